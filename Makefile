@@ -1,0 +1,31 @@
+# `make run`: set up .venv and run the main job on bundled data; `make test`: set up and run the tests.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+
+.PHONY: run test bench clean
+
+$(PY):
+	$(PYTHON) -m venv $(VENV)
+
+$(STAMP): pyproject.toml | $(PY)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e ".[test]"
+	touch $(STAMP)
+
+run: $(STAMP)
+	$(VENV)/bin/vistrack demo kalman --out out/
+
+test: $(STAMP)
+	$(PY) -m pytest -q tests
+
+$(VENV)/.bench-installed: $(STAMP)
+	$(PY) -m pip install --quiet -e ".[test,bench]"
+	touch $@
+
+bench: $(VENV)/.bench-installed
+	$(PY) bench/bench_kalman.py --write docs/benchmarks.md
+
+clean:
+	rm -rf $(VENV) out build src/*.egg-info

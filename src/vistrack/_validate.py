@@ -1,0 +1,103 @@
+"""Argument checks whose errors name the argument, the expected and the actual shape or value.
+
+Every public function validates user input here, so that a mistake is reported where it was
+made (``ValueError: R must have shape (2, 2) or (T=50, 2, 2); got (3, 3)``) instead of
+surfacing later as a broadcasting error or a silent NaN.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "as_float_array",
+    "check_finite",
+    "check_matrix_stack",
+    "check_psd",
+    "as_rng",
+]
+
+
+def _fmt_shape(shape: tuple[int, ...]) -> str:
+    return "(" + ", ".join(str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
+
+
+def as_float_array(value: Any, name: str, *, ndim: tuple[int, ...] | None = None) -> np.ndarray:
+    """Convert ``value`` to a C-contiguous float64 array, checking its number of dimensions."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"{name} must be an array of numbers; got {type(value).__name__}") from exc
+    if ndim is not None and arr.ndim not in ndim:
+        want = " or ".join(f"{d}-D" for d in ndim)
+        raise ValueError(f"{name} must be {want}; got shape {_fmt_shape(arr.shape)}")
+    if not arr.flags.c_contiguous:  # (np.ascontiguousarray would turn a scalar into 1-D)
+        arr = np.ascontiguousarray(arr)
+    return arr
+
+
+def check_finite(arr: np.ndarray, name: str) -> None:
+    """Raise ``ValueError`` if ``arr`` has a NaN or an infinite entry, naming the first one."""
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(f"{name} must be finite; {name}[{', '.join(map(str, idx))}] = {arr[idx]}")
+
+
+def check_matrix_stack(
+    value: Any, name: str, rows: int, cols: int, T: int | None = None
+) -> np.ndarray:
+    """Check a constant matrix ``(rows, cols)`` or a per-step stack ``(T, rows, cols)``.
+
+    Returns a float64 array of shape ``(1, rows, cols)`` or ``(T, rows, cols)``, finite.
+    """
+    arr = as_float_array(value, name, ndim=(2, 3))
+    if arr.ndim == 2:
+        arr = arr[None]
+    ok_rc = arr.shape[1:] == (rows, cols)
+    ok_t = arr.shape[0] == 1 or T is None or arr.shape[0] == T
+    if not (ok_rc and ok_t):
+        want = f"({rows}, {cols})" + (f" or (T={T}, {rows}, {cols})" if T is not None else "")
+        got = _fmt_shape(arr.shape if value is None else np.shape(value))
+        raise ValueError(f"{name} must have shape {want}; got {got}")
+    check_finite(arr, name)
+    return arr
+
+
+def check_psd(arr: np.ndarray, name: str, *, strict: bool = False) -> None:
+    """Check that every matrix of a stack ``(..., n, n)`` is symmetric positive (semi-)definite.
+
+    Symmetry is checked to a relative tolerance of 1e-8 of the largest entry; definiteness by the
+    smallest eigenvalue, to a tolerance of 1e-10 of the largest.
+    """
+    scale = np.max(np.abs(arr), axis=(-2, -1), keepdims=True)
+    scale = np.where(scale > 0, scale, 1.0)
+    asym = np.abs(arr - np.swapaxes(arr, -1, -2)) > 1e-8 * scale
+    if asym.any():
+        where = tuple(int(i) for i in np.argwhere(asym)[0])
+        raise ValueError(
+            f"{name} must be symmetric; {name}{list(where)} = {arr[where]} but its transpose "
+            f"entry is {arr[where[:-2] + (where[-1], where[-2])]}"
+        )
+    eig = np.linalg.eigvalsh(arr)
+    tol = 1e-10 * scale[..., 0]
+    bad = eig[..., 0] <= tol[..., 0] if strict else eig[..., 0] < -tol[..., 0]
+    if np.any(bad):
+        which = tuple(int(i) for i in np.argwhere(np.atleast_1d(bad))[0]) if bad.ndim else ()
+        kind = "positive definite" if strict else "positive semi-definite"
+        loc = f" (matrix {list(which)})" if which else ""
+        raise ValueError(
+            f"{name} must be {kind}{loc}; its smallest eigenvalue is "
+            f"{float(np.atleast_1d(eig[..., 0])[which if which else 0]):.3g}"
+        )
+
+
+def as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
+    """Normalise ``rng`` (a Generator, a seed or None) to a ``numpy.random.Generator``."""
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if rng is None or isinstance(rng, (int, np.integer)):
+        return np.random.default_rng(rng)
+    raise TypeError(f"rng must be a numpy Generator, an int seed or None; got {type(rng).__name__}")

@@ -1,0 +1,23 @@
+"""Inference: batched Kalman kernels, the whole-sequence filter, smoothers."""
+
+from .kalman import (
+    FilterResult,
+    KalmanFilter,
+    kalman_filter,
+    kalman_filter_1d,
+    kf_predict,
+    kf_update,
+)
+from .smoothers import SmoothResult, rts_smooth, two_filter_smooth
+
+__all__ = [
+    "FilterResult",
+    "KalmanFilter",
+    "SmoothResult",
+    "kalman_filter",
+    "kalman_filter_1d",
+    "kf_predict",
+    "kf_update",
+    "rts_smooth",
+    "two_filter_smooth",
+]

@@ -1,0 +1,452 @@
+r"""The Kalman filter: batched kernels, a whole-sequence function, the seeds' scalar equations,
+and a thin class over models.
+
+Notation follows the seeds: the dynamics ``x_i ~ N(D x_{i-1}, Σd)`` are ``F``, ``Q`` here and the
+measurements ``y_i ~ N(M x_i, Σm)`` are ``H``, ``R``. The prior ``x0, P0`` is the seeds'
+``x̄0⁻, Σ0⁻``: the prediction *for the first step*, which the first measurement corrects.
+
+Prediction:  ``x̄ᵢ⁻ = F x̄ᵢ₋₁⁺``,   ``Σᵢ⁻ = F Σᵢ₋₁⁺ F' + Q``
+
+Correction:  ``K = Σᵢ⁻ H' (H Σᵢ⁻ H' + R)⁻¹``,  ``x̄ᵢ⁺ = x̄ᵢ⁻ + K (yᵢ - H x̄ᵢ⁻)``,
+``Σᵢ⁺ = (I - K H) Σᵢ⁻ (I - K H)' + K R K'`` (Joseph form: equal to the seeds' ``(I - K H) Σᵢ⁻`` in
+exact arithmetic, and symmetric positive semi-definite in floating point).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .._validate import as_float_array, check_finite, check_matrix_stack, check_psd
+from ..types import Gaussian
+from . import _kernels
+
+__all__ = [
+    "FilterResult",
+    "kalman_filter",
+    "kf_predict",
+    "kf_update",
+    "kalman_filter_1d",
+    "KalmanFilter",
+]
+
+
+
+@dataclass(frozen=True)
+class FilterResult:
+    """The output of :func:`kalman_filter`. Arrays are read-only.
+
+    Attributes
+    ----------
+    means, covs : ndarray, shape (..., T, n) and (..., T, n, n)
+        Corrected estimates ``x̄ᵢ⁺, Σᵢ⁺`` (``covs`` is None when ``store_covs=False``).
+    pred_means, pred_covs : ndarray, shape (..., T, n) and (..., T, n, n)
+        Predictions ``x̄ᵢ⁻, Σᵢ⁻`` (``pred_means[..., 0, :]`` is the prior ``x0``).
+    loglik : ndarray, shape (...)
+        ``log p(y_0, ..., y_{T-1})``, summed over the observed components.
+    last : Gaussian
+        The corrected estimate at the last step, batch shape ``(...)``.
+    shared_covs : bool
+        True when every series shared one covariance sequence (``covs`` is then a broadcast view).
+    """
+
+    means: np.ndarray
+    covs: np.ndarray | None
+    pred_means: np.ndarray
+    pred_covs: np.ndarray | None
+    loglik: np.ndarray
+    last: Gaussian
+    shared_covs: bool = False
+
+
+def _readonly(*arrays: np.ndarray | None) -> None:
+    for a in arrays:
+        if a is not None and a.flags.writeable:
+            a.flags.writeable = False
+
+
+def _as_ys(ys: Any) -> tuple[np.ndarray, bool]:
+    y = as_float_array(ys, "ys", ndim=(2, 3))
+    if np.isinf(y).any():
+        idx = tuple(int(i) for i in np.argwhere(np.isinf(y))[0])
+        raise ValueError(f"ys must be finite or NaN (missing); ys{list(idx)} = {y[idx]}")
+    single = y.ndim == 2
+    return (y[None] if single else y), single
+
+
+def _prior(x0: Any, P0: Any, B: int) -> tuple[np.ndarray, np.ndarray]:
+    x = as_float_array(x0, "x0", ndim=(1, 2))
+    n = x.shape[-1]
+    if x.ndim == 2 and x.shape[0] not in (1, B):
+        raise ValueError(f"x0 must have shape ({n},) or (B={B}, {n}); got {x.shape}")
+    P = as_float_array(P0, "P0", ndim=(2, 3))
+    if P.shape[-2:] != (n, n) or (P.ndim == 3 and P.shape[0] not in (1, B)):
+        raise ValueError(f"P0 must have shape ({n}, {n}) or (B={B}, {n}, {n}); got {P.shape}")
+    check_finite(x, "x0")
+    check_finite(P, "P0")
+    check_psd(P, "P0")
+    return x.reshape(-1, n), P.reshape(-1, n, n)
+
+
+def _model(F: Any, Q: Any, H: Any, R: Any, n: int, m: int, T: int | None):
+    F_ = check_matrix_stack(F, "F", n, n, T)
+    Q_ = check_matrix_stack(Q, "Q", n, n, T)
+    H_ = check_matrix_stack(H, "H", m, n, T)
+    R_ = check_matrix_stack(R, "R", m, m, T)
+    check_psd(Q_, "Q")
+    check_psd(R_, "R")
+    return F_, Q_, H_, R_
+
+
+def _raise_not_pd(bad_t: int) -> None:
+    if bad_t >= 0:
+        raise ValueError(
+            f"the innovation covariance H P H' + R is not positive definite at step {bad_t}; "
+            "R must be positive definite on the observed components (or P must make S so)"
+        )
+
+
+def kalman_filter(
+    ys: Any,
+    *,
+    F: Any,
+    Q: Any,
+    H: Any,
+    R: Any,
+    x0: Any,
+    P0: Any,
+    store_covs: bool = True,
+) -> FilterResult:
+    """Run the Kalman filter over one series or a batch of series.
+
+    Parameters
+    ----------
+    ys : array, shape (T, m) or (B, T, m)
+        Measurements. A NaN component is missing: a row of NaN means no measurement at that step
+        (predict only); NaN in some components updates with the others.
+    F, Q : array, shape (n, n) or (T, n, n)
+        Dynamics and process noise, constant or per step (``F[t]`` predicts step ``t``; the
+        first step has no prediction, so ``F[0]`` and ``Q[0]`` are not used).
+    H, R : array, shape (m, n) / (m, m) or (T, m, n) / (T, m, m)
+        Measurement matrix and noise covariance, constant or per step.
+    x0, P0 : array, shape (n,) / (n, n) or per series (B, n) / (B, n, n)
+        Prior of the first step (the seeds' ``x̄0⁻``, ``Σ0⁻``), corrected by ``ys[..., 0, :]``.
+    store_covs : bool
+        If False, ``covs`` and ``pred_covs`` are not kept (``last`` still holds the final
+        covariance), which saves ``2 B T n²`` floats on large batches.
+
+    Returns
+    -------
+    FilterResult
+
+    Notes
+    -----
+    As the seeds observe, the covariance does not depend on the measured values. Series that share
+    ``P0`` and the pattern of missing components therefore share every covariance and gain: these
+    are computed once, and each series then costs only its mean recursion. Other batches run the
+    general kernel, which carries one covariance per series.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vistrack.filters import kalman_filter
+    >>> F = np.array([[1.0, 1.0], [0.0, 1.0]]); H = np.array([[1.0, 0.0]])
+    >>> ys = np.array([[0.1], [0.9], [np.nan], [3.2]])
+    >>> res = kalman_filter(ys, F=F, Q=0.01 * np.eye(2), H=H, R=[[0.25]],
+    ...                     x0=[0.0, 1.0], P0=np.eye(2))
+    >>> res.means.shape, res.covs.shape, res.loglik.shape
+    ((4, 2), (4, 2, 2), ())
+    """
+    y, single = _as_ys(ys)
+    B, T, m = y.shape
+    x0_, P0_ = _prior(x0, P0, B)
+    n = x0_.shape[1]
+    F_, Q_, H_, R_ = _model(F, Q, H, R, n, m, T)
+
+    means = np.empty((B, T, n))
+    pmeans = np.empty((B, T, n))
+    loglik = np.empty(B)
+    mask = np.isnan(y)
+    shared = B > 1 and P0_.shape[0] == 1 and bool((mask == mask[0]).all())
+    if shared:
+        # covariances, gains and Cholesky factors once, from the first series
+        gains = np.empty((T, n, m))
+        chol = np.empty((T, m, m))
+        c4 = np.empty((1, T, n, n)) if store_covs else np.empty((1, 1, 1, 1))
+        pc4 = np.empty((1, T, n, n)) if store_covs else np.empty((1, 1, 1, 1))
+        last1 = np.empty((1, n, n))
+        bad_t = _kernels.kf_batch(
+            y[:1], F_, Q_, H_, R_, x0_[:1], P0_, np.empty((1, T, n)), c4, np.empty((1, T, n)),
+            pc4, np.empty(1), last1, gains, chol, store_covs,
+        )
+        _raise_not_pd(bad_t)
+        _kernels.kf_means_shared(y, F_, H_, x0_, gains, chol, means, pmeans, loglik)
+        covs = np.broadcast_to(c4, (B, T, n, n)) if store_covs else None
+        pcovs = np.broadcast_to(pc4, (B, T, n, n)) if store_covs else None
+        last_P = np.broadcast_to(last1, (B, n, n))
+    else:
+        covs = np.empty((B, T, n, n)) if store_covs else np.empty((1, 1, 1, 1))
+        pcovs = np.empty((B, T, n, n)) if store_covs else np.empty((1, 1, 1, 1))
+        last_P = np.empty((B, n, n))
+        bad_t = _kernels.kf_batch(
+            y, F_, Q_, H_, R_, x0_, P0_, means, covs, pmeans, pcovs, loglik, last_P,
+            np.empty((0, n, m)), np.empty((0, m, m)), store_covs,
+        )
+        _raise_not_pd(bad_t)
+        if not store_covs:
+            covs = pcovs = None
+    if single:
+        means, pmeans, loglik, last_P = means[0], pmeans[0], loglik[0], last_P[0]
+        covs = None if covs is None else covs[0]
+        pcovs = None if pcovs is None else pcovs[0]
+    last = Gaussian(means[..., -1, :], last_P)
+    _readonly(means, covs, pmeans, pcovs, loglik)
+    return FilterResult(means, covs, pmeans, pcovs, np.asarray(loglik), last, shared)
+
+
+def _gaussian_batch(g: Gaussian) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
+    if not isinstance(g, Gaussian):
+        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
+    n = g.mean.shape[-1]
+    batch = g.mean.shape[:-1]
+    mean = np.ascontiguousarray(g.mean.reshape(-1, n))
+    cov = np.ascontiguousarray(g.cov.reshape(-1, n, n))
+    return mean, cov, batch
+
+
+def kf_predict(g: Gaussian, F: Any, Q: Any) -> Gaussian:
+    """Predict every Gaussian of a batch one step: ``N(F m, F P F' + Q)``.
+
+    Parameters
+    ----------
+    g : Gaussian, batch shape (...)
+    F, Q : array, shape (n, n)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vistrack import Gaussian
+    >>> g = Gaussian(np.zeros((5, 2)), np.tile(np.eye(2), (5, 1, 1)))
+    >>> kf_predict(g, [[1, 1], [0, 1]], 0.1 * np.eye(2)).cov[0]
+    array([[2.1, 1. ],
+           [1. , 1.1]])
+    """
+    mean, cov, batch = _gaussian_batch(g)
+    n = mean.shape[1]
+    F_ = check_matrix_stack(F, "F", n, n, 1)
+    Q_ = check_matrix_stack(Q, "Q", n, n, 1)
+    out_m = np.empty_like(mean)
+    out_P = np.empty_like(cov)
+    _kernels.predict_batch(mean, cov, F_, Q_, out_m, out_P)
+    return Gaussian(out_m.reshape(batch + (n,)), out_P.reshape(batch + (n, n)))
+
+
+def kf_update(
+    g: Gaussian, y: Any, H: Any, R: Any, *, return_loglik: bool = False
+) -> Gaussian | tuple[Gaussian, np.ndarray]:
+    """Correct every Gaussian of a batch with its measurement.
+
+    Parameters
+    ----------
+    g : Gaussian, batch shape (...)
+    y : array, shape (..., m)
+        One measurement per Gaussian; NaN components are missing (an all-NaN row leaves that
+        Gaussian unchanged).
+    H, R : array, shape (m, n) and (m, m)
+    return_loglik : bool
+        Also return ``log N(y; H m, H P H' + R)`` per Gaussian, shape (...).
+    """
+    mean, cov, batch = _gaussian_batch(g)
+    B, n = mean.shape
+    y_ = as_float_array(y, "y")
+    if y_.shape[:-1] != batch or y_.ndim == 0:
+        raise ValueError(f"y must have shape {batch + ('m',)} to match g; got {y_.shape}")
+    m = y_.shape[-1]
+    H_ = check_matrix_stack(H, "H", m, n, 1)
+    R_ = check_matrix_stack(R, "R", m, m, 1)
+    out_m = np.empty((B, 1, n))
+    out_P = np.empty((B, n, n))
+    ll = np.empty(B)
+    d4 = np.empty((1, 1, 1, 1))
+    bad_t = _kernels.kf_batch(
+        y_.reshape(B, 1, m), np.zeros((1, n, n)), np.zeros((1, n, n)), H_, R_, mean, cov, out_m, d4, np.empty((B, 1, n)), d4, ll, out_P,
+        np.empty((0, n, m)), np.empty((0, m, m)), False,
+    )
+    _raise_not_pd(bad_t)
+    post = Gaussian(out_m.reshape(batch + (n,)), out_P.reshape(batch + (n, n)))
+    if return_loglik:
+        return post, ll.reshape(batch)
+    return post
+
+
+def kalman_filter_1d(
+    ys: Any,
+    *,
+    d: float | np.ndarray,
+    m: float | np.ndarray,
+    sigma_d: float | np.ndarray,
+    sigma_m: float | np.ndarray,
+    x0: float,
+    sigma0: float,
+) -> dict[str, np.ndarray]:
+    r"""The seeds' scalar Kalman filter, written exactly as on the slides.
+
+    Model ``xᵢ ~ N(dᵢ xᵢ₋₁, σ_dᵢ²)``, ``yᵢ ~ N(mᵢ xᵢ, σ_mᵢ²)``; start ``x̄0⁻ = x0``, ``σ0⁻ = sigma0``.
+
+    .. math::
+        \bar x_i^- = d_i \bar x_{i-1}^+, \quad
+        \sigma_i^- = \sqrt{\sigma_{d_i}^2 + (d_i \sigma_{i-1}^+)^2}, \quad
+        \bar x_i^+ = \frac{\bar x_i^- \sigma_{m_i}^2 + m_i y_i (\sigma_i^-)^2}
+                          {\sigma_{m_i}^2 + m_i^2 (\sigma_i^-)^2}, \quad
+        \sigma_i^+ = \sqrt{\frac{\sigma_{m_i}^2 (\sigma_i^-)^2}{\sigma_{m_i}^2 + m_i^2 (\sigma_i^-)^2}}
+
+    Parameters are scalars or arrays of shape (T,); ``sigma_d`` and ``sigma_m`` are standard
+    deviations. A NaN in ``ys`` skips the correction at that step.
+
+    Returns
+    -------
+    dict with arrays of shape (T,): ``pred_mean``, ``pred_std``, ``mean``, ``std``.
+    """
+    y = as_float_array(ys, "ys", ndim=(1,))
+    T = y.shape[0]
+    par = {}
+    for name, v in (("d", d), ("m", m), ("sigma_d", sigma_d), ("sigma_m", sigma_m)):
+        a = as_float_array(v, name, ndim=(0, 1))
+        if a.ndim == 1 and a.shape[0] != T:
+            raise ValueError(f"{name} must be a scalar or have shape (T={T},); got {a.shape}")
+        check_finite(a, name)
+        par[name] = np.broadcast_to(a, (T,))
+    out = {k: np.empty(T) for k in ("pred_mean", "pred_std", "mean", "std")}
+    xp, sp = float(x0), float(sigma0)
+    for i in range(T):
+        di, mi, sd, sm = (float(par[k][i]) for k in ("d", "m", "sigma_d", "sigma_m"))
+        if i > 0:
+            xp = di * out["mean"][i - 1]
+            sp = np.sqrt(sd**2 + (di * out["std"][i - 1]) ** 2)
+        out["pred_mean"][i], out["pred_std"][i] = xp, sp
+        if np.isnan(y[i]):
+            out["mean"][i], out["std"][i] = xp, sp
+            continue
+        den = sm**2 + mi**2 * sp**2
+        out["mean"][i] = (xp * sm**2 + mi * y[i] * sp**2) / den
+        out["std"][i] = np.sqrt(sm**2 * sp**2 / den)
+    return out
+
+
+def _dt_steps(dt: Any, T: int) -> np.ndarray | float:
+    d = as_float_array(dt, "dt", ndim=(0, 1))
+    if d.ndim == 0:
+        return float(d)
+    if d.shape[0] == T - 1:
+        d = np.concatenate([[0.0], d])  # step 0 has no prediction
+    if d.shape[0] != T:
+        raise ValueError(
+            f"dt must be a scalar, the T-1={T - 1} intervals between steps or T={T} values "
+            f"(dt[0] unused); got shape {d.shape}"
+        )
+    return d
+
+
+class KalmanFilter:
+    """A Kalman filter built from a motion model and a measurement model.
+
+    Parameters
+    ----------
+    motion : MotionModel
+        Gives ``F(dt)``, ``Q(dt)`` (e.g. :class:`vistrack.models.ConstantVelocity`).
+    measurement : MeasurementModel
+        Gives ``H(n)``, ``R()`` (e.g. :class:`vistrack.models.Position`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vistrack.models import ConstantVelocity, Position
+    >>> kf = KalmanFilter(ConstantVelocity(dim=2, q=0.1), Position(dim=2, r=1.0))
+    >>> ys = np.c_[np.arange(10.0), 2 * np.arange(10.0)]
+    >>> smoothed = kf.smooth(ys)
+    >>> smoothed.means.shape
+    (10, 4)
+    """
+
+    def __init__(self, motion: Any, measurement: Any):
+        for name, obj, attrs in (
+            ("motion", motion, ("F", "Q", "ndim_state")),
+            ("measurement", measurement, ("H", "R", "ndim_meas")),
+        ):
+            missing = [a for a in attrs if not hasattr(obj, a)]
+            if missing:
+                raise TypeError(f"{name} must provide {', '.join(attrs)}; "
+                                f"{type(obj).__name__} lacks {', '.join(missing)}")
+        self.motion = motion
+        self.measurement = measurement
+
+    def __repr__(self) -> str:
+        return f"KalmanFilter({self.motion!r}, {self.measurement!r})"
+
+    def matrices(self, T: int, dt: Any = 1.0) -> dict[str, np.ndarray]:
+        """``F, Q, H, R`` for ``T`` steps with time step(s) ``dt``."""
+        n = self.motion.ndim_state
+        d = _dt_steps(dt, T)
+        return {
+            "F": self.motion.F(d),
+            "Q": self.motion.Q(d),
+            "H": self.measurement.H(n),
+            "R": self.measurement.R(),
+        }
+
+    def default_prior(self, ys: np.ndarray, *, scale: float = 1e3) -> tuple[np.ndarray, np.ndarray]:
+        """A weak prior from the first measurement of each series.
+
+        ``x0`` is the least-squares state ``H⁺ y`` of the first non-missing value of each
+        component (0 where a component is never observed), and ``P0`` is ``R`` on the measured
+        subspace and ``scale² · max(diag R)`` on the rest of the state.
+        """
+        y, _ = _as_ys(ys)
+        n = self.motion.ndim_state
+        H = np.asarray(self.measurement.H(n), dtype=float)
+        R = np.asarray(self.measurement.R(), dtype=float)
+        H0, R0 = (H[0] if H.ndim == 3 else H), (R[0] if R.ndim == 3 else R)
+        ok = ~np.isnan(y)
+        first = np.where(ok.any(axis=1), np.argmax(ok, axis=1), 0)  # (B, m)
+        y_first = np.take_along_axis(y, first[:, None, :], axis=1)[:, 0]
+        y_first = np.nan_to_num(y_first)
+        Hp = np.linalg.pinv(H0)
+        x0 = y_first @ Hp.T
+        proj = Hp @ H0
+        P0 = Hp @ R0 @ Hp.T + scale**2 * np.max(np.diag(R0)) * (np.eye(n) - proj)
+        P0 = 0.5 * (P0 + P0.T)
+        return (x0[0] if np.ndim(ys) == 2 else x0), P0
+
+    def filter(
+        self,
+        ys: Any,
+        *,
+        dt: Any = 1.0,
+        x0: Any = None,
+        P0: Any = None,
+        store_covs: bool = True,
+    ) -> FilterResult:
+        """Filter ``ys`` of shape ``(T, m)`` or ``(B, T, m)``; see :func:`kalman_filter`.
+
+        ``dt`` is a scalar, the ``T-1`` intervals between steps, or ``T`` values with ``dt[0]``
+        unused. Without ``x0``/``P0`` the prior is :meth:`default_prior`.
+        """
+        T = np.shape(ys)[-2] if np.ndim(ys) >= 2 else 0
+        if x0 is None or P0 is None:
+            dx0, dP0 = self.default_prior(ys)
+            x0 = dx0 if x0 is None else x0
+            P0 = dP0 if P0 is None else P0
+        return kalman_filter(ys, **self.matrices(T, dt), x0=x0, P0=P0, store_covs=store_covs)
+
+    def smooth(
+        self, ys: Any, *, dt: Any = 1.0, x0: Any = None, P0: Any = None
+    ) -> "SmoothResult":
+        """Filter, then RTS-smooth; see :func:`vistrack.filters.rts_smooth`."""
+        from .smoothers import rts_smooth
+
+        T = np.shape(ys)[-2]
+        mats = self.matrices(T, dt)
+        res = self.filter(ys, dt=dt, x0=x0, P0=P0)
+        return rts_smooth(res, F=mats["F"], Q=mats["Q"])

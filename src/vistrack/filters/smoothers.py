@@ -1,0 +1,256 @@
+r"""Fixed-interval smoothers: Rauch-Tung-Striebel and the seeds' two-filter (forward-backward) form.
+
+Both give ``p(x_t | y_0, ..., y_{T-1})`` for a linear-Gaussian model and agree to rounding; the
+tests check one against the other.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from .._validate import check_matrix_stack, check_psd
+from .kalman import FilterResult, _as_ys, _model, _readonly
+
+__all__ = ["SmoothResult", "rts_smooth", "two_filter_smooth"]
+
+
+@dataclass(frozen=True)
+class SmoothResult:
+    """Smoothed means ``(..., T, n)`` and covariances ``(..., T, n, n)``; arrays are read-only.
+
+    ``filtered`` is the forward :class:`FilterResult` the smoother started from. For the two-filter
+    smoother, ``backward_info`` and ``backward_info_vec`` hold the backward filter's prediction in
+    information form, ``Λ_t = cov⁻¹`` ``(..., T, n, n)`` and ``η_t = Λ_t · mean`` ``(..., T, n)``:
+    the density of ``y_{t+1}, ..., y_{T-1}`` given ``x_t`` (``Λ`` may be singular near the end).
+    """
+
+    means: np.ndarray
+    covs: np.ndarray
+    filtered: FilterResult
+    backward_info: np.ndarray | None = None
+    backward_info_vec: np.ndarray | None = None
+
+
+@njit(cache=True)
+def _chol_solve_inplace(L, A, B, n, k):
+    """Solve ``(L L') X = B`` for ``X (n, k)``; ``A`` is ``L`` (lower, computed here from A)."""
+    # Cholesky of A (n x n) into L
+    for i in range(n):
+        d = A[i, i]
+        for p in range(i):
+            d -= L[i, p] * L[i, p]
+        if not d > 0.0:
+            return False
+        L[i, i] = math.sqrt(d)
+        for r in range(i + 1, n):
+            s = A[r, i]
+            for p in range(i):
+                s -= L[r, p] * L[i, p]
+            L[r, i] = s / L[i, i]
+    for c in range(k):
+        for i in range(n):
+            s = B[i, c]
+            for p in range(i):
+                s -= L[i, p] * B[p, c]
+            B[i, c] = s / L[i, i]
+        for i in range(n - 1, -1, -1):
+            s = B[i, c]
+            for p in range(i + 1, n):
+                s -= L[p, i] * B[p, c]
+            B[i, c] = s / L[i, i]
+    return True
+
+
+@njit(cache=True)
+def _rts_kernel(means, covs, F, Q, s_means, s_covs):
+    """RTS backward pass over ``B`` series; returns the first failing step or -1."""
+    B, T, n = means.shape
+    Pp = np.empty((n, n))
+    FP = np.empty((n, n))
+    L = np.empty((n, n))
+    G = np.empty((n, n))  # holds G' = Pp^-1 F P
+    dP = np.empty((n, n))
+    GdP = np.empty((n, n))
+    dm = np.empty(n)
+    for b in range(B):
+        for i in range(n):
+            s_means[b, T - 1, i] = means[b, T - 1, i]
+            for k in range(n):
+                s_covs[b, T - 1, i, k] = covs[b, T - 1, i, k]
+        for t in range(T - 2, -1, -1):
+            tf = t + 1 if F.shape[0] > 1 else 0
+            tq = t + 1 if Q.shape[0] > 1 else 0
+            # FP = F P_t; Pp = F P_t F' + Q
+            for i in range(n):
+                for k in range(n):
+                    s = 0.0
+                    for l in range(n):
+                        s += F[tf, i, l] * covs[b, t, l, k]
+                    FP[i, k] = s
+            for i in range(n):
+                for k in range(i, n):
+                    s = Q[tq, i, k]
+                    for l in range(n):
+                        s += FP[i, l] * F[tf, k, l]
+                    Pp[i, k] = s
+                    Pp[k, i] = s
+            # G' = Pp^-1 (F P_t)  (P_t symmetric, so F P_t = (P_t F')')
+            for i in range(n):
+                for k in range(n):
+                    G[i, k] = FP[i, k]
+            if not _chol_solve_inplace(L, Pp, G, n, n):
+                return t
+            # dm = m_s(t+1) - F m_t
+            for i in range(n):
+                s = s_means[b, t + 1, i]
+                for l in range(n):
+                    s -= F[tf, i, l] * means[b, t, l]
+                dm[i] = s
+            for i in range(n):
+                s = means[b, t, i]
+                for l in range(n):
+                    s += G[l, i] * dm[l]
+                s_means[b, t, i] = s
+            # P_s = P + G (P_s(t+1) - Pp) G'
+            for i in range(n):
+                for k in range(n):
+                    dP[i, k] = s_covs[b, t + 1, i, k] - Pp[i, k]
+            for i in range(n):
+                for k in range(n):
+                    s = 0.0
+                    for l in range(n):
+                        s += G[l, i] * dP[l, k]
+                    GdP[i, k] = s
+            for i in range(n):
+                for k in range(i, n):
+                    s = covs[b, t, i, k]
+                    for l in range(n):
+                        s += GdP[i, l] * G[l, k]
+                    s2 = covs[b, t, k, i]
+                    for l in range(n):
+                        s2 += GdP[k, l] * G[l, i]
+                    v = 0.5 * (s + s2)
+                    s_covs[b, t, i, k] = v
+                    s_covs[b, t, k, i] = v
+    return -1
+
+
+def _filtered_arrays(result: FilterResult) -> tuple[np.ndarray, np.ndarray, bool]:
+    if not isinstance(result, FilterResult):
+        raise TypeError(f"result must be a FilterResult; got {type(result).__name__}")
+    if result.covs is None:
+        raise ValueError("result has no covariances: run kalman_filter with store_covs=True")
+    single = result.means.ndim == 2
+    means = np.ascontiguousarray(result.means if not single else result.means[None])
+    covs = np.ascontiguousarray(result.covs if not single else result.covs[None])
+    return means, covs, single
+
+
+def rts_smooth(result: FilterResult, *, F: Any, Q: Any) -> SmoothResult:
+    r"""Rauch-Tung-Striebel smoother over a filtered sequence (one series or a batch).
+
+    .. math::
+        G_t = P_t F' (F P_t F' + Q)^{-1}, \quad
+        m^s_t = m_t + G_t (m^s_{t+1} - F m_t), \quad
+        P^s_t = P_t + G_t (P^s_{t+1} - F P_t F' - Q) G_t'
+
+    with ``F = F[t+1]``, ``Q = Q[t+1]`` for per-step matrices. The gain comes from a Cholesky
+    solve with the predicted covariance.
+
+    Parameters
+    ----------
+    result : FilterResult
+        From :func:`vistrack.filters.kalman_filter` with ``store_covs=True``.
+    F, Q : array, shape (n, n) or (T, n, n)
+        The model the filter ran with.
+    """
+    means, covs, single = _filtered_arrays(result)
+    B, T, n = means.shape
+    F_ = check_matrix_stack(F, "F", n, n, T)
+    Q_ = check_matrix_stack(Q, "Q", n, n, T)
+    check_psd(Q_, "Q")
+    s_means = np.empty_like(means)
+    s_covs = np.empty_like(covs)
+    bad = _rts_kernel(means, covs, F_, Q_, s_means, s_covs)
+    if bad >= 0:
+        raise ValueError(
+            f"the predicted covariance F P F' + Q from step {bad} to {bad + 1} is not positive "
+            "definite, so the RTS gain is undefined; make Q positive definite"
+        )
+    if single:
+        s_means, s_covs = s_means[0], s_covs[0]
+    _readonly(s_means, s_covs)
+    return SmoothResult(s_means, s_covs, result)
+
+
+def two_filter_smooth(
+    ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any
+) -> SmoothResult:
+    r"""The seeds' forward-backward smoother: run two filters and combine them.
+
+    "The crucial point here is that we can obtain a smoothed estimate by viewing the backward
+    filter's prediction as yet another measurement for the forward filter." The forward pass is
+    :func:`kalman_filter`. The backward filter runs from the last step to the first with no prior
+    (a diffuse start), so it is kept in information form ``(Λ, η)``:
+
+    - correction at ``t``: ``Λ ← Λ + H' R⁻¹ H``, ``η ← η + H' R⁻¹ y_t`` (observed components);
+    - prediction from ``t+1`` to ``t``: ``Λ_t = F' (I + Λ Q)⁻¹ Λ F``, ``η_t = F' (I + Λ Q)⁻¹ η``.
+
+    The backward prediction ``N(Λ_t⁻¹ η_t, Λ_t⁻¹)`` is then a measurement of ``x_t`` with ``H = I``
+    for the forward estimate ``N(m_t, P_t)``; in a form that stays defined while ``Λ_t`` is
+    singular: ``P^s = (I + P Λ)⁻¹ P``, ``m^s = (I + P Λ)⁻¹ (m + P η)``.
+
+    Parameters are those of :func:`kalman_filter`. Returns a :class:`SmoothResult` whose
+    ``backward_info``/``backward_info_vec`` hold ``Λ_t``, ``η_t``.
+    """
+    from .kalman import kalman_filter
+
+    fwd = kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0)
+    y, single = _as_ys(ys)
+    B, T, m = y.shape
+    n = fwd.means.shape[-1]
+    F_, Q_, H_, R_ = _model(F, Q, H, R, n, m, T)
+    fm, fP, _ = _filtered_arrays(fwd)
+    eye = np.eye(n)
+    Lam = np.zeros((B, n, n))
+    eta = np.zeros((B, n))
+    lam_pred = np.empty((B, T, n, n))
+    eta_pred = np.empty((B, T, n))
+    s_means = np.empty((B, T, n))
+    s_covs = np.empty((B, T, n, n))
+    for t in range(T - 1, -1, -1):
+        if t < T - 1:
+            # backward prediction from t+1 to t
+            Ft, Qt = F_[t + 1 if F_.shape[0] > 1 else 0], Q_[t + 1 if Q_.shape[0] > 1 else 0]
+            C = np.linalg.solve(eye + Lam @ Qt, np.concatenate([Lam, eta[..., None]], axis=-1))
+            Lam = Ft.T @ C[..., :n] @ Ft
+            Lam = 0.5 * (Lam + np.swapaxes(Lam, -1, -2))
+            eta = (Ft.T @ C[..., n:])[..., 0]
+        lam_pred[:, t], eta_pred[:, t] = Lam, eta
+        # combine: the backward prediction as a measurement of x_t for the forward estimate
+        P = fP[:, t]
+        Mx = eye + P @ Lam
+        sol = np.linalg.solve(Mx, np.concatenate([P, (fm[:, t] + (P @ eta[..., None])[..., 0])[..., None]], axis=-1))
+        Ps = sol[..., :n]
+        s_covs[:, t] = 0.5 * (Ps + np.swapaxes(Ps, -1, -2))
+        s_means[:, t] = sol[..., n]
+        # backward correction with y_t (observed components only)
+        Ht, Rt = H_[t if H_.shape[0] > 1 else 0], R_[t if R_.shape[0] > 1 else 0]
+        obs = ~np.isnan(y[:, t])  # (B, m)
+        both = obs[:, :, None] & obs[:, None, :]
+        Rm = np.where(both, Rt, np.eye(m))  # decouple missing components
+        W = np.linalg.solve(Rm, np.eye(m)) * both  # R_oo^-1 embedded, zero on missing
+        yt = np.where(obs, y[:, t], 0.0)
+        HtW = Ht.T @ W  # (B, n, m)
+        Lam = Lam + HtW @ Ht
+        Lam = 0.5 * (Lam + np.swapaxes(Lam, -1, -2))
+        eta = eta + (HtW @ yt[..., None])[..., 0]
+    if single:
+        s_means, s_covs, lam_pred, eta_pred = s_means[0], s_covs[0], lam_pred[0], eta_pred[0]
+    _readonly(s_means, s_covs, lam_pred, eta_pred)
+    return SmoothResult(s_means, s_covs, fwd, lam_pred, eta_pred)

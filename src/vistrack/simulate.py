@@ -1,0 +1,119 @@
+"""Sample states and measurements from linear-Gaussian models, with a seeded ``rng``."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ._validate import as_float_array, as_rng, check_finite, check_psd
+from .filters.kalman import KalmanFilter, _model
+
+__all__ = ["simulate_lgssm", "simulate"]
+
+
+def _psd_sqrt(S: np.ndarray) -> np.ndarray:
+    """A square root ``A`` with ``A A' = S`` for a stack of PSD matrices (singular allowed)."""
+    w, V = np.linalg.eigh(S)
+    return V * np.sqrt(np.clip(w, 0.0, None))[..., None, :]
+
+
+def simulate_lgssm(
+    T: int,
+    *,
+    F: Any,
+    Q: Any,
+    H: Any,
+    R: Any,
+    x0: Any,
+    P0: Any = None,
+    n_series: int | None = None,
+    rng: np.random.Generator | int | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Sample ``x_t = F_t x_{t-1} + N(0, Q_t)``, ``y_t = H_t x_t + N(0, R_t)`` for ``T`` steps.
+
+    Parameters
+    ----------
+    T : int
+        Number of steps.
+    F, Q, H, R : array
+        Constant ``(n, n)``/``(m, n)``/``(m, m)`` or per step ``(T, ...)``, as in
+        :func:`vistrack.filters.kalman_filter` (``F[0]``, ``Q[0]`` unused).
+    x0, P0 : array
+        The first state is drawn from ``N(x0, P0)`` (exactly ``x0`` if ``P0`` is None).
+    n_series : int, optional
+        Draw this many independent series: outputs gain a leading axis.
+    rng : Generator, int or None
+
+    Returns
+    -------
+    xs : ndarray, shape ([n_series,] T, n)
+    ys : ndarray, shape ([n_series,] T, m)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> xs, ys = simulate_lgssm(5, F=np.eye(1), Q=[[1.0]], H=[[1.0]], R=[[0.1]], x0=[0.0], rng=0)
+    >>> xs.shape, ys.shape
+    ((5, 1), (5, 1))
+    """
+    if int(T) != T or T < 1:
+        raise ValueError(f"T must be a positive integer; got {T}")
+    T = int(T)
+    gen = as_rng(rng)
+    x0_ = as_float_array(x0, "x0", ndim=(1,))
+    check_finite(x0_, "x0")
+    n = x0_.shape[0]
+    H_arr = as_float_array(H, "H", ndim=(2, 3))
+    m = H_arr.shape[-2]
+    F_, Q_, H_, R_ = _model(F, Q, H_arr, R, n, m, T)
+    B = 1 if n_series is None else int(n_series)
+    if B < 1:
+        raise ValueError(f"n_series must be >= 1; got {n_series}")
+    x = np.broadcast_to(x0_, (B, n)).copy()
+    if P0 is not None:
+        P0_ = as_float_array(P0, "P0", ndim=(2,))
+        if P0_.shape != (n, n):
+            raise ValueError(f"P0 must have shape ({n}, {n}); got {P0_.shape}")
+        check_psd(P0_, "P0")
+        x += gen.standard_normal((B, n)) @ _psd_sqrt(P0_).T
+    sq, sr = _psd_sqrt(Q_), _psd_sqrt(R_)
+    xs = np.empty((B, T, n))
+    ys = np.empty((B, T, m))
+    for t in range(T):
+        if t > 0:
+            Ft, St = F_[t if len(F_) > 1 else 0], sq[t if len(sq) > 1 else 0]
+            x = x @ Ft.T + gen.standard_normal((B, n)) @ St.T
+        Ht, Rt = H_[t if len(H_) > 1 else 0], sr[t if len(sr) > 1 else 0]
+        xs[:, t] = x
+        ys[:, t] = x @ Ht.T + gen.standard_normal((B, m)) @ Rt.T
+    if n_series is None:
+        return xs[0], ys[0]
+    return xs, ys
+
+
+def simulate(
+    motion: Any,
+    measurement: Any,
+    T: int,
+    *,
+    x0: Any,
+    P0: Any = None,
+    dt: Any = 1.0,
+    n_series: int | None = None,
+    rng: np.random.Generator | int | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Sample from a motion model and a measurement model; see :func:`simulate_lgssm`.
+
+    ``dt`` is a scalar, the ``T-1`` intervals between steps, or ``T`` values (``dt[0]`` unused).
+
+    Examples
+    --------
+    >>> from vistrack.models import ConstantVelocity, Position
+    >>> xs, ys = simulate(ConstantVelocity(dim=2, q=0.1), Position(dim=2), 15,
+    ...                   x0=[10, 10, 1, 0], rng=1)
+    >>> xs.shape, ys.shape
+    ((15, 4), (15, 2))
+    """
+    mats = KalmanFilter(motion, measurement).matrices(int(T), dt)
+    return simulate_lgssm(T, **mats, x0=x0, P0=P0, n_series=n_series, rng=rng)

@@ -1,0 +1,24 @@
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(12345)
+
+
+def random_model(rng, n, m, T=None, *, tv=False):
+    """A well-conditioned random linear-Gaussian model; per-step matrices when ``tv``."""
+
+    def spd(k, scale, lead=()):
+        A = rng.normal(size=lead + (k, k))
+        return scale * (A @ np.swapaxes(A, -1, -2) / k + np.eye(k))
+
+    lead = (T,) if tv else ()
+    F = np.eye(n) + 0.3 * rng.normal(size=lead + (n, n)) / np.sqrt(n)
+    H = rng.normal(size=lead + (m, n))
+    return dict(F=F, Q=spd(n, 0.2, lead), H=H, R=spd(m, 0.5, lead))

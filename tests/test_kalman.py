@@ -1,0 +1,285 @@
+"""The Kalman filter against FilterPy, pykalman, a joint-Gaussian oracle and the seeds' 1-D equations."""
+
+import numpy as np
+import pytest
+from scipy import stats
+
+import vistrack as vt
+from vistrack.filters import kalman_filter, kalman_filter_1d, kf_predict, kf_update
+
+from .conftest import random_model
+
+filterpy_kalman = pytest.importorskip("filterpy.kalman")
+pykalman = pytest.importorskip("pykalman")
+
+RTOL = 1e-8
+
+
+def at(A, t):
+    return A[t] if A.ndim == 3 else A
+
+
+def filterpy_run(ys, F, Q, H, R, x0, P0):
+    """Step FilterPy's predict/update (batch_filter of 2.0.0 rejects (T, m) arrays)."""
+    n, m = len(x0), ys.shape[1]
+    kf = filterpy_kalman.KalmanFilter(dim_x=n, dim_z=m)
+    kf.x, kf.P = np.array(x0, float), np.array(P0, float)
+    means, covs, ll = [], [], 0.0
+    for t, y in enumerate(ys):
+        if t > 0:
+            kf.predict(F=at(F, t), Q=at(Q, t))
+        o = ~np.isnan(y)
+        if o.any():
+            Ht, Rt = at(H, t)[o], at(R, t)[np.ix_(o, o)]
+            kf.update(y[o], R=Rt, H=Ht)
+            ll += kf.log_likelihood
+        means.append(kf.x.copy())
+        covs.append(kf.P.copy())
+    return np.array(means), np.array(covs), ll
+
+
+def with_missing(rng, ys, rows=0.15, comps=0.15):
+    ys = ys.copy()
+    ys[rng.random(ys.shape[:-1]) < rows] = np.nan
+    ys[rng.random(ys.shape) < comps] = np.nan
+    return ys
+
+
+@pytest.mark.parametrize("tv", [False, True])
+@pytest.mark.parametrize("n,m", [(1, 1), (2, 1), (4, 2), (6, 3)])
+def test_equals_filterpy_with_missing_components(rng, n, m, tv):
+    T = 40
+    mod = random_model(rng, n, m, T, tv=tv)
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(n), rng=rng)
+    ys = with_missing(rng, ys)
+    x0, P0 = rng.normal(size=n), 2.0 * np.eye(n)
+    res = kalman_filter(ys, **mod, x0=x0, P0=P0)
+    fm, fP, fll = filterpy_run(ys, **mod, x0=x0, P0=P0)
+    np.testing.assert_allclose(res.means, fm, rtol=RTOL, atol=1e-10)
+    np.testing.assert_allclose(res.covs, fP, rtol=RTOL, atol=1e-10)
+    assert res.loglik == pytest.approx(fll, rel=1e-10)
+
+
+@pytest.mark.parametrize("tv", [False, True])
+def test_filter_and_rts_equal_pykalman(rng, tv):
+    n, m, T = 4, 2, 60
+    mod = random_model(rng, n, m, T, tv=tv)
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(n), rng=rng)
+    ys[[3, 17, 18, 40]] = np.nan  # pykalman handles whole missing rows only (pykalman #58)
+    x0, P0 = rng.normal(size=n), 3.0 * np.eye(n)
+    # pykalman's transition_matrices[t] maps t -> t+1; ours F[t] maps t-1 -> t
+    pk = pykalman.KalmanFilter(
+        transition_matrices=mod["F"][1:] if tv else mod["F"],
+        transition_covariance=mod["Q"][1:] if tv else mod["Q"],
+        observation_matrices=mod["H"],
+        observation_covariance=mod["R"],
+        initial_state_mean=x0,
+        initial_state_covariance=P0,
+    )
+    masked = np.ma.masked_invalid(ys)
+    pm, pP = pk.filter(masked)
+    sm, sP = pk.smooth(masked)
+    res = kalman_filter(ys, **mod, x0=x0, P0=P0)
+    np.testing.assert_allclose(res.means, pm, rtol=RTOL, atol=1e-10)
+    np.testing.assert_allclose(res.covs, pP, rtol=RTOL, atol=1e-10)
+    smooth = vt.rts_smooth(res, F=mod["F"], Q=mod["Q"])
+    np.testing.assert_allclose(smooth.means, sm, rtol=RTOL, atol=1e-10)
+    np.testing.assert_allclose(smooth.covs, sP, rtol=RTOL, atol=1e-10)
+    if not tv:  # pykalman's loglikelihood() fails on per-step observation matrices
+        assert res.loglik == pytest.approx(pk.loglikelihood(masked), rel=1e-10)
+
+
+def test_loglik_equals_joint_gaussian_density(rng):
+    """log p(y_0..y_T-1) from the filter equals the density of the stacked Gaussian vector."""
+    n, m, T = 3, 2, 6
+    mod = random_model(rng, n, m)
+    x0, P0 = rng.normal(size=n), np.eye(n)
+    F, Q, H, R = mod["F"], mod["Q"], mod["H"], mod["R"]
+    # joint of states: x_t = F^t x_0 + sum F^(t-s) w_s
+    Phi = [np.linalg.matrix_power(F, t) for t in range(T)]
+    mean_x = np.concatenate([Phi[t] @ x0 for t in range(T)])
+    Cx = np.zeros((T * n, T * n))
+    for s in range(T):
+        for t in range(T):
+            k = min(s, t)
+            c = Phi[s] @ P0 @ Phi[t].T
+            for r in range(1, k + 1):
+                c = c + Phi[s - r] @ Q @ Phi[t - r].T
+            Cx[s * n:(s + 1) * n, t * n:(t + 1) * n] = c
+    Hbig = np.kron(np.eye(T), H)
+    Cy = Hbig @ Cx @ Hbig.T + np.kron(np.eye(T), R)
+    y = rng.multivariate_normal(Hbig @ mean_x, Cy).reshape(T, m)
+    y[2, 1] = np.nan
+    y[4] = np.nan
+    keep = ~np.isnan(y.ravel())
+    want = stats.multivariate_normal(
+        (Hbig @ mean_x)[keep], Cy[np.ix_(keep, keep)]).logpdf(y.ravel()[keep])
+    got = kalman_filter(y, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0).loglik
+    assert got == pytest.approx(want, rel=1e-10)
+
+
+def test_scalar_equations_equal_matrix_form(rng):
+    T = 50
+    d = 1 + 0.05 * rng.normal(size=T)
+    mm = 1 + 0.2 * rng.random(T)
+    sd, sm = 0.3 + rng.random(T), 0.5 + rng.random(T)
+    ys = rng.normal(size=T).cumsum()
+    ys[[5, 6, 30]] = np.nan
+    s = kalman_filter_1d(ys, d=d, m=mm, sigma_d=sd, sigma_m=sm, x0=0.5, sigma0=2.0)
+    res = kalman_filter(ys[:, None], F=d[:, None, None], Q=(sd**2)[:, None, None],
+                        H=mm[:, None, None], R=(sm**2)[:, None, None], x0=[0.5], P0=[[4.0]])
+    np.testing.assert_allclose(s["mean"], res.means[:, 0], rtol=1e-12)
+    np.testing.assert_allclose(s["std"] ** 2, res.covs[:, 0, 0], rtol=1e-12)
+    np.testing.assert_allclose(s["pred_mean"], res.pred_means[:, 0], rtol=1e-12)
+    np.testing.assert_allclose(s["pred_std"] ** 2, res.pred_covs[:, 0, 0], rtol=1e-12)
+
+
+@pytest.mark.parametrize("store_covs", [True, False])
+def test_batch_shared_and_general_paths_agree_with_single_series(rng, store_covs):
+    n, m, T, B = 4, 2, 30, 70  # B > one chunk of the kernel, and not a multiple of it
+    mod = random_model(rng, n, m)
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(n), n_series=B, rng=rng)
+    pattern = rng.random((T, m)) < 0.2
+    ys[:, pattern] = np.nan  # the same missing pattern in every series
+    x0 = rng.normal(size=(B, n))
+    P0 = np.eye(n)
+    shared = kalman_filter(ys, **mod, x0=x0, P0=P0, store_covs=store_covs)
+    general = kalman_filter(ys, **mod, x0=x0, P0=np.broadcast_to(P0, (B, n, n)), store_covs=store_covs)
+    assert shared.shared_covs and not general.shared_covs
+    for b in (0, 33, B - 1):
+        one = kalman_filter(ys[b], **mod, x0=x0[b], P0=P0)
+        for res in (shared, general):
+            np.testing.assert_allclose(res.means[b], one.means, rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(res.pred_means[b], one.pred_means, rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(res.loglik[b], one.loglik, rtol=1e-12)
+            np.testing.assert_allclose(res.last.cov[b], one.covs[-1], rtol=1e-12, atol=1e-14)
+            if store_covs:
+                np.testing.assert_allclose(res.covs[b], one.covs, rtol=1e-12, atol=1e-14)
+            else:
+                assert res.covs is None and res.pred_covs is None
+
+
+def test_different_missing_patterns_use_per_series_covariances(rng):
+    n, m, T, B = 2, 2, 20, 5
+    mod = random_model(rng, n, m)
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(n), n_series=B, rng=rng)
+    ys[2, 5, 0] = np.nan
+    res = kalman_filter(ys, **mod, x0=np.zeros(n), P0=np.eye(n))
+    assert not res.shared_covs
+    one = kalman_filter(ys[2], **mod, x0=np.zeros(n), P0=np.eye(n))
+    np.testing.assert_allclose(res.covs[2], one.covs, rtol=1e-12)
+    assert not np.allclose(res.covs[1, 5], res.covs[2, 5])
+
+
+def test_all_missing_row_only_predicts(rng):
+    mod = random_model(rng, 3, 2)
+    ys = rng.normal(size=(5, 2))
+    ys[2] = np.nan
+    res = kalman_filter(ys, **mod, x0=np.zeros(3), P0=np.eye(3))
+    np.testing.assert_array_equal(res.means[2], res.pred_means[2])
+    np.testing.assert_array_equal(res.covs[2], res.pred_covs[2])
+
+
+def test_result_is_read_only(rng):
+    mod = random_model(rng, 2, 1)
+    res = kalman_filter(rng.normal(size=(5, 1)), **mod, x0=np.zeros(2), P0=np.eye(2))
+    with pytest.raises(ValueError):
+        res.means[0, 0] = 1.0
+    with pytest.raises(Exception):
+        res.means = None
+
+
+def test_predict_update_kernels_equal_the_sequence_filter(rng):
+    n, m = 4, 2
+    mod = random_model(rng, n, m)
+    ys = rng.normal(size=(7, 3, m))  # batch of 7 tracks, 3 steps
+    ys[1, 1, 0] = np.nan
+    ys[4, 2] = np.nan
+    seq = kalman_filter(ys, **mod, x0=np.zeros(n), P0=np.eye(n))
+    g = vt.Gaussian(np.zeros((7, n)), np.broadcast_to(np.eye(n), (7, n, n)))
+    total = np.zeros(7)
+    for t in range(3):
+        if t > 0:
+            g = kf_predict(g, mod["F"], mod["Q"])
+            np.testing.assert_allclose(g.mean, seq.pred_means[:, t], rtol=1e-12, atol=1e-13)
+        g, ll = kf_update(g, ys[:, t], mod["H"], mod["R"], return_loglik=True)
+        total += ll
+        np.testing.assert_allclose(g.mean, seq.means[:, t], rtol=1e-12, atol=1e-13)
+        np.testing.assert_allclose(g.cov, seq.covs[:, t], rtol=1e-12, atol=1e-13)
+    np.testing.assert_allclose(total, seq.loglik, rtol=1e-12)
+
+
+def test_kernels_keep_batch_shape(rng):
+    g = vt.Gaussian(np.zeros((2, 3, 2)), np.broadcast_to(np.eye(2), (2, 3, 2, 2)))
+    p = kf_predict(g, np.eye(2), np.eye(2))
+    u = kf_update(p, np.ones((2, 3, 1)), [[1.0, 0.0]], [[1.0]])
+    assert p.batch_shape == u.batch_shape == (2, 3)
+    single = kf_update(vt.Gaussian(np.zeros(2), np.eye(2)), [1.0], [[1.0, 0.0]], [[1.0]])
+    assert single.mean.shape == (2,)
+    np.testing.assert_allclose(single.mean, [0.5, 0.0])
+
+
+def test_kalman_filter_class_uses_true_dt(rng):
+    """Variable time steps give the per-step matrices of the model (dropped frames, sort#22)."""
+    cv, pos = vt.ConstantVelocity(dim=2, q=0.3), vt.Position(dim=2, r=0.5)
+    kf = vt.KalmanFilter(cv, pos)
+    times = np.cumsum(rng.uniform(0.5, 3.0, size=25))
+    ys = rng.normal(size=(25, 2)).cumsum(0)
+    x0, P0 = np.zeros(4), 10 * np.eye(4)
+    got = kf.filter(ys, dt=np.diff(times), x0=x0, P0=P0)
+    dts = np.r_[0.0, np.diff(times)]
+    want = kalman_filter(ys, F=cv.F(dts), Q=cv.Q(dts), H=pos.H(4), R=pos.R(), x0=x0, P0=P0)
+    np.testing.assert_allclose(got.means, want.means, rtol=1e-12)
+    sm = kf.smooth(ys, dt=np.diff(times), x0=x0, P0=P0)
+    np.testing.assert_allclose(sm.means, vt.rts_smooth(want, F=cv.F(dts), Q=cv.Q(dts)).means, rtol=1e-12)
+
+
+def test_default_prior_starts_at_first_measurement():
+    kf = vt.KalmanFilter(vt.ConstantVelocity(dim=2), vt.Position(dim=2, r=2.0))
+    ys = np.array([[np.nan, 4.0], [3.0, 5.0], [4.0, 6.0]])
+    x0, P0 = kf.default_prior(ys)
+    np.testing.assert_allclose(x0, [3.0, 4.0, 0.0, 0.0])
+    np.testing.assert_allclose(np.diag(P0), [2.0, 2.0, 2e6, 2e6])
+    res = kf.filter(ys)
+    assert np.all(np.isfinite(res.means))
+
+
+E = np.eye(2)
+
+
+@pytest.mark.parametrize(
+    "kwargs,exc,match",
+    [
+        (dict(ys=np.ones((5, 3))), ValueError, r"H must have shape \(3, 2\)"),
+        (dict(ys=np.ones(5)), ValueError, "ys must be 2-D or 3-D; got shape"),
+        (dict(ys=[[np.inf, 1.0]] * 3), ValueError, "ys must be finite or NaN"),
+        (dict(F=[[1.0, np.nan], [0.0, 1.0]]), ValueError, r"F must be finite; F\[0, 0, 1\] = nan"),
+        (dict(F=np.eye(3)), ValueError, r"F must have shape \(2, 2\) or \(T=5, 2, 2\); got \(3, 3\)"),
+        (dict(F=np.stack([E] * 4)), ValueError, r"F must have shape .*got \(4, 2, 2\)"),
+        (dict(Q=-E), ValueError, "Q must be positive semi-definite"),
+        (dict(R=[[1.0, 0.3], [0.2, 1.0]]), ValueError, "R must be symmetric"),
+        (dict(P0=-E), ValueError, "P0 must be positive semi-definite"),
+        (dict(P0=np.eye(3)), ValueError, r"P0 must have shape \(2, 2\) or \(B=1, 2, 2\); got \(3, 3\)"),
+        (dict(x0=np.zeros((3, 2))), ValueError, r"x0 must have shape \(2,\) or \(B=1, 2\)"),
+        (dict(x0="ab"), TypeError, "x0 must be an array of numbers"),
+        (dict(R=np.zeros((2, 2)), P0=np.zeros((2, 2))), ValueError, "not positive definite at step 0"),
+    ],
+)
+def test_bad_arguments_raise_naming_the_argument(kwargs, exc, match):
+    args = dict(ys=np.ones((5, 2)), F=E, Q=E, H=E, R=E, x0=np.zeros(2), P0=E)
+    args.update(kwargs)
+    ys = args.pop("ys")
+    with pytest.raises(exc, match=match):
+        kalman_filter(ys, **args)
+
+
+def test_kernel_argument_errors():
+    g = vt.Gaussian(np.zeros((3, 2)), np.broadcast_to(E, (3, 2, 2)))
+    with pytest.raises(ValueError, match=r"y must have shape \(3, 'm'\)"):
+        kf_update(g, np.ones((4, 1)), [[1.0, 0.0]], [[1.0]])
+    with pytest.raises(TypeError, match="g must be a vistrack.Gaussian"):
+        kf_predict(np.zeros(2), E, E)
+    with pytest.raises(ValueError, match=r"Gaussian cov must have shape"):
+        vt.Gaussian(np.zeros(2), np.eye(3))
+    with pytest.raises(ValueError, match="sigma_m must be a scalar or have shape"):
+        kalman_filter_1d(np.ones(4), d=1, m=1, sigma_d=1, sigma_m=np.ones(3), x0=0, sigma0=1)

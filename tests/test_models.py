@@ -1,0 +1,127 @@
+"""Motion and measurement models against closed forms and a Van Loan matrix-exponential oracle."""
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from vistrack.models import (
+    ConstantAcceleration,
+    ConstantPosition,
+    ConstantVelocity,
+    LinearGaussian,
+    LinearMeasurement,
+    LinearMotion,
+    Periodic,
+    Position,
+)
+
+
+def van_loan(A, G, q, dt):
+    """Exact discretisation of dx = A x dt + G dw, E[dw dw'] = q dt (Van Loan, 1978)."""
+    n = A.shape[0]
+    M = np.zeros((2 * n, 2 * n))
+    M[:n, :n] = -A
+    M[:n, n:] = G @ G.T * q
+    M[n:, n:] = A.T
+    E = expm(M * dt)
+    F = E[n:, n:].T
+    return F, F @ E[:n, n:]
+
+
+def integrator(order, dim):
+    k = order + 1
+    A1 = np.eye(k, k, 1)
+    G1 = np.zeros((k, 1))
+    G1[-1] = 1
+    return np.kron(A1, np.eye(dim)), np.kron(G1, np.eye(dim))
+
+
+@pytest.mark.parametrize("cls,order", [(ConstantPosition, 0), (ConstantVelocity, 1), (ConstantAcceleration, 2)])
+@pytest.mark.parametrize("dim", [1, 2, 3])
+@pytest.mark.parametrize("dt", [0.04, 1.0, 2.5])
+def test_kinematic_models_equal_van_loan(cls, order, dim, dt):
+    model = cls(dim=dim, q=0.7)
+    A, G = integrator(order, dim)
+    F, Q = van_loan(A, G, 0.7, dt)
+    np.testing.assert_allclose(model.F(dt), F, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(model.Q(dt), Q, rtol=1e-9, atol=1e-14)
+    assert model.ndim_state == dim * (order + 1)
+
+
+@pytest.mark.parametrize("omega", [0.5, 1.0, 3.0])
+@pytest.mark.parametrize("dt", [0.1, 1.3])
+def test_periodic_exact_equals_van_loan(omega, dt):
+    model = Periodic(dim=1, omega=omega, q=0.3)
+    A = np.array([[0.0, 1.0], [-(omega**2), 0.0]])
+    F, Q = van_loan(A, np.array([[0.0], [1.0]]), 0.3, dt)
+    np.testing.assert_allclose(model.F(dt), F, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(model.Q(dt), Q, rtol=1e-9, atol=1e-14)
+
+
+def test_seed_euler_matrices():
+    # the slides: periodic u_i = [[1, dt], [-dt, 1]] u_{i-1}; constant acceleration without dt²/2
+    np.testing.assert_array_equal(Periodic(discretisation="euler").F(0.1), [[1, 0.1], [-0.1, 1]])
+    np.testing.assert_array_equal(
+        ConstantAcceleration(dim=1, discretisation="euler").F(0.5),
+        [[1, 0.5, 0], [0, 1, 0.5], [0, 0, 1]],
+    )
+    # forward Euler of the oscillator gains energy every step; the exact one keeps it
+    u = np.array([1.0, 0.0])
+    Fe, Fx = Periodic(discretisation="euler").F(0.1), Periodic().F(0.1)
+    for _ in range(100):
+        ue, ux = Fe @ (u if _ == 0 else ue), Fx @ (u if _ == 0 else ux)
+    assert np.hypot(*ux) == pytest.approx(1.0, abs=1e-12)
+    assert np.hypot(*ue) == pytest.approx((1 + 0.01) ** 50, rel=1e-9)
+
+
+def test_dt_array_gives_stacks():
+    cv = ConstantVelocity(dim=2, q=0.2)
+    dts = np.array([0.5, 1.0, 3.0])
+    np.testing.assert_array_equal(cv.F(dts), np.stack([cv.F(d) for d in dts]))
+    np.testing.assert_array_equal(cv.Q(dts), np.stack([cv.Q(d) for d in dts]))
+    p = Periodic(dim=2)
+    assert p.F(dts).shape == (3, 4, 4)
+
+
+def test_state_layout_matches_seed_2d_example():
+    F = ConstantVelocity(dim=2).F(1.0)
+    np.testing.assert_array_equal(F, [[1, 0, 1, 0], [0, 1, 0, 1], [0, 0, 1, 0], [0, 0, 0, 1]])
+    np.testing.assert_array_equal(Position(dim=2).H(4), np.eye(2, 4))
+
+
+@pytest.mark.parametrize(
+    "call,match",
+    [
+        (lambda: ConstantVelocity(dim=4), "dim must be 1, 2 or 3; got 4"),
+        (lambda: ConstantVelocity(q=-1), "q must be a finite number >= 0"),
+        (lambda: ConstantVelocity().F(-0.1), "dt must be finite and >= 0"),
+        (lambda: ConstantVelocity().F(np.nan), "dt must be finite"),
+        (lambda: Periodic(omega=0), "omega must be a finite number > 0"),
+        (lambda: ConstantAcceleration(discretisation="rk4"), "discretisation must be"),
+        (lambda: Position(dim=2, r=0.0), "r must be a finite variance > 0"),
+        (lambda: Position(dim=2, r=np.eye(3)), r"r must have shape \(2, 2\)"),
+        (lambda: Position(dim=2, r=[[1, 2], [2, 1]]), "r must be positive definite"),
+        (lambda: Position(dim=3).H(2), "needs a state of at least 3"),
+        (lambda: LinearMotion(np.eye(2), -np.eye(2)), "Q must be positive semi-definite"),
+        (lambda: LinearMotion(np.eye(2), [[1, 0.5], [0, 1]]), "Q must be symmetric"),
+        (lambda: LinearMotion([[1, np.nan], [0, 1]], np.eye(2)), r"F must be finite; F\[0, 0, 1\]"),
+        (lambda: LinearMotion(np.eye(2), np.eye(3)), r"Q must have shape \(2, 2\)"),
+        (lambda: LinearMotion(np.eye(2), np.eye(2)).F(0.5), "discrete-time model"),
+        (lambda: LinearMeasurement(np.eye(2, 4), np.eye(3)), r"R must have shape \(2, 2\)"),
+        (lambda: LinearGaussian(np.eye(4), np.eye(4), np.eye(2, 3), np.eye(2)), "H has 3 columns"),
+        (lambda: LinearGaussian(np.stack([np.eye(2)] * 5), np.eye(2), np.stack([np.eye(2)] * 4), np.eye(2)),
+         "disagree on the number of steps"),
+    ],
+)
+def test_bad_model_arguments_name_the_argument(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+def test_linear_gaussian_time_varying():
+    T = 6
+    F = np.stack([np.eye(2) * (1 + 0.1 * t) for t in range(T)])
+    model = LinearGaussian(F, np.eye(2), np.eye(1, 2), np.eye(1))
+    assert model.n_steps == T
+    assert model.F.shape == (T, 2, 2)
+    assert model.H.shape == (1, 2)

@@ -1,0 +1,69 @@
+"""RTS and the seeds' two-filter smoother: equal to each other and to the batch posterior."""
+
+import numpy as np
+import pytest
+
+import vistrack as vt
+from vistrack.filters import kalman_filter, rts_smooth, two_filter_smooth
+
+from .conftest import random_model
+
+
+@pytest.mark.parametrize("tv", [False, True])
+def test_rts_equals_two_filter(rng, tv):
+    n, m, T, B = 4, 2, 50, 3
+    mod = random_model(rng, n, m, T, tv=tv)
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(n), n_series=B, rng=rng)
+    ys[rng.random((B, T)) < 0.1] = np.nan
+    ys[rng.random((B, T, m)) < 0.1] = np.nan
+    x0, P0 = rng.normal(size=(B, n)), 2.0 * np.eye(n)
+    rts = rts_smooth(kalman_filter(ys, **mod, x0=x0, P0=P0), F=mod["F"], Q=mod["Q"])
+    two = two_filter_smooth(ys, **mod, x0=x0, P0=P0)
+    np.testing.assert_allclose(two.means, rts.means, rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(two.covs, rts.covs, rtol=1e-8, atol=1e-10)
+
+
+def test_smoother_equals_batch_posterior(rng):
+    """The smoothed marginals equal the exact Gaussian conditional of all states given all data."""
+    n, m, T = 2, 1, 8
+    mod = random_model(rng, n, m)
+    F, Q, H, R = mod["F"], mod["Q"], mod["H"], mod["R"]
+    x0, P0 = rng.normal(size=n), np.eye(n)
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=x0, rng=rng)
+    # prior of all states: block-bidiagonal precision J, from x0 ~ N(x0, P0), x_t - F x_{t-1} ~ N(0, Q)
+    A = np.zeros((T * n, T * n))
+    A[:n, :n] = np.eye(n)
+    for t in range(1, T):
+        A[t * n:(t + 1) * n, t * n:(t + 1) * n] = np.eye(n)
+        A[t * n:(t + 1) * n, (t - 1) * n:t * n] = -F
+    W = np.kron(np.eye(T), np.linalg.inv(Q))
+    W[:n, :n] = np.linalg.inv(P0)
+    J = A.T @ W @ A
+    h = A.T @ W @ np.r_[x0, np.zeros((T - 1) * n)]
+    Hb = np.kron(np.eye(T), H)
+    Rinv = np.kron(np.eye(T), np.linalg.inv(R))
+    C = np.linalg.inv(J + Hb.T @ Rinv @ Hb)
+    mu = C @ (h + Hb.T @ Rinv @ ys.ravel())
+    sm = rts_smooth(kalman_filter(ys, **mod, x0=x0, P0=P0), F=F, Q=Q)
+    np.testing.assert_allclose(sm.means.ravel(), mu, rtol=1e-9, atol=1e-10)
+    for t in range(T):
+        np.testing.assert_allclose(sm.covs[t], C[t * n:(t + 1) * n, t * n:(t + 1) * n], rtol=1e-9)
+
+
+def test_smoothed_variance_is_never_larger_than_filtered(rng):
+    cv = vt.ConstantVelocity(dim=1, q=0.1)
+    kf = vt.KalmanFilter(cv, vt.Position(dim=1, r=1.0))
+    _, ys = vt.simulate.simulate(cv, vt.Position(dim=1), 40, x0=[0, 1], rng=rng)
+    sm = kf.smooth(ys)
+    fP, sP = sm.filtered.covs, sm.covs
+    assert np.all(np.linalg.eigvalsh(fP - sP) > -1e-10)
+    np.testing.assert_allclose(fP[-1], sP[-1])
+
+
+def test_rts_needs_covariances(rng):
+    mod = random_model(rng, 2, 1)
+    res = kalman_filter(rng.normal(size=(5, 1)), **mod, x0=np.zeros(2), P0=np.eye(2), store_covs=False)
+    with pytest.raises(ValueError, match="store_covs=True"):
+        rts_smooth(res, F=mod["F"], Q=mod["Q"])
+    with pytest.raises(TypeError, match="result must be a FilterResult"):
+        rts_smooth(np.zeros(3), F=mod["F"], Q=mod["Q"])
