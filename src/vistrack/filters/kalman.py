@@ -206,14 +206,33 @@ def kalman_filter(
     return FilterResult(means, covs, pmeans, pcovs, np.asarray(loglik), last, shared)
 
 
-def _gaussian_batch(g: Gaussian) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
-    if not isinstance(g, Gaussian):
-        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
-    n = g.mean.shape[-1]
-    batch = g.mean.shape[:-1]
-    mean = np.ascontiguousarray(g.mean.reshape(-1, n))
-    cov = np.ascontiguousarray(g.cov.reshape(-1, n, n))
-    return mean, cov, batch
+def _contiguous(a: np.ndarray) -> np.ndarray:
+    return a if a.flags.c_contiguous else np.ascontiguousarray(a)
+
+
+def _small_matrix(value: Any, name: str, rows: int, cols: int) -> np.ndarray:
+    """A constant ``(rows, cols)`` float64 matrix, checked for shape here (the kernels check
+    finiteness and symmetry, which costs less there)."""
+    if type(value) is np.ndarray and value.dtype == np.float64 and value.flags.c_contiguous:
+        arr = value
+    else:
+        arr = as_float_array(value, name)
+    if arr.shape != (rows, cols):
+        raise ValueError(f"{name} must have shape ({rows}, {cols}); got {arr.shape}")
+    return arr
+
+
+_KERNEL_ERRORS = {
+    1: "{a} must be finite",
+    2: "{b} must be finite",
+    3: "{b} must be symmetric",
+    4: "the innovation covariance H P H' + R is not positive definite for some Gaussian; "
+    "R must be positive definite on the observed components (or P must make S so)",
+}
+
+
+def _kernel_error(code: int, a: str, b: str) -> None:
+    raise ValueError(_KERNEL_ERRORS[code].format(a=a, b=b))
 
 
 def kf_predict(g: Gaussian, F: Any, Q: Any) -> Gaussian:
@@ -223,6 +242,8 @@ def kf_predict(g: Gaussian, F: Any, Q: Any) -> Gaussian:
     ----------
     g : Gaussian, batch shape (...)
     F, Q : array, shape (n, n)
+        Checked for shape, finiteness and the symmetry of ``Q`` (not for definiteness, which
+        would cost more than the prediction; :func:`kalman_filter` checks it).
 
     Examples
     --------
@@ -233,14 +254,16 @@ def kf_predict(g: Gaussian, F: Any, Q: Any) -> Gaussian:
     array([[2.1, 1. ],
            [1. , 1.1]])
     """
-    mean, cov, batch = _gaussian_batch(g)
-    n = mean.shape[1]
-    F_ = check_matrix_stack(F, "F", n, n, 1)
-    Q_ = check_matrix_stack(Q, "Q", n, n, 1)
-    out_m = np.empty_like(mean)
-    out_P = np.empty_like(cov)
-    _kernels.predict_batch(mean, cov, F_, Q_, out_m, out_P)
-    return Gaussian(out_m.reshape(batch + (n,)), out_P.reshape(batch + (n, n)))
+    if not isinstance(g, Gaussian):
+        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
+    n = g.mean.shape[-1]
+    code, mean, cov = _kernels.predict_batch(
+        _contiguous(g.mean), _contiguous(g.cov), _small_matrix(F, "F", n, n),
+        _small_matrix(Q, "Q", n, n),
+    )
+    if code >= 0:
+        _kernel_error(code, "F", "Q")
+    return Gaussian._trusted(mean, cov)
 
 
 def kf_update(
@@ -255,30 +278,28 @@ def kf_update(
         One measurement per Gaussian; NaN components are missing (an all-NaN row leaves that
         Gaussian unchanged).
     H, R : array, shape (m, n) and (m, m)
+        Checked for shape, finiteness and the symmetry of ``R``; a non-positive-definite
+        innovation covariance raises ``ValueError``.
     return_loglik : bool
         Also return ``log N(y; H m, H P H' + R)`` per Gaussian, shape (...).
     """
-    mean, cov, batch = _gaussian_batch(g)
-    B, n = mean.shape
-    y_ = as_float_array(y, "y")
-    if y_.shape[:-1] != batch or y_.ndim == 0:
-        raise ValueError(f"y must have shape {batch + ('m',)} to match g; got {y_.shape}")
-    m = y_.shape[-1]
-    H_ = check_matrix_stack(H, "H", m, n, 1)
-    R_ = check_matrix_stack(R, "R", m, m, 1)
-    out_m = np.empty((B, 1, n))
-    out_P = np.empty((B, n, n))
-    ll = np.empty(B)
-    d4 = np.empty((1, 1, 1, 1))
-    bad_t = _kernels.kf_batch(
-        y_.reshape(B, 1, m), np.zeros((1, n, n)), np.zeros((1, n, n)), H_, R_, mean, cov, out_m, d4, np.empty((B, 1, n)), d4, ll, out_P,
-        np.empty((0, n, m)), np.empty((0, m, m)), False,
+    if not isinstance(g, Gaussian):
+        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
+    mean = g.mean
+    n = mean.shape[-1]
+    if not (type(y) is np.ndarray and y.dtype == np.float64):
+        y = as_float_array(y, "y")
+    if y.ndim != mean.ndim or y.shape[:-1] != mean.shape[:-1]:
+        raise ValueError(f"y must have shape {mean.shape[:-1] + ('m',)} to match g; got {y.shape}")
+    m = y.shape[-1]
+    code, mean, cov, ll = _kernels.update_batch(
+        _contiguous(mean), _contiguous(g.cov), _contiguous(y), _small_matrix(H, "H", m, n),
+        _small_matrix(R, "R", m, m),
     )
-    _raise_not_pd(bad_t)
-    post = Gaussian(out_m.reshape(batch + (n,)), out_P.reshape(batch + (n, n)))
-    if return_loglik:
-        return post, ll.reshape(batch)
-    return post
+    if code >= 0:
+        _kernel_error(code, "H", "R")
+    post = Gaussian._trusted(mean, cov)
+    return (post, ll) if return_loglik else post
 
 
 def kalman_filter_1d(

@@ -1,0 +1,97 @@
+"""Simulation statistics, NEES/NIS consistency, and long-run numerical stability."""
+
+import numpy as np
+import pytest
+from scipy import stats
+
+import vistrack as vt
+from vistrack.evaluation import chi2_band, nees, nis, rmse
+from vistrack.simulate import simulate, simulate_lgssm
+
+
+def test_simulated_state_covariance_matches_closed_form():
+    """Var(x_t) of a random walk from a fixed start is t·q·dt; checked over many series."""
+    cp = vt.ConstantPosition(dim=1, q=0.5)
+    xs, ys = simulate(cp, vt.Position(dim=1, r=2.0), 11, x0=[0.0], dt=2.0, n_series=20000, rng=3)
+    var_x = xs[:, 10, 0].var()
+    var_y_minus_x = (ys - xs)[:, :, 0].var()
+    # sampling sd of a variance estimate is var * sqrt(2 / N): use 5 sd
+    assert var_x == pytest.approx(10 * 0.5 * 2.0, rel=5 * np.sqrt(2 / 20000))
+    assert var_y_minus_x == pytest.approx(2.0, rel=5 * np.sqrt(2 / (20000 * 11)))
+
+
+def test_simulate_is_reproducible_and_validates():
+    a = simulate_lgssm(5, F=np.eye(2), Q=np.eye(2), H=np.eye(1, 2), R=[[1.0]], x0=[0, 0], rng=7)
+    b = simulate_lgssm(5, F=np.eye(2), Q=np.eye(2), H=np.eye(1, 2), R=[[1.0]], x0=[0, 0], rng=7)
+    np.testing.assert_array_equal(a[1], b[1])
+    with pytest.raises(ValueError, match="T must be a positive integer"):
+        simulate_lgssm(0, F=np.eye(2), Q=np.eye(2), H=np.eye(1, 2), R=[[1.0]], x0=[0, 0])
+    with pytest.raises(TypeError, match="rng must be"):
+        simulate_lgssm(3, F=np.eye(2), Q=np.eye(2), H=np.eye(1, 2), R=[[1.0]], x0=[0, 0], rng="x")
+
+
+def test_nees_and_nis_of_a_correct_filter_lie_in_the_chi2_band():
+    cv, pos = vt.ConstantVelocity(dim=2, q=0.2), vt.Position(dim=2, r=1.5)
+    N, T = 200, 60
+    x0, P0 = np.array([0.0, 0.0, 1.0, -1.0]), np.diag([4.0, 4.0, 1.0, 1.0])
+    xs, ys = simulate(cv, pos, T, x0=x0, P0=P0, n_series=N, rng=11)
+    kf = vt.KalmanFilter(cv, pos)
+    res = kf.filter(ys, x0=x0, P0=P0)
+    e = nees(xs, res.means, res.covs)  # (N, T)
+    lo, hi = chi2_band(4, n_runs=N)
+    frac = np.mean((e.mean(0) > lo) & (e.mean(0) < hi))
+    # each step is inside its 95 % band with probability 0.95: 60 steps, allow 3 binomial sd
+    assert frac >= 0.95 - 3 * np.sqrt(0.95 * 0.05 / T)
+    lo_all, hi_all = chi2_band(4, n_runs=N * T)
+    assert lo_all < e.mean() < hi_all
+    v, dof = nis(ys, res, H=pos.H(4), R=pos.R())
+    assert np.all(dof == 2)
+    lo2, hi2 = chi2_band(2, n_runs=N * T)
+    assert lo2 < v.mean() < hi2
+    # a filter that believes in 100x too little process noise is caught by NEES
+    bad = vt.KalmanFilter(vt.ConstantVelocity(dim=2, q=0.002), pos).filter(ys, x0=x0, P0=P0)
+    assert nees(xs, bad.means, bad.covs).mean() > 2 * hi_all
+    # and smoothing beats filtering
+    sm = kf.smooth(ys, x0=x0, P0=P0)
+    assert rmse(sm.means[..., :2], xs[..., :2]) < rmse(res.means[..., :2], xs[..., :2])
+
+
+def test_nis_counts_only_observed_components():
+    pos = vt.Position(dim=2, r=1.0)
+    kf = vt.KalmanFilter(vt.ConstantPosition(dim=2, q=1.0), pos)
+    ys = np.array([[0.0, 0.0], [1.0, np.nan], [np.nan, np.nan]])
+    res = kf.filter(ys, x0=np.zeros(2), P0=np.eye(2))
+    v, dof = nis(ys, res, H=pos.H(2), R=pos.R())
+    np.testing.assert_array_equal(dof, [2, 1, 0])
+    S = res.pred_covs[1, 0, 0] + 1.0
+    assert v[1] == pytest.approx((1.0 - res.pred_means[1, 0]) ** 2 / S)
+    assert v[2] == 0.0
+
+
+def test_chi2_band_matches_scipy():
+    lo, hi = chi2_band(3, n_runs=10, level=0.9)
+    assert lo == pytest.approx(stats.chi2.ppf(0.05, 30) / 10)
+    assert hi == pytest.approx(stats.chi2.ppf(0.95, 30) / 10)
+    with pytest.raises(ValueError):
+        chi2_band(0)
+
+
+@pytest.mark.slow
+def test_covariances_stay_symmetric_positive_definite_over_a_million_steps():
+    """A badly scaled model: states in metres and km/s-scale velocities, tiny process noise."""
+    T = 1_000_000
+    dt = 1e-3
+    ca = vt.ConstantAcceleration(dim=1, q=1e-9)
+    F, Q = ca.F(dt), ca.Q(dt)  # Q spans ~1e-24 .. 1e-12
+    H = np.array([[1.0, 0.0, 0.0]])
+    R = np.array([[1e4]])
+    _, ys = simulate_lgssm(2000, F=F, Q=Q, H=H, R=R, x0=[0.0, 1e3, 1.0], rng=5)
+    ys = np.resize(ys, (T, 1))
+    ys[::7] = np.nan
+    res = vt.kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=[0.0, 1e3, 1.0], P0=np.diag([1e6, 1e2, 1e-2]))
+    P = res.covs
+    assert np.array_equal(P, np.swapaxes(P, -1, -2))
+    # positive definite: a Cholesky factorisation of every covariance succeeds
+    for chunk in range(0, T, 100_000):
+        np.linalg.cholesky(P[chunk:chunk + 100_000])
+    assert np.all(np.isfinite(res.means))
