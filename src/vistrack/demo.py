@@ -1,0 +1,209 @@
+"""The seeds' Kalman-filter figures, remade from real runs of vistrack.
+
+- :func:`constant_velocity_1d`: 1-D constant velocity, "o state, x measurement, * predicted,
+  + corrected, 3σ bars" (seed ``000``/``002``);
+- :func:`smoothing_1d`: forward, backward and combined estimates of the two-filter smoother;
+- :func:`murphy_2d`: the 2-D constant-velocity example from Kevin Murphy's toolbox (seed ``000``),
+  with uncertainty ellipses, and its error statistics over many seeds.
+
+``vistrack demo kalman`` runs them all and writes the PNGs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .filters import kalman_filter, rts_smooth, two_filter_smooth
+from .models import ConstantVelocity, LinearGaussian, Position
+from .simulate import simulate, simulate_lgssm
+
+__all__ = ["constant_velocity_1d", "smoothing_1d", "murphy_2d", "MurphyStats", "run_kalman_demo"]
+
+# the 1-D example: constant velocity, position measured
+_CV1 = ConstantVelocity(dim=1, q=0.05)
+_POS1 = Position(dim=1, r=1.0)
+_X0 = np.array([0.0, 1.0])
+_P0 = np.diag([4.0, 1.0])
+
+
+def _figure(ncols: int = 1, *, width: float = 6.4, height: float = 4.2):
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width * ncols, height), layout="constrained")
+    return fig, fig.subplots(1, ncols, squeeze=False)[0]
+
+
+def _sample_1d(T: int, seed: int):
+    return simulate(_CV1, _POS1, T, x0=_X0, rng=seed)
+
+
+def constant_velocity_1d(path: str | Path, *, T: int = 20, seed: int = 2) -> Path:
+    """Filter a simulated 1-D constant-velocity track and draw the seeds' figure."""
+    from .viz.plots import plot_estimates_1d
+
+    xs, ys = _sample_1d(T, seed)
+    F, Q, H, R = _CV1.F(1.0), _CV1.Q(1.0), _POS1.H(2), _POS1.R()
+    res = kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=_X0, P0=_P0)
+    fig, (ax,) = _figure()
+    t = np.arange(T)
+    plot_estimates_1d(
+        ax, t, truth=xs[:, 0], measurements=ys[:, 0],
+        pred_mean=res.pred_means[:, 0], pred_std=np.sqrt(res.pred_covs[:, 0, 0]),
+        mean=res.means[:, 0], std=np.sqrt(res.covs[:, 0, 0]),
+        title="Kalman filter, 1-D constant velocity (bars: 3 standard deviations)",
+    )
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def _moments(Lam: np.ndarray, eta: np.ndarray, cond_max: float = 1e8):
+    """Mean and covariance from information form, NaN where ``Λ`` is (near) singular."""
+    T, n = eta.shape
+    mean = np.full((T, n), np.nan)
+    cov = np.full((T, n, n), np.nan)
+    for t in range(T):
+        if np.linalg.cond(Lam[t]) < cond_max:
+            cov[t] = np.linalg.inv(Lam[t])
+            mean[t] = cov[t] @ eta[t]
+    return mean, cov
+
+
+def smoothing_1d(path: str | Path, *, T: int = 20, seed: int = 2) -> Path:
+    """The seeds' forward, backward and combined (two-filter) estimates, in three panels."""
+    from .viz.plots import plot_estimates_1d
+
+    xs, ys = _sample_1d(T, seed)
+    F, Q, H, R = _CV1.F(1.0), _CV1.Q(1.0), _POS1.H(2), _POS1.R()
+    sm = two_filter_smooth(ys, F=F, Q=Q, H=H, R=R, x0=_X0, P0=_P0)
+    fwd = sm.filtered
+    # backward filter: its prediction (without y_t) and its correction (with y_t), in moments
+    Lp, ep = sm.backward_info, sm.backward_info_vec
+    HtRi = H.T @ np.linalg.inv(R)
+    Lc = Lp + HtRi @ H
+    ec = ep + ys @ HtRi.T
+    bp_mean, bp_cov = _moments(Lp, ep)
+    bc_mean, bc_cov = _moments(Lc, ec)
+    t = np.arange(T)
+    fig, axes = _figure(3, width=5.2)
+    common = dict(truth=xs[:, 0], measurements=ys[:, 0])
+    plot_estimates_1d(axes[0], t, **common, pred_mean=fwd.pred_means[:, 0],
+                      pred_std=np.sqrt(fwd.pred_covs[:, 0, 0]), mean=fwd.means[:, 0],
+                      std=np.sqrt(fwd.covs[:, 0, 0]), title="Forward estimates")
+    plot_estimates_1d(axes[1], t, **common, pred_mean=bp_mean[:, 0],
+                      pred_std=np.sqrt(bp_cov[:, 0, 0]), mean=bc_mean[:, 0],
+                      std=np.sqrt(bc_cov[:, 0, 0]), title="Backward estimates")
+    plot_estimates_1d(axes[2], t, **common, mean=sm.means[:, 0], std=np.sqrt(sm.covs[:, 0, 0]),
+                      title="Combined forward-backward estimates")
+    lo = np.nanmin(ys) - 4
+    hi = np.nanmax(ys) + 4
+    for ax in axes:
+        ax.set_ylim(lo, hi)
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    return path
+
+
+# Kevin Murphy's 2-D constant-velocity demo, as in seed 000
+MURPHY = LinearGaussian(
+    F=np.array([[1, 0, 1, 0], [0, 1, 0, 1], [0, 0, 1, 0], [0, 0, 0, 1.0]]),
+    Q=0.1 * np.eye(4),
+    H=np.eye(2, 4),
+    R=np.eye(2),
+)
+MURPHY_X0 = np.array([10.0, 10.0, 1.0, 0.0])
+MURPHY_P0 = 10.0 * np.eye(4)
+MURPHY_T = 15
+
+
+@dataclass(frozen=True)
+class MurphyStats:
+    """The toolbox demo's error, ``sqrt(Σ_t Σ_{x,y} (estimate - truth)²)``, over ``n_seeds`` runs."""
+
+    n_seeds: int
+    filtered: np.ndarray  # (n_seeds,)
+    smoothed: np.ndarray  # (n_seeds,)
+
+    @property
+    def mean_filtered(self) -> float:
+        return float(self.filtered.mean())
+
+    @property
+    def mean_smoothed(self) -> float:
+        return float(self.smoothed.mean())
+
+    @property
+    def ratio(self) -> float:
+        return self.mean_filtered / self.mean_smoothed
+
+    def percentile_of(self, filtered: float, smoothed: float) -> tuple[float, float]:
+        """Where a single run's errors sit in our distribution, in percent."""
+        return (float(100 * np.mean(self.filtered < filtered)),
+                float(100 * np.mean(self.smoothed < smoothed)))
+
+
+def murphy_errors(n_seeds: int = 1000, *, seed: int = 0) -> MurphyStats:
+    """Run the 2-D example on ``n_seeds`` simulated tracks as one batch: filter and RTS-smooth."""
+    m = MURPHY
+    xs, ys = simulate_lgssm(MURPHY_T, F=m.F, Q=m.Q, H=m.H, R=m.R, x0=MURPHY_X0,
+                            n_series=n_seeds, rng=seed)
+    res = kalman_filter(ys, F=m.F, Q=m.Q, H=m.H, R=m.R, x0=MURPHY_X0, P0=MURPHY_P0)
+    sm = rts_smooth(res, F=m.F, Q=m.Q)
+    err = lambda est: np.sqrt(((est[..., :2] - xs[..., :2]) ** 2).sum(axis=(-2, -1)))  # noqa: E731
+    return MurphyStats(n_seeds, err(res.means), err(sm.means))
+
+
+def murphy_2d(path: str | Path, *, seed: int = 8) -> tuple[Path, float, float]:
+    """Draw one run of the 2-D example: filtered and smoothed estimates with 1σ ellipses.
+
+    Returns the path and that run's filtered and smoothed errors.
+    """
+    from .viz.plots import plot_track_2d
+
+    m = MURPHY
+    xs, ys = simulate_lgssm(MURPHY_T, F=m.F, Q=m.Q, H=m.H, R=m.R, x0=MURPHY_X0, rng=seed)
+    res = kalman_filter(ys, F=m.F, Q=m.Q, H=m.H, R=m.R, x0=MURPHY_X0, P0=MURPHY_P0)
+    sm = rts_smooth(res, F=m.F, Q=m.Q)
+    ef = float(np.sqrt(((res.means[:, :2] - xs[:, :2]) ** 2).sum()))
+    es = float(np.sqrt(((sm.means[:, :2] - xs[:, :2]) ** 2).sum()))
+    fig, axes = _figure(2, width=3.6, height=5.6)
+    plot_track_2d(axes[0], truth=xs, measurements=ys, means=res.means, covs=res.covs,
+                  label="filtered", color="tab:red", title=f"Filtered (error {ef:.2f})")
+    plot_track_2d(axes[1], truth=xs, measurements=ys, means=sm.means, covs=sm.covs,
+                  label="smoothed", color="tab:blue", title=f"Smoothed (error {es:.2f})")
+    lims = [(min(a.get_xlim()[0] for a in axes), max(a.get_xlim()[1] for a in axes)),
+            (min(a.get_ylim()[0] for a in axes), max(a.get_ylim()[1] for a in axes))]
+    for a in axes:
+        a.set_xlim(*lims[0])
+        a.set_ylim(*lims[1])
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    return path, ef, es
+
+
+def run_kalman_demo(out_dir: str | Path, *, n_seeds: int = 1000) -> str:
+    """Write the three figures into ``out_dir`` and return a text summary."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    p1 = constant_velocity_1d(out / "kalman_1d.png")
+    p2 = smoothing_1d(out / "smoothing_1d.png")
+    p3, ef, es = murphy_2d(out / "kalman_2d.png")
+    st = murphy_errors(n_seeds)
+    pf, ps = st.percentile_of(4.9, 3.2)
+    lines = [
+        f"wrote {p1}",
+        f"wrote {p2}",
+        f"wrote {p3}",
+        "",
+        "2-D constant-velocity example (seed 000, Murphy's toolbox): error = sqrt(sum of squared",
+        "position errors over x, y and all 15 steps)",
+        f"  this figure's run:              filtered {ef:.2f}   smoothed {es:.2f}",
+        f"  mean over {st.n_seeds} seeds (vistrack): filtered {st.mean_filtered:.2f}   "
+        f"smoothed {st.mean_smoothed:.2f}   ratio {st.ratio:.2f}",
+        "  FilterPy / pykalman (issue):    filtered 4.30   smoothed 2.93   ratio 1.47",
+        f"  the slide's run (4.9 / 3.2) sits at our {pf:.0f}th / {ps:.0f}th percentile",
+    ]
+    return "\n".join(lines)

@@ -1,0 +1,105 @@
+"""Plots of filter and smoother runs, in the style of the seeds' figures.
+
+Every function draws on a given matplotlib ``ax`` and returns it; none calls ``plt.show()``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["covariance_ellipse", "plot_estimates_1d", "plot_track_2d"]
+
+
+def covariance_ellipse(mean: Any, cov: Any, *, nsigma: float = 1.0, points: int = 64) -> np.ndarray:
+    """Points ``(points, 2)`` on the ``nsigma`` contour of a 2-D Gaussian ``N(mean, cov)``."""
+    mean = np.asarray(mean, dtype=float)
+    cov = np.asarray(cov, dtype=float)
+    if mean.shape != (2,) or cov.shape != (2, 2):
+        raise ValueError(f"need a 2-D mean (2,) and covariance (2, 2); got {mean.shape}, {cov.shape}")
+    w, V = np.linalg.eigh(cov)
+    a = np.linspace(0.0, 2.0 * np.pi, points)
+    circle = np.stack([np.cos(a), np.sin(a)], axis=1)
+    return mean + nsigma * (circle * np.sqrt(np.clip(w, 0.0, None))) @ V.T
+
+
+def plot_estimates_1d(
+    ax: Any,
+    t: Any,
+    *,
+    truth: Any = None,
+    measurements: Any = None,
+    pred_mean: Any = None,
+    pred_std: Any = None,
+    mean: Any = None,
+    std: Any = None,
+    nsigma: float = 3.0,
+    title: str | None = None,
+) -> Any:
+    """The seeds' 1-D figure: "The o-s give state, x-s measurement. The \\*-s give x̄ᵢ⁻, +-s give
+    x̄ᵢ⁺, vertical bars are 3 standard deviation bars".
+
+    All series are arrays of shape (T,); NaN points are not drawn. Returns ``ax``.
+    """
+    t = np.asarray(t, dtype=float)
+    off = 0.12 * (np.median(np.diff(t)) if t.size > 1 else 1.0)
+    if truth is not None:
+        ax.plot(t, truth, "o", mfc="none", color="k", label="state")
+    if measurements is not None:
+        ax.plot(t, measurements, "x", color="tab:green", label="measurement")
+    if pred_mean is not None:
+        ax.plot(t - off, pred_mean, "*", color="tab:blue", label=r"predicted $\bar{x}_i^-$")
+        if pred_std is not None:
+            ax.errorbar(t - off, pred_mean, yerr=nsigma * np.asarray(pred_std), fmt="none",
+                        ecolor="tab:blue", elinewidth=0.8, capsize=2)
+    if mean is not None:
+        ax.plot(t + off, mean, "+", color="tab:red", ms=9, label=r"corrected $\bar{x}_i^+$")
+        if std is not None:
+            ax.errorbar(t + off, mean, yerr=nsigma * np.asarray(std), fmt="none",
+                        ecolor="tab:red", elinewidth=0.8, capsize=2)
+    ax.set_xlabel("time")
+    ax.set_ylabel("position")
+    if title:
+        ax.set_title(title)
+    ax.legend(loc="best", fontsize=8)
+    return ax
+
+
+def plot_track_2d(
+    ax: Any,
+    *,
+    truth: Any = None,
+    measurements: Any = None,
+    means: Any = None,
+    covs: Any = None,
+    label: str = "estimate",
+    color: str = "tab:red",
+    nsigma: float = 1.0,
+    title: str | None = None,
+) -> Any:
+    """A 2-D track: true path, measurements, estimated positions and their ``nsigma`` ellipses.
+
+    ``truth``, ``measurements``, ``means`` are ``(T, >=2)`` arrays whose first two columns are the
+    position; ``covs`` is ``(T, >=2, >=2)`` and its top-left 2x2 block is drawn. Returns ``ax``.
+    """
+    if truth is not None:
+        tr = np.asarray(truth)
+        ax.plot(tr[:, 0], tr[:, 1], "ks-", ms=4, mfc="none", lw=0.8, label="true")
+    if measurements is not None:
+        ys = np.asarray(measurements)
+        ax.plot(ys[:, 0], ys[:, 1], "g*", label="observed")
+    if means is not None:
+        ms = np.asarray(means)
+        ax.plot(ms[:, 0], ms[:, 1], "x-", color=color, lw=1.0, label=label)
+        if covs is not None:
+            for mu, P in zip(ms, np.asarray(covs)):
+                e = covariance_ellipse(mu[:2], P[:2, :2], nsigma=nsigma)
+                ax.plot(e[:, 0], e[:, 1], "-", color=color, lw=0.7, alpha=0.8)
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    if title:
+        ax.set_title(title)
+    ax.legend(loc="best", fontsize=8)
+    return ax
