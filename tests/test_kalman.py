@@ -46,7 +46,7 @@ def with_missing(rng, ys, rows=0.15, comps=0.15):
 
 
 @pytest.mark.parametrize("tv", [False, True])
-@pytest.mark.parametrize("n,m", [(1, 1), (2, 1), (4, 2), (6, 3)])
+@pytest.mark.parametrize("n,m", [(1, 1), (2, 1), (4, 2), (6, 3), (1, 3), (2, 4)])
 def test_equals_filterpy_with_missing_components(rng, n, m, tv):
     T = 40
     mod = random_model(rng, n, m, T, tv=tv)
@@ -150,13 +150,14 @@ def test_batch_shared_and_general_paths_agree_with_single_series(rng, store_covs
         one = kalman_filter(ys[b], **mod, x0=x0[b], P0=P0)
         for res in (shared, general):
             np.testing.assert_allclose(res.means[b], one.means, rtol=1e-12, atol=1e-12)
-            np.testing.assert_allclose(res.pred_means[b], one.pred_means, rtol=1e-12, atol=1e-12)
             np.testing.assert_allclose(res.loglik[b], one.loglik, rtol=1e-12)
             np.testing.assert_allclose(res.last.cov[b], one.covs[-1], rtol=1e-12, atol=1e-14)
             if store_covs:
+                np.testing.assert_allclose(res.pred_means[b], one.pred_means, rtol=1e-12, atol=1e-12)
                 np.testing.assert_allclose(res.covs[b], one.covs, rtol=1e-12, atol=1e-14)
+                np.testing.assert_allclose(res.pred_covs[b], one.pred_covs, rtol=1e-12, atol=1e-14)
             else:
-                assert res.covs is None and res.pred_covs is None
+                assert res.covs is None and res.pred_covs is None and res.pred_means is None
 
 
 def test_different_missing_patterns_use_per_series_covariances(rng):

@@ -40,16 +40,16 @@ def _views(buf, o, shape):
 @njit(cache=True)
 def scratch(n, m, cc):
     """The SoA work arrays of :func:`update_chunk` and :func:`predict_chunk` for ``cc`` series,
-    carved from one allocation: ``x, xp, P, Pp, FP, A, AP, U, K, S, e, wv, yv, obs, nobs, ll``."""
-    buf = np.empty(cc * (5 * n * n + 2 * n + 2 * n * m + m * m + 4 * m + 2))
+    carved from one allocation: ``x, xp, P, Pp, FP, AP, W, U, K, S, e, wv, yv, obs, nobs, ll``."""
+    buf = np.empty(cc * (5 * n * n + 2 * n + 3 * n * m + m * m + 4 * m + 2))
     o = 0
     x, o = _views(buf, o, (n, cc))
     xp, o = _views(buf, o, (n, cc))
     P, o = _views(buf, o, (n, n, cc))
     Pp, o = _views(buf, o, (n, n, cc))
     FP, o = _views(buf, o, (n, n, cc))
-    A, o = _views(buf, o, (n, n, cc))
     AP, o = _views(buf, o, (n, n, cc))
+    W, o = _views(buf, o, (n, m, cc))
     U, o = _views(buf, o, (n, m, cc))
     K, o = _views(buf, o, (n, m, cc))
     S, o = _views(buf, o, (m, m, cc))
@@ -59,7 +59,7 @@ def scratch(n, m, cc):
     obs, o = _views(buf, o, (m, cc))
     nobs = buf[o:o + cc]
     ll = buf[o + cc:o + 2 * cc]
-    return x, xp, P, Pp, FP, A, AP, U, K, S, e, wv, yv, obs, nobs, ll
+    return x, xp, P, Pp, FP, AP, W, U, K, S, e, wv, yv, obs, nobs, ll
 
 
 @njit(cache=True, fastmath=_FM)
@@ -135,7 +135,7 @@ def predict_batch(mean_in, cov_in, F2, Q2):
 
 
 @njit(cache=True, fastmath=_FM)
-def update_chunk(H, R, th, tr, yv, xp, Pp, x, P, A, AP, U, K, S, e, wv, obs, nobs, ll, c):
+def update_chunk(H, R, th, tr, yv, xp, Pp, x, P, AP, W, U, K, S, e, wv, obs, nobs, ll, c):
     """Correct ``c`` predicted series (SoA ``xp (n, CH)``, ``Pp (n, n, CH)``) with ``yv (m, CH)``
     (NaN = missing) into ``x``, ``P``; adds the innovation log-density to ``ll``.
 
@@ -205,84 +205,96 @@ def update_chunk(H, R, th, tr, yv, xp, Pp, x, P, A, AP, U, K, S, e, wv, obs, nob
                 both = obs[k, j] * obs[k2, j]
                 S[k, k2, j] = both * S[k, k2, j] + (1.0 - both) * (k == k2)
                 S[k2, k, j] = S[k, k2, j]
-    # Cholesky S = L L' in place (lower triangle of S)
+    # Cholesky S = L L' in place (lower triangle of S); the series loop j is innermost in every
+    # nest below, so that each statement becomes SIMD code over series
     for k in range(m):
+        for p in range(k):
+            for j in range(c):
+                S[k, k, j] -= S[k, p, j] * S[k, p, j]
+        nbad = 0.0
         for j in range(c):
             d = S[k, k, j]
-            for p in range(k):
-                d -= S[k, p, j] * S[k, p, j]
-            if not d > 0.0:
-                bad = True
-                d = 1.0
-            S[k, k, j] = math.sqrt(d)
+            nbad += 0.0 if d > 0.0 else 1.0  # (NaN counts as bad)
+            S[k, k, j] = math.sqrt(d) if d > 0.0 else 1.0
+        if nbad > 0.0:
+            bad = True
         for k2 in range(k + 1, m):
+            for p in range(k):
+                for j in range(c):
+                    S[k2, k, j] -= S[k2, p, j] * S[k, p, j]
             for j in range(c):
-                s = S[k2, k, j]
-                for p in range(k):
-                    s -= S[k2, p, j] * S[k, p, j]
-                S[k2, k, j] = s / S[k, k, j]
-    # K = U S^-1: solve L z = U[i]' then L' K[i]' = z, per state row i
+                S[k2, k, j] /= S[k, k, j]
+    # K = U S^-1: per state row i, solve L z = U[i]' then L' K[i]' = z
     for i in range(n):
         for k in range(m):
             for j in range(c):
-                s = U[i, k, j]
-                for p in range(k):
-                    s -= S[k, p, j] * K[i, p, j]
-                K[i, k, j] = s / S[k, k, j]
-        for k in range(m - 1, -1, -1):
-            for j in range(c):
-                s = K[i, k, j]
-                for p in range(k + 1, m):
-                    s -= S[p, k, j] * K[i, p, j]
-                K[i, k, j] = s / S[k, k, j]
-    # log-likelihood of the innovation: whiten w = L^-1 e (missing: e = 0, L_kk = 1)
-    for k in range(m):
-        for j in range(c):
-            s = e[k, j]
+                K[i, k, j] = U[i, k, j]
             for p in range(k):
-                s -= S[k, p, j] * wv[p, j]
-            w = s / S[k, k, j]
-            wv[k, j] = w
-            ll[j] -= 0.5 * w * w + math.log(S[k, k, j])
+                for j in range(c):
+                    K[i, k, j] -= S[k, p, j] * K[i, p, j]
+            for j in range(c):
+                K[i, k, j] /= S[k, k, j]
+        for k in range(m - 1, -1, -1):
+            for p in range(k + 1, m):
+                for j in range(c):
+                    K[i, k, j] -= S[p, k, j] * K[i, p, j]
+            for j in range(c):
+                K[i, k, j] /= S[k, k, j]
+    # log N(e; 0, S) = -0.5 |L^-1 e|^2 - log det L - 0.5 k log 2π (missing: e = 0, L_kk = 1)
     for j in range(c):
         ll[j] -= 0.5 * nobs[j] * _LOG2PI
+        wv[0, j] = 1.0  # scratch: product of the diagonal of L, for one log per series
+    for k in range(m):
+        for j in range(c):
+            obs[k, j] = e[k, j]  # obs is free now: it holds the whitened innovation
+        for p in range(k):
+            for j in range(c):
+                obs[k, j] -= S[k, p, j] * obs[p, j]
+        for j in range(c):
+            w = obs[k, j] / S[k, k, j]
+            obs[k, j] = w
+            ll[j] -= 0.5 * w * w
+            wv[0, j] *= S[k, k, j]
+    for j in range(c):
+        ll[j] -= math.log(wv[0, j])
+    # mean: x = xp + K e
     for i in range(n):
         for j in range(c):
-            s = xp[i, j]
-            for k in range(m):
-                s += K[i, k, j] * e[k, j]
-            x[i, j] = s
-    # Joseph form: A = I - K H; P = A Pp A' + K R K' (upper triangle, mirrored)
+            x[i, j] = xp[i, j]
+        for k in range(m):
+            for j in range(c):
+                x[i, j] += K[i, k, j] * e[k, j]
+    # Joseph form (I - K H) Pp (I - K H)' + K R K', evaluated as P = AP - W K' with
+    # AP = (I - K H) Pp = Pp - K U' and W = AP H' - K R: the same matrix for any K (so an
+    # inexact gain still costs only second order), in n²m + n·nnz(H) + nm² + n²m/2 operations
     for i in range(n):
         for l in range(n):
             for j in range(c):
-                A[i, l, j] = 1.0 if i == l else 0.0
+                AP[i, l, j] = Pp[i, l, j]
+            for k in range(m):
+                for j in range(c):
+                    AP[i, l, j] -= K[i, k, j] * U[l, k, j]
+    for i in range(n):
         for k in range(m):
+            for j in range(c):
+                W[i, k, j] = 0.0
             for l in range(n):
                 h = H[th, k, l]
                 if h != 0.0:
                     for j in range(c):
-                        A[i, l, j] -= K[i, k, j] * h
-    for i in range(n):
-        for l in range(n):
-            for j in range(c):
-                AP[i, l, j] = 0.0
-            for r in range(n):
-                for j in range(c):
-                    AP[i, l, j] += A[i, r, j] * Pp[r, l, j]
+                        W[i, k, j] += AP[i, l, j] * h
+            for k2 in range(m):
+                r = R[tr, k2, k]
+                if r != 0.0:
+                    for j in range(c):
+                        W[i, k, j] -= K[i, k2, j] * r
     for i in range(n):
         for l in range(i, n):
             for j in range(c):
-                s = 0.0
-                for r in range(n):
-                    s += AP[i, r, j] * A[l, r, j]
-                P[i, l, j] = s
+                P[i, l, j] = AP[i, l, j]
             for k in range(m):
-                for k2 in range(m):
-                    r = R[tr, k, k2]
-                    if r != 0.0:
-                        for j in range(c):
-                            P[i, l, j] += K[i, k, j] * r * K[l, k2, j]
+                for j in range(c):
+                    P[i, l, j] -= W[i, k, j] * K[l, k, j]
             if l != i:
                 for j in range(c):
                     P[l, i, j] = P[i, l, j]
@@ -331,7 +343,7 @@ def update_batch(mean_in, cov_in, y_in, H2, R2):
     ll = ll_out.reshape(-1)
     B = mean.shape[0]
     cc = min(B, CH)
-    x, xp, P, Pp, _, A, AP, U, K, S, e, wv, yv, obs, nobs, llc = scratch(n, m, cc)
+    x, xp, P, Pp, _, AP, W, U, K, S, e, wv, yv, obs, nobs, llc = scratch(n, m, cc)
     bad = False
     for b0 in range(0, B, cc):
         c = min(cc, B - b0)
@@ -343,7 +355,7 @@ def update_batch(mean_in, cov_in, y_in, H2, R2):
                     Pp[i, k, j] = cov[b0 + j, i, k]
             for k in range(m):
                 yv[k, j] = y[b0 + j, k]
-        if update_chunk(H, R, 0, 0, yv, xp, Pp, x, P, A, AP, U, K, S, e, wv, obs, nobs, llc, c):
+        if update_chunk(H, R, 0, 0, yv, xp, Pp, x, P, AP, W, U, K, S, e, wv, obs, nobs, llc, c):
             bad = True
         for j in range(c):
             ll[b0 + j] = llc[j]
@@ -362,15 +374,15 @@ def kf_batch(
 
     ``F, Q (TF, n, n)``, ``H (TH, m, n)``, ``R (TR, m, m)`` with each leading size 1 or T.
     ``x0 (B0, n)``, ``P0 (BP, n, n)`` with B0, BP in {1, B}. Writes ``means``, ``pmeans``
-    ``(B, T, n)``, ``loglik (B,)``, ``last_P (B, n, n)`` and, when ``store_covs``, ``covs`` and
-    ``pcovs (B, T, n, n)``. When ``gains`` has ``T`` rows (used with ``B == 1``) it also writes
+    ``(B, T, n)``, ``loglik (B,)``, ``last_P (B, n, n)`` and, when ``store_covs``, ``pmeans``,
+    ``covs`` and ``pcovs (B, T, n, n)``. When ``gains`` has ``T`` rows (used with ``B == 1``) it also writes
     the Kalman gains ``(T, n, m)`` and the Cholesky factors of ``S`` ``(T, m, m)`` into ``chol``.
     Returns the first step whose innovation covariance is not positive definite, or -1.
     """
     B, T, m = ys.shape
     n = x0.shape[1]
     want_gains = gains.shape[0] == T
-    x, xp, P, Pp, FP, A, AP, U, K, S, e, wv, yv, obs, nobs, ll = scratch(n, m, CH)
+    x, xp, P, Pp, FP, AP, W, U, K, S, e, wv, yv, obs, nobs, ll = scratch(n, m, CH)
     bad_t = -1
     for b0 in range(0, B, CH):
         c = min(CH, B - b0)
@@ -394,10 +406,10 @@ def kf_batch(
             else:
                 predict_chunk(F, Q, t if F.shape[0] > 1 else 0, t if Q.shape[0] > 1 else 0,
                               x, P, xp, Pp, FP, c)
-            for i in range(n):
-                for j in range(c):
-                    pmeans[b0 + j, t, i] = xp[i, j]
-                if store_covs:
+            if store_covs:
+                for i in range(n):
+                    for j in range(c):
+                        pmeans[b0 + j, t, i] = xp[i, j]
                     for k in range(n):
                         for j in range(c):
                             pcovs[b0 + j, t, i, k] = Pp[i, k, j]
@@ -407,7 +419,7 @@ def kf_batch(
                     yv[k, j] = ys[b0 + j, t, k]
             th = t if H.shape[0] > 1 else 0
             tr = t if R.shape[0] > 1 else 0
-            if update_chunk(H, R, th, tr, yv, xp, Pp, x, P, A, AP, U, K, S, e, wv, obs, nobs, ll, c):
+            if update_chunk(H, R, th, tr, yv, xp, Pp, x, P, AP, W, U, K, S, e, wv, obs, nobs, ll, c):
                 if bad_t < 0:
                     bad_t = t
             if want_gains:
@@ -433,12 +445,13 @@ def kf_batch(
 
 
 @njit(cache=True, fastmath=_FM)
-def kf_means_shared(ys, F, H, x0, gains, chol, means, pmeans, loglik):
+def kf_means_shared(ys, F, H, x0, gains, chol, means, pmeans, loglik, store_pred):
     """Mean recursion for series that share their covariances and gains.
 
     ``gains (T, n, m)`` and ``chol (T, m, m)`` come from :func:`kf_batch` run on one series with
     the shared missing-data pattern; missing components have zero gain columns and unit rows in
     ``chol``. Each series costs ``F x``, ``H x``, ``K e`` and a triangular solve per step.
+    ``pmeans`` is written only when ``store_pred``.
     """
     B, T, m = ys.shape
     n = x0.shape[1]
@@ -491,21 +504,29 @@ def kf_means_shared(ys, F, H, x0, gains, chol, means, pmeans, loglik):
                     for j in range(c):
                         e[k, j] = 0.0
             for k in range(m):
-                lkk = chol[t, k, k]
                 for j in range(c):
-                    s = e[k, j]
-                    for p in range(k):
-                        s -= chol[t, k, p] * w[p, j]
-                    w[k, j] = s / lkk
+                    w[k, j] = e[k, j]
+                for p in range(k):
+                    lkp = chol[t, k, p]
+                    if lkp != 0.0:
+                        for j in range(c):
+                            w[k, j] -= lkp * w[p, j]
+                inv = 1.0 / chol[t, k, k]
+                for j in range(c):
+                    w[k, j] *= inv
                     ll[j] -= 0.5 * w[k, j] * w[k, j]
             for i in range(n):
+                if store_pred:
+                    for j in range(c):
+                        pmeans[b0 + j, t, i] = xp[i, j]
                 for j in range(c):
-                    pmeans[b0 + j, t, i] = xp[i, j]
+                    x[i, j] = xp[i, j]
+                for k in range(m):
+                    g = gains[t, i, k]
+                    if g != 0.0:
+                        for j in range(c):
+                            x[i, j] += g * e[k, j]
                 for j in range(c):
-                    s = xp[i, j]
-                    for k in range(m):
-                        s += gains[t, i, k] * e[k, j]
-                    x[i, j] = s
-                    means[b0 + j, t, i] = s
+                    means[b0 + j, t, i] = x[i, j]
         for j in range(c):
             loglik[b0 + j] = ll[j]

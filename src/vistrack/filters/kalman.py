@@ -43,7 +43,8 @@ class FilterResult:
     means, covs : ndarray, shape (..., T, n) and (..., T, n, n)
         Corrected estimates ``x̄ᵢ⁺, Σᵢ⁺`` (``covs`` is None when ``store_covs=False``).
     pred_means, pred_covs : ndarray, shape (..., T, n) and (..., T, n, n)
-        Predictions ``x̄ᵢ⁻, Σᵢ⁻`` (``pred_means[..., 0, :]`` is the prior ``x0``).
+        Predictions ``x̄ᵢ⁻, Σᵢ⁻`` (``pred_means[..., 0, :]`` is the prior ``x0``); None when
+        ``store_covs=False``.
     loglik : ndarray, shape (...)
         ``log p(y_0, ..., y_{T-1})``, summed over the observed components.
     last : Gaussian
@@ -54,7 +55,7 @@ class FilterResult:
 
     means: np.ndarray
     covs: np.ndarray | None
-    pred_means: np.ndarray
+    pred_means: np.ndarray | None
     pred_covs: np.ndarray | None
     loglik: np.ndarray
     last: Gaussian
@@ -134,8 +135,9 @@ def kalman_filter(
     x0, P0 : array, shape (n,) / (n, n) or per series (B, n) / (B, n, n)
         Prior of the first step (the seeds' ``x̄0⁻``, ``Σ0⁻``), corrected by ``ys[..., 0, :]``.
     store_covs : bool
-        If False, ``covs`` and ``pred_covs`` are not kept (``last`` still holds the final
-        covariance), which saves ``2 B T n²`` floats on large batches.
+        If False, only the corrected means, the log-likelihood and the last Gaussian are kept
+        (``covs``, ``pred_means`` and ``pred_covs`` are None), which saves ``B T n (2 n + 1)``
+        floats and most of the memory traffic on large batches.
 
     Returns
     -------
@@ -166,7 +168,7 @@ def kalman_filter(
     F_, Q_, H_, R_ = _model(F, Q, H, R, n, m, T)
 
     means = np.empty((B, T, n))
-    pmeans = np.empty((B, T, n))
+    pmeans = np.empty((B, T, n)) if store_covs else np.empty((1, 1, n))
     loglik = np.empty(B)
     mask = np.isnan(y)
     shared = B > 1 and P0_.shape[0] == 1 and bool((mask == mask[0]).all())
@@ -182,7 +184,7 @@ def kalman_filter(
             pc4, np.empty(1), last1, gains, chol, store_covs,
         )
         _raise_not_pd(bad_t)
-        _kernels.kf_means_shared(y, F_, H_, x0_, gains, chol, means, pmeans, loglik)
+        _kernels.kf_means_shared(y, F_, H_, x0_, gains, chol, means, pmeans, loglik, store_covs)
         covs = np.broadcast_to(c4, (B, T, n, n)) if store_covs else None
         pcovs = np.broadcast_to(pc4, (B, T, n, n)) if store_covs else None
         last_P = np.broadcast_to(last1, (B, n, n))
@@ -197,10 +199,11 @@ def kalman_filter(
         _raise_not_pd(bad_t)
         if not store_covs:
             covs = pcovs = None
+    if not store_covs:
+        pmeans = None
     if single:
-        means, pmeans, loglik, last_P = means[0], pmeans[0], loglik[0], last_P[0]
-        covs = None if covs is None else covs[0]
-        pcovs = None if pcovs is None else pcovs[0]
+        means, loglik, last_P = means[0], loglik[0], last_P[0]
+        pmeans, covs, pcovs = (None if a is None else a[0] for a in (pmeans, covs, pcovs))
     last = Gaussian(means[..., -1, :], last_P)
     _readonly(means, covs, pmeans, pcovs, loglik)
     return FilterResult(means, covs, pmeans, pcovs, np.asarray(loglik), last, shared)
