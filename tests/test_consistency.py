@@ -77,8 +77,12 @@ def test_chi2_band_matches_scipy():
 
 
 @pytest.mark.slow
-def test_covariances_stay_symmetric_positive_definite_over_a_million_steps():
-    """A badly scaled model: states in metres and km/s-scale velocities, tiny process noise."""
+@pytest.mark.parametrize("kernel", ["one series", "batch"])
+def test_covariances_stay_symmetric_positive_definite_over_a_million_steps(kernel):
+    """A badly scaled model: states in metres and km/s-scale velocities, tiny process noise.
+
+    "one series" runs the scalar kernel; "batch" two series with their own priors, which run
+    the vectorised kernel with one covariance per series."""
     T = 1_000_000
     dt = 1e-3
     ca = vt.ConstantAcceleration(dim=1, q=1e-9)
@@ -88,10 +92,15 @@ def test_covariances_stay_symmetric_positive_definite_over_a_million_steps():
     _, ys = simulate_lgssm(2000, F=F, Q=Q, H=H, R=R, x0=[0.0, 1e3, 1.0], rng=5)
     ys = np.resize(ys, (T, 1))
     ys[::7] = np.nan
-    res = vt.kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=[0.0, 1e3, 1.0], P0=np.diag([1e6, 1e2, 1e-2]))
-    P = res.covs
+    P0 = np.diag([1e6, 1e2, 1e-2])
+    if kernel == "batch":
+        ys = np.stack([ys, ys[::-1]])
+        P0 = np.stack([P0, 2 * P0])
+    res = vt.kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=[0.0, 1e3, 1.0], P0=P0)
+    assert not res.shared_covs
+    P = res.covs.reshape(-1, 3, 3)
     assert np.array_equal(P, np.swapaxes(P, -1, -2))
     # positive definite: a Cholesky factorisation of every covariance succeeds
-    for chunk in range(0, T, 100_000):
+    for chunk in range(0, len(P), 100_000):
         np.linalg.cholesky(P[chunk:chunk + 100_000])
     assert np.all(np.isfinite(res.means))

@@ -5,7 +5,7 @@ import pytest
 from scipy import stats
 
 import vistrack as vt
-from vistrack.filters import kalman_filter, kalman_filter_1d, kf_predict, kf_update
+from vistrack.filters import kalman_filter, kalman_filter_1d, kf_predict, kf_step, kf_update
 
 from .conftest import random_model
 
@@ -210,6 +210,28 @@ def test_predict_update_kernels_equal_the_sequence_filter(rng):
     np.testing.assert_allclose(total, seq.loglik, rtol=1e-12)
 
 
+@pytest.mark.parametrize("B", [1, 5, 300])  # scalar path below 8 Gaussians, SoA path above
+def test_kf_step_equals_predict_then_update(rng, B):
+    n, m = 4, 2
+    mod = random_model(rng, n, m)
+    A = rng.normal(size=(B, n, n))
+    g = vt.Gaussian(rng.normal(size=(B, n)), A @ np.swapaxes(A, 1, 2) + np.eye(n))
+    y = rng.normal(size=(B, m))
+    y[0, 1] = np.nan
+    got, ll = kf_step(g, y, mod["F"], mod["Q"], mod["H"], mod["R"], return_loglik=True)
+    want, ll2 = kf_update(kf_predict(g, mod["F"], mod["Q"]), y, mod["H"], mod["R"], return_loglik=True)
+    np.testing.assert_allclose(got.mean, want.mean, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(got.cov, want.cov, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(ll, ll2, rtol=1e-13)
+    # and both equal FilterPy on the first Gaussian
+    kf = filterpy_kalman.KalmanFilter(dim_x=n, dim_z=m)
+    kf.x, kf.P = g.mean[0].copy(), g.cov[0].copy()
+    kf.predict(F=mod["F"], Q=mod["Q"])
+    kf.update(y[0, :1], H=mod["H"][:1], R=mod["R"][:1, :1])
+    np.testing.assert_allclose(got.mean[0], kf.x, rtol=1e-10)
+    np.testing.assert_allclose(got.cov[0], kf.P, rtol=1e-10)
+
+
 def test_kernels_keep_batch_shape(rng):
     g = vt.Gaussian(np.zeros((2, 3, 2)), np.broadcast_to(np.eye(2), (2, 3, 2, 2)))
     p = kf_predict(g, np.eye(2), np.eye(2))
@@ -282,5 +304,18 @@ def test_kernel_argument_errors():
         kf_predict(np.zeros(2), E, E)
     with pytest.raises(ValueError, match=r"Gaussian cov must have shape"):
         vt.Gaussian(np.zeros(2), np.eye(3))
+    bad = np.array([[1.0, np.inf]])
+    with pytest.raises(ValueError, match="F must be finite"):
+        kf_step(g, np.ones((3, 1)), np.full((2, 2), np.nan), E, [[1.0, 0.0]], [[1.0]])
+    with pytest.raises(ValueError, match="H must be finite"):
+        kf_step(g, np.ones((3, 1)), E, E, bad, [[1.0]])
+    with pytest.raises(ValueError, match="R must be symmetric"):
+        kf_update(g, np.ones((3, 2)), E, [[1.0, 0.5], [0.0, 1.0]])
+    with pytest.raises(ValueError, match="Q must be symmetric"):
+        kf_predict(g, E, [[1.0, 0.5], [0.0, 1.0]])
+    with pytest.raises(ValueError, match=r"H must have shape \(1, 2\); got \(1, 3\)"):
+        kf_update(g, np.ones((3, 1)), [[1.0, 0.0, 0.0]], [[1.0]])
+    with pytest.raises(ValueError, match="not positive definite"):
+        kf_update(vt.Gaussian(np.zeros((3, 2)), np.zeros((3, 2, 2))), np.ones((3, 1)), [[1.0, 0.0]], [[0.0]])
     with pytest.raises(ValueError, match="sigma_m must be a scalar or have shape"):
         kalman_filter_1d(np.ones(4), d=1, m=1, sigma_d=1, sigma_m=np.ones(3), x0=0, sigma0=1)

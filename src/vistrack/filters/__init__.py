@@ -6,6 +6,7 @@ from .kalman import (
     kalman_filter,
     kalman_filter_1d,
     kf_predict,
+    kf_step,
     kf_update,
 )
 from .smoothers import SmoothResult, rts_smooth, two_filter_smooth
@@ -17,6 +18,7 @@ __all__ = [
     "kalman_filter",
     "kalman_filter_1d",
     "kf_predict",
+    "kf_step",
     "kf_update",
     "rts_smooth",
     "two_filter_smooth",

@@ -24,6 +24,7 @@ import math
 import numpy as np
 from numba import njit
 
+SMALL_B = 8  # per-call kernels use the scalar path below this batch size
 CH = 128  # series per chunk (measured best of 16-256 on the 10,000 x 500 CV batch)
 _LOG2PI = math.log(2.0 * math.pi)
 _FM = {"contract", "arcp", "nsz", "reassoc"}  # fast-math without assuming "no NaN"
@@ -116,6 +117,11 @@ def predict_batch(mean_in, cov_in, F2, Q2):
     om = out_mean.reshape((-1, n))
     oc = out_cov.reshape((-1, n, n))
     B = mean.shape[0]
+    if B < SMALL_B:
+        FP = np.empty((n, n))
+        for b in range(B):
+            predict_one(F, Q, 0, 0, mean[b], cov[b], om[b], oc[b], FP)
+        return -1, out_mean, out_cov
     cc = min(B, CH)
     x, xp, P, Pp, FP = scratch(n, 0, cc)[:5]
     for b0 in range(0, B, cc):
@@ -342,6 +348,14 @@ def update_batch(mean_in, cov_in, y_in, H2, R2):
     out_c = out_cov.reshape((-1, n, n))
     ll = ll_out.reshape(-1)
     B = mean.shape[0]
+    if B < SMALL_B:
+        idx, e, U, K, S, AP, W, _ = one_scratch(n, m)
+        bad = False
+        for b in range(B):
+            ok, ll[b] = update_one(H, R, 0, 0, y[b], mean[b], cov[b], out_m[b], out_c[b],
+                                   idx, e, U, K, S, AP, W)
+            bad = bad or not ok
+        return (4 if bad else -1), out_mean, out_cov, ll_out
     cc = min(B, CH)
     x, xp, P, Pp, _, AP, W, U, K, S, e, wv, yv, obs, nobs, llc = scratch(n, m, cc)
     bad = False
@@ -530,3 +544,197 @@ def kf_means_shared(ys, F, H, x0, gains, chol, means, pmeans, loglik, store_pred
                     means[b0 + j, t, i] = x[i, j]
         for j in range(c):
             loglik[b0 + j] = ll[j]
+
+
+# ------------------------------------------------------------------------------------------------
+# Scalar kernels for one Gaussian at a time. With a single series the SoA loops above have length
+# one and cost more in loop overhead than in arithmetic; these run the same equations on plain
+# (n,) / (n, n) arrays, updating with the observed components only.
+
+
+@njit(cache=True, fastmath=_FM)
+def predict_one(F, Q, tf, tq, x, P, xp, Pp, FP):
+    """``xp = F x``, ``Pp = F P F' + Q`` for one Gaussian; ``FP`` is scratch."""
+    n = x.shape[0]
+    for i in range(n):
+        s = 0.0
+        for l in range(n):
+            s += F[tf, i, l] * x[l]
+        xp[i] = s
+        for k in range(n):
+            s = 0.0
+            for l in range(n):
+                s += F[tf, i, l] * P[l, k]
+            FP[i, k] = s
+    for i in range(n):
+        for k in range(i, n):
+            s = Q[tq, i, k]
+            for l in range(n):
+                s += FP[i, l] * F[tf, k, l]
+            Pp[i, k] = s
+            Pp[k, i] = s
+
+
+@njit(cache=True, fastmath=_FM)
+def update_one(H, R, th, tr, y, xp, Pp, x, P, idx, e, U, K, S, AP, W):
+    """Correct one predicted Gaussian ``xp, Pp`` with ``y (m,)`` (NaN = missing) into ``x, P``.
+
+    Uses the observed components only; the Joseph form is evaluated as in :func:`update_chunk`.
+    Returns ``(ok, loglik)``; ``ok`` is False if ``S`` is not positive definite.
+    """
+    n = xp.shape[0]
+    m = y.shape[0]
+    ko = 0
+    for k in range(m):
+        if not math.isnan(y[k]):
+            idx[ko] = k
+            ko += 1
+    if ko == 0:
+        for i in range(n):
+            x[i] = xp[i]
+            for k in range(n):
+                P[i, k] = Pp[i, k]
+        return True, 0.0
+    for a in range(ko):
+        k = idx[a]
+        s = y[k]
+        for i in range(n):
+            s -= H[th, k, i] * xp[i]
+        e[a] = s
+    for i in range(n):
+        for a in range(ko):
+            k = idx[a]
+            s = 0.0
+            for l in range(n):
+                s += Pp[i, l] * H[th, k, l]
+            U[i, a] = s
+    for a in range(ko):
+        for b in range(a, ko):
+            s = R[tr, idx[a], idx[b]]
+            for i in range(n):
+                s += H[th, idx[a], i] * U[i, b]
+            S[a, b] = s
+            S[b, a] = s
+    for a in range(ko):  # Cholesky, lower triangle
+        d = S[a, a]
+        for p in range(a):
+            d -= S[a, p] * S[a, p]
+        if not d > 0.0:
+            return False, 0.0
+        S[a, a] = math.sqrt(d)
+        for b in range(a + 1, ko):
+            s = S[b, a]
+            for p in range(a):
+                s -= S[b, p] * S[a, p]
+            S[b, a] = s / S[a, a]
+    for i in range(n):  # K = U S^-1
+        for a in range(ko):
+            s = U[i, a]
+            for p in range(a):
+                s -= S[a, p] * K[i, p]
+            K[i, a] = s / S[a, a]
+        for a in range(ko - 1, -1, -1):
+            s = K[i, a]
+            for p in range(a + 1, ko):
+                s -= S[p, a] * K[i, p]
+            K[i, a] = s / S[a, a]
+    ll = -0.5 * ko * _LOG2PI
+    det_l = 1.0
+    for a in range(ko):  # whiten e in place
+        s = e[a]
+        for p in range(a):
+            s -= S[a, p] * e[p]
+        e[a] = s / S[a, a]
+        ll -= 0.5 * e[a] * e[a]
+        det_l *= S[a, a]
+    ll -= math.log(det_l)
+    for a in range(ko - 1, -1, -1):  # un-whiten: e = L w, to use the innovation below
+        s = 0.0
+        for p in range(a + 1):
+            s += S[a, p] * e[p]
+        e[a] = s
+    for i in range(n):
+        s = xp[i]
+        for a in range(ko):
+            s += K[i, a] * e[a]
+        x[i] = s
+    for i in range(n):
+        for l in range(n):
+            s = Pp[i, l]
+            for a in range(ko):
+                s -= K[i, a] * U[l, a]
+            AP[i, l] = s
+    for i in range(n):
+        for a in range(ko):
+            s = 0.0
+            for l in range(n):
+                s += AP[i, l] * H[th, idx[a], l]
+            for b in range(ko):
+                s -= K[i, b] * R[tr, idx[b], idx[a]]
+            W[i, a] = s
+    for i in range(n):
+        for l in range(i, n):
+            s = AP[i, l]
+            for a in range(ko):
+                s -= W[i, a] * K[l, a]
+            P[i, l] = s
+            P[l, i] = s
+    return True, ll
+
+
+
+@njit(cache=True, fastmath=_FM)
+def step_batch(mean_in, cov_in, y_in, F2, Q2, H2, R2):
+    """Predict with ``F, Q`` then correct with ``y, H, R``, for a batch of Gaussians of any batch
+    shape. Returns ``(code, mean, cov, loglik)``; codes as :func:`predict_batch` (1-3) and
+    :func:`update_batch` (5-7 for H/R, 4 for S)."""
+    code, pm, pc = predict_batch(mean_in, cov_in, F2, Q2)
+    if code >= 0:
+        return code, pm, pc, np.empty(y_in.shape[:-1])
+    code, m, c, ll = update_batch(pm, pc, y_in, H2, R2)
+    if code >= 0 and code != 4:
+        code += 4
+    return code, m, c, ll
+
+
+@njit(cache=True)
+def one_scratch(n, m):
+    idx = np.empty(m, dtype=np.int64)
+    return (idx, np.empty(m), np.empty((n, m)), np.empty((n, m)), np.empty((m, m)),
+            np.empty((n, n)), np.empty((n, m)), np.empty((n, n)))
+
+
+@njit(cache=True, fastmath=_FM)
+def kf_single(ys, F, Q, H, R, x0, P0, means, covs, pmeans, pcovs, last_P, store_covs):
+    """:func:`kf_batch` for one series ``ys (T, m)``, ``x0 (n,)``, ``P0 (n, n)``.
+
+    Returns ``(bad_t, loglik)``: the first step whose ``S`` is not positive definite (or -1).
+    """
+    T, m = ys.shape
+    n = x0.shape[0]
+    idx, e, U, K, S, AP, W, FP = one_scratch(n, m)
+    x = x0.copy()
+    P = P0.copy()
+    xp = np.empty(n)
+    Pp = np.empty((n, n))
+    total = 0.0
+    for t in range(T):
+        if t == 0:
+            xp[:] = x
+            Pp[:, :] = P
+        else:
+            predict_one(F, Q, t if F.shape[0] > 1 else 0, t if Q.shape[0] > 1 else 0,
+                        x, P, xp, Pp, FP)
+        if store_covs:
+            pmeans[t] = xp
+            pcovs[t] = Pp
+        ok, ll = update_one(H, R, t if H.shape[0] > 1 else 0, t if R.shape[0] > 1 else 0,
+                            ys[t], xp, Pp, x, P, idx, e, U, K, S, AP, W)
+        if not ok:
+            return t, total
+        total += ll
+        means[t] = x
+        if store_covs:
+            covs[t] = P
+    last_P[:, :] = P
+    return -1, total

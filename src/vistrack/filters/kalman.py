@@ -28,6 +28,7 @@ __all__ = [
     "kalman_filter",
     "kf_predict",
     "kf_update",
+    "kf_step",
     "kalman_filter_1d",
     "KalmanFilter",
 ]
@@ -188,6 +189,18 @@ def kalman_filter(
         covs = np.broadcast_to(c4, (B, T, n, n)) if store_covs else None
         pcovs = np.broadcast_to(pc4, (B, T, n, n)) if store_covs else None
         last_P = np.broadcast_to(last1, (B, n, n))
+    elif B == 1 and P0_.shape[0] == 1:
+        # one series: the scalar kernel (the SoA kernel's loops would have length one)
+        covs = np.empty((1, T, n, n)) if store_covs else np.empty((1, 1, n, n))
+        pcovs = np.empty((1, T, n, n)) if store_covs else np.empty((1, 1, n, n))
+        last_P = np.empty((1, n, n))
+        bad_t, loglik[0] = _kernels.kf_single(
+            y[0], F_, Q_, H_, R_, x0_[0], P0_[0], means[0], covs[0], pmeans[0], pcovs[0],
+            last_P[0], store_covs,
+        )
+        _raise_not_pd(bad_t)
+        if not store_covs:
+            covs = pcovs = None
     else:
         covs = np.empty((B, T, n, n)) if store_covs else np.empty((1, 1, 1, 1))
         pcovs = np.empty((B, T, n, n)) if store_covs else np.empty((1, 1, 1, 1))
@@ -231,11 +244,56 @@ _KERNEL_ERRORS = {
     3: "{b} must be symmetric",
     4: "the innovation covariance H P H' + R is not positive definite for some Gaussian; "
     "R must be positive definite on the observed components (or P must make S so)",
+    5: "H must be finite",
+    6: "R must be finite",
+    7: "R must be symmetric",
 }
 
 
 def _kernel_error(code: int, a: str, b: str) -> None:
     raise ValueError(_KERNEL_ERRORS[code].format(a=a, b=b))
+
+
+def _check_y(y: Any, mean: np.ndarray) -> np.ndarray:
+    if not (type(y) is np.ndarray and y.dtype == np.float64):
+        y = as_float_array(y, "y")
+    if y.ndim != mean.ndim or y.shape[:-1] != mean.shape[:-1]:
+        raise ValueError(f"y must have shape {mean.shape[:-1] + ('m',)} to match g; got {y.shape}")
+    return _contiguous(y)
+
+
+def kf_step(
+    g: Gaussian, y: Any, F: Any, Q: Any, H: Any, R: Any, *, return_loglik: bool = False
+) -> Gaussian | tuple[Gaussian, np.ndarray]:
+    """:func:`kf_predict` then :func:`kf_update` in one call: the usual loop of one tracker.
+
+    Same arguments and checks as the two; equal to ``kf_update(kf_predict(g, F, Q), y, H, R)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vistrack import Gaussian
+    >>> g = Gaussian(np.zeros(2), np.eye(2))
+    >>> F, Q, H, R = [[1.0, 1.0], [0.0, 1.0]], 0.01 * np.eye(2), [[1.0, 0.0]], [[0.5]]
+    >>> for y in ([1.0], [2.1], [2.9]):
+    ...     g = kf_step(g, y, F, Q, H, R)
+    >>> g.mean.round(2)
+    array([2.88, 0.95])
+    """
+    if not isinstance(g, Gaussian):
+        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
+    mean = g.mean
+    n = mean.shape[-1]
+    y = _check_y(y, mean)
+    m = y.shape[-1]
+    code, mean, cov, ll = _kernels.step_batch(
+        _contiguous(mean), _contiguous(g.cov), y, _small_matrix(F, "F", n, n),
+        _small_matrix(Q, "Q", n, n), _small_matrix(H, "H", m, n), _small_matrix(R, "R", m, m),
+    )
+    if code >= 0:
+        _kernel_error(code, "F", "Q")
+    post = Gaussian._trusted(mean, cov)
+    return (post, ll) if return_loglik else post
 
 
 def kf_predict(g: Gaussian, F: Any, Q: Any) -> Gaussian:
@@ -290,13 +348,10 @@ def kf_update(
         raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
     mean = g.mean
     n = mean.shape[-1]
-    if not (type(y) is np.ndarray and y.dtype == np.float64):
-        y = as_float_array(y, "y")
-    if y.ndim != mean.ndim or y.shape[:-1] != mean.shape[:-1]:
-        raise ValueError(f"y must have shape {mean.shape[:-1] + ('m',)} to match g; got {y.shape}")
+    y = _check_y(y, mean)
     m = y.shape[-1]
     code, mean, cov, ll = _kernels.update_batch(
-        _contiguous(mean), _contiguous(g.cov), _contiguous(y), _small_matrix(H, "H", m, n),
+        _contiguous(mean), _contiguous(g.cov), y, _small_matrix(H, "H", m, n),
         _small_matrix(R, "R", m, m),
     )
     if code >= 0:
