@@ -19,6 +19,7 @@ Cholesky solves, never an explicit inverse.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -120,7 +121,7 @@ def predict_batch(mean_in, cov_in, F2, Q2):
     if B < SMALL_B:
         FP = np.empty((n, n))
         for b in range(B):
-            predict_one(F, Q, 0, 0, mean[b], cov[b], om[b], oc[b], FP)
+            predict_one(F, Q, 0, 0, mean[b], cov[b], om[b], oc[b], FP, n)
         return -1, out_mean, out_cov
     cc = min(B, CH)
     x, xp, P, Pp, FP = scratch(n, 0, cc)[:5]
@@ -349,11 +350,11 @@ def update_batch(mean_in, cov_in, y_in, H2, R2):
     ll = ll_out.reshape(-1)
     B = mean.shape[0]
     if B < SMALL_B:
-        idx, e, U, K, S, AP, W, _ = one_scratch(n, m)
+        idx, e, Ut, KT, S, L, AP, W, _ = one_scratch(n, m)
         bad = False
         for b in range(B):
             ok, ll[b] = update_one(H, R, 0, 0, y[b], mean[b], cov[b], out_m[b], out_c[b],
-                                   idx, e, U, K, S, AP, W)
+                                   idx, e, Ut, KT, S, L, AP, W, n, m)
             bad = bad or not ok
         return (4 if bad else -1), out_mean, out_cov, ll_out
     cc = min(B, CH)
@@ -552,38 +553,72 @@ def kf_means_shared(ys, F, H, x0, gains, chol, means, pmeans, loglik, store_pred
 # (n,) / (n, n) arrays, updating with the observed components only.
 
 
-@njit(cache=True, fastmath=_FM)
-def predict_one(F, Q, tf, tq, x, P, xp, Pp, FP):
-    """``xp = F x``, ``Pp = F P F' + Q`` for one Gaussian; ``FP`` is scratch."""
-    n = x.shape[0]
+@njit(cache=True)
+def chol_solve(L, A, B, n, k):
+    """Factor ``A = L L'`` (``A`` is ``n x n``, the lower triangle of ``L`` is written) and solve
+    ``A X = B`` in place for ``B`` of ``n x k``. Returns False if ``A`` is not positive definite."""
     for i in range(n):
-        s = 0.0
-        for l in range(n):
-            s += F[tf, i, l] * x[l]
-        xp[i] = s
+        d = A[i, i]
+        for p in range(i):
+            d -= L[i, p] * L[i, p]
+        if not d > 0.0:
+            return False
+        L[i, i] = math.sqrt(d)
+        for r in range(i + 1, n):
+            s = A[r, i]
+            for p in range(i):
+                s -= L[r, p] * L[i, p]
+            L[r, i] = s / L[i, i]
+    for c in range(k):
+        for i in range(n):
+            s = B[i, c]
+            for p in range(i):
+                s -= L[i, p] * B[p, c]
+            B[i, c] = s / L[i, i]
+        for i in range(n - 1, -1, -1):
+            s = B[i, c]
+            for p in range(i + 1, n):
+                s -= L[p, i] * B[p, c]
+            B[i, c] = s / L[i, i]
+    return True
+
+
+@njit(cache=True, fastmath=_FM)
+def predict_one(F, Q, tf, tq, x, P, xp, Pp, FP, n):
+    """``xp = F x``, ``FP = F P``, ``Pp = F P F' + Q`` for one Gaussian, skipping zeros of ``F``.
+
+    ``n`` is the state size: a caller that passes a compile-time constant (see
+    :func:`single_kernel`) gets the loops unrolled."""
+    for i in range(n):
+        xp[i] = 0.0
         for k in range(n):
-            s = 0.0
-            for l in range(n):
-                s += F[tf, i, l] * P[l, k]
-            FP[i, k] = s
+            FP[i, k] = 0.0
+        for l in range(n):
+            f = F[tf, i, l]
+            if f != 0.0:
+                xp[i] += f * x[l]
+                for k in range(n):
+                    FP[i, k] += f * P[l, k]
     for i in range(n):
         for k in range(i, n):
             s = Q[tq, i, k]
             for l in range(n):
-                s += FP[i, l] * F[tf, k, l]
+                f = F[tf, k, l]
+                if f != 0.0:
+                    s += FP[i, l] * f
             Pp[i, k] = s
             Pp[k, i] = s
 
 
 @njit(cache=True, fastmath=_FM)
-def update_one(H, R, th, tr, y, xp, Pp, x, P, idx, e, U, K, S, AP, W):
+def update_one(H, R, th, tr, y, xp, Pp, x, P, idx, e, Ut, KT, S, L, AP, W, n, m):
     """Correct one predicted Gaussian ``xp, Pp`` with ``y (m,)`` (NaN = missing) into ``x, P``.
 
-    Uses the observed components only; the Joseph form is evaluated as in :func:`update_chunk`.
-    Returns ``(ok, loglik)``; ``ok`` is False if ``S`` is not positive definite.
+    Uses the observed components only (``Ut = H_o Pp``, ``S = H_o Pp H_o' + R_oo``, gain from
+    ``S K' = Ut`` by :func:`chol_solve`); the Joseph form is evaluated as in
+    :func:`update_chunk`. Zeros of ``H`` are skipped. Returns ``(ok, loglik)``; ``ok`` is False
+    if ``S`` is not positive definite. ``n``, ``m`` as in :func:`predict_one`.
     """
-    n = xp.shape[0]
-    m = y.shape[0]
     ko = 0
     for k in range(m):
         if not math.isnan(y[k]):
@@ -597,90 +632,67 @@ def update_one(H, R, th, tr, y, xp, Pp, x, P, idx, e, U, K, S, AP, W):
         return True, 0.0
     for a in range(ko):
         k = idx[a]
-        s = y[k]
+        e[a] = y[k]
+        for l in range(n):
+            Ut[a, l] = 0.0
         for i in range(n):
-            s -= H[th, k, i] * xp[i]
-        e[a] = s
-    for i in range(n):
-        for a in range(ko):
-            k = idx[a]
-            s = 0.0
-            for l in range(n):
-                s += Pp[i, l] * H[th, k, l]
-            U[i, a] = s
+            h = H[th, k, i]
+            if h != 0.0:
+                e[a] -= h * xp[i]
+                for l in range(n):
+                    Ut[a, l] += h * Pp[i, l]
     for a in range(ko):
         for b in range(a, ko):
             s = R[tr, idx[a], idx[b]]
             for i in range(n):
-                s += H[th, idx[a], i] * U[i, b]
+                h = H[th, idx[a], i]
+                if h != 0.0:
+                    s += h * Ut[b, i]
             S[a, b] = s
             S[b, a] = s
-    for a in range(ko):  # Cholesky, lower triangle
-        d = S[a, a]
-        for p in range(a):
-            d -= S[a, p] * S[a, p]
-        if not d > 0.0:
-            return False, 0.0
-        S[a, a] = math.sqrt(d)
-        for b in range(a + 1, ko):
-            s = S[b, a]
-            for p in range(a):
-                s -= S[b, p] * S[a, p]
-            S[b, a] = s / S[a, a]
-    for i in range(n):  # K = U S^-1
-        for a in range(ko):
-            s = U[i, a]
-            for p in range(a):
-                s -= S[a, p] * K[i, p]
-            K[i, a] = s / S[a, a]
-        for a in range(ko - 1, -1, -1):
-            s = K[i, a]
-            for p in range(a + 1, ko):
-                s -= S[p, a] * K[i, p]
-            K[i, a] = s / S[a, a]
+        for l in range(n):
+            KT[a, l] = Ut[a, l]
+    if not chol_solve(L, S, KT, ko, n):
+        return False, 0.0
     ll = -0.5 * ko * _LOG2PI
     det_l = 1.0
-    for a in range(ko):  # whiten e in place
+    for a in range(ko):  # whitened innovation L^-1 e, into S's first column (S is spent)
         s = e[a]
         for p in range(a):
-            s -= S[a, p] * e[p]
-        e[a] = s / S[a, a]
-        ll -= 0.5 * e[a] * e[a]
-        det_l *= S[a, a]
+            s -= L[a, p] * S[p, 0]
+        S[a, 0] = s / L[a, a]
+        ll -= 0.5 * S[a, 0] * S[a, 0]
+        det_l *= L[a, a]
     ll -= math.log(det_l)
-    for a in range(ko - 1, -1, -1):  # un-whiten: e = L w, to use the innovation below
-        s = 0.0
-        for p in range(a + 1):
-            s += S[a, p] * e[p]
-        e[a] = s
     for i in range(n):
         s = xp[i]
         for a in range(ko):
-            s += K[i, a] * e[a]
+            s += KT[a, i] * e[a]
         x[i] = s
     for i in range(n):
         for l in range(n):
             s = Pp[i, l]
             for a in range(ko):
-                s -= K[i, a] * U[l, a]
+                s -= KT[a, i] * Ut[a, l]
             AP[i, l] = s
     for i in range(n):
         for a in range(ko):
             s = 0.0
             for l in range(n):
-                s += AP[i, l] * H[th, idx[a], l]
+                h = H[th, idx[a], l]
+                if h != 0.0:
+                    s += AP[i, l] * h
             for b in range(ko):
-                s -= K[i, b] * R[tr, idx[b], idx[a]]
+                s -= KT[b, i] * R[tr, idx[b], idx[a]]
             W[i, a] = s
     for i in range(n):
         for l in range(i, n):
             s = AP[i, l]
             for a in range(ko):
-                s -= W[i, a] * K[l, a]
+                s -= W[i, a] * KT[a, l]
             P[i, l] = s
             P[l, i] = s
     return True, ll
-
 
 
 @njit(cache=True, fastmath=_FM)
@@ -699,42 +711,56 @@ def step_batch(mean_in, cov_in, y_in, F2, Q2, H2, R2):
 
 @njit(cache=True)
 def one_scratch(n, m):
-    idx = np.empty(m, dtype=np.int64)
-    return (idx, np.empty(m), np.empty((n, m)), np.empty((n, m)), np.empty((m, m)),
-            np.empty((n, n)), np.empty((n, m)), np.empty((n, n)))
+    """Work arrays of :func:`update_one` and :func:`predict_one`:
+    ``idx, e, Ut, KT, S, L, AP, W, FP``."""
+    return (np.empty(m, dtype=np.int64), np.empty(m), np.empty((m, n)), np.empty((m, n)),
+            np.empty((m, m)), np.empty((m, m)), np.empty((n, n)), np.empty((n, m)),
+            np.empty((n, n)))
 
 
-@njit(cache=True, fastmath=_FM)
-def kf_single(ys, F, Q, H, R, x0, P0, means, covs, pmeans, pcovs, last_P, store_covs):
-    """:func:`kf_batch` for one series ``ys (T, m)``, ``x0 (n,)``, ``P0 (n, n)``.
+@functools.lru_cache(maxsize=None)
+def single_kernel(n, m):
+    """The one-series filter for state size ``n`` and measurement size ``m``, compiled with both
+    as constants (numba treats a closure's variables as such), so that the small matrix loops
+    unroll: about a third faster than with run-time sizes. Each size compiles once per machine
+    and is then loaded from numba's cache.
 
-    Returns ``(bad_t, loglik)``: the first step whose ``S`` is not positive definite (or -1).
+    The kernel takes ``ys (T, m), F, Q, H, R, x0 (n,), P0 (n, n), means, covs, pmeans, pcovs,
+    last_P, store_covs`` (as :func:`kf_batch` for one series) and returns ``(bad_t, loglik)``.
     """
-    T, m = ys.shape
-    n = x0.shape[0]
-    idx, e, U, K, S, AP, W, FP = one_scratch(n, m)
-    x = x0.copy()
-    P = P0.copy()
-    xp = np.empty(n)
-    Pp = np.empty((n, n))
-    total = 0.0
-    for t in range(T):
-        if t == 0:
-            xp[:] = x
-            Pp[:, :] = P
-        else:
-            predict_one(F, Q, t if F.shape[0] > 1 else 0, t if Q.shape[0] > 1 else 0,
-                        x, P, xp, Pp, FP)
-        if store_covs:
-            pmeans[t] = xp
-            pcovs[t] = Pp
-        ok, ll = update_one(H, R, t if H.shape[0] > 1 else 0, t if R.shape[0] > 1 else 0,
-                            ys[t], xp, Pp, x, P, idx, e, U, K, S, AP, W)
-        if not ok:
-            return t, total
-        total += ll
-        means[t] = x
-        if store_covs:
-            covs[t] = P
-    last_P[:, :] = P
-    return -1, total
+
+    @njit(cache=True, fastmath=_FM)
+    def kf_single(ys, F, Q, H, R, x0, P0, means, covs, pmeans, pcovs, last_P, store_covs):
+        T = ys.shape[0]
+        idx, e, Ut, KT, S, L, AP, W, FP = one_scratch(n, m)
+        x = x0.copy()
+        P = P0.copy()
+        xp = np.empty(n)
+        Pp = np.empty((n, n))
+        total = 0.0
+        for t in range(T):
+            if t == 0:
+                xp[:] = x
+                Pp[:, :] = P
+            else:
+                predict_one(F, Q, t if F.shape[0] > 1 else 0, t if Q.shape[0] > 1 else 0,
+                            x, P, xp, Pp, FP, n)
+            if store_covs:
+                for i in range(n):  # explicit loops: numba's slice assignment costs more here
+                    pmeans[t, i] = xp[i]
+                    for k in range(n):
+                        pcovs[t, i, k] = Pp[i, k]
+            ok, ll = update_one(H, R, t if H.shape[0] > 1 else 0, t if R.shape[0] > 1 else 0,
+                                ys[t], xp, Pp, x, P, idx, e, Ut, KT, S, L, AP, W, n, m)
+            if not ok:
+                return t, total
+            total += ll
+            for i in range(n):
+                means[t, i] = x[i]
+                if store_covs:
+                    for k in range(n):
+                        covs[t, i, k] = P[i, k]
+        last_P[:, :] = P
+        return -1, total
+
+    return kf_single

@@ -194,7 +194,7 @@ def kalman_filter(
         covs = np.empty((1, T, n, n)) if store_covs else np.empty((1, 1, n, n))
         pcovs = np.empty((1, T, n, n)) if store_covs else np.empty((1, 1, n, n))
         last_P = np.empty((1, n, n))
-        bad_t, loglik[0] = _kernels.kf_single(
+        bad_t, loglik[0] = _kernels.single_kernel(n, m)(
             y[0], F_, Q_, H_, R_, x0_[0], P0_[0], means[0], covs[0], pmeans[0], pcovs[0],
             last_P[0], store_covs,
         )

@@ -6,7 +6,7 @@ tests check one against the other.
 
 from __future__ import annotations
 
-import math
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -14,6 +14,7 @@ import numpy as np
 from numba import njit
 
 from .._validate import check_matrix_stack, check_psd
+from ._kernels import chol_solve, predict_one
 from .kalman import FilterResult, _as_ys, _model, _readonly
 
 __all__ = ["SmoothResult", "rts_smooth", "two_filter_smooth"]
@@ -36,108 +37,63 @@ class SmoothResult:
     backward_info_vec: np.ndarray | None = None
 
 
-@njit(cache=True)
-def _chol_solve_inplace(L, A, B, n, k):
-    """Solve ``(L L') X = B`` for ``X (n, k)``; ``A`` is ``L`` (lower, computed here from A)."""
-    # Cholesky of A (n x n) into L
-    for i in range(n):
-        d = A[i, i]
-        for p in range(i):
-            d -= L[i, p] * L[i, p]
-        if not d > 0.0:
-            return False
-        L[i, i] = math.sqrt(d)
-        for r in range(i + 1, n):
-            s = A[r, i]
-            for p in range(i):
-                s -= L[r, p] * L[i, p]
-            L[r, i] = s / L[i, i]
-    for c in range(k):
-        for i in range(n):
-            s = B[i, c]
-            for p in range(i):
-                s -= L[i, p] * B[p, c]
-            B[i, c] = s / L[i, i]
-        for i in range(n - 1, -1, -1):
-            s = B[i, c]
-            for p in range(i + 1, n):
-                s -= L[p, i] * B[p, c]
-            B[i, c] = s / L[i, i]
-    return True
+@functools.lru_cache(maxsize=None)
+def _rts_kernel(n):
+    """The RTS backward pass for state size ``n``, compiled with ``n`` as a constant (see
+    :func:`vistrack.filters._kernels.single_kernel`). The kernel returns the first failing
+    step or -1."""
 
+    @njit(cache=True)
+    def rts(means, covs, F, Q, s_means, s_covs):
+        B, T = means.shape[0], means.shape[1]
+        xp = np.empty(n)
+        Pp = np.empty((n, n))
+        FP = np.empty((n, n))
+        L = np.empty((n, n))
+        G = np.empty((n, n))  # holds G' = Pp^-1 F P
+        dP = np.empty((n, n))
+        GdP = np.empty((n, n))
+        for b in range(B):
+            s_means[b, T - 1] = means[b, T - 1]
+            s_covs[b, T - 1] = covs[b, T - 1]
+            for t in range(T - 2, -1, -1):
+                # the filter's prediction of t+1: xp = F m_t, FP = F P_t, Pp = F P_t F' + Q
+                predict_one(F, Q, t + 1 if F.shape[0] > 1 else 0, t + 1 if Q.shape[0] > 1 else 0,
+                            means[b, t], covs[b, t], xp, Pp, FP, n)
+                # G' = Pp^-1 (F P_t)  (P_t symmetric, so F P_t = (P_t F')')
+                G[:, :] = FP
+                if not chol_solve(L, Pp, G, n, n):
+                    return t
+                # m_s = m + G (m_s(t+1) - F m)
+                for i in range(n):
+                    s = means[b, t, i]
+                    for l in range(n):
+                        s += G[l, i] * (s_means[b, t + 1, l] - xp[l])
+                    s_means[b, t, i] = s
+                # P_s = P + G (P_s(t+1) - Pp) G'
+                for i in range(n):
+                    for k in range(n):
+                        dP[i, k] = s_covs[b, t + 1, i, k] - Pp[i, k]
+                for i in range(n):
+                    for k in range(n):
+                        s = 0.0
+                        for l in range(n):
+                            s += G[l, i] * dP[l, k]
+                        GdP[i, k] = s
+                for i in range(n):
+                    for k in range(i, n):
+                        s = covs[b, t, i, k]
+                        for l in range(n):
+                            s += GdP[i, l] * G[l, k]
+                        s2 = covs[b, t, k, i]
+                        for l in range(n):
+                            s2 += GdP[k, l] * G[l, i]
+                        v = 0.5 * (s + s2)
+                        s_covs[b, t, i, k] = v
+                        s_covs[b, t, k, i] = v
+        return -1
 
-@njit(cache=True)
-def _rts_kernel(means, covs, F, Q, s_means, s_covs):
-    """RTS backward pass over ``B`` series; returns the first failing step or -1."""
-    B, T, n = means.shape
-    Pp = np.empty((n, n))
-    FP = np.empty((n, n))
-    L = np.empty((n, n))
-    G = np.empty((n, n))  # holds G' = Pp^-1 F P
-    dP = np.empty((n, n))
-    GdP = np.empty((n, n))
-    dm = np.empty(n)
-    for b in range(B):
-        for i in range(n):
-            s_means[b, T - 1, i] = means[b, T - 1, i]
-            for k in range(n):
-                s_covs[b, T - 1, i, k] = covs[b, T - 1, i, k]
-        for t in range(T - 2, -1, -1):
-            tf = t + 1 if F.shape[0] > 1 else 0
-            tq = t + 1 if Q.shape[0] > 1 else 0
-            # FP = F P_t; Pp = F P_t F' + Q
-            for i in range(n):
-                for k in range(n):
-                    s = 0.0
-                    for l in range(n):
-                        s += F[tf, i, l] * covs[b, t, l, k]
-                    FP[i, k] = s
-            for i in range(n):
-                for k in range(i, n):
-                    s = Q[tq, i, k]
-                    for l in range(n):
-                        s += FP[i, l] * F[tf, k, l]
-                    Pp[i, k] = s
-                    Pp[k, i] = s
-            # G' = Pp^-1 (F P_t)  (P_t symmetric, so F P_t = (P_t F')')
-            for i in range(n):
-                for k in range(n):
-                    G[i, k] = FP[i, k]
-            if not _chol_solve_inplace(L, Pp, G, n, n):
-                return t
-            # dm = m_s(t+1) - F m_t
-            for i in range(n):
-                s = s_means[b, t + 1, i]
-                for l in range(n):
-                    s -= F[tf, i, l] * means[b, t, l]
-                dm[i] = s
-            for i in range(n):
-                s = means[b, t, i]
-                for l in range(n):
-                    s += G[l, i] * dm[l]
-                s_means[b, t, i] = s
-            # P_s = P + G (P_s(t+1) - Pp) G'
-            for i in range(n):
-                for k in range(n):
-                    dP[i, k] = s_covs[b, t + 1, i, k] - Pp[i, k]
-            for i in range(n):
-                for k in range(n):
-                    s = 0.0
-                    for l in range(n):
-                        s += G[l, i] * dP[l, k]
-                    GdP[i, k] = s
-            for i in range(n):
-                for k in range(i, n):
-                    s = covs[b, t, i, k]
-                    for l in range(n):
-                        s += GdP[i, l] * G[l, k]
-                    s2 = covs[b, t, k, i]
-                    for l in range(n):
-                        s2 += GdP[k, l] * G[l, i]
-                    v = 0.5 * (s + s2)
-                    s_covs[b, t, i, k] = v
-                    s_covs[b, t, k, i] = v
-    return -1
+    return rts
 
 
 def _filtered_arrays(result: FilterResult) -> tuple[np.ndarray, np.ndarray, bool]:
@@ -176,7 +132,7 @@ def rts_smooth(result: FilterResult, *, F: Any, Q: Any) -> SmoothResult:
     check_psd(Q_, "Q")
     s_means = np.empty_like(means)
     s_covs = np.empty_like(covs)
-    bad = _rts_kernel(means, covs, F_, Q_, s_means, s_covs)
+    bad = _rts_kernel(n)(means, covs, F_, Q_, s_means, s_covs)
     if bad >= 0:
         raise ValueError(
             f"the predicted covariance F P F' + Q from step {bad} to {bad + 1} is not positive "
