@@ -254,12 +254,16 @@ def _kernel_error(code: int, a: str, b: str) -> None:
     raise ValueError(_KERNEL_ERRORS[code].format(a=a, b=b))
 
 
-def _check_y(y: Any, mean: np.ndarray) -> np.ndarray:
+def _with_measurement(g: Gaussian, y: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Check ``g`` and one measurement per Gaussian; contiguous ``mean, cov, y`` for a kernel."""
+    if not isinstance(g, Gaussian):
+        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
+    mean = g.mean
     if not (type(y) is np.ndarray and y.dtype == np.float64):
         y = as_float_array(y, "y")
     if y.ndim != mean.ndim or y.shape[:-1] != mean.shape[:-1]:
         raise ValueError(f"y must have shape {mean.shape[:-1] + ('m',)} to match g; got {y.shape}")
-    return _contiguous(y)
+    return _contiguous(mean), _contiguous(g.cov), _contiguous(y)
 
 
 def kf_step(
@@ -280,14 +284,10 @@ def kf_step(
     >>> g.mean.round(2)
     array([2.88, 0.95])
     """
-    if not isinstance(g, Gaussian):
-        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
-    mean = g.mean
-    n = mean.shape[-1]
-    y = _check_y(y, mean)
-    m = y.shape[-1]
+    mean, cov, y = _with_measurement(g, y)
+    n, m = mean.shape[-1], y.shape[-1]
     code, mean, cov, ll = _kernels.step_batch(
-        _contiguous(mean), _contiguous(g.cov), y, _small_matrix(F, "F", n, n),
+        mean, cov, y, _small_matrix(F, "F", n, n),
         _small_matrix(Q, "Q", n, n), _small_matrix(H, "H", m, n), _small_matrix(R, "R", m, m),
     )
     if code >= 0:
@@ -344,14 +344,10 @@ def kf_update(
     return_loglik : bool
         Also return ``log N(y; H m, H P H' + R)`` per Gaussian, shape (...).
     """
-    if not isinstance(g, Gaussian):
-        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
-    mean = g.mean
-    n = mean.shape[-1]
-    y = _check_y(y, mean)
-    m = y.shape[-1]
+    mean, cov, y = _with_measurement(g, y)
+    n, m = mean.shape[-1], y.shape[-1]
     code, mean, cov, ll = _kernels.update_batch(
-        _contiguous(mean), _contiguous(g.cov), y, _small_matrix(H, "H", m, n),
+        mean, cov, y, _small_matrix(H, "H", m, n),
         _small_matrix(R, "R", m, m),
     )
     if code >= 0:
