@@ -62,7 +62,22 @@ def per_step(rows, repeats):
         for _ in range(steps):
             g = vt.kf_update(vt.kf_predict(g, F, Q), z, H, R)
 
-    rows.append(("one predict + update from Python", "vistrack", median_time(vistrack_step, repeats) / steps * 1e6, "µs/step"))
+    def vistrack_fused():
+        g = vt.Gaussian(X0, P0)
+        for _ in range(steps):
+            g = vt.kf_step(g, z, F, Q, H, R)
+
+    rows.append(("one predict + update from Python", "vistrack kf_step", median_time(vistrack_fused, repeats) / steps * 1e6, "µs/step"))
+    rows.append(("one predict + update from Python", "vistrack kf_predict + kf_update", median_time(vistrack_step, repeats) / steps * 1e6, "µs/step"))
+    n_tracks = 100
+    zs = np.ones((n_tracks, 2))
+
+    def vistrack_tracks():
+        g = vt.Gaussian(np.tile(X0, (n_tracks, 1)), np.tile(P0, (n_tracks, 1, 1)))
+        for _ in range(steps // 10):
+            g = vt.kf_update(vt.kf_predict(g, F, Q), zs, H, R)
+
+    rows.append(("one predict + update from Python", f"vistrack kf_predict + kf_update on {n_tracks} tracks at once, per track", median_time(vistrack_tracks, repeats) / (steps // 10) / n_tracks * 1e6, "µs/step"))
     fk = optional("filterpy.kalman")
     if fk is not None:
         import filterpy.kalman as fk
@@ -110,6 +125,8 @@ def one_series(rows, repeats, T):
     label = f"one series, whole-sequence filter (T={T:,})"
     t = median_time(lambda: vt.kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=X0, P0=P0), repeats)
     rows.append((label, "vistrack", t / T * 1e6, "µs/step"))
+    t = median_time(lambda: vt.kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=X0, P0=P0, store_covs=False), repeats)
+    rows.append((label, "vistrack, store_covs=False (means only)", t / T * 1e6, "µs/step"))
     label2 = f"filter + RTS smoother, one series (T={T:,})"
 
     def vt_both():
