@@ -319,3 +319,49 @@ def test_kernel_argument_errors():
         kf_update(vt.Gaussian(np.zeros((3, 2)), np.zeros((3, 2, 2))), np.ones((3, 1)), [[1.0, 0.0]], [[0.0]])
     with pytest.raises(ValueError, match="sigma_m must be a scalar or have shape"):
         kalman_filter_1d(np.ones(4), d=1, m=1, sigma_d=1, sigma_m=np.ones(3), x0=0, sigma0=1)
+
+
+def test_online_filter_equals_the_sequence_filter(rng):
+    cv, pos = vt.ConstantVelocity(dim=2, q=0.3), vt.Position(dim=2, r=0.7)
+    kf = vt.KalmanFilter(cv, pos)
+    T = 30
+    times = np.cumsum(rng.uniform(0.5, 2.0, size=T))
+    _, ys = vt.simulate.simulate(cv, pos, T, x0=[0, 0, 1, 1], dt=np.diff(times), rng=rng)
+    ys[4] = np.nan
+    ys[9, 0] = np.nan
+    x0, P0 = np.zeros(4), 5 * np.eye(4)
+    want = kf.filter(ys, dt=np.diff(times), x0=x0, P0=P0)
+    f = kf.online(x0, P0, dt=1.0)
+    total = f.update(ys[0])
+    np.testing.assert_allclose(f.mean, want.means[0], rtol=1e-12)
+    for t in range(1, T):
+        total += f.step(ys[t], dt=times[t] - times[t - 1])
+        np.testing.assert_allclose(f.mean, want.means[t], rtol=1e-11, atol=1e-12)
+        np.testing.assert_allclose(f.cov, want.covs[t], rtol=1e-11, atol=1e-12)
+    assert total == pytest.approx(float(want.loglik), rel=1e-12)
+    f.predict()  # default dt back to 1.0
+    np.testing.assert_allclose(f.mean, cv.F(1.0) @ want.means[-1], rtol=1e-12)
+    with pytest.raises(ValueError):
+        f.mean[0] = 1.0  # a read-only view
+    snap = f.gaussian
+    f.step([1.0, 2.0])
+    assert not np.allclose(snap.mean, f.mean)
+
+
+def test_online_filter_errors_leave_the_state_unchanged():
+    kf = vt.KalmanFilter(vt.ConstantVelocity(dim=1), vt.Position(dim=1))
+    f = kf.online([0.0, 1.0], np.eye(2))
+    before = f.gaussian
+    with pytest.raises(ValueError, match=r"y must have shape \(1,\); got \(2,\)"):
+        f.step([1.0, 2.0])
+    with pytest.raises(ValueError, match="y must be finite or NaN"):
+        f.step([np.inf])
+    np.testing.assert_array_equal(f.mean, before.mean)
+    np.testing.assert_array_equal(f.cov, before.cov)
+    with pytest.raises(ValueError, match=r"x0 must have shape \(2,\)"):
+        kf.online([0.0, 1.0, 2.0], np.eye(3))
+    degenerate = vt.KalmanFilter(vt.LinearMotion(np.eye(1), np.zeros((1, 1))),
+                                 vt.LinearMeasurement([[1.0]], [[0.0]])).online([0.0], [[0.0]])
+    with pytest.raises(ValueError, match="not positive definite"):
+        degenerate.update([1.0])
+    np.testing.assert_array_equal(degenerate.mean, [0.0])

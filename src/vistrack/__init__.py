@@ -12,6 +12,7 @@ The public API is re-exported here; submodules hold the details:
 from .filters import (
     FilterResult,
     KalmanFilter,
+    OnlineFilter,
     SmoothResult,
     kalman_filter,
     kalman_filter_1d,
@@ -43,6 +44,7 @@ __all__ = [
     "FilterResult",
     "Gaussian",
     "KalmanFilter",
+    "OnlineFilter",
     "LinearGaussian",
     "LinearMeasurement",
     "LinearMotion",

@@ -3,6 +3,7 @@
 from .kalman import (
     FilterResult,
     KalmanFilter,
+    OnlineFilter,
     kalman_filter,
     kalman_filter_1d,
     kf_predict,
@@ -14,6 +15,7 @@ from .smoothers import SmoothResult, rts_smooth, two_filter_smooth
 __all__ = [
     "FilterResult",
     "KalmanFilter",
+    "OnlineFilter",
     "SmoothResult",
     "kalman_filter",
     "kalman_filter_1d",

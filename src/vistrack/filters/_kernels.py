@@ -718,6 +718,57 @@ def one_scratch(n, m):
             np.empty((n, n)))
 
 
+def step_work(n, m):
+    """Work buffers of :func:`step_inplace`: one float buffer, and an index buffer of ``m + n``
+    entries (its length also tells the kernel ``n``)."""
+    return np.empty(3 * n * n + 3 * n * m + 2 * m * m + m + n), np.empty(m + n, dtype=np.int64)
+
+
+@njit(cache=True, fastmath=_FM)
+def step_inplace(state, y, model, do_predict, do_update, fbuf, idx):
+    """Predict and/or correct one Gaussian in place.
+
+    ``state`` packs ``x (n,)`` then ``P (n, n)``; ``model`` packs ``F (n, n)``, ``Q (n, n)``,
+    ``H (m, n)``, ``R (m, m)``; ``fbuf``, ``idx`` are the work buffers of :func:`step_work`.
+    Few arguments, because numba's call overhead grows with the number of arrays. Returns
+    ``(code, loglik)``: code -1 on success, 4 if ``S`` is not positive definite, 8 if ``y`` has an
+    infinite entry. On failure the state is left as it was."""
+    m = y.shape[0]
+    n = idx.shape[0] - m
+    x, o = _views(state, 0, (n,))
+    P, o = _views(state, o, (n, n))
+    F, o = _views(model, 0, (1, n, n))
+    Q, o = _views(model, o, (1, n, n))
+    H, o = _views(model, o, (1, m, n))
+    R, o = _views(model, o, (1, m, m))
+    o = 0
+    xp, o = _views(fbuf, o, (n,))
+    Pp, o = _views(fbuf, o, (n, n))
+    FP, o = _views(fbuf, o, (n, n))
+    AP, o = _views(fbuf, o, (n, n))
+    e, o = _views(fbuf, o, (m,))
+    Ut, o = _views(fbuf, o, (m, n))
+    KT, o = _views(fbuf, o, (m, n))
+    W, o = _views(fbuf, o, (n, m))
+    S, o = _views(fbuf, o, (m, m))
+    L, o = _views(fbuf, o, (m, m))
+    if do_update:
+        for k in range(m):
+            if math.isinf(y[k]):
+                return 8, 0.0
+    if do_predict:
+        predict_one(F, Q, 0, 0, x, P, xp, Pp, FP, n)
+    else:
+        xp[:] = x
+        Pp[:, :] = P
+    if not do_update:
+        x[:] = xp
+        P[:, :] = Pp
+        return -1, 0.0
+    ok, ll = update_one(H, R, 0, 0, y, xp, Pp, x, P, idx, e, Ut, KT, S, L, AP, W, n, m)
+    return (-1 if ok else 4), ll
+
+
 @functools.lru_cache(maxsize=None)
 def single_kernel(n, m):
     """The one-series filter for state size ``n`` and measurement size ``m``, compiled with both

@@ -31,6 +31,7 @@ __all__ = [
     "kf_step",
     "kalman_filter_1d",
     "KalmanFilter",
+    "OnlineFilter",
 ]
 
 
@@ -515,6 +516,21 @@ class KalmanFilter:
             P0 = dP0 if P0 is None else P0
         return kalman_filter(ys, **self.matrices(T, dt), x0=x0, P0=P0, store_covs=store_covs)
 
+    def online(self, x0: Any, P0: Any, *, dt: float = 1.0) -> "OnlineFilter":
+        """A filter for one target that is fed one measurement at a time.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> f = KalmanFilter(ConstantVelocity(dim=1, q=0.01), Position(dim=1, r=0.5)).online(
+        ...     x0=[0.0, 1.0], P0=np.eye(2))
+        >>> for y in ([1.0], [2.1], [2.9]):
+        ...     _ = f.step(y)
+        >>> f.mean.round(2)
+        array([2.88, 0.95])
+        """
+        return OnlineFilter(self, x0, P0, dt=dt)
+
     def smooth(
         self, ys: Any, *, dt: Any = 1.0, x0: Any = None, P0: Any = None
     ) -> "SmoothResult":
@@ -525,3 +541,105 @@ class KalmanFilter:
         mats = self.matrices(T, dt)
         res = self.filter(ys, dt=dt, x0=x0, P0=P0)
         return rts_smooth(res, F=mats["F"], Q=mats["Q"])
+
+
+class OnlineFilter:
+    """One target's Gaussian, predicted and corrected in place, one measurement at a time.
+
+    Made by :meth:`KalmanFilter.online`. The model's matrices for the default time step are
+    checked once, here, so a call costs little more than the arithmetic: this is the loop of a
+    single-object tracker. For many targets, :func:`kf_predict` / :func:`kf_update` on a batch
+    of Gaussians cost less per target.
+
+    Attributes
+    ----------
+    mean, cov : ndarray
+        Read-only views of the current estimate (they change with the next call; copy to keep).
+    """
+
+    __slots__ = ("_kf", "_n", "_m", "_dt0", "_dt", "_model", "_state", "_work", "_no_y")
+
+    def __init__(self, kf: KalmanFilter, x0: Any, P0: Any, *, dt: float = 1.0):
+        n = kf.motion.ndim_state
+        x, P = _prior(x0, P0, 1)
+        if x.shape != (1, n) or P.shape[0] != 1:
+            raise ValueError(f"x0 must have shape ({n},) and P0 ({n}, {n}); got {np.shape(x0)}, "
+                             f"{np.shape(P0)}")
+        H = np.asarray(kf.measurement.H(n), dtype=np.float64)
+        R = np.asarray(kf.measurement.R(), dtype=np.float64)
+        if H.ndim != 2 or R.ndim != 2:
+            raise ValueError("an online filter needs a constant measurement model (H, R 2-D)")
+        m = H.shape[0]
+        H = check_matrix_stack(H, "H", m, n, 1)
+        R = check_matrix_stack(R, "R", m, m, 1)
+        check_psd(R, "R")
+        self._kf, self._n, self._m = kf, n, m
+        # one buffer for F, Q, H, R and one for x, P: few arguments make the kernel call cheap
+        self._model = np.zeros(2 * n * n + m * n + m * m)
+        self._model[2 * n * n:] = np.concatenate([H.ravel(), R.ravel()])
+        self._state = np.concatenate([x[0], P[0].ravel()])
+        self._dt0 = float(dt)  # the default time step; F, Q are kept for the last one used
+        self._dt = None
+        self._set_dt(self._dt0)
+        self._work = _kernels.step_work(n, m)
+        self._no_y = np.full(m, np.nan)  # the measurement argument of a prediction
+
+    def _set_dt(self, dt: float) -> None:
+        n = self._n
+        F = check_matrix_stack(self._kf.motion.F(dt), "F", n, n, 1)
+        Q = check_matrix_stack(self._kf.motion.Q(dt), "Q", n, n, 1)
+        check_psd(Q, "Q")
+        self._model[: 2 * n * n] = np.concatenate([F.ravel(), Q.ravel()])
+        self._dt = dt
+
+    def __repr__(self) -> str:
+        return f"OnlineFilter(mean={np.array2string(self.mean, precision=3)})"
+
+    @property
+    def mean(self) -> np.ndarray:
+        v = self._state[: self._n]
+        v.flags.writeable = False
+        return v
+
+    @property
+    def cov(self) -> np.ndarray:
+        v = self._state[self._n:].reshape(self._n, self._n)
+        v.flags.writeable = False
+        return v
+
+    @property
+    def gaussian(self) -> Gaussian:
+        """A copy of the current estimate."""
+        return Gaussian(self.mean.copy(), self.cov.copy())
+
+    def _run(self, y: Any, predict: bool, update: bool, dt: float | None) -> float:
+        if predict:
+            d = self._dt0 if dt is None else float(dt)
+            if d != self._dt:
+                self._set_dt(d)
+        if update:
+            if not (type(y) is np.ndarray and y.dtype == np.float64 and y.flags.c_contiguous):
+                y = as_float_array(y, "y")
+            if y.shape != (self._m,):
+                raise ValueError(f"y must have shape ({self._m},); got {y.shape}")
+        else:
+            y = self._no_y
+        fbuf, ibuf = self._work
+        code, ll = _kernels.step_inplace(self._state, y, self._model, predict, update, fbuf, ibuf)
+        if code >= 0:
+            if code == 8:
+                raise ValueError(f"y must be finite or NaN (missing); got {y}")
+            _kernel_error(code, "F", "Q")
+        return ll
+
+    def predict(self, *, dt: float | None = None) -> None:
+        """Predict one step of ``dt`` (default: the ``dt`` the filter was made with)."""
+        self._run(None, True, False, dt)
+
+    def update(self, y: Any) -> float:
+        """Correct with ``y (m,)`` (NaN components missing); returns ``log N(y; H m, S)``."""
+        return self._run(y, False, True, None)
+
+    def step(self, y: Any, *, dt: float | None = None) -> float:
+        """:meth:`predict` then :meth:`update`; returns the log-likelihood of ``y``."""
+        return self._run(y, True, True, dt)
