@@ -67,6 +67,12 @@ def per_step(rows, repeats):
         for _ in range(steps):
             g = vt.kf_step(g, z, F, Q, H, R)
 
+    def vistrack_online():
+        f = vt.KalmanFilter(vt.LinearMotion(F, Q), vt.LinearMeasurement(H, R)).online(X0, P0)
+        for _ in range(steps):
+            f.step(z)
+
+    rows.append(("one predict + update from Python", "vistrack OnlineFilter.step", median_time(vistrack_online, repeats) / steps * 1e6, "µs/step"))
     rows.append(("one predict + update from Python", "vistrack kf_step", median_time(vistrack_fused, repeats) / steps * 1e6, "µs/step"))
     rows.append(("one predict + update from Python", "vistrack kf_predict + kf_update", median_time(vistrack_step, repeats) / steps * 1e6, "µs/step"))
     n_tracks = 100

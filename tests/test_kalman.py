@@ -365,3 +365,33 @@ def test_online_filter_errors_leave_the_state_unchanged():
     with pytest.raises(ValueError, match="not positive definite"):
         degenerate.update([1.0])
     np.testing.assert_array_equal(degenerate.mean, [0.0])
+
+
+@pytest.mark.parametrize(
+    "motion,Qfix",
+    [(vt.ConstantVelocity(dim=2, q=0.1), None), (vt.ConstantVelocity(dim=2), 0.1 * np.eye(4)),
+     (vt.ConstantPosition(dim=3, q=1.0), None), (vt.ConstantAcceleration(dim=1, q=0.01), None)],
+)
+def test_steady_state_phase_of_one_series_equals_filterpy_and_the_batch_kernel(rng, motion, Qfix):
+    """Long, fully observed series with constant matrices: the one-series kernel freezes the
+    converged covariance; with sparse missing steps it leaves and re-enters that phase."""
+    n = motion.ndim_state
+    dim = motion.dim
+    F, Q = motion.F(1.0), (motion.Q(1.0) if Qfix is None else Qfix)
+    H, R = np.eye(dim, n), 0.8 * np.eye(dim)
+    T = 600
+    _, ys = vt.simulate.simulate_lgssm(T, F=F, Q=Q, H=H, R=R, x0=np.zeros(n), rng=rng)
+    ys[[300, 301, 450]] = np.nan
+    ys[500, 0] = np.nan
+    x0, P0 = np.zeros(n), 10.0 * np.eye(n)
+    one = kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0)
+    # the batch kernel (one covariance per series) on two copies
+    two = kalman_filter(np.stack([ys, ys]), F=F, Q=Q, H=H, R=R, x0=x0, P0=np.stack([P0, P0]))
+    assert not two.shared_covs
+    np.testing.assert_allclose(one.means, two.means[1], rtol=1e-11, atol=1e-11)
+    np.testing.assert_allclose(one.covs, two.covs[1], rtol=1e-11, atol=1e-13)
+    np.testing.assert_allclose(one.loglik, two.loglik[1], rtol=1e-12)
+    fm, fP, fll = filterpy_run(ys, F, Q, H, R, x0, P0)
+    np.testing.assert_allclose(one.means, fm, rtol=1e-9, atol=1e-10)
+    np.testing.assert_allclose(one.covs, fP, rtol=1e-9, atol=1e-12)
+    assert one.loglik == pytest.approx(fll, rel=1e-10)
