@@ -719,55 +719,65 @@ def one_scratch(n, m):
             np.empty((n, n)))
 
 
-def step_work(n, m):
-    """Work buffers of :func:`step_inplace`: one float buffer, and an index buffer of ``m + n``
-    entries (its length also tells the kernel ``n``)."""
-    return np.empty(3 * n * n + 3 * n * m + 2 * m * m + m + n), np.empty(m + n, dtype=np.int64)
+def online_layout(n, m):
+    """Offsets in the one buffer of :func:`online_kernel`: state ``x (n,)``, ``P (n, n)``; model
+    ``F, Q (n, n)``, ``H (m, n)``, ``R (m, m)``; then work space. Returns (offsets, size)."""
+    sizes = [("x", n), ("P", n * n), ("F", n * n), ("Q", n * n), ("H", m * n), ("R", m * m),
+             ("work", 3 * n * n + 3 * n * m + 2 * m * m + m + n)]
+    offsets, o = {}, 0
+    for name, size in sizes:
+        offsets[name] = o
+        o += size
+    return offsets, o
 
 
-@njit(cache=True, fastmath=_FM)
-def step_inplace(state, y, model, do_predict, do_update, fbuf, idx):
-    """Predict and/or correct one Gaussian in place.
+@functools.lru_cache(maxsize=None)
+def online_kernel(n, m):
+    """The in-place predict/correct of :class:`vistrack.filters.OnlineFilter`, compiled for state
+    size ``n`` and measurement size ``m`` as constants (see :func:`single_kernel`).
 
-    ``state`` packs ``x (n,)`` then ``P (n, n)``; ``model`` packs ``F (n, n)``, ``Q (n, n)``,
-    ``H (m, n)``, ``R (m, m)``; ``fbuf``, ``idx`` are the work buffers of :func:`step_work`.
-    Few arguments, because numba's call overhead grows with the number of arrays. Returns
-    ``(code, loglik)``: code -1 on success, 4 if ``S`` is not positive definite, 8 if ``y`` has an
-    infinite entry. On failure the state is left as it was."""
-    m = y.shape[0]
-    n = idx.shape[0] - m
-    x, o = _views(state, 0, (n,))
-    P, o = _views(state, o, (n, n))
-    F, o = _views(model, 0, (1, n, n))
-    Q, o = _views(model, o, (1, n, n))
-    H, o = _views(model, o, (1, m, n))
-    R, o = _views(model, o, (1, m, m))
-    o = 0
-    xp, o = _views(fbuf, o, (n,))
-    Pp, o = _views(fbuf, o, (n, n))
-    FP, o = _views(fbuf, o, (n, n))
-    AP, o = _views(fbuf, o, (n, n))
-    e, o = _views(fbuf, o, (m,))
-    Ut, o = _views(fbuf, o, (m, n))
-    KT, o = _views(fbuf, o, (m, n))
-    W, o = _views(fbuf, o, (n, m))
-    S, o = _views(fbuf, o, (m, m))
-    L, o = _views(fbuf, o, (m, m))
-    if do_update:
-        for k in range(m):
-            if math.isinf(y[k]):
-                return 8, 0.0
-    if do_predict:
-        predict_one(F, Q, 0, 0, x, P, xp, Pp, FP, n)
-    else:
-        xp[:] = x
-        Pp[:, :] = P
-    if not do_update:
-        x[:] = xp
-        P[:, :] = Pp
-        return -1, 0.0
-    ok, ll = update_one(H, R, 0, 0, y, xp, Pp, x, P, idx, e, Ut, KT, S, L, AP, W, n, m)
-    return (-1 if ok else 4), ll
+    The kernel takes ``(buf, y, idx, do_predict, do_update)``: ``buf`` holds the state, the model
+    and the work space as laid out by :func:`online_layout`, and ``idx`` is an int64 work array of
+    ``m`` entries; three arrays, because numba's call overhead grows with each array argument.
+    It returns ``(code, loglik)``: code -1 on success, 4 if ``S`` is not positive definite, 8 if
+    ``y`` has an infinite entry. On failure the state is left as it was.
+    """
+
+    @njit(cache=True, fastmath=_FM)
+    def step(buf, y, idx, do_predict, do_update):
+        x, o = _views(buf, 0, (n,))
+        P, o = _views(buf, o, (n, n))
+        F, o = _views(buf, o, (1, n, n))
+        Q, o = _views(buf, o, (1, n, n))
+        H, o = _views(buf, o, (1, m, n))
+        R, o = _views(buf, o, (1, m, m))
+        xp, o = _views(buf, o, (n,))
+        Pp, o = _views(buf, o, (n, n))
+        FP, o = _views(buf, o, (n, n))
+        AP, o = _views(buf, o, (n, n))
+        e, o = _views(buf, o, (m,))
+        Ut, o = _views(buf, o, (m, n))
+        KT, o = _views(buf, o, (m, n))
+        W, o = _views(buf, o, (n, m))
+        S, o = _views(buf, o, (m, m))
+        L, o = _views(buf, o, (m, m))
+        if do_update:
+            for k in range(m):
+                if math.isinf(y[k]):
+                    return 8, 0.0
+        if do_predict:
+            predict_one(F, Q, 0, 0, x, P, xp, Pp, FP, n)
+        else:
+            xp[:] = x
+            Pp[:, :] = P
+        if not do_update:
+            x[:] = xp
+            P[:, :] = Pp
+            return -1, 0.0
+        ok, ll = update_one(H, R, 0, 0, y, xp, Pp, x, P, idx, e, Ut, KT, S, L, AP, W, n, m)
+        return (-1 if ok else 4), ll
+
+    return step
 
 
 @functools.lru_cache(maxsize=None)

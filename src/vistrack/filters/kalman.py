@@ -557,7 +557,7 @@ class OnlineFilter:
         Read-only views of the current estimate (they change with the next call; copy to keep).
     """
 
-    __slots__ = ("_kf", "_n", "_m", "_dt0", "_dt", "_model", "_state", "_work", "_no_y")
+    __slots__ = ("_kf", "_n", "_m", "_dt0", "_dt", "_buf", "_off", "_idx", "_kernel", "_no_y")
 
     def __init__(self, kf: KalmanFilter, x0: Any, P0: Any, *, dt: float = 1.0):
         n = kf.motion.ndim_state
@@ -574,22 +574,31 @@ class OnlineFilter:
         R = check_matrix_stack(R, "R", m, m, 1)
         check_psd(R, "R")
         self._kf, self._n, self._m = kf, n, m
-        # one buffer for F, Q, H, R and one for x, P: few arguments make the kernel call cheap
-        self._model = np.zeros(2 * n * n + m * n + m * m)
-        self._model[2 * n * n:] = np.concatenate([H.ravel(), R.ravel()])
-        self._state = np.concatenate([x[0], P[0].ravel()])
+        # state, model and work space in one buffer: few arguments make the kernel call cheap
+        self._off, size = _kernels.online_layout(n, m)
+        self._buf = np.zeros(size)
+        self._put("x", x[0])
+        self._put("P", P[0])
+        self._put("H", H)
+        self._put("R", R)
+        self._idx = np.empty(m, dtype=np.int64)
+        self._kernel = _kernels.online_kernel(n, m)
         self._dt0 = float(dt)  # the default time step; F, Q are kept for the last one used
         self._dt = None
         self._set_dt(self._dt0)
-        self._work = _kernels.step_work(n, m)
         self._no_y = np.full(m, np.nan)  # the measurement argument of a prediction
+
+    def _put(self, name: str, value: np.ndarray) -> None:
+        o = self._off[name]
+        self._buf[o:o + value.size] = value.ravel()
 
     def _set_dt(self, dt: float) -> None:
         n = self._n
         F = check_matrix_stack(self._kf.motion.F(dt), "F", n, n, 1)
         Q = check_matrix_stack(self._kf.motion.Q(dt), "Q", n, n, 1)
         check_psd(Q, "Q")
-        self._model[: 2 * n * n] = np.concatenate([F.ravel(), Q.ravel()])
+        self._put("F", F)
+        self._put("Q", Q)
         self._dt = dt
 
     def __repr__(self) -> str:
@@ -597,13 +606,14 @@ class OnlineFilter:
 
     @property
     def mean(self) -> np.ndarray:
-        v = self._state[: self._n]
+        v = self._buf[: self._n]
         v.flags.writeable = False
         return v
 
     @property
     def cov(self) -> np.ndarray:
-        v = self._state[self._n:].reshape(self._n, self._n)
+        n = self._n
+        v = self._buf[n:n + n * n].reshape(n, n)
         v.flags.writeable = False
         return v
 
@@ -624,8 +634,7 @@ class OnlineFilter:
                 raise ValueError(f"y must have shape ({self._m},); got {y.shape}")
         else:
             y = self._no_y
-        fbuf, ibuf = self._work
-        code, ll = _kernels.step_inplace(self._state, y, self._model, predict, update, fbuf, ibuf)
+        code, ll = self._kernel(self._buf, y, self._idx, predict, update)
         if code >= 0:
             if code == 8:
                 raise ValueError(f"y must be finite or NaN (missing); got {y}")
