@@ -210,6 +210,10 @@ def batch(rows, repeats, B, T):
 
     rows.append((label, "vistrack, shared covariances (same P0 and missing pattern)", steps / median_time(vt_shared, repeats) / 1e6, "M steps/s"))
     rows.append((label, "vistrack, one covariance per series (general path)", steps / median_time(vt_general, repeats) / 1e6, "M steps/s"))
+    Fd = np.eye(4) + 0.1 * rng.normal(size=(4, 4))  # a dense model: no zeros to skip
+    Ad = rng.normal(size=(4, 4))
+    Qd, Hd = Ad @ Ad.T / 4 + 0.1 * np.eye(4), rng.normal(size=(2, 4))
+    rows.append((label, "vistrack, one covariance per series, dense F and H", steps / median_time(lambda: vt.kalman_filter(ys, F=Fd, Q=Qd, H=Hd, R=R, x0=X0, P0=P0b, store_covs=False), repeats) / 1e6, "M steps/s"))
     ys_m = ys.copy()
     ys_m[rng.random((B, T)) < 0.05] = np.nan  # different missing steps per series
     rows.append((label, "vistrack, general path with 5 % missing steps", steps / median_time(lambda: vt.kalman_filter(ys_m, F=F, Q=Q, H=H, R=R, x0=X0, P0=P0, store_covs=False), repeats) / 1e6, "M steps/s"))

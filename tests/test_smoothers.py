@@ -67,3 +67,21 @@ def test_rts_needs_covariances(rng):
         rts_smooth(res, F=mod["F"], Q=mod["Q"])
     with pytest.raises(TypeError, match="result must be a FilterResult"):
         rts_smooth(np.zeros(3), F=mod["F"], Q=mod["Q"])
+
+
+@pytest.mark.parametrize("tv", [False, True])
+def test_rts_equals_filterpy_rts_smoother(rng, tv):
+    filterpy_kalman = pytest.importorskip("filterpy.kalman")
+    n, m, T = 4, 2, 40
+    mod = random_model(rng, n, m, T, tv=tv)
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(n), rng=rng)
+    ys[[7, 8, 20]] = np.nan
+    res = kalman_filter(ys, **mod, x0=np.zeros(n), P0=np.eye(n))
+    # FilterPy's rts_smoother(Xs, Ps, Fs, Qs) uses Fs[k+1], Qs[k+1] between steps k and k+1, as we do
+    Fs = mod["F"] if tv else [mod["F"]] * T
+    Qs = mod["Q"] if tv else [mod["Q"]] * T
+    kf = filterpy_kalman.KalmanFilter(dim_x=n, dim_z=m)
+    xs, Ps, _, _ = kf.rts_smoother(np.array(res.means), np.array(res.covs), Fs=Fs, Qs=Qs)
+    sm = rts_smooth(res, F=mod["F"], Q=mod["Q"])
+    np.testing.assert_allclose(sm.means, xs, rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(sm.covs, Ps, rtol=1e-8, atol=1e-10)
