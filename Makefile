@@ -18,7 +18,7 @@ run: $(STAMP)
 	$(VENV)/bin/vistrack demo kalman --out out/
 
 test: $(STAMP)
-	$(PY) -m pytest -q tests
+	$(PY) -m pytest -q
 
 $(VENV)/.bench-installed: $(STAMP)
 	$(PY) -m pip install --quiet -e ".[test,bench]"

@@ -1,5 +1,7 @@
 """The Kalman filter against FilterPy, pykalman, a joint-Gaussian oracle and the seeds' 1-D equations."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -186,7 +188,7 @@ def test_result_is_read_only(rng):
     res = kalman_filter(rng.normal(size=(5, 1)), **mod, x0=np.zeros(2), P0=np.eye(2))
     with pytest.raises(ValueError):
         res.means[0, 0] = 1.0
-    with pytest.raises(Exception):
+    with pytest.raises(dataclasses.FrozenInstanceError):
         res.means = None
 
 

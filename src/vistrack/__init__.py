@@ -52,11 +52,13 @@ __all__ = [
     "Position",
     "SmoothResult",
     "__version__",
+    "evaluation",
     "kalman_filter",
     "kalman_filter_1d",
     "kf_predict",
     "kf_step",
     "kf_update",
     "rts_smooth",
+    "simulate",
     "two_filter_smooth",
 ]

@@ -9,19 +9,24 @@ Prediction:  ``x̄ᵢ⁻ = F x̄ᵢ₋₁⁺``,   ``Σᵢ⁻ = F Σᵢ₋₁⁺ 
 
 Correction:  ``K = Σᵢ⁻ H' (H Σᵢ⁻ H' + R)⁻¹``,  ``x̄ᵢ⁺ = x̄ᵢ⁻ + K (yᵢ - H x̄ᵢ⁻)``,
 ``Σᵢ⁺ = (I - K H) Σᵢ⁻ (I - K H)' + K R K'`` (Joseph form: equal to the seeds' ``(I - K H) Σᵢ⁻`` in
-exact arithmetic, and symmetric positive semi-definite in floating point).
+exact arithmetic, but an error in the gain changes it only to second order). It is kept exactly
+symmetric; the tests run 10⁶ steps of a badly scaled model and find every covariance positive
+definite.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._validate import as_float_array, check_finite, check_matrix_stack, check_psd
 from ..types import Gaussian
 from . import _kernels
+
+if TYPE_CHECKING:
+    from .smoothers import SmoothResult
 
 __all__ = [
     "FilterResult",
@@ -33,7 +38,6 @@ __all__ = [
     "KalmanFilter",
     "OnlineFilter",
 ]
-
 
 
 @dataclass(frozen=True)
@@ -283,7 +287,7 @@ def kf_step(
     >>> for y in ([1.0], [2.1], [2.9]):
     ...     g = kf_step(g, y, F, Q, H, R)
     >>> g.mean.round(2)
-    array([2.88, 0.95])
+    array([2.82, 0.86])
     """
     mean, cov, y = _with_measurement(g, y)
     n, m = mean.shape[-1], y.shape[-1]
@@ -516,24 +520,28 @@ class KalmanFilter:
             P0 = dP0 if P0 is None else P0
         return kalman_filter(ys, **self.matrices(T, dt), x0=x0, P0=P0, store_covs=store_covs)
 
-    def online(self, x0: Any, P0: Any, *, dt: float = 1.0) -> "OnlineFilter":
+    def online(self, x0: Any, P0: Any, *, dt: float = 1.0) -> OnlineFilter:
         """A filter for one target that is fed one measurement at a time.
+
+        ``x0, P0`` are the prior of the first measurement (as in :func:`kalman_filter`): correct
+        them with :meth:`OnlineFilter.update`, then :meth:`OnlineFilter.step` for each later one.
 
         Examples
         --------
         >>> from vistrack.models import ConstantVelocity, Position
         >>> f = KalmanFilter(ConstantVelocity(dim=1, q=0.01), Position(dim=1, r=0.5)).online(
         ...     x0=[0.0, 1.0], P0=np.eye(2))
+        >>> _ = f.update([0.1])
         >>> for y in ([1.0], [2.1], [2.9]):
         ...     _ = f.step(y)
         >>> f.mean.round(2)
-        array([2.88, 0.95])
+        array([2.96, 0.96])
         """
         return OnlineFilter(self, x0, P0, dt=dt)
 
     def smooth(
         self, ys: Any, *, dt: Any = 1.0, x0: Any = None, P0: Any = None
-    ) -> "SmoothResult":
+    ) -> SmoothResult:
         """Filter, then RTS-smooth; see :func:`vistrack.filters.rts_smooth`."""
         from .smoothers import rts_smooth
 

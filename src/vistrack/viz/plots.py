@@ -93,7 +93,7 @@ def plot_track_2d(
         ms = np.asarray(means)
         ax.plot(ms[:, 0], ms[:, 1], "x-", color=color, lw=1.0, label=label)
         if covs is not None:
-            for mu, P in zip(ms, np.asarray(covs)):
+            for mu, P in zip(ms, np.asarray(covs), strict=True):
                 e = covariance_ellipse(mu[:2], P[:2, :2], nsigma=nsigma)
                 ax.plot(e[:, 0], e[:, 1], "-", color=color, lw=0.7, alpha=0.8)
     ax.set_aspect("equal", adjustable="box")
