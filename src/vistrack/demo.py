@@ -97,7 +97,7 @@ def smoothing_1d(path: str | Path, *, T: int = 20, seed: int = 2) -> Path:
                       pred_std=np.sqrt(bp_cov[:, 0, 0]), mean=bc_mean[:, 0],
                       std=np.sqrt(bc_cov[:, 0, 0]), title="Backward estimates")
     plot_estimates_1d(axes[2], t, **common, mean=sm.means[:, 0], std=np.sqrt(sm.covs[:, 0, 0]),
-                      title="Combined forward-backward estimates")
+                      title="Combined forward-backward estimates", mean_label="smoothed")
     lo = np.nanmin(ys) - 4
     hi = np.nanmax(ys) + 4
     for ax in axes:

@@ -36,11 +36,13 @@ def plot_estimates_1d(
     std: Any = None,
     nsigma: float = 3.0,
     title: str | None = None,
+    mean_label: str = r"corrected $\bar{x}_i^+$",
 ) -> Any:
     """The seeds' 1-D figure: "The o-s give state, x-s measurement. The \\*-s give x̄ᵢ⁻, +-s give
     x̄ᵢ⁺, vertical bars are 3 standard deviation bars".
 
-    All series are arrays of shape (T,); NaN points are not drawn. Returns ``ax``.
+    All series are arrays of shape (T,); NaN points are not drawn. ``mean_label`` names the
+    ``mean`` series (e.g. "smoothed"). Returns ``ax``.
     """
     t = np.asarray(t, dtype=float)
     off = 0.12 * (np.median(np.diff(t)) if t.size > 1 else 1.0)
@@ -48,16 +50,16 @@ def plot_estimates_1d(
         ax.plot(t, truth, "o", mfc="none", color="k", label="state")
     if measurements is not None:
         ax.plot(t, measurements, "x", color="tab:green", label="measurement")
-    if pred_mean is not None:
-        ax.plot(t - off, pred_mean, "*", color="tab:blue", label=r"predicted $\bar{x}_i^-$")
-        if pred_std is not None:
-            ax.errorbar(t - off, pred_mean, yerr=nsigma * np.asarray(pred_std), fmt="none",
-                        ecolor="tab:blue", elinewidth=0.8, capsize=2)
-    if mean is not None:
-        ax.plot(t + off, mean, "+", color="tab:red", ms=9, label=r"corrected $\bar{x}_i^+$")
-        if std is not None:
-            ax.errorbar(t + off, mean, yerr=nsigma * np.asarray(std), fmt="none",
-                        ecolor="tab:red", elinewidth=0.8, capsize=2)
+    for tt, mu, sd, marker, ms, color, label in (
+        (t - off, pred_mean, pred_std, "*", 6, "tab:blue", r"predicted $\bar{x}_i^-$"),
+        (t + off, mean, std, "+", 9, "tab:red", mean_label),
+    ):
+        if mu is None:
+            continue
+        ax.plot(tt, mu, marker, color=color, ms=ms, label=label)
+        if sd is not None:
+            ax.errorbar(tt, mu, yerr=nsigma * np.asarray(sd), fmt="none", ecolor=color,
+                        elinewidth=0.8, capsize=2)
     ax.set_xlabel("time")
     ax.set_ylabel("position")
     if title:
