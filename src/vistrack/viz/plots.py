@@ -12,6 +12,15 @@ import numpy as np
 __all__ = ["covariance_ellipse", "plot_estimates_1d", "plot_track_2d"]
 
 
+def _finish(ax: Any, xlabel: str, ylabel: str, title: str | None) -> Any:
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title)
+    ax.legend(loc="best", fontsize=8)
+    return ax
+
+
 def covariance_ellipse(mean: Any, cov: Any, *, nsigma: float = 1.0, points: int = 64) -> np.ndarray:
     """Points ``(points, 2)`` on the ``nsigma`` contour of a 2-D Gaussian ``N(mean, cov)``."""
     mean = np.asarray(mean, dtype=float)
@@ -60,12 +69,7 @@ def plot_estimates_1d(
         if sd is not None:
             ax.errorbar(tt, mu, yerr=nsigma * np.asarray(sd), fmt="none", ecolor=color,
                         elinewidth=0.8, capsize=2)
-    ax.set_xlabel("time")
-    ax.set_ylabel("position")
-    if title:
-        ax.set_title(title)
-    ax.legend(loc="best", fontsize=8)
-    return ax
+    return _finish(ax, "time", "position", title)
 
 
 def plot_track_2d(
@@ -99,9 +103,4 @@ def plot_track_2d(
                 e = covariance_ellipse(mu[:2], P[:2, :2], nsigma=nsigma)
                 ax.plot(e[:, 0], e[:, 1], "-", color=color, lw=0.7, alpha=0.8)
     ax.set_aspect("equal", adjustable="box")
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
-    if title:
-        ax.set_title(title)
-    ax.legend(loc="best", fontsize=8)
-    return ax
+    return _finish(ax, "x", "y", title)
