@@ -1,19 +1,24 @@
 """Compiled Kalman kernels (numba). Private: the public API is in :mod:`vistrack.filters.kalman`.
 
-Layout. The batched kernels work on a chunk of ``CH`` series at a time in structure-of-arrays form
-(``x[i, j]`` is entry ``i`` of series ``j``), with the series index as the innermost loop, so that
-LLVM turns every matrix operation into SIMD code over series. Entries of ``F`` and ``H`` that are
-zero are skipped by a scalar test outside that loop: the constant-position, -velocity,
--acceleration and periodic models, whose ``F`` is mostly zeros, and position measurements, whose
-``H`` is a selection, get their sparsity exploited by this one kernel.
+Three families, one set of equations:
 
-Missing measurement components (NaN) are handled exactly and without a branch per series: a
-missing component ``k`` gets a zero innovation, a zero column ``k`` in ``P H'`` and a unit,
-decoupled row and column in ``S``. Its Kalman-gain column is then zero, and the update equals the
-update with the observed components only.
+- **Batches** (:func:`kf_batch`, :func:`kf_means_shared`, :func:`predict_batch`,
+  :func:`update_batch`) work on a chunk of ``CH`` series at a time in structure-of-arrays form
+  (``x[i, j]`` is entry ``i`` of series ``j``), with the series index as the innermost loop, so
+  that LLVM turns every matrix operation into SIMD code over series. Entries of ``F`` and ``H``
+  that are zero are skipped by a scalar test outside that loop, so the sparse kinematic models
+  and selection-type measurements cost less. Missing components (NaN) are handled without a
+  branch per series: a missing component gets a zero innovation, a zero column in ``P H'`` and a
+  unit, decoupled row and column in ``S``, so its gain column is zero and the update equals the
+  update with the observed components only.
+- **One Gaussian at a time** (:func:`predict_one`, :func:`update_one`, used by the one-series
+  filter :func:`single_kernel`, the RTS smoother, small per-call batches and
+  :func:`online_kernel`), which update with the observed components only. The one-series and
+  online kernels are compiled per state and measurement size, so their loops unroll.
 
-Covariance updates use the Joseph form ``(I - K H) P (I - K H)' + K R K'``, computed on the upper
-triangle and mirrored, so covariances stay symmetric and positive semi-definite; gains come from
+Covariance updates use the Joseph form ``(I - K H) P (I - K H)' + K R K'``, evaluated as
+``AP - W K'`` with ``AP = P - K (H P)`` and ``W = AP H' - K R`` (the same matrix for any gain),
+on the upper triangle and mirrored, so covariances stay exactly symmetric; gains come from
 Cholesky solves, never an explicit inverse.
 """
 
