@@ -62,3 +62,11 @@ def test_murphy_errors_equal_filterpy_per_run_and_match_published_means():
     assert abs(st.mean_filtered - 4.30) < 4 * se_f
     assert abs(st.mean_smoothed - 2.93) < 4 * se_s
     assert st.ratio == pytest.approx(1.47, abs=0.05)
+
+
+def test_import_stays_light():
+    """`import vistrack` must not pull in matplotlib or scipy.stats (~60 MB and ~1 s each):
+    the CLI and library users pay for them only when they plot or ask for chi-square bands."""
+    code = "import sys, vistrack; print(sorted(m for m in ('matplotlib', 'scipy.stats') if m in sys.modules))"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert r.stdout.strip() == "[]"
