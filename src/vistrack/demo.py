@@ -145,15 +145,24 @@ class MurphyStats:
                 float(100 * np.mean(self.smoothed < smoothed)))
 
 
-def murphy_errors(n_seeds: int = 1000, *, seed: int = 0) -> MurphyStats:
-    """Run the 2-D example on ``n_seeds`` simulated tracks as one batch: filter and RTS-smooth."""
+def _murphy_run(seed: int, n_series: int | None = None):
+    """Simulate the 2-D example, filter and RTS-smooth it; ``(xs, ys, filtered, smoothed)``."""
     m = MURPHY
     xs, ys = simulate_lgssm(MURPHY_T, F=m.F, Q=m.Q, H=m.H, R=m.R, x0=MURPHY_X0,
-                            n_series=n_seeds, rng=seed)
+                            n_series=n_series, rng=seed)
     res = kalman_filter(ys, F=m.F, Q=m.Q, H=m.H, R=m.R, x0=MURPHY_X0, P0=MURPHY_P0)
-    sm = rts_smooth(res, F=m.F, Q=m.Q)
-    err = lambda est: np.sqrt(((est[..., :2] - xs[..., :2]) ** 2).sum(axis=(-2, -1)))  # noqa: E731
-    return MurphyStats(n_seeds, err(res.means), err(sm.means))
+    return xs, ys, res, rts_smooth(res, F=m.F, Q=m.Q)
+
+
+def _toolbox_error(est: np.ndarray, xs: np.ndarray) -> np.ndarray:
+    """The toolbox demo's "MSE": sqrt of the squared position errors summed over x, y and steps."""
+    return np.sqrt(((est[..., :2] - xs[..., :2]) ** 2).sum(axis=(-2, -1)))
+
+
+def murphy_errors(n_seeds: int = 1000, *, seed: int = 0) -> MurphyStats:
+    """Run the 2-D example on ``n_seeds`` simulated tracks as one batch: filter and RTS-smooth."""
+    xs, _, res, sm = _murphy_run(seed, n_seeds)
+    return MurphyStats(n_seeds, _toolbox_error(res.means, xs), _toolbox_error(sm.means, xs))
 
 
 def murphy_2d(path: str | Path, *, seed: int = 8) -> tuple[Path, float, float]:
@@ -163,12 +172,8 @@ def murphy_2d(path: str | Path, *, seed: int = 8) -> tuple[Path, float, float]:
     """
     from .viz.plots import plot_track_2d
 
-    m = MURPHY
-    xs, ys = simulate_lgssm(MURPHY_T, F=m.F, Q=m.Q, H=m.H, R=m.R, x0=MURPHY_X0, rng=seed)
-    res = kalman_filter(ys, F=m.F, Q=m.Q, H=m.H, R=m.R, x0=MURPHY_X0, P0=MURPHY_P0)
-    sm = rts_smooth(res, F=m.F, Q=m.Q)
-    ef = float(np.sqrt(((res.means[:, :2] - xs[:, :2]) ** 2).sum()))
-    es = float(np.sqrt(((sm.means[:, :2] - xs[:, :2]) ** 2).sum()))
+    xs, ys, res, sm = _murphy_run(seed)
+    ef, es = float(_toolbox_error(res.means, xs)), float(_toolbox_error(sm.means, xs))
     fig, axes = _figure(2, width=3.6, height=5.6)
     plot_track_2d(axes[0], truth=xs, measurements=ys, means=res.means, covs=res.covs,
                   label="filtered", color="tab:red", title=f"Filtered (error {ef:.2f})")

@@ -396,8 +396,9 @@ def kf_batch(
     ``F, Q (TF, n, n)``, ``H (TH, m, n)``, ``R (TR, m, m)`` with each leading size 1 or T.
     ``x0 (B0, n)``, ``P0 (BP, n, n)`` with B0, BP in {1, B}. Writes ``means``, ``pmeans``
     ``(B, T, n)``, ``loglik (B,)``, ``last_P (B, n, n)`` and, when ``store_covs``, ``pmeans``,
-    ``covs`` and ``pcovs (B, T, n, n)``. When ``gains`` has ``T`` rows (used with ``B == 1``) it also writes
-    the Kalman gains ``(T, n, m)`` and the Cholesky factors of ``S`` ``(T, m, m)`` into ``chol``.
+    ``covs`` and ``pcovs (B, T, n, n)``. When ``gains`` has ``T`` rows (used with ``B == 1``)
+    it also writes the Kalman gains ``(T, n, m)`` and the Cholesky factors of ``S``
+    ``(T, m, m)`` into ``chol``.
     Returns the first step whose innovation covariance is not positive definite, or -1.
     """
     B, T, m = ys.shape

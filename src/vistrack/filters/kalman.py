@@ -176,8 +176,10 @@ def kalman_filter(
     means = np.empty((B, T, n))
     pmeans = np.empty((B, T, n)) if store_covs else np.empty((1, 1, n))
     loglik = np.empty(B)
-    mask = np.isnan(y)
-    shared = B > 1 and P0_.shape[0] == 1 and bool((mask == mask[0]).all())
+    shared = False
+    if B > 1 and P0_.shape[0] == 1:  # only then can the series share their covariances
+        mask = np.isnan(y)
+        shared = bool((mask == mask[0]).all())
     if shared:
         # covariances, gains and Cholesky factors once, from the first series
         gains = np.empty((T, n, m))
@@ -614,14 +616,15 @@ class OnlineFilter:
 
     @property
     def mean(self) -> np.ndarray:
-        v = self._buf[: self._n]
+        o = self._off["x"]
+        v = self._buf[o:o + self._n]
         v.flags.writeable = False
         return v
 
     @property
     def cov(self) -> np.ndarray:
-        n = self._n
-        v = self._buf[n:n + n * n].reshape(n, n)
+        n, o = self._n, self._off["P"]
+        v = self._buf[o:o + n * n].reshape(n, n)
         v.flags.writeable = False
         return v
 
