@@ -23,7 +23,7 @@ import numpy as np
 
 from .._validate import as_float_array, check_finite, check_matrix_stack, check_psd
 from ..types import Gaussian
-from . import _kernels
+from . import _codegen, _kernels
 
 if TYPE_CHECKING:
     from .smoothers import SmoothResult
@@ -153,8 +153,13 @@ def kalman_filter(
     -----
     As the seeds observe, the covariance does not depend on the measured values. Series that share
     ``P0`` and the pattern of missing components therefore share every covariance and gain: these
-    are computed once, and each series then costs only its mean recursion. Other batches run the
-    general kernel, which carries one covariance per series.
+    are computed once, and each series then costs only its mean recursion. Other batches carry one
+    covariance per series. Large ones (100,000 series-steps or more, state size up to 6,
+    measurement size up to 3) run a kernel generated for the zeros and ones of ``F``, ``Q``,
+    ``H``, ``R``; it compiles in a few seconds the first time a pattern is seen, and is then
+    cached on disk (``$VISTRACK_CACHE_DIR``, by default ``~/.cache/vistrack/kernels``). With
+    constant matrices and fully observed steps, the covariances converge to their steady state,
+    after which only the means are computed.
 
     Examples
     --------
@@ -212,10 +217,18 @@ def kalman_filter(
         covs = np.empty((B, T, n, n)) if store_covs else np.empty((1, 1, 1, 1))
         pcovs = np.empty((B, T, n, n)) if store_covs else np.empty((1, 1, 1, 1))
         last_P = np.empty((B, n, n))
-        bad_t = _kernels.kf_batch(
-            y, F_, Q_, H_, R_, x0_, P0_, means, covs, pmeans, pcovs, loglik, last_P,
-            np.empty((0, n, m)), np.empty((0, m, m)), store_covs,
-        )
+        if _codegen.worth_it(n, m, B * T):
+            # straight-line code for this model's zeros and ones, compiled once per machine
+            codes = (_codegen.entry_codes(a) for a in (F_, Q_, H_, R_))
+            bad_t = _codegen.batch_kernel(n, m, *codes)(
+                y, F_, Q_, H_, R_, x0_, P0_, means, covs, pmeans, pcovs, loglik, last_P,
+                store_covs,
+            )
+        else:
+            bad_t = _kernels.kf_batch(
+                y, F_, Q_, H_, R_, x0_, P0_, means, covs, pmeans, pcovs, loglik, last_P,
+                np.empty((0, n, m)), np.empty((0, m, m)), store_covs,
+            )
         _raise_not_pd(bad_t)
         if not store_covs:
             covs = pcovs = None

@@ -1,0 +1,409 @@
+"""Batch Kalman kernels generated for the structure of one model. Private.
+
+The per-series batch filter spends its time on small matrix products whose shapes and zero
+patterns are fixed by the model: a constant-velocity ``F`` is mostly zeros and ones, and a
+position ``H`` only selects. :func:`batch_kernel` writes, for one pattern of zeros and ones in
+``F``, ``Q``, ``H`` and ``R``, the filter as straight-line scalar code: every product by a
+structural zero is gone, every product by a structural one is a copy, and the covariance is
+held as its upper triangle. The other entries are read at run time (per step when they vary),
+so one kernel serves every noise level and every ``dt`` but 1 (whose entries are ones).
+
+The series of a chunk are the innermost loop, so LLVM turns each straight-line block into SIMD
+code over series. Three things keep it so: the work arrays are rows of one flat array at
+constant offsets (separate arrays might alias, and LLVM gives up on the run-time checks for
+that many), divisions follow numpy's error model (Python's raises on zero, a branch that stops
+vectorisation), and the log-determinant is accumulated as a product, with a log only when the
+product leaves [1e-100, 1e100] (a call to ``log`` would not vectorise). The prediction and the
+update are two loops rather than one: smaller blocks spill fewer registers, and measured faster.
+
+The equations are those of :mod:`vistrack.filters._kernels`: Cholesky factor of the innovation
+covariance ``S``, gains by triangular solves, the Joseph form evaluated as ``AP - W K'``, and
+missing components decoupled in ``S`` so that their gain is zero. A dense ``F`` and ``H`` give
+the generic kernel for that state and measurement size. As in the one-series kernel, constant
+matrices and fully observed steps lead to a steady state: once two fully observed steps leave
+every covariance of a chunk unchanged to 8 ulp, only the means are computed, until a step with a
+missing component.
+
+The source of each kernel is written to a file in the user's cache directory
+(``$VISTRACK_CACHE_DIR``, else ``$XDG_CACHE_HOME/vistrack/kernels`` or
+``~/.cache/vistrack/kernels``) and imported from there, so numba caches its machine code like
+that of any other module: a pattern costs its compilation (seconds) once per machine.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib.util
+import math
+import os
+import re
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+CH = 128  # series per chunk
+MAX_N, MAX_M = 6, 3  # larger models: the code, and its compilation time, grow as n² m
+# Below this many series-steps the loop kernel of _kernels is used: a new pattern costs some
+# seconds of compilation once per machine, which only a large batch repays.
+MIN_STEPS = 100_000
+
+
+def worth_it(n: int, m: int, steps: int) -> bool:
+    """Whether a batch of ``steps`` series-steps of this size runs a generated kernel."""
+    return n <= MAX_N and m <= MAX_M and steps >= MIN_STEPS
+
+
+def entry_codes(a: np.ndarray) -> tuple:
+    """Per entry of a stack ``(T, r, c)``: 0 if it is zero at every step, 1 if it is one at
+    every step, else 2."""
+    zero = (a == 0.0).all(axis=0)
+    one = (a == 1.0).all(axis=0)
+    codes = np.where(zero, 0, np.where(one, 1, 2))
+    return tuple(tuple(int(v) for v in row) for row in codes)
+
+
+def _term(code: int, coef: str, var: str) -> str | None:
+    if code == 0:
+        return None
+    return var if code == 1 else f"{coef} * {var}"
+
+
+def _sum(terms, empty: str = "0.0") -> str:
+    terms = [t for t in terms if t is not None]
+    return " + ".join(terms) if terms else empty
+
+
+def _p(i: int, k: int, name: str = "p") -> str:
+    return f"{name}{min(i, k)}_{max(i, k)}"
+
+
+def _tri(n: int):
+    return [(i, k) for i in range(n) for k in range(i, n)]
+
+
+def _predict(n, cf, cq) -> list[str]:
+    """Straight-line prediction of one series: reads ``X, PP``, writes ``XP, PPP`` at ``j``."""
+    L = []
+    tri = _tri(n)
+    for i in range(n):
+        L.append(f"x{i} = X[{i}, j]")
+    for a, (i, k) in enumerate(tri):
+        L.append(f"p{i}_{k} = PP[{a}, j]")
+    for i in range(n):
+        L.append(f"XP[{i}, j] = " + _sum(_term(cf[i][l], f"f{i}_{l}", f"x{l}") for l in range(n)))
+    for i in range(n):
+        for k in range(n):
+            fp = _sum(_term(cf[i][l], f"f{i}_{l}", _p(l, k)) for l in range(n))
+            L.append(f"fp{i}_{k} = {fp}")
+    for a, (i, k) in enumerate(tri):
+        terms = [_term(cf[k][l], f"f{k}_{l}", f"fp{i}_{l}") for l in range(n)]
+        if cq[i][k]:
+            terms.append(f"q{i}_{k}" if cq[i][k] == 2 else "1.0")
+        L.append(f"PPP[{a}, j] = " + _sum(terms))
+    return L
+
+
+def _update(n, m, ch, cr) -> list[str]:
+    """Straight-line update of one series: reads ``XP, PPP, Y`` (NaN = missing), writes
+    ``X, PP``, the innovation log-density without its log-determinant to ``LL`` and the
+    determinant of the Cholesky factor of ``S`` to ``DS``, at ``j``."""
+    L = []
+    tri = _tri(n)
+    for i in range(n):
+        L.append(f"xp{i} = XP[{i}, j]")
+    for a, (i, k) in enumerate(tri):
+        L.append(f"pp{i}_{k} = PPP[{a}, j]")
+    # innovation e = y - H xp, U = Pp H', S = H U + R
+    for k in range(m):
+        L.append(f"y{k} = Y[{k}, j]")
+        hx = _sum(_term(ch[k][i], f"h{k}_{i}", f"xp{i}") for i in range(n))
+        L.append(f"o{k} = 0.0 if math.isnan(y{k}) else 1.0")
+        L.append(f"e{k} = (y{k} - ({hx})) if o{k} == 1.0 else 0.0")
+    for i in range(n):
+        for k in range(m):
+            u = _sum(_term(ch[k][l], f"h{k}_{l}", _p(i, l, "pp")) for l in range(n))
+            L.append(f"u{i}_{k} = o{k} * ({u})")
+    for k, k2 in _tri(m):
+        terms = [_term(ch[k][i], f"h{k}_{i}", f"u{i}_{k2}") for i in range(n)]
+        if cr[k][k2]:
+            terms.append(f"r{k}_{k2}" if cr[k][k2] == 2 else "1.0")
+        s = _sum(terms)
+        s = f"o{k} * ({s}) + (1.0 - o{k})" if k == k2 else f"o{k} * o{k2} * ({s})"
+        L.append(f"s{k}_{k2} = {s}")
+    # Cholesky S = L L' (a non-positive pivot is counted and replaced by one)
+    for k in range(m):
+        d = f"s{k}_{k}" + "".join(f" - l{k}_{p} * l{k}_{p}" for p in range(k))
+        L.append(f"d{k} = {d}")
+        L.append(f"nbad += not d{k} > 0.0")
+        L.append(f"l{k}_{k} = math.sqrt(d{k}) if d{k} > 0.0 else 1.0")
+        L.append(f"il{k} = 1.0 / l{k}_{k}")
+        for k2 in range(k + 1, m):
+            v = f"s{k}_{k2}" + "".join(f" - l{k2}_{p} * l{k}_{p}" for p in range(k))
+            L.append(f"l{k2}_{k} = ({v}) * il{k}")
+    # gains K = U S^-1 by forward and back substitution, and the whitened innovation
+    for i in range(n):
+        for k in range(m):
+            v = f"u{i}_{k}" + "".join(f" - l{k}_{p} * z{i}_{p}" for p in range(k))
+            L.append(f"z{i}_{k} = ({v}) * il{k}")
+        for k in range(m - 1, -1, -1):
+            v = f"z{i}_{k}" + "".join(f" - l{p}_{k} * k{i}_{p}" for p in range(k + 1, m))
+            L.append(f"k{i}_{k} = ({v}) * il{k}")
+    for k in range(m):
+        v = f"e{k}" + "".join(f" - l{k}_{p} * w{p}" for p in range(k))
+        L.append(f"w{k} = ({v}) * il{k}")
+    nobs = " + ".join(f"o{k}" for k in range(m))
+    L.append("LL[j] -= 0.5 * (" + " + ".join(f"w{k} * w{k}" for k in range(m))
+             + f") + HALF_LOG2PI * ({nobs})")
+    L.append("DS[j] = " + " * ".join(f"l{k}_{k}" for k in range(m)))
+    for i in range(n):
+        L.append(f"X[{i}, j] = xp{i} + " + _sum(f"k{i}_{k} * e{k}" for k in range(m)))
+    # Joseph form (I - K H) Pp (I - K H)' + K R K' = AP - W K' with AP = Pp - K U',
+    # W = AP H' - K R
+    for i in range(n):
+        for l in range(n):
+            L.append(f"ap{i}_{l} = {_p(i, l, 'pp')} - ("
+                     + _sum(f"k{i}_{k} * u{l}_{k}" for k in range(m)) + ")")
+    for i in range(n):
+        for k in range(m):
+            a = _sum(_term(ch[k][l], f"h{k}_{l}", f"ap{i}_{l}") for l in range(n))
+            b = _sum(_term(cr[k2][k], f"r{k2}_{k}", f"k{i}_{k2}") for k2 in range(m))
+            L.append(f"wk{i}_{k} = {a} - ({b})")
+    # count the entries of P that moved by more than 8 ulp of its scale since the last step
+    # (NaN counts as moved), and keep the gain and the factor of S for a steady state
+    L.append("tol = 8.0 * EPS * max(" + ", ".join(f"abs(pp{i}_{i})" for i in range(n))
+             + ")" if n > 1 else "tol = 8.0 * EPS * abs(pp0_0)")
+    for a, (i, l) in enumerate(tri):
+        L.append(f"pn = ap{i}_{l} - (" + _sum(f"wk{i}_{k} * k{l}_{k}" for k in range(m)) + ")")
+        L.append(f"nmoved += not abs(pn - PP[{a}, j]) <= tol")
+        L.append(f"PP[{a}, j] = pn")
+    for i in range(n):
+        for k in range(m):
+            L.append(f"KL[{i * m + k}, j] = k{i}_{k}")
+    for a, (k, p) in enumerate(_lower(m)):
+        L.append(f"KL[{n * m + a}, j] = " + (f"il{k}" if k == p else f"l{k}_{p}"))
+    return L
+
+
+def _lower(m: int):
+    return [(k, p) for k in range(m) for p in range(k + 1)]
+
+
+def _steady(n, m, cf, ch) -> list[str]:
+    """The steady-state step of one series: ``P``, the gain and ``S`` are those of the last
+    step (kept in ``KL``), so only the mean moves. Reads ``X, Y``, writes ``X, XP, LL``."""
+    L = []
+    for i in range(n):
+        L.append(f"x{i} = X[{i}, j]")
+    for i in range(n):
+        L.append(f"xp{i} = " + _sum(_term(cf[i][l], f"f{i}_{l}", f"x{l}") for l in range(n)))
+        L.append(f"XP[{i}, j] = xp{i}")
+    for k in range(m):
+        hx = _sum(_term(ch[k][i], f"h{k}_{i}", f"xp{i}") for i in range(n))
+        L.append(f"e{k} = Y[{k}, j] - ({hx})")
+    for a, (k, p) in enumerate(_lower(m)):
+        L.append(f"{'il' if k == p else 'l'}{k}{'' if k == p else f'_{p}'} = KL[{n * m + a}, j]")
+    for k in range(m):
+        v = f"e{k}" + "".join(f" - l{k}_{p} * w{p}" for p in range(k))
+        L.append(f"w{k} = ({v}) * il{k}")
+    L.append("LL[j] -= 0.5 * (" + " + ".join(f"w{k} * w{k}" for k in range(m))
+             + f") + HALF_LOG2PI * {float(m)}")
+    for i in range(n):
+        L.append(f"X[{i}, j] = xp{i} + " + _sum(f"KL[{i * m + k}, j] * e{k}" for k in range(m)))
+    return L
+
+
+def source(n: int, m: int, cf, cq, ch, cr) -> str:
+    """The Python source of the kernel for this pattern (see :func:`batch_kernel`)."""
+    tri = _tri(n)
+    nt = len(tri)
+
+    def loads(codes, name, arr, idx, rows, cols, upper=False):
+        out = []
+        for i in range(rows):
+            for k in range(i if upper else 0, cols):
+                if codes[i][k] == 2:
+                    out.append(f"{name}{i}_{k} = {arr}[{idx}, {i}, {k}]")
+        return out
+
+    def loop(body, ind):
+        pad = " " * ind
+        return [f"{pad}for j in range(c):"] + [pad + "    " + s for s in body]
+
+    src = [
+        "import math",
+        "import numpy as np",
+        "from numba import njit",
+        "",
+        f"HALF_LOG2PI = {0.5 * math.log(2.0 * math.pi)!r}",
+        f"EPS = {float(np.finfo(np.float64).eps)!r}",
+        "",
+        "",
+        "@njit(cache=True, error_model='numpy', fastmath={'contract', 'arcp', 'nsz'})",
+        "def kernel(ys, F, Q, H, R, x_init, P_init, means, covs, pmeans, pcovs, loglik, last_P,"
+        " store_covs):",
+        "    B, T, m = ys.shape",
+        f"    W = np.empty({(2 * n + 2 * nt + m + 3 + n * m + m * (m + 1) // 2) * CH})",
+        "    bad_t = -1",
+        "    constant = max(F.shape[0], Q.shape[0], H.shape[0], R.shape[0]) == 1",
+        f"    for b0 in range(0, B, {CH}):",
+        f"        c = min({CH}, B - b0)",
+        "        for j in range(c):",
+        "            bx = b0 + j if x_init.shape[0] > 1 else 0",
+        "            bp = b0 + j if P_init.shape[0] > 1 else 0",
+    ]
+    src += [f"            X[{i}, j] = x_init[bx, {i}]" for i in range(n)]
+    src += [f"            PP[{a}, j] = P_init[bp, {i}, {k}]" for a, (i, k) in enumerate(tri)]
+    src += [
+        "            LL[j] = 0.0",
+        "            D[j] = 1.0",
+        "        steady = False",
+        "        full_before = False",
+        "        for t in range(T):",
+        "            tf = t if F.shape[0] > 1 else 0",
+        "            tq = t if Q.shape[0] > 1 else 0",
+        "            th = t if H.shape[0] > 1 else 0",
+        "            tr = t if R.shape[0] > 1 else 0",
+    ]
+    src += ["            " + s for s in loads(cf, "f", "F", "tf", n, n)]
+    src += ["            " + s for s in loads(cq, "q", "Q", "tq", n, n, upper=True)]
+    src += ["            " + s for s in loads(ch, "h", "H", "th", m, n)]
+    src += ["            " + s for s in loads(cr, "r", "R", "tr", m, m)]
+    src += [
+        "            nnan = 0",
+        "            for k in range(m):",
+        "                for j in range(c):",
+        "                    v = ys[b0 + j, t, k]",
+        "                    Y[k, j] = v",
+        "                    nnan += v != v",
+        "            nbad = 0",
+        "            nmoved = 0",
+        "            if steady and nnan == 0:",
+    ]
+    src += loop(_steady(n, m, cf, ch), 16)
+    src += [
+        "            else:",
+        "                if t == 0:  # no prediction before the first step",
+        "                    for j in range(c):",
+    ]
+    src += [f"                        XP[{i}, j] = X[{i}, j]" for i in range(n)]
+    src += [f"                        PPP[{a}, j] = PP[{a}, j]" for a in range(nt)]
+    src += ["                else:"]
+    src += loop(_predict(n, cf, cq), 20)
+    src += loop(_update(n, m, ch, cr), 16)
+    src += [
+        "                # steady state: two fully observed steps with constant matrices that",
+        "                # left every P of the chunk unchanged to 8 ulp (P does not depend on y)",
+        "                steady = (constant and t > 0 and nnan == 0 and full_before",
+        "                          and nmoved == 0 and nbad == 0)",
+        "                full_before = nnan == 0",
+        "            if nbad and bad_t < 0:",
+        "                bad_t = t",
+        "            # log det L summed as a running product D of the per-step products DS, one",
+        "            # log per series when D leaves [1e-100, 1e100] (or DS is extreme); at the end",
+        "            nout = 0",
+        "            for j in range(c):",
+        "                d = D[j] * DS[j]",
+        "                nout += not (1e-100 < d < 1e100)",
+        "            if nout == 0 and t < T - 1:",
+        "                for j in range(c):",
+        "                    D[j] *= DS[j]",
+        "            else:",
+        "                for j in range(c):",
+        "                    d = D[j] * DS[j]",
+        "                    if 1e-100 < d < 1e100:",
+        "                        D[j] = d",
+        "                    else:",
+        "                        LL[j] -= math.log(D[j]) + math.log(DS[j])",
+        "                        D[j] = 1.0",
+        "                    if t == T - 1:",
+        "                        LL[j] -= math.log(D[j])",
+        "            for j in range(c):",
+        f"                for i in range({n}):",
+        "                    means[b0 + j, t, i] = X[i, j]",
+        "            if store_covs:",
+        "                for j in range(c):",
+        f"                    for i in range({n}):",
+        "                        pmeans[b0 + j, t, i] = XP[i, j]",
+    ]
+    for a, (i, k) in enumerate(tri):
+        src.append(f"                    covs[b0 + j, t, {i}, {k}] = PP[{a}, j]")
+        src.append(f"                    pcovs[b0 + j, t, {i}, {k}] = PPP[{a}, j]")
+        if i != k:
+            src.append(f"                    covs[b0 + j, t, {k}, {i}] = PP[{a}, j]")
+            src.append(f"                    pcovs[b0 + j, t, {k}, {i}] = PPP[{a}, j]")
+    src += ["        for j in range(c):", "            loglik[b0 + j] = LL[j]"]
+    for a, (i, k) in enumerate(tri):
+        src.append(f"            last_P[b0 + j, {i}, {k}] = PP[{a}, j]")
+        if i != k:
+            src.append(f"            last_P[b0 + j, {k}, {i}] = PP[{a}, j]")
+    src += ["    return bad_t", ""]
+    return _flatten("\n".join(src), n, m)
+
+
+def _flatten(src: str, n: int, m: int) -> str:
+    """Rewrite the work arrays (``X[r, j]``, ``PP``, ``XP``, ``PPP``, ``Y``, ``KL`` and the
+    single rows ``D[j]``, ``DS[j]``, ``LL[j]``) as rows of one flat array ``W`` at constant
+    offsets. Separate arrays might alias as far as LLVM knows, and it will not emit run-time
+    checks for that many, so it would not vectorise; rows of one array need no check."""
+    nt = n * (n + 1) // 2
+    offsets, o = {}, 0
+    for name, rows in (("X", n), ("PP", nt), ("XP", n), ("PPP", nt), ("Y", m), ("D", 1),
+                       ("DS", 1), ("LL", 1), ("KL", n * m + m * (m + 1) // 2)):
+        offsets[name], o = o, o + rows
+
+    def rows(match):
+        base = offsets[match.group(1)] * CH
+        r = match.group(2)
+        off = f"{base + int(r) * CH}" if r.isdigit() else f"{base} + ({r}) * {CH}"
+        return f"W[{off} + j]"
+
+    src = re.sub(r"\b(X|PP|XP|PPP|Y|KL)\[([^\]]+), j\]", rows, src)
+    return re.sub(r"\b(D|DS|LL)\[j\]", lambda mt: f"W[{offsets[mt.group(1)] * CH} + j]", src)
+
+
+def _cache_dir() -> Path:
+    base = os.environ.get("VISTRACK_CACHE_DIR")
+    if base:
+        return Path(base)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    root = Path(xdg) if xdg else Path.home() / ".cache"
+    return root / "vistrack" / "kernels"
+
+
+@functools.lru_cache(maxsize=None)
+def batch_kernel(n: int, m: int, cf: tuple, cq: tuple, ch: tuple, cr: tuple):
+    """The compiled kernel for state size ``n``, measurement size ``m`` and the entry codes
+    (see :func:`entry_codes`) of ``F``, ``Q``, ``H``, ``R``.
+
+    ``kernel(ys, F, Q, H, R, x0, P0, means, covs, pmeans, pcovs, loglik, last_P, store_covs)``
+    has the arguments and result of :func:`vistrack.filters._kernels.kf_batch` without the gains.
+    """
+    src = source(n, m, cf, cq, ch, cr)
+    # the file is named by its content, so a changed generator never meets a stale cache
+    name = f"vistrack_kf_{n}_{m}_{hashlib.sha1(src.encode()).hexdigest()[:16]}"
+    user = os.getuid() if hasattr(os, "getuid") else "user"
+    path = None
+    for d in (_cache_dir(), Path(tempfile.gettempdir()) / f"vistrack-kernels-{user}"):
+        try:
+            d.mkdir(parents=True, exist_ok=True)
+            p = d / f"{name}.py"
+            if not p.exists() or p.read_text() != src:
+                tmp = d / f"{name}.{os.getpid()}.tmp"
+                tmp.write_text(src)
+                os.replace(tmp, p)  # atomic: concurrent processes never see half a file
+            path = p
+            break
+        except OSError:
+            continue
+    if path is None:  # no writable directory: compile without a cache
+        namespace: dict = {}
+        exec(compile(src.replace("cache=True", "cache=False"), name, "exec"), namespace)
+        return namespace["kernel"]
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module.kernel

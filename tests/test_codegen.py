@@ -1,0 +1,177 @@
+"""The batch kernels generated per model structure (vistrack.filters._codegen).
+
+Large per-series batches run these; the tests lower the size threshold so that small batches
+do too, and check them against FilterPy and against the loop kernel.
+"""
+
+import numpy as np
+import pytest
+
+import vistrack as vt
+from vistrack.filters import _codegen, kalman_filter
+
+from .conftest import random_model
+from .test_kalman import filterpy_run, with_missing
+
+
+@pytest.fixture
+def generated(monkeypatch):
+    """Every per-series batch runs a generated kernel; yields the list of patterns used."""
+    used = []
+    make = _codegen.batch_kernel
+
+    def spy(*key):
+        used.append(key)
+        return make(*key)
+
+    monkeypatch.setattr(_codegen, "MIN_STEPS", 0)
+    monkeypatch.setattr(_codegen, "batch_kernel", spy)
+    return used
+
+
+def loop_kernel(monkeypatch):
+    monkeypatch.setattr(_codegen, "MIN_STEPS", 1 << 62)
+
+
+def cv_model(dt):
+    motion, meas = vt.ConstantVelocity(dim=2, q=0.5), vt.Position(dim=2, r=0.3)
+    return dict(F=motion.F(dt), Q=motion.Q(dt), H=meas.H(4), R=meas.R())
+
+
+@pytest.mark.parametrize("case", ["constant velocity", "dense, time-varying"])
+def test_generated_kernel_equals_filterpy(rng, generated, case):
+    B, T = 130, 25  # more than one chunk of 128 series, and not a multiple of it
+    if case == "constant velocity":
+        mod = cv_model(0.5)
+    else:
+        mod = random_model(rng, 3, 2, T, tv=True)
+    n, m = mod["H"].shape[-1], mod["H"].shape[-2]
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(n), n_series=B, rng=rng)
+    ys = with_missing(rng, ys)  # rows and single components, different in every series
+    x0 = rng.normal(size=(B, n))
+    A = rng.normal(size=(B, n, n))
+    P0 = A @ np.swapaxes(A, 1, 2) + np.eye(n)
+    res = kalman_filter(ys, **mod, x0=x0, P0=P0)
+    assert len(generated) == 1 and not res.shared_covs
+    codes = generated[0][2:]
+    if case == "constant velocity":  # the structure is in the code: zeros, ones, dt
+        assert codes[0] == ((1, 0, 2, 0), (0, 1, 0, 2), (0, 0, 1, 0), (0, 0, 0, 1))
+        assert codes[2] == ((1, 0, 0, 0), (0, 1, 0, 0))
+    else:
+        assert all(c == 2 for rows in codes for row in rows for c in row)
+    for b in (0, 77, 128, B - 1):
+        fm, fP, fll = filterpy_run(ys[b], **mod, x0=x0[b], P0=P0[b])
+        np.testing.assert_allclose(res.means[b], fm, rtol=1e-9, atol=1e-10)
+        np.testing.assert_allclose(res.covs[b], fP, rtol=1e-9, atol=1e-10)
+        assert res.loglik[b] == pytest.approx(fll, rel=1e-10)
+        np.testing.assert_array_equal(res.last.cov[b], res.covs[b, -1])
+    assert np.array_equal(res.covs, np.swapaxes(res.covs, -1, -2))
+
+
+def test_steady_state_phase_equals_filterpy(rng, generated):
+    """Fully observed constant models converge to a steady state, where only the means move;
+    a missing component in any series of a chunk leaves it until P converges again."""
+    B, T = 130, 300
+    mod = cv_model(0.5)
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(4), n_series=B, rng=rng)
+    ys[7, 150, 1] = np.nan  # chunk 0 leaves the steady state at step 150
+    x0 = rng.normal(size=(B, 4))
+    P0 = (1.0 + rng.random(B))[:, None, None] * np.eye(4)
+    res = kalman_filter(ys, **mod, x0=x0, P0=P0)
+    assert generated
+    for b in (0, 7, 129):
+        fm, fP, fll = filterpy_run(ys[b], **mod, x0=x0[b], P0=P0[b])
+        np.testing.assert_allclose(res.means[b], fm, rtol=1e-9, atol=1e-10)
+        np.testing.assert_allclose(res.covs[b], fP, rtol=1e-9, atol=1e-12)
+        F, Q = mod["F"], mod["Q"]
+        pred = F @ fP[:-1] @ F.T + Q
+        np.testing.assert_allclose(res.pred_covs[b, 1:], pred, rtol=1e-9, atol=1e-12)
+        assert res.loglik[b] == pytest.approx(fll, rel=1e-10)
+    # frozen: the covariance is bitwise constant over the steady steps
+    assert np.array_equal(res.covs[129, 100], res.covs[129, -1])
+    assert np.array_equal(res.covs[0, 100], res.covs[0, 149])
+    assert not np.array_equal(res.covs[7, 149], res.covs[7, 150])
+
+
+@pytest.mark.parametrize("store_covs", [True, False])
+def test_generated_kernel_equals_loop_kernel(rng, monkeypatch, generated, store_covs):
+    B, T = 40, 30
+    mod = cv_model(0.1)
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(4), n_series=B, rng=rng)
+    ys = with_missing(rng, ys)
+    x0, P0 = rng.normal(size=(B, 4)), np.broadcast_to(3.0 * np.eye(4), (B, 4, 4))
+    gen = kalman_filter(ys, **mod, x0=x0, P0=P0, store_covs=store_covs)
+    loop_kernel(monkeypatch)
+    ref = kalman_filter(ys, **mod, x0=x0, P0=P0, store_covs=store_covs)
+    assert len(generated) == 1
+    for name in ("means", "covs", "pred_means", "pred_covs", "loglik"):
+        a, b = getattr(gen, name), getattr(ref, name)
+        if store_covs:
+            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12, err_msg=name)
+        elif name != "means" and name != "loglik":
+            assert a is None and b is None
+    np.testing.assert_allclose(gen.last.cov, ref.last.cov, rtol=1e-12, atol=1e-13)
+    # the first step has no prediction: its predicted moments are the prior
+    if store_covs:
+        np.testing.assert_array_equal(gen.pred_means[:, 0], x0)
+        np.testing.assert_array_equal(gen.pred_covs[:, 0], P0)
+
+
+@pytest.mark.parametrize("scale", [1e-70, 1e70])
+def test_loglik_is_exact_when_determinants_leave_the_float_range(
+    rng, monkeypatch, generated, scale
+):
+    """The log-determinant is summed as a running product with rescaling; with innovation
+    standard deviations of 1e±70 the product of a few steps would overflow or underflow."""
+    B, T = 9, 200
+    mod = random_model(rng, 3, 2)
+    F = 0.95 * mod["F"] / np.abs(np.linalg.eigvals(mod["F"])).max()  # stable over 200 steps
+    mod = dict(mod, F=F, Q=mod["Q"] * scale**2, R=mod["R"] * scale**2)
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(3), n_series=B, rng=rng)
+    ys = with_missing(rng, ys)
+    P0 = np.broadcast_to(scale**2 * np.eye(3), (B, 3, 3))
+    gen = kalman_filter(ys, **mod, x0=np.zeros(3), P0=P0, store_covs=False)
+    assert generated
+    loop_kernel(monkeypatch)
+    ref = kalman_filter(ys, **mod, x0=np.zeros(3), P0=P0, store_covs=False)
+    assert np.all(np.abs(gen.loglik) > 1e4)  # 2 T log(scale) dominates
+    np.testing.assert_allclose(gen.loglik, ref.loglik, rtol=1e-12)
+    fm, _, fll = filterpy_run(ys[4], **mod, x0=np.zeros(3), P0=P0[4])
+    assert gen.loglik[4] == pytest.approx(fll, rel=1e-10)
+
+
+def test_generated_kernel_reports_the_first_bad_step(generated):
+    F, Q = np.eye(2), np.zeros((2, 2))
+    H, R = np.eye(2), np.diag([1.0, 0.0])
+    ys = np.ones((3, 4, 2))
+    ys[:, :2, 1] = np.nan  # the zero-variance component is missing at steps 0 and 1 only
+    P0 = np.broadcast_to(np.diag([1.0, 0.0]), (3, 2, 2))
+    with pytest.raises(ValueError, match="not positive definite at step 2"):
+        kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=np.zeros(2), P0=P0)
+    assert generated
+
+
+def test_kernel_source_is_cached_in_the_cache_directory(tmp_path, monkeypatch):
+    monkeypatch.setenv("VISTRACK_CACHE_DIR", str(tmp_path))
+    codes = (((2,),), ((2,),), ((1,),), ((2,),))
+    _codegen.batch_kernel.cache_clear()
+    try:
+        kernel = _codegen.batch_kernel(1, 1, *codes)
+    finally:
+        _codegen.batch_kernel.cache_clear()  # later calls use the default directory again
+    (path,) = tmp_path.glob("vistrack_kf_1_1_*.py")
+    assert path.read_text() == _codegen.source(1, 1, *codes)
+    ys = np.array([[[1.0], [np.nan], [3.0]]])
+    out = [np.empty((1, 3, 1)), np.empty((1, 3, 1, 1)), np.empty((1, 3, 1)), np.empty((1, 3, 1, 1))]
+    loglik, last = np.empty(1), np.empty((1, 1, 1))
+    one = np.ones((1, 1, 1))
+    assert kernel(ys, one, one, one, one, np.zeros((1, 1)), one, *out, loglik, last, True) == -1
+    ref = kalman_filter(ys[0], F=[[1.0]], Q=[[1.0]], H=[[1.0]], R=[[1.0]], x0=[0.0], P0=[[1.0]])
+    np.testing.assert_allclose(out[0][0], ref.means, rtol=1e-14)
+    assert loglik[0] == pytest.approx(float(ref.loglik), rel=1e-14)
+
+
+def test_small_or_large_models_use_the_loop_kernel():
+    assert _codegen.worth_it(4, 2, 10_000 * 500)
+    assert not _codegen.worth_it(4, 2, 1000)  # a new pattern's compilation would not pay
+    assert not _codegen.worth_it(9, 3, 10_000 * 500)  # code and compile time grow as n² m
