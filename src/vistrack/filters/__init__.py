@@ -1,4 +1,5 @@
-"""Inference: batched Kalman kernels, the whole-sequence filter, smoothers."""
+"""Inference: batched Kalman kernels, the whole-sequence filter, smoothers, and the EKF, UKF and
+ensemble Kalman filter for nonlinear models."""
 
 from .kalman import (
     FilterResult,
@@ -10,10 +11,29 @@ from .kalman import (
     kf_step,
     kf_update,
 )
+from .ekf import ExtendedKalmanFilter, ekf_predict, ekf_update
+from .enkf import Ensemble, EnsembleKalmanFilter, enkf_predict, enkf_update
 from .smoothers import SmoothResult, rts_smooth, two_filter_smooth
+from .ukf import (
+    JulierSigmaPoints,
+    MerweScaledSigmaPoints,
+    UnscentedKalmanFilter,
+    ukf_predict,
+    ukf_update,
+)
 
 __all__ = [
+    "Ensemble",
+    "EnsembleKalmanFilter",
+    "ExtendedKalmanFilter",
     "FilterResult",
+    "JulierSigmaPoints",
+    "MerweScaledSigmaPoints",
+    "UnscentedKalmanFilter",
+    "ekf_predict",
+    "ekf_update",
+    "enkf_predict",
+    "enkf_update",
     "KalmanFilter",
     "OnlineFilter",
     "SmoothResult",
@@ -24,4 +44,6 @@ __all__ = [
     "kf_update",
     "rts_smooth",
     "two_filter_smooth",
+    "ukf_predict",
+    "ukf_update",
 ]

@@ -1,7 +1,19 @@
-"""Physics: motion models (``F(dt)``, ``Q(dt)``) and measurement models (``H``, ``R``)."""
+"""Physics: motion models (``F(dt)``, ``Q(dt)``; nonlinear: ``f``, ``jacobian``) and measurement
+models (``H``, ``R``; nonlinear: ``h``, ``jacobian``)."""
 
 from .linear_gaussian import LinearGaussian
 from .measurement import LinearMeasurement, MeasurementModel, Position
+from .nonlinear import (
+    CoordinatedTurn,
+    GrowthMeasurement,
+    GrowthMotion,
+    NonlinearMeasurement,
+    NonlinearMotion,
+    RangeBearing,
+    growth_model,
+    numerical_jacobian,
+    wrap_angle,
+)
 from .motion import (
     ConstantAcceleration,
     ConstantPosition,
@@ -15,6 +27,15 @@ __all__ = [
     "ConstantAcceleration",
     "ConstantPosition",
     "ConstantVelocity",
+    "CoordinatedTurn",
+    "GrowthMeasurement",
+    "GrowthMotion",
+    "NonlinearMeasurement",
+    "NonlinearMotion",
+    "RangeBearing",
+    "growth_model",
+    "numerical_jacobian",
+    "wrap_angle",
     "LinearGaussian",
     "LinearMeasurement",
     "LinearMotion",

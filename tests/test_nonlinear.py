@@ -1,0 +1,248 @@
+"""Nonlinear models, EKF, UKF and EnKF: against finite differences, the Kalman filter on linear
+models, and FilterPy's UnscentedKalmanFilter."""
+
+import numpy as np
+import pytest
+
+import vistrack as vt
+from vistrack.filters import (
+    Ensemble,
+    EnsembleKalmanFilter,
+    ExtendedKalmanFilter,
+    JulierSigmaPoints,
+    MerweScaledSigmaPoints,
+    UnscentedKalmanFilter,
+    ekf_update,
+    enkf_update,
+    kalman_filter,
+    ukf_update,
+)
+from vistrack.models import (
+    CoordinatedTurn,
+    NonlinearMeasurement,
+    NonlinearMotion,
+    RangeBearing,
+    growth_model,
+    numerical_jacobian,
+    wrap_angle,
+)
+
+filterpy_kalman = pytest.importorskip("filterpy.kalman")
+
+
+# ---------------------------------------------------------------- models
+@pytest.mark.parametrize("w", [0.7, -0.3, 1e-6, 0.0])
+def test_coordinated_turn_jacobian_equals_finite_differences(rng, w):
+    ct = CoordinatedTurn()
+    x = np.array([[1.0, -2.0, 3.0, 0.5, w], [0.0, 0.0, -1.0, 2.0, w]])
+    for dt in (0.1, 1.0, 2.5):
+        J = ct.jacobian(x, dt)
+        Jn = numerical_jacobian(lambda z: ct.f(z, dt), x, eps=1e-7)
+        np.testing.assert_allclose(J, Jn, rtol=1e-6, atol=1e-7)
+
+
+def test_coordinated_turn_tends_to_constant_velocity():
+    ct, cv = CoordinatedTurn(q=0.3), vt.ConstantVelocity(dim=2, q=0.3)
+    x = np.array([1.0, 2.0, 3.0, -4.0])
+    for w in (0.0, 1e-9, 1e-5):
+        # the velocity turns by w dt: |change| <= |w| dt |v| (|v| = 5), positions by less
+        np.testing.assert_allclose(ct.f(np.append(x, w), 0.7)[:4], cv.F(0.7) @ x, rtol=0,
+                                   atol=abs(w) * 0.7 * 5.0 + 1e-15)
+    np.testing.assert_allclose(ct.Q(0.7)[:4, :4], cv.Q(0.7), rtol=1e-15)
+
+
+def test_coordinated_turn_turns_a_quarter_circle():
+    # speed 1, turn rate pi/2 for 1 s: a quarter of a circle of radius 2/pi
+    x = CoordinatedTurn().f(np.array([0.0, 0.0, 1.0, 0.0, np.pi / 2]), 1.0)
+    r = 2 / np.pi
+    np.testing.assert_allclose(x, [r, r, 0.0, 1.0, np.pi / 2], atol=1e-15)
+
+
+def test_range_bearing_and_growth_jacobians_equal_finite_differences(rng):
+    rb = RangeBearing(sensor=(1.0, -2.0), ndim_state=4)
+    x = rng.normal(size=(6, 4)) * 5
+    np.testing.assert_allclose(rb.jacobian(x), numerical_jacobian(rb.h, x), rtol=1e-6, atol=1e-9)
+    motion, meas = growth_model()
+    x = rng.normal(size=(7, 1)) * 3
+    np.testing.assert_allclose(motion.jacobian(x, t=3.0),
+                               numerical_jacobian(lambda z: motion.f(z, t=3.0), x), rtol=1e-6)
+    np.testing.assert_allclose(meas.jacobian(x), numerical_jacobian(meas.h, x), rtol=1e-6)
+
+
+def test_bearing_residual_and_mean_wrap():
+    rb = RangeBearing()
+    r = rb.residual(np.array([10.0, np.pi - 0.1]), np.array([9.0, -np.pi + 0.1]))
+    np.testing.assert_allclose(r, [1.0, -0.2], atol=1e-12)
+    z = np.array([[1.0, np.pi - 0.1], [1.0, -np.pi + 0.1]])
+    assert abs(abs(rb.mean(z, np.array([0.5, 0.5]))[1]) - np.pi) < 1e-12
+    np.testing.assert_allclose(wrap_angle([np.pi, -np.pi, 3 * np.pi]), [np.pi, np.pi, np.pi])
+
+
+def test_user_models_fall_back_to_finite_differences(rng):
+    F = np.array([[1.0, 0.5], [0.0, 1.0]])
+    mo = NonlinearMotion(lambda x, dt, t: x @ F.T, Q=0.1 * np.eye(2), ndim_state=2)
+    me = NonlinearMeasurement(lambda x: x[..., :1] ** 3, R=[[0.2]], ndim_state=2)
+    x = rng.normal(size=(3, 2))
+    np.testing.assert_allclose(mo.jacobian(x), np.broadcast_to(F, (3, 2, 2)), atol=1e-8)
+    np.testing.assert_allclose(me.jacobian(x)[:, 0, 0], 3 * x[:, 0] ** 2, rtol=1e-6)
+
+
+@pytest.mark.parametrize(
+    "make, match",
+    [
+        (lambda: RangeBearing(r_range=0.0), "r_range must be a finite variance"),
+        (lambda: RangeBearing(sensor=(1.0, 2.0, 3.0)), r"sensor must have shape \(2,\)"),
+        (lambda: CoordinatedTurn(q=-1), "q must be a finite number >= 0"),
+        (lambda: NonlinearMeasurement(lambda x: x, R=[[1.0, 0.0], [0.0, -1.0]], ndim_state=2),
+         "R"),
+        (lambda: NonlinearMeasurement(lambda x: x, R=np.eye(2), ndim_state=2, angles=(2,)),
+         "angles must index components 0..1"),
+        (lambda: MerweScaledSigmaPoints(alpha=0.0), "alpha must be > 0"),
+    ],
+)
+def test_bad_model_arguments_raise(make, match):
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+# ---------------------------------------------------------------- EKF / UKF / EnKF on linear models
+def linear_problem(rng, T=30, missing=True):
+    motion, meas = vt.ConstantVelocity(dim=2, q=0.5), vt.Position(dim=2, r=0.4)
+    F, Q, H, R = motion.F(1.0), motion.Q(1.0), meas.H(4), meas.R()
+    _, ys = vt.simulate.simulate_lgssm(T, F=F, Q=Q, H=H, R=R, x0=np.zeros(4), rng=rng)
+    if missing:
+        ys[5] = np.nan
+        ys[9, 1] = np.nan
+    x0, P0 = np.array([0.5, -0.5, 0.0, 0.0]), np.diag([2.0, 2.0, 1.0, 1.0])
+    kf = kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0)
+    return motion, meas, ys, x0, P0, kf
+
+
+@pytest.mark.parametrize("name", ["EKF", "UKF Merwe", "UKF Julier"])
+def test_ekf_and_ukf_equal_the_kalman_filter_on_a_linear_model(rng, name):
+    motion, meas, ys, x0, P0, kf = linear_problem(rng)
+    if name == "EKF":
+        flt = ExtendedKalmanFilter(motion, meas)
+    else:
+        pts = MerweScaledSigmaPoints(alpha=0.5) if "Merwe" in name else JulierSigmaPoints(1.0)
+        flt = UnscentedKalmanFilter(motion, meas, points=pts)
+    res = flt.filter(ys, x0=x0, P0=P0)
+    np.testing.assert_allclose(res.means, kf.means, rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(res.covs, kf.covs, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(res.pred_covs, kf.pred_covs, rtol=1e-10, atol=1e-12)
+    assert res.loglik == pytest.approx(float(kf.loglik), rel=1e-10)
+
+
+def test_batched_updates_equal_one_at_a_time(rng):
+    motion, meas, ys, x0, P0, _ = linear_problem(rng)
+    B = 5
+    g = vt.Gaussian(rng.normal(size=(B, 4)), np.broadcast_to(P0, (B, 4, 4)))
+    y = rng.normal(size=(B, 2))
+    y[1, 0] = np.nan
+    y[3] = np.nan
+    for update in (ekf_update, ukf_update):
+        batch, ll = update(g, y, meas, return_loglik=True)
+        for b in range(B):
+            one, ll1 = update(g[b], y[b], meas, return_loglik=True)
+            np.testing.assert_allclose(batch.mean[b], one.mean, rtol=1e-12, atol=1e-14)
+            np.testing.assert_allclose(batch.cov[b], one.cov, rtol=1e-12, atol=1e-14)
+            assert ll[b] == pytest.approx(float(ll1), rel=1e-12, abs=1e-14)
+        np.testing.assert_array_equal(batch.mean[3], g.mean[3])  # a missing row: no change
+
+
+def test_enkf_tends_to_the_kalman_filter(rng):
+    """With N members, the ensemble mean's error is about sqrt(P / N): check it within 5 of
+    those, and the covariance within a few per cent."""
+    motion, meas, ys, x0, P0, kf = linear_problem(rng, T=12)
+    N = 20_000
+    res = EnsembleKalmanFilter(motion, meas, n_members=N, rng=7).filter(ys, x0=x0, P0=P0)
+    sd = np.sqrt(np.diagonal(kf.covs, axis1=-2, axis2=-1) / N)
+    assert np.all(np.abs(res.means - kf.means) < 5 * sd)
+    np.testing.assert_allclose(res.covs, kf.covs, rtol=0.08, atol=0.02 * kf.covs.max())
+
+
+def test_enkf_update_of_a_large_ensemble_equals_the_kalman_update(rng):
+    motion, meas, *_ = linear_problem(rng)
+    P = np.diag([1.0, 2.0, 0.5, 0.5])
+    ens = Ensemble.sample(np.zeros(4), P, 200_000, rng=1)
+    out = enkf_update(ens, np.array([1.0, -1.0]), meas, rng=2)
+    ref = vt.kf_update(vt.Gaussian(*ens.moments()), np.array([1.0, -1.0]), meas.H(4), meas.R())
+    mean, cov = out.moments()
+    np.testing.assert_allclose(mean, ref.mean, atol=5 * np.sqrt(2.0 / 200_000) * 3)
+    np.testing.assert_allclose(cov, ref.cov, atol=0.01)
+
+
+# ---------------------------------------------------------------- UKF against FilterPy
+def filterpy_ukf(ys, motion, meas, x0, P0, alpha, beta, kappa, dt):
+    from filterpy.kalman import MerweScaledSigmaPoints as FPPoints
+
+    pts = FPPoints(n=len(x0), alpha=alpha, beta=beta, kappa=kappa)
+    kf = filterpy_kalman.UnscentedKalmanFilter(
+        dim_x=len(x0), dim_z=ys.shape[1], dt=dt, points=pts,
+        fx=lambda x, dt: motion.f(x, dt), hx=meas.h,
+        residual_z=meas.residual, z_mean_fn=meas.mean,
+    )
+    kf.x, kf.P, kf.Q, kf.R = np.array(x0, float), np.array(P0, float), motion.Q(dt), meas.R()
+    kf.sigmas_f = pts.sigma_points(kf.x, kf.P)  # our first step corrects the prior directly
+    means, covs = [], []
+    for t, y in enumerate(ys):
+        if t > 0:
+            kf.predict()
+        kf.update(y)
+        means.append(kf.x.copy())
+        covs.append(kf.P.copy())
+    return np.array(means), np.array(covs)
+
+
+def test_ukf_equals_filterpy_on_range_bearing_with_bearings_crossing_pi(rng):
+    """A target passes behind the sensor, so its bearing crosses ±π: both filters wrap the
+    residual and take circular means (FilterPy through its residual_z and z_mean_fn hooks)."""
+    dt, T = 0.5, 40
+    motion, meas = CoordinatedTurn(q=0.05, q_turn=1e-3), RangeBearing(1.0, 1e-3, ndim_state=5)
+    x = np.array([-20.0, 8.0, 0.0, -0.8, 0.01])
+    states = []
+    for _ in range(T):
+        states.append(x)
+        x = motion.f(x, dt) + rng.multivariate_normal(np.zeros(5), motion.Q(dt))
+    zs = meas.h(np.array(states)) + rng.normal(size=(T, 2)) * np.sqrt([1.0, 1e-3])
+    zs[:, 1] = wrap_angle(zs[:, 1])
+    assert np.any(np.abs(np.diff(zs[:, 1])) > np.pi)  # the bearing does cross ±π
+    x0, P0 = states[0] + [1.0, -1.0, 0.1, 0.1, 0.0], np.diag([4.0, 4.0, 0.5, 0.5, 1e-3])
+    for alpha, beta, kappa in ((1e-3, 2.0, 0.0), (0.3, 2.0, -2.0), (1.0, 0.0, 1.0)):
+        pts = MerweScaledSigmaPoints(alpha, beta, kappa)
+        res = UnscentedKalmanFilter(motion, meas, points=pts).filter(zs, x0=x0, P0=P0, dt=dt)
+        fm, fP = filterpy_ukf(zs, motion, meas, x0, P0, alpha, beta, kappa, dt)
+        np.testing.assert_allclose(res.means, fm, rtol=1e-8, atol=1e-8)
+        # 1e-8 of the covariance's scale: with alpha = 1e-3 the weights are about -1e6 and
+        # 1e5, so both implementations round entries near zero at ~1e-10 of the scale
+        np.testing.assert_allclose(res.covs, fP, rtol=1e-8, atol=1e-8 * np.abs(fP).max())
+    assert np.max(np.hypot(*(res.means[10:, :2] - np.array(states)[10:, :2]).T)) < 3.0
+
+
+def test_ukf_covariances_stay_positive_definite_over_a_long_run(rng):
+    dt, T = 1.0, 5000
+    motion, meas = CoordinatedTurn(q=1e-6, q_turn=1e-10), RangeBearing(1e-2, 1e-8, ndim_state=5)
+    states = [np.array([100.0, 0.0, 0.0, 1.0, 0.0])]
+    for _ in range(T - 1):
+        states.append(motion.f(states[-1], dt))
+    zs = meas.h(np.array(states)) + rng.normal(size=(T, 2)) * np.sqrt([1e-2, 1e-8])
+    res = UnscentedKalmanFilter(motion, meas).filter(zs, x0=states[0], P0=np.eye(5) * 1e-2)
+    assert np.array_equal(res.covs, np.swapaxes(res.covs, -1, -2))
+    np.linalg.cholesky(res.covs)  # raises if any is not positive definite
+
+
+def test_nonlinear_filter_errors_name_the_argument(rng):
+    motion, meas = CoordinatedTurn(), RangeBearing(ndim_state=5)
+    flt = ExtendedKalmanFilter(motion, meas)
+    with pytest.raises(ValueError, match="ys must have 2 measurement components"):
+        flt.filter(np.zeros((3, 3)), x0=np.ones(5), P0=np.eye(5))
+    with pytest.raises(ValueError, match="x0 and P0 must have shapes"):
+        flt.filter(np.ones((3, 2)), x0=np.ones(4), P0=np.eye(5))
+    with pytest.raises(ValueError, match=r"y must have shape \(2,\)"):
+        ekf_update(vt.Gaussian(np.ones(5), np.eye(5)), np.ones(3), meas)
+    with pytest.raises(ValueError, match="g.cov must be positive definite"):
+        ukf_update(vt.Gaussian(np.ones(5), -np.eye(5)), np.ones(2), meas)
+    with pytest.raises(TypeError, match="motion must be a motion model"):
+        ExtendedKalmanFilter(object(), meas)
+    with pytest.raises(ValueError, match="n_members must be an integer >= 2"):
+        EnsembleKalmanFilter(motion, meas, n_members=1)
