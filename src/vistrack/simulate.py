@@ -1,4 +1,5 @@
-"""Sample states and measurements from linear-Gaussian models, with a seeded ``rng``."""
+"""Sample states and measurements from linear-Gaussian and nonlinear models, with a seeded
+``rng``."""
 
 from __future__ import annotations
 
@@ -115,5 +116,42 @@ def simulate(
     >>> xs.shape, ys.shape
     ((15, 4), (15, 2))
     """
-    mats = KalmanFilter(motion, measurement).matrices(int(T), dt)
-    return simulate_lgssm(T, **mats, x0=x0, P0=P0, n_series=n_series, rng=rng)
+    nonlinear = hasattr(motion, "jacobian") or hasattr(measurement, "jacobian")
+    if not nonlinear:
+        mats = KalmanFilter(motion, measurement).matrices(int(T), dt)
+        return simulate_lgssm(T, **mats, x0=x0, P0=P0, n_series=n_series, rng=rng)
+    return _simulate_nonlinear(motion, measurement, int(T), x0, P0, dt, n_series, as_rng(rng))
+
+
+def _simulate_nonlinear(motion, measurement, T, x0, P0, dt, n_series, gen):
+    """``x_t = f(x_{t-1}, dt_t, t) + w_t``, ``y_t = h(x_t) + v_t`` (angles wrapped), with
+    ``t`` the cumulative time from 0."""
+    from .filters._nonlinear import Measurement, Motion
+    from .models.nonlinear import wrap_angle
+
+    mo = Motion(motion)
+    me = Measurement(measurement, mo.n)
+    n, B = mo.n, 1 if n_series is None else int(n_series)
+    x0_ = as_float_array(x0, "x0", ndim=(1,))
+    if x0_.shape != (n,):
+        raise ValueError(f"x0 must have shape ({n},); got {x0_.shape}")
+    x = np.broadcast_to(x0_, (B, n)).copy()
+    if P0 is not None:
+        x += gen.standard_normal((B, n)) @ _psd_sqrt(as_float_array(P0, "P0", ndim=(2,))).T
+    d = np.asarray(dt, dtype=float)
+    dts = np.broadcast_to(d, (T,)) if d.ndim == 0 or d.shape == (T,) else np.concatenate(
+        [[0.0], d])
+    times = np.concatenate([[0.0], np.cumsum(dts[1:])])
+    Rs = _psd_sqrt(me.R)
+    xs, ys = np.empty((B, T, n)), np.empty((B, T, me.m))
+    for t in range(T):
+        if t > 0:
+            Qs = _psd_sqrt(np.asarray(mo.Q(float(dts[t])), dtype=float))
+            x = mo.f(x, float(dts[t]), float(times[t])) + gen.standard_normal((B, n)) @ Qs.T
+        xs[:, t] = x
+        ys[:, t] = me.h(x) + gen.standard_normal((B, me.m)) @ Rs.T
+        for k in getattr(measurement, "angles", ()):
+            ys[:, t, k] = wrap_angle(ys[:, t, k])
+    if n_series is None:
+        return xs[0], ys[0]
+    return xs, ys

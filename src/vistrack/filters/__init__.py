@@ -13,6 +13,17 @@ from .kalman import (
 )
 from .ekf import ExtendedKalmanFilter, ekf_predict, ekf_update
 from .enkf import Ensemble, EnsembleKalmanFilter, enkf_predict, enkf_update
+from .particle import (
+    RESAMPLERS,
+    ParticleDegeneracyError,
+    ParticleFilter,
+    ParticleResult,
+    effective_sample_size,
+    particle_mode,
+    resample,
+    weighted_cov,
+    weighted_mean,
+)
 from .smoothers import SmoothResult, rts_smooth, two_filter_smooth
 from .ukf import (
     JulierSigmaPoints,
@@ -23,6 +34,15 @@ from .ukf import (
 )
 
 __all__ = [
+    "RESAMPLERS",
+    "ParticleDegeneracyError",
+    "ParticleFilter",
+    "ParticleResult",
+    "effective_sample_size",
+    "particle_mode",
+    "resample",
+    "weighted_cov",
+    "weighted_mean",
     "Ensemble",
     "EnsembleKalmanFilter",
     "ExtendedKalmanFilter",

@@ -1,0 +1,406 @@
+r"""Particle filtering: sequential importance resampling (SIR), the seeds' CONDENSATION.
+
+The posterior is a weighted set of samples (seed 004, "factored sampling"): each step moves
+every particle through the dynamics with sampled noise (predict, spread), weights it by the
+likelihood of the measurement, :math:`w_i \propto w_i\, p(y_t \mid x_i)` (weight), and resamples
+when the effective sample size :math:`N_\text{eff} = 1 / \sum w_i^2` falls below a fraction of
+``N``. Weights are kept as logarithms, normalised by log-sum-exp, so that likelihoods far below
+the smallest double do not underflow to an all-zero set.
+
+Resampling schemes, chosen by name (:data:`RESAMPLERS`): ``multinomial``, ``stratified``,
+``systematic`` and ``residual``. All run in linear time: sorted uniforms merged with the
+cumulative weights (Douc, Cappé and Moulines, 2005, "Comparison of resampling schemes for
+particle filtering"; Hol, Schön and Gustafsson, 2006).
+
+Estimates from a cloud: the weighted mean and covariance, and the **mode**, the seeds' "mean of
+the tallest peak", found by a weighted Gaussian-kernel mean-shift, with the share of the weight
+in that peak as its confidence.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+from numba import njit
+
+from .._validate import as_float_array, as_rng
+from ._nonlinear import Measurement, Motion
+
+__all__ = [
+    "RESAMPLERS",
+    "resample",
+    "effective_sample_size",
+    "ParticleDegeneracyError",
+    "weighted_mean",
+    "weighted_cov",
+    "particle_mode",
+    "ParticleFilter",
+    "ParticleResult",
+]
+
+
+class ParticleDegeneracyError(RuntimeError):
+    """Every particle has zero likelihood: the cloud has lost the target. Raised rather than
+    silently resetting the weights, which would hide the failure."""
+
+
+# ---------------------------------------------------------------- resampling
+@njit(cache=True)
+def _merge(cw, u, out):
+    """``out[k]`` = the first ``i`` with ``u[k] < cw[i]``, for sorted ``u`` (linear time)."""
+    i = 0
+    n = cw.shape[0]
+    for k in range(u.shape[0]):
+        while i < n - 1 and cw[i] <= u[k]:
+            i += 1
+        out[k] = i
+    return out
+
+
+def _cumulative(w: np.ndarray) -> np.ndarray:
+    cw = np.cumsum(w)
+    cw /= cw[-1]  # exactly 1 at the end, whatever the rounding of the sum
+    return cw
+
+
+def _multinomial(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    # sorted uniforms in linear time: normalised cumulative sums of exponentials
+    e = np.cumsum(rng.standard_exponential(n + 1))
+    return _merge(_cumulative(w), e[:-1] / e[-1], np.empty(n, np.int64))
+
+
+def _stratified(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    u = (np.arange(n) + rng.random(n)) / n
+    return _merge(_cumulative(w), u, np.empty(n, np.int64))
+
+
+def _systematic(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    u = (np.arange(n) + rng.random()) / n
+    return _merge(_cumulative(w), u, np.empty(n, np.int64))
+
+
+def _residual(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    nw = n * w
+    copies = np.floor(nw).astype(np.int64)
+    idx = np.repeat(np.arange(len(w)), copies)
+    rest = n - len(idx)
+    if rest == 0:
+        return idx
+    r = nw - copies
+    return np.sort(np.concatenate([idx, _multinomial(r / r.sum(), rest, rng)]))
+
+
+RESAMPLERS: dict[str, Callable[[np.ndarray, int, np.random.Generator], np.ndarray]] = {
+    "multinomial": _multinomial,
+    "stratified": _stratified,
+    "systematic": _systematic,
+    "residual": _residual,
+}
+"""Resampling schemes by name: ``f(weights, n, rng) -> indices (n,)``, sorted."""
+
+
+def _check_weights(weights: Any) -> np.ndarray:
+    w = as_float_array(weights, "weights", ndim=(1,))
+    if w.size == 0:
+        raise ValueError("weights must not be empty")
+    if not np.all(np.isfinite(w)) or np.any(w < 0):
+        bad = w[~(np.isfinite(w) & (w >= 0))][0]
+        raise ValueError(f"weights must be finite and >= 0; got {bad}")
+    s = w.sum()
+    if abs(s - 1.0) > 1e-9 * max(1, len(w)) ** 0.5:
+        raise ValueError(f"weights must sum to 1; they sum to {float(s)!r}")
+    return w
+
+
+def resample(weights: Any, method: str = "systematic", *, n: int | None = None,
+             rng: np.random.Generator | int | None = None) -> np.ndarray:
+    r"""Indices of ``n`` (default ``len(weights)``) particles drawn by ``method``.
+
+    Each index ``i`` is drawn ``N w_i`` times in expectation (unbiased); the schemes differ in
+    variance: multinomial > residual, stratified > systematic (usually).
+
+    Examples
+    --------
+    >>> resample([0.1, 0.2, 0.7], "systematic", n=10, rng=0)
+    array([0, 1, 1, 2, 2, 2, 2, 2, 2, 2])
+    """
+    if method not in RESAMPLERS:
+        raise ValueError(f"method must be one of {sorted(RESAMPLERS)}; got {method!r}")
+    w = _check_weights(weights)
+    n = len(w) if n is None else int(n)
+    if n < 1:
+        raise ValueError(f"n must be >= 1; got {n}")
+    return RESAMPLERS[method](w, n, as_rng(rng))
+
+
+def effective_sample_size(weights: Any) -> float:
+    """``1 / Σ w²`` of normalised weights: N for equal weights, 1 when one particle has all."""
+    w = np.asarray(weights, dtype=float)
+    return float(1.0 / np.dot(w, w))
+
+
+# ---------------------------------------------------------------- estimates
+def weighted_mean(particles: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``Σ w_i x_i`` of ``particles (N, n)``."""
+    return weights @ particles
+
+
+def weighted_cov(particles: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``Σ w_i (x_i - m)(x_i - m)'`` (the weighted population covariance)."""
+    d = particles - weighted_mean(particles, weights)
+    return (d * weights[:, None]).T @ d
+
+
+def particle_mode(particles: np.ndarray, weights: np.ndarray, *, bandwidth: Any = None,
+                  n_starts: int = 8, max_iter: int = 50,
+                  max_points: int = 5000) -> tuple[np.ndarray, float]:
+    r"""The mode of a weighted cloud, "the mean of the tallest peak", and its confidence.
+
+    A mean-shift with a Gaussian kernel of covariance ``bandwidth²`` (per dimension; default
+    Silverman's rule on the weighted covariance) runs from the weighted mean and from
+    ``n_starts - 1`` particles drawn by weight, so that every sizeable peak gets a start. End
+    points closer than one bandwidth are one peak; the peak with the highest kernel density
+    wins. Its confidence is the share of the weight of the particles nearer to it than to any
+    other peak found. Clouds larger than ``max_points`` are subsampled by systematic
+    resampling for the search (the confidence uses every particle).
+
+    Returns ``(mode (n,), confidence in [0, 1])``.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> x = np.concatenate([rng.normal(-5, 1, (300, 1)), rng.normal(4, 1, (700, 1))])
+    >>> mode, conf = particle_mode(x, np.full(1000, 1e-3))
+    >>> round(float(mode[0])), round(conf, 1)
+    (4, 0.7)
+    """
+    x = np.asarray(particles, dtype=float)
+    w = np.asarray(weights, dtype=float)
+    N, n = x.shape
+    if bandwidth is None:
+        sd = np.sqrt(np.maximum(np.diagonal(weighted_cov(x, w)), 1e-300))
+        neff = effective_sample_size(w)
+        h = sd * (4.0 / ((n + 2) * neff)) ** (1.0 / (n + 4))
+    else:
+        h = np.broadcast_to(np.asarray(bandwidth, dtype=float), (n,))
+    search = np.random.default_rng(0)  # the estimate must not consume the filter's randomness
+    if N > max_points:
+        xs, ws = x[_systematic(w, max_points, search)], np.full(max_points, 1.0 / max_points)
+    else:
+        xs, ws = x, w
+    z = xs / h
+    picks = _systematic(ws, max(n_starts - 1, 1), search)
+    starts = np.concatenate([[weighted_mean(xs, ws)], xs[picks]]) / h
+    for _ in range(max_iter):
+        d2 = ((starts[:, None, :] - z[None]) ** 2).sum(-1)  # (S, N)
+        k = ws * np.exp(-0.5 * (d2 - d2.min(1, keepdims=True)))
+        new = (k @ z) / k.sum(1, keepdims=True)
+        done = np.max(np.abs(new - starts)) < 1e-6
+        starts = new
+        if done:
+            break
+    peaks: list[np.ndarray] = []
+    for p in starts:
+        if all(((p - q) ** 2).sum() > 1.0 for q in peaks):
+            peaks.append(p)
+    P = np.array(peaks)
+    dens = (ws * np.exp(-0.5 * ((P[:, None, :] - z[None]) ** 2).sum(-1))).sum(1)
+    best = int(np.argmax(dens))
+    nearest = np.argmin(((x[:, None, :] / h - P[None]) ** 2).sum(-1), axis=1)
+    return P[best] * h, min(1.0, float(w[nearest == best].sum()))
+
+
+# ---------------------------------------------------------------- the filter
+@dataclass(frozen=True)
+class ParticleResult:
+    """The output of :meth:`ParticleFilter.filter`.
+
+    Attributes
+    ----------
+    means, covs : (T, n), (T, n, n)
+        Weighted mean and covariance of the cloud after each correction.
+    modes, mode_confidence : (T, n), (T,)
+        :func:`particle_mode` of each step's cloud (when asked for), else None.
+    ess : (T,)
+        Effective sample size after each correction, before any resampling.
+    resampled : (T,) bool
+        Whether the step resampled.
+    loglik : float
+        ``Σ_t log p(y_t | y_{<t})``, each term ``log Σ w_i p(y_t | x_i)``.
+    particles, weights : (N, n), (N,)
+        The last cloud.
+    """
+
+    means: np.ndarray
+    covs: np.ndarray
+    modes: np.ndarray | None
+    mode_confidence: np.ndarray | None
+    ess: np.ndarray
+    resampled: np.ndarray
+    loglik: float
+    particles: np.ndarray
+    weights: np.ndarray
+
+
+def _logsumexp(a: np.ndarray) -> float:
+    m = np.max(a)
+    if not np.isfinite(m):
+        return m
+    return float(m + math.log(np.exp(a - m).sum()))
+
+
+class ParticleFilter:
+    r"""A bootstrap (SIR / CONDENSATION) particle filter.
+
+    Parameters
+    ----------
+    motion
+        A motion model (``f`` and ``Q``, or ``F`` and ``Q``); particles move by ``f`` plus
+        Gaussian noise of covariance ``Q(dt)``. Or a callable
+        ``propagate(particles (N, n), dt, t, rng) -> (N, n)`` for any other dynamics.
+    likelihood
+        A measurement model (``h``, ``R``: a Gaussian likelihood with the model's residual),
+        or a callable ``log_likelihood(y, particles (N, n)) -> (N,)`` returning
+        ``log p(y | x_i)`` (image likelihoods plug in here).
+    n_particles : int
+    resampling : str
+        A name in :data:`RESAMPLERS`.
+    ess_threshold : float in [0, 1]
+        Resample when ``N_eff < ess_threshold * N`` (1 resamples every step, 0 never).
+    rng : numpy Generator, int seed or None
+    ndim_state : int, optional
+        Needed when ``motion`` is a callable.
+
+    Examples
+    --------
+    >>> import vistrack as vt
+    >>> motion, meas = vt.models.growth_model()
+    >>> xs, ys = vt.simulate.simulate(motion, meas, 50, x0=[0.1], rng=1)
+    >>> pf = ParticleFilter(motion, meas, n_particles=2000, rng=2)
+    >>> res = pf.filter(ys, x0=[0.0], P0=[[5.0]])
+    >>> res.means.shape, res.ess.shape, bool(res.resampled.any())
+    ((50, 1), (50,), True)
+    """
+
+    def __init__(self, motion: Any, likelihood: Any, n_particles: int = 1000, *,
+                 resampling: str = "systematic", ess_threshold: float = 0.5,
+                 rng: np.random.Generator | int | None = None, ndim_state: int | None = None):
+        if int(n_particles) != n_particles or n_particles < 1:
+            raise ValueError(f"n_particles must be an integer >= 1; got {n_particles}")
+        if resampling not in RESAMPLERS:
+            raise ValueError(f"resampling must be one of {sorted(RESAMPLERS)}; got {resampling!r}")
+        if not 0.0 <= ess_threshold <= 1.0:
+            raise ValueError(f"ess_threshold must be in [0, 1]; got {ess_threshold}")
+        self.n_particles, self.resampling = int(n_particles), resampling
+        self.ess_threshold, self.rng = float(ess_threshold), as_rng(rng)
+        if hasattr(motion, "Q"):
+            mo = Motion(motion)
+            self.ndim_state = mo.n
+            self._propagate = self._model_propagate(mo)
+        elif callable(motion):
+            if ndim_state is None:
+                raise ValueError("ndim_state is needed when motion is a callable")
+            self.ndim_state, self._propagate = int(ndim_state), motion
+        else:
+            raise TypeError(f"motion must be a motion model or a callable; got "
+                            f"{type(motion).__name__}")
+        if hasattr(likelihood, "R"):
+            self._loglik = self._gaussian_loglik(Measurement(likelihood, self.ndim_state))
+        elif callable(likelihood):
+            self._loglik = likelihood
+        else:
+            raise TypeError(f"likelihood must be a measurement model or a callable; got "
+                            f"{type(likelihood).__name__}")
+
+    @staticmethod
+    def _model_propagate(mo: Motion):
+        cache: dict = {}
+
+        def propagate(x, dt, t, rng):
+            if dt not in cache:
+                w, V = np.linalg.eigh(mo.Q(dt))
+                cache[dt] = (np.sqrt(np.clip(w, 0.0, None)), V)
+            s, V = cache[dt]
+            out = np.asarray(mo.f(x, dt, t), dtype=float)
+            noise = rng.standard_normal(out.shape)
+            return out + (noise * s) @ V.T if out.shape[-1] > 1 else out + noise * s[0]
+
+        return propagate
+
+    @staticmethod
+    def _gaussian_loglik(me: Measurement):
+        L = np.linalg.cholesky(me.R)
+        const = -np.log(np.diagonal(L)).sum() - 0.5 * me.m * math.log(2 * math.pi)
+
+        def loglik(y, x):
+            obs = ~np.isnan(y)
+            r = me.residual(np.where(obs, y, 0.0), me.h(x))[:, obs]
+            Lo = np.linalg.cholesky(me.R[np.ix_(obs, obs)]) if not obs.all() else L
+            z = np.linalg.solve(Lo, r.T)
+            c = const if obs.all() else (-np.log(np.diagonal(Lo)).sum()
+                                         - 0.5 * obs.sum() * math.log(2 * math.pi))
+            return c - 0.5 * (z * z).sum(0)
+
+        return loglik
+
+    def filter(self, ys: Any, *, x0: Any = None, P0: Any = None, particles: Any = None,
+               dt: Any = 1.0, times: Any = None, modes: bool = False) -> ParticleResult:
+        """Filter ``ys (T, m)`` (a NaN row: predict only). The first cloud is ``particles
+        (N, n)`` or ``N`` draws from ``N(x0, P0)``, the prior of the first step (which is
+        corrected with no prediction before it, as in the Kalman filters). ``modes=True`` also
+        computes :func:`particle_mode` at every step.
+
+        Raises :class:`ParticleDegeneracyError` naming the step if every particle gets zero
+        likelihood."""
+        ys = as_float_array(ys, "ys", ndim=(2,))
+        T = ys.shape[0]
+        n, N, rng = self.ndim_state, self.n_particles, self.rng
+        if particles is not None:
+            x = as_float_array(particles, "particles", ndim=(2,))
+            if x.shape != (N, n):
+                raise ValueError(f"particles must have shape ({N}, {n}); got {x.shape}")
+            x = x.copy()
+        else:
+            m0 = as_float_array(x0, "x0", ndim=(1,))
+            C0 = as_float_array(P0, "P0", ndim=(2,))
+            if m0.shape != (n,) or C0.shape != (n, n):
+                raise ValueError(f"x0 and P0 must have shapes ({n},) and ({n}, {n}); "
+                                 f"got {m0.shape} and {C0.shape}")
+            x = rng.multivariate_normal(m0, C0, size=N, method="eigh")
+        dts = np.broadcast_to(as_float_array(dt, "dt", ndim=(0, 1)), (T,))
+        if times is None:
+            times = np.concatenate([[0.0], np.cumsum(dts[1:])])
+        logw = np.full(N, -math.log(N))
+        means, covs = np.empty((T, n)), np.empty((T, n, n))
+        mode_arr = np.empty((T, n)) if modes else None
+        conf = np.empty(T) if modes else None
+        ess, resampled, total = np.empty(T), np.zeros(T, bool), 0.0
+        for t in range(T):
+            if t > 0:
+                x = self._propagate(x, float(dts[t]), float(times[t]), rng)
+            if not np.isnan(ys[t]).all():
+                ll = np.asarray(self._loglik(ys[t], x), dtype=float)
+                a = logw + ll
+                norm = _logsumexp(a)
+                if not np.isfinite(norm):
+                    raise ParticleDegeneracyError(
+                        f"every particle has zero likelihood at step {t} (measurement "
+                        f"{ys[t].tolist()}); the filter has lost the target"
+                    )
+                total += norm
+                logw = a - norm
+            w = np.exp(logw)
+            w /= w.sum()
+            means[t], covs[t] = weighted_mean(x, w), weighted_cov(x, w)
+            if modes:
+                mode_arr[t], conf[t] = particle_mode(x, w)
+            ess[t] = effective_sample_size(w)
+            if ess[t] < self.ess_threshold * N or self.ess_threshold == 1.0:
+                x = x[RESAMPLERS[self.resampling](w, N, rng)]
+                logw = np.full(N, -math.log(N))
+                resampled[t] = True
+        w = np.exp(logw)
+        return ParticleResult(means, covs, mode_arr, conf, ess, resampled, total, x, w / w.sum())

@@ -1,0 +1,152 @@
+"""Particle filter: resampling schemes against their expected counts, the filter against the
+Kalman filter on a linear model, log-domain weights, degeneracy, and the mode."""
+
+import numpy as np
+import pytest
+
+import vistrack as vt
+from vistrack.filters import (
+    RESAMPLERS,
+    ParticleDegeneracyError,
+    ParticleFilter,
+    effective_sample_size,
+    kalman_filter,
+    particle_mode,
+    resample,
+)
+
+W = np.array([0.3, 0.0, 0.05, 0.25, 1e-4, 0.1, 0.0999, 0.2])  # includes zero and tiny weights
+
+
+@pytest.mark.parametrize("method", sorted(RESAMPLERS))
+def test_resampling_is_unbiased(method):
+    """Mean counts over 4000 draws equal N w within 5 standard errors (the standard error
+    from the multinomial variance N w (1 - w), at least that of a count that is floor or ceil of
+    N w, 1/4); zero weights are never drawn."""
+    rng = np.random.default_rng(3)
+    N, reps = 16, 4000
+    counts = np.zeros((reps, len(W)))
+    for r in range(reps):
+        idx = resample(W, method, n=N, rng=rng)
+        assert np.all(np.diff(idx) >= 0)  # sorted, as every scheme here returns them
+        counts[r] = np.bincount(idx, minlength=len(W))
+    expected = N * W
+    se = np.sqrt(np.maximum(N * W * (1 - W), 0.25) / reps)
+    assert np.all(np.abs(counts.mean(0) - expected) < 5 * se)
+    assert np.all(counts[:, W == 0] == 0)
+
+
+@pytest.mark.parametrize("method", ["systematic", "residual"])
+def test_low_variance_schemes_keep_the_deterministic_part(method):
+    rng = np.random.default_rng(4)
+    for _ in range(200):
+        w = rng.dirichlet(np.ones(30) * 0.5)
+        c = np.bincount(resample(w, method, rng=rng), minlength=30)
+        assert np.all(c >= np.floor(30 * w) - (method == "systematic"))
+        if method == "systematic":  # each count is floor or ceil of N w (up to rounding)
+            assert np.all(c <= np.ceil(30 * w) + 1)
+
+
+def test_resampling_arguments_are_checked():
+    with pytest.raises(ValueError, match="weights must sum to 1; they sum to 0.9"):
+        resample([0.5, 0.4])
+    with pytest.raises(ValueError, match="weights must be finite and >= 0; got -0.1"):
+        resample([1.1, -0.1])
+    with pytest.raises(ValueError, match=r"method must be one of \['multinomial', 'residual', "):
+        resample([1.0], "bogus")
+    with pytest.raises(ValueError, match="n must be >= 1"):
+        resample([1.0], n=0)
+
+
+def linear_problem(rng, T=25):
+    motion, meas = vt.ConstantVelocity(dim=1, q=0.2), vt.Position(dim=1, r=0.5)
+    xs, ys = vt.simulate.simulate(motion, meas, T, x0=[0.0, 1.0], rng=rng)
+    x0, P0 = np.array([0.0, 1.0]), np.diag([1.0, 0.25])
+    F, Q, H, R = motion.F(1.0), motion.Q(1.0), meas.H(2), meas.R()
+    return motion, meas, ys, x0, P0, kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0)
+
+
+def test_particle_filter_mean_approaches_the_kalman_filter(rng):
+    motion, meas, ys, x0, P0, kf = linear_problem(rng)
+    sd = np.sqrt(np.diagonal(kf.covs, axis1=-2, axis2=-1))
+    errs = {}
+    for N in (300, 30_000):
+        res = ParticleFilter(motion, meas, n_particles=N, rng=5).filter(ys, x0=x0, P0=P0)
+        errs[N] = np.sqrt(np.mean(((res.means - kf.means) / sd) ** 2))
+    # Monte Carlo error shrinks like 1/sqrt(N): 10 times here, allow a factor 4
+    assert errs[30_000] < errs[300] / 4
+    assert errs[30_000] < 0.03
+    # the log-likelihood estimate is consistent too
+    res = ParticleFilter(motion, meas, n_particles=30_000, rng=6).filter(ys, x0=x0, P0=P0)
+    assert res.loglik == pytest.approx(float(kf.loglik), abs=0.5)
+
+
+def test_log_domain_weights_survive_vanishing_likelihoods(rng):
+    """A constant offset of -1e5 in every log-likelihood underflows exp() to 0 for every
+    particle, but does not change normalised weights: the runs must match exactly."""
+    motion, meas, ys, x0, P0, _ = linear_problem(rng, T=10)
+
+    def loglik(y, x):
+        return -0.5 * (y[0] - x[:, 0]) ** 2 / 0.5
+
+    runs = [ParticleFilter(motion, lambda y, x, c=c: loglik(y, x) + c, n_particles=500,
+                           rng=9).filter(ys, x0=x0, P0=P0) for c in (0.0, -1e5)]
+    np.testing.assert_allclose(runs[0].means, runs[1].means, rtol=1e-12)
+    assert runs[1].loglik == pytest.approx(runs[0].loglik - 10 * 1e5, rel=1e-12)
+
+
+def test_degeneracy_is_reported_with_the_step(rng):
+    motion, meas, ys, x0, P0, _ = linear_problem(rng, T=6)
+
+    def loglik(y, x, calls=[0]):
+        calls[0] += 1
+        return np.full(len(x), -np.inf if calls[0] == 4 else 0.0)
+
+    with pytest.raises(ParticleDegeneracyError, match="zero likelihood at step 3"):
+        ParticleFilter(motion, loglik, n_particles=100, rng=1).filter(ys, x0=x0, P0=P0)
+
+
+def test_ess_threshold_controls_resampling(rng):
+    motion, meas, ys, x0, P0, _ = linear_problem(rng, T=10)
+    never = ParticleFilter(motion, meas, 200, ess_threshold=0.0, rng=1).filter(ys, x0=x0, P0=P0)
+    always = ParticleFilter(motion, meas, 200, ess_threshold=1.0, rng=1).filter(ys, x0=x0, P0=P0)
+    assert not never.resampled.any() and always.resampled.all()
+    half = ParticleFilter(motion, meas, 200, ess_threshold=0.5, rng=1).filter(ys, x0=x0, P0=P0)
+    np.testing.assert_array_equal(half.resampled, half.ess < 100)
+    assert effective_sample_size(np.full(4, 0.25)) == pytest.approx(4.0)
+
+
+def test_mode_finds_the_tallest_peak_and_its_weight():
+    rng = np.random.default_rng(0)
+    x = np.concatenate([rng.normal([-6, 0], 1.0, (4000, 2)), rng.normal([5, 3], 0.7, (2000, 2))])
+    w = np.concatenate([np.full(4000, 0.35 / 4000), np.full(2000, 0.65 / 2000)])
+    mode, conf = particle_mode(x, w)
+    np.testing.assert_allclose(mode, [5, 3], atol=0.15)
+    assert conf == pytest.approx(0.65, abs=0.05)
+    # the weighted mean sits between the peaks, where there is no particle
+    assert np.linalg.norm(w @ x - mode) > 4
+
+
+def test_growth_model_runs_with_modes_and_a_user_likelihood():
+    motion, meas = vt.models.growth_model()
+    xs, ys = vt.simulate.simulate(motion, meas, 60, x0=[0.1], rng=2)
+    pf = ParticleFilter(motion, meas, n_particles=3000, rng=3)
+    res = pf.filter(ys, x0=[0.0], P0=[[5.0]], modes=True)
+    assert res.modes.shape == (60, 1) and np.all((res.mode_confidence > 0) & (res.mode_confidence <= 1))
+    rmse = np.sqrt(np.mean((res.means[:, 0] - xs[:, 0]) ** 2))
+    assert rmse < 8  # the posterior is bimodal (sign ambiguity); the literature reports ~4.5-6
+    custom = ParticleFilter(motion, lambda y, x: -0.5 * (y[0] - x[:, 0] ** 2 / 20) ** 2,
+                            n_particles=3000, rng=3).filter(ys, x0=[0.0], P0=[[5.0]])
+    np.testing.assert_allclose(custom.means, res.means, rtol=1e-10)  # the same likelihood
+
+
+def test_particle_filter_arguments_are_checked():
+    motion, meas = vt.models.growth_model()
+    with pytest.raises(ValueError, match="resampling must be one of"):
+        ParticleFilter(motion, meas, resampling="best")
+    with pytest.raises(ValueError, match="ess_threshold must be in"):
+        ParticleFilter(motion, meas, ess_threshold=2.0)
+    with pytest.raises(ValueError, match="ndim_state is needed"):
+        ParticleFilter(lambda x, dt, t, rng: x, meas)
+    with pytest.raises(ValueError, match=r"particles must have shape \(10, 1\)"):
+        ParticleFilter(motion, meas, 10).filter(np.ones((3, 1)), particles=np.ones((5, 1)))
