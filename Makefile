@@ -26,6 +26,7 @@ $(VENV)/.bench-installed: $(STAMP)
 
 bench: $(VENV)/.bench-installed
 	$(PY) bench/bench_kalman.py --write docs/benchmarks.md
+	$(PY) bench/bench_particle.py --write docs/benchmarks.md
 
 clean:
 	rm -rf $(VENV) out build src/*.egg-info

@@ -245,13 +245,6 @@ class ParticleResult:
     weights: np.ndarray
 
 
-def _logsumexp(a: np.ndarray) -> float:
-    m = np.max(a)
-    if not np.isfinite(m):
-        return m
-    return float(m + math.log(np.exp(a - m).sum()))
-
-
 class ParticleFilter:
     r"""A bootstrap (SIR / CONDENSATION) particle filter.
 
@@ -332,17 +325,19 @@ class ParticleFilter:
 
     @staticmethod
     def _gaussian_loglik(me: Measurement):
-        L = np.linalg.cholesky(me.R)
-        const = -np.log(np.diagonal(L)).sum() - 0.5 * me.m * math.log(2 * math.pi)
+        def whitening(obs):
+            L = np.linalg.cholesky(me.R[np.ix_(obs, obs)])
+            c = -np.log(np.diagonal(L)).sum() - 0.5 * obs.sum() * math.log(2 * math.pi)
+            return np.linalg.inv(L).T, c  # the inverse of a small triangular factor, once
+
+        full = whitening(np.ones(me.m, bool))
 
         def loglik(y, x):
             obs = ~np.isnan(y)
+            Linv_t, c = full if obs.all() else whitening(obs)
             r = me.residual(np.where(obs, y, 0.0), me.h(x))[:, obs]
-            Lo = np.linalg.cholesky(me.R[np.ix_(obs, obs)]) if not obs.all() else L
-            z = np.linalg.solve(Lo, r.T)
-            c = const if obs.all() else (-np.log(np.diagonal(Lo)).sum()
-                                         - 0.5 * obs.sum() * math.log(2 * math.pi))
-            return c - 0.5 * (z * z).sum(0)
+            z = r * Linv_t[0, 0] if r.shape[1] == 1 else r @ Linv_t
+            return c - 0.5 * (z * z).sum(1)
 
         return loglik
 
@@ -382,18 +377,21 @@ class ParticleFilter:
             if t > 0:
                 x = self._propagate(x, float(dts[t]), float(times[t]), rng)
             if not np.isnan(ys[t]).all():
-                ll = np.asarray(self._loglik(ys[t], x), dtype=float)
-                a = logw + ll
-                norm = _logsumexp(a)
-                if not np.isfinite(norm):
+                a = logw + np.asarray(self._loglik(ys[t], x), dtype=float)
+                top = np.max(a)
+                if not np.isfinite(top):
                     raise ParticleDegeneracyError(
                         f"every particle has zero likelihood at step {t} (measurement "
                         f"{ys[t].tolist()}); the filter has lost the target"
                     )
-                total += norm
-                logw = a - norm
-            w = np.exp(logw)
-            w /= w.sum()
+                w = np.exp(a - top)  # log-sum-exp: the largest weight is exp(0)
+                s = w.sum()
+                total += top + math.log(s)
+                w /= s
+                logw = a - (top + math.log(s))
+            else:
+                w = np.exp(logw)
+                w /= w.sum()
             means[t], covs[t] = weighted_mean(x, w), weighted_cov(x, w)
             if modes:
                 mode_arr[t], conf[t] = particle_mode(x, w)

@@ -1,0 +1,223 @@
+"""Particle filter and UKF speed: vistrack beside the libraries a user would pick instead.
+
+    python bench/bench_particle.py [--quick] [--write docs/benchmarks.md]
+
+Particle filter: the univariate growth model (q = 10, r = 1), 100 steps, systematic resampling
+every step, N = 1,000 and N = 100,000, one core. Every implementation runs in this process on
+the same measurements; the table gives the median time per step of a few runs and the RMSE of
+the filtered mean against the simulated states. UKF: 2-D coordinated turn with range-bearing
+measurements, one predict + update per call.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import statistics
+import sys
+import time
+import warnings
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+import vistrack as vt  # noqa: E402
+from vistrack.filters import ParticleFilter, UnscentedKalmanFilter, ukf_predict, ukf_update  # noqa: E402
+
+T = 100
+
+
+def median_time(fn, repeats):
+    fn()
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times), out
+
+
+def optional(name):
+    try:
+        return __import__(name)
+    except Exception as exc:  # noqa: BLE001 - any import failure means "not available"
+        print(f"  ({name} not available: {exc})", file=sys.stderr)
+        return None
+
+
+def growth_f(x, t):
+    return x / 2 + 25 * x / (1 + x * x) + 8 * np.cos(1.2 * t)
+
+
+def numpy_sir(ys, N, rng, resample_fn=None):
+    """A plain-numpy bootstrap filter: what a user writes by hand."""
+    x = rng.normal(0.0, np.sqrt(5.0), N)
+    means = np.empty(len(ys))
+    for t, y in enumerate(ys[:, 0]):
+        if t > 0:
+            x = growth_f(x, t) + rng.normal(0.0, np.sqrt(10.0), N)
+        logw = -0.5 * (y - x * x / 20) ** 2
+        w = np.exp(logw - logw.max())
+        w /= w.sum()
+        means[t] = w @ x
+        if resample_fn is None:
+            idx = np.searchsorted(np.cumsum(w), (rng.random() + np.arange(N)) / N)
+            x = x[np.minimum(idx, N - 1)]
+        else:
+            x = x[resample_fn(w)]
+    return means
+
+
+def particle_rows(rows, repeats, sizes):
+    motion, meas = vt.models.growth_model()
+    xs, ys = vt.simulate.simulate(motion, meas, T, x0=[0.1], rng=1)
+    truth = xs[:, 0]
+
+    def rmse(m):
+        return float(np.sqrt(np.mean((np.asarray(m) - truth) ** 2)))
+
+    fp = optional("filterpy.monte_carlo")
+    pfl = optional("pfilter")
+    prt = optional("particles")
+    for N in sizes:
+        label = f"particle filter, growth model, N = {N:,}"
+        pf = ParticleFilter(motion, meas, n_particles=N, ess_threshold=1.0, rng=2)
+        sec, res = median_time(lambda: pf.filter(ys, x0=[0.0], P0=[[5.0]]), repeats)
+        rows.append((label, "vistrack ParticleFilter", sec / T * 1e3, rmse(res.means[:, 0])))
+        rng = np.random.default_rng(3)
+        sec, m = median_time(lambda: numpy_sir(ys, N, rng), repeats)
+        rows.append((label, "plain numpy SIR", sec / T * 1e3, rmse(m)))
+        if fp is not None:
+            from filterpy.monte_carlo import systematic_resample
+
+            sec, m = median_time(lambda: numpy_sir(ys, N, rng, systematic_resample), 1)
+            rows.append((label, "numpy + FilterPy systematic_resample", sec / T * 1e3, rmse(m)))
+        if pfl is not None:
+            def run_pfilter():
+                f = pfl.ParticleFilter(
+                    prior_fn=lambda n: np.random.normal(0, np.sqrt(5.0), (n, 1)),
+                    observe_fn=lambda x, **kw: x ** 2 / 20,
+                    n_particles=N,
+                    dynamics_fn=lambda x, t=0, **kw: growth_f(x, t),
+                    noise_fn=lambda x, **kw: x + np.random.normal(0, np.sqrt(10.0), x.shape),
+                    weight_fn=lambda x, y, **kw: np.exp(-0.5 * ((x - y) ** 2).sum(1)),
+                    resample_proportion=0.0,
+                    resample_fn=pfl.systematic_resample,
+                )
+                out = []
+                for t in range(T):
+                    f.update(ys[t][None], t=t)
+                    out.append(f.mean_state[0])
+                return out
+
+            np.random.seed(4)
+            sec, m = median_time(run_pfilter, 1)
+            rows.append((label, "pfilter (systematic_resample)", sec / T * 1e3, rmse(m)))
+        if prt is not None:
+            from particles import distributions as dists
+            from particles import state_space_models as ssm
+            from particles.collectors import Moments
+
+            class Growth(ssm.StateSpaceModel):
+                def PX0(self):
+                    return dists.Normal(loc=0.0, scale=np.sqrt(5.0))
+
+                def PX(self, t, xp):
+                    return dists.Normal(loc=growth_f(xp, t), scale=np.sqrt(10.0))
+
+                def PY(self, t, xp, x):
+                    return dists.Normal(loc=x ** 2 / 20, scale=1.0)
+
+            def run_particles():
+                fk = ssm.Bootstrap(ssm=Growth(), data=ys[:, 0])
+                alg = prt.SMC(fk=fk, N=N, resampling="systematic", ESSrmin=1.0,
+                              collect=[Moments()], store_history=False)
+                alg.run()
+                return [s["mean"] for s in alg.summaries.moments]
+
+            sec, m = median_time(run_particles, 1)
+            rows.append((label, "particles (SMC, systematic)", sec / T * 1e3, rmse(m)))
+
+
+def ukf_rows(rows, repeats):
+    motion, meas = vt.models.CoordinatedTurn(q=0.05, q_turn=1e-3), vt.models.RangeBearing(
+        1.0, 1e-3, ndim_state=5)
+    _, zs = vt.simulate.simulate(motion, meas, 200, x0=[-20.0, 8.0, 0.0, -0.8, 0.01], rng=5)
+    x0, P0 = np.array([-20.0, 8.0, 0.0, -0.8, 0.01]), np.diag([4.0, 4.0, 0.5, 0.5, 1e-3])
+    label = "UKF, coordinated turn + range-bearing, one predict + update"
+
+    def functional():
+        g = vt.Gaussian(x0, P0)
+        for z in zs:
+            g = ukf_update(ukf_predict(g, motion), z, meas)
+
+    sec, _ = median_time(functional, repeats)
+    rows.append((label, "vistrack ukf_predict + ukf_update", sec / len(zs) * 1e3, None))
+    flt = UnscentedKalmanFilter(motion, meas)
+    sec, _ = median_time(lambda: flt.filter(zs, x0=x0, P0=P0), repeats)
+    rows.append((label, "vistrack UnscentedKalmanFilter.filter, per step", sec / len(zs) * 1e3, None))
+    if optional("filterpy") is not None:
+        from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter as FPU
+
+        def filterpy_run():
+            kf = FPU(dim_x=5, dim_z=2, dt=1.0, points=MerweScaledSigmaPoints(5, 1e-3, 2.0, 0.0),
+                     fx=lambda x, dt: motion.f(x, dt), hx=meas.h, residual_z=meas.residual,
+                     z_mean_fn=meas.mean)
+            kf.x, kf.P, kf.Q, kf.R = x0.copy(), P0.copy(), motion.Q(1.0), meas.R()
+            for z in zs:
+                kf.predict()
+                kf.update(z)
+
+        sec, _ = median_time(filterpy_run, repeats)
+        rows.append((label, "FilterPy UnscentedKalmanFilter", sec / len(zs) * 1e3, None))
+
+
+def to_markdown(rows):
+    out, current = [], None
+    for label, lib, ms, rmse in rows:
+        if label != current:
+            current, ref = label, ms
+            out += ["", f"**{label}**", "", "| library | ms/step | times slower than vistrack | RMSE |",
+                    "|---|---:|---:|---:|"]
+        r = "" if rmse is None else f"{rmse:.2f}"
+        out.append(f"| {lib} | {ms:.3g} | {ms / ref:.2g} | {r} |")
+    return "\n".join(out)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="N = 1,000 only")
+    ap.add_argument("--write", metavar="MD", help="replace the particle-filter section of this file")
+    args = ap.parse_args()
+    warnings.simplefilter("ignore")
+    rows = []
+    print("particle filter ...", file=sys.stderr)
+    particle_rows(rows, 3, (1000,) if args.quick else (1000, 100_000))
+    print("UKF ...", file=sys.stderr)
+    ukf_rows(rows, 5)
+    import numba
+
+    env = (f"Python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}, "
+           f"{platform.machine()}, one core, {time.strftime('%Y-%m-%d')}")
+    cmd = "python bench/bench_particle.py" + (" --quick" if args.quick else "")
+    section = (f"## Particle filter and UKF\n\nMeasured with `{cmd}` ({env}). RMSE: of the "
+               f"filtered mean against the simulated states.\n{to_markdown(rows)}\n")
+    print(section)
+    if args.write:
+        text = open(args.write).read()
+        start = text.find("## Particle filter and UKF")
+        if start >= 0:
+            end = text.find("\n## ", start + 5)
+            text = text[:start] + section + ("\n" + text[end + 1:] if end >= 0 else "")
+        else:
+            text = text.rstrip() + "\n\n" + section
+        with open(args.write, "w") as fh:
+            fh.write(text)
+
+
+if __name__ == "__main__":
+    main()
