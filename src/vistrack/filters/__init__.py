@@ -13,6 +13,7 @@ from .kalman import (
 )
 from .ekf import ExtendedKalmanFilter, ekf_predict, ekf_update
 from .enkf import Ensemble, EnsembleKalmanFilter, enkf_predict, enkf_update
+from .imm import IMMFilter, IMMResult
 from .particle import (
     RESAMPLERS,
     ParticleDegeneracyError,
@@ -47,6 +48,8 @@ __all__ = [
     "EnsembleKalmanFilter",
     "ExtendedKalmanFilter",
     "FilterResult",
+    "IMMFilter",
+    "IMMResult",
     "JulierSigmaPoints",
     "MerweScaledSigmaPoints",
     "UnscentedKalmanFilter",

@@ -117,8 +117,13 @@ class ExtendedKalmanFilter:
         """Filter ``ys (T, m)`` or ``(B, T, m)`` (NaN = missing). ``x0, P0`` are the prior of the
         first step, as in :func:`~vistrack.filters.kalman_filter`. ``dt`` is a scalar or one per
         step; ``times`` (default: the cumulative ``dt``, from 0) is passed to the model."""
-        return run_sequence(
-            ys, x0, P0, self.motion.n, self.measurement.m, dt, times,
-            lambda g, dt, t: ekf_predict(g, self.motion, dt, t),
-            lambda g, y: ekf_update(g, y, self.measurement, return_loglik=True),
-        )
+        return run_sequence(ys, x0, P0, self.motion.n, self.measurement.m, dt, times,
+                            self.predict, self.update)
+
+    def predict(self, g: Gaussian, dt: float = 1.0, t: float = 0.0) -> Gaussian:
+        """One prediction (:func:`ekf_predict` with this filter's motion model)."""
+        return ekf_predict(g, self.motion, dt, t)
+
+    def update(self, g: Gaussian, y: Any) -> tuple[Gaussian, np.ndarray]:
+        """One correction and its innovation log-density (:func:`ekf_update`)."""
+        return ekf_update(g, y, self.measurement, return_loglik=True)

@@ -224,11 +224,15 @@ class UnscentedKalmanFilter:
                times: Any = None) -> FilterResult:
         """Filter ``ys (T, m)`` or ``(B, T, m)``; arguments as
         :meth:`ExtendedKalmanFilter.filter <vistrack.filters.ExtendedKalmanFilter.filter>`."""
-        return run_sequence(
-            ys, x0, P0, self.motion.n, self.measurement.m, dt, times,
-            lambda g, dt, t: ukf_predict(g, self.motion, dt, t, points=self.points,
-                                         state_mean=self.state_mean,
-                                         state_residual=self.state_residual),
-            lambda g, y: ukf_update(g, y, self.measurement, points=self.points,
-                                    state_residual=self.state_residual, return_loglik=True),
-        )
+        return run_sequence(ys, x0, P0, self.motion.n, self.measurement.m, dt, times,
+                            self.predict, self.update)
+
+    def predict(self, g: Gaussian, dt: float = 1.0, t: float = 0.0) -> Gaussian:
+        """One prediction (:func:`ukf_predict` with this filter's model and points)."""
+        return ukf_predict(g, self.motion, dt, t, points=self.points,
+                           state_mean=self.state_mean, state_residual=self.state_residual)
+
+    def update(self, g: Gaussian, y: Any) -> tuple[Gaussian, np.ndarray]:
+        """One correction and its innovation log-density (:func:`ukf_update`)."""
+        return ukf_update(g, y, self.measurement, points=self.points,
+                          state_residual=self.state_residual, return_loglik=True)

@@ -1,0 +1,220 @@
+r"""Multiple-model filtering: the interacting multiple model (IMM) filter.
+
+The seeds' multiple-model filter (seed 000, "Multiple model filters", after Welch and Bishop):
+"test several models of assumed dynamics, use the best" — run one filter per model, weigh each
+by how well it predicts the measurements, and report the probability-weighted estimate, which
+has "no lag" when the target moves and is "smooth when still". With a Markov switching matrix
+``Π`` (``Π[i, j] = P(model j at t | model i at t-1)``) the filters also exchange their estimates
+before each prediction, which is the IMM of Blom and Bar-Shalom (1988). With ``Π = I`` there is
+no exchange and this is exactly the seed's filter.
+
+One IMM cycle for mode probabilities :math:`\mu_i`:
+
+.. math::
+    \bar c_j = \sum_i \Pi_{ij} \mu_i, \quad \mu_{i|j} = \Pi_{ij} \mu_i / \bar c_j, \quad
+    x^{0}_j = \sum_i \mu_{i|j} x_i, \quad
+    P^{0}_j = \sum_i \mu_{i|j} \left(P_i + (x_i - x^0_j)(x_i - x^0_j)^T\right),
+
+then each filter predicts from :math:`(x^0_j, P^0_j)` and corrects, giving the log-likelihood
+:math:`\ell_j` of the measurement, and :math:`\log \mu_j = \log \bar c_j + \ell_j - \log \sum_k
+\bar c_k e^{\ell_k}`. Everything is done with log-probabilities, so a measurement that every
+model finds very unlikely does not underflow to 0/0 (FilterPy's IMM does, filterpy #70).
+
+Members may have different state sizes when each smaller state is a leading part of the larger
+ones (derivative-major layouts give this: ``[x, y]`` in ``[x, y, vx, vy]`` in
+``[x, y, vx, vy, ω]``). An estimate moves to a larger space by taking the missing components,
+and their covariance, from the receiving model's own estimate; to a smaller one by dropping
+them. Members may be any filter with ``predict(g, dt, t)`` and ``update(g, y) -> (g, loglik)``:
+:class:`~vistrack.filters.ExtendedKalmanFilter` (exact for linear models),
+:class:`~vistrack.filters.UnscentedKalmanFilter`, or one's own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from .._validate import as_float_array
+from ..types import Gaussian
+from .kalman import _readonly
+
+__all__ = ["IMMFilter", "IMMResult"]
+
+
+@dataclass(frozen=True)
+class IMMResult:
+    """The output of :meth:`IMMFilter.filter`. Arrays are read-only.
+
+    Attributes
+    ----------
+    means, covs : (..., T, n), (..., T, n, n)
+        The probability-weighted (moment-matched) estimate, in the state space of the largest
+        member.
+    mode_probs : (..., T, M)
+        Posterior model probabilities after each correction.
+    member_means : list of (..., T, n_i)
+        Each member's corrected mean.
+    loglik : (...)
+        ``log p(y_0, ..., y_{T-1})`` under the switching model.
+    """
+
+    means: np.ndarray
+    covs: np.ndarray
+    mode_probs: np.ndarray
+    member_means: list
+    loglik: np.ndarray
+
+
+def _convert(g: Gaussian, ref: Gaussian) -> tuple[np.ndarray, np.ndarray]:
+    """``g`` in the state space of ``ref``: truncated, or completed from ``ref``."""
+    ni, nj = g.mean.shape[-1], ref.mean.shape[-1]
+    if ni >= nj:
+        return g.mean[..., :nj], g.cov[..., :nj, :nj]
+    x = np.concatenate([g.mean, ref.mean[..., ni:]], axis=-1)
+    P = np.zeros(ref.cov.shape)
+    P[..., :ni, :ni] = g.cov
+    P[..., ni:, ni:] = ref.cov[..., ni:, ni:]
+    return x, P
+
+
+def _mix(gs: Sequence[Gaussian], w: np.ndarray, ref: Gaussian) -> Gaussian:
+    """Moment-matched mixture ``Σ_i w_i g_i`` (weights ``w (..., M)``) in ``ref``'s space."""
+    xs, Ps = zip(*(_convert(g, ref) for g in gs))
+    X, P = np.stack(xs, -2), np.stack(Ps, -3)  # (..., M, n), (..., M, n, n)
+    mean = np.einsum("...i,...in->...n", w, X)
+    d = X - mean[..., None, :]
+    cov = np.einsum("...i,...inm->...nm", w, P + d[..., :, None] * d[..., None, :])
+    return Gaussian(mean, 0.5 * (cov + np.swapaxes(cov, -1, -2)))
+
+
+def _logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
+    m = np.max(a, axis=axis, keepdims=True)
+    m = np.where(np.isfinite(m), m, 0.0)
+    with np.errstate(divide="ignore"):  # all -inf: log 0 = -inf, reported by the caller
+        return np.squeeze(m, axis) + np.log(np.exp(a - m).sum(axis))
+
+
+class IMMFilter:
+    """Interacting multiple models over a sequence.
+
+    Parameters
+    ----------
+    filters : sequence of filters
+        Each with ``predict(g, dt, t) -> Gaussian``, ``update(g, y) -> (Gaussian, loglik)``
+        and ``motion.n`` (its state size): :class:`~vistrack.filters.ExtendedKalmanFilter`,
+        :class:`~vistrack.filters.UnscentedKalmanFilter`.
+    transition : (M, M) array
+        ``transition[i, j]``: probability of switching from model ``i`` to model ``j`` in one
+        step; rows sum to one. The identity gives the seed's multiple-model filter.
+    mode_probs : (M,) array, optional
+        Prior model probabilities (default uniform).
+
+    Examples
+    --------
+    >>> import vistrack as vt
+    >>> still = vt.filters.ExtendedKalmanFilter(vt.ConstantPosition(dim=1, q=0.01),
+    ...                                         vt.Position(dim=1, r=0.1))
+    >>> moving = vt.filters.ExtendedKalmanFilter(vt.ConstantVelocity(dim=1, q=0.01),
+    ...                                          vt.Position(dim=1, r=0.1))
+    >>> imm = IMMFilter([still, moving], [[0.95, 0.05], [0.05, 0.95]])
+    >>> ys = np.r_[np.zeros(10), np.arange(1.0, 11.0)][:, None]
+    >>> res = imm.filter(ys, x0=[0.0, 0.0], P0=np.eye(2))
+    >>> res.mode_probs[[9, -1]].round(2)  # still, then moving
+    array([[0.83, 0.17],
+           [0.  , 1.  ]])
+    """
+
+    def __init__(self, filters: Sequence[Any], transition: Any, *, mode_probs: Any = None):
+        self.filters = list(filters)
+        M = len(self.filters)
+        if M < 1:
+            raise ValueError("filters must hold at least one filter")
+        for k, f in enumerate(self.filters):
+            if not (callable(getattr(f, "predict", None)) and callable(getattr(f, "update", None))):
+                raise TypeError(f"filters[{k}] must have predict(g, dt, t) and update(g, y); "
+                                f"got {type(f).__name__}")
+        Pi = as_float_array(transition, "transition", ndim=(2,))
+        if Pi.shape != (M, M):
+            raise ValueError(f"transition must have shape ({M}, {M}); got {Pi.shape}")
+        if np.any(Pi < 0) or not np.allclose(Pi.sum(1), 1.0, atol=1e-9):
+            raise ValueError(f"transition must be non-negative with rows summing to 1; row sums "
+                             f"are {Pi.sum(1).tolist()}")
+        mu = np.full(M, 1.0 / M) if mode_probs is None else as_float_array(
+            mode_probs, "mode_probs", ndim=(1,))
+        if mu.shape != (M,) or np.any(mu < 0) or abs(mu.sum() - 1.0) > 1e-9:
+            raise ValueError(f"mode_probs must be {M} non-negative numbers summing to 1; "
+                             f"got {mu.tolist()}")
+        with np.errstate(divide="ignore"):
+            self.log_transition, self.log_mu0 = np.log(Pi), np.log(mu)
+        self.sizes = [int(f.motion.n) for f in self.filters]
+        self.ref = int(np.argmax(self.sizes))
+
+    def filter(self, ys: Any, *, x0: Any, P0: Any, dt: Any = 1.0,
+               times: Any = None) -> IMMResult:
+        """Filter ``ys (T, m)`` or ``(B, T, m)``. ``x0, P0`` are the prior of the first step in
+        the largest member's state space (each member takes its leading part)."""
+        ys = as_float_array(ys, "ys", ndim=(2, 3))
+        single = ys.ndim == 2
+        if single:
+            ys = ys[None]
+        B, T, _ = ys.shape
+        n = self.sizes[self.ref]
+        x0 = as_float_array(x0, "x0", ndim=(1, 2))
+        P0 = as_float_array(P0, "P0", ndim=(2, 3))
+        if x0.shape[-1] != n or P0.shape[-2:] != (n, n):
+            raise ValueError(f"x0 and P0 must have shapes (…, {n}) and (…, {n}, {n}) (the "
+                             f"largest member's state); got {x0.shape} and {P0.shape}")
+        x0 = np.broadcast_to(x0, (B, n))
+        P0 = np.broadcast_to(P0, (B, n, n))
+        gs = [Gaussian(x0[:, :k].copy(), P0[:, :k, :k].copy()) for k in self.sizes]
+        dts = np.broadcast_to(as_float_array(dt, "dt", ndim=(0, 1)), (T,))
+        if times is None:
+            times = np.concatenate([[0.0], np.cumsum(dts[1:])])
+        M = len(self.filters)
+        log_mu = np.broadcast_to(self.log_mu0, (B, M)).copy()
+        means, covs = np.empty((B, T, n)), np.empty((B, T, n, n))
+        probs = np.empty((B, T, M))
+        member_means = [np.empty((B, T, k)) for k in self.sizes]
+        loglik = np.zeros(B)
+        for t in range(T):
+            if t > 0:
+                # mixing: a[b, i, j] = log Π_ij + log μ_i; c̄_j = Σ_i exp(a); μ_{i|j}
+                a = self.log_transition[None] + log_mu[:, :, None]
+                log_c = _logsumexp(a, 1)  # (B, M)
+                with np.errstate(invalid="ignore"):
+                    w = np.exp(a - log_c[:, None, :])  # (B, i, j)
+                w = np.nan_to_num(w)  # a model with c̄_j = 0 has no mass to mix
+                gs = [_mix(gs, w[:, :, j], gs[j]) for j in range(M)]
+                gs = [f.predict(g, float(dts[t]), float(times[t]))
+                      for f, g in zip(self.filters, gs)]
+            else:
+                log_c = log_mu
+            y = ys[:, t]
+            if np.isnan(y).all():
+                log_mu = log_c
+            else:
+                lls = []
+                for j, f in enumerate(self.filters):
+                    gs[j], ll = f.update(gs[j], y)
+                    lls.append(np.broadcast_to(ll, (B,)))
+                joint = log_c + np.stack(lls, -1)
+                norm = _logsumexp(joint, 1)
+                if not np.all(np.isfinite(norm)):
+                    b = int(np.argmin(np.isfinite(norm)))
+                    raise ValueError(f"every model gives zero likelihood to the measurement of "
+                                     f"series {b} at step {t}")
+                loglik += norm
+                log_mu = joint - norm[:, None]
+            mu = np.exp(log_mu)
+            probs[:, t] = mu
+            out = _mix(gs, mu, gs[self.ref])
+            means[:, t], covs[:, t] = out.mean, out.cov
+            for j, g in enumerate(gs):
+                member_means[j][:, t] = g.mean
+        if single:
+            means, covs, probs, loglik = means[0], covs[0], probs[0], loglik[0]
+            member_means = [m[0] for m in member_means]
+        _readonly(means, covs, probs, *member_means)
+        return IMMResult(means, covs, probs, member_means, np.asarray(loglik))

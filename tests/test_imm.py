@@ -1,0 +1,158 @@
+"""The IMM filter: against single Kalman filters, the closed form of the seed's multiple-model
+filter, a manoeuvring target with a known switch time, and members of different sizes."""
+
+import numpy as np
+import pytest
+
+import vistrack as vt
+from vistrack.filters import ExtendedKalmanFilter, IMMFilter, UnscentedKalmanFilter, kalman_filter
+
+
+def cv(q, r=1.0, dim=1):
+    return ExtendedKalmanFilter(vt.ConstantVelocity(dim=dim, q=q), vt.Position(dim=dim, r=r))
+
+
+def kf_run(q, ys, x0, P0, r=1.0):
+    m, p = vt.ConstantVelocity(dim=1, q=q), vt.Position(dim=1, r=r)
+    return kalman_filter(ys, F=m.F(1.0), Q=m.Q(1.0), H=p.H(2), R=p.R(), x0=x0, P0=P0)
+
+
+def test_identical_members_are_the_kalman_filter(rng):
+    _, ys = vt.simulate.simulate(vt.ConstantVelocity(dim=1, q=0.3), vt.Position(dim=1), 30,
+                                 x0=[0.0, 1.0], rng=rng)
+    ys[7] = np.nan
+    x0, P0 = np.zeros(2), np.eye(2)
+    kf = kf_run(0.3, ys, x0, P0)
+    for members in ([cv(0.3)], [cv(0.3), cv(0.3)]):
+        M = len(members)
+        Pi = np.full((M, M), 0.1 / max(M - 1, 1)) + np.eye(M) * (0.9 - 0.1 / max(M - 1, 1))
+        res = IMMFilter(members, Pi if M > 1 else [[1.0]]).filter(ys, x0=x0, P0=P0)
+        np.testing.assert_allclose(res.means, kf.means, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(res.covs, kf.covs, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(res.mode_probs, 1.0 / M, rtol=1e-12)
+        assert res.loglik == pytest.approx(float(kf.loglik), rel=1e-10)
+
+
+def test_identity_switching_is_the_seeds_multiple_model_filter(rng):
+    """With Π = I the filters never mix: each runs alone, and the model probabilities are the
+    prior times each model's likelihood of the measurements so far, normalised."""
+    T = 15
+    _, ys = vt.simulate.simulate(vt.ConstantVelocity(dim=1, q=0.5), vt.Position(dim=1), T,
+                                 x0=[0.0, 1.0], rng=rng)
+    x0, P0, qs, prior = np.zeros(2), np.eye(2), (0.01, 2.0), np.array([0.3, 0.7])
+    res = IMMFilter([cv(q) for q in qs], np.eye(2), mode_probs=prior).filter(ys, x0=x0, P0=P0)
+    for j, q in enumerate(qs):
+        np.testing.assert_allclose(res.member_means[j], kf_run(q, ys, x0, P0).means, rtol=1e-10)
+    cum = np.array([[float(kf_run(q, ys[: t + 1], x0, P0).loglik) for q in qs] for t in range(T)])
+    expected = prior * np.exp(cum - cum.max(1, keepdims=True))
+    np.testing.assert_allclose(res.mode_probs, expected / expected.sum(1, keepdims=True),
+                               rtol=1e-9)
+
+
+def manoeuvre(rng, T=80, switch=40):
+    """1-D: speed 1, then at ``switch`` a jump to speed -3 (known switch time)."""
+    v = np.where(np.arange(T) < switch, 1.0, -3.0)
+    x = np.concatenate([[0.0], np.cumsum(v[1:])])
+    return x, (x + rng.normal(size=T))[:, None]
+
+
+def test_imm_beats_either_single_model_on_a_manoeuvring_target():
+    Pi = [[0.97, 0.03], [0.03, 0.97]]
+    err = {"smooth": [], "agile": [], "imm": []}
+    prob_after = []
+    for seed in range(20):
+        x, ys = manoeuvre(np.random.default_rng(seed))
+        x0, P0 = np.array([0.0, 1.0]), np.eye(2)
+        for name, q in (("smooth", 1e-3), ("agile", 3.0)):
+            err[name].append(kf_run(q, ys, x0, P0).means[:, 0] - x)
+        res = IMMFilter([cv(1e-3), cv(3.0)], Pi).filter(ys, x0=x0, P0=P0)
+        err["imm"].append(res.means[:, 0] - x)
+        prob_after.append(res.mode_probs[40:46, 1].max())
+    rmse = {k: np.sqrt(np.mean(np.square(v))) for k, v in err.items()}
+    assert rmse["imm"] < rmse["smooth"] and rmse["imm"] < rmse["agile"], rmse
+    assert np.mean(prob_after) > 0.9  # the agile model takes over right after the switch
+
+
+def test_members_of_different_sizes_give_no_lag_and_smooth_when_still():
+    """The seed's P vs PV example: a target that stands, walks, stands."""
+    P_model = ExtendedKalmanFilter(vt.ConstantPosition(dim=1, q=1e-4), vt.Position(dim=1, r=0.05))
+    PV_model = ExtendedKalmanFilter(vt.ConstantVelocity(dim=1, q=0.05), vt.Position(dim=1, r=0.05))
+    v = np.r_[np.zeros(40), np.full(40, 0.5), np.zeros(40)]
+    x = np.cumsum(v)
+    still, moving = np.r_[10:40, 90:120], np.r_[50:80]
+    errs = {"P": [], "PV": [], "imm": []}
+    p_still, p_moving = [], []
+    for seed in range(10):
+        ys = (x + np.random.default_rng(seed).normal(scale=np.sqrt(0.05), size=len(x)))[:, None]
+        imm = IMMFilter([P_model, PV_model], [[0.95, 0.05], [0.05, 0.95]])
+        res = imm.filter(ys, x0=[0.0, 0.0], P0=np.eye(2))
+        p = res.mode_probs[:, 0]
+        p_still.append(p[still].mean())
+        p_moving.append(p[moving].mean())
+        errs["imm"].append(res.means[:, 0] - x)
+        errs["P"].append(res.member_means[0][:, 0] - x)
+        errs["PV"].append(res.member_means[1][:, 0] - x)
+    assert np.mean(p_still) > 0.6 and np.mean(p_moving) < 0.2
+    rms = {k: np.sqrt(np.mean(np.square(np.array(e)), axis=0)) for k, e in errs.items()}
+    assert rms["imm"][moving].mean() < 0.7 * rms["P"][moving].mean()  # no lag
+    assert rms["imm"][still].mean() < rms["PV"][still].mean()  # smooth when still
+
+
+def test_log_domain_probabilities_survive_an_outlier(rng):
+    """A measurement 1e6 standard deviations away has likelihood exp(-5e11) under both
+    models: 0 in floating point. In the log domain the probabilities stay defined."""
+    x, ys = manoeuvre(rng, T=20)
+    ys[10] = 1e6
+    res = IMMFilter([cv(1e-3), cv(3.0)], [[0.9, 0.1], [0.1, 0.9]]).filter(
+        ys, x0=[0.0, 1.0], P0=np.eye(2))
+    assert np.all(np.isfinite(res.mode_probs))
+    np.testing.assert_allclose(res.mode_probs.sum(-1), 1.0, rtol=1e-12)
+    assert res.mode_probs[10, 1] > 0.999  # the wide model explains the jump far better
+
+
+def test_nonlinear_members_with_different_state_sizes(rng):
+    """Coordinated turn (UKF, 5 states) and constant velocity (EKF, 4 states) from range and
+    bearing: the turn model gains probability during a turn."""
+    ct = vt.models.CoordinatedTurn(q=0.01, q_turn=1e-4)
+    rb = vt.models.RangeBearing(0.25, 1e-5, sensor=(0.0, -50.0), ndim_state=5)
+    x = np.array([0.0, 0.0, 1.0, 0.0, 0.0])
+    states = []
+    for t in range(90):
+        x = x.copy()
+        x[4] = 0.15 if 30 <= t < 50 else 0.0
+        states.append(x)
+        x = ct.f(x, 1.0)
+    states = np.array(states)
+    ys = rb.h(states) + rng.normal(size=(90, 2)) * np.sqrt([0.25, 1e-5])
+    members = [UnscentedKalmanFilter(ct, rb),
+               ExtendedKalmanFilter(vt.ConstantVelocity(dim=2, q=0.01),
+                                    vt.models.RangeBearing(0.25, 1e-5, sensor=(0.0, -50.0)))]
+    res = IMMFilter(members, [[0.95, 0.05], [0.05, 0.95]]).filter(
+        ys, x0=[0.0, 0.0, 1.0, 0.0, 0.0], P0=np.diag([1.0, 1.0, 0.1, 0.1, 0.01]))
+    assert res.means.shape == (90, 5) and res.member_means[1].shape == (90, 4)
+    p_turn = res.mode_probs[:, 0]
+    assert p_turn[35:50].mean() > p_turn[5:30].mean() + 0.2
+    assert np.sqrt(np.mean(np.sum((res.means[:, :2] - states[:, :2]) ** 2, 1))) < 2.0
+
+
+@pytest.mark.parametrize(
+    "transition, kwargs, match",
+    [
+        ([[0.9, 0.2], [0.1, 0.9]], {}, "rows summing to 1"),
+        ([[1.0]], {}, r"transition must have shape \(2, 2\)"),
+        ([[0.9, 0.1], [0.1, 0.9]], {"mode_probs": [0.5, 0.6]}, "mode_probs must be 2"),
+    ],
+)
+def test_bad_arguments_raise(transition, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        IMMFilter([cv(0.1), cv(1.0)], transition, **kwargs)
+
+
+def test_zero_likelihood_everywhere_is_reported():
+    class Never(ExtendedKalmanFilter):
+        def update(self, g, y):
+            return g, np.full(np.shape(y)[:-1], -np.inf)
+
+    bad = Never(vt.ConstantVelocity(dim=1), vt.Position(dim=1))
+    with pytest.raises(ValueError, match="zero likelihood to the measurement of series 0 at step 0"):
+        IMMFilter([bad, bad], np.eye(2)).filter(np.ones((3, 1)), x0=[0.0, 0.0], P0=np.eye(2))
