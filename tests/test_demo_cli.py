@@ -2,6 +2,7 @@
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -70,3 +71,14 @@ def test_import_stays_light():
     code = "import sys, vistrack; print(sorted(m for m in ('matplotlib', 'scipy.stats') if m in sys.modules))"
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert r.stdout.strip() == "[]"
+
+
+def test_nonlinear_example_figures(tmp_path):
+    import runpy
+
+    example = runpy.run_path(str(Path(__file__).parents[1] / "examples" / "nonlinear_figures.py"))
+    paths = example["main"](tmp_path)
+    assert [p.name for p in paths] == ["particle_cloud.png", "p_vs_pv.png", "ekf_ukf_pf.png"]
+    for p in paths:
+        png = p.read_bytes()
+        assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
