@@ -13,7 +13,7 @@ from .kalman import (
 )
 from .ekf import ExtendedKalmanFilter, ekf_predict, ekf_update
 from .enkf import Ensemble, EnsembleKalmanFilter, enkf_predict, enkf_update
-from .imm import IMMFilter, IMMResult
+from .imm import IMMFilter, IMMResult, SwitchingParticleFilter, SwitchingResult
 from .particle import (
     RESAMPLERS,
     ParticleDegeneracyError,
@@ -50,6 +50,8 @@ __all__ = [
     "FilterResult",
     "IMMFilter",
     "IMMResult",
+    "SwitchingParticleFilter",
+    "SwitchingResult",
     "JulierSigmaPoints",
     "MerweScaledSigmaPoints",
     "UnscentedKalmanFilter",

@@ -3,6 +3,7 @@ models (``H``, ``R``; nonlinear: ``h``, ``jacobian``)."""
 
 from .linear_gaussian import LinearGaussian
 from .measurement import LinearMeasurement, MeasurementModel, Position
+from .switching import SwitchingLinearSystem
 from .nonlinear import (
     CoordinatedTurn,
     GrowthMeasurement,
@@ -33,6 +34,7 @@ __all__ = [
     "NonlinearMeasurement",
     "NonlinearMotion",
     "RangeBearing",
+    "SwitchingLinearSystem",
     "growth_model",
     "numerical_jacobian",
     "wrap_angle",
