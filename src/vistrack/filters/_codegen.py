@@ -381,9 +381,14 @@ def batch_kernel(n: int, m: int, cf: tuple, cq: tuple, ch: tuple, cr: tuple):
     ``kernel(ys, F, Q, H, R, x0, P0, means, covs, pmeans, pcovs, loglik, last_P, store_covs)``
     has the arguments and result of :func:`vistrack.filters._kernels.kf_batch` without the gains.
     """
-    src = source(n, m, cf, cq, ch, cr)
-    # the file is named by its content, so a changed generator never meets a stale cache
-    name = f"vistrack_kf_{n}_{m}_{hashlib.sha1(src.encode()).hexdigest()[:16]}"
+    return load(f"vistrack_kf_{n}_{m}", source(n, m, cf, cq, ch, cr)).kernel
+
+
+def load(prefix: str, src: str):
+    """Import generated source ``src`` as a module, from a file in the cache directory named by
+    ``prefix`` and the source's hash (so a changed generator never meets a stale cache), so
+    that numba caches the machine code of its ``cache=True`` functions."""
+    name = f"{prefix}_{hashlib.sha1(src.encode()).hexdigest()[:16]}"
     user = os.getuid() if hasattr(os, "getuid") else "user"
     path = None
     for d in (_cache_dir(), Path(tempfile.gettempdir()) / f"vistrack-kernels-{user}"):
@@ -399,11 +404,11 @@ def batch_kernel(n: int, m: int, cf: tuple, cq: tuple, ch: tuple, cr: tuple):
         except OSError:
             continue
     if path is None:  # no writable directory: compile without a cache
-        namespace: dict = {}
-        exec(compile(src.replace("cache=True", "cache=False"), name, "exec"), namespace)
-        return namespace["kernel"]
+        module = type(sys)(name)
+        exec(compile(src.replace("cache=True", "cache=False"), name, "exec"), module.__dict__)
+        return module
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
     spec.loader.exec_module(module)
-    return module.kernel
+    return module

@@ -96,9 +96,10 @@ def masked_innovation(e: np.ndarray, S: np.ndarray, obs: np.ndarray):
     log-density of the observed components' innovation. Raises if ``S`` is not positive
     definite on the observed components."""
     m = e.shape[-1]
-    both = obs[..., :, None] & obs[..., None, :]
-    S = np.where(both, S, np.eye(m))
-    e = np.where(obs, e, 0.0)
+    if not obs.all():
+        both = obs[..., :, None] & obs[..., None, :]
+        S = np.where(both, S, np.eye(m))
+        e = np.where(obs, e, 0.0)
     try:
         L = np.linalg.cholesky(S)
     except np.linalg.LinAlgError:

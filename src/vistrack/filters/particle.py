@@ -19,6 +19,7 @@ in that peak as its confidence.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -77,9 +78,29 @@ def _stratified(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
     return _merge(_cumulative(w), u, np.empty(n, np.int64))
 
 
+@njit(cache=True, error_model="numpy")
+def _systematic_kernel(w, u0, out):
+    # u_k = (k + u0) / n; index i is drawn for every u_k below the cumulative weight c_i,
+    # that is for k < ceil(n c_i - u0): one pass, no search
+    n = out.shape[0]
+    total = 0.0
+    for i in range(w.shape[0]):
+        total += w[i]
+    c, k = 0.0, 0
+    for i in range(w.shape[0]):
+        c += w[i]
+        edge = min(math.ceil(n * (c / total) - u0), n)
+        while k < edge:
+            out[k] = i
+            k += 1
+    while k < n:  # rounding of the last cumulative weight
+        out[k] = w.shape[0] - 1
+        k += 1
+    return out
+
+
 def _systematic(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
-    u = (np.arange(n) + rng.random()) / n
-    return _merge(_cumulative(w), u, np.empty(n, np.int64))
+    return _systematic_kernel(w, rng.random(), np.empty(n, np.int64))
 
 
 def _residual(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -213,6 +234,103 @@ def particle_mode(particles: np.ndarray, weights: np.ndarray, *, bandwidth: Any 
     return P[best] * h, min(1.0, float(w[nearest == best].sum()))
 
 
+# ---------------------------------------------------------------- the compiled path
+_FUSED = """
+import math
+import numpy as np
+from numba import njit
+from {fmod} import {fname} as f
+from {hmod} import {hname} as h
+
+
+@njit(cache=True, error_model="numpy")
+def step(x, logw, w, y, obs, angles, Linv, c, dt, t, fp, hp, S, noise, predict, mean, cov):
+    # one particle-filter step in one pass over the cloud: propagate (x <- f(x) + S noise),
+    # weigh (log w += c - |Linv r|^2 / 2 over the observed components), normalise (w, log w);
+    # then the weighted mean and covariance. Returns (log of the normalising sum, ESS).
+    N = x.shape[0]
+    n, m = {n}, {m}  # literal sizes: the per-particle loops unroll
+    no = obs.shape[0]
+    xn = np.empty(n)
+    z = np.empty(m)
+    r = np.empty(max(no, 1))
+    top = -np.inf
+    for i in range(N):
+        if predict:
+            f(x[i], dt, t, fp, xn)
+            for k in range(n):
+                v = xn[k]
+                for l in range(n):
+                    v += S[k, l] * noise[i, l]
+                x[i, k] = v
+        q = 0.0
+        if no > 0:
+            h(x[i], hp, z)
+            for a in range(no):
+                k = obs[a]
+                d = y[k] - z[k]
+                if angles[k]:
+                    d = math.pi - ((math.pi - d) % (2.0 * math.pi))
+                r[a] = d
+            for a in range(no):
+                v = 0.0
+                for b in range(a + 1):
+                    v += Linv[a, b] * r[b]
+                q += v * v
+        v = logw[i] + c - 0.5 * q
+        logw[i] = v
+        if v > top:
+            top = v
+    if not top > -np.inf:
+        return -np.inf, 0.0
+    total = 0.0
+    for i in range(N):
+        e = math.exp(logw[i] - top)
+        w[i] = e
+        total += e
+    norm = top + math.log(total)
+    sq = 0.0
+    for k in range(n):
+        mean[k] = 0.0
+    for i in range(N):
+        logw[i] -= norm
+        wi = w[i] / total
+        w[i] = wi
+        sq += wi * wi
+        for k in range(n):
+            mean[k] += wi * x[i, k]
+    for k in range(n):
+        for l in range(n):
+            cov[k, l] = 0.0
+    for i in range(N):
+        wi = w[i]
+        for k in range(n):
+            dk = x[i, k] - mean[k]
+            for l in range(k + 1):
+                cov[k, l] += wi * dk * (x[i, l] - mean[l])
+    for k in range(n):
+        for l in range(k):
+            cov[l, k] = cov[k, l]
+    return norm, 1.0 / sq
+"""
+
+
+def _jit_ref(fn) -> tuple[str, str] | None:
+    """Module and name of a module-level numba function, or None."""
+    py = getattr(fn, "py_func", None)
+    if py is None or "<locals>" in py.__qualname__:
+        return None
+    return py.__module__, py.__name__
+
+
+@functools.lru_cache(maxsize=None)
+def _fused(fref: tuple[str, str], href: tuple[str, str], n: int, m: int):
+    from . import _codegen
+
+    src = _FUSED.format(fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m)
+    return _codegen.load("vistrack_pf", src)
+
+
 # ---------------------------------------------------------------- the filter
 @dataclass(frozen=True)
 class ParticleResult:
@@ -266,6 +384,11 @@ class ParticleFilter:
     rng : numpy Generator, int seed or None
     ndim_state : int, optional
         Needed when ``motion`` is a callable.
+    compiled : bool
+        When the motion and measurement models provide compiled one-state functions
+        (``jit_f``, ``jit_h``: the growth model, the coordinated turn, range-bearing), run each
+        step as one compiled pass over the cloud (propagate, weigh, normalise, moments), with
+        the same draws from ``rng`` as the numpy path.
 
     Examples
     --------
@@ -280,7 +403,8 @@ class ParticleFilter:
 
     def __init__(self, motion: Any, likelihood: Any, n_particles: int = 1000, *,
                  resampling: str = "systematic", ess_threshold: float = 0.5,
-                 rng: np.random.Generator | int | None = None, ndim_state: int | None = None):
+                 rng: np.random.Generator | int | None = None, ndim_state: int | None = None,
+                 compiled: bool = True):
         if int(n_particles) != n_particles or n_particles < 1:
             raise ValueError(f"n_particles must be an integer >= 1; got {n_particles}")
         if resampling not in RESAMPLERS:
@@ -300,8 +424,13 @@ class ParticleFilter:
         else:
             raise TypeError(f"motion must be a motion model or a callable; got "
                             f"{type(motion).__name__}")
+        self._fused = None
         if hasattr(likelihood, "R"):
             self._loglik = self._gaussian_loglik(Measurement(likelihood, self.ndim_state))
+            fref = _jit_ref(getattr(motion, "jit_f", None))
+            href = _jit_ref(getattr(likelihood, "jit_h", None))
+            if compiled and fref and href and hasattr(motion, "jit_params"):
+                self._fused = (fref, href, motion, likelihood)
         elif callable(likelihood):
             self._loglik = likelihood
         else:
@@ -346,25 +475,17 @@ class ParticleFilter:
         """Filter ``ys (T, m)`` (a NaN row: predict only). The first cloud is ``particles
         (N, n)`` or ``N`` draws from ``N(x0, P0)``, the prior of the first step (which is
         corrected with no prediction before it, as in the Kalman filters). ``modes=True`` also
-        computes :func:`particle_mode` at every step.
+        computes :func:`particle_mode` at every step (on the numpy path).
 
         Raises :class:`ParticleDegeneracyError` naming the step if every particle gets zero
         likelihood."""
         ys = as_float_array(ys, "ys", ndim=(2,))
         T = ys.shape[0]
         n, N, rng = self.ndim_state, self.n_particles, self.rng
-        if particles is not None:
-            x = as_float_array(particles, "particles", ndim=(2,))
-            if x.shape != (N, n):
-                raise ValueError(f"particles must have shape ({N}, {n}); got {x.shape}")
-            x = x.copy()
-        else:
-            m0 = as_float_array(x0, "x0", ndim=(1,))
-            C0 = as_float_array(P0, "P0", ndim=(2,))
-            if m0.shape != (n,) or C0.shape != (n, n):
-                raise ValueError(f"x0 and P0 must have shapes ({n},) and ({n}, {n}); "
-                                 f"got {m0.shape} and {C0.shape}")
-            x = rng.multivariate_normal(m0, C0, size=N, method="eigh")
+        if self._fused is not None and not modes:
+            x = self._initial(particles, x0, P0)
+            return self._filter_fused(ys, x, dt, times)
+        x = self._initial(particles, x0, P0)
         dts = np.broadcast_to(as_float_array(dt, "dt", ndim=(0, 1)), (T,))
         if times is None:
             times = np.concatenate([[0.0], np.cumsum(dts[1:])])
@@ -402,3 +523,75 @@ class ParticleFilter:
                 resampled[t] = True
         w = np.exp(logw)
         return ParticleResult(means, covs, mode_arr, conf, ess, resampled, total, x, w / w.sum())
+
+    def _initial(self, particles: Any, x0: Any, P0: Any) -> np.ndarray:
+        n, N = self.ndim_state, self.n_particles
+        if particles is not None:
+            x = as_float_array(particles, "particles", ndim=(2,))
+            if x.shape != (N, n):
+                raise ValueError(f"particles must have shape ({N}, {n}); got {x.shape}")
+            return x.copy()
+        m0 = as_float_array(x0, "x0", ndim=(1,))
+        C0 = as_float_array(P0, "P0", ndim=(2,))
+        if m0.shape != (n,) or C0.shape != (n, n):
+            raise ValueError(f"x0 and P0 must have shapes ({n},) and ({n}, {n}); "
+                             f"got {m0.shape} and {C0.shape}")
+        return self.rng.multivariate_normal(m0, C0, size=N, method="eigh")
+
+    def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: Any, times: Any) -> ParticleResult:
+        fref, href, motion, meas = self._fused
+        T, m = ys.shape
+        kern = _fused(fref, href, self.ndim_state, m)
+        n, N, rng = self.ndim_state, self.n_particles, self.rng
+        w = np.empty(N)
+        no_noise = np.zeros((1, n))
+        x = np.ascontiguousarray(x, dtype=float)
+        R = np.asarray(meas.R(), dtype=float)
+        if R.shape != (m, m):
+            raise ValueError(f"ys must have {R.shape[0]} measurement components; got {m}")
+        angles = np.zeros(m, dtype=np.bool_)
+        angles[list(getattr(meas, "angles", ()))] = True
+        hp = np.asarray(meas.jit_params(), dtype=float)
+        dts = np.broadcast_to(as_float_array(dt, "dt", ndim=(0, 1)), (T,))
+        if times is None:
+            times = np.concatenate([[0.0], np.cumsum(dts[1:])])
+        whiten: dict = {}
+        noise: dict = {}
+        logw = np.full(N, -math.log(N))
+        means, covs = np.empty((T, n)), np.empty((T, n, n))
+        ess, resampled, total = np.empty(T), np.zeros(T, bool), 0.0
+        mean, cov = np.empty(n), np.empty((n, n))
+        for t in range(T):
+            y = ys[t]
+            obs = np.flatnonzero(~np.isnan(y))
+            key = obs.tobytes()
+            if key not in whiten:
+                if len(obs):
+                    L = np.linalg.cholesky(R[np.ix_(obs, obs)])
+                    c = -np.log(np.diagonal(L)).sum() - 0.5 * len(obs) * math.log(2 * math.pi)
+                    whiten[key] = (np.linalg.inv(L), c)
+                else:
+                    whiten[key] = (np.zeros((0, 0)), 0.0)
+            Linv, c = whiten[key]
+            d, tt = float(dts[t]), float(times[t])
+            if d not in noise:
+                w_, V = np.linalg.eigh(np.asarray(motion.Q(d), dtype=float))
+                noise[d] = np.ascontiguousarray(V * np.sqrt(np.clip(w_, 0.0, None)))
+            eps = rng.standard_normal((N, n)) if t > 0 else no_noise
+            norm, ess[t] = kern.step(x, logw, w, np.where(np.isnan(y), 0.0, y), obs, angles,
+                                     Linv, c, d, tt,
+                                     np.asarray(motion.jit_params(d, tt), dtype=float), hp,
+                                     noise[d], eps, t > 0, mean, cov)
+            if not np.isfinite(norm):
+                raise ParticleDegeneracyError(
+                    f"every particle has zero likelihood at step {t} (measurement "
+                    f"{y.tolist()}); the filter has lost the target"
+                )
+            total += norm
+            means[t], covs[t] = mean, cov
+            if ess[t] < self.ess_threshold * N or self.ess_threshold == 1.0:
+                x = x[RESAMPLERS[self.resampling](w, N, rng)]
+                logw = np.full(N, -math.log(N))
+                w = np.full(N, 1.0 / N)
+                resampled[t] = True
+        return ParticleResult(means, covs, None, None, ess, resampled, total, x, w)

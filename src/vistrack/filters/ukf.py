@@ -37,7 +37,6 @@ from ._nonlinear import (
     Motion,
     check_gaussian,
     check_y,
-    gain,
     masked_innovation,
     run_sequence,
     symmetric,
@@ -190,10 +189,10 @@ def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | 
     C = np.einsum("...ki,k,...kj->...ij", dx, Wc, rz)
     e = me.residual(np.where(obs, y, 0.0), zhat)
     e, S, L, ll = masked_innovation(e, Pzz + me.R, obs)
-    K = gain(C, L)
-    V = np.swapaxes(np.linalg.solve(L, np.swapaxes(C, -1, -2)), -1, -2)  # C L^-T
+    Vt = np.linalg.solve(L, np.swapaxes(C, -1, -2))  # (C L^-T)'
+    K = np.swapaxes(np.linalg.solve(np.swapaxes(L, -1, -2), Vt), -1, -2)  # C S^-1 = V L^-1
     out = Gaussian(g.mean + (K @ e[..., None])[..., 0],
-                   symmetric(g.cov - V @ np.swapaxes(V, -1, -2)))
+                   symmetric(g.cov - np.swapaxes(Vt, -1, -2) @ Vt))
     return (out, ll) if return_loglik else out
 
 

@@ -23,9 +23,11 @@ missing Jacobian falls back to :func:`numerical_jacobian` (central differences).
 
 from __future__ import annotations
 
+import math
 from typing import Callable
 
 import numpy as np
+from numba import njit
 
 from .._validate import as_float_array, check_matrix_stack, check_psd
 from .motion import _as_dt, _check_q
@@ -182,6 +184,47 @@ def _weighted_mean(z, w, angles):
     return out
 
 
+# ---------------------------------------------------------------- compiled one-state functions
+# ``f(x (n,), dt, t, params, out (n,))`` and ``h(x (n,), params, out (m,))`` for one state: the
+# particle filter's compiled path calls them per particle (models expose them as ``jit_f`` /
+# ``jit_h`` with ``jit_params``). User models may provide their own, defined at module level.
+@njit(cache=True, error_model="numpy", inline="always")
+def _ct_f(x, dt, t, params, out):
+    w = x[4]
+    a = w * dt
+    sa, ca = math.sin(a), math.cos(a)
+    if abs(a) < 1e-4:
+        s, c = dt * (1 - a * a / 6), dt * (a / 2 - a**3 / 24)
+    else:
+        s, c = sa / w, (1 - ca) / w
+    out[0] = x[0] + s * x[2] - c * x[3]
+    out[1] = x[1] + c * x[2] + s * x[3]
+    out[2] = ca * x[2] - sa * x[3]
+    out[3] = sa * x[2] + ca * x[3]
+    out[4] = w
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _range_bearing_h(x, params, out):
+    dx, dy = x[0] - params[0], x[1] - params[1]
+    out[0] = math.sqrt(dx * dx + dy * dy)
+    out[1] = math.atan2(dy, dx)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _growth_f(x, dt, t, params, out):
+    v = x[0]
+    out[0] = v / 2 + 25 * v / (1 + v * v) + params[0]  # params[0] = 8 cos(1.2 t), once a step
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _square_h(x, params, out):
+    out[0] = x[0] * x[0] / 20
+
+
+_NO_PARAMS = np.zeros(0)
+
+
 class CoordinatedTurn:
     r"""The coordinated-turn model in 2-D: constant speed, constant turn rate ``ω``.
 
@@ -208,6 +251,10 @@ class CoordinatedTurn:
     """
 
     ndim_state = 5
+    jit_f = staticmethod(_ct_f)
+
+    def jit_params(self, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
+        return _NO_PARAMS
 
     def __init__(self, q: float = 1.0, q_turn: float = 0.01):
         self.q = _check_q(q)
@@ -285,6 +332,10 @@ class RangeBearing:
 
     angles = (1,)
     ndim_meas = 2
+    jit_h = staticmethod(_range_bearing_h)
+
+    def jit_params(self) -> np.ndarray:
+        return self.sensor
 
     def __init__(self, r_range: float = 1.0, r_bearing: float = 1e-4, sensor=(0.0, 0.0),
                  ndim_state: int = 4):
@@ -339,6 +390,10 @@ class GrowthMotion:
     """
 
     ndim_state = 1
+    jit_f = staticmethod(_growth_f)
+
+    def jit_params(self, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
+        return np.array([8 * math.cos(1.2 * t)])
 
     def __init__(self, q: float = 10.0):
         self.q = _check_q(q)
@@ -363,6 +418,10 @@ class GrowthMeasurement:
     in the literature). Its sign ambiguity makes the posterior bimodal."""
 
     ndim_meas, ndim_state, angles = 1, 1, ()
+    jit_h = staticmethod(_square_h)
+
+    def jit_params(self) -> np.ndarray:
+        return _NO_PARAMS
 
     def __init__(self, r: float = 1.0):
         if not np.isfinite(r) or r <= 0:
