@@ -266,17 +266,11 @@ class SwitchingParticleFilter:
     def __init__(self, system: Any, n_particles: int = 500, *, resampling: str = "systematic",
                  ess_threshold: float = 0.5, rng: Any = None):
         from .._validate import as_rng
-        from .particle import RESAMPLERS
+        from .particle import RESAMPLERS, check_particle_options
 
-        if int(n_particles) != n_particles or n_particles < 1:
-            raise ValueError(f"n_particles must be an integer >= 1; got {n_particles}")
-        if resampling not in RESAMPLERS:
-            raise ValueError(f"resampling must be one of {sorted(RESAMPLERS)}; got {resampling!r}")
-        if not 0.0 <= ess_threshold <= 1.0:
-            raise ValueError(f"ess_threshold must be in [0, 1]; got {ess_threshold}")
-        self.system, self.n_particles = system, int(n_particles)
-        self.resample = RESAMPLERS[resampling]
-        self.ess_threshold, self.rng = float(ess_threshold), as_rng(rng)
+        self.n_particles, self.ess_threshold = check_particle_options(
+            n_particles, resampling, ess_threshold)
+        self.system, self.resample, self.rng = system, RESAMPLERS[resampling], as_rng(rng)
 
     def filter(self, ys: Any, *, x0: Any, P0: Any, dt: float = 1.0) -> SwitchingResult:
         """Filter ``ys (T, m)`` (NaN = missing); ``x0, P0``: the prior of the first step."""

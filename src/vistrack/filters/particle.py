@@ -363,6 +363,18 @@ class ParticleResult:
     weights: np.ndarray
 
 
+def check_particle_options(n_particles: Any, resampling: str,
+                           ess_threshold: Any) -> tuple[int, float]:
+    """Check a particle filter's size, resampling scheme and ESS threshold."""
+    if int(n_particles) != n_particles or n_particles < 1:
+        raise ValueError(f"n_particles must be an integer >= 1; got {n_particles}")
+    if resampling not in RESAMPLERS:
+        raise ValueError(f"resampling must be one of {sorted(RESAMPLERS)}; got {resampling!r}")
+    if not 0.0 <= ess_threshold <= 1.0:
+        raise ValueError(f"ess_threshold must be in [0, 1]; got {ess_threshold}")
+    return int(n_particles), float(ess_threshold)
+
+
 class ParticleFilter:
     r"""A bootstrap (SIR / CONDENSATION) particle filter.
 
@@ -405,14 +417,9 @@ class ParticleFilter:
                  resampling: str = "systematic", ess_threshold: float = 0.5,
                  rng: np.random.Generator | int | None = None, ndim_state: int | None = None,
                  compiled: bool = True):
-        if int(n_particles) != n_particles or n_particles < 1:
-            raise ValueError(f"n_particles must be an integer >= 1; got {n_particles}")
-        if resampling not in RESAMPLERS:
-            raise ValueError(f"resampling must be one of {sorted(RESAMPLERS)}; got {resampling!r}")
-        if not 0.0 <= ess_threshold <= 1.0:
-            raise ValueError(f"ess_threshold must be in [0, 1]; got {ess_threshold}")
-        self.n_particles, self.resampling = int(n_particles), resampling
-        self.ess_threshold, self.rng = float(ess_threshold), as_rng(rng)
+        self.n_particles, self.ess_threshold = check_particle_options(
+            n_particles, resampling, ess_threshold)
+        self.resampling, self.rng = resampling, as_rng(rng)
         if hasattr(motion, "Q"):
             mo = Motion(motion)
             self.ndim_state = mo.n

@@ -115,7 +115,24 @@ class NonlinearMotion:
         return np.asarray(self._Q(dt), dtype=float)
 
 
-class NonlinearMeasurement:
+class _Measurement:
+    """``R()``, ``residual(a, b)`` (angles wrap) and ``mean(z, w)`` (circular for angles) of a
+    measurement model with ``_R`` and ``angles``."""
+
+    _R: np.ndarray
+    angles: tuple = ()
+
+    def R(self) -> np.ndarray:
+        return self._R.copy()
+
+    def residual(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return _residual(a, b, self.angles)
+
+    def mean(self, z: np.ndarray, w: np.ndarray) -> np.ndarray:
+        return _weighted_mean(z, w, self.angles)
+
+
+class NonlinearMeasurement(_Measurement):
     r"""A user-given measurement model ``y = h(x) + N(0, R)``.
 
     Parameters
@@ -155,14 +172,6 @@ class NonlinearMeasurement:
             return self._jac(x)
         return numerical_jacobian(self._h, x)
 
-    def R(self) -> np.ndarray:
-        return self._R.copy()
-
-    def residual(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        return _residual(a, b, self.angles)
-
-    def mean(self, z: np.ndarray, w: np.ndarray) -> np.ndarray:
-        return _weighted_mean(z, w, self.angles)
 
 
 def _residual(a, b, angles):
@@ -307,7 +316,7 @@ class CoordinatedTurn:
         return Q
 
 
-class RangeBearing:
+class RangeBearing(_Measurement):
     r"""Range and bearing of a 2-D position from a sensor at ``sensor = (sx, sy)``.
 
     .. math:: h(x) = \left[\sqrt{(x - s_x)^2 + (y - s_y)^2},\;
@@ -368,14 +377,6 @@ class RangeBearing:
         J[..., 1, 0], J[..., 1, 1] = -dy / r2, dx / r2
         return J
 
-    def R(self) -> np.ndarray:
-        return self._R.copy()
-
-    def residual(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        return _residual(a, b, self.angles)
-
-    def mean(self, z: np.ndarray, w: np.ndarray) -> np.ndarray:
-        return _weighted_mean(z, w, self.angles)
 
 
 class GrowthMotion:
@@ -413,7 +414,7 @@ class GrowthMotion:
         return np.array([[self.q]])
 
 
-class GrowthMeasurement:
+class GrowthMeasurement(_Measurement):
     r"""The growth model's measurement ``y_t = x_t^2 / 20 + v_t``, ``v_t ~ N(0, r)`` (``r = 1``
     in the literature). Its sign ambiguity makes the posterior bimodal."""
 
@@ -437,14 +438,6 @@ class GrowthMeasurement:
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         return (np.asarray(x, dtype=float) / 10)[..., None]
 
-    def R(self) -> np.ndarray:
-        return self._R.copy()
-
-    def residual(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        return np.asarray(a, dtype=float) - b
-
-    def mean(self, z: np.ndarray, w: np.ndarray) -> np.ndarray:
-        return _weighted_mean(z, w, ())
 
 
 def growth_model(q: float = 10.0, r: float = 1.0) -> tuple[GrowthMotion, GrowthMeasurement]:
