@@ -33,6 +33,7 @@ class Motion:
             )
         if self.n < 1:
             raise TypeError(f"motion must have ndim_state >= 1; got {type(model).__name__}")
+        self._Q: dict = {}
 
     def f(self, x: np.ndarray, dt: float, t: float) -> np.ndarray:
         if self.linear:
@@ -45,7 +46,11 @@ class Motion:
         return self.model.jacobian(x, dt, t)
 
     def Q(self, dt: float) -> np.ndarray:
-        return self.model.Q(dt)
+        """``Q(dt)``, computed once per distinct ``dt`` (models are immutable)."""
+        Q = self._Q.get(dt)
+        if Q is None:
+            Q = self._Q[dt] = np.asarray(self.model.Q(dt), dtype=float)
+        return Q
 
 
 def _plain_residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -273,15 +273,17 @@ class CoordinatedTurn:
         return f"CoordinatedTurn(q={self.q}, q_turn={self.q_turn})"
 
     @staticmethod
-    def _coeffs(w, dt):
-        """``s = sin(wΔ)/w``, ``c = (1 - cos wΔ)/w`` and their derivatives in ``w``, with the
-        series near ``w = 0``."""
+    def _coeffs(w, dt, derivatives=True):
+        """``s = sin(wΔ)/w``, ``c = (1 - cos wΔ)/w`` and (if asked) their derivatives in
+        ``w``, with the series near ``w = 0``."""
         a = w * dt
         small = np.abs(a) < 1e-4
         safe = np.where(small, 1.0, w)
         sa, ca = np.sin(a), np.cos(a)
         s = np.where(small, dt * (1 - a * a / 6), sa / safe)
         c = np.where(small, dt * (a / 2 - a**3 / 24), (1 - ca) / safe)
+        if not derivatives:
+            return sa, ca, s, c, None, None
         ds = np.where(small, dt * dt * (-a / 3 + a**3 / 30), (dt * ca - sa / safe) / safe)
         dc = np.where(small, dt * dt * (0.5 - a * a / 8), (dt * sa - (1 - ca) / safe) / safe)
         return sa, ca, s, c, ds, dc
@@ -289,7 +291,7 @@ class CoordinatedTurn:
     def f(self, x: np.ndarray, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
         x = np.asarray(x, dtype=float)
         px, py, vx, vy, w = np.moveaxis(x, -1, 0)
-        sa, ca, s, c, _, _ = self._coeffs(w, dt)
+        sa, ca, s, c, _, _ = self._coeffs(w, dt, derivatives=False)
         return np.stack([px + s * vx - c * vy, py + c * vx + s * vy,
                          ca * vx - sa * vy, sa * vx + ca * vy, w], axis=-1)
 
