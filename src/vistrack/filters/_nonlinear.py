@@ -80,6 +80,17 @@ class Measurement:
         self.m = self.R.shape[-1]
         self.residual = residual or getattr(model, "residual", None) or _plain_residual
         self.mean = mean or getattr(model, "mean", None) or _plain_mean
+        # "standard": residuals are differences (angles wrapped) and means weighted sums
+        # (circular for angles), which the compiled one-Gaussian kernels reproduce
+        from ..models.nonlinear import _Measurement
+
+        own = type(model)
+        self.standard = residual is None and mean is None and (
+            self.linear or (getattr(own, "residual", None) is _Measurement.residual
+                            and getattr(own, "mean", None) is _Measurement.mean)
+            or not (hasattr(model, "residual") or hasattr(model, "mean")))
+        self.angle_mask = np.zeros(self.m, dtype=np.bool_)
+        self.angle_mask[list(getattr(model, "angles", ()))] = True
 
     def h(self, x: np.ndarray) -> np.ndarray:
         return x @ self.H.T if self.linear else self.model.h(x)
@@ -164,7 +175,13 @@ def run_sequence(ys: Any, x0: Any, P0: Any, n: int, m: int, dt: Any, times: Any,
         if x0.shape[-1] != n or P0.shape[-2:] != (n, n):
             raise ValueError(f"x0 and P0 must have shapes (…, {n}) and (…, {n}, {n}); "
                              f"got {x0.shape} and {P0.shape}")
-        state = Gaussian(np.broadcast_to(x0, (B, n)).copy(), np.broadcast_to(P0, (B, n, n)).copy())
+        if B == 1 and x0.ndim == 1 and P0.ndim == 2:
+            # one series: the state is one Gaussian, which runs the compiled one-Gaussian paths
+            state = Gaussian(x0.copy(), P0.copy())
+            ys = ys[0]
+        else:
+            state = Gaussian(np.broadcast_to(x0, (B, n)).copy(),
+                             np.broadcast_to(P0, (B, n, n)).copy())
     means = np.empty((B, T, n))
     covs = np.empty((B, T, n, n))
     pmeans = np.empty((B, T, n))
@@ -175,7 +192,7 @@ def run_sequence(ys: Any, x0: Any, P0: Any, n: int, m: int, dt: Any, times: Any,
             state = predict(state, float(dts[t]), float(times[t]))
         pm, pc = _moments(state)
         pmeans[:, t], pcovs[:, t] = pm, pc
-        y = ys[:, t]
+        y = ys[..., t, :]
         if np.isnan(y).all():
             mean, cov = pm, pc
         else:

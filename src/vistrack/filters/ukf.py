@@ -27,9 +27,11 @@ systems"; Wan and van der Merwe (2000), "The unscented Kalman filter for nonline
 
 from __future__ import annotations
 
+import math
 from typing import Any, Callable
 
 import numpy as np
+from numba import njit
 
 from ..types import Gaussian
 from ._nonlinear import (
@@ -59,11 +61,170 @@ def _sqrt(P: np.ndarray, scale: float) -> np.ndarray:
         raise ValueError("g.cov must be positive definite to draw sigma points") from None
 
 
+# ---------------------------------------------------------------- compiled, one Gaussian
+# For one Gaussian (the common case of a track) the sigma-point algebra is a few dozen numpy
+# calls on 5x5 matrices, whose overhead is most of the time; these kernels do it in three
+# compiled calls a step. The model's f and h still run as numpy on all points at once.
+@njit(cache=True, error_model="numpy")
+def _chol(A, L):
+    """Lower Cholesky factor of ``A`` into ``L``; False if ``A`` is not positive definite."""
+    n = A.shape[0]
+    for j in range(n):
+        d = A[j, j]
+        for k in range(j):
+            d -= L[j, k] * L[j, k]
+        if not d > 0.0:
+            return False
+        L[j, j] = math.sqrt(d)
+        for i in range(j + 1, n):
+            v = A[i, j]
+            for k in range(j):
+                v -= L[i, k] * L[j, k]
+            L[i, j] = v / L[j, j]
+        for i in range(j):
+            L[i, j] = 0.0
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _points_one(x, P, scale, out):
+    n = x.shape[0]
+    L = np.empty((n, n))
+    if not _chol(scale * P, L):
+        return False
+    for k in range(n):
+        out[0, k] = x[k]
+    for i in range(n):
+        for k in range(n):
+            out[1 + i, k] = x[k] + L[k, i]
+            out[1 + n + i, k] = x[k] - L[k, i]
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _state_moments_one(Y, Wm, Wc, Q, mean, cov):
+    K, n = Y.shape
+    for k in range(n):
+        v = 0.0
+        for i in range(K):
+            v += Wm[i] * Y[i, k]
+        mean[k] = v
+    for a in range(n):
+        for b in range(a + 1):
+            v = Q[a, b]
+            for i in range(K):
+                v += Wc[i] * (Y[i, a] - mean[a]) * (Y[i, b] - mean[b])
+            cov[a, b] = v
+            cov[b, a] = v
+
+
+@njit(cache=True, error_model="numpy")
+def _wrap(d):
+    return math.pi - ((math.pi - d) % (2.0 * math.pi))
+
+
+@njit(cache=True, error_model="numpy")
+def _update_one(G, Z, Wm, Wc, R, y, angles, x, P, xo, Po):
+    """Unscented correction of one Gaussian from its sigma points ``G`` and their
+    measurements ``Z`` (the equations of :func:`ukf_update`, angles wrapped and averaged on the
+    circle, NaN components of ``y`` missing). Returns ``(ok, loglik)``."""
+    K, n = G.shape
+    m = Z.shape[1]
+    zhat = np.empty(m)
+    for k in range(m):
+        if angles[k]:
+            s, c = 0.0, 0.0
+            for i in range(K):
+                s += Wm[i] * math.sin(Z[i, k])
+                c += Wm[i] * math.cos(Z[i, k])
+            zhat[k] = math.atan2(s, c)
+        else:
+            v = 0.0
+            for i in range(K):
+                v += Wm[i] * Z[i, k]
+            zhat[k] = v
+    rz = np.empty((K, m))
+    e = np.empty(m)
+    nobs = 0
+    for k in range(m):
+        obs = not math.isnan(y[k])
+        nobs += obs
+        d = y[k] - zhat[k] if obs else 0.0
+        e[k] = _wrap(d) if angles[k] else d
+        for i in range(K):
+            d = Z[i, k] - zhat[k]
+            rz[i, k] = (_wrap(d) if angles[k] else d) if obs else 0.0
+    S = np.empty((m, m))
+    for a in range(m):
+        for b in range(a + 1):
+            if math.isnan(y[a]) or math.isnan(y[b]):
+                v = 1.0 if a == b else 0.0
+            else:
+                v = R[a, b]
+                for i in range(K):
+                    v += Wc[i] * rz[i, a] * rz[i, b]
+            S[a, b] = v
+            S[b, a] = v
+    C = np.zeros((n, m))
+    for i in range(K):
+        for a in range(n):
+            dx = Wc[i] * (G[i, a] - x[a])
+            for b in range(m):
+                C[a, b] += dx * rz[i, b]
+    L = np.empty((m, m))
+    if not _chol(S, L):
+        return False, 0.0
+    # Vt = L^-1 C' (m x n); K' = L'^-1 Vt; whitened innovation w = L^-1 e
+    Vt = np.empty((m, n))
+    for a in range(n):
+        for b in range(m):
+            v = C[a, b]
+            for k in range(b):
+                v -= L[b, k] * Vt[k, a]
+            Vt[b, a] = v / L[b, b]
+    Kt = np.empty((m, n))
+    for a in range(n):
+        for b in range(m - 1, -1, -1):
+            v = Vt[b, a]
+            for k in range(b + 1, m):
+                v -= L[k, b] * Kt[k, a]
+            Kt[b, a] = v / L[b, b]
+    ll = -0.5 * nobs * math.log(2.0 * math.pi)
+    w = np.empty(m)
+    for b in range(m):
+        v = e[b]
+        for k in range(b):
+            v -= L[b, k] * w[k]
+        w[b] = v / L[b, b]
+        ll -= 0.5 * w[b] * w[b] + math.log(L[b, b])
+    for a in range(n):
+        v = x[a]
+        for b in range(m):
+            v += Kt[b, a] * e[b]
+        xo[a] = v
+    for a in range(n):
+        for c in range(a + 1):
+            v = P[a, c]
+            for b in range(m):
+                v -= Vt[b, a] * Vt[b, c]
+            Po[a, c] = v
+            Po[c, a] = v
+    return True, ll
+
+
 class _SigmaPoints:
     lam: float
 
     def weights(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         raise NotImplementedError
+
+    def points_one(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
+        """Sigma points of one Gaussian, compiled: ``(2n + 1, n)``."""
+        n = x.shape[0]
+        out = np.empty((2 * n + 1, n))
+        if not _points_one(x, P, float(n + self._lam(n)), out):
+            raise ValueError("g.cov must be positive definite to draw sigma points")
+        return out
 
     def points(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
         """Sigma points of a batch ``x (..., n)``, ``P (..., n, n)``: ``(..., 2n + 1, n)``."""
@@ -150,6 +311,11 @@ def ukf_predict(g: Gaussian, motion: Any, dt: float = 1.0, t: float = 0.0, *,
     points = points or MerweScaledSigmaPoints()
     n = g.mean.shape[-1]
     Wm, Wc = points.weights(n)
+    if g.mean.ndim == 1 and state_mean is None and state_residual is None:
+        gamma = np.asarray(mo.f(points.points_one(g.mean, g.cov), dt, t), dtype=float)
+        mean, cov = np.empty(n), np.empty((n, n))
+        _state_moments_one(gamma, Wm, Wc, np.asarray(mo.Q(dt), dtype=float), mean, cov)
+        return Gaussian(mean, cov)
     chi = points.points(g.mean, g.cov)
     gamma = np.asarray(mo.f(chi, dt, t), dtype=float)
     mean, cov, _ = _transform(gamma, Wm, Wc, state_mean or _wmean, state_residual or _sub)
@@ -180,6 +346,16 @@ def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | 
     y = check_y(y, g.mean.shape[:-1], me.m)
     points = points or MerweScaledSigmaPoints()
     Wm, Wc = points.weights(n)
+    if g.mean.ndim == 1 and me.standard and state_residual is None:
+        gamma = points.points_one(g.mean, g.cov)
+        xo, Po = np.empty(n), np.empty((n, n))
+        ok, ll1 = _update_one(gamma, np.asarray(me.h(gamma), dtype=float), Wm, Wc, me.R, y,
+                              me.angle_mask, g.mean, g.cov, xo, Po)
+        if not ok:
+            raise ValueError("the innovation covariance is not positive definite; R must be "
+                             "positive definite on the observed components")
+        out = Gaussian(xo, Po)
+        return (out, np.asarray(ll1)) if return_loglik else out
     gamma = points.points(g.mean, g.cov)
     obs = ~np.isnan(y)
     zs = np.asarray(me.h(gamma), dtype=float)
