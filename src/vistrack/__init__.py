@@ -3,17 +3,23 @@
 The public API is re-exported here; submodules hold the details:
 
 - :mod:`vistrack.models` — motion and measurement models (the physics);
-- :mod:`vistrack.filters` — Kalman filter and smoothers (the inference);
+- :mod:`vistrack.filters` — Kalman filter and smoothers, EKF, UKF, ensemble KF, particle
+  filters and multiple models (the inference);
 - :mod:`vistrack.simulate` — sample states and measurements from a model;
 - :mod:`vistrack.evaluation` — RMSE, NEES, NIS;
 - :mod:`vistrack.viz` — the seeds' figures.
 """
 
 from .filters import (
+    EnsembleKalmanFilter,
+    ExtendedKalmanFilter,
     FilterResult,
+    IMMFilter,
     KalmanFilter,
     OnlineFilter,
+    ParticleFilter,
     SmoothResult,
+    UnscentedKalmanFilter,
     kalman_filter,
     kalman_filter_1d,
     kf_predict,
@@ -41,10 +47,15 @@ __all__ = [
     "ConstantAcceleration",
     "ConstantPosition",
     "ConstantVelocity",
+    "EnsembleKalmanFilter",
+    "ExtendedKalmanFilter",
     "FilterResult",
     "Gaussian",
+    "IMMFilter",
     "KalmanFilter",
     "OnlineFilter",
+    "ParticleFilter",
+    "UnscentedKalmanFilter",
     "LinearGaussian",
     "LinearMeasurement",
     "LinearMotion",

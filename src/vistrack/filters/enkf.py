@@ -46,7 +46,10 @@ class Ensemble:
         """``n_members`` draws from ``N(mean, cov)`` (a batch: ``mean (..., n)``)."""
         rng = as_rng(rng)
         mean = np.asarray(mean, dtype=float)
-        L = np.linalg.cholesky(np.asarray(cov, dtype=float))
+        try:
+            L = np.linalg.cholesky(np.asarray(cov, dtype=float))
+        except np.linalg.LinAlgError:
+            raise ValueError("cov must be positive definite to sample an ensemble") from None
         z = rng.standard_normal(mean.shape[:-1] + (int(n_members), mean.shape[-1]))
         return cls(mean[..., None, :] + z @ np.swapaxes(L, -1, -2))
 
