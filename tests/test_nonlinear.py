@@ -238,6 +238,10 @@ def test_nonlinear_filter_errors_name_the_argument(rng):
         flt.filter(np.zeros((3, 3)), x0=np.ones(5), P0=np.eye(5))
     with pytest.raises(ValueError, match="x0 and P0 must have shapes"):
         flt.filter(np.ones((3, 2)), x0=np.ones(4), P0=np.eye(5))
+    with pytest.raises(ValueError, match=r"dt must be a scalar or have shape \(3,\); got \(2,\)"):
+        flt.filter(np.ones((3, 2)), x0=np.ones(5), P0=np.eye(5), dt=[1.0, 2.0])
+    with pytest.raises(ValueError, match=r"times must have shape \(3,\)"):
+        flt.filter(np.ones((3, 2)), x0=np.ones(5), P0=np.eye(5), times=[0.0, 1.0])
     with pytest.raises(ValueError, match=r"y must have shape \(2,\)"):
         ekf_update(vt.Gaussian(np.ones(5), np.eye(5)), np.ones(3), meas)
     with pytest.raises(ValueError, match="g.cov must be positive definite"):

@@ -148,6 +148,21 @@ def check_gaussian(g: Any) -> Gaussian:
     return g
 
 
+def step_times(dt: Any, times: Any, T: int) -> tuple[np.ndarray, np.ndarray]:
+    """``dt`` (a scalar or ``(T,)``, ``dt[t]`` the step from ``t-1`` to ``t``) as ``(T,)``, and
+    the time of each step: ``times``, by default the cumulative ``dt`` from 0."""
+    d = as_float_array(dt, "dt", ndim=(0, 1))
+    if d.ndim == 1 and d.shape != (T,):
+        raise ValueError(f"dt must be a scalar or have shape ({T},); got {d.shape}")
+    dts = np.broadcast_to(d, (T,))
+    if times is None:
+        return dts, np.concatenate([[0.0], np.cumsum(dts[1:])])
+    times = as_float_array(times, "times", ndim=(1,))
+    if times.shape != (T,):
+        raise ValueError(f"times must have shape ({T},); got {times.shape}")
+    return dts, times
+
+
 def run_sequence(ys: Any, x0: Any, P0: Any, n: int, m: int, dt: Any, times: Any,
                  predict: Callable, update: Callable, state: Any = None) -> FilterResult:
     """Filter ``ys (T, m)`` or ``(B, T, m)`` with ``predict(state, dt, t)`` and
@@ -163,12 +178,7 @@ def run_sequence(ys: Any, x0: Any, P0: Any, n: int, m: int, dt: Any, times: Any,
     B, T, mm = ys.shape
     if mm != m:
         raise ValueError(f"ys must have {m} measurement components (last axis); got {mm}")
-    dts = np.broadcast_to(as_float_array(dt, "dt", ndim=(0, 1)), (T,))
-    if times is None:
-        times = np.concatenate([[0.0], np.cumsum(dts[1:])])
-    times = as_float_array(times, "times", ndim=(1,))
-    if times.shape != (T,):
-        raise ValueError(f"times must have shape ({T},); got {times.shape}")
+    dts, times = step_times(dt, times, T)
     if state is None:
         x0 = as_float_array(x0, "x0", ndim=(1, 2))
         P0 = as_float_array(P0, "P0", ndim=(2, 3))

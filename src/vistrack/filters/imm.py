@@ -38,6 +38,7 @@ import numpy as np
 
 from .._validate import as_float_array
 from ..types import Gaussian
+from ._nonlinear import step_times
 from .kalman import _readonly
 
 __all__ = ["IMMFilter", "IMMResult", "SwitchingParticleFilter", "SwitchingResult"]
@@ -169,9 +170,7 @@ class IMMFilter:
         x0 = np.broadcast_to(x0, (B, n))
         P0 = np.broadcast_to(P0, (B, n, n))
         gs = [Gaussian(x0[:, :k].copy(), P0[:, :k, :k].copy()) for k in self.sizes]
-        dts = np.broadcast_to(as_float_array(dt, "dt", ndim=(0, 1)), (T,))
-        if times is None:
-            times = np.concatenate([[0.0], np.cumsum(dts[1:])])
+        dts, times = step_times(dt, times, T)
         M = len(self.filters)
         log_mu = np.broadcast_to(self.log_mu0, (B, M)).copy()
         means, covs = np.empty((B, T, n)), np.empty((B, T, n, n))

@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from .._validate import as_float_array, as_rng
-from ._nonlinear import Measurement, Motion
+from ._nonlinear import Measurement, Motion, step_times
 
 __all__ = [
     "RESAMPLERS",
@@ -46,6 +46,11 @@ __all__ = [
 class ParticleDegeneracyError(RuntimeError):
     """Every particle has zero likelihood: the cloud has lost the target. Raised rather than
     silently resetting the weights, which would hide the failure."""
+
+
+def _degenerate(t: int, y: np.ndarray) -> ParticleDegeneracyError:
+    return ParticleDegeneracyError(f"every particle has zero likelihood at step {t} (measurement "
+                                   f"{y.tolist()}); the filter has lost the target")
 
 
 # ---------------------------------------------------------------- resampling
@@ -493,9 +498,7 @@ class ParticleFilter:
             x = self._initial(particles, x0, P0)
             return self._filter_fused(ys, x, dt, times)
         x = self._initial(particles, x0, P0)
-        dts = np.broadcast_to(as_float_array(dt, "dt", ndim=(0, 1)), (T,))
-        if times is None:
-            times = np.concatenate([[0.0], np.cumsum(dts[1:])])
+        dts, times = step_times(dt, times, T)
         logw = np.full(N, -math.log(N))
         means, covs = np.empty((T, n)), np.empty((T, n, n))
         mode_arr = np.empty((T, n)) if modes else None
@@ -508,10 +511,7 @@ class ParticleFilter:
                 a = logw + np.asarray(self._loglik(ys[t], x), dtype=float)
                 top = np.max(a)
                 if not np.isfinite(top):
-                    raise ParticleDegeneracyError(
-                        f"every particle has zero likelihood at step {t} (measurement "
-                        f"{ys[t].tolist()}); the filter has lost the target"
-                    )
+                    raise _degenerate(t, ys[t])
                 w = np.exp(a - top)  # log-sum-exp: the largest weight is exp(0)
                 s = w.sum()
                 total += top + math.log(s)
@@ -559,9 +559,7 @@ class ParticleFilter:
         angles = np.zeros(m, dtype=np.bool_)
         angles[list(getattr(meas, "angles", ()))] = True
         hp = np.asarray(meas.jit_params(), dtype=float)
-        dts = np.broadcast_to(as_float_array(dt, "dt", ndim=(0, 1)), (T,))
-        if times is None:
-            times = np.concatenate([[0.0], np.cumsum(dts[1:])])
+        dts, times = step_times(dt, times, T)
         whiten: dict = {}
         noise: dict = {}
         logw = np.full(N, -math.log(N))
@@ -590,10 +588,7 @@ class ParticleFilter:
                                      np.asarray(motion.jit_params(d, tt), dtype=float), hp,
                                      noise[d], eps, t > 0, mean, cov)
             if not np.isfinite(norm):
-                raise ParticleDegeneracyError(
-                    f"every particle has zero likelihood at step {t} (measurement "
-                    f"{y.tolist()}); the filter has lost the target"
-                )
+                raise _degenerate(t, y)
             total += norm
             means[t], covs[t] = mean, cov
             if ess[t] < self.ess_threshold * N or self.ess_threshold == 1.0:
