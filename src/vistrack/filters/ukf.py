@@ -34,6 +34,7 @@ import numpy as np
 from numba import njit
 
 from ..types import Gaussian
+from ._kernels import chol_solve
 from ._nonlinear import (
     Measurement,
     Motion,
@@ -67,29 +68,15 @@ def _sqrt(P: np.ndarray, scale: float) -> np.ndarray:
 # compiled calls a step. The model's f and h still run as numpy on all points at once.
 @njit(cache=True, error_model="numpy")
 def _chol(A, L):
-    """Lower Cholesky factor of ``A`` into ``L``; False if ``A`` is not positive definite."""
-    n = A.shape[0]
-    for j in range(n):
-        d = A[j, j]
-        for k in range(j):
-            d -= L[j, k] * L[j, k]
-        if not d > 0.0:
-            return False
-        L[j, j] = math.sqrt(d)
-        for i in range(j + 1, n):
-            v = A[i, j]
-            for k in range(j):
-                v -= L[i, k] * L[j, k]
-            L[i, j] = v / L[j, j]
-        for i in range(j):
-            L[i, j] = 0.0
-    return True
+    """Lower Cholesky factor of ``A`` into the lower triangle of ``L``; False if ``A`` is not
+    positive definite."""
+    return chol_solve(L, A, np.empty((A.shape[0], 0)), A.shape[0], 0)
 
 
 @njit(cache=True, error_model="numpy")
 def _points_one(x, P, scale, out):
     n = x.shape[0]
-    L = np.empty((n, n))
+    L = np.zeros((n, n))  # (the upper triangle stays zero)
     if not _chol(scale * P, L):
         return False
     for k in range(n):
