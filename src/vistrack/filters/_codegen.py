@@ -84,14 +84,17 @@ def _tri(n: int):
     return [(i, k) for i in range(n) for k in range(i, n)]
 
 
+def _load(n: int, x: str, p: str, X: str, P: str) -> list[str]:
+    """Read a mean from rows ``X`` into scalars ``x0..`` and an upper triangle from rows ``P``
+    into ``p0_0..``."""
+    return ([f"{x}{i} = {X}[{i}, j]" for i in range(n)]
+            + [f"{p}{i}_{k} = {P}[{a}, j]" for a, (i, k) in enumerate(_tri(n))])
+
+
 def _predict(n, cf, cq) -> list[str]:
     """Straight-line prediction of one series: reads ``X, PP``, writes ``XP, PPP`` at ``j``."""
-    L = []
     tri = _tri(n)
-    for i in range(n):
-        L.append(f"x{i} = X[{i}, j]")
-    for a, (i, k) in enumerate(tri):
-        L.append(f"p{i}_{k} = PP[{a}, j]")
+    L = _load(n, "x", "p", "X", "PP")
     for i in range(n):
         L.append(f"XP[{i}, j] = " + _sum(_term(cf[i][l], f"f{i}_{l}", f"x{l}") for l in range(n)))
     for i in range(n):
@@ -110,12 +113,8 @@ def _update(n, m, ch, cr) -> list[str]:
     """Straight-line update of one series: reads ``XP, PPP, Y`` (NaN = missing), writes
     ``X, PP``, the innovation log-density without its log-determinant to ``LL`` and the
     determinant of the Cholesky factor of ``S`` to ``DS``, at ``j``."""
-    L = []
     tri = _tri(n)
-    for i in range(n):
-        L.append(f"xp{i} = XP[{i}, j]")
-    for a, (i, k) in enumerate(tri):
-        L.append(f"pp{i}_{k} = PPP[{a}, j]")
+    L = _load(n, "xp", "pp", "XP", "PPP")
     # innovation e = y - H xp, U = Pp H', S = H U + R
     for k in range(m):
         L.append(f"y{k} = Y[{k}, j]")
