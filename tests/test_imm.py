@@ -156,3 +156,17 @@ def test_zero_likelihood_everywhere_is_reported():
     bad = Never(vt.ConstantVelocity(dim=1), vt.Position(dim=1))
     with pytest.raises(ValueError, match="zero likelihood to the measurement of series 0 at step 0"):
         IMMFilter([bad, bad], np.eye(2)).filter(np.ones((3, 1)), x0=[0.0, 0.0], P0=np.eye(2))
+
+
+def test_a_batch_of_series_equals_each_series_alone(rng):
+    members = [cv(1e-3), cv(3.0)]
+    Pi = [[0.97, 0.03], [0.03, 0.97]]
+    ys = np.stack([manoeuvre(np.random.default_rng(s), T=30, switch=15)[1] for s in range(3)])
+    ys[1, 4] = np.nan
+    x0 = rng.normal(size=(3, 2))
+    batch = IMMFilter(members, Pi).filter(ys, x0=x0, P0=np.eye(2))
+    for b in range(3):
+        one = IMMFilter(members, Pi).filter(ys[b], x0=x0[b], P0=np.eye(2))
+        np.testing.assert_allclose(batch.means[b], one.means, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(batch.mode_probs[b], one.mode_probs, rtol=1e-10, atol=1e-14)
+        assert batch.loglik[b] == pytest.approx(float(one.loglik), rel=1e-12)
