@@ -25,6 +25,7 @@ os.environ.setdefault("MKL_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 import vistrack as vt  # noqa: E402
+from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 
 F = vt.ConstantVelocity(dim=2).F(1.0)
 Q = 0.1 * np.eye(4)
@@ -290,16 +291,7 @@ def main() -> None:
                f"{table}\n")
     print(section)
     if args.write:
-        path = args.write
-        text = open(path).read() if os.path.exists(path) else "# Benchmarks\n\n"
-        start = text.find("## Kalman filter and smoother")
-        if start >= 0:
-            end = text.find("\n## ", start + 5)
-            text = text[:start] + section + ("\n" + text[end + 1:] if end >= 0 else "")
-        else:
-            text = text.rstrip() + "\n\n" + section
-        with open(path, "w") as fh:
-            fh.write(text)
+        replace_section(args.write, section)
 
 
 if __name__ == "__main__":

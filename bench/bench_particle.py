@@ -25,6 +25,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 import vistrack as vt  # noqa: E402
+from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 from vistrack.filters import ParticleFilter, UnscentedKalmanFilter, ukf_predict, ukf_update  # noqa: E402
 
 T = 100
@@ -208,15 +209,7 @@ def main():
                f"filtered mean against the simulated states.\n{to_markdown(rows)}\n")
     print(section)
     if args.write:
-        text = open(args.write).read()
-        start = text.find("## Particle filter and UKF")
-        if start >= 0:
-            end = text.find("\n## ", start + 5)
-            text = text[:start] + section + ("\n" + text[end + 1:] if end >= 0 else "")
-        else:
-            text = text.rstrip() + "\n\n" + section
-        with open(args.write, "w") as fh:
-            fh.write(text)
+        replace_section(args.write, section)
 
 
 if __name__ == "__main__":
