@@ -8,15 +8,10 @@ from typing import Any
 import numpy as np
 
 from ._validate import as_float_array, as_rng, check_finite, check_psd
+from .filters._nonlinear import psd_sqrt
 from .filters.kalman import KalmanFilter, _model
 
 __all__ = ["simulate_lgssm", "simulate"]
-
-
-def _psd_sqrt(S: np.ndarray) -> np.ndarray:
-    """A square root ``A`` with ``A A' = S`` for a stack of PSD matrices (singular allowed)."""
-    w, V = np.linalg.eigh(S)
-    return V * np.sqrt(np.clip(w, 0.0, None))[..., None, :]
 
 
 def simulate_lgssm(
@@ -77,8 +72,8 @@ def simulate_lgssm(
         if P0_.shape != (n, n):
             raise ValueError(f"P0 must have shape ({n}, {n}); got {P0_.shape}")
         check_psd(P0_, "P0")
-        x += gen.standard_normal((B, n)) @ _psd_sqrt(P0_).T
-    sq, sr = _psd_sqrt(Q_), _psd_sqrt(R_)
+        x += gen.standard_normal((B, n)) @ psd_sqrt(P0_).T
+    sq, sr = psd_sqrt(Q_), psd_sqrt(R_)
     xs = np.empty((B, T, n))
     ys = np.empty((B, T, m))
     for t in range(T):
@@ -137,16 +132,16 @@ def _simulate_nonlinear(motion, measurement, T, x0, P0, dt, n_series, gen):
         raise ValueError(f"x0 must have shape ({n},); got {x0_.shape}")
     x = np.broadcast_to(x0_, (B, n)).copy()
     if P0 is not None:
-        x += gen.standard_normal((B, n)) @ _psd_sqrt(as_float_array(P0, "P0", ndim=(2,))).T
+        x += gen.standard_normal((B, n)) @ psd_sqrt(as_float_array(P0, "P0", ndim=(2,))).T
     d = np.asarray(dt, dtype=float)
     dts = np.broadcast_to(d, (T,)) if d.ndim == 0 or d.shape == (T,) else np.concatenate(
         [[0.0], d])
     times = np.concatenate([[0.0], np.cumsum(dts[1:])])
-    Rs = _psd_sqrt(me.R)
+    Rs = psd_sqrt(me.R)
     xs, ys = np.empty((B, T, n)), np.empty((B, T, me.m))
     for t in range(T):
         if t > 0:
-            Qs = _psd_sqrt(np.asarray(mo.Q(float(dts[t])), dtype=float))
+            Qs = mo.Q_sqrt(float(dts[t]))
             x = mo.f(x, float(dts[t]), float(times[t])) + gen.standard_normal((B, n)) @ Qs.T
         xs[:, t] = x
         ys[:, t] = me.h(x) + gen.standard_normal((B, me.m)) @ Rs.T

@@ -15,6 +15,13 @@ from .kalman import FilterResult, _readonly
 _LOG2PI = math.log(2.0 * math.pi)
 
 
+def psd_sqrt(S: np.ndarray) -> np.ndarray:
+    """A square root ``A`` with ``A A' = S`` for a stack of PSD matrices (singular allowed:
+    process noise often acts on some states only), from the eigendecomposition."""
+    w, V = np.linalg.eigh(S)
+    return V * np.sqrt(np.clip(w, 0.0, None))[..., None, :]
+
+
 class Motion:
     """A motion model seen through ``f(x, dt, t)``, ``jacobian(x, dt, t)`` and ``Q(dt)``.
 
@@ -34,6 +41,7 @@ class Motion:
         if self.n < 1:
             raise TypeError(f"motion must have ndim_state >= 1; got {type(model).__name__}")
         self._Q: dict = {}
+        self._Q_sqrt: dict = {}
 
     def f(self, x: np.ndarray, dt: float, t: float) -> np.ndarray:
         if self.linear:
@@ -51,6 +59,13 @@ class Motion:
         if Q is None:
             Q = self._Q[dt] = np.asarray(self.model.Q(dt), dtype=float)
         return Q
+
+    def Q_sqrt(self, dt: float) -> np.ndarray:
+        """:func:`psd_sqrt` of ``Q(dt)``, once per distinct ``dt``: noise = eps @ Q_sqrt.T."""
+        A = self._Q_sqrt.get(dt)
+        if A is None:
+            A = self._Q_sqrt[dt] = np.ascontiguousarray(psd_sqrt(self.Q(dt)))
+        return A
 
 
 def _plain_residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:

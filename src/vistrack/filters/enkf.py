@@ -22,7 +22,15 @@ from typing import Any, Callable
 import numpy as np
 
 from .._validate import as_rng
-from ._nonlinear import Measurement, Motion, check_y, gain, masked_innovation, run_sequence
+from ._nonlinear import (
+    Measurement,
+    Motion,
+    check_y,
+    gain,
+    masked_innovation,
+    psd_sqrt,
+    run_sequence,
+)
 from .kalman import FilterResult
 
 __all__ = ["Ensemble", "enkf_predict", "enkf_update", "EnsembleKalmanFilter"]
@@ -60,12 +68,11 @@ class Ensemble:
         return mean, np.swapaxes(d, -1, -2) @ d / (self.members.shape[-2] - 1)
 
 
-def _noise(rng, shape, C):
-    if not np.any(C):
+def _noise(rng, shape, A):
+    """Draws of ``N(0, A A')``; none when ``A`` is zero (no noise)."""
+    if not np.any(A):
         return np.zeros(shape)
-    # eigh, not cholesky: process noise may be singular (e.g. noise on velocities only)
-    w, V = np.linalg.eigh(C)
-    return (rng.standard_normal(shape) * np.sqrt(np.clip(w, 0.0, None))) @ V.T
+    return rng.standard_normal(shape) @ A.T
 
 
 def enkf_predict(ens: Ensemble, motion: Any, dt: float = 1.0, t: float = 0.0, *,
@@ -73,7 +80,7 @@ def enkf_predict(ens: Ensemble, motion: Any, dt: float = 1.0, t: float = 0.0, *,
     """Move every member through ``motion`` by ``dt`` and add sampled process noise."""
     mo = motion if isinstance(motion, Motion) else Motion(motion)
     x = np.asarray(mo.f(ens.members, dt, t), dtype=float)
-    return Ensemble(x + _noise(as_rng(rng), x.shape, mo.Q(dt)))
+    return Ensemble(x + _noise(as_rng(rng), x.shape, mo.Q_sqrt(dt)))
 
 
 def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
@@ -98,7 +105,7 @@ def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
     e, S, L, ll = masked_innovation(me.residual(np.where(obs, y, 0.0), zbar),
                                     np.swapaxes(dZ, -1, -2) @ dZ / (N - 1) + me.R, obs)
     K = gain(C, L)
-    v = _noise(as_rng(rng), Z.shape, me.R)
+    v = _noise(as_rng(rng), Z.shape, psd_sqrt(me.R))
     innov = me.residual(np.where(obs, y, 0.0)[..., None, :] + v, Z) * obs[..., None, :]
     out = Ensemble(X + innov @ np.swapaxes(K, -1, -2))
     return (out, ll) if return_loglik else out

@@ -442,7 +442,7 @@ class ParticleFilter:
             fref = _jit_ref(getattr(motion, "jit_f", None))
             href = _jit_ref(getattr(likelihood, "jit_h", None))
             if compiled and fref and href and hasattr(motion, "jit_params"):
-                self._fused = (fref, href, motion, likelihood)
+                self._fused = (fref, href, mo, likelihood)
         elif callable(likelihood):
             self._loglik = likelihood
         else:
@@ -451,16 +451,9 @@ class ParticleFilter:
 
     @staticmethod
     def _model_propagate(mo: Motion):
-        cache: dict = {}
-
         def propagate(x, dt, t, rng):
-            if dt not in cache:
-                w, V = np.linalg.eigh(mo.Q(dt))
-                cache[dt] = (np.sqrt(np.clip(w, 0.0, None)), V)
-            s, V = cache[dt]
             out = np.asarray(mo.f(x, dt, t), dtype=float)
-            noise = rng.standard_normal(out.shape)
-            return out + (noise * s) @ V.T if out.shape[-1] > 1 else out + noise * s[0]
+            return out + rng.standard_normal(out.shape) @ mo.Q_sqrt(dt).T
 
         return propagate
 
@@ -546,7 +539,8 @@ class ParticleFilter:
         return self.rng.multivariate_normal(m0, C0, size=N, method="eigh")
 
     def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: Any, times: Any) -> ParticleResult:
-        fref, href, motion, meas = self._fused
+        fref, href, mo, meas = self._fused
+        motion = mo.model
         T, m = ys.shape
         kern = _fused(fref, href, self.ndim_state, m)
         n, N, rng = self.ndim_state, self.n_particles, self.rng
@@ -561,7 +555,6 @@ class ParticleFilter:
         hp = np.asarray(meas.jit_params(), dtype=float)
         dts, times = step_times(dt, times, T)
         whiten: dict = {}
-        noise: dict = {}
         logw = np.full(N, -math.log(N))
         means, covs = np.empty((T, n)), np.empty((T, n, n))
         ess, resampled, total = np.empty(T), np.zeros(T, bool), 0.0
@@ -579,14 +572,11 @@ class ParticleFilter:
                     whiten[key] = (np.zeros((0, 0)), 0.0)
             Linv, c = whiten[key]
             d, tt = float(dts[t]), float(times[t])
-            if d not in noise:
-                w_, V = np.linalg.eigh(np.asarray(motion.Q(d), dtype=float))
-                noise[d] = np.ascontiguousarray(V * np.sqrt(np.clip(w_, 0.0, None)))
             eps = rng.standard_normal((N, n)) if t > 0 else no_noise
             norm, ess[t] = kern.step(x, logw, w, np.where(np.isnan(y), 0.0, y), obs, angles,
                                      Linv, c, d, tt,
                                      np.asarray(motion.jit_params(d, tt), dtype=float), hp,
-                                     noise[d], eps, t > 0, mean, cov)
+                                     mo.Q_sqrt(d), eps, t > 0, mean, cov)
             if not np.isfinite(norm):
                 raise _degenerate(t, y)
             total += norm
