@@ -9,6 +9,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .._validate import as_float_array
+from ..models.nonlinear import _Measurement
 from ..types import Gaussian
 from .kalman import FilterResult, _readonly
 
@@ -97,8 +98,6 @@ class Measurement:
         self.mean = mean or getattr(model, "mean", None) or _plain_mean
         # "standard": residuals are differences (angles wrapped) and means weighted sums
         # (circular for angles), which the compiled one-Gaussian kernels reproduce
-        from ..models.nonlinear import _Measurement
-
         own = type(model)
         self.standard = residual is None and mean is None and (
             self.linear or (getattr(own, "residual", None) is _Measurement.residual
