@@ -72,6 +72,53 @@ def numpy_sir(ys, N, rng, resample_fn=None):
     return means
 
 
+def numba_sir(ys, N, seed):
+    """A plain numba bootstrap filter, what a numba user writes (compiled on first use)."""
+    from numba import njit
+
+    global _numba_sir
+    if "_numba_sir" not in globals():
+        @njit(cache=True)
+        def run(ys, N, seed):
+            np.random.seed(seed)
+            T = ys.shape[0]
+            x = np.sqrt(5.0) * np.random.standard_normal(N)
+            w, cw, xn, means = np.empty(N), np.empty(N), np.empty(N), np.empty(T)
+            for t in range(T):
+                if t > 0:
+                    c = 8 * np.cos(1.2 * t)
+                    for i in range(N):
+                        v = x[i]
+                        x[i] = (v / 2 + 25 * v / (1 + v * v) + c
+                                + np.sqrt(10.0) * np.random.standard_normal())
+                top = -np.inf
+                for i in range(N):
+                    d = ys[t] - x[i] * x[i] / 20
+                    w[i] = -0.5 * d * d
+                    top = max(top, w[i])
+                s = 0.0
+                for i in range(N):
+                    w[i] = np.exp(w[i] - top)
+                    s += w[i]
+                m, c = 0.0, 0.0
+                for i in range(N):
+                    w[i] /= s
+                    m += w[i] * x[i]
+                    c += w[i]
+                    cw[i] = c
+                means[t] = m
+                u0, j = np.random.random(), 0
+                for k in range(N):  # systematic resampling
+                    while j < N - 1 and cw[j] < (k + u0) / N:
+                        j += 1
+                    xn[k] = x[j]
+                x, xn = xn, x
+            return means
+
+        _numba_sir = run
+    return _numba_sir(ys, N, seed)
+
+
 def particle_rows(rows, repeats, sizes):
     motion, meas = vt.models.growth_model()
     xs, ys = vt.simulate.simulate(motion, meas, T, x0=[0.1], rng=1)
@@ -91,6 +138,9 @@ def particle_rows(rows, repeats, sizes):
         rng = np.random.default_rng(3)
         sec, m = median_time(lambda: numpy_sir(ys, N, rng), repeats)
         rows.append((label, "plain numpy SIR", sec / T * 1e3, rmse(m)))
+        numba_sir(ys[:, 0], 10, 0)  # compile outside the timing
+        sec, m = median_time(lambda: numba_sir(ys[:, 0], N, 3), repeats)
+        rows.append((label, "plain numba SIR", sec / T * 1e3, rmse(m)))
         if fp is not None:
             from filterpy.monte_carlo import systematic_resample
 
@@ -197,7 +247,7 @@ def main():
     warnings.simplefilter("ignore")
     rows = []
     print("particle filter ...", file=sys.stderr)
-    particle_rows(rows, 3, (1000,) if args.quick else (1000, 100_000))
+    particle_rows(rows, 7, (1000,) if args.quick else (1000, 100_000))
     print("UKF ...", file=sys.stderr)
     ukf_rows(rows, 5)
     import numba

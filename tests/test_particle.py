@@ -14,6 +14,7 @@ from vistrack.filters import (
     particle_mode,
     resample,
 )
+from vistrack.filters import _random
 
 W = np.array([0.3, 0.0, 0.05, 0.25, 1e-4, 0.1, 0.0999, 0.2])  # includes zero and tiny weights
 
@@ -152,24 +153,100 @@ def test_particle_filter_arguments_are_checked():
         ParticleFilter(motion, meas, 10).filter(np.ones((3, 1)), particles=np.ones((5, 1)))
 
 
-@pytest.mark.parametrize("model", ["growth", "coordinated turn, range-bearing"])
-def test_compiled_path_equals_the_numpy_path(model):
-    """Models with compiled one-state functions run one compiled pass per step; it uses the
-    same draws from rng, so both paths give the same filter to rounding."""
+def compiled_models(model):
     if model == "growth":
-        motion, meas = vt.models.growth_model()
+        motion, meas = vt.models.growth_model(q=0.0)
         x0, P0 = np.array([0.1]), np.array([[5.0]])
-    else:
-        motion = vt.models.CoordinatedTurn(q=0.05, q_turn=1e-3)
+    elif model == "coordinated turn, range-bearing":
+        motion = vt.models.CoordinatedTurn(q=0.0, q_turn=0.0)
         meas = vt.models.RangeBearing(1.0, 1e-3, ndim_state=5)
         x0, P0 = np.array([-20.0, 8.0, 0.0, -0.8, 0.02]), np.diag([1.0, 1.0, 0.1, 0.1, 1e-4])
+    else:  # linear: F x and H x
+        motion, meas = vt.ConstantVelocity(dim=2, q=0.0), vt.Position(dim=2, r=0.5)
+        x0, P0 = np.array([0.0, 0.0, 1.0, -1.0]), np.diag([1.0, 1.0, 0.25, 0.25])
+    return motion, meas, x0, P0
+
+
+@pytest.mark.parametrize("model", ["growth", "coordinated turn, range-bearing", "linear"])
+def test_compiled_path_equals_the_numpy_path_without_noise(model):
+    """The compiled path draws from its own generator, so runs are compared where no draw
+    matters: no process noise, no resampling, the same first cloud. Then every output must be
+    the numpy path's to rounding, through missing measurements and components."""
+    motion, meas, x0, P0 = compiled_models(model)
     xs, ys = vt.simulate.simulate(motion, meas, 40, x0=x0, rng=4)
     ys[7] = np.nan
     ys[9, 0] = np.nan
-    runs = [ParticleFilter(motion, meas, n_particles=500, rng=5, compiled=c).filter(
-        ys, x0=x0, P0=P0) for c in (True, False)]
+    cloud = np.random.default_rng(5).multivariate_normal(x0, P0, size=500)
+    runs = [ParticleFilter(motion, meas, n_particles=500, ess_threshold=0.0, rng=5,
+                           compiled=c).filter(ys, particles=cloud) for c in (True, False)]
     assert ParticleFilter(motion, meas, compiled=True)._fused is not None
-    np.testing.assert_allclose(runs[0].means, runs[1].means, rtol=1e-8, atol=1e-9)
-    np.testing.assert_allclose(runs[0].covs, runs[1].covs, rtol=1e-6, atol=1e-9)
-    np.testing.assert_array_equal(runs[0].resampled, runs[1].resampled)
+    np.testing.assert_allclose(runs[0].means, runs[1].means, rtol=1e-9, atol=1e-10)
+    np.testing.assert_allclose(runs[0].covs, runs[1].covs, rtol=1e-7, atol=1e-10)
+    np.testing.assert_allclose(runs[0].ess, runs[1].ess, rtol=1e-9)
+    np.testing.assert_allclose(runs[0].particles, runs[1].particles, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(runs[0].weights, runs[1].weights, rtol=1e-9, atol=1e-300)
     assert runs[0].loglik == pytest.approx(runs[1].loglik, rel=1e-10)
+    assert not runs[0].resampled.any()
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_both_paths_approach_the_kalman_filter_with_resampling(rng, compiled):
+    """With noise and resampling (every step, and by ESS), each path's mean is the Kalman
+    filter's within Monte Carlo error, for every scheme the compiled path implements."""
+    motion, meas, ys, x0, P0, kf = linear_problem(rng)
+    sd = np.sqrt(np.diagonal(kf.covs, axis1=-2, axis2=-1))
+    for method in _random.SCHEMES:
+        for threshold in (1.0, 0.5):
+            pf = ParticleFilter(motion, meas, n_particles=20_000, resampling=method,
+                                ess_threshold=threshold, rng=7, compiled=compiled)
+            assert (pf._fused is not None) == compiled
+            res = pf.filter(ys, x0=x0, P0=P0)
+            err = np.sqrt(np.mean(((res.means - kf.means) / sd) ** 2))
+            assert err < 0.04, (method, threshold, err)
+            np.testing.assert_allclose(np.sqrt(np.diagonal(res.covs, axis1=1, axis2=2)), sd,
+                                       rtol=0.05)
+            assert res.loglik == pytest.approx(float(kf.loglik), abs=0.5)
+            assert res.resampled.all() == (threshold == 1.0)
+
+
+def test_compiled_path_is_reproducible_and_reports_degeneracy():
+    motion, meas = vt.models.growth_model()
+    xs, ys = vt.simulate.simulate(motion, meas, 30, x0=[0.1], rng=1)
+    a, b = (ParticleFilter(motion, meas, 300, rng=8).filter(ys, x0=[0.0], P0=[[5.0]])
+            for _ in range(2))
+    np.testing.assert_array_equal(a.means, b.means)
+    ys[12] = 1e300  # (y - h)^2 overflows: every log weight is -inf
+    with pytest.raises(ParticleDegeneracyError, match="zero likelihood at step 12"):
+        ParticleFilter(motion, meas, 300, rng=8).filter(ys, x0=[0.0], P0=[[5.0]])
+
+
+def test_kernel_normals_are_standard_normal():
+    """xoshiro256++ with the ziggurat: 10^6 draws pass a Kolmogorov-Smirnov test against
+    N(0, 1) at the 0.1 % level (fixed seed), and the tail beyond the ziggurat's base strip,
+    drawn by a separate method, has the right mass within 4 standard errors."""
+    stats = pytest.importorskip("scipy.stats")
+    z = _random.normals(_random.seed(np.random.default_rng(11)), np.empty(1_000_000))
+    assert stats.kstest(z, "norm").pvalue > 1e-3
+    p = 2 * stats.norm.sf(3.6541528853610088)
+    tail = np.mean(np.abs(z) > 3.6541528853610088)
+    assert abs(tail - p) < 4 * np.sqrt(p * (1 - p) / z.size)
+    u = _random.uniforms(_random.seed(np.random.default_rng(12)), np.empty(1_000_000))
+    assert stats.kstest(u, "uniform").pvalue > 1e-3 and 0.0 <= u.min() and u.max() < 1.0
+
+
+@pytest.mark.parametrize("method", _random.SCHEMES)
+def test_kernel_resampling_is_unbiased(method):
+    """The compiled path's resamplers, like :func:`resample`: mean counts equal N w within 5
+    standard errors, zero weights never drawn; weights need not be normalised."""
+    s = _random.seed(np.random.default_rng(3))
+    N, reps = 16, 4000
+    counts = np.zeros((reps, len(W)))
+    for r in range(reps):
+        counts[r] = np.bincount(_random.resample_indices(W * 7.5, _random.SCHEMES.index(method),
+                                                         s, N), minlength=len(W))
+    expected = N * W
+    se = np.sqrt(np.maximum(N * W * (1 - W), 0.25) / reps)
+    assert np.all(np.abs(counts.mean(0) - expected) < 5 * se)
+    assert np.all(counts[:, W == 0] == 0)
+    if method == "systematic":  # each count is floor or ceil of N w
+        assert np.all(counts <= np.ceil(N * W) + 1e-9) and np.all(counts >= np.floor(N * W))

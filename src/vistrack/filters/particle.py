@@ -20,7 +20,10 @@ in that peak as its confidence.
 from __future__ import annotations
 
 import functools
+import hashlib
+import importlib.util
 import math
+import os
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -28,6 +31,7 @@ import numpy as np
 from numba import njit
 
 from .._validate import as_float_array, as_rng
+from . import _jitmath, _random
 from ._nonlinear import Measurement, Motion, step_times
 
 __all__ = [
@@ -241,82 +245,131 @@ def particle_mode(particles: np.ndarray, weights: np.ndarray, *, bandwidth: Any 
 
 # ---------------------------------------------------------------- the compiled path
 _FUSED = """
+# depends on: {depends}
 import math
 import numpy as np
 from numba import njit
+from vistrack.filters._jitmath import exp_weight
+from vistrack.filters._random import normal, resample_into
 from {fmod} import {fname} as f
 from {hmod} import {hname} as h
 
 
-@njit(cache=True, error_model="numpy")
-def step(x, logw, w, y, obs, angles, Linv, c, dt, t, fp, hp, S, noise, predict, mean, cov):
-    # one particle-filter step in one pass over the cloud: propagate (x <- f(x) + S noise),
-    # weigh (log w += c - |Linv r|^2 / 2 over the observed components), normalise (w, log w);
-    # then the weighted mean and covariance. Returns (log of the normalising sum, ESS).
-    N = x.shape[0]
+@njit(cache=True, error_model="numpy", fastmath={{"contract", "arcp", "nsz"}})
+def run(x, xb, ys, obs, nobs, Linv, c, angles, dts, times, fp, hp, S, scheme, threshold, s,
+        logw, w, idx, cw, means, covs, ess, resampled):
+    # The whole filter in one call. Each step is one pass over the cloud that moves every
+    # particle (x <- f(x) + S e, e ~ N(0, I), reading the resampled index straight from idx),
+    # weighs it (log w += c - |Linv r|^2 / 2 over the observed components) and keeps the
+    # largest log weight; then a pass for the normalised weights and the mean, one for the
+    # covariance, and resampling into idx when the ESS is low. Returns (the step at which
+    # every weight was zero or -1, the log-likelihood).
+    T, N = ys.shape[0], x.shape[0]
     n, m = {n}, {m}  # literal sizes: the per-particle loops unroll
-    no = obs.shape[0]
     xn = np.empty(n)
+    e = np.empty(n)
     z = np.empty(m)
-    r = np.empty(max(no, 1))
-    top = -np.inf
-    for i in range(N):
-        if predict:
-            f(x[i], dt, t, fp, xn)
-            for k in range(n):
-                v = xn[k]
+    r = np.empty(m)
+    o = np.empty(n)
+    d1 = np.empty(n)
+    d2 = np.empty((n, n))
+    uniform = -math.log(N)  # the log weight after resampling
+    loglik = 0.0
+    st = (s[0], s[1], s[2], s[3])  # the generator's state, in registers
+    moved = False  # idx holds the last resampling, not yet applied to x
+    for t in range(T):
+        no = nobs[t]
+        top = -np.inf
+        for i in range(N):
+            j = idx[i] if moved else i
+            if t > 0:
+                f(x[j], dts[t], times[t], fp[t], xn)
                 for l in range(n):
-                    v += S[k, l] * noise[i, l]
-                x[i, k] = v
-        q = 0.0
+                    e[l], st = normal(st)
+                for k in range(n):
+                    v = xn[k]
+                    for l in range(n):
+                        v += S[t, k, l] * e[l]
+                    xb[i, k] = v
+            else:
+                for k in range(n):
+                    xb[i, k] = x[j, k]
+            q = 0.0
+            if no > 0:
+                h(xb[i], hp, z)
+                for a in range(no):
+                    k = obs[t, a]
+                    d = ys[t, k] - z[k]
+                    if angles[k]:
+                        d = math.pi - ((math.pi - d) % (2.0 * math.pi))
+                    r[a] = d
+                for a in range(no):
+                    v = 0.0
+                    for b in range(a + 1):
+                        v += Linv[t, a, b] * r[b]
+                    q += v * v
+            v = (uniform if moved else logw[i]) + c[t] - 0.5 * q
+            logw[i] = v
+            top = max(top, v)
+        x, xb = xb, x
+        moved = False
+        if not top > -np.inf:
+            s[0], s[1], s[2], s[3] = st
+            return t, loglik, x
+        for i in range(N):  # vectorised
+            w[i] = exp_weight(logw[i] - top)
+        # sums of the weights, their squares, and the weighted first and second moments about
+        # a particle of the largest weight (shifted sums: no cancellation for far-off clouds)
+        ref = 0
+        for i in range(N):
+            if w[i] == 1.0:
+                ref = i
+                break
+        for k in range(n):
+            o[k] = x[ref, k]
+            d1[k] = 0.0
+            for l in range(n):
+                d2[k, l] = 0.0
+        total, sq = 0.0, 0.0
+        for i in range(N):
+            wi = w[i]
+            total += wi
+            sq += wi * wi
+            for k in range(n):
+                dk = x[i, k] - o[k]
+                d1[k] += wi * dk
+                for l in range(k + 1):
+                    d2[k, l] += wi * dk * (x[i, l] - o[l])
+        norm = top + math.log(total)
+        if not abs(norm) < np.inf:
+            s[0], s[1], s[2], s[3] = st
+            return t, loglik, x
         if no > 0:
-            h(x[i], hp, z)
-            for a in range(no):
-                k = obs[a]
-                d = y[k] - z[k]
-                if angles[k]:
-                    d = math.pi - ((math.pi - d) % (2.0 * math.pi))
-                r[a] = d
-            for a in range(no):
-                v = 0.0
-                for b in range(a + 1):
-                    v += Linv[a, b] * r[b]
-                q += v * v
-        v = logw[i] + c - 0.5 * q
-        logw[i] = v
-        if v > top:
-            top = v
-    if not top > -np.inf:
-        return -np.inf, 0.0
-    total = 0.0
-    for i in range(N):
-        e = math.exp(logw[i] - top)
-        w[i] = e
-        total += e
-    norm = top + math.log(total)
-    sq = 0.0
-    for k in range(n):
-        mean[k] = 0.0
-    for i in range(N):
-        logw[i] -= norm
-        wi = w[i] / total
-        w[i] = wi
-        sq += wi * wi
+            loglik += norm
         for k in range(n):
-            mean[k] += wi * x[i, k]
-    for k in range(n):
-        for l in range(n):
-            cov[k, l] = 0.0
-    for i in range(N):
-        wi = w[i]
+            d1[k] /= total
+            means[t, k] = o[k] + d1[k]
         for k in range(n):
-            dk = x[i, k] - mean[k]
             for l in range(k + 1):
-                cov[k, l] += wi * dk * (x[i, l] - mean[l])
-    for k in range(n):
-        for l in range(k):
-            cov[l, k] = cov[k, l]
-    return norm, 1.0 / sq
+                v = d2[k, l] / total - d1[k] * d1[l]
+                covs[t, k, l] = v
+                covs[t, l, k] = v
+        ess[t] = total * total / sq
+        if ess[t] < threshold * N or threshold == 1.0:
+            st = resample_into(w, scheme, st, cw, idx)
+            resampled[t] = True
+            moved = True
+        else:
+            for i in range(N):
+                logw[i] -= norm
+    if moved:  # the last resampling
+        for i in range(N):
+            for k in range(n):
+                xb[i, k] = x[idx[i], k]
+            logw[i] = uniform
+        x = xb
+    s[0], s[1], s[2], s[3] = st
+    return -1, loglik, x
 """
 
 
@@ -328,12 +381,83 @@ def _jit_ref(fn) -> tuple[str, str] | None:
     return py.__module__, py.__name__
 
 
+def _source_hash(*modules: str) -> str:
+    """A hash of the source files of ``modules``: part of the generated kernel's source, so
+    that numba's cache of it (which tracks its own file only) is rebuilt when a function it
+    inlines changes."""
+    h = hashlib.sha1()
+    for name in modules:
+        spec = importlib.util.find_spec(name)
+        if spec is not None and spec.origin and os.path.exists(spec.origin):
+            h.update(open(spec.origin, "rb").read())
+    return h.hexdigest()[:16]
+
+
 @functools.lru_cache(maxsize=None)
 def _fused(fref: tuple[str, str], href: tuple[str, str], n: int, m: int):
     from . import _codegen
 
-    src = _FUSED.format(fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m)
+    depends = _source_hash(fref[0], href[0], _random.__name__, _jitmath.__name__)
+    src = _FUSED.format(fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m,
+                        depends=depends)
     return _codegen.load("vistrack_pf", src)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _linear_f(x, dt, t, params, out):
+    # out = F x, params = F (n, n) flattened
+    n = out.shape[0]
+    for k in range(n):
+        v = 0.0
+        for l in range(n):
+            v += params[k * n + l] * x[l]
+        out[k] = v
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _linear_h(x, params, out):
+    # out = H x, params = H (m, n) flattened
+    m, n = out.shape[0], x.shape[0]
+    for k in range(m):
+        v = 0.0
+        for l in range(n):
+            v += params[k * n + l] * x[l]
+        out[k] = v
+
+
+def _compiled_parts(mo: Motion, me: Measurement):
+    """What the compiled path needs of the models: the module-level compiled one-state ``f``
+    and ``h`` and their parameters (``params(dt, t)`` per step, and a fixed array), from the
+    models' ``jit_f``/``jit_h`` or, for linear models, ``F x`` and ``H x``. None when a model
+    has neither (a user model in Python runs on the numpy path)."""
+    motion, meas = mo.model, me.model
+    fref = _jit_ref(getattr(motion, "jit_f", None))
+    if fref is not None and hasattr(motion, "jit_params"):
+        fparams = motion.jit_params
+    elif mo.linear and np.ndim(motion.F(1.0)) == 2:  # a constant F; one per step runs in numpy
+        def fparams(dts, times):
+            d, inv = np.unique(dts, return_inverse=True)
+            return np.array([np.ravel(motion.F(float(v))) for v in d])[inv]
+
+        fref = _jit_ref(_linear_f)
+    else:
+        return None
+    href = _jit_ref(getattr(meas, "jit_h", None))
+    if href is not None and hasattr(meas, "jit_params"):
+        hparams = meas.jit_params()
+    elif me.linear:
+        href, hparams = _jit_ref(_linear_h), me.H
+    else:
+        return None
+    return fref, fparams, href, np.asarray(hparams, dtype=float).ravel(), mo, me
+
+
+def _whitening(R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, float]:
+    """For the observed components ``o`` of the noise ``R = L L'``: ``L^-1`` (a Gaussian's
+    exponent is ``-|L^-1 r|^2 / 2``) and its constant ``-log det L - k/2 log 2π``."""
+    L = np.linalg.cholesky(R[np.ix_(o, o)])
+    return np.linalg.inv(L), float(-np.log(np.diagonal(L)).sum()
+                                   - 0.5 * len(o) * math.log(2 * math.pi))
 
 
 # ---------------------------------------------------------------- the filter
@@ -402,10 +526,14 @@ class ParticleFilter:
     ndim_state : int, optional
         Needed when ``motion`` is a callable.
     compiled : bool
-        When the motion and measurement models provide compiled one-state functions
-        (``jit_f``, ``jit_h``: the growth model, the coordinated turn, range-bearing), run each
-        step as one compiled pass over the cloud (propagate, weigh, normalise, moments), with
-        the same draws from ``rng`` as the numpy path.
+        Run the whole filter as one compiled call when the models allow it: linear models
+        (constant ``F``, ``H``), and models that provide compiled one-state functions
+        (``jit_f``, ``jit_h`` with ``jit_params``: the growth model, the coordinated turn,
+        range-bearing). Each step is then one pass over the cloud that moves, weighs and keeps
+        the largest log weight, a vectorised pass for the weights, one for the moments, and
+        resampling in place. Its randomness comes from a xoshiro256++ generator seeded from
+        ``rng`` (reproducible from the seed, but not the same draws as the numpy path, which
+        runs otherwise and when ``modes=True``).
 
     Examples
     --------
@@ -436,13 +564,12 @@ class ParticleFilter:
         else:
             raise TypeError(f"motion must be a motion model or a callable; got "
                             f"{type(motion).__name__}")
-        self._fused = None
+        self._fused, self._whiten = None, {}
         if hasattr(likelihood, "R"):
-            self._loglik = self._gaussian_loglik(Measurement(likelihood, self.ndim_state))
-            fref = _jit_ref(getattr(motion, "jit_f", None))
-            href = _jit_ref(getattr(likelihood, "jit_h", None))
-            if compiled and fref and href and hasattr(motion, "jit_params"):
-                self._fused = (fref, href, mo, likelihood)
+            me = Measurement(likelihood, self.ndim_state)
+            self._loglik = self._gaussian_loglik(me)
+            if compiled and hasattr(motion, "Q") and resampling in _random.SCHEMES:
+                self._fused = _compiled_parts(mo, me)
         elif callable(likelihood):
             self._loglik = likelihood
         else:
@@ -459,18 +586,16 @@ class ParticleFilter:
 
     @staticmethod
     def _gaussian_loglik(me: Measurement):
-        def whitening(obs):
-            L = np.linalg.cholesky(me.R[np.ix_(obs, obs)])
-            c = -np.log(np.diagonal(L)).sum() - 0.5 * obs.sum() * math.log(2 * math.pi)
-            return np.linalg.inv(L).T, c  # the inverse of a small triangular factor, once
-
-        full = whitening(np.ones(me.m, bool))
+        whiten: dict = {}  # per pattern of observed components
 
         def loglik(y, x):
             obs = ~np.isnan(y)
-            Linv_t, c = full if obs.all() else whitening(obs)
+            key = obs.tobytes()
+            if key not in whiten:
+                whiten[key] = _whitening(me.R, np.flatnonzero(obs))
+            Linv, c = whiten[key]
             r = me.residual(np.where(obs, y, 0.0), me.h(x))[:, obs]
-            z = r * Linv_t[0, 0] if r.shape[1] == 1 else r @ Linv_t
+            z = r * Linv[0, 0] if r.shape[1] == 1 else r @ Linv.T
             return c - 0.5 * (z * z).sum(1)
 
         return loglik
@@ -539,51 +664,51 @@ class ParticleFilter:
         return self.rng.multivariate_normal(m0, C0, size=N, method="eigh")
 
     def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: Any, times: Any) -> ParticleResult:
-        fref, href, mo, meas = self._fused
-        motion = mo.model
+        fref, fparams, href, hp, mo, me = self._fused
         T, m = ys.shape
-        kern = _fused(fref, href, self.ndim_state, m)
-        n, N, rng = self.ndim_state, self.n_particles, self.rng
-        w = np.empty(N)
-        no_noise = np.zeros((1, n))
-        x = np.ascontiguousarray(x, dtype=float)
-        R = np.asarray(meas.R(), dtype=float)
+        n, N = self.ndim_state, self.n_particles
+        R = me.R
         if R.shape != (m, m):
             raise ValueError(f"ys must have {R.shape[0]} measurement components; got {m}")
-        angles = np.zeros(m, dtype=np.bool_)
-        angles[list(getattr(meas, "angles", ()))] = True
-        hp = np.asarray(meas.jit_params(), dtype=float)
+        kern = _fused(fref, href, n, m)
         dts, times = step_times(dt, times, T)
-        whiten: dict = {}
-        logw = np.full(N, -math.log(N))
+        # per step: the observed components, the whitening of their noise, the model's
+        # parameters and the square root of Q
+        seen = ~np.isnan(ys)
+        if seen.all():  # the common case, without the sort of unique rows
+            patterns, which = seen[:1], np.zeros(T, np.intp)
+        else:
+            patterns, which = np.unique(seen, axis=0, return_inverse=True)
+        obs, Linv, c = (np.zeros((len(patterns), m), np.int64),
+                        np.zeros((len(patterns), m, m)), np.zeros(len(patterns)))
+        for p, key in enumerate(patterns):
+            o = np.flatnonzero(key)
+            if len(o):
+                obs[p, :len(o)] = o
+                key = o.tobytes()
+                if key not in self._whiten:
+                    self._whiten[key] = _whitening(R, o)
+                Linv[p, :len(o), :len(o)], c[p] = self._whiten[key]
+        which = which.ravel()
+        obs, Linv, c, nobs = obs[which], Linv[which], c[which], seen.sum(1)
+        dts, times = np.ascontiguousarray(dts, dtype=float), np.ascontiguousarray(times, dtype=float)
+        fp = np.asarray(fparams(dts, times), dtype=float).reshape(T, -1)
+        if (dts == dts[0]).all():
+            S = np.broadcast_to(mo.Q_sqrt(float(dts[0])), (T, n, n))
+        else:
+            d, inv = np.unique(dts, return_inverse=True)
+            S = np.array([mo.Q_sqrt(float(v)) for v in d])[inv.ravel()]
         means, covs = np.empty((T, n)), np.empty((T, n, n))
-        ess, resampled, total = np.empty(T), np.zeros(T, bool), 0.0
-        mean, cov = np.empty(n), np.empty((n, n))
-        for t in range(T):
-            y = ys[t]
-            obs = np.flatnonzero(~np.isnan(y))
-            key = obs.tobytes()
-            if key not in whiten:
-                if len(obs):
-                    L = np.linalg.cholesky(R[np.ix_(obs, obs)])
-                    c = -np.log(np.diagonal(L)).sum() - 0.5 * len(obs) * math.log(2 * math.pi)
-                    whiten[key] = (np.linalg.inv(L), c)
-                else:
-                    whiten[key] = (np.zeros((0, 0)), 0.0)
-            Linv, c = whiten[key]
-            d, tt = float(dts[t]), float(times[t])
-            eps = rng.standard_normal((N, n)) if t > 0 else no_noise
-            norm, ess[t] = kern.step(x, logw, w, np.where(np.isnan(y), 0.0, y), obs, angles,
-                                     Linv, c, d, tt,
-                                     np.asarray(motion.jit_params(d, tt), dtype=float), hp,
-                                     mo.Q_sqrt(d), eps, t > 0, mean, cov)
-            if not np.isfinite(norm):
-                raise _degenerate(t, y)
-            total += norm
-            means[t], covs[t] = mean, cov
-            if ess[t] < self.ess_threshold * N or self.ess_threshold == 1.0:
-                x = x[RESAMPLERS[self.resampling](w, N, rng)]
-                logw = np.full(N, -math.log(N))
-                w = np.full(N, 1.0 / N)
-                resampled[t] = True
-        return ParticleResult(means, covs, None, None, ess, resampled, total, x, w)
+        ess, resampled = np.empty(T), np.zeros(T, bool)
+        logw, w = np.full(N, -math.log(N)), np.empty(N)
+        fail, loglik, x = kern.run(
+            np.ascontiguousarray(x, dtype=float), np.empty((N, n)), np.where(seen, ys, 0.0),
+            obs, nobs, Linv, c, me.angle_mask, dts, times, fp, hp, S,
+            _random.SCHEMES.index(self.resampling), self.ess_threshold,
+            _random.seed(self.rng), logw, w, np.zeros(N, np.int64), np.empty(N),
+            means, covs, ess, resampled)
+        if fail >= 0:
+            raise _degenerate(int(fail), ys[fail])
+        w = np.exp(logw - logw.max())
+        return ParticleResult(means, covs, None, None, ess, resampled, float(loglik), x,
+                              w / w.sum())

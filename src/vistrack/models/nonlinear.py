@@ -195,8 +195,10 @@ def _weighted_mean(z, w, angles):
 
 # ---------------------------------------------------------------- compiled one-state functions
 # ``f(x (n,), dt, t, params, out (n,))`` and ``h(x (n,), params, out (m,))`` for one state: the
-# particle filter's compiled path calls them per particle (models expose them as ``jit_f`` /
-# ``jit_h`` with ``jit_params``). User models may provide their own, defined at module level.
+# particle filter's compiled path calls them per particle. Models expose them as ``jit_f`` /
+# ``jit_h``, with ``jit_params``: for motion, ``jit_params(dts (T,), times (T,)) -> (T, p)``,
+# each step's parameters at once; for measurement, ``jit_params() -> (p,)``. User models may
+# provide their own, defined at module level.
 @njit(cache=True, error_model="numpy", inline="always")
 def _ct_f(x, dt, t, params, out):
     w = x[4]
@@ -262,8 +264,8 @@ class CoordinatedTurn:
     ndim_state = 5
     jit_f = staticmethod(_ct_f)
 
-    def jit_params(self, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
-        return _NO_PARAMS
+    def jit_params(self, dt: np.ndarray, t: np.ndarray) -> np.ndarray:
+        return np.zeros((len(t), 0))
 
     def __init__(self, q: float = 1.0, q_turn: float = 0.01):
         self.q = _check_q(q)
@@ -395,8 +397,8 @@ class GrowthMotion:
     ndim_state = 1
     jit_f = staticmethod(_growth_f)
 
-    def jit_params(self, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
-        return np.array([8 * math.cos(1.2 * t)])
+    def jit_params(self, dt: np.ndarray, t: np.ndarray) -> np.ndarray:
+        return 8 * np.cos(1.2 * np.asarray(t, dtype=float))[:, None]
 
     def __init__(self, q: float = 10.0):
         self.q = _check_q(q)
