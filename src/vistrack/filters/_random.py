@@ -201,23 +201,25 @@ def resample_into(w, scheme, st, cw, out):
 
 # ---------------------------------------------------------------- array entry points
 @njit(cache=True, error_model="numpy")
-def normals(s, out):
+def _fill(s, out, normals):
+    st = (s[0], s[1], s[2], s[3])
+    for i in range(out.shape[0]):
+        if normals:
+            out[i], st = normal(st)
+        else:
+            out[i], st = uniform(st)
+    s[0], s[1], s[2], s[3] = st
+    return out
+
+
+def normals(s: np.ndarray, out: np.ndarray) -> np.ndarray:
     """Fill ``out`` (1-D) with standard normals, advancing the state array ``s (4,)``."""
-    st = (s[0], s[1], s[2], s[3])
-    for i in range(out.shape[0]):
-        out[i], st = normal(st)
-    s[0], s[1], s[2], s[3] = st
-    return out
+    return _fill(s, out, True)
 
 
-@njit(cache=True, error_model="numpy")
-def uniforms(s, out):
+def uniforms(s: np.ndarray, out: np.ndarray) -> np.ndarray:
     """Fill ``out`` (1-D) with uniforms in [0, 1), advancing the state array ``s (4,)``."""
-    st = (s[0], s[1], s[2], s[3])
-    for i in range(out.shape[0]):
-        out[i], st = uniform(st)
-    s[0], s[1], s[2], s[3] = st
-    return out
+    return _fill(s, out, False)
 
 
 @njit(cache=True, error_model="numpy")
