@@ -1,0 +1,256 @@
+"""MOTChallenge files: detections, ground truth and results (``det.txt``, ``gt.txt``, results),
+and ``seqinfo.ini``.
+
+Every row is ``frame, id, left, top, width, height, conf, ...``, comma-separated, frames from 1:
+
+- detections: ``id = -1``, ``conf`` the detector's score;
+- ground truth (MOT16/17/20): ``conf`` is 0 for boxes to ignore, then ``class`` and
+  ``visibility``; MOT15 ground truth has ``-1, -1, -1`` (world coordinates) there instead, so
+  its class is -1;
+- results: ``frame, id, left, top, width, height, conf, -1, -1, -1``.
+
+Rows need not be sorted: :func:`read_mot` sorts them by frame (stably, so rows of one frame keep
+their order). A malformed row raises :class:`MOTFormatError` naming the file, line and column.
+"""
+
+from __future__ import annotations
+
+import configparser
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "write_mot", "read_seqinfo",
+           "MOT_CLASSES"]
+
+MOT_CLASSES = {
+    1: "pedestrian", 2: "person_on_vehicle", 3: "car", 4: "bicycle", 5: "motorbike",
+    6: "non_mot_vehicle", 7: "static_person", 8: "distractor", 9: "occluder",
+    10: "occluder_on_ground", 11: "occluder_full", 12: "reflection", 13: "crowd",
+}
+"""The class numbers of MOT16/17/20 ground truth."""
+
+_NAMES = ("frame", "id", "left", "top", "width", "height", "conf", "class", "visibility", "z")
+
+
+class MOTFormatError(ValueError):
+    """A MOTChallenge file that cannot be read; the message names the file, line and column."""
+
+
+@dataclass(frozen=True)
+class MOTTable:
+    """The rows of one MOTChallenge file, as columns, sorted by frame.
+
+    Attributes
+    ----------
+    frames, ids : (N,) int
+    boxes : (N, 4) float
+        ``left, top, width, height`` in pixels.
+    conf : (N,) float
+        Score (detections, results) or the ground truth's "consider" flag (0: ignore).
+    classes : (N,) int
+        Column 8: the ground-truth class of MOT16/17/20, -1 where absent (MOT15, detections).
+    visibility : (N,) float
+        Column 9 of MOT16/17/20 ground truth, -1 where absent.
+    path : str
+        The file read, for messages.
+    columns : int
+        Values per row in the file (MOT16/17/20 ground truth: 9; MOT15 and results: 10).
+    """
+
+    frames: np.ndarray
+    ids: np.ndarray
+    boxes: np.ndarray
+    conf: np.ndarray
+    classes: np.ndarray
+    visibility: np.ndarray
+    path: str = ""
+    columns: int = 10
+
+    def __len__(self) -> int:
+        return int(self.frames.shape[0])
+
+    def __getitem__(self, index: Any) -> "MOTTable":
+        """Rows by boolean mask or indices."""
+        return MOTTable(self.frames[index], self.ids[index], self.boxes[index], self.conf[index],
+                        self.classes[index], self.visibility[index], self.path, self.columns)
+
+    def frame_slices(self, n_frames: int | None = None) -> list[slice]:
+        """``slices[f - 1]`` selects the rows of frame ``f``, for ``f = 1 .. n_frames``
+        (default: the last frame in the file)."""
+        last = int(self.frames.max()) if len(self) else 0
+        n = last if n_frames is None else int(n_frames)
+        edges = np.searchsorted(self.frames, np.arange(1, n + 2))
+        return [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
+
+
+def _bad(path: str, line: int, column: int, text: str) -> MOTFormatError:
+    name = _NAMES[column - 1] if column <= len(_NAMES) else f"column {column}"
+    return MOTFormatError(f"{path}, line {line}, column {column} ({name}): {text}")
+
+
+def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
+    """Parse row by row, to name the first bad line and column."""
+    rows = []
+    width = None
+    for k, raw in enumerate(lines, start=1):
+        text = raw.strip()
+        if not text:
+            continue
+        cells = [c.strip() for c in text.split(",")]
+        if len(cells) < 6:
+            raise _bad(path, k, len(cells) + 1,
+                       f"expected at least 6 comma-separated values, got {len(cells)}: {text!r}")
+        if len(cells) > 10:
+            raise _bad(path, k, 11, f"expected at most 10 values, got {len(cells)}: {text!r}")
+        if width is not None and len(cells) != width:
+            raise _bad(path, k, min(len(cells), width) + 1,
+                       f"{len(cells)} values where the lines before have {width}")
+        width = len(cells)
+        vals = []
+        for j, c in enumerate(cells, start=1):
+            try:
+                v = float(c)
+            except ValueError:
+                raise _bad(path, k, j, f"not a number: {c!r}") from None
+            if not np.isfinite(v):
+                raise _bad(path, k, j, f"not a finite number: {c!r}")
+            vals.append(v)
+        rows.append(vals)
+    return np.array(rows, dtype=float).reshape(len(rows), width or 10)
+
+
+def _check_rows(path: str, a: np.ndarray, lines: list[str] | None) -> None:
+    def line_of(i: int) -> int:
+        if lines is None:
+            return i + 1
+        nonblank = [k for k, t in enumerate(lines, start=1) if t.strip()]
+        return nonblank[i]
+
+    checks = [
+        (0, (a[:, 0] < 1) | (a[:, 0] != np.round(a[:, 0])), "frame must be an integer >= 1"),
+        (1, a[:, 1] != np.round(a[:, 1]), "id must be an integer"),
+        (4, a[:, 4] < 0, "width must be >= 0"),
+        (5, a[:, 5] < 0, "height must be >= 0"),
+    ]
+    for col, bad, text in checks:
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise _bad(path, line_of(i), col + 1, f"{text}; got {a[i, col]:g}")
+
+
+def read_mot(path: str | os.PathLike) -> MOTTable:
+    """Read a MOTChallenge detection, ground-truth or results file.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    MOTFormatError
+        For a malformed row, naming the file, line and column (1-based), e.g.
+        ``gt.txt, line 12, column 5 (width): width must be >= 0; got -3``.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "det.txt")
+    >>> _ = open(p, "w").write("2,-1,10,20,30,40,0.9,-1,-1,-1\\n1,-1,5,5,10,10,0.5,-1,-1,-1\\n")
+    >>> t = read_mot(p)
+    >>> t.frames.tolist(), t.boxes[0].tolist()
+    ([1, 2], [5.0, 5.0, 10.0, 10.0])
+    """
+    path = os.fspath(path)
+    text = Path(path).read_text()
+    lines = text.splitlines()
+    a = None
+    try:
+        if text.strip():
+            a = np.loadtxt(lines, delimiter=",", ndmin=2, dtype=float)
+            if not 6 <= a.shape[1] <= 10 or not np.isfinite(a).all():
+                a = None
+        else:
+            a = np.zeros((0, 10))
+    except ValueError:
+        a = None
+    if a is None:
+        a = _parse_slow(path, lines)
+    _check_rows(path, a, lines)
+    a = a[np.argsort(a[:, 0], kind="stable")]
+    N, w = a.shape
+    col = (lambda j, fill: a[:, j] if w > j else np.full(N, fill, dtype=float))
+    return MOTTable(frames=a[:, 0].astype(np.int64), ids=a[:, 1].astype(np.int64),
+                    boxes=np.ascontiguousarray(a[:, 2:6]), conf=col(6, 1.0),
+                    classes=col(7, -1.0).astype(np.int64), visibility=col(8, -1.0), path=path,
+                    columns=w)
+
+
+def write_mot(path: str | os.PathLike, frames: Any, ids: Any, boxes: Any, conf: Any = None, *,
+              force: bool = False) -> Path:
+    """Write a MOTChallenge results file: ``frame, id, left, top, width, height, conf, -1, -1,
+    -1``, sorted by frame and id. Refuses to overwrite an existing file unless ``force``."""
+    path = Path(path)
+    if path.exists() and not force:
+        raise FileExistsError(f"{path} exists; pass force=True (--force) to overwrite it")
+    f = np.asarray(frames, dtype=np.int64).ravel()
+    i = np.asarray(ids, dtype=np.int64).ravel()
+    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
+    c = np.ones(len(f)) if conf is None else np.asarray(conf, dtype=float).ravel()
+    if not len(f) == len(i) == len(b) == len(c):
+        raise ValueError(f"frames, ids, boxes and conf must have the same length; got "
+                         f"{len(f)}, {len(i)}, {len(b)}, {len(c)}")
+    order = np.lexsort((i, f))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w") as out:
+        for k in order:
+            x, y, w, h = b[k]
+            out.write(f"{f[k]},{i[k]},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{c[k]:.4g},-1,-1,-1\n")
+    return path
+
+
+@dataclass(frozen=True)
+class SeqInfo:
+    """``seqinfo.ini`` of a MOTChallenge sequence."""
+
+    name: str
+    frame_rate: float
+    seq_length: int
+    im_width: int
+    im_height: int
+    im_dir: str = "img1"
+    im_ext: str = ".jpg"
+
+
+def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
+    """Read ``seqinfo.ini`` (or the ``seqinfo.ini`` inside a sequence folder)."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "seqinfo.ini"
+    if not path.exists():
+        raise FileNotFoundError(f"{path} does not exist")
+    cp = configparser.ConfigParser()
+    try:
+        cp.read(path)
+    except configparser.Error as exc:
+        raise MOTFormatError(f"{path}: {exc}") from None
+    if "Sequence" not in cp:
+        raise MOTFormatError(f"{path}: no [Sequence] section")
+    s = cp["Sequence"]
+
+    def get(key: str, kind: type) -> Any:
+        if key not in s:
+            raise MOTFormatError(f"{path}: [Sequence] has no {key}")
+        try:
+            v = kind(s[key])
+        except ValueError:
+            raise MOTFormatError(f"{path}: {key} = {s[key]!r} is not {kind.__name__}") from None
+        if kind is not str and not v > 0:
+            raise MOTFormatError(f"{path}: {key} must be > 0; got {s[key]}")
+        return v
+
+    return SeqInfo(name=s.get("name", path.parent.name), frame_rate=get("frameRate", float),
+                   seq_length=get("seqLength", int), im_width=get("imWidth", int),
+                   im_height=get("imHeight", int), im_dir=s.get("imDir", "img1"),
+                   im_ext=s.get("imExt", ".jpg"))
