@@ -1,0 +1,63 @@
+"""MOTChallenge files: every format in ../shared reads, rows are sorted, bad rows are named."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from vistrack.io import MOTFormatError, read_mot, read_seqinfo, write_mot
+
+from .mot_oracles import MOT15, MOT17, seq_dir
+
+
+def test_reads_the_shared_files():
+    d = seq_dir("MOT17", "MOT17-09-FRCNN")
+    gt = read_mot(d / "gt" / "gt.txt")
+    raw = np.loadtxt(d / "gt" / "gt.txt", delimiter=",")
+    assert len(gt) == len(raw) and gt.columns == 9
+    assert set(np.unique(gt.classes)) <= set(range(1, 14)) and (gt.visibility <= 1).all()
+    assert np.all(np.diff(gt.frames) >= 0)  # MOT17 gt is sorted by id, not by frame
+    # the rows of one frame are the file's rows of that frame, in file order
+    f = raw[raw[:, 0] == 100]
+    np.testing.assert_array_equal(gt.ids[gt.frame_slices()[99]], f[:, 1])
+    info = read_seqinfo(d)
+    assert (info.name, info.frame_rate, info.seq_length) == ("MOT17-09-FRCNN", 30.0, 525)
+    for name in MOT15:
+        t = read_mot(seq_dir("MOT15", name) / "det" / "det.txt")
+        assert len(t) > 0 and t.columns == 10 and (t.ids == -1).all()
+    for name in MOT17:
+        assert len(read_mot(seq_dir("MOT17", name) / "det" / "det.txt")) > 0
+
+
+@pytest.mark.parametrize("text, where", [
+    ("1,1,10,10,5,5,1\n2,1,10,x,5,5,1\n", "line 2, column 4 (top): not a number: 'x'"),
+    ("1,1,10,10,5,5,1\n\n3,1,10,10,-5,5,1\n", "line 3, column 5 (width): width must be >= 0"),
+    ("1,1,10,10,5\n", "line 1, column 6 (height): expected at least 6"),
+    ("0,1,10,10,5,5,1\n", "line 1, column 1 (frame): frame must be an integer >= 1"),
+    ("1,1,10,10,5,5,1\n2,1,10,10,5,5,1,3\n", "line 2, column 8 (class): 8 values where"),
+    ("1,1.5,10,10,5,5,1\n", "line 1, column 2 (id): id must be an integer"),
+    ("1,1,nan,10,5,5,1\n", "line 1, column 3 (left): not a finite number"),
+])
+def test_bad_rows_are_named(tmp_path, text, where):
+    p = tmp_path / "gt.txt"
+    p.write_text(text)
+    with pytest.raises(MOTFormatError, match=re.escape(f"gt.txt, {where}")):
+        read_mot(p)
+
+
+def test_write_then_read_and_no_overwrite(tmp_path):
+    p = tmp_path / "out" / "res.txt"
+    write_mot(p, [2, 1, 1], [5, 9, 3], [[1, 2, 3, 4], [5, 6, 7, 8], [0.5, 0, 1, 1]], [0.5, 1, 1])
+    t = read_mot(p)
+    assert t.frames.tolist() == [1, 1, 2] and t.ids.tolist() == [3, 9, 5]
+    np.testing.assert_allclose(t.boxes[0], [0.5, 0, 1, 1])
+    with pytest.raises(FileExistsError, match="res.txt exists; pass force=True"):
+        write_mot(p, [1], [1], [[0, 0, 1, 1]])
+    write_mot(p, [1], [1], [[0, 0, 1, 1]], force=True)
+    assert len(read_mot(p)) == 1
+    (tmp_path / "s").mkdir()
+    (tmp_path / "s" / "seqinfo.ini").write_text("[Sequence]\nname=s\nframeRate=abc\n")
+    with pytest.raises(MOTFormatError, match="frameRate = 'abc' is not float"):
+        read_seqinfo(tmp_path / "s")
