@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-__all__ = ["Gaussian"]
+__all__ = ["Gaussian", "Detections"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,3 +72,90 @@ class Gaussian:
         if self.mean.ndim == 1:
             raise TypeError("a single Gaussian (mean of shape (n,)) has no len()")
         return int(self.mean.shape[0])
+
+
+@dataclass(frozen=True)
+class Detections:
+    """One frame's detections, as columns: boxes or points, scores and classes.
+
+    Parameters
+    ----------
+    boxes : ndarray, shape (N, 4), optional
+        ``x0, y0, x1, y1`` in pixels (``x1 >= x0``, ``y1 >= y0``).
+    points : ndarray, shape (N, d), optional
+        Point measurements (blob centres, particles), when there are no boxes.
+    scores : ndarray, shape (N,), optional
+        Detector confidences; default 1.
+    classes : ndarray, shape (N,) int, optional
+        Class numbers; default 0. Trackers never give two classes one identity.
+
+    Index with a boolean mask or indices (``dets[dets.scores > 0.5]``).
+
+    Examples
+    --------
+    >>> d = Detections.from_xywh([[10, 20, 30, 40], [0, 0, 5, 5]], scores=[0.9, 0.3])
+    >>> d[d.scores > 0.5].boxes.tolist(), d.centers[0].tolist()
+    ([[10.0, 20.0, 40.0, 60.0]], [25.0, 40.0])
+    """
+
+    boxes: np.ndarray | None = None
+    points: np.ndarray | None = None
+    scores: np.ndarray | None = None
+    classes: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if (self.boxes is None) == (self.points is None):
+            raise ValueError("Detections need boxes or points (one of them)")
+        if self.boxes is not None:
+            b = np.asarray(self.boxes, dtype=np.float64).reshape(-1, 4) if np.size(
+                self.boxes) == 0 else np.asarray(self.boxes, dtype=np.float64)
+            if b.ndim != 2 or b.shape[1] != 4:
+                raise ValueError(f"boxes must have shape (N, 4); got {b.shape}")
+            if not np.isfinite(b).all():
+                raise ValueError("boxes must be finite")
+            if (b[:, 2] < b[:, 0]).any() or (b[:, 3] < b[:, 1]).any():
+                i = int(np.flatnonzero((b[:, 2] < b[:, 0]) | (b[:, 3] < b[:, 1]))[0])
+                raise ValueError(f"boxes must be x0, y0, x1, y1 with x1 >= x0 and y1 >= y0; "
+                                 f"boxes[{i}] = {b[i].tolist()}")
+            object.__setattr__(self, "boxes", b)
+            n = len(b)
+        else:
+            p = np.asarray(self.points, dtype=np.float64)
+            if p.ndim != 2:
+                raise ValueError(f"points must have shape (N, d); got {p.shape}")
+            object.__setattr__(self, "points", p)
+            n = len(p)
+        for name, default, dtype in (("scores", 1.0, np.float64), ("classes", 0, np.int64)):
+            v = getattr(self, name)
+            v = np.full(n, default, dtype) if v is None else np.asarray(v, dtype=dtype)
+            if v.shape != (n,):
+                raise ValueError(f"{name} must have shape ({n},); got {v.shape}")
+            object.__setattr__(self, name, v)
+
+    @classmethod
+    def from_xywh(cls, xywh: Any, scores: Any = None, classes: Any = None) -> "Detections":
+        """From ``left, top, width, height`` boxes (MOTChallenge files)."""
+        b = np.asarray(xywh, dtype=np.float64).reshape(-1, 4)
+        return cls(boxes=np.c_[b[:, :2], b[:, :2] + b[:, 2:]], scores=scores, classes=classes)
+
+    def __len__(self) -> int:
+        return int(self.scores.shape[0])
+
+    def __getitem__(self, index: Any) -> "Detections":
+        return Detections(
+            boxes=None if self.boxes is None else self.boxes[index],
+            points=None if self.points is None else self.points[index],
+            scores=self.scores[index], classes=self.classes[index])
+
+    @property
+    def xywh(self) -> np.ndarray:
+        """Boxes as ``left, top, width, height``."""
+        b = self.boxes
+        return np.c_[b[:, :2], b[:, 2:] - b[:, :2]]
+
+    @property
+    def centers(self) -> np.ndarray:
+        """Box centres ``(N, 2)``, or the points."""
+        if self.boxes is None:
+            return self.points
+        return 0.5 * (self.boxes[:, :2] + self.boxes[:, 2:])

@@ -1,0 +1,121 @@
+"""Association: costs against independent computations, assignment against brute force."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from vistrack.association import (
+    assign,
+    chi2_gate,
+    components,
+    euclidean,
+    giou,
+    gnn,
+    iou,
+    mahalanobis,
+)
+
+
+def cells(x):
+    return {(i, j) for i in range(int(x[0]), int(x[2])) for j in range(int(x[1]), int(x[3]))}
+
+
+def raster_iou(a, b):
+    """IoU of integer boxes by counting unit cells."""
+    A, B = cells(a), cells(b)
+    return len(A & B) / len(A | B) if A | B else 0.0
+
+
+def test_iou_and_giou_against_rasterised_boxes():
+    rng = np.random.default_rng(0)
+    lo = rng.integers(0, 12, (40, 2))
+    boxes = np.c_[lo, lo + rng.integers(0, 8, (40, 2))].astype(float)
+    got = iou(boxes[:20], boxes[20:])
+    want = np.array([[raster_iou(a, b) for b in boxes[20:]] for a in boxes[:20]])
+    np.testing.assert_allclose(got, want, atol=1e-12)
+    # GIoU = IoU - (hull - union) / hull, the hull counted by cells too
+    g = giou(boxes[:20], boxes[20:])
+    for i in range(20):
+        for j in range(20):
+            a, b = boxes[i], boxes[20 + j]
+            hull = cells(np.r_[np.minimum(a[:2], b[:2]), np.maximum(a[2:], b[2:])])
+            A, B = cells(a), cells(b)
+            if hull:
+                want_g = raster_iou(a, b) - (len(hull) - len(A | B)) / len(hull)
+                assert g[i, j] == pytest.approx(want_g, abs=1e-12)
+    assert np.all(g <= got + 1e-12) and np.all(g >= -1)
+
+
+def test_mahalanobis_and_gate():
+    rng = np.random.default_rng(1)
+    A = rng.normal(size=(5, 3, 3))
+    S = A @ A.transpose(0, 2, 1) + np.eye(3)
+    zp, z = rng.normal(size=(5, 3)), rng.normal(size=(7, 3))
+    want = np.array([[(zz - p) @ np.linalg.inv(s) @ (zz - p) for zz in z] for p, s in zip(zp, S)])
+    np.testing.assert_allclose(mahalanobis(zp, S, z), want, rtol=1e-10)
+    assert chi2_gate(np.array([[9.20, 9.22]]), 2).tolist() == [[True, False]]  # chi2(2) 99 %
+    np.testing.assert_allclose(euclidean([[0, 0]], [[3, 4]]), [[5.0]])
+    with pytest.raises(ValueError, match=r"S must have shape \(5, 3, 3\)"):
+        mahalanobis(zp, S[:2], z)
+
+
+def brute_force(cost, gate):
+    """The most allowed pairs, then the least cost, over every assignment."""
+    T, D = cost.shape
+    best = (-1, np.inf)
+    for perm in itertools.permutations(range(max(T, D)), min(T, D)):
+        pairs = [(i, j) for i, j in zip(range(T), perm) if j < D] if T <= D else \
+                [(i, j) for j, i in zip(range(D), perm) if i < T]
+        ok = [(i, j) for i, j in pairs if gate[i, j]]
+        key = (len(ok), sum(cost[i, j] for i, j in ok))
+        if key[0] > best[0] or (key[0] == best[0] and key[1] < best[1] - 1e-12):
+            best = key
+    return best
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_gnn_equals_brute_force(seed):
+    rng = np.random.default_rng(seed)
+    T, D = rng.integers(1, 6, 2)
+    cost = rng.uniform(-1, 5, (T, D))
+    gate = rng.random((T, D)) < 0.6
+    r, c = gnn(cost, gate)
+    assert len(set(r)) == len(r) and len(set(c)) == len(c) and gate[r, c].all()
+    n, total = brute_force(cost, gate)
+    assert len(r) == n and cost[r, c].sum() == pytest.approx(total, abs=1e-9)
+
+
+def test_components_give_the_whole_problems_answer_for_many_objects():
+    """10,000 objects on a line, gated to their neighbours: solving each connected component
+    alone gives the same number of pairs and total cost as one assignment over all."""
+    from scipy.optimize import linear_sum_assignment
+
+    rng = np.random.default_rng(2)
+    x = np.sort(rng.uniform(0, 20_000, 10_000))
+    z = x + rng.normal(0, 0.5, x.size)
+    z = z[rng.permutation(z.size)][: 9_500]  # some missed
+    d = np.abs(x[:, None] - z[None, :])
+    gate = d < 3.0
+    r, c = gnn(d, gate)
+    k, lt, ld = components(gate)
+    assert k > 1000
+    big = np.where(gate, d, 1e6)
+    R, C = linear_sum_assignment(big)
+    ok = gate[R, C]
+    assert len(r) == ok.sum()
+    assert d[r, c].sum() == pytest.approx(d[R[ok], C[ok]].sum(), rel=1e-12)
+
+
+def test_greedy_and_nearest_neighbour():
+    cost = np.array([[1.0, 2.0], [1.5, 9.0]])
+    assert [a.tolist() for a in assign(cost, method="greedy")] == [[0, 1], [0, 1]]
+    r, c = assign(cost, method="nn")
+    assert r.tolist() == [0, 1] and c.tolist() == [0, 0]  # both take detection 0
+    r, c = assign(cost, np.array([[False, True], [False, False]]))
+    assert r.tolist() == [0] and c.tolist() == [1]
+    with pytest.raises(ValueError, match=r"method must be one of \['gnn', 'greedy', 'nn'\]"):
+        assign(cost, method="hungarian")
+    assert [len(a) for a in assign(np.zeros((3, 0)))] == [0, 0]
