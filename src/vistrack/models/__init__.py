@@ -1,6 +1,7 @@
 """Physics: motion models (``F(dt)``, ``Q(dt)``; nonlinear: ``f``, ``jacobian``) and measurement
 models (``H``, ``R``; nonlinear: ``h``, ``jacobian``)."""
 
+from .box import BoxMotion
 from .linear_gaussian import LinearGaussian
 from .measurement import LinearMeasurement, MeasurementModel, Position
 from .switching import SwitchingLinearSystem
@@ -25,6 +26,7 @@ from .motion import (
 )
 
 __all__ = [
+    "BoxMotion",
     "ConstantAcceleration",
     "ConstantPosition",
     "ConstantVelocity",

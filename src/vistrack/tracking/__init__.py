@@ -1,0 +1,7 @@
+"""Multi-object tracking: track management and trackers built from filters and association."""
+
+from .box import TRACKERS, BoxTracker, BoxTrackerConfig
+from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, Tracks
+
+__all__ = ["TRACKERS", "BoxTracker", "BoxTrackerConfig", "CONFIRMED", "LOST", "TENTATIVE",
+           "TrackTable", "Tracks"]

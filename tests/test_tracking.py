@@ -1,0 +1,144 @@
+"""Box trackers on scenes with known truth; lifecycle, gaps, classes, reset; the CLI."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from vistrack.evaluation import evaluate_mot
+from vistrack.io import MOTTable, read_mot
+from vistrack.tracking import BoxTracker
+from vistrack.types import Detections
+
+from .mot_oracles import seq_dir
+
+
+def scene(rng, n_obj=8, T=150, miss=0.1, clutter=1.0, noise=2.0):
+    """Boxes moving with constant velocity (some crossing), detected with noise, misses and
+    clutter. Returns truth as a MOTTable and detections per frame."""
+    start = rng.integers(1, T // 3, n_obj)
+    end = np.minimum(start + rng.integers(T // 3, T, n_obj), T)
+    p0 = rng.uniform(100, 900, (n_obj, 2))
+    v = rng.normal(0, 3, (n_obj, 2))
+    size = rng.uniform(30, 80, (n_obj, 1)) * np.array([[0.5, 1.0]])
+    truth, dets = [], []
+    for f in range(1, T + 1):
+        alive = (start <= f) & (f <= end)
+        c = p0[alive] + v[alive] * (f - start[alive])[:, None]
+        xywh = np.c_[c - size[alive] / 2, size[alive]]
+        for i, b in zip(np.flatnonzero(alive), xywh):
+            truth.append((f, i + 1, *b))
+        seen = rng.random(len(xywh)) > miss
+        d = xywh[seen] + rng.normal(0, noise, (seen.sum(), 4)) * [1, 1, 0.5, 0.5]
+        k = rng.poisson(clutter)
+        fake = np.c_[rng.uniform(0, 1000, (k, 2)), rng.uniform(15, 40, (k, 1)) * [[0.5, 1]]]
+        scores = np.r_[rng.uniform(0.7, 1.0, len(d)), rng.uniform(0.1, 0.65, k)]
+        dets.append(Detections.from_xywh(np.r_[d, fake], scores))
+    a = np.array(truth)
+    gt = MOTTable(a[:, 0].astype(int), a[:, 1].astype(int), a[:, 2:6], np.ones(len(a)),
+                  -np.ones(len(a), int), -np.ones(len(a)))
+    return gt, dets
+
+
+def run(tracker, dets):
+    rows = []
+    for f, d in enumerate(dets, start=1):
+        out = tracker.step(d, frame=f)
+        rows += [(f, i, *b, s) for i, b, s in zip(out.ids, out.xywh, out.scores)]
+    a = np.array(rows).reshape(-1, 7)
+    return MOTTable(a[:, 0].astype(int), a[:, 1].astype(int), a[:, 2:6], a[:, 6],
+                    -np.ones(len(a), int), -np.ones(len(a)))
+
+
+@pytest.mark.parametrize("name", ["bytetrack", "sort"])
+def test_trackers_recover_a_scene_with_known_truth(name):
+    rng = np.random.default_rng(0)
+    gt, dets = scene(rng)
+    c = evaluate_mot(gt, run(BoxTracker(name), dets), len(dets))
+    assert c.MOTA > 0.8 and c.IDF1 > 0.8, c.summary()
+    assert c.IDSW <= 0.01 * c.TP, c.summary()
+
+
+def test_two_stage_recovers_low_score_detections():
+    """When a third of the true detections come with a low score, the second stage keeps
+    tracking through them: more of the truth is found than with one threshold."""
+    rng = np.random.default_rng(1)
+    gt, dets = scene(rng, clutter=0.0)
+    dimmed = []
+    for d in dets:
+        s = d.scores.copy()
+        s[rng.random(len(s)) < 0.33] = 0.3
+        dimmed.append(Detections(boxes=d.boxes, scores=s))
+    two = evaluate_mot(gt, run(BoxTracker("bytetrack"), dimmed), len(dets))
+    one = evaluate_mot(gt, run(BoxTracker("bytetrack", two_stage=False), dimmed), len(dets))
+    assert two.TP > one.TP * 1.1 and two.MOTA > one.MOTA
+
+
+def test_frame_gaps_predict_over_the_true_time():
+    """An object moving 20 pixels a frame, 30 wide, unseen for 6 frames: predicted over the
+    gap it is found again under its id; predicted over one frame it would not overlap."""
+    def det(f):
+        return Detections.from_xywh([[100 + 20 * f, 50, 30, 60]], [0.9])
+
+    tr = BoxTracker("bytetrack")
+    for f in range(1, 8):
+        first = tr.step(det(f), frame=f)
+    after = tr.step(det(14), frame=14)
+    assert after.ids.tolist() == first.ids.tolist() == [1]
+    tr2 = BoxTracker("bytetrack")
+    for f in range(1, 8):
+        tr2.step(det(f), frame=f)
+    assert tr2.step(det(14), frame=8).ids.tolist() == []  # as if one frame: no match, new track
+
+
+def test_classes_never_share_an_identity_and_reset():
+    tr = BoxTracker("bytetrack")
+    box = [[10, 10, 40, 80]]
+    for f in range(1, 6):
+        cls = 0 if f < 3 else 1  # same place, the class changes: a different object
+        out = tr.step(Detections.from_xywh(box, [0.9], classes=[cls]), frame=f)
+    assert out.ids.tolist() == [2] and out.classes.tolist() == [1]
+    tr.reset()
+    assert tr.step(Detections.from_xywh(box, [0.9]), frame=1).ids.tolist() == [1]
+    with pytest.raises(ValueError, match="frame must increase; got 1 after 1"):
+        tr.step(Detections.from_xywh(box, [0.9]), frame=1)
+    with pytest.raises(ValueError, match="tracker must be one of"):
+        BoxTracker("deepsort")
+
+
+def test_memory_stays_flat_with_constant_turnover():
+    """Objects appear and leave all the time: deleted tracks are dropped, so the table holds
+    only the live ones however long the run."""
+    rng = np.random.default_rng(3)
+    tr = BoxTracker("bytetrack")
+    sizes = []
+    for f in range(1, 3001):
+        k = 20
+        lo = rng.uniform(0, 5000, (k, 2))
+        sizes.append(len(tr.tracks))
+        tr.step(Detections.from_xywh(np.c_[lo, np.full((k, 2), 20.0)], np.full(k, 0.9)), frame=f)
+    assert max(sizes[1000:]) <= max(sizes[:1000]) + 5 and max(sizes) < 100
+
+
+def test_cli_track_and_eval(tmp_path):
+    d = seq_dir("MOT15", "KITTI-17")
+    out = tmp_path / "KITTI-17.txt"
+    cmd = [sys.executable, "-m", "vistrack.cli"]
+    r = subprocess.run(cmd + ["track", str(d), "--out", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "wrote" in r.stdout and len(read_mot(out)) > 400
+    r = subprocess.run(cmd + ["track", str(d), "--out", str(out)], capture_output=True, text=True)
+    assert r.returncode == 2 and "exists; pass --force" in r.stderr
+    r = subprocess.run(cmd + ["eval", "--gt", str(d / "gt" / "gt.txt"), "--pred", str(out),
+                              "--json"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    s = json.loads(r.stdout)["KITTI-17"]
+    ours = evaluate_mot(read_mot(d / "gt" / "gt.txt"), read_mot(out), 145)
+    assert s["MOTA"] == pytest.approx(ours.MOTA) and s["HOTA"] > 0.3
+    r = subprocess.run(cmd + ["eval", "--gt", str(d / "gt" / "gt.txt")], capture_output=True,
+                       text=True)
+    assert r.returncode == 2 and "give --gt and --pred" in r.stderr
