@@ -1,7 +1,7 @@
 """Tracking accuracy on MOT15 and MOT17 train, per sequence and combined (TrackEval's
 conventions, vistrack's scorer, which equals TrackEval), with the public detections.
 
-    python bench/accuracy_mot.py [--tracker NAME] [--write docs/mot.md]
+    python bench/accuracy_mot.py [--tracker NAME] [--offline] [--write docs/mot.md]
 
 MOT15: SORT's Faster R-CNN detections (``det/det.txt``); MOT17: the FRCNN detections. The
 same configuration for every sequence.
@@ -24,13 +24,13 @@ from vistrack.pipeline import evaluate_files, track_sequence
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
 
-def run(bench: str, tracker: str, tmp: Path):
+def run(bench: str, tracker: str, offline: bool, tmp: Path):
     root = DATA / bench.lower()
     seqs = sorted(p for p in root.iterdir() if (p / "seqinfo.ini").exists())
     pairs, speed, skipped = [], {}, []
     for d in seqs:
-        r = track_sequence(d, tmp / bench / f"{d.name}.txt", tracker=tracker, force=True,
-                           progress=None)
+        r = track_sequence(d, tmp / bench / f"{d.name}.txt", tracker=tracker, offline=offline,
+                           force=True, progress=None)
         speed[d.name] = r.fps
         if (d / "gt" / "gt.txt").exists():
             pairs.append((d.name, d / "gt" / "gt.txt", r.out, d / "seqinfo.ini"))
@@ -53,6 +53,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--tracker", default="bytetrack")
+    ap.add_argument("--offline", action="store_true")
     ap.add_argument("--write", metavar="MD")
     args = ap.parse_args()
     if not DATA.exists():
@@ -60,13 +61,18 @@ def main():
     parts = []
     with tempfile.TemporaryDirectory() as tmp:
         for bench in ("MOT15", "MOT17"):
-            res, speed, skipped = run(bench, args.tracker, Path(tmp))
+            res, speed, skipped = run(bench, args.tracker, args.offline, Path(tmp))
             note = (f" Not scored (no ground truth here): {', '.join(skipped)}." if skipped
                     else "")
-            parts.append(f"**{bench} train, `{args.tracker}`**{note}\n\n{table(res, speed)}\n")
+            mode = ", offline" if args.offline else ""
+            parts.append(f"**{bench} train, `{args.tracker}`{mode}**{note}\n\n"
+                         f"{table(res, speed)}\n")
     env = f"Python {platform.python_version()}, numpy {np.__version__}, {time.strftime('%Y-%m-%d')}"
-    section = (f"## Accuracy on MOT15 and MOT17 train\n\nMeasured with `python "
-               f"bench/accuracy_mot.py --tracker {args.tracker}` ({env}).\n\n" + "\n".join(parts))
+    flag = " --offline" if args.offline else ""
+    title = "Offline accuracy" if args.offline else "Accuracy"
+    section = (f"## {title} on MOT15 and MOT17 train\n\nMeasured with `python "
+               f"bench/accuracy_mot.py --tracker {args.tracker}{flag}` ({env}).\n\n"
+               + "\n".join(parts))
     print(section)
     if args.write:
         replace_section(args.write, section)

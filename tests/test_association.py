@@ -119,3 +119,36 @@ def test_greedy_and_nearest_neighbour():
     with pytest.raises(ValueError, match=r"method must be one of \['gnn', 'greedy', 'nn'\]"):
         assign(cost, method="hungarian")
     assert [len(a) for a in assign(np.zeros((3, 0)))] == [0, 0]
+
+
+def test_sparse_pairs_and_assignment_equal_the_dense_ones():
+    from vistrack.association import gnn_sparse, iou_pairs
+
+    rng = np.random.default_rng(5)
+    for n, m in [(200, 180), (1, 5), (30, 0)]:
+        lo = rng.uniform(0, 600, (n, 2))
+        a = np.c_[lo, lo + rng.uniform(5, 60, (n, 2))]
+        lo = rng.uniform(0, 600, (m, 2))
+        b = np.c_[lo, lo + rng.uniform(5, 60, (m, 2))]
+        dense = iou(a, b)
+        for th in (0.0, 0.3):
+            r, c, v = iou_pairs(a, b, th)
+            want = np.argwhere(dense > 0) if th == 0 else np.argwhere(dense >= th)
+            assert sorted(zip(r.tolist(), c.tolist())) == sorted(map(tuple, want.tolist()))
+            np.testing.assert_allclose(v, dense[r, c], rtol=1e-12)
+        r, c, v = iou_pairs(a, b, 0.01)
+        sr, sc = gnn_sparse(r, c, 1 - v, (n, m))
+        gate = dense >= 0.01
+        dr, dc = gnn(1 - dense, gate)
+        assert len(sr) == len(dr)
+        assert (1 - dense[sr, sc]).sum() == pytest.approx((1 - dense[dr, dc]).sum(), abs=1e-9)
+
+
+def test_iou_pairs_with_far_apart_boxes():
+    from vistrack.association import iou_pairs
+
+    a = np.array([[0, 0, 10, 10], [1e9, 1e9, 1e9 + 10, 1e9 + 10]], float)
+    b = np.array([[5, 5, 15, 15], [1e9 + 5, 1e9, 1e9 + 15, 1e9 + 10], [-1e9, 0, -1e9 + 1, 1]])
+    r, c, v = iou_pairs(a, b)
+    np.testing.assert_allclose(v, iou(a, b)[r, c])
+    assert sorted(zip(r.tolist(), c.tolist())) == [(0, 0), (1, 1)]

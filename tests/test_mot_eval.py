@@ -134,3 +134,9 @@ def test_identity_scores_equal_py_motmetrics(name, tmp_path):
     assert abs(ours.FN - ref.num_misses) <= 0.01 * ours.FN
     # motmetrics counts a switch as a match of its own: TP = matches + switches
     assert abs(ours.TP - (ref.num_matches + ref.num_switches)) <= 0.01 * ours.TP
+
+
+def test_unsorted_tables_are_refused():
+    gt = table([2, 1], [1, 1], [0, 0])
+    with pytest.raises(ValueError, match="rows must be sorted by frame"):
+        evaluate_mot(gt, table([1], [1], [0]))

@@ -142,3 +142,53 @@ def test_cli_track_and_eval(tmp_path):
     r = subprocess.run(cmd + ["eval", "--gt", str(d / "gt" / "gt.txt")], capture_output=True,
                        text=True)
     assert r.returncode == 2 and "give --gt and --pred" in r.stderr
+
+
+def test_per_axis_filter_equals_the_full_kalman_filter():
+    """The box tracker's four 2-state filters equal the 8-state Kalman filter (vistrack's
+    kf_predict / kf_update) with the same F, Q and R, over predictions and updates."""
+    from vistrack import Gaussian
+    from vistrack.filters import kf_predict, kf_update
+
+    rng = np.random.default_rng(4)
+    tr = BoxTracker("bytetrack")
+    boxes = np.c_[rng.uniform(0, 500, (5, 2)), rng.uniform(20, 80, (5, 2))]
+    tr.step(Detections.from_xywh(boxes, np.full(5, 0.9)), frame=1)
+    full = [Gaussian(tr.tracks.mean[i].copy(), tr.covariances()[i]) for i in range(5)]
+    for f, dt in [(2, 1.0), (5, 3.0), (6, 1.0)]:
+        for i in range(5):
+            Q = tr.motion.Q(kf_predict(full[i], tr.motion.F(dt), np.zeros((8, 8))).mean[None, :4],
+                            dt)[0]
+            full[i] = kf_predict(full[i], tr.motion.F(dt), Q)
+        boxes[:, :2] += rng.normal(0, 2, (5, 2))
+        dets = Detections.from_xywh(boxes, np.full(5, 0.9))
+        tr.step(dets, frame=f)
+        z = np.c_[dets.centers, boxes[:, 2:]]
+        for i in range(5):
+            R = tr.motion.R(full[i].mean[None, :4])[0]
+            full[i] = kf_update(full[i], z[i], np.eye(4, 8), R)
+        np.testing.assert_allclose(tr.tracks.mean, [g.mean for g in full], rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(tr.covariances(), [g.cov for g in full], rtol=1e-9,
+                                   atol=1e-12)
+
+
+def test_offline_mode_smooths_and_fills_gaps():
+    """On a scene with known truth, offline smoothing finds more of the truth (filled gaps,
+    tentative frames) and places boxes closer to it than the online tracker."""
+    from vistrack.tracking import smooth
+
+    rng = np.random.default_rng(6)
+    gt, dets = scene(rng, miss=0.25, noise=4.0)
+    online = run(BoxTracker("bytetrack"), dets)
+    tr = BoxTracker("bytetrack", record=True)
+    for f, d in enumerate(dets, start=1):
+        tr.step(d, frame=f)
+    s = smooth(tr)
+    assert s.filled.any() and s.covs.shape == (len(s), 8, 8)
+    assert np.all(np.linalg.eigvalsh(s.covs) > 0)
+    off = MOTTable(s.frames, s.ids, s.xywh, s.scores, -np.ones(len(s), int), -np.ones(len(s)))
+    c_on, c_off = (evaluate_mot(gt, t, len(dets)) for t in (online, off))
+    assert c_off.TP > c_on.TP and c_off.MOTA > c_on.MOTA
+    assert c_off.MOTP > c_on.MOTP  # mean IoU of the matches
+    with pytest.raises(ValueError, match="record=True"):
+        smooth(BoxTracker("bytetrack"))

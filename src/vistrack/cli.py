@@ -23,7 +23,7 @@ def _track(args: argparse.Namespace) -> int:
 
     try:
         run = track_sequence(args.seq_dir, args.out, detections=args.detections,
-                             tracker=args.tracker, force=args.force,
+                             tracker=args.tracker, offline=args.offline, force=args.force,
                              progress=sys.stderr if sys.stderr.isatty() and not args.quiet
                              else None)
     except (FileNotFoundError, FileExistsError, ValueError) as exc:
@@ -113,6 +113,8 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--detections", help="detections file (default SEQ_DIR/det/det.txt)")
     track.add_argument("--tracker", default="bytetrack", choices=sorted(TRACKERS),
                        help="tracker (default: bytetrack)")
+    track.add_argument("--offline", action="store_true",
+                       help="smooth finished tracks and fill gaps of up to 0.5 s")
     track.add_argument("--out", required=True, help="results file to write")
     track.add_argument("--force", action="store_true", help="overwrite an existing results file")
     track.add_argument("--quiet", action="store_true",

@@ -17,6 +17,7 @@ import numpy as np
 from .evaluation.mot import MOTCounts, combine, evaluate_mot
 from .io.motchallenge import read_mot, read_seqinfo, write_mot
 from .tracking.box import BoxTracker
+from .tracking.offline import smooth
 from .types import Detections
 
 __all__ = ["track_sequence", "TrackRun", "evaluate_files"]
@@ -50,8 +51,9 @@ def _progress(done: int, total: int, label: str, stream: Any) -> None:
 
 
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,
-                   tracker: str = "bytetrack", force: bool = False,
-                   progress: Any = sys.stderr, **overrides: Any) -> TrackRun:
+                   tracker: str = "bytetrack", offline: bool = False, max_gap: float = 0.5,
+                   force: bool = False, progress: Any = sys.stderr,
+                   **overrides: Any) -> TrackRun:
     """Track a MOTChallenge sequence folder and write a results file.
 
     Parameters
@@ -64,6 +66,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         Another detections file (default ``seq_dir/det/det.txt``).
     tracker
         A name in :data:`vistrack.tracking.TRACKERS`.
+    offline
+        Smooth the finished tracks and fill gaps of up to ``max_gap`` seconds
+        (:func:`vistrack.tracking.smooth`).
     progress
         A stream for a progress bar, or None.
     """
@@ -79,7 +84,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     if len(dets) and dets.frames.max() > info.seq_length:
         raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
                          f"sequence's {info.seq_length} frames ({seq_dir / 'seqinfo.ini'})")
-    trk = BoxTracker(tracker, frame_rate=info.frame_rate, **overrides)
+    trk = BoxTracker(tracker, frame_rate=info.frame_rate, record=offline, **overrides)
     slices = dets.frame_slices(info.seq_length)
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
     frames, ids, boxes, scores = [], [], [], []
@@ -100,7 +105,13 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
             _progress(f, info.seq_length, info.name, progress)
     cat = (lambda a, shape: np.concatenate(a) if a else np.zeros(shape))
     F, I = cat(frames, (0,)).astype(int), cat(ids, (0,)).astype(int)
-    write_mot(out, F, I, cat(boxes, (0, 4)), cat(scores, (0,)), force=True)
+    B, S = cat(boxes, (0, 4)), cat(scores, (0,))
+    if offline:
+        t0 = time.perf_counter()
+        sm = smooth(trk, max_gap=int(round(max_gap * info.frame_rate)))
+        seconds += time.perf_counter() - t0
+        F, I, B, S = sm.frames, sm.ids, sm.xywh, np.where(sm.filled, 0.0, sm.scores)
+    write_mot(out, F, I, B, S, force=True)
     return TrackRun(out, info.seq_length, len(dets), len(F), len(np.unique(I)), seconds)
 
 

@@ -21,8 +21,9 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
+from numba import njit
 
-__all__ = ["ASSIGNERS", "assign", "gnn", "greedy", "nearest_neighbour", "components"]
+__all__ = ["ASSIGNERS", "assign", "gnn", "gnn_sparse", "greedy", "nearest_neighbour", "components"]
 
 _EMPTY = (np.zeros(0, np.int64), np.zeros(0, np.int64))
 
@@ -63,9 +64,136 @@ def gnn(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, n
     cost, gate = _check(cost, gate)
     if not gate.any():
         return _EMPTY
+    # pairs alone in their component (the track allows only this detection and the detection
+    # only this track) are matched at once; the rest are solved together when small, else one
+    # component at a time
+    row_deg, col_deg = gate.sum(1), gate.sum(0)
     r_all, c_all = np.nonzero(gate)
-    if len(r_all) == gate.shape[0] * gate.shape[1] or min(gate.shape) <= 2:
-        return _lsa(cost, gate)
+    alone = (row_deg[r_all] == 1) & (col_deg[c_all] == 1)
+    rows, cols = [r_all[alone]], [c_all[alone]]
+    rest_r = np.flatnonzero(row_deg > 0)
+    rest_r = rest_r[~np.isin(rest_r, r_all[alone])]
+    if len(rest_r):
+        rest_c = np.flatnonzero(gate[rest_r].any(0))
+        sub_cost, sub_gate = cost[np.ix_(rest_r, rest_c)], gate[np.ix_(rest_r, rest_c)]
+        if sub_gate.size <= 4096:
+            r, c = _lsa(sub_cost, sub_gate)
+            rows.append(rest_r[r])
+            cols.append(rest_c[c])
+        else:
+            r, c = _by_component(sub_cost, sub_gate)
+            rows.append(rest_r[r])
+            cols.append(rest_c[c])
+    return np.concatenate(rows).astype(np.int64), np.concatenate(cols).astype(np.int64)
+
+
+@njit(cache=True)
+def _local_indices(rr, rc, starts, ends, T, D):
+    # for pairs grouped by component: each pair's row and column index within its component,
+    # and each component's numbers of rows and columns
+    rmap, cmap = np.full(T, -1), np.full(D, -1)
+    ir, ic = np.empty(rr.shape[0], np.int64), np.empty(rr.shape[0], np.int64)
+    nr, nc = np.zeros(starts.shape[0], np.int64), np.zeros(starts.shape[0], np.int64)
+    for k in range(starts.shape[0]):
+        for p in range(starts[k], ends[k]):
+            if rmap[rr[p]] < 0:
+                rmap[rr[p]] = nr[k]
+                nr[k] += 1
+            if cmap[rc[p]] < 0:
+                cmap[rc[p]] = nc[k]
+                nc[k] += 1
+            ir[p], ic[p] = rmap[rr[p]], cmap[rc[p]]
+        for p in range(starts[k], ends[k]):
+            rmap[rr[p]], cmap[rc[p]] = -1, -1
+    return ir, ic, nr, nc
+
+
+def _solve_pairs(rr: np.ndarray, rc: np.ndarray,
+                 cc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The dense assignment over the tracks and detections of these pairs."""
+    ir, ic, nr, nc = _local_indices(rr, rc, np.zeros(1, np.int64), np.full(1, len(rr)),
+                                    int(rr.max()) + 1, int(rc.max()) + 1)
+    cost = np.zeros((nr[0], nc[0]))
+    gate = np.zeros((nr[0], nc[0]), bool)
+    cost[ir, ic], gate[ir, ic] = cc, True
+    r, c = _lsa(cost, gate)
+    ur, uc = np.empty(nr[0], np.int64), np.empty(nc[0], np.int64)
+    ur[ir], uc[ic] = rr, rc
+    return ur[r], uc[c]
+
+
+@njit(cache=True)
+def _pair_components(rows, cols, T):
+    # union-find over tracks 0..T-1 and detections T..: the component of each pair
+    parent = np.arange(T + (cols.max() + 1 if cols.shape[0] else 0))
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for k in range(rows.shape[0]):
+        a, b = find(rows[k]), find(T + cols[k])
+        if a != b:
+            parent[max(a, b)] = min(a, b)
+    out = np.empty(rows.shape[0], np.int64)
+    for k in range(rows.shape[0]):
+        out[k] = find(rows[k])
+    return out
+
+
+def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
+               shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`gnn` on the allowed pairs only (``rows``, ``cols`` and their ``cost``), for
+    problems too large for a dense matrix: the same answer as ``gnn`` on the dense problem.
+
+    Examples
+    --------
+    >>> r, c = gnn_sparse(np.array([0, 0, 1]), np.array([0, 1, 0]), np.array([1.0, 2.0, 1.5]),
+    ...                   (2, 2))
+    >>> r.tolist(), c.tolist()
+    ([0, 1], [1, 0])
+    """
+    rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
+    cost = np.asarray(cost, dtype=float)
+    T, D = shape
+    if len(rows) == 0:
+        return _EMPTY
+    row_deg = np.bincount(rows, minlength=T)
+    col_deg = np.bincount(cols, minlength=D)
+    alone = (row_deg[rows] == 1) & (col_deg[cols] == 1)
+    out_r, out_c = [rows[alone]], [cols[alone]]
+    rest = ~alone
+    if rest.any():
+        rr, rc, cc = rows[rest], cols[rest], cost[rest]
+        if len(rr) <= 256:
+            # small: one assignment over every component at once
+            r, c = _solve_pairs(rr, rc, cc)
+            out_r.append(r)
+            out_c.append(c)
+        else:
+            lab = _pair_components(rr, rc, T)
+            order = np.argsort(lab, kind="stable")
+            rr, rc, cc, lab = rr[order], rc[order], cc[order], lab[order]
+            edges = np.flatnonzero(np.diff(lab)) + 1
+            starts, ends = np.r_[0, edges], np.r_[edges, len(lab)]
+            ir, ic, nr, nc = _local_indices(rr, rc, starts, ends, T, int(rc.max()) + 1)
+            for k in range(len(starts)):
+                a, b = starts[k], ends[k]
+                sub_cost = np.zeros((nr[k], nc[k]))
+                sub_gate = np.zeros((nr[k], nc[k]), bool)
+                sub_cost[ir[a:b], ic[a:b]], sub_gate[ir[a:b], ic[a:b]] = cc[a:b], True
+                r, c = _lsa(sub_cost, sub_gate)
+                ur, uc = np.empty(nr[k], np.int64), np.empty(nc[k], np.int64)
+                ur[ir[a:b]], uc[ic[a:b]] = rr[a:b], rc[a:b]
+                out_r.append(ur[r])
+                out_c.append(uc[c])
+    return np.concatenate(out_r).astype(np.int64), np.concatenate(out_c).astype(np.int64)
+
+
+def _by_component(cost: np.ndarray, gate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r_all, _ = np.nonzero(gate)
     k, lt, ld = components(gate)
     order_t, order_d = np.argsort(lt, kind="stable"), np.argsort(ld, kind="stable")
     st = np.searchsorted(lt[order_t], np.arange(k + 1))
@@ -73,16 +201,10 @@ def gnn(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, n
     rows, cols = [], []
     for j in np.unique(lt[r_all]):
         ti, di = order_t[st[j]:st[j + 1]], order_d[sd[j]:sd[j + 1]]
-        if len(ti) == 1 or len(di) == 1:  # one side alone: its cheapest allowed partner
-            sub = np.where(gate[np.ix_(ti, di)], cost[np.ix_(ti, di)], np.inf)
-            a = np.unravel_index(np.argmin(sub), sub.shape)
-            rows.append(ti[a[0]:a[0] + 1])
-            cols.append(di[a[1]:a[1] + 1])
-            continue
         r, c = _lsa(cost[np.ix_(ti, di)], gate[np.ix_(ti, di)])
         rows.append(ti[r])
         cols.append(di[c])
-    return np.concatenate(rows).astype(np.int64), np.concatenate(cols).astype(np.int64)
+    return np.concatenate(rows), np.concatenate(cols)
 
 
 def greedy(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

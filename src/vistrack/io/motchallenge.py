@@ -81,6 +81,9 @@ class MOTTable:
     def frame_slices(self, n_frames: int | None = None) -> list[slice]:
         """``slices[f - 1]`` selects the rows of frame ``f``, for ``f = 1 .. n_frames``
         (default: the last frame in the file)."""
+        if len(self) > 1 and np.any(np.diff(self.frames) < 0):
+            raise ValueError(f"{self.path or 'MOTTable'}: rows must be sorted by frame "
+                             f"(read_mot sorts them)")
         last = int(self.frames.max()) if len(self) else 0
         n = last if n_frames is None else int(n_frames)
         edges = np.searchsorted(self.frames, np.arange(1, n + 2))

@@ -56,16 +56,23 @@ class BoxMotion:
         wh = np.maximum(np.asarray(boxes, dtype=float)[:, 2:4], 1e-3)
         return np.concatenate([wh, wh], axis=1)
 
-    def Q(self, boxes: np.ndarray, dt: float = 1.0) -> np.ndarray:
-        """Diagonal process noise ``(K, 8, 8)`` of boxes ``[cx, cy, w, h] (K, 4)`` over ``dt``."""
+    def Q_diag(self, boxes: np.ndarray, dt: float = 1.0) -> np.ndarray:
+        """The diagonal ``(K, 8)`` of the process noise of boxes ``[cx, cy, w, h] (K, 4)``
+        over ``dt`` (the covariance is diagonal)."""
         s = self._scale(boxes)
-        d = np.concatenate([(self.std_pos * s) ** 2, (self.std_vel * s) ** 2], axis=1) * dt
-        return d[:, :, None] * np.eye(8)
+        return np.concatenate([(self.std_pos * s) ** 2, (self.std_vel * s) ** 2], axis=1) * dt
+
+    def Q(self, boxes: np.ndarray, dt: float = 1.0) -> np.ndarray:
+        """Process noise ``(K, 8, 8)``."""
+        return self.Q_diag(boxes, dt)[:, :, None] * np.eye(8)
+
+    def R_diag(self, boxes: np.ndarray) -> np.ndarray:
+        """The diagonal ``(K, 4)`` of the measurement noise of boxes ``[cx, cy, w, h]``."""
+        return (self.std_meas * self._scale(boxes)) ** 2
 
     def R(self, boxes: np.ndarray) -> np.ndarray:
-        """Diagonal measurement noise ``(K, 4, 4)`` of boxes ``[cx, cy, w, h]``."""
-        d = (self.std_meas * self._scale(boxes)) ** 2
-        return d[:, :, None] * np.eye(4)
+        """Measurement noise ``(K, 4, 4)``."""
+        return self.R_diag(boxes)[:, :, None] * np.eye(4)
 
     def initial(self, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Mean ``(K, 8)`` (zero velocity) and covariance ``(K, 8, 8)`` of new tracks."""

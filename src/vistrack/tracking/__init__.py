@@ -2,6 +2,7 @@
 
 from .box import TRACKERS, BoxTracker, BoxTrackerConfig
 from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, Tracks
+from .offline import SmoothedTracks, smooth
 
 __all__ = ["TRACKERS", "BoxTracker", "BoxTrackerConfig", "CONFIRMED", "LOST", "TENTATIVE",
-           "TrackTable", "Tracks"]
+           "TrackTable", "Tracks", "SmoothedTracks", "smooth"]

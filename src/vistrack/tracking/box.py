@@ -3,7 +3,11 @@ r"""Box trackers: a Kalman filter per box, batched over all tracks, and IoU asso
 One step, as on the slides (predict, associate, correct, manage):
 
 1. **predict** every track with :class:`~vistrack.models.BoxMotion` over the true time since the
-   last frame (a gap of frames predicts further, with more noise);
+   last frame (a gap of frames predicts further, with more noise). With diagonal noise the
+   8-state filter is four independent 2-state filters, one per box value and its rate, so
+   each track keeps a 2×2 covariance per axis, ``[pp, pv, vv]``, and predict and update are
+   a few elementwise operations over all tracks (a test checks them against the full
+   8-state Kalman filter);
 2. **associate** by IoU between predicted and detected boxes, by global nearest neighbour with
    a minimum IoU as the gate; a track only takes detections of its own class. With
    ``two_stage`` (ByteTrack's idea, Zhang et al., 2022):
@@ -28,12 +32,13 @@ from typing import Any
 
 import numpy as np
 
-from ..association import assign, iou
+from ..association import assign, gnn_sparse, iou_pairs
 from ..models.box import BoxMotion
 from ..types import Detections
-from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, Tracks
+from .lifecycle import CONFIRMED, TENTATIVE, TrackTable, Tracks
 
 __all__ = ["BoxTracker", "BoxTrackerConfig", "TRACKERS"]
+
 
 
 @dataclass(frozen=True)
@@ -80,6 +85,16 @@ TRACKERS: dict[str, BoxTrackerConfig] = {
 """Box-tracker configurations by name (``vistrack track --tracker NAME``)."""
 
 
+def axes_to_full(c: np.ndarray) -> np.ndarray:
+    """Per-axis covariances ``(..., 4, 3)`` (``pp, pv, vv`` of each box value) as full
+    ``(..., 8, 8)`` ones."""
+    P = np.zeros(c.shape[:-2] + (8, 8))
+    a = np.arange(4)
+    P[..., a, a], P[..., a, a + 4] = c[..., 0], c[..., 1]
+    P[..., a + 4, a], P[..., a + 4, a + 4] = c[..., 1], c[..., 2]
+    return P
+
+
 def _to_xyxy(m: np.ndarray) -> np.ndarray:
     c, s = m[:, 0:2], np.maximum(m[:, 2:4], 0.0)
     return np.concatenate([c - s / 2, c + s / 2], axis=1)
@@ -99,6 +114,9 @@ class BoxTracker:
     motion : BoxMotion, optional
     frame_rate : float
         Frames per second, to turn frame numbers into time.
+    record : bool
+        Keep every frame's filtered states, for :func:`vistrack.tracking.offline.smooth` (the
+        offline mode); memory then grows with the sequence.
     **overrides
         Fields of the configuration to change.
 
@@ -113,7 +131,8 @@ class BoxTracker:
     """
 
     def __init__(self, config: BoxTrackerConfig | str = "bytetrack", *,
-                 motion: BoxMotion | None = None, frame_rate: float = 30.0, **overrides: Any):
+                 motion: BoxMotion | None = None, frame_rate: float = 30.0,
+                 record: bool = False, **overrides: Any):
         if isinstance(config, str):
             if config not in TRACKERS:
                 raise ValueError(f"tracker must be one of {sorted(TRACKERS)}; got {config!r}")
@@ -123,41 +142,62 @@ class BoxTracker:
             raise ValueError(f"frame_rate must be > 0; got {frame_rate}")
         self.motion = motion or BoxMotion()
         self.frame_rate = float(frame_rate)
-        self.tracks = TrackTable(8)
+        self.tracks = TrackTable(8, cov_shape=(4, 3))
+        self.record = bool(record)
         self.reset()
 
     def reset(self) -> None:
         """Forget every track; identities start again from 1."""
         self.tracks.reset()
         self.frame: int | None = None
+        self.history: list = []
+        self._q = np.zeros((0, 8))
+        self._confirmed: set = set()
 
     def _predict(self, dt: float) -> None:
         t = self.tracks
         if len(t) == 0 or dt == 0:
+            self._q = np.zeros((len(t), 8))
             return
-        F = self.motion.F(dt)
-        t.mean = t.mean @ F.T
-        t.cov = F @ t.cov @ F.T + self.motion.Q(t.mean[:, :4], dt)
+        t.mean[:, :4] += dt * t.mean[:, 4:]
+        c = t.cov
+        pp, pv, vv = c[:, :, 0], c[:, :, 1], c[:, :, 2]
+        q = self._q = self.motion.Q_diag(t.mean[:, :4], dt)
+        c[:, :, 0] = pp + dt * (2.0 * pv + dt * vv) + q[:, :4]
+        c[:, :, 1] = pv + dt * vv
+        c[:, :, 2] = vv + q[:, 4:]
 
     def _update(self, idx: np.ndarray, z: np.ndarray) -> None:
         t = self.tracks
-        m, P = t.mean[idx], t.cov[idx]
-        S = P[:, :4, :4] + self.motion.R(m[:, :4])
-        K = np.swapaxes(np.linalg.solve(S, P[:, :4, :]), 1, 2)  # P H' S^-1 (S symmetric)
-        t.mean[idx] = m + np.einsum("kij,kj->ki", K, z - m[:, :4])
-        P = P - K @ S @ np.swapaxes(K, 1, 2)
-        t.cov[idx] = 0.5 * (P + np.swapaxes(P, 1, 2))
+        m, c = t.mean[idx], t.cov[idx]
+        pp, pv, vv = c[:, :, 0], c[:, :, 1], c[:, :, 2]
+        S = pp + self.motion.R_diag(m[:, :4])
+        kp, kv = pp / S, pv / S
+        y = z - m[:, :4]
+        m[:, :4] += kp * y
+        m[:, 4:] += kv * y
+        t.mean[idx] = m
+        t.cov[idx] = np.stack([pp - kp * pp, pv - kp * pv, vv - kv * pv], axis=-1)
 
-    def _match(self, tracks: np.ndarray, dets: np.ndarray, boxes: np.ndarray, det_boxes: np.ndarray,
-               scores: np.ndarray, classes: np.ndarray, min_iou: float,
-               fuse: bool) -> tuple[np.ndarray, np.ndarray]:
-        if len(tracks) == 0 or len(dets) == 0:
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        ov = iou(boxes[tracks], det_boxes[dets])
-        gate = (ov >= min_iou) & (self.tracks.classes[tracks][:, None] == classes[dets][None, :])
-        cost = 1.0 - (ov * scores[dets][None, :] if fuse else ov)
-        r, c = assign(cost, gate, self.config.assigner)
-        return tracks[r], dets[c]
+    def covariances(self) -> np.ndarray:
+        """The full ``(K, 8, 8)`` covariances of the tracks, from the per-axis ones kept."""
+        return axes_to_full(self.tracks.cov)
+
+    def _match(self, rows: np.ndarray, cols: np.ndarray, ov: np.ndarray, track_ok: np.ndarray,
+               det_ok: np.ndarray, min_iou: float, fuse: np.ndarray | None,
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """Assign among the candidate pairs whose track and detection are still available."""
+        keep = track_ok[rows] & det_ok[cols] & (ov >= min_iou)
+        r, c, v = rows[keep], cols[keep], ov[keep]
+        if len(r) == 0:
+            return r, c
+        cost = 1.0 - (v * fuse[c] if fuse is not None else v)
+        if self.config.assigner == "gnn":
+            i, j = gnn_sparse(r, c, cost, (len(track_ok), len(det_ok)))
+            return i, j
+        dense = np.full((len(track_ok), len(det_ok)), np.inf)
+        dense[r, c] = cost
+        return assign(dense, np.isfinite(dense), self.config.assigner)
 
     def step(self, detections: Detections, frame: int | None = None) -> Tracks:
         """Track one frame. ``frame`` (an integer, increasing; default the next one) gives the
@@ -173,43 +213,54 @@ class BoxTracker:
         time = frame / self.frame_rate
         cfg, t = self.config, self.tracks
         self._predict(dt)
-        boxes = _to_xyxy(t.mean[:, :4])
         db, ds, dc = detections.boxes, detections.scores, detections.classes
-        high = np.flatnonzero(ds >= cfg.high)
-        low = np.flatnonzero((ds >= cfg.low) & (ds < cfg.high)) if cfg.two_stage else \
-            np.zeros(0, np.int64)
+        # every candidate pair once: overlapping boxes of the same class
+        rows, cols, ov = iou_pairs(_to_xyxy(t.mean[:, :4]), db,
+                                   min(cfg.min_iou, cfg.min_iou_low, cfg.min_iou_tentative))
+        same = t.classes[rows] == dc[cols]
+        rows, cols, ov = rows[same], cols[same], ov[same]
+        high = ds >= cfg.high
+        low = (ds >= cfg.low) & ~high if cfg.two_stage else np.zeros(len(ds), bool)
+        free_t = np.ones(len(t), bool)
+        free_d = np.ones(len(ds), bool)
+        tentative = t.state == TENTATIVE
         matched_t, matched_d = [], []
-        # 1: confirmed and lost tracks, confident detections
-        pool = np.flatnonzero(t.state != TENTATIVE)
-        r, c = self._match(pool, high, boxes, db, ds, dc, cfg.min_iou, cfg.fuse_score)
-        matched_t.append(r)
-        matched_d.append(c)
-        # 2: tracks still unmatched and not lost, low-score detections
+        stages = [(~tentative, high, cfg.min_iou, ds if cfg.fuse_score else None)]
         if cfg.two_stage:
-            rest = np.setdiff1d(pool[t.state[pool] == CONFIRMED], r)
-            r2, c2 = self._match(rest, low, boxes, db, ds, dc, cfg.min_iou_low, False)
-            matched_t.append(r2)
-            matched_d.append(c2)
-        # 3: tentative tracks, the confident detections left
-        left = np.setdiff1d(high, c)
-        r3, c3 = self._match(np.flatnonzero(t.state == TENTATIVE), left, boxes, db, ds, dc,
-                             cfg.min_iou_tentative if cfg.two_stage else cfg.min_iou, False)
-        matched_t.append(r3)
-        matched_d.append(c3)
+            stages.append((t.state == CONFIRMED, low, cfg.min_iou_low, None))
+        stages.append((tentative, high, cfg.min_iou_tentative if cfg.two_stage else cfg.min_iou,
+                       None))
+        # 1: confirmed and lost tracks, confident detections; 2: confirmed tracks left,
+        # low-score detections; 3: tentative tracks, confident detections left
+        for tracks_ok, dets_ok, min_iou, fuse in stages:
+            r, c = self._match(rows, cols, ov, tracks_ok & free_t, dets_ok & free_d, min_iou,
+                               fuse)
+            free_t[r] = False
+            free_d[c] = False
+            matched_t.append(r)
+            matched_d.append(c)
         mt, md = np.concatenate(matched_t), np.concatenate(matched_d)
         if len(mt):
             self._update(mt, _to_cxcywh(db[md]))
             t.scores[mt] = ds[md]
-        updated = np.zeros(len(t), bool)
-        updated[mt] = True
-        t.manage(updated, time, cfg.confirm_hits, cfg.max_lost)
+        kept = t.manage(~free_t, time, cfg.confirm_hits, cfg.max_lost)
+        if self.record:
+            q = (self._q if len(self._q) == len(kept) else np.zeros((len(kept), 8)))[kept]
+            upd = (~free_t)[kept]
         # new tracks from the confident detections nobody took
-        new = np.setdiff1d(high, c3 if len(c3) else np.zeros(0, np.int64))
-        new = np.setdiff1d(new, c)
-        new = new[ds[new] >= cfg.new_track]
+        new = np.flatnonzero(free_d & high & (ds >= cfg.new_track))
         if len(new):
             mean, cov = self.motion.initial(_to_cxcywh(db[new]))
-            t.add(mean, cov, time, dc[new], ds[new], confirmed=first)
+            d = np.diagonal(cov, axis1=1, axis2=2)
+            axes = np.stack([d[:, :4], np.zeros((len(new), 4)), d[:, 4:]], axis=-1)
+            t.add(mean, axes, time, dc[new], ds[new], confirmed=first)
+        if self.record:
+            k = len(new)
+            self.history.append((frame, dt, t.ids.copy(), t.mean.copy(), t.cov.copy(),
+                                 np.concatenate([q, np.zeros((k, 8))]),
+                                 np.concatenate([upd, np.ones(k, bool)]), t.scores.copy(),
+                                 t.classes.copy()))
+            self._confirmed.update(t.ids[t.state == CONFIRMED].tolist())
         out = np.flatnonzero((t.state == CONFIRMED) & (t.last_time == time))
-        return Tracks(ids=t.ids[out].copy(), boxes=_to_xyxy(t.mean[out, :4]), points=None,
-                      scores=t.scores[out].copy(), classes=t.classes[out].copy())
+        return Tracks(ids=t.ids[out], boxes=_to_xyxy(t.mean[out, :4]), points=None,
+                      scores=t.scores[out], classes=t.classes[out])

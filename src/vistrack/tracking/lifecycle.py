@@ -54,16 +54,18 @@ class Tracks:
 
 
 class TrackTable:
-    """Tracks as columns: ``mean (K, n)``, ``cov (K, n, n)``, ``ids``, ``state``, ``hits`` (updates
-    in a row), ``last_time`` (of the last update), ``classes`` and ``scores``."""
+    """Tracks as columns: ``mean (K, n)``, ``cov (K, *cov_shape)`` (default ``(n, n)``), ``ids``,
+    ``state``, ``hits`` (updates in a row), ``last_time`` (of the last update), ``classes`` and
+    ``scores``."""
 
-    def __init__(self, n: int):
+    def __init__(self, n: int, cov_shape: tuple[int, ...] | None = None):
         self.n = n
+        self.cov_shape = (n, n) if cov_shape is None else tuple(cov_shape)
         self.reset()
 
     def reset(self) -> None:
         n = self.n
-        self.mean, self.cov = np.zeros((0, n)), np.zeros((0, n, n))
+        self.mean, self.cov = np.zeros((0, n)), np.zeros((0,) + self.cov_shape)
         self.ids = np.zeros(0, np.int64)
         self.state = np.zeros(0, np.int8)
         self.hits = np.zeros(0, np.int64)
@@ -93,8 +95,10 @@ class TrackTable:
         for name in ("mean", "cov", "ids", "state", "hits", "last_time", "classes", "scores"):
             setattr(self, name, getattr(self, name)[mask])
 
-    def manage(self, updated: np.ndarray, time: float, confirm_hits: int, max_lost: float) -> None:
-        """After a frame's updates: count hits, confirm, lose, delete."""
+    def manage(self, updated: np.ndarray, time: float, confirm_hits: int,
+               max_lost: float) -> np.ndarray:
+        """After a frame's updates: count hits, confirm, lose, delete. Returns the mask of the
+        tracks kept."""
         self.hits = np.where(updated, self.hits + 1, 0)
         self.last_time = np.where(updated, float(time), self.last_time)
         confirm = updated & (self.state != CONFIRMED) & (
@@ -105,3 +109,4 @@ class TrackTable:
             (self.state == LOST) & (time - self.last_time > max_lost))
         if dead.any():
             self.keep(~dead)
+        return ~dead

@@ -1,0 +1,168 @@
+r"""Probabilistic data association: PDA for one track, JPDA for tracks that share measurements.
+
+Rather than choosing one measurement, a track is corrected with every gated measurement,
+weighted by the probability that it is the track's (seed 003, "probabilistic data
+association"; Bar-Shalom and Tse, 1975). With detection probability :math:`P_D`, gate
+probability :math:`P_G`, clutter of spatial density :math:`\lambda` and the likelihood
+:math:`\ell_{j} = N(z_j; \hat z, S)`:
+
+.. math::
+    \beta_j = \frac{P_D \ell_j / \lambda}{1 - P_D P_G + \sum_k P_D \ell_k / \lambda}, \qquad
+    \beta_0 = \frac{1 - P_D P_G}{1 - P_D P_G + \sum_k P_D \ell_k / \lambda}
+
+(:math:`\beta_0`: no measurement is the track's). The update uses the combined innovation
+:math:`\nu = \sum_j \beta_j \nu_j` and adds the spread of the innovations to the covariance:
+
+.. math::
+    P = \beta_0 P^- + (1 - \beta_0)(P^- - K S K') + K \Big(\sum_j \beta_j \nu_j \nu_j' - \nu \nu'
+    \Big) K'.
+
+**JPDA** (Fortmann, Bar-Shalom and Scheffe, 1983) computes the :math:`\beta` of tracks that
+compete for measurements jointly: over every feasible joint event (each measurement to at most
+one track, each track at most one measurement, within the gates), with probability
+proportional to :math:`\prod_{(t,j)} P_D \ell_{tj} / \lambda \prod_{t \text{ missed}} (1 - P_D
+P_G)`. The gated problem is split into independent clusters; a cluster is enumerated exactly
+when it has at most ``max_exact`` tracks and measurements, and otherwise gets Fitzgerald's
+"cheap JPDA" approximation (1985),
+:math:`\beta_{tj} = G_{tj} / (\sum_k G_{tk} + \sum_s G_{sj} - G_{tj} + B)` with
+:math:`G_{tj} = P_D \ell_{tj} / \lambda` and :math:`B = 1 - P_D P_G`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..types import Gaussian
+from .assign import components
+
+__all__ = ["pda_weights", "jpda_weights", "pda_update", "likelihoods"]
+
+
+def likelihoods(z_pred: np.ndarray, S: np.ndarray, Z: np.ndarray) -> np.ndarray:
+    """Gaussian likelihoods ``N(z_j; z_pred_t, S_t)`` as a ``(T, D)`` array."""
+    zp, S, Z = (np.asarray(a, dtype=float) for a in (z_pred, S, Z))
+    T, m = zp.shape
+    if len(Z) == 0 or T == 0:
+        return np.zeros((T, len(Z)))
+    L = np.linalg.cholesky(S)
+    r = Z[None, :, :] - zp[:, None, :]
+    w = np.linalg.solve(L, np.swapaxes(r, 1, 2))
+    d2 = (w * w).sum(1)
+    logdet = 2 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(1)
+    return np.exp(-0.5 * d2 - 0.5 * logdet[:, None] - 0.5 * m * np.log(2 * np.pi))
+
+
+def _check(p_detect: float, clutter_density: float, p_gate: float) -> None:
+    if not 0.0 < p_detect <= 1.0:
+        raise ValueError(f"p_detect must be in (0, 1]; got {p_detect}")
+    if not clutter_density > 0:
+        raise ValueError(f"clutter_density must be > 0 (per unit of measurement space); "
+                         f"got {clutter_density}")
+    if not 0.0 < p_gate <= 1.0:
+        raise ValueError(f"p_gate must be in (0, 1]; got {p_gate}")
+
+
+def pda_weights(lik: np.ndarray, gate: np.ndarray, *, p_detect: float = 0.9,
+                clutter_density: float = 1e-4, p_gate: float = 0.99
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """PDA association probabilities of each track on its own: ``beta (T, D)`` (0 outside
+    the gate) and ``beta0 (T,)``, from likelihoods ``lik (T, D)``.
+
+    Examples
+    --------
+    >>> b, b0 = pda_weights(np.array([[0.02, 0.01]]), np.array([[True, True]]),
+    ...                     p_detect=0.9, clutter_density=0.01, p_gate=1.0)
+    >>> (b.round(3).tolist(), round(float(b0[0]), 3))    # G = 1.8, 0.9; B = 0.1
+    ([[0.643, 0.321]], 0.036)
+    """
+    _check(p_detect, clutter_density, p_gate)
+    G = np.where(gate, p_detect * np.asarray(lik, dtype=float) / clutter_density, 0.0)
+    B = 1.0 - p_detect * p_gate
+    den = B + G.sum(1)
+    return G / den[:, None], B / den
+
+
+def _exact(G: np.ndarray, B: float) -> tuple[np.ndarray, np.ndarray]:
+    """Marginal association probabilities by enumerating every feasible joint event."""
+    T, D = G.shape
+    beta = np.zeros((T, D))
+    beta0 = np.zeros(T)
+    total = 0.0
+    taken = np.zeros(D, bool)
+    choice = np.full(T, -1)
+
+    def rec(t: int, w: float) -> None:
+        nonlocal total
+        if t == T:
+            total += w
+            for s in range(T):
+                if choice[s] < 0:
+                    beta0[s] += w
+                else:
+                    beta[s, choice[s]] += w
+            return
+        choice[t] = -1
+        rec(t + 1, w * B)
+        for j in np.flatnonzero(G[t] > 0):
+            if not taken[j]:
+                taken[j] = True
+                choice[t] = j
+                rec(t + 1, w * G[t, j])
+                taken[j] = False
+        choice[t] = -1
+
+    rec(0, 1.0)
+    return beta / total, beta0 / total
+
+
+def jpda_weights(lik: np.ndarray, gate: np.ndarray, *, p_detect: float = 0.9,
+                 clutter_density: float = 1e-4, p_gate: float = 0.99,
+                 max_exact: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """JPDA association probabilities ``beta (T, D)``, ``beta0 (T,)`` (see the module):
+    exact per cluster of up to ``max_exact`` tracks and measurements, else cheap JPDA."""
+    _check(p_detect, clutter_density, p_gate)
+    lik = np.asarray(lik, dtype=float)
+    gate = np.asarray(gate, dtype=bool) & (lik > 0)
+    T, D = lik.shape
+    G = np.where(gate, p_detect * lik / clutter_density, 0.0)
+    B = 1.0 - p_detect * p_gate
+    beta, beta0 = np.zeros((T, D)), np.ones(T)
+    if T == 0:
+        return beta, np.zeros(0)
+    if not gate.any():
+        return beta, beta0
+    k, lt, ld = components(gate)
+    for c in np.unique(lt[gate.any(1)]):
+        ti, di = np.flatnonzero(lt == c), np.flatnonzero(ld == c)
+        g = G[np.ix_(ti, di)]
+        if len(ti) <= max_exact and len(di) <= max_exact:
+            b, b0 = _exact(g, B)
+        else:  # Fitzgerald's cheap JPDA
+            den = g.sum(1)[:, None] + g.sum(0)[None, :] - g + B
+            b = g / den
+            b0 = np.clip(1.0 - b.sum(1), 0.0, 1.0)
+            s = b.sum(1) + b0
+            b, b0 = b / s[:, None], b0 / s
+        beta[np.ix_(ti, di)] = b
+        beta0[ti] = b0
+    return beta, beta0
+
+
+def pda_update(g: Gaussian, Z: np.ndarray, H: np.ndarray, R: np.ndarray, beta: np.ndarray,
+               beta0: np.ndarray) -> Gaussian:
+    """Correct every track of ``g`` (batch ``(T,)``) with all measurements ``Z (D, m)`` weighted
+    by ``beta (T, D)``, ``beta0 (T,)`` (see the module for the equations)."""
+    m, P = g.mean, g.cov
+    H = np.asarray(H, dtype=float)
+    R = np.asarray(R, dtype=float)
+    Z = np.asarray(Z, dtype=float).reshape(-1, H.shape[0])
+    zp = m @ H.T
+    S = H @ P @ H.T + R
+    K = np.swapaxes(np.linalg.solve(S, H @ P), 1, 2)  # P H' S^-1
+    nu_j = Z[None, :, :] - zp[:, None, :]  # (T, D, m)
+    nu = np.einsum("td,tdm->tm", beta, nu_j)
+    spread = np.einsum("td,tdm,tdn->tmn", beta, nu_j, nu_j) - nu[:, :, None] * nu[:, None, :]
+    mean = m + np.einsum("tnm,tm->tn", K, nu)
+    KSK = K @ S @ np.swapaxes(K, 1, 2)
+    cov = P - (1.0 - beta0)[:, None, None] * KSK + K @ spread @ np.swapaxes(K, 1, 2)
+    return Gaussian(mean, 0.5 * (cov + np.swapaxes(cov, 1, 2)))

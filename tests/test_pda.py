@@ -1,0 +1,107 @@
+"""PDA and JPDA against the Kalman filter, explicit formulas and brute-force enumeration."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from vistrack import Gaussian
+from vistrack.association import jpda_weights, likelihoods, pda_update, pda_weights
+from vistrack.filters import kf_update
+
+
+def random_tracks(rng, T, n=4, m=2):
+    A = rng.normal(size=(T, n, n))
+    P = A @ A.transpose(0, 2, 1) + np.eye(n)
+    return Gaussian(rng.normal(size=(T, n)), P), np.eye(m, n), 0.5 * np.eye(m)
+
+
+def test_pda_with_one_sure_measurement_is_the_kalman_update():
+    rng = np.random.default_rng(0)
+    g, H, R = random_tracks(rng, 3)
+    Z = rng.normal(size=(1, 2))
+    for t in range(3):
+        gt = g[t:t + 1]
+        S = H @ gt.cov @ H.T + R
+        lik = likelihoods(gt.mean @ H.T, S, Z)
+        beta, beta0 = pda_weights(lik, np.ones((1, 1), bool), p_detect=1.0, p_gate=1.0)
+        assert beta0[0] == 0 and beta[0, 0] == 1
+        got = pda_update(gt, Z, H, R, beta, beta0)
+        want = kf_update(g[t], Z[0], H, R)
+        np.testing.assert_allclose(got.mean[0], want.mean, rtol=1e-10)
+        np.testing.assert_allclose(got.cov[0], want.cov, rtol=1e-10, atol=1e-12)
+
+
+def test_pda_update_equals_the_textbook_equations():
+    rng = np.random.default_rng(1)
+    g, H, R = random_tracks(rng, 4)
+    Z = rng.normal(size=(5, 2))
+    S = H @ g.cov @ H.T + R
+    lik = likelihoods(g.mean @ H.T, S, Z)
+    gate = rng.random((4, 5)) < 0.7
+    beta, beta0 = pda_weights(lik, gate, p_detect=0.8, clutter_density=0.05, p_gate=0.95)
+    np.testing.assert_allclose(beta.sum(1) + beta0, 1.0)
+    got = pda_update(g, Z, H, R, beta, beta0)
+    for t in range(4):
+        P, m = g.cov[t], g.mean[t]
+        St = H @ P @ H.T + R
+        # the likelihood by the density formula
+        for j in range(5):
+            r = Z[j] - H @ m
+            want = np.exp(-0.5 * r @ np.linalg.inv(St) @ r) / np.sqrt(np.linalg.det(2 * np.pi * St))
+            assert lik[t, j] == pytest.approx(want, rel=1e-10)
+        K = P @ H.T @ np.linalg.inv(St)
+        nus = [Z[j] - H @ m for j in range(5)]
+        nu = sum(beta[t, j] * nus[j] for j in range(5))
+        Pc = P - K @ St @ K.T
+        spread = sum(beta[t, j] * np.outer(nus[j], nus[j]) for j in range(5)) - np.outer(nu, nu)
+        np.testing.assert_allclose(got.mean[t], m + K @ nu, rtol=1e-10)
+        np.testing.assert_allclose(got.cov[t], beta0[t] * P + (1 - beta0[t]) * Pc
+                                   + K @ spread @ K.T, rtol=1e-9, atol=1e-12)
+
+
+def brute_jpda(G, B):
+    T, D = G.shape
+    beta, beta0, total = np.zeros((T, D)), np.zeros(T), 0.0
+    for event in itertools.product(*[[-1] + list(range(D))] * T):
+        used = [j for j in event if j >= 0]
+        if len(used) != len(set(used)) or any(j >= 0 and G[t, j] == 0 for t, j in enumerate(event)):
+            continue
+        w = np.prod([B if j < 0 else G[t, j] for t, j in enumerate(event)])
+        total += w
+        for t, j in enumerate(event):
+            if j < 0:
+                beta0[t] += w
+            else:
+                beta[t, j] += w
+    return beta / total, beta0 / total
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_jpda_equals_brute_force_enumeration(seed):
+    rng = np.random.default_rng(seed)
+    T, D = rng.integers(1, 5), rng.integers(0, 5)
+    lik = rng.uniform(0.001, 0.05, (T, D))
+    gate = rng.random((T, D)) < 0.7
+    pd, lam, pg = 0.85, 0.01, 0.97
+    beta, beta0 = jpda_weights(lik, gate, p_detect=pd, clutter_density=lam, p_gate=pg)
+    want_b, want_b0 = brute_jpda(np.where(gate, pd * lik / lam, 0.0), 1 - pd * pg)
+    np.testing.assert_allclose(beta, want_b, rtol=1e-10, atol=1e-14)
+    np.testing.assert_allclose(beta0, want_b0, rtol=1e-10)
+
+
+def test_jpda_reduces_to_pda_and_cheap_jpda_is_a_distribution():
+    rng = np.random.default_rng(3)
+    lik = rng.uniform(0.001, 0.05, (1, 6))
+    gate = np.ones((1, 6), bool)
+    for a, b in zip(jpda_weights(lik, gate), pda_weights(lik, gate)):
+        np.testing.assert_allclose(a, b, rtol=1e-12)
+    lik = rng.uniform(0.001, 0.05, (12, 12))
+    gate = rng.random((12, 12)) < 0.5
+    beta, beta0 = jpda_weights(lik, gate, max_exact=4)
+    np.testing.assert_allclose(beta.sum(1) + beta0, 1.0)
+    assert np.all(beta[~gate] == 0) and np.all(beta >= 0)
+    with pytest.raises(ValueError, match="clutter_density must be > 0"):
+        pda_weights(lik, gate, clutter_density=0.0)
