@@ -25,7 +25,8 @@ os.environ.setdefault("MKL_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 import vistrack as vt  # noqa: E402
-from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
+from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
+from _markdown import replace_section  # noqa: E402
 
 F = vt.ConstantVelocity(dim=2).F(1.0)
 Q = 0.1 * np.eye(4)
@@ -43,14 +44,6 @@ def median_time(fn, repeats: int) -> float:
         fn()
         times.append(time.perf_counter() - t)
     return statistics.median(times)
-
-
-def optional(name):
-    try:
-        return __import__(name)
-    except Exception as exc:  # noqa: BLE001 - report any import failure as "not available"
-        print(f"  ({name} not available: {exc})", file=sys.stderr)
-        return None
 
 
 # ---------------------------------------------------------------- per-step from Python

@@ -25,7 +25,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 import vistrack as vt  # noqa: E402
-from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
+from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
+from _markdown import replace_section  # noqa: E402
 from vistrack.filters import ParticleFilter, UnscentedKalmanFilter, ukf_predict, ukf_update  # noqa: E402
 
 T = 100
@@ -39,14 +40,6 @@ def median_time(fn, repeats):
         out = fn()
         times.append(time.perf_counter() - t)
     return statistics.median(times), out
-
-
-def optional(name):
-    try:
-        return __import__(name)
-    except Exception as exc:  # noqa: BLE001 - any import failure means "not available"
-        print(f"  ({name} not available: {exc})", file=sys.stderr)
-        return None
 
 
 def growth_f(x, t):

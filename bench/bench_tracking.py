@@ -22,21 +22,14 @@ from pathlib import Path
 
 import numpy as np
 
-from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
+from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
+from _markdown import replace_section  # noqa: E402
 from vistrack.evaluation import evaluate_mot
 from vistrack.io import MOTTable, read_mot, read_seqinfo
 from vistrack.tracking import BoxTracker
 from vistrack.types import Detections
 
 SEQ = Path(__file__).resolve().parents[2] / "shared" / "data" / "mot17" / "MOT17-04-FRCNN"
-
-
-def optional(name):
-    try:
-        return __import__(name)
-    except Exception as exc:  # noqa: BLE001 - any import failure means "not available"
-        print(f"  ({name} not available: {exc})", file=sys.stderr)
-        return None
 
 
 # ------------------------------------------------------------------ one runner per library
@@ -177,7 +170,8 @@ def scaling_rows(sizes, budget_s):
         frames = scene(n, 20, rng)
         for name, run in run_all.items():
             prev = [r for r in rows if r[1] == name]
-            if prev and prev[-1][2] / 1e3 * (n / prev[-1][0]) ** 2 > budget_s:
+            if prev and (prev[-1][3] == "not run"
+                         or prev[-1][2] / 1e3 * (n / prev[-1][0]) ** 2 > budget_s):
                 # one frame alone would take longer than the budget (quadratic growth)
                 rows.append((n, name, float("nan"), "not run"))
                 continue

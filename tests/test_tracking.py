@@ -192,3 +192,49 @@ def test_offline_mode_smooths_and_fills_gaps():
     assert c_off.MOTP > c_on.MOTP  # mean IoU of the matches
     with pytest.raises(ValueError, match="record=True"):
         smooth(BoxTracker("bytetrack"))
+
+
+def test_import_is_light_and_every_public_name_loads():
+    """`import vistrack` stays under 100 MB (numba and scipy load on first use)."""
+    code = ("import vistrack; print([l.split()[1] for l in open('/proc/self/status') "
+            "if l.startswith('VmHWM')][0])")  # the peak resident memory, in kB
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert int(r.stdout) / 1024 < 100
+    import vistrack
+
+    for name in vistrack.__all__:
+        assert getattr(vistrack, name) is not None
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        vistrack.nope  # noqa: B018
+
+
+@pytest.mark.slow
+def test_memory_grows_less_than_1mb_over_20000_frames():
+    """Constant turnover for 20,000 frames (objects live about 2 s): the memory the tracker
+    holds, traced by tracemalloc, grows by less than 1 MB between frame 2,000 and the end."""
+    import tracemalloc
+
+    rng = np.random.default_rng(7)
+    tr = BoxTracker("bytetrack")
+    n, life = 30, 60
+    pos = rng.uniform(0, 2000, (n, 2))
+    vel = rng.normal(0, 2, (n, 2))
+    age = rng.integers(0, life, n)
+    tracemalloc.start()
+    try:
+        for f in range(1, 20_001):
+            age += 1
+            reborn = age >= life
+            pos[reborn] = rng.uniform(0, 2000, (reborn.sum(), 2))
+            age[reborn] = 0
+            pos += vel
+            tr.step(Detections.from_xywh(np.c_[pos, np.full((n, 2), 40.0)], np.full(n, 0.9)),
+                    frame=f)
+            if f == 2000:
+                base = tracemalloc.get_traced_memory()[0]
+        grown = tracemalloc.get_traced_memory()[0] - base
+    finally:
+        tracemalloc.stop()
+    assert tr.tracks.ids.max() > 5000  # the turnover happened
+    assert grown < 1_000_000, grown

@@ -6,44 +6,63 @@ The public API is re-exported here; submodules hold the details:
 - :mod:`vistrack.filters` — Kalman filter and smoothers, EKF, UKF, ensemble KF, particle
   filters and multiple models (the inference);
 - :mod:`vistrack.simulate` — sample states and measurements from a model;
-- :mod:`vistrack.evaluation` — RMSE, NEES, NIS;
+- :mod:`vistrack.association` — costs, gates, assignment, PDA and JPDA;
+- :mod:`vistrack.tracking` — track management and the multi-object trackers;
+- :mod:`vistrack.io` — MOTChallenge files;
+- :mod:`vistrack.evaluation` — RMSE, NEES, NIS; CLEAR MOT, IDF1, HOTA;
 - :mod:`vistrack.viz` — the seeds' figures.
+
+Names load on first use, so ``import vistrack`` costs little memory.
 """
 
-from .filters import (
-    EnsembleKalmanFilter,
-    ExtendedKalmanFilter,
-    FilterResult,
-    IMMFilter,
-    KalmanFilter,
-    OnlineFilter,
-    ParticleFilter,
-    SmoothResult,
-    UnscentedKalmanFilter,
-    kalman_filter,
-    kalman_filter_1d,
-    kf_predict,
-    kf_step,
-    kf_update,
-    rts_smooth,
-    two_filter_smooth,
-)
-from .models import (
-    ConstantAcceleration,
-    ConstantPosition,
-    ConstantVelocity,
-    LinearGaussian,
-    LinearMeasurement,
-    LinearMotion,
-    Periodic,
-    Position,
-)
-from .types import Gaussian
-from . import evaluation, simulate  # noqa: E402  (submodules; viz is imported on use)
+import importlib
+from typing import Any
+
+from .types import Detections, Gaussian
+
+# Everything else loads on first use (PEP 562), so that `import vistrack` stays light: numba
+# and scipy, which the filters and trackers need, cost about 100 MB of memory on their own.
+_LAZY = {
+    **{name: "filters" for name in (
+        "EnsembleKalmanFilter", "ExtendedKalmanFilter", "FilterResult", "IMMFilter",
+        "KalmanFilter", "OnlineFilter", "ParticleFilter", "SmoothResult",
+        "UnscentedKalmanFilter", "kalman_filter", "kalman_filter_1d", "kf_predict", "kf_step",
+        "kf_update", "rts_smooth", "two_filter_smooth")},
+    **{name: "models" for name in (
+        "ConstantAcceleration", "ConstantPosition", "ConstantVelocity", "LinearGaussian",
+        "LinearMeasurement", "LinearMotion", "Periodic", "Position")},
+    "BoxTracker": "tracking",
+}
+_SUBMODULES = ("association", "evaluation", "filters", "io", "models", "pipeline", "simulate",
+               "tracking", "viz")
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    elif name in _SUBMODULES:
+        value = importlib.import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module 'vistrack' has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY) | set(_SUBMODULES))
+
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "BoxTracker",
+    "Detections",
+    "association",
+    "filters",
+    "io",
+    "models",
+    "pipeline",
+    "tracking",
     "ConstantAcceleration",
     "ConstantPosition",
     "ConstantVelocity",
