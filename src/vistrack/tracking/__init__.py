@@ -3,6 +3,8 @@
 from .box import TRACKERS, BoxTracker, BoxTrackerConfig
 from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, Tracks
 from .offline import SmoothedTracks, smooth
+from .point import POINT_ASSOCIATIONS, PointTracker
 
 __all__ = ["TRACKERS", "BoxTracker", "BoxTrackerConfig", "CONFIRMED", "LOST", "TENTATIVE",
-           "TrackTable", "Tracks", "SmoothedTracks", "smooth"]
+           "TrackTable", "Tracks", "SmoothedTracks", "smooth", "POINT_ASSOCIATIONS",
+           "PointTracker"]

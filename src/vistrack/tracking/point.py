@@ -1,0 +1,165 @@
+r"""Point trackers: positions (blob centres, particles, radar plots) with a linear-Gaussian model,
+Mahalanobis gates, and association chosen by name.
+
+One step: predict every track (``kf_predict``, batched); gate each measurement by its squared
+Mahalanobis distance from each track's predicted measurement, :math:`d^2 \le \chi^2_m(p)`
+(seed 003, "validation gate"); associate; correct; manage the lifecycle
+(:mod:`vistrack.tracking.lifecycle`).
+
+Association (``association=``):
+
+- ``"gnn"``: global nearest neighbour on :math:`d^2`; ``"nn"``: each track its nearest gated
+  measurement; ``"greedy"``;
+- ``"pda"``: each track corrected with all its gated measurements weighted by their
+  probabilities (PDA), for clutter; ``"jpda"``: the probabilities computed jointly for tracks
+  that share measurements (:mod:`vistrack.association.pda`).
+
+New tentative tracks start from the measurements no track took (``gnn``, ``nn``, ``greedy``) or
+that are inside no track's gate (``pda``, ``jpda``), with zero velocity and ``init_speed`` as
+its standard deviation.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..association import assign, chi2_threshold, jpda_weights, likelihoods, mahalanobis
+from ..association.pda import pda_update, pda_weights
+from ..filters import kf_predict, kf_update
+from ..models import ConstantVelocity, Position
+from ..types import Detections, Gaussian
+from .lifecycle import CONFIRMED, TrackTable, Tracks
+
+__all__ = ["PointTracker", "POINT_ASSOCIATIONS"]
+
+POINT_ASSOCIATIONS = ("gnn", "nn", "greedy", "pda", "jpda")
+"""Association methods of :class:`PointTracker`."""
+
+
+class PointTracker:
+    """A multi-target point tracker (see the module).
+
+    Parameters
+    ----------
+    association : str
+        A name in :data:`POINT_ASSOCIATIONS`.
+    motion, measurement
+        Linear models: ``F(dt)``, ``Q(dt)`` and ``H(n)``, ``R()``. Default: constant velocity
+        in 2-D with ``q = 1`` and position measurements with ``r = 1``.
+    p_detect, clutter_density : float
+        Detection probability and clutter per unit area (PDA and JPDA).
+    gate : float
+        Gate probability ``p``: measurements beyond the ``p`` quantile of chi-square are not
+        associated.
+    init_speed : float
+        Standard deviation of a new track's velocity, per axis.
+    confirm_hits, max_lost, frame_rate
+        As for :class:`~vistrack.tracking.BoxTracker`.
+
+    Examples
+    --------
+    >>> tr = PointTracker("gnn", frame_rate=1.0)
+    >>> for f in range(1, 5):
+    ...     out = tr.step(Detections(points=[[2.0 * f, 0.0], [50.0, 3.0 * f]]), frame=f)
+    >>> out.ids.tolist(), out.points.round(1).tolist()
+    ([1, 2], [[8.0, 0.0], [50.0, 12.0]])
+    """
+
+    def __init__(self, association: str = "gnn", *, motion: Any = None, measurement: Any = None,
+                 p_detect: float = 0.9, clutter_density: float = 1e-4, gate: float = 0.99,
+                 init_speed: float = 10.0, confirm_hits: int = 3, max_lost: float = 1.0,
+                 frame_rate: float = 30.0):
+        if association not in POINT_ASSOCIATIONS:
+            raise ValueError(f"association must be one of {list(POINT_ASSOCIATIONS)}; "
+                             f"got {association!r}")
+        self.association = association
+        self.motion = motion if motion is not None else ConstantVelocity(dim=2, q=1.0)
+        self.measurement = measurement if measurement is not None else Position(dim=2, r=1.0)
+        n = self.motion.ndim_state
+        self.H = np.asarray(self.measurement.H(n), dtype=float)
+        self.R = np.asarray(self.measurement.R(), dtype=float)
+        self.m = self.H.shape[0]
+        self.p_detect, self.clutter_density = float(p_detect), float(clutter_density)
+        self.p_gate = float(gate)
+        self.threshold = chi2_threshold(self.m, gate)
+        self.init_speed = float(init_speed)
+        self.confirm_hits, self.max_lost = int(confirm_hits), float(max_lost)
+        if not frame_rate > 0:
+            raise ValueError(f"frame_rate must be > 0; got {frame_rate}")
+        self.frame_rate = float(frame_rate)
+        self.tracks = TrackTable(n)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every track; identities start again from 1."""
+        self.tracks.reset()
+        self.frame: int | None = None
+
+    def _initial(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        n, m = self.tracks.n, self.m
+        mean = np.zeros((len(z), n))
+        mean[:, :m] = z  # derivative-major states: the measured position first
+        cov = np.zeros((n, n))
+        cov[:m, :m] = self.R
+        cov[m:, m:] = self.init_speed ** 2 * np.eye(n - m)
+        return mean, np.broadcast_to(cov, (len(z), n, n)).copy()
+
+    def step(self, detections: Detections, frame: int | None = None) -> Tracks:
+        """Track one frame of point detections (``Detections(points=...)``)."""
+        if not isinstance(detections, Detections) or detections.points is None:
+            raise TypeError("detections must be vistrack.Detections with points")
+        Z = detections.points
+        if len(Z) and Z.shape[1] != self.m:
+            raise ValueError(f"points must have {self.m} coordinates; got {Z.shape[1]}")
+        frame = (1 if self.frame is None else self.frame + 1) if frame is None else int(frame)
+        if self.frame is not None and frame <= self.frame:
+            raise ValueError(f"frame must increase; got {frame} after {self.frame}")
+        first = self.frame is None
+        dt = 0.0 if first else (frame - self.frame) / self.frame_rate
+        self.frame = frame
+        time = frame / self.frame_rate
+        t = self.tracks
+        K = len(t)
+        updated = np.zeros(K, bool)
+        in_gate = np.zeros(len(Z), bool)
+        if K:
+            g = Gaussian(t.mean, t.cov)
+            if dt > 0:
+                g = kf_predict(g, self.motion.F(dt), self.motion.Q(dt))
+            zp = g.mean @ self.H.T
+            S = self.H @ g.cov @ self.H.T + self.R
+            d2 = mahalanobis(zp, S, Z) if len(Z) else np.zeros((K, 0))
+            gate = (d2 <= self.threshold) & (t.classes[:, None] == detections.classes[None, :])
+            in_gate = gate.any(0)
+            mean, cov = g.mean.copy(), g.cov.copy()
+            if self.association in ("pda", "jpda") and len(Z):
+                lik = likelihoods(zp, S, Z)
+                weigh = jpda_weights if self.association == "jpda" else pda_weights
+                beta, beta0 = weigh(lik, gate, p_detect=self.p_detect,
+                                    clutter_density=self.clutter_density, p_gate=self.p_gate)
+                hit = gate.any(1)
+                if hit.any():
+                    upd = pda_update(g[hit], Z, self.H, self.R, beta[hit], beta0[hit])
+                    mean[hit], cov[hit] = upd.mean, upd.cov
+                updated = hit
+            elif len(Z):
+                r, c = assign(d2, gate, self.association)
+                if len(r):
+                    upd = kf_update(g[r], Z[c], self.H, self.R)
+                    mean[r], cov[r] = upd.mean, upd.cov
+                    t.scores[r] = detections.scores[c]
+                updated[r] = True
+                in_gate = np.zeros(len(Z), bool)  # every measurement not taken starts a track
+                in_gate[c] = True
+            t.mean, t.cov = mean, cov
+        t.manage(updated, time, self.confirm_hits, self.max_lost)
+        new = np.flatnonzero(~in_gate)
+        if len(new):
+            mean, cov = self._initial(Z[new])
+            t.add(mean, cov, time, detections.classes[new], detections.scores[new],
+                  confirmed=first)
+        out = np.flatnonzero((t.state == CONFIRMED) & (t.last_time == time))
+        return Tracks(ids=t.ids[out], boxes=None, points=t.mean[out] @ self.H.T,
+                      scores=t.scores[out], classes=t.classes[out])
