@@ -62,29 +62,8 @@ def _lsa(cost: np.ndarray, gate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def gnn(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Global nearest neighbour by connected components (see the module)."""
     cost, gate = _check(cost, gate)
-    if not gate.any():
-        return _EMPTY
-    # pairs alone in their component (the track allows only this detection and the detection
-    # only this track) are matched at once; the rest are solved together when small, else one
-    # component at a time
-    row_deg, col_deg = gate.sum(1), gate.sum(0)
-    r_all, c_all = np.nonzero(gate)
-    alone = (row_deg[r_all] == 1) & (col_deg[c_all] == 1)
-    rows, cols = [r_all[alone]], [c_all[alone]]
-    rest_r = np.flatnonzero(row_deg > 0)
-    rest_r = rest_r[~np.isin(rest_r, r_all[alone])]
-    if len(rest_r):
-        rest_c = np.flatnonzero(gate[rest_r].any(0))
-        sub_cost, sub_gate = cost[np.ix_(rest_r, rest_c)], gate[np.ix_(rest_r, rest_c)]
-        if sub_gate.size <= 4096:
-            r, c = _lsa(sub_cost, sub_gate)
-            rows.append(rest_r[r])
-            cols.append(rest_c[c])
-        else:
-            r, c = _by_component(sub_cost, sub_gate)
-            rows.append(rest_r[r])
-            cols.append(rest_c[c])
-    return np.concatenate(rows).astype(np.int64), np.concatenate(cols).astype(np.int64)
+    r, c = np.nonzero(gate)
+    return gnn_sparse(r, c, cost[r, c], cost.shape)
 
 
 @njit(cache=True)
@@ -108,18 +87,23 @@ def _local_indices(rr, rc, starts, ends, T, D):
     return ir, ic, nr, nc
 
 
-def _solve_pairs(rr: np.ndarray, rc: np.ndarray,
-                 cc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The dense assignment over the tracks and detections of these pairs."""
-    ir, ic, nr, nc = _local_indices(rr, rc, np.zeros(1, np.int64), np.full(1, len(rr)),
-                                    int(rr.max()) + 1, int(rc.max()) + 1)
-    cost = np.zeros((nr[0], nc[0]))
-    gate = np.zeros((nr[0], nc[0]), bool)
-    cost[ir, ic], gate[ir, ic] = cc, True
-    r, c = _lsa(cost, gate)
-    ur, uc = np.empty(nr[0], np.int64), np.empty(nc[0], np.int64)
-    ur[ir], uc[ic] = rr, rc
-    return ur[r], uc[c]
+def _solve_groups(rr: np.ndarray, rc: np.ndarray, cc: np.ndarray, starts: np.ndarray,
+                  ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One dense assignment per group of pairs ``starts[k]:ends[k]`` (over that group's tracks
+    and detections)."""
+    ir, ic, nr, nc = _local_indices(rr, rc, starts, ends, int(rr.max()) + 1, int(rc.max()) + 1)
+    out_r, out_c = [], []
+    for k in range(len(starts)):
+        a, b = starts[k], ends[k]
+        cost = np.zeros((nr[k], nc[k]))
+        gate = np.zeros((nr[k], nc[k]), bool)
+        cost[ir[a:b], ic[a:b]], gate[ir[a:b], ic[a:b]] = cc[a:b], True
+        r, c = _lsa(cost, gate)
+        ur, uc = np.empty(nr[k], np.int64), np.empty(nc[k], np.int64)
+        ur[ir[a:b]], uc[ic[a:b]] = rr[a:b], rc[a:b]
+        out_r.append(ur[r])
+        out_c.append(uc[c])
+    return np.concatenate(out_r), np.concatenate(out_c)
 
 
 @njit(cache=True)
@@ -167,44 +151,18 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
     rest = ~alone
     if rest.any():
         rr, rc, cc = rows[rest], cols[rest], cost[rest]
-        if len(rr) <= 256:
-            # small: one assignment over every component at once
-            r, c = _solve_pairs(rr, rc, cc)
-            out_r.append(r)
-            out_c.append(c)
-        else:
+        if len(rr) <= 256:  # small: one assignment over every component at once
+            starts, ends = np.zeros(1, np.int64), np.full(1, len(rr))
+        else:  # one per connected component
             lab = _pair_components(rr, rc, T)
             order = np.argsort(lab, kind="stable")
             rr, rc, cc, lab = rr[order], rc[order], cc[order], lab[order]
             edges = np.flatnonzero(np.diff(lab)) + 1
             starts, ends = np.r_[0, edges], np.r_[edges, len(lab)]
-            ir, ic, nr, nc = _local_indices(rr, rc, starts, ends, T, int(rc.max()) + 1)
-            for k in range(len(starts)):
-                a, b = starts[k], ends[k]
-                sub_cost = np.zeros((nr[k], nc[k]))
-                sub_gate = np.zeros((nr[k], nc[k]), bool)
-                sub_cost[ir[a:b], ic[a:b]], sub_gate[ir[a:b], ic[a:b]] = cc[a:b], True
-                r, c = _lsa(sub_cost, sub_gate)
-                ur, uc = np.empty(nr[k], np.int64), np.empty(nc[k], np.int64)
-                ur[ir[a:b]], uc[ic[a:b]] = rr[a:b], rc[a:b]
-                out_r.append(ur[r])
-                out_c.append(uc[c])
+        r, c = _solve_groups(rr, rc, cc, starts, ends)
+        out_r.append(r)
+        out_c.append(c)
     return np.concatenate(out_r).astype(np.int64), np.concatenate(out_c).astype(np.int64)
-
-
-def _by_component(cost: np.ndarray, gate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    r_all, _ = np.nonzero(gate)
-    k, lt, ld = components(gate)
-    order_t, order_d = np.argsort(lt, kind="stable"), np.argsort(ld, kind="stable")
-    st = np.searchsorted(lt[order_t], np.arange(k + 1))
-    sd = np.searchsorted(ld[order_d], np.arange(k + 1))
-    rows, cols = [], []
-    for j in np.unique(lt[r_all]):
-        ti, di = order_t[st[j]:st[j + 1]], order_d[sd[j]:sd[j + 1]]
-        r, c = _lsa(cost[np.ix_(ti, di)], gate[np.ix_(ti, di)])
-        rows.append(ti[r])
-        cols.append(di[c])
-    return np.concatenate(rows), np.concatenate(cols)
 
 
 def greedy(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

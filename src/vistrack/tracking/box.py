@@ -73,7 +73,7 @@ class BoxTrackerConfig:
     min_iou_tentative: float = 0.3
     fuse_score: bool = True
     confirm_hits: int = 2
-    max_lost: float = 1.0
+    max_lost: float = 1.5
     assigner: str = "gnn"
 
 
