@@ -108,10 +108,27 @@ def mahalanobis(z_pred: Any, S: Any, z: Any) -> np.ndarray:
 
 
 @njit(cache=True, error_model="numpy")
-def _grid_pairs(a, b, min_iou, cw, ch):
-    # b bucketed by the grid cell of its corner (x0, y0), cells cw x ch (the largest box of b):
-    # a box of b can only overlap box a if its corner lies in the cells from
-    # (a.x0 - cw, a.y0 - ch) to (a.x1, a.y1)
+def _grid_pairs(a, b, min_iou):
+    # b bucketed by the grid cell of its corner (x0, y0), cells as large as b's largest box
+    # (coarser when b is spread so far that the grid would be much larger than b): a box of b
+    # can only overlap box a if its corner lies in the cells from (a.x0 - cw, a.y0 - ch) to
+    # (a.x1, a.y1). Returns (rows, cols, iou, ok); ok is False for a non-finite box.
+    cw, ch = 1e-9, 1e-9
+    x_hi, y_hi = -np.inf, -np.inf
+    for arr in (a, b):
+        for j in range(arr.shape[0]):
+            for k in range(4):
+                if not np.isfinite(arr[j, k]):
+                    return (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(0), False)
+    for j in range(b.shape[0]):
+        cw = max(cw, b[j, 2] - b[j, 0])
+        ch = max(ch, b[j, 3] - b[j, 1])
+        x_hi, y_hi = max(x_hi, b[j, 0]), max(y_hi, b[j, 1])
+    cells = ((x_hi - b[:, 0].min()) / cw + 1) * ((y_hi - b[:, 1].min()) / ch + 1)
+    limit = 4.0 * b.shape[0] + 1024
+    if cells > limit:
+        grow = np.sqrt(cells / limit)
+        cw, ch = cw * grow, ch * grow
     x_min, y_min = b[:, 0].min(), b[:, 1].min()
     gx = np.empty(b.shape[0], np.int64)
     gy = np.empty(b.shape[0], np.int64)
@@ -162,7 +179,7 @@ def _grid_pairs(a, b, min_iou, cw, ch):
                         rows, cols, vals = rows2, cols2, vals2
                     rows[n], cols[n], vals[n] = i, j, v
                     n += 1
-    return rows[:n], cols[:n], vals[:n]
+    return rows[:n], cols[:n], vals[:n], True
 
 
 def iou_pairs(a: Any, b: Any, min_iou: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -182,13 +199,8 @@ def iou_pairs(a: Any, b: Any, min_iou: float = 0.0) -> tuple[np.ndarray, np.ndar
     a, b = _boxes(a, "a"), _boxes(b, "b")
     if len(a) == 0 or len(b) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
-    if not (np.isfinite(a).all() and np.isfinite(b).all()):
+    rows, cols, vals, ok = _grid_pairs(np.ascontiguousarray(a), np.ascontiguousarray(b),
+                                       float(min_iou))
+    if not ok:
         raise ValueError("boxes must be finite")
-    cw = max(float(np.max(b[:, 2] - b[:, 0])), 1e-9)
-    ch = max(float(np.max(b[:, 3] - b[:, 1])), 1e-9)
-    cells = (float(np.ptp(b[:, 0])) / cw + 1) * (float(np.ptp(b[:, 1])) / ch + 1)
-    limit = 4.0 * len(b) + 1024  # far-apart boxes: coarser cells, so the grid stays small
-    if cells > limit:
-        grow = np.sqrt(cells / limit)
-        cw, ch = cw * grow, ch * grow
-    return _grid_pairs(np.ascontiguousarray(a), np.ascontiguousarray(b), float(min_iou), cw, ch)
+    return rows, cols, vals
