@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Gaussian", "Detections"]
+__all__ = ["Gaussian", "Detections", "xyxy_to_xywh"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -72,6 +72,12 @@ class Gaussian:
         if self.mean.ndim == 1:
             raise TypeError("a single Gaussian (mean of shape (n,)) has no len()")
         return int(self.mean.shape[0])
+
+
+def xyxy_to_xywh(boxes: np.ndarray) -> np.ndarray:
+    """Boxes ``x0, y0, x1, y1`` as ``left, top, width, height`` (MOTChallenge files)."""
+    b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    return np.c_[b[:, :2], b[:, 2:] - b[:, :2]]
 
 
 @dataclass(frozen=True)
@@ -150,8 +156,7 @@ class Detections:
     @property
     def xywh(self) -> np.ndarray:
         """Boxes as ``left, top, width, height``."""
-        b = self.boxes
-        return np.c_[b[:, :2], b[:, 2:] - b[:, :2]]
+        return xyxy_to_xywh(self.boxes)
 
     @property
     def centers(self) -> np.ndarray:

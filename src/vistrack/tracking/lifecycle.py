@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..types import xyxy_to_xywh
+
 __all__ = ["TENTATIVE", "CONFIRMED", "LOST", "TrackTable", "Tracks"]
 
 TENTATIVE, CONFIRMED, LOST = 0, 1, 2
@@ -49,8 +51,7 @@ class Tracks:
 
     @property
     def xywh(self) -> np.ndarray:
-        b = self.boxes
-        return np.c_[b[:, :2], b[:, 2:] - b[:, :2]]
+        return xyxy_to_xywh(self.boxes)
 
 
 class TrackTable:

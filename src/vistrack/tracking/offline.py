@@ -22,7 +22,7 @@ import numpy as np
 
 from ..filters.kalman import FilterResult
 from ..filters.smoothers import rts_smooth
-from ..types import Gaussian
+from ..types import Gaussian, xyxy_to_xywh
 from .box import BoxTracker, _to_xyxy, axes_to_full
 
 __all__ = ["SmoothedTracks", "smooth"]
@@ -47,8 +47,7 @@ class SmoothedTracks:
 
     @property
     def xywh(self) -> np.ndarray:
-        b = self.boxes
-        return np.c_[b[:, :2], b[:, 2:] - b[:, :2]]
+        return xyxy_to_xywh(self.boxes)
 
 
 def smooth(tracker: BoxTracker, max_gap: int = 20) -> SmoothedTracks:
