@@ -6,7 +6,6 @@ results files against ground truth. The command line (:mod:`vistrack.cli`) calls
 
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -52,7 +51,7 @@ def _progress(done: int, total: int, label: str, stream: Any) -> None:
 
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,
                    tracker: str = "bytetrack", offline: bool = False, max_gap: float = 0.5,
-                   force: bool = False, progress: Any = sys.stderr,
+                   force: bool = False, progress: Any = None,
                    **overrides: Any) -> TrackRun:
     """Track a MOTChallenge sequence folder and write a results file.
 
@@ -70,7 +69,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         Smooth the finished tracks and fill gaps of up to ``max_gap`` seconds
         (:func:`vistrack.tracking.smooth`).
     progress
-        A stream for a progress bar, or None.
+        A stream for a progress bar (the command line passes stderr on a terminal), or None.
     """
     seq_dir = Path(seq_dir)
     info = read_seqinfo(seq_dir)
