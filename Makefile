@@ -28,6 +28,9 @@ $(VENV)/.bench-installed: $(STAMP)
 bench: $(VENV)/.bench-installed
 	$(PY) bench/bench_kalman.py --write docs/benchmarks.md
 	$(PY) bench/bench_particle.py --write docs/benchmarks.md
+	$(PY) bench/bench_tracking.py --write docs/benchmarks.md
+	$(PY) bench/accuracy_mot.py --write docs/mot.md
+	$(PY) bench/accuracy_mot.py --offline --write docs/mot.md
 
 clean:
 	rm -rf $(VENV) out build src/*.egg-info
