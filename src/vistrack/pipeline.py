@@ -114,7 +114,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     return TrackRun(out, info.seq_length, len(dets), len(F), len(np.unique(I)), seconds)
 
 
-def evaluate_files(pairs: list[tuple[Path, Path, Path | None]], *,
+def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
                    benchmark: str = "auto") -> dict[str, MOTCounts]:
     """Score ``(name, gt, results, seqinfo-or-None)`` pairs; adds ``"COMBINED"`` when there are
     several."""
