@@ -152,3 +152,34 @@ def test_iou_pairs_with_far_apart_boxes():
     r, c, v = iou_pairs(a, b)
     np.testing.assert_allclose(v, iou(a, b)[r, c])
     assert sorted(zip(r.tolist(), c.tolist())) == [(0, 0), (1, 1)]
+
+
+def test_compiled_lsa_equals_scipy_pair_for_pair():
+    """vistrack's compiled shortest augmenting path gives scipy's assignment exactly, ties
+    included (integer costs), for wide, tall and square matrices."""
+    from scipy.optimize import linear_sum_assignment
+
+    from vistrack.association import lsa
+
+    rng = np.random.default_rng(11)
+    for k in range(600):
+        n, m = rng.integers(1, 10, 2)
+        cost = rng.uniform(-3, 5, (n, m))
+        if k % 2:
+            cost = np.round(cost)
+        r, c = lsa(cost)
+        R, C = linear_sum_assignment(cost)
+        assert r.tolist() == R.tolist() and c.tolist() == C.tolist()
+    r, c = lsa(np.zeros((0, 3)))
+    assert len(r) == len(c) == 0
+
+
+def test_sparse_assignment_checks_its_arguments():
+    from vistrack.association import gnn_sparse
+
+    with pytest.raises(ValueError, match="must index a \\(2, 2\\) problem"):
+        gnn_sparse([0, 2], [0, 1], [1.0, 1.0], (2, 2))
+    with pytest.raises(ValueError, match="1-D of one length"):
+        gnn_sparse([0, 1], [0], [1.0, 1.0], (2, 2))
+    with pytest.raises(ValueError, match="finite"):
+        gnn_sparse([0, 1], [0, 1], [1.0, np.nan], (2, 2))

@@ -172,6 +172,64 @@ def test_per_axis_filter_equals_the_full_kalman_filter():
                                    atol=1e-12)
 
 
+def assert_same_tracking(frames, fps=30.0, **kw):
+    """The compiled step and the numpy steps give identical outputs and recorded states."""
+    runs = []
+    for compiled in (True, False):
+        tr = BoxTracker(frame_rate=fps, compiled=compiled, record=True, **kw)
+        assert tr.compiled == compiled
+        runs.append(([tr.step(d, frame=f) for f, d in frames], tr.history))
+    (out_c, hist_c), (out_n, hist_n) = runs
+    for a, b in zip(out_c, out_n):
+        assert np.array_equal(a.ids, b.ids) and np.array_equal(a.boxes, b.boxes)
+        assert np.array_equal(a.scores, b.scores)
+    for a, b in zip(hist_c, hist_n):
+        assert all(np.array_equal(x, y) for x, y in zip(a, b))
+    return sum(len(o) for o in out_c)
+
+
+@pytest.mark.parametrize("config", ["bytetrack", "sort"])
+def test_compiled_step_equals_the_numpy_steps(config):
+    """Predict, associate and correct in one compiled call: bit for bit the numpy steps, with
+    gaps in the frame numbers, two classes, clutter and crossings."""
+    rng = np.random.default_rng(8)
+    _, dets = scene(rng, n_obj=20, clutter=3.0)
+    frames = [(f, Detections(boxes=d.boxes, scores=d.scores,
+                             classes=rng.integers(0, 2, len(d))))
+              for f, d in enumerate(dets, start=1) if f % 7]
+    assert assert_same_tracking(frames, config=config) > 500
+
+
+def test_the_compiled_step_runs_only_where_it_equals_the_numpy_steps():
+    from vistrack.models import BoxMotion
+
+    class Slower(BoxMotion):
+        pass
+
+    assert BoxTracker().compiled and not BoxTracker(compiled=False).compiled
+    assert not BoxTracker(assigner="greedy").compiled
+    assert not BoxTracker(motion=Slower()).compiled  # a subclass may change the noise
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("bench", ["MOT15", "MOT17"])
+def test_compiled_step_equals_the_numpy_steps_on_every_sequence(bench):
+    from vistrack.io import read_seqinfo
+
+    from .mot_oracles import SHARED
+
+    dirs = sorted(p.parents[1] for p in (SHARED / bench.lower()).glob("*/det/det.txt"))
+    if not dirs:
+        pytest.skip(f"{SHARED / bench.lower()} not found: the shared data is not beside this "
+                    "checkout")
+    for d in dirs:
+        det, info = read_mot(d / "det" / "det.txt"), read_seqinfo(d)
+        frames = [(f, Detections.from_xywh(det.boxes[s], det.conf[s]))
+                  for f, s in enumerate(det.frame_slices(info.seq_length), start=1)]
+        for config in ("bytetrack", "sort"):
+            assert assert_same_tracking(frames, info.frame_rate, config=config) > 0
+
+
 def test_offline_mode_smooths_and_fills_gaps():
     """On a scene with known truth, offline smoothing finds more of the truth (filled gaps,
     tentative frames) and places boxes closer to it than the online tracker."""

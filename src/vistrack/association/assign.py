@@ -5,9 +5,10 @@ shape, and returns ``(rows, cols)``: the pairs assigned, each track and each det
 once (except ``"nn"``).
 
 - ``"gnn"``: global nearest neighbour, the assignment of the most pairs, and among those the
-  least total cost (scipy's ``linear_sum_assignment``, Crouse 2016). The gated graph is split
-  into connected components first and each is solved on its own: the same answer, at the cost
-  of the components' sizes rather than the whole problem's (10,000 objects stay cheap);
+  least total cost (Crouse's shortest augmenting path, 2016, the algorithm of scipy's
+  ``linear_sum_assignment``, compiled as :func:`lsa`). The gated graph is split into connected
+  components first and each is solved on its own: the same answer, at the cost of the
+  components' sizes rather than the whole problem's (10,000 objects stay cheap);
 - ``"greedy"``: pairs in order of increasing cost, each taken if both ends are free;
 - ``"nn"``: each track takes its nearest allowed detection (the seeds' nearest neighbour); two
   tracks may take the same detection.
@@ -18,12 +19,12 @@ from __future__ import annotations
 from typing import Callable
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from numba import njit
 
-__all__ = ["ASSIGNERS", "assign", "gnn", "gnn_sparse", "greedy", "nearest_neighbour", "components"]
+__all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_sparse", "greedy", "lsa",
+           "nearest_neighbour", "components"]
 
 _EMPTY = (np.zeros(0, np.int64), np.zeros(0, np.int64))
 
@@ -48,17 +49,6 @@ def components(gate: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
     return k, labels[:T], labels[T:]
 
 
-def _lsa(cost: np.ndarray, gate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    # a disallowed pair costs more than any set of allowed ones, so the solution has the
-    # most allowed pairs and, among those, the least cost
-    span = float(np.ptp(cost[gate])) if gate.any() else 0.0
-    big = (span + 1.0) * (min(cost.shape) + 1) + float(np.abs(cost[gate]).max(initial=0.0))
-    c = np.where(gate, cost, big)
-    r, k = linear_sum_assignment(c)
-    ok = gate[r, k]
-    return r[ok], k[ok]
-
-
 def gnn(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Global nearest neighbour by connected components (see the module)."""
     cost, gate = _check(cost, gate)
@@ -67,43 +57,95 @@ def gnn(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, n
 
 
 @njit(cache=True)
-def _local_indices(rr, rc, starts, ends, T, D):
-    # for pairs grouped by component: each pair's row and column index within its component,
-    # and each component's numbers of rows and columns
-    rmap, cmap = np.full(T, -1), np.full(D, -1)
-    ir, ic = np.empty(rr.shape[0], np.int64), np.empty(rr.shape[0], np.int64)
-    nr, nc = np.zeros(starts.shape[0], np.int64), np.zeros(starts.shape[0], np.int64)
-    for k in range(starts.shape[0]):
-        for p in range(starts[k], ends[k]):
-            if rmap[rr[p]] < 0:
-                rmap[rr[p]] = nr[k]
-                nr[k] += 1
-            if cmap[rc[p]] < 0:
-                cmap[rc[p]] = nc[k]
-                nc[k] += 1
-            ir[p], ic[p] = rmap[rr[p]], cmap[rc[p]]
-        for p in range(starts[k], ends[k]):
-            rmap[rr[p]], cmap[rc[p]] = -1, -1
-    return ir, ic, nr, nc
+def lsa(cost):
+    """The least-cost assignment of a dense ``(n, m)`` cost matrix: ``(rows, cols)`` sorted by
+    row, ``min(n, m)`` pairs. Crouse's shortest augmenting path (2016), the algorithm of
+    scipy's ``linear_sum_assignment``, step for step (ties are broken the same way), compiled
+    so that it can be called from other kernels."""
+    transpose = cost.shape[0] > cost.shape[1]
+    c = cost.T.copy() if transpose else cost
+    nr, nc = c.shape
+    u, v = np.zeros(nr), np.zeros(nc)
+    spc = np.empty(nc)
+    path = np.full(nc, -1)
+    col4row, row4col = np.full(nr, -1), np.full(nc, -1)
+    SR, SC = np.zeros(nr, np.bool_), np.zeros(nc, np.bool_)
+    remaining = np.empty(nc, np.int64)
+    for cur in range(nr):
+        # Dijkstra from row `cur` over reduced costs, to the nearest unassigned column
+        min_val = 0.0
+        for it in range(nc):
+            remaining[it] = nc - it - 1
+        n_rem = nc
+        SR[:], SC[:] = False, False
+        spc[:] = np.inf
+        sink, i = -1, cur
+        while sink == -1:
+            index, lowest = -1, np.inf
+            SR[i] = True
+            for it in range(n_rem):
+                j = remaining[it]
+                r = min_val + c[i, j] - u[i] - v[j]
+                if r < spc[j]:
+                    path[j] = i
+                    spc[j] = r
+                if spc[j] < lowest or (spc[j] == lowest and row4col[j] == -1):
+                    lowest = spc[j]
+                    index = it
+            min_val = lowest
+            if min_val == np.inf:  # only with infinite costs, which callers never pass
+                raise ValueError("cost matrix is infeasible")
+            j = remaining[index]
+            if row4col[j] == -1:
+                sink = j
+            else:
+                i = row4col[j]
+            SC[j] = True
+            n_rem -= 1
+            remaining[index] = remaining[n_rem]
+        # update the dual variables and augment along the path
+        u[cur] += min_val
+        for i in range(nr):
+            if SR[i] and i != cur:
+                u[i] += min_val - spc[col4row[i]]
+        for j in range(nc):
+            if SC[j]:
+                v[j] -= min_val - spc[j]
+        j = sink
+        while True:
+            i = path[j]
+            row4col[j] = i
+            col4row[i], j = j, col4row[i]
+            if i == cur:
+                break
+    if transpose:
+        order = np.argsort(col4row)
+        return col4row[order], order.astype(np.int64)
+    return np.arange(nr), col4row
 
 
-def _solve_groups(rr: np.ndarray, rc: np.ndarray, cc: np.ndarray, starts: np.ndarray,
-                  ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """One dense assignment per group of pairs ``starts[k]:ends[k]`` (over that group's tracks
-    and detections)."""
-    ir, ic, nr, nc = _local_indices(rr, rc, starts, ends, int(rr.max()) + 1, int(rc.max()) + 1)
-    out_r, out_c = [], []
-    for k in range(len(starts)):
-        a, b = starts[k], ends[k]
-        cost = np.zeros((nr[k], nc[k]))
-        gate = np.zeros((nr[k], nc[k]), bool)
-        cost[ir[a:b], ic[a:b]], gate[ir[a:b], ic[a:b]] = cc[a:b], True
-        r, c = _lsa(cost, gate)
-        ur, uc = np.empty(nr[k], np.int64), np.empty(nc[k], np.int64)
-        ur[ir[a:b]], uc[ic[a:b]] = rr[a:b], rc[a:b]
-        out_r.append(ur[r])
-        out_c.append(uc[c])
-    return np.concatenate(out_r), np.concatenate(out_c)
+@njit(cache=True)
+def _gated_lsa(cost, gate):
+    # a disallowed pair costs more than any set of allowed ones, so the solution has the
+    # most allowed pairs and, among those, the least cost
+    lo, hi, top, any_ok = np.inf, -np.inf, 0.0, False
+    for i in range(cost.shape[0]):
+        for j in range(cost.shape[1]):
+            if gate[i, j]:
+                any_ok = True
+                lo, hi = min(lo, cost[i, j]), max(hi, cost[i, j])
+                top = max(top, abs(cost[i, j]))
+    if not any_ok:
+        return np.empty(0, np.int64), np.empty(0, np.int64)
+    big = (hi - lo + 1.0) * (min(cost.shape[0], cost.shape[1]) + 1) + top
+    c = np.where(gate, cost, big)
+    r, k = lsa(c)
+    n = 0
+    for p in range(r.shape[0]):
+        if gate[r[p], k[p]]:
+            r[n], k[n] = r[p], k[p]
+            n += 1
+    return r[:n], k[:n]
 
 
 @njit(cache=True)
@@ -127,6 +169,71 @@ def _pair_components(rows, cols, T):
     return out
 
 
+@njit(cache=True)
+def gnn_pairs(rows, cols, cost, T, D):
+    """The compiled core of :func:`gnn_sparse` (arguments checked, int64 and float64): pairs
+    whose track and detection have no other candidate are taken at once; the others are
+    split into connected components, each solved by :func:`lsa`."""
+    n = rows.shape[0]
+    out_r, out_c = np.empty(n, np.int64), np.empty(n, np.int64)
+    if n == 0:
+        return out_r, out_c
+    row_deg, col_deg = np.zeros(T, np.int64), np.zeros(D, np.int64)
+    for p in range(n):
+        row_deg[rows[p]] += 1
+        col_deg[cols[p]] += 1
+    m, rest = 0, np.empty(n, np.int64)
+    n_rest = 0
+    for p in range(n):
+        if row_deg[rows[p]] == 1 and col_deg[cols[p]] == 1:
+            out_r[m], out_c[m] = rows[p], cols[p]
+            m += 1
+        else:
+            rest[n_rest] = p
+            n_rest += 1
+    if n_rest == 0:
+        return out_r[:m], out_c[:m]
+    rest = rest[:n_rest]
+    rr, rc = rows[rest], cols[rest]
+    lab = _pair_components(rr, rc, T)
+    order = rest[np.argsort(lab, kind="mergesort")]
+    lab = np.sort(lab)
+    rmap, cmap = np.full(T, -1), np.full(D, -1)
+    ur, uc = np.empty(n_rest, np.int64), np.empty(n_rest, np.int64)
+    a = 0
+    while a < n_rest:
+        b = a
+        while b < n_rest and lab[b] == lab[a]:
+            b += 1
+        # the component's tracks and detections, numbered in order of first appearance
+        nr = nc = 0
+        for q in range(a, b):
+            p = order[q]
+            if rmap[rows[p]] < 0:
+                rmap[rows[p]] = nr
+                ur[nr] = rows[p]
+                nr += 1
+            if cmap[cols[p]] < 0:
+                cmap[cols[p]] = nc
+                uc[nc] = cols[p]
+                nc += 1
+        sub = np.zeros((nr, nc))
+        gate = np.zeros((nr, nc), np.bool_)
+        for q in range(a, b):
+            p = order[q]
+            sub[rmap[rows[p]], cmap[cols[p]]] = cost[p]
+            gate[rmap[rows[p]], cmap[cols[p]]] = True
+        r, k = _gated_lsa(sub, gate)
+        for q in range(r.shape[0]):
+            out_r[m], out_c[m] = ur[r[q]], uc[k[q]]
+            m += 1
+        for q in range(a, b):
+            p = order[q]
+            rmap[rows[p]], cmap[cols[p]] = -1, -1
+        a = b
+    return out_r[:m], out_c[:m]
+
+
 def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
                shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
     """:func:`gnn` on the allowed pairs only (``rows``, ``cols`` and their ``cost``), for
@@ -141,28 +248,17 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
     """
     rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
     cost = np.asarray(cost, dtype=float)
-    T, D = shape
+    T, D = (int(x) for x in shape)
+    if not rows.shape == cols.shape == cost.shape or rows.ndim != 1:
+        raise ValueError(f"rows, cols and cost must be 1-D of one length; got shapes "
+                         f"{rows.shape}, {cols.shape} and {cost.shape}")
     if len(rows) == 0:
         return _EMPTY
-    row_deg = np.bincount(rows, minlength=T)
-    col_deg = np.bincount(cols, minlength=D)
-    alone = (row_deg[rows] == 1) & (col_deg[cols] == 1)
-    out_r, out_c = [rows[alone]], [cols[alone]]
-    rest = ~alone
-    if rest.any():
-        rr, rc, cc = rows[rest], cols[rest], cost[rest]
-        if len(rr) <= 256:  # small: one assignment over every component at once
-            starts, ends = np.zeros(1, np.int64), np.full(1, len(rr))
-        else:  # one per connected component
-            lab = _pair_components(rr, rc, T)
-            order = np.argsort(lab, kind="stable")
-            rr, rc, cc, lab = rr[order], rc[order], cc[order], lab[order]
-            edges = np.flatnonzero(np.diff(lab)) + 1
-            starts, ends = np.r_[0, edges], np.r_[edges, len(lab)]
-        r, c = _solve_groups(rr, rc, cc, starts, ends)
-        out_r.append(r)
-        out_c.append(c)
-    return np.concatenate(out_r).astype(np.int64), np.concatenate(out_c).astype(np.int64)
+    if rows.min() < 0 or rows.max() >= T or cols.min() < 0 or cols.max() >= D:
+        raise ValueError(f"rows and cols must index a ({T}, {D}) problem")
+    if not np.isfinite(cost).all():
+        raise ValueError("cost must be finite on every pair")
+    return gnn_pairs(rows, cols, cost, T, D)
 
 
 def greedy(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -32,10 +32,14 @@ from typing import Any
 
 import numpy as np
 
+from numba import njit
+
 from ..association import assign, gnn_sparse, iou_pairs
+from ..association.assign import gnn_pairs
+from ..association.costs import _grid_pairs
 from ..models.box import BoxMotion
 from ..types import Detections
-from .lifecycle import CONFIRMED, TENTATIVE, TrackTable, Tracks
+from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, Tracks
 
 __all__ = ["BoxTracker", "BoxTrackerConfig", "TRACKERS"]
 
@@ -104,6 +108,92 @@ def _to_cxcywh(b: np.ndarray) -> np.ndarray:
     return np.concatenate([(b[:, :2] + b[:, 2:]) / 2, b[:, 2:] - b[:, :2]], axis=1)
 
 
+@njit(cache=True)
+def _stage(rows, cols, ov, state, stage_state, det_ok, min_iou, fuse, ds, match, used, T, D):
+    # one association stage over the candidate pairs whose track (state in stage_state, not
+    # matched) and detection (det_ok, not used) are free; cost 1 - IoU (x score if fuse)
+    keep = np.empty(rows.shape[0], np.int64)
+    n = 0
+    for p in range(rows.shape[0]):
+        i, j = rows[p], cols[p]
+        if (match[i] < 0 and not used[j] and det_ok[j] and ov[p] >= min_iou
+                and (state[i] == stage_state[0] or state[i] == stage_state[1])):
+            keep[n] = p
+            n += 1
+    keep = keep[:n]
+    cost = 1.0 - (ov[keep] * ds[cols[keep]] if fuse else ov[keep])
+    r, c = gnn_pairs(rows[keep], cols[keep], cost, T, D)
+    for q in range(r.shape[0]):
+        match[r[q]] = c[q]
+        used[c[q]] = True
+
+
+@njit(cache=True)
+def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q):
+    """Predict, associate and correct in one compiled call: the same arithmetic as
+    :meth:`BoxTracker._predict`, the stages of :meth:`BoxTracker.step` with ``gnn``, and
+    :meth:`BoxTracker._update`. ``noise`` is BoxMotion's ``(std_pos, std_vel, std_meas)``,
+    ``cfg`` ``(two_stage, high, low, min_iou, min_iou_low, min_iou_tentative, fuse_score)``.
+    Updates ``mean``, ``cov`` and ``q`` (the process noise, for the record) in place; returns
+    each track's detection (-1: none), which detections were used, and False if a box is not
+    finite."""
+    K, D = mean.shape[0], db.shape[0]
+    sp, sv, sm = noise
+    two_stage, high, low = cfg[0] != 0.0, cfg[1], cfg[2]
+    if dt != 0.0:
+        for i in range(K):
+            for a in range(4):
+                mean[i, a] += dt * mean[i, 4 + a]
+            for a in range(4):
+                s = max(mean[i, 2 + a % 2], 1e-3)
+                qp, qv = (sp * s) ** 2 * dt, (sv * s) ** 2 * dt
+                pp, pv, vv = cov[i, a, 0], cov[i, a, 1], cov[i, a, 2]
+                cov[i, a, 0] = pp + dt * (2.0 * pv + dt * vv) + qp
+                cov[i, a, 1] = pv + dt * vv
+                cov[i, a, 2] = vv + qv
+                q[i, a], q[i, 4 + a] = qp, qv
+    match = np.full(K, -1)
+    used = np.zeros(D, np.bool_)
+    if K == 0 or D == 0:
+        return match, used, True
+    pred = np.empty((K, 4))
+    for i in range(K):
+        for a in range(2):
+            h = max(mean[i, 2 + a], 0.0) / 2
+            pred[i, a], pred[i, 2 + a] = mean[i, a] - h, mean[i, a] + h
+    rows, cols, ov, ok = _grid_pairs(pred, db, min(cfg[3], cfg[4], cfg[5]))
+    if not ok:
+        return match, used, False
+    same = tclass[rows] == dc[cols]
+    rows, cols, ov = rows[same], cols[same], ov[same]
+    high_d = ds >= high
+    low_d = (ds >= low) & ~high_d if two_stage else np.zeros(D, np.bool_)
+    # 1: confirmed and lost tracks, confident detections; 2: confirmed tracks left,
+    # low-score detections; 3: tentative tracks, confident detections left
+    _stage(rows, cols, ov, state, (CONFIRMED, LOST), high_d, cfg[3], cfg[6] != 0.0, ds, match,
+           used, K, D)
+    if two_stage:
+        _stage(rows, cols, ov, state, (CONFIRMED, CONFIRMED), low_d, cfg[4], False, ds, match,
+               used, K, D)
+    _stage(rows, cols, ov, state, (TENTATIVE, TENTATIVE), high_d, cfg[5] if two_stage else cfg[3],
+           False, ds, match, used, K, D)
+    for i in range(K):
+        j = match[i]
+        if j < 0:
+            continue
+        for a in range(4):
+            s = max(mean[i, 2 + a % 2], 1e-3)
+            z = (db[j, a] + db[j, a + 2]) / 2 if a < 2 else db[j, a] - db[j, a - 2]
+            pp, pv, vv = cov[i, a, 0], cov[i, a, 1], cov[i, a, 2]
+            S = pp + (sm * s) ** 2
+            kp, kv = pp / S, pv / S
+            y = z - mean[i, a]
+            mean[i, a] += kp * y
+            mean[i, 4 + a] += kv * y
+            cov[i, a, 0], cov[i, a, 1], cov[i, a, 2] = pp - kp * pp, pv - kp * pv, vv - kv * pv
+    return match, used, True
+
+
 class BoxTracker:
     """A multi-object box tracker (see the module for the algorithm).
 
@@ -117,6 +207,10 @@ class BoxTracker:
     record : bool
         Keep every frame's filtered states, for :func:`vistrack.tracking.offline.smooth` (the
         offline mode); memory then grows with the sequence.
+    compiled : bool
+        Predict, associate and correct in one compiled call when the configuration allows it
+        (``assigner="gnn"`` and a :class:`~vistrack.models.BoxMotion` itself, not a subclass);
+        the results equal the numpy steps', which run otherwise.
     **overrides
         Fields of the configuration to change.
 
@@ -132,7 +226,7 @@ class BoxTracker:
 
     def __init__(self, config: BoxTrackerConfig | str = "bytetrack", *,
                  motion: BoxMotion | None = None, frame_rate: float = 30.0,
-                 record: bool = False, **overrides: Any):
+                 record: bool = False, compiled: bool = True, **overrides: Any):
         if isinstance(config, str):
             if config not in TRACKERS:
                 raise ValueError(f"tracker must be one of {sorted(TRACKERS)}; got {config!r}")
@@ -144,6 +238,12 @@ class BoxTracker:
         self.frame_rate = float(frame_rate)
         self.tracks = TrackTable(8, cov_shape=(4, 3))
         self.record = bool(record)
+        self.compiled = bool(compiled) and self.config.assigner == "gnn" and \
+            type(self.motion) is BoxMotion
+        c, m = self.config, self.motion
+        self._cfg = np.array([c.two_stage, c.high, c.low, c.min_iou, c.min_iou_low,
+                              c.min_iou_tentative, c.fuse_score], float)
+        self._noise = (float(m.std_pos), float(m.std_vel), float(m.std_meas))
         self.reset()
 
     def reset(self) -> None:
@@ -199,27 +299,16 @@ class BoxTracker:
         dense[r, c] = cost
         return assign(dense, np.isfinite(dense), self.config.assigner)
 
-    def step(self, detections: Detections, frame: int | None = None) -> Tracks:
-        """Track one frame. ``frame`` (an integer, increasing; default the next one) gives the
-        time since the last frame, so gaps in frame numbers are predicted over."""
-        if not isinstance(detections, Detections) or detections.boxes is None:
-            raise TypeError("detections must be vistrack.Detections with boxes")
-        frame = (1 if self.frame is None else self.frame + 1) if frame is None else int(frame)
-        if self.frame is not None and frame <= self.frame:
-            raise ValueError(f"frame must increase; got {frame} after {self.frame}")
-        first = self.frame is None
-        dt = 0.0 if first else float(frame - self.frame)
-        self.frame = frame
-        time = frame / self.frame_rate
+    def _associate_numpy(self, db: np.ndarray, ds: np.ndarray, dc: np.ndarray,
+                         high: np.ndarray) -> tuple[np.ndarray, ...]:
+        """The stages of association (see the module) in numpy, after :meth:`_predict`:
+        ``(updated (K,), free detections (D,), matched tracks, their detections)``."""
         cfg, t = self.config, self.tracks
-        self._predict(dt)
-        db, ds, dc = detections.boxes, detections.scores, detections.classes
         # every candidate pair once: overlapping boxes of the same class
         rows, cols, ov = iou_pairs(_to_xyxy(t.mean[:, :4]), db,
                                    min(cfg.min_iou, cfg.min_iou_low, cfg.min_iou_tentative))
         same = t.classes[rows] == dc[cols]
         rows, cols, ov = rows[same], cols[same], ov[same]
-        high = ds >= cfg.high
         low = (ds >= cfg.low) & ~high if cfg.two_stage else np.zeros(len(ds), bool)
         free_t = np.ones(len(t), bool)
         free_d = np.ones(len(ds), bool)
@@ -239,14 +328,44 @@ class BoxTracker:
             free_d[c] = False
             matched_t.append(r)
             matched_d.append(c)
-        mt, md = np.concatenate(matched_t), np.concatenate(matched_d)
+        return ~free_t, free_d, np.concatenate(matched_t), np.concatenate(matched_d)
+
+    def step(self, detections: Detections, frame: int | None = None) -> Tracks:
+        """Track one frame. ``frame`` (an integer, increasing; default the next one) gives the
+        time since the last frame, so gaps in frame numbers are predicted over."""
+        if not isinstance(detections, Detections) or detections.boxes is None:
+            raise TypeError("detections must be vistrack.Detections with boxes")
+        frame = (1 if self.frame is None else self.frame + 1) if frame is None else int(frame)
+        if self.frame is not None and frame <= self.frame:
+            raise ValueError(f"frame must increase; got {frame} after {self.frame}")
+        first = self.frame is None
+        dt = 0.0 if first else float(frame - self.frame)
+        self.frame = frame
+        time = frame / self.frame_rate
+        cfg, t = self.config, self.tracks
+        db, ds, dc = detections.boxes, detections.scores, detections.classes
+        high = ds >= cfg.high
+        if self.compiled:
+            self._q = np.zeros((len(t), 8))
+            c = np.ascontiguousarray  # one compiled signature for every layout of the input
+            match, used, ok = _associate(t.mean, t.cov, t.state, t.classes, c(db), c(ds), c(dc),
+                                         dt, self._noise, self._cfg, self._q)
+            if not ok:
+                raise ValueError("track boxes must be finite")
+            updated, free_d = match >= 0, ~used
+            mt = np.flatnonzero(updated)
+            md = match[mt]
+        else:
+            self._predict(dt)
+            updated, free_d, mt, md = self._associate_numpy(db, ds, dc, high)
         if len(mt):
-            self._update(mt, _to_cxcywh(db[md]))
+            if not self.compiled:
+                self._update(mt, _to_cxcywh(db[md]))
             t.scores[mt] = ds[md]
-        kept = t.manage(~free_t, time, cfg.confirm_hits, cfg.max_lost)
+        kept = t.manage(updated, time, cfg.confirm_hits, cfg.max_lost)
         if self.record:
             q = (self._q if len(self._q) == len(kept) else np.zeros((len(kept), 8)))[kept]
-            upd = (~free_t)[kept]
+            upd = updated[kept]
         # new tracks from the confident detections nobody took
         new = np.flatnonzero(free_d & high & (ds >= cfg.new_track))
         if len(new):
