@@ -69,15 +69,15 @@ class BoxTrackerConfig:
     """
 
     two_stage: bool = True
-    high: float = 0.6
+    high: float = 0.8
     low: float = 0.1
-    new_track: float = 0.7
+    new_track: float = 0.9
     min_iou: float = 0.2
-    min_iou_low: float = 0.5
+    min_iou_low: float = 0.3
     min_iou_tentative: float = 0.3
     fuse_score: bool = True
     confirm_hits: int = 2
-    max_lost: float = 1.5
+    max_lost: float = 2.0
     assigner: str = "gnn"
 
 
