@@ -16,6 +16,8 @@ $(STAMP): pyproject.toml | $(PY)
 	touch $(STAMP)
 
 run: $(STAMP)
+	$(VENV)/bin/vistrack track data/pets09-s2l1/pets09-s2l1.mp4 --gt data/pets09-s2l1/gt.txt \
+		--out-dir out/pets09-s2l1 --force
 	$(VENV)/bin/vistrack demo kalman --out out/
 
 test: $(STAMP)

@@ -8,7 +8,8 @@ The public API is re-exported here; submodules hold the details:
 - :mod:`vistrack.simulate` — sample states and measurements from a model;
 - :mod:`vistrack.association` — costs, gates, assignment, PDA and JPDA;
 - :mod:`vistrack.tracking` — track management and the multi-object trackers;
-- :mod:`vistrack.io` — MOTChallenge files;
+- :mod:`vistrack.io` — MOTChallenge files, video in and out;
+- :mod:`vistrack.frontends` — frames to detections: background models, blobs;
 - :mod:`vistrack.evaluation` — RMSE, NEES, NIS; CLEAR MOT, IDF1, HOTA;
 - :mod:`vistrack.viz` — the seeds' figures.
 
@@ -33,8 +34,8 @@ _LAZY = {
         "LinearMeasurement", "LinearMotion", "Periodic", "Position")},
     "BoxTracker": "tracking",
 }
-_SUBMODULES = ("association", "evaluation", "filters", "io", "models", "pipeline", "simulate",
-               "tracking", "viz")
+_SUBMODULES = ("association", "evaluation", "filters", "frontends", "io", "models", "pipeline",
+               "simulate", "tracking", "viz")
 
 
 def __getattr__(name: str) -> Any:
@@ -59,6 +60,7 @@ __all__ = [
     "Detections",
     "association",
     "filters",
+    "frontends",
     "io",
     "models",
     "pipeline",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 from . import __version__
 
@@ -19,18 +20,48 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def _track(args: argparse.Namespace) -> int:
-    from .pipeline import track_sequence
+    from .io.video import VideoError
+    from .pipeline import track_sequence, track_video
 
+    if (args.out is None) == (args.out_dir is None):
+        print("vistrack track: error: give --out RESULTS.txt (a MOTChallenge sequence's "
+              "detections) or --out-dir OUT/ (from pixels)", file=sys.stderr)
+        return 2
+    progress = sys.stderr if sys.stderr.isatty() and not args.quiet else None
     try:
-        run = track_sequence(args.seq_dir, args.out, detections=args.detections,
-                             tracker=args.tracker, offline=args.offline, force=args.force,
-                             progress=sys.stderr if sys.stderr.isatty() and not args.quiet
-                             else None)
-    except (FileNotFoundError, FileExistsError, ValueError) as exc:
+        if args.out is not None:
+            for flag in ("frontend", "gt", "fps", "stop", "min_area", "background"):
+                if getattr(args, flag) is not None:
+                    print(f"vistrack track: error: --{flag.replace('_', '-')} goes with "
+                          "--out-dir",
+                          file=sys.stderr)
+                    return 2
+            run = track_sequence(args.input, args.out, detections=args.detections,
+                                 tracker=args.tracker, offline=args.offline, force=args.force,
+                                 progress=progress)
+            print(f"wrote {run.out}: {run.rows} boxes of {run.tracks} tracks over {run.frames} "
+                  f"frames from {run.detections} detections; tracker {run.fps:.0f} frames/s")
+            return 0
+        if args.offline or args.detections:
+            print("vistrack track: error: --offline and --detections go with --out (use "
+                  "--frontend detections:FILE with --out-dir)", file=sys.stderr)
+            return 2
+        extra = {k: v for k, v in (("min_area", args.min_area),
+                                   ("background", args.background)) if v is not None}
+        run = track_video(args.input, args.out_dir, frontend=args.frontend or "bgsub",
+                          fps=args.fps, tracker=args.tracker, gt=args.gt, stop=args.stop,
+                          force=args.force, progress=progress, **extra)
+    except (FileNotFoundError, FileExistsError, ValueError, VideoError) as exc:
         print(f"vistrack track: error: {exc}", file=sys.stderr)
         return 2
-    print(f"wrote {run.out}: {run.rows} boxes of {run.tracks} tracks over {run.frames} frames "
-          f"from {run.detections} detections; tracker {run.fps:.0f} frames/s")
+    sec = run.seconds
+    ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
+    print(f"tracked {run.frames} frames: {run.rows} boxes of {run.tracks} tracks; "
+          f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})")
+    for name, path in run.files.items():
+        print(f"  {name:<7} {path}")
+    if run.scores is not None:
+        _table({Path(args.input).stem: run.scores})
     return 0
 
 
@@ -41,7 +72,6 @@ _COLUMNS = (("HOTA", 1), ("DetA", 1), ("AssA", 1), ("MOTA", 1), ("MOTP", 1), ("I
 
 def _eval(args: argparse.Namespace) -> int:
     import json
-    from pathlib import Path
 
     from .pipeline import evaluate_files
 
@@ -78,13 +108,17 @@ def _eval(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({k: v.summary() for k, v in res.items()}, indent=2))
         return 0
+    _table(res)
+    return 0
+
+
+def _table(res: dict) -> None:
     width = max(len(k) for k in res) + 2
     print("".join([f"{'sequence':<{width}}"] + [f"{c:>7}" for c, _ in _COLUMNS]))
     for name, c in res.items():
         s = c.summary()
         cells = [f"{100 * s[k]:7.1f}" if pct else f"{s[k]:7d}" for k, pct in _COLUMNS]
         print("".join([f"{name:<{width}}"] + cells))
-    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -103,20 +137,33 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--seeds", type=int, default=1000,
                       help="simulated runs for the error statistics (default: 1000)")
     demo.set_defaults(func=_demo)
-    from .tracking import TRACKERS
-
     track = sub.add_parser(
-        "track", help="track the detections of a MOTChallenge sequence",
-        description="Track a MOTChallenge sequence folder (seqinfo.ini, det/det.txt) and write "
-        "a MOTChallenge results file.")
-    track.add_argument("seq_dir", help="sequence folder")
-    track.add_argument("--detections", help="detections file (default SEQ_DIR/det/det.txt)")
-    track.add_argument("--tracker", default="bytetrack", choices=sorted(TRACKERS),
-                       help="tracker (default: bytetrack)")
+        "track", help="track a MOTChallenge sequence's detections, or a video from pixels",
+        description="With --out: track a MOTChallenge sequence folder's detections "
+        "(seqinfo.ini, det/det.txt) and write a results file. With --out-dir: track a video "
+        "file, image folder or sequence folder from pixels and write tracks.txt, tracks.csv, "
+        "annotated.mp4 and trajectories.png (and scores, given --gt).")
+    track.add_argument("input", metavar="INPUT",
+                       help="MOTChallenge sequence folder (--out), or video (--out-dir)")
+    track.add_argument("--out", help="results file to write (detections mode)")
+    track.add_argument("--out-dir", help="folder for the outputs (video mode)")
+    track.add_argument("--detections", help="detections file (default INPUT/det/det.txt)")
+    track.add_argument("--tracker", default="bytetrack",
+                       help="tracker: bytetrack (default) or sort")
     track.add_argument("--offline", action="store_true",
-                       help="smooth finished tracks and fill gaps of up to 0.5 s")
-    track.add_argument("--out", required=True, help="results file to write")
-    track.add_argument("--force", action="store_true", help="overwrite an existing results file")
+                       help="smooth finished tracks and fill gaps of up to 0.5 s (--out)")
+    track.add_argument("--frontend", help="video mode: bgsub (default; background model and "
+                       "blobs), hog (OpenCV's people detector) or detections:FILE")
+    track.add_argument("--fps", type=float, help="video mode: the true frame rate, when the "
+                       "file's header is wrong")
+    track.add_argument("--gt", help="video mode: MOTChallenge ground truth to score against")
+    track.add_argument("--stop", type=int, help="video mode: the last frame to track")
+    track.add_argument("--background", choices=("selective", "mog2"),
+                       help="video mode, bgsub: the background model (default: selective, the "
+                       "seeds' running mean and variance)")
+    track.add_argument("--min-area", type=float,
+                       help="video mode, bgsub: the smallest blob, in pixels (default: 500)")
+    track.add_argument("--force", action="store_true", help="overwrite existing outputs")
     track.add_argument("--quiet", action="store_true",
                        help="no progress bar (shown on a terminal only)")
     track.set_defaults(func=_track)

@@ -19,7 +19,7 @@ from .tracking.box import BoxTracker
 from .tracking.offline import smooth
 from .types import Detections
 
-__all__ = ["track_sequence", "TrackRun", "evaluate_files"]
+__all__ = ["track_sequence", "TrackRun", "evaluate_files", "track_video", "VideoRun", "FRONTENDS"]
 
 
 @dataclass(frozen=True)
@@ -125,3 +125,161 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     if len(out) > 1:
         out["COMBINED"] = combine(out.values())
     return out
+
+
+# ------------------------------------------------------------------------------- video
+FRONTENDS = ("bgsub", "hog", "detections:FILE")
+"""Front-ends of :func:`track_video` by name."""
+
+
+@dataclass(frozen=True)
+class VideoRun:
+    """What :func:`track_video` wrote and measured: the output files, frames, tracks, the
+    seconds spent in each stage (``decode``, ``frontend``, ``tracker``, ``write``) and the
+    scores against ground truth (None without it)."""
+
+    out_dir: Path
+    files: dict
+    frames: int
+    rows: int
+    tracks: int
+    seconds: dict
+    scores: MOTCounts | None
+
+    @property
+    def fps(self) -> float:
+        """Frames per second of decode, front-end and tracker together."""
+        s = sum(v for k, v in self.seconds.items() if k != "write")
+        return self.frames / max(s, 1e-12)
+
+
+def _frontend(name: str, reader: Any, *, background: str, min_area: float, n_init: int):
+    """The per-frame function ``image -> Detections`` of a front-end, by name."""
+    import cv2
+
+    from .frontends import background as make_background
+    from .frontends import find_blobs
+    from .io.video import VideoReader
+
+    if name == "bgsub":
+        bg = make_background(background)
+        bg.initialize(f.image for f in VideoReader(reader.source, fps=reader.fps, grey=True,
+                                                   start=reader.start,
+                                                   stop=reader.start + n_init - 1))
+
+        def detect(image: np.ndarray, index: int) -> Detections:
+            grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
+            return find_blobs(bg.apply(grey), min_area=min_area, open_size=3,
+                              close_size=7).detections("boxes")
+        return detect
+    if name == "hog":
+        from .frontends.detectors import HOGDetector
+
+        hog = HOGDetector()
+        return lambda image, index: hog.detect(image)
+    if name.startswith("detections:"):
+        path = Path(name.split(":", 1)[1])
+        if not path.exists():
+            raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
+        dets = read_mot(path)
+        n = max(int(dets.frames.max()) if len(dets) else 0, reader.start + len(reader))
+        slices = dets.frame_slices(n)
+        return lambda image, index: Detections.from_xywh(dets.boxes[slices[index - 1]],
+                                                         dets.conf[slices[index - 1]])
+    raise ValueError(f"frontend must be one of {list(FRONTENDS)}; got {name!r}")
+
+
+def track_video(video: str | Path, out_dir: str | Path, *, frontend: str = "bgsub",
+                fps: float | None = None, tracker: str = "bytetrack",
+                gt: str | Path | None = None, background: str = "selective",
+                min_area: float = 500.0, n_init: int = 20, stop: int | None = None,
+                annotate: bool = True, force: bool = False, progress: Any = None,
+                **overrides: Any) -> VideoRun:
+    """Track a video (a file, an image folder or a MOTChallenge sequence folder) from pixels.
+
+    Writes into ``out_dir``: ``tracks.txt`` (MOTChallenge results), ``tracks.csv``,
+    ``annotated.mp4`` (boxes, identities, trails and 2-sigma ellipses of the centres) and
+    ``trajectories.png``; scores against ``gt`` (a MOTChallenge ground-truth file) when given.
+
+    Parameters
+    ----------
+    frontend
+        ``"bgsub"`` (the seeds' background model, then blobs), ``"hog"`` (OpenCV's people
+        detector) or ``"detections:FILE"`` (a MOTChallenge detections file).
+    fps
+        The true frame rate, when the container's header is wrong.
+    background, min_area, n_init
+        For ``bgsub``: the background model's name, the smallest blob in pixels, and the
+        frames whose median starts the model.
+    stop
+        The last frame to track (default: all).
+    """
+    import cv2
+
+    from .io.video import VideoReader, VideoWriter
+    from .viz.annotate import Annotator
+    from .viz.plots import plot_trajectories
+
+    out_dir = Path(out_dir)
+    files = {"tracks": out_dir / "tracks.txt", "csv": out_dir / "tracks.csv",
+             "video": out_dir / "annotated.mp4", "plot": out_dir / "trajectories.png"}
+    if not annotate:
+        del files["video"]
+    there = [str(p) for p in files.values() if p.exists()]
+    if there and not force:
+        raise FileExistsError(f"{', '.join(there)} exist; pass --force to overwrite them")
+    gt_table = read_mot(gt) if gt is not None else None
+    reader = VideoReader(video, fps=fps, stop=stop, prefetch=8)
+    detect = _frontend(frontend, reader, background=background, min_area=min_area,
+                       n_init=n_init)
+    trk = BoxTracker(tracker, frame_rate=reader.fps, **overrides)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    writer = VideoWriter(files["video"], reader.fps) if annotate else None
+    ann = Annotator()
+    sec = dict.fromkeys(("decode", "frontend", "tracker", "write"), 0.0)
+    rows, first_image, n = [], None, 0
+    every = max(1, len(reader) // 50)
+    t0 = time.perf_counter()
+    try:
+        for frame in reader:
+            t1 = time.perf_counter()
+            sec["decode"] += t1 - t0
+            d = detect(frame.image, frame.index)
+            t2 = time.perf_counter()
+            res = trk.step(d, frame=frame.index)
+            t3 = time.perf_counter()
+            sec["frontend"] += t2 - t1
+            sec["tracker"] += t3 - t2
+            rows += [(frame.index, i, *b, s) for i, b, s in zip(res.ids, res.xywh, res.scores)]
+            if first_image is None:
+                first_image = frame.image
+            if writer is not None:
+                writer.write(ann.draw(frame.image, res, label=f"frame {frame.index}"))
+            n += 1
+            if n % every == 0 or n == len(reader):
+                _progress(n, len(reader), reader.source.name, progress)
+            t0 = time.perf_counter()
+            sec["write"] += t0 - t3
+    finally:
+        if writer is not None:
+            writer.close()
+    if n == 0:
+        raise ValueError(f"{video}: no frames to track")
+    a = np.array(rows, dtype=float).reshape(-1, 7)
+    F, I = a[:, 0].astype(int), a[:, 1].astype(int)
+    write_mot(files["tracks"], F, I, a[:, 2:6], a[:, 6], force=True)
+    with open(files["csv"], "w") as fh:
+        fh.write("frame,id,x,y,w,h,score\n")
+        for r in a:
+            fh.write(f"{int(r[0])},{int(r[1])},{r[2]:.2f},{r[3]:.2f},{r[4]:.2f},{r[5]:.2f},"
+                     f"{r[6]:.3f}\n")
+    plot_trajectories(F, I, a[:, 2:4] + a[:, 4:6] / 2,
+                      cv2.cvtColor(first_image, cv2.COLOR_BGR2RGB) if first_image.ndim == 3
+                      else first_image, files["plot"],
+                      title=f"{reader.source.name}: {len(np.unique(I))} tracks, {n} frames")
+    scores = None
+    if gt_table is not None:  # scored over the frames tracked
+        last = reader.start + n - 1
+        g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= last)]
+        scores = evaluate_mot(g, read_mot(files["tracks"]), last, benchmark="auto")
+    return VideoRun(out_dir, files, n, len(a), len(np.unique(I)), sec, scores)

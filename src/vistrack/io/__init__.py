@@ -1,4 +1,4 @@
-"""Reading and writing outside formats: MOTChallenge files."""
+"""Reading and writing outside formats: MOTChallenge files, video."""
 
 from .motchallenge import (
     MOT_CLASSES,
@@ -9,6 +9,7 @@ from .motchallenge import (
     read_seqinfo,
     write_mot,
 )
+from .video import Frame, VideoError, VideoReader, VideoWriter
 
 __all__ = ["MOT_CLASSES", "MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "read_seqinfo",
-           "write_mot"]
+           "write_mot", "Frame", "VideoError", "VideoReader", "VideoWriter"]

@@ -381,5 +381,7 @@ class BoxTracker:
                                  t.classes.copy()))
             self._confirmed.update(t.ids[t.state == CONFIRMED].tolist())
         out = np.flatnonzero((t.state == CONFIRMED) & (t.last_time == time))
+        covs = np.zeros((len(out), 2, 2))
+        covs[:, 0, 0], covs[:, 1, 1] = t.cov[out, 0, 0], t.cov[out, 1, 0]
         return Tracks(ids=t.ids[out], boxes=_to_xyxy(t.mean[out, :4]), points=None,
-                      scores=t.scores[out], classes=t.classes[out])
+                      scores=t.scores[out], classes=t.classes[out], covs=covs)

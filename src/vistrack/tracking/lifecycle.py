@@ -38,6 +38,9 @@ class Tracks:
     points : (K, d) float or None
     scores, classes : (K,)
         The score and class of the detection each track was updated with.
+    covs : (K, 2, 2) float or None
+        The covariance of each track's centre (boxes) or point position, where the tracker
+        gives it.
     """
 
     ids: np.ndarray
@@ -45,6 +48,7 @@ class Tracks:
     points: np.ndarray | None
     scores: np.ndarray
     classes: np.ndarray
+    covs: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.ids.shape[0])

@@ -161,5 +161,7 @@ class PointTracker:
             t.add(mean, cov, time, detections.classes[new], detections.scores[new],
                   confirmed=first)
         out = np.flatnonzero((t.state == CONFIRMED) & (t.last_time == time))
-        return Tracks(ids=t.ids[out], boxes=None, points=t.mean[out] @ self.H.T,
-                      scores=t.scores[out], classes=t.classes[out])
+        H = self.H
+        covs = H @ t.cov[out] @ H.T
+        return Tracks(ids=t.ids[out], boxes=None, points=t.mean[out] @ H.T,
+                      scores=t.scores[out], classes=t.classes[out], covs=covs[:, :2, :2])

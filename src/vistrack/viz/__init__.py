@@ -1,5 +1,8 @@
-"""Pictures: the seeds' filter figures (:mod:`vistrack.viz.plots`). Needs matplotlib."""
+"""Pictures: the seeds' filter figures and track plots (:mod:`vistrack.viz.plots`, matplotlib),
+and tracks drawn on frames (:mod:`vistrack.viz.annotate`, OpenCV)."""
 
-from .plots import covariance_ellipse, plot_estimates_1d, plot_track_2d
+from .annotate import Annotator, id_colour
+from .plots import covariance_ellipse, plot_estimates_1d, plot_track_2d, plot_trajectories
 
-__all__ = ["covariance_ellipse", "plot_estimates_1d", "plot_track_2d"]
+__all__ = ["Annotator", "id_colour", "covariance_ellipse", "plot_estimates_1d", "plot_track_2d",
+           "plot_trajectories"]

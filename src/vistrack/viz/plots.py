@@ -1,6 +1,7 @@
 """Plots of filter and smoother runs, in the style of the seeds' figures.
 
-Every function draws on a given matplotlib ``ax`` and returns it; none calls ``plt.show()``.
+The filter figures draw on a given matplotlib ``ax`` and return it; ``plot_trajectories`` makes
+its own figure and can save it. None calls ``plt.show()``.
 """
 
 from __future__ import annotations
@@ -9,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["covariance_ellipse", "plot_estimates_1d", "plot_track_2d"]
+__all__ = ["covariance_ellipse", "plot_estimates_1d", "plot_track_2d", "plot_trajectories"]
 
 
 def _finish(ax: Any, xlabel: str, ylabel: str, title: str | None) -> Any:
@@ -104,3 +105,39 @@ def plot_track_2d(
                 ax.plot(e[:, 0], e[:, 1], "-", color=color, lw=0.7, alpha=0.8)
     ax.set_aspect("equal", adjustable="box")
     return _finish(ax, "x", "y", title)
+
+
+def plot_trajectories(frames: Any, ids: Any, centres: Any, background: Any = None,
+                      path: Any = None, *, title: str | None = None) -> Any:
+    """Every track's path of centres ``(N, 2)`` (rows of ``frames`` and ``ids``), one colour
+    per identity, over a dimmed ``background`` image (RGB or grey) when given; saved to
+    ``path`` (PNG) when given. Returns the figure."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    frames, ids, c = np.asarray(frames), np.asarray(ids), np.asarray(centres, dtype=float)
+    fig, ax = plt.subplots(figsize=(9, 7))
+    if background is not None:
+        ax.imshow(np.asarray(background), cmap="gray", alpha=0.45)
+    order = np.lexsort((frames, ids))
+    edges = np.flatnonzero(np.diff(ids[order])) + 1
+    cmap = plt.get_cmap("tab20")
+    for k, (a, b) in enumerate(zip(np.r_[0, edges], np.r_[edges, len(order)])):
+        p = c[order[a:b]]
+        ax.plot(p[:, 0], p[:, 1], "-", color=cmap(k % 20), lw=1.5)
+        ax.plot(p[-1, 0], p[-1, 1], "o", color=cmap(k % 20), ms=3)
+    if background is None:
+        ax.invert_yaxis()
+        ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("x (pixels)")
+    ax.set_ylabel("y (pixels)")
+    if title:
+        ax.set_title(title)
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+    return fig

@@ -1,0 +1,213 @@
+r"""Background subtraction: the seeds' selective running mean and variance, and OpenCV's MOG2.
+
+:class:`SelectiveBackground` is the model of the seeds (UCSD CSE 252A, "Background image" and
+"Segmentation image"), per pixel:
+
+- ``B_0`` is the median of the first ``N`` frames (:meth:`~SelectiveBackground.initialize`);
+- the difference ``D_n² = (I_n - B_{n-1})²`` marks a pixel foreground where
+  ``D_n² ≥ T σ_{n-1}²``;
+- where the pixel is background, the mean and the mean of squares run on,
+  ``B_n = (1-α) B_{n-1} + α I_n`` and ``J_n² = (1-α) J_{n-1}² + α I_n²``; elsewhere they keep
+  their values (a person standing still is not learnt into the background);
+- the variance is ``σ_n² = J_n² - B_n²``.
+
+Two choices the seeds leave open: ``J_0²`` is ``B_0²`` plus a robust variance of the first
+``N`` frames, ``(1.4826 · median |I - B_0|)²`` (the median absolute deviation: people who walk
+through some of those frames would inflate the plain variance and blind the model where they
+walked), and ``σ²`` is floored at ``min_sigma²`` (a pixel that never changed would otherwise
+call any change foreground). In colour the test sums over
+channels, ``Σ_c D_c² ≥ T Σ_c σ_c²``, which is the seeds' test on grey images.
+
+The selective update has the seeds' blind spot: an object that stands in more than half of the
+first ``N`` frames is part of ``B_0``, and when it leaves, the uncovered background is
+foreground (a "ghost") that is never learnt, since foreground pixels are not updated. Start
+the model on frames where things move, or with more of them.
+
+``freeze=True`` stops learning (the model stays ``B_0``, ``J_0``); OpenCV's KNN and GSOC
+subtractors ignore ``learningRate=0``. Masks are uint8, 255 for foreground, as OpenCV's.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Iterable
+
+import numpy as np
+from numba import njit, prange
+
+__all__ = ["BACKGROUNDS", "MOG2Background", "SelectiveBackground", "background"]
+
+
+@njit(cache=True, parallel=True, fastmath=True)
+def _selective_grey(img, B, J2, T, min_var, alpha, mask):
+    # flat (n,) arrays; branchless, so that the loop vectorises: the learning weight is alpha
+    # where the pixel is background and 0 where it is foreground
+    # (B + w (I - B) is (1 - w) B + w I)
+    for i in prange(img.shape[0]):
+        v = np.float32(img[i])
+        b = B[i]
+        d = v - b
+        fg = d * d >= T * max(J2[i] - b * b, min_var)
+        mask[i] = np.uint8(255) * np.uint8(fg)
+        w = np.float32(0.0) if fg else alpha
+        B[i] = b + w * d
+        J2[i] = J2[i] + w * (v * v - J2[i])
+
+
+@njit(cache=True, parallel=True, fastmath=True)
+def _selective_colour(img, B, J2, T, min_var, alpha, mask):
+    # (n, 3) arrays: the test sums over the channels; written out per channel so that the
+    # loop vectorises
+    for i in prange(img.shape[0]):
+        v0, v1, v2 = np.float32(img[i, 0]), np.float32(img[i, 1]), np.float32(img[i, 2])
+        b0, b1, b2 = B[i, 0], B[i, 1], B[i, 2]
+        d0, d1, d2 = v0 - b0, v1 - b1, v2 - b2
+        var = (max(J2[i, 0] - b0 * b0, min_var) + max(J2[i, 1] - b1 * b1, min_var)
+               + max(J2[i, 2] - b2 * b2, min_var))
+        fg = d0 * d0 + d1 * d1 + d2 * d2 >= T * var
+        mask[i] = np.uint8(255) * np.uint8(fg)
+        w = np.float32(0.0) if fg else alpha
+        B[i, 0], B[i, 1], B[i, 2] = b0 + w * d0, b1 + w * d1, b2 + w * d2
+        J2[i, 0] += w * (v0 * v0 - J2[i, 0])
+        J2[i, 1] += w * (v1 * v1 - J2[i, 1])
+        J2[i, 2] += w * (v2 * v2 - J2[i, 2])
+
+
+class SelectiveBackground:
+    """The seeds' selective running mean/variance background model (see the module).
+
+    Parameters
+    ----------
+    alpha : float
+        Learning rate of the running mean and mean of squares, in (0, 1].
+    threshold : float
+        ``T``: foreground where ``D² ≥ T σ²`` (25 is five standard deviations).
+    n_init : int
+        Frames whose median is ``B_0``, when the model initialises itself from the first
+        frames given to :meth:`apply`.
+    min_sigma : float
+        Floor of ``σ``, in grey levels.
+    freeze : bool
+        Keep the initial model (no learning).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> frames = [np.clip(100 + rng.normal(0, 2, (40, 60)), 0, 255).astype(np.uint8)
+    ...           for _ in range(10)]
+    >>> bg = SelectiveBackground(threshold=16).initialize(frames)
+    >>> im = frames[0].copy(); im[10:20, 20:30] = 200   # a bright square
+    >>> m = bg.apply(im)
+    >>> int(m[10:20, 20:30].all()), int(m.sum() // 255)
+    (1, 100)
+    """
+
+    def __init__(self, alpha: float = 0.02, threshold: float = 25.0, n_init: int = 20,
+                 min_sigma: float = 6.0, freeze: bool = False):
+        if not 0.0 < alpha <= 1.0:
+            raise ValueError(f"alpha must be in (0, 1]; got {alpha}")
+        if not threshold > 0:
+            raise ValueError(f"threshold must be > 0; got {threshold}")
+        if int(n_init) < 1:
+            raise ValueError(f"n_init must be >= 1; got {n_init}")
+        if not min_sigma >= 0:
+            raise ValueError(f"min_sigma must be >= 0; got {min_sigma}")
+        self.alpha, self.threshold, self.n_init = float(alpha), float(threshold), int(n_init)
+        self.min_sigma, self.freeze = float(min_sigma), bool(freeze)
+        self.mean: np.ndarray | None = None  # B (H, W, C) float32
+        self.mean_sq: np.ndarray | None = None  # J² (H, W, C) float32
+        self._buffer: list[np.ndarray] = []
+
+    @staticmethod
+    def _as3(image: Any) -> np.ndarray:
+        im = np.asarray(image)
+        if im.dtype != np.uint8 or im.ndim not in (2, 3):
+            raise ValueError(f"image must be (H, W) or (H, W, C) uint8; got {im.shape} "
+                             f"{im.dtype}")
+        return im[:, :, None] if im.ndim == 2 else im
+
+    def initialize(self, frames: Iterable[Any]) -> "SelectiveBackground":
+        """``B_0`` = the per-pixel median of ``frames``, ``σ_0`` their median absolute deviation
+        from it times 1.4826 (the standard deviation, for Gaussian noise)."""
+        stack = [self._as3(f) for f in frames]
+        if len(stack) == 0:
+            raise ValueError("initialize needs at least one frame")
+        stack = np.stack(stack)
+        self.mean = np.median(stack, axis=0).astype(np.float32)
+        mad = np.median(np.abs(stack.astype(np.float32) - self.mean), axis=0)
+        var = (1.4826 * mad) ** 2
+        self.mean_sq = (self.mean * self.mean + var).astype(np.float32)
+        self._buffer = []
+        return self
+
+    @property
+    def variance(self) -> np.ndarray:
+        """``σ² = J² - B²`` (H, W, C), before the floor."""
+        if self.mean is None:
+            raise RuntimeError("the model is not initialised yet")
+        return self.mean_sq - self.mean * self.mean
+
+    def apply(self, image: Any) -> np.ndarray:
+        """The foreground mask ``(H, W)`` uint8 (255 foreground) of one frame, and the model's
+        update. Before the model has ``n_init`` frames (when :meth:`initialize` was not called)
+        the frames are collected and the masks are empty."""
+        im = self._as3(image)
+        if self.mean is None:
+            self._buffer.append(im.copy())
+            if len(self._buffer) >= self.n_init:
+                self.initialize(self._buffer)
+            return np.zeros(im.shape[:2], np.uint8)
+        if im.shape != self.mean.shape:
+            raise ValueError(f"image has shape {im.shape[:2] + im.shape[2:]}; the model was "
+                             f"built on {self.mean.shape}")
+        mask = np.empty(im.shape[:2], np.uint8)
+        H, W, C = im.shape
+        args = (np.float32(self.threshold), np.float32(self.min_sigma ** 2),
+                np.float32(0.0 if self.freeze else self.alpha), mask.reshape(-1))
+        im = np.ascontiguousarray(im)
+        if C == 1:
+            _selective_grey(im.reshape(-1), self.mean.reshape(-1), self.mean_sq.reshape(-1),
+                            *args)
+        elif C == 3:
+            _selective_colour(im.reshape(-1, C), self.mean.reshape(-1, C),
+                              self.mean_sq.reshape(-1, C), *args)
+        else:
+            raise ValueError(f"image must have 1 or 3 channels; got {C}")
+        return mask
+
+
+class MOG2Background:
+    """OpenCV's Gaussian-mixture subtractor (Zivkovic 2004) behind the same interface; shadows
+    (marked 127 by OpenCV) count as background."""
+
+    def __init__(self, history: int = 500, var_threshold: float = 16.0,
+                 detect_shadows: bool = True, freeze: bool = False):
+        import cv2
+
+        self._m = cv2.createBackgroundSubtractorMOG2(int(history), float(var_threshold),
+                                                     bool(detect_shadows))
+        self.freeze = bool(freeze)
+        self._seen = 0
+
+    def initialize(self, frames: Iterable[Any]) -> "MOG2Background":
+        for f in frames:
+            self._m.apply(np.asarray(f))
+            self._seen += 1
+        return self
+
+    def apply(self, image: Any) -> np.ndarray:
+        # MOG2 honours learningRate=0 (unlike KNN and GSOC), so freezing works after warm-up
+        rate = 0.0 if self.freeze and self._seen else -1.0
+        m = self._m.apply(np.asarray(image), learningRate=rate)
+        self._seen += 1
+        return np.where(m > 200, np.uint8(255), np.uint8(0))
+
+
+BACKGROUNDS = {"selective": SelectiveBackground, "mog2": MOG2Background}
+"""Background models by name: ``selective`` (the seeds'), ``mog2`` (OpenCV)."""
+
+
+def background(name: str = "selective", **kwargs: Any):
+    """A background model by name in :data:`BACKGROUNDS`."""
+    if name not in BACKGROUNDS:
+        raise ValueError(f"background must be one of {sorted(BACKGROUNDS)}; got {name!r}")
+    return BACKGROUNDS[name](**kwargs)

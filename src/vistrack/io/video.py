@@ -1,0 +1,276 @@
+"""Frames in and out: :class:`VideoReader` over a video file, an image folder or a MOTChallenge
+``img1/``, and :class:`VideoWriter` for MP4.
+
+Frames stream one at a time (memory stays bounded however long the video), each as a
+:class:`Frame` with its index (from 1, as MOTChallenge counts) and time in seconds. OpenCV
+decodes. A file that stops decoding before the frame count its header gives yields the
+frames read and warns with the frame index where reading stopped; a file OpenCV cannot open at
+all raises :class:`VideoError` naming it.
+"""
+
+from __future__ import annotations
+
+import configparser
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+__all__ = ["Frame", "VideoError", "VideoReader", "VideoWriter", "IMAGE_SUFFIXES"]
+
+IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
+
+
+class VideoError(OSError):
+    """A video or image that cannot be read or written."""
+
+
+def _cv2():
+    try:
+        import cv2
+    except ImportError as e:  # pragma: no cover - a core dependency
+        raise ImportError("vistrack.io.video needs OpenCV: pip install "
+                          "opencv-contrib-python-headless") from e
+    return cv2
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One frame: ``index`` (from 1), ``time`` (seconds from the first frame, ``(index - 1) /
+    fps``) and ``image`` ``(H, W, 3)`` BGR or ``(H, W)`` grey, uint8."""
+
+    index: int
+    time: float
+    image: np.ndarray
+
+
+class VideoReader:
+    """Frames of a video file, an image folder, or a MOTChallenge sequence folder (its
+    ``img1/``, with the frame rate of its ``seqinfo.ini``).
+
+    Parameters
+    ----------
+    source
+        A video file, or a folder of images (read in name order).
+    fps : float, optional
+        Frames per second; default the sequence's ``seqinfo.ini``, else the container's header,
+        else 30 (image folders). Give it when the header is wrong.
+    grey : bool
+        Yield ``(H, W)`` grey frames instead of BGR.
+    start, stop : int, optional
+        The first and last frame index to yield (from 1, inclusive).
+    prefetch : int
+        Decode up to this many frames ahead in a background thread (OpenCV releases the GIL
+        while it decodes), so that decoding overlaps the caller's work; 0 decodes in the
+        caller's thread. Memory holds at most ``prefetch`` frames more.
+
+    Examples
+    --------
+    >>> import tempfile, cv2
+    >>> d = Path(tempfile.mkdtemp())
+    >>> for k in range(3):
+    ...     _ = cv2.imwrite(str(d / f"{k:06d}.png"), np.full((4, 6, 3), 40 * k, np.uint8))
+    >>> r = VideoReader(d, fps=10)
+    >>> len(r), r.size, [(f.index, f.time, int(f.image[0, 0, 0])) for f in r]
+    (3, (6, 4), [(1, 0.0, 0), (2, 0.1, 40), (3, 0.2, 80)])
+    """
+
+    def __init__(self, source: str | Path, *, fps: float | None = None, grey: bool = False,
+                 start: int = 1, stop: int | None = None, prefetch: int = 0):
+        src = Path(source)
+        if not src.exists():
+            raise FileNotFoundError(f"{src} does not exist")
+        self.source, self.grey = src, bool(grey)
+        if int(start) < 1:
+            raise ValueError(f"start must be >= 1 (frames count from 1); got {start}")
+        self.start, self.stop = int(start), None if stop is None else int(stop)
+        if int(prefetch) < 0:
+            raise ValueError(f"prefetch must be >= 0; got {prefetch}")
+        self.prefetch = int(prefetch)
+        self._files: list[Path] | None = None
+        seq_fps = None
+        if src.is_dir():
+            info = src / "seqinfo.ini"
+            if info.exists():
+                cp = configparser.ConfigParser()
+                cp.read(info)
+                seq = cp["Sequence"] if "Sequence" in cp else {}
+                seq_fps = float(seq["frameRate"]) if "frameRate" in seq else None
+                src = src / seq.get("imDir", "img1")
+                if not src.is_dir():
+                    raise FileNotFoundError(f"{src} does not exist ({info} names it)")
+            self._files = sorted(p for p in src.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+            if not self._files:
+                raise VideoError(f"{src} holds no images ({', '.join(IMAGE_SUFFIXES)})")
+            first = self._read_image(self._files[0])
+            self.size = (first.shape[1], first.shape[0])
+            self.frame_count = len(self._files)
+            header_fps = None
+        else:
+            cv2 = _cv2()
+            cap = cv2.VideoCapture(str(src))
+            if not cap.isOpened():
+                raise VideoError(f"{src}: OpenCV cannot open it as a video")
+            self.size = (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)),
+                         int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
+            self.frame_count = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+            header_fps = cap.get(cv2.CAP_PROP_FPS) or None
+            cap.release()
+        fps = fps if fps is not None else seq_fps or header_fps or 30.0
+        if not np.isfinite(fps) or fps <= 0:
+            raise ValueError(f"fps must be a finite number > 0; got {fps}")
+        self.fps = float(fps)
+
+    def __len__(self) -> int:
+        """Frames to yield, from the header's count for video files (the file may hold fewer:
+        reading then stops with a warning)."""
+        stop = self.frame_count if self.stop is None else min(self.stop, self.frame_count)
+        return max(0, stop - self.start + 1)
+
+    def _read_image(self, path: Path) -> np.ndarray:
+        cv2 = _cv2()
+        im = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if self.grey else cv2.IMREAD_COLOR)
+        if im is None:
+            raise VideoError(f"{path}: not a readable image")
+        return im
+
+    def _frame(self, index: int, image: np.ndarray) -> Frame:
+        return Frame(index, (index - 1) / self.fps, image)
+
+    def __iter__(self) -> Iterator[Frame]:
+        if self.prefetch == 0:
+            yield from self._frames()
+            return
+        import queue
+        import threading
+
+        q: queue.Queue = queue.Queue(maxsize=self.prefetch)
+        stop = threading.Event()
+        end = object()
+
+        def work() -> None:
+            try:
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always")
+                    for f in self._frames():
+                        while not stop.is_set():
+                            try:
+                                q.put(f, timeout=0.1)
+                                break
+                            except queue.Full:
+                                continue
+                        if stop.is_set():
+                            return
+                q.put((end, caught, None))
+            except BaseException as exc:  # handed to the caller's thread
+                q.put((end, [], exc))
+
+        t = threading.Thread(target=work, name="vistrack-video-reader", daemon=True)
+        t.start()
+        try:
+            while True:
+                item = q.get()
+                if isinstance(item, tuple) and item[0] is end:
+                    for w in item[1]:
+                        warnings.warn(w.message, w.category, stacklevel=2)
+                    if item[2] is not None:
+                        raise item[2]
+                    return
+                yield item
+        finally:
+            stop.set()
+            t.join()
+
+    def _frames(self) -> Iterator[Frame]:
+        last = self.frame_count if self.stop is None else min(self.stop, self.frame_count)
+        if self._files is not None:
+            for k in range(self.start, last + 1):
+                yield self._frame(k, self._read_image(self._files[k - 1]))
+            return
+        cv2 = _cv2()
+        cap = cv2.VideoCapture(str(self.source))
+        try:
+            if self.start > 1:
+                cap.set(cv2.CAP_PROP_POS_FRAMES, self.start - 1)
+            for k in range(self.start, last + 1):
+                ok, im = cap.read()
+                if not ok or im is None:
+                    warnings.warn(f"{self.source}: reading stopped at frame {k} of the "
+                                  f"{self.frame_count} its header gives (truncated or corrupt)",
+                                  RuntimeWarning, stacklevel=2)
+                    return
+                if self.grey:
+                    im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
+                yield self._frame(k, im)
+        finally:
+            cap.release()
+
+
+class VideoWriter:
+    """Write frames to an MP4 file (``mp4v``), as a context manager.
+
+    Parameters
+    ----------
+    path
+        The file to write; its folder is created.
+    fps : float
+    size : (width, height), optional
+        Default: the first frame's.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "a.mp4"
+    >>> with VideoWriter(p, fps=10) as w:
+    ...     for k in range(5):
+    ...         w.write(np.full((32, 48, 3), 50 * k, np.uint8))
+    >>> r = VideoReader(p)
+    >>> len(r), r.size, r.fps
+    (5, (48, 32), 10.0)
+    """
+
+    def __init__(self, path: str | Path, fps: float, size: tuple[int, int] | None = None):
+        if not np.isfinite(fps) or fps <= 0:
+            raise ValueError(f"fps must be a finite number > 0; got {fps}")
+        self.path, self.fps, self.size = Path(path), float(fps), size
+        self._w = None
+        self.frames = 0
+
+    def _open(self, size: tuple[int, int]) -> None:
+        cv2 = _cv2()
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), self.fps,
+                                  size)
+        if not self._w.isOpened():
+            raise VideoError(f"{self.path}: OpenCV cannot write an MP4 here")
+        self.size = size
+
+    def write(self, image: np.ndarray) -> None:
+        """Append a ``(H, W, 3)`` BGR or ``(H, W)`` grey uint8 frame of the writer's size."""
+        im = np.asarray(image)
+        if im.dtype != np.uint8 or im.ndim not in (2, 3) or (im.ndim == 3 and im.shape[2] != 3):
+            raise ValueError(f"image must be (H, W) or (H, W, 3) uint8; got {im.shape} "
+                             f"{im.dtype}")
+        size = (im.shape[1], im.shape[0])
+        if self._w is None:
+            self._open(self.size or size)
+        if size != self.size:
+            raise ValueError(f"frame {self.frames + 1} is {size[0]}x{size[1]}; the video is "
+                             f"{self.size[0]}x{self.size[1]}")
+        if im.ndim == 2:
+            im = np.repeat(im[:, :, None], 3, axis=2)
+        self._w.write(np.ascontiguousarray(im))
+        self.frames += 1
+
+    def close(self) -> None:
+        if self._w is not None:
+            self._w.release()
+            self._w = None
+
+    def __enter__(self) -> "VideoWriter":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

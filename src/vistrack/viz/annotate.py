@@ -1,0 +1,83 @@
+"""Draw tracks on frames: boxes, identities, trails and covariance ellipses (OpenCV)."""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Annotator", "id_colour"]
+
+
+def id_colour(i: int) -> tuple[int, int, int]:
+    """A bright BGR colour for identity ``i``, far from its neighbours' (golden-ratio hues)."""
+    import colorsys
+
+    r, g, b = colorsys.hsv_to_rgb((int(i) * 0.618033988749895) % 1.0, 0.85, 1.0)
+    return int(255 * b), int(255 * g), int(255 * r)
+
+
+class Annotator:
+    """Draws one frame's tracks, remembering each identity's recent centres for its trail.
+
+    Parameters
+    ----------
+    trail : int
+        Frames of trail kept per identity; an identity unseen for that long is forgotten
+        (memory stays bounded on long videos).
+    nsigma : float
+        Size of the covariance ellipse of a track's centre, in standard deviations.
+    """
+
+    def __init__(self, trail: int = 30, nsigma: float = 2.0):
+        self.trail, self.nsigma = int(trail), float(nsigma)
+        self._trails: dict[int, deque] = {}
+        self._last: dict[int, int] = {}
+        self._n = 0
+
+    def draw(self, image: np.ndarray, tracks: Any, label: str | None = None) -> np.ndarray:
+        """A copy of the BGR ``image`` with ``tracks`` (:class:`vistrack.tracking.Tracks`)
+        drawn."""
+        import cv2
+
+        out = image.copy() if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+        self._n += 1
+        boxes = tracks.boxes
+        centres = (boxes[:, :2] + boxes[:, 2:]) / 2 if boxes is not None else tracks.points[:, :2]
+        for k, i in enumerate(tracks.ids.tolist()):
+            t = self._trails.setdefault(i, deque(maxlen=self.trail))
+            t.append(centres[k])
+            self._last[i] = self._n
+        for i in [i for i, n in self._last.items() if self._n - n > self.trail]:
+            del self._trails[i], self._last[i]
+        for i, t in self._trails.items():
+            if len(t) > 1:
+                pts = np.round(np.array(t)).astype(np.int32).reshape(-1, 1, 2)
+                cv2.polylines(out, [pts], False, id_colour(i), 2, cv2.LINE_AA)
+        covs = getattr(tracks, "covs", None)
+        for k, i in enumerate(tracks.ids.tolist()):
+            c = id_colour(i)
+            cx, cy = centres[k]
+            if covs is not None:
+                lam, vec = np.linalg.eigh(covs[k][:2, :2])
+                ax = self.nsigma * np.sqrt(np.maximum(lam, 0.0))
+                ang = float(np.degrees(np.arctan2(vec[1, 1], vec[0, 1])))
+                cv2.ellipse(out, (int(round(cx)), int(round(cy))),
+                            (max(int(round(ax[1])), 1), max(int(round(ax[0])), 1)), ang, 0, 360,
+                            c, 1, cv2.LINE_AA)
+            if boxes is not None:
+                x0, y0, x1, y1 = np.round(boxes[k]).astype(int)
+                cv2.rectangle(out, (x0, y0), (x1, y1), c, 2)
+                org = (x0, max(y0 - 4, 12))
+            else:
+                cv2.circle(out, (int(round(cx)), int(round(cy))), 3, c, -1)
+                org = (int(cx) + 4, int(cy) - 4)
+            cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 3, cv2.LINE_AA)
+            cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5, c, 1, cv2.LINE_AA)
+        if label:
+            cv2.putText(out, label, (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (0, 0, 0), 3,
+                        cv2.LINE_AA)
+            cv2.putText(out, label, (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (255, 255, 255), 1,
+                        cv2.LINE_AA)
+        return out
