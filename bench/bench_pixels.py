@@ -4,7 +4,8 @@ a baseline a user would assemble from OpenCV and PyPI, in one run.
     python bench/bench_pixels.py [--write docs/benchmarks.md]
 
 1. Background subtraction per frame at 640x480 (PETS09-S2L1 frames resized), grey and colour:
-   vistrack's selective running mean/variance against OpenCV's MOG2 and KNN.
+   vistrack's selective running mean/variance against OpenCV's MOG2 and KNN. Feature
+   tracking with 500 features: vistrack's KLT against OpenCV's lk_track.py sample loop.
 2. PETS09-S2L1 (`../shared/data/opencv-vtest/vtest.avi`, 795 frames, 7 frames/s), end to end:
    decode, background, blobs, tracker; HOTA / MOTA / IDF1 against the MOT15 ground truth.
    vistrack: the selective model, `frontends.find_blobs`, `bytetrack`. Baseline: MOG2,
@@ -67,6 +68,55 @@ def background_rows():
         ours = per_frame(sel.apply, fr[20:])
         rows.append((kind, ours, per_frame(mog.apply, fr[20:]), per_frame(knn.apply, fr[20:])))
         print(f"  {kind}: selective {ours:.2f} ms", file=sys.stderr)
+    return rows
+
+
+def klt_rows(n_features=500):
+    """ms a frame of feature tracking at 640x480 (PETS09 frames resized): vistrack's KLT with
+    and without the affine check, and OpenCV's lk_track.py sample loop (pyramidal LK with a
+    forward-backward check, new features every 5 frames), the same number of features."""
+    from vistrack.frontends.klt import KLTTracker
+
+    grey = [cv2.cvtColor(cv2.resize(f.image, (640, 480), interpolation=cv2.INTER_AREA),
+                         cv2.COLOR_BGR2GRAY) for f in VideoReader(VIDEO, stop=150)]
+
+    def opencv_sample():
+        tracks, prev = [], None
+        lk = dict(winSize=(15, 15), maxLevel=2,
+                  criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03))
+
+        def step(g):
+            nonlocal tracks, prev
+            if prev is not None and tracks:
+                p0 = np.float32(tracks).reshape(-1, 1, 2)
+                p1, _, _ = cv2.calcOpticalFlowPyrLK(prev, g, p0, None, **lk)
+                p0r, _, _ = cv2.calcOpticalFlowPyrLK(g, prev, p1, None, **lk)
+                good = np.abs(p0 - p0r).reshape(-1, 2).max(-1) < 1
+                tracks = [tuple(p) for p, ok in zip(p1.reshape(-1, 2), good) if ok]
+            step.n += 1
+            if step.n % 5 == 1 and len(tracks) < n_features:
+                mask = np.full(g.shape, 255, np.uint8)
+                for x, y in np.int32(tracks):
+                    cv2.circle(mask, (int(x), int(y)), 7, 0, -1)
+                p = cv2.goodFeaturesToTrack(g, n_features - len(tracks), 0.01, 7, mask=mask,
+                                            blockSize=7)
+                if p is not None:
+                    tracks += [tuple(q) for q in p.reshape(-1, 2)]
+            prev = g
+        step.n = 0
+        return step
+
+    rows = []
+    for name, make in (("vistrack KLT, affine check on", lambda: KLTTracker(n_features).step),
+                       ("vistrack KLT, affine check off",
+                        lambda: KLTTracker(n_features, affine_check=False).step),
+                       ("OpenCV lk_track.py loop", opencv_sample)):
+        step = make()
+        for g in grey[:10]:
+            step(g)
+        ms = per_frame(step, grey[10:], repeats=1)
+        rows.append((name, ms))
+        print(f"  {name}: {ms:.2f} ms", file=sys.stderr)
     return rows
 
 
@@ -175,6 +225,10 @@ def main():
          "| frames | vistrack selective | OpenCV MOG2 | OpenCV KNN | MOG2 / selective |",
          "|---|---:|---:|---:|---:|"]
     t += [f"| {k} | {a:.2f} | {b:.2f} | {c:.2f} | {b / a:.0f} |" for k, a, b, c in bg]
+    kl = klt_rows()
+    k = ["**Feature tracking, 500 features, 640×480, ms a frame**", "",
+         "| tracker | ms a frame | frames/s |", "|---|---:|---:|"]
+    k += [f"| {n} | {m:.2f} | {1e3 / m:.0f} |" for n, m in kl]
     chain, decode = chain_rows()
     u = ["**PETS09-S2L1 from pixels, 795 frames, end to end**", "",
          "| chain | frames/s | ms a frame | HOTA | MOTA | IDF1 |", "|---|---:|---:|---:|---:|---:|"]
@@ -183,7 +237,8 @@ def main():
     env = (f"Python {platform.python_version()}, numpy {np.__version__}, OpenCV "
            f"{cv2.__version__}, {platform.machine()}, {time.strftime('%Y-%m-%d')}")
     section = (f"## From pixels\n\nMeasured with `python bench/bench_pixels.py` ({env}).\n\n"
-               + "\n".join(t) + "\n\n" + "\n".join(u) + "\n\n" + f"Decoding alone (to grey, "
+               + "\n".join(t) + "\n\n" + "\n".join(k) + "\n\n" + "\n".join(u) + "\n\n"
+               + f"Decoding alone (to grey, "
                f"in one thread) takes {decode:.2f} ms a frame; both chains read the video "
                f"through `VideoReader(prefetch=8)`, which decodes in a second thread while "
                f"the frame before is processed, and their times are of the whole loop.\n")

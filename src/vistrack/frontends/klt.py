@@ -1,0 +1,243 @@
+r"""Feature tracking: Shi-Tomasi features, pyramidal Lucas-Kanade, and the seeds' checks.
+
+One step (seed 003, "Tracking over many frames" and "Shi-Tomasi feature tracker"):
+
+1. **update positions** with pyramidal Lucas-Kanade and a pure translation model (OpenCV's
+   ``calcOpticalFlowPyrLK``);
+2. **frame-to-frame checks**: tracking the new position back to the previous frame must land
+   within ``fb_max`` pixels of where the feature was, and the patch there must correlate with
+   the previous frame's by at least ``min_ncc`` (Lucas-Kanade without enough pyramid can
+   settle in a wrong minimum that tracks back consistently);
+3. **large motions**: a feature Lucas-Kanade loses, or that fails the check, is searched for
+   discretely, by normalised cross-correlation of its last patch over a window of
+   ``search_radius`` pixels around its last place; the best integer location is refined to
+   sub-pixel by Lucas-Kanade and checked forward-backward again;
+4. **affine consistency**: the patch of the frame the feature was *first* seen in is
+   registered to the current frame with an affine warp (inverse-compositional Lucas-Kanade,
+   started from the last warp moved to the new position); a feature whose normalised RMS
+   residual exceeds ``max_residual``, or whose warp has drifted from the translation-only
+   position by more than ``fb_max``, is terminated. Comparing with the first frame, not the
+   previous one, is what stops slow drift;
+5. **start new features** (Shi-Tomasi's minimum eigenvalue of the second-moment matrix, away
+   from the features kept) to keep ``max_features``, whenever a tenth of them are gone.
+
+Identities are integers from 1, never reused.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..types import Detections
+from ._affine import patch_ncc, prepare_templates, register
+
+__all__ = ["Features", "KLTTracker"]
+
+
+@dataclass(frozen=True)
+class Features:
+    """The features of one frame: ``ids (N,)``, ``points (N, 2)`` (x, y), ``ages (N,)``
+    (frames since each was started), ``residuals (N,)`` (of the affine check; 0 for new ones)
+    and the number ``terminated`` in this frame."""
+
+    ids: np.ndarray
+    points: np.ndarray
+    ages: np.ndarray
+    residuals: np.ndarray
+    terminated: int
+
+    def __len__(self) -> int:
+        return int(self.ids.shape[0])
+
+    def detections(self) -> Detections:
+        return Detections(points=self.points)
+
+
+class KLTTracker:
+    """Shi-Tomasi + Lucas-Kanade feature tracker with forward-backward and affine checks.
+
+    Parameters
+    ----------
+    max_features : int
+        Features to keep; new ones are started when fewer remain.
+    quality, min_distance, block_size
+        Shi-Tomasi: the smallest accepted minimum eigenvalue as a fraction of the best, the
+        smallest distance between features, and the second-moment window.
+    win_size, levels
+        Lucas-Kanade window (pixels) and pyramid levels above the image.
+    fb_max : float
+        Largest forward-backward error, and largest disagreement of the affine position with
+        the translation one (pixels).
+    affine_check : bool
+    half : int
+        Half-size of the patch compared with the first frame's ((2 half + 1)² pixels).
+    max_residual : float
+        Largest RMS difference of normalised intensities after affine registration
+        (``√(2 (1 - NCC))``; 0.5 is a correlation of about 0.88).
+    search_radius : int
+        Discrete search window for features Lucas-Kanade loses; 0 turns it off.
+    min_ncc : float
+        Smallest correlation of a feature's patch with the previous frame's.
+    """
+
+    def __init__(self, max_features: int = 500, *, quality: float = 0.01,
+                 min_distance: float = 7.0, block_size: int = 7, win_size: int = 15,
+                 levels: int = 2, fb_max: float = 1.0, affine_check: bool = True,
+                 half: int = 5, max_residual: float = 0.5, search_radius: int = 24,
+                 min_ncc: float = 0.8):
+        if int(max_features) < 1:
+            raise ValueError(f"max_features must be >= 1; got {max_features}")
+        self.max_features, self.quality = int(max_features), float(quality)
+        self.min_distance, self.block_size = float(min_distance), int(block_size)
+        self.win_size, self.levels, self.fb_max = int(win_size), int(levels), float(fb_max)
+        self.affine_check, self.half = bool(affine_check), int(half)
+        self.max_residual, self.search_radius = float(max_residual), int(search_radius)
+        self.min_ncc = float(min_ncc)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every feature; identities start again from 1."""
+        self._prev: np.ndarray | None = None
+        self.ids = np.zeros(0, np.int64)
+        self.points = np.zeros((0, 2), np.float32)
+        self.ages = np.zeros(0, np.int64)
+        self.residuals = np.zeros(0)
+        n = (2 * self.half + 1) ** 2
+        self._T, self._SD = np.zeros((0, n)), np.zeros((0, n, 6))
+        self._Hinv, self._p = np.zeros((0, 6, 6)), np.zeros((0, 6))
+        self._next_id = 1
+
+    @staticmethod
+    def _grey(image: Any) -> np.ndarray:
+        import cv2
+
+        im = np.asarray(image)
+        if im.dtype != np.uint8 or im.ndim not in (2, 3):
+            raise ValueError(f"image must be (H, W) or (H, W, 3) uint8; got {im.shape} "
+                             f"{im.dtype}")
+        return cv2.cvtColor(im, cv2.COLOR_BGR2GRAY) if im.ndim == 3 else im
+
+    def _lk(self, a, b, pts, guess=None):
+        import cv2
+
+        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01)
+        flags = cv2.OPTFLOW_USE_INITIAL_FLOW if guess is not None else 0
+        nxt, st, _ = cv2.calcOpticalFlowPyrLK(
+            a, b, pts.reshape(-1, 1, 2), None if guess is None else guess.reshape(-1, 1, 2),
+            winSize=(self.win_size, self.win_size), maxLevel=self.levels, criteria=crit,
+            flags=flags)
+        return nxt.reshape(-1, 2), st.ravel().astype(bool)
+
+    def _forward_backward(self, grey, p0, p1, searched=False):
+        # tracked back to the previous frame, a feature must land where it was. Features the
+        # discrete search found moved too far for Lucas-Kanade without a start: they are
+        # tracked back from where they were (their match is already established by the
+        # search's correlation)
+        back, ok = self._lk(grey, self._prev, p1.astype(np.float32),
+                            guess=p0 if searched else None)
+        return ok & (np.linalg.norm(back - p0, axis=1) <= self.fb_max)
+
+    def _search(self, prev, cur, pts):
+        # discrete NCC search of each feature's last patch around its last place
+        import cv2
+
+        h, r = self.half, self.search_radius
+        H, W = cur.shape
+        out = np.full((len(pts), 2), np.nan, np.float32)
+        for k, (x, y) in enumerate(np.round(pts).astype(int)):
+            if not (h <= x < W - h and h <= y < H - h):
+                continue
+            tpl = prev[y - h:y + h + 1, x - h:x + h + 1]
+            x0, y0 = max(x - r - h, 0), max(y - r - h, 0)
+            x1, y1 = min(x + r + h + 1, W), min(y + r + h + 1, H)
+            win = cur[y0:y1, x0:x1]
+            if win.shape[0] <= 2 * h or win.shape[1] <= 2 * h or tpl.std() < 1e-6:
+                continue
+            res = cv2.matchTemplate(win, tpl, cv2.TM_CCOEFF_NORMED)
+            _, best, _, (bx, by) = cv2.minMaxLoc(res)
+            if best > 0.7:
+                out[k] = (x0 + bx + h, y0 + by + h)
+        return out
+
+    def _spawn(self, grey: np.ndarray) -> None:
+        import cv2
+
+        # top up when a tenth is gone (finding features costs a pass over the image)
+        need = self.max_features - len(self.ids)
+        if need <= 0 or (len(self.ids) and need < 0.1 * self.max_features):
+            return
+        mask = np.full(grey.shape, 255, np.uint8)
+        for x, y in np.round(self.points).astype(int):
+            cv2.circle(mask, (int(x), int(y)), int(self.min_distance), 0, -1)
+        new = cv2.goodFeaturesToTrack(grey, need, self.quality, self.min_distance, mask=mask,
+                                      blockSize=self.block_size)
+        if new is None:
+            return
+        pts = new.reshape(-1, 2).astype(np.float32)
+        if self.affine_check:
+            T, SD, Hinv, ok = prepare_templates(grey, pts, self.half)
+            pts, T, SD, Hinv = pts[ok], T[ok], SD[ok], Hinv[ok]
+        else:
+            n = (2 * self.half + 1) ** 2
+            T, SD, Hinv = np.zeros((len(pts), n)), np.zeros((len(pts), n, 6)), \
+                np.zeros((len(pts), 6, 6))
+        k = len(pts)
+        p = np.zeros((k, 6))
+        p[:, 4:] = pts
+        self.ids = np.r_[self.ids, np.arange(self._next_id, self._next_id + k)]
+        self._next_id += k
+        self.points = np.r_[self.points, pts]
+        self.ages = np.r_[self.ages, np.zeros(k, np.int64)]
+        self.residuals = np.r_[self.residuals, np.zeros(k)]
+        self._T, self._SD = np.r_[self._T, T], np.r_[self._SD, SD]
+        self._Hinv, self._p = np.r_[self._Hinv, Hinv], np.r_[self._p, p]
+
+    def step(self, image: Any) -> Features:
+        """Track the features into a new frame (grey or BGR uint8) and top them up."""
+        grey = self._grey(image)
+        terminated = 0
+        if self._prev is not None and len(self.ids):
+            if grey.shape != self._prev.shape:
+                raise ValueError(f"image is {grey.shape[1]}x{grey.shape[0]}; the previous "
+                                 f"frame was {self._prev.shape[1]}x{self._prev.shape[0]}")
+            p0 = self.points.astype(np.float32)
+            p1, ok = self._lk(self._prev, grey, p0)
+            ok &= self._forward_backward(grey, p0, p1)
+            # and the patch must still look like the last frame's
+            ok &= patch_ncc(self._prev, p0, grey, p1, self.half) >= self.min_ncc
+            lost = ~ok
+            if self.search_radius > 0 and lost.any():
+                found = self._search(self._prev, grey, p0[lost])
+                good = ~np.isnan(found[:, 0])
+                if good.any():
+                    idx = np.flatnonzero(lost)[good]
+                    ref, st = self._lk(self._prev, grey, p0[idx], guess=found[good])
+                    st &= self._forward_backward(grey, p0[idx], ref, searched=True)
+                    p1[idx[st]] = ref[st]
+                    ok[idx[st]] = True
+            H, W = grey.shape
+            ok &= (p1[:, 0] >= 0) & (p1[:, 0] <= W - 1) & (p1[:, 1] >= 0) & (p1[:, 1] <= H - 1)
+            if self.affine_check and ok.any():
+                idx = np.flatnonzero(ok)
+                p = self._p[idx].copy()
+                p[:, 4:] = p1[idx]  # the last warp, moved to the new position
+                rms = register(grey, self.half, self._T[idx], self._SD[idx], self._Hinv[idx],
+                               p, iters=5, eps=0.03)
+                drift = np.linalg.norm(p[:, 4:] - p1[idx], axis=1)
+                good = (rms <= self.max_residual) & (drift <= self.fb_max)
+                self._p[idx] = p
+                self.residuals[idx] = rms
+                ok[idx[~good]] = False
+            terminated = int((~ok).sum())
+            self.points = p1.astype(np.float32)
+            self.ages = self.ages + 1
+            keep = ok
+            for name in ("ids", "points", "ages", "residuals", "_T", "_SD", "_Hinv", "_p"):
+                setattr(self, name, getattr(self, name)[keep])
+        self._prev = grey
+        self._spawn(grey)
+        return Features(self.ids.copy(), self.points.astype(float), self.ages.copy(),
+                        self.residuals.copy(), terminated)

@@ -1,0 +1,135 @@
+"""KLT feature tracking: sub-pixel motion with known truth, large motions, the affine check
+against the first frame, affine registration of a known warp, and a static camera."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from vistrack.frontends._affine import prepare_templates, register
+from vistrack.frontends.klt import KLTTracker
+
+from .conftest import SHARED
+
+
+def texture(rng, shape=(240, 320), blur=2.0):
+    im = rng.uniform(0, 255, shape).astype(np.float32)
+    return cv2.GaussianBlur(im, (0, 0), blur)
+
+
+def shifted(im, dx, dy):
+    M = np.float32([[1, 0, dx], [0, 1, dy]])
+    return np.clip(cv2.warpAffine(im, M, im.shape[::-1], flags=cv2.INTER_CUBIC,
+                                  borderMode=cv2.BORDER_REFLECT), 0, 255).astype(np.uint8)
+
+
+def test_features_follow_a_known_subpixel_motion():
+    rng = np.random.default_rng(0)
+    base = texture(rng)
+    klt = KLTTracker(200)
+    f0 = klt.step(shifted(base, 0, 0))
+    start = dict(zip(f0.ids.tolist(), f0.points))
+    v = np.array([1.3, -0.7])
+    for k in range(1, 11):
+        f = klt.step(shifted(base, *(k * v)))
+    assert f.ages.max() == 10
+    old = np.isin(f.ids, list(start))
+    assert old.sum() > 0.9 * len(start)  # nearly all survive every check
+    err = np.array([p - start[i] - 10 * v for i, p in zip(f.ids[old], f.points[old])])
+    inner = np.all((f.points[old] > 20) & (f.points[old] < [300, 220]), axis=1)
+    assert np.median(np.abs(err[inner])) < 0.05 and np.abs(err[inner]).max() < 0.3
+    # topped up whenever a tenth is gone
+    assert f.residuals[old].max() < 0.3 and len(f) >= 180
+
+
+def test_large_motions_are_found_by_discrete_search():
+    """Without a pyramid, Lucas-Kanade loses a 9-pixel jump; the NCC search finds it."""
+    rng = np.random.default_rng(1)
+    base = texture(rng, blur=1.5)
+    kept = {}
+    for radius in (0, 24):
+        klt = KLTTracker(150, levels=0, search_radius=radius)
+        ids0 = set(klt.step(shifted(base, 0, 0)).ids.tolist())
+        f = klt.step(shifted(base, 9, -6))
+        kept[radius] = len(ids0 & set(f.ids.tolist())) / len(ids0)
+    assert kept[0] < 0.3 and kept[24] > 0.8
+
+
+def test_affine_check_against_the_first_frame_stops_slow_drift():
+    """A patch of the scene fades into other content, 4 % a frame: each frame looks like
+    the last (Lucas-Kanade and the forward-backward check keep the features), but against
+    the frame where the features were first seen the patch no longer matches, and the
+    affine check ends them; elsewhere features live on."""
+    rng = np.random.default_rng(2)
+    a, b = texture(rng), texture(rng)
+    region = (slice(60, 180), slice(40, 150))
+    survivors = {}
+    for check in (False, True):
+        klt = KLTTracker(300, affine_check=check)
+        f = klt.step(a.astype(np.uint8))
+        inside = {i for i, (x, y) in zip(f.ids.tolist(), f.points)
+                  if 50 <= x < 140 and 70 <= y < 170}
+        outside = set(f.ids.tolist()) - inside
+        for k in range(1, 26):
+            im = a.copy()
+            w = min(1.0, 0.04 * k)
+            im[region] = (1 - w) * a[region] + w * b[region]
+            f = klt.step(im.astype(np.uint8))
+        now = set(f.ids.tolist())
+        survivors[check] = (len(inside & now) / len(inside), len(outside & now) / len(outside))
+    assert survivors[False][0] > 0.5  # frame to frame, the fading patch passes
+    assert survivors[True][0] < 0.1  # against the first frame, it does not
+    assert survivors[True][1] > 0.9  # the rest of the scene is kept
+
+
+def test_affine_registration_recovers_a_known_warp():
+    rng = np.random.default_rng(3)
+    img = texture(rng)
+    c = np.array([[120.0, 110.0]])
+    A, d = np.array([[1.06, 0.04], [-0.03, 0.95]]), np.array([2.4, -1.7])
+    M = np.c_[A, d + c[0] - A @ c[0]]  # the warp about the patch centre
+    img2 = cv2.warpAffine(img, M, img.shape[::-1], flags=cv2.INTER_CUBIC)
+    img2 = 0.8 * img2 + 20  # and a change of contrast and brightness
+    T, SD, Hinv, ok = prepare_templates(img, c, 7)
+    p = np.zeros((1, 6))
+    p[0, 4:] = c[0]
+    rms = register(img2, 7, T, SD, Hinv, p, iters=50, eps=1e-4)
+    assert ok[0] and rms[0] < 0.05
+    # where the patch's corners land, by the estimated and the true warp: within 0.1 pixel
+    corners = np.array([[-7, -7], [7, -7], [-7, 7], [7, 7]], float)
+    Ae = np.array([[1 + p[0, 0], p[0, 2]], [p[0, 1], 1 + p[0, 3]]])
+    est = corners @ Ae.T + p[0, 4:]
+    true = corners @ A.T + c[0] + d
+    assert np.abs(est - true).max() < 0.1
+    flat = prepare_templates(np.full((50, 50), 7.0), np.array([[25.0, 25.0]]), 5)[3]
+    assert not flat[0]  # a flat patch cannot be registered
+
+
+def test_static_camera_features_stay_put_on_pets09():
+    """Real frames (PETS09-S2L1, a fixed camera): features off the people do not move."""
+    from vistrack.io import VideoReader, read_mot
+
+    video = SHARED / "data" / "opencv-vtest" / "vtest.avi"
+    gt_path = SHARED / "data" / "mot15" / "PETS09-S2L1" / "gt" / "gt.txt"
+    if not video.exists() or not gt_path.exists():
+        pytest.skip(f"{video} not found: the shared data is not beside this checkout")
+    gt = read_mot(gt_path)
+    klt = KLTTracker(300)
+    frames = list(VideoReader(video, grey=True, stop=12))
+    start = klt.step(frames[0].image)
+    first = dict(zip(start.ids.tolist(), start.points))
+    for fr in frames[1:]:
+        f = klt.step(fr.image)
+    people = gt.boxes[gt.frames <= 12]
+    moved = []
+    for i, p in zip(f.ids.tolist(), f.points):
+        if i not in first:
+            continue
+        q = first[i]
+        on_person = ((q[0] >= people[:, 0] - 10) & (q[0] <= people[:, 0] + people[:, 2] + 10)
+                     & (q[1] >= people[:, 1] - 10)
+                     & (q[1] <= people[:, 1] + people[:, 3] + 10)).any()
+        if not on_person:
+            moved.append(np.linalg.norm(p - q))
+    assert len(moved) > 150 and np.median(moved) < 0.1 and np.percentile(moved, 95) < 0.5
