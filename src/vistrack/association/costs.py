@@ -107,6 +107,52 @@ def mahalanobis(z_pred: Any, S: Any, z: Any) -> np.ndarray:
     return (w * w).sum(1)
 
 
+def mahalanobis_pairs(z_pred: Any, S: Any, z: Any,
+                      threshold: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pairs of tracks and detections whose squared Mahalanobis distance is at most
+    ``threshold``, without the dense ``(T, D)`` matrix: ``(rows, cols, d2)``.
+
+    A detection within the gate of track ``t`` lies within Euclidean distance
+    ``√(threshold · λ_max(S_t))`` of its prediction, so a k-d tree over the detections gives
+    the candidates, and only those are measured.
+
+    Examples
+    --------
+    >>> r, c, d2 = mahalanobis_pairs([[0.0, 0.0]], [np.diag([4.0, 1.0])],
+    ...                              [[2.0, 0.0], [0.0, 2.0], [9.0, 9.0]], threshold=2.0)
+    >>> r.tolist(), c.tolist(), d2.tolist()
+    ([0], [0], [1.0])
+    """
+    from scipy.spatial import cKDTree
+
+    zp = np.atleast_2d(np.asarray(z_pred, dtype=float))
+    S = np.asarray(S, dtype=float)
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    T, m = zp.shape
+    if S.shape != (T, m, m):
+        raise ValueError(f"S must have shape ({T}, {m}, {m}); got {S.shape}")
+    empty = np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
+    if T == 0 or z.size == 0:
+        return empty
+    if z.shape[1] != m:
+        raise ValueError(f"z must have shape (D, {m}); got {z.shape}")
+    try:
+        Sinv = np.linalg.inv(S)
+        lam = np.linalg.eigvalsh(S)[:, -1]
+    except np.linalg.LinAlgError:
+        raise ValueError("S must be positive definite for every track") from None
+    if not (lam > 0).all():
+        raise ValueError("S must be positive definite for every track")
+    near = cKDTree(z).query_ball_point(zp, np.sqrt(threshold * lam) * (1 + 1e-9))
+    counts = np.fromiter((len(x) for x in near), np.int64, T)
+    rows = np.repeat(np.arange(T), counts)
+    cols = np.fromiter((j for x in near for j in x), np.int64, int(counts.sum()))
+    r = z[cols] - zp[rows]
+    d2 = np.einsum("pi,pij,pj->p", r, Sinv[rows], r)
+    ok = d2 <= threshold
+    return rows[ok], cols[ok], d2[ok]
+
+
 @njit(cache=True, error_model="numpy")
 def _grid_pairs(a, b, min_iou):
     # b bucketed by the grid cell of its corner (x0, y0), cells as large as b's largest box

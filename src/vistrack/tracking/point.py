@@ -25,7 +25,9 @@ from typing import Any
 
 import numpy as np
 
-from ..association import assign, chi2_threshold, jpda_weights, likelihoods, mahalanobis
+from ..association import (assign, chi2_threshold, gnn_sparse, jpda_weights, likelihoods,
+                           mahalanobis)
+from ..association.costs import mahalanobis_pairs
 from ..association.pda import pda_update, pda_weights
 from ..filters import kf_predict, kf_update
 from ..models import ConstantVelocity, Position
@@ -130,11 +132,28 @@ class PointTracker:
                 g = kf_predict(g, self.motion.F(dt), self.motion.Q(dt))
             zp = g.mean @ self.H.T
             S = self.H @ g.cov @ self.H.T + self.R
-            d2 = mahalanobis(zp, S, Z) if len(Z) else np.zeros((K, 0))
-            gate = (d2 <= self.threshold) & (t.classes[:, None] == detections.classes[None, :])
-            in_gate = gate.any(0)
             mean, cov = g.mean.copy(), g.cov.copy()
-            if self.association in ("pda", "jpda") and len(Z):
+            if self.association == "gnn" and len(Z):
+                # gated pairs only (a k-d tree finds the candidates), one assignment per
+                # connected group: thousands of points stay cheap
+                r, c, d2 = mahalanobis_pairs(zp, S, Z, self.threshold)
+                same = t.classes[r] == detections.classes[c]
+                r, c = gnn_sparse(r[same], c[same], d2[same], (K, len(Z)))
+                if len(r):
+                    upd = kf_update(g[r], Z[c], self.H, self.R)
+                    mean[r], cov[r] = upd.mean, upd.cov
+                    t.scores[r] = detections.scores[c]
+                updated[r] = True
+                in_gate[c] = True  # every measurement not taken starts a track
+                gate = None
+            else:
+                d2 = mahalanobis(zp, S, Z) if len(Z) else np.zeros((K, 0))
+                gate = (d2 <= self.threshold) & (t.classes[:, None]
+                                                 == detections.classes[None, :])
+                in_gate = gate.any(0)
+            if gate is None:
+                pass
+            elif self.association in ("pda", "jpda") and len(Z):
                 lik = likelihoods(zp, S, Z)
                 weigh = jpda_weights if self.association == "jpda" else pda_weights
                 beta, beta0 = weigh(lik, gate, p_detect=self.p_detect,

@@ -1,0 +1,116 @@
+"""Microscopy: spots and the point tracker beside trackpy, on trackpy's bulk-water clip (50
+PNG frames, 640x424, about 520 particles a frame), in one run.
+
+    python bench/bench_microscopy.py [--write docs/benchmarks.md]
+
+vistrack: `frontends.spots.locate` (Crocker-Grier with trackpy's conventions) and
+`PointTracker("gnn")` with the constant-position (drifting points) model. trackpy: `locate`
+and `link` (search range 5 px, memory 3 frames). Frames per second of locating and linking
+together, the median of three runs after a warm-up; the agreement of the two.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import cv2
+import numpy as np
+from scipy.spatial import cKDTree
+
+from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
+from vistrack.frontends.spots import locate
+from vistrack.models import ConstantPosition, Position
+from vistrack.tracking import PointTracker
+
+FRAMES = Path(__file__).resolve().parents[2] / "shared" / "data" / "trackpy-bulk-water" / "frames"
+
+
+def run_vistrack(frames):
+    tr = PointTracker("gnn", motion=ConstantPosition(dim=2, q=24.0),
+                      measurement=Position(dim=2, r=0.01), frame_rate=24.0, confirm_hits=1,
+                      max_lost=3.5 / 24, gate=0.999)
+    out = []
+    for k, im in enumerate(frames):
+        r = tr.step(locate(im, 11, invert=True, minmass=20).detections(), frame=k + 1)
+        out.append((r.ids, r.points))
+    return out
+
+
+def run_trackpy(frames):
+    import trackpy as tp
+
+    tp.quiet()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        f = tp.batch(frames, 11, invert=True, minmass=20)
+        return tp.link(f, 5, memory=3)
+
+
+def timed(fn, frames):
+    fn(frames[:3])
+    secs = []
+    res = None
+    for _ in range(3):
+        t = time.perf_counter()
+        res = fn(frames)
+        secs.append(time.perf_counter() - t)
+    return res, len(frames) / statistics.median(secs)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--write", metavar="MD")
+    args = ap.parse_args()
+    files = sorted(FRAMES.glob("*.png"))
+    if not files:
+        sys.exit(f"{FRAMES} not found: the shared data must be beside this checkout")
+    frames = [cv2.imread(str(f), cv2.IMREAD_GRAYSCALE) for f in files]
+    ours, fps_ours = timed(run_vistrack, frames)
+    links, fps_tp = timed(run_trackpy, frames)
+    near, ids_of = [], {}
+    for k, (ids, pts) in enumerate(ours):
+        theirs = links[links.frame == k]
+        d, j = cKDTree(pts).query(theirs[["x", "y"]].values)
+        near.append(d < 0.5)
+        for pid, i, ok in zip(theirs.particle.values, ids[j], d < 0.5):
+            if ok:
+                ids_of.setdefault(pid, set()).add(int(i))
+    near = np.concatenate(near)
+    n_ours = len(np.unique(np.concatenate([i for i, _ in ours])))
+    long_ours = sum(1 for v in np.unique(np.concatenate([i for i, _ in ours]), return_counts=True)[1]
+                    if v >= 25)
+    long_tp = int((links.groupby("particle").size() >= 25).sum())
+    env = (f"Python {platform.python_version()}, numpy {np.__version__}, trackpy "
+           f"{__import__('trackpy').__version__}, {time.strftime('%Y-%m-%d')}")
+    section = f"""## Microscopy
+
+Measured with `python bench/bench_microscopy.py` ({env}): trackpy's bulk-water clip, 50
+frames, about 520 particles a frame; locating and linking together.
+
+| | frames/s | trajectories | of 25 frames or more |
+|---|---:|---:|---:|
+| vistrack: spots + `PointTracker("gnn")`, constant position | {fps_ours:.0f} | {n_ours} | {long_ours} |
+| trackpy: `locate` + `link` (search 5 px, memory 3) | {fps_tp:.0f} | {links.particle.nunique()} | {long_tp} |
+
+vistrack is {fps_ours / fps_tp:.1f} times as fast. `spots.locate` finds exactly trackpy's
+particles at trackpy's positions (a test checks it to 1e-9 px); {100 * near.mean():.1f} % of
+trackpy's linked positions have a vistrack track within 0.5 px (the tracks report filtered
+estimates), and {100 * np.mean([len(v) == 1 for v in ids_of.values()]):.1f} % of trackpy's
+trajectories are one vistrack identity throughout. vistrack keeps a lost particle's track
+predicting (its covariance growing) for 3 frames and takes it back within its gate, so it
+breaks fewer trajectories.
+"""
+    print(section)
+    if args.write:
+        replace_section(args.write, section)
+
+
+if __name__ == "__main__":
+    main()
