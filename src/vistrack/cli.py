@@ -65,6 +65,33 @@ def _track(args: argparse.Namespace) -> int:
     return 0
 
 
+def _track_one(args: argparse.Namespace) -> int:
+    from .io.video import VideoError
+    from .pipeline import track_one
+
+    try:
+        init = [float(v) for v in args.init.split(",")]
+        if len(init) != 4:
+            raise ValueError
+    except ValueError:
+        print(f"vistrack track-one: error: --init must be x,y,w,h (four numbers); got "
+              f"{args.init!r}", file=sys.stderr)
+        return 2
+    try:
+        run = track_one(args.input, init, args.out, method=args.method, gt=args.gt,
+                        force=args.force, progress=sys.stderr if sys.stderr.isatty()
+                        and not args.quiet else None)
+    except (FileNotFoundError, FileExistsError, ValueError, VideoError) as exc:
+        print(f"vistrack track-one: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"wrote {run.out}: {len(run.boxes)} boxes; {args.method} {run.fps:.0f} frames/s")
+    if run.scores is not None:
+        s = run.scores
+        print(f"success rate (IoU > 0.5) {100 * s['success']:.1f} %, AUC {100 * s['auc']:.1f} %, "
+              f"precision (20 px) {100 * s['precision']:.1f} %")
+    return 0
+
+
 _COLUMNS = (("HOTA", 1), ("DetA", 1), ("AssA", 1), ("MOTA", 1), ("MOTP", 1), ("IDF1", 1),
             ("IDP", 1), ("IDR", 1), ("TP", 0), ("FP", 0), ("FN", 0), ("IDSW", 0), ("Frag", 0),
             ("MT", 0), ("PT", 0), ("ML", 0))
@@ -167,6 +194,23 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--quiet", action="store_true",
                        help="no progress bar (shown on a terminal only)")
     track.set_defaults(func=_track)
+    one = sub.add_parser(
+        "track-one", help="follow one object from a box drawn on the first frame",
+        description="Follow one object through a video or image folder from its box in the "
+        "first frame; write frame,x,y,w,h lines (frames from 1).")
+    one.add_argument("input", metavar="INPUT", help="video file or image folder")
+    one.add_argument("--init", required=True, help="the first frame's box: x,y,w,h")
+    one.add_argument("--method", default="colour",
+                     choices=("colour", "template", "klt", "csrt", "kcf"),
+                     help="colour (default: mean shift on a colour model learnt online, "
+                     "with scale), template (affine SSD), klt (median flow), or OpenCV's csrt "
+                     "and kcf for comparison")
+    one.add_argument("--out", required=True, help="boxes file to write")
+    one.add_argument("--gt", help="ground truth (OTB groundtruth_rect.txt, VOT groundtruth.txt "
+                     "or a boxes file) to score against")
+    one.add_argument("--force", action="store_true", help="overwrite an existing boxes file")
+    one.add_argument("--quiet", action="store_true", help="no progress bar")
+    one.set_defaults(func=_track_one)
     ev = sub.add_parser(
         "eval", help="score results against ground truth (HOTA, CLEAR MOT, IDF1)",
         description="Score MOTChallenge results as TrackEval does: HOTA, DetA, AssA, MOTA, "

@@ -19,7 +19,8 @@ from .tracking.box import BoxTracker
 from .tracking.offline import smooth
 from .types import Detections
 
-__all__ = ["track_sequence", "TrackRun", "evaluate_files", "track_video", "VideoRun", "FRONTENDS"]
+__all__ = ["track_sequence", "TrackRun", "evaluate_files", "track_video", "VideoRun", "FRONTENDS",
+           "track_one", "SingleRun"]
 
 
 @dataclass(frozen=True)
@@ -283,3 +284,64 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: str = "bgsu
         g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= last)]
         scores = evaluate_mot(g, read_mot(files["tracks"]), last, benchmark="auto")
     return VideoRun(out_dir, files, n, len(a), len(np.unique(I)), sec, scores)
+
+
+# -------------------------------------------------------------------- one object, by hand
+@dataclass(frozen=True)
+class SingleRun:
+    """What :func:`track_one` did: the boxes file, the boxes ``(T, 4)``, the tracker's
+    seconds, and the scores against ground truth (``success``, ``auc``, ``precision``; None
+    without it)."""
+
+    out: Path
+    boxes: np.ndarray
+    seconds: float
+    scores: dict | None
+
+    @property
+    def fps(self) -> float:
+        return (len(self.boxes) - 1) / max(self.seconds, 1e-12)
+
+
+def track_one(source: str | Path, init: Any, out: str | Path, *, method: str = "colour",
+              gt: str | Path | None = None, force: bool = False,
+              progress: Any = None) -> SingleRun:
+    """Follow one object from its box ``init`` (``x, y, w, h`` in the first frame) through a
+    video or image folder, and write ``frame,x,y,w,h`` lines (frames from 1) to ``out``.
+
+    ``method`` is a name in :data:`vistrack.frontends.single.METHODS`; ``gt`` a ground-truth
+    file (OTB ``groundtruth_rect.txt``, VOT ``groundtruth.txt`` or a boxes file) to score
+    against.
+    """
+    from .evaluation.single import precision, read_boxes, success_curve, success_rate, \
+        write_boxes
+    from .frontends.single import single_tracker
+    from .io.video import VideoReader
+
+    out = Path(out)
+    if out.exists() and not force:
+        raise FileExistsError(f"{out} exists; pass --force to overwrite it")
+    tracker = single_tracker(method)
+    truth = read_boxes(gt) if gt is not None else None
+    reader = VideoReader(source, prefetch=4)
+    boxes, sec = [], 0.0
+    for k, frame in enumerate(reader):
+        t0 = time.perf_counter()
+        if k == 0:
+            tracker.init(frame.image, init)
+            boxes.append(np.asarray(init, dtype=float))
+        else:
+            boxes.append(tracker.update(frame.image))
+            sec += time.perf_counter() - t0
+        if (k + 1) % 20 == 0 or k + 1 == len(reader):
+            _progress(k + 1, len(reader), reader.source.name, progress)
+    b = np.array(boxes).reshape(-1, 4)
+    write_boxes(out, b, force=True)
+    scores = None
+    if truth is not None:
+        if len(truth) < len(b):
+            raise ValueError(f"{gt} has {len(truth)} boxes for {len(b)} frames")
+        t = truth[:len(b)]
+        scores = {"success": success_rate(b, t), "auc": success_curve(b, t)[2],
+                  "precision": precision(b, t)}
+    return SingleRun(out, b, sec, scores)

@@ -1,8 +1,9 @@
-"""Scores: filter accuracy and consistency (RMSE, NEES, NIS) and multi-object tracking
-(CLEAR MOT, IDF1, HOTA)."""
+"""Scores: filter accuracy and consistency (RMSE, NEES, NIS), multi-object tracking
+(CLEAR MOT, IDF1, HOTA) and single-object tracking (success rate, precision)."""
 
 from .filtering import chi2_band, nees, nis, rmse
 from .mot import ALPHAS, MOTCounts, box_iou_xywh, combine, evaluate_mot
+from .single import precision, region_to_bbox, success_curve, success_rate
 
 __all__ = ["chi2_band", "nees", "nis", "rmse", "ALPHAS", "MOTCounts", "box_iou_xywh", "combine",
-           "evaluate_mot"]
+           "evaluate_mot", "precision", "region_to_bbox", "success_curve", "success_rate"]

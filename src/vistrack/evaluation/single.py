@@ -1,0 +1,142 @@
+"""Single-object tracking scores (OTB's measures) and ground-truth boxes of OTB and VOT.
+
+- **success rate**: the fraction of frames whose IoU with the ground truth exceeds a threshold
+  (0.5 by default); the **success curve** over thresholds 0, 0.05, ..., 1 and its mean, the
+  area under it (AUC);
+- **precision**: the fraction of frames whose centre error is at most 20 pixels.
+
+Boxes are ``x, y, w, h`` (top-left corner and size), one per frame.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["success_rate", "success_curve", "precision", "region_to_bbox", "read_boxes",
+           "write_boxes"]
+
+
+def _pair(pred: Any, gt: Any) -> tuple[np.ndarray, np.ndarray]:
+    p = np.asarray(pred, dtype=float).reshape(-1, 4)
+    g = np.asarray(gt, dtype=float).reshape(-1, 4)
+    if p.shape != g.shape:
+        raise ValueError(f"pred and gt must have one box per frame; got {len(p)} and {len(g)}")
+    return p, g
+
+
+def overlaps(pred: Any, gt: Any) -> np.ndarray:
+    """IoU of each frame's predicted and true box ``(T,)``."""
+    p, g = _pair(pred, gt)
+    iw = np.clip(np.minimum(p[:, 0] + p[:, 2], g[:, 0] + g[:, 2]) - np.maximum(p[:, 0], g[:, 0]),
+                 0, None)
+    ih = np.clip(np.minimum(p[:, 1] + p[:, 3], g[:, 1] + g[:, 3]) - np.maximum(p[:, 1], g[:, 1]),
+                 0, None)
+    inter = iw * ih
+    union = p[:, 2] * p[:, 3] + g[:, 2] * g[:, 3] - inter
+    return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
+
+
+def success_rate(pred: Any, gt: Any, threshold: float = 0.5) -> float:
+    """Fraction of frames with IoU > ``threshold``.
+
+    Examples
+    --------
+    >>> success_rate([[0, 0, 10, 10], [5, 0, 10, 10]], [[0, 0, 10, 10], [0, 0, 10, 10]])
+    0.5
+    """
+    return float(np.mean(overlaps(pred, gt) > threshold))
+
+
+def success_curve(pred: Any, gt: Any) -> tuple[np.ndarray, np.ndarray, float]:
+    """``(thresholds, success rates, AUC)`` over thresholds 0, 0.05, ..., 1 (OTB)."""
+    th = np.linspace(0, 1, 21)
+    v = overlaps(pred, gt)
+    rates = np.array([np.mean(v > t) for t in th])
+    return th, rates, float(rates.mean())
+
+
+def precision(pred: Any, gt: Any, threshold: float = 20.0) -> float:
+    """Fraction of frames whose box centres are at most ``threshold`` pixels apart."""
+    p, g = _pair(pred, gt)
+    d = np.linalg.norm((p[:, :2] + p[:, 2:] / 2) - (g[:, :2] + g[:, 2:] / 2), axis=1)
+    return float(np.mean(d <= threshold))
+
+
+def region_to_bbox(polygons: Any, rule: str = "area") -> np.ndarray:
+    """Axis-aligned ``x, y, w, h`` boxes of VOT's rotated boxes ``(T, 8)`` (four corners).
+
+    ``rule="area"``: the box centred on the corners' mean with the rotated box's area and the
+    corners' aspect ratio (VOT's and SiamFC's ``region_to_bbox``); ``"minmax"``: the
+    corners' bounding box (larger by up to twice for a box turned 45°).
+
+    Examples
+    --------
+    >>> region_to_bbox([[0, 0, 4, 0, 4, 2, 0, 2]]).tolist()         # upright: the same box
+    [[-0.5, -0.5, 5.0, 3.0]]
+    """
+    q = np.asarray(polygons, dtype=float).reshape(-1, 8)
+    xs, ys = q[:, 0::2], q[:, 1::2]
+    x1, x2, y1, y2 = xs.min(1), xs.max(1), ys.min(1), ys.max(1)
+    if rule == "minmax":
+        return np.c_[x1, y1, x2 - x1, y2 - y1]
+    if rule != "area":
+        raise ValueError(f"rule must be 'area' or 'minmax'; got {rule!r}")
+    cx, cy = xs.mean(1), ys.mean(1)
+    a1 = np.linalg.norm(q[:, 0:2] - q[:, 2:4], axis=1) * np.linalg.norm(q[:, 2:4] - q[:, 4:6],
+                                                                         axis=1)
+    a2 = (x2 - x1) * (y2 - y1)
+    s = np.sqrt(np.divide(a1, a2, out=np.ones_like(a1), where=a2 > 0))
+    w, h = s * (x2 - x1) + 1, s * (y2 - y1) + 1
+    return np.c_[cx - w / 2, cy - h / 2, w, h]
+
+
+def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
+    """Ground-truth or result boxes ``(T, 4)`` ``x, y, w, h`` from a text file:
+
+    - OTB ``groundtruth_rect.txt``: ``x y w h`` (tabs, spaces or commas), 1-based pixels,
+      returned 0-based;
+    - VOT ``groundtruth.txt``: 8 values a line, converted by :func:`region_to_bbox`;
+    - vistrack's ``boxes.txt``: ``frame,x,y,w,h``.
+
+    A malformed line raises ValueError naming the file and line.
+    """
+    path = Path(path)
+    rows = []
+    for n, line in enumerate(path.read_text().splitlines(), start=1):
+        if not line.strip():
+            continue
+        try:
+            vals = [float(v) for v in line.replace(",", " ").replace("\t", " ").split()]
+        except ValueError:
+            raise ValueError(f"{path}:{n}: not numbers: {line.strip()!r}") from None
+        if len(vals) not in (4, 5, 8):
+            raise ValueError(f"{path}:{n}: expected 4 (x y w h), 5 (frame,x,y,w,h) or 8 "
+                             f"(polygon) values; got {len(vals)}")
+        if rows and len(vals) != len(rows[-1]):
+            raise ValueError(f"{path}:{n}: {len(vals)} values after lines of {len(rows[-1])}")
+        rows.append(vals)
+    a = np.array(rows, dtype=float)
+    if a.size == 0:
+        return np.zeros((0, 4))
+    if a.shape[1] == 8:
+        return region_to_bbox(a, rule)
+    if a.shape[1] == 5:
+        return a[:, 1:]
+    if path.name == "groundtruth_rect.txt":  # OTB: 1-based pixels
+        a[:, :2] -= 1
+    return a
+
+
+def write_boxes(path: str | Path, boxes: Any, *, force: bool = False) -> None:
+    """Write ``frame,x,y,w,h`` lines, frames from 1."""
+    path = Path(path)
+    if path.exists() and not force:
+        raise FileExistsError(f"{path} exists; pass --force to overwrite it")
+    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w") as fh:
+        for k, (x, y, w, h) in enumerate(b, start=1):
+            fh.write(f"{k},{x:.2f},{y:.2f},{w:.2f},{h:.2f}\n")

@@ -1,0 +1,299 @@
+r"""Single-object trackers: one box, initialised by hand, followed frame to frame.
+
+Every tracker has ``init(image, box)`` and ``update(image) -> box`` (boxes are ``x, y, w, h``
+floats, the top-left corner and size), and is chosen by name from :data:`METHODS`:
+
+- ``"klt"``: median flow (Kalal et al., 2010) from the seeds' feature tracking: Shi-Tomasi
+  features inside the box are tracked by pyramidal Lucas-Kanade with the forward-backward
+  check; the box moves by their median displacement and scales by the median ratio of
+  their pairwise distances;
+- ``"template"``: the seeds' SSD template tracking with an affine warp (the Hager/Toyama
+  cycle: predict, warp, compare, correct), by inverse-compositional Lucas-Kanade of the
+  first frame's central patch (:mod:`vistrack.frontends._affine`), started each frame from
+  the median-flow motion; the box is the warped first box's bounding box;
+- ``"colour"``: mean shift on the back-projection of a saturation-value histogram of the
+  target against its surroundings (the object's colour over the background's), with the
+  histogram updated online from the tracked box;
+- ``"csrt"``, ``"kcf"``: OpenCV contrib's trackers, for comparison.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import numpy as np
+
+from ._affine import prepare_templates, register
+
+__all__ = ["METHODS", "single_tracker", "MedianFlow", "TemplateTracker", "ColourTracker",
+           "OpenCVTracker"]
+
+
+def _box(box: Any) -> np.ndarray:
+    b = np.asarray(box, dtype=float).reshape(-1)
+    if b.shape != (4,) or not np.isfinite(b).all() or b[2] <= 0 or b[3] <= 0:
+        raise ValueError(f"box must be x, y, w, h with w, h > 0; got {np.asarray(box).tolist()}")
+    return b
+
+
+def _grey(image: Any) -> np.ndarray:
+    import cv2
+
+    im = np.asarray(image)
+    return cv2.cvtColor(im, cv2.COLOR_BGR2GRAY) if im.ndim == 3 else im
+
+
+class MedianFlow:
+    """Median-flow tracking of a box by its features (see the module).
+
+    Parameters
+    ----------
+    grid : int
+        Features are the best Shi-Tomasi corners in the box, up to ``grid²``.
+    fb_max : float
+        Forward-backward error (pixels) above which a feature is not used.
+    """
+
+    def __init__(self, grid: int = 10, fb_max: float = 2.0, win_size: int = 11,
+                 levels: int = 3):
+        self.grid, self.fb_max = int(grid), float(fb_max)
+        self.lk = dict(winSize=(int(win_size), int(win_size)), maxLevel=int(levels))
+
+    def init(self, image: Any, box: Any) -> None:
+        self.prev = _grey(image)
+        self.box = _box(box)
+
+    def motion(self, grey: np.ndarray) -> tuple[np.ndarray, float] | None:
+        """Median displacement and scale of the box's features from the previous frame, or
+        None when too few are reliable."""
+        import cv2
+
+        x, y, w, h = self.box
+        H, W = grey.shape
+        x0, y0 = int(max(x, 0)), int(max(y, 0))
+        x1, y1 = int(min(x + w, W)), int(min(y + h, H))
+        if x1 - x0 < 4 or y1 - y0 < 4:
+            return None
+        mask = np.zeros_like(self.prev)
+        mask[y0:y1, x0:x1] = 255
+        p0 = cv2.goodFeaturesToTrack(self.prev, self.grid ** 2, 0.01, 2, mask=mask,
+                                     blockSize=3)
+        if p0 is None or len(p0) < 4:
+            # too little texture: a regular grid instead
+            gx, gy = np.meshgrid(np.linspace(x0, x1 - 1, self.grid),
+                                 np.linspace(y0, y1 - 1, self.grid))
+            p0 = np.c_[gx.ravel(), gy.ravel()].astype(np.float32).reshape(-1, 1, 2)
+        p1, st, _ = cv2.calcOpticalFlowPyrLK(self.prev, grey, p0, None, **self.lk)
+        pb, sb, _ = cv2.calcOpticalFlowPyrLK(grey, self.prev, p1, None, **self.lk)
+        fb = np.linalg.norm((pb - p0).reshape(-1, 2), axis=1)
+        ok = st.ravel().astype(bool) & sb.ravel().astype(bool) & (fb <= self.fb_max)
+        # the better half by forward-backward error, as median flow does
+        ok &= fb <= np.median(fb[ok]) if ok.any() else ok
+        if ok.sum() < 3:
+            return None
+        a, b = p0.reshape(-1, 2)[ok], p1.reshape(-1, 2)[ok]
+        d = np.median(b - a, axis=0)
+        i, j = np.triu_indices(len(a), 1)
+        da = np.linalg.norm(a[i] - a[j], axis=1)
+        db = np.linalg.norm(b[i] - b[j], axis=1)
+        good = da > 1e-3
+        s = float(np.median(db[good] / da[good])) if good.any() else 1.0
+        return d, s
+
+    def update(self, image: Any) -> np.ndarray:
+        grey = _grey(image)
+        m = self.motion(grey)
+        if m is not None:
+            d, s = m
+            x, y, w, h = self.box
+            cx, cy = x + w / 2 + d[0], y + h / 2 + d[1]
+            self.box = np.array([cx - s * w / 2, cy - s * h / 2, s * w, s * h])
+        self.prev = grey
+        return self.box.copy()
+
+
+class TemplateTracker:
+    """Affine template tracking of the first frame's central patch (see the module).
+
+    Parameters
+    ----------
+    max_residual : float
+        RMS difference of normalised intensities above which the registration is not
+        trusted and the median-flow motion alone moves the box.
+    """
+
+    def __init__(self, max_residual: float = 0.6, iters: int = 30):
+        self.max_residual, self.iters = float(max_residual), int(iters)
+        self.flow = MedianFlow()
+
+    def init(self, image: Any, box: Any) -> None:
+        grey = _grey(image).astype(np.float32)
+        b = _box(box)
+        self.box0 = b
+        self.half = max(3, int(min(b[2], b[3]) / 2) - 1)
+        c = np.array([[b[0] + b[2] / 2, b[1] + b[3] / 2]])
+        self.T, self.SD, self.Hinv, ok = prepare_templates(grey, c, self.half)
+        self.ok = bool(ok[0])
+        self.p = np.zeros((1, 6))
+        self.p[0, 4:] = c[0]
+        self.flow.init(image, b)
+        self.box = b.copy()
+        self.residual = 0.0
+
+    def _corners(self, p: np.ndarray) -> np.ndarray:
+        x, y, w, h = self.box0
+        c = np.array([x + w / 2, y + h / 2])
+        rel = np.array([[x, y], [x + w, y], [x, y + h], [x + w, y + h]]) - c
+        A = np.array([[1 + p[0], p[2]], [p[1], 1 + p[3]]])
+        return rel @ A.T + p[4:]
+
+    def update(self, image: Any) -> np.ndarray:
+        grey = _grey(image)
+        prior = self.flow.update(image)
+        if not self.ok:
+            self.box = prior
+            return prior.copy()
+        # predict: the last warp, moved and scaled by the median flow
+        p = self.p.copy()
+        s = prior[2] / self.box[2] if self.box[2] > 0 else 1.0
+        A = np.array([[1 + p[0, 0], p[0, 2]], [p[0, 1], 1 + p[0, 3]]]) * s
+        p[0, :4] = [A[0, 0] - 1, A[1, 0], A[0, 1], A[1, 1] - 1]
+        p[0, 4:] = prior[:2] + prior[2:] / 2
+        rms = register(grey, self.half, self.T, self.SD, self.Hinv, p, iters=self.iters)
+        self.residual = float(rms[0])
+        if rms[0] <= self.max_residual:
+            self.p = p
+            q = self._corners(p[0])
+            lo, hi = q.min(0), q.max(0)
+            self.box = np.r_[lo, hi - lo]
+        else:
+            self.box = prior
+            self.p[0, 4:] = prior[:2] + prior[2:] / 2
+        self.flow.box = self.box.copy()
+        return self.box.copy()
+
+
+def _sum(integral: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> float:
+    return float(integral[y1, x1] - integral[y0, x1] - integral[y1, x0] + integral[y0, x0])
+
+
+class ColourTracker:
+    """Mean shift on a colour back-projection, with an online histogram (see the module).
+
+    Parameters
+    ----------
+    bins : int
+        Histogram bins per channel (saturation and value).
+    rate : float
+        Weight of the current box's histogram in the model each frame (0 keeps the first).
+    """
+
+    def __init__(self, bins: int = 32, rate: float = 0.05, scales: tuple = (0.93, 1.0, 1.07)):
+        self.bins, self.rate = int(bins), float(rate)
+        self.scales = tuple(float(v) for v in scales)
+
+    def _hist(self, hsv: np.ndarray, box: np.ndarray) -> np.ndarray:
+        import cv2
+
+        x, y, w, h = np.round(box).astype(int)
+        H, W = hsv.shape[:2]
+        inner = np.zeros((H, W), np.uint8)
+        inner[max(y, 0):max(y + h, 0), max(x, 0):max(x + w, 0)] = 1
+        ring = np.zeros((H, W), np.uint8)
+        ring[max(y - h, 0):max(y + 2 * h, 0), max(x - w, 0):max(x + 2 * w, 0)] = 1
+        ring[inner == 1] = 0
+        ch, bs, rng = [1, 2], [self.bins, self.bins], [0, 256, 0, 256]
+        ht = cv2.calcHist([hsv], ch, inner, bs, rng)
+        hb = cv2.calcHist([hsv], ch, ring, bs, rng)
+        return ht / max(ht.sum(), 1.0), hb / max(hb.sum(), 1.0)
+
+    def init(self, image: Any, box: Any) -> None:
+        import cv2
+
+        self.box = _box(box)
+        self.pt, self.pb = self._hist(cv2.cvtColor(np.asarray(image), cv2.COLOR_BGR2HSV),
+                                      self.box)
+
+    @staticmethod
+    def _mean(integral: np.ndarray, b: np.ndarray, ring: bool = False) -> float:
+        H, W = integral.shape[0] - 1, integral.shape[1] - 1
+        clip = (lambda v, n: int(min(max(round(v), 0), n)))
+        x0, y0 = clip(b[0], W), clip(b[1], H)
+        x1, y1 = clip(b[0] + b[2], W), clip(b[1] + b[3], H)
+        inner = _sum(integral, x0, y0, x1, y1)
+        n_in = max((x1 - x0) * (y1 - y0), 1)
+        if not ring:
+            return inner / n_in
+        mx, my = b[2] / 4, b[3] / 4
+        X0, Y0 = clip(b[0] - mx, W), clip(b[1] - my, H)
+        X1, Y1 = clip(b[0] + b[2] + mx, W), clip(b[1] + b[3] + my, H)
+        n_out = max((X1 - X0) * (Y1 - Y0) - n_in, 1)
+        return (_sum(integral, X0, Y0, X1, Y1) - inner) / n_out
+
+    def update(self, image: Any) -> np.ndarray:
+        import cv2
+
+        hsv = cv2.cvtColor(np.asarray(image), cv2.COLOR_BGR2HSV)
+        ratio = (255 * self.pt / (self.pt + self.pb + 1e-12)).astype(np.float32)
+        bp = cv2.calcBackProject([hsv], [1, 2], ratio, [0, 256, 0, 256], 1)
+        x, y, w, h = np.round(self.box).astype(int)
+        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.5)
+        _, (x, y, w, h) = cv2.meanShift(bp, (x, y, max(w, 1), max(h, 1)), crit)
+        cx, cy = x + w / 2, y + h / 2
+        w, h = self.box[2], self.box[3]
+        # the scale whose box best separates the object's colour from its surroundings:
+        # mean back-projection inside minus in the ring around it
+        integral = cv2.integral(bp.astype(np.float64))
+        best, box = -np.inf, self.box
+        for s in self.scales:
+            b = np.array([cx - s * w / 2, cy - s * h / 2, s * w, s * h])
+            score = self._mean(integral, b) - self._mean(integral, b, ring=True)
+            if score > best:
+                best, box = score, b
+        self.box = box
+        if self.rate > 0:
+            pt, pb = self._hist(hsv, self.box)
+            self.pt = (1 - self.rate) * self.pt + self.rate * pt
+            self.pb = (1 - self.rate) * self.pb + self.rate * pb
+        return self.box.copy()
+
+
+class OpenCVTracker:
+    """OpenCV contrib's CSRT or KCF behind the same interface (for comparison)."""
+
+    def __init__(self, kind: str = "csrt"):
+        import cv2
+
+        makers = {"csrt": cv2.TrackerCSRT.create, "kcf": cv2.TrackerKCF.create}
+        if kind not in makers:
+            raise ValueError(f"kind must be one of {sorted(makers)}; got {kind!r}")
+        self._make = makers[kind]
+
+    def init(self, image: Any, box: Any) -> None:
+        b = _box(box)
+        self._t = self._make()
+        self._t.init(np.asarray(image), tuple(int(round(v)) for v in b))
+        self.box = b
+
+    def update(self, image: Any) -> np.ndarray:
+        ok, b = self._t.update(np.asarray(image))
+        if ok:
+            self.box = np.asarray(b, float)
+        return self.box.copy()
+
+
+METHODS: dict[str, Callable[[], Any]] = {
+    "klt": MedianFlow,
+    "template": TemplateTracker,
+    "colour": ColourTracker,
+    "csrt": lambda: OpenCVTracker("csrt"),
+    "kcf": lambda: OpenCVTracker("kcf"),
+}
+"""Single-object trackers by name."""
+
+
+def single_tracker(method: str = "template") -> Any:
+    """A single-object tracker by name in :data:`METHODS`."""
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {sorted(METHODS)}; got {method!r}")
+    return METHODS[method]()
