@@ -29,7 +29,9 @@ SEQS = {
                      DATA / "otb-crossing" / "Crossing" / "groundtruth_rect.txt"),
     "VOT15 bag": (DATA / "vot15-bag" / "imgs", "*.jpg", DATA / "vot15-bag" / "groundtruth.txt"),
 }
-METHODS = (("vistrack colour (default)", "colour"), ("vistrack template", "template"),
+METHODS = (("vistrack colour (default)", "colour"), ("vistrack camshift", "camshift"),
+           ("vistrack particle (colour CONDENSATION)", "particle"),
+           ("vistrack template", "template"),
            ("vistrack klt (median flow)", "klt"), ("OpenCV CSRT", "csrt"), ("OpenCV KCF", "kcf"))
 
 

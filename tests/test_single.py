@@ -73,7 +73,8 @@ def run(method, frames, init):
     return np.array([init] + [tr.update(f) for f in frames[1:]])
 
 
-@pytest.mark.parametrize("method,kind", [("colour", "colour"), ("template", "texture"),
+@pytest.mark.parametrize("method,kind", [("colour", "colour"), ("camshift", "colour"),
+                                         ("particle", "colour"), ("template", "texture"),
                                          ("klt", "texture")])
 def test_trackers_follow_a_moving_growing_target(method, kind):
     rng = np.random.default_rng(3)
@@ -83,7 +84,7 @@ def test_trackers_follow_a_moving_growing_target(method, kind):
 
 
 def test_method_names_and_bad_boxes():
-    assert set(METHODS) == {"colour", "template", "klt", "csrt", "kcf"}
+    assert set(METHODS) == {"colour", "camshift", "particle", "template", "klt", "csrt", "kcf"}
     with pytest.raises(ValueError, match="method must be one of"):
         single_tracker("siamese")
     with pytest.raises(ValueError, match="box must be x, y, w, h with w, h > 0"):

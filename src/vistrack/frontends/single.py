@@ -14,6 +14,12 @@ floats, the top-left corner and size), and is chosen by name from :data:`METHODS
 - ``"colour"``: mean shift on the back-projection of a saturation-value histogram of the
   target against its surroundings (the object's colour over the background's), with the
   histogram updated online from the tracked box;
+- ``"camshift"``: the same back-projection, tracked by OpenCV's CamShift (the window's size
+  and orientation from its moments);
+- ``"particle"``: CONDENSATION on the same colour model (Pérez et al., 2002): particles of
+  ``(cx, cy, log scale)`` diffuse as a random walk, each is weighed by how much more of the
+  object's colour its box holds than the ring around it, and they are resampled by
+  :func:`vistrack.filters.resample` when the effective sample size falls below half;
 - ``"csrt"``, ``"kcf"``: OpenCV contrib's trackers, for comparison.
 """
 
@@ -26,7 +32,7 @@ import numpy as np
 from ._affine import prepare_templates, register
 
 __all__ = ["METHODS", "single_tracker", "MedianFlow", "TemplateTracker", "ColourTracker",
-           "OpenCVTracker"]
+           "CamShiftTracker", "ColourParticleTracker", "OpenCVTracker"]
 
 
 def _box(box: Any) -> np.ndarray:
@@ -173,8 +179,22 @@ class TemplateTracker:
         return self.box.copy()
 
 
-def _sum(integral: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> float:
-    return float(integral[y1, x1] - integral[y0, x1] - integral[y1, x0] + integral[y0, x0])
+def _contrast(integral: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Mean of the image inside each box ``(N, 4)`` minus the mean in the ring a quarter of
+    its size around it, from the image's integral ``(H + 1, W + 1)``."""
+    H, W = integral.shape[0] - 1, integral.shape[1] - 1
+
+    def total(x0, y0, x1, y1):
+        x0, x1 = np.clip(np.round(x0), 0, W).astype(int), np.clip(np.round(x1), 0, W).astype(int)
+        y0, y1 = np.clip(np.round(y0), 0, H).astype(int), np.clip(np.round(y1), 0, H).astype(int)
+        area = (x1 - x0) * (y1 - y0)
+        return integral[y1, x1] - integral[y0, x1] - integral[y1, x0] + integral[y0, x0], area
+
+    inner, n_in = total(b[:, 0], b[:, 1], b[:, 0] + b[:, 2], b[:, 1] + b[:, 3])
+    mx, my = b[:, 2] / 4, b[:, 3] / 4
+    outer, n_out = total(b[:, 0] - mx, b[:, 1] - my, b[:, 0] + b[:, 2] + mx,
+                         b[:, 1] + b[:, 3] + my)
+    return inner / np.maximum(n_in, 1) - (outer - inner) / np.maximum(n_out - n_in, 1)
 
 
 class ColourTracker:
@@ -214,22 +234,6 @@ class ColourTracker:
         self.pt, self.pb = self._hist(cv2.cvtColor(np.asarray(image), cv2.COLOR_BGR2HSV),
                                       self.box)
 
-    @staticmethod
-    def _mean(integral: np.ndarray, b: np.ndarray, ring: bool = False) -> float:
-        H, W = integral.shape[0] - 1, integral.shape[1] - 1
-        clip = (lambda v, n: int(min(max(round(v), 0), n)))
-        x0, y0 = clip(b[0], W), clip(b[1], H)
-        x1, y1 = clip(b[0] + b[2], W), clip(b[1] + b[3], H)
-        inner = _sum(integral, x0, y0, x1, y1)
-        n_in = max((x1 - x0) * (y1 - y0), 1)
-        if not ring:
-            return inner / n_in
-        mx, my = b[2] / 4, b[3] / 4
-        X0, Y0 = clip(b[0] - mx, W), clip(b[1] - my, H)
-        X1, Y1 = clip(b[0] + b[2] + mx, W), clip(b[1] + b[3] + my, H)
-        n_out = max((X1 - X0) * (Y1 - Y0) - n_in, 1)
-        return (_sum(integral, X0, Y0, X1, Y1) - inner) / n_out
-
     def update(self, image: Any) -> np.ndarray:
         import cv2
 
@@ -243,14 +247,97 @@ class ColourTracker:
         w, h = self.box[2], self.box[3]
         # the scale whose box best separates the object's colour from its surroundings:
         # mean back-projection inside minus in the ring around it
-        integral = cv2.integral(bp.astype(np.float64))
-        best, box = -np.inf, self.box
-        for s in self.scales:
-            b = np.array([cx - s * w / 2, cy - s * h / 2, s * w, s * h])
-            score = self._mean(integral, b) - self._mean(integral, b, ring=True)
-            if score > best:
-                best, box = score, b
-        self.box = box
+        sc = np.array(self.scales)[:, None]
+        boxes = np.c_[cx - sc * w / 2, cy - sc * h / 2, sc * w, sc * h]
+        self.box = boxes[int(np.argmax(_contrast(cv2.integral(bp.astype(np.float64)), boxes)))]
+        if self.rate > 0:
+            pt, pb = self._hist(hsv, self.box)
+            self.pt = (1 - self.rate) * self.pt + self.rate * pt
+            self.pb = (1 - self.rate) * self.pb + self.rate * pb
+        return self.box.copy()
+
+
+class CamShiftTracker(ColourTracker):
+    """OpenCV's CamShift on the colour back-projection of :class:`ColourTracker`."""
+
+    def update(self, image: Any) -> np.ndarray:
+        import cv2
+
+        hsv = cv2.cvtColor(np.asarray(image), cv2.COLOR_BGR2HSV)
+        ratio = (255 * self.pt / (self.pt + self.pb + 1e-12)).astype(np.float32)
+        bp = cv2.calcBackProject([hsv], [1, 2], ratio, [0, 256, 0, 256], 1)
+        # CamShift sizes its window from the back-projection's mass in it: pixels more
+        # likely background than object (below one half) must not count, or the window
+        # grows over the background's faint mass
+        bp[bp < 128] = 0
+        x, y, w, h = np.round(self.box).astype(int)
+        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.5)
+        rect, _ = cv2.CamShift(bp, (x, y, max(w, 1), max(h, 1)), crit)
+        (cx, cy), (rw, rh), _ = rect
+        if rw > 1 and rh > 1:
+            bx, by, bw, bh = cv2.boundingRect(cv2.boxPoints(rect).astype(np.float32))
+            self.box = np.array([bx, by, bw, bh], float)
+        if self.rate > 0:
+            pt, pb = self._hist(hsv, self.box)
+            self.pt = (1 - self.rate) * self.pt + self.rate * pt
+            self.pb = (1 - self.rate) * self.pb + self.rate * pb
+        return self.box.copy()
+
+
+class ColourParticleTracker(ColourTracker):
+    """CONDENSATION with the colour model of :class:`ColourTracker` (see the module).
+
+    Parameters
+    ----------
+    n_particles : int
+    step : float
+        Standard deviation of the random walk of the centre per frame, as a fraction of the
+        box's size; the log scale walks with a quarter of it.
+    sharpness : float
+        ``λ`` of the likelihood ``exp(λ · contrast)``, the contrast being the mean
+        back-projection (0–1) inside the box minus that in the ring around it.
+    """
+
+    def __init__(self, n_particles: int = 300, step: float = 0.15, sharpness: float = 30.0,
+                 rng: Any = 0, **kwargs: Any):
+        super().__init__(**kwargs)
+        self.n, self.step, self.sharpness = int(n_particles), float(step), float(sharpness)
+        self.rng = np.random.default_rng(rng)
+
+    def init(self, image: Any, box: Any) -> None:
+        super().init(image, box)
+        b = self.box
+        self.size = b[2:].copy()
+        self.x = np.tile([b[0] + b[2] / 2, b[1] + b[3] / 2, 0.0], (self.n, 1))
+        self.w = np.full(self.n, 1.0 / self.n)
+
+    def update(self, image: Any) -> np.ndarray:
+        import cv2
+
+        from ..filters import effective_sample_size, resample
+
+        hsv = cv2.cvtColor(np.asarray(image), cv2.COLOR_BGR2HSV)
+        ratio = (255 * self.pt / (self.pt + self.pb + 1e-12)).astype(np.float32)
+        bp = cv2.calcBackProject([hsv], [1, 2], ratio, [0, 256, 0, 256], 1)
+        integral = cv2.integral(bp.astype(np.float64) / 255.0)
+        # predict: a random walk in centre and log scale
+        sz = self.size * np.exp(self.x[:, 2:3])
+        self.x[:, :2] += self.rng.standard_normal((self.n, 2)) * self.step * sz
+        self.x[:, 2] += self.rng.standard_normal(self.n) * self.step / 4
+        # weigh
+        sz = self.size * np.exp(self.x[:, 2:3])
+        boxes = np.c_[self.x[:, :2] - sz / 2, sz]
+        contrast = _contrast(integral, boxes)
+        logw = np.log(self.w) + self.sharpness * contrast
+        w = np.exp(logw - logw.max())
+        self.w = w / w.sum()
+        m = self.w @ self.x
+        s = self.size * np.exp(m[2])
+        self.box = np.r_[m[:2] - s / 2, s]
+        # resample when the effective sample size is below half
+        if effective_sample_size(self.w) < 0.5 * self.n:
+            idx = resample(self.w, "systematic", rng=self.rng)
+            self.x, self.w = self.x[idx], np.full(self.n, 1.0 / self.n)
         if self.rate > 0:
             pt, pb = self._hist(hsv, self.box)
             self.pt = (1 - self.rate) * self.pt + self.rate * pt
@@ -286,6 +373,8 @@ METHODS: dict[str, Callable[[], Any]] = {
     "klt": MedianFlow,
     "template": TemplateTracker,
     "colour": ColourTracker,
+    "camshift": CamShiftTracker,
+    "particle": ColourParticleTracker,
     "csrt": lambda: OpenCVTracker("csrt"),
     "kcf": lambda: OpenCVTracker("kcf"),
 }
