@@ -95,6 +95,7 @@ def prepare_templates(image: np.ndarray, centres: np.ndarray, half: int):
 @njit(cache=True, parallel=True, fastmath=True)
 def _register(img, half, T, SD, Hinv, p, iters, eps, rms):
     K = p.shape[0]
+    H, W = img.shape
     h = 2 * half + 1
     n = h * h
     for k in prange(K):
@@ -105,31 +106,50 @@ def _register(img, half, T, SD, Hinv, p, iters, eps, rms):
         while True:
             a00, a10, a01, a11 = 1.0 + p[k, 0], p[k, 1], p[k, 2], 1.0 + p[k, 3]
             dx, dy = p[k, 4], p[k, 5]
-            q, inside = 0, True
-            for i in range(h):
-                y = i - half
-                for j in range(h):
-                    x = j - half
-                    v = _bilinear(img, a00 * x + a01 * y + dx, a10 * x + a11 * y + dy)
-                    if np.isnan(v):
+            # the warped patch is a parallelogram: inside the image if its corners are, so
+            # the pixels need no checks
+            inside = True
+            for cy in (-half, half):
+                for cx in (-half, half):
+                    u, v = a00 * cx + a01 * cy + dx, a10 * cx + a11 * cy + dy
+                    if not (0.0 <= u < W - 1.0 and 0.0 <= v < H - 1.0):
                         inside = False
-                    warped[q] = v
-                    q += 1
             if not inside:
                 rms[k] = np.inf
                 break
-            m, s = warped.mean(), warped.std()
-            if s < 1e-6:
+            q = 0
+            s1 = s2 = 0.0
+            for i in range(h):
+                y = i - half
+                u0, v0 = a01 * y + dx - a00 * half, a11 * y + dy - a10 * half
+                for j in range(h):
+                    u, v = u0 + a00 * j, v0 + a10 * j
+                    x0, y0 = int(u), int(v)
+                    fx, fy = u - x0, v - y0
+                    val = ((1.0 - fy) * ((1.0 - fx) * img[y0, x0] + fx * img[y0, x0 + 1])
+                           + fy * ((1.0 - fx) * img[y0 + 1, x0] + fx * img[y0 + 1, x0 + 1]))
+                    warped[q] = val
+                    s1 += val
+                    s2 += val * val
+                    q += 1
+            m = s1 / n
+            var = s2 / n - m * m
+            if var < 1e-12:
                 rms[k] = np.inf
                 break
+            inv_s = 1.0 / np.sqrt(var)
             e2 = 0.0
-            for a in range(6):
-                b[a] = 0.0
+            b0 = b1 = b2 = b3 = b4 = b5 = 0.0
             for q in range(n):
-                e = (warped[q] - m) / s - T[k, q]
+                e = (warped[q] - m) * inv_s - T[k, q]
                 e2 += e * e
-                for a in range(6):
-                    b[a] += SD[k, q, a] * e
+                b0 += SD[k, q, 0] * e
+                b1 += SD[k, q, 1] * e
+                b2 += SD[k, q, 2] * e
+                b3 += SD[k, q, 3] * e
+                b4 += SD[k, q, 4] * e
+                b5 += SD[k, q, 5] * e
+            b[0], b[1], b[2], b[3], b[4], b[5] = b0, b1, b2, b3, b4, b5
             rms[k] = np.sqrt(e2 / n)
             if it == iters:
                 break
@@ -173,30 +193,35 @@ def register(image: np.ndarray, half: int, T: np.ndarray, SD: np.ndarray, Hinv: 
 
 @njit(cache=True, parallel=True, fastmath=True)
 def _ncc(a, pa, b, pb, half, out):
-    h = 2 * half + 1
-    n = h * h
+    H, W = a.shape
+    n = (2 * half + 1) ** 2
     for k in prange(pa.shape[0]):
-        u = np.empty(n)
-        v = np.empty(n)
-        q = 0
-        bad = False
-        for i in range(-half, half + 1):
-            for j in range(-half, half + 1):
-                u[q] = _bilinear(a, pa[k, 0] + j, pa[k, 1] + i)
-                v[q] = _bilinear(b, pb[k, 0] + j, pb[k, 1] + i)
-                if np.isnan(u[q]) or np.isnan(v[q]):
-                    bad = True
-                q += 1
-        if bad:
+        ax, ay, bx, by = pa[k, 0] - half, pa[k, 1] - half, pb[k, 0] - half, pb[k, 1] - half
+        # both patches inside their images (checked once, not per pixel)
+        if not (0.0 <= ax and ax + 2 * half < W - 1.0 and 0.0 <= ay and ay + 2 * half < H - 1.0
+                and 0.0 <= bx and bx + 2 * half < W - 1.0 and 0.0 <= by
+                and by + 2 * half < H - 1.0):
             out[k] = -1.0
             continue
-        mu, mv = u.mean(), v.mean()
-        su, sv, c = 0.0, 0.0, 0.0
-        for q in range(n):
-            su += (u[q] - mu) ** 2
-            sv += (v[q] - mv) ** 2
-            c += (u[q] - mu) * (v[q] - mv)
-        out[k] = c / np.sqrt(su * sv) if su > 1e-9 and sv > 1e-9 else -1.0
+        iax, iay, ibx, iby = int(ax), int(ay), int(bx), int(by)
+        fax, fay, fbx, fby = ax - iax, ay - iay, bx - ibx, by - iby
+        su = sv = suu = svv = suv = 0.0
+        for i in range(2 * half + 1):
+            for j in range(2 * half + 1):
+                u = ((1.0 - fay) * ((1.0 - fax) * a[iay + i, iax + j] + fax * a[iay + i, iax + j + 1])
+                     + fay * ((1.0 - fax) * a[iay + i + 1, iax + j]
+                              + fax * a[iay + i + 1, iax + j + 1]))
+                v = ((1.0 - fby) * ((1.0 - fbx) * b[iby + i, ibx + j] + fbx * b[iby + i, ibx + j + 1])
+                     + fby * ((1.0 - fbx) * b[iby + i + 1, ibx + j]
+                              + fbx * b[iby + i + 1, ibx + j + 1]))
+                su += u
+                sv += v
+                suu += u * u
+                svv += v * v
+                suv += u * v
+        cu = suu - su * su / n
+        cv = svv - sv * sv / n
+        out[k] = (suv - su * sv / n) / np.sqrt(cu * cv) if cu > 1e-9 and cv > 1e-9 else -1.0
 
 
 def patch_ncc(a: np.ndarray, pa: np.ndarray, b: np.ndarray, pb: np.ndarray,

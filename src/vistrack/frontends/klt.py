@@ -4,22 +4,23 @@ One step (seed 003, "Tracking over many frames" and "Shi-Tomasi feature tracker"
 
 1. **update positions** with pyramidal Lucas-Kanade and a pure translation model (OpenCV's
    ``calcOpticalFlowPyrLK``);
-2. **frame-to-frame checks**: tracking the new position back to the previous frame must land
-   within ``fb_max`` pixels of where the feature was, and the patch there must correlate with
-   the previous frame's by at least ``min_ncc`` (Lucas-Kanade without enough pyramid can
-   settle in a wrong minimum that tracks back consistently);
+2. **frame-to-frame check**: the patch at the new place must correlate with the previous
+   frame's by at least ``min_ncc`` (Lucas-Kanade without enough pyramid can settle in a wrong
+   minimum);
 3. **large motions**: a feature Lucas-Kanade loses, or that fails the check, is searched for
    discretely, by normalised cross-correlation of its last patch over a window of
    ``search_radius`` pixels around its last place; the best integer location is refined to
-   sub-pixel by Lucas-Kanade and checked forward-backward again;
-4. **affine consistency**: the patch of the frame the feature was *first* seen in is
+   sub-pixel by Lucas-Kanade;
+4. **forward-backward check**: tracked back to the previous frame, every feature must land
+   within ``fb_max`` pixels of where it was;
+5. **affine consistency**: the patch of the frame the feature was *first* seen in is
    registered to the current frame with an affine warp (inverse-compositional Lucas-Kanade,
    started from the last warp moved to the new position); a feature whose normalised RMS
    residual exceeds ``max_residual``, or whose warp has drifted from the translation-only
    position by more than ``fb_max``, is terminated. Comparing with the first frame, not the
    previous one, is what stops slow drift;
-5. **start new features** (Shi-Tomasi's minimum eigenvalue of the second-moment matrix, away
-   from the features kept) to keep ``max_features``, whenever a tenth of them are gone.
+6. **start new features** (Shi-Tomasi's minimum eigenvalue of the second-moment matrix, away
+   from the features kept) to keep ``max_features``, whenever a fifth of them are gone.
 
 Identities are integers from 1, never reused.
 """
@@ -123,7 +124,7 @@ class KLTTracker:
     def _lk(self, a, b, pts, guess=None):
         import cv2
 
-        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01)
+        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03)
         flags = cv2.OPTFLOW_USE_INITIAL_FLOW if guess is not None else 0
         nxt, st, _ = cv2.calcOpticalFlowPyrLK(
             a, b, pts.reshape(-1, 1, 2), None if guess is None else guess.reshape(-1, 1, 2),
@@ -131,13 +132,13 @@ class KLTTracker:
             flags=flags)
         return nxt.reshape(-1, 2), st.ravel().astype(bool)
 
-    def _forward_backward(self, grey, p0, p1, searched=False):
-        # tracked back to the previous frame, a feature must land where it was. Features the
-        # discrete search found moved too far for Lucas-Kanade without a start: they are
-        # tracked back from where they were (their match is already established by the
-        # search's correlation)
-        back, ok = self._lk(grey, self._prev, p1.astype(np.float32),
-                            guess=p0 if searched else None)
+    def _forward_backward(self, grey, p0, p1, searched):
+        # tracked back to the previous frame, a feature must land where it was. Lucas-Kanade
+        # starts from the feature's new place, except for those the discrete search found:
+        # they moved too far for it, and start from where they were (their match is already
+        # established by the search's correlation)
+        guess = np.where(searched[:, None], p0, p1).astype(np.float32)
+        back, ok = self._lk(grey, self._prev, p1.astype(np.float32), guess=guess)
         return ok & (np.linalg.norm(back - p0, axis=1) <= self.fb_max)
 
     def _search(self, prev, cur, pts):
@@ -165,9 +166,9 @@ class KLTTracker:
     def _spawn(self, grey: np.ndarray) -> None:
         import cv2
 
-        # top up when a tenth is gone (finding features costs a pass over the image)
+        # top up when a fifth is gone (finding features costs a pass over the image)
         need = self.max_features - len(self.ids)
-        if need <= 0 or (len(self.ids) and need < 0.1 * self.max_features):
+        if need <= 0 or (len(self.ids) and need < 0.2 * self.max_features):
             return
         mask = np.full(grey.shape, 255, np.uint8)
         for x, y in np.round(self.points).astype(int):
@@ -205,26 +206,30 @@ class KLTTracker:
                                  f"frame was {self._prev.shape[1]}x{self._prev.shape[0]}")
             p0 = self.points.astype(np.float32)
             p1, ok = self._lk(self._prev, grey, p0)
-            ok &= self._forward_backward(grey, p0, p1)
-            # and the patch must still look like the last frame's
-            ok &= patch_ncc(self._prev, p0, grey, p1, self.half) >= self.min_ncc
+            # the patch must still look like the last frame's
+            g32 = grey.astype(np.float32)  # once, for the compiled checks
+            ok &= patch_ncc(self._prev32, p0, g32, p1, self.half) >= self.min_ncc
             lost = ~ok
+            searched = np.zeros(len(ok), bool)
             if self.search_radius > 0 and lost.any():
                 found = self._search(self._prev, grey, p0[lost])
                 good = ~np.isnan(found[:, 0])
                 if good.any():
                     idx = np.flatnonzero(lost)[good]
                     ref, st = self._lk(self._prev, grey, p0[idx], guess=found[good])
-                    st &= self._forward_backward(grey, p0[idx], ref, searched=True)
                     p1[idx[st]] = ref[st]
-                    ok[idx[st]] = True
+                    ok[idx[st]] = searched[idx[st]] = True
+            # forward-backward, for every feature in one call
+            cand = np.flatnonzero(ok)
+            if len(cand):
+                ok[cand] &= self._forward_backward(grey, p0[cand], p1[cand], searched[cand])
             H, W = grey.shape
             ok &= (p1[:, 0] >= 0) & (p1[:, 0] <= W - 1) & (p1[:, 1] >= 0) & (p1[:, 1] <= H - 1)
             if self.affine_check and ok.any():
                 idx = np.flatnonzero(ok)
                 p = self._p[idx].copy()
                 p[:, 4:] = p1[idx]  # the last warp, moved to the new position
-                rms = register(grey, self.half, self._T[idx], self._SD[idx], self._Hinv[idx],
+                rms = register(g32, self.half, self._T[idx], self._SD[idx], self._Hinv[idx],
                                p, iters=5, eps=0.03)
                 drift = np.linalg.norm(p[:, 4:] - p1[idx], axis=1)
                 good = (rms <= self.max_residual) & (drift <= self.fb_max)
@@ -238,6 +243,7 @@ class KLTTracker:
             for name in ("ids", "points", "ages", "residuals", "_T", "_SD", "_Hinv", "_p"):
                 setattr(self, name, getattr(self, name)[keep])
         self._prev = grey
+        self._prev32 = grey.astype(np.float32)
         self._spawn(grey)
         return Features(self.ids.copy(), self.points.astype(float), self.ages.copy(),
                         self.residuals.copy(), terminated)
