@@ -351,3 +351,29 @@ def test_track_video_from_a_detections_file(tmp_path):
     np.testing.assert_allclose(a.boxes, b.boxes, atol=0.01)
     with pytest.raises(FileNotFoundError, match="nope.txt does not exist"):
         track_video(demo / "pets09-s2l1.mp4", tmp_path / "w", frontend="detections:nope.txt")
+
+
+def test_track_video_with_a_detector_of_ones_own(tmp_path):
+    """The detector protocol: any object with detect(image) -> Detections."""
+    from pathlib import Path
+
+    from vistrack.io import read_mot
+    from vistrack.pipeline import track_video
+    from vistrack.types import Detections
+
+    class Fixed:
+        calls = 0
+
+        def detect(self, image):
+            self.calls += 1
+            x = 100 + 3 * self.calls
+            return Detections.from_xywh([[x, 200, 30, 80]], [0.95])
+
+    demo = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1"
+    det = Fixed()
+    run = track_video(demo / "pets09-s2l1.mp4", tmp_path, frontend=det, stop=10, annotate=False)
+    t = read_mot(run.files["tracks"])
+    assert det.calls == 10 and run.tracks == 1 and len(t) == 10
+    np.testing.assert_allclose(t.boxes[-1], [130, 200, 30, 80], atol=0.5)
+    with pytest.raises(TypeError, match="detect\\(image\\) -> Detections"):
+        track_video(demo / "pets09-s2l1.mp4", tmp_path / "x", frontend=42, stop=2)

@@ -154,9 +154,16 @@ class VideoRun:
         return self.frames / max(s, 1e-12)
 
 
-def _frontend(name: str, reader: Any, *, background: str, min_area: float, n_init: int):
-    """The per-frame function ``image -> Detections`` of a front-end, by name."""
+def _frontend(name: Any, reader: Any, *, background: str, min_area: float, n_init: int):
+    """The per-frame function ``image -> Detections`` of a front-end, by name, or of a
+    detector (any object with ``detect(image) -> Detections``)."""
     import cv2
+
+    if not isinstance(name, str):
+        if not callable(getattr(name, "detect", None)):
+            raise TypeError(f"frontend must be a name in {list(FRONTENDS)} or an object with "
+                            f"detect(image) -> Detections; got {type(name).__name__}")
+        return lambda image, index: name.detect(image)
 
     from .frontends import background as make_background
     from .frontends import find_blobs
@@ -190,7 +197,7 @@ def _frontend(name: str, reader: Any, *, background: str, min_area: float, n_ini
     raise ValueError(f"frontend must be one of {list(FRONTENDS)}; got {name!r}")
 
 
-def track_video(video: str | Path, out_dir: str | Path, *, frontend: str = "bgsub",
+def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = "bgsub",
                 fps: float | None = None, tracker: str = "bytetrack",
                 gt: str | Path | None = None, background: str = "selective",
                 min_area: float = 500.0, n_init: int = 20, stop: int | None = None,
@@ -206,7 +213,9 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: str = "bgsu
     ----------
     frontend
         ``"bgsub"`` (the seeds' background model, then blobs), ``"hog"`` (OpenCV's people
-        detector) or ``"detections:FILE"`` (a MOTChallenge detections file).
+        detector), ``"detections:FILE"`` (a MOTChallenge detections file), or a detector of
+        your own: any object with ``detect(image) -> Detections``
+        (:class:`vistrack.frontends.detectors.Detector`).
     fps
         The true frame rate, when the container's header is wrong.
     background, min_area, n_init
