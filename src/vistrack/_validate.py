@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "as_uint8_image",
     "as_float_array",
     "check_finite",
     "check_matrix_stack",
@@ -36,6 +37,22 @@ def as_float_array(value: Any, name: str, *, ndim: tuple[int, ...] | None = None
     if not arr.flags.c_contiguous:  # (np.ascontiguousarray would turn a scalar into 1-D)
         arr = np.ascontiguousarray(arr)
     return arr
+
+
+def as_uint8_image(image: Any, name: str = "image", channels: tuple[int, ...] = (1, 3, 4),
+                   grey: bool = False) -> np.ndarray:
+    """An 8-bit ``(H, W)`` or ``(H, W, C)`` image, checked; ``grey=True`` converts colour
+    (BGR) to grey."""
+    im = np.asarray(image)
+    if im.dtype != np.uint8 or im.ndim not in (2, 3) or (im.ndim == 3
+                                                         and im.shape[2] not in channels):
+        raise ValueError(f"{name} must be (H, W) or (H, W, C) uint8 with C in {channels}; got "
+                         f"shape {_fmt_shape(im.shape)} {im.dtype}")
+    if grey and im.ndim == 3:
+        import cv2
+
+        im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY if im.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
+    return im
 
 
 def check_finite(arr: np.ndarray, name: str) -> None:

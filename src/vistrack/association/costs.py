@@ -78,6 +78,19 @@ def euclidean(a: Any, b: Any) -> np.ndarray:
     return np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(-1))
 
 
+def _innovations(z_pred: Any, S: Any, z: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    # predicted measurements (T, m), innovation covariances (T, m, m), detections (D, m)
+    zp = np.atleast_2d(np.asarray(z_pred, dtype=float))
+    S = np.asarray(S, dtype=float)
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    T, m = zp.shape
+    if S.shape != (T, m, m):
+        raise ValueError(f"S must have shape ({T}, {m}, {m}); got {S.shape}")
+    if z.shape[1:] != (m,) and z.size:
+        raise ValueError(f"z must have shape (D, {m}); got {z.shape}")
+    return zp, S, z
+
+
 def mahalanobis(z_pred: Any, S: Any, z: Any) -> np.ndarray:
     """Squared Mahalanobis distances ``(T, D)`` of detections ``z (D, m)`` from predicted
     measurements ``z_pred (T, m)`` with innovation covariances ``S (T, m, m)``, by one
@@ -88,14 +101,8 @@ def mahalanobis(z_pred: Any, S: Any, z: Any) -> np.ndarray:
     >>> mahalanobis([[0.0, 0.0]], [np.diag([4.0, 1.0])], [[2.0, 0.0], [0.0, 2.0]]).tolist()
     [[1.0, 4.0]]
     """
-    zp = np.atleast_2d(np.asarray(z_pred, dtype=float))
-    S = np.asarray(S, dtype=float)
-    z = np.atleast_2d(np.asarray(z, dtype=float))
+    zp, S, z = _innovations(z_pred, S, z)
     T, m = zp.shape
-    if S.shape != (T, m, m):
-        raise ValueError(f"S must have shape ({T}, {m}, {m}); got {S.shape}")
-    if z.shape[1:] != (m,) and z.size:
-        raise ValueError(f"z must have shape (D, {m}); got {z.shape}")
     if T == 0 or z.size == 0:
         return np.zeros((T, len(z) if z.size else 0))
     try:
@@ -125,17 +132,10 @@ def mahalanobis_pairs(z_pred: Any, S: Any, z: Any,
     """
     from scipy.spatial import cKDTree
 
-    zp = np.atleast_2d(np.asarray(z_pred, dtype=float))
-    S = np.asarray(S, dtype=float)
-    z = np.atleast_2d(np.asarray(z, dtype=float))
-    T, m = zp.shape
-    if S.shape != (T, m, m):
-        raise ValueError(f"S must have shape ({T}, {m}, {m}); got {S.shape}")
-    empty = np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
+    zp, S, z = _innovations(z_pred, S, z)
+    T = len(zp)
     if T == 0 or z.size == 0:
-        return empty
-    if z.shape[1] != m:
-        raise ValueError(f"z must have shape (D, {m}); got {z.shape}")
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
     try:
         Sinv = np.linalg.inv(S)
         lam = np.linalg.eigvalsh(S)[:, -1]

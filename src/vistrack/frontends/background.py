@@ -34,6 +34,8 @@ from typing import Any, Iterable
 import numpy as np
 from numba import njit, prange
 
+from .._validate import as_uint8_image
+
 __all__ = ["BACKGROUNDS", "MOG2Background", "SelectiveBackground", "background"]
 
 
@@ -121,10 +123,7 @@ class SelectiveBackground:
 
     @staticmethod
     def _as3(image: Any) -> np.ndarray:
-        im = np.asarray(image)
-        if im.dtype != np.uint8 or im.ndim not in (2, 3):
-            raise ValueError(f"image must be (H, W) or (H, W, C) uint8; got {im.shape} "
-                             f"{im.dtype}")
+        im = as_uint8_image(image, channels=(1, 3))
         return im[:, :, None] if im.ndim == 2 else im
 
     def initialize(self, frames: Iterable[Any]) -> "SelectiveBackground":
@@ -169,11 +168,9 @@ class SelectiveBackground:
         if C == 1:
             _selective_grey(im.reshape(-1), self.mean.reshape(-1), self.mean_sq.reshape(-1),
                             *args)
-        elif C == 3:
+        else:  # 3 channels (checked by _as3)
             _selective_colour(im.reshape(-1, C), self.mean.reshape(-1, C),
                               self.mean_sq.reshape(-1, C), *args)
-        else:
-            raise ValueError(f"image must have 1 or 3 channels; got {C}")
         return mask
 
 

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from .._validate import as_uint8_image
 from ..types import Detections
 from ._affine import patch_ncc, prepare_templates, register
 
@@ -111,16 +112,6 @@ class KLTTracker:
         self._Hinv, self._p = np.zeros((0, 6, 6)), np.zeros((0, 6))
         self._next_id = 1
 
-    @staticmethod
-    def _grey(image: Any) -> np.ndarray:
-        import cv2
-
-        im = np.asarray(image)
-        if im.dtype != np.uint8 or im.ndim not in (2, 3):
-            raise ValueError(f"image must be (H, W) or (H, W, 3) uint8; got {im.shape} "
-                             f"{im.dtype}")
-        return cv2.cvtColor(im, cv2.COLOR_BGR2GRAY) if im.ndim == 3 else im
-
     def _lk(self, a, b, pts, guess=None):
         import cv2
 
@@ -198,7 +189,7 @@ class KLTTracker:
 
     def step(self, image: Any) -> Features:
         """Track the features into a new frame (grey or BGR uint8) and top them up."""
-        grey = self._grey(image)
+        grey = as_uint8_image(image, grey=True)
         terminated = 0
         if self._prev is not None and len(self.ids):
             if grey.shape != self._prev.shape:

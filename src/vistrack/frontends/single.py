@@ -29,6 +29,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .._validate import as_uint8_image
 from ._affine import prepare_templates, register
 
 __all__ = ["METHODS", "single_tracker", "MedianFlow", "TemplateTracker", "ColourTracker",
@@ -43,10 +44,13 @@ def _box(box: Any) -> np.ndarray:
 
 
 def _grey(image: Any) -> np.ndarray:
+    return as_uint8_image(image, grey=True)
+
+
+def _hsv(image: Any) -> np.ndarray:
     import cv2
 
-    im = np.asarray(image)
-    return cv2.cvtColor(im, cv2.COLOR_BGR2GRAY) if im.ndim == 3 else im
+    return cv2.cvtColor(as_uint8_image(image, channels=(3,)), cv2.COLOR_BGR2HSV)
 
 
 class MedianFlow:
@@ -228,18 +232,28 @@ class ColourTracker:
         return ht / max(ht.sum(), 1.0), hb / max(hb.sum(), 1.0)
 
     def init(self, image: Any, box: Any) -> None:
+        self.box = _box(box)
+        self.pt, self.pb = self._hist(_hsv(image), self.box)
+
+    def _backproject(self, hsv: np.ndarray) -> np.ndarray:
+        # p(object | colour) with equal priors, 0-255
         import cv2
 
-        self.box = _box(box)
-        self.pt, self.pb = self._hist(cv2.cvtColor(np.asarray(image), cv2.COLOR_BGR2HSV),
-                                      self.box)
+        ratio = (255 * self.pt / (self.pt + self.pb + 1e-12)).astype(np.float32)
+        return cv2.calcBackProject([hsv], [1, 2], ratio, [0, 256, 0, 256], 1)
+
+    def _learn(self, hsv: np.ndarray) -> None:
+        # the online model: a share `rate` of the tracked box's histograms each frame
+        if self.rate > 0:
+            pt, pb = self._hist(hsv, self.box)
+            self.pt = (1 - self.rate) * self.pt + self.rate * pt
+            self.pb = (1 - self.rate) * self.pb + self.rate * pb
 
     def update(self, image: Any) -> np.ndarray:
         import cv2
 
-        hsv = cv2.cvtColor(np.asarray(image), cv2.COLOR_BGR2HSV)
-        ratio = (255 * self.pt / (self.pt + self.pb + 1e-12)).astype(np.float32)
-        bp = cv2.calcBackProject([hsv], [1, 2], ratio, [0, 256, 0, 256], 1)
+        hsv = _hsv(image)
+        bp = self._backproject(hsv)
         x, y, w, h = np.round(self.box).astype(int)
         crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.5)
         _, (x, y, w, h) = cv2.meanShift(bp, (x, y, max(w, 1), max(h, 1)), crit)
@@ -250,10 +264,7 @@ class ColourTracker:
         sc = np.array(self.scales)[:, None]
         boxes = np.c_[cx - sc * w / 2, cy - sc * h / 2, sc * w, sc * h]
         self.box = boxes[int(np.argmax(_contrast(cv2.integral(bp.astype(np.float64)), boxes)))]
-        if self.rate > 0:
-            pt, pb = self._hist(hsv, self.box)
-            self.pt = (1 - self.rate) * self.pt + self.rate * pt
-            self.pb = (1 - self.rate) * self.pb + self.rate * pb
+        self._learn(hsv)
         return self.box.copy()
 
 
@@ -263,9 +274,8 @@ class CamShiftTracker(ColourTracker):
     def update(self, image: Any) -> np.ndarray:
         import cv2
 
-        hsv = cv2.cvtColor(np.asarray(image), cv2.COLOR_BGR2HSV)
-        ratio = (255 * self.pt / (self.pt + self.pb + 1e-12)).astype(np.float32)
-        bp = cv2.calcBackProject([hsv], [1, 2], ratio, [0, 256, 0, 256], 1)
+        hsv = _hsv(image)
+        bp = self._backproject(hsv)
         # CamShift sizes its window from the back-projection's mass in it: pixels more
         # likely background than object (below one half) must not count, or the window
         # grows over the background's faint mass
@@ -277,10 +287,7 @@ class CamShiftTracker(ColourTracker):
         if rw > 1 and rh > 1:
             bx, by, bw, bh = cv2.boundingRect(cv2.boxPoints(rect).astype(np.float32))
             self.box = np.array([bx, by, bw, bh], float)
-        if self.rate > 0:
-            pt, pb = self._hist(hsv, self.box)
-            self.pt = (1 - self.rate) * self.pt + self.rate * pt
-            self.pb = (1 - self.rate) * self.pb + self.rate * pb
+        self._learn(hsv)
         return self.box.copy()
 
 
@@ -316,9 +323,8 @@ class ColourParticleTracker(ColourTracker):
 
         from ..filters import effective_sample_size, resample
 
-        hsv = cv2.cvtColor(np.asarray(image), cv2.COLOR_BGR2HSV)
-        ratio = (255 * self.pt / (self.pt + self.pb + 1e-12)).astype(np.float32)
-        bp = cv2.calcBackProject([hsv], [1, 2], ratio, [0, 256, 0, 256], 1)
+        hsv = _hsv(image)
+        bp = self._backproject(hsv)
         integral = cv2.integral(bp.astype(np.float64) / 255.0)
         # predict: a random walk in centre and log scale
         sz = self.size * np.exp(self.x[:, 2:3])
@@ -338,10 +344,7 @@ class ColourParticleTracker(ColourTracker):
         if effective_sample_size(self.w) < 0.5 * self.n:
             idx = resample(self.w, "systematic", rng=self.rng)
             self.x, self.w = self.x[idx], np.full(self.n, 1.0 / self.n)
-        if self.rate > 0:
-            pt, pb = self._hist(hsv, self.box)
-            self.pt = (1 - self.rate) * self.pt + self.rate * pt
-            self.pb = (1 - self.rate) * self.pb + self.rate * pb
+        self._learn(hsv)
         return self.box.copy()
 
 
