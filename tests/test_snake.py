@@ -1,0 +1,78 @@
+"""Snakes: the B-spline basis against scipy, and contours tracking shapes with known
+boundaries."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.interpolate import BSpline
+
+from vistrack.frontends.snake import Snake, bspline_matrix
+
+
+def test_bspline_basis_equals_scipy():
+    """The periodic uniform cubic B-spline and its derivative, against scipy's BSpline on
+    the periodically extended control points."""
+    rng = np.random.default_rng(0)
+    for n, m in ((4, 9), (7, 21), (20, 100)):
+        Q = rng.normal(size=(n, 2))
+        s = np.arange(m) * n / m
+        spl = BSpline(np.arange(-3, n + 4, dtype=float), Q[(np.arange(n + 3) - 1) % n], 3)
+        np.testing.assert_allclose(bspline_matrix(n, m) @ Q, spl(s), atol=1e-12)
+        np.testing.assert_allclose(bspline_matrix(n, m, derivative=True) @ Q,
+                                   spl.derivative()(s), atol=1e-12)
+    with pytest.raises(ValueError, match="n >= 4"):
+        bspline_matrix(3, 10)
+
+
+def ellipse_frame(cx, cy, a, b, angle, shape=(240, 320), rng=None):
+    """A filled ellipse rendered exactly: each pixel's coverage from 4 x 4 sub-samples
+    (pixel (i, j) covers [j - 0.5, j + 0.5] x [i - 0.5, i + 0.5])."""
+    sub = (np.arange(4) + 0.5) / 4 - 0.5
+    y, x = np.mgrid[0:shape[0], 0:shape[1]].astype(float)
+    t = np.radians(angle)
+    cover = np.zeros(shape)
+    for dy in sub:
+        for dx in sub:
+            u = (x + dx - cx) * np.cos(t) + (y + dy - cy) * np.sin(t)
+            v = -(x + dx - cx) * np.sin(t) + (y + dy - cy) * np.cos(t)
+            cover += (u / a) ** 2 + (v / b) ** 2 <= 1
+    im = 60 + 140 * cover / 16
+    if rng is not None:
+        im = im + rng.normal(0, 4, shape)
+    return np.clip(np.round(im), 0, 255).astype(np.uint8)
+
+
+def distance_to_ellipse(pts, cx, cy, a, b, angle):
+    # |implicit radius - 1| scaled by the local radius: a close approximation of the distance
+    t = np.radians(angle)
+    d = pts - [cx, cy]
+    u = d[:, 0] * np.cos(t) + d[:, 1] * np.sin(t)
+    v = -d[:, 0] * np.sin(t) + d[:, 1] * np.cos(t)
+    rho = np.sqrt((u / a) ** 2 + (v / b) ** 2)
+    return np.abs(rho - 1) * np.hypot(u, v) / np.maximum(rho, 1e-9)
+
+
+def test_snake_follows_a_moving_turning_ellipse():
+    """An ellipse drifts 2 px a frame, grows and turns, on noise: the contour stays on its
+    boundary (mean distance < 0.5 px in every frame)."""
+    rng = np.random.default_rng(1)
+    s = Snake()
+    s.init_circle((100, 120), 30)
+    for k in range(40):
+        geo = (100 + 2 * k, 120 + np.sin(k / 6) * 10, 40 + k * 0.3, 25, 10 + 2 * k)
+        pts = s.step(ellipse_frame(*geo, rng=rng))
+        if k >= 5:  # after it has locked on
+            assert distance_to_ellipse(pts, *geo).mean() < 0.5
+    assert s.found.mean() > 0.9
+
+
+def test_without_edges_the_contour_holds_its_prediction():
+    s = Snake(n_control=12, n_samples=60)
+    s.init_circle((80, 60), 20)
+    before = s.contour().copy()
+    after = s.step(np.full((120, 160), 90, np.uint8))  # a blank frame: no edge anywhere
+    assert not s.found.any()
+    np.testing.assert_allclose(after, before)
+    with pytest.raises(ValueError, match="control_points must have shape \\(12, 2\\)"):
+        s.init(np.zeros((5, 2)))
