@@ -38,7 +38,8 @@ class Detector(Protocol):
 
 class HOGDetector:
     """Dalal and Triggs' HOG people detector (OpenCV's default people SVM), with non-maximum
-    suppression; scores are the SVM margins squashed to (0, 1) by a logistic.
+    suppression; boxes are the detection windows without their margin (as OpenCV's sample
+    draws them), and scores the SVM margins squashed to (0, 1) by a logistic.
 
     Parameters
     ----------
@@ -79,5 +80,8 @@ class HOGDetector:
             return Detections(boxes=np.zeros((0, 4)))
         w = np.asarray(w, float).ravel()
         r = np.asarray(rects, float).reshape(-1, 4) / self.upscale
+        # the window holds the person with a margin: keep its inner 70 % of the width and 90 %
+        # of the height (OpenCV's peopledetect sample)
+        r = r + np.c_[0.15 * r[:, 2], 0.05 * r[:, 3], -0.3 * r[:, 2], -0.1 * r[:, 3]]
         keep = nms(np.c_[r[:, :2], r[:, :2] + r[:, 2:]], w, self.nms_iou)
         return Detections.from_xywh(r[keep], 1.0 / (1.0 + np.exp(-w[keep])))
