@@ -31,6 +31,10 @@ bench: $(VENV)/.bench-installed
 	$(PY) bench/bench_kalman.py --write docs/benchmarks.md
 	$(PY) bench/bench_particle.py --write docs/benchmarks.md
 	$(PY) bench/bench_tracking.py --write docs/benchmarks.md
+	$(PY) bench/bench_pixels.py --write docs/benchmarks.md
+	$(PY) bench/bench_microscopy.py --write docs/benchmarks.md
+	$(PY) bench/bench_single.py --write docs/benchmarks.md
+	$(PY) bench/bench_snake.py --write docs/benchmarks.md
 	$(PY) bench/accuracy_mot.py --write docs/mot.md
 	$(PY) bench/accuracy_mot.py --offline --write docs/mot.md
 
