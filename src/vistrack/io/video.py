@@ -141,7 +141,10 @@ class VideoReader:
 
     def __iter__(self) -> Iterator[Frame]:
         if self.prefetch == 0:
-            yield from self._frames()
+            notes: list[str] = []
+            yield from self._frames(notes)
+            for n in notes:
+                warnings.warn(n, RuntimeWarning, stacklevel=2)
             return
         import queue
         import threading
@@ -151,21 +154,22 @@ class VideoReader:
         end = object()
 
         def work() -> None:
+            # what goes wrong is handed to the caller's thread: the note of a truncated file
+            # (warned there, not here: the warnings machinery is not thread-safe) or the error
+            notes: list[str] = []
             try:
-                with warnings.catch_warnings(record=True) as caught:
-                    warnings.simplefilter("always")
-                    for f in self._frames():
-                        while not stop.is_set():
-                            try:
-                                q.put(f, timeout=0.1)
-                                break
-                            except queue.Full:
-                                continue
-                        if stop.is_set():
-                            return
-                q.put((end, caught, None))
-            except BaseException as exc:  # handed to the caller's thread
-                q.put((end, [], exc))
+                for f in self._frames(notes):
+                    while not stop.is_set():
+                        try:
+                            q.put(f, timeout=0.1)
+                            break
+                        except queue.Full:
+                            continue
+                    if stop.is_set():
+                        return
+                q.put((end, notes, None))
+            except BaseException as exc:
+                q.put((end, notes, exc))
 
         t = threading.Thread(target=work, name="vistrack-video-reader", daemon=True)
         t.start()
@@ -173,8 +177,8 @@ class VideoReader:
             while True:
                 item = q.get()
                 if isinstance(item, tuple) and item[0] is end:
-                    for w in item[1]:
-                        warnings.warn(w.message, w.category, stacklevel=2)
+                    for n in item[1]:
+                        warnings.warn(n, RuntimeWarning, stacklevel=2)
                     if item[2] is not None:
                         raise item[2]
                     return
@@ -183,7 +187,8 @@ class VideoReader:
             stop.set()
             t.join()
 
-    def _frames(self) -> Iterator[Frame]:
+    def _frames(self, notes: list) -> Iterator[Frame]:
+        # frames in order; a file that stops early appends a note to `notes`
         last = self.frame_count if self.stop is None else min(self.stop, self.frame_count)
         if self._files is not None:
             for k in range(self.start, last + 1):
@@ -197,9 +202,8 @@ class VideoReader:
             for k in range(self.start, last + 1):
                 ok, im = cap.read()
                 if not ok or im is None:
-                    warnings.warn(f"{self.source}: reading stopped at frame {k} of the "
-                                  f"{self.frame_count} its header gives (truncated or corrupt)",
-                                  RuntimeWarning, stacklevel=2)
+                    notes.append(f"{self.source}: reading stopped at frame {k} of the "
+                                 f"{self.frame_count} its header gives (truncated or corrupt)")
                     return
                 if self.grey:
                     im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
