@@ -157,14 +157,13 @@ class VideoRun:
 def _frontend(name: Any, reader: Any, *, background: str, min_area: float, n_init: int):
     """The per-frame function ``image -> Detections`` of a front-end, by name, or of a
     detector (any object with ``detect(image) -> Detections``)."""
-    import cv2
-
     if not isinstance(name, str):
         if not callable(getattr(name, "detect", None)):
             raise TypeError(f"frontend must be a name in {list(FRONTENDS)} or an object with "
                             f"detect(image) -> Detections; got {type(name).__name__}")
         return lambda image, index: name.detect(image)
 
+    from ._validate import as_uint8_image
     from .frontends import background as make_background
     from .frontends import find_blobs
     from .io.video import VideoReader
@@ -176,8 +175,8 @@ def _frontend(name: Any, reader: Any, *, background: str, min_area: float, n_ini
                                                    stop=reader.start + n_init - 1))
 
         def detect(image: np.ndarray, index: int) -> Detections:
-            grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
-            return find_blobs(bg.apply(grey), min_area=min_area, open_size=3,
+            mask = bg.apply(as_uint8_image(image, grey=True))
+            return find_blobs(mask, min_area=min_area, open_size=3,
                               close_size=7).detections("boxes")
         return detect
     if name == "hog":
