@@ -32,7 +32,8 @@ SEQS = {
 METHODS = (("vistrack colour (default)", "colour"), ("vistrack camshift", "camshift"),
            ("vistrack particle (colour CONDENSATION)", "particle"),
            ("vistrack template", "template"),
-           ("vistrack klt (median flow)", "klt"), ("OpenCV CSRT", "csrt"), ("OpenCV KCF", "kcf"))
+           ("vistrack klt (median flow)", "klt"), ("vistrack wsl (online appearance)", "wsl"),
+           ("OpenCV CSRT", "csrt"), ("OpenCV KCF", "kcf"))
 
 
 def main():

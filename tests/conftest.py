@@ -6,6 +6,13 @@ import pytest
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 
 
+def need(path):
+    """``path``, or skip the test with the reason when the shared data is absent."""
+    if not path.exists():
+        pytest.skip(f"{path} not found: the shared data is not beside this checkout")
+    return path
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)

@@ -12,15 +12,9 @@ import pytest
 from vistrack.frontends import MOG2Background, SelectiveBackground, background, find_blobs
 from vistrack.io import VideoError, VideoReader, VideoWriter
 
-from .conftest import SHARED
+from .conftest import SHARED, need
 
 VTEST = SHARED / "data" / "opencv-vtest" / "vtest.avi"
-
-
-def need(path):
-    if not path.exists():
-        pytest.skip(f"{path} not found: the shared data is not beside this checkout")
-    return path
 
 
 # ----------------------------------------------------------------------------- video

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "as_box",
     "as_uint8_image",
     "as_float_array",
     "check_finite",
@@ -53,6 +54,14 @@ def as_uint8_image(image: Any, name: str = "image", channels: tuple[int, ...] = 
 
         im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY if im.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
     return im
+
+
+def as_box(box: Any, name: str = "box") -> np.ndarray:
+    """One box ``x, y, w, h`` as 4 finite floats with ``w, h > 0``."""
+    b = np.asarray(box, dtype=float).reshape(-1)
+    if b.shape != (4,) or not np.isfinite(b).all() or b[2] <= 0 or b[3] <= 0:
+        raise ValueError(f"{name} must be x, y, w, h with w, h > 0; got {np.asarray(box).tolist()}")
+    return b
 
 
 def check_finite(arr: np.ndarray, name: str) -> None:

@@ -201,12 +201,12 @@ def build_parser() -> argparse.ArgumentParser:
     one.add_argument("input", metavar="INPUT", help="video file or image folder")
     one.add_argument("--init", required=True, help="the first frame's box: x,y,w,h")
     one.add_argument("--method", default="colour",
-                     choices=("colour", "camshift", "particle", "template", "klt", "csrt",
-                              "kcf"),
+                     choices=("colour", "camshift", "particle", "template", "klt", "wsl",
+                              "csrt", "kcf"),
                      help="colour (default: mean shift on a colour model learnt online, "
                      "with scale), camshift, particle (CONDENSATION on the colour model), "
-                     "template (affine SSD), klt (median flow), or OpenCV's csrt and kcf for "
-                     "comparison")
+                     "template (affine SSD), klt (median flow), wsl (robust online "
+                     "appearance model), or OpenCV's csrt and kcf for comparison")
     one.add_argument("--out", required=True, help="boxes file to write")
     one.add_argument("--gt", help="ground truth (OTB groundtruth_rect.txt, VOT groundtruth.txt "
                      "or a boxes file) to score against")

@@ -1,6 +1,7 @@
 """Front-ends: frames to :class:`~vistrack.types.Detections`, and single-object trackers.
 They know nothing of tracks."""
 
+from .appearance import WSLModel, WSLTracker
 from .background import BACKGROUNDS, MOG2Background, SelectiveBackground, background
 from .blobs import Blobs, find_blobs, threshold
 from .detectors import Detector, HOGDetector
@@ -11,4 +12,4 @@ from .spots import Spots, locate
 
 __all__ = ["BACKGROUNDS", "MOG2Background", "SelectiveBackground", "background", "Blobs",
            "find_blobs", "threshold", "Detector", "HOGDetector", "Features", "KLTTracker",
-           "METHODS", "single_tracker", "Snake", "Spots", "locate"]
+           "METHODS", "single_tracker", "Snake", "Spots", "locate", "WSLModel", "WSLTracker"]

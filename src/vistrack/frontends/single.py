@@ -20,6 +20,9 @@ floats, the top-left corner and size), and is chosen by name from :data:`METHODS
   ``(cx, cy, log scale)`` diffuse as a random walk, each is weighed by how much more of the
   object's colour its box holds than the ring around it, and they are resampled by
   :func:`vistrack.filters.resample` when the effective sample size falls below half;
+- ``"wsl"``: the robust online appearance model of Jepson, Fleet and El-Maraghi
+  (:class:`vistrack.frontends.appearance.WSLTracker`): the stable / wandering / lost mixture
+  of the view's intensities is the likelihood of an exhaustive translation search;
 - ``"csrt"``, ``"kcf"``: OpenCV contrib's trackers, for comparison.
 """
 
@@ -29,18 +32,12 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .._validate import as_uint8_image
+from .._validate import as_box, as_uint8_image
 from ._affine import prepare_templates, register
+from .appearance import WSLTracker
 
 __all__ = ["METHODS", "single_tracker", "MedianFlow", "TemplateTracker", "ColourTracker",
            "CamShiftTracker", "ColourParticleTracker", "OpenCVTracker"]
-
-
-def _box(box: Any) -> np.ndarray:
-    b = np.asarray(box, dtype=float).reshape(-1)
-    if b.shape != (4,) or not np.isfinite(b).all() or b[2] <= 0 or b[3] <= 0:
-        raise ValueError(f"box must be x, y, w, h with w, h > 0; got {np.asarray(box).tolist()}")
-    return b
 
 
 def _grey(image: Any) -> np.ndarray:
@@ -71,7 +68,7 @@ class MedianFlow:
 
     def init(self, image: Any, box: Any) -> None:
         self.prev = _grey(image)
-        self.box = _box(box)
+        self.box = as_box(box)
 
     def motion(self, grey: np.ndarray) -> tuple[np.ndarray, float] | None:
         """Median displacement and scale of the box's features from the previous frame, or
@@ -138,7 +135,7 @@ class TemplateTracker:
 
     def init(self, image: Any, box: Any) -> None:
         grey = _grey(image).astype(np.float32)
-        b = _box(box)
+        b = as_box(box)
         self.box0 = b
         self.half = max(3, int(min(b[2], b[3]) / 2) - 1)
         c = np.array([[b[0] + b[2] / 2, b[1] + b[3] / 2]])
@@ -232,7 +229,7 @@ class ColourTracker:
         return ht / max(ht.sum(), 1.0), hb / max(hb.sum(), 1.0)
 
     def init(self, image: Any, box: Any) -> None:
-        self.box = _box(box)
+        self.box = as_box(box)
         self.pt, self.pb = self._hist(_hsv(image), self.box)
 
     def _backproject(self, hsv: np.ndarray) -> np.ndarray:
@@ -360,7 +357,7 @@ class OpenCVTracker:
         self._make = makers[kind]
 
     def init(self, image: Any, box: Any) -> None:
-        b = _box(box)
+        b = as_box(box)
         self._t = self._make()
         self._t.init(np.asarray(image), tuple(int(round(v)) for v in b))
         self.box = b
@@ -378,6 +375,7 @@ METHODS: dict[str, Callable[[], Any]] = {
     "colour": ColourTracker,
     "camshift": CamShiftTracker,
     "particle": ColourParticleTracker,
+    "wsl": WSLTracker,
     "csrt": lambda: OpenCVTracker("csrt"),
     "kcf": lambda: OpenCVTracker("kcf"),
 }
