@@ -84,8 +84,8 @@ def test_trackers_follow_a_moving_growing_target(method, kind):
 
 
 def test_method_names_and_bad_boxes():
-    assert set(METHODS) == {"colour", "camshift", "particle", "template", "klt", "wsl", "csrt",
-                            "kcf"}
+    assert set(METHODS) == {"colour", "camshift", "particle", "template", "klt", "wsl",
+                            "meanshift", "snake", "csrt", "kcf"}
     with pytest.raises(ValueError, match="method must be one of"):
         single_tracker("siamese")
     with pytest.raises(ValueError, match="box must be x, y, w, h with w, h > 0"):

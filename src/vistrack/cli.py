@@ -201,12 +201,13 @@ def build_parser() -> argparse.ArgumentParser:
     one.add_argument("input", metavar="INPUT", help="video file or image folder")
     one.add_argument("--init", required=True, help="the first frame's box: x,y,w,h")
     one.add_argument("--method", default="colour",
-                     choices=("colour", "camshift", "particle", "template", "klt", "wsl",
-                              "csrt", "kcf"),
+                     choices=("colour", "meanshift", "camshift", "particle", "template", "klt",
+                              "wsl", "snake", "csrt", "kcf"),
                      help="colour (default: mean shift on a colour model learnt online, "
-                     "with scale), camshift, particle (CONDENSATION on the colour model), "
-                     "template (affine SSD), klt (median flow), wsl (robust online "
-                     "appearance model), or OpenCV's csrt and kcf for comparison")
+                     "with scale), meanshift (the same, fixed size), camshift, particle "
+                     "(CONDENSATION on the colour model), template (affine SSD), klt (median "
+                     "flow), wsl (robust online appearance model), snake (B-spline contour), "
+                     "or OpenCV's csrt and kcf for comparison")
     one.add_argument("--out", required=True, help="boxes file to write")
     one.add_argument("--gt", help="ground truth (OTB groundtruth_rect.txt, VOT groundtruth.txt "
                      "or a boxes file) to score against")

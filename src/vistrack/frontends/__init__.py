@@ -3,6 +3,7 @@ They know nothing of tracks."""
 
 from .appearance import WSLModel, WSLTracker
 from .background import BACKGROUNDS, MOG2Background, SelectiveBackground, background
+from .compose import Composite
 from .blobs import Blobs, find_blobs, threshold
 from .detectors import Detector, HOGDetector
 from .klt import Features, KLTTracker
@@ -12,4 +13,5 @@ from .spots import Spots, locate
 
 __all__ = ["BACKGROUNDS", "MOG2Background", "SelectiveBackground", "background", "Blobs",
            "find_blobs", "threshold", "Detector", "HOGDetector", "Features", "KLTTracker",
-           "METHODS", "single_tracker", "Snake", "Spots", "locate", "WSLModel", "WSLTracker"]
+           "METHODS", "single_tracker", "Snake", "Spots", "locate", "WSLModel", "WSLTracker",
+           "Composite"]

@@ -240,3 +240,10 @@ class WSLTracker:
         self.box = np.array([self.centre[0] - self.w / 2, self.centre[1] - self.h / 2,
                              self.w, self.h])
         return self.box.copy()
+
+    def anchor(self, box: Any) -> None:
+        """Move the region to ``box`` (the view keeps its pixel size; the velocity is kept)."""
+        b = as_box(box)
+        self.centre = b[:2] + b[2:] / 2
+        self.w, self.h = float(b[2]), float(b[3])
+        self.box = b

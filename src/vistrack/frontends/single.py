@@ -23,7 +23,13 @@ floats, the top-left corner and size), and is chosen by name from :data:`METHODS
 - ``"wsl"``: the robust online appearance model of Jepson, Fleet and El-Maraghi
   (:class:`vistrack.frontends.appearance.WSLTracker`): the stable / wandering / lost mixture
   of the view's intensities is the likelihood of an exhaustive translation search;
+- ``"meanshift"``: ``"colour"`` with the window's size fixed (the classic mean-shift tracker);
+- ``"snake"``: the B-spline snake (:class:`vistrack.frontends.snake.SnakeTracker`) started on
+  the ellipse inscribed in the box, its box the contour's bounding box;
 - ``"csrt"``, ``"kcf"``: OpenCV contrib's trackers, for comparison.
+
+Every tracker but OpenCV's also has ``anchor(box)``, which moves its state to a box, for
+:class:`vistrack.frontends.compose.Composite`.
 """
 
 from __future__ import annotations
@@ -35,6 +41,7 @@ import numpy as np
 from .._validate import as_box, as_uint8_image
 from ._affine import prepare_templates, register
 from .appearance import WSLTracker
+from .snake import SnakeTracker
 
 __all__ = ["METHODS", "single_tracker", "MedianFlow", "TemplateTracker", "ColourTracker",
            "CamShiftTracker", "ColourParticleTracker", "OpenCVTracker"]
@@ -118,6 +125,10 @@ class MedianFlow:
         self.prev = grey
         return self.box.copy()
 
+    def anchor(self, box: Any) -> None:
+        """Move the box to ``box`` (the next frame's features are found in it)."""
+        self.box = as_box(box)
+
 
 class TemplateTracker:
     """Affine template tracking of the first frame's central patch (see the module).
@@ -178,6 +189,17 @@ class TemplateTracker:
             self.p[0, 4:] = prior[:2] + prior[2:] / 2
         self.flow.box = self.box.copy()
         return self.box.copy()
+
+    def anchor(self, box: Any) -> None:
+        """Move the warp so that its box is ``box``: the same shape, shifted and scaled."""
+        b = as_box(box)
+        s = np.sqrt(b[2] * b[3] / (self.box[2] * self.box[3]))
+        p = self.p[0]
+        A = np.array([[1 + p[0], p[2]], [p[1], 1 + p[3]]]) * s
+        p[:4] = [A[0, 0] - 1, A[1, 0], A[0, 1], A[1, 1] - 1]
+        self.p[0, 4:] = b[:2] + b[2:] / 2
+        self.box = b
+        self.flow.anchor(b)
 
 
 def _contrast(integral: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -264,6 +286,10 @@ class ColourTracker:
         self._learn(hsv)
         return self.box.copy()
 
+    def anchor(self, box: Any) -> None:
+        """Move the window to ``box``."""
+        self.box = as_box(box)
+
 
 class CamShiftTracker(ColourTracker):
     """OpenCV's CamShift on the colour back-projection of :class:`ColourTracker`."""
@@ -314,6 +340,14 @@ class ColourParticleTracker(ColourTracker):
         self.size = b[2:].copy()
         self.x = np.tile([b[0] + b[2] / 2, b[1] + b[3] / 2, 0.0], (self.n, 1))
         self.w = np.full(self.n, 1.0 / self.n)
+
+    def anchor(self, box: Any) -> None:
+        """Shift and scale the particle cloud so that its mean box is ``box``."""
+        b = as_box(box)
+        m = self.w @ self.x
+        self.x[:, :2] += b[:2] + b[2:] / 2 - m[:2]
+        self.x[:, 2] += np.log(np.sqrt(b[2] * b[3] / np.prod(self.size))) - m[2]
+        self.box = b
 
     def update(self, image: Any) -> np.ndarray:
         import cv2
@@ -376,6 +410,8 @@ METHODS: dict[str, Callable[[], Any]] = {
     "camshift": CamShiftTracker,
     "particle": ColourParticleTracker,
     "wsl": WSLTracker,
+    "snake": SnakeTracker,
+    "meanshift": lambda: ColourTracker(scales=(1.0,)),
     "csrt": lambda: OpenCVTracker("csrt"),
     "kcf": lambda: OpenCVTracker("kcf"),
 }

@@ -180,3 +180,56 @@ class Snake:
         self.state = g
         self.found = found
         return self.contour()
+
+
+class SnakeTracker:
+    """A :class:`Snake` as a box tracker: started on the ellipse inscribed in the first box,
+    its box is the contour's bounding box; ``anchor(box)`` moves and scales the contour so
+    that its bounding box is ``box``.
+
+    Parameters
+    ----------
+    **snake
+        Passed to :class:`Snake`.
+    """
+
+    def __init__(self, **snake: Any):
+        self.snake = Snake(**snake)
+
+    def init(self, image: Any, box: Any) -> None:
+        from .._validate import as_box
+
+        b = as_box(box)
+        s = self.snake
+        # a cubic B-spline through control points on an ellipse lies inside them: the
+        # ratio is (2 + cos(2π/n)) / 3, as in Snake.init_circle
+        k = 3 / (2 + np.cos(2 * np.pi / s.n))
+        a = 2 * np.pi * np.arange(s.n) / s.n
+        c = b[:2] + b[2:] / 2
+        s.init(np.c_[c[0] + k * b[2] / 2 * np.cos(a), c[1] + k * b[3] / 2 * np.sin(a)])
+        self.box = b
+
+    def _bounds(self) -> np.ndarray:
+        pts = self.snake.contour()
+        lo, hi = pts.min(0), pts.max(0)
+        return np.r_[lo, np.maximum(hi - lo, 1e-6)]
+
+    def update(self, image: Any) -> np.ndarray:
+        self.snake.step(image)
+        self.box = self._bounds()
+        return self.box.copy()
+
+    def anchor(self, box: Any) -> None:
+        from .._validate import as_box
+
+        b = as_box(box)
+        cur = self._bounds()
+        s = b[2:] / cur[2:]
+        c0, c1 = cur[:2] + cur[2:] / 2, b[:2] + b[2:] / 2
+        g = self.snake.state
+        n = self.snake.n
+        mean = g.mean.copy()
+        mean[:n] = c1[0] + s[0] * (mean[:n] - c0[0])
+        mean[n:] = c1[1] + s[1] * (mean[n:] - c0[1])
+        self.snake.state = Gaussian(mean, g.cov)
+        self.box = b

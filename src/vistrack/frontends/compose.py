@@ -1,0 +1,151 @@
+r"""Tracker composition: several single-object trackers fused into one estimate (seed 001,
+"Tracker composition: color and shape", "Combining trackers ⇒ robustness"; XVision's
+composition of primitive trackers).
+
+:class:`Composite` runs its member trackers on each frame, reads each one's box as a
+measurement ``z = (cx, cy, log w, log h)`` and fuses them in a Kalman filter whose state is the
+centre with its velocity (constant velocity, white acceleration ``q_pos`` px²/frame³) and the
+log size (a random walk, ``q_size`` per frame). A member's measurement noise is set by its
+``noise``: a standard deviation of the centre as a fraction of the box's size, and one of the
+log size. Each frame follows the Hager/Toyama cycle with the prediction shared: every member
+is first **anchored** on the composite's predicted box (``anchor(box)`` moves its own state
+there), so a member that drifted, or whose window grew over the background, searches from
+the composite's estimate; each member's box is then gated, a member whose normalised
+innovation squared exceeds the χ² quantile ``gate`` (4 degrees of freedom) being rejected
+that frame as in the seeds' validation gates; the accepted ones correct the prediction.
+
+A member is anything with ``init(image, box)``, ``update(image) -> box`` and
+``anchor(box)``; every tracker in :data:`vistrack.frontends.single.METHODS` except OpenCV's
+has ``anchor``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+import numpy as np
+from scipy.stats import chi2
+
+from .._validate import as_box
+from ..filters import kf_predict, kf_update
+from ..types import Gaussian
+
+__all__ = ["Composite"]
+
+# the first velocity's standard deviation, as a fraction of the box's size a frame
+_V0 = 0.5
+
+_H = np.zeros((4, 6))
+_H[0, 0] = _H[1, 1] = _H[2, 4] = _H[3, 5] = 1.0
+
+
+def _measure(box: np.ndarray) -> np.ndarray:
+    return np.array([box[0] + box[2] / 2, box[1] + box[3] / 2, np.log(box[2]), np.log(box[3])])
+
+
+def _box_of(x: np.ndarray) -> np.ndarray:
+    w, h = np.exp(x[4]), np.exp(x[5])
+    return np.array([x[0] - w / 2, x[1] - h / 2, w, h])
+
+
+class Composite:
+    """Member trackers fused by a gated Kalman filter (see the module).
+
+    Parameters
+    ----------
+    members : mapping of name to (tracker, (pos_sd, log_size_sd))
+        The trackers and their measurement noise: the centre's standard deviation as a
+        fraction of the box's size, and the log size's standard deviation.
+    q_pos : float
+        White-acceleration density of the centre (px² per frame³, scaled by the box's size
+        over 100 px).
+    q_size : float
+        Random-walk variance of the log size per frame.
+    gate : float
+        Probability of the χ² gate on each member's innovation (4 degrees of freedom).
+
+    After each ``update``, ``boxes`` holds each member's own box and ``accepted`` whether
+    it passed the gate.
+
+    Examples
+    --------
+    Colour for the centre, a snake's contour for the size (``examples/compose_bag.py``):
+
+    >>> from vistrack.frontends.single import single_tracker
+    >>> tracker = Composite({"colour": (single_tracker("meanshift"), (0.1, 1.0)),
+    ...                      "shape": (single_tracker("snake"), (0.2, 0.05))})
+    """
+
+    def __init__(self, members: Mapping[str, tuple[Any, tuple[float, float]]], *,
+                 q_pos: float = 16.0, q_size: float = 1e-3, gate: float = 0.999):
+        if not members:
+            raise ValueError("members must name at least one tracker")
+        self.members: dict[str, Any] = {}
+        self.noise: dict[str, np.ndarray] = {}
+        for name, value in members.items():
+            try:
+                tracker, (pos_sd, size_sd) = value
+            except (TypeError, ValueError):
+                raise ValueError(f"members[{name!r}] must be (tracker, (pos_sd, log_size_sd)); "
+                                 f"got {value!r}") from None
+            for attr in ("init", "update", "anchor"):
+                if not callable(getattr(tracker, attr, None)):
+                    raise TypeError(f"members[{name!r}] has no {attr}() method")
+            if not (pos_sd > 0 and size_sd > 0):
+                raise ValueError(f"members[{name!r}]: noise must be positive; got "
+                                 f"{(pos_sd, size_sd)}")
+            self.members[name] = tracker
+            self.noise[name] = np.array([pos_sd, size_sd], float)
+        if not (0 < gate < 1):
+            raise ValueError(f"gate must be a probability in (0, 1); got {gate}")
+        self.q_pos, self.q_size = float(q_pos), float(q_size)
+        self.threshold = float(chi2.ppf(gate, 4))
+
+    def init(self, image: Any, box: Any) -> None:
+        b = as_box(box)
+        for tracker in self.members.values():
+            tracker.init(image, b)
+        z = _measure(b)
+        mean = np.r_[z[:2], 0.0, 0.0, z[2:]]
+        cov = np.diag([1.0, 1.0, (_V0 * b[2]) ** 2, (_V0 * b[3]) ** 2, 1e-4, 1e-4])
+        self.state = Gaussian(mean, cov)
+        self.box = b.copy()
+        self.boxes = {name: b.copy() for name in self.members}
+        self.accepted = {name: True for name in self.members}
+
+    def _motion(self) -> tuple[np.ndarray, np.ndarray]:
+        F = np.eye(6)
+        F[0, 2] = F[1, 3] = 1.0
+        q = self.q_pos * max(self.box[2], self.box[3]) / 100.0
+        Q = np.zeros((6, 6))
+        for i, j in ((0, 2), (1, 3)):
+            Q[np.ix_([i, j], [i, j])] = q * np.array([[1 / 3, 1 / 2], [1 / 2, 1.0]])
+        Q[4, 4] = Q[5, 5] = self.q_size
+        return F, Q
+
+    def update(self, image: Any) -> np.ndarray:
+        g = kf_predict(self.state, *self._motion())
+        size = np.exp(g.mean[4:])
+        predicted = _box_of(g.mean)
+        for tracker in self.members.values():
+            tracker.anchor(predicted)
+        # every member is gated against the prediction, then the accepted ones correct it
+        accepted = []
+        for name, tracker in self.members.items():
+            box = np.asarray(tracker.update(image), float)
+            self.boxes[name] = box
+            ok = box.shape == (4,) and bool(np.isfinite(box).all()) and box[2] > 0 and box[3] > 0
+            if ok:
+                pos_sd, size_sd = self.noise[name]
+                R = np.diag([(pos_sd * size[0]) ** 2, (pos_sd * size[1]) ** 2,
+                             size_sd ** 2, size_sd ** 2])
+                v = _measure(box) - _H @ g.mean
+                ok = float(v @ np.linalg.solve(_H @ g.cov @ _H.T + R, v)) <= self.threshold
+                if ok:
+                    accepted.append((_measure(box), R))
+            self.accepted[name] = ok
+        for z, R in accepted:
+            g = kf_update(g, z, _H, R)
+        self.state = g
+        self.box = _box_of(g.mean)
+        return self.box.copy()
