@@ -21,6 +21,7 @@ import numpy as np
 
 from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 from vistrack.evaluation.single import precision, read_boxes, success_curve, success_rate
+from vistrack.frontends.compose import Composite
 from vistrack.frontends.single import single_tracker
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -33,7 +34,17 @@ METHODS = (("vistrack colour (default)", "colour"), ("vistrack camshift", "camsh
            ("vistrack particle (colour CONDENSATION)", "particle"),
            ("vistrack template", "template"),
            ("vistrack klt (median flow)", "klt"), ("vistrack wsl (online appearance)", "wsl"),
+           ("vistrack meanshift (colour, fixed size)", "meanshift"),
+           ("vistrack snake", "snake"),
+           ("vistrack meanshift + snake (Composite)", "compose"),
            ("OpenCV CSRT", "csrt"), ("OpenCV KCF", "kcf"))
+
+
+def make(method):
+    if method == "compose":     # the composition of examples/compose_bag.py
+        return Composite({"colour": (single_tracker("meanshift"), (0.1, 1.0)),
+                          "shape": (single_tracker("snake"), (0.2, 0.05))})
+    return single_tracker(method)
 
 
 def main():
@@ -50,7 +61,7 @@ def main():
         gt = read_boxes(gt_path)
         gt_mm = read_boxes(gt_path, rule="minmax") if gt_path.name == "groundtruth.txt" else None
         for label, method in METHODS:
-            tr = single_tracker(method)
+            tr = make(method)
             tr.init(frames[0], gt[0])
             out = [gt[0]]
             t = time.perf_counter()

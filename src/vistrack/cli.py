@@ -48,7 +48,7 @@ def _track(args: argparse.Namespace) -> int:
             return 2
         extra = {k: v for k, v in (("min_area", args.min_area),
                                    ("background", args.background)) if v is not None}
-        run = track_video(args.input, args.out_dir, frontend=args.frontend or "bgsub",
+        run = track_video(args.input, args.out_dir, frontend=args.frontend,
                           fps=args.fps, tracker=args.tracker, gt=args.gt, stop=args.stop,
                           force=args.force, progress=progress, **extra)
     except (FileNotFoundError, FileExistsError, ValueError, VideoError) as exc:
@@ -176,11 +176,14 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--out-dir", help="folder for the outputs (video mode)")
     track.add_argument("--detections", help="detections file (default INPUT/det/det.txt)")
     track.add_argument("--tracker", default="bytetrack",
-                       help="tracker: bytetrack (default) or sort")
+                       help="tracker: bytetrack (default) or sort; in video mode also dcpf, "
+                       "the detector-confidence particle filter (HOG's confidence map, "
+                       "about 3 frames/s)")
     track.add_argument("--offline", action="store_true",
                        help="smooth finished tracks and fill gaps of up to 0.5 s (--out)")
     track.add_argument("--frontend", help="video mode: bgsub (default; background model and "
-                       "blobs), hog (OpenCV's people detector) or detections:FILE")
+                       "blobs), hog (OpenCV's people detector; the default of dcpf) or "
+                       "detections:FILE")
     track.add_argument("--fps", type=float, help="video mode: the true frame rate, when the "
                        "file's header is wrong")
     track.add_argument("--gt", help="video mode: MOTChallenge ground truth to score against")

@@ -16,6 +16,7 @@ import numpy as np
 from .evaluation.mot import MOTCounts, combine, evaluate_mot
 from .io.motchallenge import read_mot, read_seqinfo, write_mot
 from .tracking.box import BoxTracker
+from .tracking.lifecycle import Tracks
 from .tracking.offline import smooth
 from .types import Detections
 
@@ -196,11 +197,12 @@ def _frontend(name: Any, reader: Any, *, background: str, min_area: float, n_ini
     raise ValueError(f"frontend must be one of {list(FRONTENDS)}; got {name!r}")
 
 
-def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = "bgsub",
+def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
                 fps: float | None = None, tracker: str = "bytetrack",
                 gt: str | Path | None = None, background: str = "selective",
                 min_area: float = 500.0, n_init: int = 20, stop: int | None = None,
                 annotate: bool = True, force: bool = False, progress: Any = None,
+                confidence: Any = None, det_threshold: float = 0.5,
                 **overrides: Any) -> VideoRun:
     """Track a video (a file, an image folder or a MOTChallenge sequence folder) from pixels.
 
@@ -211,10 +213,20 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = "bgsu
     Parameters
     ----------
     frontend
-        ``"bgsub"`` (the seeds' background model, then blobs), ``"hog"`` (OpenCV's people
-        detector), ``"detections:FILE"`` (a MOTChallenge detections file), or a detector of
-        your own: any object with ``detect(image) -> Detections``
-        (:class:`vistrack.frontends.detectors.Detector`).
+        ``"bgsub"`` (the default of the box trackers: the seeds' background model, then
+        blobs), ``"hog"`` (OpenCV's people detector; with ``tracker="dcpf"``, the default,
+        the peaks of the confidence map above ``det_threshold``), ``"detections:FILE"`` (a
+        MOTChallenge detections file), or a detector of your own: any object with
+        ``detect(image) -> Detections`` (:class:`vistrack.frontends.detectors.Detector`).
+    tracker
+        A box tracker's name (:data:`vistrack.tracking.TRACKERS`: ``"bytetrack"``,
+        ``"sort"``), or ``"dcpf"``, the detector-confidence particle filter
+        (:class:`vistrack.tracking.dcpf.DetectorConfidencePF`; ``overrides`` are then
+        fields of its :class:`~vistrack.tracking.dcpf.DCPFConfig`).
+    confidence, det_threshold
+        For ``"dcpf"``: the detector's continuous confidence, a callable ``image ->
+        ConfidenceMap`` (default :class:`vistrack.frontends.detectors.HOGConfidence`), and
+        the SVM margin above which its peaks are detections.
     fps
         The true frame rate, when the container's header is wrong.
     background, min_area, n_init
@@ -239,9 +251,35 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = "bgsu
         raise FileExistsError(f"{', '.join(there)} exist; pass --force to overwrite them")
     gt_table = read_mot(gt) if gt is not None else None
     reader = VideoReader(video, fps=fps, stop=stop, prefetch=8)
-    detect = _frontend(frontend, reader, background=background, min_area=min_area,
-                       n_init=n_init)
-    trk = BoxTracker(tracker, frame_rate=reader.fps, **overrides)
+    if tracker == "dcpf":
+        from .frontends.detectors import HOGConfidence
+        from .tracking.dcpf import DetectorConfidencePF
+
+        conf_of = HOGConfidence() if confidence is None else confidence
+        if not callable(conf_of):
+            raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
+                            f"{type(conf_of).__name__}")
+        own = frontend in (None, "hog")
+        detect_other = None if own else _frontend(frontend, reader, background=background,
+                                                  min_area=min_area, n_init=n_init)
+        dcpf = DetectorConfidencePF(**overrides)
+
+        def detect(image: np.ndarray, index: int) -> Any:
+            # the frame's detections and confidence map (the particle filter's classifiers
+            # also read the image)
+            cmap = conf_of(image)
+            return (cmap.detections(det_threshold) if own else detect_other(image, index),
+                    cmap, image)
+
+        def step(d: Any, index: int) -> Tracks:
+            return dcpf.update(d[2], d[0], d[1])
+    else:
+        detect = _frontend("bgsub" if frontend is None else frontend, reader,
+                           background=background, min_area=min_area, n_init=n_init)
+        box_tracker = BoxTracker(tracker, frame_rate=reader.fps, **overrides)
+
+        def step(d: Any, index: int) -> Tracks:
+            return box_tracker.step(d, frame=index)
     out_dir.mkdir(parents=True, exist_ok=True)
     writer = VideoWriter(files["video"], reader.fps) if annotate else None
     ann = Annotator()
@@ -255,7 +293,7 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = "bgsu
             sec["decode"] += t1 - t0
             d = detect(frame.image, frame.index)
             t2 = time.perf_counter()
-            res = trk.step(d, frame=frame.index)
+            res = step(d, frame.index)
             t3 = time.perf_counter()
             sec["frontend"] += t2 - t1
             sec["tracker"] += t3 - t2

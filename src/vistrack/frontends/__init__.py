@@ -5,7 +5,7 @@ from .appearance import WSLModel, WSLTracker
 from .background import BACKGROUNDS, MOG2Background, SelectiveBackground, background
 from .compose import Composite
 from .blobs import Blobs, find_blobs, threshold
-from .detectors import Detector, HOGDetector
+from .detectors import ConfidenceMap, Detector, HOGConfidence, HOGDetector
 from .klt import Features, KLTTracker
 from .single import METHODS, single_tracker
 from .snake import Snake
@@ -14,4 +14,4 @@ from .spots import Spots, locate
 __all__ = ["BACKGROUNDS", "MOG2Background", "SelectiveBackground", "background", "Blobs",
            "find_blobs", "threshold", "Detector", "HOGDetector", "Features", "KLTTracker",
            "METHODS", "single_tracker", "Snake", "Spots", "locate", "WSLModel", "WSLTracker",
-           "Composite"]
+           "Composite", "ConfidenceMap", "HOGConfidence"]

@@ -1,0 +1,370 @@
+r"""The detector-confidence particle filter of Breitenstein et al. (ICCV 2009, PAMI 2011; seed
+004, "Tracking based on detector confidence"): one particle filter per target, observed
+through the discrete detections, the detector's continuous confidence and a classifier of
+that target learnt online.
+
+**State and motion.** Each target has ``n_particles`` particles of ``(x, y, u, v)``: its box
+centre and velocity in pixels a frame, moved by constant velocity with Gaussian noise
+``(x, y) += (u, v) + ε_xy``, ``(u, v) += ε_uv``; the noise scales with the target's height.
+The box's size is the target's, learnt from the detections associated with it.
+
+**Association.** Detections are matched to targets greedily, best pair first, by the seed's
+score ``S(tr, d) = g(tr, d) · (c_tr(d) + α · Σ_p p_N(d - p) / N)``: a gate ``g`` (the
+detection's centre within ``gate`` heights of the target's and its height within a factor
+1.5), the target's classifier at the detection, and how densely its particles lie around the
+detection. Pairs with ``S`` below ``min_score`` are not matched.
+
+**Observation model**, each particle's weight (seed 004, slide "Observation model"):
+
+    w = β · I(tr) · p_N(p - d*) + γ · d_c(p) · p_o(tr) + η · c_tr(p),
+
+- ``I(tr) p_N(p - d*)``: if a detection ``d*`` was associated, a Gaussian of the particle's
+  distance to it (standard deviation ``sigma_det`` of the height; unnormalised, 1 at ``d*``);
+- ``d_c(p)``: the detector's confidence at the particle (a :class:`ConfidenceMap` at the
+  target's height, its score squashed by a logistic). ``p_o(tr)`` says how much that
+  confidence can be the target's own; here it is ``1 / (1 + k)`` with ``k`` the other targets
+  whose boxes overlap this one's (the confidence map cannot tell people apart where they
+  overlap), which is our reading of the seed's term;
+- ``c_tr(p)``: the target's own classifier at the particle's box: a logistic regression on
+  the box's hue-saturation histogram, trained online by a few steps of gradient descent
+  each frame, with the target's box as the positive and the other targets' boxes and
+  background boxes around it as negatives (the paper uses online boosting; the seed's point
+  is a light online classifier that tells nearby people apart).
+
+The weights are normalised and the particles resampled every frame (systematic resampling,
+as CONDENSATION). Setting ``beta``, ``gamma`` or ``eta`` to 0 removes a term: the seed's
+ablation table compares Det, Det+DetConf, Det+Class and all three.
+
+**Track management.** A detection that no target took, scoring at least ``init_score``, and
+overlapping no target's box by more than ``max_overlap`` IoU starts a tentative target; one
+associated in ``confirm`` frames in a row is confirmed, and one missed first is deleted. Of
+two confirmed targets whose boxes overlap by more than ``merge_iou`` for more than
+``merge_frames`` frames in a row, the younger ends (two filters on one person). A
+confirmed target is *supported* in a frame when a detection is associated with it or, with
+the confidence term on, when the mean confidence at its particles is at least
+``min_confidence``; unsupported for ``max_missed`` frames, or with its centre out of the
+image, it ends. A target is reported in the frames where it is supported.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..association import iou
+from ..types import Detections
+from .lifecycle import Tracks
+
+__all__ = ["DCPFConfig", "DetectorConfidencePF", "ColourFeatures", "systematic"]
+
+
+@dataclass
+class DCPFConfig:
+    """Settings of :class:`DetectorConfidencePF` (see the module); ``beta``, ``gamma`` and
+    ``eta`` weigh the detection, detector-confidence and classifier terms."""
+
+    beta: float = 1.0
+    gamma: float = 1.0
+    eta: float = 0.3
+    n_particles: int = 100
+    sigma_pos: float = 0.04
+    sigma_vel: float = 0.02
+    sigma_det: float = 0.15
+    alpha: float = 1.0
+    gate: float = 0.6
+    min_score: float = 0.6
+    init_score: float = 0.75
+    max_overlap: float = 0.3
+    merge_iou: float = 0.5
+    merge_frames: int = 3
+    confirm: int = 2
+    max_missed: int = 10
+    min_confidence: float = 0.3
+    size_rate: float = 0.3
+    learning_rate: float = 5.0
+    epochs: int = 10
+
+    def __post_init__(self) -> None:
+        for name in ("beta", "gamma", "eta"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be >= 0; got {getattr(self, name)}")
+        if self.beta + self.gamma + self.eta <= 0:
+            raise ValueError("at least one of beta, gamma and eta must be > 0")
+        if self.n_particles < 2 or self.confirm < 1 or self.max_missed < 0:
+            raise ValueError(f"need n_particles >= 2, confirm >= 1 and max_missed >= 0; got "
+                             f"{self.n_particles}, {self.confirm}, {self.max_missed}")
+
+
+class ColourFeatures:
+    """Hue-saturation histograms (``bins`` hue × ``bins_s`` saturation) of any number of boxes
+    of one frame, from per-bin integral images of the frame at half size."""
+
+    def __init__(self, image: Any, bins: int = 8, bins_s: int = 4, scale: float = 0.5):
+        import cv2
+
+        from .._validate import as_uint8_image
+
+        im = as_uint8_image(image, channels=(3,))
+        small = cv2.resize(im, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+        hsv = cv2.cvtColor(small, cv2.COLOR_BGR2HSV)
+        b = (hsv[..., 0].astype(np.int32) * bins // 180) * bins_s \
+            + hsv[..., 1].astype(np.int32) * bins_s // 256
+        # one integral image per bin, laid out (H + 1, W + 1, bins) for lookups
+        self.integral = np.stack([cv2.integral((b == k).view(np.uint8))
+                                  for k in range(bins * bins_s)], axis=-1)
+        self.scale = scale
+        self.dim = bins * bins_s
+
+    def __call__(self, xywh: np.ndarray) -> np.ndarray:
+        """``(..., dim)`` features of boxes ``(..., 4)`` (x, y, w, h in image pixels): the
+        square roots of their histograms (unit length; dot products are Bhattacharyya
+        coefficients)."""
+        H, W = self.integral.shape[0] - 1, self.integral.shape[1] - 1
+        b = np.asarray(xywh, float) * self.scale
+        x0 = np.clip(np.round(b[..., 0]), 0, W).astype(int)
+        y0 = np.clip(np.round(b[..., 1]), 0, H).astype(int)
+        x1 = np.clip(np.round(b[..., 0] + b[..., 2]), 0, W).astype(int)
+        y1 = np.clip(np.round(b[..., 1] + b[..., 3]), 0, H).astype(int)
+        I = self.integral
+        h = I[y1, x1] - I[y0, x1] - I[y1, x0] + I[y0, x0]
+        return np.sqrt(np.maximum(h, 0) / np.maximum(h.sum(-1, keepdims=True), 1.0))
+
+
+def systematic(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Systematic resampling of every row of ``weights (T, N)`` (rows summing to 1) at once:
+    indices ``(T, N)``, row ``t`` drawing particle ``i`` about ``N w[t, i]`` times."""
+    T, N = weights.shape
+    u = (rng.random((T, 1)) + np.arange(N)) / N
+    c = np.cumsum(weights, axis=1)
+    c[:, -1] = 1.0
+    # one search over the rows laid end to end: row t's values are offset by t
+    idx = np.searchsorted((c + np.arange(T)[:, None]).ravel(), (u + np.arange(T)[:, None]).ravel())
+    return np.minimum(idx.reshape(T, N) - np.arange(T)[:, None] * N, N - 1)
+
+
+def _sigmoid(z: np.ndarray) -> np.ndarray:
+    return 1.0 / (1.0 + np.exp(-np.clip(z, -50, 50)))
+
+
+class DetectorConfidencePF:
+    """Multi-person tracking by one particle filter per target (see the module).
+
+    Parameters
+    ----------
+    config : DCPFConfig, optional
+    rng : int or numpy Generator
+    **overrides
+        Fields of :class:`DCPFConfig`.
+
+    ``update(image, detections, confidence)`` takes a BGR frame, its discrete detections
+    (:class:`~vistrack.types.Detections`, scores in (0, 1)) and a
+    :class:`~vistrack.frontends.detectors.ConfidenceMap` (or None when ``gamma`` is 0), and
+    returns the reported targets as :class:`~vistrack.tracking.Tracks`.
+    """
+
+    def __init__(self, config: DCPFConfig | None = None, *, rng: Any = 0, **overrides: Any):
+        if config is None:
+            config = DCPFConfig(**overrides)
+        elif overrides:
+            config = DCPFConfig(**{**config.__dict__, **overrides})
+        self.cfg = config
+        self.rng = np.random.default_rng(rng)
+        N = config.n_particles
+        self.particles = np.zeros((0, N, 4))
+        self.size = np.zeros((0, 2))               # w, h
+        self.ids = np.zeros(0, np.int64)
+        self.hits = np.zeros(0, np.int64)          # associations in a row (tentative)
+        self.confirmed = np.zeros(0, bool)
+        self.missed = np.zeros(0, np.int64)        # unsupported frames in a row
+        self.overlapped = np.zeros(0, np.int64)    # frames in a row on an older target
+        self.weights_clf = np.zeros((0, 0))
+        self.next_id = 1
+        self.frame = 0
+
+    # ------------------------------------------------------------------ helpers
+    def _boxes(self, centres: np.ndarray, size: np.ndarray) -> np.ndarray:
+        return np.concatenate([centres - size / 2, np.broadcast_to(size, centres.shape)], -1)
+
+    def _classify(self, feats: np.ndarray, k: np.ndarray | slice) -> np.ndarray:
+        W = self.weights_clf[k]
+        return _sigmoid((feats * W[..., None, :-1]).sum(-1) + W[..., None, -1])
+
+    def _train(self, feats: ColourFeatures, est: np.ndarray, train: np.ndarray) -> None:
+        """A few gradient steps of each trained target's logistic regression: its box is the
+        positive; the other targets' boxes and four boxes beside it the negatives."""
+        cfg = self.cfg
+        T = len(est)
+        offsets = np.array([[-1.0, 0.0], [1.0, 0.0], [-0.5, -0.5], [0.5, 0.5]])
+        for k in np.flatnonzero(train):
+            c, s = est[k, :2] + est[k, 2:] / 2, est[k, 2:]
+            neg = [est[j] for j in range(T) if j != k]
+            neg += [np.r_[c + o * s - s / 2, s] for o in offsets]
+            X = feats(np.vstack([est[k][None], np.array(neg)]))
+            y = np.r_[1.0, np.zeros(len(neg))]
+            sw = np.r_[len(neg), np.ones(len(neg))]       # balance the one positive
+            Xb = np.c_[X, np.ones(len(X))]
+            w = self.weights_clf[k]
+            for _ in range(cfg.epochs):
+                p = _sigmoid(Xb @ w)
+                w -= cfg.learning_rate * (sw * (p - y)) @ Xb / sw.sum()
+            self.weights_clf[k] = w
+
+    # ------------------------------------------------------------------ one frame
+    def update(self, image: Any, detections: Detections, confidence: Any = None) -> Tracks:
+        cfg = self.cfg
+        self.frame += 1
+        if cfg.gamma > 0 and confidence is None:
+            raise ValueError("confidence is required when gamma > 0 (the detector-confidence "
+                             "term); pass a ConfidenceMap or set gamma=0")
+        img = np.asarray(image)
+        H, W = img.shape[:2]
+        feats = ColourFeatures(img) if cfg.eta > 0 else None
+        T, N = len(self.ids), cfg.n_particles
+        det_xywh = detections.xywh if len(detections) else np.zeros((0, 4))
+        det_c = det_xywh[:, :2] + det_xywh[:, 2:] / 2
+
+        # predict: constant velocity, noise scaled by each target's height
+        h = self.size[:, 1:2, None] if T else np.zeros((0, 1, 1))
+        p = self.particles
+        p[..., :2] += p[..., 2:] + self.rng.standard_normal((T, N, 2)) * cfg.sigma_pos * h
+        p[..., 2:] += self.rng.standard_normal((T, N, 2)) * cfg.sigma_vel * h
+
+        # associate greedily by S(tr, d) = g · (c_tr(d) + α · density of particles at d)
+        match = np.full(T, -1)
+        if T and len(det_c):
+            sd = cfg.sigma_det * self.size[:, 1]
+            d2 = ((det_c[None, :, None, :] - p[:, None, :, :2]) ** 2).sum(-1)
+            density = np.exp(-0.5 * d2 / sd[:, None, None] ** 2).mean(-1)       # (T, D)
+            centre = p[..., :2].mean(1)
+            dist = np.linalg.norm(det_c[None] - centre[:, None], axis=-1)
+            ratio = det_xywh[None, :, 3] / self.size[:, None, 1]
+            gate = (dist <= cfg.gate * self.size[:, None, 1]) & (ratio < 1.5) & (ratio > 1 / 1.5)
+            if cfg.eta > 0:
+                clf = self._classify(feats(det_xywh)[None], slice(None))
+            else:
+                clf = np.full((T, len(det_c)), 0.5)
+            S = np.where(gate, clf + cfg.alpha * density, -np.inf)
+            while True:
+                t, d = np.unravel_index(int(np.argmax(S)), S.shape)
+                if not S[t, d] >= cfg.min_score:
+                    break
+                match[t] = d
+                S[t, :] = -np.inf
+                S[:, d] = -np.inf
+
+        # weigh: β I(tr) p_N(p - d*) + γ d_c(p) p_o(tr) + η c_tr(p)
+        conf_mean = np.zeros(T)
+        if T:
+            w = np.full((T, N), 1e-6)
+            if cfg.beta > 0:
+                has = match >= 0
+                if has.any():
+                    sd = cfg.sigma_det * self.size[has, 1]
+                    d2 = ((p[has, :, :2] - det_c[match[has]][:, None]) ** 2).sum(-1)
+                    w[has] += cfg.beta * np.exp(-0.5 * d2 / sd[:, None] ** 2)
+            if cfg.gamma > 0:
+                dc = _sigmoid(confidence.score(p[..., 0], p[..., 1], self.size[:, None, 1],
+                                               outside=-10.0))
+                conf_mean = dc.mean(1)
+                boxes = self._boxes(p[..., :2].mean(1), self.size)
+                xyxy = np.c_[boxes[:, :2], boxes[:, :2] + boxes[:, 2:]]
+                ov = iou(xyxy, xyxy)
+                np.fill_diagonal(ov, 0.0)
+                p_o = 1.0 / (1.0 + (ov > 0.2).sum(1))
+                w += cfg.gamma * dc * p_o[:, None]
+            if cfg.eta > 0:
+                pb = self._boxes(p[..., :2], self.size[:, None, :])
+                w += cfg.eta * self._classify(feats(pb), slice(None))
+            w /= w.sum(1, keepdims=True)
+            est_c = (w[..., None] * p[..., :2]).sum(1)
+            p[:] = np.take_along_axis(p, systematic(w, self.rng)[..., None], axis=1)
+        else:
+            est_c = np.zeros((0, 2))
+
+        # sizes from the associated detections
+        has = match >= 0
+        if has.any():
+            self.size[has] += cfg.size_rate * (det_xywh[match[has], 2:] - self.size[has])
+        est = self._boxes(est_c, self.size)
+
+        # support, confirmation, deletion
+        supported = has.copy()
+        if cfg.gamma > 0:
+            supported |= self.confirmed & (conf_mean >= cfg.min_confidence)
+        self.hits = np.where(has, self.hits + 1, 0)
+        self.missed = np.where(supported, 0, self.missed + 1)
+        self.confirmed |= self.hits >= cfg.confirm
+        inside = (est_c[:, 0] >= 0) & (est_c[:, 0] < W) & (est_c[:, 1] >= 0) & (est_c[:, 1] < H)
+        keep = np.where(self.confirmed, self.missed <= cfg.max_missed, has) & inside
+        # two targets on one person: the younger ends once it has overlapped an older one
+        # for merge_frames frames in a row (people crossing overlap for a few)
+        covered = np.zeros(T, bool)
+        if T > 1:
+            xyxy = np.c_[est[:, :2], est[:, :2] + est[:, 2:]]
+            ov = np.triu(iou(xyxy, xyxy), 1)       # rows are older: ids grow with the index
+            both = self.confirmed[:, None] & self.confirmed[None, :]
+            covered = ((ov > cfg.merge_iou) & both).any(0)
+        self.overlapped = np.where(covered, self.overlapped + 1, 0)
+        keep &= self.overlapped <= cfg.merge_frames
+        report = self.confirmed & supported & keep
+        out = Tracks(ids=self.ids[report].copy(),
+                     boxes=np.c_[est[report, :2], est[report, :2] + est[report, 2:]],
+                     points=None, scores=conf_mean[report] if cfg.gamma > 0
+                     else np.ones(int(report.sum())),
+                     classes=np.zeros(int(report.sum()), np.int64))
+
+        # the classifiers learn where their targets were detected
+        if cfg.eta > 0 and has.any():
+            self._train(feats, est, has & keep)
+
+        # end targets; start new ones from strong detections no target took
+        self._select(keep)
+        est = est[keep]
+        if len(det_c):
+            free = np.ones(len(det_c), bool)
+            free[match[match >= 0]] = False
+            strong = free & (detections.scores >= cfg.init_score)
+            if strong.any():
+                cand = det_xywh[strong]
+                cxyxy = np.c_[cand[:, :2], cand[:, :2] + cand[:, 2:]]
+                if len(est):
+                    exyxy = np.c_[est[:, :2], est[:, :2] + est[:, 2:]]
+                    cand = cand[iou(cxyxy, exyxy).max(1) <= cfg.max_overlap]
+                self._start(cand, feats)
+        return out
+
+    def _select(self, keep: np.ndarray) -> None:
+        for name in ("particles", "size", "ids", "hits", "confirmed", "missed", "overlapped",
+                     "weights_clf"):
+            setattr(self, name, getattr(self, name)[keep])
+
+    def _start(self, boxes: np.ndarray, feats: ColourFeatures | None) -> None:
+        k, N = len(boxes), self.cfg.n_particles
+        if k == 0:
+            return
+        c = boxes[:, :2] + boxes[:, 2:] / 2
+        parts = np.zeros((k, N, 4))
+        parts[..., :2] = c[:, None] + self.rng.standard_normal((k, N, 2)) \
+            * self.cfg.sigma_pos * boxes[:, None, 3:4]
+        parts[..., 2:] = self.rng.standard_normal((k, N, 2)) * self.cfg.sigma_vel \
+            * boxes[:, None, 3:4]
+        dim = feats.dim + 1 if feats is not None else 1
+        if self.weights_clf.shape[1] != dim:
+            self.weights_clf = np.zeros((len(self.ids), dim))
+        self.particles = np.concatenate([self.particles, parts])
+        self.size = np.concatenate([self.size, boxes[:, 2:]])
+        self.ids = np.concatenate([self.ids, np.arange(self.next_id, self.next_id + k)])
+        self.next_id += k
+        self.hits = np.concatenate([self.hits, np.ones(k, np.int64)])
+        self.confirmed = np.concatenate([self.confirmed, np.full(k, self.cfg.confirm <= 1)])
+        self.missed = np.concatenate([self.missed, np.zeros(k, np.int64)])
+        self.overlapped = np.concatenate([self.overlapped, np.zeros(k, np.int64)])
+        self.weights_clf = np.concatenate([self.weights_clf, np.zeros((k, dim))])
+        if feats is not None:
+            # start each classifier on its first box
+            est = np.concatenate([self._boxes(self.particles[:, :, :2].mean(1), self.size)])
+            train = np.zeros(len(self.ids), bool)
+            train[-k:] = True
+            self._train(feats, est, train)
