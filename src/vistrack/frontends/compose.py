@@ -24,7 +24,6 @@ from __future__ import annotations
 from typing import Any, Mapping
 
 import numpy as np
-from scipy.stats import chi2
 
 from .._validate import as_box
 from ..filters import kf_predict, kf_update
@@ -98,6 +97,8 @@ class Composite:
             self.noise[name] = np.array([pos_sd, size_sd], float)
         if not (0 < gate < 1):
             raise ValueError(f"gate must be a probability in (0, 1); got {gate}")
+        from scipy.stats import chi2
+
         self.q_pos, self.q_size = float(q_pos), float(q_size)
         self.threshold = float(chi2.ppf(gate, 4))
 

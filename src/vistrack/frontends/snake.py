@@ -23,11 +23,11 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from .._validate import as_uint8_image
+from .._validate import as_box, as_uint8_image
 from ..filters import kf_predict, kf_update
 from ..types import Gaussian
 
-__all__ = ["Snake", "bspline_matrix"]
+__all__ = ["Snake", "SnakeTracker", "bspline_matrix"]
 
 
 def bspline_matrix(n: int, m: int, derivative: bool = False) -> np.ndarray:
@@ -197,8 +197,6 @@ class SnakeTracker:
         self.snake = Snake(**snake)
 
     def init(self, image: Any, box: Any) -> None:
-        from .._validate import as_box
-
         b = as_box(box)
         s = self.snake
         # a cubic B-spline through control points on an ellipse lies inside them: the
@@ -220,8 +218,6 @@ class SnakeTracker:
         return self.box.copy()
 
     def anchor(self, box: Any) -> None:
-        from .._validate import as_box
-
         b = as_box(box)
         cur = self._bounds()
         s = b[2:] / cur[2:]
