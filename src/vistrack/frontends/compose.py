@@ -27,6 +27,7 @@ import numpy as np
 
 from .._validate import as_box
 from ..filters import kf_predict, kf_update
+from ..models import ConstantVelocity
 from ..types import Gaussian
 
 __all__ = ["Composite"]
@@ -115,12 +116,10 @@ class Composite:
         self.accepted = {name: True for name in self.members}
 
     def _motion(self) -> tuple[np.ndarray, np.ndarray]:
-        F = np.eye(6)
-        F[0, 2] = F[1, 3] = 1.0
-        q = self.q_pos * max(self.box[2], self.box[3]) / 100.0
-        Q = np.zeros((6, 6))
-        for i, j in ((0, 2), (1, 3)):
-            Q[np.ix_([i, j], [i, j])] = q * np.array([[1 / 3, 1 / 2], [1 / 2, 1.0]])
+        # the centre: the models' constant velocity over one frame; the log size: a random walk
+        cv = ConstantVelocity(dim=2, q=self.q_pos * max(self.box[2], self.box[3]) / 100.0)
+        F, Q = np.eye(6), np.zeros((6, 6))
+        F[:4, :4], Q[:4, :4] = cv.F(1.0), cv.Q(1.0)
         Q[4, 4] = Q[5, 5] = self.q_size
         return F, Q
 
