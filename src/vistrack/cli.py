@@ -178,7 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--tracker", default="bytetrack",
                        help="tracker: bytetrack (default) or sort; in video mode also dcpf, "
                        "the detector-confidence particle filter (HOG's confidence map, "
-                       "about 5 frames/s)")
+                       "3-4 frames/s)")
     track.add_argument("--offline", action="store_true",
                        help="smooth finished tracks and fill gaps of up to 0.5 s (--out)")
     track.add_argument("--frontend", help="video mode: bgsub (default; background model and "
