@@ -180,7 +180,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "the detector-confidence particle filter (HOG's confidence map, "
                        "3-4 frames/s)")
     track.add_argument("--offline", action="store_true",
-                       help="smooth finished tracks and fill gaps of up to 0.5 s (--out)")
+                       help="smooth finished tracks and fill gaps of up to 0.75 s (--out)")
     track.add_argument("--frontend", help="video mode: bgsub (default; background model and "
                        "blobs), hog (OpenCV's people detector; the default of dcpf) or "
                        "detections:FILE")

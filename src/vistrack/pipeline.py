@@ -52,7 +52,7 @@ def _progress(done: int, total: int, label: str, stream: Any) -> None:
 
 
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,
-                   tracker: str = "bytetrack", offline: bool = False, max_gap: float = 0.5,
+                   tracker: str = "bytetrack", offline: bool = False, max_gap: float = 0.75,
                    force: bool = False, progress: Any = None,
                    **overrides: Any) -> TrackRun:
     """Track a MOTChallenge sequence folder and write a results file.
