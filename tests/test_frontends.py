@@ -392,9 +392,9 @@ def test_reading_a_video_keeps_memory_bounded():
 
 @pytest.mark.slow
 def test_hog_front_end_tracks_people(tmp_path):
-    """`--frontend hog` end to end on the bundled clip's first 30 frames: with the windows'
-    margins removed, the boxes match the annotations (measured: MOTA 0.42, HOTA 0.38 over 40
-    frames; with the margins, MOTA was -0.6)."""
+    """`--frontend hog` end to end on the bundled clip's first 30 frames: with the person box
+    inside each window (INRIA's 50 % x 75 %), the boxes match the annotations (measured: MOTA
+    0.61, HOTA 0.52; with the whole window, MOTA was -0.6)."""
     from pathlib import Path
 
     from vistrack.pipeline import track_video
@@ -402,4 +402,4 @@ def test_hog_front_end_tracks_people(tmp_path):
     demo = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1"
     run = track_video(demo / "pets09-s2l1.mp4", tmp_path, frontend="hog", gt=demo / "gt.txt",
                       stop=30, annotate=False)
-    assert run.scores.MOTA > 0.25 and run.scores.HOTA > 0.3
+    assert run.scores.MOTA > 0.5 and run.scores.HOTA > 0.45

@@ -30,6 +30,11 @@ def nms(boxes: np.ndarray, scores: np.ndarray, max_iou: float) -> np.ndarray:
     return order[keep]
 
 
+# the person inside HOG's 64x128 window, as in the INRIA data its SVM was trained on: 96 pixels
+# tall (75 %) and about 32 wide (50 %)
+_INNER_W, _INNER_H = 0.5, 0.75
+
+
 class Detector(Protocol):
     """What :func:`vistrack.pipeline.track_video` needs of a detector."""
 
@@ -38,8 +43,9 @@ class Detector(Protocol):
 
 class HOGDetector:
     """Dalal and Triggs' HOG people detector (OpenCV's default people SVM), with non-maximum
-    suppression; boxes are the detection windows without their margin (as OpenCV's sample
-    draws them), and scores the SVM margins squashed to (0, 1) by a logistic.
+    suppression; boxes are the person inside each detection window (its central 50 % of the
+    width and 75 % of the height, as in the INRIA data the SVM was trained on), and scores the
+    SVM margins squashed to (0, 1) by a logistic.
 
     Parameters
     ----------
@@ -80,16 +86,12 @@ class HOGDetector:
             return Detections(boxes=np.zeros((0, 4)))
         w = np.asarray(w, float).ravel()
         r = np.asarray(rects, float).reshape(-1, 4) / self.upscale
-        # the window holds the person with a margin: keep its inner 70 % of the width and 90 %
-        # of the height (OpenCV's peopledetect sample)
-        r = r + np.c_[0.15 * r[:, 2], 0.05 * r[:, 3], -0.3 * r[:, 2], -0.1 * r[:, 3]]
+        # the window holds the person with a margin: keep the central part where INRIA's
+        # people stand
+        mw, mh = (1 - _INNER_W) / 2, (1 - _INNER_H) / 2
+        r = r + np.c_[mw * r[:, 2], mh * r[:, 3], -2 * mw * r[:, 2], -2 * mh * r[:, 3]]
         keep = nms(np.c_[r[:, :2], r[:, :2] + r[:, 2:]], w, self.nms_iou)
         return Detections.from_xywh(r[keep], 1.0 / (1.0 + np.exp(-w[keep])))
-
-
-# the person inside HOG's 64x128 window, as in the INRIA data its SVM was trained on: 96 pixels
-# tall (75 %) and about 32 wide (50 %)
-_INNER_W, _INNER_H = 0.5, 0.75
 
 
 class ConfidenceMap:
