@@ -74,11 +74,7 @@ def run(frames, maps, gt, seed=0, **config):
         rows += [(t, i, *b) for i, b in zip(out.ids, out.xywh)]
         if t == SHOW:
             snapshot = (tracker.particles[..., :2].copy(), out)
-    r = np.array(rows, float).reshape(-1, 6)
-    pred = MOTTable(frames=r[:, 0].astype(int), ids=r[:, 1].astype(int), boxes=r[:, 2:],
-                    conf=np.ones(len(r)), classes=-np.ones(len(r), int),
-                    visibility=-np.ones(len(r)))
-    return evaluate_mot(gt, pred, len(frames)), snapshot
+    return evaluate_mot(gt, MOTTable.from_rows(rows), len(frames)), snapshot
 
 
 def main():

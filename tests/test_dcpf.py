@@ -101,11 +101,7 @@ def crossing_scene(T=60, miss=0.5, seed=0):
         dets.append(Detections.from_xywh(np.array(boxes).reshape(-1, 4),
                                          np.full(len(boxes), 0.95)))
         maps.append(ConfidenceMap([50], [score], [(0, 0)], [4], aspect=0.4))
-    g = np.array(gt)
-    table = MOTTable(frames=g[:, 0].astype(int), ids=g[:, 1].astype(int), boxes=g[:, 2:],
-                     conf=np.ones(len(g)), classes=-np.ones(len(g), int),
-                     visibility=-np.ones(len(g)))
-    return frames, dets, maps, table
+    return frames, dets, maps, MOTTable.from_rows(gt)
 
 
 def score(scene, **config):
@@ -115,11 +111,7 @@ def score(scene, **config):
     for t, (img, d, m) in enumerate(zip(frames, dets, maps), 1):
         out = tracker.update(img, d, m if tracker.cfg.gamma > 0 else None)
         rows += [(t, i, *b) for i, b in zip(out.ids, out.xywh)]
-    r = np.array(rows, float).reshape(-1, 6)
-    pred = MOTTable(frames=r[:, 0].astype(int), ids=r[:, 1].astype(int), boxes=r[:, 2:],
-                    conf=np.ones(len(r)), classes=-np.ones(len(r), int),
-                    visibility=-np.ones(len(r)))
-    return evaluate_mot(gt, pred, len(frames), benchmark="MOT15")
+    return evaluate_mot(gt, MOTTable.from_rows(rows), len(frames), benchmark="MOT15")
 
 
 def test_detector_confidence_carries_the_targets_through_missed_detections():
@@ -208,11 +200,7 @@ def test_pets09_clip_terms_of_the_observation_model():
         for t, (img, m) in enumerate(zip(frames, maps), 1):
             out = tracker.update(img, m.detections(0.5), m)
             rows += [(t, i, *b) for i, b in zip(out.ids, out.xywh)]
-        r = np.array(rows, float).reshape(-1, 6)
-        pred = MOTTable(frames=r[:, 0].astype(int), ids=r[:, 1].astype(int), boxes=r[:, 2:],
-                        conf=np.ones(len(r)), classes=-np.ones(len(r), int),
-                        visibility=-np.ones(len(r)))
-        return evaluate_mot(gt, pred, 200)
+        return evaluate_mot(gt, MOTTable.from_rows(rows), 200)
 
     full, det_conf, det = mot(), mot(eta=0.0), mot(gamma=0.0, eta=0.0)
     assert min(full.MOTA, det_conf.MOTA, det.MOTA) > 0.45

@@ -139,10 +139,11 @@ class Composite:
                 pos_sd, size_sd = self.noise[name]
                 R = np.diag([(pos_sd * size[0]) ** 2, (pos_sd * size[1]) ** 2,
                              size_sd ** 2, size_sd ** 2])
-                v = _measure(box) - _H @ g.mean
+                z = _measure(box)
+                v = z - _H @ g.mean
                 ok = float(v @ np.linalg.solve(_H @ g.cov @ _H.T + R, v)) <= self.threshold
                 if ok:
-                    accepted.append((_measure(box), R))
+                    accepted.append((z, R))
             self.accepted[name] = ok
         for z, R in accepted:
             g = kf_update(g, z, _H, R)

@@ -73,6 +73,30 @@ class MOTTable:
     def __len__(self) -> int:
         return int(self.frames.shape[0])
 
+    @classmethod
+    def from_rows(cls, rows: Any, path: str = "") -> "MOTTable":
+        """From rows ``frame, id, left, top, width, height[, conf, class, visibility, ...]``
+        (at least 6 values each; the rest default to conf 1, class -1, visibility -1), sorted
+        by frame.
+
+        Examples
+        --------
+        >>> t = MOTTable.from_rows([(2, 1, 0, 0, 10, 20), (1, 1, 5, 5, 10, 20)])
+        >>> t.frames.tolist(), t.conf.tolist()
+        ([1, 2], [1.0, 1.0])
+        """
+        a = np.asarray(rows, dtype=float)
+        a = a.reshape(-1, a.shape[-1] if a.ndim == 2 else 6)
+        if a.shape[1] < 6:
+            raise ValueError(f"rows need at least 6 values (frame, id, box); got {a.shape[1]}")
+        a = a[np.argsort(a[:, 0], kind="stable")]
+        N, w = a.shape
+        col = (lambda j, fill: a[:, j] if w > j else np.full(N, fill, dtype=float))
+        return cls(frames=a[:, 0].astype(np.int64), ids=a[:, 1].astype(np.int64),
+                   boxes=np.ascontiguousarray(a[:, 2:6]), conf=col(6, 1.0),
+                   classes=col(7, -1.0).astype(np.int64), visibility=col(8, -1.0), path=path,
+                   columns=w)
+
     def __getitem__(self, index: Any) -> "MOTTable":
         """Rows by boolean mask or indices."""
         return MOTTable(self.frames[index], self.ids[index], self.boxes[index], self.conf[index],
@@ -181,13 +205,7 @@ def read_mot(path: str | os.PathLike) -> MOTTable:
     if a is None:
         a = _parse_slow(path, lines)
     _check_rows(path, a, lines)
-    a = a[np.argsort(a[:, 0], kind="stable")]
-    N, w = a.shape
-    col = (lambda j, fill: a[:, j] if w > j else np.full(N, fill, dtype=float))
-    return MOTTable(frames=a[:, 0].astype(np.int64), ids=a[:, 1].astype(np.int64),
-                    boxes=np.ascontiguousarray(a[:, 2:6]), conf=col(6, 1.0),
-                    classes=col(7, -1.0).astype(np.int64), visibility=col(8, -1.0), path=path,
-                    columns=w)
+    return MOTTable.from_rows(a, path)
 
 
 def write_mot(path: str | os.PathLike, frames: Any, ids: Any, boxes: Any, conf: Any = None, *,

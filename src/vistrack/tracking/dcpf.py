@@ -226,7 +226,7 @@ class DetectorConfidencePF:
         det_c = det_xywh[:, :2] + det_xywh[:, 2:] / 2
 
         # predict: constant velocity, noise scaled by each target's height
-        h = self.size[:, 1:2, None] if T else np.zeros((0, 1, 1))
+        h = self.size[:, 1:2, None]
         p = self.particles
         p[..., :2] += p[..., 2:] + self.rng.standard_normal((T, N, 2)) * cfg.sigma_pos * h
         p[..., 2:] += self.rng.standard_normal((T, N, 2)) * cfg.sigma_vel * h
@@ -255,11 +255,11 @@ class DetectorConfidencePF:
                 S[:, d] = -np.inf
 
         # weigh: β I(tr) p_N(p - d*) + γ d_c(p) p_o(tr) + η c_tr(p)
+        has = match >= 0
         conf_mean = np.zeros(T)
         if T:
             w = np.full((T, N), 1e-6)
             if cfg.beta > 0:
-                has = match >= 0
                 if has.any():
                     sd = cfg.sigma_det * self.size[has, 1]
                     d2 = ((p[has, :, :2] - det_c[match[has]][:, None]) ** 2).sum(-1)
@@ -284,7 +284,6 @@ class DetectorConfidencePF:
             est_c = np.zeros((0, 2))
 
         # sizes from the associated detections
-        has = match >= 0
         if has.any():
             self.size[has] += cfg.size_rate * (det_xywh[match[has], 2:] - self.size[has])
         est = self._boxes(est_c, self.size)
@@ -364,7 +363,7 @@ class DetectorConfidencePF:
         self.weights_clf = np.concatenate([self.weights_clf, np.zeros((k, dim))])
         if feats is not None:
             # start each classifier on its first box
-            est = np.concatenate([self._boxes(self.particles[:, :, :2].mean(1), self.size)])
+            est = self._boxes(self.particles[:, :, :2].mean(1), self.size)
             train = np.zeros(len(self.ids), bool)
             train[-k:] = True
             self._train(feats, est, train)
