@@ -136,7 +136,7 @@ def run_chain(make, stop=None):
 def vistrack_chain(init):
     def make():
         bg = SelectiveBackground().initialize(init)
-        tr = BoxTracker("bytetrack", frame_rate=FPS)
+        tr = BoxTracker("bytetrack", frame_rate=FPS, camera_motion=False)  # as the CLI's bgsub
 
         def detect(grey):
             b = find_blobs(bg.apply(grey), min_area=500, open_size=3, close_size=7)

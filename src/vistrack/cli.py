@@ -28,6 +28,11 @@ def _track(args: argparse.Namespace) -> int:
               "detections) or --out-dir OUT/ (from pixels)", file=sys.stderr)
         return 2
     progress = sys.stderr if sys.stderr.isatty() and not args.quiet else None
+    still = {"camera_motion": False} if args.still_camera else {}
+    if still and args.tracker == "dcpf":
+        print("vistrack track: error: --still-camera goes with the box trackers (bytetrack, "
+              "sort)", file=sys.stderr)
+        return 2
     try:
         if args.out is not None:
             for flag in ("frontend", "gt", "fps", "stop", "min_area", "background"):
@@ -38,7 +43,7 @@ def _track(args: argparse.Namespace) -> int:
                     return 2
             run = track_sequence(args.input, args.out, detections=args.detections,
                                  tracker=args.tracker, offline=args.offline, force=args.force,
-                                 progress=progress)
+                                 progress=progress, **still)
             print(f"wrote {run.out}: {run.rows} boxes of {run.tracks} tracks over {run.frames} "
                   f"frames from {run.detections} detections; tracker {run.fps:.0f} frames/s")
             return 0
@@ -50,7 +55,7 @@ def _track(args: argparse.Namespace) -> int:
                                    ("background", args.background)) if v is not None}
         run = track_video(args.input, args.out_dir, frontend=args.frontend,
                           fps=args.fps, tracker=args.tracker, gt=args.gt, stop=args.stop,
-                          force=args.force, progress=progress, **extra)
+                          force=args.force, progress=progress, **extra, **still)
     except (FileNotFoundError, FileExistsError, ValueError, VideoError) as exc:
         print(f"vistrack track: error: {exc}", file=sys.stderr)
         return 2
@@ -180,7 +185,11 @@ def build_parser() -> argparse.ArgumentParser:
                        "the detector-confidence particle filter (HOG's confidence map, "
                        "3-4 frames/s)")
     track.add_argument("--offline", action="store_true",
-                       help="smooth finished tracks and fill gaps of up to 0.75 s (--out)")
+                       help="smooth finished tracks, fill gaps of up to 1 s, drop tracks whose "
+                       "detections score under 0.85 on average (--out)")
+    track.add_argument("--still-camera", action="store_true",
+                       help="the camera does not move: no camera-motion compensation (on by "
+                       "default in bytetrack, except with the bgsub front-end)")
     track.add_argument("--frontend", help="video mode: bgsub (default; background model and "
                        "blobs), hog (OpenCV's people detector; the default of dcpf) or "
                        "detections:FILE")

@@ -52,7 +52,8 @@ def _progress(done: int, total: int, label: str, stream: Any) -> None:
 
 
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,
-                   tracker: str = "bytetrack", offline: bool = False, max_gap: float = 0.75,
+                   tracker: str = "bytetrack", offline: bool = False, max_gap: float = 1.0,
+                   min_track_score: float = 0.85,
                    force: bool = False, progress: Any = None,
                    **overrides: Any) -> TrackRun:
     """Track a MOTChallenge sequence folder and write a results file.
@@ -68,7 +69,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     tracker
         A name in :data:`vistrack.tracking.TRACKERS`.
     offline
-        Smooth the finished tracks and fill gaps of up to ``max_gap`` seconds
+        Smooth the finished tracks, fill gaps of up to ``max_gap`` seconds and drop tracks
+        whose detections score less than ``min_track_score`` on average
         (:func:`vistrack.tracking.smooth`).
     progress
         A stream for a progress bar (the command line passes stderr on a terminal), or None.
@@ -109,7 +111,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     B, S = cat(boxes, (0, 4)), cat(scores, (0,))
     if offline:
         t0 = time.perf_counter()
-        sm = smooth(trk, max_gap=int(round(max_gap * info.frame_rate)))
+        sm = smooth(trk, max_gap=int(round(max_gap * info.frame_rate)),
+                    min_score=min_track_score)
         seconds += time.perf_counter() - t0
         F, I, B, S = sm.frames, sm.ids, sm.xywh, np.where(sm.filled, 0.0, sm.scores)
     write_mot(out, F, I, B, S, force=True)
@@ -231,7 +234,8 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
         The true frame rate, when the container's header is wrong.
     background, min_area, n_init
         For ``bgsub``: the background model's name, the smallest blob in pixels, and the
-        frames whose median starts the model.
+        frames whose median starts the model. A background model needs a still camera, so
+        with ``bgsub`` the box tracker's ``camera_motion`` is off unless passed.
     stop
         The last frame to track (default: all).
     """
@@ -274,8 +278,13 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
         def step(d: Any, index: int) -> Tracks:
             return dcpf.update(d[2], d[0], d[1])
     else:
-        detect = _frontend("bgsub" if frontend is None else frontend, reader,
-                           background=background, min_area=min_area, n_init=n_init)
+        frontend = "bgsub" if frontend is None else frontend
+        detect = _frontend(frontend, reader, background=background, min_area=min_area,
+                           n_init=n_init)
+        if frontend == "bgsub":
+            # a background model works only with a still camera: nothing to compensate, and
+            # blobs that split and merge would read as small shifts of the camera
+            overrides.setdefault("camera_motion", False)
         box_tracker = BoxTracker(tracker, frame_rate=reader.fps, **overrides)
 
         def step(d: Any, index: int) -> Tracks:

@@ -8,6 +8,16 @@ One step, as on the slides (predict, associate, correct, manage):
    each track keeps a 2×2 covariance per axis, ``[pp, pv, vv]``, and predict and update are
    a few elementwise operations over all tracks (a test checks them against the full
    8-state Kalman filter);
+   with ``camera_motion``, the predictions then follow the camera: where the camera turns or
+   shakes, every box in the image moves by the same amount, which no track's own velocity
+   foresees. Confirmed tracks are matched to confident detections at IoU ≥
+   ``camera_min_iou`` (global nearest neighbour), and the median of the matched detections'
+   centres minus the predicted ones is the frame's shift. It moves every track, lost ones
+   too, when at least ``camera_min_matches`` pairs give it and it is more than
+   ``camera_sig`` standard errors from zero (``1.4826 MAD / √n`` per axis), so most of a
+   still camera's noise is left alone. This is BoT-SORT's camera-motion compensation
+   (Aharon et al., 2022) estimated from the tracks themselves instead of from the image; a
+   jump larger than about a third of a box leaves too few overlapping pairs and goes unseen;
 2. **associate** by IoU between predicted and detected boxes, by global nearest neighbour with
    a minimum IoU as the gate; a track only takes detections of its own class. With
    ``two_stage`` (ByteTrack's idea, Zhang et al., 2022):
@@ -66,6 +76,12 @@ class BoxTrackerConfig:
         Updates in a row that confirm a track.
     max_lost : float
         Seconds a confirmed track may go unmatched before it is deleted.
+    camera_motion : bool
+        Move every prediction by the shift of the image between frames, estimated from the
+        confidently matched tracks (see the module).
+    camera_min_iou, camera_min_matches, camera_sig : float, int, float
+        The IoU of the pairs that estimate the shift, how many pairs it needs, and how many
+        standard errors from zero it must be.
     """
 
     two_stage: bool = True
@@ -79,12 +95,17 @@ class BoxTrackerConfig:
     confirm_hits: int = 2
     max_lost: float = 2.0
     assigner: str = "gnn"
+    camera_motion: bool = True
+    camera_min_iou: float = 0.3
+    camera_min_matches: int = 3
+    camera_sig: float = 2.0
 
 
 TRACKERS: dict[str, BoxTrackerConfig] = {
     "bytetrack": BoxTrackerConfig(),
     "sort": BoxTrackerConfig(two_stage=False, high=0.5, low=0.5, new_track=0.5, min_iou=0.3,
-                             fuse_score=False, confirm_hits=3, max_lost=0.1),
+                             fuse_score=False, confirm_hits=3, max_lost=0.1,
+                             camera_motion=False),
 }
 """Box-tracker configurations by name (``vistrack track --tracker NAME``)."""
 
@@ -109,6 +130,29 @@ def _to_cxcywh(b: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
+def _camera_shift(mean, db, r, c, min_matches, sig):
+    # the median of detection centre minus predicted centre over the pairs (r, c), per axis;
+    # zeros with fewer than min_matches pairs, or where neither axis' median is more than
+    # sig standard errors (1.4826 MAD / sqrt(n)) from zero
+    n = r.shape[0]
+    out = np.zeros(2)
+    if n < max(min_matches, 1):
+        return out
+    res = np.empty(n)
+    significant = False
+    for a in range(2):
+        for k in range(n):
+            res[k] = (db[c[k], a] + db[c[k], a + 2]) / 2 - mean[r[k], a]
+        m = np.median(res)
+        out[a] = m
+        if abs(m) > sig * 1.4826 * np.median(np.abs(res - m)) / np.sqrt(n):
+            significant = True
+    if not significant:
+        out[:] = 0.0
+    return out
+
+
+@njit(cache=True)
 def _stage(rows, cols, ov, state, stage_state, det_ok, min_iou, fuse, ds, match, used, T, D):
     # one association stage over the candidate pairs whose track (state in stage_state, not
     # matched) and detection (det_ok, not used) are free; cost 1 - IoU (x score if fuse)
@@ -129,14 +173,15 @@ def _stage(rows, cols, ov, state, stage_state, det_ok, min_iou, fuse, ds, match,
 
 
 @njit(cache=True)
-def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q):
+def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q, shift):
     """Predict, associate and correct in one compiled call: the same arithmetic as
     :meth:`BoxTracker._predict`, the stages of :meth:`BoxTracker.step` with ``gnn``, and
     :meth:`BoxTracker._update`. ``noise`` is BoxMotion's ``(std_pos, std_vel, std_meas)``,
-    ``cfg`` ``(two_stage, high, low, min_iou, min_iou_low, min_iou_tentative, fuse_score)``.
-    Updates ``mean``, ``cov`` and ``q`` (the process noise, for the record) in place; returns
-    each track's detection (-1: none), which detections were used, and False if a box is not
-    finite."""
+    ``cfg`` ``(two_stage, high, low, min_iou, min_iou_low, min_iou_tentative, fuse_score,
+    camera_motion, camera_min_iou, camera_min_matches, camera_sig)``. Updates ``mean``,
+    ``cov``, ``q`` (the process noise, for the record) and ``shift`` (the camera's) in place;
+    returns each track's detection (-1: none), which detections were used, and False if a box
+    is not finite."""
     K, D = mean.shape[0], db.shape[0]
     sp, sv, sm = noise
     two_stage, high, low = cfg[0] != 0.0, cfg[1], cfg[2]
@@ -156,17 +201,29 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q):
     used = np.zeros(D, np.bool_)
     if K == 0 or D == 0:
         return match, used, True
-    pred = np.empty((K, 4))
-    for i in range(K):
-        for a in range(2):
-            h = max(mean[i, 2 + a], 0.0) / 2
-            pred[i, a], pred[i, 2 + a] = mean[i, a] - h, mean[i, a] + h
-    rows, cols, ov, ok = _grid_pairs(pred, db, min(cfg[3], cfg[4], cfg[5]))
-    if not ok:
-        return match, used, False
-    same = tclass[rows] == dc[cols]
-    rows, cols, ov = rows[same], cols[same], ov[same]
     high_d = ds >= high
+    for attempt in range(2):
+        pred = np.empty((K, 4))
+        for i in range(K):
+            for a in range(2):
+                h = max(mean[i, 2 + a], 0.0) / 2
+                pred[i, a], pred[i, 2 + a] = mean[i, a] - h, mean[i, a] + h
+        rows, cols, ov, ok = _grid_pairs(pred, db, min(cfg[3], cfg[4], cfg[5]))
+        if not ok:
+            return match, used, False
+        same = tclass[rows] == dc[cols]
+        rows, cols, ov = rows[same], cols[same], ov[same]
+        if attempt == 1 or cfg[7] == 0.0:
+            break
+        # the camera's shift from confirmed tracks and confident detections (see the module)
+        sel = (ov >= cfg[8]) & high_d[cols] & (state[rows] == CONFIRMED)
+        r, c = gnn_pairs(rows[sel], cols[sel], 1.0 - ov[sel], K, D)
+        shift[:] = _camera_shift(mean, db, r, c, cfg[9], cfg[10])
+        if shift[0] == 0.0 and shift[1] == 0.0:
+            break
+        for i in range(K):
+            mean[i, 0] += shift[0]
+            mean[i, 1] += shift[1]
     low_d = (ds >= low) & ~high_d if two_stage else np.zeros(D, np.bool_)
     # 1: confirmed and lost tracks, confident detections; 2: confirmed tracks left,
     # low-score detections; 3: tentative tracks, confident detections left
@@ -214,6 +271,12 @@ class BoxTracker:
     **overrides
         Fields of the configuration to change.
 
+    Attributes
+    ----------
+    camera_shift : (2,) float
+        The shift of the image in pixels (x, y) estimated at the last frame, zeros where none
+        was applied (``camera_motion``).
+
     Examples
     --------
     >>> from vistrack.types import Detections
@@ -242,7 +305,8 @@ class BoxTracker:
             type(self.motion) is BoxMotion
         c, m = self.config, self.motion
         self._cfg = np.array([c.two_stage, c.high, c.low, c.min_iou, c.min_iou_low,
-                              c.min_iou_tentative, c.fuse_score], float)
+                              c.min_iou_tentative, c.fuse_score, c.camera_motion,
+                              c.camera_min_iou, c.camera_min_matches, c.camera_sig], float)
         self._noise = (float(m.std_pos), float(m.std_vel), float(m.std_meas))
         self.reset()
 
@@ -253,6 +317,8 @@ class BoxTracker:
         self.history: list = []
         self._q = np.zeros((0, 8))
         self._confirmed: set = set()
+        self.camera_shift = np.zeros(2)
+        self._camera_offset = np.zeros(2)  # the shifts so far, summed (for the smoother)
 
     def _predict(self, dt: float) -> None:
         t = self.tracks
@@ -304,6 +370,13 @@ class BoxTracker:
         """The stages of association (see the module) in numpy, after :meth:`_predict`:
         ``(updated (K,), free detections (D,), matched tracks, their detections)``."""
         cfg, t = self.config, self.tracks
+        if cfg.camera_motion and len(t) and len(ds):
+            rows, cols, ov = iou_pairs(_to_xyxy(t.mean[:, :4]), db, cfg.camera_min_iou)
+            ok = (t.classes[rows] == dc[cols]) & high[cols] & (t.state[rows] == CONFIRMED)
+            i, j = gnn_sparse(rows[ok], cols[ok], 1.0 - ov[ok], (len(t), len(ds)))
+            self.camera_shift = _camera_shift(t.mean, db, i, j, cfg.camera_min_matches,
+                                              cfg.camera_sig)
+            t.mean[:, :2] += self.camera_shift
         # every candidate pair once: overlapping boxes of the same class
         rows, cols, ov = iou_pairs(_to_xyxy(t.mean[:, :4]), db,
                                    min(cfg.min_iou, cfg.min_iou_low, cfg.min_iou_tentative))
@@ -345,11 +418,12 @@ class BoxTracker:
         cfg, t = self.config, self.tracks
         db, ds, dc = detections.boxes, detections.scores, detections.classes
         high = ds >= cfg.high
+        self.camera_shift = np.zeros(2)
         if self.compiled:
             self._q = np.zeros((len(t), 8))
             c = np.ascontiguousarray  # one compiled signature for every layout of the input
             match, used, ok = _associate(t.mean, t.cov, t.state, t.classes, c(db), c(ds), c(dc),
-                                         dt, self._noise, self._cfg, self._q)
+                                         dt, self._noise, self._cfg, self._q, self.camera_shift)
             if not ok:
                 raise ValueError("track boxes must be finite")
             updated, free_d = match >= 0, ~used
@@ -358,6 +432,7 @@ class BoxTracker:
         else:
             self._predict(dt)
             updated, free_d, mt, md = self._associate_numpy(db, ds, dc, high)
+        self._camera_offset = self._camera_offset + self.camera_shift
         if len(mt):
             if not self.compiled:
                 self._update(mt, _to_cxcywh(db[md]))
@@ -378,7 +453,7 @@ class BoxTracker:
             self.history.append((frame, dt, t.ids.copy(), t.mean.copy(), t.cov.copy(),
                                  np.concatenate([q, np.zeros((k, 8))]),
                                  np.concatenate([upd, np.ones(k, bool)]), t.scores.copy(),
-                                 t.classes.copy()))
+                                 t.classes.copy(), self._camera_offset))
             self._confirmed.update(t.ids[t.state == CONFIRMED].tolist())
         out = np.flatnonzero((t.state == CONFIRMED) & (t.last_time == time))
         covs = np.zeros((len(out), 2, 2))
