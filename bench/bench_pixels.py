@@ -39,6 +39,7 @@ DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 VIDEO = DATA / "opencv-vtest" / "vtest.avi"
 GT = DATA / "mot15" / "PETS09-S2L1" / "gt" / "gt.txt"
 FPS = 7.0  # MOTChallenge's rate for PETS09-S2L1 (the AVI header says 10)
+SIZE = (768, 576)  # vtest.avi's frames
 
 
 def per_frame(fn, frames, repeats=3):
@@ -136,7 +137,8 @@ def run_chain(make, stop=None):
 def vistrack_chain(init):
     def make():
         bg = SelectiveBackground().initialize(init)
-        tr = BoxTracker("bytetrack", frame_rate=FPS, camera_motion=False)  # as the CLI's bgsub
+        tr = BoxTracker("bytetrack", frame_rate=FPS, camera_motion=False,  # as the CLI's bgsub
+                        image_size=SIZE)
 
         def detect(grey):
             b = find_blobs(bg.apply(grey), min_area=500, open_size=3, close_size=7)

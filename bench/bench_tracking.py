@@ -36,8 +36,8 @@ SEQ = Path(__file__).resolve().parents[2] / "shared" / "data" / "mot17" / "MOT17
 # each takes frames of (xyxy (N, 4), scores (N,)) and returns, per frame, (ids, xyxy), and the
 # seconds of each of the tracker's own calls; it stops early after `budget` seconds
 def run_vistrack(name):
-    def run(frames, fps, budget=np.inf):
-        tr = BoxTracker(name, frame_rate=fps)
+    def run(frames, fps, budget=np.inf, image_size=None):
+        tr = BoxTracker(name, frame_rate=fps, image_size=image_size)
         out, sec = [], []
         for f, (b, s) in enumerate(frames, 1):
             d = Detections(boxes=b, scores=s)
@@ -138,8 +138,10 @@ def mot17_rows(repeats):
     rows = []
     for name, run in runners().items():
         secs, res = [], None
-        for _ in range(repeats if name.startswith("vistrack") else 1):
-            res, sec = run(frames, info.frame_rate)
+        ours = name.startswith("vistrack")
+        kw = {"image_size": (info.im_width, info.im_height)} if ours else {}  # as the CLI
+        for _ in range(repeats if ours else 1):
+            res, sec = run(frames, info.frame_rate, **kw)
             secs.append(sum(sec))
         c = evaluate_mot(gt, to_table(res), info.seq_length, benchmark="MOT17")
         rows.append((name, len(frames) / min(secs), c.HOTA, c.MOTA, c.IDF1))

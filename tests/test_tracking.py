@@ -9,6 +9,7 @@ import sys
 import numpy as np
 import pytest
 
+from vistrack.association import iou_pairs
 from vistrack.evaluation import evaluate_mot
 from vistrack.io import MOTTable, read_mot
 from vistrack.tracking import BoxTracker
@@ -95,6 +96,40 @@ def test_frame_gaps_predict_over_the_true_time():
     for f in range(1, 8):
         tr2.step(det(f), frame=f)
     assert tr2.step(det(14), frame=8).ids.tolist() == []  # as if one frame: no match, new track
+
+
+def test_coasting_reports_a_well_followed_track_through_a_short_miss():
+    """Three people moving at constant velocity, all unseen in frames 16-18 of a 640 x 480
+    image. A, followed 15 frames in a row, is reported at its prediction in frames 16 and 17
+    (on the truth: IoU > 0.9) and not in 18; B, followed 5 frames, is not reported; C is
+    reported in frame 16 and not in 17, where its prediction crosses the image's edge."""
+    def truth(f):
+        return np.array([[100 + 4 * f, 200, 40, 100],    # A, seen from frame 1
+                         [300, 100 + 3 * f, 40, 100],    # B, seen from frame 11
+                         [400 + 12 * f, 300, 40, 100]],  # C, right edge 632 at 16, 644 at 17
+                        float)
+
+    def detections(f):
+        seen = [] if 16 <= f <= 18 else [0, 2] if f <= 10 else [0, 1, 2]
+        return Detections.from_xywh(truth(f)[seen], np.full(len(seen), 0.9))
+
+    def run_ids(tracker, frames=21):
+        out = {f: tracker.step(detections(f), frame=f) for f in range(1, frames + 1)}
+        return out, {f: o.ids.tolist() for f, o in out.items()}
+
+    out, ids = run_ids(BoxTracker("bytetrack", image_size=(640, 480)))
+    A, C = ids[10]
+    assert len(ids[15]) == 3  # and B
+    assert ids[16] == [A, C] and ids[17] == [A] and ids[18] == []
+    for f in (16, 17):
+        truth_box = Detections.from_xywh(truth(f)[:1], [1.0]).boxes
+        assert iou_pairs(out[f].boxes[:1], truth_box, 0.9)[2].size == 1
+    assert sorted(ids[19]) == sorted(ids[15])  # all found again under their identities
+    # without the image's size C is reported in frame 17 too; with coast_frames=0, none is
+    assert run_ids(BoxTracker("bytetrack"), 17)[1][17] == [A, C]
+    assert run_ids(BoxTracker("bytetrack", coast_frames=0), 17)[1][16] == []
+    with pytest.raises(ValueError, match="image_size must be"):
+        BoxTracker(image_size=(640, 0))
 
 
 def test_classes_never_share_an_identity_and_reset():

@@ -87,7 +87,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     if len(dets) and dets.frames.max() > info.seq_length:
         raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
                          f"sequence's {info.seq_length} frames ({seq_dir / 'seqinfo.ini'})")
-    trk = BoxTracker(tracker, frame_rate=info.frame_rate, record=offline, **overrides)
+    trk = BoxTracker(tracker, frame_rate=info.frame_rate, record=offline,
+                     image_size=(info.im_width, info.im_height), **overrides)
     slices = dets.frame_slices(info.seq_length)
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
     frames, ids, boxes, scores = [], [], [], []
@@ -285,7 +286,8 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
             # a background model works only with a still camera: nothing to compensate, and
             # blobs that split and merge would read as small shifts of the camera
             overrides.setdefault("camera_motion", False)
-        box_tracker = BoxTracker(tracker, frame_rate=reader.fps, **overrides)
+        box_tracker = BoxTracker(tracker, frame_rate=reader.fps, image_size=reader.size,
+                                 **overrides)
 
         def step(d: Any, index: int) -> Tracks:
             return box_tracker.step(d, frame=index)

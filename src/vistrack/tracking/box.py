@@ -29,7 +29,12 @@ One step, as on the slides (predict, associate, correct, manage):
 
 3. **correct** the matched tracks with their detections (one batched Kalman update);
 4. **manage**: :mod:`vistrack.tracking.lifecycle`; unmatched confident detections with score
-   ≥ ``new_track`` start tentative tracks.
+   ≥ ``new_track`` start tentative tracks;
+5. **report** the confirmed tracks updated in this frame, and, with ``coast_frames``, a
+   track lost for at most that many frames after at least ``coast_after`` updates in a row,
+   at its prediction, while that lies inside the image: a detector misses a person it has
+   found many frames in a row for a frame or two (occlusion, blur) far more often than the
+   person vanishes.
 
 ``"sort"`` is the one-stage tracker with a single score threshold (Bewley et al., 2016),
 ``"bytetrack"`` the two-stage one; :data:`TRACKERS` maps names to configurations.
@@ -82,6 +87,9 @@ class BoxTrackerConfig:
     camera_min_iou, camera_min_matches, camera_sig : float, int, float
         The IoU of the pairs that estimate the shift, how many pairs it needs, and how many
         standard errors from zero it must be.
+    coast_frames, coast_after : int
+        Report a lost track's prediction for up to ``coast_frames`` frames, if it had been
+        updated at least ``coast_after`` frames in a row (0: never).
     """
 
     two_stage: bool = True
@@ -99,13 +107,15 @@ class BoxTrackerConfig:
     camera_min_iou: float = 0.3
     camera_min_matches: int = 3
     camera_sig: float = 2.0
+    coast_frames: int = 2
+    coast_after: int = 10
 
 
 TRACKERS: dict[str, BoxTrackerConfig] = {
     "bytetrack": BoxTrackerConfig(),
     "sort": BoxTrackerConfig(two_stage=False, high=0.5, low=0.5, new_track=0.5, min_iou=0.3,
                              fuse_score=False, confirm_hits=3, max_lost=0.1,
-                             camera_motion=False),
+                             camera_motion=False, coast_frames=0),
 }
 """Box-tracker configurations by name (``vistrack track --tracker NAME``)."""
 
@@ -261,6 +271,9 @@ class BoxTracker:
     motion : BoxMotion, optional
     frame_rate : float
         Frames per second, to turn frame numbers into time.
+    image_size : (width, height), optional
+        A coasting track is reported only while its box lies inside the image (without it,
+        wherever it is).
     record : bool
         Keep every frame's filtered states, for :func:`vistrack.tracking.offline.smooth` (the
         offline mode); memory then grows with the sequence.
@@ -289,7 +302,8 @@ class BoxTracker:
 
     def __init__(self, config: BoxTrackerConfig | str = "bytetrack", *,
                  motion: BoxMotion | None = None, frame_rate: float = 30.0,
-                 record: bool = False, compiled: bool = True, **overrides: Any):
+                 record: bool = False, compiled: bool = True,
+                 image_size: tuple[int, int] | None = None, **overrides: Any):
         if isinstance(config, str):
             if config not in TRACKERS:
                 raise ValueError(f"tracker must be one of {sorted(TRACKERS)}; got {config!r}")
@@ -299,6 +313,9 @@ class BoxTracker:
             raise ValueError(f"frame_rate must be > 0; got {frame_rate}")
         self.motion = motion or BoxMotion()
         self.frame_rate = float(frame_rate)
+        if image_size is not None and (len(image_size) != 2 or min(image_size) <= 0):
+            raise ValueError(f"image_size must be (width, height) > 0; got {image_size}")
+        self.image_size = None if image_size is None else tuple(float(v) for v in image_size)
         self.tracks = TrackTable(8, cov_shape=(4, 3))
         self.record = bool(record)
         self.compiled = bool(compiled) and self.config.assigner == "gnn" and \
@@ -455,7 +472,16 @@ class BoxTracker:
                                  np.concatenate([upd, np.ones(k, bool)]), t.scores.copy(),
                                  t.classes.copy(), self._camera_offset))
             self._confirmed.update(t.ids[t.state == CONFIRMED].tolist())
-        out = np.flatnonzero((t.state == CONFIRMED) & (t.last_time == time))
+        report = (t.state == CONFIRMED) & (t.last_time == time)
+        if cfg.coast_frames > 0:
+            coast = ((t.state == LOST) & (t.streak >= cfg.coast_after)
+                     & (time - t.last_time <= (cfg.coast_frames + 0.5) / self.frame_rate))
+            if self.image_size is not None and coast.any():
+                b = _to_xyxy(t.mean[:, :4])
+                coast &= ((b[:, 0] >= 0) & (b[:, 1] >= 0) & (b[:, 2] <= self.image_size[0])
+                          & (b[:, 3] <= self.image_size[1]))
+            report |= coast
+        out = np.flatnonzero(report)
         covs = np.zeros((len(out), 2, 2))
         covs[:, 0, 0], covs[:, 1, 1] = t.cov[out, 0, 0], t.cov[out, 1, 0]
         return Tracks(ids=t.ids[out], boxes=_to_xyxy(t.mean[out, :4]), points=None,

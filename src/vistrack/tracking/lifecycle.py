@@ -28,7 +28,8 @@ TENTATIVE, CONFIRMED, LOST = 0, 1, 2
 
 @dataclass(frozen=True)
 class Tracks:
-    """A tracker's output for one frame: the confirmed tracks updated in it.
+    """A tracker's output for one frame: the confirmed tracks updated in it (and, for the box
+    trackers, the ones coasting through a short miss, at their predictions).
 
     Attributes
     ----------
@@ -37,7 +38,7 @@ class Tracks:
         ``x0, y0, x1, y1`` (box trackers) or None.
     points : (K, d) float or None
     scores, classes : (K,)
-        The score and class of the detection each track was updated with.
+        The score and class of the detection each track was last updated with.
     covs : (K, 2, 2) float or None
         The covariance of each track's centre (boxes) or point position, where the tracker
         gives it.
@@ -60,8 +61,9 @@ class Tracks:
 
 class TrackTable:
     """Tracks as columns: ``mean (K, n)``, ``cov (K, *cov_shape)`` (default ``(n, n)``), ``ids``,
-    ``state``, ``hits`` (updates in a row), ``last_time`` (of the last update), ``classes`` and
-    ``scores``."""
+    ``state``, ``hits`` (updates in a row), ``streak`` (the length of the last run of updates
+    in a row, kept while the track is lost), ``last_time`` (of the last update), ``classes``
+    and ``scores``."""
 
     def __init__(self, n: int, cov_shape: tuple[int, ...] | None = None):
         self.n = n
@@ -74,6 +76,7 @@ class TrackTable:
         self.ids = np.zeros(0, np.int64)
         self.state = np.zeros(0, np.int8)
         self.hits = np.zeros(0, np.int64)
+        self.streak = np.zeros(0, np.int64)
         self.last_time = np.zeros(0)
         self.classes = np.zeros(0, np.int64)
         self.scores = np.zeros(0)
@@ -92,12 +95,14 @@ class TrackTable:
         self.state = np.concatenate([self.state, np.full(k, CONFIRMED if confirmed else TENTATIVE,
                                                          np.int8)])
         self.hits = np.concatenate([self.hits, np.ones(k, np.int64)])
+        self.streak = np.concatenate([self.streak, np.ones(k, np.int64)])
         self.last_time = np.concatenate([self.last_time, np.full(k, float(time))])
         self.classes = np.concatenate([self.classes, classes])
         self.scores = np.concatenate([self.scores, scores])
 
     def keep(self, mask: np.ndarray) -> None:
-        for name in ("mean", "cov", "ids", "state", "hits", "last_time", "classes", "scores"):
+        for name in ("mean", "cov", "ids", "state", "hits", "streak", "last_time", "classes",
+                     "scores"):
             setattr(self, name, getattr(self, name)[mask])
 
     def manage(self, updated: np.ndarray, time: float, confirm_hits: int,
@@ -105,6 +110,7 @@ class TrackTable:
         """After a frame's updates: count hits, confirm, lose, delete. Returns the mask of the
         tracks kept."""
         self.hits = np.where(updated, self.hits + 1, 0)
+        self.streak = np.where(updated, self.hits, self.streak)
         self.last_time = np.where(updated, float(time), self.last_time)
         confirm = updated & (self.state != CONFIRMED) & (
             (self.hits >= confirm_hits) | (self.state == LOST))
