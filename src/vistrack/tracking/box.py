@@ -212,13 +212,15 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q, shift):
     if K == 0 or D == 0:
         return match, used, True
     high_d = ds >= high
+    # the lowest IoU any stage, or the camera's estimate, looks at
+    gate = min(cfg[3], cfg[4], cfg[5], cfg[8] if cfg[7] != 0.0 else 1.0)
     for attempt in range(2):
         pred = np.empty((K, 4))
         for i in range(K):
             for a in range(2):
                 h = max(mean[i, 2 + a], 0.0) / 2
                 pred[i, a], pred[i, 2 + a] = mean[i, a] - h, mean[i, a] + h
-        rows, cols, ov, ok = _grid_pairs(pred, db, min(cfg[3], cfg[4], cfg[5]))
+        rows, cols, ov, ok = _grid_pairs(pred, db, gate)
         if not ok:
             return match, used, False
         same = tclass[rows] == dc[cols]
@@ -387,18 +389,24 @@ class BoxTracker:
         """The stages of association (see the module) in numpy, after :meth:`_predict`:
         ``(updated (K,), free detections (D,), matched tracks, their detections)``."""
         cfg, t = self.config, self.tracks
+        gate = min(cfg.min_iou, cfg.min_iou_low, cfg.min_iou_tentative,
+                   cfg.camera_min_iou if cfg.camera_motion else 1.0)
+
+        def candidates():
+            # every candidate pair once: overlapping boxes of the same class
+            rows, cols, ov = iou_pairs(_to_xyxy(t.mean[:, :4]), db, gate)
+            same = t.classes[rows] == dc[cols]
+            return rows[same], cols[same], ov[same]
+
+        rows, cols, ov = candidates()
         if cfg.camera_motion and len(t) and len(ds):
-            rows, cols, ov = iou_pairs(_to_xyxy(t.mean[:, :4]), db, cfg.camera_min_iou)
-            ok = (t.classes[rows] == dc[cols]) & high[cols] & (t.state[rows] == CONFIRMED)
+            ok = (ov >= cfg.camera_min_iou) & high[cols] & (t.state[rows] == CONFIRMED)
             i, j = gnn_sparse(rows[ok], cols[ok], 1.0 - ov[ok], (len(t), len(ds)))
             self.camera_shift = _camera_shift(t.mean, db, i, j, cfg.camera_min_matches,
                                               cfg.camera_sig)
-            t.mean[:, :2] += self.camera_shift
-        # every candidate pair once: overlapping boxes of the same class
-        rows, cols, ov = iou_pairs(_to_xyxy(t.mean[:, :4]), db,
-                                   min(cfg.min_iou, cfg.min_iou_low, cfg.min_iou_tentative))
-        same = t.classes[rows] == dc[cols]
-        rows, cols, ov = rows[same], cols[same], ov[same]
+            if self.camera_shift.any():
+                t.mean[:, :2] += self.camera_shift
+                rows, cols, ov = candidates()
         low = (ds >= cfg.low) & ~high if cfg.two_stage else np.zeros(len(ds), bool)
         free_t = np.ones(len(t), bool)
         free_d = np.ones(len(ds), bool)
