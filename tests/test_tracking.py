@@ -238,6 +238,7 @@ def assert_same_tracking(frames, fps=30.0, **kw):
         assert np.array_equal(a.ids, b.ids) and np.array_equal(a.boxes, b.boxes)
         assert np.array_equal(a.scores, b.scores)
     for a, b in zip(hist_c, hist_n):
+        a, b = a[:-1] + a[-1], b[:-1] + b[-1]  # the last item holds the frame's detections
         assert all(np.array_equal(x, y) for x, y in zip(a, b))
     return sum(len(o) for o in out_c)
 
@@ -383,6 +384,82 @@ def test_offline_mode_drops_tracks_of_low_score_detections():
     assert len(smooth(tr, min_score=0.99)) == 0
 
 
+def _walkers(rng, paths, T, noise=1.0):
+    """Truth and detections of boxes 40 x 100 moving with constant velocity: ``paths`` holds
+    ``(start (x, y), velocity, frames present, frames detected, score(frame))``."""
+    truth, dets = [], [[] for _ in range(T)]
+    for k, (p0, v, present, seen, score) in enumerate(paths, start=1):
+        for f in present:
+            c = np.asarray(p0, float) + np.asarray(v, float) * (f - 1)
+            b = np.r_[c - [20, 50], 40, 100]
+            truth.append((f, k, *b))
+            if f in seen:
+                dets[f - 1].append((*(b + rng.normal(0, noise, 4) * [1, 1, 0.5, 0.5]),
+                                    score(f)))
+    a = np.array(sorted(truth))
+    gt = MOTTable(a[:, 0].astype(int), a[:, 1].astype(int), a[:, 2:6], np.ones(len(a)),
+                  -np.ones(len(a), int), -np.ones(len(a)))
+    rows = [np.array(d, float).reshape(-1, 5) for d in dets]
+    return gt, [Detections.from_xywh(r[:, :4], r[:, 4]) for r in rows]
+
+
+def _smoothed_table(s):
+    return MOTTable(s.frames, s.ids, s.xywh, s.scores, -np.ones(len(s), int), -np.ones(len(s)))
+
+
+def test_offline_mode_follows_tracks_back_through_low_score_detections():
+    """A person detected with score 0.5 for 20 frames and 0.95 after starts a track only at
+    frame 21 (new tracks need 0.9); offline, the track is followed back through the weak
+    detections to frame 1, on the truth, while low-score clutter elsewhere is left alone."""
+    from vistrack.tracking import smooth
+
+    rng = np.random.default_rng(3)
+    T = 50
+    every = range(1, T + 1)
+    gt, dets = _walkers(rng, [((100, 200), (3, 0.5), every, every,
+                               lambda f: 0.5 if f <= 20 else 0.95),
+                              ((600, 300), (-1, 0), every, every, lambda f: 0.95)], T)
+    clutter = [Detections.from_xywh(np.r_[d.xywh, rng.uniform([300, 500, 20, 50],
+                                                              [900, 700, 40, 100], (1, 4))],
+                                    np.r_[d.scores, 0.4]) for d in dets]
+    tr = BoxTracker("bytetrack", record=True)
+    for f, d in enumerate(clutter, start=1):
+        tr.step(d, frame=f)
+    plain, ext = smooth(tr, extend_iou=None), smooth(tr)
+    walker = lambda s: s.frames[s.ids == s.ids[np.argmin(s.boxes[:, 0])]]  # noqa: E731
+    assert walker(plain).min() == 21 and walker(ext).min() == 1
+    c_plain, c_ext = (evaluate_mot(gt, _smoothed_table(s), T) for s in (plain, ext))
+    assert c_ext.FN == 0 and c_plain.FN == 20 and c_ext.FP == 0 and c_ext.IDSW == 0
+    assert c_ext.MOTP > 0.9  # the mean IoU of the matches: the added boxes lie on the truth
+    assert np.all(np.linalg.eigvalsh(ext.covs) > 0)
+
+
+def test_offline_mode_links_tracks_across_a_long_occlusion():
+    """A person hidden for 70 frames (longer than the 2 s a lost track is kept) comes back
+    as a new track online; offline the two tracks are joined and the gap filled on the truth.
+    People elsewhere, one leaving and one arriving during the occlusion, are not joined."""
+    from vistrack.tracking import smooth
+
+    rng = np.random.default_rng(4)
+    T = 160
+    hidden = [*range(1, 41), *range(111, T + 1)]
+    first, last = range(1, 41), range(111, T + 1)
+    gt, dets = _walkers(rng, [((100, 200), (2, 0.5), range(1, T + 1), hidden, lambda f: 0.95),
+                              ((700, 150), (0, 1), first, first, lambda f: 0.95),
+                              ((900, 400), (-2, 0), last, last, lambda f: 0.95)], T)
+    tr = BoxTracker("bytetrack", record=True)
+    for f, d in enumerate(dets, start=1):
+        tr.step(d, frame=f)
+    apart, linked = smooth(tr, link_gap=0), smooth(tr, link_gap=90)
+    assert len(np.unique(apart.ids)) == 4 and len(np.unique(linked.ids)) == 3
+    c_apart, c_linked = (evaluate_mot(gt, _smoothed_table(s), T) for s in (apart, linked))
+    assert c_linked.IDSW == 0 and c_linked.FN == 0 and c_linked.FP == 0
+    assert c_apart.IDSW == 1 and c_apart.FN == 70  # a gap of 70 frames is not filled
+    gap = linked.filled & (linked.frames > 40) & (linked.frames < 111)
+    assert gap.sum() == 70 and np.all(np.linalg.eigvalsh(linked.covs) > 0)
+    assert c_linked.MOTP > 0.9
+
+
 def test_offline_mode_follows_the_camera():
     """With a jumping camera, the smoother works in coordinates that follow the camera: the
     filled gaps and smoothed boxes lie on the truth, better than online and better than
@@ -398,7 +475,7 @@ def test_offline_mode_follows_the_camera():
         scores["online"].append(evaluate_mot(gt, run(BoxTracker("bytetrack"), dets), len(dets)))
         for name in ("offline", "image"):
             if name == "image":  # forget the shifts: smooth in image coordinates
-                tr.history = [h[:9] + (np.zeros(2),) for h in tr.history]
+                tr.history = [h[:9] + (np.zeros(2),) + h[10:] for h in tr.history]
             s = smooth(tr)
             off = MOTTable(s.frames, s.ids, s.xywh, s.scores, -np.ones(len(s), int),
                            -np.ones(len(s)))

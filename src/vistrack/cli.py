@@ -186,7 +186,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "3-4 frames/s)")
     track.add_argument("--offline", action="store_true",
                        help="smooth finished tracks, fill gaps of up to 1 s, drop tracks whose "
-                       "detections score under 0.85 on average (--out)")
+                       "detections score under 0.85 on average, follow tracks back through "
+                       "unused detections, join tracks up to 2 s apart (--out)")
     track.add_argument("--still-camera", action="store_true",
                        help="the camera does not move: no camera-motion compensation (on by "
                        "default in bytetrack, except with the bgsub front-end)")

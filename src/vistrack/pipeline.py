@@ -53,7 +53,7 @@ def _progress(done: int, total: int, label: str, stream: Any) -> None:
 
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,
                    tracker: str = "bytetrack", offline: bool = False, max_gap: float = 1.0,
-                   min_track_score: float = 0.85,
+                   min_track_score: float = 0.85, link_gap: float = 2.0,
                    force: bool = False, progress: Any = None,
                    **overrides: Any) -> TrackRun:
     """Track a MOTChallenge sequence folder and write a results file.
@@ -69,8 +69,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     tracker
         A name in :data:`vistrack.tracking.TRACKERS`.
     offline
-        Smooth the finished tracks, fill gaps of up to ``max_gap`` seconds and drop tracks
-        whose detections score less than ``min_track_score`` on average
+        Smooth the finished tracks, fill gaps of up to ``max_gap`` seconds, drop tracks
+        whose detections score less than ``min_track_score`` on average, follow tracks back
+        through the detections left over and join tracks up to ``link_gap`` seconds apart
         (:func:`vistrack.tracking.smooth`).
     progress
         A stream for a progress bar (the command line passes stderr on a terminal), or None.
@@ -112,8 +113,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     B, S = cat(boxes, (0, 4)), cat(scores, (0,))
     if offline:
         t0 = time.perf_counter()
-        sm = smooth(trk, max_gap=int(round(max_gap * info.frame_rate)),
-                    min_score=min_track_score)
+        fps = info.frame_rate
+        sm = smooth(trk, max_gap=int(round(max_gap * fps)), min_score=min_track_score,
+                    link_gap=int(round(link_gap * fps)), link_window=max(1, round(0.5 * fps)))
         seconds += time.perf_counter() - t0
         F, I, B, S = sm.frames, sm.ids, sm.xywh, np.where(sm.filled, 0.0, sm.scores)
     write_mot(out, F, I, B, S, force=True)

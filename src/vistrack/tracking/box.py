@@ -130,6 +130,40 @@ def axes_to_full(c: np.ndarray) -> np.ndarray:
     return P
 
 
+def predict_axes(mean: np.ndarray, cov: np.ndarray, dt: float, motion: BoxMotion) -> np.ndarray:
+    """Predict states ``(K, 8)`` and per-axis covariances ``(K, 4, 3)`` over ``dt`` frames in
+    place (a negative ``dt`` predicts backwards in time, with the noise of ``|dt|``); returns
+    the process noise ``(K, 8)`` added."""
+    mean[:, :4] += dt * mean[:, 4:]
+    pp, pv, vv = cov[:, :, 0].copy(), cov[:, :, 1].copy(), cov[:, :, 2].copy()
+    q = motion.Q_diag(mean[:, :4], abs(dt))
+    cov[:, :, 0] = pp + dt * (2.0 * pv + dt * vv) + q[:, :4]
+    cov[:, :, 1] = pv + dt * vv
+    cov[:, :, 2] = vv + q[:, 4:]
+    return q
+
+
+def update_axes(mean: np.ndarray, cov: np.ndarray, z: np.ndarray,
+                motion: BoxMotion) -> tuple[np.ndarray, np.ndarray]:
+    """Correct states ``(K, 8)`` and per-axis covariances ``(K, 4, 3)`` with boxes
+    ``[cx, cy, w, h] (K, 4)``: the new ``(mean, cov)``."""
+    m = mean.copy()
+    pp, pv, vv = cov[:, :, 0], cov[:, :, 1], cov[:, :, 2]
+    S = pp + motion.R_diag(m[:, :4])
+    kp, kv = pp / S, pv / S
+    y = z - m[:, :4]
+    m[:, :4] += kp * y
+    m[:, 4:] += kv * y
+    return m, np.stack([pp - kp * pp, pv - kp * pv, vv - kv * pv], axis=-1)
+
+
+def full_to_axes(P: np.ndarray) -> np.ndarray:
+    """Full ``(..., 8, 8)`` covariances as per-axis ones ``(..., 4, 3)`` (the inverse of
+    :func:`axes_to_full` for covariances with no terms across axes)."""
+    a = np.arange(4)
+    return np.stack([P[..., a, a], P[..., a, a + 4], P[..., a + 4, a + 4]], axis=-1)
+
+
 def _to_xyxy(m: np.ndarray) -> np.ndarray:
     c, s = m[:, 0:2], np.maximum(m[:, 2:4], 0.0)
     return np.concatenate([c - s / 2, c + s / 2], axis=1)
@@ -277,8 +311,9 @@ class BoxTracker:
         A coasting track is reported only while its box lies inside the image (without it,
         wherever it is).
     record : bool
-        Keep every frame's filtered states, for :func:`vistrack.tracking.offline.smooth` (the
-        offline mode); memory then grows with the sequence.
+        Keep every frame's filtered states and detections, for
+        :func:`vistrack.tracking.offline.smooth` (the offline mode); memory then grows with the
+        sequence.
     compiled : bool
         Predict, associate and correct in one compiled call when the configuration allows it
         (``assigner="gnn"`` and a :class:`~vistrack.models.BoxMotion` itself, not a subclass);
@@ -344,25 +379,11 @@ class BoxTracker:
         if len(t) == 0 or dt == 0:
             self._q = np.zeros((len(t), 8))
             return
-        t.mean[:, :4] += dt * t.mean[:, 4:]
-        c = t.cov
-        pp, pv, vv = c[:, :, 0], c[:, :, 1], c[:, :, 2]
-        q = self._q = self.motion.Q_diag(t.mean[:, :4], dt)
-        c[:, :, 0] = pp + dt * (2.0 * pv + dt * vv) + q[:, :4]
-        c[:, :, 1] = pv + dt * vv
-        c[:, :, 2] = vv + q[:, 4:]
+        self._q = predict_axes(t.mean, t.cov, dt, self.motion)
 
     def _update(self, idx: np.ndarray, z: np.ndarray) -> None:
         t = self.tracks
-        m, c = t.mean[idx], t.cov[idx]
-        pp, pv, vv = c[:, :, 0], c[:, :, 1], c[:, :, 2]
-        S = pp + self.motion.R_diag(m[:, :4])
-        kp, kv = pp / S, pv / S
-        y = z - m[:, :4]
-        m[:, :4] += kp * y
-        m[:, 4:] += kv * y
-        t.mean[idx] = m
-        t.cov[idx] = np.stack([pp - kp * pp, pv - kp * pv, vv - kv * pv], axis=-1)
+        t.mean[idx], t.cov[idx] = update_axes(t.mean[idx], t.cov[idx], z, self.motion)
 
     def covariances(self) -> np.ndarray:
         """The full ``(K, 8, 8)`` covariances of the tracks, from the per-axis ones kept."""
@@ -478,7 +499,8 @@ class BoxTracker:
             self.history.append((frame, dt, t.ids.copy(), t.mean.copy(), t.cov.copy(),
                                  np.concatenate([q, np.zeros((k, 8))]),
                                  np.concatenate([upd, np.ones(k, bool)]), t.scores.copy(),
-                                 t.classes.copy(), self._camera_offset))
+                                 t.classes.copy(), self._camera_offset,
+                                 (db.copy(), ds.copy(), dc.copy())))
             self._confirmed.update(t.ids[t.state == CONFIRMED].tolist())
         report = (t.state == CONFIRMED) & (t.last_time == time)
         if cfg.coast_frames > 0:

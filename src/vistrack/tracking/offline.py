@@ -15,7 +15,16 @@ camera, where the tracker compensated its motion). Then
   the predictions after a track's last update;
 - with ``min_score``, a track whose detections score less than that on average is dropped:
   with the whole track known, one that lived mostly on the second stage's low-score
-  detections is more often a false one than an object.
+  detections is more often a false one than an object;
+- each track is followed back in time from its first update, by a Kalman filter running
+  backwards from the smoothed first state, through the detections no track took: online, a
+  track starts only at a detection confident enough to start one (``new_track``), and the
+  same person is often detected less confidently in the frames before;
+- a track that ends is joined to one that starts up to ``link_gap`` frames later when each
+  one's box, carried across the gap by its velocity, overlaps the other's (online, a track
+  lost longer than ``max_lost`` is deleted and the person comes back under a new identity);
+  the gap between them is filled by a smoother bridging it, from the first track's last
+  state to the second one's first box.
 """
 
 from __future__ import annotations
@@ -27,7 +36,9 @@ import numpy as np
 from ..filters.kalman import FilterResult
 from ..filters.smoothers import rts_smooth
 from ..types import Gaussian, xyxy_to_xywh
-from .box import BoxTracker, _to_xyxy, axes_to_full
+from ..association import gnn_sparse, iou_pairs
+from .box import (BoxTracker, _to_cxcywh, _to_xyxy, axes_to_full, full_to_axes, predict_axes,
+                  update_axes)
 
 __all__ = ["SmoothedTracks", "smooth"]
 
@@ -60,7 +71,27 @@ def _empty() -> SmoothedTracks:
                           z.astype(bool), np.zeros((0, 8, 8)))
 
 
-def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0) -> SmoothedTracks:
+_DUPLICATE_IOU = 0.5  # a detection overlapping a reported box this much is that box's
+
+
+@dataclass
+class _Track:
+    """One smoothed track's rows (image coordinates) and its end states (camera coordinates)."""
+
+    id: int
+    cls: int
+    frames: np.ndarray
+    boxes: np.ndarray
+    scores: np.ndarray
+    filled: np.ndarray
+    covs: np.ndarray
+    first: tuple  # (frame, mean (8,), cov (8, 8)) at the first update
+    last: tuple  # the same at the last update
+
+
+def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0, *,
+           extend_iou: float | None = 0.5, link_gap: int = 60, link_iou: float = 0.3,
+           link_window: int = 15) -> SmoothedTracks:
     """Smooth the tracks a ``BoxTracker(record=True)`` has followed (see the module).
 
     Parameters
@@ -71,11 +102,39 @@ def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0) -> Sm
         The longest gap (in frames without an update) that is filled.
     min_score
         The lowest mean score of a track's detections that is kept.
+    extend_iou
+        Follow each track back from its first update through the detections no track took
+        (any score down to the tracker's ``low``), while one overlaps its backward prediction
+        by at least this IoU; None: not at all.
+    link_gap, link_iou, link_window
+        Join a track that ends to one that starts at most ``link_gap`` frames later (0: never)
+        when their boxes, carried across the gap by the velocities of their last and first
+        ``link_window`` detected frames, overlap the other's by ``link_iou`` on average; the
+        gap between them is filled from the smoother.
     """
     if not tracker.record:
         raise ValueError("the tracker must be created with record=True for offline smoothing")
     if not tracker.history:
         return _empty()
+    cam = {h[0]: h[9] for h in tracker.history}
+    tracks = _smooth_tracks(tracker, max_gap, min_score)
+    if not tracks:
+        return _empty()
+    if extend_iou is not None:
+        _extend_back(tracker, tracks, cam, extend_iou)
+    if link_gap > 0:
+        tracks = _link(tracker, tracks, cam, link_gap, link_iou, link_window)
+    n = [len(t.frames) for t in tracks]
+    cols = [np.concatenate([t.frames for t in tracks]),
+            np.repeat([t.id for t in tracks], n), np.concatenate([t.boxes for t in tracks]),
+            np.concatenate([t.scores for t in tracks]), np.repeat([t.cls for t in tracks], n),
+            np.concatenate([t.filled for t in tracks]), np.concatenate([t.covs for t in tracks])]
+    by_frame = np.lexsort((cols[1], cols[0]))
+    return SmoothedTracks(*(c[by_frame] for c in cols))
+
+
+def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[_Track]:
+    """RTS-smooth every confirmed track and fill its gaps of up to ``max_gap`` frames."""
     frame = np.concatenate([np.full(len(h[2]), h[0]) for h in tracker.history])
     dt = np.concatenate([np.full(len(h[2]), h[1]) for h in tracker.history])
     ids, mean, cov, q, upd, score, cls = (np.concatenate([h[k] for h in tracker.history])
@@ -90,7 +149,7 @@ def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0) -> Sm
     frame, dt, ids, mean, cov, q, upd, score, cls, cam = (
         a[keep][order] for a in (frame, dt, ids, mean, cov, q, upd, score, cls, cam))
     if len(ids) == 0:
-        return _empty()
+        return []
     edges = np.flatnonzero(np.diff(ids)) + 1
     out = []
     for a, b in zip(np.r_[0, edges], np.r_[edges, len(ids)]):
@@ -109,11 +168,14 @@ def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0) -> Sm
             m_s, P_s = np.asarray(sm.means), np.asarray(sm.covs)
         else:
             m_s, P_s = mean[a:last], P
+        f = frame[a:last]
+        updated = upd[a:last]
+        first_u = int(u[0])
+        ends = ((int(f[first_u]), m_s[first_u].copy(), P_s[first_u]),
+                (int(f[-1]), m_s[-1].copy(), P_s[-1]))
         m_s = m_s.copy()
         m_s[:, :2] += cam[a:last]
         # frames to report: updates, and gaps between updates of at most max_gap frames
-        f = frame[a:last]
-        updated = upd[a:last]
         uf = f[updated]
         gap_len = np.diff(uf) - 1
         fill = np.zeros(L, bool)
@@ -121,11 +183,165 @@ def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0) -> Sm
             if 0 < n <= max_gap:
                 fill |= (f > g0) & (f < g1)
         rep = updated | fill
-        out.append((f[rep], ids[a:last][rep], _to_xyxy(m_s[rep, :4]),
-                    np.where(updated, score[a:last], 0.0)[rep], cls[a:last][rep], fill[rep],
-                    P_s[rep]))
-    if not out:
-        return _empty()
-    cols = [np.concatenate([o[k] for o in out]) for k in range(7)]
-    by_frame = np.lexsort((cols[1], cols[0]))
-    return SmoothedTracks(*(c[by_frame] for c in cols))
+        out.append(_Track(int(ids[a]), int(cls[a]), f[rep], _to_xyxy(m_s[rep, :4]),
+                          np.where(updated, score[a:last], 0.0)[rep], fill[rep], P_s[rep],
+                          *ends))
+    return out
+
+
+def _extend_back(tracker: BoxTracker, tracks: list[_Track], cam: dict, min_iou: float) -> None:
+    """Follow every track back in time from its first update, in place: a backward Kalman
+    filter from the smoothed first state, updated at each earlier frame by the free detection
+    overlapping its prediction most (global nearest neighbour over the tracks being followed),
+    until a frame has none. Free: of the track's class, scoring at least the tracker's
+    ``low``, and not overlapping a box already reported in that frame."""
+    motion, low = tracker.motion, tracker.config.low
+    frames = [h[0] for h in tracker.history]
+    dets = {h[0]: h[10] for h in tracker.history}
+    starts: dict[int, list[int]] = {}
+    reported: dict[int, list[np.ndarray]] = {}
+    for k, t in enumerate(tracks):
+        starts.setdefault(t.first[0], []).append(k)
+        for f, b in zip(t.frames.tolist(), t.boxes):
+            reported.setdefault(f, []).append(b)
+    active = np.zeros(0, int)
+    mean, cov = np.zeros((0, 8)), np.zeros((0, 4, 3))
+    added: dict[int, list] = {}
+    for i in range(len(frames) - 1, -1, -1):
+        f = frames[i]
+        if len(active):
+            predict_axes(mean, cov, f - frames[i + 1], motion)
+            pred = mean[:, :4].copy()
+            pred[:, :2] += cam[f]
+            db, ds, dc = dets[f]
+            free = ds >= low
+            if f in reported and free.any():
+                r, c, _ = iou_pairs(db, np.array(reported[f]), _DUPLICATE_IOU)
+                free[r] = False
+            rows, cols, ov = iou_pairs(_to_xyxy(pred), db, min_iou)
+            ok = free[cols] & (dc[cols] == np.array([tracks[k].cls for k in active])[rows])
+            r, c = gnn_sparse(rows[ok], cols[ok], 1.0 - ov[ok], (len(active), len(db)))
+            if len(r):
+                z = _to_cxcywh(db[c])
+                z[:, :2] -= cam[f]
+                mean[r], cov[r] = update_axes(mean[r], cov[r], z, motion)
+                box = mean[r, :4].copy()
+                box[:, :2] += cam[f]
+                for k, b, sc, P in zip(active[r], _to_xyxy(box), ds[c], axes_to_full(cov[r])):
+                    added.setdefault(int(k), []).append((f, b, sc, P))
+            active, mean, cov = active[r], mean[r], cov[r]
+        new = starts.get(f, [])
+        if new:
+            active = np.r_[active, new].astype(int)
+            mean = np.concatenate([mean, [tracks[k].first[1] for k in new]])
+            cov = np.concatenate([cov, full_to_axes(np.stack([tracks[k].first[2] for k in new]))])
+    for k, rows in added.items():
+        t = tracks[k]
+        rows = rows[::-1]  # in time order
+        t.frames = np.r_[[r[0] for r in rows], t.frames]
+        t.boxes = np.concatenate([[r[1] for r in rows], t.boxes])
+        t.scores = np.r_[[r[2] for r in rows], t.scores]
+        t.filled = np.r_[np.zeros(len(rows), bool), t.filled]
+        t.covs = np.concatenate([[r[3] for r in rows], t.covs])
+
+
+def _carried_ends(t: _Track, cam: dict, window: int) -> tuple[np.ndarray, ...]:
+    """A track's first and last detected boxes in camera coordinates (``cx, cy, w, h``) and
+    the velocities of their centres over the first and last ``window`` detected frames."""
+    f = t.frames[~t.filled]
+    c = _to_cxcywh(t.boxes[~t.filled])
+    c[:, :2] -= np.array([cam[x] for x in f.tolist()])
+    n = min(window, len(f) - 1)
+    v0, v1 = np.zeros(2), np.zeros(2)
+    if n > 0:
+        v0 = (c[n, :2] - c[0, :2]) / (f[n] - f[0])
+        v1 = (c[-1, :2] - c[-1 - n, :2]) / (f[-1] - f[-1 - n])
+    return c[0], c[-1], v0, v1, f[0], f[-1]
+
+
+def _link(tracker: BoxTracker, tracks: list[_Track], cam: dict, link_gap: int,
+          min_iou: float, window: int) -> list[_Track]:
+    """Join tracks that end to tracks that start up to ``link_gap`` frames later (global
+    nearest neighbour on the mean IoU of the boxes carried across the gap) and fill the gaps
+    from a smoother bridging them."""
+    ends = [_carried_ends(t, cam, window) for t in tracks]
+    c0, c1, v0, v1, f0, f1 = (np.array([e[k] for e in ends]) for k in range(6))
+    cls = np.array([t.cls for t in tracks])
+    gap = f0[None, :] - f1[:, None]  # [a, b]: frames from a's last to b's first
+    a, b = np.nonzero((gap > 0) & (gap <= link_gap) & (cls[:, None] == cls[None, :]))
+    if len(a) == 0:
+        return tracks
+    d = gap[a, b][:, None]
+    fwd = c1[a].copy()
+    fwd[:, :2] += v1[a] * d  # a's last box carried forward to b's first frame
+    back = c0[b].copy()
+    back[:, :2] -= v0[b] * d  # b's first box carried back to a's last frame
+    score = (_iou_rows(_to_xyxy(fwd), _to_xyxy(c0[b]))
+             + _iou_rows(_to_xyxy(back), _to_xyxy(c1[a]))) / 2
+    ok = score >= min_iou
+    r, c = gnn_sparse(a[ok], b[ok], 1.0 - score[ok], (len(tracks), len(tracks)))
+    nxt = dict(zip(r.tolist(), c.tolist()))
+    frames = np.array([h[0] for h in tracker.history])
+    heads = set(range(len(tracks))) - set(nxt.values())
+    out = []
+    for h in sorted(heads):
+        chain = [h]
+        while chain[-1] in nxt:
+            chain.append(nxt[chain[-1]])
+        parts = [tracks[chain[0]]]
+        for p, q in zip(chain[:-1], chain[1:]):
+            parts.append(_bridge(tracker, tracks[p], tracks[q], frames, cam))
+            parts.append(tracks[q])
+        t = parts[0]
+        out.append(_Track(t.id, t.cls, *(np.concatenate([getattr(x, k) for x in parts])
+                                          for k in ("frames", "boxes", "scores", "filled",
+                                                    "covs")),
+                          t.first, tracks[chain[-1]].last))
+    return out
+
+
+def _bridge(tracker: BoxTracker, a: _Track, b: _Track, frames: np.ndarray,
+            cam: dict) -> _Track:
+    """The rows between track ``a``'s last update and track ``b``'s first box: a Kalman filter
+    from ``a``'s smoothed last state, predicted across the gap and corrected by ``b``'s first
+    box, smoothed back (RTS)."""
+    motion = tracker.motion
+    fl, m, P = a.last
+    f_b = int(b.frames[0])
+    gf = frames[(frames > fl) & (frames <= f_b)]
+    z = _to_cxcywh(b.boxes[:1])[0]
+    z[:2] -= cam[f_b]
+    means, covs, Fs, Qs = [m], [P], [np.eye(8)], [np.zeros((8, 8))]
+    prev = fl
+    for f in gf.tolist():
+        F = motion.F(f - prev)
+        Q = np.diag(motion.Q_diag(means[-1][None, :4], f - prev)[0])
+        m, P = F @ means[-1], F @ covs[-1] @ F.T + Q
+        if f == f_b:
+            R = np.diag(motion.R_diag(m[None, :4])[0])
+            K = np.linalg.solve(P[:4, :4] + R, P[:4, :]).T
+            m, P = m + K @ (z - m[:4]), P - K @ P[:4, :]
+            P = (P + P.T) / 2
+        means.append(m)
+        covs.append(P)
+        Fs.append(F)
+        Qs.append(Q)
+        prev = f
+    means, covs = np.array(means), np.array(covs)
+    res = FilterResult(means, covs, None, None, np.zeros(()), Gaussian(means[-1], covs[-1]))
+    sm = rts_smooth(res, F=np.array(Fs), Q=np.array(Qs))
+    m_s, P_s = np.asarray(sm.means)[1:-1].copy(), np.asarray(sm.covs)[1:-1]
+    g = gf[:-1]
+    m_s[:, :2] += np.array([cam[x] for x in g.tolist()]).reshape(-1, 2)
+    return _Track(a.id, a.cls, g, _to_xyxy(m_s[:, :4]), np.zeros(len(g)),
+                  np.ones(len(g), bool), P_s, a.first, a.last)
+
+
+def _iou_rows(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The IoU of boxes ``p[k]`` and ``q[k]`` (``x0, y0, x1, y1``), row by row."""
+    w = np.clip(np.minimum(p[:, 2], q[:, 2]) - np.maximum(p[:, 0], q[:, 0]), 0, None)
+    h = np.clip(np.minimum(p[:, 3], q[:, 3]) - np.maximum(p[:, 1], q[:, 1]), 0, None)
+    inter = w * h
+    union = ((p[:, 2] - p[:, 0]) * (p[:, 3] - p[:, 1])
+             + (q[:, 2] - q[:, 0]) * (q[:, 3] - q[:, 1]) - inter)
+    return np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
