@@ -315,8 +315,9 @@ def _bridge(tracker: BoxTracker, a: _Track, b: _Track, frames: np.ndarray,
     prev = fl
     for f in gf.tolist():
         F = motion.F(f - prev)
-        Q = np.diag(motion.Q_diag(means[-1][None, :4], f - prev)[0])
-        m, P = F @ means[-1], F @ covs[-1] @ F.T + Q
+        m = F @ means[-1]
+        Q = np.diag(motion.Q_diag(m[None, :4], f - prev)[0])  # of the predicted box, as online
+        P = F @ covs[-1] @ F.T + Q
         if f == f_b:
             R = np.diag(motion.R_diag(m[None, :4])[0])
             K = np.linalg.solve(P[:4, :4] + R, P[:4, :]).T
