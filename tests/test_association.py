@@ -16,6 +16,7 @@ from vistrack.association import (
     gnn,
     iou,
     mahalanobis,
+    paired_iou,
 )
 
 
@@ -47,6 +48,12 @@ def test_iou_and_giou_against_rasterised_boxes():
                 want_g = raster_iou(a, b) - (len(hull) - len(A | B)) / len(hull)
                 assert g[i, j] == pytest.approx(want_g, abs=1e-12)
     assert np.all(g <= got + 1e-12) and np.all(g >= -1)
+    # row by row: box k of one set against box k of the other
+    np.testing.assert_allclose(paired_iou(boxes[:20], boxes[20:]),
+                               [raster_iou(a, b) for a, b in zip(boxes[:20], boxes[20:])],
+                               atol=1e-12)
+    with pytest.raises(ValueError, match="same shape"):
+        paired_iou(boxes[:3], boxes[:2])
 
 
 def test_mahalanobis_and_gate():

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-__all__ = ["iou", "iou_pairs", "giou", "euclidean", "mahalanobis"]
+__all__ = ["iou", "paired_iou", "iou_pairs", "giou", "euclidean", "mahalanobis"]
 
 
 def _boxes(b: Any, name: str) -> np.ndarray:
@@ -29,14 +29,17 @@ def _boxes(b: Any, name: str) -> np.ndarray:
 
 
 def _overlap(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    iw = np.clip(np.minimum(a[:, None, 2], b[None, :, 2]) - np.maximum(a[:, None, 0], b[None, :, 0]),
-                 0, None)
-    ih = np.clip(np.minimum(a[:, None, 3], b[None, :, 3]) - np.maximum(a[:, None, 1], b[None, :, 1]),
-                 0, None)
+    # intersection and union of boxes (..., 4) that broadcast against each other
+    iw = np.clip(np.minimum(a[..., 2], b[..., 2]) - np.maximum(a[..., 0], b[..., 0]), 0, None)
+    ih = np.clip(np.minimum(a[..., 3], b[..., 3]) - np.maximum(a[..., 1], b[..., 1]), 0, None)
     inter = iw * ih
-    area_a = (a[:, 2] - a[:, 0]) * (a[:, 3] - a[:, 1])
-    area_b = (b[:, 2] - b[:, 0]) * (b[:, 3] - b[:, 1])
-    return inter, area_a[:, None] + area_b[None, :] - inter
+    area_a = (a[..., 2] - a[..., 0]) * (a[..., 3] - a[..., 1])
+    area_b = (b[..., 2] - b[..., 0]) * (b[..., 3] - b[..., 1])
+    return inter, area_a + area_b - inter
+
+
+def _ratio(inter: np.ndarray, union: np.ndarray) -> np.ndarray:
+    return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
 
 
 def iou(a: Any, b: Any) -> np.ndarray:
@@ -49,8 +52,22 @@ def iou(a: Any, b: Any) -> np.ndarray:
     [[0.333, 0.0]]
     """
     a, b = _boxes(a, "a"), _boxes(b, "b")
-    inter, union = _overlap(a, b)
-    return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
+    return _ratio(*_overlap(a[:, None], b[None, :]))
+
+
+def paired_iou(a: Any, b: Any) -> np.ndarray:
+    """Intersection over union of boxes ``a[k]`` and ``b[k]`` (both ``(N, 4)``): ``(N,)``, 0
+    where both boxes are empty.
+
+    Examples
+    --------
+    >>> paired_iou([[0, 0, 2, 2], [0, 0, 1, 1]], [[1, 0, 3, 2], [5, 5, 6, 6]]).round(3).tolist()
+    [0.333, 0.0]
+    """
+    a, b = _boxes(a, "a"), _boxes(b, "b")
+    if a.shape != b.shape:
+        raise ValueError(f"a and b must have the same shape; got {a.shape} and {b.shape}")
+    return _ratio(*_overlap(a, b))
 
 
 def giou(a: Any, b: Any) -> np.ndarray:
@@ -62,12 +79,11 @@ def giou(a: Any, b: Any) -> np.ndarray:
     [[-0.3333333333333333]]
     """
     a, b = _boxes(a, "a"), _boxes(b, "b")
-    inter, union = _overlap(a, b)
+    inter, union = _overlap(a[:, None], b[None, :])
     cw = np.maximum(a[:, None, 2], b[None, :, 2]) - np.minimum(a[:, None, 0], b[None, :, 0])
     ch = np.maximum(a[:, None, 3], b[None, :, 3]) - np.minimum(a[:, None, 1], b[None, :, 1])
     hull = cw * ch
-    i = np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
-    return i - np.divide(hull - union, hull, out=np.zeros_like(hull), where=hull > 0)
+    return _ratio(inter, union) - _ratio(hull - union, hull)
 
 
 def euclidean(a: Any, b: Any) -> np.ndarray:

@@ -36,7 +36,7 @@ import numpy as np
 from ..filters.kalman import FilterResult
 from ..filters.smoothers import rts_smooth
 from ..types import Gaussian, xyxy_to_xywh
-from ..association import gnn_sparse, iou_pairs
+from ..association import gnn_sparse, iou_pairs, paired_iou
 from .box import (BoxTracker, _to_cxcywh, _to_xyxy, axes_to_full, full_to_axes, predict_axes,
                   update_axes)
 
@@ -196,7 +196,7 @@ def _extend_back(tracker: BoxTracker, tracks: list[_Track], cam: dict, min_iou: 
     until a frame has none. Free: of the track's class, scoring at least the tracker's
     ``low``, and not overlapping a box already reported in that frame."""
     motion, low = tracker.motion, tracker.config.low
-    frames = [h[0] for h in tracker.history]
+    frames = list(cam)  # the recorded frames, in order
     dets = {h[0]: h[10] for h in tracker.history}
     starts: dict[int, list[int]] = {}
     reported: dict[int, list[np.ndarray]] = {}
@@ -276,12 +276,12 @@ def _link(tracker: BoxTracker, tracks: list[_Track], cam: dict, link_gap: int,
     fwd[:, :2] += v1[a] * d  # a's last box carried forward to b's first frame
     back = c0[b].copy()
     back[:, :2] -= v0[b] * d  # b's first box carried back to a's last frame
-    score = (_iou_rows(_to_xyxy(fwd), _to_xyxy(c0[b]))
-             + _iou_rows(_to_xyxy(back), _to_xyxy(c1[a]))) / 2
+    score = (paired_iou(_to_xyxy(fwd), _to_xyxy(c0[b]))
+             + paired_iou(_to_xyxy(back), _to_xyxy(c1[a]))) / 2
     ok = score >= min_iou
     r, c = gnn_sparse(a[ok], b[ok], 1.0 - score[ok], (len(tracks), len(tracks)))
     nxt = dict(zip(r.tolist(), c.tolist()))
-    frames = np.array([h[0] for h in tracker.history])
+    frames = np.fromiter(cam, dtype=np.int64)  # the recorded frames, in order
     heads = set(range(len(tracks))) - set(nxt.values())
     out = []
     for h in sorted(heads):
@@ -309,40 +309,26 @@ def _bridge(tracker: BoxTracker, a: _Track, b: _Track, frames: np.ndarray,
     fl, m, P = a.last
     f_b = int(b.frames[0])
     gf = frames[(frames > fl) & (frames <= f_b)]
-    z = _to_cxcywh(b.boxes[:1])[0]
-    z[:2] -= cam[f_b]
-    means, covs, Fs, Qs = [m], [P], [np.eye(8)], [np.zeros((8, 8))]
+    z = _to_cxcywh(b.boxes[:1])
+    z[:, :2] -= cam[f_b]
+    mean, cov = m[None].copy(), full_to_axes(P[None])
+    means, covs, Fs, Qs = [mean[0]], [cov[0]], [np.eye(8)], [np.zeros((8, 8))]
     prev = fl
     for f in gf.tolist():
-        F = motion.F(f - prev)
-        m = F @ means[-1]
-        Q = np.diag(motion.Q_diag(m[None, :4], f - prev)[0])  # of the predicted box, as online
-        P = F @ covs[-1] @ F.T + Q
+        q = predict_axes(mean, cov, f - prev, motion)
         if f == f_b:
-            R = np.diag(motion.R_diag(m[None, :4])[0])
-            K = np.linalg.solve(P[:4, :4] + R, P[:4, :]).T
-            m, P = m + K @ (z - m[:4]), P - K @ P[:4, :]
-            P = (P + P.T) / 2
-        means.append(m)
-        covs.append(P)
-        Fs.append(F)
-        Qs.append(Q)
+            mean, cov = update_axes(mean, cov, z, motion)
+        means.append(mean[0].copy())
+        covs.append(cov[0].copy())
+        Fs.append(motion.F(f - prev))
+        Qs.append(np.diag(q[0]))
         prev = f
-    means, covs = np.array(means), np.array(covs)
-    res = FilterResult(means, covs, None, None, np.zeros(()), Gaussian(means[-1], covs[-1]))
+    covs = axes_to_full(np.array(covs))
+    res = FilterResult(np.array(means), covs, None, None, np.zeros(()),
+                       Gaussian(means[-1], covs[-1]))
     sm = rts_smooth(res, F=np.array(Fs), Q=np.array(Qs))
     m_s, P_s = np.asarray(sm.means)[1:-1].copy(), np.asarray(sm.covs)[1:-1]
     g = gf[:-1]
     m_s[:, :2] += np.array([cam[x] for x in g.tolist()]).reshape(-1, 2)
     return _Track(a.id, a.cls, g, _to_xyxy(m_s[:, :4]), np.zeros(len(g)),
                   np.ones(len(g), bool), P_s, a.first, a.last)
-
-
-def _iou_rows(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """The IoU of boxes ``p[k]`` and ``q[k]`` (``x0, y0, x1, y1``), row by row."""
-    w = np.clip(np.minimum(p[:, 2], q[:, 2]) - np.maximum(p[:, 0], q[:, 0]), 0, None)
-    h = np.clip(np.minimum(p[:, 3], q[:, 3]) - np.maximum(p[:, 1], q[:, 1]), 0, None)
-    inter = w * h
-    union = ((p[:, 2] - p[:, 0]) * (p[:, 3] - p[:, 1])
-             + (q[:, 2] - q[:, 0]) * (q[:, 3] - q[:, 1]) - inter)
-    return np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
