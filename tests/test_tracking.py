@@ -531,3 +531,35 @@ def test_memory_grows_less_than_1mb_over_20000_frames():
         tracemalloc.stop()
     assert tr.tracks.ids.max() > 5000  # the turnover happened
     assert grown < 1_000_000, grown
+
+
+def test_smoothing_the_size_follows_the_true_box_when_sizes_are_noisier():
+    """Detections whose width errs twice as much as their centre, and their height 1.4 times
+    (as MOT15's and MOT17's do, or more, against their ground truth): the default noise,
+    which says so, estimates the width and the whole box closer to the truth than one noise
+    level for all four values."""
+    from vistrack.association import iou
+    from vistrack.models import BoxMotion
+
+    width_err, box_iou = {}, {}
+    for name, motion in (("default", BoxMotion()), ("same", BoxMotion(std_meas=1 / 20))):
+        rng = np.random.default_rng(8)
+        we, ov = [], []
+        for _ in range(20):
+            c0, v = rng.uniform(200, 800, 2), rng.normal(0, 3, 2)
+            size = np.array([40.0, 100.0]) * rng.uniform(0.8, 1.2)
+            tr = BoxTracker("bytetrack", motion=motion, camera_motion=False)
+            for f in range(1, 61):
+                c = c0 + v * f
+                z = np.r_[c + rng.normal(0, 1, 2) * size / 20,
+                          size + rng.normal(0, 1, 2) * size * [1 / 10, 1 / 14]]
+                out = tr.step(Detections.from_xywh([np.r_[z[:2] - z[2:] / 2, z[2:]]], [0.95]),
+                              frame=f)
+                if f > 10 and len(out):
+                    we.append(abs(out.xywh[0, 2] - size[0]))
+                    truth = np.r_[c - size / 2, c + size / 2][None]
+                    ov.append(iou(out.boxes, truth)[0, 0])
+        width_err[name], box_iou[name] = np.mean(we), np.mean(ov)
+    # measured: 1.9 against 2.4 pixels, mean IoU 0.871 against 0.862
+    assert width_err["default"] < 0.9 * width_err["same"], width_err
+    assert box_iou["default"] > box_iou["same"], box_iou

@@ -7,6 +7,17 @@ of the box's width (x, w) or height (y, h), as in the Kalman filters of DeepSORT
 BoT-SORT (``σ_p = 1/20`` of the size per frame for position, ``σ_v = 1/160`` for velocity).
 Over a gap of ``dt`` frames ``F`` integrates the velocity for ``dt`` and the process noise
 variances grow by ``dt``.
+
+A detector's box size is noisier than its centre, and its width noisiest: a person's arms and
+legs swing in and out of the box, while head and feet fix its height. Against the ground
+truth of MOT15 and MOT17 (robust standard deviations, each sequence's bias taken off), the
+detected width errs by 0.18 and 0.038 of the width, the centre's x by 0.10 and 0.022 of the
+width; the height by 0.087 and 0.025 of the height, the centre's y by 0.039 and 0.014 of the
+height. So by
+default a detection's width has a standard deviation of ``1/10`` of it and its height
+``1/14`` of it, against ``1/20`` for the centre, and the filter follows the jumps of a
+detection's size less. (On MOT15 the centre's x errs by more than ``1/20`` too, but a larger
+value there, or for the height, tracked worse; see docs/mot.md.)
 """
 
 from __future__ import annotations
@@ -23,7 +34,11 @@ class BoxMotion:
     ----------
     std_pos, std_vel : float
         Per-frame standard deviations of position and velocity noise, as fractions of the box
-        size. ``std_meas`` is that of a detection's centre and size.
+        size.
+    std_meas : float or sequence of 4 floats
+        Standard deviations of a detection's ``cx, cy, w, h`` as fractions of its width (x, w)
+        or height (y, h); one number for all four, or one each (default
+        ``(1/20, 1/20, 1/10, 1/14)``, see the module).
     init_pos, init_vel : float
         Multipliers of ``std_pos`` and ``std_vel`` for a new track's covariance (its velocity
         is unknown).
@@ -31,19 +46,26 @@ class BoxMotion:
     Examples
     --------
     >>> m = BoxMotion()
-    >>> float(m.F(2.0)[0, 4]), m.R(np.array([[0, 0, 20.0, 40.0]]))[0].diagonal().tolist()
-    (2.0, [1.0, 4.0, 1.0, 4.0])
+    >>> float(m.F(2.0)[0, 4]), m.R(np.array([[0, 0, 20.0, 28.0]]))[0].diagonal().round(2).tolist()
+    (2.0, [1.0, 1.96, 4.0, 4.0])
     """
 
     ndim_state, ndim_meas = 8, 4
 
     def __init__(self, std_pos: float = 1 / 20, std_vel: float = 1 / 160,
-                 std_meas: float = 1 / 20, init_pos: float = 2.0, init_vel: float = 10.0):
-        for name, v in (("std_pos", std_pos), ("std_vel", std_vel), ("std_meas", std_meas),
-                        ("init_pos", init_pos), ("init_vel", init_vel)):
+                 std_meas: float | tuple[float, float, float, float] = (1 / 20, 1 / 20, 1 / 10,
+                                                                        1 / 14),
+                 init_pos: float = 2.0, init_vel: float = 10.0):
+        meas = np.broadcast_to(np.asarray(std_meas, dtype=float), (4,)) \
+            if np.ndim(std_meas) == 0 or np.shape(std_meas) == (4,) else None
+        if meas is None:
+            raise ValueError(f"std_meas must be one number or 4 (cx, cy, w, h); got {std_meas!r}")
+        for name, v in (("std_pos", std_pos), ("std_vel", std_vel), ("init_pos", init_pos),
+                        ("init_vel", init_vel), *(("std_meas", m) for m in meas)):
             if not np.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite number > 0; got {v}")
-        self.std_pos, self.std_vel, self.std_meas = std_pos, std_vel, std_meas
+        self.std_pos, self.std_vel = std_pos, std_vel
+        self.std_meas = meas.copy()
         self.init_pos, self.init_vel = init_pos, init_vel
 
     def F(self, dt: float = 1.0) -> np.ndarray:

@@ -220,14 +220,14 @@ def _stage(rows, cols, ov, state, stage_state, det_ok, min_iou, fuse, ds, match,
 def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q, shift):
     """Predict, associate and correct in one compiled call: the same arithmetic as
     :meth:`BoxTracker._predict`, the stages of :meth:`BoxTracker.step` with ``gnn``, and
-    :meth:`BoxTracker._update`. ``noise`` is BoxMotion's ``(std_pos, std_vel, std_meas)``,
+    :meth:`BoxTracker._update`. ``noise`` is BoxMotion's ``(std_pos, std_vel, *std_meas)``,
     ``cfg`` ``(two_stage, high, low, min_iou, min_iou_low, min_iou_tentative, fuse_score,
     camera_motion, camera_min_iou, camera_min_matches, camera_sig)``. Updates ``mean``,
     ``cov``, ``q`` (the process noise, for the record) and ``shift`` (the camera's) in place;
     returns each track's detection (-1: none), which detections were used, and False if a box
     is not finite."""
     K, D = mean.shape[0], db.shape[0]
-    sp, sv, sm = noise
+    sp, sv = noise[0], noise[1]
     two_stage, high, low = cfg[0] != 0.0, cfg[1], cfg[2]
     if dt != 0.0:
         for i in range(K):
@@ -288,7 +288,7 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q, shift):
             s = max(mean[i, 2 + a % 2], 1e-3)
             z = (db[j, a] + db[j, a + 2]) / 2 if a < 2 else db[j, a] - db[j, a - 2]
             pp, pv, vv = cov[i, a, 0], cov[i, a, 1], cov[i, a, 2]
-            S = pp + (sm * s) ** 2
+            S = pp + (noise[2 + a] * s) ** 2
             kp, kv = pp / S, pv / S
             y = z - mean[i, a]
             mean[i, a] += kp * y
@@ -361,7 +361,7 @@ class BoxTracker:
         self._cfg = np.array([c.two_stage, c.high, c.low, c.min_iou, c.min_iou_low,
                               c.min_iou_tentative, c.fuse_score, c.camera_motion,
                               c.camera_min_iou, c.camera_min_matches, c.camera_sig], float)
-        self._noise = (float(m.std_pos), float(m.std_vel), float(m.std_meas))
+        self._noise = np.r_[float(m.std_pos), float(m.std_vel), m.std_meas]
         self.reset()
 
     def reset(self) -> None:
