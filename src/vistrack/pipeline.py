@@ -289,11 +289,9 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
             # a background model works only with a still camera: nothing to compensate, and
             # blobs that split and merge would read as small shifts of the camera
             overrides.setdefault("camera_motion", False)
-            # a blob's box errs with the segmentation (shadows merged, a body split), in its
-            # size as much as in its centre, not as a person detector's does: one noise level
-            # for all four values (on the bundled clip HOTA / MOTA / IDF1 37.2 / 28.2 / 44.2,
-            # against 34.9 / 27.4 / 40.0 with BoxMotion's default)
-            overrides.setdefault("motion", BoxMotion(std_meas=1 / 20))
+            from .frontends.blobs import BOX_STD_MEAS  # one noise level for centre and size
+
+            overrides.setdefault("motion", BoxMotion(std_meas=BOX_STD_MEAS))
         box_tracker = BoxTracker(tracker, frame_rate=reader.fps, image_size=reader.size,
                                  **overrides)
 
