@@ -13,9 +13,8 @@ legs swing in and out of the box, while head and feet fix its height. Against th
 truth of MOT15 and MOT17 (robust standard deviations, each sequence's bias taken off), the
 detected width errs by 0.18 and 0.038 of the width, the centre's x by 0.10 and 0.022 of the
 width; the height by 0.087 and 0.025 of the height, the centre's y by 0.039 and 0.014 of the
-height. So by
-default a detection's width has a standard deviation of ``1/10`` of it and its height
-``1/14`` of it, against ``1/20`` for the centre, and the filter follows the jumps of a
+height. So by default a detection's width has a standard deviation of ``1/10`` of it and its
+height ``1/14`` of it, against ``1/20`` for the centre, and the filter follows the jumps of a
 detection's size less. (On MOT15 the centre's x errs by more than ``1/20`` too, but a larger
 value there, or for the height, tracked worse; see docs/mot.md.)
 """
@@ -46,8 +45,10 @@ class BoxMotion:
     Examples
     --------
     >>> m = BoxMotion()
-    >>> float(m.F(2.0)[0, 4]), m.R(np.array([[0, 0, 20.0, 28.0]]))[0].diagonal().round(2).tolist()
-    (2.0, [1.0, 1.96, 4.0, 4.0])
+    >>> float(m.F(2.0)[0, 4])
+    2.0
+    >>> m.R(np.array([[0, 0, 20.0, 28.0]]))[0].diagonal().round(2).tolist()  # cx, cy, w, h
+    [1.0, 1.96, 4.0, 4.0]
     """
 
     ndim_state, ndim_meas = 8, 4
