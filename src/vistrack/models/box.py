@@ -57,16 +57,15 @@ class BoxMotion:
                  std_meas: float | tuple[float, float, float, float] = (1 / 20, 1 / 20, 1 / 10,
                                                                         1 / 14),
                  init_pos: float = 2.0, init_vel: float = 10.0):
-        meas = np.broadcast_to(np.asarray(std_meas, dtype=float), (4,)) \
-            if np.ndim(std_meas) == 0 or np.shape(std_meas) == (4,) else None
-        if meas is None:
+        meas = np.asarray(std_meas, dtype=float)
+        if meas.shape not in ((), (4,)):
             raise ValueError(f"std_meas must be one number or 4 (cx, cy, w, h); got {std_meas!r}")
         for name, v in (("std_pos", std_pos), ("std_vel", std_vel), ("init_pos", init_pos),
-                        ("init_vel", init_vel), *(("std_meas", m) for m in meas)):
+                        ("init_vel", init_vel), *(("std_meas", m) for m in meas.ravel())):
             if not np.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite number > 0; got {v}")
         self.std_pos, self.std_vel = std_pos, std_vel
-        self.std_meas = meas.copy()
+        self.std_meas = np.broadcast_to(meas, (4,)).copy()
         self.init_pos, self.init_vel = init_pos, init_vel
 
     def F(self, dt: float = 1.0) -> np.ndarray:
