@@ -31,9 +31,7 @@ from _common import optional  # noqa: E402  (bench/ is on the path of its script
 from _markdown import replace_section  # noqa: E402
 from vistrack.evaluation import evaluate_mot
 from vistrack.frontends import SelectiveBackground, find_blobs
-from vistrack.frontends.blobs import BOX_STD_MEAS
 from vistrack.io import MOTTable, VideoReader, read_mot
-from vistrack.models import BoxMotion
 from vistrack.tracking import BoxTracker
 from vistrack.types import Detections
 
@@ -140,7 +138,7 @@ def vistrack_chain(init):
     def make():
         bg = SelectiveBackground().initialize(init)
         tr = BoxTracker("bytetrack", frame_rate=FPS, camera_motion=False,  # as the CLI's bgsub
-                        motion=BoxMotion(std_meas=BOX_STD_MEAS), image_size=SIZE)
+                        image_size=SIZE)
 
         def detect(grey):
             b = find_blobs(bg.apply(grey), min_area=500, open_size=3, close_size=7)

@@ -100,6 +100,8 @@ def test_state_layout_matches_seed_2d_example():
         (lambda: Periodic(omega=0), "omega must be a finite number > 0"),
         (lambda: BoxMotion(std_meas=(0.05, 0.05)), r"std_meas must be one number or 4 \(cx, cy"),
         (lambda: BoxMotion(std_meas=(0.05, 0.05, 0.0, 0.05)), "std_meas must be a finite number > 0"),
+        (lambda: BoxMotion(frame_rate=0), "frame_rate must be a finite number > 0"),
+        (lambda: BoxMotion().at_rate(np.inf), "frame_rate must be a finite number > 0"),
         (lambda: ConstantAcceleration(discretisation="rk4"), "discretisation must be"),
         (lambda: Position(dim=2, r=0.0), "r must be a finite variance > 0"),
         (lambda: Position(dim=2, r=np.eye(3)), r"r must have shape \(2, 2\)"),
@@ -140,6 +142,26 @@ def test_box_measurement_noise_per_value():
     np.testing.assert_allclose(m.R(boxes), expected[:, :, None] * np.eye(4))
     np.testing.assert_allclose(BoxMotion(std_meas=0.1).R_diag(boxes),
                                (0.1 * boxes[:, [2, 3, 2, 3]]) ** 2)
+
+
+@pytest.mark.parametrize("rate", [7.0, 10.0, 14.0, 60.0])
+def test_box_motion_at_another_frame_rate_is_the_same_motion_in_time(rate):
+    """The noise is a random walk of the position and of the velocity in time: over one
+    second, the position variance added, and the velocity variance in pixels per second, are
+    the same at any frame rate; a new track's position and velocity (pixels per second)
+    start as uncertain; F is the same per frame."""
+    box = np.array([[100.0, 200.0, 40.0, 90.0]])
+    ref, m = BoxMotion(), BoxMotion().at_rate(rate)
+    assert ref.at_rate(30.0) is ref and m.frame_rate == rate
+    q_ref, q = ref.Q_diag(box, 30.0), m.Q_diag(box, rate)  # one second of frames
+    np.testing.assert_allclose(q[:, :4], q_ref[:, :4])
+    np.testing.assert_allclose(q[:, 4:] * rate ** 2, q_ref[:, 4:] * 30.0 ** 2)
+    d_ref = np.diagonal(ref.initial(box)[1], axis1=1, axis2=2)
+    d = np.diagonal(m.initial(box)[1], axis1=1, axis2=2)
+    np.testing.assert_allclose(d[:, :4], d_ref[:, :4])
+    np.testing.assert_allclose(d[:, 4:] * rate ** 2, d_ref[:, 4:] * 30.0 ** 2)
+    np.testing.assert_array_equal(m.F(2.0), ref.F(2.0))
+    np.testing.assert_array_equal(m.R_diag(box), ref.R_diag(box))
 
 
 @pytest.mark.slow

@@ -68,7 +68,9 @@ def test_trackers_recover_a_scene_with_known_truth(name):
 
 def test_two_stage_recovers_low_score_detections():
     """When a third of the true detections come with a low score, the second stage keeps
-    tracking through them: more of the truth is found than with one threshold."""
+    tracking through them: more of the truth is found than with one threshold (raw scores,
+    where 0.3 is low: calibrated, these detections persist like the others and are
+    confident)."""
     rng = np.random.default_rng(1)
     gt, dets = scene(rng, clutter=0.0)
     dimmed = []
@@ -76,8 +78,10 @@ def test_two_stage_recovers_low_score_detections():
         s = d.scores.copy()
         s[rng.random(len(s)) < 0.33] = 0.3
         dimmed.append(Detections(boxes=d.boxes, scores=s))
-    two = evaluate_mot(gt, run(BoxTracker("bytetrack"), dimmed), len(dets))
-    one = evaluate_mot(gt, run(BoxTracker("bytetrack", two_stage=False), dimmed), len(dets))
+    raw = dict(scores="raw", high=0.8, new_track=0.9, low=0.1)
+    two = evaluate_mot(gt, run(BoxTracker("bytetrack", **raw), dimmed), len(dets))
+    one = evaluate_mot(gt, run(BoxTracker("bytetrack", two_stage=False, **raw), dimmed),
+                       len(dets))
     assert two.TP > one.TP * 1.1 and two.MOTA > one.MOTA
 
 
@@ -99,10 +103,12 @@ def test_frame_gaps_predict_over_the_true_time():
 
 
 def test_coasting_reports_a_well_followed_track_through_a_short_miss():
-    """Three people moving at constant velocity, all unseen in frames 16-18 of a 640 x 480
-    image. A, followed 15 frames in a row, is reported at its prediction in frames 16 and 17
-    (on the truth: IoU > 0.9) and not in 18; B, followed 5 frames, is not reported; C is
-    reported in frame 16 and not in 17, where its prediction crosses the image's edge."""
+    """Three people moving at constant velocity, all unseen in frames 16-19 of a 640 x 480
+    image. At 30 frames/s, A, followed 15 frames (0.5 s) in a row, is reported at its
+    prediction for 0.1 s, in frames 16-18 (on the truth: IoU > 0.9), and not in 19; B, followed
+    5 frames (0.17 s, under a third of a second), is not reported; C is reported in frame 16
+    and not in 17, where its prediction crosses the image's edge. At 10 frames/s the same
+    frames last three times longer: A and B are reported in frame 16 only."""
     def truth(f):
         return np.array([[100 + 4 * f, 200, 40, 100],    # A, seen from frame 1
                          [300, 100 + 3 * f, 40, 100],    # B, seen from frame 11
@@ -110,24 +116,26 @@ def test_coasting_reports_a_well_followed_track_through_a_short_miss():
                         float)
 
     def detections(f):
-        seen = [] if 16 <= f <= 18 else [0, 2] if f <= 10 else [0, 1, 2]
+        seen = [] if 16 <= f <= 19 else [0, 2] if f <= 10 else [0, 1, 2]
         return Detections.from_xywh(truth(f)[seen], np.full(len(seen), 0.9))
 
-    def run_ids(tracker, frames=21):
+    def run_ids(tracker, frames=22):
         out = {f: tracker.step(detections(f), frame=f) for f in range(1, frames + 1)}
         return out, {f: o.ids.tolist() for f, o in out.items()}
 
     out, ids = run_ids(BoxTracker("bytetrack", image_size=(640, 480)))
     A, C = ids[10]
-    assert len(ids[15]) == 3  # and B
-    assert ids[16] == [A, C] and ids[17] == [A] and ids[18] == []
-    for f in (16, 17):
+    B, = set(ids[15]) - {A, C}
+    assert ids[16] == [A, C] and ids[17] == ids[18] == [A] and ids[19] == []
+    for f in (16, 17, 18):
         truth_box = Detections.from_xywh(truth(f)[:1], [1.0]).boxes
         assert iou_pairs(out[f].boxes[:1], truth_box, 0.9)[2].size == 1
-    assert sorted(ids[19]) == sorted(ids[15])  # all found again under their identities
-    # without the image's size C is reported in frame 17 too; with coast_frames=0, none is
+    assert sorted(ids[20]) == sorted(ids[15])  # all found again under their identities
+    # without the image's size C is reported in frame 17 too; with coast_time=0, none is
     assert run_ids(BoxTracker("bytetrack"), 17)[1][17] == [A, C]
-    assert run_ids(BoxTracker("bytetrack", coast_frames=0), 17)[1][16] == []
+    assert run_ids(BoxTracker("bytetrack", coast_time=0.0), 17)[1][16] == []
+    slow = run_ids(BoxTracker("bytetrack", frame_rate=10.0, image_size=(640, 480)))[1]
+    assert sorted(slow[16]) == sorted([A, B, C]) and slow[17] == []
     with pytest.raises(ValueError, match="image_size must be"):
         BoxTracker(image_size=(640, 0))
 
@@ -237,9 +245,11 @@ def assert_same_tracking(frames, fps=30.0, **kw):
     for a, b in zip(out_c, out_n):
         assert np.array_equal(a.ids, b.ids) and np.array_equal(a.boxes, b.boxes)
         assert np.array_equal(a.scores, b.scores)
+    def flat(h):  # one item holds the frame's detections
+        return [y for x in h for y in (x if isinstance(x, tuple) else (x,))]
+
     for a, b in zip(hist_c, hist_n):
-        a, b = a[:-1] + a[-1], b[:-1] + b[-1]  # the last item holds the frame's detections
-        assert all(np.array_equal(x, y) for x, y in zip(a, b))
+        assert all(np.array_equal(x, y) for x, y in zip(flat(a), flat(b)))
     return sum(len(o) for o in out_c)
 
 
@@ -316,6 +326,40 @@ def test_camera_motion_is_estimated():
     assert not BoxTracker("sort").config.camera_motion
 
 
+def test_camera_motion_moves_only_the_tracks_it_fits():
+    """Six boxes speeding up to the left (cars passing the camera) and three standing still:
+    the camera's shift, estimated from the majority, is applied at almost every frame, but a
+    standing box's detection overlaps its own prediction better than the moved one, so its
+    track is not moved: it stays on the truth under one identity. (A shift applied to every
+    track would carry them 4-20 pixels a frame off.) The compiled step and the numpy steps
+    agree."""
+    rng = np.random.default_rng(0)
+    A0 = np.c_[np.linspace(900, 1300, 6), np.full(6, 300.0)]
+    B = np.array([[200, 700], [500, 750], [800, 720.0]])
+    wh = np.r_[np.tile([80, 50], (6, 1)), np.tile([40, 90], (3, 1))]
+    frames = []
+    for t in range(60):
+        c = np.r_[np.c_[A0[:, 0] - (4 * t + 0.15 * t * t), A0[:, 1]], B]
+        c = c + rng.normal(0, 0.5, c.shape)
+        frames.append((t + 1, Detections.from_xywh(np.c_[c - wh / 2, wh], np.full(9, 0.9))))
+    tr = BoxTracker(image_size=(2000, 1000))
+    truth = np.c_[B - [20, 45], B + [20, 45]]
+    shifted, ids = 0, set()
+    for f, d in frames:
+        out = tr.step(d, frame=f)
+        shifted += tr.camera_shift.any()
+        if f > 3:
+            ov = iou_pairs(truth, out.boxes, 0.8)
+            assert len(ov[0]) == 3, f
+            ids.update(out.ids[ov[1]].tolist())
+    assert shifted > 50 and len(ids) == 3
+    # the shifts each track followed, summed: the passing boxes' 250 pixels or more, the
+    # standing boxes' a few (where a small shift overlapped their detection as well)
+    standing = np.isin(tr.tracks.ids, sorted(ids))
+    assert np.abs(tr._offsets[standing]).max() < 5 and tr._offsets[~standing, 0].max() < -200
+    assert assert_same_tracking(frames) > 400
+
+
 def test_the_compiled_step_runs_only_where_it_equals_the_numpy_steps():
     from vistrack.models import BoxMotion
 
@@ -370,10 +414,11 @@ def test_offline_mode_smooths_and_fills_gaps():
 
 def test_offline_mode_drops_tracks_of_low_score_detections():
     """A track started by two confident detections and kept alive by low-score ones (the
-    second stage) is dropped offline by ``min_score``; a track of confident ones is kept."""
+    second stage) is dropped offline by ``min_score``; a track of confident ones is kept
+    (raw scores: calibrated, the low scores here persist as the high ones do)."""
     from vistrack.tracking import smooth
 
-    tr = BoxTracker("bytetrack", record=True)
+    tr = BoxTracker("bytetrack", record=True, scores="raw", high=0.8, new_track=0.9, low=0.1)
     for f in range(1, 21):
         weak = 0.95 if f <= 2 else 0.3
         tr.step(Detections.from_xywh([[100 + 3 * f, 50, 30, 60], [400, 50 + 2 * f, 30, 60]],
@@ -409,8 +454,9 @@ def _smoothed_table(s):
 
 def test_offline_mode_follows_tracks_back_through_low_score_detections():
     """A person detected with score 0.5 for 20 frames and 0.95 after starts a track only at
-    frame 21 (new tracks need 0.9); offline, the track is followed back through the weak
-    detections to frame 1, on the truth, while low-score clutter elsewhere is left alone."""
+    frame 21 (new tracks need 0.9, on raw scores); offline, the track is followed back through
+    the weak detections to frame 1, on the truth, while low-score clutter elsewhere is left
+    alone."""
     from vistrack.tracking import smooth
 
     rng = np.random.default_rng(3)
@@ -422,7 +468,7 @@ def test_offline_mode_follows_tracks_back_through_low_score_detections():
     clutter = [Detections.from_xywh(np.r_[d.xywh, rng.uniform([300, 500, 20, 50],
                                                               [900, 700, 40, 100], (1, 4))],
                                     np.r_[d.scores, 0.4]) for d in dets]
-    tr = BoxTracker("bytetrack", record=True)
+    tr = BoxTracker("bytetrack", record=True, scores="raw", high=0.8, new_track=0.9, low=0.1)
     for f, d in enumerate(clutter, start=1):
         tr.step(d, frame=f)
     plain, ext = smooth(tr, extend_iou=None), smooth(tr)
@@ -475,7 +521,8 @@ def test_offline_mode_follows_the_camera():
         scores["online"].append(evaluate_mot(gt, run(BoxTracker("bytetrack"), dets), len(dets)))
         for name in ("offline", "image"):
             if name == "image":  # forget the shifts: smooth in image coordinates
-                tr.history = [h[:9] + (np.zeros(2),) + h[10:] for h in tr.history]
+                tr.history = [h[:9] + (np.zeros(2), h[10], np.zeros_like(h[11]))
+                              for h in tr.history]
             s = smooth(tr)
             off = MOTTable(s.frames, s.ids, s.xywh, s.scores, -np.ones(len(s), int),
                            -np.ones(len(s)))

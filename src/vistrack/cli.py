@@ -19,54 +19,117 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+# command-line options that set the box tracker's configuration: (option, table, key, type,
+# metavar, help, the default as the help says it); vistrack.config is not imported to build the
+# parser (it loads the compiled tracker), and a test checks these defaults against it
+_SETTINGS = (
+    ("scores", "tracker", "scores", str, None, "what the thresholds apply to", "calibrated"),
+    ("high", "tracker", "high", float, "X", "confident detections: the first association stage",
+     0.6),
+    ("low", "tracker", "low", float, "X", "the lowest used at all", 0.3),
+    ("new_track", "tracker", "new_track", float, "X", "the lowest that starts a track", 0.7),
+    ("min_iou", "tracker", "min_iou", float, "X",
+     "the first stage's gate, on IoU times the confidence", 0.2),
+    ("confirm_hits", "tracker", "confirm_hits", int, "N", "updates in a row that confirm a track",
+     2),
+    ("max_lost", "tracker", "max_lost", float, "SECONDS", "how long a lost track is kept", 2.0),
+    ("max_gap", "offline", "max_gap", float, "SECONDS", "offline: the longest gap filled", 1.0),
+    ("min_track_score", "offline", "min_track_score", float, "X",
+     "offline: the lowest mean confidence of a track's detections kept", 0.75),
+    ("link_gap", "offline", "link_gap", float, "SECONDS",
+     "offline: join tracks up to this far apart (0: never)", 2.0),
+)
+
+
+def _box_config(args: argparse.Namespace):
+    """The box tracker's configuration from --tracker, --config and the setting options
+    (in that order, each over the one before), or an error message."""
+    from .config import TrackConfig, read_config
+
+    base = TrackConfig.preset(args.tracker or "bytetrack")
+    if args.config is not None:
+        cfg = read_config(args.config)
+        if args.tracker is not None and args.tracker != cfg.name:
+            return None, (f"--tracker {args.tracker} disagrees with [tracker] name = "
+                          f"\"{cfg.name}\" in {args.config}")
+    else:
+        cfg = base
+    for option, table, key, *_ in _SETTINGS:
+        value = getattr(args, option)
+        if value is not None:
+            try:
+                cfg = cfg.with_values(**{table: {key: value}})
+            except ValueError as exc:
+                return None, f"--{option.replace('_', '-')}: {exc}"
+    if args.still_camera:
+        cfg = cfg.with_values(tracker={"camera_motion": False})
+    if args.offline:
+        cfg = cfg.with_values(offline={"enabled": True})
+    return cfg, None
+
+
 def _track(args: argparse.Namespace) -> int:
+    from .config import ConfigError, config_toml
     from .io.video import VideoError
     from .pipeline import track_sequence, track_video
 
+    def fail(text: str) -> int:
+        print(f"vistrack track: error: {text}", file=sys.stderr)
+        return 2
+
     if (args.out is None) == (args.out_dir is None):
-        print("vistrack track: error: give --out RESULTS.txt (a MOTChallenge sequence's "
-              "detections) or --out-dir OUT/ (from pixels)", file=sys.stderr)
-        return 2
+        return fail("give --out RESULTS.txt (a MOTChallenge sequence's detections) or "
+                    "--out-dir OUT/ (from pixels)")
     progress = sys.stderr if sys.stderr.isatty() and not args.quiet else None
-    still = {"camera_motion": False} if args.still_camera else {}
-    if still and args.tracker == "dcpf":
-        print("vistrack track: error: --still-camera goes with the box trackers (bytetrack, "
-              "sort)", file=sys.stderr)
-        return 2
+    setting_flags = [o for o, *_ in _SETTINGS if getattr(args, o) is not None]
+    if args.tracker == "dcpf":
+        given = setting_flags + [f for f in ("still_camera", "config", "print_config")
+                                 if getattr(args, f)]
+        if given:
+            return fail(f"--{given[0].replace('_', '-')} goes with the box trackers "
+                        "(bytetrack, sort)")
+    # with --print-config, stdout holds the configuration alone (the summary goes to stderr)
+    report = sys.stderr if args.print_config else sys.stdout
     try:
+        cfg = None
+        if args.tracker != "dcpf":
+            cfg, problem = _box_config(args)
+            if problem:
+                return fail(problem)
         if args.out is not None:
             for flag in ("frontend", "gt", "fps", "stop", "min_area", "background"):
                 if getattr(args, flag) is not None:
-                    print(f"vistrack track: error: --{flag.replace('_', '-')} goes with "
-                          "--out-dir",
-                          file=sys.stderr)
-                    return 2
-            run = track_sequence(args.input, args.out, detections=args.detections,
-                                 tracker=args.tracker, offline=args.offline, force=args.force,
-                                 progress=progress, **still)
+                    return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
+            run = track_sequence(args.input, args.out, detections=args.detections, config=cfg,
+                                 force=args.force, progress=progress)
             print(f"wrote {run.out}: {run.rows} boxes of {run.tracks} tracks over {run.frames} "
-                  f"frames from {run.detections} detections; tracker {run.fps:.0f} frames/s")
-            return 0
-        if args.offline or args.detections:
-            print("vistrack track: error: --offline and --detections go with --out (use "
-                  "--frontend detections:FILE with --out-dir)", file=sys.stderr)
-            return 2
-        extra = {k: v for k, v in (("min_area", args.min_area),
-                                   ("background", args.background)) if v is not None}
-        run = track_video(args.input, args.out_dir, frontend=args.frontend,
-                          fps=args.fps, tracker=args.tracker, gt=args.gt, stop=args.stop,
-                          force=args.force, progress=progress, **extra, **still)
+                  f"frames from {run.detections} detections; tracker {run.fps:.0f} frames/s",
+                  file=report)
+        else:
+            offline_flags = [f for f in ("offline", "detections", "max_gap", "min_track_score",
+                                         "link_gap") if getattr(args, f)]
+            if offline_flags or (cfg is not None and cfg.offline.enabled):
+                return fail("--offline, its settings and --detections go with --out (use "
+                            "--frontend detections:FILE with --out-dir)")
+            extra = {k: v for k, v in (("min_area", args.min_area),
+                                       ("background", args.background)) if v is not None}
+            given = args.config is not None or setting_flags or args.still_camera
+            run = track_video(args.input, args.out_dir, frontend=args.frontend,
+                              fps=args.fps, tracker=args.tracker or "bytetrack", gt=args.gt,
+                              stop=args.stop, force=args.force, progress=progress,
+                              config=cfg if given else None, **extra)
+            sec = run.seconds
+            ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
+            print(f"tracked {run.frames} frames: {run.rows} boxes of {run.tracks} tracks; "
+                  f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})", file=report)
+            for name, path in run.files.items():
+                print(f"  {name:<7} {path}", file=report)
+            if run.scores is not None:
+                _table({Path(args.input).stem: run.scores}, report)
     except (FileNotFoundError, FileExistsError, ValueError, VideoError) as exc:
-        print(f"vistrack track: error: {exc}", file=sys.stderr)
-        return 2
-    sec = run.seconds
-    ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
-    print(f"tracked {run.frames} frames: {run.rows} boxes of {run.tracks} tracks; "
-          f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})")
-    for name, path in run.files.items():
-        print(f"  {name:<7} {path}")
-    if run.scores is not None:
-        _table({Path(args.input).stem: run.scores})
+        return fail(str(exc) if not isinstance(exc, ConfigError) else str(exc))
+    if args.print_config:
+        sys.stdout.write(config_toml(run.config, run.derived))
     return 0
 
 
@@ -144,13 +207,14 @@ def _eval(args: argparse.Namespace) -> int:
     return 0
 
 
-def _table(res: dict) -> None:
+def _table(res: dict, stream=None) -> None:
+    stream = sys.stdout if stream is None else stream
     width = max(len(k) for k in res) + 2
-    print("".join([f"{'sequence':<{width}}"] + [f"{c:>7}" for c, _ in _COLUMNS]))
+    print("".join([f"{'sequence':<{width}}"] + [f"{c:>7}" for c, _ in _COLUMNS]), file=stream)
     for name, c in res.items():
         s = c.summary()
         cells = [f"{100 * s[k]:7.1f}" if pct else f"{s[k]:7d}" for k, pct in _COLUMNS]
-        print("".join([f"{name:<{width}}"] + cells))
+        print("".join([f"{name:<{width}}"] + cells), file=stream)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -180,17 +244,34 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--out", help="results file to write (detections mode)")
     track.add_argument("--out-dir", help="folder for the outputs (video mode)")
     track.add_argument("--detections", help="detections file (default INPUT/det/det.txt)")
-    track.add_argument("--tracker", default="bytetrack",
+    track.add_argument("--tracker", choices=("bytetrack", "sort", "dcpf"),
                        help="tracker: bytetrack (default) or sort; in video mode also dcpf, "
                        "the detector-confidence particle filter (HOG's confidence map, "
                        "3-4 frames/s)")
     track.add_argument("--offline", action="store_true",
-                       help="smooth finished tracks, fill gaps of up to 1 s, drop tracks whose "
-                       "detections score under 0.85 on average, follow tracks back through "
-                       "unused detections, join tracks up to 2 s apart (--out)")
+                       help="smooth finished tracks, fill their gaps, drop tracks of weak "
+                       "detections, follow tracks back through unused detections and join "
+                       "tracks across gaps; scores are calibrated on the whole file (--out)")
     track.add_argument("--still-camera", action="store_true",
                        help="the camera does not move: no camera-motion compensation (on by "
                        "default in bytetrack, except with the bgsub front-end)")
+    box = track.add_argument_group(
+        "box tracker settings", "The thresholds apply to calibrated confidences in [0, 1] "
+        "(how nearly detections of a score persist from frame to frame as the detector's "
+        "best do; learnt from the detections, so any score scale works), or with --scores "
+        "raw to the scores themselves. Each option is put over --config, and the file over "
+        "its preset ([tracker] name, which --tracker must then agree with).")
+    box.add_argument("--config", metavar="FILE",
+                     help="the whole tracker configuration, TOML (as --print-config writes)")
+    box.add_argument("--print-config", action="store_true",
+                     help="print the configuration used, with the values derived from the "
+                     "data (raw score of each threshold, frame rate), as TOML to stdout; "
+                     "the summary goes to stderr")
+    for option, _, _, kind, metavar, text, default in _SETTINGS:
+        box.add_argument("--" + option.replace("_", "-"), type=kind, metavar=metavar,
+                         choices=("calibrated", "raw") if option == "scores" else None,
+                         help=f"{text} (default {default:g})" if kind is not str else
+                         f"{text} (default {default})")
     track.add_argument("--frontend", help="video mode: bgsub (default; background model and "
                        "blobs), hog (OpenCV's people detector; the default of dcpf) or "
                        "detections:FILE")

@@ -7,7 +7,7 @@ results files against ground truth. The command line (:mod:`vistrack.cli`) calls
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -16,18 +16,21 @@ import numpy as np
 from .evaluation.mot import MOTCounts, combine, evaluate_mot
 from .io.motchallenge import read_mot, read_seqinfo, write_mot
 from .models.box import BoxMotion
+from .config import OfflineConfig, TrackConfig
 from .tracking.box import BoxTracker
+from .tracking.calibration import ScoreCalibration
 from .tracking.lifecycle import Tracks
 from .tracking.offline import smooth
 from .types import Detections
 
-__all__ = ["track_sequence", "TrackRun", "evaluate_files", "track_video", "VideoRun", "FRONTENDS",
-           "track_one", "SingleRun"]
+__all__ = ["track_sequence", "TrackRun", "resolve_config", "derived_values", "evaluate_files",
+           "track_video", "VideoRun", "FRONTENDS", "track_one", "SingleRun"]
 
 
 @dataclass(frozen=True)
 class TrackRun:
-    """What :func:`track_sequence` did: the results file, frames, tracks and tracker time."""
+    """What :func:`track_sequence` did: the results file, frames, tracks, tracker time, the
+    configuration used and the values derived from the data (:func:`derived_values`)."""
 
     out: Path
     frames: int
@@ -35,6 +38,8 @@ class TrackRun:
     rows: int
     tracks: int
     seconds: float
+    config: TrackConfig | None = None
+    derived: dict | None = None
 
     @property
     def fps(self) -> float:
@@ -52,10 +57,56 @@ def _progress(done: int, total: int, label: str, stream: Any) -> None:
     stream.flush()
 
 
+_OFFLINE_KEYS = {f.name for f in fields(OfflineConfig)}
+
+
+def resolve_config(config: TrackConfig | str | None = None, *, tracker: str | None = None,
+                   offline: bool | None = None, **overrides: Any) -> TrackConfig:
+    """The configuration of a run: ``config`` (a :class:`~vistrack.config.TrackConfig` or a
+    preset's name; default the ``tracker`` preset, else ``bytetrack``), with ``offline`` and
+    ``overrides`` (fields of the tracker's or the offline mode's settings, or ``motion``, a
+    :class:`~vistrack.models.BoxMotion`) put over it."""
+    if isinstance(config, str) or config is None:
+        if isinstance(config, str) and tracker is not None and tracker != config:
+            raise ValueError(f"tracker {tracker!r} and config {config!r} disagree")
+        config = TrackConfig.preset(config if isinstance(config, str) else tracker or
+                                    "bytetrack")
+    elif tracker is not None and tracker != config.name:
+        raise ValueError(f"tracker {tracker!r} and the configuration's {config.name!r} "
+                         "disagree; give one")
+    motion = overrides.pop("motion", None)
+    off = {k: overrides.pop(k) for k in list(overrides) if k in _OFFLINE_KEYS}
+    if offline is not None:
+        off["enabled"] = bool(offline)
+    config = config.with_values(tracker=overrides, offline=off)
+    return replace(config, motion=motion) if motion is not None else config
+
+
+def derived_values(trk: BoxTracker) -> dict:
+    """What a box tracker derived from the data it has tracked: its frame rate, its motion's
+    per-frame noise at that rate, and with calibrated scores the raw score at which each
+    threshold's confidence is reached (:meth:`ScoreCalibration.score_at`), with what the
+    calibration was fitted to."""
+    c, m = trk.config, trk.motion
+    out: dict = {"frame_rate": trk.frame_rate}
+    if trk.image_size is not None:
+        out["image_size"] = [int(v) for v in trk.image_size]
+    out.update({"std_pos_per_frame": float(m.std_pos), "std_vel_per_frame": float(m.std_vel)})
+    if c.scores == "calibrated":
+        cal = trk.calibration or trk.calibrator.calibration()
+        out["calibration"] = "whole file" if trk.calibration is not None else \
+            "online, at the last frame"
+        out["calibration_outcomes"] = cal.n
+        if cal.n:
+            out["calibration_top_persistence"] = round(cal.top_persistence, 6)
+        for name in ("high", "low", "new_track"):
+            out[f"{name}_score"] = cal.score_at(getattr(c, name))
+    return out
+
+
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,
-                   tracker: str = "bytetrack", offline: bool = False, max_gap: float = 1.0,
-                   min_track_score: float = 0.85, link_gap: float = 2.0,
-                   force: bool = False, progress: Any = None,
+                   config: TrackConfig | str | None = None, tracker: str | None = None,
+                   offline: bool | None = None, force: bool = False, progress: Any = None,
                    **overrides: Any) -> TrackRun:
     """Track a MOTChallenge sequence folder and write a results file.
 
@@ -67,16 +118,18 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         The results file to write (not overwritten unless ``force``).
     detections
         Another detections file (default ``seq_dir/det/det.txt``).
-    tracker
-        A name in :data:`vistrack.tracking.TRACKERS`.
-    offline
-        Smooth the finished tracks, fill gaps of up to ``max_gap`` seconds, drop tracks
-        whose detections score less than ``min_track_score`` on average, follow tracks back
-        through the detections left over and join tracks up to ``link_gap`` seconds apart
-        (:func:`vistrack.tracking.smooth`).
+    config, tracker, offline, overrides
+        The configuration (:func:`resolve_config`): a
+        :class:`~vistrack.config.TrackConfig` or a preset's name in
+        :data:`vistrack.tracking.TRACKERS`, and values put over it.
+        Offline, the finished tracks are smoothed, gaps filled, tracks of weak detections
+        dropped, tracks followed back through the detections left over and joined across
+        gaps (:func:`vistrack.tracking.smooth`), and calibrated scores are calibrated on the
+        whole file.
     progress
         A stream for a progress bar (the command line passes stderr on a terminal), or None.
     """
+    cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
     seq_dir = Path(seq_dir)
     info = read_seqinfo(seq_dir)
     det_path = Path(detections) if detections is not None else seq_dir / "det" / "det.txt"
@@ -89,16 +142,24 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     if len(dets) and dets.frames.max() > info.seq_length:
         raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
                          f"sequence's {info.seq_length} frames ({seq_dir / 'seqinfo.ini'})")
-    trk = BoxTracker(tracker, frame_rate=info.frame_rate, record=offline,
-                     image_size=(info.im_width, info.im_height), **overrides)
     slices = dets.frame_slices(info.seq_length)
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
+    per_frame = [Detections(boxes=xyxy[s], scores=dets.conf[s]) for s in slices]
+    seconds = 0.0
+    calibration = None
+    tc, oc = cfg.tracker, cfg.offline
+    if oc.enabled and tc.scores == "calibrated":
+        # offline, the scores are calibrated on the whole file (see tracking.calibration)
+        t0 = time.perf_counter()
+        calibration = ScoreCalibration.from_frames(per_frame, link_iou=tc.link_iou,
+                                                   top=tc.calibration_top)
+        seconds += time.perf_counter() - t0
+    trk = BoxTracker(tc, motion=cfg.motion, frame_rate=info.frame_rate, record=oc.enabled,
+                     image_size=(info.im_width, info.im_height), calibration=calibration)
     frames, ids, boxes, scores = [], [], [], []
     every = max(1, info.seq_length // 50)
-    seconds = 0.0
     for f in range(1, info.seq_length + 1):
-        s = slices[f - 1]
-        d = Detections(boxes=xyxy[s], scores=dets.conf[s])
+        d = per_frame[f - 1]
         t0 = time.perf_counter()
         res = trk.step(d, frame=f)
         seconds += time.perf_counter() - t0
@@ -112,15 +173,19 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     cat = (lambda a, shape: np.concatenate(a) if a else np.zeros(shape))
     F, I = cat(frames, (0,)).astype(int), cat(ids, (0,)).astype(int)
     B, S = cat(boxes, (0, 4)), cat(scores, (0,))
-    if offline:
+    if oc.enabled:
         t0 = time.perf_counter()
         fps = info.frame_rate
-        sm = smooth(trk, max_gap=int(round(max_gap * fps)), min_score=min_track_score,
-                    link_gap=int(round(link_gap * fps)), link_window=max(1, round(0.5 * fps)))
+        sm = smooth(trk, max_gap=int(round(oc.max_gap * fps)), min_score=oc.min_track_score,
+                    extend_iou=oc.extend_iou if oc.extend_iou > 0 else None,
+                    link_gap=int(round(oc.link_gap * fps)), link_iou=oc.link_iou,
+                    link_window=max(1, round(oc.link_window * fps)))
         seconds += time.perf_counter() - t0
         F, I, B, S = sm.frames, sm.ids, sm.xywh, np.where(sm.filled, 0.0, sm.scores)
     write_mot(out, F, I, B, S, force=True)
-    return TrackRun(out, info.seq_length, len(dets), len(F), len(np.unique(I)), seconds)
+    used = cfg if cfg.motion is not None else replace(cfg, motion=BoxMotion())
+    return TrackRun(out, info.seq_length, len(dets), len(F), len(np.unique(I)), seconds,
+                    used, derived_values(trk))
 
 
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
@@ -144,8 +209,9 @@ FRONTENDS = ("bgsub", "hog", "detections:FILE")
 @dataclass(frozen=True)
 class VideoRun:
     """What :func:`track_video` wrote and measured: the output files, frames, tracks, the
-    seconds spent in each stage (``decode``, ``frontend``, ``tracker``, ``write``) and the
-    scores against ground truth (None without it)."""
+    seconds spent in each stage (``decode``, ``frontend``, ``tracker``, ``write``), the
+    scores against ground truth (None without it), and for a box tracker the configuration
+    used and the values derived from the data."""
 
     out_dir: Path
     files: dict
@@ -154,6 +220,8 @@ class VideoRun:
     tracks: int
     seconds: dict
     scores: MOTCounts | None
+    config: TrackConfig | None = None
+    derived: dict | None = None
 
     @property
     def fps(self) -> float:
@@ -210,7 +278,7 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
                 min_area: float = 500.0, n_init: int = 20, stop: int | None = None,
                 annotate: bool = True, force: bool = False, progress: Any = None,
                 confidence: Any = None, det_threshold: float = 0.5,
-                **overrides: Any) -> VideoRun:
+                config: TrackConfig | None = None, **overrides: Any) -> VideoRun:
     """Track a video (a file, an image folder or a MOTChallenge sequence folder) from pixels.
 
     Writes into ``out_dir``: ``tracks.txt`` (MOTChallenge results), ``tracks.csv``,
@@ -242,6 +310,10 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
         with ``bgsub`` the box tracker's ``camera_motion`` is off unless passed.
     stop
         The last frame to track (default: all).
+    config
+        The whole configuration of a box tracker (:class:`~vistrack.config.TrackConfig`), used
+        as it is: the ``bgsub`` front-end's default (no camera motion) is not put over it.
+        ``overrides`` then change its tracker's settings.
     """
     import cv2
 
@@ -285,15 +357,19 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
         frontend = "bgsub" if frontend is None else frontend
         detect = _frontend(frontend, reader, background=background, min_area=min_area,
                            n_init=n_init)
-        if frontend == "bgsub":
+        if config is not None and config.offline.enabled:
+            raise ValueError("the offline mode goes with a sequence's detections (track "
+                             "--out), not with a video")
+        if frontend == "bgsub" and config is None:
             # a background model works only with a still camera: nothing to compensate, and
             # blobs that split and merge would read as small shifts of the camera
             overrides.setdefault("camera_motion", False)
-            from .frontends.blobs import BOX_STD_MEAS  # one noise level for centre and size
-
-            overrides.setdefault("motion", BoxMotion(std_meas=BOX_STD_MEAS))
-        box_tracker = BoxTracker(tracker, frame_rate=reader.fps, image_size=reader.size,
-                                 **overrides)
+        motion = overrides.pop("motion", None)
+        cfg = resolve_config(config if config is not None else tracker, **overrides)
+        if motion is not None or cfg.motion is None:
+            cfg = replace(cfg, motion=motion or BoxMotion())
+        box_tracker = BoxTracker(cfg.tracker, motion=cfg.motion, frame_rate=reader.fps,
+                                 image_size=reader.size)
 
         def step(d: Any, index: int) -> Tracks:
             return box_tracker.step(d, frame=index)
@@ -346,7 +422,10 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
         last = reader.start + n - 1
         g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= last)]
         scores = evaluate_mot(g, read_mot(files["tracks"]), last, benchmark="auto")
-    return VideoRun(out_dir, files, n, len(a), len(np.unique(I)), sec, scores)
+    if tracker == "dcpf":
+        return VideoRun(out_dir, files, n, len(a), len(np.unique(I)), sec, scores)
+    return VideoRun(out_dir, files, n, len(a), len(np.unique(I)), sec, scores, cfg,
+                    derived_values(box_tracker))
 
 
 # -------------------------------------------------------------------- one object, by hand

@@ -22,14 +22,7 @@ from numba import njit
 
 from ..types import Detections
 
-__all__ = ["BOX_STD_MEAS", "Blobs", "find_blobs", "threshold"]
-
-BOX_STD_MEAS = 1 / 20
-"""The standard deviation of a blob's box (centre and size alike) as a fraction of its size,
-for :class:`vistrack.models.BoxMotion`: a blob's box errs with the segmentation (a shadow
-merged in, a body split in two), in its size as much as in its centre, unlike a person
-detector's (on the bundled PETS09 clip HOTA / MOTA / IDF1 37.2 / 28.2 / 44.2, against
-34.9 / 27.4 / 40.0 with BoxMotion's default)."""
+__all__ = ["Blobs", "find_blobs", "threshold"]
 
 
 @dataclass(frozen=True)

@@ -4,9 +4,17 @@ State ``[cx, cy, w, h, vcx, vcy, vw, vh]`` (centre, size and their rates, deriva
 the kinematic models); measurement ``[cx, cy, w, h]``. A pedestrian 400 pixels tall moves and is
 mis-detected by more pixels than one 40 pixels tall, so every standard deviation is a fraction
 of the box's width (x, w) or height (y, h), as in the Kalman filters of DeepSORT, ByteTrack and
-BoT-SORT (``σ_p = 1/20`` of the size per frame for position, ``σ_v = 1/160`` for velocity).
-Over a gap of ``dt`` frames ``F`` integrates the velocity for ``dt`` and the process noise
-variances grow by ``dt``.
+BoT-SORT (``σ_p = 1/20`` of the size per frame for position, as theirs, and ``σ_v = 1/320`` for
+velocity, half theirs, at 30 frames/s: with the noise following the frame rate as below, theirs
+tracked the 7-14 frames/s sequences worse, see docs/mot.md). Over a gap of ``dt`` frames ``F``
+integrates the velocity for ``dt`` and the process noise variances grow by ``dt``.
+
+Those per-frame values describe one physical motion at one frame rate. The noise is a random
+walk of the position and of the velocity in time, so at ``r`` times fewer frames a second each
+frame's position variance is ``r`` times larger and, the velocity being per frame, its variance
+``r³`` times larger; the initial uncertainty of a new track's position (in pixels) stays, and
+its velocity's (in pixels per frame) grows by ``r``. :meth:`BoxMotion.at_rate` gives the model
+at another frame rate; :class:`~vistrack.tracking.BoxTracker` uses the one at its own.
 
 A detector's box size is noisier than its centre, and its width noisiest: a person's arms and
 legs swing in and out of the box, while head and feet fix its height. Against the ground
@@ -40,7 +48,10 @@ class BoxMotion:
         ``(1/20, 1/20, 1/10, 1/14)``, see the module).
     init_pos, init_vel : float
         Multipliers of ``std_pos`` and ``std_vel`` for a new track's covariance (its velocity
-        is unknown).
+        is unknown: ``20 × 1/320``, a sixteenth of its size a frame at 30 frames/s).
+    frame_rate : float
+        The frames per second at which the per-frame ``std_pos``, ``std_vel``, ``init_pos`` and
+        ``init_vel`` hold (see the module).
 
     Examples
     --------
@@ -49,24 +60,41 @@ class BoxMotion:
     2.0
     >>> m.R(np.array([[0, 0, 20.0, 28.0]]))[0].diagonal().round(2).tolist()  # cx, cy, w, h
     [1.0, 1.96, 4.0, 4.0]
+    >>> slow = m.at_rate(10.0)  # a third of the frames: each frame's velocity noise 3**1.5 larger
+    >>> round(slow.std_vel / m.std_vel, 3), round(slow.std_pos / m.std_pos, 3)
+    (5.196, 1.732)
     """
 
     ndim_state, ndim_meas = 8, 4
 
-    def __init__(self, std_pos: float = 1 / 20, std_vel: float = 1 / 160,
+    def __init__(self, std_pos: float = 1 / 20, std_vel: float = 1 / 320,
                  std_meas: float | tuple[float, float, float, float] = (1 / 20, 1 / 20, 1 / 10,
                                                                         1 / 14),
-                 init_pos: float = 2.0, init_vel: float = 10.0):
+                 init_pos: float = 2.0, init_vel: float = 20.0, frame_rate: float = 30.0):
         meas = np.asarray(std_meas, dtype=float)
         if meas.shape not in ((), (4,)):
             raise ValueError(f"std_meas must be one number or 4 (cx, cy, w, h); got {std_meas!r}")
         for name, v in (("std_pos", std_pos), ("std_vel", std_vel), ("init_pos", init_pos),
-                        ("init_vel", init_vel), *(("std_meas", m) for m in meas.ravel())):
+                        ("init_vel", init_vel), ("frame_rate", frame_rate),
+                        *(("std_meas", m) for m in meas.ravel())):
             if not np.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite number > 0; got {v}")
         self.std_pos, self.std_vel = std_pos, std_vel
         self.std_meas = np.broadcast_to(meas, (4,)).copy()
         self.init_pos, self.init_vel = init_pos, init_vel
+        self.frame_rate = float(frame_rate)
+
+    def at_rate(self, frame_rate: float) -> "BoxMotion":
+        """The same motion with its per-frame noise at ``frame_rate`` frames per second (see
+        the module); ``self`` when that is its rate already."""
+        if not (np.isfinite(frame_rate) and frame_rate > 0):
+            raise ValueError(f"frame_rate must be a finite number > 0; got {frame_rate}")
+        if frame_rate == self.frame_rate:
+            return self
+        r = self.frame_rate / float(frame_rate)
+        return type(self)(std_pos=self.std_pos * r ** 0.5, std_vel=self.std_vel * r ** 1.5,
+                          std_meas=tuple(self.std_meas), init_pos=self.init_pos * r ** -0.5,
+                          init_vel=self.init_vel * r ** -0.5, frame_rate=frame_rate)
 
     def F(self, dt: float = 1.0) -> np.ndarray:
         """``[[I, dt I], [0, I]]`` (8, 8): the constant-velocity transition of the 4 box values."""

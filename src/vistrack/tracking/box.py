@@ -2,8 +2,16 @@ r"""Box trackers: a Kalman filter per box, batched over all tracks, and IoU asso
 
 One step, as on the slides (predict, associate, correct, manage):
 
+0. **scores**: with ``scores="calibrated"`` (the default) every threshold below applies to
+   the detection's calibrated confidence in ``[0, 1]``, not to its raw score: how nearly
+   detections of that score persist from frame to frame as the detector's most confident
+   ones do, learnt online from the frames seen so far, or fitted to the whole file
+   beforehand (:mod:`vistrack.tracking.calibration`). It depends on the order of the
+   scores only, so one setting serves a detector thresholded at 0.5, one whose raw scores
+   run from −1 to 16, and any strictly increasing transform of either, identically;
 1. **predict** every track with :class:`~vistrack.models.BoxMotion` over the true time since the
-   last frame (a gap of frames predicts further, with more noise). With diagonal noise the
+   last frame (a gap of frames predicts further, with more noise; the noise per frame follows
+   the frame rate, :meth:`~vistrack.models.BoxMotion.at_rate`). With diagonal noise the
    8-state filter is four independent 2-state filters, one per box value and its rate, so
    each track keeps a 2×2 covariance per axis, ``[pp, pv, vv]``, and predict and update are
    a few elementwise operations over all tracks (a test checks them against the full
@@ -12,48 +20,55 @@ One step, as on the slides (predict, associate, correct, manage):
    shakes, every box in the image moves by the same amount, which no track's own velocity
    foresees. Confirmed tracks are matched to confident detections at IoU ≥
    ``camera_min_iou`` (global nearest neighbour), and the median of the matched detections'
-   centres minus the predicted ones is the frame's shift. It moves every track, lost ones
-   too, when at least ``camera_min_matches`` pairs give it and it is more than
-   ``camera_sig`` standard errors from zero (``1.4826 MAD / √n`` per axis), so most of a
-   still camera's noise is left alone. This is BoT-SORT's camera-motion compensation
-   (Aharon et al., 2022) estimated from the tracks themselves instead of from the image; a
-   jump larger than about a third of a box leaves too few overlapping pairs and goes unseen;
+   centres minus the predicted ones is the frame's shift, when at least
+   ``camera_min_matches`` pairs give it and it is more than ``camera_sig`` standard errors
+   from zero (``1.4826 MAD / √n`` per axis), so most of a still camera's noise is left alone.
+   This is BoT-SORT's camera-motion compensation (Aharon et al., 2022) estimated from the
+   tracks themselves instead of from the image. One shift does not describe every scene: from
+   a car driving forward, or among cars passing it, boxes at different depths move
+   differently, and the median of a few tracks is wrong for the rest. So each track follows
+   the shift only where its moved prediction overlaps its best-overlapping detection at
+   least as much as its own prediction does (tracks near no detection follow it), and is
+   associated at that prediction alone; its velocity still learns the motion seen in the
+   image, so that where the next frame gives no shift (too few pairs), a camera that keeps
+   turning is followed by the tracks' own predictions. A jump larger than about a third of a
+   box leaves too few overlapping pairs and goes unseen;
 2. **associate** by IoU between predicted and detected boxes, by global nearest neighbour with
    a minimum IoU as the gate; a track only takes detections of its own class. With
    ``two_stage`` (ByteTrack's idea, Zhang et al., 2022):
 
-   - confirmed and lost tracks take the confident detections first (score ≥ ``high``);
-   - tracks still unmatched and not lost take the low-score ones (``low`` ≤ score < ``high``),
-     which are often the partly occluded objects a single threshold would drop;
+   - confirmed and lost tracks take the confident detections first (confidence ≥ ``high``);
+   - tracks still unmatched and not lost take the less confident ones (``low`` ≤ confidence
+     < ``high``), which are often the partly occluded objects a single threshold would drop;
    - tentative tracks take what is left of the confident detections;
 
 3. **correct** the matched tracks with their detections (one batched Kalman update);
-4. **manage**: :mod:`vistrack.tracking.lifecycle`; unmatched confident detections with score
-   ≥ ``new_track`` start tentative tracks;
-5. **report** the confirmed tracks updated in this frame, and, with ``coast_frames``, a
-   track lost for at most that many frames after at least ``coast_after`` updates in a row,
-   at its prediction, while that lies inside the image: a detector misses a person it has
-   found many frames in a row for a frame or two (occlusion, blur) far more often than the
-   person vanishes.
+4. **manage**: :mod:`vistrack.tracking.lifecycle`; unmatched confident detections with
+   confidence ≥ ``new_track`` start tentative tracks;
+5. **report** the confirmed tracks updated in this frame, and, with ``coast_time``, a track
+   lost for at most that long after being updated in a row for ``coast_after`` seconds, at
+   its prediction, while that lies inside the image: a detector misses a person it has found
+   for a while for a moment (occlusion, blur) far more often than the person vanishes.
 
-``"sort"`` is the one-stage tracker with a single score threshold (Bewley et al., 2016),
+``"sort"`` is the one-stage tracker with a single threshold (Bewley et al., 2016),
 ``"bytetrack"`` the two-stage one; :data:`TRACKERS` maps names to configurations.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
 
 from numba import njit
 
-from ..association import assign, gnn_sparse, iou_pairs
+from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs
 from ..association.assign import gnn_pairs
 from ..association.costs import _grid_pairs
 from ..models.box import BoxMotion
 from ..types import Detections
+from .calibration import ScoreCalibration, ScoreCalibrator
 from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, Tracks
 
 __all__ = ["BoxTracker", "BoxTrackerConfig", "TRACKERS"]
@@ -68,34 +83,48 @@ class BoxTrackerConfig:
     ----------
     two_stage : bool
         Associate low-score detections in a second stage.
+    scores : {"calibrated", "raw"}
+        What the thresholds ``high``, ``low`` and ``new_track`` (and ``fuse_score``) apply to:
+        the calibrated confidence of each detection's score, in ``[0, 1]``, learnt from the
+        detections themselves (:mod:`vistrack.tracking.calibration`: how nearly detections
+        of that score persist from frame to frame as the detector's best ones do), so that
+        one setting serves detectors whose scores live on any scale; or the raw scores.
     high, low : float
-        Score thresholds: confident detections, and the lowest score used at all.
+        Thresholds: confident detections, and the lowest used at all.
     new_track : float
-        Lowest score that starts a track.
+        Lowest that starts a track.
     min_iou, min_iou_low, min_iou_tentative : float
         IoU gates of the three stages.
     fuse_score : bool
-        First-stage cost ``1 - IoU * score`` (a confident detection wins a tie) instead of
-        ``1 - IoU``.
+        The first stage's similarity is ``IoU * score`` (cost ``1 -`` it; its gate
+        ``min_iou`` applies to it too, as in ByteTrack): a confident detection wins a tie,
+        and a less confident one must overlap more to be taken.
     confirm_hits : int
         Updates in a row that confirm a track.
     max_lost : float
         Seconds a confirmed track may go unmatched before it is deleted.
     camera_motion : bool
-        Move every prediction by the shift of the image between frames, estimated from the
-        confidently matched tracks (see the module).
+        Move the predictions by the shift of the image between frames, estimated from the
+        confidently matched tracks, track by track where it fits the detections (see the
+        module).
     camera_min_iou, camera_min_matches, camera_sig : float, int, float
         The IoU of the pairs that estimate the shift, how many pairs it needs, and how many
         standard errors from zero it must be.
-    coast_frames, coast_after : int
-        Report a lost track's prediction for up to ``coast_frames`` frames, if it had been
-        updated at least ``coast_after`` frames in a row (0: never).
+    coast_time, coast_after : float
+        Report a lost track's prediction for up to ``coast_time`` seconds, if it had been
+        updated in a row for at least ``coast_after`` seconds (0: never).
+    link_iou, calibration_top, calibration_prior : float
+        With calibrated scores: the IoU at which a detection continues one of the previous
+        frame, the fraction of the most confident detections whose persistence is full
+        confidence, and how many outcomes weigh as much as the rank prior
+        (:class:`~vistrack.tracking.calibration.ScoreCalibrator`).
     """
 
     two_stage: bool = True
-    high: float = 0.8
-    low: float = 0.1
-    new_track: float = 0.9
+    scores: str = "calibrated"
+    high: float = 0.6
+    low: float = 0.3
+    new_track: float = 0.7
     min_iou: float = 0.2
     min_iou_low: float = 0.3
     min_iou_tentative: float = 0.3
@@ -107,15 +136,52 @@ class BoxTrackerConfig:
     camera_min_iou: float = 0.3
     camera_min_matches: int = 3
     camera_sig: float = 2.0
-    coast_frames: int = 2
-    coast_after: int = 10
+    coast_time: float = 0.1
+    coast_after: float = 1 / 3
+    link_iou: float = 0.3
+    calibration_top: float = 0.05
+    calibration_prior: float = 0.0
+
+    def __post_init__(self) -> None:
+        def bad(name: str, must: str) -> ValueError:
+            return ValueError(f"{name} must be {must}; got {getattr(self, name)!r}")
+
+        kinds = {f.name: f.type for f in fields(self)}
+        for name, kind in kinds.items():
+            v = getattr(self, name)
+            if kind == "bool" and not isinstance(v, (bool, np.bool_)):
+                raise bad(name, "True or False")
+            if kind == "int" and (isinstance(v, bool) or v != int(v)):
+                raise bad(name, "an integer")
+            if kind == "float" and (isinstance(v, bool) or not isinstance(v, (int, float))
+                                    or np.isnan(v)):
+                raise bad(name, "a number")
+        if self.scores not in ("calibrated", "raw"):
+            raise bad("scores", "'calibrated' or 'raw'")
+        if self.assigner not in ASSIGNERS:
+            raise bad("assigner", f"one of {sorted(ASSIGNERS)}")
+        unit = ("high", "low", "new_track") if self.scores == "calibrated" else ()
+        for name in unit + ("min_iou", "min_iou_low", "min_iou_tentative", "camera_min_iou"):
+            if not 0 <= getattr(self, name) <= 1:
+                raise bad(name, "in [0, 1]" + (" (a calibrated confidence)" if name in unit
+                                               else ""))
+        for name in ("link_iou", "calibration_top"):
+            if not 0 < getattr(self, name) <= 1:
+                raise bad(name, "in (0, 1]")
+        for name in ("max_lost", "coast_time", "coast_after", "camera_sig",
+                     "calibration_prior"):
+            if not 0 <= getattr(self, name) < np.inf:
+                raise bad(name, "a finite number >= 0")
+        for name in ("confirm_hits", "camera_min_matches"):
+            if getattr(self, name) < 1:
+                raise bad(name, "an integer >= 1")
 
 
 TRACKERS: dict[str, BoxTrackerConfig] = {
     "bytetrack": BoxTrackerConfig(),
     "sort": BoxTrackerConfig(two_stage=False, high=0.5, low=0.5, new_track=0.5, min_iou=0.3,
                              fuse_score=False, confirm_hits=3, max_lost=0.1,
-                             camera_motion=False, coast_frames=0),
+                             camera_motion=False, coast_time=0.0),
 }
 """Box-tracker configurations by name (``vistrack track --tracker NAME``)."""
 
@@ -143,16 +209,20 @@ def predict_axes(mean: np.ndarray, cov: np.ndarray, dt: float, motion: BoxMotion
     return q
 
 
-def update_axes(mean: np.ndarray, cov: np.ndarray, z: np.ndarray,
-                motion: BoxMotion) -> tuple[np.ndarray, np.ndarray]:
+def update_axes(mean: np.ndarray, cov: np.ndarray, z: np.ndarray, motion: BoxMotion,
+                moved: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Correct states ``(K, 8)`` and per-axis covariances ``(K, 4, 3)`` with boxes
-    ``[cx, cy, w, h] (K, 4)``: the new ``(mean, cov)``."""
+    ``[cx, cy, w, h] (K, 4)``: the new ``(mean, cov)``. ``moved (K, 2)``: the shift each
+    state's centre was moved by with the camera, which its velocity learns as motion seen in
+    the image (see the module)."""
     m = mean.copy()
     pp, pv, vv = cov[:, :, 0], cov[:, :, 1], cov[:, :, 2]
     S = pp + motion.R_diag(m[:, :4])
     kp, kv = pp / S, pv / S
     y = z - m[:, :4]
     m[:, :4] += kp * y
+    if moved is not None:
+        y[:, :2] += moved
     m[:, 4:] += kv * y
     return m, np.stack([pp - kp * pp, pv - kp * pv, vv - kv * pv], axis=-1)
 
@@ -197,14 +267,46 @@ def _camera_shift(mean, db, r, c, min_matches, sig):
 
 
 @njit(cache=True)
+def _choose_prediction(K, D, rows, cols, ov, rows1, cols1, ov1):
+    # each track keeps the candidate pairs of the prediction, its own (rows, cols, ov) or the
+    # one moved with the camera (rows1, ...), that overlaps its best detection more (moved on
+    # a tie); returns the pairs kept, sorted by (row, col), and which tracks keep their own
+    best_own, best_moved = np.zeros(K), np.zeros(K)
+    for p in range(rows.shape[0]):
+        best_own[rows[p]] = max(best_own[rows[p]], ov[p])
+    for p in range(rows1.shape[0]):
+        best_moved[rows1[p]] = max(best_moved[rows1[p]], ov1[p])
+    own = best_own > best_moved
+    k0, k1 = own[rows], ~own[rows1]
+    r = np.concatenate((rows1[k1], rows[k0]))
+    c = np.concatenate((cols1[k1], cols[k0]))
+    o = np.concatenate((ov1[k1], ov[k0]))
+    order = np.argsort(r * D + c, kind="mergesort")
+    return r[order], c[order], o[order], own
+
+
+@njit(cache=True)
+def _pred_boxes(mean):
+    K = mean.shape[0]
+    pred = np.empty((K, 4))
+    for i in range(K):
+        for a in range(2):
+            h = max(mean[i, 2 + a], 0.0) / 2
+            pred[i, a], pred[i, 2 + a] = mean[i, a] - h, mean[i, a] + h
+    return pred
+
+
+@njit(cache=True)
 def _stage(rows, cols, ov, state, stage_state, det_ok, min_iou, fuse, ds, match, used, T, D):
     # one association stage over the candidate pairs whose track (state in stage_state, not
-    # matched) and detection (det_ok, not used) are free; cost 1 - IoU (x score if fuse)
+    # matched) and detection (det_ok, not used) are free and whose similarity, IoU (x score
+    # if fuse), is at least min_iou; cost 1 - similarity
     keep = np.empty(rows.shape[0], np.int64)
     n = 0
     for p in range(rows.shape[0]):
         i, j = rows[p], cols[p]
-        if (match[i] < 0 and not used[j] and det_ok[j] and ov[p] >= min_iou
+        if (match[i] < 0 and not used[j] and det_ok[j]
+                and (ov[p] * ds[j] if fuse else ov[p]) >= min_iou
                 and (state[i] == stage_state[0] or state[i] == stage_state[1])):
             keep[n] = p
             n += 1
@@ -243,33 +345,37 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q, shift):
                 q[i, a], q[i, 4 + a] = qp, qv
     match = np.full(K, -1)
     used = np.zeros(D, np.bool_)
+    moved = np.zeros(K, np.bool_)
     if K == 0 or D == 0:
-        return match, used, True
+        return match, used, moved, True
     high_d = ds >= high
     # the lowest IoU any stage, or the camera's estimate, looks at
     gate = min(cfg[3], cfg[4], cfg[5], cfg[8] if cfg[7] != 0.0 else 1.0)
-    for attempt in range(2):
-        pred = np.empty((K, 4))
-        for i in range(K):
-            for a in range(2):
-                h = max(mean[i, 2 + a], 0.0) / 2
-                pred[i, a], pred[i, 2 + a] = mean[i, a] - h, mean[i, a] + h
-        rows, cols, ov, ok = _grid_pairs(pred, db, gate)
-        if not ok:
-            return match, used, False
-        same = tclass[rows] == dc[cols]
-        rows, cols, ov = rows[same], cols[same], ov[same]
-        if attempt == 1 or cfg[7] == 0.0:
-            break
+    rows, cols, ov, ok = _grid_pairs(_pred_boxes(mean), db, gate)
+    if not ok:
+        return match, used, moved, False
+    same = tclass[rows] == dc[cols]
+    rows, cols, ov = rows[same], cols[same], ov[same]
+    if cfg[7] != 0.0:
         # the camera's shift from confirmed tracks and confident detections (see the module)
         sel = (ov >= cfg[8]) & high_d[cols] & (state[rows] == CONFIRMED)
         r, c = gnn_pairs(rows[sel], cols[sel], 1.0 - ov[sel], K, D)
         shift[:] = _camera_shift(mean, db, r, c, cfg[9], cfg[10])
-        if shift[0] == 0.0 and shift[1] == 0.0:
-            break
-        for i in range(K):
-            mean[i, 0] += shift[0]
-            mean[i, 1] += shift[1]
+        if shift[0] != 0.0 or shift[1] != 0.0:
+            for i in range(K):
+                mean[i, 0] += shift[0]
+                mean[i, 1] += shift[1]
+            r1, c1, ov1, ok = _grid_pairs(_pred_boxes(mean), db, gate)
+            same = tclass[r1] == dc[c1]
+            # each track follows the camera, or not, as its best detection says
+            rows, cols, ov, own = _choose_prediction(K, D, rows, cols, ov, r1[same], c1[same],
+                                                     ov1[same])
+            for i in range(K):
+                if own[i]:
+                    mean[i, 0] -= shift[0]
+                    mean[i, 1] -= shift[1]
+                else:
+                    moved[i] = True
     low_d = (ds >= low) & ~high_d if two_stage else np.zeros(D, np.bool_)
     # 1: confirmed and lost tracks, confident detections; 2: confirmed tracks left,
     # low-score detections; 3: tentative tracks, confident detections left
@@ -292,9 +398,10 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q, shift):
             kp, kv = pp / S, pv / S
             y = z - mean[i, a]
             mean[i, a] += kp * y
-            mean[i, 4 + a] += kv * y
+            # the velocity learns the motion seen in the image, the camera's included
+            mean[i, 4 + a] += kv * (y + shift[a] if a < 2 and moved[i] else y)
             cov[i, a, 0], cov[i, a, 1], cov[i, a, 2] = pp - kp * pp, pv - kp * pv, vv - kv * pv
-    return match, used, True
+    return match, used, moved, True
 
 
 class BoxTracker:
@@ -314,6 +421,11 @@ class BoxTracker:
         Keep every frame's filtered states and detections, for
         :func:`vistrack.tracking.offline.smooth` (the offline mode); memory then grows with the
         sequence.
+    calibration : ScoreCalibration, optional
+        With calibrated scores (``config.scores``), a fixed map from scores to confidences,
+        such as one fitted to the whole sequence beforehand
+        (:meth:`~vistrack.tracking.calibration.ScoreCalibration.from_frames`, the offline
+        mode); without it the tracker learns the map online from the frames it has seen.
     compiled : bool
         Predict, associate and correct in one compiled call when the configuration allows it
         (``assigner="gnn"`` and a :class:`~vistrack.models.BoxMotion` itself, not a subclass);
@@ -340,15 +452,23 @@ class BoxTracker:
     def __init__(self, config: BoxTrackerConfig | str = "bytetrack", *,
                  motion: BoxMotion | None = None, frame_rate: float = 30.0,
                  record: bool = False, compiled: bool = True,
-                 image_size: tuple[int, int] | None = None, **overrides: Any):
+                 image_size: tuple[int, int] | None = None,
+                 calibration: ScoreCalibration | None = None, **overrides: Any):
         if isinstance(config, str):
             if config not in TRACKERS:
                 raise ValueError(f"tracker must be one of {sorted(TRACKERS)}; got {config!r}")
             config = TRACKERS[config]
         self.config = replace(config, **overrides) if overrides else config
+        if calibration is not None and not isinstance(calibration, ScoreCalibration):
+            raise TypeError(f"calibration must be a ScoreCalibration; got "
+                            f"{type(calibration).__name__}")
+        if calibration is not None and self.config.scores != "calibrated":
+            raise ValueError("calibration goes with scores='calibrated'")
+        self.calibration = calibration
         if not frame_rate > 0:
             raise ValueError(f"frame_rate must be > 0; got {frame_rate}")
-        self.motion = motion or BoxMotion()
+        # the motion's noise at this tracker's frame rate (models/box.py)
+        self.motion = (motion or BoxMotion()).at_rate(frame_rate)
         self.frame_rate = float(frame_rate)
         if image_size is not None and (len(image_size) != 2 or min(image_size) <= 0):
             raise ValueError(f"image_size must be (width, height) > 0; got {image_size}")
@@ -365,7 +485,12 @@ class BoxTracker:
         self.reset()
 
     def reset(self) -> None:
-        """Forget every track; identities start again from 1."""
+        """Forget every track (and what the online score calibration learnt); identities
+        start again from 1."""
+        c = self.config
+        self.calibrator = (ScoreCalibrator(link_iou=c.link_iou, top=c.calibration_top,
+                                           prior=c.calibration_prior)
+                           if c.scores == "calibrated" and self.calibration is None else None)
         self.tracks.reset()
         self.frame: int | None = None
         self.history: list = []
@@ -373,6 +498,8 @@ class BoxTracker:
         self._confirmed: set = set()
         self.camera_shift = np.zeros(2)
         self._camera_offset = np.zeros(2)  # the shifts so far, summed (for the smoother)
+        self._offsets = np.zeros((0, 2))  # the shifts each track was moved by, summed
+        self._moved = np.zeros(0, bool)
 
     def _predict(self, dt: float) -> None:
         t = self.tracks
@@ -383,7 +510,15 @@ class BoxTracker:
 
     def _update(self, idx: np.ndarray, z: np.ndarray) -> None:
         t = self.tracks
-        t.mean[idx], t.cov[idx] = update_axes(t.mean[idx], t.cov[idx], z, self.motion)
+        moved = self._moved[idx, None] * self.camera_shift
+        t.mean[idx], t.cov[idx] = update_axes(t.mean[idx], t.cov[idx], z, self.motion, moved)
+
+    def confidence(self, scores: Any) -> np.ndarray:
+        """Scores as the thresholds see them: calibrated confidences (by the fixed calibration,
+        or what the tracker has learnt so far), or the raw scores."""
+        if self.config.scores == "raw":
+            return np.asarray(scores, dtype=np.float64)
+        return (self.calibration or self.calibrator.calibration())(scores)
 
     def covariances(self) -> np.ndarray:
         """The full ``(K, 8, 8)`` covariances of the tracks, from the per-axis ones kept."""
@@ -392,12 +527,14 @@ class BoxTracker:
     def _match(self, rows: np.ndarray, cols: np.ndarray, ov: np.ndarray, track_ok: np.ndarray,
                det_ok: np.ndarray, min_iou: float, fuse: np.ndarray | None,
                ) -> tuple[np.ndarray, np.ndarray]:
-        """Assign among the candidate pairs whose track and detection are still available."""
-        keep = track_ok[rows] & det_ok[cols] & (ov >= min_iou)
-        r, c, v = rows[keep], cols[keep], ov[keep]
+        """Assign among the candidate pairs whose track and detection are still available
+        and whose similarity, IoU (times the score with ``fuse``), is at least ``min_iou``."""
+        sim = ov * fuse[cols] if fuse is not None else ov
+        keep = track_ok[rows] & det_ok[cols] & (sim >= min_iou)
+        r, c = rows[keep], cols[keep]
         if len(r) == 0:
             return r, c
-        cost = 1.0 - (v * fuse[c] if fuse is not None else v)
+        cost = 1.0 - sim[keep]
         if self.config.assigner == "gnn":
             i, j = gnn_sparse(r, c, cost, (len(track_ok), len(det_ok)))
             return i, j
@@ -420,6 +557,7 @@ class BoxTracker:
             return rows[same], cols[same], ov[same]
 
         rows, cols, ov = candidates()
+        self._moved = np.zeros(len(t), bool)
         if cfg.camera_motion and len(t) and len(ds):
             ok = (ov >= cfg.camera_min_iou) & high[cols] & (t.state[rows] == CONFIRMED)
             i, j = gnn_sparse(rows[ok], cols[ok], 1.0 - ov[ok], (len(t), len(ds)))
@@ -427,7 +565,11 @@ class BoxTracker:
                                               cfg.camera_sig)
             if self.camera_shift.any():
                 t.mean[:, :2] += self.camera_shift
-                rows, cols, ov = candidates()
+                # each track follows the camera, or not, as its best detection says
+                rows, cols, ov, own = _choose_prediction(len(t), len(ds), rows, cols, ov,
+                                                         *candidates())
+                t.mean[own, :2] -= self.camera_shift
+                self._moved = ~own
         low = (ds >= cfg.low) & ~high if cfg.two_stage else np.zeros(len(ds), bool)
         free_t = np.ones(len(t), bool)
         free_d = np.ones(len(ds), bool)
@@ -462,28 +604,45 @@ class BoxTracker:
         self.frame = frame
         time = frame / self.frame_rate
         cfg, t = self.config, self.tracks
-        db, ds, dc = detections.boxes, detections.scores, detections.classes
+        db, raw, dc = detections.boxes, detections.scores, detections.classes
+        if np.isnan(raw).any():
+            i = int(np.flatnonzero(np.isnan(raw))[0])
+            raise ValueError(f"detection scores must not be NaN; scores[{i}] is NaN (frame "
+                             f"{frame})")
+        if self.calibrator is not None:
+            self.calibrator.observe(detections)
+        ds = self.confidence(raw)
+        if cfg.scores == "raw" and cfg.fuse_score and len(ds) and not (
+                (ds >= 0) & (ds <= 1)).all():
+            raise ValueError(f"fuse_score weighs IoU by the score, which must lie in [0, 1]; "
+                             f"frame {frame} has scores from {ds.min():.4g} to {ds.max():.4g} "
+                             "(use scores='calibrated', or fuse_score=False)")
         high = ds >= cfg.high
         self.camera_shift = np.zeros(2)
         if self.compiled:
             self._q = np.zeros((len(t), 8))
             c = np.ascontiguousarray  # one compiled signature for every layout of the input
-            match, used, ok = _associate(t.mean, t.cov, t.state, t.classes, c(db), c(ds), c(dc),
-                                         dt, self._noise, self._cfg, self._q, self.camera_shift)
+            match, used, moved, ok = _associate(t.mean, t.cov, t.state, t.classes, c(db), c(ds),
+                                                c(dc), dt, self._noise, self._cfg, self._q,
+                                                self.camera_shift)
             if not ok:
                 raise ValueError("track boxes must be finite")
             updated, free_d = match >= 0, ~used
             mt = np.flatnonzero(updated)
             md = match[mt]
+            self._moved = moved
         else:
             self._predict(dt)
             updated, free_d, mt, md = self._associate_numpy(db, ds, dc, high)
+            moved = self._moved
         self._camera_offset = self._camera_offset + self.camera_shift
+        self._offsets[moved] += self.camera_shift
         if len(mt):
             if not self.compiled:
                 self._update(mt, _to_cxcywh(db[md]))
-            t.scores[mt] = ds[md]
+            t.scores[mt] = raw[md]
         kept = t.manage(updated, time, cfg.confirm_hits, cfg.max_lost)
+        self._offsets = self._offsets[kept]
         if self.record:
             q = (self._q if len(self._q) == len(kept) else np.zeros((len(kept), 8)))[kept]
             upd = updated[kept]
@@ -493,19 +652,21 @@ class BoxTracker:
             mean, cov = self.motion.initial(_to_cxcywh(db[new]))
             d = np.diagonal(cov, axis1=1, axis2=2)
             axes = np.stack([d[:, :4], np.zeros((len(new), 4)), d[:, 4:]], axis=-1)
-            t.add(mean, axes, time, dc[new], ds[new], confirmed=first)
+            t.add(mean, axes, time, dc[new], raw[new], confirmed=first)
+            self._offsets = np.concatenate([self._offsets, np.zeros((len(new), 2))])
         if self.record:
             k = len(new)
             self.history.append((frame, dt, t.ids.copy(), t.mean.copy(), t.cov.copy(),
                                  np.concatenate([q, np.zeros((k, 8))]),
                                  np.concatenate([upd, np.ones(k, bool)]), t.scores.copy(),
                                  t.classes.copy(), self._camera_offset,
-                                 (db.copy(), ds.copy(), dc.copy())))
+                                 (db.copy(), raw.copy(), dc.copy(), ds.copy()),
+                                 self._offsets.copy()))
             self._confirmed.update(t.ids[t.state == CONFIRMED].tolist())
         report = (t.state == CONFIRMED) & (t.last_time == time)
-        if cfg.coast_frames > 0:
-            coast = ((t.state == LOST) & (t.streak >= cfg.coast_after)
-                     & (time - t.last_time <= (cfg.coast_frames + 0.5) / self.frame_rate))
+        if cfg.coast_time > 0:
+            coast = ((t.state == LOST) & (t.streak >= cfg.coast_after * self.frame_rate - 1e-9)
+                     & (time - t.last_time <= cfg.coast_time + 0.5 / self.frame_rate))
             if self.image_size is not None and coast.any():
                 b = _to_xyxy(t.mean[:, :4])
                 coast &= ((b[:, 0] >= 0) & (b[:, 1] >= 0) & (b[:, 2] <= self.image_size[0])

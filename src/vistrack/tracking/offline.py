@@ -139,22 +139,24 @@ def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[
     dt = np.concatenate([np.full(len(h[2]), h[1]) for h in tracker.history])
     ids, mean, cov, q, upd, score, cls = (np.concatenate([h[k] for h in tracker.history])
                                           for k in range(2, 9))
-    # the camera's shifts moved every track: in coordinates that follow the camera (minus
-    # the shifts so far) the tracks move by F(dt) alone, as the smoother assumes
-    cam = np.concatenate([np.broadcast_to(h[9], (len(h[2]), 2)) for h in tracker.history])
+    # the camera's shifts moved the tracks: minus the shifts each track was moved by so far,
+    # it moves by F(dt) alone, as the smoother assumes; `glob` is the camera's own offset,
+    # the coordinates the later steps (following back, joining) work in
+    cam = np.concatenate([h[11] for h in tracker.history])
+    glob = np.concatenate([np.broadcast_to(h[9], (len(h[2]), 2)) for h in tracker.history])
     mean = mean.copy()
     mean[:, :2] -= cam
     keep = np.isin(ids, np.fromiter(tracker._confirmed, dtype=np.int64))
     order = np.lexsort((frame[keep], ids[keep]))
-    frame, dt, ids, mean, cov, q, upd, score, cls, cam = (
-        a[keep][order] for a in (frame, dt, ids, mean, cov, q, upd, score, cls, cam))
+    frame, dt, ids, mean, cov, q, upd, score, cls, cam, glob = (
+        a[keep][order] for a in (frame, dt, ids, mean, cov, q, upd, score, cls, cam, glob))
     if len(ids) == 0:
         return []
     edges = np.flatnonzero(np.diff(ids)) + 1
     out = []
     for a, b in zip(np.r_[0, edges], np.r_[edges, len(ids)]):
         u = np.flatnonzero(upd[a:b])
-        if score[a:b][u].mean() < min_score:
+        if tracker.confidence(score[a:b][u]).mean() < min_score:
             continue
         last = a + int(u[-1]) + 1  # nothing after the last update
         L = last - a
@@ -171,8 +173,11 @@ def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[
         f = frame[a:last]
         updated = upd[a:last]
         first_u = int(u[0])
-        ends = ((int(f[first_u]), m_s[first_u].copy(), P_s[first_u]),
-                (int(f[-1]), m_s[-1].copy(), P_s[-1]))
+        ends = []
+        for k in (first_u, L - 1):  # in the camera's coordinates
+            m = m_s[k].copy()
+            m[:2] += cam[a + k] - glob[a + k]
+            ends.append((int(f[k]), m, P_s[k]))
         m_s = m_s.copy()
         m_s[:, :2] += cam[a:last]
         # frames to report: updates, and gaps between updates of at most max_gap frames
@@ -213,8 +218,8 @@ def _extend_back(tracker: BoxTracker, tracks: list[_Track], cam: dict, min_iou: 
             predict_axes(mean, cov, f - frames[i + 1], motion)
             pred = mean[:, :4].copy()
             pred[:, :2] += cam[f]
-            db, ds, dc = dets[f]
-            free = ds >= low
+            db, ds, dc, conf = dets[f]
+            free = conf >= low
             if f in reported and free.any():
                 r, c, _ = iou_pairs(db, np.array(reported[f]), _DUPLICATE_IOU)
                 free[r] = False

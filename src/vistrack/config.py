@@ -1,0 +1,249 @@
+"""The whole configuration of ``vistrack track`` with a box tracker, read from and written to
+TOML.
+
+::
+
+    [tracker]          # vistrack.tracking.BoxTrackerConfig, from the preset `name`
+    name = "bytetrack"
+    scores = "calibrated"
+    high = 0.6
+    ...
+    [motion]           # vistrack.models.BoxMotion (per-frame noise at its frame_rate)
+    std_pos = 0.05
+    ...
+    [offline]          # the offline mode (vistrack track --offline)
+    enabled = false
+    max_gap = 1.0
+    ...
+    [derived]          # written by --print-config: what the run derived; ignored when read
+    frame_rate = 30.0
+    ...
+
+A file may hold any part: what it leaves out keeps the preset's value (``[tracker] name``,
+default ``bytetrack``). :func:`read_config` rejects unknown tables and keys, and values of the
+wrong kind, naming the file and the key; :func:`config_toml` writes a configuration (and the
+values a run derived) that :func:`read_config` reads back to the same configuration.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from dataclasses import asdict, dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any
+
+from .models.box import BoxMotion
+from .tracking.box import TRACKERS, BoxTrackerConfig
+
+__all__ = ["OfflineConfig", "TrackConfig", "read_config", "config_toml", "ConfigError"]
+
+
+class ConfigError(ValueError):
+    """A configuration file that cannot be used; the message names the file and the key."""
+
+
+@dataclass(frozen=True)
+class OfflineConfig:
+    """Settings of the offline mode (:func:`vistrack.tracking.smooth`), in seconds where they
+    are durations.
+
+    Attributes
+    ----------
+    enabled : bool
+        Smooth, fill, follow back and join when the sequence is over.
+    max_gap : float
+        The longest gap in a track that is filled (seconds).
+    min_track_score : float
+        The lowest mean score of a track's detections that is kept (a calibrated confidence
+        with ``scores = "calibrated"``).
+    extend_iou : float
+        Follow tracks back through the detections left over while one overlaps the backward
+        prediction by this IoU (0: not at all).
+    link_gap, link_iou, link_window : float
+        Join tracks up to ``link_gap`` seconds apart whose boxes, carried across the gap by
+        the velocities of their last and first ``link_window`` seconds, overlap by
+        ``link_iou`` on average (``link_gap`` 0: never).
+    """
+
+    enabled: bool = False
+    max_gap: float = 1.0
+    min_track_score: float = 0.75
+    extend_iou: float = 0.5
+    link_gap: float = 2.0
+    link_iou: float = 0.3
+    link_window: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.enabled, bool):
+            raise ValueError(f"enabled must be true or false; got {self.enabled!r}")
+        for f in fields(self)[1:]:
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < math.inf:
+                raise ValueError(f"{f.name} must be a finite number >= 0; got {v!r}")
+        for name in ("extend_iou", "link_iou"):
+            if getattr(self, name) > 1:
+                raise ValueError(f"{name} must be in [0, 1]; got {getattr(self, name)!r}")
+
+
+_MOTION = ("std_pos", "std_vel", "std_meas", "init_pos", "init_vel", "frame_rate")
+
+
+@dataclass(frozen=True)
+class TrackConfig:
+    """Everything ``vistrack track`` with a box tracker is set by: the preset's ``name``, the
+    tracker's settings, the box motion (None: the front-end's default) and the offline
+    mode's settings."""
+
+    name: str = "bytetrack"
+    tracker: BoxTrackerConfig = field(default_factory=BoxTrackerConfig)
+    motion: BoxMotion | None = None
+    offline: OfflineConfig = field(default_factory=OfflineConfig)
+
+    @classmethod
+    def preset(cls, name: str = "bytetrack") -> "TrackConfig":
+        """The configuration of a preset in :data:`vistrack.tracking.TRACKERS`."""
+        if name not in TRACKERS:
+            raise ValueError(f"tracker must be one of {sorted(TRACKERS)}; got {name!r}")
+        return cls(name=name, tracker=TRACKERS[name])
+
+    def with_values(self, tracker: dict | None = None, motion: dict | None = None,
+                    offline: dict | None = None) -> "TrackConfig":
+        """A copy with some values changed (None values are left alone)."""
+        def keep(d: dict | None) -> dict:
+            return {k: v for k, v in (d or {}).items() if v is not None}
+
+        t, m, o = keep(tracker), keep(motion), keep(offline)
+        mot = self.motion
+        if m:
+            base = {k: getattr(mot or BoxMotion(), k) for k in _MOTION}
+            base["std_meas"] = tuple(float(x) for x in base["std_meas"])
+            mot = BoxMotion(**{**base, **m})
+        return replace(self, tracker=replace(self.tracker, **t) if t else self.tracker,
+                       motion=mot, offline=replace(self.offline, **o) if o else self.offline)
+
+
+def _toml_loads(text: str) -> dict:
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover - Python 3.10
+        import tomli as tomllib
+    return tomllib.loads(text)
+
+
+def _kind(value: Any, kind: str) -> bool:
+    if kind == "bool":
+        return isinstance(value, bool)
+    if kind == "int":
+        return isinstance(value, int) and not isinstance(value, bool)
+    if kind == "float":
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+    if kind == "str":
+        return isinstance(value, str)
+    return True
+
+
+_KIND_WORDS = {"bool": "true or false", "int": "an integer", "float": "a number",
+               "str": "a string"}
+
+
+def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> TrackConfig:
+    """Read a configuration file (see the module) over ``base`` (default: the preset its
+    ``[tracker] name`` gives, ``bytetrack`` without one).
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    ConfigError
+        For a file that is not TOML, an unknown table or key, or a value of the wrong kind
+        or out of range, naming the file and the key.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{path} does not exist (--config FILE)") from None
+    except (UnicodeDecodeError, IsADirectoryError) as exc:
+        raise ConfigError(f"{path}: not a TOML text file ({exc})") from None
+    try:
+        data = _toml_loads(text)
+    except ValueError as exc:  # tomllib.TOMLDecodeError: names the line and column
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    unknown = set(data) - {"tracker", "motion", "offline", "derived"}
+    if unknown:
+        raise ConfigError(f"{path}: unknown table or key {sorted(unknown)[0]!r} (tables: "
+                          "[tracker], [motion], [offline], [derived])")
+    for table in ("tracker", "motion", "offline", "derived"):
+        if table in data and not isinstance(data[table], dict):
+            raise ConfigError(f"{path}: {table} must be a table ([{table}])")
+    tracker = dict(data.get("tracker", {}))
+    name = tracker.pop("name", None)
+    if name is not None and name not in TRACKERS:
+        raise ConfigError(f"{path}: [tracker] name must be one of {sorted(TRACKERS)}; got "
+                          f"{name!r}")
+    cfg = base if base is not None else TrackConfig.preset(name or "bytetrack")
+    if name is not None and base is not None and name != base.name:
+        cfg = replace(TrackConfig.preset(name), motion=base.motion, offline=base.offline)
+    kinds = {"tracker": {f.name: f.type for f in fields(BoxTrackerConfig)},
+             "offline": {f.name: f.type for f in fields(OfflineConfig)},
+             "motion": {"std_pos": "float", "std_vel": "float", "std_meas": "list",
+                        "init_pos": "float", "init_vel": "float", "frame_rate": "float"}}
+    values = {"tracker": tracker, "motion": dict(data.get("motion", {})),
+              "offline": dict(data.get("offline", {}))}
+    for table, given in values.items():
+        for key, value in given.items():
+            kind = kinds[table].get(key)
+            if kind is None:
+                raise ConfigError(f"{path}: [{table}] has no key {key!r} (keys: "
+                                  f"{', '.join(sorted(kinds[table]))})")
+            if kind == "list":
+                ok = (isinstance(value, (int, float)) and not isinstance(value, bool)) or (
+                    isinstance(value, list) and len(value) == 4
+                    and all(_kind(v, "float") for v in value))
+                if not ok:
+                    raise ConfigError(f"{path}: [{table}] {key} must be a number or a list of "
+                                      f"4 numbers; got {value!r}")
+                given[key] = tuple(value) if isinstance(value, list) else value
+            elif not _kind(value, kind):
+                raise ConfigError(f"{path}: [{table}] {key} must be {_KIND_WORDS[kind]}; got "
+                                  f"{value!r}")
+            elif kind == "float":
+                given[key] = float(value)
+    try:
+        return cfg.with_values(**values)
+    except ValueError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
+
+
+def _value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_value(x) for x in v) + "]"
+    if isinstance(v, float):
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return repr(v)  # round-trips exactly
+    return str(v)
+
+
+def config_toml(cfg: TrackConfig, derived: dict | None = None) -> str:
+    """The configuration as TOML (see the module), with ``derived`` values in a last
+    ``[derived]`` table that :func:`read_config` ignores."""
+    lines = ["# vistrack track configuration: vistrack track ... --config FILE",
+             "", "[tracker]", f"name = {_value(cfg.name)}"]
+    lines += [f"{k} = {_value(v)}" for k, v in asdict(cfg.tracker).items()]
+    if cfg.motion is not None:
+        lines += ["", "[motion]"]
+        for k in _MOTION:
+            v = getattr(cfg.motion, k)
+            lines.append(f"{k} = {_value([float(x) for x in v] if k == 'std_meas' else v)}")
+    lines += ["", "[offline]"] + [f"{k} = {_value(v)}" for k, v in asdict(cfg.offline).items()]
+    if derived:
+        lines += ["", "[derived]  # what the run derived from the data; not read back"]
+        lines += [f"{k} = {_value(v)}" for k, v in derived.items()]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,321 @@
+r"""Detector scores calibrated by the detections themselves.
+
+Every detector scores on its own scale: probabilities from 0.5 up (a detector thresholded at
+0.5), raw logits from −1 to 16 (a LiDAR detector), a constant 1. A fixed threshold fitted to
+one is wrong for the next: above every score of another, or below its clutter. What all have
+in common is that a real object is detected again in the next frame, where most clutter is
+not. So the calibration asks of each detection whether it **persists**: whether it continues
+a detection of the previous frame and is continued in the next (boxes of one class linked
+frame to frame one-to-one, by global nearest neighbour on IoU ≥ ``link_iou``).
+
+- ``P(persist | score)`` is estimated by isotonic regression: the non-decreasing function of
+  the score closest to the persistence indicators in least squares (pool-adjacent-violators,
+  over the distinct scores weighted by their counts);
+- it is divided by the persistence of the detector's most confident detections (the top
+  ``top`` fraction by score, 5 %, and at least 20 of them), since objects themselves persist
+  less where they move fast against their size or the frame rate is low, and clipped to 1.
+
+The result, the **calibrated confidence** ``c(score)`` in ``[0, 1]``, says how nearly a
+detection of that score behaves like the detector's best ones. It depends on the order of the
+scores only, so any strictly increasing transform of all scores (× 10, a logit, a square)
+leaves it, and every threshold on it, exactly unchanged.
+
+:class:`ScoreCalibration` is a fitted map; :meth:`ScoreCalibration.from_frames` fits one to a
+whole sequence (the offline mode). :class:`ScoreCalibrator` learns it online from the frames
+seen so far: until it has seen ``prior`` persistence outcomes it leans on the rank of each
+score among those seen (``c = w c_data + (1 - w) rank``, ``w = n / (n + prior)``), so the first
+frames trust only their best-scored detections.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from ..association.assign import gnn_pairs
+from ..association.costs import _grid_pairs
+from ..types import Detections
+
+__all__ = ["ScoreCalibration", "ScoreCalibrator", "isotonic_increasing", "persistence"]
+
+
+@njit(cache=True)
+def _pava(y, w):
+    # pool adjacent violators: the non-decreasing fit to y with weights w (w > 0)
+    n = y.shape[0]
+    val, wt, size = np.empty(n), np.empty(n), np.empty(n, np.int64)
+    k = 0
+    for i in range(n):
+        val[k], wt[k], size[k] = y[i], w[i], 1
+        while k > 0 and val[k - 1] > val[k]:
+            tot = wt[k - 1] + wt[k]
+            val[k - 1] = (val[k - 1] * wt[k - 1] + val[k] * wt[k]) / tot
+            wt[k - 1] = tot
+            size[k - 1] += size[k]
+            k -= 1
+        k += 1
+    out = np.empty(n)
+    i = 0
+    for b in range(k):
+        for _ in range(size[b]):
+            out[i] = val[b]
+            i += 1
+    return out
+
+
+def isotonic_increasing(y: Any, weights: Any = None) -> np.ndarray:
+    """The non-decreasing sequence closest to ``y`` in weighted least squares (isotonic
+    regression by pool-adjacent-violators).
+
+    Examples
+    --------
+    >>> isotonic_increasing([1.0, 3.0, 2.0, 4.0]).tolist()
+    [1.0, 2.5, 2.5, 4.0]
+    """
+    y = np.ascontiguousarray(y, dtype=np.float64).ravel()
+    w = np.ones_like(y) if weights is None else np.ascontiguousarray(weights, np.float64).ravel()
+    if w.shape != y.shape:
+        raise ValueError(f"weights must have the shape of y {y.shape}; got {w.shape}")
+    if not (np.isfinite(y).all() and np.isfinite(w).all() and (w > 0).all()):
+        raise ValueError("y must be finite and weights finite and > 0")
+    return _pava(y, w) if len(y) else y.copy()
+
+
+@njit(cache=True)
+def _link(prev, prev_cls, cur, cur_cls, min_iou):
+    # one-to-one links (GNN on 1 - IoU) between two frames' boxes of the same class
+    rows, cols, ov, ok = _grid_pairs(prev, cur, min_iou)
+    if not ok:
+        return rows, cols
+    same = prev_cls[rows] == cur_cls[cols]
+    rows, cols, ov = rows[same], cols[same], ov[same]
+    return gnn_pairs(rows, cols, 1.0 - ov, prev.shape[0], cur.shape[0])
+
+
+def _scores(scores: Any) -> np.ndarray:
+    s = np.asarray(scores, dtype=np.float64).ravel()
+    bad = np.flatnonzero(np.isnan(s))
+    if len(bad):
+        raise ValueError(f"scores must not be NaN; scores[{int(bad[0])}] is NaN")
+    return s
+
+
+def persistence(frames: Iterable[Detections], link_iou: float = 0.3
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """The scores of every detection of the frames but the first and the last (which lack a
+    neighbour), and whether each persists (it continues a detection of the previous frame and
+    is continued in the next; see the module): ``(scores, persisted)``, in the order of the
+    frames and of the detections within them."""
+    cal = ScoreCalibrator(link_iou=link_iou, window=None)
+    for d in frames:
+        cal.observe(d)
+    cal.observe(None)  # the last frame has no next frame: its detections do not persist
+    return cal._buf_s.copy(), cal._buf_p.astype(bool)
+
+
+class ScoreCalibration:
+    """A fitted map from a detector's scores to calibrated confidences in ``[0, 1]`` (see the
+    module). Call it on scores; :meth:`score_at` is the lowest score with a given confidence.
+
+    Parameters
+    ----------
+    scores : (M,) float
+        The distinct scores, increasing.
+    confidence : (M,) float
+        Their confidences, non-decreasing, in ``[0, 1]``. A score between two of them takes
+        the lower one's confidence, a score below all of them the lowest, one above all the
+        highest.
+    n : int
+        How many persistence outcomes the map was fitted to (0: none; the rank prior alone).
+    top_persistence : float
+        The persistence of the top detections that the data part was divided by.
+
+    Examples
+    --------
+    >>> s = [0.2, 0.3, 0.6, 0.7, 0.8, 0.9]
+    >>> cal = ScoreCalibration.fit(s, [0, 0, 1, 0, 1, 1], top=1 / 3, top_min=2)
+    >>> cal([0.25, 0.65, 0.95]).tolist()
+    [0.0, 0.5, 1.0]
+    >>> cal.score_at(0.5), cal.score_at(0.9)
+    (0.6, 0.8)
+    """
+
+    def __init__(self, scores: Any, confidence: Any, *, n: int = 0,
+                 top_persistence: float = float("nan")):
+        s = np.asarray(scores, dtype=np.float64).ravel()
+        c = np.asarray(confidence, dtype=np.float64).ravel()
+        if s.shape != c.shape or len(s) == 0:
+            raise ValueError(f"scores and confidence must have one equal, non-zero length; got "
+                             f"{s.shape} and {c.shape}")
+        if np.isnan(s).any() or (np.diff(s) <= 0).any():
+            raise ValueError("scores must be increasing (distinct) and not NaN")
+        if not ((c >= 0) & (c <= 1)).all() or (np.diff(c) < 0).any():
+            raise ValueError("confidence must be non-decreasing, in [0, 1]")
+        self.scores, self.confidence = s, c
+        self.n, self.top_persistence = int(n), float(top_persistence)
+
+    @classmethod
+    def fit(cls, scores: Any, persisted: Any, *, top: float = 0.05,
+            top_min: int = 20) -> "ScoreCalibration":
+        """Fit to scores and their persistence outcomes (see the module): full confidence is
+        the persistence of the ``top`` fraction of the detections by score, and of at least
+        ``top_min`` of them (a small sample's top fraction is a handful)."""
+        if not 0 < top <= 1:
+            raise ValueError(f"top must be in (0, 1]; got {top}")
+        s = _scores(scores)
+        p = np.asarray(persisted, dtype=np.float64).ravel()
+        if p.shape != s.shape:
+            raise ValueError(f"persisted must have the shape of scores {s.shape}; got {p.shape}")
+        if len(s) == 0:
+            raise ValueError("no scores to fit")
+        u, inv, counts = np.unique(s, return_inverse=True, return_counts=True)
+        hits = np.bincount(inv, weights=p, minlength=len(u))
+        fit = _pava(hits / counts, counts.astype(np.float64))
+        # the persistence of the top fraction by score (ties at its edge included)
+        above = np.cumsum(counts[::-1])[::-1]  # detections scoring >= u[k]
+        k = int(np.flatnonzero(above >= min(len(s), max(top * len(s), top_min)))[-1])
+        a = hits[k:].sum() / counts[k:].sum()
+        if a <= 0:
+            conf = np.ones(len(u))  # nothing persists: no evidence to tell scores apart
+        else:
+            conf = np.minimum(fit / a, 1.0)
+        return cls(u, conf, n=len(s), top_persistence=a)
+
+    @classmethod
+    def from_frames(cls, frames: Iterable[Detections], *, link_iou: float = 0.3,
+                    top: float = 0.05) -> "ScoreCalibration":
+        """Fit to a whole sequence of frames (the offline mode)."""
+        s, p = persistence(frames, link_iou)
+        return cls.fit(s, p, top=top)
+
+    def __call__(self, scores: Any) -> np.ndarray:
+        s = _scores(scores)
+        k = np.searchsorted(self.scores, s, side="right") - 1
+        return self.confidence[np.clip(k, 0, len(self.scores) - 1)]
+
+    def score_at(self, level: float) -> float:
+        """The lowest score whose confidence is at least ``level`` (``inf`` if none is)."""
+        k = np.flatnonzero(self.confidence >= level)
+        return float(self.scores[k[0]]) if len(k) else float("inf")
+
+    def blend(self, weight: float, ranked: np.ndarray) -> "ScoreCalibration":
+        """``weight`` × this map + (1 − ``weight``) × the empirical distribution function of
+        ``ranked`` (scores), on the union of both's scores."""
+        r = np.sort(ranked)
+        u = np.union1d(self.scores, r)
+        cdf = np.searchsorted(r, u, side="right") / len(r)
+        c = weight * self(u) + (1.0 - weight) * cdf
+        return ScoreCalibration(u, np.clip(c, 0.0, 1.0), n=self.n,
+                                top_persistence=self.top_persistence)
+
+    def __repr__(self) -> str:
+        return (f"ScoreCalibration({len(self.scores)} scores {self.scores[0]:.4g} .. "
+                f"{self.scores[-1]:.4g}, fitted to {self.n} detections)")
+
+
+class ScoreCalibrator:
+    """Learns a :class:`ScoreCalibration` online, from the frames seen so far (see the
+    module).
+
+    Parameters
+    ----------
+    link_iou : float
+        The IoU at which a detection continues one of the previous frame.
+    top : float
+        The fraction of the most confident detections whose persistence is full confidence.
+    prior : float
+        How many persistence outcomes weigh as much as the rank prior.
+    window : int or None
+        Keep the last ``window`` outcomes (None: all), so the map follows a scene that changes.
+
+    Call :meth:`observe` once a frame, then the calibrator itself on that frame's scores.
+    """
+
+    def __init__(self, *, link_iou: float = 0.3, top: float = 0.05, prior: float = 0.0,
+                 window: int | None = 20000):
+        if not 0 < link_iou <= 1:
+            raise ValueError(f"link_iou must be in (0, 1]; got {link_iou}")
+        if not 0 < top <= 1:
+            raise ValueError(f"top must be in (0, 1]; got {top}")
+        if not prior >= 0:
+            raise ValueError(f"prior must be >= 0; got {prior}")
+        if window is not None and window < 1:
+            raise ValueError(f"window must be >= 1 or None; got {window}")
+        self.link_iou, self.top, self.prior, self.window = float(link_iou), float(top), \
+            float(prior), window
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget everything seen."""
+        self._buf_s, self._buf_p = np.zeros(0), np.zeros(0)
+        self._prev: tuple | None = None  # boxes, classes, scores, linked back, first frame
+        self._new_since_fit = 0
+        self._fit_n = -1
+        self._cal: ScoreCalibration | None = None
+
+    @property
+    def n(self) -> int:
+        """How many persistence outcomes are held."""
+        return len(self._buf_s)
+
+    def observe(self, detections: Detections | None) -> None:
+        """Take one frame's detections (None: the sequence has ended): link them to the
+        previous frame's, which are then resolved."""
+        if detections is None:
+            boxes, cls, s = np.zeros((0, 4)), np.zeros(0, np.int64), np.zeros(0)
+        else:
+            if detections.boxes is None:
+                raise TypeError("detections must have boxes")
+            boxes = np.ascontiguousarray(detections.boxes)
+            cls = np.ascontiguousarray(detections.classes)
+            s = _scores(detections.scores)
+        linked_back = np.zeros(len(s), bool)
+        if self._prev is not None:
+            pb, pc, ps, pl, first = self._prev
+            linked_fwd = np.zeros(len(ps), bool)
+            if len(pb) and len(boxes):
+                r, c = _link(pb, pc, boxes, cls, self.link_iou)
+                linked_fwd[r] = True
+                linked_back[c] = True
+            if detections is not None and not first:
+                # the first and the last frame lack a neighbour: no outcome
+                self._push(ps, (pl & linked_fwd).astype(np.float64))
+        self._prev = None if detections is None else (boxes, cls, s, linked_back,
+                                                      self._prev is None)
+
+    def _push(self, s: np.ndarray, p: np.ndarray) -> None:
+        if len(s) == 0:
+            return
+        self._buf_s = np.concatenate([self._buf_s, s])
+        self._buf_p = np.concatenate([self._buf_p, p])
+        if self.window is not None and len(self._buf_s) > self.window:
+            self._buf_s = self._buf_s[-self.window:]
+            self._buf_p = self._buf_p[-self.window:]
+        self._new_since_fit += len(s)
+
+    def calibration(self) -> ScoreCalibration:
+        """The map learnt so far: refitted when the outcomes held have grown by a tenth (or
+        by ``window / 10``) since the last fit, blended with the rank prior."""
+        pending = self._prev[2] if self._prev is not None else np.zeros(0)
+        n = self.n
+        stale = (self._cal is None or self._new_since_fit >= max(1, 0.1 * max(self._fit_n, 1))
+                 or (self._fit_n < self.prior and len(pending)))
+        if not stale:
+            return self._cal
+        ranked = np.concatenate([self._buf_s, pending])
+        if len(ranked) == 0:
+            return ScoreCalibration([0.0], [1.0])  # nothing seen: nothing to tell apart
+        w = n / (n + self.prior) if n + self.prior > 0 else 1.0
+        if n:
+            cal = ScoreCalibration.fit(self._buf_s, self._buf_p, top=self.top)
+            cal = cal.blend(w, ranked) if w < 1 else cal
+        else:
+            cal = ScoreCalibration([float(ranked.min())], [1.0]).blend(0.0, ranked)
+        self._cal, self._fit_n, self._new_since_fit = cal, n, 0
+        return cal
+
+    def __call__(self, scores: Any) -> np.ndarray:
+        return self.calibration()(scores)

@@ -1,0 +1,195 @@
+"""Score calibration by persistence: isotonic regression against scipy, invariance to the
+score's scale, what it learns on scenes with known truth, and the tracker built on it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vistrack.io import read_mot
+from vistrack.tracking import BoxTracker
+from vistrack.tracking.calibration import (ScoreCalibration, ScoreCalibrator,
+                                           isotonic_increasing, persistence)
+from vistrack.types import Detections
+
+from .test_tracking import run, scene
+
+
+def test_isotonic_regression_equals_scipys():
+    from scipy.optimize import isotonic_regression
+
+    rng = np.random.default_rng(0)
+    for n in (1, 2, 7, 200):
+        y, w = rng.normal(size=n), rng.uniform(0.1, 3.0, n)
+        np.testing.assert_allclose(isotonic_increasing(y, w),
+                                   isotonic_regression(y, weights=w).x, rtol=1e-12, atol=1e-12)
+    with pytest.raises(ValueError, match="weights must have the shape"):
+        isotonic_increasing([1.0, 2.0], [1.0])
+    with pytest.raises(ValueError, match="finite and weights finite and > 0"):
+        isotonic_increasing([1.0, 2.0], [1.0, 0.0])
+
+
+def frames_with_clutter(rng, T=120, scale=lambda s: s):
+    """Eight objects moving slowly (they persist), scored 0.5-1, and three clutter boxes a
+    frame at random places (they do not), scored 0-0.6; ``scale`` maps every score."""
+    p0 = rng.uniform(100, 900, (8, 2))
+    v = rng.normal(0, 2, (8, 2))
+    out, truth = [], []
+    for f in range(T):
+        c = p0 + v * f
+        obj = np.c_[c - [15, 40], c + [15, 40]]
+        xy = rng.uniform(0, 1000, (3, 2))
+        clutter = np.c_[xy, xy + [30, 80]]
+        s = np.r_[rng.uniform(0.5, 1.0, 8), rng.uniform(0.0, 0.6, 3)]
+        out.append(Detections(boxes=np.r_[obj, clutter], scores=scale(s)))
+        truth.append(np.r_[np.ones(8, bool), np.zeros(3, bool)])
+    return out, truth
+
+
+def test_persistence_tells_objects_from_clutter():
+    """Objects persist (continued from the frame before and into the next), clutter does not;
+    the calibrated confidence of an object's score is high, of clutter's low, and the
+    threshold at confidence 0.5 falls where the two score ranges meet."""
+    frames, truth = frames_with_clutter(np.random.default_rng(1))
+    s, p = persistence(frames)
+    t = np.concatenate(truth[1:-1])  # the first and last frames give no outcome
+    assert len(s) == len(t) and p[t].mean() > 0.99 and p[~t].mean() < 0.05
+    cal = ScoreCalibration.fit(s, p)
+    assert cal.top_persistence > 0.99
+    assert cal(s[t]).mean() > 0.95 and cal(s[~t]).mean() < 0.2
+    assert 0.45 < cal.score_at(0.5) < 0.65  # objects from 0.5, clutter up to 0.6
+    assert cal.score_at(2.0) == np.inf
+
+
+@pytest.mark.parametrize("transform", [lambda s: 10 * s, lambda s: np.log(s / (1 - s)),
+                                       lambda s: s ** 2, lambda s: np.arctan(50 * s) - 8])
+def test_calibration_and_tracks_do_not_depend_on_the_scores_scale(transform):
+    """Any strictly increasing transform of every score (x 10, a logit, a square, a squashed
+    offset) gives the same confidences, the thresholds move with it, and the tracker's
+    tracks are identical, online and with a fixed calibration."""
+    rng = np.random.default_rng(2)
+    frames, _ = frames_with_clutter(np.random.default_rng(2))
+    frames = [Detections(boxes=d.boxes, scores=np.clip(d.scores, 1e-3, 1 - 1e-3))
+              for d in frames]
+    moved = [Detections(boxes=d.boxes, scores=transform(d.scores)) for d in frames]
+    a, b = ScoreCalibration.from_frames(frames), ScoreCalibration.from_frames(moved)
+    np.testing.assert_array_equal(a(frames[5].scores), b(moved[5].scores))
+    assert b.score_at(0.7) == pytest.approx(transform(a.score_at(0.7)))
+    _, dets = scene(rng, clutter=2.0)
+    for fixed in (False, True):
+        outs = []
+        for ds in (dets, [Detections(boxes=d.boxes, scores=transform(np.clip(d.scores, 1e-3,
+                                                                               1 - 1e-3)))
+                          for d in dets]):
+            cal = ScoreCalibration.from_frames(ds) if fixed else None
+            tr = BoxTracker(calibration=cal)
+            outs.append([tr.step(d, frame=f) for f, d in enumerate(ds, start=1)])
+        for x, y in zip(*outs):
+            assert np.array_equal(x.ids, y.ids) and np.array_equal(x.boxes, y.boxes)
+
+
+def test_the_online_calibration_learns_what_the_whole_file_gives():
+    """Online, after the last frame, the calibrator holds the outcomes of every frame but the
+    first and the last: its map equals the one fitted to the whole file. Before any outcome,
+    the first frame's scores are ranked."""
+    frames, _ = frames_with_clutter(np.random.default_rng(3))
+    cal = ScoreCalibrator(window=None)
+    cal.observe(frames[0])
+    ranks = cal(frames[0].scores)
+    order = np.argsort(frames[0].scores)
+    np.testing.assert_allclose(ranks[order], np.arange(1, 12) / 11)
+    for d in frames[1:]:
+        cal.observe(d)
+    full = ScoreCalibration.from_frames(frames)
+    last = cal.calibration()
+    np.testing.assert_array_equal(last.scores, full.scores)
+    np.testing.assert_array_equal(last.confidence, full.confidence)
+    assert cal.n == full.n == 11 * (len(frames) - 2)
+
+
+def test_calibration_edge_cases_and_errors():
+    """One score for all (nothing to tell apart: full confidence), frames without detections,
+    and bad input named."""
+    boxes = np.array([[0, 0, 10, 20.0]])
+    same = [Detections(boxes=boxes + 2 * f, scores=[1.0]) for f in range(5)]
+    cal = ScoreCalibration.from_frames(same)
+    assert cal([0.0, 1.0, 7.0]).tolist() == [1.0, 1.0, 1.0]
+    gaps = [Detections(boxes=np.zeros((0, 4))) if f % 2 else same[f] for f in range(5)]
+    assert ScoreCalibration.from_frames(gaps).n == 1
+    with pytest.raises(ValueError, match=r"scores\[1\] is NaN"):
+        ScoreCalibration.fit([0.1, np.nan], [1, 0])
+    with pytest.raises(ValueError, match="no scores to fit"):
+        ScoreCalibration.fit([], [])
+    with pytest.raises(ValueError, match=r"top must be in \(0, 1\]"):
+        ScoreCalibrator(top=0.0)
+    with pytest.raises(ValueError, match="must be increasing"):
+        ScoreCalibration([0.2, 0.1], [0.0, 1.0])
+    with pytest.raises(ValueError, match=r"detection scores must not be NaN; scores\[0\]"):
+        BoxTracker().step(Detections(boxes=boxes, scores=[np.nan]), frame=1)
+
+
+def test_scores_above_one_are_calibrated_or_refused():
+    """Raw scores of 0-16 (a LiDAR detector's logits): calibrated, they track like scores in
+    [0, 1]; as raw scores with the first stage weighing IoU by the score they are refused by
+    name, since 1 - IoU x score would go negative."""
+    rng = np.random.default_rng(5)
+    _, dets = scene(rng)
+    wide = [Detections(boxes=d.boxes, scores=16 * d.scores) for d in dets]
+    a, b = run(BoxTracker(), dets), run(BoxTracker(), wide)
+    assert np.array_equal(a.ids, b.ids) and np.array_equal(a.boxes, b.boxes)
+    with pytest.raises(ValueError, match="fuse_score weighs IoU by the score, which must lie"):
+        run(BoxTracker(scores="raw", high=8.0, new_track=9.0, low=1.0), wide)
+    out = run(BoxTracker(scores="raw", high=8.0, new_track=9.0, low=1.0, fuse_score=False),
+              wide)
+    assert len(out) > 500
+
+
+def _transformed(seq, tmp_path, fn, name):
+    """``seq`` with every detection score mapped by ``fn`` (the rest of each line as it is,
+    the new score in full precision): a sequence folder in tmp_path."""
+    import shutil
+
+    d = tmp_path / name / seq.name
+    (d / "det").mkdir(parents=True)
+    shutil.copy(seq / "seqinfo.ini", d / "seqinfo.ini")
+    lines = []
+    for line in (seq / "det" / "det.txt").read_text().splitlines():
+        cells = line.split(",")
+        cells[6] = repr(float(fn(float(cells[6]))))
+        lines.append(",".join(cells))
+    (d / "det" / "det.txt").write_text("\n".join(lines) + "\n")
+    return d
+
+
+@pytest.mark.parametrize("bench,name,transforms", [
+    ("kitti-tracking", "KITTI-0001-Car", {"x10": lambda s: 10 * s, "cube": lambda s: s ** 3,
+                                          "arctan": lambda s: np.arctan(s)}),
+    ("mot16-fairmot", "MOT16-09", {"logit": lambda s: np.log(s / (1 - s)),
+                                   "square": lambda s: s ** 2}),
+])
+@pytest.mark.parametrize("offline", [False, True])
+def test_a_monotone_transform_of_a_real_detectors_scores_changes_no_track(
+        tmp_path, bench, name, transforms, offline):
+    """PointRCNN's raw scores on a KITTI drive, FairMOT's on a MOT16 sequence: mapped by any
+    strictly increasing function, the tracks are the same, online and offline, so HOTA is
+    too."""
+    from vistrack.evaluation import evaluate_mot
+    from vistrack.pipeline import track_sequence
+
+    from .mot_oracles import SHARED
+
+    seq = SHARED / bench / name
+    if not (seq / "det" / "det.txt").exists():
+        pytest.skip(f"{seq} not found: the shared data is not beside this checkout")
+    base = track_sequence(seq, tmp_path / "base.txt", offline=offline)
+    ref = read_mot(base.out)
+    scores = set()
+    for label, fn in transforms.items():
+        d = _transformed(seq, tmp_path, fn, label)
+        run = track_sequence(d, tmp_path / f"{label}.txt", offline=offline)
+        got = read_mot(run.out)
+        assert np.array_equal(got.frames, ref.frames) and np.array_equal(got.ids, ref.ids)
+        np.testing.assert_array_equal(got.boxes, ref.boxes)
+        gt = read_mot(seq / "gt" / "gt.txt")
+        scores.add(round(evaluate_mot(gt, got, base.frames).HOTA, 12))
+    assert len(scores) == 1 and len(ref) > 1000

@@ -1,0 +1,195 @@
+"""The tracker's configuration: TOML written and read back, every `vistrack track` setting,
+and bad files and values named."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from vistrack.config import ConfigError, OfflineConfig, TrackConfig, config_toml, read_config
+from vistrack.io import write_mot
+from vistrack.models import BoxMotion
+from vistrack.pipeline import resolve_config, track_sequence
+
+from .test_tracking import scene
+
+CLI = [sys.executable, "-m", "vistrack.cli", "track"]
+
+
+@pytest.fixture(scope="module")
+def seq(tmp_path_factory):
+    """A MOTChallenge sequence folder of the tests' scene: 150 frames at 25 frames/s, scores
+    on a raw scale of 0-16."""
+    d = tmp_path_factory.mktemp("seq") / "SCENE"
+    (d / "det").mkdir(parents=True)
+    _, dets = scene(np.random.default_rng(11), clutter=2.0)
+    f = np.concatenate([np.full(len(x), k) for k, x in enumerate(dets, start=1)])
+    b = np.concatenate([x.xywh for x in dets])
+    s = 16 * np.concatenate([x.scores for x in dets]) - 1
+    write_mot(d / "det" / "det.txt", f, -np.ones(len(f), int), b, s)
+    (d / "seqinfo.ini").write_text("[Sequence]\nname=SCENE\nimDir=img1\nframeRate=25\n"
+                                   "seqLength=150\nimWidth=1000\nimHeight=1000\nimExt=.jpg\n")
+    return d
+
+
+def cli(*args):
+    return subprocess.run(CLI + [str(a) for a in args], capture_output=True, text=True)
+
+
+def test_a_configuration_reads_back_as_written(tmp_path):
+    """Every preset, and one with values of every kind changed (a float, an integer, a bool,
+    a string, the motion's four measurement noises, the offline mode), is read back equal."""
+    changed = TrackConfig.preset("bytetrack").with_values(
+        tracker={"high": 0.55, "confirm_hits": 3, "camera_motion": False, "scores": "raw",
+                 "new_track": 0.9},
+        motion={"std_meas": (0.03, 0.04, 0.05, 0.06), "frame_rate": 25.0},
+        offline={"enabled": True, "max_gap": 0.75})
+    for cfg in (TrackConfig.preset("bytetrack"), TrackConfig.preset("sort"), changed):
+        path = tmp_path / "c.toml"
+        path.write_text(config_toml(cfg, {"frame_rate": 25.0, "high_score": 3.5}))
+        back = read_config(path)
+        assert back.name == cfg.name and back.tracker == cfg.tracker
+        assert back.offline == cfg.offline
+        if cfg.motion is not None:
+            for k in ("std_pos", "std_vel", "init_pos", "init_vel", "frame_rate"):
+                assert getattr(back.motion, k) == getattr(cfg.motion, k)
+            np.testing.assert_array_equal(back.motion.std_meas, cfg.motion.std_meas)
+
+
+def test_a_partial_file_keeps_the_presets_other_values(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text('[tracker]\nname = "sort"\nhigh = 0.4\n\n[offline]\nmax_gap = 2\n')
+    cfg = read_config(path)
+    assert cfg.name == "sort" and cfg.tracker.high == 0.4 and cfg.offline.max_gap == 2.0
+    assert cfg.tracker.confirm_hits == 3 and not cfg.tracker.two_stage  # sort's own
+    assert cfg.motion is None  # the front-end's default motion
+
+
+@pytest.mark.parametrize("text,match", [
+    ("[tracker\nhigh = 0.5\n", r"not valid TOML: .*line 1, column 9"),
+    ("[trakcer]\nhigh = 0.5\n", "unknown table or key 'trakcer'"),
+    ("[tracker]\nhihg = 0.5\n", r"\[tracker\] has no key 'hihg' \(keys: assigner"),
+    ("[tracker]\nhigh = \"0.5\"\n", r"\[tracker\] high must be a number; got '0.5'"),
+    ("[tracker]\nconfirm_hits = 2.5\n", r"\[tracker\] confirm_hits must be an integer"),
+    ("[tracker]\ncamera_motion = 1\n", r"\[tracker\] camera_motion must be true or false"),
+    ("[tracker]\nname = \"deepsort\"\n", r"\[tracker\] name must be one of \['bytetrack', "
+                                         r"'sort'\]"),
+    ("[tracker]\nhigh = 1.5\n", r"high must be in \[0, 1\] \(a calibrated confidence\)"),
+    ("[motion]\nstd_meas = [0.1, 0.2]\n", r"std_meas must be a number or a list of 4"),
+    ("[motion]\nstd_pos = -1\n", "std_pos must be a finite number > 0"),
+    ("[offline]\nmax_gap = -1\n", "max_gap must be a finite number >= 0"),
+    ("tracker = 3\n", "tracker must be a table"),
+])
+def test_a_bad_file_is_named_with_its_key(tmp_path, text, match):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=match) as e:
+        read_config(path)
+    assert str(path) in str(e.value)
+
+
+def test_bad_files_and_values_on_the_command_line(seq, tmp_path):
+    missing = cli(seq, "--out", tmp_path / "r.txt", "--config", tmp_path / "none.toml")
+    assert missing.returncode == 2 and "none.toml does not exist (--config FILE)" in \
+        missing.stderr
+    (tmp_path / "s.toml").write_text('[tracker]\nname = "sort"\n')
+    r = cli(seq, "--out", tmp_path / "r.txt", "--config", tmp_path / "s.toml", "--tracker",
+            "bytetrack")
+    assert r.returncode == 2 and "--tracker bytetrack disagrees with [tracker] name" in r.stderr
+    r = cli(seq, "--out", tmp_path / "r.txt", "--high", "1.5")
+    assert r.returncode == 2 and "--high: high must be in [0, 1]" in r.stderr
+    r = cli(seq, "--out-dir", tmp_path / "v", "--min-track-score", "0.5")
+    assert r.returncode == 2 and "--offline, its settings and --detections go with --out" in \
+        r.stderr
+    r = cli(seq, "--out-dir", tmp_path / "v", "--tracker", "dcpf", "--config",
+            tmp_path / "s.toml")
+    assert r.returncode == 2 and "--config goes with the box trackers" in r.stderr
+    r = cli(seq, "--out", tmp_path / "r.txt", "--scores", "raw")  # raw scores of -1 to 15
+    assert r.returncode == 2 and "fuse_score weighs IoU by the score, which must lie in " \
+        "[0, 1]" in r.stderr
+
+
+@pytest.mark.parametrize("offline", [False, True])
+def test_print_config_read_back_gives_identical_tracks(seq, tmp_path, offline):
+    """`--print-config` writes TOML alone to stdout (the summary to stderr), with the values
+    derived from the data; read back with `--config` it tracks the sequence identically."""
+    flags = ["--offline"] if offline else []
+    r = cli(seq, "--out", tmp_path / "a.txt", "--print-config", "--high", "0.5", *flags)
+    assert r.returncode == 0, r.stderr
+    assert "wrote" in r.stderr and "wrote" not in r.stdout
+    (tmp_path / "used.toml").write_text(r.stdout)
+    assert "high = 0.5" in r.stdout and "[derived]" in r.stdout
+    assert "frame_rate = 25.0" in r.stdout and "new_track_score = " in r.stdout
+    assert f"enabled = {'true' if offline else 'false'}" in r.stdout
+    r = cli(seq, "--out", tmp_path / "b.txt", "--config", tmp_path / "used.toml")
+    assert r.returncode == 0, r.stderr
+    a, b = (tmp_path / "a.txt").read_text(), (tmp_path / "b.txt").read_text()
+    assert a == b and len(a.splitlines()) > 500
+
+
+# every option: its value in the configuration used, and the same tracks as the API's
+OPTIONS = [("--scores", "raw", "scores", "raw"), ("--high", "0.7", "high", 0.7),
+           ("--low", "0.5", "low", 0.5), ("--new-track", "0.9", "new_track", 0.9),
+           ("--min-iou", "0.5", "min_iou", 0.5), ("--confirm-hits", "3", "confirm_hits", 3),
+           ("--max-lost", "0.05", "max_lost", 0.05), ("--max-gap", "0.04", "max_gap", 0.04),
+           ("--min-track-score", "0.99", "min_track_score", 0.99),
+           ("--link-gap", "0", "link_gap", 0.0), ("--still-camera", None, "camera_motion",
+                                                  False)]
+
+
+@pytest.mark.parametrize("option,value,key,expected", OPTIONS)
+def test_each_option_sets_its_value(seq, tmp_path, option, value, key, expected):
+    flags = [option] + ([value] if value is not None else [])
+    offline = key in ("max_gap", "min_track_score", "link_gap")
+    if offline:
+        flags.append("--offline")
+    if key == "scores":  # raw scores of -1 to 15 need thresholds on their scale
+        flags = ["--config", tmp_path / "raw.toml"]
+        (tmp_path / "raw.toml").write_text('[tracker]\nscores = "raw"\nhigh = 12.0\n'
+                                           'low = 2.0\nnew_track = 13.0\nfuse_score = false\n')
+    r = cli(seq, "--out", tmp_path / "cli.txt", "--print-config", *flags)
+    assert r.returncode == 0, r.stderr
+    line = f"{key} = " + (f'"{expected}"' if isinstance(expected, str) else
+                          str(expected).lower() if isinstance(expected, bool) else
+                          repr(expected))
+    assert line in r.stdout.splitlines(), (line, r.stdout)
+    over = {key: expected}
+    if key == "scores":
+        over.update(high=12.0, low=2.0, new_track=13.0, fuse_score=False)
+    run = track_sequence(seq, tmp_path / "api.txt", offline=offline, **over)
+    default = track_sequence(seq, tmp_path / "default.txt", offline=offline)
+    cli_rows, api_rows = (tmp_path / "cli.txt").read_text(), (tmp_path / "api.txt").read_text()
+    assert cli_rows == api_rows
+    if key != "link_gap":  # nothing to join in this scene
+        assert api_rows != (tmp_path / "default.txt").read_text(), key
+    assert run.config.tracker != default.config.tracker or \
+        run.config.offline != default.config.offline
+
+
+def test_resolve_config_puts_values_over_a_preset():
+    cfg = resolve_config("sort", offline=True, high=0.4, max_gap=0.5,
+                         motion=BoxMotion(std_meas=0.04))
+    assert cfg.name == "sort" and cfg.tracker.high == 0.4 and cfg.offline.enabled
+    assert cfg.offline.max_gap == 0.5 and float(cfg.motion.std_meas[0]) == 0.04
+    assert resolve_config(tracker="sort").name == "sort"
+    with pytest.raises(ValueError, match="tracker 'sort' and the configuration's 'bytetrack'"):
+        resolve_config(TrackConfig.preset(), tracker="sort")
+    with pytest.raises(TypeError, match="hgh"):
+        resolve_config(hgh=0.4)
+    assert replace(OfflineConfig(), enabled=True).enabled
+    with pytest.raises(ValueError, match="enabled must be true or false"):
+        OfflineConfig(enabled=1)
+
+
+def test_the_command_lines_defaults_are_the_configurations():
+    """The defaults `vistrack track --help` states are the configuration's own (the parser
+    does not load the tracker to read them)."""
+    from vistrack.cli import _SETTINGS
+
+    cfg = TrackConfig.preset("bytetrack")
+    for option, table, key, _, _, _, default in _SETTINGS:
+        assert getattr(getattr(cfg, table), key) == default, option
