@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test bench clean
+.PHONY: run test bench bench-peers clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -25,6 +25,10 @@ test: $(STAMP)
 
 $(VENV)/.bench-installed: $(STAMP)
 	$(PY) -m pip install --quiet -e ".[test,bench]"
+	# supervision (for trackers) pulls opencv-python, whose cv2 lacks the contrib modules
+	# (HOG) and overwrites ours: put opencv-contrib-python-headless back over it
+	$(PY) -m pip install --quiet --force-reinstall --no-deps \
+		"$$($(PY) -m pip freeze | grep -i '^opencv-contrib-python-headless==')"
 	touch $@
 
 bench: $(VENV)/.bench-installed
@@ -36,7 +40,14 @@ bench: $(VENV)/.bench-installed
 	$(PY) bench/bench_single.py --write docs/benchmarks.md
 	$(PY) bench/bench_snake.py --write docs/benchmarks.md
 	$(PY) bench/accuracy_mot.py --write docs/mot.md
-	$(PY) bench/accuracy_mot.py --offline --write docs/mot.md
+
+# boxmot for bench/accuracy_mot.py, in an environment of its own: it pins filterpy<2 and
+# opencv-python<5, and pulls torch (several GB)
+.venv-boxmot/bin/python:
+	$(PYTHON) -m venv .venv-boxmot
+	.venv-boxmot/bin/python -m pip install --quiet "torch==2.14.1" "torchvision==0.29.1" "boxmot==25.0.0"
+
+bench-peers: .venv-boxmot/bin/python
 
 clean:
 	rm -rf $(VENV) out build src/*.egg-info
