@@ -372,7 +372,7 @@ def test_the_compiled_step_runs_only_where_it_equals_the_numpy_steps():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("bench", ["MOT15", "MOT17"])
+@pytest.mark.parametrize("bench", ["MOT15", "MOT17", "MOT16-FairMOT", "KITTI-tracking"])
 def test_compiled_step_equals_the_numpy_steps_on_every_sequence(bench):
     from vistrack.io import read_seqinfo
 
