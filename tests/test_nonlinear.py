@@ -252,21 +252,30 @@ def test_nonlinear_filter_errors_name_the_argument(rng):
         EnsembleKalmanFilter(motion, meas, n_members=1)
 
 
-@pytest.mark.parametrize("kind", ["EKF", "UKF"])
-def test_sequence_filters_on_a_batch_equal_each_series_alone(rng, kind):
-    """A batch runs the batched numpy code; one series the one-Gaussian path."""
+@pytest.mark.parametrize("kind,tol", [("EKF", (1e-10, 1e-10)), ("UKF", (1e-10, 1e-10)),
+                                      ("UKF, alpha 1e-3", (1e-7, 1e-5))])
+def test_sequence_filters_on_a_batch_equal_each_series_alone(rng, kind, tol):
+    """A batch runs the batched numpy code; one series the one-Gaussian path. With sigma-point
+    weights of order one (alpha = 0.5) the two agree to 1e-10 (measured: 2e-15 for the means,
+    1e-12 for the log-likelihood). With the default alpha = 1e-3 the weights are about -1e6
+    and 1e5, and the two summation orders alone move the means by up to 8e-9 of their scale
+    and the log-likelihood by up to 2e-6 of itself (measured over 20 seeds; a bearing noise
+    of 1e-3 rad makes the log-likelihood a thousand times more sensitive than the means), so
+    that case is checked to ten times that."""
+    from vistrack.filters.ukf import MerweScaledSigmaPoints
+
     motion, meas = CoordinatedTurn(q=0.05, q_turn=1e-3), RangeBearing(1.0, 1e-3, ndim_state=5)
     x0 = np.array([-20.0, 8.0, 0.0, -0.8, 0.01])
     _, ys = vt.simulate.simulate(motion, meas, 25, x0=x0, n_series=3, rng=rng)
     ys[0, 5] = np.nan
     ys[2, 8, 1] = np.nan
     P0 = np.diag([4.0, 4.0, 0.5, 0.5, 1e-3])
-    flt = ExtendedKalmanFilter(motion, meas) if kind == "EKF" else UnscentedKalmanFilter(motion, meas)
+    flt = (ExtendedKalmanFilter(motion, meas) if kind == "EKF" else
+           UnscentedKalmanFilter(motion, meas) if kind != "UKF" else
+           UnscentedKalmanFilter(motion, meas, points=MerweScaledSigmaPoints(alpha=0.5)))
     batch = flt.filter(ys, x0=x0, P0=P0)
     for b in range(3):
         one = flt.filter(ys[b], x0=x0, P0=P0)
-        # to 1e-8 of each array's scale: with alpha = 1e-3 the sigma-point weights are about
-        # -1e6 and 1e5, so two summation orders differ at ~1e-10 of the scale
         for got, want in ((batch.means[b], one.means), (batch.covs[b], one.covs)):
-            np.testing.assert_allclose(got, want, rtol=1e-8, atol=1e-8 * np.abs(want).max())
-        assert batch.loglik[b] == pytest.approx(float(one.loglik), rel=1e-8)
+            np.testing.assert_allclose(got, want, rtol=tol[0], atol=tol[0] * np.abs(want).max())
+        assert batch.loglik[b] == pytest.approx(float(one.loglik), rel=tol[1])
