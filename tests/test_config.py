@@ -193,3 +193,23 @@ def test_the_command_lines_defaults_are_the_configurations():
     cfg = TrackConfig.preset("bytetrack")
     for option, table, key, _, _, _, default in _SETTINGS:
         assert getattr(getattr(cfg, table), key) == default, option
+
+
+def test_video_mode_options_keep_the_front_ends_defaults(tmp_path):
+    """From pixels, an option goes over the background front-end's defaults (a still camera);
+    a configuration file is used as it is, and reads back to the same tracks."""
+    from pathlib import Path
+
+    clip = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
+    r = cli(clip, "--out-dir", tmp_path / "a", "--stop", "15", "--high", "0.5", "--quiet",
+            "--print-config")
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert "high = 0.5" in lines and "camera_motion = false" in lines
+    assert "frame_rate = 7.0" in lines  # the clip's, in [derived]
+    (tmp_path / "used.toml").write_text(r.stdout)
+    r = cli(clip, "--out-dir", tmp_path / "b", "--stop", "15", "--quiet", "--config",
+            tmp_path / "used.toml")
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "a" / "tracks.txt").read_text() == \
+        (tmp_path / "b" / "tracks.txt").read_text()

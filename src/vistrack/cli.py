@@ -113,11 +113,18 @@ def _track(args: argparse.Namespace) -> int:
                             "--frontend detections:FILE with --out-dir)")
             extra = {k: v for k, v in (("min_area", args.min_area),
                                        ("background", args.background)) if v is not None}
-            given = args.config is not None or setting_flags or args.still_camera
+            if args.config is not None or args.tracker == "dcpf":
+                # a file is the whole configuration, used as it is
+                settings = {"config": cfg} if cfg is not None else {}
+            else:  # the options go over the front-end's defaults (bgsub: a still camera)
+                settings = {key: getattr(args, option) for option, table, key, *_ in _SETTINGS
+                            if table == "tracker" and getattr(args, option) is not None}
+                if args.still_camera:
+                    settings["camera_motion"] = False
             run = track_video(args.input, args.out_dir, frontend=args.frontend,
                               fps=args.fps, tracker=args.tracker or "bytetrack", gt=args.gt,
                               stop=args.stop, force=args.force, progress=progress,
-                              config=cfg if given else None, **extra)
+                              **extra, **settings)
             sec = run.seconds
             ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
             print(f"tracked {run.frames} frames: {run.rows} boxes of {run.tracks} tracks; "
