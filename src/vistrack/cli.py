@@ -69,7 +69,7 @@ def _box_config(args: argparse.Namespace):
 
 
 def _track(args: argparse.Namespace) -> int:
-    from .config import ConfigError, config_toml
+    from .config import config_toml
     from .io.video import VideoError
     from .pipeline import track_sequence, track_video
 
@@ -134,7 +134,7 @@ def _track(args: argparse.Namespace) -> int:
             if run.scores is not None:
                 _table({Path(args.input).stem: run.scores}, report)
     except (FileNotFoundError, FileExistsError, ValueError, VideoError) as exc:
-        return fail(str(exc) if not isinstance(exc, ConfigError) else str(exc))
+        return fail(str(exc))
     if args.print_config:
         sys.stdout.write(config_toml(run.config, run.derived))
     return 0
