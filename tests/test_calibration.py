@@ -107,6 +107,23 @@ def test_the_online_calibration_learns_what_the_whole_file_gives():
     assert cal.n == full.n == 11 * (len(frames) - 2)
 
 
+def test_the_rank_map_is_the_empirical_distribution_function():
+    """``ScoreCalibration.ranks``: each score maps to the fraction of scores at or below it,
+    ties included (scipy's weak percentile of score); one below them all takes the lowest
+    score's rank, as any map does."""
+    from scipy.stats import percentileofscore
+
+    rng = np.random.default_rng(5)
+    s = np.round(rng.uniform(-1, 3, 60), 1)  # many ties
+    cal = ScoreCalibration.ranks(s)
+    q = np.r_[s, 0.05, 9.0]
+    want = np.array([percentileofscore(s, x, kind="weak") / 100 for x in q])
+    np.testing.assert_allclose(cal(q), want, rtol=0, atol=1e-12)
+    assert cal([-2.0]) == np.count_nonzero(s == s.min()) / len(s)
+    with pytest.raises(ValueError, match="no scores to rank"):
+        ScoreCalibration.ranks([])
+
+
 def test_calibration_edge_cases_and_errors():
     """One score for all (nothing to tell apart: full confidence), frames without detections,
     and bad input named."""

@@ -244,6 +244,15 @@ def _grid_pairs(a, b, min_iou):
     return rows[:n], cols[:n], vals[:n], True
 
 
+@njit(cache=True)
+def _grid_pairs_same_class(a, a_cls, b, b_cls, min_iou):
+    # _grid_pairs over the pairs whose boxes are of one class (trackers never give two
+    # classes one identity)
+    rows, cols, vals, ok = _grid_pairs(a, b, min_iou)
+    same = a_cls[rows] == b_cls[cols]
+    return rows[same], cols[same], vals[same], ok
+
+
 def iou_pairs(a: Any, b: Any, min_iou: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The pairs of boxes ``a (N, 4)`` × ``b (M, 4)`` whose IoU is at least ``min_iou`` (and
     > 0), without the dense ``(N, M)`` matrix: ``(rows, cols, iou)``, by row.

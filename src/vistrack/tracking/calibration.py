@@ -38,7 +38,7 @@ import numpy as np
 from numba import njit
 
 from ..association.assign import gnn_pairs
-from ..association.costs import _grid_pairs
+from ..association.costs import _grid_pairs_same_class
 from ..types import Detections
 
 __all__ = ["ScoreCalibration", "ScoreCalibrator", "isotonic_increasing", "persistence"]
@@ -89,11 +89,7 @@ def isotonic_increasing(y: Any, weights: Any = None) -> np.ndarray:
 @njit(cache=True)
 def _link(prev, prev_cls, cur, cur_cls, min_iou):
     # one-to-one links (GNN on 1 - IoU) between two frames' boxes of the same class
-    rows, cols, ov, ok = _grid_pairs(prev, cur, min_iou)
-    if not ok:
-        return rows, cols
-    same = prev_cls[rows] == cur_cls[cols]
-    rows, cols, ov = rows[same], cols[same], ov[same]
+    rows, cols, ov, _ = _grid_pairs_same_class(prev, prev_cls, cur, cur_cls, min_iou)
     return gnn_pairs(rows, cols, 1.0 - ov, prev.shape[0], cur.shape[0])
 
 
@@ -202,6 +198,16 @@ class ScoreCalibration:
         """The lowest score whose confidence is at least ``level`` (``inf`` if none is)."""
         k = np.flatnonzero(self.confidence >= level)
         return float(self.scores[k[0]]) if len(k) else float("inf")
+
+    @classmethod
+    def ranks(cls, scores: Any) -> "ScoreCalibration":
+        """The map of each score to its rank among ``scores``: the fraction of them at or
+        below it (their empirical distribution function; nothing fitted)."""
+        r = np.sort(_scores(scores))
+        if len(r) == 0:
+            raise ValueError("no scores to rank")
+        u = np.unique(r)
+        return cls(u, np.searchsorted(r, u, side="right") / len(r))
 
     def blend(self, weight: float, ranked: np.ndarray) -> "ScoreCalibration":
         """``weight`` × this map + (1 − ``weight``) × the empirical distribution function of
@@ -315,7 +321,7 @@ class ScoreCalibrator:
             cal = ScoreCalibration.fit(self._buf_s, self._buf_p, top=self.top)
             cal = cal.blend(w, ranked) if w < 1 else cal
         else:
-            cal = ScoreCalibration([float(ranked.min())], [1.0]).blend(0.0, ranked)
+            cal = ScoreCalibration.ranks(ranked)
         self._cal, self._fit_n, self._new_since_fit = cal, n, 0
         return cal
 
