@@ -6,6 +6,12 @@ import pytest
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 
 
+def pytest_addoption(parser):
+    parser.addoption("--write-digests", action="store_true",
+                     help="store the result files' digests (tests/test_accuracy.py) instead "
+                          "of checking them")
+
+
 def need(path):
     """``path``, or skip the test with the reason when the shared data is absent."""
     if not path.exists():

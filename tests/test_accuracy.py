@@ -2,10 +2,17 @@
 of every set must not get worse than those stored in ``accuracy_floor.json`` (measured with
 ``python bench/accuracy_mot.py``; see docs/mot.md), and camera-motion compensation must do no
 harm: on no KITTI drive, filmed from a moving car, more than a point of HOTA below the same
-tracker with ``camera_motion=False``, and a gain on MOT17."""
+tracker with ``camera_motion=False``, and a gain on MOT17.
+
+The result files themselves are kept too: every sequence's, online and offline, and the tracks
+of the bundled clip from pixels, by their SHA-256 in ``result_digests.json``. A change meant
+to keep behaviour (a refactor, a speed-up) must leave them all byte-identical; a change meant
+to alter results re-measures the floors and writes new digests with
+``python -m pytest tests/test_accuracy.py --write-digests``."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 
@@ -18,6 +25,8 @@ from .mot_oracles import SHARED
 SETS = {"MOT15": "mot15", "MOT17": "mot17", "MOT16-FairMOT": "mot16-fairmot",
         "KITTI": "kitti-tracking"}
 FLOOR = json.loads((Path(__file__).with_name("accuracy_floor.json")).read_text())
+DIGESTS = Path(__file__).with_name("result_digests.json")
+CLIP = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
 # the stored values are rounded to 0.01; a different platform's floating point may flip a
 # rare tie in the assignment, which moves a COMBINED score by a few hundredths
 SLACK = 0.05
@@ -33,6 +42,7 @@ def _sequences(name):
 
 
 _RUNS: dict = {}
+_FILES: dict = {}  # (offline, set, sequence) -> the results file written
 
 
 def scores(tmp_path_factory, name, offline=False, **kw):
@@ -44,6 +54,8 @@ def scores(tmp_path_factory, name, offline=False, **kw):
         for d in _sequences(name):
             r = track_sequence(d, out / f"{d.name}.txt", offline=offline, **kw)
             pairs.append((d.name, d / "gt" / "gt.txt", r.out, d / "seqinfo.ini"))
+            if not kw:
+                _FILES["offline" if offline else "online", name, d.name] = r.out
         _RUNS[key] = evaluate_files(pairs)
     return _RUNS[key]
 
@@ -68,3 +80,29 @@ def test_camera_motion_does_no_harm_on_kitti_and_helps_mot17(tmp_path_factory):
                      scores(tmp_path_factory, "MOT17", camera_motion=False))
     assert moving["COMBINED"].HOTA > still["COMBINED"].HOTA + 0.003
     assert moving["COMBINED"].IDF1 > still["COMBINED"].IDF1
+
+
+def _sha256(path):
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+@pytest.mark.slow
+def test_result_files_are_unchanged(tmp_path_factory, request):
+    """Every result file of the four sets (online and offline, default configuration, as the
+    floors above were measured) and the bundled clip's tracks from pixels, byte for byte."""
+    from vistrack.pipeline import track_video
+
+    got = {}
+    for offline in (False, True):
+        for name in SETS:
+            scores(tmp_path_factory, name, offline)  # tracked once, shared with the floors
+    for (mode, name, seq), path in sorted(_FILES.items()):
+        got[f"{mode}/{name}/{seq}"] = _sha256(path)
+    run = track_video(CLIP, tmp_path_factory.mktemp("clip") / "out", annotate=False)
+    got["video/pets09-s2l1.mp4/tracks.txt"] = _sha256(run.out_dir / "tracks.txt")
+    if request.config.getoption("--write-digests"):
+        DIGESTS.write_text(json.dumps(got, indent=1, sort_keys=True) + "\n")
+    want = json.loads(DIGESTS.read_text())
+    changed = sorted(k for k in want.keys() | got.keys() if want.get(k) != got.get(k))
+    assert not changed, (f"{len(changed)} of {len(want)} result files differ from "
+                         f"{DIGESTS.name}: {changed[:10]}")
