@@ -1,6 +1,6 @@
-"""The detector-confidence particle filter: batched systematic resampling, the confidence
-map's geometry against OpenCV's HOG and bilinear interpolation, and tracking two crossing
-people whose detections are missing half the time."""
+"""The detector-confidence particle filter: the confidence map's geometry against OpenCV's
+HOG and bilinear interpolation, and tracking two crossing people whose detections are missing
+half the time."""
 
 from __future__ import annotations
 
@@ -10,18 +10,8 @@ import pytest
 from vistrack.evaluation.mot import evaluate_mot
 from vistrack.frontends.detectors import ConfidenceMap, HOGConfidence
 from vistrack.io.motchallenge import MOTTable
-from vistrack.tracking.dcpf import DCPFConfig, DetectorConfidencePF, systematic
+from vistrack.tracking.dcpf import DCPFConfig, DetectorConfidencePF
 from vistrack.types import Detections
-
-
-def test_systematic_resampling_draws_each_particle_n_w_times_within_one():
-    rng = np.random.default_rng(0)
-    w = rng.random((50, 37)) ** 3
-    w /= w.sum(1, keepdims=True)
-    idx = systematic(w, rng)
-    counts = np.stack([np.bincount(r, minlength=37) for r in idx])
-    assert np.abs(counts - 37 * w).max() < 1.0
-    assert (counts.sum(1) == 37).all()
 
 
 def test_confidence_map_is_bilinear_and_picks_the_nearest_height():

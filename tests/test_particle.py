@@ -48,6 +48,24 @@ def test_low_variance_schemes_keep_the_deterministic_part(method):
             assert np.all(c <= np.ceil(30 * w) + 1)
 
 
+@pytest.mark.parametrize("method", sorted(RESAMPLERS))
+def test_a_batch_of_sets_is_resampled_as_each_set_alone(method):
+    """Rows of ``(B, N)`` weights are resampled independently, drawing from the generator in
+    row order: the same indices as one call per row; systematic rows draw particle ``i``
+    ``N w_i`` times, within one."""
+    rng = np.random.default_rng(0)
+    w = rng.random((50, 37)) ** 3
+    w[::7, ::3] = 0.0
+    w /= w.sum(1, keepdims=True)
+    got = resample(w, method, n=40, rng=11)
+    g = np.random.default_rng(11)
+    np.testing.assert_array_equal(got, np.stack([resample(r, method, n=40, rng=g) for r in w]))
+    if method == "systematic":
+        counts = np.stack([np.bincount(r, minlength=37) for r in resample(w, rng=1)])
+        assert np.abs(counts - 37 * w).max() < 1.0 and (counts.sum(1) == 37).all()
+    assert resample(np.zeros((0, 5)), method, rng=0).shape == (0, 5)
+
+
 def test_resampling_arguments_are_checked():
     with pytest.raises(ValueError, match="weights must sum to 1; they sum to 0.9"):
         resample([0.5, 0.4])
@@ -57,6 +75,10 @@ def test_resampling_arguments_are_checked():
         resample([1.0], "bogus")
     with pytest.raises(ValueError, match="n must be >= 1"):
         resample([1.0], n=0)
+    with pytest.raises(ValueError, match="weights must sum to 1; row 1 sums to 0.5"):
+        resample([[0.5, 0.5], [0.25, 0.25]])
+    with pytest.raises(ValueError, match="weights must be 1-D or 2-D"):
+        resample(np.ones((1, 1, 1)))
 
 
 def linear_problem(rng, T=25):

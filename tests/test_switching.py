@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import vistrack as vt
-from vistrack.filters import SwitchingParticleFilter, kalman_filter
+from vistrack.filters import IMMFilter, SwitchingParticleFilter, kalman_filter
 from vistrack.models import SwitchingLinearSystem
 
 
@@ -70,7 +70,7 @@ def test_rbpf_and_imm_against_the_exact_posterior():
     np.testing.assert_allclose(rb.mode_probs[-1], probs, atol=0.02)
     assert rb.loglik == pytest.approx(loglik, abs=0.05)
     # the IMM merges the k^T Gaussians into k at every step: an approximation, but close here
-    imm = slds.imm().filter(ys, x0=x0, P0=P0)
+    imm = IMMFilter.from_system(slds).filter(ys, x0=x0, P0=P0)
     assert np.all(np.abs(imm.means[-1] - mean) < 0.2 * sd)
     np.testing.assert_allclose(imm.mode_probs[-1], probs, atol=0.1)
 

@@ -19,6 +19,8 @@ __all__ = [
     "check_matrix_stack",
     "check_psd",
     "as_rng",
+    "as_measurement_series",
+    "check_linear_gaussian",
 ]
 
 
@@ -127,3 +129,27 @@ def as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
     if rng is None or isinstance(rng, (int, np.integer)):
         return np.random.default_rng(rng)
     raise TypeError(f"rng must be a numpy Generator, an int seed or None; got {type(rng).__name__}")
+
+
+def as_measurement_series(ys: Any, name: str = "ys") -> tuple[np.ndarray, bool]:
+    """Measurements ``(T, m)`` or ``(B, T, m)`` as ``(B, T, m)`` float64 (NaN: missing), and
+    whether a single series was given; an infinite value is named with its index."""
+    y = as_float_array(ys, name, ndim=(2, 3))
+    if np.isinf(y).any():
+        idx = tuple(int(i) for i in np.argwhere(np.isinf(y))[0])
+        raise ValueError(f"{name} must be finite or NaN (missing); {name}{list(idx)} = {y[idx]}")
+    single = y.ndim == 2
+    return (y[None] if single else y), single
+
+
+def check_linear_gaussian(F: Any, Q: Any, H: Any, R: Any, n: int, m: int,
+                          T: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A linear-Gaussian model's ``F (n, n)``, ``Q (n, n)``, ``H (m, n)``, ``R (m, m)``, each
+    constant or one per step (``T``), checked (``Q`` and ``R`` positive semi-definite)."""
+    F_ = check_matrix_stack(F, "F", n, n, T)
+    Q_ = check_matrix_stack(Q, "Q", n, n, T)
+    H_ = check_matrix_stack(H, "H", m, n, T)
+    R_ = check_matrix_stack(R, "R", m, m, T)
+    check_psd(Q_, "Q")
+    check_psd(R_, "R")
+    return F_, Q_, H_, R_

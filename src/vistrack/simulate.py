@@ -9,7 +9,8 @@ import numpy as np
 
 from ._validate import as_float_array, as_rng, check_finite, check_psd
 from .filters._nonlinear import psd_sqrt
-from .filters.kalman import KalmanFilter, _model
+from ._validate import check_linear_gaussian
+from .filters.linear import KalmanFilter
 
 __all__ = ["simulate_lgssm", "simulate"]
 
@@ -62,7 +63,7 @@ def simulate_lgssm(
     n = x0_.shape[0]
     H_arr = as_float_array(H, "H", ndim=(2, 3))
     m = H_arr.shape[-2]
-    F_, Q_, H_, R_ = _model(F, Q, H_arr, R, n, m, T)
+    F_, Q_, H_, R_ = check_linear_gaussian(F, Q, H_arr, R, n, m, T)
     B = 1 if n_series is None else int(n_series)
     if B < 1:
         raise ValueError(f"n_series must be >= 1; got {n_series}")

@@ -2,11 +2,13 @@
 
 from .assign import (ASSIGNERS, assign, components, gnn, gnn_sparse, greedy, lsa,
                      nearest_neighbour)
-from .costs import euclidean, giou, iou, iou_pairs, mahalanobis, paired_iou
+from .costs import (euclidean, giou, iou, iou_pairs, iou_pairs_same_class, mahalanobis,
+                    paired_iou)
 from .gating import chi2_gate, chi2_threshold
 from .pda import jpda_weights, likelihoods, pda_update, pda_weights
 
 __all__ = ["ASSIGNERS", "assign", "components", "gnn", "gnn_sparse", "greedy", "lsa",
            "nearest_neighbour",
-           "euclidean", "giou", "iou", "iou_pairs", "mahalanobis", "paired_iou", "chi2_gate", "chi2_threshold",
+           "euclidean", "giou", "iou", "iou_pairs", "iou_pairs_same_class", "mahalanobis",
+           "paired_iou", "chi2_gate", "chi2_threshold",
            "jpda_weights", "likelihoods", "pda_update", "pda_weights"]

@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-__all__ = ["iou", "paired_iou", "iou_pairs", "giou", "euclidean", "mahalanobis"]
+__all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "giou", "euclidean",
+           "mahalanobis"]
 
 
 def _boxes(b: Any, name: str) -> np.ndarray:
@@ -245,9 +246,20 @@ def _grid_pairs(a, b, min_iou):
 
 
 @njit(cache=True)
-def _grid_pairs_same_class(a, a_cls, b, b_cls, min_iou):
-    # _grid_pairs over the pairs whose boxes are of one class (trackers never give two
-    # classes one identity)
+def iou_pairs_same_class(a, a_cls, b, b_cls, min_iou):
+    """:func:`iou_pairs` over the pairs of one class (trackers never give two classes one
+    identity), compiled, for compiled callers too: ``a (N, 4)``, ``b (M, 4)`` float64 boxes
+    ``(x0, y0, x1, y1)``, ``a_cls (N,)``, ``b_cls (M,)`` int64 classes. Returns ``(rows,
+    cols, iou, ok)``; ``ok`` is False, and the pairs empty, when a box is not finite.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a, b = np.array([[0, 0, 2, 2.0]]), np.array([[1, 0, 3, 2.0], [0, 0, 2, 2.0]])
+    >>> r, c, v, ok = iou_pairs_same_class(a, np.array([1]), b, np.array([2, 1]), 0.1)
+    >>> c.tolist(), v.tolist(), ok
+    ([1], [1.0], True)
+    """
     rows, cols, vals, ok = _grid_pairs(a, b, min_iou)
     same = a_cls[rows] == b_cls[cols]
     return rows[same], cols[same], vals[same], ok

@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import as_float_array
-from ..filters.kalman import FilterResult, _as_ys
+from .._validate import as_float_array, as_measurement_series
+from ..filters.kalman import FilterResult
 
 __all__ = ["rmse", "nees", "nis", "chi2_band"]
 
@@ -58,7 +58,7 @@ def nis(ys: Any, result: FilterResult, *, H: Any, R: Any) -> tuple[np.ndarray, n
     dof : ndarray of int, shape (..., T)
         Number of observed components (the chi-square degrees of freedom).
     """
-    y, single = _as_ys(ys)
+    y, single = as_measurement_series(ys)
     if result.pred_covs is None:
         raise ValueError("result has no covariances: run the filter with store_covs=True")
     pm = result.pred_means if not single else result.pred_means[None]

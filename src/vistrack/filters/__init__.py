@@ -3,8 +3,6 @@ ensemble Kalman filter for nonlinear models."""
 
 from .kalman import (
     FilterResult,
-    KalmanFilter,
-    OnlineFilter,
     kalman_filter,
     kalman_filter_1d,
     kf_predict,
@@ -26,6 +24,7 @@ from .particle import (
     weighted_mean,
 )
 from .smoothers import SmoothResult, rts_smooth, two_filter_smooth
+from .linear import KalmanFilter, OnlineFilter
 from .ukf import (
     JulierSigmaPoints,
     MerweScaledSigmaPoints,

@@ -9,7 +9,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .._validate import as_float_array
-from ..models.nonlinear import _Measurement
+from ..models.nonlinear import AngleAwareMeasurement
 from ..types import Gaussian
 from .kalman import FilterResult, _readonly
 
@@ -100,8 +100,9 @@ class Measurement:
         # (circular for angles), which the compiled one-Gaussian kernels reproduce
         own = type(model)
         self.standard = residual is None and mean is None and (
-            self.linear or (getattr(own, "residual", None) is _Measurement.residual
-                            and getattr(own, "mean", None) is _Measurement.mean)
+            self.linear
+            or (getattr(own, "residual", None) is AngleAwareMeasurement.residual
+                and getattr(own, "mean", None) is AngleAwareMeasurement.mean)
             or not (hasattr(model, "residual") or hasattr(model, "mean")))
         self.angle_mask = np.zeros(self.m, dtype=np.bool_)
         self.angle_mask[list(getattr(model, "angles", ()))] = True

@@ -127,6 +127,16 @@ class IMMFilter:
            [0.  , 1.  ]])
     """
 
+    @classmethod
+    def from_system(cls, system: Any) -> "IMMFilter":
+        """The IMM of a :class:`~vistrack.models.SwitchingLinearSystem`: one exact Kalman
+        member (an :class:`~vistrack.filters.ExtendedKalmanFilter` of a linear model) per
+        motion, with the system's switching matrix and first-mode distribution."""
+        from .ekf import ExtendedKalmanFilter
+
+        return cls([ExtendedKalmanFilter(m, system.measurement) for m in system.motions],
+                   system.transition, mode_probs=system.mode_probs)
+
     def __init__(self, filters: Sequence[Any], transition: Any, *, mode_probs: Any = None):
         self.filters = list(filters)
         M = len(self.filters)

@@ -1,5 +1,5 @@
-r"""The Kalman filter: batched kernels, a whole-sequence function, the seeds' scalar equations,
-and a thin class over models.
+r"""The Kalman filter: batched kernels, a whole-sequence function and the seeds' scalar
+equations (the class over models is :mod:`vistrack.filters.linear`).
 
 Notation follows the seeds: the dynamics ``x_i ~ N(D x_{i-1}, Σd)`` are ``F``, ``Q`` here and the
 measurements ``y_i ~ N(M x_i, Σm)`` are ``H``, ``R``. The prior ``x0, P0`` is the seeds'
@@ -17,16 +17,14 @@ definite.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from .._validate import as_float_array, check_finite, check_matrix_stack, check_psd
+from .._validate import (as_float_array, as_measurement_series, check_finite,
+                         check_linear_gaussian, check_psd)
 from ..types import Gaussian
 from . import _codegen, _kernels
-
-if TYPE_CHECKING:
-    from .smoothers import SmoothResult
 
 __all__ = [
     "FilterResult",
@@ -35,8 +33,6 @@ __all__ = [
     "kf_update",
     "kf_step",
     "kalman_filter_1d",
-    "KalmanFilter",
-    "OnlineFilter",
 ]
 
 
@@ -74,15 +70,6 @@ def _readonly(*arrays: np.ndarray | None) -> None:
             a.flags.writeable = False
 
 
-def _as_ys(ys: Any) -> tuple[np.ndarray, bool]:
-    y = as_float_array(ys, "ys", ndim=(2, 3))
-    if np.isinf(y).any():
-        idx = tuple(int(i) for i in np.argwhere(np.isinf(y))[0])
-        raise ValueError(f"ys must be finite or NaN (missing); ys{list(idx)} = {y[idx]}")
-    single = y.ndim == 2
-    return (y[None] if single else y), single
-
-
 def _prior(x0: Any, P0: Any, B: int) -> tuple[np.ndarray, np.ndarray]:
     x = as_float_array(x0, "x0", ndim=(1, 2))
     n = x.shape[-1]
@@ -95,16 +82,6 @@ def _prior(x0: Any, P0: Any, B: int) -> tuple[np.ndarray, np.ndarray]:
     check_finite(P, "P0")
     check_psd(P, "P0")
     return x.reshape(-1, n), P.reshape(-1, n, n)
-
-
-def _model(F: Any, Q: Any, H: Any, R: Any, n: int, m: int, T: int | None):
-    F_ = check_matrix_stack(F, "F", n, n, T)
-    Q_ = check_matrix_stack(Q, "Q", n, n, T)
-    H_ = check_matrix_stack(H, "H", m, n, T)
-    R_ = check_matrix_stack(R, "R", m, m, T)
-    check_psd(Q_, "Q")
-    check_psd(R_, "R")
-    return F_, Q_, H_, R_
 
 
 def _raise_not_pd(bad_t: int) -> None:
@@ -172,11 +149,11 @@ def kalman_filter(
     >>> res.means.shape, res.covs.shape, res.loglik.shape
     ((4, 2), (4, 2, 2), ())
     """
-    y, single = _as_ys(ys)
+    y, single = as_measurement_series(ys)
     B, T, m = y.shape
     x0_, P0_ = _prior(x0, P0, B)
     n = x0_.shape[1]
-    F_, Q_, H_, R_ = _model(F, Q, H, R, n, m, T)
+    F_, Q_, H_, R_ = check_linear_gaussian(F, Q, H, R, n, m, T)
 
     means = np.empty((B, T, n))
     pmeans = np.empty((B, T, n)) if store_covs else np.empty((1, 1, n))
@@ -428,251 +405,3 @@ def kalman_filter_1d(
         out["mean"][i] = (xp * sm**2 + mi * y[i] * sp**2) / den
         out["std"][i] = np.sqrt(sm**2 * sp**2 / den)
     return out
-
-
-def _dt_steps(dt: Any, T: int) -> np.ndarray | float:
-    d = as_float_array(dt, "dt", ndim=(0, 1))
-    if d.ndim == 0:
-        return float(d)
-    if d.shape[0] == T - 1:
-        d = np.concatenate([[0.0], d])  # step 0 has no prediction
-    if d.shape[0] != T:
-        raise ValueError(
-            f"dt must be a scalar, the T-1={T - 1} intervals between steps or T={T} values "
-            f"(dt[0] unused); got shape {d.shape}"
-        )
-    return d
-
-
-class KalmanFilter:
-    """A Kalman filter built from a motion model and a measurement model.
-
-    Parameters
-    ----------
-    motion : MotionModel
-        Gives ``F(dt)``, ``Q(dt)`` (e.g. :class:`vistrack.models.ConstantVelocity`).
-    measurement : MeasurementModel
-        Gives ``H(n)``, ``R()`` (e.g. :class:`vistrack.models.Position`).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from vistrack.models import ConstantVelocity, Position
-    >>> kf = KalmanFilter(ConstantVelocity(dim=2, q=0.1), Position(dim=2, r=1.0))
-    >>> ys = np.c_[np.arange(10.0), 2 * np.arange(10.0)]
-    >>> smoothed = kf.smooth(ys)
-    >>> smoothed.means.shape
-    (10, 4)
-    """
-
-    def __init__(self, motion: Any, measurement: Any):
-        for name, obj, attrs in (
-            ("motion", motion, ("F", "Q", "ndim_state")),
-            ("measurement", measurement, ("H", "R", "ndim_meas")),
-        ):
-            missing = [a for a in attrs if not hasattr(obj, a)]
-            if missing:
-                raise TypeError(f"{name} must provide {', '.join(attrs)}; "
-                                f"{type(obj).__name__} lacks {', '.join(missing)}")
-        self.motion = motion
-        self.measurement = measurement
-
-    def __repr__(self) -> str:
-        return f"KalmanFilter({self.motion!r}, {self.measurement!r})"
-
-    def matrices(self, T: int, dt: Any = 1.0) -> dict[str, np.ndarray]:
-        """``F, Q, H, R`` for ``T`` steps with time step(s) ``dt``."""
-        n = self.motion.ndim_state
-        d = _dt_steps(dt, T)
-        return {
-            "F": self.motion.F(d),
-            "Q": self.motion.Q(d),
-            "H": self.measurement.H(n),
-            "R": self.measurement.R(),
-        }
-
-    def default_prior(self, ys: np.ndarray, *, scale: float = 1e3) -> tuple[np.ndarray, np.ndarray]:
-        """A weak prior from the first measurement of each series.
-
-        ``x0`` is the least-squares state ``H⁺ y`` of the first non-missing value of each
-        component (0 where a component is never observed), and ``P0`` is ``R`` on the measured
-        subspace and ``scale² · max(diag R)`` on the rest of the state.
-        """
-        y, _ = _as_ys(ys)
-        n = self.motion.ndim_state
-        H = np.asarray(self.measurement.H(n), dtype=float)
-        R = np.asarray(self.measurement.R(), dtype=float)
-        H0, R0 = (H[0] if H.ndim == 3 else H), (R[0] if R.ndim == 3 else R)
-        ok = ~np.isnan(y)
-        first = np.where(ok.any(axis=1), np.argmax(ok, axis=1), 0)  # (B, m)
-        y_first = np.take_along_axis(y, first[:, None, :], axis=1)[:, 0]
-        y_first = np.nan_to_num(y_first)
-        Hp = np.linalg.pinv(H0)
-        x0 = y_first @ Hp.T
-        proj = Hp @ H0
-        P0 = Hp @ R0 @ Hp.T + scale**2 * np.max(np.diag(R0)) * (np.eye(n) - proj)
-        P0 = 0.5 * (P0 + P0.T)
-        return (x0[0] if np.ndim(ys) == 2 else x0), P0
-
-    def filter(
-        self,
-        ys: Any,
-        *,
-        dt: Any = 1.0,
-        x0: Any = None,
-        P0: Any = None,
-        store_covs: bool = True,
-    ) -> FilterResult:
-        """Filter ``ys`` of shape ``(T, m)`` or ``(B, T, m)``; see :func:`kalman_filter`.
-
-        ``dt`` is a scalar, the ``T-1`` intervals between steps, or ``T`` values with ``dt[0]``
-        unused. Without ``x0``/``P0`` the prior is :meth:`default_prior`.
-        """
-        T = np.shape(ys)[-2] if np.ndim(ys) >= 2 else 0
-        if x0 is None or P0 is None:
-            dx0, dP0 = self.default_prior(ys)
-            x0 = dx0 if x0 is None else x0
-            P0 = dP0 if P0 is None else P0
-        return kalman_filter(ys, **self.matrices(T, dt), x0=x0, P0=P0, store_covs=store_covs)
-
-    def online(self, x0: Any, P0: Any, *, dt: float = 1.0) -> OnlineFilter:
-        """A filter for one target that is fed one measurement at a time.
-
-        ``x0, P0`` are the prior of the first measurement (as in :func:`kalman_filter`): correct
-        them with :meth:`OnlineFilter.update`, then :meth:`OnlineFilter.step` for each later one.
-
-        Examples
-        --------
-        >>> from vistrack.models import ConstantVelocity, Position
-        >>> f = KalmanFilter(ConstantVelocity(dim=1, q=0.01), Position(dim=1, r=0.5)).online(
-        ...     x0=[0.0, 1.0], P0=np.eye(2))
-        >>> _ = f.update([0.1])
-        >>> for y in ([1.0], [2.1], [2.9]):
-        ...     _ = f.step(y)
-        >>> f.mean.round(2)
-        array([2.96, 0.96])
-        """
-        return OnlineFilter(self, x0, P0, dt=dt)
-
-    def smooth(
-        self, ys: Any, *, dt: Any = 1.0, x0: Any = None, P0: Any = None
-    ) -> SmoothResult:
-        """Filter, then RTS-smooth; see :func:`vistrack.filters.rts_smooth`."""
-        from .smoothers import rts_smooth
-
-        T = np.shape(ys)[-2]
-        mats = self.matrices(T, dt)
-        res = self.filter(ys, dt=dt, x0=x0, P0=P0)
-        return rts_smooth(res, F=mats["F"], Q=mats["Q"])
-
-
-class OnlineFilter:
-    """One target's Gaussian, predicted and corrected in place, one measurement at a time.
-
-    Made by :meth:`KalmanFilter.online`. The model's matrices for the default time step are
-    checked once, here, so a call costs little more than the arithmetic: this is the loop of a
-    single-object tracker. For many targets, :func:`kf_predict` / :func:`kf_update` on a batch
-    of Gaussians cost less per target.
-
-    Attributes
-    ----------
-    mean, cov : ndarray
-        Read-only views of the current estimate (they change with the next call; copy to keep).
-    """
-
-    __slots__ = ("_kf", "_n", "_m", "_dt0", "_dt", "_buf", "_off", "_idx", "_kernel", "_no_y")
-
-    def __init__(self, kf: KalmanFilter, x0: Any, P0: Any, *, dt: float = 1.0):
-        n = kf.motion.ndim_state
-        x, P = _prior(x0, P0, 1)
-        if x.shape != (1, n) or P.shape[0] != 1:
-            raise ValueError(f"x0 must have shape ({n},) and P0 ({n}, {n}); got {np.shape(x0)}, "
-                             f"{np.shape(P0)}")
-        H = np.asarray(kf.measurement.H(n), dtype=np.float64)
-        R = np.asarray(kf.measurement.R(), dtype=np.float64)
-        if H.ndim != 2 or R.ndim != 2:
-            raise ValueError("an online filter needs a constant measurement model (H, R 2-D)")
-        m = H.shape[0]
-        H = check_matrix_stack(H, "H", m, n, 1)
-        R = check_matrix_stack(R, "R", m, m, 1)
-        check_psd(R, "R")
-        self._kf, self._n, self._m = kf, n, m
-        # state, model and work space in one buffer: few arguments make the kernel call cheap
-        self._off, size = _kernels.online_layout(n, m)
-        self._buf = np.zeros(size)
-        self._put("x", x[0])
-        self._put("P", P[0])
-        self._put("H", H)
-        self._put("R", R)
-        self._idx = np.empty(m, dtype=np.int64)
-        self._kernel = _kernels.online_kernel(n, m)
-        self._dt0 = float(dt)  # the default time step; F, Q are kept for the last one used
-        self._dt = None
-        self._set_dt(self._dt0)
-        self._no_y = np.full(m, np.nan)  # the measurement argument of a prediction
-
-    def _put(self, name: str, value: np.ndarray) -> None:
-        o = self._off[name]
-        self._buf[o:o + value.size] = value.ravel()
-
-    def _set_dt(self, dt: float) -> None:
-        n = self._n
-        F = check_matrix_stack(self._kf.motion.F(dt), "F", n, n, 1)
-        Q = check_matrix_stack(self._kf.motion.Q(dt), "Q", n, n, 1)
-        check_psd(Q, "Q")
-        self._put("F", F)
-        self._put("Q", Q)
-        self._dt = dt
-
-    def __repr__(self) -> str:
-        return f"OnlineFilter(mean={np.array2string(self.mean, precision=3)})"
-
-    @property
-    def mean(self) -> np.ndarray:
-        o = self._off["x"]
-        v = self._buf[o:o + self._n]
-        v.flags.writeable = False
-        return v
-
-    @property
-    def cov(self) -> np.ndarray:
-        n, o = self._n, self._off["P"]
-        v = self._buf[o:o + n * n].reshape(n, n)
-        v.flags.writeable = False
-        return v
-
-    @property
-    def gaussian(self) -> Gaussian:
-        """A copy of the current estimate."""
-        return Gaussian(self.mean.copy(), self.cov.copy())
-
-    def _run(self, y: Any, predict: bool, update: bool, dt: float | None) -> float:
-        if predict:
-            d = self._dt0 if dt is None else float(dt)
-            if d != self._dt:
-                self._set_dt(d)
-        if update:
-            if not (type(y) is np.ndarray and y.dtype == np.float64 and y.flags.c_contiguous):
-                y = as_float_array(y, "y")
-            if y.shape != (self._m,):
-                raise ValueError(f"y must have shape ({self._m},); got {y.shape}")
-        else:
-            y = self._no_y
-        code, ll = self._kernel(self._buf, y, self._idx, predict, update)
-        if code >= 0:
-            if code == 8:
-                raise ValueError(f"y must be finite or NaN (missing); got {y}")
-            _kernel_error(code, "F", "Q")
-        return ll
-
-    def predict(self, *, dt: float | None = None) -> None:
-        """Predict one step of ``dt`` (default: the ``dt`` the filter was made with)."""
-        self._run(None, True, False, dt)
-
-    def update(self, y: Any) -> float:
-        """Correct with ``y (m,)`` (NaN components missing); returns ``log N(y; H m, S)``."""
-        return self._run(y, False, True, None)
-
-    def step(self, y: Any, *, dt: float | None = None) -> float:
-        """:meth:`predict` then :meth:`update`; returns the log-likelihood of ``y``."""
-        return self._run(y, True, True, dt)

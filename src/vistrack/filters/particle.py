@@ -133,16 +133,26 @@ RESAMPLERS: dict[str, Callable[[np.ndarray, int, np.random.Generator], np.ndarra
 
 
 def _check_weights(weights: Any) -> np.ndarray:
-    w = as_float_array(weights, "weights", ndim=(1,))
-    if w.size == 0:
+    w = as_float_array(weights, "weights", ndim=(1, 2))
+    if w.shape[-1] == 0:
         raise ValueError("weights must not be empty")
     if not np.all(np.isfinite(w)) or np.any(w < 0):
         bad = w[~(np.isfinite(w) & (w >= 0))][0]
         raise ValueError(f"weights must be finite and >= 0; got {bad}")
-    s = w.sum()
-    if abs(s - 1.0) > 1e-9 * max(1, len(w)) ** 0.5:
-        raise ValueError(f"weights must sum to 1; they sum to {float(s)!r}")
+    s = w.sum(-1)
+    off = np.abs(s - 1.0) > 1e-9 * max(1, w.shape[-1]) ** 0.5
+    if off.any():
+        k = np.flatnonzero(np.ravel(off))[0]
+        where = f"row {k} sums" if w.ndim == 2 else "they sum"
+        raise ValueError(f"weights must sum to 1; {where} to {float(np.ravel(s)[k])!r}")
     return w
+
+
+@njit(cache=True)
+def _systematic_rows(w, u0, out):
+    for t in range(w.shape[0]):
+        _systematic_kernel(w[t], u0[t], out[t])
+    return out
 
 
 def resample(weights: Any, method: str = "systematic", *, n: int | None = None,
@@ -152,18 +162,43 @@ def resample(weights: Any, method: str = "systematic", *, n: int | None = None,
     Each index ``i`` is drawn ``N w_i`` times in expectation (unbiased); the schemes differ in
     variance: multinomial > residual, stratified > systematic (usually).
 
+    Parameters
+    ----------
+    weights : (N,) or (B, N) array
+        Normalised weights of one particle set, or of ``B`` sets (each row sums to 1), which
+        are resampled independently in one call.
+    method : str
+        A name of :data:`RESAMPLERS`.
+    n : int, optional
+        How many to draw (per set).
+    rng : numpy Generator, int or None
+
+    Returns
+    -------
+    (n,) or (B, n) int64 array
+        Indices into each set, sorted.
+
     Examples
     --------
     >>> resample([0.1, 0.2, 0.7], "systematic", n=10, rng=0)
     array([0, 1, 1, 2, 2, 2, 2, 2, 2, 2])
+    >>> resample([[0.5, 0.5], [0.0, 1.0]], rng=0)
+    array([[0, 1],
+           [1, 1]])
     """
     if method not in RESAMPLERS:
         raise ValueError(f"method must be one of {sorted(RESAMPLERS)}; got {method!r}")
     w = _check_weights(weights)
-    n = len(w) if n is None else int(n)
+    n = w.shape[-1] if n is None else int(n)
     if n < 1:
         raise ValueError(f"n must be >= 1; got {n}")
-    return RESAMPLERS[method](w, n, as_rng(rng))
+    gen = as_rng(rng)
+    if w.ndim == 1:
+        return RESAMPLERS[method](w, n, gen)
+    if method == "systematic":  # one draw a row, all rows in one compiled call
+        return _systematic_rows(w, gen.random(w.shape[0]), np.empty((w.shape[0], n), np.int64))
+    return np.stack([RESAMPLERS[method](row, n, gen) for row in w]) if len(w) else \
+        np.empty((0, n), np.int64)
 
 
 def effective_sample_size(weights: Any) -> float:

@@ -13,9 +13,10 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from .._validate import check_matrix_stack, check_psd
+from .._validate import (as_measurement_series, check_linear_gaussian, check_matrix_stack,
+                         check_psd)
 from ._kernels import chol_solve, predict_one
-from .kalman import FilterResult, _as_ys, _model, _readonly
+from .kalman import FilterResult, _readonly, kalman_filter
 
 __all__ = ["SmoothResult", "rts_smooth", "two_filter_smooth"]
 
@@ -164,13 +165,12 @@ def two_filter_smooth(
     Parameters are those of :func:`kalman_filter`. Returns a :class:`SmoothResult` whose
     ``backward_info``/``backward_info_vec`` hold ``Λ_t``, ``η_t``.
     """
-    from .kalman import kalman_filter
 
     fwd = kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0)
-    y, single = _as_ys(ys)
+    y, single = as_measurement_series(ys)
     B, T, m = y.shape
     n = fwd.means.shape[-1]
-    F_, Q_, H_, R_ = _model(F, Q, H, R, n, m, T)
+    F_, Q_, H_, R_ = check_linear_gaussian(F, Q, H, R, n, m, T)
     fm, fP, _ = _filtered_arrays(fwd)
     eye = np.eye(n)
     Lam = np.zeros((B, n, n))

@@ -6,6 +6,7 @@ from .linear_gaussian import LinearGaussian
 from .measurement import LinearMeasurement, MeasurementModel, Position
 from .switching import SwitchingLinearSystem
 from .nonlinear import (
+    AngleAwareMeasurement,
     CoordinatedTurn,
     GrowthMeasurement,
     GrowthMotion,
@@ -26,6 +27,7 @@ from .motion import (
 )
 
 __all__ = [
+    "AngleAwareMeasurement",
     "BoxMotion",
     "ConstantAcceleration",
     "ConstantPosition",

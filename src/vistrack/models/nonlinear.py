@@ -33,6 +33,7 @@ from .._validate import as_float_array, check_matrix_stack, check_psd
 from .motion import _as_dt, _check_q
 
 __all__ = [
+    "AngleAwareMeasurement",
     "CoordinatedTurn",
     "RangeBearing",
     "GrowthMotion",
@@ -115,9 +116,11 @@ class NonlinearMotion:
         return np.asarray(self._Q(dt), dtype=float)
 
 
-class _Measurement:
-    """``R()``, ``residual(a, b)`` (angles wrap) and ``mean(z, w)`` (circular for angles) of a
-    measurement model with ``_R`` and ``angles``."""
+class AngleAwareMeasurement:
+    """The base of the nonlinear measurement models: ``R()``, ``residual(a, b)`` (differences,
+    angles wrapped to ``(-π, π]``) and ``mean(z, w)`` (weighted sums, circular for angles) of a
+    model with ``_R`` and ``angles``. The filters' compiled one-Gaussian kernels reproduce
+    these two, so a model that keeps them (does not override them) takes the fast path."""
 
     _R: np.ndarray
     angles: tuple = ()
@@ -132,7 +135,7 @@ class _Measurement:
         return _weighted_mean(z, w, self.angles)
 
 
-class NonlinearMeasurement(_Measurement):
+class NonlinearMeasurement(AngleAwareMeasurement):
     r"""A user-given measurement model ``y = h(x) + N(0, R)``.
 
     Parameters
@@ -320,7 +323,7 @@ class CoordinatedTurn:
         return Q
 
 
-class RangeBearing(_Measurement):
+class RangeBearing(AngleAwareMeasurement):
     r"""Range and bearing of a 2-D position from a sensor at ``sensor = (sx, sy)``.
 
     .. math:: h(x) = \left[\sqrt{(x - s_x)^2 + (y - s_y)^2},\;
@@ -418,7 +421,7 @@ class GrowthMotion:
         return np.array([[self.q]])
 
 
-class GrowthMeasurement(_Measurement):
+class GrowthMeasurement(AngleAwareMeasurement):
     r"""The growth model's measurement ``y_t = x_t^2 / 20 + v_t``, ``v_t ~ N(0, r)`` (``r = 1``
     in the literature). Its sign ambiguity makes the posterior bimodal."""
 

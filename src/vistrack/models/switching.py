@@ -6,7 +6,8 @@ r"""Switching linear dynamic systems (seed 004, "Even More Extensions"):
 
 "a set of k dynamic models :math:`A^{(1)}, \dots, A^{(k)}`, each of which describes a
 different dynamic behaviour; a hidden variable :math:`z_t` determines which model is active".
-Estimate it with :class:`~vistrack.filters.IMMFilter` (:meth:`SwitchingLinearSystem.imm`) or
+Estimate it with :class:`~vistrack.filters.IMMFilter`
+(:meth:`IMMFilter.from_system <vistrack.filters.IMMFilter.from_system>`) or
 the Rao-Blackwellised particle filter
 :class:`~vistrack.filters.SwitchingParticleFilter`, which samples mode sequences and keeps an
 exact Kalman filter per sample.
@@ -99,10 +100,3 @@ class SwitchingLinearSystem:
             zs[t], xs[t] = z, x
         ys = xs @ H.T + gen.multivariate_normal(np.zeros(len(R)), R, size=T, method="eigh")
         return zs, xs, ys
-
-    def imm(self):
-        """An :class:`~vistrack.filters.IMMFilter` for this system (exact Kalman members)."""
-        from ..filters import ExtendedKalmanFilter, IMMFilter
-
-        return IMMFilter([ExtendedKalmanFilter(m, self.measurement) for m in self.motions],
-                         self.transition, mode_probs=self.mode_probs)

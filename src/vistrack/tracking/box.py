@@ -65,7 +65,7 @@ from numba import njit
 
 from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs
 from ..association.assign import gnn_pairs
-from ..association.costs import _grid_pairs_same_class
+from ..association.costs import iou_pairs_same_class
 from ..models.box import BoxMotion
 from ..types import Detections
 from .calibration import ScoreCalibration, ScoreCalibrator
@@ -351,7 +351,7 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q, shift):
     high_d = ds >= high
     # the lowest IoU any stage, or the camera's estimate, looks at
     gate = min(cfg[3], cfg[4], cfg[5], cfg[8] if cfg[7] != 0.0 else 1.0)
-    rows, cols, ov, ok = _grid_pairs_same_class(_pred_boxes(mean), tclass, db, dc, gate)
+    rows, cols, ov, ok = iou_pairs_same_class(_pred_boxes(mean), tclass, db, dc, gate)
     if not ok:
         return match, used, moved, False
     if cfg[7] != 0.0:
@@ -363,7 +363,7 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q, shift):
             for i in range(K):
                 mean[i, 0] += shift[0]
                 mean[i, 1] += shift[1]
-            r1, c1, ov1, ok = _grid_pairs_same_class(_pred_boxes(mean), tclass, db, dc, gate)
+            r1, c1, ov1, ok = iou_pairs_same_class(_pred_boxes(mean), tclass, db, dc, gate)
             # each track follows the camera, or not, as its best detection says
             rows, cols, ov, own = _choose_prediction(K, D, rows, cols, ov, r1, c1, ov1)
             for i in range(K):

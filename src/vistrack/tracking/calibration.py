@@ -38,7 +38,7 @@ import numpy as np
 from numba import njit
 
 from ..association.assign import gnn_pairs
-from ..association.costs import _grid_pairs_same_class
+from ..association.costs import iou_pairs_same_class
 from ..types import Detections
 
 __all__ = ["ScoreCalibration", "ScoreCalibrator", "isotonic_increasing", "persistence"]
@@ -89,7 +89,7 @@ def isotonic_increasing(y: Any, weights: Any = None) -> np.ndarray:
 @njit(cache=True)
 def _link(prev, prev_cls, cur, cur_cls, min_iou):
     # one-to-one links (GNN on 1 - IoU) between two frames' boxes of the same class
-    rows, cols, ov, _ = _grid_pairs_same_class(prev, prev_cls, cur, cur_cls, min_iou)
+    rows, cols, ov, _ = iou_pairs_same_class(prev, prev_cls, cur, cur_cls, min_iou)
     return gnn_pairs(rows, cols, 1.0 - ov, prev.shape[0], cur.shape[0])
 
 

@@ -54,10 +54,11 @@ from typing import Any
 import numpy as np
 
 from ..association import iou
+from ..filters.particle import resample
 from ..types import Detections
 from .lifecycle import Tracks
 
-__all__ = ["DCPFConfig", "DetectorConfidencePF", "ColourFeatures", "systematic"]
+__all__ = ["DCPFConfig", "DetectorConfidencePF", "ColourFeatures"]
 
 
 @dataclass
@@ -130,18 +131,6 @@ class ColourFeatures:
         I = self.integral
         h = I[y1, x1] - I[y0, x1] - I[y1, x0] + I[y0, x0]
         return np.sqrt(np.maximum(h, 0) / np.maximum(h.sum(-1, keepdims=True), 1.0))
-
-
-def systematic(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Systematic resampling of every row of ``weights (T, N)`` (rows summing to 1) at once:
-    indices ``(T, N)``, row ``t`` drawing particle ``i`` about ``N w[t, i]`` times."""
-    T, N = weights.shape
-    u = (rng.random((T, 1)) + np.arange(N)) / N
-    c = np.cumsum(weights, axis=1)
-    c[:, -1] = 1.0
-    # one search over the rows laid end to end: row t's values are offset by t
-    idx = np.searchsorted((c + np.arange(T)[:, None]).ravel(), (u + np.arange(T)[:, None]).ravel())
-    return np.minimum(idx.reshape(T, N) - np.arange(T)[:, None] * N, N - 1)
 
 
 def _sigmoid(z: np.ndarray) -> np.ndarray:
@@ -279,7 +268,7 @@ class DetectorConfidencePF:
                 w += cfg.eta * self._classify(feats(pb), slice(None))
             w /= w.sum(1, keepdims=True)
             est_c = (w[..., None] * p[..., :2]).sum(1)
-            p[:] = np.take_along_axis(p, systematic(w, self.rng)[..., None], axis=1)
+            p[:] = np.take_along_axis(p, resample(w, "systematic", rng=self.rng)[..., None], axis=1)
         else:
             est_c = np.zeros((0, 2))
 
