@@ -37,6 +37,17 @@ def test_console_script_runs():
     assert r.returncode == 0 and r.stdout.startswith("vistrack ")
 
 
+def test_the_version_has_one_source():
+    """The installed metadata's version is ``vistrack.__version__`` (pyproject reads it)."""
+    from importlib.metadata import version
+
+    import vistrack
+
+    assert version("vistrack") == vistrack.__version__
+    assert 'dynamic = ["version"]' in (Path(__file__).resolve().parents[1] /
+                                       "pyproject.toml").read_text()
+
+
 def test_murphy_errors_equal_filterpy_per_run_and_match_published_means():
     st = murphy_errors(1000, seed=0)
     # per run: FilterPy's filter on the same simulated tracks gives the same error (first 20 runs)
