@@ -102,14 +102,14 @@ class TrackConfig:
     offline: OfflineConfig = field(default_factory=OfflineConfig)
 
     @classmethod
-    def preset(cls, name: str = "bytetrack") -> "TrackConfig":
+    def preset(cls, name: str = "bytetrack") -> TrackConfig:
         """The configuration of a preset in :data:`vistrack.tracking.TRACKERS`."""
         if name not in TRACKERS:
             raise ValueError(f"tracker must be one of {sorted(TRACKERS)}; got {name!r}")
         return cls(name=name, tracker=TRACKERS[name])
 
     def with_values(self, tracker: dict | None = None, motion: dict | None = None,
-                    offline: dict | None = None) -> "TrackConfig":
+                    offline: dict | None = None) -> TrackConfig:
         """A copy with some values changed (None values are left alone)."""
         def keep(d: dict | None) -> dict:
             return {k: v for k, v in (d or {}).items() if v is not None}

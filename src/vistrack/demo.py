@@ -121,7 +121,8 @@ MURPHY_T = 15
 
 @dataclass(frozen=True)
 class MurphyStats:
-    """The toolbox demo's error, ``sqrt(Σ_t Σ_{x,y} (estimate - truth)²)``, over ``n_seeds`` runs."""
+    """The toolbox demo's error, ``sqrt(Σ_t Σ_{x,y} (estimate - truth)²)``, over ``n_seeds``
+    runs."""
 
     n_seeds: int
     filtered: np.ndarray  # (n_seeds,)

@@ -13,10 +13,10 @@ from typing import Any
 
 import numpy as np
 
+from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, combine, evaluate_mot
 from .io.motchallenge import read_mot, read_seqinfo, write_mot
 from .models.box import BoxMotion
-from .config import OfflineConfig, TrackConfig
 from .tracking.box import BoxTracker
 from .tracking.calibration import ScoreCalibration
 from .tracking.lifecycle import Tracks
@@ -170,7 +170,10 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
             scores.append(res.scores)
         if f % every == 0 or f == info.seq_length:
             _progress(f, info.seq_length, info.name, progress)
-    cat = (lambda a, shape: np.concatenate(a) if a else np.zeros(shape))
+
+    def cat(a: list, shape: tuple) -> np.ndarray:
+        return np.concatenate(a) if a else np.zeros(shape)
+
     F, I = cat(frames, (0,)).astype(int), cat(ids, (0,)).astype(int)
     B, S = cat(boxes, (0, 4)), cat(scores, (0,))
     if oc.enabled:
@@ -455,8 +458,7 @@ def track_one(source: str | Path, init: Any, out: str | Path, *, method: str = "
     file (OTB ``groundtruth_rect.txt``, VOT ``groundtruth.txt`` or a boxes file) to score
     against.
     """
-    from .evaluation.single import precision, read_boxes, success_curve, success_rate, \
-        write_boxes
+    from .evaluation.single import precision, read_boxes, success_curve, success_rate, write_boxes
     from .frontends.single import single_tracker
     from .io.video import VideoReader
 

@@ -7,9 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from ._validate import as_float_array, as_rng, check_finite, check_psd
+from ._validate import as_float_array, as_rng, check_finite, check_linear_gaussian, check_psd
 from .filters._nonlinear import psd_sqrt
-from ._validate import check_linear_gaussian
 from .filters.linear import KalmanFilter
 
 __all__ = ["simulate_lgssm", "simulate"]

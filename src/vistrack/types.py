@@ -47,7 +47,7 @@ class Gaussian:
         object.__setattr__(self, "cov", cov)
 
     @classmethod
-    def _trusted(cls, mean: np.ndarray, cov: np.ndarray) -> "Gaussian":
+    def _trusted(cls, mean: np.ndarray, cov: np.ndarray) -> Gaussian:
         """Wrap float64 arrays already known to have matching shapes (kernel outputs)."""
         g = object.__new__(cls)
         object.__setattr__(g, "mean", mean)
@@ -64,7 +64,7 @@ class Gaussian:
         """The leading (batch) dimensions."""
         return tuple(self.mean.shape[:-1])
 
-    def __getitem__(self, index: object) -> "Gaussian":
+    def __getitem__(self, index: object) -> Gaussian:
         """Index the batch: ``g[mask]``, ``g[3]``, ``g[:10]``."""
         return Gaussian(self.mean[index], self.cov[index])
 
@@ -139,7 +139,7 @@ class Detections:
             object.__setattr__(self, name, v)
 
     @classmethod
-    def from_xywh(cls, xywh: Any, scores: Any = None, classes: Any = None) -> "Detections":
+    def from_xywh(cls, xywh: Any, scores: Any = None, classes: Any = None) -> Detections:
         """From ``left, top, width, height`` boxes (MOTChallenge files)."""
         b = np.asarray(xywh, dtype=np.float64).reshape(-1, 4)
         return cls(boxes=np.c_[b[:, :2], b[:, :2] + b[:, 2:]], scores=scores, classes=classes)
@@ -147,7 +147,7 @@ class Detections:
     def __len__(self) -> int:
         return int(self.scores.shape[0])
 
-    def __getitem__(self, index: Any) -> "Detections":
+    def __getitem__(self, index: Any) -> Detections:
         return Detections(
             boxes=None if self.boxes is None else self.boxes[index],
             points=None if self.points is None else self.points[index],

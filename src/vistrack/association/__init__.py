@@ -1,9 +1,7 @@
 """Data association: costs between tracks and detections, gates, and assignment."""
 
-from .assign import (ASSIGNERS, assign, components, gnn, gnn_sparse, greedy, lsa,
-                     nearest_neighbour)
-from .costs import (euclidean, giou, iou, iou_pairs, iou_pairs_same_class, mahalanobis,
-                    paired_iou)
+from .assign import ASSIGNERS, assign, components, gnn, gnn_sparse, greedy, lsa, nearest_neighbour
+from .costs import euclidean, giou, iou, iou_pairs, iou_pairs_same_class, mahalanobis, paired_iou
 from .gating import chi2_gate, chi2_threshold
 from .pda import jpda_weights, likelihoods, pda_update, pda_weights
 

@@ -16,12 +16,12 @@ once (except ``"nn"``).
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
+from numba import njit
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-from numba import njit
 
 __all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_sparse", "greedy", "lsa",
            "nearest_neighbour", "components"]

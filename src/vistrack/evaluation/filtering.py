@@ -21,11 +21,13 @@ __all__ = ["rmse", "nees", "nis", "chi2_band"]
 
 
 def rmse(estimates: Any, truth: Any, *, axis: int | tuple[int, ...] | None = None) -> np.ndarray:
-    """Root-mean-square error ``sqrt(mean((estimates - truth)²))`` over ``axis`` (all by default)."""
+    """Root-mean-square error ``sqrt(mean((estimates - truth)²))`` over ``axis`` (all by
+    default)."""
     est = as_float_array(estimates, "estimates")
     tru = as_float_array(truth, "truth")
     if est.shape != tru.shape:
-        raise ValueError(f"estimates and truth must have the same shape; got {est.shape} and {tru.shape}")
+        raise ValueError(f"estimates and truth must have the same shape; got {est.shape} and "
+                         f"{tru.shape}")
     return np.sqrt(np.mean((est - tru) ** 2, axis=axis))
 
 

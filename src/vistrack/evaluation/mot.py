@@ -26,8 +26,8 @@ LocA are averaged weighted by each sequence's true positives.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field, fields
-from typing import Iterable
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -169,7 +169,7 @@ class MOTCounts:
     AssPr_alpha: np.ndarray = field(default_factory=lambda: np.zeros(len(ALPHAS)))
     LocA_alpha: np.ndarray = field(default_factory=lambda: np.ones(len(ALPHAS)))
 
-    def __add__(self, other: "MOTCounts") -> "MOTCounts":
+    def __add__(self, other: MOTCounts) -> MOTCounts:
         out = MOTCounts()
         for f in fields(self):
             if f.name not in ("AssA_alpha", "AssRe_alpha", "AssPr_alpha", "LocA_alpha"):
@@ -395,7 +395,8 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     (1, 0.75, 0.5)
     """
     if n_frames is None:
-        n_frames = int(max(gt.frames.max() if len(gt) else 0, pred.frames.max() if len(pred) else 0))
+        n_frames = int(max(gt.frames.max() if len(gt) else 0,
+                           pred.frames.max() if len(pred) else 0))
     seq = _prepare(gt, pred, int(n_frames), benchmark)
     out = MOTCounts(frames=int(n_frames), gt_dets=sum(len(g) for g in seq.gt_ids),
                     pred_dets=sum(len(p) for p in seq.pred_ids), gt_ids=seq.n_gt_ids,

@@ -1,6 +1,9 @@
 """Inference: batched Kalman kernels, the whole-sequence filter, smoothers, and the EKF, UKF and
 ensemble Kalman filter for nonlinear models."""
 
+from .ekf import ExtendedKalmanFilter, ekf_predict, ekf_update
+from .enkf import Ensemble, EnsembleKalmanFilter, enkf_predict, enkf_update
+from .imm import IMMFilter, IMMResult, SwitchingParticleFilter, SwitchingResult
 from .kalman import (
     FilterResult,
     kalman_filter,
@@ -9,9 +12,7 @@ from .kalman import (
     kf_step,
     kf_update,
 )
-from .ekf import ExtendedKalmanFilter, ekf_predict, ekf_update
-from .enkf import Ensemble, EnsembleKalmanFilter, enkf_predict, enkf_update
-from .imm import IMMFilter, IMMResult, SwitchingParticleFilter, SwitchingResult
+from .linear import KalmanFilter, OnlineFilter
 from .particle import (
     RESAMPLERS,
     ParticleDegeneracyError,
@@ -24,7 +25,6 @@ from .particle import (
     weighted_mean,
 )
 from .smoothers import SmoothResult, rts_smooth, two_filter_smooth
-from .linear import KalmanFilter, OnlineFilter
 from .ukf import (
     JulierSigmaPoints,
     MerweScaledSigmaPoints,

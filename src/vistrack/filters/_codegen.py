@@ -372,7 +372,7 @@ def _cache_dir() -> Path:
     return root / "vistrack" / "kernels"
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def batch_kernel(n: int, m: int, cf: tuple, cq: tuple, ch: tuple, cr: tuple):
     """The compiled kernel for state size ``n``, measurement size ``m`` and the entry codes
     (see :func:`entry_codes`) of ``F``, ``Q``, ``H``, ``R``.

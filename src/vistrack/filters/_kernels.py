@@ -316,8 +316,8 @@ def update_chunk(H, R, th, tr, yv, xp, Pp, x, P, AP, W, U, K, S, e, wv, obs, nob
 
 @njit(cache=True)
 def check_matrices(F, Q, sym_tol):
-    """0 if ``F`` and ``Q`` (``(1, n, n)`` / ``(1, r, r)``) are finite and ``Q`` symmetric; 1 if ``F``
-    has a non-finite entry, 2 if ``Q`` has, 3 if ``Q`` is not symmetric."""
+    """0 if ``F`` and ``Q`` (``(1, n, n)`` / ``(1, r, r)``) are finite and ``Q`` symmetric; 1 if
+    ``F`` has a non-finite entry, 2 if ``Q`` has, 3 if ``Q`` is not symmetric."""
     for v in F.ravel():
         if not math.isfinite(v):
             return 1
@@ -441,7 +441,8 @@ def kf_batch(
                     yv[k, j] = ys[b0 + j, t, k]
             th = t if H.shape[0] > 1 else 0
             tr = t if R.shape[0] > 1 else 0
-            if update_chunk(H, R, th, tr, yv, xp, Pp, x, P, AP, W, U, K, S, e, wv, obs, nobs, ll, c):
+            if update_chunk(H, R, th, tr, yv, xp, Pp, x, P, AP, W, U, K, S, e, wv, obs, nobs, ll,
+                            c):
                 if bad_t < 0:
                     bad_t = t
             if want_gains:
@@ -737,7 +738,7 @@ def online_layout(n, m):
     return offsets, o
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def online_kernel(n, m):
     """The in-place predict/correct of :class:`vistrack.filters.OnlineFilter`, compiled for state
     size ``n`` and measurement size ``m`` as constants (see :func:`single_kernel`).
@@ -786,7 +787,7 @@ def online_kernel(n, m):
     return step
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def single_kernel(n, m):
     """The one-series filter for state size ``n`` and measurement size ``m``, compiled with both
     as constants (numba treats a closure's variables as such), so that the small matrix loops

@@ -4,7 +4,8 @@ the loop over a sequence. Private; the public functions are in ekf.py, ukf.py an
 from __future__ import annotations
 
 import math
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -87,7 +88,8 @@ class Measurement:
         self.linear = hasattr(model, "H") and not hasattr(model, "jacobian")
         if self.linear:
             self.H = np.asarray(model.H(n), dtype=float)
-        elif not (callable(getattr(model, "h", None)) and callable(getattr(model, "jacobian", None))):
+        elif not (callable(getattr(model, "h", None))
+                  and callable(getattr(model, "jacobian", None))):
             raise TypeError(
                 f"measurement must be a measurement model with H and R, or h(x), jacobian(x) "
                 f"and R(); got {type(model).__name__}"

@@ -122,7 +122,7 @@ def _merge_uniforms(cw, scheme, st, out):
     total, start = 1.0, st
     if scheme == 0:
         total = 0.0
-        for k in range(n + 1):
+        for _ in range(n + 1):
             u, st = uniform(st)
             total -= math.log1p(-u)
         st, start = start, st

@@ -18,7 +18,8 @@ model it is exactly the Kalman filter.
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 

@@ -16,8 +16,9 @@ the ensemble grows, the EnKF tends to the Kalman filter on linear models.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -50,7 +51,7 @@ class Ensemble:
 
     @classmethod
     def sample(cls, mean: Any, cov: Any, n_members: int,
-               rng: np.random.Generator | int | None = None) -> "Ensemble":
+               rng: np.random.Generator | int | None = None) -> Ensemble:
         """``n_members`` draws from ``N(mean, cov)`` (a batch: ``mean (..., n)``)."""
         rng = as_rng(rng)
         mean = np.asarray(mean, dtype=float)

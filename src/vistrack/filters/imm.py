@@ -31,8 +31,9 @@ them. Members may be any filter with ``predict(g, dt, t)`` and ``update(g, y) ->
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -128,7 +129,7 @@ class IMMFilter:
     """
 
     @classmethod
-    def from_system(cls, system: Any) -> "IMMFilter":
+    def from_system(cls, system: Any) -> IMMFilter:
         """The IMM of a :class:`~vistrack.models.SwitchingLinearSystem`: one exact Kalman
         member (an :class:`~vistrack.filters.ExtendedKalmanFilter` of a linear model) per
         motion, with the system's switching matrix and first-mode distribution."""

@@ -21,8 +21,13 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import (as_float_array, as_measurement_series, check_finite,
-                         check_linear_gaussian, check_psd)
+from .._validate import (
+    as_float_array,
+    as_measurement_series,
+    check_finite,
+    check_linear_gaussian,
+    check_psd,
+)
 from ..types import Gaussian
 from . import _codegen, _kernels
 
@@ -365,14 +370,16 @@ def kalman_filter_1d(
 ) -> dict[str, np.ndarray]:
     r"""The seeds' scalar Kalman filter, written exactly as on the slides.
 
-    Model ``xᵢ ~ N(dᵢ xᵢ₋₁, σ_dᵢ²)``, ``yᵢ ~ N(mᵢ xᵢ, σ_mᵢ²)``; start ``x̄0⁻ = x0``, ``σ0⁻ = sigma0``.
+    Model ``xᵢ ~ N(dᵢ xᵢ₋₁, σ_dᵢ²)``, ``yᵢ ~ N(mᵢ xᵢ, σ_mᵢ²)``; start ``x̄0⁻ = x0``,
+    ``σ0⁻ = sigma0``.
 
     .. math::
         \bar x_i^- = d_i \bar x_{i-1}^+, \quad
         \sigma_i^- = \sqrt{\sigma_{d_i}^2 + (d_i \sigma_{i-1}^+)^2}, \quad
         \bar x_i^+ = \frac{\bar x_i^- \sigma_{m_i}^2 + m_i y_i (\sigma_i^-)^2}
                           {\sigma_{m_i}^2 + m_i^2 (\sigma_i^-)^2}, \quad
-        \sigma_i^+ = \sqrt{\frac{\sigma_{m_i}^2 (\sigma_i^-)^2}{\sigma_{m_i}^2 + m_i^2 (\sigma_i^-)^2}}
+        \sigma_i^+ = \sqrt{\frac{\sigma_{m_i}^2 (\sigma_i^-)^2}
+                                {\sigma_{m_i}^2 + m_i^2 (\sigma_i^-)^2}}
 
     Parameters are scalars or arrays of shape (T,); ``sigma_d`` and ``sigma_m`` are standard
     deviations. A NaN in ``ys`` skips the correction at that step.

@@ -24,8 +24,9 @@ import hashlib
 import importlib.util
 import math
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -428,7 +429,7 @@ def _source_hash(*modules: str) -> str:
     return h.hexdigest()[:16]
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _fused(fref: tuple[str, str], href: tuple[str, str], n: int, m: int):
     from . import _codegen
 
@@ -726,7 +727,8 @@ class ParticleFilter:
                 Linv[p, :len(o), :len(o)], c[p] = self._whiten[key]
         which = which.ravel()
         obs, Linv, c, nobs = obs[which], Linv[which], c[which], seen.sum(1)
-        dts, times = np.ascontiguousarray(dts, dtype=float), np.ascontiguousarray(times, dtype=float)
+        dts = np.ascontiguousarray(dts, dtype=float)
+        times = np.ascontiguousarray(times, dtype=float)
         fp = np.asarray(fparams(dts, times), dtype=float).reshape(T, -1)
         if (dts == dts[0]).all():
             S = np.broadcast_to(mo.Q_sqrt(float(dts[0])), (T, n, n))

@@ -13,8 +13,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from .._validate import (as_measurement_series, check_linear_gaussian, check_matrix_stack,
-                         check_psd)
+from .._validate import as_measurement_series, check_linear_gaussian, check_matrix_stack, check_psd
 from ._kernels import chol_solve, predict_one
 from .kalman import FilterResult, _readonly, kalman_filter
 
@@ -38,7 +37,7 @@ class SmoothResult:
     backward_info_vec: np.ndarray | None = None
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _rts_kernel(n):
     """The RTS backward pass for state size ``n``, compiled with ``n`` as a constant (see
     :func:`vistrack.filters._kernels.single_kernel`). The kernel returns the first failing
@@ -191,7 +190,8 @@ def two_filter_smooth(
         # combine: the backward prediction as a measurement of x_t for the forward estimate
         P = fP[:, t]
         Mx = eye + P @ Lam
-        sol = np.linalg.solve(Mx, np.concatenate([P, (fm[:, t] + (P @ eta[..., None])[..., 0])[..., None]], axis=-1))
+        rhs = (fm[:, t] + (P @ eta[..., None])[..., 0])[..., None]
+        sol = np.linalg.solve(Mx, np.concatenate([P, rhs], axis=-1))
         Ps = sol[..., :n]
         s_covs[:, t] = 0.5 * (Ps + np.swapaxes(Ps, -1, -2))
         s_means[:, t] = sol[..., n]

@@ -28,7 +28,8 @@ systems"; Wan and van der Merwe (2000), "The unscented Kalman filter for nonline
 from __future__ import annotations
 
 import math
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numba import njit

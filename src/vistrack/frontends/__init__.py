@@ -3,8 +3,8 @@ They know nothing of tracks."""
 
 from .appearance import WSLModel, WSLTracker
 from .background import BACKGROUNDS, MOG2Background, SelectiveBackground, background
-from .compose import Composite
 from .blobs import Blobs, find_blobs, threshold
+from .compose import Composite
 from .detectors import ConfidenceMap, Detector, HOGConfidence, HOGDetector
 from .klt import Features, KLTTracker
 from .single import METHODS, single_tracker

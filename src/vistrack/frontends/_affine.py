@@ -208,10 +208,12 @@ def _ncc(a, pa, b, pb, half, out):
         su = sv = suu = svv = suv = 0.0
         for i in range(2 * half + 1):
             for j in range(2 * half + 1):
-                u = ((1.0 - fay) * ((1.0 - fax) * a[iay + i, iax + j] + fax * a[iay + i, iax + j + 1])
+                u = ((1.0 - fay) * ((1.0 - fax) * a[iay + i, iax + j]
+                                    + fax * a[iay + i, iax + j + 1])
                      + fay * ((1.0 - fax) * a[iay + i + 1, iax + j]
                               + fax * a[iay + i + 1, iax + j + 1]))
-                v = ((1.0 - fby) * ((1.0 - fbx) * b[iby + i, ibx + j] + fbx * b[iby + i, ibx + j + 1])
+                v = ((1.0 - fby) * ((1.0 - fbx) * b[iby + i, ibx + j]
+                                    + fbx * b[iby + i, ibx + j + 1])
                      + fby * ((1.0 - fbx) * b[iby + i + 1, ibx + j]
                               + fbx * b[iby + i + 1, ibx + j + 1]))
                 su += u

@@ -81,7 +81,8 @@ class WSLModel:
         if m0.shape != (3,) or (m0 <= 0).any():
             raise ValueError(f"m0 must be three positive mixing probabilities; got {m0.tolist()}")
         self.alpha = 1.0 - float(np.exp(-1.0 / tau))
-        self.sigma_w, self.sigma_s0, self.sigma_min = float(sigma_w), float(sigma_s0), float(sigma_min)
+        self.sigma_w, self.sigma_s0 = float(sigma_w), float(sigma_s0)
+        self.sigma_min = float(sigma_min)
         self.m0, self.log_lost = m0 / m0.sum(), float(np.log(lost_density))
         self.ready = False
 

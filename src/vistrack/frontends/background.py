@@ -29,7 +29,8 @@ subtractors ignore ``learningRate=0``. Masks are uint8, 255 for foreground, as O
 
 from __future__ import annotations
 
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 from numba import njit, prange
@@ -126,7 +127,7 @@ class SelectiveBackground:
         im = as_uint8_image(image, channels=(1, 3))
         return im[:, :, None] if im.ndim == 2 else im
 
-    def initialize(self, frames: Iterable[Any]) -> "SelectiveBackground":
+    def initialize(self, frames: Iterable[Any]) -> SelectiveBackground:
         """``B_0`` = the per-pixel median of ``frames``, ``σ_0`` their median absolute deviation
         from it times 1.4826 (the standard deviation, for Gaussian noise)."""
         stack = [self._as3(f) for f in frames]
@@ -187,7 +188,7 @@ class MOG2Background:
         self.freeze = bool(freeze)
         self._seen = 0
 
-    def initialize(self, frames: Iterable[Any]) -> "MOG2Background":
+    def initialize(self, frames: Iterable[Any]) -> MOG2Background:
         for f in frames:
             self._m.apply(np.asarray(f))
             self._seen += 1

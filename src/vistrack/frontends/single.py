@@ -34,7 +34,8 @@ Every tracker but OpenCV's also has ``anchor(box)``, which moves its state to a 
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 

@@ -74,7 +74,7 @@ class MOTTable:
         return int(self.frames.shape[0])
 
     @classmethod
-    def from_rows(cls, rows: Any, path: str = "") -> "MOTTable":
+    def from_rows(cls, rows: Any, path: str = "") -> MOTTable:
         """From rows ``frame, id, left, top, width, height[, conf, class, visibility, ...]``
         (at least 6 values each; the rest default to conf 1, class -1, visibility -1), sorted
         by frame.
@@ -91,13 +91,16 @@ class MOTTable:
             raise ValueError(f"rows need at least 6 values (frame, id, box); got {a.shape[1]}")
         a = a[np.argsort(a[:, 0], kind="stable")]
         N, w = a.shape
-        col = (lambda j, fill: a[:, j] if w > j else np.full(N, fill, dtype=float))
+
+        def col(j: int, fill: float) -> np.ndarray:
+            return a[:, j] if w > j else np.full(N, fill, dtype=float)
+
         return cls(frames=a[:, 0].astype(np.int64), ids=a[:, 1].astype(np.int64),
                    boxes=np.ascontiguousarray(a[:, 2:6]), conf=col(6, 1.0),
                    classes=col(7, -1.0).astype(np.int64), visibility=col(8, -1.0), path=path,
                    columns=w)
 
-    def __getitem__(self, index: Any) -> "MOTTable":
+    def __getitem__(self, index: Any) -> MOTTable:
         """Rows by boolean mask or indices."""
         return MOTTable(self.frames[index], self.ids[index], self.boxes[index], self.conf[index],
                         self.classes[index], self.visibility[index], self.path, self.columns)

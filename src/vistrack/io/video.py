@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import configparser
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
 
 import numpy as np
 
@@ -273,7 +273,7 @@ class VideoWriter:
             self._w.release()
             self._w = None
 
-    def __enter__(self) -> "VideoWriter":
+    def __enter__(self) -> VideoWriter:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -4,7 +4,14 @@ models (``H``, ``R``; nonlinear: ``h``, ``jacobian``)."""
 from .box import BoxMotion
 from .linear_gaussian import LinearGaussian
 from .measurement import LinearMeasurement, MeasurementModel, Position
-from .switching import SwitchingLinearSystem
+from .motion import (
+    ConstantAcceleration,
+    ConstantPosition,
+    ConstantVelocity,
+    LinearMotion,
+    MotionModel,
+    Periodic,
+)
 from .nonlinear import (
     AngleAwareMeasurement,
     CoordinatedTurn,
@@ -17,14 +24,7 @@ from .nonlinear import (
     numerical_jacobian,
     wrap_angle,
 )
-from .motion import (
-    ConstantAcceleration,
-    ConstantPosition,
-    ConstantVelocity,
-    LinearMotion,
-    MotionModel,
-    Periodic,
-)
+from .switching import SwitchingLinearSystem
 
 __all__ = [
     "AngleAwareMeasurement",

@@ -84,7 +84,7 @@ class BoxMotion:
         self.init_pos, self.init_vel = init_pos, init_vel
         self.frame_rate = float(frame_rate)
 
-    def at_rate(self, frame_rate: float) -> "BoxMotion":
+    def at_rate(self, frame_rate: float) -> BoxMotion:
         """The same motion with its per-frame noise at ``frame_rate`` frames per second (see
         the module); ``self`` when that is its rate already."""
         if not (np.isfinite(frame_rate) and frame_rate > 0):

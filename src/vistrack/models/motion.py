@@ -114,7 +114,8 @@ class _Kinematic:
         return out
 
     def F(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
-        """Transition matrix, ``(n, n)`` for scalar ``dt`` or ``(K, n, n)`` for ``dt`` of ``(K,)``."""
+        """Transition matrix, ``(n, n)`` for scalar ``dt`` or ``(K, n, n)`` for ``dt`` of
+        ``(K,)``."""
         return np.kron(self._F1(_as_dt(dt)), np.eye(self.dim))
 
     def Q(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
@@ -206,10 +207,12 @@ class Periodic:
 
     State per axis ``u = (p, v)`` with ``du/dt = S u``, ``S = [[0, 1], [-ω², 0]]``.
 
-    - ``discretisation='exact'``: ``F = exp(S dt) = [[cos ωdt, sin(ωdt)/ω], [-ω sin ωdt, cos ωdt]]``,
-      which keeps the energy of the oscillation;
-    - ``discretisation='euler'``: the seeds' forward Euler step ``F = I + S dt = [[1, dt], [-ω² dt, 1]]``,
-      whose amplitude grows by ``sqrt(1 + ω² dt²)`` every step.
+    - ``discretisation='exact'``:
+      ``F = exp(S dt) = [[cos ωdt, sin(ωdt)/ω], [-ω sin ωdt, cos ωdt]]``, which keeps the
+      energy of the oscillation;
+    - ``discretisation='euler'``: the seeds' forward Euler step
+      ``F = I + S dt = [[1, dt], [-ω² dt, 1]]``, whose amplitude grows by
+      ``sqrt(1 + ω² dt²)`` every step.
 
     ``Q`` is the exact covariance of white-noise acceleration of density ``q``:
     ``Q11 = q/ω² (dt/2 - sin(2ωdt)/(4ω))``, ``Q12 = q sin²(ωdt)/(2ω²)``,

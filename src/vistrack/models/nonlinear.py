@@ -24,7 +24,7 @@ missing Jacobian falls back to :func:`numerical_jacobian` (central differences).
 from __future__ import annotations
 
 import math
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from numba import njit

@@ -15,7 +15,8 @@ exact Kalman filter per sample.
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 

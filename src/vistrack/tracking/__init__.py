@@ -2,7 +2,7 @@
 
 from .box import TRACKERS, BoxTracker, BoxTrackerConfig
 from .dcpf import DCPFConfig, DetectorConfidencePF
-from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, Tracks
+from .lifecycle import CONFIRMED, LOST, TENTATIVE, Tracks, TrackTable
 from .offline import SmoothedTracks, smooth
 from .point import POINT_ASSOCIATIONS, PointTracker
 

@@ -60,7 +60,6 @@ from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
-
 from numba import njit
 
 from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs
@@ -69,7 +68,7 @@ from ..association.costs import iou_pairs_same_class
 from ..models.box import BoxMotion
 from ..types import Detections
 from .calibration import ScoreCalibration, ScoreCalibrator
-from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, Tracks
+from .lifecycle import CONFIRMED, LOST, TENTATIVE, Tracks, TrackTable
 
 __all__ = ["BoxTracker", "BoxTrackerConfig", "TRACKERS"]
 

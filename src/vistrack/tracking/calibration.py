@@ -157,7 +157,7 @@ class ScoreCalibration:
 
     @classmethod
     def fit(cls, scores: Any, persisted: Any, *, top: float = 0.05,
-            top_min: int = 20) -> "ScoreCalibration":
+            top_min: int = 20) -> ScoreCalibration:
         """Fit to scores and their persistence outcomes (see the module): full confidence is
         the persistence of the ``top`` fraction of the detections by score, and of at least
         ``top_min`` of them (a small sample's top fraction is a handful)."""
@@ -184,7 +184,7 @@ class ScoreCalibration:
 
     @classmethod
     def from_frames(cls, frames: Iterable[Detections], *, link_iou: float = 0.3,
-                    top: float = 0.05) -> "ScoreCalibration":
+                    top: float = 0.05) -> ScoreCalibration:
         """Fit to a whole sequence of frames (the offline mode)."""
         s, p = persistence(frames, link_iou)
         return cls.fit(s, p, top=top)
@@ -200,7 +200,7 @@ class ScoreCalibration:
         return float(self.scores[k[0]]) if len(k) else float("inf")
 
     @classmethod
-    def ranks(cls, scores: Any) -> "ScoreCalibration":
+    def ranks(cls, scores: Any) -> ScoreCalibration:
         """The map of each score to its rank among ``scores``: the fraction of them at or
         below it (their empirical distribution function; nothing fitted)."""
         r = np.sort(_scores(scores))
@@ -209,7 +209,7 @@ class ScoreCalibration:
         u = np.unique(r)
         return cls(u, np.searchsorted(r, u, side="right") / len(r))
 
-    def blend(self, weight: float, ranked: np.ndarray) -> "ScoreCalibration":
+    def blend(self, weight: float, ranked: np.ndarray) -> ScoreCalibration:
         """``weight`` × this map + (1 − ``weight``) × the empirical distribution function of
         ``ranked`` (scores), on the union of both's scores."""
         r = np.sort(ranked)

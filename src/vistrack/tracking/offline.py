@@ -33,21 +33,29 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..association import gnn_sparse, iou_pairs, paired_iou
 from ..filters.kalman import FilterResult
 from ..filters.smoothers import rts_smooth
 from ..types import Gaussian, xyxy_to_xywh
-from ..association import gnn_sparse, iou_pairs, paired_iou
-from .box import (BoxTracker, _to_cxcywh, _to_xyxy, axes_to_full, full_to_axes, predict_axes,
-                  update_axes)
+from .box import (
+    BoxTracker,
+    _to_cxcywh,
+    _to_xyxy,
+    axes_to_full,
+    full_to_axes,
+    predict_axes,
+    update_axes,
+)
 
 __all__ = ["SmoothedTracks", "smooth"]
 
 
 @dataclass(frozen=True)
 class SmoothedTracks:
-    """Rows of smoothed tracks, sorted by frame and id: ``frames``, ``ids``, ``boxes`` (``x0, y0, x1, y1``), ``scores``
-    (of the detection, 0 for a filled gap), ``classes``, ``filled`` (True in a gap), and the
-    smoothed state covariances ``covs (N, 8, 8)`` of ``[cx, cy, w, h, vcx, vcy, vw, vh]``."""
+    """Rows of smoothed tracks, sorted by frame and id: ``frames``, ``ids``, ``boxes``
+    (``x0, y0, x1, y1``), ``scores`` (of the detection, 0 for a filled gap), ``classes``,
+    ``filled`` (True in a gap), and the smoothed state covariances ``covs (N, 8, 8)`` of
+    ``[cx, cy, w, h, vcx, vcy, vw, vh]``."""
 
     frames: np.ndarray
     ids: np.ndarray

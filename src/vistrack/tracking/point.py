@@ -25,14 +25,13 @@ from typing import Any
 
 import numpy as np
 
-from ..association import (assign, chi2_threshold, gnn_sparse, jpda_weights, likelihoods,
-                           mahalanobis)
+from ..association import assign, chi2_threshold, gnn_sparse, jpda_weights, likelihoods, mahalanobis
 from ..association.costs import mahalanobis_pairs
 from ..association.pda import pda_update, pda_weights
 from ..filters import kf_predict, kf_update
 from ..models import ConstantVelocity, Position
 from ..types import Detections, Gaussian
-from .lifecycle import CONFIRMED, TrackTable, Tracks
+from .lifecycle import CONFIRMED, Tracks, TrackTable
 
 __all__ = ["PointTracker", "POINT_ASSOCIATIONS"]
 

@@ -27,7 +27,8 @@ def covariance_ellipse(mean: Any, cov: Any, *, nsigma: float = 1.0, points: int 
     mean = np.asarray(mean, dtype=float)
     cov = np.asarray(cov, dtype=float)
     if mean.shape != (2,) or cov.shape != (2, 2):
-        raise ValueError(f"need a 2-D mean (2,) and covariance (2, 2); got {mean.shape}, {cov.shape}")
+        raise ValueError(f"need a 2-D mean (2,) and covariance (2, 2); got {mean.shape}, "
+                         f"{cov.shape}")
     w, V = np.linalg.eigh(cov)
     a = np.linspace(0.0, 2.0 * np.pi, points)
     circle = np.stack([np.cos(a), np.sin(a)], axis=1)
