@@ -1,10 +1,11 @@
-# `make run`: set up .venv and run the main job on bundled data; `make test`: set up and run the tests.
+# `make run`: set up .venv and run the main job on bundled data; `make test`: set up and run the tests;
+# `make docs`: build the documentation site (docs/_build/html), warnings as errors.
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test bench bench-peers clean
+.PHONY: run test docs bench bench-peers clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -22,6 +23,16 @@ run: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q
+
+$(VENV)/.docs-installed: $(STAMP)
+	$(PY) -m pip install --quiet -e ".[docs]"
+	touch $@
+
+# the API pages are generated from each module's __all__: start them afresh, so that a removed
+# name leaves no stale page behind
+docs: $(VENV)/.docs-installed
+	rm -rf docs/api/generated
+	$(VENV)/bin/sphinx-build -W --keep-going -b html docs docs/_build/html
 
 $(VENV)/.bench-installed: $(STAMP)
 	$(PY) -m pip install --quiet -e ".[test,bench]"
@@ -50,4 +61,4 @@ bench: $(VENV)/.bench-installed
 bench-peers: .venv-boxmot/bin/python
 
 clean:
-	rm -rf $(VENV) out build src/*.egg-info
+	rm -rf $(VENV) out build src/*.egg-info docs/_build docs/api/generated

@@ -95,6 +95,8 @@ class Detections:
     classes : ndarray, shape (N,) int, optional
         Class numbers; default 0. Trackers never give two classes one identity.
 
+    Notes
+    -----
     Index with a boolean mask or indices (``dets[dets.scores > 0.5]``).
 
     Examples

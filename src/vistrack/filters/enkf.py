@@ -125,6 +125,8 @@ class EnsembleKalmanFilter:
     residual : callable, optional
         Measurement residual, overriding the model's.
 
+    Notes
+    -----
     The result's ``means`` and ``covs`` are the ensemble's sample moments.
     """
 

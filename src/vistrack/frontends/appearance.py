@@ -172,6 +172,8 @@ class WSLTracker:
     **model
         Passed to :class:`WSLModel`.
 
+    Notes
+    -----
     After each ``update``, ``ownership`` holds the ownerships ``(3, h, w)`` of the view at
     the new box and ``model`` the mixture.
     """

@@ -65,6 +65,8 @@ class Composite:
     gate : float
         Probability of the χ² gate on each member's innovation (4 degrees of freedom).
 
+    Notes
+    -----
     After each ``update``, ``boxes`` holds each member's own box and ``accepted`` whether
     it passed the gate.
 

@@ -287,6 +287,8 @@ class LinearMotion:
     Q : array, shape (n, n) or (T, n, n)
         Process-noise covariance ``Σd``, symmetric positive semi-definite.
 
+    Notes
+    -----
     A discrete-time model has no time step: ``F(dt)`` and ``Q(dt)`` accept only ``dt = 1``.
     """
 

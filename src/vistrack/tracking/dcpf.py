@@ -147,6 +147,8 @@ class DetectorConfidencePF:
     **overrides
         Fields of :class:`DCPFConfig`.
 
+    Notes
+    -----
     ``update(image, detections, confidence)`` takes a BGR frame, its discrete detections
     (:class:`~vistrack.types.Detections`, scores in (0, 1)) and a
     :class:`~vistrack.frontends.detectors.ConfidenceMap` (or None when ``gamma`` is 0), and
