@@ -36,9 +36,10 @@ from pathlib import Path
 
 import numpy as np
 
-from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 from vistrack.io import read_mot, read_seqinfo, write_mot
 from vistrack.pipeline import evaluate_files, track_sequence
+
+from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data"

@@ -25,6 +25,7 @@ os.environ.setdefault("MKL_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 import vistrack as vt  # noqa: E402
+
 from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
 from _markdown import replace_section  # noqa: E402
 
@@ -66,9 +67,12 @@ def per_step(rows, repeats):
         for _ in range(steps):
             f.step(z)
 
-    rows.append(("one predict + update from Python", "vistrack OnlineFilter.step", median_time(vistrack_online, repeats) / steps * 1e6, "µs/step"))
-    rows.append(("one predict + update from Python", "vistrack kf_step", median_time(vistrack_fused, repeats) / steps * 1e6, "µs/step"))
-    rows.append(("one predict + update from Python", "vistrack kf_predict + kf_update", median_time(vistrack_step, repeats) / steps * 1e6, "µs/step"))
+    rows.append(("one predict + update from Python", "vistrack OnlineFilter.step",
+                 median_time(vistrack_online, repeats) / steps * 1e6, "µs/step"))
+    rows.append(("one predict + update from Python", "vistrack kf_step",
+                 median_time(vistrack_fused, repeats) / steps * 1e6, "µs/step"))
+    rows.append(("one predict + update from Python", "vistrack kf_predict + kf_update",
+                 median_time(vistrack_step, repeats) / steps * 1e6, "µs/step"))
     n_tracks = 100
     zs = np.ones((n_tracks, 2))
 
@@ -77,7 +81,10 @@ def per_step(rows, repeats):
         for _ in range(steps // 10):
             g = vt.kf_update(vt.kf_predict(g, F, Q), zs, H, R)
 
-    rows.append(("one predict + update from Python", f"vistrack kf_predict + kf_update on {n_tracks} tracks at once, per track", median_time(vistrack_tracks, repeats) / (steps // 10) / n_tracks * 1e6, "µs/step"))
+    rows.append(("one predict + update from Python",
+                 f"vistrack kf_predict + kf_update on {n_tracks} tracks at once, per track",
+                 median_time(vistrack_tracks, repeats) / (steps // 10) / n_tracks * 1e6,
+                 "µs/step"))
     fk = optional("filterpy.kalman")
     if fk is not None:
         import filterpy.kalman as fk
@@ -89,7 +96,8 @@ def per_step(rows, repeats):
                 kf.predict()
                 kf.update(z)
 
-        rows.append(("one predict + update from Python", "FilterPy", median_time(filterpy_step, repeats) / steps * 1e6, "µs/step"))
+        rows.append(("one predict + update from Python", "FilterPy",
+                     median_time(filterpy_step, repeats) / steps * 1e6, "µs/step"))
     cv2 = optional("cv2")
     if cv2 is not None:
         zz = np.ones((2, 1))
@@ -103,11 +111,12 @@ def per_step(rows, repeats):
                 k.predict()
                 k.correct(zz)
 
-        rows.append(("one predict + update from Python", "OpenCV cv2.KalmanFilter", median_time(opencv_step, repeats) / steps * 1e6, "µs/step"))
+        rows.append(("one predict + update from Python", "OpenCV cv2.KalmanFilter",
+                     median_time(opencv_step, repeats) / steps * 1e6, "µs/step"))
     pk = optional("pykalman")
     if pk is not None:
-        kfp = pk.KalmanFilter(transition_matrices=F, observation_matrices=H, transition_covariance=Q,
-                              observation_covariance=R)
+        kfp = pk.KalmanFilter(transition_matrices=F, observation_matrices=H,
+                              transition_covariance=Q, observation_covariance=R)
         n_pk = 200
 
         def pykalman_step():
@@ -115,7 +124,8 @@ def per_step(rows, repeats):
             for _ in range(n_pk):
                 m, P = kfp.filter_update(m, P, z)
 
-        rows.append(("one predict + update from Python", "pykalman (filter_update)", median_time(pykalman_step, repeats) / n_pk * 1e6, "µs/step"))
+        rows.append(("one predict + update from Python", "pykalman (filter_update)",
+                     median_time(pykalman_step, repeats) / n_pk * 1e6, "µs/step"))
 
 
 # ---------------------------------------------------------------- one long series
@@ -125,7 +135,8 @@ def one_series(rows, repeats, T):
     label = f"one series, whole-sequence filter (T={T:,})"
     t = median_time(lambda: vt.kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=X0, P0=P0), repeats)
     rows.append((label, "vistrack", t / T * 1e6, "µs/step"))
-    t = median_time(lambda: vt.kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=X0, P0=P0, store_covs=False), repeats)
+    t = median_time(
+        lambda: vt.kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=X0, P0=P0, store_covs=False), repeats)
     rows.append((label, "vistrack, store_covs=False (means only)", t / T * 1e6, "µs/step"))
     label2 = f"filter + RTS smoother, one series (T={T:,})"
 
@@ -153,26 +164,36 @@ def one_series(rows, repeats, T):
                 ms[i], Ps[i] = kf.x, kf.P
             return ms, Ps
 
-        rows.append((label, "FilterPy (predict/update loop)", median_time(fp_filter, 1) / short * 1e6, "µs/step"))
+        rows.append((label, "FilterPy (predict/update loop)",
+                     median_time(fp_filter, 1) / short * 1e6, "µs/step"))
 
         def fp_both():
             ms, Ps = fp_filter()
             kf.rts_smoother(ms, Ps)
 
-        rows.append((label2, f"FilterPy (loop + rts_smoother; T={short:,}, ×{scale:g})", median_time(fp_both, 1) * scale, "s"))
+        rows.append((label2, f"FilterPy (loop + rts_smoother; T={short:,}, ×{scale:g})",
+                     median_time(fp_both, 1) * scale, "s"))
     pk = optional("pykalman")
     if pk is not None:
         n_pk = min(T, 2000)
-        kfp = pk.KalmanFilter(transition_matrices=F, observation_matrices=H, transition_covariance=Q,
-                              observation_covariance=R, initial_state_mean=X0, initial_state_covariance=P0)
-        rows.append((label, f"pykalman (T={n_pk:,})", median_time(lambda: kfp.filter(ys[:n_pk]), 1) / n_pk * 1e6, "µs/step"))
-        rows.append((label2, f"pykalman (smooth; T={n_pk:,}, ×{T / n_pk:g})", median_time(lambda: kfp.smooth(ys[:n_pk]), 1) * T / n_pk, "s"))
+        kfp = pk.KalmanFilter(transition_matrices=F, observation_matrices=H,
+                              transition_covariance=Q, observation_covariance=R,
+                              initial_state_mean=X0, initial_state_covariance=P0)
+        rows.append((label, f"pykalman (T={n_pk:,})",
+                     median_time(lambda: kfp.filter(ys[:n_pk]), 1) / n_pk * 1e6, "µs/step"))
+        rows.append((label2, f"pykalman (smooth; T={n_pk:,}, ×{T / n_pk:g})",
+                     median_time(lambda: kfp.smooth(ys[:n_pk]), 1) * T / n_pk, "s"))
     sk = optional("simdkalman")
     if sk is not None:
-        kfs = sk.KalmanFilter(state_transition=F, process_noise=Q, observation_model=H, observation_noise=R)
+        kfs = sk.KalmanFilter(state_transition=F, process_noise=Q, observation_model=H,
+                              observation_noise=R)
         y3 = ys[None]
-        rows.append((label, "simdkalman", median_time(lambda: kfs.compute(y3, 0, initial_value=X0, initial_covariance=P0, filtered=True, smoothed=False), repeats) / T * 1e6, "µs/step"))
-        rows.append((label2, "simdkalman", median_time(lambda: kfs.compute(y3, 0, initial_value=X0, initial_covariance=P0, filtered=True, smoothed=True), repeats), "s"))
+        rows.append((label, "simdkalman", median_time(
+            lambda: kfs.compute(y3, 0, initial_value=X0, initial_covariance=P0, filtered=True,
+                                smoothed=False), repeats) / T * 1e6, "µs/step"))
+        rows.append((label2, "simdkalman", median_time(
+            lambda: kfs.compute(y3, 0, initial_value=X0, initial_covariance=P0, filtered=True,
+                                smoothed=True), repeats), "s"))
     if optional("statsmodels") is not None:
         from statsmodels.tsa.statespace.kalman_smoother import KalmanSmoother
 
@@ -184,7 +205,8 @@ def one_series(rows, repeats, T):
             ks.initialize_known(X0, P0)
             return ks.smooth() if smooth else ks.filter()
 
-        rows.append((label, "statsmodels", median_time(lambda: sm_run(False), repeats) / T * 1e6, "µs/step"))
+        rows.append((label, "statsmodels",
+                     median_time(lambda: sm_run(False), repeats) / T * 1e6, "µs/step"))
         rows.append((label2, "statsmodels", median_time(lambda: sm_run(True), repeats), "s"))
 
 
@@ -202,28 +224,47 @@ def batch(rows, repeats, B, T):
     def vt_general():
         return vt.kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=X0, P0=P0b, store_covs=False)
 
-    rows.append((label, "vistrack, shared covariances (same P0 and missing pattern)", steps / median_time(vt_shared, repeats) / 1e6, "M steps/s"))
-    rows.append((label, "vistrack, one covariance per series (generated kernel; steady state after ~40 steps)", steps / median_time(vt_general, repeats) / 1e6, "M steps/s"))
+    rows.append((label, "vistrack, shared covariances (same P0 and missing pattern)",
+                 steps / median_time(vt_shared, repeats) / 1e6, "M steps/s"))
+    rows.append((label, "vistrack, one covariance per series "
+                        "(generated kernel; steady state after ~40 steps)",
+                 steps / median_time(vt_general, repeats) / 1e6, "M steps/s"))
     Fd = np.eye(4) + 0.1 * rng.normal(size=(4, 4))  # a dense model: no zeros to skip
     Ad = rng.normal(size=(4, 4))
     Qd, Hd = Ad @ Ad.T / 4 + 0.1 * np.eye(4), rng.normal(size=(2, 4))
-    rows.append((label, "vistrack, one covariance per series, dense F and H (generated kernel)", steps / median_time(lambda: vt.kalman_filter(ys, F=Fd, Q=Qd, H=Hd, R=R, x0=X0, P0=P0b, store_covs=False), repeats) / 1e6, "M steps/s"))
+    rows.append((label, "vistrack, one covariance per series, dense F and H (generated kernel)",
+                 steps / median_time(lambda: vt.kalman_filter(
+                     ys, F=Fd, Q=Qd, H=Hd, R=R, x0=X0, P0=P0b, store_covs=False), repeats) / 1e6,
+                 "M steps/s"))
     # the loop kernel that serves models too large for generated code (n > 6 or m > 3)
     from vistrack.filters import _codegen
 
     min_steps, _codegen.MIN_STEPS = _codegen.MIN_STEPS, 1 << 62
     try:
-        rows.append((label, "vistrack, one covariance per series, loop kernel (any size)", steps / median_time(lambda: vt.kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=X0, P0=P0b, store_covs=False), repeats) / 1e6, "M steps/s"))
-        rows.append((label, "vistrack, loop kernel, dense F and H", steps / median_time(lambda: vt.kalman_filter(ys, F=Fd, Q=Qd, H=Hd, R=R, x0=X0, P0=P0b, store_covs=False), repeats) / 1e6, "M steps/s"))
+        rows.append((label, "vistrack, one covariance per series, loop kernel (any size)",
+                     steps / median_time(lambda: vt.kalman_filter(
+                         ys, F=F, Q=Q, H=H, R=R, x0=X0, P0=P0b, store_covs=False), repeats)
+                     / 1e6, "M steps/s"))
+        rows.append((label, "vistrack, loop kernel, dense F and H",
+                     steps / median_time(lambda: vt.kalman_filter(
+                         ys, F=Fd, Q=Qd, H=Hd, R=R, x0=X0, P0=P0b, store_covs=False), repeats)
+                     / 1e6, "M steps/s"))
     finally:
         _codegen.MIN_STEPS = min_steps
     ys_m = ys.copy()
     ys_m[rng.random((B, T)) < 0.05] = np.nan  # different missing steps per series
-    rows.append((label, "vistrack, 5 % missing steps, different per series (generated kernel, never steady)", steps / median_time(lambda: vt.kalman_filter(ys_m, F=F, Q=Q, H=H, R=R, x0=X0, P0=P0, store_covs=False), repeats) / 1e6, "M steps/s"))
+    rows.append((label, "vistrack, 5 % missing steps, different per series "
+                        "(generated kernel, never steady)",
+                 steps / median_time(lambda: vt.kalman_filter(
+                     ys_m, F=F, Q=Q, H=H, R=R, x0=X0, P0=P0, store_covs=False), repeats) / 1e6,
+                 "M steps/s"))
     sk = optional("simdkalman")
     if sk is not None:
-        kfs = sk.KalmanFilter(state_transition=F, process_noise=Q, observation_model=H, observation_noise=R)
-        rows.append((label, "simdkalman", steps / median_time(lambda: kfs.compute(ys, 0, initial_value=X0, initial_covariance=P0, filtered=True, smoothed=False), repeats) / 1e6, "M steps/s"))
+        kfs = sk.KalmanFilter(state_transition=F, process_noise=Q, observation_model=H,
+                              observation_noise=R)
+        rows.append((label, "simdkalman", steps / median_time(
+            lambda: kfs.compute(ys, 0, initial_value=X0, initial_covariance=P0, filtered=True,
+                                smoothed=False), repeats) / 1e6, "M steps/s"))
     if optional("filterpy") is not None:
         import filterpy.kalman as fk
 
@@ -239,7 +280,8 @@ def batch(rows, repeats, B, T):
                         kf.predict()
                     kf.update(ys[b, i])
 
-        rows.append((label, f"FilterPy loop ({nb} series)", nb * T / median_time(fp_loop, 1) / 1e6, "M steps/s"))
+        rows.append((label, f"FilterPy loop ({nb} series)",
+                     nb * T / median_time(fp_loop, 1) / 1e6, "M steps/s"))
 
 
 def to_markdown(rows) -> str:
@@ -259,9 +301,11 @@ def to_markdown(rows) -> str:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="small sizes, for a smoke run")
-    ap.add_argument("--write", metavar="MD", help="replace the Kalman section of this markdown file")
+    ap.add_argument("--write", metavar="MD",
+                    help="replace the Kalman section of this markdown file")
     args = ap.parse_args()
     warnings.simplefilter("ignore")
     repeats = 3 if args.quick else 5
@@ -274,7 +318,8 @@ def main() -> None:
     batch(rows, repeats, 1000 if args.quick else 10_000, 100 if args.quick else 500)
     import numba
 
-    env = (f"Python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}, "
+    env = (f"Python {platform.python_version()}, numpy {np.__version__}, "
+           f"numba {numba.__version__}, "
            f"{platform.machine()}, {os.cpu_count()} cores (one used), "
            f"{time.strftime('%Y-%m-%d')}")
     table = to_markdown(rows)

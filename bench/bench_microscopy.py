@@ -23,10 +23,11 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
-from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 from vistrack.frontends.spots import locate
 from vistrack.models import ConstantPosition, Position
 from vistrack.tracking import PointTracker
+
+from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 
 FRAMES = Path(__file__).resolve().parents[2] / "shared" / "data" / "trackpy-bulk-water" / "frames"
 
@@ -84,11 +85,16 @@ def main():
                 ids_of.setdefault(pid, set()).add(int(i))
     near = np.concatenate(near)
     n_ours = len(np.unique(np.concatenate([i for i, _ in ours])))
-    long_ours = sum(1 for v in np.unique(np.concatenate([i for i, _ in ours]), return_counts=True)[1]
+    long_ours = sum(1 for v in np.unique(np.concatenate([i for i, _ in ours]),
+                                         return_counts=True)[1]
                     if v >= 25)
     long_tp = int((links.groupby("particle").size() >= 25).sum())
     env = (f"Python {platform.python_version()}, numpy {np.__version__}, trackpy "
            f"{__import__('trackpy').__version__}, {time.strftime('%Y-%m-%d')}")
+    row_ours = (f'| vistrack: spots + `PointTracker("gnn")`, constant position | {fps_ours:.0f} '
+                f"| {n_ours} | {long_ours} |")
+    row_tp = (f"| trackpy: `locate` + `link` (search 5 px, memory 3) | {fps_tp:.0f} "
+              f"| {links.particle.nunique()} | {long_tp} |")
     section = f"""## Microscopy
 
 Measured with `python bench/bench_microscopy.py` ({env}): trackpy's bulk-water clip, 50
@@ -96,8 +102,8 @@ frames, about 520 particles a frame; locating and linking together.
 
 | | frames/s | trajectories | of 25 frames or more |
 |---|---:|---:|---:|
-| vistrack: spots + `PointTracker("gnn")`, constant position | {fps_ours:.0f} | {n_ours} | {long_ours} |
-| trackpy: `locate` + `link` (search 5 px, memory 3) | {fps_tp:.0f} | {links.particle.nunique()} | {long_tp} |
+{row_ours}
+{row_tp}
 
 vistrack is {fps_ours / fps_tp:.1f} times as fast. `spots.locate` finds exactly trackpy's
 particles at trackpy's positions (a test checks it to 1e-9 px); {100 * near.mean():.1f} % of

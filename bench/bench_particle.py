@@ -25,9 +25,10 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 import vistrack as vt  # noqa: E402
+from vistrack.filters import ParticleFilter, UnscentedKalmanFilter, ukf_predict, ukf_update  # noqa: E402
+
 from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
 from _markdown import replace_section  # noqa: E402
-from vistrack.filters import ParticleFilter, UnscentedKalmanFilter, ukf_predict, ukf_update  # noqa: E402
 
 T = 100
 
@@ -202,9 +203,11 @@ def ukf_rows(rows, repeats):
     rows.append((label, "vistrack ukf_predict + ukf_update", sec / len(zs) * 1e3, None))
     flt = UnscentedKalmanFilter(motion, meas)
     sec, _ = median_time(lambda: flt.filter(zs, x0=x0, P0=P0), repeats)
-    rows.append((label, "vistrack UnscentedKalmanFilter.filter, per step", sec / len(zs) * 1e3, None))
+    rows.append((label, "vistrack UnscentedKalmanFilter.filter, per step",
+                 sec / len(zs) * 1e3, None))
     if optional("filterpy") is not None:
-        from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter as FPU
+        from filterpy.kalman import MerweScaledSigmaPoints
+        from filterpy.kalman import UnscentedKalmanFilter as FPU
 
         def filterpy_run():
             kf = FPU(dim_x=5, dim_z=2, dt=1.0, points=MerweScaledSigmaPoints(5, 1e-3, 2.0, 0.0),
@@ -224,7 +227,8 @@ def to_markdown(rows):
     for label, lib, ms, rmse in rows:
         if label != current:
             current, ref = label, ms
-            out += ["", f"**{label}**", "", "| library | ms/step | times slower than vistrack | RMSE |",
+            out += ["", f"**{label}**", "",
+                    "| library | ms/step | times slower than vistrack | RMSE |",
                     "|---|---:|---:|---:|"]
         r = "" if rmse is None else f"{rmse:.2f}"
         out.append(f"| {lib} | {ms:.3g} | {ms / ref:.2g} | {r} |")
@@ -235,7 +239,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="N = 1,000 only")
-    ap.add_argument("--write", metavar="MD", help="replace the particle-filter section of this file")
+    ap.add_argument("--write", metavar="MD",
+                    help="replace the particle-filter section of this file")
     args = ap.parse_args()
     warnings.simplefilter("ignore")
     rows = []
@@ -245,7 +250,8 @@ def main():
     ukf_rows(rows, 5)
     import numba
 
-    env = (f"Python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}, "
+    env = (f"Python {platform.python_version()}, numpy {np.__version__}, "
+           f"numba {numba.__version__}, "
            f"{platform.machine()}, one core, {time.strftime('%Y-%m-%d')}")
     cmd = "python bench/bench_particle.py" + (" --quick" if args.quick else "")
     section = (f"## Particle filter and UKF\n\nMeasured with `{cmd}` ({env}). RMSE: of the "

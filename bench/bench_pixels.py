@@ -27,13 +27,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
-from _markdown import replace_section  # noqa: E402
 from vistrack.evaluation import evaluate_mot
 from vistrack.frontends import SelectiveBackground, find_blobs
 from vistrack.io import MOTTable, VideoReader, read_mot
 from vistrack.tracking import BoxTracker
 from vistrack.types import Detections
+
+from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
+from _markdown import replace_section  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 VIDEO = DATA / "opencv-vtest" / "vtest.avi"
@@ -198,7 +199,7 @@ def chain_rows():
     gt = read_mot(GT)
     base_make, base_tracker = baseline_chain(init)
     rows = []
-    for name, make in ((f"vistrack: selective background, blobs, bytetrack", vistrack_chain(init)),
+    for name, make in (("vistrack: selective background, blobs, bytetrack", vistrack_chain(init)),
                        (f"baseline: MOG2, connected components, {base_tracker}", base_make)):
         run_chain(make, stop=30)  # warm-up (compiled code loaded)
         secs, res = [], None

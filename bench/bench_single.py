@@ -19,10 +19,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 from vistrack.evaluation.single import precision, read_boxes, success_curve, success_rate
 from vistrack.frontends.compose import Composite
 from vistrack.frontends.single import single_tracker
+
+from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 SEQS = {

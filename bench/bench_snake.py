@@ -21,9 +21,10 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 from tests.test_snake import distance_to_ellipse, ellipse_frame  # noqa: E402
 from vistrack.frontends.snake import Snake  # noqa: E402
+
+from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 
 
 def scene(T=30):
@@ -72,7 +73,8 @@ def main():
     run_vistrack(frames[:3], geos[:3])  # compiled code loaded
     rows = []
     for name, fn in (("vistrack `Snake` (B-spline, radial search, Kalman)", run_vistrack),
-                     ("scikit-image `active_contour` (its defaults: up to 2,500 iterations)", run_skimage)):
+                     ("scikit-image `active_contour` (its defaults: up to 2,500 iterations)",
+                      run_skimage)):
         sec, err = fn(frames, geos)
         rows.append((name, 1e3 * statistics.median(sec[1:]), float(np.median(err[5:]))))
         print(f"  {name}: {rows[-1][1]:.2f} ms", file=sys.stderr)

@@ -22,12 +22,13 @@ from pathlib import Path
 
 import numpy as np
 
-from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
-from _markdown import replace_section  # noqa: E402
 from vistrack.evaluation import evaluate_mot
 from vistrack.io import MOTTable, read_mot, read_seqinfo
 from vistrack.tracking import BoxTracker
 from vistrack.types import Detections
+
+from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
+from _markdown import replace_section  # noqa: E402
 
 SEQ = Path(__file__).resolve().parents[2] / "shared" / "data" / "mot17" / "MOT17-04-FRCNN"
 

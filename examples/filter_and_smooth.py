@@ -14,4 +14,5 @@ filtered = kf.filter(ys, dt=np.diff(times))
 smoothed = kf.smooth(ys, dt=np.diff(times))
 print("filtered RMSE", vt.evaluation.rmse(filtered.means[:, :2], xs[:, :2]).round(2))
 print("smoothed RMSE", vt.evaluation.rmse(smoothed.means[:, :2], xs[:, :2]).round(2))
-print("velocity at t=8:", smoothed.means[-1, 2:].round(2), "+/-", np.sqrt(np.diag(smoothed.covs[-1])[2:]).round(2))
+print("velocity at t=8:", smoothed.means[-1, 2:].round(2), "+/-",
+      np.sqrt(np.diag(smoothed.covs[-1])[2:]).round(2))

@@ -8,8 +8,12 @@ import pytest
 
 from vistrack.io import read_mot
 from vistrack.tracking import BoxTracker
-from vistrack.tracking.calibration import (ScoreCalibration, ScoreCalibrator,
-                                           isotonic_increasing, persistence)
+from vistrack.tracking.calibration import (
+    ScoreCalibration,
+    ScoreCalibrator,
+    isotonic_increasing,
+    persistence,
+)
 from vistrack.types import Detections
 
 from .test_tracking import run, scene

@@ -45,7 +45,7 @@ def test_generated_kernel_equals_filterpy(rng, generated, case):
         mod = cv_model(0.5)
     else:
         mod = random_model(rng, 3, 2, T, tv=True)
-    n, m = mod["H"].shape[-1], mod["H"].shape[-2]
+    n = mod["H"].shape[-1]
     _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(n), n_series=B, rng=rng)
     ys = with_missing(rng, ys)  # rows and single components, different in every series
     x0 = rng.normal(size=(B, n))

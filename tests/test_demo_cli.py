@@ -33,7 +33,8 @@ def test_cli_rejects_bad_arguments(capsys):
 
 
 def test_console_script_runs():
-    r = subprocess.run([sys.executable, "-m", "vistrack.cli", "--version"], capture_output=True, text=True)
+    r = subprocess.run([sys.executable, "-m", "vistrack.cli", "--version"], capture_output=True,
+                       text=True)
     assert r.returncode == 0 and r.stdout.startswith("vistrack ")
 
 
@@ -79,7 +80,8 @@ def test_murphy_errors_equal_filterpy_per_run_and_match_published_means():
 def test_import_stays_light():
     """`import vistrack` must not pull in matplotlib or scipy.stats (~60 MB and ~1 s each):
     the CLI and library users pay for them only when they plot or ask for chi-square bands."""
-    code = "import sys, vistrack; print(sorted(m for m in ('matplotlib', 'scipy.stats') if m in sys.modules))"
+    code = ("import sys, vistrack; "
+            "print(sorted(m for m in ('matplotlib', 'scipy.stats') if m in sys.modules))")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert r.stdout.strip() == "[]"
 

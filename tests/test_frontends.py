@@ -381,7 +381,7 @@ def test_reading_a_video_keeps_memory_bounded():
     r = VideoReader(need(VTEST), fps=7, prefetch=8)
     tracemalloc.start()
     n = 0
-    for f in r:
+    for _f in r:
         n += 1
         if n == 50:
             tracemalloc.reset_peak()

@@ -154,7 +154,8 @@ def test_zero_likelihood_everywhere_is_reported():
             return g, np.full(np.shape(y)[:-1], -np.inf)
 
     bad = Never(vt.ConstantVelocity(dim=1), vt.Position(dim=1))
-    with pytest.raises(ValueError, match="zero likelihood to the measurement of series 0 at step 0"):
+    with pytest.raises(ValueError,
+                       match="zero likelihood to the measurement of series 0 at step 0"):
         IMMFilter([bad, bad], np.eye(2)).filter(np.ones((3, 1)), x0=[0.0, 0.0], P0=np.eye(2))
 
 

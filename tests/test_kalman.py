@@ -1,4 +1,5 @@
-"""The Kalman filter against FilterPy, pykalman, a joint-Gaussian oracle and the seeds' 1-D equations."""
+"""The Kalman filter against FilterPy, pykalman, a joint-Gaussian oracle and the seeds' 1-D
+equations."""
 
 import dataclasses
 
@@ -146,7 +147,8 @@ def test_batch_shared_and_general_paths_agree_with_single_series(rng, store_covs
     x0 = rng.normal(size=(B, n))
     P0 = np.eye(n)
     shared = kalman_filter(ys, **mod, x0=x0, P0=P0, store_covs=store_covs)
-    general = kalman_filter(ys, **mod, x0=x0, P0=np.broadcast_to(P0, (B, n, n)), store_covs=store_covs)
+    general = kalman_filter(ys, **mod, x0=x0, P0=np.broadcast_to(P0, (B, n, n)),
+                            store_covs=store_covs)
     assert shared.shared_covs and not general.shared_covs
     for b in (0, 33, B - 1):
         one = kalman_filter(ys[b], **mod, x0=x0[b], P0=P0)
@@ -155,7 +157,8 @@ def test_batch_shared_and_general_paths_agree_with_single_series(rng, store_covs
             np.testing.assert_allclose(res.loglik[b], one.loglik, rtol=1e-12)
             np.testing.assert_allclose(res.last.cov[b], one.covs[-1], rtol=1e-12, atol=1e-14)
             if store_covs:
-                np.testing.assert_allclose(res.pred_means[b], one.pred_means, rtol=1e-12, atol=1e-12)
+                np.testing.assert_allclose(res.pred_means[b], one.pred_means, rtol=1e-12,
+                                           atol=1e-12)
                 np.testing.assert_allclose(res.covs[b], one.covs, rtol=1e-12, atol=1e-14)
                 np.testing.assert_allclose(res.pred_covs[b], one.pred_covs, rtol=1e-12, atol=1e-14)
             else:
@@ -221,7 +224,8 @@ def test_kf_step_equals_predict_then_update(rng, B):
     y = rng.normal(size=(B, m))
     y[0, 1] = np.nan
     got, ll = kf_step(g, y, mod["F"], mod["Q"], mod["H"], mod["R"], return_loglik=True)
-    want, ll2 = kf_update(kf_predict(g, mod["F"], mod["Q"]), y, mod["H"], mod["R"], return_loglik=True)
+    want, ll2 = kf_update(kf_predict(g, mod["F"], mod["Q"]), y, mod["H"], mod["R"],
+                          return_loglik=True)
     np.testing.assert_allclose(got.mean, want.mean, rtol=1e-13, atol=1e-13)
     np.testing.assert_allclose(got.cov, want.cov, rtol=1e-13, atol=1e-13)
     np.testing.assert_allclose(ll, ll2, rtol=1e-13)
@@ -256,7 +260,8 @@ def test_kalman_filter_class_uses_true_dt(rng):
     want = kalman_filter(ys, F=cv.F(dts), Q=cv.Q(dts), H=pos.H(4), R=pos.R(), x0=x0, P0=P0)
     np.testing.assert_allclose(got.means, want.means, rtol=1e-12)
     sm = kf.smooth(ys, dt=np.diff(times), x0=x0, P0=P0)
-    np.testing.assert_allclose(sm.means, vt.rts_smooth(want, F=cv.F(dts), Q=cv.Q(dts)).means, rtol=1e-12)
+    np.testing.assert_allclose(sm.means, vt.rts_smooth(want, F=cv.F(dts), Q=cv.Q(dts)).means,
+                               rtol=1e-12)
 
 
 def test_default_prior_starts_at_first_measurement():
@@ -279,15 +284,18 @@ E = np.eye(2)
         (dict(ys=np.ones(5)), ValueError, "ys must be 2-D or 3-D; got shape"),
         (dict(ys=[[np.inf, 1.0]] * 3), ValueError, "ys must be finite or NaN"),
         (dict(F=[[1.0, np.nan], [0.0, 1.0]]), ValueError, r"F must be finite; F\[0, 0, 1\] = nan"),
-        (dict(F=np.eye(3)), ValueError, r"F must have shape \(2, 2\) or \(T=5, 2, 2\); got \(3, 3\)"),
+        (dict(F=np.eye(3)), ValueError,
+         r"F must have shape \(2, 2\) or \(T=5, 2, 2\); got \(3, 3\)"),
         (dict(F=np.stack([E] * 4)), ValueError, r"F must have shape .*got \(4, 2, 2\)"),
         (dict(Q=-E), ValueError, "Q must be positive semi-definite"),
         (dict(R=[[1.0, 0.3], [0.2, 1.0]]), ValueError, "R must be symmetric"),
         (dict(P0=-E), ValueError, "P0 must be positive semi-definite"),
-        (dict(P0=np.eye(3)), ValueError, r"P0 must have shape \(2, 2\) or \(B=1, 2, 2\); got \(3, 3\)"),
+        (dict(P0=np.eye(3)), ValueError,
+         r"P0 must have shape \(2, 2\) or \(B=1, 2, 2\); got \(3, 3\)"),
         (dict(x0=np.zeros((3, 2))), ValueError, r"x0 must have shape \(2,\) or \(B=1, 2\)"),
         (dict(x0="ab"), TypeError, "x0 must be an array of numbers"),
-        (dict(R=np.zeros((2, 2)), P0=np.zeros((2, 2))), ValueError, "not positive definite at step 0"),
+        (dict(R=np.zeros((2, 2)), P0=np.zeros((2, 2))), ValueError,
+         "not positive definite at step 0"),
     ],
 )
 def test_bad_arguments_raise_naming_the_argument(kwargs, exc, match):
@@ -318,7 +326,8 @@ def test_kernel_argument_errors():
     with pytest.raises(ValueError, match=r"H must have shape \(1, 2\); got \(1, 3\)"):
         kf_update(g, np.ones((3, 1)), [[1.0, 0.0, 0.0]], [[1.0]])
     with pytest.raises(ValueError, match="not positive definite"):
-        kf_update(vt.Gaussian(np.zeros((3, 2)), np.zeros((3, 2, 2))), np.ones((3, 1)), [[1.0, 0.0]], [[0.0]])
+        kf_update(vt.Gaussian(np.zeros((3, 2)), np.zeros((3, 2, 2))), np.ones((3, 1)), [[1.0, 0.0]],
+                  [[0.0]])
     with pytest.raises(ValueError, match="sigma_m must be a scalar or have shape"):
         kalman_filter_1d(np.ones(4), d=1, m=1, sigma_d=1, sigma_m=np.ones(3), x0=0, sigma0=1)
 

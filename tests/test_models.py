@@ -37,7 +37,8 @@ def integrator(order, dim):
     return np.kron(A1, np.eye(dim)), np.kron(G1, np.eye(dim))
 
 
-@pytest.mark.parametrize("cls,order", [(ConstantPosition, 0), (ConstantVelocity, 1), (ConstantAcceleration, 2)])
+@pytest.mark.parametrize("cls,order",
+                         [(ConstantPosition, 0), (ConstantVelocity, 1), (ConstantAcceleration, 2)])
 @pytest.mark.parametrize("dim", [1, 2, 3])
 @pytest.mark.parametrize("dt", [0.04, 1.0, 2.5])
 def test_kinematic_models_equal_van_loan(cls, order, dim, dt):
@@ -99,7 +100,8 @@ def test_state_layout_matches_seed_2d_example():
         (lambda: ConstantVelocity().F(np.nan), "dt must be finite"),
         (lambda: Periodic(omega=0), "omega must be a finite number > 0"),
         (lambda: BoxMotion(std_meas=(0.05, 0.05)), r"std_meas must be one number or 4 \(cx, cy"),
-        (lambda: BoxMotion(std_meas=(0.05, 0.05, 0.0, 0.05)), "std_meas must be a finite number > 0"),
+        (lambda: BoxMotion(std_meas=(0.05, 0.05, 0.0, 0.05)),
+         "std_meas must be a finite number > 0"),
         (lambda: BoxMotion(frame_rate=0), "frame_rate must be a finite number > 0"),
         (lambda: BoxMotion().at_rate(np.inf), "frame_rate must be a finite number > 0"),
         (lambda: ConstantAcceleration(discretisation="rk4"), "discretisation must be"),
@@ -114,7 +116,8 @@ def test_state_layout_matches_seed_2d_example():
         (lambda: LinearMotion(np.eye(2), np.eye(2)).F(0.5), "discrete-time model"),
         (lambda: LinearMeasurement(np.eye(2, 4), np.eye(3)), r"R must have shape \(2, 2\)"),
         (lambda: LinearGaussian(np.eye(4), np.eye(4), np.eye(2, 3), np.eye(2)), "H has 3 columns"),
-        (lambda: LinearGaussian(np.stack([np.eye(2)] * 5), np.eye(2), np.stack([np.eye(2)] * 4), np.eye(2)),
+        (lambda: LinearGaussian(np.stack([np.eye(2)] * 5), np.eye(2), np.stack([np.eye(2)] * 4),
+                                np.eye(2)),
          "disagree on the number of steps"),
     ],
 )

@@ -7,9 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from .mot_oracles import MOT15, MOT17, n_frames, noisy_predictions, seq_dir, trackeval_scores
 from vistrack.evaluation import ALPHAS, MOTCounts, combine, evaluate_mot
 from vistrack.io import MOTTable, read_mot
+
+from .mot_oracles import MOT15, MOT17, n_frames, noisy_predictions, seq_dir, trackeval_scores
 
 CLEAR = {"TP": "CLR_TP", "FN": "CLR_FN", "FP": "CLR_FP", "IDSW": "IDSW", "Frag": "Frag",
          "MT": "MT", "PT": "PT", "ML": "ML"}
@@ -108,7 +109,7 @@ def test_bad_inputs_are_named():
 
 def motmetrics_summary(gt_path, pred_path):
     if not hasattr(np, "asfarray"):  # py-motmetrics 1.4 still calls np.asfarray (numpy < 2)
-        np.asfarray = lambda a, dtype=float: np.asarray(a, dtype=dtype)
+        np.asfarray = lambda a, dtype=float: np.asarray(a, dtype=dtype)  # noqa: NPY201 (the shim)
     mm = pytest.importorskip("motmetrics")
     gt = mm.io.loadtxt(str(gt_path), fmt="mot15-2D", min_confidence=1)
     ts = mm.io.loadtxt(str(pred_path), fmt="mot15-2D")

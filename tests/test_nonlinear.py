@@ -37,7 +37,7 @@ def test_coordinated_turn_jacobian_equals_finite_differences(rng, w):
     x = np.array([[1.0, -2.0, 3.0, 0.5, w], [0.0, 0.0, -1.0, 2.0, w]])
     for dt in (0.1, 1.0, 2.5):
         J = ct.jacobian(x, dt)
-        Jn = numerical_jacobian(lambda z: ct.f(z, dt), x, eps=1e-7)
+        Jn = numerical_jacobian(lambda z, dt=dt: ct.f(z, dt), x, eps=1e-7)
         np.testing.assert_allclose(J, Jn, rtol=1e-6, atol=1e-7)
 
 

@@ -9,12 +9,12 @@ from vistrack.filters import (
     RESAMPLERS,
     ParticleDegeneracyError,
     ParticleFilter,
+    _random,
     effective_sample_size,
     kalman_filter,
     particle_mode,
     resample,
 )
-from vistrack.filters import _random
 
 W = np.array([0.3, 0.0, 0.05, 0.25, 1e-4, 0.1, 0.0999, 0.2])  # includes zero and tiny weights
 
@@ -121,7 +121,9 @@ def test_log_domain_weights_survive_vanishing_likelihoods(rng):
 def test_degeneracy_is_reported_with_the_step(rng):
     motion, meas, ys, x0, P0, _ = linear_problem(rng, T=6)
 
-    def loglik(y, x, calls=[0]):
+    calls = [0]  # how many times loglik was called
+
+    def loglik(y, x):
         calls[0] += 1
         return np.full(len(x), -np.inf if calls[0] == 4 else 0.0)
 
@@ -155,7 +157,8 @@ def test_growth_model_runs_with_modes_and_a_user_likelihood():
     xs, ys = vt.simulate.simulate(motion, meas, 60, x0=[0.1], rng=2)
     pf = ParticleFilter(motion, meas, n_particles=3000, rng=3)
     res = pf.filter(ys, x0=[0.0], P0=[[5.0]], modes=True)
-    assert res.modes.shape == (60, 1) and np.all((res.mode_confidence > 0) & (res.mode_confidence <= 1))
+    assert res.modes.shape == (60, 1) and np.all((res.mode_confidence > 0)
+                                                 & (res.mode_confidence <= 1))
     rmse = np.sqrt(np.mean((res.means[:, 0] - xs[:, 0]) ** 2))
     assert rmse < 8  # the posterior is bimodal (sign ambiguity); the literature reports ~4.5-6
     custom = ParticleFilter(motion, lambda y, x: -0.5 * (y[0] - x[:, 0] ** 2 / 20) ** 2,

@@ -10,8 +10,13 @@ import cv2
 import numpy as np
 import pytest
 
-from vistrack.evaluation.single import (precision, read_boxes, region_to_bbox, success_curve,
-                                        success_rate)
+from vistrack.evaluation.single import (
+    precision,
+    read_boxes,
+    region_to_bbox,
+    success_curve,
+    success_rate,
+)
 from vistrack.frontends.single import METHODS, single_tracker
 
 from .conftest import SHARED

@@ -30,7 +30,8 @@ def test_smoother_equals_batch_posterior(rng):
     F, Q, H, R = mod["F"], mod["Q"], mod["H"], mod["R"]
     x0, P0 = rng.normal(size=n), np.eye(n)
     _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=x0, rng=rng)
-    # prior of all states: block-bidiagonal precision J, from x0 ~ N(x0, P0), x_t - F x_{t-1} ~ N(0, Q)
+    # prior of all states: block-bidiagonal precision J, from x0 ~ N(x0, P0),
+    # x_t - F x_{t-1} ~ N(0, Q)
     A = np.zeros((T * n, T * n))
     A[:n, :n] = np.eye(n)
     for t in range(1, T):
@@ -62,7 +63,8 @@ def test_smoothed_variance_is_never_larger_than_filtered(rng):
 
 def test_rts_needs_covariances(rng):
     mod = random_model(rng, 2, 1)
-    res = kalman_filter(rng.normal(size=(5, 1)), **mod, x0=np.zeros(2), P0=np.eye(2), store_covs=False)
+    res = kalman_filter(rng.normal(size=(5, 1)), **mod, x0=np.zeros(2), P0=np.eye(2),
+                        store_covs=False)
     with pytest.raises(ValueError, match="store_covs=True"):
         rts_smooth(res, F=mod["F"], Q=mod["Q"])
     with pytest.raises(TypeError, match="result must be a FilterResult"):
@@ -77,7 +79,8 @@ def test_rts_equals_filterpy_rts_smoother(rng, tv):
     _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(n), rng=rng)
     ys[[7, 8, 20]] = np.nan
     res = kalman_filter(ys, **mod, x0=np.zeros(n), P0=np.eye(n))
-    # FilterPy's rts_smoother(Xs, Ps, Fs, Qs) uses Fs[k+1], Qs[k+1] between steps k and k+1, as we do
+    # FilterPy's rts_smoother(Xs, Ps, Fs, Qs) uses Fs[k+1], Qs[k+1] between steps k and k+1,
+    # as we do
     Fs = mod["F"] if tv else [mod["F"]] * T
     Qs = mod["Q"] if tv else [mod["Q"]] * T
     kf = filterpy_kalman.KalmanFilter(dim_x=n, dim_z=m)
