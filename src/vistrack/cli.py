@@ -71,7 +71,7 @@ def _box_config(args: argparse.Namespace):
 def _track(args: argparse.Namespace) -> int:
     from .config import config_toml
     from .io.video import VideoError
-    from .pipeline import track_sequence, track_video
+    from .pipeline import TrackRun, VideoRun, track_sequence, track_video
 
     def fail(text: str) -> int:
         print(f"vistrack track: error: {text}", file=sys.stderr)
@@ -90,6 +90,7 @@ def _track(args: argparse.Namespace) -> int:
                         "(bytetrack, sort)")
     # with --print-config, stdout holds the configuration alone (the summary goes to stderr)
     report = sys.stderr if args.print_config else sys.stdout
+    run: TrackRun | VideoRun
     try:
         cfg = None
         if args.tracker != "dcpf":
@@ -136,6 +137,7 @@ def _track(args: argparse.Namespace) -> int:
     except (FileNotFoundError, FileExistsError, ValueError, VideoError) as exc:
         return fail(str(exc))
     if args.print_config:
+        assert run.config is not None  # a box tracker's run (dcpf refuses --print-config)
         sys.stdout.write(config_toml(run.config, run.derived))
     return 0
 

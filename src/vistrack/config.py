@@ -32,7 +32,7 @@ import os
 import sys
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from .models.box import BoxMotion
 from .tracking.box import TRACKERS, BoxTrackerConfig
@@ -186,10 +186,12 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
     cfg = base if base is not None else TrackConfig.preset(name or "bytetrack")
     if name is not None and base is not None and name != base.name:
         cfg = replace(TrackConfig.preset(name), motion=base.motion, offline=base.offline)
-    kinds = {"tracker": {f.name: f.type for f in fields(BoxTrackerConfig)},
-             "offline": {f.name: f.type for f in fields(OfflineConfig)},
-             "motion": {"std_pos": "float", "std_vel": "float", "std_meas": "list",
-                        "init_pos": "float", "init_vel": "float", "frame_rate": "float"}}
+    # both modules use postponed annotations: a field's type is its annotation's text
+    kinds: dict[str, dict[str, str]] = {
+        "tracker": {f.name: cast(str, f.type) for f in fields(BoxTrackerConfig)},
+        "offline": {f.name: cast(str, f.type) for f in fields(OfflineConfig)},
+        "motion": {"std_pos": "float", "std_vel": "float", "std_meas": "list",
+                   "init_pos": "float", "init_vel": "float", "frame_rate": "float"}}
     values = {"tracker": tracker, "motion": dict(data.get("motion", {})),
               "offline": dict(data.get("offline", {}))}
     for table, given in values.items():

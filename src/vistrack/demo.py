@@ -47,6 +47,8 @@ def constant_velocity_1d(path: str | Path, *, T: int = 20, seed: int = 2) -> Pat
     xs, ys = _sample_1d(T, seed)
     F, Q, H, R = _CV1.F(1.0), _CV1.Q(1.0), _POS1.H(2), _POS1.R()
     res = kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=_X0, P0=_P0)
+    # store_covs=True (the default) keeps every covariance and prediction
+    assert res.pred_means is not None and res.pred_covs is not None and res.covs is not None
     fig, (ax,) = _figure()
     t = np.arange(T)
     plot_estimates_1d(
@@ -80,6 +82,9 @@ def smoothing_1d(path: str | Path, *, T: int = 20, seed: int = 2) -> Path:
     F, Q, H, R = _CV1.F(1.0), _CV1.Q(1.0), _POS1.H(2), _POS1.R()
     sm = two_filter_smooth(ys, F=F, Q=Q, H=H, R=R, x0=_X0, P0=_P0)
     fwd = sm.filtered
+    # two_filter_smooth keeps the backward information and all of the forward filter's arrays
+    assert sm.backward_info is not None and sm.backward_info_vec is not None
+    assert fwd.pred_means is not None and fwd.pred_covs is not None and fwd.covs is not None
     # backward filter: its prediction (without y_t) and its correction (with y_t), in moments
     Lp, ep = sm.backward_info, sm.backward_info_vec
     HtRi = H.T @ np.linalg.inv(R)

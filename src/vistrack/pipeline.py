@@ -93,7 +93,10 @@ def derived_values(trk: BoxTracker) -> dict:
         out["image_size"] = [int(v) for v in trk.image_size]
     out.update({"std_pos_per_frame": float(m.std_pos), "std_vel_per_frame": float(m.std_vel)})
     if c.scores == "calibrated":
-        cal = trk.calibration or trk.calibrator.calibration()
+        cal = trk.calibration
+        if cal is None:
+            assert trk.calibrator is not None  # the tracker makes one for scores="calibrated"
+            cal = trk.calibrator.calibration()
         out["calibration"] = "whole file" if trk.calibration is not None else \
             "online, at the last frame"
         out["calibration_outcomes"] = cal.n
@@ -351,8 +354,10 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
             # the frame's detections and confidence map (the particle filter's classifiers
             # also read the image)
             cmap = conf_of(image)
-            return (cmap.detections(det_threshold) if own else detect_other(image, index),
-                    cmap, image)
+            if own:
+                return cmap.detections(det_threshold), cmap, image
+            assert detect_other is not None  # made above when the frontend is not HOG's own
+            return detect_other(image, index), cmap, image
 
         def step(d: Any, index: int) -> Tracks:
             return dcpf.update(d[2], d[0], d[1])
@@ -408,6 +413,7 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
             writer.close()
     if n == 0:
         raise ValueError(f"{video}: no frames to track")
+    assert first_image is not None  # kept at the first of the n frames
     a = np.array(rows, dtype=float).reshape(-1, 7)
     F, I = a[:, 0].astype(int), a[:, 1].astype(int)
     write_mot(files["tracks"], F, I, a[:, 2:6], a[:, 6], force=True)

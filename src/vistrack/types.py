@@ -64,7 +64,7 @@ class Gaussian:
         """The leading (batch) dimensions."""
         return tuple(self.mean.shape[:-1])
 
-    def __getitem__(self, index: object) -> Gaussian:
+    def __getitem__(self, index: Any) -> Gaussian:
         """Index the batch: ``g[mask]``, ``g[3]``, ``g[:10]``."""
         return Gaussian(self.mean[index], self.cov[index])
 
@@ -147,9 +147,11 @@ class Detections:
         return cls(boxes=np.c_[b[:, :2], b[:, :2] + b[:, 2:]], scores=scores, classes=classes)
 
     def __len__(self) -> int:
+        assert self.scores is not None  # filled in by __post_init__
         return int(self.scores.shape[0])
 
     def __getitem__(self, index: Any) -> Detections:
+        assert self.scores is not None and self.classes is not None  # set by __post_init__
         return Detections(
             boxes=None if self.boxes is None else self.boxes[index],
             points=None if self.points is None else self.points[index],
@@ -158,11 +160,14 @@ class Detections:
     @property
     def xywh(self) -> np.ndarray:
         """Boxes as ``left, top, width, height``."""
+        if self.boxes is None:
+            raise ValueError("xywh needs box detections; these detections are points")
         return xyxy_to_xywh(self.boxes)
 
     @property
     def centers(self) -> np.ndarray:
         """Box centres ``(N, 2)``, or the points."""
         if self.boxes is None:
+            assert self.points is not None  # __post_init__ requires boxes or points
             return self.points
         return 0.5 * (self.boxes[:, :2] + self.boxes[:, 2:])

@@ -63,6 +63,8 @@ def nis(ys: Any, result: FilterResult, *, H: Any, R: Any) -> tuple[np.ndarray, n
     y, single = as_measurement_series(ys)
     if result.pred_covs is None:
         raise ValueError("result has no covariances: run the filter with store_covs=True")
+    if result.pred_means is None:
+        raise ValueError("result has no predicted means: run the filter with store_covs=True")
     pm = result.pred_means if not single else result.pred_means[None]
     pP = result.pred_covs if not single else result.pred_covs[None]
     H_ = as_float_array(H, "H", ndim=(2, 3))

@@ -92,11 +92,11 @@ def _check_unique(table: MOTTable, what: str) -> None:
 
 def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Sequence:
     bench = _benchmark_of(gt, benchmark)
-    for t, what in ((gt, "ground truth"), (pred, "prediction")):
-        if len(t) and t.frames.max() > n_frames:
-            raise ValueError(f"{t.path or what}: frame {int(t.frames.max())} is beyond the "
-                             f"sequence's {n_frames} frames")
-        _check_unique(t, what)
+    for table, what in ((gt, "ground truth"), (pred, "prediction")):
+        if len(table) and table.frames.max() > n_frames:
+            raise ValueError(f"{table.path or what}: frame {int(table.frames.max())} is beyond "
+                             f"the sequence's {n_frames} frames")
+        _check_unique(table, what)
     if bench != "MOT15" and len(gt):
         bad = np.setdiff1d(np.unique(gt.classes), np.arange(1, 14))
         if len(bad):

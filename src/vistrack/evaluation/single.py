@@ -104,7 +104,7 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
     A malformed line raises ValueError naming the file and line.
     """
     path = Path(path)
-    rows = []
+    rows: list[list[float]] = []
     for n, line in enumerate(path.read_text().splitlines(), start=1):
         if not line.strip():
             continue

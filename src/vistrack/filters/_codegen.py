@@ -167,9 +167,9 @@ def _update(n, m, ch, cr) -> list[str]:
                      + _sum(f"k{i}_{k} * u{l}_{k}" for k in range(m)) + ")")
     for i in range(n):
         for k in range(m):
-            a = _sum(_term(ch[k][l], f"h{k}_{l}", f"ap{i}_{l}") for l in range(n))
-            b = _sum(_term(cr[k2][k], f"r{k2}_{k}", f"k{i}_{k2}") for k2 in range(m))
-            L.append(f"wk{i}_{k} = {a} - ({b})")
+            ha = _sum(_term(ch[k][l], f"h{k}_{l}", f"ap{i}_{l}") for l in range(n))
+            rk = _sum(_term(cr[k2][k], f"r{k2}_{k}", f"k{i}_{k2}") for k2 in range(m))
+            L.append(f"wk{i}_{k} = {ha} - ({rk})")
     # count the entries of P that moved by more than 8 ulp of its scale since the last step
     # (NaN counts as moved), and keep the gain and the factor of S for a steady state
     L.append("tol = 8.0 * EPS * max(" + ", ".join(f"abs(pp{i}_{i})" for i in range(n))
@@ -349,9 +349,9 @@ def _flatten(src: str, n: int, m: int) -> str:
     checks for that many, so it would not vectorise; rows of one array need no check."""
     nt = n * (n + 1) // 2
     offsets, o = {}, 0
-    for name, rows in (("X", n), ("PP", nt), ("XP", n), ("PPP", nt), ("Y", m), ("D", 1),
-                       ("DS", 1), ("LL", 1), ("KL", n * m + m * (m + 1) // 2)):
-        offsets[name], o = o, o + rows
+    for name, nrows in (("X", n), ("PP", nt), ("XP", n), ("PPP", nt), ("Y", m), ("D", 1),
+                        ("DS", 1), ("LL", 1), ("KL", n * m + m * (m + 1) // 2)):
+        offsets[name], o = o, o + nrows
 
     def rows(match):
         base = offsets[match.group(1)] * CH
@@ -407,6 +407,8 @@ def load(prefix: str, src: str):
         exec(compile(src.replace("cache=True", "cache=False"), name, "exec"), module.__dict__)
         return module
     spec = importlib.util.spec_from_file_location(name, path)
+    if spec is None or spec.loader is None:
+        raise ImportError(f"cannot load the generated kernel module {path}")
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
     spec.loader.exec_module(module)

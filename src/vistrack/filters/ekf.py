@@ -19,7 +19,7 @@ model it is exactly the Kalman filter.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 
@@ -59,6 +59,15 @@ def ekf_predict(g: Gaussian, motion: Any, dt: float = 1.0, t: float = 0.0) -> Ga
     return Gaussian(np.asarray(mo.f(g.mean, dt, t), dtype=float), cov)
 
 
+@overload
+def ekf_update(g: Gaussian, y: Any, measurement: Any, *, residual: Callable | None = None,
+               return_loglik: Literal[False] = ...) -> Gaussian: ...
+@overload
+def ekf_update(g: Gaussian, y: Any, measurement: Any, *, residual: Callable | None = None,
+               return_loglik: Literal[True]) -> tuple[Gaussian, np.ndarray]: ...
+@overload
+def ekf_update(g: Gaussian, y: Any, measurement: Any, *, residual: Callable | None = None,
+               return_loglik: bool) -> Gaussian | tuple[Gaussian, np.ndarray]: ...
 def ekf_update(g: Gaussian, y: Any, measurement: Any, *, residual: Callable | None = None,
                return_loglik: bool = False) -> Gaussian | tuple[Gaussian, np.ndarray]:
     r"""EKF correction of a batch of Gaussians ``g`` with measurements ``y (..., m)``.

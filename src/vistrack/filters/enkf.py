@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 
@@ -84,6 +84,18 @@ def enkf_predict(ens: Ensemble, motion: Any, dt: float = 1.0, t: float = 0.0, *,
     return Ensemble(x + _noise(as_rng(rng), x.shape, mo.Q_sqrt(dt)))
 
 
+@overload
+def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
+                rng: np.random.Generator | int | None = None, residual: Callable | None = None,
+                return_loglik: Literal[False] = ...) -> Ensemble: ...
+@overload
+def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
+                rng: np.random.Generator | int | None = None, residual: Callable | None = None,
+                return_loglik: Literal[True]) -> tuple[Ensemble, np.ndarray]: ...
+@overload
+def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
+                rng: np.random.Generator | int | None = None, residual: Callable | None = None,
+                return_loglik: bool) -> Ensemble | tuple[Ensemble, np.ndarray]: ...
 def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
                 rng: np.random.Generator | int | None = None, residual: Callable | None = None,
                 return_loglik: bool = False) -> Ensemble | tuple[Ensemble, np.ndarray]:

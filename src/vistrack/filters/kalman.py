@@ -17,7 +17,7 @@ definite.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 
@@ -214,14 +214,14 @@ def kalman_filter(
         _raise_not_pd(bad_t)
         if not store_covs:
             covs = pcovs = None
-    if not store_covs:
-        pmeans = None
+    pred_means: np.ndarray | None = pmeans if store_covs else None
     if single:
         means, loglik, last_P = means[0], loglik[0], last_P[0]
-        pmeans, covs, pcovs = (None if a is None else a[0] for a in (pmeans, covs, pcovs))
+        pred_means, covs, pcovs = (None if a is None else a[0]
+                                   for a in (pred_means, covs, pcovs))
     last = Gaussian(means[..., -1, :], last_P)
-    _readonly(means, covs, pmeans, pcovs, loglik)
-    return FilterResult(means, covs, pmeans, pcovs, np.asarray(loglik), last, shared)
+    _readonly(means, covs, pred_means, pcovs, loglik)
+    return FilterResult(means, covs, pred_means, pcovs, np.asarray(loglik), last, shared)
 
 
 def _contiguous(a: np.ndarray) -> np.ndarray:
@@ -268,6 +268,18 @@ def _with_measurement(g: Gaussian, y: Any) -> tuple[np.ndarray, np.ndarray, np.n
     return _contiguous(mean), _contiguous(g.cov), _contiguous(y)
 
 
+@overload
+def kf_step(
+    g: Gaussian, y: Any, F: Any, Q: Any, H: Any, R: Any, *, return_loglik: Literal[False] = ...
+) -> Gaussian: ...
+@overload
+def kf_step(
+    g: Gaussian, y: Any, F: Any, Q: Any, H: Any, R: Any, *, return_loglik: Literal[True]
+) -> tuple[Gaussian, np.ndarray]: ...
+@overload
+def kf_step(
+    g: Gaussian, y: Any, F: Any, Q: Any, H: Any, R: Any, *, return_loglik: bool
+) -> Gaussian | tuple[Gaussian, np.ndarray]: ...
 def kf_step(
     g: Gaussian, y: Any, F: Any, Q: Any, H: Any, R: Any, *, return_loglik: bool = False
 ) -> Gaussian | tuple[Gaussian, np.ndarray]:
@@ -329,6 +341,18 @@ def kf_predict(g: Gaussian, F: Any, Q: Any) -> Gaussian:
     return Gaussian._trusted(mean, cov)
 
 
+@overload
+def kf_update(
+    g: Gaussian, y: Any, H: Any, R: Any, *, return_loglik: Literal[False] = ...
+) -> Gaussian: ...
+@overload
+def kf_update(
+    g: Gaussian, y: Any, H: Any, R: Any, *, return_loglik: Literal[True]
+) -> tuple[Gaussian, np.ndarray]: ...
+@overload
+def kf_update(
+    g: Gaussian, y: Any, H: Any, R: Any, *, return_loglik: bool
+) -> Gaussian | tuple[Gaussian, np.ndarray]: ...
 def kf_update(
     g: Gaussian, y: Any, H: Any, R: Any, *, return_loglik: bool = False
 ) -> Gaussian | tuple[Gaussian, np.ndarray]:

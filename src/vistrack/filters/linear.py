@@ -192,7 +192,7 @@ class OnlineFilter:
         self._idx = np.empty(m, dtype=np.int64)
         self._kernel = _kernels.online_kernel(n, m)
         self._dt0 = float(dt)  # the default time step; F, Q are kept for the last one used
-        self._dt = None
+        self._dt: float | None = None
         self._set_dt(self._dt0)
         self._no_y = np.full(m, np.nan)  # the measurement argument of a prediction
 

@@ -488,6 +488,12 @@ def _compiled_parts(mo: Motion, me: Measurement):
     return fref, fparams, href, np.asarray(hparams, dtype=float).ravel(), mo, me
 
 
+# what the compiled path needs of the models (see _compiled_parts): f's module and name, its
+# parameters per step, h's module and name, h's parameters, and the two models
+_FusedParts = tuple[tuple[str, str], Callable[..., Any], tuple[str, str], np.ndarray, Motion,
+                    Measurement]
+
+
 def _whitening(R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, float]:
     """For the observed components ``o`` of the noise ``R = L L'``: ``L^-1`` (a Gaussian's
     exponent is ``-|L^-1 r|^2 / 2``) and its constant ``-log det L - k/2 log 2π``."""
@@ -600,7 +606,8 @@ class ParticleFilter:
         else:
             raise TypeError(f"motion must be a motion model or a callable; got "
                             f"{type(motion).__name__}")
-        self._fused, self._whiten = None, {}
+        self._fused: _FusedParts | None = None
+        self._whiten: dict[bytes, tuple[np.ndarray, float]] = {}
         if hasattr(likelihood, "R"):
             me = Measurement(likelihood, self.ndim_state)
             self._loglik = self._gaussian_loglik(me)
@@ -676,6 +683,7 @@ class ParticleFilter:
                 w /= w.sum()
             means[t], covs[t] = weighted_mean(x, w), weighted_cov(x, w)
             if modes:
+                assert mode_arr is not None and conf is not None  # allocated when modes
                 mode_arr[t], conf[t] = particle_mode(x, w)
             ess[t] = effective_sample_size(w)
             if ess[t] < self.ess_threshold * N or self.ess_threshold == 1.0:
@@ -700,6 +708,7 @@ class ParticleFilter:
         return self.rng.multivariate_normal(m0, C0, size=N, method="eigh")
 
     def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: Any, times: Any) -> ParticleResult:
+        assert self._fused is not None  # filter calls this only with the compiled parts
         fref, fparams, href, hp, mo, me = self._fused
         T, m = ys.shape
         n, N = self.ndim_state, self.n_particles

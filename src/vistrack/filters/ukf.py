@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 from numba import njit
@@ -203,6 +203,9 @@ def _update_one(G, Z, Wm, Wc, R, y, angles, x, P, xo, Po):
 class _SigmaPoints:
     lam: float
 
+    def _lam(self, n: int) -> float:
+        raise NotImplementedError
+
     def weights(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         raise NotImplementedError
 
@@ -318,6 +321,21 @@ def _sub(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a - b
 
 
+@overload
+def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | None = None,
+               residual: Callable | None = None, mean: Callable | None = None,
+               state_residual: Callable | None = None,
+               return_loglik: Literal[False] = ...) -> Gaussian: ...
+@overload
+def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | None = None,
+               residual: Callable | None = None, mean: Callable | None = None,
+               state_residual: Callable | None = None,
+               return_loglik: Literal[True]) -> tuple[Gaussian, np.ndarray]: ...
+@overload
+def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | None = None,
+               residual: Callable | None = None, mean: Callable | None = None,
+               state_residual: Callable | None = None,
+               return_loglik: bool) -> Gaussian | tuple[Gaussian, np.ndarray]: ...
 def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | None = None,
                residual: Callable | None = None, mean: Callable | None = None,
                state_residual: Callable | None = None,

@@ -77,13 +77,14 @@ class WSLModel:
                         ("sigma_min", sigma_min), ("lost_density", lost_density)):
             if not np.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be positive; got {v!r}")
-        m0 = np.asarray(m0, dtype=float)
-        if m0.shape != (3,) or (m0 <= 0).any():
-            raise ValueError(f"m0 must be three positive mixing probabilities; got {m0.tolist()}")
+        m0_arr = np.asarray(m0, dtype=float)
+        if m0_arr.shape != (3,) or (m0_arr <= 0).any():
+            raise ValueError("m0 must be three positive mixing probabilities; got "
+                             f"{m0_arr.tolist()}")
         self.alpha = 1.0 - float(np.exp(-1.0 / tau))
         self.sigma_w, self.sigma_s0 = float(sigma_w), float(sigma_s0)
         self.sigma_min = float(sigma_min)
-        self.m0, self.log_lost = m0 / m0.sum(), float(np.log(lost_density))
+        self.m0, self.log_lost = m0_arr / m0_arr.sum(), float(np.log(lost_density))
         self.ready = False
 
     def _data(self, d: Any, name: str = "data") -> np.ndarray:
@@ -211,7 +212,8 @@ class WSLTracker:
         self.centre = np.array([b[0] + b[2] / 2, b[1] + b[3] / 2])
         self.velocity = np.zeros(2)
         self.model = WSLModel((self.vh, self.vw), **self.model_args)
-        view = self._sample(g, *self.centre, self.w / self.vw, self.vw, self.vh)
+        view = self._sample(g, self.centre[0], self.centre[1], self.w / self.vw, self.vw,
+                            self.vh)
         self.model.init(view)
         self.ownership = self.model.ownership(view)
         self.box = b.copy()
@@ -226,7 +228,8 @@ class WSLTracker:
         best = (-np.inf, 0.0, 0.0, 1.0)
         for s in self.scales:
             step = s * self.w / self.vw
-            region = self._sample(g, *pred, step, self.vw + 2 * r, self.vh + 2 * r)
+            region = self._sample(g, pred[0], pred[1], step, self.vw + 2 * r,
+                                  self.vh + 2 * r)
             windows = sliding_window_view(region, (self.vh, self.vw))
             ll = self.model.log_likelihood(windows)
             i, j = np.unravel_index(int(np.argmax(ll)), ll.shape)
@@ -238,7 +241,8 @@ class WSLTracker:
         self.velocity = centre - self.centre
         self.centre = centre
         self.w, self.h = self.w * s, self.h * s
-        view = self._sample(g, *self.centre, self.w / self.vw, self.vw, self.vh)
+        view = self._sample(g, self.centre[0], self.centre[1], self.w / self.vw, self.vw,
+                            self.vh)
         self.ownership = self.model.update(view)
         self.box = np.array([self.centre[0] - self.w / 2, self.centre[1] - self.h / 2,
                              self.w, self.h])

@@ -130,10 +130,10 @@ class SelectiveBackground:
     def initialize(self, frames: Iterable[Any]) -> SelectiveBackground:
         """``B_0`` = the per-pixel median of ``frames``, ``σ_0`` their median absolute deviation
         from it times 1.4826 (the standard deviation, for Gaussian noise)."""
-        stack = [self._as3(f) for f in frames]
-        if len(stack) == 0:
+        images = [self._as3(f) for f in frames]
+        if len(images) == 0:
             raise ValueError("initialize needs at least one frame")
-        stack = np.stack(stack)
+        stack = np.stack(images)
         self.mean = np.median(stack, axis=0).astype(np.float32)
         mad = np.median(np.abs(stack.astype(np.float32) - self.mean), axis=0)
         var = (1.4826 * mad) ** 2
@@ -158,6 +158,7 @@ class SelectiveBackground:
             if len(self._buffer) >= self.n_init:
                 self.initialize(self._buffer)
             return np.zeros(im.shape[:2], np.uint8)
+        assert self.mean_sq is not None  # set together with mean by initialize
         if im.shape != self.mean.shape:
             raise ValueError(f"image has shape {im.shape[:2] + im.shape[2:]}; the model was "
                              f"built on {self.mean.shape}")

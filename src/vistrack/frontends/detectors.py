@@ -65,7 +65,8 @@ class HOGDetector:
         import cv2
 
         self._hog = cv2.HOGDescriptor()
-        self._hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+        # the detector comes as a float32 array (asarray keeps it; the stubs say Sequence)
+        self._hog.setSVMDetector(np.asarray(cv2.HOGDescriptor.getDefaultPeopleDetector()))
         self.scale, self.hit_threshold, self.nms_iou = float(scale), float(hit_threshold), \
             float(nms_iou)
         if not upscale > 0:
@@ -79,12 +80,12 @@ class HOGDetector:
         if self.upscale != 1.0:
             im = cv2.resize(im, None, fx=self.upscale, fy=self.upscale,
                             interpolation=cv2.INTER_LINEAR)
-        rects, w = self._hog.detectMultiScale(im, hitThreshold=self.hit_threshold,
-                                              winStride=(8, 8), padding=(8, 8),
-                                              scale=self.scale)
+        rects, weights = self._hog.detectMultiScale(im, hitThreshold=self.hit_threshold,
+                                                    winStride=(8, 8), padding=(8, 8),
+                                                    scale=self.scale)
         if len(rects) == 0:
             return Detections(boxes=np.zeros((0, 4)))
-        w = np.asarray(w, float).ravel()
+        w = np.asarray(weights, float).ravel()
         r = np.asarray(rects, float).reshape(-1, 4) / self.upscale
         # the window holds the person with a margin: keep the central part where INRIA's
         # people stand
@@ -204,7 +205,8 @@ class HOGConfidence:
         if self.heights.ndim != 1 or len(self.heights) == 0 or (self.heights <= 0).any():
             raise ValueError(f"heights must be positive; got {heights!r}")
         self._hog = cv2.HOGDescriptor()
-        self._hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+        # the detector comes as a float32 array (asarray keeps it; the stubs say Sequence)
+        self._hog.setSVMDetector(np.asarray(cv2.HOGDescriptor.getDefaultPeopleDetector()))
 
     def __call__(self, image: Any) -> ConfidenceMap:
         import cv2
@@ -218,9 +220,9 @@ class HOGConfidence:
             f = _INNER_H * 128 / h
             small = cv2.resize(im, (max(64, int(round(W * f))), max(128, int(round(H * f)))),
                                interpolation=cv2.INTER_LINEAR)
-            loc, w = self._hog.detect(small, hitThreshold=-1e9, winStride=(8, 8),
-                                      padding=(0, 0))
-            loc = np.asarray(loc, float).reshape(-1, 2)
+            found, w = self._hog.detect(small, hitThreshold=-1e9, winStride=(8, 8),
+                                        padding=(0, 0))
+            loc = np.asarray(found, float).reshape(-1, 2)
             nx = (small.shape[1] - 64) // 8 + 1
             ny = (small.shape[0] - 128) // 8 + 1
             grid = np.full((ny, nx), -np.inf)

@@ -85,6 +85,8 @@ class KLTTracker:
         Smallest correlation of a feature's patch with the previous frame's.
     """
 
+    _prev32: np.ndarray  # float32 copy of the previous frame, set by step
+
     def __init__(self, max_features: int = 500, *, quality: float = 0.01,
                  min_distance: float = 7.0, block_size: int = 7, win_size: int = 15,
                  levels: int = 2, fb_max: float = 1.0, affine_check: bool = True,

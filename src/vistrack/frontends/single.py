@@ -35,7 +35,7 @@ Every tracker but OpenCV's also has ``anchor(box)``, which moves its state to a 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
@@ -44,8 +44,18 @@ from ._affine import prepare_templates, register
 from .appearance import WSLTracker
 from .snake import SnakeTracker
 
+if TYPE_CHECKING:
+    import cv2
+
 __all__ = ["METHODS", "single_tracker", "MedianFlow", "TemplateTracker", "ColourTracker",
            "CamShiftTracker", "ColourParticleTracker", "OpenCVTracker"]
+
+
+class _LKArgs(TypedDict):
+    """Keyword arguments of ``cv2.calcOpticalFlowPyrLK``."""
+
+    winSize: tuple[int, int]
+    maxLevel: int
 
 
 def _grey(image: Any) -> np.ndarray:
@@ -72,7 +82,7 @@ class MedianFlow:
     def __init__(self, grid: int = 10, fb_max: float = 2.0, win_size: int = 11,
                  levels: int = 3):
         self.grid, self.fb_max = int(grid), float(fb_max)
-        self.lk = dict(winSize=(int(win_size), int(win_size)), maxLevel=int(levels))
+        self.lk = _LKArgs(winSize=(int(win_size), int(win_size)), maxLevel=int(levels))
 
     def init(self, image: Any, box: Any) -> None:
         self.prev = _grey(image)
@@ -98,8 +108,11 @@ class MedianFlow:
             gx, gy = np.meshgrid(np.linspace(x0, x1 - 1, self.grid),
                                  np.linspace(y0, y1 - 1, self.grid))
             p0 = np.c_[gx.ravel(), gy.ravel()].astype(np.float32).reshape(-1, 1, 2)
-        p1, st, _ = cv2.calcOpticalFlowPyrLK(self.prev, grey, p0, None, **self.lk)
-        pb, sb, _ = cv2.calcOpticalFlowPyrLK(grey, self.prev, p1, None, **self.lk)
+        # nextPts=None: OpenCV allocates the output points
+        p1, st, _ = cv2.calcOpticalFlowPyrLK(  # type: ignore[call-overload]  # stubs forbid None
+            self.prev, grey, p0, None, **self.lk)
+        pb, sb, _ = cv2.calcOpticalFlowPyrLK(  # type: ignore[call-overload]  # stubs forbid None
+            grey, self.prev, p1, None, **self.lk)
         fb = np.linalg.norm((pb - p0).reshape(-1, 2), axis=1)
         ok = st.ravel().astype(bool) & sb.ravel().astype(bool) & (fb <= self.fb_max)
         # the better half by forward-backward error, as median flow does
@@ -236,7 +249,7 @@ class ColourTracker:
         self.bins, self.rate = int(bins), float(rate)
         self.scales = tuple(float(v) for v in scales)
 
-    def _hist(self, hsv: np.ndarray, box: np.ndarray) -> np.ndarray:
+    def _hist(self, hsv: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         import cv2
 
         x, y, w, h = np.round(box).astype(int)
@@ -386,7 +399,8 @@ class OpenCVTracker:
     def __init__(self, kind: str = "csrt"):
         import cv2
 
-        makers = {"csrt": cv2.TrackerCSRT.create, "kcf": cv2.TrackerKCF.create}
+        makers: dict[str, Callable[[], cv2.Tracker]] = {"csrt": cv2.TrackerCSRT.create,
+                                                        "kcf": cv2.TrackerKCF.create}
         if kind not in makers:
             raise ValueError(f"kind must be one of {sorted(makers)}; got {kind!r}")
         self._make = makers[kind]

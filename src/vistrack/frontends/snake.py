@@ -149,6 +149,8 @@ class Snake:
 
     @property
     def control_points(self) -> np.ndarray:
+        if self.state is None:  # AttributeError, as before this check (and for hasattr)
+            raise AttributeError("the snake has no state yet: call init or init_circle first")
         x = self.state.mean
         return np.c_[x[:self.n], x[self.n:]]
 
@@ -223,6 +225,7 @@ class SnakeTracker:
         s = b[2:] / cur[2:]
         c0, c1 = cur[:2] + cur[2:] / 2, b[:2] + b[2:] / 2
         g = self.snake.state
+        assert g is not None  # _bounds above needs (and checks) the state
         n = self.snake.n
         mean = g.mean.copy()
         mean[:n] = c1[0] + s[0] * (mean[:n] - c0[0])

@@ -15,8 +15,12 @@ import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import cv2
 
 __all__ = ["Frame", "VideoError", "VideoReader", "VideoWriter", "IMAGE_SUFFIXES"]
 
@@ -239,15 +243,15 @@ class VideoWriter:
         if not np.isfinite(fps) or fps <= 0:
             raise ValueError(f"fps must be a finite number > 0; got {fps}")
         self.path, self.fps, self.size = Path(path), float(fps), size
-        self._w = None
+        self._w: cv2.VideoWriter | None = None
         self.frames = 0
 
     def _open(self, size: tuple[int, int]) -> None:
         cv2 = _cv2()
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), self.fps,
-                                  size)
-        if not self._w.isOpened():
+        w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), self.fps, size)
+        self._w = w
+        if not w.isOpened():
             raise VideoError(f"{self.path}: OpenCV cannot write an MP4 here")
         self.size = size
 
@@ -260,6 +264,7 @@ class VideoWriter:
         size = (im.shape[1], im.shape[0])
         if self._w is None:
             self._open(self.size or size)
+        assert self._w is not None and self.size is not None  # both set by _open
         if size != self.size:
             raise ValueError(f"frame {self.frames + 1} is {size[0]}x{size[1]}; the video is "
                              f"{self.size[0]}x{self.size[1]}")

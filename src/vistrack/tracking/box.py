@@ -513,7 +513,11 @@ class BoxTracker:
         or what the tracker has learnt so far), or the raw scores."""
         if self.config.scores == "raw":
             return np.asarray(scores, dtype=np.float64)
-        return (self.calibration or self.calibrator.calibration())(scores)
+        cal = self.calibration
+        if cal is None:
+            assert self.calibrator is not None  # reset makes one for scores="calibrated"
+            cal = self.calibrator.calibration()
+        return cal(scores)
 
     def covariances(self) -> np.ndarray:
         """The full ``(K, 8, 8)`` covariances of the tracks, from the per-axis ones kept."""
@@ -595,11 +599,12 @@ class BoxTracker:
         if self.frame is not None and frame <= self.frame:
             raise ValueError(f"frame must increase; got {frame} after {self.frame}")
         first = self.frame is None
-        dt = 0.0 if first else float(frame - self.frame)
+        dt = 0.0 if self.frame is None else float(frame - self.frame)
         self.frame = frame
         time = frame / self.frame_rate
         cfg, t = self.config, self.tracks
         db, raw, dc = detections.boxes, detections.scores, detections.classes
+        assert raw is not None and dc is not None  # set by Detections.__post_init__
         if np.isnan(raw).any():
             i = int(np.flatnonzero(np.isnan(raw))[0])
             raise ValueError(f"detection scores must not be NaN; scores[{i}] is NaN (frame "

@@ -312,6 +312,7 @@ class ScoreCalibrator:
         stale = (self._cal is None or self._new_since_fit >= max(1, 0.1 * max(self._fit_n, 1))
                  or (self._fit_n < self.prior and len(pending)))
         if not stale:
+            assert self._cal is not None  # stale when nothing was fitted yet
             return self._cal
         ranked = np.concatenate([self._buf_s, pending])
         if len(ranked) == 0:

@@ -49,7 +49,7 @@ image, it ends. A target is reported in the frames where it is supported.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -233,6 +233,7 @@ class DetectorConfidencePF:
             ratio = det_xywh[None, :, 3] / self.size[:, None, 1]
             gate = (dist <= cfg.gate * self.size[:, None, 1]) & (ratio < 1.5) & (ratio > 1 / 1.5)
             if cfg.eta > 0:
+                assert feats is not None  # made above when eta > 0
                 clf = self._classify(feats(det_xywh)[None], slice(None))
             else:
                 clf = np.full((T, len(det_c)), 0.5)
@@ -266,6 +267,7 @@ class DetectorConfidencePF:
                 p_o = 1.0 / (1.0 + (ov > 0.2).sum(1))
                 w += cfg.gamma * dc * p_o[:, None]
             if cfg.eta > 0:
+                assert feats is not None  # made above when eta > 0
                 pb = self._boxes(p[..., :2], self.size[:, None, :])
                 w += cfg.eta * self._classify(feats(pb), slice(None))
             w /= w.sum(1, keepdims=True)
@@ -295,7 +297,7 @@ class DetectorConfidencePF:
             xyxy = np.c_[est[:, :2], est[:, :2] + est[:, 2:]]
             ov = np.triu(iou(xyxy, xyxy), 1)       # rows are older: ids grow with the index
             both = self.confirmed[:, None] & self.confirmed[None, :]
-            covered = ((ov > cfg.merge_iou) & both).any(0)
+            covered = cast(np.ndarray, ((ov > cfg.merge_iou) & both).any(0))  # (T,) array
         self.overlapped = np.where(covered, self.overlapped + 1, 0)
         keep &= self.overlapped <= cfg.merge_frames
         report = self.confirmed & supported & keep
@@ -307,6 +309,7 @@ class DetectorConfidencePF:
 
         # the classifiers learn where their targets were detected
         if cfg.eta > 0 and has.any():
+            assert feats is not None  # made above when eta > 0
             self._train(feats, est, has & keep)
 
         # end targets; start new ones from strong detections no target took
@@ -315,6 +318,7 @@ class DetectorConfidencePF:
         if len(det_c):
             free = np.ones(len(det_c), bool)
             free[match[match >= 0]] = False
+            assert detections.scores is not None  # set by Detections.__post_init__
             strong = free & (detections.scores >= cfg.init_score)
             if strong.any():
                 cand = det_xywh[strong]

@@ -56,6 +56,8 @@ class Tracks:
 
     @property
     def xywh(self) -> np.ndarray:
+        if self.boxes is None:
+            raise ValueError("xywh needs box tracks; these tracks are points")
         return xyxy_to_xywh(self.boxes)
 
 

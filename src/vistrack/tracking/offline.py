@@ -248,14 +248,14 @@ def _extend_back(tracker: BoxTracker, tracks: list[_Track], cam: dict, min_iou: 
             active = np.r_[active, new].astype(int)
             mean = np.concatenate([mean, [tracks[k].first[1] for k in new]])
             cov = np.concatenate([cov, full_to_axes(np.stack([tracks[k].first[2] for k in new]))])
-    for k, rows in added.items():
+    for k, newest_first in added.items():
         t = tracks[k]
-        rows = rows[::-1]  # in time order
-        t.frames = np.r_[[r[0] for r in rows], t.frames]
-        t.boxes = np.concatenate([[r[1] for r in rows], t.boxes])
-        t.scores = np.r_[[r[2] for r in rows], t.scores]
-        t.filled = np.r_[np.zeros(len(rows), bool), t.filled]
-        t.covs = np.concatenate([[r[3] for r in rows], t.covs])
+        rec = newest_first[::-1]  # in time order
+        t.frames = np.r_[[r[0] for r in rec], t.frames]
+        t.boxes = np.concatenate([[r[1] for r in rec], t.boxes])
+        t.scores = np.r_[[r[2] for r in rec], t.scores]
+        t.filled = np.r_[np.zeros(len(rec), bool), t.filled]
+        t.covs = np.concatenate([[r[3] for r in rec], t.covs])
 
 
 def _carried_ends(t: _Track, cam: dict, window: int) -> tuple[np.ndarray, ...]:
@@ -306,10 +306,9 @@ def _link(tracker: BoxTracker, tracks: list[_Track], cam: dict, link_gap: int,
             parts.append(_bridge(tracker, tracks[p], tracks[q], frames, cam))
             parts.append(tracks[q])
         t = parts[0]
-        out.append(_Track(t.id, t.cls, *(np.concatenate([getattr(x, k) for x in parts])
-                                          for k in ("frames", "boxes", "scores", "filled",
-                                                    "covs")),
-                          t.first, tracks[chain[-1]].last))
+        fr, bx, sc, fi, cv = (np.concatenate([getattr(x, k) for x in parts])
+                              for k in ("frames", "boxes", "scores", "filled", "covs"))
+        out.append(_Track(t.id, t.cls, fr, bx, sc, fi, cv, t.first, tracks[chain[-1]].last))
     return out
 
 
@@ -336,9 +335,9 @@ def _bridge(tracker: BoxTracker, a: _Track, b: _Track, frames: np.ndarray,
         Fs.append(motion.F(f - prev))
         Qs.append(np.diag(q[0]))
         prev = f
-    covs = axes_to_full(np.array(covs))
-    res = FilterResult(np.array(means), covs, None, None, np.zeros(()),
-                       Gaussian(means[-1], covs[-1]))
+    full_covs = axes_to_full(np.array(covs))
+    res = FilterResult(np.array(means), full_covs, None, None, np.zeros(()),
+                       Gaussian(means[-1], full_covs[-1]))
     sm = rts_smooth(res, F=np.array(Fs), Q=np.array(Qs))
     m_s, P_s = np.asarray(sm.means)[1:-1].copy(), np.asarray(sm.covs)[1:-1]
     g = gf[:-1]

@@ -112,13 +112,15 @@ class PointTracker:
         if not isinstance(detections, Detections) or detections.points is None:
             raise TypeError("detections must be vistrack.Detections with points")
         Z = detections.points
+        scores, classes = detections.scores, detections.classes
+        assert scores is not None and classes is not None  # set by Detections.__post_init__
         if len(Z) and Z.shape[1] != self.m:
             raise ValueError(f"points must have {self.m} coordinates; got {Z.shape[1]}")
         frame = (1 if self.frame is None else self.frame + 1) if frame is None else int(frame)
         if self.frame is not None and frame <= self.frame:
             raise ValueError(f"frame must increase; got {frame} after {self.frame}")
         first = self.frame is None
-        dt = 0.0 if first else (frame - self.frame) / self.frame_rate
+        dt = 0.0 if self.frame is None else (frame - self.frame) / self.frame_rate
         self.frame = frame
         time = frame / self.frame_rate
         t = self.tracks
@@ -136,19 +138,19 @@ class PointTracker:
                 # gated pairs only (a k-d tree finds the candidates), one assignment per
                 # connected group: thousands of points stay cheap
                 r, c, d2 = mahalanobis_pairs(zp, S, Z, self.threshold)
-                same = t.classes[r] == detections.classes[c]
+                same = t.classes[r] == classes[c]
                 r, c = gnn_sparse(r[same], c[same], d2[same], (K, len(Z)))
                 if len(r):
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
-                    t.scores[r] = detections.scores[c]
+                    t.scores[r] = scores[c]
                 updated[r] = True
                 in_gate[c] = True  # every measurement not taken starts a track
                 gate = None
             else:
                 d2 = mahalanobis(zp, S, Z) if len(Z) else np.zeros((K, 0))
                 gate = (d2 <= self.threshold) & (t.classes[:, None]
-                                                 == detections.classes[None, :])
+                                                 == classes[None, :])
                 in_gate = gate.any(0)
             if gate is None:
                 pass
@@ -167,7 +169,7 @@ class PointTracker:
                 if len(r):
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
-                    t.scores[r] = detections.scores[c]
+                    t.scores[r] = scores[c]
                 updated[r] = True
                 in_gate = np.zeros(len(Z), bool)  # every measurement not taken starts a track
                 in_gate[c] = True
@@ -176,7 +178,7 @@ class PointTracker:
         new = np.flatnonzero(~in_gate)
         if len(new):
             mean, cov = self._initial(Z[new])
-            t.add(mean, cov, time, detections.classes[new], detections.scores[new],
+            t.add(mean, cov, time, classes[new], scores[new],
                   confirmed=first)
         out = np.flatnonzero((t.state == CONFIRMED) & (t.last_time == time))
         H = self.H
