@@ -1,11 +1,12 @@
 # `make run`: set up .venv and run the main job on bundled data; `make test`: set up and run the tests;
-# `make docs`: build the documentation site (docs/_build/html), warnings as errors.
+# `make docs`: build the documentation site (docs/_build/html), warnings as errors;
+# `make lint`: ruff and mypy, as configured in pyproject.toml.
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test docs bench bench-peers clean
+.PHONY: run test docs lint bench bench-peers clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -23,6 +24,14 @@ run: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q
+
+$(VENV)/.lint-installed: $(STAMP)
+	$(PY) -m pip install --quiet -e ".[lint]"
+	touch $@
+
+lint: $(VENV)/.lint-installed
+	$(VENV)/bin/ruff check
+	$(VENV)/bin/mypy
 
 $(VENV)/.docs-installed: $(STAMP)
 	$(PY) -m pip install --quiet -e ".[docs]"
