@@ -92,11 +92,8 @@ def derived_values(trk: BoxTracker) -> dict:
     if trk.image_size is not None:
         out["image_size"] = [int(v) for v in trk.image_size]
     out.update({"std_pos_per_frame": float(m.std_pos), "std_vel_per_frame": float(m.std_vel)})
-    if c.scores == "calibrated":
-        cal = trk.calibration
-        if cal is None:
-            assert trk.calibrator is not None  # the tracker makes one for scores="calibrated"
-            cal = trk.calibrator.calibration()
+    cal = trk.score_calibration()
+    if cal is not None:
         out["calibration"] = "whole file" if trk.calibration is not None else \
             "online, at the last frame"
         out["calibration_outcomes"] = cal.n

@@ -508,16 +508,21 @@ class BoxTracker:
         moved = self._moved[idx, None] * self.camera_shift
         t.mean[idx], t.cov[idx] = update_axes(t.mean[idx], t.cov[idx], z, self.motion, moved)
 
-    def confidence(self, scores: Any) -> np.ndarray:
-        """Scores as the thresholds see them: calibrated confidences (by the fixed calibration,
-        or what the tracker has learnt so far), or the raw scores."""
+    def score_calibration(self) -> ScoreCalibration | None:
+        """The calibration in use: the fixed one, or what the tracker has learnt so far; None
+        with ``scores="raw"``."""
         if self.config.scores == "raw":
-            return np.asarray(scores, dtype=np.float64)
-        cal = self.calibration
-        if cal is None:
-            assert self.calibrator is not None  # reset makes one for scores="calibrated"
-            cal = self.calibrator.calibration()
-        return cal(scores)
+            return None
+        if self.calibration is not None:
+            return self.calibration
+        assert self.calibrator is not None  # reset makes one for scores="calibrated"
+        return self.calibrator.calibration()
+
+    def confidence(self, scores: Any) -> np.ndarray:
+        """Scores as the thresholds see them: calibrated confidences (by
+        :meth:`score_calibration`), or the raw scores."""
+        cal = self.score_calibration()
+        return np.asarray(scores, dtype=np.float64) if cal is None else cal(scores)
 
     def covariances(self) -> np.ndarray:
         """The full ``(K, 8, 8)`` covariances of the tracks, from the per-axis ones kept."""
