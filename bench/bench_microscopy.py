@@ -35,10 +35,10 @@ FRAMES = Path(__file__).resolve().parents[2] / "shared" / "data" / "trackpy-bulk
 def run_vistrack(frames):
     tr = PointTracker("gnn", motion=ConstantPosition(dim=2, q=24.0),
                       measurement=Position(dim=2, r=0.01), frame_rate=24.0, confirm_hits=1,
-                      max_lost=3.5 / 24, gate=0.999)
+                      max_lost=3.5 / 24, p_gate=0.999)
     out = []
     for k, im in enumerate(frames):
-        r = tr.step(locate(im, 11, invert=True, minmass=20).detections(), frame=k + 1)
+        r = tr.step(k + 1, locate(im, 11, invert=True, minmass=20).detections())
         out.append((r.ids, r.points))
     return out
 

@@ -8,7 +8,7 @@ a baseline a user would assemble from OpenCV and PyPI, in one run.
    tracking with 500 features: vistrack's KLT against OpenCV's lk_track.py sample loop.
 2. PETS09-S2L1 (`../shared/data/opencv-vtest/vtest.avi`, 795 frames, 7 frames/s), end to end:
    decode, background, blobs, tracker; HOTA / MOTA / IDF1 against the MOT15 ground truth.
-   vistrack: the selective model, `frontends.find_blobs`, `bytetrack`. Baseline: MOG2,
+   vistrack: the selective model, `frontends.BlobDetector`, `bytetrack`. Baseline: MOG2,
    morphology, `cv2.connectedComponentsWithStats`, and `trackers`' SORT (vistrack's `sort`
    when `trackers` is not installed). Frames per second are of the whole loop, decode
    included (in a second thread, as `vistrack track` does), the median of three runs after
@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from vistrack.evaluation import evaluate_mot
-from vistrack.frontends import SelectiveBackground, find_blobs
+from vistrack.frontends import BlobDetector, SelectiveBackground
 from vistrack.io import MOTTable, VideoReader, read_mot
 from vistrack.tracking import BoxTracker
 from vistrack.types import Detections
@@ -77,7 +77,7 @@ def klt_rows(n_features=500):
     """ms a frame of feature tracking at 640x480 (PETS09 frames resized): vistrack's KLT with
     and without the affine check, and OpenCV's lk_track.py sample loop (pyramidal LK with a
     forward-backward check, new features every 5 frames), the same number of features."""
-    from vistrack.frontends.klt import KLTTracker
+    from vistrack.tracking.klt import KLTTracker
 
     grey = [cv2.cvtColor(cv2.resize(f.image, (640, 480), interpolation=cv2.INTER_AREA),
                          cv2.COLOR_BGR2GRAY) for f in VideoReader(VIDEO, stop=150)]
@@ -137,16 +137,17 @@ def run_chain(make, stop=None):
 
 def vistrack_chain(init):
     def make():
-        bg = SelectiveBackground().initialize(init)
+        blobs = BlobDetector(min_area=500)  # the CLI's bgsub front-end
+        blobs.initialize(init)
         tr = BoxTracker("bytetrack", frame_rate=FPS, camera_motion=False,  # as the CLI's bgsub
                         image_size=SIZE)
 
         def detect(grey):
-            b = find_blobs(bg.apply(grey), min_area=500, open_size=3, close_size=7)
-            return b.boxes, np.ones(len(b))
+            d = blobs.detect(grey)
+            return d.boxes, d.scores
 
         def track(boxes, scores, k):
-            r = tr.step(Detections(boxes=boxes, scores=scores), frame=k)
+            r = tr.step(k, Detections(boxes=boxes, scores=scores))
             return r.ids, r.boxes
         return detect, track
     return make
@@ -185,7 +186,7 @@ def baseline_chain(init):
             tr = BoxTracker("sort", frame_rate=FPS)
 
             def track(boxes, scores, k):
-                r = tr.step(Detections(boxes=boxes, scores=scores), frame=k)
+                r = tr.step(k, Detections(boxes=boxes, scores=scores))
                 return r.ids, r.boxes
         return detect, track
     return make, "trackers SORT" if trackers is not None else "vistrack sort"

@@ -20,8 +20,8 @@ import cv2
 import numpy as np
 
 from vistrack.evaluation.single import precision, read_boxes, success_curve, success_rate
-from vistrack.frontends.compose import Composite
-from vistrack.frontends.single import single_tracker
+from vistrack.tracking.compose import Composite
+from vistrack.tracking.single import single_tracker
 
 from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 

@@ -22,7 +22,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from tests.test_snake import distance_to_ellipse, ellipse_frame  # noqa: E402
-from vistrack.frontends.snake import Snake  # noqa: E402
+from vistrack.tracking.snake import Snake  # noqa: E402
 
 from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 
@@ -40,7 +40,7 @@ def run_vistrack(frames, geos):
     sec, err = [], []
     for im, g in zip(frames, geos):
         t = time.perf_counter()
-        pts = s.step(im)
+        pts = s.track(im)
         sec.append(time.perf_counter() - t)
         err.append(distance_to_ellipse(pts, *g).mean())
     return sec, err

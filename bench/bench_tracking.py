@@ -43,7 +43,7 @@ def run_vistrack(name):
         for f, (b, s) in enumerate(frames, 1):
             d = Detections(boxes=b, scores=s)
             t = time.perf_counter()
-            r = tr.step(d, frame=f)
+            r = tr.step(f, d)
             sec.append(time.perf_counter() - t)
             out.append((r.ids, r.boxes))
             if sum(sec) > budget:
@@ -82,7 +82,7 @@ def run_motpy(frames, fps, budget=np.inf):
     for b, s in frames:
         dets = [motpy.Detection(box=x, score=float(c)) for x, c in zip(b, s)]
         t = time.perf_counter()
-        tracks = tr.step(dets)
+        tracks = tr.step(detections=dets)
         sec.append(time.perf_counter() - t)
         ids = {}
         out.append((np.array([ids.setdefault(k.id, hash(k.id) % 10**9) for k in tracks], int),

@@ -9,7 +9,7 @@
 - **shape alone**: the B-spline snake (``snake``), its box the contour's bounding box. Its
   radial search snaps to the strong edges of the ground and the goal posts, and it is lost
   within a few frames;
-- **composition**: :class:`~vistrack.frontends.compose.Composite` with the colour tracker
+- **composition**: :class:`~vistrack.tracking.compose.Composite` with the colour tracker
   trusted for the centre (standard deviation 0.1 of the box's size, its size ignored: 1.0 in
   log size) and the snake for the size (0.05 in log size, its centre at 0.2). Each frame
   both trackers start from the fused box.
@@ -28,8 +28,8 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from vistrack.evaluation.single import overlaps, read_boxes, success_rate
-from vistrack.frontends.compose import Composite
-from vistrack.frontends.single import single_tracker
+from vistrack.tracking.compose import Composite
+from vistrack.tracking.single import single_tracker
 
 SEQ = Path(__file__).resolve().parents[2] / "shared" / "data" / "vot15-bag"
 OUT = Path(__file__).resolve().parent / "figures" / "compose_bag.png"

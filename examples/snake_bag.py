@@ -21,7 +21,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from vistrack.evaluation.single import overlaps, read_boxes
-from vistrack.frontends.snake import SnakeTracker
+from vistrack.tracking.snake import SnakeTracker
 
 SEQ = Path(__file__).resolve().parents[2] / "shared" / "data" / "vot15-bag"
 OUT = Path(__file__).resolve().parent / "figures" / "snake_bag.png"

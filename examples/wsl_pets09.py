@@ -35,8 +35,8 @@ from matplotlib.patches import Rectangle
 
 from vistrack.evaluation import box_iou_xywh
 from vistrack.evaluation.single import read_boxes
-from vistrack.frontends.appearance import WSLModel, WSLTracker
 from vistrack.io import VideoReader, read_mot
+from vistrack.tracking.appearance import WSLModel, WSLTracker
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 VIDEO = DATA / "opencv-vtest" / "vtest.avi"

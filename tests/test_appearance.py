@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from vistrack.frontends.appearance import WSLModel, WSLTracker
+from vistrack.tracking.appearance import WSLModel, WSLTracker
 
 from .conftest import SHARED, need
 

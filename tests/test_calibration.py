@@ -87,7 +87,7 @@ def test_calibration_and_tracks_do_not_depend_on_the_scores_scale(transform):
                           for d in dets]):
             cal = ScoreCalibration.from_frames(ds) if fixed else None
             tr = BoxTracker(calibration=cal)
-            outs.append([tr.step(d, frame=f) for f, d in enumerate(ds, start=1)])
+            outs.append([tr.step(f, d) for f, d in enumerate(ds, start=1)])
         for x, y in zip(*outs):
             assert np.array_equal(x.ids, y.ids) and np.array_equal(x.boxes, y.boxes)
 
@@ -146,7 +146,7 @@ def test_calibration_edge_cases_and_errors():
     with pytest.raises(ValueError, match="must be increasing"):
         ScoreCalibration([0.2, 0.1], [0.0, 1.0])
     with pytest.raises(ValueError, match=r"detection scores must not be NaN; scores\[0\]"):
-        BoxTracker().step(Detections(boxes=boxes, scores=[np.nan]), frame=1)
+        BoxTracker().step(1, Detections(boxes=boxes, scores=[np.nan]))
 
 
 def test_scores_above_one_are_calibrated_or_refused():

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from vistrack.evaluation.single import overlaps
-from vistrack.frontends.compose import Composite
-from vistrack.frontends.single import single_tracker
+from vistrack.tracking.compose import Composite
+from vistrack.tracking.single import single_tracker
 
 
 class Fixed:
@@ -86,7 +86,7 @@ def test_members_are_checked():
     with pytest.raises(ValueError, match=r"members\['x'\] must be"):
         Composite({"x": Fixed([])})
     with pytest.raises(ValueError, match="gate"):
-        Composite({"x": (Fixed([]), (0.1, 0.1))}, gate=1.0)
+        Composite({"x": (Fixed([]), (0.1, 0.1))}, p_gate=1.0)
 
 
 def growing_ellipse_scene(T=30, seed=0):

@@ -99,7 +99,7 @@ def score(scene, **config):
     tracker = DetectorConfidencePF(rng=0, max_missed=5, **config)
     rows = []
     for t, (img, d, m) in enumerate(zip(frames, dets, maps), 1):
-        out = tracker.update(img, d, m if tracker.cfg.gamma > 0 else None)
+        out = tracker.update(img, d, m if tracker.config.gamma > 0 else None)
         rows += [(t, i, *b) for i, b in zip(out.ids, out.xywh)]
     return evaluate_mot(gt, MOTTable.from_rows(rows), len(frames), benchmark="MOT15")
 
@@ -137,7 +137,7 @@ def test_configuration_is_checked():
     with pytest.raises(ValueError, match="at least one"):
         DCPFConfig(beta=0, gamma=0, eta=0)
     tracker = DetectorConfidencePF()
-    with pytest.raises(ValueError, match="confidence is required"):
+    with pytest.raises(ValueError, match="needs the detector.s confidence"):
         tracker.update(np.zeros((10, 10, 3), np.uint8), Detections.from_xywh(np.zeros((0, 4))))
 
 

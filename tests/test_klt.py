@@ -7,8 +7,8 @@ import cv2
 import numpy as np
 import pytest
 
-from vistrack.frontends._affine import prepare_templates, register
-from vistrack.frontends.klt import KLTTracker
+from vistrack.tracking._affine import prepare_templates, register
+from vistrack.tracking.klt import KLTTracker
 
 from .conftest import SHARED
 
@@ -28,11 +28,11 @@ def test_features_follow_a_known_subpixel_motion():
     rng = np.random.default_rng(0)
     base = texture(rng)
     klt = KLTTracker(200)
-    f0 = klt.step(shifted(base, 0, 0))
+    f0 = klt.track(shifted(base, 0, 0))
     start = dict(zip(f0.ids.tolist(), f0.points))
     v = np.array([1.3, -0.7])
     for k in range(1, 11):
-        f = klt.step(shifted(base, *(k * v)))
+        f = klt.track(shifted(base, *(k * v)))
     assert f.ages.max() == 10
     old = np.isin(f.ids, list(start))
     assert old.sum() > 0.9 * len(start)  # nearly all survive every check
@@ -50,8 +50,8 @@ def test_large_motions_are_found_by_discrete_search():
     kept = {}
     for radius in (0, 24):
         klt = KLTTracker(150, levels=0, search_radius=radius)
-        ids0 = set(klt.step(shifted(base, 0, 0)).ids.tolist())
-        f = klt.step(shifted(base, 9, -6))
+        ids0 = set(klt.track(shifted(base, 0, 0)).ids.tolist())
+        f = klt.track(shifted(base, 9, -6))
         kept[radius] = len(ids0 & set(f.ids.tolist())) / len(ids0)
     assert kept[0] < 0.3 and kept[24] > 0.8
 
@@ -67,7 +67,7 @@ def test_affine_check_against_the_first_frame_stops_slow_drift():
     survivors = {}
     for check in (False, True):
         klt = KLTTracker(300, affine_check=check)
-        f = klt.step(a.astype(np.uint8))
+        f = klt.track(a.astype(np.uint8))
         inside = {i for i, (x, y) in zip(f.ids.tolist(), f.points)
                   if 50 <= x < 140 and 70 <= y < 170}
         outside = set(f.ids.tolist()) - inside
@@ -75,7 +75,7 @@ def test_affine_check_against_the_first_frame_stops_slow_drift():
             im = a.copy()
             w = min(1.0, 0.04 * k)
             im[region] = (1 - w) * a[region] + w * b[region]
-            f = klt.step(im.astype(np.uint8))
+            f = klt.track(im.astype(np.uint8))
         now = set(f.ids.tolist())
         survivors[check] = (len(inside & now) / len(inside), len(outside & now) / len(outside))
     assert survivors[False][0] > 0.5  # frame to frame, the fading patch passes
@@ -117,10 +117,10 @@ def test_static_camera_features_stay_put_on_pets09():
     gt = read_mot(gt_path)
     klt = KLTTracker(300)
     frames = list(VideoReader(video, grey=True, stop=12))
-    start = klt.step(frames[0].image)
+    start = klt.track(frames[0].image)
     first = dict(zip(start.ids.tolist(), start.points))
     for fr in frames[1:]:
-        f = klt.step(fr.image)
+        f = klt.track(fr.image)
     people = gt.boxes[gt.frames <= 12]
     moved = []
     for i, p in zip(f.ids.tolist(), f.points):

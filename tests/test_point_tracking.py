@@ -31,7 +31,7 @@ def targets(rng, T=60, clutter=0.0, p_detect=1.0, area=200.0, crossing=True):
 
 
 def run(tracker, frames):
-    return [tracker.step(Detections(points=z), frame=f) for f, z in enumerate(frames, 1)]
+    return [tracker.step(f, Detections(points=z)) for f, z in enumerate(frames, 1)]
 
 
 def recall_and_ids(truth, outputs, start=5, radius=3.0):
@@ -53,7 +53,7 @@ def test_every_association_agrees_without_clutter():
     NN and greedy are the same Kalman filter, and PDA and JPDA (with P_D P_G = 1 - 1e-9) equal
     it to 1e-6."""
     truth, frames = targets(np.random.default_rng(0), crossing=False)
-    runs = {a: run(PointTracker(a, p_detect=1.0, gate=1 - 1e-9, frame_rate=1.0), frames)
+    runs = {a: run(PointTracker(a, p_detect=1.0, p_gate=1 - 1e-9, frame_rate=1.0), frames)
             for a in POINT_ASSOCIATIONS}
     ref = runs["gnn"]
     for a, outs in runs.items():
@@ -83,6 +83,6 @@ def test_point_tracker_arguments():
         PointTracker("mht")
     tr = PointTracker("gnn")
     with pytest.raises(TypeError, match="with points"):
-        tr.step(Detections.from_xywh([[0, 0, 1, 1]]))
+        tr.step(detections=Detections.from_xywh([[0, 0, 1, 1]]))
     with pytest.raises(ValueError, match="points must have 2 coordinates"):
-        tr.step(Detections(points=np.zeros((1, 3))))
+        tr.step(detections=Detections(points=np.zeros((1, 3))))

@@ -17,7 +17,7 @@ from vistrack.evaluation.single import (
     success_curve,
     success_rate,
 )
-from vistrack.frontends.single import METHODS, single_tracker
+from vistrack.tracking.single import METHODS, single_tracker
 
 from .conftest import SHARED
 

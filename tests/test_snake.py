@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.interpolate import BSpline
 
-from vistrack.frontends.snake import Snake, bspline_matrix
+from vistrack.tracking.snake import Snake, bspline_matrix
 
 
 def test_bspline_basis_equals_scipy():
@@ -61,7 +61,7 @@ def test_snake_follows_a_moving_turning_ellipse():
     s.init_circle((100, 120), 30)
     for k in range(40):
         geo = (100 + 2 * k, 120 + np.sin(k / 6) * 10, 40 + k * 0.3, 25, 10 + 2 * k)
-        pts = s.step(ellipse_frame(*geo, rng=rng))
+        pts = s.track(ellipse_frame(*geo, rng=rng))
         if k >= 5:  # after it has locked on
             assert distance_to_ellipse(pts, *geo).mean() < 0.5
     assert s.found.mean() > 0.9
@@ -71,7 +71,7 @@ def test_without_edges_the_contour_holds_its_prediction():
     s = Snake(n_control=12, n_samples=60)
     s.init_circle((80, 60), 20)
     before = s.contour().copy()
-    after = s.step(np.full((120, 160), 90, np.uint8))  # a blank frame: no edge anywhere
+    after = s.track(np.full((120, 160), 90, np.uint8))  # a blank frame: no edge anywhere
     assert not s.found.any()
     np.testing.assert_allclose(after, before)
     with pytest.raises(ValueError, match="control_points must have shape \\(12, 2\\)"):

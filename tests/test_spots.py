@@ -76,10 +76,10 @@ def test_point_tracker_links_the_particles_as_trackpy_does():
         links = tp.link(tp.batch(frames, 11, invert=True, minmass=20), 5, memory=3)
     tr = PointTracker("gnn", motion=ConstantPosition(dim=2, q=24.0),
                       measurement=Position(dim=2, r=0.01), frame_rate=24.0, confirm_hits=1,
-                      max_lost=3.5 / 24, gate=0.999)
+                      max_lost=3.5 / 24, p_gate=0.999)
     near, ids_of = [], {}
     for k, im in enumerate(frames):
-        out = tr.step(locate(im, 11, invert=True, minmass=20).detections(), frame=k + 1)
+        out = tr.step(k + 1, locate(im, 11, invert=True, minmass=20).detections())
         theirs = links[links.frame == k]
         d, j = cKDTree(out.points).query(theirs[["x", "y"]].values)
         near.append(d < 0.5)

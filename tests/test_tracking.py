@@ -50,7 +50,7 @@ def scene(rng, n_obj=8, T=150, miss=0.1, clutter=1.0, noise=2.0, shake=None, hei
 def run(tracker, dets):
     rows = []
     for f, d in enumerate(dets, start=1):
-        out = tracker.step(d, frame=f)
+        out = tracker.step(f, d)
         rows += [(f, i, *b, s) for i, b, s in zip(out.ids, out.xywh, out.scores)]
     a = np.array(rows).reshape(-1, 7)
     return MOTTable(a[:, 0].astype(int), a[:, 1].astype(int), a[:, 2:6], a[:, 6],
@@ -93,13 +93,13 @@ def test_frame_gaps_predict_over_the_true_time():
 
     tr = BoxTracker("bytetrack")
     for f in range(1, 8):
-        first = tr.step(det(f), frame=f)
-    after = tr.step(det(14), frame=14)
+        first = tr.step(f, det(f))
+    after = tr.step(14, det(14))
     assert after.ids.tolist() == first.ids.tolist() == [1]
     tr2 = BoxTracker("bytetrack")
     for f in range(1, 8):
-        tr2.step(det(f), frame=f)
-    assert tr2.step(det(14), frame=8).ids.tolist() == []  # as if one frame: no match, new track
+        tr2.step(f, det(f))
+    assert tr2.step(8, det(14)).ids.tolist() == []  # as if one frame: no match, new track
 
 
 def test_coasting_reports_a_well_followed_track_through_a_short_miss():
@@ -120,7 +120,7 @@ def test_coasting_reports_a_well_followed_track_through_a_short_miss():
         return Detections.from_xywh(truth(f)[seen], np.full(len(seen), 0.9))
 
     def run_ids(tracker, frames=22):
-        out = {f: tracker.step(detections(f), frame=f) for f in range(1, frames + 1)}
+        out = {f: tracker.step(f, detections(f)) for f in range(1, frames + 1)}
         return out, {f: o.ids.tolist() for f, o in out.items()}
 
     out, ids = run_ids(BoxTracker("bytetrack", image_size=(640, 480)))
@@ -145,12 +145,12 @@ def test_classes_never_share_an_identity_and_reset():
     box = [[10, 10, 40, 80]]
     for f in range(1, 6):
         cls = 0 if f < 3 else 1  # same place, the class changes: a different object
-        out = tr.step(Detections.from_xywh(box, [0.9], classes=[cls]), frame=f)
+        out = tr.step(f, Detections.from_xywh(box, [0.9], classes=[cls]))
     assert out.ids.tolist() == [2] and out.classes.tolist() == [1]
     tr.reset()
-    assert tr.step(Detections.from_xywh(box, [0.9]), frame=1).ids.tolist() == [1]
+    assert tr.step(1, Detections.from_xywh(box, [0.9])).ids.tolist() == [1]
     with pytest.raises(ValueError, match="frame must increase; got 1 after 1"):
-        tr.step(Detections.from_xywh(box, [0.9]), frame=1)
+        tr.step(1, Detections.from_xywh(box, [0.9]))
     with pytest.raises(ValueError, match="tracker must be one of"):
         BoxTracker("deepsort")
 
@@ -165,7 +165,7 @@ def test_memory_stays_flat_with_constant_turnover():
         k = 20
         lo = rng.uniform(0, 5000, (k, 2))
         sizes.append(len(tr.tracks))
-        tr.step(Detections.from_xywh(np.c_[lo, np.full((k, 2), 20.0)], np.full(k, 0.9)), frame=f)
+        tr.step(f, Detections.from_xywh(np.c_[lo, np.full((k, 2), 20.0)], np.full(k, 0.9)))
     assert max(sizes[1000:]) <= max(sizes[:1000]) + 5 and max(sizes) < 100
 
 
@@ -215,7 +215,7 @@ def test_per_axis_filter_equals_the_full_kalman_filter():
     rng = np.random.default_rng(4)
     tr = BoxTracker("bytetrack", camera_motion=False)
     boxes = np.c_[rng.uniform(0, 500, (5, 2)), rng.uniform(20, 80, (5, 2))]
-    tr.step(Detections.from_xywh(boxes, np.full(5, 0.9)), frame=1)
+    tr.step(1, Detections.from_xywh(boxes, np.full(5, 0.9)))
     full = [Gaussian(tr.tracks.mean[i].copy(), tr.covariances()[i]) for i in range(5)]
     for f, dt in [(2, 1.0), (5, 3.0), (6, 1.0)]:
         for i in range(5):
@@ -224,7 +224,7 @@ def test_per_axis_filter_equals_the_full_kalman_filter():
             full[i] = kf_predict(full[i], tr.motion.F(dt), Q)
         boxes[:, :2] += rng.normal(0, 2, (5, 2))
         dets = Detections.from_xywh(boxes, np.full(5, 0.9))
-        tr.step(dets, frame=f)
+        tr.step(f, dets)
         z = np.c_[dets.centers, boxes[:, 2:]]
         for i in range(5):
             R = tr.motion.R(full[i].mean[None, :4])[0]
@@ -240,7 +240,7 @@ def assert_same_tracking(frames, fps=30.0, **kw):
     for compiled in (True, False):
         tr = BoxTracker(frame_rate=fps, compiled=compiled, record=True, **kw)
         assert tr.compiled == compiled
-        runs.append(([tr.step(d, frame=f) for f, d in frames], tr.history))
+        runs.append(([tr.step(f, d) for f, d in frames], tr.history))
     (out_c, hist_c), (out_n, hist_n) = runs
     for a, b in zip(out_c, out_n):
         assert np.array_equal(a.ids, b.ids) and np.array_equal(a.boxes, b.boxes)
@@ -269,7 +269,7 @@ def camera_shifts(tracker, dets):
     """The camera shift the tracker applies at each frame, (T, 2)."""
     out = []
     for f, d in enumerate(dets, start=1):
-        tracker.step(d, frame=f)
+        tracker.step(f, d)
         out.append(tracker.camera_shift.copy())
     return np.array(out)
 
@@ -312,7 +312,7 @@ def test_camera_motion_is_estimated():
         tr = BoxTracker("bytetrack")
         for f, d in enumerate(dets, start=1):
             n = int((tr.tracks.state == CONFIRMED).sum())
-            tr.step(d, frame=f)
+            tr.step(f, d)
             if shake[f - 1].any() and n >= 5:
                 err.append(np.abs(tr.camera_shift - shake[f - 1]).max())
                 jumps.append(np.abs(shake[f - 1]).max())
@@ -346,7 +346,7 @@ def test_camera_motion_moves_only_the_tracks_it_fits():
     truth = np.c_[B - [20, 45], B + [20, 45]]
     shifted, ids = 0, set()
     for f, d in frames:
-        out = tr.step(d, frame=f)
+        out = tr.step(f, d)
         shifted += tr.camera_shift.any()
         if f > 3:
             ov = iou_pairs(truth, out.boxes, 0.8)
@@ -400,7 +400,7 @@ def test_offline_mode_smooths_and_fills_gaps():
     online = run(BoxTracker("bytetrack"), dets)
     tr = BoxTracker("bytetrack", record=True)
     for f, d in enumerate(dets, start=1):
-        tr.step(d, frame=f)
+        tr.step(f, d)
     s = smooth(tr)
     assert s.filled.any() and s.covs.shape == (len(s), 8, 8)
     assert np.all(np.linalg.eigvalsh(s.covs) > 0)
@@ -421,8 +421,8 @@ def test_offline_mode_drops_tracks_of_low_score_detections():
     tr = BoxTracker("bytetrack", record=True, scores="raw", high=0.8, new_track=0.9, low=0.1)
     for f in range(1, 21):
         weak = 0.95 if f <= 2 else 0.3
-        tr.step(Detections.from_xywh([[100 + 3 * f, 50, 30, 60], [400, 50 + 2 * f, 30, 60]],
-                                     [0.95, weak]), frame=f)
+        tr.step(f, Detections.from_xywh([[100 + 3 * f, 50, 30, 60], [400, 50 + 2 * f, 30, 60]],
+                                     [0.95, weak]))
     assert len(np.unique(smooth(tr).ids)) == 2  # both confirmed, both kept without min_score
     kept = smooth(tr, min_score=0.85)
     assert np.unique(kept.ids).tolist() == [1] and len(kept) == 20
@@ -470,7 +470,7 @@ def test_offline_mode_follows_tracks_back_through_low_score_detections():
                                     np.r_[d.scores, 0.4]) for d in dets]
     tr = BoxTracker("bytetrack", record=True, scores="raw", high=0.8, new_track=0.9, low=0.1)
     for f, d in enumerate(clutter, start=1):
-        tr.step(d, frame=f)
+        tr.step(f, d)
     plain, ext = smooth(tr, extend_iou=None), smooth(tr)
     walker = lambda s: s.frames[s.ids == s.ids[np.argmin(s.boxes[:, 0])]]  # noqa: E731
     assert walker(plain).min() == 21 and walker(ext).min() == 1
@@ -495,7 +495,7 @@ def test_offline_mode_links_tracks_across_a_long_occlusion():
                               ((900, 400), (-2, 0), last, last, lambda f: 0.95)], T)
     tr = BoxTracker("bytetrack", record=True)
     for f, d in enumerate(dets, start=1):
-        tr.step(d, frame=f)
+        tr.step(f, d)
     apart, linked = smooth(tr, link_gap=0), smooth(tr, link_gap=90)
     assert len(np.unique(apart.ids)) == 4 and len(np.unique(linked.ids)) == 3
     c_apart, c_linked = (evaluate_mot(gt, _smoothed_table(s), T) for s in (apart, linked))
@@ -517,7 +517,7 @@ def test_offline_mode_follows_the_camera():
         gt, dets, _ = shaking_scene(seed)
         tr = BoxTracker("bytetrack", record=True)
         for f, d in enumerate(dets, start=1):
-            tr.step(d, frame=f)
+            tr.step(f, d)
         scores["online"].append(evaluate_mot(gt, run(BoxTracker("bytetrack"), dets), len(dets)))
         for name in ("offline", "image"):
             if name == "image":  # forget the shifts: smooth in image coordinates
@@ -569,8 +569,7 @@ def test_memory_grows_less_than_1mb_over_20000_frames():
             pos[reborn] = rng.uniform(0, 2000, (reborn.sum(), 2))
             age[reborn] = 0
             pos += vel
-            tr.step(Detections.from_xywh(np.c_[pos, np.full((n, 2), 40.0)], np.full(n, 0.9)),
-                    frame=f)
+            tr.step(f, Detections.from_xywh(np.c_[pos, np.full((n, 2), 40.0)], np.full(n, 0.9)))
             if f == 2000:
                 base = tracemalloc.get_traced_memory()[0]
         grown = tracemalloc.get_traced_memory()[0] - base
@@ -600,8 +599,7 @@ def test_smoothing_the_size_follows_the_true_box_when_sizes_are_noisier():
                 c = c0 + v * f
                 z = np.r_[c + rng.normal(0, 1, 2) * size / 20,
                           size + rng.normal(0, 1, 2) * size * [1 / 10, 1 / 14]]
-                out = tr.step(Detections.from_xywh([np.r_[z[:2] - z[2:] / 2, z[2:]]], [0.95]),
-                              frame=f)
+                out = tr.step(f, Detections.from_xywh([np.r_[z[:2] - z[2:] / 2, z[2:]]], [0.95]))
                 if f > 10 and len(out):
                     we.append(abs(out.xywh[0, 2] - size[0]))
                     truth = np.r_[c - size / 2, c + size / 2][None]

@@ -71,7 +71,8 @@ def _box_config(args: argparse.Namespace):
 def _track(args: argparse.Namespace) -> int:
     from .config import config_toml
     from .io.video import VideoError
-    from .pipeline import TrackRun, VideoRun, track_sequence, track_video
+    from .pipeline import TRACKERS, TrackRun, VideoRun, track_sequence, track_video
+    from .tracking.box import TRACKERS as BOX_PRESETS
 
     def fail(text: str) -> int:
         print(f"vistrack track: error: {text}", file=sys.stderr)
@@ -82,18 +83,27 @@ def _track(args: argparse.Namespace) -> int:
                     "--out-dir OUT/ (from pixels)")
     progress = sys.stderr if sys.stderr.isatty() and not args.quiet else None
     setting_flags = [o for o, *_ in _SETTINGS if getattr(args, o) is not None]
-    if args.tracker == "dcpf":
+    name = args.tracker or "bytetrack"
+    box = name in BOX_PRESETS
+    if not box:
+        if name not in TRACKERS and ":" not in name:
+            return fail(f"--tracker must be one of {sorted(TRACKERS)} or module:callable; "
+                        f"got {name!r}")
         given = setting_flags + [f for f in ("still_camera", "config", "print_config")
                                  if getattr(args, f)]
         if given:
             return fail(f"--{given[0].replace('_', '-')} goes with the box trackers "
-                        "(bytetrack, sort)")
+                        f"({', '.join(sorted(BOX_PRESETS))})")
+        if args.out is not None:
+            return fail(f"--out (a sequence's detections) goes with the box trackers "
+                        f"({', '.join(sorted(BOX_PRESETS))}); --tracker {name} goes with "
+                        "--out-dir")
     # with --print-config, stdout holds the configuration alone (the summary goes to stderr)
     report = sys.stderr if args.print_config else sys.stdout
     run: TrackRun | VideoRun
     try:
         cfg = None
-        if args.tracker != "dcpf":
+        if box:
             cfg, problem = _box_config(args)
             if problem:
                 return fail(problem)
@@ -114,7 +124,7 @@ def _track(args: argparse.Namespace) -> int:
                             "--frontend detections:FILE with --out-dir)")
             extra = {k: v for k, v in (("min_area", args.min_area),
                                        ("background", args.background)) if v is not None}
-            if args.config is not None or args.tracker == "dcpf":
+            if args.config is not None or not box:
                 # a file is the whole configuration, used as it is
                 settings = {"config": cfg} if cfg is not None else {}
             else:  # the options go over the front-end's defaults (bgsub: a still camera)
@@ -123,7 +133,7 @@ def _track(args: argparse.Namespace) -> int:
                 if args.still_camera:
                     settings["camera_motion"] = False
             run = track_video(args.input, args.out_dir, frontend=args.frontend,
-                              fps=args.fps, tracker=args.tracker or "bytetrack", gt=args.gt,
+                              fps=args.fps, tracker=name, gt=args.gt,
                               stop=args.stop, force=args.force, progress=progress,
                               **extra, **settings)
             sec = run.seconds
@@ -137,7 +147,7 @@ def _track(args: argparse.Namespace) -> int:
     except (FileNotFoundError, FileExistsError, ValueError, VideoError) as exc:
         return fail(str(exc))
     if args.print_config:
-        assert run.config is not None  # a box tracker's run (dcpf refuses --print-config)
+        assert run.config is not None  # a box tracker's run (others refuse --print-config)
         sys.stdout.write(config_toml(run.config, run.derived))
     return 0
 
@@ -253,10 +263,13 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--out", help="results file to write (detections mode)")
     track.add_argument("--out-dir", help="folder for the outputs (video mode)")
     track.add_argument("--detections", help="detections file (default INPUT/det/det.txt)")
-    track.add_argument("--tracker", choices=("bytetrack", "sort", "dcpf"),
-                       help="tracker: bytetrack (default) or sort; in video mode also dcpf, "
-                       "the detector-confidence particle filter (HOG's confidence map, "
-                       "3-4 frames/s)")
+    track.add_argument("--tracker", metavar="NAME",
+                       help="tracker: bytetrack (default) or sort; in video mode also dcpf "
+                       "(the detector-confidence particle filter on HOG's confidence map, "
+                       "3-4 frames/s), single:METHOD (one object, from the first frame's "
+                       "most confident detection; METHOD as track-one's), or "
+                       "module:callable, a tracker of your own (a callable returning an "
+                       "object with step(frame, detections) -> Tracks and reset())")
     track.add_argument("--offline", action="store_true",
                        help="smooth finished tracks, fill their gaps, drop tracks of weak "
                        "detections, follow tracks back through unused detections and join "
@@ -282,8 +295,8 @@ def build_parser() -> argparse.ArgumentParser:
                          help=f"{text} (default {default:g})" if kind is not str else
                          f"{text} (default {default})")
     track.add_argument("--frontend", help="video mode: bgsub (default; background model and "
-                       "blobs), hog (OpenCV's people detector; the default of dcpf) or "
-                       "detections:FILE")
+                       "blobs), hog (OpenCV's people detector), confidence (the peaks of "
+                       "HOG's confidence map; the default of dcpf) or detections:FILE")
     track.add_argument("--fps", type=float, help="video mode: the true frame rate, when the "
                        "file's header is wrong")
     track.add_argument("--gt", help="video mode: MOTChallenge ground truth to score against")

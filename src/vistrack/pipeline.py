@@ -1,30 +1,44 @@
-"""Where the stages meet: detections from a file, a tracker, results and scores.
+"""Where the stages meet: one loop, source → detector → tracker → sinks.
 
-``track_sequence`` runs a tracker over a MOTChallenge sequence folder; ``evaluate_files`` scores
-results files against ground truth. The command line (:mod:`vistrack.cli`) calls these.
+:func:`run` is the loop: for each :class:`~vistrack.types.Frame` of a source, the detector
+gives its :class:`~vistrack.types.Detections`, the tracker (any
+:class:`~vistrack.tracking.Tracker`) its :class:`~vistrack.types.Tracks`, and every sink
+(:class:`~vistrack.io.tracks.Sink`) takes them. It never asks which parts it has.
+
+The parts are chosen by name from registries that list the valid names when one is wrong:
+:data:`FRONTENDS` (frames to detections), :data:`TRACKERS` (box trackers' presets, the
+detector-confidence particle filter, the single-object trackers, or ``module:callable``,
+any tracker of your own) and :data:`SINKS` (the files of a run). :func:`track_sequence`,
+:func:`track_video` and :func:`track_one` assemble them for the command line
+(:mod:`vistrack.cli`) and call :func:`run`; :func:`evaluate_files` scores results files.
 """
 
 from __future__ import annotations
 
+import importlib
 import time
-from dataclasses import dataclass, fields, replace
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 
 from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, combine, evaluate_mot
 from .io.motchallenge import read_mot, read_seqinfo, write_mot
+from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink, TrackRows
 from .models.box import BoxMotion
+from .tracking.base import Tracker
 from .tracking.box import BoxTracker
 from .tracking.calibration import ScoreCalibration
-from .tracking.lifecycle import Tracks
 from .tracking.offline import smooth
-from .types import Detections
+from .types import Detections, Frame
 
-__all__ = ["track_sequence", "TrackRun", "resolve_config", "derived_values", "evaluate_files",
-           "track_video", "VideoRun", "FRONTENDS", "track_one", "SingleRun"]
+__all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "SINKS",
+           "as_detector", "make_tracker", "track_sequence", "TrackRun", "resolve_config",
+           "derived_values", "evaluate_files", "track_video", "VideoRun", "track_one",
+           "SingleRun"]
 
 
 @dataclass(frozen=True)
@@ -104,6 +118,412 @@ def derived_values(trk: BoxTracker) -> dict:
     return out
 
 
+# -------------------------------------------------------------------------------- the loop
+FrameDetector = Callable[[Frame], Detections]
+"""A detector as the loop sees it: one frame to its detections."""
+
+
+@dataclass(frozen=True)
+class LoopStats:
+    """What :func:`run` did: the frames it went through, and the seconds spent in each stage
+    (``decode``: waiting for the source, ``frontend``, ``tracker``, ``write``: the sinks)."""
+
+    frames: int
+    seconds: dict
+
+
+def as_detector(detector: Any) -> FrameDetector | None:
+    """A detector as a function of the frame: an object with ``detect(image) ->
+    Detections`` (:class:`~vistrack.frontends.Detector`) is called on the frame's image, a
+    callable ``frame -> Detections`` is used as it is, and None stays None (the tracker
+    finds its own objects).
+
+    Examples
+    --------
+    >>> from vistrack.frontends import BlobDetector
+    >>> callable(as_detector(BlobDetector())), as_detector(None)
+    (True, None)
+    """
+    if detector is None:
+        return None
+    detect = getattr(detector, "detect", None)
+    if callable(detect):
+        return lambda frame: detect(frame.image)
+    if callable(detector):
+        return detector
+    raise TypeError(f"detector must be an object with detect(image) -> Detections, a callable "
+                    f"frame -> Detections, or None; got {type(detector).__name__}")
+
+
+def run(source: Iterable[Frame], detector: Any, tracker: Tracker, sinks: Sequence[Sink] = (),
+        *, progress: Any = None, total: int | None = None, label: str = "") -> LoopStats:
+    """The pipeline's one loop: every frame of ``source`` through ``detector``, ``tracker``
+    and ``sinks``.
+
+    Parameters
+    ----------
+    source : iterable of Frame
+        The frames, in order (a :class:`~vistrack.io.VideoReader`, or frames without images
+        where only detections are tracked).
+    detector : detector, callable or None
+        Each frame's detections (:func:`as_detector`).
+    tracker : Tracker
+        Anything with ``step(frame, detections) -> Tracks``
+        (:class:`~vistrack.tracking.Tracker`).
+    sinks : sequence of Sink
+        Each takes every frame's tracks (``write(frame, tracks)``) and is closed when the
+        source ends. If the loop fails, sinks with an ``abort()`` are aborted instead, and
+        none is closed: no results file is written from part of a run.
+    progress : stream, optional
+        Where to draw a progress bar (of ``total`` frames, named ``label``).
+
+    Returns
+    -------
+    LoopStats
+        The frames and the seconds of each stage.
+
+    Examples
+    --------
+    >>> from vistrack.io.tracks import TrackRows
+    >>> from vistrack.tracking import BoxTracker
+    >>> frames = [Frame(k, (k - 1) / 25) for k in range(1, 4)]
+    >>> boxes = lambda f: Detections.from_xywh([[10.0 + 4 * f.index, 20, 30, 60]], [0.9])
+    >>> rows = TrackRows()
+    >>> run(frames, boxes, BoxTracker(), [rows]).frames
+    3
+    >>> rows.frames.tolist(), rows.ids.tolist()
+    ([1, 2, 3], [1, 1, 1])
+    """
+    detect = as_detector(detector)
+    if not callable(getattr(tracker, "step", None)):
+        raise TypeError(f"tracker must have step(frame, detections) -> Tracks; got "
+                        f"{type(tracker).__name__}")
+    for k, sink in enumerate(sinks):
+        if not isinstance(sink, Sink):
+            raise TypeError(f"sinks[{k}] must have write(frame, tracks) and close(); got "
+                            f"{type(sink).__name__}")
+    sec = dict.fromkeys(("decode", "frontend", "tracker", "write"), 0.0)
+    n = 0
+    every = max(1, (total or 0) // 50)
+    t0 = time.perf_counter()
+    try:
+        for frame in source:
+            t1 = time.perf_counter()
+            sec["decode"] += t1 - t0
+            d = detect(frame) if detect is not None else None
+            t2 = time.perf_counter()
+            tracks = tracker.step(frame, d)
+            t3 = time.perf_counter()
+            sec["frontend"] += t2 - t1
+            sec["tracker"] += t3 - t2
+            for sink in sinks:
+                sink.write(frame, tracks)
+            n += 1
+            if total and (n % every == 0 or n == total):
+                _progress(n, total, label, progress)
+            t0 = time.perf_counter()
+            sec["write"] += t0 - t3
+    except BaseException:
+        for sink in sinks:
+            abort = getattr(sink, "abort", None)
+            if callable(abort):
+                abort()
+        raise
+    t0 = time.perf_counter()
+    for sink in sinks:
+        sink.close()
+    sec["write"] += time.perf_counter() - t0
+    return LoopStats(n, sec)
+
+
+# ---------------------------------------------------------------------------- registries
+T = TypeVar("T")
+
+
+class Registry(dict[str, T], Generic[T]):
+    """Parts by name: a ``dict`` whose missing names raise a ``ValueError`` that lists the
+    valid ones.
+
+    Examples
+    --------
+    >>> r = Registry("colour", {"red": 1, "blue": 2})
+    >>> r["red"]
+    1
+    >>> r["green"]
+    Traceback (most recent call last):
+    ...
+    ValueError: colour must be one of ['blue', 'red']; got 'green'
+    """
+
+    def __init__(self, kind: str, items: dict[str, T]):
+        super().__init__(items)
+        self.kind = kind
+
+    def __missing__(self, name: str) -> T:
+        raise ValueError(f"{self.kind} must be one of {sorted(self)}; got {name!r}")
+
+
+class _OncePerImage:
+    """A confidence ``image -> ConfidenceMap`` evaluated once per image, so that a detector
+    and a tracker asking for the same frame's map share it."""
+
+    def __init__(self, confidence: Callable[[Any], Any]):
+        if not callable(confidence):
+            raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
+                            f"{type(confidence).__name__}")
+        self.confidence = confidence
+        self._last: tuple[Any, Any] | None = None
+
+    def __call__(self, image: Any) -> Any:
+        if self._last is None or self._last[0] is not image:
+            self._last = (image, self.confidence(image))
+        return self._last[1]
+
+
+@dataclass
+class Context:
+    """What the parts of a run are made from: the source's frame rate and image size, the
+    video reader (a background model starts from its first frames), the run's box-tracker
+    configuration and settings, and the options of the front-ends.
+
+    Attributes
+    ----------
+    fps : float
+        Frames per second of the source.
+    image_size : (width, height) or None
+    reader : VideoReader or None
+    config : TrackConfig or None
+        A box tracker's whole configuration, used as it is.
+    overrides : dict
+        Settings of the tracker (fields of its configuration).
+    options : dict
+        Front-end options: ``background``, ``min_area``, ``n_init`` (``bgsub``),
+        ``det_threshold`` (``confidence``), ``confidence`` (a callable ``image ->
+        ConfidenceMap``; default :class:`~vistrack.frontends.HOGConfidence`).
+    resolved : TrackConfig or None
+        The configuration a box tracker was made with (set by its maker).
+    """
+
+    fps: float
+    image_size: tuple[int, int] | None = None
+    reader: Any = None
+    config: TrackConfig | None = None
+    overrides: dict = field(default_factory=dict)
+    options: dict = field(default_factory=dict)
+    resolved: TrackConfig | None = None
+    _confidence: Any = None
+
+    @property
+    def confidence(self) -> Callable[[Any], Any]:
+        """The run's detector confidence (one per run, once per image)."""
+        if self._confidence is None:
+            conf = self.options.get("confidence")
+            if conf is None:
+                from .frontends.detectors import HOGConfidence
+
+                conf = HOGConfidence()
+            self._confidence = _OncePerImage(conf)
+        return self._confidence
+
+
+def _bgsub(ctx: Context) -> FrameDetector:
+    from .frontends.blobs import BlobDetector
+    from .io.video import VideoReader
+
+    opt, reader = ctx.options, ctx.reader
+    det = BlobDetector(opt.get("background", "selective"), min_area=opt.get("min_area", 500.0))
+    if reader is not None:
+        n_init = int(opt.get("n_init", 20))
+        det.initialize(f.image for f in VideoReader(reader.source, fps=reader.fps, grey=True,
+                                                    start=reader.start,
+                                                    stop=reader.start + n_init - 1))
+    return lambda frame: det.detect(frame.image)
+
+
+def _hog(ctx: Context) -> FrameDetector:
+    from .frontends.detectors import HOGDetector
+
+    hog = HOGDetector()
+    return lambda frame: hog.detect(frame.image)
+
+
+def _confidence_peaks(ctx: Context) -> FrameDetector:
+    from .frontends.detectors import ConfidencePeaks
+
+    peaks = ConfidencePeaks(ctx.confidence, ctx.options.get("det_threshold", 0.5))
+    return lambda frame: peaks.detect(frame.image)
+
+
+def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
+    dets = read_mot(path)
+    last = int(dets.frames.max()) if len(dets) else 0
+    if ctx.reader is not None:
+        last = max(last, ctx.reader.start + len(ctx.reader))
+    slices = dets.frame_slices(last)
+    return lambda frame: Detections.from_xywh(dets.boxes[slices[frame.index - 1]],
+                                              dets.conf[slices[frame.index - 1]])
+
+
+@dataclass(frozen=True)
+class Frontend:
+    """A front-end in :data:`FRONTENDS`: ``make(context) -> (frame -> Detections)``, and
+    whether it needs a still camera (then the box trackers do not compensate camera
+    motion, unless their configuration is given whole)."""
+
+    make: Callable[[Context], FrameDetector]
+    still_camera: bool = False
+    help: str = ""
+
+
+FRONTENDS: Registry[Frontend] = Registry("frontend", {
+    "bgsub": Frontend(_bgsub, still_camera=True, help="the seeds' background model, then "
+                      "blobs (frontends.BlobDetector)"),
+    "hog": Frontend(_hog, help="OpenCV's HOG people detector"),
+    "confidence": Frontend(_confidence_peaks, help="the peaks of the detector's confidence "
+                           "map (HOG's by default) above det_threshold"),
+})
+"""Front-ends by name; also ``"detections:FILE"``, a MOTChallenge detections file."""
+
+
+def _frontend(name: Any, ctx: Context) -> FrameDetector:
+    """A front-end by name (:data:`FRONTENDS`, or ``detections:FILE``), or a detector of
+    your own (:func:`as_detector`)."""
+    if isinstance(name, str):
+        if name.startswith("detections:"):
+            return _detections_file(name.split(":", 1)[1], ctx)
+        if name not in FRONTENDS:
+            raise ValueError(f"frontend must be one of {sorted(FRONTENDS)} or "
+                             f"detections:FILE; got {name!r}")
+        return FRONTENDS[name].make(ctx)
+    detect = as_detector(name) if name is not None else None
+    if detect is None:
+        raise TypeError("frontend must be a name or a detector, not None")
+    return detect
+
+
+def _box_tracker(preset: str) -> Callable[[Context], Tracker]:
+    def make(ctx: Context) -> Tracker:
+        over = dict(ctx.overrides)
+        motion = over.pop("motion", None)
+        cfg = resolve_config(ctx.config if ctx.config is not None else preset, **over)
+        if motion is not None or cfg.motion is None:
+            cfg = replace(cfg, motion=motion or BoxMotion())
+        if cfg.offline.enabled:
+            raise ValueError("the offline mode goes with a sequence's detections (track "
+                             "--out), not with a video")
+        ctx.resolved = cfg
+        return BoxTracker(cfg.tracker, motion=cfg.motion, frame_rate=ctx.fps,
+                          image_size=ctx.image_size)
+    return make
+
+
+def _dcpf(ctx: Context) -> Tracker:
+    from .tracking.dcpf import DetectorConfidencePF
+
+    return DetectorConfidencePF(confidence=ctx.confidence, **ctx.overrides)
+
+
+def _single(method: str) -> Callable[[Context], Tracker]:
+    def make(ctx: Context) -> Tracker:
+        from .tracking.single import single_tracker
+
+        if ctx.overrides:
+            raise ValueError(f"the single-object tracker {method!r} takes no settings; got "
+                             f"{sorted(ctx.overrides)}")
+        return single_tracker(method)
+    return make
+
+
+@dataclass(frozen=True)
+class TrackerEntry:
+    """A tracker in :data:`TRACKERS`: ``make(context) -> Tracker``, and the front-end it
+    goes with by default."""
+
+    make: Callable[[Context], Tracker]
+    frontend: str = "bgsub"
+    box_config: bool = False
+    help: str = ""
+
+
+def _trackers() -> Registry[TrackerEntry]:
+    from .tracking.box import TRACKERS as BOX_PRESETS
+    from .tracking.single import METHODS
+
+    items = {name: TrackerEntry(_box_tracker(name), box_config=True,
+                                help="box tracker (tracking.BoxTracker)")
+             for name in BOX_PRESETS}
+    items["dcpf"] = TrackerEntry(_dcpf, frontend="confidence",
+                                 help="detector-confidence particle filter")
+    for name in METHODS:
+        items[f"single:{name}"] = TrackerEntry(_single(name), help="one object, started at "
+                                               "the first frame's most confident detection")
+    return Registry("tracker", items)
+
+
+TRACKERS: Registry[TrackerEntry] = _trackers()
+"""Trackers by name for :func:`track_video` (``vistrack track --tracker``): the box trackers'
+presets (:data:`vistrack.tracking.TRACKERS`), ``"dcpf"`` and ``"single:METHOD"`` (a
+single-object tracker, :data:`vistrack.tracking.METHODS`); also ``"module:callable"``, a
+callable of yours that returns a :class:`~vistrack.tracking.Tracker`."""
+
+
+def make_tracker(tracker: Any, ctx: Context) -> tuple[Tracker, str]:
+    """A tracker and its default front-end: ``tracker`` by name in :data:`TRACKERS`, as
+    ``"module:callable"`` (the callable is called with no arguments), or a tracker object
+    (any :class:`~vistrack.tracking.Tracker`, whose default front-end is ``bgsub``)."""
+    if not isinstance(tracker, str):
+        if not callable(getattr(tracker, "step", None)):
+            raise TypeError(f"tracker must be a name in {sorted(TRACKERS)}, 'module:callable' "
+                            f"or an object with step(frame, detections) -> Tracks; got "
+                            f"{type(tracker).__name__}")
+        return tracker, "bgsub"
+    if tracker in TRACKERS:
+        entry = TRACKERS[tracker]
+        return entry.make(ctx), entry.frontend
+    if ":" in tracker and not tracker.startswith("single:"):
+        module, _, name = tracker.partition(":")
+        try:
+            maker = getattr(importlib.import_module(module), name)
+        except (ImportError, AttributeError) as exc:
+            raise ValueError(f"tracker {tracker!r}: cannot import {name} from {module} "
+                             f"({exc})") from exc
+        made = maker()
+        if not callable(getattr(made, "step", None)):
+            raise TypeError(f"tracker {tracker!r} made a {type(made).__name__}, which has no "
+                            "step(frame, detections) -> Tracks")
+        return made, "bgsub"
+    return TRACKERS[tracker].make(ctx), ""  # raises, listing the names
+
+
+# ------------------------------------------------------------------------------- sinks
+SINKS: Registry[Callable[[Path, Context, str], Sink]] = Registry("sink", {
+    "tracks": lambda path, ctx, name: MOTWriter(path),
+    "csv": lambda path, ctx, name: CSVWriter(path),
+    "video": lambda path, ctx, name: _annotated_video(path, ctx.fps),
+    "plot": lambda path, ctx, name: _trajectory_plot(path, name),
+})
+"""The outputs of :func:`track_video` by name: ``make(path, context, source name) -> Sink``."""
+
+SINK_FILES = {"tracks": "tracks.txt", "csv": "tracks.csv", "video": "annotated.mp4",
+              "plot": "trajectories.png"}
+"""Each sink's file in the output folder."""
+
+
+def _annotated_video(path: Path, fps: float) -> Sink:
+    from .viz.annotate import AnnotatedVideo
+
+    return AnnotatedVideo(path, fps)
+
+
+def _trajectory_plot(path: Path, name: str) -> Sink:
+    from .viz.plots import TrajectoryPlot
+
+    return TrajectoryPlot(path, name)
+
+
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,
                    config: TrackConfig | str | None = None, tracker: str | None = None,
                    offline: bool | None = None, force: bool = False, progress: Any = None,
@@ -128,6 +548,12 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         whole file.
     progress
         A stream for a progress bar (the command line passes stderr on a terminal), or None.
+
+    Returns
+    -------
+    TrackRun
+        The file written, counts, the tracker's seconds, the configuration and the values
+        derived from the data.
     """
     cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
     seq_dir = Path(seq_dir)
@@ -156,26 +582,12 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         seconds += time.perf_counter() - t0
     trk = BoxTracker(tc, motion=cfg.motion, frame_rate=info.frame_rate, record=oc.enabled,
                      image_size=(info.im_width, info.im_height), calibration=calibration)
-    frames, ids, boxes, scores = [], [], [], []
-    every = max(1, info.seq_length // 50)
-    for f in range(1, info.seq_length + 1):
-        d = per_frame[f - 1]
-        t0 = time.perf_counter()
-        res = trk.step(d, frame=f)
-        seconds += time.perf_counter() - t0
-        if len(res):
-            frames.append(np.full(len(res), f))
-            ids.append(res.ids)
-            boxes.append(res.xywh)
-            scores.append(res.scores)
-        if f % every == 0 or f == info.seq_length:
-            _progress(f, info.seq_length, info.name, progress)
-
-    def cat(a: list, shape: tuple) -> np.ndarray:
-        return np.concatenate(a) if a else np.zeros(shape)
-
-    F, I = cat(frames, (0,)).astype(int), cat(ids, (0,)).astype(int)
-    B, S = cat(boxes, (0, 4)), cat(scores, (0,))
+    frames = (Frame(f, (f - 1) / info.frame_rate) for f in range(1, info.seq_length + 1))
+    rows = TrackRows()
+    stats = run(frames, lambda frame: per_frame[frame.index - 1], trk, [rows],
+                progress=progress, total=info.seq_length, label=info.name)
+    seconds += stats.seconds["tracker"]
+    F, I, B, S = rows.frames, rows.ids, rows.xywh, rows.scores
     if oc.enabled:
         t0 = time.perf_counter()
         fps = info.frame_rate
@@ -205,10 +617,6 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
 
 
 # ------------------------------------------------------------------------------- video
-FRONTENDS = ("bgsub", "hog", "detections:FILE")
-"""Front-ends of :func:`track_video` by name."""
-
-
 @dataclass(frozen=True)
 class VideoRun:
     """What :func:`track_video` wrote and measured: the output files, frames, tracks, the
@@ -233,50 +641,8 @@ class VideoRun:
         return self.frames / max(s, 1e-12)
 
 
-def _frontend(name: Any, reader: Any, *, background: str, min_area: float, n_init: int):
-    """The per-frame function ``image -> Detections`` of a front-end, by name, or of a
-    detector (any object with ``detect(image) -> Detections``)."""
-    if not isinstance(name, str):
-        if not callable(getattr(name, "detect", None)):
-            raise TypeError(f"frontend must be a name in {list(FRONTENDS)} or an object with "
-                            f"detect(image) -> Detections; got {type(name).__name__}")
-        return lambda image, index: name.detect(image)
-
-    from ._validate import as_uint8_image
-    from .frontends import background as make_background
-    from .frontends import find_blobs
-    from .io.video import VideoReader
-
-    if name == "bgsub":
-        bg = make_background(background)
-        bg.initialize(f.image for f in VideoReader(reader.source, fps=reader.fps, grey=True,
-                                                   start=reader.start,
-                                                   stop=reader.start + n_init - 1))
-
-        def detect(image: np.ndarray, index: int) -> Detections:
-            mask = bg.apply(as_uint8_image(image, grey=True))
-            return find_blobs(mask, min_area=min_area, open_size=3,
-                              close_size=7).detections("boxes")
-        return detect
-    if name == "hog":
-        from .frontends.detectors import HOGDetector
-
-        hog = HOGDetector()
-        return lambda image, index: hog.detect(image)
-    if name.startswith("detections:"):
-        path = Path(name.split(":", 1)[1])
-        if not path.exists():
-            raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
-        dets = read_mot(path)
-        n = max(int(dets.frames.max()) if len(dets) else 0, reader.start + len(reader))
-        slices = dets.frame_slices(n)
-        return lambda image, index: Detections.from_xywh(dets.boxes[slices[index - 1]],
-                                                         dets.conf[slices[index - 1]])
-    raise ValueError(f"frontend must be one of {list(FRONTENDS)}; got {name!r}")
-
-
 def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
-                fps: float | None = None, tracker: str = "bytetrack",
+                fps: float | None = None, tracker: Any = "bytetrack",
                 gt: str | Path | None = None, background: str = "selective",
                 min_area: float = 500.0, n_init: int = 20, stop: int | None = None,
                 annotate: bool = True, force: bool = False, progress: Any = None,
@@ -284,27 +650,31 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
                 config: TrackConfig | None = None, **overrides: Any) -> VideoRun:
     """Track a video (a file, an image folder or a MOTChallenge sequence folder) from pixels.
 
-    Writes into ``out_dir``: ``tracks.txt`` (MOTChallenge results), ``tracks.csv``,
-    ``annotated.mp4`` (boxes, identities, trails and 2-sigma ellipses of the centres) and
-    ``trajectories.png``; scores against ``gt`` (a MOTChallenge ground-truth file) when given.
+    Writes into ``out_dir`` (:data:`SINKS`): ``tracks.txt`` (MOTChallenge results),
+    ``tracks.csv``, ``annotated.mp4`` (boxes, identities, trails and 2-sigma ellipses of the
+    centres) and ``trajectories.png``; scores against ``gt`` (a MOTChallenge ground-truth
+    file) when given.
 
     Parameters
     ----------
     frontend
-        ``"bgsub"`` (the default of the box trackers: the seeds' background model, then
-        blobs), ``"hog"`` (OpenCV's people detector; with ``tracker="dcpf"``, the default,
-        the peaks of the confidence map above ``det_threshold``), ``"detections:FILE"`` (a
-        MOTChallenge detections file), or a detector of your own: any object with
-        ``detect(image) -> Detections`` (:class:`vistrack.frontends.detectors.Detector`).
+        A name in :data:`FRONTENDS`: ``"bgsub"`` (the seeds' background model, then blobs),
+        ``"hog"`` (OpenCV's people detector), ``"confidence"`` (the peaks of the detector's
+        confidence map above ``det_threshold``); ``"detections:FILE"`` (a MOTChallenge
+        detections file); or a detector of your own: any object with ``detect(image) ->
+        Detections`` (:class:`vistrack.frontends.detectors.Detector`). Default: the
+        tracker's (``bgsub``; ``confidence`` for ``dcpf``).
     tracker
-        A box tracker's name (:data:`vistrack.tracking.TRACKERS`: ``"bytetrack"``,
-        ``"sort"``), or ``"dcpf"``, the detector-confidence particle filter
-        (:class:`vistrack.tracking.dcpf.DetectorConfidencePF`; ``overrides`` are then
-        fields of its :class:`~vistrack.tracking.dcpf.DCPFConfig`).
+        A name in :data:`TRACKERS`: a box tracker's preset (``"bytetrack"``, ``"sort"``;
+        ``overrides`` are fields of its configuration), ``"dcpf"`` (the detector-confidence
+        particle filter; ``overrides`` are fields of its
+        :class:`~vistrack.tracking.dcpf.DCPFConfig`), ``"single:METHOD"`` (one object,
+        from the first frame's most confident detection); ``"module:callable"``; or any
+        tracker object (:class:`~vistrack.tracking.Tracker`).
     confidence, det_threshold
-        For ``"dcpf"``: the detector's continuous confidence, a callable ``image ->
-        ConfidenceMap`` (default :class:`vistrack.frontends.detectors.HOGConfidence`), and
-        the SVM margin above which its peaks are detections.
+        The detector's continuous confidence, a callable ``image -> ConfidenceMap`` (default
+        :class:`vistrack.frontends.detectors.HOGConfidence`), for ``dcpf`` and the
+        ``confidence`` front-end, and the SVM margin above which its peaks are detections.
     fps
         The true frame rate, when the container's header is wrong.
     background, min_area, n_init
@@ -317,121 +687,62 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
         The whole configuration of a box tracker (:class:`~vistrack.config.TrackConfig`), used
         as it is: the ``bgsub`` front-end's default (no camera motion) is not put over it.
         ``overrides`` then change its tracker's settings.
-    """
-    import cv2
 
-    from .io.video import VideoReader, VideoWriter
-    from .viz.annotate import Annotator
-    from .viz.plots import plot_trajectories
+    Returns
+    -------
+    VideoRun
+        The files written, counts, seconds per stage and the scores.
+    """
+    from .io.video import VideoReader
 
     out_dir = Path(out_dir)
-    files = {"tracks": out_dir / "tracks.txt", "csv": out_dir / "tracks.csv",
-             "video": out_dir / "annotated.mp4", "plot": out_dir / "trajectories.png"}
-    if not annotate:
-        del files["video"]
+    files = {name: out_dir / SINK_FILES[name] for name in SINKS
+             if annotate or name != "video"}
     there = [str(p) for p in files.values() if p.exists()]
     if there and not force:
         raise FileExistsError(f"{', '.join(there)} exist; pass --force to overwrite them")
     gt_table = read_mot(gt) if gt is not None else None
+    if confidence is not None and not callable(confidence):
+        raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
+                        f"{type(confidence).__name__}")
     reader = VideoReader(video, fps=fps, stop=stop, prefetch=8)
-    if tracker == "dcpf":
-        from .frontends.detectors import HOGConfidence
-        from .tracking.dcpf import DetectorConfidencePF
-
-        conf_of = HOGConfidence() if confidence is None else confidence
-        if not callable(conf_of):
-            raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
-                            f"{type(conf_of).__name__}")
-        own = frontend in (None, "hog")
-        detect_other = None if own else _frontend(frontend, reader, background=background,
-                                                  min_area=min_area, n_init=n_init)
-        dcpf = DetectorConfidencePF(**overrides)
-
-        def detect(image: np.ndarray, index: int) -> Any:
-            # the frame's detections and confidence map (the particle filter's classifiers
-            # also read the image)
-            cmap = conf_of(image)
-            if own:
-                return cmap.detections(det_threshold), cmap, image
-            assert detect_other is not None  # made above when the frontend is not HOG's own
-            return detect_other(image, index), cmap, image
-
-        def step(d: Any, index: int) -> Tracks:
-            return dcpf.update(d[2], d[0], d[1])
-    else:
-        frontend = "bgsub" if frontend is None else frontend
-        detect = _frontend(frontend, reader, background=background, min_area=min_area,
-                           n_init=n_init)
-        if config is not None and config.offline.enabled:
-            raise ValueError("the offline mode goes with a sequence's detections (track "
-                             "--out), not with a video")
-        if frontend == "bgsub" and config is None:
-            # a background model works only with a still camera: nothing to compensate, and
-            # blobs that split and merge would read as small shifts of the camera
-            overrides.setdefault("camera_motion", False)
-        motion = overrides.pop("motion", None)
-        cfg = resolve_config(config if config is not None else tracker, **overrides)
-        if motion is not None or cfg.motion is None:
-            cfg = replace(cfg, motion=motion or BoxMotion())
-        box_tracker = BoxTracker(cfg.tracker, motion=cfg.motion, frame_rate=reader.fps,
-                                 image_size=reader.size)
-
-        def step(d: Any, index: int) -> Tracks:
-            return box_tracker.step(d, frame=index)
+    ctx = Context(reader.fps, reader.size, reader, config, dict(overrides),
+                  {"background": background, "min_area": min_area, "n_init": n_init,
+                   "det_threshold": det_threshold, "confidence": confidence})
+    box = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].box_config
+    if config is not None and not box:
+        raise ValueError(f"config is a box tracker's configuration; tracker {tracker!r} is "
+                         "not a box tracker")
+    name = frontend
+    if name is None:
+        name = TRACKERS[tracker].frontend if isinstance(tracker, str) and tracker in TRACKERS \
+            else "bgsub"
+    if box and config is None and isinstance(name, str) and name in FRONTENDS \
+            and FRONTENDS[name].still_camera:
+        # a background model works only with a still camera: nothing to compensate, and
+        # blobs that split and merge would read as small shifts of the camera
+        ctx.overrides.setdefault("camera_motion", False)
+    trk, _ = make_tracker(tracker, ctx)
+    detect = _frontend(name, ctx)
     out_dir.mkdir(parents=True, exist_ok=True)
-    writer = VideoWriter(files["video"], reader.fps) if annotate else None
-    ann = Annotator()
-    sec = dict.fromkeys(("decode", "frontend", "tracker", "write"), 0.0)
-    rows, first_image, n = [], None, 0
-    every = max(1, len(reader) // 50)
-    t0 = time.perf_counter()
-    try:
-        for frame in reader:
-            t1 = time.perf_counter()
-            sec["decode"] += t1 - t0
-            d = detect(frame.image, frame.index)
-            t2 = time.perf_counter()
-            res = step(d, frame.index)
-            t3 = time.perf_counter()
-            sec["frontend"] += t2 - t1
-            sec["tracker"] += t3 - t2
-            rows += [(frame.index, i, *b, s) for i, b, s in zip(res.ids, res.xywh, res.scores)]
-            if first_image is None:
-                first_image = frame.image
-            if writer is not None:
-                writer.write(ann.draw(frame.image, res, label=f"frame {frame.index}"))
-            n += 1
-            if n % every == 0 or n == len(reader):
-                _progress(n, len(reader), reader.source.name, progress)
-            t0 = time.perf_counter()
-            sec["write"] += t0 - t3
-    finally:
-        if writer is not None:
-            writer.close()
+    sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
+    stats = run(reader, detect, trk, list(sinks.values()), progress=progress,
+                total=len(reader), label=reader.source.name)
+    n = stats.frames
     if n == 0:
         raise ValueError(f"{video}: no frames to track")
-    assert first_image is not None  # kept at the first of the n frames
-    a = np.array(rows, dtype=float).reshape(-1, 7)
-    F, I = a[:, 0].astype(int), a[:, 1].astype(int)
-    write_mot(files["tracks"], F, I, a[:, 2:6], a[:, 6], force=True)
-    with open(files["csv"], "w") as fh:
-        fh.write("frame,id,x,y,w,h,score\n")
-        for r in a:
-            fh.write(f"{int(r[0])},{int(r[1])},{r[2]:.2f},{r[3]:.2f},{r[4]:.2f},{r[5]:.2f},"
-                     f"{r[6]:.3f}\n")
-    plot_trajectories(F, I, a[:, 2:4] + a[:, 4:6] / 2,
-                      cv2.cvtColor(first_image, cv2.COLOR_BGR2RGB) if first_image.ndim == 3
-                      else first_image, files["plot"],
-                      title=f"{reader.source.name}: {len(np.unique(I))} tracks, {n} frames")
+    rows = sinks["tracks"]
+    assert isinstance(rows, TrackRows)
     scores = None
     if gt_table is not None:  # scored over the frames tracked
         last = reader.start + n - 1
         g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= last)]
         scores = evaluate_mot(g, read_mot(files["tracks"]), last, benchmark="auto")
-    if tracker == "dcpf":
-        return VideoRun(out_dir, files, n, len(a), len(np.unique(I)), sec, scores)
-    return VideoRun(out_dir, files, n, len(a), len(np.unique(I)), sec, scores, cfg,
-                    derived_values(box_tracker))
+    n_tracks = len(np.unique(rows.ids))
+    if not isinstance(trk, BoxTracker):
+        return VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores)
+    return VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
+                    ctx.resolved, derived_values(trk))
 
 
 # -------------------------------------------------------------------- one object, by hand
@@ -457,33 +768,32 @@ def track_one(source: str | Path, init: Any, out: str | Path, *, method: str = "
     """Follow one object from its box ``init`` (``x, y, w, h`` in the first frame) through a
     video or image folder, and write ``frame,x,y,w,h`` lines (frames from 1) to ``out``.
 
-    ``method`` is a name in :data:`vistrack.frontends.single.METHODS`; ``gt`` a ground-truth
+    ``method`` is a name in :data:`vistrack.tracking.single.METHODS`; ``gt`` a ground-truth
     file (OTB ``groundtruth_rect.txt``, VOT ``groundtruth.txt`` or a boxes file) to score
-    against.
+    against. The loop is :func:`run`'s: the first frame's detection is ``init``, which starts
+    the tracker (:class:`~vistrack.tracking.SingleObjectTracker`).
     """
-    from .evaluation.single import precision, read_boxes, success_curve, success_rate, write_boxes
-    from .frontends.single import single_tracker
+    from ._validate import as_box
+    from .evaluation.single import precision, read_boxes, success_curve, success_rate
     from .io.video import VideoReader
+    from .tracking.single import single_tracker
 
     out = Path(out)
     if out.exists() and not force:
         raise FileExistsError(f"{out} exists; pass --force to overwrite it")
     tracker = single_tracker(method)
+    start = Detections.from_xywh(as_box(init)[None])
     truth = read_boxes(gt) if gt is not None else None
     reader = VideoReader(source, prefetch=4)
-    boxes, sec = [], 0.0
-    for k, frame in enumerate(reader):
-        t0 = time.perf_counter()
-        if k == 0:
-            tracker.init(frame.image, init)
-            boxes.append(np.asarray(init, dtype=float))
-        else:
-            boxes.append(tracker.update(frame.image))
-            sec += time.perf_counter() - t0
-        if (k + 1) % 20 == 0 or k + 1 == len(reader):
-            _progress(k + 1, len(reader), reader.source.name, progress)
-    b = np.array(boxes).reshape(-1, 4)
-    write_boxes(out, b, force=True)
+    first = reader.start
+
+    def detect(frame: Frame) -> Detections | None:
+        return start if frame.index == first else None
+
+    writer = BoxesWriter(out)
+    stats = run(reader, detect, tracker, [writer], progress=progress, total=len(reader),
+                label=reader.source.name)
+    b = writer.boxes
     scores = None
     if truth is not None:
         if len(truth) < len(b):
@@ -491,4 +801,4 @@ def track_one(source: str | Path, init: Any, out: str | Path, *, method: str = "
         t = truth[:len(b)]
         scores = {"success": success_rate(b, t), "auc": success_curve(b, t)[2],
                   "precision": precision(b, t)}
-    return SingleRun(out, b, sec, scores)
+    return SingleRun(out, b, stats.seconds["tracker"], scores)

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-__all__ = ["Gaussian", "Detections", "xyxy_to_xywh"]
+__all__ = ["Gaussian", "Detections", "Tracks", "Frame", "xyxy_to_xywh"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -171,3 +171,80 @@ class Detections:
             assert self.points is not None  # __post_init__ requires boxes or points
             return self.points
         return 0.5 * (self.boxes[:, :2] + self.boxes[:, 2:])
+
+
+@dataclass(frozen=True)
+class Tracks:
+    """What a tracker reports for one frame (:class:`~vistrack.tracking.Tracker`): the
+    confirmed tracks updated in it (and, for the box trackers, the ones coasting through a
+    short miss, at their predictions).
+
+    Boxes are ``x0, y0, x1, y1``, as in :class:`Detections`; :attr:`xywh` converts at the
+    edge, for the MOTChallenge files.
+
+    Attributes
+    ----------
+    ids : (K,) int
+        Identities, integers from 1.
+    boxes : (K, 4) float or None
+        ``x0, y0, x1, y1`` (box trackers), or None for point tracks.
+    points : (K, d) float or None
+        Positions (point trackers), or None.
+    scores, classes : (K,)
+        The score and class of the detection each track was last updated with.
+    covs : (K, 2, 2) float or None
+        The covariance of each track's centre (boxes) or point position, where the tracker
+        gives it.
+
+    Examples
+    --------
+    >>> t = Tracks(ids=np.array([1]), boxes=np.array([[10.0, 20, 40, 80]]), points=None,
+    ...            scores=np.array([0.9]), classes=np.array([0]))
+    >>> len(t), t.xywh.tolist()
+    (1, [[10.0, 20.0, 30.0, 60.0]])
+    >>> len(Tracks.empty())
+    0
+    """
+
+    ids: np.ndarray
+    boxes: np.ndarray | None
+    points: np.ndarray | None
+    scores: np.ndarray
+    classes: np.ndarray
+    covs: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return int(self.ids.shape[0])
+
+    @classmethod
+    def empty(cls, boxes: bool = True) -> Tracks:
+        """No tracks: box tracks (``boxes (0, 4)``), or point tracks with ``boxes=False``."""
+        return cls(ids=np.zeros(0, np.int64), boxes=np.zeros((0, 4)) if boxes else None,
+                   points=None if boxes else np.zeros((0, 2)), scores=np.zeros(0),
+                   classes=np.zeros(0, np.int64))
+
+    @property
+    def xywh(self) -> np.ndarray:
+        """Boxes as ``x, y, w, h`` ``(K, 4)`` (top-left corner and size)."""
+        if self.boxes is None:
+            raise ValueError("xywh needs box tracks; these tracks are points")
+        return xyxy_to_xywh(self.boxes)
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One frame of a source: ``index`` (from 1, as MOTChallenge counts), ``time`` (seconds
+    from the first frame, ``(index - 1) / fps``) and ``image`` (``(H, W, 3)`` BGR or
+    ``(H, W)`` grey, uint8; None where only detections are tracked).
+
+    Every tracker's :meth:`~vistrack.tracking.Tracker.step` takes one.
+
+    Examples
+    --------
+    >>> Frame(3, 2 / 25)
+    Frame(index=3, time=0.08)
+    """
+
+    index: int
+    time: float
+    image: np.ndarray | None = field(default=None, repr=False)

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from ..io.tracks import write_boxes
+
 __all__ = ["success_rate", "success_curve", "precision", "region_to_bbox", "read_boxes",
            "write_boxes"]
 
@@ -130,13 +132,3 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
     return a
 
 
-def write_boxes(path: str | Path, boxes: Any, *, force: bool = False) -> None:
-    """Write ``frame,x,y,w,h`` lines, frames from 1."""
-    path = Path(path)
-    if path.exists() and not force:
-        raise FileExistsError(f"{path} exists; pass --force to overwrite it")
-    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w") as fh:
-        for k, (x, y, w, h) in enumerate(b, start=1):
-            fh.write(f"{k},{x:.2f},{y:.2f},{w:.2f},{h:.2f}\n")

@@ -274,7 +274,7 @@ class SwitchingParticleFilter:
     """
 
     def __init__(self, system: Any, n_particles: int = 500, *, resampling: str = "systematic",
-                 ess_threshold: float = 0.5, rng: Any = None):
+                 ess_threshold: float = 0.5, rng: np.random.Generator | int | None = None):
         from .._validate import as_rng
         from .particle import RESAMPLERS, check_particle_options
 

@@ -1,17 +1,17 @@
-"""Front-ends: frames to :class:`~vistrack.types.Detections`, and single-object trackers.
-They know nothing of tracks."""
+"""Front-ends: frames to :class:`~vistrack.types.Detections`. They know nothing of tracks.
 
-from .appearance import WSLModel, WSLTracker
+Background models and blobs (:class:`BlobDetector`), HOG people detection and its dense
+confidence (:class:`HOGDetector`, :class:`HOGConfidence`, :class:`ConfidencePeaks`), and
+spots in microscopy (:func:`locate`). Every detector answers ``detect(image) ->
+Detections`` (:class:`Detector`). Trackers that follow features, templates, colours,
+contours or appearance models from frame to frame are in :mod:`vistrack.tracking`.
+"""
+
 from .background import BACKGROUNDS, MOG2Background, SelectiveBackground, background
-from .blobs import Blobs, find_blobs, threshold
-from .compose import Composite
-from .detectors import ConfidenceMap, Detector, HOGConfidence, HOGDetector
-from .klt import Features, KLTTracker
-from .single import METHODS, single_tracker
-from .snake import Snake
+from .blobs import BlobDetector, Blobs, find_blobs, threshold
+from .detectors import ConfidenceMap, ConfidencePeaks, Detector, HOGConfidence, HOGDetector
 from .spots import Spots, locate
 
 __all__ = ["BACKGROUNDS", "MOG2Background", "SelectiveBackground", "background", "Blobs",
-           "find_blobs", "threshold", "Detector", "HOGDetector", "Features", "KLTTracker",
-           "METHODS", "single_tracker", "Snake", "Spots", "locate", "WSLModel", "WSLTracker",
-           "Composite", "ConfidenceMap", "HOGConfidence"]
+           "BlobDetector", "find_blobs", "threshold", "Detector", "HOGDetector", "Spots",
+           "locate", "ConfidenceMap", "HOGConfidence", "ConfidencePeaks"]

@@ -22,7 +22,7 @@ from numba import njit
 
 from ..types import Detections
 
-__all__ = ["Blobs", "find_blobs", "threshold"]
+__all__ = ["Blobs", "BlobDetector", "find_blobs", "threshold"]
 
 
 @dataclass(frozen=True)
@@ -137,3 +137,52 @@ def find_blobs(mask: Any, *, min_area: float = 0, max_area: float = np.inf, open
     angles = np.arctan2(vec[:, 1, 1], vec[:, 0, 1]) if len(area) else np.zeros(0)
     boxes = np.c_[lo, hi + 1].astype(float)
     return Blobs(c, covs, area, boxes, axes, angles)
+
+
+class BlobDetector:
+    """The seeds' background subtraction and blobs as a detector: each frame's foreground
+    mask from a background model (:func:`~vistrack.frontends.background`), cleaned by an
+    opening and a closing, and its connected regions as boxes (score 1).
+
+    A background model needs a still camera, and a start: :meth:`initialize` with the first
+    frames (their median); without it the selective model collects its first frames (and
+    finds nothing in them) before it starts.
+
+    Parameters
+    ----------
+    background : str
+        The background model's name (``"selective"``, the seeds' running mean and variance
+        updated where no object is, or ``"mog2"``).
+    min_area : float
+        The smallest blob, in pixels.
+    open_size, close_size : int
+        Structuring elements of the clean-up (:func:`find_blobs`).
+
+    Examples
+    --------
+    >>> frames = [np.full((40, 60), 100, np.uint8) for _ in range(5)]
+    >>> det = BlobDetector(min_area=20)
+    >>> det.initialize(frames)
+    >>> person = frames[0].copy(); person[10:30, 20:30] = 250
+    >>> det.detect(person).boxes.tolist()
+    [[20.0, 10.0, 30.0, 30.0]]
+    """
+
+    def __init__(self, background: str = "selective", *, min_area: float = 500.0,
+                 open_size: int = 3, close_size: int = 7):
+        from .background import background as make_background
+
+        self.model = make_background(background)
+        self.min_area, self.open_size, self.close_size = float(min_area), open_size, close_size
+
+    def initialize(self, images: Any) -> None:
+        """Start the background model from ``images`` (an iterable of frames)."""
+        self.model.initialize(images)
+
+    def detect(self, image: Any) -> Detections:
+        """The blobs of ``image``'s foreground as boxes ``x0, y0, x1, y1``."""
+        from .._validate import as_uint8_image
+
+        mask = self.model.apply(as_uint8_image(image, grey=True))
+        return find_blobs(mask, min_area=self.min_area, open_size=self.open_size,
+                          close_size=self.close_size).detections("boxes")

@@ -12,7 +12,8 @@ import numpy as np
 
 from ..types import Detections
 
-__all__ = ["Detector", "HOGDetector", "nms", "ConfidenceMap", "HOGConfidence"]
+__all__ = ["Detector", "HOGDetector", "nms", "ConfidenceMap", "HOGConfidence",
+           "ConfidencePeaks"]
 
 
 def nms(boxes: np.ndarray, scores: np.ndarray, max_iou: float) -> np.ndarray:
@@ -234,3 +235,27 @@ class HOGConfidence:
             origins.append((32 / f, 64 / f))
             strides.append(8 / f)
         return ConfidenceMap(self.heights, scores, origins, strides)
+
+
+class ConfidencePeaks:
+    """A detector from a continuous confidence: the peaks of ``confidence(image)`` (a
+    :class:`ConfidenceMap`) above ``threshold``, as :meth:`ConfidenceMap.detections` gives
+    them.
+
+    Parameters
+    ----------
+    confidence : callable
+        ``image -> ConfidenceMap``, such as :class:`HOGConfidence`.
+    threshold : float
+        The SVM margin above which a peak is a detection.
+    """
+
+    def __init__(self, confidence: Any, threshold: float = 0.5):
+        if not callable(confidence):
+            raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
+                            f"{type(confidence).__name__}")
+        self.confidence, self.threshold = confidence, float(threshold)
+
+    def detect(self, image: Any) -> Detections:
+        """The peaks of the image's confidence above the threshold."""
+        return self.confidence(image).detections(self.threshold)

@@ -1,4 +1,5 @@
-"""Reading and writing outside formats: MOTChallenge files, video."""
+"""Reading and writing outside formats: MOTChallenge files, video, and the sinks that write
+tracks (:mod:`vistrack.io.tracks`)."""
 
 from .motchallenge import (
     MOT_CLASSES,
@@ -9,7 +10,9 @@ from .motchallenge import (
     read_seqinfo,
     write_mot,
 )
+from .tracks import BoxesWriter, CSVWriter, MOTWriter, Sink, TrackRows, write_boxes
 from .video import Frame, VideoError, VideoReader, VideoWriter
 
 __all__ = ["MOT_CLASSES", "MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "read_seqinfo",
-           "write_mot", "Frame", "VideoError", "VideoReader", "VideoWriter"]
+           "write_mot", "Frame", "VideoError", "VideoReader", "VideoWriter", "Sink",
+           "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes"]

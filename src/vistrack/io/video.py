@@ -13,11 +13,12 @@ from __future__ import annotations
 import configparser
 import warnings
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+
+from ..types import Frame
 
 if TYPE_CHECKING:
     import cv2
@@ -38,16 +39,6 @@ def _cv2():
         raise ImportError("vistrack.io.video needs OpenCV: pip install "
                           "opencv-contrib-python-headless") from e
     return cv2
-
-
-@dataclass(frozen=True)
-class Frame:
-    """One frame: ``index`` (from 1), ``time`` (seconds from the first frame, ``(index - 1) /
-    fps``) and ``image`` ``(H, W, 3)`` BGR or ``(H, W)`` grey, uint8."""
-
-    index: int
-    time: float
-    image: np.ndarray
 
 
 class VideoReader:

@@ -1,11 +1,30 @@
-"""Multi-object tracking: track management and trackers built from filters and association."""
+"""Tracking: one protocol (:class:`Tracker`: ``step(frame, detections) -> Tracks`` and
+``reset()``) and every tracker built on it.
 
+- multi-object, from detections: :class:`BoxTracker` (SORT, ByteTrack), :class:`PointTracker`
+  (NN, GNN, PDA, JPDA), and the offline smoother :func:`smooth`;
+- multi-object, from detections and pixels: :class:`DetectorConfidencePF`, and
+  :class:`~vistrack.tracking.klt.KLTTracker` (features);
+- one object (:class:`SingleObjectTracker`): colour, CamShift, particle, template, median
+  flow, WSL, snake and OpenCV's, by name in :data:`METHODS`, and their composition
+  (:class:`~vistrack.tracking.compose.Composite`);
+- track management: :mod:`vistrack.tracking.lifecycle`.
+"""
+
+from ..types import Tracks
+from .base import SingleObjectTracker, Tracker
 from .box import TRACKERS, BoxTracker, BoxTrackerConfig
+from .compose import Composite
 from .dcpf import DCPFConfig, DetectorConfidencePF
-from .lifecycle import CONFIRMED, LOST, TENTATIVE, Tracks, TrackTable
+from .klt import Features, KLTTracker
+from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable
 from .offline import SmoothedTracks, smooth
 from .point import POINT_ASSOCIATIONS, PointTracker
+from .single import METHODS, single_tracker
+from .snake import Snake, SnakeTracker
 
-__all__ = ["TRACKERS", "BoxTracker", "BoxTrackerConfig", "CONFIRMED", "LOST", "TENTATIVE",
-           "TrackTable", "Tracks", "SmoothedTracks", "smooth", "POINT_ASSOCIATIONS",
-           "PointTracker", "DCPFConfig", "DetectorConfidencePF"]
+__all__ = ["Tracker", "SingleObjectTracker", "TRACKERS", "BoxTracker", "BoxTrackerConfig",
+           "CONFIRMED", "LOST", "TENTATIVE", "TrackTable", "Tracks", "SmoothedTracks", "smooth",
+           "POINT_ASSOCIATIONS", "PointTracker", "DCPFConfig", "DetectorConfidencePF",
+           "Features", "KLTTracker", "METHODS", "single_tracker", "Composite", "Snake",
+           "SnakeTracker"]

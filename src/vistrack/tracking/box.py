@@ -66,9 +66,10 @@ from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
 from ..models.box import BoxMotion
-from ..types import Detections
+from ..types import Detections, Frame, Tracks
+from .base import frame_index
 from .calibration import ScoreCalibration, ScoreCalibrator
-from .lifecycle import CONFIRMED, LOST, TENTATIVE, Tracks, TrackTable
+from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable
 
 __all__ = ["BoxTracker", "BoxTrackerConfig", "TRACKERS"]
 
@@ -439,7 +440,7 @@ class BoxTracker:
     >>> from vistrack.types import Detections
     >>> tr = BoxTracker("bytetrack")
     >>> for f in range(1, 4):
-    ...     out = tr.step(Detections.from_xywh([[10 + 5 * f, 20, 30, 60]], [0.9]), frame=f)
+    ...     out = tr.step(f, Detections.from_xywh([[10 + 5 * f, 20, 30, 60]], [0.9]))
     >>> out.ids.tolist(), out.boxes.round(1).tolist()
     ([1], [[24.0, 20.0, 54.0, 80.0]])
     """
@@ -595,14 +596,29 @@ class BoxTracker:
             matched_d.append(c)
         return ~free_t, free_d, np.concatenate(matched_t), np.concatenate(matched_d)
 
-    def step(self, detections: Detections, frame: int | None = None) -> Tracks:
-        """Track one frame. ``frame`` (an integer, increasing; default the next one) gives the
-        time since the last frame, so gaps in frame numbers are predicted over."""
+    def step(self, frame: Frame | int | None = None,
+             detections: Detections | None = None) -> Tracks:
+        """Track one frame (:class:`~vistrack.tracking.Tracker`).
+
+        Parameters
+        ----------
+        frame : Frame or int, optional
+            The frame, or its index (increasing; default the next one): the time since the
+            last frame is the gap in indices over ``frame_rate``, so gaps in frame numbers are
+            predicted over. The image is not used.
+        detections : Detections
+            The frame's detections, with boxes (None: no detections).
+
+        Returns
+        -------
+        Tracks
+            The tracks reported in this frame (see the module, step 5).
+        """
+        if detections is None:
+            detections = Detections(boxes=np.zeros((0, 4)))
         if not isinstance(detections, Detections) or detections.boxes is None:
             raise TypeError("detections must be vistrack.Detections with boxes")
-        frame = (1 if self.frame is None else self.frame + 1) if frame is None else int(frame)
-        if self.frame is not None and frame <= self.frame:
-            raise ValueError(f"frame must increase; got {frame} after {self.frame}")
+        frame = frame_index(frame, self.frame)
         first = self.frame is None
         dt = 0.0 if self.frame is None else float(frame - self.frame)
         self.frame = frame

@@ -10,7 +10,7 @@ The box's size is the target's, learnt from the detections associated with it.
 
 **Association.** Detections are matched to targets greedily, best pair first, by the seed's
 score ``S(tr, d) = g(tr, d) · (c_tr(d) + α · Σ_p p_N(d - p) / N)``: a gate ``g`` (the
-detection's centre within ``gate`` heights of the target's and its height within a factor
+detection's centre within ``gate_heights`` heights of the target's and its height within a factor
 1.5), the target's classifier at the detection, and how densely its particles lie around the
 detection. Pairs with ``S`` below ``min_score`` are not matched.
 
@@ -48,20 +48,20 @@ image, it ends. A target is reported in the frames where it is supported.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, cast
 
 import numpy as np
 
 from ..association import iou
 from ..filters.particle import resample
-from ..types import Detections
-from .lifecycle import Tracks
+from ..types import Detections, Frame, Tracks
+from .base import frame_image
 
 __all__ = ["DCPFConfig", "DetectorConfidencePF", "ColourFeatures"]
 
 
-@dataclass
+@dataclass(frozen=True)
 class DCPFConfig:
     """Settings of :class:`DetectorConfidencePF` (see the module); ``beta``, ``gamma`` and
     ``eta`` weigh the detection, detector-confidence and classifier terms."""
@@ -74,7 +74,7 @@ class DCPFConfig:
     sigma_vel: float = 0.02
     sigma_det: float = 0.15
     alpha: float = 1.0
-    gate: float = 0.6
+    gate_heights: float = 0.6
     min_score: float = 0.6
     init_score: float = 0.75
     max_overlap: float = 0.3
@@ -143,25 +143,42 @@ class DetectorConfidencePF:
     Parameters
     ----------
     config : DCPFConfig, optional
-    rng : int or numpy Generator
+    confidence : callable, optional
+        The detector's continuous confidence of an image, ``image -> ConfidenceMap``
+        (:class:`~vistrack.frontends.detectors.HOGConfidence`, or your detector's), which
+        :meth:`step` evaluates on each frame; needed when ``gamma > 0`` (the
+        detector-confidence term).
+    rng : int, numpy Generator or None
+        The particles' randomness (default 0: the same tracks every run).
     **overrides
         Fields of :class:`DCPFConfig`.
 
     Notes
     -----
-    ``update(image, detections, confidence)`` takes a BGR frame, its discrete detections
-    (:class:`~vistrack.types.Detections`, scores in (0, 1)) and a
-    :class:`~vistrack.frontends.detectors.ConfidenceMap` (or None when ``gamma`` is 0), and
-    returns the reported targets as :class:`~vistrack.tracking.Tracks`.
+    :meth:`step` is the tracker protocol (:class:`~vistrack.tracking.Tracker`): a frame with
+    its BGR image, and its discrete detections (scores in (0, 1)). :meth:`update` is the same
+    step with the confidence map given, for a map computed elsewhere.
     """
 
-    def __init__(self, config: DCPFConfig | None = None, *, rng: Any = 0, **overrides: Any):
+    def __init__(self, config: DCPFConfig | None = None, *, confidence: Any = None,
+                 rng: np.random.Generator | int | None = 0, **overrides: Any):
         if config is None:
             config = DCPFConfig(**overrides)
         elif overrides:
-            config = DCPFConfig(**{**config.__dict__, **overrides})
-        self.cfg = config
-        self.rng = np.random.default_rng(rng)
+            config = replace(config, **overrides)
+        if confidence is not None and not callable(confidence):
+            raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
+                            f"{type(confidence).__name__}")
+        self.config = config
+        self.confidence = confidence
+        self._rng_seed = rng
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every target; identities start again from 1 (and, with an integer or no
+        ``rng``, the randomness starts again: the same frames give the same tracks)."""
+        config = self.config
+        self.rng = np.random.default_rng(self._rng_seed)
         N = config.n_particles
         self.particles = np.zeros((0, N, 4))
         self.size = np.zeros((0, 2))               # w, h
@@ -174,6 +191,28 @@ class DetectorConfidencePF:
         self.next_id = 1
         self.frame = 0
 
+    def step(self, frame: Frame, detections: Detections | None = None) -> Tracks:
+        """Track one frame (:class:`~vistrack.tracking.Tracker`).
+
+        Parameters
+        ----------
+        frame : Frame
+            The frame, with its BGR image (the classifiers and the confidence read it).
+        detections : Detections, optional
+            The frame's detections, scores in (0, 1) (None: none).
+
+        Returns
+        -------
+        Tracks
+            The confirmed targets supported in this frame; scores are the mean detector
+            confidence at their particles (1 without the confidence term).
+        """
+        image = frame_image(frame, "DetectorConfidencePF")
+        if detections is None:
+            detections = Detections(boxes=np.zeros((0, 4)))
+        cmap = self.confidence(image) if self.confidence is not None else None
+        return self.update(image, detections, cmap)
+
     # ------------------------------------------------------------------ helpers
     def _boxes(self, centres: np.ndarray, size: np.ndarray) -> np.ndarray:
         return np.concatenate([centres - size / 2, np.broadcast_to(size, centres.shape)], -1)
@@ -185,7 +224,7 @@ class DetectorConfidencePF:
     def _train(self, feats: ColourFeatures, est: np.ndarray, train: np.ndarray) -> None:
         """A few gradient steps of each trained target's logistic regression: its box is the
         positive; the other targets' boxes and four boxes beside it the negatives."""
-        cfg = self.cfg
+        cfg = self.config
         T = len(est)
         offsets = np.array([[-1.0, 0.0], [1.0, 0.0], [-0.5, -0.5], [0.5, 0.5]])
         for k in np.flatnonzero(train):
@@ -204,11 +243,15 @@ class DetectorConfidencePF:
 
     # ------------------------------------------------------------------ one frame
     def update(self, image: Any, detections: Detections, confidence: Any = None) -> Tracks:
-        cfg = self.cfg
+        """One frame with its confidence map given: ``image`` (BGR), its ``detections`` and
+        a :class:`~vistrack.frontends.detectors.ConfidenceMap` (None when ``gamma`` is 0);
+        as :meth:`step`."""
+        cfg = self.config
         self.frame += 1
         if cfg.gamma > 0 and confidence is None:
-            raise ValueError("confidence is required when gamma > 0 (the detector-confidence "
-                             "term); pass a ConfidenceMap or set gamma=0")
+            raise ValueError("the detector-confidence term (gamma > 0) needs the detector's "
+                             "confidence: construct with confidence=HOGConfidence() (or "
+                             "your own), pass a ConfidenceMap to update(), or set gamma=0")
         img = np.asarray(image)
         H, W = img.shape[:2]
         feats = ColourFeatures(img) if cfg.eta > 0 else None
@@ -231,7 +274,8 @@ class DetectorConfidencePF:
             centre = p[..., :2].mean(1)
             dist = np.linalg.norm(det_c[None] - centre[:, None], axis=-1)
             ratio = det_xywh[None, :, 3] / self.size[:, None, 1]
-            gate = (dist <= cfg.gate * self.size[:, None, 1]) & (ratio < 1.5) & (ratio > 1 / 1.5)
+            gate = ((dist <= cfg.gate_heights * self.size[:, None, 1]) & (ratio < 1.5)
+                    & (ratio > 1 / 1.5))
             if cfg.eta > 0:
                 assert feats is not None  # made above when eta > 0
                 clf = self._classify(feats(det_xywh)[None], slice(None))
@@ -335,14 +379,14 @@ class DetectorConfidencePF:
             setattr(self, name, getattr(self, name)[keep])
 
     def _start(self, boxes: np.ndarray, feats: ColourFeatures | None) -> None:
-        k, N = len(boxes), self.cfg.n_particles
+        k, N = len(boxes), self.config.n_particles
         if k == 0:
             return
         c = boxes[:, :2] + boxes[:, 2:] / 2
         parts = np.zeros((k, N, 4))
         parts[..., :2] = c[:, None] + self.rng.standard_normal((k, N, 2)) \
-            * self.cfg.sigma_pos * boxes[:, None, 3:4]
-        parts[..., 2:] = self.rng.standard_normal((k, N, 2)) * self.cfg.sigma_vel \
+            * self.config.sigma_pos * boxes[:, None, 3:4]
+        parts[..., 2:] = self.rng.standard_normal((k, N, 2)) * self.config.sigma_vel \
             * boxes[:, None, 3:4]
         dim = feats.dim + 1 if feats is not None else 1
         if self.weights_clf.shape[1] != dim:
@@ -352,7 +396,7 @@ class DetectorConfidencePF:
         self.ids = np.concatenate([self.ids, np.arange(self.next_id, self.next_id + k)])
         self.next_id += k
         self.hits = np.concatenate([self.hits, np.ones(k, np.int64)])
-        self.confirmed = np.concatenate([self.confirmed, np.full(k, self.cfg.confirm <= 1)])
+        self.confirmed = np.concatenate([self.confirmed, np.full(k, self.config.confirm <= 1)])
         self.missed = np.concatenate([self.missed, np.zeros(k, np.int64)])
         self.overlapped = np.concatenate([self.overlapped, np.zeros(k, np.int64)])
         self.weights_clf = np.concatenate([self.weights_clf, np.zeros((k, dim))])

@@ -15,50 +15,13 @@ Identities are integers from 1, never reused until :meth:`TrackTable.reset`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from ..types import xyxy_to_xywh
+from ..types import Tracks
 
 __all__ = ["TENTATIVE", "CONFIRMED", "LOST", "TrackTable", "Tracks"]
 
 TENTATIVE, CONFIRMED, LOST = 0, 1, 2
-
-
-@dataclass(frozen=True)
-class Tracks:
-    """A tracker's output for one frame: the confirmed tracks updated in it (and, for the box
-    trackers, the ones coasting through a short miss, at their predictions).
-
-    Attributes
-    ----------
-    ids : (K,) int
-    boxes : (K, 4) float
-        ``x0, y0, x1, y1`` (box trackers) or None.
-    points : (K, d) float or None
-    scores, classes : (K,)
-        The score and class of the detection each track was last updated with.
-    covs : (K, 2, 2) float or None
-        The covariance of each track's centre (boxes) or point position, where the tracker
-        gives it.
-    """
-
-    ids: np.ndarray
-    boxes: np.ndarray | None
-    points: np.ndarray | None
-    scores: np.ndarray
-    classes: np.ndarray
-    covs: np.ndarray | None = None
-
-    def __len__(self) -> int:
-        return int(self.ids.shape[0])
-
-    @property
-    def xywh(self) -> np.ndarray:
-        if self.boxes is None:
-            raise ValueError("xywh needs box tracks; these tracks are points")
-        return xyxy_to_xywh(self.boxes)
 
 
 class TrackTable:

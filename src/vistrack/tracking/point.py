@@ -30,8 +30,9 @@ from ..association.costs import mahalanobis_pairs
 from ..association.pda import pda_update, pda_weights
 from ..filters import kf_predict, kf_update
 from ..models import ConstantVelocity, Position
-from ..types import Detections, Gaussian
-from .lifecycle import CONFIRMED, Tracks, TrackTable
+from ..types import Detections, Frame, Gaussian, Tracks
+from .base import frame_index
+from .lifecycle import CONFIRMED, TrackTable
 
 __all__ = ["PointTracker", "POINT_ASSOCIATIONS"]
 
@@ -51,7 +52,7 @@ class PointTracker:
         in 2-D with ``q = 1`` and position measurements with ``r = 1``.
     p_detect, clutter_density : float
         Detection probability and clutter per unit area (PDA and JPDA).
-    gate : float
+    p_gate : float
         Gate probability ``p``: measurements beyond the ``p`` quantile of chi-square are not
         associated.
     init_speed : float
@@ -63,13 +64,13 @@ class PointTracker:
     --------
     >>> tr = PointTracker("gnn", frame_rate=1.0)
     >>> for f in range(1, 5):
-    ...     out = tr.step(Detections(points=[[2.0 * f, 0.0], [50.0, 3.0 * f]]), frame=f)
+    ...     out = tr.step(f, Detections(points=[[2.0 * f, 0.0], [50.0, 3.0 * f]]))
     >>> out.ids.tolist(), out.points.round(1).tolist()
     ([1, 2], [[8.0, 0.0], [50.0, 12.0]])
     """
 
     def __init__(self, association: str = "gnn", *, motion: Any = None, measurement: Any = None,
-                 p_detect: float = 0.9, clutter_density: float = 1e-4, gate: float = 0.99,
+                 p_detect: float = 0.9, clutter_density: float = 1e-4, p_gate: float = 0.99,
                  init_speed: float = 10.0, confirm_hits: int = 3, max_lost: float = 1.0,
                  frame_rate: float = 30.0):
         if association not in POINT_ASSOCIATIONS:
@@ -83,8 +84,8 @@ class PointTracker:
         self.R = np.asarray(self.measurement.R(), dtype=float)
         self.m = self.H.shape[0]
         self.p_detect, self.clutter_density = float(p_detect), float(clutter_density)
-        self.p_gate = float(gate)
-        self.threshold = chi2_threshold(self.m, gate)
+        self.p_gate = float(p_gate)
+        self.threshold = chi2_threshold(self.m, p_gate)
         self.init_speed = float(init_speed)
         self.confirm_hits, self.max_lost = int(confirm_hits), float(max_lost)
         if not frame_rate > 0:
@@ -107,8 +108,26 @@ class PointTracker:
         cov[m:, m:] = self.init_speed ** 2 * np.eye(n - m)
         return mean, np.broadcast_to(cov, (len(z), n, n)).copy()
 
-    def step(self, detections: Detections, frame: int | None = None) -> Tracks:
-        """Track one frame of point detections (``Detections(points=...)``)."""
+    def step(self, frame: Frame | int | None = None,
+             detections: Detections | None = None) -> Tracks:
+        """Track one frame of point detections (:class:`~vistrack.tracking.Tracker`).
+
+        Parameters
+        ----------
+        frame : Frame or int, optional
+            The frame, or its index (increasing; default the next one); the time since the
+            last frame is the gap in indices over ``frame_rate``. The image is not used.
+        detections : Detections
+            The frame's detections, with ``points (N, d)`` (None: no detections).
+
+        Returns
+        -------
+        Tracks
+            The confirmed tracks updated in this frame, with ``points`` and their
+            covariances.
+        """
+        if detections is None:
+            detections = Detections(points=np.zeros((0, self.m)))
         if not isinstance(detections, Detections) or detections.points is None:
             raise TypeError("detections must be vistrack.Detections with points")
         Z = detections.points
@@ -116,9 +135,7 @@ class PointTracker:
         assert scores is not None and classes is not None  # set by Detections.__post_init__
         if len(Z) and Z.shape[1] != self.m:
             raise ValueError(f"points must have {self.m} coordinates; got {Z.shape[1]}")
-        frame = (1 if self.frame is None else self.frame + 1) if frame is None else int(frame)
-        if self.frame is not None and frame <= self.frame:
-            raise ValueError(f"frame must increase; got {frame} after {self.frame}")
+        frame = frame_index(frame, self.frame)
         first = self.frame is None
         dt = 0.0 if self.frame is None else (frame - self.frame) / self.frame_rate
         self.frame = frame

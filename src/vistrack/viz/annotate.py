@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Annotator", "id_colour"]
+__all__ = ["Annotator", "AnnotatedVideo", "id_colour"]
 
 
 def id_colour(i: int) -> tuple[int, int, int]:
@@ -81,3 +81,39 @@ class Annotator:
             cv2.putText(out, label, (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (255, 255, 255), 1,
                         cv2.LINE_AA)
         return out
+
+
+class AnnotatedVideo:
+    """A sink (:class:`~vistrack.io.tracks.Sink`) that draws each frame's tracks with an
+    :class:`Annotator` and writes the frames to an MP4 at ``fps``
+    (:class:`~vistrack.io.VideoWriter`), each labelled with its frame index.
+
+    Parameters
+    ----------
+    path : str or Path
+        The video to write (opened at the first frame).
+    fps : float
+        Frames per second of the video.
+    annotator : Annotator, optional
+        How to draw (default ``Annotator()``).
+    """
+
+    def __init__(self, path: Any, fps: float, annotator: Annotator | None = None):
+        from ..io.video import VideoWriter
+
+        self.path = path
+        self.annotator = annotator or Annotator()
+        self._writer = VideoWriter(path, fps)
+
+    def write(self, frame: Any, tracks: Any) -> None:
+        """Draw ``tracks`` on ``frame.image`` and write it."""
+        if frame.image is None:
+            raise ValueError(f"AnnotatedVideo draws on images; frame {frame.index} has none")
+        self._writer.write(self.annotator.draw(frame.image, tracks,
+                                               label=f"frame {frame.index}"))
+
+    def close(self) -> None:
+        """Finish the video file."""
+        self._writer.close()
+
+    abort = close  # a run that fails keeps the frames written so far

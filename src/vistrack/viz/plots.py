@@ -10,7 +10,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["covariance_ellipse", "plot_estimates_1d", "plot_track_2d", "plot_trajectories"]
+__all__ = ["covariance_ellipse", "plot_estimates_1d", "plot_track_2d", "plot_trajectories",
+           "TrajectoryPlot"]
 
 
 def _finish(ax: Any, xlabel: str, ylabel: str, title: str | None) -> Any:
@@ -142,3 +143,37 @@ def plot_trajectories(frames: Any, ids: Any, centres: Any, background: Any = Non
         fig.savefig(path, dpi=100)
         plt.close(fig)
     return fig
+
+
+class TrajectoryPlot:
+    """A sink (:class:`~vistrack.io.tracks.Sink`) that collects every box track's centres
+    and, when closed, plots them over the first frame (:func:`plot_trajectories`) to the PNG
+    ``path``, titled ``"{name}: {tracks} tracks, {frames} frames"``."""
+
+    def __init__(self, path: Any, name: str = ""):
+        from ..io.tracks import TrackRows
+
+        self.path, self.name = path, name
+        self._rows = TrackRows()
+        self._first: Any = None
+        self._frames = 0
+
+    def write(self, frame: Any, tracks: Any) -> None:
+        """Keep the tracks' centres (and the first frame's image)."""
+        if self._first is None:
+            self._first = frame.image
+        self._frames += 1
+        self._rows.write(frame, tracks)
+
+    def close(self) -> None:
+        """Draw and save the figure."""
+        import cv2
+
+        r = self._rows
+        xywh = r.xywh
+        image = self._first
+        if image is not None and image.ndim == 3:
+            image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
+        plot_trajectories(r.frames, r.ids, xywh[:, :2] + xywh[:, 2:] / 2, image, self.path,
+                          title=f"{self.name}: {len(np.unique(r.ids))} tracks, "
+                          f"{self._frames} frames")

@@ -9,7 +9,7 @@ floats, the top-left corner and size), and is chosen by name from :data:`METHODS
   their pairwise distances;
 - ``"template"``: the seeds' SSD template tracking with an affine warp (the Hager/Toyama
   cycle: predict, warp, compare, correct), by inverse-compositional Lucas-Kanade of the
-  first frame's central patch (:mod:`vistrack.frontends._affine`), started each frame from
+  first frame's central patch (:mod:`vistrack.tracking._affine`), started each frame from
   the median-flow motion; the box is the warped first box's bounding box;
 - ``"colour"``: mean shift on the back-projection of a saturation-value histogram of the
   target against its surroundings (the object's colour over the background's), with the
@@ -21,15 +21,15 @@ floats, the top-left corner and size), and is chosen by name from :data:`METHODS
   object's colour its box holds than the ring around it, and they are resampled by
   :func:`vistrack.filters.resample` when the effective sample size falls below half;
 - ``"wsl"``: the robust online appearance model of Jepson, Fleet and El-Maraghi
-  (:class:`vistrack.frontends.appearance.WSLTracker`): the stable / wandering / lost mixture
+  (:class:`vistrack.tracking.appearance.WSLTracker`): the stable / wandering / lost mixture
   of the view's intensities is the likelihood of an exhaustive translation search;
 - ``"meanshift"``: ``"colour"`` with the window's size fixed (the classic mean-shift tracker);
-- ``"snake"``: the B-spline snake (:class:`vistrack.frontends.snake.SnakeTracker`) started on
+- ``"snake"``: the B-spline snake (:class:`vistrack.tracking.snake.SnakeTracker`) started on
   the ellipse inscribed in the box, its box the contour's bounding box;
 - ``"csrt"``, ``"kcf"``: OpenCV contrib's trackers, for comparison.
 
 Every tracker but OpenCV's also has ``anchor(box)``, which moves its state to a box, for
-:class:`vistrack.frontends.compose.Composite`.
+:class:`vistrack.tracking.compose.Composite`.
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ import numpy as np
 from .._validate import as_box, as_uint8_image
 from ._affine import prepare_templates, register
 from .appearance import WSLTracker
+from .base import SingleObjectTracker
 from .snake import SnakeTracker
 
 if TYPE_CHECKING:
@@ -68,7 +69,7 @@ def _hsv(image: Any) -> np.ndarray:
     return cv2.cvtColor(as_uint8_image(image, channels=(3,)), cv2.COLOR_BGR2HSV)
 
 
-class MedianFlow:
+class MedianFlow(SingleObjectTracker):
     """Median-flow tracking of a box by its features (see the module).
 
     Parameters
@@ -84,7 +85,7 @@ class MedianFlow:
         self.grid, self.fb_max = int(grid), float(fb_max)
         self.lk = _LKArgs(winSize=(int(win_size), int(win_size)), maxLevel=int(levels))
 
-    def init(self, image: Any, box: Any) -> None:
+    def _start(self, image: Any, box: Any) -> None:
         self.prev = _grey(image)
         self.box = as_box(box)
 
@@ -128,7 +129,7 @@ class MedianFlow:
         s = float(np.median(db[good] / da[good])) if good.any() else 1.0
         return d, s
 
-    def update(self, image: Any) -> np.ndarray:
+    def _follow(self, image: Any) -> np.ndarray:
         grey = _grey(image)
         m = self.motion(grey)
         if m is not None:
@@ -144,7 +145,7 @@ class MedianFlow:
         self.box = as_box(box)
 
 
-class TemplateTracker:
+class TemplateTracker(SingleObjectTracker):
     """Affine template tracking of the first frame's central patch (see the module).
 
     Parameters
@@ -158,7 +159,7 @@ class TemplateTracker:
         self.max_residual, self.iters = float(max_residual), int(iters)
         self.flow = MedianFlow()
 
-    def init(self, image: Any, box: Any) -> None:
+    def _start(self, image: Any, box: Any) -> None:
         grey = _grey(image).astype(np.float32)
         b = as_box(box)
         self.box0 = b
@@ -179,7 +180,7 @@ class TemplateTracker:
         A = np.array([[1 + p[0], p[2]], [p[1], 1 + p[3]]])
         return rel @ A.T + p[4:]
 
-    def update(self, image: Any) -> np.ndarray:
+    def _follow(self, image: Any) -> np.ndarray:
         grey = _grey(image)
         prior = self.flow.update(image)
         if not self.ok:
@@ -234,7 +235,7 @@ def _contrast(integral: np.ndarray, b: np.ndarray) -> np.ndarray:
     return inner / np.maximum(n_in, 1) - (outer - inner) / np.maximum(n_out - n_in, 1)
 
 
-class ColourTracker:
+class ColourTracker(SingleObjectTracker):
     """Mean shift on a colour back-projection, with an online histogram (see the module).
 
     Parameters
@@ -264,7 +265,7 @@ class ColourTracker:
         hb = cv2.calcHist([hsv], ch, ring, bs, rng)
         return ht / max(ht.sum(), 1.0), hb / max(hb.sum(), 1.0)
 
-    def init(self, image: Any, box: Any) -> None:
+    def _start(self, image: Any, box: Any) -> None:
         self.box = as_box(box)
         self.pt, self.pb = self._hist(_hsv(image), self.box)
 
@@ -282,7 +283,7 @@ class ColourTracker:
             self.pt = (1 - self.rate) * self.pt + self.rate * pt
             self.pb = (1 - self.rate) * self.pb + self.rate * pb
 
-    def update(self, image: Any) -> np.ndarray:
+    def _follow(self, image: Any) -> np.ndarray:
         import cv2
 
         hsv = _hsv(image)
@@ -308,7 +309,7 @@ class ColourTracker:
 class CamShiftTracker(ColourTracker):
     """OpenCV's CamShift on the colour back-projection of :class:`ColourTracker`."""
 
-    def update(self, image: Any) -> np.ndarray:
+    def _follow(self, image: Any) -> np.ndarray:
         import cv2
 
         hsv = _hsv(image)
@@ -343,13 +344,15 @@ class ColourParticleTracker(ColourTracker):
     """
 
     def __init__(self, n_particles: int = 300, step: float = 0.15, sharpness: float = 30.0,
-                 rng: Any = 0, **kwargs: Any):
+                 rng: np.random.Generator | int | None = 0, **kwargs: Any):
         super().__init__(**kwargs)
-        self.n, self.step, self.sharpness = int(n_particles), float(step), float(sharpness)
-        self.rng = np.random.default_rng(rng)
+        self.n, self.step_size, self.sharpness = int(n_particles), float(step), float(sharpness)
+        self._seed = rng
 
-    def init(self, image: Any, box: Any) -> None:
-        super().init(image, box)
+    def _start(self, image: Any, box: Any) -> None:
+        # each start draws afresh from the seed (an integer seed: the same boxes again)
+        self.rng = np.random.default_rng(self._seed)
+        super()._start(image, box)
         b = self.box
         self.size = b[2:].copy()
         self.x = np.tile([b[0] + b[2] / 2, b[1] + b[3] / 2, 0.0], (self.n, 1))
@@ -363,7 +366,7 @@ class ColourParticleTracker(ColourTracker):
         self.x[:, 2] += np.log(np.sqrt(b[2] * b[3] / np.prod(self.size))) - m[2]
         self.box = b
 
-    def update(self, image: Any) -> np.ndarray:
+    def _follow(self, image: Any) -> np.ndarray:
         import cv2
 
         from ..filters import effective_sample_size, resample
@@ -373,8 +376,8 @@ class ColourParticleTracker(ColourTracker):
         integral = cv2.integral(bp.astype(np.float64) / 255.0)
         # predict: a random walk in centre and log scale
         sz = self.size * np.exp(self.x[:, 2:3])
-        self.x[:, :2] += self.rng.standard_normal((self.n, 2)) * self.step * sz
-        self.x[:, 2] += self.rng.standard_normal(self.n) * self.step / 4
+        self.x[:, :2] += self.rng.standard_normal((self.n, 2)) * self.step_size * sz
+        self.x[:, 2] += self.rng.standard_normal(self.n) * self.step_size / 4
         # weigh
         sz = self.size * np.exp(self.x[:, 2:3])
         boxes = np.c_[self.x[:, :2] - sz / 2, sz]
@@ -393,7 +396,7 @@ class ColourParticleTracker(ColourTracker):
         return self.box.copy()
 
 
-class OpenCVTracker:
+class OpenCVTracker(SingleObjectTracker):
     """OpenCV contrib's CSRT or KCF behind the same interface (for comparison)."""
 
     def __init__(self, kind: str = "csrt"):
@@ -405,13 +408,13 @@ class OpenCVTracker:
             raise ValueError(f"kind must be one of {sorted(makers)}; got {kind!r}")
         self._make = makers[kind]
 
-    def init(self, image: Any, box: Any) -> None:
+    def _start(self, image: Any, box: Any) -> None:
         b = as_box(box)
         self._t = self._make()
         self._t.init(np.asarray(image), tuple(int(round(v)) for v in b))
         self.box = b
 
-    def update(self, image: Any) -> np.ndarray:
+    def _follow(self, image: Any) -> np.ndarray:
         ok, b = self._t.update(np.asarray(image))
         if ok:
             self.box = np.asarray(b, float)

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from .._validate import as_box, as_uint8_image
+from .base import SingleObjectTracker
 
 __all__ = ["WSLModel", "WSLTracker"]
 
@@ -155,7 +156,7 @@ def _view_size(w: float, h: float, size: int) -> tuple[int, int]:
     return max(4, int(round(w * s))), max(4, int(round(h * s)))
 
 
-class WSLTracker:
+class WSLTracker(SingleObjectTracker):
     """A region tracker whose likelihood is the WSL appearance model (see the module).
 
     Parameters
@@ -204,7 +205,7 @@ class WSLTracker:
         return cv2.warpAffine(g, A, (out_w, out_h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                               borderMode=cv2.BORDER_REPLICATE).astype(float)
 
-    def init(self, image: Any, box: Any) -> None:
+    def _start(self, image: Any, box: Any) -> None:
         b = as_box(box)
         g = self._prepare(image)
         self.vw, self.vh = _view_size(b[2], b[3], self.size)
@@ -219,7 +220,7 @@ class WSLTracker:
         self.box = b.copy()
         self.score = float("nan")
 
-    def update(self, image: Any) -> np.ndarray:
+    def _follow(self, image: Any) -> np.ndarray:
         from numpy.lib.stride_tricks import sliding_window_view
 
         g = self._prepare(image)

@@ -33,8 +33,9 @@ from typing import Any
 import numpy as np
 
 from .._validate import as_uint8_image
-from ..types import Detections
+from ..types import Detections, Frame, Tracks
 from ._affine import patch_ncc, prepare_templates, register
+from .base import frame_image
 
 __all__ = ["Features", "KLTTracker"]
 
@@ -85,7 +86,7 @@ class KLTTracker:
         Smallest correlation of a feature's patch with the previous frame's.
     """
 
-    _prev32: np.ndarray  # float32 copy of the previous frame, set by step
+    _prev32: np.ndarray  # float32 copy of the previous frame, set by track
 
     def __init__(self, max_features: int = 500, *, quality: float = 0.01,
                  min_distance: float = 7.0, block_size: int = 7, win_size: int = 15,
@@ -189,7 +190,17 @@ class KLTTracker:
         self._T, self._SD = np.r_[self._T, T], np.r_[self._SD, SD]
         self._Hinv, self._p = np.r_[self._Hinv, Hinv], np.r_[self._p, p]
 
-    def step(self, image: Any) -> Features:
+    def step(self, frame: Frame, detections: Detections | None = None) -> Tracks:
+        """Track one frame (:class:`~vistrack.tracking.Tracker`): the features as point
+        tracks (score 1). ``frame`` carries the image; detections are not used (the tracker
+        finds its own features). :meth:`track` gives the features' ages and residuals too.
+        """
+        f = self.track(frame_image(frame, "KLTTracker"))
+        n = len(f)
+        return Tracks(ids=f.ids, boxes=None, points=f.points, scores=np.ones(n),
+                      classes=np.zeros(n, np.int64))
+
+    def track(self, image: Any) -> Features:
         """Track the features into a new frame (grey or BGR uint8) and top them up."""
         grey = as_uint8_image(image, grey=True)
         terminated = 0

@@ -26,6 +26,7 @@ from numba import njit
 from .._validate import as_box, as_uint8_image
 from ..filters import kf_predict, kf_update
 from ..types import Gaussian
+from .base import SingleObjectTracker
 
 __all__ = ["Snake", "SnakeTracker", "bspline_matrix"]
 
@@ -113,7 +114,7 @@ class Snake:
     >>> s = Snake(n_control=12, n_samples=60)
     >>> s.init_circle((80, 60), 26)
     >>> for _ in range(5):
-    ...     pts = s.step(im)
+    ...     pts = s.track(im)
     >>> r = np.linalg.norm(pts - [80, 60], axis=1)
     >>> bool(abs(r.mean() - 30) < 0.6)
     True
@@ -158,7 +159,7 @@ class Snake:
         """The contour's ``m`` sample points ``(m, 2)``."""
         return self.B @ self.control_points
 
-    def step(self, image: Any) -> np.ndarray:
+    def track(self, image: Any) -> np.ndarray:
         """Track the contour into a new (grey or BGR) frame; returns its sample points."""
         if self.state is None:
             raise RuntimeError("call init or init_circle first")
@@ -184,7 +185,7 @@ class Snake:
         return self.contour()
 
 
-class SnakeTracker:
+class SnakeTracker(SingleObjectTracker):
     """A :class:`Snake` as a box tracker: started on the ellipse inscribed in the first box,
     its box is the contour's bounding box; ``anchor(box)`` moves and scales the contour so
     that its bounding box is ``box``.
@@ -198,7 +199,7 @@ class SnakeTracker:
     def __init__(self, **snake: Any):
         self.snake = Snake(**snake)
 
-    def init(self, image: Any, box: Any) -> None:
+    def _start(self, image: Any, box: Any) -> None:
         b = as_box(box)
         s = self.snake
         # a cubic B-spline through control points on an ellipse lies inside them: the
@@ -214,8 +215,8 @@ class SnakeTracker:
         lo, hi = pts.min(0), pts.max(0)
         return np.r_[lo, np.maximum(hi - lo, 1e-6)]
 
-    def update(self, image: Any) -> np.ndarray:
-        self.snake.step(image)
+    def _follow(self, image: Any) -> np.ndarray:
+        self.snake.track(image)
         self.box = self._bounds()
         return self.box.copy()
 

@@ -11,11 +11,11 @@ log size. Each frame follows the Hager/Toyama cycle with the prediction shared: 
 is first **anchored** on the composite's predicted box (``anchor(box)`` moves its own state
 there), so a member that drifted, or whose window grew over the background, searches from
 the composite's estimate; each member's box is then gated, a member whose normalised
-innovation squared exceeds the χ² quantile ``gate`` (4 degrees of freedom) being rejected
+innovation squared exceeds the χ² quantile ``p_gate`` (4 degrees of freedom) being rejected
 that frame as in the seeds' validation gates; the accepted ones correct the prediction.
 
 A member is anything with ``init(image, box)``, ``update(image) -> box`` and
-``anchor(box)``; every tracker in :data:`vistrack.frontends.single.METHODS` except OpenCV's
+``anchor(box)``; every tracker in :data:`vistrack.tracking.single.METHODS` except OpenCV's
 has ``anchor``.
 """
 
@@ -30,6 +30,7 @@ from .._validate import as_box
 from ..filters import kf_predict, kf_update
 from ..models import ConstantVelocity
 from ..types import Gaussian
+from .base import SingleObjectTracker
 
 __all__ = ["Composite"]
 
@@ -49,7 +50,7 @@ def _box_of(x: np.ndarray) -> np.ndarray:
     return np.array([x[0] - w / 2, x[1] - h / 2, w, h])
 
 
-class Composite:
+class Composite(SingleObjectTracker):
     """Member trackers fused by a gated Kalman filter (see the module).
 
     Parameters
@@ -62,7 +63,7 @@ class Composite:
         over 100 px).
     q_size : float
         Random-walk variance of the log size per frame.
-    gate : float
+    p_gate : float
         Probability of the χ² gate on each member's innovation (4 degrees of freedom).
 
     Notes
@@ -74,13 +75,13 @@ class Composite:
     --------
     Colour for the centre, a snake's contour for the size (``examples/compose_bag.py``):
 
-    >>> from vistrack.frontends.single import single_tracker
+    >>> from vistrack.tracking.single import single_tracker
     >>> tracker = Composite({"colour": (single_tracker("meanshift"), (0.1, 1.0)),
     ...                      "shape": (single_tracker("snake"), (0.2, 0.05))})
     """
 
     def __init__(self, members: Mapping[str, tuple[Any, tuple[float, float]]], *,
-                 q_pos: float = 16.0, q_size: float = 1e-3, gate: float = 0.999):
+                 q_pos: float = 16.0, q_size: float = 1e-3, p_gate: float = 0.999):
         if not members:
             raise ValueError("members must name at least one tracker")
         self.members: dict[str, Any] = {}
@@ -99,14 +100,14 @@ class Composite:
                                  f"{(pos_sd, size_sd)}")
             self.members[name] = tracker
             self.noise[name] = np.array([pos_sd, size_sd], float)
-        if not (0 < gate < 1):
-            raise ValueError(f"gate must be a probability in (0, 1); got {gate}")
+        if not (0 < p_gate < 1):
+            raise ValueError(f"p_gate must be a probability in (0, 1); got {p_gate}")
         from scipy.stats import chi2
 
         self.q_pos, self.q_size = float(q_pos), float(q_size)
-        self.threshold = float(chi2.ppf(gate, 4))
+        self.threshold = float(chi2.ppf(p_gate, 4))
 
-    def init(self, image: Any, box: Any) -> None:
+    def _start(self, image: Any, box: Any) -> None:
         b = as_box(box)
         for tracker in self.members.values():
             tracker.init(image, b)
@@ -126,7 +127,7 @@ class Composite:
         Q[4, 4] = Q[5, 5] = self.q_size
         return F, Q
 
-    def update(self, image: Any) -> np.ndarray:
+    def _follow(self, image: Any) -> np.ndarray:
         g = kf_predict(self.state, *self._motion())
         size = np.exp(g.mean[4:])
         predicted = _box_of(g.mean)

@@ -1,0 +1,161 @@
+"""Tracks out: sinks that take a tracker's output frame by frame and write a file when closed.
+
+Every sink answers ``write(frame, tracks)`` (one :class:`~vistrack.types.Frame` and the
+:class:`~vistrack.types.Tracks` reported in it) and ``close()``; :func:`vistrack.pipeline.run`
+feeds any list of them. Here: :class:`MOTWriter` (MOTChallenge results), :class:`CSVWriter`
+(``frame,id,x,y,w,h,score`` with a header) and :class:`BoxesWriter` (one object's
+``frame,x,y,w,h``, OTB-style); pictures are sinks in :mod:`vistrack.viz`.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from ..types import Frame, Tracks
+from .motchallenge import write_mot
+
+__all__ = ["Sink", "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes"]
+
+
+@runtime_checkable
+class Sink(Protocol):
+    """What every output of the pipeline answers."""
+
+    def write(self, frame: Frame, tracks: Tracks) -> None:
+        """Take one frame's tracks."""
+        ...
+
+    def close(self) -> None:
+        """Finish (write the file)."""
+        ...
+
+
+class TrackRows:
+    """Collects box tracks as rows: :attr:`frames`, :attr:`ids`, :attr:`xywh` and
+    :attr:`scores`, in the order written (a sink that writes nothing).
+
+    Examples
+    --------
+    >>> rows = TrackRows()
+    >>> rows.write(Frame(1, 0.0), Tracks(ids=np.array([4]), boxes=np.array([[0, 0, 2.0, 3]]),
+    ...                                   points=None, scores=np.ones(1), classes=np.zeros(1)))
+    >>> rows.frames.tolist(), rows.ids.tolist(), rows.xywh.tolist()
+    ([1], [4], [[0.0, 0.0, 2.0, 3.0]])
+    """
+
+    def __init__(self) -> None:
+        self._frames: list[np.ndarray] = []
+        self._ids: list[np.ndarray] = []
+        self._xywh: list[np.ndarray] = []
+        self._scores: list[np.ndarray] = []
+
+    def write(self, frame: Frame, tracks: Tracks) -> None:
+        """Keep the rows of one frame's tracks (boxes)."""
+        if len(tracks):
+            self._frames.append(np.full(len(tracks), int(frame.index)))
+            self._ids.append(np.asarray(tracks.ids))
+            self._xywh.append(tracks.xywh)
+            self._scores.append(np.asarray(tracks.scores, dtype=float))
+
+    def close(self) -> None:
+        """Nothing to finish."""
+
+    def __len__(self) -> int:
+        return sum(len(f) for f in self._frames)
+
+    @staticmethod
+    def _cat(parts: list[np.ndarray], shape: tuple[int, ...]) -> np.ndarray:
+        return np.concatenate(parts) if parts else np.zeros(shape)
+
+    @property
+    def frames(self) -> np.ndarray:
+        """Frame index of each row ``(N,)`` int."""
+        return self._cat(self._frames, (0,)).astype(int)
+
+    @property
+    def ids(self) -> np.ndarray:
+        """Track identity of each row ``(N,)`` int."""
+        return self._cat(self._ids, (0,)).astype(int)
+
+    @property
+    def xywh(self) -> np.ndarray:
+        """Boxes ``(N, 4)``: ``x, y, w, h`` (top-left corner and size)."""
+        return self._cat(self._xywh, (0, 4))
+
+    @property
+    def scores(self) -> np.ndarray:
+        """Score of each row ``(N,)``."""
+        return self._cat(self._scores, (0,))
+
+
+class MOTWriter(TrackRows):
+    """Writes MOTChallenge results (:func:`~vistrack.io.write_mot`) to ``path`` when closed."""
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        super().__init__()
+        self.path = Path(path)
+
+    def close(self) -> None:
+        """Write the file."""
+        write_mot(self.path, self.frames, self.ids, self.xywh, self.scores, force=True)
+
+
+class CSVWriter(TrackRows):
+    """Writes ``frame,id,x,y,w,h,score`` rows, with that header, to ``path`` when closed
+    (boxes to 2 decimals, scores to 3)."""
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        super().__init__()
+        self.path = Path(path)
+
+    def close(self) -> None:
+        """Write the file."""
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        with open(self.path, "w") as fh:
+            fh.write("frame,id,x,y,w,h,score\n")
+            for f, i, (x, y, w, h), s in zip(self.frames, self.ids, self.xywh, self.scores):
+                fh.write(f"{f},{i},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{s:.3f}\n")
+
+
+def write_boxes(path: str | os.PathLike, boxes: object, *, force: bool = False) -> None:
+    """Write one object's boxes ``(T, 4)`` (``x, y, w, h``) as ``frame,x,y,w,h`` lines,
+    frames from 1 (OTB-style); refuses to overwrite an existing file unless ``force``."""
+    path = Path(path)
+    if path.exists() and not force:
+        raise FileExistsError(f"{path} exists; pass --force to overwrite it")
+    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w") as fh:
+        for k, (x, y, w, h) in enumerate(b, start=1):
+            fh.write(f"{k},{x:.2f},{y:.2f},{w:.2f},{h:.2f}\n")
+
+
+class BoxesWriter:
+    """One object's box in every frame, written as ``frame,x,y,w,h`` lines (frames counted
+    from 1, :func:`write_boxes`) to ``path`` when closed: a single-object tracker's track 1.
+
+    Attributes
+    ----------
+    boxes : (T, 4) ndarray
+        The boxes written so far (``x, y, w, h``; NaN in a frame without the object).
+    """
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        self.path = Path(path)
+        self._boxes: list[np.ndarray] = []
+
+    def write(self, frame: Frame, tracks: Tracks) -> None:
+        """Keep the frame's box (NaN when no track is reported)."""
+        self._boxes.append(tracks.xywh[0] if len(tracks) else np.full(4, np.nan))
+
+    @property
+    def boxes(self) -> np.ndarray:
+        return np.array(self._boxes, dtype=float).reshape(-1, 4)
+
+    def close(self) -> None:
+        """Write the file."""
+        write_boxes(self.path, self.boxes, force=True)

@@ -1,0 +1,251 @@
+"""One tracker protocol and one loop: every tracker answers ``step(frame, detections)`` and
+``reset()``, :func:`vistrack.pipeline.run` drives any of them into any sinks, and the
+registries name the valid parts."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from vistrack.evaluation.single import success_rate
+from vistrack.io import read_mot
+from vistrack.io.tracks import BoxesWriter, CSVWriter, MOTWriter, TrackRows
+from vistrack.pipeline import FRONTENDS, SINKS, TRACKERS, Registry, run, track_video
+from vistrack.tracking import (
+    METHODS,
+    BoxTracker,
+    Composite,
+    DetectorConfidencePF,
+    KLTTracker,
+    PointTracker,
+    SingleObjectTracker,
+    Tracker,
+    single_tracker,
+)
+from vistrack.types import Detections, Frame, Tracks
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def red_disc_clip(T=30, size=(160, 120)):
+    """Frames of a red disc moving right on a grey background, and its true boxes (xywh)."""
+    W, H = size
+    frames, boxes = [], []
+    for k in range(T):
+        im = np.full((H, W, 3), 120, np.uint8)
+        cx, cy, r = 30 + 2 * k, 60, 12
+        cv2.circle(im, (cx, cy), r, (30, 30, 220), -1)
+        frames.append(Frame(k + 1, k / 25, im))
+        boxes.append([cx - r, cy - r, 2 * r, 2 * r])
+    return frames, np.array(boxes, float)
+
+
+def every_tracker():
+    """One of each tracker class, ready to step."""
+    out = {"BoxTracker": BoxTracker(), "PointTracker": PointTracker(),
+           "DetectorConfidencePF": DetectorConfidencePF(gamma=0.0), "KLTTracker": KLTTracker(),
+           "Composite": Composite({"colour": (single_tracker("colour"), (4.0, 8.0))})}
+    out.update({f"single:{m}": single_tracker(m) for m in METHODS})
+    return out
+
+
+@pytest.mark.parametrize("name", list(every_tracker()))
+def test_every_tracker_answers_the_protocol(name):
+    """Each tracker is a Tracker, steps through frames with the frame's detections into
+    Tracks, and after reset() gives the same tracks again from the same frames."""
+    tracker = every_tracker()[name]
+    assert isinstance(tracker, Tracker)
+    frames, boxes = red_disc_clip(T=8)
+    points = name == "PointTracker"
+
+    def dets(k):
+        b = boxes[k]
+        if points:
+            return Detections(points=[b[:2] + b[2:] / 2])
+        return Detections.from_xywh([b], [0.9])
+
+    def go():
+        out = [tracker.step(f, dets(k)) for k, f in enumerate(frames)]
+        assert all(isinstance(t, Tracks) for t in out)
+        return out
+
+    first = go()
+    tracker.reset()
+    again = go()
+    for a, b in zip(first, again):
+        np.testing.assert_array_equal(a.ids, b.ids)
+        np.testing.assert_array_equal(a.boxes if a.boxes is not None else a.points,
+                                      b.boxes if b.boxes is not None else b.points)
+    if name not in ("KLTTracker",):  # KLT follows its own features, not the disc
+        last = first[-1]
+        assert len(last) >= 1 and last.ids[0] == 1
+        if not points:
+            assert last.boxes.shape == (len(last), 4)
+
+
+def test_single_object_trackers_start_at_the_best_detection_and_follow_it():
+    frames, truth = red_disc_clip()
+    tr = single_tracker("colour")
+    assert not tr.started and len(tr.step(frames[0])) == 0  # nothing to start from
+    decoy = np.r_[truth[1, :2] + 50, truth[1, 2:]]
+    out = [tr.step(frames[1], Detections.from_xywh([decoy, truth[1]], [0.3, 0.9]))]
+    out += [tr.step(f) for f in frames[2:]]
+    np.testing.assert_allclose(out[0].xywh[0], truth[1])  # the more confident one
+    boxes = np.array([t.xywh[0] for t in out])
+    assert success_rate(boxes, truth[1:]) > 0.9
+    with pytest.raises(TypeError, match="frame must be a vistrack.types.Frame with an image"):
+        tr.step(5)
+    fresh = single_tracker("template")
+    with pytest.raises(RuntimeError, match="update before init"):
+        fresh.update(frames[0].image)
+    assert isinstance(fresh, SingleObjectTracker)
+
+
+def test_box_and_point_trackers_take_a_frame_or_its_index():
+    d = Detections.from_xywh([[10, 20, 30, 60]], [0.9])
+    a, b = BoxTracker(), BoxTracker()
+    for k in range(1, 4):
+        ta, tb = a.step(k, d), b.step(Frame(k, (k - 1) / 30), d)
+        np.testing.assert_array_equal(ta.boxes, tb.boxes)
+    assert len(a.step(None, None)) == 0 and a.frame == 4  # the next frame; no detections
+    with pytest.raises(ValueError, match="frame must increase; got 2 after 4"):
+        a.step(2, d)
+    with pytest.raises(TypeError, match="frame must be a vistrack.types.Frame or its index"):
+        a.step("7", d)
+
+
+def test_run_feeds_sinks_and_writes_nothing_from_a_failed_run(tmp_path):
+    frames, truth = red_disc_clip(T=10)
+    boxes = {f.index: Detections.from_xywh([truth[k]], [0.9]) for k, f in enumerate(frames)}
+    sinks = [MOTWriter(tmp_path / "t.txt"), CSVWriter(tmp_path / "t.csv"), TrackRows()]
+    stats = run(frames, lambda f: boxes[f.index], BoxTracker(), sinks)
+    assert stats.frames == 10 and set(stats.seconds) == {"decode", "frontend", "tracker",
+                                                         "write"}
+    got = read_mot(tmp_path / "t.txt")
+    np.testing.assert_allclose(got.boxes, sinks[2].xywh, atol=0.005)
+    assert len(got) == len(sinks[2]) == 10  # confirmed at once in the first frame
+    assert (tmp_path / "t.csv").read_text().splitlines()[0] == "frame,id,x,y,w,h,score"
+
+    def broken(f):
+        if f.index == 5:
+            raise RuntimeError("detector failed at frame 5")
+        return boxes[f.index]
+
+    with pytest.raises(RuntimeError, match="frame 5"):
+        run(frames, broken, BoxTracker(), [MOTWriter(tmp_path / "partial.txt")])
+    assert not (tmp_path / "partial.txt").exists()
+    with pytest.raises(TypeError, match=r"sinks\[0\] must have write"):
+        run(frames, None, BoxTracker(), [object()])
+    with pytest.raises(TypeError, match="tracker must have step"):
+        run(frames, None, object())
+
+
+def test_registries_list_the_valid_names():
+    assert {"bgsub", "hog", "confidence"} <= set(FRONTENDS)
+    assert {"bytetrack", "sort", "dcpf", "single:colour"} <= set(TRACKERS)
+    assert set(SINKS) == {"tracks", "csv", "video", "plot"}
+    with pytest.raises(ValueError, match=r"tracker must be one of \['bytetrack'"):
+        TRACKERS["yolo"]
+    with pytest.raises(ValueError, match="must be one of"):
+        Registry("sink", {})["x"]
+
+
+class EveryDetection:
+    """A tracker of one's own: each detection is its own track, numbered in order."""
+
+    def __init__(self):
+        self.reset()
+
+    def reset(self):
+        self.frames = 0
+
+    def step(self, frame, detections=None):
+        self.frames += 1
+        n = 0 if detections is None else len(detections)
+        return Tracks(ids=np.arange(1, n + 1), boxes=detections.boxes if n else np.zeros((0, 4)),
+                      points=None, scores=np.ones(n), classes=np.zeros(n, int))
+
+
+def write_clip(folder, frames):
+    folder.mkdir()
+    for f in frames:
+        cv2.imwrite(str(folder / f"{f.index:06d}.png"), f.image)
+    return folder
+
+
+def test_track_video_takes_any_tracker_and_detector(tmp_path):
+    """A tracker and a detector of one's own, through track_video: the tracks written are
+    the detector's boxes, as the tracker returned them."""
+    frames, truth = red_disc_clip(T=12)
+    folder = write_clip(tmp_path / "frames", frames)
+
+    class Truth:
+        def __init__(self):
+            self.k = 0
+
+        def detect(self, image):
+            self.k += 1
+            return Detections.from_xywh([truth[self.k - 1]], [0.8])
+
+    mine = EveryDetection()
+    run_ = track_video(folder, tmp_path / "out", tracker=mine, frontend=Truth(), fps=25,
+                       annotate=False)
+    got = read_mot(run_.files["tracks"])
+    assert run_.frames == 12 and mine.frames == 12 and run_.config is None
+    np.testing.assert_allclose(got.boxes, truth, atol=0.005)
+    with pytest.raises(TypeError, match="tracker must be a name in"):
+        track_video(folder, tmp_path / "o2", tracker=42, frontend=Truth())
+
+
+def test_track_video_follows_one_object_by_name(tmp_path):
+    """``single:colour``: the first frame's detection starts it; it follows the disc."""
+    frames, truth = red_disc_clip(T=20)
+    folder = write_clip(tmp_path / "frames", frames)
+    det = tmp_path / "det.txt"
+    det.write_text(",".join(map(str, [1, -1, *truth[0], 0.9, -1, -1, -1])) + "\n")
+    r = track_video(folder, tmp_path / "out", tracker="single:colour",
+                    frontend=f"detections:{det}", fps=25, annotate=False)
+    got = read_mot(r.files["tracks"])
+    assert r.tracks == 1 and len(got) == 20
+    assert success_rate(got.boxes, truth) > 0.9
+
+
+def test_cli_takes_a_tracker_of_ones_own(tmp_path):
+    """``--tracker module:callable``: the CLI makes it and runs it like any other."""
+    frames, truth = red_disc_clip(T=6)
+    folder = write_clip(tmp_path / "frames", frames)
+    (tmp_path / "mytracker.py").write_text(
+        "from tests.test_pipeline import EveryDetection\n"
+        "def make():\n    return EveryDetection()\n")
+    det = tmp_path / "det.txt"
+    det.write_text("".join(",".join(map(str, [k + 1, -1, *truth[k], 0.9, -1, -1, -1])) + "\n"
+                           for k in range(6)))
+    env = {"PYTHONPATH": f"{tmp_path}:{ROOT}:{ROOT / 'src'}"}
+    cmd = [sys.executable, "-m", "vistrack.cli", "track", str(folder), "--tracker",
+           "mytracker:make", "--frontend", f"detections:{det}", "--out-dir",
+           str(tmp_path / "out"), "--fps", "25", "--force"]
+    r = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "tracked 6 frames: 6 boxes of 1 tracks" in r.stdout
+    bad = subprocess.run(cmd[:6] + ["nomodule:make"] + cmd[7:], capture_output=True, text=True,
+                         env=env, cwd=tmp_path)
+    assert bad.returncode == 2
+    assert "cannot import make from nomodule" in bad.stderr
+    box_only = subprocess.run(cmd[:6] + ["dcpf", "--high", "0.5"] + cmd[7:],
+                              capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert box_only.returncode == 2 and "goes with the box trackers" in box_only.stderr
+
+
+def test_boxes_writer_marks_frames_without_the_object(tmp_path):
+    w = BoxesWriter(tmp_path / "b.txt")
+    w.write(Frame(1, 0.0), Tracks.empty())
+    w.write(Frame(2, 0.04), Tracks(ids=np.ones(1, int), boxes=np.array([[1.0, 2, 4, 6]]),
+                                   points=None, scores=np.ones(1), classes=np.zeros(1, int)))
+    w.close()
+    assert (tmp_path / "b.txt").read_text().splitlines() == ["1,nan,nan,nan,nan",
+                                                             "2,1.00,2.00,3.00,4.00"]
