@@ -262,86 +262,221 @@ class MOTCounts:
     # CLEAR MOT
     @property
     def MOTA(self) -> float:
-        r"""CLEAR MOT accuracy, :math:`1 - (FN + FP + IDSW) / (TP + FN)`; can be negative."""
+        r"""CLEAR MOT accuracy, :math:`1 - (FN + FP + IDSW) / (TP + FN)`; can be negative.
+
+        Examples
+        --------
+        >>> c = MOTCounts(TP=8, FN=2, FP=1, IDSW=1, MOTP_sum=6.0, IDTP=6, IDFP=3, IDFN=4)
+        >>> c.MOTA
+        0.6
+        """
         return (self.TP - self.FP - self.IDSW) / max(1, self.TP + self.FN)
 
     @property
     def MOTP(self) -> float:
-        r"""CLEAR MOT precision: the mean IoU of the matches, :math:`\text{MOTP\_sum} / TP`."""
+        r"""CLEAR MOT precision: the mean IoU of the matches, :math:`\text{MOTP\_sum} / TP`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(TP=8, FN=2, FP=1, IDSW=1, MOTP_sum=6.0, IDTP=6, IDFP=3, IDFN=4)
+        >>> c.MOTP
+        0.75
+        """
         return self.MOTP_sum / max(1, self.TP)
 
     # identity
     @property
     def IDF1(self) -> float:
-        r"""Identity F1, :math:`IDTP / (IDTP + (IDFP + IDFN) / 2)`."""
+        r"""Identity F1, :math:`IDTP / (IDTP + (IDFP + IDFN) / 2)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(TP=8, FN=2, FP=1, IDSW=1, MOTP_sum=6.0, IDTP=6, IDFP=3, IDFN=4)
+        >>> round(c.IDF1, 3)
+        0.632
+        """
         return self.IDTP / max(1.0, self.IDTP + 0.5 * self.IDFP + 0.5 * self.IDFN)
 
     @property
     def IDP(self) -> float:
-        r"""Identity precision, :math:`IDTP / (IDTP + IDFP)`."""
+        r"""Identity precision, :math:`IDTP / (IDTP + IDFP)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(TP=8, FN=2, FP=1, IDSW=1, MOTP_sum=6.0, IDTP=6, IDFP=3, IDFN=4)
+        >>> round(c.IDP, 3)
+        0.667
+        """
         return self.IDTP / max(1, self.IDTP + self.IDFP)
 
     @property
     def IDR(self) -> float:
-        r"""Identity recall, :math:`IDTP / (IDTP + IDFN)`."""
+        r"""Identity recall, :math:`IDTP / (IDTP + IDFN)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(TP=8, FN=2, FP=1, IDSW=1, MOTP_sum=6.0, IDTP=6, IDFP=3, IDFN=4)
+        >>> c.IDR
+        0.6
+        """
         return self.IDTP / max(1, self.IDTP + self.IDFN)
 
     # HOTA
     @property
     def DetA_alpha(self) -> np.ndarray:
         r"""Detection accuracy per threshold, :math:`TP_\alpha / (TP_\alpha + FN_\alpha +
-        FP_\alpha)`: ``(19,)``."""
+        FP_\alpha)`: ``(19,)``.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> c.DetA_alpha[:3].round(3)
+        array([0.667, 0.667, 0.667])
+        """
         return self.HOTA_TP / np.maximum(1, self.HOTA_TP + self.HOTA_FN + self.HOTA_FP)
 
     @property
     def HOTA_alpha(self) -> np.ndarray:
         r"""HOTA per threshold, :math:`\sqrt{\text{DetA}_\alpha \, \text{AssA}_\alpha}`:
-        ``(19,)``."""
+        ``(19,)``.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> c.HOTA_alpha.shape, round(float(c.HOTA_alpha[0]), 3)
+        ((19,), 0.577)
+        """
         return np.sqrt(self.DetA_alpha * self.AssA_alpha)
 
     @property
     def HOTA(self) -> float:
-        """Higher order tracking accuracy: :attr:`HOTA_alpha` averaged over :data:`ALPHAS`."""
+        """Higher order tracking accuracy: :attr:`HOTA_alpha` averaged over :data:`ALPHAS`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.HOTA, 3)
+        0.577
+        """
         return float(self.HOTA_alpha.mean())
 
     @property
     def DetA(self) -> float:
-        """Detection accuracy: :attr:`DetA_alpha` averaged over :data:`ALPHAS`."""
+        """Detection accuracy: :attr:`DetA_alpha` averaged over :data:`ALPHAS`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.DetA, 3)
+        0.667
+        """
         return float(self.DetA_alpha.mean())
 
     @property
     def AssA(self) -> float:
         r"""Association accuracy averaged over :data:`ALPHAS`: per threshold, the mean over the
-        matches :math:`c` of :math:`|TPA(c)| / (|TPA(c)| + |FNA(c)| + |FPA(c)|)`."""
+        matches :math:`c` of :math:`|TPA(c)| / (|TPA(c)| + |FNA(c)| + |FPA(c)|)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> c.AssA
+        0.5
+        """
         return float(self.AssA_alpha.mean())
 
     @property
     def LocA(self) -> float:
-        """Localisation accuracy: the mean IoU of HOTA's matches, averaged over :data:`ALPHAS`."""
+        """Localisation accuracy: the mean IoU of HOTA's matches, averaged over :data:`ALPHAS`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.LocA, 3)
+        0.9
+        """
         return float(self.LocA_alpha.mean())
 
     @property
     def DetRe(self) -> float:
         r"""Detection recall, :math:`TP_\alpha / (TP_\alpha + FN_\alpha)` averaged over
-        :data:`ALPHAS`."""
+        :data:`ALPHAS`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.DetRe, 3)
+        0.8
+        """
         return float((self.HOTA_TP / np.maximum(1, self.HOTA_TP + self.HOTA_FN)).mean())
 
     @property
     def DetPr(self) -> float:
         r"""Detection precision, :math:`TP_\alpha / (TP_\alpha + FP_\alpha)` averaged over
-        :data:`ALPHAS`."""
+        :data:`ALPHAS`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.DetPr, 3)
+        0.8
+        """
         return float((self.HOTA_TP / np.maximum(1, self.HOTA_TP + self.HOTA_FP)).mean())
 
     @property
     def AssRe(self) -> float:
         r"""Association recall averaged over :data:`ALPHAS`: per threshold, the mean over the
-        matches :math:`c` of :math:`|TPA(c)| / (|TPA(c)| + |FNA(c)|)`."""
+        matches :math:`c` of :math:`|TPA(c)| / (|TPA(c)| + |FNA(c)|)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.AssRe, 3)
+        0.6
+        """
         return float(self.AssRe_alpha.mean())
 
     @property
     def AssPr(self) -> float:
         r"""Association precision averaged over :data:`ALPHAS`: per threshold, the mean over
-        the matches :math:`c` of :math:`|TPA(c)| / (|TPA(c)| + |FPA(c)|)`."""
+        the matches :math:`c` of :math:`|TPA(c)| / (|TPA(c)| + |FPA(c)|)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.AssPr, 3)
+        0.7
+        """
         return float(self.AssPr_alpha.mean())
 
     def summary(self) -> dict:

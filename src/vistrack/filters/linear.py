@@ -389,7 +389,16 @@ class OnlineFilter:
 
     @property
     def mean(self) -> np.ndarray:
-        """The current mean ``(n,)``: a read-only view that the next call changes."""
+        """The current mean ``(n,)``: a read-only view that the next call changes.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantPosition, Position
+        >>> f = KalmanFilter(ConstantPosition(dim=2), Position(dim=2)).online([1.0, 2.0],
+        ...                                                                  np.eye(2))
+        >>> f.mean, f.mean.flags.writeable
+        (array([1., 2.]), False)
+        """
         o = self._off["x"]
         v = self._buf[o:o + self._n]
         v.flags.writeable = False
@@ -397,7 +406,16 @@ class OnlineFilter:
 
     @property
     def cov(self) -> np.ndarray:
-        """The current covariance ``(n, n)``: a read-only view that the next call changes."""
+        """The current covariance ``(n, n)``: a read-only view that the next call changes.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantPosition, Position
+        >>> f = KalmanFilter(ConstantPosition(dim=1), Position(dim=1)).online([0.0], np.eye(1))
+        >>> _ = f.update([1.0])
+        >>> f.cov
+        array([[0.5]])
+        """
         n, o = self._n, self._off["P"]
         v = self._buf[o:o + n * n].reshape(n, n)
         v.flags.writeable = False

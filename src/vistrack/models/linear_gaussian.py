@@ -88,6 +88,11 @@ class LinearGaussian:
         """Transition matrix ``D``, ``(n, n) or (T, n, n)``.
 
         As :meth:`LinearMotion.F` gives it.
+
+        Examples
+        --------
+        >>> LinearGaussian(np.eye(2), np.eye(2), [[1.0, 0.0]], [[1.0]]).F.shape
+        (2, 2)
         """
         return self.motion.F()
 
@@ -96,6 +101,11 @@ class LinearGaussian:
         """Process-noise covariance ``Σd``, ``(n, n) or (T, n, n)``.
 
         As :meth:`LinearMotion.Q` gives it.
+
+        Examples
+        --------
+        >>> LinearGaussian(np.eye(2), np.eye(2), [[1.0, 0.0]], [[1.0]]).Q.shape
+        (2, 2)
         """
         return self.motion.Q()
 
@@ -104,6 +114,11 @@ class LinearGaussian:
         """Measurement matrix ``M``, ``(m, n) or (T, m, n)``.
 
         As :meth:`LinearMeasurement.H` gives it.
+
+        Examples
+        --------
+        >>> LinearGaussian(np.eye(2), np.eye(2), [[1.0, 0.0]], [[1.0]]).H.shape
+        (1, 2)
         """
         return self.measurement.H()
 
@@ -112,5 +127,10 @@ class LinearGaussian:
         """Measurement-noise covariance ``Σm``, ``(m, m) or (T, m, m)``.
 
         As :meth:`LinearMeasurement.R` gives it.
+
+        Examples
+        --------
+        >>> LinearGaussian(np.eye(2), np.eye(2), [[1.0, 0.0]], [[1.0]]).R.shape
+        (1, 1)
         """
         return self.measurement.R()

@@ -50,6 +50,11 @@ class MeasurementModel(Protocol):
         -------
         (m, n) or (T, m, n) ndarray
             ``H``, constant or one per step.
+
+        Examples
+        --------
+        >>> Position(dim=1).H(2)
+        array([[1., 0.]])
         """
         ...
 
@@ -60,6 +65,11 @@ class MeasurementModel(Protocol):
         -------
         (m, m) or (T, m, m) ndarray
             ``R``, symmetric positive (semi-)definite, constant or one per step.
+
+        Examples
+        --------
+        >>> Position(dim=1, r=2.0).R()
+        array([[2.]])
         """
         ...
 

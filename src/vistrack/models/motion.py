@@ -68,6 +68,12 @@ class MotionModel(Protocol):
         -------
         (n, n) or (K, n, n) ndarray
             ``F(dt)``, one per time step when ``dt`` is an array.
+
+        Examples
+        --------
+        >>> ConstantVelocity(dim=1).F(2.0)
+        array([[1., 2.],
+               [0., 1.]])
         """
         ...
 
@@ -83,6 +89,11 @@ class MotionModel(Protocol):
         -------
         (n, n) or (K, n, n) ndarray
             ``Q(dt)``, symmetric positive semi-definite, shaped like :meth:`F`.
+
+        Examples
+        --------
+        >>> ConstantPosition(dim=1, q=0.5).Q(2.0)
+        array([[1.]])
         """
         ...
 

@@ -453,8 +453,20 @@ def _weighted_mean(z, w, angles):
 # provide their own, defined at module level.
 @njit(cache=True, error_model="numpy", inline="always")
 def _ct_f(x, dt, t, params, out):
-    """The coordinated turn's ``f`` for one state, compiled: writes ``f(x (5,), dt)`` into
-    ``out (5,)`` (``t`` and the empty ``params`` are unused).
+    """The coordinated turn's ``f`` for one state, compiled: writes ``f(x, dt)`` into ``out``.
+
+    Parameters
+    ----------
+    x : (5,) ndarray
+        The state ``[x, y, vx, vy, ω]``.
+    dt : float
+        Time step.
+    t : float
+        Unused.
+    params : (0,) ndarray
+        Unused (a row of :meth:`CoordinatedTurn.jit_params`).
+    out : (5,) ndarray
+        Receives the predicted state; nothing is returned.
 
     Examples
     --------
@@ -480,8 +492,16 @@ def _ct_f(x, dt, t, params, out):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _range_bearing_h(x, params, out):
-    """Range-bearing ``h`` for one state, compiled: writes ``[range, bearing]`` of ``x (n,)``
-    from the sensor ``params = (sx, sy)`` into ``out (2,)``.
+    """Range-bearing ``h`` for one state, compiled: writes ``[range, bearing]`` into ``out``.
+
+    Parameters
+    ----------
+    x : (n,) ndarray
+        The state; its first two entries are the position.
+    params : (2,) ndarray
+        The sensor's position (:meth:`RangeBearing.jit_params`).
+    out : (2,) ndarray
+        Receives ``[range, bearing]``; nothing is returned.
 
     Examples
     --------
@@ -497,8 +517,18 @@ def _range_bearing_h(x, params, out):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _growth_f(x, dt, t, params, out):
-    """The growth model's ``f`` for one state, compiled: writes ``x/2 + 25 x/(1 + x²) +
-    params[0]`` into ``out (1,)``, with ``params[0] = 8 cos(1.2 t)`` from ``jit_params``.
+    """The growth model's ``f`` for one state, compiled: ``x/2 + 25 x/(1 + x²) + params[0]``.
+
+    Parameters
+    ----------
+    x : (1,) ndarray
+        The state.
+    dt, t : float
+        Unused: the forcing comes in ``params``.
+    params : (1,) ndarray
+        ``8 cos(1.2 t)``, a row of :meth:`GrowthMotion.jit_params`.
+    out : (1,) ndarray
+        Receives the predicted state; nothing is returned.
 
     Examples
     --------
@@ -513,8 +543,16 @@ def _growth_f(x, dt, t, params, out):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _square_h(x, params, out):
-    """The growth model's measurement ``x² / 20`` for one state, compiled, into ``out (1,)``
-    (``params`` is unused).
+    """The growth model's measurement ``x² / 20`` for one state, compiled.
+
+    Parameters
+    ----------
+    x : (1,) ndarray
+        The state.
+    params : (0,) ndarray
+        Unused (:meth:`GrowthMeasurement.jit_params`).
+    out : (1,) ndarray
+        Receives ``x² / 20``; nothing is returned.
 
     Examples
     --------
