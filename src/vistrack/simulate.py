@@ -26,25 +26,52 @@ def simulate_lgssm(
     n_series: int | None = None,
     rng: np.random.Generator | int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Sample ``x_t = F_t x_{t-1} + N(0, Q_t)``, ``y_t = H_t x_t + N(0, R_t)`` for ``T`` steps.
+    r"""Sample states and measurements of a linear-Gaussian state-space model.
+
+    .. math::
+
+        x_0 \sim N(\bar x_0, P_0), \qquad
+        x_t = F_t x_{t-1} + w_t, \quad w_t \sim N(0, Q_t), \qquad
+        y_t = H_t x_t + v_t, \quad v_t \sim N(0, R_t),
+
+    for ``t = 0, ..., T-1`` (the seeds' :math:`x_i \sim N(D x_{i-1}, \Sigma_d)`,
+    :math:`y_i \sim N(M x_i, \Sigma_m)`).
 
     Parameters
     ----------
     T : int
-        Number of steps.
-    F, Q, H, R : array
-        Constant ``(n, n)``/``(m, n)``/``(m, m)`` or per step ``(T, ...)``, as in
-        :func:`vistrack.filters.kalman_filter` (``F[0]``, ``Q[0]`` unused).
-    x0, P0 : array
-        The first state is drawn from ``N(x0, P0)`` (exactly ``x0`` if ``P0`` is None).
+        Number of steps, at least 1.
+    F, Q : (n, n) or (T, n, n) array_like
+        Dynamics and process-noise covariance, constant or per step, as in
+        :func:`vistrack.filters.kalman_filter` (``F[t]`` moves step ``t-1`` to ``t``; ``F[0]``
+        and ``Q[0]`` are unused). ``Q`` is symmetric positive semi-definite.
+    H, R : (m, n) and (m, m), or (T, m, n) and (T, m, m) array_like
+        Measurement matrix and noise covariance, constant or per step.
+    x0 : (n,) array_like
+        Mean :math:`\bar x_0` of the first state.
+    P0 : (n, n) array_like, optional
+        Covariance of the first state; the first state is exactly ``x0`` if None.
     n_series : int, optional
-        Draw this many independent series: outputs gain a leading axis.
-    rng : Generator, int or None
+        Draw this many independent series: the outputs gain a leading axis.
+    rng : numpy.random.Generator, int or None
+        Random generator or seed.
 
     Returns
     -------
-    xs : ndarray, shape ([n_series,] T, n)
-    ys : ndarray, shape ([n_series,] T, m)
+    xs : ([n_series,] T, n) ndarray
+        States.
+    ys : ([n_series,] T, m) ndarray
+        Measurements.
+
+    Raises
+    ------
+    ValueError
+        If ``T`` is not a positive integer, a matrix has the wrong shape or is not finite,
+        ``Q``, ``R`` or ``P0`` is not symmetric positive semi-definite, or ``n_series < 1``.
+
+    See Also
+    --------
+    simulate : The same from motion and measurement models, linear or not.
 
     Examples
     --------
@@ -99,9 +126,52 @@ def simulate(
     n_series: int | None = None,
     rng: np.random.Generator | int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Sample from a motion model and a measurement model; see :func:`simulate_lgssm`.
+    r"""Sample states and measurements from a motion model and a measurement model.
 
-    ``dt`` is a scalar, the ``T-1`` intervals between steps, or ``T`` values (``dt[0]`` unused).
+    Linear models (no ``jacobian``) are sampled by :func:`simulate_lgssm` with the matrices
+    :meth:`vistrack.filters.KalmanFilter.matrices` gives. A nonlinear model (one with a
+    ``jacobian``: :mod:`vistrack.models.nonlinear`) is sampled as
+
+    .. math::
+
+        x_t = f(x_{t-1}, \Delta t_t, \tau_t) + w_t, \quad w_t \sim N(0, Q(\Delta t_t)),
+        \qquad y_t = h(x_t) + v_t, \quad v_t \sim N(0, R),
+
+    with :math:`\tau_t` the time since the first step (the cumulative ``dt``), and the
+    measurement components that the model lists in ``angles`` wrapped to ``(-π, π]``.
+
+    Parameters
+    ----------
+    motion : motion model
+        Linear (``F(dt)``, ``Q(dt)``, ``ndim_state``, as :mod:`vistrack.models.motion`) or
+        nonlinear (``f``, ``jacobian``, ``Q``, as :mod:`vistrack.models.nonlinear`).
+    measurement : measurement model
+        Linear (``H(n)``, ``R()``) or nonlinear (``h``, ``jacobian``, ``R()``).
+    T : int
+        Number of steps.
+    x0 : (n,) array_like
+        Mean of the first state.
+    P0 : (n, n) array_like, optional
+        Covariance of the first state; the first state is exactly ``x0`` if None.
+    dt : float or array_like
+        Time step: a scalar, the ``T-1`` intervals between steps, or ``T`` values (``dt[0]``
+        unused).
+    n_series : int, optional
+        Draw this many independent series: the outputs gain a leading axis.
+    rng : numpy.random.Generator, int or None
+        Random generator or seed.
+
+    Returns
+    -------
+    xs : ([n_series,] T, n) ndarray
+        States.
+    ys : ([n_series,] T, m) ndarray
+        Measurements.
+
+    See Also
+    --------
+    simulate_lgssm : The linear-Gaussian sampler, from matrices.
+    vistrack.models.SwitchingLinearSystem.sample : Sampling a switching linear system.
 
     Examples
     --------
@@ -110,6 +180,13 @@ def simulate(
     ...                   x0=[10, 10, 1, 0], rng=1)
     >>> xs.shape, ys.shape
     ((15, 4), (15, 2))
+
+    A nonlinear model, 3 independent series:
+
+    >>> from vistrack.models import growth_model
+    >>> xs, ys = simulate(*growth_model(), 20, x0=[0.1], n_series=3, rng=0)
+    >>> xs.shape, ys.shape
+    ((3, 20, 1), (3, 20, 1))
     """
     nonlinear = hasattr(motion, "jacobian") or hasattr(measurement, "jacobian")
     if not nonlinear:

@@ -12,14 +12,34 @@ __all__ = ["Gaussian", "Detections", "Tracks", "Frame", "xyxy_to_xywh"]
 
 @dataclass(frozen=True, slots=True)
 class Gaussian:
-    """A batch of Gaussian densities ``N(mean, cov)``.
+    r"""A batch of Gaussian densities ``N(mean, cov)``.
+
+    Each member of the batch is the density
+
+    .. math::
+
+        N(x; \mu, P) = (2\pi)^{-n/2} \det(P)^{-1/2}
+        \exp\left(-\tfrac12 (x - \mu)' P^{-1} (x - \mu)\right).
 
     Parameters
     ----------
-    mean : ndarray, shape (..., n)
+    mean : (..., n) array_like
         Means; the leading dimensions index the batch (one Gaussian is a batch of one).
-    cov : ndarray, shape (..., n, n)
-        Covariances, with the same leading dimensions as ``mean``.
+        Stored as float64.
+    cov : (..., n, n) array_like
+        Covariances, with the same leading dimensions as ``mean``. Stored as float64; their
+        symmetry and definiteness are not checked here.
+
+    Raises
+    ------
+    ValueError
+        If ``mean`` is a scalar or ``cov`` does not have the shape ``mean.shape + (n,)``.
+
+    Notes
+    -----
+    Index the batch as an array: ``g[mask]``, ``g[3]``, ``g[:10]`` give Gaussians of the
+    selected members; ``len(g)`` is the size of the first batch dimension (a single Gaussian,
+    ``mean`` of shape ``(n,)``, has no ``len``). Instances are frozen.
 
     Examples
     --------
@@ -27,6 +47,8 @@ class Gaussian:
     >>> g = Gaussian(np.zeros((3, 2)), np.broadcast_to(np.eye(2), (3, 2, 2)))
     >>> g.batch_shape, g.ndim
     ((3,), 2)
+    >>> g[1:].mean.shape, len(g)
+    ((2, 2), 3)
     """
 
     mean: np.ndarray
@@ -56,12 +78,24 @@ class Gaussian:
 
     @property
     def ndim(self) -> int:
-        """Dimension ``n`` of the state."""
+        """Dimension ``n`` of the state: the last axis of ``mean``.
+
+        Examples
+        --------
+        >>> Gaussian(np.zeros(4), np.eye(4)).ndim
+        4
+        """
         return int(self.mean.shape[-1])
 
     @property
     def batch_shape(self) -> tuple[int, ...]:
-        """The leading (batch) dimensions."""
+        """The leading (batch) dimensions: ``mean.shape[:-1]``, ``()`` for one Gaussian.
+
+        Examples
+        --------
+        >>> Gaussian(np.zeros(4), np.eye(4)).batch_shape
+        ()
+        """
         return tuple(self.mean.shape[:-1])
 
     def __getitem__(self, index: Any) -> Gaussian:
@@ -75,7 +109,24 @@ class Gaussian:
 
 
 def xyxy_to_xywh(boxes: np.ndarray) -> np.ndarray:
-    """Boxes ``x0, y0, x1, y1`` as ``left, top, width, height`` (MOTChallenge files)."""
+    """Boxes ``x0, y0, x1, y1`` as ``left, top, width, height`` (MOTChallenge files).
+
+    Parameters
+    ----------
+    boxes : (N, 4) or (4,) array_like
+        Corners ``x0, y0, x1, y1``; any shape with a multiple of 4 values is read as rows of
+        four.
+
+    Returns
+    -------
+    (N, 4) ndarray
+        ``x0, y0, x1 - x0, y1 - y0`` as float64.
+
+    Examples
+    --------
+    >>> xyxy_to_xywh([[10, 20, 40, 60]]).tolist()
+    [[10.0, 20.0, 30.0, 40.0]]
+    """
     b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
     return np.c_[b[:, :2], b[:, 2:] - b[:, :2]]
 
@@ -86,18 +137,28 @@ class Detections:
 
     Parameters
     ----------
-    boxes : ndarray, shape (N, 4), optional
-        ``x0, y0, x1, y1`` in pixels (``x1 >= x0``, ``y1 >= y0``).
-    points : ndarray, shape (N, d), optional
-        Point measurements (blob centres, particles), when there are no boxes.
-    scores : ndarray, shape (N,), optional
+    boxes : (N, 4) array_like, optional
+        ``x0, y0, x1, y1`` in pixels (``x1 >= x0``, ``y1 >= y0``, finite).
+    points : (N, d) array_like, optional
+        Point measurements (blob centres, particles), when there are no boxes. Exactly one of
+        ``boxes`` and ``points`` is given.
+    scores : (N,) array_like, optional
         Detector confidences; default 1.
-    classes : ndarray, shape (N,) int, optional
+    classes : (N,) array_like of int, optional
         Class numbers; default 0. Trackers never give two classes one identity.
+
+    Raises
+    ------
+    ValueError
+        If both or neither of ``boxes`` and ``points`` are given, a box is not finite or has
+        ``x1 < x0`` or ``y1 < y0``, or ``scores`` or ``classes`` do not have one value per
+        detection.
 
     Notes
     -----
-    Index with a boolean mask or indices (``dets[dets.scores > 0.5]``).
+    Index with a boolean mask or indices (``dets[dets.scores > 0.5]``); ``len(dets)`` is the
+    number of detections. Instances are frozen; the arrays are stored as float64 (boxes,
+    points, scores) and int64 (classes).
 
     Examples
     --------
@@ -142,7 +203,27 @@ class Detections:
 
     @classmethod
     def from_xywh(cls, xywh: Any, scores: Any = None, classes: Any = None) -> Detections:
-        """From ``left, top, width, height`` boxes (MOTChallenge files)."""
+        """Detections from ``left, top, width, height`` boxes (MOTChallenge files).
+
+        Parameters
+        ----------
+        xywh : (N, 4) array_like
+            ``left, top, width, height`` of each box (widths and heights >= 0).
+        scores : (N,) array_like, optional
+            Detector confidences; default 1.
+        classes : (N,) array_like of int, optional
+            Class numbers; default 0.
+
+        Returns
+        -------
+        Detections
+            With ``boxes`` ``x0, y0, x0 + w, y0 + h``.
+
+        Examples
+        --------
+        >>> Detections.from_xywh([[10, 20, 30, 40]]).boxes.tolist()
+        [[10.0, 20.0, 40.0, 60.0]]
+        """
         b = np.asarray(xywh, dtype=np.float64).reshape(-1, 4)
         return cls(boxes=np.c_[b[:, :2], b[:, :2] + b[:, 2:]], scores=scores, classes=classes)
 
@@ -159,14 +240,30 @@ class Detections:
 
     @property
     def xywh(self) -> np.ndarray:
-        """Boxes as ``left, top, width, height``."""
+        """Boxes as ``left, top, width, height``, ``(N, 4)``.
+
+        Raises ``ValueError`` for point detections, which have no boxes.
+
+        Examples
+        --------
+        >>> Detections(boxes=[[10, 20, 40, 60]]).xywh.tolist()
+        [[10.0, 20.0, 30.0, 40.0]]
+        """
         if self.boxes is None:
             raise ValueError("xywh needs box detections; these detections are points")
         return xyxy_to_xywh(self.boxes)
 
     @property
     def centers(self) -> np.ndarray:
-        """Box centres ``(N, 2)``, or the points."""
+        """Box centres ``(N, 2)``, or the points ``(N, d)`` themselves.
+
+        Examples
+        --------
+        >>> Detections(boxes=[[10, 20, 40, 60]]).centers.tolist()
+        [[25.0, 40.0]]
+        >>> Detections(points=[[1.0, 2.0, 3.0]]).centers.tolist()
+        [[1.0, 2.0, 3.0]]
+        """
         if self.boxes is None:
             assert self.points is not None  # __post_init__ requires boxes or points
             return self.points

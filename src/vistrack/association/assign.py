@@ -40,8 +40,30 @@ def _check(cost: np.ndarray, gate: np.ndarray | None) -> tuple[np.ndarray, np.nd
 
 
 def components(gate: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
-    """Connected components of the bipartite graph of allowed pairs: ``(k, track_label (T,),
-    detection_label (D,))``; unconnected tracks and detections get labels of their own."""
+    """Connected components of the bipartite graph of allowed track-detection pairs.
+
+    Parameters
+    ----------
+    gate : (T, D) array_like of bool
+        The allowed pairs: the edges of the graph.
+
+    Returns
+    -------
+    k : int
+        Number of components.
+    track_label : (T,) ndarray of int
+        Component of each track, in ``0 .. k-1``.
+    detection_label : (D,) ndarray of int
+        Component of each detection; unconnected tracks and detections get labels of their
+        own.
+
+    Examples
+    --------
+    >>> gate = np.array([[True, False, False], [True, False, False], [False, False, True]])
+    >>> k, tl, dl = components(gate)
+    >>> k, tl.tolist(), dl.tolist()     # {t0, t1, d0}, {t2, d2}, {d1}
+    (3, [0, 0, 1], [0, 2, 1])
+    """
     T, D = gate.shape
     r, c = np.nonzero(gate)
     g = coo_matrix((np.ones(len(r)), (r, T + c)), shape=(T + D, T + D))
@@ -50,7 +72,51 @@ def components(gate: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
 
 
 def gnn(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Global nearest neighbour by connected components (see the module)."""
+    r"""Global nearest neighbour: the most allowed pairs, and among those the least cost.
+
+    Over the matchings ``A`` of allowed pairs (each track and each detection at most once)
+    of the largest size, the one that minimises
+
+    .. math:: \sum_{(i, j) \in A} c_{ij}.
+
+    The gated graph is split into connected components (:func:`components`), each solved
+    by :func:`lsa`; pairs whose track and detection have no other candidate are taken at
+    once.
+
+    Parameters
+    ----------
+    cost : (T, D) array_like
+        Cost of each pair; non-finite costs are never assigned.
+    gate : (T, D) array_like of bool, optional
+        The allowed pairs; default every pair of finite cost.
+
+    Returns
+    -------
+    rows, cols : (K,) ndarray of int64
+        The assigned pairs ``(rows[k], cols[k])``.
+
+    Raises
+    ------
+    ValueError
+        If ``cost`` is not 2-D or ``gate`` does not have its shape.
+
+    See Also
+    --------
+    gnn_sparse : The same on a list of allowed pairs.
+
+    References
+    ----------
+    .. [1] D. F. Crouse, "On implementing 2D rectangular assignment algorithms", *IEEE
+       Transactions on Aerospace and Electronic Systems* 52(4), 2016.
+
+    Examples
+    --------
+    >>> cost = np.array([[1.0, 2.0], [1.5, 9.0]])
+    >>> [a.tolist() for a in gnn(cost)]           # 2 + 1.5 beats 1 + 9
+    [[0, 1], [1, 0]]
+    >>> [a.tolist() for a in gnn(cost, gate=[[True, False], [True, False]])]
+    [[0], [0]]
+    """
     cost, gate = _check(cost, gate)
     r, c = np.nonzero(gate)
     return gnn_sparse(r, c, cost[r, c], cost.shape)
@@ -58,10 +124,38 @@ def gnn(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, n
 
 @njit(cache=True)
 def lsa(cost):
-    """The least-cost assignment of a dense ``(n, m)`` cost matrix: ``(rows, cols)`` sorted by
-    row, ``min(n, m)`` pairs. Crouse's shortest augmenting path (2016), the algorithm of
-    scipy's ``linear_sum_assignment``, step for step (ties are broken the same way), compiled
-    so that it can be called from other kernels."""
+    """The least-cost assignment of a dense cost matrix, compiled.
+
+    Crouse's shortest augmenting path (2016), the algorithm of scipy's
+    ``linear_sum_assignment``, step for step (ties are broken the same way), compiled so that
+    it can be called from other kernels.
+
+    Parameters
+    ----------
+    cost : (n, m) ndarray of float64
+        Finite costs (every pair is allowed).
+
+    Returns
+    -------
+    rows, cols : (min(n, m),) ndarray of int64
+        The assigned pairs, sorted by row.
+
+    Raises
+    ------
+    ValueError
+        If the problem is infeasible (only with infinite costs).
+
+    References
+    ----------
+    .. [1] D. F. Crouse, "On implementing 2D rectangular assignment algorithms", *IEEE
+       Transactions on Aerospace and Electronic Systems* 52(4), 2016.
+
+    Examples
+    --------
+    >>> r, c = lsa(np.array([[4.0, 1.0, 3.0], [2.0, 0.0, 5.0]]))
+    >>> r.tolist(), c.tolist()
+    ([0, 1], [1, 0])
+    """
     transpose = cost.shape[0] > cost.shape[1]
     c = cost.T.copy() if transpose else cost
     nr, nc = c.shape
@@ -171,9 +265,32 @@ def _pair_components(rows, cols, T):
 
 @njit(cache=True)
 def gnn_pairs(rows, cols, cost, T, D):
-    """The compiled core of :func:`gnn_sparse` (arguments checked, int64 and float64): pairs
-    whose track and detection have no other candidate are taken at once; the others are
-    split into connected components, each solved by :func:`lsa`."""
+    """The compiled core of :func:`gnn_sparse`, for arguments already checked.
+
+    Pairs whose track and detection have no other candidate are taken at once; the others are
+    split into connected components, each solved by :func:`lsa`.
+
+    Parameters
+    ----------
+    rows, cols : (P,) ndarray of int64
+        The allowed pairs, tracks in ``0 .. T-1`` and detections in ``0 .. D-1``.
+    cost : (P,) ndarray of float64
+        Their finite costs.
+    T, D : int
+        Numbers of tracks and detections.
+
+    Returns
+    -------
+    rows, cols : (K,) ndarray of int64
+        The assigned pairs.
+
+    Examples
+    --------
+    >>> r, c = gnn_pairs(np.array([0, 0, 1]), np.array([0, 1, 0]), np.array([1.0, 2.0, 1.5]),
+    ...                  2, 2)
+    >>> r.tolist(), c.tolist()
+    ([0, 1], [1, 0])
+    """
     n = rows.shape[0]
     out_r, out_c = np.empty(n, np.int64), np.empty(n, np.int64)
     if n == 0:
@@ -236,8 +353,30 @@ def gnn_pairs(rows, cols, cost, T, D):
 
 def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
                shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`gnn` on the allowed pairs only (``rows``, ``cols`` and their ``cost``), for
+    """Global nearest neighbour on a list of allowed pairs.
+
+    :func:`gnn` on the allowed pairs only (``rows``, ``cols`` and their ``cost``), for
     problems too large for a dense matrix: the same answer as ``gnn`` on the dense problem.
+
+    Parameters
+    ----------
+    rows, cols : (P,) array_like of int
+        The allowed pairs: track ``rows[p]`` with detection ``cols[p]``.
+    cost : (P,) array_like
+        The cost of each pair, finite.
+    shape : (int, int)
+        ``(T, D)``, the numbers of tracks and detections.
+
+    Returns
+    -------
+    rows, cols : (K,) ndarray of int64
+        The assigned pairs.
+
+    Raises
+    ------
+    ValueError
+        If the three arrays are not 1-D of one length, an index is outside ``shape``, or a
+        cost is not finite.
 
     Examples
     --------
@@ -262,7 +401,32 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
 
 
 def greedy(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs by increasing cost, each taken when both ends are still free."""
+    """Greedy assignment: pairs by increasing cost, each taken when both ends are still free.
+
+    Not optimal (see the example). Ties are taken in the row-major order of the matrix.
+
+    Parameters
+    ----------
+    cost : (T, D) array_like
+        Cost of each pair; non-finite costs are never assigned.
+    gate : (T, D) array_like of bool, optional
+        The allowed pairs; default every pair of finite cost.
+
+    Returns
+    -------
+    rows, cols : (K,) ndarray of int64
+        The assigned pairs, in the order they were taken (increasing cost).
+
+    Raises
+    ------
+    ValueError
+        If ``cost`` is not 2-D or ``gate`` does not have its shape.
+
+    Examples
+    --------
+    >>> [a.tolist() for a in greedy(np.array([[1.0, 2.0], [1.5, 9.0]]))]   # 1 + 9
+    [[0, 1], [0, 1]]
+    """
     cost, gate = _check(cost, gate)
     r, c = np.nonzero(gate)
     order = np.argsort(cost[r, c], kind="stable")
@@ -279,7 +443,31 @@ def greedy(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray
 
 def nearest_neighbour(cost: np.ndarray,
                       gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Each track's cheapest allowed detection (detections may be shared)."""
+    """Each track's cheapest allowed detection; detections may be shared (the seeds' nearest
+    neighbour).
+
+    Parameters
+    ----------
+    cost : (T, D) array_like
+        Cost of each pair; non-finite costs are never assigned.
+    gate : (T, D) array_like of bool, optional
+        The allowed pairs; default every pair of finite cost.
+
+    Returns
+    -------
+    rows, cols : (K,) ndarray of int64
+        The tracks that have an allowed detection, in order, and their detection.
+
+    Raises
+    ------
+    ValueError
+        If ``cost`` is not 2-D or ``gate`` does not have its shape.
+
+    Examples
+    --------
+    >>> [a.tolist() for a in nearest_neighbour(np.array([[1.0, 2.0], [1.5, 9.0]]))]
+    [[0, 1], [0, 0]]
+    """
     cost, gate = _check(cost, gate)
     if cost.shape[1] == 0:
         return _EMPTY
@@ -295,7 +483,26 @@ ASSIGNERS: dict[str, Callable] = {"gnn": gnn, "greedy": greedy, "nn": nearest_ne
 
 def assign(cost: np.ndarray, gate: np.ndarray | None = None,
            method: str = "gnn") -> tuple[np.ndarray, np.ndarray]:
-    """Assign by ``method``, a name in :data:`ASSIGNERS`.
+    """Assign detections to tracks by ``method``, a name in :data:`ASSIGNERS`.
+
+    Parameters
+    ----------
+    cost : (T, D) array_like
+        Cost of each track-detection pair; non-finite costs are never assigned.
+    gate : (T, D) array_like of bool, optional
+        The allowed pairs; default every pair of finite cost.
+    method : {'gnn', 'greedy', 'nn'}
+        :func:`gnn`, :func:`greedy` or :func:`nearest_neighbour`.
+
+    Returns
+    -------
+    rows, cols : (K,) ndarray of int64
+        The assigned pairs ``(rows[k], cols[k])``.
+
+    Raises
+    ------
+    ValueError
+        If ``method`` is not a name in :data:`ASSIGNERS`, or as the assigner raises.
 
     Examples
     --------

@@ -44,8 +44,31 @@ def _ratio(inter: np.ndarray, union: np.ndarray) -> np.ndarray:
 
 
 def iou(a: Any, b: Any) -> np.ndarray:
-    """Intersection over union of boxes ``a (N, 4)`` and ``b (M, 4)``: ``(N, M)``, 0 where both
-    boxes are empty.
+    r"""Intersection over union of every box of ``a`` with every box of ``b``.
+
+    .. math:: \text{IoU}(A, B) = \frac{|A \cap B|}{|A \cup B|}
+
+    Parameters
+    ----------
+    a : (N, 4) array_like
+        Boxes ``x0, y0, x1, y1``.
+    b : (M, 4) array_like
+        Boxes ``x0, y0, x1, y1``.
+
+    Returns
+    -------
+    (N, M) ndarray
+        IoU in [0, 1]; 0 where the union is empty (both boxes empty).
+
+    Raises
+    ------
+    ValueError
+        If ``a`` or ``b`` is not empty and not of shape ``(., 4)``.
+
+    See Also
+    --------
+    iou_pairs : The overlapping pairs only, for many boxes.
+    paired_iou : IoU of boxes paired by index.
 
     Examples
     --------
@@ -57,8 +80,22 @@ def iou(a: Any, b: Any) -> np.ndarray:
 
 
 def paired_iou(a: Any, b: Any) -> np.ndarray:
-    """Intersection over union of boxes ``a[k]`` and ``b[k]`` (both ``(N, 4)``): ``(N,)``, 0
-    where both boxes are empty.
+    """Intersection over union of boxes paired by index: ``a[k]`` with ``b[k]``.
+
+    Parameters
+    ----------
+    a, b : (N, 4) array_like
+        Boxes ``x0, y0, x1, y1``.
+
+    Returns
+    -------
+    (N,) ndarray
+        IoU in [0, 1]; 0 where the union is empty.
+
+    Raises
+    ------
+    ValueError
+        If ``a`` and ``b`` do not have the same shape ``(N, 4)``.
 
     Examples
     --------
@@ -72,7 +109,35 @@ def paired_iou(a: Any, b: Any) -> np.ndarray:
 
 
 def giou(a: Any, b: Any) -> np.ndarray:
-    """Generalised IoU of boxes ``a (N, 4)`` and ``b (M, 4)``, in [-1, 1].
+    r"""Generalised IoU of every box of ``a`` with every box of ``b``.
+
+    .. math:: \text{GIoU}(A, B) = \text{IoU}(A, B) - \frac{|C \setminus (A \cup B)|}{|C|}
+
+    with ``C`` the smallest box that encloses both: unlike the IoU, it still tells how far
+    apart boxes that do not overlap are.
+
+    Parameters
+    ----------
+    a : (N, 4) array_like
+        Boxes ``x0, y0, x1, y1``.
+    b : (M, 4) array_like
+        Boxes ``x0, y0, x1, y1``.
+
+    Returns
+    -------
+    (N, M) ndarray
+        GIoU in [-1, 1].
+
+    Raises
+    ------
+    ValueError
+        If ``a`` or ``b`` is not empty and not of shape ``(., 4)``.
+
+    References
+    ----------
+    .. [1] H. Rezatofighi, N. Tsoi, J. Gwak, A. Sadeghian, I. Reid and S. Savarese,
+       "Generalized intersection over union: a metric and a loss for bounding box
+       regression", CVPR 2019.
 
     Examples
     --------
@@ -88,7 +153,31 @@ def giou(a: Any, b: Any) -> np.ndarray:
 
 
 def euclidean(a: Any, b: Any) -> np.ndarray:
-    """Distances between points ``a (N, d)`` and ``b (M, d)``: ``(N, M)``."""
+    """Euclidean distances between every point of ``a`` and every point of ``b``.
+
+    Parameters
+    ----------
+    a : (N, d) array_like
+        Points (one point may be given as ``(d,)``).
+    b : (M, d) array_like
+        Points (one point may be given as ``(d,)``).
+
+    Returns
+    -------
+    (N, M) ndarray
+        ``|a_i - b_j|``.
+
+    Raises
+    ------
+    ValueError
+        If the points of ``a`` and ``b`` differ in size.
+
+    Examples
+    --------
+    >>> euclidean([[0, 0], [3, 4]], [[0, 0], [6, 8]])
+    array([[ 0., 10.],
+           [ 5.,  5.]])
+    """
     a, b = np.atleast_2d(np.asarray(a, dtype=float)), np.atleast_2d(np.asarray(b, dtype=float))
     if a.shape[1] != b.shape[1]:
         raise ValueError(f"a and b must have the same point size; got {a.shape} and {b.shape}")
@@ -109,9 +198,32 @@ def _innovations(z_pred: Any, S: Any, z: Any) -> tuple[np.ndarray, np.ndarray, n
 
 
 def mahalanobis(z_pred: Any, S: Any, z: Any) -> np.ndarray:
-    """Squared Mahalanobis distances ``(T, D)`` of detections ``z (D, m)`` from predicted
-    measurements ``z_pred (T, m)`` with innovation covariances ``S (T, m, m)``, by one
-    Cholesky factorisation per track.
+    r"""Squared Mahalanobis distances of detections from tracks' predicted measurements.
+
+    .. math:: d^2_{tj} = (z_j - \hat z_t)' S_t^{-1} (z_j - \hat z_t),
+
+    by one Cholesky factorisation per track. For a consistent filter, :math:`d^2` of the
+    track's own detection is chi-square with ``m`` degrees of freedom
+    (:func:`~vistrack.association.chi2_gate`).
+
+    Parameters
+    ----------
+    z_pred : (T, m) array_like
+        Predicted measurements :math:`\hat z_t = H \bar x_t^-`.
+    S : (T, m, m) array_like
+        Innovation covariances :math:`S_t = H P_t^- H' + R`, positive definite.
+    z : (D, m) array_like
+        Detections.
+
+    Returns
+    -------
+    (T, D) ndarray
+        The squared distances.
+
+    Raises
+    ------
+    ValueError
+        If the shapes disagree, or an ``S_t`` is not positive definite.
 
     Examples
     --------
@@ -247,10 +359,32 @@ def _grid_pairs(a, b, min_iou):
 
 @njit(cache=True)
 def iou_pairs_same_class(a, a_cls, b, b_cls, min_iou):
-    """:func:`iou_pairs` over the pairs of one class (trackers never give two classes one
-    identity), compiled, for compiled callers too: ``a (N, 4)``, ``b (M, 4)`` float64 boxes
-    ``(x0, y0, x1, y1)``, ``a_cls (N,)``, ``b_cls (M,)`` int64 classes. Returns ``(rows,
-    cols, iou, ok)``; ``ok`` is False, and the pairs empty, when a box is not finite.
+    """:func:`iou_pairs` over the pairs of one class, compiled, for compiled callers too.
+
+    Trackers never give two classes one identity, so only boxes of the same class are paired.
+
+    Parameters
+    ----------
+    a : (N, 4) ndarray of float64
+        Boxes ``x0, y0, x1, y1``.
+    a_cls : (N,) ndarray of int64
+        Their classes.
+    b : (M, 4) ndarray of float64
+        Boxes ``x0, y0, x1, y1``.
+    b_cls : (M,) ndarray of int64
+        Their classes.
+    min_iou : float
+        The least IoU of a pair kept (pairs must overlap too).
+
+    Returns
+    -------
+    rows, cols : (K,) ndarray of int64
+        The pairs ``(a[rows[k]], b[cols[k]])`` of one class whose IoU is at least ``min_iou``
+        and > 0, by row.
+    iou : (K,) ndarray
+        Their IoU.
+    ok : bool
+        False, and the pairs empty, when a box is not finite.
 
     Examples
     --------
@@ -266,12 +400,32 @@ def iou_pairs_same_class(a, a_cls, b, b_cls, min_iou):
 
 
 def iou_pairs(a: Any, b: Any, min_iou: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The pairs of boxes ``a (N, 4)`` × ``b (M, 4)`` whose IoU is at least ``min_iou`` (and
-    > 0), without the dense ``(N, M)`` matrix: ``(rows, cols, iou)``, by row.
+    """The pairs of boxes whose IoU is at least ``min_iou``, without the dense matrix.
 
     The boxes of ``b`` are bucketed in a grid whose cells are as large as the largest box, so
     each box of ``a`` is compared with the boxes of a few cells only: 10,000 × 10,000 boxes
     spread over an image cost milliseconds.
+
+    Parameters
+    ----------
+    a : (N, 4) array_like
+        Boxes ``x0, y0, x1, y1``.
+    b : (M, 4) array_like
+        Boxes ``x0, y0, x1, y1``.
+    min_iou : float
+        The least IoU of a pair kept; pairs must overlap (IoU > 0) in any case.
+
+    Returns
+    -------
+    rows, cols : (K,) ndarray of int64
+        The pairs ``(a[rows[k]], b[cols[k]])``, by row.
+    iou : (K,) ndarray
+        Their IoU, as :func:`iou` gives it.
+
+    Raises
+    ------
+    ValueError
+        If a box is not finite, or ``a`` or ``b`` is not of shape ``(., 4)``.
 
     Examples
     --------

@@ -14,12 +14,57 @@ __all__ = ["chi2_gate", "chi2_threshold"]
 
 
 def chi2_threshold(m: int, p: float = 0.99) -> float:
-    """The ``p`` quantile of chi-square with ``m`` degrees of freedom."""
+    """The ``p`` quantile of chi-square with ``m`` degrees of freedom: the gate's threshold.
+
+    Parameters
+    ----------
+    m : int
+        Degrees of freedom: the size of a measurement.
+    p : float
+        Gate probability, in (0, 1).
+
+    Returns
+    -------
+    float
+        The threshold on the squared Mahalanobis distance.
+
+    Raises
+    ------
+    ValueError
+        If ``p`` is not in (0, 1).
+
+    Examples
+    --------
+    >>> round(chi2_threshold(2, 0.99), 3)
+    9.21
+    """
     if not 0.0 < p < 1.0:
         raise ValueError(f"p must be in (0, 1); got {p}")
     return float(chi2.ppf(p, int(m)))
 
 
 def chi2_gate(d2: np.ndarray, m: int, p: float = 0.99) -> np.ndarray:
-    """Boolean ``(T, D)``: ``d2 <= chi2_threshold(m, p)``."""
+    r"""The chi-square gate: which pairs are close enough to be associated.
+
+    .. math:: d^2_{ij} \le \chi^2_m(p)
+
+    Parameters
+    ----------
+    d2 : (T, D) array_like
+        Squared Mahalanobis distances (:func:`~vistrack.association.mahalanobis`).
+    m : int
+        Size of a measurement (the degrees of freedom).
+    p : float
+        Gate probability, in (0, 1).
+
+    Returns
+    -------
+    (T, D) ndarray of bool
+        ``d2 <= chi2_threshold(m, p)``.
+
+    Examples
+    --------
+    >>> chi2_gate(np.array([[1.0, 10.0]]), m=2)
+    array([[ True, False]])
+    """
     return np.asarray(d2) <= chi2_threshold(m, p)

@@ -39,7 +39,35 @@ __all__ = ["pda_weights", "jpda_weights", "pda_update", "likelihoods"]
 
 
 def likelihoods(z_pred: np.ndarray, S: np.ndarray, Z: np.ndarray) -> np.ndarray:
-    """Gaussian likelihoods ``N(z_j; z_pred_t, S_t)`` as a ``(T, D)`` array."""
+    r"""Gaussian likelihood of every detection under every track's predicted measurement.
+
+    .. math:: \ell_{tj} = N(z_j; \hat z_t, S_t) = (2\pi)^{-m/2} \det(S_t)^{-1/2}
+              \exp\left(-\tfrac12 (z_j - \hat z_t)' S_t^{-1} (z_j - \hat z_t)\right)
+
+    Parameters
+    ----------
+    z_pred : (T, m) array_like
+        Predicted measurements :math:`\hat z_t`.
+    S : (T, m, m) array_like
+        Innovation covariances, positive definite.
+    Z : (D, m) array_like
+        Detections.
+
+    Returns
+    -------
+    (T, D) ndarray
+        The likelihoods; ``(T, 0)`` when there are no detections.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If an ``S_t`` is not positive definite.
+
+    Examples
+    --------
+    >>> likelihoods(np.zeros((1, 2)), np.eye(2)[None], np.array([[0.0, 0.0], [1.0, 0.0]]))
+    array([[0.15915494, 0.09653235]])
+    """
     zp, S, Z = (np.asarray(a, dtype=float) for a in (z_pred, S, Z))
     T, m = zp.shape
     if len(Z) == 0 or T == 0:
@@ -65,8 +93,48 @@ def _check(p_detect: float, clutter_density: float, p_gate: float) -> None:
 def pda_weights(lik: np.ndarray, gate: np.ndarray, *, p_detect: float = 0.9,
                 clutter_density: float = 1e-4, p_gate: float = 0.99
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """PDA association probabilities of each track on its own: ``beta (T, D)`` (0 outside
-    the gate) and ``beta0 (T,)``, from likelihoods ``lik (T, D)``.
+    r"""PDA association probabilities of each track on its own.
+
+    With :math:`G_{j} = P_D \ell_{j} / \lambda` for the gated detections and
+    :math:`B = 1 - P_D P_G`,
+
+    .. math:: \beta_j = \frac{G_j}{B + \sum_k G_k}, \qquad \beta_0 = \frac{B}{B + \sum_k G_k}.
+
+    Parameters
+    ----------
+    lik : (T, D) array_like
+        Likelihoods :math:`\ell_{tj}` (:func:`likelihoods`).
+    gate : (T, D) array_like of bool
+        The detections in each track's gate.
+    p_detect : float
+        Detection probability :math:`P_D`, in (0, 1].
+    clutter_density : float
+        Spatial density :math:`\lambda > 0` of false detections, per unit of measurement
+        space.
+    p_gate : float
+        Probability :math:`P_G` that the track's detection falls in its gate, in (0, 1].
+
+    Returns
+    -------
+    beta : (T, D) ndarray
+        Probability that detection ``j`` is track ``t``'s; 0 outside the gate.
+    beta0 : (T,) ndarray
+        Probability that no detection is the track's. Each row of ``beta`` and its ``beta0``
+        sum to one.
+
+    Raises
+    ------
+    ValueError
+        If a probability or the density is out of range.
+
+    See Also
+    --------
+    jpda_weights : The probabilities of tracks that compete for detections, jointly.
+
+    References
+    ----------
+    .. [1] Y. Bar-Shalom and E. Tse, "Tracking in a cluttered environment with probabilistic
+       data association", *Automatica* 11(5), 1975.
 
     Examples
     --------
@@ -118,8 +186,67 @@ def _exact(G: np.ndarray, B: float) -> tuple[np.ndarray, np.ndarray]:
 def jpda_weights(lik: np.ndarray, gate: np.ndarray, *, p_detect: float = 0.9,
                  clutter_density: float = 1e-4, p_gate: float = 0.99,
                  max_exact: int = 8) -> tuple[np.ndarray, np.ndarray]:
-    """JPDA association probabilities ``beta (T, D)``, ``beta0 (T,)`` (see the module):
-    exact per cluster of up to ``max_exact`` tracks and measurements, else cheap JPDA."""
+    r"""JPDA association probabilities: tracks that share detections, weighed jointly.
+
+    Over every feasible joint event (each detection to at most one track, each track at most
+    one detection, within the gates), with probability proportional to
+
+    .. math:: \prod_{(t, j)} \frac{P_D \ell_{tj}}{\lambda}
+              \prod_{t \text{ missed}} (1 - P_D P_G),
+
+    :math:`\beta_{tj}` is the probability of the events that give detection ``j`` to track
+    ``t``. The gated problem is split into independent clusters (:func:`components`); a
+    cluster of at most ``max_exact`` tracks and at most ``max_exact`` detections is
+    enumerated exactly, a larger one gets Fitzgerald's cheap JPDA (1985),
+    :math:`\beta_{tj} = G_{tj} / (\sum_k G_{tk} + \sum_s G_{sj} - G_{tj} + B)` with
+    :math:`\beta_{t0} = \max(0, 1 - \sum_j \beta_{tj})`, each track's row then normalised to
+    sum to one.
+
+    Parameters
+    ----------
+    lik : (T, D) array_like
+        Likelihoods :math:`\ell_{tj}` (:func:`likelihoods`).
+    gate : (T, D) array_like of bool
+        The detections in each track's gate (pairs of zero likelihood are left out too).
+    p_detect : float
+        Detection probability :math:`P_D`, in (0, 1].
+    clutter_density : float
+        Spatial density :math:`\lambda` of false detections, > 0.
+    p_gate : float
+        Gate probability :math:`P_G`, in (0, 1].
+    max_exact : int
+        The largest cluster (in tracks and in detections) enumerated exactly; enumeration
+        costs grow factorially.
+
+    Returns
+    -------
+    beta : (T, D) ndarray
+        Marginal probability that detection ``j`` is track ``t``'s; 0 outside the gate.
+    beta0 : (T,) ndarray
+        Probability that no detection is the track's (1 for a track with none in its gate).
+
+    Raises
+    ------
+    ValueError
+        If a probability or the density is out of range.
+
+    References
+    ----------
+    .. [1] T. E. Fortmann, Y. Bar-Shalom and M. Scheffe, "Sonar tracking of multiple targets
+       using joint probabilistic data association", *IEEE Journal of Oceanic Engineering*
+       8(3), 1983.
+
+    Examples
+    --------
+    Two tracks; the first also sees the second's detection:
+
+    >>> b, b0 = jpda_weights(np.array([[0.02, 0.01], [0.0, 0.02]]),
+    ...                      np.array([[True, True], [False, True]]),
+    ...                      p_detect=0.9, clutter_density=0.01, p_gate=1.0)
+    >>> b.round(3), b0.round(3)
+    (array([[0.924, 0.024],
+           [0.   , 0.924]]), array([0.051, 0.076]))
+    """
     _check(p_detect, clutter_density, p_gate)
     lik = np.asarray(lik, dtype=float)
     gate = np.asarray(gate, dtype=bool) & (lik > 0)
@@ -150,8 +277,58 @@ def jpda_weights(lik: np.ndarray, gate: np.ndarray, *, p_detect: float = 0.9,
 
 def pda_update(g: Gaussian, Z: np.ndarray, H: np.ndarray, R: np.ndarray, beta: np.ndarray,
                beta0: np.ndarray) -> Gaussian:
-    """Correct every track of ``g`` (batch ``(T,)``) with all measurements ``Z (D, m)`` weighted
-    by ``beta (T, D)``, ``beta0 (T,)`` (see the module for the equations)."""
+    r"""Correct every track with all the detections, weighted by their association probabilities.
+
+    With the gain :math:`K = P^- H' S^{-1}`, :math:`S = H P^- H' + R`, the innovations
+    :math:`\nu_j = z_j - H \bar x^-` and their combination :math:`\nu = \sum_j \beta_j
+    \nu_j`,
+
+    .. math::
+
+        \bar x = \bar x^- + K \nu, \qquad
+        P = P^- - (1 - \beta_0) K S K' + K \Big(\sum_j \beta_j \nu_j \nu_j' - \nu \nu'\Big) K'.
+
+    The last term, the spread of the innovations, widens the covariance when the detections
+    disagree.
+
+    Parameters
+    ----------
+    g : Gaussian
+        The tracks' predictions, batch shape ``(T,)``, state size ``n``.
+    Z : (D, m) array_like
+        Detections.
+    H : (m, n) array_like
+        Measurement matrix.
+    R : (m, m) array_like
+        Measurement-noise covariance.
+    beta : (T, D) array_like
+        Association probabilities (:func:`pda_weights`, :func:`jpda_weights`).
+    beta0 : (T,) array_like
+        Probability that no detection is the track's.
+
+    Returns
+    -------
+    Gaussian
+        The corrected tracks, batch shape ``(T,)``.
+
+    References
+    ----------
+    .. [1] Y. Bar-Shalom and E. Tse, "Tracking in a cluttered environment with probabilistic
+       data association", *Automatica* 11(5), 1975.
+
+    Examples
+    --------
+    Two detections either side of a track: the mean stays, the spread widens ``P`` along them:
+
+    >>> from vistrack import Gaussian
+    >>> g = Gaussian(np.zeros((1, 2)), np.eye(2)[None])
+    >>> Z, H, R = np.array([[1.0, 0.0], [-1.0, 0.0]]), np.eye(2), np.eye(2)
+    >>> b, b0 = pda_weights(likelihoods(np.zeros((1, 2)), 2 * np.eye(2)[None], Z),
+    ...                     np.ones((1, 2), bool), clutter_density=0.01)
+    >>> post = pda_update(g, Z, H, R, b, b0)
+    >>> post.mean.round(3) + 0.0, post.cov[0].diagonal().round(3)
+    (array([[0., 0.]]), array([0.752, 0.505]))
+    """
     m, P = g.mean, g.cov
     H = np.asarray(H, dtype=float)
     R = np.asarray(R, dtype=float)

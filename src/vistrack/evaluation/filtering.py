@@ -21,8 +21,35 @@ __all__ = ["rmse", "nees", "nis", "chi2_band"]
 
 
 def rmse(estimates: Any, truth: Any, *, axis: int | tuple[int, ...] | None = None) -> np.ndarray:
-    """Root-mean-square error ``sqrt(mean((estimates - truth)²))`` over ``axis`` (all by
-    default)."""
+    r"""Root-mean-square error of estimates against the truth.
+
+    .. math:: \text{RMSE} = \sqrt{\operatorname{mean}\big((\hat x - x)^2\big)}
+
+    Parameters
+    ----------
+    estimates, truth : array_like
+        Arrays of one shape.
+    axis : int or tuple of int, optional
+        Axes to average over; all by default.
+
+    Returns
+    -------
+    ndarray or numpy.float64
+        The RMSE, with the ``axis`` dimensions removed (a scalar when averaging over
+        everything).
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ.
+
+    Examples
+    --------
+    >>> round(float(rmse([1.0, 2.0, 3.0], [1.0, 2.0, 5.0])), 4)
+    1.1547
+    >>> rmse(np.array([[1.0, 1.0], [3.0, 3.0]]), np.zeros((2, 2)), axis=0).round(4)
+    array([2.2361, 2.2361])
+    """
     est = as_float_array(estimates, "estimates")
     tru = as_float_array(truth, "truth")
     if est.shape != tru.shape:
@@ -38,7 +65,43 @@ def _quadratic(e: np.ndarray, S: np.ndarray) -> np.ndarray:
 
 
 def nees(truth: Any, means: Any, covs: Any) -> np.ndarray:
-    """``(x - m)' P⁻¹ (x - m)`` per estimate: ``truth, means (..., n)``, ``covs (..., n, n)``."""
+    r"""Normalised estimation error squared of each estimate.
+
+    .. math:: \text{NEES} = (x - \hat x)' P^{-1} (x - \hat x),
+
+    chi-square with ``n`` degrees of freedom for a consistent filter (see the module).
+
+    Parameters
+    ----------
+    truth : (..., n) array_like
+        True states.
+    means : (..., n) array_like
+        Estimates.
+    covs : (..., n, n) array_like
+        Their covariances, positive definite.
+
+    Returns
+    -------
+    (...) ndarray
+        One NEES per estimate.
+
+    Raises
+    ------
+    ValueError
+        If the shapes disagree.
+    numpy.linalg.LinAlgError
+        If a covariance is not positive definite.
+
+    References
+    ----------
+    .. [1] Y. Bar-Shalom, X. R. Li and T. Kirubarajan, *Estimation with Applications to
+       Tracking and Navigation*, Wiley, 2001, §5.4.
+
+    Examples
+    --------
+    >>> round(float(nees([1.0, 0.0], [0.0, 0.0], 0.5 * np.eye(2))), 6)
+    2.0
+    """
     x = as_float_array(truth, "truth")
     m = as_float_array(means, "means")
     P = as_float_array(covs, "covs")
@@ -51,14 +114,53 @@ def nees(truth: Any, means: Any, covs: Any) -> np.ndarray:
 
 
 def nis(ys: Any, result: FilterResult, *, H: Any, R: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Normalised innovation squared of each step, over its observed components.
+    r"""Normalised innovation squared of each step, over its observed components.
+
+    .. math:: \text{NIS}_t = \nu_t' S_t^{-1} \nu_t, \qquad \nu_t = y_t - H \bar x_t^-,
+              \quad S_t = H \Sigma_t^- H' + R,
+
+    chi-square with as many degrees of freedom as observed components for a consistent
+    filter (see the module).
+
+    Parameters
+    ----------
+    ys : (T, m) or (B, T, m) array_like
+        The measurements the filter ran on (NaN: missing).
+    result : FilterResult
+        From :func:`vistrack.filters.kalman_filter` (or a filter's ``filter``) with
+        ``store_covs=True``: its predictions are used.
+    H : (m, n) or (T, m, n) array_like
+        Measurement matrix.
+    R : (m, m) or (T, m, m) array_like
+        Measurement-noise covariance.
 
     Returns
     -------
-    nis : ndarray, shape (..., T)
-        ``ν' S⁻¹ ν`` with ``ν = y - H x̄⁻`` and ``S = H Σ⁻ H' + R``; 0 where nothing was observed.
-    dof : ndarray of int, shape (..., T)
+    nis : (..., T) ndarray
+        ``ν' S⁻¹ ν`` over the observed components; 0 where nothing was observed.
+    dof : (..., T) ndarray of int
         Number of observed components (the chi-square degrees of freedom).
+
+    Raises
+    ------
+    ValueError
+        If the result has no predictions (``store_covs=False``) or does not cover ``ys``.
+
+    References
+    ----------
+    .. [1] Y. Bar-Shalom, X. R. Li and T. Kirubarajan, *Estimation with Applications to
+       Tracking and Navigation*, Wiley, 2001, §5.4.
+
+    Examples
+    --------
+    >>> from vistrack.filters import kalman_filter
+    >>> F, H = np.array([[1.0, 1.0], [0.0, 1.0]]), np.array([[1.0, 0.0]])
+    >>> ys = np.array([[0.1], [0.9], [np.nan], [3.2]])
+    >>> res = kalman_filter(ys, F=F, Q=0.01 * np.eye(2), H=H, R=[[0.25]],
+    ...                     x0=[0.0, 1.0], P0=np.eye(2))
+    >>> v, dof = nis(ys, res, H=H, R=[[0.25]])
+    >>> v.round(3), dof
+    (array([0.008, 0.022, 0.   , 0.108]), array([1, 1, 0, 1]))
     """
     y, single = as_measurement_series(ys)
     if result.pred_covs is None:
@@ -86,7 +188,37 @@ def nis(ys: Any, result: FilterResult, *, H: Any, R: Any) -> tuple[np.ndarray, n
 
 
 def chi2_band(dof: int, *, n_runs: int = 1, level: float = 0.95) -> tuple[float, float]:
-    """Two-sided ``level`` band for the mean of ``n_runs`` chi-square(``dof``) statistics.
+    r"""Two-sided ``level`` band for the mean of ``n_runs`` chi-square(``dof``) statistics.
+
+    The sum of ``N`` independent chi-square(``dof``) values is chi-square(``N dof``), so the
+    band of their mean is
+
+    .. math:: \left[\frac{\chi^2_{N\,dof}\big(\tfrac{1 - level}{2}\big)}{N},\;
+              \frac{\chi^2_{N\,dof}\big(\tfrac{1 + level}{2}\big)}{N}\right].
+
+    Parameters
+    ----------
+    dof : int
+        Degrees of freedom of each statistic (``n`` for NEES, ``m`` for NIS), >= 1.
+    n_runs : int
+        Number ``N`` of independent runs averaged, >= 1.
+    level : float
+        Probability of the band, in (0, 1).
+
+    Returns
+    -------
+    lo, hi : float
+        The band's ends.
+
+    Raises
+    ------
+    ValueError
+        If an argument is out of range.
+
+    References
+    ----------
+    .. [1] Y. Bar-Shalom, X. R. Li and T. Kirubarajan, *Estimation with Applications to
+       Tracking and Navigation*, Wiley, 2001, §5.4.
 
     Examples
     --------

@@ -44,8 +44,29 @@ _DISTRACTORS = {"MOT16": (2, 7, 8, 12), "MOT17": (2, 7, 8, 12), "MOT20": (2, 6, 
 
 
 def box_iou_xywh(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """IoU of boxes ``a (N, 4)`` and ``b (M, 4)`` given as ``left, top, width, height``:
-    ``(N, M)``. Zero where the union is empty."""
+    """IoU of every box of ``a`` with every box of ``b``, boxes as ``left, top, width, height``.
+
+    Parameters
+    ----------
+    a : (N, 4) array_like
+        Boxes ``left, top, width, height`` (MOTChallenge files).
+    b : (M, 4) array_like
+        Boxes ``left, top, width, height``.
+
+    Returns
+    -------
+    (N, M) ndarray
+        IoU in [0, 1]; 0 where the union is empty (at most machine epsilon).
+
+    See Also
+    --------
+    vistrack.association.iou : The same for boxes ``x0, y0, x1, y1``.
+
+    Examples
+    --------
+    >>> box_iou_xywh([[0, 0, 10, 10]], [[5, 0, 10, 10], [0, 0, 10, 10]]).round(3)
+    array([[0.333, 1.   ]])
+    """
     a = np.asarray(a, dtype=float).reshape(-1, 4)
     b = np.asarray(b, dtype=float).reshape(-1, 4)
     ax0, ay0, ax1, ay1 = a[:, 0:1], a[:, 1:2], a[:, 0:1] + a[:, 2:3], a[:, 1:2] + a[:, 3:4]
@@ -138,7 +159,63 @@ class MOTCounts:
     """The counts behind every score of one sequence, or of several combined (``+``).
 
     The scores are properties, as fractions in [0, 1] (MOTA can be negative). HOTA and its
-    parts are averaged over :data:`ALPHAS`; ``*_alpha`` gives them per threshold.
+    parts are averaged over :data:`ALPHAS`; ``*_alpha`` gives them per threshold. Adding two
+    counts (``a + b``, :func:`combine`) adds the counts and averages ``AssA``, ``AssRe``,
+    ``AssPr`` and ``LocA`` weighted by each one's HOTA true positives, as MOTChallenge's
+    COMBINED row. (``sum`` needs the start value: ``sum(counts, MOTCounts())``.)
+
+    Attributes
+    ----------
+    frames, gt_dets, pred_dets, gt_ids, pred_ids : int
+        Frames, ground-truth and predicted boxes (after preprocessing), and their identities.
+    TP, FN, FP : int
+        CLEAR MOT matches (IoU >= 0.5), missed ground truth and unmatched predictions.
+    IDSW : int
+        Identity switches: a ground-truth object matched to another predicted id than at its
+        last match.
+    Frag : int
+        Fragmentations: times a ground-truth trajectory's matching resumes after a break.
+    MT, PT, ML : int
+        Mostly tracked (matched in more than 80 % of its frames), partly tracked and mostly
+        lost (under 20 %) ground-truth trajectories.
+    MOTP_sum : float
+        Sum of the IoU of the CLEAR MOT matches.
+    IDTP, IDFN, IDFP : int
+        Identity true positives, false negatives and false positives: detections matched, or
+        not, under the best one-to-one matching of whole trajectories.
+    HOTA_TP, HOTA_FN, HOTA_FP : (19,) ndarray
+        HOTA's detection counts at each threshold of :data:`ALPHAS`.
+    AssA_alpha, AssRe_alpha, AssPr_alpha, LocA_alpha : (19,) ndarray
+        Association accuracy, recall and precision, and localisation accuracy, per threshold.
+
+    References
+    ----------
+    .. [1] K. Bernardin and R. Stiefelhagen, "Evaluating multiple object tracking
+       performance: the CLEAR MOT metrics", *EURASIP Journal on Image and Video Processing*,
+       2008.
+    .. [2] E. Ristani, F. Solera, R. Zou, R. Cucchiara and C. Tomasi, "Performance measures
+       and a data set for multi-target, multi-camera tracking", ECCV Workshops, 2016.
+    .. [3] J. Luiten, A. Ošep, P. Dendorfer, P. Torr, A. Geiger, L. Leal-Taixé and B. Leibe,
+       "HOTA: a higher order metric for evaluating multi-object tracking", *International
+       Journal of Computer Vision* 129, 2021.
+
+    Examples
+    --------
+    One object, tracked throughout under two ids:
+
+    >>> from vistrack.io import MOTTable
+    >>> gt = MOTTable.from_rows([(f, 1, 10 * f, 0, 10, 10) for f in range(1, 5)])
+    >>> pred = MOTTable.from_rows([(f, 7 if f < 3 else 8, 10 * f, 0, 10, 10)
+    ...                            for f in range(1, 5)])
+    >>> c = evaluate_mot(gt, pred)
+    >>> c.TP, c.FN, c.FP, c.IDSW, c.MT
+    (4, 0, 0, 1, 1)
+    >>> round(c.MOTA, 3), c.MOTP, c.IDF1, round(c.HOTA, 3)
+    (0.75, 1.0, 0.5, 0.707)
+    >>> c.DetA, c.AssA, c.AssRe, c.AssPr
+    (1.0, 0.5, 0.5, 1.0)
+    >>> (c + c).TP, round(combine([c, c]).MOTA, 3)
+    (8, 0.75)
     """
 
     frames: int = 0
@@ -185,68 +262,239 @@ class MOTCounts:
     # CLEAR MOT
     @property
     def MOTA(self) -> float:
+        r"""CLEAR MOT accuracy, :math:`1 - (FN + FP + IDSW) / (TP + FN)`; can be negative.
+
+        Examples
+        --------
+        >>> c = MOTCounts(TP=8, FN=2, FP=1, IDSW=1, MOTP_sum=6.0, IDTP=6, IDFP=3, IDFN=4)
+        >>> c.MOTA
+        0.6
+        """
         return (self.TP - self.FP - self.IDSW) / max(1, self.TP + self.FN)
 
     @property
     def MOTP(self) -> float:
+        r"""CLEAR MOT precision: the mean IoU of the matches, :math:`\text{MOTP\_sum} / TP`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(TP=8, FN=2, FP=1, IDSW=1, MOTP_sum=6.0, IDTP=6, IDFP=3, IDFN=4)
+        >>> c.MOTP
+        0.75
+        """
         return self.MOTP_sum / max(1, self.TP)
 
     # identity
     @property
     def IDF1(self) -> float:
+        r"""Identity F1, :math:`IDTP / (IDTP + (IDFP + IDFN) / 2)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(TP=8, FN=2, FP=1, IDSW=1, MOTP_sum=6.0, IDTP=6, IDFP=3, IDFN=4)
+        >>> round(c.IDF1, 3)
+        0.632
+        """
         return self.IDTP / max(1.0, self.IDTP + 0.5 * self.IDFP + 0.5 * self.IDFN)
 
     @property
     def IDP(self) -> float:
+        r"""Identity precision, :math:`IDTP / (IDTP + IDFP)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(TP=8, FN=2, FP=1, IDSW=1, MOTP_sum=6.0, IDTP=6, IDFP=3, IDFN=4)
+        >>> round(c.IDP, 3)
+        0.667
+        """
         return self.IDTP / max(1, self.IDTP + self.IDFP)
 
     @property
     def IDR(self) -> float:
+        r"""Identity recall, :math:`IDTP / (IDTP + IDFN)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(TP=8, FN=2, FP=1, IDSW=1, MOTP_sum=6.0, IDTP=6, IDFP=3, IDFN=4)
+        >>> c.IDR
+        0.6
+        """
         return self.IDTP / max(1, self.IDTP + self.IDFN)
 
     # HOTA
     @property
     def DetA_alpha(self) -> np.ndarray:
+        r"""Detection accuracy per threshold, :math:`TP_\alpha / (TP_\alpha + FN_\alpha +
+        FP_\alpha)`: ``(19,)``.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> c.DetA_alpha[:3].round(3)
+        array([0.667, 0.667, 0.667])
+        """
         return self.HOTA_TP / np.maximum(1, self.HOTA_TP + self.HOTA_FN + self.HOTA_FP)
 
     @property
     def HOTA_alpha(self) -> np.ndarray:
+        r"""HOTA per threshold, :math:`\sqrt{\text{DetA}_\alpha \, \text{AssA}_\alpha}`:
+        ``(19,)``.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> c.HOTA_alpha.shape, round(float(c.HOTA_alpha[0]), 3)
+        ((19,), 0.577)
+        """
         return np.sqrt(self.DetA_alpha * self.AssA_alpha)
 
     @property
     def HOTA(self) -> float:
+        """Higher order tracking accuracy: :attr:`HOTA_alpha` averaged over :data:`ALPHAS`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.HOTA, 3)
+        0.577
+        """
         return float(self.HOTA_alpha.mean())
 
     @property
     def DetA(self) -> float:
+        """Detection accuracy: :attr:`DetA_alpha` averaged over :data:`ALPHAS`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.DetA, 3)
+        0.667
+        """
         return float(self.DetA_alpha.mean())
 
     @property
     def AssA(self) -> float:
+        r"""Association accuracy averaged over :data:`ALPHAS`: per threshold, the mean over the
+        matches :math:`c` of :math:`|TPA(c)| / (|TPA(c)| + |FNA(c)| + |FPA(c)|)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> c.AssA
+        0.5
+        """
         return float(self.AssA_alpha.mean())
 
     @property
     def LocA(self) -> float:
+        """Localisation accuracy: the mean IoU of HOTA's matches, averaged over :data:`ALPHAS`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.LocA, 3)
+        0.9
+        """
         return float(self.LocA_alpha.mean())
 
     @property
     def DetRe(self) -> float:
+        r"""Detection recall, :math:`TP_\alpha / (TP_\alpha + FN_\alpha)` averaged over
+        :data:`ALPHAS`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.DetRe, 3)
+        0.8
+        """
         return float((self.HOTA_TP / np.maximum(1, self.HOTA_TP + self.HOTA_FN)).mean())
 
     @property
     def DetPr(self) -> float:
+        r"""Detection precision, :math:`TP_\alpha / (TP_\alpha + FP_\alpha)` averaged over
+        :data:`ALPHAS`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.DetPr, 3)
+        0.8
+        """
         return float((self.HOTA_TP / np.maximum(1, self.HOTA_TP + self.HOTA_FP)).mean())
 
     @property
     def AssRe(self) -> float:
+        r"""Association recall averaged over :data:`ALPHAS`: per threshold, the mean over the
+        matches :math:`c` of :math:`|TPA(c)| / (|TPA(c)| + |FNA(c)|)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.AssRe, 3)
+        0.6
+        """
         return float(self.AssRe_alpha.mean())
 
     @property
     def AssPr(self) -> float:
+        r"""Association precision averaged over :data:`ALPHAS`: per threshold, the mean over
+        the matches :math:`c` of :math:`|TPA(c)| / (|TPA(c)| + |FPA(c)|)`.
+
+        Examples
+        --------
+        >>> c = MOTCounts(HOTA_TP=np.full(19, 8.0), HOTA_FN=np.full(19, 2.0),
+        ...           HOTA_FP=np.full(19, 2.0), AssA_alpha=np.full(19, 0.5),
+        ...           AssRe_alpha=np.full(19, 0.6), AssPr_alpha=np.full(19, 0.7),
+        ...           LocA_alpha=np.full(19, 0.9))
+        >>> round(c.AssPr, 3)
+        0.7
+        """
         return float(self.AssPr_alpha.mean())
 
     def summary(self) -> dict:
-        """Scores (fractions) and counts as a flat dict, for tables and JSON."""
+        """Scores (fractions) and counts as a flat dict, for tables and JSON.
+
+        Returns
+        -------
+        dict
+            The 13 scores (``HOTA``, ``DetA``, ``AssA``, ``LocA``, ``DetRe``, ``DetPr``,
+            ``AssRe``, ``AssPr``, ``MOTA``, ``MOTP``, ``IDF1``, ``IDP``, ``IDR``) as float,
+            then 16 counts as int (``TP`` ... ``frames``).
+
+        Examples
+        --------
+        >>> s = MOTCounts(frames=3, TP=2, FN=1).summary()
+        >>> round(s["MOTA"], 3), s["TP"], len(s)
+        (0.667, 2, 29)
+        """
         keys = ("HOTA", "DetA", "AssA", "LocA", "DetRe", "DetPr", "AssRe", "AssPr", "MOTA",
                 "MOTP", "IDF1", "IDP", "IDR")
         counts = ("TP", "FP", "FN", "IDSW", "Frag", "MT", "PT", "ML", "IDTP", "IDFP", "IDFN",
@@ -377,7 +625,24 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     -------
     MOTCounts
         With ``.MOTA``, ``.IDF1``, ``.HOTA`` ...; add counts of several sequences with ``+``
-        (or :func:`sum`) for the combined scores.
+        (or :func:`combine`) for the combined scores.
+
+    Raises
+    ------
+    ValueError
+        If ``benchmark`` is not one of the names, a file has rows beyond ``n_frames`` or an id
+        twice in a frame, or MOT16/17/20 ground truth has a class outside 1-13.
+
+    References
+    ----------
+    .. [1] K. Bernardin and R. Stiefelhagen, "Evaluating multiple object tracking
+       performance: the CLEAR MOT metrics", *EURASIP Journal on Image and Video Processing*,
+       2008.
+    .. [2] E. Ristani, F. Solera, R. Zou, R. Cucchiara and C. Tomasi, "Performance measures
+       and a data set for multi-target, multi-camera tracking", ECCV Workshops, 2016.
+    .. [3] J. Luiten, A. Ošep, P. Dendorfer, P. Torr, A. Geiger, L. Leal-Taixé and B. Leibe,
+       "HOTA: a higher order metric for evaluating multi-object tracking", *International
+       Journal of Computer Vision* 129, 2021.
 
     Examples
     --------
@@ -408,7 +673,24 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
 
 
 def combine(counts: Iterable[MOTCounts]) -> MOTCounts:
-    """The combined counts of several sequences (MOTChallenge's COMBINED row)."""
+    """The combined counts of several sequences (MOTChallenge's COMBINED row).
+
+    Parameters
+    ----------
+    counts : iterable of MOTCounts
+        One per sequence.
+
+    Returns
+    -------
+    MOTCounts
+        Their sum (see :class:`MOTCounts`); empty counts for no sequences.
+
+    Examples
+    --------
+    >>> total = combine([MOTCounts(frames=10, TP=8, FN=2), MOTCounts(frames=5, TP=3, FP=1)])
+    >>> total.frames, total.TP, round(total.MOTA, 3)
+    (15, 11, 0.769)
+    """
     total = MOTCounts()
     for c in counts:
         total = total + c

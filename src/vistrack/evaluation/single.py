@@ -30,7 +30,23 @@ def _pair(pred: Any, gt: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def overlaps(pred: Any, gt: Any) -> np.ndarray:
-    """IoU of each frame's predicted and true box ``(T,)``."""
+    """IoU of each frame's predicted and true box.
+
+    Parameters
+    ----------
+    pred, gt : (T, 4) array_like
+        Boxes ``x, y, w, h``, one per frame.
+
+    Returns
+    -------
+    (T,) ndarray
+        IoU in [0, 1]; 0 where the union is empty.
+
+    Examples
+    --------
+    >>> overlaps([[0, 0, 10, 10], [5, 0, 10, 10]], [[0, 0, 10, 10], [0, 0, 10, 10]]).round(3)
+    array([1.   , 0.333])
+    """
     p, g = _pair(pred, gt)
     iw = np.clip(np.minimum(p[:, 0] + p[:, 2], g[:, 0] + g[:, 2]) - np.maximum(p[:, 0], g[:, 0]),
                  0, None)
@@ -42,7 +58,28 @@ def overlaps(pred: Any, gt: Any) -> np.ndarray:
 
 
 def success_rate(pred: Any, gt: Any, threshold: float = 0.5) -> float:
-    """Fraction of frames with IoU > ``threshold``.
+    """Success rate: the fraction of frames whose IoU with the ground truth exceeds a threshold.
+
+    Parameters
+    ----------
+    pred, gt : (T, 4) array_like
+        Boxes ``x, y, w, h``, one per frame.
+    threshold : float
+        The IoU to exceed (strictly).
+
+    Returns
+    -------
+    float
+        In [0, 1].
+
+    Raises
+    ------
+    ValueError
+        If ``pred`` and ``gt`` have different numbers of boxes.
+
+    References
+    ----------
+    .. [1] Y. Wu, J. Lim and M.-H. Yang, "Online object tracking: a benchmark", CVPR 2013.
 
     Examples
     --------
@@ -53,7 +90,38 @@ def success_rate(pred: Any, gt: Any, threshold: float = 0.5) -> float:
 
 
 def success_curve(pred: Any, gt: Any) -> tuple[np.ndarray, np.ndarray, float]:
-    """``(thresholds, success rates, AUC)`` over thresholds 0, 0.05, ..., 1 (OTB)."""
+    """The success curve over IoU thresholds 0, 0.05, ..., 1, and the area under it (OTB).
+
+    Parameters
+    ----------
+    pred, gt : (T, 4) array_like
+        Boxes ``x, y, w, h``, one per frame.
+
+    Returns
+    -------
+    thresholds : (21,) ndarray
+        0, 0.05, ..., 1.
+    rates : (21,) ndarray
+        :func:`success_rate` at each threshold.
+    auc : float
+        The mean of ``rates``: OTB's area under the curve.
+
+    Raises
+    ------
+    ValueError
+        If ``pred`` and ``gt`` have different numbers of boxes.
+
+    References
+    ----------
+    .. [1] Y. Wu, J. Lim and M.-H. Yang, "Online object tracking: a benchmark", CVPR 2013.
+
+    Examples
+    --------
+    >>> th, rates, auc = success_curve([[0, 0, 10, 10], [5, 0, 10, 10]],
+    ...                                [[0, 0, 10, 10], [0, 0, 10, 10]])
+    >>> rates[[0, 6, 10, 20]], round(auc, 3)     # IoU 1 and 1/3
+    (array([1. , 1. , 0.5, 0. ]), 0.643)
+    """
     th = np.linspace(0, 1, 21)
     v = overlaps(pred, gt)
     rates = np.array([np.mean(v > t) for t in th])
@@ -61,23 +129,73 @@ def success_curve(pred: Any, gt: Any) -> tuple[np.ndarray, np.ndarray, float]:
 
 
 def precision(pred: Any, gt: Any, threshold: float = 20.0) -> float:
-    """Fraction of frames whose box centres are at most ``threshold`` pixels apart."""
+    """Precision: the fraction of frames whose box centres are at most ``threshold`` apart.
+
+    Parameters
+    ----------
+    pred, gt : (T, 4) array_like
+        Boxes ``x, y, w, h``, one per frame.
+    threshold : float
+        The largest centre distance, in pixels (OTB: 20).
+
+    Returns
+    -------
+    float
+        In [0, 1].
+
+    Raises
+    ------
+    ValueError
+        If ``pred`` and ``gt`` have different numbers of boxes.
+
+    References
+    ----------
+    .. [1] Y. Wu, J. Lim and M.-H. Yang, "Online object tracking: a benchmark", CVPR 2013.
+
+    Examples
+    --------
+    >>> precision([[0, 0, 10, 10], [30, 0, 10, 10]], [[0, 0, 10, 10], [0, 0, 10, 10]])
+    0.5
+    """
     p, g = _pair(pred, gt)
     d = np.linalg.norm((p[:, :2] + p[:, 2:] / 2) - (g[:, :2] + g[:, 2:] / 2), axis=1)
     return float(np.mean(d <= threshold))
 
 
 def region_to_bbox(polygons: Any, rule: str = "area") -> np.ndarray:
-    """Axis-aligned ``x, y, w, h`` boxes of VOT's rotated boxes ``(T, 8)`` (four corners).
+    """Axis-aligned ``x, y, w, h`` boxes of VOT's rotated boxes (four corners).
 
     ``rule="area"``: the box centred on the corners' mean with the rotated box's area and the
-    corners' aspect ratio (VOT's and SiamFC's ``region_to_bbox``); ``"minmax"``: the
-    corners' bounding box (larger by up to twice for a box turned 45°).
+    corners' aspect ratio (VOT's and SiamFC's ``region_to_bbox``), whose width and height,
+    as theirs, count pixels inclusively (``+ 1``); ``"minmax"``: the corners' bounding box
+    (larger by up to twice for a box turned 45°).
+
+    Parameters
+    ----------
+    polygons : (T, 8) array_like
+        Corners ``x1, y1, ..., x4, y4`` of each frame's box, in order around it.
+    rule : {'area', 'minmax'}
+        How to make the box axis-aligned.
+
+    Returns
+    -------
+    (T, 4) ndarray
+        Boxes ``x, y, w, h``.
+
+    Raises
+    ------
+    ValueError
+        If ``rule`` is not one of the two names.
 
     Examples
     --------
-    >>> region_to_bbox([[0, 0, 4, 0, 4, 2, 0, 2]]).tolist()         # upright: the same box
+    An upright 4 × 2 box: ``"area"`` adds the pixel to its width and height, ``"minmax"``
+    keeps it.
+
+    >>> region_to_bbox([[0, 0, 4, 0, 4, 2, 0, 2]]).tolist()
     [[-0.5, -0.5, 5.0, 3.0]]
+    >>> region_to_bbox([[0, 0, 4, 0, 4, 2, 0, 2]], rule="minmax").tolist()
+    [[0.0, 0.0, 4.0, 2.0]]
     """
     q = np.asarray(polygons, dtype=float).reshape(-1, 8)
     xs, ys = q[:, 0::2], q[:, 1::2]
@@ -96,14 +214,41 @@ def region_to_bbox(polygons: Any, rule: str = "area") -> np.ndarray:
 
 
 def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
-    """Ground-truth or result boxes ``(T, 4)`` ``x, y, w, h`` from a text file:
+    """Ground-truth or result boxes ``x, y, w, h`` from a text file.
 
     - OTB ``groundtruth_rect.txt``: ``x y w h`` (tabs, spaces or commas), 1-based pixels,
       returned 0-based;
     - VOT ``groundtruth.txt``: 8 values a line, converted by :func:`region_to_bbox`;
-    - vistrack's ``boxes.txt``: ``frame,x,y,w,h``.
+    - vistrack's ``boxes.txt``: ``frame,x,y,w,h`` (the frame numbers are not read: the
+      lines are taken in order).
 
-    A malformed line raises ValueError naming the file and line.
+    Other files of 4 values a line are read as they are. Blank lines are skipped.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    rule : {'area', 'minmax'}
+        For polygons: see :func:`region_to_bbox`.
+
+    Returns
+    -------
+    (T, 4) ndarray
+        One box per line.
+
+    Raises
+    ------
+    ValueError
+        If a line is not numbers, not 4, 5 or 8 of them, or not as many as the line before;
+        the message names the file and line.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "groundtruth_rect.txt"
+    >>> _ = path.write_text("11,21,30,40\\n12,21,30,40\\n")
+    >>> read_boxes(path).tolist()                   # OTB: 1-based, returned 0-based
+    [[10.0, 20.0, 30.0, 40.0], [11.0, 20.0, 30.0, 40.0]]
     """
     path = Path(path)
     rows: list[list[float]] = []
@@ -130,5 +275,3 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
     if path.name == "groundtruth_rect.txt":  # OTB: 1-based pixels
         a[:, :2] -= 1
     return a
-
-

@@ -39,7 +39,25 @@ __all__ = ["Ensemble", "enkf_predict", "enkf_update", "EnsembleKalmanFilter"]
 
 @dataclass(frozen=True)
 class Ensemble:
-    """A batch of ensembles: ``members (..., N, n)``, N members of state size n."""
+    """A batch of ensembles: ``N`` state vectors of size ``n`` per batch entry.
+
+    Parameters
+    ----------
+    members : (..., N, n) array_like
+        The members, ``N >= 2``; the leading dimensions index the batch. Stored as float64.
+
+    Raises
+    ------
+    ValueError
+        If ``members`` has fewer than 2 dimensions or fewer than 2 members.
+
+    Examples
+    --------
+    >>> ens = Ensemble([[0.0, 1.0], [2.0, 3.0]])
+    >>> ens.moments()
+    (array([1., 2.]), array([[2., 2.],
+           [2., 2.]]))
+    """
 
     members: np.ndarray
 
@@ -52,7 +70,34 @@ class Ensemble:
     @classmethod
     def sample(cls, mean: Any, cov: Any, n_members: int,
                rng: np.random.Generator | int | None = None) -> Ensemble:
-        """``n_members`` draws from ``N(mean, cov)`` (a batch: ``mean (..., n)``)."""
+        """An ensemble of ``n_members`` draws from ``N(mean, cov)``, or a batch of them.
+
+        Parameters
+        ----------
+        mean : (..., n) array_like
+            Means; the leading dimensions index the batch.
+        cov : (n, n) or (..., n, n) array_like
+            Covariances, positive definite.
+        n_members : int
+            Members per ensemble.
+        rng : numpy.random.Generator, int or None
+            Random generator or seed.
+
+        Returns
+        -------
+        Ensemble
+            Members ``(..., n_members, n)``.
+
+        Raises
+        ------
+        ValueError
+            If ``cov`` is not positive definite.
+
+        Examples
+        --------
+        >>> Ensemble.sample(np.zeros((3, 2)), np.eye(2), 100, rng=0).members.shape
+        (3, 100, 2)
+        """
         rng = as_rng(rng)
         mean = np.asarray(mean, dtype=float)
         try:
@@ -63,7 +108,25 @@ class Ensemble:
         return cls(mean[..., None, :] + z @ np.swapaxes(L, -1, -2))
 
     def moments(self) -> tuple[np.ndarray, np.ndarray]:
-        """Sample mean ``(..., n)`` and covariance ``(..., n, n)`` (divisor N - 1)."""
+        r"""Sample mean and covariance of each ensemble.
+
+        .. math:: \bar x = \frac1N \sum_i x_i, \qquad
+                  P = \frac{1}{N - 1} \sum_i (x_i - \bar x)(x_i - \bar x)'
+
+        Returns
+        -------
+        mean : (..., n) ndarray
+            Sample means.
+        cov : (..., n, n) ndarray
+            Sample covariances (divisor ``N - 1``).
+
+        Examples
+        --------
+        >>> mean, cov = Ensemble.sample([0.0, 1.0], np.eye(2), 5000, rng=0).moments()
+        >>> mean.round(1) + 0.0, cov.round(1) + 0.0
+        (array([0., 1.]), array([[1., 0.],
+               [0., 1.]]))
+        """
         mean = self.members.mean(-2)
         d = self.members - mean[..., None, :]
         return mean, np.swapaxes(d, -1, -2) @ d / (self.members.shape[-2] - 1)
@@ -78,7 +141,45 @@ def _noise(rng, shape, A):
 
 def enkf_predict(ens: Ensemble, motion: Any, dt: float = 1.0, t: float = 0.0, *,
                  rng: np.random.Generator | int | None = None) -> Ensemble:
-    """Move every member through ``motion`` by ``dt`` and add sampled process noise."""
+    r"""Move every member through the dynamics and add sampled process noise.
+
+    .. math:: x_i^- = f(x_i, \Delta t, t) + w_i, \qquad w_i \sim N(0, Q(\Delta t))
+
+    (:math:`f(x) = F x` for a linear model).
+
+    Parameters
+    ----------
+    ens : Ensemble
+        Members ``(..., N, n)``.
+    motion : motion model
+        Linear (``F``, ``Q``) or nonlinear (``f``, ``jacobian``, ``Q``).
+    dt : float
+        Time step.
+    t : float
+        Time of the predicted state (for time-varying models).
+    rng : numpy.random.Generator, int or None
+        Random generator or seed.
+
+    Returns
+    -------
+    Ensemble
+        The predicted members ``(..., N, n)``.
+
+    References
+    ----------
+    .. [1] G. Evensen, "Sequential data assimilation with a nonlinear quasi-geostrophic model
+       using Monte Carlo methods to forecast error statistics", *Journal of Geophysical
+       Research* 99(C5), 1994.
+    .. [2] G. Burgers, P. J. van Leeuwen and G. Evensen, "Analysis scheme in the ensemble
+       Kalman filter", *Monthly Weather Review* 126(6), 1998.
+
+    Examples
+    --------
+    >>> from vistrack.models import ConstantVelocity
+    >>> ens = Ensemble.sample([0.0, 1.0], np.eye(2), 5000, rng=0)
+    >>> enkf_predict(ens, ConstantVelocity(dim=1, q=0.1), dt=1.0, rng=1).moments()[0].round(1)
+    array([1., 1.])
+    """
     mo = motion if isinstance(motion, Motion) else Motion(motion)
     x = np.asarray(mo.f(ens.members, dt, t), dtype=float)
     return Ensemble(x + _noise(as_rng(rng), x.shape, mo.Q_sqrt(dt)))
@@ -99,10 +200,58 @@ def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
 def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
                 rng: np.random.Generator | int | None = None, residual: Callable | None = None,
                 return_loglik: bool = False) -> Ensemble | tuple[Ensemble, np.ndarray]:
-    """Perturbed-observation update of a batch of ensembles with ``y (..., m)`` (NaN = missing).
+    r"""Perturbed-observation update of a batch of ensembles with a measurement each.
 
-    With ``return_loglik``, also returns the Gaussian log-density of the innovation
-    ``N(r(y, mean h), S)`` under the ensemble's moments.
+    With the ensemble's cross-covariance :math:`C = \operatorname{cov}(x, h(x))` and
+    :math:`S = \operatorname{cov}(h(x)) + R`, over the observed components,
+
+    .. math:: K = C S^{-1}, \qquad x_i^+ = x_i + K\, r(y + v_i, h(x_i)),
+              \quad v_i \sim N(0, R),
+
+    with :math:`r` the measurement residual (differences, angles wrapped).
+
+    Parameters
+    ----------
+    ens : Ensemble
+        Members ``(..., N, n)``.
+    y : (..., m) array_like
+        One measurement per ensemble; NaN components are missing.
+    measurement : measurement model
+        Linear (``H``, ``R``) or nonlinear (``h``, ``jacobian``, ``R``).
+    rng : numpy.random.Generator, int or None
+        Random generator or seed.
+    residual : callable, optional
+        ``residual(a, b)``, overriding the model's.
+    return_loglik : bool
+        Also return the log-likelihood.
+
+    Returns
+    -------
+    posterior : Ensemble
+        The corrected members ``(..., N, n)``.
+    loglik : (...) ndarray
+        Only with ``return_loglik``: the Gaussian log-density of the innovation,
+        :math:`\log N(r(y, \overline{h(x)}); 0, S)`, under the ensemble's moments.
+
+    References
+    ----------
+    .. [1] G. Evensen, "Sequential data assimilation with a nonlinear quasi-geostrophic model
+       using Monte Carlo methods to forecast error statistics", *Journal of Geophysical
+       Research* 99(C5), 1994.
+    .. [2] G. Burgers, P. J. van Leeuwen and G. Evensen, "Analysis scheme in the ensemble
+       Kalman filter", *Monthly Weather Review* 126(6), 1998.
+
+    Examples
+    --------
+    Close to the Kalman update (mean ``[1.40, 1.21]``, variance 0.40) with many members:
+
+    >>> from vistrack.models import ConstantVelocity, Position
+    >>> ens = enkf_predict(Ensemble.sample([0.0, 1.0], np.eye(2), 5000, rng=0),
+    ...                    ConstantVelocity(dim=1, q=0.1), rng=1)
+    >>> post = enkf_update(ens, [1.5], Position(dim=1, r=0.5), rng=2)
+    >>> mean, cov = post.moments()
+    >>> mean.round(2), round(float(cov[0, 0]), 1)
+    (array([1.4 , 1.19]), 0.4)
     """
     X = ens.members
     N, n = X.shape[-2:]
@@ -125,21 +274,47 @@ def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
 
 
 class EnsembleKalmanFilter:
-    """The stochastic EnKF over a sequence.
+    """The stochastic EnKF over a sequence: :func:`enkf_predict` and :func:`enkf_update` per
+    step.
 
     Parameters
     ----------
     motion, measurement
         Nonlinear or linear models.
     n_members : int
-        Ensemble size.
-    rng : numpy Generator, int seed or None
+        Ensemble size, at least 2.
+    rng : numpy.random.Generator, int or None
+        Random generator or seed, used for the first ensemble and every step.
     residual : callable, optional
         Measurement residual, overriding the model's.
+
+    Raises
+    ------
+    ValueError
+        If ``n_members`` is not an integer >= 2.
+    TypeError
+        If a model lacks what a motion or measurement model provides.
 
     Notes
     -----
     The result's ``means`` and ``covs`` are the ensemble's sample moments.
+
+    References
+    ----------
+    .. [1] G. Evensen, "Sequential data assimilation with a nonlinear quasi-geostrophic model
+       using Monte Carlo methods to forecast error statistics", *Journal of Geophysical
+       Research* 99(C5), 1994.
+    .. [2] G. Burgers, P. J. van Leeuwen and G. Evensen, "Analysis scheme in the ensemble
+       Kalman filter", *Monthly Weather Review* 126(6), 1998.
+
+    Examples
+    --------
+    >>> from vistrack.models import ConstantVelocity, Position
+    >>> enkf = EnsembleKalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1, r=1.0),
+    ...                             n_members=500, rng=0)
+    >>> res = enkf.filter(np.arange(10.0)[:, None], x0=[0.0, 1.0], P0=np.eye(2))
+    >>> res.means.shape, res.covs.shape, res.means[-1].round(1)
+    ((10, 2), (10, 2, 2), array([9., 1.]))
     """
 
     def __init__(self, motion: Any, measurement: Any, n_members: int = 100, *,
@@ -153,7 +328,42 @@ class EnsembleKalmanFilter:
 
     def filter(self, ys: Any, *, x0: Any, P0: Any, dt: Any = 1.0,
                times: Any = None) -> FilterResult:
-        """Filter ``ys (T, m)`` or ``(B, T, m)``; the first ensemble is drawn from ``N(x0, P0)``."""
+        """Filter a sequence, or a batch of them.
+
+        The first ensemble is drawn from ``N(x0, P0)``, the prior of the first step, which
+        the first measurement corrects; a step whose measurement is all NaN is predicted only.
+
+        Parameters
+        ----------
+        ys : (T, m) or (B, T, m) array_like
+            Measurements; NaN components are missing.
+        x0 : (n,) or (B, n) array_like
+            Prior mean of the first step.
+        P0 : (n, n) or (B, n, n) array_like
+            Prior covariance of the first step, positive definite.
+        dt : float or (T,) array_like
+            Time step; ``dt[t]`` is the step from ``t-1`` to ``t``.
+        times : (T,) array_like, optional
+            Time of each step; default the cumulative ``dt`` from 0.
+
+        Returns
+        -------
+        FilterResult
+            The ensembles' sample means ``(..., T, n)`` and covariances ``(..., T, n, n)``,
+            their predictions, and the log-likelihood ``(...)``.
+
+        Examples
+        --------
+        Two series at once:
+
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> enkf = EnsembleKalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1),
+        ...                             n_members=200, rng=0)
+        >>> ys = np.stack([np.arange(5.0), -np.arange(5.0)])[..., None]
+        >>> res = enkf.filter(ys, x0=[0.0, 0.0], P0=np.eye(2))
+        >>> res.means.shape, res.loglik.shape
+        ((2, 5, 2), (2,))
+        """
         n = self.motion.n
         ys_arr = np.asarray(ys, dtype=float)
         B = 1 if ys_arr.ndim == 2 else ys_arr.shape[0]

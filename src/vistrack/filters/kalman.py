@@ -43,21 +43,37 @@ __all__ = [
 
 @dataclass(frozen=True)
 class FilterResult:
-    """The output of :func:`kalman_filter`. Arrays are read-only.
+    """The output of :func:`kalman_filter` (and of the other filters' ``filter``).
+
+    Arrays are read-only. ``(...)`` is ``()`` for one series and ``(B,)`` for a batch.
 
     Attributes
     ----------
-    means, covs : ndarray, shape (..., T, n) and (..., T, n, n)
-        Corrected estimates ``x̄ᵢ⁺, Σᵢ⁺`` (``covs`` is None when ``store_covs=False``).
-    pred_means, pred_covs : ndarray, shape (..., T, n) and (..., T, n, n)
-        Predictions ``x̄ᵢ⁻, Σᵢ⁻`` (``pred_means[..., 0, :]`` is the prior ``x0``); None when
+    means : (..., T, n) ndarray
+        Corrected means ``x̄ᵢ⁺``.
+    covs : (..., T, n, n) ndarray or None
+        Corrected covariances ``Σᵢ⁺``; None when ``store_covs=False``.
+    pred_means : (..., T, n) ndarray or None
+        Predicted means ``x̄ᵢ⁻`` (``pred_means[..., 0, :]`` is the prior ``x0``); None when
         ``store_covs=False``.
-    loglik : ndarray, shape (...)
+    pred_covs : (..., T, n, n) ndarray or None
+        Predicted covariances ``Σᵢ⁻``; None when ``store_covs=False``.
+    loglik : (...) ndarray
         ``log p(y_0, ..., y_{T-1})``, summed over the observed components.
     last : Gaussian
         The corrected estimate at the last step, batch shape ``(...)``.
     shared_covs : bool
-        True when every series shared one covariance sequence (``covs`` is then a broadcast view).
+        True when every series shared one covariance sequence (``covs`` is then a broadcast
+        view).
+
+    Examples
+    --------
+    >>> F, H = np.array([[1.0, 1.0], [0.0, 1.0]]), np.array([[1.0, 0.0]])
+    >>> ys = np.array([[0.1], [0.9], [np.nan], [3.2]])
+    >>> res = kalman_filter(ys, F=F, Q=0.01 * np.eye(2), H=H, R=[[0.25]],
+    ...                     x0=[0.0, 1.0], P0=np.eye(2))
+    >>> res.last.mean.round(3), round(float(res.loglik), 3), res.means.flags.writeable
+    (array([3.148, 1.05 ]), -3.579, False)
     """
 
     means: np.ndarray
@@ -108,20 +124,38 @@ def kalman_filter(
     P0: Any,
     store_covs: bool = True,
 ) -> FilterResult:
-    """Run the Kalman filter over one series or a batch of series.
+    r"""Run the Kalman filter over one series or a batch of series.
+
+    For ``t = 0, ..., T-1``, from the prior :math:`\bar x_0^- = x_0`, :math:`\Sigma_0^- =
+    P_0`:
+
+    .. math::
+
+        \bar x_t^- = F_t \bar x_{t-1}^+, \quad \Sigma_t^- = F_t \Sigma_{t-1}^+ F_t' + Q_t
+        \quad (t > 0),
+
+        K_t = \Sigma_t^- H_t' (H_t \Sigma_t^- H_t' + R_t)^{-1}, \quad
+        \bar x_t^+ = \bar x_t^- + K_t (y_t - H_t \bar x_t^-), \quad
+        \Sigma_t^+ = (I - K_t H_t) \Sigma_t^- (I - K_t H_t)' + K_t R_t K_t',
+
+    the correction over the observed components of :math:`y_t` (see the module).
 
     Parameters
     ----------
-    ys : array, shape (T, m) or (B, T, m)
+    ys : (T, m) or (B, T, m) array_like
         Measurements. A NaN component is missing: a row of NaN means no measurement at that step
         (predict only); NaN in some components updates with the others.
-    F, Q : array, shape (n, n) or (T, n, n)
+    F, Q : (n, n) or (T, n, n) array_like
         Dynamics and process noise, constant or per step (``F[t]`` predicts step ``t``; the
         first step has no prediction, so ``F[0]`` and ``Q[0]`` are not used).
-    H, R : array, shape (m, n) / (m, m) or (T, m, n) / (T, m, m)
+    H, R : (m, n) and (m, m), or (T, m, n) and (T, m, m) array_like
         Measurement matrix and noise covariance, constant or per step.
-    x0, P0 : array, shape (n,) / (n, n) or per series (B, n) / (B, n, n)
-        Prior of the first step (the seeds' ``x̄0⁻``, ``Σ0⁻``), corrected by ``ys[..., 0, :]``.
+    x0 : (n,) or (B, n) array_like
+        Prior mean of the first step (the seeds' ``x̄0⁻``), corrected by ``ys[..., 0, :]``;
+        one for all series or one per series.
+    P0 : (n, n) or (B, n, n) array_like
+        Prior covariance of the first step (the seeds' ``Σ0⁻``), symmetric positive
+        semi-definite.
     store_covs : bool
         If False, only the corrected means, the log-likelihood and the last Gaussian are kept
         (``covs``, ``pred_means`` and ``pred_covs`` are None), which saves ``B T n (2 n + 1)``
@@ -130,6 +164,21 @@ def kalman_filter(
     Returns
     -------
     FilterResult
+        Means ``(..., T, n)``, covariances ``(..., T, n, n)``, predictions, the
+        log-likelihood ``(...)`` and the last estimate; ``(...)`` is ``()`` for ``ys`` of
+        shape ``(T, m)`` and ``(B,)`` for ``(B, T, m)``.
+
+    Raises
+    ------
+    ValueError
+        If a shape disagrees, a value is not finite, ``Q``, ``R`` or ``P0`` is not symmetric
+        positive semi-definite, or an innovation covariance ``H P H' + R`` is not positive
+        definite (the message names the step).
+
+    See Also
+    --------
+    KalmanFilter : The same from motion and measurement models.
+    rts_smooth : Smoothing of the result.
 
     Notes
     -----
@@ -143,6 +192,11 @@ def kalman_filter(
     constant matrices and fully observed steps, the covariances converge to their steady state,
     after which only the means are computed.
 
+    References
+    ----------
+    .. [1] R. E. Kalman, "A new approach to linear filtering and prediction problems",
+       *Journal of Basic Engineering* 82(1), 1960.
+
     Examples
     --------
     >>> import numpy as np
@@ -153,6 +207,13 @@ def kalman_filter(
     ...                     x0=[0.0, 1.0], P0=np.eye(2))
     >>> res.means.shape, res.covs.shape, res.loglik.shape
     ((4, 2), (4, 2, 2), ())
+
+    Two series with the same missing values share their covariances:
+
+    >>> res = kalman_filter(np.stack([ys, ys + 1]), F=F, Q=0.01 * np.eye(2), H=H, R=[[0.25]],
+    ...                     x0=[0.0, 1.0], P0=np.eye(2))
+    >>> res.means.shape, res.loglik.shape, res.shared_covs
+    ((2, 4, 2), (2,), True)
     """
     y, single = as_measurement_series(ys)
     B, T, m = y.shape
@@ -283,9 +344,41 @@ def kf_step(
 def kf_step(
     g: Gaussian, y: Any, F: Any, Q: Any, H: Any, R: Any, *, return_loglik: bool = False
 ) -> Gaussian | tuple[Gaussian, np.ndarray]:
-    """:func:`kf_predict` then :func:`kf_update` in one call: the usual loop of one tracker.
+    r""":func:`kf_predict` then :func:`kf_update` in one call: the usual loop of one tracker.
 
-    Same arguments and checks as the two; equal to ``kf_update(kf_predict(g, F, Q), y, H, R)``.
+    Equal to ``kf_update(kf_predict(g, F, Q), y, H, R)``, with the same checks:
+
+    .. math:: \bar x^- = F \bar x, \qquad P^- = F P F' + Q,
+
+    then the correction of :math:`(\bar x^-, P^-)` with ``y``.
+
+    Parameters
+    ----------
+    g : Gaussian
+        Estimates at the previous step, batch shape ``(...)``, state size ``n``.
+    y : (..., m) array_like
+        One measurement per Gaussian; NaN components are missing.
+    F, Q : (n, n) array_like
+        Dynamics and process noise.
+    H, R : (m, n) and (m, m) array_like
+        Measurement matrix and noise covariance.
+    return_loglik : bool
+        Also return ``log N(y; H m⁻, H P⁻ H' + R)`` per Gaussian.
+
+    Returns
+    -------
+    posterior : Gaussian
+        The corrected estimates, batch shape ``(...)``.
+    loglik : (...) ndarray
+        Only with ``return_loglik``; 0 for a Gaussian with no observed component.
+
+    Raises
+    ------
+    TypeError
+        If ``g`` is not a :class:`~vistrack.types.Gaussian`.
+    ValueError
+        If a shape disagrees, a matrix is not finite, ``Q`` or ``R`` is not symmetric, or an
+        innovation covariance is not positive definite.
 
     Examples
     --------
@@ -311,14 +404,29 @@ def kf_step(
 
 
 def kf_predict(g: Gaussian, F: Any, Q: Any) -> Gaussian:
-    """Predict every Gaussian of a batch one step: ``N(F m, F P F' + Q)``.
+    r"""Predict every Gaussian of a batch one step: ``N(F m, F P F' + Q)``.
+
+    .. math:: \bar x^- = F \bar x, \qquad P^- = F P F' + Q
 
     Parameters
     ----------
-    g : Gaussian, batch shape (...)
-    F, Q : array, shape (n, n)
+    g : Gaussian
+        Estimates, batch shape ``(...)``, state size ``n``.
+    F, Q : (n, n) array_like
         Checked for shape, finiteness and the symmetry of ``Q`` (not for definiteness, which
         would cost more than the prediction; :func:`kalman_filter` checks it).
+
+    Returns
+    -------
+    Gaussian
+        The predictions, batch shape ``(...)``.
+
+    Raises
+    ------
+    TypeError
+        If ``g`` is not a :class:`~vistrack.types.Gaussian`.
+    ValueError
+        If ``F`` or ``Q`` has the wrong shape or is not finite, or ``Q`` is not symmetric.
 
     Examples
     --------
@@ -356,19 +464,59 @@ def kf_update(
 def kf_update(
     g: Gaussian, y: Any, H: Any, R: Any, *, return_loglik: bool = False
 ) -> Gaussian | tuple[Gaussian, np.ndarray]:
-    """Correct every Gaussian of a batch with its measurement.
+    r"""Correct every Gaussian of a batch with its measurement.
+
+    .. math::
+
+        S = H P H' + R, \quad K = P H' S^{-1}, \quad
+        \bar x^+ = \bar x + K (y - H \bar x), \quad
+        P^+ = (I - K H) P (I - K H)' + K R K',
+
+    over the observed components of ``y`` (Joseph form, kept symmetric), and the
+    log-likelihood :math:`\log N(y; H \bar x, S)`.
 
     Parameters
     ----------
-    g : Gaussian, batch shape (...)
-    y : array, shape (..., m)
+    g : Gaussian
+        Predictions, batch shape ``(...)``, state size ``n``.
+    y : (..., m) array_like
         One measurement per Gaussian; NaN components are missing (an all-NaN row leaves that
         Gaussian unchanged).
-    H, R : array, shape (m, n) and (m, m)
+    H, R : (m, n) and (m, m) array_like
         Checked for shape, finiteness and the symmetry of ``R``; a non-positive-definite
         innovation covariance raises ``ValueError``.
     return_loglik : bool
-        Also return ``log N(y; H m, H P H' + R)`` per Gaussian, shape (...).
+        Also return ``log N(y; H m, H P H' + R)`` per Gaussian.
+
+    Returns
+    -------
+    posterior : Gaussian
+        The corrected estimates, batch shape ``(...)``.
+    loglik : (...) ndarray
+        Only with ``return_loglik``; 0 for a Gaussian with no observed component.
+
+    Raises
+    ------
+    TypeError
+        If ``g`` is not a :class:`~vistrack.types.Gaussian`.
+    ValueError
+        If a shape disagrees, ``H`` or ``R`` is not finite, ``R`` is not symmetric, or an
+        innovation covariance is not positive definite.
+
+    References
+    ----------
+    .. [1] R. E. Kalman, "A new approach to linear filtering and prediction problems",
+       *Journal of Basic Engineering* 82(1), 1960.
+
+    Examples
+    --------
+    >>> from vistrack import Gaussian
+    >>> g = Gaussian(np.zeros((2, 2)), np.tile(np.eye(2), (2, 1, 1)))
+    >>> y = np.array([[1.0, np.nan], [np.nan, np.nan]])    # the second: nothing observed
+    >>> post, ll = kf_update(g, y, np.eye(2), 0.5 * np.eye(2), return_loglik=True)
+    >>> post.mean.round(3), post.cov[0].diagonal().round(3), ll.round(3)
+    (array([[0.667, 0.   ],
+           [0.   , 0.   ]]), array([0.333, 1.   ]), array([-1.455,  0.   ]))
     """
     mean, cov, y = _with_measurement(g, y)
     n, m = mean.shape[-1], y.shape[-1]
@@ -405,12 +553,40 @@ def kalman_filter_1d(
         \sigma_i^+ = \sqrt{\frac{\sigma_{m_i}^2 (\sigma_i^-)^2}
                                 {\sigma_{m_i}^2 + m_i^2 (\sigma_i^-)^2}}
 
-    Parameters are scalars or arrays of shape (T,); ``sigma_d`` and ``sigma_m`` are standard
-    deviations. A NaN in ``ys`` skips the correction at that step.
+    A NaN in ``ys`` skips the correction at that step.
+
+    Parameters
+    ----------
+    ys : (T,) array_like
+        Measurements; NaN where missing.
+    d, m : float or (T,) array_like
+        Dynamics and measurement coefficients :math:`d_i`, :math:`m_i` (``d[0]`` unused).
+    sigma_d, sigma_m : float or (T,) array_like
+        Standard deviations (not variances) of the dynamics and measurement noise
+        (``sigma_d[0]`` unused).
+    x0 : float
+        Prior mean of the first step, :math:`\bar x_0^-`.
+    sigma0 : float
+        Prior standard deviation of the first step, :math:`\sigma_0^-`.
 
     Returns
     -------
-    dict with arrays of shape (T,): ``pred_mean``, ``pred_std``, ``mean``, ``std``.
+    dict of str to (T,) ndarray
+        ``pred_mean``, ``pred_std`` (the predictions :math:`\bar x_i^-`,
+        :math:`\sigma_i^-`) and ``mean``, ``std`` (the corrections :math:`\bar x_i^+`,
+        :math:`\sigma_i^+`).
+
+    Raises
+    ------
+    ValueError
+        If an array parameter does not have shape ``(T,)`` or is not finite.
+
+    Examples
+    --------
+    >>> out = kalman_filter_1d([1.0, np.nan, 2.0], d=1.0, m=1.0, sigma_d=0.5, sigma_m=1.0,
+    ...                        x0=0.0, sigma0=1.0)
+    >>> out["mean"].round(3), out["std"].round(3)
+    (array([0.5 , 0.5 , 1.25]), array([0.707, 0.866, 0.707]))
     """
     y = as_float_array(ys, "ys", ndim=(1,))
     T = y.shape[0]

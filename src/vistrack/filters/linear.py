@@ -41,6 +41,22 @@ class KalmanFilter:
     measurement : MeasurementModel
         Gives ``H(n)``, ``R()`` (e.g. :class:`vistrack.models.Position`).
 
+    Attributes
+    ----------
+    motion, measurement
+        The models.
+
+    Raises
+    ------
+    TypeError
+        If a model lacks one of the attributes it must provide (``F``, ``Q``, ``ndim_state``;
+        ``H``, ``R``, ``ndim_meas``).
+
+    See Also
+    --------
+    kalman_filter : The filter on matrices.
+    rts_smooth : The smoother.
+
     Examples
     --------
     >>> import numpy as np
@@ -68,7 +84,35 @@ class KalmanFilter:
         return f"KalmanFilter({self.motion!r}, {self.measurement!r})"
 
     def matrices(self, T: int, dt: Any = 1.0) -> dict[str, np.ndarray]:
-        """``F, Q, H, R`` for ``T`` steps with time step(s) ``dt``."""
+        """The matrices ``F, Q, H, R`` of the models for ``T`` steps with time step(s) ``dt``.
+
+        Parameters
+        ----------
+        T : int
+            Number of steps.
+        dt : float or array_like
+            A scalar, the ``T-1`` intervals between steps, or ``T`` values (``dt[0]``
+            unused).
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``F`` and ``Q``: ``(n, n)`` for a scalar ``dt``, else ``(T, n, n)``; ``H`` and
+            ``R`` as the measurement model gives them. The keyword arguments of
+            :func:`kalman_filter`.
+
+        Raises
+        ------
+        ValueError
+            If ``dt`` has another length, or a model rejects it.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> kf = KalmanFilter(ConstantVelocity(dim=1), Position(dim=1))
+        >>> {k: v.shape for k, v in kf.matrices(3, dt=[0.5, 2.0]).items()}
+        {'F': (3, 2, 2), 'Q': (3, 2, 2), 'H': (1, 2), 'R': (1, 1)}
+        """
         n = self.motion.ndim_state
         d = _dt_steps(dt, T)
         return {
@@ -79,11 +123,41 @@ class KalmanFilter:
         }
 
     def default_prior(self, ys: np.ndarray, *, scale: float = 1e3) -> tuple[np.ndarray, np.ndarray]:
-        """A weak prior from the first measurement of each series.
+        r"""A weak prior from the first measurement of each series.
 
         ``x0`` is the least-squares state ``H⁺ y`` of the first non-missing value of each
         component (0 where a component is never observed), and ``P0`` is ``R`` on the measured
-        subspace and ``scale² · max(diag R)`` on the rest of the state.
+        subspace and ``scale² · max(diag R)`` on the rest of the state:
+
+        .. math::
+
+            x_0 = H^+ y_\text{first}, \qquad
+            P_0 = H^+ R H^{+\prime} + s^2 \max_i R_{ii} \, (I - H^+ H).
+
+        Per-step ``H`` and ``R`` use their first step.
+
+        Parameters
+        ----------
+        ys : (T, m) or (B, T, m) array_like
+            Measurements, NaN where missing.
+        scale : float
+            The prior's standard deviation on the unmeasured part of the state, in units of
+            the largest measurement standard deviation.
+
+        Returns
+        -------
+        x0 : (n,) or (B, n) ndarray
+            One prior mean per series.
+        P0 : (n, n) ndarray
+            One prior covariance for all series.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> kf = KalmanFilter(ConstantVelocity(dim=1), Position(dim=1, r=1.0))
+        >>> x0, P0 = kf.default_prior(np.array([[np.nan], [2.0], [3.0]]))
+        >>> x0, P0.diagonal()
+        (array([2., 0.]), array([1.e+00, 1.e+06]))
         """
         y, _ = as_measurement_series(ys)
         n = self.motion.ndim_state
@@ -110,10 +184,34 @@ class KalmanFilter:
         P0: Any = None,
         store_covs: bool = True,
     ) -> FilterResult:
-        """Filter ``ys`` of shape ``(T, m)`` or ``(B, T, m)``; see :func:`kalman_filter`.
+        """Filter a sequence, or a batch of them; see :func:`kalman_filter` for the equations.
 
-        ``dt`` is a scalar, the ``T-1`` intervals between steps, or ``T`` values with ``dt[0]``
-        unused. Without ``x0``/``P0`` the prior is :meth:`default_prior`.
+        Parameters
+        ----------
+        ys : (T, m) or (B, T, m) array_like
+            Measurements; NaN components are missing.
+        dt : float or array_like
+            A scalar, the ``T-1`` intervals between steps, or ``T`` values with ``dt[0]``
+            unused.
+        x0 : (n,) or (B, n) array_like, optional
+            Prior mean of the first step; from :meth:`default_prior` if None.
+        P0 : (n, n) or (B, n, n) array_like, optional
+            Prior covariance of the first step; from :meth:`default_prior` if None.
+        store_covs : bool
+            Keep the covariances and predictions (see :func:`kalman_filter`).
+
+        Returns
+        -------
+        FilterResult
+            Means ``(..., T, n)``, covariances ``(..., T, n, n)``, the log-likelihood and the
+            last estimate; ``(...)`` is ``()`` or ``(B,)``.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> kf = KalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1, r=1.0))
+        >>> kf.filter(np.arange(5.0)[:, None]).means[-1].round(3)
+        array([4., 1.])
         """
         T = np.shape(ys)[-2] if np.ndim(ys) >= 2 else 0
         if x0 is None or P0 is None:
@@ -127,6 +225,27 @@ class KalmanFilter:
 
         ``x0, P0`` are the prior of the first measurement (as in :func:`kalman_filter`): correct
         them with :meth:`OnlineFilter.update`, then :meth:`OnlineFilter.step` for each later one.
+
+        Parameters
+        ----------
+        x0 : (n,) array_like
+            Prior mean.
+        P0 : (n, n) array_like
+            Prior covariance, symmetric positive semi-definite.
+        dt : float
+            The default time step of :meth:`OnlineFilter.predict` and
+            :meth:`OnlineFilter.step`.
+
+        Returns
+        -------
+        OnlineFilter
+            The filter, at the prior.
+
+        Raises
+        ------
+        ValueError
+            If the prior has the wrong shape or is invalid, or the measurement model is not
+            constant.
 
         Examples
         --------
@@ -144,7 +263,31 @@ class KalmanFilter:
     def smooth(
         self, ys: Any, *, dt: Any = 1.0, x0: Any = None, P0: Any = None
     ) -> SmoothResult:
-        """Filter, then RTS-smooth; see :func:`vistrack.filters.rts_smooth`."""
+        """Filter, then RTS-smooth; see :func:`vistrack.filters.rts_smooth`.
+
+        Parameters
+        ----------
+        ys : (T, m) or (B, T, m) array_like
+            Measurements; NaN components are missing.
+        dt : float or array_like
+            As in :meth:`filter`.
+        x0, P0 : array_like, optional
+            The prior, as in :meth:`filter`.
+
+        Returns
+        -------
+        SmoothResult
+            Smoothed means ``(..., T, n)`` and covariances ``(..., T, n, n)``, and the forward
+            :class:`FilterResult`.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> kf = KalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1, r=1.0))
+        >>> sm = kf.smooth(np.arange(5.0)[:, None])
+        >>> sm.means.shape, sm.covs.shape, sm.filtered.means.shape
+        ((5, 2), (5, 2, 2), (5, 2))
+        """
         T = np.shape(ys)[-2]
         mats = self.matrices(T, dt)
         res = self.filter(ys, dt=dt, x0=x0, P0=P0)
@@ -157,12 +300,44 @@ class OnlineFilter:
     Made by :meth:`KalmanFilter.online`. The model's matrices for the default time step are
     checked once, here, so a call costs little more than the arithmetic: this is the loop of a
     single-object tracker. For many targets, :func:`kf_predict` / :func:`kf_update` on a batch
-    of Gaussians cost less per target.
+    of Gaussians cost less per target. The equations are those of :func:`kf_predict` and
+    :func:`kf_update`.
+
+    Parameters
+    ----------
+    kf : KalmanFilter
+        The models; the measurement model must be constant (``H``, ``R`` 2-D).
+    x0 : (n,) array_like
+        Prior mean of the first measurement.
+    P0 : (n, n) array_like
+        Prior covariance, symmetric positive semi-definite.
+    dt : float
+        The default time step.
 
     Attributes
     ----------
-    mean, cov : ndarray
-        Read-only views of the current estimate (they change with the next call; copy to keep).
+    mean : (n,) ndarray
+        Read-only view of the current mean (it changes with the next call; copy to keep).
+    cov : (n, n) ndarray
+        Read-only view of the current covariance.
+
+    Raises
+    ------
+    ValueError
+        If the prior has the wrong shape or is invalid, or the measurement model is not
+        constant, or its ``R`` is not symmetric positive semi-definite.
+
+    Examples
+    --------
+    >>> from vistrack.models import ConstantVelocity, Position
+    >>> kf = KalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1, r=1.0))
+    >>> f = OnlineFilter(kf, [0.0, 1.0], np.eye(2))
+    >>> f.predict()
+    >>> f.mean, f.cov.round(3)
+    (array([1., 1.]), array([[2.033, 1.05 ],
+           [1.05 , 1.1  ]]))
+    >>> round(f.update([1.2]), 3), f.mean.round(3)
+    (-1.48, array([1.134, 1.069]))
     """
 
     __slots__ = ("_kf", "_n", "_m", "_dt0", "_dt", "_buf", "_off", "_idx", "_kernel", "_no_y")
@@ -214,6 +389,16 @@ class OnlineFilter:
 
     @property
     def mean(self) -> np.ndarray:
+        """The current mean ``(n,)``: a read-only view that the next call changes.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantPosition, Position
+        >>> f = KalmanFilter(ConstantPosition(dim=2), Position(dim=2)).online([1.0, 2.0],
+        ...                                                                  np.eye(2))
+        >>> f.mean, f.mean.flags.writeable
+        (array([1., 2.]), False)
+        """
         o = self._off["x"]
         v = self._buf[o:o + self._n]
         v.flags.writeable = False
@@ -221,6 +406,16 @@ class OnlineFilter:
 
     @property
     def cov(self) -> np.ndarray:
+        """The current covariance ``(n, n)``: a read-only view that the next call changes.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantPosition, Position
+        >>> f = KalmanFilter(ConstantPosition(dim=1), Position(dim=1)).online([0.0], np.eye(1))
+        >>> _ = f.update([1.0])
+        >>> f.cov
+        array([[0.5]])
+        """
         n, o = self._n, self._off["P"]
         v = self._buf[o:o + n * n].reshape(n, n)
         v.flags.writeable = False
@@ -228,7 +423,16 @@ class OnlineFilter:
 
     @property
     def gaussian(self) -> Gaussian:
-        """A copy of the current estimate."""
+        """A copy of the current estimate: a :class:`~vistrack.types.Gaussian`, batch shape ``()``.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantPosition, Position
+        >>> kf = KalmanFilter(ConstantPosition(dim=2), Position(dim=2))
+        >>> g = kf.online([1.0, 2.0], np.eye(2)).gaussian
+        >>> g.mean, g.batch_shape
+        (array([1., 2.]), ())
+        """
         return Gaussian(self.mean.copy(), self.cov.copy())
 
     def _run(self, y: Any, predict: bool, update: bool, dt: float | None) -> float:
@@ -251,13 +455,82 @@ class OnlineFilter:
         return ll
 
     def predict(self, *, dt: float | None = None) -> None:
-        """Predict one step of ``dt`` (default: the ``dt`` the filter was made with)."""
+        r"""Predict one step: :math:`\bar x \leftarrow F \bar x`, :math:`P \leftarrow F P F' + Q`.
+
+        Parameters
+        ----------
+        dt : float, optional
+            Time step; default the ``dt`` the filter was made with. ``F(dt)`` and ``Q(dt)``
+            are computed (and checked) when ``dt`` changes.
+
+        Raises
+        ------
+        ValueError
+            If the model's ``F`` or ``Q`` for ``dt`` is invalid.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> f = KalmanFilter(ConstantVelocity(dim=1), Position(dim=1)).online([0.0, 1.0],
+        ...                                                                  np.eye(2))
+        >>> f.predict(dt=3.0)
+        >>> f.mean
+        array([3., 1.])
+        """
         self._run(None, True, False, dt)
 
     def update(self, y: Any) -> float:
-        """Correct with ``y (m,)`` (NaN components missing); returns ``log N(y; H m, S)``."""
+        """Correct with a measurement (the equations of :func:`kf_update`).
+
+        Parameters
+        ----------
+        y : (m,) array_like
+            The measurement; NaN components are missing (all NaN: no correction).
+
+        Returns
+        -------
+        float
+            ``log N(y; H m, S)`` over the observed components (0 if none).
+
+        Raises
+        ------
+        ValueError
+            If ``y`` has the wrong shape or an infinite value, or the innovation covariance
+            is not positive definite.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantPosition, Position
+        >>> f = KalmanFilter(ConstantPosition(dim=1), Position(dim=1, r=1.0)).online([0.0],
+        ...                                                                         np.eye(1))
+        >>> round(f.update([2.0]), 3), f.mean, f.cov
+        (-2.266, array([1.]), array([[0.5]]))
+        """
         return self._run(y, False, True, None)
 
     def step(self, y: Any, *, dt: float | None = None) -> float:
-        """:meth:`predict` then :meth:`update`; returns the log-likelihood of ``y``."""
+        """:meth:`predict` then :meth:`update`: the loop of a tracker.
+
+        Parameters
+        ----------
+        y : (m,) array_like
+            The measurement; NaN components are missing.
+        dt : float, optional
+            Time step; default the ``dt`` the filter was made with.
+
+        Returns
+        -------
+        float
+            The log-likelihood of ``y`` under the prediction.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> f = KalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1)).online(
+        ...     [0.0, 1.0], np.eye(2))
+        >>> for y in ([1.1], [1.9], [3.2]):
+        ...     ll = f.step(y)
+        >>> f.mean.round(2), round(ll, 3)
+        (array([3.1 , 1.04]), -1.458)
+        """
         return self._run(y, True, True, dt)

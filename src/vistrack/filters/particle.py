@@ -49,8 +49,22 @@ __all__ = [
 
 
 class ParticleDegeneracyError(RuntimeError):
-    """Every particle has zero likelihood: the cloud has lost the target. Raised rather than
-    silently resetting the weights, which would hide the failure."""
+    """Every particle has zero likelihood: the cloud has lost the target.
+
+    Raised by :meth:`ParticleFilter.filter` rather than silently resetting the weights, which
+    would hide the failure; the message names the step and the measurement.
+
+    Examples
+    --------
+    >>> from vistrack.models import ConstantPosition
+    >>> never = lambda y, x: np.full(len(x), -np.inf)     # log-likelihood of every particle
+    >>> pf = ParticleFilter(ConstantPosition(dim=1), never, n_particles=10, rng=0)
+    >>> try:  # doctest: +ELLIPSIS
+    ...     pf.filter(np.zeros((3, 1)), x0=[0.0], P0=[[1.0]])
+    ... except ParticleDegeneracyError as e:
+    ...     print(e)
+    every particle has zero likelihood at step 0 (measurement [0.0]); the filter has lost ...
+    """
 
 
 def _degenerate(t: int, y: np.ndarray) -> ParticleDegeneracyError:
@@ -165,19 +179,33 @@ def resample(weights: Any, method: str = "systematic", *, n: int | None = None,
 
     Parameters
     ----------
-    weights : (N,) or (B, N) array
+    weights : (N,) or (B, N) array_like
         Normalised weights of one particle set, or of ``B`` sets (each row sums to 1), which
         are resampled independently in one call.
-    method : str
+    method : {'systematic', 'stratified', 'residual', 'multinomial'}
         A name of :data:`RESAMPLERS`.
     n : int, optional
-        How many to draw (per set).
-    rng : numpy Generator, int or None
+        How many to draw (per set), >= 1.
+    rng : numpy.random.Generator, int or None
+        Random generator or seed.
 
     Returns
     -------
-    (n,) or (B, n) int64 array
+    (n,) or (B, n) ndarray of int64
         Indices into each set, sorted.
+
+    Raises
+    ------
+    ValueError
+        If ``method`` is unknown, the weights are empty, negative, not finite or do not sum
+        to one, or ``n < 1``.
+
+    References
+    ----------
+    .. [1] R. Douc, O. Cappé and E. Moulines, "Comparison of resampling schemes for particle
+       filtering", ISPA 2005.
+    .. [2] J. D. Hol, T. B. Schön and F. Gustafsson, "On resampling algorithms for particle
+       filters", Nonlinear Statistical Signal Processing Workshop, 2006.
 
     Examples
     --------
@@ -203,19 +231,75 @@ def resample(weights: Any, method: str = "systematic", *, n: int | None = None,
 
 
 def effective_sample_size(weights: Any) -> float:
-    """``1 / Σ w²`` of normalised weights: N for equal weights, 1 when one particle has all."""
+    r"""Effective sample size of normalised weights, :math:`N_\text{eff} = 1 / \sum_i w_i^2`.
+
+    ``N`` for equal weights, 1 when one particle has all the weight.
+
+    Parameters
+    ----------
+    weights : (N,) array_like
+        Normalised weights (summing to one; not checked).
+
+    Returns
+    -------
+    float
+        In ``[1, N]``.
+
+    Examples
+    --------
+    >>> effective_sample_size([0.25, 0.25, 0.25, 0.25]), effective_sample_size([1.0, 0.0])
+    (4.0, 1.0)
+    """
     w = np.asarray(weights, dtype=float)
     return float(1.0 / np.dot(w, w))
 
 
 # ---------------------------------------------------------------- estimates
 def weighted_mean(particles: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """``Σ w_i x_i`` of ``particles (N, n)``."""
+    r"""Weighted mean of a particle cloud, :math:`\sum_i w_i x_i`.
+
+    Parameters
+    ----------
+    particles : (N, n) ndarray
+        The particles.
+    weights : (N,) ndarray
+        Normalised weights.
+
+    Returns
+    -------
+    (n,) ndarray
+        The mean.
+
+    Examples
+    --------
+    >>> weighted_mean(np.array([[0.0], [2.0]]), np.array([0.25, 0.75]))
+    array([1.5])
+    """
     return weights @ particles
 
 
 def weighted_cov(particles: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """``Σ w_i (x_i - m)(x_i - m)'`` (the weighted population covariance)."""
+    r"""Weighted covariance of a particle cloud, :math:`\sum_i w_i (x_i - m)(x_i - m)'`.
+
+    The population covariance (no bias correction), with ``m`` the :func:`weighted_mean`.
+
+    Parameters
+    ----------
+    particles : (N, n) ndarray
+        The particles.
+    weights : (N,) ndarray
+        Normalised weights (an array: it is indexed).
+
+    Returns
+    -------
+    (n, n) ndarray
+        The covariance.
+
+    Examples
+    --------
+    >>> weighted_cov(np.array([[0.0], [2.0]]), np.array([0.25, 0.75]))
+    array([[0.75]])
+    """
     d = particles - weighted_mean(particles, weights)
     return (d * weights[:, None]).T @ d
 
@@ -231,9 +315,49 @@ def particle_mode(particles: np.ndarray, weights: np.ndarray, *, bandwidth: Any 
     points closer than one bandwidth are one peak; the peak with the highest kernel density
     wins. Its confidence is the share of the weight of the particles nearer to it than to any
     other peak found. Clouds larger than ``max_points`` are subsampled by systematic
-    resampling for the search (the confidence uses every particle).
+    resampling for the search (the confidence uses every particle). The search draws from a
+    generator of its own, so the estimate does not change the filter's random draws.
 
-    Returns ``(mode (n,), confidence in [0, 1])``.
+    Each mean-shift step moves a point :math:`p` to the kernel-weighted mean of the
+    particles,
+
+    .. math::
+
+        p \leftarrow \frac{\sum_i w_i K(x_i - p)\, x_i}{\sum_i w_i K(x_i - p)}, \qquad
+        K(d) = \exp\left(-\tfrac12 \textstyle\sum_k d_k^2 / h_k^2\right),
+
+    with Silverman's bandwidth :math:`h_k = \sigma_k \big(4 / ((n + 2) N_\text{eff})
+    \big)^{1/(n+4)}` by default.
+
+    Parameters
+    ----------
+    particles : (N, n) array_like
+        The particles.
+    weights : (N,) array_like
+        Normalised weights.
+    bandwidth : float or (n,) array_like, optional
+        Kernel standard deviation per dimension; default Silverman's rule.
+    n_starts : int
+        Number of mean-shift starts (the weighted mean and ``n_starts - 1`` particles).
+    max_iter : int
+        Largest number of mean-shift steps.
+    max_points : int
+        Clouds larger than this are subsampled for the search.
+
+    Returns
+    -------
+    mode : (n,) ndarray
+        The mode.
+    confidence : float
+        Share of the weight in the mode's peak, in [0, 1].
+
+    References
+    ----------
+    .. [1] D. Comaniciu and P. Meer, "Mean shift: a robust approach toward feature space
+       analysis", *IEEE Transactions on Pattern Analysis and Machine Intelligence* 24(5),
+       2002.
+    .. [2] B. W. Silverman, *Density Estimation for Statistics and Data Analysis*, Chapman
+       and Hall, 1986.
 
     Examples
     --------
@@ -509,18 +633,32 @@ class ParticleResult:
 
     Attributes
     ----------
-    means, covs : (T, n), (T, n, n)
-        Weighted mean and covariance of the cloud after each correction.
-    modes, mode_confidence : (T, n), (T,)
+    means : (T, n) ndarray
+        Weighted mean of the cloud after each correction.
+    covs : (T, n, n) ndarray
+        Weighted covariance of the cloud after each correction.
+    modes : (T, n) ndarray or None
         :func:`particle_mode` of each step's cloud (when asked for), else None.
-    ess : (T,)
+    mode_confidence : (T,) ndarray or None
+        The modes' confidences, else None.
+    ess : (T,) ndarray
         Effective sample size after each correction, before any resampling.
-    resampled : (T,) bool
+    resampled : (T,) ndarray of bool
         Whether the step resampled.
     loglik : float
         ``Σ_t log p(y_t | y_{<t})``, each term ``log Σ w_i p(y_t | x_i)``.
-    particles, weights : (N, n), (N,)
+    particles : (N, n) ndarray
         The last cloud.
+    weights : (N,) ndarray
+        Its normalised weights.
+
+    Examples
+    --------
+    >>> import vistrack as vt
+    >>> pf = ParticleFilter(vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1), 500, rng=0)
+    >>> res = pf.filter(np.arange(5.0)[:, None], x0=[0.0, 1.0], P0=np.eye(2))
+    >>> res.means.shape, res.particles.shape, bool(np.isclose(res.weights.sum(), 1.0))
+    ((5, 2), (500, 2), True)
     """
 
     means: np.ndarray
@@ -549,6 +687,17 @@ def check_particle_options(n_particles: Any, resampling: str,
 class ParticleFilter:
     r"""A bootstrap (SIR / CONDENSATION) particle filter.
 
+    Each step moves the particles through the dynamics, weighs them by the measurement's
+    likelihood and resamples when the effective sample size is low:
+
+    .. math::
+
+        x_t^{(i)} = f(x_{t-1}^{(i)}, \Delta t, t) + w^{(i)}, \quad w^{(i)} \sim N(0, Q),
+        \qquad \log w_t^{(i)} = \log w_{t-1}^{(i)} + \log p(y_t \mid x_t^{(i)}) - c_t,
+
+    with :math:`c_t` the log-sum-exp that normalises the weights, and :math:`\sum_t c_t` the
+    log-likelihood of the measurements.
+
     Parameters
     ----------
     motion
@@ -560,11 +709,14 @@ class ParticleFilter:
         or a callable ``log_likelihood(y, particles (N, n)) -> (N,)`` returning
         ``log p(y | x_i)`` (image likelihoods plug in here).
     n_particles : int
+        Number ``N`` of particles, >= 1.
     resampling : str
         A name in :data:`RESAMPLERS`.
-    ess_threshold : float in [0, 1]
-        Resample when ``N_eff < ess_threshold * N`` (1 resamples every step, 0 never).
-    rng : numpy Generator, int seed or None
+    ess_threshold : float
+        In [0, 1]: resample when ``N_eff < ess_threshold * N`` (1 resamples every step, 0
+        never).
+    rng : numpy.random.Generator, int or None
+        Random generator or seed.
     ndim_state : int, optional
         Needed when ``motion`` is a callable.
     compiled : bool
@@ -576,6 +728,21 @@ class ParticleFilter:
         resampling in place. Its randomness comes from a xoshiro256++ generator seeded from
         ``rng`` (reproducible from the seed, but not the same draws as the numpy path, which
         runs otherwise and when ``modes=True``).
+
+    Raises
+    ------
+    ValueError
+        If ``n_particles``, ``resampling`` or ``ess_threshold`` is invalid, or ``motion`` is
+        a callable and ``ndim_state`` is missing.
+    TypeError
+        If ``motion`` or ``likelihood`` is neither a model nor a callable.
+
+    References
+    ----------
+    .. [1] N. J. Gordon, D. J. Salmond and A. F. M. Smith, "Novel approach to
+       nonlinear/non-Gaussian Bayesian state estimation", *IEE Proceedings F* 140(2), 1993.
+    .. [2] M. Isard and A. Blake, "CONDENSATION: conditional density propagation for visual
+       tracking", *International Journal of Computer Vision* 29(1), 1998.
 
     Examples
     --------
@@ -645,13 +812,53 @@ class ParticleFilter:
 
     def filter(self, ys: Any, *, x0: Any = None, P0: Any = None, particles: Any = None,
                dt: Any = 1.0, times: Any = None, modes: bool = False) -> ParticleResult:
-        """Filter ``ys (T, m)`` (a NaN row: predict only). The first cloud is ``particles
-        (N, n)`` or ``N`` draws from ``N(x0, P0)``, the prior of the first step (which is
-        corrected with no prediction before it, as in the Kalman filters). ``modes=True`` also
-        computes :func:`particle_mode` at every step (on the numpy path).
+        """Filter one sequence.
 
-        Raises :class:`ParticleDegeneracyError` naming the step if every particle gets zero
-        likelihood."""
+        The first cloud is ``particles`` or ``N`` draws from ``N(x0, P0)``, the prior of the
+        first step (which is corrected with no prediction before it, as in the Kalman
+        filters).
+
+        Parameters
+        ----------
+        ys : (T, m) array_like
+            Measurements; a row of NaN is predicted only (NaN in some components: the
+            Gaussian likelihood uses the others).
+        x0 : (n,) array_like, optional
+            Prior mean of the first step (when ``particles`` is not given).
+        P0 : (n, n) array_like, optional
+            Prior covariance of the first step.
+        particles : (N, n) array_like, optional
+            The first cloud, instead of draws from ``N(x0, P0)``.
+        dt : float or (T,) array_like
+            Time step; ``dt[t]`` is the step from ``t-1`` to ``t``.
+        times : (T,) array_like, optional
+            Time of each step; default the cumulative ``dt`` from 0.
+        modes : bool
+            Also compute :func:`particle_mode` at every step (on the numpy path).
+
+        Returns
+        -------
+        ParticleResult
+            Means ``(T, n)``, covariances ``(T, n, n)``, effective sample sizes ``(T,)``,
+            the log-likelihood and the last cloud.
+
+        Raises
+        ------
+        ParticleDegeneracyError
+            If every particle gets zero likelihood (the message names the step).
+        ValueError
+            If the prior or ``particles`` has the wrong shape.
+
+        Examples
+        --------
+        >>> import vistrack as vt
+        >>> pf = ParticleFilter(vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1, r=1.0),
+        ...                     n_particles=2000, rng=0)
+        >>> ys = np.array([[0.0], [1.1], [np.nan], [2.9], [4.2]])
+        >>> res = pf.filter(ys, x0=[0.0, 1.0], P0=np.eye(2), modes=True)
+        >>> res.means[:, 0].round(1) + 0.0, res.modes.shape
+        (array([0. , 1.1, 2.1, 2.9, 4.1]), (5, 2))
+        """
         ys = as_float_array(ys, "ys", ndim=(2,))
         T = ys.shape[0]
         n, N, rng = self.ndim_state, self.n_particles, self.rng

@@ -122,8 +122,31 @@ class CSVWriter(TrackRows):
 
 
 def write_boxes(path: str | os.PathLike, boxes: object, *, force: bool = False) -> None:
-    """Write one object's boxes ``(T, 4)`` (``x, y, w, h``) as ``frame,x,y,w,h`` lines,
-    frames from 1 (OTB-style); refuses to overwrite an existing file unless ``force``."""
+    """Write one object's boxes as ``frame,x,y,w,h`` lines, frames from 1 (vistrack's
+    ``boxes.txt``, read by :func:`vistrack.evaluation.single.read_boxes`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file; its directory is made if needed.
+    boxes : (T, 4) array_like
+        Boxes ``x, y, w, h``, one per frame, written with two decimals.
+    force : bool
+        Overwrite an existing file.
+
+    Raises
+    ------
+    FileExistsError
+        If ``path`` exists and ``force`` is False.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "boxes.txt"
+    >>> write_boxes(path, [[1, 2, 30, 40]])
+    >>> path.read_text()
+    '1,1.00,2.00,30.00,40.00\\n'
+    """
     path = Path(path)
     if path.exists() and not force:
         raise FileExistsError(f"{path} exists; pass --force to overwrite it")

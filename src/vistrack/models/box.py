@@ -35,7 +35,20 @@ __all__ = ["BoxMotion"]
 
 
 class BoxMotion:
-    """Constant velocity of box centre and size with size-scaled noise.
+    r"""Constant velocity of box centre and size with size-scaled noise.
+
+    With :math:`s = (w, h, w, h)` the size of a box ``[cx, cy, w, h]`` (each entry at least
+    ``1e-3``), over ``dt`` frames
+
+    .. math::
+
+        F = \begin{pmatrix} I_4 & \Delta t\, I_4 \\ 0 & I_4 \end{pmatrix}, \quad
+        Q = \Delta t \operatorname{diag}\big((\sigma_p s)^2, (\sigma_v s)^2\big), \quad
+        R = \operatorname{diag}\big((\sigma_m \odot s)^2\big),
+
+    with :math:`\sigma_p` = ``std_pos``, :math:`\sigma_v` = ``std_vel``, :math:`\sigma_m` =
+    ``std_meas`` and the squares taken entry by entry; a new track starts at the detected box
+    with zero velocity and standard deviations ``init_pos σ_p s`` and ``init_vel σ_v s``.
 
     Parameters
     ----------
@@ -52,6 +65,27 @@ class BoxMotion:
     frame_rate : float
         The frames per second at which the per-frame ``std_pos``, ``std_vel``, ``init_pos`` and
         ``init_vel`` hold (see the module).
+
+    Attributes
+    ----------
+    ndim_state, ndim_meas : int
+        Sizes of the state and of a measurement: 8 and 4.
+    std_meas : (4,) ndarray
+        The measurement standard deviations, one per component.
+
+    Raises
+    ------
+    ValueError
+        If a value is not a finite number > 0, or ``std_meas`` is neither one number nor four.
+
+    References
+    ----------
+    .. [1] N. Wojke, A. Bewley and D. Paulus, "Simple online and realtime tracking with a deep
+       association metric" (DeepSORT), ICIP 2017.
+    .. [2] Y. Zhang et al., "ByteTrack: multi-object tracking by associating every detection
+       box", ECCV 2022.
+    .. [3] N. Aharon, R. Orfaig and B.-Z. Bobrovsky, "BoT-SORT: robust associations
+       multi-pedestrian tracking", arXiv:2206.14651, 2022.
 
     Examples
     --------
@@ -85,8 +119,34 @@ class BoxMotion:
         self.frame_rate = float(frame_rate)
 
     def at_rate(self, frame_rate: float) -> BoxMotion:
-        """The same motion with its per-frame noise at ``frame_rate`` frames per second (see
-        the module); ``self`` when that is its rate already."""
+        """The same motion with its per-frame noise at another frame rate (see the module).
+
+        With ``r = self.frame_rate / frame_rate`` (frames ``r`` times further apart),
+        ``std_pos`` scales by ``r^(1/2)``, ``std_vel`` by ``r^(3/2)``, ``init_pos`` and
+        ``init_vel`` by ``r^(-1/2)`` (so a new track's position uncertainty stays and its
+        velocity's grows by ``r``); ``std_meas`` is unchanged.
+
+        Parameters
+        ----------
+        frame_rate : float
+            Frames per second, finite and > 0.
+
+        Returns
+        -------
+        BoxMotion
+            The model at ``frame_rate``; ``self`` when that is its rate already.
+
+        Raises
+        ------
+        ValueError
+            If ``frame_rate`` is not a finite number > 0.
+
+        Examples
+        --------
+        >>> m = BoxMotion()
+        >>> m.at_rate(30.0) is m, m.at_rate(15.0).frame_rate
+        (True, 15.0)
+        """
         if not (np.isfinite(frame_rate) and frame_rate > 0):
             raise ValueError(f"frame_rate must be a finite number > 0; got {frame_rate}")
         if frame_rate == self.frame_rate:
@@ -97,7 +157,23 @@ class BoxMotion:
                           init_vel=self.init_vel * r ** -0.5, frame_rate=frame_rate)
 
     def F(self, dt: float = 1.0) -> np.ndarray:
-        """``[[I, dt I], [0, I]]`` (8, 8): the constant-velocity transition of the 4 box values."""
+        """The constant-velocity transition of the 4 box values, ``[[I, dt I], [0, I]]``.
+
+        Parameters
+        ----------
+        dt : float
+            Time step, in frames.
+
+        Returns
+        -------
+        (8, 8) ndarray
+            ``F(dt)``.
+
+        Examples
+        --------
+        >>> BoxMotion().F(3.0)[:4, 4:].diagonal().tolist()
+        [3.0, 3.0, 3.0, 3.0]
+        """
         return np.kron(np.array([[1.0, float(dt)], [0.0, 1.0]]), np.eye(4))
 
     @staticmethod
@@ -107,25 +183,112 @@ class BoxMotion:
         return np.concatenate([wh, wh], axis=1)
 
     def Q_diag(self, boxes: np.ndarray, dt: float = 1.0) -> np.ndarray:
-        """The diagonal ``(K, 8)`` of the process noise of boxes ``[cx, cy, w, h] (K, 4)``
-        over ``dt`` (the covariance is diagonal)."""
+        """The diagonal of the process noise of boxes over ``dt`` (the covariance is diagonal).
+
+        Parameters
+        ----------
+        boxes : (K, 4) array_like
+            Boxes ``[cx, cy, w, h]`` whose sizes scale the noise.
+        dt : float
+            Time step, in frames; the variances are proportional to it.
+
+        Returns
+        -------
+        (K, 8) ndarray
+            ``dt (σ_p s)², dt (σ_v s)²`` per box, ``s = (w, h, w, h)``.
+
+        Examples
+        --------
+        >>> BoxMotion().Q_diag(np.array([[100, 50, 20.0, 40.0]]))[0, :4].round(4).tolist()
+        [1.0, 4.0, 1.0, 4.0]
+        """
         s = self._scale(boxes)
         return np.concatenate([(self.std_pos * s) ** 2, (self.std_vel * s) ** 2], axis=1) * dt
 
     def Q(self, boxes: np.ndarray, dt: float = 1.0) -> np.ndarray:
-        """Process noise ``(K, 8, 8)``."""
+        """Process noise of boxes over ``dt``: :meth:`Q_diag` as diagonal matrices.
+
+        Parameters
+        ----------
+        boxes : (K, 4) array_like
+            Boxes ``[cx, cy, w, h]`` whose sizes scale the noise.
+        dt : float
+            Time step, in frames.
+
+        Returns
+        -------
+        (K, 8, 8) ndarray
+            Diagonal covariances.
+
+        Examples
+        --------
+        >>> BoxMotion().Q(np.array([[100, 50, 20.0, 40.0]]), dt=2.0).shape
+        (1, 8, 8)
+        """
         return self.Q_diag(boxes, dt)[:, :, None] * np.eye(8)
 
     def R_diag(self, boxes: np.ndarray) -> np.ndarray:
-        """The diagonal ``(K, 4)`` of the measurement noise of boxes ``[cx, cy, w, h]``."""
+        """The diagonal of the measurement noise of boxes (the covariance is diagonal).
+
+        Parameters
+        ----------
+        boxes : (K, 4) array_like
+            Boxes ``[cx, cy, w, h]`` (detected or predicted) whose sizes scale the noise.
+
+        Returns
+        -------
+        (K, 4) ndarray
+            ``(std_meas s)²`` per box, ``s = (w, h, w, h)``.
+
+        Examples
+        --------
+        >>> BoxMotion().R_diag(np.array([[100, 50, 20.0, 40.0]])).round(2).tolist()
+        [[1.0, 4.0, 4.0, 8.16]]
+        """
         return (self.std_meas * self._scale(boxes)) ** 2
 
     def R(self, boxes: np.ndarray) -> np.ndarray:
-        """Measurement noise ``(K, 4, 4)``."""
+        """Measurement noise of boxes: :meth:`R_diag` as diagonal matrices.
+
+        Parameters
+        ----------
+        boxes : (K, 4) array_like
+            Boxes ``[cx, cy, w, h]`` whose sizes scale the noise.
+
+        Returns
+        -------
+        (K, 4, 4) ndarray
+            Diagonal covariances.
+
+        Examples
+        --------
+        >>> BoxMotion().R(np.array([[0, 0, 20.0, 28.0]]))[0].diagonal().round(2).tolist()
+        [1.0, 1.96, 4.0, 4.0]
+        """
         return self.R_diag(boxes)[:, :, None] * np.eye(4)
 
     def initial(self, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Mean ``(K, 8)`` (zero velocity) and covariance ``(K, 8, 8)`` of new tracks."""
+        """The Gaussian of new tracks started at detected boxes.
+
+        Parameters
+        ----------
+        boxes : (K, 4) array_like
+            Detected boxes ``[cx, cy, w, h]``.
+
+        Returns
+        -------
+        mean : (K, 8) ndarray
+            The boxes, with zero velocity.
+        cov : (K, 8, 8) ndarray
+            Diagonal, with standard deviations ``init_pos σ_p s`` and ``init_vel σ_v s``,
+            ``s = (w, h, w, h)``.
+
+        Examples
+        --------
+        >>> mean, cov = BoxMotion().initial(np.array([[100, 50, 20.0, 40.0]]))
+        >>> mean[0, 4:].tolist(), np.sqrt(cov[0].diagonal()).round(3).tolist()
+        ([0.0, 0.0, 0.0, 0.0], [2.0, 4.0, 2.0, 4.0, 1.25, 2.5, 1.25, 2.5])
+        """
         b = np.asarray(boxes, dtype=float)
         s = self._scale(b)
         d = np.concatenate([(self.init_pos * self.std_pos * s) ** 2,

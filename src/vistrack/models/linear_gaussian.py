@@ -18,11 +18,34 @@ class LinearGaussian:
 
     Parameters
     ----------
-    F, Q : array, shape (n, n) or (T, n, n)
+    F, Q : (n, n) or (T, n, n) array_like
         Dynamics ``D`` and its noise covariance ``Σd``; per step when 3-D (``F[t]`` predicts
         step ``t`` from ``t-1``; ``F[0]`` is unused).
-    H, R : array, shape (m, n) / (m, m) or (T, m, n) / (T, m, m)
+    H, R : (m, n) and (m, m), or (T, m, n) and (T, m, m) array_like
         Measurement matrix ``M`` and its noise covariance ``Σm``.
+
+    Attributes
+    ----------
+    motion : LinearMotion
+        The dynamics ``F``, ``Q``.
+    measurement : LinearMeasurement
+        The measurement ``H``, ``R``.
+    ndim_state, ndim_meas : int
+        Sizes ``n`` and ``m``.
+    n_steps : int or None
+        The number of per-step matrices, None when all four are constant.
+
+    Raises
+    ------
+    ValueError
+        If a matrix is invalid (see :class:`LinearMotion` and :class:`LinearMeasurement`),
+        ``H`` does not have ``n`` columns, or per-step matrices disagree on the number of
+        steps.
+
+    See Also
+    --------
+    vistrack.filters.KalmanFilter : Filters and smooths with ``model.motion`` and
+        ``model.measurement``.
 
     Examples
     --------
@@ -33,6 +56,10 @@ class LinearGaussian:
     >>> model = LinearGaussian(F, 0.1 * np.eye(4), np.eye(2, 4), np.eye(2))
     >>> model.ndim_state, model.ndim_meas
     (4, 2)
+    >>> from vistrack.filters import KalmanFilter
+    >>> kf = KalmanFilter(model.motion, model.measurement)
+    >>> kf.filter(np.zeros((6, 2))).means.shape
+    (6, 4)
     """
 
     def __init__(self, F: np.ndarray, Q: np.ndarray, H: np.ndarray, R: np.ndarray):
@@ -58,16 +85,52 @@ class LinearGaussian:
 
     @property
     def F(self) -> np.ndarray:
+        """Transition matrix ``D``, ``(n, n) or (T, n, n)``.
+
+        As :meth:`LinearMotion.F` gives it.
+
+        Examples
+        --------
+        >>> LinearGaussian(np.eye(2), np.eye(2), [[1.0, 0.0]], [[1.0]]).F.shape
+        (2, 2)
+        """
         return self.motion.F()
 
     @property
     def Q(self) -> np.ndarray:
+        """Process-noise covariance ``Σd``, ``(n, n) or (T, n, n)``.
+
+        As :meth:`LinearMotion.Q` gives it.
+
+        Examples
+        --------
+        >>> LinearGaussian(np.eye(2), np.eye(2), [[1.0, 0.0]], [[1.0]]).Q.shape
+        (2, 2)
+        """
         return self.motion.Q()
 
     @property
     def H(self) -> np.ndarray:
+        """Measurement matrix ``M``, ``(m, n) or (T, m, n)``.
+
+        As :meth:`LinearMeasurement.H` gives it.
+
+        Examples
+        --------
+        >>> LinearGaussian(np.eye(2), np.eye(2), [[1.0, 0.0]], [[1.0]]).H.shape
+        (1, 2)
+        """
         return self.measurement.H()
 
     @property
     def R(self) -> np.ndarray:
+        """Measurement-noise covariance ``Σm``, ``(m, m) or (T, m, m)``.
+
+        As :meth:`LinearMeasurement.R` gives it.
+
+        Examples
+        --------
+        >>> LinearGaussian(np.eye(2), np.eye(2), [[1.0, 0.0]], [[1.0]]).R.shape
+        (1, 1)
+        """
         return self.measurement.R()

@@ -19,24 +19,84 @@ __all__ = ["MeasurementModel", "Position", "LinearMeasurement"]
 
 @runtime_checkable
 class MeasurementModel(Protocol):
-    """What a linear measurement model provides."""
+    """What a linear measurement model provides: ``H(ndim_state)``, ``R()`` and ``ndim_meas``.
+
+    Any object with these is a measurement model for :class:`~vistrack.filters.KalmanFilter`
+    and the other filters; the protocol is checkable at run time with ``isinstance`` (which
+    looks for the names only, not their signatures).
+
+    Attributes
+    ----------
+    ndim_meas : int
+        Size ``m`` of a measurement.
+
+    Examples
+    --------
+    >>> isinstance(Position(dim=2), MeasurementModel)
+    True
+    """
 
     ndim_meas: int
 
-    def H(self, ndim_state: int) -> np.ndarray: ...
+    def H(self, ndim_state: int) -> np.ndarray:
+        """Measurement matrix for a state of ``ndim_state`` entries.
 
-    def R(self) -> np.ndarray: ...
+        Parameters
+        ----------
+        ndim_state : int
+            Size ``n`` of the motion model's state.
+
+        Returns
+        -------
+        (m, n) or (T, m, n) ndarray
+            ``H``, constant or one per step.
+
+        Examples
+        --------
+        >>> Position(dim=1).H(2)
+        array([[1., 0.]])
+        """
+        ...
+
+    def R(self) -> np.ndarray:
+        """Measurement-noise covariance.
+
+        Returns
+        -------
+        (m, m) or (T, m, m) ndarray
+            ``R``, symmetric positive (semi-)definite, constant or one per step.
+
+        Examples
+        --------
+        >>> Position(dim=1, r=2.0).R()
+        array([[2.]])
+        """
+        ...
 
 
 class Position:
-    """Measure the position: the first ``dim`` entries of a derivative-major kinematic state.
+    r"""Measure the position: the first ``dim`` entries of a derivative-major kinematic state.
+
+    .. math:: y = \begin{pmatrix} I_{dim} & 0 \end{pmatrix} x + v, \qquad v \sim N(0, R).
 
     Parameters
     ----------
     dim : {1, 2, 3}
         Number of measured coordinates.
-    r : float or array of shape (dim, dim)
-        Measurement-noise variance per coordinate (a float gives ``r I``), or the full covariance.
+    r : float or (dim, dim) array_like
+        Measurement-noise variance per coordinate (a float gives ``r I``, ``r > 0``), or the
+        full covariance (symmetric positive definite).
+
+    Attributes
+    ----------
+    ndim_meas : int
+        ``dim``.
+
+    Raises
+    ------
+    ValueError
+        If ``dim`` is not 1, 2 or 3, or ``r`` is not a finite variance > 0 or a symmetric
+        positive definite ``(dim, dim)`` matrix.
 
     Examples
     --------
@@ -62,6 +122,28 @@ class Position:
         return f"Position(dim={self.ndim_meas})"
 
     def H(self, ndim_state: int) -> np.ndarray:
+        """The matrix that picks the first ``dim`` entries of the state.
+
+        Parameters
+        ----------
+        ndim_state : int
+            Size ``n`` of the state, at least ``dim``.
+
+        Returns
+        -------
+        (dim, n) ndarray
+            ``[I 0]``.
+
+        Raises
+        ------
+        ValueError
+            If ``ndim_state < dim``.
+
+        Examples
+        --------
+        >>> Position(dim=1).H(3)
+        array([[1., 0., 0.]])
+        """
         if ndim_state < self.ndim_meas:
             raise ValueError(
                 f"Position(dim={self.ndim_meas}) needs a state of at least {self.ndim_meas} "
@@ -70,16 +152,53 @@ class Position:
         return np.eye(self.ndim_meas, ndim_state)
 
     def R(self) -> np.ndarray:
+        """The measurement-noise covariance.
+
+        Returns
+        -------
+        (dim, dim) ndarray
+            A copy of ``R``.
+
+        Examples
+        --------
+        >>> Position(dim=2, r=4.0).R()
+        array([[4., 0.],
+               [0., 4.]])
+        """
         return self._R.copy()
 
 
 class LinearMeasurement:
-    """A user-given linear measurement ``y = H x + N(0, R)``, constant or one per step.
+    r"""A user-given linear measurement ``y = H x + N(0, R)``, constant or one per step.
+
+    .. math:: y_t = H_t x_t + v_t, \qquad v_t \sim N(0, R_t).
 
     Parameters
     ----------
-    H : array, shape (m, n) or (T, m, n)
-    R : array, shape (m, m) or (T, m, m), symmetric positive semi-definite
+    H : (m, n) or (T, m, n) array_like
+        Measurement matrix ``M``, constant or one per step.
+    R : (m, m) or (T, m, m) array_like
+        Measurement-noise covariance ``Σm``, symmetric positive semi-definite, constant or one
+        per step (with as many steps as ``H`` when both are per step).
+
+    Attributes
+    ----------
+    ndim_meas, ndim_state : int
+        Sizes ``m`` and ``n``.
+    n_steps : int or None
+        The number of per-step matrices, None when both are constant.
+
+    Raises
+    ------
+    ValueError
+        If a matrix is not finite or has the wrong shape, the two disagree on the number of
+        steps, or ``R`` is not symmetric positive semi-definite.
+
+    Examples
+    --------
+    >>> meas = LinearMeasurement([[1.0, 1.0]], [[0.5]])
+    >>> meas.ndim_meas, meas.ndim_state, meas.H(2)
+    (1, 2, array([[1., 1.]]))
     """
 
     def __init__(self, H: np.ndarray, R: np.ndarray):
@@ -99,6 +218,29 @@ class LinearMeasurement:
         return f"LinearMeasurement(m={self.ndim_meas}, n={self.ndim_state})"
 
     def H(self, ndim_state: int | None = None) -> np.ndarray:
+        """The measurement matrix or matrices.
+
+        Parameters
+        ----------
+        ndim_state : int, optional
+            Size of the motion model's state, checked against the columns of ``H``.
+
+        Returns
+        -------
+        (m, n) or (T, m, n) ndarray
+            The constant matrix (also when it was given as a stack of one), or the per-step
+            stack.
+
+        Raises
+        ------
+        ValueError
+            If ``ndim_state`` is given and is not ``n``.
+
+        Examples
+        --------
+        >>> LinearMeasurement(np.ones((5, 1, 2)), [[1.0]]).H().shape
+        (5, 1, 2)
+        """
         if ndim_state is not None and ndim_state != self.ndim_state:
             raise ValueError(
                 f"this LinearMeasurement's H has {self.ndim_state} columns; "
@@ -107,4 +249,17 @@ class LinearMeasurement:
         return self._H[0] if self._H.shape[0] == 1 else self._H
 
     def R(self) -> np.ndarray:
+        """The measurement-noise covariance or covariances.
+
+        Returns
+        -------
+        (m, m) or (T, m, m) ndarray
+            The constant matrix (also when it was given as a stack of one), or the per-step
+            stack.
+
+        Examples
+        --------
+        >>> LinearMeasurement([[1.0, 0.0]], [[0.5]]).R()
+        array([[0.5]])
+        """
         return self._R[0] if self._R.shape[0] == 1 else self._R

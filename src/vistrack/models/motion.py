@@ -37,13 +37,65 @@ Discretisation = Literal["exact", "euler"]
 
 @runtime_checkable
 class MotionModel(Protocol):
-    """What a linear motion model provides."""
+    """What a linear motion model provides: ``F(dt)``, ``Q(dt)`` and ``ndim_state``.
+
+    Any object with these is a motion model for :class:`~vistrack.filters.KalmanFilter` and
+    the other filters; the protocol is checkable at run time with ``isinstance`` (which looks
+    for the names only, not their signatures).
+
+    Attributes
+    ----------
+    ndim_state : int
+        Size ``n`` of the state.
+
+    Examples
+    --------
+    >>> isinstance(ConstantVelocity(dim=2), MotionModel)
+    True
+    """
 
     ndim_state: int
 
-    def F(self, dt: float | np.ndarray = 1.0) -> np.ndarray: ...
+    def F(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
+        """Transition matrix over a time step.
 
-    def Q(self, dt: float | np.ndarray = 1.0) -> np.ndarray: ...
+        Parameters
+        ----------
+        dt : float or (K,) array_like
+            Time step, or several.
+
+        Returns
+        -------
+        (n, n) or (K, n, n) ndarray
+            ``F(dt)``, one per time step when ``dt`` is an array.
+
+        Examples
+        --------
+        >>> ConstantVelocity(dim=1).F(2.0)
+        array([[1., 2.],
+               [0., 1.]])
+        """
+        ...
+
+    def Q(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
+        """Process-noise covariance over a time step.
+
+        Parameters
+        ----------
+        dt : float or (K,) array_like
+            Time step, or several.
+
+        Returns
+        -------
+        (n, n) or (K, n, n) ndarray
+            ``Q(dt)``, symmetric positive semi-definite, shaped like :meth:`F`.
+
+        Examples
+        --------
+        >>> ConstantPosition(dim=1, q=0.5).Q(2.0)
+        array([[1.]])
+        """
+        ...
 
 
 def _as_dt(dt: float | np.ndarray) -> np.ndarray:
@@ -114,30 +166,86 @@ class _Kinematic:
         return out
 
     def F(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
-        """Transition matrix, ``(n, n)`` for scalar ``dt`` or ``(K, n, n)`` for ``dt`` of
-        ``(K,)``."""
+        """Transition matrix over ``dt``: ``dt^(j-i) / (j-i)!`` per axis (see the class).
+
+        Parameters
+        ----------
+        dt : float or (K,) array_like
+            Time step(s), finite and >= 0.
+
+        Returns
+        -------
+        (n, n) or (K, n, n) ndarray
+            ``(n, n)`` for a scalar ``dt``, one matrix per step for ``dt`` of shape ``(K,)``.
+
+        Examples
+        --------
+        >>> ConstantVelocity(dim=1).F([1.0, 2.0]).shape
+        (2, 2, 2)
+        """
         return np.kron(self._F1(_as_dt(dt)), np.eye(self.dim))
 
     def Q(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
-        """Process-noise covariance, shaped like :meth:`F`."""
+        """Process-noise covariance over ``dt`` (see the class), shaped like :meth:`F`.
+
+        Parameters
+        ----------
+        dt : float or (K,) array_like
+            Time step(s), finite and >= 0.
+
+        Returns
+        -------
+        (n, n) or (K, n, n) ndarray
+            Symmetric positive semi-definite; zero for ``dt = 0``.
+
+        Examples
+        --------
+        >>> ConstantVelocity(dim=1, q=1.0).Q(1.0).round(3).tolist()
+        [[0.333, 0.5], [0.5, 1.0]]
+        """
         return np.kron(self._Q1(_as_dt(dt)), np.eye(self.dim))
 
     def f(self, x: np.ndarray, dt: float = 1.0) -> np.ndarray:
-        """Propagate states ``x`` of shape ``(..., n)`` by ``dt`` without noise."""
+        """Propagate states by ``dt`` without noise: ``x F(dt)'``.
+
+        Parameters
+        ----------
+        x : (..., n) array_like
+            States, one per row.
+        dt : float
+            Time step.
+
+        Returns
+        -------
+        (..., n) ndarray
+            The predicted states ``F(dt) x``.
+
+        Examples
+        --------
+        >>> ConstantVelocity(dim=1).f(np.array([0.0, 2.0]), dt=0.5)
+        array([1., 2.])
+        """
         return np.asarray(x) @ self.F(dt).T
 
 
 class ConstantPosition(_Kinematic):
     r"""Drifting points: :math:`D = I`, the position is the old one plus noise.
 
-    ``Q(dt) = q dt I`` (a random walk whose variance grows by ``q`` per unit time).
+    ``Q(dt) = q dt I`` (a random walk whose variance grows by ``q`` per unit time):
+
+    .. math:: x_t = x_{t-1} + w_t, \qquad w_t \sim N(0, q\, \Delta t\, I).
 
     Parameters
     ----------
     dim : {1, 2, 3}
         Spatial dimension; the state is the position, ``n = dim``.
     q : float
-        Diffusion rate: variance added per unit time, per axis.
+        Diffusion rate: variance added per unit time, per axis (finite, >= 0).
+
+    Raises
+    ------
+    ValueError
+        If ``dim`` is not 1, 2 or 3, or ``q`` is negative or not finite.
 
     Examples
     --------
@@ -163,6 +271,27 @@ class ConstantVelocity(_Kinematic):
     where ``q`` is the power spectral density of the acceleration noise (units of
     position² / time³). With ``discretisation='euler'``, ``Q = q dt`` on the velocity only.
 
+    Parameters
+    ----------
+    dim : {1, 2, 3}
+        Spatial dimension; the state is ``[p_1..p_dim, v_1..v_dim]``, ``n = 2 dim``.
+    q : float
+        Spectral density of the white-noise acceleration, per axis (finite, >= 0).
+    discretisation : {'exact', 'euler'}
+        ``'exact'``: ``F = exp(A dt)`` and the exact noise integral; ``'euler'``: the forward
+        Euler step ``I + A dt`` (the same ``F`` here) and noise ``q dt`` on the velocity.
+
+    Raises
+    ------
+    ValueError
+        If ``dim`` is not 1, 2 or 3, ``q`` is negative or not finite, or ``discretisation``
+        is not one of the two names.
+
+    References
+    ----------
+    .. [1] Y. Bar-Shalom, X. R. Li and T. Kirubarajan, *Estimation with Applications to
+       Tracking and Navigation*, Wiley, 2001, ch. 6 (kinematic models).
+
     Examples
     --------
     >>> ConstantVelocity(dim=1).F(0.5)
@@ -186,6 +315,28 @@ class ConstantAcceleration(_Kinematic):
     ``discretisation='euler'``; the default is the exact one. ``Q`` is the exact white-noise-jerk
     covariance with jerk spectral density ``q``:
     ``q [[dt⁵/20, dt⁴/8, dt³/6], [dt⁴/8, dt³/3, dt²/2], [dt³/6, dt²/2, dt]]``.
+
+    Parameters
+    ----------
+    dim : {1, 2, 3}
+        Spatial dimension; the state is ``[p_1..p_dim, v_1..v_dim, a_1..a_dim]``,
+        ``n = 3 dim``.
+    q : float
+        Spectral density of the white-noise jerk, per axis (finite, >= 0).
+    discretisation : {'exact', 'euler'}
+        ``'exact'``: ``F = exp(A dt)`` and the exact noise integral; ``'euler'``: the seeds'
+        ``F = I + A dt`` and noise ``q dt`` on the acceleration only.
+
+    Raises
+    ------
+    ValueError
+        If ``dim`` is not 1, 2 or 3, ``q`` is negative or not finite, or ``discretisation``
+        is not one of the two names.
+
+    References
+    ----------
+    .. [1] Y. Bar-Shalom, X. R. Li and T. Kirubarajan, *Estimation with Applications to
+       Tracking and Navigation*, Wiley, 2001, ch. 6 (kinematic models).
 
     Examples
     --------
@@ -217,6 +368,34 @@ class Periodic:
     ``Q`` is the exact covariance of white-noise acceleration of density ``q``:
     ``Q11 = q/ω² (dt/2 - sin(2ωdt)/(4ω))``, ``Q12 = q sin²(ωdt)/(2ω²)``,
     ``Q22 = q (dt/2 + sin(2ωdt)/(4ω))`` (Euler: ``q dt`` on the velocity).
+
+    Parameters
+    ----------
+    dim : {1, 2, 3}
+        Spatial dimension; the state is ``[p_1..p_dim, v_1..v_dim]``, ``n = 2 dim``.
+    omega : float
+        Angular frequency ``ω`` (finite, > 0); the period is ``2π / ω``.
+    q : float
+        Spectral density of the white-noise acceleration, per axis (finite, >= 0).
+    discretisation : {'exact', 'euler'}
+        See above.
+
+    Raises
+    ------
+    ValueError
+        If ``dim`` is not 1, 2 or 3, ``omega`` is not a finite number > 0, ``q`` is negative
+        or not finite, or ``discretisation`` is not one of the two names.
+
+    Examples
+    --------
+    A quarter period moves position into velocity:
+
+    >>> Periodic(omega=2.0).F(np.pi / 4).round(12)
+    array([[ 0. ,  0.5],
+           [-2. ,  0. ]])
+    >>> Periodic(omega=2.0, discretisation="euler").F(0.5)
+    array([[ 1. ,  0.5],
+           [-2. ,  1. ]])
     """
 
     def __init__(
@@ -243,6 +422,24 @@ class Periodic:
         )
 
     def F(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
+        """Transition matrix over ``dt`` (see the class).
+
+        Parameters
+        ----------
+        dt : float or (K,) array_like
+            Time step(s), finite and >= 0.
+
+        Returns
+        -------
+        (n, n) or (K, n, n) ndarray
+            One matrix per step for ``dt`` of shape ``(K,)``.
+
+        Examples
+        --------
+        >>> Periodic(omega=1.0).F(np.pi).round(12)
+        array([[-1.,  0.],
+               [-0., -1.]])
+        """
         d = _as_dt(dt)
         w = self.omega
         out = np.empty(d.shape + (2, 2))
@@ -260,6 +457,26 @@ class Periodic:
         return np.kron(out, np.eye(self.dim))
 
     def Q(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
+        """Process-noise covariance over ``dt`` (see the class), shaped like :meth:`F`.
+
+        Parameters
+        ----------
+        dt : float or (K,) array_like
+            Time step(s), finite and >= 0.
+
+        Returns
+        -------
+        (n, n) or (K, n, n) ndarray
+            Symmetric positive semi-definite.
+
+        Examples
+        --------
+        Over a whole period the position and velocity noise have the same energy:
+
+        >>> Periodic(omega=1.0, q=1.0).Q(2 * np.pi).round(6)
+        array([[3.141593, 0.      ],
+               [0.      , 3.141593]])
+        """
         d = _as_dt(dt)
         w, q = self.omega, self.q
         out = np.zeros(d.shape + (2, 2))
@@ -273,23 +490,64 @@ class Periodic:
         return np.kron(out, np.eye(self.dim))
 
     def f(self, x: np.ndarray, dt: float = 1.0) -> np.ndarray:
+        """Propagate states by ``dt`` without noise: ``x F(dt)'``.
+
+        Parameters
+        ----------
+        x : (..., n) array_like
+            States, one per row.
+        dt : float
+            Time step.
+
+        Returns
+        -------
+        (..., n) ndarray
+            The predicted states.
+
+        Examples
+        --------
+        >>> Periodic(omega=1.0).f(np.array([1.0, 0.0]), dt=np.pi).round(12)
+        array([-1., -0.])
+        """
         return np.asarray(x) @ self.F(dt).T
 
 
 class LinearMotion:
     r"""A user-given discrete-time motion model ``x_t = D_t x_{t-1} + N(0, Σd_t)``.
 
+    .. math:: x_t = F_t x_{t-1} + w_t, \qquad w_t \sim N(0, Q_t).
+
     Parameters
     ----------
-    F : array, shape (n, n) or (T, n, n)
+    F : (n, n) or (T, n, n) array_like
         Transition matrix ``D``, constant or one per step (``F[t]`` maps step ``t-1`` to ``t``;
         ``F[0]`` is never used, since the first step has no prediction).
-    Q : array, shape (n, n) or (T, n, n)
-        Process-noise covariance ``Σd``, symmetric positive semi-definite.
+    Q : (n, n) or (T, n, n) array_like
+        Process-noise covariance ``Σd``, symmetric positive semi-definite; constant or one per
+        step (with as many steps as ``F`` when both are per step).
+
+    Attributes
+    ----------
+    ndim_state : int
+        Size ``n`` of the state.
+    n_steps : int or None
+        The number of per-step matrices, None when both are constant.
+
+    Raises
+    ------
+    ValueError
+        If a matrix is not finite or square of size ``n``, the two disagree on the number of
+        steps, or ``Q`` is not symmetric positive semi-definite.
 
     Notes
     -----
     A discrete-time model has no time step: ``F(dt)`` and ``Q(dt)`` accept only ``dt = 1``.
+
+    Examples
+    --------
+    >>> m = LinearMotion([[1.0, 1.0], [0.0, 1.0]], 0.1 * np.eye(2))
+    >>> m.f(np.array([0.0, 2.0])), m.n_steps
+    (array([2., 2.]), None)
     """
 
     def __init__(self, F: np.ndarray, Q: np.ndarray):
@@ -318,14 +576,86 @@ class LinearMotion:
             )
 
     def F(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
+        """The transition matrix or matrices.
+
+        Parameters
+        ----------
+        dt : float or array_like
+            Must be 1 (every entry, for an array): the model is discrete-time.
+
+        Returns
+        -------
+        (n, n), (T, n, n) or (1, n, n) ndarray
+            The constant matrix when neither ``F`` nor ``Q`` is per step; otherwise the stored
+            stack: ``(T, n, n)`` if ``F`` was given per step, ``(1, n, n)`` if it was constant.
+
+        Raises
+        ------
+        ValueError
+            If ``dt`` is not 1.
+
+        Examples
+        --------
+        >>> LinearMotion(np.eye(2), np.eye(2)).F().shape
+        (2, 2)
+        """
         self._check_dt(dt)
         return self._F[0] if self.n_steps is None else self._F
 
     def Q(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
+        """The process-noise covariance or covariances.
+
+        Parameters
+        ----------
+        dt : float or array_like
+            Must be 1 (every entry, for an array): the model is discrete-time.
+
+        Returns
+        -------
+        (n, n), (T, n, n) or (1, n, n) ndarray
+            The constant matrix when neither ``F`` nor ``Q`` is per step; otherwise the stored
+            stack: ``(T, n, n)`` if ``Q`` was given per step, ``(1, n, n)`` if it was constant.
+
+        Raises
+        ------
+        ValueError
+            If ``dt`` is not 1.
+
+        Examples
+        --------
+        >>> LinearMotion(np.eye(2), 0.5 * np.eye(2)).Q()
+        array([[0.5, 0. ],
+               [0. , 0.5]])
+        """
         self._check_dt(dt)
         return self._Q[0] if self.n_steps is None else self._Q
 
     def f(self, x: np.ndarray, dt: float = 1.0) -> np.ndarray:
+        """Propagate states one step without noise: ``x F'``.
+
+        Parameters
+        ----------
+        x : (..., n) array_like
+            States, one per row.
+        dt : float
+            Must be 1.
+
+        Returns
+        -------
+        (..., n) ndarray
+            The predicted states.
+
+        Raises
+        ------
+        ValueError
+            If the model has one ``F`` per step (there is no single ``F`` to apply), or ``dt``
+            is not 1.
+
+        Examples
+        --------
+        >>> LinearMotion([[0.0, 1.0], [1.0, 0.0]], np.eye(2)).f(np.array([1.0, 2.0]))
+        array([2., 1.])
+        """
         if self.n_steps is not None:
             raise ValueError("f(x) needs a constant F; this LinearMotion has one F per step")
         return np.asarray(x) @ self.F(dt).T

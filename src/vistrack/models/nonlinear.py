@@ -47,21 +47,58 @@ __all__ = [
 
 
 def wrap_angle(a: np.ndarray) -> np.ndarray:
-    """Angles wrapped to ``(-π, π]``."""
+    r"""Angles wrapped to ``(-π, π]``: :math:`\pi - ((\pi - a) \bmod 2\pi)`.
+
+    Parameters
+    ----------
+    a : array_like
+        Angles in radians, any shape.
+
+    Returns
+    -------
+    ndarray
+        The angles plus a multiple of ``2π``, in ``(-π, π]``, shaped like ``a``.
+
+    Examples
+    --------
+    >>> wrap_angle([np.pi, -np.pi, 1.5 * np.pi, 0.25]).round(4)
+    array([ 3.1416,  3.1416, -1.5708,  0.25  ])
+    """
     return np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2.0 * np.pi)
 
 
 def numerical_jacobian(fun: Callable[[np.ndarray], np.ndarray], x: np.ndarray,
                        eps: float = 1e-6) -> np.ndarray:
-    r"""Central-difference Jacobian of ``fun`` at a batch ``x (..., n)``: ``(..., k, n)``.
+    r"""Central-difference Jacobian of ``fun`` at a batch of points.
 
-    The step for entry ``i`` is ``eps * max(1, |x_i|)``; the error is O(step²) for smooth
-    ``fun``. ``fun`` must accept a batch ``(..., n)`` and return ``(..., k)``.
+    .. math:: J_{ki} = \frac{f_k(x + h_i e_i) - f_k(x - h_i e_i)}{2 h_i}, \qquad
+              h_i = \varepsilon \max(1, |x_i|).
+
+    The error is O(h²) for smooth ``fun``. All ``2 n`` evaluations are made in one call.
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(x (..., n)) -> (..., k)``, on a batch; it is called once, on points of shape
+        ``(2 n, ..., n)``.
+    x : (..., n) array_like
+        Points at which to differentiate.
+    eps : float
+        Relative step.
+
+    Returns
+    -------
+    (..., k, n) ndarray
+        The Jacobian at each point.
 
     Examples
     --------
     >>> numerical_jacobian(lambda x: x**2, np.array([3.0])).round(6)
     array([[6.]])
+    >>> f = lambda x: np.stack([x[..., 0] * x[..., 1], np.sin(x[..., 0])], axis=-1)
+    >>> numerical_jacobian(f, np.array([2.0, 3.0])).round(6)
+    array([[ 3.      ,  2.      ],
+           [-0.416147,  0.      ]])
     """
     x = np.asarray(x, dtype=float)
     n = x.shape[-1]
@@ -78,13 +115,34 @@ def numerical_jacobian(fun: Callable[[np.ndarray], np.ndarray], x: np.ndarray,
 class NonlinearMotion:
     r"""A user-given motion model ``x_t = f(x, dt, t) + N(0, Q(dt))``.
 
+    .. math:: x_t = f(x_{t-1}, \Delta t, t) + w_t, \qquad w_t \sim N(0, Q(\Delta t)).
+
     Parameters
     ----------
-    f : callable ``f(x, dt, t)`` on a batch ``x (..., n)``
-    Q : ``(n, n)`` array, or a callable ``Q(dt)``
+    f : callable
+        ``f(x, dt, t) -> (..., n)`` on a batch ``x (..., n)``; ``t`` is the time of the
+        predicted state.
+    Q : (n, n) array_like or callable
+        The process-noise covariance (constant, symmetric positive semi-definite), or a
+        callable ``Q(dt) -> (n, n)``.
     ndim_state : int
-    jacobian : callable ``jacobian(x, dt, t) -> (..., n, n)``, optional
-        Defaults to central differences of ``f``.
+        Size ``n`` of the state.
+    jacobian : callable, optional
+        ``jacobian(x, dt, t) -> (..., n, n)``; central differences of ``f``
+        (:func:`numerical_jacobian`) if absent.
+
+    Raises
+    ------
+    TypeError
+        If ``f`` is not callable.
+    ValueError
+        If a constant ``Q`` is not ``(n, n)``, finite, symmetric positive semi-definite.
+
+    Examples
+    --------
+    >>> m = NonlinearMotion(lambda x, dt, t: x + dt * np.sin(x), 0.1 * np.eye(1), ndim_state=1)
+    >>> m.f(np.array([0.5]), dt=2.0).round(4), m.jacobian(np.array([0.0])).round(6)
+    (array([1.4589]), array([[2.]]))
     """
 
     def __init__(self, f: Callable, Q: np.ndarray | Callable, ndim_state: int,
@@ -105,48 +163,204 @@ class NonlinearMotion:
         return f"NonlinearMotion(ndim_state={self.ndim_state})"
 
     def f(self, x: np.ndarray, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
+        """The mean transition: the given ``f(x, dt, t)``.
+
+        Parameters
+        ----------
+        x : (..., n) ndarray
+            States.
+        dt : float
+            Time step.
+        t : float
+            Time of the predicted state.
+
+        Returns
+        -------
+        (..., n) ndarray
+            What ``f`` returns.
+
+        Examples
+        --------
+        >>> NonlinearMotion(lambda x, dt, t: 2 * x, np.eye(1), 1).f(np.array([[1.0], [3.0]]))
+        array([[2.],
+               [6.]])
+        """
         return self._f(x, dt, t)
 
     def jacobian(self, x: np.ndarray, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
+        """The Jacobian ``∂f/∂x``: the given one, or central differences of ``f``.
+
+        Parameters
+        ----------
+        x : (..., n) ndarray
+            States at which to differentiate.
+        dt : float
+            Time step.
+        t : float
+            Time of the predicted state.
+
+        Returns
+        -------
+        (..., n, n) ndarray
+            One Jacobian per state.
+
+        Examples
+        --------
+        >>> NonlinearMotion(lambda x, dt, t: x**3, np.eye(1), 1).jacobian(np.array([2.0]))
+        array([[12.]])
+        """
         if self._jac is not None:
             return self._jac(x, dt, t)
         return numerical_jacobian(lambda z: self._f(z, dt, t), x)
 
     def Q(self, dt: float = 1.0) -> np.ndarray:
+        """The process-noise covariance over ``dt``.
+
+        Parameters
+        ----------
+        dt : float
+            Time step (a constant ``Q`` ignores it).
+
+        Returns
+        -------
+        (n, n) ndarray
+            ``Q`` (a copy of the constant one), or the callable's value as float.
+
+        Examples
+        --------
+        >>> NonlinearMotion(lambda x, dt, t: x, lambda dt: [[dt]], 1).Q(0.5)
+        array([[0.5]])
+        """
         return np.asarray(self._Q(dt), dtype=float)
 
 
 class AngleAwareMeasurement:
-    """The base of the nonlinear measurement models: ``R()``, ``residual(a, b)`` (differences,
-    angles wrapped to ``(-π, π]``) and ``mean(z, w)`` (weighted sums, circular for angles) of a
-    model with ``_R`` and ``angles``. The filters' compiled one-Gaussian kernels reproduce
-    these two, so a model that keeps them (does not override them) takes the fast path."""
+    r"""The base of the nonlinear measurement models: noise, residuals and means with angles.
+
+    It gives ``R()``, ``residual(a, b)`` (differences, angles wrapped to ``(-π, π]``) and
+    ``mean(z, w)`` (weighted sums, circular for angles) of a model with ``_R`` (the noise
+    covariance) and ``angles`` (the indices of the components that are angles). The filters'
+    compiled one-Gaussian kernels reproduce these two, so a model that keeps them (does not
+    override them) takes the fast path.
+
+    Attributes
+    ----------
+    angles : tuple of int
+        The measurement components that are angles (radians); empty by default.
+
+    Examples
+    --------
+    >>> rb = RangeBearing()
+    >>> rb.residual(np.array([1.0, 3.0]), np.array([0.0, -3.0])).round(4)  # across ±π
+    array([ 1.    , -0.2832])
+    """
 
     _R: np.ndarray
     angles: tuple = ()
 
     def R(self) -> np.ndarray:
+        """The measurement-noise covariance.
+
+        Returns
+        -------
+        (m, m) ndarray
+            A copy of ``R``.
+
+        Examples
+        --------
+        >>> RangeBearing(r_range=4.0, r_bearing=0.01).R()
+        array([[4.  , 0.  ],
+               [0.  , 0.01]])
+        """
         return self._R.copy()
 
     def residual(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Differences ``a - b`` of measurements, the angle components wrapped to ``(-π, π]``.
+
+        Parameters
+        ----------
+        a, b : (..., m) array_like
+            Measurements (broadcast against each other).
+
+        Returns
+        -------
+        (..., m) ndarray
+            ``a - b``, with :func:`wrap_angle` applied to the components in ``angles``.
+
+        Examples
+        --------
+        >>> RangeBearing().residual(np.array([5.0, -3.1]), np.array([4.0, 3.1])).round(4)
+        array([1.    , 0.0832])
+        """
         return _residual(a, b, self.angles)
 
     def mean(self, z: np.ndarray, w: np.ndarray) -> np.ndarray:
+        r"""Weighted mean of measurements, circular for angles.
+
+        .. math::
+
+            \bar z_k = \sum_i w_i z_{ik}, \qquad
+            \bar z_a = \operatorname{atan2}\Big(\sum_i w_i \sin z_{ia},
+            \sum_i w_i \cos z_{ia}\Big) \text{ for an angle } a.
+
+        Parameters
+        ----------
+        z : (..., N, m) ndarray
+            ``N`` measurements (sigma points, ensemble members) per batch entry.
+        w : (N,) ndarray
+            Weights, summing to one (the plain components use them as given, so the
+            unscented transform's negative weights are allowed).
+
+        Returns
+        -------
+        (..., m) ndarray
+            The weighted means.
+
+        Examples
+        --------
+        >>> z = np.array([[10.0, 3.0], [20.0, -3.0]])   # bearings either side of π
+        >>> RangeBearing().mean(z, np.array([0.5, 0.5])).round(4)
+        array([15.    ,  3.1416])
+        """
         return _weighted_mean(z, w, self.angles)
 
 
 class NonlinearMeasurement(AngleAwareMeasurement):
     r"""A user-given measurement model ``y = h(x) + N(0, R)``.
 
+    .. math:: y_t = h(x_t) + v_t, \qquad v_t \sim N(0, R).
+
     Parameters
     ----------
-    h : callable on a batch ``x (..., n)``, returning ``(..., m)``
-    R : ``(m, m)`` array
+    h : callable
+        ``h(x) -> (..., m)`` on a batch ``x (..., n)``.
+    R : (m, m) array_like
+        Measurement-noise covariance, symmetric positive definite.
     ndim_state : int
-    jacobian : callable ``jacobian(x) -> (..., m, n)``, optional; central differences if absent
+        Size ``n`` of the state.
+    jacobian : callable, optional
+        ``jacobian(x) -> (..., m, n)``; central differences of ``h``
+        (:func:`numerical_jacobian`) if absent.
     angles : sequence of int, optional
         Components of ``y`` that are angles (in radians): their residuals are wrapped to
         ``(-π, π]`` and their means are circular.
+
+    Raises
+    ------
+    TypeError
+        If ``h`` is not callable.
+    ValueError
+        If ``R`` is not a finite, symmetric positive definite square matrix, or an angle index
+        is outside ``0 .. m-1``.
+
+    Examples
+    --------
+    A bearing-only sensor at the origin:
+
+    >>> bearing = NonlinearMeasurement(lambda x: np.arctan2(x[..., 1:2], x[..., 0:1]),
+    ...                                [[0.01]], ndim_state=2, angles=(0,))
+    >>> bearing.h(np.array([0.0, 1.0])).round(4), bearing.jacobian(np.array([1.0, 1.0])).round(6)
+    (array([1.5708]), array([[-0.5,  0.5]]))
     """
 
     def __init__(self, h: Callable, R: np.ndarray, ndim_state: int,
@@ -168,9 +382,44 @@ class NonlinearMeasurement(AngleAwareMeasurement):
         return f"NonlinearMeasurement(ndim_meas={self.ndim_meas}, ndim_state={self.ndim_state})"
 
     def h(self, x: np.ndarray) -> np.ndarray:
+        """The mean measurement: the given ``h(x)``.
+
+        Parameters
+        ----------
+        x : (..., n) ndarray
+            States.
+
+        Returns
+        -------
+        (..., m) ndarray
+            What ``h`` returns.
+
+        Examples
+        --------
+        >>> NonlinearMeasurement(lambda x: x[..., :1] ** 2, [[1.0]], 2).h(np.array([3.0, 0.0]))
+        array([9.])
+        """
         return self._h(x)
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """The Jacobian ``∂h/∂x``: the given one, or central differences of ``h``.
+
+        Parameters
+        ----------
+        x : (..., n) ndarray
+            States at which to differentiate.
+
+        Returns
+        -------
+        (..., m, n) ndarray
+            One Jacobian per state.
+
+        Examples
+        --------
+        >>> meas = NonlinearMeasurement(lambda x: x[..., :1] ** 2, [[1.0]], 2)
+        >>> meas.jacobian(np.array([3.0, 0.0])).round(6)
+        array([[6., 0.]])
+        """
         if self._jac is not None:
             return self._jac(x)
         return numerical_jacobian(self._h, x)
@@ -204,6 +453,29 @@ def _weighted_mean(z, w, angles):
 # provide their own, defined at module level.
 @njit(cache=True, error_model="numpy", inline="always")
 def _ct_f(x, dt, t, params, out):
+    """The coordinated turn's ``f`` for one state, compiled: writes ``f(x, dt)`` into ``out``.
+
+    Parameters
+    ----------
+    x : (5,) ndarray
+        The state ``[x, y, vx, vy, ω]``.
+    dt : float
+        Time step.
+    t : float
+        Unused.
+    params : (0,) ndarray
+        Unused (a row of :meth:`CoordinatedTurn.jit_params`).
+    out : (5,) ndarray
+        Receives the predicted state; nothing is returned.
+
+    Examples
+    --------
+    >>> out = np.empty(5)
+    >>> CoordinatedTurn.jit_f(np.array([0.0, 0.0, 1.0, 0.0, np.pi / 2]), 1.0, 0.0,
+    ...                       np.zeros(0), out)
+    >>> out.round(3)
+    array([0.637, 0.637, 0.   , 1.   , 1.571])
+    """
     w = x[4]
     a = w * dt
     sa, ca = math.sin(a), math.cos(a)
@@ -220,6 +492,24 @@ def _ct_f(x, dt, t, params, out):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _range_bearing_h(x, params, out):
+    """Range-bearing ``h`` for one state, compiled: writes ``[range, bearing]`` into ``out``.
+
+    Parameters
+    ----------
+    x : (n,) ndarray
+        The state; its first two entries are the position.
+    params : (2,) ndarray
+        The sensor's position (:meth:`RangeBearing.jit_params`).
+    out : (2,) ndarray
+        Receives ``[range, bearing]``; nothing is returned.
+
+    Examples
+    --------
+    >>> out = np.empty(2)
+    >>> RangeBearing.jit_h(np.array([3.0, 4.0, 0.0, 0.0]), np.zeros(2), out)
+    >>> out.round(4)
+    array([5.    , 0.9273])
+    """
     dx, dy = x[0] - params[0], x[1] - params[1]
     out[0] = math.sqrt(dx * dx + dy * dy)
     out[1] = math.atan2(dy, dx)
@@ -227,12 +517,50 @@ def _range_bearing_h(x, params, out):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _growth_f(x, dt, t, params, out):
+    """The growth model's ``f`` for one state, compiled: ``x/2 + 25 x/(1 + x²) + params[0]``.
+
+    Parameters
+    ----------
+    x : (1,) ndarray
+        The state.
+    dt, t : float
+        Unused: the forcing comes in ``params``.
+    params : (1,) ndarray
+        ``8 cos(1.2 t)``, a row of :meth:`GrowthMotion.jit_params`.
+    out : (1,) ndarray
+        Receives the predicted state; nothing is returned.
+
+    Examples
+    --------
+    >>> out = np.empty(1)
+    >>> GrowthMotion.jit_f(np.array([1.0]), 1.0, 0.0, np.array([8.0]), out)
+    >>> out
+    array([21.])
+    """
     v = x[0]
     out[0] = v / 2 + 25 * v / (1 + v * v) + params[0]  # params[0] = 8 cos(1.2 t), once a step
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _square_h(x, params, out):
+    """The growth model's measurement ``x² / 20`` for one state, compiled.
+
+    Parameters
+    ----------
+    x : (1,) ndarray
+        The state.
+    params : (0,) ndarray
+        Unused (:meth:`GrowthMeasurement.jit_params`).
+    out : (1,) ndarray
+        Receives ``x² / 20``; nothing is returned.
+
+    Examples
+    --------
+    >>> out = np.empty(1)
+    >>> GrowthMeasurement.jit_h(np.array([2.0]), np.zeros(0), out)
+    >>> out
+    array([0.2])
+    """
     out[0] = x[0] * x[0] / 20
 
 
@@ -254,8 +582,37 @@ class CoordinatedTurn:
     with the limit ``ω → 0`` (constant velocity) taken by series. Process noise: white
     acceleration of spectral density ``q`` on position and velocity (as
     :class:`~vistrack.models.ConstantVelocity`), and a random walk of density ``q_turn`` on
-    ``ω``. Reference: Bar-Shalom, Li and Kirubarajan, *Estimation with Applications to Tracking
-    and Navigation* (2001), §11.7.
+    ``ω``:
+
+    .. math::
+
+        Q = \begin{pmatrix} q\,Δ^3/3\; I_2 & q\,Δ^2/2\; I_2 & 0 \\
+                            q\,Δ^2/2\; I_2 & q\,Δ\; I_2 & 0 \\
+                            0 & 0 & q_\text{turn} Δ \end{pmatrix}.
+
+    Parameters
+    ----------
+    q : float
+        Spectral density of the white-noise acceleration (finite, >= 0).
+    q_turn : float
+        Spectral density of the turn rate's random walk (finite, >= 0).
+
+    Attributes
+    ----------
+    ndim_state : int
+        Size of the state: 5.
+    jit_f : numba function
+        ``f`` for one state, compiled, for the particle filter's compiled path.
+
+    Raises
+    ------
+    ValueError
+        If ``q`` or ``q_turn`` is negative or not finite.
+
+    References
+    ----------
+    .. [1] Y. Bar-Shalom, X. R. Li and T. Kirubarajan, *Estimation with Applications to
+       Tracking and Navigation*, Wiley, 2001, §11.7.
 
     Examples
     --------
@@ -268,6 +625,23 @@ class CoordinatedTurn:
     jit_f = staticmethod(_ct_f)
 
     def jit_params(self, dt: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """The parameters of :attr:`jit_f` for each step: none.
+
+        Parameters
+        ----------
+        dt, t : (T,) ndarray
+            Time steps and times of the steps.
+
+        Returns
+        -------
+        (T, 0) ndarray
+            Empty rows.
+
+        Examples
+        --------
+        >>> CoordinatedTurn().jit_params(np.ones(3), np.arange(3.0)).shape
+        (3, 0)
+        """
         return np.zeros((len(t), 0))
 
     def __init__(self, q: float = 1.0, q_turn: float = 0.01):
@@ -294,6 +668,29 @@ class CoordinatedTurn:
         return sa, ca, s, c, ds, dc
 
     def f(self, x: np.ndarray, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
+        """Move states by ``dt`` along their turns (see the class), without noise.
+
+        Parameters
+        ----------
+        x : (..., 5) array_like
+            States ``[x, y, vx, vy, ω]``.
+        dt : float
+            Time step.
+        t : float
+            Unused (the model does not depend on time).
+
+        Returns
+        -------
+        (..., 5) ndarray
+            The predicted states.
+
+        Examples
+        --------
+        A quarter turn at unit speed:
+
+        >>> CoordinatedTurn().f(np.array([0.0, 0.0, 1.0, 0.0, np.pi / 2])).round(3)
+        array([0.637, 0.637, 0.   , 1.   , 1.571])
+        """
         x = np.asarray(x, dtype=float)
         px, py, vx, vy, w = np.moveaxis(x, -1, 0)
         sa, ca, s, c, _, _ = self._coeffs(w, dt, derivatives=False)
@@ -301,6 +698,34 @@ class CoordinatedTurn:
                          ca * vx - sa * vy, sa * vx + ca * vy, w], axis=-1)
 
     def jacobian(self, x: np.ndarray, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
+        """The Jacobian ``∂f/∂x``, analytic, with its ``ω → 0`` limit by series.
+
+        Parameters
+        ----------
+        x : (..., 5) array_like
+            States ``[x, y, vx, vy, ω]``.
+        dt : float
+            Time step.
+        t : float
+            Unused.
+
+        Returns
+        -------
+        (..., 5, 5) ndarray
+            One Jacobian per state.
+
+        Examples
+        --------
+        At ``ω = 0`` it is the constant-velocity transition, plus the turn's first effect:
+
+        >>> J = CoordinatedTurn().jacobian(np.array([0.0, 0.0, 1.0, 0.0, 0.0]))
+        >>> J[:, 2:].round(3) + 0.0   # (+ 0.0: no negative zeros)
+        array([[1. , 0. , 0. ],
+               [0. , 1. , 0.5],
+               [1. , 0. , 0. ],
+               [0. , 1. , 1. ],
+               [0. , 0. , 1. ]])
+        """
         x = np.asarray(x, dtype=float)
         _, _, vx, vy, w = np.moveaxis(x, -1, 0)
         sa, ca, s, c, ds, dc = self._coeffs(w, dt)
@@ -313,6 +738,23 @@ class CoordinatedTurn:
         return J
 
     def Q(self, dt: float = 1.0) -> np.ndarray:
+        """Process-noise covariance over ``dt`` (see the class).
+
+        Parameters
+        ----------
+        dt : float
+            Time step, finite and >= 0 (one value).
+
+        Returns
+        -------
+        (5, 5) ndarray
+            Symmetric positive semi-definite.
+
+        Examples
+        --------
+        >>> CoordinatedTurn(q=0.1, q_turn=0.01).Q(2.0).diagonal().round(3)
+        array([0.267, 0.267, 0.2  , 0.2  , 0.02 ])
+        """
         d = float(_as_dt(dt))
         Q = np.zeros((5, 5))
         for i in range(2):
@@ -335,10 +777,28 @@ class RangeBearing(AngleAwareMeasurement):
     Parameters
     ----------
     r_range, r_bearing : float
-        Measurement noise variances (range² and rad²).
-    sensor : (2,) array
+        Measurement noise variances (range² and rad²), finite and > 0.
+    sensor : (2,) array_like
+        Position ``(sx, sy)`` of the sensor.
     ndim_state : int
         Size of the state (at least 2).
+
+    Attributes
+    ----------
+    angles : tuple of int
+        ``(1,)``: the bearing.
+    ndim_meas : int
+        Size of a measurement: 2.
+    sensor : (2,) ndarray
+        The sensor's position.
+    jit_h : numba function
+        ``h`` for one state, compiled, for the particle filter's compiled path.
+
+    Raises
+    ------
+    ValueError
+        If a variance is not a finite number > 0, ``sensor`` does not have two entries, or
+        ``ndim_state < 2``.
 
     Examples
     --------
@@ -351,6 +811,18 @@ class RangeBearing(AngleAwareMeasurement):
     jit_h = staticmethod(_range_bearing_h)
 
     def jit_params(self) -> np.ndarray:
+        """The parameters of :attr:`jit_h`: the sensor's position.
+
+        Returns
+        -------
+        (2,) ndarray
+            ``sensor``.
+
+        Examples
+        --------
+        >>> RangeBearing(sensor=(1.0, 2.0)).jit_params()
+        array([1., 2.])
+        """
         return self.sensor
 
     def __init__(self, r_range: float = 1.0, r_bearing: float = 1e-4, sensor=(0.0, 0.0),
@@ -370,11 +842,48 @@ class RangeBearing(AngleAwareMeasurement):
         return f"RangeBearing(sensor={self.sensor.tolist()}, ndim_state={self.ndim_state})"
 
     def h(self, x: np.ndarray) -> np.ndarray:
+        """Range and bearing of each state's position from the sensor (see the class).
+
+        Parameters
+        ----------
+        x : (..., n) array_like
+            States whose first two entries are the position.
+
+        Returns
+        -------
+        (..., 2) ndarray
+            ``[range, bearing]``, the bearing in ``(-π, π]``.
+
+        Examples
+        --------
+        >>> RangeBearing(sensor=(1.0, 1.0)).h(np.array([4.0, 5.0, 0.0, 0.0])).round(4)
+        array([5.    , 0.9273])
+        """
         x = np.asarray(x, dtype=float)
         dx, dy = x[..., 0] - self.sensor[0], x[..., 1] - self.sensor[1]
         return np.stack([np.hypot(dx, dy), np.arctan2(dy, dx)], axis=-1)
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
+        r"""The Jacobian ``∂h/∂x``: with :math:`(d_x, d_y)` the position relative to the sensor
+        and :math:`r` its length, rows :math:`(d_x, d_y)/r` and :math:`(-d_y, d_x)/r^2` in the
+        position columns, zero elsewhere.
+
+        Parameters
+        ----------
+        x : (..., n) array_like
+            States (not at the sensor, where the Jacobian is undefined).
+
+        Returns
+        -------
+        (..., 2, n) ndarray
+            One Jacobian per state.
+
+        Examples
+        --------
+        >>> RangeBearing(sensor=(1.0, 1.0)).jacobian(np.array([4.0, 5.0, 0.0, 0.0])).round(3)
+        array([[ 0.6 ,  0.8 ,  0.  ,  0.  ],
+               [-0.16,  0.12,  0.  ,  0.  ]])
+        """
         x = np.asarray(x, dtype=float)
         dx, dy = x[..., 0] - self.sensor[0], x[..., 1] - self.sensor[1]
         r2 = dx * dx + dy * dy
@@ -392,15 +901,62 @@ class GrowthMotion:
     .. math:: x_t = \frac{x_{t-1}}{2} + \frac{25 x_{t-1}}{1 + x_{t-1}^2} + 8 \cos(1.2\, t) + w_t,
        \qquad w_t \sim N(0, q)
 
-    with ``t`` the step index (``q = 10`` in the literature). Reference: Gordon, Salmond and
-    Smith (1993), "Novel approach to nonlinear/non-Gaussian Bayesian state estimation";
-    Kitagawa (1996).
+    with ``t`` the step index (``q = 10`` in the literature); see :func:`growth_model` for it
+    with its measurement.
+
+    Parameters
+    ----------
+    q : float
+        Process-noise variance (finite, >= 0).
+
+    Attributes
+    ----------
+    ndim_state : int
+        Size of the state: 1.
+    jit_f : numba function
+        ``f`` for one state, compiled, for the particle filter's compiled path.
+
+    Raises
+    ------
+    ValueError
+        If ``q`` is negative or not finite.
+
+    References
+    ----------
+    .. [1] N. J. Gordon, D. J. Salmond and A. F. M. Smith, "Novel approach to
+       nonlinear/non-Gaussian Bayesian state estimation", *IEE Proceedings F* 140(2), 1993.
+    .. [2] G. Kitagawa, "Monte Carlo filter and smoother for non-Gaussian nonlinear state
+       space models", *Journal of Computational and Graphical Statistics* 5(1), 1996.
+
+    Examples
+    --------
+    >>> GrowthMotion().f(np.array([[1.0], [2.0]]), t=0.0)
+    array([[21.],
+           [19.]])
     """
 
     ndim_state = 1
     jit_f = staticmethod(_growth_f)
 
     def jit_params(self, dt: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """The parameters of :attr:`jit_f` for each step: the forcing ``8 cos(1.2 t)``.
+
+        Parameters
+        ----------
+        dt, t : (T,) ndarray
+            Time steps (unused) and times of the steps.
+
+        Returns
+        -------
+        (T, 1) ndarray
+            ``8 cos(1.2 t)``.
+
+        Examples
+        --------
+        >>> GrowthMotion().jit_params(np.ones(2), np.array([0.0, 1.0])).round(4)
+        array([[8.    ],
+               [2.8989]])
+        """
         return 8 * np.cos(1.2 * np.asarray(t, dtype=float))[:, None]
 
     def __init__(self, q: float = 10.0):
@@ -410,25 +966,127 @@ class GrowthMotion:
         return f"GrowthMotion(q={self.q})"
 
     def f(self, x: np.ndarray, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
+        """The mean transition ``x/2 + 25 x/(1 + x²) + 8 cos(1.2 t)``.
+
+        Parameters
+        ----------
+        x : (..., 1) array_like
+            States.
+        dt : float
+            Unused (the model is discrete-time).
+        t : float
+            The step index of the predicted state.
+
+        Returns
+        -------
+        (..., 1) ndarray
+            The predicted states.
+
+        Examples
+        --------
+        >>> GrowthMotion().f(np.array([0.0]), t=0.0)
+        array([8.])
+        """
         x = np.asarray(x, dtype=float)
         return x / 2 + 25 * x / (1 + x * x) + 8 * np.cos(1.2 * np.asarray(t))[..., None]
 
     def jacobian(self, x: np.ndarray, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
+        """The derivative ``1/2 + 25 (1 - x²) / (1 + x²)²``.
+
+        Parameters
+        ----------
+        x : (..., 1) array_like
+            States.
+        dt, t : float
+            Unused.
+
+        Returns
+        -------
+        (..., 1, 1) ndarray
+            One Jacobian per state.
+
+        Examples
+        --------
+        >>> GrowthMotion().jacobian(np.array([1.0]))
+        array([[0.5]])
+        """
         x = np.asarray(x, dtype=float)
         return (0.5 + 25 * (1 - x * x) / (1 + x * x) ** 2)[..., None]
 
     def Q(self, dt: float = 1.0) -> np.ndarray:
+        """The process-noise variance as a matrix.
+
+        Parameters
+        ----------
+        dt : float
+            Unused.
+
+        Returns
+        -------
+        (1, 1) ndarray
+            ``[[q]]``.
+
+        Examples
+        --------
+        >>> GrowthMotion(q=10.0).Q()
+        array([[10.]])
+        """
         return np.array([[self.q]])
 
 
 class GrowthMeasurement(AngleAwareMeasurement):
-    r"""The growth model's measurement ``y_t = x_t^2 / 20 + v_t``, ``v_t ~ N(0, r)`` (``r = 1``
-    in the literature). Its sign ambiguity makes the posterior bimodal."""
+    r"""The growth model's measurement ``y_t = x_t^2 / 20 + v_t``, ``v_t ~ N(0, r)``.
+
+    .. math:: y_t = \frac{x_t^2}{20} + v_t, \qquad v_t \sim N(0, r)
+
+    (``r = 1`` in the literature). Its sign ambiguity makes the posterior bimodal.
+
+    Parameters
+    ----------
+    r : float
+        Measurement-noise variance, finite and > 0.
+
+    Attributes
+    ----------
+    ndim_meas, ndim_state : int
+        Sizes of a measurement and of the state: 1 and 1.
+    jit_h : numba function
+        ``h`` for one state, compiled, for the particle filter's compiled path.
+
+    Raises
+    ------
+    ValueError
+        If ``r`` is not a finite number > 0.
+
+    References
+    ----------
+    .. [1] N. J. Gordon, D. J. Salmond and A. F. M. Smith, "Novel approach to
+       nonlinear/non-Gaussian Bayesian state estimation", *IEE Proceedings F* 140(2), 1993.
+
+    Examples
+    --------
+    >>> meas = GrowthMeasurement()
+    >>> meas.h(np.array([[-2.0], [2.0]]))   # the same for x and -x
+    array([[0.2],
+           [0.2]])
+    """
 
     ndim_meas, ndim_state, angles = 1, 1, ()
     jit_h = staticmethod(_square_h)
 
     def jit_params(self) -> np.ndarray:
+        """The parameters of :attr:`jit_h`: none.
+
+        Returns
+        -------
+        (0,) ndarray
+            Empty.
+
+        Examples
+        --------
+        >>> GrowthMeasurement().jit_params().shape
+        (0,)
+        """
         return _NO_PARAMS
 
     def __init__(self, r: float = 1.0):
@@ -440,15 +1098,75 @@ class GrowthMeasurement(AngleAwareMeasurement):
         return f"GrowthMeasurement(r={self._R[0, 0]})"
 
     def h(self, x: np.ndarray) -> np.ndarray:
+        """The mean measurement ``x² / 20``.
+
+        Parameters
+        ----------
+        x : (..., 1) array_like
+            States.
+
+        Returns
+        -------
+        (..., 1) ndarray
+            ``x² / 20``.
+
+        Examples
+        --------
+        >>> GrowthMeasurement().h(np.array([10.0]))
+        array([5.])
+        """
         return np.asarray(x, dtype=float) ** 2 / 20
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """The derivative ``x / 10``.
+
+        Parameters
+        ----------
+        x : (..., 1) array_like
+            States.
+
+        Returns
+        -------
+        (..., 1, 1) ndarray
+            One Jacobian per state.
+
+        Examples
+        --------
+        >>> GrowthMeasurement().jacobian(np.array([2.0]))
+        array([[0.2]])
+        """
         return (np.asarray(x, dtype=float) / 10)[..., None]
 
 
 
 def growth_model(q: float = 10.0, r: float = 1.0) -> tuple[GrowthMotion, GrowthMeasurement]:
-    """The growth model's motion and measurement, with the literature's ``q = 10``, ``r = 1``.
+    r"""The growth model's motion and measurement, with the literature's ``q = 10``, ``r = 1``.
+
+    .. math::
+
+        x_t = \frac{x_{t-1}}{2} + \frac{25 x_{t-1}}{1 + x_{t-1}^2} + 8 \cos(1.2\, t) + w_t,
+        \quad w_t \sim N(0, q), \qquad y_t = \frac{x_t^2}{20} + v_t, \quad v_t \sim N(0, r).
+
+    Parameters
+    ----------
+    q : float
+        Process-noise variance.
+    r : float
+        Measurement-noise variance.
+
+    Returns
+    -------
+    motion : GrowthMotion
+        The dynamics.
+    measurement : GrowthMeasurement
+        The measurement.
+
+    References
+    ----------
+    .. [1] N. J. Gordon, D. J. Salmond and A. F. M. Smith, "Novel approach to
+       nonlinear/non-Gaussian Bayesian state estimation", *IEE Proceedings F* 140(2), 1993.
+    .. [2] G. Kitagawa, "Monte Carlo filter and smoother for non-Gaussian nonlinear state
+       space models", *Journal of Computational and Graphical Statistics* 5(1), 1996.
 
     Examples
     --------

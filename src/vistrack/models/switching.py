@@ -26,17 +26,62 @@ __all__ = ["SwitchingLinearSystem"]
 
 
 class SwitchingLinearSystem:
-    """k linear motion models of one state size, a Markov switching matrix and one linear
-    measurement model.
+    r"""A switching linear dynamic system: ``k`` linear motion models of one state size, a
+    Markov switching matrix and one linear measurement model.
+
+    .. math::
+
+        z_t \sim \Pi_{z_{t-1}, \cdot}, \qquad
+        x_t = F^{(z_t)} x_{t-1} + e_t, \quad e_t \sim N(0, Q^{(z_t)}), \qquad
+        y_t = H x_t + w_t, \quad w_t \sim N(0, R).
 
     Parameters
     ----------
-    motions : sequence of linear motion models (``F(dt)``, ``Q(dt)``), all of state size n
-    measurement : linear measurement model (``H``, ``R``)
-    transition : (k, k) array
-        ``transition[i, j] = P(z_t = j | z_{t-1} = i)``; rows sum to one.
-    mode_probs : (k,) array, optional
+    motions : sequence of motion models
+        Linear motion models (``F(dt)``, ``Q(dt)``, ``ndim_state``), all of state size ``n``.
+    measurement : measurement model
+        A linear measurement model (``H(n)``, ``R()``).
+    transition : (k, k) array_like
+        ``transition[i, j] = P(z_t = j | z_{t-1} = i)``; non-negative, rows sum to one.
+    mode_probs : (k,) array_like, optional
         Distribution of the first mode (default uniform).
+
+    Attributes
+    ----------
+    motions : list
+        The ``k`` motion models.
+    measurement : measurement model
+        The measurement model.
+    transition : (k, k) ndarray
+        The switching matrix ``Π``.
+    mode_probs : (k,) ndarray
+        The first mode's distribution.
+    ndim_state : int
+        Size ``n`` of the state.
+
+    Raises
+    ------
+    ValueError
+        If there are no motions, they differ in state size, ``transition`` is not a
+        non-negative ``(k, k)`` matrix whose rows sum to one, or ``mode_probs`` is not ``k``
+        non-negative numbers summing to one.
+
+    References
+    ----------
+    .. [1] K. P. Murphy, "Switching Kalman filters", technical report, 1998.
+
+    Examples
+    --------
+    A target that is mostly still and sometimes moves:
+
+    >>> import vistrack as vt
+    >>> slds = SwitchingLinearSystem(
+    ...     [vt.ConstantVelocity(dim=1, q=0.01), vt.ConstantVelocity(dim=1, q=4.0)],
+    ...     vt.Position(dim=1), [[0.95, 0.05], [0.2, 0.8]])
+    >>> slds
+    SwitchingLinearSystem(k=2, ndim_state=2)
+    >>> slds.mode_probs
+    array([0.5, 0.5])
     """
 
     def __init__(self, motions: Sequence[Any], measurement: Any, transition: Any,
@@ -67,10 +112,38 @@ class SwitchingLinearSystem:
 
     def sample(self, T: int, *, x0: Any, P0: Any = None, dt: float = 1.0,
                rng: np.random.Generator | int | None = None):
-        """Draw modes ``zs (T,)``, states ``xs (T, n)`` and measurements ``ys (T, m)``.
+        """Draw a sequence of modes, states and measurements.
 
-        The first state is ``x0`` (or a draw from ``N(x0, P0)``) under the first mode; each
-        later step first switches mode, then moves with that mode's dynamics.
+        The first mode is drawn from ``mode_probs`` and the first state is ``x0`` (or a draw
+        from ``N(x0, P0)``); each later step first switches mode, then moves with that mode's
+        dynamics. Every state is measured.
+
+        Parameters
+        ----------
+        T : int
+            Number of steps.
+        x0 : (n,) array_like
+            Mean of the first state.
+        P0 : (n, n) array_like, optional
+            Covariance of the first state; the first state is exactly ``x0`` if None.
+        dt : float
+            Time step of the motion models.
+        rng : numpy.random.Generator, int or None
+            Random generator or seed.
+
+        Returns
+        -------
+        zs : (T,) ndarray of int64
+            Mode of each step.
+        xs : (T, n) ndarray
+            States.
+        ys : (T, m) ndarray
+            Measurements.
+
+        Raises
+        ------
+        ValueError
+            If ``x0`` does not have shape ``(n,)``.
 
         Examples
         --------
