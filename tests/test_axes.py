@@ -13,7 +13,7 @@ from vistrack.filters import (
     kf_predict,
     kf_update,
 )
-from vistrack.filters.axes import _predict_inplace, _update_inplace
+from vistrack.filters.axes import _predict_inplace, _predicted_values, _update_inplace
 
 
 def random_state(rng, K, A):
@@ -36,6 +36,9 @@ def test_compiled_steps_equal_the_reference_bit_for_bit(A):
         mean, cov = random_state(rng, K, A)
         q = rng.uniform(0, 2, (K, 2 * A))
         m_ref, c_ref = axes_predict(mean, cov, dt, q)
+        assert np.array_equal(_predicted_values(mean, dt), m_ref[:, :A])
+        view = np.c_[mean, mean][:, : 2 * A]  # not contiguous
+        assert np.array_equal(_predicted_values(view, dt), mean[:, :A] + dt * mean[:, A:])
         m, c = mean.copy(), cov.copy()
         _predict_inplace(m, c, dt, q)
         assert np.array_equal(m, m_ref) and np.array_equal(c, c_ref)

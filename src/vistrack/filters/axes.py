@@ -206,6 +206,18 @@ def full_to_axes(P: Any) -> np.ndarray:
 
 
 @njit(cache=True)
+def _predicted_values(mean, dt):
+    """The values :func:`axes_predict` predicts, ``mean[:, :A] + dt * mean[:, A:]`` ``(K, A)``,
+    new: where process noise that depends on the state is evaluated."""
+    A = mean.shape[1] // 2
+    out = np.empty((mean.shape[0], A))
+    for i in range(mean.shape[0]):
+        for a in range(A):
+            out[i, a] = mean[i, a] + dt * mean[i, A + a]
+    return out
+
+
+@njit(cache=True)
 def _predict_inplace(mean, cov, dt, q):
     """:func:`axes_predict` of every row of ``mean (K, 2A)``, ``cov (K, A, 3)`` in place."""
     A = cov.shape[1]
