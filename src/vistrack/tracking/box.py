@@ -365,11 +365,12 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, q, r, settings, shift):
                match, used, K, D)
     _stage(rows, cols, ov, state, (TENTATIVE, TENTATIVE), high_d,
            cfg.min_iou_tentative if cfg.two_stage else cfg.min_iou, False, ds, match, used, K, D)
-    rows = np.flatnonzero(match >= 0)
-    M = rows.shape[0]
+    updated = np.flatnonzero(match >= 0)
+    M = updated.shape[0]
     z, rm, offset = np.empty((M, 4)), np.empty((M, 4)), np.zeros((M, 4))
     for k in range(M):
-        i, j = rows[k], match[rows[k]]
+        i = updated[k]
+        j = match[i]
         for a in range(2):  # the detection's [cx, cy, w, h]
             z[k, a] = (db[j, a] + db[j, a + 2]) / 2
             z[k, 2 + a] = db[j, 2 + a] - db[j, a]
@@ -377,7 +378,7 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, q, r, settings, shift):
             offset[k, a] = shift[a] if moved[i] else 0.0
         for a in range(4):
             rm[k, a] = r[i, a]
-    _update_inplace(mean, cov, rows, z, rm, offset)
+    _update_inplace(mean, cov, updated, z, rm, offset)
     return match, used, moved, True
 
 
