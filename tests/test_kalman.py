@@ -406,3 +406,27 @@ def test_steady_state_phase_of_one_series_equals_filterpy_and_the_batch_kernel(r
     np.testing.assert_allclose(one.means, fm, rtol=1e-9, atol=1e-10)
     np.testing.assert_allclose(one.covs, fP, rtol=1e-9, atol=1e-12)
     assert one.loglik == pytest.approx(fll, rel=1e-10)
+
+
+def test_cholesky_helpers_factor_and_solve(rng):
+    """The compiled Cholesky factor and triangular solves that the Kalman and UKF kernels
+    share: ``L L' = A``, ``L X = B``, ``L' X = B``, and ``chol_solve`` is the three in turn;
+    a matrix that is not positive definite is refused."""
+    from vistrack.filters._kernels import back_solve, chol_factor, chol_solve, forward_solve
+
+    n, k = 5, 3
+    G = rng.normal(size=(n, n))
+    A, B = G @ G.T + n * np.eye(n), rng.normal(size=(n, k))
+    L = np.zeros((n, n))
+    assert chol_factor(L, A, n)
+    np.testing.assert_allclose(L, np.linalg.cholesky(A), rtol=1e-12, atol=1e-14)
+    X = B.copy()
+    forward_solve(L, X, n, k)
+    np.testing.assert_allclose(L @ X, B, rtol=1e-12, atol=1e-12)
+    Y = X.copy()
+    back_solve(L, Y, n, k)
+    np.testing.assert_allclose(A @ Y, B, rtol=1e-12, atol=1e-12)
+    L2, X2 = np.zeros((n, n)), B.copy()
+    assert chol_solve(L2, A, X2, n, k)
+    assert np.array_equal(L2, L) and np.array_equal(X2, Y)
+    assert not chol_factor(np.zeros((n, n)), -A, n)

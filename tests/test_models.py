@@ -147,6 +147,25 @@ def test_box_measurement_noise_per_value():
                                (0.1 * boxes[:, [2, 3, 2, 3]]) ** 2)
 
 
+def test_box_noise_is_the_size_scaled_formula_bit_for_bit():
+    """The compiled Q_diag and R_diag give numpy's ``(std * s) ** 2 * dt`` exactly, ``s`` the
+    width (x, w) or height (y, h) at least 1e-3, on views and lists too; NaN sizes give NaN."""
+    rng = np.random.default_rng(1)
+    mean = np.c_[rng.uniform(-100, 1000, (300, 2)), rng.uniform(-1, 400, (300, 2)),
+                 rng.normal(0, 5, (300, 4))]
+    mean[:4, 2:4] = [[0.0, 1e-4], [1e-3, -5.0], [np.nan, 3.0], [2.0, np.inf]]
+    boxes = mean[:, :4]  # a view, as the tracker passes
+    for m in (BoxMotion(), BoxMotion().at_rate(7.0), BoxMotion(std_meas=0.07)):
+        s = np.tile(np.maximum(boxes[:, 2:4], 1e-3), 2)
+        for dt in (1.0, 3.0, 0.5, 1 / 3):
+            want = np.concatenate([(m.std_pos * s) ** 2, (m.std_vel * s) ** 2], axis=1) * dt
+            assert np.array_equal(m.Q_diag(boxes, dt), want, equal_nan=True)
+        assert np.array_equal(m.R_diag(boxes), (m.std_meas * s) ** 2, equal_nan=True)
+        assert np.array_equal(m.R_diag(boxes[:5].tolist()), m.R_diag(boxes[:5]),
+                              equal_nan=True)
+    assert BoxMotion().Q_diag(np.zeros((0, 4))).shape == (0, 8)
+
+
 @pytest.mark.parametrize("rate", [7.0, 10.0, 14.0, 60.0])
 def test_box_motion_at_another_frame_rate_is_the_same_motion_in_time(rate):
     """The noise is a random walk of the position and of the velocity in time: over one

@@ -361,14 +361,35 @@ def test_camera_motion_moves_only_the_tracks_it_fits():
 
 
 def test_the_compiled_step_runs_only_where_it_equals_the_numpy_steps():
-    from vistrack.models import BoxMotion
-
-    class Slower(BoxMotion):
-        pass
-
     assert BoxTracker().compiled and not BoxTracker(compiled=False).compiled
     assert not BoxTracker(assigner="greedy").compiled
-    assert not BoxTracker(motion=Slower()).compiled  # a subclass may change the noise
+
+
+def test_the_compiled_step_takes_the_noise_of_any_box_motion():
+    """A motion model of another noise (here in pixels, not scaled by the box's size) runs
+    the compiled step, whose filter takes its Q_diag and R_diag: bit for bit the numpy steps,
+    and other tracks than BoxMotion's."""
+    from vistrack.models import BoxMotion
+
+    class PixelNoise(BoxMotion):
+        def Q_diag(self, boxes, dt=1.0):
+            return np.tile([4.0, 4.0, 1.0, 1.0, 0.3, 0.3, 0.01, 0.01], (len(boxes), 1)) * dt
+
+        def R_diag(self, boxes):
+            return np.tile([4.0, 4.0, 16.0, 9.0], (len(boxes), 1))
+
+    rng = np.random.default_rng(9)
+    shake = rng.normal(0, 20, (150, 2)) * (rng.random((150, 1)) < 0.2)
+    _, dets = scene(rng, n_obj=20, clutter=3.0, shake=shake)
+    frames = [(f, d) for f, d in enumerate(dets, start=1) if f % 7]
+    assert BoxTracker(motion=PixelNoise()).compiled
+    assert assert_same_tracking(frames, motion=PixelNoise()) > 500
+    own, box = BoxTracker(motion=PixelNoise()), BoxTracker()
+    for f, d in frames:
+        own.step(d, frame=f)
+        box.step(d, frame=f)
+    assert own.tracks.mean.shape != box.tracks.mean.shape or not np.array_equal(
+        own.tracks.mean, box.tracks.mean)
 
 
 @pytest.mark.slow

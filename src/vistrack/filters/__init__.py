@@ -1,6 +1,8 @@
-"""Inference: batched Kalman kernels, the whole-sequence filter, smoothers, and the EKF, UKF and
-ensemble Kalman filter for nonlinear models."""
+"""Inference: batched Kalman kernels, the whole-sequence filter, smoothers, the filter of
+independent (value, rate) pairs that the box tracker runs, and the EKF, UKF and ensemble Kalman
+filter for nonlinear models."""
 
+from .axes import axes_predict, axes_to_full, axes_update, full_to_axes
 from .ekf import ExtendedKalmanFilter, ekf_predict, ekf_update
 from .enkf import Ensemble, EnsembleKalmanFilter, enkf_predict, enkf_update
 from .imm import IMMFilter, IMMResult, SwitchingParticleFilter, SwitchingResult
@@ -60,6 +62,10 @@ __all__ = [
     "enkf_update",
     "KalmanFilter",
     "OnlineFilter",
+    "axes_predict",
+    "axes_to_full",
+    "axes_update",
+    "full_to_axes",
     "SmoothResult",
     "kalman_filter",
     "kalman_filter_1d",

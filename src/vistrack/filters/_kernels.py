@@ -562,9 +562,9 @@ def kf_means_shared(ys, F, H, x0, gains, chol, means, pmeans, loglik, store_pred
 
 
 @njit(cache=True)
-def chol_solve(L, A, B, n, k):
-    """Factor ``A = L L'`` (``A`` is ``n x n``, the lower triangle of ``L`` is written) and solve
-    ``A X = B`` in place for ``B`` of ``n x k``. Returns False if ``A`` is not positive definite."""
+def chol_factor(L, A, n):
+    """Factor ``A = L L'`` (``A`` is ``n x n``; the lower triangle of ``L`` is written, the upper
+    left as it was). Returns False if ``A`` is not positive definite."""
     for i in range(n):
         d = A[i, i]
         for p in range(i):
@@ -577,17 +577,40 @@ def chol_solve(L, A, B, n, k):
             for p in range(i):
                 s -= L[r, p] * L[i, p]
             L[r, i] = s / L[i, i]
+    return True
+
+
+@njit(cache=True)
+def forward_solve(L, B, n, k):
+    """Solve ``L X = B`` in place for ``B`` of ``n x k``, ``L`` the lower triangle of a factor
+    from :func:`chol_factor`."""
     for c in range(k):
         for i in range(n):
             s = B[i, c]
             for p in range(i):
                 s -= L[i, p] * B[p, c]
             B[i, c] = s / L[i, i]
+
+
+@njit(cache=True)
+def back_solve(L, B, n, k):
+    """Solve ``L' X = B`` in place for ``B`` of ``n x k`` (see :func:`forward_solve`)."""
+    for c in range(k):
         for i in range(n - 1, -1, -1):
             s = B[i, c]
             for p in range(i + 1, n):
                 s -= L[p, i] * B[p, c]
             B[i, c] = s / L[i, i]
+
+
+@njit(cache=True)
+def chol_solve(L, A, B, n, k):
+    """Factor ``A = L L'`` (``A`` is ``n x n``, the lower triangle of ``L`` is written) and solve
+    ``A X = B`` in place for ``B`` of ``n x k``. Returns False if ``A`` is not positive definite."""
+    if not chol_factor(L, A, n):
+        return False
+    forward_solve(L, B, n, k)
+    back_solve(L, B, n, k)
     return True
 
 

@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit
 
 from ..types import Gaussian
-from ._kernels import chol_solve
+from ._kernels import back_solve, chol_factor, forward_solve
 from ._nonlinear import (
     Measurement,
     Motion,
@@ -66,19 +66,13 @@ def _sqrt(P: np.ndarray, scale: float) -> np.ndarray:
 # ---------------------------------------------------------------- compiled, one Gaussian
 # For one Gaussian (the common case of a track) the sigma-point algebra is a few dozen numpy
 # calls on 5x5 matrices, whose overhead is most of the time; these kernels do it in three
-# compiled calls a step. The model's f and h still run as numpy on all points at once.
-@njit(cache=True, error_model="numpy")
-def _chol(A, L):
-    """Lower Cholesky factor of ``A`` into the lower triangle of ``L``; False if ``A`` is not
-    positive definite."""
-    return chol_solve(L, A, np.empty((A.shape[0], 0)), A.shape[0], 0)
-
-
+# compiled calls a step, with the Kalman kernels' Cholesky factor and triangular solves. The
+# model's f and h still run as numpy on all points at once.
 @njit(cache=True, error_model="numpy")
 def _points_one(x, P, scale, out):
     n = x.shape[0]
     L = np.zeros((n, n))  # (the upper triangle stays zero)
-    if not _chol(scale * P, L):
+    if not chol_factor(L, scale * P, n):
         return False
     for k in range(n):
         out[0, k] = x[k]
@@ -160,31 +154,19 @@ def _update_one(G, Z, Wm, Wc, R, y, angles, x, P, xo, Po):
             for b in range(m):
                 C[a, b] += dx * rz[i, b]
     L = np.empty((m, m))
-    if not _chol(S, L):
+    if not chol_factor(L, S, m):
         return False, 0.0
     # Vt = L^-1 C' (m x n); K' = L'^-1 Vt; whitened innovation w = L^-1 e
-    Vt = np.empty((m, n))
-    for a in range(n):
-        for b in range(m):
-            v = C[a, b]
-            for k in range(b):
-                v -= L[b, k] * Vt[k, a]
-            Vt[b, a] = v / L[b, b]
-    Kt = np.empty((m, n))
-    for a in range(n):
-        for b in range(m - 1, -1, -1):
-            v = Vt[b, a]
-            for k in range(b + 1, m):
-                v -= L[k, b] * Kt[k, a]
-            Kt[b, a] = v / L[b, b]
+    Vt = np.ascontiguousarray(C.T)
+    forward_solve(L, Vt, m, n)
+    Kt = Vt.copy()
+    back_solve(L, Kt, m, n)
+    w = np.empty((m, 1))
+    w[:, 0] = e
+    forward_solve(L, w, m, 1)
     ll = -0.5 * nobs * math.log(2.0 * math.pi)
-    w = np.empty(m)
     for b in range(m):
-        v = e[b]
-        for k in range(b):
-            v -= L[b, k] * w[k]
-        w[b] = v / L[b, b]
-        ll -= 0.5 * w[b] * w[b] + math.log(L[b, b])
+        ll -= 0.5 * w[b, 0] * w[b, 0] + math.log(L[b, b])
     for a in range(n):
         v = x[a]
         for b in range(m):

@@ -14,8 +14,10 @@ One step, as on the slides (predict, associate, correct, manage):
    the frame rate, :meth:`~vistrack.models.BoxMotion.at_rate`). With diagonal noise the
    8-state filter is four independent 2-state filters, one per box value and its rate, so
    each track keeps a 2×2 covariance per axis, ``[pp, pv, vv]``, and predict and update are
-   a few elementwise operations over all tracks (a test checks them against the full
-   8-state Kalman filter);
+   a few elementwise operations over all tracks: :mod:`vistrack.filters.axes` (tested
+   against the full 8-state Kalman filter), with the motion's process noise
+   (:meth:`~vistrack.models.BoxMotion.Q_diag`) and detection noise
+   (:meth:`~vistrack.models.BoxMotion.R_diag`) at each track's predicted box;
    with ``camera_motion``, the predictions then follow the camera: where the camera turns or
    shakes, every box in the image moves by the same amount, which no track's own velocity
    foresees. Confirmed tracks are matched to confident detections at IoU ≥
@@ -65,6 +67,14 @@ from numba import njit
 from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
+from ..filters.axes import (
+    _predict_inplace,
+    _predicted_values,
+    _update_inplace,
+    axes_predict,
+    axes_to_full,
+    axes_update,
+)
 from ..models.box import BoxMotion
 from ..types import Detections, Frame, Tracks
 from .base import frame_index
@@ -186,52 +196,19 @@ TRACKERS: dict[str, BoxTrackerConfig] = {
 """Box-tracker configurations by name (``vistrack track --tracker NAME``)."""
 
 
-def axes_to_full(c: np.ndarray) -> np.ndarray:
-    """Per-axis covariances ``(..., 4, 3)`` (``pp, pv, vv`` of each box value) as full
-    ``(..., 8, 8)`` ones."""
-    P = np.zeros(c.shape[:-2] + (8, 8))
-    a = np.arange(4)
-    P[..., a, a], P[..., a, a + 4] = c[..., 0], c[..., 1]
-    P[..., a + 4, a], P[..., a + 4, a + 4] = c[..., 1], c[..., 2]
-    return P
+def _noise(mean: np.ndarray, dt: float,
+           motion: BoxMotion) -> tuple[np.ndarray, np.ndarray]:
+    """The motion's noise at the boxes that states ``(K, 8)`` predict to over ``dt`` frames:
+    ``(q, r)``, the process noise ``q (K, 8)`` over ``|dt|`` and the detections' noise
+    ``r (K, 4)`` (the diagonals of ``Q`` and ``R``). The tracker corrects with ``r`` of the
+    prediction before the camera's shift, which moves centres only (the same ``r`` for
+    :class:`~vistrack.models.BoxMotion`, whose noise scales with the size)."""
+    boxes = _predicted_values(mean, dt)  # mean[:, :4] + dt * mean[:, 4:]
+    return motion.Q_diag(boxes, abs(dt)), motion.R_diag(boxes)
 
 
-def predict_axes(mean: np.ndarray, cov: np.ndarray, dt: float, motion: BoxMotion) -> np.ndarray:
-    """Predict states ``(K, 8)`` and per-axis covariances ``(K, 4, 3)`` over ``dt`` frames in
-    place (a negative ``dt`` predicts backwards in time, with the noise of ``|dt|``); returns
-    the process noise ``(K, 8)`` added."""
-    mean[:, :4] += dt * mean[:, 4:]
-    pp, pv, vv = cov[:, :, 0].copy(), cov[:, :, 1].copy(), cov[:, :, 2].copy()
-    q = motion.Q_diag(mean[:, :4], abs(dt))
-    cov[:, :, 0] = pp + dt * (2.0 * pv + dt * vv) + q[:, :4]
-    cov[:, :, 1] = pv + dt * vv
-    cov[:, :, 2] = vv + q[:, 4:]
-    return q
-
-
-def update_axes(mean: np.ndarray, cov: np.ndarray, z: np.ndarray, motion: BoxMotion,
-                moved: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Correct states ``(K, 8)`` and per-axis covariances ``(K, 4, 3)`` with boxes
-    ``[cx, cy, w, h] (K, 4)``: the new ``(mean, cov)``. ``moved (K, 2)``: the shift each
-    state's centre was moved by with the camera, which its velocity learns as motion seen in
-    the image (see the module)."""
-    m = mean.copy()
-    pp, pv, vv = cov[:, :, 0], cov[:, :, 1], cov[:, :, 2]
-    S = pp + motion.R_diag(m[:, :4])
-    kp, kv = pp / S, pv / S
-    y = z - m[:, :4]
-    m[:, :4] += kp * y
-    if moved is not None:
-        y[:, :2] += moved
-    m[:, 4:] += kv * y
-    return m, np.stack([pp - kp * pp, pv - kp * pv, vv - kv * pv], axis=-1)
-
-
-def full_to_axes(P: np.ndarray) -> np.ndarray:
-    """Full ``(..., 8, 8)`` covariances as per-axis ones ``(..., 4, 3)`` (the inverse of
-    :func:`axes_to_full` for covariances with no terms across axes)."""
-    a = np.arange(4)
-    return np.stack([P[..., a, a], P[..., a, a + 4], P[..., a + 4, a + 4]], axis=-1)
+def _contiguous(a: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=np.float64)
 
 
 def _to_xyxy(m: np.ndarray) -> np.ndarray:
@@ -318,47 +295,54 @@ def _stage(rows, cols, ov, state, stage_state, det_ok, min_iou, fuse, ds, match,
         used[c[q]] = True
 
 
+_ASSOCIATION = np.dtype([
+    ("two_stage", np.bool_), ("high", np.float64), ("low", np.float64),
+    ("min_iou", np.float64), ("min_iou_low", np.float64), ("min_iou_tentative", np.float64),
+    ("fuse_score", np.bool_), ("camera_motion", np.bool_), ("camera_min_iou", np.float64),
+    ("camera_min_matches", np.int64), ("camera_sig", np.float64)], align=True)
+"""The settings the compiled association reads, fields of :class:`BoxTrackerConfig` by name
+and type, as one record (numba takes an array of records at the cost of an array, a tuple of
+eleven values at several times that)."""
+
+
+def _association(c: BoxTrackerConfig) -> np.ndarray:
+    """The settings of ``c`` the compiled association reads: an array of one
+    :data:`_ASSOCIATION` record."""
+    return np.array([tuple(getattr(c, name) for name in _ASSOCIATION.fields or ())],
+                    dtype=_ASSOCIATION)
+
+
 @njit(cache=True)
-def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q, shift):
-    """Predict, associate and correct in one compiled call: the same arithmetic as
-    :meth:`BoxTracker._predict`, the stages of :meth:`BoxTracker.step` with ``gnn``, and
-    :meth:`BoxTracker._update`. ``noise`` is BoxMotion's ``(std_pos, std_vel, *std_meas)``,
-    ``cfg`` ``(two_stage, high, low, min_iou, min_iou_low, min_iou_tentative, fuse_score,
-    camera_motion, camera_min_iou, camera_min_matches, camera_sig)``. Updates ``mean``,
-    ``cov``, ``q`` (the process noise, for the record) and ``shift`` (the camera's) in place;
-    returns each track's detection (-1: none), which detections were used, and False if a box
-    is not finite."""
+def _associate(mean, cov, state, tclass, db, ds, dc, dt, q, r, settings, shift):
+    """Predict, associate and correct in one compiled call: :meth:`BoxTracker.step` with
+    ``gnn``. The filter's steps are :mod:`vistrack.filters.axes`' compiled ones, with the
+    motion's noise ``q (K, 8)`` and ``r (K, 4)`` at the predicted boxes (:func:`_noise`);
+    between them come the camera's shift and the three association stages (see the module),
+    with the settings ``settings[0]`` (:func:`_association`). Updates ``mean`` and ``cov`` in
+    place and writes the camera's shift into ``shift``; returns each track's detection (-1:
+    none), which detections were used, which tracks were moved with the camera, and False if
+    a box is not finite."""
     K, D = mean.shape[0], db.shape[0]
-    sp, sv = noise[0], noise[1]
-    two_stage, high, low = cfg[0] != 0.0, cfg[1], cfg[2]
+    cfg = settings[0]
     if dt != 0.0:
-        for i in range(K):
-            for a in range(4):
-                mean[i, a] += dt * mean[i, 4 + a]
-            for a in range(4):
-                s = max(mean[i, 2 + a % 2], 1e-3)
-                qp, qv = (sp * s) ** 2 * dt, (sv * s) ** 2 * dt
-                pp, pv, vv = cov[i, a, 0], cov[i, a, 1], cov[i, a, 2]
-                cov[i, a, 0] = pp + dt * (2.0 * pv + dt * vv) + qp
-                cov[i, a, 1] = pv + dt * vv
-                cov[i, a, 2] = vv + qv
-                q[i, a], q[i, 4 + a] = qp, qv
+        _predict_inplace(mean, cov, dt, q)
     match = np.full(K, -1)
     used = np.zeros(D, np.bool_)
     moved = np.zeros(K, np.bool_)
     if K == 0 or D == 0:
         return match, used, moved, True
-    high_d = ds >= high
+    high_d = ds >= cfg.high
     # the lowest IoU any stage, or the camera's estimate, looks at
-    gate = min(cfg[3], cfg[4], cfg[5], cfg[8] if cfg[7] != 0.0 else 1.0)
+    gate = min(cfg.min_iou, cfg.min_iou_low, cfg.min_iou_tentative,
+               cfg.camera_min_iou if cfg.camera_motion else 1.0)
     rows, cols, ov, ok = iou_pairs_same_class(_pred_boxes(mean), tclass, db, dc, gate)
     if not ok:
         return match, used, moved, False
-    if cfg[7] != 0.0:
+    if cfg.camera_motion:
         # the camera's shift from confirmed tracks and confident detections (see the module)
-        sel = (ov >= cfg[8]) & high_d[cols] & (state[rows] == CONFIRMED)
-        r, c = gnn_pairs(rows[sel], cols[sel], 1.0 - ov[sel], K, D)
-        shift[:] = _camera_shift(mean, db, r, c, cfg[9], cfg[10])
+        sel = (ov >= cfg.camera_min_iou) & high_d[cols] & (state[rows] == CONFIRMED)
+        pr, pc = gnn_pairs(rows[sel], cols[sel], 1.0 - ov[sel], K, D)
+        shift[:] = _camera_shift(mean, db, pr, pc, cfg.camera_min_matches, cfg.camera_sig)
         if shift[0] != 0.0 or shift[1] != 0.0:
             for i in range(K):
                 mean[i, 0] += shift[0]
@@ -372,31 +356,30 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, noise, cfg, q, shift):
                     mean[i, 1] -= shift[1]
                 else:
                     moved[i] = True
-    low_d = (ds >= low) & ~high_d if two_stage else np.zeros(D, np.bool_)
+    low_d = (ds >= cfg.low) & ~high_d if cfg.two_stage else np.zeros(D, np.bool_)
     # 1: confirmed and lost tracks, confident detections; 2: confirmed tracks left,
     # low-score detections; 3: tentative tracks, confident detections left
-    _stage(rows, cols, ov, state, (CONFIRMED, LOST), high_d, cfg[3], cfg[6] != 0.0, ds, match,
-           used, K, D)
-    if two_stage:
-        _stage(rows, cols, ov, state, (CONFIRMED, CONFIRMED), low_d, cfg[4], False, ds, match,
-               used, K, D)
-    _stage(rows, cols, ov, state, (TENTATIVE, TENTATIVE), high_d, cfg[5] if two_stage else cfg[3],
-           False, ds, match, used, K, D)
-    for i in range(K):
+    _stage(rows, cols, ov, state, (CONFIRMED, LOST), high_d, cfg.min_iou, cfg.fuse_score, ds,
+           match, used, K, D)
+    if cfg.two_stage:
+        _stage(rows, cols, ov, state, (CONFIRMED, CONFIRMED), low_d, cfg.min_iou_low, False, ds,
+               match, used, K, D)
+    _stage(rows, cols, ov, state, (TENTATIVE, TENTATIVE), high_d,
+           cfg.min_iou_tentative if cfg.two_stage else cfg.min_iou, False, ds, match, used, K, D)
+    updated = np.flatnonzero(match >= 0)
+    M = updated.shape[0]
+    z, rm, offset = np.empty((M, 4)), np.empty((M, 4)), np.zeros((M, 4))
+    for k in range(M):
+        i = updated[k]
         j = match[i]
-        if j < 0:
-            continue
-        for a in range(4):
-            s = max(mean[i, 2 + a % 2], 1e-3)
-            z = (db[j, a] + db[j, a + 2]) / 2 if a < 2 else db[j, a] - db[j, a - 2]
-            pp, pv, vv = cov[i, a, 0], cov[i, a, 1], cov[i, a, 2]
-            S = pp + (noise[2 + a] * s) ** 2
-            kp, kv = pp / S, pv / S
-            y = z - mean[i, a]
-            mean[i, a] += kp * y
+        for a in range(2):  # the detection's [cx, cy, w, h]
+            z[k, a] = (db[j, a] + db[j, a + 2]) / 2
+            z[k, 2 + a] = db[j, 2 + a] - db[j, a]
             # the velocity learns the motion seen in the image, the camera's included
-            mean[i, 4 + a] += kv * (y + shift[a] if a < 2 and moved[i] else y)
-            cov[i, a, 0], cov[i, a, 1], cov[i, a, 2] = pp - kp * pp, pv - kp * pv, vv - kv * pv
+            offset[k, a] = shift[a] if moved[i] else 0.0
+        for a in range(4):
+            rm[k, a] = r[i, a]
+    _update_inplace(mean, cov, updated, z, rm, offset)
     return match, used, moved, True
 
 
@@ -408,6 +391,9 @@ class BoxTracker:
     config : BoxTrackerConfig or str
         Settings, or a name in :data:`TRACKERS`.
     motion : BoxMotion, optional
+        The motion and its noise (default ``BoxMotion()``); a subclass, or any object with
+        the same ``at_rate``, ``initial``, ``Q_diag``, ``R_diag`` (and ``F``, for the offline
+        mode), changes the noise of the filter in both the compiled and the numpy steps.
     frame_rate : float
         Frames per second, to turn frame numbers into time.
     image_size : (width, height), optional
@@ -424,8 +410,7 @@ class BoxTracker:
         mode); without it the tracker learns the map online from the frames it has seen.
     compiled : bool
         Predict, associate and correct in one compiled call when the configuration allows it
-        (``assigner="gnn"`` and a :class:`~vistrack.models.BoxMotion` itself, not a subclass);
-        the results equal the numpy steps', which run otherwise.
+        (``assigner="gnn"``); the results equal the numpy steps', which run otherwise.
     **overrides
         Fields of the configuration to change.
 
@@ -471,13 +456,8 @@ class BoxTracker:
         self.image_size = None if image_size is None else tuple(float(v) for v in image_size)
         self.tracks = TrackTable(8, cov_shape=(4, 3))
         self.record = bool(record)
-        self.compiled = bool(compiled) and self.config.assigner == "gnn" and \
-            type(self.motion) is BoxMotion
-        c, m = self.config, self.motion
-        self._cfg = np.array([c.two_stage, c.high, c.low, c.min_iou, c.min_iou_low,
-                              c.min_iou_tentative, c.fuse_score, c.camera_motion,
-                              c.camera_min_iou, c.camera_min_matches, c.camera_sig], float)
-        self._noise = np.r_[float(m.std_pos), float(m.std_vel), m.std_meas]
+        self.compiled = bool(compiled) and self.config.assigner == "gnn"
+        self._association = _association(self.config)
         self.reset()
 
     def reset(self) -> None:
@@ -490,7 +470,7 @@ class BoxTracker:
         self.tracks.reset()
         self.frame: int | None = None
         self.history: list = []
-        self._q = np.zeros((0, 8))
+        self._q, self._r = np.zeros((0, 8)), np.zeros((0, 4))
         self._confirmed: set = set()
         self.camera_shift = np.zeros(2)
         self._camera_offset = np.zeros(2)  # the shifts so far, summed (for the smoother)
@@ -498,16 +478,22 @@ class BoxTracker:
         self._moved = np.zeros(0, bool)
 
     def _predict(self, dt: float) -> None:
+        """The motion's noise at the predicted boxes (:func:`_noise`) into ``_q`` and ``_r``,
+        and, in numpy, the prediction (the compiled call predicts with ``_q``)."""
         t = self.tracks
         if len(t) == 0 or dt == 0:
-            self._q = np.zeros((len(t), 8))
+            self._q, self._r = np.zeros((len(t), 8)), np.zeros((len(t), 4))
             return
-        self._q = predict_axes(t.mean, t.cov, dt, self.motion)
+        self._q, self._r = _noise(t.mean, dt, self.motion)
+        if not self.compiled:
+            t.mean, t.cov = axes_predict(t.mean, t.cov, dt, self._q)
 
     def _update(self, idx: np.ndarray, z: np.ndarray) -> None:
+        """The numpy correction of the tracks ``idx`` with boxes ``z [cx, cy, w, h]``."""
         t = self.tracks
-        moved = self._moved[idx, None] * self.camera_shift
-        t.mean[idx], t.cov[idx] = update_axes(t.mean[idx], t.cov[idx], z, self.motion, moved)
+        offset = np.zeros(z.shape)
+        offset[:, :2] = self._moved[idx, None] * self.camera_shift
+        t.mean[idx], t.cov[idx] = axes_update(t.mean[idx], t.cov[idx], z, self._r[idx], offset)
 
     def score_calibration(self) -> ScoreCalibration | None:
         """The calibration in use: the fixed one, or what the tracker has learnt so far; None
@@ -640,24 +626,21 @@ class BoxTracker:
                              "(use scores='calibrated', or fuse_score=False)")
         high = ds >= cfg.high
         self.camera_shift = np.zeros(2)
+        self._predict(dt)
         if self.compiled:
-            self._q = np.zeros((len(t), 8))
-            c = np.ascontiguousarray  # one compiled signature for every layout of the input
-            match, used, moved, ok = _associate(t.mean, t.cov, t.state, t.classes, c(db), c(ds),
-                                                c(dc), dt, self._noise, self._cfg, self._q,
-                                                self.camera_shift)
+            c = _contiguous  # one compiled signature for every layout of the input
+            match, used, self._moved, ok = _associate(
+                t.mean, t.cov, t.state, t.classes, c(db), c(ds), np.ascontiguousarray(dc), dt,
+                c(self._q), c(self._r), self._association, self.camera_shift)
             if not ok:
                 raise ValueError("track boxes must be finite")
             updated, free_d = match >= 0, ~used
             mt = np.flatnonzero(updated)
             md = match[mt]
-            self._moved = moved
         else:
-            self._predict(dt)
             updated, free_d, mt, md = self._associate_numpy(db, ds, dc, high)
-            moved = self._moved
         self._camera_offset = self._camera_offset + self.camera_shift
-        self._offsets[moved] += self.camera_shift
+        self._offsets[self._moved] += self.camera_shift
         if len(mt):
             if not self.compiled:
                 self._update(mt, _to_cxcywh(db[md]))

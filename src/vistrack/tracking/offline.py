@@ -34,18 +34,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..association import gnn_sparse, iou_pairs, paired_iou
+from ..filters.axes import axes_predict, axes_to_full, axes_update, full_to_axes
 from ..filters.kalman import FilterResult
 from ..filters.smoothers import rts_smooth
+from ..models.box import BoxMotion
 from ..types import Gaussian, xyxy_to_xywh
-from .box import (
-    BoxTracker,
-    _to_cxcywh,
-    _to_xyxy,
-    axes_to_full,
-    full_to_axes,
-    predict_axes,
-    update_axes,
-)
+from .box import BoxTracker, _to_cxcywh, _to_xyxy
 
 __all__ = ["SmoothedTracks", "smooth"]
 
@@ -141,6 +135,22 @@ def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0, *,
     return SmoothedTracks(*(c[by_frame] for c in cols))
 
 
+def _predict(mean: np.ndarray, cov: np.ndarray, dt: float,
+             motion: BoxMotion) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Box states ``(K, 8)`` and per-axis covariances ``(K, 4, 3)`` predicted over ``dt`` frames
+    (negative: backwards in time), with the motion's noise at the predicted boxes, as the
+    tracker predicts: ``(mean, cov, q)``, ``q (K, 8)`` the diagonal of the noise added."""
+    q = motion.Q_diag(mean[:, :4] + dt * mean[:, 4:], abs(dt))
+    return (*axes_predict(mean, cov, dt, q), q)
+
+
+def _correct(mean: np.ndarray, cov: np.ndarray, z: np.ndarray,
+             motion: BoxMotion) -> tuple[np.ndarray, np.ndarray]:
+    """Predicted box states and covariances corrected with boxes ``[cx, cy, w, h] (K, 4)``,
+    with the motion's detection noise at the predicted boxes, as the tracker corrects."""
+    return axes_update(mean, cov, z, motion.R_diag(mean[:, :4]))
+
+
 def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[_Track]:
     """RTS-smooth every confirmed track and fill its gaps of up to ``max_gap`` frames."""
     frame = np.concatenate([np.full(len(h[2]), h[0]) for h in tracker.history])
@@ -223,7 +233,7 @@ def _extend_back(tracker: BoxTracker, tracks: list[_Track], cam: dict, min_iou: 
     for i in range(len(frames) - 1, -1, -1):
         f = frames[i]
         if len(active):
-            predict_axes(mean, cov, f - frames[i + 1], motion)
+            mean, cov, _ = _predict(mean, cov, f - frames[i + 1], motion)
             pred = mean[:, :4].copy()
             pred[:, :2] += cam[f]
             db, ds, dc, conf = dets[f]
@@ -237,7 +247,7 @@ def _extend_back(tracker: BoxTracker, tracks: list[_Track], cam: dict, min_iou: 
             if len(r):
                 z = _to_cxcywh(db[c])
                 z[:, :2] -= cam[f]
-                mean[r], cov[r] = update_axes(mean[r], cov[r], z, motion)
+                mean[r], cov[r] = _correct(mean[r], cov[r], z, motion)
                 box = mean[r, :4].copy()
                 box[:, :2] += cam[f]
                 for k, b, sc, P in zip(active[r], _to_xyxy(box), ds[c], axes_to_full(cov[r])):
@@ -327,9 +337,9 @@ def _bridge(tracker: BoxTracker, a: _Track, b: _Track, frames: np.ndarray,
     means, covs, Fs, Qs = [mean[0]], [cov[0]], [np.eye(8)], [np.zeros((8, 8))]
     prev = fl
     for f in gf.tolist():
-        q = predict_axes(mean, cov, f - prev, motion)
+        mean, cov, q = _predict(mean, cov, f - prev, motion)
         if f == f_b:
-            mean, cov = update_axes(mean, cov, z, motion)
+            mean, cov = _correct(mean, cov, z, motion)
         means.append(mean[0].copy())
         covs.append(cov[0].copy())
         Fs.append(motion.F(f - prev))

@@ -1,0 +1,142 @@
+"""The filter of independent (value, rate) pairs: its compiled version against the numpy
+reference (bit for bit), and both against the full Kalman filter on the equivalent matrices."""
+
+import numpy as np
+import pytest
+
+from vistrack import Gaussian
+from vistrack.filters import (
+    axes_predict,
+    axes_to_full,
+    axes_update,
+    full_to_axes,
+    kf_predict,
+    kf_update,
+)
+from vistrack.filters.axes import _predict_inplace, _predicted_values, _update_inplace
+
+
+def random_state(rng, K, A):
+    """States of K tracks with A axes, and per-axis covariances that are positive definite."""
+    mean = np.c_[rng.uniform(-50, 500, (K, A)), rng.normal(0, 3, (K, A))]
+    pp, vv = rng.uniform(0.5, 20, (K, A)), rng.uniform(0.01, 2, (K, A))
+    pv = rng.uniform(-0.9, 0.9, (K, A)) * np.sqrt(pp * vv)
+    return mean, np.stack([pp, pv, vv], axis=-1)
+
+
+def transition(A, dt):
+    return np.kron(np.array([[1.0, dt], [0.0, 1.0]]), np.eye(A))
+
+
+@pytest.mark.parametrize("A", [1, 2, 4])
+def test_compiled_steps_equal_the_reference_bit_for_bit(A):
+    rng = np.random.default_rng(A)
+    K = 40
+    for dt in (1.0, 3.0, -2.0, 0.5):
+        mean, cov = random_state(rng, K, A)
+        q = rng.uniform(0, 2, (K, 2 * A))
+        m_ref, c_ref = axes_predict(mean, cov, dt, q)
+        assert np.array_equal(_predicted_values(mean, dt), m_ref[:, :A])
+        view = np.c_[mean, mean][:, : 2 * A]  # not contiguous
+        assert np.array_equal(_predicted_values(view, dt), mean[:, :A] + dt * mean[:, A:])
+        m, c = mean.copy(), cov.copy()
+        _predict_inplace(m, c, dt, q)
+        assert np.array_equal(m, m_ref) and np.array_equal(c, c_ref)
+        # update a subset of the rows, in an order of their own
+        rows = rng.permutation(K)[: K // 2]
+        z = m_ref[rows, :A] + rng.normal(0, 2, (len(rows), A))
+        r = rng.uniform(0.1, 9, (len(rows), A))
+        offset = rng.normal(0, 3, (len(rows), A)) * (rng.random((len(rows), 1)) < 0.5)
+        for off in (offset, np.zeros_like(offset)):
+            m_exp, c_exp = m_ref.copy(), c_ref.copy()
+            m_exp[rows], c_exp[rows] = axes_update(m_ref[rows], c_ref[rows], z, r, off)
+            m2, c2 = m.copy(), c.copy()
+            _update_inplace(m2, c2, rows, z, r, off)
+            assert np.array_equal(m2, m_exp) and np.array_equal(c2, c_exp)
+        # no offset: the Kalman filter, as with a zero one
+        m_none, c_none = axes_update(m_ref[rows], c_ref[rows], z, r)
+        assert np.array_equal(m_none, m_exp[rows]) and np.array_equal(c_none, c_exp[rows])
+
+
+@pytest.mark.parametrize("A", [1, 3, 4])
+def test_steps_equal_the_full_kalman_filter(A):
+    """Predictions and updates over several steps equal kf_predict and kf_update (Joseph form)
+    on the full 2A x 2A matrices ``F = [[I, dt I], [0, I]]``, diagonal ``Q``, ``H = [I 0]``,
+    diagonal ``R``."""
+    rng = np.random.default_rng(10 + A)
+    K = 25
+    mean, cov = random_state(rng, K, A)
+    full = [Gaussian(mean[k].copy(), axes_to_full(cov[k])) for k in range(K)]
+    H = np.eye(A, 2 * A)
+    for dt in (1.0, 2.0, 1.0, -1.0, 4.0):
+        q = rng.uniform(0, 1, (K, 2 * A))
+        mean, cov = axes_predict(mean, cov, dt, q)
+        full = [kf_predict(g, transition(A, dt), np.diag(q[k])) for k, g in enumerate(full)]
+        np.testing.assert_allclose(mean, [g.mean for g in full], rtol=1e-12, atol=1e-9)
+        np.testing.assert_allclose(axes_to_full(cov), [g.cov for g in full], rtol=1e-12,
+                                   atol=1e-9)
+        z = mean[:, :A] + rng.normal(0, 2, (K, A))
+        r = rng.uniform(0.1, 5, (K, A))
+        mean, cov = axes_update(mean, cov, z, r)
+        full = [kf_update(g, z[k], H, np.diag(r[k])) for k, g in enumerate(full)]
+        np.testing.assert_allclose(mean, [g.mean for g in full], rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(axes_to_full(cov), [g.cov for g in full], rtol=1e-9,
+                                   atol=1e-12)
+
+
+def test_compiled_steps_equal_the_full_kalman_filter():
+    """The compiled steps, on the box state (four axes), against the full filter."""
+    rng = np.random.default_rng(3)
+    K, A = 30, 4
+    mean, cov = random_state(rng, K, A)
+    full = [Gaussian(mean[k].copy(), axes_to_full(cov[k])) for k in range(K)]
+    for dt in (1.0, 3.0, 1.0):
+        q = rng.uniform(0, 1, (K, 2 * A))
+        _predict_inplace(mean, cov, dt, q)
+        rows = np.flatnonzero(rng.random(K) < 0.7)
+        z = mean[rows, :A] + rng.normal(0, 2, (len(rows), A))
+        r = rng.uniform(0.1, 5, (len(rows), A))
+        _update_inplace(mean, cov, rows, z, r, np.zeros((len(rows), A)))
+        for k in range(K):
+            full[k] = kf_predict(full[k], transition(A, dt), np.diag(q[k]))
+        for n, k in enumerate(rows):
+            full[k] = kf_update(full[k], z[n], np.eye(A, 2 * A), np.diag(r[n]))
+        np.testing.assert_allclose(mean, [g.mean for g in full], rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(axes_to_full(cov), [g.cov for g in full], rtol=1e-9,
+                                   atol=1e-12)
+
+
+def test_rate_offset_is_motion_the_rate_learns():
+    """A value moved by ``d`` outside the filter and measured where it was moved to: with
+    ``rate_offset = d`` the rate moves as if the value had been measured ``d`` further,
+    the value and the covariance as without it."""
+    mean, cov = np.array([[10.0, 1.0]]), np.array([[[4.0, 1.0, 1.0]]])
+    z, r, d = np.array([[12.0]]), np.array([[4.0]]), np.array([[3.0]])
+    m0, c0 = axes_update(mean, cov, z, r)
+    m1, c1 = axes_update(mean, cov, z, r, d)
+    assert m1[0, 0] == m0[0, 0] and np.array_equal(c1, c0)
+    assert m1[0, 1] == pytest.approx(m0[0, 1] + 1.0 / 8.0 * 3.0)
+
+
+def test_conversions_between_axes_and_full_covariances():
+    rng = np.random.default_rng(0)
+    _, cov = random_state(rng, 6, 4)
+    P = axes_to_full(cov)
+    assert P.shape == (6, 8, 8) and np.array_equal(P, np.swapaxes(P, -1, -2))
+    assert np.all(np.linalg.eigvalsh(P) > 0)
+    assert np.array_equal(full_to_axes(P), cov)
+    assert np.array_equal(full_to_axes(P[0]), cov[0])
+
+
+def test_shapes_are_checked():
+    mean, cov = np.zeros((3, 8)), np.ones((3, 4, 3))
+    with pytest.raises(ValueError, match="mean must have shape"):
+        axes_predict(np.zeros((3, 6)), cov, 1.0, np.zeros((3, 8)))
+    with pytest.raises(ValueError, match="q must have shape"):
+        axes_predict(mean, cov, 1.0, np.zeros((3, 4)))
+    with pytest.raises(ValueError, match="cov must have shape"):
+        axes_update(mean, np.ones((3, 4, 2)), np.zeros((3, 4)), np.ones((3, 4)))
+    with pytest.raises(ValueError, match="r must have shape"):
+        axes_update(mean, cov, np.zeros((3, 4)), np.ones((3, 2)))
+    with pytest.raises(ValueError, match="P must have shape"):
+        full_to_axes(np.zeros((3, 7, 7)))
