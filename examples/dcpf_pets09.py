@@ -67,7 +67,7 @@ def confidence_maps() -> list[ConfidenceMap]:
 
 
 def run(frames, maps, gt, seed=0, **config):
-    tracker = DetectorConfidencePF(rng=seed, **config)
+    tracker = DetectorConfidencePF(rng=seed, frame_rate=7, **config)  # PETS09: 7 frames/s
     rows, snapshot = [], None
     for t, (image, cmap) in enumerate(zip(frames, maps), 1):
         out = tracker.update(image, cmap.detections(DET_THRESHOLD), cmap)

@@ -96,7 +96,7 @@ def crossing_scene(T=60, miss=0.5, seed=0):
 
 def score(scene, **config):
     frames, dets, maps, gt = scene
-    tracker = DetectorConfidencePF(rng=0, max_missed=5, **config)
+    tracker = DetectorConfidencePF(rng=0, frame_rate=10, max_lost=0.55, **config)
     rows = []
     for t, (img, d, m) in enumerate(zip(frames, dets, maps), 1):
         out = tracker.update(img, d, m if tracker.config.gamma > 0 else None)
@@ -158,7 +158,7 @@ def test_track_video_runs_the_particle_filter_on_a_users_confidence(tmp_path):
     calls = iter(maps)
     run = track_video(folder, tmp_path / "out", tracker="dcpf", fps=10,
                       confidence=lambda image: next(calls), gt=tmp_path / "gt.txt",
-                      max_missed=5)
+                      max_lost=0.55)
     assert run.frames == len(frames) and run.tracks >= 2
     assert run.scores.MOTA > 0.6 and run.scores.IDSW == 0
     with pytest.raises(TypeError, match="confidence must be a callable"):
@@ -185,7 +185,7 @@ def test_pets09_clip_terms_of_the_observation_model():
         maps.append(hog(f.image))
 
     def mot(**config):
-        tracker = DetectorConfidencePF(rng=0, **config)
+        tracker = DetectorConfidencePF(rng=0, frame_rate=7, **config)
         rows = []
         for t, (img, m) in enumerate(zip(frames, maps), 1):
             out = tracker.update(img, m.detections(0.5), m)

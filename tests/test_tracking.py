@@ -386,8 +386,8 @@ def test_the_compiled_step_takes_the_noise_of_any_box_motion():
     assert assert_same_tracking(frames, motion=PixelNoise()) > 500
     own, box = BoxTracker(motion=PixelNoise()), BoxTracker()
     for f, d in frames:
-        own.step(d, frame=f)
-        box.step(d, frame=f)
+        own.step(f, d)
+        box.step(f, d)
     assert own.tracks.mean.shape != box.tracks.mean.shape or not np.array_equal(
         own.tracks.mean, box.tracks.mean)
 

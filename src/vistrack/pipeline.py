@@ -423,7 +423,7 @@ def _box_tracker(preset: str) -> Callable[[Context], Tracker]:
 def _dcpf(ctx: Context) -> Tracker:
     from .tracking.dcpf import DetectorConfidencePF
 
-    return DetectorConfidencePF(confidence=ctx.confidence, **ctx.overrides)
+    return DetectorConfidencePF(confidence=ctx.confidence, frame_rate=ctx.fps, **ctx.overrides)
 
 
 def _single(method: str) -> Callable[[Context], Tracker]:

@@ -35,15 +35,18 @@ The weights are normalised and the particles resampled every frame (systematic r
 as CONDENSATION). Setting ``beta``, ``gamma`` or ``eta`` to 0 removes a term: the seed's
 ablation table compares Det, Det+DetConf, Det+Class and all three.
 
-**Track management.** A detection that no target took, scoring at least ``init_score``, and
-overlapping no target's box by more than ``max_overlap`` IoU starts a tentative target; one
-associated in ``confirm`` frames in a row is confirmed, and one missed first is deleted. Of
-two confirmed targets whose boxes overlap by more than ``merge_iou`` for more than
-``merge_frames`` frames in a row, the younger ends (two filters on one person). A
-confirmed target is *supported* in a frame when a detection is associated with it or, with
-the confidence term on, when the mean confidence at its particles is at least
-``min_confidence``; unsupported for ``max_missed`` frames, or with its centre out of the
-image, it ends. A target is reported in the frames where it is supported.
+**Track management** is the shared lifecycle (:class:`~vistrack.tracking.TrackTable`), with
+two rules of the seed's own. A detection that no target took, scoring at least
+``init_score``, and overlapping no target's box by more than ``max_overlap`` IoU starts a
+tentative target; one associated in ``confirm`` frames in a row is confirmed, and one missed
+first is deleted. A confirmed target is *supported* in a frame (an update of the lifecycle)
+when a detection is associated with it or, with the confidence term on, when the mean
+confidence at its particles is at least ``min_confidence``; unsupported for longer than
+``max_lost`` seconds, or with its centre out of the image, it ends. Of two confirmed targets
+whose boxes overlap by more than ``merge_iou`` for more than ``merge_time`` seconds in a
+row, the younger ends (two filters on one person). A target is reported in the frames where
+it is supported. Times are frames over ``frame_rate``; the defaults (1.5 s and 0.5 s) are
+10 and 3 frames at PETS09's 7 frames/s, where they were chosen.
 """
 
 from __future__ import annotations
@@ -53,10 +56,11 @@ from typing import Any, cast
 
 import numpy as np
 
-from ..association import iou
+from ..association import greedy, iou
 from ..filters.particle import resample
 from ..types import Detections, Frame, Tracks
 from .base import frame_image
+from .lifecycle import CONFIRMED, TENTATIVE, TrackTable
 
 __all__ = ["DCPFConfig", "DetectorConfidencePF", "ColourFeatures"]
 
@@ -79,9 +83,9 @@ class DCPFConfig:
     init_score: float = 0.75
     max_overlap: float = 0.3
     merge_iou: float = 0.5
-    merge_frames: int = 3
+    merge_time: float = 0.5
     confirm: int = 2
-    max_missed: int = 10
+    max_lost: float = 1.5
     min_confidence: float = 0.3
     size_rate: float = 0.3
     learning_rate: float = 5.0
@@ -93,9 +97,11 @@ class DCPFConfig:
                 raise ValueError(f"{name} must be >= 0; got {getattr(self, name)}")
         if self.beta + self.gamma + self.eta <= 0:
             raise ValueError("at least one of beta, gamma and eta must be > 0")
-        if self.n_particles < 2 or self.confirm < 1 or self.max_missed < 0:
-            raise ValueError(f"need n_particles >= 2, confirm >= 1 and max_missed >= 0; got "
-                             f"{self.n_particles}, {self.confirm}, {self.max_missed}")
+        if self.n_particles < 2 or self.confirm < 1 or not self.max_lost >= 0 \
+                or not self.merge_time >= 0:
+            raise ValueError(f"need n_particles >= 2, confirm >= 1, max_lost >= 0 and "
+                             f"merge_time >= 0; got {self.n_particles}, {self.confirm}, "
+                             f"{self.max_lost}, {self.merge_time}")
 
 
 class ColourFeatures:
@@ -150,6 +156,8 @@ class DetectorConfidencePF:
         detector-confidence term).
     rng : int, numpy Generator or None
         The particles' randomness (default 0: the same tracks every run).
+    frame_rate : float
+        Frames per second, to turn frames into time (``max_lost``, ``merge_time``).
     **overrides
         Fields of :class:`DCPFConfig`.
 
@@ -161,7 +169,8 @@ class DetectorConfidencePF:
     """
 
     def __init__(self, config: DCPFConfig | None = None, *, confidence: Any = None,
-                 rng: np.random.Generator | int | None = 0, **overrides: Any):
+                 rng: np.random.Generator | int | None = 0, frame_rate: float = 30.0,
+                 **overrides: Any):
         if config is None:
             config = DCPFConfig(**overrides)
         elif overrides:
@@ -169,8 +178,11 @@ class DetectorConfidencePF:
         if confidence is not None and not callable(confidence):
             raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                             f"{type(confidence).__name__}")
+        if not (np.isfinite(frame_rate) and frame_rate > 0):
+            raise ValueError(f"frame_rate must be a finite number > 0; got {frame_rate}")
         self.config = config
         self.confidence = confidence
+        self.frame_rate = float(frame_rate)
         self._rng_seed = rng
         self.reset()
 
@@ -180,16 +192,19 @@ class DetectorConfidencePF:
         config = self.config
         self.rng = np.random.default_rng(self._rng_seed)
         N = config.n_particles
+        # the lifecycle's table (mean: each target's box x, y, w, h), and per target its
+        # particles, size, seconds in a row on an older target, and classifier
+        self.tracks = TrackTable(4, cov_shape=(0,))
         self.particles = np.zeros((0, N, 4))
         self.size = np.zeros((0, 2))               # w, h
-        self.ids = np.zeros(0, np.int64)
-        self.hits = np.zeros(0, np.int64)          # associations in a row (tentative)
-        self.confirmed = np.zeros(0, bool)
-        self.missed = np.zeros(0, np.int64)        # unsupported frames in a row
-        self.overlapped = np.zeros(0, np.int64)    # frames in a row on an older target
+        self.overlapped = np.zeros(0)
         self.weights_clf = np.zeros((0, 0))
-        self.next_id = 1
         self.frame = 0
+
+    @property
+    def ids(self) -> np.ndarray:
+        """The identities of the targets held ``(T,)``."""
+        return self.tracks.ids
 
     def step(self, frame: Frame, detections: Detections | None = None) -> Tracks:
         """Track one frame (:class:`~vistrack.tracking.Tracker`).
@@ -248,6 +263,7 @@ class DetectorConfidencePF:
         as :meth:`step`."""
         cfg = self.config
         self.frame += 1
+        time = self.frame / self.frame_rate
         if cfg.gamma > 0 and confidence is None:
             raise ValueError("the detector-confidence term (gamma > 0) needs the detector's "
                              "confidence: construct with confidence=HOGConfidence() (or "
@@ -282,13 +298,8 @@ class DetectorConfidencePF:
             else:
                 clf = np.full((T, len(det_c)), 0.5)
             S = np.where(gate, clf + cfg.alpha * density, -np.inf)
-            while True:
-                t, d = np.unravel_index(int(np.argmax(S)), S.shape)
-                if not S[t, d] >= cfg.min_score:
-                    break
-                match[t] = d
-                S[t, :] = -np.inf
-                S[:, d] = -np.inf
+            r, c = greedy(-S, S >= cfg.min_score)  # best pair first
+            match[r] = c
 
         # weigh: β I(tr) p_N(p - d*) + γ d_c(p) p_o(tr) + η c_tr(p)
         has = match >= 0
@@ -325,27 +336,29 @@ class DetectorConfidencePF:
             self.size[has] += cfg.size_rate * (det_xywh[match[has], 2:] - self.size[has])
         est = self._boxes(est_c, self.size)
 
-        # support, confirmation, deletion
+        # support, then the lifecycle: a target is updated in the frames where it is supported
+        tab = self.tracks
+        confirmed = tab.state != TENTATIVE
         supported = has.copy()
         if cfg.gamma > 0:
-            supported |= self.confirmed & (conf_mean >= cfg.min_confidence)
-        self.hits = np.where(has, self.hits + 1, 0)
-        self.missed = np.where(supported, 0, self.missed + 1)
-        self.confirmed |= self.hits >= cfg.confirm
+            supported |= confirmed & (conf_mean >= cfg.min_confidence)
+        tab.mean = est.copy()
+        tab.advance(supported, time, cfg.confirm)
+        confirmed = tab.state != TENTATIVE
         inside = (est_c[:, 0] >= 0) & (est_c[:, 0] < W) & (est_c[:, 1] >= 0) & (est_c[:, 1] < H)
-        keep = np.where(self.confirmed, self.missed <= cfg.max_missed, has) & inside
+        keep = ~tab.ended(supported, time, cfg.max_lost) & inside
         # two targets on one person: the younger ends once it has overlapped an older one
-        # for merge_frames frames in a row (people crossing overlap for a few)
+        # for merge_time seconds in a row (people crossing overlap for a few frames)
         covered = np.zeros(T, bool)
         if T > 1:
             xyxy = np.c_[est[:, :2], est[:, :2] + est[:, 2:]]
             ov = np.triu(iou(xyxy, xyxy), 1)       # rows are older: ids grow with the index
-            both = self.confirmed[:, None] & self.confirmed[None, :]
+            both = confirmed[:, None] & confirmed[None, :]
             covered = cast(np.ndarray, ((ov > cfg.merge_iou) & both).any(0))  # (T,) array
-        self.overlapped = np.where(covered, self.overlapped + 1, 0)
-        keep &= self.overlapped <= cfg.merge_frames
-        report = self.confirmed & supported & keep
-        out = Tracks(ids=self.ids[report].copy(),
+        self.overlapped = np.where(covered, self.overlapped + 1 / self.frame_rate, 0.0)
+        keep &= self.overlapped <= cfg.merge_time
+        report = (tab.state == CONFIRMED) & supported & keep
+        out = Tracks(ids=tab.ids[report].copy(),
                      boxes=np.c_[est[report, :2], est[report, :2] + est[report, 2:]],
                      points=None, scores=conf_mean[report] if cfg.gamma > 0
                      else np.ones(int(report.sum())),
@@ -370,15 +383,15 @@ class DetectorConfidencePF:
                 if len(est):
                     exyxy = np.c_[est[:, :2], est[:, :2] + est[:, 2:]]
                     cand = cand[iou(cxyxy, exyxy).max(1) <= cfg.max_overlap]
-                self._start(cand, feats)
+                self._start(cand, feats, time)
         return out
 
     def _select(self, keep: np.ndarray) -> None:
-        for name in ("particles", "size", "ids", "hits", "confirmed", "missed", "overlapped",
-                     "weights_clf"):
+        self.tracks.keep(keep)
+        for name in ("particles", "size", "overlapped", "weights_clf"):
             setattr(self, name, getattr(self, name)[keep])
 
-    def _start(self, boxes: np.ndarray, feats: ColourFeatures | None) -> None:
+    def _start(self, boxes: np.ndarray, feats: ColourFeatures | None, time: float) -> None:
         k, N = len(boxes), self.config.n_particles
         if k == 0:
             return
@@ -391,14 +404,11 @@ class DetectorConfidencePF:
         dim = feats.dim + 1 if feats is not None else 1
         if self.weights_clf.shape[1] != dim:
             self.weights_clf = np.zeros((len(self.ids), dim))
+        self.tracks.add(boxes, np.zeros((k, 0)), time, np.zeros(k, np.int64), np.zeros(k),
+                        confirmed=self.config.confirm <= 1)
         self.particles = np.concatenate([self.particles, parts])
         self.size = np.concatenate([self.size, boxes[:, 2:]])
-        self.ids = np.concatenate([self.ids, np.arange(self.next_id, self.next_id + k)])
-        self.next_id += k
-        self.hits = np.concatenate([self.hits, np.ones(k, np.int64)])
-        self.confirmed = np.concatenate([self.confirmed, np.full(k, self.config.confirm <= 1)])
-        self.missed = np.concatenate([self.missed, np.zeros(k, np.int64)])
-        self.overlapped = np.concatenate([self.overlapped, np.zeros(k, np.int64)])
+        self.overlapped = np.concatenate([self.overlapped, np.zeros(k)])
         self.weights_clf = np.concatenate([self.weights_clf, np.zeros((k, dim))])
         if feats is not None:
             # start each classifier on its first box

@@ -70,10 +70,9 @@ class TrackTable:
                      "scores"):
             setattr(self, name, getattr(self, name)[mask])
 
-    def manage(self, updated: np.ndarray, time: float, confirm_hits: int,
-               max_lost: float) -> np.ndarray:
-        """After a frame's updates: count hits, confirm, lose, delete. Returns the mask of the
-        tracks kept."""
+    def advance(self, updated: np.ndarray, time: float, confirm_hits: int) -> None:
+        """After a frame's updates: count hits, confirm (``confirm_hits`` updates in a row, or
+        a lost track updated again), and lose the confirmed tracks not updated."""
         self.hits = np.where(updated, self.hits + 1, 0)
         self.streak = np.where(updated, self.hits, self.streak)
         self.last_time = np.where(updated, float(time), self.last_time)
@@ -81,8 +80,19 @@ class TrackTable:
             (self.hits >= confirm_hits) | (self.state == LOST))
         self.state[confirm] = CONFIRMED
         self.state[~updated & (self.state == CONFIRMED)] = LOST
-        dead = (~updated & (self.state == TENTATIVE)) | (
+
+    def ended(self, updated: np.ndarray, time: float, max_lost: float) -> np.ndarray:
+        """The tracks to delete after :meth:`advance`: tentative ones not updated, and those
+        lost for longer than ``max_lost`` seconds."""
+        return (~updated & (self.state == TENTATIVE)) | (
             (self.state == LOST) & (time - self.last_time > max_lost))
+
+    def manage(self, updated: np.ndarray, time: float, confirm_hits: int,
+               max_lost: float) -> np.ndarray:
+        """After a frame's updates: count hits, confirm, lose, delete (:meth:`advance`, then
+        :meth:`ended`). Returns the mask of the tracks kept."""
+        self.advance(updated, time, confirm_hits)
+        dead = self.ended(updated, time, max_lost)
         if dead.any():
             self.keep(~dead)
         return ~dead
