@@ -496,8 +496,19 @@ class BoxTracker:
         t.mean[idx], t.cov[idx] = axes_update(t.mean[idx], t.cov[idx], z, self._r[idx], offset)
 
     def score_calibration(self) -> ScoreCalibration | None:
-        """The calibration in use: the fixed one, or what the tracker has learnt so far; None
-        with ``scores="raw"``."""
+        """The calibration in use.
+
+        Returns
+        -------
+        ScoreCalibration or None
+            The fixed one (``calibration``), or what the tracker has learnt from the frames
+            so far; None with ``scores="raw"``.
+
+        Examples
+        --------
+        >>> BoxTracker(scores="raw").score_calibration() is None
+        True
+        """
         if self.config.scores == "raw":
             return None
         if self.calibration is not None:
@@ -506,13 +517,43 @@ class BoxTracker:
         return self.calibrator.calibration()
 
     def confidence(self, scores: Any) -> np.ndarray:
-        """Scores as the thresholds see them: calibrated confidences (by
-        :meth:`score_calibration`), or the raw scores."""
+        """Scores as the thresholds see them.
+
+        Parameters
+        ----------
+        scores : (N,) array_like
+            Raw detection scores.
+
+        Returns
+        -------
+        (N,) ndarray
+            Calibrated confidences in ``[0, 1]`` (by :meth:`score_calibration`), or the raw
+            scores with ``scores="raw"``.
+
+        Examples
+        --------
+        >>> BoxTracker(scores="raw").confidence([0.2, 3.0]).tolist()
+        [0.2, 3.0]
+        """
         cal = self.score_calibration()
         return np.asarray(scores, dtype=np.float64) if cal is None else cal(scores)
 
     def covariances(self) -> np.ndarray:
-        """The full ``(K, 8, 8)`` covariances of the tracks, from the per-axis ones kept."""
+        """The tracks' full covariances, from the per-axis ones kept
+        (:func:`~vistrack.filters.axes.axes_to_full`).
+
+        Returns
+        -------
+        (K, 8, 8) ndarray
+            One per track, state ``[cx, cy, w, h, vcx, vcy, vw, vh]``.
+
+        Examples
+        --------
+        >>> tr = BoxTracker()
+        >>> _ = tr.step(1, Detections.from_xywh([[10, 20, 30, 60]], [0.9]))
+        >>> tr.covariances().shape
+        (1, 8, 8)
+        """
         return axes_to_full(self.tracks.cov)
 
     def _match(self, rows: np.ndarray, cols: np.ndarray, ov: np.ndarray, track_ok: np.ndarray,

@@ -67,8 +67,47 @@ __all__ = ["DCPFConfig", "DetectorConfidencePF", "ColourFeatures"]
 
 @dataclass(frozen=True)
 class DCPFConfig:
-    """Settings of :class:`DetectorConfidencePF` (see the module); ``beta``, ``gamma`` and
-    ``eta`` weigh the detection, detector-confidence and classifier terms."""
+    """Settings of :class:`DetectorConfidencePF` (see the module).
+
+    Attributes
+    ----------
+    beta, gamma, eta : float
+        Weights of the detection, detector-confidence and classifier terms (0 removes one).
+    n_particles : int
+        Particles per target.
+    sigma_pos, sigma_vel : float
+        Per-frame noise of the centre and the velocity, as fractions of the target's height.
+    sigma_det : float
+        Standard deviation of the detection term, as a fraction of the height.
+    alpha : float
+        Weight of the particle density in the association score.
+    gate_heights : float
+        A detection's centre must lie within this many heights of the target's.
+    min_score : float
+        The smallest association score that matches.
+    init_score : float
+        The smallest detection score that starts a target.
+    max_overlap : float
+        A new target must overlap no target by more IoU than this.
+    merge_iou, merge_time : float
+        Two confirmed targets overlapping by more IoU than ``merge_iou`` for more than
+        ``merge_time`` seconds in a row: the younger ends.
+    confirm : int
+        Associations in a row that confirm a target.
+    max_lost : float
+        Seconds a confirmed target may go unsupported before it ends.
+    min_confidence : float
+        The mean confidence at its particles that supports a target without a detection.
+    size_rate : float
+        How fast the target's size follows its detections (exponential smoothing).
+    learning_rate, epochs : float, int
+        The classifier's gradient steps each frame.
+
+    Examples
+    --------
+    >>> DCPFConfig(eta=0.0).max_lost
+    1.5
+    """
 
     beta: float = 1.0
     gamma: float = 1.0
@@ -105,8 +144,26 @@ class DCPFConfig:
 
 
 class ColourFeatures:
-    """Hue-saturation histograms (``bins`` hue × ``bins_s`` saturation) of any number of boxes
-    of one frame, from per-bin integral images of the frame at half size."""
+    """Hue-saturation histograms of any number of boxes of one frame, from per-bin integral
+    images of the frame (each box's histogram is four lookups a bin).
+
+    Parameters
+    ----------
+    image : (H, W, 3) uint8 ndarray
+        The frame, BGR.
+    bins, bins_s : int
+        Hue and saturation bins (``dim = bins × bins_s`` features).
+    scale : float
+        The frame is resized by this before the histograms are counted.
+
+    Examples
+    --------
+    >>> im = np.zeros((40, 60, 3), np.uint8); im[:, 30:] = (0, 0, 255)  # right half red
+    >>> f = ColourFeatures(im)
+    >>> h = f(np.array([[0, 0, 20, 20], [40, 10, 20, 20]]))
+    >>> h.shape, float(h[0] @ h[1])  # Bhattacharyya coefficient: black vs red
+    ((2, 32), 0.0)
+    """
 
     def __init__(self, image: Any, bins: int = 8, bins_s: int = 4, scale: float = 0.5):
         import cv2
@@ -125,9 +182,19 @@ class ColourFeatures:
         self.dim = bins * bins_s
 
     def __call__(self, xywh: np.ndarray) -> np.ndarray:
-        """``(..., dim)`` features of boxes ``(..., 4)`` (x, y, w, h in image pixels): the
-        square roots of their histograms (unit length; dot products are Bhattacharyya
-        coefficients)."""
+        """The features of boxes.
+
+        Parameters
+        ----------
+        xywh : (..., 4) array_like
+            Boxes ``x, y, w, h`` in image pixels.
+
+        Returns
+        -------
+        (..., dim) ndarray
+            The square roots of their normalised histograms (unit length: dot products are
+            Bhattacharyya coefficients).
+        """
         H, W = self.integral.shape[0] - 1, self.integral.shape[1] - 1
         b = np.asarray(xywh, float) * self.scale
         x0 = np.clip(np.round(b[..., 0]), 0, W).astype(int)
