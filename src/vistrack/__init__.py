@@ -7,9 +7,10 @@ The public API is re-exported here; submodules hold the details:
   filters and multiple models (the inference);
 - :mod:`vistrack.simulate` — sample states and measurements from a model;
 - :mod:`vistrack.association` — costs, gates, assignment, PDA and JPDA;
-- :mod:`vistrack.tracking` — track management and the multi-object trackers;
+- :mod:`vistrack.tracking` — the tracker protocol, track management, and every tracker;
 - :mod:`vistrack.io` — MOTChallenge files, video in and out;
-- :mod:`vistrack.frontends` — frames to detections: background models, blobs;
+- :mod:`vistrack.frontends` — frames to detections: background models, blobs, HOG;
+- :mod:`vistrack.pipeline` — one loop, source → detector → tracker → sinks (:func:`run`);
 - :mod:`vistrack.evaluation` — RMSE, NEES, NIS; CLEAR MOT, IDF1, HOTA;
 - :mod:`vistrack.viz` — the seeds' figures.
 
@@ -19,7 +20,7 @@ Names load on first use, so ``import vistrack`` costs little memory.
 import importlib
 from typing import Any
 
-from .types import Detections, Gaussian
+from .types import Detections, Frame, Gaussian, Tracks
 
 # Everything else loads on first use (PEP 562), so that `import vistrack` stays light: numba
 # and scipy, which the filters and trackers need, cost about 100 MB of memory on their own.
@@ -33,6 +34,8 @@ _LAZY = {
         "ConstantAcceleration", "ConstantPosition", "ConstantVelocity", "LinearGaussian",
         "LinearMeasurement", "LinearMotion", "Periodic", "Position")},
     "BoxTracker": "tracking",
+    "Tracker": "tracking",
+    "run": "pipeline",
 }
 _SUBMODULES = ("association", "evaluation", "filters", "frontends", "io", "models", "pipeline",
                "simulate", "tracking", "viz")
@@ -58,6 +61,10 @@ __version__ = "0.1.0"
 __all__ = [
     "BoxTracker",
     "Detections",
+    "Frame",
+    "Tracks",
+    "Tracker",
+    "run",
     "association",
     "filters",
     "frontends",
