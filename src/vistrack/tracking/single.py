@@ -447,8 +447,14 @@ class CamShiftTracker(ColourTracker):
     """OpenCV's CamShift on the colour back-projection of :class:`ColourTracker`.
 
     The back-projection below one half (pixels more likely background than object) is set
-    to 0 first; the box is the bounding box of CamShift's rotated window. Parameters as
-    :class:`ColourTracker` (``scales`` is not used).
+    to 0 first; the box is the bounding box of CamShift's rotated window.
+
+    Parameters
+    ----------
+    bins, rate : int, float
+        As for :class:`ColourTracker`.
+    scales : tuple of float
+        Not used: CamShift sizes its window itself.
 
     References
     ----------
