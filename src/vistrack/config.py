@@ -41,7 +41,21 @@ __all__ = ["OfflineConfig", "TrackConfig", "read_config", "config_toml", "Config
 
 
 class ConfigError(ValueError):
-    """A configuration file that cannot be used; the message names the file and the key."""
+    """A configuration file that cannot be used; the message names the file and the key.
+
+    A ``ValueError``; :func:`read_config` raises it.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "bad.toml"
+    >>> _ = path.write_text('[tracker]\\nhigh = "x"\\n')
+    >>> try:
+    ...     read_config(path)
+    ... except ConfigError as e:
+    ...     print(str(e).split(": ", 1)[1])
+    [tracker] high must be a number; got 'x'
+    """
 
 
 @dataclass(frozen=True)
@@ -65,6 +79,21 @@ class OfflineConfig:
         Join tracks up to ``link_gap`` seconds apart whose boxes, carried across the gap by
         the velocities of their last and first ``link_window`` seconds, overlap by
         ``link_iou`` on average (``link_gap`` 0: never).
+
+    Raises
+    ------
+    ValueError
+        If ``enabled`` is not a bool, a number is negative or not finite, or an IoU is
+        above 1.
+
+    Examples
+    --------
+    >>> OfflineConfig(enabled=True, max_gap=0.5).max_gap
+    0.5
+    >>> OfflineConfig(max_gap=-1)
+    Traceback (most recent call last):
+    ...
+    ValueError: max_gap must be a finite number >= 0; got -1
     """
 
     enabled: bool = False
@@ -94,7 +123,25 @@ _MOTION = ("std_pos", "std_vel", "std_meas", "init_pos", "init_vel", "frame_rate
 class TrackConfig:
     """Everything ``vistrack track`` with a box tracker is set by: the preset's ``name``, the
     tracker's settings, the box motion (None: the front-end's default) and the offline
-    mode's settings."""
+    mode's settings.
+
+    Attributes
+    ----------
+    name : str
+        The preset the settings start from (:data:`vistrack.tracking.TRACKERS`).
+    tracker : BoxTrackerConfig
+        The tracker's settings.
+    motion : BoxMotion or None
+        The box motion; None: the default :class:`~vistrack.models.BoxMotion`.
+    offline : OfflineConfig
+        The offline mode's settings.
+
+    Examples
+    --------
+    >>> cfg = TrackConfig.preset("sort").with_values(tracker={"high": 0.5})
+    >>> cfg.name, cfg.tracker.two_stage, cfg.tracker.high, cfg.motion, cfg.offline.enabled
+    ('sort', False, 0.5, None, False)
+    """
 
     name: str = "bytetrack"
     tracker: BoxTrackerConfig = field(default_factory=BoxTrackerConfig)
@@ -103,14 +150,69 @@ class TrackConfig:
 
     @classmethod
     def preset(cls, name: str = "bytetrack") -> TrackConfig:
-        """The configuration of a preset in :data:`vistrack.tracking.TRACKERS`."""
+        """The configuration of a preset in :data:`vistrack.tracking.TRACKERS`.
+
+        Parameters
+        ----------
+        name : str
+            The preset's name.
+
+        Returns
+        -------
+        TrackConfig
+            The preset's tracker settings, no motion (the default) and the offline mode
+            off.
+
+        Raises
+        ------
+        ValueError
+            If ``name`` is not a preset.
+
+        Examples
+        --------
+        >>> cfg = TrackConfig.preset("bytetrack")
+        >>> cfg.name, cfg.tracker.two_stage
+        ('bytetrack', True)
+        """
         if name not in TRACKERS:
             raise ValueError(f"tracker must be one of {sorted(TRACKERS)}; got {name!r}")
         return cls(name=name, tracker=TRACKERS[name])
 
     def with_values(self, tracker: dict | None = None, motion: dict | None = None,
                     offline: dict | None = None) -> TrackConfig:
-        """A copy with some values changed (None values are left alone)."""
+        """A copy with some values changed (None values are left alone).
+
+        Parameters
+        ----------
+        tracker : dict, optional
+            Fields of :class:`~vistrack.tracking.BoxTrackerConfig`.
+        motion : dict, optional
+            Arguments of :class:`~vistrack.models.BoxMotion` (``std_pos``, ``std_vel``,
+            ``std_meas``, ``init_pos``, ``init_vel``, ``frame_rate``); the others keep the
+            current motion's values (or the default's).
+        offline : dict, optional
+            Fields of :class:`OfflineConfig`.
+
+        Returns
+        -------
+        TrackConfig
+            The new configuration.
+
+        Raises
+        ------
+        ValueError
+            If a value is invalid.
+        TypeError
+            If a key names no field.
+
+        Examples
+        --------
+        >>> cfg = TrackConfig.preset("sort").with_values(
+        ...     tracker={"high": 0.5, "low": None}, motion={"std_pos": 0.1},
+        ...     offline={"enabled": True})
+        >>> cfg.tracker.high, cfg.motion.std_pos, cfg.motion.init_pos, cfg.offline.enabled
+        (0.5, 0.1, 2.0, True)
+        """
         def keep(d: dict | None) -> dict:
             return {k: v for k, v in (d or {}).items() if v is not None}
 
@@ -152,6 +254,19 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
     """Read a configuration file (see the module) over ``base`` (default: the preset its
     ``[tracker] name`` gives, ``bytetrack`` without one).
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML file.
+    base : TrackConfig, optional
+        What the file's values are put over. When the file names another preset, that
+        preset's tracker settings are the base, with ``base``'s motion and offline settings.
+
+    Returns
+    -------
+    TrackConfig
+        The configuration (the ``[derived]`` table is ignored).
+
     Raises
     ------
     FileNotFoundError
@@ -159,6 +274,16 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
     ConfigError
         For a file that is not TOML, an unknown table or key, or a value of the wrong kind
         or out of range, naming the file and the key.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "track.toml"
+    >>> _ = path.write_text('[tracker]\\nname = "sort"\\nhigh = 0.5\\n'
+    ...                     '[offline]\\nenabled = true\\n')
+    >>> cfg = read_config(path)
+    >>> cfg.name, cfg.tracker.high, cfg.offline.enabled
+    ('sort', 0.5, True)
     """
     path = Path(path)
     try:
@@ -235,7 +360,34 @@ def _value(v: Any) -> str:
 
 def config_toml(cfg: TrackConfig, derived: dict | None = None) -> str:
     """The configuration as TOML (see the module), with ``derived`` values in a last
-    ``[derived]`` table that :func:`read_config` ignores."""
+    ``[derived]`` table that :func:`read_config` ignores.
+
+    Parameters
+    ----------
+    cfg : TrackConfig
+        The configuration; its ``[motion]`` table is written only when it has a motion.
+    derived : dict, optional
+        Values a run derived (:func:`vistrack.pipeline.derived_values`).
+
+    Returns
+    -------
+    str
+        The TOML text; floats are written exactly, so :func:`read_config` gives back the
+        same values.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> cfg = TrackConfig.preset("sort").with_values(motion={"std_pos": 0.1})
+    >>> text = config_toml(cfg, {"frame_rate": 30.0})
+    >>> text.splitlines()[2:4], "[derived]" in text
+    (['[tracker]', 'name = "sort"'], True)
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "track.toml"
+    >>> _ = path.write_text(text)
+    >>> back = read_config(path)
+    >>> back.tracker == cfg.tracker, back.motion.std_pos, back.offline == cfg.offline
+    (True, 0.1, True)
+    """
     lines = ["# vistrack track configuration: vistrack track ... --config FILE",
              "", "[tracker]", f"name = {_value(cfg.name)}"]
     lines += [f"{k} = {_value(v)}" for k, v in asdict(cfg.tracker).items()]

@@ -44,7 +44,34 @@ __all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "
 @dataclass(frozen=True)
 class TrackRun:
     """What :func:`track_sequence` did: the results file, frames, tracks, tracker time, the
-    configuration used and the values derived from the data (:func:`derived_values`)."""
+    configuration used and the values derived from the data (:func:`derived_values`).
+
+    Attributes
+    ----------
+    out : Path
+        The results file written.
+    frames : int
+        Frames in the sequence.
+    detections : int
+        Rows of the detections file.
+    rows : int
+        Rows written.
+    tracks : int
+        Distinct identities written.
+    seconds : float
+        Seconds spent tracking (with the offline mode's calibration and smoothing).
+    config : TrackConfig or None
+        The configuration used (its motion filled in).
+    derived : dict or None
+        :func:`derived_values` of the tracker.
+
+    Examples
+    --------
+    >>> run = TrackRun(Path("out.txt"), frames=100, detections=900, rows=800, tracks=12,
+    ...                seconds=0.5)
+    >>> run.fps
+    200.0
+    """
 
     out: Path
     frames: int
@@ -57,6 +84,13 @@ class TrackRun:
 
     @property
     def fps(self) -> float:
+        """Frames tracked per second of tracking.
+
+        Examples
+        --------
+        >>> TrackRun(Path("out.txt"), 100, 900, 800, 12, 0.25).fps
+        400.0
+        """
         return self.frames / max(self.seconds, 1e-12)
 
 
@@ -79,7 +113,40 @@ def resolve_config(config: TrackConfig | str | None = None, *, tracker: str | No
     """The configuration of a run: ``config`` (a :class:`~vistrack.config.TrackConfig` or a
     preset's name; default the ``tracker`` preset, else ``bytetrack``), with ``offline`` and
     ``overrides`` (fields of the tracker's or the offline mode's settings, or ``motion``, a
-    :class:`~vistrack.models.BoxMotion`) put over it."""
+    :class:`~vistrack.models.BoxMotion`) put over it.
+
+    Parameters
+    ----------
+    config : TrackConfig, str or None
+        The configuration, or a preset's name in :data:`vistrack.tracking.TRACKERS`.
+    tracker : str, optional
+        A preset's name; it must agree with ``config`` when both are given.
+    offline : bool, optional
+        Turn the offline mode on or off (None: as ``config`` has it).
+    **overrides
+        Fields of :class:`~vistrack.tracking.BoxTrackerConfig` or
+        :class:`~vistrack.config.OfflineConfig`, or ``motion``; None values are left alone.
+
+    Returns
+    -------
+    TrackConfig
+        The configuration of the run.
+
+    Raises
+    ------
+    ValueError
+        If ``tracker`` and ``config`` disagree, a preset is unknown, or a value is invalid.
+    TypeError
+        If an override names no field.
+
+    Examples
+    --------
+    >>> cfg = resolve_config("sort", high=0.5, max_gap=2.0)
+    >>> cfg.name, cfg.tracker.high, cfg.offline.max_gap, cfg.offline.enabled
+    ('sort', 0.5, 2.0, False)
+    >>> resolve_config(offline=True).offline.enabled
+    True
+    """
     if isinstance(config, str) or config is None:
         if isinstance(config, str) and tracker is not None and tracker != config:
             raise ValueError(f"tracker {tracker!r} and config {config!r} disagree")
@@ -100,7 +167,28 @@ def derived_values(trk: BoxTracker) -> dict:
     """What a box tracker derived from the data it has tracked: its frame rate, its motion's
     per-frame noise at that rate, and with calibrated scores the raw score at which each
     threshold's confidence is reached (:meth:`ScoreCalibration.score_at`), with what the
-    calibration was fitted to."""
+    calibration was fitted to.
+
+    Parameters
+    ----------
+    trk : BoxTracker
+        A box tracker (that has tracked a sequence, for the calibration's values).
+
+    Returns
+    -------
+    dict
+        ``frame_rate``, ``image_size`` (when the tracker has one), ``std_pos_per_frame`` and
+        ``std_vel_per_frame``; with calibrated scores also ``calibration`` (``"whole file"``
+        or ``"online, at the last frame"``), ``calibration_outcomes``,
+        ``calibration_top_persistence`` (when fitted to outcomes) and ``high_score``,
+        ``low_score`` and ``new_track_score``.
+
+    Examples
+    --------
+    >>> trk = BoxTracker("sort", frame_rate=25.0, scores="raw")
+    >>> sorted(derived_values(trk))
+    ['frame_rate', 'std_pos_per_frame', 'std_vel_per_frame']
+    """
     c, m = trk.config, trk.motion
     out: dict = {"frame_rate": trk.frame_rate}
     if trk.image_size is not None:
@@ -126,7 +214,22 @@ FrameDetector = Callable[[Frame], Detections]
 @dataclass(frozen=True)
 class LoopStats:
     """What :func:`run` did: the frames it went through, and the seconds spent in each stage
-    (``decode``: waiting for the source, ``frontend``, ``tracker``, ``write``: the sinks)."""
+    (``decode``: waiting for the source, ``frontend``, ``tracker``, ``write``: the sinks).
+
+    Attributes
+    ----------
+    frames : int
+        Frames the loop went through.
+    seconds : dict of str to float
+        Seconds in each stage: ``decode``, ``frontend``, ``tracker`` and ``write``.
+
+    Examples
+    --------
+    >>> from vistrack.tracking import BoxTracker
+    >>> stats = run([Frame(1, 0.0), Frame(2, 0.04)], None, BoxTracker())
+    >>> stats.frames, sorted(stats.seconds)
+    (2, ['decode', 'frontend', 'tracker', 'write'])
+    """
 
     frames: int
     seconds: dict
@@ -137,6 +240,21 @@ def as_detector(detector: Any) -> FrameDetector | None:
     Detections`` (:class:`~vistrack.frontends.Detector`) is called on the frame's image, a
     callable ``frame -> Detections`` is used as it is, and None stays None (the tracker
     finds its own objects).
+
+    Parameters
+    ----------
+    detector : detector, callable or None
+        An object with ``detect(image)``, a callable of the frame, or None.
+
+    Returns
+    -------
+    callable or None
+        ``frame -> Detections``, or None.
+
+    Raises
+    ------
+    TypeError
+        If ``detector`` is none of these.
 
     Examples
     --------
@@ -244,6 +362,13 @@ class Registry(dict[str, T], Generic[T]):
     """Parts by name: a ``dict`` whose missing names raise a ``ValueError`` that lists the
     valid ones.
 
+    Parameters
+    ----------
+    kind : str
+        What the parts are, for the message (``"frontend"``, ``"tracker"``, ``"sink"``).
+    items : dict of str to part
+        The parts by name.
+
     Examples
     --------
     >>> r = Registry("colour", {"red": 1, "blue": 2})
@@ -302,6 +427,13 @@ class Context:
         ConfidenceMap``; default :class:`~vistrack.frontends.HOGConfidence`).
     resolved : TrackConfig or None
         The configuration a box tracker was made with (set by its maker).
+
+    Examples
+    --------
+    >>> ctx = Context(fps=25.0, overrides={"high": 0.5})
+    >>> tracker, frontend = make_tracker("sort", ctx)
+    >>> frontend, ctx.resolved.name, ctx.resolved.tracker.high
+    ('bgsub', 'sort', 0.5)
     """
 
     fps: float
@@ -315,7 +447,20 @@ class Context:
 
     @property
     def confidence(self) -> Callable[[Any], Any]:
-        """The run's detector confidence (one per run, once per image)."""
+        """The run's detector confidence (one per run, once per image).
+
+        ``options["confidence"]``, or a :class:`~vistrack.frontends.HOGConfidence`, made at
+        the first call and kept; it evaluates each image once, however many parts ask.
+
+        Examples
+        --------
+        >>> calls = []
+        >>> ctx = Context(fps=25.0, options={"confidence": lambda image: calls.append(1)})
+        >>> image = np.zeros((4, 4), np.uint8)
+        >>> _ = ctx.confidence(image), ctx.confidence(image)
+        >>> len(calls)
+        1
+        """
         if self._confidence is None:
             conf = self.options.get("confidence")
             if conf is None:
@@ -473,7 +618,40 @@ callable of yours that returns a :class:`~vistrack.tracking.Tracker`."""
 def make_tracker(tracker: Any, ctx: Context) -> tuple[Tracker, str]:
     """A tracker and its default front-end: ``tracker`` by name in :data:`TRACKERS`, as
     ``"module:callable"`` (the callable is called with no arguments), or a tracker object
-    (any :class:`~vistrack.tracking.Tracker`, whose default front-end is ``bgsub``)."""
+    (any :class:`~vistrack.tracking.Tracker`, whose default front-end is ``bgsub``).
+
+    Parameters
+    ----------
+    tracker : str or Tracker
+        A name in :data:`TRACKERS`, ``"module:callable"``, or a tracker.
+    ctx : Context
+        What a named tracker is made from (its ``overrides`` are the tracker's settings).
+
+    Returns
+    -------
+    tracker : Tracker
+        The tracker.
+    frontend : str
+        The name of its default front-end in :data:`FRONTENDS`.
+
+    Raises
+    ------
+    ValueError
+        If the name is not in :data:`TRACKERS` (the message lists them), the callable
+        cannot be imported, a single-object tracker is given settings, or a setting's value
+        is invalid.
+    TypeError
+        If ``tracker`` (or what the callable made) has no ``step``, or a setting names no
+        field of the tracker's configuration.
+
+    Examples
+    --------
+    >>> tracker, frontend = make_tracker("dcpf", Context(fps=25.0))
+    >>> type(tracker).__name__, frontend
+    ('DetectorConfidencePF', 'confidence')
+    >>> type(make_tracker("single:colour", Context(fps=25.0))[0]).__name__
+    'ColourTracker'
+    """
     if not isinstance(tracker, str):
         if not callable(getattr(tracker, "step", None)):
             raise TypeError(f"tracker must be a name in {sorted(TRACKERS)}, 'module:callable' "
@@ -532,11 +710,11 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
 
     Parameters
     ----------
-    seq_dir
+    seq_dir : str or Path
         A folder with ``seqinfo.ini`` and ``det/det.txt``.
-    out
+    out : str or Path
         The results file to write (not overwritten unless ``force``).
-    detections
+    detections : str or Path, optional
         Another detections file (default ``seq_dir/det/det.txt``).
     config, tracker, offline, overrides
         The configuration (:func:`resolve_config`): a
@@ -546,6 +724,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         dropped, tracks followed back through the detections left over and joined across
         gaps (:func:`vistrack.tracking.smooth`), and calibrated scores are calibrated on the
         whole file.
+    force : bool
+        Overwrite ``out``.
     progress
         A stream for a progress bar (the command line passes stderr on a terminal), or None.
 
@@ -554,6 +734,35 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     TrackRun
         The file written, counts, the tracker's seconds, the configuration and the values
         derived from the data.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``seqinfo.ini`` or the detections file does not exist.
+    FileExistsError
+        If ``out`` exists and ``force`` is False.
+    ValueError
+        If the detections run past the sequence's last frame, or the configuration is
+        invalid.
+    MOTFormatError
+        If a file is malformed.
+
+    Examples
+    --------
+    A sequence of five frames with one detection each:
+
+    >>> import tempfile
+    >>> seq = Path(tempfile.mkdtemp())
+    >>> _ = (seq / "seqinfo.ini").write_text("[Sequence]\\nname=demo\\nframeRate=10\\n"
+    ...                                      "seqLength=5\\nimWidth=320\\nimHeight=240\\n")
+    >>> (seq / "det").mkdir()
+    >>> _ = (seq / "det" / "det.txt").write_text(
+    ...     "".join(f"{f},-1,{10 + 5 * f},20,30,60,0.9\\n" for f in range(1, 6)))
+    >>> result = track_sequence(seq, seq / "tracks.txt")
+    >>> result.frames, result.rows, result.tracks, result.config.name
+    (5, 5, 1, 'bytetrack')
+    >>> (seq / "tracks.txt").read_text().splitlines()[0]
+    '1,1,15.00,20.00,30.00,60.00,0.9,-1,-1,-1'
     """
     cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
     seq_dir = Path(seq_dir)
@@ -606,7 +815,43 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
                    benchmark: str = "auto") -> dict[str, MOTCounts]:
     """Score ``(name, gt, results, seqinfo-or-None)`` pairs; adds ``"COMBINED"`` when there are
-    several."""
+    several.
+
+    Parameters
+    ----------
+    pairs : list of (str, Path, Path, Path or None)
+        Each sequence's name, ground-truth file, results file and ``seqinfo.ini`` (which
+        gives the number of frames; None: the files' last frame).
+    benchmark : {"auto", "MOT15", "MOT16", "MOT17", "MOT20"}
+        The ground truth's preprocessing, passed to
+        :func:`~vistrack.evaluation.evaluate_mot`.
+
+    Returns
+    -------
+    dict of str to MOTCounts
+        The counts of each sequence by name, and ``"COMBINED"``, their sum, when there are
+        several.
+
+    Raises
+    ------
+    FileNotFoundError
+        If a file does not exist.
+    MOTFormatError
+        If a file is malformed.
+    ValueError
+        If ``benchmark`` is not one of the names, or a file's rows go past the sequence.
+
+    Examples
+    --------
+    Results that are the ground truth itself:
+
+    >>> import tempfile
+    >>> gt = Path(tempfile.mkdtemp()) / "gt.txt"
+    >>> _ = write_mot(gt, [1, 2, 3], [1, 1, 1], [[10, 20, 30, 60]] * 3)
+    >>> scores = evaluate_files([("a", gt, gt, None), ("b", gt, gt, None)])
+    >>> sorted(scores), scores["COMBINED"].TP, scores["a"].FN
+    (['COMBINED', 'a', 'b'], 6, 0)
+    """
     out: dict[str, MOTCounts] = {}
     for name, gt, pred, info in pairs:
         n = read_seqinfo(info).seq_length if info is not None else None
@@ -622,7 +867,36 @@ class VideoRun:
     """What :func:`track_video` wrote and measured: the output files, frames, tracks, the
     seconds spent in each stage (``decode``, ``frontend``, ``tracker``, ``write``), the
     scores against ground truth (None without it), and for a box tracker the configuration
-    used and the values derived from the data."""
+    used and the values derived from the data.
+
+    Attributes
+    ----------
+    out_dir : Path
+        The output folder.
+    files : dict of str to Path
+        The file of each sink written (:data:`SINKS`).
+    frames : int
+        Frames tracked.
+    rows : int
+        Rows of tracks written.
+    tracks : int
+        Distinct identities.
+    seconds : dict of str to float
+        Seconds in each stage (:class:`LoopStats`).
+    scores : MOTCounts or None
+        The scores against the ground truth.
+    config : TrackConfig or None
+        A box tracker's configuration.
+    derived : dict or None
+        :func:`derived_values` of a box tracker.
+
+    Examples
+    --------
+    >>> run = VideoRun(Path("out"), {}, 100, 800, 12, {"decode": 0.5, "frontend": 1.0,
+    ...                "tracker": 0.5, "write": 3.0}, None)
+    >>> run.fps
+    50.0
+    """
 
     out_dir: Path
     files: dict
@@ -636,7 +910,14 @@ class VideoRun:
 
     @property
     def fps(self) -> float:
-        """Frames per second of decode, front-end and tracker together."""
+        """Frames per second of decode, front-end and tracker together.
+
+        Examples
+        --------
+        >>> VideoRun(Path("out"), {}, 10, 0, 0, {"decode": 0.1, "tracker": 0.1,
+        ...          "write": 5.0}, None).fps
+        50.0
+        """
         s = sum(v for k, v in self.seconds.items() if k != "write")
         return self.frames / max(s, 1e-12)
 
@@ -657,41 +938,83 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
 
     Parameters
     ----------
-    frontend
+    video : str or Path
+        A video file, an image folder or a MOTChallenge sequence folder.
+    out_dir : str or Path
+        The output folder (made if needed; its files are not overwritten unless ``force``).
+    frontend : str or detector, optional
         A name in :data:`FRONTENDS`: ``"bgsub"`` (the seeds' background model, then blobs),
         ``"hog"`` (OpenCV's people detector), ``"confidence"`` (the peaks of the detector's
         confidence map above ``det_threshold``); ``"detections:FILE"`` (a MOTChallenge
         detections file); or a detector of your own: any object with ``detect(image) ->
         Detections`` (:class:`vistrack.frontends.detectors.Detector`). Default: the
         tracker's (``bgsub``; ``confidence`` for ``dcpf``).
-    tracker
+    tracker : str or Tracker
         A name in :data:`TRACKERS`: a box tracker's preset (``"bytetrack"``, ``"sort"``;
         ``overrides`` are fields of its configuration), ``"dcpf"`` (the detector-confidence
         particle filter; ``overrides`` are fields of its
         :class:`~vistrack.tracking.dcpf.DCPFConfig`), ``"single:METHOD"`` (one object,
         from the first frame's most confident detection); ``"module:callable"``; or any
         tracker object (:class:`~vistrack.tracking.Tracker`).
-    confidence, det_threshold
+    gt : str or Path, optional
+        A MOTChallenge ground-truth file, scored over the frames tracked.
+    confidence, det_threshold : callable, float
         The detector's continuous confidence, a callable ``image -> ConfidenceMap`` (default
         :class:`vistrack.frontends.detectors.HOGConfidence`), for ``dcpf`` and the
         ``confidence`` front-end, and the SVM margin above which its peaks are detections.
-    fps
+    fps : float, optional
         The true frame rate, when the container's header is wrong.
-    background, min_area, n_init
+    background, min_area, n_init : str, float, int
         For ``bgsub``: the background model's name, the smallest blob in pixels, and the
         frames whose median starts the model. A background model needs a still camera, so
         with ``bgsub`` the box tracker's ``camera_motion`` is off unless passed.
-    stop
+    stop : int, optional
         The last frame to track (default: all).
-    config
+    annotate : bool
+        Also write ``annotated.mp4``.
+    force : bool
+        Overwrite the output files.
+    progress
+        A stream for a progress bar, or None.
+    config : TrackConfig, optional
         The whole configuration of a box tracker (:class:`~vistrack.config.TrackConfig`), used
         as it is: the ``bgsub`` front-end's default (no camera motion) is not put over it.
         ``overrides`` then change its tracker's settings.
+
+    **overrides
+        Settings of the tracker (fields of its configuration).
 
     Returns
     -------
     VideoRun
         The files written, counts, seconds per stage and the scores.
+
+    Raises
+    ------
+    FileExistsError
+        If an output file exists and ``force`` is False.
+    FileNotFoundError
+        If the video, the ground truth or a detections file does not exist.
+    ValueError
+        If the video has no frames to track, ``config`` goes with a tracker that is not a
+        box tracker, or a name or a setting is invalid.
+    TypeError
+        If ``confidence`` is not callable, or the tracker or front-end is not one.
+
+    Examples
+    --------
+    Five frames of an image folder, with their detections from a MOTChallenge file:
+
+    >>> import tempfile, cv2
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> for k in range(5):
+    ...     _ = cv2.imwrite(str(folder / f"{k + 1:06d}.png"), np.zeros((60, 80, 3), np.uint8))
+    >>> dets = folder / "det.txt"
+    >>> _ = dets.write_text("".join(f"{f},-1,{5 + 5 * f},20,20,20,0.9\\n" for f in range(1, 6)))
+    >>> result = track_video(folder, folder / "out", frontend=f"detections:{dets}",
+    ...                      annotate=False)
+    >>> result.frames, result.rows, result.tracks, sorted(result.files)
+    (5, 5, 1, ['csv', 'plot', 'tracks'])
     """
     from .io.video import VideoReader
 
@@ -750,7 +1073,24 @@ def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
 class SingleRun:
     """What :func:`track_one` did: the boxes file, the boxes ``(T, 4)``, the tracker's
     seconds, and the scores against ground truth (``success``, ``auc``, ``precision``; None
-    without it)."""
+    without it).
+
+    Attributes
+    ----------
+    out : Path
+        The boxes file written.
+    boxes : (T, 4) ndarray
+        The box ``x, y, w, h`` in each frame (the first is ``init``).
+    seconds : float
+        Seconds spent in the tracker.
+    scores : dict of str to float or None
+        ``success``, ``auc`` and ``precision`` against the ground truth.
+
+    Examples
+    --------
+    >>> SingleRun(Path("boxes.txt"), np.zeros((11, 4)), 0.5, None).fps
+    20.0
+    """
 
     out: Path
     boxes: np.ndarray
@@ -759,6 +1099,14 @@ class SingleRun:
 
     @property
     def fps(self) -> float:
+        """Frames followed per second of tracking (the first frame, where the tracker
+        starts, not counted).
+
+        Examples
+        --------
+        >>> SingleRun(Path("boxes.txt"), np.zeros((5, 4)), 0.1, None).fps
+        40.0
+        """
         return (len(self.boxes) - 1) / max(self.seconds, 1e-12)
 
 
@@ -772,6 +1120,52 @@ def track_one(source: str | Path, init: Any, out: str | Path, *, method: str = "
     file (OTB ``groundtruth_rect.txt``, VOT ``groundtruth.txt`` or a boxes file) to score
     against. The loop is :func:`run`'s: the first frame's detection is ``init``, which starts
     the tracker (:class:`~vistrack.tracking.SingleObjectTracker`).
+
+    Parameters
+    ----------
+    source : str or Path
+        A video file or an image folder.
+    init : (4,) array_like
+        The object's box ``x, y, w, h`` in the first frame.
+    out : str or Path
+        The boxes file to write (not overwritten unless ``force``).
+    method : str
+        A name in :data:`vistrack.tracking.single.METHODS`.
+    gt : str or Path, optional
+        A ground-truth file, with a box for every frame tracked.
+    force : bool
+        Overwrite ``out``.
+    progress
+        A stream for a progress bar, or None.
+
+    Returns
+    -------
+    SingleRun
+        The file written, the boxes, the tracker's seconds and the scores.
+
+    Raises
+    ------
+    FileExistsError
+        If ``out`` exists and ``force`` is False.
+    ValueError
+        If ``method`` is unknown, ``init`` is not a box, or ``gt`` has fewer boxes than
+        frames.
+
+    Examples
+    --------
+    A red square moving 5 pixels a frame over green:
+
+    >>> import tempfile, cv2
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> for k in range(4):
+    ...     im = np.full((60, 80, 3), (40, 120, 40), np.uint8)
+    ...     im[20:40, 10 + 5 * k:30 + 5 * k] = (0, 0, 255)
+    ...     _ = cv2.imwrite(str(folder / f"{k + 1:06d}.png"), im)
+    >>> result = track_one(folder, [10, 20, 20, 20], folder / "boxes.txt", method="wsl")
+    >>> result.boxes[:, 0].round().tolist()
+    [10.0, 15.0, 20.0, 25.0]
+    >>> (folder / "boxes.txt").read_text().splitlines()[1]
+    '2,15.00,20.00,20.00,20.00'
     """
     from ._validate import as_box
     from .evaluation.single import precision, read_boxes, success_curve, success_rate

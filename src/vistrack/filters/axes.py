@@ -168,6 +168,17 @@ def axes_to_full(cov: Any) -> np.ndarray:
     """Per-axis covariances ``(..., A, 3)`` (``pp, pv, vv`` of each value and its rate) as full
     ``(..., 2A, 2A)`` ones, in the order of the state (the ``A`` values, then their rates).
 
+    Parameters
+    ----------
+    cov : (..., A, 3) array_like
+        Per-axis covariances ``[pp, pv, vv]``.
+
+    Returns
+    -------
+    (..., 2A, 2A) ndarray
+        The full covariances: ``P[a, a] = pp``, ``P[a, A + a] = P[A + a, a] = pv`` and
+        ``P[A + a, A + a] = vv`` for each axis ``a``, zero across axes.
+
     Examples
     --------
     >>> axes_to_full([[1.0, 0.5, 2.0]]).tolist()
@@ -185,6 +196,21 @@ def axes_to_full(cov: Any) -> np.ndarray:
 def full_to_axes(P: Any) -> np.ndarray:
     """Full ``(..., 2A, 2A)`` covariances as per-axis ones ``(..., A, 3)``: the inverse of
     :func:`axes_to_full` for covariances with no terms across axes (any are dropped).
+
+    Parameters
+    ----------
+    P : (..., 2A, 2A) array_like
+        Full covariances, in the order of the state (the ``A`` values, then their rates).
+
+    Returns
+    -------
+    (..., A, 3) ndarray
+        ``[P[a, a], P[a, A + a], P[A + a, A + a]]`` for each axis ``a``.
+
+    Raises
+    ------
+    ValueError
+        If ``P`` is not a stack of square matrices of even size.
 
     Examples
     --------

@@ -192,7 +192,39 @@ class _SigmaPoints:
         raise NotImplementedError
 
     def points_one(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
-        """Sigma points of one Gaussian, compiled: ``(2n + 1, n)``."""
+        r"""Sigma points of one Gaussian, by a compiled kernel.
+
+        The same points as :meth:`points`: :math:`\chi_0 = x`, then
+        :math:`x + (\sqrt{(n + \lambda) P})_i` for each column ``i`` of the Cholesky factor,
+        then :math:`x - (\sqrt{(n + \lambda) P})_i`.
+
+        Parameters
+        ----------
+        x : (n,) ndarray
+            Mean.
+        P : (n, n) ndarray
+            Covariance, positive definite.
+
+        Returns
+        -------
+        (2n + 1, n) ndarray
+            The points, one a row.
+
+        Raises
+        ------
+        ValueError
+            If ``P`` is not positive definite, or the points' parameters give
+            :math:`n + \lambda \le 0`.
+
+        Examples
+        --------
+        >>> JulierSigmaPoints(kappa=1.0).points_one(np.zeros(2), np.eye(2)).round(3)
+        array([[ 0.   ,  0.   ],
+               [ 1.732,  0.   ],
+               [ 0.   ,  1.732],
+               [-1.732,  0.   ],
+               [ 0.   , -1.732]])
+        """
         n = x.shape[0]
         out = np.empty((2 * n + 1, n))
         if not _points_one(x, P, float(n + self._lam(n)), out):
@@ -200,7 +232,35 @@ class _SigmaPoints:
         return out
 
     def points(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
-        """Sigma points of a batch ``x (..., n)``, ``P (..., n, n)``: ``(..., 2n + 1, n)``."""
+        r"""Sigma points of a batch of Gaussians.
+
+        :math:`\chi_0 = x`, then :math:`x + (\sqrt{(n + \lambda) P})_i` for each column ``i``
+        of the Cholesky factor, then :math:`x - (\sqrt{(n + \lambda) P})_i`.
+
+        Parameters
+        ----------
+        x : (..., n) ndarray
+            Means; the leading dimensions index the batch.
+        P : (..., n, n) ndarray
+            Covariances, positive definite.
+
+        Returns
+        -------
+        (..., 2n + 1, n) ndarray
+            The points of each Gaussian, one a row.
+
+        Raises
+        ------
+        ValueError
+            If a covariance is not positive definite, or the points' parameters give
+            :math:`n + \lambda \le 0`.
+
+        Examples
+        --------
+        >>> pts = MerweScaledSigmaPoints(alpha=0.5).points(np.zeros((3, 2)), np.eye(2))
+        >>> pts.shape, pts[0, :, 0].round(3).tolist()
+        ((3, 5, 2), [0.0, 0.707, 0.0, -0.707, 0.0])
+        """
         n = x.shape[-1]
         L = _sqrt(P, n + self._lam(n))
         Lt = np.swapaxes(L, -1, -2)  # row i = column i of L
@@ -209,8 +269,51 @@ class _SigmaPoints:
 
 
 class MerweScaledSigmaPoints(_SigmaPoints):
-    """Van der Merwe's scaled sigma points: ``2n + 1`` points with parameters α (spread, small
-    positive), β (2 is optimal for Gaussians) and κ (usually 0 or 3 - n)."""
+    r"""Van der Merwe's scaled sigma points: ``2n + 1`` points with parameters α (spread, small
+    positive), β (2 is optimal for Gaussians) and κ (usually 0 or 3 - n).
+
+    Parameters
+    ----------
+    alpha : float
+        Spread of the points around the mean, > 0.
+    beta : float
+        Prior knowledge of the distribution, added to the mean's covariance weight (2 is
+        optimal for Gaussians).
+    kappa : float
+        Secondary scaling.
+
+    Raises
+    ------
+    ValueError
+        If ``alpha`` is not > 0 (and, when points or weights are asked for a state size
+        ``n``, if :math:`\alpha^2 (n + \kappa) \le 0`).
+
+    Notes
+    -----
+    For a state of size ``n``,
+
+    .. math::
+
+        \lambda = \alpha^2 (n + \kappa) - n, \qquad
+        W^m_0 = \frac{\lambda}{n + \lambda}, \qquad
+        W^c_0 = W^m_0 + 1 - \alpha^2 + \beta, \qquad
+        W^m_i = W^c_i = \frac{1}{2 (n + \lambda)} \quad (i = 1 \dots 2n),
+
+    and the points are :math:`x` and :math:`x \pm (\sqrt{(n + \lambda) P})_i`.
+
+    References
+    ----------
+    .. [1] E. A. Wan and R. van der Merwe, "The unscented Kalman filter for nonlinear
+       estimation", *Proceedings of the IEEE Adaptive Systems for Signal Processing,
+       Communications, and Control Symposium*, 2000.
+
+    Examples
+    --------
+    >>> pts = MerweScaledSigmaPoints(alpha=1.0, beta=2.0, kappa=1.0)
+    >>> Wm, Wc = pts.weights(2)
+    >>> Wm.round(3).tolist(), Wc.round(3).tolist()
+    ([0.333, 0.167, 0.167, 0.167, 0.167], [2.333, 0.167, 0.167, 0.167, 0.167])
+    """
 
     def __init__(self, alpha: float = 1e-3, beta: float = 2.0, kappa: float = 0.0):
         if not alpha > 0:
@@ -227,6 +330,31 @@ class MerweScaledSigmaPoints(_SigmaPoints):
         return lam
 
     def weights(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        r"""The mean and covariance weights of the ``2n + 1`` points (see the class).
+
+        Parameters
+        ----------
+        n : int
+            State size.
+
+        Returns
+        -------
+        Wm : (2n + 1,) ndarray
+            Mean weights; they sum to 1.
+        Wc : (2n + 1,) ndarray
+            Covariance weights: ``Wm`` but for the first, :math:`W^m_0 + 1 - \alpha^2 + \beta`.
+
+        Raises
+        ------
+        ValueError
+            If :math:`\alpha^2 (n + \kappa) \le 0`.
+
+        Examples
+        --------
+        >>> Wm, Wc = MerweScaledSigmaPoints(alpha=1.0, kappa=1.0).weights(2)
+        >>> round(float(Wm.sum()), 12), round(float(Wc[0] - Wm[0]), 12)
+        (1.0, 2.0)
+        """
         lam = self._lam(n)
         Wm = np.full(2 * n + 1, 0.5 / (n + lam))
         Wc = Wm.copy()
@@ -236,7 +364,35 @@ class MerweScaledSigmaPoints(_SigmaPoints):
 
 
 class JulierSigmaPoints(_SigmaPoints):
-    """Julier and Uhlmann's sigma points: ``2n + 1`` points, weight ``κ / (n + κ)`` on the mean."""
+    r"""Julier and Uhlmann's sigma points: ``2n + 1`` points, weight ``κ / (n + κ)`` on the mean.
+
+    Parameters
+    ----------
+    kappa : float
+        Scaling: :math:`\lambda = \kappa`; ``n + κ`` must be > 0 for a state of size ``n``.
+
+    Notes
+    -----
+    The points are :math:`x` and :math:`x \pm (\sqrt{(n + \kappa) P})_i`, with the same
+    weights for the mean and the covariance,
+
+    .. math::
+
+        W_0 = \frac{\kappa}{n + \kappa}, \qquad
+        W_i = \frac{1}{2 (n + \kappa)} \quad (i = 1 \dots 2n).
+
+    References
+    ----------
+    .. [1] S. J. Julier and J. K. Uhlmann, "A new extension of the Kalman filter to nonlinear
+       systems", *Proceedings of SPIE* 3068 (Signal Processing, Sensor Fusion, and Target
+       Recognition VI), 1997.
+
+    Examples
+    --------
+    >>> Wm, Wc = JulierSigmaPoints(kappa=1.0).weights(2)
+    >>> Wm.round(3).tolist(), bool((Wm == Wc).all())
+    ([0.333, 0.167, 0.167, 0.167, 0.167], True)
+    """
 
     def __init__(self, kappa: float = 0.0):
         self.kappa = float(kappa)
@@ -250,6 +406,26 @@ class JulierSigmaPoints(_SigmaPoints):
         return self.kappa
 
     def weights(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """The mean and covariance weights of the ``2n + 1`` points (see the class).
+
+        Parameters
+        ----------
+        n : int
+            State size; ``n + kappa`` must be > 0 (checked when points are drawn, by
+            :meth:`points` and :meth:`points_one`, not here).
+
+        Returns
+        -------
+        Wm : (2n + 1,) ndarray
+            Mean weights; they sum to 1.
+        Wc : (2n + 1,) ndarray
+            Covariance weights, equal to ``Wm``.
+
+        Examples
+        --------
+        >>> JulierSigmaPoints(kappa=0.0).weights(1)[0].tolist()
+        [0.0, 0.5, 0.5]
+        """
         W = np.full(2 * n + 1, 0.5 / (n + self.kappa))
         W[0] = self.kappa / (n + self.kappa)
         return W, W.copy()
@@ -267,10 +443,58 @@ def _transform(pts: np.ndarray, Wm: np.ndarray, Wc: np.ndarray, mean_fn: Callabl
 def ukf_predict(g: Gaussian, motion: Any, dt: float = 1.0, t: float = 0.0, *,
                 points: _SigmaPoints | None = None, state_mean: Callable | None = None,
                 state_residual: Callable | None = None) -> Gaussian:
-    r"""UKF prediction of a batch of Gaussians ``g`` (mean ``(..., n)``).
+    r"""UKF prediction of a batch of Gaussians through the dynamics.
 
-    ``points`` defaults to ``MerweScaledSigmaPoints()``. ``state_mean(points, w)`` and
-    ``state_residual(a, b)`` override the weighted mean and ``a - b`` for states with angles.
+    With sigma points :math:`\chi_i` of ``g`` and weights :math:`W^m_i`, :math:`W^c_i`,
+
+    .. math::
+
+        x^- = \sum_i W^m_i f(\chi_i), \qquad
+        P^- = \sum_i W^c_i \big(f(\chi_i) - x^-\big)\big(f(\chi_i) - x^-\big)' + Q(\Delta t)
+
+    (the mean and the differences are ``state_mean`` and ``state_residual`` when given).
+
+    Parameters
+    ----------
+    g : Gaussian
+        Mean ``(..., n)`` and covariance ``(..., n, n)``, positive definite; the leading
+        dimensions index the batch.
+    motion : motion model
+        Nonlinear (``f``, ``jacobian``, ``Q``; :mod:`vistrack.models.nonlinear`) or linear
+        (``F``, ``Q``).
+    dt : float
+        Time step.
+    t : float
+        Time of the predicted state (for time-varying models).
+    points : MerweScaledSigmaPoints or JulierSigmaPoints, optional
+        The sigma points; default ``MerweScaledSigmaPoints()``.
+    state_mean : callable, optional
+        ``state_mean(points, w)``: the weighted mean of points ``(..., k, n)`` with weights
+        ``(k,)``, overriding the weighted sum (for states with angles).
+    state_residual : callable, optional
+        ``state_residual(a, b)``, overriding ``a - b`` (for states with angles).
+
+    Returns
+    -------
+    Gaussian
+        The predicted mean ``(..., n)`` and covariance ``(..., n, n)``.
+
+    Raises
+    ------
+    TypeError
+        If ``g`` is not a :class:`~vistrack.types.Gaussian`, or ``motion`` is not a motion
+        model.
+    ValueError
+        If a covariance is not positive definite (no sigma points).
+
+    References
+    ----------
+    .. [1] S. J. Julier and J. K. Uhlmann, "A new extension of the Kalman filter to nonlinear
+       systems", *Proceedings of SPIE* 3068 (Signal Processing, Sensor Fusion, and Target
+       Recognition VI), 1997.
+    .. [2] E. A. Wan and R. van der Merwe, "The unscented Kalman filter for nonlinear
+       estimation", *Proceedings of the IEEE Adaptive Systems for Signal Processing,
+       Communications, and Control Symposium*, 2000.
 
     Examples
     --------
@@ -322,10 +546,91 @@ def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | 
                residual: Callable | None = None, mean: Callable | None = None,
                state_residual: Callable | None = None,
                return_loglik: bool = False) -> Gaussian | tuple[Gaussian, np.ndarray]:
-    r"""UKF correction of a batch of Gaussians ``g`` with ``y (..., m)`` (NaN = missing).
+    r"""UKF correction of a batch of Gaussians with a measurement each (NaN = missing).
 
-    The sigma points are drawn from ``g``. ``residual(a, b)`` and ``mean(z, w)`` override the
-    measurement model's (angles wrap; circular means).
+    The sigma points :math:`\gamma_i` are drawn from ``g`` (so that they carry the process
+    noise of the prediction too). With :math:`r_i = r(h(\gamma_i), \hat z)`, over the observed
+    components,
+
+    .. math::
+
+        \hat z = \sum_i W^m_i h(\gamma_i), \qquad
+        S = \sum_i W^c_i r_i r_i' + R, \qquad
+        C = \sum_i W^c_i (\gamma_i - x) r_i',
+
+        K = C S^{-1}, \qquad x^+ = x + K\, r(y, \hat z), \qquad
+        P^+ = P - V V', \quad V = C L^{-T}, \quad S = L L',
+
+    the last form symmetric by construction. ``r`` is the measurement model's residual
+    (differences, angles wrapped) and :math:`\hat z` its mean (circular for angles). On a
+    linear model this is the Kalman update.
+
+    Parameters
+    ----------
+    g : Gaussian
+        The prior: mean ``(..., n)`` and covariance ``(..., n, n)``, positive definite.
+    y : (..., m) array_like
+        One measurement per Gaussian; NaN components are missing (they neither correct the
+        state nor count in the log-likelihood).
+    measurement : measurement model
+        Nonlinear (``h``, ``jacobian``, ``R``; :mod:`vistrack.models.nonlinear`) or linear
+        (``H``, ``R``).
+    points : MerweScaledSigmaPoints or JulierSigmaPoints, optional
+        The sigma points; default ``MerweScaledSigmaPoints()``.
+    residual : callable, optional
+        ``residual(a, b)`` of measurements, overriding the model's.
+    mean : callable, optional
+        ``mean(z, w)``: the weighted mean of measurements ``(..., k, m)`` with weights
+        ``(k,)``, overriding the model's.
+    state_residual : callable, optional
+        ``state_residual(a, b)`` of states, overriding ``a - b`` in :math:`C` (for states with
+        angles).
+    return_loglik : bool
+        Also return the log-likelihood.
+
+    Returns
+    -------
+    posterior : Gaussian
+        The corrected mean ``(..., n)`` and covariance ``(..., n, n)``.
+    loglik : (...) ndarray
+        Only with ``return_loglik``: the Gaussian log-density of the innovation,
+        :math:`\log N(r(y, \hat z); 0, S)`, over the observed components.
+
+    Raises
+    ------
+    TypeError
+        If ``g`` is not a :class:`~vistrack.types.Gaussian`, or ``measurement`` is not a
+        measurement model.
+    ValueError
+        If ``y`` does not have shape ``(..., m)`` matching ``g``, a covariance is not
+        positive definite, or the innovation covariance is not (``R`` must be positive
+        definite on the observed components).
+
+    References
+    ----------
+    .. [1] S. J. Julier and J. K. Uhlmann, "A new extension of the Kalman filter to nonlinear
+       systems", *Proceedings of SPIE* 3068 (Signal Processing, Sensor Fusion, and Target
+       Recognition VI), 1997.
+    .. [2] E. A. Wan and R. van der Merwe, "The unscented Kalman filter for nonlinear
+       estimation", *Proceedings of the IEEE Adaptive Systems for Signal Processing,
+       Communications, and Control Symposium*, 2000.
+
+    Examples
+    --------
+    On a linear model, the Kalman update (:func:`~vistrack.filters.kf_update` gives the
+    same numbers):
+
+    >>> from vistrack.models import ConstantVelocity, Position
+    >>> g = ukf_predict(Gaussian(np.array([0.0, 1.0]), np.eye(2)), ConstantVelocity(dim=1, q=0.1))
+    >>> post, ll = ukf_update(g, [1.5], Position(dim=1, r=0.5), return_loglik=True)
+    >>> post.mean.round(3), round(float(ll), 3)
+    (array([1.401, 1.207]), -1.433)
+
+    A batch of three, the second measurement missing:
+
+    >>> gb = Gaussian(np.zeros((3, 2)), np.broadcast_to(np.eye(2), (3, 2, 2)))
+    >>> ukf_update(gb, [[1.0], [np.nan], [2.0]], Position(dim=1, r=0.5)).mean[:, 0].round(3)
+    array([0.667, 0.   , 1.333])
     """
     g = check_gaussian(g)
     n = g.mean.shape[-1]
@@ -361,7 +666,8 @@ def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | 
 
 
 class UnscentedKalmanFilter:
-    """The UKF over a sequence, from a motion and a measurement model.
+    """The UKF over a sequence, from a motion and a measurement model: :func:`ukf_predict`
+    and :func:`ukf_update` per step.
 
     Parameters
     ----------
@@ -373,6 +679,30 @@ class UnscentedKalmanFilter:
         Measurement residual ``r(a, b)`` and mean ``mean(z, w)``, overriding the model's.
     state_residual, state_mean : callable, optional
         The same for the state (for states with angles).
+
+    Raises
+    ------
+    TypeError
+        If a model lacks what a motion or measurement model provides.
+
+    References
+    ----------
+    .. [1] S. J. Julier and J. K. Uhlmann, "A new extension of the Kalman filter to nonlinear
+       systems", *Proceedings of SPIE* 3068 (Signal Processing, Sensor Fusion, and Target
+       Recognition VI), 1997.
+    .. [2] E. A. Wan and R. van der Merwe, "The unscented Kalman filter for nonlinear
+       estimation", *Proceedings of the IEEE Adaptive Systems for Signal Processing,
+       Communications, and Control Symposium*, 2000.
+
+    Examples
+    --------
+    >>> import vistrack as vt
+    >>> motion, meas = vt.models.CoordinatedTurn(q=0.01), vt.models.RangeBearing(ndim_state=5)
+    >>> ys = np.array([[10.0, 0.0], [10.5, 0.1], [np.nan, np.nan], [11.0, 0.3]])
+    >>> res = UnscentedKalmanFilter(motion, meas).filter(
+    ...     ys, x0=[10.0, 0.0, 0.0, 1.0, 0.0], P0=np.diag([1.0, 1.0, 1.0, 1.0, 0.01]))
+    >>> res.means.shape, res.covs.shape
+    ((4, 5), (4, 5, 5))
     """
 
     def __init__(self, motion: Any, measurement: Any, *, points: _SigmaPoints | None = None,
@@ -385,17 +715,101 @@ class UnscentedKalmanFilter:
 
     def filter(self, ys: Any, *, x0: Any, P0: Any, dt: Any = 1.0,
                times: Any = None) -> FilterResult:
-        """Filter ``ys (T, m)`` or ``(B, T, m)``; arguments as
-        :meth:`ExtendedKalmanFilter.filter <vistrack.filters.ExtendedKalmanFilter.filter>`."""
+        """Filter a sequence, or a batch of them; arguments as
+        :meth:`ExtendedKalmanFilter.filter <vistrack.filters.ExtendedKalmanFilter.filter>`.
+
+        Each step predicts (but the first) and corrects with its measurement; a step whose
+        measurement is all NaN is predicted only.
+
+        Parameters
+        ----------
+        ys : (T, m) or (B, T, m) array_like
+            Measurements; NaN components are missing.
+        x0 : (n,) or (B, n) array_like
+            Prior mean of the first step.
+        P0 : (n, n) or (B, n, n) array_like
+            Prior covariance of the first step, positive definite.
+        dt : float or (T,) array_like
+            Time step; ``dt[t]`` is the step from ``t-1`` to ``t``.
+        times : (T,) array_like, optional
+            Time of each step, passed to the model; default the cumulative ``dt`` from 0.
+
+        Returns
+        -------
+        FilterResult
+            Corrected means ``(..., T, n)`` and covariances ``(..., T, n, n)``, the
+            predictions, and the log-likelihood ``(...)``.
+
+        Raises
+        ------
+        ValueError
+            If the shapes disagree with the models, or a covariance is not positive definite.
+
+        Examples
+        --------
+        Two series at once, on a linear model:
+
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> ukf = UnscentedKalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1))
+        >>> ys = np.stack([np.arange(5.0), -np.arange(5.0)])[..., None]
+        >>> res = ukf.filter(ys, x0=[0.0, 0.0], P0=np.eye(2))
+        >>> res.means.shape, res.loglik.shape
+        ((2, 5, 2), (2,))
+        """
         return run_sequence(ys, x0, P0, self.motion.n, self.measurement.m, dt, times,
                             self.predict, self.update)
 
     def predict(self, g: Gaussian, dt: float = 1.0, t: float = 0.0) -> Gaussian:
-        """One prediction (:func:`ukf_predict` with this filter's model and points)."""
+        """One prediction (:func:`ukf_predict` with this filter's model and points).
+
+        Parameters
+        ----------
+        g : Gaussian
+            Mean ``(..., n)`` and covariance ``(..., n, n)``.
+        dt : float
+            Time step.
+        t : float
+            Time of the predicted state.
+
+        Returns
+        -------
+        Gaussian
+            The prediction, ``(..., n)`` and ``(..., n, n)``.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> ukf = UnscentedKalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1))
+        >>> ukf.predict(Gaussian(np.array([0.0, 1.0]), np.eye(2))).mean
+        array([1., 1.])
+        """
         return ukf_predict(g, self.motion, dt, t, points=self.points,
                            state_mean=self.state_mean, state_residual=self.state_residual)
 
     def update(self, g: Gaussian, y: Any) -> tuple[Gaussian, np.ndarray]:
-        """One correction and its innovation log-density (:func:`ukf_update`)."""
+        """One correction and its innovation log-density (:func:`ukf_update`).
+
+        Parameters
+        ----------
+        g : Gaussian
+            The prior: mean ``(..., n)`` and covariance ``(..., n, n)``.
+        y : (..., m) array_like
+            The measurement; NaN components are missing.
+
+        Returns
+        -------
+        posterior : Gaussian
+            The corrected mean and covariance.
+        loglik : (...) ndarray
+            The Gaussian log-density of the innovation.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> ukf = UnscentedKalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1, r=1.0))
+        >>> post, ll = ukf.update(Gaussian(np.array([0.0, 1.0]), np.eye(2)), [1.0])
+        >>> post.mean, round(float(ll), 3)
+        (array([0.5, 1. ]), -1.516)
+        """
         return ukf_update(g, y, self.measurement, points=self.points,
                           state_residual=self.state_residual, return_loglik=True)

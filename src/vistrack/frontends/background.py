@@ -94,6 +94,19 @@ class SelectiveBackground:
     freeze : bool
         Keep the initial model (no learning).
 
+    Attributes
+    ----------
+    mean : (H, W, C) float32 ndarray or None
+        The background ``B`` (None until the model is initialised).
+    mean_sq : (H, W, C) float32 ndarray or None
+        The running mean of squares ``J²``.
+
+    Raises
+    ------
+    ValueError
+        If ``alpha`` is not in (0, 1], ``threshold`` not > 0, ``n_init`` less than 1 or
+        ``min_sigma`` negative.
+
     Examples
     --------
     >>> rng = np.random.default_rng(0)
@@ -129,7 +142,32 @@ class SelectiveBackground:
 
     def initialize(self, frames: Iterable[Any]) -> SelectiveBackground:
         """``B_0`` = the per-pixel median of ``frames``, ``σ_0`` their median absolute deviation
-        from it times 1.4826 (the standard deviation, for Gaussian noise)."""
+        from it times 1.4826 (the standard deviation, for Gaussian noise).
+
+        Parameters
+        ----------
+        frames : iterable of ndarray
+            Frames ``(H, W)`` grey or ``(H, W, 3)`` BGR, uint8, all of one size.
+
+        Returns
+        -------
+        SelectiveBackground
+            The model itself, initialised (``J_0² = B_0² + σ_0²``).
+
+        Raises
+        ------
+        ValueError
+            If there are no frames.
+
+        Examples
+        --------
+        >>> rng = np.random.default_rng(0)
+        >>> frames = [np.clip(100 + rng.normal(0, 2, (40, 60)), 0, 255).astype(np.uint8)
+        ...           for _ in range(10)]
+        >>> bg = SelectiveBackground().initialize(frames)
+        >>> bg.mean.shape, round(float(bg.mean.mean()))
+        ((40, 60, 1), 100)
+        """
         images = [self._as3(f) for f in frames]
         if len(images) == 0:
             raise ValueError("initialize needs at least one frame")
@@ -143,7 +181,24 @@ class SelectiveBackground:
 
     @property
     def variance(self) -> np.ndarray:
-        """``σ² = J² - B²`` (H, W, C), before the floor."""
+        """``σ² = J² - B²`` (H, W, C), before the floor.
+
+        Raises
+        ------
+        RuntimeError
+            If the model is not initialised yet.
+
+        Examples
+        --------
+        Frames with noise of standard deviation 2:
+
+        >>> rng = np.random.default_rng(0)
+        >>> frames = [np.clip(100 + rng.normal(0, 2, (40, 60)), 0, 255).astype(np.uint8)
+        ...           for _ in range(10)]
+        >>> bg = SelectiveBackground().initialize(frames)
+        >>> bg.variance.shape, round(float(np.sqrt(bg.variance.mean())), 1)
+        ((40, 60, 1), 2.0)
+        """
         if self.mean is None:
             raise RuntimeError("the model is not initialised yet")
         return self.mean_sq - self.mean * self.mean
@@ -151,7 +206,37 @@ class SelectiveBackground:
     def apply(self, image: Any) -> np.ndarray:
         """The foreground mask ``(H, W)`` uint8 (255 foreground) of one frame, and the model's
         update. Before the model has ``n_init`` frames (when :meth:`initialize` was not called)
-        the frames are collected and the masks are empty."""
+        the frames are collected and the masks are empty.
+
+        Parameters
+        ----------
+        image : (H, W) or (H, W, 3) ndarray
+            The frame, grey or BGR uint8, of the model's size and channels.
+
+        Returns
+        -------
+        (H, W) uint8 ndarray
+            255 where ``D² ≥ T σ²`` (summed over channels), 0 elsewhere.
+
+        Raises
+        ------
+        ValueError
+            If the image's shape differs from the model's.
+
+        Examples
+        --------
+        Without :meth:`initialize`, the first ``n_init`` frames start the model:
+
+        >>> rng = np.random.default_rng(0)
+        >>> frames = [np.clip(100 + rng.normal(0, 2, (40, 60)), 0, 255).astype(np.uint8)
+        ...           for _ in range(4)]
+        >>> bg = SelectiveBackground(n_init=3, threshold=16)
+        >>> [int(bg.apply(f).max()) for f in frames[:3]], bg.mean is None
+        ([0, 0, 0], False)
+        >>> im = frames[3].copy(); im[10:20, 20:30] = 200
+        >>> int(bg.apply(im)[10:20, 20:30].min())
+        255
+        """
         im = self._as3(image)
         if self.mean is None:
             self._buffer.append(im.copy())
@@ -178,7 +263,36 @@ class SelectiveBackground:
 
 class MOG2Background:
     """OpenCV's Gaussian-mixture subtractor (Zivkovic 2004) behind the same interface; shadows
-    (marked 127 by OpenCV) count as background."""
+    (marked 127 by OpenCV) count as background.
+
+    Parameters
+    ----------
+    history : int
+        Frames that make the model (OpenCV's ``history``).
+    var_threshold : float
+        Squared Mahalanobis distance above which a pixel is foreground (OpenCV's
+        ``varThreshold``).
+    detect_shadows : bool
+        Mark shadows (which :meth:`apply` then counts as background).
+    freeze : bool
+        Stop learning once the model has seen a frame.
+
+    References
+    ----------
+    .. [1] Z. Zivkovic, "Improved adaptive Gaussian mixture model for background
+       subtraction", *International Conference on Pattern Recognition*, 2004.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> frames = [np.clip(100 + rng.normal(0, 2, (40, 60)), 0, 255).astype(np.uint8)
+    ...           for _ in range(10)]
+    >>> bg = MOG2Background(history=50).initialize(frames)
+    >>> im = frames[0].copy(); im[10:20, 20:30] = 200   # a bright square
+    >>> m = bg.apply(im)
+    >>> int(m[10:20, 20:30].all()), int(m.sum() // 255)
+    (1, 100)
+    """
 
     def __init__(self, history: int = 500, var_threshold: float = 16.0,
                  detect_shadows: bool = True, freeze: bool = False):
@@ -190,12 +304,49 @@ class MOG2Background:
         self._seen = 0
 
     def initialize(self, frames: Iterable[Any]) -> MOG2Background:
+        """Learn from ``frames`` first (each is one step of the mixture's learning).
+
+        Parameters
+        ----------
+        frames : iterable of ndarray
+            Frames ``(H, W)`` grey or ``(H, W, 3)`` BGR, uint8.
+
+        Returns
+        -------
+        MOG2Background
+            The model itself.
+
+        Examples
+        --------
+        >>> bg = MOG2Background().initialize([np.zeros((4, 6), np.uint8)] * 3)
+        >>> int(bg.apply(np.zeros((4, 6), np.uint8)).max())
+        0
+        """
         for f in frames:
             self._m.apply(np.asarray(f))
             self._seen += 1
         return self
 
     def apply(self, image: Any) -> np.ndarray:
+        """The foreground mask ``(H, W)`` uint8 (255 foreground) of one frame, and the model's
+        update (none with ``freeze``, after the first frame).
+
+        Parameters
+        ----------
+        image : (H, W) or (H, W, 3) ndarray
+            The frame, grey or BGR uint8.
+
+        Returns
+        -------
+        (H, W) uint8 ndarray
+            255 where OpenCV marks foreground, 0 elsewhere (shadows included).
+
+        Examples
+        --------
+        >>> bg = MOG2Background()
+        >>> bg.apply(np.zeros((4, 6), np.uint8)).shape
+        (4, 6)
+        """
         # MOG2 honours learningRate=0 (unlike KNN and GSOC), so freezing works after warm-up
         rate = 0.0 if self.freeze and self._seen else -1.0
         m = self._m.apply(np.asarray(image), learningRate=rate)
@@ -208,7 +359,31 @@ BACKGROUNDS = {"selective": SelectiveBackground, "mog2": MOG2Background}
 
 
 def background(name: str = "selective", **kwargs: Any):
-    """A background model by name in :data:`BACKGROUNDS`."""
+    """A background model by name in :data:`BACKGROUNDS`.
+
+    Parameters
+    ----------
+    name : str
+        ``"selective"`` (:class:`SelectiveBackground`) or ``"mog2"``
+        (:class:`MOG2Background`).
+    **kwargs
+        Passed to the model.
+
+    Returns
+    -------
+    SelectiveBackground or MOG2Background
+        A new model.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is not in :data:`BACKGROUNDS`.
+
+    Examples
+    --------
+    >>> background("selective", alpha=0.05).alpha
+    0.05
+    """
     if name not in BACKGROUNDS:
         raise ValueError(f"background must be one of {sorted(BACKGROUNDS)}; got {name!r}")
     return BACKGROUNDS[name](**kwargs)

@@ -30,7 +30,34 @@ class Blobs:
     """Regions of one frame, as columns: ``centroids (N, 2)`` (x, y), ``covs (N, 2, 2)`` of
     the pixel coordinates, ``areas (N,)`` in pixels, ``boxes (N, 4)`` (``x0, y0, x1, y1``,
     bounding the pixels), and the equivalent ellipses' ``axes (N, 2)`` (semi-major, semi-minor)
-    and ``angles (N,)`` (radians, of the major axis from +x towards +y)."""
+    and ``angles (N,)`` (radians, of the major axis from +x towards +y).
+
+    What :func:`find_blobs` returns; ``len()`` is the number of regions.
+
+    Attributes
+    ----------
+    centroids : (N, 2) ndarray
+        Centroids ``x, y`` (pixel centres at integer coordinates).
+    covs : (N, 2, 2) ndarray
+        Covariances of the regions' pixel coordinates.
+    areas : (N,) ndarray
+        Pixel counts.
+    boxes : (N, 4) ndarray
+        Bounding boxes ``x0, y0, x1, y1`` (``x1, y1`` one past the last pixel).
+    axes : (N, 2) ndarray
+        Semi-axes of the equivalent ellipses, ``2 √λ`` of the covariance's eigenvalues,
+        major first.
+    angles : (N,) ndarray
+        Orientation of the major axis, radians from +x towards +y.
+
+    Examples
+    --------
+    >>> m = np.zeros((20, 30), np.uint8)
+    >>> m[2:6, 3:13] = 255                     # a 10 x 4 bar
+    >>> b = find_blobs(m, open_size=0, close_size=0)
+    >>> len(b), b.axes.round(2).tolist(), b.angles.round(2).tolist()
+    (1, [[5.74, 2.24]], [0.0])
+    """
 
     centroids: np.ndarray
     covs: np.ndarray
@@ -44,7 +71,31 @@ class Blobs:
 
     def detections(self, kind: str = "boxes") -> Detections:
         """As :class:`~vistrack.types.Detections`: ``"boxes"`` or ``"points"`` (centroids);
-        scores are 1."""
+        scores are 1.
+
+        Parameters
+        ----------
+        kind : {"boxes", "points"}
+            Detections of the bounding boxes, or of the centroids.
+
+        Returns
+        -------
+        Detections
+            One per region.
+
+        Raises
+        ------
+        ValueError
+            If ``kind`` is neither.
+
+        Examples
+        --------
+        >>> m = np.zeros((20, 30), np.uint8)
+        >>> m[2:6, 3:13] = 255
+        >>> b = find_blobs(m, open_size=0, close_size=0)
+        >>> b.detections().boxes.tolist(), b.detections("points").points.tolist()
+        ([[3.0, 2.0, 13.0, 6.0]], [[7.5, 3.5]])
+        """
         if kind == "boxes":
             return Detections(boxes=self.boxes)
         if kind == "points":
@@ -54,7 +105,31 @@ class Blobs:
 
 def threshold(image: Any, level: float, above: bool = True) -> np.ndarray:
     """A binary mask (uint8, 255 set) of the pixels above (or below) ``level``; colour images
-    are compared in grey."""
+    are compared in grey.
+
+    Parameters
+    ----------
+    image : (H, W) or (H, W, 3) array_like
+        Grey, or BGR (converted to grey).
+    level : float
+        The threshold (strict: pixels equal to it are not set).
+    above : bool
+        Set the pixels above ``level``; False: those below.
+
+    Returns
+    -------
+    (H, W) uint8 ndarray
+        255 where set, 0 elsewhere.
+
+    Examples
+    --------
+    >>> threshold(np.array([[0, 100], [200, 255]], np.uint8), 150)
+    array([[  0,   0],
+           [255, 255]], dtype=uint8)
+    >>> threshold(np.array([[0, 100], [200, 255]], np.uint8), 150, above=False)
+    array([[255, 255],
+           [  0,   0]], dtype=uint8)
+    """
     im = np.asarray(image)
     if im.ndim == 3:
         import cv2
@@ -95,11 +170,22 @@ def find_blobs(mask: Any, *, min_area: float = 0, max_area: float = np.inf, open
     Parameters
     ----------
     mask : (H, W) array
+        Binary: non-zero pixels are set.
     min_area, max_area : float
         Limits on a region's pixel count (after the clean-up).
     open_size, close_size : int
         Sizes of the elliptical structuring elements of the opening (removes specks) and then
         the closing (joins a body's pieces); 0 skips one.
+
+    Returns
+    -------
+    Blobs
+        The regions kept, 8-connected, in OpenCV's label order.
+
+    Raises
+    ------
+    ValueError
+        If ``mask`` is not 2-D.
 
     Examples
     --------
@@ -158,6 +244,16 @@ class BlobDetector:
     open_size, close_size : int
         Structuring elements of the clean-up (:func:`find_blobs`).
 
+    Attributes
+    ----------
+    model : SelectiveBackground or MOG2Background
+        The background model.
+
+    Raises
+    ------
+    ValueError
+        If ``background`` is not a name in :data:`~vistrack.frontends.BACKGROUNDS`.
+
     Examples
     --------
     >>> frames = [np.full((40, 60), 100, np.uint8) for _ in range(5)]
@@ -176,11 +272,47 @@ class BlobDetector:
         self.min_area, self.open_size, self.close_size = float(min_area), open_size, close_size
 
     def initialize(self, images: Any) -> None:
-        """Start the background model from ``images`` (an iterable of frames)."""
+        """Start the background model from ``images`` (an iterable of frames).
+
+        Parameters
+        ----------
+        images : iterable of ndarray
+            Frames ``(H, W)`` grey (as :meth:`detect` gives the model) or BGR, uint8.
+
+        Examples
+        --------
+        >>> det = BlobDetector()
+        >>> det.initialize([np.full((40, 60), 100, np.uint8)] * 5)
+        >>> det.model.mean.shape
+        (40, 60, 1)
+        """
         self.model.initialize(images)
 
     def detect(self, image: Any) -> Detections:
-        """The blobs of ``image``'s foreground as boxes ``x0, y0, x1, y1``."""
+        """The blobs of ``image``'s foreground as boxes ``x0, y0, x1, y1``.
+
+        The image is converted to grey, its foreground mask taken (the model learns from it),
+        cleaned and its regions of at least ``min_area`` pixels found.
+
+        Parameters
+        ----------
+        image : (H, W) or (H, W, 3) ndarray
+            The frame, grey or BGR uint8.
+
+        Returns
+        -------
+        Detections
+            One box per blob, score 1.
+
+        Examples
+        --------
+        >>> det = BlobDetector(min_area=20)
+        >>> det.initialize([np.full((40, 60), 100, np.uint8)] * 5)
+        >>> person = np.full((40, 60, 3), 100, np.uint8); person[10:30, 20:30] = 250
+        >>> d = det.detect(person)
+        >>> d.boxes.tolist(), d.scores.tolist()
+        ([[20.0, 10.0, 30.0, 30.0]], [1.0])
+        """
         from .._validate import as_uint8_image
 
         mask = self.model.apply(as_uint8_image(image, grey=True))

@@ -19,7 +19,28 @@ __all__ = ["Detector", "HOGDetector", "nms", "ConfidenceMap", "HOGConfidence",
 def nms(boxes: np.ndarray, scores: np.ndarray, max_iou: float) -> np.ndarray:
     """Greedy non-maximum suppression: indices of the boxes ``(N, 4)`` ``x0, y0, x1, y1``
     kept, best score first; a box overlapping a kept one by more than ``max_iou`` is
-    dropped."""
+    dropped.
+
+    Parameters
+    ----------
+    boxes : (N, 4) ndarray
+        Boxes ``x0, y0, x1, y1``.
+    scores : (N,) array_like
+        Their scores (ties keep the earlier box first).
+    max_iou : float
+        The largest IoU with a kept box that a box may have and be kept.
+
+    Returns
+    -------
+    (K,) int ndarray
+        Indices of the boxes kept, in decreasing score.
+
+    Examples
+    --------
+    >>> boxes = np.array([[0, 0, 10, 10], [1, 1, 11, 11], [20, 20, 30, 30.0]])
+    >>> nms(boxes, np.array([0.5, 0.9, 0.1]), 0.5)
+    array([1, 2])
+    """
     from ..association import iou
 
     order = np.argsort(-np.asarray(scores), kind="stable")
@@ -37,9 +58,47 @@ _INNER_W, _INNER_H = 0.5, 0.75
 
 
 class Detector(Protocol):
-    """What :func:`vistrack.pipeline.track_video` needs of a detector."""
+    """What :func:`vistrack.pipeline.track_video` needs of a detector: ``detect(image) ->
+    Detections``.
 
-    def detect(self, image: np.ndarray) -> Detections: ...
+    Any object with that method is a detector for :func:`vistrack.pipeline.run` (which calls
+    it on each frame's image, :func:`vistrack.pipeline.as_detector`).
+
+    Examples
+    --------
+    A detector of the bright pixels' bounding box:
+
+    >>> from vistrack.pipeline import as_detector
+    >>> from vistrack.types import Frame
+    >>> class Bright:
+    ...     def detect(self, image):
+    ...         y, x = np.nonzero(image > 128)
+    ...         return Detections(boxes=np.array([[x.min(), y.min(), x.max() + 1, y.max() + 1]],
+    ...                                          float))
+    >>> image = np.zeros((40, 60), np.uint8); image[10:20, 5:15] = 255
+    >>> as_detector(Bright())(Frame(1, 0.0, image)).boxes.tolist()
+    [[5.0, 10.0, 15.0, 20.0]]
+    """
+
+    def detect(self, image: np.ndarray) -> Detections:
+        """The detections of one image.
+
+        Parameters
+        ----------
+        image : ndarray
+            The frame's image (``(H, W, 3)`` BGR or ``(H, W)`` grey, uint8).
+
+        Returns
+        -------
+        Detections
+            Its detections.
+
+        Examples
+        --------
+        >>> HOGDetector().detect(np.zeros((128, 96, 3), np.uint8)).boxes.shape
+        (0, 4)
+        """
+        ...
 
 
 class HOGDetector:
@@ -59,6 +118,23 @@ class HOGDetector:
     upscale : float
         Enlarge the image first: the detector's window is 64×128 pixels, so people smaller
         than about 50×100 pixels need it (PETS09's are about 30×80).
+
+    Raises
+    ------
+    ValueError
+        If ``upscale`` is not > 0.
+
+    References
+    ----------
+    .. [1] N. Dalal and B. Triggs, "Histograms of oriented gradients for human detection",
+       *IEEE Conference on Computer Vision and Pattern Recognition*, 2005.
+
+    Examples
+    --------
+    An empty scene has no people:
+
+    >>> len(HOGDetector().detect(np.zeros((128, 96, 3), np.uint8)))
+    0
     """
 
     def __init__(self, scale: float = 1.05, hit_threshold: float = 0.0, nms_iou: float = 0.4,
@@ -75,6 +151,24 @@ class HOGDetector:
         self.upscale = float(upscale)
 
     def detect(self, image: Any) -> Detections:
+        """The people in ``image``.
+
+        Parameters
+        ----------
+        image : (H, W, 3) or (H, W) ndarray
+            The frame, BGR or grey uint8.
+
+        Returns
+        -------
+        Detections
+            Boxes of the people (in the image's pixels), after non-maximum suppression, with
+            scores ``1 / (1 + exp(-margin))``.
+
+        Examples
+        --------
+        >>> HOGDetector(upscale=1.0).detect(np.zeros((128, 64, 3), np.uint8)).boxes.shape
+        (0, 4)
+        """
         import cv2
 
         im = np.asarray(image)
@@ -112,7 +206,22 @@ class ConfidenceMap:
     strides : (L,) float
         Image pixels between cells of each level.
     aspect : float
-        Box width over height.
+        Box width over height (default: the person inside HOG's window, 32 / 96).
+
+    Raises
+    ------
+    ValueError
+        If the four have not one entry per level (at least one), or a level's scores are not
+        a 2-D grid of at least 2 x 2.
+
+    Examples
+    --------
+    One level of 5 x 6 cells with a peak of 2 at cell ``(2, 3)``:
+
+    >>> scores = np.zeros((5, 6)); scores[2, 3] = 2.0
+    >>> cmap = ConfidenceMap([100.0], [scores], [(10.0, 20.0)], [8.0])
+    >>> float(cmap.score(10 + 8 * 3, 20 + 8 * 2, 100)), float(cmap.score(10 + 8 * 2.5, 36, 100))
+    (2.0, 1.0)
     """
 
     def __init__(self, heights: Any, scores: list, origins: Any, strides: Any,
@@ -131,14 +240,53 @@ class ConfidenceMap:
         self.aspect = float(aspect)
 
     def level(self, h: Any) -> np.ndarray:
-        """Index of the level nearest each height (in log height)."""
+        """Index of the level nearest each height (in log height).
+
+        Parameters
+        ----------
+        h : float or array_like
+            Box heights (image pixels).
+
+        Returns
+        -------
+        int ndarray
+            The level of each, of ``h``'s shape.
+
+        Examples
+        --------
+        >>> cmap = ConfidenceMap([50.0, 100.0], [np.zeros((2, 2))] * 2, [(0, 0)] * 2, [8, 8])
+        >>> cmap.level([40, 70, 71, 300]).tolist()
+        [0, 0, 1, 1]
+        """
         h = np.asarray(h, float)
         return np.abs(np.log(np.maximum(h, 1e-6))[..., None]
                       - np.log(self.heights)).argmin(-1)
 
     def score(self, x: Any, y: Any, h: Any, outside: float = -np.inf) -> np.ndarray:
         """The score at box centres ``(x, y)`` and heights ``h`` (broadcast together),
-        bilinear in position on the level nearest in height; ``outside`` beyond the grid."""
+        bilinear in position on the level nearest in height; ``outside`` beyond the grid.
+
+        Parameters
+        ----------
+        x, y : float or array_like
+            Box centres (image pixels).
+        h : float or array_like
+            Box heights; each picks the level nearest in log height (:meth:`level`).
+        outside : float
+            The score of a centre beyond its level's grid.
+
+        Returns
+        -------
+        ndarray
+            The scores, of the broadcast shape of ``x``, ``y`` and ``h``.
+
+        Examples
+        --------
+        >>> scores = np.zeros((5, 6)); scores[2, 3] = 2.0
+        >>> cmap = ConfidenceMap([100.0], [scores], [(10.0, 20.0)], [8.0])
+        >>> cmap.score([34.0, 30.0, 0.0], 36.0, 100.0)
+        array([  2.,   1., -inf])
+        """
         x, y, h = np.broadcast_arrays(*(np.asarray(v, float) for v in (x, y, h)))
         lev = self.level(h)
         out = np.full(x.shape, outside, float)
@@ -161,7 +309,29 @@ class ConfidenceMap:
     def detections(self, threshold: float = 0.0, nms_iou: float = 0.4) -> Detections:
         """The discrete detections: cells scoring above ``threshold`` that are the largest of
         their 3 x 3 neighbourhood, over all levels, after non-maximum suppression; scores
-        squashed to (0, 1) by a logistic."""
+        squashed to (0, 1) by a logistic.
+
+        Parameters
+        ----------
+        threshold : float
+            The score a peak must exceed.
+        nms_iou : float
+            Overlap above which the weaker of two detections is dropped.
+
+        Returns
+        -------
+        Detections
+            A box per peak, centred on its cell, the level's height tall and ``aspect`` times
+            that wide; scores ``1 / (1 + exp(-score))``.
+
+        Examples
+        --------
+        >>> scores = np.zeros((5, 6)); scores[2, 3] = 2.0
+        >>> cmap = ConfidenceMap([90.0], [scores], [(10.0, 20.0)], [8.0], aspect=0.5)
+        >>> d = cmap.detections(threshold=1.0)
+        >>> d.xywh.tolist(), d.scores.round(3).tolist()
+        ([[11.5, -9.0, 45.0, 90.0]], [0.881])
+        """
         boxes, scores = [], []
         for k, s in enumerate(self.scores):
             pad = np.pad(s, 1, constant_values=-np.inf)
@@ -197,6 +367,23 @@ class HOGConfidence:
         image enlarged twice); on PETS09-S2L1 (people 55 to 150 pixels tall) they gave
         fewer false detections than levels from 55 to 145 (MOTA 65 against 55 with the
         particle filter).
+
+    Raises
+    ------
+    ValueError
+        If ``heights`` is not a non-empty list of positive numbers.
+
+    Notes
+    -----
+    Call it on an image (grey or BGR uint8) for its :class:`ConfidenceMap`: level ``k`` is
+    HOG's SVM margin of every window at a stride of 8 pixels of the image resized by
+    ``96 / heights[k]``, with ``origins`` and ``strides`` in the original image's pixels.
+
+    Examples
+    --------
+    >>> cmap = HOGConfidence()(np.zeros((240, 320, 3), np.uint8))
+    >>> cmap.heights.tolist(), cmap.scores[3].shape, float(cmap.strides[3])
+    ([46.0, 58.0, 75.0, 96.0, 121.0], (15, 33), 8.0)
     """
 
     def __init__(self, heights: Any = (46, 58, 75, 96, 121)):
@@ -248,6 +435,19 @@ class ConfidencePeaks:
         ``image -> ConfidenceMap``, such as :class:`HOGConfidence`.
     threshold : float
         The SVM margin above which a peak is a detection.
+
+    Raises
+    ------
+    TypeError
+        If ``confidence`` is not callable.
+
+    Examples
+    --------
+    >>> scores = np.zeros((5, 6)); scores[2, 3] = 2.0
+    >>> cmap = ConfidenceMap([90.0], [scores], [(10.0, 20.0)], [8.0], aspect=0.5)
+    >>> peaks = ConfidencePeaks(lambda image: cmap, threshold=1.0)
+    >>> peaks.detect(np.zeros((100, 100), np.uint8)).xywh.tolist()
+    [[11.5, -9.0, 45.0, 90.0]]
     """
 
     def __init__(self, confidence: Any, threshold: float = 0.5):
@@ -257,5 +457,21 @@ class ConfidencePeaks:
         self.confidence, self.threshold = confidence, float(threshold)
 
     def detect(self, image: Any) -> Detections:
-        """The peaks of the image's confidence above the threshold."""
+        """The peaks of the image's confidence above the threshold.
+
+        Parameters
+        ----------
+        image : ndarray
+            The frame's image, as ``confidence`` takes it.
+
+        Returns
+        -------
+        Detections
+            :meth:`ConfidenceMap.detections` of ``confidence(image)`` above ``threshold``.
+
+        Examples
+        --------
+        >>> len(ConfidencePeaks(HOGConfidence()).detect(np.zeros((240, 320, 3), np.uint8)))
+        0
+        """
         return self.confidence(image).detections(self.threshold)

@@ -34,7 +34,25 @@ __all__ = ["Spots", "locate"]
 @dataclass(frozen=True)
 class Spots:
     """Spots of one frame: ``centroids (N, 2)`` (x, y), ``mass (N,)`` (integrated band-passed
-    brightness, in the input's grey levels) and ``size (N,)`` (radius of gyration, pixels)."""
+    brightness, in the input's grey levels) and ``size (N,)`` (radius of gyration, pixels).
+
+    What :func:`locate` returns; ``len()`` is the number of spots.
+
+    Attributes
+    ----------
+    centroids : (N, 2) ndarray
+        Positions ``x, y``, the origin at the centre of pixel (0, 0).
+    mass : (N,) ndarray
+        Integrated band-passed brightness, in the input's grey levels.
+    size : (N,) ndarray
+        Radius of gyration, in pixels.
+
+    Examples
+    --------
+    >>> s = Spots(np.array([[3.0, 4.0]]), np.array([100.0]), np.array([2.0]))
+    >>> len(s), s.detections().points.tolist()
+    (1, [[3.0, 4.0]])
+    """
 
     centroids: np.ndarray
     mass: np.ndarray
@@ -44,7 +62,19 @@ class Spots:
         return int(self.mass.shape[0])
 
     def detections(self) -> Detections:
-        """As point detections (scores 1)."""
+        """As point detections (scores 1).
+
+        Returns
+        -------
+        Detections
+            ``points (N, 2)``: the centroids.
+
+        Examples
+        --------
+        >>> d = Spots(np.array([[3.0, 4.0]]), np.array([100.0]), np.array([2.0])).detections()
+        >>> d.points.tolist(), d.scores.tolist()
+        ([[3.0, 4.0]], [1.0])
+        """
         return Detections(points=self.centroids)
 
 
@@ -114,11 +144,52 @@ def locate(image: Any, diameter: int, *, minmass: float = 0.0,
     image : (H, W) array
         Grey; colour images are converted.
     diameter : int
-        The spots' size in pixels, odd (round up).
+        The spots' size in pixels, odd (round up), at least 3.
     minmass : float
-        Smallest integrated brightness kept.
+        Smallest integrated brightness kept (in the input's grey levels; strictly above it).
+    separation : float, optional
+        Smallest distance between spots; default ``diameter + 1``.
+    noise_size : float
+        Standard deviation of the Gaussian that removes pixel noise.
+    smoothing_size : int, optional
+        Side of the boxcar that estimates the background, odd and larger than
+        ``noise_size``; default ``diameter``.
+    threshold : float
+        Band-passed values below it become 0.
     invert : bool
         Spots darker than the background.
+    percentile : float
+        A local maximum must be brighter than this percentile of the band-passed image's
+        non-zero pixels.
+    max_iterations : int
+        Most moves of the disc in the refinement.
+
+    Returns
+    -------
+    Spots
+        The spots found.
+
+    Raises
+    ------
+    ValueError
+        If ``image`` is neither ``(H, W)`` nor ``(H, W, 3)``, ``diameter`` is not an odd
+        integer >= 3, or ``smoothing_size`` is even or not larger than ``noise_size``.
+
+    References
+    ----------
+    .. [1] J. C. Crocker and D. G. Grier, "Methods of digital video microscopy for colloidal
+       studies", *Journal of Colloid and Interface Science* 179(1), 1996.
+
+    Examples
+    --------
+    Two Gaussian spots of standard deviation 2 pixels:
+
+    >>> y, x = np.mgrid[0:64, 0:64]
+    >>> im = sum(200 * np.exp(-((x - cx) ** 2 + (y - cy) ** 2) / 8.0)
+    ...          for cx, cy in [(20.3, 15.6), (45.0, 40.2)]).astype(np.uint8)
+    >>> spots = locate(im, 9)
+    >>> spots.centroids.round(1).tolist(), spots.size.round(1).tolist()
+    ([[20.3, 15.6], [45.0, 40.2]], [2.0, 2.0])
     """
     from scipy import ndimage
 

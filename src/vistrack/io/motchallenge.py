@@ -37,7 +37,21 @@ _NAMES = ("frame", "id", "left", "top", "width", "height", "conf", "class", "vis
 
 
 class MOTFormatError(ValueError):
-    """A MOTChallenge file that cannot be read; the message names the file, line and column."""
+    """A MOTChallenge file that cannot be read; the message names the file, line and column.
+
+    A ``ValueError``; :func:`read_mot` and :func:`read_seqinfo` raise it.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "gt.txt")
+    >>> _ = open(p, "w").write("1,1,0,0,-3,4\\n")
+    >>> try:
+    ...     read_mot(p)
+    ... except MOTFormatError as e:
+    ...     print(str(e).split(", ", 1)[1])
+    line 1, column 5 (width): width must be >= 0; got -3
+    """
 
 
 @dataclass(frozen=True)
@@ -47,6 +61,7 @@ class MOTTable:
     Attributes
     ----------
     frames, ids : (N,) int
+        Frame (from 1) and identity of each row (-1 for detections).
     boxes : (N, 4) float
         ``left, top, width, height`` in pixels.
     conf : (N,) float
@@ -59,6 +74,14 @@ class MOTTable:
         The file read, for messages.
     columns : int
         Values per row in the file (MOT16/17/20 ground truth: 9; MOT15 and results: 10).
+
+    Examples
+    --------
+    ``len()`` counts the rows; a boolean mask or indices select some:
+
+    >>> t = MOTTable.from_rows([(1, 1, 0, 0, 10, 20), (1, 2, 5, 5, 10, 20), (2, 1, 1, 0, 10, 20)])
+    >>> len(t), t[t.ids == 1].frames.tolist(), t.boxes[1].tolist()
+    (3, [1, 2], [5.0, 5.0, 10.0, 20.0])
     """
 
     frames: np.ndarray
@@ -78,6 +101,23 @@ class MOTTable:
         """From rows ``frame, id, left, top, width, height[, conf, class, visibility, ...]``
         (at least 6 values each; the rest default to conf 1, class -1, visibility -1), sorted
         by frame.
+
+        Parameters
+        ----------
+        rows : (N, w) array_like
+            The rows, ``6 <= w``; values past the ninth are not kept.
+        path : str
+            The file they come from, for messages.
+
+        Returns
+        -------
+        MOTTable
+            The rows sorted by frame (stably), with ``columns = w``.
+
+        Raises
+        ------
+        ValueError
+            If the rows have fewer than 6 values.
 
         Examples
         --------
@@ -107,7 +147,30 @@ class MOTTable:
 
     def frame_slices(self, n_frames: int | None = None) -> list[slice]:
         """``slices[f - 1]`` selects the rows of frame ``f``, for ``f = 1 .. n_frames``
-        (default: the last frame in the file)."""
+        (default: the last frame in the file).
+
+        Parameters
+        ----------
+        n_frames : int, optional
+            The frames to slice; frames past the last row's get empty slices.
+
+        Returns
+        -------
+        list of slice
+            One per frame, of the table's rows (empty for a frame without rows).
+
+        Raises
+        ------
+        ValueError
+            If the rows are not sorted by frame.
+
+        Examples
+        --------
+        >>> t = MOTTable.from_rows([(1, 1, 0, 0, 10, 20), (3, 1, 5, 5, 10, 20),
+        ...                         (3, 2, 1, 1, 3, 3)])
+        >>> [len(t.ids[s]) for s in t.frame_slices(4)]
+        [1, 0, 2, 0]
+        """
         if len(self) > 1 and np.any(np.diff(self.frames) < 0):
             raise ValueError(f"{self.path or 'MOTTable'}: rows must be sorted by frame "
                              f"(read_mot sorts them)")
@@ -175,6 +238,17 @@ def _check_rows(path: str, a: np.ndarray, lines: list[str] | None) -> None:
 def read_mot(path: str | os.PathLike) -> MOTTable:
     """Read a MOTChallenge detection, ground-truth or results file.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file: comma-separated rows of 6 to 10 numbers, all of one width (blank lines
+        skipped).
+
+    Returns
+    -------
+    MOTTable
+        Its rows, sorted by frame (an empty file gives an empty table).
+
     Raises
     ------
     FileNotFoundError
@@ -214,7 +288,42 @@ def read_mot(path: str | os.PathLike) -> MOTTable:
 def write_mot(path: str | os.PathLike, frames: Any, ids: Any, boxes: Any, conf: Any = None, *,
               force: bool = False) -> Path:
     """Write a MOTChallenge results file: ``frame, id, left, top, width, height, conf, -1, -1,
-    -1``, sorted by frame and id. Refuses to overwrite an existing file unless ``force``."""
+    -1``, sorted by frame and id. Refuses to overwrite an existing file unless ``force``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file; its folder is made if needed.
+    frames, ids : (N,) array_like
+        Frame and identity of each row (integers).
+    boxes : (N, 4) array_like
+        Boxes ``left, top, width, height``, written with two decimals.
+    conf : (N,) array_like, optional
+        Scores, written with 4 significant digits; default 1.
+    force : bool
+        Overwrite an existing file.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    FileExistsError
+        If ``path`` exists and ``force`` is False.
+    ValueError
+        If the columns differ in length.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = write_mot(pathlib.Path(tempfile.mkdtemp()) / "res.txt", [2, 1], [1, 1],
+    ...               [[0, 0, 10, 20], [1, 2, 3, 4]], [0.9, 0.75])
+    >>> print(p.read_text(), end="")
+    1,1,1.00,2.00,3.00,4.00,0.75,-1,-1,-1
+    2,1,0.00,0.00,10.00,20.00,0.9,-1,-1,-1
+    """
     path = Path(path)
     if path.exists() and not force:
         raise FileExistsError(f"{path} exists; pass force=True (--force) to overwrite it")
@@ -236,7 +345,29 @@ def write_mot(path: str | os.PathLike, frames: Any, ids: Any, boxes: Any, conf: 
 
 @dataclass(frozen=True)
 class SeqInfo:
-    """``seqinfo.ini`` of a MOTChallenge sequence."""
+    """``seqinfo.ini`` of a MOTChallenge sequence.
+
+    Attributes
+    ----------
+    name : str
+        The sequence's name (default: its folder's).
+    frame_rate : float
+        Frames per second (``frameRate``).
+    seq_length : int
+        Number of frames (``seqLength``).
+    im_width, im_height : int
+        Image size in pixels (``imWidth``, ``imHeight``).
+    im_dir : str
+        The images' folder (``imDir``).
+    im_ext : str
+        The images' suffix (``imExt``).
+
+    Examples
+    --------
+    >>> info = SeqInfo("MOT17-02", 30.0, 600, 1920, 1080)
+    >>> info.seq_length / info.frame_rate, info.im_dir, info.im_ext
+    (20.0, 'img1', '.jpg')
+    """
 
     name: str
     frame_rate: float
@@ -248,7 +379,36 @@ class SeqInfo:
 
 
 def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
-    """Read ``seqinfo.ini`` (or the ``seqinfo.ini`` inside a sequence folder)."""
+    """Read ``seqinfo.ini`` (or the ``seqinfo.ini`` inside a sequence folder).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, or the sequence folder holding it.
+
+    Returns
+    -------
+    SeqInfo
+        Its ``[Sequence]`` section.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    MOTFormatError
+        If it is not an INI file, has no ``[Sequence]`` section, or lacks ``frameRate``,
+        ``seqLength``, ``imWidth`` or ``imHeight`` or has one that is not a positive number.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "seqinfo.ini").write_text("[Sequence]\\nname=S\\nframeRate=25\\nseqLength=3\\n"
+    ...                                    "imWidth=640\\nimHeight=480\\n")
+    >>> info = read_seqinfo(d)
+    >>> info.name, info.frame_rate, info.seq_length, (info.im_width, info.im_height)
+    ('S', 25.0, 3, (640, 480))
+    """
     path = Path(path)
     if path.is_dir():
         path = path / "seqinfo.ini"

@@ -23,14 +23,58 @@ __all__ = ["Sink", "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_
 
 @runtime_checkable
 class Sink(Protocol):
-    """What every output of the pipeline answers."""
+    """What every output of the pipeline answers: ``write(frame, tracks)`` and ``close()``.
+
+    Any object with these two methods is a sink for :func:`vistrack.pipeline.run`, which
+    writes every frame's tracks to it and closes it when the source ends (or calls its
+    ``abort()``, where it has one, if the run fails). The protocol is checkable at run time
+    with ``isinstance`` (which looks for the names only, not their signatures).
+
+    Examples
+    --------
+    >>> class Count:
+    ...     def __init__(self):
+    ...         self.tracks = 0
+    ...     def write(self, frame, tracks):
+    ...         self.tracks += len(tracks)
+    ...     def close(self):
+    ...         print(self.tracks, "tracks")
+    >>> isinstance(Count(), Sink), isinstance(TrackRows(), Sink)
+    (True, True)
+    """
 
     def write(self, frame: Frame, tracks: Tracks) -> None:
-        """Take one frame's tracks."""
+        """Take one frame's tracks.
+
+        Parameters
+        ----------
+        frame : Frame
+            The frame.
+        tracks : Tracks
+            The tracks the tracker reported in it.
+
+        Examples
+        --------
+        >>> rows = TrackRows()
+        >>> rows.write(Frame(3, 0.1), Tracks(ids=np.array([1]), boxes=np.array([[0, 0, 2.0, 3]]),
+        ...                                   points=None, scores=np.ones(1), classes=np.zeros(1)))
+        >>> rows.frames.tolist()
+        [3]
+        """
         ...
 
     def close(self) -> None:
-        """Finish (write the file)."""
+        """Finish (write the file).
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "tracks.csv"
+        >>> sink = CSVWriter(path)
+        >>> sink.close()
+        >>> path.read_text()
+        'frame,id,x,y,w,h,score\\n'
+        """
         ...
 
 
@@ -54,7 +98,29 @@ class TrackRows:
         self._scores: list[np.ndarray] = []
 
     def write(self, frame: Frame, tracks: Tracks) -> None:
-        """Keep the rows of one frame's tracks (boxes)."""
+        """Keep the rows of one frame's tracks (boxes).
+
+        Parameters
+        ----------
+        frame : Frame
+            The frame; its index is each row's frame.
+        tracks : Tracks
+            Box tracks (point tracks have no ``xywh``).
+
+        Raises
+        ------
+        ValueError
+            If the tracks are points.
+
+        Examples
+        --------
+        >>> rows = TrackRows()
+        >>> rows.write(Frame(2, 0.04), Tracks(ids=np.array([4, 5]),
+        ...                                   boxes=np.array([[0, 0, 2.0, 3], [1, 1, 3, 3]]),
+        ...                                   points=None, scores=np.ones(2), classes=np.zeros(2)))
+        >>> len(rows), rows.ids.tolist()
+        (2, [4, 5])
+        """
         if len(tracks):
             self._frames.append(np.full(len(tracks), int(frame.index)))
             self._ids.append(np.asarray(tracks.ids))
@@ -62,7 +128,15 @@ class TrackRows:
             self._scores.append(np.asarray(tracks.scores, dtype=float))
 
     def close(self) -> None:
-        """Nothing to finish."""
+        """Nothing to finish (the rows stay readable).
+
+        Examples
+        --------
+        >>> rows = TrackRows()
+        >>> rows.close()
+        >>> len(rows)
+        0
+        """
 
     def __len__(self) -> int:
         return sum(len(f) for f in self._frames)
@@ -73,47 +147,134 @@ class TrackRows:
 
     @property
     def frames(self) -> np.ndarray:
-        """Frame index of each row ``(N,)`` int."""
+        """Frame index of each row ``(N,)`` int.
+
+        Examples
+        --------
+        >>> TrackRows().frames
+        array([], dtype=int64)
+        """
         return self._cat(self._frames, (0,)).astype(int)
 
     @property
     def ids(self) -> np.ndarray:
-        """Track identity of each row ``(N,)`` int."""
+        """Track identity of each row ``(N,)`` int.
+
+        Examples
+        --------
+        >>> rows = TrackRows()
+        >>> rows.write(Frame(1, 0.0), Tracks(ids=np.array([7]), boxes=np.array([[0, 0, 2.0, 3]]),
+        ...                                   points=None, scores=np.ones(1), classes=np.zeros(1)))
+        >>> rows.ids
+        array([7])
+        """
         return self._cat(self._ids, (0,)).astype(int)
 
     @property
     def xywh(self) -> np.ndarray:
-        """Boxes ``(N, 4)``: ``x, y, w, h`` (top-left corner and size)."""
+        """Boxes ``(N, 4)``: ``x, y, w, h`` (top-left corner and size).
+
+        Examples
+        --------
+        >>> rows = TrackRows()
+        >>> rows.write(Frame(1, 0.0), Tracks(ids=np.array([7]), boxes=np.array([[1, 2, 4.0, 8]]),
+        ...                                   points=None, scores=np.ones(1), classes=np.zeros(1)))
+        >>> rows.xywh.tolist()
+        [[1.0, 2.0, 3.0, 6.0]]
+        """
         return self._cat(self._xywh, (0, 4))
 
     @property
     def scores(self) -> np.ndarray:
-        """Score of each row ``(N,)``."""
+        """Score of each row ``(N,)``.
+
+        Examples
+        --------
+        >>> rows = TrackRows()
+        >>> rows.write(Frame(1, 0.0), Tracks(ids=np.array([7]), boxes=np.array([[1, 2, 4.0, 8]]),
+        ...                                   points=None, scores=np.array([0.8]),
+        ...                                   classes=np.zeros(1)))
+        >>> rows.scores.tolist()
+        [0.8]
+        """
         return self._cat(self._scores, (0,))
 
 
 class MOTWriter(TrackRows):
-    """Writes MOTChallenge results (:func:`~vistrack.io.write_mot`) to ``path`` when closed."""
+    """Writes MOTChallenge results (:func:`~vistrack.io.write_mot`) to ``path`` when closed.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The results file (overwritten; its folder is made if needed).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "tracks.txt"
+    >>> sink = MOTWriter(path)
+    >>> sink.write(Frame(1, 0.0), Tracks(ids=np.array([1]), boxes=np.array([[10, 20, 40, 80.0]]),
+    ...                                  points=None, scores=np.array([0.9]), classes=np.zeros(1)))
+    >>> sink.close()
+    >>> path.read_text()
+    '1,1,10.00,20.00,30.00,60.00,0.9,-1,-1,-1\\n'
+    """
 
     def __init__(self, path: str | os.PathLike) -> None:
         super().__init__()
         self.path = Path(path)
 
     def close(self) -> None:
-        """Write the file."""
+        """Write the file (the rows sorted by frame and id).
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "tracks.txt"
+        >>> MOTWriter(path).close()
+        >>> path.read_text()
+        ''
+        """
         write_mot(self.path, self.frames, self.ids, self.xywh, self.scores, force=True)
 
 
 class CSVWriter(TrackRows):
     """Writes ``frame,id,x,y,w,h,score`` rows, with that header, to ``path`` when closed
-    (boxes to 2 decimals, scores to 3)."""
+    (boxes to 2 decimals, scores to 3).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (overwritten; its folder is made if needed).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "tracks.csv"
+    >>> sink = CSVWriter(path)
+    >>> sink.write(Frame(1, 0.0), Tracks(ids=np.array([1]), boxes=np.array([[10, 20, 40, 80.0]]),
+    ...                                  points=None, scores=np.array([0.9]), classes=np.zeros(1)))
+    >>> sink.close()
+    >>> print(path.read_text(), end="")
+    frame,id,x,y,w,h,score
+    1,1,10.00,20.00,30.00,60.00,0.900
+    """
 
     def __init__(self, path: str | os.PathLike) -> None:
         super().__init__()
         self.path = Path(path)
 
     def close(self) -> None:
-        """Write the file."""
+        """Write the file: the header, then the rows in the order written.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "out" / "tracks.csv"
+        >>> CSVWriter(path).close()
+        >>> path.read_text()
+        'frame,id,x,y,w,h,score\\n'
+        """
         self.path.parent.mkdir(parents=True, exist_ok=True)
         with open(self.path, "w") as fh:
             fh.write("frame,id,x,y,w,h,score\n")
@@ -161,10 +322,24 @@ class BoxesWriter:
     """One object's box in every frame, written as ``frame,x,y,w,h`` lines (frames counted
     from 1, :func:`write_boxes`) to ``path`` when closed: a single-object tracker's track 1.
 
-    Attributes
+    Parameters
     ----------
-    boxes : (T, 4) ndarray
-        The boxes written so far (``x, y, w, h``; NaN in a frame without the object).
+    path : str or os.PathLike
+        The file (overwritten; its folder is made if needed).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "boxes.txt"
+    >>> sink = BoxesWriter(path)
+    >>> one = Tracks(ids=np.array([1]), boxes=np.array([[10, 20, 40, 80.0]]), points=None,
+    ...              scores=np.ones(1), classes=np.zeros(1))
+    >>> sink.write(Frame(1, 0.0), one)
+    >>> sink.write(Frame(2, 0.04), Tracks.empty())
+    >>> sink.close()
+    >>> print(path.read_text(), end="")
+    1,10.00,20.00,30.00,60.00
+    2,nan,nan,nan,nan
     """
 
     def __init__(self, path: str | os.PathLike) -> None:
@@ -172,13 +347,48 @@ class BoxesWriter:
         self._boxes: list[np.ndarray] = []
 
     def write(self, frame: Frame, tracks: Tracks) -> None:
-        """Keep the frame's box (NaN when no track is reported)."""
+        """Keep the frame's box (NaN when no track is reported).
+
+        Parameters
+        ----------
+        frame : Frame
+            The frame (its boxes are kept in the order written, one per call).
+        tracks : Tracks
+            The frame's box tracks; the first one's box is kept.
+
+        Examples
+        --------
+        >>> sink = BoxesWriter("unused.txt")
+        >>> sink.write(Frame(1, 0.0), Tracks.empty())
+        >>> sink.boxes
+        array([[nan, nan, nan, nan]])
+        """
         self._boxes.append(tracks.xywh[0] if len(tracks) else np.full(4, np.nan))
 
     @property
     def boxes(self) -> np.ndarray:
+        """The boxes written so far ``(T, 4)`` (``x, y, w, h``; NaN in a frame without the
+        object).
+
+        Examples
+        --------
+        >>> sink = BoxesWriter("unused.txt")
+        >>> sink.write(Frame(1, 0.0), Tracks(ids=np.array([1]), boxes=np.array([[1, 2, 4, 8.0]]),
+        ...                                  points=None, scores=np.ones(1), classes=np.zeros(1)))
+        >>> sink.boxes.tolist()
+        [[1.0, 2.0, 3.0, 6.0]]
+        """
         return np.array(self._boxes, dtype=float).reshape(-1, 4)
 
     def close(self) -> None:
-        """Write the file."""
+        """Write the file (:func:`write_boxes`, overwriting).
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "boxes.txt"
+        >>> BoxesWriter(path).close()
+        >>> path.read_text()
+        ''
+        """
         write_boxes(self.path, self.boxes, force=True)

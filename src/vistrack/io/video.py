@@ -29,7 +29,19 @@ IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
 
 
 class VideoError(OSError):
-    """A video or image that cannot be read or written."""
+    """A video or image that cannot be read or written.
+
+    An ``OSError``; :class:`VideoReader` and :class:`VideoWriter` raise it, naming the file.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> try:
+    ...     VideoReader(tempfile.mkdtemp())
+    ... except VideoError as e:
+    ...     print(str(e).split(" ", 1)[1])
+    holds no images (.jpg, .jpeg, .png, .bmp, .tif, .tiff)
+    """
 
 
 def _cv2():
@@ -47,8 +59,9 @@ class VideoReader:
 
     Parameters
     ----------
-    source
-        A video file, or a folder of images (read in name order).
+    source : str or Path
+        A video file, a folder of images (read in name order), or a MOTChallenge sequence
+        folder.
     fps : float, optional
         Frames per second; default the sequence's ``seqinfo.ini``, else the container's header,
         else 30 (image folders). Give it when the header is wrong.
@@ -60,6 +73,25 @@ class VideoReader:
         Decode up to this many frames ahead in a background thread (OpenCV releases the GIL
         while it decodes), so that decoding overlaps the caller's work; 0 decodes in the
         caller's thread. Memory holds at most ``prefetch`` frames more.
+
+    Attributes
+    ----------
+    fps : float
+        The frame rate used.
+    size : (width, height)
+        The frames' size (of the header, for video files).
+    frame_count : int
+        Frames in the source (the header's count, for video files).
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``source`` (or the image folder its ``seqinfo.ini`` names) does not exist.
+    VideoError
+        If OpenCV cannot open the video, or the folder holds no images.
+    ValueError
+        If ``start`` is less than 1, ``prefetch`` negative, or the frame rate not a finite
+        number > 0.
 
     Examples
     --------
@@ -212,11 +244,22 @@ class VideoWriter:
 
     Parameters
     ----------
-    path
-        The file to write; its folder is created.
+    path : str or Path
+        The file to write; its folder is created (at the first frame).
     fps : float
+        Frames per second.
     size : (width, height), optional
         Default: the first frame's.
+
+    Attributes
+    ----------
+    frames : int
+        Frames written so far.
+
+    Raises
+    ------
+    ValueError
+        If ``fps`` is not a finite number > 0.
 
     Examples
     --------
@@ -247,7 +290,31 @@ class VideoWriter:
         self.size = size
 
     def write(self, image: np.ndarray) -> None:
-        """Append a ``(H, W, 3)`` BGR or ``(H, W)`` grey uint8 frame of the writer's size."""
+        """Append a ``(H, W, 3)`` BGR or ``(H, W)`` grey uint8 frame of the writer's size.
+
+        The first frame opens the file (at ``size``, or the frame's own size).
+
+        Parameters
+        ----------
+        image : (H, W, 3) or (H, W) uint8 ndarray
+            The frame; grey frames are written as BGR.
+
+        Raises
+        ------
+        ValueError
+            If ``image`` is not such an array, or its size is not the video's.
+        VideoError
+            If OpenCV cannot open the file for writing.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> w = VideoWriter(Path(tempfile.mkdtemp()) / "grey.mp4", fps=25)
+        >>> w.write(np.zeros((16, 16), np.uint8))
+        >>> w.frames, w.size
+        (1, (16, 16))
+        >>> w.close()
+        """
         im = np.asarray(image)
         if im.dtype != np.uint8 or im.ndim not in (2, 3) or (im.ndim == 3 and im.shape[2] != 3):
             raise ValueError(f"image must be (H, W) or (H, W, 3) uint8; got {im.shape} "
@@ -265,6 +332,17 @@ class VideoWriter:
         self.frames += 1
 
     def close(self) -> None:
+        """Finish the file (nothing is written if no frame was); closing twice is harmless.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> w = VideoWriter(Path(tempfile.mkdtemp()) / "a.mp4", fps=25)
+        >>> w.write(np.zeros((16, 16, 3), np.uint8))
+        >>> w.close(); w.close()
+        >>> len(VideoReader(w.path))
+        1
+        """
         if self._w is not None:
             self._w.release()
             self._w = None

@@ -58,6 +58,29 @@ class WSLModel:
     lost_density : float
         The lost component's uniform density (1 for data in ``[0, 1]``).
 
+    Attributes
+    ----------
+    alpha : float
+        The online EM's forgetting factor ``1 - exp(-1/τ)``.
+    m : (3, \\*shape) ndarray
+        Mixing probabilities of S, W and L per pixel (after :meth:`init`).
+    mu_s, var_s : (\\*shape) ndarray
+        Mean and variance of the stable component.
+    prev : (\\*shape) ndarray
+        The last observation, the wandering component's mean.
+
+    Raises
+    ------
+    ValueError
+        If ``shape`` is empty or not positive, a scale or ``tau`` is not a finite positive
+        number, or ``m0`` is not three positive numbers.
+
+    References
+    ----------
+    .. [1] A. D. Jepson, D. J. Fleet and T. F. El-Maraghi, "Robust online appearance models
+       for visual tracking", *IEEE Conference on Computer Vision and Pattern Recognition*,
+       2001.
+
     Examples
     --------
     >>> model = WSLModel((1,))
@@ -95,7 +118,28 @@ class WSLModel:
         return d
 
     def init(self, d: Any) -> None:
-        """Start the model on a first observation: ``μ_s = d``, ``σ_s = sigma_s0``."""
+        """Start the model on a first observation: ``μ_s = d``, ``σ_s = sigma_s0``.
+
+        The mixing probabilities start at ``m0`` (normalised) and the wandering component's
+        mean at ``d``.
+
+        Parameters
+        ----------
+        d : array_like
+            One observation, of the model's ``shape``.
+
+        Raises
+        ------
+        ValueError
+            If ``d`` does not have the model's shape.
+
+        Examples
+        --------
+        >>> model = WSLModel((2,), m0=(2.0, 1.0, 1.0))
+        >>> model.init([0.2, 0.8])
+        >>> model.mu_s.tolist(), model.m[:, 0].tolist()
+        ([0.2, 0.8], [0.5, 0.25, 0.25])
+        """
         d = self._data(d)
         if d.shape != self.shape:
             raise ValueError(f"init takes one observation of shape {self.shape}; got {d.shape}")
@@ -119,7 +163,34 @@ class WSLModel:
         return np.stack(np.broadcast_arrays(ls, lw, ll))
 
     def log_likelihood(self, d: Any) -> np.ndarray:
-        """``Σ_x log Σ_i m_i p_i(d(x))`` for each observation in a batch ``(..., *shape)``."""
+        """``Σ_x log Σ_i m_i p_i(d(x))`` for each observation in a batch ``(..., *shape)``.
+
+        Parameters
+        ----------
+        d : (..., \\*shape) array_like
+            Observations; the leading dimensions index the batch.
+
+        Returns
+        -------
+        (...) ndarray
+            The log-likelihood of each observation, summed over its pixels.
+
+        Raises
+        ------
+        ValueError
+            If ``d`` does not end in the model's shape.
+        RuntimeError
+            Before :meth:`init`.
+
+        Examples
+        --------
+        The observation the model was started on is more likely than one far from it:
+
+        >>> model = WSLModel((2,))
+        >>> model.init([0.5, 0.5])
+        >>> model.log_likelihood([[0.5, 0.5], [0.5, 0.95]]).round(3)
+        array([2.958, 0.681])
+        """
         d = self._data(d)
         t = self._log_terms(d)
         top = t.max(axis=0)
@@ -127,14 +198,76 @@ class WSLModel:
         return per_pixel.reshape(d.shape[:d.ndim - len(self.shape)] + (-1,)).sum(-1)
 
     def ownership(self, d: Any) -> np.ndarray:
-        """``(3, *shape)``: the ownership probabilities ``o_s, o_w, o_l`` of one observation."""
+        """``(3, *shape)``: the ownership probabilities ``o_s, o_w, o_l`` of one observation.
+
+        Parameters
+        ----------
+        d : (\\*shape) array_like
+            One observation.
+
+        Returns
+        -------
+        (3, \\*shape) ndarray
+            ``o_i = m_i p_i(d) / Σ_j m_j p_j(d)`` per pixel; they sum to 1 over the first axis.
+
+        Raises
+        ------
+        ValueError
+            If ``d`` does not end in the model's shape.
+        RuntimeError
+            Before :meth:`init`.
+
+        Examples
+        --------
+        A pixel far from its stable mean and from its last value is owned by the lost
+        component:
+
+        >>> model = WSLModel((2,))
+        >>> model.init([0.5, 0.5])
+        >>> model.ownership([0.5, 0.95]).round(2)
+        array([[0.73, 0.  ],
+               [0.17, 0.  ],
+               [0.1 , 1.  ]])
+        """
         d = self._data(d)
         t = self._log_terms(d)
         t = np.exp(t - t.max(axis=0))
         return t / t.sum(axis=0)
 
     def update(self, d: Any) -> np.ndarray:
-        """One step of online EM on observation ``d``; returns its ownerships ``(3, *shape)``."""
+        """One step of online EM on observation ``d``; returns its ownerships ``(3, *shape)``.
+
+        The mixing probabilities and the stable component's moments move towards the
+        observation by ``alpha``, weighted by the ownerships (see the module); ``σ_s`` is
+        floored at ``sigma_min``, and ``d`` becomes the wandering component's mean.
+
+        Parameters
+        ----------
+        d : (\\*shape) array_like
+            One observation.
+
+        Returns
+        -------
+        (3, \\*shape) ndarray
+            The ownerships of ``d`` before the update (:meth:`ownership`).
+
+        Raises
+        ------
+        ValueError
+            If ``d`` does not have the model's shape.
+        RuntimeError
+            Before :meth:`init`.
+
+        Examples
+        --------
+        An outlier owned by the lost component leaves the stable mean where it was:
+
+        >>> model = WSLModel((2,))
+        >>> model.init([0.5, 0.5])
+        >>> o = model.update([0.5, 0.95])
+        >>> model.mu_s.tolist(), model.m[2].round(3).tolist()
+        ([0.5, 0.5], [0.433, 0.477])
+        """
         d = self._data(d)
         if d.shape != self.shape:
             raise ValueError(f"update takes one observation of shape {self.shape}; got {d.shape}")
@@ -174,10 +307,44 @@ class WSLTracker(SingleObjectTracker):
     **model
         Passed to :class:`WSLModel`.
 
+    Attributes
+    ----------
+    model : WSLModel
+        The mixture (after the tracker has started).
+    ownership : (3, h, w) ndarray
+        The ownerships of the view at the last box.
+    score : float
+        The log-likelihood of the view at the last box (NaN after :meth:`init`).
+
+    Raises
+    ------
+    ValueError
+        If ``size`` is less than 8 or ``radius`` less than 1.
+
     Notes
     -----
     After each ``update``, ``ownership`` holds the ownerships ``(3, h, w)`` of the view at
     the new box and ``model`` the mixture.
+
+    References
+    ----------
+    .. [1] A. D. Jepson, D. J. Fleet and T. F. El-Maraghi, "Robust online appearance models
+       for visual tracking", *IEEE Conference on Computer Vision and Pattern Recognition*,
+       2001.
+
+    Examples
+    --------
+    A red square moving 3 pixels a frame:
+
+    >>> def image(x):
+    ...     im = np.zeros((60, 80, 3), np.uint8); im[20:40, x:x + 20] = (0, 0, 255)
+    ...     return im
+    >>> t = WSLTracker()
+    >>> t.init(image(30), [30, 20, 20, 20])
+    >>> [t.update(image(x)).round().tolist()[0] for x in (33, 36, 39)]
+    [33.0, 36.0, 39.0]
+    >>> t.ownership.shape
+    (3, 32, 32)
     """
 
     def __init__(self, size: int = 32, radius: int = 8, scales: tuple = (1.0,),
@@ -250,7 +417,21 @@ class WSLTracker(SingleObjectTracker):
         return self.box.copy()
 
     def anchor(self, box: Any) -> None:
-        """Move the region to ``box`` (the view keeps its pixel size; the velocity is kept)."""
+        """Move the region to ``box`` (the view keeps its pixel size; the velocity is kept).
+
+        Parameters
+        ----------
+        box : (4,) array_like
+            The box ``x, y, w, h``.
+
+        Examples
+        --------
+        >>> t = WSLTracker()
+        >>> t.init(np.zeros((60, 80), np.uint8), [30, 20, 20, 20])
+        >>> t.anchor([10, 10, 30, 30])
+        >>> t.centre.tolist(), t.box.tolist()
+        ([25.0, 25.0], [10.0, 10.0, 30.0, 30.0])
+        """
         b = as_box(box)
         self.centre = b[:2] + b[2:] / 2
         self.w, self.h = float(b[2]), float(b[3])

@@ -25,7 +25,11 @@ __all__ = ["Tracker", "SingleObjectTracker", "frame_index", "frame_image"]
 
 @runtime_checkable
 class Tracker(Protocol):
-    """What every tracker answers.
+    """What every tracker answers: ``step(frame, detections) -> Tracks`` and ``reset()``.
+
+    Any object with these two methods is a tracker for :func:`vistrack.pipeline.run`; the
+    protocol is checkable at run time with ``isinstance`` (which looks for the names only, not
+    their signatures).
 
     Examples
     --------
@@ -35,17 +39,69 @@ class Tracker(Protocol):
     """
 
     def step(self, frame: Frame, detections: Detections | None = None) -> Tracks:
-        """Track one frame; return the tracks reported in it."""
+        """Track one frame; return the tracks reported in it.
+
+        Parameters
+        ----------
+        frame : Frame
+            The frame: its index, its time, and its image where the tracker looks at pixels
+            (trackers of detections also take the index alone).
+        detections : Detections, optional
+            The frame's detections (None: none, or the tracker finds its own objects).
+
+        Returns
+        -------
+        Tracks
+            The tracks the tracker reports in this frame.
+
+        Examples
+        --------
+        >>> from vistrack.tracking import BoxTracker
+        >>> tracker = BoxTracker()
+        >>> tracks = tracker.step(Frame(1, 0.0), Detections.from_xywh([[10, 20, 30, 60]], [0.9]))
+        >>> tracks.ids.tolist(), tracks.xywh.tolist()
+        ([1], [[10.0, 20.0, 30.0, 60.0]])
+        """
         ...
 
     def reset(self) -> None:
-        """Forget every track; identities start again from 1."""
+        """Forget every track; identities start again from 1.
+
+        Examples
+        --------
+        >>> from vistrack.tracking import BoxTracker
+        >>> tracker = BoxTracker()
+        >>> _ = tracker.step(Frame(1, 0.0), Detections.from_xywh([[10, 20, 30, 60]], [0.9]))
+        >>> _ = tracker.step(Frame(2, 0.04), Detections.from_xywh([[500, 20, 30, 60]], [0.9]))
+        >>> tracker.reset()
+        >>> tracker.step(Frame(1, 0.0), Detections.from_xywh([[500, 20, 30, 60]], [0.9])).ids
+        array([1])
+        """
         ...
 
 
 def frame_index(frame: Frame | int | None, last: int | None) -> int:
     """The index of ``frame`` (a :class:`~vistrack.types.Frame`, or its index; None: the
     one after ``last``, or 1), checked to come after ``last``.
+
+    Parameters
+    ----------
+    frame : Frame, int or None
+        The frame, its index, or None for the one after ``last``.
+    last : int or None
+        The index of the tracker's previous frame (None: there was none).
+
+    Returns
+    -------
+    int
+        The frame's index.
+
+    Raises
+    ------
+    TypeError
+        If ``frame`` is neither a :class:`~vistrack.types.Frame`, an integer nor None.
+    ValueError
+        If the index does not come after ``last``.
 
     Examples
     --------
@@ -68,7 +124,34 @@ def frame_index(frame: Frame | int | None, last: int | None) -> int:
 
 def frame_image(frame: Any, who: str) -> np.ndarray:
     """The image of ``frame``, a :class:`~vistrack.types.Frame` with one; ``who`` names the
-    tracker in the error."""
+    tracker in the error.
+
+    Parameters
+    ----------
+    frame : Frame
+        A frame with an image.
+    who : str
+        The tracker asking, for the message.
+
+    Returns
+    -------
+    ndarray
+        ``frame.image``, as an array.
+
+    Raises
+    ------
+    TypeError
+        If ``frame`` is not a :class:`~vistrack.types.Frame`, or has no image.
+
+    Examples
+    --------
+    >>> frame_image(Frame(1, 0.0, np.zeros((4, 6), np.uint8)), "mine").shape
+    (4, 6)
+    >>> frame_image(Frame(1, 0.0), "mine")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    TypeError: mine looks at pixels: frame must be a vistrack.types.Frame with an image; ...
+    """
     image = frame.image if isinstance(frame, Frame) else None
     if image is None:
         raise TypeError(f"{who} looks at pixels: frame must be a vistrack.types.Frame with an "
@@ -88,6 +171,19 @@ class SingleObjectTracker:
 
     A tracker implements ``_start(image, box)`` (``box`` validated, ``(4,)`` float) and
     ``_follow(image) -> box``.
+
+    Examples
+    --------
+    By hand, on a red square that moves 3 pixels to the right:
+
+    >>> from vistrack.tracking.single import single_tracker
+    >>> def image(x):
+    ...     im = np.zeros((60, 80, 3), np.uint8); im[20:40, x:x + 20] = (0, 0, 255)
+    ...     return im
+    >>> t = single_tracker("wsl")
+    >>> t.init(image(30), [30, 20, 20, 20])
+    >>> t.update(image(33)).round().tolist()
+    [33.0, 20.0, 20.0, 20.0]
     """
 
     _started: bool = False
@@ -99,12 +195,60 @@ class SingleObjectTracker:
         raise NotImplementedError
 
     def init(self, image: Any, box: Any) -> None:
-        """Start following the object in ``box`` (``x, y, w, h``) of ``image``."""
+        """Start following the object in ``box`` (``x, y, w, h``) of ``image``.
+
+        Parameters
+        ----------
+        image : (H, W, 3) or (H, W) ndarray
+            The first frame, BGR or grey uint8 (as the tracker needs).
+        box : (4,) array_like
+            The object's box ``x, y, w, h``: the top-left corner and size.
+
+        Raises
+        ------
+        ValueError
+            If ``box`` is not four finite numbers with a positive size.
+
+        Examples
+        --------
+        >>> from vistrack.tracking.single import single_tracker
+        >>> t = single_tracker("colour")
+        >>> t.init(np.zeros((60, 80, 3), np.uint8), [30, 20, 20, 20])
+        >>> t.started
+        True
+        """
         self._start(image, as_box(box))
         self._started = True
 
     def update(self, image: Any) -> np.ndarray:
-        """The object's box ``(4,)`` (``x, y, w, h``) in the next ``image``."""
+        """The object's box ``(4,)`` (``x, y, w, h``) in the next ``image``.
+
+        Parameters
+        ----------
+        image : (H, W, 3) or (H, W) ndarray
+            The next frame, of the first frame's kind.
+
+        Returns
+        -------
+        (4,) ndarray
+            The box ``x, y, w, h`` (float).
+
+        Raises
+        ------
+        RuntimeError
+            If the tracker has not been started (:meth:`init` or :meth:`step`).
+
+        Examples
+        --------
+        >>> from vistrack.tracking.single import single_tracker
+        >>> def image(x):
+        ...     im = np.zeros((60, 80, 3), np.uint8); im[20:40, x:x + 20] = (0, 0, 255)
+        ...     return im
+        >>> t = single_tracker("wsl")
+        >>> t.init(image(30), [30, 20, 20, 20])
+        >>> [t.update(image(x)).round().tolist()[0] for x in (33, 36)]
+        [33.0, 36.0]
+        """
         if not self._started:
             raise RuntimeError(f"{type(self).__name__}.update before init: start it with "
                                "init(image, box) or step(frame, detections)")
@@ -112,11 +256,42 @@ class SingleObjectTracker:
 
     @property
     def started(self) -> bool:
-        """Whether the tracker holds an object (after :meth:`init`, until :meth:`reset`)."""
+        """Whether the tracker holds an object (after :meth:`init`, until :meth:`reset`).
+
+        Examples
+        --------
+        >>> from vistrack.tracking.single import single_tracker
+        >>> t = single_tracker("colour")
+        >>> t.started
+        False
+        >>> t.init(np.zeros((60, 80, 3), np.uint8), [30, 20, 20, 20])
+        >>> t.started
+        True
+        """
         return self._started
 
     def step(self, frame: Frame, detections: Detections | None = None) -> Tracks:
         """Track one frame (see the class); ``frame`` must carry its image.
+
+        Parameters
+        ----------
+        frame : Frame
+            The frame, with its image.
+        detections : Detections, optional
+            The frame's detections, with boxes; used only until the tracker has started, the
+            most confident one (the first, without scores) starting it.
+
+        Returns
+        -------
+        Tracks
+            Nothing before the tracker has started; then one track, identity 1, score 1 and
+            class 0, with the object's box ``x0, y0, x1, y1``.
+
+        Raises
+        ------
+        TypeError
+            If ``frame`` has no image, or the detections that would start the tracker have no
+            boxes.
 
         Examples
         --------
@@ -145,5 +320,15 @@ class SingleObjectTracker:
                       classes=np.zeros(1, np.int64))
 
     def reset(self) -> None:
-        """Forget the object; the next frame with a detection starts the tracker again."""
+        """Forget the object; the next frame with a detection starts the tracker again.
+
+        Examples
+        --------
+        >>> from vistrack.tracking.single import single_tracker
+        >>> t = single_tracker("colour")
+        >>> t.init(np.zeros((60, 80, 3), np.uint8), [30, 20, 20, 20])
+        >>> t.reset()
+        >>> t.started
+        False
+        """
         self._started = False

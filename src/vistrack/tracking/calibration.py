@@ -69,8 +69,29 @@ def _pava(y, w):
 
 
 def isotonic_increasing(y: Any, weights: Any = None) -> np.ndarray:
-    """The non-decreasing sequence closest to ``y`` in weighted least squares (isotonic
+    r"""The non-decreasing sequence closest to ``y`` in weighted least squares (isotonic
     regression by pool-adjacent-violators).
+
+    .. math:: \hat y = \arg\min_{z_1 \le z_2 \le \dots \le z_N} \sum_i w_i (y_i - z_i)^2
+
+    Parameters
+    ----------
+    y : (N,) array_like
+        The values, in order (flattened), finite.
+    weights : (N,) array_like, optional
+        Their weights, finite and > 0; default all 1.
+
+    Returns
+    -------
+    (N,) ndarray
+        The fit: each run of values that violates the order is replaced by its weighted
+        mean.
+
+    Raises
+    ------
+    ValueError
+        If ``weights`` does not have the shape of ``y``, or a value or weight is not finite,
+        or a weight is not > 0.
 
     Examples
     --------
@@ -106,7 +127,34 @@ def persistence(frames: Iterable[Detections], link_iou: float = 0.3
     """The scores of every detection of the frames but the first and the last (which lack a
     neighbour), and whether each persists (it continues a detection of the previous frame and
     is continued in the next; see the module): ``(scores, persisted)``, in the order of the
-    frames and of the detections within them."""
+    frames and of the detections within them.
+
+    Parameters
+    ----------
+    frames : iterable of Detections
+        One frame's detections each, with boxes, in order.
+    link_iou : float
+        The IoU at which a detection continues one of the previous frame (boxes of one class,
+        linked one-to-one by global nearest neighbour).
+
+    Returns
+    -------
+    scores : (M,) ndarray
+        The detections' scores.
+    persisted : (M,) bool ndarray
+        Whether each persists.
+
+    Examples
+    --------
+    An object that stays (score 0.9) and clutter that jumps (score 0.4), over four frames:
+
+    >>> frames = [Detections(boxes=np.array([[10.0, 10, 40, 80], [200 + 50 * f, 100,
+    ...                                      230 + 50 * f, 160]]), scores=np.array([0.9, 0.4]))
+    ...           for f in range(4)]
+    >>> scores, persisted = persistence(frames)
+    >>> scores.tolist(), persisted.tolist()
+    ([0.9, 0.4, 0.9, 0.4], [True, False, True, False])
+    """
     cal = ScoreCalibrator(link_iou=link_iou, window=None)
     for d in frames:
         cal.observe(d)
@@ -130,6 +178,19 @@ class ScoreCalibration:
         How many persistence outcomes the map was fitted to (0: none; the rank prior alone).
     top_persistence : float
         The persistence of the top detections that the data part was divided by.
+
+    Attributes
+    ----------
+    scores, confidence : (M,) ndarray
+        The map's points, as given.
+    n, top_persistence : int, float
+        As given.
+
+    Raises
+    ------
+    ValueError
+        If ``scores`` and ``confidence`` differ in length or are empty, the scores are not
+        increasing (or one is NaN), or the confidences are not non-decreasing in ``[0, 1]``.
 
     Examples
     --------
@@ -160,7 +221,40 @@ class ScoreCalibration:
             top_min: int = 20) -> ScoreCalibration:
         """Fit to scores and their persistence outcomes (see the module): full confidence is
         the persistence of the ``top`` fraction of the detections by score, and of at least
-        ``top_min`` of them (a small sample's top fraction is a handful)."""
+        ``top_min`` of them (a small sample's top fraction is a handful).
+
+        Parameters
+        ----------
+        scores : (N,) array_like
+            The detections' scores (not NaN).
+        persisted : (N,) array_like
+            Whether each persisted (bool, or 0 and 1).
+        top : float
+            The fraction of the detections, by score, whose persistence is full confidence,
+            in ``(0, 1]``; ties at its edge are included.
+        top_min : int
+            The least number of detections it is taken over (all of them if there are
+            fewer).
+
+        Returns
+        -------
+        ScoreCalibration
+            On the distinct scores: the isotonic fit of the persistence over the top
+            detections' persistence, clipped to 1 (all 1 when none of the top detections
+            persisted).
+
+        Raises
+        ------
+        ValueError
+            If ``top`` is not in ``(0, 1]``, the shapes differ, there are no scores, or a
+            score is NaN.
+
+        Examples
+        --------
+        >>> cal = ScoreCalibration.fit([0.1, 0.2, 0.8, 0.9], [0, 1, 1, 1], top=0.5, top_min=2)
+        >>> cal.confidence.tolist(), cal.top_persistence
+        ([0.0, 1.0, 1.0, 1.0], 1.0)
+        """
         if not 0 < top <= 1:
             raise ValueError(f"top must be in (0, 1]; got {top}")
         s = _scores(scores)
@@ -185,7 +279,41 @@ class ScoreCalibration:
     @classmethod
     def from_frames(cls, frames: Iterable[Detections], *, link_iou: float = 0.3,
                     top: float = 0.05) -> ScoreCalibration:
-        """Fit to a whole sequence of frames (the offline mode)."""
+        """Fit to a whole sequence of frames (the offline mode).
+
+        :func:`persistence` of the frames, then :meth:`fit`.
+
+        Parameters
+        ----------
+        frames : iterable of Detections
+            Every frame's detections, with boxes, in order.
+        link_iou : float
+            The IoU at which a detection continues one of the previous frame.
+        top : float
+            The fraction of the most confident detections whose persistence is full
+            confidence (at least 20 of them).
+
+        Returns
+        -------
+        ScoreCalibration
+            The fitted map.
+
+        Raises
+        ------
+        ValueError
+            If the frames but the first and last hold no detections.
+
+        Examples
+        --------
+        An object that stays (score 0.9) and clutter that jumps (score 0.4):
+
+        >>> frames = [Detections(boxes=np.array([[10.0, 10, 40, 80], [200 + 50 * f, 100,
+        ...                                      230 + 50 * f, 160]]), scores=np.array([0.9, 0.4]))
+        ...           for f in range(6)]
+        >>> cal = ScoreCalibration.from_frames(frames)
+        >>> cal([0.4, 0.9]).tolist(), cal.score_at(0.5)
+        ([0.0, 1.0], 0.9)
+        """
         s, p = persistence(frames, link_iou)
         return cls.fit(s, p, top=top)
 
@@ -195,14 +323,52 @@ class ScoreCalibration:
         return self.confidence[np.clip(k, 0, len(self.scores) - 1)]
 
     def score_at(self, level: float) -> float:
-        """The lowest score whose confidence is at least ``level`` (``inf`` if none is)."""
+        """The lowest score whose confidence is at least ``level`` (``inf`` if none is).
+
+        Parameters
+        ----------
+        level : float
+            A confidence.
+
+        Returns
+        -------
+        float
+            The lowest of the map's scores with at least that confidence, or ``inf``.
+
+        Examples
+        --------
+        >>> cal = ScoreCalibration([0.2, 0.5, 0.8], [0.0, 0.6, 1.0])
+        >>> cal.score_at(0.5), cal.score_at(1.0), cal.score_at(1.5)
+        (0.5, 0.8, inf)
+        """
         k = np.flatnonzero(self.confidence >= level)
         return float(self.scores[k[0]]) if len(k) else float("inf")
 
     @classmethod
     def ranks(cls, scores: Any) -> ScoreCalibration:
         """The map of each score to its rank among ``scores``: the fraction of them at or
-        below it (their empirical distribution function; nothing fitted)."""
+        below it (their empirical distribution function; nothing fitted).
+
+        Parameters
+        ----------
+        scores : (N,) array_like
+            Scores (not NaN).
+
+        Returns
+        -------
+        ScoreCalibration
+            On the distinct scores, with ``n = 0``.
+
+        Raises
+        ------
+        ValueError
+            If there are no scores, or one is NaN.
+
+        Examples
+        --------
+        >>> ScoreCalibration.ranks([0.1, 0.5, 0.5, 0.9]).confidence.tolist()
+        [0.25, 0.75, 1.0]
+        """
         r = np.sort(_scores(scores))
         if len(r) == 0:
             raise ValueError("no scores to rank")
@@ -211,7 +377,26 @@ class ScoreCalibration:
 
     def blend(self, weight: float, ranked: np.ndarray) -> ScoreCalibration:
         """``weight`` × this map + (1 − ``weight``) × the empirical distribution function of
-        ``ranked`` (scores), on the union of both's scores."""
+        ``ranked`` (scores), on the union of both's scores.
+
+        Parameters
+        ----------
+        weight : float
+            The weight of this map, in ``[0, 1]``.
+        ranked : (R,) ndarray
+            The scores whose ranks are the prior; at least one.
+
+        Returns
+        -------
+        ScoreCalibration
+            The blend, clipped to ``[0, 1]``, with this map's ``n`` and ``top_persistence``.
+
+        Examples
+        --------
+        >>> cal = ScoreCalibration([0.4, 0.9], [0.0, 1.0])
+        >>> cal.blend(0.5, np.array([0.4, 0.9])).confidence.tolist()
+        [0.25, 1.0]
+        """
         r = np.sort(ranked)
         u = np.union1d(self.scores, r)
         cdf = np.searchsorted(r, u, side="right") / len(r)
@@ -239,7 +424,27 @@ class ScoreCalibrator:
     window : int or None
         Keep the last ``window`` outcomes (None: all), so the map follows a scene that changes.
 
-    Call :meth:`observe` once a frame, then the calibrator itself on that frame's scores.
+    Call :meth:`observe` once a frame, then the calibrator itself on that frame's scores:
+    ``calibrator(scores)`` is :meth:`calibration` applied to them.
+
+    Raises
+    ------
+    ValueError
+        If ``link_iou`` or ``top`` is not in ``(0, 1]``, ``prior`` is negative, or ``window``
+        is less than 1.
+
+    Examples
+    --------
+    Until the third frame, the ranks of the scores seen; then what persists:
+
+    >>> cal = ScoreCalibrator()
+    >>> for f in range(3):
+    ...     boxes = np.array([[10.0, 10, 40, 80], [200 + 50 * f, 100, 230 + 50 * f, 160]])
+    ...     cal.observe(Detections(boxes=boxes, scores=np.array([0.9, 0.4])))
+    ...     print(cal.n, cal([0.4, 0.9]).tolist())
+    0 [0.5, 1.0]
+    0 [0.5, 1.0]
+    2 [0.0, 1.0]
     """
 
     def __init__(self, *, link_iou: float = 0.3, top: float = 0.05, prior: float = 0.0,
@@ -257,7 +462,16 @@ class ScoreCalibrator:
         self.reset()
 
     def reset(self) -> None:
-        """Forget everything seen."""
+        """Forget everything seen.
+
+        Examples
+        --------
+        >>> cal = ScoreCalibrator()
+        >>> for f in range(3):
+        ...     cal.observe(Detections(boxes=np.array([[10.0, 10, 40, 80]]), scores=[0.9]))
+        >>> cal.n, (cal.reset(), cal.n)[1]
+        (1, 0)
+        """
         self._buf_s, self._buf_p = np.zeros(0), np.zeros(0)
         self._prev: tuple | None = None  # boxes, classes, scores, linked back, first frame
         self._new_since_fit = 0
@@ -266,12 +480,43 @@ class ScoreCalibrator:
 
     @property
     def n(self) -> int:
-        """How many persistence outcomes are held."""
+        """How many persistence outcomes are held (at most ``window``).
+
+        Examples
+        --------
+        >>> cal = ScoreCalibrator()
+        >>> for f in range(4):
+        ...     cal.observe(Detections(boxes=np.array([[10.0, 10, 40, 80]]), scores=[0.9]))
+        >>> cal.n  # frames 2 and 3: the first and the last frame seen have no outcome yet
+        2
+        """
         return len(self._buf_s)
 
     def observe(self, detections: Detections | None) -> None:
         """Take one frame's detections (None: the sequence has ended): link them to the
-        previous frame's, which are then resolved."""
+        previous frame's, which are then resolved.
+
+        Parameters
+        ----------
+        detections : Detections or None
+            The frame's detections, with boxes; None after the last frame (its detections
+            then get no outcome, having no next frame).
+
+        Raises
+        ------
+        TypeError
+            If the detections have no boxes.
+        ValueError
+            If a score is NaN.
+
+        Examples
+        --------
+        >>> cal = ScoreCalibrator()
+        >>> for f in range(3):
+        ...     cal.observe(Detections(boxes=np.array([[10.0, 10, 40, 80]]), scores=[0.9]))
+        >>> cal.n
+        1
+        """
         if detections is None:
             boxes, cls, s = np.zeros((0, 4)), np.zeros(0, np.int64), np.zeros(0)
         else:
@@ -306,7 +551,21 @@ class ScoreCalibrator:
 
     def calibration(self) -> ScoreCalibration:
         """The map learnt so far: refitted when the outcomes held have grown by a tenth (or
-        by ``window / 10``) since the last fit, blended with the rank prior."""
+        by ``window / 10``) since the last fit, blended with the rank prior.
+
+        Before any outcome, the ranks of the scores seen (:meth:`ScoreCalibration.ranks`);
+        with nothing seen, confidence 1 for every score.
+
+        Returns
+        -------
+        ScoreCalibration
+            The map.
+
+        Examples
+        --------
+        >>> ScoreCalibrator().calibration()([0.1, 5.0]).tolist()
+        [1.0, 1.0]
+        """
         pending = self._prev[2] if self._prev is not None else np.zeros(0)
         n = self.n
         stale = (self._cal is None or self._new_since_fit >= max(1, 0.1 * max(self._fit_n, 1))

@@ -44,7 +44,31 @@ __all__ = ["Features", "KLTTracker"]
 class Features:
     """The features of one frame: ``ids (N,)``, ``points (N, 2)`` (x, y), ``ages (N,)``
     (frames since each was started), ``residuals (N,)`` (of the affine check; 0 for new ones)
-    and the number ``terminated`` in this frame."""
+    and the number ``terminated`` in this frame.
+
+    What :meth:`KLTTracker.track` returns; ``len()`` is the number of features.
+
+    Attributes
+    ----------
+    ids : (N,) int64 ndarray
+        Identities, integers from 1, never reused.
+    points : (N, 2) ndarray
+        Positions ``x, y`` in pixels.
+    ages : (N,) int64 ndarray
+        Frames since each feature was started (0 in its first frame).
+    residuals : (N,) ndarray
+        Normalised RMS residual of each feature's affine check in this frame (0 for new
+        features, and without the check).
+    terminated : int
+        How many features were terminated in this frame.
+
+    Examples
+    --------
+    >>> f = Features(np.array([1, 2]), np.array([[3.0, 4.0], [5.0, 6.0]]), np.zeros(2, int),
+    ...              np.zeros(2), terminated=0)
+    >>> len(f), f.detections().points.tolist()
+    (2, [[3.0, 4.0], [5.0, 6.0]])
+    """
 
     ids: np.ndarray
     points: np.ndarray
@@ -56,6 +80,20 @@ class Features:
         return int(self.ids.shape[0])
 
     def detections(self) -> Detections:
+        """The features as point detections.
+
+        Returns
+        -------
+        Detections
+            ``points (N, 2)``, scores 1.
+
+        Examples
+        --------
+        >>> f = Features(np.array([7]), np.array([[3.0, 4.0]]), np.zeros(1, int), np.zeros(1), 0)
+        >>> d = f.detections()
+        >>> d.points.tolist(), d.scores.tolist()
+        ([[3.0, 4.0]], [1.0])
+        """
         return Detections(points=self.points)
 
 
@@ -75,6 +113,8 @@ class KLTTracker:
         Largest forward-backward error, and largest disagreement of the affine position with
         the translation one (pixels).
     affine_check : bool
+        Register each feature's first patch to the current frame (step 5 of the module), and
+        terminate the features that fail.
     half : int
         Half-size of the patch compared with the first frame's ((2 half + 1)² pixels).
     max_residual : float
@@ -84,6 +124,25 @@ class KLTTracker:
         Discrete search window for features Lucas-Kanade loses; 0 turns it off.
     min_ncc : float
         Smallest correlation of a feature's patch with the previous frame's.
+
+    Raises
+    ------
+    ValueError
+        If ``max_features`` is less than 1.
+
+    Examples
+    --------
+    A textured scene moving 2 pixels to the right:
+
+    >>> import cv2
+    >>> rng = np.random.default_rng(0)
+    >>> scene = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 2)
+    >>> klt = KLTTracker(max_features=50)
+    >>> first = klt.track(scene)
+    >>> second = klt.track(np.roll(scene, 2, axis=1))
+    >>> kept = np.isin(first.ids, second.ids)
+    >>> np.median(second.points - first.points[kept], axis=0).round(1) + 0.0
+    array([2., 0.])
     """
 
     _prev32: np.ndarray  # float32 copy of the previous frame, set by track
@@ -104,7 +163,17 @@ class KLTTracker:
         self.reset()
 
     def reset(self) -> None:
-        """Forget every feature; identities start again from 1."""
+        """Forget every feature; identities start again from 1.
+
+        Examples
+        --------
+        >>> rng = np.random.default_rng(0)
+        >>> klt = KLTTracker(max_features=20)
+        >>> _ = klt.track(rng.integers(0, 256, (60, 80), dtype=np.uint8))
+        >>> klt.reset()
+        >>> len(klt.ids)
+        0
+        """
         self._prev: np.ndarray | None = None
         self.ids = np.zeros(0, np.int64)
         self.points = np.zeros((0, 2), np.float32)
@@ -194,6 +263,35 @@ class KLTTracker:
         """Track one frame (:class:`~vistrack.tracking.Tracker`): the features as point
         tracks (score 1). ``frame`` carries the image; detections are not used (the tracker
         finds its own features). :meth:`track` gives the features' ages and residuals too.
+
+        Parameters
+        ----------
+        frame : Frame
+            The frame, with its image (grey or BGR uint8).
+        detections : Detections, optional
+            Not used.
+
+        Returns
+        -------
+        Tracks
+            The features kept and started in this frame: ``ids``, ``points (N, 2)``, scores 1
+            and class 0.
+
+        Raises
+        ------
+        TypeError
+            If ``frame`` has no image.
+        ValueError
+            If the image's size differs from the previous frame's.
+
+        Examples
+        --------
+        >>> from vistrack.types import Frame
+        >>> rng = np.random.default_rng(0)
+        >>> image = rng.integers(0, 256, (60, 80), dtype=np.uint8)
+        >>> tracks = KLTTracker(max_features=20).step(Frame(1, 0.0, image))
+        >>> tracks.ids[:3].tolist(), tracks.points.shape[1], bool((tracks.scores == 1).all())
+        ([1, 2, 3], 2, True)
         """
         f = self.track(frame_image(frame, "KLTTracker"))
         n = len(f)
@@ -201,7 +299,34 @@ class KLTTracker:
                       classes=np.zeros(n, np.int64))
 
     def track(self, image: Any) -> Features:
-        """Track the features into a new frame (grey or BGR uint8) and top them up."""
+        """Track the features into a new frame (grey or BGR uint8) and top them up.
+
+        Parameters
+        ----------
+        image : (H, W) or (H, W, 3) ndarray
+            The frame, grey or BGR uint8, of the previous frame's size.
+
+        Returns
+        -------
+        Features
+            The features kept and started, and how many were terminated.
+
+        Raises
+        ------
+        ValueError
+            If the image's size differs from the previous frame's.
+
+        Examples
+        --------
+        >>> import cv2
+        >>> rng = np.random.default_rng(0)
+        >>> scene = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 2)
+        >>> klt = KLTTracker(max_features=50)
+        >>> first = klt.track(scene)
+        >>> second = klt.track(np.roll(scene, 2, axis=1))
+        >>> int(first.ages.max()), int(second.ages.min()), second.terminated
+        (0, 1, 0)
+        """
         grey = as_uint8_image(image, grey=True)
         terminated = 0
         if self._prev is not None and len(self.ids):

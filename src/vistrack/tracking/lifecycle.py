@@ -28,7 +28,56 @@ class TrackTable:
     """Tracks as columns: ``mean (K, n)``, ``cov (K, *cov_shape)`` (default ``(n, n)``), ``ids``,
     ``state``, ``hits`` (updates in a row), ``streak`` (the length of the last run of updates
     in a row, kept while the track is lost), ``last_time`` (of the last update), ``classes``
-    and ``scores``."""
+    and ``scores``.
+
+    The trackers correct the rows of ``mean`` and ``cov`` themselves; the table adds tracks
+    (:meth:`add`), runs the lifecycle after each frame (:meth:`manage`, see the module) and
+    drops rows (:meth:`keep`).
+
+    Parameters
+    ----------
+    n : int
+        State size.
+    cov_shape : tuple of int, optional
+        Shape of one track's covariance; default ``(n, n)`` (the box tracker keeps ``(4, 3)``,
+        per-axis covariances, :mod:`vistrack.filters.axes`).
+
+    Attributes
+    ----------
+    mean : (K, n) ndarray
+        The tracks' states.
+    cov : (K, \\*cov_shape) ndarray
+        Their covariances.
+    ids : (K,) int64 ndarray
+        Identities, integers from 1.
+    state : (K,) int8 ndarray
+        :data:`TENTATIVE`, :data:`CONFIRMED` or :data:`LOST`.
+    hits : (K,) int64 ndarray
+        Updates in a row, up to the last frame (0 after a miss).
+    streak : (K,) int64 ndarray
+        The length of the last run of updates in a row, kept while the track is lost.
+    last_time : (K,) float ndarray
+        Time of the last update (seconds).
+    classes : (K,) int64 ndarray
+        Class of each track.
+    scores : (K,) float ndarray
+        Score of the detection each track was last updated with (as the tracker sets it).
+    next_id : int
+        The identity the next track gets.
+
+    Examples
+    --------
+    Two tentative tracks; the first is updated in the next frame and confirmed, the second
+    missed and deleted:
+
+    >>> t = TrackTable(2)
+    >>> t.add(np.array([[0.0, 0.0], [5.0, 5.0]]), np.tile(np.eye(2), (2, 1, 1)), 0.0,
+    ...       np.zeros(2, np.int64), np.array([0.9, 0.8]), confirmed=False)
+    >>> t.manage(np.array([True, False]), 0.1, confirm_hits=2, max_lost=1.0)
+    array([ True, False])
+    >>> t.ids.tolist(), t.state.tolist() == [CONFIRMED], t.hits.tolist()
+    ([1], True, [2])
+    """
 
     def __init__(self, n: int, cov_shape: tuple[int, ...] | None = None):
         self.n = n
@@ -36,6 +85,17 @@ class TrackTable:
         self.reset()
 
     def reset(self) -> None:
+        """Drop every track; identities start again from 1.
+
+        Examples
+        --------
+        >>> t = TrackTable(2)
+        >>> t.add(np.zeros((1, 2)), np.eye(2)[None], 0.0, np.zeros(1, np.int64), np.ones(1),
+        ...       confirmed=True)
+        >>> t.reset()
+        >>> len(t), t.next_id
+        (0, 1)
+        """
         n = self.n
         self.mean, self.cov = np.zeros((0, n)), np.zeros((0,) + self.cov_shape)
         self.ids = np.zeros(0, np.int64)
@@ -52,6 +112,31 @@ class TrackTable:
 
     def add(self, mean: np.ndarray, cov: np.ndarray, time: float, classes: np.ndarray,
             scores: np.ndarray, confirmed: bool) -> None:
+        """Add new tracks, with the next identities, one hit and ``time`` as their last update.
+
+        Parameters
+        ----------
+        mean : (k, n) ndarray
+            Their states.
+        cov : (k, \\*cov_shape) ndarray
+            Their covariances.
+        time : float
+            The time of the frame they start in (seconds).
+        classes : (k,) int ndarray
+            Their classes.
+        scores : (k,) ndarray
+            The scores of the detections they start from.
+        confirmed : bool
+            Start them confirmed (in a sequence's first frame) rather than tentative.
+
+        Examples
+        --------
+        >>> t = TrackTable(2)
+        >>> t.add(np.zeros((2, 2)), np.zeros((2, 2, 2)), 0.0, np.zeros(2, np.int64),
+        ...       np.ones(2), confirmed=True)
+        >>> t.ids.tolist(), t.state.tolist() == [CONFIRMED, CONFIRMED], t.next_id
+        ([1, 2], True, 3)
+        """
         k = len(mean)
         self.mean = np.concatenate([self.mean, mean])
         self.cov = np.concatenate([self.cov, cov])
@@ -66,13 +151,43 @@ class TrackTable:
         self.scores = np.concatenate([self.scores, scores])
 
     def keep(self, mask: np.ndarray) -> None:
+        """Keep only some rows of every column.
+
+        Parameters
+        ----------
+        mask : (K,) bool ndarray or int ndarray
+            The rows to keep (a mask, or their indices).
+
+        Examples
+        --------
+        >>> t = TrackTable(1)
+        >>> t.add(np.arange(3.0)[:, None], np.ones((3, 1, 1)), 0.0, np.zeros(3, np.int64),
+        ...       np.ones(3), confirmed=False)
+        >>> t.keep(np.array([True, False, True]))
+        >>> t.ids.tolist(), t.mean.ravel().tolist()
+        ([1, 3], [0.0, 2.0])
+        """
         for name in ("mean", "cov", "ids", "state", "hits", "streak", "last_time", "classes",
                      "scores"):
             setattr(self, name, getattr(self, name)[mask])
 
     def advance(self, updated: np.ndarray, time: float, confirm_hits: int) -> None:
-        """After a frame's updates: count hits, confirm (``confirm_hits`` updates in a row, or
-        a lost track updated again), and lose the confirmed tracks not updated."""
+        """After a frame's updates: count hits, confirm and lose (the first half of
+        :meth:`manage`).
+
+        The updated tracks get a hit (the others lose their run of hits) and ``time`` as
+        their last update; a tentative track with ``confirm_hits`` hits in a row, or a lost
+        track updated again, is confirmed; a confirmed track not updated is lost.
+
+        Parameters
+        ----------
+        updated : (K,) bool ndarray
+            Which tracks were updated in this frame.
+        time : float
+            The frame's time (seconds).
+        confirm_hits : int
+            Updates in a row that confirm a tentative track (the one it started with counts).
+        """
         self.hits = np.where(updated, self.hits + 1, 0)
         self.streak = np.where(updated, self.hits, self.streak)
         self.last_time = np.where(updated, float(time), self.last_time)
@@ -82,15 +197,66 @@ class TrackTable:
         self.state[~updated & (self.state == CONFIRMED)] = LOST
 
     def ended(self, updated: np.ndarray, time: float, max_lost: float) -> np.ndarray:
-        """The tracks to delete after :meth:`advance`: tentative ones not updated, and those
-        lost for longer than ``max_lost`` seconds."""
+        """The tracks to delete after :meth:`advance` (the second half of :meth:`manage`).
+
+        Parameters
+        ----------
+        updated : (K,) bool ndarray
+            Which tracks were updated in this frame.
+        time : float
+            The frame's time (seconds).
+        max_lost : float
+            Seconds a lost track is kept after its last update.
+
+        Returns
+        -------
+        (K,) bool ndarray
+            The tentative tracks not updated, and the tracks lost for more than ``max_lost``
+            seconds since their last update.
+        """
         return (~updated & (self.state == TENTATIVE)) | (
             (self.state == LOST) & (time - self.last_time > max_lost))
 
     def manage(self, updated: np.ndarray, time: float, confirm_hits: int,
                max_lost: float) -> np.ndarray:
-        """After a frame's updates: count hits, confirm, lose, delete (:meth:`advance`, then
-        :meth:`ended`). Returns the mask of the tracks kept."""
+        """After a frame's updates: count hits, confirm, lose (:meth:`advance`), and delete
+        (:meth:`ended`). Returns the mask of the tracks kept.
+
+        The updated tracks get a hit (the others lose their run of hits) and ``time`` as
+        their last update; a tentative track with ``confirm_hits`` hits in a row, or a lost
+        track updated again, is confirmed; a confirmed track not updated is lost; a tentative
+        track not updated, or a track lost for more than ``max_lost`` seconds since its last
+        update, is deleted.
+
+        Parameters
+        ----------
+        updated : (K,) bool ndarray
+            Which tracks were updated in this frame.
+        time : float
+            The frame's time (seconds).
+        confirm_hits : int
+            Updates in a row that confirm a tentative track (the one it started with counts).
+        max_lost : float
+            Seconds a lost track is kept after its last update.
+
+        Returns
+        -------
+        (K,) bool ndarray
+            Which of the tracks before the call are kept (their rows, in order, are the table
+            now).
+
+        Examples
+        --------
+        A confirmed track missed for longer than ``max_lost`` is deleted:
+
+        >>> t = TrackTable(1)
+        >>> t.add(np.zeros((1, 1)), np.ones((1, 1, 1)), 0.0, np.zeros(1, np.int64),
+        ...       np.ones(1), confirmed=True)
+        >>> t.manage(np.array([False]), 0.5, 3, 1.0), t.state.tolist() == [LOST]
+        (array([ True]), True)
+        >>> t.manage(np.array([False]), 1.5, 3, 1.0), len(t)
+        (array([False]), 0)
+        """
         self.advance(updated, time, confirm_hits)
         dead = self.ended(updated, time, max_lost)
         if dead.any():

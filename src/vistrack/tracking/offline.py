@@ -49,7 +49,38 @@ class SmoothedTracks:
     """Rows of smoothed tracks, sorted by frame and id: ``frames``, ``ids``, ``boxes``
     (``x0, y0, x1, y1``), ``scores`` (of the detection, 0 for a filled gap), ``classes``,
     ``filled`` (True in a gap), and the smoothed state covariances ``covs (N, 8, 8)`` of
-    ``[cx, cy, w, h, vcx, vcy, vw, vh]``."""
+    ``[cx, cy, w, h, vcx, vcy, vw, vh]``.
+
+    What :func:`smooth` returns; ``len()`` is the number of rows.
+
+    Attributes
+    ----------
+    frames : (N,) int ndarray
+        Frame of each row.
+    ids : (N,) int ndarray
+        Track identity of each row.
+    boxes : (N, 4) ndarray
+        Smoothed boxes ``x0, y0, x1, y1``.
+    scores : (N,) ndarray
+        Score of the detection the track was updated with in that frame; 0 in a filled gap.
+    classes : (N,) int ndarray
+        Class of each row's track.
+    filled : (N,) bool ndarray
+        True where the row fills a gap (no detection).
+    covs : (N, 8, 8) ndarray
+        Smoothed covariances of the state ``[cx, cy, w, h, vcx, vcy, vw, vh]``.
+
+    Examples
+    --------
+    >>> from vistrack.tracking import BoxTracker
+    >>> from vistrack.types import Detections
+    >>> tr = BoxTracker(record=True, frame_rate=10)
+    >>> for f in range(1, 6):
+    ...     _ = tr.step(f, Detections.from_xywh([[10 + 5 * f, 20, 30, 60]], [0.9]))
+    >>> rows = smooth(tr)
+    >>> len(rows), rows.frames.tolist(), rows.covs.shape
+    (5, [1, 2, 3, 4, 5], (5, 8, 8))
+    """
 
     frames: np.ndarray
     ids: np.ndarray
@@ -64,6 +95,15 @@ class SmoothedTracks:
 
     @property
     def xywh(self) -> np.ndarray:
+        """Boxes as ``x, y, w, h`` ``(N, 4)`` (top-left corner and size).
+
+        Examples
+        --------
+        >>> z = np.zeros(1)
+        >>> SmoothedTracks(z.astype(int), z.astype(int), np.array([[10.0, 20, 40, 80]]), z,
+        ...                z.astype(int), z.astype(bool), np.zeros((1, 8, 8))).xywh.tolist()
+        [[10.0, 20.0, 30.0, 60.0]]
+        """
         return xyxy_to_xywh(self.boxes)
 
 
@@ -98,21 +138,52 @@ def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0, *,
 
     Parameters
     ----------
-    tracker
+    tracker : BoxTracker
         A tracker created with ``record=True`` that has run over a sequence.
-    max_gap
+    max_gap : int
         The longest gap (in frames without an update) that is filled.
-    min_score
-        The lowest mean score of a track's detections that is kept.
-    extend_iou
+    min_score : float
+        The lowest mean score of a track's detections that is kept (the scores as the
+        tracker's thresholds see them, :meth:`BoxTracker.confidence`).
+    extend_iou : float or None
         Follow each track back from its first update through the detections no track took
         (any score down to the tracker's ``low``), while one overlaps its backward prediction
         by at least this IoU; None: not at all.
-    link_gap, link_iou, link_window
+    link_gap, link_iou, link_window : int, float, int
         Join a track that ends to one that starts at most ``link_gap`` frames later (0: never)
         when their boxes, carried across the gap by the velocities of their last and first
         ``link_window`` detected frames, overlap the other's by ``link_iou`` on average; the
         gap between them is filled from the smoother.
+
+    Returns
+    -------
+    SmoothedTracks
+        The rows of the tracks ever confirmed, sorted by frame and id: the smoothed boxes at
+        their updates, the gaps filled, and the frames added by following back and joining
+        (empty when nothing was tracked). A joined track keeps the identity of the first
+        one.
+
+    Raises
+    ------
+    ValueError
+        If the tracker was not created with ``record=True``.
+
+    Examples
+    --------
+    A box moving 5 pixels a frame, missed in frames 5 and 6: online, frame 5 is its
+    prediction (coasting) and frame 6 is not reported; offline, both are filled from the
+    smoothed motion:
+
+    >>> from vistrack.types import Detections
+    >>> tr = BoxTracker(record=True, frame_rate=10)
+    >>> for f in range(1, 11):
+    ...     boxes = [] if f in (5, 6) else [[10 + 5 * f, 20, 30, 60]]
+    ...     _ = tr.step(f, Detections.from_xywh(np.reshape(boxes, (-1, 4)), [0.9] * len(boxes)))
+    >>> rows = smooth(tr)
+    >>> rows.frames.tolist()
+    [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]
+    >>> rows.xywh[3:7, 0].round(1).tolist(), rows.filled[3:7].tolist()
+    ([30.0, 35.0, 40.0, 45.0], [False, True, True, False])
     """
     if not tracker.record:
         raise ValueError("the tracker must be created with record=True for offline smoothing")

@@ -60,6 +60,12 @@ class PointTracker:
     confirm_hits, max_lost, frame_rate
         As for :class:`~vistrack.tracking.BoxTracker`.
 
+    Raises
+    ------
+    ValueError
+        If ``association`` is not in :data:`POINT_ASSOCIATIONS`, or ``frame_rate`` is not
+        > 0.
+
     Examples
     --------
     >>> tr = PointTracker("gnn", frame_rate=1.0)
@@ -95,7 +101,16 @@ class PointTracker:
         self.reset()
 
     def reset(self) -> None:
-        """Forget every track; identities start again from 1."""
+        """Forget every track; identities start again from 1.
+
+        Examples
+        --------
+        >>> tr = PointTracker(frame_rate=1.0)
+        >>> _ = tr.step(1, Detections(points=[[0.0, 0.0], [9.0, 9.0]]))
+        >>> tr.reset()
+        >>> tr.step(1, Detections(points=[[9.0, 9.0]])).ids.tolist()
+        [1]
+        """
         self.tracks.reset()
         self.frame: int | None = None
 
@@ -124,7 +139,26 @@ class PointTracker:
         -------
         Tracks
             The confirmed tracks updated in this frame, with ``points`` and their
-            covariances.
+            covariances (``covs (K, 2, 2)``, of the first two coordinates).
+
+        Raises
+        ------
+        TypeError
+            If ``detections`` are not :class:`~vistrack.types.Detections` with points.
+        ValueError
+            If the points do not have the measurement's size, or the frame index does not
+            increase.
+
+        Examples
+        --------
+        Two objects, associated by JPDA (the tracks of the first frame start confirmed):
+
+        >>> tr = PointTracker("jpda", frame_rate=10.0)
+        >>> for f in range(1, 4):
+        ...     out = tr.step(Frame(f, (f - 1) / 10), Detections(points=[[2.0 * f, 0.0],
+        ...                                                         [50.0, 3.0 * f]]))
+        >>> out.ids.tolist(), out.points.round(1).tolist(), out.covs.shape
+        ([1, 2], [[5.3, 0.0], [50.0, 8.0]], (2, 2, 2))
         """
         if detections is None:
             detections = Detections(points=np.zeros((0, self.m)))

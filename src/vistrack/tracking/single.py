@@ -75,9 +75,31 @@ class MedianFlow(SingleObjectTracker):
     Parameters
     ----------
     grid : int
-        Features are the best Shi-Tomasi corners in the box, up to ``grid²``.
+        Features are the best Shi-Tomasi corners in the box, up to ``grid²`` (a regular
+        ``grid × grid`` of points where the box has too little texture).
     fb_max : float
-        Forward-backward error (pixels) above which a feature is not used.
+        Forward-backward error (pixels) above which a feature is not used; of the others,
+        the better half by that error moves the box.
+    win_size, levels : int
+        Lucas-Kanade window (pixels) and pyramid levels above the image.
+
+    References
+    ----------
+    .. [1] Z. Kalal, K. Mikolajczyk and J. Matas, "Forward-backward error: automatic
+       detection of tracking failures", *International Conference on Pattern Recognition*,
+       2010.
+
+    Examples
+    --------
+    A textured scene moving 3 pixels right and 1 down:
+
+    >>> import cv2
+    >>> rng = np.random.default_rng(0)
+    >>> scene = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 2)
+    >>> t = MedianFlow()
+    >>> t.init(scene, [40, 30, 40, 40])
+    >>> t.update(np.roll(scene, (1, 3), axis=(0, 1))).round(1).tolist()
+    [43.0, 31.0, 40.0, 40.0]
     """
 
     def __init__(self, grid: int = 10, fb_max: float = 2.0, win_size: int = 11,
@@ -91,7 +113,31 @@ class MedianFlow(SingleObjectTracker):
 
     def motion(self, grey: np.ndarray) -> tuple[np.ndarray, float] | None:
         """Median displacement and scale of the box's features from the previous frame, or
-        None when too few are reliable."""
+        None when too few are reliable.
+
+        Parameters
+        ----------
+        grey : (H, W) uint8 ndarray
+            The next frame, grey, of the previous frame's size.
+
+        Returns
+        -------
+        tuple of ((2,) ndarray, float) or None
+            The median displacement ``dx, dy`` of the reliable features, and the median
+            ratio of their pairwise distances (the scale); None when the box lies (almost)
+            outside the image or fewer than 3 features pass the checks.
+
+        Examples
+        --------
+        >>> import cv2
+        >>> rng = np.random.default_rng(0)
+        >>> scene = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 2)
+        >>> t = MedianFlow()
+        >>> t.init(scene, [40, 30, 40, 40])
+        >>> d, s = t.motion(np.roll(scene, (1, 3), axis=(0, 1)))
+        >>> d.round(1).tolist(), round(s, 3)
+        ([3.0, 1.0], 1.0)
+        """
         import cv2
 
         x, y, w, h = self.box
@@ -141,7 +187,21 @@ class MedianFlow(SingleObjectTracker):
         return self.box.copy()
 
     def anchor(self, box: Any) -> None:
-        """Move the box to ``box`` (the next frame's features are found in it)."""
+        """Move the box to ``box`` (the next frame's features are found in it).
+
+        Parameters
+        ----------
+        box : (4,) array_like
+            The box ``x, y, w, h``.
+
+        Examples
+        --------
+        >>> t = MedianFlow()
+        >>> t.init(np.zeros((60, 80), np.uint8), [10, 10, 20, 20])
+        >>> t.anchor([30, 20, 10, 10])
+        >>> t.box.tolist()
+        [30.0, 20.0, 10.0, 10.0]
+        """
         self.box = as_box(box)
 
 
@@ -153,6 +213,30 @@ class TemplateTracker(SingleObjectTracker):
     max_residual : float
         RMS difference of normalised intensities above which the registration is not
         trusted and the median-flow motion alone moves the box.
+    iters : int
+        Iterations of the inverse-compositional registration per frame.
+
+    Attributes
+    ----------
+    residual : float
+        The registration's RMS residual at the last frame.
+
+    References
+    ----------
+    .. [1] S. Baker and I. Matthews, "Lucas-Kanade 20 years on: a unifying framework",
+       *International Journal of Computer Vision* 56(3), 2004.
+
+    Examples
+    --------
+    A textured scene moving 3 pixels right and 1 down:
+
+    >>> import cv2
+    >>> rng = np.random.default_rng(0)
+    >>> scene = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 2)
+    >>> t = TemplateTracker()
+    >>> t.init(scene, [40, 30, 40, 40])
+    >>> t.update(np.roll(scene, (1, 3), axis=(0, 1))).round(1).tolist()
+    [43.0, 31.0, 40.0, 40.0]
     """
 
     def __init__(self, max_residual: float = 0.6, iters: int = 30):
@@ -206,7 +290,25 @@ class TemplateTracker(SingleObjectTracker):
         return self.box.copy()
 
     def anchor(self, box: Any) -> None:
-        """Move the warp so that its box is ``box``: the same shape, shifted and scaled."""
+        """Move the warp so that its box is ``box``: the same shape, shifted and scaled.
+
+        Parameters
+        ----------
+        box : (4,) array_like
+            The box ``x, y, w, h``; the warp is scaled by the square root of the ratio of the
+            areas.
+
+        Examples
+        --------
+        >>> import cv2
+        >>> rng = np.random.default_rng(0)
+        >>> scene = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 2)
+        >>> t = TemplateTracker()
+        >>> t.init(scene, [40, 30, 40, 40])
+        >>> t.anchor([50, 40, 20, 20])
+        >>> t.box.tolist()
+        [50.0, 40.0, 20.0, 20.0]
+        """
         b = as_box(box)
         s = np.sqrt(b[2] * b[3] / (self.box[2] * self.box[3]))
         p = self.p[0]
@@ -244,6 +346,27 @@ class ColourTracker(SingleObjectTracker):
         Histogram bins per channel (saturation and value).
     rate : float
         Weight of the current box's histogram in the model each frame (0 keeps the first).
+    scales : tuple of float
+        Relative sizes tried around the mean-shift position each frame; the one whose box
+        best separates the object's colour from the ring around it is kept (``(1.0,)``: a
+        fixed size, ``"meanshift"`` in :data:`METHODS`).
+
+    References
+    ----------
+    .. [1] D. Comaniciu, V. Ramesh and P. Meer, "Real-time tracking of non-rigid objects
+       using mean shift", *IEEE Conference on Computer Vision and Pattern Recognition*, 2000.
+
+    Examples
+    --------
+    A red square moving 3 pixels a frame over green (mean shift lags a little):
+
+    >>> def image(x):
+    ...     im = np.full((60, 80, 3), (40, 120, 40), np.uint8); im[20:40, x:x + 20] = (0, 0, 255)
+    ...     return im
+    >>> t = ColourTracker()
+    >>> t.init(image(30), [30, 20, 20, 20])
+    >>> [t.update(image(x)).round().tolist()[0] for x in (33, 36, 39)]
+    [31.0, 34.0, 37.0]
     """
 
     def __init__(self, bins: int = 32, rate: float = 0.05, scales: tuple = (0.93, 1.0, 1.07)):
@@ -302,12 +425,52 @@ class ColourTracker(SingleObjectTracker):
         return self.box.copy()
 
     def anchor(self, box: Any) -> None:
-        """Move the window to ``box``."""
+        """Move the window to ``box``.
+
+        Parameters
+        ----------
+        box : (4,) array_like
+            The box ``x, y, w, h``.
+
+        Examples
+        --------
+        >>> t = ColourTracker()
+        >>> t.init(np.zeros((60, 80, 3), np.uint8), [30, 20, 20, 20])
+        >>> t.anchor([10, 10, 30, 30])
+        >>> t.box.tolist()
+        [10.0, 10.0, 30.0, 30.0]
+        """
         self.box = as_box(box)
 
 
 class CamShiftTracker(ColourTracker):
-    """OpenCV's CamShift on the colour back-projection of :class:`ColourTracker`."""
+    """OpenCV's CamShift on the colour back-projection of :class:`ColourTracker`.
+
+    The back-projection below one half (pixels more likely background than object) is set
+    to 0 first; the box is the bounding box of CamShift's rotated window.
+
+    Parameters
+    ----------
+    bins, rate : int, float
+        As for :class:`ColourTracker`.
+    scales : tuple of float
+        Not used: CamShift sizes its window itself.
+
+    References
+    ----------
+    .. [1] G. R. Bradski, "Computer vision face tracking for use in a perceptual user
+       interface", *Intel Technology Journal* Q2, 1998.
+
+    Examples
+    --------
+    >>> def image(x):
+    ...     im = np.full((60, 80, 3), (40, 120, 40), np.uint8); im[20:40, x:x + 20] = (0, 0, 255)
+    ...     return im
+    >>> t = CamShiftTracker()
+    >>> t.init(image(30), [30, 20, 20, 20])
+    >>> [t.update(image(x)).round().tolist()[0] for x in (33, 36, 39)]
+    [30.0, 34.0, 36.0]
+    """
 
     def _follow(self, image: Any) -> np.ndarray:
         import cv2
@@ -335,12 +498,35 @@ class ColourParticleTracker(ColourTracker):
     Parameters
     ----------
     n_particles : int
+        Particles of ``(cx, cy, log scale)``.
     step : float
         Standard deviation of the random walk of the centre per frame, as a fraction of the
         box's size; the log scale walks with a quarter of it.
     sharpness : float
         ``λ`` of the likelihood ``exp(λ · contrast)``, the contrast being the mean
         back-projection (0–1) inside the box minus that in the ring around it.
+    rng : numpy.random.Generator, int or None
+        Random generator or seed; each start draws afresh from it (an integer seed gives the
+        same boxes again).
+    **kwargs
+        Passed to :class:`ColourTracker` (``bins``, ``rate``).
+
+    References
+    ----------
+    .. [1] P. Pérez, C. Hue, J. Vermaak and M. Gangnet, "Color-based probabilistic tracking",
+       *European Conference on Computer Vision*, 2002.
+    .. [2] M. Isard and A. Blake, "CONDENSATION: conditional density propagation for visual
+       tracking", *International Journal of Computer Vision* 29(1), 1998.
+
+    Examples
+    --------
+    >>> def image(x):
+    ...     im = np.full((60, 80, 3), (40, 120, 40), np.uint8); im[20:40, x:x + 20] = (0, 0, 255)
+    ...     return im
+    >>> t = ColourParticleTracker(rng=0)
+    >>> t.init(image(30), [30, 20, 20, 20])
+    >>> [t.update(image(x)).round().tolist()[0] for x in (33, 36, 39)]
+    [33.0, 36.0, 39.0]
     """
 
     def __init__(self, n_particles: int = 300, step: float = 0.15, sharpness: float = 30.0,
@@ -359,7 +545,21 @@ class ColourParticleTracker(ColourTracker):
         self.w = np.full(self.n, 1.0 / self.n)
 
     def anchor(self, box: Any) -> None:
-        """Shift and scale the particle cloud so that its mean box is ``box``."""
+        """Shift and scale the particle cloud so that its mean box is ``box``.
+
+        Parameters
+        ----------
+        box : (4,) array_like
+            The box ``x, y, w, h``.
+
+        Examples
+        --------
+        >>> t = ColourParticleTracker()
+        >>> t.init(np.zeros((60, 80, 3), np.uint8), [30, 20, 20, 20])
+        >>> t.anchor([40, 20, 20, 20])
+        >>> (t.w @ t.x).round(3).tolist()  # the weighted mean centre and log scale
+        [50.0, 30.0, 0.0]
+        """
         b = as_box(box)
         m = self.w @ self.x
         self.x[:, :2] += b[:2] + b[2:] / 2 - m[:2]
@@ -397,7 +597,32 @@ class ColourParticleTracker(ColourTracker):
 
 
 class OpenCVTracker(SingleObjectTracker):
-    """OpenCV contrib's CSRT or KCF behind the same interface (for comparison)."""
+    """OpenCV contrib's CSRT or KCF behind the same interface (for comparison).
+
+    Boxes are rounded to whole pixels when the tracker starts; where OpenCV's tracker
+    reports a failure, the last box is kept. It has no ``anchor``, so it cannot be a member
+    of :class:`~vistrack.tracking.compose.Composite`.
+
+    Parameters
+    ----------
+    kind : {"csrt", "kcf"}
+        OpenCV's ``TrackerCSRT`` or ``TrackerKCF``.
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is neither.
+
+    Examples
+    --------
+    >>> import cv2
+    >>> rng = np.random.default_rng(0)
+    >>> scene = cv2.GaussianBlur(rng.integers(0, 256, (120, 160, 3), dtype=np.uint8), (0, 0), 2)
+    >>> t = OpenCVTracker("csrt")
+    >>> t.init(scene, [40, 30, 40, 40])
+    >>> t.update(np.roll(scene, (1, 3), axis=(0, 1))).shape
+    (4,)
+    """
 
     def __init__(self, kind: str = "csrt"):
         import cv2
@@ -437,7 +662,28 @@ METHODS: dict[str, Callable[[], Any]] = {
 
 
 def single_tracker(method: str = "template") -> Any:
-    """A single-object tracker by name in :data:`METHODS`."""
+    """A single-object tracker by name in :data:`METHODS`.
+
+    Parameters
+    ----------
+    method : str
+        A name in :data:`METHODS` (see the module).
+
+    Returns
+    -------
+    SingleObjectTracker
+        A new tracker, with its default settings.
+
+    Raises
+    ------
+    ValueError
+        If ``method`` is not in :data:`METHODS`.
+
+    Examples
+    --------
+    >>> type(single_tracker("meanshift")).__name__, single_tracker("meanshift").scales
+    ('ColourTracker', (1.0,))
+    """
     if method not in METHODS:
         raise ValueError(f"method must be one of {sorted(METHODS)}; got {method!r}")
     return METHODS[method]()

@@ -35,6 +35,26 @@ def bspline_matrix(n: int, m: int, derivative: bool = False) -> np.ndarray:
     """``(m, n)``: the periodic uniform cubic B-spline basis at ``m`` equally spaced parameters
     (row ``k`` gives ``r(s_k) = Σ_j B[k, j] Q_j``), or its derivative along ``s``.
 
+    Parameters
+    ----------
+    n : int
+        Control points, at least 4.
+    m : int
+        Samples, at least 1, at ``s_k = k n / m`` (the parameter runs over ``[0, n)``).
+    derivative : bool
+        The derivative ``dr/ds`` instead.
+
+    Returns
+    -------
+    (m, n) ndarray
+        The basis: each row has the four weights of the control points around its
+        parameter (they sum to 1, and to 0 for the derivative).
+
+    Raises
+    ------
+    ValueError
+        If ``n < 4`` or ``m < 1``.
+
     Examples
     --------
     >>> B = bspline_matrix(6, 12)
@@ -106,6 +126,24 @@ class Snake:
         Process variance per frame of each control point coordinate, and the variance of an
         edge's position along its normal (pixels²).
 
+    Attributes
+    ----------
+    state : Gaussian or None
+        The control points' distribution: the ``n`` x coordinates, then the ``n`` y
+        coordinates (None before :meth:`init`).
+    found : (m,) bool ndarray
+        Where :meth:`track` found an edge at the last frame.
+
+    Raises
+    ------
+    ValueError
+        If ``q`` or ``r`` is not > 0 (or the sizes are those :func:`bspline_matrix`
+        refuses).
+
+    References
+    ----------
+    .. [1] A. Blake and M. Isard, *Active Contours*, Springer, 1998.
+
     Examples
     --------
     >>> import cv2
@@ -132,7 +170,27 @@ class Snake:
         self.state: Gaussian | None = None
 
     def init(self, control_points: Any, std: float = 2.0) -> None:
-        """Start from control points ``(n, 2)`` with standard deviation ``std`` pixels."""
+        """Start from control points ``(n, 2)`` with standard deviation ``std`` pixels.
+
+        Parameters
+        ----------
+        control_points : (n, 2) array_like
+            The control points ``x, y``.
+        std : float
+            Standard deviation of each coordinate (independent), in pixels.
+
+        Raises
+        ------
+        ValueError
+            If ``control_points`` does not have shape ``(n, 2)``.
+
+        Examples
+        --------
+        >>> s = Snake(n_control=4, n_samples=8)
+        >>> s.init([[0, 0], [10, 0], [10, 10], [0, 10]])
+        >>> s.control_points[1].tolist(), float(s.state.cov[0, 0])
+        ([10.0, 0.0], 4.0)
+        """
         Q = np.asarray(control_points, dtype=float)
         if Q.shape != (self.n, 2):
             raise ValueError(f"control_points must have shape ({self.n}, 2); got {Q.shape}")
@@ -141,7 +199,25 @@ class Snake:
 
     def init_circle(self, centre: Any, radius: float, std: float = 2.0) -> None:
         """Start from the spline closest to a circle (control points on a slightly larger
-        circle, as a cubic B-spline lies inside its control polygon)."""
+        circle, as a cubic B-spline lies inside its control polygon).
+
+        Parameters
+        ----------
+        centre : (2,) array_like
+            The circle's centre ``x, y``.
+        radius : float
+            Its radius, in pixels.
+        std : float
+            Standard deviation of each control point coordinate, in pixels.
+
+        Examples
+        --------
+        >>> s = Snake(n_control=8, n_samples=16)
+        >>> s.init_circle((80, 60), 26)
+        >>> r = np.linalg.norm(s.contour() - [80, 60], axis=1)
+        >>> round(float(r.min()), 1), round(float(r.max()), 1)
+        (26.0, 26.0)
+        """
         a = 2 * np.pi * np.arange(self.n) / self.n
         # the spline through points on a circle of radius R has radius about R (2 + cos(2π/n))/3
         R = radius * 3 / (2 + np.cos(2 * np.pi / self.n))
@@ -150,17 +226,83 @@ class Snake:
 
     @property
     def control_points(self) -> np.ndarray:
+        """The control points' means ``(n, 2)`` (``x, y``).
+
+        Raises
+        ------
+        AttributeError
+            Before :meth:`init` or :meth:`init_circle`.
+
+        Examples
+        --------
+        >>> s = Snake(n_control=4, n_samples=8)
+        >>> s.init([[0, 0], [10, 0], [10, 10], [0, 10]])
+        >>> s.control_points.tolist()
+        [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]
+        """
         if self.state is None:  # AttributeError, as before this check (and for hasattr)
             raise AttributeError("the snake has no state yet: call init or init_circle first")
         x = self.state.mean
         return np.c_[x[:self.n], x[self.n:]]
 
     def contour(self) -> np.ndarray:
-        """The contour's ``m`` sample points ``(m, 2)``."""
+        """The contour's ``m`` sample points ``(m, 2)``.
+
+        Returns
+        -------
+        (m, 2) ndarray
+            ``r(s_k) = B_k Q`` at the control points' means, ``x, y``.
+
+        Raises
+        ------
+        AttributeError
+            Before :meth:`init` or :meth:`init_circle`.
+
+        Examples
+        --------
+        >>> s = Snake(n_control=4, n_samples=4)
+        >>> s.init([[0, 0], [6, 0], [6, 6], [0, 6]])
+        >>> s.contour().tolist()
+        [[1.0, 1.0], [5.0, 1.0], [5.0, 5.0], [1.0, 5.0]]
+        """
         return self.B @ self.control_points
 
     def track(self, image: Any) -> np.ndarray:
-        """Track the contour into a new (grey or BGR) frame; returns its sample points."""
+        """Track the contour into a new (grey or BGR) frame; returns its sample points.
+
+        Predicts the control points, searches for an edge along each sample's normal, and
+        corrects the control points with the edges found (see the module); with fewer than
+        3 edges the prediction stands.
+
+        Parameters
+        ----------
+        image : (H, W) or (H, W, 3) ndarray
+            The frame, grey or BGR uint8.
+
+        Returns
+        -------
+        (m, 2) ndarray
+            The contour's sample points after the correction (:meth:`contour`).
+
+        Raises
+        ------
+        RuntimeError
+            Before :meth:`init` or :meth:`init_circle`.
+
+        Examples
+        --------
+        A circle of radius 26 locks onto a disc of radius 30:
+
+        >>> import cv2
+        >>> im = np.zeros((120, 160), np.uint8)
+        >>> _ = cv2.circle(im, (80, 60), 30, 255, -1)
+        >>> s = Snake(n_control=12, n_samples=60)
+        >>> s.init_circle((80, 60), 26)
+        >>> for _ in range(5):
+        ...     pts = s.track(im)
+        >>> pts.shape, int(s.found.sum())
+        ((60, 2), 60)
+        """
         if self.state is None:
             raise RuntimeError("call init or init_circle first")
         img = as_uint8_image(image, grey=True).astype(np.float32)
@@ -194,6 +336,25 @@ class SnakeTracker(SingleObjectTracker):
     ----------
     **snake
         Passed to :class:`Snake`.
+
+    Attributes
+    ----------
+    snake : Snake
+        The contour.
+
+    Examples
+    --------
+    A disc of radius 30 (its box ``50, 30, 60, 60``), started from a smaller box:
+
+    >>> import cv2
+    >>> im = np.zeros((120, 160, 3), np.uint8)
+    >>> _ = cv2.circle(im, (80, 60), 30, (255, 255, 255), -1)
+    >>> t = SnakeTracker(n_control=12, n_samples=60)
+    >>> t.init(im, [54, 34, 52, 52])
+    >>> for _ in range(5):
+    ...     box = t.update(im)
+    >>> box.round().tolist()
+    [50.0, 30.0, 60.0, 60.0]
     """
 
     def __init__(self, **snake: Any):
@@ -221,6 +382,23 @@ class SnakeTracker(SingleObjectTracker):
         return self.box.copy()
 
     def anchor(self, box: Any) -> None:
+        """Move and scale the contour (each axis on its own) so that its bounding box is
+        ``box``; the covariance is kept.
+
+        Parameters
+        ----------
+        box : (4,) array_like
+            The box ``x, y, w, h``.
+
+        Examples
+        --------
+        >>> t = SnakeTracker(n_control=8, n_samples=32)
+        >>> t.init(np.zeros((120, 160), np.uint8), [50, 30, 60, 60])
+        >>> t.anchor([40, 30, 30, 20])
+        >>> pts = t.snake.contour()
+        >>> pts.min(0).round(6).tolist(), pts.max(0).round(6).tolist()
+        ([40.0, 30.0], [70.0, 50.0])
+        """
         b = as_box(box)
         cur = self._bounds()
         s = b[2:] / cur[2:]

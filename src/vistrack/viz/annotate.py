@@ -11,7 +11,24 @@ __all__ = ["Annotator", "AnnotatedVideo", "id_colour"]
 
 
 def id_colour(i: int) -> tuple[int, int, int]:
-    """A bright BGR colour for identity ``i``, far from its neighbours' (golden-ratio hues)."""
+    """A bright BGR colour for identity ``i``, far from its neighbours' (golden-ratio hues).
+
+    Parameters
+    ----------
+    i : int
+        The identity.
+
+    Returns
+    -------
+    tuple of int
+        ``(blue, green, red)``, each 0 to 255: hue ``i × 0.618…`` (mod 1), saturation 0.85,
+        value 1.
+
+    Examples
+    --------
+    >>> id_colour(1), id_colour(2)
+    ((255, 101, 38), (38, 255, 164))
+    """
     import colorsys
 
     r, g, b = colorsys.hsv_to_rgb((int(i) * 0.618033988749895) % 1.0, 0.85, 1.0)
@@ -28,6 +45,16 @@ class Annotator:
         (memory stays bounded on long videos).
     nsigma : float
         Size of the covariance ellipse of a track's centre, in standard deviations.
+
+    Examples
+    --------
+    >>> from vistrack.types import Tracks
+    >>> ann = Annotator()
+    >>> tracks = Tracks(ids=np.array([3]), boxes=np.array([[10, 10, 30, 40.0]]), points=None,
+    ...                 scores=np.ones(1), classes=np.zeros(1))
+    >>> out = ann.draw(np.zeros((60, 80, 3), np.uint8), tracks, label="frame 1")
+    >>> tuple(out[25, 10]) == id_colour(3)   # the box's left side
+    True
     """
 
     def __init__(self, trail: int = 30, nsigma: float = 2.0):
@@ -38,7 +65,38 @@ class Annotator:
 
     def draw(self, image: np.ndarray, tracks: Any, label: str | None = None) -> np.ndarray:
         """A copy of the BGR ``image`` with ``tracks`` (:class:`vistrack.tracking.Tracks`)
-        drawn."""
+        drawn.
+
+        Each identity in its colour (:func:`id_colour`): its trail of recent centres, the
+        ``nsigma`` ellipse of its centre's covariance (where the tracks have ``covs``), its
+        box (or a dot at its point) and its number; ``label`` at the top left. Each call is
+        one frame of the trails.
+
+        Parameters
+        ----------
+        image : (H, W, 3) or (H, W) uint8 ndarray
+            The frame, BGR or grey (drawn on in colour); not changed.
+        tracks : Tracks
+            The frame's tracks, boxes or points.
+        label : str, optional
+            A caption, such as the frame's number.
+
+        Returns
+        -------
+        (H, W, 3) uint8 ndarray
+            The drawing.
+
+        Examples
+        --------
+        Point tracks on a grey frame:
+
+        >>> from vistrack.types import Tracks
+        >>> tracks = Tracks(ids=np.array([1]), boxes=None, points=np.array([[40.0, 30.0]]),
+        ...                 scores=np.ones(1), classes=np.zeros(1))
+        >>> out = Annotator().draw(np.zeros((60, 80), np.uint8), tracks)
+        >>> out.shape, tuple(out[30, 40]) == id_colour(1)
+        ((60, 80, 3), True)
+        """
         import cv2
 
         out = image.copy() if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
@@ -96,6 +154,24 @@ class AnnotatedVideo:
         Frames per second of the video.
     annotator : Annotator, optional
         How to draw (default ``Annotator()``).
+
+    Raises
+    ------
+    ValueError
+        If ``fps`` is not a finite number > 0.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from vistrack.io import VideoReader
+    >>> from vistrack.types import Frame, Tracks
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "annotated.mp4"
+    >>> video = AnnotatedVideo(path, fps=10)
+    >>> for k in range(1, 4):
+    ...     video.write(Frame(k, (k - 1) / 10, np.zeros((48, 64, 3), np.uint8)), Tracks.empty())
+    >>> video.close()
+    >>> len(VideoReader(path))
+    3
     """
 
     def __init__(self, path: Any, fps: float, annotator: Annotator | None = None):
@@ -106,14 +182,47 @@ class AnnotatedVideo:
         self._writer = VideoWriter(path, fps)
 
     def write(self, frame: Any, tracks: Any) -> None:
-        """Draw ``tracks`` on ``frame.image`` and write it."""
+        """Draw ``tracks`` on ``frame.image`` and write it.
+
+        Parameters
+        ----------
+        frame : Frame
+            The frame, with its image (all of one size).
+        tracks : Tracks
+            Its tracks.
+
+        Raises
+        ------
+        ValueError
+            If the frame has no image, or its size differs from the first frame's.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> from vistrack.types import Frame, Tracks
+        >>> video = AnnotatedVideo(pathlib.Path(tempfile.mkdtemp()) / "a.mp4", fps=10)
+        >>> video.write(Frame(1, 0.0), Tracks.empty())
+        Traceback (most recent call last):
+        ...
+        ValueError: AnnotatedVideo draws on images; frame 1 has none
+        """
         if frame.image is None:
             raise ValueError(f"AnnotatedVideo draws on images; frame {frame.index} has none")
         self._writer.write(self.annotator.draw(frame.image, tracks,
                                                label=f"frame {frame.index}"))
 
     def close(self) -> None:
-        """Finish the video file."""
+        """Finish the video file (and :meth:`abort` does the same: a run that fails keeps
+        the frames written so far).
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> video = AnnotatedVideo(pathlib.Path(tempfile.mkdtemp()) / "a.mp4", fps=10)
+        >>> video.close()
+        >>> video.path.exists()   # no frame: no file
+        False
+        """
         self._writer.close()
 
     abort = close  # a run that fails keeps the frames written so far

@@ -24,7 +24,44 @@ def _finish(ax: Any, xlabel: str, ylabel: str, title: str | None) -> Any:
 
 
 def covariance_ellipse(mean: Any, cov: Any, *, nsigma: float = 1.0, points: int = 64) -> np.ndarray:
-    """Points ``(points, 2)`` on the ``nsigma`` contour of a 2-D Gaussian ``N(mean, cov)``."""
+    r"""Points ``(points, 2)`` on the ``nsigma`` contour of a 2-D Gaussian ``N(mean, cov)``.
+
+    With :math:`\mathrm{cov} = V \operatorname{diag}(w) V'`, the points are
+    :math:`\mu + n_\sigma V \operatorname{diag}(\sqrt{w}) (\cos a, \sin a)'` for ``points``
+    angles :math:`a` from 0 to :math:`2\pi` (both ends: the contour is closed).
+
+    Parameters
+    ----------
+    mean : (2,) array_like
+        The centre.
+    cov : (2, 2) array_like
+        The covariance, symmetric positive semi-definite (negative eigenvalues count as 0).
+    nsigma : float
+        The contour's Mahalanobis distance.
+    points : int
+        Points on it.
+
+    Returns
+    -------
+    (points, 2) ndarray
+        The contour.
+
+    Raises
+    ------
+    ValueError
+        If ``mean`` is not ``(2,)`` or ``cov`` not ``(2, 2)``.
+
+    Examples
+    --------
+    Standard deviations 2 along x and 1 along y, at 2 sigma:
+
+    >>> covariance_ellipse([1.0, 2.0], np.diag([4.0, 1.0]), nsigma=2, points=5).round(3) + 0.0
+    array([[ 1.,  4.],
+           [ 5.,  2.],
+           [ 1.,  0.],
+           [-3.,  2.],
+           [ 1.,  4.]])
+    """
     mean = np.asarray(mean, dtype=float)
     cov = np.asarray(cov, dtype=float)
     if mean.shape != (2,) or cov.shape != (2, 2):
@@ -55,6 +92,39 @@ def plot_estimates_1d(
 
     All series are arrays of shape (T,); NaN points are not drawn. ``mean_label`` names the
     ``mean`` series (e.g. "smoothed"). Returns ``ax``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Where to draw.
+    t : (T,) array_like
+        Times; the predicted and corrected series are drawn a little left and right of them.
+    truth, measurements : (T,) array_like, optional
+        The states (circles) and measurements (crosses).
+    pred_mean, pred_std : (T,) array_like, optional
+        The predicted means (stars) and their standard deviations.
+    mean, std : (T,) array_like, optional
+        The corrected (or smoothed) means (pluses) and their standard deviations.
+    nsigma : float
+        Half-length of the error bars, in standard deviations.
+    title : str, optional
+        The axes' title.
+    mean_label : str
+        Legend of the ``mean`` series.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        ``ax``, labelled, with a legend.
+
+    Examples
+    --------
+    >>> from matplotlib.figure import Figure
+    >>> ax = Figure().subplots()
+    >>> _ = plot_estimates_1d(ax, [0.0, 1.0, 2.0], truth=[0, 1, 2], measurements=[0.1, 1.2, 1.9],
+    ...                       mean=[0.0, 1.1, 2.0], std=[0.3, 0.2, 0.2])
+    >>> [t.get_text() for t in ax.get_legend().get_texts()][:2], ax.get_xlabel()
+    (['state', 'measurement'], 'time')
     """
     t = np.asarray(t, dtype=float)
     off = 0.12 * (np.median(np.diff(t)) if t.size > 1 else 1.0)
@@ -91,6 +161,35 @@ def plot_track_2d(
 
     ``truth``, ``measurements``, ``means`` are ``(T, >=2)`` arrays whose first two columns are the
     position; ``covs`` is ``(T, >=2, >=2)`` and its top-left 2x2 block is drawn. Returns ``ax``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Where to draw.
+    truth, measurements, means : (T, >=2) array_like, optional
+        The true path (squares), the measurements (stars) and the estimates (crosses).
+    covs : (T, >=2, >=2) array_like, optional
+        The estimates' covariances; their ``nsigma`` ellipses are drawn (with ``means``).
+    label, color : str
+        Legend and colour of the estimates.
+    nsigma : float
+        The ellipses' size, in standard deviations.
+    title : str, optional
+        The axes' title.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        ``ax``, with equal scales on both axes.
+
+    Examples
+    --------
+    >>> from matplotlib.figure import Figure
+    >>> ax = Figure().subplots()
+    >>> means = np.c_[np.arange(3.0), np.zeros(3)]
+    >>> _ = plot_track_2d(ax, means=means, covs=np.tile(0.1 * np.eye(2), (3, 1, 1)))
+    >>> len(ax.lines)   # the estimates and three ellipses
+    4
     """
     if truth is not None:
         tr = np.asarray(truth)
@@ -113,7 +212,37 @@ def plot_trajectories(frames: Any, ids: Any, centres: Any, background: Any = Non
                       path: Any = None, *, title: str | None = None) -> Any:
     """Every track's path of centres ``(N, 2)`` (rows of ``frames`` and ``ids``), one colour
     per identity, over a dimmed ``background`` image (RGB or grey) when given; saved to
-    ``path`` (PNG) when given. Returns the figure."""
+    ``path`` (PNG) when given. Returns the figure.
+
+    Parameters
+    ----------
+    frames, ids : (N,) array_like
+        Frame and identity of each row (any order; each track is drawn in frame order).
+    centres : (N, 2) array_like
+        Centre ``x, y`` of each row, in pixels.
+    background : (H, W, 3) or (H, W) array_like, optional
+        An image under the paths (RGB or grey); without it the y axis points down, as in an
+        image.
+    path : str or Path, optional
+        Save the figure there (PNG, 100 dpi) and close it; matplotlib is then switched to
+        the Agg backend (where it can be; a failure to switch is ignored).
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (closed, when saved).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "paths.png"
+    >>> fig = plot_trajectories([1, 2, 1, 2], [1, 1, 2, 2], [[0, 0], [1, 1], [5, 5], [6, 5]],
+    ...                         path=path)
+    >>> len(fig.axes[0].lines), path.exists()   # a path and an end dot per track
+    (4, True)
+    """
     import matplotlib
 
     if path is not None:
@@ -148,7 +277,30 @@ def plot_trajectories(frames: Any, ids: Any, centres: Any, background: Any = Non
 class TrajectoryPlot:
     """A sink (:class:`~vistrack.io.tracks.Sink`) that collects every box track's centres
     and, when closed, plots them over the first frame (:func:`plot_trajectories`) to the PNG
-    ``path``, titled ``"{name}: {tracks} tracks, {frames} frames"``."""
+    ``path``, titled ``"{name}: {tracks} tracks, {frames} frames"``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The PNG to write.
+    name : str
+        The source's name, for the title.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from vistrack.types import Frame, Tracks
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "trajectories.png"
+    >>> plot = TrajectoryPlot(path, "demo")
+    >>> for k in range(1, 4):
+    ...     box = np.array([[10.0 * k, 10, 10.0 * k + 20, 40]])
+    ...     plot.write(Frame(k, 0.0, np.zeros((60, 80, 3), np.uint8)),
+    ...                Tracks(ids=np.array([1]), boxes=box, points=None, scores=np.ones(1),
+    ...                       classes=np.zeros(1)))
+    >>> plot.close()
+    >>> path.exists()
+    True
+    """
 
     def __init__(self, path: Any, name: str = ""):
         from ..io.tracks import TrackRows
@@ -159,14 +311,49 @@ class TrajectoryPlot:
         self._frames = 0
 
     def write(self, frame: Any, tracks: Any) -> None:
-        """Keep the tracks' centres (and the first frame's image)."""
+        """Keep the tracks' centres (and the first frame's image).
+
+        Parameters
+        ----------
+        frame : Frame
+            The frame; the first one's image is the background.
+        tracks : Tracks
+            Its box tracks.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> from vistrack.types import Frame, Tracks
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "t.png"
+        >>> plot = TrajectoryPlot(path, "one box")
+        >>> for k in (1, 2):
+        ...     box = np.array([[k, 0, 4, 4.0]])
+        ...     plot.write(Frame(k, 0.0), Tracks(ids=np.array([1]), boxes=box, points=None,
+        ...                                      scores=np.ones(1), classes=np.zeros(1)))
+        >>> plot.close()
+        >>> path.exists()
+        True
+        """
         if self._first is None:
             self._first = frame.image
         self._frames += 1
         self._rows.write(frame, tracks)
 
     def close(self) -> None:
-        """Draw and save the figure."""
+        """Draw and save the figure.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> from vistrack.types import Frame, Tracks
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "t.png"
+        >>> plot = TrajectoryPlot(path)
+        >>> plot.write(Frame(1, 0.0), Tracks(ids=np.array([1]), boxes=np.array([[0, 0, 4, 4.0]]),
+        ...                                  points=None, scores=np.ones(1), classes=np.zeros(1)))
+        >>> plot.close()
+        >>> path.exists()
+        True
+        """
         import cv2
 
         r = self._rows
