@@ -249,3 +249,19 @@ def test_boxes_writer_marks_frames_without_the_object(tmp_path):
     w.close()
     assert (tmp_path / "b.txt").read_text().splitlines() == ["1,nan,nan,nan,nan",
                                                              "2,1.00,2.00,3.00,4.00"]
+
+
+def test_a_video_where_nothing_is_tracked_still_writes_every_output(tmp_path):
+    """No detections at all: empty tracks files and a plot of the first frame, no error."""
+    frames, _ = red_disc_clip(T=5)
+    folder = write_clip(tmp_path / "frames", frames)
+
+    class Nothing:
+        def detect(self, image):
+            return Detections(boxes=np.zeros((0, 4)))
+
+    r = track_video(folder, tmp_path / "out", frontend=Nothing(), fps=25)
+    assert r.rows == 0 and r.tracks == 0
+    assert all(p.exists() for p in r.files.values())
+    assert (tmp_path / "out" / "tracks.txt").read_text() == ""
+    assert (tmp_path / "out" / "tracks.csv").read_text() == "frame,id,x,y,w,h,score\n"

@@ -256,7 +256,8 @@ def plot_trajectories(frames: Any, ids: Any, centres: Any, background: Any = Non
     order = np.lexsort((frames, ids))
     edges = np.flatnonzero(np.diff(ids[order])) + 1
     cmap = plt.get_cmap("tab20")
-    for k, (a, b) in enumerate(zip(np.r_[0, edges], np.r_[edges, len(order)])):
+    spans = zip(np.r_[0, edges], np.r_[edges, len(order)]) if len(order) else ()
+    for k, (a, b) in enumerate(spans):
         p = c[order[a:b]]
         ax.plot(p[:, 0], p[:, 1], "-", color=cmap(k % 20), lw=1.5)
         ax.plot(p[-1, 0], p[-1, 1], "o", color=cmap(k % 20), ms=3)
