@@ -52,6 +52,7 @@ def test_a_configuration_reads_back_as_written(tmp_path):
         path = tmp_path / "c.toml"
         path.write_text(config_toml(cfg, {"frame_rate": 25.0, "high_score": 3.5}))
         back = read_config(path)
+        assert back == cfg
         assert back.name == cfg.name and back.tracker == cfg.tracker
         assert back.offline == cfg.offline
         if cfg.motion is not None:

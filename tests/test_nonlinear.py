@@ -279,3 +279,13 @@ def test_sequence_filters_on_a_batch_equal_each_series_alone(rng, kind, tol):
         for got, want in ((batch.means[b], one.means), (batch.covs[b], one.covs)):
             np.testing.assert_allclose(got, want, rtol=tol[0], atol=tol[0] * np.abs(want).max())
         assert batch.loglik[b] == pytest.approx(float(one.loglik), rel=tol[1])
+
+
+def test_julier_weights_need_a_positive_spread():
+    """``n + kappa`` is the points' spread: at 0 or below the weights have no meaning (a
+    division by zero, or negative weights), as for Merwe's points."""
+    W, _ = JulierSigmaPoints(kappa=1.0).weights(2)
+    assert W.sum() == pytest.approx(1.0) and W[0] == pytest.approx(1 / 3)  # kappa / (n + kappa)
+    for kappa in (-2.0, -3.0):
+        with pytest.raises(ValueError, match="n \\+ kappa must be > 0"):
+            JulierSigmaPoints(kappa=kappa).weights(2)

@@ -411,8 +411,7 @@ class JulierSigmaPoints(_SigmaPoints):
         Parameters
         ----------
         n : int
-            State size; ``n + kappa`` must be > 0 (checked when points are drawn, by
-            :meth:`points` and :meth:`points_one`, not here).
+            State size; ``n + kappa`` must be > 0.
 
         Returns
         -------
@@ -421,11 +420,18 @@ class JulierSigmaPoints(_SigmaPoints):
         Wc : (2n + 1,) ndarray
             Covariance weights, equal to ``Wm``.
 
+        Raises
+        ------
+        ValueError
+            If ``n + kappa <= 0``.
+
         Examples
         --------
         >>> JulierSigmaPoints(kappa=0.0).weights(1)[0].tolist()
         [0.0, 0.5, 0.5]
         """
+        if not n + self.kappa > 0:
+            raise ValueError(f"n + kappa must be > 0; got {n + self.kappa} for n={n}")
         W = np.full(2 * n + 1, 0.5 / (n + self.kappa))
         W[0] = self.kappa / (n + self.kappa)
         return W, W.copy()

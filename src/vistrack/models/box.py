@@ -138,6 +138,23 @@ class BoxMotion:
         self.init_pos, self.init_vel = init_pos, init_vel
         self.frame_rate = float(frame_rate)
 
+    def _key(self) -> tuple:
+        return (type(self), self.std_pos, self.std_vel, tuple(self.std_meas.tolist()),
+                self.init_pos, self.init_vel, self.frame_rate)
+
+    def __eq__(self, other: object) -> bool:
+        """Equal when of the same class with the same parameters (a configuration read back
+        from its TOML equals the one written)."""
+        return isinstance(other, BoxMotion) and self._key() == other._key()
+
+    def __hash__(self) -> int:
+        return hash(self._key())
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}(std_pos={self.std_pos!r}, std_vel={self.std_vel!r}, "
+                f"std_meas={tuple(self.std_meas.tolist())!r}, init_pos={self.init_pos!r}, "
+                f"init_vel={self.init_vel!r}, frame_rate={self.frame_rate!r})")
+
     def at_rate(self, frame_rate: float) -> BoxMotion:
         """The same motion with its per-frame noise at another frame rate (see the module).
 
