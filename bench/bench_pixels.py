@@ -109,9 +109,9 @@ def klt_rows(n_features=500):
         return step
 
     rows = []
-    for name, make in (("vistrack KLT, affine check on", lambda: KLTTracker(n_features).step),
+    for name, make in (("vistrack KLT, affine check on", lambda: KLTTracker(n_features).track),
                        ("vistrack KLT, affine check off",
-                        lambda: KLTTracker(n_features, affine_check=False).step),
+                        lambda: KLTTracker(n_features, affine_check=False).track),
                        ("OpenCV lk_track.py loop", opencv_sample)):
         step = make()
         for g in grey[:10]:

@@ -100,6 +100,8 @@ def test_single_object_trackers_start_at_the_best_detection_and_follow_it():
     assert success_rate(boxes, truth[1:]) > 0.9
     with pytest.raises(TypeError, match="frame must be a vistrack.types.Frame with an image"):
         tr.step(5)
+    with pytest.raises(TypeError, match=r"got an array of shape \(120, 160, 3\) \(wrap it"):
+        tr.step(frames[3].image)
     fresh = single_tracker("template")
     with pytest.raises(RuntimeError, match="update before init"):
         fresh.update(frames[0].image)

@@ -154,8 +154,11 @@ def frame_image(frame: Any, who: str) -> np.ndarray:
     """
     image = frame.image if isinstance(frame, Frame) else None
     if image is None:
+        got = (f"{frame!r}" if isinstance(frame, Frame) else
+               f"an array of shape {frame.shape} (wrap it: Frame(index, time, image))"
+               if isinstance(frame, np.ndarray) else type(frame).__name__)
         raise TypeError(f"{who} looks at pixels: frame must be a vistrack.types.Frame with an "
-                        f"image; got {frame!r}")
+                        f"image; got {got}")
     return np.asarray(image)
 
 
