@@ -26,6 +26,7 @@ import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -549,7 +550,7 @@ def _source_hash(*modules: str) -> str:
     for name in modules:
         spec = importlib.util.find_spec(name)
         if spec is not None and spec.origin and os.path.exists(spec.origin):
-            h.update(open(spec.origin, "rb").read())
+            h.update(Path(spec.origin).read_bytes())
     return h.hexdigest()[:16]
 
 
