@@ -19,6 +19,8 @@ from vistrack.filters import (
     kalman_filter,
     particle_mode,
     resample,
+    weighted_cov,
+    weighted_mean,
 )
 
 W = np.array([0.3, 0.0, 0.05, 0.25, 1e-4, 0.1, 0.0999, 0.2])  # includes zero and tiny weights
@@ -155,6 +157,26 @@ def test_mode_finds_the_tallest_peak_and_its_weight():
     assert conf == pytest.approx(0.65, abs=0.05)
     # the weighted mean sits between the peaks, where there is no particle
     assert np.linalg.norm(w @ x - mode) > 4
+
+
+def test_weighted_moments_take_lists_and_equal_numpy():
+    """weighted_mean and weighted_cov against numpy's np.average and np.cov (aweights, no bias
+    correction), from lists as from arrays; wrong shapes are named."""
+    rng = np.random.default_rng(4)
+    x = rng.normal(size=(50, 3))
+    w = rng.random(50)
+    w /= w.sum()
+    mean = np.average(x, axis=0, weights=w)
+    cov = np.cov(x.T, aweights=w, bias=True)
+    for args in ((x, w), (x.tolist(), w.tolist())):
+        np.testing.assert_allclose(weighted_mean(*args), mean, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(weighted_cov(*args), cov, rtol=1e-12, atol=1e-15)
+    with pytest.raises(ValueError, match=r"weights must have shape \(50,\), one per particle"):
+        weighted_cov(x, w[:-1].tolist())
+    with pytest.raises(ValueError, match="particles must be 2-D"):
+        weighted_mean(x[:, 0], w)
+    with pytest.raises(ValueError, match="weights must be 1-D"):
+        weighted_mean(x, w[:, None])
 
 
 def test_growth_model_runs_with_modes_and_a_user_likelihood():

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 from numba import njit
+from numpy.typing import ArrayLike
 
 from .._validate import as_float_array, as_rng
 from . import _jitmath, _random
@@ -256,53 +257,81 @@ def effective_sample_size(weights: Any) -> float:
 
 
 # ---------------------------------------------------------------- estimates
-def weighted_mean(particles: np.ndarray, weights: np.ndarray) -> np.ndarray:
+def _particles_and_weights(particles: ArrayLike,
+                           weights: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    x = as_float_array(particles, "particles", ndim=(2,))
+    w = as_float_array(weights, "weights", ndim=(1,))
+    if w.shape != x.shape[:1]:
+        raise ValueError(f"weights must have shape ({x.shape[0]},), one per particle (row of "
+                         f"particles); got {w.shape}")
+    return x, w
+
+
+def _wmean(x: np.ndarray, w: np.ndarray) -> np.ndarray:
+    return w @ x
+
+
+def _wcov(x: np.ndarray, w: np.ndarray) -> np.ndarray:
+    d = x - _wmean(x, w)
+    return (d * w[:, None]).T @ d
+
+
+def weighted_mean(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
     r"""Weighted mean of a particle cloud, :math:`\sum_i w_i x_i`.
 
     Parameters
     ----------
-    particles : (N, n) ndarray
+    particles : (N, n) array_like
         The particles.
-    weights : (N,) ndarray
-        Normalised weights.
+    weights : (N,) array_like
+        Normalised weights (not checked).
 
     Returns
     -------
     (n,) ndarray
         The mean.
 
+    Raises
+    ------
+    ValueError
+        If ``particles`` is not 2-D or ``weights`` is not one weight per particle.
+
     Examples
     --------
-    >>> weighted_mean(np.array([[0.0], [2.0]]), np.array([0.25, 0.75]))
+    >>> weighted_mean([[0.0], [2.0]], [0.25, 0.75])
     array([1.5])
     """
-    return weights @ particles
+    return _wmean(*_particles_and_weights(particles, weights))
 
 
-def weighted_cov(particles: np.ndarray, weights: np.ndarray) -> np.ndarray:
+def weighted_cov(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
     r"""Weighted covariance of a particle cloud, :math:`\sum_i w_i (x_i - m)(x_i - m)'`.
 
     The population covariance (no bias correction), with ``m`` the :func:`weighted_mean`.
 
     Parameters
     ----------
-    particles : (N, n) ndarray
+    particles : (N, n) array_like
         The particles.
-    weights : (N,) ndarray
-        Normalised weights (an array: it is indexed).
+    weights : (N,) array_like
+        Normalised weights (not checked).
 
     Returns
     -------
     (n, n) ndarray
         The covariance.
 
+    Raises
+    ------
+    ValueError
+        If ``particles`` is not 2-D or ``weights`` is not one weight per particle.
+
     Examples
     --------
-    >>> weighted_cov(np.array([[0.0], [2.0]]), np.array([0.25, 0.75]))
+    >>> weighted_cov([[0.0], [2.0]], [0.25, 0.75])
     array([[0.75]])
     """
-    d = particles - weighted_mean(particles, weights)
-    return (d * weights[:, None]).T @ d
+    return _wcov(*_particles_and_weights(particles, weights))
 
 
 def particle_mode(particles: np.ndarray, weights: np.ndarray, *, bandwidth: Any = None,
@@ -372,7 +401,7 @@ def particle_mode(particles: np.ndarray, weights: np.ndarray, *, bandwidth: Any 
     w = np.asarray(weights, dtype=float)
     N, n = x.shape
     if bandwidth is None:
-        sd = np.sqrt(np.maximum(np.diagonal(weighted_cov(x, w)), 1e-300))
+        sd = np.sqrt(np.maximum(np.diagonal(_wcov(x, w)), 1e-300))
         neff = effective_sample_size(w)
         h = sd * (4.0 / ((n + 2) * neff)) ** (1.0 / (n + 4))
     else:
@@ -384,7 +413,7 @@ def particle_mode(particles: np.ndarray, weights: np.ndarray, *, bandwidth: Any 
         xs, ws = x, w
     z = xs / h
     picks = _systematic(ws, max(n_starts - 1, 1), search)
-    starts = np.concatenate([[weighted_mean(xs, ws)], xs[picks]]) / h
+    starts = np.concatenate([[_wmean(xs, ws)], xs[picks]]) / h
     for _ in range(max_iter):
         d2 = ((starts[:, None, :] - z[None]) ** 2).sum(-1)  # (S, N)
         k = ws * np.exp(-0.5 * (d2 - d2.min(1, keepdims=True)))
@@ -889,7 +918,7 @@ class ParticleFilter:
             else:
                 w = np.exp(logw)
                 w /= w.sum()
-            means[t], covs[t] = weighted_mean(x, w), weighted_cov(x, w)
+            means[t], covs[t] = _wmean(x, w), _wcov(x, w)
             if modes:
                 assert mode_arr is not None and conf is not None  # allocated when modes
                 mode_arr[t], conf[t] = particle_mode(x, w)
