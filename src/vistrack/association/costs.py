@@ -197,6 +197,23 @@ def _innovations(z_pred: Any, S: Any, z: Any) -> tuple[np.ndarray, np.ndarray, n
     return zp, S, z
 
 
+def cholesky_innovations(S: np.ndarray) -> np.ndarray:
+    """The Cholesky factors ``L`` (``S_t = L_t L_t'``) of innovation covariances ``(T, m, m)``.
+
+    Raises a ValueError naming the first track whose ``S_t`` is not positive definite, rather
+    than numpy's LinAlgError."""
+    try:
+        return np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        for t in range(len(S)):
+            try:
+                np.linalg.cholesky(S[t])
+            except np.linalg.LinAlgError:
+                raise ValueError(f"S must be positive definite for every track; S[{t}] is "
+                                 f"not") from None
+        raise ValueError("S must be positive definite for every track") from None
+
+
 def mahalanobis(z_pred: Any, S: Any, z: Any) -> np.ndarray:
     r"""Squared Mahalanobis distances of detections from tracks' predicted measurements.
 
@@ -234,10 +251,7 @@ def mahalanobis(z_pred: Any, S: Any, z: Any) -> np.ndarray:
     T, m = zp.shape
     if T == 0 or z.size == 0:
         return np.zeros((T, len(z) if z.size else 0))
-    try:
-        L = np.linalg.cholesky(S)
-    except np.linalg.LinAlgError:
-        raise ValueError("S must be positive definite for every track") from None
+    L = cholesky_innovations(S)
     r = z[None, :, :] - zp[:, None, :]  # (T, D, m)
     w = np.linalg.solve(L, np.swapaxes(r, 1, 2))  # L w = r' : (T, m, D)
     return (w * w).sum(1)

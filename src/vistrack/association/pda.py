@@ -34,6 +34,7 @@ import numpy as np
 
 from ..types import Gaussian
 from .assign import components
+from .costs import cholesky_innovations
 
 __all__ = ["pda_weights", "jpda_weights", "pda_update", "likelihoods"]
 
@@ -60,8 +61,8 @@ def likelihoods(z_pred: np.ndarray, S: np.ndarray, Z: np.ndarray) -> np.ndarray:
 
     Raises
     ------
-    numpy.linalg.LinAlgError
-        If an ``S_t`` is not positive definite.
+    ValueError
+        If an ``S_t`` is not positive definite (as :func:`~vistrack.association.mahalanobis`).
 
     Examples
     --------
@@ -72,7 +73,7 @@ def likelihoods(z_pred: np.ndarray, S: np.ndarray, Z: np.ndarray) -> np.ndarray:
     T, m = zp.shape
     if len(Z) == 0 or T == 0:
         return np.zeros((T, len(Z)))
-    L = np.linalg.cholesky(S)
+    L = cholesky_innovations(S)
     r = Z[None, :, :] - zp[:, None, :]
     w = np.linalg.solve(L, np.swapaxes(r, 1, 2))
     d2 = (w * w).sum(1)
