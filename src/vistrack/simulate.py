@@ -9,7 +9,7 @@ import numpy as np
 
 from ._validate import as_float_array, as_rng, check_finite, check_linear_gaussian, check_psd
 from .filters._nonlinear import psd_sqrt
-from .filters.linear import KalmanFilter
+from .filters.linear import KalmanFilter, dt_steps
 
 __all__ = ["simulate_lgssm", "simulate"]
 
@@ -168,6 +168,12 @@ def simulate(
     ys : ([n_series,] T, m) ndarray
         Measurements.
 
+    Raises
+    ------
+    ValueError
+        If ``dt`` is neither a scalar nor ``T-1`` or ``T`` values, or a model or the prior
+        is invalid (:func:`simulate_lgssm` lists the checks of the linear path).
+
     See Also
     --------
     simulate_lgssm : The linear-Gaussian sampler, from matrices.
@@ -210,9 +216,7 @@ def _simulate_nonlinear(motion, measurement, T, x0, P0, dt, n_series, gen):
     x = np.broadcast_to(x0_, (B, n)).copy()
     if P0 is not None:
         x += gen.standard_normal((B, n)) @ psd_sqrt(as_float_array(P0, "P0", ndim=(2,))).T
-    d = np.asarray(dt, dtype=float)
-    dts = np.broadcast_to(d, (T,)) if d.ndim == 0 or d.shape == (T,) else np.concatenate(
-        [[0.0], d])
+    dts = np.broadcast_to(dt_steps(dt, T), (T,))
     times = np.concatenate([[0.0], np.cumsum(dts[1:])])
     Rs = psd_sqrt(me.R)
     xs, ys = np.empty((B, T, n)), np.empty((B, T, me.m))

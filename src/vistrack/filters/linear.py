@@ -7,6 +7,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._validate import as_float_array, as_measurement_series, check_matrix_stack, check_psd
 from ..types import Gaussian
@@ -17,7 +18,9 @@ from .smoothers import SmoothResult, rts_smooth
 __all__ = ["KalmanFilter", "OnlineFilter"]
 
 
-def _dt_steps(dt: Any, T: int) -> np.ndarray | float:
+def dt_steps(dt: ArrayLike, T: int) -> np.ndarray | float:
+    """``dt`` for ``T`` steps: a scalar as a float, else ``(T,)`` with ``dt[t]`` the step from
+    ``t-1`` to ``t`` (the ``T-1`` intervals between steps gain an unused ``dt[0] = 0``)."""
     d = as_float_array(dt, "dt", ndim=(0, 1))
     if d.ndim == 0:
         return float(d)
@@ -114,7 +117,7 @@ class KalmanFilter:
         {'F': (3, 2, 2), 'Q': (3, 2, 2), 'H': (1, 2), 'R': (1, 1)}
         """
         n = self.motion.ndim_state
-        d = _dt_steps(dt, T)
+        d = dt_steps(dt, T)
         return {
             "F": self.motion.F(d),
             "Q": self.motion.Q(d),
