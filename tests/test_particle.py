@@ -1,6 +1,7 @@
 """Particle filter: resampling schemes against their expected counts, the filter against the
 Kalman filter on a linear model, log-domain weights, degeneracy, and the mode."""
 
+import dataclasses
 import gc
 import hashlib
 import warnings
@@ -317,3 +318,22 @@ def test_source_hash_reads_the_files_and_closes_them():
         gc.collect()
     assert got == ref.hexdigest()[:16]
     assert not [w for w in caught if issubclass(w.category, ResourceWarning)]
+
+
+@pytest.mark.parametrize("compiled, modes", [(True, False), (False, False), (False, True)])
+def test_result_arrays_are_read_only_as_the_kalman_filters(compiled, modes):
+    """Every array of a ParticleResult is read-only, as in kalman_filter's FilterResult."""
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1)
+    ys = np.arange(6.0)[:, None]
+    kf = vt.KalmanFilter(cv, pos).filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
+    pf = ParticleFilter(cv, pos, 200, rng=0, compiled=compiled)
+    assert (pf._fused is not None) == compiled
+    res = pf.filter(ys, x0=[0.0, 1.0], P0=np.eye(2), modes=modes)
+    arrays = {f.name: getattr(res, f.name) for f in dataclasses.fields(res)
+              if isinstance(getattr(res, f.name), np.ndarray)}
+    assert len(arrays) == (8 if modes else 6)
+    assert not kf.means.flags.writeable
+    for name, a in arrays.items():
+        assert not a.flags.writeable, name
+        with pytest.raises(ValueError, match="read-only"):
+            a[...] = 0

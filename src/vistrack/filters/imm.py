@@ -350,7 +350,7 @@ class IMMFilter:
 
 @dataclass(frozen=True)
 class SwitchingResult:
-    """The output of :meth:`SwitchingParticleFilter.filter`.
+    """The output of :meth:`SwitchingParticleFilter.filter`. Arrays are read-only.
 
     Attributes
     ----------
@@ -375,8 +375,8 @@ class SwitchingResult:
     >>> zs, xs, ys = slds.sample(100, x0=[0.0, 1.0], rng=0)
     >>> res = SwitchingParticleFilter(slds, n_particles=300, rng=1).filter(
     ...     ys, x0=[0.0, 1.0], P0=np.eye(2))
-    >>> res.means.shape, res.mode_probs.shape, res.ess.shape
-    ((100, 2), (100, 2), (100,))
+    >>> res.means.shape, res.mode_probs.shape, res.ess.shape, res.means.flags.writeable
+    ((100, 2), (100, 2), (100,), False)
     """
 
     means: np.ndarray
@@ -549,4 +549,5 @@ class SwitchingParticleFilter:
                 idx = self.resample(w, N, rng)
                 mean, cov, z = mean[idx], cov[idx], z[idx]
                 logw = np.full(N, -np.log(N))
+        _readonly(means, covs, probs, ess)
         return SwitchingResult(means, covs, probs, ess, total)

@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 from .._validate import as_float_array, as_rng
 from . import _jitmath, _random
 from ._nonlinear import Measurement, Motion, step_times
+from .kalman import _readonly
 
 __all__ = [
     "RESAMPLERS",
@@ -659,7 +660,7 @@ def _whitening(R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, float]:
 # ---------------------------------------------------------------- the filter
 @dataclass(frozen=True)
 class ParticleResult:
-    """The output of :meth:`ParticleFilter.filter`.
+    """The output of :meth:`ParticleFilter.filter`. Arrays are read-only.
 
     Attributes
     ----------
@@ -689,6 +690,8 @@ class ParticleResult:
     >>> res = pf.filter(np.arange(5.0)[:, None], x0=[0.0, 1.0], P0=np.eye(2))
     >>> res.means.shape, res.particles.shape, bool(np.isclose(res.weights.sum(), 1.0))
     ((5, 2), (500, 2), True)
+    >>> res.means.flags.writeable, res.particles.flags.writeable
+    (False, False)
     """
 
     means: np.ndarray
@@ -700,6 +703,15 @@ class ParticleResult:
     loglik: float
     particles: np.ndarray
     weights: np.ndarray
+
+
+def _result(means: np.ndarray, covs: np.ndarray, modes: np.ndarray | None,
+            mode_confidence: np.ndarray | None, ess: np.ndarray, resampled: np.ndarray,
+            loglik: float, particles: np.ndarray, weights: np.ndarray) -> ParticleResult:
+    """A :class:`ParticleResult` whose arrays are made read-only, as the other filters'."""
+    _readonly(means, covs, modes, mode_confidence, ess, resampled, particles, weights)
+    return ParticleResult(means, covs, modes, mode_confidence, ess, resampled, loglik,
+                          particles, weights)
 
 
 def check_particle_options(n_particles: Any, resampling: str,
@@ -928,7 +940,7 @@ class ParticleFilter:
                 logw = np.full(N, -math.log(N))
                 resampled[t] = True
         w = np.exp(logw)
-        return ParticleResult(means, covs, mode_arr, conf, ess, resampled, total, x, w / w.sum())
+        return _result(means, covs, mode_arr, conf, ess, resampled, total, x, w / w.sum())
 
     def _initial(self, particles: Any, x0: Any, P0: Any) -> np.ndarray:
         n, N = self.ndim_state, self.n_particles
@@ -993,5 +1005,4 @@ class ParticleFilter:
         if fail >= 0:
             raise _degenerate(int(fail), ys[fail])
         w = np.exp(logw - logw.max())
-        return ParticleResult(means, covs, None, None, ess, resampled, float(loglik), x,
-                              w / w.sum())
+        return _result(means, covs, None, None, ess, resampled, float(loglik), x, w / w.sum())
