@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ._validate import as_float_array, as_rng, check_finite, check_linear_gaussian, check_psd
 from .filters._nonlinear import psd_sqrt
@@ -17,12 +18,12 @@ __all__ = ["simulate_lgssm", "simulate"]
 def simulate_lgssm(
     T: int,
     *,
-    F: Any,
-    Q: Any,
-    H: Any,
-    R: Any,
-    x0: Any,
-    P0: Any = None,
+    F: ArrayLike,
+    Q: ArrayLike,
+    H: ArrayLike,
+    R: ArrayLike,
+    x0: ArrayLike,
+    P0: ArrayLike | None = None,
     n_series: int | None = None,
     rng: np.random.Generator | int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -120,9 +121,9 @@ def simulate(
     measurement: Any,
     T: int,
     *,
-    x0: Any,
-    P0: Any = None,
-    dt: Any = 1.0,
+    x0: ArrayLike,
+    P0: ArrayLike | None = None,
+    dt: ArrayLike = 1.0,
     n_series: int | None = None,
     rng: np.random.Generator | int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -30,6 +30,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field, fields
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.optimize import linear_sum_assignment
 
 from ..io.motchallenge import MOTTable
@@ -43,7 +44,7 @@ _EPS = np.finfo(float).eps
 _DISTRACTORS = {"MOT16": (2, 7, 8, 12), "MOT17": (2, 7, 8, 12), "MOT20": (2, 6, 7, 8, 12)}
 
 
-def box_iou_xywh(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     """IoU of every box of ``a`` with every box of ``b``, boxes as ``left, top, width, height``.
 
     Parameters

@@ -150,7 +150,7 @@ RESAMPLERS: dict[str, Callable[[np.ndarray, int, np.random.Generator], np.ndarra
 """Resampling schemes by name: ``f(weights, n, rng) -> indices (n,)``, sorted."""
 
 
-def _check_weights(weights: Any) -> np.ndarray:
+def _check_weights(weights: ArrayLike) -> np.ndarray:
     w = as_float_array(weights, "weights", ndim=(1, 2))
     if w.shape[-1] == 0:
         raise ValueError("weights must not be empty")
@@ -173,7 +173,7 @@ def _systematic_rows(w, u0, out):
     return out
 
 
-def resample(weights: Any, method: str = "systematic", *, n: int | None = None,
+def resample(weights: ArrayLike, method: str = "systematic", *, n: int | None = None,
              rng: np.random.Generator | int | None = None) -> np.ndarray:
     r"""Indices of ``n`` (default ``len(weights)``) particles drawn by ``method``.
 
@@ -233,7 +233,7 @@ def resample(weights: Any, method: str = "systematic", *, n: int | None = None,
         np.empty((0, n), np.int64)
 
 
-def effective_sample_size(weights: Any) -> float:
+def effective_sample_size(weights: ArrayLike) -> float:
     r"""Effective sample size of normalised weights, :math:`N_\text{eff} = 1 / \sum_i w_i^2`.
 
     ``N`` for equal weights, 1 when one particle has all the weight.
@@ -335,7 +335,7 @@ def weighted_cov(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
     return _wcov(*_particles_and_weights(particles, weights))
 
 
-def particle_mode(particles: np.ndarray, weights: np.ndarray, *, bandwidth: Any = None,
+def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayLike | None = None,
                   n_starts: int = 8, max_iter: int = 50,
                   max_points: int = 5000) -> tuple[np.ndarray, float]:
     r"""The mode of a weighted cloud, "the mean of the tallest peak", and its confidence.
@@ -714,8 +714,8 @@ def _result(means: np.ndarray, covs: np.ndarray, modes: np.ndarray | None,
                           particles, weights)
 
 
-def check_particle_options(n_particles: Any, resampling: str,
-                           ess_threshold: Any) -> tuple[int, float]:
+def check_particle_options(n_particles: float, resampling: str,
+                           ess_threshold: float) -> tuple[int, float]:
     """Check a particle filter's size, resampling scheme and ESS threshold."""
     if int(n_particles) != n_particles or n_particles < 1:
         raise ValueError(f"n_particles must be an integer >= 1; got {n_particles}")
@@ -852,8 +852,9 @@ class ParticleFilter:
 
         return loglik
 
-    def filter(self, ys: Any, *, x0: Any = None, P0: Any = None, particles: Any = None,
-               dt: Any = 1.0, times: Any = None, modes: bool = False) -> ParticleResult:
+    def filter(self, ys: ArrayLike, *, x0: ArrayLike | None = None, P0: ArrayLike | None = None,
+               particles: ArrayLike | None = None, dt: ArrayLike = 1.0,
+               times: ArrayLike | None = None, modes: bool = False) -> ParticleResult:
         """Filter one sequence.
 
         The first cloud is ``particles`` or ``N`` draws from ``N(x0, P0)``, the prior of the
@@ -942,7 +943,8 @@ class ParticleFilter:
         w = np.exp(logw)
         return _result(means, covs, mode_arr, conf, ess, resampled, total, x, w / w.sum())
 
-    def _initial(self, particles: Any, x0: Any, P0: Any) -> np.ndarray:
+    def _initial(self, particles: ArrayLike | None, x0: ArrayLike | None,
+                 P0: ArrayLike | None) -> np.ndarray:
         n, N = self.ndim_state, self.n_particles
         if particles is not None:
             x = as_float_array(particles, "particles", ndim=(2,))
@@ -956,7 +958,8 @@ class ParticleFilter:
                              f"got {m0.shape} and {C0.shape}")
         return self.rng.multivariate_normal(m0, C0, size=N, method="eigh")
 
-    def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: Any, times: Any) -> ParticleResult:
+    def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: ArrayLike,
+                      times: ArrayLike | None) -> ParticleResult:
         assert self._fused is not None  # filter calls this only with the compiled parts
         fref, fparams, href, hp, mo, me = self._fused
         T, m = ys.shape
