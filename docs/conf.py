@@ -1,5 +1,7 @@
 """Sphinx configuration for the vistrack documentation (`make docs`)."""
 
+import re
+
 import vistrack
 
 project = "vistrack"
@@ -30,6 +32,8 @@ autodoc_member_order = "bysource"
 # The signatures carry the annotations; the numpydoc Parameters sections already say the types
 # in words, so the annotations are not repeated in the descriptions.
 autodoc_typehints = "signature"
+# numpy.typing.ArrayLike by its name, not the union of protocols it stands for.
+autodoc_type_aliases = {"ArrayLike": "numpy.typing.ArrayLike"}  # see _alias_names
 
 # numpydoc would add a table of members to every class, beside the members autodoc already
 # documents, and document each attribute twice.
@@ -46,3 +50,17 @@ myst_heading_anchors = 3
 html_theme = "furo"
 html_title = f"vistrack {release}"
 
+
+# -- Hooks ----------------------------------------------------------------------------------
+def _alias_names(app, what, name, obj, options, signature, return_annotation):
+    """Sphinx writes an alias in a union (``ArrayLike | None``) as its placeholder's repr,
+    ``TypeAliasForwardRef('numpy.typing.ArrayLike')``: write the alias's name instead."""
+
+    def fix(text):
+        return re.sub(r"TypeAliasForwardRef\('([\w.]+)'\)", r"\1", text) if text else text
+
+    return fix(signature), fix(return_annotation)
+
+
+def setup(app):
+    app.connect("autodoc-process-signature", _alias_names)

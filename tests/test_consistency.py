@@ -31,6 +31,30 @@ def test_simulate_is_reproducible_and_validates():
         simulate_lgssm(3, F=np.eye(2), Q=np.eye(2), H=np.eye(1, 2), R=[[1.0]], x0=[0, 0], rng="x")
 
 
+def test_simulate_checks_dt_alike_for_linear_and_nonlinear_models():
+    """dt is a scalar, the T-1 intervals or T values (dt[0] unused) for either kind of model:
+    the intervals and T values give the same draws, and another length is refused with the
+    same message (it used to be accepted, or fail with an IndexError, for nonlinear models)."""
+    T, intervals = 6, [0.5, 1.0, 2.0, 0.25, 1.5]
+    linear = (vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1), [0.0, 1.0])
+    nonlinear = (*vt.models.growth_model(), [0.1])
+    for motion, meas, x0 in (linear, nonlinear):
+        a = simulate(motion, meas, T, x0=x0, dt=intervals, rng=4)
+        b = simulate(motion, meas, T, x0=x0, dt=[9.0] + intervals, rng=4)
+        np.testing.assert_array_equal(a[0], b[0])
+        np.testing.assert_array_equal(a[1], b[1])
+        for bad in (intervals[:3], intervals + [1.0, 1.0]):
+            with pytest.raises(ValueError, match=rf"dt must be a scalar, the T-1={T - 1} "
+                               rf"intervals between steps or T={T} values .*got shape "
+                               rf"\({len(bad)},\)"):
+                simulate(motion, meas, T, x0=x0, dt=bad, rng=4)
+    # the growth model's f uses the time: with steps of 2 the state at step t is f at 2 (t-1)
+    motion, meas = vt.models.growth_model(q=0.0, r=1.0)
+    xs, _ = simulate(motion, meas, 3, x0=[0.1], dt=[2.0, 2.0], rng=0)
+    x1 = 0.5 * 0.1 + 25 * 0.1 / (1 + 0.1**2) + 8 * np.cos(1.2 * 2.0)
+    assert xs[1, 0] == pytest.approx(x1, rel=1e-12)
+
+
 def test_nees_and_nis_of_a_correct_filter_lie_in_the_chi2_band():
     cv, pos = vt.ConstantVelocity(dim=2, q=0.2), vt.Position(dim=2, r=1.5)
     N, T = 200, 60

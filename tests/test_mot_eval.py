@@ -4,6 +4,8 @@ of error; and the scores' definitions on small cases worked by hand."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -95,6 +97,30 @@ def test_hand_worked_cases():
     # ... but matched by HOTA at every alpha up to 1/3
     assert np.all(c.HOTA_TP[ALPHAS <= 1 / 3] == 4) and np.all(c.HOTA_TP[ALPHAS > 1 / 3] == 0)
     assert c.LocA_alpha[0] == pytest.approx(1 / 3)
+
+
+def test_sum_equals_combine():
+    """sum() starts from 0; the total must be combine's, field by field, bit for bit."""
+    rng = np.random.default_rng(3)
+    counts = []
+    for k in range(3):
+        frames = np.repeat(np.arange(1, 21), 3)
+        ids = np.tile([1, 2, 3], 20)
+        x = ids * 30.0 + rng.normal(0, 1, len(ids))
+        keep = rng.random(len(ids)) < 0.8
+        pid = np.where(frames > 10 + k, ids + 10, ids)  # an identity switch halfway
+        gt = table(frames, ids, x)
+        pred = table(frames[keep], pid[keep], x[keep] + rng.normal(0, 3, keep.sum()))
+        counts.append(evaluate_mot(gt, pred))
+    for part in (counts[:1], counts[:2], counts):
+        total, ref = sum(part), combine(part)
+        assert isinstance(total, MOTCounts)
+        for f in dataclasses.fields(MOTCounts):
+            np.testing.assert_array_equal(getattr(total, f.name), getattr(ref, f.name),
+                                          err_msg=f.name)
+    assert sum(counts).HOTA == combine(counts).HOTA and sum(counts).IDSW > 0
+    with pytest.raises(TypeError):
+        1 + counts[0]  # only sum()'s start value 0 is an empty MOTCounts
 
 
 def test_bad_inputs_are_named():

@@ -1,6 +1,12 @@
 """Particle filter: resampling schemes against their expected counts, the filter against the
 Kalman filter on a linear model, log-domain weights, degeneracy, and the mode."""
 
+import dataclasses
+import gc
+import hashlib
+import warnings
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -14,6 +20,8 @@ from vistrack.filters import (
     kalman_filter,
     particle_mode,
     resample,
+    weighted_cov,
+    weighted_mean,
 )
 
 W = np.array([0.3, 0.0, 0.05, 0.25, 1e-4, 0.1, 0.0999, 0.2])  # includes zero and tiny weights
@@ -152,6 +160,26 @@ def test_mode_finds_the_tallest_peak_and_its_weight():
     assert np.linalg.norm(w @ x - mode) > 4
 
 
+def test_weighted_moments_take_lists_and_equal_numpy():
+    """weighted_mean and weighted_cov against numpy's np.average and np.cov (aweights, no bias
+    correction), from lists as from arrays; wrong shapes are named."""
+    rng = np.random.default_rng(4)
+    x = rng.normal(size=(50, 3))
+    w = rng.random(50)
+    w /= w.sum()
+    mean = np.average(x, axis=0, weights=w)
+    cov = np.cov(x.T, aweights=w, bias=True)
+    for args in ((x, w), (x.tolist(), w.tolist())):
+        np.testing.assert_allclose(weighted_mean(*args), mean, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(weighted_cov(*args), cov, rtol=1e-12, atol=1e-15)
+    with pytest.raises(ValueError, match=r"weights must have shape \(50,\), one per particle"):
+        weighted_cov(x, w[:-1].tolist())
+    with pytest.raises(ValueError, match="particles must be 2-D"):
+        weighted_mean(x[:, 0], w)
+    with pytest.raises(ValueError, match="weights must be 1-D"):
+        weighted_mean(x, w[:, None])
+
+
 def test_growth_model_runs_with_modes_and_a_user_likelihood():
     motion, meas = vt.models.growth_model()
     xs, ys = vt.simulate.simulate(motion, meas, 60, x0=[0.1], rng=2)
@@ -275,3 +303,37 @@ def test_kernel_resampling_is_unbiased(method):
     assert np.all(counts[:, W == 0] == 0)
     if method == "systematic":  # each count is floor or ceil of N w
         assert np.all(counts <= np.ceil(N * W) + 1e-9) and np.all(counts >= np.floor(N * W))
+
+
+def test_source_hash_reads_the_files_and_closes_them():
+    """The compiled kernel's cache key: sha1 of the modules' source files, read with hashlib on
+    the files themselves; no file is left open (no ResourceWarning)."""
+    from vistrack.filters import _jitmath, particle
+
+    names = (_random.__name__, _jitmath.__name__)
+    ref = hashlib.sha1(b"".join(Path(m.__file__).read_bytes() for m in (_random, _jitmath)))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = particle._source_hash(*names)
+        gc.collect()
+    assert got == ref.hexdigest()[:16]
+    assert not [w for w in caught if issubclass(w.category, ResourceWarning)]
+
+
+@pytest.mark.parametrize("compiled, modes", [(True, False), (False, False), (False, True)])
+def test_result_arrays_are_read_only_as_the_kalman_filters(compiled, modes):
+    """Every array of a ParticleResult is read-only, as in kalman_filter's FilterResult."""
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1)
+    ys = np.arange(6.0)[:, None]
+    kf = vt.KalmanFilter(cv, pos).filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
+    pf = ParticleFilter(cv, pos, 200, rng=0, compiled=compiled)
+    assert (pf._fused is not None) == compiled
+    res = pf.filter(ys, x0=[0.0, 1.0], P0=np.eye(2), modes=modes)
+    arrays = {f.name: getattr(res, f.name) for f in dataclasses.fields(res)
+              if isinstance(getattr(res, f.name), np.ndarray)}
+    assert len(arrays) == (8 if modes else 6)
+    assert not kf.means.flags.writeable
+    for name, a in arrays.items():
+        assert not a.flags.writeable, name
+        with pytest.raises(ValueError, match="read-only"):
+            a[...] = 0

@@ -34,6 +34,27 @@ def test_pda_with_one_sure_measurement_is_the_kalman_update():
         np.testing.assert_allclose(got.cov[0], want.cov, rtol=1e-10, atol=1e-12)
 
 
+def test_a_covariance_that_is_not_positive_definite_is_named_as_mahalanobis_names_it():
+    """S[1] = [[1, 2], [2, 1]] has eigenvalues 3 and -1: likelihoods refuses it with the
+    ValueError of mahalanobis, naming the track, not numpy's LinAlgError."""
+    from vistrack.association import mahalanobis
+
+    S = np.stack([np.eye(2), np.array([[1.0, 2.0], [2.0, 1.0]])])
+    assert np.linalg.eigvalsh(S[1]).min() == pytest.approx(-1.0)
+    zp, Z = np.zeros((2, 2)), np.ones((3, 2))
+    msg = r"S must be positive definite for every track; S\[1\] is not"
+    with pytest.raises(ValueError, match=msg):
+        mahalanobis(zp, S, Z)
+    with pytest.raises(ValueError, match=msg):
+        likelihoods(zp, S, Z)
+    # a positive definite S: the density of scipy's multivariate normal
+    stats = pytest.importorskip("scipy.stats")
+    S[1] = [[2.0, 0.5], [0.5, 1.0]]
+    lik = likelihoods(zp + [[0.0, 0.0], [1.0, -1.0]], S, Z)
+    np.testing.assert_allclose(lik[1], stats.multivariate_normal([1.0, -1.0], S[1]).pdf(Z),
+                               rtol=1e-12)
+
+
 def test_pda_update_equals_the_textbook_equations():
     rng = np.random.default_rng(1)
     g, H, R = random_tracks(rng, 4)

@@ -75,6 +75,21 @@ def test_rbpf_and_imm_against_the_exact_posterior():
     np.testing.assert_allclose(imm.mode_probs[-1], probs, atol=0.1)
 
 
+def test_result_arrays_are_read_only_as_the_imms():
+    """SwitchingResult's arrays are read-only, as IMMResult's and kalman_filter's."""
+    slds = make_system()
+    _, _, ys = slds.sample(20, x0=[0.0, 1.0], rng=2)
+    res = SwitchingParticleFilter(slds, n_particles=50, rng=3).filter(ys, x0=[0.0, 1.0],
+                                                                      P0=np.eye(2))
+    imm = IMMFilter.from_system(slds).filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
+    assert not imm.means.flags.writeable and not imm.mode_probs.flags.writeable
+    for name in ("means", "covs", "mode_probs", "ess"):
+        a = getattr(res, name)
+        assert not a.flags.writeable, name
+        with pytest.raises(ValueError, match="read-only"):
+            a[...] = 0
+
+
 def test_bad_systems_raise():
     cv, ca = vt.ConstantVelocity(dim=1), vt.ConstantAcceleration(dim=1)
     with pytest.raises(ValueError, match=r"motions must share one state size; got sizes \[2, 3\]"):

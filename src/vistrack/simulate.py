@@ -6,10 +6,11 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ._validate import as_float_array, as_rng, check_finite, check_linear_gaussian, check_psd
 from .filters._nonlinear import psd_sqrt
-from .filters.linear import KalmanFilter
+from .filters.linear import KalmanFilter, dt_steps
 
 __all__ = ["simulate_lgssm", "simulate"]
 
@@ -17,12 +18,12 @@ __all__ = ["simulate_lgssm", "simulate"]
 def simulate_lgssm(
     T: int,
     *,
-    F: Any,
-    Q: Any,
-    H: Any,
-    R: Any,
-    x0: Any,
-    P0: Any = None,
+    F: ArrayLike,
+    Q: ArrayLike,
+    H: ArrayLike,
+    R: ArrayLike,
+    x0: ArrayLike,
+    P0: ArrayLike | None = None,
     n_series: int | None = None,
     rng: np.random.Generator | int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -120,9 +121,9 @@ def simulate(
     measurement: Any,
     T: int,
     *,
-    x0: Any,
-    P0: Any = None,
-    dt: Any = 1.0,
+    x0: ArrayLike,
+    P0: ArrayLike | None = None,
+    dt: ArrayLike = 1.0,
     n_series: int | None = None,
     rng: np.random.Generator | int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -168,6 +169,12 @@ def simulate(
     ys : ([n_series,] T, m) ndarray
         Measurements.
 
+    Raises
+    ------
+    ValueError
+        If ``dt`` is neither a scalar nor ``T-1`` or ``T`` values, or a model or the prior
+        is invalid (:func:`simulate_lgssm` lists the checks of the linear path).
+
     See Also
     --------
     simulate_lgssm : The linear-Gaussian sampler, from matrices.
@@ -210,9 +217,7 @@ def _simulate_nonlinear(motion, measurement, T, x0, P0, dt, n_series, gen):
     x = np.broadcast_to(x0_, (B, n)).copy()
     if P0 is not None:
         x += gen.standard_normal((B, n)) @ psd_sqrt(as_float_array(P0, "P0", ndim=(2,))).T
-    d = np.asarray(dt, dtype=float)
-    dts = np.broadcast_to(d, (T,)) if d.ndim == 0 or d.shape == (T,) else np.concatenate(
-        [[0.0], d])
+    dts = np.broadcast_to(dt_steps(dt, T), (T,))
     times = np.concatenate([[0.0], np.cumsum(dts[1:])])
     Rs = psd_sqrt(me.R)
     xs, ys = np.empty((B, T, n)), np.empty((B, T, me.m))

@@ -11,16 +11,15 @@ r"""Association costs between tracks and detections, vectorised over both: ``(T,
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numba import njit
+from numpy.typing import ArrayLike
 
 __all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "giou", "euclidean",
            "mahalanobis"]
 
 
-def _boxes(b: Any, name: str) -> np.ndarray:
+def _boxes(b: ArrayLike, name: str) -> np.ndarray:
     a = np.asarray(b, dtype=float)
     if a.size == 0:
         return a.reshape(0, 4)
@@ -43,7 +42,7 @@ def _ratio(inter: np.ndarray, union: np.ndarray) -> np.ndarray:
     return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
 
 
-def iou(a: Any, b: Any) -> np.ndarray:
+def iou(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     r"""Intersection over union of every box of ``a`` with every box of ``b``.
 
     .. math:: \text{IoU}(A, B) = \frac{|A \cap B|}{|A \cup B|}
@@ -79,7 +78,7 @@ def iou(a: Any, b: Any) -> np.ndarray:
     return _ratio(*_overlap(a[:, None], b[None, :]))
 
 
-def paired_iou(a: Any, b: Any) -> np.ndarray:
+def paired_iou(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     """Intersection over union of boxes paired by index: ``a[k]`` with ``b[k]``.
 
     Parameters
@@ -108,7 +107,7 @@ def paired_iou(a: Any, b: Any) -> np.ndarray:
     return _ratio(*_overlap(a, b))
 
 
-def giou(a: Any, b: Any) -> np.ndarray:
+def giou(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     r"""Generalised IoU of every box of ``a`` with every box of ``b``.
 
     .. math:: \text{GIoU}(A, B) = \text{IoU}(A, B) - \frac{|C \setminus (A \cup B)|}{|C|}
@@ -152,7 +151,7 @@ def giou(a: Any, b: Any) -> np.ndarray:
     return _ratio(inter, union) - _ratio(hull - union, hull)
 
 
-def euclidean(a: Any, b: Any) -> np.ndarray:
+def euclidean(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     """Euclidean distances between every point of ``a`` and every point of ``b``.
 
     Parameters
@@ -184,7 +183,8 @@ def euclidean(a: Any, b: Any) -> np.ndarray:
     return np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(-1))
 
 
-def _innovations(z_pred: Any, S: Any, z: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _innovations(z_pred: ArrayLike, S: ArrayLike,
+                 z: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     # predicted measurements (T, m), innovation covariances (T, m, m), detections (D, m)
     zp = np.atleast_2d(np.asarray(z_pred, dtype=float))
     S = np.asarray(S, dtype=float)
@@ -197,7 +197,24 @@ def _innovations(z_pred: Any, S: Any, z: Any) -> tuple[np.ndarray, np.ndarray, n
     return zp, S, z
 
 
-def mahalanobis(z_pred: Any, S: Any, z: Any) -> np.ndarray:
+def cholesky_innovations(S: np.ndarray) -> np.ndarray:
+    """The Cholesky factors ``L`` (``S_t = L_t L_t'``) of innovation covariances ``(T, m, m)``.
+
+    Raises a ValueError naming the first track whose ``S_t`` is not positive definite, rather
+    than numpy's LinAlgError."""
+    try:
+        return np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        for t in range(len(S)):
+            try:
+                np.linalg.cholesky(S[t])
+            except np.linalg.LinAlgError:
+                raise ValueError(f"S must be positive definite for every track; S[{t}] is "
+                                 f"not") from None
+        raise ValueError("S must be positive definite for every track") from None
+
+
+def mahalanobis(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike) -> np.ndarray:
     r"""Squared Mahalanobis distances of detections from tracks' predicted measurements.
 
     .. math:: d^2_{tj} = (z_j - \hat z_t)' S_t^{-1} (z_j - \hat z_t),
@@ -234,16 +251,13 @@ def mahalanobis(z_pred: Any, S: Any, z: Any) -> np.ndarray:
     T, m = zp.shape
     if T == 0 or z.size == 0:
         return np.zeros((T, len(z) if z.size else 0))
-    try:
-        L = np.linalg.cholesky(S)
-    except np.linalg.LinAlgError:
-        raise ValueError("S must be positive definite for every track") from None
+    L = cholesky_innovations(S)
     r = z[None, :, :] - zp[:, None, :]  # (T, D, m)
     w = np.linalg.solve(L, np.swapaxes(r, 1, 2))  # L w = r' : (T, m, D)
     return (w * w).sum(1)
 
 
-def mahalanobis_pairs(z_pred: Any, S: Any, z: Any,
+def mahalanobis_pairs(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike,
                       threshold: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The pairs of tracks and detections whose squared Mahalanobis distance is at most
     ``threshold``, without the dense ``(T, D)`` matrix: ``(rows, cols, d2)``.
@@ -399,7 +413,8 @@ def iou_pairs_same_class(a, a_cls, b, b_cls, min_iou):
     return rows[same], cols[same], vals[same], ok
 
 
-def iou_pairs(a: Any, b: Any, min_iou: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def iou_pairs(a: ArrayLike, b: ArrayLike,
+              min_iou: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The pairs of boxes whose IoU is at least ``min_iou``, without the dense matrix.
 
     The boxes of ``b`` are bucketed in a grid whose cells are as large as the largest box, so

@@ -31,14 +31,16 @@ when it has at most ``max_exact`` tracks and measurements, and otherwise gets Fi
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..types import Gaussian
 from .assign import components
+from .costs import cholesky_innovations
 
 __all__ = ["pda_weights", "jpda_weights", "pda_update", "likelihoods"]
 
 
-def likelihoods(z_pred: np.ndarray, S: np.ndarray, Z: np.ndarray) -> np.ndarray:
+def likelihoods(z_pred: ArrayLike, S: ArrayLike, Z: ArrayLike) -> np.ndarray:
     r"""Gaussian likelihood of every detection under every track's predicted measurement.
 
     .. math:: \ell_{tj} = N(z_j; \hat z_t, S_t) = (2\pi)^{-m/2} \det(S_t)^{-1/2}
@@ -60,8 +62,8 @@ def likelihoods(z_pred: np.ndarray, S: np.ndarray, Z: np.ndarray) -> np.ndarray:
 
     Raises
     ------
-    numpy.linalg.LinAlgError
-        If an ``S_t`` is not positive definite.
+    ValueError
+        If an ``S_t`` is not positive definite (as :func:`~vistrack.association.mahalanobis`).
 
     Examples
     --------
@@ -72,7 +74,7 @@ def likelihoods(z_pred: np.ndarray, S: np.ndarray, Z: np.ndarray) -> np.ndarray:
     T, m = zp.shape
     if len(Z) == 0 or T == 0:
         return np.zeros((T, len(Z)))
-    L = np.linalg.cholesky(S)
+    L = cholesky_innovations(S)
     r = Z[None, :, :] - zp[:, None, :]
     w = np.linalg.solve(L, np.swapaxes(r, 1, 2))
     d2 = (w * w).sum(1)
@@ -90,7 +92,7 @@ def _check(p_detect: float, clutter_density: float, p_gate: float) -> None:
         raise ValueError(f"p_gate must be in (0, 1]; got {p_gate}")
 
 
-def pda_weights(lik: np.ndarray, gate: np.ndarray, *, p_detect: float = 0.9,
+def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
                 clutter_density: float = 1e-4, p_gate: float = 0.99
                 ) -> tuple[np.ndarray, np.ndarray]:
     r"""PDA association probabilities of each track on its own.
@@ -183,7 +185,7 @@ def _exact(G: np.ndarray, B: float) -> tuple[np.ndarray, np.ndarray]:
     return beta / total, beta0 / total
 
 
-def jpda_weights(lik: np.ndarray, gate: np.ndarray, *, p_detect: float = 0.9,
+def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
                  clutter_density: float = 1e-4, p_gate: float = 0.99,
                  max_exact: int = 8) -> tuple[np.ndarray, np.ndarray]:
     r"""JPDA association probabilities: tracks that share detections, weighed jointly.
@@ -275,7 +277,7 @@ def jpda_weights(lik: np.ndarray, gate: np.ndarray, *, p_detect: float = 0.9,
     return beta, beta0
 
 
-def pda_update(g: Gaussian, Z: np.ndarray, H: np.ndarray, R: np.ndarray, beta: np.ndarray,
+def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.ndarray,
                beta0: np.ndarray) -> Gaussian:
     r"""Correct every track with all the detections, weighted by their association probabilities.
 
@@ -301,9 +303,9 @@ def pda_update(g: Gaussian, Z: np.ndarray, H: np.ndarray, R: np.ndarray, beta: n
         Measurement matrix.
     R : (m, m) array_like
         Measurement-noise covariance.
-    beta : (T, D) array_like
+    beta : (T, D) ndarray
         Association probabilities (:func:`pda_weights`, :func:`jpda_weights`).
-    beta0 : (T,) array_like
+    beta0 : (T,) ndarray
         Probability that no detection is the track's.
 
     Returns

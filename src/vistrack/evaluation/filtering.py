@@ -10,9 +10,8 @@ Applications to Tracking and Navigation*, §5.4). Averaged over ``N`` independen
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._validate import as_float_array, as_measurement_series
 from ..filters.kalman import FilterResult
@@ -20,7 +19,8 @@ from ..filters.kalman import FilterResult
 __all__ = ["rmse", "nees", "nis", "chi2_band"]
 
 
-def rmse(estimates: Any, truth: Any, *, axis: int | tuple[int, ...] | None = None) -> np.ndarray:
+def rmse(estimates: ArrayLike, truth: ArrayLike, *,
+         axis: int | tuple[int, ...] | None = None) -> np.ndarray:
     r"""Root-mean-square error of estimates against the truth.
 
     .. math:: \text{RMSE} = \sqrt{\operatorname{mean}\big((\hat x - x)^2\big)}
@@ -64,7 +64,7 @@ def _quadratic(e: np.ndarray, S: np.ndarray) -> np.ndarray:
     return np.sum(w * w, axis=-1)
 
 
-def nees(truth: Any, means: Any, covs: Any) -> np.ndarray:
+def nees(truth: ArrayLike, means: ArrayLike, covs: ArrayLike) -> np.ndarray:
     r"""Normalised estimation error squared of each estimate.
 
     .. math:: \text{NEES} = (x - \hat x)' P^{-1} (x - \hat x),
@@ -113,7 +113,8 @@ def nees(truth: Any, means: Any, covs: Any) -> np.ndarray:
     return _quadratic(x - m, P)
 
 
-def nis(ys: Any, result: FilterResult, *, H: Any, R: Any) -> tuple[np.ndarray, np.ndarray]:
+def nis(ys: ArrayLike, result: FilterResult, *, H: ArrayLike,
+        R: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     r"""Normalised innovation squared of each step, over its observed components.
 
     .. math:: \text{NIS}_t = \nu_t' S_t^{-1} \nu_t, \qquad \nu_t = y_t - H \bar x_t^-,

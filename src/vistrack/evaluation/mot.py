@@ -30,6 +30,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field, fields
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.optimize import linear_sum_assignment
 
 from ..io.motchallenge import MOTTable
@@ -43,7 +44,7 @@ _EPS = np.finfo(float).eps
 _DISTRACTORS = {"MOT16": (2, 7, 8, 12), "MOT17": (2, 7, 8, 12), "MOT20": (2, 6, 7, 8, 12)}
 
 
-def box_iou_xywh(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     """IoU of every box of ``a`` with every box of ``b``, boxes as ``left, top, width, height``.
 
     Parameters
@@ -162,7 +163,7 @@ class MOTCounts:
     parts are averaged over :data:`ALPHAS`; ``*_alpha`` gives them per threshold. Adding two
     counts (``a + b``, :func:`combine`) adds the counts and averages ``AssA``, ``AssRe``,
     ``AssPr`` and ``LocA`` weighted by each one's HOTA true positives, as MOTChallenge's
-    COMBINED row. (``sum`` needs the start value: ``sum(counts, MOTCounts())``.)
+    COMBINED row. ``sum(counts)`` gives the same as :func:`combine`.
 
     Attributes
     ----------
@@ -214,8 +215,8 @@ class MOTCounts:
     (0.75, 1.0, 0.5, 0.707)
     >>> c.DetA, c.AssA, c.AssRe, c.AssPr
     (1.0, 0.5, 0.5, 1.0)
-    >>> (c + c).TP, round(combine([c, c]).MOTA, 3)
-    (8, 0.75)
+    >>> (c + c).TP, round(combine([c, c]).MOTA, 3), sum([c, c]).TP
+    (8, 0.75, 8)
     """
 
     frames: int = 0
@@ -258,6 +259,12 @@ class MOTCounts:
         loc = self.LocA_alpha * self.HOTA_TP + other.LocA_alpha * other.HOTA_TP
         out.LocA_alpha = np.maximum(1e-10, loc) / np.maximum(1e-10, tp)
         return out
+
+    def __radd__(self, other: int) -> MOTCounts:
+        # sum() starts from 0: 0 + counts is the empty counts plus these, as in combine
+        if isinstance(other, int) and not isinstance(other, bool) and other == 0:
+            return MOTCounts() + self
+        return NotImplemented
 
     # CLEAR MOT
     @property

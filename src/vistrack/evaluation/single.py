@@ -11,9 +11,9 @@ Boxes are ``x, y, w, h`` (top-left corner and size), one per frame.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..io.tracks import write_boxes
 
@@ -21,7 +21,7 @@ __all__ = ["success_rate", "success_curve", "precision", "region_to_bbox", "read
            "write_boxes"]
 
 
-def _pair(pred: Any, gt: Any) -> tuple[np.ndarray, np.ndarray]:
+def _pair(pred: ArrayLike, gt: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     p = np.asarray(pred, dtype=float).reshape(-1, 4)
     g = np.asarray(gt, dtype=float).reshape(-1, 4)
     if p.shape != g.shape:
@@ -29,7 +29,7 @@ def _pair(pred: Any, gt: Any) -> tuple[np.ndarray, np.ndarray]:
     return p, g
 
 
-def overlaps(pred: Any, gt: Any) -> np.ndarray:
+def overlaps(pred: ArrayLike, gt: ArrayLike) -> np.ndarray:
     """IoU of each frame's predicted and true box.
 
     Parameters
@@ -57,7 +57,7 @@ def overlaps(pred: Any, gt: Any) -> np.ndarray:
     return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
 
 
-def success_rate(pred: Any, gt: Any, threshold: float = 0.5) -> float:
+def success_rate(pred: ArrayLike, gt: ArrayLike, threshold: float = 0.5) -> float:
     """Success rate: the fraction of frames whose IoU with the ground truth exceeds a threshold.
 
     Parameters
@@ -89,7 +89,7 @@ def success_rate(pred: Any, gt: Any, threshold: float = 0.5) -> float:
     return float(np.mean(overlaps(pred, gt) > threshold))
 
 
-def success_curve(pred: Any, gt: Any) -> tuple[np.ndarray, np.ndarray, float]:
+def success_curve(pred: ArrayLike, gt: ArrayLike) -> tuple[np.ndarray, np.ndarray, float]:
     """The success curve over IoU thresholds 0, 0.05, ..., 1, and the area under it (OTB).
 
     Parameters
@@ -128,7 +128,7 @@ def success_curve(pred: Any, gt: Any) -> tuple[np.ndarray, np.ndarray, float]:
     return th, rates, float(rates.mean())
 
 
-def precision(pred: Any, gt: Any, threshold: float = 20.0) -> float:
+def precision(pred: ArrayLike, gt: ArrayLike, threshold: float = 20.0) -> float:
     """Precision: the fraction of frames whose box centres are at most ``threshold`` apart.
 
     Parameters
@@ -162,7 +162,7 @@ def precision(pred: Any, gt: Any, threshold: float = 20.0) -> float:
     return float(np.mean(d <= threshold))
 
 
-def region_to_bbox(polygons: Any, rule: str = "area") -> np.ndarray:
+def region_to_bbox(polygons: ArrayLike, rule: str = "area") -> np.ndarray:
     """Axis-aligned ``x, y, w, h`` boxes of VOT's rotated boxes (four corners).
 
     ``rule="area"``: the box centred on the corners' mean with the rotated box's area and the

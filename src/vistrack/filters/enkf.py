@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Any, Literal, overload
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._validate import as_rng
 from ._nonlinear import (
@@ -68,7 +69,7 @@ class Ensemble:
         object.__setattr__(self, "members", m)
 
     @classmethod
-    def sample(cls, mean: Any, cov: Any, n_members: int,
+    def sample(cls, mean: ArrayLike, cov: ArrayLike, n_members: int,
                rng: np.random.Generator | int | None = None) -> Ensemble:
         """An ensemble of ``n_members`` draws from ``N(mean, cov)``, or a batch of them.
 
@@ -186,18 +187,18 @@ def enkf_predict(ens: Ensemble, motion: Any, dt: float = 1.0, t: float = 0.0, *,
 
 
 @overload
-def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
+def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
                 rng: np.random.Generator | int | None = None, residual: Callable | None = None,
                 return_loglik: Literal[False] = ...) -> Ensemble: ...
 @overload
-def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
+def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
                 rng: np.random.Generator | int | None = None, residual: Callable | None = None,
                 return_loglik: Literal[True]) -> tuple[Ensemble, np.ndarray]: ...
 @overload
-def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
+def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
                 rng: np.random.Generator | int | None = None, residual: Callable | None = None,
                 return_loglik: bool) -> Ensemble | tuple[Ensemble, np.ndarray]: ...
-def enkf_update(ens: Ensemble, y: Any, measurement: Any, *,
+def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
                 rng: np.random.Generator | int | None = None, residual: Callable | None = None,
                 return_loglik: bool = False) -> Ensemble | tuple[Ensemble, np.ndarray]:
     r"""Perturbed-observation update of a batch of ensembles with a measurement each.
@@ -326,8 +327,8 @@ class EnsembleKalmanFilter:
         self.n_members = int(n_members)
         self.rng = as_rng(rng)
 
-    def filter(self, ys: Any, *, x0: Any, P0: Any, dt: Any = 1.0,
-               times: Any = None) -> FilterResult:
+    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike, dt: ArrayLike = 1.0,
+               times: ArrayLike | None = None) -> FilterResult:
         """Filter a sequence, or a batch of them.
 
         The first ensemble is drawn from ``N(x0, P0)``, the prior of the first step, which

@@ -36,8 +36,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._validate import as_float_array
+from ..models.switching import SwitchingLinearSystem
 from ..types import Gaussian
 from ._nonlinear import step_times
 from .kalman import _readonly
@@ -182,7 +184,7 @@ class IMMFilter:
     """
 
     @classmethod
-    def from_system(cls, system: Any) -> IMMFilter:
+    def from_system(cls, system: SwitchingLinearSystem) -> IMMFilter:
         """The IMM of a :class:`~vistrack.models.SwitchingLinearSystem`.
 
         One exact Kalman member (an :class:`~vistrack.filters.ExtendedKalmanFilter` of a
@@ -216,7 +218,8 @@ class IMMFilter:
         return cls([ExtendedKalmanFilter(m, system.measurement) for m in system.motions],
                    system.transition, mode_probs=system.mode_probs)
 
-    def __init__(self, filters: Sequence[Any], transition: Any, *, mode_probs: Any = None):
+    def __init__(self, filters: Sequence[Any], transition: ArrayLike, *,
+                 mode_probs: ArrayLike | None = None):
         self.filters = list(filters)
         M = len(self.filters)
         if M < 1:
@@ -241,8 +244,8 @@ class IMMFilter:
         self.sizes = [int(f.motion.n) for f in self.filters]
         self.ref = int(np.argmax(self.sizes))
 
-    def filter(self, ys: Any, *, x0: Any, P0: Any, dt: Any = 1.0,
-               times: Any = None) -> IMMResult:
+    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike, dt: ArrayLike = 1.0,
+               times: ArrayLike | None = None) -> IMMResult:
         """Filter a sequence, or a batch of them.
 
         Parameters
@@ -350,7 +353,7 @@ class IMMFilter:
 
 @dataclass(frozen=True)
 class SwitchingResult:
-    """The output of :meth:`SwitchingParticleFilter.filter`.
+    """The output of :meth:`SwitchingParticleFilter.filter`. Arrays are read-only.
 
     Attributes
     ----------
@@ -375,8 +378,8 @@ class SwitchingResult:
     >>> zs, xs, ys = slds.sample(100, x0=[0.0, 1.0], rng=0)
     >>> res = SwitchingParticleFilter(slds, n_particles=300, rng=1).filter(
     ...     ys, x0=[0.0, 1.0], P0=np.eye(2))
-    >>> res.means.shape, res.mode_probs.shape, res.ess.shape
-    ((100, 2), (100, 2), (100,))
+    >>> res.means.shape, res.mode_probs.shape, res.ess.shape, res.means.flags.writeable
+    ((100, 2), (100, 2), (100,), False)
     """
 
     means: np.ndarray
@@ -449,8 +452,9 @@ class SwitchingParticleFilter:
     True
     """
 
-    def __init__(self, system: Any, n_particles: int = 500, *, resampling: str = "systematic",
-                 ess_threshold: float = 0.5, rng: np.random.Generator | int | None = None):
+    def __init__(self, system: SwitchingLinearSystem, n_particles: int = 500, *,
+                 resampling: str = "systematic", ess_threshold: float = 0.5,
+                 rng: np.random.Generator | int | None = None):
         from .._validate import as_rng
         from .particle import RESAMPLERS, check_particle_options
 
@@ -458,7 +462,8 @@ class SwitchingParticleFilter:
             n_particles, resampling, ess_threshold)
         self.system, self.resample, self.rng = system, RESAMPLERS[resampling], as_rng(rng)
 
-    def filter(self, ys: Any, *, x0: Any, P0: Any, dt: float = 1.0) -> SwitchingResult:
+    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike,
+               dt: float = 1.0) -> SwitchingResult:
         """Filter one sequence.
 
         Every particle starts at ``N(x0, P0)``, the prior of the first step, with a mode
@@ -549,4 +554,5 @@ class SwitchingParticleFilter:
                 idx = self.resample(w, N, rng)
                 mean, cov, z = mean[idx], cov[idx], z[idx]
                 logw = np.full(N, -np.log(N))
+        _readonly(means, covs, probs, ess)
         return SwitchingResult(means, covs, probs, ess, total)

@@ -17,9 +17,10 @@ definite.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Literal, overload
+from typing import Literal, overload
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._validate import (
     as_float_array,
@@ -91,7 +92,7 @@ def _readonly(*arrays: np.ndarray | None) -> None:
             a.flags.writeable = False
 
 
-def _prior(x0: Any, P0: Any, B: int) -> tuple[np.ndarray, np.ndarray]:
+def _prior(x0: ArrayLike, P0: ArrayLike, B: int) -> tuple[np.ndarray, np.ndarray]:
     x = as_float_array(x0, "x0", ndim=(1, 2))
     n = x.shape[-1]
     if x.ndim == 2 and x.shape[0] not in (1, B):
@@ -114,14 +115,14 @@ def _raise_not_pd(bad_t: int) -> None:
 
 
 def kalman_filter(
-    ys: Any,
+    ys: ArrayLike,
     *,
-    F: Any,
-    Q: Any,
-    H: Any,
-    R: Any,
-    x0: Any,
-    P0: Any,
+    F: ArrayLike,
+    Q: ArrayLike,
+    H: ArrayLike,
+    R: ArrayLike,
+    x0: ArrayLike,
+    P0: ArrayLike,
     store_covs: bool = True,
 ) -> FilterResult:
     r"""Run the Kalman filter over one series or a batch of series.
@@ -289,7 +290,7 @@ def _contiguous(a: np.ndarray) -> np.ndarray:
     return a if a.flags.c_contiguous else np.ascontiguousarray(a)
 
 
-def _small_matrix(value: Any, name: str, rows: int, cols: int) -> np.ndarray:
+def _small_matrix(value: ArrayLike, name: str, rows: int, cols: int) -> np.ndarray:
     """A constant ``(rows, cols)`` float64 matrix, checked for shape here (the kernels check
     finiteness and symmetry, which costs less there)."""
     if type(value) is np.ndarray and value.dtype == np.float64 and value.flags.c_contiguous:
@@ -317,7 +318,7 @@ def _kernel_error(code: int, a: str, b: str) -> None:
     raise ValueError(_KERNEL_ERRORS[code].format(a=a, b=b))
 
 
-def _with_measurement(g: Gaussian, y: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _with_measurement(g: Gaussian, y: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Check ``g`` and one measurement per Gaussian; contiguous ``mean, cov, y`` for a kernel."""
     if not isinstance(g, Gaussian):
         raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
@@ -331,18 +332,22 @@ def _with_measurement(g: Gaussian, y: Any) -> tuple[np.ndarray, np.ndarray, np.n
 
 @overload
 def kf_step(
-    g: Gaussian, y: Any, F: Any, Q: Any, H: Any, R: Any, *, return_loglik: Literal[False] = ...
+    g: Gaussian, y: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, *,
+    return_loglik: Literal[False] = ...
 ) -> Gaussian: ...
 @overload
 def kf_step(
-    g: Gaussian, y: Any, F: Any, Q: Any, H: Any, R: Any, *, return_loglik: Literal[True]
+    g: Gaussian, y: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, *,
+    return_loglik: Literal[True]
 ) -> tuple[Gaussian, np.ndarray]: ...
 @overload
 def kf_step(
-    g: Gaussian, y: Any, F: Any, Q: Any, H: Any, R: Any, *, return_loglik: bool
+    g: Gaussian, y: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, *,
+    return_loglik: bool
 ) -> Gaussian | tuple[Gaussian, np.ndarray]: ...
 def kf_step(
-    g: Gaussian, y: Any, F: Any, Q: Any, H: Any, R: Any, *, return_loglik: bool = False
+    g: Gaussian, y: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, *,
+    return_loglik: bool = False
 ) -> Gaussian | tuple[Gaussian, np.ndarray]:
     r""":func:`kf_predict` then :func:`kf_update` in one call: the usual loop of one tracker.
 
@@ -403,7 +408,7 @@ def kf_step(
     return (post, ll) if return_loglik else post
 
 
-def kf_predict(g: Gaussian, F: Any, Q: Any) -> Gaussian:
+def kf_predict(g: Gaussian, F: ArrayLike, Q: ArrayLike) -> Gaussian:
     r"""Predict every Gaussian of a batch one step: ``N(F m, F P F' + Q)``.
 
     .. math:: \bar x^- = F \bar x, \qquad P^- = F P F' + Q
@@ -451,18 +456,18 @@ def kf_predict(g: Gaussian, F: Any, Q: Any) -> Gaussian:
 
 @overload
 def kf_update(
-    g: Gaussian, y: Any, H: Any, R: Any, *, return_loglik: Literal[False] = ...
+    g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike, *, return_loglik: Literal[False] = ...
 ) -> Gaussian: ...
 @overload
 def kf_update(
-    g: Gaussian, y: Any, H: Any, R: Any, *, return_loglik: Literal[True]
+    g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike, *, return_loglik: Literal[True]
 ) -> tuple[Gaussian, np.ndarray]: ...
 @overload
 def kf_update(
-    g: Gaussian, y: Any, H: Any, R: Any, *, return_loglik: bool
+    g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike, *, return_loglik: bool
 ) -> Gaussian | tuple[Gaussian, np.ndarray]: ...
 def kf_update(
-    g: Gaussian, y: Any, H: Any, R: Any, *, return_loglik: bool = False
+    g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike, *, return_loglik: bool = False
 ) -> Gaussian | tuple[Gaussian, np.ndarray]:
     r"""Correct every Gaussian of a batch with its measurement.
 
@@ -531,7 +536,7 @@ def kf_update(
 
 
 def kalman_filter_1d(
-    ys: Any,
+    ys: ArrayLike,
     *,
     d: float | np.ndarray,
     m: float | np.ndarray,

@@ -4,11 +4,12 @@ equations are :mod:`vistrack.filters.kalman`'s and :mod:`vistrack.filters.smooth
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._validate import as_float_array, as_measurement_series, check_matrix_stack, check_psd
+from ..models.measurement import MeasurementModel
+from ..models.motion import MotionModel
 from ..types import Gaussian
 from . import _kernels
 from .kalman import FilterResult, _kernel_error, _prior, kalman_filter
@@ -17,7 +18,9 @@ from .smoothers import SmoothResult, rts_smooth
 __all__ = ["KalmanFilter", "OnlineFilter"]
 
 
-def _dt_steps(dt: Any, T: int) -> np.ndarray | float:
+def dt_steps(dt: ArrayLike, T: int) -> np.ndarray | float:
+    """``dt`` for ``T`` steps: a scalar as a float, else ``(T,)`` with ``dt[t]`` the step from
+    ``t-1`` to ``t`` (the ``T-1`` intervals between steps gain an unused ``dt[0] = 0``)."""
     d = as_float_array(dt, "dt", ndim=(0, 1))
     if d.ndim == 0:
         return float(d)
@@ -68,7 +71,7 @@ class KalmanFilter:
     (10, 4)
     """
 
-    def __init__(self, motion: Any, measurement: Any):
+    def __init__(self, motion: MotionModel, measurement: MeasurementModel):
         for name, obj, attrs in (
             ("motion", motion, ("F", "Q", "ndim_state")),
             ("measurement", measurement, ("H", "R", "ndim_meas")),
@@ -83,7 +86,7 @@ class KalmanFilter:
     def __repr__(self) -> str:
         return f"KalmanFilter({self.motion!r}, {self.measurement!r})"
 
-    def matrices(self, T: int, dt: Any = 1.0) -> dict[str, np.ndarray]:
+    def matrices(self, T: int, dt: ArrayLike = 1.0) -> dict[str, np.ndarray]:
         """The matrices ``F, Q, H, R`` of the models for ``T`` steps with time step(s) ``dt``.
 
         Parameters
@@ -114,7 +117,7 @@ class KalmanFilter:
         {'F': (3, 2, 2), 'Q': (3, 2, 2), 'H': (1, 2), 'R': (1, 1)}
         """
         n = self.motion.ndim_state
-        d = _dt_steps(dt, T)
+        d = dt_steps(dt, T)
         return {
             "F": self.motion.F(d),
             "Q": self.motion.Q(d),
@@ -122,7 +125,8 @@ class KalmanFilter:
             "R": self.measurement.R(),
         }
 
-    def default_prior(self, ys: np.ndarray, *, scale: float = 1e3) -> tuple[np.ndarray, np.ndarray]:
+    def default_prior(self, ys: ArrayLike, *,
+                      scale: float = 1e3) -> tuple[np.ndarray, np.ndarray]:
         r"""A weak prior from the first measurement of each series.
 
         ``x0`` is the least-squares state ``H⁺ y`` of the first non-missing value of each
@@ -177,11 +181,11 @@ class KalmanFilter:
 
     def filter(
         self,
-        ys: Any,
+        ys: ArrayLike,
         *,
-        dt: Any = 1.0,
-        x0: Any = None,
-        P0: Any = None,
+        dt: ArrayLike = 1.0,
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
         store_covs: bool = True,
     ) -> FilterResult:
         """Filter a sequence, or a batch of them; see :func:`kalman_filter` for the equations.
@@ -220,7 +224,7 @@ class KalmanFilter:
             P0 = dP0 if P0 is None else P0
         return kalman_filter(ys, **self.matrices(T, dt), x0=x0, P0=P0, store_covs=store_covs)
 
-    def online(self, x0: Any, P0: Any, *, dt: float = 1.0) -> OnlineFilter:
+    def online(self, x0: ArrayLike, P0: ArrayLike, *, dt: float = 1.0) -> OnlineFilter:
         """A filter for one target that is fed one measurement at a time.
 
         ``x0, P0`` are the prior of the first measurement (as in :func:`kalman_filter`): correct
@@ -261,7 +265,8 @@ class KalmanFilter:
         return OnlineFilter(self, x0, P0, dt=dt)
 
     def smooth(
-        self, ys: Any, *, dt: Any = 1.0, x0: Any = None, P0: Any = None
+        self, ys: ArrayLike, *, dt: ArrayLike = 1.0, x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None
     ) -> SmoothResult:
         """Filter, then RTS-smooth; see :func:`vistrack.filters.rts_smooth`.
 
@@ -342,7 +347,7 @@ class OnlineFilter:
 
     __slots__ = ("_kf", "_n", "_m", "_dt0", "_dt", "_buf", "_off", "_idx", "_kernel", "_no_y")
 
-    def __init__(self, kf: KalmanFilter, x0: Any, P0: Any, *, dt: float = 1.0):
+    def __init__(self, kf: KalmanFilter, x0: ArrayLike, P0: ArrayLike, *, dt: float = 1.0):
         n = kf.motion.ndim_state
         x, P = _prior(x0, P0, 1)
         if x.shape != (1, n) or P.shape[0] != 1:
@@ -435,7 +440,7 @@ class OnlineFilter:
         """
         return Gaussian(self.mean.copy(), self.cov.copy())
 
-    def _run(self, y: Any, predict: bool, update: bool, dt: float | None) -> float:
+    def _run(self, y: ArrayLike | None, predict: bool, update: bool, dt: float | None) -> float:
         if predict:
             d = self._dt0 if dt is None else float(dt)
             if d != self._dt:
@@ -479,7 +484,7 @@ class OnlineFilter:
         """
         self._run(None, True, False, dt)
 
-    def update(self, y: Any) -> float:
+    def update(self, y: ArrayLike) -> float:
         """Correct with a measurement (the equations of :func:`kf_update`).
 
         Parameters
@@ -508,7 +513,7 @@ class OnlineFilter:
         """
         return self._run(y, False, True, None)
 
-    def step(self, y: Any, *, dt: float | None = None) -> float:
+    def step(self, y: ArrayLike, *, dt: float | None = None) -> float:
         """:meth:`predict` then :meth:`update`: the loop of a tracker.
 
         Parameters

@@ -26,14 +26,17 @@ import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numba import njit
+from numpy.typing import ArrayLike
 
 from .._validate import as_float_array, as_rng
 from . import _jitmath, _random
 from ._nonlinear import Measurement, Motion, step_times
+from .kalman import _readonly
 
 __all__ = [
     "RESAMPLERS",
@@ -147,7 +150,7 @@ RESAMPLERS: dict[str, Callable[[np.ndarray, int, np.random.Generator], np.ndarra
 """Resampling schemes by name: ``f(weights, n, rng) -> indices (n,)``, sorted."""
 
 
-def _check_weights(weights: Any) -> np.ndarray:
+def _check_weights(weights: ArrayLike) -> np.ndarray:
     w = as_float_array(weights, "weights", ndim=(1, 2))
     if w.shape[-1] == 0:
         raise ValueError("weights must not be empty")
@@ -170,7 +173,7 @@ def _systematic_rows(w, u0, out):
     return out
 
 
-def resample(weights: Any, method: str = "systematic", *, n: int | None = None,
+def resample(weights: ArrayLike, method: str = "systematic", *, n: int | None = None,
              rng: np.random.Generator | int | None = None) -> np.ndarray:
     r"""Indices of ``n`` (default ``len(weights)``) particles drawn by ``method``.
 
@@ -230,7 +233,7 @@ def resample(weights: Any, method: str = "systematic", *, n: int | None = None,
         np.empty((0, n), np.int64)
 
 
-def effective_sample_size(weights: Any) -> float:
+def effective_sample_size(weights: ArrayLike) -> float:
     r"""Effective sample size of normalised weights, :math:`N_\text{eff} = 1 / \sum_i w_i^2`.
 
     ``N`` for equal weights, 1 when one particle has all the weight.
@@ -255,56 +258,84 @@ def effective_sample_size(weights: Any) -> float:
 
 
 # ---------------------------------------------------------------- estimates
-def weighted_mean(particles: np.ndarray, weights: np.ndarray) -> np.ndarray:
+def _particles_and_weights(particles: ArrayLike,
+                           weights: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    x = as_float_array(particles, "particles", ndim=(2,))
+    w = as_float_array(weights, "weights", ndim=(1,))
+    if w.shape != x.shape[:1]:
+        raise ValueError(f"weights must have shape ({x.shape[0]},), one per particle (row of "
+                         f"particles); got {w.shape}")
+    return x, w
+
+
+def _wmean(x: np.ndarray, w: np.ndarray) -> np.ndarray:
+    return w @ x
+
+
+def _wcov(x: np.ndarray, w: np.ndarray) -> np.ndarray:
+    d = x - _wmean(x, w)
+    return (d * w[:, None]).T @ d
+
+
+def weighted_mean(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
     r"""Weighted mean of a particle cloud, :math:`\sum_i w_i x_i`.
 
     Parameters
     ----------
-    particles : (N, n) ndarray
+    particles : (N, n) array_like
         The particles.
-    weights : (N,) ndarray
-        Normalised weights.
+    weights : (N,) array_like
+        Normalised weights (not checked).
 
     Returns
     -------
     (n,) ndarray
         The mean.
 
+    Raises
+    ------
+    ValueError
+        If ``particles`` is not 2-D or ``weights`` is not one weight per particle.
+
     Examples
     --------
-    >>> weighted_mean(np.array([[0.0], [2.0]]), np.array([0.25, 0.75]))
+    >>> weighted_mean([[0.0], [2.0]], [0.25, 0.75])
     array([1.5])
     """
-    return weights @ particles
+    return _wmean(*_particles_and_weights(particles, weights))
 
 
-def weighted_cov(particles: np.ndarray, weights: np.ndarray) -> np.ndarray:
+def weighted_cov(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
     r"""Weighted covariance of a particle cloud, :math:`\sum_i w_i (x_i - m)(x_i - m)'`.
 
     The population covariance (no bias correction), with ``m`` the :func:`weighted_mean`.
 
     Parameters
     ----------
-    particles : (N, n) ndarray
+    particles : (N, n) array_like
         The particles.
-    weights : (N,) ndarray
-        Normalised weights (an array: it is indexed).
+    weights : (N,) array_like
+        Normalised weights (not checked).
 
     Returns
     -------
     (n, n) ndarray
         The covariance.
 
+    Raises
+    ------
+    ValueError
+        If ``particles`` is not 2-D or ``weights`` is not one weight per particle.
+
     Examples
     --------
-    >>> weighted_cov(np.array([[0.0], [2.0]]), np.array([0.25, 0.75]))
+    >>> weighted_cov([[0.0], [2.0]], [0.25, 0.75])
     array([[0.75]])
     """
-    d = particles - weighted_mean(particles, weights)
-    return (d * weights[:, None]).T @ d
+    return _wcov(*_particles_and_weights(particles, weights))
 
 
-def particle_mode(particles: np.ndarray, weights: np.ndarray, *, bandwidth: Any = None,
+def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayLike | None = None,
                   n_starts: int = 8, max_iter: int = 50,
                   max_points: int = 5000) -> tuple[np.ndarray, float]:
     r"""The mode of a weighted cloud, "the mean of the tallest peak", and its confidence.
@@ -371,7 +402,7 @@ def particle_mode(particles: np.ndarray, weights: np.ndarray, *, bandwidth: Any 
     w = np.asarray(weights, dtype=float)
     N, n = x.shape
     if bandwidth is None:
-        sd = np.sqrt(np.maximum(np.diagonal(weighted_cov(x, w)), 1e-300))
+        sd = np.sqrt(np.maximum(np.diagonal(_wcov(x, w)), 1e-300))
         neff = effective_sample_size(w)
         h = sd * (4.0 / ((n + 2) * neff)) ** (1.0 / (n + 4))
     else:
@@ -383,7 +414,7 @@ def particle_mode(particles: np.ndarray, weights: np.ndarray, *, bandwidth: Any 
         xs, ws = x, w
     z = xs / h
     picks = _systematic(ws, max(n_starts - 1, 1), search)
-    starts = np.concatenate([[weighted_mean(xs, ws)], xs[picks]]) / h
+    starts = np.concatenate([[_wmean(xs, ws)], xs[picks]]) / h
     for _ in range(max_iter):
         d2 = ((starts[:, None, :] - z[None]) ** 2).sum(-1)  # (S, N)
         k = ws * np.exp(-0.5 * (d2 - d2.min(1, keepdims=True)))
@@ -549,7 +580,7 @@ def _source_hash(*modules: str) -> str:
     for name in modules:
         spec = importlib.util.find_spec(name)
         if spec is not None and spec.origin and os.path.exists(spec.origin):
-            h.update(open(spec.origin, "rb").read())
+            h.update(Path(spec.origin).read_bytes())
     return h.hexdigest()[:16]
 
 
@@ -629,7 +660,7 @@ def _whitening(R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, float]:
 # ---------------------------------------------------------------- the filter
 @dataclass(frozen=True)
 class ParticleResult:
-    """The output of :meth:`ParticleFilter.filter`.
+    """The output of :meth:`ParticleFilter.filter`. Arrays are read-only.
 
     Attributes
     ----------
@@ -659,6 +690,8 @@ class ParticleResult:
     >>> res = pf.filter(np.arange(5.0)[:, None], x0=[0.0, 1.0], P0=np.eye(2))
     >>> res.means.shape, res.particles.shape, bool(np.isclose(res.weights.sum(), 1.0))
     ((5, 2), (500, 2), True)
+    >>> res.means.flags.writeable, res.particles.flags.writeable
+    (False, False)
     """
 
     means: np.ndarray
@@ -672,8 +705,17 @@ class ParticleResult:
     weights: np.ndarray
 
 
-def check_particle_options(n_particles: Any, resampling: str,
-                           ess_threshold: Any) -> tuple[int, float]:
+def _result(means: np.ndarray, covs: np.ndarray, modes: np.ndarray | None,
+            mode_confidence: np.ndarray | None, ess: np.ndarray, resampled: np.ndarray,
+            loglik: float, particles: np.ndarray, weights: np.ndarray) -> ParticleResult:
+    """A :class:`ParticleResult` whose arrays are made read-only, as the other filters'."""
+    _readonly(means, covs, modes, mode_confidence, ess, resampled, particles, weights)
+    return ParticleResult(means, covs, modes, mode_confidence, ess, resampled, loglik,
+                          particles, weights)
+
+
+def check_particle_options(n_particles: float, resampling: str,
+                           ess_threshold: float) -> tuple[int, float]:
     """Check a particle filter's size, resampling scheme and ESS threshold."""
     if int(n_particles) != n_particles or n_particles < 1:
         raise ValueError(f"n_particles must be an integer >= 1; got {n_particles}")
@@ -810,8 +852,9 @@ class ParticleFilter:
 
         return loglik
 
-    def filter(self, ys: Any, *, x0: Any = None, P0: Any = None, particles: Any = None,
-               dt: Any = 1.0, times: Any = None, modes: bool = False) -> ParticleResult:
+    def filter(self, ys: ArrayLike, *, x0: ArrayLike | None = None, P0: ArrayLike | None = None,
+               particles: ArrayLike | None = None, dt: ArrayLike = 1.0,
+               times: ArrayLike | None = None, modes: bool = False) -> ParticleResult:
         """Filter one sequence.
 
         The first cloud is ``particles`` or ``N`` draws from ``N(x0, P0)``, the prior of the
@@ -888,7 +931,7 @@ class ParticleFilter:
             else:
                 w = np.exp(logw)
                 w /= w.sum()
-            means[t], covs[t] = weighted_mean(x, w), weighted_cov(x, w)
+            means[t], covs[t] = _wmean(x, w), _wcov(x, w)
             if modes:
                 assert mode_arr is not None and conf is not None  # allocated when modes
                 mode_arr[t], conf[t] = particle_mode(x, w)
@@ -898,9 +941,10 @@ class ParticleFilter:
                 logw = np.full(N, -math.log(N))
                 resampled[t] = True
         w = np.exp(logw)
-        return ParticleResult(means, covs, mode_arr, conf, ess, resampled, total, x, w / w.sum())
+        return _result(means, covs, mode_arr, conf, ess, resampled, total, x, w / w.sum())
 
-    def _initial(self, particles: Any, x0: Any, P0: Any) -> np.ndarray:
+    def _initial(self, particles: ArrayLike | None, x0: ArrayLike | None,
+                 P0: ArrayLike | None) -> np.ndarray:
         n, N = self.ndim_state, self.n_particles
         if particles is not None:
             x = as_float_array(particles, "particles", ndim=(2,))
@@ -914,7 +958,8 @@ class ParticleFilter:
                              f"got {m0.shape} and {C0.shape}")
         return self.rng.multivariate_normal(m0, C0, size=N, method="eigh")
 
-    def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: Any, times: Any) -> ParticleResult:
+    def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: ArrayLike,
+                      times: ArrayLike | None) -> ParticleResult:
         assert self._fused is not None  # filter calls this only with the compiled parts
         fref, fparams, href, hp, mo, me = self._fused
         T, m = ys.shape
@@ -963,5 +1008,4 @@ class ParticleFilter:
         if fail >= 0:
             raise _degenerate(int(fail), ys[fail])
         w = np.exp(logw - logw.max())
-        return ParticleResult(means, covs, None, None, ess, resampled, float(loglik), x,
-                              w / w.sum())
+        return _result(means, covs, None, None, ess, resampled, float(loglik), x, w / w.sum())

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numba import njit
+from numpy.typing import ArrayLike
 
 from .._validate import as_measurement_series, check_linear_gaussian, check_matrix_stack, check_psd
 from ._kernels import chol_solve, predict_one
@@ -128,7 +128,7 @@ def _filtered_arrays(result: FilterResult) -> tuple[np.ndarray, np.ndarray, bool
     return means, covs, single
 
 
-def rts_smooth(result: FilterResult, *, F: Any, Q: Any) -> SmoothResult:
+def rts_smooth(result: FilterResult, *, F: ArrayLike, Q: ArrayLike) -> SmoothResult:
     r"""Rauch-Tung-Striebel smoother over a filtered sequence (one series or a batch).
 
     .. math::
@@ -205,7 +205,8 @@ def rts_smooth(result: FilterResult, *, F: Any, Q: Any) -> SmoothResult:
 
 
 def two_filter_smooth(
-    ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any
+    ys: ArrayLike, *, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, x0: ArrayLike,
+    P0: ArrayLike
 ) -> SmoothResult:
     r"""The seeds' forward-backward smoother: run two filters and combine them.
 

@@ -16,11 +16,13 @@ exact Kalman filter per sample.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._validate import as_float_array, as_rng
+from .measurement import MeasurementModel
+from .motion import MotionModel
 
 __all__ = ["SwitchingLinearSystem"]
 
@@ -84,8 +86,8 @@ class SwitchingLinearSystem:
     array([0.5, 0.5])
     """
 
-    def __init__(self, motions: Sequence[Any], measurement: Any, transition: Any,
-                 mode_probs: Any = None):
+    def __init__(self, motions: Sequence[MotionModel], measurement: MeasurementModel,
+                 transition: ArrayLike, mode_probs: ArrayLike | None = None):
         self.motions = list(motions)
         k = len(self.motions)
         if k < 1:
@@ -110,8 +112,9 @@ class SwitchingLinearSystem:
     def __repr__(self) -> str:
         return f"SwitchingLinearSystem(k={len(self.motions)}, ndim_state={self.ndim_state})"
 
-    def sample(self, T: int, *, x0: Any, P0: Any = None, dt: float = 1.0,
-               rng: np.random.Generator | int | None = None):
+    def sample(self, T: int, *, x0: ArrayLike, P0: ArrayLike | None = None, dt: float = 1.0,
+               rng: np.random.Generator | int | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Draw a sequence of modes, states and measurements.
 
         The first mode is drawn from ``mode_probs`` and the first state is ``x0`` (or a draw
