@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from vistrack import Gaussian
-from vistrack.association import jpda_weights, likelihoods, pda_update, pda_weights
-from vistrack.filters import kf_update
+from vistrack.association import jpda_weights, likelihoods, pda_weights
+from vistrack.filters import kf_update, pda_update
 
 
 def random_tracks(rng, T, n=4, m=2):

@@ -3,10 +3,10 @@
 from .assign import ASSIGNERS, assign, components, gnn, gnn_sparse, greedy, lsa, nearest_neighbour
 from .costs import euclidean, giou, iou, iou_pairs, iou_pairs_same_class, mahalanobis, paired_iou
 from .gating import chi2_gate, chi2_threshold
-from .pda import jpda_weights, likelihoods, pda_update, pda_weights
+from .pda import jpda_weights, likelihoods, pda_weights
 
 __all__ = ["ASSIGNERS", "assign", "components", "gnn", "gnn_sparse", "greedy", "lsa",
            "nearest_neighbour",
            "euclidean", "giou", "iou", "iou_pairs", "iou_pairs_same_class", "mahalanobis",
            "paired_iou", "chi2_gate", "chi2_threshold",
-           "jpda_weights", "likelihoods", "pda_update", "pda_weights"]
+           "jpda_weights", "likelihoods", "pda_weights"]

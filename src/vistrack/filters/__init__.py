@@ -26,6 +26,7 @@ from .particle import (
     weighted_cov,
     weighted_mean,
 )
+from .pda import pda_update
 from .smoothers import SmoothResult, rts_smooth, two_filter_smooth
 from .ukf import (
     JulierSigmaPoints,
@@ -62,6 +63,7 @@ __all__ = [
     "enkf_update",
     "KalmanFilter",
     "OnlineFilter",
+    "pda_update",
     "axes_predict",
     "axes_to_full",
     "axes_update",

@@ -27,8 +27,8 @@ import numpy as np
 
 from ..association import assign, chi2_threshold, gnn_sparse, jpda_weights, likelihoods, mahalanobis
 from ..association.costs import mahalanobis_pairs
-from ..association.pda import pda_update, pda_weights
-from ..filters import kf_predict, kf_update
+from ..association.pda import pda_weights
+from ..filters import kf_predict, kf_update, pda_update
 from ..models import ConstantVelocity, Position
 from ..types import Detections, Frame, Gaussian, Tracks
 from .base import frame_index
