@@ -131,10 +131,10 @@ def test_scalar_equations_equal_matrix_form(rng):
     s = kalman_filter_1d(ys, d=d, m=mm, sigma_d=sd, sigma_m=sm, x0=0.5, sigma0=2.0)
     res = kalman_filter(ys[:, None], F=d[:, None, None], Q=(sd**2)[:, None, None],
                         H=mm[:, None, None], R=(sm**2)[:, None, None], x0=[0.5], P0=[[4.0]])
-    np.testing.assert_allclose(s["mean"], res.means[:, 0], rtol=1e-12)
-    np.testing.assert_allclose(s["std"] ** 2, res.covs[:, 0, 0], rtol=1e-12)
-    np.testing.assert_allclose(s["pred_mean"], res.pred_means[:, 0], rtol=1e-12)
-    np.testing.assert_allclose(s["pred_std"] ** 2, res.pred_covs[:, 0, 0], rtol=1e-12)
+    np.testing.assert_allclose(s.mean, res.means[:, 0], rtol=1e-12)
+    np.testing.assert_allclose(s.std ** 2, res.covs[:, 0, 0], rtol=1e-12)
+    np.testing.assert_allclose(s.pred_mean, res.pred_means[:, 0], rtol=1e-12)
+    np.testing.assert_allclose(s.pred_std ** 2, res.pred_covs[:, 0, 0], rtol=1e-12)
 
 
 @pytest.mark.parametrize("store_covs", [True, False])

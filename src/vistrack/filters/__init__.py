@@ -8,6 +8,7 @@ from .enkf import Ensemble, EnsembleKalmanFilter, enkf_predict, enkf_update
 from .imm import IMMFilter, IMMResult, SwitchingParticleFilter, SwitchingResult
 from .kalman import (
     FilterResult,
+    FilterResult1D,
     kalman_filter,
     kalman_filter_1d,
     kf_predict,
@@ -71,6 +72,7 @@ __all__ = [
     "SmoothResult",
     "kalman_filter",
     "kalman_filter_1d",
+    "FilterResult1D",
     "kf_predict",
     "kf_step",
     "kf_update",

@@ -39,6 +39,7 @@ __all__ = [
     "kf_update",
     "kf_step",
     "kalman_filter_1d",
+    "FilterResult1D",
 ]
 
 
@@ -535,6 +536,31 @@ def kf_update(
     return (post, ll) if return_loglik else post
 
 
+@dataclass(frozen=True)
+class FilterResult1D:
+    """The output of :func:`kalman_filter_1d`: the slides' scalar quantities, each ``(T,)``,
+    read-only.
+
+    Attributes
+    ----------
+    pred_mean, pred_std : (T,) ndarray
+        The predictions :math:`\bar x_i^-` and :math:`\\sigma_i^-`.
+    mean, std : (T,) ndarray
+        The corrections :math:`\bar x_i^+` and :math:`\\sigma_i^+`.
+
+    Examples
+    --------
+    >>> r = kalman_filter_1d([1.0], d=1.0, m=1.0, sigma_d=0.5, sigma_m=1.0, x0=0.0, sigma0=1.0)
+    >>> float(r.mean[0]), r.mean.flags.writeable
+    (0.5, False)
+    """
+
+    pred_mean: np.ndarray
+    pred_std: np.ndarray
+    mean: np.ndarray
+    std: np.ndarray
+
+
 def kalman_filter_1d(
     ys: ArrayLike,
     *,
@@ -544,7 +570,7 @@ def kalman_filter_1d(
     sigma_m: float | np.ndarray,
     x0: float,
     sigma0: float,
-) -> dict[str, np.ndarray]:
+) -> FilterResult1D:
     r"""The seeds' scalar Kalman filter, written exactly as on the slides.
 
     Model ``xᵢ ~ N(dᵢ xᵢ₋₁, σ_dᵢ²)``, ``yᵢ ~ N(mᵢ xᵢ, σ_mᵢ²)``; start ``x̄0⁻ = x0``,
@@ -576,10 +602,10 @@ def kalman_filter_1d(
 
     Returns
     -------
-    dict of str to (T,) ndarray
+    FilterResult1D
         ``pred_mean``, ``pred_std`` (the predictions :math:`\bar x_i^-`,
         :math:`\sigma_i^-`) and ``mean``, ``std`` (the corrections :math:`\bar x_i^+`,
-        :math:`\sigma_i^+`).
+        :math:`\sigma_i^+`), each ``(T,)``.
 
     Raises
     ------
@@ -590,7 +616,7 @@ def kalman_filter_1d(
     --------
     >>> out = kalman_filter_1d([1.0, np.nan, 2.0], d=1.0, m=1.0, sigma_d=0.5, sigma_m=1.0,
     ...                        x0=0.0, sigma0=1.0)
-    >>> out["mean"].round(3), out["std"].round(3)
+    >>> out.mean.round(3), out.std.round(3)
     (array([0.5 , 0.5 , 1.25]), array([0.707, 0.866, 0.707]))
     """
     y = as_float_array(ys, "ys", ndim=(1,))
@@ -616,4 +642,5 @@ def kalman_filter_1d(
         den = sm**2 + mi**2 * sp**2
         out["mean"][i] = (xp * sm**2 + mi * y[i] * sp**2) / den
         out["std"][i] = np.sqrt(sm**2 * sp**2 / den)
-    return out
+    _readonly(*out.values())
+    return FilterResult1D(**out)
