@@ -443,7 +443,7 @@ class Context:
     overrides: dict = field(default_factory=dict)
     options: dict = field(default_factory=dict)
     resolved: TrackConfig | None = None
-    _confidence: Any = None
+    _confidence: Any = field(default=None, init=False, repr=False)
 
     @property
     def confidence(self) -> Callable[[Any], Any]:
