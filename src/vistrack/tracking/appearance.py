@@ -372,8 +372,7 @@ class WSLTracker(SingleObjectTracker):
         return cv2.warpAffine(g, A, (out_w, out_h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                               borderMode=cv2.BORDER_REPLICATE).astype(float)
 
-    def _start(self, image: Any, box: Any) -> None:
-        b = as_box(box)
+    def _start(self, image: Any, b: np.ndarray) -> None:
         g = self._prepare(image)
         self.vw, self.vh = _view_size(b[2], b[3], self.size)
         self.w, self.h = float(b[2]), float(b[3])

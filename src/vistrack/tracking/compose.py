@@ -26,7 +26,6 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import as_box
 from ..filters import kf_predict, kf_update
 from ..models import ConstantVelocity
 from ..types import Gaussian
@@ -135,8 +134,7 @@ class Composite(SingleObjectTracker):
         self.q_pos, self.q_size = float(q_pos), float(q_size)
         self.threshold = float(chi2.ppf(p_gate, 4))
 
-    def _start(self, image: Any, box: Any) -> None:
-        b = as_box(box)
+    def _start(self, image: Any, b: np.ndarray) -> None:
         for tracker in self.members.values():
             tracker.init(image, b)
         z = _measure(b)

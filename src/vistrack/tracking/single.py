@@ -109,7 +109,7 @@ class MedianFlow(SingleObjectTracker):
 
     def _start(self, image: Any, box: Any) -> None:
         self.prev = _grey(image)
-        self.box = as_box(box)
+        self.box = box
 
     def motion(self, grey: np.ndarray) -> tuple[np.ndarray, float] | None:
         """Median displacement and scale of the box's features from the previous frame, or
@@ -243,9 +243,8 @@ class TemplateTracker(SingleObjectTracker):
         self.max_residual, self.iters = float(max_residual), int(iters)
         self.flow = MedianFlow()
 
-    def _start(self, image: Any, box: Any) -> None:
+    def _start(self, image: Any, b: np.ndarray) -> None:
         grey = _grey(image).astype(np.float32)
-        b = as_box(box)
         self.box0 = b
         self.half = max(3, int(min(b[2], b[3]) / 2) - 1)
         c = np.array([[b[0] + b[2] / 2, b[1] + b[3] / 2]])
@@ -389,7 +388,7 @@ class ColourTracker(SingleObjectTracker):
         return ht / max(ht.sum(), 1.0), hb / max(hb.sum(), 1.0)
 
     def _start(self, image: Any, box: Any) -> None:
-        self.box = as_box(box)
+        self.box = box
         self.pt, self.pb = self._hist(_hsv(image), self.box)
 
     def _backproject(self, hsv: np.ndarray) -> np.ndarray:
@@ -633,8 +632,7 @@ class OpenCVTracker(SingleObjectTracker):
             raise ValueError(f"kind must be one of {sorted(makers)}; got {kind!r}")
         self._make = makers[kind]
 
-    def _start(self, image: Any, box: Any) -> None:
-        b = as_box(box)
+    def _start(self, image: Any, b: np.ndarray) -> None:
         self._t = self._make()
         self._t.init(np.asarray(image), tuple(int(round(v)) for v in b))
         self.box = b

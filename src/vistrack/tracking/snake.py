@@ -360,8 +360,7 @@ class SnakeTracker(SingleObjectTracker):
     def __init__(self, **snake: Any):
         self.snake = Snake(**snake)
 
-    def _start(self, image: Any, box: Any) -> None:
-        b = as_box(box)
+    def _start(self, image: Any, b: np.ndarray) -> None:
         s = self.snake
         # a cubic B-spline through control points on an ellipse lies inside them: the
         # ratio is (2 + cos(2π/n)) / 3, as in Snake.init_circle
