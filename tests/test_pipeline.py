@@ -267,3 +267,41 @@ def test_a_video_where_nothing_is_tracked_still_writes_every_output(tmp_path):
     assert all(p.exists() for p in r.files.values())
     assert (tmp_path / "out" / "tracks.txt").read_text() == ""
     assert (tmp_path / "out" / "tracks.csv").read_text() == "frame,id,x,y,w,h,score\n"
+
+
+def test_an_interrupted_run_leaves_the_earlier_outputs_as_they_were(tmp_path):
+    """Ctrl-C in the middle of a run over an earlier run's folder (``force``): every file of
+    the earlier run is still there, byte for byte, and no partial file is left beside it."""
+    frames, truth = red_disc_clip(T=12)
+    folder = write_clip(tmp_path / "frames", frames)
+
+    class Truth:
+        def __init__(self, stop=None):
+            self.k, self.stop = 0, stop
+
+        def detect(self, image):
+            self.k += 1
+            if self.k == self.stop:
+                raise KeyboardInterrupt
+            return Detections.from_xywh([truth[self.k - 1]], [0.9])
+
+    out = tmp_path / "out"
+    first = track_video(folder, out, frontend=Truth(), fps=25)
+    before = {p.name: p.read_bytes() for p in first.files.values()}
+    assert len(before) == 4 and all(before.values())
+    with pytest.raises(KeyboardInterrupt):
+        track_video(folder, out, frontend=Truth(stop=6), fps=25, force=True)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def test_the_cli_says_an_interrupted_run_in_one_line(tmp_path, monkeypatch, capsys):
+    import vistrack.pipeline
+    from vistrack.cli import main
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(vistrack.pipeline, "track_video", interrupted)
+    assert main(["track", str(tmp_path), "--out-dir", str(tmp_path / "out")]) == 130
+    err = capsys.readouterr().err
+    assert err == "vistrack track: interrupted; earlier outputs are kept\n"

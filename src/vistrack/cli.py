@@ -354,7 +354,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     if getattr(args, "seeds", 1) < 1:
         parser.error(f"--seeds must be >= 1; got {args.seeds}")
-    return args.func(args)
+    try:
+        return args.func(args)
+    except KeyboardInterrupt:
+        # tracks, boxes, video and plot are written under partial names and renamed only
+        # when complete (vistrack.io.atomic): what an earlier run wrote is still there
+        kept = "; earlier outputs are kept" if args.command in ("track", "track-one") else ""
+        print(f"vistrack {args.command}: interrupted{kept}", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -1,6 +1,8 @@
 """Reading and writing outside formats: MOTChallenge files, video, and the sinks that write
-tracks (:mod:`vistrack.io.tracks`)."""
+tracks (:mod:`vistrack.io.tracks`). Every file is written whole or not at all
+(:mod:`vistrack.io.atomic`)."""
 
+from .atomic import open_replacing, partial_path, replacing
 from .motchallenge import (
     MOT_CLASSES,
     MOTFormatError,
@@ -15,4 +17,5 @@ from .video import Frame, VideoError, VideoReader, VideoWriter
 
 __all__ = ["MOT_CLASSES", "MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "read_seqinfo",
            "write_mot", "Frame", "VideoError", "VideoReader", "VideoWriter", "Sink",
-           "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes"]
+           "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes",
+           "partial_path", "replacing", "open_replacing"]

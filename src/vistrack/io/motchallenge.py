@@ -23,6 +23,8 @@ from typing import Any
 
 import numpy as np
 
+from .atomic import open_replacing
+
 __all__ = ["MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "write_mot", "read_seqinfo",
            "MOT_CLASSES"]
 
@@ -335,8 +337,7 @@ def write_mot(path: str | os.PathLike, frames: Any, ids: Any, boxes: Any, conf: 
         raise ValueError(f"frames, ids, boxes and conf must have the same length; got "
                          f"{len(f)}, {len(i)}, {len(b)}, {len(c)}")
     order = np.lexsort((i, f))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w") as out:
+    with open_replacing(path) as out:
         for k in order:
             x, y, w, h = b[k]
             out.write(f"{f[k]},{i[k]},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{c[k]:.4g},-1,-1,-1\n")

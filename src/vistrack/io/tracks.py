@@ -16,6 +16,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from ..types import Frame, Tracks
+from .atomic import open_replacing
 from .motchallenge import write_mot
 
 __all__ = ["Sink", "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes"]
@@ -275,8 +276,7 @@ class CSVWriter(TrackRows):
         >>> path.read_text()
         'frame,id,x,y,w,h,score\\n'
         """
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        with open(self.path, "w") as fh:
+        with open_replacing(self.path) as fh:
             fh.write("frame,id,x,y,w,h,score\n")
             for f, i, (x, y, w, h), s in zip(self.frames, self.ids, self.xywh, self.scores):
                 fh.write(f"{f},{i},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{s:.3f}\n")
@@ -312,8 +312,7 @@ def write_boxes(path: str | os.PathLike, boxes: object, *, force: bool = False) 
     if path.exists() and not force:
         raise FileExistsError(f"{path} exists; pass --force to overwrite it")
     b = np.asarray(boxes, dtype=float).reshape(-1, 4)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w") as fh:
+    with open_replacing(path) as fh:
         for k, (x, y, w, h) in enumerate(b, start=1):
             fh.write(f"{k},{x:.2f},{y:.2f},{w:.2f},{h:.2f}\n")
 

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import os
 from collections import deque
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -175,11 +177,13 @@ class AnnotatedVideo:
     """
 
     def __init__(self, path: Any, fps: float, annotator: Annotator | None = None):
-        from ..io.video import VideoWriter
+        from ..io import VideoWriter, partial_path
 
-        self.path = path
+        self.path = Path(path)
         self.annotator = annotator or Annotator()
-        self._writer = VideoWriter(path, fps)
+        # frames go to a partial file, renamed over ``path`` when the video is complete
+        self._part = partial_path(self.path)
+        self._writer = VideoWriter(self._part, fps)
 
     def write(self, frame: Any, tracks: Any) -> None:
         """Draw ``tracks`` on ``frame.image`` and write it.
@@ -212,8 +216,7 @@ class AnnotatedVideo:
                                                label=f"frame {frame.index}"))
 
     def close(self) -> None:
-        """Finish the video file (and :meth:`abort` does the same: a run that fails keeps
-        the frames written so far).
+        """Finish the video file: it replaces any earlier ``path`` only now, complete.
 
         Examples
         --------
@@ -224,5 +227,11 @@ class AnnotatedVideo:
         False
         """
         self._writer.close()
+        if self._part.exists():
+            os.replace(self._part, self.path)
 
-    abort = close  # a run that fails keeps the frames written so far
+    def abort(self) -> None:
+        """Give the video up (a run that failed): the frames written are removed, and an
+        earlier ``path`` is left as it was."""
+        self._writer.close()
+        self._part.unlink(missing_ok=True)

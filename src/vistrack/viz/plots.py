@@ -362,6 +362,9 @@ class TrajectoryPlot:
         image = self._first
         if image is not None and image.ndim == 3:
             image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
-        plot_trajectories(r.frames, r.ids, xywh[:, :2] + xywh[:, 2:] / 2, image, self.path,
-                          title=f"{self.name}: {len(np.unique(r.ids))} tracks, "
-                          f"{self._frames} frames")
+        from ..io import replacing
+
+        with replacing(self.path) as part:  # an earlier plot stays until this one is saved
+            plot_trajectories(r.frames, r.ids, xywh[:, :2] + xywh[:, 2:] / 2, image, part,
+                              title=f"{self.name}: {len(np.unique(r.ids))} tracks, "
+                              f"{self._frames} frames")
