@@ -9,6 +9,7 @@ from scipy import stats
 
 import vistrack as vt
 from vistrack.filters import kalman_filter, kalman_filter_1d, kf_predict, kf_step, kf_update
+from vistrack.filters.kalman import _update
 
 from .conftest import random_model
 
@@ -208,8 +209,10 @@ def test_predict_update_kernels_equal_the_sequence_filter(rng):
         if t > 0:
             g = kf_predict(g, mod["F"], mod["Q"])
             np.testing.assert_allclose(g.mean, seq.pred_means[:, t], rtol=1e-12, atol=1e-13)
-        g, ll = kf_update(g, ys[:, t], mod["H"], mod["R"], return_loglik=True)
+        prev = g
+        g, ll = _update(g, ys[:, t], mod["H"], mod["R"])
         total += ll
+        np.testing.assert_array_equal(kf_update(prev, ys[:, t], mod["H"], mod["R"]).mean, g.mean)
         np.testing.assert_allclose(g.mean, seq.means[:, t], rtol=1e-12, atol=1e-13)
         np.testing.assert_allclose(g.cov, seq.covs[:, t], rtol=1e-12, atol=1e-13)
     np.testing.assert_allclose(total, seq.loglik, rtol=1e-12)
@@ -223,12 +226,10 @@ def test_kf_step_equals_predict_then_update(rng, B):
     g = vt.Gaussian(rng.normal(size=(B, n)), A @ np.swapaxes(A, 1, 2) + np.eye(n))
     y = rng.normal(size=(B, m))
     y[0, 1] = np.nan
-    got, ll = kf_step(g, y, mod["F"], mod["Q"], mod["H"], mod["R"], return_loglik=True)
-    want, ll2 = kf_update(kf_predict(g, mod["F"], mod["Q"]), y, mod["H"], mod["R"],
-                          return_loglik=True)
+    got = kf_step(g, y, mod["F"], mod["Q"], mod["H"], mod["R"])
+    want = kf_update(kf_predict(g, mod["F"], mod["Q"]), y, mod["H"], mod["R"])
     np.testing.assert_allclose(got.mean, want.mean, rtol=1e-13, atol=1e-13)
     np.testing.assert_allclose(got.cov, want.cov, rtol=1e-13, atol=1e-13)
-    np.testing.assert_allclose(ll, ll2, rtol=1e-13)
     # and both equal FilterPy on the first Gaussian
     kf = filterpy_kalman.KalmanFilter(dim_x=n, dim_z=m)
     kf.x, kf.P = g.mean[0].copy(), g.cov[0].copy()
@@ -430,3 +431,21 @@ def test_cholesky_helpers_factor_and_solve(rng):
     assert chol_solve(L2, A, X2, n, k)
     assert np.array_equal(L2, L) and np.array_equal(X2, Y)
     assert not chol_factor(np.zeros((n, n)), -A, n)
+
+
+def test_kalman_filter_class_predict_update_equal_the_functions_and_the_sequence(rng):
+    cv, pos = vt.models.ConstantVelocity(dim=2, q=0.3), vt.models.Position(dim=2, r=0.7)
+    kf = vt.filters.KalmanFilter(cv, pos)
+    ys = rng.normal(size=(3, 6, 2)).cumsum(1)
+    ys[0, 2] = np.nan
+    seq = kf.filter(ys, x0=np.zeros(4), P0=np.eye(4), dt=0.5)
+    g, total = vt.Gaussian(np.zeros((3, 4)), np.tile(np.eye(4), (3, 1, 1))), np.zeros(3)
+    for t in range(6):
+        if t > 0:
+            want = kf_predict(g, cv.F(0.5), cv.Q(0.5))
+            g = kf.predict(g, dt=0.5)
+            np.testing.assert_array_equal(g.mean, want.mean)
+        g, ll = kf.update(g, ys[:, t])
+        total += ll
+        np.testing.assert_allclose(g.mean, seq.means[:, t], rtol=1e-12, atol=1e-13)
+    np.testing.assert_allclose(total, seq.loglik, rtol=1e-12)

@@ -140,10 +140,13 @@ def test_batched_updates_equal_one_at_a_time(rng):
     y = rng.normal(size=(B, 2))
     y[1, 0] = np.nan
     y[3] = np.nan
-    for update in (ekf_update, ukf_update):
-        batch, ll = update(g, y, meas, return_loglik=True)
+    for flt, update in ((ExtendedKalmanFilter(motion, meas), ekf_update),
+                        (UnscentedKalmanFilter(motion, meas), ukf_update)):
+        batch, ll = flt.update(g, y)
+        np.testing.assert_array_equal(update(g, y, meas).mean, batch.mean)
+        np.testing.assert_array_equal(update(g, y, meas).cov, batch.cov)
         for b in range(B):
-            one, ll1 = update(g[b], y[b], meas, return_loglik=True)
+            one, ll1 = flt.update(g[b], y[b])
             np.testing.assert_allclose(batch.mean[b], one.mean, rtol=1e-12, atol=1e-14)
             np.testing.assert_allclose(batch.cov[b], one.cov, rtol=1e-12, atol=1e-14)
             assert ll[b] == pytest.approx(float(ll1), rel=1e-12, abs=1e-14)

@@ -3,7 +3,6 @@ the loop over a sequence. Private; the public functions are in ekf.py, ukf.py an
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import Any
 
@@ -13,8 +12,6 @@ from .._validate import as_float_array
 from ..models.nonlinear import AngleAwareMeasurement
 from ..types import Gaussian
 from .kalman import FilterResult, _readonly
-
-_LOG2PI = math.log(2.0 * math.pi)
 
 
 def psd_sqrt(S: np.ndarray) -> np.ndarray:
@@ -116,40 +113,6 @@ class Measurement:
         if self.linear:
             return np.broadcast_to(self.H, x.shape[:-1] + self.H.shape)
         return self.model.jacobian(x)
-
-
-def symmetric(P: np.ndarray) -> np.ndarray:
-    return 0.5 * (P + np.swapaxes(P, -1, -2))
-
-
-def masked_innovation(e: np.ndarray, S: np.ndarray, obs: np.ndarray):
-    """Decouple missing components: a zero innovation, and a unit row and column in ``S``.
-
-    Returns ``(e, S, L, loglik)`` with ``L`` the Cholesky factor of the masked ``S`` and the
-    log-density of the observed components' innovation. Raises if ``S`` is not positive
-    definite on the observed components."""
-    m = e.shape[-1]
-    if not obs.all():
-        both = obs[..., :, None] & obs[..., None, :]
-        S = np.where(both, S, np.eye(m))
-        e = np.where(obs, e, 0.0)
-    try:
-        L = np.linalg.cholesky(S)
-    except np.linalg.LinAlgError:
-        raise ValueError(
-            "the innovation covariance is not positive definite for some Gaussian; R must be "
-            "positive definite on the observed components"
-        ) from None
-    w = np.linalg.solve(L, e[..., None])[..., 0]
-    logdet = np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
-    ll = -0.5 * (w * w).sum(-1) - logdet - 0.5 * obs.sum(-1) * _LOG2PI
-    return e, S, L, ll
-
-
-def gain(C: np.ndarray, L: np.ndarray) -> np.ndarray:
-    """``K = C S^-1`` for ``S = L L'``, by two triangular solves (``C (..., n, m)``)."""
-    Z = np.linalg.solve(L, np.swapaxes(C, -1, -2))  # L^-1 C'
-    return np.swapaxes(np.linalg.solve(np.swapaxes(L, -1, -2), Z), -1, -2)
 
 
 def check_y(y: Any, batch: tuple, m: int) -> np.ndarray:

@@ -19,7 +19,7 @@ model it is exactly the Kalman filter.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Literal, overload
+from typing import Any
 
 import numpy as np
 
@@ -29,12 +29,10 @@ from ._nonlinear import (
     Motion,
     check_gaussian,
     check_y,
-    gain,
-    masked_innovation,
     run_sequence,
-    symmetric,
 )
 from .kalman import FilterResult
+from .reference import condition_on, symmetric
 
 __all__ = ["ekf_predict", "ekf_update", "ExtendedKalmanFilter"]
 
@@ -59,42 +57,32 @@ def ekf_predict(g: Gaussian, motion: Any, dt: float = 1.0, t: float = 0.0) -> Ga
     return Gaussian(np.asarray(mo.f(g.mean, dt, t), dtype=float), cov)
 
 
-@overload
-def ekf_update(g: Gaussian, y: Any, measurement: Any, *, residual: Callable | None = None,
-               return_loglik: Literal[False] = ...) -> Gaussian: ...
-@overload
-def ekf_update(g: Gaussian, y: Any, measurement: Any, *, residual: Callable | None = None,
-               return_loglik: Literal[True]) -> tuple[Gaussian, np.ndarray]: ...
-@overload
-def ekf_update(g: Gaussian, y: Any, measurement: Any, *, residual: Callable | None = None,
-               return_loglik: bool) -> Gaussian | tuple[Gaussian, np.ndarray]: ...
-def ekf_update(g: Gaussian, y: Any, measurement: Any, *, residual: Callable | None = None,
-               return_loglik: bool = False) -> Gaussian | tuple[Gaussian, np.ndarray]:
+def ekf_update(g: Gaussian, y: Any, measurement: Any, *,
+               residual: Callable | None = None) -> Gaussian:
     r"""EKF correction of a batch of Gaussians ``g`` with measurements ``y (..., m)``.
 
     NaN components of ``y`` are missing: the update uses the others (a NaN row leaves ``g``
     unchanged). ``residual(a, b)`` overrides the model's (default ``a - b``, with angles
-    wrapped for models that declare them). With ``return_loglik``, also returns the
-    log-density of the innovation, shape ``(...)``.
+    wrapped for models that declare them). This is
+    :func:`vistrack.filters.reference.condition_on` with the measurement model's Jacobian
+    and residual; :meth:`ExtendedKalmanFilter.update` also gives the log-density of the
+    innovation.
     """
+    return _ekf_update(g, y, measurement, residual)[0]
+
+
+def _ekf_update(g: Gaussian, y: Any, measurement: Any,
+                residual: Callable | None) -> tuple[Gaussian, np.ndarray]:
     g = check_gaussian(g)
     n = g.mean.shape[-1]
     me = measurement if isinstance(measurement, Measurement) else Measurement(
         measurement, n, residual)
     y = check_y(y, g.mean.shape[:-1], me.m)
     obs = ~np.isnan(y)
-    x, P = g.mean, g.cov
-    H = me.jacobian(x) * obs[..., :, None]  # missing components: zero rows
+    x = g.mean
     e = me.residual(np.where(obs, y, 0.0), me.h(x))
-    U = P @ np.swapaxes(H, -1, -2)  # P H'
-    e, S, L, ll = masked_innovation(e, H @ U + me.R, obs)
-    K = gain(U, L)
-    mean = x + (K @ e[..., None])[..., 0]
-    A = np.eye(n) - K @ H
-    Rm = np.where(obs[..., :, None] & obs[..., None, :], me.R, 0.0)
-    cov = symmetric(A @ P @ np.swapaxes(A, -1, -2) + K @ Rm @ np.swapaxes(K, -1, -2))
-    out = Gaussian(mean, cov)
-    return (out, ll) if return_loglik else out
+    mean, cov, ll = condition_on(x, g.cov, me.jacobian(x), me.R, e, obs)
+    return Gaussian(mean, cov), ll
 
 
 class ExtendedKalmanFilter:
@@ -136,4 +124,4 @@ class ExtendedKalmanFilter:
 
     def update(self, g: Gaussian, y: Any) -> tuple[Gaussian, np.ndarray]:
         """One correction and its innovation log-density (:func:`ekf_update`)."""
-        return ekf_update(g, y, self.measurement, return_loglik=True)
+        return _ekf_update(g, y, self.measurement, None)

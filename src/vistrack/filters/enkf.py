@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Literal, overload
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -28,12 +28,11 @@ from ._nonlinear import (
     Measurement,
     Motion,
     check_y,
-    gain,
-    masked_innovation,
     psd_sqrt,
     run_sequence,
 )
 from .kalman import FilterResult
+from .reference import gain, masked_innovation
 
 __all__ = ["Ensemble", "enkf_predict", "enkf_update", "EnsembleKalmanFilter"]
 
@@ -186,21 +185,9 @@ def enkf_predict(ens: Ensemble, motion: Any, dt: float = 1.0, t: float = 0.0, *,
     return Ensemble(x + _noise(as_rng(rng), x.shape, mo.Q_sqrt(dt)))
 
 
-@overload
 def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
-                rng: np.random.Generator | int | None = None, residual: Callable | None = None,
-                return_loglik: Literal[False] = ...) -> Ensemble: ...
-@overload
-def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
-                rng: np.random.Generator | int | None = None, residual: Callable | None = None,
-                return_loglik: Literal[True]) -> tuple[Ensemble, np.ndarray]: ...
-@overload
-def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
-                rng: np.random.Generator | int | None = None, residual: Callable | None = None,
-                return_loglik: bool) -> Ensemble | tuple[Ensemble, np.ndarray]: ...
-def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
-                rng: np.random.Generator | int | None = None, residual: Callable | None = None,
-                return_loglik: bool = False) -> Ensemble | tuple[Ensemble, np.ndarray]:
+                rng: np.random.Generator | int | None = None,
+                residual: Callable | None = None) -> Ensemble:
     r"""Perturbed-observation update of a batch of ensembles with a measurement each.
 
     With the ensemble's cross-covariance :math:`C = \operatorname{cov}(x, h(x))` and
@@ -223,15 +210,12 @@ def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
         Random generator or seed.
     residual : callable, optional
         ``residual(a, b)``, overriding the model's.
-    return_loglik : bool
-        Also return the log-likelihood.
 
     Returns
     -------
-    posterior : Ensemble
-        The corrected members ``(..., N, n)``.
-    loglik : (...) ndarray
-        Only with ``return_loglik``: the Gaussian log-density of the innovation,
+    Ensemble
+        The corrected members ``(..., N, n)``. :meth:`EnsembleKalmanFilter.update` also gives
+        the Gaussian log-density of the innovation,
         :math:`\log N(r(y, \overline{h(x)}); 0, S)`, under the ensemble's moments.
 
     References
@@ -254,6 +238,12 @@ def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
     >>> mean.round(2), round(float(cov[0, 0]), 1)
     (array([1.4 , 1.19]), 0.4)
     """
+    return _enkf_update(ens, y, measurement, rng, residual)[0]
+
+
+def _enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any,
+                 rng: np.random.Generator | int | None,
+                 residual: Callable | None) -> tuple[Ensemble, np.ndarray]:
     X = ens.members
     N, n = X.shape[-2:]
     me = measurement if isinstance(measurement, Measurement) else Measurement(
@@ -271,7 +261,7 @@ def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
     v = _noise(as_rng(rng), Z.shape, psd_sqrt(me.R))
     innov = me.residual(np.where(obs, y, 0.0)[..., None, :] + v, Z) * obs[..., None, :]
     out = Ensemble(X + innov @ np.swapaxes(K, -1, -2))
-    return (out, ll) if return_loglik else out
+    return out, ll
 
 
 class EnsembleKalmanFilter:
@@ -373,7 +363,60 @@ class EnsembleKalmanFilter:
         ens = Ensemble.sample(x0, P0, self.n_members, self.rng)
         return run_sequence(
             ys, None, None, n, self.measurement.m, dt, times,
-            lambda e, dt, t: enkf_predict(e, self.motion, dt, t, rng=self.rng),
-            lambda e, y: enkf_update(e, y, self.measurement, rng=self.rng, return_loglik=True),
-            state=ens,
+            self.predict, self.update, state=ens,
         )
+
+    def predict(self, ens: Ensemble, dt: float = 1.0, t: float = 0.0) -> Ensemble:
+        """One prediction (:func:`enkf_predict` with this filter's motion model and generator).
+
+        Parameters
+        ----------
+        ens : Ensemble
+            Members ``(..., N, n)``.
+        dt : float
+            Time step.
+        t : float
+            Time of the predicted state.
+
+        Returns
+        -------
+        Ensemble
+            The predicted members.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> enkf = EnsembleKalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1), rng=0)
+        >>> ens = Ensemble.sample([0.0, 1.0], np.eye(2), 2000, rng=1)
+        >>> enkf.predict(ens).moments()[0].round(1)
+        array([1., 1.])
+        """
+        return enkf_predict(ens, self.motion, dt, t, rng=self.rng)
+
+    def update(self, ens: Ensemble, y: ArrayLike) -> tuple[Ensemble, np.ndarray]:
+        r"""One correction (:func:`enkf_update`) and the innovation's log-density.
+
+        Parameters
+        ----------
+        ens : Ensemble
+            Members ``(..., N, n)``.
+        y : (..., m) array_like
+            One measurement per ensemble; NaN components are missing.
+
+        Returns
+        -------
+        posterior : Ensemble
+            The corrected members.
+        loglik : (...) ndarray
+            :math:`\log N(r(y, \overline{h(x)}); 0, S)` under the ensemble's moments, over
+            the observed components.
+
+        Examples
+        --------
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> enkf = EnsembleKalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1), rng=0)
+        >>> post, ll = enkf.update(Ensemble.sample([0.0, 1.0], np.eye(2), 2000, rng=1), [1.0])
+        >>> post.moments()[0].round(1), ll.shape
+        (array([0.5, 1. ]), ())
+        """
+        return _enkf_update(ens, y, self.measurement, self.rng, None)

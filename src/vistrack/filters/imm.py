@@ -42,7 +42,7 @@ from .._validate import as_float_array
 from ..models.switching import SwitchingLinearSystem
 from ..types import Gaussian
 from ._nonlinear import step_times
-from .kalman import _readonly
+from .kalman import _readonly, _update, kf_predict
 
 __all__ = ["IMMFilter", "IMMResult", "SwitchingParticleFilter", "SwitchingResult"]
 
@@ -505,8 +505,6 @@ class SwitchingParticleFilter:
         >>> bool(np.allclose(res.mode_probs.sum(1), 1.0))
         True
         """
-        from .kalman import kf_predict, kf_update
-
         sysm, N, rng = self.system, self.n_particles, self.rng
         ys = as_float_array(ys, "ys", ndim=(2,))
         T, n, k = ys.shape[0], sysm.ndim_state, len(sysm.motions)
@@ -536,8 +534,7 @@ class SwitchingParticleFilter:
                         g = kf_predict(Gaussian(mean[idx], cov[idx]), Fs[j], Qs[j])
                         mean[idx], cov[idx] = g.mean, g.cov
             if not np.isnan(ys[t]).all():
-                g, ll = kf_update(Gaussian(mean, cov), np.broadcast_to(ys[t], (N, len(R))),
-                                  H, R, return_loglik=True)
+                g, ll = _update(Gaussian(mean, cov), np.broadcast_to(ys[t], (N, len(R))), H, R)
                 mean, cov = g.mean.copy(), g.cov.copy()
                 a = logw + ll
                 norm = float(_logsumexp(a[None], 1)[0])

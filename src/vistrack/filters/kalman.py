@@ -17,7 +17,6 @@ definite.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -331,25 +330,9 @@ def _with_measurement(g: Gaussian, y: ArrayLike) -> tuple[np.ndarray, np.ndarray
     return _contiguous(mean), _contiguous(g.cov), _contiguous(y)
 
 
-@overload
 def kf_step(
-    g: Gaussian, y: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, *,
-    return_loglik: Literal[False] = ...
-) -> Gaussian: ...
-@overload
-def kf_step(
-    g: Gaussian, y: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, *,
-    return_loglik: Literal[True]
-) -> tuple[Gaussian, np.ndarray]: ...
-@overload
-def kf_step(
-    g: Gaussian, y: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, *,
-    return_loglik: bool
-) -> Gaussian | tuple[Gaussian, np.ndarray]: ...
-def kf_step(
-    g: Gaussian, y: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, *,
-    return_loglik: bool = False
-) -> Gaussian | tuple[Gaussian, np.ndarray]:
+    g: Gaussian, y: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike
+) -> Gaussian:
     r""":func:`kf_predict` then :func:`kf_update` in one call: the usual loop of one tracker.
 
     Equal to ``kf_update(kf_predict(g, F, Q), y, H, R)``, with the same checks:
@@ -368,15 +351,11 @@ def kf_step(
         Dynamics and process noise.
     H, R : (m, n) and (m, m) array_like
         Measurement matrix and noise covariance.
-    return_loglik : bool
-        Also return ``log N(y; H m⁻, H P⁻ H' + R)`` per Gaussian.
 
     Returns
     -------
-    posterior : Gaussian
+    Gaussian
         The corrected estimates, batch shape ``(...)``.
-    loglik : (...) ndarray
-        Only with ``return_loglik``; 0 for a Gaussian with no observed component.
 
     Raises
     ------
@@ -405,8 +384,7 @@ def kf_step(
     )
     if code >= 0:
         _kernel_error(code, "F", "Q")
-    post = Gaussian._trusted(mean, cov)
-    return (post, ll) if return_loglik else post
+    return Gaussian._trusted(mean, cov)
 
 
 def kf_predict(g: Gaussian, F: ArrayLike, Q: ArrayLike) -> Gaussian:
@@ -455,21 +433,7 @@ def kf_predict(g: Gaussian, F: ArrayLike, Q: ArrayLike) -> Gaussian:
     return Gaussian._trusted(mean, cov)
 
 
-@overload
-def kf_update(
-    g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike, *, return_loglik: Literal[False] = ...
-) -> Gaussian: ...
-@overload
-def kf_update(
-    g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike, *, return_loglik: Literal[True]
-) -> tuple[Gaussian, np.ndarray]: ...
-@overload
-def kf_update(
-    g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike, *, return_loglik: bool
-) -> Gaussian | tuple[Gaussian, np.ndarray]: ...
-def kf_update(
-    g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike, *, return_loglik: bool = False
-) -> Gaussian | tuple[Gaussian, np.ndarray]:
+def kf_update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> Gaussian:
     r"""Correct every Gaussian of a batch with its measurement.
 
     .. math::
@@ -478,7 +442,9 @@ def kf_update(
         \bar x^+ = \bar x + K (y - H \bar x), \quad
         P^+ = (I - K H) P (I - K H)' + K R K',
 
-    over the observed components of ``y`` (Joseph form, kept symmetric), and the
+    over the observed components of ``y`` (Joseph form, kept symmetric): compiled, and equal
+    to :func:`vistrack.filters.reference.kalman_update` to rounding.
+    :meth:`KalmanFilter.update <vistrack.filters.KalmanFilter.update>` also gives the
     log-likelihood :math:`\log N(y; H \bar x, S)`.
 
     Parameters
@@ -491,15 +457,11 @@ def kf_update(
     H, R : (m, n) and (m, m) array_like
         Checked for shape, finiteness and the symmetry of ``R``; a non-positive-definite
         innovation covariance raises ``ValueError``.
-    return_loglik : bool
-        Also return ``log N(y; H m, H P H' + R)`` per Gaussian.
 
     Returns
     -------
-    posterior : Gaussian
+    Gaussian
         The corrected estimates, batch shape ``(...)``.
-    loglik : (...) ndarray
-        Only with ``return_loglik``; 0 for a Gaussian with no observed component.
 
     Raises
     ------
@@ -519,11 +481,17 @@ def kf_update(
     >>> from vistrack import Gaussian
     >>> g = Gaussian(np.zeros((2, 2)), np.tile(np.eye(2), (2, 1, 1)))
     >>> y = np.array([[1.0, np.nan], [np.nan, np.nan]])    # the second: nothing observed
-    >>> post, ll = kf_update(g, y, np.eye(2), 0.5 * np.eye(2), return_loglik=True)
-    >>> post.mean.round(3), post.cov[0].diagonal().round(3), ll.round(3)
+    >>> post = kf_update(g, y, np.eye(2), 0.5 * np.eye(2))
+    >>> post.mean.round(3), post.cov[0].diagonal().round(3)
     (array([[0.667, 0.   ],
-           [0.   , 0.   ]]), array([0.333, 1.   ]), array([-1.455,  0.   ]))
+           [0.   , 0.   ]]), array([0.333, 1.   ]))
     """
+    return _update(g, y, H, R)[0]
+
+
+def _update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> tuple[Gaussian, np.ndarray]:
+    """:func:`kf_update` and ``log N(y; H m, H P H' + R)`` per Gaussian (0 where nothing is
+    observed)."""
     mean, cov, y = _with_measurement(g, y)
     n, m = mean.shape[-1], y.shape[-1]
     code, mean, cov, ll = _kernels.update_batch(
@@ -532,8 +500,7 @@ def kf_update(
     )
     if code >= 0:
         _kernel_error(code, "H", "R")
-    post = Gaussian._trusted(mean, cov)
-    return (post, ll) if return_loglik else post
+    return Gaussian._trusted(mean, cov), ll
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from ..models.measurement import MeasurementModel
 from ..models.motion import MotionModel
 from ..types import Gaussian
 from . import _kernels
-from .kalman import FilterResult, _kernel_error, _prior, kalman_filter
+from .kalman import FilterResult, _kernel_error, _prior, _update, kalman_filter, kf_predict
 from .smoothers import SmoothResult, rts_smooth
 
 __all__ = ["KalmanFilter", "OnlineFilter"]
@@ -124,6 +124,64 @@ class KalmanFilter:
             "H": self.measurement.H(n),
             "R": self.measurement.R(),
         }
+
+    def predict(self, g: Gaussian, dt: float = 1.0, t: float = 0.0) -> Gaussian:
+        """One prediction of a batch by the motion model: :func:`kf_predict` with ``F(dt)``,
+        ``Q(dt)``.
+
+        Parameters
+        ----------
+        g : Gaussian
+            Estimates, batch shape ``(...)``.
+        dt : float
+            Time step.
+        t : float
+            Time of the predicted state (unused by linear models; there for the signature
+            every filter class shares).
+
+        Returns
+        -------
+        Gaussian
+            The predictions.
+
+        Examples
+        --------
+        >>> from vistrack import Gaussian
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> kf = KalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1, r=0.5))
+        >>> kf.predict(Gaussian(np.array([0.0, 1.0]), np.eye(2)), dt=2.0).mean
+        array([2., 1.])
+        """
+        return kf_predict(g, self.motion.F(dt), self.motion.Q(dt))
+
+    def update(self, g: Gaussian, y: ArrayLike) -> tuple[Gaussian, np.ndarray]:
+        """One correction by the measurement model (:func:`kf_update`) and its log-likelihood.
+
+        Parameters
+        ----------
+        g : Gaussian
+            Predictions, batch shape ``(...)``.
+        y : (..., m) array_like
+            One measurement per Gaussian; NaN components are missing.
+
+        Returns
+        -------
+        posterior : Gaussian
+            The corrected estimates.
+        loglik : (...) ndarray
+            ``log N(y; H m, H P H' + R)`` over the observed components; 0 where none is.
+
+        Examples
+        --------
+        >>> from vistrack import Gaussian
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> kf = KalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1, r=0.5))
+        >>> post, ll = kf.update(Gaussian(np.array([0.0, 1.0]), np.eye(2)), [1.5])
+        >>> post.mean.round(3), round(float(ll), 3)
+        (array([1., 1.]), -1.872)
+        """
+        n = self.motion.ndim_state
+        return _update(g, y, self.measurement.H(n), self.measurement.R())
 
     def default_prior(self, ys: ArrayLike, *,
                       scale: float = 1e3) -> tuple[np.ndarray, np.ndarray]:

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, Literal, overload
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -41,11 +41,10 @@ from ._nonlinear import (
     Motion,
     check_gaussian,
     check_y,
-    masked_innovation,
     run_sequence,
-    symmetric,
 )
 from .kalman import FilterResult
+from .reference import masked_innovation, symmetric
 
 __all__ = [
     "MerweScaledSigmaPoints",
@@ -533,25 +532,9 @@ def _sub(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a - b
 
 
-@overload
 def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | None = None,
                residual: Callable | None = None, mean: Callable | None = None,
-               state_residual: Callable | None = None,
-               return_loglik: Literal[False] = ...) -> Gaussian: ...
-@overload
-def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | None = None,
-               residual: Callable | None = None, mean: Callable | None = None,
-               state_residual: Callable | None = None,
-               return_loglik: Literal[True]) -> tuple[Gaussian, np.ndarray]: ...
-@overload
-def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | None = None,
-               residual: Callable | None = None, mean: Callable | None = None,
-               state_residual: Callable | None = None,
-               return_loglik: bool) -> Gaussian | tuple[Gaussian, np.ndarray]: ...
-def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | None = None,
-               residual: Callable | None = None, mean: Callable | None = None,
-               state_residual: Callable | None = None,
-               return_loglik: bool = False) -> Gaussian | tuple[Gaussian, np.ndarray]:
+               state_residual: Callable | None = None) -> Gaussian:
     r"""UKF correction of a batch of Gaussians with a measurement each (NaN = missing).
 
     The sigma points :math:`\gamma_i` are drawn from ``g`` (so that they carry the process
@@ -591,15 +574,12 @@ def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | 
     state_residual : callable, optional
         ``state_residual(a, b)`` of states, overriding ``a - b`` in :math:`C` (for states with
         angles).
-    return_loglik : bool
-        Also return the log-likelihood.
 
     Returns
     -------
-    posterior : Gaussian
+    Gaussian
         The corrected mean ``(..., n)`` and covariance ``(..., n, n)``.
-    loglik : (...) ndarray
-        Only with ``return_loglik``: the Gaussian log-density of the innovation,
+        :meth:`UnscentedKalmanFilter.update` also gives the log-density of the innovation,
         :math:`\log N(r(y, \hat z); 0, S)`, over the observed components.
 
     Raises
@@ -628,9 +608,8 @@ def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | 
 
     >>> from vistrack.models import ConstantVelocity, Position
     >>> g = ukf_predict(Gaussian(np.array([0.0, 1.0]), np.eye(2)), ConstantVelocity(dim=1, q=0.1))
-    >>> post, ll = ukf_update(g, [1.5], Position(dim=1, r=0.5), return_loglik=True)
-    >>> post.mean.round(3), round(float(ll), 3)
-    (array([1.401, 1.207]), -1.433)
+    >>> ukf_update(g, [1.5], Position(dim=1, r=0.5)).mean.round(3)
+    array([1.401, 1.207])
 
     A batch of three, the second measurement missing:
 
@@ -638,6 +617,12 @@ def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | 
     >>> ukf_update(gb, [[1.0], [np.nan], [2.0]], Position(dim=1, r=0.5)).mean[:, 0].round(3)
     array([0.667, 0.   , 1.333])
     """
+    return _ukf_update(g, y, measurement, points, residual, mean, state_residual)[0]
+
+
+def _ukf_update(g: Gaussian, y: Any, measurement: Any, points: _SigmaPoints | None,
+                residual: Callable | None, mean: Callable | None,
+                state_residual: Callable | None) -> tuple[Gaussian, np.ndarray]:
     g = check_gaussian(g)
     n = g.mean.shape[-1]
     me = measurement if isinstance(measurement, Measurement) else Measurement(
@@ -654,7 +639,7 @@ def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | 
             raise ValueError("the innovation covariance is not positive definite; R must be "
                              "positive definite on the observed components")
         out = Gaussian(xo, Po)
-        return (out, np.asarray(ll1)) if return_loglik else out
+        return out, np.asarray(ll1)
     gamma = points.points(g.mean, g.cov)
     obs = ~np.isnan(y)
     zs = np.asarray(me.h(gamma), dtype=float)
@@ -668,7 +653,7 @@ def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | 
     K = np.swapaxes(np.linalg.solve(np.swapaxes(L, -1, -2), Vt), -1, -2)  # C S^-1 = V L^-1
     out = Gaussian(g.mean + (K @ e[..., None])[..., 0],
                    symmetric(g.cov - np.swapaxes(Vt, -1, -2) @ Vt))
-    return (out, ll) if return_loglik else out
+    return out, ll
 
 
 class UnscentedKalmanFilter:
@@ -817,5 +802,5 @@ class UnscentedKalmanFilter:
         >>> post.mean, round(float(ll), 3)
         (array([0.5, 1. ]), -1.516)
         """
-        return ukf_update(g, y, self.measurement, points=self.points,
-                          state_residual=self.state_residual, return_loglik=True)
+        return _ukf_update(g, y, self.measurement, self.points, None, None,
+                           self.state_residual)
