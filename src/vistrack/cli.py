@@ -7,7 +7,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from . import __version__
+from . import __version__, _compile
 
 DEMOS = ("kalman",)
 
@@ -136,10 +136,13 @@ def _track(args: argparse.Namespace) -> int:
                               fps=args.fps, tracker=name, gt=args.gt,
                               stop=args.stop, force=args.force, progress=progress,
                               **extra, **settings)
-            sec = run.seconds
+            sec = dict(run.seconds)
+            compiling = sec.pop("compile", 0.0)
             ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
             print(f"tracked {run.frames} frames: {run.rows} boxes of {run.tracks} tracks; "
-                  f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})", file=report)
+                  f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})"
+                  + (f"; compiling took {compiling:.1f} s" if compiling >= 0.05 else ""),
+                  file=report)
             for name, path in run.files.items():
                 print(f"  {name:<7} {path}", file=report)
             if run.scores is not None:
@@ -355,6 +358,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     if getattr(args, "seeds", 1) < 1:
         parser.error(f"--seeds must be >= 1; got {args.seeds}")
     try:
+        if args.command in ("track", "track-one", "demo"):
+            # a first run compiles the kernels: say so once, and leave it out of the rates
+            with _compile.watch(None if getattr(args, "quiet", False) else sys.stderr):
+                return args.func(args)
         return args.func(args)
     except KeyboardInterrupt:
         # tracks, boxes, video and plot are written under partial names and renamed only

@@ -24,6 +24,7 @@ from typing import Any, Generic, TypeVar
 
 import numpy as np
 
+from . import _compile
 from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, combine, evaluate_mot
 from .io.motchallenge import read_mot, read_seqinfo, write_mot
@@ -214,21 +215,24 @@ FrameDetector = Callable[[Frame], Detections]
 @dataclass(frozen=True)
 class LoopStats:
     """What :func:`run` did: the frames it went through, and the seconds spent in each stage
-    (``decode``: waiting for the source, ``frontend``, ``tracker``, ``write``: the sinks).
+    (``decode``: waiting for the source, ``frontend``, ``tracker``, ``write``: the sinks), and
+    compiling kernels (``compile``: counted while the command line watches numba, and left out
+    of the stages).
 
     Attributes
     ----------
     frames : int
         Frames the loop went through.
     seconds : dict of str to float
-        Seconds in each stage: ``decode``, ``frontend``, ``tracker`` and ``write``.
+        Seconds in each stage: ``decode``, ``frontend``, ``tracker``, ``write`` and
+        ``compile``.
 
     Examples
     --------
     >>> from vistrack.tracking import BoxTracker
     >>> stats = run([Frame(1, 0.0), Frame(2, 0.04)], None, BoxTracker())
     >>> stats.frames, sorted(stats.seconds)
-    (2, ['decode', 'frontend', 'tracker', 'write'])
+    (2, ['compile', 'decode', 'frontend', 'tracker', 'write'])
     """
 
     frames: int
@@ -320,27 +324,28 @@ def run(source: Iterable[Frame], detector: Any, tracker: Tracker, sinks: Sequenc
         if not isinstance(sink, Sink):
             raise TypeError(f"sinks[{k}] must have write(frame, tracks) and close(); got "
                             f"{type(sink).__name__}")
-    sec = dict.fromkeys(("decode", "frontend", "tracker", "write"), 0.0)
+    sec = dict.fromkeys(("decode", "frontend", "tracker", "write", "compile"), 0.0)
     n = 0
     every = max(1, (total or 0) // 50)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), _compile.seconds()
     try:
         for frame in source:
-            t1 = time.perf_counter()
-            sec["decode"] += t1 - t0
+            t1, c1 = time.perf_counter(), _compile.seconds()
+            sec["decode"] += (t1 - t0) - (c1 - c0)
             d = detect(frame) if detect is not None else None
-            t2 = time.perf_counter()
+            t2, c2 = time.perf_counter(), _compile.seconds()
             tracks = tracker.step(frame, d)
-            t3 = time.perf_counter()
-            sec["frontend"] += t2 - t1
-            sec["tracker"] += t3 - t2
+            t3, c3 = time.perf_counter(), _compile.seconds()
+            sec["frontend"] += (t2 - t1) - (c2 - c1)
+            sec["tracker"] += (t3 - t2) - (c3 - c2)
             for sink in sinks:
                 sink.write(frame, tracks)
             n += 1
             if total and (n % every == 0 or n == total):
                 _progress(n, total, label, progress)
-            t0 = time.perf_counter()
-            sec["write"] += t0 - t3
+            t0, c0 = time.perf_counter(), _compile.seconds()
+            sec["write"] += (t0 - t3) - (c0 - c3)
+            sec["compile"] += c0 - c1
     except BaseException:
         for sink in sinks:
             abort = getattr(sink, "abort", None)
@@ -785,10 +790,10 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     tc, oc = cfg.tracker, cfg.offline
     if oc.enabled and tc.scores == "calibrated":
         # offline, the scores are calibrated on the whole file (see tracking.calibration)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), _compile.seconds()
         calibration = ScoreCalibration.from_frames(per_frame, link_iou=tc.link_iou,
                                                    top=tc.calibration_top)
-        seconds += time.perf_counter() - t0
+        seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
     trk = BoxTracker(tc, motion=cfg.motion, frame_rate=info.frame_rate, record=oc.enabled,
                      image_size=(info.im_width, info.im_height), calibration=calibration)
     frames = (Frame(f, (f - 1) / info.frame_rate) for f in range(1, info.seq_length + 1))
@@ -798,13 +803,13 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     seconds += stats.seconds["tracker"]
     F, I, B, S = rows.frames, rows.ids, rows.xywh, rows.scores
     if oc.enabled:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), _compile.seconds()
         fps = info.frame_rate
         sm = smooth(trk, max_gap=int(round(oc.max_gap * fps)), min_score=oc.min_track_score,
                     extend_iou=oc.extend_iou if oc.extend_iou > 0 else None,
                     link_gap=int(round(oc.link_gap * fps)), link_iou=oc.link_iou,
                     link_window=max(1, round(oc.link_window * fps)))
-        seconds += time.perf_counter() - t0
+        seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
         F, I, B, S = sm.frames, sm.ids, sm.xywh, np.where(sm.filled, 0.0, sm.scores)
     write_mot(out, F, I, B, S, force=True)
     used = cfg if cfg.motion is not None else replace(cfg, motion=BoxMotion())
@@ -910,7 +915,7 @@ class VideoRun:
 
     @property
     def fps(self) -> float:
-        """Frames per second of decode, front-end and tracker together.
+        """Frames per second of decode, front-end and tracker together (compiling left out).
 
         Examples
         --------
@@ -918,7 +923,7 @@ class VideoRun:
         ...          "write": 5.0}, None).fps
         50.0
         """
-        s = sum(v for k, v in self.seconds.items() if k != "write")
+        s = sum(v for k, v in self.seconds.items() if k not in ("write", "compile"))
         return self.frames / max(s, 1e-12)
 
 
