@@ -36,8 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
+from vistrack.evaluation import evaluate_files
 from vistrack.io import read_mot, read_seqinfo, write_mot
-from vistrack.pipeline import evaluate_files, track_sequence
+from vistrack.pipeline import track_sequence
 
 from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
 

@@ -18,7 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from vistrack.pipeline import evaluate_files, track_sequence
+from vistrack.evaluation import evaluate_files
+from vistrack.pipeline import track_sequence
 
 from .mot_oracles import SHARED
 

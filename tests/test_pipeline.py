@@ -127,7 +127,7 @@ def test_run_feeds_sinks_and_writes_nothing_from_a_failed_run(tmp_path):
     sinks = [MOTWriter(tmp_path / "t.txt"), CSVWriter(tmp_path / "t.csv"), TrackRows()]
     stats = run(frames, lambda f: boxes[f.index], BoxTracker(), sinks)
     assert stats.frames == 10 and set(stats.seconds) == {"decode", "frontend", "tracker",
-                                                         "write"}
+                                                         "write", "compile"}
     got = read_mot(tmp_path / "t.txt")
     np.testing.assert_allclose(got.boxes, sinks[2].xywh, atol=0.005)
     assert len(got) == len(sinks[2]) == 10  # confirmed at once in the first frame

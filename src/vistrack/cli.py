@@ -190,7 +190,7 @@ _COLUMNS = (("HOTA", 1), ("DetA", 1), ("AssA", 1), ("MOTA", 1), ("MOTP", 1), ("I
 def _eval(args: argparse.Namespace) -> int:
     import json
 
-    from .pipeline import evaluate_files
+    from .evaluation import evaluate_files
 
     pairs = []
     if args.gt_dir or args.pred_dir:

@@ -10,7 +10,8 @@ The parts are chosen by name from registries that list the valid names when one 
 detector-confidence particle filter, the single-object trackers, or ``module:callable``,
 any tracker of your own) and :data:`SINKS` (the files of a run). :func:`track_sequence`,
 :func:`track_video` and :func:`track_one` assemble them for the command line
-(:mod:`vistrack.cli`) and call :func:`run`; :func:`evaluate_files` scores results files.
+(:mod:`vistrack.cli`) and call :func:`run`;
+:func:`vistrack.evaluation.evaluate_files` scores results files.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import numpy as np
 
 from . import _compile
 from .config import OfflineConfig, TrackConfig
-from .evaluation.mot import MOTCounts, combine, evaluate_mot
+from .evaluation.mot import MOTCounts, evaluate_mot
 from .io.motchallenge import read_mot, read_seqinfo, write_mot
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink, TrackRows
 from .models.box import BoxMotion
@@ -38,7 +39,7 @@ from .types import Detections, Frame
 
 __all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "SINKS",
            "as_detector", "make_tracker", "track_sequence", "TrackRun", "resolve_config",
-           "derived_values", "evaluate_files", "track_video", "VideoRun", "track_one",
+           "derived_values", "track_video", "VideoRun", "track_one",
            "SingleRun"]
 
 
@@ -815,55 +816,6 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     used = cfg if cfg.motion is not None else replace(cfg, motion=BoxMotion())
     return TrackRun(out, info.seq_length, len(dets), len(F), len(np.unique(I)), seconds,
                     used, derived_values(trk))
-
-
-def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
-                   benchmark: str = "auto") -> dict[str, MOTCounts]:
-    """Score ``(name, gt, results, seqinfo-or-None)`` pairs; adds ``"COMBINED"`` when there are
-    several.
-
-    Parameters
-    ----------
-    pairs : list of (str, Path, Path, Path or None)
-        Each sequence's name, ground-truth file, results file and ``seqinfo.ini`` (which
-        gives the number of frames; None: the files' last frame).
-    benchmark : {"auto", "MOT15", "MOT16", "MOT17", "MOT20"}
-        The ground truth's preprocessing, passed to
-        :func:`~vistrack.evaluation.evaluate_mot`.
-
-    Returns
-    -------
-    dict of str to MOTCounts
-        The counts of each sequence by name, and ``"COMBINED"``, their sum, when there are
-        several.
-
-    Raises
-    ------
-    FileNotFoundError
-        If a file does not exist.
-    MOTFormatError
-        If a file is malformed.
-    ValueError
-        If ``benchmark`` is not one of the names, or a file's rows go past the sequence.
-
-    Examples
-    --------
-    Results that are the ground truth itself:
-
-    >>> import tempfile
-    >>> gt = Path(tempfile.mkdtemp()) / "gt.txt"
-    >>> _ = write_mot(gt, [1, 2, 3], [1, 1, 1], [[10, 20, 30, 60]] * 3)
-    >>> scores = evaluate_files([("a", gt, gt, None), ("b", gt, gt, None)])
-    >>> sorted(scores), scores["COMBINED"].TP, scores["a"].FN
-    (['COMBINED', 'a', 'b'], 6, 0)
-    """
-    out: dict[str, MOTCounts] = {}
-    for name, gt, pred, info in pairs:
-        n = read_seqinfo(info).seq_length if info is not None else None
-        out[str(name)] = evaluate_mot(read_mot(gt), read_mot(pred), n, benchmark=benchmark)
-    if len(out) > 1:
-        out["COMBINED"] = combine(out.values())
-    return out
 
 
 # ------------------------------------------------------------------------------- video

@@ -8,7 +8,6 @@ detection falls with probability ``p`` (seed 003, "validation gate").
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import chi2
 
 __all__ = ["chi2_gate", "chi2_threshold"]
 
@@ -40,6 +39,8 @@ def chi2_threshold(m: int, p: float = 0.99) -> float:
     """
     if not 0.0 < p < 1.0:
         raise ValueError(f"p must be in (0, 1); got {p}")
+    from scipy.stats import chi2  # here: scipy.stats takes about 0.4 s to import
+
     return float(chi2.ppf(p, int(m)))
 
 

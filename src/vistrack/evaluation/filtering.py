@@ -10,11 +10,15 @@ Applications to Tracking and Navigation*, §5.4). Averaged over ``N`` independen
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import as_float_array, as_measurement_series
-from ..filters.kalman import FilterResult
+
+if TYPE_CHECKING:  # the filters import numba; scoring needs none of it
+    from ..filters.kalman import FilterResult
 
 __all__ = ["rmse", "nees", "nis", "chi2_band"]
 

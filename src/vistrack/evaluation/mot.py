@@ -31,9 +31,16 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.optimize import linear_sum_assignment
 
 from ..io.motchallenge import MOTTable
+
+
+def linear_sum_assignment(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """scipy's ``linear_sum_assignment``, imported at the first call (scipy.optimize takes
+    about 0.3 s to import, which ``vistrack eval`` would otherwise pay before it reads a file)."""
+    from scipy.optimize import linear_sum_assignment as lsa
+
+    return lsa(cost)
 
 __all__ = ["MOTCounts", "evaluate_mot", "combine", "box_iou_xywh", "ALPHAS"]
 
