@@ -273,6 +273,11 @@ def _pred_boxes(mean):
     return pred
 
 
+_STAGE_STATES = np.array([[CONFIRMED, LOST], [CONFIRMED, CONFIRMED], [TENTATIVE, TENTATIVE]],
+                         dtype=np.int8)
+"""The track states each association stage takes: confirmed and lost, confirmed, tentative."""
+
+
 @njit(cache=True)
 def _stage(rows, cols, ov, state, stage_state, det_ok, min_iou, fuse, ds, match, used, T, D):
     # one association stage over the candidate pairs whose track (state in stage_state, not
@@ -359,13 +364,18 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, q, r, settings, shift):
     low_d = (ds >= cfg.low) & ~high_d if cfg.two_stage else np.zeros(D, np.bool_)
     # 1: confirmed and lost tracks, confident detections; 2: confirmed tracks left,
     # low-score detections; 3: tentative tracks, confident detections left
-    _stage(rows, cols, ov, state, (CONFIRMED, LOST), high_d, cfg.min_iou, cfg.fuse_score, ds,
+    # the stages' track states come from one array and "no fuse" from a variable, so that the
+    # three calls share one signature (constants would be typed as literals: one compilation
+    # per call)
+    no_fuse = cfg.fuse_score and not cfg.fuse_score
+    _stage(rows, cols, ov, state, _STAGE_STATES[0], high_d, cfg.min_iou, cfg.fuse_score, ds,
            match, used, K, D)
     if cfg.two_stage:
-        _stage(rows, cols, ov, state, (CONFIRMED, CONFIRMED), low_d, cfg.min_iou_low, False, ds,
+        _stage(rows, cols, ov, state, _STAGE_STATES[1], low_d, cfg.min_iou_low, no_fuse, ds,
                match, used, K, D)
-    _stage(rows, cols, ov, state, (TENTATIVE, TENTATIVE), high_d,
-           cfg.min_iou_tentative if cfg.two_stage else cfg.min_iou, False, ds, match, used, K, D)
+    _stage(rows, cols, ov, state, _STAGE_STATES[2], high_d,
+           cfg.min_iou_tentative if cfg.two_stage else cfg.min_iou, no_fuse, ds, match, used, K,
+           D)
     updated = np.flatnonzero(match >= 0)
     M = updated.shape[0]
     z, rm, offset = np.empty((M, 4)), np.empty((M, 4)), np.zeros((M, 4))
