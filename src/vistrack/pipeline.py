@@ -479,24 +479,25 @@ def _bgsub(ctx: Context) -> FrameDetector:
     det = BlobDetector(opt.get("background", "selective"), min_area=opt.get("min_area", 500.0))
     if reader is not None:
         n_init = int(opt.get("n_init", 20))
-        det.initialize(f.image for f in VideoReader(reader.source, fps=reader.fps, grey=True,
-                                                    start=reader.start,
-                                                    stop=reader.start + n_init - 1))
-    return lambda frame: det.detect(frame.image)
+        # a video's frames have images
+        det.initialize(f.image for f in VideoReader(  # type: ignore[misc]
+            reader.source, fps=reader.fps, grey=True, start=reader.start,
+            stop=reader.start + n_init - 1))
+    return lambda frame: det.detect(frame.image)  # type: ignore[arg-type]  # as above
 
 
 def _hog(ctx: Context) -> FrameDetector:
     from .frontends.detectors import HOGDetector
 
     hog = HOGDetector()
-    return lambda frame: hog.detect(frame.image)
+    return lambda frame: hog.detect(frame.image)  # type: ignore[arg-type]  # a video's frames
 
 
 def _confidence_peaks(ctx: Context) -> FrameDetector:
     from .frontends.detectors import ConfidencePeaks
 
     peaks = ConfidencePeaks(ctx.confidence, ctx.options.get("det_threshold", 0.5))
-    return lambda frame: peaks.detect(frame.image)
+    return lambda frame: peaks.detect(frame.image)  # type: ignore[arg-type]  # a video's frames
 
 
 def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
