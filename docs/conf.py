@@ -1,6 +1,6 @@
 """Sphinx configuration for the vistrack documentation (`make docs`)."""
 
-import re
+from sphinx.util.inspect import TypeAliasForwardRef
 
 import vistrack
 
@@ -32,8 +32,18 @@ autodoc_member_order = "bysource"
 # The signatures carry the annotations; the numpydoc Parameters sections already say the types
 # in words, so the annotations are not repeated in the descriptions.
 autodoc_typehints = "signature"
-# numpy.typing.ArrayLike by its name, not the union of protocols it stands for.
-autodoc_type_aliases = {"ArrayLike": "numpy.typing.ArrayLike"}  # see _alias_names
+# numpy.typing.ArrayLike by its name, not the union of protocols it stands for. The others
+# are names that modules import for their annotations only (under TYPE_CHECKING): given here,
+# the signatures that use them resolve, and Frame and Tracks (re-exported by vistrack.io and
+# vistrack.tracking too) link to their one page.
+autodoc_type_aliases = {  # see the hooks below
+    "ArrayLike": "numpy.typing.ArrayLike",
+    "Frame": "~vistrack.types.Frame",
+    "Tracks": "~vistrack.types.Tracks",
+    "TextIO": "typing.TextIO",
+    "Detector": "~vistrack.frontends.Detector",
+    "ConfidenceMap": "~vistrack.frontends.ConfidenceMap",
+}
 
 # numpydoc would add a table of members to every class, beside the members autodoc already
 # documents, and document each attribute twice.
@@ -52,15 +62,7 @@ html_title = f"vistrack {release}"
 
 
 # -- Hooks ----------------------------------------------------------------------------------
-def _alias_names(app, what, name, obj, options, signature, return_annotation):
-    """Sphinx writes an alias in a union (``ArrayLike | None``) as its placeholder's repr,
-    ``TypeAliasForwardRef('numpy.typing.ArrayLike')``: write the alias's name instead."""
-
-    def fix(text):
-        return re.sub(r"TypeAliasForwardRef\('([\w.]+)'\)", r"\1", text) if text else text
-
-    return fix(signature), fix(return_annotation)
-
-
-def setup(app):
-    app.connect("autodoc-process-signature", _alias_names)
+# Sphinx writes an alias inside another type (``ArrayLike | None``, ``Callable[[ndarray],
+# ConfidenceMap]``, in a signature or a property's type) as its placeholder's repr,
+# ``TypeAliasForwardRef('numpy.typing.ArrayLike')``: make that repr the alias's name.
+TypeAliasForwardRef.__repr__ = lambda self: self.name

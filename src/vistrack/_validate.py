@@ -7,9 +7,12 @@ surfacing later as a broadcasting error or a silent NaN.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "as_box",
@@ -28,7 +31,8 @@ def _fmt_shape(shape: tuple[int, ...]) -> str:
     return "(" + ", ".join(str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
 
 
-def as_float_array(value: Any, name: str, *, ndim: tuple[int, ...] | None = None) -> np.ndarray:
+def as_float_array(value: ArrayLike | None, name: str, *,
+                   ndim: tuple[int, ...] | None = None) -> np.ndarray:
     """Convert ``value`` to a C-contiguous float64 array, checking its number of dimensions."""
     try:
         arr = np.asarray(value, dtype=np.float64)
@@ -42,7 +46,7 @@ def as_float_array(value: Any, name: str, *, ndim: tuple[int, ...] | None = None
     return arr
 
 
-def as_uint8_image(image: Any, name: str = "image", channels: tuple[int, ...] = (1, 3, 4),
+def as_uint8_image(image: ArrayLike, name: str = "image", channels: tuple[int, ...] = (1, 3, 4),
                    grey: bool = False) -> np.ndarray:
     """An 8-bit ``(H, W)`` or ``(H, W, C)`` image, checked; ``grey=True`` converts colour
     (BGR) to grey."""
@@ -58,7 +62,7 @@ def as_uint8_image(image: Any, name: str = "image", channels: tuple[int, ...] = 
     return im
 
 
-def as_box(box: Any, name: str = "box") -> np.ndarray:
+def as_box(box: ArrayLike, name: str = "box") -> np.ndarray:
     """One box ``x, y, w, h`` as 4 finite floats with ``w, h > 0``."""
     b = np.asarray(box, dtype=float).reshape(-1)
     if b.shape != (4,) or not np.isfinite(b).all() or b[2] <= 0 or b[3] <= 0:
@@ -75,7 +79,7 @@ def check_finite(arr: np.ndarray, name: str) -> None:
 
 
 def check_matrix_stack(
-    value: Any, name: str, rows: int, cols: int, T: int | None = None
+    value: ArrayLike | None, name: str, rows: int, cols: int, T: int | None = None
 ) -> np.ndarray:
     """Check a constant matrix ``(rows, cols)`` or a per-step stack ``(T, rows, cols)``.
 
@@ -131,7 +135,7 @@ def as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
     raise TypeError(f"rng must be a numpy Generator, an int seed or None; got {type(rng).__name__}")
 
 
-def as_measurement_series(ys: Any, name: str = "ys") -> tuple[np.ndarray, bool]:
+def as_measurement_series(ys: ArrayLike, name: str = "ys") -> tuple[np.ndarray, bool]:
     """Measurements ``(T, m)`` or ``(B, T, m)`` as ``(B, T, m)`` float64 (NaN: missing), and
     whether a single series was given; an infinite value is named with its index."""
     y = as_float_array(ys, name, ndim=(2, 3))
@@ -142,7 +146,7 @@ def as_measurement_series(ys: Any, name: str = "ys") -> tuple[np.ndarray, bool]:
     return (y[None] if single else y), single
 
 
-def check_linear_gaussian(F: Any, Q: Any, H: Any, R: Any, n: int, m: int,
+def check_linear_gaussian(F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, n: int, m: int,
                           T: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """A linear-Gaussian model's ``F (n, n)``, ``Q (n, n)``, ``H (m, n)``, ``R (m, m)``, each
     constant or one per step (``T``), checked (``Q`` and ``R`` positive semi-definite)."""

@@ -32,7 +32,7 @@ import os
 import sys
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any, cast
+from typing import cast
 
 from .models.box import BoxMotion
 from .tracking.box import TRACKERS, BoxTrackerConfig
@@ -234,7 +234,7 @@ def _toml_loads(text: str) -> dict:
     return tomllib.loads(text)
 
 
-def _kind(value: Any, kind: str) -> bool:
+def _kind(value: object, kind: str) -> bool:
     if kind == "bool":
         return isinstance(value, bool)
     if kind == "int":
@@ -344,7 +344,7 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
         raise ConfigError(f"{path}: {exc}") from None
 
 
-def _value(v: Any) -> str:
+def _value(v: object) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, str):

@@ -21,7 +21,7 @@ import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 import numpy as np
 
@@ -36,6 +36,14 @@ from .tracking.box import BoxTracker
 from .tracking.calibration import ScoreCalibration
 from .tracking.offline import smooth
 from .types import Detections, Frame
+
+if TYPE_CHECKING:
+    from typing import TextIO
+
+    from numpy.typing import ArrayLike
+
+    from .frontends.detectors import ConfidenceMap, Detector
+    from .io.video import VideoReader
 
 __all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "SINKS",
            "as_detector", "make_tracker", "track_sequence", "TrackRun", "resolve_config",
@@ -96,7 +104,7 @@ class TrackRun:
         return self.frames / max(self.seconds, 1e-12)
 
 
-def _progress(done: int, total: int, label: str, stream: Any) -> None:
+def _progress(done: int, total: int, label: str, stream: TextIO | None) -> None:
     if stream is None:
         return
     width = 30
@@ -240,7 +248,8 @@ class LoopStats:
     seconds: dict
 
 
-def as_detector(detector: Any) -> FrameDetector | None:
+def as_detector(detector: Detector | Callable[[Frame], Detections | None] | None
+                ) -> Callable[[Frame], Detections | None] | None:
     """A detector as a function of the frame: an object with ``detect(image) ->
     Detections`` (:class:`~vistrack.frontends.Detector`) is called on the frame's image, a
     callable ``frame -> Detections`` is used as it is, and None stays None (the tracker
@@ -278,8 +287,9 @@ def as_detector(detector: Any) -> FrameDetector | None:
                     f"frame -> Detections, or None; got {type(detector).__name__}")
 
 
-def run(source: Iterable[Frame], detector: Any, tracker: Tracker, sinks: Sequence[Sink] = (),
-        *, progress: Any = None, total: int | None = None, label: str = "") -> LoopStats:
+def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detections | None] | None,
+        tracker: Tracker, sinks: Sequence[Sink] = (), *, progress: TextIO | None = None,
+        total: int | None = None, label: str = "") -> LoopStats:
     """The pipeline's one loop: every frame of ``source`` through ``detector``, ``tracker``
     and ``sinks``.
 
@@ -398,14 +408,14 @@ class _OncePerImage:
     """A confidence ``image -> ConfidenceMap`` evaluated once per image, so that a detector
     and a tracker asking for the same frame's map share it."""
 
-    def __init__(self, confidence: Callable[[Any], Any]):
+    def __init__(self, confidence: Callable[[np.ndarray], ConfidenceMap]):
         if not callable(confidence):
             raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                             f"{type(confidence).__name__}")
         self.confidence = confidence
-        self._last: tuple[Any, Any] | None = None
+        self._last: tuple[np.ndarray, ConfidenceMap] | None = None
 
-    def __call__(self, image: Any) -> Any:
+    def __call__(self, image: np.ndarray) -> ConfidenceMap:
         if self._last is None or self._last[0] is not image:
             self._last = (image, self.confidence(image))
         return self._last[1]
@@ -444,15 +454,15 @@ class Context:
 
     fps: float
     image_size: tuple[int, int] | None = None
-    reader: Any = None
+    reader: VideoReader | None = None
     config: TrackConfig | None = None
     overrides: dict = field(default_factory=dict)
     options: dict = field(default_factory=dict)
     resolved: TrackConfig | None = None
-    _confidence: Any = field(default=None, init=False, repr=False)
+    _confidence: _OncePerImage | None = field(default=None, init=False, repr=False)
 
     @property
-    def confidence(self) -> Callable[[Any], Any]:
+    def confidence(self) -> Callable[[np.ndarray], ConfidenceMap]:
         """The run's detector confidence (one per run, once per image).
 
         ``options["confidence"]``, or a :class:`~vistrack.frontends.HOGConfidence`, made at
@@ -485,24 +495,25 @@ def _bgsub(ctx: Context) -> FrameDetector:
     det = BlobDetector(opt.get("background", "selective"), min_area=opt.get("min_area", 500.0))
     if reader is not None:
         n_init = int(opt.get("n_init", 20))
-        det.initialize(f.image for f in VideoReader(reader.source, fps=reader.fps, grey=True,
-                                                    start=reader.start,
-                                                    stop=reader.start + n_init - 1))
-    return lambda frame: det.detect(frame.image)
+        # a video's frames have images
+        det.initialize(f.image for f in VideoReader(  # type: ignore[misc]
+            reader.source, fps=reader.fps, grey=True, start=reader.start,
+            stop=reader.start + n_init - 1))
+    return lambda frame: det.detect(frame.image)  # type: ignore[arg-type]  # as above
 
 
 def _hog(ctx: Context) -> FrameDetector:
     from .frontends.detectors import HOGDetector
 
     hog = HOGDetector()
-    return lambda frame: hog.detect(frame.image)
+    return lambda frame: hog.detect(frame.image)  # type: ignore[arg-type]  # a video's frames
 
 
 def _confidence_peaks(ctx: Context) -> FrameDetector:
     from .frontends.detectors import ConfidencePeaks
 
     peaks = ConfidencePeaks(ctx.confidence, ctx.options.get("det_threshold", 0.5))
-    return lambda frame: peaks.detect(frame.image)
+    return lambda frame: peaks.detect(frame.image)  # type: ignore[arg-type]  # a video's frames
 
 
 def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
@@ -539,7 +550,8 @@ FRONTENDS: Registry[Frontend] = Registry("frontend", {
 """Front-ends by name; also ``"detections:FILE"``, a MOTChallenge detections file."""
 
 
-def _frontend(name: Any, ctx: Context) -> FrameDetector:
+def _frontend(name: str | Detector | Callable[[Frame], Detections | None] | None,
+              ctx: Context) -> Callable[[Frame], Detections | None]:
     """A front-end by name (:data:`FRONTENDS`, or ``detections:FILE``), or a detector of
     your own (:func:`as_detector`)."""
     if isinstance(name, str):
@@ -621,7 +633,7 @@ single-object tracker, :data:`vistrack.tracking.METHODS`); also ``"module:callab
 callable of yours that returns a :class:`~vistrack.tracking.Tracker`."""
 
 
-def make_tracker(tracker: Any, ctx: Context) -> tuple[Tracker, str]:
+def make_tracker(tracker: str | Tracker, ctx: Context) -> tuple[Tracker, str]:
     """A tracker and its default front-end: ``tracker`` by name in :data:`TRACKERS`, as
     ``"module:callable"`` (the callable is called with no arguments), or a tracker object
     (any :class:`~vistrack.tracking.Tracker`, whose default front-end is ``bgsub``).
@@ -710,8 +722,8 @@ def _trajectory_plot(path: Path, name: str) -> Sink:
 
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,
                    config: TrackConfig | str | None = None, tracker: str | None = None,
-                   offline: bool | None = None, force: bool = False, progress: Any = None,
-                   **overrides: Any) -> TrackRun:
+                   offline: bool | None = None, force: bool = False,
+                   progress: TextIO | None = None, **overrides: object) -> TrackRun:
     """Track a MOTChallenge sequence folder and write a results file.
 
     Parameters
@@ -879,13 +891,15 @@ class VideoRun:
         return self.frames / max(s, 1e-12)
 
 
-def track_video(video: str | Path, out_dir: str | Path, *, frontend: Any = None,
-                fps: float | None = None, tracker: Any = "bytetrack",
+def track_video(video: str | Path, out_dir: str | Path, *,
+                frontend: str | Detector | Callable[[Frame], Detections | None] | None = None,
+                fps: float | None = None, tracker: str | Tracker = "bytetrack",
                 gt: str | Path | None = None, background: str = "selective",
                 min_area: float = 500.0, n_init: int = 20, stop: int | None = None,
-                annotate: bool = True, force: bool = False, progress: Any = None,
-                confidence: Any = None, det_threshold: float = 0.5,
-                config: TrackConfig | None = None, **overrides: Any) -> VideoRun:
+                annotate: bool = True, force: bool = False, progress: TextIO | None = None,
+                confidence: Callable[[np.ndarray], ConfidenceMap] | None = None,
+                det_threshold: float = 0.5, config: TrackConfig | None = None,
+                **overrides: object) -> VideoRun:
     """Track a video (a file, an image folder or a MOTChallenge sequence folder) from pixels.
 
     Writes into ``out_dir`` (:data:`SINKS`): ``tracks.txt`` (MOTChallenge results),
@@ -1067,9 +1081,9 @@ class SingleRun:
         return (len(self.boxes) - 1) / max(self.seconds, 1e-12)
 
 
-def track_one(source: str | Path, init: Any, out: str | Path, *, method: str = "colour",
+def track_one(source: str | Path, init: ArrayLike, out: str | Path, *, method: str = "colour",
               gt: str | Path | None = None, force: bool = False,
-              progress: Any = None) -> SingleRun:
+              progress: TextIO | None = None) -> SingleRun:
     """Follow one object from its box ``init`` (``x, y, w, h`` in the first frame) through a
     video or image folder, and write ``frame,x,y,w,h`` lines (frames from 1) to ``out``.
 

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -11,6 +11,14 @@ from numpy.typing import ArrayLike
 from ._validate import as_float_array, as_rng, check_finite, check_linear_gaussian, check_psd
 from .filters._nonlinear import psd_sqrt
 from .filters.linear import KalmanFilter, dt_steps
+
+if TYPE_CHECKING:
+    from .models.protocols import (
+        MeasurementModel,
+        MotionModel,
+        NonlinearMeasurementModel,
+        NonlinearMotionModel,
+    )
 
 __all__ = ["simulate_lgssm", "simulate"]
 
@@ -117,8 +125,8 @@ def simulate_lgssm(
 
 
 def simulate(
-    motion: Any,
-    measurement: Any,
+    motion: MotionModel | NonlinearMotionModel,
+    measurement: MeasurementModel | NonlinearMeasurementModel,
     T: int,
     *,
     x0: ArrayLike,
@@ -197,7 +205,9 @@ def simulate(
     """
     nonlinear = hasattr(motion, "jacobian") or hasattr(measurement, "jacobian")
     if not nonlinear:
-        mats = KalmanFilter(motion, measurement).matrices(int(T), dt)
+        # neither model has a jacobian: both are linear
+        mats = KalmanFilter(cast("MotionModel", motion),
+                            cast("MeasurementModel", measurement)).matrices(int(T), dt)
         return simulate_lgssm(T, **mats, x0=x0, P0=P0, n_series=n_series, rng=rng)
     return _simulate_nonlinear(motion, measurement, int(T), x0, P0, dt, n_series, as_rng(rng))
 

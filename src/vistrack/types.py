@@ -3,9 +3,20 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+    from typing import TypeAlias
+
+    from numpy.typing import ArrayLike
+
+    # what indexes a batch: an integer, a slice, a boolean mask or integer indices, or a
+    # tuple of these for several batch dimensions
+    _Index: TypeAlias = (int | slice | np.ndarray | Sequence[int]
+                         | tuple[int | slice | np.ndarray | Sequence[int], ...])
 
 __all__ = ["Gaussian", "Detections", "Tracks", "Frame", "xyxy_to_xywh"]
 
@@ -98,7 +109,7 @@ class Gaussian:
         """
         return tuple(self.mean.shape[:-1])
 
-    def __getitem__(self, index: Any) -> Gaussian:
+    def __getitem__(self, index: _Index) -> Gaussian:
         """Index the batch: ``g[mask]``, ``g[3]``, ``g[:10]``."""
         return Gaussian(self.mean[index], self.cov[index])
 
@@ -202,7 +213,8 @@ class Detections:
             object.__setattr__(self, name, v)
 
     @classmethod
-    def from_xywh(cls, xywh: Any, scores: Any = None, classes: Any = None) -> Detections:
+    def from_xywh(cls, xywh: ArrayLike, scores: ArrayLike | None = None,
+                  classes: ArrayLike | None = None) -> Detections:
         """Detections from ``left, top, width, height`` boxes (MOTChallenge files).
 
         Parameters
@@ -225,13 +237,15 @@ class Detections:
         [[10.0, 20.0, 40.0, 60.0]]
         """
         b = np.asarray(xywh, dtype=np.float64).reshape(-1, 4)
-        return cls(boxes=np.c_[b[:, :2], b[:, :2] + b[:, 2:]], scores=scores, classes=classes)
+        # the fields are typed as the ndarrays __post_init__ makes of them; it takes array_like
+        return cls(boxes=np.c_[b[:, :2], b[:, :2] + b[:, 2:]],
+                   scores=scores, classes=classes)  # type: ignore[arg-type]
 
     def __len__(self) -> int:
         assert self.scores is not None  # filled in by __post_init__
         return int(self.scores.shape[0])
 
-    def __getitem__(self, index: Any) -> Detections:
+    def __getitem__(self, index: _Index) -> Detections:
         assert self.scores is not None and self.classes is not None  # set by __post_init__
         return Detections(
             boxes=None if self.boxes is None else self.boxes[index],

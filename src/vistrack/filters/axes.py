@@ -41,15 +41,18 @@ and :func:`full_to_axes` convert between the per-axis covariances and full ``2A 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
 __all__ = ["axes_predict", "axes_update", "axes_to_full", "full_to_axes"]
 
 
-def _state(mean: Any, cov: Any) -> tuple[np.ndarray, np.ndarray, int]:
+def _state(mean: ArrayLike, cov: ArrayLike) -> tuple[np.ndarray, np.ndarray, int]:
     m = np.asarray(mean, dtype=np.float64)
     c = np.asarray(cov, dtype=np.float64)
     if c.ndim < 2 or c.shape[-1] != 3:
@@ -61,14 +64,15 @@ def _state(mean: Any, cov: Any) -> tuple[np.ndarray, np.ndarray, int]:
     return m, c, A
 
 
-def _per_state(value: Any, name: str, shape: tuple[int, ...]) -> np.ndarray:
+def _per_state(value: ArrayLike, name: str, shape: tuple[int, ...]) -> np.ndarray:
     v = np.asarray(value, dtype=np.float64)
     if v.shape != shape:
         raise ValueError(f"{name} must have shape {shape}; got {v.shape}")
     return v
 
 
-def axes_predict(mean: Any, cov: Any, dt: float, q: Any) -> tuple[np.ndarray, np.ndarray]:
+def axes_predict(mean: ArrayLike, cov: ArrayLike, dt: float,
+                 q: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     r"""Predict states of independent (value, rate) pairs over ``dt`` (see the module).
 
     Parameters
@@ -112,8 +116,8 @@ def axes_predict(mean: Any, cov: Any, dt: float, q: Any) -> tuple[np.ndarray, np
                           vv + qd[..., A:]], axis=-1)
 
 
-def axes_update(mean: Any, cov: Any, z: Any, r: Any,
-                rate_offset: Any = None) -> tuple[np.ndarray, np.ndarray]:
+def axes_update(mean: ArrayLike, cov: ArrayLike, z: ArrayLike, r: ArrayLike,
+                rate_offset: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
     r"""Correct states of independent (value, rate) pairs with measurements of their values
     (see the module).
 
@@ -164,7 +168,7 @@ def axes_update(mean: Any, cov: Any, z: Any, r: Any,
     return out, np.stack([pp - kp * pp, pv - kp * pv, vv - kv * pv], axis=-1)
 
 
-def axes_to_full(cov: Any) -> np.ndarray:
+def axes_to_full(cov: ArrayLike) -> np.ndarray:
     """Per-axis covariances ``(..., A, 3)`` (``pp, pv, vv`` of each value and its rate) as full
     ``(..., 2A, 2A)`` ones, in the order of the state (the ``A`` values, then their rates).
 
@@ -193,7 +197,7 @@ def axes_to_full(cov: Any) -> np.ndarray:
     return P
 
 
-def full_to_axes(P: Any) -> np.ndarray:
+def full_to_axes(P: ArrayLike) -> np.ndarray:
     """Full ``(..., 2A, 2A)`` covariances as per-axis ones ``(..., A, 3)``: the inverse of
     :func:`axes_to_full` for covariances with no terms across axes (any are dropped).
 

@@ -136,11 +136,11 @@ class SelectiveBackground:
         self._buffer: list[np.ndarray] = []
 
     @staticmethod
-    def _as3(image: Any) -> np.ndarray:
+    def _as3(image: np.ndarray) -> np.ndarray:
         im = as_uint8_image(image, channels=(1, 3))
         return im[:, :, None] if im.ndim == 2 else im
 
-    def initialize(self, frames: Iterable[Any]) -> SelectiveBackground:
+    def initialize(self, frames: Iterable[np.ndarray]) -> SelectiveBackground:
         """``B_0`` = the per-pixel median of ``frames``, ``σ_0`` their median absolute deviation
         from it times 1.4826 (the standard deviation, for Gaussian noise).
 
@@ -203,7 +203,7 @@ class SelectiveBackground:
             raise RuntimeError("the model is not initialised yet")
         return self.mean_sq - self.mean * self.mean
 
-    def apply(self, image: Any) -> np.ndarray:
+    def apply(self, image: np.ndarray) -> np.ndarray:
         """The foreground mask ``(H, W)`` uint8 (255 foreground) of one frame, and the model's
         update. Before the model has ``n_init`` frames (when :meth:`initialize` was not called)
         the frames are collected and the masks are empty.
@@ -303,7 +303,7 @@ class MOG2Background:
         self.freeze = bool(freeze)
         self._seen = 0
 
-    def initialize(self, frames: Iterable[Any]) -> MOG2Background:
+    def initialize(self, frames: Iterable[np.ndarray]) -> MOG2Background:
         """Learn from ``frames`` first (each is one step of the mixture's learning).
 
         Parameters
@@ -327,7 +327,7 @@ class MOG2Background:
             self._seen += 1
         return self
 
-    def apply(self, image: Any) -> np.ndarray:
+    def apply(self, image: np.ndarray) -> np.ndarray:
         """The foreground mask ``(H, W)`` uint8 (255 foreground) of one frame, and the model's
         update (none with ``freeze``, after the first frame).
 
@@ -358,7 +358,7 @@ BACKGROUNDS = {"selective": SelectiveBackground, "mog2": MOG2Background}
 """Background models by name: ``selective`` (the seeds'), ``mog2`` (OpenCV)."""
 
 
-def background(name: str = "selective", **kwargs: Any):
+def background(name: str = "selective", **kwargs: Any) -> SelectiveBackground | MOG2Background:
     """A background model by name in :data:`BACKGROUNDS`.
 
     Parameters

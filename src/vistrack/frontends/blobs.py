@@ -15,12 +15,17 @@ From a binary image (a threshold of the frame, or a background model's foregroun
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
 
 from ..types import Detections
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    from numpy.typing import ArrayLike
 
 __all__ = ["Blobs", "BlobDetector", "find_blobs", "threshold"]
 
@@ -103,7 +108,7 @@ class Blobs:
         raise ValueError(f"kind must be 'boxes' or 'points'; got {kind!r}")
 
 
-def threshold(image: Any, level: float, above: bool = True) -> np.ndarray:
+def threshold(image: ArrayLike, level: float, above: bool = True) -> np.ndarray:
     """A binary mask (uint8, 255 set) of the pixels above (or below) ``level``; colour images
     are compared in grey.
 
@@ -162,8 +167,8 @@ def _moments(labels, n):
     return s, lo, hi
 
 
-def find_blobs(mask: Any, *, min_area: float = 0, max_area: float = np.inf, open_size: int = 3,
-               close_size: int = 5) -> Blobs:
+def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf,
+               open_size: int = 3, close_size: int = 5) -> Blobs:
     """Connected regions of a binary ``mask`` (non-zero set) and their moments (see the
     module).
 
@@ -271,7 +276,7 @@ class BlobDetector:
         self.model = make_background(background)
         self.min_area, self.open_size, self.close_size = float(min_area), open_size, close_size
 
-    def initialize(self, images: Any) -> None:
+    def initialize(self, images: Iterable[np.ndarray]) -> None:
         """Start the background model from ``images`` (an iterable of frames).
 
         Parameters
@@ -288,7 +293,7 @@ class BlobDetector:
         """
         self.model.initialize(images)
 
-    def detect(self, image: Any) -> Detections:
+    def detect(self, image: np.ndarray) -> Detections:
         """The blobs of ``image``'s foreground as boxes ``x0, y0, x1, y1``.
 
         The image is converted to grey, its foreground mask taken (the model learns from it),

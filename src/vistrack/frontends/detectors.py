@@ -6,11 +6,16 @@ A detector is any object with ``detect(image) -> Detections``; nothing here down
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from ..types import Detections
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+    from numpy.typing import ArrayLike
 
 __all__ = ["Detector", "HOGDetector", "nms", "ConfidenceMap", "HOGConfidence",
            "ConfidencePeaks"]
@@ -150,7 +155,7 @@ class HOGDetector:
             raise ValueError(f"upscale must be > 0; got {upscale}")
         self.upscale = float(upscale)
 
-    def detect(self, image: Any) -> Detections:
+    def detect(self, image: np.ndarray) -> Detections:
         """The people in ``image``.
 
         Parameters
@@ -224,7 +229,8 @@ class ConfidenceMap:
     (2.0, 1.0)
     """
 
-    def __init__(self, heights: Any, scores: list, origins: Any, strides: Any,
+    def __init__(self, heights: ArrayLike, scores: Sequence[ArrayLike], origins: ArrayLike,
+                 strides: ArrayLike,
                  aspect: float = _INNER_W * 64 / (_INNER_H * 128)):
         self.heights = np.asarray(heights, float)
         self.scores = [np.asarray(s, float) for s in scores]
@@ -239,7 +245,7 @@ class ConfidenceMap:
             raise ValueError("each level's scores must be a 2-D grid of at least 2 x 2")
         self.aspect = float(aspect)
 
-    def level(self, h: Any) -> np.ndarray:
+    def level(self, h: ArrayLike) -> np.ndarray:
         """Index of the level nearest each height (in log height).
 
         Parameters
@@ -262,7 +268,8 @@ class ConfidenceMap:
         return np.abs(np.log(np.maximum(h, 1e-6))[..., None]
                       - np.log(self.heights)).argmin(-1)
 
-    def score(self, x: Any, y: Any, h: Any, outside: float = -np.inf) -> np.ndarray:
+    def score(self, x: ArrayLike, y: ArrayLike, h: ArrayLike,
+              outside: float = -np.inf) -> np.ndarray:
         """The score at box centres ``(x, y)`` and heights ``h`` (broadcast together),
         bilinear in position on the level nearest in height; ``outside`` beyond the grid.
 
@@ -386,7 +393,7 @@ class HOGConfidence:
     ([46.0, 58.0, 75.0, 96.0, 121.0], (15, 33), 8.0)
     """
 
-    def __init__(self, heights: Any = (46, 58, 75, 96, 121)):
+    def __init__(self, heights: ArrayLike = (46, 58, 75, 96, 121)):
         import cv2
 
         self.heights = np.asarray(heights, float)
@@ -396,7 +403,7 @@ class HOGConfidence:
         # the detector comes as a float32 array (asarray keeps it; the stubs say Sequence)
         self._hog.setSVMDetector(np.asarray(cv2.HOGDescriptor.getDefaultPeopleDetector()))
 
-    def __call__(self, image: Any) -> ConfidenceMap:
+    def __call__(self, image: np.ndarray) -> ConfidenceMap:
         import cv2
 
         from .._validate import as_uint8_image
@@ -450,13 +457,14 @@ class ConfidencePeaks:
     [[11.5, -9.0, 45.0, 90.0]]
     """
 
-    def __init__(self, confidence: Any, threshold: float = 0.5):
+    def __init__(self, confidence: Callable[[np.ndarray], ConfidenceMap],
+                 threshold: float = 0.5):
         if not callable(confidence):
             raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                             f"{type(confidence).__name__}")
         self.confidence, self.threshold = confidence, float(threshold)
 
-    def detect(self, image: Any) -> Detections:
+    def detect(self, image: np.ndarray) -> Detections:
         """The peaks of the image's confidence above the threshold.
 
         Parameters

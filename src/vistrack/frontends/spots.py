@@ -21,12 +21,15 @@ Positions are ``(x, y)`` with the origin at the centre of pixel (0, 0).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
 
 from ..types import Detections
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["Spots", "locate"]
 
@@ -133,7 +136,7 @@ def _refine(image, coords, r, mask, max_iterations, shift):
     return out, mass, rg
 
 
-def locate(image: Any, diameter: int, *, minmass: float = 0.0,
+def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
            separation: float | None = None, noise_size: float = 1.0,
            smoothing_size: int | None = None, threshold: float = 1.0, invert: bool = False,
            percentile: float = 64.0, max_iterations: int = 10) -> Spots:

@@ -19,11 +19,16 @@ import configparser
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .atomic import open_replacing
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from ..types import _Index
 
 __all__ = ["MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "write_mot", "read_seqinfo",
            "MOT_CLASSES"]
@@ -99,7 +104,7 @@ class MOTTable:
         return int(self.frames.shape[0])
 
     @classmethod
-    def from_rows(cls, rows: Any, path: str = "") -> MOTTable:
+    def from_rows(cls, rows: ArrayLike, path: str = "") -> MOTTable:
         """From rows ``frame, id, left, top, width, height[, conf, class, visibility, ...]``
         (at least 6 values each; the rest default to conf 1, class -1, visibility -1), sorted
         by frame.
@@ -142,7 +147,7 @@ class MOTTable:
                    classes=col(7, -1.0).astype(np.int64), visibility=col(8, -1.0), path=path,
                    columns=w)
 
-    def __getitem__(self, index: Any) -> MOTTable:
+    def __getitem__(self, index: _Index) -> MOTTable:
         """Rows by boolean mask or indices."""
         return MOTTable(self.frames[index], self.ids[index], self.boxes[index], self.conf[index],
                         self.classes[index], self.visibility[index], self.path, self.columns)
@@ -287,8 +292,8 @@ def read_mot(path: str | os.PathLike) -> MOTTable:
     return MOTTable.from_rows(a, path)
 
 
-def write_mot(path: str | os.PathLike, frames: Any, ids: Any, boxes: Any, conf: Any = None, *,
-              force: bool = False) -> Path:
+def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes: ArrayLike,
+              conf: ArrayLike | None = None, *, force: bool = False) -> Path:
     """Write a MOTChallenge results file: ``frame, id, left, top, width, height, conf, -1, -1,
     -1``, sorted by frame and id. Refuses to overwrite an existing file unless ``force``.
 

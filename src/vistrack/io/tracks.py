@@ -11,13 +11,16 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
 from ..types import Frame, Tracks
 from .atomic import open_replacing
 from .motchallenge import write_mot
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["Sink", "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes"]
 
@@ -282,7 +285,7 @@ class CSVWriter(TrackRows):
                 fh.write(f"{f},{i},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{s:.3f}\n")
 
 
-def write_boxes(path: str | os.PathLike, boxes: object, *, force: bool = False) -> None:
+def write_boxes(path: str | os.PathLike, boxes: ArrayLike, *, force: bool = False) -> None:
     """Write one object's boxes as ``frame,x,y,w,h`` lines, frames from 1 (vistrack's
     ``boxes.txt``, read by :func:`vistrack.evaluation.single.read_boxes`).
 

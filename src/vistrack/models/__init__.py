@@ -1,5 +1,6 @@
 """Physics: motion models (``F(dt)``, ``Q(dt)``; nonlinear: ``f``, ``jacobian``) and measurement
-models (``H``, ``R``; nonlinear: ``h``, ``jacobian``)."""
+models (``H``, ``R``; nonlinear: ``h``, ``jacobian``); what a model must provide is
+:mod:`vistrack.models.protocols`."""
 
 from .box import BoxMotion
 from .linear_gaussian import LinearGaussian
@@ -24,6 +25,7 @@ from .nonlinear import (
     numerical_jacobian,
     wrap_angle,
 )
+from .protocols import NonlinearMeasurementModel, NonlinearMotionModel
 from .switching import SwitchingLinearSystem
 
 __all__ = [
@@ -36,7 +38,9 @@ __all__ = [
     "GrowthMeasurement",
     "GrowthMotion",
     "NonlinearMeasurement",
+    "NonlinearMeasurementModel",
     "NonlinearMotion",
+    "NonlinearMotionModel",
     "RangeBearing",
     "SwitchingLinearSystem",
     "growth_model",

@@ -28,12 +28,15 @@ a constant-velocity prediction), then updates the mixture there.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._validate import as_box, as_uint8_image
 from .base import SingleObjectTracker
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["WSLModel", "WSLTracker"]
 
@@ -111,13 +114,13 @@ class WSLModel:
         self.m0, self.log_lost = m0_arr / m0_arr.sum(), float(np.log(lost_density))
         self.ready = False
 
-    def _data(self, d: Any, name: str = "data") -> np.ndarray:
+    def _data(self, d: ArrayLike, name: str = "data") -> np.ndarray:
         d = np.asarray(d, dtype=float)
         if d.shape[-len(self.shape):] != self.shape:
             raise ValueError(f"{name} must end in shape {self.shape}; got {d.shape}")
         return d
 
-    def init(self, d: Any) -> None:
+    def init(self, d: ArrayLike) -> None:
         """Start the model on a first observation: ``μ_s = d``, ``σ_s = sigma_s0``.
 
         The mixing probabilities start at ``m0`` (normalised) and the wandering component's
@@ -162,7 +165,7 @@ class WSLModel:
         ll = np.broadcast_to(np.log(self.m[2]) + self.log_lost, d.shape)
         return np.stack(np.broadcast_arrays(ls, lw, ll))
 
-    def log_likelihood(self, d: Any) -> np.ndarray:
+    def log_likelihood(self, d: ArrayLike) -> np.ndarray:
         """``Σ_x log Σ_i m_i p_i(d(x))`` for each observation in a batch ``(..., *shape)``.
 
         Parameters
@@ -197,7 +200,7 @@ class WSLModel:
         per_pixel = top + np.log(np.exp(t - top).sum(axis=0))
         return per_pixel.reshape(d.shape[:d.ndim - len(self.shape)] + (-1,)).sum(-1)
 
-    def ownership(self, d: Any) -> np.ndarray:
+    def ownership(self, d: ArrayLike) -> np.ndarray:
         """``(3, *shape)``: the ownership probabilities ``o_s, o_w, o_l`` of one observation.
 
         Parameters
@@ -234,7 +237,7 @@ class WSLModel:
         t = np.exp(t - t.max(axis=0))
         return t / t.sum(axis=0)
 
-    def update(self, d: Any) -> np.ndarray:
+    def update(self, d: ArrayLike) -> np.ndarray:
         """One step of online EM on observation ``d``; returns its ownerships ``(3, *shape)``.
 
         The mixing probabilities and the stable component's moments move towards the
@@ -355,7 +358,7 @@ class WSLTracker(SingleObjectTracker):
         self.scales = tuple(float(s) for s in scales)
         self.blur, self.model_args = float(blur), model
 
-    def _prepare(self, image: Any) -> np.ndarray:
+    def _prepare(self, image: np.ndarray) -> np.ndarray:
         import cv2
 
         g = as_uint8_image(image, grey=True).astype(np.float32) / 255.0
@@ -372,7 +375,7 @@ class WSLTracker(SingleObjectTracker):
         return cv2.warpAffine(g, A, (out_w, out_h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                               borderMode=cv2.BORDER_REPLICATE).astype(float)
 
-    def _start(self, image: Any, b: np.ndarray) -> None:
+    def _start(self, image: np.ndarray, b: np.ndarray) -> None:
         g = self._prepare(image)
         self.vw, self.vh = _view_size(b[2], b[3], self.size)
         self.w, self.h = float(b[2]), float(b[3])
@@ -386,7 +389,7 @@ class WSLTracker(SingleObjectTracker):
         self.box = b.copy()
         self.score = float("nan")
 
-    def _follow(self, image: Any) -> np.ndarray:
+    def _follow(self, image: np.ndarray) -> np.ndarray:
         from numpy.lib.stride_tricks import sliding_window_view
 
         g = self._prepare(image)
@@ -415,7 +418,7 @@ class WSLTracker(SingleObjectTracker):
                              self.w, self.h])
         return self.box.copy()
 
-    def anchor(self, box: Any) -> None:
+    def anchor(self, box: ArrayLike) -> None:
         """Move the region to ``box`` (the view keeps its pixel size; the velocity is kept).
 
         Parameters

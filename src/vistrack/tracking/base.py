@@ -13,12 +13,15 @@ of the first frame that has one, and follow that object alone from then on.
 
 from __future__ import annotations
 
-from typing import Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
 from .._validate import as_box
 from ..types import Detections, Frame, Tracks
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["Tracker", "SingleObjectTracker", "frame_index", "frame_image"]
 
@@ -122,7 +125,7 @@ def frame_index(frame: Frame | int | None, last: int | None) -> int:
     return index
 
 
-def frame_image(frame: Any, who: str) -> np.ndarray:
+def frame_image(frame: Frame, who: str) -> np.ndarray:
     """The image of ``frame``, a :class:`~vistrack.types.Frame` with one; ``who`` names the
     tracker in the error.
 
@@ -191,13 +194,13 @@ class SingleObjectTracker:
 
     _started: bool = False
 
-    def _start(self, image: Any, box: np.ndarray) -> None:  # pragma: no cover - abstract
+    def _start(self, image: np.ndarray, box: np.ndarray) -> None:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def _follow(self, image: Any) -> np.ndarray:  # pragma: no cover - abstract
+    def _follow(self, image: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def init(self, image: Any, box: Any) -> None:
+    def init(self, image: np.ndarray, box: ArrayLike) -> None:
         """Start following the object in ``box`` (``x, y, w, h``) of ``image``.
 
         Parameters
@@ -223,7 +226,7 @@ class SingleObjectTracker:
         self._start(image, as_box(box))
         self._started = True
 
-    def update(self, image: Any) -> np.ndarray:
+    def update(self, image: np.ndarray) -> np.ndarray:
         """The object's box ``(4,)`` (``x, y, w, h``) in the next ``image``.
 
         Parameters

@@ -59,7 +59,7 @@ One step, as on the slides (predict, associate, correct, manage):
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numba import njit
@@ -80,6 +80,9 @@ from ..types import Detections, Frame, Tracks
 from .base import frame_index
 from .calibration import ScoreCalibration, ScoreCalibrator
 from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["BoxTracker", "BoxTrackerConfig", "TRACKERS"]
 
@@ -526,7 +529,7 @@ class BoxTracker:
         assert self.calibrator is not None  # reset makes one for scores="calibrated"
         return self.calibrator.calibration()
 
-    def confidence(self, scores: Any) -> np.ndarray:
+    def confidence(self, scores: ArrayLike) -> np.ndarray:
         """Scores as the thresholds see them.
 
         Parameters

@@ -32,7 +32,7 @@ which tracked best on the four sets of docs/mot.md).
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
@@ -40,6 +40,9 @@ from numba import njit
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
 from ..types import Detections
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["ScoreCalibration", "ScoreCalibrator", "isotonic_increasing", "persistence"]
 
@@ -68,7 +71,7 @@ def _pava(y, w):
     return out
 
 
-def isotonic_increasing(y: Any, weights: Any = None) -> np.ndarray:
+def isotonic_increasing(y: ArrayLike, weights: ArrayLike | None = None) -> np.ndarray:
     r"""The non-decreasing sequence closest to ``y`` in weighted least squares (isotonic
     regression by pool-adjacent-violators).
 
@@ -114,7 +117,7 @@ def _link(prev, prev_cls, cur, cur_cls, min_iou):
     return gnn_pairs(rows, cols, 1.0 - ov, prev.shape[0], cur.shape[0])
 
 
-def _scores(scores: Any) -> np.ndarray:
+def _scores(scores: ArrayLike) -> np.ndarray:
     s = np.asarray(scores, dtype=np.float64).ravel()
     bad = np.flatnonzero(np.isnan(s))
     if len(bad):
@@ -202,7 +205,7 @@ class ScoreCalibration:
     (0.6, 0.8)
     """
 
-    def __init__(self, scores: Any, confidence: Any, *, n: int = 0,
+    def __init__(self, scores: ArrayLike, confidence: ArrayLike, *, n: int = 0,
                  top_persistence: float = float("nan")):
         s = np.asarray(scores, dtype=np.float64).ravel()
         c = np.asarray(confidence, dtype=np.float64).ravel()
@@ -217,7 +220,7 @@ class ScoreCalibration:
         self.n, self.top_persistence = int(n), float(top_persistence)
 
     @classmethod
-    def fit(cls, scores: Any, persisted: Any, *, top: float = 0.05,
+    def fit(cls, scores: ArrayLike, persisted: ArrayLike, *, top: float = 0.05,
             top_min: int = 20) -> ScoreCalibration:
         """Fit to scores and their persistence outcomes (see the module): full confidence is
         the persistence of the ``top`` fraction of the detections by score, and of at least
@@ -317,7 +320,7 @@ class ScoreCalibration:
         s, p = persistence(frames, link_iou)
         return cls.fit(s, p, top=top)
 
-    def __call__(self, scores: Any) -> np.ndarray:
+    def __call__(self, scores: ArrayLike) -> np.ndarray:
         s = _scores(scores)
         k = np.searchsorted(self.scores, s, side="right") - 1
         return self.confidence[np.clip(k, 0, len(self.scores) - 1)]
@@ -345,7 +348,7 @@ class ScoreCalibration:
         return float(self.scores[k[0]]) if len(k) else float("inf")
 
     @classmethod
-    def ranks(cls, scores: Any) -> ScoreCalibration:
+    def ranks(cls, scores: ArrayLike) -> ScoreCalibration:
         """The map of each score to its rank among ``scores``: the fraction of them at or
         below it (their empirical distribution function; nothing fitted).
 
@@ -524,7 +527,7 @@ class ScoreCalibrator:
                 raise TypeError("detections must have boxes")
             boxes = np.ascontiguousarray(detections.boxes)
             cls = np.ascontiguousarray(detections.classes)
-            s = _scores(detections.scores)
+            s = _scores(detections.scores)  # type: ignore[arg-type]  # set by __post_init__
         linked_back = np.zeros(len(s), bool)
         if self._prev is not None:
             pb, pc, ps, pl, first = self._prev
@@ -585,5 +588,5 @@ class ScoreCalibrator:
         self._cal, self._fit_n, self._new_since_fit = cal, n, 0
         return cal
 
-    def __call__(self, scores: Any) -> np.ndarray:
+    def __call__(self, scores: ArrayLike) -> np.ndarray:
         return self.calibration()(scores)

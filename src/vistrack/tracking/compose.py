@@ -22,7 +22,7 @@ has ``anchor``.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -31,7 +31,21 @@ from ..models import ConstantVelocity
 from ..types import Gaussian
 from .base import SingleObjectTracker
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
 __all__ = ["Composite"]
+
+
+class _Member(Protocol):
+    """What a member of a :class:`Composite` answers: ``init(image, box)``,
+    ``update(image) -> box`` and ``anchor(box)``, boxes ``x, y, w, h``."""
+
+    def init(self, image: np.ndarray, box: np.ndarray, /) -> None: ...
+
+    def update(self, image: np.ndarray, /) -> ArrayLike: ...
+
+    def anchor(self, box: np.ndarray, /) -> None: ...
 
 # the first velocity's standard deviation, as a fraction of the box's size a frame
 _V0 = 0.5
@@ -107,11 +121,11 @@ class Composite(SingleObjectTracker):
     {'colour': True, 'shape': True}
     """
 
-    def __init__(self, members: Mapping[str, tuple[Any, tuple[float, float]]], *,
+    def __init__(self, members: Mapping[str, tuple[_Member, tuple[float, float]]], *,
                  q_pos: float = 16.0, q_size: float = 1e-3, p_gate: float = 0.999):
         if not members:
             raise ValueError("members must name at least one tracker")
-        self.members: dict[str, Any] = {}
+        self.members: dict[str, _Member] = {}
         self.noise: dict[str, np.ndarray] = {}
         for name, value in members.items():
             try:
@@ -134,7 +148,7 @@ class Composite(SingleObjectTracker):
         self.q_pos, self.q_size = float(q_pos), float(q_size)
         self.threshold = float(chi2.ppf(p_gate, 4))
 
-    def _start(self, image: Any, b: np.ndarray) -> None:
+    def _start(self, image: np.ndarray, b: np.ndarray) -> None:
         for tracker in self.members.values():
             tracker.init(image, b)
         z = _measure(b)
@@ -153,7 +167,7 @@ class Composite(SingleObjectTracker):
         Q[4, 4] = Q[5, 5] = self.q_size
         return F, Q
 
-    def _follow(self, image: Any) -> np.ndarray:
+    def _follow(self, image: np.ndarray) -> np.ndarray:
         g = kf_predict(self.state, *self._motion())
         size = np.exp(g.mean[4:])
         predicted = _box_of(g.mean)

@@ -52,7 +52,7 @@ it is supported. Times are frames over ``frame_rate``; the defaults (1.5 s and 0
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -61,6 +61,11 @@ from ..filters.particle import resample
 from ..types import Detections, Frame, Tracks
 from .base import frame_image
 from .lifecycle import CONFIRMED, TENTATIVE, TrackTable
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from ..frontends.detectors import ConfidenceMap
 
 __all__ = ["DCPFConfig", "DetectorConfidencePF", "ColourFeatures"]
 
@@ -165,7 +170,7 @@ class ColourFeatures:
     ((2, 32), 0.0)
     """
 
-    def __init__(self, image: Any, bins: int = 8, bins_s: int = 4, scale: float = 0.5):
+    def __init__(self, image: np.ndarray, bins: int = 8, bins_s: int = 4, scale: float = 0.5):
         import cv2
 
         from .._validate import as_uint8_image
@@ -235,7 +240,8 @@ class DetectorConfidencePF:
     step with the confidence map given, for a map computed elsewhere.
     """
 
-    def __init__(self, config: DCPFConfig | None = None, *, confidence: Any = None,
+    def __init__(self, config: DCPFConfig | None = None, *,
+                 confidence: Callable[[np.ndarray], ConfidenceMap] | None = None,
                  rng: np.random.Generator | int | None = 0, frame_rate: float = 30.0,
                  **overrides: Any):
         if config is None:
@@ -324,7 +330,8 @@ class DetectorConfidencePF:
             self.weights_clf[k] = w
 
     # ------------------------------------------------------------------ one frame
-    def update(self, image: Any, detections: Detections, confidence: Any = None) -> Tracks:
+    def update(self, image: np.ndarray, detections: Detections,
+               confidence: ConfidenceMap | None = None) -> Tracks:
         """One frame with its confidence map given: ``image`` (BGR), its ``detections`` and
         a :class:`~vistrack.frontends.detectors.ConfidenceMap` (None when ``gamma`` is 0);
         as :meth:`step`."""
@@ -379,8 +386,9 @@ class DetectorConfidencePF:
                     d2 = ((p[has, :, :2] - det_c[match[has]][:, None]) ** 2).sum(-1)
                     w[has] += cfg.beta * np.exp(-0.5 * d2 / sd[:, None] ** 2)
             if cfg.gamma > 0:
-                dc = _sigmoid(confidence.score(p[..., 0], p[..., 1], self.size[:, None, 1],
-                                               outside=-10.0))
+                # not None with gamma > 0: checked above
+                dc = _sigmoid(confidence.score(  # type: ignore[union-attr]
+                    p[..., 0], p[..., 1], self.size[:, None, 1], outside=-10.0))
                 conf_mean = dc.mean(1)
                 boxes = self._boxes(p[..., :2].mean(1), self.size)
                 xyxy = np.c_[boxes[:, :2], boxes[:, :2] + boxes[:, 2:]]

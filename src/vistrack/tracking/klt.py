@@ -28,7 +28,6 @@ Identities are integers from 1, never reused.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -298,7 +297,7 @@ class KLTTracker:
         return Tracks(ids=f.ids, boxes=None, points=f.points, scores=np.ones(n),
                       classes=np.zeros(n, np.int64))
 
-    def track(self, image: Any) -> Features:
+    def track(self, image: np.ndarray) -> Features:
         """Track the features into a new frame (grey or BGR uint8) and top them up.
 
         Parameters

@@ -21,7 +21,7 @@ its standard deviation.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -33,6 +33,9 @@ from ..models import ConstantVelocity, Position
 from ..types import Detections, Frame, Gaussian, Tracks
 from .base import frame_index
 from .lifecycle import CONFIRMED, TrackTable
+
+if TYPE_CHECKING:
+    from ..models.protocols import MeasurementModel, MotionModel
 
 __all__ = ["PointTracker", "POINT_ASSOCIATIONS"]
 
@@ -75,7 +78,8 @@ class PointTracker:
     ([1, 2], [[8.0, 0.0], [50.0, 12.0]])
     """
 
-    def __init__(self, association: str = "gnn", *, motion: Any = None, measurement: Any = None,
+    def __init__(self, association: str = "gnn", *, motion: MotionModel | None = None,
+                 measurement: MeasurementModel | None = None,
                  p_detect: float = 0.9, clutter_density: float = 1e-4, p_gate: float = 0.99,
                  init_speed: float = 10.0, confirm_hits: int = 3, max_lost: float = 1.0,
                  frame_rate: float = 30.0):

@@ -47,6 +47,7 @@ from .snake import SnakeTracker
 
 if TYPE_CHECKING:
     import cv2
+    from numpy.typing import ArrayLike
 
 __all__ = ["METHODS", "single_tracker", "MedianFlow", "TemplateTracker", "ColourTracker",
            "CamShiftTracker", "ColourParticleTracker", "OpenCVTracker"]
@@ -59,11 +60,11 @@ class _LKArgs(TypedDict):
     maxLevel: int
 
 
-def _grey(image: Any) -> np.ndarray:
+def _grey(image: np.ndarray) -> np.ndarray:
     return as_uint8_image(image, grey=True)
 
 
-def _hsv(image: Any) -> np.ndarray:
+def _hsv(image: np.ndarray) -> np.ndarray:
     import cv2
 
     return cv2.cvtColor(as_uint8_image(image, channels=(3,)), cv2.COLOR_BGR2HSV)
@@ -107,7 +108,7 @@ class MedianFlow(SingleObjectTracker):
         self.grid, self.fb_max = int(grid), float(fb_max)
         self.lk = _LKArgs(winSize=(int(win_size), int(win_size)), maxLevel=int(levels))
 
-    def _start(self, image: Any, box: Any) -> None:
+    def _start(self, image: np.ndarray, box: np.ndarray) -> None:
         self.prev = _grey(image)
         self.box = box
 
@@ -175,7 +176,7 @@ class MedianFlow(SingleObjectTracker):
         s = float(np.median(db[good] / da[good])) if good.any() else 1.0
         return d, s
 
-    def _follow(self, image: Any) -> np.ndarray:
+    def _follow(self, image: np.ndarray) -> np.ndarray:
         grey = _grey(image)
         m = self.motion(grey)
         if m is not None:
@@ -186,7 +187,7 @@ class MedianFlow(SingleObjectTracker):
         self.prev = grey
         return self.box.copy()
 
-    def anchor(self, box: Any) -> None:
+    def anchor(self, box: ArrayLike) -> None:
         """Move the box to ``box`` (the next frame's features are found in it).
 
         Parameters
@@ -243,7 +244,7 @@ class TemplateTracker(SingleObjectTracker):
         self.max_residual, self.iters = float(max_residual), int(iters)
         self.flow = MedianFlow()
 
-    def _start(self, image: Any, b: np.ndarray) -> None:
+    def _start(self, image: np.ndarray, b: np.ndarray) -> None:
         grey = _grey(image).astype(np.float32)
         self.box0 = b
         self.half = max(3, int(min(b[2], b[3]) / 2) - 1)
@@ -263,7 +264,7 @@ class TemplateTracker(SingleObjectTracker):
         A = np.array([[1 + p[0], p[2]], [p[1], 1 + p[3]]])
         return rel @ A.T + p[4:]
 
-    def _follow(self, image: Any) -> np.ndarray:
+    def _follow(self, image: np.ndarray) -> np.ndarray:
         grey = _grey(image)
         prior = self.flow.update(image)
         if not self.ok:
@@ -288,7 +289,7 @@ class TemplateTracker(SingleObjectTracker):
         self.flow.box = self.box.copy()
         return self.box.copy()
 
-    def anchor(self, box: Any) -> None:
+    def anchor(self, box: ArrayLike) -> None:
         """Move the warp so that its box is ``box``: the same shape, shifted and scaled.
 
         Parameters
@@ -387,7 +388,7 @@ class ColourTracker(SingleObjectTracker):
         hb = cv2.calcHist([hsv], ch, ring, bs, rng)
         return ht / max(ht.sum(), 1.0), hb / max(hb.sum(), 1.0)
 
-    def _start(self, image: Any, box: Any) -> None:
+    def _start(self, image: np.ndarray, box: np.ndarray) -> None:
         self.box = box
         self.pt, self.pb = self._hist(_hsv(image), self.box)
 
@@ -405,7 +406,7 @@ class ColourTracker(SingleObjectTracker):
             self.pt = (1 - self.rate) * self.pt + self.rate * pt
             self.pb = (1 - self.rate) * self.pb + self.rate * pb
 
-    def _follow(self, image: Any) -> np.ndarray:
+    def _follow(self, image: np.ndarray) -> np.ndarray:
         import cv2
 
         hsv = _hsv(image)
@@ -423,7 +424,7 @@ class ColourTracker(SingleObjectTracker):
         self._learn(hsv)
         return self.box.copy()
 
-    def anchor(self, box: Any) -> None:
+    def anchor(self, box: ArrayLike) -> None:
         """Move the window to ``box``.
 
         Parameters
@@ -471,7 +472,7 @@ class CamShiftTracker(ColourTracker):
     [30.0, 34.0, 36.0]
     """
 
-    def _follow(self, image: Any) -> np.ndarray:
+    def _follow(self, image: np.ndarray) -> np.ndarray:
         import cv2
 
         hsv = _hsv(image)
@@ -534,7 +535,7 @@ class ColourParticleTracker(ColourTracker):
         self.n, self.step_size, self.sharpness = int(n_particles), float(step), float(sharpness)
         self._seed = rng
 
-    def _start(self, image: Any, box: Any) -> None:
+    def _start(self, image: np.ndarray, box: np.ndarray) -> None:
         # each start draws afresh from the seed (an integer seed: the same boxes again)
         self.rng = np.random.default_rng(self._seed)
         super()._start(image, box)
@@ -543,7 +544,7 @@ class ColourParticleTracker(ColourTracker):
         self.x = np.tile([b[0] + b[2] / 2, b[1] + b[3] / 2, 0.0], (self.n, 1))
         self.w = np.full(self.n, 1.0 / self.n)
 
-    def anchor(self, box: Any) -> None:
+    def anchor(self, box: ArrayLike) -> None:
         """Shift and scale the particle cloud so that its mean box is ``box``.
 
         Parameters
@@ -565,7 +566,7 @@ class ColourParticleTracker(ColourTracker):
         self.x[:, 2] += np.log(np.sqrt(b[2] * b[3] / np.prod(self.size))) - m[2]
         self.box = b
 
-    def _follow(self, image: Any) -> np.ndarray:
+    def _follow(self, image: np.ndarray) -> np.ndarray:
         import cv2
 
         from ..filters import effective_sample_size, resample
@@ -632,19 +633,19 @@ class OpenCVTracker(SingleObjectTracker):
             raise ValueError(f"kind must be one of {sorted(makers)}; got {kind!r}")
         self._make = makers[kind]
 
-    def _start(self, image: Any, b: np.ndarray) -> None:
+    def _start(self, image: np.ndarray, b: np.ndarray) -> None:
         self._t = self._make()
         self._t.init(np.asarray(image), tuple(int(round(v)) for v in b))
         self.box = b
 
-    def _follow(self, image: Any) -> np.ndarray:
+    def _follow(self, image: np.ndarray) -> np.ndarray:
         ok, b = self._t.update(np.asarray(image))
         if ok:
             self.box = np.asarray(b, float)
         return self.box.copy()
 
 
-METHODS: dict[str, Callable[[], Any]] = {
+METHODS: dict[str, Callable[[], SingleObjectTracker]] = {
     "klt": MedianFlow,
     "template": TemplateTracker,
     "colour": ColourTracker,
@@ -659,7 +660,7 @@ METHODS: dict[str, Callable[[], Any]] = {
 """Single-object trackers by name."""
 
 
-def single_tracker(method: str = "template") -> Any:
+def single_tracker(method: str = "template") -> SingleObjectTracker:
     """A single-object tracker by name in :data:`METHODS`.
 
     Parameters

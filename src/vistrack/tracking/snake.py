@@ -18,7 +18,7 @@ The contour is a periodic uniform cubic B-spline, ``r(s) = U(s) Q`` with ``n`` c
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numba import njit
@@ -27,6 +27,9 @@ from .._validate import as_box, as_uint8_image
 from ..filters import kf_predict, kf_update
 from ..types import Gaussian
 from .base import SingleObjectTracker
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["Snake", "SnakeTracker", "bspline_matrix"]
 
@@ -169,7 +172,7 @@ class Snake:
         self.q, self.r = float(q), float(r)
         self.state: Gaussian | None = None
 
-    def init(self, control_points: Any, std: float = 2.0) -> None:
+    def init(self, control_points: ArrayLike, std: float = 2.0) -> None:
         """Start from control points ``(n, 2)`` with standard deviation ``std`` pixels.
 
         Parameters
@@ -197,7 +200,7 @@ class Snake:
         # state: x coordinates of the control points, then y
         self.state = Gaussian(np.r_[Q[:, 0], Q[:, 1]], std ** 2 * np.eye(2 * self.n))
 
-    def init_circle(self, centre: Any, radius: float, std: float = 2.0) -> None:
+    def init_circle(self, centre: ArrayLike, radius: float, std: float = 2.0) -> None:
         """Start from the spline closest to a circle (control points on a slightly larger
         circle, as a cubic B-spline lies inside its control polygon).
 
@@ -267,7 +270,7 @@ class Snake:
         """
         return self.B @ self.control_points
 
-    def track(self, image: Any) -> np.ndarray:
+    def track(self, image: np.ndarray) -> np.ndarray:
         """Track the contour into a new (grey or BGR) frame; returns its sample points.
 
         Predicts the control points, searches for an edge along each sample's normal, and
@@ -360,7 +363,7 @@ class SnakeTracker(SingleObjectTracker):
     def __init__(self, **snake: Any):
         self.snake = Snake(**snake)
 
-    def _start(self, image: Any, b: np.ndarray) -> None:
+    def _start(self, image: np.ndarray, b: np.ndarray) -> None:
         s = self.snake
         # a cubic B-spline through control points on an ellipse lies inside them: the
         # ratio is (2 + cos(2π/n)) / 3, as in Snake.init_circle
@@ -375,12 +378,12 @@ class SnakeTracker(SingleObjectTracker):
         lo, hi = pts.min(0), pts.max(0)
         return np.r_[lo, np.maximum(hi - lo, 1e-6)]
 
-    def _follow(self, image: Any) -> np.ndarray:
+    def _follow(self, image: np.ndarray) -> np.ndarray:
         self.snake.track(image)
         self.box = self._bounds()
         return self.box.copy()
 
-    def anchor(self, box: Any) -> None:
+    def anchor(self, box: ArrayLike) -> None:
         """Move and scale the contour (each axis on its own) so that its bounding box is
         ``box``; the covariance is kept.
 

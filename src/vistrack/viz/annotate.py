@@ -5,9 +5,12 @@ from __future__ import annotations
 import os
 from collections import deque
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..types import Frame, Tracks
 
 __all__ = ["Annotator", "AnnotatedVideo", "id_colour"]
 
@@ -65,7 +68,7 @@ class Annotator:
         self._last: dict[int, int] = {}
         self._n = 0
 
-    def draw(self, image: np.ndarray, tracks: Any, label: str | None = None) -> np.ndarray:
+    def draw(self, image: np.ndarray, tracks: Tracks, label: str | None = None) -> np.ndarray:
         """A copy of the BGR ``image`` with ``tracks`` (:class:`vistrack.tracking.Tracks`)
         drawn.
 
@@ -104,7 +107,9 @@ class Annotator:
         out = image.copy() if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
         self._n += 1
         boxes = tracks.boxes
-        centres = (boxes[:, :2] + boxes[:, 2:]) / 2 if boxes is not None else tracks.points[:, :2]
+        # tracks without boxes have points
+        centres = ((boxes[:, :2] + boxes[:, 2:]) / 2 if boxes is not None
+                   else tracks.points[:, :2])  # type: ignore[index]
         for k, i in enumerate(tracks.ids.tolist()):
             t = self._trails.setdefault(i, deque(maxlen=self.trail))
             t.append(centres[k])
@@ -176,7 +181,7 @@ class AnnotatedVideo:
     3
     """
 
-    def __init__(self, path: Any, fps: float, annotator: Annotator | None = None):
+    def __init__(self, path: str | os.PathLike, fps: float, annotator: Annotator | None = None):
         from ..io import VideoWriter, partial_path
 
         self.path = Path(path)
@@ -185,7 +190,7 @@ class AnnotatedVideo:
         self._part = partial_path(self.path)
         self._writer = VideoWriter(self._part, fps)
 
-    def write(self, frame: Any, tracks: Any) -> None:
+    def write(self, frame: Frame, tracks: Tracks) -> None:
         """Draw ``tracks`` on ``frame.image`` and write it.
 
         Parameters

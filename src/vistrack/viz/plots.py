@@ -6,15 +6,24 @@ its own figure and can save it. None calls ``plt.show()``.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import os
+
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+    from numpy.typing import ArrayLike
+
+    from ..types import Frame, Tracks
 
 __all__ = ["covariance_ellipse", "plot_estimates_1d", "plot_track_2d", "plot_trajectories",
            "TrajectoryPlot"]
 
 
-def _finish(ax: Any, xlabel: str, ylabel: str, title: str | None) -> Any:
+def _finish(ax: Axes, xlabel: str, ylabel: str, title: str | None) -> Axes:
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     if title:
@@ -23,7 +32,8 @@ def _finish(ax: Any, xlabel: str, ylabel: str, title: str | None) -> Any:
     return ax
 
 
-def covariance_ellipse(mean: Any, cov: Any, *, nsigma: float = 1.0, points: int = 64) -> np.ndarray:
+def covariance_ellipse(mean: ArrayLike, cov: ArrayLike, *, nsigma: float = 1.0,
+                       points: int = 64) -> np.ndarray:
     r"""Points ``(points, 2)`` on the ``nsigma`` contour of a 2-D Gaussian ``N(mean, cov)``.
 
     With :math:`\mathrm{cov} = V \operatorname{diag}(w) V'`, the points are
@@ -74,19 +84,19 @@ def covariance_ellipse(mean: Any, cov: Any, *, nsigma: float = 1.0, points: int 
 
 
 def plot_estimates_1d(
-    ax: Any,
-    t: Any,
+    ax: Axes,
+    t: ArrayLike,
     *,
-    truth: Any = None,
-    measurements: Any = None,
-    pred_mean: Any = None,
-    pred_std: Any = None,
-    mean: Any = None,
-    std: Any = None,
+    truth: ArrayLike | None = None,
+    measurements: ArrayLike | None = None,
+    pred_mean: ArrayLike | None = None,
+    pred_std: ArrayLike | None = None,
+    mean: ArrayLike | None = None,
+    std: ArrayLike | None = None,
     nsigma: float = 3.0,
     title: str | None = None,
     mean_label: str = r"corrected $\bar{x}_i^+$",
-) -> Any:
+) -> Axes:
     """The seeds' 1-D figure: "The o-s give state, x-s measurement. The \\*-s give x̄ᵢ⁻, +-s give
     x̄ᵢ⁺, vertical bars are 3 standard deviation bars".
 
@@ -146,17 +156,17 @@ def plot_estimates_1d(
 
 
 def plot_track_2d(
-    ax: Any,
+    ax: Axes,
     *,
-    truth: Any = None,
-    measurements: Any = None,
-    means: Any = None,
-    covs: Any = None,
+    truth: ArrayLike | None = None,
+    measurements: ArrayLike | None = None,
+    means: ArrayLike | None = None,
+    covs: ArrayLike | None = None,
     label: str = "estimate",
     color: str = "tab:red",
     nsigma: float = 1.0,
     title: str | None = None,
-) -> Any:
+) -> Axes:
     """A 2-D track: true path, measurements, estimated positions and their ``nsigma`` ellipses.
 
     ``truth``, ``measurements``, ``means`` are ``(T, >=2)`` arrays whose first two columns are the
@@ -208,8 +218,9 @@ def plot_track_2d(
     return _finish(ax, "x", "y", title)
 
 
-def plot_trajectories(frames: Any, ids: Any, centres: Any, background: Any = None,
-                      path: Any = None, *, title: str | None = None) -> Any:
+def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
+                      background: ArrayLike | None = None, path: str | os.PathLike | None = None,
+                      *, title: str | None = None) -> Figure:
     """Every track's path of centres ``(N, 2)`` (rows of ``frames`` and ``ids``), one colour
     per identity, over a dimmed ``background`` image (RGB or grey) when given; saved to
     ``path`` (PNG) when given. Returns the figure.
@@ -303,15 +314,15 @@ class TrajectoryPlot:
     True
     """
 
-    def __init__(self, path: Any, name: str = ""):
+    def __init__(self, path: str | os.PathLike, name: str = ""):
         from ..io.tracks import TrackRows
 
         self.path, self.name = path, name
         self._rows = TrackRows()
-        self._first: Any = None
+        self._first: np.ndarray | None = None
         self._frames = 0
 
-    def write(self, frame: Any, tracks: Any) -> None:
+    def write(self, frame: Frame, tracks: Tracks) -> None:
         """Keep the tracks' centres (and the first frame's image).
 
         Parameters
