@@ -9,8 +9,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._validate import as_float_array, as_rng, check_finite, check_linear_gaussian, check_psd
-from .filters._nonlinear import psd_sqrt
 from .filters.linear import KalmanFilter, dt_steps
+from .models.adapters import psd_sqrt
 
 if TYPE_CHECKING:
     from .models.protocols import (
@@ -215,11 +215,11 @@ def simulate(
 def _simulate_nonlinear(motion, measurement, T, x0, P0, dt, n_series, gen):
     """``x_t = f(x_{t-1}, dt_t, t) + w_t``, ``y_t = h(x_t) + v_t`` (angles wrapped), with
     ``t`` the cumulative time from 0."""
-    from .filters._nonlinear import Measurement, Motion
+    from .models.adapters import MeasurementFunctions, MotionFunctions
     from .models.nonlinear import wrap_angle
 
-    mo = Motion(motion)
-    me = Measurement(measurement, mo.n)
+    mo = MotionFunctions(motion)
+    me = MeasurementFunctions(measurement, mo.n)
     n, B = mo.n, 1 if n_series is None else int(n_series)
     x0_ = as_float_array(x0, "x0", ndim=(1,))
     if x0_.shape != (n,):
@@ -229,7 +229,7 @@ def _simulate_nonlinear(motion, measurement, T, x0, P0, dt, n_series, gen):
         x += gen.standard_normal((B, n)) @ psd_sqrt(as_float_array(P0, "P0", ndim=(2,))).T
     dts = np.broadcast_to(dt_steps(dt, T), (T,))
     times = np.concatenate([[0.0], np.cumsum(dts[1:])])
-    Rs = psd_sqrt(me.R)
+    Rs = psd_sqrt(me.Rm)
     xs, ys = np.empty((B, T, n)), np.empty((B, T, me.m))
     for t in range(T):
         if t > 0:

@@ -5,7 +5,7 @@ filter for nonlinear models."""
 from .axes import axes_predict, axes_to_full, axes_update, full_to_axes
 from .ekf import ExtendedKalmanFilter, ekf_predict, ekf_update
 from .enkf import Ensemble, EnsembleKalmanFilter, enkf_predict, enkf_update
-from .imm import IMMFilter, IMMResult, SwitchingParticleFilter, SwitchingResult
+from .imm import GaussianFilter, IMMFilter, IMMResult, SwitchingParticleFilter, SwitchingResult
 from .kalman import (
     FilterResult,
     FilterResult1D,
@@ -51,6 +51,7 @@ __all__ = [
     "EnsembleKalmanFilter",
     "ExtendedKalmanFilter",
     "FilterResult",
+    "GaussianFilter",
     "IMMFilter",
     "IMMResult",
     "SwitchingParticleFilter",

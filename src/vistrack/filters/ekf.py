@@ -19,14 +19,19 @@ model it is exactly the Kalman filter.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ..models.adapters import MeasurementFunctions, MotionFunctions
+from ..models.protocols import (
+    MeasurementModel,
+    MotionModel,
+    NonlinearMeasurementModel,
+    NonlinearMotionModel,
+)
 from ..types import Gaussian
 from ._nonlinear import (
-    Measurement,
-    Motion,
     check_gaussian,
     check_y,
     run_sequence,
@@ -37,7 +42,8 @@ from .reference import condition_on, symmetric
 __all__ = ["ekf_predict", "ekf_update", "ExtendedKalmanFilter"]
 
 
-def ekf_predict(g: Gaussian, motion: Any, dt: float = 1.0, t: float = 0.0) -> Gaussian:
+def ekf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: float = 1.0,
+                t: float = 0.0) -> Gaussian:
     r"""EKF prediction of a batch of Gaussians ``g`` (mean ``(..., n)``) by ``dt`` to time ``t``.
 
     ``motion`` is a nonlinear motion model (``f``, ``jacobian``, ``Q``; see
@@ -51,13 +57,14 @@ def ekf_predict(g: Gaussian, motion: Any, dt: float = 1.0, t: float = 0.0) -> Ga
     array([0.998, 0.05 , 0.995, 0.1  , 0.1  ])
     """
     g = check_gaussian(g)
-    mo = motion if isinstance(motion, Motion) else Motion(motion)
+    mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
     G = mo.jacobian(g.mean, dt, t)
     cov = symmetric(G @ g.cov @ np.swapaxes(G, -1, -2) + mo.Q(dt))
     return Gaussian(np.asarray(mo.f(g.mean, dt, t), dtype=float), cov)
 
 
-def ekf_update(g: Gaussian, y: Any, measurement: Any, *,
+def ekf_update(g: Gaussian, y: ArrayLike,
+               measurement: MeasurementModel | NonlinearMeasurementModel, *,
                residual: Callable | None = None) -> Gaussian:
     r"""EKF correction of a batch of Gaussians ``g`` with measurements ``y (..., m)``.
 
@@ -71,17 +78,18 @@ def ekf_update(g: Gaussian, y: Any, measurement: Any, *,
     return _ekf_update(g, y, measurement, residual)[0]
 
 
-def _ekf_update(g: Gaussian, y: Any, measurement: Any,
+def _ekf_update(g: Gaussian, y: ArrayLike,
+                measurement: MeasurementModel | NonlinearMeasurementModel,
                 residual: Callable | None) -> tuple[Gaussian, np.ndarray]:
     g = check_gaussian(g)
     n = g.mean.shape[-1]
-    me = measurement if isinstance(measurement, Measurement) else Measurement(
+    me = measurement if isinstance(measurement, MeasurementFunctions) else MeasurementFunctions(
         measurement, n, residual)
     y = check_y(y, g.mean.shape[:-1], me.m)
     obs = ~np.isnan(y)
     x = g.mean
     e = me.residual(np.where(obs, y, 0.0), me.h(x))
-    mean, cov, ll = condition_on(x, g.cov, me.jacobian(x), me.R, e, obs)
+    mean, cov, ll = condition_on(x, g.cov, me.jacobian(x), me.Rm, e, obs)
     return Gaussian(mean, cov), ll
 
 
@@ -106,12 +114,14 @@ class ExtendedKalmanFilter:
     ((4, 5), (4, 5, 5))
     """
 
-    def __init__(self, motion: Any, measurement: Any, *, residual: Callable | None = None):
-        self.motion = Motion(motion)
-        self.measurement = Measurement(measurement, self.motion.n, residual)
+    def __init__(self, motion: MotionModel | NonlinearMotionModel,
+                 measurement: MeasurementModel | NonlinearMeasurementModel, *,
+                 residual: Callable | None = None):
+        self.motion = MotionFunctions(motion)
+        self.measurement = MeasurementFunctions(measurement, self.motion.n, residual)
 
-    def filter(self, ys: Any, *, x0: Any, P0: Any, dt: Any = 1.0,
-               times: Any = None) -> FilterResult:
+    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike, dt: ArrayLike = 1.0,
+               times: ArrayLike | None = None) -> FilterResult:
         """Filter ``ys (T, m)`` or ``(B, T, m)`` (NaN = missing). ``x0, P0`` are the prior of the
         first step, as in :func:`~vistrack.filters.kalman_filter`. ``dt`` is a scalar or one per
         step; ``times`` (default: the cumulative ``dt``, from 0) is passed to the model."""
@@ -122,6 +132,6 @@ class ExtendedKalmanFilter:
         """One prediction (:func:`ekf_predict` with this filter's motion model)."""
         return ekf_predict(g, self.motion, dt, t)
 
-    def update(self, g: Gaussian, y: Any) -> tuple[Gaussian, np.ndarray]:
+    def update(self, g: Gaussian, y: ArrayLike) -> tuple[Gaussian, np.ndarray]:
         """One correction and its innovation log-density (:func:`ekf_update`)."""
         return _ekf_update(g, y, self.measurement, None)

@@ -18,17 +18,20 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import as_rng
+from ..models.adapters import MeasurementFunctions, MotionFunctions, psd_sqrt
+from ..models.protocols import (
+    MeasurementModel,
+    MotionModel,
+    NonlinearMeasurementModel,
+    NonlinearMotionModel,
+)
 from ._nonlinear import (
-    Measurement,
-    Motion,
     check_y,
-    psd_sqrt,
     run_sequence,
 )
 from .kalman import FilterResult
@@ -139,7 +142,8 @@ def _noise(rng, shape, A):
     return rng.standard_normal(shape) @ A.T
 
 
-def enkf_predict(ens: Ensemble, motion: Any, dt: float = 1.0, t: float = 0.0, *,
+def enkf_predict(ens: Ensemble, motion: MotionModel | NonlinearMotionModel, dt: float = 1.0,
+                 t: float = 0.0, *,
                  rng: np.random.Generator | int | None = None) -> Ensemble:
     r"""Move every member through the dynamics and add sampled process noise.
 
@@ -180,12 +184,13 @@ def enkf_predict(ens: Ensemble, motion: Any, dt: float = 1.0, t: float = 0.0, *,
     >>> enkf_predict(ens, ConstantVelocity(dim=1, q=0.1), dt=1.0, rng=1).moments()[0].round(1)
     array([1., 1.])
     """
-    mo = motion if isinstance(motion, Motion) else Motion(motion)
+    mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
     x = np.asarray(mo.f(ens.members, dt, t), dtype=float)
     return Ensemble(x + _noise(as_rng(rng), x.shape, mo.Q_sqrt(dt)))
 
 
-def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
+def enkf_update(ens: Ensemble, y: ArrayLike,
+                measurement: MeasurementModel | NonlinearMeasurementModel, *,
                 rng: np.random.Generator | int | None = None,
                 residual: Callable | None = None) -> Ensemble:
     r"""Perturbed-observation update of a batch of ensembles with a measurement each.
@@ -241,12 +246,13 @@ def enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any, *,
     return _enkf_update(ens, y, measurement, rng, residual)[0]
 
 
-def _enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any,
+def _enkf_update(ens: Ensemble, y: ArrayLike,
+                 measurement: MeasurementModel | NonlinearMeasurementModel,
                  rng: np.random.Generator | int | None,
                  residual: Callable | None) -> tuple[Ensemble, np.ndarray]:
     X = ens.members
     N, n = X.shape[-2:]
-    me = measurement if isinstance(measurement, Measurement) else Measurement(
+    me = measurement if isinstance(measurement, MeasurementFunctions) else MeasurementFunctions(
         measurement, n, residual)
     y = check_y(y, X.shape[:-2], me.m)
     obs = ~np.isnan(y)
@@ -256,9 +262,9 @@ def _enkf_update(ens: Ensemble, y: ArrayLike, measurement: Any,
     dX = X - X.mean(-2)[..., None, :]
     C = np.swapaxes(dX, -1, -2) @ dZ / (N - 1)
     e, S, L, ll = masked_innovation(me.residual(np.where(obs, y, 0.0), zbar),
-                                    np.swapaxes(dZ, -1, -2) @ dZ / (N - 1) + me.R, obs)
+                                    np.swapaxes(dZ, -1, -2) @ dZ / (N - 1) + me.Rm, obs)
     K = gain(C, L)
-    v = _noise(as_rng(rng), Z.shape, psd_sqrt(me.R))
+    v = _noise(as_rng(rng), Z.shape, psd_sqrt(me.Rm))
     innov = me.residual(np.where(obs, y, 0.0)[..., None, :] + v, Z) * obs[..., None, :]
     out = Ensemble(X + innov @ np.swapaxes(K, -1, -2))
     return out, ll
@@ -308,12 +314,13 @@ class EnsembleKalmanFilter:
     ((10, 2), (10, 2, 2), array([9., 1.]))
     """
 
-    def __init__(self, motion: Any, measurement: Any, n_members: int = 100, *,
+    def __init__(self, motion: MotionModel | NonlinearMotionModel,
+                 measurement: MeasurementModel | NonlinearMeasurementModel, n_members: int = 100, *,
                  rng: np.random.Generator | int | None = None, residual: Callable | None = None):
         if int(n_members) != n_members or n_members < 2:
             raise ValueError(f"n_members must be an integer >= 2; got {n_members}")
-        self.motion = Motion(motion)
-        self.measurement = Measurement(measurement, self.motion.n, residual)
+        self.motion = MotionFunctions(motion)
+        self.measurement = MeasurementFunctions(measurement, self.motion.n, residual)
         self.n_members = int(n_members)
         self.rng = as_rng(rng)
 

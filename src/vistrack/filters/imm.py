@@ -33,18 +33,49 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import as_float_array
+from ..models.protocols import MotionModel, NonlinearMotionModel
 from ..models.switching import SwitchingLinearSystem
 from ..types import Gaussian
 from ._nonlinear import step_times
 from .kalman import _readonly, _update, kf_predict
 
-__all__ = ["IMMFilter", "IMMResult", "SwitchingParticleFilter", "SwitchingResult"]
+__all__ = ["GaussianFilter", "IMMFilter", "IMMResult", "SwitchingParticleFilter", "SwitchingResult"]
+
+
+@runtime_checkable
+class GaussianFilter(Protocol):
+    """What a filter class gives :class:`IMMFilter`: one step of its own model at a time.
+
+    :class:`~vistrack.filters.KalmanFilter`, :class:`~vistrack.filters.ExtendedKalmanFilter`
+    and :class:`~vistrack.filters.UnscentedKalmanFilter` are such filters (see the API
+    conventions: every filter class has ``predict`` and ``update``).
+
+    Examples
+    --------
+    >>> import vistrack as vt
+    >>> kf = vt.filters.KalmanFilter(vt.models.ConstantVelocity(dim=1), vt.models.Position(dim=1))
+    >>> isinstance(kf, GaussianFilter)
+    True
+    """
+
+    @property
+    def motion(self) -> MotionModel | NonlinearMotionModel:
+        """The motion model (its ``ndim_state`` is the size of the filter's state)."""
+        ...
+
+    def predict(self, g: Gaussian, dt: float = 1.0, t: float = 0.0, /) -> Gaussian:
+        """The prediction of ``g`` by ``dt`` to time ``t``."""
+        ...
+
+    def update(self, g: Gaussian, y: ArrayLike, /) -> tuple[Gaussian, np.ndarray]:
+        """The correction of ``g`` by ``y`` and the innovation's log-density."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -218,7 +249,7 @@ class IMMFilter:
         return cls([ExtendedKalmanFilter(m, system.measurement) for m in system.motions],
                    system.transition, mode_probs=system.mode_probs)
 
-    def __init__(self, filters: Sequence[Any], transition: ArrayLike, *,
+    def __init__(self, filters: Sequence[GaussianFilter], transition: ArrayLike, *,
                  mode_probs: ArrayLike | None = None):
         self.filters = list(filters)
         M = len(self.filters)
@@ -241,7 +272,7 @@ class IMMFilter:
                              f"got {mu.tolist()}")
         with np.errstate(divide="ignore"):
             self.log_transition, self.log_mu0 = np.log(Pi), np.log(mu)
-        self.sizes = [int(f.motion.n) for f in self.filters]
+        self.sizes = [int(f.motion.ndim_state) for f in self.filters]
         self.ref = int(np.argmax(self.sizes))
 
     def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike, dt: ArrayLike = 1.0,

@@ -27,15 +27,22 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
 from .._validate import as_float_array, as_rng
+from ..models.adapters import MeasurementFunctions, MotionFunctions
+from ..models.protocols import (
+    MeasurementModel,
+    MotionModel,
+    NonlinearMeasurementModel,
+    NonlinearMotionModel,
+)
 from . import _jitmath, _random
-from ._nonlinear import Measurement, Motion, step_times
+from ._nonlinear import step_times
 from .kalman import _readonly
 
 __all__ = [
@@ -616,7 +623,7 @@ def _linear_h(x, params, out):
         out[k] = v
 
 
-def _compiled_parts(mo: Motion, me: Measurement):
+def _compiled_parts(mo: MotionFunctions, me: MeasurementFunctions):
     """What the compiled path needs of the models: the module-level compiled one-state ``f``
     and ``h`` and their parameters (``params(dt, t)`` per step, and a fixed array), from the
     models' ``jit_f``/``jit_h`` or, for linear models, ``F x`` and ``H x``. None when a model
@@ -625,7 +632,8 @@ def _compiled_parts(mo: Motion, me: Measurement):
     fref = _jit_ref(getattr(motion, "jit_f", None))
     if fref is not None and hasattr(motion, "jit_params"):
         fparams = motion.jit_params
-    elif mo.linear and np.ndim(motion.F(1.0)) == 2:  # a constant F; one per step runs in numpy
+    elif mo.linear and np.ndim(cast(MotionModel, motion).F(1.0)) == 2:
+        # a constant F; one per step runs in numpy
         def fparams(dts, times):
             d, inv = np.unique(dts, return_inverse=True)
             return np.array([np.ravel(motion.F(float(v))) for v in d])[inv]
@@ -645,8 +653,8 @@ def _compiled_parts(mo: Motion, me: Measurement):
 
 # what the compiled path needs of the models (see _compiled_parts): f's module and name, its
 # parameters per step, h's module and name, h's parameters, and the two models
-_FusedParts = tuple[tuple[str, str], Callable[..., Any], tuple[str, str], np.ndarray, Motion,
-                    Measurement]
+_FusedParts = tuple[tuple[str, str], Callable[..., Any], tuple[str, str], np.ndarray,
+                    MotionFunctions, MeasurementFunctions]
 
 
 def _whitening(R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, float]:
@@ -797,7 +805,10 @@ class ParticleFilter:
     ((50, 1), (50,), True)
     """
 
-    def __init__(self, motion: Any, likelihood: Any, n_particles: int = 1000, *,
+    def __init__(self, motion: MotionModel | NonlinearMotionModel | Callable[..., np.ndarray],
+                 likelihood: (MeasurementModel | NonlinearMeasurementModel
+                              | Callable[[np.ndarray, np.ndarray], np.ndarray]),
+                 n_particles: int = 1000, *,
                  resampling: str = "systematic", ess_threshold: float = 0.5,
                  rng: np.random.Generator | int | None = None, ndim_state: int | None = None,
                  compiled: bool = True):
@@ -805,7 +816,7 @@ class ParticleFilter:
             n_particles, resampling, ess_threshold)
         self.resampling, self.rng = resampling, as_rng(rng)
         if hasattr(motion, "Q"):
-            mo = Motion(motion)
+            mo = MotionFunctions(cast(MotionModel | NonlinearMotionModel, motion))
             self.ndim_state = mo.n
             self._propagate = self._model_propagate(mo)
         elif callable(motion):
@@ -818,7 +829,8 @@ class ParticleFilter:
         self._fused: _FusedParts | None = None
         self._whiten: dict[bytes, tuple[np.ndarray, float]] = {}
         if hasattr(likelihood, "R"):
-            me = Measurement(likelihood, self.ndim_state)
+            me = MeasurementFunctions(
+                cast(MeasurementModel | NonlinearMeasurementModel, likelihood), self.ndim_state)
             self._loglik = self._gaussian_loglik(me)
             if compiled and hasattr(motion, "Q") and resampling in _random.SCHEMES:
                 self._fused = _compiled_parts(mo, me)
@@ -829,7 +841,7 @@ class ParticleFilter:
                             f"{type(likelihood).__name__}")
 
     @staticmethod
-    def _model_propagate(mo: Motion):
+    def _model_propagate(mo: MotionFunctions):
         def propagate(x, dt, t, rng):
             out = np.asarray(mo.f(x, dt, t), dtype=float)
             return out + rng.standard_normal(out.shape) @ mo.Q_sqrt(dt).T
@@ -837,14 +849,14 @@ class ParticleFilter:
         return propagate
 
     @staticmethod
-    def _gaussian_loglik(me: Measurement):
+    def _gaussian_loglik(me: MeasurementFunctions):
         whiten: dict = {}  # per pattern of observed components
 
         def loglik(y, x):
             obs = ~np.isnan(y)
             key = obs.tobytes()
             if key not in whiten:
-                whiten[key] = _whitening(me.R, np.flatnonzero(obs))
+                whiten[key] = _whitening(me.Rm, np.flatnonzero(obs))
             Linv, c = whiten[key]
             r = me.residual(np.where(obs, y, 0.0), me.h(x))[:, obs]
             z = r * Linv[0, 0] if r.shape[1] == 1 else r @ Linv.T
@@ -964,7 +976,7 @@ class ParticleFilter:
         fref, fparams, href, hp, mo, me = self._fused
         T, m = ys.shape
         n, N = self.ndim_state, self.n_particles
-        R = me.R
+        R = me.Rm
         if R.shape != (m, m):
             raise ValueError(f"ys must have {R.shape[0]} measurement components; got {m}")
         kern = _fused(fref, href, n, m)

@@ -29,16 +29,21 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 from numba import njit
+from numpy.typing import ArrayLike
 
+from ..models.adapters import MeasurementFunctions, MotionFunctions
+from ..models.protocols import (
+    MeasurementModel,
+    MotionModel,
+    NonlinearMeasurementModel,
+    NonlinearMotionModel,
+)
 from ..types import Gaussian
 from ._kernels import back_solve, chol_factor, forward_solve
 from ._nonlinear import (
-    Measurement,
-    Motion,
     check_gaussian,
     check_y,
     run_sequence,
@@ -445,7 +450,8 @@ def _transform(pts: np.ndarray, Wm: np.ndarray, Wc: np.ndarray, mean_fn: Callabl
     return mean, cov, r
 
 
-def ukf_predict(g: Gaussian, motion: Any, dt: float = 1.0, t: float = 0.0, *,
+def ukf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: float = 1.0,
+                t: float = 0.0, *,
                 points: _SigmaPoints | None = None, state_mean: Callable | None = None,
                 state_residual: Callable | None = None) -> Gaussian:
     r"""UKF prediction of a batch of Gaussians through the dynamics.
@@ -509,7 +515,7 @@ def ukf_predict(g: Gaussian, motion: Any, dt: float = 1.0, t: float = 0.0, *,
     array([0.997, 0.05 , 0.99 , 0.099, 0.1  ])
     """
     g = check_gaussian(g)
-    mo = motion if isinstance(motion, Motion) else Motion(motion)
+    mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
     points = points or MerweScaledSigmaPoints()
     n = g.mean.shape[-1]
     Wm, Wc = points.weights(n)
@@ -532,7 +538,9 @@ def _sub(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a - b
 
 
-def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | None = None,
+def ukf_update(g: Gaussian, y: ArrayLike,
+               measurement: MeasurementModel | NonlinearMeasurementModel, *,
+               points: _SigmaPoints | None = None,
                residual: Callable | None = None, mean: Callable | None = None,
                state_residual: Callable | None = None) -> Gaussian:
     r"""UKF correction of a batch of Gaussians with a measurement each (NaN = missing).
@@ -620,12 +628,14 @@ def ukf_update(g: Gaussian, y: Any, measurement: Any, *, points: _SigmaPoints | 
     return _ukf_update(g, y, measurement, points, residual, mean, state_residual)[0]
 
 
-def _ukf_update(g: Gaussian, y: Any, measurement: Any, points: _SigmaPoints | None,
+def _ukf_update(g: Gaussian, y: ArrayLike,
+                measurement: MeasurementModel | NonlinearMeasurementModel,
+                points: _SigmaPoints | None,
                 residual: Callable | None, mean: Callable | None,
                 state_residual: Callable | None) -> tuple[Gaussian, np.ndarray]:
     g = check_gaussian(g)
     n = g.mean.shape[-1]
-    me = measurement if isinstance(measurement, Measurement) else Measurement(
+    me = measurement if isinstance(measurement, MeasurementFunctions) else MeasurementFunctions(
         measurement, n, residual, mean)
     y = check_y(y, g.mean.shape[:-1], me.m)
     points = points or MerweScaledSigmaPoints()
@@ -633,7 +643,7 @@ def _ukf_update(g: Gaussian, y: Any, measurement: Any, points: _SigmaPoints | No
     if g.mean.ndim == 1 and me.standard and state_residual is None:
         gamma = points.points_one(g.mean, g.cov)
         xo, Po = np.empty(n), np.empty((n, n))
-        ok, ll1 = _update_one(gamma, np.asarray(me.h(gamma), dtype=float), Wm, Wc, me.R, y,
+        ok, ll1 = _update_one(gamma, np.asarray(me.h(gamma), dtype=float), Wm, Wc, me.Rm, y,
                               me.angle_mask, g.mean, g.cov, xo, Po)
         if not ok:
             raise ValueError("the innovation covariance is not positive definite; R must be "
@@ -648,7 +658,7 @@ def _ukf_update(g: Gaussian, y: Any, measurement: Any, points: _SigmaPoints | No
     dx = (state_residual or _sub)(gamma, g.mean[..., None, :])
     C = np.einsum("...ki,k,...kj->...ij", dx, Wc, rz)
     e = me.residual(np.where(obs, y, 0.0), zhat)
-    e, S, L, ll = masked_innovation(e, Pzz + me.R, obs)
+    e, S, L, ll = masked_innovation(e, Pzz + me.Rm, obs)
     Vt = np.linalg.solve(L, np.swapaxes(C, -1, -2))  # (C L^-T)'
     K = np.swapaxes(np.linalg.solve(np.swapaxes(L, -1, -2), Vt), -1, -2)  # C S^-1 = V L^-1
     out = Gaussian(g.mean + (K @ e[..., None])[..., 0],
@@ -696,16 +706,18 @@ class UnscentedKalmanFilter:
     ((4, 5), (4, 5, 5))
     """
 
-    def __init__(self, motion: Any, measurement: Any, *, points: _SigmaPoints | None = None,
+    def __init__(self, motion: MotionModel | NonlinearMotionModel,
+                 measurement: MeasurementModel | NonlinearMeasurementModel, *,
+                 points: _SigmaPoints | None = None,
                  residual: Callable | None = None, mean: Callable | None = None,
                  state_residual: Callable | None = None, state_mean: Callable | None = None):
-        self.motion = Motion(motion)
-        self.measurement = Measurement(measurement, self.motion.n, residual, mean)
+        self.motion = MotionFunctions(motion)
+        self.measurement = MeasurementFunctions(measurement, self.motion.n, residual, mean)
         self.points = points or MerweScaledSigmaPoints()
         self.state_residual, self.state_mean = state_residual, state_mean
 
-    def filter(self, ys: Any, *, x0: Any, P0: Any, dt: Any = 1.0,
-               times: Any = None) -> FilterResult:
+    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike, dt: ArrayLike = 1.0,
+               times: ArrayLike | None = None) -> FilterResult:
         """Filter a sequence, or a batch of them; arguments as
         :meth:`ExtendedKalmanFilter.filter <vistrack.filters.ExtendedKalmanFilter.filter>`.
 
@@ -777,7 +789,7 @@ class UnscentedKalmanFilter:
         return ukf_predict(g, self.motion, dt, t, points=self.points,
                            state_mean=self.state_mean, state_residual=self.state_residual)
 
-    def update(self, g: Gaussian, y: Any) -> tuple[Gaussian, np.ndarray]:
+    def update(self, g: Gaussian, y: ArrayLike) -> tuple[Gaussian, np.ndarray]:
         """One correction and its innovation log-density (:func:`ukf_update`).
 
         Parameters

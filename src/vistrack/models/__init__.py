@@ -2,6 +2,7 @@
 models (``H``, ``R``; nonlinear: ``h``, ``jacobian``); what a model must provide is
 :mod:`vistrack.models.protocols`."""
 
+from .adapters import MeasurementFunctions, MotionFunctions, psd_sqrt
 from .box import BoxMotion
 from .linear_gaussian import LinearGaussian
 from .measurement import LinearMeasurement, MeasurementModel, Position
@@ -29,6 +30,9 @@ from .protocols import NonlinearMeasurementModel, NonlinearMotionModel
 from .switching import SwitchingLinearSystem
 
 __all__ = [
+    "MeasurementFunctions",
+    "MotionFunctions",
+    "psd_sqrt",
     "AngleAwareMeasurement",
     "BoxMotion",
     "ConstantAcceleration",

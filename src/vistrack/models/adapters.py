@@ -1,0 +1,232 @@
+"""Any motion or measurement model seen as the functions the nonlinear filters and the
+simulator call: :class:`MotionFunctions` (``f``, ``jacobian``, ``Q``) and
+:class:`MeasurementFunctions` (``h``, ``jacobian``, ``R``, ``residual``, ``mean``), for linear
+and nonlinear models alike, and :func:`psd_sqrt`, the square root the samplers draw noise
+with."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import cast
+
+import numpy as np
+
+from .nonlinear import AngleAwareMeasurement
+from .protocols import (
+    MeasurementModel,
+    MotionModel,
+    NonlinearMeasurementModel,
+    NonlinearMotionModel,
+)
+
+__all__ = ["MotionFunctions", "MeasurementFunctions", "psd_sqrt"]
+
+
+def psd_sqrt(S: np.ndarray) -> np.ndarray:
+    """A square root ``A`` with ``A A' = S`` of each of a stack of positive semi-definite
+    matrices, from the eigendecomposition (singular matrices allowed: process noise often acts
+    on some states only).
+
+    Parameters
+    ----------
+    S : (..., n, n) ndarray
+        Symmetric positive semi-definite matrices.
+
+    Returns
+    -------
+    (..., n, n) ndarray
+        ``A`` with ``A A' = S`` (negative eigenvalues from rounding taken as 0).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> S = np.array([[4.0, 0.0], [0.0, 0.0]])
+    >>> A = psd_sqrt(S)
+    >>> bool(np.allclose(A @ A.T, S))
+    True
+    """
+    w, V = np.linalg.eigh(S)
+    return V * np.sqrt(np.clip(w, 0.0, None))[..., None, :]
+
+
+class MotionFunctions:
+    """A linear or nonlinear motion model seen as functions: ``f(x, dt, t)``,
+    ``jacobian(x, dt, t)``, ``Q(dt)`` and ``Q_sqrt(dt)``.
+
+    For a linear model (``F(dt)``, :class:`~vistrack.models.protocols.MotionModel`),
+    ``f(x) = F x`` and the Jacobian is ``F``; a nonlinear one
+    (:class:`~vistrack.models.protocols.NonlinearMotionModel`) is used as it is. ``Q`` and its
+    square root are computed once per distinct ``dt``. It is itself a nonlinear motion model,
+    which is how the EKF, UKF, ensemble and particle filters and
+    :func:`vistrack.simulate.simulate` see every model.
+
+    Parameters
+    ----------
+    model : MotionModel or NonlinearMotionModel
+        The model.
+
+    Attributes
+    ----------
+    model
+        The model given.
+    n : int
+        The state's size (also ``ndim_state``).
+    linear : bool
+        Whether the model is linear (has ``F`` and no ``jacobian``).
+
+    Raises
+    ------
+    TypeError
+        If ``model`` is neither kind of motion model, or its ``ndim_state`` is below 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vistrack.models import ConstantVelocity
+    >>> mo = MotionFunctions(ConstantVelocity(dim=1, q=0.1))
+    >>> mo.f(np.array([[0.0, 2.0]]), 0.5, 0.0), mo.linear, mo.ndim_state
+    (array([[1., 2.]]), True, 2)
+    """
+
+    def __init__(self, model: MotionModel | NonlinearMotionModel):
+        self.model = model
+        self.n = int(getattr(model, "ndim_state", 0))
+        self.linear = hasattr(model, "F") and not hasattr(model, "jacobian")
+        if not (self.linear or (callable(getattr(model, "f", None))
+                                and callable(getattr(model, "jacobian", None)))):
+            raise TypeError(
+                f"motion must be a motion model with F(dt) and Q(dt), or f(x, dt, t), "
+                f"jacobian(x, dt, t) and Q(dt); got {type(model).__name__}"
+            )
+        if self.n < 1:
+            raise TypeError(f"motion must have ndim_state >= 1; got {type(model).__name__}")
+        self._Q: dict = {}
+        self._Q_sqrt: dict = {}
+
+    @property
+    def ndim_state(self) -> int:
+        """The state's size, as a motion model gives it."""
+        return self.n
+
+    def f(self, x: np.ndarray, dt: float, t: float) -> np.ndarray:
+        """``x_t = f(x, dt, t)`` for states ``x (..., n)``."""
+        if self.linear:
+            return x @ cast(MotionModel, self.model).F(dt).T
+        return cast(NonlinearMotionModel, self.model).f(x, dt, t)
+
+    def jacobian(self, x: np.ndarray, dt: float, t: float) -> np.ndarray:
+        """``∂f/∂x (..., n, n)`` at states ``x (..., n)``."""
+        if self.linear:
+            return np.broadcast_to(cast(MotionModel, self.model).F(dt), x.shape + (self.n,))
+        return cast(NonlinearMotionModel, self.model).jacobian(x, dt, t)
+
+    def Q(self, dt: float) -> np.ndarray:
+        """``Q(dt)``, computed once per distinct ``dt`` (models are immutable)."""
+        Q = self._Q.get(dt)
+        if Q is None:
+            Q = self._Q[dt] = np.asarray(self.model.Q(dt), dtype=float)
+        return Q
+
+    def Q_sqrt(self, dt: float) -> np.ndarray:
+        """:func:`psd_sqrt` of ``Q(dt)``, once per distinct ``dt``: noise = eps @ Q_sqrt.T."""
+        A = self._Q_sqrt.get(dt)
+        if A is None:
+            A = self._Q_sqrt[dt] = np.ascontiguousarray(psd_sqrt(self.Q(dt)))
+        return A
+
+
+def _plain_residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a - b
+
+
+def _plain_mean(z: np.ndarray, w: np.ndarray) -> np.ndarray:
+    return np.einsum("...km,k->...m", z, w)
+
+
+class MeasurementFunctions:
+    """A linear or nonlinear measurement model seen as functions: ``h(x)``, ``jacobian(x)``,
+    ``R()``, ``residual(a, b)`` and ``mean(z, w)``.
+
+    For a linear model (``H``, ``R``) ``h(x) = H x``; residuals are differences (a model's own
+    ``residual`` and ``mean``, such as those of angle-aware models, are used when it has them)
+    unless given here. It is itself a nonlinear measurement model.
+
+    Parameters
+    ----------
+    model : MeasurementModel or NonlinearMeasurementModel
+        The model.
+    n : int
+        The state's size (for a linear model's ``H(n)``).
+    residual, mean : callable, optional
+        ``residual(a, b)`` and ``mean(z, w)`` overriding the model's.
+
+    Attributes
+    ----------
+    model
+        The model given.
+    m : int
+        The measurement's size.
+    Rm : (m, m) ndarray
+        The noise covariance (also ``R()``).
+    linear : bool
+        Whether the model is linear.
+    standard : bool
+        Whether residuals are differences (angles wrapped) and means weighted sums (circular
+        for angles): what the compiled one-Gaussian UKF kernels reproduce.
+    angle_mask : (m,) ndarray of bool
+        The components that are angles.
+
+    Raises
+    ------
+    TypeError
+        If ``model`` is neither kind of measurement model.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vistrack.models import Position
+    >>> me = MeasurementFunctions(Position(dim=1, r=0.5), 2)
+    >>> me.h(np.array([[3.0, 1.0]])), me.R(), me.m
+    (array([[3.]]), array([[0.5]]), 1)
+    """
+
+    def __init__(self, model: MeasurementModel | NonlinearMeasurementModel, n: int,
+                 residual: Callable | None = None, mean: Callable | None = None):
+        self.model = model
+        self.linear = hasattr(model, "H") and not hasattr(model, "jacobian")
+        if self.linear:
+            self.H = np.asarray(cast(MeasurementModel, model).H(n), dtype=float)
+        elif not (callable(getattr(model, "h", None))
+                  and callable(getattr(model, "jacobian", None))):
+            raise TypeError(
+                f"measurement must be a measurement model with H and R, or h(x), jacobian(x) "
+                f"and R(); got {type(model).__name__}"
+            )
+        self.Rm = np.asarray(model.R(), dtype=float)
+        self.m = self.Rm.shape[-1]
+        self.residual = residual or getattr(model, "residual", None) or _plain_residual
+        self.mean = mean or getattr(model, "mean", None) or _plain_mean
+        # "standard": residuals are differences (angles wrapped) and means weighted sums
+        # (circular for angles), which the compiled one-Gaussian kernels reproduce
+        own = type(model)
+        self.standard = residual is None and mean is None and (
+            self.linear
+            or (getattr(own, "residual", None) is AngleAwareMeasurement.residual
+                and getattr(own, "mean", None) is AngleAwareMeasurement.mean)
+            or not (hasattr(model, "residual") or hasattr(model, "mean")))
+        self.angle_mask = np.zeros(self.m, dtype=np.bool_)
+        self.angle_mask[list(getattr(model, "angles", ()))] = True
+
+    def R(self) -> np.ndarray:
+        """The noise covariance ``(m, m)``, as a measurement model gives it."""
+        return self.Rm
+
+    def h(self, x: np.ndarray) -> np.ndarray:
+        """The noise-free measurement ``h(x) (..., m)`` of states ``x (..., n)``."""
+        return x @ self.H.T if self.linear else cast(NonlinearMeasurementModel, self.model).h(x)
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``∂h/∂x (..., m, n)`` at states ``x (..., n)``."""
+        if self.linear:
+            return np.broadcast_to(self.H, x.shape[:-1] + self.H.shape)
+        return cast(NonlinearMeasurementModel, self.model).jacobian(x)
