@@ -15,7 +15,7 @@ import pytest
 from vistrack.evaluation.single import success_rate
 from vistrack.io import read_mot
 from vistrack.io.tracks import BoxesWriter, CSVWriter, MOTWriter, TrackRows
-from vistrack.pipeline import FRONTENDS, SINKS, TRACKERS, Registry, run, track_video
+from vistrack.pipeline import FRONTENDS, SINKS, TRACKERS, Registry, as_detector, run, track_video
 from vistrack.tracking import (
     METHODS,
     BoxTracker,
@@ -305,3 +305,11 @@ def test_the_cli_says_an_interrupted_run_in_one_line(tmp_path, monkeypatch, caps
     assert main(["track", str(tmp_path), "--out-dir", str(tmp_path / "out")]) == 130
     err = capsys.readouterr().err
     assert err == "vistrack track: interrupted; earlier outputs are kept\n"
+
+
+def test_a_detector_on_a_frame_without_an_image_names_the_frame():
+    from vistrack.frontends import BlobDetector
+
+    detect = as_detector(BlobDetector())
+    with pytest.raises(ValueError, match=r"frame 3 has no image; the detector BlobDetector"):
+        detect(Frame(3, 0.1))

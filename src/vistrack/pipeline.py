@@ -280,7 +280,8 @@ def as_detector(detector: Detector | Callable[[Frame], Detections | None] | None
         return None
     detect = getattr(detector, "detect", None)
     if callable(detect):
-        return lambda frame: detect(frame.image)
+        what = f"the detector {type(detector).__name__}"
+        return lambda frame: detect(_image(frame, what))
     if callable(detector):
         return detector
     raise TypeError(f"detector must be an object with detect(image) -> Detections, a callable "
@@ -487,6 +488,14 @@ class Context:
         return self._confidence
 
 
+def _image(frame: Frame, what: str) -> np.ndarray:
+    """The frame's image, or a ValueError naming the frame and the front-end that needs it."""
+    if frame.image is None:
+        raise ValueError(f"frame {frame.index} has no image; {what} needs the video's frames "
+                         f"(for detections read from a file, use --frontend detections:FILE)")
+    return frame.image
+
+
 def _bgsub(ctx: Context) -> FrameDetector:
     from .frontends.blobs import BlobDetector
     from .io.video import VideoReader
@@ -495,25 +504,24 @@ def _bgsub(ctx: Context) -> FrameDetector:
     det = BlobDetector(opt.get("background", "selective"), min_area=opt.get("min_area", 500.0))
     if reader is not None:
         n_init = int(opt.get("n_init", 20))
-        # a video's frames have images
-        det.initialize(f.image for f in VideoReader(  # type: ignore[misc]
+        det.initialize(_image(f, "the background model") for f in VideoReader(
             reader.source, fps=reader.fps, grey=True, start=reader.start,
             stop=reader.start + n_init - 1))
-    return lambda frame: det.detect(frame.image)  # type: ignore[arg-type]  # as above
+    return lambda frame: det.detect(_image(frame, "the background model"))
 
 
 def _hog(ctx: Context) -> FrameDetector:
     from .frontends.detectors import HOGDetector
 
     hog = HOGDetector()
-    return lambda frame: hog.detect(frame.image)  # type: ignore[arg-type]  # a video's frames
+    return lambda frame: hog.detect(_image(frame, "the HOG detector"))
 
 
 def _confidence_peaks(ctx: Context) -> FrameDetector:
     from .frontends.detectors import ConfidencePeaks
 
     peaks = ConfidencePeaks(ctx.confidence, ctx.options.get("det_threshold", 0.5))
-    return lambda frame: peaks.detect(frame.image)  # type: ignore[arg-type]  # a video's frames
+    return lambda frame: peaks.detect(_image(frame, "the confidence peaks"))
 
 
 def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
