@@ -61,3 +61,20 @@ def test_write_then_read_and_no_overwrite(tmp_path):
     (tmp_path / "s" / "seqinfo.ini").write_text("[Sequence]\nname=s\nframeRate=abc\n")
     with pytest.raises(MOTFormatError, match="frameRate = 'abc' is not float"):
         read_seqinfo(tmp_path / "s")
+
+
+def test_write_mot_text_equals_python_formatting_row_by_row(tmp_path):
+    """The block writer gives, byte for byte, each row formatted on its own with str.format."""
+    rng = np.random.default_rng(5)
+    n = 70_000  # more than one block
+    F, I = rng.integers(1, 500, n), rng.integers(-1, 3000, n)
+    B = rng.uniform(-50, 2000, (n, 4))
+    S = rng.uniform(-1, 17, n)
+    B[:4] = [[-0.0, 0.125, 0.375, 1.005], [2.675, 1e-9, -1e-9, 1e15], [0, 0, 0, 0],
+             [np.inf, -np.inf, np.nan, 5]]
+    S[:6] = [1.0, 1e-5, 123456.0, -0.85, np.nan, 0.99995]
+    path = write_mot(tmp_path / "r.txt", F, I, B, S)
+    order = np.lexsort((I, F))
+    want = "".join(f"{F[k]},{I[k]},{B[k, 0]:.2f},{B[k, 1]:.2f},{B[k, 2]:.2f},{B[k, 3]:.2f},"
+                   f"{S[k]:.4g},-1,-1,-1\n" for k in order)
+    assert path.read_text() == want
