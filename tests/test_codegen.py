@@ -4,6 +4,8 @@ Large per-series batches run these; the tests lower the size threshold so that s
 do too, and check them against FilterPy and against the loop kernel.
 """
 
+import re
+
 import numpy as np
 import pytest
 
@@ -175,3 +177,20 @@ def test_small_or_large_models_use_the_loop_kernel():
     assert _codegen.worth_it(4, 2, 10_000 * 500)
     assert not _codegen.worth_it(4, 2, 1000)  # a new pattern's compilation would not pay
     assert not _codegen.worth_it(9, 3, 10_000 * 500)  # code and compile time grow as n² m
+
+
+@pytest.mark.parametrize("n,m", [(1, 1), (2, 1), (4, 2), (6, 3)])
+def test_work_rows_fill_the_flat_array_without_overlap(n, m):
+    """Every work row of a generated kernel is a row of W; the rows tile W exactly."""
+    dense = (((2,) * n,) * n, ((2,) * n,) * n, ((2,) * n,) * m, ((2,) * m,) * m)
+    src = _codegen.source(n, m, *dense)
+    assert not re.search(r"\b(X|PP|XP|PPP|Y|KL|D|DS|LL)\[", src)
+    layout = _codegen._Layout(n, m)
+    nt = n * (n + 1) // 2
+    sizes = {"X": n, "PP": nt, "XP": n, "PPP": nt, "Y": m, "D": 1, "DS": 1, "LL": 1,
+             "KL": n * m + m * (m + 1) // 2}
+    starts = sorted((layout.offsets[k], sizes[k]) for k in sizes)
+    assert starts[0][0] == 0
+    assert all(a + s == b for (a, s), (b, _) in zip(starts, starts[1:]))
+    total = starts[-1][0] + starts[-1][1]
+    assert f"W = np.empty({total * _codegen.CH})" in src

@@ -37,7 +37,6 @@ import hashlib
 import importlib.util
 import math
 import os
-import re
 import sys
 import tempfile
 from pathlib import Path
@@ -84,19 +83,46 @@ def _tri(n: int):
     return [(i, k) for i in range(n) for k in range(i, n)]
 
 
-def _load(n: int, x: str, p: str, X: str, P: str) -> list[str]:
+class _Layout:
+    """Where the kernel's work rows live: rows of ``CH`` series (one per ``j``) at constant
+    offsets in one flat array ``W``, since separate arrays might alias as far as LLVM knows, and
+    it will not emit run-time checks for that many, so it would not vectorise; rows of one
+    array need no check. ``w("X", 2)`` is the source of row 2 of the mean ``X`` at series
+    ``j``, ``w("Y", "k")`` the row a generated variable ``k`` picks, ``w("LL")`` a single row.
+
+    The rows: the mean ``X`` (``n``), the covariance's upper triangle ``PP``, the prediction
+    ``XP`` and ``PPP``, the measurement ``Y`` (``m``), the running log-determinant ``D``, a
+    step's ``DS``, the log-likelihood ``LL``, and the steady state's gain and factor ``KL``."""
+
+    def __init__(self, n: int, m: int):
+        nt = n * (n + 1) // 2
+        self.offsets, o = {}, 0
+        for name, nrows in (("X", n), ("PP", nt), ("XP", n), ("PPP", nt), ("Y", m), ("D", 1),
+                            ("DS", 1), ("LL", 1), ("KL", n * m + m * (m + 1) // 2)):
+            self.offsets[name], o = o, o + nrows
+
+    def __call__(self, name: str, row: int | str | None = None) -> str:
+        base = self.offsets[name] * CH
+        if row is None:
+            return f"W[{base} + j]"
+        if isinstance(row, int):
+            return f"W[{base + row * CH} + j]"
+        return f"W[{base} + ({row}) * {CH} + j]"
+
+
+def _load(n: int, x: str, p: str, X: str, P: str, w: _Layout) -> list[str]:
     """Read a mean from rows ``X`` into scalars ``x0..`` and an upper triangle from rows ``P``
     into ``p0_0..``."""
-    return ([f"{x}{i} = {X}[{i}, j]" for i in range(n)]
-            + [f"{p}{i}_{k} = {P}[{a}, j]" for a, (i, k) in enumerate(_tri(n))])
+    return ([f"{x}{i} = {w(X, i)}" for i in range(n)]
+            + [f"{p}{i}_{k} = {w(P, a)}" for a, (i, k) in enumerate(_tri(n))])
 
 
-def _predict(n, cf, cq) -> list[str]:
+def _predict(n, cf, cq, w: _Layout) -> list[str]:
     """Straight-line prediction of one series: reads ``X, PP``, writes ``XP, PPP`` at ``j``."""
     tri = _tri(n)
-    L = _load(n, "x", "p", "X", "PP")
+    L = _load(n, "x", "p", "X", "PP", w)
     for i in range(n):
-        L.append(f"XP[{i}, j] = " + _sum(_term(cf[i][l], f"f{i}_{l}", f"x{l}") for l in range(n)))
+        L.append(f"{w('XP', i)} = " + _sum(_term(cf[i][l], f"f{i}_{l}", f"x{l}") for l in range(n)))
     for i in range(n):
         for k in range(n):
             fp = _sum(_term(cf[i][l], f"f{i}_{l}", _p(l, k)) for l in range(n))
@@ -105,19 +131,19 @@ def _predict(n, cf, cq) -> list[str]:
         terms = [_term(cf[k][l], f"f{k}_{l}", f"fp{i}_{l}") for l in range(n)]
         if cq[i][k]:
             terms.append(f"q{i}_{k}" if cq[i][k] == 2 else "1.0")
-        L.append(f"PPP[{a}, j] = " + _sum(terms))
+        L.append(f"{w('PPP', a)} = " + _sum(terms))
     return L
 
 
-def _update(n, m, ch, cr) -> list[str]:
+def _update(n, m, ch, cr, w: _Layout) -> list[str]:
     """Straight-line update of one series: reads ``XP, PPP, Y`` (NaN = missing), writes
     ``X, PP``, the innovation log-density without its log-determinant to ``LL`` and the
     determinant of the Cholesky factor of ``S`` to ``DS``, at ``j``."""
     tri = _tri(n)
-    L = _load(n, "xp", "pp", "XP", "PPP")
+    L = _load(n, "xp", "pp", "XP", "PPP", w)
     # innovation e = y - H xp, U = Pp H', S = H U + R
     for k in range(m):
-        L.append(f"y{k} = Y[{k}, j]")
+        L.append(f"y{k} = {w('Y', k)}")
         hx = _sum(_term(ch[k][i], f"h{k}_{i}", f"xp{i}") for i in range(n))
         L.append(f"o{k} = 0.0 if math.isnan(y{k}) else 1.0")
         L.append(f"e{k} = (y{k} - ({hx})) if o{k} == 1.0 else 0.0")
@@ -154,11 +180,11 @@ def _update(n, m, ch, cr) -> list[str]:
         v = f"e{k}" + "".join(f" - l{k}_{p} * w{p}" for p in range(k))
         L.append(f"w{k} = ({v}) * il{k}")
     nobs = " + ".join(f"o{k}" for k in range(m))
-    L.append("LL[j] -= 0.5 * (" + " + ".join(f"w{k} * w{k}" for k in range(m))
+    L.append(f"{w('LL')} -= 0.5 * (" + " + ".join(f"w{k} * w{k}" for k in range(m))
              + f") + HALF_LOG2PI * ({nobs})")
-    L.append("DS[j] = " + " * ".join(f"l{k}_{k}" for k in range(m)))
+    L.append(f"{w('DS')} = " + " * ".join(f"l{k}_{k}" for k in range(m)))
     for i in range(n):
-        L.append(f"X[{i}, j] = xp{i} + " + _sum(f"k{i}_{k} * e{k}" for k in range(m)))
+        L.append(f"{w('X', i)} = xp{i} + " + _sum(f"k{i}_{k} * e{k}" for k in range(m)))
     # Joseph form (I - K H) Pp (I - K H)' + K R K' = AP - W K' with AP = Pp - K U',
     # W = AP H' - K R
     for i in range(n):
@@ -176,13 +202,13 @@ def _update(n, m, ch, cr) -> list[str]:
              + ")" if n > 1 else "tol = 8.0 * EPS * abs(pp0_0)")
     for a, (i, l) in enumerate(tri):
         L.append(f"pn = ap{i}_{l} - (" + _sum(f"wk{i}_{k} * k{l}_{k}" for k in range(m)) + ")")
-        L.append(f"nmoved += not abs(pn - PP[{a}, j]) <= tol")
-        L.append(f"PP[{a}, j] = pn")
+        L.append(f"nmoved += not abs(pn - {w('PP', a)}) <= tol")
+        L.append(f"{w('PP', a)} = pn")
     for i in range(n):
         for k in range(m):
-            L.append(f"KL[{i * m + k}, j] = k{i}_{k}")
+            L.append(f"{w('KL', i * m + k)} = k{i}_{k}")
     for a, (k, p) in enumerate(_lower(m)):
-        L.append(f"KL[{n * m + a}, j] = " + (f"il{k}" if k == p else f"l{k}_{p}"))
+        L.append(f"{w('KL', n * m + a)} = " + (f"il{k}" if k == p else f"l{k}_{p}"))
     return L
 
 
@@ -190,27 +216,27 @@ def _lower(m: int):
     return [(k, p) for k in range(m) for p in range(k + 1)]
 
 
-def _steady(n, m, cf, ch) -> list[str]:
+def _steady(n, m, cf, ch, w: _Layout) -> list[str]:
     """The steady-state step of one series: ``P``, the gain and ``S`` are those of the last
     step (kept in ``KL``), so only the mean moves. Reads ``X, Y``, writes ``X, XP, LL``."""
     L = []
     for i in range(n):
-        L.append(f"x{i} = X[{i}, j]")
+        L.append(f"x{i} = {w('X', i)}")
     for i in range(n):
         L.append(f"xp{i} = " + _sum(_term(cf[i][l], f"f{i}_{l}", f"x{l}") for l in range(n)))
-        L.append(f"XP[{i}, j] = xp{i}")
+        L.append(f"{w('XP', i)} = xp{i}")
     for k in range(m):
         hx = _sum(_term(ch[k][i], f"h{k}_{i}", f"xp{i}") for i in range(n))
-        L.append(f"e{k} = Y[{k}, j] - ({hx})")
+        L.append(f"e{k} = {w('Y', k)} - ({hx})")
     for a, (k, p) in enumerate(_lower(m)):
-        L.append(f"{'il' if k == p else 'l'}{k}{'' if k == p else f'_{p}'} = KL[{n * m + a}, j]")
+        L.append(f"{'il' if k == p else 'l'}{k}{'' if k == p else f'_{p}'} = {w('KL', n * m + a)}")
     for k in range(m):
         v = f"e{k}" + "".join(f" - l{k}_{p} * w{p}" for p in range(k))
         L.append(f"w{k} = ({v}) * il{k}")
-    L.append("LL[j] -= 0.5 * (" + " + ".join(f"w{k} * w{k}" for k in range(m))
+    L.append(f"{w('LL')} -= 0.5 * (" + " + ".join(f"w{k} * w{k}" for k in range(m))
              + f") + HALF_LOG2PI * {float(m)}")
     for i in range(n):
-        L.append(f"X[{i}, j] = xp{i} + " + _sum(f"KL[{i * m + k}, j] * e{k}" for k in range(m)))
+        L.append(f"{w('X', i)} = xp{i} + " + _sum(f"{w('KL', i * m + k)} * e{k}" for k in range(m)))
     return L
 
 
@@ -218,6 +244,7 @@ def source(n: int, m: int, cf, cq, ch, cr) -> str:
     """The Python source of the kernel for this pattern (see :func:`batch_kernel`)."""
     tri = _tri(n)
     nt = len(tri)
+    w = _Layout(n, m)
 
     def loads(codes, name, arr, idx, rows, cols, upper=False):
         out = []
@@ -253,11 +280,11 @@ def source(n: int, m: int, cf, cq, ch, cr) -> str:
         "            bx = b0 + j if x_init.shape[0] > 1 else 0",
         "            bp = b0 + j if P_init.shape[0] > 1 else 0",
     ]
-    src += [f"            X[{i}, j] = x_init[bx, {i}]" for i in range(n)]
-    src += [f"            PP[{a}, j] = P_init[bp, {i}, {k}]" for a, (i, k) in enumerate(tri)]
+    src += [f"            {w('X', i)} = x_init[bx, {i}]" for i in range(n)]
+    src += [f"            {w('PP', a)} = P_init[bp, {i}, {k}]" for a, (i, k) in enumerate(tri)]
     src += [
-        "            LL[j] = 0.0",
-        "            D[j] = 1.0",
+        f"            {w('LL')} = 0.0",
+        f"            {w('D')} = 1.0",
         "        steady = False",
         "        full_before = False",
         "        for t in range(T):",
@@ -275,23 +302,23 @@ def source(n: int, m: int, cf, cq, ch, cr) -> str:
         "            for k in range(m):",
         "                for j in range(c):",
         "                    v = ys[b0 + j, t, k]",
-        "                    Y[k, j] = v",
+        f"                    {w('Y', 'k')} = v",
         "                    nnan += v != v",
         "            nbad = 0",
         "            nmoved = 0",
         "            if steady and nnan == 0:",
     ]
-    src += loop(_steady(n, m, cf, ch), 16)
+    src += loop(_steady(n, m, cf, ch, w), 16)
     src += [
         "            else:",
         "                if t == 0:  # no prediction before the first step",
         "                    for j in range(c):",
     ]
-    src += [f"                        XP[{i}, j] = X[{i}, j]" for i in range(n)]
-    src += [f"                        PPP[{a}, j] = PP[{a}, j]" for a in range(nt)]
+    src += [f"                        {w('XP', i)} = {w('X', i)}" for i in range(n)]
+    src += [f"                        {w('PPP', a)} = {w('PP', a)}" for a in range(nt)]
     src += ["                else:"]
-    src += loop(_predict(n, cf, cq), 20)
-    src += loop(_update(n, m, ch, cr), 16)
+    src += loop(_predict(n, cf, cq, w), 20)
+    src += loop(_update(n, m, ch, cr, w), 16)
     src += [
         "                # steady state: two fully observed steps with constant matrices that",
         "                # left every P of the chunk unchanged to 8 ulp (P does not depend on y)",
@@ -304,63 +331,42 @@ def source(n: int, m: int, cf, cq, ch, cr) -> str:
         "            # log per series when D leaves [1e-100, 1e100] (or DS is extreme); at the end",
         "            nout = 0",
         "            for j in range(c):",
-        "                d = D[j] * DS[j]",
+        f"                d = {w('D')} * {w('DS')}",
         "                nout += not (1e-100 < d < 1e100)",
         "            if nout == 0 and t < T - 1:",
         "                for j in range(c):",
-        "                    D[j] *= DS[j]",
+        f"                    {w('D')} *= {w('DS')}",
         "            else:",
         "                for j in range(c):",
-        "                    d = D[j] * DS[j]",
+        f"                    d = {w('D')} * {w('DS')}",
         "                    if 1e-100 < d < 1e100:",
-        "                        D[j] = d",
+        f"                        {w('D')} = d",
         "                    else:",
-        "                        LL[j] -= math.log(D[j]) + math.log(DS[j])",
-        "                        D[j] = 1.0",
+        f"                        {w('LL')} -= math.log({w('D')}) + math.log({w('DS')})",
+        f"                        {w('D')} = 1.0",
         "                    if t == T - 1:",
-        "                        LL[j] -= math.log(D[j])",
+        f"                        {w('LL')} -= math.log({w('D')})",
         "            for j in range(c):",
         f"                for i in range({n}):",
-        "                    means[b0 + j, t, i] = X[i, j]",
+        f"                    means[b0 + j, t, i] = {w('X', 'i')}",
         "            if store_covs:",
         "                for j in range(c):",
         f"                    for i in range({n}):",
-        "                        pmeans[b0 + j, t, i] = XP[i, j]",
+        f"                        pmeans[b0 + j, t, i] = {w('XP', 'i')}",
     ]
     for a, (i, k) in enumerate(tri):
-        src.append(f"                    covs[b0 + j, t, {i}, {k}] = PP[{a}, j]")
-        src.append(f"                    pcovs[b0 + j, t, {i}, {k}] = PPP[{a}, j]")
+        src.append(f"                    covs[b0 + j, t, {i}, {k}] = {w('PP', a)}")
+        src.append(f"                    pcovs[b0 + j, t, {i}, {k}] = {w('PPP', a)}")
         if i != k:
-            src.append(f"                    covs[b0 + j, t, {k}, {i}] = PP[{a}, j]")
-            src.append(f"                    pcovs[b0 + j, t, {k}, {i}] = PPP[{a}, j]")
-    src += ["        for j in range(c):", "            loglik[b0 + j] = LL[j]"]
+            src.append(f"                    covs[b0 + j, t, {k}, {i}] = {w('PP', a)}")
+            src.append(f"                    pcovs[b0 + j, t, {k}, {i}] = {w('PPP', a)}")
+    src += ["        for j in range(c):", f"            loglik[b0 + j] = {w('LL')}"]
     for a, (i, k) in enumerate(tri):
-        src.append(f"            last_P[b0 + j, {i}, {k}] = PP[{a}, j]")
+        src.append(f"            last_P[b0 + j, {i}, {k}] = {w('PP', a)}")
         if i != k:
-            src.append(f"            last_P[b0 + j, {k}, {i}] = PP[{a}, j]")
+            src.append(f"            last_P[b0 + j, {k}, {i}] = {w('PP', a)}")
     src += ["    return bad_t", ""]
-    return _flatten("\n".join(src), n, m)
-
-
-def _flatten(src: str, n: int, m: int) -> str:
-    """Rewrite the work arrays (``X[r, j]``, ``PP``, ``XP``, ``PPP``, ``Y``, ``KL`` and the
-    single rows ``D[j]``, ``DS[j]``, ``LL[j]``) as rows of one flat array ``W`` at constant
-    offsets. Separate arrays might alias as far as LLVM knows, and it will not emit run-time
-    checks for that many, so it would not vectorise; rows of one array need no check."""
-    nt = n * (n + 1) // 2
-    offsets, o = {}, 0
-    for name, nrows in (("X", n), ("PP", nt), ("XP", n), ("PPP", nt), ("Y", m), ("D", 1),
-                        ("DS", 1), ("LL", 1), ("KL", n * m + m * (m + 1) // 2)):
-        offsets[name], o = o, o + nrows
-
-    def rows(match):
-        base = offsets[match.group(1)] * CH
-        r = match.group(2)
-        off = f"{base + int(r) * CH}" if r.isdigit() else f"{base} + ({r}) * {CH}"
-        return f"W[{off} + j]"
-
-    src = re.sub(r"\b(X|PP|XP|PPP|Y|KL)\[([^\]]+), j\]", rows, src)
-    return re.sub(r"\b(D|DS|LL)\[j\]", lambda mt: f"W[{offsets[mt.group(1)] * CH} + j]", src)
+    return "\n".join(src)
 
 
 def _cache_dir() -> Path:
