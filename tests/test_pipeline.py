@@ -313,3 +313,25 @@ def test_a_detector_on_a_frame_without_an_image_names_the_frame():
     detect = as_detector(BlobDetector())
     with pytest.raises(ValueError, match=r"frame 3 has no image; the detector BlobDetector"):
         detect(Frame(3, 0.1))
+
+
+def test_track_rows_equal_the_concatenated_frames():
+    """TrackRows keeps its rows in doubling arrays; they equal the frames' rows concatenated,
+    the ids' dtype widened as np.concatenate widens it."""
+    rng = np.random.default_rng(3)
+    rows, blocks = TrackRows(), []
+    for f in range(1, 400):
+        k = int(rng.integers(0, 9))
+        ids = rng.integers(0, 1000, k).astype(np.int32 if f < 200 else np.int64)
+        xyxy = rng.uniform(0, 50, (k, 4))
+        xyxy[:, 2:] += xyxy[:, :2]
+        t = Tracks(ids=ids, boxes=xyxy, points=None, scores=rng.uniform(0, 1, k),
+                   classes=np.zeros(k))
+        rows.write(Frame(f, f / 25), t)
+        blocks.append((np.full(k, f), ids, t.xywh, t.scores))
+    assert len(rows) == sum(len(b[0]) for b in blocks)
+    np.testing.assert_array_equal(rows.frames, np.concatenate([b[0] for b in blocks]))
+    want_ids = np.concatenate([b[1] for b in blocks])
+    np.testing.assert_array_equal(rows.ids, want_ids)
+    np.testing.assert_array_equal(rows.xywh, np.concatenate([b[2] for b in blocks]))
+    np.testing.assert_array_equal(rows.scores, np.concatenate([b[3] for b in blocks]))
