@@ -3,13 +3,64 @@
 from __future__ import annotations
 
 import argparse
+import math
+import os
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from pathlib import Path
 
 from . import __version__, _compile
 
 DEMOS = ("kalman",)
+
+
+class Terminated(BaseException):
+    """SIGTERM, raised in the main thread while :func:`main` runs, so that a run stops as on
+    Ctrl-C: partial outputs removed, earlier ones kept (a ``BaseException``, as
+    ``KeyboardInterrupt``, so that no ``except Exception`` takes it for an error)."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated
+
+
+def _fail(command: str, text: str) -> int:
+    """Print a user's mistake in one line and return the exit status 2."""
+    print(f"vistrack {command}: error: {text}", file=sys.stderr)
+    return 2
+
+
+def _user_errors() -> tuple[type[BaseException], ...]:
+    """The exceptions that say what a user gave is wrong (printed in one line, without
+    ``--debug``): ``ValueError`` (``MOTFormatError`` and ``ConfigError`` are ones),
+    ``TypeError``, the file errors, and ``VideoError`` (looked up only if
+    ``vistrack.io.video`` was imported, which is the only way one can have been raised)."""
+    errors: list[type[BaseException]] = [
+        ValueError, TypeError, FileNotFoundError, FileExistsError, PermissionError,
+        IsADirectoryError, NotADirectoryError]
+    video = sys.modules.get("vistrack.io.video")
+    if video is not None:
+        errors.append(video.VideoError)
+    return tuple(errors)
+
+
+def _message(exc: BaseException) -> str:
+    """An exception's message on one line; an OS error as ``FILE: what went wrong``.
+
+    Examples
+    --------
+    >>> _message(FileNotFoundError(2, "No such file or directory", "a.txt"))
+    'a.txt: No such file or directory'
+    >>> _message(ValueError("two\\nlines"))
+    'two lines'
+    """
+    if isinstance(exc, OSError) and exc.strerror and exc.filename is not None:
+        text = f"{exc.filename}: {exc.strerror}"
+    else:
+        text = str(exc) or type(exc).__name__
+    return " ".join(line.strip() for line in text.splitlines())
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -68,27 +119,60 @@ def _box_config(args: argparse.Namespace):
     return cfg, None
 
 
+def _tracker_problem(name: str) -> str | None:
+    """Why ``--tracker name`` names no tracker, listing the valid names, or None."""
+    from .pipeline import TRACKERS
+
+    module, colon, attr = name.partition(":")
+    if name in TRACKERS or (colon and module != "single" and module and attr):
+        return None
+    boxes = [k for k, entry in TRACKERS.items() if entry.box_config]
+    others = [k for k in TRACKERS if k not in boxes and not k.startswith("single:")]
+    methods = [k.split(":", 1)[1] for k in TRACKERS if k.startswith("single:")]
+    return (f"--tracker must be {', '.join(sorted(boxes) + sorted(others))}, single:METHOD "
+            f"(METHOD one of {', '.join(sorted(methods))}) or module:callable (a tracker of "
+            f"your own); got {name!r}")
+
+
+def _number_problem(args: argparse.Namespace) -> str | None:
+    """The first numeric option whose value is out of its range, as a message, or None."""
+    checks = (("fps", lambda v: math.isfinite(v) and v > 0, "a number > 0"),
+              ("stop", lambda v: v >= 1, "a frame number >= 1"),
+              ("min_area", lambda v: math.isfinite(v) and v >= 0, "a number >= 0"))
+    for option, ok, what in checks:
+        value = getattr(args, option, None)
+        if value is not None and not ok(value):
+            return f"--{option.replace('_', '-')} must be {what}; got {value:g}"
+    for option, _, _, kind, *_ in _SETTINGS:
+        value = getattr(args, option, None)
+        if kind is float and value is not None and not math.isfinite(value):
+            return f"--{option.replace('_', '-')} must be a finite number; got {value:g}"
+    return None
+
+
 def _track(args: argparse.Namespace) -> int:
     from .config import config_toml
-    from .io.video import VideoError
-    from .pipeline import TRACKERS, TrackRun, VideoRun, track_sequence, track_video
+    from .io.atomic import check_output
+    from .pipeline import TrackRun, VideoRun, track_sequence, track_video, video_outputs
     from .tracking.box import TRACKERS as BOX_PRESETS
 
     def fail(text: str) -> int:
-        print(f"vistrack track: error: {text}", file=sys.stderr)
-        return 2
+        return _fail("track", text)
 
     if (args.out is None) == (args.out_dir is None):
         return fail("give --out RESULTS.txt (a MOTChallenge sequence's detections) or "
                     "--out-dir OUT/ (from pixels)")
+    problem = _number_problem(args)
+    if problem:
+        return fail(problem)
     progress = sys.stderr if sys.stderr.isatty() and not args.quiet else None
     setting_flags = [o for o, *_ in _SETTINGS if getattr(args, o) is not None]
     name = args.tracker or "bytetrack"
     box = name in BOX_PRESETS
     if not box:
-        if name not in TRACKERS and ":" not in name:
-            return fail(f"--tracker must be one of {sorted(TRACKERS)} or module:callable; "
-                        f"got {name!r}")
+        problem = _tracker_problem(name)
+        if problem:
+            return fail(problem)
         given = setting_flags + [f for f in ("still_camera", "config", "print_config")
                                  if getattr(args, f)]
         if given:
@@ -98,57 +182,66 @@ def _track(args: argparse.Namespace) -> int:
             return fail(f"--out (a sequence's detections) goes with the box trackers "
                         f"({', '.join(sorted(BOX_PRESETS))}); --tracker {name} goes with "
                         "--out-dir")
+    if args.out is not None:
+        for flag in ("frontend", "gt", "fps", "stop", "min_area", "background"):
+            if getattr(args, flag) is not None:
+                return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
+        if Path(args.input).is_file():
+            return fail(f"--out is for a MOTChallenge sequence folder (seqinfo.ini, "
+                        f"det/det.txt), and {args.input} is a file: track a video with "
+                        "--out-dir OUT/")
+        # before anything is read or computed: a run that cannot write fails now
+        check_output(args.out, force=args.force, name="--out")
+    else:
+        offline_flags = [f for f in ("offline", "detections", "max_gap", "min_track_score",
+                                     "link_gap") if getattr(args, f)]
+        if offline_flags:
+            return fail("--offline, its settings and --detections go with --out (use "
+                        "--frontend detections:FILE with --out-dir)")
+        video_outputs(args.out_dir, force=args.force, name="--out-dir")
     # with --print-config, stdout holds the configuration alone (the summary goes to stderr)
     report = sys.stderr if args.print_config else sys.stdout
     run: TrackRun | VideoRun
-    try:
-        cfg = None
-        if box:
-            cfg, problem = _box_config(args)
-            if problem:
-                return fail(problem)
-        if args.out is not None:
-            for flag in ("frontend", "gt", "fps", "stop", "min_area", "background"):
-                if getattr(args, flag) is not None:
-                    return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
-            run = track_sequence(args.input, args.out, detections=args.detections, config=cfg,
-                                 force=args.force, progress=progress)
-            print(f"wrote {run.out}: {run.rows} boxes of {run.tracks} tracks over {run.frames} "
-                  f"frames from {run.detections} detections; tracker {run.fps:.0f} frames/s",
-                  file=report)
-        else:
-            offline_flags = [f for f in ("offline", "detections", "max_gap", "min_track_score",
-                                         "link_gap") if getattr(args, f)]
-            if offline_flags or (cfg is not None and cfg.offline.enabled):
-                return fail("--offline, its settings and --detections go with --out (use "
-                            "--frontend detections:FILE with --out-dir)")
-            extra = {k: v for k, v in (("min_area", args.min_area),
-                                       ("background", args.background)) if v is not None}
-            if args.config is not None or not box:
-                # a file is the whole configuration, used as it is
-                settings = {"config": cfg} if cfg is not None else {}
-            else:  # the options go over the front-end's defaults (bgsub: a still camera)
-                settings = {key: getattr(args, option) for option, table, key, *_ in _SETTINGS
-                            if table == "tracker" and getattr(args, option) is not None}
-                if args.still_camera:
-                    settings["camera_motion"] = False
-            run = track_video(args.input, args.out_dir, frontend=args.frontend,
-                              fps=args.fps, tracker=name, gt=args.gt,
-                              stop=args.stop, force=args.force, progress=progress,
-                              **extra, **settings)
-            sec = dict(run.seconds)
-            compiling = sec.pop("compile", 0.0)
-            ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
-            print(f"tracked {run.frames} frames: {run.rows} boxes of {run.tracks} tracks; "
-                  f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})"
-                  + (f"; compiling took {compiling:.1f} s" if compiling >= 0.05 else ""),
-                  file=report)
-            for name, path in run.files.items():
-                print(f"  {name:<7} {path}", file=report)
-            if run.scores is not None:
-                _table({Path(args.input).stem: run.scores}, report)
-    except (FileNotFoundError, FileExistsError, ValueError, VideoError) as exc:
-        return fail(str(exc))
+    cfg = None
+    if box:
+        cfg, problem = _box_config(args)
+        if problem:
+            return fail(problem)
+    if args.out is not None:
+        run = track_sequence(args.input, args.out, detections=args.detections, config=cfg,
+                             force=args.force, progress=progress)
+        print(f"wrote {run.out}: {run.rows} boxes of {run.tracks} tracks over {run.frames} "
+              f"frames from {run.detections} detections; tracker {run.fps:.0f} frames/s",
+              file=report)
+    else:
+        if cfg is not None and cfg.offline.enabled:
+            return fail("--offline, its settings and --detections go with --out (use "
+                        "--frontend detections:FILE with --out-dir)")
+        extra = {k: v for k, v in (("min_area", args.min_area),
+                                   ("background", args.background)) if v is not None}
+        if args.config is not None or not box:
+            # a file is the whole configuration, used as it is
+            settings = {"config": cfg} if cfg is not None else {}
+        else:  # the options go over the front-end's defaults (bgsub: a still camera)
+            settings = {key: getattr(args, option) for option, table, key, *_ in _SETTINGS
+                        if table == "tracker" and getattr(args, option) is not None}
+            if args.still_camera:
+                settings["camera_motion"] = False
+        run = track_video(args.input, args.out_dir, frontend=args.frontend,
+                          fps=args.fps, tracker=name, gt=args.gt,
+                          stop=args.stop, force=args.force, progress=progress,
+                          **extra, **settings)
+        sec = dict(run.seconds)
+        compiling = sec.pop("compile", 0.0)
+        ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
+        print(f"tracked {run.frames} frames: {run.rows} boxes of {run.tracks} tracks; "
+              f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})"
+              + (f"; compiling took {compiling:.1f} s" if compiling >= 0.05 else ""),
+              file=report)
+        for key, path in run.files.items():
+            print(f"  {key:<7} {path}", file=report)
+        if run.scores is not None:
+            _table({Path(args.input).stem: run.scores}, report)
     if args.print_config:
         assert run.config is not None  # a box tracker's run (others refuse --print-config)
         sys.stdout.write(config_toml(run.config, run.derived))
@@ -156,24 +249,21 @@ def _track(args: argparse.Namespace) -> int:
 
 
 def _track_one(args: argparse.Namespace) -> int:
-    from .io.video import VideoError
+    from .io.atomic import check_output
     from .pipeline import track_one
 
     try:
         init = [float(v) for v in args.init.split(",")]
-        if len(init) != 4:
+        if len(init) != 4 or not all(math.isfinite(v) for v in init) or min(init[2:]) <= 0:
             raise ValueError
     except ValueError:
-        print(f"vistrack track-one: error: --init must be x,y,w,h (four numbers); got "
-              f"{args.init!r}", file=sys.stderr)
-        return 2
-    try:
-        run = track_one(args.input, init, args.out, method=args.method, gt=args.gt,
-                        force=args.force, progress=sys.stderr if sys.stderr.isatty()
-                        and not args.quiet else None)
-    except (FileNotFoundError, FileExistsError, ValueError, VideoError) as exc:
-        print(f"vistrack track-one: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail("track-one", f"--init must be x,y,w,h (four finite numbers, w and h "
+                     f"> 0); got {args.init!r}")
+    # before anything is read or computed: a run that cannot write fails now
+    check_output(args.out, force=args.force, name="--out")
+    run = track_one(args.input, init, args.out, method=args.method, gt=args.gt,
+                    force=args.force, progress=sys.stderr if sys.stderr.isatty()
+                    and not args.quiet else None)
     print(f"wrote {run.out}: {len(run.boxes)} boxes; {args.method} {run.fps:.0f} frames/s")
     if run.scores is not None:
         s = run.scores
@@ -244,6 +334,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="vistrack", description="Visual object tracking: filters, trackers, scores."
     )
     parser.add_argument("--version", action="version", version=f"vistrack {__version__}")
+    debug_help = ("show the traceback of a user's mistake too (a bug's is always shown), "
+                  "instead of one line")
+    parser.add_argument("--debug", action="store_true", help=debug_help)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     demo = sub.add_parser(
         "demo", help="remake the lecture figures from real runs",
@@ -254,6 +347,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", default="out", help="folder for the figures (default: out)")
     demo.add_argument("--seeds", type=int, default=1000,
                       help="simulated runs for the error statistics (default: 1000)")
+    demo.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                      help=debug_help)
     demo.set_defaults(func=_demo)
     track = sub.add_parser(
         "track", help="track a MOTChallenge sequence's detections, or a video from pixels",
@@ -312,6 +407,8 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--force", action="store_true", help="overwrite existing outputs")
     track.add_argument("--quiet", action="store_true",
                        help="no progress bar (shown on a terminal only)")
+    track.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                       help=debug_help)
     track.set_defaults(func=_track)
     one = sub.add_parser(
         "track-one", help="follow one object from a box drawn on the first frame",
@@ -332,6 +429,8 @@ def build_parser() -> argparse.ArgumentParser:
                      "or a boxes file) to score against")
     one.add_argument("--force", action="store_true", help="overwrite an existing boxes file")
     one.add_argument("--quiet", action="store_true", help="no progress bar")
+    one.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                     help=debug_help)
     one.set_defaults(func=_track_one)
     ev = sub.add_parser(
         "eval", help="score results against ground truth (HOTA, CLEAR MOT, IDF1)",
@@ -345,11 +444,22 @@ def build_parser() -> argparse.ArgumentParser:
                                                            "MOT20"),
                     help="preprocessing of the ground truth (default: auto, from its columns)")
     ev.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    ev.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                    help=debug_help)
     ev.set_defaults(func=_eval)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return its exit status.
+
+    A user's mistake (:func:`_user_errors`) prints one line ``vistrack COMMAND: error:
+    MESSAGE`` and returns 2 (with ``--debug``, its traceback instead); any other exception
+    is a bug and shows its traceback. Ctrl-C returns 130 and SIGTERM 143, each with one
+    line (outputs are written whole or not at all: earlier ones are kept). When stdout is a
+    pipe closed early (``vistrack eval --json | head -1``), the rest of the output is
+    dropped quietly and the status is 1, as Python's documentation recommends.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if not hasattr(args, "func"):
@@ -357,18 +467,42 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     if getattr(args, "seeds", 1) < 1:
         parser.error(f"--seeds must be >= 1; got {args.seeds}")
+    # SIGTERM stops a run as Ctrl-C does, for as long as main runs (signal handlers can be
+    # set in the main thread only)
+    old = (signal.signal(signal.SIGTERM, _terminate)
+           if threading.current_thread() is threading.main_thread() else None)
     try:
         if args.command in ("track", "track-one", "demo"):
             # a first run compiles the kernels: say so once, and leave it out of the rates
             with _compile.watch(None if getattr(args, "quiet", False) else sys.stderr):
-                return args.func(args)
-        return args.func(args)
-    except KeyboardInterrupt:
+                status = args.func(args)
+        else:
+            status = args.func(args)
+        sys.stdout.flush()  # a closed pipe shows here, not at exit
+        return status
+    except (KeyboardInterrupt, Terminated) as exc:
         # tracks, boxes, video and plot are written under partial names and renamed only
         # when complete (vistrack.io.atomic): what an earlier run wrote is still there
         kept = "; earlier outputs are kept" if args.command in ("track", "track-one") else ""
-        print(f"vistrack {args.command}: interrupted{kept}", file=sys.stderr)
-        return 130
+        how = "interrupted" if isinstance(exc, KeyboardInterrupt) else "terminated"
+        print(f"vistrack {args.command}: {how}{kept}", file=sys.stderr)
+        return 130 if isinstance(exc, KeyboardInterrupt) else 128 + signal.SIGTERM
+    except BrokenPipeError:
+        # https://docs.python.org/3/library/signal.html#note-on-sigpipe: the reader has
+        # gone; send the rest of stdout (and the flush at exit) to devnull
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except (OSError, ValueError):  # stdout is not a file (a test's capture)
+            pass
+        return 1
+    except _user_errors() as exc:
+        if args.debug:
+            raise
+        return _fail(args.command, _message(exc))
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
 
 
 if __name__ == "__main__":

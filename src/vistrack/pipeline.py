@@ -28,6 +28,7 @@ import numpy as np
 from . import _compile
 from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, evaluate_mot
+from .io.atomic import check_output
 from .io.motchallenge import read_mot, read_seqinfo, write_mot
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink, TrackRows
 from .models.box import BoxMotion
@@ -48,7 +49,7 @@ if TYPE_CHECKING:
 __all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "SINKS",
            "as_detector", "make_tracker", "track_sequence", "TrackRun", "resolve_config",
            "derived_values", "track_video", "VideoRun", "track_one",
-           "SingleRun"]
+           "SingleRun", "video_outputs"]
 
 
 @dataclass(frozen=True)
@@ -767,9 +768,12 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         If ``seqinfo.ini`` or the detections file does not exist.
     FileExistsError
         If ``out`` exists and ``force`` is False.
+    IsADirectoryError, NotADirectoryError, PermissionError
+        If ``out`` cannot be written (:func:`vistrack.io.atomic.check_output`); checked
+        first, before anything is read.
     ValueError
-        If the detections run past the sequence's last frame, or the configuration is
-        invalid.
+        If ``seq_dir`` is a file, the detections run past the sequence's last frame, or the
+        configuration is invalid.
     MOTFormatError
         If a file is malformed.
 
@@ -790,15 +794,17 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     >>> (seq / "tracks.txt").read_text().splitlines()[0]
     '1,1,15.00,20.00,30.00,60.00,0.9,-1,-1,-1'
     """
+    out = Path(out)
+    check_output(out, force=force)
     cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
     seq_dir = Path(seq_dir)
+    if seq_dir.is_file():
+        raise ValueError(f"seq_dir {seq_dir} is a file; a MOTChallenge sequence is a folder "
+                         "(seqinfo.ini, det/det.txt), and a video is tracked by track_video")
     info = read_seqinfo(seq_dir)
     det_path = Path(detections) if detections is not None else seq_dir / "det" / "det.txt"
     if not det_path.exists():
         raise FileNotFoundError(f"{det_path} does not exist (pass --detections FILE)")
-    out = Path(out)
-    if out.exists() and not force:
-        raise FileExistsError(f"{out} exists; pass --force to overwrite it")
     dets = read_mot(det_path)
     if len(dets) and dets.frames.max() > info.seq_length:
         raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
@@ -899,6 +905,44 @@ class VideoRun:
         return self.frames / max(s, 1e-12)
 
 
+def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = False,
+                  name: str = "out_dir") -> dict[str, Path]:
+    """The file of each sink :func:`track_video` writes in ``out_dir``, checked before any
+    work is done: ``out_dir`` is a folder or can be made one, can be written in, its
+    outputs are not folders, and exist only if ``force``.
+
+    ``name`` names the argument or option in the messages.
+
+    Raises
+    ------
+    NotADirectoryError
+        If ``out_dir`` or a folder above it is a file.
+    IsADirectoryError
+        If an output's name is a folder.
+    PermissionError
+        If the output folder (or the nearest existing one above it) cannot be written in.
+    FileExistsError
+        If an output exists and ``force`` is False.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> out = Path(tempfile.mkdtemp()) / "out"
+    >>> sorted(p.name for p in video_outputs(out, annotate=False).values())
+    ['tracks.csv', 'tracks.txt', 'trajectories.png']
+    """
+    out_dir = Path(out_dir)
+    check_output(out_dir, name=name, folder=True)
+    files = {key: out_dir / SINK_FILES[key] for key in SINKS if annotate or key != "video"}
+    for p in files.values():
+        if p.is_dir():
+            raise IsADirectoryError(f"{name} {out_dir}: {p} is a folder, not a file")
+    there = [str(p) for p in files.values() if p.exists()]
+    if there and not force:
+        raise FileExistsError(f"{', '.join(there)} exist; pass --force to overwrite them")
+    return files
+
+
 def track_video(video: str | Path, out_dir: str | Path, *,
                 frontend: str | Detector | Callable[[Frame], Detections | None] | None = None,
                 fps: float | None = None, tracker: str | Tracker = "bytetrack",
@@ -972,6 +1016,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     ------
     FileExistsError
         If an output file exists and ``force`` is False.
+    IsADirectoryError, NotADirectoryError, PermissionError
+        If an output cannot be written (:func:`video_outputs`); checked first, before
+        anything is read.
     FileNotFoundError
         If the video, the ground truth or a detections file does not exist.
     ValueError
@@ -997,12 +1044,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     """
     from .io.video import VideoReader
 
+    files = video_outputs(out_dir, annotate=annotate, force=force)
     out_dir = Path(out_dir)
-    files = {name: out_dir / SINK_FILES[name] for name in SINKS
-             if annotate or name != "video"}
-    there = [str(p) for p in files.values() if p.exists()]
-    if there and not force:
-        raise FileExistsError(f"{', '.join(there)} exist; pass --force to overwrite them")
     gt_table = read_mot(gt) if gt is not None else None
     if confidence is not None and not callable(confidence):
         raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
@@ -1126,6 +1169,9 @@ def track_one(source: str | Path, init: ArrayLike, out: str | Path, *, method: s
     ------
     FileExistsError
         If ``out`` exists and ``force`` is False.
+    IsADirectoryError, NotADirectoryError, PermissionError
+        If ``out`` cannot be written (:func:`vistrack.io.atomic.check_output`); checked
+        first, before anything is read.
     ValueError
         If ``method`` is unknown, ``init`` is not a box, or ``gt`` has fewer boxes than
         frames.
@@ -1152,8 +1198,7 @@ def track_one(source: str | Path, init: ArrayLike, out: str | Path, *, method: s
     from .tracking.single import single_tracker
 
     out = Path(out)
-    if out.exists() and not force:
-        raise FileExistsError(f"{out} exists; pass --force to overwrite it")
+    check_output(out, force=force)
     tracker = single_tracker(method)
     start = Detections.from_xywh(as_box(init)[None])
     truth = read_boxes(gt) if gt is not None else None

@@ -10,7 +10,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
-__all__ = ["partial_path", "replacing", "open_replacing"]
+__all__ = ["partial_path", "replacing", "open_replacing", "check_output"]
 
 
 def partial_path(path: str | os.PathLike) -> Path:
@@ -56,3 +56,65 @@ def open_replacing(path: str | os.PathLike) -> Iterator[IO[str]]:
     (:func:`replacing`)."""
     with replacing(path) as part, open(part, "w") as fh:
         yield fh
+
+
+def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "out",
+                 folder: bool = False) -> None:
+    """Raise, before any work is done, if ``path`` cannot be written: a file (or with
+    ``folder``, a folder to write files in) that is a folder (a file), lies under a file,
+    lies in a folder that cannot be written, or (a file) exists and ``force`` is False.
+
+    ``name`` names the argument or option in the messages.
+
+    Raises
+    ------
+    IsADirectoryError
+        If ``path`` is to be a file and is an existing folder.
+    NotADirectoryError
+        If ``path`` is to be a folder and is an existing file, or a folder above it is a
+        file.
+    FileExistsError
+        If ``path`` is to be a file, exists and ``force`` is False.
+    PermissionError
+        If the nearest existing folder at or above where ``path`` is written cannot be
+        written in.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> tmp = Path(tempfile.mkdtemp())
+    >>> check_output(tmp / "new" / "a.txt")  # folders are made when written
+    >>> check_output(tmp, name="--out")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    IsADirectoryError: --out ... is a folder, not a file
+    >>> _ = (tmp / "f").write_text("")
+    >>> check_output(tmp / "f" / "a.txt", name="--out")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    NotADirectoryError: --out .../f/a.txt: .../f is a file, not a folder
+    >>> check_output(tmp / "f", name="--out")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    FileExistsError: --out .../f exists; pass --force to overwrite it
+    >>> check_output(tmp / "f", name="--out-dir", folder=True)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    NotADirectoryError: --out-dir .../f is a file, not a folder
+    """
+    p = Path(path)
+    if folder:
+        if p.exists() and not p.is_dir():
+            raise NotADirectoryError(f"{name} {p} is a file, not a folder")
+    elif p.is_dir():
+        raise IsADirectoryError(f"{name} {p} is a folder, not a file")
+    # the nearest existing folder at or above where the file is written
+    here = p if folder else p.parent
+    while not here.exists() and here != here.parent:
+        here = here.parent
+    if here.exists() and not here.is_dir():
+        raise NotADirectoryError(f"{name} {p}: {here} is a file, not a folder")
+    if not os.access(here, os.W_OK | os.X_OK):
+        raise PermissionError(f"{name} {p}: cannot write in {here} (no permission)")
+    if not folder and p.exists() and not force:
+        raise FileExistsError(f"{name} {p} exists; pass --force to overwrite it")

@@ -1,0 +1,289 @@
+"""The command line answers mistakes and signals in one line, with a known exit status, and
+before any frame is read: SIGTERM, outputs that cannot be written, numbers out of range,
+unknown trackers, a closed pipe, and ``--debug``."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from vistrack.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+VIDEO = ROOT / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
+GT = ROOT / "data" / "pets09-s2l1" / "gt.txt"
+ENV = {**os.environ, "PYTHONPATH": f"{ROOT / 'src'}"}
+
+
+def cli(*args, **kwargs):
+    return subprocess.run([sys.executable, "-m", "vistrack.cli", *map(str, args)],
+                          capture_output=True, text=True, env=ENV, cwd=ROOT, **kwargs)
+
+
+def one_line(capsys, command, message):
+    """What main printed: nothing on stdout and exactly one error line on stderr."""
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err == f"vistrack {command}: error: {message}\n"
+
+
+@pytest.fixture
+def bad_sequence(tmp_path):
+    """A MOTChallenge sequence folder whose detections file is malformed: reading it fails,
+    so an error about anything else shows that it was never read."""
+    seq = tmp_path / "seq"
+    (seq / "det").mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=5\n"
+                                     "imWidth=320\nimHeight=240\n")
+    (seq / "det" / "det.txt").write_text("not,a,detection\n")
+    return seq
+
+
+# ------------------------------------------------------------------------------ SIGTERM
+def test_sigterm_keeps_the_earlier_outputs_and_says_so_in_one_line(tmp_path):
+    """SIGTERM in the middle of a run over an earlier complete run (``--force``): exit 143,
+    one line, every earlier file byte for byte as it was and no partial file left."""
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "vistrack.cli", "track", str(VIDEO), "--out-dir", str(out),
+           "--force", "--quiet"]
+    first = subprocess.run(cmd, capture_output=True, text=True, env=ENV, cwd=ROOT)
+    assert first.returncode == 0, first.stderr
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert sorted(before) == ["annotated.mp4", "tracks.csv", "tracks.txt", "trajectories.png"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=ENV, cwd=ROOT)
+    # the annotated video's partial file appears with the first frame written: the run is
+    # then in its loop, with about two seconds to go
+    partial = out / ".annotated.partial.mp4"
+    deadline = time.monotonic() + 300
+    while not partial.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert proc.poll() is None, "the run ended before it could be stopped"
+    proc.send_signal(signal.SIGTERM)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 143
+    assert stderr == "vistrack track: terminated; earlier outputs are kept\n"
+    assert stdout == ""
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def test_main_restores_the_sigterm_handler(tmp_path, capsys):
+    old = signal.getsignal(signal.SIGTERM)
+    assert main(["track", str(VIDEO), "--out-dir", str(tmp_path), "--min-area", "-1"]) == 2
+    assert signal.getsignal(signal.SIGTERM) is old
+
+
+# --------------------------------------------------------- outputs checked before any work
+def test_out_that_is_a_folder_is_refused_even_with_force(bad_sequence, tmp_path, capsys):
+    folder = tmp_path / "results"
+    folder.mkdir()
+    assert main(["track", str(bad_sequence), "--out", str(folder), "--force"]) == 2
+    one_line(capsys, "track", f"--out {folder} is a folder, not a file")
+
+
+def test_out_under_a_file_is_refused(bad_sequence, tmp_path, capsys):
+    (tmp_path / "file").write_text("")
+    out = tmp_path / "file" / "results.txt"
+    assert main(["track", str(bad_sequence), "--out", str(out)]) == 2
+    one_line(capsys, "track", f"--out {out}: {tmp_path / 'file'} is a file, not a folder")
+
+
+def test_an_existing_out_without_force_is_refused_before_reading(bad_sequence, tmp_path,
+                                                                 capsys):
+    out = tmp_path / "results.txt"
+    out.write_text("earlier")
+    assert main(["track", str(bad_sequence), "--out", str(out)]) == 2
+    one_line(capsys, "track", f"--out {out} exists; pass --force to overwrite it")
+    assert out.read_text() == "earlier"
+
+
+def test_out_dir_that_is_a_file_is_refused(tmp_path, capsys):
+    # the video does not exist: the output is checked first, and the video never opened
+    (tmp_path / "file").write_text("")
+    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir",
+                 str(tmp_path / "file")]) == 2
+    one_line(capsys, "track", f"--out-dir {tmp_path / 'file'} is a file, not a folder")
+    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir",
+                 str(tmp_path / "file" / "sub")]) == 2
+    one_line(capsys, "track", f"--out-dir {tmp_path / 'file' / 'sub'}: {tmp_path / 'file'} "
+             "is a file, not a folder")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+
+
+def test_out_dir_with_earlier_outputs_needs_force(tmp_path, capsys):
+    (tmp_path / "tracks.txt").write_text("earlier")
+    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir", str(tmp_path)]) == 2
+    one_line(capsys, "track", f"{tmp_path / 'tracks.txt'} exist; pass --force to overwrite "
+             "them")
+    (tmp_path / "tracks.csv").mkdir()
+    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir", str(tmp_path),
+                 "--force"]) == 2
+    one_line(capsys, "track", f"--out-dir {tmp_path}: {tmp_path / 'tracks.csv'} is a folder, "
+             "not a file")
+
+
+def test_an_output_folder_that_cannot_be_written_is_refused(tmp_path, capsys, monkeypatch):
+    import vistrack.io.atomic
+
+    monkeypatch.setattr(vistrack.io.atomic.os, "access", lambda path, mode: False)
+    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir",
+                 str(tmp_path / "out")]) == 2
+    one_line(capsys, "track", f"--out-dir {tmp_path / 'out'}: cannot write in {tmp_path} "
+             "(no permission)")
+    assert main(["track-one", str(tmp_path / "missing.mp4"), "--init", "1,2,3,4", "--out",
+                 str(tmp_path / "boxes.txt")]) == 2
+    one_line(capsys, "track-one", f"--out {tmp_path / 'boxes.txt'}: cannot write in "
+             f"{tmp_path} (no permission)")
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0,
+                    reason="permissions bind a user other than root on POSIX")
+def test_a_read_only_folder_is_refused(tmp_path, capsys):
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        assert main(["track", str(VIDEO), "--out-dir", str(folder)]) == 2
+        one_line(capsys, "track", f"--out-dir {folder}: cannot write in {folder} "
+                 "(no permission)")
+    finally:
+        folder.chmod(0o755)
+
+
+def test_track_one_checks_its_output_first(tmp_path, capsys):
+    (tmp_path / "folder").mkdir()
+    missing = tmp_path / "missing.mp4"
+    assert main(["track-one", str(missing), "--init", "1,2,3,4", "--out",
+                 str(tmp_path / "folder"), "--force"]) == 2
+    one_line(capsys, "track-one", f"--out {tmp_path / 'folder'} is a folder, not a file")
+    (tmp_path / "boxes.txt").write_text("earlier")
+    assert main(["track-one", str(missing), "--init", "1,2,3,4", "--out",
+                 str(tmp_path / "boxes.txt")]) == 2
+    one_line(capsys, "track-one", f"--out {tmp_path / 'boxes.txt'} exists; pass --force to "
+             "overwrite it")
+
+
+# ------------------------------------------------------------- a video given to --out
+def test_a_video_given_to_out_says_which_option_goes_with_videos(tmp_path):
+    r = cli("track", VIDEO, "--out", tmp_path / "results.txt")
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr == (f"vistrack track: error: --out is for a MOTChallenge sequence folder "
+                        f"(seqinfo.ini, det/det.txt), and {VIDEO} is a file: track a video "
+                        "with --out-dir OUT/\n")
+    assert not (tmp_path / "results.txt").exists()
+
+
+# ------------------------------------------------------------------- numbers and names
+@pytest.mark.parametrize("option, value, message", [
+    ("--min-area", "-1", "--min-area must be a number >= 0; got -1"),
+    ("--min-area", "nan", "--min-area must be a number >= 0; got nan"),
+    ("--fps", "0", "--fps must be a number > 0; got 0"),
+    ("--fps", "inf", "--fps must be a number > 0; got inf"),
+    ("--stop", "-3", "--stop must be a frame number >= 1; got -3"),
+    ("--high", "nan", "--high must be a finite number; got nan"),
+    ("--max-lost", "inf", "--max-lost must be a finite number; got inf"),
+])
+def test_numbers_out_of_range_are_refused_before_reading(tmp_path, capsys, option, value,
+                                                         message):
+    # the video does not exist: the number is checked before it is opened
+    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir", str(tmp_path / "out"),
+                 option, value]) == 2
+    one_line(capsys, "track", message)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("init", ["1,2,3,nan", "1,2,0,4", "1,2,3"])
+def test_track_one_refuses_a_box_that_is_not_one(tmp_path, capsys, init):
+    assert main(["track-one", str(VIDEO), "--init", init, "--out",
+                 str(tmp_path / "b.txt")]) == 2
+    one_line(capsys, "track-one", f"--init must be x,y,w,h (four finite numbers, w and h > 0); "
+             f"got {init!r}")
+
+
+@pytest.mark.parametrize("name", ["bogus", "single:bogus"])
+def test_an_unknown_tracker_lists_every_form(tmp_path, capsys, name):
+    from vistrack.tracking.single import METHODS
+
+    assert main(["track", str(VIDEO), "--out-dir", str(tmp_path / "out"), "--tracker",
+                 name]) == 2
+    one_line(capsys, "track", "--tracker must be bytetrack, sort, dcpf, single:METHOD (METHOD "
+             f"one of {', '.join(sorted(METHODS))}) or module:callable (a tracker of your "
+             f"own); got {name!r}")
+
+
+# ------------------------------------------------------------------------- closed pipe
+def test_a_pipe_closed_early_ends_quietly():
+    """``vistrack eval --json | head -c 10``: head's ten bytes, and nothing on stderr."""
+    cmd = (f"{sys.executable} -m vistrack.cli eval --gt {GT} --pred {GT} --json "
+           "| head -c 10")
+    r = subprocess.run(["bash", "-o", "pipefail", "-c", cmd], capture_output=True, text=True,
+                       env=ENV, cwd=ROOT)
+    assert r.stdout == '{\n  "data"'
+    assert r.stderr == ""
+    assert r.returncode in (0, 1)  # 1 if head had gone before the JSON was written
+
+
+def test_a_pipe_closed_before_writing_gives_status_1_and_no_traceback():
+    """The reader gone before anything is written (as ``head`` once it has its lines):
+    status 1, as the Python documentation's note on SIGPIPE recommends, and no traceback."""
+    read, write = os.pipe()
+    os.close(read)  # no reader: every write to the pipe fails with EPIPE
+    try:
+        r = subprocess.run([sys.executable, "-m", "vistrack.cli", "eval", "--gt", str(GT),
+                            "--pred", str(GT), "--json"], stdout=write,
+                           stderr=subprocess.PIPE, text=True, env=ENV, cwd=ROOT)
+    finally:
+        os.close(write)
+    assert r.stderr == ""
+    assert r.returncode == 1
+
+
+# ---------------------------------------------------------------------- errors, --debug
+def test_a_user_error_from_inside_a_run_is_one_line(tmp_path, capsys, monkeypatch):
+    import vistrack.pipeline
+    from vistrack.io.video import VideoError
+
+    def broken(*args, **kwargs):
+        raise VideoError("clip.mp4: cannot decode frame 7")
+
+    monkeypatch.setattr(vistrack.pipeline, "track_video", broken)
+    assert main(["track", str(VIDEO), "--out-dir", str(tmp_path / "out")]) == 2
+    one_line(capsys, "track", "clip.mp4: cannot decode frame 7")
+
+    def denied(*args, **kwargs):
+        raise PermissionError(13, "Permission denied", "/somewhere/tracks.txt")
+
+    monkeypatch.setattr(vistrack.pipeline, "track_video", denied)
+    assert main(["track", str(VIDEO), "--out-dir", str(tmp_path / "out")]) == 2
+    one_line(capsys, "track", "/somewhere/tracks.txt: Permission denied")
+
+
+def test_debug_shows_a_user_errors_traceback(tmp_path, capsys):
+    out = tmp_path / "boxes.txt"
+    out.write_text("earlier")
+    argv = ["track-one", str(VIDEO), "--init", "1,2,3,4", "--out", str(out)]
+    with pytest.raises(FileExistsError, match="pass --force"):
+        main(["--debug", *argv])
+    with pytest.raises(FileExistsError, match="pass --force"):
+        main([*argv, "--debug"])  # after the command too
+    r = cli("--debug", *argv)
+    assert r.returncode == 1
+    assert "Traceback (most recent call last)" in r.stderr
+    assert r.stderr.rstrip().splitlines()[-1].startswith("FileExistsError: --out ")
+
+
+def test_a_bug_always_shows_its_traceback(tmp_path, monkeypatch):
+    import vistrack.pipeline
+
+    def bug(*args, **kwargs):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(vistrack.pipeline, "track_video", bug)
+    with pytest.raises(RuntimeError, match="a bug"):
+        main(["track", str(VIDEO), "--out-dir", str(tmp_path / "out")])
