@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_rng
+from .._validate import as_float_array, as_rng, check_has_steps, check_prior
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
     MeasurementModel,
@@ -915,6 +915,7 @@ class ParticleFilter:
         (array([0. , 1.1, 2.1, 2.9, 4.1]), (5, 2))
         """
         ys = as_float_array(ys, "ys", ndim=(2,))
+        check_has_steps(ys)
         T = ys.shape[0]
         n, N, rng = self.ndim_state, self.n_particles, self.rng
         if self._fused is not None and not modes:
@@ -963,11 +964,7 @@ class ParticleFilter:
             if x.shape != (N, n):
                 raise ValueError(f"particles must have shape ({N}, {n}); got {x.shape}")
             return x.copy()
-        m0 = as_float_array(x0, "x0", ndim=(1,))
-        C0 = as_float_array(P0, "P0", ndim=(2,))
-        if m0.shape != (n,) or C0.shape != (n, n):
-            raise ValueError(f"x0 and P0 must have shapes ({n},) and ({n}, {n}); "
-                             f"got {m0.shape} and {C0.shape}")
+        m0, C0 = check_prior(x0, P0, n, batch=False)
         return self.rng.multivariate_normal(m0, C0, size=N, method="eigh")
 
     def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: ArrayLike,
