@@ -107,3 +107,37 @@ def test_a_missing_prior_is_named():
     with pytest.raises(ValueError, match=re.escape(
             "P0 is required (the prior of the first step); got None") + "$"):
         ParticleFilter(CV, POS, rng=0).filter(np.zeros((3, 1)), x0=[0.0, 1.0])
+
+
+def test_a_likelihood_returning_nan_is_a_value_error_naming_the_step():
+    calls = [0]
+
+    def loglik(y, x):
+        calls[0] += 1
+        out = -0.5 * (y[0] - x[:, 0]) ** 2
+        if calls[0] == 3:
+            out[:7] = np.nan
+        return out
+
+    pf = ParticleFilter(CV, loglik, n_particles=1000, rng=0)
+    with pytest.raises(ValueError, match=re.escape(
+            "likelihood returned NaN for 7 of 1000 particles at step 2 (measurement [2.0]); it "
+            "must return log p(y | x) for each particle, -inf where y is impossible") + "$"):
+        pf.filter(np.arange(5.0)[:, None], x0=[0.0, 1.0], P0=np.eye(2))
+
+
+@pytest.mark.parametrize("shape", [(999,), (1000, 1), ()])
+def test_a_likelihood_returning_the_wrong_number_of_values_is_named(shape):
+    pf = ParticleFilter(CV, lambda y, x: np.zeros(shape), n_particles=1000, rng=0)
+    with pytest.raises(ValueError, match=re.escape(
+            f"likelihood must return (N,) = (1000,) log-likelihoods, one per particle; got "
+            f"shape {shape} at step 0") + "$"):
+        pf.filter(np.arange(5.0)[:, None], x0=[0.0, 1.0], P0=np.eye(2))
+
+
+def test_a_likelihood_of_minus_infinity_everywhere_is_still_degeneracy():
+    from vistrack.filters import ParticleDegeneracyError
+
+    pf = ParticleFilter(CV, lambda y, x: np.full(len(x), -np.inf), n_particles=50, rng=0)
+    with pytest.raises(ParticleDegeneracyError, match="zero likelihood at step 0"):
+        pf.filter(np.zeros((3, 1)), x0=[0.0, 1.0], P0=np.eye(2))

@@ -77,6 +77,21 @@ class ParticleDegeneracyError(RuntimeError):
     """
 
 
+def _user_loglik(ll: object, N: int, t: int, y: np.ndarray) -> np.ndarray:
+    """The values a user's log-likelihood callable returned at step ``t``, checked: ``N`` of
+    them, none NaN (``-inf`` is an impossible particle; NaN is a bug in the callable)."""
+    a = np.asarray(ll, dtype=float)
+    if a.shape != (N,):
+        raise ValueError(f"likelihood must return (N,) = ({N},) log-likelihoods, one per "
+                         f"particle; got shape {a.shape} at step {t}")
+    nan = np.isnan(a)
+    if nan.any():
+        raise ValueError(f"likelihood returned NaN for {int(nan.sum())} of {N} particles at "
+                         f"step {t} (measurement {y.tolist()}); it must return log p(y | x) for "
+                         "each particle, -inf where y is impossible")
+    return a
+
+
 def _degenerate(t: int, y: np.ndarray) -> ParticleDegeneracyError:
     return ParticleDegeneracyError(f"every particle has zero likelihood at step {t} (measurement "
                                    f"{y.tolist()}); the filter has lost the target")
@@ -831,11 +846,13 @@ class ParticleFilter:
         if hasattr(likelihood, "R"):
             me = MeasurementFunctions(
                 cast(MeasurementModel | NonlinearMeasurementModel, likelihood), self.ndim_state)
-            self._loglik = self._gaussian_loglik(me)
+            gauss = self._gaussian_loglik(me)
+            self._loglik = lambda y, x, t: np.asarray(gauss(y, x), dtype=float)
             if compiled and hasattr(motion, "Q") and resampling in _random.SCHEMES:
                 self._fused = _compiled_parts(mo, me)
         elif callable(likelihood):
-            self._loglik = likelihood
+            N = self.n_particles
+            self._loglik = lambda y, x, t: _user_loglik(likelihood(y, x), N, t, y)
         else:
             raise TypeError(f"likelihood must be a measurement model or a callable; got "
                             f"{type(likelihood).__name__}")
@@ -902,7 +919,9 @@ class ParticleFilter:
         ParticleDegeneracyError
             If every particle gets zero likelihood (the message names the step).
         ValueError
-            If the prior or ``particles`` has the wrong shape.
+            If ``ys`` has no step, the prior or ``particles`` has the wrong shape, or a
+            ``likelihood`` callable returns other than ``N`` values or a NaN (the message
+            names the step).
 
         Examples
         --------
@@ -932,7 +951,7 @@ class ParticleFilter:
             if t > 0:
                 x = self._propagate(x, float(dts[t]), float(times[t]), rng)
             if not np.isnan(ys[t]).all():
-                a = logw + np.asarray(self._loglik(ys[t], x), dtype=float)
+                a = logw + self._loglik(ys[t], x, t)
                 top = np.max(a)
                 if not np.isfinite(top):
                     raise _degenerate(t, ys[t])
