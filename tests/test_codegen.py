@@ -4,7 +4,13 @@ Large per-series batches run these; the tests lower the size threshold so that s
 do too, and check them against FilterPy and against the loop kernel.
 """
 
+import os
 import re
+import stat
+import tempfile
+import threading
+import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -194,3 +200,168 @@ def test_work_rows_fill_the_flat_array_without_overlap(n, m):
     assert all(a + s == b for (a, s), (b, _) in zip(starts, starts[1:]))
     total = starts[-1][0] + starts[-1][1]
     assert f"W = np.empty({total * _codegen.CH})" in src
+
+
+# ------------------------------------------------- the kernel folder: private, checked before use
+SRC = "VALUE = 41 + 1\n"  # a module to load (no kernel: these tests are about the folder)
+
+
+@pytest.fixture
+def folders(tmp_path, monkeypatch):
+    """Every folder the cache may choose, under tmp_path: the configured one is ``cache``, the
+    temporary directory ``tmp`` (its shared fallback ``tmp/vistrack-kernels-{uid}``), and the
+    process's private folder is made afresh."""
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    monkeypatch.setattr(_codegen, "_PRIVATE_DIR", [])
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.setenv("VISTRACK_CACHE_DIR", str(tmp_path / "cache"))
+    return tmp_path / "cache", tmp_path / "tmp" / f"vistrack-kernels-{os.getuid()}"
+
+
+def _load_where():
+    """Load SRC; the folder its source file went to."""
+    module = _codegen.load("vistrack_foldertest", SRC)
+    assert module.VALUE == 42
+    return {p.parent for p in Path(tempfile.gettempdir()).parent.rglob("vistrack_foldertest_*.py")}
+
+
+def _mode(d):
+    return stat.S_IMODE(os.lstat(d).st_mode)
+
+
+def test_a_new_cache_folder_is_private(folders):
+    cache, _ = folders
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert _load_where() == {cache}
+    assert _mode(cache) == 0o700
+    assert not list(cache.glob("*.tmp"))
+
+
+@pytest.mark.parametrize("env", ["XDG_CACHE_HOME", "HOME"])
+def test_the_cache_folder_follows_xdg_cache_home_then_home(tmp_path, monkeypatch, folders, env):
+    monkeypatch.delenv("VISTRACK_CACHE_DIR")
+    monkeypatch.setenv(env, str(tmp_path / "home"))
+    want = tmp_path / "home" / ("" if env == "XDG_CACHE_HOME" else ".cache") / "vistrack/kernels"
+    assert _load_where() == {want}
+    assert _mode(want) == 0o700
+
+
+def test_an_existing_private_folder_of_the_user_is_used(folders):
+    cache, _ = folders
+    cache.mkdir(mode=0o755)
+    os.chmod(cache, 0o755)  # written by others: no; read by others: harmless
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert _load_where() == {cache}
+
+
+def _refused(d, why, then):
+    return re.escape(f"vistrack does not use the kernel folder {d}: {why}; {then}") + "$"
+
+
+@pytest.mark.parametrize("mode", [0o777, 0o775, 0o757])
+def test_a_folder_others_may_write_to_is_refused(folders, mode):
+    cache, shared = folders
+    cache.mkdir()
+    os.chmod(cache, mode)
+    with pytest.warns(RuntimeWarning, match=_refused(
+            cache, f"others may write to it (mode {mode:#o})", f"it tries {shared}")):
+        assert _load_where() == {shared}
+    assert _mode(shared) == 0o700
+    assert not list(cache.iterdir())
+
+
+def test_a_symbolic_link_is_refused(folders, tmp_path):
+    cache, shared = folders
+    (tmp_path / "elsewhere").mkdir(mode=0o700)
+    cache.symlink_to(tmp_path / "elsewhere")
+    with pytest.warns(RuntimeWarning, match=_refused(
+            cache, "it is a symbolic link", f"it tries {shared}")):
+        assert _load_where() == {shared}
+    assert not list((tmp_path / "elsewhere").iterdir())
+
+
+def test_a_file_is_refused(folders):
+    cache, shared = folders
+    cache.write_text("not a folder")
+    with pytest.warns(RuntimeWarning, match=_refused(
+            cache, "it is not a directory", f"it tries {shared}")):
+        assert _load_where() == {shared}
+
+
+@pytest.mark.skipif(not hasattr(os, "getuid") or os.getuid() != 0,
+                    reason="giving a folder to another user (os.chown) needs root; "
+                           "test_a_folder_of_another_user_is_refused_by_uid covers the check")
+def test_a_folder_of_another_user_is_refused(folders):
+    """The attack: another local user creates the shared temporary folder first."""
+    cache, shared = folders
+    os.chmod(cache.parent, 0o755)
+    cache.write_text("")  # the configured folder is unusable, so the shared one is tried
+    shared.mkdir(mode=0o700)
+    os.chown(shared, 65534, 65534)
+    with pytest.warns(RuntimeWarning) as record:
+        found = _load_where()
+    assert re.match(_refused(shared, "it belongs to user id 65534, not to this user (0)",
+                             "it uses a new temporary folder for this process instead"),
+                    str(record[-1].message))
+    assert found == {_codegen._PRIVATE_DIR[0]}
+    assert _mode(_codegen._PRIVATE_DIR[0]) == 0o700
+    assert not list(shared.iterdir())
+
+
+def test_a_folder_of_another_user_is_refused_by_uid(folders, monkeypatch):
+    cache, shared = folders
+    cache.mkdir(mode=0o700)
+    me = os.getuid()
+    monkeypatch.setattr(_codegen, "_uid", lambda: me + 1)  # as if the folder were another's
+    shared = shared.parent / f"vistrack-kernels-{me + 1}"  # (named after the uid)
+    with pytest.warns(RuntimeWarning) as record:
+        found = _load_where()
+    assert [str(w.message) for w in record] == [
+        f"vistrack does not use the kernel folder {d}: it belongs to user id {me}, not to this "
+        f"user ({me + 1}); " + then for d, then in (
+            (cache, f"it tries {shared}"),
+            (shared, "it uses a new temporary folder for this process instead"))]
+    assert found == {_codegen._PRIVATE_DIR[0]}
+
+
+def test_when_both_folders_are_refused_the_process_gets_its_own(folders):
+    cache, shared = folders
+    for d in (cache, shared):
+        d.mkdir()
+        os.chmod(d, 0o777)
+    with pytest.warns(RuntimeWarning) as record:
+        found = _load_where()
+    assert [str(w.message) for w in record] == [
+        f"vistrack does not use the kernel folder {cache}: others may write to it (mode 0o777); "
+        f"it tries {shared}",
+        f"vistrack does not use the kernel folder {shared}: others may write to it (mode "
+        "0o777); it uses a new temporary folder for this process instead",
+    ]
+    (private,) = found
+    assert private == _codegen._PRIVATE_DIR[0] and _mode(private) == 0o700
+    assert private.parent == Path(tempfile.gettempdir())
+
+
+def test_threads_write_through_temporary_files_of_their_own(tmp_path, monkeypatch):
+    """Eight threads write the same file at once: each through its own temporary file."""
+    names, replace = [], os.replace
+    barrier = threading.Barrier(8)
+
+    def recording_replace(src, dst):
+        names.append(os.fspath(src))
+        barrier.wait(timeout=10)  # every thread has its temporary file before any replaces
+        replace(src, dst)
+
+    monkeypatch.setattr(_codegen.os, "replace", recording_replace)
+    target = tmp_path / "kernel.py"
+    threads = [threading.Thread(target=_codegen._write, args=(target, SRC)) for _ in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(set(names)) == 8
+    assert target.read_text() == SRC
+    assert [p.name for p in tmp_path.iterdir()] == ["kernel.py"]

@@ -239,7 +239,7 @@ def test_nonlinear_filter_errors_name_the_argument(rng):
     flt = ExtendedKalmanFilter(motion, meas)
     with pytest.raises(ValueError, match="ys must have 2 measurement components"):
         flt.filter(np.zeros((3, 3)), x0=np.ones(5), P0=np.eye(5))
-    with pytest.raises(ValueError, match="x0 and P0 must have shapes"):
+    with pytest.raises(ValueError, match=r"^x0 must have shape \(5,\) or \(B, 5\); got \(4,\)$"):
         flt.filter(np.ones((3, 2)), x0=np.ones(4), P0=np.eye(5))
     with pytest.raises(ValueError, match=r"dt must be a scalar or have shape \(3,\); got \(2,\)"):
         flt.filter(np.ones((3, 2)), x0=np.ones(5), P0=np.eye(5), dt=[1.0, 2.0])

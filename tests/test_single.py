@@ -143,3 +143,55 @@ def test_template_tracker_on_the_first_frames_of_otb_crossing():
     frames = sequence(CROSSING / "img", "*.jpg")[:40]
     gt = read_boxes(CROSSING / "groundtruth_rect.txt")[:40]
     assert success_rate(run("template", frames, gt[0]), gt) >= 0.9
+
+
+def _frame_768x576():
+    """A textured 768x576 BGR frame (the size of OpenCV's vtest.avi) with a red square."""
+    rng = np.random.default_rng(11)
+    im = cv2.GaussianBlur(rng.integers(0, 256, (576, 768, 3), dtype=np.uint8), (5, 5), 0)
+    im[200:260, 300:360] = (30, 30, 220)
+    return im
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_every_tracker_refuses_a_start_box_outside_the_image(method):
+    import re
+
+    im = _frame_768x576()
+    for box, msg in [
+        ([800, 10, 40, 40], "box (x, y, w, h) = (800, 10, 40, 40) lies outside the 768x576 "
+                            "image"),
+        ([-50, -50, 40, 40], "box (x, y, w, h) = (-50, -50, 40, 40) lies outside the 768x576 "
+                             "image"),
+        ([10, 576, 40, 40], "box (x, y, w, h) = (10, 576, 40, 40) lies outside the 768x576 "
+                            "image"),
+        ([756, 100, 40, 40], "box (x, y, w, h) = (756, 100, 40, 40) has only 30 % of its area "
+                             "inside the 768x576 image; a start box must be at least half "
+                             "inside"),
+        ([-20.5, 560, 40, 40], "box (x, y, w, h) = (-20.5, 560, 40, 40) has only 19 % of its "
+                               "area inside the 768x576 image; a start box must be at least "
+                               "half inside"),
+    ]:
+        tracker = single_tracker(method)
+        with pytest.raises(ValueError, match="^" + re.escape(msg) + "$"):
+            tracker.init(im, box)
+        assert not tracker.started
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_every_tracker_starts_at_a_box_inside_or_half_inside(method):
+    im = _frame_768x576()
+    for box in ([300, 200, 60, 60], [738, 200, 60, 60], [0, 0, 768, 576]):  # inside, half, all
+        tracker = single_tracker(method)
+        tracker.init(im, box)
+        out = tracker.update(im)
+        assert out.shape == (4,) and np.isfinite(out).all()
+
+
+def test_step_refuses_a_starting_detection_outside_the_image():
+    from vistrack.types import Detections, Frame
+
+    tracker = single_tracker("csrt")
+    with pytest.raises(ValueError, match=r"^box \(x, y, w, h\) = \(800, 10, 40, 40\) lies "
+                                         r"outside the 768x576 image$"):
+        tracker.step(Frame(0, 0.0, _frame_768x576()), Detections.from_xywh([[800, 10, 40, 40]]))

@@ -23,6 +23,8 @@ __all__ = [
     "check_psd",
     "as_rng",
     "as_measurement_series",
+    "check_has_steps",
+    "check_prior",
     "check_linear_gaussian",
 ]
 
@@ -144,6 +146,32 @@ def as_measurement_series(ys: ArrayLike, name: str = "ys") -> tuple[np.ndarray, 
         raise ValueError(f"{name} must be finite or NaN (missing); {name}{list(idx)} = {y[idx]}")
     single = y.ndim == 2
     return (y[None] if single else y), single
+
+
+def check_has_steps(y: np.ndarray, name: str = "ys") -> None:
+    """Raise ``ValueError`` if a series ``(..., T, m)`` has no step (``T = 0``): a filter has
+    nothing to return then, not even a last estimate."""
+    if y.ndim >= 2 and y.shape[-2] == 0:
+        raise ValueError(f"{name} must have at least one step; got shape {_fmt_shape(y.shape)}")
+
+
+def check_prior(x0: ArrayLike | None, P0: ArrayLike | None, n: int, *, batch: bool = True,
+                space: str = "") -> tuple[np.ndarray, np.ndarray]:
+    """A prior mean ``(n,)`` (or ``(B, n)`` when ``batch``) and covariance ``(n, n)`` (or
+    ``(B, n, n)``) for a model whose state has ``n`` entries; each error names the argument
+    (``space`` is appended to the expected shape, e.g. " (the largest member's state)")."""
+    for name, value in (("x0", x0), ("P0", P0)):
+        if value is None:
+            raise ValueError(f"{name} is required (the prior of the first step); got None")
+    x = as_float_array(x0, "x0", ndim=(1, 2) if batch else (1,))
+    if x.shape[-1] != n:
+        want = f"({n},)" + (f" or (B, {n})" if batch else "")
+        raise ValueError(f"x0 must have shape {want}{space}; got {_fmt_shape(x.shape)}")
+    P = as_float_array(P0, "P0", ndim=(2, 3) if batch else (2,))
+    if P.shape[-2:] != (n, n):
+        want = f"({n}, {n})" + (f" or (B, {n}, {n})" if batch else "")
+        raise ValueError(f"P0 must have shape {want}{space}; got {_fmt_shape(P.shape)}")
+    return x, P
 
 
 def check_linear_gaussian(F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, n: int, m: int,

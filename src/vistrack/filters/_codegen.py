@@ -27,18 +27,26 @@ missing component.
 The source of each kernel is written to a file in the user's cache directory
 (``$VISTRACK_CACHE_DIR``, else ``$XDG_CACHE_HOME/vistrack/kernels`` or
 ``~/.cache/vistrack/kernels``) and imported from there, so numba caches its machine code like
-that of any other module: a pattern costs its compilation (seconds) once per machine.
+that of any other module: a pattern costs its compilation (seconds) once per machine. Since
+numba unpickles what it finds there, a folder is used only if it is a directory (not a symbolic
+link) owned by the user and not writable by others; it is created with mode 0o700. An unsafe
+folder is refused with a warning (then ``vistrack-kernels-{uid}`` in the temporary directory,
+under the same rule, else a new private folder for the process).
 """
 
 from __future__ import annotations
 
+import atexit
 import functools
 import hashlib
 import importlib.util
 import math
 import os
+import shutil
+import stat
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -378,6 +386,91 @@ def _cache_dir() -> Path:
     return root / "vistrack" / "kernels"
 
 
+def _uid() -> int | None:
+    return os.getuid() if hasattr(os, "getuid") else None
+
+
+def _unsafe(d: Path) -> str | None:
+    """Why the kernel folder ``d`` must not be used, or None if it is safe.
+
+    numba unpickles what it finds beside a kernel's source, so the folder must be a real
+    directory (not a symbolic link) that only this user can write to: owned by them, with no
+    group or other write permission. A missing folder is created with mode 0o700 (its parents
+    with the default mode). An ``OSError`` (the folder cannot be created) propagates."""
+    if not os.path.lexists(d):
+        d.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            d.mkdir(mode=0o700)
+        except FileExistsError:  # created meanwhile, by this user or another: check it below
+            pass
+    st = os.lstat(d)
+    if stat.S_ISLNK(st.st_mode):
+        return "it is a symbolic link"
+    if not stat.S_ISDIR(st.st_mode):
+        return "it is not a directory"
+    uid = _uid()
+    if uid is not None and st.st_uid != uid:
+        return f"it belongs to user id {st.st_uid}, not to this user ({uid})"
+    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        return f"others may write to it (mode {stat.S_IMODE(st.st_mode):#o})"
+    return None
+
+
+_PRIVATE_DIR: list[Path] = []  # this process's own temporary folder, made when first needed
+
+
+def _private_dir() -> Path:
+    """A fresh folder (mode 0o700) for this process only, removed when it exits."""
+    if not _PRIVATE_DIR:
+        d = Path(tempfile.mkdtemp(prefix="vistrack-kernels-"))
+        atexit.register(shutil.rmtree, d, ignore_errors=True)
+        _PRIVATE_DIR.append(d)
+    return _PRIVATE_DIR[0]
+
+
+def _write(path: Path, src: str) -> None:
+    """Write ``src`` to ``path`` through a temporary file of a name unique to this call (so
+    neither concurrent processes nor threads share one), replaced atomically: a reader never
+    sees half a file."""
+    with tempfile.NamedTemporaryFile("w", dir=path.parent, prefix=f"{path.stem}.",
+                                     suffix=".tmp", delete=False) as f:
+        f.write(src)
+    try:
+        os.replace(f.name, path)
+    except OSError:
+        Path(f.name).unlink(missing_ok=True)
+        raise
+
+
+def _source_file(name: str, src: str) -> Path | None:
+    """The file holding ``src`` in the first usable kernel folder: the cache directory, else
+    ``vistrack-kernels-{uid}`` in the temporary directory, else a fresh folder for this process.
+    A folder that exists but is unsafe (see :func:`_unsafe`) is refused with a warning; one that
+    cannot be written is passed over. None if no folder can be written."""
+    user = _uid() if _uid() is not None else "user"
+    shared = [_cache_dir(), Path(tempfile.gettempdir()) / f"vistrack-kernels-{user}"]
+    for i, d in enumerate(shared + [None]):
+        try:
+            if d is None:
+                d = _private_dir()
+            else:
+                why = _unsafe(d)
+                if why is not None:
+                    warnings.warn(
+                        f"vistrack does not use the kernel folder {d}: {why}; "
+                        + ("it tries " + str(shared[i + 1]) if i + 1 < len(shared)
+                           else "it uses a new temporary folder for this process instead"),
+                        RuntimeWarning, stacklevel=4)
+                    continue
+            p = d / f"{name}.py"
+            if not p.exists() or p.read_text() != src:
+                _write(p, src)
+            return p
+        except OSError:
+            continue
+    return None
+
+
 @functools.cache
 def batch_kernel(n: int, m: int, cf: tuple, cq: tuple, ch: tuple, cr: tuple):
     """The compiled kernel for state size ``n``, measurement size ``m`` and the entry codes
@@ -394,20 +487,7 @@ def load(prefix: str, src: str):
     ``prefix`` and the source's hash (so a changed generator never meets a stale cache), so
     that numba caches the machine code of its ``cache=True`` functions."""
     name = f"{prefix}_{hashlib.sha1(src.encode()).hexdigest()[:16]}"
-    user = os.getuid() if hasattr(os, "getuid") else "user"
-    path = None
-    for d in (_cache_dir(), Path(tempfile.gettempdir()) / f"vistrack-kernels-{user}"):
-        try:
-            d.mkdir(parents=True, exist_ok=True)
-            p = d / f"{name}.py"
-            if not p.exists() or p.read_text() != src:
-                tmp = d / f"{name}.{os.getpid()}.tmp"
-                tmp.write_text(src)
-                os.replace(tmp, p)  # atomic: concurrent processes never see half a file
-            path = p
-            break
-        except OSError:
-            continue
+    path = _source_file(name, src)
     if path is None:  # no writable directory: compile without a cache
         module = type(sys)(name)
         exec(compile(src.replace("cache=True", "cache=False"), name, "exec"), module.__dict__)

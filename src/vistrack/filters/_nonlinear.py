@@ -9,7 +9,7 @@ from typing import Protocol, TypeVar, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array
+from .._validate import as_float_array, check_has_steps, check_prior
 from ..types import Gaussian
 from .kalman import FilterResult, _readonly
 
@@ -61,6 +61,7 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
     ``dt`` is a scalar or ``(T,)`` (``dt[t]`` is the step from ``t-1`` to ``t``); ``times``
     defaults to the cumulative sum of ``dt`` with ``times[0] = 0``."""
     Y = as_float_array(ys, "ys", ndim=(2, 3))
+    check_has_steps(Y)
     single = Y.ndim == 2
     if single:
         Y = Y[None]
@@ -69,11 +70,7 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
         raise ValueError(f"ys must have {m} measurement components (last axis); got {mm}")
     dts, times = step_times(dt, times, T)
     if state is None:
-        mean0 = as_float_array(x0, "x0", ndim=(1, 2))
-        cov0 = as_float_array(P0, "P0", ndim=(2, 3))
-        if mean0.shape[-1] != n or cov0.shape[-2:] != (n, n):
-            raise ValueError(f"x0 and P0 must have shapes (…, {n}) and (…, {n}, {n}); "
-                             f"got {mean0.shape} and {cov0.shape}")
+        mean0, cov0 = check_prior(x0, P0, n)
         if B == 1 and mean0.ndim == 1 and cov0.ndim == 2:
             # one series: the state is one Gaussian, which runs the compiled one-Gaussian paths
             state = cast(State, Gaussian(mean0.copy(), cov0.copy()))

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_rng
+from .._validate import as_float_array, as_rng, check_has_steps, check_prior
 from ..models.adapters import MeasurementFunctions, MotionFunctions, psd_sqrt
 from ..models.protocols import (
     MeasurementModel,
@@ -363,13 +363,15 @@ class EnsembleKalmanFilter:
         ((2, 5, 2), (2,))
         """
         n = self.motion.n
-        ys_arr = np.asarray(ys, dtype=float)
+        ys_arr = as_float_array(ys, "ys", ndim=(2, 3))
+        check_has_steps(ys_arr)
         B = 1 if ys_arr.ndim == 2 else ys_arr.shape[0]
-        x0 = np.broadcast_to(np.asarray(x0, dtype=float), (B, n))
-        P0 = np.broadcast_to(np.asarray(P0, dtype=float), (B, n, n))
+        x0, P0 = check_prior(x0, P0, n)
+        x0 = np.broadcast_to(x0, (B, n))
+        P0 = np.broadcast_to(P0, (B, n, n))
         ens = Ensemble.sample(x0, P0, self.n_members, self.rng)
         return run_sequence(
-            ys, None, None, n, self.measurement.m, dt, times,
+            ys_arr, None, None, n, self.measurement.m, dt, times,
             self.predict, self.update, state=ens,
         )
 

@@ -38,7 +38,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array
+from .._validate import as_float_array, check_has_steps, check_prior
 from ..models.protocols import MotionModel, NonlinearMotionModel
 from ..models.switching import SwitchingLinearSystem
 from ..types import Gaussian
@@ -320,16 +320,13 @@ class IMMFilter:
         True
         """
         ys = as_float_array(ys, "ys", ndim=(2, 3))
+        check_has_steps(ys)
         single = ys.ndim == 2
         if single:
             ys = ys[None]
         B, T, _ = ys.shape
         n = self.sizes[self.ref]
-        x0 = as_float_array(x0, "x0", ndim=(1, 2))
-        P0 = as_float_array(P0, "P0", ndim=(2, 3))
-        if x0.shape[-1] != n or P0.shape[-2:] != (n, n):
-            raise ValueError(f"x0 and P0 must have shapes (…, {n}) and (…, {n}, {n}) (the "
-                             f"largest member's state); got {x0.shape} and {P0.shape}")
+        x0, P0 = check_prior(x0, P0, n, space=" (the largest member's state)")
         x0 = np.broadcast_to(x0, (B, n))
         P0 = np.broadcast_to(P0, (B, n, n))
         gs = [Gaussian(x0[:, :k].copy(), P0[:, :k, :k].copy()) for k in self.sizes]
@@ -538,16 +535,13 @@ class SwitchingParticleFilter:
         """
         sysm, N, rng = self.system, self.n_particles, self.rng
         ys = as_float_array(ys, "ys", ndim=(2,))
+        check_has_steps(ys)
         T, n, k = ys.shape[0], sysm.ndim_state, len(sysm.motions)
         H, R = sysm.measurement.H(n), sysm.measurement.R()
         Fs = [m.F(dt) for m in sysm.motions]
         Qs = [m.Q(dt) for m in sysm.motions]
         cum = np.cumsum(sysm.transition, axis=1)
-        x0 = as_float_array(x0, "x0", ndim=(1,))
-        P0 = as_float_array(P0, "P0", ndim=(2,))
-        if x0.shape != (n,) or P0.shape != (n, n):
-            raise ValueError(f"x0 and P0 must have shapes ({n},) and ({n}, {n}); got {x0.shape} "
-                             f"and {P0.shape}")
+        x0, P0 = check_prior(x0, P0, n, batch=False)
         mean = np.broadcast_to(x0, (N, n)).copy()
         cov = np.broadcast_to(P0, (N, n, n)).copy()
         z = np.minimum(np.searchsorted(np.cumsum(sysm.mode_probs), rng.random(N), "right"), k - 1)

@@ -25,6 +25,7 @@ from .._validate import (
     as_float_array,
     as_measurement_series,
     check_finite,
+    check_has_steps,
     check_linear_gaussian,
     check_psd,
 )
@@ -92,12 +93,19 @@ def _readonly(*arrays: np.ndarray | None) -> None:
             a.flags.writeable = False
 
 
-def _prior(x0: ArrayLike, P0: ArrayLike, B: int) -> tuple[np.ndarray, np.ndarray]:
+def _prior(x0: ArrayLike, P0: ArrayLike, B: int,
+           n_model: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The prior, checked; ``n_model`` is the state size of ``F`` when known: an ``x0`` whose
+    length disagrees with both ``P0`` and ``F`` is named (rather than ``P0``)."""
     x = as_float_array(x0, "x0", ndim=(1, 2))
+    P = as_float_array(P0, "P0", ndim=(2, 3))
     n = x.shape[-1]
+    n_P = P.shape[-1]
+    if n != n_P and n_model == n_P and P.shape[-2] == n_P:
+        raise ValueError(f"x0 must have shape ({n_P},) or (B={B}, {n_P}) to match P0 and F; "
+                         f"got {x.shape}")
     if x.ndim == 2 and x.shape[0] not in (1, B):
         raise ValueError(f"x0 must have shape ({n},) or (B={B}, {n}); got {x.shape}")
-    P = as_float_array(P0, "P0", ndim=(2, 3))
     if P.shape[-2:] != (n, n) or (P.ndim == 3 and P.shape[0] not in (1, B)):
         raise ValueError(f"P0 must have shape ({n}, {n}) or (B={B}, {n}, {n}); got {P.shape}")
     check_finite(x, "x0")
@@ -172,7 +180,8 @@ def kalman_filter(
     Raises
     ------
     ValueError
-        If a shape disagrees, a value is not finite, ``Q``, ``R`` or ``P0`` is not symmetric
+        If ``ys`` has no step (``T = 0``), a shape disagrees (the message names the argument),
+        a value is not finite, ``Q``, ``R`` or ``P0`` is not symmetric
         positive semi-definite, or an innovation covariance ``H P H' + R`` is not positive
         definite (the message names the step).
 
@@ -217,8 +226,9 @@ def kalman_filter(
     ((2, 4, 2), (2,), True)
     """
     y, single = as_measurement_series(ys)
+    check_has_steps(y[0] if single else y)
     B, T, m = y.shape
-    x0_, P0_ = _prior(x0, P0, B)
+    x0_, P0_ = _prior(x0, P0, B, np.shape(F)[-1] if np.ndim(F) >= 2 else None)
     n = x0_.shape[1]
     F_, Q_, H_, R_ = check_linear_gaussian(F, Q, H, R, n, m, T)
 

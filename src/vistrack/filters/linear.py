@@ -7,7 +7,13 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_measurement_series, check_matrix_stack, check_psd
+from .._validate import (
+    as_float_array,
+    as_measurement_series,
+    check_has_steps,
+    check_matrix_stack,
+    check_psd,
+)
 from ..models.measurement import MeasurementModel
 from ..models.motion import MotionModel
 from ..types import Gaussian
@@ -221,7 +227,8 @@ class KalmanFilter:
         >>> x0, P0.diagonal()
         (array([2., 0.]), array([1.e+00, 1.e+06]))
         """
-        y, _ = as_measurement_series(ys)
+        y, single = as_measurement_series(ys)
+        check_has_steps(y[0] if single else y)
         n = self.motion.ndim_state
         H = np.asarray(self.measurement.H(n), dtype=float)
         R = np.asarray(self.measurement.R(), dtype=float)

@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_rng
+from .._validate import as_float_array, as_rng, check_has_steps, check_prior
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
     MeasurementModel,
@@ -75,6 +75,21 @@ class ParticleDegeneracyError(RuntimeError):
     ...     print(e)
     every particle has zero likelihood at step 0 (measurement [0.0]); the filter has lost ...
     """
+
+
+def _user_loglik(ll: object, N: int, t: int, y: np.ndarray) -> np.ndarray:
+    """The values a user's log-likelihood callable returned at step ``t``, checked: ``N`` of
+    them, none NaN (``-inf`` is an impossible particle; NaN is a bug in the callable)."""
+    a = np.asarray(ll, dtype=float)
+    if a.shape != (N,):
+        raise ValueError(f"likelihood must return (N,) = ({N},) log-likelihoods, one per "
+                         f"particle; got shape {a.shape} at step {t}")
+    nan = np.isnan(a)
+    if nan.any():
+        raise ValueError(f"likelihood returned NaN for {int(nan.sum())} of {N} particles at "
+                         f"step {t} (measurement {y.tolist()}); it must return log p(y | x) for "
+                         "each particle, -inf where y is impossible")
+    return a
 
 
 def _degenerate(t: int, y: np.ndarray) -> ParticleDegeneracyError:
@@ -831,11 +846,13 @@ class ParticleFilter:
         if hasattr(likelihood, "R"):
             me = MeasurementFunctions(
                 cast(MeasurementModel | NonlinearMeasurementModel, likelihood), self.ndim_state)
-            self._loglik = self._gaussian_loglik(me)
+            gauss = self._gaussian_loglik(me)
+            self._loglik = lambda y, x, t: np.asarray(gauss(y, x), dtype=float)
             if compiled and hasattr(motion, "Q") and resampling in _random.SCHEMES:
                 self._fused = _compiled_parts(mo, me)
         elif callable(likelihood):
-            self._loglik = likelihood
+            N = self.n_particles
+            self._loglik = lambda y, x, t: _user_loglik(likelihood(y, x), N, t, y)
         else:
             raise TypeError(f"likelihood must be a measurement model or a callable; got "
                             f"{type(likelihood).__name__}")
@@ -902,7 +919,9 @@ class ParticleFilter:
         ParticleDegeneracyError
             If every particle gets zero likelihood (the message names the step).
         ValueError
-            If the prior or ``particles`` has the wrong shape.
+            If ``ys`` has no step, the prior or ``particles`` has the wrong shape, or a
+            ``likelihood`` callable returns other than ``N`` values or a NaN (the message
+            names the step).
 
         Examples
         --------
@@ -915,6 +934,7 @@ class ParticleFilter:
         (array([0. , 1.1, 2.1, 2.9, 4.1]), (5, 2))
         """
         ys = as_float_array(ys, "ys", ndim=(2,))
+        check_has_steps(ys)
         T = ys.shape[0]
         n, N, rng = self.ndim_state, self.n_particles, self.rng
         if self._fused is not None and not modes:
@@ -931,7 +951,7 @@ class ParticleFilter:
             if t > 0:
                 x = self._propagate(x, float(dts[t]), float(times[t]), rng)
             if not np.isnan(ys[t]).all():
-                a = logw + np.asarray(self._loglik(ys[t], x), dtype=float)
+                a = logw + self._loglik(ys[t], x, t)
                 top = np.max(a)
                 if not np.isfinite(top):
                     raise _degenerate(t, ys[t])
@@ -963,11 +983,7 @@ class ParticleFilter:
             if x.shape != (N, n):
                 raise ValueError(f"particles must have shape ({N}, {n}); got {x.shape}")
             return x.copy()
-        m0 = as_float_array(x0, "x0", ndim=(1,))
-        C0 = as_float_array(P0, "P0", ndim=(2,))
-        if m0.shape != (n,) or C0.shape != (n, n):
-            raise ValueError(f"x0 and P0 must have shapes ({n},) and ({n}, {n}); "
-                             f"got {m0.shape} and {C0.shape}")
+        m0, C0 = check_prior(x0, P0, n, batch=False)
         return self.rng.multivariate_normal(m0, C0, size=N, method="eigh")
 
     def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: ArrayLike,

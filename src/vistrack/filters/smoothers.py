@@ -13,7 +13,13 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
-from .._validate import as_measurement_series, check_linear_gaussian, check_matrix_stack, check_psd
+from .._validate import (
+    as_measurement_series,
+    check_has_steps,
+    check_linear_gaussian,
+    check_matrix_stack,
+    check_psd,
+)
 from ._kernels import chol_solve, predict_one
 from .kalman import FilterResult, _readonly, kalman_filter
 
@@ -186,6 +192,7 @@ def rts_smooth(result: FilterResult, *, F: ArrayLike, Q: ArrayLike) -> SmoothRes
     array([0.941, 0.337])
     """
     means, covs, single = _filtered_arrays(result)
+    check_has_steps(result.means, "result.means")
     B, T, n = means.shape
     F_ = check_matrix_stack(F, "F", n, n, T)
     Q_ = check_matrix_stack(Q, "Q", n, n, T)

@@ -23,7 +23,7 @@ from ..types import Detections, Frame, Tracks
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-__all__ = ["Tracker", "SingleObjectTracker", "frame_index", "frame_image"]
+__all__ = ["Tracker", "SingleObjectTracker", "check_start_box", "frame_index", "frame_image"]
 
 
 @runtime_checkable
@@ -165,6 +165,35 @@ def frame_image(frame: Frame, who: str) -> np.ndarray:
     return np.asarray(image)
 
 
+def check_start_box(image: np.ndarray, box: np.ndarray, name: str = "box") -> None:
+    """Refuse a start box ``x, y, w, h`` with less than half its area inside ``image``: a
+    tracker has no object to learn there (and OpenCV's fail inside, others follow nothing).
+
+    Examples
+    --------
+    >>> image, box = np.zeros((576, 768), np.uint8), np.array([700.0, 10, 200, 40])
+    >>> check_start_box(image, box)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: box (x, y, w, h) = (700, 10, 200, 40) has only 34 % of its area inside the ...
+    """
+    shape = np.shape(image)
+    if len(shape) < 2:
+        return  # not an image: the tracker's own check names it
+    H, W = shape[:2]
+    x, y, w, h = (float(v) for v in box)
+    iw = max(0.0, min(x + w, W) - max(x, 0.0))
+    ih = max(0.0, min(y + h, H) - max(y, 0.0))
+    inside = iw * ih / (w * h)
+    if inside >= 0.5:
+        return
+    where = f"{name} (x, y, w, h) = ({', '.join(f'{v:g}' for v in (x, y, w, h))})"
+    if inside == 0.0:
+        raise ValueError(f"{where} lies outside the {W}x{H} image")
+    raise ValueError(f"{where} has only {int(100 * inside)} % of its area inside the {W}x{H} "
+                     "image; a start box must be at least half inside")
+
+
 class SingleObjectTracker:
     """The tracker protocol for trackers of one object, on top of ``init(image, box)`` and
     ``update(image) -> box`` (boxes ``x, y, w, h``: the top-left corner and size).
@@ -213,7 +242,9 @@ class SingleObjectTracker:
         Raises
         ------
         ValueError
-            If ``box`` is not four finite numbers with a positive size.
+            If ``box`` is not four finite numbers with a positive size, or less than half of
+            it lies inside ``image`` (the message gives the box, the share inside and the
+            image's size).
 
         Examples
         --------
@@ -222,8 +253,14 @@ class SingleObjectTracker:
         >>> t.init(np.zeros((60, 80, 3), np.uint8), [30, 20, 20, 20])
         >>> t.started
         True
+        >>> t.init(np.zeros((60, 80, 3), np.uint8), [90, 20, 20, 20])
+        Traceback (most recent call last):
+        ...
+        ValueError: box (x, y, w, h) = (90, 20, 20, 20) lies outside the 80x60 image
         """
-        self._start(image, as_box(box))
+        b = as_box(box)
+        check_start_box(image, b)
+        self._start(image, b)
         self._started = True
 
     def update(self, image: np.ndarray) -> np.ndarray:
@@ -298,6 +335,9 @@ class SingleObjectTracker:
         TypeError
             If ``frame`` has no image, or the detections that would start the tracker have no
             boxes.
+        ValueError
+            If the detection that starts the tracker is less than half inside the image (see
+            :meth:`init`).
 
         Examples
         --------

@@ -1,0 +1,143 @@
+"""Errors that name the argument: no measurement steps, a prior of the wrong size, and a
+particle filter's user likelihood that returns NaN or the wrong number of values."""
+
+import re
+
+import numpy as np
+import pytest
+
+import vistrack as vt
+from vistrack.filters import (
+    EnsembleKalmanFilter,
+    ExtendedKalmanFilter,
+    FilterResult,
+    IMMFilter,
+    KalmanFilter,
+    ParticleFilter,
+    SwitchingParticleFilter,
+    UnscentedKalmanFilter,
+    kalman_filter,
+    rts_smooth,
+)
+from vistrack.models import SwitchingLinearSystem
+
+CV, POS = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1, r=1.0)
+MATS = dict(F=np.array([[1.0, 1.0], [0.0, 1.0]]), Q=0.01 * np.eye(2), H=np.array([[1.0, 0.0]]),
+            R=[[0.25]])
+SLDS = SwitchingLinearSystem([vt.ConstantVelocity(dim=1, q=0.01),
+                              vt.ConstantVelocity(dim=1, q=4.0)], POS, [[0.9, 0.1], [0.2, 0.8]])
+
+
+def _imm():
+    return IMMFilter([KalmanFilter(CV, POS), KalmanFilter(vt.ConstantVelocity(dim=1, q=4.0), POS)],
+                     [[0.9, 0.1], [0.1, 0.9]])
+
+
+# every sequence filter, called with ys, x0 and P0
+FILTERS = {
+    "kalman_filter": lambda ys, x0, P0: kalman_filter(ys, **MATS, x0=x0, P0=P0),
+    "KalmanFilter.filter": lambda ys, x0, P0: KalmanFilter(CV, POS).filter(ys, x0=x0, P0=P0),
+    "KalmanFilter.smooth": lambda ys, x0, P0: KalmanFilter(CV, POS).smooth(ys, x0=x0, P0=P0),
+    "ExtendedKalmanFilter": lambda ys, x0, P0: ExtendedKalmanFilter(CV, POS).filter(
+        ys, x0=x0, P0=P0),
+    "UnscentedKalmanFilter": lambda ys, x0, P0: UnscentedKalmanFilter(CV, POS).filter(
+        ys, x0=x0, P0=P0),
+    "EnsembleKalmanFilter": lambda ys, x0, P0: EnsembleKalmanFilter(CV, POS, rng=0).filter(
+        ys, x0=x0, P0=P0),
+    "ParticleFilter": lambda ys, x0, P0: ParticleFilter(CV, POS, rng=0).filter(
+        ys, x0=x0, P0=P0),
+    "ParticleFilter (numpy path)": lambda ys, x0, P0: ParticleFilter(CV, POS, rng=0).filter(
+        ys, x0=x0, P0=P0, modes=True),
+    "IMMFilter": lambda ys, x0, P0: _imm().filter(ys, x0=x0, P0=P0),
+    "SwitchingParticleFilter": lambda ys, x0, P0: SwitchingParticleFilter(SLDS, rng=0).filter(
+        ys, x0=x0, P0=P0),
+}
+BATCHED = {"kalman_filter", "KalmanFilter.filter", "KalmanFilter.smooth", "ExtendedKalmanFilter",
+           "UnscentedKalmanFilter", "EnsembleKalmanFilter", "IMMFilter"}
+
+
+@pytest.mark.parametrize("name", sorted(FILTERS))
+def test_no_step_is_refused_naming_ys(name):
+    with pytest.raises(ValueError, match=re.escape(
+            "ys must have at least one step; got shape (0, 1)") + "$"):
+        FILTERS[name](np.empty((0, 1)), [0.0, 1.0], np.eye(2))
+    if name in BATCHED:
+        with pytest.raises(ValueError, match=re.escape(
+                "ys must have at least one step; got shape (3, 0, 1)") + "$"):
+            FILTERS[name](np.empty((3, 0, 1)), [0.0, 1.0], np.eye(2))
+
+
+def test_no_step_is_refused_by_the_default_prior():
+    kf = KalmanFilter(CV, POS)
+    for call in (kf.filter, kf.smooth, kf.default_prior):
+        with pytest.raises(ValueError, match=re.escape(
+                "ys must have at least one step; got shape (0, 1)") + "$"):
+            call(np.empty((0, 1)))
+
+
+def test_rts_smooth_refuses_a_result_without_steps():
+    res = FilterResult(np.empty((0, 2)), np.empty((0, 2, 2)), None, None, np.asarray(0.0),
+                       vt.Gaussian(np.zeros(2), np.eye(2)))
+    with pytest.raises(ValueError, match=re.escape(
+            "result.means must have at least one step; got shape (0, 2)") + "$"):
+        rts_smooth(res, F=MATS["F"], Q=MATS["Q"])
+
+
+@pytest.mark.parametrize("name", sorted(FILTERS))
+def test_a_prior_mean_of_the_wrong_length_names_x0(name):
+    if name.startswith("kalman") or name.startswith("KalmanFilter"):
+        want = "x0 must have shape (2,) or (B=1, 2) to match P0 and F; got (3,)"
+    elif name in BATCHED:
+        want = "x0 must have shape (2,) or (B, 2)"
+        want += " (the largest member's state)" if name == "IMMFilter" else ""
+        want += "; got (3,)"
+    else:
+        want = "x0 must have shape (2,); got (3,)"
+    with pytest.raises(ValueError, match=re.escape(want) + "$"):
+        FILTERS[name](np.zeros((4, 1)), [0.0, 1.0, 2.0], np.eye(2))
+
+
+@pytest.mark.parametrize("name", sorted(FILTERS))
+def test_a_prior_covariance_of_the_wrong_size_names_P0(name):
+    with pytest.raises(ValueError, match=r"^P0 must have shape \(2, 2\)"):
+        FILTERS[name](np.zeros((4, 1)), [0.0, 1.0], np.eye(3))
+
+
+def test_a_missing_prior_is_named():
+    with pytest.raises(ValueError, match=re.escape(
+            "P0 is required (the prior of the first step); got None") + "$"):
+        ParticleFilter(CV, POS, rng=0).filter(np.zeros((3, 1)), x0=[0.0, 1.0])
+
+
+def test_a_likelihood_returning_nan_is_a_value_error_naming_the_step():
+    calls = [0]
+
+    def loglik(y, x):
+        calls[0] += 1
+        out = -0.5 * (y[0] - x[:, 0]) ** 2
+        if calls[0] == 3:
+            out[:7] = np.nan
+        return out
+
+    pf = ParticleFilter(CV, loglik, n_particles=1000, rng=0)
+    with pytest.raises(ValueError, match=re.escape(
+            "likelihood returned NaN for 7 of 1000 particles at step 2 (measurement [2.0]); it "
+            "must return log p(y | x) for each particle, -inf where y is impossible") + "$"):
+        pf.filter(np.arange(5.0)[:, None], x0=[0.0, 1.0], P0=np.eye(2))
+
+
+@pytest.mark.parametrize("shape", [(999,), (1000, 1), ()])
+def test_a_likelihood_returning_the_wrong_number_of_values_is_named(shape):
+    pf = ParticleFilter(CV, lambda y, x: np.zeros(shape), n_particles=1000, rng=0)
+    with pytest.raises(ValueError, match=re.escape(
+            f"likelihood must return (N,) = (1000,) log-likelihoods, one per particle; got "
+            f"shape {shape} at step 0") + "$"):
+        pf.filter(np.arange(5.0)[:, None], x0=[0.0, 1.0], P0=np.eye(2))
+
+
+def test_a_likelihood_of_minus_infinity_everywhere_is_still_degeneracy():
+    from vistrack.filters import ParticleDegeneracyError
+
+    pf = ParticleFilter(CV, lambda y, x: np.full(len(x), -np.inf), n_particles=50, rng=0)
+    with pytest.raises(ParticleDegeneracyError, match="zero likelihood at step 0"):
+        pf.filter(np.zeros((3, 1)), x0=[0.0, 1.0], P0=np.eye(2))
