@@ -20,6 +20,7 @@ from __future__ import annotations
 import configparser
 import itertools
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -306,7 +307,9 @@ def read_mot(path: str | os.PathLike) -> MOTTable:
     a = None
     try:
         if text.strip():
-            a = np.loadtxt(lines, delimiter=",", ndmin=2, dtype=float)
+            with warnings.catch_warnings():  # a file of comments only: "no data"
+                warnings.simplefilter("ignore", UserWarning)
+                a = np.loadtxt(lines, delimiter=",", ndmin=2, dtype=float)
             if not 6 <= a.shape[1] <= 10 or not np.isfinite(a).all():
                 a = None
         else:
