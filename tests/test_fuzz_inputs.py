@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from vistrack.config import ConfigError, TrackConfig, config_toml, read_config
 from vistrack.io import MOTFormatError, read_mot, read_seqinfo
 
-# about 27 s of CPU time (2-4 times that on a loaded machine): more than the ~20 s a test
+# about 24 s on an idle 2-CPU machine (50-100 s when it is loaded): more than the ~20 s a test
 # outside the slow set may take
 pytestmark = pytest.mark.slow
 
