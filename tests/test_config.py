@@ -3,6 +3,7 @@ and bad files and values named."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from dataclasses import replace
@@ -214,3 +215,28 @@ def test_video_mode_options_keep_the_front_ends_defaults(tmp_path):
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "a" / "tracks.txt").read_text() == \
         (tmp_path / "b" / "tracks.txt").read_text()
+
+
+@pytest.mark.parametrize("data, why", [
+    (b"\x89PNG\r\n\x1a\n\x00", "(byte 0: b'\\x89' is not UTF-8)"),
+    (b"[tracker]\nname = \"s\xe9rt\"\n", "(byte 19: b'\\xe9' is not UTF-8)"),
+    (b"[tracker]\n\x00\x00", "(byte 10 is a NUL byte)"),
+])
+def test_a_binary_or_non_utf8_file_is_named(tmp_path, data, why):
+    path = tmp_path / "bad.toml"
+    path.write_bytes(data)
+    with pytest.raises(ConfigError) as e:
+        read_config(path)
+    assert str(e.value) == f"{path} is not a text TOML file {why}"
+    with pytest.raises(ConfigError, match=re.escape(f"{tmp_path} is not a text TOML file (it "
+                                                    "is a folder)")):
+        read_config(tmp_path)
+
+
+def test_a_byte_order_mark_is_dropped_and_deep_nesting_is_named(tmp_path):
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf[tracker]\r\nname = \"sort\"\r\n")
+    assert read_config(path).name == "sort"
+    path.write_text("x = " + "[" * 5000 + "]" * 5000 + "\n")
+    with pytest.raises(ConfigError, match=re.escape(f"{path}: not valid TOML")):
+        read_config(path)

@@ -3,6 +3,7 @@ independent transcription of the seeds' formulas, and the PETS09-S2L1 clip."""
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import cv2
@@ -84,6 +85,79 @@ def test_a_truncated_video_warns_with_the_frame_where_reading_stopped(tmp_path):
         assert 0 < n < 795
         msg = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
         assert msg and f"reading stopped at frame {n + 1}" in msg[0] and "cut.avi" in msg[0]
+
+
+def _folder(tmp_path, n=5, ext=".jpg", size=(48, 64)):
+    rng = np.random.default_rng(1)
+    files = []
+    for k in range(n):
+        im = cv2.GaussianBlur(rng.integers(0, 255, size + (3,), dtype=np.uint8), (9, 9), 3)
+        files.append(tmp_path / f"{k + 1:06d}{ext}")
+        cv2.imwrite(str(files[-1]), im)
+    return files
+
+
+def _read(reader):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        frames = list(reader)
+    return frames, [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
+
+
+@pytest.mark.parametrize("ext", [".jpg", ".png"])
+def test_a_truncated_image_is_named_or_skipped(tmp_path, ext):
+    files = _folder(tmp_path, ext=ext)
+    data = files[2].read_bytes()
+    files[2].write_bytes(data[: len(data) // 2])  # libjpeg would decode a grey lower half
+    why = ("a JPEG cut short (" if ext == ".jpg" else "not a readable image (OpenCV cannot "
+           "decode it")
+    for prefetch in (0, 3):
+        with pytest.raises(VideoError) as e:
+            list(VideoReader(tmp_path, prefetch=prefetch))
+        assert str(e.value).startswith(f"{files[2]}: {why}")
+        frames, msg = _read(VideoReader(tmp_path, prefetch=prefetch, skip_bad=True))
+        assert [f.index for f in frames] == [1, 2, 4, 5]  # indices stay the files' positions
+        assert len(msg) == 1 and msg[0].startswith(f"{files[2]}: {why}")
+        assert msg[0].endswith("; skipped")
+    # a bad first image: named when the reader is made, or skipped (the size is the next's)
+    files[0].write_bytes(b"\xff\xd8\xff\xe0 junk")
+    with pytest.raises(VideoError, match=re.escape(f"{files[0]}: ")):
+        VideoReader(tmp_path)
+    r = VideoReader(tmp_path, skip_bad=True)
+    frames, msg = _read(r)
+    assert r.size == (64, 48) and [f.index for f in frames] == [2, 4, 5] and len(msg) == 2
+    for f in files:
+        f.write_bytes(b"")
+    with pytest.raises(VideoError, match="holds no readable images"):
+        VideoReader(tmp_path, skip_bad=True)
+
+
+def test_a_jpeg_padded_after_its_end_marker_reads(tmp_path):
+    files = _folder(tmp_path, n=2)
+    files[1].write_bytes(files[1].read_bytes() + b"\x00" * 100)
+    frames, msg = _read(VideoReader(tmp_path))
+    assert len(frames) == 2 and not msg
+
+
+def test_an_image_of_another_size_is_named_with_both_sizes(tmp_path):
+    files = _folder(tmp_path, n=4, ext=".png")
+    cv2.imwrite(str(files[2]), np.zeros((30, 40, 3), np.uint8))
+    with pytest.raises(VideoError) as e:
+        list(VideoReader(tmp_path))
+    assert str(e.value) == (f"{files[2]}: image is 40x30, but 000001.png, the first image, is "
+                            "64x48 (a folder's images must have one size)")
+    frames, msg = _read(VideoReader(tmp_path, grey=True, skip_bad=True))
+    assert [f.index for f in frames] == [1, 2, 4] and frames[0].image.shape == (48, 64)
+    assert msg == [str(e.value) + "; skipped"]
+
+
+def test_a_binary_seqinfo_beside_the_images_is_named(tmp_path):
+    (tmp_path / "img1").mkdir()
+    _folder(tmp_path / "img1", n=1)
+    (tmp_path / "seqinfo.ini").write_bytes(b"\x89PNG\r\n\x00")
+    with pytest.raises(VideoError, match=re.escape(f"{tmp_path / 'seqinfo.ini'} is not a "
+                                                   "readable seqinfo.ini")):
+        VideoReader(tmp_path)
 
 
 def test_pets_clip_and_a_motchallenge_image_folder():

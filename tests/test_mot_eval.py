@@ -167,3 +167,91 @@ def test_unsorted_tables_are_refused():
     gt = table([2, 1], [1, 1], [0, 0])
     with pytest.raises(ValueError, match="rows must be sorted by frame"):
         evaluate_mot(gt, table([1], [1], [0]))
+
+
+# ------------------------------------------------------------------ sanity warnings
+
+
+def _rows(path, rows):
+    path.write_text("".join(",".join(str(v) for v in r) + "\n" for r in rows))
+    return path
+
+
+def test_sanity_warnings_of_unrelated_files(tmp_path):
+    from vistrack.evaluation import sanity_warnings
+
+    gt = _rows(tmp_path / "gt.txt", [(f, 1, 10 * f, 0, 20, 40, 1, 1, 1) for f in range(1, 11)])
+    g = read_mot(gt)
+    assert sanity_warnings(g, read_mot(gt)) == []
+    late = read_mot(_rows(tmp_path / "late.txt", [(f, 1, 0, 0, 20, 40, 1, -1, -1, -1)
+                                                  for f in (20, 21)]))
+    assert sanity_warnings(g, late) == [
+        f"predictions and ground truth look unrelated: {late.path} has frames 20-21 and "
+        f"{gt} frames 1-10, no frame in common"]
+    far = read_mot(_rows(tmp_path / "far.txt", [(f, 1, 900, 900, 20, 40, 1, -1, -1, -1)
+                                                for f in range(1, 11)]))
+    assert sanity_warnings(g, far) == [
+        f"predictions and ground truth look unrelated: no box of {far.path} overlaps a box of "
+        f"{gt} by IoU >= 0.5 in any of their 10 common frames"]
+    one = read_mot(_rows(tmp_path / "one.txt", [(1, 1, 10, 0, 20, 40, 1, -1, -1, -1)]))
+    assert sanity_warnings(g, one) == []
+    # 1 box of 11 meets the ground truth: fewer than 10 %
+    few = read_mot(_rows(tmp_path / "few.txt", [(1, 1, 10, 0, 20, 40, 1, -1, -1, -1)]
+                         + [(f, 2, 900, 900, 20, 40, 1, -1, -1, -1) for f in range(1, 11)]))
+    assert sanity_warnings(g, few) == [
+        f"predictions and ground truth look unrelated: only 1 of the 11 boxes of {few.path} in "
+        f"their 10 common frames overlap a box of {gt} by IoU >= 0.5"]
+    empty = read_mot(_rows(tmp_path / "empty.txt", []))
+    assert sanity_warnings(g, empty) == [] and sanity_warnings(empty, far) == []
+
+
+def test_sanity_warnings_on_the_shared_files_and_a_chance_overlap(tmp_path):
+    from vistrack.evaluation import sanity_warnings
+
+    d = seq_dir("MOT17", "MOT17-09-FRCNN")
+    gt, det = read_mot(d / "gt" / "gt.txt"), read_mot(d / "det" / "det.txt")
+    assert sanity_warnings(gt, det) == []  # a detector's boxes meet the ground truth's
+    # another sequence's ground truth as results: some boxes meet by chance (0.98 %)
+    other = read_mot(seq_dir("MOT17", "MOT17-04-FRCNN") / "gt" / "gt.txt")
+    (w,) = sanity_warnings(gt, other)
+    assert w.startswith("predictions and ground truth look unrelated: only ")
+    assert w.endswith(f"boxes of {other.path} in their 525 common frames overlap a box of "
+                      f"{gt.path} by IoU >= 0.5")
+
+
+def test_ground_truth_that_looks_like_detections(tmp_path):
+    from vistrack.evaluation import evaluate_files, sanity_warnings
+
+    det = _rows(tmp_path / "det.txt", [(1, -1, 0, 0, 20, 40, 0.9, -1, -1, -1),
+                                       (1, -1, 50, 0, 20, 40, 0.4, -1, -1, -1)])
+    res = _rows(tmp_path / "res.txt", [(1, 1, 0, 0, 20, 40, 0.9, -1, -1, -1),
+                                       (1, 2, 50, 0, 20, 40, 0.4, -1, -1, -1)])
+    with pytest.raises(ValueError) as e:
+        evaluate_files([("s", det, res, None)])
+    assert str(e.value) == (f"{det}: id -1 appears more than once in frame 1; every id is -1: "
+                            "it looks like a detections file (det.txt), not ground truth")
+    with pytest.raises(ValueError, match="looks like a detections file .det.txt., not tracking "
+                                         "results"):
+        evaluate_files([("s", res, det, None)])
+    one = _rows(tmp_path / "one.txt", [(1, -1, 0, 0, 20, 40, 0.9, -1, -1, -1)])
+    assert sanity_warnings(read_mot(one), read_mot(res)) == [
+        f"{one} looks like a detections or results file, not ground truth: every id is -1"]
+    r = evaluate_files([("s", res, res, None)])
+    assert r.warnings == [
+        f"{res} looks like a detections or results file, not ground truth: its column 7 holds "
+        "scores (0.9) where ground truth has 0 or 1, and it has no class column"]
+    assert r["s"].TP == 2
+
+
+def test_cli_eval_prints_the_warnings_on_stderr(tmp_path, capsys):
+    from vistrack.cli import main
+
+    gt = _rows(tmp_path / "gt.txt", [(f, 1, 10 * f, 0, 20, 40, 1, 1, 1) for f in range(1, 4)])
+    res = _rows(tmp_path / "res.txt", [(f, 1, 500, 0, 20, 40, 1, -1, -1, -1)
+                                       for f in range(1, 4)])
+    assert main(["eval", "--gt", str(gt), "--pred", str(res)]) == 0
+    out = capsys.readouterr()
+    assert out.err == (f"vistrack eval: warning: predictions and ground truth look unrelated: "
+                       f"no box of {res} overlaps a box of {gt} by IoU >= 0.5 in any of their "
+                       "3 common frames\n")
+    assert "MOTA" in out.out

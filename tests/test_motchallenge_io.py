@@ -78,3 +78,71 @@ def test_write_mot_text_equals_python_formatting_row_by_row(tmp_path):
     want = "".join(f"{F[k]},{I[k]},{B[k, 0]:.2f},{B[k, 1]:.2f},{B[k, 2]:.2f},{B[k, 3]:.2f},"
                    f"{S[k]:.4g},-1,-1,-1\n" for k in order)
     assert path.read_text() == want
+
+
+def test_a_byte_order_mark_and_crlf_read_as_plain_text(tmp_path):
+    rows = "170,1,10,10,5,5,1\n171,2,1,2,3,4,0\n"
+    plain, bom, crlf = tmp_path / "plain.txt", tmp_path / "bom.txt", tmp_path / "crlf.txt"
+    plain.write_bytes(rows.encode())
+    bom.write_bytes(b"\xef\xbb\xbf" + rows.encode())
+    crlf.write_bytes(b"\xef\xbb\xbf" + rows.replace("\n", "\r\n").encode())
+    want = read_mot(plain)
+    for p in (bom, crlf):
+        got = read_mot(p)
+        np.testing.assert_array_equal(got.frames, want.frames)
+        np.testing.assert_array_equal(got.ids, want.ids)
+        np.testing.assert_array_equal(got.boxes, want.boxes)
+        np.testing.assert_array_equal(got.conf, want.conf)
+    # a bad row after a BOM is still named by its line
+    bom.write_bytes(b"\xef\xbb\xbf1,1,10,10,5,5,1\r\n2,1,x,10,5,5,1\r\n")
+    with pytest.raises(MOTFormatError, match=re.escape("bom.txt, line 2, column 3 (left): "
+                                                       "not a number: 'x'")):
+        read_mot(bom)
+
+
+@pytest.mark.parametrize("data, why", [
+    (b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR", "(byte 0: b'\\x89' is not UTF-8)"),
+    (b"1,1,10,10,5,5,1\n2,1,10,10,\xe9,5,1\n", "(byte 26: b'\\xe9' is not UTF-8)"),
+    (b"\x00" * 64, "(byte 0 is a NUL byte)"),
+    (b"1,1,10,10,5,5,1\n\x00\x00", "(byte 16 is a NUL byte)"),
+])
+def test_binary_or_non_utf8_files_are_named(tmp_path, data, why):
+    p = tmp_path / "gt.txt"
+    p.write_bytes(data)
+    with pytest.raises(MOTFormatError) as e:
+        read_mot(p)
+    assert str(e.value) == f"{p} is not a text MOTChallenge file {why}"
+    s = tmp_path / "seqinfo.ini"
+    s.write_bytes(data)
+    with pytest.raises(MOTFormatError) as e:
+        read_seqinfo(tmp_path)
+    assert str(e.value) == f"{s} is not a text seqinfo.ini file {why}"
+
+
+def test_huge_frames_and_ids_are_refused(tmp_path):
+    p = tmp_path / "gt.txt"
+    p.write_text("1,1,10,10,5,5,1\n1e300,1,10,10,5,5,1\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            "gt.txt, line 2, column 1 (frame): frame must be at most 2**53; got 1e+300")):
+        read_mot(p)
+    p.write_text("1,-1e20,10,10,5,5,1\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            "gt.txt, line 1, column 2 (id): id must be between -2**53 and 2**53; got -1e+20")):
+        read_mot(p)
+
+
+@pytest.mark.parametrize("body, match", [
+    ("[Sequence]\nname=50%\nframeRate=25\nseqLength=3\nimWidth=640\nimHeight=480\n", None),
+    ("[Sequence]\nframeRate=inf\nseqLength=3\nimWidth=640\nimHeight=480\n",
+     "frameRate must be a finite number > 0; got inf"),
+    ("[Sequence]\nframeRate=25\nframeRate=30\n", "not a valid INI file: While reading from"),
+    ("frameRate=25\n", "not a valid INI file: File contains no section headers"),
+])
+def test_seqinfo_oddities(tmp_path, body, match):
+    p = tmp_path / "seqinfo.ini"
+    p.write_bytes(b"\xef\xbb\xbf" + body.encode())
+    if match is None:
+        assert read_seqinfo(p).name == "50%"  # no interpolation; the BOM is dropped
+    else:
+        with pytest.raises(MOTFormatError, match=re.escape(f"{p}: {match}")):
+            read_seqinfo(p)

@@ -312,6 +312,8 @@ def _eval(args: argparse.Namespace) -> int:
     except (FileNotFoundError, ValueError) as exc:
         print(f"vistrack eval: error: {exc}", file=sys.stderr)
         return 2
+    for warning in res.warnings:
+        print(f"vistrack eval: warning: {warning}", file=sys.stderr)
     if args.json:
         print(json.dumps({k: v.summary() for k, v in res.items()}, indent=2))
         return 0

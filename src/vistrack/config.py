@@ -272,8 +272,8 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
     FileNotFoundError
         If the file does not exist.
     ConfigError
-        For a file that is not TOML, an unknown table or key, or a value of the wrong kind
-        or out of range, naming the file and the key.
+        For a file that is not UTF-8 text or not TOML, an unknown table or key, or a value
+        of the wrong kind or out of range, naming the file and the key.
 
     Examples
     --------
@@ -287,15 +287,25 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8-sig")
+        raw = path.read_bytes()
     except FileNotFoundError:
         raise FileNotFoundError(f"{path} does not exist (--config FILE)") from None
-    except (UnicodeDecodeError, IsADirectoryError) as exc:
-        raise ConfigError(f"{path}: not a TOML text file ({exc})") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path} is not a text TOML file (it is a folder)") from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path} is not a text TOML file (byte {exc.start}: "
+                          f"{raw[exc.start:exc.start + 1]!r} is not UTF-8)") from None
+    if "\x00" in text:
+        raise ConfigError(f"{path} is not a text TOML file (byte {raw.index(0)} is a NUL "
+                          "byte)")
     try:
         data = _toml_loads(text)
     except ValueError as exc:  # tomllib.TOMLDecodeError: names the line and column
         raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    except RecursionError:  # arrays or inline tables nested a thousand deep
+        raise ConfigError(f"{path}: not valid TOML: nested too deep") from None
     unknown = set(data) - {"tracker", "motion", "offline", "derived"}
     if unknown:
         raise ConfigError(f"{path}: unknown table or key {sorted(unknown)[0]!r} (tables: "

@@ -6,14 +6,38 @@ from pathlib import Path
 
 from ..io.motchallenge import read_mot, read_seqinfo
 from .mot import MOTCounts, combine, evaluate_mot
+from .sanity import sanity_warnings
 
-__all__ = ["evaluate_files"]
+__all__ = ["evaluate_files", "EvalResults"]
+
+
+class EvalResults(dict[str, MOTCounts]):
+    """What :func:`evaluate_files` returns: a dict of each sequence's :class:`MOTCounts` by
+    name, with the warnings of :func:`~vistrack.evaluation.sanity_warnings` about the files.
+
+    Attributes
+    ----------
+    warnings : list of str
+        One sentence per warning, naming the files, in the order of the sequences; empty when
+        nothing looks wrong. ``vistrack eval`` prints each on stderr.
+
+    Examples
+    --------
+    >>> r = EvalResults({"a": MOTCounts(TP=3)}, warnings=["gt.txt looks like ..."])
+    >>> r["a"].TP, r.warnings
+    (3, ['gt.txt looks like ...'])
+    """
+
+    def __init__(self, *args, warnings: list[str] | None = None, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.warnings: list[str] = list(warnings or [])
 
 
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
-                   benchmark: str = "auto") -> dict[str, MOTCounts]:
+                   benchmark: str = "auto") -> EvalResults:
     """Score ``(name, gt, results, seqinfo-or-None)`` pairs; adds ``"COMBINED"`` when there are
-    several.
+    several. Files that look unrelated, or ground truth that looks like detections, are warned
+    about in the result's ``warnings`` (:func:`~vistrack.evaluation.sanity_warnings`).
 
     Parameters
     ----------
@@ -26,9 +50,9 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
 
     Returns
     -------
-    dict of str to MOTCounts
-        The counts of each sequence by name, and ``"COMBINED"``, their sum, when there are
-        several.
+    EvalResults
+        A dict: the counts of each sequence by name, and ``"COMBINED"``, their sum, when there
+        are several; its ``warnings`` list the sanity warnings of every pair.
 
     Raises
     ------
@@ -48,13 +72,15 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     >>> gt = Path(tempfile.mkdtemp()) / "gt.txt"
     >>> _ = write_mot(gt, [1, 2, 3], [1, 1, 1], [[10, 20, 30, 60]] * 3)
     >>> scores = evaluate_files([("a", gt, gt, None), ("b", gt, gt, None)])
-    >>> sorted(scores), scores["COMBINED"].TP, scores["a"].FN
-    (['COMBINED', 'a', 'b'], 6, 0)
+    >>> sorted(scores), scores["COMBINED"].TP, scores["a"].FN, scores.warnings
+    (['COMBINED', 'a', 'b'], 6, 0, [])
     """
-    out: dict[str, MOTCounts] = {}
+    out = EvalResults()
     for name, gt, pred, info in pairs:
         n = read_seqinfo(info).seq_length if info is not None else None
-        out[str(name)] = evaluate_mot(read_mot(gt), read_mot(pred), n, benchmark=benchmark)
+        g, p = read_mot(gt), read_mot(pred)
+        out.warnings += sanity_warnings(g, p)
+        out[str(name)] = evaluate_mot(g, p, n, benchmark=benchmark)
     if len(out) > 1:
         out["COMBINED"] = combine(out.values())
     return out

@@ -115,8 +115,12 @@ def _check_unique(table: MOTTable, what: str) -> None:
     u, counts = np.unique(key, return_counts=True)
     if (counts > 1).any():
         k = int(np.flatnonzero(np.isin(key, u[counts > 1]))[0])
+        hint = ""
+        if (table.ids == -1).all():
+            hint = (f"; every id is -1: it looks like a detections file (det.txt), not "
+                    f"{'tracking results' if what == 'prediction' else what}")
         raise ValueError(f"{table.path or what}: id {int(table.ids[k])} appears more than once in "
-                         f"frame {int(table.frames[k])}")
+                         f"frame {int(table.frames[k])}{hint}")
 
 
 def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Sequence:

@@ -10,7 +10,9 @@ Every row is ``frame, id, left, top, width, height, conf, ...``, comma-separated
 - results: ``frame, id, left, top, width, height, conf, -1, -1, -1``.
 
 Rows need not be sorted: :func:`read_mot` sorts them by frame (stably, so rows of one frame keep
-their order). A malformed row raises :class:`MOTFormatError` naming the file, line and column.
+their order). A malformed row raises :class:`MOTFormatError` naming the file, line and column; a
+file that is not UTF-8 text raises it naming the file. A UTF-8 byte-order mark and Windows
+(CRLF) line ends are read as plain text.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from __future__ import annotations
 import configparser
 import itertools
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -45,7 +48,8 @@ _NAMES = ("frame", "id", "left", "top", "width", "height", "conf", "class", "vis
 
 
 class MOTFormatError(ValueError):
-    """A MOTChallenge file that cannot be read; the message names the file, line and column.
+    """A MOTChallenge file that cannot be read; the message names the file, and the line and
+    column of a bad row.
 
     A ``ValueError``; :func:`read_mot` and :func:`read_seqinfo` raise it.
 
@@ -193,6 +197,26 @@ def _bad(path: str, line: int, column: int, text: str) -> MOTFormatError:
     return MOTFormatError(f"{path}, line {line}, column {column} ({name}): {text}")
 
 
+def _read_text(path: str, what: str) -> str:
+    """The file's text (UTF-8, a byte-order mark dropped), or :class:`MOTFormatError` naming it
+    when it is not text."""
+    data = Path(path).read_bytes()
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise MOTFormatError(f"{path} is not a text {what} file (byte {exc.start}: "
+                             f"{data[exc.start:exc.start + 1]!r} is not UTF-8)") from None
+    if "\x00" in text:
+        raise MOTFormatError(f"{path} is not a text {what} file (byte {data.index(0)} is a NUL "
+                             f"byte)")
+    return text
+
+
+# frames and ids beyond 2**53 are not integers a float holds exactly (nor fit in int64 when
+# much larger)
+_INT_LIMIT = 2.0 ** 53
+
+
 def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
     """Parse row by row, to name the first bad line and column."""
     rows = []
@@ -233,7 +257,9 @@ def _check_rows(path: str, a: np.ndarray, lines: list[str] | None) -> None:
 
     checks = [
         (0, (a[:, 0] < 1) | (a[:, 0] != np.round(a[:, 0])), "frame must be an integer >= 1"),
+        (0, a[:, 0] > _INT_LIMIT, "frame must be at most 2**53"),
         (1, a[:, 1] != np.round(a[:, 1]), "id must be an integer"),
+        (1, np.abs(a[:, 1]) > _INT_LIMIT, "id must be between -2**53 and 2**53"),
         (4, a[:, 4] < 0, "width must be >= 0"),
         (5, a[:, 5] < 0, "height must be >= 0"),
     ]
@@ -263,7 +289,8 @@ def read_mot(path: str | os.PathLike) -> MOTTable:
         If the file does not exist.
     MOTFormatError
         For a malformed row, naming the file, line and column (1-based), e.g.
-        ``gt.txt, line 12, column 5 (width): width must be >= 0; got -3``.
+        ``gt.txt, line 12, column 5 (width): width must be >= 0; got -3``; for a file that is
+        not UTF-8 text (``gt.txt is not a text MOTChallenge file (...)``).
 
     Examples
     --------
@@ -275,12 +302,14 @@ def read_mot(path: str | os.PathLike) -> MOTTable:
     ([1, 2], [5.0, 5.0, 10.0, 10.0])
     """
     path = os.fspath(path)
-    text = Path(path).read_text()
+    text = _read_text(path, "MOTChallenge")
     lines = text.splitlines()
     a = None
     try:
         if text.strip():
-            a = np.loadtxt(lines, delimiter=",", ndmin=2, dtype=float)
+            with warnings.catch_warnings():  # a file of comments only: "no data"
+                warnings.simplefilter("ignore", UserWarning)
+                a = np.loadtxt(lines, delimiter=",", ndmin=2, dtype=float)
             if not 6 <= a.shape[1] <= 10 or not np.isfinite(a).all():
                 a = None
         else:
@@ -411,8 +440,9 @@ def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
     FileNotFoundError
         If the file does not exist.
     MOTFormatError
-        If it is not an INI file, has no ``[Sequence]`` section, or lacks ``frameRate``,
-        ``seqLength``, ``imWidth`` or ``imHeight`` or has one that is not a positive number.
+        If it is not a UTF-8 text INI file, has no ``[Sequence]`` section, or lacks
+        ``frameRate``, ``seqLength``, ``imWidth`` or ``imHeight`` or has one that is not a
+        finite number > 0, naming the file.
 
     Examples
     --------
@@ -429,11 +459,13 @@ def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
         path = path / "seqinfo.ini"
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist")
-    cp = configparser.ConfigParser()
+    text = _read_text(os.fspath(path), "seqinfo.ini")
+    # no interpolation: a '%' in a value is the value's
+    cp = configparser.ConfigParser(interpolation=None)
     try:
-        cp.read(path)
+        cp.read_string(text, source=str(path))
     except configparser.Error as exc:
-        raise MOTFormatError(f"{path}: {exc}") from None
+        raise MOTFormatError(f"{path}: not a valid INI file: {exc}") from None
     if "Sequence" not in cp:
         raise MOTFormatError(f"{path}: no [Sequence] section")
     s = cp["Sequence"]
@@ -445,8 +477,8 @@ def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
             v = kind(s[key])
         except ValueError:
             raise MOTFormatError(f"{path}: {key} = {s[key]!r} is not {kind.__name__}") from None
-        if kind is not str and not v > 0:
-            raise MOTFormatError(f"{path}: {key} must be > 0; got {s[key]}")
+        if kind is not str and not 0 < v < np.inf:
+            raise MOTFormatError(f"{path}: {key} must be a finite number > 0; got {s[key]}")
         return v
 
     return SeqInfo(name=s.get("name", path.parent.name), frame_rate=get("frameRate", float),

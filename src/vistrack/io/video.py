@@ -5,7 +5,10 @@ Frames stream one at a time (memory stays bounded however long the video), each 
 :class:`Frame` with its index (from 1, as MOTChallenge counts) and time in seconds. OpenCV
 decodes. A file that stops decoding before the frame count its header gives yields the
 frames read and warns with the frame index where reading stopped; a file OpenCV cannot open at
-all raises :class:`VideoError` naming it.
+all raises :class:`VideoError` naming it. In an image folder, an image that does not decode, a
+JPEG cut short (no end-of-image marker) and an image of another size than the first raise
+:class:`VideoError` naming the file, or are skipped with a warning naming it
+(``skip_bad=True``).
 """
 
 from __future__ import annotations
@@ -26,6 +29,15 @@ if TYPE_CHECKING:
 __all__ = ["Frame", "VideoError", "VideoReader", "VideoWriter", "IMAGE_SUFFIXES"]
 
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
+
+# a whole JPEG ends with its end-of-image marker; some writers pad after it, so it is looked
+# for in the last bytes (entropy-coded data never holds FF D9: a byte FF there is followed by
+# 00 or a restart marker D0-D7)
+_JPEG_EOI, _JPEG_TAIL = b"\xff\xd9", 1024
+
+
+class _Note(str):
+    """A warning :meth:`VideoReader._frames` hands to the caller's thread, in order."""
 
 
 class VideoError(OSError):
@@ -73,6 +85,12 @@ class VideoReader:
         Decode up to this many frames ahead in a background thread (OpenCV releases the GIL
         while it decodes), so that decoding overlaps the caller's work; 0 decodes in the
         caller's thread. Memory holds at most ``prefetch`` frames more.
+    skip_bad : bool
+        Image folders: skip an image that does not decode, a JPEG cut short, or an image of
+        another size than the first readable one, with a ``RuntimeWarning`` naming the file,
+        instead of raising :class:`VideoError`. The frames after keep their indices (the
+        file's position in the folder, as MOTChallenge numbers frames), so a skipped image is
+        a missing index; ``len()`` still counts it.
 
     Attributes
     ----------
@@ -88,7 +106,9 @@ class VideoReader:
     FileNotFoundError
         If ``source`` (or the image folder its ``seqinfo.ini`` names) does not exist.
     VideoError
-        If OpenCV cannot open the video, or the folder holds no images.
+        If OpenCV cannot open the video, the folder holds no images, its ``seqinfo.ini`` is
+        not a text INI file, or (while iterating, unless ``skip_bad``) an image is unreadable,
+        cut short or of another size than the first, naming the file.
     ValueError
         If ``start`` is less than 1, ``prefetch`` negative, or the frame rate not a finite
         number > 0.
@@ -105,7 +125,8 @@ class VideoReader:
     """
 
     def __init__(self, source: str | Path, *, fps: float | None = None, grey: bool = False,
-                 start: int = 1, stop: int | None = None, prefetch: int = 0):
+                 start: int = 1, stop: int | None = None, prefetch: int = 0,
+                 skip_bad: bool = False):
         src = Path(source)
         if not src.exists():
             raise FileNotFoundError(f"{src} does not exist")
@@ -116,22 +137,36 @@ class VideoReader:
         if int(prefetch) < 0:
             raise ValueError(f"prefetch must be >= 0; got {prefetch}")
         self.prefetch = int(prefetch)
+        self.skip_bad = bool(skip_bad)
         self._files: list[Path] | None = None
         seq_fps = None
         if src.is_dir():
             info = src / "seqinfo.ini"
             if info.exists():
-                cp = configparser.ConfigParser()
-                cp.read(info)
-                seq = cp["Sequence"] if "Sequence" in cp else {}
-                seq_fps = float(seq["frameRate"]) if "frameRate" in seq else None
+                cp = configparser.ConfigParser(interpolation=None)
+                try:
+                    cp.read_string(info.read_bytes().decode("utf-8-sig"), source=str(info))
+                    seq = cp["Sequence"] if "Sequence" in cp else {}
+                    seq_fps = float(seq["frameRate"]) if "frameRate" in seq else None
+                except (UnicodeDecodeError, configparser.Error, ValueError) as exc:
+                    raise VideoError(f"{info} is not a readable seqinfo.ini ({exc})") from None
                 src = src / seq.get("imDir", "img1")
                 if not src.is_dir():
                     raise FileNotFoundError(f"{src} does not exist ({info} names it)")
             self._files = sorted(p for p in src.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
             if not self._files:
                 raise VideoError(f"{src} holds no images ({', '.join(IMAGE_SUFFIXES)})")
-            first = self._read_image(self._files[0])
+            first = None
+            for path in self._files:
+                im, why = self._load(path)
+                if im is not None:
+                    first = im
+                    self._first = path
+                    break
+                if not self.skip_bad:
+                    raise VideoError(f"{path}: {why}")
+            if first is None:
+                raise VideoError(f"{src} holds no readable images (every one fails to decode)")
             self.size = (first.shape[1], first.shape[0])
             self.frame_count = len(self._files)
             header_fps = None
@@ -156,11 +191,33 @@ class VideoReader:
         stop = self.frame_count if self.stop is None else min(self.stop, self.frame_count)
         return max(0, stop - self.start + 1)
 
-    def _read_image(self, path: Path) -> np.ndarray:
+    def _load(self, path: Path) -> tuple[np.ndarray | None, str]:
+        """The image, or None and why not."""
+        if path.suffix.lower() in (".jpg", ".jpeg"):
+            with open(path, "rb") as f:
+                size = f.seek(0, 2)
+                f.seek(max(0, size - _JPEG_TAIL))
+                if _JPEG_EOI not in f.read():
+                    return None, (f"a JPEG cut short ({size} bytes, no end-of-image marker "
+                                  "FF D9): truncated or corrupt")
         cv2 = _cv2()
         im = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if self.grey else cv2.IMREAD_COLOR)
         if im is None:
-            raise VideoError(f"{path}: not a readable image")
+            return None, "not a readable image (OpenCV cannot decode it: corrupt or truncated)"
+        return im, ""
+
+    def _image(self, path: Path) -> np.ndarray | _Note:
+        """The image of one file, or (``skip_bad``) the note that it was skipped."""
+        im, why = self._load(path)
+        if im is not None and (im.shape[1], im.shape[0]) != self.size:
+            why = (f"image is {im.shape[1]}x{im.shape[0]}, but {self._first.name}, the first "
+                   f"image, is {self.size[0]}x{self.size[1]} (a folder's images must have one "
+                   "size)")
+            im = None
+        if im is None:
+            if not self.skip_bad:
+                raise VideoError(f"{path}: {why}")
+            return _Note(f"{path}: {why}; skipped")
         return im
 
     def _frame(self, index: int, image: np.ndarray) -> Frame:
@@ -168,10 +225,11 @@ class VideoReader:
 
     def __iter__(self) -> Iterator[Frame]:
         if self.prefetch == 0:
-            notes: list[str] = []
-            yield from self._frames(notes)
-            for n in notes:
-                warnings.warn(n, RuntimeWarning, stacklevel=2)
+            for f in self._frames():
+                if isinstance(f, _Note):
+                    warnings.warn(f, RuntimeWarning, stacklevel=2)
+                else:
+                    yield f
             return
         import queue
         import threading
@@ -181,11 +239,11 @@ class VideoReader:
         end = object()
 
         def work() -> None:
-            # what goes wrong is handed to the caller's thread: the note of a truncated file
-            # (warned there, not here: the warnings machinery is not thread-safe) or the error
-            notes: list[str] = []
+            # what goes wrong is handed to the caller's thread, in order: the notes of a
+            # truncated file or a skipped image (warned there, not here: the warnings machinery
+            # is not thread-safe) and the error
             try:
-                for f in self._frames(notes):
+                for f in self._frames():
                     while not stop.is_set():
                         try:
                             q.put(f, timeout=0.1)
@@ -194,9 +252,9 @@ class VideoReader:
                             continue
                     if stop.is_set():
                         return
-                q.put((end, notes, None))
+                q.put((end, None))
             except BaseException as exc:
-                q.put((end, notes, exc))
+                q.put((end, exc))
 
         t = threading.Thread(target=work, name="vistrack-video-reader", daemon=True)
         t.start()
@@ -204,22 +262,24 @@ class VideoReader:
             while True:
                 item = q.get()
                 if isinstance(item, tuple) and item[0] is end:
-                    for n in item[1]:
-                        warnings.warn(n, RuntimeWarning, stacklevel=2)
-                    if item[2] is not None:
-                        raise item[2]
+                    if item[1] is not None:
+                        raise item[1]
                     return
-                yield item
+                if isinstance(item, _Note):
+                    warnings.warn(item, RuntimeWarning, stacklevel=2)
+                else:
+                    yield item
         finally:
             stop.set()
             t.join()
 
-    def _frames(self, notes: list) -> Iterator[Frame]:
-        # frames in order; a file that stops early appends a note to `notes`
+    def _frames(self) -> Iterator[Frame | _Note]:
+        # frames in order, and the notes of a file that stops early or an image skipped
         last = self.frame_count if self.stop is None else min(self.stop, self.frame_count)
         if self._files is not None:
             for k in range(self.start, last + 1):
-                yield self._frame(k, self._read_image(self._files[k - 1]))
+                im = self._image(self._files[k - 1])
+                yield im if isinstance(im, _Note) else self._frame(k, im)
             return
         cv2 = _cv2()
         cap = cv2.VideoCapture(str(self.source))
@@ -229,8 +289,8 @@ class VideoReader:
             for k in range(self.start, last + 1):
                 ok, im = cap.read()
                 if not ok or im is None:
-                    notes.append(f"{self.source}: reading stopped at frame {k} of the "
-                                 f"{self.frame_count} its header gives (truncated or corrupt)")
+                    yield _Note(f"{self.source}: reading stopped at frame {k} of the "
+                                f"{self.frame_count} its header gives (truncated or corrupt)")
                     return
                 if self.grey:
                     im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
