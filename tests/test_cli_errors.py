@@ -287,3 +287,37 @@ def test_a_bug_always_shows_its_traceback(tmp_path, monkeypatch):
     monkeypatch.setattr(vistrack.pipeline, "track_video", bug)
     with pytest.raises(RuntimeError, match="a bug"):
         main(["track", str(VIDEO), "--out-dir", str(tmp_path / "out")])
+
+
+def test_skip_bad_frames_carries_on_past_a_cut_short_jpeg(tmp_path, capsys):
+    """An image folder with one JPEG cut in half: an error naming it, or with
+    --skip-bad-frames a one-line warning naming it and the other frames tracked."""
+    import cv2
+    import numpy as np
+
+    from vistrack.io import read_mot
+
+    folder = tmp_path / "img"
+    folder.mkdir()
+    rng = np.random.default_rng(0)
+    for k in range(1, 31):
+        img = np.full((120, 160, 3), 90, np.uint8) + rng.integers(0, 5, (120, 160, 3),
+                                                                   dtype=np.uint8)
+        img[40:80, 4 * k:4 * k + 20] = 230  # a bright box moving right
+        cv2.imwrite(str(folder / f"{k:06d}.jpg"), img)
+    bad = folder / "000025.jpg"
+    bad.write_bytes(bad.read_bytes()[: bad.stat().st_size // 2])
+    status = main(["track", str(folder), "--out-dir", str(tmp_path / "a"), "--quiet",
+                   "--min-area", "50", "--fps", "10"])
+    err = capsys.readouterr().err
+    assert status == 2 and "000025.jpg" in err and "cut short" in err
+    assert not (tmp_path / "a" / "tracks.txt").exists()
+    status = main(["track", str(folder), "--out-dir", str(tmp_path / "b"), "--quiet",
+                   "--min-area", "50", "--fps", "10", "--skip-bad-frames"])
+    err = capsys.readouterr().err
+    assert status == 0
+    warned = [line for line in err.splitlines() if "warning" in line]
+    assert len(warned) == 1 and warned[0].startswith("vistrack track: warning: ")
+    assert "000025.jpg" in warned[0]
+    frames = read_mot(tmp_path / "b" / "tracks.txt").frames
+    assert 25 not in frames and frames.max() > 25  # the frame after it keeps its number

@@ -8,7 +8,8 @@ import os
 import signal
 import sys
 import threading
-from collections.abc import Sequence
+import warnings
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from . import __version__, _compile
@@ -186,6 +187,8 @@ def _track(args: argparse.Namespace) -> int:
         for flag in ("frontend", "gt", "fps", "stop", "min_area", "background"):
             if getattr(args, flag) is not None:
                 return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
+        if args.skip_bad_frames:
+            return fail("--skip-bad-frames goes with --out-dir")
         if Path(args.input).is_file():
             return fail(f"--out is for a MOTChallenge sequence folder (seqinfo.ini, "
                         f"det/det.txt), and {args.input} is a file: track a video with "
@@ -229,8 +232,8 @@ def _track(args: argparse.Namespace) -> int:
                 settings["camera_motion"] = False
         run = track_video(args.input, args.out_dir, frontend=args.frontend,
                           fps=args.fps, tracker=name, gt=args.gt,
-                          stop=args.stop, force=args.force, progress=progress,
-                          **extra, **settings)
+                          stop=args.stop, skip_bad_frames=args.skip_bad_frames,
+                          force=args.force, progress=progress, **extra, **settings)
         sec = dict(run.seconds)
         compiling = sec.pop("compile", 0.0)
         ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
@@ -401,6 +404,9 @@ def build_parser() -> argparse.ArgumentParser:
                        "file's header is wrong")
     track.add_argument("--gt", help="video mode: MOTChallenge ground truth to score against")
     track.add_argument("--stop", type=int, help="video mode: the last frame to track")
+    track.add_argument("--skip-bad-frames", action="store_true",
+                       help="image folders: skip an unreadable, cut-short or differently sized "
+                            "image with a warning naming it (default: stop with an error)")
     track.add_argument("--background", choices=("selective", "mog2"),
                        help="video mode, bgsub: the background model (default: selective, the "
                        "seeds' running mean and variance)")
@@ -452,6 +458,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warnings(command: str) -> Callable[..., None]:
+    """``warnings.showwarning`` for the command line: ``vistrack COMMAND: warning: MESSAGE``."""
+
+    def show(message: Warning | str, category: type[Warning], *rest: object,
+             **kw: object) -> None:
+        print(f"vistrack {command}: warning: {message}", file=sys.stderr)
+
+    return show
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return its exit status.
 
@@ -473,6 +489,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     # set in the main thread only)
     old = (signal.signal(signal.SIGTERM, _terminate)
            if threading.current_thread() is threading.main_thread() else None)
+    # a warning is one line, as an error is: "vistrack track: warning: FILE: ...; skipped"
+    shown = warnings.catch_warnings()
+    shown.__enter__()
+    warnings.showwarning = _one_line_warnings(args.command)
     try:
         if args.command in ("track", "track-one", "demo"):
             # a first run compiles the kernels: say so once, and leave it out of the rates
@@ -503,6 +523,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         return _fail(args.command, _message(exc))
     finally:
+        shown.__exit__(None, None, None)
         if old is not None:
             signal.signal(signal.SIGTERM, old)
 

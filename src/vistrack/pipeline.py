@@ -507,7 +507,7 @@ def _bgsub(ctx: Context) -> FrameDetector:
         n_init = int(opt.get("n_init", 20))
         det.initialize(_image(f, "the background model") for f in VideoReader(
             reader.source, fps=reader.fps, grey=True, start=reader.start,
-            stop=reader.start + n_init - 1))
+            stop=reader.start + n_init - 1, skip_bad=reader.skip_bad))
     return lambda frame: det.detect(_image(frame, "the background model"))
 
 
@@ -948,6 +948,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 fps: float | None = None, tracker: str | Tracker = "bytetrack",
                 gt: str | Path | None = None, background: str = "selective",
                 min_area: float = 500.0, n_init: int = 20, stop: int | None = None,
+                skip_bad_frames: bool = False,
                 annotate: bool = True, force: bool = False, progress: TextIO | None = None,
                 confidence: Callable[[np.ndarray], ConfidenceMap] | None = None,
                 det_threshold: float = 0.5, config: TrackConfig | None = None,
@@ -993,6 +994,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         with ``bgsub`` the box tracker's ``camera_motion`` is off unless passed.
     stop : int, optional
         The last frame to track (default: all).
+    skip_bad_frames : bool
+        In an image folder, skip an image that cannot be read (or is cut short, or of another
+        size) with a ``RuntimeWarning`` naming it, instead of stopping with a
+        :class:`~vistrack.io.VideoError`; the frames after it keep their numbers.
     annotate : bool
         Also write ``annotated.mp4``.
     force : bool
@@ -1050,7 +1055,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     if confidence is not None and not callable(confidence):
         raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                         f"{type(confidence).__name__}")
-    reader = VideoReader(video, fps=fps, stop=stop, prefetch=8)
+    reader = VideoReader(video, fps=fps, stop=stop, prefetch=8, skip_bad=skip_bad_frames)
     ctx = Context(reader.fps, reader.size, reader, config, dict(overrides),
                   {"background": background, "min_area": min_area, "n_init": n_init,
                    "det_threshold": det_threshold, "confidence": confidence})
