@@ -185,3 +185,16 @@ def check_linear_gaussian(F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike
     check_psd(Q_, "Q")
     check_psd(R_, "R")
     return F_, Q_, H_, R_
+
+
+def decode_text(data: bytes, path: object, what: str, error: type[Exception]) -> str:
+    """``data`` as UTF-8 text (a byte-order mark dropped), or ``error`` saying that ``path`` is
+    not a text ``what`` file, and at which byte."""
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise error(f"{path} is not a text {what} file (byte {exc.start}: "
+                    f"{data[exc.start:exc.start + 1]!r} is not UTF-8)") from None
+    if "\x00" in text:
+        raise error(f"{path} is not a text {what} file (byte {data.index(0)} is a NUL byte)")
+    return text

@@ -34,6 +34,7 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import cast
 
+from ._validate import decode_text
 from .models.box import BoxMotion
 from .tracking.box import TRACKERS, BoxTrackerConfig
 
@@ -292,14 +293,7 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
         raise FileNotFoundError(f"{path} does not exist (--config FILE)") from None
     except IsADirectoryError:
         raise ConfigError(f"{path} is not a text TOML file (it is a folder)") from None
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"{path} is not a text TOML file (byte {exc.start}: "
-                          f"{raw[exc.start:exc.start + 1]!r} is not UTF-8)") from None
-    if "\x00" in text:
-        raise ConfigError(f"{path} is not a text TOML file (byte {raw.index(0)} is a NUL "
-                          "byte)")
+    text = decode_text(raw, path, "TOML", ConfigError)
     try:
         data = _toml_loads(text)
     except ValueError as exc:  # tomllib.TOMLDecodeError: names the line and column

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._validate import decode_text
 from .atomic import open_replacing
 
 if TYPE_CHECKING:
@@ -200,16 +201,7 @@ def _bad(path: str, line: int, column: int, text: str) -> MOTFormatError:
 def _read_text(path: str, what: str) -> str:
     """The file's text (UTF-8, a byte-order mark dropped), or :class:`MOTFormatError` naming it
     when it is not text."""
-    data = Path(path).read_bytes()
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise MOTFormatError(f"{path} is not a text {what} file (byte {exc.start}: "
-                             f"{data[exc.start:exc.start + 1]!r} is not UTF-8)") from None
-    if "\x00" in text:
-        raise MOTFormatError(f"{path} is not a text {what} file (byte {data.index(0)} is a NUL "
-                             f"byte)")
-    return text
+    return decode_text(Path(path).read_bytes(), path, what, MOTFormatError)
 
 
 # frames and ids beyond 2**53 are not integers a float holds exactly (nor fit in int64 when
