@@ -489,10 +489,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     # set in the main thread only)
     old = (signal.signal(signal.SIGTERM, _terminate)
            if threading.current_thread() is threading.main_thread() else None)
-    # a warning is one line, as an error is: "vistrack track: warning: FILE: ...; skipped"
-    shown = warnings.catch_warnings()
-    shown.__enter__()
-    warnings.showwarning = _one_line_warnings(args.command)
+    try:
+        return _dispatch(args)
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
+
+
+def _dispatch(args: argparse.Namespace) -> int:
+    """Run the command with each warning printed as one line, as an error is
+    (``vistrack track: warning: FILE: ...; skipped``)."""
+    with warnings.catch_warnings():
+        warnings.showwarning = _one_line_warnings(args.command)
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run the command, turning an interrupt, a closed pipe or a user's mistake into one line
+    and an exit status."""
     try:
         if args.command in ("track", "track-one", "demo"):
             # a first run compiles the kernels: say so once, and leave it out of the rates
@@ -522,10 +536,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.debug:
             raise
         return _fail(args.command, _message(exc))
-    finally:
-        shown.__exit__(None, None, None)
-        if old is not None:
-            signal.signal(signal.SIGTERM, old)
 
 
 if __name__ == "__main__":
