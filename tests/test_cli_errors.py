@@ -321,3 +321,11 @@ def test_skip_bad_frames_carries_on_past_a_cut_short_jpeg(tmp_path, capsys):
     assert "000025.jpg" in warned[0]
     frames = read_mot(tmp_path / "b" / "tracks.txt").frames
     assert 25 not in frames and frames.max() > 25  # the frame after it keeps its number
+
+
+def test_eval_errors_are_one_line_and_debug_shows_them(tmp_path, capsys):
+    missing = tmp_path / "nothere.txt"
+    assert main(["eval", "--gt", str(missing), "--pred", str(GT)]) == 2
+    one_line(capsys, "eval", f"{missing}: No such file or directory")
+    with pytest.raises(FileNotFoundError):
+        main(["eval", "--debug", "--gt", str(missing), "--pred", str(GT)])

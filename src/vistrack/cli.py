@@ -288,33 +288,24 @@ def _eval(args: argparse.Namespace) -> int:
     pairs = []
     if args.gt_dir or args.pred_dir:
         if not (args.gt_dir and args.pred_dir):
-            print("vistrack eval: error: --gt-dir and --pred-dir go together", file=sys.stderr)
-            return 2
+            return _fail("eval", "--gt-dir and --pred-dir go together")
         for seq in sorted(p for p in Path(args.gt_dir).iterdir() if (p / "gt" / "gt.txt").exists()):
             pred = Path(args.pred_dir) / f"{seq.name}.txt"
             if not pred.exists():
-                print(f"vistrack eval: error: no results for {seq.name}: {pred} does not exist",
-                      file=sys.stderr)
-                return 2
+                return _fail("eval", f"no results for {seq.name}: {pred} does not exist")
             info = seq / "seqinfo.ini"
             pairs.append((seq.name, seq / "gt" / "gt.txt", pred, info if info.exists() else None))
         if not pairs:
-            print(f"vistrack eval: error: no SEQ/gt/gt.txt under {args.gt_dir}", file=sys.stderr)
-            return 2
+            return _fail("eval", f"no SEQ/gt/gt.txt under {args.gt_dir}")
     elif args.gt and args.pred:
         gt = Path(args.gt)
         info = gt.parent.parent / "seqinfo.ini"
         pairs.append((gt.parent.parent.name or "sequence", gt, Path(args.pred),
                       info if info.exists() else None))
     else:
-        print("vistrack eval: error: give --gt and --pred, or --gt-dir and --pred-dir",
-              file=sys.stderr)
-        return 2
-    try:
-        res = evaluate_files(pairs, benchmark=args.benchmark)
-    except (FileNotFoundError, ValueError) as exc:
-        print(f"vistrack eval: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail("eval", "give --gt and --pred, or --gt-dir and --pred-dir")
+    # a missing or malformed file is a user's mistake: main prints it in one line
+    res = evaluate_files(pairs, benchmark=args.benchmark)
     for warning in res.warnings:
         print(f"vistrack eval: warning: {warning}", file=sys.stderr)
     if args.json:
