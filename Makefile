@@ -6,23 +6,28 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test docs lint bench bench-peers clean
+.PHONY: run test docs lint bench bench-peers clean kernels
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
 
-$(STAMP): pyproject.toml | $(PY)
+$(STAMP): pyproject.toml setup.py | $(PY)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e ".[test]"
 	$(PY) -m pip install --quiet --no-deps "trackeval>=1.3.0"
 	touch $(STAMP)
 
-run: $(STAMP)
+# the kernels compiled ahead of time (setup.py): rebuilt when a source changed since; if that
+# fails (no C compiler), vistrack compiles them on first use instead
+kernels: $(STAMP)
+	-$(PY) -m vistrack._prebuilt_build build --inplace --if-stale
+
+run: kernels
 	$(VENV)/bin/vistrack track data/pets09-s2l1/pets09-s2l1.mp4 --gt data/pets09-s2l1/gt.txt \
 		--out-dir out/pets09-s2l1 --force
 	$(VENV)/bin/vistrack demo kalman --out out/
 
-test: $(STAMP)
+test: kernels
 	$(PY) -m pytest -q
 
 $(VENV)/.lint-installed: $(STAMP)
@@ -70,4 +75,5 @@ bench: $(VENV)/.bench-installed
 bench-peers: .venv-boxmot/bin/python
 
 clean:
-	rm -rf $(VENV) out build src/*.egg-info docs/_build docs/api/generated
+	rm -rf $(VENV) out build src/*.egg-info docs/_build docs/api/generated src/vistrack/_kernels*.so \
+		src/vistrack/_kernels.json

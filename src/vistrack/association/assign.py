@@ -23,6 +23,8 @@ from numba import njit
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from .._prebuilt import kernel
+
 __all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_sparse", "greedy", "lsa",
            "nearest_neighbour", "components"]
 
@@ -351,6 +353,10 @@ def gnn_pairs(rows, cols, cost, T, D):
     return out_r[:m], out_c[:m]
 
 
+_gnn_pairs = kernel(gnn_pairs)
+""":func:`gnn_pairs` for calls from Python (compiled code calls the numba function)."""
+
+
 def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
                shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
     """Global nearest neighbour on a list of allowed pairs.
@@ -385,8 +391,8 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
     >>> r.tolist(), c.tolist()
     ([0, 1], [1, 0])
     """
-    rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
-    cost = np.asarray(cost, dtype=float)
+    rows, cols = np.ascontiguousarray(rows, np.int64), np.ascontiguousarray(cols, np.int64)
+    cost = np.ascontiguousarray(cost, dtype=float)
     T, D = (int(x) for x in shape)
     if not rows.shape == cols.shape == cost.shape or rows.ndim != 1:
         raise ValueError(f"rows, cols and cost must be 1-D of one length; got shapes "
@@ -397,7 +403,7 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
         raise ValueError(f"rows and cols must index a ({T}, {D}) problem")
     if not np.isfinite(cost).all():
         raise ValueError("cost must be finite on every pair")
-    return gnn_pairs(rows, cols, cost, T, D)
+    return _gnn_pairs(rows, cols, cost, T, D)
 
 
 def greedy(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

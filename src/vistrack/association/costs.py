@@ -15,6 +15,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
+from .._prebuilt import kernel
+
 __all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "giou", "euclidean",
            "mahalanobis"]
 
@@ -413,6 +415,10 @@ def iou_pairs_same_class(a, a_cls, b, b_cls, min_iou):
     return rows[same], cols[same], vals[same], ok
 
 
+_grid_pairs_kernel = kernel(_grid_pairs)
+""":func:`_grid_pairs` for calls from Python (compiled code calls the numba function)."""
+
+
 def iou_pairs(a: ArrayLike, b: ArrayLike,
               min_iou: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The pairs of boxes whose IoU is at least ``min_iou``, without the dense matrix.
@@ -451,8 +457,8 @@ def iou_pairs(a: ArrayLike, b: ArrayLike,
     a, b = _boxes(a, "a"), _boxes(b, "b")
     if len(a) == 0 or len(b) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
-    rows, cols, vals, ok = _grid_pairs(np.ascontiguousarray(a), np.ascontiguousarray(b),
-                                       float(min_iou))
+    rows, cols, vals, ok = _grid_pairs_kernel(np.ascontiguousarray(a), np.ascontiguousarray(b),
+                                              float(min_iou))
     if not ok:
         raise ValueError("boxes must be finite")
     return rows, cols, vals

@@ -30,6 +30,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .._prebuilt import kernel
+
 SMALL_B = 8  # per-call kernels use the scalar path below this batch size
 CH = 128  # series per chunk (measured best of 16-256 on the 10,000 x 500 CV batch)
 _LOG2PI = math.log(2.0 * math.pi)
@@ -387,6 +389,7 @@ def update_batch(mean_in, cov_in, y_in, H2, R2):
     return (4 if bad else -1), out_mean, out_cov, ll_out
 
 
+@kernel
 @njit(cache=True, fastmath=_FM)
 def kf_batch(
     ys, F, Q, H, R, x0, P0, means, covs, pmeans, pcovs, loglik, last_P, gains, chol, store_covs
@@ -467,6 +470,7 @@ def kf_batch(
     return bad_t
 
 
+@kernel
 @njit(cache=True, fastmath=_FM)
 def kf_means_shared(ys, F, H, x0, gains, chol, means, pmeans, loglik, store_pred):
     """Mean recursion for series that share their covariances and gains.
@@ -925,4 +929,4 @@ def single_kernel(n, m):
         last_P[:, :] = P
         return -1, total
 
-    return kf_single
+    return kernel(kf_single, f"{__name__}:single_kernel({n!r}, {m!r})")

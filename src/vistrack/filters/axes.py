@@ -46,6 +46,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numba import njit
 
+from .._prebuilt import kernel
+
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
@@ -235,6 +237,7 @@ def full_to_axes(P: ArrayLike) -> np.ndarray:
 # called from other compiled functions.
 
 
+@kernel
 @njit(cache=True)
 def _predicted_values(mean, dt):
     """The values :func:`axes_predict` predicts, ``mean[:, :A] + dt * mean[:, A:]`` ``(K, A)``,

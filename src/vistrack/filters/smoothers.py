@@ -13,6 +13,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
+from .._prebuilt import kernel
 from .._validate import (
     as_measurement_series,
     check_has_steps,
@@ -120,7 +121,7 @@ def _rts_kernel(n):
                         s_covs[b, t, k, i] = v
         return -1
 
-    return rts
+    return kernel(rts, f"{__name__}:_rts_kernel({n!r})")
 
 
 def _filtered_arrays(result: FilterResult) -> tuple[np.ndarray, np.ndarray, bool]:

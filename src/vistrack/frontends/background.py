@@ -35,11 +35,13 @@ from typing import Any
 import numpy as np
 from numba import njit, prange
 
+from .._prebuilt import kernel
 from .._validate import as_uint8_image
 
 __all__ = ["BACKGROUNDS", "MOG2Background", "SelectiveBackground", "background"]
 
 
+@kernel
 @njit(cache=True, fastmath=True)
 def _selective_grey(img, B, J2, T, min_var, alpha, mask):
     # one thread: it takes 0.14 ms a 640x480 frame, and idle OpenMP threads would spin on the

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numba import njit
 
+from .._prebuilt import kernel
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -144,6 +145,7 @@ def threshold(image: ArrayLike, level: float, above: bool = True) -> np.ndarray:
     return m.astype(np.uint8) * 255
 
 
+@kernel
 @njit(cache=True)
 def _moments(labels, n):
     # per label (1..n-1): m00, m10, m01, m20, m11, m02 and the pixel bounds

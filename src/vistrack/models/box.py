@@ -32,9 +32,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .._prebuilt import kernel
+
 __all__ = ["BoxMotion"]
 
 
+@kernel
 @njit(cache=True)
 def _size_scaled(boxes, std, dt):
     """Variances of noise scaled by the size of boxes ``[cx, cy, w, h] (K, 4)``: ``(K, n)``,
@@ -239,7 +242,7 @@ class BoxMotion:
         >>> BoxMotion().Q_diag(np.array([[100, 50, 20.0, 40.0]]))[0, :4].round(4).tolist()
         [1.0, 4.0, 1.0, 4.0]
         """
-        return _size_scaled(np.asarray(boxes, dtype=np.float64), self._std_q, float(dt))
+        return _size_scaled(np.ascontiguousarray(boxes, dtype=np.float64), self._std_q, float(dt))
 
     def Q(self, boxes: np.ndarray, dt: float = 1.0) -> np.ndarray:
         """Process noise of boxes over ``dt``: :meth:`Q_diag` as diagonal matrices.
@@ -281,7 +284,7 @@ class BoxMotion:
         >>> BoxMotion().R_diag(np.array([[100, 50, 20.0, 40.0]])).round(2).tolist()
         [[1.0, 4.0, 4.0, 8.16]]
         """
-        return _size_scaled(np.asarray(boxes, dtype=np.float64), self.std_meas, 1.0)
+        return _size_scaled(np.ascontiguousarray(boxes, dtype=np.float64), self.std_meas, 1.0)
 
     def R(self, boxes: np.ndarray) -> np.ndarray:
         """Measurement noise of boxes: :meth:`R_diag` as diagonal matrices.

@@ -64,6 +64,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numba import njit
 
+from .._prebuilt import kernel
 from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
@@ -320,6 +321,7 @@ def _association(c: BoxTrackerConfig) -> np.ndarray:
                     dtype=_ASSOCIATION)
 
 
+@kernel
 @njit(cache=True)
 def _associate(mean, cov, state, tclass, db, ds, dc, dt, q, r, settings, shift):
     """Predict, associate and correct in one compiled call: :meth:`BoxTracker.step` with

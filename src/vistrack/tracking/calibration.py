@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numba import njit
 
+from .._prebuilt import kernel
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
 from ..types import Detections
@@ -47,6 +48,7 @@ if TYPE_CHECKING:
 __all__ = ["ScoreCalibration", "ScoreCalibrator", "isotonic_increasing", "persistence"]
 
 
+@kernel
 @njit(cache=True)
 def _pava(y, w):
     # pool adjacent violators: the non-decreasing fit to y with weights w (w > 0)
@@ -110,6 +112,7 @@ def isotonic_increasing(y: ArrayLike, weights: ArrayLike | None = None) -> np.nd
     return _pava(y, w) if len(y) else y.copy()
 
 
+@kernel
 @njit(cache=True)
 def _link(prev, prev_cls, cur, cur_cls, min_iou):
     # one-to-one links (GNN on 1 - IoU) between two frames' boxes of the same class

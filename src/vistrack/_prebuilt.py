@@ -1,0 +1,230 @@
+"""Kernels compiled when vistrack is installed, so that a first run does not wait for numba.
+
+vistrack's kernels are numba functions. Compiled on first use, the ones a ``vistrack track``
+needs take about 30 s on two cores; so installing vistrack from source also compiles, ahead
+of time, the kernels its commands call from Python, for the argument types they call them with,
+into one extension module, :mod:`vistrack._kernels` (``setup.py``; the list of kernels and types
+is ``_prebuilt.json``, written by ``python -m vistrack._prebuilt_build record``).
+
+A :class:`Kernel` stands where Python calls such a numba function. It calls the ahead-of-time
+build when the arguments have exactly the numba types it was built for, and numba's dispatcher
+otherwise, which compiles (or loads from its cache) as before. Both are numba's compilation of
+the same source for the same types and the same processor, so their results are the same; the
+extension is used only if it was built
+
+- from the package's current source (a hash of every ``.py`` file in it),
+- by the numba version now installed,
+- for this machine's processor (its name and features, as numba targets them).
+
+Otherwise, or if it is missing (no C compiler when installing, ``VISTRACK_PREBUILT=0``),
+everything is compiled on first use, as before: slower to start, the same results.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import json
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from numba._dispatcher import compute_fingerprint as _fingerprint
+
+__all__ = ["Kernel", "kernel", "status", "built", "source_hash"]
+
+EXTENSION = "vistrack._kernels"
+"""The extension module the kernels are compiled into."""
+
+PACKAGE = Path(__file__).resolve().parent
+SIGNATURES = PACKAGE / "_prebuilt.json"
+"""The kernels to build and their argument types (``_prebuilt_build record`` writes it)."""
+
+BUILD_INFO = "_kernels.json"
+"""Beside the extension: what it was built from and for (see :func:`_build_info`)."""
+
+_REGISTRY: dict[str, Kernel] = {}
+_MISSING = object()
+_state: dict[str, Any] = {}
+
+
+def source_hash() -> str:
+    """A hash of every ``.py`` file in the package (paths and contents): compiled code is
+    current only if this has not changed since it was built."""
+    h = hashlib.sha256()
+    for path in sorted(PACKAGE.rglob("*.py")):
+        h.update(path.relative_to(PACKAGE).as_posix().encode())
+        h.update(b"\0")
+        h.update(path.read_bytes())
+        h.update(b"\0")
+    return h.hexdigest()
+
+
+def machine() -> dict[str, str]:
+    """The numba version and the processor numba compiles for here."""
+    import llvmlite.binding as llvm
+    import numba
+
+    return {"numba": numba.__version__, "cpu": llvm.get_host_cpu_name(),
+            "features": llvm.get_host_cpu_features().flatten()}
+
+
+def _stale(info: dict[str, Any]) -> str:
+    """Why the build described by ``info`` may not be used here ("" if it may)."""
+    if info.get("sources") != source_hash():
+        return "built from other sources (rebuild: pip install, or make)"
+    here = machine()
+    if any(info.get(k) != v for k, v in here.items()):
+        return "built for another numba version or processor"
+    return ""
+
+
+def built(directory: Path = PACKAGE) -> tuple[dict[str, Any] | None, str]:
+    """The build information in ``directory`` and why it may not be used ("" if it may),
+    without importing the extension."""
+    path = directory / BUILD_INFO
+    try:
+        info = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return None, "not built"
+    except (OSError, ValueError) as e:
+        return None, f"build information unreadable ({path}: {e})"
+    return info, _stale(info)
+
+
+def _load() -> tuple[Any, dict[str, Any]] | None:
+    """The extension and its build information, if it exists and may be used here (see the
+    module); None otherwise, with the reason in :func:`status`."""
+    if "loaded" in _state:
+        return _state["loaded"]
+    loaded, why = None, ""
+    if os.environ.get("VISTRACK_PREBUILT", "1") == "0":
+        why = "turned off (VISTRACK_PREBUILT=0)"
+    else:
+        try:
+            module = importlib.import_module(EXTENSION)
+        except ImportError as e:
+            why = f"not built ({e})"
+        else:
+            info, why = built(Path(module.__file__ or "").parent)
+            if info is not None and not why:
+                loaded = (module, info)
+    _state["loaded"], _state["why"] = loaded, why
+    return loaded
+
+
+def status() -> str:
+    """One line: are the ahead-of-time kernels in use, and if not, why."""
+    loaded = _load()
+    if loaded is None:
+        return f"ahead-of-time kernels not used: {_state['why']}"
+    n = sum(len(v) for v in loaded[1]["kernels"].values())
+    return f"ahead-of-time kernels in use: {n} builds of {len(loaded[1]['kernels'])} kernels"
+
+
+class Kernel:
+    """A numba function called from Python: the ahead-of-time build for the argument types it
+    was built for, numba's dispatcher (``jit``) for any other.
+
+    Parameters
+    ----------
+    jit : numba dispatcher
+        The ``@njit`` function.
+    key : str
+        Its name in ``_prebuilt.json``: ``module:name``, or ``module:factory(args)`` for a
+        kernel made by a factory.
+    """
+
+    __slots__ = ("jit", "key", "_table", "_builds")
+
+    def __init__(self, jit: Any, key: str) -> None:
+        self.jit = jit
+        self.key = key
+        self._table: dict[tuple[bytes, ...], Callable[..., Any] | None] = {}
+        self._builds: dict[tuple[Any, ...], Callable[..., Any]] | None = None
+
+    def __call__(self, *args: Any) -> Any:
+        try:
+            key = tuple([_fingerprint(a) for a in args])
+        except (TypeError, ValueError, NotImplementedError):
+            return self.jit(*args)  # a type without a quick fingerprint: numba decides
+        fn = self._table.get(key, _MISSING)
+        if fn is _MISSING:
+            fn = self._resolve(args)
+            if len(self._table) < 64:  # a record's fingerprint names its dtype object
+                self._table[key] = fn
+        return (fn or self.jit)(*args)  # type: ignore[operator]
+
+    def _resolve(self, args: tuple[Any, ...]) -> Callable[..., Any] | None:
+        """The ahead-of-time build for these arguments' numba types, if there is one."""
+        if self._builds is None:
+            self._builds = {}
+            loaded = _load()
+            if loaded is not None:
+                module, info = loaded
+                for encoded, name in info["kernels"].get(self.key, []):
+                    self._builds[tuple(decode(t) for t in encoded)] = getattr(module, name)
+        if not self._builds:
+            return None
+        from numba import typeof
+        from numba.core.typing.typeof import Purpose
+
+        return self._builds.get(tuple(typeof(a, Purpose.argument) for a in args))
+
+    def __repr__(self) -> str:
+        return f"Kernel({self.key})"
+
+
+def kernel(jit: Any, key: str | None = None) -> Kernel:
+    """Wrap the numba function ``jit`` for calls from Python (see :class:`Kernel`); ``key``
+    names a kernel made by a factory, ``"module:factory(args)"``."""
+    if key is None:
+        key = f"{jit.py_func.__module__}:{jit.py_func.__qualname__}"
+    k = _REGISTRY.get(key)
+    if k is None or k.jit is not jit:
+        k = _REGISTRY[key] = Kernel(jit, key)
+    return k
+
+
+# -- argument types to and from JSON -------------------------------------------------------
+
+def encode(t: Any) -> Any:
+    """A numba argument type as JSON (arrays, records, scalars and tuples of them); raises
+    TypeError for any other type."""
+    from numba.core import types
+    from numba.np.numpy_support import as_dtype
+
+    if isinstance(t, types.Array):
+        return ["array", encode(t.dtype), t.ndim, t.layout, bool(not t.mutable), bool(t.aligned)]
+    if isinstance(t, types.Record):
+        d = as_dtype(t)
+        fields: dict[str, Any] = dict(d.fields or {})
+        return ["record", list(d.names or ()), [fields[n][0].str for n in d.names or ()],
+                [fields[n][1] for n in d.names or ()], d.itemsize, bool(t.aligned)]
+    if isinstance(t, types.BaseTuple):
+        return ["tuple", [encode(x) for x in getattr(t, "types")]]  # noqa: B009
+    if isinstance(t, (types.Boolean, types.Integer, types.Float, types.Complex)):
+        return str(t)
+    raise TypeError(f"no ahead-of-time build for arguments of type {t}")
+
+
+def decode(e: Any) -> Any:
+    """The numba type :func:`encode` wrote."""
+    import numpy as np
+    from numba.core import types
+    from numba.np.numpy_support import from_dtype
+
+    if isinstance(e, str):
+        return getattr(types, e)
+    kind = e[0]
+    if kind == "array":
+        _, dtype, ndim, layout, readonly, aligned = e
+        return types.Array(decode(dtype), ndim, layout, readonly=readonly, aligned=aligned)
+    if kind == "record":
+        _, names, formats, offsets, itemsize, aligned = e
+        return from_dtype(np.dtype({"names": names, "formats": formats, "offsets": offsets,
+                                    "itemsize": itemsize, "aligned": aligned}))
+    if kind == "tuple":
+        return types.BaseTuple.from_types([decode(x) for x in e[1]])
+    raise ValueError(f"unknown type {e!r} in {SIGNATURES}")

@@ -1,0 +1,206 @@
+"""Build :mod:`vistrack._kernels`, the kernels compiled ahead of time (:mod:`vistrack._prebuilt`).
+
+``python -m vistrack._prebuilt_build record``
+    runs what vistrack's commands run (the bundled clip tracked online and offline, the same
+    detections as a MOTChallenge sequence, ``vistrack demo kalman``, a filter and a smoother on
+    a short series) and writes to ``_prebuilt.json`` every kernel wrapped by
+    :func:`vistrack._prebuilt.kernel` and the argument types it was compiled for.
+``python -m vistrack._prebuilt_build build [--inplace | --out-dir DIR]``
+    compiles them into the extension (``setup.py`` does this when pip installs vistrack;
+    ``make`` when the sources changed). ``--if-stale`` skips a build that is current.
+
+Each exported function forwards to the numba function itself, so that numba compiles the
+kernel with its own options (``fastmath``, ``error_model``) exactly as on first use, and the
+module targets this machine's processor, as numba does: the results are those of the kernels
+compiled on first use.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import contextlib
+import importlib
+import io
+import json
+import os
+import sys
+import tempfile
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from . import _prebuilt
+from ._prebuilt import BUILD_INFO, PACKAGE, SIGNATURES, decode, encode
+
+__all__ = ["record", "build", "main"]
+
+
+def _resolve(key: str) -> Any:
+    """The numba function named by a key of ``_prebuilt.json``."""
+    module, _, name = key.partition(":")
+    mod = importlib.import_module(module)
+    if name.endswith(")"):
+        factory, _, args = name.partition("(")
+        obj = getattr(mod, factory)(*ast.literal_eval(f"({args[:-1]},)"))
+    else:
+        obj = getattr(mod, name)
+    return obj.jit if isinstance(obj, _prebuilt.Kernel) else obj
+
+
+@contextlib.contextmanager
+def _quiet_cwd() -> Iterator[Path]:
+    old = Path.cwd()
+    with tempfile.TemporaryDirectory() as d:
+        os.chdir(d)
+        try:
+            yield Path(d)
+        finally:
+            os.chdir(old)
+
+
+def _workloads(root: Path) -> None:
+    """Run what vistrack's commands run, on data that ships with it (see the module)."""
+    import numpy as np
+
+    import vistrack as vt
+    from vistrack.cli import main as cli
+    from vistrack.io.motchallenge import read_mot
+
+    clip = root / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
+    gt = root / "data" / "pets09-s2l1" / "gt.txt"
+    sink = io.StringIO()
+    with _quiet_cwd() as d, contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
+        cli(["track", str(clip), "--out-dir", str(d / "a"), "--force"])
+        cli(["track", str(clip), "--out-dir", str(d / "b"), "--force", "--offline"])
+        # the clip's ground truth as a detector's output: a MOTChallenge sequence
+        seq = d / "seq"
+        (seq / "det").mkdir(parents=True)
+        t = read_mot(gt)
+        rows = [f"{f},-1,{x:.2f},{y:.2f},{w:.2f},{h:.2f},{0.5 + 0.5 * (i % 2):.2f},-1,-1,-1"
+                for i, (f, (x, y, w, h)) in enumerate(zip(t.frames, t.boxes))]
+        (seq / "det" / "det.txt").write_text("\n".join(rows) + "\n")
+        (seq / "seqinfo.ini").write_text(
+            "[Sequence]\nname=seq\nframeRate=7\nseqLength=795\nimWidth=768\nimHeight=576\n")
+        cli(["track", str(seq), "--out", str(d / "c.txt"), "--force"])
+        cli(["track", str(seq), "--out", str(d / "d.txt"), "--force", "--offline"])
+        cli(["demo", "kalman", "--out", str(d / "demo")])
+        # a filter and a smoother on a short series (examples/filter_and_smooth.py)
+        cv, pos = vt.ConstantVelocity(dim=2, q=0.5), vt.Position(dim=2, r=4.0)
+        _, ys = vt.simulate.simulate(cv, pos, 7, x0=[0, 0, 2, 1], dt=np.ones(6), rng=0)
+        ys[5, 1] = np.nan
+        kf = vt.KalmanFilter(cv, pos)
+        kf.filter(ys, dt=np.ones(6))
+        kf.smooth(ys, dt=np.ones(6))
+        # the pairing the offline linking does from Python
+        boxes = np.column_stack([t.boxes[:, :2], t.boxes[:, :2] + t.boxes[:, 2:]])[:200]
+        r, c, v = vt.association.iou_pairs(boxes, boxes + 1.0, 0.3)
+        vt.association.gnn_sparse(r, c, 1.0 - v, (len(boxes), len(boxes)))
+
+
+def record(root: Path) -> dict[str, list[Any]]:
+    """Run :func:`_workloads` and return each wrapped kernel's argument types (encoded), in
+    the order they were compiled."""
+    _workloads(root)
+    out: dict[str, list[Any]] = {}
+    for key, k in sorted(_prebuilt._REGISTRY.items()):
+        sigs = []
+        for args in k.jit.nopython_signatures:
+            encoded = [encode(t) for t in args.args]
+            if tuple(decode(e) for e in encoded) != tuple(args.args):
+                raise TypeError(f"{key}: {args.args} does not survive encoding")
+            sigs.append(encoded)
+        if sigs:
+            out[key] = sigs
+    return out
+
+
+def _forwarder(target: Any, n: int) -> Any:
+    """``def f(a0, ..., a{n-1}): return target(a0, ..., a{n-1})``, for export."""
+    names = ", ".join(f"a{i}" for i in range(n))
+    scope: dict[str, Any] = {"target": target}
+    exec(f"def forward({names}):\n    return target({names})\n", scope)  # noqa: S102
+    return scope["forward"]
+
+
+def build(out_dir: Path, filename: str | None = None, verbose: bool = False) -> Path:
+    """Compile every kernel of ``_prebuilt.json`` into ``out_dir`` (the extension and its
+    build information); returns the extension's path."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # numba.pycc's pending deprecation
+        from numba.pycc import CC
+
+    spec = json.loads(SIGNATURES.read_text(encoding="utf-8"))
+    cc = CC(EXTENSION_NAME)
+    cc.output_dir = str(out_dir)
+    if filename:
+        cc.output_file = filename
+    cc.verbose = verbose
+    info: dict[str, Any] = dict(_prebuilt.machine())
+    cc.target_cpu = info["cpu"]
+    exports: dict[str, list[Any]] = {}
+    i = 0
+    for key, sigs in spec["kernels"].items():
+        jit = _resolve(key)
+        for encoded in sigs:
+            args = tuple(decode(e) for e in encoded)
+            cres = jit.compile(args) if args not in jit.overloads else None
+            del cres
+            sig = jit.overloads[args].signature
+            name = f"k{i}"
+            i += 1
+            cc.export(name, sig)(_forwarder(jit, len(args)))
+            exports.setdefault(key, []).append([encoded, name])
+    out_dir.mkdir(parents=True, exist_ok=True)
+    cc.compile()
+    path = out_dir / (filename or Path(cc.output_file).name)
+    info.update(sources=_prebuilt.source_hash(), kernels=exports)
+    (path.parent / BUILD_INFO).write_text(json.dumps(info, indent=1) + "\n", encoding="utf-8")
+    return path
+
+
+EXTENSION_NAME = _prebuilt.EXTENSION.rpartition(".")[2]
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m vistrack._prebuilt_build", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("record", help="run the workloads, write _prebuilt.json")
+    r.add_argument("--root", type=Path, default=PACKAGE.parent.parent,
+                   help="the source tree with data/ (default: this package's)")
+    b = sub.add_parser("build", help="compile the extension")
+    where = b.add_mutually_exclusive_group(required=True)
+    where.add_argument("--inplace", action="store_true", help="beside this package's sources")
+    where.add_argument("--out", type=Path,
+                       help=f"the extension's file (its folder gets {BUILD_INFO})")
+    b.add_argument("--if-stale", action="store_true",
+                   help="do nothing if the extension in place is current")
+    b.add_argument("--verbose", action="store_true")
+    a = p.parse_args(argv)
+    if a.command == "record":
+        kernels = record(a.root)
+        text = json.dumps({"kernels": kernels}, indent=1) + "\n"
+        SIGNATURES.write_text(text, encoding="utf-8")
+        print(f"{SIGNATURES}: {sum(map(len, kernels.values()))} builds of {len(kernels)} "
+              "kernels")
+        return 0
+    out_dir, filename = (PACKAGE, None) if a.inplace else (a.out.parent, a.out.name)
+    if a.if_stale:
+        info, why = _prebuilt.built(out_dir)
+        if info is not None and not why:
+            print(f"{out_dir / BUILD_INFO}: current")
+            return 0
+    t = time.perf_counter()
+    with tempfile.TemporaryDirectory() as cache:
+        os.environ["NUMBA_CACHE_DIR"] = cache  # build from source, not from a cache
+        path = build(out_dir, filename, verbose=a.verbose)
+    print(f"built {path} in {time.perf_counter() - t:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,161 @@
+"""The kernels compiled ahead of time: in use, complete for vistrack's commands, and equal to
+numba's compilation on first use."""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numba import njit
+from numba.core import types
+
+from vistrack import _prebuilt
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_the_kernels_compiled_ahead_of_time_are_in_use():
+    # `make test` builds them (setup.py on install, `make kernels` after a change)
+    assert _prebuilt.status().startswith("ahead-of-time kernels in use"), _prebuilt.status()
+
+
+@pytest.mark.slow
+def test_vistracks_commands_compile_nothing_on_a_first_run(tmp_path):
+    """The bundled clip tracked online and offline, a MOTChallenge sequence online and
+    offline, `demo kalman`, a filter and a smoother, with numba's and vistrack's caches empty:
+    no kernel is compiled."""
+    script = textwrap.dedent("""
+        import sys
+        from pathlib import Path
+        from numba.core import event
+        from vistrack import _prebuilt_build
+
+        compiled = []
+        class Listener(event.Listener):
+            def on_start(self, ev):
+                d = ev.data["dispatcher"]
+                compiled.append(f"{d.py_func.__module__}.{d.py_func.__qualname__}")
+            def on_end(self, ev):
+                pass
+        event.register("numba:compile", Listener())
+        _prebuilt_build._workloads(Path(sys.argv[1]))
+        print(sorted(set(compiled)))
+    """)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+               VISTRACK_CACHE_DIR=str(tmp_path / "kernels"))
+    out = subprocess.run([sys.executable, "-c", script, str(ROOT)], env=env, check=True,
+                         capture_output=True, text=True).stdout
+    assert out.strip() == "[]"
+
+
+@pytest.mark.slow
+def test_each_build_equals_numbas_compilation_on_first_use(monkeypatch):
+    """Every kernel call of the workloads, repeated with the numba function itself: the same
+    results and the same changes to the arguments, to the bit."""
+    from vistrack import _prebuilt_build
+
+    calls = {}
+    original = _prebuilt.Kernel.__call__
+
+    def spy(self, *args):
+        if len(calls.setdefault(self.key, [])) < 3:
+            calls[self.key].append(_copy(args))
+        return original(self, *args)
+
+    monkeypatch.setattr(_prebuilt.Kernel, "__call__", spy)
+    _prebuilt_build._workloads(ROOT)
+    monkeypatch.setattr(_prebuilt.Kernel, "__call__", original)
+    spec = json.loads(_prebuilt.SIGNATURES.read_text())["kernels"]
+    assert set(calls) >= set(spec)
+    checked = 0
+    for key, arg_lists in calls.items():
+        k = _prebuilt._REGISTRY[key]
+        for args in arg_lists:
+            aot = k._resolve(args)
+            if aot is None:
+                continue
+            a_args, j_args = _copy(args), _copy(args)
+            a_out, j_out = aot(*a_args), k.jit(*j_args)
+            _assert_identical(a_out, j_out, key)
+            _assert_identical(a_args, j_args, key)
+            checked += 1
+    # every build was used and compared at least once
+    assert checked >= sum(map(len, spec.values()))
+
+
+def _copy(x):
+    if isinstance(x, np.ndarray):
+        c = x.copy()
+        c.flags.writeable = x.flags.writeable
+        return c
+    if isinstance(x, tuple):
+        return tuple(_copy(v) for v in x)
+    return x
+
+
+def _assert_identical(a, b, key):
+    if isinstance(a, tuple):
+        assert isinstance(b, tuple) and len(a) == len(b), key
+        for u, v in zip(a, b):
+            _assert_identical(u, v, key)
+    elif isinstance(a, np.ndarray):
+        assert a.dtype == b.dtype and a.shape == b.shape, key
+        assert np.array_equal(a, b, equal_nan=a.dtype.kind in "fc"), key
+    else:
+        assert a == b or (a != a and b != b), key
+
+
+def test_other_argument_types_go_to_numba():
+    @njit
+    def add(a, x):
+        a += x
+        return a.sum()
+
+    k = _prebuilt.Kernel(add, "tests:add")
+    k._builds = {(types.Array(types.float64, 1, "C"), types.float64): lambda *a: "built"}
+    assert k(np.zeros(3), 1.0) == "built"
+    # other dtypes, layouts, read-only arrays and scalar types: numba's own dispatch
+    assert k(np.zeros(3, np.float32), 1.0) == 3.0
+    assert k(np.zeros(6)[::2], 1.0) == 3.0
+    assert k(np.zeros(3), 1) == 3.0
+    assert k(np.zeros((2, 2)), 1.0) == 4.0
+    ro = np.zeros(3)
+    ro.flags.writeable = False
+    assert k._resolve((ro, 1.0)) is None and k._resolve((np.zeros(3), 1.0)) is not None
+
+
+def test_a_build_for_other_sources_or_another_machine_is_not_used(tmp_path):
+    assert _prebuilt.built(tmp_path) == (None, "not built")
+    info = dict(_prebuilt.machine(), sources=_prebuilt.source_hash(), kernels={})
+    (tmp_path / _prebuilt.BUILD_INFO).write_text(json.dumps(info))
+    assert _prebuilt.built(tmp_path)[1] == ""
+    for field, value in [("sources", "0" * 64), ("numba", "0.1"), ("cpu", "i386"),
+                         ("features", "-sse2")]:
+        (tmp_path / _prebuilt.BUILD_INFO).write_text(json.dumps(dict(info, **{field: value})))
+        assert _prebuilt.built(tmp_path)[1], field
+    (tmp_path / _prebuilt.BUILD_INFO).write_text("{")
+    assert _prebuilt.built(tmp_path)[1].startswith("build information unreadable")
+
+
+def test_the_argument_types_survive_json():
+    from numba.np.numpy_support import from_dtype
+
+    from vistrack.tracking.box import _ASSOCIATION
+
+    samples = [types.float64, types.int64, types.boolean, types.int8,
+               types.Array(types.float64, 3, "C"), types.Array(types.int32, 2, "A"),
+               types.Array(types.float64, 2, "C", readonly=True),
+               types.Array(from_dtype(_ASSOCIATION), 1, "C"),
+               types.UniTuple(types.int64, 2), types.Tuple((types.float64, types.int64))]
+    for t in samples:
+        assert _prebuilt.decode(json.loads(json.dumps(_prebuilt.encode(t)))) == t
+    spec = json.loads(_prebuilt.SIGNATURES.read_text())["kernels"]
+    for sigs in spec.values():
+        for sig in sigs:
+            assert [_prebuilt.encode(_prebuilt.decode(e)) for e in sig] == sig
+    with pytest.raises(TypeError, match="no ahead-of-time build"):
+        _prebuilt.encode(types.unicode_type)
