@@ -6,15 +6,14 @@ compiler; without them vistrack installs all the same and compiles its kernels o
 
 import os
 import shutil
-import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 from setuptools import Extension, setup
 from setuptools.command.build_ext import build_ext
 
 HERE = Path(__file__).resolve().parent
-INFO = "_kernels.json"  # vistrack._prebuilt.BUILD_INFO
 
 
 class BuildKernels(build_ext):
@@ -22,16 +21,28 @@ class BuildKernels(build_ext):
     ahead-of-time compiler) instead of compiling C sources."""
 
     def build_extension(self, ext: Extension) -> None:
-        target = Path(self.get_ext_fullpath(ext.name))
-        env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-            [str(HERE / "src")] + ([os.environ["PYTHONPATH"]] if "PYTHONPATH" in os.environ
-                                   else [])))
-        cmd = [sys.executable, "-m", "vistrack._prebuilt_build", "build", "--out", str(target)]
-        print("compiling vistrack's kernels ahead of time (a minute or two)", file=sys.stderr)
+        target = Path(self.get_ext_fullpath(ext.name)).resolve()
         try:
-            subprocess.run(cmd, check=True, env=env, cwd=HERE)
-        except (OSError, subprocess.CalledProcessError) as e:
-            print(f"warning: vistrack's kernels were not compiled ahead of time ({e}); "
+            with tempfile.TemporaryDirectory() as cache:
+                os.environ["NUMBA_CACHE_DIR"] = cache  # from source, not from a cache
+                sys.path.insert(0, str(HERE / "src"))
+                from vistrack._prebuilt import BUILD_INFO, built
+                from vistrack._prebuilt_build import build
+
+                here = HERE / "src" / "vistrack"
+                info, why = built(here)
+                if info is not None and not why and (here / target.name).exists():
+                    # an editable install again (make lint, make docs): the build beside the
+                    # sources is current
+                    target.parent.mkdir(parents=True, exist_ok=True)
+                    for name in (target.name, BUILD_INFO):
+                        shutil.copyfile(here / name, target.parent / name)
+                    return
+                print("compiling vistrack's kernels ahead of time (a minute or two)",
+                      file=sys.stderr)
+                build(target.parent, target.name)
+        except Exception as e:  # noqa: BLE001 - any failure leaves compilation to first use
+            print(f"warning: vistrack's kernels were not compiled ahead of time ({e!r}); "
                   "vistrack works the same and compiles them on first use", file=sys.stderr)
 
     def copy_extensions_to_source(self) -> None:
@@ -40,8 +51,10 @@ class BuildKernels(build_ext):
             built = Path(self.get_ext_fullpath(ext.name))
             if built.exists():
                 dest = HERE / "src" / "vistrack"
-                for name in (built.name, INFO):  # a new file each: a running vistrack may
-                    tmp = dest / f".{name}.{os.getpid()}.tmp"  # have the old one open
+                # vistrack._prebuilt.BUILD_INFO beside it; a new file each, as a running
+                # vistrack may have the old one open
+                for name in (built.name, "_kernels.json"):
+                    tmp = dest / f".{name}.{os.getpid()}.tmp"
                     shutil.copyfile(built.parent / name, tmp)
                     os.replace(tmp, dest / name)
 

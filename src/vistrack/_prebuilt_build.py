@@ -24,6 +24,7 @@ import importlib
 import io
 import json
 import os
+import runpy
 import sys
 import tempfile
 import time
@@ -97,6 +98,58 @@ def _workloads(root: Path) -> None:
         boxes = np.column_stack([t.boxes[:, :2], t.boxes[:, :2] + t.boxes[:, 2:]])[:200]
         r, c, v = vt.association.iou_pairs(boxes, boxes + 1.0, 0.3)
         vt.association.gnn_sparse(r, c, 1.0 - v, (len(boxes), len(boxes)))
+        _more_workloads(root, clip, d, ys)
+
+
+def _more_workloads(root: Path, clip: Path, d: Path, ys: Any) -> None:
+    """The single-object trackers, the detector-confidence particle filter, the nonlinear
+    filters, the IMM, particle resampling and the spot finder (the examples' kernels)."""
+    import cv2
+    import numpy as np
+
+    import vistrack as vt
+    from vistrack.cli import main as cli
+    from vistrack.filters import ExtendedKalmanFilter, IMMFilter
+
+    cap = cv2.VideoCapture(str(clip))
+    folder = d / "frames"
+    folder.mkdir()
+    for k in range(8):
+        ok, frame = cap.read()
+        if ok:
+            cv2.imwrite(str(folder / f"{k:04d}.png"), frame)
+    cap.release()
+    for method in ("colour", "meanshift", "particle", "template", "klt", "snake"):
+        cli(["track-one", str(folder), "--init", "40,95,30,80", "--method", method,
+             "--out", str(d / f"one-{method}.txt")])
+    cli(["track", str(clip), "--tracker", "dcpf", "--stop", "3", "--out-dir", str(d / "e")])
+    # the multiple-model example: an IMM of extended Kalman filters
+    P = ExtendedKalmanFilter(vt.ConstantPosition(dim=2, q=1.0), vt.Position(dim=2, r=4.0))
+    PV = ExtendedKalmanFilter(vt.ConstantVelocity(dim=2, q=400.0), vt.Position(dim=2, r=4.0))
+    imm = IMMFilter([P, PV], [[0.95, 0.05], [0.05, 0.95]])
+    imm.filter(np.nan_to_num(ys), x0=np.r_[0.0, 0, 0, 0], P0=np.diag([25, 25, 400, 400.0]),
+               dt=1 / 7)
+    # the nonlinear filters, particles and resampling
+    from vistrack.filters import (
+        EnsembleKalmanFilter,
+        ParticleFilter,
+        UnscentedKalmanFilter,
+    )
+    from vistrack.models import CoordinatedTurn, RangeBearing
+
+    ct, rb = CoordinatedTurn(q=0.1), RangeBearing(r_range=1.0, r_bearing=1e-3, ndim_state=5)
+    xs, zs = vt.simulate.simulate(ct, rb, 20, x0=[100.0, 100, 1, 0, 0.05], rng=0)
+    x0, P0 = xs[0], np.eye(5)
+    for f in (ExtendedKalmanFilter(ct, rb), UnscentedKalmanFilter(ct, rb),
+              EnsembleKalmanFilter(ct, rb, n_members=50, rng=0)):
+        f.filter(zs, x0=x0, P0=P0)
+    for method in ("multinomial", "stratified", "systematic", "residual"):
+        ParticleFilter(ct, rb, n_particles=200, resampling=method, rng=0).filter(
+            zs, x0=x0, P0=P0)
+    runpy.run_path(str(root / "examples" / "nonlinear_figures.py"))["main"](d / "figures")
+    img = np.zeros((64, 64))
+    img[20:23, 30:33] = 50.0
+    vt.frontends.locate(img, diameter=5)
 
 
 def record(root: Path) -> dict[str, list[Any]]:

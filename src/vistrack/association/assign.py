@@ -353,7 +353,7 @@ def gnn_pairs(rows, cols, cost, T, D):
     return out_r[:m], out_c[:m]
 
 
-_gnn_pairs = kernel(gnn_pairs)
+gnn_pairs_py = kernel(gnn_pairs)
 """:func:`gnn_pairs` for calls from Python (compiled code calls the numba function)."""
 
 
@@ -403,7 +403,7 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
         raise ValueError(f"rows and cols must index a ({T}, {D}) problem")
     if not np.isfinite(cost).all():
         raise ValueError("cost must be finite on every pair")
-    return _gnn_pairs(rows, cols, cost, T, D)
+    return gnn_pairs_py(rows, cols, cost, T, D)
 
 
 def greedy(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -415,7 +415,7 @@ def iou_pairs_same_class(a, a_cls, b, b_cls, min_iou):
     return rows[same], cols[same], vals[same], ok
 
 
-_grid_pairs_kernel = kernel(_grid_pairs)
+_grid_pairs_py = kernel(_grid_pairs)
 """:func:`_grid_pairs` for calls from Python (compiled code calls the numba function)."""
 
 
@@ -457,8 +457,8 @@ def iou_pairs(a: ArrayLike, b: ArrayLike,
     a, b = _boxes(a, "a"), _boxes(b, "b")
     if len(a) == 0 or len(b) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
-    rows, cols, vals, ok = _grid_pairs_kernel(np.ascontiguousarray(a), np.ascontiguousarray(b),
-                                              float(min_iou))
+    rows, cols, vals, ok = _grid_pairs_py(np.ascontiguousarray(a), np.ascontiguousarray(b),
+                                          float(min_iou))
     if not ok:
         raise ValueError("boxes must be finite")
     return rows, cols, vals

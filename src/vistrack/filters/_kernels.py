@@ -149,6 +149,10 @@ def predict_batch(mean_in, cov_in, F2, Q2):
     return -1, out_mean, out_cov
 
 
+predict_batch_py = kernel(predict_batch)
+""":func:`predict_batch` for calls from Python (compiled code calls the numba function)."""
+
+
 @njit(cache=True, fastmath=_FM)
 def update_chunk(H, R, th, tr, yv, xp, Pp, x, P, AP, W, U, K, S, e, wv, obs, nobs, ll, c):
     """Correct ``c`` predicted series (SoA ``xp (n, CH)``, ``Pp (n, n, CH)``) with ``yv (m, CH)``
@@ -387,6 +391,10 @@ def update_batch(mean_in, cov_in, y_in, H2, R2):
                 for k in range(n):
                     out_c[b0 + j, i, k] = P[i, k, j]
     return (4 if bad else -1), out_mean, out_cov, ll_out
+
+
+update_batch_py = kernel(update_batch)
+""":func:`update_batch` for calls from Python (compiled code calls the numba function)."""
 
 
 @kernel
@@ -730,6 +738,7 @@ def update_one(H, R, th, tr, y, xp, Pp, x, P, idx, e, Ut, KT, S, L, AP, W, n, m)
     return True, ll
 
 
+@kernel
 @njit(cache=True, fastmath=_FM)
 def step_batch(mean_in, cov_in, y_in, F2, Q2, H2, R2):
     """Predict with ``F, Q`` then correct with ``y, H, R``, for a batch of Gaussians of any batch

@@ -21,6 +21,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .._prebuilt import kernel
+
 SCHEMES = ("multinomial", "stratified", "systematic", "residual")
 """Resampling schemes the kernels implement, by code: ``SCHEMES.index(name)``."""
 
@@ -200,6 +202,7 @@ def resample_into(w, scheme, st, cw, out):
 
 
 # ---------------------------------------------------------------- array entry points
+@kernel
 @njit(cache=True, error_model="numpy")
 def _fill(s, out, normals):
     st = (s[0], s[1], s[2], s[3])

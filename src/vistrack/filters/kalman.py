@@ -434,7 +434,7 @@ def kf_predict(g: Gaussian, F: ArrayLike, Q: ArrayLike) -> Gaussian:
     if not isinstance(g, Gaussian):
         raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
     n = g.mean.shape[-1]
-    code, mean, cov = _kernels.predict_batch(
+    code, mean, cov = _kernels.predict_batch_py(
         _contiguous(g.mean), _contiguous(g.cov), _small_matrix(F, "F", n, n),
         _small_matrix(Q, "Q", n, n),
     )
@@ -504,7 +504,7 @@ def _update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> tuple[Gaus
     observed)."""
     mean, cov, y = _with_measurement(g, y)
     n, m = mean.shape[-1], y.shape[-1]
-    code, mean, cov, ll = _kernels.update_batch(
+    code, mean, cov, ll = _kernels.update_batch_py(
         mean, cov, y, _small_matrix(H, "H", m, n),
         _small_matrix(R, "R", m, m),
     )

@@ -33,6 +33,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
+from .._prebuilt import kernel
 from .._validate import as_float_array, as_rng, check_has_steps, check_prior
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
@@ -98,6 +99,7 @@ def _degenerate(t: int, y: np.ndarray) -> ParticleDegeneracyError:
 
 
 # ---------------------------------------------------------------- resampling
+@kernel
 @njit(cache=True)
 def _merge(cw, u, out):
     """``out[k]`` = the first ``i`` with ``u[k] < cw[i]``, for sorted ``u`` (linear time)."""
@@ -148,8 +150,12 @@ def _systematic_kernel(w, u0, out):
     return out
 
 
+_systematic_kernel_py = kernel(_systematic_kernel)
+""":func:`_systematic_kernel` for calls from Python (compiled code calls the numba function)."""
+
+
 def _systematic(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
-    return _systematic_kernel(w, rng.random(), np.empty(n, np.int64))
+    return _systematic_kernel_py(w, rng.random(), np.empty(n, np.int64))
 
 
 def _residual(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -188,6 +194,7 @@ def _check_weights(weights: ArrayLike) -> np.ndarray:
     return w
 
 
+@kernel
 @njit(cache=True)
 def _systematic_rows(w, u0, out):
     for t in range(w.shape[0]):

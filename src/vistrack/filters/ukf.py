@@ -34,6 +34,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
+from .._prebuilt import kernel
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
     MeasurementModel,
@@ -72,6 +73,7 @@ def _sqrt(P: np.ndarray, scale: float) -> np.ndarray:
 # calls on 5x5 matrices, whose overhead is most of the time; these kernels do it in three
 # compiled calls a step, with the Kalman kernels' Cholesky factor and triangular solves. The
 # model's f and h still run as numpy on all points at once.
+@kernel
 @njit(cache=True, error_model="numpy")
 def _points_one(x, P, scale, out):
     n = x.shape[0]
@@ -87,6 +89,7 @@ def _points_one(x, P, scale, out):
     return True
 
 
+@kernel
 @njit(cache=True, error_model="numpy")
 def _state_moments_one(Y, Wm, Wc, Q, mean, cov):
     K, n = Y.shape
@@ -109,6 +112,7 @@ def _wrap(d):
     return math.pi - ((math.pi - d) % (2.0 * math.pi))
 
 
+@kernel
 @njit(cache=True, error_model="numpy")
 def _update_one(G, Z, Wm, Wc, R, y, angles, x, P, xo, Po):
     """Unscented correction of one Gaussian from its sigma points ``G`` and their

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numba import njit
 
+from .._prebuilt import kernel
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -86,6 +87,7 @@ def _disc(r: int) -> np.ndarray:
     return ((x / r) ** 2 + (y / r) ** 2 <= 1).astype(np.float64) if r > 0 else np.ones((1, 1))
 
 
+@kernel
 @njit(cache=True)
 def _refine(image, coords, r, mask, max_iterations, shift):
     # centre of mass of mask * image around each (row, col) start, moving the disc a pixel at

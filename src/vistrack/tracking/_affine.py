@@ -16,6 +16,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from .._prebuilt import kernel
+
 __all__ = ["prepare_templates", "register"]
 
 
@@ -30,6 +32,7 @@ def _bilinear(img, x, y):
             + ay * ((1.0 - ax) * img[y0 + 1, x0] + ax * img[y0 + 1, x0 + 1]))
 
 
+@kernel
 @njit(cache=True)
 def _prepare(img, centres, half, T, SD, Hinv, ok):
     # cut the templates (normalised), their steepest-descent images and inverse Hessians

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numba import njit
 
+from .._prebuilt import kernel
 from .._validate import as_box, as_uint8_image
 from ..filters import kf_predict, kf_update
 from ..types import Gaussian
@@ -81,6 +82,7 @@ def bspline_matrix(n: int, m: int, derivative: bool = False) -> np.ndarray:
     return B
 
 
+@kernel
 @njit(cache=True, fastmath=True)
 def _radial_search(img, pts, normals, search, min_edge, out, found):
     # along each normal, the offset (from -search to +search, half-pixel steps) of the
