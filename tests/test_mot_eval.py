@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from vistrack.evaluation import ALPHAS, MOTCounts, combine, evaluate_mot
+from vistrack.evaluation import ALPHAS, MOTCounts, box_iou_xywh, combine, evaluate_mot
 from vistrack.io import MOTTable, read_mot
 
 from .mot_oracles import MOT15, MOT17, n_frames, noisy_predictions, seq_dir, trackeval_scores
@@ -167,6 +167,69 @@ def test_unsorted_tables_are_refused():
     gt = table([2, 1], [1, 1], [0, 0])
     with pytest.raises(ValueError, match="rows must be sorted by frame"):
         evaluate_mot(gt, table([1], [1], [0]))
+
+
+# ------------------------------------------------- huge numbers, long sequences, bad rows
+
+
+def _exact_iou(a, b):
+    """IoU in exact rational arithmetic: no rounding, no overflow."""
+    from fractions import Fraction
+
+    (ax, ay, aw, ah), (bx, by, bw, bh) = (map(Fraction, map(float, box)) for box in (a, b))
+    iw = max(Fraction(0), min(ax + aw, bx + bw) - max(ax, bx))
+    ih = max(Fraction(0), min(ay + ah, by + bh) - max(ay, by))
+    union = aw * ah + bw * bh - iw * ih
+    return float(iw * ih / union) if union > 0 else 0.0
+
+
+def test_iou_of_huge_boxes_is_exact_and_in_range():
+    """Boxes up to 1e308: the IoU of exact arithmetic (it was NaN once a right edge or an area
+    overflowed, and evaluate_mot failed in scipy with "matrix contains invalid numeric
+    entries")."""
+    import warnings
+
+    rng = np.random.default_rng(5)
+    a = np.c_[rng.uniform(-50, 50, (40, 2)), rng.uniform(1, 60, (40, 2))]
+    b = a[rng.permutation(40)] + rng.normal(0, 5, (40, 4)) * [1, 1, 0, 0]
+    b[:10] = a[:10] + rng.normal(0, 2, (10, 4)) * [1, 1, 0.1, 0.1]  # overlapping pairs
+    exact = np.array([[_exact_iou(p, q) for q in b] for p in a])
+    small = box_iou_xywh(a, b)
+    # rounding in the corners' differences: at most a few ulp of the coordinates (~100)
+    np.testing.assert_allclose(small, exact, rtol=0, atol=1e-12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow warning either
+        for exponent in (400, 900, 1016):  # 2**1016 * 60: near the largest float
+            # a power of two scales every sum and product exactly: the same IoU, bit for bit
+            iou = box_iou_xywh(np.ldexp(a, exponent), np.ldexp(b, exponent))
+            assert (iou == small).all() and (iou[:10].diagonal() > 0).all()
+        mixed = [[1e308, 0, 1e308, 10], [0, 0, 1e308, 1e308], [0, 0, 10, 10],
+                 [-1e308, 5, 3e307, 1], [-1.1e308, 5.5, 5e307, 2]]
+        iou = box_iou_xywh(mixed, mixed)
+    exact = np.array([[_exact_iou(p, q) for q in mixed] for p in mixed])
+    # (a right edge x + w is rounded, as any sum of floats: a few ulp of x)
+    np.testing.assert_allclose(iou, exact, rtol=1e-14, atol=1e-300)
+    assert iou[3, 4] > 0.1 and (iou.diagonal() == 1.0).all()
+
+
+def test_huge_boxes_score_as_their_scaled_down_copies(tmp_path):
+    from vistrack.evaluation import evaluate_files
+
+    rng = np.random.default_rng(6)
+    frames, ids = np.repeat(np.arange(1, 6), 3), np.tile([1, 2, 3], 5)
+    x = ids * 30.0 + rng.normal(0, 1, 15)
+    gt, res = table(frames, ids, x), table(frames, np.where(frames > 3, ids + 5, ids),
+                                           x + rng.normal(0, 3, 15))
+    small = evaluate_mot(gt, res).summary()
+    for exponent in (600, 1000):
+        def big(t, exponent=exponent):
+            return MOTTable(t.frames, t.ids, np.ldexp(t.boxes, exponent), t.conf, t.classes,
+                            t.visibility)
+        assert evaluate_mot(big(gt), big(res)).summary() == small
+    # the issue's case, through the files: a right edge of 2e308 (inf in floats)
+    f = _rows(tmp_path / "gt.txt", [(1, 1, "1e308", 0, "1e308", 10, 1, -1, -1, -1)])
+    c = evaluate_files([("s", f, f, None)])["s"]
+    assert (c.TP, c.FP, c.FN, c.MOTP, c.HOTA) == (1, 0, 0, 1.0, 1.0)
 
 
 # ------------------------------------------------------------------ sanity warnings

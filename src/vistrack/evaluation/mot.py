@@ -54,6 +54,11 @@ _DISTRACTORS = {"MOT16": (2, 7, 8, 12), "MOT17": (2, 7, 8, 12), "MOT20": (2, 6, 
 def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     """IoU of every box of ``a`` with every box of ``b``, boxes as ``left, top, width, height``.
 
+    Any finite boxes give an IoU in [0, 1], however large their numbers: a pair with a value
+    beyond 2**500, whose areas or right edges could overflow, is computed with each axis scaled
+    by a power of two (which leaves the IoU as it is). As in any float sum, a right edge
+    ``left + width`` is rounded: a width below the spacing of floats at ``left`` is lost.
+
     Parameters
     ----------
     a : (N, 4) array_like
@@ -74,9 +79,25 @@ def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     --------
     >>> box_iou_xywh([[0, 0, 10, 10]], [[5, 0, 10, 10], [0, 0, 10, 10]]).round(3)
     array([[0.333, 1.   ]])
+    >>> box_iou_xywh([[0, 0, 1e300, 1e300]], [[0, 0, 1e300, 5e299]])
+    array([[0.5]])
     """
     a = np.asarray(a, dtype=float).reshape(-1, 4)
     b = np.asarray(b, dtype=float).reshape(-1, 4)
+    big_a, big_b = (np.abs(a) > _BIG).any(1), (np.abs(b) > _BIG).any(1)
+    if not (big_a.any() or big_b.any()):
+        return _iou(a, b)
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = _iou(a, b)
+    i, j = np.nonzero(big_a[:, None] | big_b[None, :])
+    out[i, j] = _iou_scaled(a[i], b[j])
+    return out
+
+
+_BIG = 2.0 ** 500  # below it, no sum or product of the IoU overflows
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     ax0, ay0, ax1, ay1 = a[:, 0:1], a[:, 1:2], a[:, 0:1] + a[:, 2:3], a[:, 1:2] + a[:, 3:4]
     bx0, by0, bx1, by1 = b[:, 0], b[:, 1], b[:, 0] + b[:, 2], b[:, 1] + b[:, 3]
     iw = np.clip(np.minimum(ax1, bx1) - np.maximum(ax0, bx0), 0, None)
@@ -86,6 +107,23 @@ def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     inter[union <= _EPS] = 0.0
     union[union <= _EPS] = 1.0
     return inter / union
+
+
+def _iou_scaled(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The IoU of the pairs ``a[k]``, ``b[k]``, each axis scaled by the power of two that brings
+    the pair's largest value on it below 1 (exact, unless a value becomes subnormal): no sum or
+    product can overflow. Used for boxes with values beyond :data:`_BIG`."""
+    cols = []
+    for pos, size in ((0, 2), (1, 3)):  # the x axis, then the y axis
+        v = np.stack([a[:, pos], a[:, size], b[:, pos], b[:, size]], axis=1)
+        v = np.ldexp(v, -np.frexp(np.abs(v).max(1))[1][:, None])
+        lo = np.maximum(v[:, 0], v[:, 2])
+        hi = np.minimum(v[:, 0] + v[:, 1], v[:, 2] + v[:, 3])
+        cols.append((np.clip(hi - lo, 0, None), v[:, 1], v[:, 3]))
+    (iw, aw, bw), (ih, ah, bh) = cols
+    inter = iw * ih
+    union = aw * ah + bw * bh - inter
+    return np.where(union > 0, np.minimum(1.0, inter / np.where(union > 0, union, 1.0)), 0.0)
 
 
 @dataclass
