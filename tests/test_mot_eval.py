@@ -232,6 +232,17 @@ def test_huge_boxes_score_as_their_scaled_down_copies(tmp_path):
     assert (c.TP, c.FP, c.FN, c.MOTP, c.HOTA) == (1, 0, 0, 1.0, 1.0)
 
 
+def test_frame_numbers_near_2_to_53_need_no_memory_per_frame():
+    """A sequence as long as its last frame number (no seqinfo.ini): the frames without rows
+    cost nothing (a table of every frame up to 2**53 was a MemoryError)."""
+    last = 2 ** 53
+    gt = table([1, 2, last], [1, 1, 1], [0, 1, 5])
+    c = evaluate_mot(gt, table([1, 2, last], [4, 4, 4], [0, 1, 5]))
+    assert c.frames == last and (c.TP, c.FP, c.FN, c.IDSW) == (3, 0, 0, 0) and c.HOTA == 1.0
+    c = evaluate_mot(gt, table([1, 2, last - 1], [4, 4, 4], [0, 1, 5]), n_frames=last)
+    assert (c.TP, c.FP, c.FN, c.frames) == (2, 1, 1, last)
+
+
 # ------------------------------------------------------------------ sanity warnings
 
 

@@ -128,9 +128,9 @@ def _iou_scaled(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 @dataclass
 class _Sequence:
-    gt_ids: list  # per frame, contiguous ids 0 .. n_gt_ids - 1
+    gt_ids: list  # per frame with a row, contiguous ids 0 .. n_gt_ids - 1
     pred_ids: list
-    sim: list  # per frame (n_gt_t, n_pred_t) IoU
+    sim: list  # per such frame (n_gt_t, n_pred_t) IoU
     n_gt_ids: int
     n_pred_ids: int
 
@@ -164,6 +164,9 @@ def _check_unique(table: MOTTable, what: str) -> None:
 def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Sequence:
     bench = _benchmark_of(gt, benchmark)
     for table, what in ((gt, "ground truth"), (pred, "prediction")):
+        if len(table) > 1 and np.any(np.diff(table.frames) < 0):
+            raise ValueError(f"{table.path or what}: rows must be sorted by frame (read_mot "
+                             "sorts them)")
         if len(table) and table.frames.max() > n_frames:
             raise ValueError(f"{table.path or what}: frame {int(table.frames.max())} is beyond "
                              f"the sequence's {n_frames} frames")
@@ -174,10 +177,16 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Se
             raise ValueError(f"{gt.path or 'ground truth'}: class {int(bad[0])} is not a "
                              f"{bench} class (1-13)")
     distractors = np.array(_DISTRACTORS.get(bench, ()), dtype=np.int64)
-    gs, ps = gt.frame_slices(n_frames), pred.frame_slices(n_frames)
+    # the frames with a row: a frame without any adds nothing to a count, and the sequence may
+    # be long (its last frame, or seqinfo.ini's length, need not bound the work)
+    frames = np.union1d(gt.frames, pred.frames)
+    frames = frames[frames >= 1]
+    gs = np.searchsorted(gt.frames, frames, "left"), np.searchsorted(gt.frames, frames, "right")
+    ps = (np.searchsorted(pred.frames, frames, "left"),
+          np.searchsorted(pred.frames, frames, "right"))
     gt_ids, pred_ids, sims = [], [], []
-    for t in range(n_frames):
-        g, p = gt[gs[t]], pred[ps[t]]
+    for g0, g1, p0, p1 in zip(*gs, *ps):
+        g, p = gt[int(g0):int(g1)], pred[int(p0):int(p1)]
         sim = box_iou_xywh(g.boxes, p.boxes)
         keep_p = np.ones(len(p), bool)
         if bench != "MOT15" and len(g) and len(p):
