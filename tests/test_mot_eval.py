@@ -243,6 +243,19 @@ def test_frame_numbers_near_2_to_53_need_no_memory_per_frame():
     assert (c.TP, c.FP, c.FN, c.frames) == (2, 1, 1, last)
 
 
+def test_ids_far_apart_are_not_taken_for_twins():
+    """Ids from -2**52 to 2**52: (frame, id) pairs were once packed into one int64, which
+    overflowed and made two different pairs equal."""
+    m = 2 ** 52
+    t = table([1, 2049, 2049], [-m + 2048, -m, m], [0, 0, 50])
+    c = evaluate_mot(t, t)
+    assert (c.TP, c.FP, c.FN, c.IDSW) == (3, 0, 0, 0)
+    twins = table([1, 2049, 2049, 2049], [-m + 2048, -m, m, -m], [0, 0, 50, 90])
+    with pytest.raises(ValueError, match=f"^prediction: id {-m} appears more than once in "
+                                         "frame 2049$"):
+        evaluate_mot(t, twins)
+
+
 # ------------------------------------------------------------------ sanity warnings
 
 

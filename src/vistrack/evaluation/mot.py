@@ -148,17 +148,21 @@ def _benchmark_of(gt: MOTTable, benchmark: str) -> str:
 def _check_unique(table: MOTTable, what: str) -> None:
     if len(table) < 2:
         return
-    key = table.frames * (int(table.ids.max()) - int(table.ids.min()) + 1) + (
-        table.ids - int(table.ids.min()))
-    u, counts = np.unique(key, return_counts=True)
-    if (counts > 1).any():
-        k = int(np.flatnonzero(np.isin(key, u[counts > 1]))[0])
-        hint = ""
-        if (table.ids == -1).all():
-            hint = (f"; every id is -1: it looks like a detections file (det.txt), not "
-                    f"{'tracking results' if what == 'prediction' else what}")
-        raise ValueError(f"{table.path or what}: id {int(table.ids[k])} appears more than once in "
-                         f"frame {int(table.frames[k])}{hint}")
+    # rows sorted by (frame, id): a repeated pair sits next to its twin
+    order = np.lexsort((table.ids, table.frames))
+    f, i = table.frames[order], table.ids[order]
+    same = (f[1:] == f[:-1]) & (i[1:] == i[:-1])
+    if not same.any():
+        return
+    twin = np.zeros(len(table), bool)
+    twin[order[1:][same]] = twin[order[:-1][same]] = True
+    k = int(np.argmax(twin))  # the first such row in the table's order
+    hint = ""
+    if (table.ids == -1).all():
+        hint = (f"; every id is -1: it looks like a detections file (det.txt), not "
+                f"{'tracking results' if what == 'prediction' else what}")
+    raise ValueError(f"{table.path or what}: id {int(table.ids[k])} appears more than once in "
+                     f"frame {int(table.frames[k])}{hint}")
 
 
 def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Sequence:
