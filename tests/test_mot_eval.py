@@ -256,6 +256,31 @@ def test_ids_far_apart_are_not_taken_for_twins():
         evaluate_mot(t, twins)
 
 
+def test_a_bad_row_found_while_scoring_is_named_by_its_line(tmp_path):
+    """An id twice in a frame, a frame past seqinfo.ini's length, a class out of range: the
+    file and the line(s), counted as read_mot counts them (blank and comment lines too, in the
+    file's order, not the frames')."""
+    from vistrack.evaluation import evaluate_files
+
+    gt = tmp_path / "gt.txt"
+    gt.write_text("2,1,0,0,10,10,1,1,1\n\n1,1,0,0,10,10,1,1,1\n# a comment\n"
+                  "2,2,20,0,10,10,1,1,1\n2,1,5,0,10,10,1,1,1\n")
+    ok = _rows(tmp_path / "ok.txt", [(1, 1, 0, 0, 10, 10, 1, 1, 1), (3, 1, 0, 0, 10, 10, 1, 14,
+                                                                     1)])
+    info = tmp_path / "seqinfo.ini"
+    info.write_text("[Sequence]\nname=s\nframeRate=10\nseqLength=2\nimWidth=64\n"
+                    "imHeight=48\n")
+    with pytest.raises(ValueError) as e:
+        evaluate_files([("s", ok, gt, None)], benchmark="MOT15")
+    assert str(e.value) == f"{gt}, lines 1 and 6: id 1 appears more than once in frame 2"
+    with pytest.raises(ValueError) as e:
+        evaluate_files([("s", ok, ok, info)], benchmark="MOT15")
+    assert str(e.value) == f"{ok}, line 2: frame 3 is beyond the sequence's 2 frames"
+    with pytest.raises(ValueError) as e:
+        evaluate_files([("s", ok, ok, None)], benchmark="MOT17")
+    assert str(e.value) == f"{ok}, line 2, column 8 (class): class 14 is not a MOT17 class (1-13)"
+
+
 # ------------------------------------------------------------------ sanity warnings
 
 
@@ -315,8 +340,9 @@ def test_ground_truth_that_looks_like_detections(tmp_path):
                                        (1, 2, 50, 0, 20, 40, 0.4, -1, -1, -1)])
     with pytest.raises(ValueError) as e:
         evaluate_files([("s", det, res, None)])
-    assert str(e.value) == (f"{det}: id -1 appears more than once in frame 1; every id is -1: "
-                            "it looks like a detections file (det.txt), not ground truth")
+    assert str(e.value) == (f"{det}, lines 1 and 2: id -1 appears more than once in frame 1; "
+                            "every id is -1: it looks like a detections file (det.txt), not "
+                            "ground truth")
     with pytest.raises(ValueError, match="looks like a detections file .det.txt., not tracking "
                                          "results"):
         evaluate_files([("s", res, det, None)])

@@ -26,12 +26,14 @@ LocA are averaged weighted by each sequence's true positives.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, fields
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._validate import decode_text
 from ..io.motchallenge import MOTTable
 
 
@@ -145,6 +147,44 @@ def _benchmark_of(gt: MOTTable, benchmark: str) -> str:
     return "MOT17" if has_classes else "MOT15"
 
 
+def _lines_of(path: str, match: Callable[[list[float]], bool]) -> list[int]:
+    """The lines (from 1) of the MOTChallenge file ``path`` whose row ``match`` accepts, for a
+    message; empty for a table not read from a file (or a file no longer readable)."""
+    if not path:
+        return []
+    try:
+        text = decode_text(Path(path).read_bytes(), path, "MOTChallenge", ValueError)
+    except (OSError, ValueError):
+        return []
+    found = []
+    for k, raw in enumerate(text.splitlines(), start=1):  # as read_mot counts lines
+        try:  # a blank or comment line (np.loadtxt skips those) is not a row
+            row = [float(c) for c in raw.split("#", 1)[0].split(",")]
+        except ValueError:
+            continue
+        if len(row) >= 6 and match(row):
+            found.append(k)
+    return found
+
+
+def _where(table: MOTTable, what: str, lines: list[int]) -> str:
+    """``path, line 4`` / ``path, lines 4 and 9``, or the file (or ``what``) alone."""
+    name = table.path or what
+    if not lines:
+        return name
+    if len(lines) == 1:
+        return f"{name}, line {lines[0]}"
+    return f"{name}, lines {lines[0]} and {lines[1]}"
+
+
+def _check_frames(table: MOTTable, what: str, n_frames: int) -> None:
+    if len(table) and table.frames.max() > n_frames:
+        last = int(table.frames.max())
+        lines = _lines_of(table.path, lambda row: row[0] == last)[:1]
+        raise ValueError(f"{_where(table, what, lines)}: frame {last} is beyond the sequence's "
+                         f"{n_frames} frames")
+
+
 def _check_unique(table: MOTTable, what: str) -> None:
     if len(table) < 2:
         return
@@ -157,12 +197,14 @@ def _check_unique(table: MOTTable, what: str) -> None:
     twin = np.zeros(len(table), bool)
     twin[order[1:][same]] = twin[order[:-1][same]] = True
     k = int(np.argmax(twin))  # the first such row in the table's order
+    frame, ident = int(table.frames[k]), int(table.ids[k])
     hint = ""
     if (table.ids == -1).all():
         hint = (f"; every id is -1: it looks like a detections file (det.txt), not "
                 f"{'tracking results' if what == 'prediction' else what}")
-    raise ValueError(f"{table.path or what}: id {int(table.ids[k])} appears more than once in "
-                     f"frame {int(table.frames[k])}{hint}")
+    lines = _lines_of(table.path, lambda row: row[0] == frame and row[1] == ident)
+    raise ValueError(f"{_where(table, what, lines)}: id {ident} appears more than once in "
+                     f"frame {frame}{hint}")
 
 
 def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Sequence:
@@ -171,15 +213,15 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Se
         if len(table) > 1 and np.any(np.diff(table.frames) < 0):
             raise ValueError(f"{table.path or what}: rows must be sorted by frame (read_mot "
                              "sorts them)")
-        if len(table) and table.frames.max() > n_frames:
-            raise ValueError(f"{table.path or what}: frame {int(table.frames.max())} is beyond "
-                             f"the sequence's {n_frames} frames")
+        _check_frames(table, what, n_frames)
         _check_unique(table, what)
     if bench != "MOT15" and len(gt):
         bad = np.setdiff1d(np.unique(gt.classes), np.arange(1, 14))
         if len(bad):
-            raise ValueError(f"{gt.path or 'ground truth'}: class {int(bad[0])} is not a "
-                             f"{bench} class (1-13)")
+            cls = int(bad[0])
+            lines = _lines_of(gt.path, lambda row: len(row) > 7 and row[7] == cls)[:1]
+            where = _where(gt, "ground truth", lines) + (", column 8 (class)" if lines else "")
+            raise ValueError(f"{where}: class {cls} is not a {bench} class (1-13)")
     distractors = np.array(_DISTRACTORS.get(bench, ()), dtype=np.int64)
     # the frames with a row: a frame without any adds nothing to a count, and the sequence may
     # be long (its last frame, or seqinfo.ini's length, need not bound the work)
@@ -700,7 +742,9 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     ------
     ValueError
         If ``benchmark`` is not one of the names, a file has rows beyond ``n_frames`` or an id
-        twice in a frame, or MOT16/17/20 ground truth has a class outside 1-13.
+        twice in a frame, or MOT16/17/20 ground truth has a class outside 1-13. The message
+        names the table's file and, when it was read from one, the line(s) of the row:
+        ``res.txt, lines 4 and 9: id 3 appears more than once in frame 2``.
 
     References
     ----------
