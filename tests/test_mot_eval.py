@@ -281,6 +281,25 @@ def test_a_bad_row_found_while_scoring_is_named_by_its_line(tmp_path):
     assert str(e.value) == f"{ok}, line 2, column 8 (class): class 14 is not a MOT17 class (1-13)"
 
 
+def test_cli_eval_table_keeps_its_columns_apart(tmp_path, capsys):
+    """MOTA of -1300 % and a name shorter than the header: each value still ends under its
+    header, with a space before it (-1300.0 and 7-digit counts filled the 7 characters)."""
+    import re
+
+    from vistrack.cli import main
+
+    (tmp_path / "s" / "gt").mkdir(parents=True)
+    gt = _rows(tmp_path / "s" / "gt" / "gt.txt", [(1, 1, 0, 0, 20, 40, 1, 1, 1)])
+    res = _rows(tmp_path / "res.txt", [(1, k, 100 + 30 * k, 0, 20, 40, 1, -1, -1, -1)
+                                       for k in range(13)])
+    assert main(["eval", "--gt", str(gt), "--pred", str(res)]) == 0
+    head, row = capsys.readouterr().out.splitlines()
+    cells = dict(zip(head.split(), row.split()))
+    assert cells["sequence"] == "s" and cells["MOTA"] == "-1300.0" and cells["FP"] == "13"
+    ends = [[m.end() for m in re.finditer(r"\S+", line)] for line in (head, row)]
+    assert ends[0][1:] == ends[1][1:] and len(ends[0]) == len(ends[1]) == 17
+
+
 # ------------------------------------------------------------------ sanity warnings
 
 

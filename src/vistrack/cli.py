@@ -316,13 +316,19 @@ def _eval(args: argparse.Namespace) -> int:
 
 
 def _table(res: dict, stream=None) -> None:
+    """The scores as a table: a column of 7 characters per score, wider where a value needs it
+    (MOTA -1200.0, a count of millions), so that a space always parts two values; the names'
+    column as wide as its header or its longest name, and two spaces."""
     stream = sys.stdout if stream is None else stream
-    width = max(len(k) for k in res) + 2
-    print("".join([f"{'sequence':<{width}}"] + [f"{c:>7}" for c, _ in _COLUMNS]), file=stream)
-    for name, c in res.items():
-        s = c.summary()
-        cells = [f"{100 * s[k]:7.1f}" if pct else f"{s[k]:7d}" for k, pct in _COLUMNS]
-        print("".join([f"{name:<{width}}"] + cells), file=stream)
+    width = max(len(k) for k in ["sequence", *res]) + 2
+    rows = [[f"{100 * s[k]:.1f}" if pct else f"{s[k]:d}" for k, pct in _COLUMNS]
+            for s in (c.summary() for c in res.values())]
+    widths = [max([7] + [len(r[j]) + 1 for r in rows]) for j in range(len(_COLUMNS))]
+    print("".join([f"{'sequence':<{width}}"] + [f"{c:>{w}}" for (c, _), w in
+                                                 zip(_COLUMNS, widths)]), file=stream)
+    for name, cells in zip(res, rows):
+        print("".join([f"{name:<{width}}"] + [f"{v:>{w}}" for v, w in zip(cells, widths)]),
+              file=stream)
 
 
 def build_parser() -> argparse.ArgumentParser:
