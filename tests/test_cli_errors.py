@@ -217,6 +217,57 @@ def test_an_unknown_tracker_lists_every_form(tmp_path, capsys, name):
              f"own); got {name!r}")
 
 
+# ------------------------------------------------------------- argparse's own errors
+@pytest.mark.parametrize("argv, message", [
+    (["track", "clip.mp4", "--min-area", "abc"],
+     "vistrack track: error: argument --min-area: invalid float value: 'abc'"),
+    (["track", "clip.mp4", "--out-dir", "out", "--bogus", "1"],
+     "vistrack track: error: unrecognized arguments: --bogus 1"),
+    (["track"], "vistrack track: error: the following arguments are required: INPUT"),
+    (["track-one", "clip.mp4", "--out", "b.txt"],
+     "vistrack track-one: error: the following arguments are required: --init"),
+    (["track-one", "clip.mp4", "--out", "b.txt", "--init"],
+     "vistrack track-one: error: argument --init: expected one argument"),
+    (["eval", "--gt", "gt.txt", "--pred", "res.txt", "--jsn"],
+     "vistrack eval: error: unrecognized arguments: --jsn"),
+    (["demo", "kalman", "--seeds", "x"],
+     "vistrack demo: error: argument --seeds: invalid int value: 'x'"),
+    (["demo", "kalman", "--seeds", "0"], "vistrack demo: error: --seeds must be >= 1; got 0"),
+    (["--bogus"], "vistrack: error: unrecognized arguments: --bogus"),
+])
+def test_argument_errors_are_one_line(capsys, argv, message):
+    """An unknown option, a value of the wrong type, a missing argument: argparse's message in
+    the command line's one form (argparse printed its usage on a line before), status 2."""
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    assert e.value.code == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == message + "\n"
+
+
+@pytest.mark.parametrize("argv, start", [
+    (["eval", "--benchmark", "MOT99"],
+     "vistrack eval: error: argument --benchmark: invalid choice: 'MOT99' "),
+    (["track-one", "clip.mp4", "--init", "1,2,3,4", "--out", "b.txt", "--method", "nope"],
+     "vistrack track-one: error: argument --method: invalid choice: 'nope' "),
+    (["trak"], "vistrack: error: argument COMMAND: invalid choice: 'trak' "),
+])
+def test_an_invalid_choice_is_one_line_listing_the_choices(capsys, argv, start):
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    out, err = capsys.readouterr()
+    assert e.value.code == 2 and out == "" and err.startswith(start)
+    assert err.count("\n") == 1 and err.endswith(")\n")  # "(choose from ...)"
+
+
+def test_argument_errors_through_the_console_and_the_usage_with_help():
+    r = cli("track", VIDEO, "--min-area", "abc")
+    assert (r.returncode, r.stdout) == (2, "")
+    assert r.stderr == "vistrack track: error: argument --min-area: invalid float value: 'abc'\n"
+    r = cli("track", "--help")
+    assert r.returncode == 0 and r.stdout.startswith("usage: vistrack track ")
+
+
 # ------------------------------------------------------------------------- closed pipe
 def test_a_pipe_closed_early_ends_quietly():
     """``vistrack eval --json | head -c 10``: head's ten bytes, and nothing on stderr."""

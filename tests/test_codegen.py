@@ -316,6 +316,8 @@ def test_a_folder_of_another_user_is_refused_by_uid(folders, monkeypatch):
     cache.mkdir(mode=0o700)
     me = os.getuid()
     monkeypatch.setattr(_codegen, "_uid", lambda: me + 1)  # as if the folder were another's
+    # (and the folders above it too, unless this user is root: those are the next tests')
+    monkeypatch.setattr(_codegen, "_unsafe_parents", lambda d: None)
     shared = shared.parent / f"vistrack-kernels-{me + 1}"  # (named after the uid)
     with pytest.warns(RuntimeWarning) as record:
         found = _load_where()
@@ -343,6 +345,109 @@ def test_when_both_folders_are_refused_the_process_gets_its_own(folders):
     (private,) = found
     assert private == _codegen._PRIVATE_DIR[0] and _mode(private) == 0o700
     assert private.parent == Path(tempfile.gettempdir())
+
+
+# ------------------------------- the folders above it: no one else may replace the kernel folder
+def _open_to_all(folder, mode=0o777):
+    folder.mkdir()
+    os.chmod(folder, mode)  # (mkdir's mode is cut by the umask)
+    return folder
+
+
+def _someone_could_swap(folder):
+    return (f"others may write to {folder}, a folder above it (mode "
+            f"{_mode(folder):#o}, no sticky bit), and put another folder in its place; "
+            f"'chmod go-w {folder}' makes it safe")
+
+
+@pytest.mark.parametrize("mode", [0o777, 0o775, 0o757, 0o730])
+def test_a_folder_above_that_others_may_write_to_is_refused(folders, tmp_path, monkeypatch,
+                                                            mode):
+    """Group or others could rename the folder that holds the cache and put their own there:
+    refused before anything is made under it (by mode bits: whoever runs the tests)."""
+    _, shared = folders
+    above = _open_to_all(tmp_path / "open", mode)
+    cache = above / "sub" / "kernels"
+    monkeypatch.setenv("VISTRACK_CACHE_DIR", str(cache))
+    with pytest.warns(RuntimeWarning, match=_refused(cache, _someone_could_swap(above),
+                                                     f"it tries {shared}")):
+        assert _load_where() == {shared}
+    assert not list(above.iterdir())
+
+
+def test_a_folder_above_with_the_sticky_bit_is_safe_as_tmp_is(folders, tmp_path, monkeypatch):
+    """Mode 1777 (/tmp): only an entry's owner may rename or delete it. The folders made
+    below it are private, whatever the umask (with 002 they were 775 once)."""
+    above = _open_to_all(tmp_path / "shared", 0o1777)
+    cache = above / "me" / "cache" / "kernels"
+    monkeypatch.setenv("VISTRACK_CACHE_DIR", str(cache))
+    umask = os.umask(0o002)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            assert _load_where() == {cache}
+    finally:
+        os.umask(umask)
+    assert [_mode(d) for d in (cache, cache.parent, cache.parent.parent)] == [0o700] * 3
+
+
+def test_a_folder_above_of_another_user_is_refused(folders, tmp_path, monkeypatch):
+    above = tmp_path / "theirs"
+    above.mkdir()
+    os.chmod(above, 0o755)
+    cache = above / "kernels"
+    monkeypatch.setenv("VISTRACK_CACHE_DIR", str(cache))
+    me = os.getuid()
+    if me == 0:  # root owns every folder of tmp_path: give this one away
+        os.chown(above, 65534, -1)
+        owner, shared = 65534, folders[1]
+    else:  # as if this user were another, whose folders these are not
+        monkeypatch.setattr(_codegen, "_uid", lambda: me + 1)
+        owner, shared = me, folders[1].parent / f"vistrack-kernels-{me + 1}"
+    with pytest.warns(RuntimeWarning) as record:
+        _load_where()
+    assert str(record[0].message) == (
+        f"vistrack does not use the kernel folder {cache}: {above}, a folder above it, belongs "
+        f"to user id {owner}, neither this user ({_codegen._uid()}) nor root; set "
+        f"VISTRACK_CACHE_DIR to a folder of your own; it tries {shared}")
+    assert not cache.exists()
+
+
+def test_folders_above_are_checked_through_symbolic_links(folders, tmp_path, monkeypatch):
+    """A link to a folder open to all, and a link that lies in a folder open to all (it could
+    be pointed elsewhere): both refused."""
+    _, shared = folders
+    _open_to_all(tmp_path / "real")
+    (tmp_path / "link").symlink_to(tmp_path / "real")
+    (tmp_path / "safe").mkdir(mode=0o700)
+    open_ = _open_to_all(tmp_path / "open")
+    (open_ / "link").symlink_to(tmp_path / "safe")
+    for cache, culprit in ((tmp_path / "link" / "kernels", tmp_path / "link"),
+                           (open_ / "link" / "kernels", open_)):
+        monkeypatch.setenv("VISTRACK_CACHE_DIR", str(cache))
+        with pytest.warns(RuntimeWarning, match=_refused(cache, _someone_could_swap(culprit),
+                                                         f"it tries {shared}")):
+            assert _load_where() == {shared}
+    assert not list((tmp_path / "real").iterdir()) and not list((tmp_path / "safe").iterdir())
+
+
+def test_a_temporary_directory_under_an_open_folder_gets_no_cache(folders, tmp_path):
+    """Every folder refused, the process's own one too (it would be made in the temporary
+    directory, which others could replace): the kernels compile without a cache."""
+    cache, shared = folders
+    cache.write_text("")  # the configured folder is unusable
+    tmp = Path(tempfile.gettempdir())
+    os.chmod(tmp, 0o777)
+    with pytest.warns(RuntimeWarning) as record:
+        assert _load_where() == set()
+    assert [str(w.message) for w in record] == [
+        f"vistrack does not use the kernel folder {cache}: it is not a directory; it tries "
+        f"{shared}",
+        f"vistrack does not use the kernel folder {shared}: {_someone_could_swap(tmp)}; it "
+        "uses a new temporary folder for this process instead",
+        f"vistrack does not make a kernel folder in {tmp}: {_someone_could_swap(tmp)}; it "
+        "compiles the kernels without a cache instead"]
+    assert _codegen._PRIVATE_DIR == [] and list(tmp.iterdir()) == []
 
 
 def test_threads_write_through_temporary_files_of_their_own(tmp_path, monkeypatch):

@@ -139,6 +139,89 @@ def test_a_jpeg_padded_after_its_end_marker_reads(tmp_path):
     assert len(frames) == 2 and not msg
 
 
+# JPEGs as encoders write them: baseline, progressive (several scans), with restart markers
+JPEG_KINDS = {"baseline": [], "progressive": [cv2.IMWRITE_JPEG_PROGRESSIVE, 1],
+              "restarts": [cv2.IMWRITE_JPEG_RST_INTERVAL, 2]}
+
+
+def _jpeg(kind, seed=0, size=(48, 64), comment=b""):
+    """A JPEG's bytes; ``comment`` goes into a COM segment after the JFIF header (a stand-in
+    for metadata, such as an EXIF thumbnail with its own end-of-image marker)."""
+    rng = np.random.default_rng(seed)
+    im = cv2.GaussianBlur(rng.integers(0, 255, size + (3,), dtype=np.uint8), (5, 5), 1)
+    data = cv2.imencode(".jpg", im, JPEG_KINDS[kind])[1].tobytes()
+    if comment:
+        at = 4 + int.from_bytes(data[4:6], "big")  # after SOI and APP0
+        data = data[:at] + b"\xff\xfe" + (len(comment) + 2).to_bytes(2, "big") + comment + \
+            data[at:]
+    return data
+
+
+@pytest.mark.parametrize("kind", sorted(JPEG_KINDS))
+def test_a_jpeg_with_data_after_its_end_reads_as_without(tmp_path, kind):
+    """Cameras append data after the end-of-image marker (metadata, a second image, a video):
+    the image is read, as the same file without them is, in colour and grey. Before, only the
+    last 1024 bytes were searched for the marker."""
+    data = _jpeg(kind)
+    rng = np.random.default_rng(1)
+    tails = [b"\x00" * 100, rng.integers(0, 256, 5000, dtype=np.uint8).tobytes(),
+             _jpeg("baseline", seed=2) * 3, b"\xff\xd9\xff\xd8" + b"\xff" * 2000]
+    (tmp_path / "plain").mkdir()
+    (tmp_path / "plain" / "000001.jpg").write_bytes(data)
+    for k, tail in enumerate(tails):
+        (tmp_path / f"{k:06d}.jpg").write_bytes(data + tail)
+    for grey in (False, True):
+        want = cv2.imread(str(tmp_path / "plain" / "000001.jpg"),
+                          cv2.IMREAD_GRAYSCALE if grey else cv2.IMREAD_COLOR)
+        frames, msg = _read(VideoReader(tmp_path, grey=grey))
+        assert not msg and len(frames) == len(tails)
+        for f in frames:
+            np.testing.assert_array_equal(f.image, want)
+
+
+@pytest.mark.parametrize("kind", sorted(JPEG_KINDS))
+def test_every_cut_of_a_jpeg_is_reported_as_cut_short(tmp_path, kind):
+    """Every prefix of a JPEG (whose metadata hold an end-of-image marker of their own, as an
+    EXIF thumbnail does) is cut short; the whole file, and the file with data after it, are
+    not. Before, a cut that left the thumbnail's marker in the last 1024 bytes passed, and
+    libjpeg decoded a grey lower part."""
+    from vistrack.io.video import _jpeg_end
+
+    thumb = _jpeg("baseline", seed=3, size=(8, 8))
+    data = _jpeg(kind, comment=b"thumbnail:" + thumb)
+    assert data.count(b"\xff\xd9") == 2
+    assert [n for n in range(2, len(data)) if _jpeg_end(data[:n]) is not None] == []
+    assert _jpeg_end(data) == _jpeg_end(data + thumb) == len(data)
+    # inside the image's data, the thumbnail's marker in the last 1024 bytes
+    cut = data.index(thumb) + len(thumb) + 1000
+    assert cut < len(data) - 1000
+    (tmp_path / "000001.jpg").write_bytes(data)
+    (tmp_path / "000002.jpg").write_bytes(data[:cut])
+    with pytest.raises(VideoError) as e:
+        list(VideoReader(tmp_path))
+    assert str(e.value) == (f"{tmp_path / '000002.jpg'}: a JPEG cut short (its {cut} bytes "
+                            "end before its end-of-image marker FF D9): truncated or corrupt")
+
+
+@pytest.mark.parametrize("grey", [False, True])
+def test_image_folders_read_as_cv2_imread_reads_each_file(tmp_path, grey):
+    """JPEGs are decoded from the bytes read once: the frames are cv2.imread's, bit for bit
+    (the bundled sequences' JPEGs too, when the shared data is there)."""
+    flags = cv2.IMREAD_GRAYSCALE if grey else cv2.IMREAD_COLOR
+    for k, kind in enumerate(sorted(JPEG_KINDS) * 2):
+        (tmp_path / f"{k:06d}.jpg").write_bytes(_jpeg(kind, seed=k))
+    folders = [tmp_path]
+    otb = SHARED / "data" / "otb-crossing" / "Crossing" / "img"
+    if otb.is_dir():
+        folders.append(otb)
+    for folder in folders:
+        files = sorted(folder.glob("*.jpg"))
+        frames = list(VideoReader(folder, grey=grey))
+        assert len(frames) == len(files) > 0
+        for f, path in zip(frames, files):
+            np.testing.assert_array_equal(f.image, cv2.imread(str(path), flags))
+
+
 def test_an_image_of_another_size_is_named_with_both_sizes(tmp_path):
     files = _folder(tmp_path, n=4, ext=".png")
     cv2.imwrite(str(files[2]), np.zeros((30, 40, 3), np.uint8))

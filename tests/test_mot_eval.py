@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from vistrack.evaluation import ALPHAS, MOTCounts, combine, evaluate_mot
+from vistrack.evaluation import ALPHAS, MOTCounts, box_iou_xywh, combine, evaluate_mot
 from vistrack.io import MOTTable, read_mot
 
 from .mot_oracles import MOT15, MOT17, n_frames, noisy_predictions, seq_dir, trackeval_scores
@@ -169,6 +169,137 @@ def test_unsorted_tables_are_refused():
         evaluate_mot(gt, table([1], [1], [0]))
 
 
+# ------------------------------------------------- huge numbers, long sequences, bad rows
+
+
+def _exact_iou(a, b):
+    """IoU in exact rational arithmetic: no rounding, no overflow."""
+    from fractions import Fraction
+
+    (ax, ay, aw, ah), (bx, by, bw, bh) = (map(Fraction, map(float, box)) for box in (a, b))
+    iw = max(Fraction(0), min(ax + aw, bx + bw) - max(ax, bx))
+    ih = max(Fraction(0), min(ay + ah, by + bh) - max(ay, by))
+    union = aw * ah + bw * bh - iw * ih
+    return float(iw * ih / union) if union > 0 else 0.0
+
+
+def test_iou_of_huge_boxes_is_exact_and_in_range():
+    """Boxes up to 1e308: the IoU of exact arithmetic (it was NaN once a right edge or an area
+    overflowed, and evaluate_mot failed in scipy with "matrix contains invalid numeric
+    entries")."""
+    import warnings
+
+    rng = np.random.default_rng(5)
+    a = np.c_[rng.uniform(-50, 50, (40, 2)), rng.uniform(1, 60, (40, 2))]
+    b = a[rng.permutation(40)] + rng.normal(0, 5, (40, 4)) * [1, 1, 0, 0]
+    b[:10] = a[:10] + rng.normal(0, 2, (10, 4)) * [1, 1, 0.1, 0.1]  # overlapping pairs
+    exact = np.array([[_exact_iou(p, q) for q in b] for p in a])
+    small = box_iou_xywh(a, b)
+    # rounding in the corners' differences: at most a few ulp of the coordinates (~100)
+    np.testing.assert_allclose(small, exact, rtol=0, atol=1e-12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow warning either
+        for exponent in (400, 900, 1016):  # 2**1016 * 60: near the largest float
+            # a power of two scales every sum and product exactly: the same IoU, bit for bit
+            iou = box_iou_xywh(np.ldexp(a, exponent), np.ldexp(b, exponent))
+            assert (iou == small).all() and (iou[:10].diagonal() > 0).all()
+        mixed = [[1e308, 0, 1e308, 10], [0, 0, 1e308, 1e308], [0, 0, 10, 10],
+                 [-1e308, 5, 3e307, 1], [-1.1e308, 5.5, 5e307, 2]]
+        iou = box_iou_xywh(mixed, mixed)
+    exact = np.array([[_exact_iou(p, q) for q in mixed] for p in mixed])
+    # (a right edge x + w is rounded, as any sum of floats: a few ulp of x)
+    np.testing.assert_allclose(iou, exact, rtol=1e-14, atol=1e-300)
+    assert iou[3, 4] > 0.1 and (iou.diagonal() == 1.0).all()
+
+
+def test_huge_boxes_score_as_their_scaled_down_copies(tmp_path):
+    from vistrack.evaluation import evaluate_files
+
+    rng = np.random.default_rng(6)
+    frames, ids = np.repeat(np.arange(1, 6), 3), np.tile([1, 2, 3], 5)
+    x = ids * 30.0 + rng.normal(0, 1, 15)
+    gt, res = table(frames, ids, x), table(frames, np.where(frames > 3, ids + 5, ids),
+                                           x + rng.normal(0, 3, 15))
+    small = evaluate_mot(gt, res).summary()
+    for exponent in (600, 1000):
+        def big(t, exponent=exponent):
+            return MOTTable(t.frames, t.ids, np.ldexp(t.boxes, exponent), t.conf, t.classes,
+                            t.visibility)
+        assert evaluate_mot(big(gt), big(res)).summary() == small
+    # the issue's case, through the files: a right edge of 2e308 (inf in floats)
+    f = _rows(tmp_path / "gt.txt", [(1, 1, "1e308", 0, "1e308", 10, 1, -1, -1, -1)])
+    c = evaluate_files([("s", f, f, None)])["s"]
+    assert (c.TP, c.FP, c.FN, c.MOTP, c.HOTA) == (1, 0, 0, 1.0, 1.0)
+
+
+def test_frame_numbers_near_2_to_53_need_no_memory_per_frame():
+    """A sequence as long as its last frame number (no seqinfo.ini): the frames without rows
+    cost nothing (a table of every frame up to 2**53 was a MemoryError)."""
+    last = 2 ** 53
+    gt = table([1, 2, last], [1, 1, 1], [0, 1, 5])
+    c = evaluate_mot(gt, table([1, 2, last], [4, 4, 4], [0, 1, 5]))
+    assert c.frames == last and (c.TP, c.FP, c.FN, c.IDSW) == (3, 0, 0, 0) and c.HOTA == 1.0
+    c = evaluate_mot(gt, table([1, 2, last - 1], [4, 4, 4], [0, 1, 5]), n_frames=last)
+    assert (c.TP, c.FP, c.FN, c.frames) == (2, 1, 1, last)
+
+
+def test_ids_far_apart_are_not_taken_for_twins():
+    """Ids from -2**52 to 2**52: (frame, id) pairs were once packed into one int64, which
+    overflowed and made two different pairs equal."""
+    m = 2 ** 52
+    t = table([1, 2049, 2049], [-m + 2048, -m, m], [0, 0, 50])
+    c = evaluate_mot(t, t)
+    assert (c.TP, c.FP, c.FN, c.IDSW) == (3, 0, 0, 0)
+    twins = table([1, 2049, 2049, 2049], [-m + 2048, -m, m, -m], [0, 0, 50, 90])
+    with pytest.raises(ValueError, match=f"^prediction: id {-m} appears more than once in "
+                                         "frame 2049$"):
+        evaluate_mot(t, twins)
+
+
+def test_a_bad_row_found_while_scoring_is_named_by_its_line(tmp_path):
+    """An id twice in a frame, a frame past seqinfo.ini's length, a class out of range: the
+    file and the line(s), counted as read_mot counts them (blank and comment lines too, in the
+    file's order, not the frames')."""
+    from vistrack.evaluation import evaluate_files
+
+    gt = tmp_path / "gt.txt"
+    gt.write_text("2,1,0,0,10,10,1,1,1\n\n1,1,0,0,10,10,1,1,1\n# a comment\n"
+                  "2,2,20,0,10,10,1,1,1\n2,1,5,0,10,10,1,1,1\n")
+    ok = _rows(tmp_path / "ok.txt", [(1, 1, 0, 0, 10, 10, 1, 1, 1), (3, 1, 0, 0, 10, 10, 1, 14,
+                                                                     1)])
+    info = tmp_path / "seqinfo.ini"
+    info.write_text("[Sequence]\nname=s\nframeRate=10\nseqLength=2\nimWidth=64\n"
+                    "imHeight=48\n")
+    with pytest.raises(ValueError) as e:
+        evaluate_files([("s", ok, gt, None)], benchmark="MOT15")
+    assert str(e.value) == f"{gt}, lines 1 and 6: id 1 appears more than once in frame 2"
+    with pytest.raises(ValueError) as e:
+        evaluate_files([("s", ok, ok, info)], benchmark="MOT15")
+    assert str(e.value) == f"{ok}, line 2: frame 3 is beyond the sequence's 2 frames"
+    with pytest.raises(ValueError) as e:
+        evaluate_files([("s", ok, ok, None)], benchmark="MOT17")
+    assert str(e.value) == f"{ok}, line 2, column 8 (class): class 14 is not a MOT17 class (1-13)"
+
+
+def test_cli_eval_table_keeps_its_columns_apart(tmp_path, capsys):
+    """MOTA of -1300 % and a name shorter than the header: each value still ends under its
+    header, with a space before it (-1300.0 and 7-digit counts filled the 7 characters)."""
+    import re
+
+    from vistrack.cli import main
+
+    (tmp_path / "s" / "gt").mkdir(parents=True)
+    gt = _rows(tmp_path / "s" / "gt" / "gt.txt", [(1, 1, 0, 0, 20, 40, 1, 1, 1)])
+    res = _rows(tmp_path / "res.txt", [(1, k, 100 + 30 * k, 0, 20, 40, 1, -1, -1, -1)
+                                       for k in range(13)])
+    assert main(["eval", "--gt", str(gt), "--pred", str(res)]) == 0
+    head, row = capsys.readouterr().out.splitlines()
+    cells = dict(zip(head.split(), row.split()))
+    assert cells["sequence"] == "s" and cells["MOTA"] == "-1300.0" and cells["FP"] == "13"
+    ends = [[m.end() for m in re.finditer(r"\S+", line)] for line in (head, row)]
+    assert ends[0][1:] == ends[1][1:] and len(ends[0]) == len(ends[1]) == 17
+
+
 # ------------------------------------------------------------------ sanity warnings
 
 
@@ -228,8 +359,9 @@ def test_ground_truth_that_looks_like_detections(tmp_path):
                                        (1, 2, 50, 0, 20, 40, 0.4, -1, -1, -1)])
     with pytest.raises(ValueError) as e:
         evaluate_files([("s", det, res, None)])
-    assert str(e.value) == (f"{det}: id -1 appears more than once in frame 1; every id is -1: "
-                            "it looks like a detections file (det.txt), not ground truth")
+    assert str(e.value) == (f"{det}, lines 1 and 2: id -1 appears more than once in frame 1; "
+                            "every id is -1: it looks like a detections file (det.txt), not "
+                            "ground truth")
     with pytest.raises(ValueError, match="looks like a detections file .det.txt., not tracking "
                                          "results"):
         evaluate_files([("s", res, det, None)])

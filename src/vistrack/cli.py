@@ -11,6 +11,7 @@ import threading
 import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import NoReturn
 
 from . import __version__, _compile
 
@@ -62,6 +63,24 @@ def _message(exc: BaseException) -> str:
     else:
         text = str(exc) or type(exc).__name__
     return " ".join(line.strip() for line in text.splitlines())
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser with its errors in the command line's one form: one line
+    ``vistrack COMMAND: error: MESSAGE`` and exit status 2, where argparse prints its usage and
+    then the error. ``--help`` shows the usage."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {_message(ValueError(message))}\n")
+
+
+def _command_parser(parser: argparse.ArgumentParser, command: str | None
+                    ) -> argparse.ArgumentParser:
+    """The parser of ``command`` (``vistrack track``), or ``parser`` itself."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction) and command in action.choices:
+            return action.choices[command]
+    return parser
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -316,17 +335,23 @@ def _eval(args: argparse.Namespace) -> int:
 
 
 def _table(res: dict, stream=None) -> None:
+    """The scores as a table: a column of 7 characters per score, wider where a value needs it
+    (MOTA -1200.0, a count of millions), so that a space always parts two values; the names'
+    column as wide as its header or its longest name, and two spaces."""
     stream = sys.stdout if stream is None else stream
-    width = max(len(k) for k in res) + 2
-    print("".join([f"{'sequence':<{width}}"] + [f"{c:>7}" for c, _ in _COLUMNS]), file=stream)
-    for name, c in res.items():
-        s = c.summary()
-        cells = [f"{100 * s[k]:7.1f}" if pct else f"{s[k]:7d}" for k, pct in _COLUMNS]
-        print("".join([f"{name:<{width}}"] + cells), file=stream)
+    width = max(len(k) for k in ["sequence", *res]) + 2
+    rows = [[f"{100 * s[k]:.1f}" if pct else f"{s[k]:d}" for k, pct in _COLUMNS]
+            for s in (c.summary() for c in res.values())]
+    widths = [max([7] + [len(r[j]) + 1 for r in rows]) for j in range(len(_COLUMNS))]
+    print("".join([f"{'sequence':<{width}}"] + [f"{c:>{w}}" for (c, _), w in
+                                                 zip(_COLUMNS, widths)]), file=stream)
+    for name, cells in zip(res, rows):
+        print("".join([f"{name:<{width}}"] + [f"{v:>{w}}" for v, w in zip(cells, widths)]),
+              file=stream)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="vistrack", description="Visual object tracking: filters, trackers, scores."
     )
     parser.add_argument("--version", action="version", version=f"vistrack {__version__}")
@@ -464,18 +489,23 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     A user's mistake (:func:`_user_errors`) prints one line ``vistrack COMMAND: error:
     MESSAGE`` and returns 2 (with ``--debug``, its traceback instead); any other exception
-    is a bug and shows its traceback. Ctrl-C returns 130 and SIGTERM 143, each with one
+    is a bug and shows its traceback. A mistake in the arguments themselves (an unknown
+    option, a value of the wrong type, a missing argument) prints the same one line and
+    exits 2 (``SystemExit``, as argparse does). Ctrl-C returns 130 and SIGTERM 143, each with one
     line (outputs are written whole or not at all: earlier ones are kept). When stdout is a
     pipe closed early (``vistrack eval --json | head -1``), the rest of the output is
     dropped quietly and the status is 1, as Python's documentation recommends.
     """
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    command = _command_parser(parser, getattr(args, "command", None))
+    if extra:  # said by the command's parser (parse_args would say it as vistrack's)
+        command.error(f"unrecognized arguments: {' '.join(extra)}")
     if not hasattr(args, "func"):
         parser.print_help()
         return 2
     if getattr(args, "seeds", 1) < 1:
-        parser.error(f"--seeds must be >= 1; got {args.seeds}")
+        command.error(f"--seeds must be >= 1; got {args.seeds}")
     # SIGTERM stops a run as Ctrl-C does, for as long as main runs (signal handlers can be
     # set in the main thread only)
     old = (signal.signal(signal.SIGTERM, _terminate)

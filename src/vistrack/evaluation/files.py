@@ -61,7 +61,9 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     MOTFormatError
         If a file is malformed.
     ValueError
-        If ``benchmark`` is not one of the names, or a file's rows go past the sequence.
+        If ``benchmark`` is not one of the names, or a file's rows go past the sequence, hold
+        an id twice in a frame or (ground truth of MOT16/17/20) a class outside 1-13, naming
+        the file and the line(s) of the row (see :func:`~vistrack.evaluation.evaluate_mot`).
 
     Examples
     --------

@@ -26,12 +26,14 @@ LocA are averaged weighted by each sequence's true positives.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, fields
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._validate import decode_text
 from ..io.motchallenge import MOTTable
 
 
@@ -54,6 +56,11 @@ _DISTRACTORS = {"MOT16": (2, 7, 8, 12), "MOT17": (2, 7, 8, 12), "MOT20": (2, 6, 
 def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     """IoU of every box of ``a`` with every box of ``b``, boxes as ``left, top, width, height``.
 
+    Any finite boxes give an IoU in [0, 1], however large their numbers: a pair with a value
+    beyond 2**500, whose areas or right edges could overflow, is computed with each axis scaled
+    by a power of two (which leaves the IoU as it is). As in any float sum, a right edge
+    ``left + width`` is rounded: a width below the spacing of floats at ``left`` is lost.
+
     Parameters
     ----------
     a : (N, 4) array_like
@@ -74,9 +81,25 @@ def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     --------
     >>> box_iou_xywh([[0, 0, 10, 10]], [[5, 0, 10, 10], [0, 0, 10, 10]]).round(3)
     array([[0.333, 1.   ]])
+    >>> box_iou_xywh([[0, 0, 1e300, 1e300]], [[0, 0, 1e300, 5e299]])
+    array([[0.5]])
     """
     a = np.asarray(a, dtype=float).reshape(-1, 4)
     b = np.asarray(b, dtype=float).reshape(-1, 4)
+    big_a, big_b = (np.abs(a) > _BIG).any(1), (np.abs(b) > _BIG).any(1)
+    if not (big_a.any() or big_b.any()):
+        return _iou(a, b)
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = _iou(a, b)
+    i, j = np.nonzero(big_a[:, None] | big_b[None, :])
+    out[i, j] = _iou_scaled(a[i], b[j])
+    return out
+
+
+_BIG = 2.0 ** 500  # below it, no sum or product of the IoU overflows
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     ax0, ay0, ax1, ay1 = a[:, 0:1], a[:, 1:2], a[:, 0:1] + a[:, 2:3], a[:, 1:2] + a[:, 3:4]
     bx0, by0, bx1, by1 = b[:, 0], b[:, 1], b[:, 0] + b[:, 2], b[:, 1] + b[:, 3]
     iw = np.clip(np.minimum(ax1, bx1) - np.maximum(ax0, bx0), 0, None)
@@ -88,11 +111,28 @@ def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     return inter / union
 
 
+def _iou_scaled(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The IoU of the pairs ``a[k]``, ``b[k]``, each axis scaled by the power of two that brings
+    the pair's largest value on it below 1 (exact, unless a value becomes subnormal): no sum or
+    product can overflow. Used for boxes with values beyond :data:`_BIG`."""
+    cols = []
+    for pos, size in ((0, 2), (1, 3)):  # the x axis, then the y axis
+        v = np.stack([a[:, pos], a[:, size], b[:, pos], b[:, size]], axis=1)
+        v = np.ldexp(v, -np.frexp(np.abs(v).max(1))[1][:, None])
+        lo = np.maximum(v[:, 0], v[:, 2])
+        hi = np.minimum(v[:, 0] + v[:, 1], v[:, 2] + v[:, 3])
+        cols.append((np.clip(hi - lo, 0, None), v[:, 1], v[:, 3]))
+    (iw, aw, bw), (ih, ah, bh) = cols
+    inter = iw * ih
+    union = aw * ah + bw * bh - inter
+    return np.where(union > 0, np.minimum(1.0, inter / np.where(union > 0, union, 1.0)), 0.0)
+
+
 @dataclass
 class _Sequence:
-    gt_ids: list  # per frame, contiguous ids 0 .. n_gt_ids - 1
+    gt_ids: list  # per frame with a row, contiguous ids 0 .. n_gt_ids - 1
     pred_ids: list
-    sim: list  # per frame (n_gt_t, n_pred_t) IoU
+    sim: list  # per such frame (n_gt_t, n_pred_t) IoU
     n_gt_ids: int
     n_pred_ids: int
 
@@ -107,39 +147,92 @@ def _benchmark_of(gt: MOTTable, benchmark: str) -> str:
     return "MOT17" if has_classes else "MOT15"
 
 
+def _lines_of(path: str, match: Callable[[list[float]], bool]) -> list[int]:
+    """The lines (from 1) of the MOTChallenge file ``path`` whose row ``match`` accepts, for a
+    message; empty for a table not read from a file (or a file no longer readable)."""
+    if not path:
+        return []
+    try:
+        text = decode_text(Path(path).read_bytes(), path, "MOTChallenge", ValueError)
+    except (OSError, ValueError):
+        return []
+    found = []
+    for k, raw in enumerate(text.splitlines(), start=1):  # as read_mot counts lines
+        try:  # a blank or comment line (np.loadtxt skips those) is not a row
+            row = [float(c) for c in raw.split("#", 1)[0].split(",")]
+        except ValueError:
+            continue
+        if len(row) >= 6 and match(row):
+            found.append(k)
+    return found
+
+
+def _where(table: MOTTable, what: str, lines: list[int]) -> str:
+    """``path, line 4`` / ``path, lines 4 and 9``, or the file (or ``what``) alone."""
+    name = table.path or what
+    if not lines:
+        return name
+    if len(lines) == 1:
+        return f"{name}, line {lines[0]}"
+    return f"{name}, lines {lines[0]} and {lines[1]}"
+
+
+def _check_frames(table: MOTTable, what: str, n_frames: int) -> None:
+    if len(table) and table.frames.max() > n_frames:
+        last = int(table.frames.max())
+        lines = _lines_of(table.path, lambda row: row[0] == last)[:1]
+        raise ValueError(f"{_where(table, what, lines)}: frame {last} is beyond the sequence's "
+                         f"{n_frames} frames")
+
+
 def _check_unique(table: MOTTable, what: str) -> None:
     if len(table) < 2:
         return
-    key = table.frames * (int(table.ids.max()) - int(table.ids.min()) + 1) + (
-        table.ids - int(table.ids.min()))
-    u, counts = np.unique(key, return_counts=True)
-    if (counts > 1).any():
-        k = int(np.flatnonzero(np.isin(key, u[counts > 1]))[0])
-        hint = ""
-        if (table.ids == -1).all():
-            hint = (f"; every id is -1: it looks like a detections file (det.txt), not "
-                    f"{'tracking results' if what == 'prediction' else what}")
-        raise ValueError(f"{table.path or what}: id {int(table.ids[k])} appears more than once in "
-                         f"frame {int(table.frames[k])}{hint}")
+    # rows sorted by (frame, id): a repeated pair sits next to its twin
+    order = np.lexsort((table.ids, table.frames))
+    f, i = table.frames[order], table.ids[order]
+    same = (f[1:] == f[:-1]) & (i[1:] == i[:-1])
+    if not same.any():
+        return
+    twin = np.zeros(len(table), bool)
+    twin[order[1:][same]] = twin[order[:-1][same]] = True
+    k = int(np.argmax(twin))  # the first such row in the table's order
+    frame, ident = int(table.frames[k]), int(table.ids[k])
+    hint = ""
+    if (table.ids == -1).all():
+        hint = (f"; every id is -1: it looks like a detections file (det.txt), not "
+                f"{'tracking results' if what == 'prediction' else what}")
+    lines = _lines_of(table.path, lambda row: row[0] == frame and row[1] == ident)
+    raise ValueError(f"{_where(table, what, lines)}: id {ident} appears more than once in "
+                     f"frame {frame}{hint}")
 
 
 def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Sequence:
     bench = _benchmark_of(gt, benchmark)
     for table, what in ((gt, "ground truth"), (pred, "prediction")):
-        if len(table) and table.frames.max() > n_frames:
-            raise ValueError(f"{table.path or what}: frame {int(table.frames.max())} is beyond "
-                             f"the sequence's {n_frames} frames")
+        if len(table) > 1 and np.any(np.diff(table.frames) < 0):
+            raise ValueError(f"{table.path or what}: rows must be sorted by frame (read_mot "
+                             "sorts them)")
+        _check_frames(table, what, n_frames)
         _check_unique(table, what)
     if bench != "MOT15" and len(gt):
         bad = np.setdiff1d(np.unique(gt.classes), np.arange(1, 14))
         if len(bad):
-            raise ValueError(f"{gt.path or 'ground truth'}: class {int(bad[0])} is not a "
-                             f"{bench} class (1-13)")
+            cls = int(bad[0])
+            lines = _lines_of(gt.path, lambda row: len(row) > 7 and row[7] == cls)[:1]
+            where = _where(gt, "ground truth", lines) + (", column 8 (class)" if lines else "")
+            raise ValueError(f"{where}: class {cls} is not a {bench} class (1-13)")
     distractors = np.array(_DISTRACTORS.get(bench, ()), dtype=np.int64)
-    gs, ps = gt.frame_slices(n_frames), pred.frame_slices(n_frames)
+    # the frames with a row: a frame without any adds nothing to a count, and the sequence may
+    # be long (its last frame, or seqinfo.ini's length, need not bound the work)
+    frames = np.union1d(gt.frames, pred.frames)
+    frames = frames[frames >= 1]
+    gs = np.searchsorted(gt.frames, frames, "left"), np.searchsorted(gt.frames, frames, "right")
+    ps = (np.searchsorted(pred.frames, frames, "left"),
+          np.searchsorted(pred.frames, frames, "right"))
     gt_ids, pred_ids, sims = [], [], []
-    for t in range(n_frames):
-        g, p = gt[gs[t]], pred[ps[t]]
+    for g0, g1, p0, p1 in zip(*gs, *ps):
+        g, p = gt[int(g0):int(g1)], pred[int(p0):int(p1)]
         sim = box_iou_xywh(g.boxes, p.boxes)
         keep_p = np.ones(len(p), bool)
         if bench != "MOT15" and len(g) and len(p):
@@ -649,7 +742,9 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     ------
     ValueError
         If ``benchmark`` is not one of the names, a file has rows beyond ``n_frames`` or an id
-        twice in a frame, or MOT16/17/20 ground truth has a class outside 1-13.
+        twice in a frame, or MOT16/17/20 ground truth has a class outside 1-13. The message
+        names the table's file and, when it was read from one, the line(s) of the row:
+        ``res.txt, lines 4 and 9: id 3 appears more than once in frame 2``.
 
     References
     ----------

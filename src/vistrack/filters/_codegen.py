@@ -29,9 +29,12 @@ The source of each kernel is written to a file in the user's cache directory
 ``~/.cache/vistrack/kernels``) and imported from there, so numba caches its machine code like
 that of any other module: a pattern costs its compilation (seconds) once per machine. Since
 numba unpickles what it finds there, a folder is used only if it is a directory (not a symbolic
-link) owned by the user and not writable by others; it is created with mode 0o700. An unsafe
-folder is refused with a warning (then ``vistrack-kernels-{uid}`` in the temporary directory,
-under the same rule, else a new private folder for the process).
+link) owned by the user and not writable by others, below folders that no one else could
+replace it in (as ssh's StrictModes: each is owned by the user or root, and not writable by
+group or others unless it has the sticky bit, as ``/tmp``); it is created with mode 0o700, and
+so are the folders missing above it. An unsafe folder is refused with a warning (then
+``vistrack-kernels-{uid}`` in the temporary directory, under the same rule, else a new private
+folder for the process, else no cache at all).
 """
 
 from __future__ import annotations
@@ -390,15 +393,56 @@ def _uid() -> int | None:
     return os.getuid() if hasattr(os, "getuid") else None
 
 
+def _unsafe_parents(d: Path) -> str | None:
+    """Why a folder above ``d`` would let someone else replace ``d`` (or what holds it), or
+    None: as ssh's StrictModes, each existing folder above it must be owned by this user or
+    root, and not writable by group or others unless it has the sticky bit (as ``/tmp``,
+    where only an entry's owner may rename or delete it). The folders above ``d`` as written
+    and above its real path (symbolic links resolved) are checked, nearest first. Not on
+    systems without POSIX owners (Windows)."""
+    uid = _uid()
+    if uid is None:
+        return None
+    seen = set()
+    for path in (Path(os.path.abspath(d)), Path(os.path.realpath(d))):
+        for parent in path.parents:
+            if parent in seen:
+                continue
+            seen.add(parent)
+            try:
+                st = os.stat(parent)
+            except (FileNotFoundError, NotADirectoryError):  # made below, mode 0o700
+                continue
+            if st.st_uid not in (uid, 0):
+                return (f"{parent}, a folder above it, belongs to user id {st.st_uid}, neither "
+                        f"this user ({uid}) nor root; set VISTRACK_CACHE_DIR to a folder of "
+                        "your own")
+            if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH) and not st.st_mode & stat.S_ISVTX:
+                return (f"others may write to {parent}, a folder above it (mode "
+                        f"{stat.S_IMODE(st.st_mode):#o}, no sticky bit), and put another folder "
+                        f"in its place; 'chmod go-w {parent}' makes it safe")
+    return None
+
+
 def _unsafe(d: Path) -> str | None:
     """Why the kernel folder ``d`` must not be used, or None if it is safe.
 
     numba unpickles what it finds beside a kernel's source, so the folder must be a real
     directory (not a symbolic link) that only this user can write to: owned by them, with no
-    group or other write permission. A missing folder is created with mode 0o700 (its parents
-    with the default mode). An ``OSError`` (the folder cannot be created) propagates."""
+    group or other write permission, below folders that no one else could replace it in
+    (:func:`_unsafe_parents`, checked before anything is created). A missing folder is created
+    with mode 0o700, as are the missing folders above it. An ``OSError`` (the folder cannot be
+    created) propagates."""
+    why = _unsafe_parents(d)
+    if why is not None:
+        return why
     if not os.path.lexists(d):
-        d.parent.mkdir(parents=True, exist_ok=True)
+        for parent in reversed(d.parents):
+            if not os.path.lexists(parent):
+                try:
+                    parent.mkdir(mode=0o700)
+                except FileExistsError:  # made meanwhile: the checks below see it
+                    pass
         try:
             d.mkdir(mode=0o700)
         except FileExistsError:  # created meanwhile, by this user or another: check it below
@@ -445,13 +489,23 @@ def _write(path: Path, src: str) -> None:
 def _source_file(name: str, src: str) -> Path | None:
     """The file holding ``src`` in the first usable kernel folder: the cache directory, else
     ``vistrack-kernels-{uid}`` in the temporary directory, else a fresh folder for this process.
-    A folder that exists but is unsafe (see :func:`_unsafe`) is refused with a warning; one that
-    cannot be written is passed over. None if no folder can be written."""
+    A folder that is unsafe (see :func:`_unsafe`) is refused with a warning; one that cannot be
+    written is passed over. None if no folder can be written, or the temporary directory is
+    below a folder others could replace it in (the kernels then compile without a cache)."""
     user = _uid() if _uid() is not None else "user"
     shared = [_cache_dir(), Path(tempfile.gettempdir()) / f"vistrack-kernels-{user}"]
     for i, d in enumerate(shared + [None]):
         try:
             if d is None:
+                if not _PRIVATE_DIR:
+                    # the fresh folder is made in the temporary directory: the folders above it
+                    # must be safe too (the temporary directory itself may be /tmp)
+                    why = _unsafe_parents(Path(tempfile.gettempdir()) / "vistrack-kernels-")
+                    if why is not None:
+                        warnings.warn(f"vistrack does not make a kernel folder in "
+                                      f"{tempfile.gettempdir()}: {why}; it compiles the kernels "
+                                      "without a cache instead", RuntimeWarning, stacklevel=4)
+                        return None
                 d = _private_dir()
             else:
                 why = _unsafe(d)

@@ -6,7 +6,8 @@ Frames stream one at a time (memory stays bounded however long the video), each 
 decodes. A file that stops decoding before the frame count its header gives yields the
 frames read and warns with the frame index where reading stopped; a file OpenCV cannot open at
 all raises :class:`VideoError` naming it. In an image folder, an image that does not decode, a
-JPEG cut short (no end-of-image marker) and an image of another size than the first raise
+JPEG cut short (its data end before its end-of-image marker; data after the marker, which many
+cameras append, are fine) and an image of another size than the first raise
 :class:`VideoError` naming the file, or are skipped with a warning naming it
 (``skip_bad=True``).
 """
@@ -14,6 +15,7 @@ JPEG cut short (no end-of-image marker) and an image of another size than the fi
 from __future__ import annotations
 
 import configparser
+import re
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -30,10 +32,53 @@ __all__ = ["Frame", "VideoError", "VideoReader", "VideoWriter", "IMAGE_SUFFIXES"
 
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
 
-# a whole JPEG ends with its end-of-image marker; some writers pad after it, so it is looked
-# for in the last bytes (entropy-coded data never holds FF D9: a byte FF there is followed by
-# 00 or a restart marker D0-D7)
-_JPEG_EOI, _JPEG_TAIL = b"\xff\xd9", 1024
+# a JPEG's markers: FF, then a code other than 00 and FF (FF FF: a fill byte before the
+# marker); in entropy-coded data, FF 00 is a data byte FF and FF D0-D7 a restart marker, which
+# the data go on after. (Without repetition, so that re scans at about 1 GB/s.)
+_JPEG_MARKER = re.compile(rb"\xff[\x01-\xfe]")
+_JPEG_SCAN_END = re.compile(rb"\xff[\x01-\xcf\xd8-\xfe]")
+
+
+def _jpeg_end(data: bytes) -> int | None:
+    """Where the JPEG image that ``data`` starts with ends: the offset just past its
+    end-of-image marker (FF D9), or None if the data end first (cut short, or corrupt).
+
+    The segments are walked as a decoder reads them (each marker's length, and the
+    entropy-coded data after a start of scan up to the next marker), so an FF D9 inside a
+    thumbnail or metadata is not taken for the image's end, and whatever follows the end
+    (cameras append metadata, other images, even videos) is not looked at.
+
+    Examples
+    --------
+    Start of image, an APP1 segment that holds FF D9, a scan whose data hold a byte FF
+    (FF 00) and a restart marker, and the end of image:
+
+    >>> jpeg = bytes.fromhex("ffd8 ffe1 0006 ffd9 0000 ffda 0002 12ff0034 ffd0 56 ffd9")
+    >>> len(jpeg), _jpeg_end(jpeg), _jpeg_end(jpeg + b"appended"), _jpeg_end(jpeg[:-2])
+    (23, 23, 23, None)
+    """
+    pos = 2  # past the start-of-image marker FF D8
+    while True:
+        # the next marker: fill bytes FF before it, and bytes that are not one (libjpeg warns
+        # of "extraneous bytes"), are skipped as libjpeg skips them
+        m = _JPEG_MARKER.search(data, pos)
+        if m is None:
+            return None
+        code, pos = data[m.end() - 1], m.end()
+        if code == 0xD9:  # end of image
+            return pos
+        if code in (0x01, 0xD8) or 0xD0 <= code <= 0xD7:  # markers without a length
+            continue
+        if pos + 2 > len(data) or (length := int.from_bytes(data[pos:pos + 2], "big")) < 2:
+            return None
+        pos += length
+        if pos > len(data):
+            return None
+        if code == 0xDA:  # start of scan: entropy-coded data up to the next marker
+            m = _JPEG_SCAN_END.search(data, pos)
+            if m is None:
+                return None
+            pos = m.start()
 
 
 class _Note(str):
@@ -192,19 +237,25 @@ class VideoReader:
         return max(0, stop - self.start + 1)
 
     def _load(self, path: Path) -> tuple[np.ndarray | None, str]:
-        """The image, or None and why not."""
-        if path.suffix.lower() in (".jpg", ".jpeg"):
-            with open(path, "rb") as f:
-                size = f.seek(0, 2)
-                f.seek(max(0, size - _JPEG_TAIL))
-                if _JPEG_EOI not in f.read():
-                    return None, (f"a JPEG cut short ({size} bytes, no end-of-image marker "
-                                  "FF D9): truncated or corrupt")
+        """The image, or None and why not.
+
+        A JPEG is read once: its bytes are checked for the image's end-of-image marker (data
+        after it are fine) and decoded from memory, as ``cv2.imread`` decodes the file."""
         cv2 = _cv2()
-        im = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if self.grey else cv2.IMREAD_COLOR)
-        if im is None:
-            return None, "not a readable image (OpenCV cannot decode it: corrupt or truncated)"
-        return im, ""
+        flags = cv2.IMREAD_GRAYSCALE if self.grey else cv2.IMREAD_COLOR
+        unreadable = "not a readable image (OpenCV cannot decode it: corrupt or truncated)"
+        if path.suffix.lower() not in (".jpg", ".jpeg"):
+            im = cv2.imread(str(path), flags)
+            return (None, unreadable) if im is None else (im, "")
+        data = path.read_bytes()
+        if data[:2] == b"\xff\xd8" and _jpeg_end(data) is None:
+            return None, (f"a JPEG cut short (its {len(data)} bytes end before its end-of-image "
+                          "marker FF D9): truncated or corrupt")
+        try:
+            im = cv2.imdecode(np.frombuffer(data, np.uint8), flags) if data else None
+        except cv2.error:
+            im = None
+        return (None, unreadable) if im is None else (im, "")
 
     def _image(self, path: Path) -> np.ndarray | _Note:
         """The image of one file, or (``skip_bad``) the note that it was skipped."""
