@@ -56,7 +56,7 @@ open(sys.argv[2], "w").write("\\n".join(rows) + "\\n")
 """
 
 
-def entries(out: Path) -> list[tuple[str, list[str], bool]]:
+def entries(out: Path, examples: Path) -> list[tuple[str, list[str], bool]]:
     """(name, command, needs shared data) for each entry point."""
     e = [
         ("import vistrack", [PY, "-c", "import vistrack"], False),
@@ -76,8 +76,26 @@ def entries(out: Path) -> list[tuple[str, list[str], bool]]:
           str(out / "crossing.txt"), "--force"], True),
         ("examples/filter_and_smooth.py", [PY, str(ROOT / "examples" / "filter_and_smooth.py")],
          False),
+        ("examples/nonlinear_figures.py",
+         [PY, str(ROOT / "examples" / "nonlinear_figures.py"), str(out / "figures")], False),
     ]
+    # the examples that write their figures beside themselves run from a copy (see main)
+    for name, shared in [("kalman_seed_figures", False), ("compose_bag", True),
+                         ("snake_bag", True), ("mm_pets09", True), ("dcpf_pets09", True),
+                         ("wsl_pets09", True)]:
+        e.append((f"examples/{name}.py", [PY, str(examples / f"{name}.py")], shared))
     return e
+
+
+def _copy_examples(work: Path) -> Path:
+    """A copy of examples/ under ``work``, so that their figures go there; its
+    ``../../shared`` is the shared data, as for the repository's own."""
+    copy = work / "tree" / "repo" / "examples"
+    shutil.copytree(ROOT / "examples", copy, ignore=shutil.ignore_patterns("*.png"))
+    (copy / "figures").mkdir(exist_ok=True)
+    if SHARED.exists():
+        (work / "tree" / "shared").symlink_to(SHARED.parent)
+    return copy
 
 
 def timed(cmd: list[str], env: dict[str, str]) -> tuple[float, float, int]:
@@ -101,37 +119,53 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", nargs="*", default=None,
                     help="entries whose name contains one of these strings")
     ap.add_argument("--write", metavar="MD", help="write the section into this markdown file")
+    ap.add_argument("--jit", action="store_true",
+                    help="also time each cold run without the kernels compiled at install "
+                         "(VISTRACK_PREBUILT=0): everything compiled on first use")
     args = ap.parse_args(argv)
 
     work = Path(tempfile.mkdtemp(prefix="vt-startup-"))
     out = work / "out"
     rows = []
+    examples = _copy_examples(work)
+    from vistrack import _prebuilt
+
+    print(_prebuilt.status(), file=sys.stderr)
     try:
-        for name, cmd, shared in entries(out):
+        for name, cmd, shared in entries(out, examples):
             if args.only and not any(s in name for s in args.only):
                 continue
             if shared and not SHARED.exists():
                 print(f"  skip {name}: ../shared/data is not beside the repository",
                       file=sys.stderr)
                 continue
-            cold, warm = [], []
+            cold, jit, warm = [], [], []
             for k in range(args.cold):
                 env = dict(os.environ, NUMBA_CACHE_DIR=str(work / f"numba-{name}-{k}"),
                            VISTRACK_CACHE_DIR=str(work / f"kernels-{name}-{k}"))
                 cold.append(timed(cmd, env))
+                if args.jit:  # the same without the kernels compiled at install
+                    env = dict(env, VISTRACK_PREBUILT="0",
+                               NUMBA_CACHE_DIR=str(work / f"numba-jit-{name}-{k}"),
+                               VISTRACK_CACHE_DIR=str(work / f"kernels-jit-{name}-{k}"))
+                    jit.append(timed(cmd, env))
             env = dict(os.environ, NUMBA_CACHE_DIR=str(work / "numba-warm"),
                        VISTRACK_CACHE_DIR=str(work / "kernels-warm"))
             timed(cmd, env)  # fill the caches
             for _ in range(args.warm):
                 warm.append(timed(cmd, env))
-            if any(c[2] for c in cold + warm):
+            if any(c[2] for c in cold + jit + warm):
                 print(f"  {name}: a run failed", file=sys.stderr)
-            row = (name, statistics.median(c[0] for c in cold) if cold else float("nan"),
-                   statistics.median(c[1] for c in cold) if cold else float("nan"),
-                   statistics.median(w[0] for w in warm), statistics.median(w[1] for w in warm))
+            nan = float("nan")
+            row = (name, statistics.median(c[0] for c in cold) if cold else nan,
+                   statistics.median(c[1] for c in cold) if cold else nan,
+                   statistics.median(w[0] for w in warm), statistics.median(w[1] for w in warm),
+                   statistics.median(c[0] for c in jit) if jit else nan)
             rows.append(row)
             print(f"{name:45s} cold {row[1]:7.2f} s ({row[2]:6.2f} s CPU)   "
-                  f"warm {row[3]:6.2f} s ({row[4]:5.2f} s CPU)", flush=True)
+                  f"warm {row[3]:6.2f} s ({row[4]:5.2f} s CPU)"
+                  + (f"   cold, compiled on first use {row[5]:7.2f} s" if jit else ""),
+                  flush=True)
         peer = []
         if SHARED.exists() and (not args.only or any("trackers" in s for s in args.only)):
             env = dict(os.environ)
@@ -161,15 +195,21 @@ def main(argv: list[str] | None = None) -> int:
             "## Start-up and first run",
             "",
             f"Measured with `python bench/bench_startup.py --cold {args.cold} --warm "
-            f"{args.warm}` ({platform.python_implementation()} {platform.python_version()}, "
-            f"{os.cpu_count()} cores). Whole process, median of the runs; cold: every cache "
-            "emptied (a fresh install's first run), warm: the same command again.",
+            f"{args.warm}{' --jit' if args.jit else ''}` ({platform.python_implementation()} "
+            f"{platform.python_version()}, {os.cpu_count()} cores; {_prebuilt.status()}). "
+            "Whole process, median of the runs; cold: every cache emptied (a fresh install's "
+            "first run), warm: the same command again"
+            + ("; compiled on first use: cold without the kernels compiled at install "
+               "(`VISTRACK_PREBUILT=0`), as before they were." if args.jit else "."),
             "",
-            "| command | cold s | cold CPU s | warm s | warm CPU s |",
-            "|---|---:|---:|---:|---:|",
+            "| command | cold s | cold CPU s | warm s | warm CPU s |"
+            + (" cold, compiled on first use, s |" if args.jit else ""),
+            "|---|---:|---:|---:|---:|" + ("---:|" if args.jit else ""),
         ]
-        lines += [f"| {r[0]} | {r[1]:.2f} | {r[2]:.2f} | {r[3]:.2f} | {r[4]:.2f} |" for r in rows]
-        lines += [f"| {p[0]} (peer) | | | {p[1]:.2f} | {p[2]:.2f} |" for p in peer]
+        lines += [f"| {r[0]} | {r[1]:.2f} | {r[2]:.2f} | {r[3]:.2f} | {r[4]:.2f} |"
+                  + (f" {r[5]:.2f} |" if args.jit else "") for r in rows]
+        lines += [f"| {p[0]} (peer) | | | {p[1]:.2f} | {p[2]:.2f} |" + (" |" if args.jit else "")
+                  for p in peer]
         replace_section(args.write, "\n".join(lines) + "\n")
     return 0
 

@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
-from .._prebuilt import kernel
+from .._prebuilt import Kernel, kernel
 from .._validate import as_float_array, as_rng, check_has_steps, check_prior
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
@@ -623,6 +623,14 @@ def _fused(fref: tuple[str, str], href: tuple[str, str], n: int, m: int):
     return _codegen.load("vistrack_pf", src)
 
 
+@functools.cache
+def _fused_kernel(fref: tuple[str, str], href: tuple[str, str], n: int, m: int) -> Kernel:
+    """The fused filter of :func:`_fused` for calls from Python (and for compiling it ahead of
+    time, see :mod:`vistrack._prebuilt`)."""
+    return kernel(_fused(fref, href, n, m).run,
+                  f"{__name__}:_fused_kernel({fref!r}, {href!r}, {n!r}, {m!r})")
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _linear_f(x, dt, t, params, out):
     # out = F x, params = F (n, n) flattened
@@ -1002,7 +1010,7 @@ class ParticleFilter:
         R = me.Rm
         if R.shape != (m, m):
             raise ValueError(f"ys must have {R.shape[0]} measurement components; got {m}")
-        kern = _fused(fref, href, n, m)
+        run = _fused_kernel(fref, href, n, m)
         dts, times = step_times(dt, times, T)
         # per step: the observed components, the whitening of their noise, the model's
         # parameters and the square root of Q
@@ -1034,7 +1042,7 @@ class ParticleFilter:
         means, covs = np.empty((T, n)), np.empty((T, n, n))
         ess, resampled = np.empty(T), np.zeros(T, bool)
         logw, w = np.full(N, -math.log(N)), np.empty(N)
-        fail, loglik, x = kern.run(
+        fail, loglik, x = run(
             np.ascontiguousarray(x, dtype=float), np.empty((N, n)), np.where(seen, ys, 0.0),
             obs, nobs, Linv, c, me.angle_mask, dts, times, fp, hp, S,
             _random.SCHEMES.index(self.resampling), self.ess_threshold,
