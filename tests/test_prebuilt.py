@@ -168,3 +168,22 @@ def test_the_argument_types_survive_json():
             assert [_prebuilt.encode(_prebuilt.decode(e)) for e in sig] == sig
     with pytest.raises(TypeError, match="no ahead-of-time build"):
         _prebuilt.encode(types.unicode_type)
+
+
+def test_an_extension_and_build_information_of_two_builds_are_not_used(tmp_path, monkeypatch):
+    import types as pytypes
+
+    info = dict(_prebuilt.machine(), sources=_prebuilt.source_hash(), kernels={}, build_id=7)
+    (tmp_path / _prebuilt.BUILD_INFO).write_text(json.dumps(info))
+    fake = pytypes.ModuleType(_prebuilt.EXTENSION)
+    fake.__file__ = str(tmp_path / "_kernels.so")
+    monkeypatch.setattr(_prebuilt.importlib, "import_module", lambda name: fake)
+    monkeypatch.setattr(_prebuilt, "_state", {})
+    fake.build_id = lambda: 8
+    assert _prebuilt._load() is None and "another build" in _prebuilt.status()
+    monkeypatch.setattr(_prebuilt, "_state", {})
+    fake.build_id = lambda: 7
+    assert _prebuilt._load() == (fake, info)
+    monkeypatch.setattr(_prebuilt, "_state", {})
+    monkeypatch.setenv("VISTRACK_PREBUILT", "0")
+    assert _prebuilt._load() is None and "VISTRACK_PREBUILT=0" in _prebuilt.status()

@@ -109,7 +109,10 @@ def _load() -> tuple[Any, dict[str, Any]] | None:
         else:
             info, why = built(Path(module.__file__ or "").parent)
             if info is not None and not why:
-                loaded = (module, info)
+                if getattr(module, "build_id", lambda: None)() != info.get("build_id"):
+                    why = f"{BUILD_INFO} describes another build than {module.__file__}"
+                else:
+                    loaded = (module, info)
     _state["loaded"], _state["why"] = loaded, why
     return loaded
 

@@ -25,6 +25,8 @@ import io
 import json
 import os
 import runpy
+import secrets
+import shutil
 import sys
 import tempfile
 import time
@@ -179,39 +181,48 @@ def _forwarder(target: Any, n: int) -> Any:
 
 def build(out_dir: Path, filename: str | None = None, verbose: bool = False) -> Path:
     """Compile every kernel of ``_prebuilt.json`` into ``out_dir`` (the extension and its
-    build information); returns the extension's path."""
+    build information); returns the extension's path. Both are written under temporary names
+    and renamed into place when complete (a running vistrack keeps the files it opened)."""
     import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # numba.pycc's pending deprecation
         from numba.pycc import CC
 
+    # the sources as they are imported here, before they are compiled
+    info: dict[str, Any] = dict(_prebuilt.machine(), sources=_prebuilt.source_hash())
     spec = json.loads(SIGNATURES.read_text(encoding="utf-8"))
-    cc = CC(EXTENSION_NAME)
-    cc.output_dir = str(out_dir)
-    if filename:
-        cc.output_file = filename
-    cc.verbose = verbose
-    info: dict[str, Any] = dict(_prebuilt.machine())
-    cc.target_cpu = info["cpu"]
-    exports: dict[str, list[Any]] = {}
-    i = 0
-    for key, sigs in spec["kernels"].items():
-        jit = _resolve(key)
-        for encoded in sigs:
-            args = tuple(decode(e) for e in encoded)
-            cres = jit.compile(args) if args not in jit.overloads else None
-            del cres
-            sig = jit.overloads[args].signature
-            name = f"k{i}"
-            i += 1
-            cc.export(name, sig)(_forwarder(jit, len(args)))
-            exports.setdefault(key, []).append([encoded, name])
     out_dir.mkdir(parents=True, exist_ok=True)
-    cc.compile()
+    cc = CC(EXTENSION_NAME)
     path = out_dir / (filename or Path(cc.output_file).name)
-    info.update(sources=_prebuilt.source_hash(), kernels=exports)
-    (path.parent / BUILD_INFO).write_text(json.dumps(info, indent=1) + "\n", encoding="utf-8")
+    tmp = Path(tempfile.mkdtemp(prefix=".kernels-", dir=out_dir))
+    try:
+        cc.output_dir = str(tmp)
+        cc.output_file = path.name
+        cc.verbose = verbose
+        cc.target_cpu = info["cpu"]
+        # the module and its build information name the same build
+        info["build_id"] = secrets.randbits(62)
+        scope: dict[str, Any] = {}
+        exec(f"def build_id():\n    return {info['build_id']}\n", scope)  # noqa: S102
+        cc.export("build_id", "int64()")(scope["build_id"])
+        exports: dict[str, list[Any]] = {}
+        for key, sigs in spec["kernels"].items():
+            jit = _resolve(key)
+            for encoded in sigs:
+                args = tuple(decode(e) for e in encoded)
+                if args not in jit.overloads:
+                    jit.compile(args)
+                name = f"k{sum(map(len, exports.values()))}"
+                cc.export(name, jit.overloads[args].signature)(_forwarder(jit, len(args)))
+                exports.setdefault(key, []).append([encoded, name])
+        cc.compile()
+        info["kernels"] = exports
+        (tmp / BUILD_INFO).write_text(json.dumps(info, indent=1) + "\n", encoding="utf-8")
+        os.replace(tmp / path.name, path)
+        os.replace(tmp / BUILD_INFO, out_dir / BUILD_INFO)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
     return path
 
 
