@@ -292,14 +292,16 @@ def _lanes(byte: int) -> np.uint64:
 _L7F, _L30, _LF0, _L06, _L33, _L2E, _L1E = map(_lanes, (0x7F, 0x30, 0xF0, 0x06, 0x33, 0x2E, 0x1E))
 # A field's last 8 bytes, read as one little-endian word: lane 7 (the top byte) is its last
 # byte. By the number n of the field's bytes in the word (n clipped to 9: longer than a
-# word), the mask of its lanes: the top n (none for 0 and 9: such a field reads as '00000000',
-# which `_word_digits`' callers refuse)
-_FIELD = np.array([0] + [(0xFFFFFFFFFFFFFFFF << (64 - 8 * n)) & 0xFFFFFFFFFFFFFFFF
-                         for n in range(1, 9)] + [0], dtype=np.uint64)
-# 10**(decimals) by the '.''s lane p, looked up by the exponent bits of float(1 << 8p) (127 +
-# p): the decimals are the lanes after the '.', 7 - p; float(0) (no '.') has exponent bits 0
+# word): the mask of its lanes (the top n), and '0' in the others; for 0 and 9 both are 0,
+# and a 0 byte is not a digit
+_FIELD = np.array([(0, 0)] + [((0xFFFFFFFFFFFFFFFF << (64 - 8 * n)) & 0xFFFFFFFFFFFFFFFF,
+                               0x3030303030303030 >> (8 * n)) for n in range(1, 9)] + [(0, 0)],
+                  dtype=np.uint64)
+# 10**(decimals) by the '.''s lane p, looked up by the exponent bits of float(0x80 << 8p)
+# (128 + p): the decimals are the lanes after the '.', 7 - p; float(0) (no '.') has exponent
+# bits 0
 _SCALE = np.ones(256)
-_SCALE[127:135] = 10.0 ** (7 - np.arange(8))
+_SCALE[128:136] = 10.0 ** (7 - np.arange(8))
 _POW10 = 10.0 ** np.arange(23)
 _PLAIN_BLOCK = 1 << 16  # bytes parsed at a time: the temporaries stay in the cache
 # the fields read one by one with Python's float(): longer than 16 bytes, more than 15 digits,
@@ -312,9 +314,9 @@ def _word_digits(word: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarra
     with at most one '.': the digits with the '.' dropped (one per lane, the first lane 0 where
     a '.' was dropped), the '.''s lane as 0x80 (0 when none), and which words were such
     digits."""
-    w: np.ndarray = word ^ _L30
-    w &= _FIELD.take(n, mode="clip")
-    w ^= _L30
+    field = _FIELD.take(n, axis=0, mode="clip")
+    w: np.ndarray = word & field[:, 0]
+    w |= field[:, 1]
     # 0x80 in the lanes equal to '.', exactly (no borrow from lane to lane)
     x: np.ndarray = w ^ _L2E
     dots: np.ndarray = x & _L7F
@@ -350,7 +352,7 @@ def _digits_value(d: np.ndarray) -> np.ndarray:
 
 def _scale(dots: np.ndarray) -> np.ndarray:
     """10**(the lanes after the '.') of each word (1 when it has none)."""
-    return _SCALE.take((dots >> _U8(7)).astype(float).view(np.uint64) >> _U8(55))
+    return _SCALE.take(dots.astype(float).view(np.uint64) >> _U8(55))
 
 
 def _plain_fields(buf: np.ndarray, words: np.ndarray, start: np.ndarray,
@@ -362,7 +364,6 @@ def _plain_fields(buf: np.ndarray, words: np.ndarray, start: np.ndarray,
     n -= neg
     d, dots, ok = _word_digits(words[end - 8], n)
     ok &= n > (dots != 0)  # a digit
-    ok &= n <= 8
     value = _digits_value(d).astype(float)
     value /= _scale(dots)
     np.negative(value, out=value, where=neg)
