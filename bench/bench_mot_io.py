@@ -1,0 +1,191 @@
+"""Reading and writing MOTChallenge files: vistrack's read_mot and write_mot beside what a user
+would use instead (numpy's loadtxt and savetxt, pandas' read_csv and to_csv, motmetrics' loader),
+in one run, on the same files.
+
+    python bench/bench_mot_io.py [--rows N] [--repeat N] [--write MD]
+
+Files: MOT17-04's gt.txt (108,005 rows of 9 values, sorted by id, not by frame) and det.txt
+(28,406 rows of 7), when ../shared/data is beside the repository, and a results file of
+``--rows`` rows (default 1,000,000; 100 boxes a frame, written by write_mot). Each figure is
+the median wall-clock time of ``--repeat`` runs (default 5; fewer for a reader or writer still
+running after 30 s), the file in the page cache; rows/s is rows / that time. "before" is
+read_mot's careful reader alone (numpy's loadtxt, then line by line where it fails: what
+read_mot was before it read plain files itself), run here beside the rest.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from vistrack.io import MOTTable, read_mot, write_mot
+from vistrack.io.motchallenge import _read_careful
+
+from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
+from _markdown import replace_section  # noqa: E402
+
+SEQ = Path(__file__).resolve().parents[2] / "shared" / "data" / "mot17" / "MOT17-04-FRCNN"
+BUDGET_S = 30.0
+ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.4g,-1,-1,-1"
+
+
+def median_s(fn: Callable[[], object], repeat: int) -> tuple[float, int]:
+    """Median seconds of up to ``repeat`` calls (fewer once BUDGET_S is spent), and the calls."""
+    times: list[float] = []
+    while len(times) < repeat and sum(times) < BUDGET_S:
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times), len(times)
+
+
+def names(width: int) -> list[str]:
+    """The MOTChallenge column names of a file of ``width`` values."""
+    tail = ["class", "visibility"] if width == 9 else ["x", "y", "z"]
+    return (["frame", "id", "bb_left", "bb_top", "bb_width", "bb_height", "conf"] + tail)[:width]
+
+
+def readers() -> list[tuple[str, Callable[[Path, int], object]]]:
+    def before(p: Path, w: int) -> MOTTable:
+        return MOTTable.from_rows(_read_careful(str(p), p.read_bytes()), str(p))
+
+    out: list[tuple[str, Callable[[Path, int], object]]] = [
+        ("vistrack read_mot", lambda p, w: read_mot(p)),
+        ("vistrack read_mot before (loadtxt, then line by line)", before),
+        ("numpy loadtxt(delimiter=',')", lambda p, w: np.loadtxt(p, delimiter=",", ndmin=2)),
+    ]
+    pd = optional("pandas")
+    if pd is not None:
+        out.append(("pandas read_csv(header=None, names=MOT columns)",
+                    lambda p, w: pd.read_csv(p, header=None, names=names(w))))
+    mm = optional("motmetrics")
+    if mm is not None:
+        out.append(("motmetrics io.loadtxt(fmt='mot15-2D')",
+                    lambda p, w: mm.io.loadtxt(str(p), fmt="mot15-2D")))
+    return out
+
+
+def results(n: int, seed: int = 0) -> tuple[np.ndarray, ...]:
+    """``n`` results rows, 100 boxes a frame: frames, ids, boxes, scores."""
+    rng = np.random.default_rng(seed)
+    f = np.repeat(np.arange(1, n // 100 + 2), 100)[:n]
+    i = np.tile(np.arange(1, 101), n // 100 + 1)[:n]
+    b = np.c_[rng.uniform(0, 1900, (n, 2)), rng.uniform(5, 300, (n, 2))]
+    return f, i, b, rng.uniform(0, 1, n)
+
+
+def writers(f, i, b, c) -> list[tuple[str, Callable[[Path], object]]]:
+    rows = np.c_[f, i, b, c]
+    out: list[tuple[str, Callable[[Path], object]]] = [
+        ("vistrack write_mot", lambda p: write_mot(p, f, i, b, c, force=True)),
+        (f"numpy savetxt(fmt='{ROW}')", lambda p: np.savetxt(p, rows, fmt=ROW)),
+    ]
+    pd = optional("pandas")
+    if pd is not None:
+        df = pd.DataFrame(rows, columns=names(7)).astype({"frame": int, "id": int})
+        df["x"] = df["y"] = df["z"] = -1
+        out.append(("pandas to_csv(float_format='%.2f')",
+                    lambda p: df.to_csv(p, header=False, index=False, float_format="%.2f")))
+    return out
+
+
+def table(head: str, files: list[tuple[str, Path | None, int, int]],
+          rows: list[tuple[str, list[float]]]) -> list[str]:
+    """Milliseconds and M rows/s per file, and how many times vistrack's (the first row's) time
+    each takes on the last file."""
+    cols = " | ".join(f"{name} ({n:,} rows): ms | M rows/s" for name, _, n, _ in files)
+    t = [f"| {head} | {cols} | times vistrack's time ({files[-1][0]}) |",
+         "|---|" + "---:|---:|" * len(files) + "---:|"]
+    ref = rows[0][1][-1]
+    for name, secs in rows:
+        cells = " | ".join(f"{1e3 * s:,.0f} | {n / s / 1e6:.2f}"
+                           for s, (_, _, n, _) in zip(secs, files))
+        t.append(f"| {name} | {cells} | {secs[-1] / ref:.2g} |")
+    return t
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--rows", type=int, default=1_000_000, help="rows of the results file")
+    ap.add_argument("--repeat", type=int, default=5, help="runs of each (median)")
+    ap.add_argument("--write", metavar="MD", help="write the section into this markdown file")
+    args = ap.parse_args()
+    warnings.simplefilter("ignore")
+    load = os.getloadavg()[0]
+    work = Path(tempfile.mkdtemp(prefix="vt-motio-"))
+    f, i, b, c = results(args.rows)
+    big = write_mot(work / "results.txt", f, i, b, c)
+    files: list[tuple[str, Path | None, int, int]] = []
+    for name in ("gt", "det"):
+        p = SEQ / name / f"{name}.txt"
+        if p.exists():
+            t = read_mot(p)
+            files.append((f"MOT17-04 {name}.txt", p, len(t), t.columns))
+        else:
+            print(f"  ({p} not found: skipped)", file=sys.stderr)
+    files.append(("results", big, args.rows, 10))
+
+    read_rows = []
+    for name, fn in readers():
+        secs = []
+        for fname, p, n, w in files:
+            s, runs = median_s(lambda: fn(p, w), args.repeat)
+            secs.append(s)
+            print(f"{name:55s} {fname:18s} {1e3 * s:9.1f} ms  {n / s / 1e6:6.2f} M rows/s "
+                  f"({runs} runs)", flush=True)
+        read_rows.append((name, secs))
+
+    write_rows = []
+    out = work / "written.txt"
+    for name, fn in writers(f, i, b, c):
+        s, runs = median_s(lambda: fn(out), args.repeat)
+        write_rows.append((name, [s]))
+        print(f"{name:55s} {'results':18s} {1e3 * s:9.1f} ms  {args.rows / s / 1e6:6.2f} M "
+              f"rows/s ({runs} runs)", flush=True)
+
+    versions = ", ".join(f"{m} {getattr(optional(m), '__version__', '?')}"
+                         for m in ("numpy", "pandas", "motmetrics") if optional(m) is not None)
+    cmd = "python bench/bench_mot_io.py" + ("" if args.rows == 1_000_000 else
+                                            f" --rows {args.rows}")
+    lines = [
+        "## MOTChallenge files: reading and writing",
+        "",
+        f"Measured with `{cmd}` (Python {platform.python_version()}, {versions}, "
+        f"{os.cpu_count()} cores, load average {load:.1f} at the start, "
+        f"{time.strftime('%Y-%m-%d')}). Wall-clock median of {args.repeat} runs (fewer for "
+        f"one still running after {BUDGET_S:.0f} s), the file in the page cache. read_mot "
+        "returns the rows checked and sorted by frame; the others parse only. \"before\" is "
+        "read_mot's careful reader alone, what read_mot was until it read plain files itself.",
+        "",
+        "**Reading**",
+        "",
+        *table("reader", files, read_rows),
+        "",
+        f"**Writing** ({args.rows:,} results rows, `{ROW}` a row; pandas with %.2f for every "
+        "float)",
+        "",
+        *table("writer", [("results", None, args.rows, 10)], write_rows),
+        "",
+    ]
+    section = "\n".join(lines)
+    print(section)
+    if args.write:
+        replace_section(args.write, section)
+    for p in work.iterdir():
+        p.unlink()
+    work.rmdir()
+
+
+if __name__ == "__main__":
+    main()
