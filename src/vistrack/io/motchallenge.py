@@ -358,10 +358,10 @@ def _plain_fields(buf: np.ndarray, words: np.ndarray, start: np.ndarray,
                   end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The values of the fields ``buf[start:end]`` of up to 8 bytes after a sign, and which
     were plain numbers."""
-    neg = buf[start] == 45  # '-'
+    neg = buf.take(start) == 45  # '-'
     n = end - start
     n -= neg
-    d, dots, ok = _word_digits(words[end - 8], n)
+    d, dots, ok = _word_digits(words.take(end - 8), n)
     ok &= n > (dots != 0)  # a digit
     value = _digits_value(d).astype(float)
     value /= _scale(dots)
@@ -373,10 +373,10 @@ def _long_fields(buf: np.ndarray, words: np.ndarray, start: np.ndarray,
                  end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Like :func:`_plain_fields` for fields of 9 to 16 bytes after a sign (two words): their
     values, and which were plain numbers whose digits are below 2**53."""
-    neg = buf[start] == 45
+    neg = buf.take(start) == 45
     n = end - start - neg
-    d1, dots1, ok = _word_digits(words[end - 8], np.full(len(n), 8))
-    d0, dots0, ok0 = _word_digits(words[end - 16], n - 8)
+    d1, dots1, ok = _word_digits(words.take(end - 8), np.full(len(n), 8))
+    d0, dots0, ok0 = _word_digits(words.take(end - 16), n - 8)
     ok &= ok0 & ((dots0 == 0) | (dots1 == 0)) & (n > 8) & (n <= 16)
     # a '.' in the second word moves the first word's last digit into it, and the first word
     # up a lane
@@ -406,7 +406,6 @@ def _parse_plain(data: bytes) -> np.ndarray | None:
     pad = 16  # '0's before the first field: every field's last 16 bytes are in the buffer
     raw = b"".join((b"0" * pad, memoryview(data)[:end], b"\n"))
     buf = np.frombuffer(raw, dtype=np.uint8)
-    words = np.ndarray((len(buf) - 7,), dtype="<u8", buffer=raw, strides=(1,))
     out = np.empty(0)
     width = spare = row = 0
     s = pad
@@ -423,23 +422,28 @@ def _parse_plain(data: bytes) -> np.ndarray | None:
             out = np.empty((raw.count(b"\n"), width))
             spare = out.size // 64 + 16
         # every line `width` fields: the rows' last fields end the lines
-        if len(sep) != width * rows or not ends[sep[width - 1::width]].all():
+        if len(sep) != width * rows or not ends.take(sep[width - 1::width]).all():
             return None
-        sep += s
+        # the block and the 16 bytes before it, as bytes and as the words at every byte (a
+        # view of the block only: numpy's take copies a view's whole array first)
+        base = s - pad
+        block = buf[base:e]
+        words = np.ndarray((e - base - 7,), dtype="<u8", buffer=raw, offset=base, strides=(1,))
+        sep += pad
         start = np.empty_like(sep)
-        start[0] = s
+        start[0] = pad
         start[1:] = sep[:-1] + 1
-        value, ok = _plain_fields(buf, words, start, sep)
+        value, ok = _plain_fields(block, words, start, sep)
         if not ok.all():
             k = np.flatnonzero(~ok)
-            v, ok = _long_fields(buf, words, start[k], sep[k])
+            v, ok = _long_fields(block, words, start[k], sep[k])
             value[k[ok]] = v[ok]
             k = k[~ok]
             spare -= len(k)
             if spare < 0:
                 return None
             for j in k.tolist():
-                f = raw[start[j]:sep[j]]
+                f = raw[base + start[j]:base + sep[j]]
                 if not _FIELD_RE.fullmatch(f):
                     return None
                 value[j] = x = float(f)
