@@ -41,14 +41,17 @@ BUDGET_S = 30.0
 ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.4g,-1,-1,-1"
 
 
-def median_s(fn: Callable[[], object], repeat: int) -> tuple[float, int]:
-    """Median seconds of up to ``repeat`` calls (fewer once BUDGET_S is spent), and the calls."""
-    times: list[float] = []
-    while len(times) < repeat and sum(times) < BUDGET_S:
-        t = time.perf_counter()
+def median_s(fn: Callable[[], object], repeat: int) -> tuple[float, float, int]:
+    """Median wall-clock and CPU seconds of up to ``repeat`` calls (fewer once BUDGET_S is
+    spent), and the calls."""
+    wall: list[float] = []
+    cpu: list[float] = []
+    while len(wall) < repeat and sum(wall) < BUDGET_S:
+        t, c = time.perf_counter(), time.process_time()
         fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times), len(times)
+        wall.append(time.perf_counter() - t)
+        cpu.append(time.process_time() - c)
+    return statistics.median(wall), statistics.median(cpu), len(wall)
 
 
 def names(width: int) -> list[str]:
@@ -116,17 +119,19 @@ def writers(f, i, b, c) -> list[tuple[str, Callable[[Path], object]]]:
 
 
 def table(head: str, files: list[tuple[str, Path | None, int, int]],
-          rows: list[tuple[str, list[float]]]) -> list[str]:
-    """Milliseconds and M rows/s per file, and how many times vistrack's (the first row's) time
-    each takes on the last file."""
-    cols = " | ".join(f"{name} ({n:,} rows): ms | M rows/s" for name, _, n, _ in files)
+          rows: list[tuple[str, list[tuple[float, float]]]]) -> list[str]:
+    """Per file: milliseconds, M rows/s, and M rows/s of CPU time (rows / CPU seconds: less
+    sensitive to other work on the machine); and how many times vistrack's (the first row's)
+    time each takes on the last file."""
+    cols = " | ".join(f"{name} ({n:,} rows): ms | M rows/s | M rows/s, CPU"
+                      for name, _, n, _ in files)
     t = [f"| {head} | {cols} | times vistrack's time ({files[-1][0]}) |",
-         "|---|" + "---:|---:|" * len(files) + "---:|"]
-    ref = rows[0][1][-1]
+         "|---|" + "---:|---:|---:|" * len(files) + "---:|"]
+    ref = rows[0][1][-1][0]
     for name, secs in rows:
-        cells = " | ".join(f"{1e3 * s:,.0f} | {n / s / 1e6:.2f}"
-                           for s, (_, _, n, _) in zip(secs, files))
-        t.append(f"| {name} | {cells} | {secs[-1] / ref:.2g} |")
+        cells = " | ".join(f"{1e3 * s:,.0f} | {n / s / 1e6:.2f} | {n / c / 1e6:.2f}"
+                           for (s, c), (_, _, n, _) in zip(secs, files))
+        t.append(f"| {name} | {cells} | {secs[-1][0] / ref:.2g} |")
     return t
 
 
@@ -156,21 +161,21 @@ def main() -> None:
     for name, fn in readers():
         secs = []
         for fname, p, n, w in files:
-            s, runs = median_s(lambda: fn(p, w), args.repeat)
-            secs.append(s)
+            s, cpu, runs = median_s(lambda: fn(p, w), args.repeat)
+            secs.append((s, cpu))
             print(f"{name:55s} {fname:18s} {1e3 * s:9.1f} ms  {n / s / 1e6:6.2f} M rows/s "
-                  f"({runs} runs)", flush=True)
+                  f"({n / cpu / 1e6:6.2f} CPU; {runs} runs)", flush=True)
         read_rows.append((name, secs))
 
     write_rows = []
     written = []
     for k, (name, fn) in enumerate(writers(f, i, b, c)):
         out = work / f"written-{k}.txt"
-        s, runs = median_s(lambda: fn(out), args.repeat)
-        write_rows.append((name, [s]))
+        s, cpu, runs = median_s(lambda: fn(out), args.repeat)
+        write_rows.append((name, [(s, cpu)]))
         written.append(out.read_bytes())
         print(f"{name:55s} {'results':18s} {1e3 * s:9.1f} ms  {args.rows / s / 1e6:6.2f} M "
-              f"rows/s ({runs} runs)", flush=True)
+              f"rows/s ({args.rows / cpu / 1e6:6.2f} CPU; {runs} runs)", flush=True)
 
     # read_mot gives what its careful reader gives, and write_mot what it wrote before
     same_read = all(
@@ -192,8 +197,9 @@ def main() -> None:
         "",
         f"Measured with `{cmd}` (Python {platform.python_version()}, {versions}, "
         f"{os.cpu_count()} cores, load average {load:.1f} at the start, "
-        f"{time.strftime('%Y-%m-%d')}). Wall-clock median of {args.repeat} runs (fewer for "
-        f"one still running after {BUDGET_S:.0f} s), the file in the page cache. read_mot "
+        f"{time.strftime('%Y-%m-%d')}). Median of {args.repeat} runs (fewer for one still "
+        f"running after {BUDGET_S:.0f} s), the file in the page cache: wall-clock "
+        "milliseconds and rows a second, and rows a second of the process's CPU time. read_mot "
         "returns the rows checked and sorted by frame; the others parse only. \"before\" is "
         "read_mot's careful reader alone, what read_mot was until it read plain files itself, "
         "and write_mot's previous code, Python's %-format of a block of rows at a time. In "
