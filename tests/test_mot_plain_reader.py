@@ -110,13 +110,20 @@ def test_files_as_the_careful_reader_reads_them(tmp_path, text, plain):
 
 
 def test_long_files_take_the_plain_reader_block_after_block(tmp_path):
-    """Blocks end at line ends; a line longer than a block; an odd field deep in the file."""
+    """Blocks end at line ends; a line longer than a block; fields of 9 to 17 bytes (read after
+    the last block) in every block; an odd field deep in the file."""
     r = random.Random(3)
     rows = [f"{r.randrange(1, 900)},{r.randrange(-1, 300)},{r.uniform(-50, 2000):.3f},"
             f"{r.uniform(0, 1000):.2f},{r.uniform(0, 500):.1f},{r.randrange(0, 800)},"
             f"{r.random():.6f},-1,-1,-1" for _ in range(30_000)]
+    for k in range(0, len(rows), 97):
+        x = f"{r.uniform(-1e3, 1e3):.{r.randrange(6, 13)}f}"
+        rows[k] = rows[k].replace(",-1,-1,-1", f",-1,{x},-1")
     rows[12_345] = rows[12_345].replace(",-1,-1,-1", ",-1,-1," + "0" * 70_000 + "1")
     assert check(tmp_path / "gt.txt", "\n".join(rows).encode())
+    for junk in ("12345678x", "1234567.8.9", "-123456789012345678"):
+        odd = rows[:20_000] + [rows[20_000].replace(",-1,", f",{junk},", 1)] + rows[20_001:]
+        assert check(tmp_path / "gt.txt", "\n".join(odd).encode()) == (junk[0] == "-")
     rows[29_000] = rows[29_000].replace(",-1,", ",+1,", 1)
     assert not check(tmp_path / "gt.txt", "\n".join(rows).encode())
     rows[29_000] = rows[29_000].replace(",+1,", ",1e0,", 1)

@@ -302,7 +302,7 @@ _FIELD = np.array([(0, 0)] + [((0xFFFFFFFFFFFFFFFF << (64 - 8 * n)) & 0xFFFFFFFF
 _SCALE = np.ones(256)
 _SCALE[128:136] = 10.0 ** (7 - np.arange(8))
 _POW10 = 10.0 ** np.arange(23)
-_PLAIN_BLOCK = 1 << 16  # bytes parsed at a time: the temporaries stay in the cache
+_PLAIN_BLOCK = 1 << 17  # bytes parsed at a time: the temporaries stay in the cache
 # the fields read one by one with Python's float(): longer than 16 bytes, more than 15 digits,
 # or an exponent; at most 1 in 64 of a file's fields (more, and the careful reader is as fast)
 _FIELD_RE = re.compile(rb"-?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
@@ -375,8 +375,8 @@ def _long_fields(buf: np.ndarray, words: np.ndarray, start: np.ndarray,
     values, and which were plain numbers whose digits are below 2**53."""
     neg = buf.take(start) == 45
     n = end - start - neg
-    d1, dots1, ok = _word_digits(words.take(end - 8), np.full(len(n), 8))
-    d0, dots0, ok0 = _word_digits(words.take(end - 16), n - 8)
+    d1, dots1, ok = _word_digits(words[end - 8], np.full(len(n), 8))
+    d0, dots0, ok0 = _word_digits(words[end - 16], n - 8)
     ok &= ok0 & ((dots0 == 0) | (dots1 == 0)) & (n > 8) & (n <= 16)
     # a '.' in the second word moves the first word's last digit into it, and the first word
     # up a lane
@@ -388,6 +388,20 @@ def _long_fields(buf: np.ndarray, words: np.ndarray, start: np.ndarray,
     value = m.astype(float) / (_scale(dots1) * np.where(dots0 != 0, 1e8 * _scale(dots0), 1.0))
     np.negative(value, out=value, where=neg)
     return value, ok
+
+
+def _python_fields(raw: bytes, start: np.ndarray, end: np.ndarray, out: np.ndarray,
+                   at: np.ndarray) -> bool:
+    """``out[at]``: the fields ``raw[start:end]`` read with Python's float(); whether they were
+    plain numbers (with an exponent or many digits), finite."""
+    for a, b, j in zip(start.tolist(), end.tolist(), at.tolist()):
+        f = raw[a:b]
+        if not _FIELD_RE.fullmatch(f):
+            return False
+        out[j] = x = float(f)
+        if not math.isfinite(x):
+            return False
+    return True
 
 
 def _parse_plain(data: bytes) -> np.ndarray | None:
@@ -408,13 +422,17 @@ def _parse_plain(data: bytes) -> np.ndarray | None:
     buf = np.frombuffer(raw, dtype=np.uint8)
     out = np.empty(0)
     width = spare = row = 0
+    later: list[tuple[np.ndarray, ...]] = []  # fields of 9 to 17 bytes: where in out, in raw
     s = pad
     while s < len(raw):
         e = raw.find(b"\n", min(s + _PLAIN_BLOCK, len(raw)) - 1) + 1
         u = buf[s:e]
-        ends = u == 10
-        rows = int(np.count_nonzero(ends))
-        sep = np.flatnonzero(ends | (u == 44))  # ',' or the line's end
+        # the fields' ends: ',' or '\n' (the only bytes below '-' a plain file has: the counts
+        # of ',' and '\n' tell whether there are others)
+        sep = np.flatnonzero(u <= 44)
+        rows = raw.count(b"\n", s, e)
+        if len(sep) != rows + raw.count(b",", s, e):
+            return None
         if not width:
             width = len(sep) // rows
             if not 6 <= width <= 10:
@@ -422,7 +440,7 @@ def _parse_plain(data: bytes) -> np.ndarray | None:
             out = np.empty((raw.count(b"\n"), width))
             spare = out.size // 64 + 16
         # every line `width` fields: the rows' last fields end the lines
-        if len(sep) != width * rows or not ends.take(sep[width - 1::width]).all():
+        if len(sep) != width * rows or not (u.take(sep[width - 1::width]) == 10).all():
             return None
         # the block and the 16 bytes before it, as bytes and as the words at every byte (a
         # view of the block only: numpy's take copies a view's whole array first)
@@ -434,24 +452,28 @@ def _parse_plain(data: bytes) -> np.ndarray | None:
         start[0] = pad
         start[1:] = sep[:-1] + 1
         value, ok = _plain_fields(block, words, start, sep)
+        out[row:row + rows] = value.reshape(rows, width)
         if not ok.all():
             k = np.flatnonzero(~ok)
-            v, ok = _long_fields(block, words, start[k], sep[k])
-            value[k[ok]] = v[ok]
-            k = k[~ok]
+            n = sep[k] - start[k]
+            two = (n > 8) & (n <= 17)  # two words: read after the last block, all at once
+            later.append((row * width + k[two], base + start[k[two]], base + sep[k[two]]))
+            k = k[~two]
             spare -= len(k)
-            if spare < 0:
+            if spare < 0 or not _python_fields(raw, base + start[k], base + sep[k],
+                                               out.reshape(-1), row * width + k):
                 return None
-            for j in k.tolist():
-                f = raw[base + start[j]:base + sep[j]]
-                if not _FIELD_RE.fullmatch(f):
-                    return None
-                value[j] = x = float(f)
-                if not math.isfinite(x):
-                    return None
-        out[row:row + rows] = value.reshape(rows, width)
         row += rows
         s = e
+    if later:
+        at, first, last = (np.concatenate(x) for x in zip(*later))
+        words = np.ndarray((len(raw) - 7,), dtype="<u8", buffer=raw, strides=(1,))
+        value, ok = _long_fields(buf, words, first, last)
+        out.reshape(-1)[at[ok]] = value[ok]
+        k = np.flatnonzero(~ok)
+        if len(k) > spare or not _python_fields(raw, first[k], last[k], out.reshape(-1),
+                                                at[k]):
+            return None
     return out
 
 
