@@ -7,16 +7,19 @@ in one run, on the same files.
 Files: MOT17-04's gt.txt (108,005 rows of 9 values, sorted by id, not by frame) and det.txt
 (28,406 rows of 7), when ../shared/data is beside the repository, and a results file of
 ``--rows`` rows (default 1,000,000; 100 boxes a frame, written by write_mot). Each figure is
-the median wall-clock time of ``--repeat`` runs (default 5; fewer for a reader or writer still
-running after 30 s), the file in the page cache; rows/s is rows / that time. "before" is,
-for reading, read_mot's careful reader alone (numpy's loadtxt, then line by line where it
-fails: what read_mot was before it read plain files itself) and, for writing, write_mot's
-previous code (Python's %-format, a block of rows at a time), run here beside the rest.
+the median wall-clock time of ``--repeat`` rounds (default 5), each running every reader (and
+then every writer) once in turn, so that other work on the machine weighs on all alike (a
+reader or writer that has taken 30 s is not run again), the file in the page cache; rows/s
+is rows / that time, and also rows / the median CPU time. "before" is, for reading,
+read_mot's careful reader alone (numpy's loadtxt, then line by line where it fails: what
+read_mot was before it read plain files itself) and, for writing, write_mot's previous code
+(Python's %-format, a block of rows at a time), run here beside the rest.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import itertools
 import os
 import platform
@@ -41,17 +44,20 @@ BUDGET_S = 30.0
 ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.4g,-1,-1,-1"
 
 
-def median_s(fn: Callable[[], object], repeat: int) -> tuple[float, float, int]:
-    """Median wall-clock and CPU seconds of up to ``repeat`` calls (fewer once BUDGET_S is
-    spent), and the calls."""
-    wall: list[float] = []
-    cpu: list[float] = []
-    while len(wall) < repeat and sum(wall) < BUDGET_S:
-        t, c = time.perf_counter(), time.process_time()
-        fn()
-        wall.append(time.perf_counter() - t)
-        cpu.append(time.process_time() - c)
-    return statistics.median(wall), statistics.median(cpu), len(wall)
+def medians(jobs: list[Callable[[], object]], repeat: int) -> list[tuple[float, float, int]]:
+    """Median wall-clock and CPU seconds of each job, and its calls: ``repeat`` rounds, each
+    calling every job once in turn (so that other work on the machine weighs on all alike); a
+    job that has taken BUDGET_S is not called again."""
+    wall: list[list[float]] = [[] for _ in jobs]
+    cpu: list[list[float]] = [[] for _ in jobs]
+    for _ in range(repeat):
+        for k, fn in enumerate(jobs):
+            if sum(wall[k]) < BUDGET_S:
+                t, c = time.perf_counter(), time.process_time()
+                fn()
+                wall[k].append(time.perf_counter() - t)
+                cpu[k].append(time.process_time() - c)
+    return [(statistics.median(w), statistics.median(c), len(w)) for w, c in zip(wall, cpu)]
 
 
 def names(width: int) -> list[str]:
@@ -164,24 +170,24 @@ def main() -> None:
             print(f"  ({p} not found: skipped)", file=sys.stderr)
     files.append(("results", big, args.rows, 10))
 
-    read_rows = []
-    for name, fn in readers():
+    rd = readers()
+    for _, fn in rd:
         fn(files[0][1], files[0][3])  # once before timing: first-call costs are not reading
-        secs = []
-        for fname, p, n, w in files:
-            s, cpu, runs = median_s(lambda: fn(p, w), args.repeat)
-            secs.append((s, cpu))
-            print(f"{name:55s} {fname:18s} {1e3 * s:9.1f} ms  {n / s / 1e6:6.2f} M rows/s "
-                  f"({n / cpu / 1e6:6.2f} CPU; {runs} runs)", flush=True)
-        read_rows.append((name, secs))
+    jobs = [(name, fname, n, functools.partial(fn, p, w))
+            for name, fn in rd for fname, p, n, w in files]
+    got = medians([j[3] for j in jobs], args.repeat)
+    read_rows = [(name, [(s, cpu) for (nm, _, _, _), (s, cpu, _) in zip(jobs, got) if nm == name])
+                 for name, _ in rd]
+    for (name, fname, n, _), (s, cpu, runs) in zip(jobs, got):
+        print(f"{name:55s} {fname:18s} {1e3 * s:9.1f} ms  {n / s / 1e6:6.2f} M rows/s "
+              f"({n / cpu / 1e6:6.2f} CPU; {runs} runs)", flush=True)
 
-    write_rows = []
-    written = []
-    for k, (name, fn) in enumerate(writers(f, i, b, c)):
-        out = work / f"written-{k}.txt"
-        s, cpu, runs = median_s(lambda: fn(out), args.repeat)
-        write_rows.append((name, [(s, cpu)]))
-        written.append(out.read_bytes())
+    wr = writers(f, i, b, c)
+    outs = [work / f"written-{k}.txt" for k in range(len(wr))]
+    got = medians([functools.partial(fn, out) for (_, fn), out in zip(wr, outs)], args.repeat)
+    write_rows = [(name, [(s, cpu)]) for (name, _), (s, cpu, _) in zip(wr, got)]
+    written = [out.read_bytes() for out in outs]
+    for (name, _), (s, cpu, runs) in zip(wr, got):
         print(f"{name:55s} {'results':18s} {1e3 * s:9.1f} ms  {args.rows / s / 1e6:6.2f} M "
               f"rows/s ({args.rows / cpu / 1e6:6.2f} CPU; {runs} runs)", flush=True)
 
@@ -205,8 +211,9 @@ def main() -> None:
         "",
         f"Measured with `{cmd}` (Python {platform.python_version()}, {versions}, "
         f"{os.cpu_count()} cores, load average {load:.1f} at the start, "
-        f"{time.strftime('%Y-%m-%d')}). Median of {args.repeat} runs (fewer for one still "
-        f"running after {BUDGET_S:.0f} s), the file in the page cache: wall-clock "
+        f"{time.strftime('%Y-%m-%d')}). Median of {args.repeat} rounds, each running every "
+        f"reader (then writer) once in turn (one that has taken {BUDGET_S:.0f} s is not run "
+        "again), the file in the page cache: wall-clock "
         "milliseconds and rows a second, and rows a second of the process's CPU time. read_mot "
         "returns the rows checked and sorted by frame; the others parse only. \"before\" is "
         "read_mot's careful reader alone, what read_mot was until it read plain files itself, "
