@@ -267,14 +267,15 @@ def _check_rows(path: str, a: np.ndarray, lines: list[str] | None) -> None:
 # The plain-file reader. numpy's loadtxt converts each value with the C library's strtod, about
 # 150 ns a value (0.7 M rows/s); this reads the numbers most files hold eight bytes at a time,
 # with integer arithmetic on arrays of 64-bit words (SWAR), a block of the file at a time so
-# that the temporaries stay in the cache: 3-4 times faster. It accepts only files that the
+# that the temporaries stay in the cache: about 4 times faster. It accepts only files that the
 # careful reader (loadtxt, then line by line) reads without a doubt, and reads them to the same
 # bits: an optional byte-order mark; lines ended by '\n' or '\r\n', blank lines only at the
 # end; every line the same number (6 to 10) of comma-separated fields; every field an optional
 # '-', then digits with at most one '.' and at least one digit (or, for at most 1 field in 64,
-# a number with an exponent or more than 15 digits, read with Python's float(), as loadtxt
-# does). For anything else (a space, '+', 'nan', a comment, a blank line, any other byte) it
-# returns None and the careful reader decides, so every message stays as it was.
+# a number with an exponent ('e' or 'E', no '+') or more than 15 digits, read with Python's
+# float(), as loadtxt reads it). For anything else (a space, '+', 'nan', a comment, a blank
+# line, any other byte) it returns None and the careful reader decides, so every message stays
+# as it was.
 #
 # A plain field's value is its digits read as an integer M (exact: M < 2**53) divided by 10**k
 # for its k decimals (exact: k <= 15): one IEEE division, so the correctly rounded value of the
@@ -303,7 +304,7 @@ _SCALE = np.ones(256)
 _SCALE[128:136] = 10.0 ** (7 - np.arange(8))
 _POW10 = 10.0 ** np.arange(23)
 _PLAIN_BLOCK = 1 << 17  # bytes parsed at a time: the temporaries stay in the cache
-# the fields read one by one with Python's float(): longer than 16 bytes, more than 15 digits,
+# the fields read one by one with Python's float(): longer than 17 bytes, digits above 2**53,
 # or an exponent; at most 1 in 64 of a file's fields (more, and the careful reader is as fast)
 _FIELD_RE = re.compile(rb"-?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
 
