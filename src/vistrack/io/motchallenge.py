@@ -290,13 +290,7 @@ def _lanes(byte: int) -> np.uint64:
 
 
 _L7F, _L30, _LF0, _L06, _L33, _L2E, _L1E = map(_lanes, (0x7F, 0x30, 0xF0, 0x06, 0x33, 0x2E, 0x1E))
-# A field's last 8 bytes, read as one little-endian word: lane 7 (the top byte) is its last
-# byte. By the number n of the field's bytes in the word (n clipped to 9: longer than a
-# word): the mask of its lanes (the top n), and '0' in the others; for 0 and 9 both are 0,
-# and a 0 byte is not a digit
-_FIELD = np.array([(0, 0)] + [((0xFFFFFFFFFFFFFFFF << (64 - 8 * n)) & 0xFFFFFFFFFFFFFFFF,
-                               0x3030303030303030 >> (8 * n)) for n in range(1, 9)] + [(0, 0)],
-                  dtype=np.uint64)
+_ALL = _U8(0xFFFFFFFFFFFFFFFF)
 # 10**(decimals) by the '.''s lane p, looked up by the exponent bits of float(0x80 << 8p)
 # (128 + p): the decimals are the lanes after the '.', 7 - p; float(0) (no '.') has exponent
 # bits 0
@@ -314,9 +308,12 @@ def _word_digits(word: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarra
     with at most one '.': the digits with the '.' dropped (one per lane, the first lane 0 where
     a '.' was dropped), the '.''s lane as 0x80 (0 when none), and which words were such
     digits."""
-    field = _FIELD.take(n, axis=0, mode="clip")
-    w: np.ndarray = word & field[:, 0]
-    w |= field[:, 1]
+    # a field's last 8 bytes, read as one little-endian word: lane 7 (the top byte) is its
+    # last byte; its n bytes are the top n lanes, and '0' goes in the others. numpy shifts by
+    # 64 or more to 0: for n >= 9 (longer than a word) both are 0, and a 0 byte is no digit
+    low = _U8(8) * np.minimum(n, 9).astype(np.uint64)
+    w: np.ndarray = word & (_ALL << (_U8(64) - low))
+    w |= _L30 >> low
     # 0x80 in the lanes equal to '.', exactly (no borrow from lane to lane)
     x: np.ndarray = w ^ _L2E
     dots: np.ndarray = x & _L7F
@@ -366,7 +363,7 @@ def _plain_fields(buf: np.ndarray, words: np.ndarray, start: np.ndarray,
     ok &= n > (dots != 0)  # a digit
     value = _digits_value(d).astype(float)
     value /= _scale(dots)
-    np.negative(value, out=value, where=neg)
+    value *= 1.0 - 2.0 * neg  # (-0.0 for '-0', as float() reads it)
     return value, ok
 
 
@@ -431,8 +428,10 @@ def _parse_plain(data: bytes) -> np.ndarray | None:
         # the fields' ends: ',' or '\n' (the only bytes below '-' a plain file has: the counts
         # of ',' and '\n' tell whether there are others)
         sep = np.flatnonzero(u <= 44)
-        rows = raw.count(b"\n", s, e)
-        if len(sep) != rows + raw.count(b",", s, e):
+        kind = u.take(sep)
+        ends = kind == 10
+        rows = int(np.count_nonzero(ends))
+        if len(sep) != rows + np.count_nonzero(kind == 44):
             return None
         if not width:
             width = len(sep) // rows
@@ -441,7 +440,7 @@ def _parse_plain(data: bytes) -> np.ndarray | None:
             out = np.empty((raw.count(b"\n"), width))
             spare = out.size // 64 + 16
         # every line `width` fields: the rows' last fields end the lines
-        if len(sep) != width * rows or not (u.take(sep[width - 1::width]) == 10).all():
+        if len(sep) != width * rows or not ends[width - 1::width].all():
             return None
         # the block and the 16 bytes before it, as bytes and as the words at every byte (a
         # view of the block only: numpy's take copies a view's whole array first)
