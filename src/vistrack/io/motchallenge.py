@@ -289,13 +289,16 @@ def _lanes(byte: int) -> np.uint64:
     return _U8(byte * 0x0101010101010101)
 
 
-_L7F, _L30, _LF0, _L06, _L33, _L2E, _L1E = map(_lanes, (0x7F, 0x30, 0xF0, 0x06, 0x33, 0x2E, 0x1E))
-_ALL = _U8(0xFFFFFFFFFFFFFFFF)
-# 10**(decimals) by the '.''s lane p, looked up by the exponent bits of float(0x80 << 8p)
-# (128 + p): the decimals are the lanes after the '.', 7 - p; float(0) (no '.') has exponent
+_L7F, _L30, _L76, _L80 = map(_lanes, (0x7F, 0x30, 0x76, 0x80))
+# by the number n of a field's bytes in its word (clipped to 9: longer than a word), the mask
+# of its lanes: the top n
+_FIELD = np.array([(0xFFFFFFFFFFFFFFFF << (64 - 8 * n)) & 0xFFFFFFFFFFFFFFFF for n in range(9)]
+                  + [0], dtype=np.uint64)
+# 10**(decimals) by the '.''s lane p, looked up by the exponent bits of float(1 << 8p)
+# (127 + p): the decimals are the lanes after the '.', 7 - p; float(0) (no '.') has exponent
 # bits 0
 _SCALE = np.ones(256)
-_SCALE[128:136] = 10.0 ** (7 - np.arange(8))
+_SCALE[127:135] = 10.0 ** (7 - np.arange(8))
 _POW10 = 10.0 ** np.arange(23)
 _PLAIN_BLOCK = 1 << 17  # bytes parsed at a time: the temporaries stay in the cache
 # the fields read one by one with Python's float(): longer than 17 bytes, digits above 2**53,
@@ -304,38 +307,30 @@ _FIELD_RE = re.compile(rb"-?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
 
 
 def _word_digits(word: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The top ``n`` lanes of the words ``word`` (ASCII; the other lanes taken as '0') as digits
-    with at most one '.': the digits with the '.' dropped (one per lane, the first lane 0 where
-    a '.' was dropped), the '.''s lane as 0x80 (0 when none), and which words were such
-    digits."""
+    """The top ``n`` lanes (n <= 8: the callers refuse longer fields) of the words ``word``
+    (ASCII; the other lanes taken as '0') as digits with at most one '.': the digits with the
+    '.' dropped (one per lane, the first lane 0 where a '.' was dropped), the '.''s lane as 1
+    (0 when none), and which words were such digits."""
     # a field's last 8 bytes, read as one little-endian word: lane 7 (the top byte) is its
-    # last byte; its n bytes are the top n lanes, and '0' goes in the others. numpy shifts by
-    # 64 or more to 0: for n >= 9 (longer than a word) both are 0, and a 0 byte is no digit
-    low = _U8(8) * np.minimum(n, 9).astype(np.uint64)
-    w: np.ndarray = word & (_ALL << (_U8(64) - low))
-    w |= _L30 >> low
-    # 0x80 in the lanes equal to '.', exactly (no borrow from lane to lane)
-    x: np.ndarray = w ^ _L2E
-    dots: np.ndarray = x & _L7F
-    dots += _L7F
-    dots |= x
-    dots |= _L7F
-    dots = ~dots
-    ok: np.ndarray = (dots & (dots - _U8(1))) == 0  # at most one
-    one = dots >> _U8(7)
-    w ^= one * _U8(0x1E)  # '.' -> '0'
-    t: np.ndarray = w + _L06
-    t &= _LF0
-    t >>= _U8(4)
-    t |= w & _LF0
-    ok &= t == _L33  # every lane '0' to '9'
-    w -= _L30
-    # the lanes before the '.' move up one, over it: w - x + (x << 8) with x those lanes
+    # last byte. Each lane minus '0' (xor: '0'-'9' are 0x30-0x39), 0 outside the field's n
+    y: np.ndarray = word ^ _L30
+    y &= _FIELD.take(n, mode="clip")
+    # 0x80 in the lanes above 9, exactly (no carry from lane to lane): at most one, and '.'
+    other: np.ndarray = y & _L7F
+    other += _L76
+    other |= y
+    other &= _L80
+    ok: np.ndarray = (other & (other - _U8(1))) == 0
+    one = other >> _U8(7)
+    dot = one * _U8(0x1E)  # '.' ^ '0'
+    ok &= (y & (one * _U8(0xFF))) == dot
+    y ^= dot  # '.' -> 0
+    # the lanes before the '.' move up one, over it: y - x + (x << 8) with x those lanes
     x = one - (one != 0)
-    x &= w
+    x &= y
     x *= _U8(255)
-    w += x
-    return w, dots, ok
+    y += x
+    return y, one, ok
 
 
 def _digits_value(d: np.ndarray) -> np.ndarray:
@@ -347,9 +342,9 @@ def _digits_value(d: np.ndarray) -> np.ndarray:
     return d >> _U8(32)
 
 
-def _scale(dots: np.ndarray) -> np.ndarray:
-    """10**(the lanes after the '.') of each word (1 when it has none)."""
-    return _SCALE.take(dots.astype(float).view(np.uint64) >> _U8(55))
+def _scale(one: np.ndarray) -> np.ndarray:
+    """10**(the lanes after the '.') of each word, from the '.''s lane (1 when none)."""
+    return _SCALE.take(one.astype(float).view(np.uint64) >> _U8(55))
 
 
 def _plain_fields(buf: np.ndarray, words: np.ndarray, start: np.ndarray,
@@ -359,10 +354,11 @@ def _plain_fields(buf: np.ndarray, words: np.ndarray, start: np.ndarray,
     neg = buf.take(start) == 45  # '-'
     n = end - start
     n -= neg
-    d, dots, ok = _word_digits(words.take(end - 8), n)
-    ok &= n > (dots != 0)  # a digit
+    d, dot, ok = _word_digits(words.take(end - 8), n)
+    ok &= n > (dot != 0)  # a digit
+    ok &= n <= 8
     value = _digits_value(d).astype(float)
-    value /= _scale(dots)
+    value /= _scale(dot)
     value *= 1.0 - 2.0 * neg  # (-0.0 for '-0', as float() reads it)
     return value, ok
 
@@ -373,17 +369,17 @@ def _long_fields(buf: np.ndarray, words: np.ndarray, start: np.ndarray,
     values, and which were plain numbers whose digits are below 2**53."""
     neg = buf.take(start) == 45
     n = end - start - neg
-    d1, dots1, ok = _word_digits(words[end - 8], np.full(len(n), 8))
-    d0, dots0, ok0 = _word_digits(words[end - 16], n - 8)
-    ok &= ok0 & ((dots0 == 0) | (dots1 == 0)) & (n > 8) & (n <= 16)
+    d1, dot1, ok = _word_digits(words[end - 8], np.full(len(n), 8))
+    d0, dot0, ok0 = _word_digits(words[end - 16], n - 8)
+    ok &= ok0 & ((dot0 == 0) | (dot1 == 0)) & (n > 8) & (n <= 16)
     # a '.' in the second word moves the first word's last digit into it, and the first word
     # up a lane
-    moved = (dots1 != 0).astype(np.uint64)
+    moved = (dot1 != 0).astype(np.uint64)
     d1 |= (d0 >> _U8(56)) * moved
     d0 <<= _U8(8) * moved
     m = _digits_value(d0) * _U8(100_000_000) + _digits_value(d1)
     ok &= m <= _U8(1 << 53)
-    value = m.astype(float) / (_scale(dots1) * np.where(dots0 != 0, 1e8 * _scale(dots0), 1.0))
+    value = m.astype(float) / (_scale(dot1) * np.where(dot0 != 0, 1e8 * _scale(dot0), 1.0))
     np.negative(value, out=value, where=neg)
     return value, ok
 
