@@ -144,7 +144,12 @@ class MOTTable:
         if a.shape[1] < 6:
             raise ValueError(f"rows need at least 6 values (frame, id, box); got {a.shape[1]}")
         # (np.take copies whole rows 2-3 times faster than a[order])
-        a = np.take(a, np.argsort(a[:, 0], kind="stable"), axis=0)
+        return cls._of(np.take(a, np.argsort(a[:, 0], kind="stable"), axis=0), path)
+
+    @classmethod
+    def _of(cls, a: np.ndarray, path: str) -> MOTTable:
+        """The table of the rows ``a`` (float, sorted by frame), which it keeps (its conf and
+        visibility are views of ``a``)."""
         N, w = a.shape
 
         def col(j: int, fill: float) -> np.ndarray:
@@ -515,6 +520,8 @@ def read_mot(path: str | os.PathLike) -> MOTTable:
             a = None  # the careful reader names the row, as it always has
     if a is None:
         a = _read_careful(path, data)
+    elif len(a) < 2 or (a[1:, 0] >= a[:-1, 0]).all():
+        return MOTTable._of(a, path)  # sorted already: from_rows would copy it as it is
     return MOTTable.from_rows(a, path)
 
 
