@@ -304,7 +304,6 @@ _FIELD = np.array([(0xFFFFFFFFFFFFFFFF << (64 - 8 * n)) & 0xFFFFFFFFFFFFFFFF for
 # bits 0
 _SCALE = np.ones(256)
 _SCALE[127:135] = 10.0 ** (7 - np.arange(8))
-_POW10 = 10.0 ** np.arange(23)
 _PLAIN_BLOCK = 1 << 17  # bytes parsed at a time: the temporaries stay in the cache
 # the fields read one by one with Python's float(): longer than 17 bytes, digits above 2**53,
 # or an exponent; at most 1 in 64 of a file's fields (more, and the careful reader is as fast)
