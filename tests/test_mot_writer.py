@@ -1,0 +1,81 @@
+"""write_mot formats whole columns with numpy: its text must be, byte for byte, Python's
+%-format of each row (`%d,%d,%.2f,%.2f,%.2f,%.2f,%.4g,-1,-1,-1`), on every kind of value."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from vistrack.io import read_mot, write_mot
+
+ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.4g,-1,-1,-1\n"
+
+
+def percent_format(f, i, b, c) -> bytes:
+    """Each row with Python's %-format, sorted by frame and id (stably) as write_mot sorts."""
+    order = np.lexsort((i, f))
+    return "".join(ROW % (int(f[k]), int(i[k]), *map(float, b[k]), float(c[k]))
+                   for k in order).encode()
+
+
+def values(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Values of every kind: any magnitude, ties and near-ties of the rounding (multiples of 1/8
+    and of 0.005, their neighbours), decimals as files hold them, scores in [0, 1], and zeros,
+    NaN, infinities, the %.4g exponent switches."""
+    kind = rng.integers(0, 9, n)
+    v = rng.uniform(-1, 1, n) * 10.0 ** rng.uniform(-12, 16, n)
+    v = np.where(kind == 0, np.round(rng.uniform(-3000, 3000, n) * 8) / 8, v)
+    v = np.where(kind == 1, np.round(rng.uniform(-3000, 3000, n) * 200) / 200, v)
+    v = np.where(kind == 2, np.round(rng.uniform(-1e4, 1e4, n), int(rng.integers(0, 6))), v)
+    v = np.where(kind == 3, rng.choice(
+        [0.0, -0.0, np.nan, np.inf, -np.inf, 1e-4, 9.9995e-5, 1e-5, 2.5e-5, 1.5e-4, 0.99995,
+         9999.4, 9999.5, 9999.6, 99995.0, 1e11, 1e13, 5e-324, 1.7976931348623157e308], n), v)
+    v = np.where(kind == 4, rng.uniform(0, 1, n), v)
+    v = np.where(kind == 5, np.round(rng.uniform(0, 1, n), 4), v)
+    v = np.where(kind == 6, np.nextafter(np.round(rng.uniform(-1e3, 1e3, n), 3),
+                                         rng.choice([-np.inf, np.inf], n)), v)
+    return np.where(kind == 7, rng.uniform(-50, 2000, n), v)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_write_mot_is_the_percent_format_byte_for_byte(tmp_path, seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 40_000))
+    f = rng.integers(-10 ** int(rng.integers(1, 19)), 10 ** int(rng.integers(1, 19)), n)
+    f[rng.random(n) < 0.005] = np.iinfo(np.int64).min
+    i = rng.integers(-5, 10 ** int(rng.integers(1, 16)), n)
+    b, c = values(rng, 4 * n).reshape(n, 4), values(rng, n)
+    path = write_mot(tmp_path / "r.txt", f, i, b, c)
+    assert path.read_bytes() == percent_format(f, i, b, c)
+
+
+def test_write_mot_typical_results_then_read_back(tmp_path):
+    """A tracker's results (boxes in pixels, scores in [0, 1]) more than one block long, and
+    read_mot reads the file back to the rounded values."""
+    rng = np.random.default_rng(7)
+    n = 50_000
+    f, i = np.repeat(np.arange(1, 501), 100), np.tile(np.arange(1, 101), 500)
+    b = np.c_[rng.uniform(-20, 1920, (n, 2)), rng.uniform(1, 400, (n, 2))]
+    c = rng.uniform(0, 1, n)
+    path = write_mot(tmp_path / "r.txt", f, i, b, c)
+    assert path.read_bytes() == percent_format(f, i, b, c)
+    t = read_mot(path)
+    np.testing.assert_array_equal(t.boxes, np.array([float(f"{x:.2f}") for x in b.ravel()])
+                                  .reshape(n, 4))
+    np.testing.assert_array_equal(t.conf, [float(f"{x:.4g}") for x in c])
+
+
+@settings(max_examples=500, derandomize=True, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(rows=st.lists(st.tuples(
+    st.integers(-2 ** 63, 2 ** 63 - 1), st.integers(-2 ** 63, 2 ** 63 - 1),
+    *[st.floats(allow_nan=True, allow_infinity=True, width=64)] * 5), min_size=1, max_size=40))
+def test_write_mot_hypothesis_floats(tmp_path_factory, rows):
+    """Any int64 frames and ids and any doubles (subnormal, huge, -0.0, NaN)."""
+    a = list(zip(*rows))
+    f, i = np.array(a[0], dtype=np.int64), np.array(a[1], dtype=np.int64)
+    b, c = np.array(a[2:6], dtype=float).T, np.array(a[6], dtype=float)
+    path = write_mot(tmp_path_factory.getbasetemp() / "hyp.txt", f, i, b, c, force=True)
+    assert path.read_bytes() == percent_format(f, i, b, c)
