@@ -253,3 +253,21 @@ def test_track_sequence_online_writes_what_the_rows_kept_in_memory_give(tmp_path
     assert not partial_path(tmp_path / "online.txt").exists()
     assert isinstance(r.out, Path)
 
+
+def test_the_trajectory_plot_draws_the_rows_it_was_given(tmp_path):
+    """The plot keeps each row's frame, identity and centre only; its PNG is byte for byte
+    the figure of the rows' centres computed here from the boxes."""
+    from vistrack.viz import TrajectoryPlot, plot_trajectories
+
+    frames = random_tracks(np.random.default_rng(13), 120, id_pool=12)
+    image = np.random.default_rng(14).integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    plot = TrajectoryPlot(tmp_path / "t.png", "demo")
+    for frame, t in frames:
+        plot.write(Frame(frame.index, frame.time, image), t)
+    plot.close()
+    rows = np.array([r[:6] for r in rows_of(frames)])
+    ids = rows[:, 1].astype(int)
+    plot_trajectories(rows[:, 0].astype(int), ids, rows[:, 2:4] + rows[:, 4:6] / 2,
+                      image[..., ::-1], tmp_path / "want.png",
+                      title=f"demo: {len(set(ids.tolist()))} tracks, 120 frames")
+    assert (tmp_path / "t.png").read_bytes() == (tmp_path / "want.png").read_bytes()
