@@ -7,13 +7,18 @@ one video (125 loops: 25,000 frames, an hour at 7 frames/s), which `vistrack tra
 through its whole chain (background model, blobs, box tracker, and every output: tracks, CSV,
 annotated video, plot). The resident memory of the process (VmRSS, from /proc) is sampled
 every half second; the growth is the last sample against the first one after 10 % of the
-frames (the background model, the kernels and the writers are set up by then).
+frames (the background model, the kernels and the writers are set up by then). The frames
+end when ``tracks.txt`` appears: the results file is the first output closed, so its
+appearance marks the start of closing the outputs (the trajectory plot is drawn then). The
+growth over the frames is the median of the samples in the last tenth of the frames against
+the median of those in the tenth after the first 10 % (single samples move by a few MB).
 """
 
 from __future__ import annotations
 
 import argparse
 import platform
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -69,14 +74,19 @@ def main(argv: list[str] | None = None) -> int:
         video = Path(tmp) / "soak.mp4"
         n, fps = looped_video(video, args.loops)
         print(f"{n} frames at {fps:g} frames/s ({n / fps / 3600:.2f} h)", flush=True)
+        out_dir = Path(tmp) / "out"
         cmd = [str(Path(sys.executable).parent / "vistrack"), "track", str(video), "--out-dir",
-               str(Path(tmp) / "out"), "--quiet"]
+               str(out_dir), "--quiet"]
         t0 = time.perf_counter()
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         samples: list[tuple[float, float]] = []
+        closing = None  # the first sample taken with tracks.txt there
         while proc.poll() is None:
+            done = (out_dir / "tracks.txt").exists()
             r = rss_mb(proc.pid)
             if r is not None:
+                if done and closing is None:
+                    closing = len(samples)
                 samples.append((time.perf_counter() - t0, r))
             time.sleep(0.5)
         out, err = proc.communicate()
@@ -87,10 +97,15 @@ def main(argv: list[str] | None = None) -> int:
     settled = [r for t, r in samples if t >= 0.1 * wall]
     first, last, peak = settled[0], settled[-1], max(r for _, r in samples)
     growth = last - first
+    # the frames' samples after the first 10 %: medians of their second and last tenths
+    frames = [r for t, r in samples[:closing] if t >= 0.1 * wall] or settled
+    tenth = max(1, len(frames) // 10)
+    early, late = statistics.median(frames[:tenth]), statistics.median(frames[-tenth:])
     print(out.strip())
     print(f"RSS after 10 % of the run {first:.0f} MB, at the end {last:.0f} MB, peak {peak:.0f} "
           f"MB: growth {growth:+.1f} MB over {wall:.0f} s ({n / wall:.0f} frames/s whole "
-          f"process)")
+          f"process); over the frames (medians of tenths) {early:.1f} MB to {late:.1f} MB: "
+          f"{late - early:+.1f} MB")
     if args.write:
         replace_section(args.write, "\n".join([
             "## Soak",
@@ -101,9 +116,11 @@ def main(argv: list[str] | None = None) -> int:
             "through `vistrack track` with every output, the process's resident memory "
             "sampled every 0.5 s.",
             "",
-            "| frames | wall s | RSS after 10 % MB | RSS at the end MB | peak MB | growth MB |",
-            "|---:|---:|---:|---:|---:|---:|",
-            f"| {n:,} | {wall:.0f} | {first:.0f} | {last:.0f} | {peak:.0f} | {growth:+.1f} |",
+            "| frames | wall s | RSS after 10 % MB | RSS at the end MB | peak MB | growth MB "
+            "| growth over the frames MB |",
+            "|---:|---:|---:|---:|---:|---:|---:|",
+            f"| {n:,} | {wall:.0f} | {first:.0f} | {last:.0f} | {peak:.0f} | {growth:+.1f} "
+            f"| {late - early:+.1f} |",
             "",
             "Goal: growth ≤ 20 MB over the run.",
             "",

@@ -30,7 +30,7 @@ from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, evaluate_mot
 from .io.atomic import check_output
 from .io.motchallenge import read_mot, read_seqinfo, write_mot
-from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink, TrackRows
+from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
 from .models.box import BoxMotion
 from .tracking.base import Tracker
 from .tracking.box import BoxTracker
@@ -308,7 +308,8 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
     sinks : sequence of Sink
         Each takes every frame's tracks (``write(frame, tracks)``) and is closed when the
         source ends. If the loop fails, sinks with an ``abort()`` are aborted instead, and
-        none is closed: no results file is written from part of a run.
+        none is closed: no results file is written from part of a run. If a sink fails to
+        close, it and the sinks after it are aborted.
     progress : stream, optional
         Where to draw a progress bar (of ``total`` frames, named ``label``).
 
@@ -360,16 +361,25 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
             sec["write"] += (t0 - t3) - (c0 - c3)
             sec["compile"] += c0 - c1
     except BaseException:
-        for sink in sinks:
-            abort = getattr(sink, "abort", None)
-            if callable(abort):
-                abort()
+        _abort(sinks)
         raise
     t0 = time.perf_counter()
-    for sink in sinks:
-        sink.close()
+    for k, sink in enumerate(sinks):
+        try:
+            sink.close()
+        except BaseException:
+            _abort(sinks[k:])  # the files not yet complete are given up
+            raise
     sec["write"] += time.perf_counter() - t0
     return LoopStats(n, sec)
+
+
+def _abort(sinks: Sequence[Sink]) -> None:
+    """Call ``abort()`` on the sinks that have one (harmless on one that failed to close)."""
+    for sink in sinks:
+        abort = getattr(sink, "abort", None)
+        if callable(abort):
+            abort()
 
 
 # ---------------------------------------------------------------------------- registries
@@ -824,12 +834,16 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     trk = BoxTracker(tc, motion=cfg.motion, frame_rate=info.frame_rate, record=oc.enabled,
                      image_size=(info.im_width, info.im_height), calibration=calibration)
     frames = (Frame(f, (f - 1) / info.frame_rate) for f in range(1, info.seq_length + 1))
-    rows = TrackRows()
-    stats = run(frames, lambda frame: per_frame[frame.index - 1], trk, [rows],
-                progress=progress, total=info.seq_length, label=info.name)
+    # online, the rows go to the file as they come; offline, the tracker records its tracks,
+    # which are smoothed at the end and written then
+    writer = None if oc.enabled else MOTWriter(out)
+    stats = run(frames, lambda frame: per_frame[frame.index - 1], trk,
+                [writer] if writer is not None else [], progress=progress,
+                total=info.seq_length, label=info.name)
     seconds += stats.seconds["tracker"]
-    F, I, B, S = rows.frames, rows.ids, rows.xywh, rows.scores
-    if oc.enabled:
+    if writer is not None:
+        n_rows, n_tracks = len(writer), len(writer.identities)
+    else:
         t0, c0 = time.perf_counter(), _compile.seconds()
         fps = info.frame_rate
         sm = smooth(trk, max_gap=int(round(oc.max_gap * fps)), min_score=oc.min_track_score,
@@ -837,11 +851,12 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                     link_gap=int(round(oc.link_gap * fps)), link_iou=oc.link_iou,
                     link_window=max(1, round(oc.link_window * fps)))
         seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
-        F, I, B, S = sm.frames, sm.ids, sm.xywh, np.where(sm.filled, 0.0, sm.scores)
-    write_mot(out, F, I, B, S, force=True)
+        F, I = sm.frames, sm.ids
+        write_mot(out, F, I, sm.xywh, np.where(sm.filled, 0.0, sm.scores), force=True)
+        n_rows, n_tracks = len(F), len(np.unique(I))
     used = cfg if cfg.motion is not None else replace(cfg, motion=BoxMotion())
-    return TrackRun(out, info.seq_length, len(dets), len(F), len(np.unique(I)), seconds,
-                    used, derived_values(trk))
+    return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds, used,
+                    derived_values(trk))
 
 
 # ------------------------------------------------------------------------------- video
@@ -1082,13 +1097,13 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     if n == 0:
         raise ValueError(f"{video}: no frames to track")
     rows = sinks["tracks"]
-    assert isinstance(rows, TrackRows)
+    assert isinstance(rows, MOTWriter)
     scores = None
     if gt_table is not None:  # scored over the frames tracked
         last = reader.start + n - 1
         g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= last)]
         scores = evaluate_mot(g, read_mot(files["tracks"]), last, benchmark="auto")
-    n_tracks = len(np.unique(rows.ids))
+    n_tracks = len(rows.identities)
     if not isinstance(trk, BoxTracker):
         return VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores)
     return VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,

@@ -2,7 +2,7 @@
 tracks (:mod:`vistrack.io.tracks`). Every file is written whole or not at all
 (:mod:`vistrack.io.atomic`)."""
 
-from .atomic import open_replacing, partial_path, replacing
+from .atomic import PartialFile, open_replacing, partial_path, replacing
 from .motchallenge import (
     MOT_CLASSES,
     MOTFormatError,
@@ -18,4 +18,4 @@ from .video import Frame, VideoError, VideoReader, VideoWriter
 __all__ = ["MOT_CLASSES", "MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "read_seqinfo",
            "write_mot", "Frame", "VideoError", "VideoReader", "VideoWriter", "Sink",
            "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes",
-           "partial_path", "replacing", "open_replacing"]
+           "partial_path", "replacing", "open_replacing", "PartialFile"]

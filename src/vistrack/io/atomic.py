@@ -10,7 +10,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
-__all__ = ["partial_path", "replacing", "open_replacing", "check_output"]
+__all__ = ["partial_path", "replacing", "open_replacing", "PartialFile", "check_output"]
 
 
 def partial_path(path: str | os.PathLike) -> Path:
@@ -56,6 +56,90 @@ def open_replacing(path: str | os.PathLike) -> Iterator[IO[str]]:
     (:func:`replacing`)."""
     with replacing(path) as part, open(part, "w") as fh:
         yield fh
+
+
+class PartialFile:
+    """A text file written piece by piece, as a run goes, under the partial name of ``path``
+    (:func:`partial_path`): :meth:`commit` renames it over ``path`` once complete,
+    :meth:`abort` removes it. Nothing is made on disk before the first :meth:`write` (or
+    :meth:`commit`, which writes an empty file).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file's final name (its folder is made when the file is opened).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> out = Path(tempfile.mkdtemp()) / "a.txt"
+    >>> _ = out.write_text("earlier")
+    >>> f = PartialFile(out)
+    >>> f.write("new ")
+    >>> f.write("rows")
+    >>> out.read_text(), f.part.exists()   # the earlier file stays until the commit
+    ('earlier', True)
+    >>> f.commit()
+    >>> out.read_text(), f.part.exists()
+    ('new rows', False)
+    >>> g = PartialFile(out)
+    >>> g.write("half")
+    >>> g.abort()
+    >>> out.read_text(), sorted(p.name for p in out.parent.iterdir())
+    ('new rows', ['a.txt'])
+    """
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        self.path = Path(path)
+        self.part = partial_path(self.path)
+        self._fh: IO[str] | None = None
+
+    def _open(self) -> IO[str]:
+        if self._fh is None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._fh = open(self.part, "w")  # closed by commit or abort
+        return self._fh
+
+    def write(self, text: str) -> None:
+        """Append ``text`` to the partial file (opened, and its folder made, at the first
+        call)."""
+        self._open().write(text)
+
+    def read(self) -> str:
+        """Everything written so far (the partial file read back)."""
+        self._open().flush()
+        return self.part.read_text()
+
+    def truncate(self) -> None:
+        """Start the partial file over, empty."""
+        fh = self._open()
+        fh.seek(0)
+        fh.truncate()
+
+    def commit(self) -> None:
+        """Close the partial file and rename it over ``path`` (an empty file if nothing was
+        written); on failure (a full disk at the last flush) remove it, leaving ``path`` as
+        it was."""
+        try:
+            self._open().close()
+            os.replace(self.part, self.path)
+        except BaseException:
+            self.abort()
+            raise
+        finally:
+            self._fh = None
+
+    def abort(self) -> None:
+        """Give the file up: close and remove the partial file; ``path`` is left as it was.
+        Harmless when nothing was written, or called twice."""
+        fh, self._fh = self._fh, None
+        try:
+            if fh is not None:
+                fh.close()
+        except OSError:  # the flush of a file being given up (a full disk)
+            pass
+        finally:
+            self.part.unlink(missing_ok=True)
 
 
 def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "out",

@@ -1,14 +1,18 @@
-"""Tracks out: sinks that take a tracker's output frame by frame and write a file when closed.
+"""Tracks out: sinks that take a tracker's output frame by frame and write a file.
 
 Every sink answers ``write(frame, tracks)`` (one :class:`~vistrack.types.Frame` and the
 :class:`~vistrack.types.Tracks` reported in it) and ``close()``; :func:`vistrack.pipeline.run`
 feeds any list of them. Here: :class:`MOTWriter` (MOTChallenge results), :class:`CSVWriter`
 (``frame,id,x,y,w,h,score`` with a header) and :class:`BoxesWriter` (one object's
-``frame,x,y,w,h``, OTB-style); pictures are sinks in :mod:`vistrack.viz`.
+``frame,x,y,w,h``, OTB-style), which write their rows as the frames come to a partial file
+renamed into place when closed (:mod:`vistrack.io.atomic`), so that a long run's memory does
+not grow with its rows; :class:`TrackRows` keeps the rows in memory instead. Pictures are
+sinks in :mod:`vistrack.viz`.
 """
 
 from __future__ import annotations
 
+import itertools
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
@@ -16,8 +20,8 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 import numpy as np
 
 from ..types import Frame, Tracks
-from .atomic import open_replacing
-from .motchallenge import write_mot
+from .atomic import PartialFile, open_replacing
+from .motchallenge import _ROW as _MOT_ROW
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -106,6 +110,10 @@ class _Column:
     def values(self) -> np.ndarray:
         assert self.data is not None
         return self.data[:self.n].copy()
+
+    def view(self, shape: tuple[int, ...]) -> np.ndarray:
+        """The rows so far without a copy (``np.zeros(shape)`` before any)."""
+        return self.data[:self.n] if self.data is not None else np.zeros(shape)
 
 
 class TrackRows:
@@ -233,13 +241,88 @@ class TrackRows:
         return self._cat(self._scores, (0,))
 
 
-class MOTWriter(TrackRows):
-    """Writes MOTChallenge results (:func:`~vistrack.io.write_mot`) to ``path`` when closed.
+def _mot_text(frame: int, ids: np.ndarray, xywh: np.ndarray, scores: np.ndarray) -> str:
+    """One frame's rows as MOTChallenge lines, in the given order (:func:`~vistrack.io.write_mot`'s
+    format: one %-format of the block)."""
+    cells = zip([frame] * len(ids), ids.tolist(), *xywh.T.tolist(), scores.tolist())
+    return (_MOT_ROW * len(ids)) % tuple(itertools.chain.from_iterable(cells))
+
+
+def _frame_and_id(line: str) -> tuple[int, int]:
+    f, i, _ = line.split(",", 2)
+    return int(f), int(i)
+
+
+class _RowsFile:
+    """Box tracks written as text rows, frame by frame, to the partial file of ``path``
+    (:class:`~vistrack.io.atomic.PartialFile`), renamed into place when closed: only the
+    count of rows and the set of identities are kept, so memory does not grow with the
+    rows."""
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        self.path = Path(path)
+        self._file = PartialFile(self.path)
+        self._rows = 0
+        self._ids: set[int] = set()
+
+    def _columns(self, frame: Frame, tracks: Tracks
+                 ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+        """The frame's index and its rows' ids, boxes ``x, y, w, h`` and scores, as
+        :class:`TrackRows` keeps them (int and float64), counted."""
+        ids = np.asarray(tracks.ids).astype(int)
+        xywh = np.asarray(tracks.xywh, dtype=float)
+        scores = np.asarray(tracks.scores, dtype=float)
+        self._rows += len(ids)
+        self._ids.update(ids.tolist())
+        return int(frame.index), ids, xywh, scores
+
+    def __len__(self) -> int:
+        return self._rows
+
+    @property
+    def identities(self) -> np.ndarray:
+        """The distinct track identities written so far, sorted ``(K,)`` int.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> sink = CSVWriter(pathlib.Path(tempfile.mkdtemp()) / "tracks.csv")
+        >>> for k, ids in enumerate(([4, 2], [2], [9, 4]), start=1):
+        ...     sink.write(Frame(k, 0.0), Tracks(ids=np.array(ids), boxes=np.ones((len(ids), 4)),
+        ...                                      points=None, scores=np.ones(len(ids)),
+        ...                                      classes=np.zeros(len(ids))))
+        >>> len(sink), sink.identities.tolist()
+        (5, [2, 4, 9])
+        >>> sink.abort()
+        """
+        return np.array(sorted(self._ids), dtype=int)
+
+    def abort(self) -> None:
+        """Give the file up (a run that failed): the rows written are removed, and an earlier
+        file at ``path`` is left as it was."""
+        self._file.abort()
+
+
+class MOTWriter(_RowsFile):
+    """Writes MOTChallenge results (:func:`~vistrack.io.write_mot`'s format and order: sorted
+    by frame and id) to ``path``.
+
+    The rows go to a partial file beside ``path`` as the frames come, and replace ``path``
+    only when closed (:class:`~vistrack.io.atomic.PartialFile`); :meth:`abort` removes them.
+    Frames given in increasing order (as :func:`vistrack.pipeline.run` gives them) are
+    written as they come, each frame's rows sorted by id, so memory does not grow with the
+    rows; frames out of order are sorted when the file is closed (the rows are then read
+    back into memory once).
 
     Parameters
     ----------
     path : str or os.PathLike
         The results file (overwritten; its folder is made if needed).
+
+    Attributes
+    ----------
+    path : Path
+        The results file.
 
     Examples
     --------
@@ -251,14 +334,54 @@ class MOTWriter(TrackRows):
     >>> sink.close()
     >>> path.read_text()
     '1,1,10.00,20.00,30.00,60.00,0.9,-1,-1,-1\\n'
+    >>> len(sink), sink.identities.tolist()
+    (1, [1])
     """
 
     def __init__(self, path: str | os.PathLike) -> None:
-        super().__init__()
-        self.path = Path(path)
+        super().__init__(path)
+        self._last: int | None = None  # the latest frame written
+        self._in_order = True
+
+    def write(self, frame: Frame, tracks: Tracks) -> None:
+        """Write one frame's rows (boxes), sorted by id.
+
+        Parameters
+        ----------
+        frame : Frame
+            The frame; its index is each row's frame.
+        tracks : Tracks
+            Box tracks (point tracks have no ``xywh``).
+
+        Raises
+        ------
+        ValueError
+            If the tracks are points.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> sink = MOTWriter(pathlib.Path(tempfile.mkdtemp()) / "tracks.txt")
+        >>> sink.write(Frame(2, 0.04), Tracks(ids=np.array([5, 4]),
+        ...                                   boxes=np.array([[0, 0, 2.0, 3], [1, 1, 3, 3]]),
+        ...                                   points=None, scores=np.ones(2), classes=np.zeros(2)))
+        >>> print(sink._file.read(), end="")
+        2,4,1.00,1.00,2.00,2.00,1,-1,-1,-1
+        2,5,0.00,0.00,2.00,3.00,1,-1,-1,-1
+        >>> sink.abort()
+        """
+        if not len(tracks):
+            return
+        f, ids, xywh, scores = self._columns(frame, tracks)
+        if self._last is not None and f <= self._last:
+            self._in_order = False  # sorted when closed
+        self._last = f if self._last is None else max(self._last, f)
+        order = np.argsort(ids, kind="stable")
+        self._file.write(_mot_text(f, ids[order], xywh[order], scores[order]))
 
     def close(self) -> None:
-        """Write the file (the rows sorted by frame and id).
+        """Finish the file (sorting it by frame and id if frames came out of order) and
+        rename it over ``path``.
 
         Examples
         --------
@@ -268,17 +391,34 @@ class MOTWriter(TrackRows):
         >>> path.read_text()
         ''
         """
-        write_mot(self.path, self.frames, self.ids, self.xywh, self.scores, force=True)
+        if not self._in_order:
+            try:
+                # a stable sort of the lines by (frame, id): write_mot's np.lexsort order
+                lines = sorted(self._file.read().splitlines(keepends=True), key=_frame_and_id)
+                self._file.truncate()
+                self._file.write("".join(lines))
+            except BaseException:
+                self._file.abort()
+                raise
+        self._file.commit()
 
 
-class CSVWriter(TrackRows):
-    """Writes ``frame,id,x,y,w,h,score`` rows, with that header, to ``path`` when closed
-    (boxes to 2 decimals, scores to 3).
+class CSVWriter(_RowsFile):
+    """Writes ``frame,id,x,y,w,h,score`` rows, with that header, in the order written (boxes
+    to 2 decimals, scores to 3), to ``path``.
+
+    The rows go to a partial file beside ``path`` as the frames come, and replace ``path``
+    only when closed (:class:`~vistrack.io.atomic.PartialFile`); :meth:`abort` removes them.
 
     Parameters
     ----------
     path : str or os.PathLike
         The file (overwritten; its folder is made if needed).
+
+    Attributes
+    ----------
+    path : Path
+        The file.
 
     Examples
     --------
@@ -293,12 +433,55 @@ class CSVWriter(TrackRows):
     1,1,10.00,20.00,30.00,60.00,0.900
     """
 
+    _HEADER = "frame,id,x,y,w,h,score\n"
+    # %d, %.2f and %.3f are str.format's d, .2f and .3f
+    _ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.3f\n"
+
     def __init__(self, path: str | os.PathLike) -> None:
-        super().__init__()
-        self.path = Path(path)
+        super().__init__(path)
+        self._started = False
+
+    def _start(self) -> None:
+        if not self._started:
+            self._file.write(self._HEADER)
+            self._started = True
+
+    def write(self, frame: Frame, tracks: Tracks) -> None:
+        """Write one frame's rows (boxes), in the tracks' order (the header first).
+
+        Parameters
+        ----------
+        frame : Frame
+            The frame; its index is each row's frame.
+        tracks : Tracks
+            Box tracks (point tracks have no ``xywh``).
+
+        Raises
+        ------
+        ValueError
+            If the tracks are points.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> sink = CSVWriter(pathlib.Path(tempfile.mkdtemp()) / "tracks.csv")
+        >>> sink.write(Frame(3, 0.1), Tracks(ids=np.array([7]), boxes=np.array([[1, 2, 4, 8.0]]),
+        ...                                  points=None, scores=np.array([0.5]),
+        ...                                  classes=np.zeros(1)))
+        >>> print(sink._file.read(), end="")
+        frame,id,x,y,w,h,score
+        3,7,1.00,2.00,3.00,6.00,0.500
+        >>> sink.abort()
+        """
+        self._start()
+        if not len(tracks):
+            return
+        f, ids, xywh, scores = self._columns(frame, tracks)
+        cells = zip([f] * len(ids), ids.tolist(), *xywh.T.tolist(), scores.tolist())
+        self._file.write((self._ROW * len(ids)) % tuple(itertools.chain.from_iterable(cells)))
 
     def close(self) -> None:
-        """Write the file: the header, then the rows in the order written.
+        """Finish the file (the header alone if no frame came) and rename it over ``path``.
 
         Examples
         --------
@@ -308,10 +491,12 @@ class CSVWriter(TrackRows):
         >>> path.read_text()
         'frame,id,x,y,w,h,score\\n'
         """
-        with open_replacing(self.path) as fh:
-            fh.write("frame,id,x,y,w,h,score\n")
-            for f, i, (x, y, w, h), s in zip(self.frames, self.ids, self.xywh, self.scores):
-                fh.write(f"{f},{i},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{s:.3f}\n")
+        try:
+            self._start()
+        except BaseException:
+            self._file.abort()
+            raise
+        self._file.commit()
 
 
 def write_boxes(path: str | os.PathLike, boxes: ArrayLike, *, force: bool = False) -> None:
@@ -351,7 +536,11 @@ def write_boxes(path: str | os.PathLike, boxes: ArrayLike, *, force: bool = Fals
 
 class BoxesWriter:
     """One object's box in every frame, written as ``frame,x,y,w,h`` lines (frames counted
-    from 1, :func:`write_boxes`) to ``path`` when closed: a single-object tracker's track 1.
+    from 1, :func:`write_boxes`' format) to ``path``: a single-object tracker's track 1.
+
+    Each frame's line goes to a partial file beside ``path`` as it comes, and replaces
+    ``path`` only when closed (:class:`~vistrack.io.atomic.PartialFile`); :meth:`abort`
+    removes it. The boxes are also kept (:attr:`boxes`, one array that doubles as it fills).
 
     Parameters
     ----------
@@ -373,28 +562,36 @@ class BoxesWriter:
     2,nan,nan,nan,nan
     """
 
+    # %d and %.2f are str.format's d and .2f
+    _ROW = "%d,%.2f,%.2f,%.2f,%.2f\n"
+
     def __init__(self, path: str | os.PathLike) -> None:
         self.path = Path(path)
-        self._boxes: list[np.ndarray] = []
+        self._file = PartialFile(self.path)
+        self._boxes = _Column()
 
     def write(self, frame: Frame, tracks: Tracks) -> None:
-        """Keep the frame's box (NaN when no track is reported).
+        """Write and keep the frame's box (NaN when no track is reported).
 
         Parameters
         ----------
         frame : Frame
-            The frame (its boxes are kept in the order written, one per call).
+            The frame (its boxes are numbered in the order written, one per call, from 1).
         tracks : Tracks
             The frame's box tracks; the first one's box is kept.
 
         Examples
         --------
-        >>> sink = BoxesWriter("unused.txt")
+        >>> import tempfile, pathlib
+        >>> sink = BoxesWriter(pathlib.Path(tempfile.mkdtemp()) / "boxes.txt")
         >>> sink.write(Frame(1, 0.0), Tracks.empty())
         >>> sink.boxes
         array([[nan, nan, nan, nan]])
+        >>> sink.abort()
         """
-        self._boxes.append(tracks.xywh[0] if len(tracks) else np.full(4, np.nan))
+        box = np.asarray(tracks.xywh[0] if len(tracks) else np.full(4, np.nan), dtype=float)
+        self._boxes.add(box.reshape(1, 4))
+        self._file.write(self._ROW % (self._boxes.n, *box.tolist()))
 
     @property
     def boxes(self) -> np.ndarray:
@@ -403,16 +600,18 @@ class BoxesWriter:
 
         Examples
         --------
-        >>> sink = BoxesWriter("unused.txt")
+        >>> import tempfile, pathlib
+        >>> sink = BoxesWriter(pathlib.Path(tempfile.mkdtemp()) / "boxes.txt")
         >>> sink.write(Frame(1, 0.0), Tracks(ids=np.array([1]), boxes=np.array([[1, 2, 4, 8.0]]),
         ...                                  points=None, scores=np.ones(1), classes=np.zeros(1)))
         >>> sink.boxes.tolist()
         [[1.0, 2.0, 3.0, 6.0]]
+        >>> sink.abort()
         """
-        return np.array(self._boxes, dtype=float).reshape(-1, 4)
+        return self._boxes.values() if self._boxes.n else np.zeros((0, 4))
 
     def close(self) -> None:
-        """Write the file (:func:`write_boxes`, overwriting).
+        """Finish the file and rename it over ``path`` (an empty file if no frame came).
 
         Examples
         --------
@@ -422,4 +621,9 @@ class BoxesWriter:
         >>> path.read_text()
         ''
         """
-        write_boxes(self.path, self.boxes, force=True)
+        self._file.commit()
+
+    def abort(self) -> None:
+        """Give the file up (a run that failed): the lines written are removed, and an
+        earlier file at ``path`` is left as it was."""
+        self._file.abort()

@@ -288,8 +288,9 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
 
 class TrajectoryPlot:
     """A sink (:class:`~vistrack.io.tracks.Sink`) that collects every box track's centres
-    and, when closed, plots them over the first frame (:func:`plot_trajectories`) to the PNG
-    ``path``, titled ``"{name}: {tracks} tracks, {frames} frames"``.
+    (with their frames and identities, in arrays that double as they fill) and, when closed,
+    plots them over the first frame (:func:`plot_trajectories`) to the PNG ``path``, titled
+    ``"{name}: {tracks} tracks, {frames} frames"``.
 
     Parameters
     ----------
@@ -315,10 +316,12 @@ class TrajectoryPlot:
     """
 
     def __init__(self, path: str | os.PathLike, name: str = ""):
-        from ..io.tracks import TrackRows
+        from ..io.tracks import _Column
 
         self.path, self.name = path, name
-        self._rows = TrackRows()
+        # what the figure needs of each row, in arrays that double as they fill: its frame,
+        # identity and centre (32 bytes a row)
+        self._frame_of, self._id_of, self._centres = _Column(), _Column(), _Column()
         self._first: np.ndarray | None = None
         self._frames = 0
 
@@ -349,7 +352,11 @@ class TrajectoryPlot:
         if self._first is None:
             self._first = frame.image
         self._frames += 1
-        self._rows.write(frame, tracks)
+        if len(tracks):
+            xywh = tracks.xywh
+            self._frame_of.add(np.full(len(tracks), int(frame.index)))
+            self._id_of.add(np.asarray(tracks.ids).astype(int))
+            self._centres.add(xywh[:, :2] + xywh[:, 2:] / 2)
 
     def close(self) -> None:
         """Draw and save the figure.
@@ -368,14 +375,13 @@ class TrajectoryPlot:
         """
         import cv2
 
-        r = self._rows
-        xywh = r.xywh
+        frames, ids = self._frame_of.view((0,)), self._id_of.view((0,))
         image = self._first
         if image is not None and image.ndim == 3:
             image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
         from ..io import replacing
 
         with replacing(self.path) as part:  # an earlier plot stays until this one is saved
-            plot_trajectories(r.frames, r.ids, xywh[:, :2] + xywh[:, 2:] / 2, image, part,
-                              title=f"{self.name}: {len(np.unique(r.ids))} tracks, "
+            plot_trajectories(frames, ids, self._centres.view((0, 2)), image, part,
+                              title=f"{self.name}: {len(np.unique(ids))} tracks, "
                               f"{self._frames} frames")

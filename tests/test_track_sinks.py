@@ -1,0 +1,273 @@
+"""The writers of tracks stream: MOTChallenge results, CSV and boxes go to a partial file as
+the frames come, in the same bytes as the whole file formatted at once, hold no rows in
+memory, and leave no file under the final name until the run is complete."""
+
+from __future__ import annotations
+
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vistrack.io import PartialFile, partial_path, write_mot
+from vistrack.io.tracks import BoxesWriter, CSVWriter, MOTWriter, TrackRows, write_boxes
+from vistrack.pipeline import run, track_sequence
+from vistrack.tracking import BoxTracker
+from vistrack.types import Detections, Frame, Tracks
+
+
+def random_tracks(rng, n_frames, *, max_rows=8, id_pool=60):
+    """Frames 1..n of box tracks with random ids (int32 or int64), boxes and scores, and some
+    awkward values (negative zero, halves that round either way, huge and NaN scores)."""
+    out = []
+    for f in range(1, n_frames + 1):
+        k = int(rng.integers(0, max_rows + 1))
+        ids = rng.choice(id_pool, k, replace=False).astype(np.int32 if f % 2 else np.int64)
+        xyxy = rng.uniform(-20, 900, (k, 4))
+        xyxy[:, 2:] = xyxy[:, :2] + rng.uniform(0, 200, (k, 2))
+        scores = rng.uniform(-1, 17, k)
+        if k and f % 7 == 0:
+            xyxy[0] = [-0.0, 0.125, 2.675, 1.005]
+            scores[0] = [np.nan, 0.99995, 1e-5, 123456.0][f % 4]
+        out.append((Frame(f, (f - 1) / 25), Tracks(ids=ids, boxes=xyxy, points=None,
+                                                   scores=scores, classes=np.zeros(k, int))))
+    return out
+
+
+def rows_of(frames):
+    """Every row (frame, id, x, y, w, h, score) in the order written, from the boxes."""
+    rows = []
+    for frame, t in frames:
+        b = np.asarray(t.boxes, float)
+        for i, (x0, y0, x1, y1), s in zip(t.ids.tolist(), b.tolist(), t.scores.tolist()):
+            rows.append((frame.index, i, x0, y0, x1 - x0, y1 - y0, s))
+    return rows
+
+
+def mot_text(rows):
+    """The results file formatted at once, row by row with str.format: sorted by frame, then
+    id, rows of equal keys in the order written."""
+    rows = sorted(rows, key=lambda r: (r[0], r[1]))
+    return "".join(f"{f},{i},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{s:.4g},-1,-1,-1\n"
+                   for f, i, x, y, w, h, s in rows)
+
+
+def csv_text(rows):
+    return "frame,id,x,y,w,h,score\n" + "".join(
+        f"{f},{i},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{s:.3f}\n" for f, i, x, y, w, h, s in rows)
+
+
+def test_mot_and_csv_writers_write_the_same_bytes_as_the_whole_file_at_once(tmp_path):
+    frames = random_tracks(np.random.default_rng(7), 3000)
+    rows = rows_of(frames)
+    mot, csv = MOTWriter(tmp_path / "t.txt"), CSVWriter(tmp_path / "t.csv")
+    kept = TrackRows()
+    for frame, t in frames:
+        for sink in (mot, csv, kept):
+            sink.write(frame, t)
+    mot.close()
+    csv.close()
+    assert (tmp_path / "t.txt").read_text() == mot_text(rows)
+    assert (tmp_path / "t.csv").read_text() == csv_text(rows)
+    # and what write_mot makes of the rows kept in memory
+    write_mot(tmp_path / "all.txt", kept.frames, kept.ids, kept.xywh, kept.scores)
+    assert (tmp_path / "t.txt").read_bytes() == (tmp_path / "all.txt").read_bytes()
+    assert len(mot) == len(csv) == len(rows) > 10_000
+    assert mot.identities.tolist() == sorted({r[1] for r in rows})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["all.txt", "t.csv", "t.txt"]
+
+
+def test_frames_out_of_order_are_sorted_when_the_file_is_closed(tmp_path):
+    frames = random_tracks(np.random.default_rng(8), 300)
+    order = np.random.default_rng(9).permutation(len(frames))
+    shuffled = [frames[k] for k in order] + frames[:20]  # and some frames twice
+    mot = MOTWriter(tmp_path / "t.txt")
+    for frame, t in shuffled:
+        mot.write(frame, t)
+    mot.close()
+    assert (tmp_path / "t.txt").read_text() == mot_text(rows_of(shuffled))
+
+
+def test_the_writers_hold_no_rows_and_write_as_the_frames_come(tmp_path):
+    """20,000 frames of 6 rows: the writers' Python memory stays where it was after the
+    first 1,000 frames (a TrackRows, which keeps the rows, grows by megabytes under the same
+    measure), and the rows are on disk under the partial name, none under the final one."""
+    pool = random_tracks(np.random.default_rng(10), 50, max_rows=6, id_pool=6)
+    pool = [t for _, t in pool if len(t) == 6]
+    assert pool
+
+    def traced_growth(sinks, n=20_000, settle=1_000):
+        tracemalloc.start()
+        try:
+            for f in range(1, n + 1):
+                for sink in sinks:
+                    sink.write(Frame(f, f / 25), pool[f % len(pool)])
+                if f == settle:
+                    start = tracemalloc.get_traced_memory()[0]
+            return tracemalloc.get_traced_memory()[0] - start
+        finally:
+            tracemalloc.stop()
+
+    mot, csv = MOTWriter(tmp_path / "t.txt"), CSVWriter(tmp_path / "t.csv")
+    boxes = BoxesWriter(tmp_path / "b.txt")
+    streamed = traced_growth([mot, csv])
+    kept = traced_growth([TrackRows()])
+    assert len(mot) == len(csv) == 120_000
+    assert streamed < 64 * 1024, streamed
+    assert kept > 3 * 2**20, kept  # the measure sees rows that are kept
+    # the boxes writer keeps one box a frame (32 bytes), as an array, and nothing else
+    assert traced_growth([boxes]) < 20_000 * 32 * 2.5
+    for path in (tmp_path / "t.txt", tmp_path / "t.csv", tmp_path / "b.txt"):
+        assert not path.exists()
+        assert partial_path(path).stat().st_size > 100_000  # all but the buffer's last bytes
+    mot.close()
+    csv.close()
+    boxes.close()
+    assert len((tmp_path / "t.txt").read_text().splitlines()) == 120_000
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.txt", "t.csv", "t.txt"]
+
+
+def test_the_boxes_writer_writes_what_write_boxes_writes(tmp_path):
+    rng = np.random.default_rng(11)
+    w, want = BoxesWriter(tmp_path / "b.txt"), []
+    for f in range(1, 400):
+        if rng.uniform() < 0.2:
+            w.write(Frame(f, 0.0), Tracks.empty())
+            want.append([np.nan] * 4)
+            continue
+        xyxy = rng.uniform(-10, 500, (2, 4))
+        xyxy[:, 2:] += xyxy[:, :2]
+        w.write(Frame(f, 0.0), Tracks(ids=np.array([1, 2]), boxes=xyxy, points=None,
+                                      scores=np.ones(2), classes=np.zeros(2, int)))
+        want.append([xyxy[0, 0], xyxy[0, 1], xyxy[0, 2] - xyxy[0, 0], xyxy[0, 3] - xyxy[0, 1]])
+    w.close()
+    write_boxes(tmp_path / "want.txt", want)
+    assert (tmp_path / "b.txt").read_bytes() == (tmp_path / "want.txt").read_bytes()
+    np.testing.assert_array_equal(w.boxes, np.array(want))
+
+
+def truth_detector(frames, stop=None):
+    """Detections of three boxes moving apart, one call a frame; KeyboardInterrupt (Ctrl-C)
+    in frame ``stop``."""
+
+    def detect(frame):
+        if frame.index == stop:
+            raise KeyboardInterrupt
+        f = frame.index
+        return Detections.from_xywh([[10 + 3 * f, 20, 30, 60], [200 - 2 * f, 40, 30, 60],
+                                     [100, 100 + f, 40, 40]], [0.9, 0.8, 0.95])
+
+    return detect
+
+
+def test_an_interrupted_run_leaves_no_file_under_a_final_name(tmp_path):
+    frames = [Frame(k, (k - 1) / 25) for k in range(1, 31)]
+    names = ["t.txt", "t.csv", "b.txt"]
+
+    def sinks(folder):
+        return [MOTWriter(folder / "t.txt"), CSVWriter(folder / "t.csv"),
+                BoxesWriter(folder / "b.txt")]
+
+    # nothing there before: nothing there after, not even a partial file
+    fresh = tmp_path / "fresh"
+    seen = []
+
+    def look(frame):  # in the middle of the run: partial files, no final names
+        if frame.index == 12:
+            seen.append(sorted(p.name for p in fresh.iterdir()))
+        return truth_detector(frames, stop=20)(frame)
+
+    with pytest.raises(KeyboardInterrupt):
+        run(frames, look, BoxTracker(), sinks(fresh))
+    assert seen == [sorted(partial_path(fresh / n).name for n in names)]
+    assert list(fresh.iterdir()) == []
+
+    # an earlier run's files stay byte for byte
+    earlier = tmp_path / "earlier"
+    run(frames, truth_detector(frames), BoxTracker(), sinks(earlier))
+    before = {p.name: p.read_bytes() for p in earlier.iterdir()}
+    assert sorted(before) == sorted(names) and all(before.values())
+    with pytest.raises(KeyboardInterrupt):
+        run(frames, truth_detector(frames, stop=20), BoxTracker(), sinks(earlier))
+    assert {p.name: p.read_bytes() for p in earlier.iterdir()} == before
+
+
+def test_a_sink_that_fails_to_close_aborts_the_sinks_after_it(tmp_path):
+    frames = [Frame(k, (k - 1) / 25) for k in range(1, 11)]
+
+    class Broken:
+        def write(self, frame, tracks):
+            pass
+
+        def close(self):
+            raise OSError("no space left on device")
+
+    sinks = [MOTWriter(tmp_path / "a.txt"), Broken(), CSVWriter(tmp_path / "c.csv")]
+    with pytest.raises(OSError, match="no space left"):
+        run(frames, truth_detector(frames), BoxTracker(), sinks)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt"]  # closed before the failure
+
+
+def test_a_partial_file_that_cannot_be_renamed_is_removed(tmp_path):
+    (tmp_path / "t.txt").mkdir()  # the final name is taken by a folder
+    f = PartialFile(tmp_path / "t.txt")
+    f.write("rows\n")
+    with pytest.raises(OSError):
+        f.commit()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.txt"]
+    assert (tmp_path / "t.txt").is_dir()
+
+
+def test_track_sequence_online_writes_what_the_rows_kept_in_memory_give(tmp_path):
+    """The online results of a sequence, written as the frames come, equal write_mot of the
+    same tracker's rows kept in memory; the counts are the file's."""
+    seq = tmp_path / "seq"
+    (seq / "det").mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=60\n"
+                                     "imWidth=640\nimHeight=480\n")
+    rng = np.random.default_rng(12)
+    lines = []
+    for f in range(1, 61):
+        for k in range(4):
+            if rng.uniform() < 0.9:
+                x, y = 20 + 100 * k + 2 * f + rng.normal(0, 1), 50 + 30 * k + rng.normal(0, 1)
+                lines.append(f"{f},-1,{x:.2f},{y:.2f},40,80,{rng.uniform(0.3, 1):.3f}\n")
+    (seq / "det" / "det.txt").write_text("".join(lines))
+    r = track_sequence(seq, tmp_path / "online.txt")
+
+    from vistrack.io import read_mot
+
+    dets = read_mot(seq / "det" / "det.txt")
+    slices = dets.frame_slices(60)
+    xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
+    rows = TrackRows()
+    trk = BoxTracker(r.config.tracker, motion=r.config.motion, frame_rate=10.0,
+                     image_size=(640, 480))
+    run([Frame(f, (f - 1) / 10) for f in range(1, 61)],
+        lambda fr: Detections(boxes=xyxy[slices[fr.index - 1]], scores=dets.conf[
+            slices[fr.index - 1]]), trk, [rows])
+    write_mot(tmp_path / "want.txt", rows.frames, rows.ids, rows.xywh, rows.scores)
+    assert (tmp_path / "online.txt").read_bytes() == (tmp_path / "want.txt").read_bytes()
+    assert r.rows == len(rows) > 100 and r.tracks == len(np.unique(rows.ids)) >= 4
+    assert not partial_path(tmp_path / "online.txt").exists()
+    assert isinstance(r.out, Path)
+
+
+def test_the_trajectory_plot_draws_the_rows_it_was_given(tmp_path):
+    """The plot keeps each row's frame, identity and centre only; its PNG is byte for byte
+    the figure of the rows' centres computed here from the boxes."""
+    from vistrack.viz import TrajectoryPlot, plot_trajectories
+
+    frames = random_tracks(np.random.default_rng(13), 120, id_pool=12)
+    image = np.random.default_rng(14).integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    plot = TrajectoryPlot(tmp_path / "t.png", "demo")
+    for frame, t in frames:
+        plot.write(Frame(frame.index, frame.time, image), t)
+    plot.close()
+    rows = np.array([r[:6] for r in rows_of(frames)])
+    ids = rows[:, 1].astype(int)
+    plot_trajectories(rows[:, 0].astype(int), ids, rows[:, 2:4] + rows[:, 4:6] / 2,
+                      image[..., ::-1], tmp_path / "want.png",
+                      title=f"demo: {len(set(ids.tolist()))} tracks, 120 frames")
+    assert (tmp_path / "t.png").read_bytes() == (tmp_path / "want.png").read_bytes()
