@@ -45,18 +45,11 @@ class BuildKernels(build_ext):
             print(f"warning: vistrack's kernels were not compiled ahead of time ({e!r}); "
                   "vistrack works the same and compiles them on first use", file=sys.stderr)
 
-    def run(self) -> None:
-        super().run()
-        # an editable install: setuptools before 64 copies the extension beside the sources
-        # itself (inplace); later ones set editable_mode and map files instead, which the
-        # sources' package (found through a .pth) does not see
-        if getattr(self, "editable_mode", False) and not self.inplace:
-            self.copy_extensions_to_source()
-
     def copy_extensions_to_source(self) -> None:
         """Editable installs: the extension and its build information beside the sources."""
         for ext in self.extensions:
-            built = Path(self.get_ext_fullpath(ext.name))
+            # where build_extension wrote it (get_ext_fullpath names the source tree now)
+            built = Path(self.build_lib, self.get_ext_filename(self.get_ext_fullname(ext.name)))
             if built.exists():
                 dest = HERE / "src" / "vistrack"
                 # vistrack._prebuilt.BUILD_INFO beside it; a new file each, as a running
