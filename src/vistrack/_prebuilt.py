@@ -139,13 +139,14 @@ class Kernel:
         kernel made by a factory.
     """
 
-    __slots__ = ("jit", "key", "_table", "_builds")
+    __slots__ = ("jit", "key", "_table", "_builds", "_dtypes")
 
     def __init__(self, jit: Any, key: str) -> None:
         self.jit = jit
         self.key = key
         self._table: dict[tuple[bytes, ...], Callable[..., Any] | None] = {}
         self._builds: dict[tuple[Any, ...], Callable[..., Any]] | None = None
+        self._dtypes: list[tuple[Any, ...]] = []
 
     def __call__(self, *args: Any) -> Any:
         try:
@@ -155,8 +156,11 @@ class Kernel:
         fn = self._table.get(key, _MISSING)
         if fn is _MISSING:
             fn = self._resolve(args)
-            if len(self._table) < 64:  # a record's fingerprint names its dtype object
+            if len(self._table) < 64:
                 self._table[key] = fn
+                # a record's fingerprint holds its dtype's address: keep the dtype alive, so
+                # that the address is not reused by another dtype while the entry stands
+                self._dtypes.append(tuple(getattr(a, "dtype", None) for a in args))
         return (fn or self.jit)(*args)  # type: ignore[operator]
 
     def _resolve(self, args: tuple[Any, ...]) -> Callable[..., Any] | None:
