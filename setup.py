@@ -17,8 +17,8 @@ HERE = Path(__file__).resolve().parent
 
 
 class BuildKernels(build_ext):
-    """Build ``vistrack._kernels`` with ``python -m vistrack._prebuilt_build`` (numba's
-    ahead-of-time compiler) instead of compiling C sources."""
+    """Build ``vistrack._kernels`` with :func:`vistrack._prebuilt_build.build` (numba's
+    ahead-of-time compiler, in this process) instead of compiling C sources."""
 
     def build_extension(self, ext: Extension) -> None:
         target = Path(self.get_ext_fullpath(ext.name)).resolve()
