@@ -279,6 +279,12 @@ def test_a_bad_row_found_while_scoring_is_named_by_its_line(tmp_path):
     with pytest.raises(ValueError) as e:
         evaluate_files([("s", ok, ok, None)], benchmark="MOT17")
     assert str(e.value) == f"{ok}, line 2, column 8 (class): class 14 is not a MOT17 class (1-13)"
+    half = _rows(tmp_path / "half.txt", [(1, 1, 0, 0, 10, 10, 1, 1, 1), (2, 1, 0, 0, 10, 10, 1,
+                                                                       3.5, 1)])
+    with pytest.raises(ValueError) as e:  # not truncated to class 3
+        evaluate_files([("s", half, half, None)], benchmark="MOT17")
+    assert str(e.value) == (f"{half}, line 2, column 8 (class): class 3.5 is not a MOT17 class "
+                            "(1-13)")
 
 
 def test_cli_eval_table_keeps_its_columns_apart(tmp_path, capsys):

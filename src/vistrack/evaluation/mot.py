@@ -216,12 +216,20 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Se
         _check_frames(table, what, n_frames)
         _check_unique(table, what)
     if bench != "MOT15" and len(gt):
-        bad = np.setdiff1d(np.unique(gt.classes), np.arange(1, 14))
-        if len(bad):
-            cls = int(bad[0])
-            lines = _lines_of(gt.path, lambda row: len(row) > 7 and row[7] == cls)[:1]
+        bad = ~np.isin(gt.classes, np.arange(1, 14))
+        if bad.any():
+            seen: list[float] = []  # the first bad row's value, as written (3.5, 1e30)
+
+            def other(row: list[float]) -> bool:
+                if len(row) > 7 and row[7] not in range(1, 14) and not seen:
+                    seen.append(row[7])
+                    return True
+                return False
+
+            lines = _lines_of(gt.path, other)[:1]
             where = _where(gt, "ground truth", lines) + (", column 8 (class)" if lines else "")
-            raise ValueError(f"{where}: class {cls} is not a {bench} class (1-13)")
+            value = f"{seen[0]:g}" if seen else str(int(gt.classes[np.argmax(bad)]))
+            raise ValueError(f"{where}: class {value} is not a {bench} class (1-13)")
     distractors = np.array(_DISTRACTORS.get(bench, ()), dtype=np.int64)
     # the frames with a row: a frame without any adds nothing to a count, and the sequence may
     # be long (its last frame, or seqinfo.ini's length, need not bound the work)

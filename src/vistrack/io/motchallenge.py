@@ -17,6 +17,7 @@ file that is not UTF-8 text raises it naming the file. A UTF-8 byte-order mark a
 
 from __future__ import annotations
 
+import ast
 import configparser
 import math
 import os
@@ -81,7 +82,8 @@ class MOTTable:
     conf : (N,) float
         Score (detections, results) or the ground truth's "consider" flag (0: ignore).
     classes : (N,) int
-        Column 8: the ground-truth class of MOT16/17/20, -1 where absent (MOT15, detections).
+        Column 8: the ground-truth class of MOT16/17/20; -1 where absent (detections) or not
+        an integer of at most 2**53 in size (MOT15 ground truth holds a world ``x`` there).
     visibility : (N,) float
         Column 9 of MOT16/17/20 ground truth, -1 where absent.
     path : str
@@ -155,10 +157,12 @@ class MOTTable:
         def col(j: int, fill: float) -> np.ndarray:
             return a[:, j] if w > j else np.full(N, fill, dtype=float)
 
+        c = col(7, -1.0)
+        if w > 7:  # a class is an integer; anything else (MOT15's world x) is none
+            c = np.where((c == np.round(c)) & (np.abs(c) <= _INT_LIMIT), c, -1.0)
         return cls(frames=a[:, 0].astype(np.int64), ids=a[:, 1].astype(np.int64),
                    boxes=np.ascontiguousarray(a[:, 2:6]), conf=col(6, 1.0),
-                   classes=col(7, -1.0).astype(np.int64), visibility=col(8, -1.0), path=path,
-                   columns=w)
+                   classes=c.astype(np.int64), visibility=col(8, -1.0), path=path, columns=w)
 
     def __getitem__(self, index: _Index) -> MOTTable:
         """Rows by boolean mask or indices."""
@@ -788,6 +792,24 @@ class SeqInfo:
     im_ext: str = ".jpg"
 
 
+def _ini_error(exc: configparser.Error) -> str:
+    """``, line N: not a valid INI file: what`` for configparser's error ``exc``, on one line
+    (its own messages span several and repeat the file's name)."""
+    line = getattr(exc, "lineno", None)
+    if isinstance(exc, configparser.MissingSectionHeaderError):
+        what = f"no [section] header before {exc.line.strip()!r}"
+    elif isinstance(exc, configparser.DuplicateOptionError):
+        what = f"{exc.option!r} appears twice in [{exc.section}]"
+    elif isinstance(exc, configparser.DuplicateSectionError):
+        what = f"[{exc.section}] appears twice"
+    elif isinstance(exc, configparser.ParsingError) and exc.errors:
+        line, text = exc.errors[0]  # the line's repr
+        what = f"not 'key = value': {ast.literal_eval(text).strip()!r}"
+    else:
+        what = " ".join(str(exc).split())
+    return (f", line {line}" if line else "") + f": not a valid INI file: {what}"
+
+
 def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
     """Read ``seqinfo.ini`` (or the ``seqinfo.ini`` inside a sequence folder).
 
@@ -831,7 +853,7 @@ def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
     try:
         cp.read_string(text, source=str(path))
     except configparser.Error as exc:
-        raise MOTFormatError(f"{path}: not a valid INI file: {exc}") from None
+        raise MOTFormatError(f"{path}{_ini_error(exc)}") from None
     if "Sequence" not in cp:
         raise MOTFormatError(f"{path}: no [Sequence] section")
     s = cp["Sequence"]
