@@ -240,3 +240,26 @@ def test_a_byte_order_mark_is_dropped_and_deep_nesting_is_named(tmp_path):
     path.write_text("x = " + "[" * 5000 + "]" * 5000 + "\n")
     with pytest.raises(ConfigError, match=re.escape(f"{path}: not valid TOML")):
         read_config(path)
+
+
+def test_an_interrupted_sequence_leaves_no_folder_it_made(seq, tmp_path, monkeypatch):
+    """Ctrl-C at frame 50, when rows have been written to the partial file, into folders that
+    did not exist: they are removed again, with the partial file."""
+    import vistrack.pipeline
+
+    step = vistrack.pipeline.BoxTracker.step
+
+    out = tmp_path / "new" / "deeper" / "tracks.txt"
+    seen = []
+
+    def interrupted(self, frame, *args, **kwargs):
+        if frame.index == 50:
+            seen.extend(p.name for p in out.parent.iterdir())
+            raise KeyboardInterrupt
+        return step(self, frame, *args, **kwargs)
+
+    monkeypatch.setattr(vistrack.pipeline.BoxTracker, "step", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        track_sequence(seq, out)
+    assert seen == [".tracks.partial.txt"]
+    assert list(tmp_path.iterdir()) == []

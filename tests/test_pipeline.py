@@ -292,6 +292,10 @@ def test_an_interrupted_run_leaves_the_earlier_outputs_as_they_were(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         track_video(folder, out, frontend=Truth(stop=6), fps=25, force=True)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    # into folders that did not exist: they are removed again, and the folder above is empty
+    with pytest.raises(KeyboardInterrupt):
+        track_video(folder, tmp_path / "new" / "out", frontend=Truth(stop=6), fps=25)
+    assert not (tmp_path / "new").exists()
 
 
 def test_the_cli_says_an_interrupted_run_in_one_line(tmp_path, monkeypatch, capsys):

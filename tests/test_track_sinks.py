@@ -271,3 +271,19 @@ def test_the_trajectory_plot_draws_the_rows_it_was_given(tmp_path):
                       image[..., ::-1], tmp_path / "want.png",
                       title=f"demo: {len(set(ids.tolist()))} tracks, 120 frames")
     assert (tmp_path / "t.png").read_bytes() == (tmp_path / "want.png").read_bytes()
+
+
+def test_replacing_removes_the_folders_it_made_when_interrupted(tmp_path):
+    """An interrupted write under folders that did not exist leaves neither file nor folder;
+    a folder that existed, or that holds something else, stays."""
+    from vistrack.io.atomic import replacing
+
+    with pytest.raises(KeyboardInterrupt), replacing(tmp_path / "a" / "b" / "x.txt") as part:
+        part.write_text("half")
+        raise KeyboardInterrupt
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "keep.txt").write_text("other")
+    with pytest.raises(KeyboardInterrupt), replacing(tmp_path / "a" / "b" / "x.txt") as part:
+        raise KeyboardInterrupt
+    assert [p.name for p in (tmp_path / "a").iterdir()] == ["keep.txt"]

@@ -28,7 +28,7 @@ import numpy as np
 from . import _compile
 from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, evaluate_mot
-from .io.atomic import check_output
+from .io.atomic import check_output, made_folder
 from .io.motchallenge import read_mot, read_seqinfo, write_mot
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
 from .models.box import BoxMotion
@@ -836,24 +836,25 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     frames = (Frame(f, (f - 1) / info.frame_rate) for f in range(1, info.seq_length + 1))
     # online, the rows go to the file as they come; offline, the tracker records its tracks,
     # which are smoothed at the end and written then
-    writer = None if oc.enabled else MOTWriter(out)
-    stats = run(frames, lambda frame: per_frame[frame.index - 1], trk,
-                [writer] if writer is not None else [], progress=progress,
-                total=info.seq_length, label=info.name)
-    seconds += stats.seconds["tracker"]
-    if writer is not None:
-        n_rows, n_tracks = len(writer), len(writer.identities)
-    else:
-        t0, c0 = time.perf_counter(), _compile.seconds()
-        fps = info.frame_rate
-        sm = smooth(trk, max_gap=int(round(oc.max_gap * fps)), min_score=oc.min_track_score,
-                    extend_iou=oc.extend_iou if oc.extend_iou > 0 else None,
-                    link_gap=int(round(oc.link_gap * fps)), link_iou=oc.link_iou,
-                    link_window=max(1, round(oc.link_window * fps)))
-        seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
-        F, I = sm.frames, sm.ids
-        write_mot(out, F, I, sm.xywh, np.where(sm.filled, 0.0, sm.scores), force=True)
-        n_rows, n_tracks = len(F), len(np.unique(I))
+    with made_folder(out.parent):  # removed again, if made here, when the run fails
+        writer = None if oc.enabled else MOTWriter(out)
+        stats = run(frames, lambda frame: per_frame[frame.index - 1], trk,
+                    [writer] if writer is not None else [], progress=progress,
+                    total=info.seq_length, label=info.name)
+        seconds += stats.seconds["tracker"]
+        if writer is not None:
+            n_rows, n_tracks = len(writer), len(writer.identities)
+        else:
+            t0, c0 = time.perf_counter(), _compile.seconds()
+            fps = info.frame_rate
+            sm = smooth(trk, max_gap=int(round(oc.max_gap * fps)), min_score=oc.min_track_score,
+                        extend_iou=oc.extend_iou if oc.extend_iou > 0 else None,
+                        link_gap=int(round(oc.link_gap * fps)), link_iou=oc.link_iou,
+                        link_window=max(1, round(oc.link_window * fps)))
+            seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
+            F, I = sm.frames, sm.ids
+            write_mot(out, F, I, sm.xywh, np.where(sm.filled, 0.0, sm.scores), force=True)
+            n_rows, n_tracks = len(F), len(np.unique(I))
     used = cfg if cfg.motion is not None else replace(cfg, motion=BoxMotion())
     return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds, used,
                     derived_values(trk))
@@ -1089,10 +1090,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         ctx.overrides.setdefault("camera_motion", False)
     trk, _ = make_tracker(tracker, ctx)
     detect = _frontend(name, ctx)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
-    stats = run(reader, detect, trk, list(sinks.values()), progress=progress,
-                total=len(reader), label=reader.source.name)
+    with made_folder(out_dir):  # removed again, if made here, when the run fails
+        sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
+        stats = run(reader, detect, trk, list(sinks.values()), progress=progress,
+                    total=len(reader), label=reader.source.name)
     n = stats.frames
     if n == 0:
         raise ValueError(f"{video}: no frames to track")
@@ -1229,8 +1230,9 @@ def track_one(source: str | Path, init: ArrayLike, out: str | Path, *, method: s
         return start if frame.index == first else None
 
     writer = BoxesWriter(out)
-    stats = run(reader, detect, tracker, [writer], progress=progress, total=len(reader),
-                label=reader.source.name)
+    with made_folder(out.parent):  # removed again, if made here, when the run fails
+        stats = run(reader, detect, tracker, [writer], progress=progress, total=len(reader),
+                    label=reader.source.name)
     b = writer.boxes
     scores = None
     if truth is not None:

@@ -10,7 +10,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
-__all__ = ["partial_path", "replacing", "open_replacing", "PartialFile", "check_output"]
+__all__ = ["partial_path", "replacing", "open_replacing", "PartialFile", "check_output",
+           "made_folder"]
 
 
 def partial_path(path: str | os.PathLike) -> Path:
@@ -18,6 +19,56 @@ def partial_path(path: str | os.PathLike) -> Path:
     the same suffix (a video writer picks its container by the suffix)."""
     p = Path(path)
     return p.with_name(f".{p.stem}.partial{p.suffix}")
+
+
+def _make_folder(path: Path) -> list[Path]:
+    """Make the folder ``path`` and its missing parents; the folders made, outermost first."""
+    made, p = [], path
+    while not p.exists() and p != p.parent:
+        made.append(p)
+        p = p.parent
+    path.mkdir(parents=True, exist_ok=True)
+    return made[::-1]
+
+
+def _remove_empty(made: list[Path]) -> None:
+    """Remove the folders ``made`` (outermost first) that are empty, innermost first."""
+    for p in reversed(made):
+        try:
+            p.rmdir()
+        except OSError:  # not empty (something else was written there), or gone
+            return
+
+
+@contextlib.contextmanager
+def made_folder(path: str | os.PathLike) -> Iterator[Path]:
+    """Make the folder ``path`` (and its missing parents) for the block; if the block raises
+    (an error, Ctrl-C), remove again those it made that are still empty, so that a failed run
+    leaves no trace where there was nothing.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> root = Path(tempfile.mkdtemp())
+    >>> try:
+    ...     with made_folder(root / "out" / "run1") as out:
+    ...         raise KeyboardInterrupt
+    ... except KeyboardInterrupt:
+    ...     pass
+    >>> sorted(root.iterdir())
+    []
+    >>> with made_folder(root / "out") as out:
+    ...     _ = (out / "a.txt").write_text("done")
+    >>> sorted(p.name for p in out.iterdir())
+    ['a.txt']
+    """
+    p = Path(path)
+    made = _make_folder(p)
+    try:
+        yield p
+    except BaseException:
+        _remove_empty(made)
+        raise
 
 
 @contextlib.contextmanager
@@ -41,11 +92,12 @@ def replacing(path: str | os.PathLike) -> Iterator[Path]:
     """
     p = Path(path)
     part = partial_path(p)
-    p.parent.mkdir(parents=True, exist_ok=True)
+    made = _make_folder(p.parent)
     try:
         yield part
     except BaseException:
         part.unlink(missing_ok=True)
+        _remove_empty(made)
         raise
     os.replace(part, p)
 
