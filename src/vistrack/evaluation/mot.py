@@ -36,13 +36,53 @@ from numpy.typing import ArrayLike
 from .._validate import decode_text
 from ..io.motchallenge import MOTTable
 
+_LSA: list[Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]] = []
+
 
 def linear_sum_assignment(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """scipy's ``linear_sum_assignment``, imported at the first call (scipy.optimize takes
-    about 0.3 s to import, which ``vistrack eval`` would otherwise pay before it reads a file)."""
+    """scipy's ``linear_sum_assignment`` (TrackEval's), loaded at the first call
+    (:func:`_scipy_lsa`)."""
+    if not _LSA:
+        _LSA.append(_scipy_lsa())
+    return _LSA[0](cost)
+
+
+def _scipy_lsa() -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """scipy's ``linear_sum_assignment``: the function of its extension module
+    ``scipy.optimize._lsap``, loaded on its own where it can be, else the public import.
+
+    ``import scipy.optimize`` takes about 0.3 s (its ``__init__`` imports the whole package),
+    most of ``vistrack eval``'s time on a small file; the extension alone loads in about 10 ms.
+    scipy's ``__init__`` exports that extension's function as it is; where its layout differs
+    (another scipy version) the public import is used."""
+    import sys
+
+    public = sys.modules.get("scipy.optimize")
+    if public is None:
+        try:
+            import importlib.machinery
+            import importlib.util
+
+            import scipy
+
+            folder = Path(scipy.__file__).parent / "optimize"
+            for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+                path = folder / f"_lsap{suffix}"
+                if path.is_file():
+                    loader = importlib.machinery.ExtensionFileLoader("scipy.optimize._lsap",
+                                                                     str(path))
+                    spec = importlib.util.spec_from_loader(loader.name, loader)
+                    assert spec is not None
+                    module = importlib.util.module_from_spec(spec)
+                    loader.exec_module(module)
+                    fn = module.linear_sum_assignment
+                    if callable(fn):
+                        return fn
+        except Exception:  # noqa: BLE001 - any failure: the public import below
+            pass
     from scipy.optimize import linear_sum_assignment as lsa
 
-    return lsa(cost)
+    return lsa
 
 __all__ = ["MOTCounts", "evaluate_mot", "combine", "box_iou_xywh", "ALPHAS"]
 
