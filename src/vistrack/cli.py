@@ -318,8 +318,10 @@ def _eval(args: argparse.Namespace) -> int:
             return _fail("eval", f"no SEQ/gt/gt.txt under {args.gt_dir}")
     elif args.gt and args.pred:
         gt = Path(args.gt)
-        info = gt.parent.parent / "seqinfo.ini"
-        pairs.append((gt.parent.parent.name or "sequence", gt, Path(args.pred),
+        # SEQ/gt/gt.txt, or a ground-truth file beside its seqinfo.ini (SEQ/gt.txt)
+        seq = gt.parent.parent if gt.parent.name == "gt" else gt.parent
+        info = seq / "seqinfo.ini"
+        pairs.append((seq.resolve().name or "sequence", gt, Path(args.pred),
                       info if info.exists() else None))
     else:
         return _fail("eval", "give --gt and --pred, or --gt-dir and --pred-dir")
