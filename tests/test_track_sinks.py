@@ -273,6 +273,61 @@ def test_the_trajectory_plot_draws_the_rows_it_was_given(tmp_path):
     assert (tmp_path / "t.png").read_bytes() == (tmp_path / "want.png").read_bytes()
 
 
+def test_the_trajectory_plot_draws_all_tracks_in_two_artists(tmp_path):
+    """Each track's centres in frame order (rows given in any order), its end dot at its last
+    centre, coloured by tab20 in the order of the ids; and as many artists for 300 tracks as
+    for 3, so that an hour of video draws in bounded memory."""
+    import matplotlib
+
+    from vistrack.viz import plot_trajectories
+
+    rng = np.random.default_rng(5)
+    children = []
+    for n in (3, 300):
+        lens = rng.integers(1, 30, n)
+        ids = np.repeat(rng.permutation(np.arange(10, 10 + 7 * n, 7)), lens)
+        frames = np.concatenate([rng.integers(1, 500) + np.arange(k) for k in lens])
+        c = rng.uniform(0, 100, (len(ids), 2))
+        shuffle = rng.permutation(len(ids))
+        fig = plot_trajectories(frames[shuffle], ids[shuffle], c[shuffle],
+                                path=tmp_path / f"{n}.png")
+        ax = fig.axes[0]
+        paths, dots = ax.collections
+        want = [c[ids == i][np.argsort(frames[ids == i])] for i in np.unique(ids)]
+        assert len(paths.get_segments()) == n
+        for got, w in zip(paths.get_segments(), want, strict=True):
+            assert np.array_equal(got, w)
+        assert np.array_equal(dots.get_offsets(), [w[-1] for w in want])
+        tab20 = matplotlib.colormaps["tab20"](np.arange(n) % 20)
+        assert np.array_equal(paths.get_colors(), tab20)
+        assert np.array_equal(dots.get_facecolors(), tab20)
+        children.append(len(ax.get_children()))
+    assert children[0] == children[1]
+
+
+def test_a_saved_trajectory_plot_leaves_pyplot_alone(tmp_path):
+    """Saved to a file, the plot is drawn without pyplot: in a fresh interpreter pyplot is not
+    imported and the backend is not switched (a notebook's stays as it was); TrajectoryPlot
+    imports what it draws with when made, before any frame."""
+    code = f"""
+import sys
+import matplotlib
+backend = matplotlib.rcParams._get_backend_or_none()
+from vistrack.viz import TrajectoryPlot, plot_trajectories
+plot = TrajectoryPlot({str(tmp_path / "t.png")!r})
+assert "matplotlib.figure" in sys.modules
+plot_trajectories([1, 2], [1, 1], [[0, 0], [1, 1]], path={str(tmp_path / "p.png")!r})
+assert "matplotlib.pyplot" not in sys.modules
+assert matplotlib.rcParams._get_backend_or_none() == backend
+print("ok")
+"""
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout == "ok\n", out.stderr
+
+
 def test_replacing_removes_the_folders_it_made_when_interrupted(tmp_path):
     """An interrupted write under folders that did not exist leaves neither file nor folder;
     a folder that existed, or that holds something else, stays."""
