@@ -20,8 +20,6 @@ from collections.abc import Callable
 
 import numpy as np
 from numba import njit
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from .._prebuilt import kernel
 
@@ -68,6 +66,11 @@ def components(gate: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
     """
     T, D = gate.shape
     r, c = np.nonzero(gate)
+    # scipy.sparse here, not at the top: importing it takes 0.25-0.4 s, which the box
+    # trackers (their own union-find, compiled) and vistrack track do not need
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
     g = coo_matrix((np.ones(len(r)), (r, T + c)), shape=(T + D, T + D))
     k, labels = connected_components(g, directed=False)
     return k, labels[:T], labels[T:]
