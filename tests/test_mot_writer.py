@@ -8,7 +8,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from vistrack.io import read_mot, write_mot
+from vistrack.io import MOTWriter, read_mot, write_mot
+from vistrack.types import Frame, Tracks
 
 ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.4g,-1,-1,-1\n"
 
@@ -49,6 +50,28 @@ def test_write_mot_is_the_percent_format_byte_for_byte(tmp_path, seed):
     b, c = values(rng, 4 * n).reshape(n, 4), values(rng, n)
     path = write_mot(tmp_path / "r.txt", f, i, b, c)
     assert path.read_bytes() == percent_format(f, i, b, c)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_mot_writer_is_the_percent_format_byte_for_byte(tmp_path, seed):
+    """MOTWriter formats a frame of many rows as write_mot does, a few rows with %: either
+    way each frame's text is the %-format of its rows (sorted by id), on every kind of value."""
+    rng = np.random.default_rng(100 + seed)
+    writer, want = MOTWriter(tmp_path / "w.txt"), []
+    for frame in range(1, 9):
+        n = 3000 if frame == 1 else int(rng.choice([0, 1, 5, 255, 256, 257, 3000]))
+        ids = rng.permutation(np.unique(rng.integers(0, 10 ** int(rng.integers(4, 15)), n)))
+        n = len(ids)
+        b, c = values(rng, 4 * n).reshape(n, 4), values(rng, n)
+        ok = np.isfinite(b).all(axis=1) & (np.abs(b) < 1e15).all(axis=1)
+        ids, b, c = ids[ok], b[ok], c[ok]  # boxes as Tracks holds them: finite corners
+        tracks = Tracks(ids=ids, boxes=np.c_[b[:, :2], b[:, :2] + b[:, 2:]], points=None,
+                        scores=c, classes=np.zeros(len(ids)))
+        writer.write(Frame(frame, 0.0), tracks)
+        xywh = tracks.xywh
+        want.append(percent_format(np.full(len(ids), frame), ids, xywh, c))
+    writer.close()
+    assert (tmp_path / "w.txt").read_bytes() == b"".join(want)
 
 
 def test_write_mot_typical_results_then_read_back(tmp_path):

@@ -22,6 +22,7 @@ import numpy as np
 from ..types import Frame, Tracks
 from .atomic import PartialFile, open_replacing
 from .motchallenge import _ROW as _MOT_ROW
+from .motchallenge import _format_rows
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -241,9 +242,16 @@ class TrackRows:
         return self._cat(self._scores, (0,))
 
 
+_COLUMNS_FROM = 256
+"""Rows a frame from which its text is formatted a column at a time (write_mot's formatter:
+0.47 ms for 1,000 rows against 0.89 ms with %, but 0.17 ms for 4 rows against 5 us)."""
+
+
 def _mot_text(frame: int, ids: np.ndarray, xywh: np.ndarray, scores: np.ndarray) -> str:
     """One frame's rows as MOTChallenge lines, in the given order (:func:`~vistrack.io.write_mot`'s
-    format: one %-format of the block)."""
+    format, byte for byte: one %-format of the block, or write_mot's formatter for many)."""
+    if len(ids) >= _COLUMNS_FROM:
+        return _format_rows(np.full(len(ids), frame), ids, xywh, scores).decode("ascii")
     cells = zip([frame] * len(ids), ids.tolist(), *xywh.T.tolist(), scores.tolist())
     return (_MOT_ROW * len(ids)) % tuple(itertools.chain.from_iterable(cells))
 
