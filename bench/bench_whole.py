@@ -35,6 +35,8 @@ import numpy as np
 from vistrack.io import write_mot
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_startup import PEER_SORT  # noqa: E402  (trackers' SORT, as a user would script it)
+
 from _markdown import replace_section  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -42,25 +44,6 @@ PY = sys.executable
 VT = str(Path(PY).parent / "vistrack")
 FRAMES, BOXES, SIDE, FPS = 150, 1000, 4000, 25
 GOAL_MS, GOAL_RATIO = 3.0, 40.0
-
-# trackers' SORT over a MOTChallenge detection file, whole process, as a user would script it
-# (as in bench_startup.py)
-PEER_SORT = """
-import sys, numpy as np, supervision as sv
-from trackers import SORTTracker
-det = np.loadtxt(sys.argv[1], delimiter=",", ndmin=2)
-tr = SORTTracker(frame_rate=float(sys.argv[3]))
-rows = []
-for f in range(1, int(det[:, 0].max()) + 1):
-    d = det[det[:, 0] == f]
-    xyxy = np.c_[d[:, 2:4], d[:, 2:4] + d[:, 4:6]]
-    out = tr.update(sv.Detections(xyxy=xyxy, confidence=d[:, 6]))
-    for (x0, y0, x1, y1), i in zip(out.xyxy, out.tracker_id):
-        if i >= 0:
-            rows.append(f"{f},{i},{x0:.2f},{y0:.2f},{x1 - x0:.2f},{y1 - y0:.2f},1,-1,-1,-1")
-open(sys.argv[2], "w").write("\\n".join(rows) + "\\n")
-"""
-
 
 # vistrack's steps of `vistrack track SEQ_DIR --out FILE`, one process, each timed (as
 # pipeline.track_sequence, with the CLI's default tracker); prints seconds as key=value
