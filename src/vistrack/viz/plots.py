@@ -6,7 +6,7 @@ its own figure and can save it. None calls ``plt.show()``.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -275,8 +275,9 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
 
         fig = Figure(figsize=(9, 7))
     ax = fig.subplots()
-    if background is not None:
-        ax.imshow(np.asarray(background), cmap="gray", alpha=0.45)
+    image, bg = None, None if background is None else np.asarray(background)
+    if bg is not None:
+        image = ax.imshow(bg, cmap="gray", alpha=0.45)
     order = np.lexsort((frames, ids))
     starts = np.flatnonzero(np.diff(ids[order])) + 1
     paths = np.split(c[order], starts) if len(order) else []
@@ -294,10 +295,89 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
     ax.set_ylabel("y (pixels)")
     if title:
         ax.set_title(title)
+    if path is not None and image is not None and bg is not None and (
+            bg.ndim == 2 or (bg.ndim == 3 and bg.shape[2] == 3)):
+        # saved with the background put under the drawing rather than drawn by matplotlib,
+        # which resamples an image in floating point: 26-37 MB for a 768x576 frame, at the
+        # end of a run, against a few MB here (the image still sets the axes' limits)
+        image.set_visible(False)
     fig.tight_layout()
     if path is not None:
-        fig.savefig(path, dpi=100)
+        if image is not None and bg is not None and not image.get_visible():
+            _save_over(fig, ax, image, bg, path)
+            image.set_visible(True)  # the figure returned shows it as before
+        else:
+            fig.savefig(path, dpi=100)
     return fig
+
+
+def _save_over(fig: Figure, ax: Axes, image: Any, background: np.ndarray,
+               path: str | os.PathLike) -> None:
+    """Save ``fig`` (PNG, 100 dpi) drawn over ``background``, an RGB or grey image shown by
+    ``image`` (an ``AxesImage`` of ``ax``, hidden, of alpha 0.45), as matplotlib would draw it:
+    grey levels stretched from their least to their greatest, the image blended over the axes'
+    face colour."""
+    import cv2
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.image import imsave
+
+    fig.set_dpi(100)
+    canvas = FigureCanvasAgg(fig)
+    faces = [(patch, patch.get_alpha()) for patch in (fig.patch, ax.patch)]
+    for patch, _ in faces:
+        patch.set_alpha(0.0)  # drawn below instead
+    try:
+        canvas.draw()
+    finally:
+        for patch, alpha in faces:
+            patch.set_alpha(alpha)
+    top = np.asarray(canvas.buffer_rgba())  # straight (not premultiplied) alpha
+    h, w = top.shape[:2]
+    # what lies under the drawing, in bytes: the figure's face, the axes' face, the image
+    out = np.empty((h, w, 3), np.uint8)
+    out[:] = _bytes(fig.get_facecolor())
+    face = _bytes(ax.get_facecolor())
+    (x0, y0), (x1, y1) = ax.bbox.get_points()
+    box = (slice(max(0, round(h - y1)), round(h - y0)), slice(max(0, round(x0)), round(x1)))
+    out[box] = face
+    # the image's corners in pixels (display coordinates have y up; the buffer's rows go down)
+    left, right, bottom, top_ = image.get_extent()
+    (xa, ya), (xb, yb) = ax.transData.transform([(left, bottom), (right, top_)])
+    c0, c1 = round(min(xa, xb)), round(max(xa, xb))
+    r0, r1 = round(h - max(ya, yb)), round(h - min(ya, yb))
+    rs = slice(max(r0, box[0].start), min(r1, box[0].stop))  # inside the canvas and the axes
+    cs = slice(max(c0, box[1].start), min(c1, box[1].stop))
+    if rs.stop > rs.start and cs.stop > cs.start:
+        if background.ndim == 2:  # the grey colour map over the image's range, as imshow's norm
+            g = background.astype(np.float32)
+            lo, hi = float(g.min()), float(g.max())
+            scale = 255 / (hi - lo) if hi > lo else 0.0
+            rgb = cv2.cvtColor(cv2.convertScaleAbs(g, alpha=scale, beta=-lo * scale),
+                               cv2.COLOR_GRAY2RGB)
+        elif background.dtype.kind == "f":
+            rgb = cv2.convertScaleAbs(np.clip(background, 0, 1).astype(np.float32), alpha=255)
+        else:
+            rgb = np.asarray(background, np.uint8)
+        shrink = (c1 - c0) * (r1 - r0) < rgb.shape[0] * rgb.shape[1]
+        rgb = cv2.resize(rgb, (c1 - c0, r1 - r0),
+                         interpolation=cv2.INTER_AREA if shrink else cv2.INTER_LINEAR)
+        part = np.ascontiguousarray(rgb[rs.start - r0:rs.stop - r0, cs.start - c0:cs.stop - c0])
+        alpha = float(image.get_alpha())
+        out[rs, cs] = cv2.addWeighted(part, alpha, np.full_like(part, face), 1 - alpha, 0)
+    # the drawing over it, a band of rows at a time (a few MB at most in floating point)
+    for r in range(0, h, 64):
+        t = top[r:r + 64].astype(np.float32)
+        a = t[..., 3:] / 255
+        band = out[r:r + 64]
+        band[:] = np.clip(t[..., :3] * a + band * (1 - a) + 0.5, 0, 255)
+    imsave(path, out, format="png", dpi=100)
+
+
+def _bytes(colour: Any) -> np.ndarray:
+    """A matplotlib colour's RGB as bytes."""
+    from matplotlib.colors import to_rgb
+
+    return np.round(np.array(to_rgb(colour)) * 255).astype(np.uint8)
 
 
 class TrajectoryPlot:
