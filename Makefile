@@ -27,8 +27,9 @@ run: kernels
 		--out-dir out/pets09-s2l1 --force
 	$(VENV)/bin/vistrack demo kalman --out out/
 
+# the whole suite, slow-marked checks included, on every core (pytest-xdist)
 test: kernels
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n auto
 
 $(VENV)/.lint-installed: $(STAMP)
 	$(PY) -m pip install --quiet -e ".[lint]"

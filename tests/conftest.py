@@ -1,7 +1,17 @@
+import os
 from pathlib import Path
 
-import numpy as np
-import pytest
+# Under pytest-xdist (make test), each worker keeps its own numba cache. numba's on-disk index
+# is read, extended and written back without a lock: two processes compiling two signatures of
+# one function at once can both name their code file ``.1``, and one signature then loads the
+# other's code (numba/core/caching.py, IndexDataCacheFile.save). Set before numba is imported:
+# this file is loaded before any test module.
+if os.environ.get("PYTEST_XDIST_WORKER") and "NUMBA_CACHE_DIR" not in os.environ:
+    os.environ["NUMBA_CACHE_DIR"] = str(Path(__file__).resolve().parents[1] / ".pytest_cache"
+                                        / f"numba-{os.environ['PYTEST_XDIST_WORKER']}")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 
