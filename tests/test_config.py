@@ -134,7 +134,7 @@ def test_print_config_read_back_gives_identical_tracks(seq, tmp_path, offline):
 
 
 # every option: its value in the configuration used, and the same tracks as the API's
-OPTIONS = [("--scores", "raw", "scores", "raw"), ("--high", "0.8", "high", 0.8),
+OPTIONS = [("--scores", "raw", "scores", "raw"), ("--high", "0.7", "high", 0.7),
            ("--low", "0.5", "low", 0.5), ("--new-track", "0.9", "new_track", 0.9),
            ("--min-iou", "0.5", "min_iou", 0.5), ("--confirm-hits", "3", "confirm_hits", 3),
            ("--max-lost", "0.05", "max_lost", 0.05), ("--max-gap", "0.04", "max_gap", 0.04),

@@ -96,7 +96,7 @@ def _demo(args: argparse.Namespace) -> int:
 _SETTINGS = (
     ("scores", "tracker", "scores", str, None, "what the thresholds apply to", "calibrated"),
     ("high", "tracker", "high", float, "X", "confident detections: the first association stage",
-     0.7),
+     0.6),
     ("low", "tracker", "low", float, "X", "the lowest used at all", 0.3),
     ("new_track", "tracker", "new_track", float, "X", "the lowest that starts a track", 0.7),
     ("min_iou", "tracker", "min_iou", float, "X",

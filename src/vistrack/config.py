@@ -6,7 +6,7 @@ TOML.
     [tracker]          # vistrack.tracking.BoxTrackerConfig, from the preset `name`
     name = "bytetrack"
     scores = "calibrated"
-    high = 0.7
+    high = 0.6
     ...
     [motion]           # vistrack.models.BoxMotion (per-frame noise at its frame_rate)
     std_pos = 0.05

@@ -136,7 +136,7 @@ class BoxTrackerConfig:
 
     two_stage: bool = True
     scores: str = "calibrated"
-    high: float = 0.7
+    high: float = 0.6
     low: float = 0.3
     new_track: float = 0.7
     min_iou: float = 0.2
@@ -150,7 +150,7 @@ class BoxTrackerConfig:
     camera_min_iou: float = 0.3
     camera_min_matches: int = 3
     camera_sig: float = 2.0
-    coast_time: float = 0.17
+    coast_time: float = 0.1
     coast_after: float = 1 / 3
     link_iou: float = 0.3
     calibration_top: float = 0.05
