@@ -257,8 +257,9 @@ def main() -> None:
             print(parts[-1], flush=True)
     env = (f"Python {platform.python_version()}, numpy {np.__version__}, "
            f"{time.strftime('%Y-%m-%d')}")
+    cmd = "python bench/accuracy_mot.py" + (f" --jitter {args.jitter}" if args.jitter else "")
     section = ("## Accuracy on four sets, beside the peers\n\n"
-               f"Measured with `python bench/accuracy_mot.py` ({env}); vistrack's defaults, "
+               f"Measured with `{cmd}` ({env}); vistrack's defaults, "
                "the peers' packaged defaults, the frame rate from `seqinfo.ini`, TrackEval's "
                "conventions (MOT15's for KITTI: ground-truth rows with conf 0 are ignored). "
                "frames/s is the tracker alone, the median over sequences for boxmot.\n\n"
