@@ -299,14 +299,14 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
             bg.ndim == 2 or (bg.ndim == 3 and bg.shape[2] == 3)):
         # saved with the background put under the drawing rather than drawn by matplotlib,
         # which resamples an image in floating point: 26-37 MB for a 768x576 frame, at the
-        # end of a run, against a few MB here (the image still sets the axes' limits)
+        # end of a run, against a few MB here (the hidden image still sets the axes' limits)
         image.set_visible(False)
-    fig.tight_layout()
-    if path is not None:
-        if image is not None and bg is not None and not image.get_visible():
-            _save_over(fig, ax, image, bg, path)
-            image.set_visible(True)  # the figure returned shows it as before
-        else:
+        fig.tight_layout()
+        _save_over(fig, ax, image, bg, path)
+        image.set_visible(True)  # the figure returned shows it as before
+    else:
+        fig.tight_layout()
+        if path is not None:
             fig.savefig(path, dpi=100)
     return fig
 
