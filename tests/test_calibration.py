@@ -94,8 +94,8 @@ def test_calibration_and_tracks_do_not_depend_on_the_scores_scale(transform):
 
 def test_the_online_calibration_learns_what_the_whole_file_gives():
     """Online, after the last frame, the calibrator holds the outcomes of every frame but the
-    first and the last: its map equals the one fitted to the whole file. Before any outcome,
-    the first frame's scores are ranked."""
+    first and the last, and of every chain resolved: its map equals the one fitted to the
+    whole file. Before any outcome, the first frame's scores are ranked."""
     frames, _ = frames_with_clutter(np.random.default_rng(3))
     cal = ScoreCalibrator(window=None)
     cal.observe(frames[0])
@@ -108,7 +108,57 @@ def test_the_online_calibration_learns_what_the_whole_file_gives():
     last = cal.calibration()
     np.testing.assert_array_equal(last.scores, full.scores)
     np.testing.assert_array_equal(last.confidence, full.confidence)
-    assert cal.n == full.n == 11 * (len(frames) - 2)
+    assert cal.n == full.n
+    flat = ScoreCalibration.from_frames(frames, chain_span=0.0)
+    assert flat.n == 11 * (len(frames) - 2)
+
+
+def flickering_scene(pan=0.0, T=40):
+    """At 10 frames/s: four objects detected in every frame (score 0.9), four detected in two
+    frames of three (0.5), one clutter box a frame, each far from every other (0.2); the
+    image moves by ``pan`` pixels a frame. Boxes 100 pixels wide."""
+    out = []
+    for f in range(T):
+        x = np.r_[np.arange(4) * 300.0, 1500 + np.arange(4) * 300.0] + pan * f
+        seen = np.r_[np.ones(4, bool), np.full(4, f % 3 != 2)]
+        x = np.r_[x[seen], 5000 + 500 * f]
+        boxes = np.c_[x, np.full(len(x), 100.0), x + 100, np.full(len(x), 300.0)]
+        scores = np.r_[np.full(4, 0.9), np.full(int(seen[4:].sum()), 0.5), 0.2]
+        out.append(Detections(boxes=boxes, scores=scores))
+    return out
+
+
+@pytest.mark.parametrize("pan", [0.0, 35.0])
+def test_chains_across_gaps_count_flickering_objects(pan):
+    """Derived by hand: a detection of the flickering objects (seen two frames of three) is
+    never continued from the frame before *and* into the next, so it never persists; but it
+    lies on a chain across one-frame gaps that spans the sequence. The clutter does neither,
+    the steady objects both. So with chains (over 1 s, gaps up to 0.2 s: 2 frames at 10
+    frames/s), scores 0.2, 0.5, 0.9 have confidences 0, n / (2n - 2) and 1, where n is the
+    number of frames a flickering object is seen in (27 of 40: each of its detections has a
+    chain's outcome 1, and all but the first and the last one frame to frame, 0); frame to
+    frame alone, 0, 0, 1. With the image moving by 35 pixels a frame, a box 100 wide seen
+    again after a frame's gap overlaps its last one at IoU 0.18, under the links' 0.3: the
+    chains hold because their last boxes are moved by the image's shift (the median
+    displacement of the frame-to-frame links)."""
+    frames = flickering_scene(pan)
+    T = len(frames)
+    n = sum(f % 3 != 2 for f in range(T))
+    assert n == 27
+    for span, want in ((1.0, [0.0, n / (2 * n - 2), 1.0]), (0.0, [0.0, 0.0, 1.0])):
+        cal = ScoreCalibration.from_frames(frames, frame_rate=10.0, chain_span=span)
+        assert cal([0.2, 0.5, 0.9]).tolist() == want
+    # the outcomes one by one: the objects' chains last once they span 10 frames, and then
+    # every detection on them counts; the clutter's end 3 frames after it was seen (the
+    # last two frames' are still open)
+    online = ScoreCalibrator(frame_rate=10.0, window=None)
+    for d in frames:
+        online.observe(d)
+    s, o = online.outcomes()
+    assert np.count_nonzero(s == 0.9) == 4 * (T - 2) + 4 * T and (o[s == 0.9] == 1).all()
+    assert np.count_nonzero(s == 0.5) == 4 * (n - 2) + 4 * n
+    assert o[s == 0.5].sum() == 4 * n  # the flickering ones: 0 frame to frame
+    assert np.count_nonzero(s == 0.2) == (T - 2) + (T - 3) and (o[s == 0.2] == 0).all()
 
 
 def test_the_rank_map_is_the_empirical_distribution_function():

@@ -400,8 +400,9 @@ def build_parser() -> argparse.ArgumentParser:
                        "default in bytetrack, except with the bgsub front-end)")
     box = track.add_argument_group(
         "box tracker settings", "The thresholds apply to calibrated confidences in [0, 1] "
-        "(how nearly detections of a score persist from frame to frame as the detector's "
-        "best do; learnt from the detections, so any score scale works), or with --scores "
+        "(how nearly detections of a score persist from frame to frame, and lie on chains "
+        "of detections that last, as the detector's best do; learnt from the detections, so "
+        "any score scale works), or with --scores "
         "raw to the scores themselves. Each option is put over --config, and the file over "
         "its preset ([tracker] name, which --tracker must then agree with).")
     box.add_argument("--config", metavar="FILE",

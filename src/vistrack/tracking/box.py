@@ -4,9 +4,10 @@ One step, as on the slides (predict, associate, correct, manage):
 
 0. **scores**: with ``scores="calibrated"`` (the default) every threshold below applies to
    the detection's calibrated confidence in ``[0, 1]``, not to its raw score: how nearly
-   detections of that score persist from frame to frame as the detector's most confident
-   ones do, learnt online from the frames seen so far, or fitted to the whole file
-   beforehand (:mod:`vistrack.tracking.calibration`). It depends on the order of the
+   detections of that score persist from frame to frame, and lie on chains of detections
+   that last, as the detector's most confident ones do, learnt online from the frames seen
+   so far, or fitted to the whole file beforehand (:mod:`vistrack.tracking.calibration`).
+   It depends on the order of the
    scores only, so one setting serves a detector thresholded at 0.5, one whose raw scores
    run from −1 to 16, and any strictly increasing transform of either, identically;
 1. **predict** every track with :class:`~vistrack.models.BoxMotion` over the true time since the
@@ -101,8 +102,8 @@ class BoxTrackerConfig:
         What the thresholds ``high``, ``low`` and ``new_track`` (and ``fuse_score``) apply to:
         the calibrated confidence of each detection's score, in ``[0, 1]``, learnt from the
         detections themselves (:mod:`vistrack.tracking.calibration`: how nearly detections
-        of that score persist from frame to frame as the detector's best ones do), so that
-        one setting serves detectors whose scores live on any scale; or the raw scores.
+        of that score persist and last as the detector's best ones do), so that one
+        setting serves detectors whose scores live on any scale; or the raw scores.
     high, low : float
         Thresholds: confident detections, and the lowest used at all.
     new_track : float
@@ -129,9 +130,14 @@ class BoxTrackerConfig:
         updated in a row for at least ``coast_after`` seconds (0: never).
     link_iou, calibration_top, calibration_prior : float
         With calibrated scores: the IoU at which a detection continues one of the previous
-        frame, the fraction of the most confident detections whose persistence is full
-        confidence, and how many outcomes weigh as much as the rank prior
+        frame, the fraction of the outcomes, by score, whose rate is full confidence, and
+        how many outcomes weigh as much as the rank prior
         (:class:`~vistrack.tracking.calibration.ScoreCalibrator`).
+    chain_span, chain_gap : float
+        With calibrated scores: seconds. A detection also counts as an object's if it lies on
+        a chain of detections that spans ``chain_span`` or more, linked across gaps of up to
+        ``chain_gap`` (0: frame-to-frame persistence alone; see
+        :mod:`vistrack.tracking.calibration`).
     """
 
     two_stage: bool = True
@@ -155,6 +161,8 @@ class BoxTrackerConfig:
     link_iou: float = 0.3
     calibration_top: float = 0.05
     calibration_prior: float = 0.0
+    chain_span: float = 1.0
+    chain_gap: float = 0.2
 
     def __post_init__(self) -> None:
         def bad(name: str, must: str) -> ValueError:
@@ -183,7 +191,7 @@ class BoxTrackerConfig:
             if not 0 < getattr(self, name) <= 1:
                 raise bad(name, "in (0, 1]")
         for name in ("max_lost", "coast_time", "coast_after", "camera_sig",
-                     "calibration_prior"):
+                     "calibration_prior", "chain_span", "chain_gap"):
             if not 0 <= getattr(self, name) < np.inf:
                 raise bad(name, "a finite number >= 0")
         for name in ("confirm_hits", "camera_min_matches"):
@@ -480,7 +488,9 @@ class BoxTracker:
         start again from 1."""
         c = self.config
         self.calibrator = (ScoreCalibrator(link_iou=c.link_iou, top=c.calibration_top,
-                                           prior=c.calibration_prior)
+                                           prior=c.calibration_prior,
+                                           frame_rate=self.frame_rate,
+                                           chain_span=c.chain_span, chain_gap=c.chain_gap)
                            if c.scores == "calibrated" and self.calibration is None else None)
         self.tracks.reset()
         self.frame: int | None = None

@@ -3,17 +3,31 @@ r"""Detector scores calibrated by the detections themselves.
 Every detector scores on its own scale: probabilities from 0.5 up (a detector thresholded at
 0.5), raw logits from −1 to 16 (a LiDAR detector), a constant 1. A fixed threshold fitted to
 one is wrong for the next: above every score of another, or below its clutter. What all have
-in common is that a real object is detected again in the next frame, where most clutter is
-not. So the calibration asks of each detection whether it **persists**: whether it continues
-a detection of the previous frame and is continued in the next (boxes of one class linked
-frame to frame one-to-one, by global nearest neighbour on IoU ≥ ``link_iou``).
+in common is that a real object is detected again and again, where most clutter is not. So
+the calibration asks two things of each detection, each one outcome of 0 or 1:
 
-- ``P(persist | score)`` is estimated by isotonic regression: the non-decreasing function of
-  the score closest to the persistence indicators in least squares (pool-adjacent-violators,
-  over the distinct scores weighted by their counts);
-- it is divided by the persistence of the detector's most confident detections (the top
-  ``top`` fraction by score, 5 %, and at least 20 of them), since objects themselves persist
-  less where they move fast against their size or the frame rate is low, and clipped to 1.
+- does it **persist** from frame to frame: does it continue a detection of the previous
+  frame and is it continued in the next (boxes of one class linked frame to frame
+  one-to-one, by global nearest neighbour on IoU ≥ ``link_iou``)?
+- does it lie on a **chain** that lasts: detections linked the same way, but across gaps of
+  up to ``chain_gap`` seconds, the chain's last box moved by the image's shift since it was
+  seen (the median displacement of the frame-to-frame links), spanning ``chain_span``
+  seconds or more? A person half hidden in a crowd is detected in some frames and not in
+  others, so few of their detections persist from frame to frame, but they lie on long
+  chains; clutter that recurs where it was in pairs of frames does the opposite less
+  often. The frame-to-frame outcome is known one frame later, the chain's once it spans
+  ``chain_span`` (then every detection on it is) or once it has gone ``chain_gap`` without
+  a detection (then none of its detections is).
+
+The two outcomes weigh the same: each detection contributes both. Then
+
+- ``P(outcome | score)`` is estimated by isotonic regression: the non-decreasing function of
+  the score closest to the outcomes in least squares (pool-adjacent-violators, over the
+  distinct scores weighted by their counts);
+- it is divided by the rate of the detector's most confident detections (the top ``top``
+  fraction of the outcomes by score, 5 %, and at least 20 of them), since objects themselves
+  persist less where they move fast against their size or the frame rate is low, and
+  clipped to 1.
 
 The result, the **calibrated confidence** ``c(score)`` in ``[0, 1]``, says how nearly a
 detection of that score behaves like the detector's best ones. It depends on the order of the
@@ -32,7 +46,7 @@ which tracked best on the four sets of docs/mot.md).
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numba import njit
@@ -120,6 +134,16 @@ def _link(prev, prev_cls, cur, cur_cls, min_iou):
     return gnn_pairs(rows, cols, 1.0 - ov, prev.shape[0], cur.shape[0])
 
 
+@kernel
+@njit(cache=True)
+def _link_chains(heads, head_cls, age, cur, cur_cls, min_iou):
+    # one-to-one links (GNN) between chains' last boxes and a frame's boxes of the same
+    # class, on 1 - IoU plus 0.01 a frame since the chain was last extended (the most recent
+    # chain wins a tie)
+    rows, cols, ov, _ = iou_pairs_same_class(heads, head_cls, cur, cur_cls, min_iou)
+    return gnn_pairs(rows, cols, 1.0 - ov + 0.01 * age[rows], heads.shape[0], cur.shape[0])
+
+
 def _scores(scores: ArrayLike) -> np.ndarray:
     s = np.asarray(scores, dtype=np.float64).ravel()
     bad = np.flatnonzero(np.isnan(s))
@@ -161,11 +185,17 @@ def persistence(frames: Iterable[Detections], link_iou: float = 0.3
     >>> scores.tolist(), persisted.tolist()
     ([0.9, 0.4, 0.9, 0.4], [True, False, True, False])
     """
-    cal = ScoreCalibrator(link_iou=link_iou, window=None)
+    s, p = _outcomes(frames, link_iou=link_iou, chain_span=0.0)
+    return s, p.astype(bool)
+
+
+def _outcomes(frames: Iterable[Detections], **calibrator: Any) -> tuple[np.ndarray, np.ndarray]:
+    # every outcome of a whole sequence (ScoreCalibrator.outcomes after its last frame)
+    cal = ScoreCalibrator(window=None, **calibrator)
     for d in frames:
         cal.observe(d)
     cal.observe(None)  # the last frame has no next frame: its detections do not persist
-    return cal._buf_s.copy(), cal._buf_p.astype(bool)
+    return cal.outcomes()
 
 
 class ScoreCalibration:
@@ -181,9 +211,9 @@ class ScoreCalibration:
         the lower one's confidence, a score below all of them the lowest, one above all the
         highest.
     n : int
-        How many persistence outcomes the map was fitted to (0: none; the rank prior alone).
+        How many outcomes the map was fitted to (0: none; the rank prior alone).
     top_persistence : float
-        The persistence of the top detections that the data part was divided by.
+        The rate of the top outcomes (by score) that the data part was divided by.
 
     Attributes
     ----------
@@ -225,8 +255,8 @@ class ScoreCalibration:
     @classmethod
     def fit(cls, scores: ArrayLike, persisted: ArrayLike, *, top: float = 0.05,
             top_min: int = 20) -> ScoreCalibration:
-        """Fit to scores and their persistence outcomes (see the module): full confidence is
-        the persistence of the ``top`` fraction of the detections by score, and of at least
+        """Fit to scores and their outcomes (see the module): full confidence is the rate of
+        the ``top`` fraction of the outcomes by score, and of at least
         ``top_min`` of them (a small sample's top fraction is a handful).
 
         Parameters
@@ -234,9 +264,10 @@ class ScoreCalibration:
         scores : (N,) array_like
             The detections' scores (not NaN).
         persisted : (N,) array_like
-            Whether each persisted (bool, or 0 and 1).
+            Each outcome: whether the detection persisted, or its chain lasted (bool, or 0
+            and 1).
         top : float
-            The fraction of the detections, by score, whose persistence is full confidence,
+            The fraction of the outcomes, by score, whose rate is full confidence,
             in ``(0, 1]``; ties at its edge are included.
         top_min : int
             The least number of detections it is taken over (all of them if there are
@@ -245,9 +276,8 @@ class ScoreCalibration:
         Returns
         -------
         ScoreCalibration
-            On the distinct scores: the isotonic fit of the persistence over the top
-            detections' persistence, clipped to 1 (all 1 when none of the top detections
-            persisted).
+            On the distinct scores: the isotonic fit of the outcomes over the top
+            outcomes' rate, clipped to 1 (all 1 when none of the top outcomes is 1).
 
         Raises
         ------
@@ -272,7 +302,7 @@ class ScoreCalibration:
         u, inv, counts = np.unique(s, return_inverse=True, return_counts=True)
         hits = np.bincount(inv, weights=p, minlength=len(u))
         fit = _pava(hits / counts, counts.astype(np.float64))
-        # the persistence of the top fraction by score (ties at its edge included)
+        # the rate of the top fraction by score (ties at its edge included)
         above = np.cumsum(counts[::-1])[::-1]  # detections scoring >= u[k]
         k = int(np.flatnonzero(above >= min(len(s), max(top * len(s), top_min)))[-1])
         a = hits[k:].sum() / counts[k:].sum()
@@ -284,10 +314,12 @@ class ScoreCalibration:
 
     @classmethod
     def from_frames(cls, frames: Iterable[Detections], *, link_iou: float = 0.3,
-                    top: float = 0.05) -> ScoreCalibration:
+                    top: float = 0.05, frame_rate: float = 30.0, chain_span: float = 1.0,
+                    chain_gap: float = 0.2) -> ScoreCalibration:
         """Fit to a whole sequence of frames (the offline mode).
 
-        :func:`persistence` of the frames, then :meth:`fit`.
+        The outcomes a :class:`ScoreCalibrator` holds after the last frame (frame-to-frame
+        persistence and chains), then :meth:`fit`.
 
         Parameters
         ----------
@@ -296,8 +328,11 @@ class ScoreCalibration:
         link_iou : float
             The IoU at which a detection continues one of the previous frame.
         top : float
-            The fraction of the most confident detections whose persistence is full
-            confidence (at least 20 of them).
+            The fraction of the outcomes, by score, whose rate is full confidence (at least
+            20 of them).
+        frame_rate, chain_span, chain_gap : float
+            Frames a second, and the chains' span and gap in seconds (see
+            :class:`ScoreCalibrator`).
 
         Returns
         -------
@@ -307,7 +342,8 @@ class ScoreCalibration:
         Raises
         ------
         ValueError
-            If the frames but the first and last hold no detections.
+            If no outcome is resolved: the frames but the first and the last hold no
+            detections, and no chain has lasted or ended.
 
         Examples
         --------
@@ -320,7 +356,8 @@ class ScoreCalibration:
         >>> cal([0.4, 0.9]).tolist(), cal.score_at(0.5)
         ([0.0, 1.0], 0.9)
         """
-        s, p = persistence(frames, link_iou)
+        s, p = _outcomes(frames, link_iou=link_iou, frame_rate=frame_rate,
+                         chain_span=chain_span, chain_gap=chain_gap)
         return cls.fit(s, p, top=top)
 
     def __call__(self, scores: ArrayLike) -> np.ndarray:
@@ -422,13 +459,19 @@ class ScoreCalibrator:
     Parameters
     ----------
     link_iou : float
-        The IoU at which a detection continues one of the previous frame.
+        The IoU at which a detection continues one of the previous frame (or a chain).
     top : float
-        The fraction of the most confident detections whose persistence is full confidence.
+        The fraction of the outcomes, by score, whose rate is full confidence.
     prior : float
-        How many persistence outcomes weigh as much as the rank prior.
+        How many outcomes weigh as much as the rank prior.
     window : int or None
         Keep the last ``window`` outcomes (None: all), so the map follows a scene that changes.
+    frame_rate : float
+        Frames a second, for the chains' times.
+    chain_span, chain_gap : float
+        Seconds: a chain that spans ``chain_span`` or more lasts, and a chain ends when
+        ``chain_gap`` has gone by without a detection on it (at least one frame). With
+        ``chain_span`` 0 there are no chains: frame-to-frame persistence alone.
 
     Call :meth:`observe` once a frame, then the calibrator itself on that frame's scores:
     ``calibrator(scores)`` is :meth:`calibration` applied to them.
@@ -436,35 +479,52 @@ class ScoreCalibrator:
     Raises
     ------
     ValueError
-        If ``link_iou`` or ``top`` is not in ``(0, 1]``, ``prior`` is negative, or ``window``
-        is less than 1.
+        If ``link_iou`` or ``top`` is not in ``(0, 1]``, ``prior``, ``chain_span`` or
+        ``chain_gap`` is negative or not finite, ``frame_rate`` is not > 0 and finite, or
+        ``window`` is less than 1.
 
     Examples
     --------
-    Until the third frame, the ranks of the scores seen; then what persists:
+    An object that stays (score 0.9) and clutter that jumps (0.4), at one frame a second,
+    with chains that last over 2 s and end after 1 s without a detection. Until the third
+    frame, the ranks of the scores seen. There, the second frame's detections are resolved
+    frame to frame, the object's chain lasts (its three detections count), and the first
+    clutter box's chain ends (it does not); in the fourth, one outcome frame to frame each,
+    the object's new detection on its lasting chain, and the second clutter box's chain:
 
-    >>> cal = ScoreCalibrator()
-    >>> for f in range(3):
+    >>> cal = ScoreCalibrator(frame_rate=1.0, chain_span=2.0, chain_gap=1.0)
+    >>> for f in range(4):
     ...     boxes = np.array([[10.0, 10, 40, 80], [200 + 50 * f, 100, 230 + 50 * f, 160]])
     ...     cal.observe(Detections(boxes=boxes, scores=np.array([0.9, 0.4])))
     ...     print(cal.n, cal([0.4, 0.9]).tolist())
     0 [0.5, 1.0]
     0 [0.5, 1.0]
-    2 [0.0, 1.0]
+    6 [0.0, 1.0]
+    10 [0.0, 1.0]
     """
 
     def __init__(self, *, link_iou: float = 0.3, top: float = 0.05, prior: float = 0.0,
-                 window: int | None = 20000):
+                 window: int | None = 20000, frame_rate: float = 30.0,
+                 chain_span: float = 1.0, chain_gap: float = 0.2):
         if not 0 < link_iou <= 1:
             raise ValueError(f"link_iou must be in (0, 1]; got {link_iou}")
         if not 0 < top <= 1:
             raise ValueError(f"top must be in (0, 1]; got {top}")
-        if not prior >= 0:
-            raise ValueError(f"prior must be >= 0; got {prior}")
+        for name, v in (("prior", prior), ("chain_span", chain_span), ("chain_gap", chain_gap)):
+            if not 0 <= v < np.inf:
+                raise ValueError(f"{name} must be a finite number >= 0; got {v}")
+        if not 0 < frame_rate < np.inf:
+            raise ValueError(f"frame_rate must be > 0 and finite; got {frame_rate}")
         if window is not None and window < 1:
             raise ValueError(f"window must be >= 1 or None; got {window}")
         self.link_iou, self.top, self.prior, self.window = float(link_iou), float(top), \
             float(prior), window
+        self.frame_rate, self.chain_span, self.chain_gap = float(frame_rate), \
+            float(chain_span), float(chain_gap)
+        # in frames: a chain lasts once its last frame is this far after its first, and takes
+        # a detection up to this many frames after its last
+        self._span = self.chain_span * self.frame_rate
+        self._gap = max(1, int(round(self.chain_gap * self.frame_rate)))
         self.reset()
 
     def reset(self) -> None:
@@ -483,14 +543,27 @@ class ScoreCalibrator:
         self._new_since_fit = 0
         self._fit_n = -1
         self._cal: ScoreCalibration | None = None
+        # the chains: the frame count, the image's shift summed over the frames, each chain's
+        # last box (``_head_*``: box, class, frame, the summed shift then, chain), each chain's
+        # first frame and state (0 open, 1 lasted, -1 ended short) by chain number from
+        # ``_base``, and the detections whose chain is still open (score, chain)
+        self._t = 0
+        self._shift = np.zeros(2)
+        self._head_box, self._head_cls = np.zeros((0, 4)), np.zeros(0, np.int64)
+        self._head_t, self._head_shift = np.zeros(0, np.int64), np.zeros((0, 2))
+        self._head_chain = np.zeros(0, np.int64)
+        self._first, self._state = np.zeros(0, np.int64), np.zeros(0, np.int8)
+        self._base = 0
+        self._open_s, self._open_chain = np.zeros(0), np.zeros(0, np.int64)
 
     @property
     def n(self) -> int:
-        """How many persistence outcomes are held (at most ``window``).
+        """How many outcomes are held (at most ``window``): two for a detection whose
+        chain is resolved and whose next frame has been seen.
 
         Examples
         --------
-        >>> cal = ScoreCalibrator()
+        >>> cal = ScoreCalibrator(chain_span=0.0)
         >>> for f in range(4):
         ...     cal.observe(Detections(boxes=np.array([[10.0, 10, 40, 80]]), scores=[0.9]))
         >>> cal.n  # frames 2 and 3: the first and the last frame seen have no outcome yet
@@ -498,15 +571,35 @@ class ScoreCalibrator:
         """
         return len(self._buf_s)
 
+    def outcomes(self) -> tuple[np.ndarray, np.ndarray]:
+        """The outcomes held, in the order they were resolved: ``(scores, outcomes)``, each
+        outcome 0 or 1 (see the module).
+
+        Returns
+        -------
+        scores, outcomes : (n,) ndarray
+            Copies.
+
+        Examples
+        --------
+        >>> cal = ScoreCalibrator(chain_span=0.0)
+        >>> for f in range(3):
+        ...     cal.observe(Detections(boxes=np.array([[10.0, 10, 40, 80]]), scores=[0.9]))
+        >>> cal.outcomes()
+        (array([0.9]), array([1.]))
+        """
+        return self._buf_s.copy(), self._buf_p.copy()
+
     def observe(self, detections: Detections | None) -> None:
         """Take one frame's detections (None: the sequence has ended): link them to the
-        previous frame's, which are then resolved.
+        previous frame's, which are then resolved, and to the chains.
 
         Parameters
         ----------
         detections : Detections or None
             The frame's detections, with boxes; None after the last frame (its detections
-            then get no outcome, having no next frame).
+            then get no frame-to-frame outcome, having no next frame, and chains still open
+            none).
 
         Raises
         ------
@@ -517,7 +610,7 @@ class ScoreCalibrator:
 
         Examples
         --------
-        >>> cal = ScoreCalibrator()
+        >>> cal = ScoreCalibrator(chain_span=0.0)
         >>> for f in range(3):
         ...     cal.observe(Detections(boxes=np.array([[10.0, 10, 40, 80]]), scores=[0.9]))
         >>> cal.n
@@ -528,7 +621,7 @@ class ScoreCalibrator:
         else:
             if detections.boxes is None:
                 raise TypeError("detections must have boxes")
-            boxes = np.ascontiguousarray(detections.boxes)
+            boxes = np.ascontiguousarray(detections.boxes, dtype=np.float64)
             cls = np.ascontiguousarray(detections.classes)
             s = _scores(detections.scores)  # type: ignore[arg-type]  # set by __post_init__
         linked_back = np.zeros(len(s), bool)
@@ -539,11 +632,67 @@ class ScoreCalibrator:
                 r, c = _link(pb, pc, boxes, cls, self.link_iou)
                 linked_fwd[r] = True
                 linked_back[c] = True
+                if len(r) >= 3:  # the image's shift: the links' median displacement
+                    d = (boxes[c, :2] + boxes[c, 2:] - pb[r, :2] - pb[r, 2:]) / 2
+                    self._shift = self._shift + np.median(d, axis=0)
             if detections is not None and not first:
                 # the first and the last frame lack a neighbour: no outcome
                 self._push(ps, (pl & linked_fwd).astype(np.float64))
+        if detections is not None and self.chain_span > 0:
+            self._extend_chains(boxes, cls, s)
         self._prev = None if detections is None else (boxes, cls, s, linked_back,
                                                       self._prev is None)
+
+    def _extend_chains(self, boxes: np.ndarray, cls: np.ndarray, s: np.ndarray) -> None:
+        """Link a frame's detections to the chains; resolve the chains that now span
+        ``chain_span`` or have ended, and push the outcomes of their detections."""
+        t, self._t = self._t, self._t + 1
+        ended = t - self._head_t > self._gap
+        chains = self._head_chain[ended] - self._base
+        self._state[chains] = np.where(self._state[chains] == 0, -1, self._state[chains])
+        keep = ~ended
+        hb, hc, ht = self._head_box[keep], self._head_cls[keep], self._head_t[keep]
+        hs, hid = self._head_shift[keep], self._head_chain[keep]
+        ids = np.empty(len(s), np.int64)
+        taken = np.zeros(len(hb), bool)
+        if len(hb) and len(boxes):
+            d = self._shift - hs
+            moved = np.ascontiguousarray(hb + np.concatenate([d, d], axis=1))
+            r, c = _link_chains(moved, hc, (t - ht).astype(np.float64), boxes, cls,
+                                self.link_iou)
+            ids[c] = hid[r]
+            taken[r] = True
+        else:
+            c = np.zeros(0, np.int64)
+        new = np.ones(len(s), bool)
+        new[c] = False
+        n0 = self._base + len(self._first)
+        ids[new] = n0 + np.arange(int(new.sum()))
+        self._first = np.concatenate([self._first, np.full(int(new.sum()), t)])
+        self._state = np.concatenate([self._state, np.zeros(int(new.sum()), np.int8)])
+        cont = ids[c] - self._base
+        lasted = t - self._first[cont] >= self._span - 1e-9
+        self._state[cont[lasted]] = 1
+        # the detections of resolved chains give their outcomes
+        self._open_s = np.concatenate([self._open_s, s])
+        self._open_chain = np.concatenate([self._open_chain, ids])
+        st = self._state[self._open_chain - self._base]
+        done = st != 0
+        if done.any():
+            self._push(self._open_s[done], (st[done] > 0).astype(np.float64))
+            self._open_s, self._open_chain = self._open_s[~done], self._open_chain[~done]
+        self._head_box = np.concatenate([hb[~taken], boxes])
+        self._head_cls = np.concatenate([hc[~taken], cls.astype(np.int64)])
+        self._head_t = np.concatenate([ht[~taken], np.full(len(s), t, np.int64)])
+        self._head_shift = np.concatenate([hs[~taken], np.tile(self._shift, (len(s), 1))])
+        self._head_chain = np.concatenate([hid[~taken], ids])
+        # forget the chains before the oldest still referred to, once they are half the table
+        live = np.r_[self._head_chain, self._open_chain]
+        low = int(live.min()) if len(live) else self._base + len(self._first)
+        if low - self._base > len(self._first) // 2:
+            self._first = self._first[low - self._base:]
+            self._state = self._state[low - self._base:]
+            self._base = low
 
     def _push(self, s: np.ndarray, p: np.ndarray) -> None:
         if len(s) == 0:
