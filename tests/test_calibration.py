@@ -193,6 +193,14 @@ def test_calibration_edge_cases_and_errors():
         ScoreCalibration.fit([], [])
     with pytest.raises(ValueError, match=r"top must be in \(0, 1\]"):
         ScoreCalibrator(top=0.0)
+    with pytest.raises(ValueError, match="chain_span must be a finite number >= 0; got -1"):
+        ScoreCalibrator(chain_span=-1.0)
+    with pytest.raises(ValueError, match="chain_gap must be a finite number >= 0; got inf"):
+        ScoreCalibrator(chain_gap=np.inf)
+    with pytest.raises(ValueError, match="frame_rate must be > 0 and finite; got 0"):
+        ScoreCalibrator(frame_rate=0.0)
+    with pytest.raises(ValueError, match="chain_span must be a finite number >= 0"):
+        BoxTracker(chain_span=-0.5)
     with pytest.raises(ValueError, match="must be increasing"):
         ScoreCalibration([0.2, 0.1], [0.0, 1.0])
     with pytest.raises(ValueError, match=r"detection scores must not be NaN; scores\[0\]"):

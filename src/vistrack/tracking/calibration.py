@@ -136,12 +136,108 @@ def _link(prev, prev_cls, cur, cur_cls, min_iou):
 
 @kernel
 @njit(cache=True)
-def _link_chains(heads, head_cls, age, cur, cur_cls, min_iou):
-    # one-to-one links (GNN) between chains' last boxes and a frame's boxes of the same
-    # class, on 1 - IoU plus 0.01 a frame since the chain was last extended (the most recent
-    # chain wins a tie)
-    rows, cols, ov, _ = iou_pairs_same_class(heads, head_cls, cur, cur_cls, min_iou)
-    return gnn_pairs(rows, cols, 1.0 - ov + 0.01 * age[rows], heads.shape[0], cur.shape[0])
+def _chain_step(t, gap, span, shift, head_box, head_cls, head_t, head_shift, head_chain,
+                first, state, base, open_s, open_chain, boxes, cls, s, min_iou):
+    # one frame of ScoreCalibrator's chains (see _extend_chains): returns the new heads, the
+    # chains' first frames and states from chain number ``base``, the detections still open,
+    # and the scores and outcomes resolved in this frame
+    H, N, C = head_box.shape[0], boxes.shape[0], first.shape[0]
+    state = state.copy()
+    keep = np.empty(H, np.bool_)
+    for i in range(H):
+        keep[i] = t - head_t[i] <= gap
+        if not keep[i] and state[head_chain[i] - base] == 0:
+            state[head_chain[i] - base] = -1  # ended short of the span
+    kept = np.flatnonzero(keep)
+    K = kept.shape[0]
+    moved = np.empty((K, 4))
+    kcls = np.empty(K, np.int64)
+    age = np.empty(K)
+    for j in range(K):
+        i = kept[j]
+        for a in range(4):
+            moved[j, a] = head_box[i, a] + shift[a % 2] - head_shift[i, a % 2]
+        kcls[j] = head_cls[i]
+        age[j] = t - head_t[i]
+    ids = np.full(N, -1, np.int64)
+    taken = np.zeros(K, np.bool_)
+    if K > 0 and N > 0:
+        # one-to-one links (GNN) on 1 - IoU plus 0.01 a frame since the chain was last
+        # extended (the most recent chain wins a tie)
+        rows, cols, ov, _ = iou_pairs_same_class(moved, kcls, boxes, cls, min_iou)
+        r, c = gnn_pairs(rows, cols, 1.0 - ov + 0.01 * age[rows], K, N)
+        for m in range(r.shape[0]):
+            ids[c[m]] = head_chain[kept[r[m]]]
+            taken[r[m]] = True
+    n_new = 0
+    for j in range(N):
+        if ids[j] < 0:
+            n_new += 1
+    first2 = np.empty(C + n_new, np.int64)
+    state2 = np.empty(C + n_new, np.int8)
+    first2[:C] = first
+    state2[:C] = state
+    k = C
+    for j in range(N):
+        if ids[j] < 0:
+            ids[j] = base + k
+            first2[k] = t
+            state2[k] = 0
+            k += 1
+        elif state2[ids[j] - base] == 0 and t - first2[ids[j] - base] >= span - 1e-9:
+            state2[ids[j] - base] = 1  # lasted: every detection on it counts
+    # the open detections whose chain is now resolved give their outcomes
+    P = open_s.shape[0]
+    all_s = np.concatenate((open_s, s))
+    all_c = np.concatenate((open_chain, ids))
+    n_done = 0
+    for j in range(P + N):
+        if state2[all_c[j] - base] != 0:
+            n_done += 1
+    out_s, out_p = np.empty(n_done), np.empty(n_done)
+    still_s, still_c = np.empty(P + N - n_done), np.empty(P + N - n_done, np.int64)
+    d = 0
+    o = 0
+    for j in range(P + N):
+        st = state2[all_c[j] - base]
+        if st != 0:
+            out_s[d] = all_s[j]
+            out_p[d] = 1.0 if st > 0 else 0.0
+            d += 1
+        else:
+            still_s[o] = all_s[j]
+            still_c[o] = all_c[j]
+            o += 1
+    # the heads: the chains not extended (and not ended), then this frame's detections
+    n_keep = 0
+    for j in range(K):
+        if not taken[j]:
+            n_keep += 1
+    M = n_keep + N
+    hb, hc, ht = np.empty((M, 4)), np.empty(M, np.int64), np.empty(M, np.int64)
+    hs, hid = np.empty((M, 2)), np.empty(M, np.int64)
+    m = 0
+    for j in range(K):
+        if not taken[j]:
+            i = kept[j]
+            hb[m], hc[m], ht[m], hs[m], hid[m] = head_box[i], head_cls[i], head_t[i], \
+                head_shift[i], head_chain[i]
+            m += 1
+    for j in range(N):
+        hb[m], hc[m], ht[m], hid[m] = boxes[j], cls[j], t, ids[j]
+        hs[m, 0], hs[m, 1] = shift[0], shift[1]
+        m += 1
+    # forget the chains before the oldest still referred to, once they are half the table
+    low = base + first2.shape[0]
+    for j in range(M):
+        low = min(low, hid[j])
+    for j in range(o):
+        low = min(low, still_c[j])
+    if low - base > first2.shape[0] // 2:
+        first2 = first2[low - base:].copy()
+        state2 = state2[low - base:].copy()
+        base = low
+    return hb, hc, ht, hs, hid, first2, state2, base, still_s, still_c, out_s, out_p
 
 
 def _scores(scores: ArrayLike) -> np.ndarray:
@@ -645,54 +741,17 @@ class ScoreCalibrator:
 
     def _extend_chains(self, boxes: np.ndarray, cls: np.ndarray, s: np.ndarray) -> None:
         """Link a frame's detections to the chains; resolve the chains that now span
-        ``chain_span`` or have ended, and push the outcomes of their detections."""
+        ``chain_span`` or have ended, and push the outcomes of their detections (compiled:
+        :func:`_chain_step`)."""
         t, self._t = self._t, self._t + 1
-        ended = t - self._head_t > self._gap
-        chains = self._head_chain[ended] - self._base
-        self._state[chains] = np.where(self._state[chains] == 0, -1, self._state[chains])
-        keep = ~ended
-        hb, hc, ht = self._head_box[keep], self._head_cls[keep], self._head_t[keep]
-        hs, hid = self._head_shift[keep], self._head_chain[keep]
-        ids = np.empty(len(s), np.int64)
-        taken = np.zeros(len(hb), bool)
-        if len(hb) and len(boxes):
-            d = self._shift - hs
-            moved = np.ascontiguousarray(hb + np.concatenate([d, d], axis=1))
-            r, c = _link_chains(moved, hc, (t - ht).astype(np.float64), boxes, cls,
-                                self.link_iou)
-            ids[c] = hid[r]
-            taken[r] = True
-        else:
-            c = np.zeros(0, np.int64)
-        new = np.ones(len(s), bool)
-        new[c] = False
-        n0 = self._base + len(self._first)
-        ids[new] = n0 + np.arange(int(new.sum()))
-        self._first = np.concatenate([self._first, np.full(int(new.sum()), t)])
-        self._state = np.concatenate([self._state, np.zeros(int(new.sum()), np.int8)])
-        cont = ids[c] - self._base
-        lasted = t - self._first[cont] >= self._span - 1e-9
-        self._state[cont[lasted]] = 1
-        # the detections of resolved chains give their outcomes
-        self._open_s = np.concatenate([self._open_s, s])
-        self._open_chain = np.concatenate([self._open_chain, ids])
-        st = self._state[self._open_chain - self._base]
-        done = st != 0
-        if done.any():
-            self._push(self._open_s[done], (st[done] > 0).astype(np.float64))
-            self._open_s, self._open_chain = self._open_s[~done], self._open_chain[~done]
-        self._head_box = np.concatenate([hb[~taken], boxes])
-        self._head_cls = np.concatenate([hc[~taken], cls.astype(np.int64)])
-        self._head_t = np.concatenate([ht[~taken], np.full(len(s), t, np.int64)])
-        self._head_shift = np.concatenate([hs[~taken], np.tile(self._shift, (len(s), 1))])
-        self._head_chain = np.concatenate([hid[~taken], ids])
-        # forget the chains before the oldest still referred to, once they are half the table
-        live = np.r_[self._head_chain, self._open_chain]
-        low = int(live.min()) if len(live) else self._base + len(self._first)
-        if low - self._base > len(self._first) // 2:
-            self._first = self._first[low - self._base:]
-            self._state = self._state[low - self._base:]
-            self._base = low
+        (self._head_box, self._head_cls, self._head_t, self._head_shift, self._head_chain,
+         self._first, self._state, base, self._open_s, self._open_chain, out_s, out_p) = \
+            _chain_step(t, self._gap, self._span, self._shift, self._head_box,
+                        self._head_cls, self._head_t, self._head_shift, self._head_chain,
+                        self._first, self._state, self._base, self._open_s,
+                        self._open_chain, boxes, cls.astype(np.int64), s, self.link_iou)
+        self._base = int(base)
+        self._push(out_s, out_p)
 
     def _push(self, s: np.ndarray, p: np.ndarray) -> None:
         if len(s) == 0:
