@@ -18,7 +18,8 @@ HERE = Path(__file__).resolve().parent
 
 class BuildKernels(build_ext):
     """Build ``vistrack._kernels`` with :func:`vistrack._prebuilt_build.build` (numba's
-    ahead-of-time compiler, in this process) instead of compiling C sources."""
+    ahead-of-time compiler, in parts compiled at once, one process and module a part)
+    instead of compiling C sources."""
 
     def build_extension(self, ext: Extension) -> None:
         target = Path(self.get_ext_fullpath(ext.name)).resolve()
@@ -35,11 +36,13 @@ class BuildKernels(build_ext):
                     # an editable install again (make lint, make docs): the build beside the
                     # sources is current
                     target.parent.mkdir(parents=True, exist_ok=True)
-                    for name in (target.name, BUILD_INFO):
+                    parts = [target.name.replace("_kernels", m, 1)
+                             for m in info.get("parts", [])[1:]]
+                    for name in (target.name, *parts, BUILD_INFO):
                         shutil.copyfile(here / name, target.parent / name)
                     return
-                print("compiling vistrack's kernels ahead of time (a minute or two)",
-                      file=sys.stderr)
+                print("compiling vistrack's kernels ahead of time (a minute or two, in "
+                      "parallel)", file=sys.stderr)
                 build(target.parent, target.name)
         except Exception as e:  # noqa: BLE001 - any failure leaves compilation to first use
             print(f"warning: vistrack's kernels were not compiled ahead of time ({e!r}); "
@@ -52,9 +55,11 @@ class BuildKernels(build_ext):
             built = Path(self.build_lib, self.get_ext_filename(self.get_ext_fullname(ext.name)))
             if built.exists():
                 dest = HERE / "src" / "vistrack"
-                # vistrack._prebuilt.BUILD_INFO beside it; a new file each, as a running
-                # vistrack may have the old one open
-                for name in (built.name, "_kernels.json"):
+                # its other parts (_kernels_1, ...) and vistrack._prebuilt.BUILD_INFO beside
+                # it; a new file each, as a running vistrack may have the old one open
+                suffix = built.name[len("_kernels"):]
+                parts = [p.name for p in built.parent.glob(f"_kernels_*{suffix}")]
+                for name in (built.name, *parts, "_kernels.json"):
                     tmp = dest / f".{name}.{os.getpid()}.tmp"
                     shutil.copyfile(built.parent / name, tmp)
                     os.replace(tmp, dest / name)

@@ -204,3 +204,43 @@ def test_an_extension_and_build_information_of_two_builds_are_not_used(tmp_path,
     monkeypatch.setattr(_prebuilt, "_state", {})
     monkeypatch.setenv("VISTRACK_PREBUILT", "0")
     assert _prebuilt._load() is None and "VISTRACK_PREBUILT=0" in _prebuilt.status()
+
+
+def test_a_build_in_parts_is_used_only_with_every_part_of_the_same_build(tmp_path,
+                                                                          monkeypatch):
+    """The kernels compiled in parallel come in one module a part; a part missing, or one
+    of another build, and none is used."""
+    import types as pytypes
+
+    info = dict(_prebuilt.machine(), sources=_prebuilt.source_hash(), build_id=7,
+                parts=["_kernels", "_kernels_1"],
+                kernels={"tests:add": [[[_prebuilt.encode(types.float64)], "_kernels_1.k0"]]})
+    (tmp_path / _prebuilt.BUILD_INFO).write_text(json.dumps(info))
+    modules = {}
+    for name in info["parts"]:
+        m = modules[f"vistrack.{name}"] = pytypes.ModuleType(f"vistrack.{name}")
+        m.__file__ = str(tmp_path / f"{name}.so")
+        m.build_id = lambda: 7
+
+    real = _prebuilt.importlib.import_module
+
+    def import_module(name, *args):
+        if name.startswith("vistrack._kernels"):
+            if name not in modules:
+                raise ImportError(f"No module named {name!r}")
+            return modules[name]
+        return real(name, *args)
+
+    monkeypatch.setattr(_prebuilt.importlib, "import_module", import_module)
+    modules["vistrack._kernels_1"].k0 = lambda x: ("part 1", x)
+    monkeypatch.setattr(_prebuilt, "_state", {})
+    assert _prebuilt._load() == (modules["vistrack._kernels"], info)
+    k = _prebuilt.Kernel(njit(lambda x: x), "tests:add")
+    assert k(2.0) == ("part 1", 2.0) and k(2) == 2  # a float built in part 1; an int: numba
+    modules["vistrack._kernels_1"].build_id = lambda: 8
+    monkeypatch.setattr(_prebuilt, "_state", {})
+    assert _prebuilt._load() is None and "another build" in _prebuilt.status()
+    del modules["vistrack._kernels_1"]
+    monkeypatch.setattr(_prebuilt, "_state", {})
+    assert _prebuilt._load() is None
+    assert "part _kernels_1 not built" in _prebuilt.status()

@@ -3,8 +3,9 @@
 vistrack's kernels are numba functions. Compiled on first use, the ones a ``vistrack track``
 needs take about 30 s on two cores; so installing vistrack from source also compiles, ahead
 of time, the kernels its commands call from Python, for the argument types they call them with,
-into one extension module, :mod:`vistrack._kernels` (``setup.py``; the list of kernels and types
-is ``_prebuilt.json``, written by ``python -m vistrack._prebuilt_build record``).
+into the extension module :mod:`vistrack._kernels` (``setup.py``; the list of kernels and types
+is ``_prebuilt.json``, written by ``python -m vistrack._prebuilt_build record``), compiled in
+parts in parallel, one module a part (``_kernels``, ``_kernels_1``, ...).
 
 A :class:`Kernel` stands where Python calls such a numba function. It calls the ahead-of-time
 build when the arguments have exactly the numba types it was built for, and numba's dispatcher
@@ -109,10 +110,21 @@ def _load() -> tuple[Any, dict[str, Any]] | None:
         else:
             info, why = built(Path(module.__file__ or "").parent)
             if info is not None and not why:
-                if getattr(module, "build_id", lambda: None)() != info.get("build_id"):
-                    why = f"{BUILD_INFO} describes another build than {module.__file__}"
-                else:
+                # the kernels were compiled in parts, in parallel: the other parts' modules
+                parts = {}
+                for name in info.get("parts", [])[1:]:
+                    try:
+                        parts[name] = importlib.import_module(f"{PACKAGE.name}.{name}")
+                    except ImportError as e:
+                        why = f"part {name} not built ({e})"
+                        break
+                for m in [module, *parts.values()]:
+                    if not why and getattr(m, "build_id", lambda: None)() != info.get(
+                            "build_id"):
+                        why = f"{BUILD_INFO} describes another build than {m.__file__}"
+                if not why:
                     loaded = (module, info)
+                    _state["parts"] = parts
     _state["loaded"], _state["why"] = loaded, why
     return loaded
 
@@ -171,7 +183,9 @@ class Kernel:
             if loaded is not None:
                 module, info = loaded
                 for encoded, name in info["kernels"].get(self.key, []):
-                    self._builds[tuple(decode(t) for t in encoded)] = getattr(module, name)
+                    part, _, fn = name.rpartition(".")  # "kN" in the first part, "part.kN"
+                    self._builds[tuple(decode(t) for t in encoded)] = getattr(
+                        _state["parts"][part] if part else module, fn)
         if not self._builds:
             return None
         from numba import typeof

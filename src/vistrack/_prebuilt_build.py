@@ -5,9 +5,11 @@
     detections as a MOTChallenge sequence, ``vistrack demo kalman``, a filter and a smoother on
     a short series) and writes to ``_prebuilt.json`` every kernel wrapped by
     :func:`vistrack._prebuilt.kernel` and the argument types it was compiled for.
-``python -m vistrack._prebuilt_build build [--inplace | --out-dir DIR]``
+``python -m vistrack._prebuilt_build build [--inplace | --out FILE] [--jobs N]``
     compiles them into the extension (``setup.py`` does this when pip installs vistrack;
-    ``make`` when the sources changed). ``--if-stale`` skips a build that is current.
+    ``make`` when the sources changed), in parts compiled at once by processes of their own,
+    one module a part (``--jobs``, default the processors, at most 4). ``--if-stale`` skips a
+    build that is current.
 
 Each exported function forwards to the numba function itself, so that numba compiles the
 kernel with its own options (``fastmath``, ``error_model``) exactly as on first use, and the
@@ -191,51 +193,116 @@ def _forwarder(target: Any, n: int) -> Any:
     return scope["forward"]
 
 
-def build(out_dir: Path, filename: str | None = None, verbose: bool = False) -> Path:
-    """Compile every kernel of ``_prebuilt.json`` into ``out_dir`` (the extension and its
-    build information); returns the extension's path. Both are written under temporary names
-    and renamed into place when complete (a running vistrack keeps the files it opened)."""
+def build(out_dir: Path, filename: str | None = None, verbose: bool = False,
+          jobs: int | None = None) -> Path:
+    """Compile every kernel of ``_prebuilt.json`` into ``out_dir``: the extension, in ``jobs``
+    parts compiled at once in processes of their own (default: the processors this process may
+    use, at most 4), one module a part (``_kernels``, ``_kernels_1``, ...), and their build
+    information; returns the first part's path. All are written under temporary names and
+    renamed into place when complete, the build information last (a running vistrack keeps
+    the files it opened)."""
+    # the sources as they are imported here, before they are compiled
+    info: dict[str, Any] = dict(_prebuilt.machine(), sources=_prebuilt.source_hash())
+    spec = json.loads(SIGNATURES.read_text(encoding="utf-8"))["kernels"]
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    jobs = max(1, min(jobs or cpus or 1, 4, len(spec)))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    first = filename or Path(_cc(EXTENSION_NAME).output_file).name
+    modules = [EXTENSION_NAME] + [f"{EXTENSION_NAME}_{i}" for i in range(1, jobs)]
+    files = [first] + [first.replace(EXTENSION_NAME, m, 1) for m in modules[1:]]
+    # every build its exported name; then the kernels dealt to the parts by module, the
+    # modules with the most builds first, each to the part with the fewest builds so far. A
+    # kernel's callees are compiled again in every part that calls them, so the box tracker's
+    # modules, which share their association kernels, go to one part together.
+    items, n = {}, 0
+    units: dict[str, list[Any]] = {}
+    for key, sigs in spec.items():
+        items[key] = [(encoded, f"k{n + i}") for i, encoded in enumerate(sigs)]
+        n += len(sigs)
+        module = key.partition(":")[0]
+        unit = "tracking" if module.startswith(_SHARING) else module
+        units.setdefault(unit, []).append((key, items[key]))
+    parts: list[list[Any]] = [[] for _ in modules]
+    for unit in sorted(units, key=lambda u: -sum(len(b) for _, b in units[u])):
+        min(parts, key=lambda p: sum(len(b) for _, b in p)).extend(units[unit])
+    info["build_id"] = secrets.randbits(62)
+    tmp = Path(tempfile.mkdtemp(prefix=".kernels-", dir=out_dir))
+    try:
+        jobs_spec = [dict(dir=str(tmp), module=m, file=f, kernels=p, cpu=info["cpu"],
+                          build_id=info["build_id"], verbose=verbose)
+                     for m, f, p in zip(modules, files, parts)]
+        if len(jobs_spec) == 1:
+            _build_part(jobs_spec[0])
+        else:
+            _run_parts(jobs_spec, tmp)
+        info["parts"] = modules
+        info["kernels"] = {key: [[e, name if m == EXTENSION_NAME else f"{m}.{name}"]
+                                 for e, name in builds]
+                           for m, p in zip(modules, parts) for key, builds in p}
+        (tmp / BUILD_INFO).write_text(json.dumps(info, indent=1) + "\n", encoding="utf-8")
+        for f in files:
+            os.replace(tmp / f, out_dir / f)
+        os.replace(tmp / BUILD_INFO, out_dir / BUILD_INFO)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return out_dir / first
+
+
+_SHARING = ("vistrack.association.", "vistrack.tracking.", "vistrack.models.box")
+
+
+def _cc(module: str) -> Any:
     import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # numba.pycc's pending deprecation
         from numba.pycc import CC
+    return CC(module)
 
-    # the sources as they are imported here, before they are compiled
-    info: dict[str, Any] = dict(_prebuilt.machine(), sources=_prebuilt.source_hash())
-    spec = json.loads(SIGNATURES.read_text(encoding="utf-8"))
-    out_dir.mkdir(parents=True, exist_ok=True)
-    cc = CC(EXTENSION_NAME)
-    path = out_dir / (filename or Path(cc.output_file).name)
-    tmp = Path(tempfile.mkdtemp(prefix=".kernels-", dir=out_dir))
-    try:
-        cc.output_dir = str(tmp)
-        cc.output_file = path.name
-        cc.verbose = verbose
-        cc.target_cpu = info["cpu"]
-        # the module and its build information name the same build
-        info["build_id"] = secrets.randbits(62)
-        scope: dict[str, Any] = {}
-        exec(f"def build_id():\n    return {info['build_id']}\n", scope)  # noqa: S102
-        cc.export("build_id", "int64()")(scope["build_id"])
-        exports: dict[str, list[Any]] = {}
-        for key, sigs in spec["kernels"].items():
-            jit = _resolve(key)
-            for encoded in sigs:
-                args = tuple(decode(e) for e in encoded)
-                if args not in jit.overloads:
-                    jit.compile(args)
-                name = f"k{sum(map(len, exports.values()))}"
-                cc.export(name, jit.overloads[args].signature)(_forwarder(jit, len(args)))
-                exports.setdefault(key, []).append([encoded, name])
-        cc.compile()
-        info["kernels"] = exports
-        (tmp / BUILD_INFO).write_text(json.dumps(info, indent=1) + "\n", encoding="utf-8")
-        os.replace(tmp / path.name, path)
-        os.replace(tmp / BUILD_INFO, out_dir / BUILD_INFO)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-    return path
+
+def _build_part(job: dict[str, Any]) -> None:
+    """Compile one part of the extension (a job of :func:`build`) into ``job["dir"]``."""
+    cc = _cc(job["module"])
+    cc.output_dir = job["dir"]
+    cc.output_file = job["file"]
+    cc.verbose = job["verbose"]
+    cc.target_cpu = job["cpu"]
+    # the module and its build information name the same build
+    scope: dict[str, Any] = {}
+    exec(f"def build_id():\n    return {job['build_id']}\n", scope)  # noqa: S102
+    cc.export("build_id", "int64()")(scope["build_id"])
+    for key, builds in job["kernels"]:
+        jit = _resolve(key)
+        for encoded, name in builds:
+            args = tuple(decode(e) for e in encoded)
+            if args not in jit.overloads:
+                jit.compile(args)
+            cc.export(name, jit.overloads[args].signature)(_forwarder(jit, len(args)))
+    cc.compile()
+
+
+def _run_parts(jobs: list[dict[str, Any]], tmp: Path) -> None:
+    """Each job of :func:`build` in a process of its own, all at once, each with an empty
+    numba cache of its own (numba compiles from source, and no two processes write one
+    cache); raises if one fails, with its output."""
+    import subprocess
+
+    procs = []
+    for i, job in enumerate(jobs):
+        (tmp / f"part{i}.json").write_text(json.dumps(job), encoding="utf-8")
+        (tmp / f"numba{i}").mkdir()
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp / f"numba{i}"),
+                   PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+        procs.append(subprocess.Popen(
+            [sys.executable, "-m", "vistrack._prebuilt_build", "part", str(tmp / f"part{i}.json")],
+            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True))
+    failed = []
+    for job, proc in zip(jobs, procs):
+        out, _ = proc.communicate()
+        if proc.returncode:
+            failed.append(f"{job['module']} (exit status {proc.returncode}):\n{out[-2000:]}")
+    if failed:
+        raise RuntimeError("compiling the kernels failed: " + "\n".join(failed))
 
 
 EXTENSION_NAME = _prebuilt.EXTENSION.rpartition(".")[2]
@@ -256,7 +323,14 @@ def main(argv: list[str] | None = None) -> int:
     b.add_argument("--if-stale", action="store_true",
                    help="do nothing if the extension in place is current")
     b.add_argument("--verbose", action="store_true")
+    b.add_argument("--jobs", type=int, default=None,
+                   help="parts compiled at once (default: the processors, at most 4)")
+    part = sub.add_parser("part", help="compile one part (run by build)")
+    part.add_argument("job", type=Path)
     a = p.parse_args(argv)
+    if a.command == "part":
+        _build_part(json.loads(a.job.read_text(encoding="utf-8")))
+        return 0
     if a.command == "record":
         kernels = record(a.root)
         text = json.dumps({"kernels": kernels}, indent=1) + "\n"
@@ -273,7 +347,7 @@ def main(argv: list[str] | None = None) -> int:
     t = time.perf_counter()
     with tempfile.TemporaryDirectory() as cache:
         os.environ["NUMBA_CACHE_DIR"] = cache  # build from source, not from a cache
-        path = build(out_dir, filename, verbose=a.verbose)
+        path = build(out_dir, filename, verbose=a.verbose, jobs=a.jobs)
     print(f"built {path} in {time.perf_counter() - t:.0f} s")
     return 0
 
