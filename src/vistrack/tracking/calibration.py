@@ -14,10 +14,10 @@ the calibration asks two things of each detection, each one outcome of 0 or 1:
   seen (the median displacement of the frame-to-frame links), spanning ``chain_span``
   seconds or more? A person half hidden in a crowd is detected in some frames and not in
   others, so few of their detections persist from frame to frame, but they lie on long
-  chains; clutter that recurs where it was in pairs of frames does the opposite less
-  often. The frame-to-frame outcome is known one frame later, the chain's once it spans
-  ``chain_span`` (then every detection on it is) or once it has gone ``chain_gap`` without
-  a detection (then none of its detections is).
+  chains. Clutter that recurs where it was lies on chains too, so chains alone would take
+  it for objects. The frame-to-frame outcome is known one frame later; a chain's once it
+  spans ``chain_span`` (1 for every detection on it, and for those that join it later) or
+  once it has gone ``chain_gap`` without a detection (0 for all of them).
 
 The two outcomes weigh the same: each detection contributes both. Then
 
