@@ -161,6 +161,21 @@ def test_chains_across_gaps_count_flickering_objects(pan):
     assert np.count_nonzero(s == 0.2) == (T - 2) + (T - 3) and (o[s == 0.2] == 0).all()
 
 
+def test_chains_no_longer_referred_to_are_forgotten():
+    """A parked car detected in every frame keeps its chain for the whole run, while clutter
+    begins a chain a box: the table of chains holds the ones still referred to (by a last
+    box or an open detection), not every chain begun since the car's (15,000 here)."""
+    rng = np.random.default_rng(9)
+    cal = ScoreCalibrator(frame_rate=30.0, window=None)
+    for _ in range(3000):
+        xy = rng.uniform(0, 4000, (5, 2))
+        boxes = np.r_[[[10.0, 10, 50, 100]], np.c_[xy, xy + 40]]
+        cal.observe(Detections(boxes=boxes, scores=np.r_[0.9, rng.uniform(0, 0.8, 5)]))
+    assert len(cal._first) < 100  # the car's chain and the last 0.2 s of clutter's
+    s, o = cal.outcomes()
+    assert (o[s == 0.9] == 1).all() and np.count_nonzero(s == 0.9) == 2 * 3000 - 2
+
+
 def test_the_rank_map_is_the_empirical_distribution_function():
     """``ScoreCalibration.ranks``: each score maps to the fraction of scores at or below it,
     ties included (scipy's weak percentile of score); one below them all takes the lowest

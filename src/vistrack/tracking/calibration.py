@@ -137,17 +137,17 @@ def _link(prev, prev_cls, cur, cur_cls, min_iou):
 @kernel
 @njit(cache=True)
 def _chain_step(t, gap, span, shift, head_box, head_cls, head_t, head_shift, head_chain,
-                first, state, base, open_s, open_chain, boxes, cls, s, min_iou):
+                first, state, open_s, open_chain, boxes, cls, s, min_iou):
     # one frame of ScoreCalibrator's chains (see _extend_chains): returns the new heads, the
-    # chains' first frames and states from chain number ``base``, the detections still open,
-    # and the scores and outcomes resolved in this frame
+    # chains' first frames and states by chain number, the detections still open, and the
+    # scores and outcomes resolved in this frame
     H, N, C = head_box.shape[0], boxes.shape[0], first.shape[0]
     state = state.copy()
     keep = np.empty(H, np.bool_)
     for i in range(H):
         keep[i] = t - head_t[i] <= gap
-        if not keep[i] and state[head_chain[i] - base] == 0:
-            state[head_chain[i] - base] = -1  # ended short of the span
+        if not keep[i] and state[head_chain[i]] == 0:
+            state[head_chain[i]] = -1  # ended short of the span
     kept = np.flatnonzero(keep)
     K = kept.shape[0]
     moved = np.empty((K, 4))
@@ -180,26 +180,26 @@ def _chain_step(t, gap, span, shift, head_box, head_cls, head_t, head_shift, hea
     k = C
     for j in range(N):
         if ids[j] < 0:
-            ids[j] = base + k
+            ids[j] = k
             first2[k] = t
             state2[k] = 0
             k += 1
-        elif state2[ids[j] - base] == 0 and t - first2[ids[j] - base] >= span - 1e-9:
-            state2[ids[j] - base] = 1  # lasted: every detection on it counts
+        elif state2[ids[j]] == 0 and t - first2[ids[j]] >= span - 1e-9:
+            state2[ids[j]] = 1  # lasted: every detection on it counts
     # the open detections whose chain is now resolved give their outcomes
     P = open_s.shape[0]
     all_s = np.concatenate((open_s, s))
     all_c = np.concatenate((open_chain, ids))
     n_done = 0
     for j in range(P + N):
-        if state2[all_c[j] - base] != 0:
+        if state2[all_c[j]] != 0:
             n_done += 1
     out_s, out_p = np.empty(n_done), np.empty(n_done)
     still_s, still_c = np.empty(P + N - n_done), np.empty(P + N - n_done, np.int64)
     d = 0
     o = 0
     for j in range(P + N):
-        st = state2[all_c[j] - base]
+        st = state2[all_c[j]]
         if st != 0:
             out_s[d] = all_s[j]
             out_p[d] = 1.0 if st > 0 else 0.0
@@ -227,17 +227,33 @@ def _chain_step(t, gap, span, shift, head_box, head_cls, head_t, head_shift, hea
         hb[m], hc[m], ht[m], hid[m] = boxes[j], cls[j], t, ids[j]
         hs[m, 0], hs[m, 1] = shift[0], shift[1]
         m += 1
-    # forget the chains before the oldest still referred to, once they are half the table
-    low = base + first2.shape[0]
+    # once more than half the table's chains are no longer referred to (by a head or an open
+    # detection), keep only the others, renumbered from 0 in order: a chain that lasts for
+    # hours does not keep every chain begun after it
+    C2 = first2.shape[0]
+    alive = np.zeros(C2, np.bool_)
     for j in range(M):
-        low = min(low, hid[j])
+        alive[hid[j]] = True
     for j in range(o):
-        low = min(low, still_c[j])
-    if low - base > first2.shape[0] // 2:
-        first2 = first2[low - base:].copy()
-        state2 = state2[low - base:].copy()
-        base = low
-    return hb, hc, ht, hs, hid, first2, state2, base, still_s, still_c, out_s, out_p
+        alive[still_c[j]] = True
+    n_alive = 0
+    for j in range(C2):
+        if alive[j]:
+            n_alive += 1
+    if C2 >= 64 and C2 > 2 * n_alive:
+        new_id = np.full(C2, -1, np.int64)
+        first3, state3 = np.empty(n_alive, np.int64), np.empty(n_alive, np.int8)
+        k = 0
+        for j in range(C2):
+            if alive[j]:
+                new_id[j], first3[k], state3[k] = k, first2[j], state2[j]
+                k += 1
+        for j in range(M):
+            hid[j] = new_id[hid[j]]
+        for j in range(o):
+            still_c[j] = new_id[still_c[j]]
+        first2, state2 = first3, state3
+    return hb, hc, ht, hs, hid, first2, state2, still_s, still_c, out_s, out_p
 
 
 def _scores(scores: ArrayLike) -> np.ndarray:
@@ -641,15 +657,15 @@ class ScoreCalibrator:
         self._cal: ScoreCalibration | None = None
         # the chains: the frame count, the image's shift summed over the frames, each chain's
         # last box (``_head_*``: box, class, frame, the summed shift then, chain), each chain's
-        # first frame and state (0 open, 1 lasted, -1 ended short) by chain number from
-        # ``_base``, and the detections whose chain is still open (score, chain)
+        # first frame and state (0 open, 1 lasted, -1 ended short) by chain number (renumbered
+        # as chains are forgotten), and the detections whose chain is still open (score,
+        # chain)
         self._t = 0
         self._shift = np.zeros(2)
         self._head_box, self._head_cls = np.zeros((0, 4)), np.zeros(0, np.int64)
         self._head_t, self._head_shift = np.zeros(0, np.int64), np.zeros((0, 2))
         self._head_chain = np.zeros(0, np.int64)
         self._first, self._state = np.zeros(0, np.int64), np.zeros(0, np.int8)
-        self._base = 0
         self._open_s, self._open_chain = np.zeros(0), np.zeros(0, np.int64)
 
     @property
@@ -745,12 +761,11 @@ class ScoreCalibrator:
         :func:`_chain_step`)."""
         t, self._t = self._t, self._t + 1
         (self._head_box, self._head_cls, self._head_t, self._head_shift, self._head_chain,
-         self._first, self._state, base, self._open_s, self._open_chain, out_s, out_p) = \
+         self._first, self._state, self._open_s, self._open_chain, out_s, out_p) = \
             _chain_step(t, self._gap, self._span, self._shift, self._head_box,
                         self._head_cls, self._head_t, self._head_shift, self._head_chain,
-                        self._first, self._state, self._base, self._open_s,
-                        self._open_chain, boxes, cls.astype(np.int64), s, self.link_iou)
-        self._base = int(base)
+                        self._first, self._state, self._open_s, self._open_chain, boxes,
+                        cls.astype(np.int64), s, self.link_iou)
         self._push(out_s, out_p)
 
     def _push(self, s: np.ndarray, p: np.ndarray) -> None:
