@@ -4,6 +4,7 @@ Everything else is declared in pyproject.toml. Compiling the kernels needs numba
 compiler; without them vistrack installs all the same and compiles its kernels on first use.
 """
 
+import json
 import os
 import shutil
 import sys
@@ -27,7 +28,7 @@ class BuildKernels(build_ext):
             with tempfile.TemporaryDirectory() as cache:
                 os.environ["NUMBA_CACHE_DIR"] = cache  # from source, not from a cache
                 sys.path.insert(0, str(HERE / "src"))
-                from vistrack._prebuilt import BUILD_INFO, built
+                from vistrack._prebuilt import BUILD_INFO, built, part_files
                 from vistrack._prebuilt_build import build
 
                 here = HERE / "src" / "vistrack"
@@ -36,9 +37,8 @@ class BuildKernels(build_ext):
                     # an editable install again (make lint, make docs): the build beside the
                     # sources is current
                     target.parent.mkdir(parents=True, exist_ok=True)
-                    parts = [target.name.replace("_kernels", m, 1)
-                             for m in info.get("parts", [])[1:]]
-                    for name in (target.name, *parts, BUILD_INFO):
+                    parts = part_files(target.name, info.get("parts", ["_kernels"]))
+                    for name in (*parts, BUILD_INFO):
                         shutil.copyfile(here / name, target.parent / name)
                     return
                 print("compiling vistrack's kernels ahead of time (a minute or two, in "
@@ -55,11 +55,14 @@ class BuildKernels(build_ext):
             built = Path(self.build_lib, self.get_ext_filename(self.get_ext_fullname(ext.name)))
             if built.exists():
                 dest = HERE / "src" / "vistrack"
-                # its other parts (_kernels_1, ...) and vistrack._prebuilt.BUILD_INFO beside
-                # it; a new file each, as a running vistrack may have the old one open
-                suffix = built.name[len("_kernels"):]
-                parts = [p.name for p in built.parent.glob(f"_kernels_*{suffix}")]
-                for name in (built.name, *parts, "_kernels.json"):
+                # with its other parts (_kernels_1, ...) and vistrack._prebuilt.BUILD_INFO,
+                # which names them; a new file each, as a running vistrack may have the old
+                # one open
+                from vistrack._prebuilt import BUILD_INFO, part_files
+
+                info = json.loads((built.parent / BUILD_INFO).read_text(encoding="utf-8"))
+                parts = part_files(built.name, info.get("parts", ["_kernels"]))
+                for name in (*parts, BUILD_INFO):
                     tmp = dest / f".{name}.{os.getpid()}.tmp"
                     shutil.copyfile(built.parent / name, tmp)
                     os.replace(tmp, dest / name)

@@ -81,6 +81,14 @@ def _stale(info: dict[str, Any]) -> str:
     return ""
 
 
+def part_files(first: str, parts: list[str]) -> list[str]:
+    """The file of each part (module names, the first ``_kernels``) of a build whose first
+    part's file is ``first`` (``_kernels.cpython-311-x86_64-linux-gnu.so``: ``_kernels_1.cp...``
+    for part ``_kernels_1``)."""
+    name = EXTENSION.rpartition(".")[2]
+    return [first.replace(name, part, 1) for part in parts]
+
+
 def built(directory: Path = PACKAGE) -> tuple[dict[str, Any] | None, str]:
     """The build information in ``directory`` and why it may not be used ("" if it may),
     without importing the extension."""
@@ -118,13 +126,14 @@ def _load() -> tuple[Any, dict[str, Any]] | None:
                     except ImportError as e:
                         why = f"part {name} not built ({e})"
                         break
-                for m in [module, *parts.values()]:
-                    if not why and getattr(m, "build_id", lambda: None)() != info.get(
-                            "build_id"):
-                        why = f"{BUILD_INFO} describes another build than {m.__file__}"
-                if not why:
-                    loaded = (module, info)
-                    _state["parts"] = parts
+                else:
+                    for m in [module, *parts.values()]:
+                        if getattr(m, "build_id", lambda: None)() != info.get("build_id"):
+                            why = f"{BUILD_INFO} describes another build than {m.__file__}"
+                            break
+                    else:
+                        loaded = (module, info)
+                        _state["parts"] = parts
     _state["loaded"], _state["why"] = loaded, why
     return loaded
 

@@ -209,7 +209,7 @@ def build(out_dir: Path, filename: str | None = None, verbose: bool = False,
     out_dir.mkdir(parents=True, exist_ok=True)
     first = filename or Path(_cc(EXTENSION_NAME).output_file).name
     modules = [EXTENSION_NAME] + [f"{EXTENSION_NAME}_{i}" for i in range(1, jobs)]
-    files = [first] + [first.replace(EXTENSION_NAME, m, 1) for m in modules[1:]]
+    files = _prebuilt.part_files(first, modules)
     # every build its exported name; then the kernels dealt to the parts by module, the
     # modules with the most builds first, each to the part with the fewest builds so far. A
     # kernel's callees are compiled again in every part that calls them, so the box tracker's

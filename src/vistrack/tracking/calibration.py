@@ -744,7 +744,8 @@ class ScoreCalibrator:
                 r, c = _link(pb, pc, boxes, cls, self.link_iou)
                 linked_fwd[r] = True
                 linked_back[c] = True
-                if len(r) >= 3:  # the image's shift: the links' median displacement
+                if self.chain_span > 0 and len(r) >= 3:
+                    # the image's shift, for the chains: the links' median displacement
                     d = (boxes[c, :2] + boxes[c, 2:] - pb[r, :2] - pb[r, 2:]) / 2
                     self._shift = self._shift + np.median(d, axis=0)
             if detections is not None and not first:
@@ -765,7 +766,7 @@ class ScoreCalibrator:
             _chain_step(t, self._gap, self._span, self._shift, self._head_box,
                         self._head_cls, self._head_t, self._head_shift, self._head_chain,
                         self._first, self._state, self._open_s, self._open_chain, boxes,
-                        cls.astype(np.int64), s, self.link_iou)
+                        cls, s, self.link_iou)
         self._push(out_s, out_p)
 
     def _push(self, s: np.ndarray, p: np.ndarray) -> None:
