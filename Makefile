@@ -5,6 +5,10 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+# vistrack installed editable, built in .venv itself rather than in an isolated environment that
+# would install numba, numpy and the rest a second time; its kernels are compiled by `make
+# kernels`, with .venv's numba
+INSTALL_E := VISTRACK_PREBUILT=0 $(PY) -m pip install --quiet --no-build-isolation -e
 
 .PHONY: run test docs lint bench bench-peers clean kernels
 
@@ -12,15 +16,16 @@ $(PY):
 	$(PYTHON) -m venv $(VENV)
 
 $(STAMP): pyproject.toml setup.py | $(PY)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[test]"
+	$(PY) -m pip install --quiet --upgrade pip "setuptools>=77" wheel
+	$(INSTALL_E) ".[test]"
 	$(PY) -m pip install --quiet --no-deps "trackeval>=1.3.0"
 	touch $(STAMP)
 
-# the kernels compiled ahead of time (setup.py): rebuilt when a source changed since; if that
-# fails (no C compiler), vistrack compiles them on first use instead
+# the kernels compiled ahead of time (as setup.py does on pip install): rebuilt when a source changed since; if that
+# fails (no C compiler), vistrack compiles them on first use instead. numba's compilations of
+# them are kept in build/numba-cache, where the tests' processes load them from
 kernels: $(STAMP)
-	-$(PY) -m vistrack._prebuilt_build build --inplace --if-stale
+	-$(PY) -m vistrack._prebuilt_build build --inplace --if-stale --numba-cache build/numba-cache
 
 run: kernels
 	$(VENV)/bin/vistrack track data/pets09-s2l1/pets09-s2l1.mp4 --gt data/pets09-s2l1/gt.txt \
@@ -32,7 +37,7 @@ test: kernels
 	$(PY) -m pytest -q -n auto
 
 $(VENV)/.lint-installed: $(STAMP)
-	$(PY) -m pip install --quiet -e ".[lint]"
+	$(INSTALL_E) ".[lint]"
 	touch $@
 
 lint: $(VENV)/.lint-installed
@@ -40,7 +45,7 @@ lint: $(VENV)/.lint-installed
 	$(VENV)/bin/mypy
 
 $(VENV)/.docs-installed: $(STAMP)
-	$(PY) -m pip install --quiet -e ".[docs]"
+	$(INSTALL_E) ".[docs]"
 	touch $@
 
 # the API pages are generated from each module's __all__: start them afresh, so that a removed
@@ -50,7 +55,7 @@ docs: $(VENV)/.docs-installed
 	$(VENV)/bin/sphinx-build -W --keep-going -b html docs docs/_build/html
 
 $(VENV)/.bench-installed: $(STAMP)
-	$(PY) -m pip install --quiet -e ".[test,bench]"
+	$(INSTALL_E) ".[test,bench]"
 	# supervision (for trackers) pulls opencv-python, whose cv2 lacks the contrib modules
 	# (HOG) and overwrites ours: put opencv-contrib-python-headless back over it
 	$(PY) -m pip install --quiet --force-reinstall --no-deps \

@@ -24,6 +24,11 @@ class BuildKernels(build_ext):
 
     def build_extension(self, ext: Extension) -> None:
         target = Path(self.get_ext_fullpath(ext.name)).resolve()
+        if os.environ.get("VISTRACK_PREBUILT", "1") == "0":
+            # `make` does so: it compiles them afterwards, with the environment's own numba
+            print("VISTRACK_PREBUILT=0: vistrack's kernels are not compiled ahead of time now",
+                  file=sys.stderr)
+            return
         try:
             with tempfile.TemporaryDirectory() as cache:
                 os.environ["NUMBA_CACHE_DIR"] = cache  # from source, not from a cache

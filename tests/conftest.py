@@ -9,9 +9,38 @@ from pathlib import Path
 if os.environ.get("PYTEST_XDIST_WORKER") and "NUMBA_CACHE_DIR" not in os.environ:
     os.environ["NUMBA_CACHE_DIR"] = str(Path(__file__).resolve().parents[1] / ".pytest_cache"
                                         / f"numba-{os.environ['PYTEST_XDIST_WORKER']}")
+    _seed = True
+else:
+    _seed = False
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+NUMBA_KEPT = ROOT / "build" / "numba-cache"
+"""numba's compilations of the kernels, kept by the build of the ahead-of-time kernels
+(``make kernels``, which ``make test`` runs; see :func:`vistrack._prebuilt_build.build`)."""
+
+
+def seed_numba_cache(dest):
+    """Copy the build's compilations of the kernels into the numba cache ``dest``, if they
+    were made from the sources as they are: a process using ``dest`` then loads them instead
+    of compiling the kernels again for those argument types (numba compiles the rest as
+    usual). Returns the number of functions copied."""
+    from vistrack import _prebuilt
+    from vistrack._prebuilt_build import copy_numba_cache
+
+    try:
+        sources = (NUMBA_KEPT / "sources").read_text(encoding="utf-8").strip()
+    except OSError:
+        return 0
+    if sources != _prebuilt.source_hash():
+        return 0
+    return copy_numba_cache(NUMBA_KEPT, Path(dest))
+
+
+if _seed:  # before any test compiles
+    seed_numba_cache(os.environ["NUMBA_CACHE_DIR"])
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 

@@ -14,6 +14,7 @@ import pytest
 from numba import njit
 from numba.core import types
 
+from tests.conftest import seed_numba_cache
 from vistrack import _prebuilt
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -65,9 +66,12 @@ def test_vistracks_commands_compile_nothing_on_a_first_run(tmp_path):
 def test_each_build_equals_numbas_compilation_on_first_use(tmp_path):
     """Every kernel call of the workloads, repeated with the numba function itself: the same
     results and the same changes to the arguments, to the bit. Compared in a process of its
-    own with numba's and vistrack's caches empty, as on a first use: nothing the test process
-    compiled or cached before (other tests' signatures, under pytest-xdist another order of
-    them) enters the comparison."""
+    own, as on a first use: nothing the test process compiled or cached before (other tests'
+    signatures, under pytest-xdist another order of them) enters the comparison. numba's
+    cache holds only what the build itself compiled as on first use, from these sources,
+    before it compiled the same code ahead of time (``build/numba-cache``, when the build
+    kept it; the comparison is the same without, and numba compiles everything here)."""
+    seed_numba_cache(tmp_path / "numba")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"),
                VISTRACK_CACHE_DIR=str(tmp_path / "kernels"))
     r = subprocess.run([sys.executable, "-c", "from tests.test_prebuilt import "
@@ -244,3 +248,47 @@ def test_a_build_in_parts_is_used_only_with_every_part_of_the_same_build(tmp_pat
     monkeypatch.setattr(_prebuilt, "_state", {})
     assert _prebuilt._load() is None
     assert "part _kernels_1 not built" in _prebuilt.status()
+
+
+def test_copied_numba_caches_load_each_signature_with_its_own_code(tmp_path):
+    """numba's cache of a function copied into another cache directory (as the build's
+    compilations are copied for the tests): the copy loads each signature's own code, and
+    where the destination held an older cache of the same function for other signatures,
+    those are compiled again rather than loaded with another signature's code."""
+    from vistrack._prebuilt_build import copy_numba_cache
+
+    (tmp_path / "mod.py").write_text(textwrap.dedent("""
+        import sys
+        import numpy as np
+        from numba import njit
+
+        @njit(cache=True)
+        def f(x):
+            return x * 2 + 1
+
+        if __name__ == "__main__":
+            args = {"int": 3, "float": 3.5, "complex": 1j, "array": np.arange(3.0)}
+            got = [f(args[k]) for k in sys.argv[1:]]
+            print(repr([np.asarray(g).tolist() for g in got]), f.stats.cache_hits.total(),
+                  f.stats.cache_misses.total())
+    """))
+
+    def run(cache, *kinds):
+        r = subprocess.run([sys.executable, str(tmp_path / "mod.py"), *kinds], cwd=tmp_path,
+                           env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / cache)),
+                           capture_output=True, text=True, check=True)
+        values, hits, misses = r.stdout.rsplit(" ", 2)
+        return ast.literal_eval(values), int(hits), int(misses)
+
+    want = {"int": 7, "float": 8.0, "complex": 1 + 2j, "array": [1.0, 3.0, 5.0]}
+    # an older cache of f for two other signatures in the destination
+    assert run("dest", "complex", "array") == ([want["complex"], want["array"]], 0, 2)
+    assert run("dest", "complex", "array")[1:] == (2, 0)
+    os.utime(next((tmp_path / "dest").rglob("*.nbi")), (1, 1))  # made long before
+    assert run("src", "int", "float") == ([want["int"], want["float"]], 0, 2)
+    assert copy_numba_cache(tmp_path / "src", tmp_path / "dest") == 1
+    assert copy_numba_cache(tmp_path / "src", tmp_path / "dest") == 0  # now as new as the copy
+    assert run("dest", "int", "float") == ([want["int"], want["float"]], 2, 0)
+    # the destination's own signatures compiled again, with their own results
+    assert run("dest", "complex", "array", "int") == (
+        [want["complex"], want["array"], want["int"]], 1, 2)

@@ -5,11 +5,13 @@
     detections as a MOTChallenge sequence, ``vistrack demo kalman``, a filter and a smoother on
     a short series) and writes to ``_prebuilt.json`` every kernel wrapped by
     :func:`vistrack._prebuilt.kernel` and the argument types it was compiled for.
-``python -m vistrack._prebuilt_build build [--inplace | --out FILE] [--jobs N]``
+``python -m vistrack._prebuilt_build build [--inplace | --out FILE] [--jobs N] [--numba-cache DIR]``
     compiles them into the extension (``setup.py`` does this when pip installs vistrack;
     ``make`` when the sources changed), in parts compiled at once by processes of their own,
     one module a part (``--jobs``, default the processors, at most 4). ``--if-stale`` skips a
-    build that is current.
+    build that is current; ``--numba-cache`` keeps numba's own compilations of the kernels,
+    which the build makes first, for other processes to load (``make`` keeps them in
+    ``build/numba-cache`` for the test suite).
 
 Each exported function forwards to the numba function itself, so that numba compiles the
 kernel with its own options (``fastmath``, ``error_model``) exactly as on first use, and the
@@ -39,7 +41,7 @@ from typing import Any
 from . import _prebuilt
 from ._prebuilt import BUILD_INFO, PACKAGE, SIGNATURES, decode, encode
 
-__all__ = ["record", "build", "main"]
+__all__ = ["record", "build", "copy_numba_cache", "main"]
 
 
 def _resolve(key: str) -> Any:
@@ -194,13 +196,19 @@ def _forwarder(target: Any, n: int) -> Any:
 
 
 def build(out_dir: Path, filename: str | None = None, verbose: bool = False,
-          jobs: int | None = None) -> Path:
+          jobs: int | None = None, numba_cache: Path | None = None) -> Path:
     """Compile every kernel of ``_prebuilt.json`` into ``out_dir``: the extension, in ``jobs``
     parts compiled at once in processes of their own (default: the processors this process may
     use, at most 4), one module a part (``_kernels``, ``_kernels_1``, ...), and their build
     information; returns the first part's path. All are written under temporary names and
     renamed into place when complete, the build information last (a running vistrack keeps
-    the files it opened)."""
+    the files it opened).
+
+    To build a kernel, numba first compiles it as on first use, into the numba cache of its
+    part's process. With ``numba_cache``, those caches are kept there (replacing what it
+    held), with the sources' hash in its file ``sources``: a process that sets
+    ``NUMBA_CACHE_DIR`` to a copy of it (:func:`copy_numba_cache`) loads these compilations
+    instead of compiling them again (the test suite's processes do)."""
     # the sources as they are imported here, before they are compiled
     info: dict[str, Any] = dict(_prebuilt.machine(), sources=_prebuilt.source_hash())
     spec = json.loads(SIGNATURES.read_text(encoding="utf-8"))["kernels"]
@@ -231,10 +239,15 @@ def build(out_dir: Path, filename: str | None = None, verbose: bool = False,
         jobs_spec = [dict(dir=str(tmp), module=m, file=f, kernels=p, cpu=info["cpu"],
                           build_id=info["build_id"], verbose=verbose)
                      for m, f, p in zip(modules, files, parts)]
-        if len(jobs_spec) == 1:
+        if len(jobs_spec) == 1 and numba_cache is None:
             _build_part(jobs_spec[0])
         else:
             _run_parts(jobs_spec, tmp)
+        if numba_cache is not None:
+            shutil.rmtree(numba_cache, ignore_errors=True)
+            for i in range(len(jobs_spec)):
+                copy_numba_cache(tmp / f"numba{i}", numba_cache)
+            (numba_cache / "sources").write_text(info["sources"] + "\n", encoding="utf-8")
         info["parts"] = modules
         info["kernels"] = {key: [[e, name if m == EXTENSION_NAME else f"{m}.{name}"]
                                  for e, name in builds]
@@ -246,6 +259,30 @@ def build(out_dir: Path, filename: str | None = None, verbose: bool = False,
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return out_dir / first
+
+
+def copy_numba_cache(src: Path, dest: Path) -> int:
+    """Copy numba's cache of each function in ``src`` (a ``NUMBA_CACHE_DIR``) into ``dest``,
+    its index and code files together, where ``dest`` has none for the function or an older
+    index (whose code files are removed first, so that the index copied names only its own);
+    returns the number of functions copied. numba checks each index against its source file's
+    contents when it loads it."""
+    import glob
+
+    n = 0
+    for index in sorted(src.rglob("*.nbi")):
+        target = dest / index.relative_to(src)
+        if target.exists() and target.stat().st_mtime >= index.stat().st_mtime:
+            continue
+        target.parent.mkdir(parents=True, exist_ok=True)
+        code = glob.escape(index.name[: -len(".nbi")]) + ".*.nbc"
+        for old in target.parent.glob(code):
+            old.unlink()
+        for data in index.parent.glob(code):
+            shutil.copy2(data, target.parent / data.name)
+        shutil.copy2(index, target)
+        n += 1
+    return n
 
 
 _SHARING = ("vistrack.association.", "vistrack.tracking.", "vistrack.models.box")
@@ -325,6 +362,8 @@ def main(argv: list[str] | None = None) -> int:
     b.add_argument("--verbose", action="store_true")
     b.add_argument("--jobs", type=int, default=None,
                    help="parts compiled at once (default: the processors, at most 4)")
+    b.add_argument("--numba-cache", type=Path, default=None,
+                   help="keep numba's compilations of the kernels in this folder")
     part = sub.add_parser("part", help="compile one part (run by build)")
     part.add_argument("job", type=Path)
     a = p.parse_args(argv)
@@ -347,7 +386,8 @@ def main(argv: list[str] | None = None) -> int:
     t = time.perf_counter()
     with tempfile.TemporaryDirectory() as cache:
         os.environ["NUMBA_CACHE_DIR"] = cache  # build from source, not from a cache
-        path = build(out_dir, filename, verbose=a.verbose, jobs=a.jobs)
+        path = build(out_dir, filename, verbose=a.verbose, jobs=a.jobs,
+                     numba_cache=a.numba_cache)
     print(f"built {path} in {time.perf_counter() - t:.0f} s")
     return 0
 
