@@ -64,6 +64,7 @@ $(VENV)/.bench-installed: $(STAMP)
 
 bench: $(VENV)/.bench-installed
 	$(PY) bench/bench_kalman.py --write docs/benchmarks.md
+	$(PY) bench/bench_em.py --write docs/benchmarks.md
 	$(PY) bench/bench_particle.py --write docs/benchmarks.md
 	$(PY) bench/bench_tracking.py --write docs/benchmarks.md
 	$(PY) bench/bench_pixels.py --write docs/benchmarks.md

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import statistics
 import sys
+import time
 
 
 def optional(name: str):
@@ -12,3 +14,15 @@ def optional(name: str):
     except Exception as exc:  # noqa: BLE001 - any import failure means "not available"
         print(f"  ({name} not available: {exc})", file=sys.stderr)
         return None
+
+
+def median_time(fn, repeats: int):
+    """The median of ``repeats`` timed calls of ``fn`` after one untimed call (compilation,
+    caches), and the last call's result."""
+    out = fn()
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times), out

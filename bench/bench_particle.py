@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import statistics
 import sys
 import time
 import warnings
@@ -27,20 +26,10 @@ import numpy as np  # noqa: E402
 import vistrack as vt  # noqa: E402
 from vistrack.filters import ParticleFilter, UnscentedKalmanFilter, ukf_predict, ukf_update  # noqa: E402
 
-from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
+from _common import median_time, optional  # noqa: E402  (bench/ is on the path of its scripts)
 from _markdown import replace_section  # noqa: E402
 
 T = 100
-
-
-def median_time(fn, repeats):
-    fn()
-    times = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times), out
 
 
 def growth_f(x, t):

@@ -1,6 +1,7 @@
 """Inference: batched Kalman kernels, the whole-sequence filter, smoothers, the filter of
 independent (value, rate) pairs that the box tracker runs, and the EKF, UKF and ensemble Kalman
-filter for nonlinear models."""
+filter for nonlinear models, and expectation-maximisation to learn a linear model's
+parameters from its measurements."""
 
 from .axes import axes_predict, axes_to_full, axes_update, full_to_axes
 from .ekf import ExtendedKalmanFilter, ekf_predict, ekf_update
@@ -15,6 +16,7 @@ from .kalman import (
     kf_step,
     kf_update,
 )
+from .learn import FitResult, em, mle
 from .linear import KalmanFilter, OnlineFilter
 from .particle import (
     RESAMPLERS,
@@ -47,6 +49,9 @@ __all__ = [
     "resample",
     "weighted_cov",
     "weighted_mean",
+    "FitResult",
+    "em",
+    "mle",
     "Ensemble",
     "EnsembleKalmanFilter",
     "ExtendedKalmanFilter",

@@ -4,6 +4,10 @@ equations are :mod:`vistrack.filters.kalman`'s and :mod:`vistrack.filters.smooth
 
 from __future__ import annotations
 
+import copy
+from dataclasses import replace
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -14,11 +18,12 @@ from .._validate import (
     check_matrix_stack,
     check_psd,
 )
-from ..models.measurement import MeasurementModel
+from ..models.measurement import LinearMeasurement, MeasurementModel, Position
 from ..models.motion import MotionModel
 from ..types import Gaussian
 from . import _kernels
 from .kalman import FilterResult, _kernel_error, _prior, _update, kalman_filter, kf_predict
+from .learn import FitResult, em, mle
 from .smoothers import SmoothResult, rts_smooth
 
 __all__ = ["KalmanFilter", "OnlineFilter"]
@@ -362,6 +367,126 @@ class KalmanFilter:
         mats = self.matrices(T, dt)
         res = self.filter(ys, dt=dt, x0=x0, P0=P0)
         return rts_smooth(res, F=mats["F"], Q=mats["Q"])
+
+    def fit(
+        self,
+        ys: ArrayLike,
+        *,
+        dt: ArrayLike = 1.0,
+        learn: tuple[str, ...] | list[str] = ("q", "R"),
+        method: str = "mle",
+        R_form: str = "diag",
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+        **options: Any,
+    ) -> tuple[KalmanFilter, FitResult]:
+        """Learn the motion model's noise ``q`` and the measurement noise ``R`` from
+        measurements (one series, or a batch pooled), the rest of the models as they are.
+
+        ``Q(dt)`` is learned as a factor of the motion model's (its ``q`` for any time steps,
+        as the model discretises it), and ``R`` by its diagonal (``R_form="diag"``), a factor
+        (``"scaled"``) or, by EM, every entry (``"full"``).
+
+        Parameters
+        ----------
+        ys : (T, m) or (B, T, m) array_like
+            Measurements; NaN components are missing.
+        dt : float or array_like
+            As in :meth:`filter`.
+        learn : sequence of {"q", "R"}
+            What to learn.
+        method : {"mle", "em"}
+            Maximum likelihood by L-BFGS with the exact gradient
+            (:func:`~vistrack.filters.mle`), or expectation-maximisation
+            (:func:`~vistrack.filters.em`); both reach the same maximum.
+        R_form : {"diag", "scaled", "full"}
+            ``R``'s structure (``"full"`` with ``method="em"`` only).
+        x0, P0 : array_like, optional
+            The prior, as in :meth:`filter` (from :meth:`default_prior` with the models given
+            if None), held fixed.
+        **options
+            Passed to the method (``max_iter``, ``tol`` for EM, ``xtol`` for L-BFGS).
+
+        Returns
+        -------
+        KalmanFilter
+            A new filter: a copy of the motion model with the learned ``q``, and the
+            measurement model with the learned ``R`` (a :class:`~vistrack.models.Position`
+            or :class:`~vistrack.models.LinearMeasurement` as given).
+        FitResult
+            The fit: its log-likelihood trace, iterations and, by maximum likelihood, standard
+            errors; ``q`` and ``stderr["q"]`` in the motion model's units.
+
+        Raises
+        ------
+        TypeError
+            If ``q`` is learned and the motion model has no ``q`` that scales its ``Q``
+            linearly, or ``R`` is learned of a measurement model that is not a ``Position``
+            or ``LinearMeasurement``.
+        ValueError
+            If ``learn``, ``method`` or ``R_form`` is unknown, or as the method raises.
+
+        Examples
+        --------
+        A constant-velocity target with q = 0.5 and R = 4 I, learned from a start of q = 1
+        and R = I:
+
+        >>> from vistrack.models import ConstantVelocity, Position
+        >>> from vistrack.simulate import simulate
+        >>> truth = KalmanFilter(ConstantVelocity(dim=2, q=0.5), Position(dim=2, r=4.0))
+        >>> _, ys = simulate(truth.motion, truth.measurement, 2000, x0=np.zeros(4), rng=0)
+        >>> kf, fit = KalmanFilter(ConstantVelocity(dim=2), Position(dim=2)).fit(ys)
+        >>> round(kf.motion.q, 2), kf.measurement.R().diagonal().round(2), fit.converged
+        (0.52, array([4.1 , 3.89]), True)
+        """
+        learned = tuple(learn)
+        for name in learned:
+            if name not in ("q", "R"):
+                raise ValueError(f"learn must name some of ['q', 'R']; got {name!r}")
+        if method not in ("mle", "em"):
+            raise ValueError(f"method must be 'mle' or 'em'; got {method!r}")
+        motion, meas = self.motion, self.measurement
+        if "q" in learned:
+            q0 = getattr(motion, "q", None)
+            doubled = copy.copy(motion)
+            if isinstance(q0, float) and q0 > 0:
+                doubled.q = 2 * q0  # type: ignore[attr-defined]
+            d = np.linspace(0.5, 2.0, 4)
+            if not (isinstance(q0, float) and q0 > 0
+                    and np.allclose(doubled.Q(d), 2 * np.asarray(motion.Q(d)), rtol=1e-12)):
+                raise TypeError(f"learning q needs a motion model whose Q is q times a "
+                                f"matrix; {motion!r} has no such q")
+        if "R" in learned and not isinstance(meas, (Position, LinearMeasurement)):
+            raise TypeError(f"learning R needs a Position or LinearMeasurement model; got "
+                            f"{type(meas).__name__}")
+        y, _ = as_measurement_series(ys)
+        T = y.shape[1]
+        if x0 is None or P0 is None:
+            dx0, dP0 = self.default_prior(y)
+            x0 = dx0 if x0 is None else x0
+            P0 = dP0 if P0 is None else P0
+        mats = self.matrices(T, dt)
+        what = tuple({"q": "Q", "R": "R"}[k] for k in learned)
+        F, Q, H, R = mats["F"], mats["Q"], mats["H"], mats["R"]
+        if method == "mle":
+            fit = mle(y, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0, learn=what, R_form=R_form,
+                      **options)
+        else:
+            fit = em(y, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0, learn=what, Q_form="scaled",
+                     R_form=R_form, **options)
+        if "q" in learned:
+            # q, and its standard error, in the motion model's units
+            q0 = float(getattr(self.motion, "q"))  # noqa: B009
+            motion = copy.copy(motion)
+            setattr(motion, "q", q0 * float(fit.q))  # noqa: B010
+            stderr = dict(fit.stderr)
+            if "q" in stderr:
+                stderr["q"] = q0 * stderr["q"]
+            fit = replace(fit, q=q0 * float(fit.q), stderr=stderr)
+        if "R" in learned:
+            meas = (Position(dim=meas.ndim_meas, r=fit.R) if isinstance(meas, Position)
+                    else LinearMeasurement(meas.H(self.motion.ndim_state), fit.R))
+        return KalmanFilter(motion, meas), fit
 
 
 class OnlineFilter:

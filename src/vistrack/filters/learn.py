@@ -1,0 +1,656 @@
+r"""Learning a linear-Gaussian model from its measurements: expectation-maximisation and
+maximum likelihood by gradient.
+
+The Kalman filter needs the model, ``F``, ``Q``, ``H``, ``R`` and the prior ``x0``, ``P0``;
+users rarely know the noise. :func:`em` learns any subset of them from one series or a batch,
+the rest held fixed (Shumway and Stoffer [1]_); :func:`mle` learns the structured noise (the
+factor ``q`` of ``Q``, ``R``'s diagonal or factor) by L-BFGS with the exact gradient, which
+comes from the same smoothed sums (Fisher's identity), with standard errors.
+:meth:`vistrack.filters.KalmanFilter.fit` does either for a filter built from models. Each iteration runs the filter and the
+Rauch-Tung-Striebel smoother (the E-step) and sets the parameters learned to the maximum of the
+expected complete-data log-likelihood (the M-step), which never lowers the likelihood of the
+measurements. With smoothed means :math:`m_t`, covariances :math:`P_t`, the lag-one
+cross-covariances :math:`C_t = \operatorname{cov}(x_t, x_{t-1} \mid y) = P_t G_{t-1}'` (the
+smoother's gain :math:`G_{t-1} = P^+_{t-1} F_t' (P^-_t)^{-1}`) and the sums over the ``N = B
+(T-1)`` transitions of the batch,
+
+.. math::
+
+    S_{11} = \sum P_t + m_t m_t', \quad S_{10} = \sum C_t + m_t m_{t-1}', \quad
+    S_{00} = \sum P_{t-1} + m_{t-1} m_{t-1}',
+
+    F = S_{10} S_{00}^{-1}, \qquad
+    Q = \frac{1}{N} \sum E[w_t w_t'] = \frac{1}{N} \sum S_{11,t} - F S_{10,t}' - S_{10,t} F'
+    + F S_{00,t} F',
+
+``H`` row by row from the steps where its component is measured, :math:`H_i = (\sum y_{ti}
+m_t') (\sum P_t + m_t m_t')^{-1}`, and ``R`` the mean of :math:`E[v_t v_t']`,
+:math:`v_t = y_t - H x_t`, over the steps that measured something (a step missed whole says
+nothing of ``R``): for a measured component its residual's square and :math:`H P_t H'`, for
+a missing one of a step measured in part what the current ``R`` expects given the measured
+ones (the conditional Gaussian of ``v``). When the series of a batch share their covariances
+(the same prior, the same steps missing), the smoother's covariances and gains are computed
+once for all of them (:attr:`FilterResult.shared_covs`). ``H``
+is learned before ``R``, ``F`` before ``Q`` and ``x0`` before ``P0``, each with the other's new
+value, as in pykalman, which the tests check this against step by step.
+
+Structured noise: ``"diag"`` keeps the diagonal of the full estimate; ``"scaled"`` learns one
+factor of the matrix given, ``Q_t = q Q^{(0)}_t``, :math:`q = \sum \operatorname{tr}(Q^{(0)+}_t
+E[w_t w_t']) / \sum \operatorname{rank} Q^{(0)}_t` (the white-noise acceleration's ``q``, for
+any time steps; the same for ``R``).
+
+References
+----------
+.. [1] R. H. Shumway and D. S. Stoffer, "An approach to time series smoothing and forecasting
+   using the EM algorithm", *Journal of Time Series Analysis* 3(4), 1982.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any, TextIO
+
+import numpy as np
+
+from .._validate import as_measurement_series, check_has_steps, check_prior
+from .kalman import FilterResult, kalman_filter
+from .smoothers import rts_smooth
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+__all__ = ["FitResult", "em", "mle", "LEARNABLE", "NOISE_FORMS"]
+
+LEARNABLE = ("F", "Q", "H", "R", "x0", "P0")
+"""The parameters :func:`em` can learn."""
+
+NOISE_FORMS = ("full", "diag", "scaled")
+"""How ``Q`` and ``R`` are learned: every entry, the diagonal only, or one factor of the
+matrix given."""
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """The output of :func:`em`: the model, learned and fixed parameters alike, and the
+    log-likelihood at each iteration.
+
+    With ``pooled=False`` every attribute has a leading batch axis ``(B,)``, one fit per series,
+    and ``loglik`` is padded with NaN after a series' last iteration.
+
+    Attributes
+    ----------
+    F, Q, H, R : ndarray
+        The model (a fixed parameter exactly as given; a learned one constant over the steps,
+        or for ``"scaled"`` noise the matrix given times ``q`` or ``r``).
+    x0, P0 : ndarray
+        The prior of the first step.
+    q, r : float or ndarray
+        The factors learned for ``"scaled"`` noise (1.0 otherwise).
+    loglik : (iterations + 1,) ndarray
+        ``log p(y)`` under the parameters at the start, after each iteration; the last is that
+        of the parameters returned.
+    iterations : int
+        M-steps taken (:func:`em`), or L-BFGS iterations (:func:`mle`).
+    converged : bool
+        :func:`em`: the last iteration raised the log-likelihood by ``tol`` or less;
+        :func:`mle`: L-BFGS stopped at a point where the gradient vanishes to its tolerance.
+    stderr : dict of str to float or ndarray
+        :func:`mle` only (empty otherwise): standard errors of the learned ``"q"`` and ``"r"``
+        (R's diagonal, or its factor), from the curvature of the log-likelihood at the
+        maximum (the inverse of the observed information, by differences of the exact
+        gradient).
+    """
+
+    F: np.ndarray
+    Q: np.ndarray
+    H: np.ndarray
+    R: np.ndarray
+    x0: np.ndarray
+    P0: np.ndarray
+    q: float | np.ndarray
+    r: float | np.ndarray
+    loglik: np.ndarray
+    iterations: int | np.ndarray
+    converged: bool | np.ndarray
+    stderr: dict[str, Any] = field(default_factory=dict)
+
+
+def em(
+    ys: ArrayLike,
+    *,
+    F: ArrayLike,
+    Q: ArrayLike,
+    H: ArrayLike,
+    R: ArrayLike,
+    x0: ArrayLike,
+    P0: ArrayLike,
+    learn: tuple[str, ...] | list[str] = ("Q", "R"),
+    Q_form: str = "full",
+    R_form: str = "full",
+    pooled: bool = True,
+    tol: float = 1e-6,
+    max_iter: int = 100,
+    progress: TextIO | None = None,
+) -> FitResult:
+    r"""Learn the parameters ``learn`` of a linear-Gaussian model from measurements by
+    expectation-maximisation (see the module), the others fixed.
+
+    Parameters
+    ----------
+    ys : (T, m) or (B, T, m) array_like
+        Measurements, NaN where missing (a whole step or some components), as for
+        :func:`kalman_filter`.
+    F, Q, H, R, x0, P0 : array_like
+        The model to start from, as for :func:`kalman_filter` (constant or per-step matrices;
+        a prior for all series or one per series). A learned ``F``, ``H``, or ``Q`` / ``R`` of
+        form ``"full"`` or ``"diag"``, is constant over the steps; ``"scaled"`` keeps the
+        per-step matrices given and learns their factor.
+    learn : sequence of str
+        Which of :data:`LEARNABLE` to learn.
+    Q_form, R_form : {"full", "diag", "scaled"}
+        How ``Q`` and ``R`` are learned (:data:`NOISE_FORMS`).
+    pooled : bool
+        One estimate from every series of a batch (the sums of the M-step over all of them),
+        or one fit per series (``False``; the result then has a batch axis).
+    tol : float
+        Stop when an iteration raises the log-likelihood by ``tol`` nats or less (``-inf``:
+        run ``max_iter`` iterations).
+    max_iter : int
+        The most iterations (M-steps).
+    progress : stream, optional
+        Where to write each iteration's log-likelihood.
+
+    Returns
+    -------
+    FitResult
+        The model and the log-likelihood trace.
+
+    Raises
+    ------
+    ValueError
+        If a name in ``learn`` or a form is unknown, ``tol`` is not a number or ``max_iter``
+        not a positive integer, ``Q`` or ``F`` is learned from series of one step, ``H`` with ``R``
+        of form ``"full"`` where some steps miss some components only, or the model's arguments
+        are invalid (as :func:`kalman_filter` says).
+
+    Examples
+    --------
+    A random walk seen in noise, its two variances learned from a start ten times off:
+
+    >>> from vistrack.simulate import simulate_lgssm
+    >>> model = dict(F=[[1.0]], H=[[1.0]], x0=[0.0], P0=[[1.0]])
+    >>> _, ys = simulate_lgssm(2000, Q=[[0.5]], R=[[4.0]], rng=1, **model)
+    >>> fit = em(ys, Q=[[5.0]], R=[[0.4]], **model, tol=1e-8, max_iter=500)
+    >>> round(float(fit.Q[0, 0]), 2), round(float(fit.R[0, 0]), 2), bool(fit.converged)
+    (0.5, 4.03, True)
+    >>> bool(np.all(np.diff(fit.loglik) >= -1e-9))  # EM never lowers the likelihood
+    True
+    """
+    learned = tuple(learn)
+    for name in learned:
+        if name not in LEARNABLE:
+            raise ValueError(f"learn must name some of {list(LEARNABLE)}; got {name!r}")
+    for name, form in (("Q_form", Q_form), ("R_form", R_form)):
+        if form not in NOISE_FORMS:
+            raise ValueError(f"{name} must be one of {list(NOISE_FORMS)}; got {form!r}")
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or np.isnan(tol):
+        raise ValueError(f"tol must be a number (-inf: never stop before max_iter); got {tol!r}")
+    y, params = _problem(ys, F, Q, H, R, x0, P0, learned, max_iter)
+    B = y.shape[0]
+    if pooled or B == 1:
+        return _fit(y, params, learned, Q_form, R_form, float(tol), int(max_iter), progress)
+    fits = []
+    for b in range(B):
+        p = dict(params)
+        if p["x0"].ndim == 2:
+            p["x0"] = p["x0"][b]
+        if p["P0"].ndim == 3:
+            p["P0"] = p["P0"][b]
+        fits.append(_fit(y[b:b + 1], p, learned, Q_form, R_form, float(tol), int(max_iter),
+                         progress))
+    K = max(len(f.loglik) for f in fits)
+    ll = np.full((B, K), np.nan)
+    for b, f in enumerate(fits):
+        ll[b, :len(f.loglik)] = f.loglik
+    def stack(name: str) -> np.ndarray:
+        return np.stack([getattr(f, name) for f in fits])
+
+    return FitResult(F=stack("F"), Q=stack("Q"), H=stack("H"), R=stack("R"), x0=stack("x0"),
+                     P0=stack("P0"), q=stack("q"), r=stack("r"), loglik=ll,
+                     iterations=stack("iterations"), converged=stack("converged"))
+
+
+def _problem(ys: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike,
+             x0: ArrayLike, P0: ArrayLike, learn: tuple[str, ...],
+             max_iter: Any) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The measurements as ``(B, T, m)`` and the model as float arrays, checked as far as
+    the filter's first run does not check them."""
+    if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
+        raise ValueError(f"max_iter must be an integer >= 1; got {max_iter!r}")
+    y, _ = as_measurement_series(ys)
+    check_has_steps(y)
+    T = y.shape[1]
+    if T < 2 and ({"F", "Q"} & set(learn)):
+        raise ValueError(f"learning F or Q needs series of at least 2 steps; got T={T}")
+    n = np.shape(F)[-1] if np.ndim(F) >= 2 else 0
+    x0_, P0_ = check_prior(x0, P0, n)
+    return y, {k: np.asarray(v, dtype=np.float64)
+               for k, v in (("F", F), ("Q", Q), ("H", H), ("R", R), ("x0", x0_), ("P0", P0_))}
+
+
+def mle(
+    ys: ArrayLike,
+    *,
+    F: ArrayLike,
+    Q: ArrayLike,
+    H: ArrayLike,
+    R: ArrayLike,
+    x0: ArrayLike,
+    P0: ArrayLike,
+    learn: tuple[str, ...] | list[str] = ("Q", "R"),
+    R_form: str = "diag",
+    xtol: float = 1e-6,
+    max_iter: int = 200,
+) -> FitResult:
+    r"""Learn the noise of a linear-Gaussian model by maximum likelihood: L-BFGS over the
+    logarithms of its structured parameters, with the exact gradient.
+
+    The parameters: ``q`` with ``Q_t = q Q^{(0)}_t`` (``Q`` as given, constant or per step:
+    the white-noise acceleration's ``q`` for any time steps), and ``R``'s diagonal
+    (``R_form="diag"``, ``R`` diagonal) or its factor ``r`` (``"scaled"``, ``R_t = r
+    R^{(0)}_t``). The gradient of ``log p(y)`` is the expected gradient of the complete-data
+    log-likelihood given the measurements (Fisher's identity), from the same smoothed sums
+    as :func:`em`'s M-step:
+
+    .. math::
+
+        rac{\partial \log p(y)}{\partial \log q} = -	frac12 \sum_t \operatorname{rank}
+        Q^{(0)}_t + rac{1}{2q} \sum_t \operatorname{tr}ig(Q^{(0)+}_t E[w_t w_t' \mid
+        y]ig), \qquad rac{\partial \log p(y)}{\partial \log r_i} = -	frac{N}{2} +
+        rac{1}{2 r_i} \sum_t E[v_{ti}^2 \mid y]
+
+    over the transitions of every series and the ``N`` steps that measured something. Where
+    EM creeps towards the maximum, this reaches it in a few dozen evaluations of the filter
+    and the smoother; both find the same maximum.
+
+    Parameters
+    ----------
+    ys : (T, m) or (B, T, m) array_like
+        Measurements, NaN where missing; a batch is pooled (one ``q`` and ``R`` for all).
+    F, Q, H, R, x0, P0 : array_like
+        The model, as for :func:`kalman_filter`; ``Q`` and ``R`` are the start and the
+        shapes of their structure (``R`` diagonal for ``"diag"``: its off-diagonal entries
+        are dropped).
+    learn : sequence of {"Q", "R"}
+        Which noise to learn; the rest stays as given.
+    R_form : {"diag", "scaled"}
+        ``R``'s structure.
+    xtol : float
+        Converged when a Newton step from where L-BFGS stops would change no parameter by a
+        factor of more than ``1 + xtol`` (L-BFGS itself stops where the log-likelihood's
+        rounding hides any further rise).
+    max_iter : int
+        The most L-BFGS iterations.
+
+    Returns
+    -------
+    FitResult
+        The model at the maximum, ``q`` and ``r`` (R's diagonal for ``"diag"``),
+        ``loglik`` at the start and after each iteration, and ``stderr``.
+
+    Raises
+    ------
+    ValueError
+        If ``learn`` names something else than ``"Q"`` and ``"R"``, ``R_form`` is unknown,
+        ``max_iter`` is not a positive integer, or the model is invalid (as
+        :func:`kalman_filter` says).
+
+    Examples
+    --------
+    The random walk of :func:`em`, its two variances by maximum likelihood:
+
+    >>> from vistrack.simulate import simulate_lgssm
+    >>> model = dict(F=[[1.0]], H=[[1.0]], x0=[0.0], P0=[[1.0]])
+    >>> _, ys = simulate_lgssm(2000, Q=[[0.5]], R=[[4.0]], rng=1, **model)
+    >>> fit = mle(ys, Q=[[1.0]], R=[[1.0]], **model)  # Q = q [[1]], R = diag(r)
+    >>> round(fit.q, 2), fit.r.round(2), bool(fit.converged)
+    (0.5, array([4.03]), True)
+    >>> round(fit.stderr["q"], 2), fit.stderr["r"].round(2)  # their standard errors
+    (0.06, array([0.16]))
+    """
+    from scipy.optimize import minimize
+
+    learned = tuple(learn)
+    for name in learned:
+        if name not in ("Q", "R"):
+            raise ValueError(f"learn must name some of ['Q', 'R']; got {name!r}")
+    if R_form not in ("diag", "scaled"):
+        raise ValueError(f"R_form must be 'diag' or 'scaled'; got {R_form!r}")
+    y, p = _problem(ys, F, Q, H, R, x0, P0, learned, max_iter)
+    lik = _Structured(y, p, learned, R_form)
+    value_and_grad, model, nq, nr = lik.value_and_grad, lik.model, lik.nq, lik.nr
+    theta0 = lik.start()
+    lls = [value_and_grad(theta0)[0]]
+    it = [0]
+
+    def negative(theta: np.ndarray) -> tuple[float, np.ndarray]:
+        ll, g = value_and_grad(theta)
+        return -ll, -g
+
+    def record(intermediate_result: Any) -> None:
+        lls.append(-float(intermediate_result.fun))
+        it[0] += 1
+
+    k = nq + nr
+    if k == 0:
+        return FitResult(F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"], P0=p["P0"], q=1.0,
+                         r=1.0, loglik=np.array(lls), iterations=0, converged=True)
+    opt = minimize(negative, theta0, jac=True, method="L-BFGS-B", callback=record,
+                   options={"gtol": 1e-9 * y.shape[0] * y.shape[1], "maxiter": int(max_iter),
+                            "ftol": 1e-13})
+    best = model(opt.x)
+    q = float(np.exp(opt.x[0])) if nq else 1.0
+    r: float | np.ndarray = (np.exp(opt.x[nq:]) if R_form == "diag" else float(
+        np.exp(opt.x[nq]))) if nr else 1.0
+    # the observed information in the logarithms, by central differences of the exact
+    # gradient: the Newton step left, and the standard errors by the delta method
+    h = 1e-4
+    info = np.empty((k, k))
+    for j in range(k):
+        d = np.zeros(k)
+        d[j] = h
+        info[:, j] = (value_and_grad(opt.x - d)[1] - value_and_grad(opt.x + d)[1]) / (2 * h)
+    info = (info + info.T) / 2
+    step = np.linalg.solve(info, value_and_grad(opt.x)[1])
+    se = np.sqrt(np.clip(np.diag(np.linalg.inv(info)), 0.0, None)) * np.exp(opt.x)
+    errors: dict[str, Any] = {}
+    if nq:
+        errors["q"] = float(se[0])
+    if nr:
+        errors["r"] = se[nq:] if R_form == "diag" else float(se[nq])
+    converged = bool(opt.success or np.max(np.abs(step)) <= xtol)
+    return FitResult(F=best["F"], Q=best["Q"], H=best["H"], R=best["R"], x0=best["x0"],
+                     P0=best["P0"], q=q, r=r, loglik=np.array(lls), iterations=it[0],
+                     converged=converged, stderr=errors)
+
+
+class _Structured:
+    """``log p(y)`` and its gradient over the logarithms of the structured noise parameters
+    of :func:`mle`: ``theta = [log q] + [log r_i ...]`` (or ``[log r]``)."""
+
+    def __init__(self, y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...],
+                 R_form: str) -> None:
+        B, T, m = y.shape
+        if R_form == "diag" and p["R"].ndim != 2:
+            raise ValueError("R_form='diag' needs one R (m, m) for all steps; got "
+                             f"{p['R'].shape}")
+        self.y, self.p, self.R_form = y, p, R_form
+        self.obs = ~np.isnan(y)
+        self.R0 = p["R"] if R_form == "scaled" else np.diag(np.diag(p["R"]))
+        self.nq = 1 if "Q" in learn else 0
+        self.nr = (m if R_form == "diag" else 1) if "R" in learn else 0
+        Qs = _steps(p["Q"], T)
+        Qs = Qs[1:] if Qs.shape[0] > 1 else Qs  # the transitions' Q
+        Rs = _steps(self.R0, T)
+        self.Q_pinv, self.R_pinv = np.linalg.pinv(Qs), np.linalg.pinv(Rs)
+        Q_rank, R_rank = np.linalg.matrix_rank(Qs), np.linalg.matrix_rank(Rs)
+        n_meas = self.obs.any(axis=-1).sum(axis=0)  # series that measured something, per step
+        self.n_meas = int(n_meas.sum())
+        self.Q_dof = B * (int(Q_rank[0]) * (T - 1) if len(Q_rank) == 1 else int(Q_rank.sum()))
+        self.R_dof = (int(R_rank[0]) * self.n_meas if len(R_rank) == 1
+                      else int(np.sum(R_rank * n_meas)))
+
+    def start(self) -> np.ndarray:
+        """``theta`` of the model given."""
+        logr = np.log(np.diag(self.R0)) if self.R_form == "diag" else np.zeros(1)
+        return np.r_[np.zeros(self.nq), logr[:self.nr]]
+
+    def model(self, theta: np.ndarray) -> dict[str, np.ndarray]:
+        out = dict(self.p, R=self.R0)
+        if self.nq:
+            out["Q"] = np.exp(theta[0]) * self.p["Q"]
+        if self.nr:
+            e = np.exp(theta[self.nq:])
+            out["R"] = np.diag(e) if self.R_form == "diag" else e[0] * self.R0
+        return out
+
+    def value_and_grad(self, theta: np.ndarray) -> tuple[float, np.ndarray]:
+        y, nq, nr = self.y, self.nq, self.nr
+        T = y.shape[1]
+        mp = self.model(theta)
+        res = kalman_filter(y, F=mp["F"], Q=mp["Q"], H=mp["H"], R=mp["R"], x0=mp["x0"],
+                            P0=mp["P0"])
+        ll = float(np.sum(res.loglik))
+        ms, Ps, X, mult = _smoothed(res, mp["F"], mp["Q"])
+        g = np.empty(nq + nr)
+        if nq:
+            A = _process_noise_sums(*_transition_sums(ms, Ps, X, mult), _transitions(mp["F"], T))
+            tr = _trace_sum(self.Q_pinv, A)
+            g[0] = -0.5 * self.Q_dof + 0.5 * tr / np.exp(theta[0])
+        if nr:
+            V = _expected_vv(y, self.obs, ms, Ps, mult, mp["H"], mp["R"], T)
+            if self.R_form == "diag":
+                g[nq:] = (-0.5 * self.n_meas
+                          + 0.5 * np.diagonal(V.sum(axis=0)) / np.exp(theta[nq:]))
+            else:
+                g[nq] = -0.5 * self.R_dof + 0.5 * _trace_sum(self.R_pinv, V) / np.exp(theta[nq])
+        return ll, g
+
+
+def _trace_sum(pinv: np.ndarray, E: np.ndarray) -> float:
+    """``sum_k tr(pinv_k E_k)`` for one ``pinv`` (1, d, d) or one per step (K, d, d)."""
+    if len(pinv) == 1:
+        return float(np.trace(pinv[0] @ E.sum(axis=0)))
+    return float(np.einsum("kij,kji->", pinv, E))
+
+
+def _fit(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form: str,
+         R_form: str, tol: float, max_iter: int, progress: TextIO | None) -> FitResult:
+    """EM over the batch ``y (B, T, m)``, pooled."""
+    B, T, m = y.shape
+    obs = ~np.isnan(y)
+    Q0, R0 = p["Q"], p["R"]  # the shapes of "scaled" noise
+    q = r = 1.0
+    lls: list[float] = []
+    converged = False
+    for k in range(max_iter + 1):
+        res = kalman_filter(y, F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"], P0=p["P0"])
+        ll = float(np.sum(res.loglik))
+        lls.append(ll)
+        if progress is not None:
+            progress.write(f"EM iteration {k}: log-likelihood {ll:.6f}\n")
+        if k > 0 and ll - lls[-2] <= tol:
+            converged = True
+            break
+        if k == max_iter:
+            break
+        ms, Ps, X, mult = _smoothed(res, p["F"], p["Q"])
+        new = dict(p)
+        if {"F", "Q"} & set(learn):
+            S11, S10, S00 = _transition_sums(ms, Ps, X, mult)
+            Fn = _transitions(p["F"], T)
+            if "F" in learn:
+                new["F"] = np.linalg.solve(S00.sum(axis=0).T, S10.sum(axis=0).T).T
+                Fn = new["F"]
+            if "Q" in learn:
+                A = _process_noise_sums(S11, S10, S00, Fn)
+                new["Q"], q_new = _noise(A, np.full(T - 1, B), Q0, Q_form, T - 1)
+                q = q_new if Q_form == "scaled" else 1.0
+        if "H" in learn:
+            new["H"] = _learn_H(y, obs, ms, Ps, mult, R_form)
+        if "R" in learn:
+            V = _expected_vv(y, obs, ms, Ps, mult, new["H"], p["R"], T)
+            new["R"], r_new = _noise(V, obs.any(axis=-1).sum(axis=0), R0, R_form, T)
+            r = r_new if R_form == "scaled" else 1.0
+        if "x0" in learn:
+            new["x0"] = ms[:, 0] if p["x0"].ndim == 2 else ms[:, 0].mean(axis=0)
+        if "P0" in learn:
+            d = ms[:, 0] - (new["x0"] if new["x0"].ndim == 2 else new["x0"][None])
+            D = Ps[:, 0] + d[:, :, None] * d[:, None, :]  # Ps broadcast when shared
+            new["P0"] = D if p["P0"].ndim == 3 else D.mean(axis=0)
+        for name in ("Q", "R", "P0"):  # symmetric to the last bit
+            if name in learn:
+                new[name] = (new[name] + np.swapaxes(new[name], -1, -2)) / 2
+        p = new
+    return FitResult(F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"], P0=p["P0"], q=q, r=r,
+                    loglik=np.array(lls), iterations=len(lls) - 1, converged=converged)
+
+
+def _smoothed(res: FilterResult, F: np.ndarray,
+              Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The smoothed means ``(B, T, n)`` and covariances, the transposed smoother gains ``X_t =
+    G_t' = (P^-_{t+1})^{-1} F_{t+1} P_t`` ``(T - 1, n, n)`` and how many series each
+    covariance stands for: when the series share one covariance sequence (the same prior and
+    the same steps missing) the covariances are those of one series ``(1, T, ...)``, computed
+    once, and stand for all ``B``; otherwise ``(B, T, ...)``, each for 1."""
+    means = res.means if res.means.ndim == 3 else res.means[None]
+    B, T, n = means.shape
+    Pf, Pp = res.covs, res.pred_covs
+    assert Pf is not None and Pp is not None and res.pred_means is not None  # store_covs
+    if Pf.ndim == 3:
+        Pf, Pp = Pf[None], Pp[None]
+    shared = B == 1 or res.shared_covs
+    one = replace(res, means=means[:1], covs=Pf[:1], pred_means=None, pred_covs=None,
+                  loglik=res.loglik) if shared else res
+    sm = rts_smooth(one, F=F, Q=Q)
+    Ps = sm.covs if sm.covs.ndim == 4 else sm.covs[None]
+    Pf, Pp = (Pf[:1], Pp[:1]) if shared else (Pf, Pp)
+    X = np.linalg.solve(Pp[:, 1:], _transitions(F, T) @ Pf[:, :-1])
+    if not shared or B == 1:
+        ms = sm.means if sm.means.ndim == 3 else sm.means[None]
+        return ms, Ps, X, 1
+    # every series' smoothed means with the shared gains, backwards over the steps
+    pm = res.pred_means
+    ms = np.empty_like(means)
+    ms[:, -1] = means[:, -1]
+    for t in range(T - 2, -1, -1):
+        ms[:, t] = means[:, t] + (ms[:, t + 1] - pm[:, t + 1]) @ X[0, t]
+    return ms, Ps, X, B
+
+
+def _transition_sums(ms: np.ndarray, Ps: np.ndarray, X: np.ndarray,
+                     mult: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per transition, summed over the batch ``(T - 1, n, n)``: ``E[x_t x_t']``, ``E[x_t
+    x_{t-1}']``, ``E[x_{t-1} x_{t-1}']``, with the lag-one cross-covariance ``C_t = Ps_t
+    G_{t-1}' = Ps_t X_{t-1}`` (see :func:`_smoothed`)."""
+    m1, m0 = ms[:, 1:], ms[:, :-1]
+    S11 = mult * Ps[:, 1:].sum(axis=0) + _outer_sum(m1, m1)
+    S10 = mult * (Ps[:, 1:] @ X).sum(axis=0) + _outer_sum(m1, m0)
+    S00 = mult * Ps[:, :-1].sum(axis=0) + _outer_sum(m0, m0)
+    return S11, S10, S00
+
+
+def _outer_sum(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``sum_b a[b, t] b[b, t]'`` for each ``t``: ``(B, T, i), (B, T, j) -> (T, i, j)`` (a
+    matrix product per step, which numpy hands to BLAS; einsum would loop)."""
+    return np.transpose(a, (1, 2, 0)) @ np.transpose(b, (1, 0, 2))
+
+
+def _process_noise_sums(S11: np.ndarray, S10: np.ndarray, S00: np.ndarray,
+                        Fn: np.ndarray) -> np.ndarray:
+    """``E[w_t w_t']`` summed over the batch, ``w_t = x_t - F_t x_{t-1}``, per transition."""
+    FS = Fn @ np.swapaxes(S10, -1, -2)
+    return S11 - FS - np.swapaxes(FS, -1, -2) + Fn @ S00 @ np.swapaxes(Fn, -1, -2)
+
+
+def _transitions(F: np.ndarray, T: int) -> np.ndarray:
+    """``F`` of each of the ``T - 1`` transitions: ``(n, n)`` if constant, else
+    ``(T - 1, n, n)``."""
+    Ft = _steps(F, T)
+    return Ft[1:] if Ft.shape[0] > 1 else Ft[0]
+
+
+def _steps(M: np.ndarray, T: int) -> np.ndarray:
+    """A constant or per-step matrix as a stack ``(1, ...)`` or ``(T, ...)``."""
+    return M[None] if M.ndim == 2 else M
+
+
+def _noise(E: np.ndarray, count: np.ndarray, shape: np.ndarray, form: str,
+           steps: int) -> tuple[np.ndarray, float]:
+    """The noise covariance from the expected outer products ``E (K, d, d)`` of each step,
+    summed over the ``count (K,)`` series that enter it: their mean (``"full"``), its
+    diagonal (``"diag"``), or the factor of ``shape`` (constant or per step) that maximises
+    the likelihood (``"scaled"``); and that factor."""
+    total = int(np.sum(count))
+    if total == 0:
+        return shape, 1.0  # nothing measured: the likelihood does not depend on it
+    if form == "scaled":
+        S = _steps(shape, steps)
+        S = S[-E.shape[0]:] if S.shape[0] > 1 else S  # Q's stack: the K transitions' matrices
+        pinv = np.linalg.pinv(S)
+        rank = np.linalg.matrix_rank(S)
+        if S.shape[0] == 1:
+            num = np.trace(pinv[0] @ E.sum(axis=0))
+            den = total * int(rank[0])
+        else:
+            num = np.einsum("kij,kji->", pinv, E)
+            den = int(np.sum(count * rank))
+        factor = float(num / den)
+        return factor * shape, factor
+    mean = E.sum(axis=0) / total
+    if form == "diag":
+        mean = np.diag(np.diag(mean))
+    return mean, 1.0
+
+
+def _learn_H(y: np.ndarray, obs: np.ndarray, ms: np.ndarray, Ps: np.ndarray, mult: int,
+             R_form: str) -> np.ndarray:
+    """``H`` row by row from the steps that measured its component."""
+    partial = obs.any(axis=-1) & ~obs.all(axis=-1)
+    if partial.any() and R_form == "full" and y.shape[-1] > 1:
+        raise ValueError("learning H where some steps miss some of their components needs R of "
+                         "form 'diag' or 'scaled' (with a full R the rows of H are coupled)")
+    rows = []
+    for i in range(y.shape[-1]):
+        o = obs[..., i].astype(np.float64)
+        yi = np.where(obs[..., i], y[..., i], 0.0)
+        num = np.einsum("bt,bti->i", yi, ms)
+        den = np.einsum("bt,bti,btj->ij", o, ms, ms)
+        if mult > 1:  # one covariance sequence for every series
+            den += np.einsum("t,tij->ij", o.sum(axis=0), Ps[0])
+        else:
+            den += np.einsum("bt,btij->ij", o, Ps)
+        rows.append(np.linalg.solve(den.T, num))
+    return np.array(rows)
+
+
+def _expected_vv(y: np.ndarray, obs: np.ndarray, ms: np.ndarray, Ps: np.ndarray, mult: int,
+                 H: np.ndarray, R_old: np.ndarray, T: int) -> np.ndarray:
+    """``E[v_t v_t' | y]`` for ``v_t = y_t - H x_t``, summed over the series that measured
+    something at step ``t`` ``(T, m, m)``: measured components from the smoothed state, missing
+    ones given the measured ones under the current ``R``."""
+    B, _, m = y.shape
+    Ht = _steps(H, T)
+    Hb = np.broadcast_to(Ht, (T,) + Ht.shape[1:]) if Ht.shape[0] == 1 else Ht
+    e = np.where(obs, y, 0.0) - np.einsum("tij,btj->bti", Hb, ms)
+    HPH = Hb @ Ps @ np.swapaxes(Hb, -1, -2)  # (1 or B, T, m, m)
+    full = np.asarray(obs.all(axis=-1))
+    fw = full.astype(np.float64)
+    V = _outer_sum(fw[..., None] * e, e)
+    V += (np.einsum("t,tij->tij", fw.sum(axis=0), HPH[0]) if mult > 1
+          else np.einsum("bt,btij->tij", fw, HPH))
+    partial = obs.any(axis=-1) & ~full
+    if not partial.any():
+        return V
+    Rt = _steps(R_old, T)
+    Rb = np.broadcast_to(Rt, (T, m, m)) if Rt.shape[0] == 1 else Rt
+    idx = np.argwhere(partial)
+    patterns, which = np.unique(obs[partial], axis=0, return_inverse=True)
+    for k, o in enumerate(patterns):
+        b, t = idx[which.ravel() == k].T
+        Rk = Rb[t]
+        oi, mi = np.flatnonzero(o), np.flatnonzero(~o)
+        ee = e[b, t][:, oi][:, :, None] * e[b, t][:, oi][:, None, :]
+        Eoo = ee + HPH[0 if mult > 1 else b, t][:, oi[:, None], oi]
+        Roo = Rk[:, oi[:, None], oi]
+        Rmo = Rk[:, mi[:, None], oi]
+        K = np.swapaxes(np.linalg.solve(Roo, np.swapaxes(Rmo, -1, -2)), -1, -2)  # Rmo Roo^-1
+        Vk = np.empty((len(b), m, m))
+        Vk[:, oi[:, None], oi] = Eoo
+        KE = K @ Eoo
+        Vk[:, mi[:, None], oi] = KE
+        Vk[:, oi[:, None], mi] = np.swapaxes(KE, -1, -2)
+        Vk[:, mi[:, None], mi] = (KE @ np.swapaxes(K, -1, -2) + Rk[:, mi[:, None], mi]
+                                  - K @ np.swapaxes(Rmo, -1, -2))
+        np.add.at(V, t, Vk)
+    return V

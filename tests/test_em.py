@@ -1,0 +1,271 @@
+"""Learning linear-Gaussian models (vistrack.filters.learn): EM equals pykalman's step by step,
+a never decreasing likelihood, frozen parameters untouched, pooled batches, the
+missing-step equivalence and known parameters recovered."""
+
+import io
+import warnings
+
+import numpy as np
+import pytest
+
+import vistrack as vt
+from vistrack.filters import em, mle
+from vistrack.filters import learn as learn_module
+from vistrack.simulate import simulate_lgssm
+
+CV, POS = vt.ConstantVelocity(dim=2, q=0.5), vt.Position(dim=2, r=4.0)
+
+
+def cv_model(dt=1.0):
+    return dict(F=CV.F(dt), Q=CV.Q(dt), H=POS.H(4), R=POS.R(), x0=np.zeros(4),
+                P0=10.0 * np.eye(4))
+
+
+def series(T, seed, **model):
+    return simulate_lgssm(T, **(model or cv_model()), rng=seed)[1]
+
+
+PK_NAMES = {"F": "transition_matrices", "Q": "transition_covariance",
+            "H": "observation_matrices", "R": "observation_covariance",
+            "x0": "initial_state_mean", "P0": "initial_state_covariance"}
+
+
+@pytest.mark.parametrize("learn", [("Q", "R"), ("F", "H"), ("F", "Q", "H", "R", "x0", "P0")])
+def test_each_iteration_equals_pykalmans_em(learn):
+    pykalman = pytest.importorskip("pykalman")
+    ys = series(150, 1)
+    ys[[5, 17, 18, 90]] = np.nan  # whole steps missing (pykalman masks a step whole)
+    start = dict(F=CV.F(1.0) + 0.05 * np.eye(4), Q=np.eye(4), H=POS.H(4), R=np.eye(2),
+                 x0=np.ones(4), P0=np.eye(4))
+    pk = pykalman.KalmanFilter(
+        transition_matrices=start["F"], observation_matrices=start["H"],
+        transition_covariance=start["Q"], observation_covariance=start["R"],
+        initial_state_mean=start["x0"], initial_state_covariance=start["P0"],
+        transition_offsets=np.zeros(4), observation_offsets=np.zeros(2),
+        em_vars=[PK_NAMES[k] for k in learn])
+    X = np.ma.masked_invalid(ys)
+    for k in range(1, 6):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            pk = pk.em(X, n_iter=1)
+        fit = em(ys, **start, learn=learn, max_iter=k, tol=-np.inf)
+        assert fit.iterations == k
+        for name, attr in PK_NAMES.items():
+            np.testing.assert_allclose(getattr(fit, name), getattr(pk, attr), rtol=1e-6,
+                                       atol=1e-9, err_msg=f"{name} after {k} iterations")
+        np.testing.assert_allclose(fit.loglik[-1], pk.loglikelihood(X), rtol=1e-9)
+
+
+@pytest.mark.parametrize("R_form", ["full", "diag", "scaled"])
+def test_log_likelihood_never_decreases_with_missing_steps_and_components(R_form, rng):
+    ys = np.stack([series(120, s) for s in range(3)])
+    ys[rng.random(ys.shape) < 0.15] = np.nan  # single components
+    ys[rng.random(ys.shape[:2]) < 0.05] = np.nan  # whole steps
+    R = np.array([[1.0, 0.3], [0.3, 2.0]]) if R_form != "diag" else np.eye(2)
+    learn = ("F", "Q", "R", "x0", "P0") + (("H",) if R_form != "full" else ())
+    fit = em(ys, **{**cv_model(), "Q": np.eye(4), "R": R}, learn=learn, R_form=R_form,
+             tol=-np.inf, max_iter=500)
+    assert fit.iterations == 500 and np.isfinite(fit.loglik).all()
+    assert np.diff(fit.loglik).min() >= -1e-9 * abs(fit.loglik[-1])
+    for name in ("F", "Q", "H", "R", "x0", "P0"):
+        assert np.isfinite(getattr(fit, name)).all(), name
+    assert np.linalg.eigvalsh(fit.Q).min() > 0 and np.linalg.eigvalsh(fit.R).min() > 0
+
+
+def test_frozen_parameters_stay_bit_identical():
+    model = cv_model()
+    fit = em(series(100, 2), **{**model, "Q": np.eye(4)}, learn=("Q",), max_iter=5)
+    for name in ("F", "H", "R", "x0", "P0"):
+        assert getattr(fit, name).tobytes() == np.asarray(model[name]).tobytes(), name
+    assert not np.array_equal(fit.Q, np.eye(4))
+
+
+def test_a_pooled_batch_of_one_series_repeated_equals_that_series():
+    ys = series(200, 3)
+    start = {**cv_model(), "Q": np.eye(4), "R": np.eye(2)}
+    one = em(ys, **start, learn=("Q", "R", "P0"), max_iter=20)
+    three = em(np.stack([ys] * 3), **start, learn=("Q", "R", "P0"), max_iter=20)
+    for name in ("Q", "R", "P0"):
+        np.testing.assert_allclose(getattr(three, name), getattr(one, name), rtol=1e-9)
+    np.testing.assert_allclose(three.loglik, 3 * one.loglik, rtol=1e-12)
+
+
+def test_one_fit_per_series_equals_each_series_fitted_alone():
+    ys = np.stack([series(100, s) for s in (4, 5)])
+    ys[1, 30:33] = np.nan  # the series do not share covariances
+    start = {**cv_model(), "Q": np.eye(4), "R": np.eye(2)}
+    both = em(ys, **start, learn=("Q", "R"), pooled=False, max_iter=30)
+    for b in range(2):
+        alone = em(ys[b], **start, learn=("Q", "R"), max_iter=30)
+        np.testing.assert_allclose(both.Q[b], alone.Q, rtol=1e-10)
+        np.testing.assert_allclose(both.R[b], alone.R, rtol=1e-10)
+        k = len(alone.loglik)
+        np.testing.assert_allclose(both.loglik[b, :k], alone.loglik, rtol=1e-12)
+        assert np.isnan(both.loglik[b, k:]).all() and both.iterations[b] == alone.iterations
+
+
+def test_a_missing_step_is_the_step_removed_and_the_time_step_doubled():
+    """The white-noise-acceleration model composes exactly over time (F(a) F(b) = F(a + b),
+    F(a) Q(b) F(a)' + Q(a) = Q(a + b)), so a series with some steps missing has the same
+    likelihood for every q and R as the series without those steps and the time steps
+    joined: the maximum, and EM's estimates there, are the same."""
+    T = 300
+    dts = np.ones(T)
+    dts[0] = 0.0
+    times = np.cumsum(dts)
+    _, ys = simulate_lgssm(T, F=CV.F(dts), Q=CV.Q(dts), H=POS.H(4), R=POS.R(),
+                           x0=np.zeros(4), P0=10.0 * np.eye(4), rng=6)
+    gone = np.arange(10, T - 10, 7)
+    ys_nan = ys.copy()
+    ys_nan[gone] = np.nan
+    keep = np.setdiff1d(np.arange(T), gone)
+    dts_kept = np.r_[0.0, np.diff(times[keep])]
+    fits = []
+    for y, d in ((ys_nan, dts), (ys[keep], dts_kept)):
+        fits.append(em(y, F=CV.F(d), Q=CV.Q(d) / 0.5, H=POS.H(4), R=np.eye(2),
+                       x0=np.zeros(4), P0=10.0 * np.eye(4), learn=("Q", "R"),
+                       Q_form="scaled", R_form="diag", tol=1e-10, max_iter=5000))
+    a, b = fits
+    assert a.converged and b.converged
+    assert abs(a.loglik[-1] - b.loglik[-1]) < 1e-6
+    np.testing.assert_allclose(a.q, b.q, rtol=1e-4)
+    np.testing.assert_allclose(np.diag(a.R), np.diag(b.R), rtol=1e-4)
+
+
+def test_a_batch_of_100_recovers_q_and_R():
+    """100 series of 1,000 steps, started from q = 1 and R = I: q within 5 % of 0.5, R's
+    diagonal within 3 % of 4 (standard errors about 1.5 % and 0.5 %)."""
+    model = cv_model()
+    ys = np.stack([series(1000, s) for s in range(100)])
+    fit = em(ys, **{**model, "Q": CV.Q(1.0) / 0.5, "R": np.eye(2)}, learn=("Q", "R"),
+             Q_form="scaled", R_form="diag", tol=1e-3, max_iter=500)
+    assert fit.converged
+    assert abs(fit.q / 0.5 - 1) < 0.05, fit.q
+    np.testing.assert_allclose(np.diag(fit.R), 4.0, rtol=0.03)
+    np.testing.assert_allclose(fit.Q, fit.q * CV.Q(1.0) / 0.5, rtol=1e-12)
+
+
+def test_scaled_noise_is_the_exact_maximum_over_its_factor():
+    """With everything else fixed, the log-likelihood as a function of the scale of Q (or R)
+    is highest at EM's fixed point: one step of EM from there does not move it."""
+    ys = series(300, 7)
+    fit = em(ys, **{**cv_model(), "Q": CV.Q(1.0)}, learn=("Q",), Q_form="scaled", tol=1e-12,
+             max_iter=3000)
+    assert fit.converged
+
+    def ll(q):
+        return float(vt.kalman_filter(ys, **{**cv_model(), "Q": q * CV.Q(1.0)}).loglik)
+
+    best = ll(fit.q)
+    for f in (0.99, 1.01):
+        assert ll(fit.q * f) < best
+
+
+def test_progress_and_errors():
+    ys = series(50, 8)
+    out = io.StringIO()
+    fit = em(ys, **cv_model(), learn=("R",), max_iter=3, tol=-np.inf, progress=out)
+    lines = out.getvalue().splitlines()
+    assert len(lines) == 4 and lines[0].startswith("EM iteration 0: log-likelihood ")
+    assert float(lines[-1].rsplit(" ", 1)[1]) == pytest.approx(fit.loglik[-1], abs=1e-6)
+    with pytest.raises(ValueError, match="learn must name some of"):
+        em(ys, **cv_model(), learn=("B",))
+    with pytest.raises(ValueError, match="R_form must be one of"):
+        em(ys, **cv_model(), R_form="banded")
+    with pytest.raises(ValueError, match="max_iter must be an integer >= 1"):
+        em(ys, **cv_model(), max_iter=0)
+    with pytest.raises(ValueError, match="tol must be a number"):
+        em(ys, **cv_model(), tol="small")
+    with pytest.raises(ValueError, match="at least 2 steps"):
+        em(ys[:1], **cv_model(), learn=("Q",))
+    partial = ys.copy()
+    partial[3, 0] = np.nan
+    with pytest.raises(ValueError, match="needs R of form 'diag' or 'scaled'"):
+        em(partial, **cv_model(), learn=("H",))
+
+
+@pytest.mark.parametrize("R_form", ["diag", "scaled"])
+def test_the_score_equals_finite_differences_of_the_log_likelihood(R_form, rng):
+    ys = np.stack([series(150, s) for s in (9, 10)])
+    ys[rng.random(ys.shape) < 0.1] = np.nan  # missing components and steps
+    m = cv_model()
+    y, p = learn_module._problem(ys, m["F"], m["Q"], m["H"], np.diag([1.0, 2.0]), m["x0"],
+                                 m["P0"], ("Q", "R"), 10)
+    lik = learn_module._Structured(y, p, ("Q", "R"), R_form)
+    theta = lik.start() + rng.normal(0, 0.3, size=lik.nq + lik.nr)
+    _, g = lik.value_and_grad(theta)
+    h = 1e-5
+    fd = [(lik.value_and_grad(theta + h * e)[0] - lik.value_and_grad(theta - h * e)[0]) / (2 * h)
+          for e in np.eye(len(theta))]
+    np.testing.assert_allclose(g, fd, rtol=1e-6)
+
+
+def test_maximum_likelihood_and_em_reach_the_same_maximum():
+    ys = np.stack([series(400, s) for s in (11, 12, 13)])
+    ys[0, 50:60] = np.nan
+    start = {**cv_model(), "Q": CV.Q(1.0), "R": np.eye(2)}
+    by_em = em(ys, **start, learn=("Q", "R"), Q_form="scaled", R_form="diag", tol=1e-9,
+               max_iter=5000)
+    by_ml = mle(ys, **start)
+    assert by_em.converged and by_ml.converged
+    assert by_ml.loglik[-1] >= by_em.loglik[-1] - 1e-6
+    assert by_ml.loglik[-1] - by_em.loglik[-1] < 1e-4
+    np.testing.assert_allclose(by_ml.q, by_em.q, rtol=1e-3)
+    np.testing.assert_allclose(by_ml.r, np.diag(by_em.R), rtol=1e-3)
+    np.testing.assert_allclose(by_ml.Q, by_ml.q * CV.Q(1.0), rtol=1e-12)
+    assert np.all(np.diff(by_ml.loglik) >= -1e-9 * abs(by_ml.loglik[-1]))
+
+
+def test_standard_error_of_a_variance_equals_the_closed_form(rng):
+    """With F = 0 the states are independent, so y_t ~ N(0, q + r) and the maximum of r is
+    mean(y^2) - q, with the observed information T / (2 (q + r)^2) there."""
+    q, T = 2.0, 4000
+    ys = rng.normal(0.0, np.sqrt(q + 3.0), size=(T, 1))
+    fit = mle(ys, F=[[0.0]], Q=[[q]], H=[[1.0]], R=[[1.0]], x0=[0.0], P0=[[q]], learn=("R",))
+    r = float(np.mean(ys ** 2)) - q
+    np.testing.assert_allclose(fit.r, [r], rtol=1e-6)
+    np.testing.assert_allclose(fit.stderr["r"], [(q + r) * np.sqrt(2 / T)], rtol=1e-3)
+    assert fit.Q.tobytes() == np.array([[q]]).tobytes() and "q" not in fit.stderr
+
+
+def test_maximum_likelihood_refuses_what_it_does_not_learn():
+    ys = series(50, 14)
+    with pytest.raises(ValueError, match=r"learn must name some of \['Q', 'R'\]"):
+        mle(ys, **cv_model(), learn=("F",))
+    with pytest.raises(ValueError, match="R_form must be 'diag' or 'scaled'"):
+        mle(ys, **cv_model(), R_form="full")
+
+
+def test_a_kalman_filter_learns_q_and_R_of_irregularly_sampled_measurements():
+    """Time steps of 0.2-3 s: Q(dt) = q Q1(dt) for every step, one q learned, within four of
+    its standard errors of the truth; the new filter's log-likelihood is the fit's maximum."""
+    rng = np.random.default_rng(15)
+    dts = rng.uniform(0.2, 3.0, size=1999)
+    truth = vt.KalmanFilter(vt.ConstantVelocity(dim=2, q=0.5), vt.Position(dim=2, r=4.0))
+    _, ys = vt.simulate.simulate(truth.motion, truth.measurement, 2000, x0=np.zeros(4),
+                                 dt=dts, rng=16)
+    start = vt.KalmanFilter(vt.ConstantVelocity(dim=2, q=1.0), vt.Position(dim=2, r=1.0))
+    kf, fit = start.fit(ys, dt=dts)
+    assert fit.converged and isinstance(kf.measurement, vt.Position)
+    assert fit.q == kf.motion.q  # in the model's units, as its standard error
+    assert abs(kf.motion.q - 0.5) < 4 * fit.stderr["q"]
+    assert np.all(np.abs(kf.measurement.R().diagonal() - 4.0) < 4 * fit.stderr["r"])
+    x0, P0 = start.default_prior(ys)
+    ll = float(kf.filter(ys, dt=dts, x0=x0, P0=P0).loglik)
+    np.testing.assert_allclose(ll, fit.loglik[-1], rtol=1e-12)
+    assert start.motion.q == 1.0  # the models given are left as they were
+    kf_em, fit_em = start.fit(ys, dt=dts, method="em", tol=1e-9, max_iter=5000)
+    np.testing.assert_allclose(kf_em.motion.q, kf.motion.q, rtol=1e-3)
+    np.testing.assert_allclose(kf_em.measurement.R(), kf.measurement.R(), rtol=1e-3, atol=1e-9)
+
+
+def test_fitting_names_a_model_it_cannot_learn():
+    ys = series(50, 17)
+    kf = vt.KalmanFilter(vt.models.LinearMotion(CV.F(1.0), CV.Q(1.0)), POS)
+    with pytest.raises(TypeError, match="learning q needs a motion model whose Q is q times"):
+        kf.fit(ys)
+    kf.fit(ys, learn=("R",))  # R alone is fine
+    with pytest.raises(ValueError, match="method must be 'mle' or 'em'"):
+        vt.KalmanFilter(CV, POS).fit(ys, method="newton")
+    with pytest.raises(ValueError, match=r"learn must name some of \['q', 'R'\]"):
+        vt.KalmanFilter(CV, POS).fit(ys, learn=("Q",))
