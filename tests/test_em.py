@@ -228,6 +228,15 @@ def test_standard_error_of_a_variance_equals_the_closed_form(rng):
     assert fit.Q.tobytes() == np.array([[q]]).tobytes() and "q" not in fit.stderr
 
 
+def test_maximum_likelihood_of_q_alone_leaves_a_full_or_per_step_R_as_given():
+    ys = series(200, 18)
+    R_full = np.array([[4.0, 1.0], [1.0, 3.0]])
+    for R in (R_full, np.stack([R_full] * 200)):
+        fit = mle(ys, **{**cv_model(), "R": R}, learn=("Q",))
+        assert fit.converged and fit.R.tobytes() == R.tobytes()
+        assert set(fit.stderr) == {"q"}
+
+
 def test_maximum_likelihood_refuses_what_it_does_not_learn():
     ys = series(50, 14)
     with pytest.raises(ValueError, match=r"learn must name some of \['Q', 'R'\]"):

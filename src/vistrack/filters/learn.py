@@ -6,13 +6,15 @@ users rarely know the noise. :func:`em` learns any subset of them from one serie
 the rest held fixed (Shumway and Stoffer [1]_); :func:`mle` learns the structured noise (the
 factor ``q`` of ``Q``, ``R``'s diagonal or factor) by L-BFGS with the exact gradient, which
 comes from the same smoothed sums (Fisher's identity), with standard errors.
-:meth:`vistrack.filters.KalmanFilter.fit` does either for a filter built from models. Each iteration runs the filter and the
-Rauch-Tung-Striebel smoother (the E-step) and sets the parameters learned to the maximum of the
-expected complete-data log-likelihood (the M-step), which never lowers the likelihood of the
-measurements. With smoothed means :math:`m_t`, covariances :math:`P_t`, the lag-one
-cross-covariances :math:`C_t = \operatorname{cov}(x_t, x_{t-1} \mid y) = P_t G_{t-1}'` (the
-smoother's gain :math:`G_{t-1} = P^+_{t-1} F_t' (P^-_t)^{-1}`) and the sums over the ``N = B
-(T-1)`` transitions of the batch,
+:meth:`vistrack.filters.KalmanFilter.fit` does either for a filter built from models.
+
+Each iteration of EM runs the filter and the Rauch-Tung-Striebel smoother (the E-step) and sets
+the parameters learned to the maximum of the expected complete-data log-likelihood (the
+M-step), which never lowers the likelihood of the measurements. With smoothed means
+:math:`m_t`, covariances :math:`P_t`, the lag-one cross-covariances
+:math:`C_t = \operatorname{cov}(x_t, x_{t-1} \mid y) = P_t G_{t-1}'` (the smoother's
+gain :math:`G_{t-1} = P^+_{t-1} F_t' (P^-_t)^{-1}`) and the sums over the ``N = B (T-1)``
+transitions of the batch,
 
 .. math::
 
@@ -28,11 +30,11 @@ m_t') (\sum P_t + m_t m_t')^{-1}`, and ``R`` the mean of :math:`E[v_t v_t']`,
 :math:`v_t = y_t - H x_t`, over the steps that measured something (a step missed whole says
 nothing of ``R``): for a measured component its residual's square and :math:`H P_t H'`, for
 a missing one of a step measured in part what the current ``R`` expects given the measured
-ones (the conditional Gaussian of ``v``). When the series of a batch share their covariances
-(the same prior, the same steps missing), the smoother's covariances and gains are computed
-once for all of them (:attr:`FilterResult.shared_covs`). ``H``
-is learned before ``R``, ``F`` before ``Q`` and ``x0`` before ``P0``, each with the other's new
-value, as in pykalman, which the tests check this against step by step.
+ones (the conditional Gaussian of ``v``). ``H`` is learned before ``R``, ``F`` before ``Q``
+and ``x0`` before ``P0``, each with the other's new value, as in pykalman, which the tests
+check this against step by step. When the series of a batch share their covariances (the same
+prior, the same steps missing: ``FilterResult.shared_covs``), the smoother's covariances and
+gains are computed once for all of them.
 
 Structured noise: ``"diag"`` keeps the diagonal of the full estimate; ``"scaled"`` learns one
 factor of the matrix given, ``Q_t = q Q^{(0)}_t``, :math:`q = \sum \operatorname{tr}(Q^{(0)+}_t
@@ -71,11 +73,11 @@ matrix given."""
 
 @dataclass(frozen=True)
 class FitResult:
-    """The output of :func:`em`: the model, learned and fixed parameters alike, and the
-    log-likelihood at each iteration.
+    """The output of :func:`em` and :func:`mle`: the model, learned and fixed parameters
+    alike, and the log-likelihood at each iteration.
 
-    With ``pooled=False`` every attribute has a leading batch axis ``(B,)``, one fit per series,
-    and ``loglik`` is padded with NaN after a series' last iteration.
+    From ``em(..., pooled=False)`` every attribute has a leading batch axis ``(B,)``, one fit
+    per series, and ``loglik`` is padded with NaN after a series' last iteration.
 
     Attributes
     ----------
@@ -85,7 +87,8 @@ class FitResult:
     x0, P0 : ndarray
         The prior of the first step.
     q, r : float or ndarray
-        The factors learned for ``"scaled"`` noise (1.0 otherwise).
+        The factors learned for ``"scaled"`` noise (1.0 otherwise); from :func:`mle` with
+        ``R_form="diag"``, ``r`` is ``R``'s diagonal.
     loglik : (iterations + 1,) ndarray
         ``log p(y)`` under the parameters at the start, after each iteration; the last is that
         of the parameters returned.
@@ -93,7 +96,8 @@ class FitResult:
         M-steps taken (:func:`em`), or L-BFGS iterations (:func:`mle`).
     converged : bool
         :func:`em`: the last iteration raised the log-likelihood by ``tol`` or less;
-        :func:`mle`: L-BFGS stopped at a point where the gradient vanishes to its tolerance.
+        :func:`mle`: a Newton step from where L-BFGS stopped would change no parameter by
+        more than ``xtol`` (relative).
     stderr : dict of str to float or ndarray
         :func:`mle` only (empty otherwise): standard errors of the learned ``"q"`` and ``"r"``
         (R's diagonal, or its factor), from the curvature of the log-likelihood at the
@@ -333,12 +337,16 @@ def mle(
     lls = [value_and_grad(theta0)[0]]
     it = [0]
 
+    seen: dict[bytes, float] = {}
+
     def negative(theta: np.ndarray) -> tuple[float, np.ndarray]:
         ll, g = value_and_grad(theta)
+        seen[theta.tobytes()] = ll
         return -ll, -g
 
-    def record(intermediate_result: Any) -> None:
-        lls.append(-float(intermediate_result.fun))
+    def record(xk: np.ndarray) -> None:  # after each iteration, at its point
+        ll = seen.get(xk.tobytes())
+        lls.append(value_and_grad(xk)[0] if ll is None else ll)
         it[0] += 1
 
     k = nq + nr
@@ -381,12 +389,13 @@ class _Structured:
     def __init__(self, y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...],
                  R_form: str) -> None:
         B, T, m = y.shape
-        if R_form == "diag" and p["R"].ndim != 2:
+        diag = R_form == "diag" and "R" in learn
+        if diag and p["R"].ndim != 2:
             raise ValueError("R_form='diag' needs one R (m, m) for all steps; got "
                              f"{p['R'].shape}")
         self.y, self.p, self.R_form = y, p, R_form
         self.obs = ~np.isnan(y)
-        self.R0 = p["R"] if R_form == "scaled" else np.diag(np.diag(p["R"]))
+        self.R0 = np.diag(np.diag(p["R"])) if diag else p["R"]  # R as given, if not learned
         self.nq = 1 if "Q" in learn else 0
         self.nr = (m if R_form == "diag" else 1) if "R" in learn else 0
         Qs = _steps(p["Q"], T)
@@ -402,8 +411,10 @@ class _Structured:
 
     def start(self) -> np.ndarray:
         """``theta`` of the model given."""
+        if not self.nr:
+            return np.zeros(self.nq)
         logr = np.log(np.diag(self.R0)) if self.R_form == "diag" else np.zeros(1)
-        return np.r_[np.zeros(self.nq), logr[:self.nr]]
+        return np.r_[np.zeros(self.nq), logr]
 
     def model(self, theta: np.ndarray) -> dict[str, np.ndarray]:
         out = dict(self.p, R=self.R0)
