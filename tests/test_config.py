@@ -187,6 +187,20 @@ def test_resolve_config_puts_values_over_a_preset():
         OfflineConfig(enabled=1)
 
 
+def test_each_flat_override_names_one_setting():
+    """``resolve_config(**overrides)`` puts a name to the tracker's settings or the offline
+    mode's: no name may be both (the tracker's calibration IoU was once ``link_iou``, the
+    offline joining's too, and an override of it reached the offline mode only)."""
+    from dataclasses import fields
+
+    from vistrack.tracking import BoxTrackerConfig
+
+    tracker = {f.name for f in fields(BoxTrackerConfig)}
+    assert not tracker & {f.name for f in fields(OfflineConfig)}
+    cfg = resolve_config(calibration_iou=0.5, link_iou=0.4)
+    assert cfg.tracker.calibration_iou == 0.5 and cfg.offline.link_iou == 0.4
+
+
 def test_the_command_lines_defaults_are_the_configurations():
     """The defaults `vistrack track --help` states are the configuration's own (the parser
     does not load the tracker to read them)."""

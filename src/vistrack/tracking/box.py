@@ -128,7 +128,7 @@ class BoxTrackerConfig:
     coast_time, coast_after : float
         Report a lost track's prediction for up to ``coast_time`` seconds, if it had been
         updated in a row for at least ``coast_after`` seconds (0: never).
-    link_iou, calibration_top, calibration_prior : float
+    calibration_iou, calibration_top, calibration_prior : float
         With calibrated scores: the IoU at which a detection continues one of the previous
         frame, the fraction of the outcomes, by score, whose rate is full confidence, and
         how many outcomes weigh as much as the rank prior
@@ -158,7 +158,7 @@ class BoxTrackerConfig:
     camera_sig: float = 2.0
     coast_time: float = 0.1
     coast_after: float = 1 / 3
-    link_iou: float = 0.3
+    calibration_iou: float = 0.3
     calibration_top: float = 0.05
     calibration_prior: float = 0.0
     chain_span: float = 1.0
@@ -187,7 +187,7 @@ class BoxTrackerConfig:
             if not 0 <= getattr(self, name) <= 1:
                 raise bad(name, "in [0, 1]" + (" (a calibrated confidence)" if name in unit
                                                else ""))
-        for name in ("link_iou", "calibration_top"):
+        for name in ("calibration_iou", "calibration_top"):
             if not 0 < getattr(self, name) <= 1:
                 raise bad(name, "in (0, 1]")
         for name in ("max_lost", "coast_time", "coast_after", "camera_sig",
@@ -487,7 +487,7 @@ class BoxTracker:
         """Forget every track (and what the online score calibration learnt); identities
         start again from 1."""
         c = self.config
-        self.calibrator = (ScoreCalibrator(link_iou=c.link_iou, top=c.calibration_top,
+        self.calibrator = (ScoreCalibrator(link_iou=c.calibration_iou, top=c.calibration_top,
                                            prior=c.calibration_prior,
                                            frame_rate=self.frame_rate,
                                            chain_span=c.chain_span, chain_gap=c.chain_gap)
