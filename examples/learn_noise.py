@@ -19,7 +19,7 @@ print(f"q = {kf.motion.q:.3f} +/- {fit.stderr['q']:.3f} (true 0.5)")
 print("R diagonal =", kf.measurement.R().diagonal().round(2), "+/-",
       fit.stderr["r"].round(2), "(true 4)")
 print(f"log-likelihood {fit.loglik[0]:.1f} -> {fit.loglik[-1]:.1f} in {fit.iterations} "
-      "L-BFGS iterations")
+      "iterations (L-BFGS, then Newton)")
 kf_em, fit_em = guess.fit(ys, dt=dts, method="em", tol=1e-8, max_iter=2000)
 print(f"EM: q = {kf_em.motion.q:.3f}, R diagonal = {kf_em.measurement.R().diagonal().round(2)}"
       f" after {fit_em.iterations} iterations")

@@ -62,7 +62,8 @@ def test_log_likelihood_never_decreases_with_missing_steps_and_components(R_form
     ys[rng.random(ys.shape) < 0.15] = np.nan  # single components
     ys[rng.random(ys.shape[:2]) < 0.05] = np.nan  # whole steps
     R = np.array([[1.0, 0.3], [0.3, 2.0]]) if R_form != "diag" else np.eye(2)
-    learn = ("F", "Q", "R", "x0", "P0") + (("H",) if R_form != "full" else ())
+    # H's rows are coupled by a correlated R where components are missing: H with "diag" only
+    learn = ("F", "Q", "R", "x0", "P0") + (("H",) if R_form == "diag" else ())
     fit = em(ys, **{**cv_model(), "Q": np.eye(4), "R": R}, learn=learn, R_form=R_form,
              tol=-np.inf, max_iter=500)
     assert fit.iterations == 500 and np.isfinite(fit.loglik).all()
@@ -180,8 +181,30 @@ def test_progress_and_errors():
         em(ys[:1], **cv_model(), learn=("Q",))
     partial = ys.copy()
     partial[3, 0] = np.nan
-    with pytest.raises(ValueError, match="needs R of form 'diag' or 'scaled'"):
-        em(partial, **cv_model(), learn=("H",))
+    correlated = {**cv_model(), "R": np.array([[4.0, 1.9], [1.9, 1.0]])}
+    for R_form in ("full", "scaled"):
+        with pytest.raises(ValueError, match="needs a diagonal R"):
+            em(partial, **correlated, learn=("H", "R"), R_form=R_form)
+    with pytest.raises(ValueError, match="needs a diagonal R"):
+        em(partial, **correlated, learn=("H",))
+    em(partial, **cv_model(), learn=("H",), max_iter=2)  # a diagonal R, given: the M-step
+    never = ys.copy()
+    never[:, 1] = np.nan
+    with pytest.raises(ValueError, match="component 1 of ys is never measured"):
+        em(never, **cv_model(), learn=("H",), R_form="diag")
+    with pytest.raises(ValueError, match="learn must be a sequence of names"):
+        em(ys, **cv_model(), learn="x0")
+    with pytest.raises(ValueError, match="x0 must be one for all series or one per series"):
+        em(np.stack([ys] * 3), **{**cv_model(), "x0": np.zeros((5, 4))})
+    with pytest.raises(ValueError, match="ys has no measurement"):
+        em(np.full_like(ys, np.nan), **cv_model())
+    per_step_R = {**cv_model(), "R": np.stack([4.0 * np.eye(2)] * len(ys))}
+    with pytest.raises(ValueError, match="learning H needs one R for all steps"):
+        em(ys, **per_step_R, learn=("H",))
+    with pytest.raises(ValueError, match="learning F needs one Q for all steps"):
+        em(ys, **{**cv_model(), "Q": np.stack([CV.Q(1.0)] * len(ys))}, learn=("F",))
+    with pytest.raises(ValueError, match="Q must not be zero to learn its factor"):
+        em(ys, **{**cv_model(), "Q": np.zeros((4, 4))}, learn=("Q",), Q_form="scaled")
 
 
 @pytest.mark.parametrize("R_form", ["diag", "scaled"])
@@ -259,9 +282,13 @@ def test_a_kalman_filter_learns_q_and_R_of_irregularly_sampled_measurements():
     assert fit.q == kf.motion.q  # in the model's units, as its standard error
     assert abs(kf.motion.q - 0.5) < 4 * fit.stderr["q"]
     assert np.all(np.abs(kf.measurement.R().diagonal() - 4.0) < 4 * fit.stderr["r"])
-    x0, P0 = start.default_prior(ys)
-    ll = float(kf.filter(ys, dt=dts, x0=x0, P0=P0).loglik)
+    ll = float(kf.filter(ys, dt=dts, x0=fit.x0, P0=fit.P0).loglik)
     np.testing.assert_allclose(ll, fit.loglik[-1], rtol=1e-12)
+    # the prior does not come from the noise guessed: another guess, the same maximum
+    kf_far, _ = vt.KalmanFilter(vt.ConstantVelocity(dim=2, q=50.0),
+                                vt.Position(dim=2, r=0.01)).fit(ys, dt=dts)
+    np.testing.assert_allclose(kf_far.motion.q, kf.motion.q, rtol=1e-3)
+    np.testing.assert_allclose(kf_far.measurement.R(), kf.measurement.R(), rtol=1e-3)
     assert start.motion.q == 1.0  # the models given are left as they were
     kf_em, fit_em = start.fit(ys, dt=dts, method="em", tol=1e-9, max_iter=5000)
     np.testing.assert_allclose(kf_em.motion.q, kf.motion.q, rtol=1e-3)
@@ -271,10 +298,86 @@ def test_a_kalman_filter_learns_q_and_R_of_irregularly_sampled_measurements():
 def test_fitting_names_a_model_it_cannot_learn():
     ys = series(50, 17)
     kf = vt.KalmanFilter(vt.models.LinearMotion(CV.F(1.0), CV.Q(1.0)), POS)
-    with pytest.raises(TypeError, match="learning q needs a motion model whose Q is q times"):
+    with pytest.raises(TypeError, match="a motion model with a q > 0 whose Q is q times"):
         kf.fit(ys)
     kf.fit(ys, learn=("R",))  # R alone is fine
     with pytest.raises(ValueError, match="method must be 'mle' or 'em'"):
         vt.KalmanFilter(CV, POS).fit(ys, method="newton")
     with pytest.raises(ValueError, match=r"learn must name some of \['q', 'R'\]"):
         vt.KalmanFilter(CV, POS).fit(ys, learn=("Q",))
+
+
+def test_one_x0_for_priors_of_different_covariances_reaches_the_maximum():
+    """A shared x0 with a P0 per series: each series weighs by its P0's inverse; at EM's end
+    the log-likelihood's slope in x0 (finite differences) is zero."""
+    ys = np.stack([series(50, b) for b in range(3)])
+    P0 = np.stack([0.01 * np.eye(4), 100 * np.eye(4), np.eye(4)])
+    start = {**cv_model(), "P0": P0, "x0": np.full(4, 3.0)}
+    fit = em(ys, **start, learn=("x0",), tol=1e-12, max_iter=20000)
+    assert fit.converged and np.diff(fit.loglik).min() >= -1e-9
+
+    def ll(x0):
+        return float(np.sum(vt.kalman_filter(ys, **{**start, "x0": x0}).loglik))
+
+    slope = [(ll(fit.x0 + 1e-5 * e) - ll(fit.x0 - 1e-5 * e)) / 2e-5 for e in np.eye(4)]
+    np.testing.assert_allclose(slope, 0.0, atol=1e-3)
+
+
+def test_a_prior_given_once_in_a_batch_axis_is_one_prior():
+    ys = np.stack([series(60, b) for b in range(3)])
+    start = {**cv_model(), "Q": np.eye(4)}
+    one = em(ys, **start, learn=("Q", "x0", "P0"), max_iter=5)
+    boxed = em(ys, **{**start, "x0": start["x0"][None], "P0": start["P0"][None]},
+               learn=("Q", "x0", "P0"), max_iter=5)
+    assert boxed.x0.shape == (4,) and boxed.P0.shape == (4, 4)
+    np.testing.assert_array_equal(boxed.loglik, one.loglik)
+    each = em(ys, **{**start, "x0": start["x0"][None]}, learn=("Q",), pooled=False,
+              max_iter=3)
+    assert each.Q.shape == (3, 4, 4)
+
+
+def test_a_fall_from_a_start_outside_the_family_does_not_stop_em():
+    """A per-step R to start from, one R learned: the first iteration lowers the likelihood
+    here (the start is no single R); EM goes on to the maximum, which a long run of plain
+    iterations confirms."""
+    rng = np.random.default_rng(11)
+    T = 150
+    H = np.stack([POS.H(4) + 0.3 * rng.normal(size=(2, 4)) for _ in range(T)])
+    R = np.stack([(lambda A: A @ A.T + 0.5 * np.eye(2))(rng.normal(size=(2, 2)))
+                  for _ in range(T)])
+    model = {**cv_model(), "H": H, "R": R}
+    ys = np.stack([simulate_lgssm(T, **model, rng=b)[1] for b in range(3)])
+    ys[rng.random(ys.shape) < 0.25] = np.nan
+    start = {**model, "R": 2.0 * R}
+    fit = em(ys, **start, learn=("R",))  # default tol
+    assert fit.loglik[1] < fit.loglik[0]  # the fall
+    long = em(ys, **start, learn=("R",), tol=-np.inf, max_iter=300)
+    assert fit.converged and fit.iterations > 1
+    assert fit.loglik[-1] == pytest.approx(long.loglik[-1], abs=1e-3)
+
+
+def test_a_singular_start_learns_a_positive_semi_definite_Q():
+    """The Euler-discretised constant velocity puts noise on the velocities only; learning
+    every entry of Q from it, rounding must not leave Q below zero."""
+    euler = vt.ConstantVelocity(dim=2, q=0.5, discretisation="euler")
+    ys = series(200, 20)
+    fit = em(ys, **{**cv_model(), "Q": euler.Q(1.0)}, learn=("Q",), tol=-np.inf, max_iter=60)
+    assert np.isfinite(fit.loglik).all() and np.linalg.eigvalsh(fit.Q).min() >= 0
+
+
+def test_maximum_likelihood_names_what_it_cannot_learn_from():
+    ys = series(60, 21)
+    with pytest.raises(ValueError, match="R's diagonal must be > 0"):
+        mle(ys, **{**cv_model(), "R": np.diag([4.0, 0.0])})
+    with pytest.raises(ValueError, match="Q must not be zero"):
+        mle(ys, **{**cv_model(), "Q": np.zeros((4, 4))})
+    with pytest.raises(ValueError, match="ys has no measurement"):
+        mle(np.full_like(ys, np.nan), **cv_model())
+    never = ys.copy()
+    never[:, 1] = np.nan
+    with pytest.raises(ValueError, match="component 1 of ys is never measured"):
+        mle(never, **cv_model())
+    with pytest.raises(ValueError, match="xtol must be a number > 0"):
+        mle(ys, **cv_model(), xtol="a")
+    with pytest.raises(ValueError, match="learn must be a sequence of names"):
+        mle(ys, **cv_model(), learn="Q")

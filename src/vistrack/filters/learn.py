@@ -10,7 +10,9 @@ comes from the same smoothed sums (Fisher's identity), with standard errors.
 
 Each iteration of EM runs the filter and the Rauch-Tung-Striebel smoother (the E-step) and sets
 the parameters learned to the maximum of the expected complete-data log-likelihood (the
-M-step), which never lowers the likelihood of the measurements. With smoothed means
+M-step), which never lowers the likelihood of the measurements (but once, on the first
+iteration, where the start lies outside the family learned: a per-step ``Q`` or ``R`` learned
+as one matrix). With smoothed means
 :math:`m_t`, covariances :math:`P_t`, the lag-one cross-covariances
 :math:`C_t = \operatorname{cov}(x_t, x_{t-1} \mid y) = P_t G_{t-1}'` (the smoother's
 gain :math:`G_{t-1} = P^+_{t-1} F_t' (P^-_t)^{-1}`) and the sums over the ``N = B (T-1)``
@@ -49,6 +51,7 @@ References
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, TextIO
 
@@ -93,9 +96,9 @@ class FitResult:
         ``log p(y)`` under the parameters at the start, after each iteration; the last is that
         of the parameters returned.
     iterations : int
-        M-steps taken (:func:`em`), or L-BFGS iterations (:func:`mle`).
+        M-steps taken (:func:`em`), or L-BFGS and Newton iterations (:func:`mle`).
     converged : bool
-        :func:`em`: the last iteration raised the log-likelihood by ``tol`` or less;
+        :func:`em`: the last iteration changed the log-likelihood by ``tol`` or less;
         :func:`mle`: a Newton step from where L-BFGS stopped would change no parameter by
         more than ``xtol`` (relative).
     stderr : dict of str to float or ndarray
@@ -157,7 +160,7 @@ def em(
         One estimate from every series of a batch (the sums of the M-step over all of them),
         or one fit per series (``False``; the result then has a batch axis).
     tol : float
-        Stop when an iteration raises the log-likelihood by ``tol`` nats or less (``-inf``:
+        Stop when an iteration changes the log-likelihood by ``tol`` nats or less (``-inf``:
         run ``max_iter`` iterations).
     max_iter : int
         The most iterations (M-steps).
@@ -172,10 +175,13 @@ def em(
     Raises
     ------
     ValueError
-        If a name in ``learn`` or a form is unknown, ``tol`` is not a number or ``max_iter``
-        not a positive integer, ``Q`` or ``F`` is learned from series of one step, ``H`` with ``R``
-        of form ``"full"`` where some steps miss some components only, or the model's arguments
-        are invalid (as :func:`kalman_filter` says).
+        If ``learn`` is a string or names something unknown, a form is unknown, ``tol`` is
+        not a number or ``max_iter`` not a positive integer, ``ys`` measures nothing, a prior
+        is given for another number of series, ``Q`` or ``F`` is learned from series of one
+        step, ``F`` (``H``) is learned with a ``Q`` (``R``) that stays one per step, ``H``
+        where some steps miss some components and ``R`` is not diagonal, or for a component
+        never measured, a ``"scaled"`` noise is zero, or the model's arguments are invalid
+        (as :func:`kalman_filter` says).
 
     Examples
     --------
@@ -190,16 +196,14 @@ def em(
     >>> bool(np.all(np.diff(fit.loglik) >= -1e-9))  # EM never lowers the likelihood
     True
     """
-    learned = tuple(learn)
-    for name in learned:
-        if name not in LEARNABLE:
-            raise ValueError(f"learn must name some of {list(LEARNABLE)}; got {name!r}")
+    learned = _names(learn, LEARNABLE)
     for name, form in (("Q_form", Q_form), ("R_form", R_form)):
         if form not in NOISE_FORMS:
             raise ValueError(f"{name} must be one of {list(NOISE_FORMS)}; got {form!r}")
-    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or np.isnan(tol):
+    if isinstance(tol, bool) or not isinstance(tol, numbers.Real) or np.isnan(tol):
         raise ValueError(f"tol must be a number (-inf: never stop before max_iter); got {tol!r}")
     y, params = _problem(ys, F, Q, H, R, x0, P0, learned, max_iter)
+    _check_em(y, params, learned, Q_form, R_form)
     B = y.shape[0]
     if pooled or B == 1:
         return _fit(y, params, learned, Q_form, R_form, float(tol), int(max_iter), progress)
@@ -211,7 +215,7 @@ def em(
         if p["P0"].ndim == 3:
             p["P0"] = p["P0"][b]
         fits.append(_fit(y[b:b + 1], p, learned, Q_form, R_form, float(tol), int(max_iter),
-                         progress))
+                         progress, f"series {b}: "))
     K = max(len(f.loglik) for f in fits)
     ll = np.full((B, K), np.nan)
     for b, f in enumerate(fits):
@@ -238,8 +242,60 @@ def _problem(ys: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLi
         raise ValueError(f"learning F or Q needs series of at least 2 steps; got T={T}")
     n = np.shape(F)[-1] if np.ndim(F) >= 2 else 0
     x0_, P0_ = check_prior(x0, P0, n)
+    B = y.shape[0]
+    for name, a, nd in (("x0", x0_, 2), ("P0", P0_, 3)):
+        if a.ndim == nd and a.shape[0] not in (1, B):
+            raise ValueError(f"{name} must be one for all series or one per series (B={B}); "
+                             f"got {a.shape[0]}")
+    x0_ = x0_[0] if x0_.ndim == 2 and (x0_.shape[0] == 1 and B > 1 or B == 1) else x0_
+    P0_ = P0_[0] if P0_.ndim == 3 and (P0_.shape[0] == 1 and B > 1 or B == 1) else P0_
+    if not np.isfinite(y).any():
+        raise ValueError("ys has no measurement: every value is NaN")
     return y, {k: np.asarray(v, dtype=np.float64)
                for k, v in (("F", F), ("Q", Q), ("H", H), ("R", R), ("x0", x0_), ("P0", P0_))}
+
+
+def _names(learn: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
+    """``learn`` as a tuple of names, each one of ``allowed``."""
+    if isinstance(learn, str):
+        raise ValueError(f"learn must be a sequence of names (e.g. ({learn!r},)), not a string")
+    names = tuple(learn)
+    for name in names:
+        if name not in allowed:
+            raise ValueError(f"learn must name some of {list(allowed)}; got {name!r}")
+    return names
+
+
+def _check_em(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form: str,
+              R_form: str) -> None:
+    """Refuse what :func:`em`'s M-steps do not cover, naming why."""
+    obs = ~np.isnan(y)
+    for name, form, M in (("Q", Q_form, p["Q"]), ("R", R_form, p["R"])):
+        if name in learn and form == "scaled" and not np.any(M):
+            raise ValueError(f"{name} must not be zero to learn its factor ({name}_form="
+                             "'scaled')")
+    # F and H are learned unweighted by the noise: exact where that noise, after the M-step,
+    # is one matrix for all steps (a per-step one would weigh each step by its inverse)
+    for name, noise, form in (("F", "Q", Q_form), ("H", "R", R_form)):
+        per_step = p[noise].ndim == 3 and (noise not in learn or form == "scaled")
+        if name in learn and per_step:
+            raise ValueError(f"learning {name} needs one {noise} for all steps, given or "
+                             f"learned as 'full' or 'diag' (its M-step would otherwise weigh "
+                             f"each step by its {noise}); got a {noise} per step")
+    if "H" in learn:
+        never = np.flatnonzero(~obs.any(axis=(0, 1)))
+        if len(never):
+            raise ValueError(f"component {int(never[0])} of ys is never measured: H's row for "
+                             "it cannot be learned")
+        partial = obs.any(axis=-1) & ~obs.all(axis=-1)
+        R_diagonal = ("R" in learn and R_form == "diag") or (
+            not ("R" in learn and R_form == "full")
+            and not np.any(p["R"] - np.eye(p["R"].shape[-1]) * np.diagonal(
+                p["R"], axis1=-2, axis2=-1)[..., None, :]))
+        if partial.any() and y.shape[-1] > 1 and not R_diagonal:
+            raise ValueError("learning H where some steps miss some of their components needs "
+                             "a diagonal R (R_form='diag', or a diagonal R not learned as "
+                             "'full'): with a correlated R the rows of H are coupled")
 
 
 def mle(
@@ -253,7 +309,7 @@ def mle(
     P0: ArrayLike,
     learn: tuple[str, ...] | list[str] = ("Q", "R"),
     R_form: str = "diag",
-    xtol: float = 1e-6,
+    xtol: float = 1e-4,
     max_iter: int = 200,
 ) -> FitResult:
     r"""Learn the noise of a linear-Gaussian model by maximum likelihood: L-BFGS over the
@@ -268,10 +324,10 @@ def mle(
 
     .. math::
 
-        rac{\partial \log p(y)}{\partial \log q} = -	frac12 \sum_t \operatorname{rank}
-        Q^{(0)}_t + rac{1}{2q} \sum_t \operatorname{tr}ig(Q^{(0)+}_t E[w_t w_t' \mid
-        y]ig), \qquad rac{\partial \log p(y)}{\partial \log r_i} = -	frac{N}{2} +
-        rac{1}{2 r_i} \sum_t E[v_{ti}^2 \mid y]
+        \frac{\partial \log p(y)}{\partial \log q} = -\tfrac12 \sum_t \operatorname{rank}
+        Q^{(0)}_t + \frac{1}{2q} \sum_t \operatorname{tr}\big(Q^{(0)+}_t E[w_t w_t' \mid
+        y]\big), \qquad \frac{\partial \log p(y)}{\partial \log r_i} = -\tfrac{N}{2} +
+        \frac{1}{2 r_i} \sum_t E[v_{ti}^2 \mid y]
 
     over the transitions of every series and the ``N`` steps that measured something. Where
     EM creeps towards the maximum, this reaches it in a few dozen evaluations of the filter
@@ -290,9 +346,10 @@ def mle(
     R_form : {"diag", "scaled"}
         ``R``'s structure.
     xtol : float
-        Converged when a Newton step from where L-BFGS stops would change no parameter by a
-        factor of more than ``1 + xtol`` (L-BFGS itself stops where the log-likelihood's
-        rounding hides any further rise).
+        Converged when a Newton step would change no parameter by a factor of more than
+        ``1 + xtol``. L-BFGS runs first, then Newton's method with the observed information
+        (the central differences of the exact gradient), which also gives the standard
+        errors.
     max_iter : int
         The most L-BFGS iterations.
 
@@ -306,8 +363,9 @@ def mle(
     ------
     ValueError
         If ``learn`` names something else than ``"Q"`` and ``"R"``, ``R_form`` is unknown,
-        ``max_iter`` is not a positive integer, or the model is invalid (as
-        :func:`kalman_filter` says).
+        ``xtol`` is not > 0, ``max_iter`` is not a positive integer, ``ys`` measures nothing,
+        the noise learned is zero (or ``R``'s diagonal is not > 0, or a component is never
+        measured, for ``"diag"``), or the model is invalid (as :func:`kalman_filter` says).
 
     Examples
     --------
@@ -324,12 +382,11 @@ def mle(
     """
     from scipy.optimize import minimize
 
-    learned = tuple(learn)
-    for name in learned:
-        if name not in ("Q", "R"):
-            raise ValueError(f"learn must name some of ['Q', 'R']; got {name!r}")
+    learned = _names(learn, ("Q", "R"))
     if R_form not in ("diag", "scaled"):
         raise ValueError(f"R_form must be 'diag' or 'scaled'; got {R_form!r}")
+    if isinstance(xtol, bool) or not isinstance(xtol, numbers.Real) or not xtol > 0:
+        raise ValueError(f"xtol must be a number > 0; got {xtol!r}")
     y, p = _problem(ys, F, Q, H, R, x0, P0, learned, max_iter)
     lik = _Structured(y, p, learned, R_form)
     value_and_grad, model, nq, nr = lik.value_and_grad, lik.model, lik.nq, lik.nr
@@ -353,33 +410,72 @@ def mle(
     if k == 0:
         return FitResult(F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"], P0=p["P0"], q=1.0,
                          r=1.0, loglik=np.array(lls), iterations=0, converged=True)
+    # each factor within e^±20 of its start: the filter stays finite
+    bounds = [(t - 20.0, t + 20.0) for t in theta0]
     opt = minimize(negative, theta0, jac=True, method="L-BFGS-B", callback=record,
-                   options={"gtol": 1e-9 * y.shape[0] * y.shape[1], "maxiter": int(max_iter),
-                            "ftol": 1e-13})
-    best = model(opt.x)
-    q = float(np.exp(opt.x[0])) if nq else 1.0
-    r: float | np.ndarray = (np.exp(opt.x[nq:]) if R_form == "diag" else float(
-        np.exp(opt.x[nq]))) if nr else 1.0
-    # the observed information in the logarithms, by central differences of the exact
-    # gradient: the Newton step left, and the standard errors by the delta method
-    h = 1e-4
-    info = np.empty((k, k))
-    for j in range(k):
-        d = np.zeros(k)
-        d[j] = h
-        info[:, j] = (value_and_grad(opt.x - d)[1] - value_and_grad(opt.x + d)[1]) / (2 * h)
-    info = (info + info.T) / 2
-    step = np.linalg.solve(info, value_and_grad(opt.x)[1])
-    se = np.sqrt(np.clip(np.diag(np.linalg.inv(info)), 0.0, None)) * np.exp(opt.x)
+                   bounds=bounds, options={"gtol": 1e-9 * y.shape[0] * y.shape[1],
+                                           "maxiter": int(max_iter), "ftol": 1e-13})
+    # then Newton's method with the observed information (central differences of the exact
+    # gradient), halving a step that does not raise the likelihood: L-BFGS stops where its
+    # line search finds no rise, which is not always the maximum
+    theta, (ll, g) = opt.x, value_and_grad(opt.x)
+    converged = False
+    for _ in range(int(max_iter)):
+        info = _information(value_and_grad, theta)
+        try:
+            step = np.linalg.solve(info, g)
+        except np.linalg.LinAlgError:
+            break
+        if not np.all(np.linalg.eigvalsh(info) > 0):
+            step = g / max(1.0, float(np.max(np.diag(info))))  # not concave here: ascend
+        elif np.max(np.abs(step)) <= xtol:
+            converged = True
+            break
+        for _ in range(30):
+            trial = np.clip(theta + step, [b[0] for b in bounds], [b[1] for b in bounds])
+            ll_new, g_new = value_and_grad(trial)
+            if ll_new >= ll:
+                break
+            step = step / 2
+        else:
+            break
+        if ll_new == ll and np.array_equal(trial, theta):
+            break
+        theta, ll, g = trial, ll_new, g_new
+        lls.append(ll)
+        it[0] += 1
+    else:
+        info = _information(value_and_grad, theta)
+    best = model(theta)
+    q = float(np.exp(theta[0])) if nq else 1.0
+    r: float | np.ndarray = (np.exp(theta[nq:]) if R_form == "diag" else float(
+        np.exp(theta[nq]))) if nr else 1.0
+    # the standard errors by the delta method
+    try:
+        var = np.diag(np.linalg.inv(info))
+    except np.linalg.LinAlgError:
+        var = np.full(k, np.inf)
+    se = np.sqrt(np.where(var > 0, var, np.inf)) * np.exp(theta)
     errors: dict[str, Any] = {}
     if nq:
         errors["q"] = float(se[0])
     if nr:
         errors["r"] = se[nq:] if R_form == "diag" else float(se[nq])
-    converged = bool(opt.success or np.max(np.abs(step)) <= xtol)
     return FitResult(F=best["F"], Q=best["Q"], H=best["H"], R=best["R"], x0=best["x0"],
                      P0=best["P0"], q=q, r=r, loglik=np.array(lls), iterations=it[0],
                      converged=converged, stderr=errors)
+
+
+def _information(value_and_grad: Any, theta: np.ndarray, h: float = 1e-4) -> np.ndarray:
+    """The observed information (minus the Hessian of the log-likelihood) at ``theta``, by
+    central differences of the exact gradient, symmetrised."""
+    k = len(theta)
+    info = np.empty((k, k))
+    for j in range(k):
+        d = np.zeros(k)
+        d[j] = h
+        info[:, j] = (value_and_grad(theta - d)[1] - value_and_grad(theta + d)[1]) / (2 * h)
+    return (info + info.T) / 2
 
 
 class _Structured:
@@ -396,6 +492,17 @@ class _Structured:
         self.y, self.p, self.R_form = y, p, R_form
         self.obs = ~np.isnan(y)
         self.R0 = np.diag(np.diag(p["R"])) if diag else p["R"]  # R as given, if not learned
+        if "Q" in learn and not np.any(p["Q"]):
+            raise ValueError("Q must not be zero to learn its factor q")
+        if "R" in learn and not np.any(p["R"]):
+            raise ValueError("R must not be zero to learn it")
+        if diag:
+            if not np.all(np.diag(p["R"]) > 0):
+                raise ValueError(f"R's diagonal must be > 0 to learn it; got {np.diag(p['R'])}")
+            never = np.flatnonzero(~self.obs.any(axis=(0, 1)))
+            if len(never):
+                raise ValueError(f"component {int(never[0])} of ys is never measured: its "
+                                 "variance in R cannot be learned")
         self.nq = 1 if "Q" in learn else 0
         self.nr = (m if R_form == "diag" else 1) if "R" in learn else 0
         Qs = _steps(p["Q"], T)
@@ -456,7 +563,8 @@ def _trace_sum(pinv: np.ndarray, E: np.ndarray) -> float:
 
 
 def _fit(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form: str,
-         R_form: str, tol: float, max_iter: int, progress: TextIO | None) -> FitResult:
+         R_form: str, tol: float, max_iter: int, progress: TextIO | None,
+         label: str = "") -> FitResult:
     """EM over the batch ``y (B, T, m)``, pooled."""
     B, T, m = y.shape
     obs = ~np.isnan(y)
@@ -469,8 +577,10 @@ def _fit(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form
         ll = float(np.sum(res.loglik))
         lls.append(ll)
         if progress is not None:
-            progress.write(f"EM iteration {k}: log-likelihood {ll:.6f}\n")
-        if k > 0 and ll - lls[-2] <= tol:
+            progress.write(f"{label}EM iteration {k}: log-likelihood {ll:.6f}\n")
+        # a change of tol or less either way (a fall larger than that, as from a per-step
+        # start outside the constant family learned, goes on)
+        if k > 0 and abs(ll - lls[-2]) <= tol:
             converged = True
             break
         if k == max_iter:
@@ -494,17 +604,33 @@ def _fit(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form
             new["R"], r_new = _noise(V, obs.any(axis=-1).sum(axis=0), R0, R_form, T)
             r = r_new if R_form == "scaled" else 1.0
         if "x0" in learn:
-            new["x0"] = ms[:, 0] if p["x0"].ndim == 2 else ms[:, 0].mean(axis=0)
+            if p["x0"].ndim == 2:
+                new["x0"] = ms[:, 0]
+            elif p["P0"].ndim == 3:  # one x0 for priors of different covariances: weighted
+                W = np.linalg.inv(p["P0"])
+                new["x0"] = np.linalg.solve(W.sum(axis=0), np.einsum("bij,bj->i", W, ms[:, 0]))
+            else:
+                new["x0"] = ms[:, 0].mean(axis=0)
         if "P0" in learn:
             d = ms[:, 0] - (new["x0"] if new["x0"].ndim == 2 else new["x0"][None])
             D = Ps[:, 0] + d[:, :, None] * d[:, None, :]  # Ps broadcast when shared
             new["P0"] = D if p["P0"].ndim == 3 else D.mean(axis=0)
-        for name in ("Q", "R", "P0"):  # symmetric to the last bit
+        for name in ("Q", "R", "P0"):  # symmetric to the last bit, and not below zero
             if name in learn:
-                new[name] = (new[name] + np.swapaxes(new[name], -1, -2)) / 2
+                new[name] = _psd((new[name] + np.swapaxes(new[name], -1, -2)) / 2)
         p = new
     return FitResult(F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"], P0=p["P0"], q=q, r=r,
                     loglik=np.array(lls), iterations=len(lls) - 1, converged=converged)
+
+
+def _psd(M: np.ndarray) -> np.ndarray:
+    """A symmetric matrix (or stack) with its eigenvalues below zero, which rounding leaves
+    in the sums of a singular noise, set to zero; unchanged when there are none."""
+    w, V = np.linalg.eigh(M)
+    if w.min() >= 0:
+        return M
+    out = (V * np.clip(w, 0.0, None)[..., None, :]) @ np.swapaxes(V, -1, -2)
+    return (out + np.swapaxes(out, -1, -2)) / 2
 
 
 def _smoothed(res: FilterResult, F: np.ndarray,
@@ -606,11 +732,8 @@ def _noise(E: np.ndarray, count: np.ndarray, shape: np.ndarray, form: str,
 
 def _learn_H(y: np.ndarray, obs: np.ndarray, ms: np.ndarray, Ps: np.ndarray, mult: int,
              R_form: str) -> np.ndarray:
-    """``H`` row by row from the steps that measured its component."""
-    partial = obs.any(axis=-1) & ~obs.all(axis=-1)
-    if partial.any() and R_form == "full" and y.shape[-1] > 1:
-        raise ValueError("learning H where some steps miss some of their components needs R of "
-                         "form 'diag' or 'scaled' (with a full R the rows of H are coupled)")
+    """``H`` row by row from the steps that measured its component (see :func:`_check_em`
+    for when that is the M-step)."""
     rows = []
     for i in range(y.shape[-1]):
         o = obs[..., i].astype(np.float64)

@@ -402,8 +402,11 @@ class KalmanFilter:
         R_form : {"diag", "scaled", "full"}
             ``R``'s structure (``"full"`` with ``method="em"`` only).
         x0, P0 : array_like, optional
-            The prior, as in :meth:`filter` (from :meth:`default_prior` with the models given
-            if None), held fixed.
+            The prior, held fixed. By default ``x0`` from the first measurement
+            (:meth:`default_prior`) and ``P0`` wide, ``100 I`` times the largest variance of
+            a series' steps from one measurement to the next, so that the values learned do
+            not depend on the noise they start from; filter with the same prior to get
+            ``fit.loglik[-1]`` back.
         **options
             Passed to the method (``max_iter``, ``tol`` for EM, ``xtol`` for L-BFGS).
 
@@ -415,7 +418,9 @@ class KalmanFilter:
             or :class:`~vistrack.models.LinearMeasurement` as given).
         FitResult
             The fit: its log-likelihood trace, iterations and, by maximum likelihood, standard
-            errors; ``q`` and ``stderr["q"]`` in the motion model's units.
+            errors; ``q`` and ``stderr["q"]`` in the motion model's units, ``r`` R's
+            diagonal (``"diag"``) or its factor relative to the measurement model's R
+            (``"scaled"``).
 
         Raises
         ------
@@ -454,17 +459,23 @@ class KalmanFilter:
             d = np.linspace(0.5, 2.0, 4)
             if not (isinstance(q0, float) and q0 > 0
                     and np.allclose(doubled.Q(d), 2 * np.asarray(motion.Q(d)), rtol=1e-12)):
-                raise TypeError(f"learning q needs a motion model whose Q is q times a "
-                                f"matrix; {motion!r} has no such q")
+                raise TypeError(f"learning q needs a motion model with a q > 0 whose Q is q "
+                                f"times a matrix; {motion!r} has no such q")
         if "R" in learned and not isinstance(meas, (Position, LinearMeasurement)):
             raise TypeError(f"learning R needs a Position or LinearMeasurement model; got "
                             f"{type(meas).__name__}")
         y, _ = as_measurement_series(ys)
         T = y.shape[1]
         if x0 is None or P0 is None:
+            # the first measurement, and every part of the state uncertain by 10 times the
+            # spread of the measurements' steps: learned values that do not depend on the
+            # noise they start from (default_prior's P0 takes R from it)
             dx0, dP0 = self.default_prior(y)
             x0 = dx0 if x0 is None else x0
-            P0 = dP0 if P0 is None else P0
+            steps = np.diff(y, axis=1)
+            spread = float(np.nanmax(np.nanvar(steps, axis=1))) if np.isfinite(
+                steps).any() else 1.0
+            P0 = 100.0 * max(spread, 1e-12) * np.eye(len(dP0)) if P0 is None else P0
         mats = self.matrices(T, dt)
         what = tuple({"q": "Q", "R": "R"}[k] for k in learned)
         F, Q, H, R = mats["F"], mats["Q"], mats["H"], mats["R"]
