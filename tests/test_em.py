@@ -381,3 +381,8 @@ def test_maximum_likelihood_names_what_it_cannot_learn_from():
         mle(ys, **cv_model(), xtol="a")
     with pytest.raises(ValueError, match="learn must be a sequence of names"):
         mle(ys, **cv_model(), learn="Q")
+
+
+def test_fit_refuses_a_string_for_learn():
+    with pytest.raises(ValueError, match="learn must be a sequence of names"):
+        vt.KalmanFilter(CV, POS).fit(series(30, 22), learn="qR")

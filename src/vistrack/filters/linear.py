@@ -23,7 +23,7 @@ from ..models.motion import MotionModel
 from ..types import Gaussian
 from . import _kernels
 from .kalman import FilterResult, _kernel_error, _prior, _update, kalman_filter, kf_predict
-from .learn import FitResult, em, mle
+from .learn import FitResult, _names, em, mle
 from .smoothers import SmoothResult, rts_smooth
 
 __all__ = ["KalmanFilter", "OnlineFilter"]
@@ -444,10 +444,7 @@ class KalmanFilter:
         >>> round(kf.motion.q, 2), kf.measurement.R().diagonal().round(2), fit.converged
         (0.52, array([4.1 , 3.89]), True)
         """
-        learned = tuple(learn)
-        for name in learned:
-            if name not in ("q", "R"):
-                raise ValueError(f"learn must name some of ['q', 'R']; got {name!r}")
+        learned = _names(learn, ("q", "R"))
         if method not in ("mle", "em"):
             raise ValueError(f"method must be 'mle' or 'em'; got {method!r}")
         motion, meas = self.motion, self.measurement
@@ -467,9 +464,9 @@ class KalmanFilter:
         y, _ = as_measurement_series(ys)
         T = y.shape[1]
         if x0 is None or P0 is None:
-            # the first measurement, and every part of the state uncertain by 10 times the
-            # spread of the measurements' steps: learned values that do not depend on the
-            # noise they start from (default_prior's P0 takes R from it)
+            # the first measurement, and every part of the state with a standard deviation of
+            # 10 times the spread of the measurements' steps: learned values that do not
+            # depend on the noise they start from (default_prior's P0 takes R from it)
             dx0, dP0 = self.default_prior(y)
             x0 = dx0 if x0 is None else x0
             steps = np.diff(y, axis=1)
