@@ -247,8 +247,8 @@ def _problem(ys: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLi
         if a.ndim == nd and a.shape[0] not in (1, B):
             raise ValueError(f"{name} must be one for all series or one per series (B={B}); "
                              f"got {a.shape[0]}")
-    x0_ = x0_[0] if x0_.ndim == 2 and (x0_.shape[0] == 1 and B > 1 or B == 1) else x0_
-    P0_ = P0_[0] if P0_.ndim == 3 and (P0_.shape[0] == 1 and B > 1 or B == 1) else P0_
+    x0_ = x0_[0] if x0_.ndim == 2 and x0_.shape[0] == 1 else x0_
+    P0_ = P0_[0] if P0_.ndim == 3 and P0_.shape[0] == 1 else P0_
     if not np.isfinite(y).any():
         raise ValueError("ys has no measurement: every value is NaN")
     return y, {k: np.asarray(v, dtype=np.float64)
@@ -264,6 +264,15 @@ def _names(learn: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
         if name not in allowed:
             raise ValueError(f"learn must name some of {list(allowed)}; got {name!r}")
     return names
+
+
+def _check_measured(obs: np.ndarray, what: str) -> None:
+    """Raise ValueError naming the first component of ``obs (B, T, m)`` never measured: of
+    ``what`` nothing can be learned."""
+    never = np.flatnonzero(~obs.any(axis=(0, 1)))
+    if len(never):
+        raise ValueError(f"component {int(never[0])} of ys is never measured: {what} cannot "
+                         "be learned")
 
 
 def _check_em(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form: str,
@@ -283,10 +292,7 @@ def _check_em(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q
                              f"learned as 'full' or 'diag' (its M-step would otherwise weigh "
                              f"each step by its {noise}); got a {noise} per step")
     if "H" in learn:
-        never = np.flatnonzero(~obs.any(axis=(0, 1)))
-        if len(never):
-            raise ValueError(f"component {int(never[0])} of ys is never measured: H's row for "
-                             "it cannot be learned")
+        _check_measured(obs, "H's row for it")
         partial = obs.any(axis=-1) & ~obs.all(axis=-1)
         R_diagonal = ("R" in learn and R_form == "diag") or (
             not ("R" in learn and R_form == "full")
@@ -394,16 +400,12 @@ def mle(
     lls = [value_and_grad(theta0)[0]]
     it = [0]
 
-    seen: dict[bytes, float] = {}
-
     def negative(theta: np.ndarray) -> tuple[float, np.ndarray]:
         ll, g = value_and_grad(theta)
-        seen[theta.tobytes()] = ll
         return -ll, -g
 
-    def record(xk: np.ndarray) -> None:  # after each iteration, at its point
-        ll = seen.get(xk.tobytes())
-        lls.append(value_and_grad(xk)[0] if ll is None else ll)
+    def record(xk: np.ndarray) -> None:  # after each iteration, at its point (computed)
+        lls.append(value_and_grad(xk)[0])
         it[0] += 1
 
     k = nq + nr
@@ -499,22 +501,18 @@ class _Structured:
         if diag:
             if not np.all(np.diag(p["R"]) > 0):
                 raise ValueError(f"R's diagonal must be > 0 to learn it; got {np.diag(p['R'])}")
-            never = np.flatnonzero(~self.obs.any(axis=(0, 1)))
-            if len(never):
-                raise ValueError(f"component {int(never[0])} of ys is never measured: its "
-                                 "variance in R cannot be learned")
+            _check_measured(self.obs, "its variance in R")
         self.nq = 1 if "Q" in learn else 0
         self.nr = (m if R_form == "diag" else 1) if "R" in learn else 0
-        Qs = _steps(p["Q"], T)
-        Qs = Qs[1:] if Qs.shape[0] > 1 else Qs  # the transitions' Q
-        Rs = _steps(self.R0, T)
-        self.Q_pinv, self.R_pinv = np.linalg.pinv(Qs), np.linalg.pinv(Rs)
-        Q_rank, R_rank = np.linalg.matrix_rank(Qs), np.linalg.matrix_rank(Rs)
         n_meas = self.obs.any(axis=-1).sum(axis=0)  # series that measured something, per step
         self.n_meas = int(n_meas.sum())
-        self.Q_dof = B * (int(Q_rank[0]) * (T - 1) if len(Q_rank) == 1 else int(Q_rank.sum()))
-        self.R_dof = (int(R_rank[0]) * self.n_meas if len(R_rank) == 1
-                      else int(np.sum(R_rank * n_meas)))
+        if self.nq:
+            self.Q_scaled = _Scaled(p["Q"], T - 1)
+            self.Q_dof = self.Q_scaled.dof(np.full(T - 1, B))
+        if self.nr and R_form == "scaled":
+            self.R_scaled = _Scaled(self.R0, T)
+            self.R_dof = self.R_scaled.dof(n_meas)
+        self._memo: dict[bytes, tuple[float, np.ndarray]] = {}
 
     def start(self) -> np.ndarray:
         """``theta`` of the model given."""
@@ -533,6 +531,11 @@ class _Structured:
         return out
 
     def value_and_grad(self, theta: np.ndarray) -> tuple[float, np.ndarray]:
+        """``log p(y)`` and its gradient at ``theta``; a point asked for again (L-BFGS's
+        start, its last point, the iterations' log) is not computed again."""
+        key = np.asarray(theta, dtype=np.float64).tobytes()
+        if key in self._memo:
+            return self._memo[key]
         y, nq, nr = self.y, self.nq, self.nr
         T = y.shape[1]
         mp = self.model(theta)
@@ -543,7 +546,7 @@ class _Structured:
         g = np.empty(nq + nr)
         if nq:
             A = _process_noise_sums(*_transition_sums(ms, Ps, X, mult), _transitions(mp["F"], T))
-            tr = _trace_sum(self.Q_pinv, A)
+            tr = self.Q_scaled.trace(A)
             g[0] = -0.5 * self.Q_dof + 0.5 * tr / np.exp(theta[0])
         if nr:
             V = _expected_vv(y, self.obs, ms, Ps, mult, mp["H"], mp["R"], T)
@@ -551,15 +554,35 @@ class _Structured:
                 g[nq:] = (-0.5 * self.n_meas
                           + 0.5 * np.diagonal(V.sum(axis=0)) / np.exp(theta[nq:]))
             else:
-                g[nq] = -0.5 * self.R_dof + 0.5 * _trace_sum(self.R_pinv, V) / np.exp(theta[nq])
+                g[nq] = -0.5 * self.R_dof + 0.5 * self.R_scaled.trace(V) / np.exp(theta[nq])
+        if len(self._memo) > 256:
+            self._memo.clear()
+        self._memo[key] = ll, g
         return ll, g
 
 
-def _trace_sum(pinv: np.ndarray, E: np.ndarray) -> float:
-    """``sum_k tr(pinv_k E_k)`` for one ``pinv`` (1, d, d) or one per step (K, d, d)."""
-    if len(pinv) == 1:
-        return float(np.trace(pinv[0] @ E.sum(axis=0)))
-    return float(np.einsum("kij,kji->", pinv, E))
+class _Scaled:
+    """A noise learned as a factor of the matrices given (``shape``, one for all steps or one
+    per step), over the last ``K`` steps of ``T`` (the ``T - 1`` transitions of ``Q``, the
+    ``T`` steps of ``R``): their pseudo-inverses and ranks, computed once for EM's M-step of
+    the factor, ``trace / dof``, and for the score of :func:`mle`."""
+
+    def __init__(self, shape: np.ndarray, K: int) -> None:
+        S = _steps(shape, K)
+        S = S[-K:] if S.shape[0] > 1 else S
+        self.pinv, self.rank = np.linalg.pinv(S), np.linalg.matrix_rank(S)
+
+    def trace(self, E: np.ndarray) -> float:
+        """``sum_k tr(pinv_k E_k)`` of the expected outer products ``E (K, d, d)``."""
+        if len(self.pinv) == 1:
+            return float(np.trace(self.pinv[0] @ E.sum(axis=0)))
+        return float(np.einsum("kij,kji->", self.pinv, E))
+
+    def dof(self, count: np.ndarray) -> int:
+        """``sum_k rank_k count_k``: the dimensions the ``count (K,)`` series measure."""
+        if len(self.rank) == 1:
+            return int(np.sum(count)) * int(self.rank[0])
+        return int(np.sum(count * self.rank))
 
 
 def _fit(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form: str,
@@ -569,6 +592,8 @@ def _fit(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form
     B, T, m = y.shape
     obs = ~np.isnan(y)
     Q0, R0 = p["Q"], p["R"]  # the shapes of "scaled" noise
+    Q_scaled = _Scaled(Q0, T - 1) if "Q" in learn and Q_form == "scaled" else None
+    R_scaled = _Scaled(R0, T) if "R" in learn and R_form == "scaled" else None
     q = r = 1.0
     lls: list[float] = []
     converged = False
@@ -595,13 +620,13 @@ def _fit(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form
                 Fn = new["F"]
             if "Q" in learn:
                 A = _process_noise_sums(S11, S10, S00, Fn)
-                new["Q"], q_new = _noise(A, np.full(T - 1, B), Q0, Q_form, T - 1)
+                new["Q"], q_new = _noise(A, np.full(T - 1, B), Q0, Q_form, Q_scaled)
                 q = q_new if Q_form == "scaled" else 1.0
         if "H" in learn:
-            new["H"] = _learn_H(y, obs, ms, Ps, mult, R_form)
+            new["H"] = _learn_H(y, obs, ms, Ps, mult)
         if "R" in learn:
             V = _expected_vv(y, obs, ms, Ps, mult, new["H"], p["R"], T)
-            new["R"], r_new = _noise(V, obs.any(axis=-1).sum(axis=0), R0, R_form, T)
+            new["R"], r_new = _noise(V, obs.any(axis=-1).sum(axis=0), R0, R_form, R_scaled)
             r = r_new if R_form == "scaled" else 1.0
         if "x0" in learn:
             if p["x0"].ndim == 2:
@@ -703,26 +728,17 @@ def _steps(M: np.ndarray, T: int) -> np.ndarray:
 
 
 def _noise(E: np.ndarray, count: np.ndarray, shape: np.ndarray, form: str,
-           steps: int) -> tuple[np.ndarray, float]:
+           scaled: _Scaled | None) -> tuple[np.ndarray, float]:
     """The noise covariance from the expected outer products ``E (K, d, d)`` of each step,
     summed over the ``count (K,)`` series that enter it: their mean (``"full"``), its
-    diagonal (``"diag"``), or the factor of ``shape`` (constant or per step) that maximises
-    the likelihood (``"scaled"``); and that factor."""
+    diagonal (``"diag"``), or the factor of ``shape`` (constant or per step, ``scaled``) that
+    maximises the likelihood (``"scaled"``); and that factor."""
     total = int(np.sum(count))
     if total == 0:
         return shape, 1.0  # nothing measured: the likelihood does not depend on it
     if form == "scaled":
-        S = _steps(shape, steps)
-        S = S[-E.shape[0]:] if S.shape[0] > 1 else S  # Q's stack: the K transitions' matrices
-        pinv = np.linalg.pinv(S)
-        rank = np.linalg.matrix_rank(S)
-        if S.shape[0] == 1:
-            num = np.trace(pinv[0] @ E.sum(axis=0))
-            den = total * int(rank[0])
-        else:
-            num = np.einsum("kij,kji->", pinv, E)
-            den = int(np.sum(count * rank))
-        factor = float(num / den)
+        assert scaled is not None
+        factor = scaled.trace(E) / scaled.dof(count)
         return factor * shape, factor
     mean = E.sum(axis=0) / total
     if form == "diag":
@@ -730,8 +746,8 @@ def _noise(E: np.ndarray, count: np.ndarray, shape: np.ndarray, form: str,
     return mean, 1.0
 
 
-def _learn_H(y: np.ndarray, obs: np.ndarray, ms: np.ndarray, Ps: np.ndarray, mult: int,
-             R_form: str) -> np.ndarray:
+def _learn_H(y: np.ndarray, obs: np.ndarray, ms: np.ndarray, Ps: np.ndarray,
+             mult: int) -> np.ndarray:
     """``H`` row by row from the steps that measured its component (see :func:`_check_em`
     for when that is the M-step)."""
     rows = []
