@@ -840,8 +840,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         # offline, the scores are calibrated on the whole file (see tracking.calibration)
         t0, c0 = time.perf_counter(), _compile.seconds()
         calibration = ScoreCalibration.from_frames(
-            per_frame, link_iou=tc.calibration_iou, top=tc.calibration_top,
-            frame_rate=info.frame_rate, chain_span=tc.chain_span, chain_gap=tc.chain_gap)
+            per_frame, **tc.calibration_options(info.frame_rate))
         seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
     trk = BoxTracker(tc, motion=cfg.motion, frame_rate=info.frame_rate, record=oc.enabled,
                      image_size=(info.im_width, info.im_height), calibration=calibration)

@@ -7,9 +7,9 @@ One step, as on the slides (predict, associate, correct, manage):
    detections of that score persist from frame to frame, and lie on chains of detections
    that last, as the detector's most confident ones do, learnt online from the frames seen
    so far, or fitted to the whole file beforehand (:mod:`vistrack.tracking.calibration`).
-   It depends on the order of the
-   scores only, so one setting serves a detector thresholded at 0.5, one whose raw scores
-   run from −1 to 16, and any strictly increasing transform of either, identically;
+   It depends on the order of the scores only, so one setting serves a detector
+   thresholded at 0.5, one whose raw scores run from −1 to 16, and any strictly increasing
+   transform of either, identically;
 1. **predict** every track with :class:`~vistrack.models.BoxMotion` over the true time since the
    last frame (a gap of frames predicts further, with more noise; the noise per frame follows
    the frame rate, :meth:`~vistrack.models.BoxMotion.at_rate`). With diagonal noise the
@@ -197,6 +197,14 @@ class BoxTrackerConfig:
         for name in ("confirm_hits", "camera_min_matches"):
             if getattr(self, name) < 1:
                 raise bad(name, "an integer >= 1")
+
+    def calibration_options(self, frame_rate: float) -> dict[str, Any]:
+        """The score calibration's settings at ``frame_rate`` frames a second, as
+        :class:`~vistrack.tracking.calibration.ScoreCalibrator` (online) and
+        :meth:`~vistrack.tracking.calibration.ScoreCalibration.from_frames` (offline) take
+        them."""
+        return dict(link_iou=self.calibration_iou, top=self.calibration_top,
+                    frame_rate=frame_rate, chain_span=self.chain_span, chain_gap=self.chain_gap)
 
 
 TRACKERS: dict[str, BoxTrackerConfig] = {
@@ -487,10 +495,8 @@ class BoxTracker:
         """Forget every track (and what the online score calibration learnt); identities
         start again from 1."""
         c = self.config
-        self.calibrator = (ScoreCalibrator(link_iou=c.calibration_iou, top=c.calibration_top,
-                                           prior=c.calibration_prior,
-                                           frame_rate=self.frame_rate,
-                                           chain_span=c.chain_span, chain_gap=c.chain_gap)
+        self.calibrator = (ScoreCalibrator(prior=c.calibration_prior,
+                                           **c.calibration_options(self.frame_rate))
                            if c.scores == "calibrated" and self.calibration is None else None)
         self.tracks.reset()
         self.frame: int | None = None
