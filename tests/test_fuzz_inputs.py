@@ -331,7 +331,7 @@ def damage_rows(rows: list[list[str]], kinds: list[str], seed: int) -> bytes:
             if np.isfinite(x := float(twin[2])):  # (an earlier damage may have made it NaN)
                 twin[2] = f"{x + r.uniform(-5, 5):.2f}"
             rows.insert(r.randrange(len(rows) + 1), twin)
-        elif kind == "negsize" and rows:
+        elif kind == "negsize" and rows and len(rows[k]) > 5:  # (not a row "columns" cut)
             rows[k][r.choice([4, 5])] = r.choice(["-1", "-0.01", "-0", "-1e308"])
         elif kind == "nan" and rows:
             rows[k][r.randrange(len(rows[k]))] = r.choice(["nan", "NaN", "inf", "-inf"])
