@@ -213,6 +213,7 @@ def main(argv: list[str] | None = None) -> int:
     vt_wall, vt_cpu = med(r[0] for r in vt), med(r[1] for r in vt)
     trk = med(tracker_ms(r[2]) for r in vt)
     t_start, t_it = med(start) * 1e3, import_ms(it)
+    numba_in = re.search(r"\| numba$", it, re.M) is not None
     part = {k: med(r[k] for r in runs) * 1e3 for k in runs[0]}
     results = [("`vistrack track SEQ_DIR --out FILE --force`", vt_wall, vt_cpu, vt_rows)]
     if peer:
@@ -239,7 +240,8 @@ def main(argv: list[str] | None = None) -> int:
              ("whole process, `vistrack track` (above)", vt_wall * 1e3, ""),
              ("imports, one `vistrack track` run under `-X importtime` (top-level "
               "cumulative)", t_it,
-              "with numba's as it loads the kernels"),
+              "numba imported" if numba_in else "numba not imported (the kernels compiled "
+              "at install serve every call)"),
              ("tracker stage as `vistrack track` prints it (all frames)", trk * FRAMES, "")]
     print("\nvistrack, where the time goes (medians):")
     for name, ms, note in parts:

@@ -78,3 +78,26 @@ def test_run_takes_compilation_out_of_the_stage_it_happened_in():
     assert stats.seconds["compile"] == compiled
     # the tracker's own work is a few microseconds a frame; the compilation is not in it
     assert stats.seconds["tracker"] < compiled / 2
+
+
+def test_the_message_comes_when_numba_is_first_imported_inside_the_block(tmp_path):
+    # a command's kernels import numba only when one must be compiled: the listener is
+    # registered then, and the first compilation is announced and counted
+    script = textwrap.dedent("""
+        import io, sys
+        import numpy as np
+        from vistrack import _compile
+        from vistrack.models import BoxMotion
+
+        out = io.StringIO()
+        with _compile.watch(out):
+            before = "numba" in sys.modules
+            BoxMotion().Q_diag(np.array([[0.0, 0.0, 10.0, 20.0]]))
+        print(before, repr(out.getvalue()), _compile.seconds() > 0)
+    """)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), VISTRACK_PREBUILT="0")
+    out = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                         text=True, check=True).stdout.strip()
+    before, rest = out.split(" ", 1)
+    message, compiled = rest.rsplit(" ", 1)
+    assert before == "False" and message.count("compiling") == 1 and compiled == "True"

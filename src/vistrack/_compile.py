@@ -13,6 +13,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import TextIO
 
+from . import _jit
+
 __all__ = ["watch", "seconds"]
 
 _total = 0.0
@@ -28,37 +30,49 @@ def watch(stream: TextIO | None, what: str = "vistrack") -> Iterator[None]:
     """Count top-level numba compilations while the block runs; before the first, write one
     line to ``stream`` (none if it is None) saying that kernels are being compiled, once.
 
-    Does nothing (and imports nothing) when numba is not installed."""
-    try:
+    Imports nothing: the listener is registered once numba is imported (a command served by
+    the kernels compiled at install never imports it, :mod:`vistrack._jit`)."""
+    said = [False]
+    registered: list[object] = []
+    active = [True]
+
+    def register() -> None:
+        if not active[0]:
+            return
         from numba.core import event
-    except ImportError:  # pragma: no cover - numba is a dependency
-        yield
-        return
 
-    class _Listener(event.Listener):
-        def __init__(self) -> None:
-            self.depth = 0
-            self.start = 0.0
-            self.said = False
+        class _Listener(event.Listener):
+            def __init__(self) -> None:
+                self.depth = 0
+                self.start = 0.0
 
-        def on_start(self, ev: event.Event) -> None:
-            if self.depth == 0:
-                if not self.said and stream is not None:
-                    print(f"{what}: compiling its kernels for this machine, once (later runs "
-                          "reuse them); rates below leave this out", file=stream, flush=True)
-                self.said = True
-                self.start = time.perf_counter()
-            self.depth += 1
+            def on_start(self, ev: event.Event) -> None:
+                if self.depth == 0:
+                    if not said[0] and stream is not None:
+                        print(f"{what}: compiling its kernels for this machine, once (later "
+                              "runs reuse them); rates below leave this out", file=stream,
+                              flush=True)
+                    said[0] = True
+                    self.start = time.perf_counter()
+                self.depth += 1
 
-        def on_end(self, ev: event.Event) -> None:
-            global _total
-            self.depth -= 1
-            if self.depth == 0:
-                _total += time.perf_counter() - self.start
+            def on_end(self, ev: event.Event) -> None:
+                global _total
+                self.depth -= 1
+                if self.depth == 0:
+                    _total += time.perf_counter() - self.start
 
-    listener = _Listener()
-    event.register("numba:compile", listener)
+        listener = _Listener()
+        event.register("numba:compile", listener)
+        registered.append(listener)
+
+    _jit.on_import(register)
     try:
         yield
     finally:
-        event.unregister("numba:compile", listener)
+        active[0] = False
+        _jit.cancel(register)
+        if registered:
+            from numba.core import event
+
+            event.unregister("numba:compile", registered[0])

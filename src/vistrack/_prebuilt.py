@@ -25,13 +25,16 @@ from __future__ import annotations
 
 import hashlib
 import importlib
+import importlib.util
 import json
 import os
+import platform
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from numba._dispatcher import compute_fingerprint as _fingerprint
+import numpy as np
 
 __all__ = ["Kernel", "kernel", "status", "built", "source_hash"]
 
@@ -63,20 +66,46 @@ def source_hash() -> str:
 
 
 def machine() -> dict[str, str]:
-    """The numba version and the processor numba compiles for here."""
+    """The numba version and the processor numba compiles for here (imports numba), and
+    :func:`host`."""
     import llvmlite.binding as llvm
     import numba
 
     return {"numba": numba.__version__, "cpu": llvm.get_host_cpu_name(),
-            "features": llvm.get_host_cpu_features().flatten()}
+            "features": llvm.get_host_cpu_features().flatten(), "host": host()}
+
+
+def host() -> str:
+    """A hash of what :func:`machine` depends on, read without importing numba or llvmlite
+    (0.15-0.2 s): the processor as the operating system reports it (its model and feature
+    flags, from which LLVM's host features are derived) and numba's installed version file.
+    "" where that cannot be read (not Linux), and then :func:`machine` decides."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
+            cpu = f.read().partition("\n\n")[0]  # the first processor's lines
+        spec = importlib.util.find_spec("numba")
+        version = Path(spec.origin or "").with_name("_version.py").read_bytes()  # type: ignore
+    except (OSError, AttributeError, ValueError, ImportError):
+        return ""
+    lines = [line for line in cpu.splitlines()
+             if line.split(":")[0].strip() in ("vendor_id", "cpu family", "model", "model name",
+                                               "stepping", "flags")]
+    if not lines:
+        return ""
+    h = hashlib.sha256("\n".join([platform.machine(), *lines]).encode())
+    h.update(version)
+    return h.hexdigest()
 
 
 def _stale(info: dict[str, Any]) -> str:
     """Why the build described by ``info`` may not be used here ("" if it may)."""
     if info.get("sources") != source_hash():
         return "built from other sources (rebuild: pip install, or make)"
+    quick = host()
+    if quick and info.get("host") == quick:
+        return ""  # the same processor and numba as the build's, by the quick check
     here = machine()
-    if any(info.get(k) != v for k, v in here.items()):
+    if any(info.get(k) != v for k, v in here.items() if k != "host"):
         return "built for another numba version or processor"
     return ""
 
@@ -160,32 +189,26 @@ class Kernel:
         kernel made by a factory.
     """
 
-    __slots__ = ("jit", "key", "_table", "_builds", "_dtypes")
+    __slots__ = ("jit", "key", "_table", "_builds")
 
     def __init__(self, jit: Any, key: str) -> None:
         self.jit = jit
         self.key = key
-        self._table: dict[tuple[bytes, ...], Callable[..., Any] | None] = {}
-        self._builds: dict[tuple[Any, ...], Callable[..., Any]] | None = None
-        self._dtypes: list[tuple[Any, ...]] = []
+        self._table: dict[tuple[Any, ...], Callable[..., Any] | None] = {}
+        self._builds: dict[Any, Callable[..., Any]] | None = None
 
     def __call__(self, *args: Any) -> Any:
-        try:
-            key = tuple([_fingerprint(a) for a in args])
-        except (TypeError, ValueError, NotImplementedError):
-            return self.jit(*args)  # a type without a quick fingerprint: numba decides
+        key = tuple([_argument(a) for a in args])
         fn = self._table.get(key, _MISSING)
         if fn is _MISSING:
-            fn = self._resolve(args)
+            fn = self._resolve(key)
             if len(self._table) < 64:
                 self._table[key] = fn
-                # a record's fingerprint holds its dtype's address: keep the dtype alive, so
-                # that the address is not reused by another dtype while the entry stands
-                self._dtypes.append(tuple(getattr(a, "dtype", None) for a in args))
         return (fn or self.jit)(*args)  # type: ignore[operator]
 
-    def _resolve(self, args: tuple[Any, ...]) -> Callable[..., Any] | None:
-        """The ahead-of-time build for these arguments' numba types, if there is one."""
+    def _resolve(self, key: tuple[Any, ...]) -> Callable[..., Any] | None:
+        """The ahead-of-time build for arguments of these :func:`_argument` types, if there
+        is one."""
         if self._builds is None:
             self._builds = {}
             loaded = _load()
@@ -193,14 +216,11 @@ class Kernel:
                 module, info = loaded
                 for encoded, name in info["kernels"].get(self.key, []):
                     part, _, fn = name.rpartition(".")  # "kN" in the first part, "part.kN"
-                    self._builds[tuple(decode(t) for t in encoded)] = getattr(
+                    self._builds[_frozen(encoded)] = getattr(
                         _state["parts"][part] if part else module, fn)
-        if not self._builds:
-            return None
-        from numba import typeof
-        from numba.core.typing.typeof import Purpose
-
-        return self._builds.get(tuple(typeof(a, Purpose.argument) for a in args))
+        if not self._builds or any(k is None for k in key):
+            return None  # a type this check does not know: numba decides
+        return self._builds.get(_frozen([_encoded(k) for k in key]))
 
     def __repr__(self) -> str:
         return f"Kernel({self.key})"
@@ -218,6 +238,69 @@ def kernel(jit: Any, key: str | None = None) -> Kernel:
 
 
 # -- argument types to and from JSON -------------------------------------------------------
+
+_INT64 = sys.maxsize > 2 ** 32  # numba types a Python int as intp: int64 on 64-bit builds
+
+
+def _argument(a: Any) -> Any:
+    """What numba's type of ``a`` as an argument depends on, read without numba: a hashable
+    key, which :func:`_encoded` turns into the JSON of :func:`encode`; None for a value this
+    does not know (then numba types it). The same keys as numba's ``typeof`` (its encoding is
+    equal, tests/test_prebuilt.py)."""
+    t = type(a)
+    if t is np.ndarray:
+        # C-contiguous, Fortran-contiguous and writeable: numpy's flag bits 0x1, 0x2, 0x400
+        # (numba's type does not depend on the data's alignment)
+        return (a.dtype, a.ndim, a.flags.num & 0x403)
+    if t is float:
+        return "float64"
+    if t is bool:
+        return "bool"
+    if t is int:
+        return "int64" if _INT64 and a.bit_length() < 64 else None
+    if t is tuple:
+        items = tuple([_argument(x) for x in a])
+        return None if None in items else ("tuple", items)
+    if isinstance(a, np.generic) and t in _SCALARS:
+        return _SCALARS[t]
+    return None
+
+
+_SCALARS = {t: np.dtype(t).name for t in (np.float64, np.float32, np.int64, np.int32, np.int16,
+                                          np.int8, np.uint64, np.uint32, np.uint16, np.uint8,
+                                          np.bool_, np.complex128, np.complex64)}
+
+
+def _dtype(d: np.dtype) -> Any:
+    """A dtype as :func:`encode` writes its numba type; None if numba has no such type or this
+    does not know it."""
+    if d.fields is not None:
+        names = list(d.names or ())
+        return ["record", names, [d.fields[n][0].str for n in names],
+                [d.fields[n][1] for n in names], d.itemsize, bool(d.isalignedstruct)]
+    if d.isnative and d.kind in "biufc" and d.name in _SCALARS.values():
+        return d.name
+    return None
+
+
+def _encoded(k: Any) -> Any:
+    """The JSON of :func:`encode` for an :func:`_argument` key."""
+    if isinstance(k, str):
+        return k
+    if k[0] == "tuple":
+        return ["tuple", [_encoded(x) for x in k[1]]]
+    dtype, ndim, flags = k
+    layout = "C" if flags & 0x1 else "F" if flags & 0x2 else "A"
+    readonly = not flags & 0x400
+    # numba's array type is aligned unless its dtype is a record without C alignment
+    aligned = dtype.fields is None or bool(dtype.isalignedstruct)
+    return ["array", _dtype(dtype), ndim, layout, bool(readonly), aligned]
+
+
+def _frozen(e: Any) -> Any:
+    """JSON lists as tuples, to be a dictionary's key."""
+    return tuple(_frozen(x) for x in e) if isinstance(e, list) else e
+
 
 def encode(t: Any) -> Any:
     """A numba argument type as JSON (arrays, records, scalars and tuples of them); raises

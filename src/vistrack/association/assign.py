@@ -19,8 +19,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from .._prebuilt import kernel
 
 __all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_sparse", "greedy", "lsa",

@@ -12,9 +12,9 @@ r"""Association costs between tracks and detections, vectorised over both: ``(T,
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike
 
+from .._jit import njit
 from .._prebuilt import kernel
 
 __all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "giou", "euclidean",

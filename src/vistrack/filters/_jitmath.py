@@ -8,18 +8,20 @@ particle cloud's log weights into weights.
 
 from __future__ import annotations
 
-from llvmlite import ir
-from numba import njit, types
-from numba.extending import intrinsic
+from .._jit import intrinsic, njit
 
 
 @intrinsic
 def _int_bits_as_float(typingctx, bits):
     """The float64 whose IEEE 754 bit pattern is the int64 ``bits``."""
+    from numba.core import types
+
     if bits != types.int64:
         return None
 
     def codegen(context, builder, signature, args):
+        from llvmlite import ir
+
         return builder.bitcast(args[0], ir.DoubleType())
 
     return types.float64(types.int64), codegen
@@ -28,10 +30,14 @@ def _int_bits_as_float(typingctx, bits):
 @intrinsic
 def _float_bits_as_int(typingctx, x):
     """The int64 with the IEEE 754 bit pattern of the float64 ``x``."""
+    from numba.core import types
+
     if x != types.float64:
         return None
 
     def codegen(context, builder, signature, args):
+        from llvmlite import ir
+
         return builder.bitcast(args[0], ir.IntType(64))
 
     return types.int64(types.float64), codegen

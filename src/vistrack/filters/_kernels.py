@@ -28,8 +28,8 @@ import functools
 import math
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from .._prebuilt import kernel
 
 SMALL_B = 8  # per-call kernels use the scalar path below this batch size

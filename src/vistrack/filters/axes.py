@@ -44,8 +44,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from .._prebuilt import kernel
 
 if TYPE_CHECKING:

@@ -30,9 +30,9 @@ from pathlib import Path
 from typing import Any, cast
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike
 
+from .._jit import njit
 from .._prebuilt import Kernel, kernel
 from .._validate import as_float_array, as_rng, check_has_steps, check_prior
 from ..models.adapters import MeasurementFunctions, MotionFunctions

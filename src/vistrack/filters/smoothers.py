@@ -10,9 +10,9 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike
 
+from .._jit import njit
 from .._prebuilt import kernel
 from .._validate import (
     as_measurement_series,

@@ -31,9 +31,9 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike
 
+from .._jit import njit
 from .._prebuilt import kernel
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (

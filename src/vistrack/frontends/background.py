@@ -33,10 +33,13 @@ from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
 
+from .._jit import bind, njit
 from .._prebuilt import kernel
 from .._validate import as_uint8_image
+
+prange = range  # numba.prange once numba is imported: a parallel loop when compiled
+bind(globals(), prange="prange")
 
 __all__ = ["BACKGROUNDS", "MOG2Background", "SelectiveBackground", "background"]
 

@@ -30,8 +30,8 @@ value there, or for the height, tracked worse; see docs/mot.md.)
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from .._prebuilt import kernel
 
 __all__ = ["BoxMotion"]

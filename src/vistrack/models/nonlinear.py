@@ -27,8 +27,8 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from .._validate import as_float_array, check_matrix_stack, check_psd
 from .motion import _as_dt, _check_q
 

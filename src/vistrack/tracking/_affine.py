@@ -14,9 +14,12 @@ deviation, so a change of brightness and contrast is not a mismatch.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
+from .._jit import bind, njit
 from .._prebuilt import kernel
+
+prange = range  # numba.prange once numba is imported: a parallel loop when compiled
+bind(globals(), prange="prange")
 
 __all__ = ["prepare_templates", "register"]
 

@@ -49,8 +49,8 @@ from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from .._prebuilt import kernel
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class

@@ -21,8 +21,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from .._prebuilt import kernel
 from .._validate import as_box, as_uint8_image
 from ..filters import kf_predict, kf_update
