@@ -270,6 +270,54 @@ def _track(args: argparse.Namespace) -> int:
     return 0
 
 
+def _fit(args: argparse.Namespace) -> int:
+    from .config import TrackConfig, config_toml, read_config
+    from .io.atomic import check_output, open_replacing
+    from .pipeline import fit_sequences
+
+    check_output(args.out, force=args.force, name="--out")
+    cfg = read_config(args.config) if args.config is not None else TrackConfig.preset()
+    progress = sys.stderr if not args.quiet else None
+    run = fit_sequences(args.inputs, gt=args.gt, config=cfg, held_out=not args.no_held_out,
+                        progress=progress)
+    rows = run.fit.per_sequence
+    from .models.box import BoxMotion
+
+    given = cfg.motion if cfg.motion is not None else BoxMotion()
+    learned = run.config.motion
+    assert learned is not None  # (fit_sequences sets it)
+    n_obj, n_det = sum(r["objects"] for r in rows), sum(r["detections"] for r in rows)
+    print(f"learned from the {run.reference} of {len(rows)} of {len(args.inputs)} sequences: "
+          f"{n_obj} objects, {n_det} matched detections")
+    print(f"{'value':14s} {'given':>9s} {'learned':>9s}   each sequence (min-max)")
+    values = [("std_pos", given.std_pos, learned.std_pos, [r["std_pos"] for r in rows]),
+              ("std_vel", given.std_vel, learned.std_vel, [r["std_vel"] for r in rows])]
+    values += [(f"std_meas {c}", given.std_meas[i], learned.std_meas[i],
+                [r["std_meas"][i] for r in rows]) for i, c in enumerate(("cx", "cy", "w", "h"))]
+    for name, a, b, each in values:
+        print(f"{name:14s} {a:9.4g} {b:9.4g}   {min(each):.4g}-{max(each):.4g}")
+    print("(fractions of the box's size; std_pos and std_vel per frame at 30 frames/s)")
+    derived: dict = {"learned_from": run.reference, "sequences": len(rows),
+                     "objects": n_obj, "detections": n_det}
+    if run.held_out is not None:
+        print("held out: each sequence tracked online with the values learned from the others,"
+              " and with the given configuration (COMBINED)")
+        print(f"{'':14s} {'HOTA':>6s} {'MOTA':>6s} {'IDF1':>6s}")
+        for mode in ("given", "learned"):
+            h = run.held_out[mode]
+            print(f"{mode:14s} {100 * h['HOTA']:6.1f} {100 * h['MOTA']:6.1f} "
+                  f"{100 * h['IDF1']:6.1f}")
+            derived.update({f"held_out_{mode}_{k.lower()}": round(v, 6) for k, v in h.items()})
+        worse = run.held_out["learned"]["HOTA"] < run.held_out["given"]["HOTA"]
+        if worse:
+            print("the learned values tracked held-out sequences worse than the given "
+                  "configuration (HOTA): keep the given one unless your data differ")
+    with open_replacing(args.out) as fh:
+        fh.write(config_toml(run.config, derived))
+    print(f"wrote {args.out} (vistrack track SEQ_DIR --out RESULTS.txt --config {args.out})")
+    return 0
+
+
 def _track_one(args: argparse.Namespace) -> int:
     from .io.atomic import check_output
     from .pipeline import track_one
@@ -437,6 +485,31 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                        help=debug_help)
     track.set_defaults(func=_track)
+    fit = sub.add_parser(
+        "fit", help="learn a box tracker's motion and measurement noise from sequences",
+        description="Learn the box motion's noise (std_pos, std_vel) and each value's "
+        "measurement noise (std_meas: cx, cy, w, h) from MOTChallenge sequences: the "
+        "detections matched to each object of the ground truth (--gt) or of a first pass's "
+        "confident tracks (the offline mode), against those objects' boxes; the motion noise "
+        "of maximum likelihood. Writes the configuration (TOML) that vistrack track --config "
+        "reads, and prints the learned values beside the given ones. With --gt and two "
+        "sequences or more, also tracks each sequence with the values learned from the "
+        "others and with the given configuration, and scores both.")
+    fit.add_argument("inputs", metavar="SEQ_DIR", nargs="+",
+                     help="MOTChallenge sequence folders (seqinfo.ini, det/det.txt)")
+    fit.add_argument("--out", required=True, help="configuration file to write (TOML)")
+    fit.add_argument("--gt", action="store_true",
+                     help="learn from each sequence's ground truth (SEQ_DIR/gt/gt.txt)")
+    fit.add_argument("--config", metavar="FILE",
+                     help="the configuration to start from and compare with (default: the "
+                     "default one)")
+    fit.add_argument("--no-held-out", action="store_true",
+                     help="with --gt: do not track and score the held-out sequences")
+    fit.add_argument("--force", action="store_true", help="overwrite an existing --out")
+    fit.add_argument("--quiet", action="store_true", help="no report of each sequence")
+    fit.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                     help=debug_help)
+    fit.set_defaults(func=_fit)
     one = sub.add_parser(
         "track-one", help="follow one object from a box drawn on the first frame",
         description="Follow one object through a video or image folder from its box in the "

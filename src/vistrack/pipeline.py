@@ -46,11 +46,12 @@ if TYPE_CHECKING:
 
     from .frontends.detectors import ConfidenceMap, Detector
     from .io.video import VideoReader
+    from .tracking.fit import MotionFit, Series
 
 __all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "SINKS",
            "as_detector", "make_tracker", "track_sequence", "TrackRun", "resolve_config",
            "derived_values", "track_video", "VideoRun", "track_one",
-           "SingleRun", "video_outputs"]
+           "SingleRun", "video_outputs", "fit_sequences", "FitRun"]
 
 
 @dataclass(frozen=True)
@@ -869,6 +870,141 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     used = cfg if cfg.motion is not None else replace(cfg, motion=BoxMotion())
     return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds, used,
                     derived_values(trk))
+
+
+# --------------------------------------------------------------------------------- fit
+@dataclass(frozen=True)
+class FitRun:
+    """What :func:`fit_sequences` learned and how it tracked.
+
+    Attributes
+    ----------
+    config : TrackConfig
+        The configuration given, with the learned box motion.
+    fit : MotionFit
+        The learned noise, and each sequence's values.
+    reference : str
+        What the objects were: ``"ground truth"`` or ``"first pass"`` (the confident tracks
+        of the offline mode with the configuration given).
+    held_out : dict or None
+        With ground truth and two sequences or more: COMBINED ``HOTA``, ``MOTA`` and ``IDF1``
+        (fractions) of each sequence tracked online with the values learned from the
+        others (``"learned"``) and with the configuration given (``"given"``); None
+        otherwise.
+    """
+
+    config: TrackConfig
+    fit: MotionFit
+    reference: str
+    held_out: dict | None = None
+
+
+def _gt_reference(seq: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    gt = read_mot(seq / "gt" / "gt.txt")
+    keep = gt.conf > 0 if gt.conf is not None else np.ones(len(gt), bool)  # 0: to ignore
+    return gt.frames[keep], gt.ids[keep], gt.boxes[keep]
+
+
+def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
+                  config: TrackConfig | str | None = None, held_out: bool = True,
+                  progress: TextIO | None = None) -> FitRun:
+    """Learn a box tracker's motion and measurement noise from MOTChallenge sequences
+    (:mod:`vistrack.tracking.fit`): from each sequence's ground truth (``gt``), otherwise
+    from the confident tracks of a first pass (the offline mode), and the detections.
+
+    Parameters
+    ----------
+    seq_dirs : sequence of str or Path
+        Sequence folders (``seqinfo.ini``, ``det/det.txt``; ``gt/gt.txt`` with ``gt``).
+    gt : bool
+        Learn from the ground truth's objects (rows of confidence 0 ignored, as in scoring).
+    config : TrackConfig or str, optional
+        The configuration to start from and to compare with (default: the default one).
+    held_out : bool
+        With ``gt`` and two sequences or more: also track each sequence with the values
+        learned from the others and with ``config``, and score both (``FitRun.held_out``).
+    progress : TextIO, optional
+        Where to report each sequence.
+
+    Returns
+    -------
+    FitRun
+
+    Raises
+    ------
+    FileNotFoundError
+        If a sequence lacks ``det/det.txt``, or ``gt/gt.txt`` with ``gt``.
+    ValueError
+        If no sequences are given, or no object is detected in two frames or more.
+    """
+    import tempfile
+
+    from .evaluation.files import evaluate_files
+    from .tracking.fit import fit_box_motion, matched_series
+
+    seqs = [Path(d) for d in seq_dirs]
+    if not seqs:
+        raise ValueError("no sequences to learn from")
+    cfg = resolve_config(config)
+    start = cfg.motion if cfg.motion is not None else BoxMotion()
+    series: list[tuple[list[Series], float]] = []
+    with tempfile.TemporaryDirectory(prefix="vistrack-fit-") as tmp:
+        for seq in seqs:
+            info = read_seqinfo(seq)
+            det_path = seq / "det" / "det.txt"
+            if not det_path.exists():
+                raise FileNotFoundError(f"{det_path} does not exist")
+            if gt:
+                if not (seq / "gt" / "gt.txt").exists():
+                    raise FileNotFoundError(f"{seq / 'gt' / 'gt.txt'} does not exist (--gt "
+                                            "learns from each sequence's ground truth)")
+                ref = _gt_reference(seq)
+            else:
+                first = Path(tmp) / f"{len(series)}.txt"
+                track_sequence(seq, first, config=replace(
+                    cfg, offline=replace(cfg.offline, enabled=True)))
+                t = read_mot(first)
+                ref = (t.frames, t.ids, t.boxes)
+            dets = read_mot(det_path)
+            s = matched_series(*ref, dets.frames, dets.boxes)
+            series.append((s, info.frame_rate))
+            if progress is not None:
+                n = sum(int(np.isfinite(z[:, 0]).sum()) for _, z, _ in s)
+                print(f"{info.name}: {len(s)} objects, {n} matched detections",
+                      file=progress, flush=True)
+        learned = fit_box_motion(series, start=start)
+        scores = None
+        if gt and held_out and len(seqs) > 1:
+            scores = _held_out(seqs, cfg, learned, Path(tmp), evaluate_files, progress)
+    return FitRun(replace(cfg, motion=learned.motion), learned,
+                  "ground truth" if gt else "first pass", scores)
+
+
+def _held_out(seqs: list[Path], cfg: TrackConfig, learned: MotionFit, tmp: Path,
+              evaluate_files: Callable[..., Any], progress: TextIO | None) -> dict:
+    """Each sequence tracked online with the values learned from the other sequences, and
+    with ``cfg``; COMBINED scores of both."""
+    from .tracking.fit import median_motion
+
+    online = replace(cfg, offline=replace(cfg.offline, enabled=False))
+    start = cfg.motion if cfg.motion is not None else BoxMotion()
+    rows = learned.per_sequence
+    out = {}
+    for mode in ("learned", "given"):
+        for k, seq in enumerate(seqs):
+            c = online
+            if mode == "learned":
+                others = [r for r in rows if r["sequence"] != k]
+                if others:  # (else nothing was learned without this sequence)
+                    c = replace(online, motion=median_motion(others, start))
+            track_sequence(seq, tmp / mode / f"{k}.txt", config=c)
+        res = evaluate_files([(seq.name, seq / "gt" / "gt.txt", tmp / mode / f"{k}.txt",
+                               seq / "seqinfo.ini") for k, seq in enumerate(seqs)])
+        c = res["COMBINED"]
+        out[mode] = {"HOTA": float(c.HOTA), "MOTA": float(c.MOTA), "IDF1": float(c.IDF1)}
+        if progress is not None:
+            print(f"held out, {mode}: HOTA {100 * c.HOTA:.1f}", file=progress, flush=True)
+    return out
 
 
 # ------------------------------------------------------------------------------- video

@@ -8,7 +8,9 @@
 - one object (:class:`SingleObjectTracker`): colour, CamShift, particle, template, median
   flow, WSL, snake and OpenCV's, by name in :data:`METHODS`, and their composition
   (:class:`~vistrack.tracking.compose.Composite`);
-- track management: :mod:`vistrack.tracking.lifecycle`.
+- track management: :mod:`vistrack.tracking.lifecycle`;
+- a box tracker's noise learned from tracks: :func:`fit_box_motion`
+  (:mod:`vistrack.tracking.fit`).
 """
 
 from ..types import Tracks
@@ -16,6 +18,7 @@ from .base import SingleObjectTracker, Tracker
 from .box import TRACKERS, BoxTracker, BoxTrackerConfig
 from .compose import Composite
 from .dcpf import DCPFConfig, DetectorConfidencePF
+from .fit import MotionFit, fit_box_motion, matched_series, measurement_noise
 from .klt import Features, KLTTracker
 from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable
 from .offline import SmoothedTracks, smooth
@@ -27,4 +30,5 @@ __all__ = ["Tracker", "SingleObjectTracker", "TRACKERS", "BoxTracker", "BoxTrack
            "CONFIRMED", "LOST", "TENTATIVE", "TrackTable", "Tracks", "SmoothedTracks", "smooth",
            "POINT_ASSOCIATIONS", "PointTracker", "DCPFConfig", "DetectorConfidencePF",
            "Features", "KLTTracker", "METHODS", "single_tracker", "Composite", "Snake",
-           "SnakeTracker"]
+           "SnakeTracker", "MotionFit", "fit_box_motion", "matched_series",
+           "measurement_noise"]

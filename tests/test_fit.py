@@ -1,0 +1,174 @@
+"""Learning a box tracker's noise (vistrack.tracking.fit, vistrack.pipeline.fit_sequences,
+vistrack fit): against the parameters simulated data were drawn with."""
+
+import numpy as np
+import pytest
+import tomllib
+
+from vistrack.cli import main
+from vistrack.config import read_config
+from vistrack.models import BoxMotion
+from vistrack.pipeline import fit_sequences, track_sequence
+from vistrack.tracking.fit import fit_box_motion, matched_series, measurement_noise
+
+
+def _simulate(rng, n_objects, T, std_pos, std_vel, std_meas, size=(40.0, 100.0)):
+    """Objects moving as BoxMotion's model says, in units of their first size: the true boxes
+    and the detections ``[cx, cy, w, h]``, (n, T, 4) each."""
+    F = BoxMotion().F(1.0)
+    scale = np.array([size[0], size[1], size[0], size[1]])
+    x = np.zeros((n_objects, 8))
+    x[:, :4] = [0.0, 0.0, 1.0, 1.0]
+    x[:, 4:] = rng.normal(0, 0.01, (n_objects, 4)) * [1, 1, 0.1, 0.1]
+    truth = np.empty((n_objects, T, 4))
+    for t in range(T):
+        truth[:, t] = x[:, :4]
+        w = rng.normal(size=(n_objects, 8)) * np.repeat([std_pos, std_vel], 4)
+        x = x @ F.T + w * np.tile(x[:, 2:4], 4)  # noise scaled by the current size
+    noise = rng.normal(size=truth.shape) * np.asarray(std_meas) * truth[..., [2, 3, 2, 3]]
+    origin = rng.uniform(100, 1000, (n_objects, 1, 2))
+    truth = truth * scale
+    truth[..., :2] += origin
+    return truth, truth + noise * scale
+
+
+def _series(truth, dets):
+    return [(np.arange(truth.shape[1]), d, g) for g, d in zip(truth, dets)]
+
+
+def test_measurement_noise_is_the_detections_spread_about_the_truth():
+    rng = np.random.default_rng(1)
+    truth, dets = _simulate(rng, 200, 30, 0.002, 0.0005, (0.03, 0.02, 0.06, 0.04))
+    got = measurement_noise(_series(truth, dets))
+    np.testing.assert_allclose(got, [0.03, 0.02, 0.06, 0.04], rtol=0.05)
+    # a detector's bias is not noise
+    biased = dets + np.array([4.0, -3.0, 2.0, 5.0])
+    np.testing.assert_allclose(measurement_noise(_series(truth, biased)), got, rtol=0.05)
+
+
+@pytest.mark.parametrize("fps", [30.0, 10.0])
+def test_the_motion_noise_of_simulated_boxes_is_found(fps):
+    """Drawn at ``fps`` from BoxMotion's model with known noise (its values at 30 frames/s
+    converted to ``fps``), the learned values at 30 frames/s are the true ones."""
+    true = BoxMotion(std_pos=0.004, std_vel=0.001, std_meas=(0.03, 0.02, 0.06, 0.04))
+    at = true.at_rate(fps)
+    rng = np.random.default_rng(2)
+    truth, dets = _simulate(rng, 300, 30, at.std_pos, at.std_vel, true.std_meas)
+    fit = fit_box_motion([(_series(truth, dets), fps)])
+    m = fit.motion
+    assert m.frame_rate == 30.0 and fit.per_sequence[0]["converged"]
+    assert m.std_pos == pytest.approx(true.std_pos, rel=0.15)
+    assert m.std_vel == pytest.approx(true.std_vel, rel=0.15)
+    np.testing.assert_allclose(m.std_meas, true.std_meas, rtol=0.05)
+    # a new track's uncertainty is the start's, not learned
+    start = BoxMotion()
+    assert m.init_pos * m.std_pos == pytest.approx(start.init_pos * start.std_pos)
+    assert m.init_vel * m.std_vel == pytest.approx(start.init_vel * start.std_vel)
+
+
+def test_the_learned_motion_noise_is_a_maximum_of_the_likelihood():
+    from vistrack.filters import kalman_filter
+
+    rng = np.random.default_rng(3)
+    truth, dets = _simulate(rng, 100, 30, 0.004, 0.001, (0.03, 0.02, 0.06, 0.04))
+    series = _series(truth, dets)
+    row = fit_box_motion([(series, 30.0)]).per_sequence[0]
+    meas = measurement_noise(series)
+    Y = np.stack([d / np.array([np.median(g[:, 2]), np.median(g[:, 3])] * 2)
+                  for _, d, g in series])
+    F, H, R = BoxMotion().F(1.0), np.eye(4, 8), np.diag(meas ** 2)
+    m = BoxMotion()
+    x0 = np.c_[Y[:, 0], np.zeros((len(Y), 4))]
+    P0 = np.diag(np.r_[meas ** 2, np.full(4, (m.init_vel * m.std_vel) ** 2)])
+
+    def loglik(sp, sv):
+        Q = np.diag(np.repeat([sp ** 2, sv ** 2], 4))
+        return np.sum(kalman_filter(Y, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0).loglik)
+
+    best = loglik(row["std_pos"], row["std_vel"])
+    assert best == pytest.approx(row["loglik"], rel=1e-9)
+    for f in (0.8, 1.25):
+        assert loglik(row["std_pos"] * f, row["std_vel"]) < best
+        assert loglik(row["std_pos"], row["std_vel"] * f) < best
+
+
+def test_matched_series_pairs_each_detection_with_one_object():
+    ref = np.array([[0, 0, 10, 20], [12, 0, 10, 20], [0, 0, 10, 20], [12, 0, 10, 20.0]])
+    det = np.array([[1, 0, 10, 20], [0, 1, 10, 20], [11, 0, 10, 20.0]])
+    out = matched_series([1, 1, 2, 2], [1, 2, 1, 2], ref, [1, 2, 2], det, min_length=1)
+    # frame 1: one detection near object 1; frame 2: one each
+    assert [f.tolist() for f, _, _ in out] == [[1, 2], [2]]
+    assert out[0][1][:, 0].tolist() == [6.0, 5.0] and out[1][1][:, 0].tolist() == [16.0]
+    assert matched_series([1, 1, 2, 2], [1, 2, 1, 2], ref, [1, 2, 2], det, min_length=2)[0][
+        0].tolist() == [1, 2]
+    with pytest.raises(ValueError, match="identity 1 appears twice in frame 1"):
+        matched_series([1, 1], [1, 1], ref[:2], [1, 1], det[[0, 2]], min_length=1)
+    with pytest.raises(ValueError, match="min_iou"):
+        matched_series([1], [1], ref[:1], [1], det[:1], min_iou=0)
+
+
+def _sequence(folder, rng, n_objects=12, T=60, fps=15.0):
+    """A MOTChallenge sequence of simulated people: seqinfo.ini, det/det.txt, gt/gt.txt."""
+    truth, dets = _simulate(rng, n_objects, T, 0.003, 0.001, (0.04, 0.03, 0.08, 0.05))
+    (folder / "det").mkdir(parents=True)
+    (folder / "gt").mkdir()
+    (folder / "seqinfo.ini").write_text(f"[Sequence]\nname={folder.name}\nframeRate={fps}\n"
+                                        f"seqLength={T}\nimWidth=1920\nimHeight=1080\n")
+    gt_rows, det_rows = [], []
+    for t in range(T):
+        for i in range(n_objects):
+            g, d = truth[i, t], dets[i, t]
+            gt_rows.append(f"{t + 1},{i + 1},{g[0] - g[2] / 2:.2f},{g[1] - g[3] / 2:.2f},"
+                           f"{g[2]:.2f},{g[3]:.2f},1,1,1")
+            det_rows.append(f"{t + 1},-1,{d[0] - d[2] / 2:.2f},{d[1] - d[3] / 2:.2f},"
+                            f"{d[2]:.2f},{d[3]:.2f},{rng.uniform(0.6, 1):.3f}")
+    (folder / "gt" / "gt.txt").write_text("\n".join(gt_rows) + "\n")
+    (folder / "det" / "det.txt").write_text("\n".join(det_rows) + "\n")
+    return folder
+
+
+def test_fit_sequences_from_ground_truth_and_from_a_first_pass(tmp_path):
+    rng = np.random.default_rng(4)
+    seqs = [_sequence(tmp_path / f"SIM-{k}", rng) for k in range(2)]
+    run = fit_sequences(seqs, gt=True)
+    assert run.reference == "ground truth" and len(run.fit.per_sequence) == 2
+    np.testing.assert_allclose(run.config.motion.std_meas, [0.04, 0.03, 0.08, 0.05], rtol=0.2)
+    assert set(run.held_out) == {"learned", "given"}
+    assert all(0 < v["HOTA"] <= 1 for v in run.held_out.values())
+    first = fit_sequences(seqs)  # the offline mode's tracks as the objects
+    assert first.reference == "first pass" and first.held_out is None
+    # its smoothed boxes follow the detections partly: the detections' spread about them is
+    # smaller than about the truth
+    assert (0 < first.config.motion.std_meas).all()
+    assert (first.config.motion.std_meas < run.config.motion.std_meas).all()
+    assert fit_sequences(seqs, gt=True, held_out=False).held_out is None
+    nogt = _sequence(tmp_path / "NOGT", rng)
+    (nogt / "gt" / "gt.txt").unlink()
+    with pytest.raises(FileNotFoundError, match="NOGT/gt/gt.txt does not exist"):
+        fit_sequences([tmp_path / "SIM-0", nogt], gt=True)
+    with pytest.raises(FileNotFoundError, match="nowhere"):
+        fit_sequences([tmp_path / "nowhere"])
+    with pytest.raises(ValueError, match="no sequences"):
+        fit_sequences([])
+
+
+def test_vistrack_fit_writes_a_configuration_that_track_reads(tmp_path, capsys):
+    rng = np.random.default_rng(5)
+    seqs = [str(_sequence(tmp_path / f"SIM-{k}", rng)) for k in range(2)]
+    out = tmp_path / "fit.toml"
+    assert main(["fit", *seqs, "--gt", "--out", str(out), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "learned from the ground truth of 2 of 2 sequences" in text
+    assert "std_meas w" in text and "held out" in text and f"wrote {out}" in text
+    cfg = read_config(out)
+    table = tomllib.loads(out.read_text())
+    assert table["derived"]["learned_from"] == "ground truth"
+    assert cfg.motion.std_pos == table["motion"]["std_pos"]
+    # the file is the configuration vistrack track uses
+    a, b = tmp_path / "a.txt", tmp_path / "b.txt"
+    assert main(["track", seqs[0], "--out", str(a), "--config", str(out), "--quiet"]) == 0
+    track_sequence(seqs[0], b, config=cfg)
+    assert a.read_bytes() == b.read_bytes()
+    # an existing file is not overwritten without --force
+    assert main(["fit", *seqs, "--out", str(out), "--quiet"]) == 2
+    assert "--force" in capsys.readouterr().err
