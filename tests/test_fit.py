@@ -107,9 +107,10 @@ def test_matched_series_pairs_each_detection_with_one_object():
         matched_series([1], [1], ref[:1], [1], det[:1], min_iou=0)
 
 
-def _sequence(folder, rng, n_objects=12, T=60, fps=15.0):
-    """A MOTChallenge sequence of simulated people: seqinfo.ini, det/det.txt, gt/gt.txt."""
-    truth, dets = _simulate(rng, n_objects, T, 0.003, 0.001, (0.04, 0.03, 0.08, 0.05))
+def _sequence(folder, rng, n_objects=12, T=60, fps=15.0, std=(0.003, 0.001)):
+    """A MOTChallenge sequence of simulated people: seqinfo.ini, det/det.txt, gt/gt.txt
+    (``std``: the motion noise; a long sequence needs little, or sizes wander below 0)."""
+    truth, dets = _simulate(rng, n_objects, T, *std, (0.04, 0.03, 0.08, 0.05))
     (folder / "det").mkdir(parents=True)
     (folder / "gt").mkdir()
     (folder / "seqinfo.ini").write_text(f"[Sequence]\nname={folder.name}\nframeRate={fps}\n"

@@ -179,6 +179,13 @@ def _track(args: argparse.Namespace) -> int:
     def fail(text: str) -> int:
         return _fail("track", text)
 
+    from .batch import is_benchmark
+
+    if len(args.input) > 1 or is_benchmark(Path(args.input[0])) or args.jobs is not None:
+        return _track_many(args)
+    if args.keep_going:
+        return fail("--keep-going goes with several inputs")
+    args.input = args.input[0]
     if (args.out is None) == (args.out_dir is None):
         return fail("give --out RESULTS.txt (a MOTChallenge sequence's detections) or "
                     "--out-dir OUT/ (from pixels)")
@@ -268,6 +275,88 @@ def _track(args: argparse.Namespace) -> int:
         assert run.config is not None  # a box tracker's run (others refuse --print-config)
         sys.stdout.write(config_toml(run.config, run.derived))
     return 0
+
+
+def _track_many(args: argparse.Namespace) -> int:
+    """``vistrack track`` on several inputs (vistrack.batch): in parallel, a line as each is
+    done, a table at the end; exit status 1 if any failed."""
+    from .batch import plan, run_jobs
+    from .io.atomic import check_output
+    from .tracking.box import TRACKERS as BOX_PRESETS
+
+    def fail(text: str) -> int:
+        return _fail("track", text)
+
+    if (args.out is None) == (args.out_dir is None):
+        return fail("give --out RESULTS/ (each sequence's detections, NAME.txt each) or "
+                    "--out-dir OUT/ (from pixels, NAME/ each)")
+    if args.jobs is not None and args.jobs < 1:
+        return fail(f"--jobs must be 1 or more; got {args.jobs}")
+    for flag in ("print_config", "gt", "fps", "detections"):
+        if getattr(args, flag):
+            return fail(f"--{flag.replace('_', '-')} goes with one input")
+    problem = _number_problem(args)
+    if problem:
+        return fail(problem)
+    name = args.tracker or "bytetrack"
+    box = name in BOX_PRESETS
+    if not box:
+        problem = _tracker_problem(name)
+        if problem:
+            return fail(problem)
+    cfg = None
+    if box:
+        cfg, problem = _box_config(args)
+        if problem:
+            return fail(problem)
+    options: dict = {"force": args.force}
+    if args.out is not None:
+        if not box:
+            return fail(f"--out (sequences' detections) goes with the box trackers "
+                        f"({', '.join(sorted(BOX_PRESETS))})")
+        for flag in ("frontend", "stop", "min_area", "background"):
+            if getattr(args, flag) is not None:
+                return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
+        kind, out, options["config"] = "detections", args.out, cfg
+    else:
+        if cfg is not None and cfg.offline.enabled:
+            return fail("--offline goes with --out")
+        kind, out = "pixels", args.out_dir
+        options.update({k: getattr(args, k) for k in ("frontend", "stop", "min_area",
+                                                       "background")
+                        if getattr(args, k) is not None})
+        options.update(tracker=name, skip_bad_frames=args.skip_bad_frames)
+        if args.config is not None or not box:
+            if cfg is not None:
+                options["config"] = cfg
+        else:
+            options.update({key: getattr(args, option) for option, table, key, *_ in _SETTINGS
+                            if table == "tracker" and getattr(args, option) is not None})
+            if args.still_camera:
+                options["camera_motion"] = False
+    jobs = plan(args.input, out, kind=kind, **options)
+    for job in jobs:  # before anything runs: a job that cannot write fails now
+        if kind == "detections":
+            check_output(job.out, force=args.force, name="--out")
+    progress = None if args.quiet else sys.stderr
+
+    def report(o, k: int, n: int) -> None:
+        if progress is not None:
+            what = (f"{o.frames} frames, {o.tracks} tracks, {o.seconds:.1f} s" if o.ok else
+                    f"failed: {o.error}")
+            print(f"[{k}/{n}] {o.input.name}: {what}", file=progress, flush=True)
+
+    outcomes = run_jobs(jobs, workers=args.jobs, keep_going=args.keep_going, on_done=report)
+    width = max(len(o.input.name) for o in outcomes)
+    print(f"{'input':{width}s}  status  frames  tracks  seconds  output")
+    for o in outcomes:
+        status = "ok" if o.ok else ("failed" if o.attempts else "not run")
+        print(f"{o.input.name:{width}s}  {status:6s}  {o.frames:6d}  {o.tracks:6d}  "
+              f"{o.seconds:7.1f}  {o.out if o.ok else o.error}")
+    bad = [o for o in outcomes if not o.ok]
+    print(f"{len(outcomes) - len(bad)} of {len(outcomes)} inputs tracked"
+          + (f"; {len(bad)} not" if bad else ""))
+    return 1 if bad else 0
 
 
 def _fit(args: argparse.Namespace) -> int:
@@ -374,7 +463,9 @@ def _eval(args: argparse.Namespace) -> int:
     else:
         return _fail("eval", "give --gt and --pred, or --gt-dir and --pred-dir")
     # a missing or malformed file is a user's mistake: main prints it in one line
-    res = evaluate_files(pairs, benchmark=args.benchmark)
+    if args.jobs is not None and args.jobs < 1:
+        return _fail("eval", f"--jobs must be 1 or more; got {args.jobs}")
+    res = evaluate_files(pairs, benchmark=args.benchmark, jobs=args.jobs)
     for warning in res.warnings:
         print(f"vistrack eval: warning: {warning}", file=sys.stderr)
     if args.json:
@@ -427,10 +518,19 @@ def build_parser() -> argparse.ArgumentParser:
         "(seqinfo.ini, det/det.txt) and write a results file. With --out-dir: track a video "
         "file, image folder or sequence folder from pixels and write tracks.txt, tracks.csv, "
         "annotated.mp4 and trajectories.png (and scores, given --gt).")
-    track.add_argument("input", metavar="INPUT",
-                       help="MOTChallenge sequence folder (--out), or video (--out-dir)")
-    track.add_argument("--out", help="results file to write (detections mode)")
-    track.add_argument("--out-dir", help="folder for the outputs (video mode)")
+    track.add_argument("input", metavar="INPUT", nargs="+",
+                       help="MOTChallenge sequence folder (--out), or video (--out-dir); "
+                       "several, or a folder of sequences, are tracked in parallel")
+    track.add_argument("--out", help="results file to write (detections mode); with several "
+                       "inputs, the folder of their results, NAME.txt each")
+    track.add_argument("--out-dir", help="folder for the outputs (video mode); with several "
+                       "inputs, a folder NAME/ each inside it")
+    track.add_argument("--jobs", type=int, metavar="N",
+                       help="several inputs: processes tracking at once (default: the cores "
+                       "this process may use; 1: one after the other, in this process)")
+    track.add_argument("--keep-going", action="store_true",
+                       help="several inputs: after one fails, track the others (default: "
+                       "start no new one)")
     track.add_argument("--detections", help="detections file (default INPUT/det/det.txt)")
     track.add_argument("--tracker", metavar="NAME",
                        help="tracker: bytetrack (default) or sort; in video mode also dcpf "
@@ -539,6 +639,9 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--gt", help="ground-truth file (SEQ/gt/gt.txt; seqinfo.ini is read beside)")
     ev.add_argument("--pred", help="results file")
     ev.add_argument("--gt-dir", help="folder of sequences SEQ/gt/gt.txt")
+    ev.add_argument("--jobs", type=int, metavar="N",
+                    help="with --gt-dir: sequences scored at once, each in a process of its "
+                    "own (default 1)")
     ev.add_argument("--pred-dir", help="folder of results SEQ.txt")
     ev.add_argument("--benchmark", default="auto", choices=("auto", "MOT15", "MOT16", "MOT17",
                                                            "MOT20"),

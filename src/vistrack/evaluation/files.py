@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..io.motchallenge import read_mot, read_seqinfo
 from .mot import MOTCounts, combine, evaluate_mot
 from .sanity import sanity_warnings
+
+if TYPE_CHECKING:
+    from concurrent.futures import Executor
 
 __all__ = ["evaluate_files", "EvalResults"]
 
@@ -33,8 +37,18 @@ class EvalResults(dict[str, MOTCounts]):
         self.warnings: list[str] = list(warnings or [])
 
 
+def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str
+           ) -> tuple[MOTCounts, list[str]]:
+    """One pair's counts and sanity warnings (in a worker, for :func:`evaluate_files`)."""
+    _, gt, pred, info = pair
+    n = read_seqinfo(info).seq_length if info is not None else None
+    g, p = read_mot(gt), read_mot(pred)
+    return evaluate_mot(g, p, n, benchmark=benchmark), sanity_warnings(g, p)
+
+
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
-                   benchmark: str = "auto") -> EvalResults:
+                   benchmark: str = "auto", jobs: int | None = None,
+                   executor: Executor | None = None) -> EvalResults:
     """Score ``(name, gt, results, seqinfo-or-None)`` pairs; adds ``"COMBINED"`` when there are
     several. Files that look unrelated, or ground truth that looks like detections, are warned
     about in the result's ``warnings`` (:func:`~vistrack.evaluation.sanity_warnings`).
@@ -47,6 +61,12 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     benchmark : {"auto", "MOT15", "MOT16", "MOT17", "MOT20"}
         The ground truth's preprocessing, passed to
         :func:`~vistrack.evaluation.evaluate_mot`.
+    jobs : int, optional
+        Score this many pairs at once, on a pool of processes (default 1: one after the
+        other, in this process); the same scores either way.
+    executor : concurrent.futures.Executor, optional
+        Score the pairs there instead (``submit(fn, *args) -> future``; a Dask client's
+        executor works).
 
     Returns
     -------
@@ -78,11 +98,21 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     (['COMBINED', 'a', 'b'], 6, 0, [])
     """
     out = EvalResults()
-    for name, gt, pred, info in pairs:
-        n = read_seqinfo(info).seq_length if info is not None else None
-        g, p = read_mot(gt), read_mot(pred)
-        out.warnings += sanity_warnings(g, p)
-        out[str(name)] = evaluate_mot(g, p, n, benchmark=benchmark)
+    if jobs is not None and jobs < 1:
+        raise ValueError(f"jobs must be 1 or more; got {jobs}")
+    if executor is None and (jobs or 1) > 1 and len(pairs) > 1:
+        from ..batch import _pool  # a pool of fresh processes, one BLAS thread each
+
+        with _pool(min(jobs or 1, len(pairs))) as pool:
+            scored = list(pool.map(_score, pairs, [benchmark] * len(pairs)))
+    elif executor is not None:
+        futures = [executor.submit(_score, pair, benchmark) for pair in pairs]
+        scored = [f.result() for f in futures]
+    else:
+        scored = [_score(pair, benchmark) for pair in pairs]
+    for (name, *_), (counts, warned) in zip(pairs, scored):
+        out.warnings += warned
+        out[str(name)] = counts
     if len(out) > 1:
         out["COMBINED"] = combine(out.values())
     return out

@@ -1,0 +1,373 @@
+"""Many inputs, one call: sequences, benchmark folders and videos tracked in parallel.
+
+:func:`track_many` runs :func:`~vistrack.pipeline.track_sequence` (a sequence's detections)
+or :func:`~vistrack.pipeline.track_video` (from pixels) on every input, each in a job of its
+own, on a pool of processes (by default one for each core this process may use) or on any
+``concurrent.futures``-style executor the caller brings (``executor.submit(fn, *args)``
+returning a future): a thread pool, a process pool of its own, or a Dask client's
+``client.get_executor()``. vistrack never starts a cluster.
+
+- Each job's results are those of tracking that input alone (the trackers are
+  deterministic), written by the worker that computed them, under a partial name renamed
+  into place when complete (:mod:`vistrack.io.atomic`).
+- A job that fails is reported with its error, one line, and the others go on
+  (``keep_going``), or no new job starts after the first failure.
+- On the pool it owns, a worker that dies (killed, out of memory) breaks the pool; its jobs
+  and the others not finished are run again on a new pool, up to ``retries`` times. What
+  they wrote is replaced whole, so outputs are complete and the same as a run without the
+  failure.
+- Each worker uses one thread for BLAS and OpenMP (more threads than cores per worker made a
+  batched numpy filter several times slower), unless the environment says otherwise.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Iterable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from typing import TextIO
+
+__all__ = ["Job", "Outcome", "is_benchmark", "expand_inputs", "plan", "track_many", "run_jobs"]
+
+_ONE_THREAD = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+               "NUMBA_NUM_THREADS")
+
+
+def _is_sequence(path: Path) -> bool:
+    return path.is_dir() and (path / "seqinfo.ini").is_file()
+
+
+def is_benchmark(path: Path) -> bool:
+    """Whether ``path`` is a folder of sequence folders (and not a sequence itself)."""
+    try:
+        return (path.is_dir() and not _is_sequence(path)
+                and any(_is_sequence(p) for p in path.iterdir()))
+    except OSError:
+        return False
+
+
+def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
+    """The inputs, each benchmark folder (a folder of sequence folders, each with
+    ``seqinfo.ini``) replaced by its sequences, sorted by name; other inputs as given.
+
+    Raises
+    ------
+    FileNotFoundError
+        If an input does not exist.
+    ValueError
+        If an input appears twice.
+    """
+    out: list[Path] = []
+    for item in inputs:
+        path = Path(item)
+        if not path.exists():
+            raise FileNotFoundError(f"{path} does not exist")
+        if is_benchmark(path):
+            out.extend(sorted((p for p in path.iterdir() if _is_sequence(p)),
+                              key=lambda p: p.name))
+        else:
+            out.append(path)
+    seen: dict[Path, Path] = {}
+    for p in out:
+        key = p.resolve()
+        if key in seen:
+            raise ValueError(f"{p} is given twice (as {seen[key]} too)")
+        seen[key] = p
+    return out
+
+
+@dataclass(frozen=True)
+class Job:
+    """One input to track: ``kind`` ``"detections"`` (a sequence's detections into the
+    results file ``out``) or ``"pixels"`` (a video, image folder or sequence folder from its
+    images into the folder ``out``), with the keyword arguments of
+    :func:`~vistrack.pipeline.track_sequence` or :func:`~vistrack.pipeline.track_video`."""
+
+    input: Path
+    out: Path
+    kind: str
+    options: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """How a :class:`Job` went: ``ok``, or ``error`` (one line: the exception's type and
+    message); frames, rows and tracks written; seconds of the whole job; ``attempts`` (more
+    than 1 if a worker died under it)."""
+
+    input: Path
+    out: Path
+    ok: bool
+    frames: int = 0
+    rows: int = 0
+    tracks: int = 0
+    seconds: float = 0.0
+    error: str = ""
+    attempts: int = 1
+
+
+def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detections",
+         **options: Any) -> list[Job]:
+    """The jobs of :func:`track_many`: each input (benchmark folders expanded,
+    :func:`expand_inputs`) to ``out/NAME.txt`` (``"detections"``) or ``out/NAME/``
+    (``"pixels"``; a video's name without its suffix).
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is unknown, with ``"detections"`` an input is not a sequence folder, or
+        two inputs would write to the same place.
+    """
+    if kind not in ("detections", "pixels"):
+        raise ValueError(f"kind must be 'detections' or 'pixels'; got {kind!r}")
+    out = Path(out)
+    jobs = []
+    for path in expand_inputs(inputs):
+        if kind == "detections":
+            if not _is_sequence(path):
+                raise ValueError(f"{path} is not a MOTChallenge sequence folder (seqinfo.ini, "
+                                 "det/det.txt) nor a folder of them")
+            target = out / f"{path.name}.txt"
+        else:
+            target = out / (path.stem if path.is_file() else path.name)
+        jobs.append(Job(path, target, kind, dict(options)))
+    names: dict[Path, Path] = {}
+    for job in jobs:
+        if job.out in names:
+            raise ValueError(f"{names[job.out]} and {job.input} would both write {job.out}")
+        names[job.out] = job.input
+    return jobs
+
+
+def _run(job: Job) -> Outcome:
+    """Run one job (in a worker): its outcome, an error caught as one line."""
+    from .pipeline import track_sequence, track_video
+
+    t0 = time.perf_counter()
+    try:
+        if job.kind == "detections":
+            run: Any = track_sequence(job.input, job.out, **job.options)
+        else:
+            run = track_video(job.input, job.out, **job.options)
+    except Exception as e:  # noqa: BLE001 - reported, and the other jobs go on
+        text = " ".join(str(e).split()) or type(e).__name__
+        return Outcome(job.input, job.out, False, seconds=time.perf_counter() - t0,
+                       error=f"{type(e).__name__}: {text}")
+    return Outcome(job.input, job.out, True, frames=run.frames, rows=run.rows,
+                   tracks=run.tracks, seconds=time.perf_counter() - t0)
+
+
+def _pool(workers: int) -> ProcessPoolExecutor:
+    """A pool of ``workers`` fresh processes (spawned: no state copied from this one), each
+    with one BLAS and OpenMP thread unless the environment sets them."""
+    import multiprocessing
+
+    saved = {k: os.environ.get(k) for k in _ONE_THREAD}
+    try:
+        for k in _ONE_THREAD:
+            os.environ.setdefault(k, "1")
+        pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+        # the processes start at the first submission: start them now, with this environment
+        for f in [pool.submit(os.getpid) for _ in range(workers)]:
+            f.result()
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    return pool
+
+
+def default_jobs() -> int:
+    """The cores this process may use."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return max(1, os.cpu_count() or 1)  # pragma: no cover - macOS, Windows
+
+
+def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
+             executor: Executor | None = None, keep_going: bool = True, retries: int = 2,
+             on_done: Callable[[Outcome, int, int], None] | None = None) -> list[Outcome]:
+    """Run ``jobs`` (see the module); their outcomes in the order of ``jobs``.
+
+    Parameters
+    ----------
+    jobs : sequence of Job
+        What to run.
+    workers : int, optional
+        Processes of the pool made here (default: the cores this process may use; 1: every
+        job in this process, one after the other). Ignored with ``executor``.
+    executor : concurrent.futures.Executor, optional
+        Where to run the jobs instead (anything with ``submit(fn, *args) -> future``); its
+        own failures are reported as the jobs' errors, not retried here.
+    keep_going : bool
+        After a job fails, run the others (True), or start no new job (False: the jobs not
+        started are reported as not run).
+    retries : int
+        Times a job whose worker died is run again, on a new pool (the pool made here only).
+    on_done : callable, optional
+        Called with each outcome as it comes, the number done and the number of jobs.
+
+    Returns
+    -------
+    list of Outcome
+    """
+    n = len(jobs)
+    outcomes: dict[int, Outcome] = {}
+    attempts = dict.fromkeys(range(n), 0)
+
+    def done(i: int, outcome: Outcome) -> None:
+        outcomes[i] = replace(outcome, attempts=attempts[i])
+        if on_done is not None:
+            on_done(outcomes[i], len(outcomes), n)
+
+    def failed(i: int, error: str) -> None:
+        done(i, Outcome(jobs[i].input, jobs[i].out, False, error=error))
+
+    def stopped() -> bool:
+        return not keep_going and any(not o.ok for o in outcomes.values())
+
+    if executor is None and (workers or default_jobs()) == 1:
+        for i, job in enumerate(jobs):
+            if stopped():
+                break
+            attempts[i] += 1
+            done(i, _run(job))
+    elif executor is not None:
+        futures = {}
+        for i, job in enumerate(jobs):
+            attempts[i] += 1
+            futures[executor.submit(_run, job)] = i
+        for f in _as_done(futures, stopped):
+            i = futures[f]
+            try:
+                done(i, f.result())
+            except Exception as e:  # noqa: BLE001 - the executor's own failure
+                failed(i, f"{type(e).__name__}: {e}")
+    else:
+        size = workers or default_jobs()
+        pending = list(range(n))
+        while pending and not stopped():
+            pool = _pool(min(size, len(pending)))
+            running: dict[Future, int] = {}
+            queue, died, broken = list(pending), [], False
+            try:
+                while (queue or running) and not broken:
+                    # twice as many jobs submitted as workers, the rest waiting here: a stop
+                    # after a failure leaves them unstarted
+                    while queue and len(running) < 2 * size and not stopped():
+                        i = queue.pop(0)
+                        try:
+                            f = pool.submit(_run, jobs[i])
+                        except BrokenProcessPool:
+                            queue.insert(0, i)
+                            broken = True
+                            break
+                        attempts[i] += 1
+                        running[f] = i
+                    if not running:
+                        break
+                    finished, _ = wait(running, return_when=FIRST_COMPLETED)
+                    for f in finished:
+                        i = running.pop(f)
+                        try:
+                            done(i, f.result())
+                        except BrokenProcessPool:
+                            died.append(i)
+                            broken = True
+                if broken:  # the other jobs under way end with the pool
+                    wait(running)
+                    for f, i in running.items():
+                        if f.exception() is None:
+                            done(i, f.result())
+                        else:
+                            died.append(i)
+            finally:
+                pool.shutdown(wait=True, cancel_futures=True)
+            pending = []
+            for i in died:
+                if attempts[i] > retries:
+                    failed(i, f"its worker died {attempts[i]} times")
+                else:
+                    pending.append(i)
+            if broken:
+                pending += queue
+            pending.sort()
+    return [outcomes.get(i, Outcome(job.input, job.out, False, attempts=0,
+                                    error="not run (an earlier input failed)"))
+            for i, job in enumerate(jobs)]
+
+
+def _as_done(futures: dict[Future, int], stopped: Callable[[], bool]) -> Iterable[Future]:
+    """The futures as they finish; once ``stopped()``, the ones not started are cancelled."""
+    left = set(futures)
+    while left:
+        finished, left = wait(left, return_when=FIRST_COMPLETED)
+        yield from finished
+        if stopped():
+            left = {f for f in left if not f.cancel()}
+
+
+def track_many(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detections",
+               jobs: int | None = None, executor: Executor | None = None,
+               keep_going: bool = True, retries: int = 2, progress: TextIO | None = None,
+               **options: Any) -> list[Outcome]:
+    """Track every input, in parallel (see the module).
+
+    Parameters
+    ----------
+    inputs : iterable of str or Path
+        Sequence folders, benchmark folders (folders of sequences) and, with ``kind``
+        ``"pixels"``, videos and image folders.
+    out : str or Path
+        The folder written: ``out/NAME.txt`` for each sequence's results (``"detections"``),
+        ``out/NAME/`` for each input's outputs (``"pixels"``).
+    kind : {"detections", "pixels"}
+        Track each sequence's detections (:func:`~vistrack.pipeline.track_sequence`), or
+        each input from its images (:func:`~vistrack.pipeline.track_video`).
+    jobs, executor, keep_going, retries
+        As :func:`run_jobs` (``jobs`` is its ``workers``).
+    progress : TextIO, optional
+        Where to write a line as each input is done.
+    **options
+        Keyword arguments of ``track_sequence`` or ``track_video`` (``config``, ``force``,
+        ``offline``, ``frontend``, ...), the same for every input.
+
+    Returns
+    -------
+    list of Outcome
+        One for each input, in order.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> root = Path(tempfile.mkdtemp())
+    >>> for name in ("A", "B"):
+    ...     seq = root / "bench" / name
+    ...     (seq / "det").mkdir(parents=True)
+    ...     _ = (seq / "seqinfo.ini").write_text(f"[Sequence]\\nname={name}\\nframeRate=10\\n"
+    ...                                          "seqLength=3\\nimWidth=320\\nimHeight=240\\n")
+    ...     _ = (seq / "det" / "det.txt").write_text(
+    ...         "".join(f"{f},-1,{10 + 5 * f},20,30,60,0.9\\n" for f in range(1, 4)))
+    >>> [(o.input.name, o.ok, o.rows) for o in track_many([root / "bench"], root / "out",
+    ...                                                    jobs=1)]
+    [('A', True, 3), ('B', True, 3)]
+    """
+    todo = plan(inputs, out, kind=kind, **options)
+
+    def report(o: Outcome, k: int, n: int) -> None:
+        if progress is not None:
+            what = (f"{o.frames} frames, {o.tracks} tracks, {o.seconds:.1f} s" if o.ok else
+                    f"failed: {o.error}")
+            print(f"[{k}/{n}] {o.input.name}: {what}", file=progress, flush=True)
+
+    return run_jobs(todo, workers=jobs, executor=executor, keep_going=keep_going,
+                    retries=retries, on_done=report)

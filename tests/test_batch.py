@@ -1,0 +1,172 @@
+"""Many inputs at once (vistrack.batch, vistrack track with several inputs): the results of
+each input alone, failures reported without stopping the others, and a worker killed in the
+middle of a job run again to the same outputs."""
+
+import os
+import signal
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.test_fit import _sequence
+from vistrack.batch import expand_inputs, plan, run_jobs, track_many
+from vistrack.cli import main
+from vistrack.pipeline import track_sequence
+
+
+@pytest.fixture(scope="module")
+def bench(tmp_path_factory):
+    """A benchmark folder of three simulated sequences."""
+    root = tmp_path_factory.mktemp("bench")
+    rng = np.random.default_rng(7)
+    for k, T in enumerate((60, 90, 40)):
+        _sequence(root / f"SIM-{k}", rng, n_objects=8, T=T)
+    return root
+
+
+def _alone(seq: Path, out: Path) -> bytes:
+    track_sequence(seq, out, force=True)
+    return out.read_bytes()
+
+
+def test_each_input_gives_what_it_gives_alone(bench, tmp_path):
+    outcomes = track_many([bench], tmp_path / "out", jobs=2)
+    assert [o.input.name for o in outcomes] == ["SIM-0", "SIM-1", "SIM-2"]
+    for o in outcomes:
+        assert o.ok and o.attempts == 1 and o.out == tmp_path / "out" / f"{o.input.name}.txt"
+        assert o.out.read_bytes() == _alone(o.input, tmp_path / f"{o.input.name}.txt")
+    # any executor: the same files
+    with ThreadPoolExecutor(2) as pool:
+        again = track_many([bench], tmp_path / "threads", executor=pool)
+    assert [o.out.read_bytes() for o in again] == [o.out.read_bytes() for o in outcomes]
+    # options go to every input: offline
+    off = track_many([bench / "SIM-1"], tmp_path / "off", jobs=1, offline=True)
+    track_sequence(bench / "SIM-1", tmp_path / "off-alone.txt", offline=True)
+    assert off[0].out.read_bytes() == (tmp_path / "off-alone.txt").read_bytes()
+
+
+def _broken(tmp_path: Path, bench: Path) -> Path:
+    bad = tmp_path / "BAD"
+    (bad / "det").mkdir(parents=True)
+    (bad / "seqinfo.ini").write_text((bench / "SIM-0" / "seqinfo.ini").read_text())
+    (bad / "det" / "det.txt").write_text("1,-1,10,20,30,40,0.9\n2,-1,10,20,x,40,0.9\n")
+    return bad
+
+
+def test_a_failing_input_is_reported_and_the_others_finish(bench, tmp_path):
+    bad = _broken(tmp_path, bench)
+    inputs = [bench / "SIM-0", bad, bench / "SIM-1"]
+    outcomes = track_many(inputs, tmp_path / "out", jobs=2)
+    assert [o.ok for o in outcomes] == [True, False, True]
+    assert "det.txt" in outcomes[1].error and "line 2" in outcomes[1].error
+    assert not (tmp_path / "out" / "BAD.txt").exists()
+    # without keep_going, no input starts after the failure
+    stop = track_many(inputs, tmp_path / "stop", jobs=1, keep_going=False)
+    assert [(o.ok, o.attempts) for o in stop] == [(True, 1), (False, 1), (False, 0)]
+    assert stop[2].error.startswith("not run")
+
+
+def _pool_workers() -> list[int]:
+    """This process's children that are process-pool workers."""
+    out = []
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit():
+            continue
+        try:
+            stat = Path(f"/proc/{pid}/stat").read_text()
+            cmd = Path(f"/proc/{pid}/cmdline").read_bytes()
+        except OSError:
+            continue
+        ppid = int(stat.rsplit(")", 1)[1].split()[1])
+        if ppid == os.getpid() and b"spawn_main" in cmd:
+            out.append(int(pid))
+    return out
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="finds the workers in /proc (Linux)")
+def test_a_worker_killed_mid_job_is_replaced_and_the_outputs_are_complete(tmp_path):
+    rng = np.random.default_rng(8)
+    seqs = [_sequence(tmp_path / "in" / f"LONG-{k}", rng, n_objects=400, T=150,
+                      std=(0.002, 0.00005)) for k in range(3)]
+    out = tmp_path / "out"
+    killed: list[int] = []
+
+    def killer():
+        # once a job is writing its results, kill one worker
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and not killed:
+            if out.exists() and any(p.name.startswith(".") for p in out.iterdir()):
+                workers = _pool_workers()
+                if workers:
+                    os.kill(workers[0], signal.SIGKILL)
+                    killed.append(workers[0])
+            time.sleep(0.01)
+
+    thread = threading.Thread(target=killer)
+    thread.start()
+    outcomes = run_jobs(plan(seqs, out), workers=2)
+    killed.append(0)  # (stops the thread if it saw nothing)
+    thread.join()
+    killed.pop()
+    assert killed, "no worker was seen running a job"
+    assert all(o.ok for o in outcomes), [o.error for o in outcomes]
+    assert max(o.attempts for o in outcomes) == 2
+    for o in outcomes:
+        assert o.out.read_bytes() == _alone(o.input, tmp_path / f"{o.input.name}.txt")
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no partial file left
+
+
+def test_inputs_expand_and_are_checked(bench, tmp_path):
+    assert [p.name for p in expand_inputs([bench])] == ["SIM-0", "SIM-1", "SIM-2"]
+    with pytest.raises(ValueError, match="given twice"):
+        expand_inputs([bench, bench / "SIM-1"])
+    with pytest.raises(FileNotFoundError, match="nowhere"):
+        expand_inputs([tmp_path / "nowhere"])
+    video = tmp_path / "clip.mp4"
+    video.write_bytes(b"")
+    with pytest.raises(ValueError, match="not a MOTChallenge sequence folder"):
+        plan([video], tmp_path / "out")
+    assert plan([video], tmp_path / "out", kind="pixels")[0].out == tmp_path / "out" / "clip"
+    with pytest.raises(ValueError, match="kind"):
+        plan([video], tmp_path, kind="pictures")
+
+
+def test_vistrack_track_with_several_inputs(bench, tmp_path, capsys):
+    out = tmp_path / "results"
+    assert main(["track", str(bench), "--out", str(out), "--jobs", "2", "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "3 of 3 inputs tracked" in text
+    assert (out / "SIM-2.txt").read_bytes() == _alone(bench / "SIM-2", tmp_path / "a.txt")
+    # outputs are not overwritten without --force, before anything runs
+    assert main(["track", str(bench), "--out", str(out), "--quiet"]) == 2
+    assert "--force" in capsys.readouterr().err
+    bad = _broken(tmp_path, bench)
+    status = main(["track", str(bench / "SIM-0"), str(bad), "--out", str(tmp_path / "r2"),
+                   "--keep-going", "--jobs", "1", "--quiet"])
+    text = capsys.readouterr().out
+    assert status == 1 and "1 of 2 inputs tracked; 1 not" in text and "failed" in text
+    assert main(["track", str(bench), "--out", str(out), "--gt", "x", "--quiet"]) == 2
+    assert "--gt goes with one input" in capsys.readouterr().err
+
+
+def test_scoring_many_pairs_at_once_gives_the_same_scores(bench, tmp_path):
+    from vistrack.evaluation import evaluate_files
+
+    outcomes = track_many([bench], tmp_path / "out", jobs=1)
+    pairs = [(o.input.name, o.input / "gt" / "gt.txt", o.out, o.input / "seqinfo.ini")
+             for o in outcomes]
+    serial = evaluate_files(pairs)
+    with ThreadPoolExecutor(2) as pool:
+        threads = evaluate_files(pairs, executor=pool)
+    processes = evaluate_files(pairs, jobs=2)
+    for name in serial:
+        for other in (threads, processes):
+            a, b = vars(serial[name]), vars(other[name])
+            assert a.keys() == b.keys()
+            assert all(np.array_equal(a[k], b[k]) for k in a), name
+    with pytest.raises(ValueError, match="jobs"):
+        evaluate_files(pairs, jobs=0)
