@@ -181,7 +181,8 @@ def _track(args: argparse.Namespace) -> int:
 
     from .batch import is_benchmark
 
-    if len(args.input) > 1 or is_benchmark(Path(args.input[0])) or args.jobs is not None:
+    if (len(args.input) > 1 or is_benchmark(Path(args.input[0])) or args.jobs is not None
+            or args.scheduler is not None):
         return _track_many(args)
     if args.keep_going:
         return fail("--keep-going goes with several inputs")
@@ -346,7 +347,19 @@ def _track_many(args: argparse.Namespace) -> int:
                     f"failed: {o.error}")
             print(f"[{k}/{n}] {o.input.name}: {what}", file=progress, flush=True)
 
-    outcomes = run_jobs(jobs, workers=args.jobs, keep_going=args.keep_going, on_done=report)
+    if args.scheduler is not None:
+        if args.jobs is not None:
+            return fail("--jobs goes with the local pool; the cluster has its own workers")
+        try:
+            from distributed import Client
+        except ImportError:
+            return fail("--scheduler needs Dask's distributed (pip install 'vistrack[dask]')")
+        with Client(args.scheduler, set_as_default=False) as client:
+            outcomes = run_jobs(jobs, executor=client.get_executor(),
+                                keep_going=args.keep_going, on_done=report)
+    else:
+        outcomes = run_jobs(jobs, workers=args.jobs, keep_going=args.keep_going,
+                            on_done=report)
     width = max(len(o.input.name) for o in outcomes)
     print(f"{'input':{width}s}  status  frames  tracks  seconds  output")
     for o in outcomes:
@@ -528,6 +541,11 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--jobs", type=int, metavar="N",
                        help="several inputs: processes tracking at once (default: the cores "
                        "this process may use; 1: one after the other, in this process)")
+    track.add_argument("--scheduler", metavar="ADDRESS",
+                       help="several inputs: run them on the running Dask cluster whose "
+                       "scheduler is at ADDRESS (tcp://host:8786), each worker with vistrack "
+                       "installed and the inputs and outputs on a filesystem it shares "
+                       "(needs vistrack[dask])")
     track.add_argument("--keep-going", action="store_true",
                        help="several inputs: after one fails, track the others (default: "
                        "start no new one)")

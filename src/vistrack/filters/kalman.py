@@ -87,6 +87,11 @@ class FilterResult:
     shared_covs: bool = False
 
 
+def _is_dask(x: object) -> bool:
+    """A Dask collection (:mod:`vistrack.filters.chunked`), told without importing Dask."""
+    return type(x).__module__.split(".", 1)[0] == "dask"
+
+
 def _readonly(*arrays: np.ndarray | None) -> None:
     for a in arrays:
         if a is not None and a.flags.writeable:
@@ -225,6 +230,11 @@ def kalman_filter(
     >>> res.means.shape, res.loglik.shape, res.shared_covs
     ((2, 4, 2), (2,), True)
     """
+    if _is_dask(ys):  # a batch larger than memory: filtered lazily, chunk by chunk
+        from . import chunked
+
+        return chunked.kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0,
+                                     store_covs=store_covs)
     y, single = as_measurement_series(ys)
     check_has_steps(y[0] if single else y)
     B, T, m = y.shape

@@ -22,7 +22,7 @@ from .._validate import (
     check_psd,
 )
 from ._kernels import chol_solve, predict_one
-from .kalman import FilterResult, _readonly, kalman_filter
+from .kalman import FilterResult, _is_dask, _readonly, kalman_filter
 
 __all__ = ["SmoothResult", "rts_smooth", "two_filter_smooth"]
 
@@ -192,6 +192,10 @@ def rts_smooth(result: FilterResult, *, F: ArrayLike, Q: ArrayLike) -> SmoothRes
     >>> np.sqrt([res.covs[2, 0, 0], sm.covs[2, 0, 0]]).round(3)
     array([0.941, 0.337])
     """
+    if isinstance(result, FilterResult) and _is_dask(result.means):
+        from . import chunked  # a filtered batch larger than memory: chunk by chunk, lazily
+
+        return chunked.rts_smooth(result, F=F, Q=Q)
     means, covs, single = _filtered_arrays(result)
     check_has_steps(result.means, "result.means")
     B, T, n = means.shape
