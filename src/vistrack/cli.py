@@ -170,6 +170,17 @@ def _number_problem(args: argparse.Namespace) -> str | None:
     return None
 
 
+def _tracker_and_numbers(args: argparse.Namespace) -> tuple[str, bool, str]:
+    """``vistrack track``'s tracker name, whether it is a box tracker, and what is wrong with
+    the numbers given or the tracker's name ("" if nothing)."""
+    from .tracking.box import TRACKERS as BOX_PRESETS
+
+    name = args.tracker or "bytetrack"
+    box = name in BOX_PRESETS
+    problem = _number_problem(args) or ("" if box else _tracker_problem(name) or "")
+    return name, box, problem
+
+
 def _track(args: argparse.Namespace) -> int:
     from .config import config_toml
     from .io.atomic import check_output
@@ -190,17 +201,12 @@ def _track(args: argparse.Namespace) -> int:
     if (args.out is None) == (args.out_dir is None):
         return fail("give --out RESULTS.txt (a MOTChallenge sequence's detections) or "
                     "--out-dir OUT/ (from pixels)")
-    problem = _number_problem(args)
+    name, box, problem = _tracker_and_numbers(args)
     if problem:
         return fail(problem)
     progress = sys.stderr if sys.stderr.isatty() and not args.quiet else None
     setting_flags = [o for o, *_ in _SETTINGS if getattr(args, o) is not None]
-    name = args.tracker or "bytetrack"
-    box = name in BOX_PRESETS
     if not box:
-        problem = _tracker_problem(name)
-        if problem:
-            return fail(problem)
         given = setting_flags + [f for f in ("still_camera", "config", "print_config")
                                  if getattr(args, f)]
         if given:
@@ -296,15 +302,9 @@ def _track_many(args: argparse.Namespace) -> int:
     for flag in ("print_config", "gt", "fps", "detections"):
         if getattr(args, flag):
             return fail(f"--{flag.replace('_', '-')} goes with one input")
-    problem = _number_problem(args)
+    name, box, problem = _tracker_and_numbers(args)
     if problem:
         return fail(problem)
-    name = args.tracker or "bytetrack"
-    box = name in BOX_PRESETS
-    if not box:
-        problem = _tracker_problem(name)
-        if problem:
-            return fail(problem)
     cfg = None
     if box:
         cfg, problem = _box_config(args)
