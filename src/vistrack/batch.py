@@ -25,14 +25,16 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
-from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from concurrent.futures import Executor, Future, ProcessPoolExecutor
     from typing import TextIO
+
+# concurrent.futures' process pool imports multiprocessing (12-18 ms): imported where a pool is
+# made, so that `vistrack track` with one input does not pay for it
 
 __all__ = ["Job", "Outcome", "is_benchmark", "expand_inputs", "plan", "track_many", "run_jobs"]
 
@@ -168,6 +170,7 @@ def _pool(workers: int) -> ProcessPoolExecutor:
     """A pool of ``workers`` fresh processes (spawned: no state copied from this one), each
     with one BLAS and OpenMP thread unless the environment sets them."""
     import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
 
     saved = {k: os.environ.get(k) for k in _ONE_THREAD}
     try:
@@ -220,6 +223,9 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
     -------
     list of Outcome
     """
+    from concurrent.futures import FIRST_COMPLETED, wait
+    from concurrent.futures.process import BrokenProcessPool
+
     n = len(jobs)
     outcomes: dict[int, Outcome] = {}
     attempts = dict.fromkeys(range(n), 0)
@@ -308,6 +314,8 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
 
 def _as_done(futures: dict[Future, int], stopped: Callable[[], bool]) -> Iterable[Future]:
     """The futures as they finish; once ``stopped()``, the ones not started are cancelled."""
+    from concurrent.futures import FIRST_COMPLETED, wait
+
     left = set(futures)
     while left:
         finished, left = wait(left, return_when=FIRST_COMPLETED)
