@@ -170,3 +170,26 @@ def test_scoring_many_pairs_at_once_gives_the_same_scores(bench, tmp_path):
             assert all(np.array_equal(a[k], b[k]) for k in a), name
     with pytest.raises(ValueError, match="jobs"):
         evaluate_files(pairs, jobs=0)
+
+
+def test_several_videos_from_pixels(tmp_path, capsys):
+    import shutil
+
+    from vistrack.pipeline import track_video
+
+    clip = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
+    a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
+    shutil.copy(clip, a)
+    shutil.copy(clip, b)
+    out = tmp_path / "out"
+    assert main(["track", str(a), str(b), "--out-dir", str(out), "--stop", "20", "--jobs",
+                 "2", "--still-camera", "--quiet"]) == 0
+    assert "2 of 2 inputs tracked" in capsys.readouterr().out
+    track_video(a, tmp_path / "alone", stop=20, camera_motion=False)
+    for name in ("a", "b"):
+        for f in ("tracks.txt", "tracks.csv"):
+            assert (out / name / f).read_bytes() == (tmp_path / "alone" / f).read_bytes()
+        assert (out / name / "annotated.mp4").stat().st_size > 0
+    # a sequence's own options belong to one input
+    assert main(["track", str(a), str(b), "--out-dir", str(out), "--fps", "7"]) == 2
+    assert "--fps goes with one input" in capsys.readouterr().err
