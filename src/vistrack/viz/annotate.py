@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 from collections import deque
 from pathlib import Path
@@ -12,11 +13,52 @@ import numpy as np
 if TYPE_CHECKING:
     from ..types import Frame, Tracks
 
-__all__ = ["Annotator", "AnnotatedVideo", "id_colour"]
+__all__ = ["Annotator", "AnnotatedVideo", "id_colour", "PALETTE_SIZE"]
+
+
+PALETTE_SIZE = 64
+"""Colours in :func:`id_colour`'s palette; identity ``i`` and ``i + 64`` share one."""
+
+
+def _oklab_to_linear_rgb(lab: np.ndarray) -> np.ndarray:
+    """OKLab ``(N, 3)`` to linear sRGB (B. Ottosson's matrices, 2020)."""
+    L, a, b = lab.T
+    lms = np.stack([L + 0.3963377774 * a + 0.2158037573 * b,
+                    L - 0.1055613458 * a - 0.0638541728 * b,
+                    L - 0.0894841775 * a - 1.2914855480 * b], axis=-1) ** 3
+    return lms @ np.array([[4.0767416621, -1.2684380046, -0.0041960863],
+                           [-3.3077115913, 2.6097574011, -0.7034186147],
+                           [0.2309699292, -0.3413193965, 1.7076147010]])
+
+
+@functools.cache
+def _palette() -> tuple[tuple[int, int, int], ...]:
+    """Bright colours each as far as can be from the ones before it: from a grid of OKLab
+    colours inside sRGB (lightness 0.6 to 0.92, chroma at least 0.08), each next colour is
+    the one farthest (Euclidean in OKLab, which is close to perceived difference) from all
+    chosen so far, starting away from black and white."""
+    L, a, b = np.meshgrid(np.linspace(0.6, 0.92, 9), np.linspace(-0.35, 0.35, 57),
+                          np.linspace(-0.35, 0.35, 57), indexing="ij")
+    lab = np.stack([L.ravel(), a.ravel(), b.ravel()], axis=1)
+    lin = _oklab_to_linear_rgb(lab)
+    lab = lab[((lin >= 0) & (lin <= 1)).all(axis=1) & (np.hypot(lab[:, 1], lab[:, 2]) >= 0.08)]
+    d = np.minimum(np.linalg.norm(lab - [0.2, 0, 0], axis=1),
+                   np.linalg.norm(lab - [1.0, 0, 0], axis=1))
+    chosen = []
+    for _ in range(PALETTE_SIZE):
+        k = int(np.argmax(d))
+        chosen.append(lab[k])
+        d = np.minimum(d, np.linalg.norm(lab - lab[k], axis=1))
+    lin = np.clip(_oklab_to_linear_rgb(np.array(chosen)), 0.0, 1.0)
+    rgb = np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * lin ** (1 / 2.4) - 0.055)
+    return tuple((int(round(255 * b)), int(round(255 * g)), int(round(255 * r)))
+                 for r, g, b in rgb)
 
 
 def id_colour(i: int) -> tuple[int, int, int]:
-    """A bright BGR colour for identity ``i``, far from its neighbours' (golden-ratio hues).
+    """A bright BGR colour for identity ``i``, far from every other identity's among the
+    nearest 64 (a palette chosen farthest-first in OKLab: among identities 1 to 30 no two
+    colours are closer than 10 CIEDE2000 units; golden-ratio hues, before, put two within 1).
 
     Parameters
     ----------
@@ -26,18 +68,14 @@ def id_colour(i: int) -> tuple[int, int, int]:
     Returns
     -------
     tuple of int
-        ``(blue, green, red)``, each 0 to 255: hue ``i × 0.618…`` (mod 1), saturation 0.85,
-        value 1.
+        ``(blue, green, red)``, each 0 to 255.
 
     Examples
     --------
-    >>> id_colour(1), id_colour(2)
-    ((255, 101, 38), (38, 255, 164))
+    >>> id_colour(1) != id_colour(2), id_colour(1) == id_colour(1 + PALETTE_SIZE)
+    (True, True)
     """
-    import colorsys
-
-    r, g, b = colorsys.hsv_to_rgb((int(i) * 0.618033988749895) % 1.0, 0.85, 1.0)
-    return int(255 * b), int(255 * g), int(255 * r)
+    return _palette()[(int(i) - 1) % PALETTE_SIZE]
 
 
 class Annotator:
@@ -46,8 +84,8 @@ class Annotator:
     Parameters
     ----------
     trail : int
-        Frames of trail kept per identity; an identity unseen for that long is forgotten
-        (memory stays bounded on long videos).
+        Frames of trail kept per identity, drawn while the identity is in the frame; an
+        identity unseen for that long is forgotten (memory stays bounded on long videos).
     nsigma : float
         Size of the covariance ellipse of a track's centre, in standard deviations.
 
@@ -116,8 +154,11 @@ class Annotator:
             self._last[i] = self._n
         for i in [i for i, n in self._last.items() if self._n - n > self.trail]:
             del self._trails[i], self._last[i]
+        present = set(tracks.ids.tolist())
         for i, t in self._trails.items():
-            if len(t) > 1:
+            # a trail ends with its track: drawn only while the identity is in the frame (its
+            # centres are kept for ``trail`` frames, so that it goes on if the track returns)
+            if i in present and len(t) > 1:
                 pts = np.round(np.array(t)).astype(np.int32).reshape(-1, 1, 2)
                 cv2.polylines(out, [pts], False, id_colour(i), 2, cv2.LINE_AA)
         covs = getattr(tracks, "covs", None)
