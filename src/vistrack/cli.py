@@ -229,8 +229,8 @@ def _track(args: argparse.Namespace) -> int:
         # before anything is read or computed: a run that cannot write fails now
         check_output(args.out, force=args.force, name="--out")
     else:
-        offline_flags = [f for f in ("offline", "detections", "max_gap", "min_track_score",
-                                     "link_gap") if getattr(args, f)]
+        offline_flags = [f for f in ("offline", "detections", "columns", "max_gap",
+                                     "min_track_score", "link_gap") if getattr(args, f)]
         if offline_flags:
             return fail("--offline, its settings and --detections go with --out (use "
                         "--frontend detections:FILE with --out-dir)")
@@ -244,8 +244,16 @@ def _track(args: argparse.Namespace) -> int:
         if problem:
             return fail(problem)
     if args.out is not None:
-        run = track_sequence(args.input, args.out, detections=args.detections, config=cfg,
-                             force=args.force, progress=progress)
+        columns = None
+        if args.columns:
+            pairs = [p.split("=", 1) for p in args.columns.split(",") if p.strip()]
+            bad = [p[0] for p in pairs if len(p) != 2 or not p[0].strip() or not p[1].strip()]
+            if bad:
+                return fail(f"--columns takes OURS=THEIRS pairs separated by commas; got "
+                            f"{bad[0]!r}")
+            columns = {a.strip(): b.strip() for a, b in pairs}
+        run = track_sequence(args.input, args.out, detections=args.detections, columns=columns,
+                             config=cfg, force=args.force, progress=progress)
         print(f"wrote {run.out}: {run.rows} boxes of {run.tracks} tracks over {run.frames} "
               f"frames from {run.detections} detections; tracker {run.fps:.0f} frames/s",
               file=report)
@@ -299,7 +307,7 @@ def _track_many(args: argparse.Namespace) -> int:
                     "--out-dir OUT/ (from pixels, NAME/ each)")
     if args.jobs is not None and args.jobs < 1:
         return fail(f"--jobs must be 1 or more; got {args.jobs}")
-    for flag in ("print_config", "gt", "fps", "detections"):
+    for flag in ("print_config", "gt", "fps", "detections", "columns"):
         if getattr(args, flag):
             return fail(f"--{flag.replace('_', '-')} goes with one input")
     name, box, problem = _tracker_and_numbers(args)
@@ -549,7 +557,12 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--keep-going", action="store_true",
                        help="several inputs: after one fails, track the others (default: "
                        "start no new one)")
-    track.add_argument("--detections", help="detections file (default INPUT/det/det.txt)")
+    track.add_argument("--detections", help="detections file (default INPUT/det/det.txt): "
+                       "MOTChallenge's format, or CSV with a header (.csv)")
+    track.add_argument("--columns", metavar="OURS=THEIRS,...",
+                       help="a CSV file's column names: frame, id (or particle), bb_left, "
+                       "bb_top, bb_width, bb_height (or x, y: the centre), conf, class "
+                       "(e.g. frame=t,bb_width=w,bb_height=h,conf=score)")
     track.add_argument("--tracker", metavar="NAME",
                        help="tracker: bytetrack (default) or sort; in video mode also dcpf "
                        "(the detector-confidence particle filter on HOG's confidence map, "

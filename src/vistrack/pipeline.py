@@ -30,7 +30,7 @@ from ._memory import PeriodicRelease
 from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, evaluate_mot
 from .io.atomic import check_output, made_folder
-from .io.motchallenge import read_mot, read_seqinfo, write_mot
+from .io.motchallenge import MOTTable, read_mot, read_seqinfo, write_mot
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
 from .models.box import BoxMotion
 from .tracking.base import Tracker
@@ -751,7 +751,29 @@ def _trajectory_plot(path: Path, name: str) -> Sink:
     return TrajectoryPlot(path, name)
 
 
+def read_detections(path: str | Path, columns: dict[str, str] | None = None) -> MOTTable:
+    """A detections file: MOTChallenge's format, or a ``.csv`` file with a header whose
+    columns ``columns`` names (:meth:`~vistrack.io.MOTTable.from_pandas`).
+
+    Raises
+    ------
+    ValueError
+        If ``columns`` is given for a MOTChallenge file, or the CSV file lacks a column.
+    """
+    path = Path(path)
+    if path.suffix.lower() != ".csv":
+        if columns:
+            raise ValueError(f"columns name a CSV file's columns; {path} is read as a "
+                             "MOTChallenge file (its name does not end in .csv)")
+        return read_mot(path)
+    from .io.motchallenge import _pandas
+
+    return MOTTable.from_pandas(_pandas("a CSV file of detections").read_csv(path), columns,
+                                path=str(path))
+
+
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,
+                   columns: dict[str, str] | None = None,
                    config: TrackConfig | str | None = None, tracker: str | None = None,
                    offline: bool | None = None, force: bool = False,
                    progress: TextIO | None = None, **overrides: object) -> TrackRun:
@@ -764,7 +786,11 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     out : str or Path
         The results file to write (not overwritten unless ``force``).
     detections : str or Path, optional
-        Another detections file (default ``seq_dir/det/det.txt``).
+        Another detections file (default ``seq_dir/det/det.txt``): MOTChallenge's format, or
+        a CSV file with a header (``.csv``; read by pandas, its columns as
+        :meth:`~vistrack.io.MOTTable.from_pandas` takes them).
+    columns : dict, optional
+        A CSV file's column names, ``{ours: theirs}`` (:meth:`~vistrack.io.MOTTable.from_pandas`).
     config, tracker, offline, overrides
         The configuration (:func:`resolve_config`): a
         :class:`~vistrack.config.TrackConfig` or a preset's name in
@@ -827,7 +853,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     det_path = Path(detections) if detections is not None else seq_dir / "det" / "det.txt"
     if not det_path.exists():
         raise FileNotFoundError(f"{det_path} does not exist (pass --detections FILE)")
-    dets = read_mot(det_path)
+    dets = read_detections(det_path, columns)
     if len(dets) and dets.frames.max() > info.seq_length:
         raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
                          f"sequence's {info.seq_length} frames ({seq_dir / 'seqinfo.ini'})")

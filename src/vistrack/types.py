@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -240,6 +240,67 @@ class Detections:
         # the fields are typed as the ndarrays __post_init__ makes of them; it takes array_like
         return cls(boxes=np.c_[b[:, :2], b[:, :2] + b[:, 2:]],
                    scores=scores, classes=classes)  # type: ignore[arg-type]
+
+    @classmethod
+    def from_supervision(cls, detections: Any) -> Detections:
+        """From a ``supervision.Detections`` (or anything with its ``xyxy``, ``confidence``
+        and ``class_id``; supervision is not imported).
+
+        Examples
+        --------
+        >>> from types import SimpleNamespace
+        >>> sv = SimpleNamespace(xyxy=np.array([[10.0, 20, 40, 60]]),
+        ...                      confidence=np.array([0.8]), class_id=np.array([2]))
+        >>> d = Detections.from_supervision(sv)
+        >>> d.boxes.tolist(), d.scores.tolist(), d.classes.tolist()
+        ([[10.0, 20.0, 40.0, 60.0]], [0.8], [2])
+        """
+        xyxy = np.asarray(detections.xyxy, dtype=np.float64).reshape(-1, 4)
+        return cls(boxes=xyxy, scores=getattr(detections, "confidence", None),
+                   classes=getattr(detections, "class_id", None))
+
+    def to_supervision(self) -> Any:
+        """As a ``supervision.Detections`` (``xyxy``, ``confidence``, ``class_id``), for
+        supervision's annotators and tools; needs supervision.
+
+        Raises
+        ------
+        ValueError
+            If these are point detections (supervision's are boxes).
+        """
+        if self.boxes is None:
+            raise ValueError("supervision's detections are boxes; these are points")
+        try:
+            import supervision
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("to_supervision needs supervision (pip install supervision)") \
+                from e
+        assert self.scores is not None and self.classes is not None  # (__post_init__)
+        return supervision.Detections(xyxy=self.boxes.copy(), confidence=self.scores.copy(),
+                                      class_id=self.classes.copy())
+
+    @classmethod
+    def from_ultralytics(cls, result: Any) -> Detections:
+        """From one image's ``ultralytics`` result (``result.boxes`` with ``xyxy``, ``conf``
+        and ``cls``, torch tensors or arrays; ultralytics is not imported).
+
+        Examples
+        --------
+        >>> from types import SimpleNamespace
+        >>> boxes = SimpleNamespace(xyxy=np.array([[1.0, 2, 3, 4]]), conf=np.array([0.5]),
+        ...                         cls=np.array([0.0]))
+        >>> Detections.from_ultralytics(SimpleNamespace(boxes=boxes)).classes.tolist()
+        [0]
+        """
+        def array(x: Any) -> np.ndarray:
+            for step in ("detach", "cpu", "numpy"):  # a torch tensor
+                x = getattr(x, step)() if hasattr(x, step) else x
+            return np.asarray(x)
+
+        b = result.boxes
+        return cls(boxes=array(b.xyxy).astype(np.float64).reshape(-1, 4),
+                   scores=array(b.conf).astype(np.float64),
+                   classes=array(b.cls).astype(np.int64))
 
     def __len__(self) -> int:
         assert self.scores is not None  # filled in by __post_init__

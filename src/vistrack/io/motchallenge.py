@@ -69,6 +69,14 @@ class MOTFormatError(ValueError):
     """
 
 
+def _pandas(what: str) -> Any:
+    try:
+        import pandas
+    except ImportError as e:  # pragma: no cover - pandas is there wherever trackpy is
+        raise ImportError(f"{what} needs pandas (pip install pandas)") from e
+    return pandas
+
+
 @dataclass(frozen=True)
 class MOTTable:
     """The rows of one MOTChallenge file, as columns, sorted by frame.
@@ -168,6 +176,106 @@ class MOTTable:
         """Rows by boolean mask or indices."""
         return MOTTable(self.frames[index], self.ids[index], self.boxes[index], self.conf[index],
                         self.classes[index], self.visibility[index], self.path, self.columns)
+
+    def to_pandas(self) -> Any:
+        """The rows as a pandas DataFrame, with the columns trackpy names for particles
+        (``frame``, ``particle``, ``x``, ``y``: the box's centre) beside MOTChallenge's own
+        (``bb_left``, ``bb_top``, ``bb_width``, ``bb_height``, ``conf``, ``class``,
+        ``visibility``), so that a trackpy user's code reads tracks as it reads its own.
+        :meth:`from_pandas` reads it back unchanged. Needs pandas.
+
+        Examples
+        --------
+        >>> t = MOTTable.from_rows([(1, 7, 0, 0, 10, 20, 0.9), (2, 7, 2, 0, 10, 20, 0.8)])
+        >>> df = t.to_pandas()
+        >>> df[["frame", "particle", "x", "y"]].values.tolist()
+        [[1.0, 7.0, 5.0, 10.0], [2.0, 7.0, 7.0, 10.0]]
+        >>> MOTTable.from_pandas(df).boxes.tolist() == t.boxes.tolist()
+        True
+        """
+        pd = _pandas("to_pandas")
+        b = self.boxes
+        return pd.DataFrame({
+            "frame": self.frames, "particle": self.ids, "x": b[:, 0] + b[:, 2] / 2,
+            "y": b[:, 1] + b[:, 3] / 2, "bb_left": b[:, 0], "bb_top": b[:, 1],
+            "bb_width": b[:, 2], "bb_height": b[:, 3], "conf": self.conf,
+            "class": self.classes, "visibility": self.visibility})
+
+    @classmethod
+    def from_pandas(cls, df: Any, columns: dict[str, str] | None = None,
+                    path: str = "") -> MOTTable:
+        """A table from a DataFrame (or any mapping of column names to arrays): ``frame``,
+        an identity (``particle`` or ``id``; -1 for detections if neither) and a box,
+        ``bb_left, bb_top, bb_width, bb_height`` or its centre ``x, y`` with ``bb_width,
+        bb_height``; ``conf``, ``class`` and ``visibility`` if there (default 1, -1, -1).
+
+        Parameters
+        ----------
+        df : pandas.DataFrame or mapping
+            The rows, one a box.
+        columns : dict, optional
+            Other names for those columns, ``{ours: theirs}`` (``{"frame": "t",
+            "bb_width": "w"}``).
+        path : str
+            What the rows come from, for messages.
+
+        Raises
+        ------
+        ValueError
+            Naming the columns that are missing, or a frame that is not a whole number.
+
+        Examples
+        --------
+        >>> rows = {"t": [1, 1], "x": [15.0, 40.0], "y": [30.0, 30.0], "w": [10.0, 10.0],
+        ...         "h": [20.0, 20.0], "score": [0.9, 0.4]}
+        >>> t = MOTTable.from_pandas(rows, columns={"frame": "t", "bb_width": "w",
+        ...                                         "bb_height": "h", "conf": "score"})
+        >>> t.boxes.tolist(), t.ids.tolist(), t.conf.tolist()
+        ([[10.0, 20.0, 10.0, 20.0], [35.0, 20.0, 10.0, 20.0]], [-1, -1], [0.9, 0.4])
+        """
+        names = dict(columns or {})
+        have = set(df.keys())
+
+        def name(ours: str) -> str:
+            return names.get(ours, ours)
+
+        def get(ours: str) -> np.ndarray | None:
+            return np.asarray(df[name(ours)], dtype=float) if name(ours) in have else None
+
+        where = f" in {path}" if path else ""
+        frame = get("frame")
+        if frame is None:
+            raise ValueError(f"no column {name('frame')!r} (the frame){where}; columns: "
+                             f"{sorted(map(str, have))}")
+        n = len(frame)
+        ident = get("particle")
+        if ident is None:
+            ident = get("id")
+        w, h = get("bb_width"), get("bb_height")
+        left, top = get("bb_left"), get("bb_top")
+        if left is None or top is None:
+            x, y = get("x"), get("y")
+            if x is None or y is None or w is None or h is None:
+                missing = [name(c) for c in ("bb_left", "bb_top", "bb_width", "bb_height")
+                           if get(c) is None]
+                raise ValueError(f"no box{where}: columns {missing} are missing (or give "
+                                 f"{name('x')!r}, {name('y')!r} with {name('bb_width')!r}, "
+                                 f"{name('bb_height')!r})")
+            left, top = x - w / 2, y - h / 2
+        if w is None or h is None:
+            raise ValueError(f"no column {name('bb_width')!r} or {name('bb_height')!r}{where}")
+        if n and not np.array_equal(frame, np.round(frame)):
+            k = int(np.flatnonzero(frame != np.round(frame))[0])
+            raise ValueError(f"frame {frame[k]} (row {k}){where} is not a whole number")
+
+        def or_fill(ours: str, fill: float) -> np.ndarray:
+            v = get(ours)
+            return v if v is not None else np.full(n, fill)
+
+        rows = np.column_stack([frame, ident if ident is not None else np.full(n, -1.0),
+                                left, top, w, h, or_fill("conf", 1.0), or_fill("class", -1.0),
+                                or_fill("visibility", -1.0)])
+        return cls.from_rows(rows if n else np.zeros((0, 9)), path)
 
     def frame_slices(self, n_frames: int | None = None) -> list[slice]:
         """``slices[f - 1]`` selects the rows of frame ``f``, for ``f = 1 .. n_frames``

@@ -1,0 +1,137 @@
+"""Tracks as pandas DataFrames, named as trackpy names particles' columns, and back."""
+
+import numpy as np
+import pytest
+
+from vistrack.io import read_mot, write_mot
+from vistrack.io.motchallenge import MOTTable
+
+pd = pytest.importorskip("pandas")
+
+
+def _table(tmp_path):
+    rng = np.random.default_rng(0)
+    frames = np.repeat(np.arange(1, 21), 3)
+    ids = np.tile([1, 2, 3], 20)
+    keep = ~((ids == 3) & (frames > 4))  # identity 3 lives 4 frames only
+    boxes = np.c_[rng.uniform(0, 500, (60, 2)), rng.uniform(5, 50, (60, 2))]
+    path = tmp_path / "tracks.txt"
+    write_mot(path, frames[keep], ids[keep], boxes[keep], rng.uniform(0, 1, 60)[keep])
+    return read_mot(path)
+
+
+def test_a_table_goes_to_a_dataframe_and_back_unchanged(tmp_path):
+    t = _table(tmp_path)
+    df = t.to_pandas()
+    assert list(df.columns[:4]) == ["frame", "particle", "x", "y"]
+    np.testing.assert_array_equal(df["x"], t.boxes[:, 0] + t.boxes[:, 2] / 2)
+    back = MOTTable.from_pandas(df)
+    for f in ("frames", "ids", "boxes", "conf", "classes", "visibility"):
+        np.testing.assert_array_equal(getattr(back, f), getattr(t, f), err_msg=f)
+
+
+def test_trackpy_reads_vistracks_tracks_as_its_own(tmp_path):
+    trackpy = pytest.importorskip("trackpy")
+    t = _table(tmp_path)
+    df = t.to_pandas()
+    # trackpy's filter_stubs keeps particles seen in at least 5 frames: identities 1 and 2
+    kept = trackpy.filter_stubs(df, threshold=5)
+    assert sorted(set(kept["particle"])) == [1, 2]
+    # its drift is the mean displacement of the particles seen in consecutive frames
+    drift = trackpy.compute_drift(df[df["particle"] < 3])
+    c = t.boxes[:, :2] + t.boxes[:, 2:] / 2
+
+    def at(f, i):
+        return c[(t.frames == f) & (t.ids == i)][0]
+
+    steps = [np.mean([at(f + 1, i) - at(f, i) for i in (1, 2)], axis=0) for f in range(1, 20)]
+    want = np.cumsum(steps, axis=0)  # frames 2 to 20, against frame 1
+    assert drift.index.tolist() == list(range(2, 21))
+    np.testing.assert_allclose(drift[["x", "y"]].values, want, atol=1e-9)
+
+
+def test_other_column_names_and_missing_columns():
+    rows = pd.DataFrame({"t": [2, 1], "track": [4, 4], "cx": [15.0, 12.0], "cy": [30.0, 30.0],
+                         "w": [10.0, 10.0], "h": [20.0, 20.0]})
+    names = {"frame": "t", "particle": "track", "x": "cx", "y": "cy", "bb_width": "w",
+             "bb_height": "h"}
+    t = MOTTable.from_pandas(rows, columns=names, path="mine.csv")
+    assert t.frames.tolist() == [1, 2] and t.boxes[:, 0].tolist() == [7.0, 10.0]
+    assert t.conf.tolist() == [1.0, 1.0]
+    with pytest.raises(ValueError, match=r"no box in mine.csv: columns \['bb_left', 'bb_top', "
+                                         r"'w'\]"):
+        MOTTable.from_pandas(rows.drop(columns="w"), columns=names, path="mine.csv")
+    with pytest.raises(ValueError, match="no column 'frame'"):
+        MOTTable.from_pandas(rows)
+    with pytest.raises(ValueError, match=r"frame 1.5 \(row 0\) is not a whole number"):
+        MOTTable.from_pandas(rows.assign(t=[1.5, 2]), columns=names)
+    assert len(MOTTable.from_pandas(rows.iloc[:0], columns=names)) == 0
+
+
+def test_detections_from_a_csv_file_with_its_own_column_names(tmp_path, capsys):
+    from tests.test_fit import _sequence
+    from vistrack.cli import main
+
+    seq = _sequence(tmp_path / "SIM", np.random.default_rng(3))
+    det = read_mot(seq / "det" / "det.txt")
+    b = det.boxes
+    pd.DataFrame({"t": det.frames, "cx": b[:, 0] + b[:, 2] / 2, "cy": b[:, 1] + b[:, 3] / 2,
+                  "w": b[:, 2], "h": b[:, 3], "score": det.conf}).to_csv(
+        tmp_path / "dets.csv", index=False)
+    a, c = tmp_path / "a.txt", tmp_path / "c.txt"
+    assert main(["track", str(seq), "--out", str(a), "--quiet"]) == 0
+    assert main(["track", str(seq), "--out", str(c), "--detections", str(tmp_path / "dets.csv"),
+                 "--columns", "frame=t,x=cx,y=cy,bb_width=w,bb_height=h,conf=score",
+                 "--quiet"]) == 0
+    ta, tc = read_mot(a), read_mot(c)
+    assert (ta.ids == tc.ids).all() and np.allclose(ta.boxes, tc.boxes, atol=0.011)
+    capsys.readouterr()
+    # column names go with a CSV file only
+    assert main(["track", str(seq), "--out", str(c), "--force", "--columns", "frame=t",
+                 "--quiet"]) == 2
+    assert "columns name a CSV file's columns" in capsys.readouterr().err
+    assert main(["track", str(seq), "--out", str(c), "--force", "--detections",
+                 str(tmp_path / "dets.csv"), "--columns", "frame", "--quiet"]) == 2
+    assert "OURS=THEIRS" in capsys.readouterr().err
+
+
+def test_detections_to_and_from_supervision_and_ultralytics():
+    sv = pytest.importorskip("supervision")
+    from types import SimpleNamespace
+
+    from vistrack.types import Detections
+
+    theirs = sv.Detections(xyxy=np.array([[10.0, 20, 40, 60], [5, 5, 9, 30]]),
+                           confidence=np.array([0.9, 0.2]), class_id=np.array([0, 3]))
+    ours = Detections.from_supervision(theirs)
+    assert ours.boxes.tolist() == theirs.xyxy.tolist() and ours.classes.tolist() == [0, 3]
+    back = ours.to_supervision()
+    assert isinstance(back, sv.Detections) and len(back) == 2
+    np.testing.assert_array_equal(back.xyxy, theirs.xyxy)
+    np.testing.assert_array_equal(back.confidence, theirs.confidence)
+    np.testing.assert_array_equal(back.class_id, theirs.class_id)
+    # supervision without scores or classes: ours default to 1 and 0
+    plain = Detections.from_supervision(sv.Detections(xyxy=theirs.xyxy))
+    assert plain.scores.tolist() == [1.0, 1.0] and plain.classes.tolist() == [0, 0]
+    with pytest.raises(ValueError, match="points"):
+        Detections(points=np.zeros((1, 2))).to_supervision()
+
+    class Tensor:  # what ultralytics holds: torch tensors, detached and moved to the CPU
+        def __init__(self, a):
+            self.a = a
+
+        def detach(self):
+            return self
+
+        def cpu(self):
+            return self
+
+        def numpy(self):
+            return self.a
+
+    result = SimpleNamespace(boxes=SimpleNamespace(xyxy=Tensor(theirs.xyxy.astype(np.float32)),
+                                                   conf=Tensor(np.array([0.9, 0.2], np.float32)),
+                                                   cls=Tensor(np.array([0.0, 3.0], np.float32))))
+    d = Detections.from_ultralytics(result)
+    assert d.boxes.tolist() == theirs.xyxy.tolist() and d.classes.tolist() == [0, 3]
+    np.testing.assert_allclose(d.scores, [0.9, 0.2], rtol=1e-6)
