@@ -193,3 +193,13 @@ def test_several_videos_from_pixels(tmp_path, capsys):
     # a sequence's own options belong to one input
     assert main(["track", str(a), str(b), "--out-dir", str(out), "--fps", "7"]) == 2
     assert "--fps goes with one input" in capsys.readouterr().err
+
+
+def test_a_job_that_cannot_be_sent_to_a_worker_is_reported(bench, tmp_path):
+    # a front-end defined here cannot be pickled to the pool's processes
+    jobs = plan([bench / "SIM-0"], tmp_path / "out", offline=False)
+    jobs.append(type(jobs[0])(bench / "SIM-1", tmp_path / "out" / "SIM-1.txt", "detections",
+                              {"config": lambda: None}))
+    outcomes = run_jobs(jobs, workers=2)
+    assert outcomes[0].ok and not outcomes[1].ok
+    assert "pickle" in outcomes[1].error.lower()

@@ -289,13 +289,18 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
                         except BrokenProcessPool:
                             died.append(i)
                             broken = True
+                        except Exception as e:  # noqa: BLE001 - a job that cannot be sent
+                            failed(i, f"{type(e).__name__}: {e}")
                 if broken:  # the other jobs under way end with the pool
                     wait(running)
                     for f, i in running.items():
-                        if f.exception() is None:
+                        error = f.exception()
+                        if error is None:
                             done(i, f.result())
-                        else:
+                        elif isinstance(error, BrokenProcessPool):
                             died.append(i)
+                        else:
+                            failed(i, f"{type(error).__name__}: {error}")
             finally:
                 pool.shutdown(wait=True, cancel_futures=True)
             pending = []
