@@ -49,3 +49,36 @@ def test_a_trail_ends_with_its_track():
     assert gone.max() == 0
     back = ann.draw(black, _box_track(7, 60.0))  # it returns: its trail goes on
     assert (np.abs(back[60, 35].astype(int) - colour) < 60).all()
+
+
+def test_hota_over_alpha_is_drawn_from_the_scores(tmp_path, capsys):
+    from tests.test_fit import _sequence
+    from vistrack.cli import main
+    from vistrack.evaluation import evaluate_files
+    from vistrack.evaluation.mot import ALPHAS
+    from vistrack.pipeline import track_sequence
+    from vistrack.viz import plot_hota_alpha
+
+    rng = np.random.default_rng(2)
+    seqs = [_sequence(tmp_path / f"S{k}", rng) for k in range(2)]
+    for s in seqs:
+        track_sequence(s, tmp_path / "res" / f"{s.name}.txt")
+    pairs = [(s.name, s / "gt" / "gt.txt", tmp_path / "res" / f"{s.name}.txt",
+              s / "seqinfo.ini") for s in seqs]
+    res = evaluate_files(pairs)
+    fig = plot_hota_alpha(res)
+    for ax, metric in zip(fig.axes, ("HOTA", "DetA", "AssA")):
+        assert [line.get_label() for line in ax.lines] == ["S0", "S1", "COMBINED"]
+        for line, name in zip(ax.lines, ("S0", "S1", "COMBINED")):
+            np.testing.assert_array_equal(line.get_xdata(), ALPHAS)
+            np.testing.assert_allclose(line.get_ydata(),
+                                       100 * getattr(res[name], f"{metric}_alpha"))
+    # the mean over α is the score itself
+    np.testing.assert_allclose(fig.axes[0].lines[2].get_ydata().mean(), 100 * res["COMBINED"].HOTA)
+    args = ["eval", "--gt-dir", str(tmp_path), "--pred-dir", str(tmp_path / "res"), "--plots",
+            str(tmp_path / "plots")]
+    assert main(args) == 0
+    assert (tmp_path / "plots" / "hota_alpha.png").read_bytes()[:4] == b"\x89PNG"
+    capsys.readouterr()
+    assert main(args) == 2 and "--force" in capsys.readouterr().err
+    assert main(args + ["--force"]) == 0

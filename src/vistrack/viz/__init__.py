@@ -6,9 +6,10 @@ from .plots import (
     TrajectoryPlot,
     covariance_ellipse,
     plot_estimates_1d,
+    plot_hota_alpha,
     plot_track_2d,
     plot_trajectories,
 )
 
 __all__ = ["Annotator", "id_colour", "covariance_ellipse", "plot_estimates_1d", "plot_track_2d",
-           "plot_trajectories", "AnnotatedVideo", "TrajectoryPlot"]
+           "plot_trajectories", "plot_hota_alpha", "AnnotatedVideo", "TrajectoryPlot"]

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from ..types import Frame, Tracks
 
 __all__ = ["covariance_ellipse", "plot_estimates_1d", "plot_track_2d", "plot_trajectories",
-           "TrajectoryPlot"]
+           "plot_hota_alpha", "TrajectoryPlot"]
 
 
 def _finish(ax: Axes, xlabel: str, ylabel: str, title: str | None) -> Axes:
@@ -309,6 +309,64 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
         if path is not None:
             fig.savefig(path, dpi=100)
     return fig
+
+
+def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = None) -> Figure:
+    """HOTA, DetA and AssA over the localisation threshold α (TrackEval's curves), one line
+    per sequence of ``results`` and a thick black one for ``"COMBINED"`` when there; saved to
+    ``path`` (PNG) when given, without pyplot. Returns the figure.
+
+    Parameters
+    ----------
+    results : dict of str to MOTCounts
+        Scores by sequence (:func:`vistrack.evaluation.evaluate_files`).
+    path : str or Path, optional
+        Save the figure there (PNG, 100 dpi).
+
+    Examples
+    --------
+    >>> from vistrack.evaluation.mot import MOTCounts, evaluate_mot
+    >>> from vistrack.io.motchallenge import MOTTable
+    >>> gt = MOTTable.from_rows([(1, 1, 0, 0, 10, 20), (2, 1, 1, 0, 10, 20)])
+    >>> fig = plot_hota_alpha({"a": evaluate_mot(gt, gt)})
+    >>> [ax.get_title() for ax in fig.axes], fig.axes[0].lines[0].get_ydata()[0]
+    (['HOTA', 'DetA', 'AssA'], np.float64(100.0))
+    """
+    from matplotlib.figure import Figure
+
+    from ..evaluation.mot import ALPHAS
+
+    fig = Figure(figsize=(12, 4))
+    axes = fig.subplots(1, 3, sharey=True)
+    names = [n for n in results if n != "COMBINED"] + (["COMBINED"] if "COMBINED" in results
+                                                      else [])
+    colours = _tab20(len(names))
+    for ax, metric in zip(axes, ("HOTA", "DetA", "AssA")):
+        for k, name in enumerate(names):
+            y = 100 * np.asarray(getattr(results[name], f"{metric}_alpha"), dtype=float)
+            if name == "COMBINED":
+                ax.plot(ALPHAS, y, color="black", linewidth=2.5, label=name)
+            else:
+                ax.plot(ALPHAS, y, color=colours[k], linewidth=1, label=name)
+        ax.set_title(metric)
+        ax.set_xlabel("localisation threshold α (IoU)")
+        ax.set_xlim(0, 1)
+        ax.set_ylim(0, 100)
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("score (%)")
+    if len(names) <= 20:
+        axes[-1].legend(fontsize=7, loc="lower left")
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=100)
+    return fig
+
+
+def _tab20(n: int) -> list[Any]:
+    """``n`` colours of matplotlib's tab20, repeating past 20."""
+    import matplotlib
+
+    return [matplotlib.colormaps["tab20"](k % 20) for k in range(n)]
 
 
 def _save_over(fig: Figure, ax: Axes, image: Any, background: np.ndarray,
