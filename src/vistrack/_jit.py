@@ -122,25 +122,23 @@ def njit(*args: Any, **options: Any) -> Any:
 
 
 def _lazy(fn: Callable[..., Any], options: dict[str, Any]) -> Any:
-    if numba_imported():
-        return _numba().njit(**options)(fn)
-    return Lazy(fn, lambda numba: numba.njit(**options)(fn))
+    return _made(fn, lambda numba: numba.njit(**options)(fn))
 
 
 def intrinsic(fn: Callable[..., Any]) -> Any:
     """``numba.extending.intrinsic``, made on first need (see :func:`njit`)."""
-    if numba_imported():
-        _numba()
-        from numba.extending import intrinsic as make
 
-        return make(fn)
+    def make(numba: Any) -> Any:
+        from numba.extending import intrinsic as numbas
 
-    def make_intrinsic(numba: Any) -> Any:
-        from numba.extending import intrinsic as make
+        return numbas(fn)
 
-        return make(fn)
+    return _made(fn, make)
 
-    return Lazy(fn, make_intrinsic)
+
+def _made(fn: Callable[..., Any], make: Callable[[Any], Any]) -> Any:
+    """numba's object ``make(numba)`` now if numba is imported, else a :class:`Lazy`."""
+    return make(_numba()) if numba_imported() else Lazy(fn, make)
 
 
 def bind(namespace: dict[str, Any], **names: str) -> None:

@@ -278,7 +278,7 @@ def _dtype(d: np.dtype) -> Any:
         names = list(d.names or ())
         return ["record", names, [d.fields[n][0].str for n in names],
                 [d.fields[n][1] for n in names], d.itemsize, bool(d.isalignedstruct)]
-    if d.isnative and d.kind in "biufc" and d.name in _SCALARS.values():
+    if d.isnative and d.name in _SCALARS.values():
         return d.name
     return None
 

@@ -36,7 +36,8 @@ if TYPE_CHECKING:
 # concurrent.futures' process pool imports multiprocessing (12-18 ms): imported where a pool is
 # made, so that `vistrack track` with one input does not pay for it
 
-__all__ = ["Job", "Outcome", "is_benchmark", "expand_inputs", "plan", "track_many", "run_jobs"]
+__all__ = ["Job", "Outcome", "is_benchmark", "expand_inputs", "plan", "track_many", "run_jobs",
+           "progress_lines", "process_pool"]
 
 _ONE_THREAD = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                "NUMBA_NUM_THREADS")
@@ -166,7 +167,7 @@ def _run(job: Job) -> Outcome:
                    tracks=run.tracks, seconds=time.perf_counter() - t0)
 
 
-def _pool(workers: int) -> ProcessPoolExecutor:
+def process_pool(workers: int) -> ProcessPoolExecutor:
     """A pool of ``workers`` fresh processes (spawned: no state copied from this one), each
     with one BLAS and OpenMP thread unless the environment sets them."""
     import multiprocessing
@@ -262,7 +263,7 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
         size = workers or default_jobs()
         pending = list(range(n))
         while pending and not stopped():
-            pool = _pool(min(size, len(pending)))
+            pool = process_pool(min(size, len(pending)))
             running: dict[Future, int] = {}
             queue, died, broken = list(pending), [], False
             try:
@@ -374,13 +375,19 @@ def track_many(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "de
     ...                                                    jobs=1)]
     [('A', True, 3), ('B', True, 3)]
     """
-    todo = plan(inputs, out, kind=kind, **options)
+    return run_jobs(plan(inputs, out, kind=kind, **options), workers=jobs, executor=executor,
+                    keep_going=keep_going, retries=retries, on_done=progress_lines(progress))
+
+
+def progress_lines(stream: TextIO | None) -> Callable[[Outcome, int, int], None] | None:
+    """An ``on_done`` for :func:`run_jobs` writing ``[k/n] NAME: ...`` to ``stream`` as each
+    job is done (None: nothing)."""
+    if stream is None:
+        return None
 
     def report(o: Outcome, k: int, n: int) -> None:
-        if progress is not None:
-            what = (f"{o.frames} frames, {o.tracks} tracks, {o.seconds:.1f} s" if o.ok else
-                    f"failed: {o.error}")
-            print(f"[{k}/{n}] {o.input.name}: {what}", file=progress, flush=True)
+        what = (f"{o.frames} frames, {o.tracks} tracks, {o.seconds:.1f} s" if o.ok else
+                f"failed: {o.error}")
+        print(f"[{k}/{n}] {o.input.name}: {what}", file=stream, flush=True)
 
-    return run_jobs(todo, workers=jobs, executor=executor, keep_going=keep_going,
-                    retries=retries, on_done=report)
+    return report

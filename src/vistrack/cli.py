@@ -11,9 +11,12 @@ import threading
 import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import NoReturn
+from typing import TYPE_CHECKING, NoReturn
 
 from . import __version__, _compile
+
+if TYPE_CHECKING:
+    from .config import TrackConfig
 
 DEMOS = ("kalman",)
 
@@ -261,20 +264,9 @@ def _track(args: argparse.Namespace) -> int:
         if cfg is not None and cfg.offline.enabled:
             return fail("--offline, its settings and --detections go with --out (use "
                         "--frontend detections:FILE with --out-dir)")
-        extra = {k: v for k, v in (("min_area", args.min_area),
-                                   ("background", args.background)) if v is not None}
-        if args.config is not None or not box:
-            # a file is the whole configuration, used as it is
-            settings = {"config": cfg} if cfg is not None else {}
-        else:  # the options go over the front-end's defaults (bgsub: a still camera)
-            settings = {key: getattr(args, option) for option, table, key, *_ in _SETTINGS
-                        if table == "tracker" and getattr(args, option) is not None}
-            if args.still_camera:
-                settings["camera_motion"] = False
-        run = track_video(args.input, args.out_dir, frontend=args.frontend,
-                          fps=args.fps, tracker=name, gt=args.gt,
-                          stop=args.stop, skip_bad_frames=args.skip_bad_frames,
-                          force=args.force, progress=progress, **extra, **settings)
+        run = track_video(args.input, args.out_dir, fps=args.fps, gt=args.gt,
+                          force=args.force, progress=progress,
+                          **_video_options(args, name, box, cfg))
         sec = dict(run.seconds)
         compiling = sec.pop("compile", 0.0)
         ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
@@ -292,10 +284,29 @@ def _track(args: argparse.Namespace) -> int:
     return 0
 
 
+def _video_options(args: argparse.Namespace, name: str, box: bool,
+                   cfg: TrackConfig | None) -> dict:
+    """``track_video``'s keyword arguments from ``vistrack track``'s options, for one input or
+    many: the front-end's, and the tracker's configuration, a file used as it is, or the
+    options given over the front-end's defaults (bgsub: a still camera)."""
+    options = {k: getattr(args, k) for k in ("frontend", "stop", "min_area", "background")
+               if getattr(args, k) is not None}
+    options.update(tracker=name, skip_bad_frames=args.skip_bad_frames)
+    if args.config is not None or not box:
+        if cfg is not None:
+            options["config"] = cfg
+    else:
+        options.update({key: getattr(args, option) for option, table, key, *_ in _SETTINGS
+                        if table == "tracker" and getattr(args, option) is not None})
+        if args.still_camera:
+            options["camera_motion"] = False
+    return options
+
+
 def _track_many(args: argparse.Namespace) -> int:
     """``vistrack track`` on several inputs (vistrack.batch): in parallel, a line as each is
     done, a table at the end; exit status 1 if any failed."""
-    from .batch import plan, run_jobs
+    from .batch import plan, progress_lines, run_jobs
     from .io.atomic import check_output
     from .tracking.box import TRACKERS as BOX_PRESETS
 
@@ -331,29 +342,12 @@ def _track_many(args: argparse.Namespace) -> int:
         if cfg is not None and cfg.offline.enabled:
             return fail("--offline goes with --out")
         kind, out = "pixels", args.out_dir
-        options.update({k: getattr(args, k) for k in ("frontend", "stop", "min_area",
-                                                       "background")
-                        if getattr(args, k) is not None})
-        options.update(tracker=name, skip_bad_frames=args.skip_bad_frames)
-        if args.config is not None or not box:
-            if cfg is not None:
-                options["config"] = cfg
-        else:
-            options.update({key: getattr(args, option) for option, table, key, *_ in _SETTINGS
-                            if table == "tracker" and getattr(args, option) is not None})
-            if args.still_camera:
-                options["camera_motion"] = False
+        options.update(_video_options(args, name, box, cfg))
     jobs = plan(args.input, out, kind=kind, **options)
-    for job in jobs:  # before anything runs: a job that cannot write fails now
-        if kind == "detections":
+    if kind == "detections":
+        for job in jobs:  # before anything runs: a job that cannot write fails now
             check_output(job.out, force=args.force, name="--out")
-    progress = None if args.quiet else sys.stderr
-
-    def report(o, k: int, n: int) -> None:
-        if progress is not None:
-            what = (f"{o.frames} frames, {o.tracks} tracks, {o.seconds:.1f} s" if o.ok else
-                    f"failed: {o.error}")
-            print(f"[{k}/{n}] {o.input.name}: {what}", file=progress, flush=True)
+    report = progress_lines(None if args.quiet else sys.stderr)
 
     if args.scheduler is not None:
         if args.jobs is not None:

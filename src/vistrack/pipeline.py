@@ -965,7 +965,6 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
     """
     import tempfile
 
-    from .evaluation.files import evaluate_files
     from .tracking.fit import fit_box_motion, matched_series
 
     seqs = [Path(d) for d in seq_dirs]
@@ -1001,32 +1000,30 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
         learned = fit_box_motion(series, start=start)
         scores = None
         if gt and held_out and len(seqs) > 1:
-            scores = _held_out(seqs, cfg, learned, Path(tmp), evaluate_files, progress)
+            scores = _held_out(seqs, cfg, start, learned.per_sequence, Path(tmp), progress)
     return FitRun(replace(cfg, motion=learned.motion), learned,
                   "ground truth" if gt else "first pass", scores)
 
 
-def _held_out(seqs: list[Path], cfg: TrackConfig, learned: MotionFit, tmp: Path,
-              evaluate_files: Callable[..., Any], progress: TextIO | None) -> dict:
-    """Each sequence tracked online with the values learned from the other sequences, and
-    with ``cfg``; COMBINED scores of both."""
+def _held_out(seqs: list[Path], cfg: TrackConfig, start: BoxMotion, rows: list[dict],
+              tmp: Path, progress: TextIO | None) -> dict:
+    """Each sequence tracked online with the values learned from the other sequences (their
+    ``rows`` of :attr:`MotionFit.per_sequence`, over ``start``), and with ``cfg``; COMBINED
+    scores of both."""
+    from .evaluation.files import evaluate_files
     from .tracking.fit import median_motion
 
     online = replace(cfg, offline=replace(cfg.offline, enabled=False))
-    start = cfg.motion if cfg.motion is not None else BoxMotion()
-    rows = learned.per_sequence
     out = {}
     for mode in ("learned", "given"):
         for k, seq in enumerate(seqs):
-            c = online
-            if mode == "learned":
-                others = [r for r in rows if r["sequence"] != k]
-                if others:  # (else nothing was learned without this sequence)
-                    c = replace(online, motion=median_motion(others, start))
-            track_sequence(seq, tmp / mode / f"{k}.txt", config=c)
-        res = evaluate_files([(seq.name, seq / "gt" / "gt.txt", tmp / mode / f"{k}.txt",
-                               seq / "seqinfo.ini") for k, seq in enumerate(seqs)])
-        c = res["COMBINED"]
+            config = online
+            others = [r for r in rows if r["sequence"] != k]
+            if mode == "learned" and others:  # (else nothing was learned without it)
+                config = replace(online, motion=median_motion(others, start))
+            track_sequence(seq, tmp / mode / f"{k}.txt", config=config)
+        c = evaluate_files([(seq.name, seq / "gt" / "gt.txt", tmp / mode / f"{k}.txt",
+                             seq / "seqinfo.ini") for k, seq in enumerate(seqs)])["COMBINED"]
         out[mode] = {"HOTA": float(c.HOTA), "MOTA": float(c.MOTA), "IDF1": float(c.IDF1)}
         if progress is not None:
             print(f"held out, {mode}: HOTA {100 * c.HOTA:.1f}", file=progress, flush=True)
