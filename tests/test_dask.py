@@ -44,7 +44,8 @@ def test_a_chunks_last_state_does_not_keep_its_means_alive():
     from vistrack.filters.chunked import _chunk_filter
 
     out = _chunk_filter(np.zeros((3, 5, 2)), np.zeros(4), np.eye(4), MODEL, False)
-    assert out[5].base is None and out[6].base is None
+    assert out[5].base is None and not np.shares_memory(out[6], out[0])
+    assert out[6].shape == (3, 4, 4) and out[6].strides[0] == 0  # one covariance, shared
 
 
 def test_the_chunked_filter_checks_its_input():
@@ -98,3 +99,153 @@ def test_many_inputs_on_a_dask_cluster_give_what_each_gives_alone(bench, tmp_pat
                  cluster.scheduler_address, "--quiet"]) == 0
     assert [p.read_bytes() for p in sorted(out.iterdir())] == \
         [o.out.read_bytes() for o in outcomes]
+
+
+def _em_problem(B=30, T=80, missing=True):
+    from vistrack.simulate import simulate_lgssm
+
+    G = np.array([[0.5, 0], [0, 0.5], [1, 0], [0, 1]])
+    truth = dict(F=F, Q=0.5 * G @ G.T, H=np.eye(2, 4), R=4 * np.eye(2), x0=np.zeros(4),
+                 P0=np.eye(4))
+    ys = np.stack([simulate_lgssm(T, rng=i, **truth)[1] for i in range(B)])
+    if missing:
+        rng = np.random.default_rng(0)
+        ys[rng.random((B, T)) < 0.1] = np.nan  # missing steps
+        ys[:, :, 1][rng.random((B, T)) < 0.1] = np.nan  # and missing components
+    return ys
+
+
+START = dict(F=F, Q=np.eye(4), H=np.eye(2, 4), R=np.eye(2), x0=np.zeros(4), P0=np.eye(4))
+
+
+@pytest.mark.parametrize("kw", [
+    dict(learn=("Q", "R")),
+    dict(learn=("Q", "R"), Q_form="scaled", R_form="diag"),
+    dict(learn=("F", "Q", "H", "R", "x0", "P0"), R_form="diag"),
+    dict(learn=("x0", "P0", "Q")),
+    dict(learn=("x0", "Q"), P0=np.stack([np.eye(4) * (1 + b) for b in range(30)])),
+    dict(learn=("P0", "R"), x0=np.arange(120.0).reshape(30, 4) / 10),
+])
+def test_em_on_a_chunked_batch_equals_em_in_memory(kw):
+    import dask
+
+    from vistrack.filters import em
+
+    ys = _em_problem()
+    args = dict(START, max_iter=25, tol=-np.inf)
+    args.update(kw)
+    want = em(ys, **args)
+    with dask.config.set(scheduler="threads"):
+        got = em(da.from_array(ys, chunks=(7, 40, 2)), **args)
+    # the same sums, added in another order: equal to rounding after 25 iterations
+    for name in ("F", "Q", "H", "R", "x0", "P0", "loglik", "q", "r"):
+        np.testing.assert_allclose(getattr(got, name), getattr(want, name), rtol=1e-9,
+                                   atol=1e-12, err_msg=name)
+    assert got.iterations == want.iterations == 25
+    assert np.all(np.diff(got.loglik) >= -1e-9)
+
+
+@pytest.mark.parametrize("per_series_prior", [False, True])
+def test_em_one_fit_per_series_on_a_chunked_batch_is_lazy_and_equal_chunk_by_chunk(
+        per_series_prior):
+    import dask
+
+    from vistrack.filters import em
+
+    ys = _em_problem(B=9, T=40)
+    args = dict(START, learn=("Q", "R", "x0"), R_form="diag", max_iter=60, tol=1e-2,
+                pooled=False)
+    if per_series_prior:
+        args["x0"] = np.arange(36.0).reshape(9, 4)
+    want = em(ys, **args)
+    lazy = em(da.from_array(ys, chunks=(4, 40, 2)), **args)
+    assert isinstance(lazy.Q, da.Array) and lazy.Q.chunks[0] == (4, 4, 1)
+    names = ("F", "Q", "H", "R", "x0", "P0", "q", "r", "loglik", "iterations", "converged")
+    got = dask.compute(*(getattr(lazy, k) for k in names), scheduler="threads")
+    assert want.iterations.min() < want.iterations.max()  # series stop apart
+    for name, g in zip(names, got):
+        w = np.asarray(getattr(want, name))
+        if name == "loglik":  # padded to max_iter + 1 lazily, to the longest fit in memory
+            assert np.isnan(g[:, w.shape[1]:]).all()
+            g = g[:, :w.shape[1]]
+        assert g.dtype == w.dtype and g.shape == w.shape, name
+        np.testing.assert_array_equal(g, w, err_msg=name)
+
+
+def test_em_on_a_chunked_batch_checks_its_input():
+    from vistrack.filters import em
+
+    ys = _em_problem(B=6, T=10)
+    chunked = da.from_array(ys, chunks=(3, 10, 2))
+    with pytest.raises(ValueError, match="learning x0 pooled on a Dask array needs one x0"):
+        em(chunked, **dict(START, x0=np.zeros((6, 4))), learn=("x0",))
+    with pytest.raises(ValueError, match="progress is not available"):
+        em(chunked, **START, pooled=False, progress=sys.stderr)
+    bad = ys.copy()
+    bad[4, 2, 1] = np.inf
+    with pytest.raises(ValueError, match=r"ys\[4, 2, 1\] = inf"):
+        em(da.from_array(bad, chunks=(3, 10, 2)), **START)
+    with pytest.raises(ValueError, match="no measurement"):
+        em(da.full((4, 5, 2), np.nan, chunks=(2, 5, 2)), **START)
+    with pytest.raises(ValueError, match="at least 2 steps"):
+        em(chunked[:, :1], **START)
+    with pytest.raises(ValueError, match="max_iter"):
+        em(chunked, **START, max_iter=0)
+    missing_one = ys.copy()
+    missing_one[:, :, 1] = np.nan
+    with pytest.raises(ValueError, match="component 1 of ys is never measured"):
+        em(da.from_array(missing_one, chunks=(3, 10, 2)), **START, learn=("H",))
+
+
+@pytest.mark.slow
+def test_a_dask_worker_killed_mid_job_is_replaced_and_the_outputs_are_complete(tmp_path):
+    import os
+    import signal
+    import threading
+    import time
+
+    distributed = pytest.importorskip("distributed")
+    import dask
+
+    from tests.test_fit import _sequence
+    from vistrack.batch import track_many
+
+    rng = np.random.default_rng(8)
+    seqs = [_sequence(tmp_path / "in" / f"LONG-{k}", rng, n_objects=400, T=150,
+                      std=(0.002, 0.00005)) for k in range(3)]
+    out = tmp_path / "out"
+    killed: list[int] = []
+    with dask.config.set({"distributed.nanny.pre-spawn-environ": {}}), \
+            distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                     dashboard_address=None) as cluster, \
+            distributed.Client(cluster, set_as_default=False) as client:
+        pids = list(client.run(os.getpid).values())
+
+        def killer():
+            # once a job is writing its results (both workers busy), kill one worker
+            deadline = time.monotonic() + 120
+            while time.monotonic() < deadline and not killed:
+                if out.exists() and any(p.name.startswith(".") for p in out.iterdir()):
+                    os.kill(pids[0], signal.SIGKILL)
+                    killed.append(pids[0])
+                time.sleep(0.01)
+
+        thread = threading.Thread(target=killer)
+        thread.start()
+        outcomes = track_many(seqs, out, executor=client.get_executor())
+        killed.append(0)  # (stops the thread if it saw nothing)
+        thread.join()
+        killed.pop()
+        after = list(client.run(os.getpid).values())
+        # the scheduler ran some job twice: on the worker killed, then on another
+        starts: dict = {}
+        for key, _, finish, *_ in cluster.scheduler.transition_log:
+            if finish == "processing":
+                starts[key] = starts.get(key, 0) + 1
+    assert killed, "no worker was seen running a job"
+    assert pids[0] not in after and len(after) == 2  # the nanny started a new worker
+    assert len(starts) == 3 and max(starts.values()) == 2, starts
+    assert all(o.ok for o in outcomes), [o.error for o in outcomes]
+    for o in outcomes:
+        assert o.out.read_bytes() == _alone(o.input, tmp_path / f"{o.input.name}.txt")
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no partial file left

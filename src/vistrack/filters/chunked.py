@@ -1,5 +1,6 @@
-"""Batches larger than memory: :func:`~vistrack.filters.kalman_filter` and
-:func:`~vistrack.filters.rts_smooth` on a Dask array chunked along the batch axis.
+"""Batches larger than memory: :func:`~vistrack.filters.kalman_filter`,
+:func:`~vistrack.filters.rts_smooth` and :func:`~vistrack.filters.em` on a Dask array chunked
+along the batch axis.
 
 Given measurements ``ys`` as a Dask array ``(B, T, m)``, :func:`kalman_filter` returns a
 :class:`~vistrack.filters.FilterResult` of Dask arrays, nothing computed yet: each chunk of
@@ -12,31 +13,45 @@ series; :func:`rts_smooth` smooths such a result chunk by chunk the same way.
 - The model (``F``, ``Q``, ``H``, ``R``) is shared by all series (per-step matrices allowed);
   the prior ``x0``, ``P0`` is shared, or one per series as an array with the batch axis
   first (numpy or Dask), cut as ``ys`` is.
+- :func:`em` pooled runs each iteration's E-step on every chunk and adds the chunks' sums
+  (a few ``(T, n, n)`` arrays a chunk); one fit per series (``pooled=False``) is lazy, as the
+  filter is.
 - Dask is imported here only (``pip install vistrack[dask]``); ``import vistrack`` does not
   import it.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..types import Gaussian
+from .kalman import _is_dask
 
 if TYPE_CHECKING:
     from .kalman import FilterResult
+    from .learn import FitResult
     from .smoothers import SmoothResult
 
-__all__ = ["kalman_filter", "rts_smooth"]
+__all__ = ["kalman_filter", "rts_smooth", "em"]
 
 
 def _batch_blocks(ys: Any) -> tuple[Any, list[tuple[int, int]]]:
     if ys.ndim != 3:
         raise ValueError(f"ys as a Dask array must have shape (B, T, m); got {ys.shape}")
-    ys = ys.rechunk({1: -1, 2: -1})
+    ys = _whole_after_batch(ys)
     edges = np.cumsum((0,) + ys.chunks[0])
     return ys, [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
+
+
+def _whole_after_batch(a: Any, batch: tuple[int, ...] | None = None) -> Any:
+    """``a`` in one chunk along every axis but the first (chunked as ``batch`` along it, if
+    given); ``a`` itself when it is so already (a rechunk to the same chunks would still copy
+    every block)."""
+    want = (batch or a.chunks[0],) + tuple((d,) for d in a.shape[1:])
+    return a if a.chunks == want else a.rechunk(want)
 
 
 def _per_series(p: Any, B: int, ndim_shared: int, name: str) -> Any:
@@ -55,9 +70,49 @@ def _chunk_filter(y: np.ndarray, x0: Any, P0: Any, model: dict, store_covs: bool
     r = in_memory(np.asarray(y), x0=np.asarray(x0), P0=np.asarray(P0), store_covs=store_covs,
                   **model)
     # the last state is a view of the means: copied, so that a result that needs only it
-    # does not keep every chunk's means alive
-    return (r.means, r.covs, r.pred_means, r.pred_covs, r.loglik, np.array(r.last.mean),
-            np.array(r.last.cov))
+    # does not keep every chunk's means alive (a covariance shared by the chunk's series
+    # stays one matrix, seen by every series, as in memory)
+    cov = r.last.cov
+    cov = (np.broadcast_to(cov[0].copy(), cov.shape) if cov.ndim == 3 and cov.strides[0] == 0
+           else np.array(cov))
+    return (r.means, r.covs, r.pred_means, r.pred_covs, r.loglik, np.array(r.last.mean), cov)
+
+
+def _one(block: Any) -> np.ndarray:
+    """The block itself, from the nested lists in which ``blockwise(..., concatenate=False)``
+    passes the one block of each axis summed over (concatenating would copy it)."""
+    while isinstance(block, list):
+        (block,) = block
+    return block
+
+
+def _block_filter(y: Any, *per_series: Any, x0: Any, P0: Any, given: tuple, model: dict,
+                  store_covs: bool) -> tuple:
+    """:func:`_chunk_filter` on one block, the priors given per series (``given``) among the
+    blocks after ``y``."""
+    blocks = {name: _one(b) for name, b in zip(given, per_series)}
+    return _chunk_filter(_one(y), blocks.get("x0", x0), blocks.get("P0", P0), model,
+                         store_covs)
+
+
+def _pick(block: tuple, i: int) -> np.ndarray:
+    return block[i]
+
+
+def _fields(packed: Any, tails: list[tuple[int, ...] | None]) -> list[Any]:
+    """The arrays packed per block as tuples in ``packed`` (one block per batch chunk), each
+    with the shape ``tail`` after the batch axis (None: not there). Each field is one task a
+    block that Dask's array optimisation fuses with the block's other steps."""
+    out: list[Any] = []
+    for i, tail in enumerate(tails):
+        if tail is None:
+            out.append(None)
+            continue
+        out.append(packed.map_blocks(_pick, i, dtype=np.float64,
+                                     chunks=(packed.chunks[0],) + tuple((d,) for d in tail),
+                                     new_axis=list(range(1, len(tail) + 1)),
+                                     meta=np.empty((0,) * (len(tail) + 1))))
+    return out
 
 
 def kalman_filter(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any,
@@ -76,39 +131,39 @@ def kalman_filter(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any,
     ValueError
         If ``ys`` is not 3-D, or a prior has a batch axis of another length.
     """
-    import dask
     import dask.array as da
 
     from .kalman import FilterResult
 
-    ys, spans = _batch_blocks(ys)
+    ys, _ = _batch_blocks(ys)
     B, T, _ = ys.shape
     x0s, P0s = _per_series(x0, B, 1, "x0"), _per_series(P0, B, 2, "P0")
     n = int(np.shape(x0)[-1])
     model = dict(F=np.asarray(F), Q=np.asarray(Q), H=np.asarray(H), R=np.asarray(R))
-    fields: list[list[Any]] = [[] for _ in range(7)]
-    for block, (a, b) in zip(ys.to_delayed().ravel(), spans):
-        k = b - a
-        out = dask.delayed(_chunk_filter, nout=7)(
-            block, x0 if x0s is None else x0s[a:b], P0 if P0s is None else P0s[a:b],
-            model, store_covs)
-        shapes = [(k, T, n), (k, T, n, n) if store_covs else None,
-                  (k, T, n) if store_covs else None, (k, T, n, n) if store_covs else None,
-                  (k,), (k, n), (k, n, n)]
-        for i, shape in enumerate(shapes):
-            if shape is not None:
-                fields[i].append(da.from_delayed(out[i], shape, dtype=np.float64))
-    cat: list[Any] = [da.concatenate(f, axis=0) if f else None for f in fields]
-    return FilterResult(means=cat[0], covs=cat[1], pred_means=cat[2], pred_covs=cat[3],
-                        loglik=cat[4], last=Gaussian._trusted(cat[5], cat[6]),
+    args: list[Any] = [ys, "btm"]
+    given: list[str] = []
+    for name, prior, index in (("x0", x0s, "bi"), ("P0", P0s, "bij")):
+        if prior is not None:
+            prior = da.asarray(prior)
+            args += [_whole_after_batch(prior, ys.chunks[0]), index]
+            given.append(name)
+    packed = da.blockwise(_block_filter, "b", *args, dtype=object, concatenate=False,
+                          meta=np.empty((0,), dtype=object), x0=None if x0s is not None
+                          else np.asarray(x0), P0=None if P0s is not None else np.asarray(P0),
+                          given=tuple(given), model=model, store_covs=store_covs)
+    means, covs, pmeans, pcovs, loglik, last_m, last_P = _fields(packed, [
+        (T, n), (T, n, n) if store_covs else None, (T, n) if store_covs else None,
+        (T, n, n) if store_covs else None, (), (n,), (n, n)])
+    return FilterResult(means=means, covs=covs, pred_means=pmeans, pred_covs=pcovs,
+                        loglik=loglik, last=Gaussian._trusted(last_m, last_P),
                         shared_covs=False)
 
 
-def _chunk_smooth(parts: tuple, model: dict) -> tuple:
+def _block_smooth(*parts: np.ndarray, model: dict) -> tuple:
     from .kalman import FilterResult
     from .smoothers import rts_smooth as in_memory
 
-    means, covs, pmeans, pcovs, loglik, last_m, last_P = (np.asarray(p) for p in parts)
+    means, covs, pmeans, pcovs, loglik, last_m, last_P = (np.asarray(_one(p)) for p in parts)
     r = FilterResult(means, covs, pmeans, pcovs, loglik, Gaussian(last_m, last_P))
     s = in_memory(r, **model)
     return s.means, s.covs
@@ -123,7 +178,6 @@ def rts_smooth(result: FilterResult, *, F: Any, Q: Any) -> SmoothResult:
     ValueError
         If the result was filtered without its covariances.
     """
-    import dask
     import dask.array as da
 
     from .smoothers import SmoothResult
@@ -133,13 +187,250 @@ def rts_smooth(result: FilterResult, *, F: Any, Q: Any) -> SmoothResult:
     arrays: list[Any] = [result.means, result.covs, result.pred_means, result.pred_covs,
                          result.loglik, result.last.mean, result.last.cov]
     chunks = arrays[0].chunks[0]
-    arrays = [a.rechunk({0: chunks, **{i: -1 for i in range(1, a.ndim)}}) for a in arrays]
-    blocks = [a.to_delayed().reshape(len(chunks), -1)[:, 0] for a in arrays]
-    model = dict(F=np.asarray(F), Q=np.asarray(Q))
-    means, covs = [], []
+    args: list[Any] = []
+    for a, index in zip(arrays, ("bti", "btij", "bti", "btij", "b", "bi", "bij")):
+        args += [_whole_after_batch(a, chunks), index]
+    packed = da.blockwise(_block_smooth, "b", *args, dtype=object, concatenate=False,
+                          meta=np.empty((0,), dtype=object),
+                          model=dict(F=np.asarray(F), Q=np.asarray(Q)))
     _, T, n = result.means.shape
-    for k, parts in zip(chunks, zip(*blocks)):
-        out = dask.delayed(_chunk_smooth, nout=2)(parts, model)
-        means.append(da.from_delayed(out[0], (k, T, n), dtype=np.float64))
-        covs.append(da.from_delayed(out[1], (k, T, n, n), dtype=np.float64))
-    return SmoothResult(da.concatenate(means), da.concatenate(covs), result)
+    means, covs = _fields(packed, [(T, n), (T, n, n)])
+    return SmoothResult(means, covs, result)
+
+
+def _chunk_summary(y: Any, first: int) -> dict:
+    """What :func:`em` checks of a chunk before its first E-step, and how many of its series
+    measured something at each step."""
+    y = np.asarray(y)
+    obs = ~np.isnan(y)
+    bad = np.argwhere(np.isinf(y))
+    inf = None if not len(bad) else ((int(bad[0][0]) + first,) + tuple(int(i) for i in bad[0][1:]),
+                                     float(y[tuple(bad[0])]))
+    return dict(measured=obs.any(axis=(0, 1)), partial=bool((obs.any(axis=-1)
+                                                              & ~obs.all(axis=-1)).any()),
+                count=obs.any(axis=-1).sum(axis=0), inf=inf)
+
+
+def _chunk_sums(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...],
+                H: np.ndarray | None) -> dict:
+    """One chunk's E-step under the model ``p`` (its prior ``x0``, ``P0``): the
+    log-likelihood and the sums of the M-step for ``learn``, summed over the chunk's series;
+    given ``H``, only the expected ``v v'`` of ``R``'s M-step under that ``H``."""
+    from .learn import _EStep
+
+    y = np.asarray(y)
+    p = dict(p, x0=np.asarray(x0), P0=np.asarray(P0))
+    e = _EStep(y, ~np.isnan(y), p)
+    if H is not None:
+        return {"V": e.vv(H)}
+    out: dict[str, Any] = {"ll": e.ll}
+    if {"F", "Q"} & set(learn):
+        out["S"] = e.transition_sums()
+    if "H" in learn:
+        out["H"] = e.H_sums()
+    elif "R" in learn:
+        out["V"] = e.vv(p["H"])
+    if {"x0", "P0"} & set(learn):
+        ms, Ps, _, mult = e.smoothed
+        d = ms[:, 0] - (p["x0"] if p["x0"].ndim == 2 else p["x0"][None])
+        out["d"], out["dd"], out["P"] = d.sum(axis=0), d.T @ d, mult * Ps[:, 0].sum(axis=0)
+        if p["P0"].ndim == 3:
+            W = np.linalg.inv(p["P0"])
+            out["W"], out["Wm"] = W.sum(axis=0), np.einsum("bij,bj->i", W, ms[:, 0])
+    return out
+
+
+def _add(parts: list) -> Any:
+    """The sum of the chunks' sums (dicts of arrays, tuples of arrays and floats)."""
+    first = parts[0]
+    if isinstance(first, dict):
+        return {k: _add([q[k] for q in parts]) for k in first}
+    if isinstance(first, tuple):
+        return tuple(_add([q[i] for q in parts]) for i in range(len(first)))
+    total = first
+    for q in parts[1:]:
+        total = total + q
+    return total
+
+
+class _Summed:
+    """An E-step over every chunk (the interface of :class:`vistrack.filters.learn._EStep`):
+    the chunks' log-likelihoods and sums, computed where the chunks are and added here."""
+
+    def __init__(self, chunks: list, p: dict, learn: tuple[str, ...], B: int,
+                 count: np.ndarray) -> None:
+        import dask
+
+        self.chunks, self.p, self.B, self.count = chunks, p, B, count
+        parts = dask.compute(*[dask.delayed(_chunk_sums)(*chunk, self._model(), learn, None)
+                               for chunk in self._priors()])
+        self.sums = _add(list(parts))
+        self.ll = float(self.sums["ll"])
+
+    def _model(self) -> dict:
+        return {k: v for k, v in self.p.items() if k not in ("x0", "P0")}
+
+    def _priors(self) -> list[tuple]:
+        """Each chunk with its prior: this iteration's where shared (``p``'s, which the
+        M-step may have changed), else the chunk's part of the one given per series."""
+        x0, P0 = self.p["x0"], self.p["P0"]
+        return [(y, c0 if x0 is None else x0, cP if P0 is None else P0)
+                for y, c0, cP in self.chunks]
+
+    def transition_sums(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.sums["S"]
+
+    def H_sums(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.sums["H"]
+
+    def vv(self, H: np.ndarray) -> np.ndarray:
+        if "V" in self.sums:  # computed with the model's H, not learned
+            return self.sums["V"]
+        import dask  # H learned: a second pass, with this iteration's new H
+
+        parts = dask.compute(*[dask.delayed(_chunk_sums)(*chunk, self._model(), (), H)
+                               for chunk in self._priors()])
+        return _add(list(parts))["V"]
+
+    def R_count(self) -> np.ndarray:
+        return self.count
+
+    def prior(self, learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+        s, B = self.sums, self.B
+        c, P0 = self.p["x0"], self.p["P0"]
+        x0 = c
+        if "x0" in learn:  # (a shared x0: checked by em)
+            x0 = np.linalg.solve(s["W"], s["Wm"]) if "W" in s else c + s["d"] / B
+        if "P0" in learn:  # sum (m - x0)(m - x0)' from the sums around the old x0
+            dd = s["dd"]
+            if "x0" in learn:
+                delta = c - x0
+                dd = (dd + np.outer(s["d"], delta) + np.outer(delta, s["d"])
+                      + B * np.outer(delta, delta))
+            P0 = (s["P"] + dd) / B
+        return x0, P0
+
+
+def _chunk_em(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...], Q_form: str,
+              R_form: str, tol: float, max_iter: int) -> tuple:
+    """One fit per series of a chunk, as :func:`vistrack.filters.em` with ``pooled=False``
+    fits them in memory; ``loglik`` padded with NaN to ``max_iter + 1``."""
+    from .learn import _fit_each
+
+    p = dict(p, x0=np.asarray(x0), P0=np.asarray(P0))
+    f = _fit_each(np.asarray(y), p, learn, Q_form, R_form, tol, max_iter, None)
+    ll = np.full((f.loglik.shape[0], max_iter + 1), np.nan)
+    ll[:, :f.loglik.shape[1]] = f.loglik
+    return (f.F, f.Q, f.H, f.R, f.x0, f.P0, np.asarray(f.q, dtype=np.float64),
+            np.asarray(f.r, dtype=np.float64), ll, np.asarray(f.iterations, dtype=np.int64),
+            np.asarray(f.converged, dtype=bool))
+
+
+def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tuple[str, ...],
+       Q_form: str, R_form: str, pooled: bool, tol: float, max_iter: int,
+       progress: Any) -> FitResult:
+    """:func:`vistrack.filters.em` on a Dask array ``(B, T, m)`` chunked along the batch
+    axis (``learn``, the forms, ``tol`` and ``max_iter`` already checked).
+
+    Pooled, each iteration runs the E-step on every chunk where the chunk is (one
+    ``dask.compute``; two when ``H`` and ``R`` are both learned) and adds the chunks' sums:
+    only the sums, a few ``(T, n, n)`` arrays a chunk, travel, and the parameters returned
+    are numpy arrays. The measurements are read (or generated) again at each iteration:
+    ``ys.persist()`` first where the cluster can hold them. The sums are added in another
+    order than in memory, so the fit equals the in-memory one to rounding, not to the bit.
+
+    With ``pooled=False`` the result is lazy: a :class:`FitResult` of Dask arrays with a
+    batch axis, each chunk's series fitted one by one where the chunk is, exactly as in
+    memory (``loglik`` padded with NaN to ``max_iter + 1`` iterations).
+
+    Raises
+    ------
+    ValueError
+        As :func:`vistrack.filters.em`, and pooled, if a prior learned is given per series
+        (learn it shared, or per series with ``pooled=False``); with ``pooled=False`` and a
+        ``progress`` stream (each chunk is fitted where it is computed).
+    """
+    import dask
+
+    from .._validate import check_linear_gaussian
+    from .learn import _check_em, _check_steps, _fit
+
+    ys, spans = _batch_blocks(ys)
+    B, T, m = ys.shape
+    if T == 0:
+        raise ValueError(f"ys must have at least one step; got shape {ys.shape}")
+    _check_steps(T, learn)
+    n = np.shape(F)[-1] if np.ndim(F) >= 2 else 0
+    check_linear_gaussian(F, Q, H, R, n, m, T)
+    x0, P0 = (x0 if _is_dask(x0) else np.asarray(x0, dtype=np.float64),
+              P0 if _is_dask(P0) else np.asarray(P0, dtype=np.float64))
+    if np.ndim(x0) == 2 and np.shape(x0)[0] == 1:
+        x0 = x0[0]
+    if np.ndim(P0) == 3 and np.shape(P0)[0] == 1:
+        P0 = P0[0]
+    x0s, P0s = _per_series(x0, B, 1, "x0"), _per_series(P0, B, 2, "P0")
+    if np.shape(x0)[-1] != n or np.shape(P0)[-2:] != (n, n):
+        raise ValueError(f"x0 must have shape ({n},) or (B, {n}) and P0 ({n}, {n}) or "
+                         f"(B, {n}, {n}); got {np.shape(x0)} and {np.shape(P0)}")
+    p = {k: np.asarray(v, dtype=np.float64) for k, v in (("F", F), ("Q", Q), ("H", H),
+                                                           ("R", R))}
+    blocks = ys.to_delayed().ravel()
+    chunks = [(y, x0 if x0s is None else x0s[a:b], P0 if P0s is None else P0s[a:b])
+              for y, (a, b) in zip(blocks, spans)]
+    if not pooled:
+        if progress is not None:
+            raise ValueError("progress is not available with pooled=False on a Dask array: "
+                             "each chunk is fitted where it is computed")
+        return _lazy_fits(chunks, spans, p, learn, Q_form, R_form, tol, max_iter, n, m, T)
+    for name, prior in (("x0", x0s), ("P0", P0s)):
+        if name in learn and prior is not None:
+            raise ValueError(f"learning {name} pooled on a Dask array needs one {name} for all "
+                             f"series; got one per series (learn it per series with "
+                             f"pooled=False)")
+    summary = dask.compute(*[dask.delayed(_chunk_summary)(y, a)
+                             for y, (a, _) in zip(blocks, spans)])
+    for s in summary:
+        if s["inf"] is not None:
+            idx, value = s["inf"]
+            raise ValueError(f"ys must be finite or NaN (missing); ys{list(idx)} = {value}")
+    measured = np.any([s["measured"] for s in summary], axis=0)
+    if not measured.any():
+        raise ValueError("ys has no measurement: every value is NaN")
+    partial = any(s["partial"] for s in summary)
+    count = _add([s["count"] for s in summary])
+    _check_em(measured, partial, dict(p, x0=x0, P0=P0), learn, Q_form, R_form)
+    # a prior given per series stays with the chunks (None here: see _Summed._priors)
+    p0: dict[str, Any] = dict(p, x0=x0 if x0s is None else None, P0=P0 if P0s is None else None)
+
+    def estep(params: dict, now: tuple[str, ...]) -> _Summed:
+        return _Summed(chunks, params, now, B, count)
+
+    fit = _fit(estep, B, T, p0, learn, Q_form, R_form, tol, max_iter, progress)
+    # a prior given per series and not learned is returned as given
+    return replace(fit, x0=fit.x0 if x0s is None else x0s, P0=fit.P0 if P0s is None else P0s)
+
+
+def _lazy_fits(chunks: list, spans: list, p: dict, learn: tuple[str, ...], Q_form: str,
+               R_form: str, tol: float, max_iter: int, n: int, m: int, T: int) -> FitResult:
+    """``em(..., pooled=False)`` on the chunks, lazily: a :class:`FitResult` of Dask arrays."""
+    import dask
+    import dask.array as da
+
+    from .learn import FitResult
+
+    def shape(name: str, form: str = "full") -> tuple[int, ...]:
+        given = p[name].shape
+        return given[-2:] if name in learn and form != "scaled" else given
+
+    per_fit = [shape("F"), shape("Q", Q_form), shape("H"), shape("R", R_form), (n,), (n, n),
+               (), (), (max_iter + 1,), (), ()]
+    dtypes = [np.float64] * 9 + [np.int64, bool]
+    fields: list[list[Any]] = [[] for _ in per_fit]
+    for (y, x0, P0), (a, b) in zip(chunks, spans):
+        out = dask.delayed(_chunk_em, nout=len(per_fit))(y, x0, P0, p, learn, Q_form, R_form,
+                                                         tol, max_iter)
+        for i, (s, dt) in enumerate(zip(per_fit, dtypes)):
+            fields[i].append(da.from_delayed(out[i], (b - a,) + s, dtype=dt))
+    F, Q, H, R, x0, P0, q, r, ll, its, conv = (da.concatenate(f) for f in fields)
+    return FitResult(F=F, Q=Q, H=H, R=R, x0=x0, P0=P0, q=q, r=r, loglik=ll, iterations=its,
+                     converged=conv)

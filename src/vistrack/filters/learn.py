@@ -58,7 +58,7 @@ from typing import TYPE_CHECKING, Any, TextIO
 import numpy as np
 
 from .._validate import as_measurement_series, check_has_steps, check_prior
-from .kalman import FilterResult, kalman_filter
+from .kalman import FilterResult, _is_dask, kalman_filter
 from .smoothers import rts_smooth
 
 if TYPE_CHECKING:
@@ -144,9 +144,13 @@ def em(
 
     Parameters
     ----------
-    ys : (T, m) or (B, T, m) array_like
+    ys : (T, m) or (B, T, m) array_like, or (B, T, m) Dask array
         Measurements, NaN where missing (a whole step or some components), as for
-        :func:`kalman_filter`.
+        :func:`kalman_filter`. A Dask array chunked along the batch axis is fitted chunk by
+        chunk where its chunks are (:func:`vistrack.filters.chunked.em`): pooled, the chunks'
+        sums added at each iteration (numpy parameters returned, equal to the in-memory fit
+        to rounding); with ``pooled=False``, lazily (a result of Dask arrays, equal to the
+        in-memory fits).
     F, Q, H, R, x0, P0 : array_like
         The model to start from, as for :func:`kalman_filter` (constant or per-step matrices;
         a prior for all series or one per series). A learned ``F``, ``H``, or ``Q`` / ``R`` of
@@ -202,11 +206,38 @@ def em(
             raise ValueError(f"{name} must be one of {list(NOISE_FORMS)}; got {form!r}")
     if isinstance(tol, bool) or not isinstance(tol, numbers.Real) or np.isnan(tol):
         raise ValueError(f"tol must be a number (-inf: never stop before max_iter); got {tol!r}")
+    if _is_dask(ys):  # a batch larger than memory: the E-step's sums added chunk to chunk
+        from . import chunked
+
+        _check_max_iter(max_iter)
+        return chunked.em(ys, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0, learn=learned, Q_form=Q_form,
+                          R_form=R_form, pooled=pooled, tol=float(tol),
+                          max_iter=int(max_iter), progress=progress)
     y, params = _problem(ys, F, Q, H, R, x0, P0, learned, max_iter)
-    _check_em(y, params, learned, Q_form, R_form)
+    obs = ~np.isnan(y)
+    _check_em(obs.any(axis=(0, 1)), bool((obs.any(axis=-1) & ~obs.all(axis=-1)).any()),
+              params, learned, Q_form, R_form)
+    if pooled or y.shape[0] == 1:
+        return _fit_in_memory(y, params, learned, Q_form, R_form, float(tol), int(max_iter),
+                              progress)
+    return _fit_each(y, params, learned, Q_form, R_form, float(tol), int(max_iter), progress)
+
+
+def _fit_in_memory(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...],
+                   Q_form: str, R_form: str, tol: float, max_iter: int,
+                   progress: TextIO | None, label: str = "") -> FitResult:
+    """:func:`_fit` on the series ``y (B, T, m)`` in memory, pooled."""
+    obs = ~np.isnan(y)
+    return _fit(lambda params, _: _EStep(y, obs, params), y.shape[0], y.shape[1], p, learn,
+                Q_form, R_form, tol, max_iter, progress, label)
+
+
+def _fit_each(y: np.ndarray, params: dict[str, np.ndarray], learn: tuple[str, ...],
+              Q_form: str, R_form: str, tol: float, max_iter: int,
+              progress: TextIO | None) -> FitResult:
+    """One fit per series of ``y (B, T, m)``, stacked along a batch axis (``loglik`` padded
+    with NaN after each series' last iteration)."""
     B = y.shape[0]
-    if pooled or B == 1:
-        return _fit(y, params, learned, Q_form, R_form, float(tol), int(max_iter), progress)
     fits = []
     for b in range(B):
         p = dict(params)
@@ -214,8 +245,8 @@ def em(
             p["x0"] = p["x0"][b]
         if p["P0"].ndim == 3:
             p["P0"] = p["P0"][b]
-        fits.append(_fit(y[b:b + 1], p, learned, Q_form, R_form, float(tol), int(max_iter),
-                         progress, f"series {b}: "))
+        fits.append(_fit_in_memory(y[b:b + 1], p, learn, Q_form, R_form, tol, max_iter,
+                                   progress, f"series {b}: "))
     K = max(len(f.loglik) for f in fits)
     ll = np.full((B, K), np.nan)
     for b, f in enumerate(fits):
@@ -233,13 +264,10 @@ def _problem(ys: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLi
              max_iter: Any) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """The measurements as ``(B, T, m)`` and the model as float arrays, checked as far as
     the filter's first run does not check them."""
-    if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
-        raise ValueError(f"max_iter must be an integer >= 1; got {max_iter!r}")
+    _check_max_iter(max_iter)
     y, _ = as_measurement_series(ys)
     check_has_steps(y)
-    T = y.shape[1]
-    if T < 2 and ({"F", "Q"} & set(learn)):
-        raise ValueError(f"learning F or Q needs series of at least 2 steps; got T={T}")
+    _check_steps(y.shape[1], learn)
     n = np.shape(F)[-1] if np.ndim(F) >= 2 else 0
     x0_, P0_ = check_prior(x0, P0, n)
     B = y.shape[0]
@@ -255,6 +283,16 @@ def _problem(ys: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLi
                for k, v in (("F", F), ("Q", Q), ("H", H), ("R", R), ("x0", x0_), ("P0", P0_))}
 
 
+def _check_max_iter(max_iter: Any) -> None:
+    if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
+        raise ValueError(f"max_iter must be an integer >= 1; got {max_iter!r}")
+
+
+def _check_steps(T: int, learn: tuple[str, ...]) -> None:
+    if T < 2 and ({"F", "Q"} & set(learn)):
+        raise ValueError(f"learning F or Q needs series of at least 2 steps; got T={T}")
+
+
 def _names(learn: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
     """``learn`` as a tuple of names, each one of ``allowed``."""
     if isinstance(learn, str):
@@ -266,19 +304,20 @@ def _names(learn: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
     return names
 
 
-def _check_measured(obs: np.ndarray, what: str) -> None:
-    """Raise ValueError naming the first component of ``obs (B, T, m)`` never measured: of
-    ``what`` nothing can be learned."""
-    never = np.flatnonzero(~obs.any(axis=(0, 1)))
+def _check_measured(measured: np.ndarray, what: str) -> None:
+    """Raise ValueError naming the first component never measured (``measured (m,)``, of the
+    whole batch): of ``what`` nothing can be learned."""
+    never = np.flatnonzero(~measured)
     if len(never):
         raise ValueError(f"component {int(never[0])} of ys is never measured: {what} cannot "
                          "be learned")
 
 
-def _check_em(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form: str,
-              R_form: str) -> None:
-    """Refuse what :func:`em`'s M-steps do not cover, naming why."""
-    obs = ~np.isnan(y)
+def _check_em(measured: np.ndarray, partial: bool, p: dict[str, np.ndarray],
+              learn: tuple[str, ...], Q_form: str, R_form: str) -> None:
+    """Refuse what :func:`em`'s M-steps do not cover, naming why; ``measured (m,)``: which
+    components of the measurements are measured at some step of some series, ``partial``:
+    whether some step measures some of its components but not all."""
     for name, form, M in (("Q", Q_form, p["Q"]), ("R", R_form, p["R"])):
         if name in learn and form == "scaled" and not np.any(M):
             raise ValueError(f"{name} must not be zero to learn its factor ({name}_form="
@@ -292,13 +331,12 @@ def _check_em(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q
                              f"learned as 'full' or 'diag' (its M-step would otherwise weigh "
                              f"each step by its {noise}); got a {noise} per step")
     if "H" in learn:
-        _check_measured(obs, "H's row for it")
-        partial = obs.any(axis=-1) & ~obs.all(axis=-1)
+        _check_measured(measured, "H's row for it")
         R_diagonal = ("R" in learn and R_form == "diag") or (
             not ("R" in learn and R_form == "full")
             and not np.any(p["R"] - np.eye(p["R"].shape[-1]) * np.diagonal(
                 p["R"], axis1=-2, axis2=-1)[..., None, :]))
-        if partial.any() and y.shape[-1] > 1 and not R_diagonal:
+        if partial and len(measured) > 1 and not R_diagonal:
             raise ValueError("learning H where some steps miss some of their components needs "
                              "a diagonal R (R_form='diag', or a diagonal R not learned as "
                              "'full'): with a correlated R the rows of H are coupled")
@@ -501,7 +539,7 @@ class _Structured:
         if diag:
             if not np.all(np.diag(p["R"]) > 0):
                 raise ValueError(f"R's diagonal must be > 0 to learn it; got {np.diag(p['R'])}")
-            _check_measured(self.obs, "its variance in R")
+            _check_measured(self.obs.any(axis=(0, 1)), "its variance in R")
         self.nq = 1 if "Q" in learn else 0
         self.nr = (m if R_form == "diag" else 1) if "R" in learn else 0
         n_meas = self.obs.any(axis=-1).sum(axis=0)  # series that measured something, per step
@@ -585,12 +623,13 @@ class _Scaled:
         return int(np.sum(count * self.rank))
 
 
-def _fit(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form: str,
-         R_form: str, tol: float, max_iter: int, progress: TextIO | None,
+def _fit(estep: Any, B: int, T: int, p: dict[str, np.ndarray], learn: tuple[str, ...],
+         Q_form: str, R_form: str, tol: float, max_iter: int, progress: TextIO | None,
          label: str = "") -> FitResult:
-    """EM over the batch ``y (B, T, m)``, pooled."""
-    B, T, m = y.shape
-    obs = ~np.isnan(y)
+    """EM pooled over a batch of ``B`` series of ``T`` steps; ``estep(p, learn)`` runs the
+    E-step under the model ``p`` and returns an object with the log-likelihood ``ll`` and the
+    M-step's sums (:class:`_EStep` for a batch in memory, one whose sums are added chunk to
+    chunk for a Dask array)."""
     Q0, R0 = p["Q"], p["R"]  # the shapes of "scaled" noise
     Q_scaled = _Scaled(Q0, T - 1) if "Q" in learn and Q_form == "scaled" else None
     R_scaled = _Scaled(R0, T) if "R" in learn and R_form == "scaled" else None
@@ -598,8 +637,8 @@ def _fit(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form
     lls: list[float] = []
     converged = False
     for k in range(max_iter + 1):
-        res = kalman_filter(y, F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"], P0=p["P0"])
-        ll = float(np.sum(res.loglik))
+        e = estep(p, learn if k < max_iter else ())
+        ll = e.ll
         lls.append(ll)
         if progress is not None:
             progress.write(f"{label}EM iteration {k}: log-likelihood {ll:.6f}\n")
@@ -610,10 +649,9 @@ def _fit(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form
             break
         if k == max_iter:
             break
-        ms, Ps, X, mult = _smoothed(res, p["F"], p["Q"])
         new = dict(p)
         if {"F", "Q"} & set(learn):
-            S11, S10, S00 = _transition_sums(ms, Ps, X, mult)
+            S11, S10, S00 = e.transition_sums()
             Fn = _transitions(p["F"], T)
             if "F" in learn:
                 new["F"] = np.linalg.solve(S00.sum(axis=0).T, S10.sum(axis=0).T).T
@@ -623,29 +661,71 @@ def _fit(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...], Q_form
                 new["Q"], q_new = _noise(A, np.full(T - 1, B), Q0, Q_form, Q_scaled)
                 q = q_new if Q_form == "scaled" else 1.0
         if "H" in learn:
-            new["H"] = _learn_H(y, obs, ms, Ps, mult)
+            new["H"] = _H_rows(*e.H_sums())
         if "R" in learn:
-            V = _expected_vv(y, obs, ms, Ps, mult, new["H"], p["R"], T)
-            new["R"], r_new = _noise(V, obs.any(axis=-1).sum(axis=0), R0, R_form, R_scaled)
+            new["R"], r_new = _noise(e.vv(new["H"]), e.R_count(), R0, R_form, R_scaled)
             r = r_new if R_form == "scaled" else 1.0
-        if "x0" in learn:
-            if p["x0"].ndim == 2:
-                new["x0"] = ms[:, 0]
-            elif p["P0"].ndim == 3:  # one x0 for priors of different covariances: weighted
-                W = np.linalg.inv(p["P0"])
-                new["x0"] = np.linalg.solve(W.sum(axis=0), np.einsum("bij,bj->i", W, ms[:, 0]))
-            else:
-                new["x0"] = ms[:, 0].mean(axis=0)
-        if "P0" in learn:
-            d = ms[:, 0] - (new["x0"] if new["x0"].ndim == 2 else new["x0"][None])
-            D = Ps[:, 0] + d[:, :, None] * d[:, None, :]  # Ps broadcast when shared
-            new["P0"] = D if p["P0"].ndim == 3 else D.mean(axis=0)
+        if {"x0", "P0"} & set(learn):
+            new["x0"], new["P0"] = e.prior(learn)
         for name in ("Q", "R", "P0"):  # symmetric to the last bit, and not below zero
             if name in learn:
                 new[name] = _psd((new[name] + np.swapaxes(new[name], -1, -2)) / 2)
         p = new
     return FitResult(F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"], P0=p["P0"], q=q, r=r,
                     loglik=np.array(lls), iterations=len(lls) - 1, converged=converged)
+
+
+class _EStep:
+    """The E-step over measurements ``y (B, T, m)`` in memory under the model ``p``: the
+    filter's log-likelihood at once, the smoother and each of the M-step's sums when first
+    asked for."""
+
+    def __init__(self, y: np.ndarray, obs: np.ndarray, p: dict[str, np.ndarray]) -> None:
+        self.y, self.obs, self.p = y, obs, p
+        self.res = kalman_filter(y, F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"],
+                                 P0=p["P0"])
+        self.ll = float(np.sum(self.res.loglik))
+        self._smoothed: tuple[np.ndarray, np.ndarray, np.ndarray, int] | None = None
+
+    @property
+    def smoothed(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """:func:`_smoothed` of this E-step's filter run."""
+        if self._smoothed is None:
+            self._smoothed = _smoothed(self.res, self.p["F"], self.p["Q"])
+        return self._smoothed
+
+    def transition_sums(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return _transition_sums(*self.smoothed)
+
+    def H_sums(self) -> tuple[np.ndarray, np.ndarray]:
+        ms, Ps, _, mult = self.smoothed
+        return _H_sums(self.y, self.obs, ms, Ps, mult)
+
+    def vv(self, H: np.ndarray) -> np.ndarray:
+        ms, Ps, _, mult = self.smoothed
+        return _expected_vv(self.y, self.obs, ms, Ps, mult, H, self.p["R"], self.y.shape[1])
+
+    def R_count(self) -> np.ndarray:
+        """How many series measured something at each step ``(T,)``."""
+        return self.obs.any(axis=-1).sum(axis=0)
+
+    def prior(self, learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+        """The prior ``x0``, ``P0`` after the M-step (those not in ``learn`` as they were)."""
+        ms, Ps, _, _ = self.smoothed
+        x0, P0 = self.p["x0"], self.p["P0"]
+        if "x0" in learn:
+            if x0.ndim == 2:
+                x0 = ms[:, 0]
+            elif P0.ndim == 3:  # one x0 for priors of different covariances: weighted
+                W = np.linalg.inv(P0)
+                x0 = np.linalg.solve(W.sum(axis=0), np.einsum("bij,bj->i", W, ms[:, 0]))
+            else:
+                x0 = ms[:, 0].mean(axis=0)
+        if "P0" in learn:
+            d = ms[:, 0] - (x0 if x0.ndim == 2 else x0[None])
+            D = Ps[:, 0] + d[:, :, None] * d[:, None, :]  # Ps broadcast when shared
+            P0 = D if P0.ndim == 3 else D.mean(axis=0)
+        return x0, P0
 
 
 def _psd(M: np.ndarray) -> np.ndarray:
@@ -746,22 +826,28 @@ def _noise(E: np.ndarray, count: np.ndarray, shape: np.ndarray, form: str,
     return mean, 1.0
 
 
-def _learn_H(y: np.ndarray, obs: np.ndarray, ms: np.ndarray, Ps: np.ndarray,
-             mult: int) -> np.ndarray:
-    """``H`` row by row from the steps that measured its component (see :func:`_check_em`
-    for when that is the M-step)."""
-    rows = []
+def _H_sums(y: np.ndarray, obs: np.ndarray, ms: np.ndarray, Ps: np.ndarray,
+            mult: int) -> tuple[np.ndarray, np.ndarray]:
+    """The sums that give ``H`` row by row (:func:`_H_rows`), over the steps that measured its
+    component: ``sum y_ti m_t'`` ``(m, n)`` and ``sum P_t + m_t m_t'`` ``(m, n, n)`` (see
+    :func:`_check_em` for when that is the M-step)."""
+    nums, dens = [], []
     for i in range(y.shape[-1]):
         o = obs[..., i].astype(np.float64)
         yi = np.where(obs[..., i], y[..., i], 0.0)
-        num = np.einsum("bt,bti->i", yi, ms)
+        nums.append(np.einsum("bt,bti->i", yi, ms))
         den = np.einsum("bt,bti,btj->ij", o, ms, ms)
         if mult > 1:  # one covariance sequence for every series
             den += np.einsum("t,tij->ij", o.sum(axis=0), Ps[0])
         else:
             den += np.einsum("bt,btij->ij", o, Ps)
-        rows.append(np.linalg.solve(den.T, num))
-    return np.array(rows)
+        dens.append(den)
+    return np.array(nums), np.array(dens)
+
+
+def _H_rows(num: np.ndarray, den: np.ndarray) -> np.ndarray:
+    """``H``, each row ``i`` solving ``den_i h = num_i`` (:func:`_H_sums`)."""
+    return np.array([np.linalg.solve(d.T, v) for v, d in zip(num, den)])
 
 
 def _expected_vv(y: np.ndarray, obs: np.ndarray, ms: np.ndarray, Ps: np.ndarray, mult: int,
