@@ -203,3 +203,36 @@ def test_a_job_that_cannot_be_sent_to_a_worker_is_reported(bench, tmp_path):
     outcomes = run_jobs(jobs, workers=2)
     assert outcomes[0].ok and not outcomes[1].ok
     assert "pickle" in outcomes[1].error.lower()
+
+
+def test_the_progress_bar_on_a_terminal_and_lines_elsewhere(tmp_path):
+    import io
+
+    from vistrack.batch import Outcome, progress_lines
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    done = [Outcome(Path("A"), tmp_path / "A.txt", True, 10, 30, 3, 0.2),
+            Outcome(Path("B"), tmp_path / "B.txt", False, error="ValueError: bad"),
+            Outcome(Path("C"), tmp_path / "C.txt", True, 5, 9, 2, 0.1)]
+    term = Terminal()
+    report = progress_lines(term, 3)
+    assert term.getvalue() == "[------------------------] 0/3 inputs, 0 s"
+    for k, o in enumerate(done, 1):
+        report(o, k, 3)
+    shown = term.getvalue().split("\r\x1b[K")  # each line clears the bar's line first
+    assert shown[1] == ("[1/3] A: 10 frames, 3 tracks, 0.2 s\n"
+                        "[########----------------] 1/3 inputs, 0 s, about 0 s left")
+    assert shown[2].startswith("[2/3] B: failed: ValueError: bad\n"
+                               "[################--------] 2/3 inputs, 1 failed, ")
+    assert shown[3] == "[3/3] C: 5 frames, 2 tracks, 0.1 s\n"  # the bar gone at the end
+    plain = io.StringIO()  # a log file: the lines only
+    report = progress_lines(plain, 3)
+    for k, o in enumerate(done, 1):
+        report(o, k, 3)
+    assert plain.getvalue().splitlines() == [
+        "[1/3] A: 10 frames, 3 tracks, 0.2 s", "[2/3] B: failed: ValueError: bad",
+        "[3/3] C: 5 frames, 2 tracks, 0.1 s"]
+    assert progress_lines(None, 3) is None

@@ -375,19 +375,48 @@ def track_many(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "de
     ...                                                    jobs=1)]
     [('A', True, 3), ('B', True, 3)]
     """
-    return run_jobs(plan(inputs, out, kind=kind, **options), workers=jobs, executor=executor,
-                    keep_going=keep_going, retries=retries, on_done=progress_lines(progress))
+    planned = plan(inputs, out, kind=kind, **options)
+    return run_jobs(planned, workers=jobs, executor=executor, keep_going=keep_going,
+                    retries=retries, on_done=progress_lines(progress, len(planned)))
 
 
-def progress_lines(stream: TextIO | None) -> Callable[[Outcome, int, int], None] | None:
+def progress_lines(stream: TextIO | None,
+                   total: int | None = None) -> Callable[[Outcome, int, int], None] | None:
     """An ``on_done`` for :func:`run_jobs` writing ``[k/n] NAME: ...`` to ``stream`` as each
-    job is done (None: nothing)."""
+    job is done (None: nothing). On a terminal, a bar under those lines shows how many inputs
+    are done, how many failed, the time so far and an estimate of the time left; it is drawn
+    at once, for ``total`` inputs, if given, and cleared when the last input is done."""
     if stream is None:
         return None
+    bar = bool(getattr(stream, "isatty", lambda: False)())
+    t0 = time.monotonic()
+    failed = 0
+
+    def draw(k: int, n: int) -> None:
+        width = 24
+        full = width * k // n if n else width
+        elapsed = time.monotonic() - t0
+        left = f", about {elapsed / k * (n - k):.0f} s left" if 0 < k < n else ""
+        bad = f", {failed} failed" if failed else ""
+        stream.write(f"[{'#' * full}{'-' * (width - full)}] {k}/{n} inputs{bad}, "
+                     f"{elapsed:.0f} s{left}")
+        stream.flush()
 
     def report(o: Outcome, k: int, n: int) -> None:
+        nonlocal failed
+        failed += not o.ok
         what = (f"{o.frames} frames, {o.tracks} tracks, {o.seconds:.1f} s" if o.ok else
                 f"failed: {o.error}")
-        print(f"[{k}/{n}] {o.input.name}: {what}", file=stream, flush=True)
+        line = f"[{k}/{n}] {o.input.name}: {what}"
+        if not bar:
+            print(line, file=stream, flush=True)
+            return
+        stream.write(f"\r\x1b[K{line}\n")  # the bar's line cleared, the line, the bar again
+        if k < n:
+            draw(k, n)
+        else:
+            stream.flush()
 
+    if bar and total:
+        draw(0, total)
     return report

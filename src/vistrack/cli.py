@@ -306,12 +306,15 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
 def _track_many(args: argparse.Namespace) -> int:
     """``vistrack track`` on several inputs (vistrack.batch): in parallel, a line as each is
     done, a table at the end; exit status 1 if any failed."""
-    from .batch import plan, progress_lines, run_jobs
+    from .batch import Outcome, plan, progress_lines, run_jobs
     from .io.atomic import check_output
     from .tracking.box import TRACKERS as BOX_PRESETS
 
     def fail(text: str) -> int:
         return _fail("track", text)
+
+    def progress(n: int) -> Callable[[Outcome, int, int], None] | None:
+        return progress_lines(None if args.quiet else sys.stderr, n)
 
     if (args.out is None) == (args.out_dir is None):
         return fail("give --out RESULTS/ (each sequence's detections, NAME.txt each) or "
@@ -347,8 +350,6 @@ def _track_many(args: argparse.Namespace) -> int:
     if kind == "detections":
         for job in jobs:  # before anything runs: a job that cannot write fails now
             check_output(job.out, force=args.force, name="--out")
-    report = progress_lines(None if args.quiet else sys.stderr)
-
     if args.scheduler is not None:
         if args.jobs is not None:
             return fail("--jobs goes with the local pool; the cluster has its own workers")
@@ -358,10 +359,10 @@ def _track_many(args: argparse.Namespace) -> int:
             return fail("--scheduler needs Dask's distributed (pip install 'vistrack[dask]')")
         with Client(args.scheduler, set_as_default=False) as client:
             outcomes = run_jobs(jobs, executor=client.get_executor(),
-                                keep_going=args.keep_going, on_done=report)
+                                keep_going=args.keep_going, on_done=progress(len(jobs)))
     else:
         outcomes = run_jobs(jobs, workers=args.jobs, keep_going=args.keep_going,
-                            on_done=report)
+                            on_done=progress(len(jobs)))
     width = max(len(o.input.name) for o in outcomes)
     print(f"{'input':{width}s}  status  frames  tracks  seconds  output")
     for o in outcomes:
