@@ -28,8 +28,7 @@ kernels: $(STAMP)
 	-$(PY) -m vistrack._prebuilt_build build --inplace --if-stale --numba-cache build/numba-cache
 
 run: kernels
-	$(VENV)/bin/vistrack track data/pets09-s2l1/pets09-s2l1.mp4 --gt data/pets09-s2l1/gt.txt \
-		--out-dir out/pets09-s2l1 --force
+	$(VENV)/bin/vistrack demo track --out out --force
 	$(VENV)/bin/vistrack demo kalman --out out/
 
 # the whole suite, slow-marked checks included, on every core (pytest-xdist)

@@ -28,7 +28,7 @@ from pathlib import Path
 import cv2
 
 ROOT = Path(__file__).resolve().parents[1]
-CLIP = ROOT / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
+CLIP = ROOT / "src" / "vistrack" / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _markdown import replace_section  # noqa: E402
 

@@ -26,8 +26,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "data"
-CLIP = ROOT / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
-GT = ROOT / "data" / "pets09-s2l1" / "gt.txt"
+CLIP = ROOT / "src" / "vistrack" / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
+GT = ROOT / "src" / "vistrack" / "data" / "pets09-s2l1" / "gt.txt"
 SEQ = SHARED / "mot17" / "MOT17-04-FRCNN"
 OTB = SHARED / "otb-crossing" / "Crossing"
 

@@ -15,6 +15,7 @@ import pytest
 from tests.test_fit import _sequence
 from vistrack.batch import expand_inputs, plan, run_jobs, track_many
 from vistrack.cli import main
+from vistrack.data import demo_clip
 from vistrack.pipeline import track_sequence
 
 
@@ -177,7 +178,7 @@ def test_several_videos_from_pixels(tmp_path, capsys):
 
     from vistrack.pipeline import track_video
 
-    clip = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
+    clip = demo_clip().video
     a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
     shutil.copy(clip, a)
     shutil.copy(clip, b)

@@ -16,8 +16,8 @@ import pytest
 from vistrack.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-VIDEO = ROOT / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
-GT = ROOT / "data" / "pets09-s2l1" / "gt.txt"
+VIDEO = ROOT / "src" / "vistrack" / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
+GT = ROOT / "src" / "vistrack" / "data" / "pets09-s2l1" / "gt.txt"
 ENV = {**os.environ, "PYTHONPATH": f"{ROOT / 'src'}"}
 
 

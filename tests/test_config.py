@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from vistrack.config import ConfigError, OfflineConfig, TrackConfig, config_toml, read_config
+from vistrack.data import demo_clip
 from vistrack.io import write_mot
 from vistrack.models import BoxMotion
 from vistrack.pipeline import resolve_config, track_sequence
@@ -214,9 +215,8 @@ def test_the_command_lines_defaults_are_the_configurations():
 def test_video_mode_options_keep_the_front_ends_defaults(tmp_path):
     """From pixels, an option goes over the background front-end's defaults (a still camera);
     a configuration file is used as it is, and reads back to the same tracks."""
-    from pathlib import Path
 
-    clip = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
+    clip = demo_clip().video
     r = cli(clip, "--out-dir", tmp_path / "a", "--stop", "15", "--high", "0.5", "--quiet",
             "--print-config")
     assert r.returncode == 0, r.stderr

@@ -175,7 +175,7 @@ def test_pets09_clip_terms_of_the_observation_model():
 
     from vistrack.io import VideoReader, read_mot
 
-    demo = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1"
+    demo = Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
     gt = read_mot(demo / "gt.txt")
     gt = gt[gt.frames <= 200]
     hog = HOGConfidence()

@@ -415,7 +415,7 @@ def test_track_video_writes_tracks_video_plot_and_scores(tmp_path):
     from vistrack.io import read_mot
     from vistrack.pipeline import track_video
 
-    demo = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1"
+    demo = Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
     run = track_video(demo / "pets09-s2l1.mp4", tmp_path / "out", gt=demo / "gt.txt", stop=60)
     assert run.frames == 60 and run.tracks > 3
     t = read_mot(run.files["tracks"])
@@ -439,7 +439,7 @@ def test_cli_tracks_a_video(tmp_path):
     import sys
     from pathlib import Path
 
-    demo = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1"
+    demo = Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
     cmd = [sys.executable, "-m", "vistrack.cli", "track", str(demo / "pets09-s2l1.mp4"), "--gt",
            str(demo / "gt.txt"), "--stop", "30", "--out-dir", str(tmp_path)]
     r = subprocess.run(cmd, capture_output=True, text=True)
@@ -463,7 +463,7 @@ def test_hog_finds_the_people_of_pets09():
     from vistrack.frontends.detectors import HOGDetector, nms
     from vistrack.io import read_mot
 
-    demo = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1"
+    demo = Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
     gt = read_mot(demo / "gt.txt")
     hog = HOGDetector()
     on, found, dets, people = 0, 0, 0, 0
@@ -490,7 +490,7 @@ def test_track_video_from_a_detections_file(tmp_path):
     from vistrack.pipeline import track_sequence, track_video
 
     seq = need(SHARED / "data" / "mot15" / "PETS09-S2L1")
-    demo = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1"
+    demo = Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
     run = track_video(demo / "pets09-s2l1.mp4", tmp_path / "v", stop=200, annotate=False,
                       frontend=f"detections:{seq / 'det' / 'det.txt'}")
     # the sequence folder's run, cut to the clip's 200 frames
@@ -520,7 +520,7 @@ def test_track_video_with_a_detector_of_ones_own(tmp_path):
             x = 100 + 3 * self.calls
             return Detections.from_xywh([[x, 200, 30, 80]], [0.95])
 
-    demo = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1"
+    demo = Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
     det = Fixed()
     run = track_video(demo / "pets09-s2l1.mp4", tmp_path, frontend=det, stop=10, annotate=False)
     t = read_mot(run.files["tracks"])
@@ -556,7 +556,7 @@ def test_hog_front_end_tracks_people(tmp_path):
 
     from vistrack.pipeline import track_video
 
-    demo = Path(__file__).resolve().parents[1] / "data" / "pets09-s2l1"
+    demo = Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
     run = track_video(demo / "pets09-s2l1.mp4", tmp_path, frontend="hog", gt=demo / "gt.txt",
                       stop=30, annotate=False)
     assert run.scores.MOTA > 0.5 and run.scores.HOTA > 0.45

@@ -258,7 +258,7 @@ def test_a_command_served_by_the_build_does_not_import_numba(tmp_path):
             assert main(argv.split("|")) == 0, argv
         print("numba imported:", "numba" in sys.modules)
     """)
-    clip = ROOT / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
+    clip = ROOT / "src" / "vistrack" / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
     commands = [f"track|{seq}|--out|{tmp_path / 'a.txt'}",
                 f"track|{seq}|--offline|--out|{tmp_path / 'b.txt'}",
                 f"eval|--gt|{tmp_path / 'a.txt'}|--pred|{tmp_path / 'b.txt'}",

@@ -73,10 +73,10 @@ def _workloads(root: Path) -> None:
 
     import vistrack as vt
     from vistrack.cli import main as cli
+    from vistrack.data import demo_clip
     from vistrack.io.motchallenge import read_mot
 
-    clip = root / "data" / "pets09-s2l1" / "pets09-s2l1.mp4"
-    gt = root / "data" / "pets09-s2l1" / "gt.txt"
+    clip, gt, _ = demo_clip()
     sink = io.StringIO()
     with _quiet_cwd() as d, contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
         cli(["track", str(clip), "--out-dir", str(d / "a"), "--force"])
@@ -351,7 +351,7 @@ def main(argv: list[str] | None = None) -> int:
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("record", help="run the workloads, write _prebuilt.json")
     r.add_argument("--root", type=Path, default=PACKAGE.parent.parent,
-                   help="the source tree with data/ (default: this package's)")
+                   help="the source tree with examples/ (default: this package's)")
     b = sub.add_parser("build", help="compile the extension")
     where = b.add_mutually_exclusive_group(required=True)
     where.add_argument("--inplace", action="store_true", help="beside this package's sources")

@@ -18,7 +18,7 @@ from . import __version__, _compile
 if TYPE_CHECKING:
     from .config import TrackConfig
 
-DEMOS = ("kalman",)
+DEMOS = ("kalman", "track")
 
 
 class Terminated(BaseException):
@@ -87,6 +87,14 @@ def _command_parser(parser: argparse.ArgumentParser, command: str | None
 
 
 def _demo(args: argparse.Namespace) -> int:
+    if args.name == "track":  # the main job on the clip that ships with vistrack
+        from .data import demo_clip
+
+        clip = demo_clip()
+        argv = ["track", str(clip.video), "--gt", str(clip.gt), "--out-dir",
+                str(Path(args.out) / "pets09-s2l1")] + (["--force"] if args.force else [])
+        track = build_parser().parse_args(argv)
+        return int(track.func(track))
     from .demo import run_kalman_demo
 
     print(run_kalman_demo(args.out, n_seeds=args.seeds))
@@ -529,14 +537,20 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help=debug_help)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     demo = sub.add_parser(
-        "demo", help="remake the lecture figures from real runs",
-        description="Run a demo and write its figures. 'kalman': the 1-D filter, the "
-        "forward-backward smoother and the 2-D constant-velocity example.",
+        "demo", help="track the bundled clip, or remake the lecture figures from real runs",
+        description="Run a demo and write what it makes. 'track': the main job on the clip "
+        "that ships with vistrack (PETS09-S2L1, frames 1-200, with its ground truth): tracks, "
+        "scores, an annotated video and a plot in OUT/pets09-s2l1/, as `vistrack track "
+        "CLIP --gt GT --out-dir OUT/pets09-s2l1` writes them. 'kalman': the 1-D filter, the "
+        "forward-backward smoother and the 2-D constant-velocity example's figures in OUT.",
     )
     demo.add_argument("name", choices=DEMOS, help="which demo")
-    demo.add_argument("--out", default="out", help="folder for the figures (default: out)")
+    demo.add_argument("--out", default="out", metavar="OUT",
+                      help="folder for what the demo writes (default: out)")
+    demo.add_argument("--force", action="store_true",
+                      help="track: replace the results of an earlier run")
     demo.add_argument("--seeds", type=int, default=1000,
-                      help="simulated runs for the error statistics (default: 1000)")
+                      help="kalman: simulated runs for the error statistics (default: 1000)")
     demo.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                       help=debug_help)
     demo.set_defaults(func=_demo)
