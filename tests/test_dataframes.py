@@ -1,5 +1,7 @@
 """Tracks as pandas DataFrames, named as trackpy names particles' columns, and back."""
 
+import sys
+
 import numpy as np
 import pytest
 
@@ -135,3 +137,44 @@ def test_detections_to_and_from_supervision_and_ultralytics():
     d = Detections.from_ultralytics(result)
     assert d.boxes.tolist() == theirs.xyxy.tolist() and d.classes.tolist() == [0, 3]
     np.testing.assert_allclose(d.scores, [0.9, 0.2], rtol=1e-6)
+
+
+def test_tracks_written_as_parquet_are_the_text_files_rows(tmp_path):
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("pyarrow")
+    from tests.test_fit import _sequence
+    from vistrack.cli import main
+    from vistrack.io import MOTTable, read_mot
+    from vistrack.pipeline import track_sequence
+
+    seq = _sequence(tmp_path / "SIM", np.random.default_rng(3), n_objects=6, T=40)
+    for offline in (False, True):
+        txt = track_sequence(seq, tmp_path / f"t{offline}.txt", offline=offline)
+        pq = track_sequence(seq, tmp_path / f"t{offline}.parquet", offline=offline)
+        assert (pq.rows, pq.tracks) == (txt.rows, txt.tracks) and pq.rows > 0
+        df = pd.read_parquet(pq.out)
+        want = read_mot(txt.out)
+        pd.testing.assert_frame_equal(df, want.to_pandas())
+        back = MOTTable.from_pandas(df)
+        assert np.array_equal(back.boxes, want.boxes) and np.array_equal(back.ids, want.ids)
+    # nothing left beside it but the two outputs of each mode and the sequence
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "SIM", "tFalse.parquet", "tFalse.txt", "tTrue.parquet", "tTrue.txt"]
+    assert main(["track", str(seq), "--out", str(tmp_path / "cli.parquet")]) == 0
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "cli.parquet"),
+                                  read_mot(tmp_path / "tFalse.txt").to_pandas())
+
+
+def test_parquet_without_pyarrow_is_a_clear_error(tmp_path, monkeypatch, capsys):
+    from tests.test_fit import _sequence
+    from vistrack.cli import main
+    from vistrack.pipeline import track_sequence
+
+    seq = _sequence(tmp_path / "SIM", np.random.default_rng(3), n_objects=2, T=5)
+    monkeypatch.setitem(sys.modules, "pyarrow", None)  # import pyarrow raises ImportError
+    with pytest.raises(ImportError, match="pyarrow is missing"):
+        track_sequence(seq, tmp_path / "t.parquet")
+    assert main(["track", str(seq), "--out", str(tmp_path / "t.parquet")]) == 2
+    err = capsys.readouterr().err
+    assert "pyarrow is missing" in err and "vistrack[parquet]" in err
+    assert not (tmp_path / "t.parquet").exists()

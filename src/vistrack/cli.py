@@ -239,6 +239,13 @@ def _track(args: argparse.Namespace) -> int:
                         "--out-dir OUT/")
         # before anything is read or computed: a run that cannot write fails now
         check_output(args.out, force=args.force, name="--out")
+        if str(args.out).lower().endswith(".parquet"):
+            from .io.motchallenge import need_parquet
+
+            try:
+                need_parquet()
+            except ImportError as e:
+                return fail(f"--out {args.out}: {e}")
     else:
         offline_flags = [f for f in ("offline", "detections", "columns", "max_gap",
                                      "min_track_score", "link_gap") if getattr(args, f)]

@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import importlib
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
@@ -30,7 +31,7 @@ from ._memory import PeriodicRelease
 from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, evaluate_mot
 from .io.atomic import check_output, made_folder
-from .io.motchallenge import MOTTable, read_mot, read_seqinfo, write_mot
+from .io.motchallenge import MOTTable, need_parquet, read_mot, read_seqinfo, write_mot
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
 from .models.box import BoxMotion
 from .tracking.base import Tracker
@@ -784,7 +785,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     seq_dir : str or Path
         A folder with ``seqinfo.ini`` and ``det/det.txt``.
     out : str or Path
-        The results file to write (not overwritten unless ``force``).
+        The results file to write (not overwritten unless ``force``): MOTChallenge's text,
+        or Parquet if its name ends in ``.parquet`` (the same rows, with the columns of
+        :meth:`~vistrack.io.MOTTable.to_pandas`; needs pandas and pyarrow).
     detections : str or Path, optional
         Another detections file (default ``seq_dir/det/det.txt``): MOTChallenge's format, or
         a CSV file with a header (``.csv``; read by pandas, its columns as
@@ -824,6 +827,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         configuration is invalid.
     MOTFormatError
         If a file is malformed.
+    ImportError
+        If ``out`` is Parquet and pandas or pyarrow is missing.
 
     Examples
     --------
@@ -844,6 +849,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     """
     out = Path(out)
     check_output(out, force=force)
+    parquet = out.suffix.lower() == ".parquet"
+    if parquet:
+        need_parquet()
     cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
     seq_dir = Path(seq_dir)
     if seq_dir.is_file():
@@ -873,9 +881,11 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                      image_size=(info.im_width, info.im_height), calibration=calibration)
     frames = (Frame(f, (f - 1) / info.frame_rate) for f in range(1, info.seq_length + 1))
     # online, the rows go to the file as they come; offline, the tracker records its tracks,
-    # which are smoothed at the end and written then
-    with made_folder(out.parent):  # removed again, if made here, when the run fails
-        writer = None if oc.enabled else MOTWriter(out)
+    # which are smoothed at the end and written then. Parquet: the same rows, written as
+    # text beside it under a hidden name first
+    text = out.with_name(f".{out.stem}.rows.txt") if parquet else out
+    with made_folder(out.parent), _removed(text if parquet else None):
+        writer = None if oc.enabled else MOTWriter(text)
         stats = run(frames, lambda frame: per_frame[frame.index - 1], trk,
                     [writer] if writer is not None else [], progress=progress,
                     total=info.seq_length, label=info.name)
@@ -891,11 +901,23 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                         link_window=max(1, round(oc.link_window * fps)))
             seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
             F, I = sm.frames, sm.ids
-            write_mot(out, F, I, sm.xywh, np.where(sm.filled, 0.0, sm.scores), force=True)
+            write_mot(text, F, I, sm.xywh, np.where(sm.filled, 0.0, sm.scores), force=True)
             n_rows, n_tracks = len(F), len(np.unique(I))
+        if parquet:
+            read_mot(text).to_parquet(out)
     used = cfg if cfg.motion is not None else replace(cfg, motion=BoxMotion())
     return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds, used,
                     derived_values(trk))
+
+
+@contextmanager
+def _removed(path: Path | None) -> Iterator[None]:
+    """Remove ``path`` (if any) when the block ends, however it ends."""
+    try:
+        yield
+    finally:
+        if path is not None:
+            path.unlink(missing_ok=True)
 
 
 # --------------------------------------------------------------------------------- fit

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import ast
 import configparser
+import importlib
 import math
 import os
 import re
@@ -75,6 +76,16 @@ def _pandas(what: str) -> Any:
     except ImportError as e:  # pragma: no cover - pandas is there wherever trackpy is
         raise ImportError(f"{what} needs pandas (pip install pandas)") from e
     return pandas
+
+
+def need_parquet() -> None:
+    """Raise ImportError, saying what to install, unless pandas and pyarrow are there."""
+    for name in ("pandas", "pyarrow"):
+        try:
+            importlib.import_module(name)
+        except ImportError as e:
+            raise ImportError(f"writing Parquet needs pandas and pyarrow; {name} is missing "
+                              "(pip install 'vistrack[parquet]')") from e
 
 
 @dataclass(frozen=True)
@@ -200,6 +211,22 @@ class MOTTable:
             "y": b[:, 1] + b[:, 3] / 2, "bb_left": b[:, 0], "bb_top": b[:, 1],
             "bb_width": b[:, 2], "bb_height": b[:, 3], "conf": self.conf,
             "class": self.classes, "visibility": self.visibility})
+
+    def to_parquet(self, path: str | os.PathLike) -> Path:
+        """Write :meth:`to_pandas`'s frame to a Parquet file, whole or not at all (under a
+        partial name renamed into place); ``MOTTable.from_pandas(pandas.read_parquet(path))``
+        reads it back. Needs pandas and pyarrow (``pip install 'vistrack[parquet]'``).
+
+        Raises
+        ------
+        ImportError
+            If pandas or pyarrow is missing, saying what to install.
+        """
+        need_parquet()
+        df = self.to_pandas()
+        with replacing(path) as part:
+            df.to_parquet(part, index=False, engine="pyarrow")
+        return Path(path)
 
     @classmethod
     def from_pandas(cls, df: Any, columns: dict[str, str] | None = None,
