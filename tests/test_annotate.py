@@ -78,7 +78,44 @@ def test_hota_over_alpha_is_drawn_from_the_scores(tmp_path, capsys):
     args = ["eval", "--gt-dir", str(tmp_path), "--pred-dir", str(tmp_path / "res"), "--plots",
             str(tmp_path / "plots")]
     assert main(args) == 0
-    assert (tmp_path / "plots" / "hota_alpha.png").read_bytes()[:4] == b"\x89PNG"
+    for name in ("hota_alpha.png", "timeline_S0.png", "timeline_S1.png"):
+        assert (tmp_path / "plots" / name).read_bytes()[:4] == b"\x89PNG"
     capsys.readouterr()
     assert main(args) == 2 and "--force" in capsys.readouterr().err
     assert main(args + ["--force"]) == 0
+
+
+def test_the_timeline_draws_each_objects_matches(tmp_path):
+    from vistrack.evaluation import clear_matches, evaluate_mot
+    from vistrack.io import MOTTable
+    from vistrack.viz import id_colour, plot_timeline
+
+    # object 1 covered by track 7 for frames 1-3, missed at 4, by track 8 at 5-6 (a switch);
+    # object 2 appears at frame 3, covered by track 9 throughout
+    rows = [(f, 1, 10 * f, 0, 10, 10) for f in range(1, 7)]
+    rows += [(f, 2, 200, 50, 10, 10) for f in range(3, 7)]
+    gt = MOTTable.from_rows(rows)
+    pred = MOTTable.from_rows([(f, 7 if f < 4 else 8, 10 * f, 0, 10, 10)
+                               for f in (1, 2, 3, 5, 6)]
+                              + [(f, 9, 200, 50, 10, 10) for f in range(3, 7)])
+    m = clear_matches(gt, pred)
+    assert m.gt_ids.tolist() == [1, 1, 1, 2, 1, 2, 1, 2, 1, 2]
+    assert m.pred_ids.tolist() == [7, 7, 7, 9, -1, 9, 8, 9, 8, 9]
+    assert m.switches.tolist() == [False] * 6 + [True] + [False] * 3
+    c = evaluate_mot(gt, pred)
+    assert (c.TP, c.FN, c.IDSW) == (9, 1, 1)
+    ax = plot_timeline(m, tmp_path / "t.png", title="S").axes[0]
+    assert ax.get_title() == "S: 2 objects, 1 identity switch"
+    runs = ax.collections[0]
+    # object 1: 7 over frames 1-3, missed at 4, 8 over 5-6; object 2: 9 over 3-6
+    spans = sorted((round(p.vertices[:, 1].mean()), p.vertices[0, 0], p.vertices[1, 0])
+                   for p in runs.get_paths())
+    assert spans == [(0, 0.5, 3.5), (0, 3.5, 4.5), (0, 4.5, 6.5), (1, 2.5, 6.5)]
+    colours = {(round(p.vertices[:, 1].mean()), p.vertices[0, 0]): tuple(c[:3])
+               for p, c in zip(runs.get_paths(), runs.get_facecolors())}
+    b, g, r = id_colour(8)
+    assert np.allclose(colours[(0, 4.5)], (r / 255, g / 255, b / 255))
+    assert np.allclose(colours[(0, 3.5)], (0.85, 0.85, 0.85))  # missed
+    marks = ax.collections[1].get_offsets()
+    assert marks.tolist() == [[5.0, 0.0]]  # the switch, on object 1's row
+    assert (tmp_path / "t.png").read_bytes()[:4] == b"\x89PNG"

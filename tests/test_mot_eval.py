@@ -165,6 +165,39 @@ def test_identity_scores_equal_py_motmetrics(name, tmp_path):
     assert abs(ours.TP - (ref.num_matches + ref.num_switches)) <= 0.01 * ours.TP
 
 
+@pytest.mark.parametrize("bench,name", [("MOT15", "ADL-Rundle-6"), ("MOT17", "MOT17-09-FRCNN")])
+def test_the_matches_frame_by_frame_are_the_counts(bench, name, tmp_path):
+    """clear_matches gives the rows behind evaluate_mot's CLEAR counts (themselves equal to
+    TrackEval's): matched rows are TP, the others FN, switches IDSW, and MT, PT and ML
+    recomputed from the rows as their definitions say (Frag depends also on the frames
+    where an object is absent, which the rows do not hold); each match overlaps at IoU
+    >= 0.5."""
+    from vistrack.evaluation import clear_matches
+
+    d = seq_dir(bench, name)
+    gt = read_mot(d / "gt" / "gt.txt")
+    pred = read_mot(noisy_predictions(d / "gt" / "gt.txt", tmp_path / "p.txt", seed=1))
+    c = evaluate_mot(gt, pred, n_frames(d), benchmark=bench)
+    m = clear_matches(gt, pred, n_frames(d), benchmark=bench)
+    hit = m.pred_ids >= 0
+    assert (int(hit.sum()), int((~hit).sum()), int(m.switches.sum())) == (c.TP, c.FN, c.IDSW)
+    assert not (m.switches & ~hit).any() and np.all(np.diff(m.frames) >= 0)
+    mt = pt = ml = 0
+    for obj in np.unique(m.gt_ids):
+        ratio = hit[m.gt_ids == obj].mean()
+        mt += ratio > 0.8
+        pt += 0.2 <= ratio <= 0.8
+        ml += ratio < 0.2
+    assert (mt, pt, ml) == (c.MT, c.PT, c.ML)
+    # each matched pair: the object's box and the track's box that frame overlap enough
+    gk = {(f, i): b for f, i, b in zip(gt.frames, gt.ids, gt.boxes)}
+    pk = {(f, i): b for f, i, b in zip(pred.frames, pred.ids, pred.boxes)}
+    a = np.array([gk[f, g] for f, g in zip(m.frames[hit], m.gt_ids[hit])])
+    b = np.array([pk[f, p] for f, p in zip(m.frames[hit], m.pred_ids[hit])])
+    iou = np.array([box_iou_xywh(x[None], y[None])[0, 0] for x, y in zip(a, b)])
+    assert iou.min() >= 0.5 - 1e-9
+
+
 def test_unsorted_tables_are_refused():
     gt = table([2, 1], [1, 1], [0, 0])
     with pytest.raises(ValueError, match="rows must be sorted by frame"):

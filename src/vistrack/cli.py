@@ -496,21 +496,29 @@ def _eval(args: argparse.Namespace) -> int:
     # a missing or malformed file is a user's mistake: main prints it in one line
     if args.jobs is not None and args.jobs < 1:
         return _fail("eval", f"--jobs must be 1 or more; got {args.jobs}")
-    if args.plots is not None:
+    plots = [] if args.plots is None else [Path(args.plots) / "hota_alpha.png"] + [
+        Path(args.plots) / f"timeline_{name}.png" for name, *_ in pairs]
+    if plots:
         from .io.atomic import check_output
 
-        check_output(Path(args.plots) / "hota_alpha.png", force=args.force, name="--plots")
+        for path in plots:
+            check_output(path, force=args.force, name="--plots")
     res = evaluate_files(pairs, benchmark=args.benchmark, jobs=args.jobs)
     for warning in res.warnings:
         print(f"vistrack eval: warning: {warning}", file=sys.stderr)
-    if args.plots is not None:
+    if plots:
+        from .evaluation.files import pair_matches
         from .io.atomic import made_folder, replacing
-        from .viz.plots import plot_hota_alpha
+        from .viz.plots import plot_hota_alpha, plot_timeline
 
-        path = Path(args.plots) / "hota_alpha.png"
-        with made_folder(path.parent), replacing(path) as part:
-            plot_hota_alpha(res, part)
-        print(f"wrote {path}", file=sys.stderr)
+        with made_folder(plots[0].parent):
+            with replacing(plots[0]) as part:
+                plot_hota_alpha(res, part)
+            for pair, path in zip(pairs, plots[1:]):
+                with replacing(path) as part:
+                    plot_timeline(pair_matches(pair, args.benchmark), part, title=pair[0])
+        for path in plots:
+            print(f"wrote {path}", file=sys.stderr)
     if args.json:
         print(json.dumps({k: v.summary() for k, v in res.items()}, indent=2))
         return 0
@@ -700,8 +708,10 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--gt-dir", help="folder of sequences SEQ/gt/gt.txt")
     ev.add_argument("--plots", metavar="DIR",
                     help="also draw HOTA, DetA and AssA over the localisation threshold α, "
-                    "each sequence and COMBINED, into DIR/hota_alpha.png")
-    ev.add_argument("--force", action="store_true", help="overwrite an existing plot")
+                    "each sequence and COMBINED, into DIR/hota_alpha.png, and each "
+                    "sequence's objects over time, coloured by the predicted identity that "
+                    "covers them, switches marked, into DIR/timeline_SEQ.png")
+    ev.add_argument("--force", action="store_true", help="overwrite existing plots")
     ev.add_argument("--jobs", type=int, metavar="N",
                     help="with --gt-dir: sequences scored at once, each in a process of its "
                     "own (default 1)")

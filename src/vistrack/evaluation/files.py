@@ -6,13 +6,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..io.motchallenge import read_mot, read_seqinfo
-from .mot import MOTCounts, combine, evaluate_mot
+from .mot import Matches, MOTCounts, clear_matches, combine, evaluate_mot
 from .sanity import sanity_warnings
 
 if TYPE_CHECKING:
     from concurrent.futures import Executor
 
-__all__ = ["evaluate_files", "EvalResults"]
+__all__ = ["evaluate_files", "pair_matches", "EvalResults"]
 
 
 class EvalResults(dict[str, MOTCounts]):
@@ -44,6 +44,16 @@ def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str
     n = read_seqinfo(info).seq_length if info is not None else None
     g, p = read_mot(gt), read_mot(pred)
     return evaluate_mot(g, p, n, benchmark=benchmark), sanity_warnings(g, p)
+
+
+def pair_matches(pair: tuple[str, Path, Path, Path | None],
+                 benchmark: str = "auto") -> Matches:
+    """The CLEAR MOT matches of one ``(name, gt, results, seqinfo-or-None)`` pair, frame by
+    frame (:func:`~vistrack.evaluation.clear_matches`), read as :func:`evaluate_files` reads
+    it."""
+    _, gt, pred, info = pair
+    n = read_seqinfo(info).seq_length if info is not None else None
+    return clear_matches(read_mot(gt), read_mot(pred), n, benchmark=benchmark)
 
 
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,

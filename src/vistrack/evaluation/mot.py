@@ -84,7 +84,8 @@ def _scipy_lsa() -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
 
     return lsa
 
-__all__ = ["MOTCounts", "evaluate_mot", "combine", "box_iou_xywh", "ALPHAS"]
+__all__ = ["MOTCounts", "evaluate_mot", "combine", "box_iou_xywh", "ALPHAS", "Matches",
+           "clear_matches"]
 
 ALPHAS = np.arange(0.05, 0.99, 0.05)
 """HOTA's IoU thresholds: 0.05, 0.10, ..., 0.95."""
@@ -175,6 +176,9 @@ class _Sequence:
     sim: list  # per such frame (n_gt_t, n_pred_t) IoU
     n_gt_ids: int
     n_pred_ids: int
+    frames: np.ndarray | None = None  # the frame of each entry above
+    gt_labels: np.ndarray | None = None  # the files' ids of the contiguous ones
+    pred_labels: np.ndarray | None = None
 
 
 def _benchmark_of(gt: MOTTable, benchmark: str) -> str:
@@ -298,7 +302,8 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Se
     ug = np.unique(np.concatenate(gt_ids)) if gt_ids else np.zeros(0, np.int64)
     up = np.unique(np.concatenate(pred_ids)) if pred_ids else np.zeros(0, np.int64)
     return _Sequence([np.searchsorted(ug, i) for i in gt_ids],
-                     [np.searchsorted(up, i) for i in pred_ids], sims, len(ug), len(up))
+                     [np.searchsorted(up, i) for i in pred_ids], sims, len(ug), len(up),
+                     frames, ug, up)
 
 
 def _assign(score: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -663,12 +668,15 @@ class MOTCounts:
         return out
 
 
-def _clear(seq: _Sequence, out: MOTCounts) -> None:
+def _clear(seq: _Sequence, out: MOTCounts, record: list | None = None) -> None:
+    """CLEAR MOT's counts into ``out``; with ``record``, each frame's objects, the predicted
+    id matched to each (-1: missed) and whether that match switched identity appended to it
+    (contiguous ids, one tuple a frame with objects)."""
     n_g = seq.n_gt_ids
     prev_any = np.full(n_g, -1)  # the predicted id of each object's last match
     prev_step = np.full(n_g, -1)  # ... at the previous frame, -1 if not matched there
     gt_count, matched_count, frag = np.zeros(n_g), np.zeros(n_g), np.zeros(n_g)
-    for g, p, sim in zip(seq.gt_ids, seq.pred_ids, seq.sim):
+    for k, (g, p, sim) in enumerate(zip(seq.gt_ids, seq.pred_ids, seq.sim)):
         # (as in TrackEval, a frame without objects or without predictions leaves the
         # previous frame's pairs in place for the next)
         if len(g) == 0:
@@ -677,13 +685,20 @@ def _clear(seq: _Sequence, out: MOTCounts) -> None:
         if len(p) == 0:
             out.FN += len(g)
             gt_count[g] += 1
+            if record is not None:
+                record.append((k, g, np.full(len(g), -1), np.zeros(len(g), bool)))
             continue
         score = 1000.0 * (p[None, :] == prev_step[g][:, None]) + sim
         score[sim < 0.5 - _EPS] = 0.0
         r, c = _assign(score)
         mg, mp = g[r], p[c]
         was = prev_any[mg]
-        out.IDSW += int(np.sum((was >= 0) & (mp != was)))
+        switched = (was >= 0) & (mp != was)
+        out.IDSW += int(np.sum(switched))
+        if record is not None:
+            matched, switch = np.full(len(g), -1), np.zeros(len(g), bool)
+            matched[r], switch[r] = mp, switched
+            record.append((k, g, matched, switch))
         gt_count[g] += 1
         matched_count[mg] += 1
         not_tracked = prev_step < 0
@@ -831,6 +846,70 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     _identity(seq, out)
     _hota(seq, out)
     return out
+
+
+@dataclass(frozen=True)
+class Matches:
+    """Which predicted track covers each ground-truth object in each frame, as CLEAR MOT
+    matches them (:func:`clear_matches`): one row per object per frame where it is scored.
+
+    Attributes
+    ----------
+    frames, gt_ids : (N,) int ndarray
+        The frame and the object's id in the ground truth, sorted by frame.
+    pred_ids : (N,) int ndarray
+        The predicted track's id matched to it there, or -1 (missed).
+    switches : (N,) bool ndarray
+        True where the match's predicted id differs from the object's previous match's (an
+        identity switch, as ``MOTCounts.IDSW`` counts them).
+    """
+
+    frames: np.ndarray
+    gt_ids: np.ndarray
+    pred_ids: np.ndarray
+    switches: np.ndarray
+
+
+def clear_matches(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
+                  benchmark: str = "auto") -> Matches:
+    """The matches behind :func:`evaluate_mot`'s CLEAR MOT counts, frame by frame: what a
+    per-object timeline draws.
+
+    Parameters and errors as :func:`evaluate_mot`; ``Matches`` has one row for each scored
+    ground-truth box (a MOT16/17/20 box of another class, or of confidence 0, is not), so
+    that the matched rows are ``TP``, the others ``FN``, and ``switches.sum()`` is ``IDSW``.
+
+    Examples
+    --------
+    >>> from vistrack.io.motchallenge import MOTTable
+    >>> def table(ids, x):
+    ...     n = len(ids)
+    ...     return MOTTable(np.arange(1, n + 1), np.array(ids), np.c_[x, np.zeros(n),
+    ...                     np.full(n, 10.0), np.full(n, 10.0)], np.ones(n), -np.ones(n, int),
+    ...                     -np.ones(n))
+    >>> m = clear_matches(table([1, 1, 1], [0, 1, 2]), table([7, 8, 8], [0, 1, 9]))
+    >>> m.frames.tolist(), m.pred_ids.tolist(), m.switches.tolist()
+    ([1, 2, 3], [7, 8, -1], [False, True, False])
+    """
+    if n_frames is None:
+        n_frames = int(max(gt.frames.max() if len(gt) else 0,
+                           pred.frames.max() if len(pred) else 0))
+    seq = _prepare(gt, pred, int(n_frames), benchmark)
+    record: list = []
+    _clear(seq, MOTCounts(), record)
+    assert seq.frames is not None and seq.gt_labels is not None and seq.pred_labels is not None
+    if not record:
+        empty = np.zeros(0, np.int64)
+        return Matches(empty, empty, empty, np.zeros(0, bool))
+    k = np.concatenate([np.full(len(g), i) for i, g, _, _ in record])
+    g = np.concatenate([g for _, g, _, _ in record])
+    p = np.concatenate([p for _, _, p, _ in record])
+    labels = seq.pred_labels
+    return Matches(frames=seq.frames[k].astype(np.int64),
+                   gt_ids=seq.gt_labels[g].astype(np.int64),
+                   pred_ids=np.where(p >= 0, labels[np.maximum(p, 0)] if len(labels) else -1,
+                                     -1).astype(np.int64),
+                   switches=np.concatenate([s for _, _, _, s in record]))
 
 
 def combine(counts: Iterable[MOTCounts]) -> MOTCounts:

@@ -7,9 +7,11 @@ from .plots import (
     covariance_ellipse,
     plot_estimates_1d,
     plot_hota_alpha,
+    plot_timeline,
     plot_track_2d,
     plot_trajectories,
 )
 
 __all__ = ["Annotator", "id_colour", "covariance_ellipse", "plot_estimates_1d", "plot_track_2d",
-           "plot_trajectories", "plot_hota_alpha", "AnnotatedVideo", "TrajectoryPlot"]
+           "plot_trajectories", "plot_hota_alpha", "plot_timeline", "AnnotatedVideo",
+           "TrajectoryPlot"]

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from ..types import Frame, Tracks
 
 __all__ = ["covariance_ellipse", "plot_estimates_1d", "plot_track_2d", "plot_trajectories",
-           "plot_hota_alpha", "TrajectoryPlot"]
+           "plot_hota_alpha", "plot_timeline", "TrajectoryPlot"]
 
 
 def _finish(ax: Axes, xlabel: str, ylabel: str, title: str | None) -> Axes:
@@ -356,6 +356,85 @@ def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = No
     axes[0].set_ylabel("score (%)")
     if len(names) <= 20:
         axes[-1].legend(fontsize=7, loc="lower left")
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=100)
+    return fig
+
+
+def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
+                  title: str = "") -> Figure:
+    """A timeline of every ground-truth object: one row per object (in the order they first
+    appear), time across, each frame coloured by the predicted identity that covers the
+    object there (the annotated video's colour of that identity; light grey where it is
+    missed), and a black mark where the identity switches. Saved to ``path`` (PNG) when
+    given, without pyplot. Returns the figure.
+
+    Parameters
+    ----------
+    matches : Matches
+        From :func:`vistrack.evaluation.clear_matches`.
+    path : str or Path, optional
+        Save the figure there (PNG, 100 dpi).
+    title : str
+        Put before the counts in the title (the sequence's name).
+
+    Examples
+    --------
+    >>> from vistrack.evaluation import Matches
+    >>> m = Matches(frames=np.array([1, 2, 3, 1, 2]), gt_ids=np.array([5, 5, 5, 6, 6]),
+    ...             pred_ids=np.array([7, 8, 8, -1, 9]),
+    ...             switches=np.array([False, True, False, False, False]))
+    >>> ax = plot_timeline(m, title="demo").axes[0]
+    >>> [t.get_text() for t in ax.get_yticklabels()], ax.get_title()
+    (['5', '6'], 'demo: 2 objects, 1 identity switch')
+    """
+    from matplotlib.collections import PolyCollection
+    from matplotlib.figure import Figure
+
+    from .annotate import id_colour
+
+    frames, gts = np.asarray(matches.frames), np.asarray(matches.gt_ids)
+    preds, switches = np.asarray(matches.pred_ids), np.asarray(matches.switches, bool)
+    objects, first = np.unique(gts, return_index=True)
+    objects = objects[np.argsort(first, kind="stable")]  # in the order they appear
+    row = {int(g): k for k, g in enumerate(objects)}
+    n = len(objects)
+    fig = Figure(figsize=(12, min(40.0, 1.6 + 0.16 * n)))
+    ax = fig.subplots()
+    boxes, colours = [], []
+    order = np.lexsort((frames, gts))
+    f, g, p = frames[order], gts[order], preds[order]
+    # runs: the same object, the same predicted id (or missed), consecutive frames
+    new = np.r_[True, (g[1:] != g[:-1]) | (p[1:] != p[:-1]) | (f[1:] != f[:-1] + 1)]
+    starts = np.flatnonzero(new)
+    ends = np.r_[starts[1:], len(f)]
+    for a, b in zip(starts, ends):
+        y = row[int(g[a])]
+        x0, x1 = f[a] - 0.5, f[b - 1] + 0.5
+        boxes.append([(x0, y - 0.4), (x1, y - 0.4), (x1, y + 0.4), (x0, y + 0.4)])
+        if p[a] < 0:
+            colours.append((0.85, 0.85, 0.85))
+        else:
+            b_, g_, r_ = id_colour(int(p[a]))
+            colours.append((r_ / 255, g_ / 255, b_ / 255))
+    ax.add_collection(PolyCollection(boxes, facecolors=colours, edgecolors="none"))
+    sw = np.flatnonzero(switches)
+    ax.scatter(frames[sw], [row[int(x)] for x in gts[sw]], marker="|", s=120, c="black",
+               linewidths=1.5, zorder=3)
+    if len(frames):
+        ax.set_xlim(frames.min() - 1, frames.max() + 1)
+    ax.set_ylim(n - 0.5, -0.5)
+    step = max(1, int(np.ceil(n / 60)))
+    ax.set_yticks(np.arange(0, n, step), [str(int(o)) for o in objects[::step]],
+                  fontsize=7 if n > 30 else 9)
+    ax.set_xlabel("frame (colour: the predicted identity covering the object; grey: missed; "
+                  "black mark: an identity switch)")
+    ax.set_ylabel("ground-truth object")
+    k = int(switches.sum())
+    counts = f"{n} object{'s' if n != 1 else ''}, {k} identity switch{'es' if k != 1 else ''}"
+    ax.set_title(f"{title}: {counts}" if title else counts)
+    ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()
     if path is not None:
         fig.savefig(path, dpi=100)
