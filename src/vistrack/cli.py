@@ -86,6 +86,19 @@ def _command_parser(parser: argparse.ArgumentParser, command: str | None
     return parser
 
 
+def _class_list(text: str) -> list[int]:
+    """``--classes 0,2``: class numbers separated by commas."""
+    try:
+        values = [int(t) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"class numbers separated by commas, e.g. 0,2; got "
+                                         f"{text!r}") from None
+    if not values or min(values) < 0:
+        raise argparse.ArgumentTypeError(f"class numbers 0 or more, separated by commas; got "
+                                         f"{text!r}")
+    return values
+
+
 def _demo(args: argparse.Namespace) -> int:
     if args.name == "track":  # the main job on the clip that ships with vistrack
         from .data import demo_clip
@@ -228,7 +241,8 @@ def _track(args: argparse.Namespace) -> int:
                         f"({', '.join(sorted(BOX_PRESETS))}); --tracker {name} goes with "
                         "--out-dir")
     if args.out is not None:
-        for flag in ("frontend", "gt", "fps", "stop", "min_area", "background"):
+        for flag in ("frontend", "gt", "fps", "stop", "min_area", "background", "classes",
+                     "onnx_layout"):
             if getattr(args, flag) is not None:
                 return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
         if args.skip_bad_frames:
@@ -304,7 +318,8 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
     """``track_video``'s keyword arguments from ``vistrack track``'s options, for one input or
     many: the front-end's, and the tracker's configuration, a file used as it is, or the
     options given over the front-end's defaults (bgsub: a still camera)."""
-    options = {k: getattr(args, k) for k in ("frontend", "stop", "min_area", "background")
+    options = {k: getattr(args, k) for k in ("frontend", "stop", "min_area", "background",
+                                              "classes", "onnx_layout")
                if getattr(args, k) is not None}
     options.update(tracker=name, skip_bad_frames=args.skip_bad_frames)
     if args.config is not None or not box:
@@ -352,7 +367,7 @@ def _track_many(args: argparse.Namespace) -> int:
         if not box:
             return fail(f"--out (sequences' detections) goes with the box trackers "
                         f"({', '.join(sorted(BOX_PRESETS))})")
-        for flag in ("frontend", "stop", "min_area", "background"):
+        for flag in ("frontend", "stop", "min_area", "background", "classes", "onnx_layout"):
             if getattr(args, flag) is not None:
                 return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
         kind, out, options["config"] = "detections", args.out, cfg
@@ -633,7 +648,15 @@ def build_parser() -> argparse.ArgumentParser:
                          f"{text} (default {default})")
     track.add_argument("--frontend", help="video mode: bgsub (default; background model and "
                        "blobs), hog (OpenCV's people detector), confidence (the peaks of "
-                       "HOG's confidence map; the default of dcpf) or detections:FILE")
+                       "HOG's confidence map; the default of dcpf), detections:FILE, or "
+                       "onnx:MODEL.onnx (your own YOLO- or SSD-style detector; pip install "
+                       "'vistrack[onnx]')")
+    track.add_argument("--classes", type=_class_list, metavar="LIST",
+                       help="video mode, onnx: the model's classes to keep, e.g. 0 (a COCO "
+                       "model's people) or 0,2 (default: all)")
+    track.add_argument("--onnx-layout", choices=("auto", "yolov8", "yolov5", "ssd"),
+                       help="video mode, onnx: the model's output layout (default: auto, told "
+                       "from the outputs' shapes)")
     track.add_argument("--fps", type=float, help="video mode: the true frame rate, when the "
                        "file's header is wrong")
     track.add_argument("--gt", help="video mode: MOTChallenge ground truth to score against")

@@ -548,6 +548,14 @@ def _confidence_peaks(ctx: Context) -> FrameDetector:
     return lambda frame: peaks.detect(_image(frame, "the confidence peaks"))
 
 
+def _onnx(path: str | Path, ctx: Context) -> FrameDetector:
+    from .frontends.onnx import ONNXDetector
+
+    det = ONNXDetector(path, layout=ctx.options.get("onnx_layout", "auto"),
+                       classes=ctx.options.get("classes"))
+    return lambda frame: det.detect(_image(frame, "the ONNX model"))
+
+
 def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
     path = Path(path)
     if not path.exists():
@@ -579,7 +587,9 @@ FRONTENDS: Registry[Frontend] = Registry("frontend", {
     "confidence": Frontend(_confidence_peaks, help="the peaks of the detector's confidence "
                            "map (HOG's by default) above det_threshold"),
 })
-"""Front-ends by name; also ``"detections:FILE"``, a MOTChallenge detections file."""
+"""Front-ends by name; also ``"detections:FILE"``, a MOTChallenge detections file, and
+``"onnx:MODEL.onnx"``, the user's own ONNX detector
+(:class:`~vistrack.frontends.onnx.ONNXDetector`)."""
 
 
 def _frontend(name: str | Detector | Callable[[Frame], Detections | None] | None,
@@ -589,9 +599,11 @@ def _frontend(name: str | Detector | Callable[[Frame], Detections | None] | None
     if isinstance(name, str):
         if name.startswith("detections:"):
             return _detections_file(name.split(":", 1)[1], ctx)
+        if name.startswith("onnx:"):
+            return _onnx(name.split(":", 1)[1], ctx)
         if name not in FRONTENDS:
-            raise ValueError(f"frontend must be one of {sorted(FRONTENDS)} or "
-                             f"detections:FILE; got {name!r}")
+            raise ValueError(f"frontend must be one of {sorted(FRONTENDS)}, detections:FILE "
+                             f"or onnx:MODEL.onnx; got {name!r}")
         return FRONTENDS[name].make(ctx)
     detect = as_detector(name) if name is not None else None
     if detect is None:
@@ -1159,7 +1171,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 skip_bad_frames: bool = False,
                 annotate: bool = True, force: bool = False, progress: TextIO | None = None,
                 confidence: Callable[[np.ndarray], ConfidenceMap] | None = None,
-                det_threshold: float = 0.5, config: TrackConfig | None = None,
+                det_threshold: float = 0.5, classes: Sequence[int] | None = None,
+                onnx_layout: str = "auto", config: TrackConfig | None = None,
                 **overrides: object) -> VideoRun:
     """Track a video (a file, an image folder or a MOTChallenge sequence folder) from pixels.
 
@@ -1178,7 +1191,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         A name in :data:`FRONTENDS`: ``"bgsub"`` (the seeds' background model, then blobs),
         ``"hog"`` (OpenCV's people detector), ``"confidence"`` (the peaks of the detector's
         confidence map above ``det_threshold``); ``"detections:FILE"`` (a MOTChallenge
-        detections file); or a detector of your own: any object with ``detect(image) ->
+        detections file); ``"onnx:MODEL.onnx"`` (your own ONNX detector, YOLO- or SSD-style,
+        run by onnxruntime: :class:`~vistrack.frontends.onnx.ONNXDetector`); or a detector
+        of your own: any object with ``detect(image) ->
         Detections`` (:class:`vistrack.frontends.detectors.Detector`). Default: the
         tracker's (``bgsub``; ``confidence`` for ``dcpf``).
     tracker : str or Tracker
@@ -1194,6 +1209,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         The detector's continuous confidence, a callable ``image -> ConfidenceMap`` (default
         :class:`vistrack.frontends.detectors.HOGConfidence`), for ``dcpf`` and the
         ``confidence`` front-end, and the SVM margin above which its peaks are detections.
+    classes, onnx_layout : sequence of int, str
+        For ``onnx:MODEL``: the model's classes kept (default all) and its output layout
+        (:data:`~vistrack.frontends.onnx.LAYOUTS`; default told from the outputs).
     fps : float, optional
         The true frame rate, when the container's header is wrong.
     background, min_area, n_init : str, float, int
@@ -1266,7 +1284,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     reader = VideoReader(video, fps=fps, stop=stop, prefetch=8, skip_bad=skip_bad_frames)
     ctx = Context(reader.fps, reader.size, reader, config, dict(overrides),
                   {"background": background, "min_area": min_area, "n_init": n_init,
-                   "det_threshold": det_threshold, "confidence": confidence})
+                   "det_threshold": det_threshold, "confidence": confidence,
+                   "classes": classes, "onnx_layout": onnx_layout})
     box = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].box_config
     if config is not None and not box:
         raise ValueError(f"config is a box tracker's configuration; tracker {tracker!r} is "

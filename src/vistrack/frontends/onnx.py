@@ -1,0 +1,264 @@
+"""A detector from the user's own ONNX model, run by onnxruntime (``pip install
+'vistrack[onnx]'``): YOLO-style and SSD-style outputs, letterboxed input, a class filter and
+non-maximum suppression. vistrack ships no weights and downloads none: the model file is
+the user's (an ``ultralytics`` ``model.export(format="onnx")``, a YOLOv5 ``export.py``, a
+converted SSD, ...).
+
+Output layouts (``layout``; ``"auto"`` tells them apart from the outputs' shapes):
+
+- ``"yolov8"`` (YOLOv8, YOLO11 and later): one output ``(1, 4 + C, N)``: each of the
+  ``N`` columns a box centre and size ``cx, cy, w, h`` in the network input's pixels and
+  ``C`` class scores. An export transposed to ``(1, N, 4 + C)`` is read too when
+  ``layout="yolov8"`` is given.
+- ``"yolov5"`` (YOLOv5, YOLOv7): one output ``(1, N, 5 + C)``: ``cx, cy, w, h``, an
+  objectness and ``C`` class probabilities; a box's score is the objectness times its best
+  class's probability.
+- ``"ssd"``: two outputs, boxes ``(1, N, 4)`` as ``x0, y0, x1, y1`` in fractions of the
+  network input, and scores ``(1, N, C)`` whose class 0 is the background (the classes
+  reported are 1 to ``C - 1``).
+
+``"auto"``: two outputs are SSD's; one output with fewer rows than columns is YOLOv8's,
+otherwise YOLOv5's.
+
+The image (BGR, as OpenCV and :class:`~vistrack.io.VideoReader` give it; grey is repeated)
+is converted to RGB, scaled to the input's size keeping its aspect (letterboxed: padded
+with grey 114 on both sides, as YOLO's exporters expect) or stretched (``resize=
+"stretch"``, SSD's default), scaled to 0-1 and normalised by ``mean`` and ``std``; the
+boxes found are mapped back to the image and clipped to it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..types import Detections
+from .detectors import nms
+
+__all__ = ["ONNXDetector", "LAYOUTS", "letterbox"]
+
+LAYOUTS = ("auto", "yolov8", "yolov5", "ssd")
+"""The output layouts :class:`ONNXDetector` reads."""
+
+
+def letterbox(image: np.ndarray, size: tuple[int, int],
+              fill: int = 114) -> tuple[np.ndarray, float, tuple[float, float]]:
+    """``image`` scaled by the largest factor that fits it in ``size = (height, width)``,
+    centred and padded with ``fill``; the factor and the padding ``(left, top)``, so that a
+    point ``p`` of the result is ``(p - (left, top)) / factor`` in the image.
+
+    Examples
+    --------
+    >>> out, r, (left, top) = letterbox(np.zeros((64, 128, 3), np.uint8), (64, 64))
+    >>> out.shape, r, (left, top), int(out[0, 0, 0]), int(out[32, 32, 0])
+    ((64, 64, 3), 0.5, (0.0, 16.0), 114, 0)
+    """
+    import cv2
+
+    h, w = image.shape[:2]
+    H, W = size
+    r = min(H / h, W / w)
+    nw, nh = int(round(w * r)), int(round(h * r))
+    resized = cv2.resize(image, (nw, nh), interpolation=cv2.INTER_LINEAR) if (nw, nh) != (w, h) \
+        else image
+    left, top = (W - nw) / 2, (H - nh) / 2
+    out = np.full((H, W) + image.shape[2:], fill, dtype=image.dtype)
+    x0, y0 = int(round(left - 0.1)), int(round(top - 0.1))
+    out[y0:y0 + nh, x0:x0 + nw] = resized
+    return out, r, (float(x0), float(y0))
+
+
+class ONNXDetector:
+    """Detections from an ONNX model (see the module): ``detect(image) -> Detections``.
+
+    Parameters
+    ----------
+    model : str or Path
+        The ``.onnx`` file.
+    layout : {"auto", "yolov8", "yolov5", "ssd"}
+        How to read the outputs (:data:`LAYOUTS`).
+    classes : sequence of int, optional
+        Keep only these classes (the model's own indices: 0 is a person for COCO-trained
+        YOLO models); default all.
+    min_score : float
+        Drop boxes scoring less (0.1 by default: a tracker's second stage uses the low ones).
+    nms_iou : float
+        Of two boxes of the same class overlapping by more than this, the lower-scoring one is
+        dropped.
+    input_size : (int, int), optional
+        ``(height, width)`` of the network's input when the model leaves it open (640 x 640
+        by default); a fixed size in the model must not be contradicted.
+    resize : {"letterbox", "stretch"}, optional
+        How the image is fitted to the input (default: letterbox for YOLO, stretch for SSD).
+    mean, std : sequence of 3 floats
+        Per RGB channel, after scaling to 0-1: ``(x - mean) / std`` (default: none).
+
+    Raises
+    ------
+    ImportError
+        If onnxruntime is missing.
+    FileNotFoundError
+        If ``model`` does not exist.
+    ValueError
+        If an option is invalid, or the model's outputs fit no layout (naming their shapes).
+    """
+
+    def __init__(self, model: str | Path, *, layout: str = "auto",
+                 classes: Sequence[int] | None = None, min_score: float = 0.1,
+                 nms_iou: float = 0.45, input_size: tuple[int, int] | None = None,
+                 resize: str | None = None, mean: Sequence[float] = (0.0, 0.0, 0.0),
+                 std: Sequence[float] = (1.0, 1.0, 1.0)) -> None:
+        try:
+            import onnxruntime as ort
+        except ImportError as e:
+            raise ImportError("the onnx front-end needs onnxruntime "
+                              "(pip install 'vistrack[onnx]')") from e
+        path = Path(model)
+        if not path.is_file():
+            raise FileNotFoundError(f"{path} does not exist (--frontend onnx:MODEL.onnx)")
+        if layout not in LAYOUTS:
+            raise ValueError(f"layout must be one of {list(LAYOUTS)}; got {layout!r}")
+        if resize not in (None, "letterbox", "stretch"):
+            raise ValueError(f"resize must be 'letterbox' or 'stretch'; got {resize!r}")
+        if not 0.0 <= min_score <= 1.0 or not 0.0 <= nms_iou <= 1.0:
+            raise ValueError(f"min_score and nms_iou must be within [0, 1]; got {min_score} "
+                             f"and {nms_iou}")
+        if len(mean) != 3 or len(std) != 3 or not all(s > 0 for s in std):
+            raise ValueError(f"mean and std must be 3 numbers each, std above 0; got {mean} "
+                             f"and {std}")
+        options = ort.SessionOptions()
+        options.log_severity_level = 3
+        try:
+            self.session = ort.InferenceSession(str(path), options,
+                                                providers=["CPUExecutionProvider"])
+        except Exception as e:  # onnxruntime's own error types: a file that is not a model
+            raise ValueError(f"{path}: not an ONNX model onnxruntime can run "
+                             f"({' '.join(str(e).split())})") from e
+        inputs = self.session.get_inputs()
+        if len(inputs) != 1 or len(inputs[0].shape) != 4:
+            raise ValueError(f"{path}: the model must take one image (1, 3, H, W); it takes "
+                             f"{[(i.name, i.shape) for i in inputs]}")
+        self.input_name = inputs[0].name
+        fixed = [d if isinstance(d, int) else None for d in inputs[0].shape[2:]]
+        if input_size is None:
+            size = (fixed[0] or 640, fixed[1] or 640)
+        else:
+            size = (int(input_size[0]), int(input_size[1]))
+            if any(f is not None and f != s for f, s in zip(fixed, size)):
+                raise ValueError(f"{path}: input_size {size} contradicts the model's input "
+                                 f"{tuple(inputs[0].shape)}")
+        self.size = size
+        self.layout = layout if layout != "auto" else self._guess_layout(path)
+        self.resize = resize or ("stretch" if self.layout == "ssd" else "letterbox")
+        self.classes = None if classes is None else np.array(sorted(set(classes)), np.int64)
+        self.min_score, self.nms_iou = float(min_score), float(nms_iou)
+        self.mean = np.asarray(mean, np.float32).reshape(3, 1, 1)
+        self.std = np.asarray(std, np.float32).reshape(3, 1, 1)
+
+    def _guess_layout(self, path: Path) -> str:
+        outs = self.session.get_outputs()
+        if len(outs) == 2:
+            return "ssd"
+        if len(outs) == 1 and len(outs[0].shape) == 3:
+            rows, cols = outs[0].shape[1:]
+            if isinstance(rows, int) and isinstance(cols, int):
+                return "yolov8" if rows < cols else "yolov5"
+            return "auto"  # open dimensions: decided on the first output seen
+        raise ValueError(f"{path}: cannot tell the output layout from "
+                         f"{[(o.name, o.shape) for o in outs]}; give the layout "
+                         f"(one of {list(LAYOUTS[1:])})")
+
+    def _input(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The network's input, and the scale and offset ``(4,)`` that map its boxes back."""
+        import cv2
+
+        if image.ndim == 2:
+            image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+        H, W = self.size
+        h, w = image.shape[:2]
+        if self.resize == "letterbox":
+            fitted, r, (left, top) = letterbox(image, (H, W))
+            scale, offset = np.full(4, r), np.array([left, top, left, top])
+        else:
+            fitted = cv2.resize(image, (W, H), interpolation=cv2.INTER_LINEAR)
+            scale = np.array([W / w, H / h, W / w, H / h])
+            offset = np.zeros(4)
+        x = cv2.cvtColor(fitted, cv2.COLOR_BGR2RGB).transpose(2, 0, 1).astype(np.float32)
+        x = (x / np.float32(255.0) - self.mean) / self.std
+        return x[None], scale, offset
+
+    def _decode(self, outputs: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Boxes ``x0, y0, x1, y1`` in the input's pixels, scores and classes."""
+        layout = self.layout
+        if layout == "auto":
+            rows, cols = np.shape(outputs[0])[1:]
+            layout = self.layout = "yolov8" if rows < cols else "yolov5"
+        if layout == "ssd":
+            if len(outputs) != 2:
+                raise ValueError(f"an SSD-style model has two outputs (boxes, scores); this "
+                                 f"one gave {len(outputs)}")
+            boxes, scores = np.asarray(outputs[0])[0], np.asarray(outputs[1])[0]
+            if boxes.ndim != 2 or boxes.shape[1] != 4 or scores.ndim != 2 \
+                    or len(scores) != len(boxes) or scores.shape[1] < 2:
+                raise ValueError(f"SSD-style outputs must be boxes (1, N, 4) and scores (1, N, "
+                                 f"C >= 2); got {outputs[0].shape} and {outputs[1].shape}")
+            cls = 1 + np.argmax(scores[:, 1:], axis=1)
+            best = scores[np.arange(len(cls)), cls]
+            H, W = self.size
+            return boxes * np.array([W, H, W, H]), best, cls
+        out = np.asarray(outputs[0])
+        if out.ndim != 3 or out.shape[0] != 1:
+            raise ValueError(f"a YOLO-style model has one output (1, ..., ...); got "
+                             f"{[np.shape(o) for o in outputs]}")
+        a = out[0]
+        if layout == "yolov8":
+            if a.shape[0] > a.shape[1]:  # an export transposed to (N, 4 + C)
+                a = a.T
+            a = a.T  # (N, 4 + C)
+            if a.shape[1] < 5:
+                raise ValueError(f"a YOLOv8-style output has 4 + C rows (C >= 1); got "
+                                 f"{out.shape}")
+            cls = np.argmax(a[:, 4:], axis=1)
+            best = a[np.arange(len(a)), 4 + cls]
+        else:
+            if a.shape[1] < 6:
+                raise ValueError(f"a YOLOv5-style output has 5 + C columns (C >= 1); got "
+                                 f"{out.shape}")
+            cls = np.argmax(a[:, 5:], axis=1)
+            best = a[:, 4] * a[np.arange(len(a)), 5 + cls]
+        c, s = a[:, :2], a[:, 2:4] / 2
+        return np.c_[c - s, c + s], best, cls
+
+    def detect(self, image: np.ndarray) -> Detections:
+        """The detections in one image (BGR or grey, ``uint8``), in its pixels, best first.
+
+        Raises
+        ------
+        ValueError
+            If the model's outputs do not fit its layout.
+        """
+        x, scale, offset = self._input(np.asarray(image))
+        outputs = self.session.run(None, {self.input_name: x})
+        boxes, scores, cls = self._decode(outputs)
+        keep = scores >= self.min_score
+        if self.classes is not None:
+            keep &= np.isin(cls, self.classes)
+        boxes, scores, cls = boxes[keep].astype(np.float64), scores[keep].astype(np.float64), \
+            cls[keep].astype(np.int64)
+        if len(boxes):
+            # per class: each class's boxes moved far from the others' before one suppression
+            span = float(np.abs(boxes).max()) + 1.0
+            kept = nms(boxes + (cls * 2 * span)[:, None], scores, self.nms_iou)
+            boxes, scores, cls = boxes[kept], scores[kept], cls[kept]
+        h, w = np.asarray(image).shape[:2]
+        boxes = (boxes - offset) / scale
+        boxes = np.clip(boxes, 0.0, [w, h, w, h])
+        return Detections(boxes=boxes, scores=scores, classes=cls)
+
+    def __repr__(self) -> str:
+        classes = None if self.classes is None else self.classes.tolist()
+        return (f"ONNXDetector(layout={self.layout!r}, input {self.size[0]}x{self.size[1]}, "
+                f"{self.resize}, classes={classes}, min_score={self.min_score}, "
+                f"nms_iou={self.nms_iou})")

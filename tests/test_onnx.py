@@ -1,0 +1,180 @@
+"""The ONNX front-end: small models built here (onnx.helper) that emit known tensors in each
+output layout, and the boxes they must give, worked by hand; letterboxing, the class filter,
+the score threshold and per-class suppression; and the front-end in a tracking run."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+onnx = pytest.importorskip("onnx")
+pytest.importorskip("onnxruntime")
+
+from onnx import TensorProto, helper, numpy_helper  # noqa: E402
+
+from vistrack.frontends.onnx import ONNXDetector, letterbox  # noqa: E402
+
+
+def constant_model(path: Path, outputs: list[np.ndarray], size=(64, 64),
+                   names=("out0", "out1")) -> Path:
+    """A model taking an image (1, 3, H, W) and returning ``outputs`` whatever the image,
+    each plus 0 times the image's mean, so that the input is used."""
+    H, W = size
+    nodes = [helper.make_node("ReduceMean", ["images"], ["mean"], keepdims=0),
+             helper.make_node("Mul", ["mean", "zero"], ["nothing"])]
+    inits = [numpy_helper.from_array(np.zeros((), np.float32), "zero")]
+    outs = []
+    for k, value in enumerate(outputs):
+        inits.append(numpy_helper.from_array(value.astype(np.float32), f"value{k}"))
+        nodes.append(helper.make_node("Add", [f"value{k}", "nothing"], [names[k]]))
+        outs.append(helper.make_tensor_value_info(names[k], TensorProto.FLOAT, value.shape))
+    graph = helper.make_graph(
+        nodes, "constant", [helper.make_tensor_value_info("images", TensorProto.FLOAT,
+                                                          [1, 3, H, W])], outs, inits)
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
+    model.ir_version = 8
+    onnx.checker.check_model(model)
+    onnx.save(model, str(path))
+    return path
+
+
+IMAGE = np.zeros((64, 128, 3), np.uint8)  # 128 wide, 64 high: letterboxed into 64 x 64 at 1/2,
+# 16 rows of padding above and below
+
+
+def to_image(x0, y0, x1, y1):
+    """A box in the 64 x 64 input's pixels, in IMAGE's: minus the padding, times 2."""
+    return [2 * x0, 2 * (y0 - 16), 2 * x1, 2 * (y1 - 16)]
+
+
+def test_letterbox_centres_the_scaled_image():
+    img = np.arange(64 * 128 * 3, dtype=np.uint8).reshape(64, 128, 3)
+    out, r, (left, top) = letterbox(img, (64, 64))
+    assert (r, left, top) == (0.5, 0.0, 16.0)
+    assert (out[:16] == 114).all() and (out[48:] == 114).all()
+    out, r, (left, top) = letterbox(np.zeros((100, 50), np.uint8), (64, 64))
+    assert (out.shape, r, left, top) == ((64, 64), 0.64, 16.0, 0.0)
+
+
+def test_yolov8_layout(tmp_path):
+    # (1, 4 + C, N): C = 3 classes, N = 4 boxes, one per column
+    cols = np.array([
+        # cx, cy, w, h, class scores
+        [32, 32, 20, 10, 0.9, 0.1, 0.0],   # class 0 at 0.9
+        [33, 32, 20, 10, 0.8, 0.0, 0.0],   # the same place, lower: suppressed
+        [33, 32, 20, 10, 0.0, 0.7, 0.0],   # the same place, class 1: kept
+        [10, 20, 4, 8, 0.0, 0.0, 0.05],    # below min_score
+    ] + [[0, 0, 0, 0, 0, 0, 0]] * 8, np.float32)  # N = 12 columns, more than 4 + C = 7 rows
+    model = constant_model(tmp_path / "v8.onnx", [cols.T[None]])
+    det = ONNXDetector(model)
+    assert det.layout == "yolov8" and det.size == (64, 64) and det.resize == "letterbox"
+    d = det.detect(IMAGE)
+    np.testing.assert_allclose(d.boxes, [to_image(22, 27, 42, 37), to_image(23, 27, 43, 37)])
+    np.testing.assert_allclose(d.scores, [0.9, 0.7], rtol=1e-6)
+    assert d.classes.tolist() == [0, 1]
+    # only class 1
+    d = ONNXDetector(model, classes=[1]).detect(IMAGE)
+    assert d.classes.tolist() == [1] and len(d) == 1
+    # everything above 0, the lowest too, and no suppression
+    d = ONNXDetector(model, min_score=0.01, nms_iou=1.0).detect(IMAGE)
+    assert len(d) == 4
+    # the same export transposed to (1, N, 4 + C), its layout given
+    model_t = constant_model(tmp_path / "v8t.onnx", [cols[None]])
+    assert ONNXDetector(model_t).layout == "yolov5"  # as its shape says: N rows > 7 columns
+    d = ONNXDetector(model_t, layout="yolov8").detect(IMAGE)
+    np.testing.assert_allclose(d.boxes[0], to_image(22, 27, 42, 37))
+
+
+def test_yolov5_layout(tmp_path):
+    # (1, N, 5 + C): objectness times the best class's probability
+    rows = np.array([
+        [32, 32, 20, 10, 0.5, 0.2, 0.8],   # class 1 at 0.4
+        [40, 40, 8, 8, 0.9, 0.9, 0.1],     # class 0 at 0.81
+        [20, 20, 8, 8, 0.1, 0.5, 0.5],     # 0.05: below min_score
+        [41, 40, 8, 8, 0.9, 0.8, 0.1],     # class 0 at 0.72, overlapping the second: dropped
+        [50, 30, 6, 6, 0.3, 0.1, 0.1],     # 0.03
+        [5, 5, 4, 4, 0.2, 0.5, 0.0],       # 0.1: kept (>= min_score)
+        [60, 60, 4, 4, 0.0, 1.0, 1.0],
+        [30, 50, 2, 2, 0.0, 0.0, 0.0],
+    ], np.float32)  # 8 rows, 7 columns: rows > columns, so "auto" reads YOLOv5
+    model = constant_model(tmp_path / "v5.onnx", [rows[None]])
+    det = ONNXDetector(model)
+    assert det.layout == "yolov5"
+    d = det.detect(IMAGE)
+    np.testing.assert_allclose(d.scores, [0.81, 0.4, 0.1], rtol=1e-6)
+    assert d.classes.tolist() == [0, 1, 0]
+    np.testing.assert_allclose(d.boxes, [to_image(36, 36, 44, 44), to_image(22, 27, 42, 37),
+                                         np.clip(to_image(3, 3, 7, 7), 0, None)])
+
+
+def test_ssd_layout(tmp_path):
+    # boxes (1, N, 4) x0, y0, x1, y1 as fractions of the input; scores (1, N, C), class 0 the
+    # background; the image stretched (not letterboxed) to the input
+    boxes = np.array([[0.25, 0.5, 0.5, 1.0], [0.1, 0.1, 0.2, 0.2], [0.0, 0.0, 1.0, 1.0]])
+    scores = np.array([[0.1, 0.2, 0.7], [0.9, 0.05, 0.05], [0.5, 0.3, 0.2]])
+    model = constant_model(tmp_path / "ssd.onnx", [boxes[None], scores[None]], size=(32, 32))
+    det = ONNXDetector(model, min_score=0.25)
+    assert det.layout == "ssd" and det.resize == "stretch"
+    d = det.detect(IMAGE)  # 128 x 64: x times 128, y times 64
+    np.testing.assert_allclose(d.boxes, [[32, 32, 64, 64], [0, 0, 128, 64]])
+    np.testing.assert_allclose(d.scores, [0.7, 0.3], rtol=1e-6)
+    assert d.classes.tolist() == [2, 1]
+
+
+def test_the_onnx_detector_checks_what_it_is_given(tmp_path):
+    model = constant_model(tmp_path / "m.onnx", [np.zeros((1, 6, 10))])
+    with pytest.raises(FileNotFoundError, match="nope.onnx"):
+        ONNXDetector(tmp_path / "nope.onnx")
+    with pytest.raises(ValueError, match="layout must be one of"):
+        ONNXDetector(model, layout="yolov3")
+    with pytest.raises(ValueError, match="contradicts the model's input"):
+        ONNXDetector(model, input_size=(32, 32))
+    bad = tmp_path / "bad.onnx"
+    bad.write_bytes(b"not a model")
+    with pytest.raises(ValueError, match="bad.onnx: not an ONNX model"):
+        ONNXDetector(bad)
+    with pytest.raises(ValueError, match="two outputs"):
+        ONNXDetector(model, layout="ssd").detect(IMAGE)
+    mismatched = constant_model(tmp_path / "two.onnx", [np.zeros((1, 2, 4)),
+                                                         np.zeros((1, 3, 2))])
+    with pytest.raises(ValueError, match=r"scores \(1, N, C >= 2\); got \(1, 2, 4\) and "
+                                         r"\(1, 3, 2\)"):
+        ONNXDetector(mismatched).detect(IMAGE)
+
+
+def test_an_onnx_model_as_the_front_end_of_a_tracking_run(tmp_path, capsys):
+    from vistrack.cli import main
+    from vistrack.data import demo_clip
+    from vistrack.io import read_mot
+    from vistrack.pipeline import track_video
+
+    # one person-sized box, class 0, and a car (class 2) elsewhere, in every frame; the
+    # clip is 768 x 576, letterboxed into 64 x 64 at 1/12 with 8 rows of padding at the top
+    cols = np.array([[32, 32, 8, 16, 0.9, 0.0, 0.0], [10, 20, 6, 4, 0.0, 0.0, 0.9]]
+                    + [[0.0] * 7] * 10).T[None]  # (1, 4 + 3, 12)
+    model = constant_model(tmp_path / "m.onnx", [cols])
+    run = track_video(demo_clip().video, tmp_path / "out", frontend=f"onnx:{model}", stop=6,
+                      annotate=False, classes=[0])
+    t = read_mot(run.out_dir / "tracks.txt")
+    assert len(np.unique(t.ids)) == 1 and t.frames.max() == 6
+    # x0 = (32 - 4) * 12 = 336, y0 = (32 - 8 - 8) * 12 = 192, 96 wide, 192 high
+    np.testing.assert_allclose(t.boxes[-1], [336, 192, 96, 192], atol=0.01)
+    assert main(["track", str(demo_clip().video), "--frontend", f"onnx:{model}", "--classes",
+                 "0,2", "--onnx-layout", "yolov8", "--stop", "6", "--out-dir",
+                 str(tmp_path / "cli"), "--still-camera"]) == 0
+    t = read_mot(tmp_path / "cli" / "tracks.txt")
+    assert len(np.unique(t.ids)) == 2  # the person and the car
+    capsys.readouterr()
+    assert main(["track", str(demo_clip().video), "--frontend", "onnx:missing.onnx",
+                 "--out-dir", str(tmp_path / "x")]) == 2
+    assert "missing.onnx does not exist" in capsys.readouterr().err
+
+
+def test_classes_on_the_command_line_are_checked(capsys):
+    from vistrack.cli import main
+
+    for bad in ("a", "-1", ","):
+        with pytest.raises(SystemExit) as e:
+            main(["track", "x.mp4", "--out-dir", "o", "--classes", bad])
+        assert e.value.code == 2
+        assert "--classes" in capsys.readouterr().err
