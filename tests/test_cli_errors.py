@@ -55,7 +55,8 @@ def test_sigterm_keeps_the_earlier_outputs_and_says_so_in_one_line(tmp_path):
     first = subprocess.run(cmd, capture_output=True, text=True, env=ENV, cwd=ROOT)
     assert first.returncode == 0, first.stderr
     before = {p.name: p.read_bytes() for p in out.iterdir()}
-    assert sorted(before) == ["annotated.mp4", "tracks.csv", "tracks.txt", "trajectories.png"]
+    assert sorted(before) == ["annotated.mp4", "run.json", "tracks.csv", "tracks.txt",
+                              "trajectories.png"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env=ENV, cwd=ROOT)
     # the annotated video's partial file appears with the first frame written: the run is

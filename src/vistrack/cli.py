@@ -86,6 +86,20 @@ def _command_parser(parser: argparse.ArgumentParser, command: str | None
     return parser
 
 
+def _command_line(argv: Sequence[str]) -> str:
+    """``vistrack ARGS...`` as a shell would read it back."""
+    import shlex
+
+    return shlex.join(["vistrack", *argv])
+
+
+def _report(args: argparse.Namespace) -> int:
+    from .report import write_report
+
+    print(f"wrote {write_report(args.out_dir, force=args.force)}")
+    return 0
+
+
 def _class_list(text: str) -> list[int]:
     """``--classes 0,2``: class numbers separated by commas."""
     try:
@@ -107,6 +121,7 @@ def _demo(args: argparse.Namespace) -> int:
         argv = ["track", str(clip.video), "--gt", str(clip.gt), "--out-dir",
                 str(Path(args.out) / "pets09-s2l1")] + (["--force"] if args.force else [])
         track = build_parser().parse_args(argv)
+        track.command_line = getattr(args, "command_line", None)
         return int(track.func(track))
     from .demo import run_kalman_demo
 
@@ -245,8 +260,9 @@ def _track(args: argparse.Namespace) -> int:
                      "onnx_layout"):
             if getattr(args, flag) is not None:
                 return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
-        if args.skip_bad_frames:
-            return fail("--skip-bad-frames goes with --out-dir")
+        for flag in ("skip_bad_frames", "report"):
+            if getattr(args, flag):
+                return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
         if Path(args.input).is_file():
             return fail(f"--out is for a MOTChallenge sequence folder (seqinfo.ini, "
                         f"det/det.txt), and {args.input} is a file: track a video with "
@@ -293,6 +309,8 @@ def _track(args: argparse.Namespace) -> int:
         if cfg is not None and cfg.offline.enabled:
             return fail("--offline, its settings and --detections go with --out (use "
                         "--frontend detections:FILE with --out-dir)")
+        if args.report:  # before anything runs: a report that cannot be written fails now
+            check_output(Path(args.out_dir) / "report.html", force=args.force, name="--report")
         run = track_video(args.input, args.out_dir, fps=args.fps, gt=args.gt,
                           force=args.force, progress=progress,
                           **_video_options(args, name, box, cfg))
@@ -303,6 +321,10 @@ def _track(args: argparse.Namespace) -> int:
               f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})"
               + (f"; compiling took {compiling:.1f} s" if compiling >= 0.05 else ""),
               file=report)
+        if args.report:
+            from .report import write_report
+
+            run.files["report"] = write_report(args.out_dir, force=True)
         for key, path in run.files.items():
             print(f"  {key:<7} {path}", file=report)
         if run.scores is not None:
@@ -321,7 +343,8 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
     options = {k: getattr(args, k) for k in ("frontend", "stop", "min_area", "background",
                                               "classes", "onnx_layout")
                if getattr(args, k) is not None}
-    options.update(tracker=name, skip_bad_frames=args.skip_bad_frames)
+    options.update(tracker=name, skip_bad_frames=args.skip_bad_frames,
+                   command=getattr(args, "command_line", None))
     if args.config is not None or not box:
         if cfg is not None:
             options["config"] = cfg
@@ -351,9 +374,11 @@ def _track_many(args: argparse.Namespace) -> int:
                     "--out-dir OUT/ (from pixels, NAME/ each)")
     if args.jobs is not None and args.jobs < 1:
         return fail(f"--jobs must be 1 or more; got {args.jobs}")
-    for flag in ("print_config", "gt", "fps", "detections", "columns"):
+    for flag in ("print_config", "gt", "fps", "detections", "columns", "report"):
         if getattr(args, flag):
-            return fail(f"--{flag.replace('_', '-')} goes with one input")
+            return fail(f"--{flag.replace('_', '-')} goes with one input (vistrack report "
+                        "OUT_DIR makes each input's page)" if flag == "report" else
+                        f"--{flag.replace('_', '-')} goes with one input")
     name, box, problem = _tracker_and_numbers(args)
     if problem:
         return fail(problem)
@@ -477,11 +502,6 @@ def _track_one(args: argparse.Namespace) -> int:
     return 0
 
 
-_COLUMNS = (("HOTA", 1), ("DetA", 1), ("AssA", 1), ("MOTA", 1), ("MOTP", 1), ("IDF1", 1),
-            ("IDP", 1), ("IDR", 1), ("TP", 0), ("FP", 0), ("FN", 0), ("IDSW", 0), ("Frag", 0),
-            ("MT", 0), ("PT", 0), ("ML", 0))
-
-
 def _eval(args: argparse.Namespace) -> int:
     import json
 
@@ -545,13 +565,15 @@ def _table(res: dict, stream=None) -> None:
     """The scores as a table: a column of 7 characters per score, wider where a value needs it
     (MOTA -1200.0, a count of millions), so that a space always parts two values; the names'
     column as wide as its header or its longest name, and two spaces."""
+    from .evaluation.mot import SCORE_COLUMNS
+
     stream = sys.stdout if stream is None else stream
     width = max(len(k) for k in ["sequence", *res]) + 2
-    rows = [[f"{100 * s[k]:.1f}" if pct else f"{s[k]:d}" for k, pct in _COLUMNS]
+    rows = [[f"{100 * s[k]:.1f}" if pct else f"{s[k]:d}" for k, pct in SCORE_COLUMNS]
             for s in (c.summary() for c in res.values())]
-    widths = [max([7] + [len(r[j]) + 1 for r in rows]) for j in range(len(_COLUMNS))]
+    widths = [max([7] + [len(r[j]) + 1 for r in rows]) for j in range(len(SCORE_COLUMNS))]
     print("".join([f"{'sequence':<{width}}"] + [f"{c:>{w}}" for (c, _), w in
-                                                 zip(_COLUMNS, widths)]), file=stream)
+                                                 zip(SCORE_COLUMNS, widths)]), file=stream)
     for name, cells in zip(res, rows):
         print("".join([f"{name:<{width}}"] + [f"{v:>{w}}" for v, w in zip(cells, widths)]),
               file=stream)
@@ -669,12 +691,29 @@ def build_parser() -> argparse.ArgumentParser:
                        "seeds' running mean and variance)")
     track.add_argument("--min-area", type=float,
                        help="video mode, bgsub: the smallest blob, in pixels (default: 500)")
+    track.add_argument("--report", action="store_true",
+                       help="video mode: also write OUT/report.html, one page with the "
+                       "command, the scores, the annotated video and the plots (as vistrack "
+                       "report OUT writes it)")
     track.add_argument("--force", action="store_true", help="overwrite existing outputs")
     track.add_argument("--quiet", action="store_true",
                        help="no progress bar (shown on a terminal only)")
     track.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                        help=debug_help)
     track.set_defaults(func=_track)
+    rep = sub.add_parser(
+        "report", help="one HTML page of a video run: the command, scores, video and plots",
+        description="Write OUT_DIR/report.html from what `vistrack track VIDEO --out-dir "
+        "OUT_DIR` wrote: the command that made it, the run's numbers, the scores against the "
+        "ground truth, the annotated video (as WebM) and the trajectories, and with ground "
+        "truth HOTA over α and each object's timeline. The page holds everything itself: it "
+        "can be mailed or opened anywhere.")
+    rep.add_argument("out_dir", metavar="OUT_DIR", help="a folder written by vistrack track "
+                     "--out-dir")
+    rep.add_argument("--force", action="store_true", help="overwrite an existing report.html")
+    rep.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                     help=debug_help)
+    rep.set_defaults(func=_report)
     fit = sub.add_parser(
         "fit", help="learn a box tracker's motion and measurement noise from sequences",
         description="Learn the box motion's noise (std_pos, std_vel) and each value's "
@@ -781,6 +820,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     if getattr(args, "seeds", 1) < 1:
         command.error(f"--seeds must be >= 1; got {args.seeds}")
+    args.command_line = _command_line(sys.argv[1:] if argv is None else argv)
     # SIGTERM stops a run as Ctrl-C does, for as long as main runs (signal handlers can be
     # set in the main thread only)
     old = (signal.signal(signal.SIGTERM, _terminate)

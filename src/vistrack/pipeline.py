@@ -1092,6 +1092,8 @@ class VideoRun:
         A box tracker's configuration.
     derived : dict or None
         :func:`derived_values` of a box tracker.
+    first : int
+        The first frame tracked (the last is ``first + frames - 1``).
 
     Examples
     --------
@@ -1110,6 +1112,7 @@ class VideoRun:
     scores: MOTCounts | None
     config: TrackConfig | None = None
     derived: dict | None = None
+    first: int = 1
 
     @property
     def fps(self) -> float:
@@ -1173,7 +1176,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 confidence: Callable[[np.ndarray], ConfidenceMap] | None = None,
                 det_threshold: float = 0.5, classes: Sequence[int] | None = None,
                 onnx_layout: str = "auto", config: TrackConfig | None = None,
-                **overrides: object) -> VideoRun:
+                command: str | None = None, **overrides: object) -> VideoRun:
     """Track a video (a file, an image folder or a MOTChallenge sequence folder) from pixels.
 
     Writes into ``out_dir`` (:data:`SINKS`): ``tracks.txt`` (MOTChallenge results),
@@ -1209,6 +1212,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         The detector's continuous confidence, a callable ``image -> ConfidenceMap`` (default
         :class:`vistrack.frontends.detectors.HOGConfidence`), for ``dcpf`` and the
         ``confidence`` front-end, and the SVM margin above which its peaks are detections.
+    command : str, optional
+        The command line that asked for this run, kept in ``run.json`` (written beside the
+        outputs: the command, the input, the ground truth, the frames, the scores), which
+        ``vistrack report`` reads.
     classes, onnx_layout : sequence of int, str
         For ``onnx:MODEL``: the model's classes kept (default all) and its output layout
         (:data:`~vistrack.frontends.onnx.LAYOUTS`; default told from the outputs).
@@ -1276,6 +1283,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     from .io.video import VideoReader
 
     files = video_outputs(out_dir, annotate=annotate, force=force)
+    check_output(Path(out_dir) / "run.json", force=force, name="out_dir")
     out_dir = Path(out_dir)
     gt_table = read_mot(gt) if gt is not None else None
     if confidence is not None and not callable(confidence):
@@ -1316,10 +1324,32 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= last)]
         scores = evaluate_mot(g, read_mot(files["tracks"]), last, benchmark="auto")
     n_tracks = len(rows.identities)
-    if not isinstance(trk, BoxTracker):
-        return VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores)
-    return VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
-                    ctx.resolved, derived_values(trk))
+    result = VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
+                      ctx.resolved if isinstance(trk, BoxTracker) else None,
+                      derived_values(trk) if isinstance(trk, BoxTracker) else None,
+                      reader.start)
+    _write_run_info(result, video, gt, command)
+    return result
+
+
+def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
+                    command: str | None) -> None:
+    """``run.json`` beside a run's outputs: how they were made (:mod:`vistrack.report`)."""
+    import json
+
+    from . import __version__
+    from .io.atomic import replacing
+    from .report import RUN_INFO
+
+    info = {"command": command, "vistrack": __version__, "name": Path(video).stem,
+            "input": str(Path(video).resolve()),
+            "gt": str(Path(gt).resolve()) if gt is not None else None,
+            "first_frame": run.first, "last_frame": run.first + run.frames - 1,
+            "frames": run.frames, "rows": run.rows, "tracks": run.tracks,
+            "fps": round(run.fps, 1),
+            "scores": run.scores.summary() if run.scores is not None else None}
+    with replacing(run.out_dir / RUN_INFO) as part:
+        part.write_text(json.dumps(info, indent=2) + "\n")
 
 
 # -------------------------------------------------------------------- one object, by hand

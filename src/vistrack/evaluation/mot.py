@@ -85,7 +85,14 @@ def _scipy_lsa() -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
     return lsa
 
 __all__ = ["MOTCounts", "evaluate_mot", "combine", "box_iou_xywh", "ALPHAS", "Matches",
-           "clear_matches"]
+           "clear_matches", "SCORE_COLUMNS"]
+
+SCORE_COLUMNS = (("HOTA", True), ("DetA", True), ("AssA", True), ("MOTA", True),
+                 ("MOTP", True), ("IDF1", True), ("IDP", True), ("IDR", True), ("TP", False),
+                 ("FP", False), ("FN", False), ("IDSW", False), ("Frag", False), ("MT", False),
+                 ("PT", False), ("ML", False))
+"""The columns of a score table (``vistrack eval``, ``vistrack report``): each key of
+:meth:`MOTCounts.summary` and whether it is a fraction shown as a percentage."""
 
 ALPHAS = np.arange(0.05, 0.99, 0.05)
 """HOTA's IoU thresholds: 0.05, 0.10, ..., 0.95."""

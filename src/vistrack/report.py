@@ -1,0 +1,229 @@
+"""One page to look at: ``vistrack report OUT_DIR`` (or ``vistrack track ... --report``)
+writes ``OUT_DIR/report.html`` from what ``vistrack track --out-dir OUT_DIR`` wrote.
+
+The page holds everything itself (no file beside it, no network): the command that made the
+results, the run's numbers, the scores against the ground truth, the annotated video
+(``annotated.mp4`` re-encoded as WebM VP8, which every browser plays, at most 640 pixels
+wide), the trajectories and, with ground truth, HOTA, DetA and AssA over the localisation
+threshold and the timeline of every object (:func:`vistrack.viz.plot_timeline`). Images and
+the video are embedded as ``data:`` URIs. A short script marks the video ``data-state=
+"playable"`` once the browser has decoded its first frame, or shows a note if it cannot.
+
+``run.json``, which ``vistrack track --out-dir`` writes beside its outputs, says how they
+were made (the command, the input, the ground truth, the scores); without it the page shows
+what the folder holds.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+__all__ = ["write_report", "RUN_INFO"]
+
+RUN_INFO = "run.json"
+"""The name of the file, beside a run's outputs, that says how they were made."""
+
+_MAX_WIDTH = 640
+
+
+def _webm(video: Path, max_width: int = _MAX_WIDTH) -> bytes:
+    """``video`` re-encoded as WebM (VP8), scaled down to ``max_width`` pixels if wider."""
+    import cv2
+
+    reader = cv2.VideoCapture(str(video))
+    if not reader.isOpened():
+        raise ValueError(f"{video}: cannot be read as a video")
+    fps = reader.get(cv2.CAP_PROP_FPS) or 25.0
+    w, h = int(reader.get(cv2.CAP_PROP_FRAME_WIDTH)), int(reader.get(cv2.CAP_PROP_FRAME_HEIGHT))
+    scale = min(1.0, max_width / max(w, 1))
+    size = (max(2, int(round(w * scale / 2)) * 2), max(2, int(round(h * scale / 2)) * 2))
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "video.webm"
+        with _stderr_silenced():  # FFmpeg's WebM muxer takes no four-character code, and
+            # OpenCV says so on stderr each time, before it falls back to VP8's own
+            writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"VP80"), fps, size)
+        if not writer.isOpened():  # pragma: no cover - an OpenCV built without libvpx
+            raise ValueError("this OpenCV cannot write WebM (VP8) video")
+        n = 0
+        while True:
+            ok, frame = reader.read()
+            if not ok:
+                break
+            writer.write(cv2.resize(frame, size, interpolation=cv2.INTER_AREA)
+                         if size != (w, h) else frame)
+            n += 1
+        writer.release()
+        reader.release()
+        if n == 0:
+            raise ValueError(f"{video}: no frames")
+        return path.read_bytes()
+
+
+@contextmanager
+def _stderr_silenced() -> Iterator[None]:
+    """Standard error (the file descriptor, which C code writes to) sent nowhere."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def _png(fig: Any) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    return buf.getvalue()
+
+
+def _data(kind: str, data: bytes) -> str:
+    return f"data:{kind};base64,{base64.b64encode(data).decode('ascii')}"
+
+
+def _score_table(scores: dict[str, dict]) -> str:
+    from .evaluation.mot import SCORE_COLUMNS
+
+    head = "".join(f"<th>{c}</th>" for c, _ in SCORE_COLUMNS)
+    rows = []
+    for name, s in scores.items():
+        cells = "".join(f"<td>{100 * s[c]:.1f}</td>" if pct else f"<td>{int(s[c])}</td>"
+                        for c, pct in SCORE_COLUMNS)
+        rows.append(f"<tr><th>{html.escape(name)}</th>{cells}</tr>")
+    return (f"<table class='scores'><tr><th>sequence</th>{head}</tr>{''.join(rows)}"
+            f"</table>")
+
+
+def _gt_plots(out_dir: Path, info: dict) -> list[tuple[str, bytes]]:
+    """HOTA over α and the timeline, when the run's ground truth is known and readable."""
+    from .evaluation import clear_matches, evaluate_mot
+    from .io.motchallenge import read_mot
+    from .viz.plots import plot_hota_alpha, plot_timeline
+
+    gt_path = info.get("gt")
+    if not gt_path or not Path(gt_path).is_file():
+        return []
+    first, last = int(info.get("first_frame", 1)), int(info.get("last_frame", 0))
+    gt, pred = read_mot(gt_path), read_mot(out_dir / "tracks.txt")
+    if last <= 0:
+        last = int(pred.frames.max()) if len(pred) else 0
+    g = gt[(gt.frames >= first) & (gt.frames <= last)]
+    name = info.get("name") or out_dir.name
+    return [("HOTA, DetA and AssA over the localisation threshold α",
+             _png(plot_hota_alpha({name: evaluate_mot(g, pred, last)}))),
+            ("Every object over time, coloured by the predicted identity that covers it",
+             _png(plot_timeline(clear_matches(g, pred, last), title=name)))]
+
+
+_STYLE = """
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1240px; color: #222;
+       padding: 0 1em; }
+h1 { font-size: 1.4em; } h2 { font-size: 1.1em; margin-top: 1.6em; }
+pre { background: #f4f4f4; padding: 0.7em; overflow-x: auto; }
+table.scores { border-collapse: collapse; font-variant-numeric: tabular-nums; }
+table.scores td, table.scores th { border-bottom: 1px solid #ddd; padding: 0.2em 0.5em;
+                                   text-align: right; }
+img, video { max-width: 100%; border: 1px solid #ccc; }
+.note { color: #a00; }
+"""
+
+_SCRIPT = """
+for (const v of document.querySelectorAll('video')) {
+  v.addEventListener('loadeddata', () => { v.dataset.state = 'playable'; });
+  v.addEventListener('error', () => {
+    v.dataset.state = 'error';
+    document.getElementById('video-note').hidden = false;
+  });
+}
+for (const img of document.querySelectorAll('img')) {
+  const mark = () => { img.dataset.state = img.naturalWidth > 0 ? 'shown' : 'error'; };
+  if (img.complete) { mark(); } else {
+    img.addEventListener('load', mark);
+    img.addEventListener('error', mark);
+  }
+}
+"""
+
+
+def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
+    """Write ``out_dir/report.html`` (see the module) and return its path.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        A folder written by ``vistrack track --out-dir`` (:func:`vistrack.pipeline.track_video`):
+        ``tracks.txt`` at least; ``annotated.mp4``, ``trajectories.png`` and ``run.json``
+        when there.
+    force : bool
+        Replace an existing ``report.html``.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``out_dir`` has no ``tracks.txt``.
+    FileExistsError
+        If ``report.html`` exists and ``force`` is False.
+    ValueError
+        If ``run.json`` or the video cannot be read, naming the file.
+    """
+    from .io.atomic import check_output, replacing
+
+    out_dir = Path(out_dir)
+    target = out_dir / "report.html"
+    tracks = out_dir / "tracks.txt"
+    if not tracks.is_file():
+        raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
+                                "track --out-dir wrote")
+    check_output(target, force=force, name="report")
+    info: dict = {}
+    run_info = out_dir / RUN_INFO
+    if run_info.is_file():
+        try:
+            info = json.loads(run_info.read_text())
+        except ValueError as e:
+            raise ValueError(f"{run_info}: not a run's description ({e})") from e
+    name = info.get("name") or out_dir.name
+    parts = [f"<h1>vistrack report: {html.escape(name)}</h1>"]
+    if info.get("command"):
+        parts.append(f"<p>Made by</p><pre>{html.escape(info['command'])}</pre>")
+    if info.get("frames"):
+        parts.append(
+            f"<p>{info['frames']} frames of {html.escape(str(info.get('input', '')))}: "
+            f"{info.get('rows', 0)} boxes of {info.get('tracks', 0)} tracks, "
+            f"{info.get('fps', 0):.0f} frames/s without writing; vistrack "
+            f"{html.escape(str(info.get('vistrack', '')))}.</p>")
+    if info.get("scores"):
+        gt = html.escape(str(info.get("gt", "")))
+        parts.append(f"<h2>Scores</h2><p>Against {gt}, over the frames tracked.</p>"
+                     + _score_table({name: info["scores"]}))
+    video = out_dir / "annotated.mp4"
+    if video.is_file():
+        parts.append("<h2>Annotated video</h2>"
+                     f"<video controls loop muted autoplay preload='auto' "
+                     f"src='{_data('video/webm', _webm(video))}'></video>"
+                     "<p id='video-note' class='note' hidden>This browser cannot play the "
+                     "video (WebM, VP8): annotated.mp4 beside this page is the same.</p>")
+    plot = out_dir / "trajectories.png"
+    figures = ([("Trajectories", plot.read_bytes())] if plot.is_file() else [])
+    figures += _gt_plots(out_dir, info)
+    for title, png in figures:
+        parts.append(f"<h2>{html.escape(title)}</h2><img alt='{html.escape(title)}' "
+                     f"src='{_data('image/png', png)}'>")
+    page = ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
+            f"<title>vistrack report: {html.escape(name)}</title><style>{_STYLE}</style>"
+            f"</head><body>{''.join(parts)}<script>{_SCRIPT}</script></body></html>\n")
+    with replacing(target) as part:
+        part.write_text(page, encoding="utf-8")
+    return target

@@ -1,0 +1,104 @@
+"""vistrack report: one self-contained HTML page of a video run, opened in a real browser
+(Debian's headless Chromium, which .ci/run installs when missing): no console message, every
+image shown, the video decoded, and a screenshot that is not blank."""
+
+import json
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from vistrack.cli import main
+from vistrack.data import demo_clip
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("report") / "run"
+    clip = demo_clip()
+    assert main(["track", str(clip.video), "--gt", str(clip.gt), "--stop", "40", "--out-dir",
+                 str(out), "--report"]) == 0
+    return out
+
+
+def test_the_page_holds_the_run(run_dir):
+    page = (run_dir / "report.html").read_text()
+    info = json.loads((run_dir / "run.json").read_text())
+    assert info["command"].startswith("vistrack track ") and "--report" in info["command"]
+    assert (info["frames"], info["first_frame"], info["last_frame"]) == (40, 1, 40)
+    assert info["scores"]["TP"] > 0
+    assert f"<pre>{info['command']}</pre>" in page
+    # the score table shows the run's own scores
+    assert f"<td>{100 * info['scores']['HOTA']:.1f}</td>" in page
+    assert f"<td>{info['scores']['IDSW']}</td>" in page
+    # everything inside the page: every source a data: URI
+    sources = re.findall(r"""(?:src|href)=['"]([^'"]{0,30})""", page)
+    assert sources and all(s.startswith("data:") for s in sources), sources
+    assert page.count("<img ") == 3  # trajectories, HOTA over alpha, the timeline
+    assert page.count("<video ") == 1
+
+
+def test_report_command_and_its_errors(run_dir, tmp_path, capsys):
+    assert main(["report", str(run_dir)]) == 2
+    assert "--force" in capsys.readouterr().err
+    assert main(["report", str(run_dir), "--force"]) == 0
+    assert capsys.readouterr().out.strip() == f"wrote {run_dir / 'report.html'}"
+    assert main(["report", str(tmp_path)]) == 2
+    assert "tracks.txt does not exist" in capsys.readouterr().err
+    # without run.json: what the folder holds
+    bare = tmp_path / "bare"
+    bare.mkdir()
+    for name in ("tracks.txt", "trajectories.png"):
+        shutil.copy(run_dir / name, bare / name)
+    assert main(["report", str(bare)]) == 0
+    page = (bare / "report.html").read_text()
+    assert "<h1>vistrack report: bare</h1>" in page and page.count("<img ") == 1
+
+
+def _browser() -> str:
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        path = shutil.which(name)
+        if path:
+            return path
+    pytest.skip("no headless Chromium here (.ci/run installs Debian's chromium package)")
+
+
+@pytest.mark.slow
+def test_the_page_in_a_real_browser(run_dir, tmp_path):
+    browser = _browser()
+    page = (run_dir / "report.html").resolve().as_uri()
+    common = [browser, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+              "--enable-logging=stderr", "--v=0", "--virtual-time-budget=15000",
+              f"--user-data-dir={tmp_path / 'profile'}"]
+    dom = subprocess.run(common + ["--dump-dom", page], capture_output=True, text=True,
+                         timeout=180)
+    assert dom.returncode == 0, dom.stderr[-2000:]
+    console = [line for line in dom.stderr.splitlines() if ":CONSOLE" in line]
+    assert not console, console  # no error, no warning, nothing logged by the page
+    states = re.findall(r'data-state="([a-z]+)"', dom.stdout)
+    assert sorted(states) == ["playable", "shown", "shown", "shown"], states
+    shot = tmp_path / "shot.png"
+    subprocess.run(common + [f"--screenshot={shot}", "--window-size=1280,1400", page],
+                   capture_output=True, timeout=180, check=True)
+    import cv2
+
+    image = cv2.imread(str(shot))
+    assert image is not None and image.shape[:2] == (1400, 1280)
+    assert image.std() > 20  # not blank: text, the table, the video's frame
+    # the video's frame is drawn: a region of many colours, not the page's white
+    colours = len(np.unique(image.reshape(-1, 3) // 32, axis=0))
+    assert colours > 50, colours
+
+
+def test_report_goes_with_one_video(tmp_path, capsys):
+    from tests.test_fit import _sequence
+
+    seq = _sequence(tmp_path / "SIM", np.random.default_rng(0), n_objects=2, T=5)
+    assert main(["track", str(seq), "--out", str(tmp_path / "t.txt"), "--report"]) == 2
+    assert "--report goes with --out-dir" in capsys.readouterr().err
+    assert main(["track", str(seq), "--out", str(tmp_path / "t.txt")]) == 0  # without it: fine
+    assert main(["track", str(seq), str(seq), "--out-dir", str(tmp_path / "many"),
+                 "--report"]) == 2
+    assert "--report goes with one input" in capsys.readouterr().err
