@@ -287,8 +287,9 @@ def test_an_interrupted_run_leaves_the_earlier_outputs_as_they_were(tmp_path):
 
     out = tmp_path / "out"
     first = track_video(folder, out, frontend=Truth(), fps=25)
-    before = {p.name: p.read_bytes() for p in first.files.values()}
-    assert len(before) == 4 and all(before.values())
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert sorted(before) == sorted([p.name for p in first.files.values()] + ["run.json"])
+    assert len(before) == 5 and all(before.values())
     with pytest.raises(KeyboardInterrupt):
         track_video(folder, out, frontend=Truth(stop=6), fps=25, force=True)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
