@@ -31,9 +31,10 @@ run: kernels
 	$(VENV)/bin/vistrack demo track --out out --force
 	$(VENV)/bin/vistrack demo kalman --out out/
 
-# the whole suite, slow-marked checks included, on every core (pytest-xdist)
+# the whole suite, slow-marked checks included, on every core (pytest-xdist; a worker that
+# runs out of tests takes some of another's, so the long ones do not leave a core idle at the end)
 test: kernels
-	$(PY) -m pytest -q -n auto
+	$(PY) -m pytest -q -n auto --dist worksteal
 
 $(VENV)/.lint-installed: $(STAMP)
 	$(INSTALL_E) ".[lint]"
