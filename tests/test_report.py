@@ -102,3 +102,16 @@ def test_report_goes_with_one_video(tmp_path, capsys):
     assert main(["track", str(seq), str(seq), "--out-dir", str(tmp_path / "many"),
                  "--report"]) == 2
     assert "--report goes with one input" in capsys.readouterr().err
+
+
+def test_a_ground_truth_gone_is_said(run_dir, tmp_path):
+    moved = tmp_path / "moved"
+    shutil.copytree(run_dir, moved)
+    (moved / "report.html").unlink()
+    info = json.loads((moved / "run.json").read_text())
+    info["gt"] = str(tmp_path / "gone" / "gt.txt")
+    (moved / "run.json").write_text(json.dumps(info))
+    assert main(["report", str(moved)]) == 0
+    page = (moved / "report.html").read_text()
+    assert "is not there any more" in page and page.count("<img ") == 1  # trajectories only
+    assert f"<td>{100 * info['scores']['HOTA']:.1f}</td>" in page  # the scores kept in run.json

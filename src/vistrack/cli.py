@@ -374,11 +374,12 @@ def _track_many(args: argparse.Namespace) -> int:
                     "--out-dir OUT/ (from pixels, NAME/ each)")
     if args.jobs is not None and args.jobs < 1:
         return fail(f"--jobs must be 1 or more; got {args.jobs}")
-    for flag in ("print_config", "gt", "fps", "detections", "columns", "report"):
+    for flag in ("print_config", "gt", "fps", "detections", "columns"):
         if getattr(args, flag):
-            return fail(f"--{flag.replace('_', '-')} goes with one input (vistrack report "
-                        "OUT_DIR makes each input's page)" if flag == "report" else
-                        f"--{flag.replace('_', '-')} goes with one input")
+            return fail(f"--{flag.replace('_', '-')} goes with one input")
+    if args.report:
+        return fail("--report goes with one input (vistrack report NAME/ makes an input's "
+                    "page afterwards)")
     name, box, problem = _tracker_and_numbers(args)
     if problem:
         return fail(problem)

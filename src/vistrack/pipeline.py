@@ -1181,8 +1181,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
 
     Writes into ``out_dir`` (:data:`SINKS`): ``tracks.txt`` (MOTChallenge results),
     ``tracks.csv``, ``annotated.mp4`` (boxes, identities, trails and 2-sigma ellipses of the
-    centres) and ``trajectories.png``; scores against ``gt`` (a MOTChallenge ground-truth
-    file) when given.
+    centres) and ``trajectories.png``, and ``run.json`` (how they were made, which
+    :mod:`vistrack.report` reads); scores against ``gt`` (a MOTChallenge ground-truth file)
+    when given.
 
     Parameters
     ----------

@@ -218,6 +218,9 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     plot = out_dir / "trajectories.png"
     figures = ([("Trajectories", plot.read_bytes())] if plot.is_file() else [])
     figures += _gt_plots(out_dir, info)
+    if info.get("gt") and not Path(info["gt"]).is_file():
+        parts.append(f"<p class='note'>The ground truth, {html.escape(info['gt'])}, is not "
+                     "there any more: no plot of HOTA over α nor timeline.</p>")
     for title, png in figures:
         parts.append(f"<h2>{html.escape(title)}</h2><img alt='{html.escape(title)}' "
                      f"src='{_data('image/png', png)}'>")
