@@ -580,6 +580,15 @@ def _table(res: dict, stream=None) -> None:
               file=stream)
 
 
+def _runs(command: argparse.ArgumentParser, func: Callable[[argparse.Namespace], int],
+          debug_help: str) -> None:
+    """End a command's parser: its own ``--debug`` (so that it may come after the command's
+    name; vistrack's applies when it is not given) and the function that runs it."""
+    command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                         help=debug_help)
+    command.set_defaults(func=func)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="vistrack", description="Visual object tracking: filters, trackers, scores."
@@ -604,9 +613,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="track: replace the results of an earlier run")
     demo.add_argument("--seeds", type=int, default=1000,
                       help="kalman: simulated runs for the error statistics (default: 1000)")
-    demo.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                      help=debug_help)
-    demo.set_defaults(func=_demo)
+    _runs(demo, _demo, debug_help)
     track = sub.add_parser(
         "track", help="track a MOTChallenge sequence's detections, or a video from pixels",
         description="With --out: track a MOTChallenge sequence folder's detections "
@@ -699,9 +706,7 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--force", action="store_true", help="overwrite existing outputs")
     track.add_argument("--quiet", action="store_true",
                        help="no progress bar (shown on a terminal only)")
-    track.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                       help=debug_help)
-    track.set_defaults(func=_track)
+    _runs(track, _track, debug_help)
     rep = sub.add_parser(
         "report", help="one HTML page of a video run: the command, scores, video and plots",
         description="Write OUT_DIR/report.html from what `vistrack track VIDEO --out-dir "
@@ -712,9 +717,7 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("out_dir", metavar="OUT_DIR", help="a folder written by vistrack track "
                      "--out-dir")
     rep.add_argument("--force", action="store_true", help="overwrite an existing report.html")
-    rep.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                     help=debug_help)
-    rep.set_defaults(func=_report)
+    _runs(rep, _report, debug_help)
     fit = sub.add_parser(
         "fit", help="learn a box tracker's motion and measurement noise from sequences",
         description="Learn the box motion's noise (std_pos, std_vel) and each value's "
@@ -737,9 +740,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="with --gt: do not track and score the held-out sequences")
     fit.add_argument("--force", action="store_true", help="overwrite an existing --out")
     fit.add_argument("--quiet", action="store_true", help="no report of each sequence")
-    fit.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                     help=debug_help)
-    fit.set_defaults(func=_fit)
+    _runs(fit, _fit, debug_help)
     one = sub.add_parser(
         "track-one", help="follow one object from a box drawn on the first frame",
         description="Follow one object through a video or image folder from its box in the "
@@ -759,9 +760,7 @@ def build_parser() -> argparse.ArgumentParser:
                      "or a boxes file) to score against")
     one.add_argument("--force", action="store_true", help="overwrite an existing boxes file")
     one.add_argument("--quiet", action="store_true", help="no progress bar")
-    one.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                     help=debug_help)
-    one.set_defaults(func=_track_one)
+    _runs(one, _track_one, debug_help)
     ev = sub.add_parser(
         "eval", help="score results against ground truth (HOTA, CLEAR MOT, IDF1)",
         description="Score MOTChallenge results as TrackEval does: HOTA, DetA, AssA, MOTA, "
@@ -783,9 +782,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                            "MOT20"),
                     help="preprocessing of the ground truth (default: auto, from its columns)")
     ev.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    ev.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                    help=debug_help)
-    ev.set_defaults(func=_eval)
+    _runs(ev, _eval, debug_help)
     return parser
 
 

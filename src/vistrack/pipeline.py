@@ -52,7 +52,7 @@ if TYPE_CHECKING:
 __all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "SINKS",
            "as_detector", "make_tracker", "track_sequence", "TrackRun", "resolve_config",
            "derived_values", "track_video", "VideoRun", "track_one",
-           "SingleRun", "video_outputs", "fit_sequences", "FitRun"]
+           "SingleRun", "video_outputs", "RUN_INFO", "fit_sequences", "FitRun"]
 
 
 @dataclass(frozen=True)
@@ -1128,11 +1128,18 @@ class VideoRun:
         return self.frames / max(s, 1e-12)
 
 
+RUN_INFO = "run.json"
+"""The file :func:`track_video` writes beside its outputs to say how they were made (the
+command, the input, the ground truth, the frames, the scores), which
+:func:`vistrack.report.write_report` reads."""
+
+
 def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = False,
                   name: str = "out_dir") -> dict[str, Path]:
     """The file of each sink :func:`track_video` writes in ``out_dir``, checked before any
     work is done: ``out_dir`` is a folder or can be made one, can be written in, its
-    outputs are not folders, and exist only if ``force``.
+    outputs (``run.json`` too, which is not a sink's) are not folders, and exist only if
+    ``force``.
 
     ``name`` names the argument or option in the messages.
 
@@ -1157,10 +1164,11 @@ def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = F
     out_dir = Path(out_dir)
     check_output(out_dir, name=name, folder=True)
     files = {key: out_dir / SINK_FILES[key] for key in SINKS if annotate or key != "video"}
-    for p in files.values():
+    written = [*files.values(), out_dir / RUN_INFO]  # and how they were made
+    for p in written:
         if p.is_dir():
             raise IsADirectoryError(f"{name} {out_dir}: {p} is a folder, not a file")
-    there = [str(p) for p in files.values() if p.exists()]
+    there = [str(p) for p in written if p.exists()]
     if there and not force:
         raise FileExistsError(f"{', '.join(there)} exist; pass --force to overwrite them")
     return files
@@ -1284,7 +1292,6 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     from .io.video import VideoReader
 
     files = video_outputs(out_dir, annotate=annotate, force=force)
-    check_output(Path(out_dir) / "run.json", force=force, name="out_dir")
     out_dir = Path(out_dir)
     gt_table = read_mot(gt) if gt is not None else None
     if confidence is not None and not callable(confidence):
@@ -1340,7 +1347,6 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
 
     from . import __version__
     from .io.atomic import replacing
-    from .report import RUN_INFO
 
     info = {"command": command, "vistrack": __version__, "name": Path(video).stem,
             "input": str(Path(video).resolve()),

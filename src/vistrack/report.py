@@ -9,7 +9,8 @@ threshold and the timeline of every object (:func:`vistrack.viz.plot_timeline`).
 the video are embedded as ``data:`` URIs. A short script marks the video ``data-state=
 "playable"`` once the browser has decoded its first frame, or shows a note if it cannot.
 
-``run.json``, which ``vistrack track --out-dir`` writes beside its outputs, says how they
+``run.json`` (:data:`vistrack.pipeline.RUN_INFO`), which ``vistrack track --out-dir``
+writes beside its outputs, says how they
 were made (the command, the input, the ground truth, the scores); without it the page shows
 what the folder holds.
 """
@@ -28,10 +29,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-__all__ = ["write_report", "RUN_INFO"]
-
-RUN_INFO = "run.json"
-"""The name of the file, beside a run's outputs, that says how they were made."""
+__all__ = ["write_report"]
 
 _MAX_WIDTH = 640
 
@@ -40,32 +38,26 @@ def _webm(video: Path, max_width: int = _MAX_WIDTH) -> bytes:
     """``video`` re-encoded as WebM (VP8), scaled down to ``max_width`` pixels if wider."""
     import cv2
 
-    reader = cv2.VideoCapture(str(video))
-    if not reader.isOpened():
-        raise ValueError(f"{video}: cannot be read as a video")
-    fps = reader.get(cv2.CAP_PROP_FPS) or 25.0
-    w, h = int(reader.get(cv2.CAP_PROP_FRAME_WIDTH)), int(reader.get(cv2.CAP_PROP_FRAME_HEIGHT))
+    from .io.video import VideoReader
+
+    reader = VideoReader(video)
+    w, h = reader.size
     scale = min(1.0, max_width / max(w, 1))
     size = (max(2, int(round(w * scale / 2)) * 2), max(2, int(round(h * scale / 2)) * 2))
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "video.webm"
         with _stderr_silenced():  # FFmpeg's WebM muxer takes no four-character code, and
             # OpenCV says so on stderr each time, before it falls back to VP8's own
-            writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"VP80"), fps, size)
+            writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"VP80"), reader.fps,
+                                     size)
         if not writer.isOpened():  # pragma: no cover - an OpenCV built without libvpx
             raise ValueError("this OpenCV cannot write WebM (VP8) video")
-        n = 0
-        while True:
-            ok, frame = reader.read()
-            if not ok:
-                break
-            writer.write(cv2.resize(frame, size, interpolation=cv2.INTER_AREA)
-                         if size != (w, h) else frame)
-            n += 1
+        for frame in reader:
+            image = frame.image
+            assert image is not None  # a reader's frames carry their images
+            writer.write(cv2.resize(image, size, interpolation=cv2.INTER_AREA)
+                         if size != (w, h) else image)
         writer.release()
-        reader.release()
-        if n == 0:
-            raise ValueError(f"{video}: no frames")
         return path.read_bytes()
 
 
@@ -176,9 +168,12 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     FileExistsError
         If ``report.html`` exists and ``force`` is False.
     ValueError
-        If ``run.json`` or the video cannot be read, naming the file.
+        If ``run.json`` cannot be read, naming it.
+    vistrack.io.VideoError
+        If the video cannot be read, naming it.
     """
     from .io.atomic import check_output, replacing
+    from .pipeline import RUN_INFO
 
     out_dir = Path(out_dir)
     target = out_dir / "report.html"

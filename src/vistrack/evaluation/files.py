@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..io.motchallenge import read_mot, read_seqinfo
+from ..io.motchallenge import MOTTable, read_mot, read_seqinfo
 from .mot import Matches, MOTCounts, clear_matches, combine, evaluate_mot
 from .sanity import sanity_warnings
 
@@ -40,10 +40,15 @@ class EvalResults(dict[str, MOTCounts]):
 def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str
            ) -> tuple[MOTCounts, list[str]]:
     """One pair's counts and sanity warnings (in a worker, for :func:`evaluate_files`)."""
+    g, p, n = _read(pair)
+    return evaluate_mot(g, p, n, benchmark=benchmark), sanity_warnings(g, p)
+
+
+def _read(pair: tuple[str, Path, Path, Path | None]) -> tuple[MOTTable, MOTTable, int | None]:
+    """A pair's ground truth, results and sequence length (None without seqinfo.ini)."""
     _, gt, pred, info = pair
     n = read_seqinfo(info).seq_length if info is not None else None
-    g, p = read_mot(gt), read_mot(pred)
-    return evaluate_mot(g, p, n, benchmark=benchmark), sanity_warnings(g, p)
+    return read_mot(gt), read_mot(pred), n
 
 
 def pair_matches(pair: tuple[str, Path, Path, Path | None],
@@ -51,9 +56,7 @@ def pair_matches(pair: tuple[str, Path, Path, Path | None],
     """The CLEAR MOT matches of one ``(name, gt, results, seqinfo-or-None)`` pair, frame by
     frame (:func:`~vistrack.evaluation.clear_matches`), read as :func:`evaluate_files` reads
     it."""
-    _, gt, pred, info = pair
-    n = read_seqinfo(info).seq_length if info is not None else None
-    return clear_matches(read_mot(gt), read_mot(pred), n, benchmark=benchmark)
+    return clear_matches(*_read(pair), benchmark=benchmark)
 
 
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,

@@ -258,6 +258,13 @@ def _check_unique(table: MOTTable, what: str) -> None:
                      f"frame {frame}{hint}")
 
 
+def _n_frames(gt: MOTTable, pred: MOTTable, n_frames: int | None) -> int:
+    """The sequence's length: ``n_frames`` if given, else the last frame of either table."""
+    if n_frames is None:
+        return int(max(gt.frames.max() if len(gt) else 0, pred.frames.max() if len(pred) else 0))
+    return int(n_frames)
+
+
 def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Sequence:
     bench = _benchmark_of(gt, benchmark)
     for table, what in ((gt, "ground truth"), (pred, "prediction")):
@@ -842,11 +849,9 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     >>> c.IDSW, round(c.MOTA, 2), round(c.IDF1, 2)
     (1, 0.75, 0.5)
     """
-    if n_frames is None:
-        n_frames = int(max(gt.frames.max() if len(gt) else 0,
-                           pred.frames.max() if len(pred) else 0))
-    seq = _prepare(gt, pred, int(n_frames), benchmark)
-    out = MOTCounts(frames=int(n_frames), gt_dets=sum(len(g) for g in seq.gt_ids),
+    n_frames = _n_frames(gt, pred, n_frames)
+    seq = _prepare(gt, pred, n_frames, benchmark)
+    out = MOTCounts(frames=n_frames, gt_dets=sum(len(g) for g in seq.gt_ids),
                     pred_dets=sum(len(p) for p in seq.pred_ids), gt_ids=seq.n_gt_ids,
                     pred_ids=seq.n_pred_ids)
     _clear(seq, out)
@@ -898,10 +903,7 @@ def clear_matches(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     >>> m.frames.tolist(), m.pred_ids.tolist(), m.switches.tolist()
     ([1, 2, 3], [7, 8, -1], [False, True, False])
     """
-    if n_frames is None:
-        n_frames = int(max(gt.frames.max() if len(gt) else 0,
-                           pred.frames.max() if len(pred) else 0))
-    seq = _prepare(gt, pred, int(n_frames), benchmark)
+    seq = _prepare(gt, pred, _n_frames(gt, pred, n_frames), benchmark)
     record: list = []
     _clear(seq, MOTCounts(), record)
     assert seq.frames is not None and seq.gt_labels is not None and seq.pred_labels is not None

@@ -259,23 +259,23 @@ class _Summed:
 
     def __init__(self, chunks: list, p: dict, learn: tuple[str, ...], B: int,
                  count: np.ndarray) -> None:
-        import dask
-
         self.chunks, self.p, self.B, self.count = chunks, p, B, count
-        parts = dask.compute(*[dask.delayed(_chunk_sums)(*chunk, self._model(), learn, None)
-                               for chunk in self._priors()])
-        self.sums = _add(list(parts))
+        self.sums = self._pass(learn, None)
         self.ll = float(self.sums["ll"])
 
-    def _model(self) -> dict:
-        return {k: v for k, v in self.p.items() if k not in ("x0", "P0")}
+    def _pass(self, learn: tuple[str, ...], H: np.ndarray | None) -> dict:
+        """:func:`_chunk_sums` of every chunk, computed where the chunks are, added. Each
+        chunk has its prior: this iteration's where shared (``p``'s, which the M-step may
+        have changed), else the chunk's part of the one given per series."""
+        import dask
 
-    def _priors(self) -> list[tuple]:
-        """Each chunk with its prior: this iteration's where shared (``p``'s, which the
-        M-step may have changed), else the chunk's part of the one given per series."""
         x0, P0 = self.p["x0"], self.p["P0"]
-        return [(y, c0 if x0 is None else x0, cP if P0 is None else P0)
-                for y, c0, cP in self.chunks]
+        model = {k: v for k, v in self.p.items() if k not in ("x0", "P0")}
+        parts = dask.compute(*[
+            dask.delayed(_chunk_sums)(y, c0 if x0 is None else x0, cP if P0 is None else P0,
+                                      model, learn, H)
+            for y, c0, cP in self.chunks])
+        return _add(list(parts))
 
     def transition_sums(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return self.sums["S"]
@@ -286,11 +286,7 @@ class _Summed:
     def vv(self, H: np.ndarray) -> np.ndarray:
         if "V" in self.sums:  # computed with the model's H, not learned
             return self.sums["V"]
-        import dask  # H learned: a second pass, with this iteration's new H
-
-        parts = dask.compute(*[dask.delayed(_chunk_sums)(*chunk, self._model(), (), H)
-                               for chunk in self._priors()])
-        return _add(list(parts))["V"]
+        return self._pass((), H)["V"]  # H learned: a second pass, with this iteration's H
 
     def R_count(self) -> np.ndarray:
         return self.count
