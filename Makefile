@@ -79,7 +79,12 @@ bench: $(VENV)/.bench-installed
 	$(PYTHON) -m venv .venv-boxmot
 	.venv-boxmot/bin/python -m pip install --quiet "torch==2.14.1" "torchvision==0.29.1" "boxmot==25.0.0"
 
-bench-peers: .venv-boxmot/bin/python
+# dynamax for bench/bench_em.py, in an environment of its own: it needs jax
+.venv-dynamax/bin/python:
+	$(PYTHON) -m venv .venv-dynamax
+	.venv-dynamax/bin/python -m pip install --quiet "jax==0.10.2" "jaxlib==0.10.2" "dynamax==1.0.3"
+
+bench-peers: .venv-boxmot/bin/python .venv-dynamax/bin/python
 
 clean:
 	rm -rf $(VENV) out build src/*.egg-info docs/_build docs/api/generated src/vistrack/_kernels*.so \

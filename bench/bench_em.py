@@ -1,15 +1,18 @@
 """Learning Q and R from measurements: vistrack's EM beside the libraries a user would pick.
 
-    python bench/bench_em.py [--quick] [--write docs/benchmarks.md]
+    python bench/bench_em.py [--quick] [--dynamax-python PY] [--write docs/benchmarks.md]
 
 The problem: a 2-D constant-velocity model (4 states), 2-D positions, T = 1,000 steps, the
 true white-noise-acceleration q = 0.5 and R = 4 I, every fit started from q = 1, R = I (the
 prior x0 = 0, P0 = 10 I known). vistrack learns the structured model (the factor q of the
 white-noise-acceleration Q, R's diagonal: `Q_form="scaled"`, `R_form="diag"`) and, beside
 pykalman and simdkalman, which learn every entry, the full Q and R. statsmodels maximises the
-likelihood over (q, r_x, r_y) with L-BFGS. One process, one core; each time is the median of
-the repeats after a warm-up run; a peer too slow for 50 iterations is timed on fewer and its
-time given per 50 (said in the table).
+likelihood over (q, r_x, r_y) with L-BFGS. dynamax's EM (`fit_em`) learns every parameter
+(F, H, their biases, Q, R and the prior: all or none), in float64, in an interpreter of its
+own (`--dynamax-python`, default `.venv-dynamax/bin/python`; `make bench-peers` makes
+it), since it needs jax. One process, one core; each time is the median of the repeats after
+a warm-up run; a peer too slow for 50 iterations is timed on fewer and its time given per 50
+(said in the table).
 """
 
 from __future__ import annotations
@@ -93,6 +96,33 @@ def _simd_prior(B: int) -> dict:
                 initial_covariance=np.tile(P0, (B, 1, 1)))
 
 
+def dynamax_fit(python: str, ys: np.ndarray, iters: int, reps: int) -> dict | None:
+    """dynamax's EM on ``ys (B, T, 2)`` from the same start, run by ``peers_dynamax.py`` in the
+    interpreter ``python``: its JSON (seconds of the first call and the median call, what a
+    call of one iteration costs, the last log probability, the first NaN), or None."""
+    import json
+
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "problem.npz")
+        np.savez(path, ys=ys if ys.ndim == 3 else ys[None], F=F, Q=Q1, H=H, R=np.eye(2), x0=X0,
+                 P0=P0)
+        r = subprocess.run([python, os.path.join(os.path.dirname(__file__), "peers_dynamax.py"),
+                            path, str(iters), str(reps)], capture_output=True, text=True)
+    if r.returncode != 0:
+        tail = r.stderr.strip().splitlines()[-1] if r.stderr.strip() else "no output"
+        print(f"  (dynamax failed: {tail})", file=sys.stderr)
+        return None
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def _dynamax_note(res: dict) -> str:
+    nan = (f"log probability NaN from iteration {res['first_nan']}"
+           if res["first_nan"] is not None else "no NaN")
+    return (f"every parameter learned; {res['fixed']:.2f} s of a call is tracing and "
+            f"compiling (a call of one iteration), again on every call; first call "
+            f"{res['first']:.2f} s; {nan}")
+
+
 def cold_first_call(prebuilt: bool = True) -> float:
     """Seconds for a fresh process, numba's and vistrack's caches empty, to import vistrack
     and run 50 iterations on one series; with the kernels compiled at install, or not
@@ -115,7 +145,14 @@ def main() -> None:
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="fewer repeats")
     ap.add_argument("--write", metavar="MD", help="write the results into this markdown file")
+    ap.add_argument("--dynamax-python", default=os.path.join(
+        os.path.dirname(os.path.dirname(os.path.abspath(__file__))), ".venv-dynamax", "bin",
+        "python"), help="an interpreter with dynamax (default .venv-dynamax/bin/python)")
     args = ap.parse_args()
+    dx_python = args.dynamax_python if os.path.exists(args.dynamax_python) else None
+    if dx_python is None:
+        print(f"  (dynamax skipped: {args.dynamax_python} does not exist; make bench-peers "
+              "makes it)", file=sys.stderr)
     reps = 2 if args.quick else 5
     one, batch = data(1), data(100)
     rows: list[tuple[str, str, str, str, str]] = []  # what, library, seconds, ratio, note
@@ -155,6 +192,10 @@ def main() -> None:
         t, _ = median_time(lambda: kf.em(one[None], n_iter=n, **_simd_prior(1)), 1)
         rows.append(("", "simdkalman EM (full Q, R)", f"{t * 50 / n:.1f}",
                      f"{t * 50 / n / base:.0f}", f"{n} iterations timed"))
+    dx_one = dynamax_fit(dx_python, one, 50, reps) if dx_python else None
+    if dx_one is not None:
+        rows.append(("", "dynamax EM (`fit_em`)", f"{dx_one['median']:.2f}",
+                     f"{dx_one['median'] / base:.0f}", _dynamax_note(dx_one)))
     t_sm = None
     res = None
     if optional("statsmodels") is not None:
@@ -178,18 +219,22 @@ def main() -> None:
     rows.append(("100 series pooled, 50 iterations", "vistrack, q and R's diagonal",
                  f"{t_b:.2f}", "1.0",
                  f"q {fb.q:.3f}, R {np.diag(fb.R).round(3).tolist()}"))
-    t_bm, bm = median_time(lambda: mle(batch, F=F, Q=Q1, H=H, R=np.eye(2), x0=X0, P0=P0),
-                           max(1, reps // 2))
-    rows.append(("100 series pooled, to the maximum", "vistrack ML (L-BFGS)", f"{t_bm:.2f}",
-                 f"{t_bm / t_b:.2f}", f"{bm.iterations} iterations, q {bm.q:.3f} ± "
-                 f"{bm.stderr['q']:.3f}, R {bm.r.round(3).tolist()} ± "
-                 f"{bm.stderr['r'].round(3).tolist()}"))
+    dx_batch = dynamax_fit(dx_python, batch, 50, max(1, reps // 2)) if dx_python else None
+    if dx_batch is not None:
+        rows.append(("", "dynamax EM (`fit_em`)", f"{dx_batch['median']:.2f}",
+                     f"{dx_batch['median'] / t_b:.1f}", _dynamax_note(dx_batch)))
     if sk is not None:
         kf = sk.KalmanFilter(state_transition=F, process_noise=np.eye(4), observation_model=H,
                              observation_noise=np.eye(2))
         t, _ = median_time(lambda: kf.em(batch, n_iter=1, **_simd_prior(len(batch))), 1)
         rows.append(("", "simdkalman EM (100 separate fits)", f"{t * 50:.1f}",
                      f"{t * 50 / t_b:.0f}", "1 iteration timed"))
+    t_bm, bm = median_time(lambda: mle(batch, F=F, Q=Q1, H=H, R=np.eye(2), x0=X0, P0=P0),
+                           max(1, reps // 2))
+    rows.append(("100 series pooled, to the maximum", "vistrack ML (L-BFGS)", f"{t_bm:.2f}",
+                 f"{t_bm / t_b:.2f}", f"{bm.iterations} iterations, q {bm.q:.3f} ± "
+                 f"{bm.stderr['q']:.3f}, R {bm.r.round(3).tolist()} ± "
+                 f"{bm.stderr['r'].round(3).tolist()}"))
     cold, jit = cold_first_call(), cold_first_call(prebuilt=False)
     rows.append(("first call, caches empty", "vistrack (import and 50 iterations)",
                  f"{cold:.1f}", "", f"a fresh process; {jit:.1f} s with the kernels compiled "
@@ -206,8 +251,15 @@ def main() -> None:
         goals.append(f"- ≥ 50× the fastest peer end to end: statsmodels reaches the maximum in "
                      f"{t_sm:.3f} s, vistrack's maximum likelihood in {t_ml:.3f} s "
                      f"({t_sm / t_ml:.1f}×), {met(t_sm / t_ml >= 50)}")
+    if dx_one is not None:
+        r1 = dx_one["median"] / t_struct
+        goals.append(f"- one series, 50 iterations, ≥ 50× dynamax's EM: {r1:.0f}×, "
+                     f"{met(r1 >= 50)}")
+    dx = (f"{dx_batch['median'] / t_b:.1f}× dynamax's {dx_batch['median']:.2f} s, "
+          f"{met(dx_batch['median'] / t_b >= 7)}" if dx_batch is not None
+          else "against dynamax: not measured (not installed here)")
     goals.append(f"- 100 series pooled, 50 iterations ≤ 2 s: {t_b:.2f} s, {met(t_b <= 2)}; "
-                 "against dynamax: not measured (not installed here)")
+                 f"≥ 7× dynamax: {dx}")
     goals.append(f"- on the batch, q within 5 % of 0.5 and R's diagonal within 3 % of 4 (at the "
                  f"maximum): q {bm.q:.3f}, R {bm.r.round(3).tolist()}, "
                  f"{met(abs(bm.q / 0.5 - 1) <= 0.05 and bool(np.all(abs(bm.r / 4 - 1) <= 0.03)))}")

@@ -91,6 +91,25 @@ def test_a_pooled_batch_of_one_series_repeated_equals_that_series():
     np.testing.assert_allclose(three.loglik, 3 * one.loglik, rtol=1e-12)
 
 
+def test_series_that_share_their_gains_are_smoothed_as_each_alone():
+    """The E-step of a batch whose series share their covariances smooths every series' means
+    with the one sequence of gains: equal to the RTS smoother run on each series alone."""
+    from vistrack.filters import kalman_filter, rts_smooth
+    from vistrack.filters.learn import _smoothed
+
+    ys = np.stack([series(150, s) for s in (6, 7, 8)])
+    ys[:, 40:43] = np.nan  # the same steps missing in every series: still shared
+    model = {**cv_model(), "Q": 0.3 * cv_model()["Q"]}
+    res = kalman_filter(ys, **model)
+    assert res.shared_covs
+    ms, Ps, _, mult = _smoothed(res, model["F"], model["Q"])
+    assert mult == 3 and Ps.shape[0] == 1
+    for b in range(3):
+        alone = rts_smooth(kalman_filter(ys[b], **model), F=model["F"], Q=model["Q"])
+        np.testing.assert_allclose(ms[b], alone.means, rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(Ps[0], alone.covs, rtol=1e-10, atol=1e-12)
+
+
 def test_one_fit_per_series_equals_each_series_fitted_alone():
     ys = np.stack([series(100, s) for s in (4, 5)])
     ys[1, 30:33] = np.nan  # the series do not share covariances

@@ -109,7 +109,8 @@ def _workloads(root: Path) -> None:
 
 def _more_workloads(root: Path, clip: Path, d: Path, ys: Any, cv: Any, pos: Any) -> None:
     """The single-object trackers, the detector-confidence particle filter, the nonlinear
-    filters, the IMM, particle resampling and the spot finder (the examples' kernels)."""
+    filters, the IMM, particle resampling, the pooled EM and the spot finder (the examples'
+    kernels)."""
     import cv2
     import numpy as np
 
@@ -165,6 +166,10 @@ def _more_workloads(root: Path, clip: Path, d: Path, ys: Any, cv: Any, pos: Any)
         for _ in range(2):
             g = kf_update(kf_predict(g, F, Q), y, H, R)
             g = kf_step(g, y, F, Q, H, R)
+    # EM on a batch of series that share their covariances (the pooled M-step's kernel)
+    batch = np.stack([np.nan_to_num(ys), np.nan_to_num(ys) + 1.0])
+    vt.filters.em(batch, F=F, Q=Q, H=H, R=R, x0=np.zeros(4), P0=np.eye(4), learn=("Q", "R"),
+                  max_iter=2)
     img = np.zeros((64, 64))
     img[20:23, 30:33] = 50.0
     vt.frontends.locate(img, diameter=5)

@@ -201,14 +201,14 @@ def rts_smooth(result: FilterResult, *, F: Any, Q: Any) -> SmoothResult:
 def _chunk_summary(y: Any, first: int) -> dict:
     """What :func:`em` checks of a chunk before its first E-step, and how many of its series
     measured something at each step."""
+    from .learn import _Observed
+
     y = np.asarray(y)
-    obs = ~np.isnan(y)
+    o = _Observed(y)
     bad = np.argwhere(np.isinf(y))
     inf = None if not len(bad) else ((int(bad[0][0]) + first,) + tuple(int(i) for i in bad[0][1:]),
                                      float(y[tuple(bad[0])]))
-    return dict(measured=obs.any(axis=(0, 1)), partial=bool((obs.any(axis=-1)
-                                                              & ~obs.all(axis=-1)).any()),
-                count=obs.any(axis=-1).sum(axis=0), inf=inf)
+    return dict(measured=o.obs.any(axis=(0, 1)), partial=o.has_partial, count=o.count, inf=inf)
 
 
 def _chunk_sums(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...],
@@ -216,11 +216,10 @@ def _chunk_sums(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...],
     """One chunk's E-step under the model ``p`` (its prior ``x0``, ``P0``): the
     log-likelihood and the sums of the M-step for ``learn``, summed over the chunk's series;
     given ``H``, only the expected ``v v'`` of ``R``'s M-step under that ``H``."""
-    from .learn import _EStep
+    from .learn import _EStep, _Observed
 
-    y = np.asarray(y)
     p = dict(p, x0=np.asarray(x0), P0=np.asarray(P0))
-    e = _EStep(y, ~np.isnan(y), p)
+    e = _EStep(_Observed(np.asarray(y)), p)
     if H is not None:
         return {"V": e.vv(H)}
     out: dict[str, Any] = {"ll": e.ll}

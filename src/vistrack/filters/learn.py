@@ -57,6 +57,8 @@ from typing import TYPE_CHECKING, Any, TextIO
 
 import numpy as np
 
+from .._jit import njit
+from .._prebuilt import kernel
 from .._validate import as_measurement_series, check_has_steps, check_prior
 from .kalman import FilterResult, _is_dask, kalman_filter
 from .smoothers import rts_smooth
@@ -214,21 +216,22 @@ def em(
                           R_form=R_form, pooled=pooled, tol=float(tol),
                           max_iter=int(max_iter), progress=progress)
     y, params = _problem(ys, F, Q, H, R, x0, P0, learned, max_iter)
-    obs = ~np.isnan(y)
-    _check_em(obs.any(axis=(0, 1)), bool((obs.any(axis=-1) & ~obs.all(axis=-1)).any()),
-              params, learned, Q_form, R_form)
+    o = _Observed(y)
+    _check_em(o.obs.any(axis=(0, 1)), o.has_partial, params, learned, Q_form, R_form)
     if pooled or y.shape[0] == 1:
         return _fit_in_memory(y, params, learned, Q_form, R_form, float(tol), int(max_iter),
-                              progress)
+                              progress, o=o)
     return _fit_each(y, params, learned, Q_form, R_form, float(tol), int(max_iter), progress)
 
 
 def _fit_in_memory(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...],
                    Q_form: str, R_form: str, tol: float, max_iter: int,
-                   progress: TextIO | None, label: str = "") -> FitResult:
-    """:func:`_fit` on the series ``y (B, T, m)`` in memory, pooled."""
-    obs = ~np.isnan(y)
-    return _fit(lambda params, _: _EStep(y, obs, params), y.shape[0], y.shape[1], p, learn,
+                   progress: TextIO | None, label: str = "", *,
+                   o: _Observed | None = None) -> FitResult:
+    """:func:`_fit` on the series ``y (B, T, m)`` in memory, pooled (``o``: ``y``'s
+    :class:`_Observed`, if already made)."""
+    obs = _Observed(y) if o is None else o
+    return _fit(lambda params, _: _EStep(obs, params), y.shape[0], y.shape[1], p, learn,
                 Q_form, R_form, tol, max_iter, progress, label)
 
 
@@ -530,7 +533,7 @@ class _Structured:
             raise ValueError("R_form='diag' needs one R (m, m) for all steps; got "
                              f"{p['R'].shape}")
         self.y, self.p, self.R_form = y, p, R_form
-        self.obs = ~np.isnan(y)
+        self.o = _Observed(y)
         self.R0 = np.diag(np.diag(p["R"])) if diag else p["R"]  # R as given, if not learned
         if "Q" in learn and not np.any(p["Q"]):
             raise ValueError("Q must not be zero to learn its factor q")
@@ -539,10 +542,10 @@ class _Structured:
         if diag:
             if not np.all(np.diag(p["R"]) > 0):
                 raise ValueError(f"R's diagonal must be > 0 to learn it; got {np.diag(p['R'])}")
-            _check_measured(self.obs.any(axis=(0, 1)), "its variance in R")
+            _check_measured(self.o.obs.any(axis=(0, 1)), "its variance in R")
         self.nq = 1 if "Q" in learn else 0
         self.nr = (m if R_form == "diag" else 1) if "R" in learn else 0
-        n_meas = self.obs.any(axis=-1).sum(axis=0)  # series that measured something, per step
+        n_meas = self.o.count  # series that measured something, per step
         self.n_meas = int(n_meas.sum())
         if self.nq:
             self.Q_scaled = _Scaled(p["Q"], T - 1)
@@ -587,7 +590,7 @@ class _Structured:
             tr = self.Q_scaled.trace(A)
             g[0] = -0.5 * self.Q_dof + 0.5 * tr / np.exp(theta[0])
         if nr:
-            V = _expected_vv(y, self.obs, ms, Ps, mult, mp["H"], mp["R"], T)
+            V = _expected_vv(self.o, ms, Ps, mult, mp["H"], mp["R"])
             if self.R_form == "diag":
                 g[nq:] = (-0.5 * self.n_meas
                           + 0.5 * np.diagonal(V.sum(axis=0)) / np.exp(theta[nq:]))
@@ -675,14 +678,32 @@ def _fit(estep: Any, B: int, T: int, p: dict[str, np.ndarray], learn: tuple[str,
                     loglik=np.array(lls), iterations=len(lls) - 1, converged=converged)
 
 
-class _EStep:
-    """The E-step over measurements ``y (B, T, m)`` in memory under the model ``p``: the
-    filter's log-likelihood at once, the smoother and each of the M-step's sums when first
-    asked for."""
+class _Observed:
+    """What every E-step needs of the measurements ``y (B, T, m)`` (NaN: missing), worked out
+    once for all iterations: ``obs`` (True where measured), ``y0`` (``y`` with 0 where
+    missing), per series and step (``(B, T)``) ``full`` (every component measured) and
+    ``partial`` (some but not all), ``has_partial`` (any such step), and ``count`` ``(T,)``,
+    how many series measured something at each step."""
 
-    def __init__(self, y: np.ndarray, obs: np.ndarray, p: dict[str, np.ndarray]) -> None:
-        self.y, self.obs, self.p = y, obs, p
-        self.res = kalman_filter(y, F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"],
+    def __init__(self, y: np.ndarray) -> None:
+        self.y = y
+        self.obs = ~np.isnan(y)
+        self.y0 = np.where(self.obs, y, 0.0)
+        self.full = self.obs.all(axis=-1)
+        some = self.obs.any(axis=-1)
+        self.partial = some & ~self.full
+        self.has_partial = bool(self.partial.any())
+        self.count = some.sum(axis=0)
+
+
+class _EStep:
+    """The E-step over measurements ``o.y (B, T, m)`` (see :class:`_Observed`) in memory
+    under the model ``p``: the filter's log-likelihood at once, the smoother and each of the
+    M-step's sums when first asked for."""
+
+    def __init__(self, o: _Observed, p: dict[str, np.ndarray]) -> None:
+        self.o, self.p = o, p
+        self.res = kalman_filter(o.y, F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"],
                                  P0=p["P0"])
         self.ll = float(np.sum(self.res.loglik))
         self._smoothed: tuple[np.ndarray, np.ndarray, np.ndarray, int] | None = None
@@ -699,15 +720,15 @@ class _EStep:
 
     def H_sums(self) -> tuple[np.ndarray, np.ndarray]:
         ms, Ps, _, mult = self.smoothed
-        return _H_sums(self.y, self.obs, ms, Ps, mult)
+        return _H_sums(self.o, ms, Ps, mult)
 
     def vv(self, H: np.ndarray) -> np.ndarray:
         ms, Ps, _, mult = self.smoothed
-        return _expected_vv(self.y, self.obs, ms, Ps, mult, H, self.p["R"], self.y.shape[1])
+        return _expected_vv(self.o, ms, Ps, mult, H, self.p["R"])
 
     def R_count(self) -> np.ndarray:
         """How many series measured something at each step ``(T,)``."""
-        return self.obs.any(axis=-1).sum(axis=0)
+        return self.o.count
 
     def prior(self, learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
         """The prior ``x0``, ``P0`` after the M-step (those not in ``learn`` as they were)."""
@@ -762,12 +783,30 @@ def _smoothed(res: FilterResult, F: np.ndarray,
         ms = sm.means if sm.means.ndim == 3 else sm.means[None]
         return ms, Ps, X, 1
     # every series' smoothed means with the shared gains, backwards over the steps
-    pm = res.pred_means
     ms = np.empty_like(means)
-    ms[:, -1] = means[:, -1]
-    for t in range(T - 2, -1, -1):
-        ms[:, t] = means[:, t] + (ms[:, t + 1] - pm[:, t + 1]) @ X[0, t]
+    _shared_gain_means(np.ascontiguousarray(means), np.ascontiguousarray(res.pred_means),
+                       np.ascontiguousarray(X[0]), ms)
     return ms, Ps, X, B
+
+
+@njit(cache=True)
+def _shared_gain_means_jit(means, pred_means, X, ms):  # pragma: no cover - compiled
+    """The RTS smoother's means of every series ``(B, T, n)`` given one sequence of
+    transposed gains ``X (T - 1, n, n)``: ``ms_t = m_t + (ms_{t+1} - pm_{t+1}) X_t``,
+    backwards, into ``ms``."""
+    B, T, n = means.shape
+    for b in range(B):
+        for i in range(n):
+            ms[b, T - 1, i] = means[b, T - 1, i]
+        for t in range(T - 2, -1, -1):
+            for i in range(n):
+                s = means[b, t, i]
+                for k in range(n):
+                    s += (ms[b, t + 1, k] - pred_means[b, t + 1, k]) * X[t, k, i]
+                ms[b, t, i] = s
+
+
+_shared_gain_means = kernel(_shared_gain_means_jit)
 
 
 def _transition_sums(ms: np.ndarray, Ps: np.ndarray, X: np.ndarray,
@@ -775,10 +814,10 @@ def _transition_sums(ms: np.ndarray, Ps: np.ndarray, X: np.ndarray,
     """Per transition, summed over the batch ``(T - 1, n, n)``: ``E[x_t x_t']``, ``E[x_t
     x_{t-1}']``, ``E[x_{t-1} x_{t-1}']``, with the lag-one cross-covariance ``C_t = Ps_t
     G_{t-1}' = Ps_t X_{t-1}`` (see :func:`_smoothed`)."""
-    m1, m0 = ms[:, 1:], ms[:, :-1]
-    S11 = mult * Ps[:, 1:].sum(axis=0) + _outer_sum(m1, m1)
-    S10 = mult * (Ps[:, 1:] @ X).sum(axis=0) + _outer_sum(m1, m0)
-    S00 = mult * Ps[:, :-1].sum(axis=0) + _outer_sum(m0, m0)
+    M = _outer_sum(ms, ms)  # sum_b m_t m_t' of every step, for both S11 and S00
+    S11 = mult * Ps[:, 1:].sum(axis=0) + M[1:]
+    S10 = mult * (Ps[:, 1:] @ X).sum(axis=0) + _outer_sum(ms[:, 1:], ms[:, :-1])
+    S00 = mult * Ps[:, :-1].sum(axis=0) + M[:-1]
     return S11, S10, S00
 
 
@@ -826,21 +865,20 @@ def _noise(E: np.ndarray, count: np.ndarray, shape: np.ndarray, form: str,
     return mean, 1.0
 
 
-def _H_sums(y: np.ndarray, obs: np.ndarray, ms: np.ndarray, Ps: np.ndarray,
+def _H_sums(o: _Observed, ms: np.ndarray, Ps: np.ndarray,
             mult: int) -> tuple[np.ndarray, np.ndarray]:
     """The sums that give ``H`` row by row (:func:`_H_rows`), over the steps that measured its
     component: ``sum y_ti m_t'`` ``(m, n)`` and ``sum P_t + m_t m_t'`` ``(m, n, n)`` (see
     :func:`_check_em` for when that is the M-step)."""
     nums, dens = [], []
-    for i in range(y.shape[-1]):
-        o = obs[..., i].astype(np.float64)
-        yi = np.where(obs[..., i], y[..., i], 0.0)
-        nums.append(np.einsum("bt,bti->i", yi, ms))
-        den = np.einsum("bt,bti,btj->ij", o, ms, ms)
+    for i in range(o.y.shape[-1]):
+        w = o.obs[..., i].astype(np.float64)
+        nums.append(np.einsum("bt,bti->i", o.y0[..., i], ms))
+        den = np.einsum("bt,bti,btj->ij", w, ms, ms)
         if mult > 1:  # one covariance sequence for every series
-            den += np.einsum("t,tij->ij", o.sum(axis=0), Ps[0])
+            den += np.einsum("t,tij->ij", w.sum(axis=0), Ps[0])
         else:
-            den += np.einsum("bt,btij->ij", o, Ps)
+            den += np.einsum("bt,btij->ij", w, Ps)
         dens.append(den)
     return np.array(nums), np.array(dens)
 
@@ -850,32 +888,32 @@ def _H_rows(num: np.ndarray, den: np.ndarray) -> np.ndarray:
     return np.array([np.linalg.solve(d.T, v) for v, d in zip(num, den)])
 
 
-def _expected_vv(y: np.ndarray, obs: np.ndarray, ms: np.ndarray, Ps: np.ndarray, mult: int,
-                 H: np.ndarray, R_old: np.ndarray, T: int) -> np.ndarray:
+def _expected_vv(o: _Observed, ms: np.ndarray, Ps: np.ndarray, mult: int, H: np.ndarray,
+                 R_old: np.ndarray) -> np.ndarray:
     """``E[v_t v_t' | y]`` for ``v_t = y_t - H x_t``, summed over the series that measured
     something at step ``t`` ``(T, m, m)``: measured components from the smoothed state, missing
     ones given the measured ones under the current ``R``."""
-    B, _, m = y.shape
+    B, T, m = o.y.shape
     Ht = _steps(H, T)
     Hb = np.broadcast_to(Ht, (T,) + Ht.shape[1:]) if Ht.shape[0] == 1 else Ht
-    e = np.where(obs, y, 0.0) - np.einsum("tij,btj->bti", Hb, ms)
+    # H x_t of every series and step: one matrix product when H is constant
+    Hx = ms @ Ht[0].T if Ht.shape[0] == 1 else np.einsum("tij,btj->bti", Ht, ms)
+    e = o.y0 - Hx
     HPH = Hb @ Ps @ np.swapaxes(Hb, -1, -2)  # (1 or B, T, m, m)
-    full = np.asarray(obs.all(axis=-1))
-    fw = full.astype(np.float64)
+    fw = o.full.astype(np.float64)
     V = _outer_sum(fw[..., None] * e, e)
     V += (np.einsum("t,tij->tij", fw.sum(axis=0), HPH[0]) if mult > 1
           else np.einsum("bt,btij->tij", fw, HPH))
-    partial = obs.any(axis=-1) & ~full
-    if not partial.any():
+    if not o.has_partial:
         return V
     Rt = _steps(R_old, T)
     Rb = np.broadcast_to(Rt, (T, m, m)) if Rt.shape[0] == 1 else Rt
-    idx = np.argwhere(partial)
-    patterns, which = np.unique(obs[partial], axis=0, return_inverse=True)
-    for k, o in enumerate(patterns):
+    idx = np.argwhere(o.partial)
+    patterns, which = np.unique(o.obs[o.partial], axis=0, return_inverse=True)
+    for k, seen in enumerate(patterns):
         b, t = idx[which.ravel() == k].T
         Rk = Rb[t]
-        oi, mi = np.flatnonzero(o), np.flatnonzero(~o)
+        oi, mi = np.flatnonzero(seen), np.flatnonzero(~seen)
         ee = e[b, t][:, oi][:, :, None] * e[b, t][:, oi][:, None, :]
         Eoo = ee + HPH[0 if mult > 1 else b, t][:, oi[:, None], oi]
         Roo = Rk[:, oi[:, None], oi]
