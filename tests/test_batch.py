@@ -50,6 +50,25 @@ def test_each_input_gives_what_it_gives_alone(bench, tmp_path):
     assert off[0].out.read_bytes() == (tmp_path / "off-alone.txt").read_bytes()
 
 
+def test_the_largest_inputs_start_first_and_outcomes_keep_the_inputs_order(bench, tmp_path):
+    """SIM-1 (90 frames) has the largest detections file, then SIM-0 (60), then SIM-2 (40):
+    submitted in that order, so that the largest does not start last; the outcomes are in
+    the inputs' order."""
+    sizes = {d.name: (d / "det" / "det.txt").stat().st_size for d in bench.iterdir()}
+    assert sizes["SIM-1"] > sizes["SIM-0"] > sizes["SIM-2"]
+    submitted = []
+
+    class Recording(ThreadPoolExecutor):
+        def submit(self, fn, *args, **kwargs):
+            submitted.append(args[0].input.name)
+            return super().submit(fn, *args, **kwargs)
+
+    with Recording(1) as pool:
+        outcomes = track_many([bench], tmp_path / "out", executor=pool)
+    assert submitted == ["SIM-1", "SIM-0", "SIM-2"]
+    assert [o.input.name for o in outcomes] == ["SIM-0", "SIM-1", "SIM-2"]
+
+
 def _broken(tmp_path: Path, bench: Path) -> Path:
     bad = tmp_path / "BAD"
     (bad / "det").mkdir(parents=True)

@@ -16,6 +16,9 @@ returning a future): a thread pool, a process pool of its own, or a Dask client'
   and the others not finished are run again on a new pool, up to ``retries`` times. What
   they wrote is replaced whole, so outputs are complete and the same as a run without the
   failure.
+- On a pool or an executor, the largest inputs (by the bytes of their detections file, video
+  or images) start first, so that a large one does not start last and run alone; outcomes
+  are reported in the inputs' order all the same.
 - Each worker uses one thread for BLAS and OpenMP (more threads than cores per worker made a
   batched numpy filter several times slower), unless the environment says otherwise.
 """
@@ -197,6 +200,26 @@ def default_jobs() -> int:
     return max(1, os.cpu_count() or 1)  # pragma: no cover - macOS, Windows
 
 
+def _size(job: Job) -> int:
+    """Bytes of what ``job`` reads, an estimate of its work: the detections file, the video,
+    or the images of its folder (``img1/`` of a MOTChallenge sequence); 0 if unreadable."""
+    path = job.input
+    try:
+        if job.kind == "detections":
+            return Path(job.options.get("detections") or path / "det" / "det.txt").stat().st_size
+        if path.is_file():
+            return path.stat().st_size
+        folder = path / "img1" if (path / "img1").is_dir() else path
+        return sum(e.stat().st_size for e in os.scandir(folder) if e.is_file())
+    except OSError:
+        return 0
+
+
+def _largest_first(jobs: Sequence[Job], indices: Iterable[int]) -> list[int]:
+    """``indices`` of ``jobs``, the largest jobs (:func:`_size`) first, ties in order."""
+    return sorted(indices, key=lambda i: -_size(jobs[i]))
+
+
 def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
              executor: Executor | None = None, keep_going: bool = True, retries: int = 2,
              on_done: Callable[[Outcome, int, int], None] | None = None) -> list[Outcome]:
@@ -250,9 +273,9 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
             done(i, _run(job))
     elif executor is not None:
         futures = {}
-        for i, job in enumerate(jobs):
+        for i in _largest_first(jobs, range(n)):
             attempts[i] += 1
-            futures[executor.submit(_run, job)] = i
+            futures[executor.submit(_run, jobs[i])] = i
         for f in _as_done(futures, stopped):
             i = futures[f]
             try:
@@ -261,7 +284,7 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
                 failed(i, f"{type(e).__name__}: {e}")
     else:
         size = workers or default_jobs()
-        pending = list(range(n))
+        pending = _largest_first(jobs, range(n))
         while pending and not stopped():
             pool = process_pool(min(size, len(pending)))
             running: dict[Future, int] = {}
@@ -312,7 +335,7 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
                     pending.append(i)
             if broken:
                 pending += queue
-            pending.sort()
+            pending = _largest_first(jobs, pending)
     return [outcomes.get(i, Outcome(job.input, job.out, False, attempts=0,
                                     error="not run (an earlier input failed)"))
             for i, job in enumerate(jobs)]
