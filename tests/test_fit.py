@@ -1,12 +1,14 @@
 """Learning a box tracker's noise (vistrack.tracking.fit, vistrack.pipeline.fit_sequences,
 vistrack fit): against the parameters simulated data were drawn with."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import tomllib
 
 from vistrack.cli import main
-from vistrack.config import read_config
+from vistrack.config import TrackConfig, read_config
 from vistrack.models import BoxMotion
 from vistrack.pipeline import fit_sequences, track_sequence
 from vistrack.tracking.fit import fit_box_motion, matched_series, measurement_noise
@@ -133,15 +135,19 @@ def test_fit_sequences_from_ground_truth_and_from_a_first_pass(tmp_path):
     seqs = [_sequence(tmp_path / f"SIM-{k}", rng) for k in range(2)]
     run = fit_sequences(seqs, gt=True)
     assert run.reference == "ground truth" and len(run.fit.per_sequence) == 2
-    np.testing.assert_allclose(run.config.motion.std_meas, [0.04, 0.03, 0.08, 0.05], rtol=0.2)
+    np.testing.assert_allclose(run.fit.motion.std_meas, [0.04, 0.03, 0.08, 0.05], rtol=0.2)
     assert set(run.held_out) == {"learned", "given"}
     assert all(0 < v["HOTA"] <= 1 for v in run.held_out.values())
+    # simulated with the noise learned: it tracks the held-out sequence better than the
+    # defaults (HOTA 0.904 against 0.870), so it is the configuration returned
+    assert run.held_out["learned"]["HOTA"] > run.held_out["given"]["HOTA"] + 0.01
+    assert run.chosen == "learned" and run.config.motion == run.fit.motion
     first = fit_sequences(seqs)  # the offline mode's tracks as the objects
     assert first.reference == "first pass" and first.held_out is None
     # its smoothed boxes follow the detections partly: the detections' spread about them is
     # smaller than about the truth
     assert (0 < first.config.motion.std_meas).all()
-    assert (first.config.motion.std_meas < run.config.motion.std_meas).all()
+    assert (first.config.motion.std_meas < run.fit.motion.std_meas).all()
     assert fit_sequences(seqs, gt=True, held_out=False).held_out is None
     nogt = _sequence(tmp_path / "NOGT", rng)
     (nogt / "gt" / "gt.txt").unlink()
@@ -151,6 +157,47 @@ def test_fit_sequences_from_ground_truth_and_from_a_first_pass(tmp_path):
         fit_sequences([tmp_path / "nowhere"])
     with pytest.raises(ValueError, match="no sequences"):
         fit_sequences([])
+
+
+def test_fit_returns_the_learned_motion_only_where_it_tracked_held_out_sequences_better(
+        tmp_path, monkeypatch, capsys):
+    """The held-out check decides: the learned motion is returned (and written) if the
+    sequences it was not learned from scored a higher COMBINED HOTA with it, else the given
+    configuration as it was, with the learned values in the file's [derived] table;
+    ``keep_learned`` (``--keep-learned``) returns them regardless."""
+    import vistrack.pipeline as pipeline
+
+    rng = np.random.default_rng(4)
+    seqs = [_sequence(tmp_path / f"SIM-{k}", rng) for k in range(2)]
+
+    def scores(learned, given):
+        return lambda *a, **k: {"learned": {"HOTA": learned, "MOTA": 0.5, "IDF1": 0.5},
+                                "given": {"HOTA": given, "MOTA": 0.5, "IDF1": 0.5}}
+
+    given = TrackConfig.preset()
+    for learned_hota, given_hota, chosen in ((0.4, 0.5, "given"), (0.5, 0.5, "given"),
+                                             (0.6, 0.5, "learned")):
+        monkeypatch.setattr(pipeline, "_held_out", scores(learned_hota, given_hota))
+        run = fit_sequences(seqs, gt=True, config=given)
+        assert run.chosen == chosen
+        assert run.config == (given if chosen == "given" else
+                              replace(given, motion=run.fit.motion))
+        kept = fit_sequences(seqs, gt=True, config=given, keep_learned=True)
+        assert kept.chosen == "learned" and kept.config.motion == kept.fit.motion
+    monkeypatch.setattr(pipeline, "_held_out", scores(0.4, 0.5))
+    out = tmp_path / "fit.toml"
+    assert main(["fit", *map(str, seqs), "--gt", "--out", str(out), "--quiet"]) == 0
+    assert "wrote the given one" in capsys.readouterr().out
+    table = tomllib.loads(out.read_text())
+    assert "motion" not in table and read_config(out) == given
+    assert table["derived"]["written"] == "given"
+    np.testing.assert_array_equal(table["derived"]["learned_std_meas"],
+                                  run.fit.motion.std_meas)
+    assert main(["fit", *map(str, seqs), "--gt", "--out", str(out), "--quiet", "--force",
+                 "--keep-learned"]) == 0
+    table = tomllib.loads(out.read_text())
+    assert table["derived"]["written"] == "learned"
+    assert read_config(out).motion == run.fit.motion
 
 
 def test_vistrack_fit_writes_a_configuration_that_track_reads(tmp_path, capsys):

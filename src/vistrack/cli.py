@@ -440,13 +440,12 @@ def _fit(args: argparse.Namespace) -> int:
     cfg = read_config(args.config) if args.config is not None else TrackConfig.preset()
     progress = sys.stderr if not args.quiet else None
     run = fit_sequences(args.inputs, gt=args.gt, config=cfg, held_out=not args.no_held_out,
-                        progress=progress)
+                        keep_learned=args.keep_learned, progress=progress)
     rows = run.fit.per_sequence
     from .models.box import BoxMotion
 
     given = cfg.motion if cfg.motion is not None else BoxMotion()
-    learned = run.config.motion
-    assert learned is not None  # (fit_sequences sets it)
+    learned = run.fit.motion
     n_obj, n_det = sum(r["objects"] for r in rows), sum(r["detections"] for r in rows)
     print(f"learned from the {run.reference} of {len(rows)} of {len(args.inputs)} sequences: "
           f"{n_obj} objects, {n_det} matched detections")
@@ -469,10 +468,18 @@ def _fit(args: argparse.Namespace) -> int:
             print(f"{mode:14s} {100 * h['HOTA']:6.1f} {100 * h['MOTA']:6.1f} "
                   f"{100 * h['IDF1']:6.1f}")
             derived.update({f"held_out_{mode}_{k.lower()}": round(v, 6) for k, v in h.items()})
-        worse = run.held_out["learned"]["HOTA"] < run.held_out["given"]["HOTA"]
-        if worse:
-            print("the learned values tracked held-out sequences worse than the given "
-                  "configuration (HOTA): keep the given one unless your data differ")
+        if run.chosen == "given":
+            print("the learned values did not track the held-out sequences better than the "
+                  "given configuration (HOTA): wrote the given one, the learned values in its "
+                  "[derived] table (--keep-learned writes them)")
+        elif run.held_out["learned"]["HOTA"] <= run.held_out["given"]["HOTA"]:
+            print("the learned values did not track the held-out sequences better than the "
+                  "given configuration (HOTA): wrote them all the same (--keep-learned)")
+    derived["written"] = run.chosen
+    if run.chosen == "given":
+        derived.update({f"learned_{k}": (list(map(float, getattr(learned, k))) if k == "std_meas"
+                                         else float(getattr(learned, k)))
+                        for k in ("std_pos", "std_vel", "std_meas")})
     with open_replacing(args.out) as fh:
         fh.write(config_toml(run.config, derived))
     print(f"wrote {args.out} (vistrack track SEQ_DIR --out RESULTS.txt --config {args.out})")
@@ -727,7 +734,8 @@ def build_parser() -> argparse.ArgumentParser:
         "of maximum likelihood. Writes the configuration (TOML) that vistrack track --config "
         "reads, and prints the learned values beside the given ones. With --gt and two "
         "sequences or more, also tracks each sequence with the values learned from the "
-        "others and with the given configuration, and scores both.")
+        "others and with the given configuration, scores both, and writes the learned "
+        "values only if they scored the higher HOTA (else the given configuration).")
     fit.add_argument("inputs", metavar="SEQ_DIR", nargs="+",
                      help="MOTChallenge sequence folders (seqinfo.ini, det/det.txt)")
     fit.add_argument("--out", required=True, help="configuration file to write (TOML)")
@@ -737,7 +745,11 @@ def build_parser() -> argparse.ArgumentParser:
                      help="the configuration to start from and compare with (default: the "
                      "default one)")
     fit.add_argument("--no-held-out", action="store_true",
-                     help="with --gt: do not track and score the held-out sequences")
+                     help="with --gt: do not track and score the held-out sequences (the "
+                     "learned values are written unchecked)")
+    fit.add_argument("--keep-learned", action="store_true",
+                     help="write the learned values even if they tracked the held-out "
+                     "sequences no better than the given configuration")
     fit.add_argument("--force", action="store_true", help="overwrite an existing --out")
     fit.add_argument("--quiet", action="store_true", help="no report of each sequence")
     _runs(fit, _fit, debug_help)

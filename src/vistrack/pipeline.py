@@ -940,7 +940,9 @@ class FitRun:
     Attributes
     ----------
     config : TrackConfig
-        The configuration given, with the learned box motion.
+        The configuration to track with: the one given with the learned box motion, or the
+        one given as it was when the learned motion tracked the held-out sequences worse
+        (``chosen``).
     fit : MotionFit
         The learned noise, and each sequence's values.
     reference : str
@@ -951,12 +953,16 @@ class FitRun:
         (fractions) of each sequence tracked online with the values learned from the
         others (``"learned"``) and with the configuration given (``"given"``); None
         otherwise.
+    chosen : str
+        Which motion ``config`` has: ``"learned"``, or ``"given"`` when the held-out
+        sequences' HOTA was not higher with the learned values.
     """
 
     config: TrackConfig
     fit: MotionFit
     reference: str
     held_out: dict | None = None
+    chosen: str = "learned"
 
 
 def _gt_reference(seq: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -967,7 +973,7 @@ def _gt_reference(seq: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
                   config: TrackConfig | str | None = None, held_out: bool = True,
-                  progress: TextIO | None = None) -> FitRun:
+                  keep_learned: bool = False, progress: TextIO | None = None) -> FitRun:
     """Learn a box tracker's motion and measurement noise from MOTChallenge sequences
     (:mod:`vistrack.tracking.fit`): from each sequence's ground truth (``gt``), otherwise
     from the confident tracks of a first pass (the offline mode), and the detections.
@@ -982,7 +988,13 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
         The configuration to start from and to compare with (default: the default one).
     held_out : bool
         With ``gt`` and two sequences or more: also track each sequence with the values
-        learned from the others and with ``config``, and score both (``FitRun.held_out``).
+        learned from the others and with ``config``, and score both (``FitRun.held_out``);
+        unless ``keep_learned``, the learned motion is returned only if it scored the
+        higher COMBINED HOTA, else ``config`` as given. The likeliest noise for the
+        detections is not always the one that tracks best (docs/mot.md): a learned value
+        is kept only where it tracked sequences it was not learned from better.
+    keep_learned : bool
+        Return the learned motion whatever the held-out sequences scored.
     progress : TextIO, optional
         Where to report each sequence.
 
@@ -1035,8 +1047,10 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
         scores = None
         if gt and held_out and len(seqs) > 1:
             scores = _held_out(seqs, cfg, start, learned.per_sequence, Path(tmp), progress)
-    return FitRun(replace(cfg, motion=learned.motion), learned,
-                  "ground truth" if gt else "first pass", scores)
+    chosen = ("given" if scores is not None and not keep_learned
+              and not scores["learned"]["HOTA"] > scores["given"]["HOTA"] else "learned")
+    return FitRun(replace(cfg, motion=learned.motion) if chosen == "learned" else cfg, learned,
+                  "ground truth" if gt else "first pass", scores, chosen)
 
 
 def _held_out(seqs: list[Path], cfg: TrackConfig, start: BoxMotion, rows: list[dict],
