@@ -941,8 +941,8 @@ class FitRun:
     ----------
     config : TrackConfig
         The configuration to track with: the one given with the learned box motion, or the
-        one given as it was when the learned motion tracked the held-out sequences worse
-        (``chosen``).
+        one given as it was when the learned motion did not track the held-out sequences
+        better (``chosen``).
     fit : MotionFit
         The learned noise, and each sequence's values.
     reference : str

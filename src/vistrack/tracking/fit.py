@@ -28,7 +28,8 @@ This is the model that makes the detections most likely. It is not the one that 
 on the four sets of docs/mot.md, values learned from the other sequences of a set tracked
 each sequence worse than the defaults on MOT17, as did values chosen by tracking score
 (docs/mot.md, "What was tried"). :func:`vistrack.pipeline.fit_sequences` therefore checks
-learned values against the defaults on held-out sequences when it can.
+learned values against the given configuration on held-out sequences when it can, and
+returns them only where they tracked those better.
 """
 
 from __future__ import annotations
