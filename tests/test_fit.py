@@ -220,3 +220,7 @@ def test_vistrack_fit_writes_a_configuration_that_track_reads(tmp_path, capsys):
     # an existing file is not overwritten without --force
     assert main(["fit", *seqs, "--out", str(out), "--quiet"]) == 2
     assert "--force" in capsys.readouterr().err
+    # without ground truth nothing is held out: the learned values, said to be unchecked
+    assert main(["fit", *seqs, "--out", str(out), "--quiet", "--force"]) == 0
+    assert "not checked on held-out sequences" in capsys.readouterr().out
+    assert tomllib.loads(out.read_text())["derived"]["written"] == "learned"

@@ -475,6 +475,9 @@ def _fit(args: argparse.Namespace) -> int:
         elif run.held_out["learned"]["HOTA"] <= run.held_out["given"]["HOTA"]:
             print("the learned values did not track the held-out sequences better than the "
                   "given configuration (HOTA): wrote them all the same (--keep-learned)")
+    else:
+        print("not checked on held-out sequences (that needs --gt, two sequences or more, and "
+              "no --no-held-out): wrote the learned values")
     derived["written"] = run.chosen
     if run.chosen == "given":
         derived.update({f"learned_{k}": (list(map(float, getattr(learned, k))) if k == "std_meas"
