@@ -138,13 +138,19 @@ def test_scalar_equations_equal_matrix_form(rng):
     np.testing.assert_allclose(s.pred_std ** 2, res.pred_covs[:, 0, 0], rtol=1e-12)
 
 
+@pytest.mark.parametrize("missing", [True, False], ids=["missing", "full"])
 @pytest.mark.parametrize("store_covs", [True, False])
-def test_batch_shared_and_general_paths_agree_with_single_series(rng, store_covs):
+def test_batch_shared_and_general_paths_agree_with_single_series(rng, store_covs, missing):
+    """Series that share their covariances (the same prior and missing steps) filtered once
+    for all, equal to each filtered alone: with steps missing the covariances come from the
+    batch kernel run on one series; fully measured and with the covariances kept, from the
+    one-series kernel, which stops updating them at their steady state."""
     n, m, T, B = 4, 2, 30, 70  # B > one chunk of the kernel, and not a multiple of it
     mod = random_model(rng, n, m)
     _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(n), n_series=B, rng=rng)
-    pattern = rng.random((T, m)) < 0.2
-    ys[:, pattern] = np.nan  # the same missing pattern in every series
+    if missing:
+        pattern = rng.random((T, m)) < 0.2
+        ys[:, pattern] = np.nan  # the same missing pattern in every series
     x0 = rng.normal(size=(B, n))
     P0 = np.eye(n)
     shared = kalman_filter(ys, **mod, x0=x0, P0=P0, store_covs=store_covs)

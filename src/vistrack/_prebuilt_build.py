@@ -100,6 +100,10 @@ def _workloads(root: Path) -> None:
         kf = vt.KalmanFilter(cv, pos)
         kf.filter(ys, dt=np.ones(6))
         kf.smooth(ys, dt=np.ones(6))
+        # a batch whose series miss different steps: each its own covariances
+        two = np.stack([ys, ys])
+        two[1, 2, 0] = np.nan
+        kf.filter(two, dt=np.ones(6))
         # the pairing the offline linking does from Python
         boxes = np.column_stack([t.boxes[:, :2], t.boxes[:, :2] + t.boxes[:, 2:]])[:200]
         r, c, v = vt.association.iou_pairs(boxes, boxes + 1.0, 0.3)

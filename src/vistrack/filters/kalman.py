@@ -119,6 +119,18 @@ def _prior(x0: ArrayLike, P0: ArrayLike, B: int,
     return x.reshape(-1, n), P.reshape(-1, n, n)
 
 
+def _shared_gains(Pp: np.ndarray, H: np.ndarray,
+                  R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The Kalman gains ``(T, n, m)`` and the Cholesky factors of ``S = H Pp H' + R``
+    ``(T, m, m)`` of every fully measured step, from the predicted covariances ``Pp (T, n,
+    n)``, ``H``, ``R`` stacks of 1 or ``T``: what :func:`_kernels.kf_means_shared` takes."""
+    HP = H @ Pp
+    S = HP @ np.swapaxes(H, -1, -2) + R
+    S = (S + np.swapaxes(S, -1, -2)) / 2
+    return (np.ascontiguousarray(np.swapaxes(np.linalg.solve(S, HP), -1, -2)),
+            np.linalg.cholesky(S))
+
+
 def _raise_not_pd(bad_t: int) -> None:
     if bad_t >= 0:
         raise ValueError(
@@ -249,7 +261,18 @@ def kalman_filter(
     if B > 1 and P0_.shape[0] == 1:  # only then can the series share their covariances
         mask = np.isnan(y)
         shared = bool((mask == mask[0]).all())
-    if shared:
+    if shared and store_covs and not np.isnan(y[0]).any():
+        # every step fully measured: the covariances once, by the one-series kernel (which
+        # stops updating them once they reach their steady state), and the gains and the
+        # Cholesky factors of S from its predicted covariances
+        c4, pc4, last1 = np.empty((1, T, n, n)), np.empty((1, T, n, n)), np.empty((1, n, n))
+        bad_t, _ = _kernels.single_kernel(n, m)(
+            y[0], F_, Q_, H_, R_, x0_[0], P0_[0], np.empty((T, n)), c4[0], np.empty((T, n)),
+            pc4[0], last1[0], True,
+        )
+        _raise_not_pd(bad_t)
+        gains, chol = _shared_gains(pc4[0], H_, R_)
+    elif shared:
         # covariances, gains and Cholesky factors once, from the first series
         gains = np.empty((T, n, m))
         chol = np.empty((T, m, m))
@@ -261,6 +284,7 @@ def kalman_filter(
             pc4, np.empty(1), last1, gains, chol, store_covs,
         )
         _raise_not_pd(bad_t)
+    if shared:
         _kernels.kf_means_shared(y, F_, H_, x0_, gains, chol, means, pmeans, loglik, store_covs)
         covs = np.broadcast_to(c4, (B, T, n, n)) if store_covs else None
         pcovs = np.broadcast_to(pc4, (B, T, n, n)) if store_covs else None
