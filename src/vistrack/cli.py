@@ -20,6 +20,10 @@ if TYPE_CHECKING:
 
 DEMOS = ("kalman", "track")
 
+_FRONTEND_OPTIONS = ("frontend", "stop", "min_area", "background", "classes", "onnx_layout")
+"""``vistrack track``'s options of the front-end, for video mode only (None when not given):
+passed on to ``track_video`` as they are."""
+
 
 class Terminated(BaseException):
     """SIGTERM, raised in the main thread while :func:`main` runs, so that a run stops as on
@@ -256,8 +260,7 @@ def _track(args: argparse.Namespace) -> int:
                         f"({', '.join(sorted(BOX_PRESETS))}); --tracker {name} goes with "
                         "--out-dir")
     if args.out is not None:
-        for flag in ("frontend", "gt", "fps", "stop", "min_area", "background", "classes",
-                     "onnx_layout"):
+        for flag in ("gt", "fps") + _FRONTEND_OPTIONS:
             if getattr(args, flag) is not None:
                 return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
         for flag in ("skip_bad_frames", "report"):
@@ -340,9 +343,7 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
     """``track_video``'s keyword arguments from ``vistrack track``'s options, for one input or
     many: the front-end's, and the tracker's configuration, a file used as it is, or the
     options given over the front-end's defaults (bgsub: a still camera)."""
-    options = {k: getattr(args, k) for k in ("frontend", "stop", "min_area", "background",
-                                              "classes", "onnx_layout")
-               if getattr(args, k) is not None}
+    options = {k: getattr(args, k) for k in _FRONTEND_OPTIONS if getattr(args, k) is not None}
     options.update(tracker=name, skip_bad_frames=args.skip_bad_frames,
                    command=getattr(args, "command_line", None))
     if args.config is not None or not box:
@@ -393,7 +394,7 @@ def _track_many(args: argparse.Namespace) -> int:
         if not box:
             return fail(f"--out (sequences' detections) goes with the box trackers "
                         f"({', '.join(sorted(BOX_PRESETS))})")
-        for flag in ("frontend", "stop", "min_area", "background", "classes", "onnx_layout"):
+        for flag in _FRONTEND_OPTIONS:
             if getattr(args, flag) is not None:
                 return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
         kind, out, options["config"] = "detections", args.out, cfg

@@ -98,8 +98,9 @@ def _score_table(scores: dict[str, dict]) -> str:
             f"</table>")
 
 
-def _gt_plots(out_dir: Path, info: dict) -> list[tuple[str, bytes]]:
-    """HOTA over α and the timeline, when the run's ground truth is known and readable."""
+def _gt_plots(tracks: Path, name: str, info: dict) -> list[tuple[str, bytes]]:
+    """HOTA over α and the timeline of the run's ``tracks`` (its results file), when its
+    ground truth is known and readable."""
     from .evaluation import clear_matches, evaluate_mot
     from .io.motchallenge import read_mot
     from .viz.plots import plot_hota_alpha, plot_timeline
@@ -108,11 +109,10 @@ def _gt_plots(out_dir: Path, info: dict) -> list[tuple[str, bytes]]:
     if not gt_path or not Path(gt_path).is_file():
         return []
     first, last = int(info.get("first_frame", 1)), int(info.get("last_frame", 0))
-    gt, pred = read_mot(gt_path), read_mot(out_dir / "tracks.txt")
+    gt, pred = read_mot(gt_path), read_mot(tracks)
     if last <= 0:
         last = int(pred.frames.max()) if len(pred) else 0
     g = gt[(gt.frames >= first) & (gt.frames <= last)]
-    name = info.get("name") or out_dir.name
     return [("HOTA, DetA and AssA over the localisation threshold α",
              _png(plot_hota_alpha({name: evaluate_mot(g, pred, last)}))),
             ("Every object over time, coloured by the predicted identity that covers it",
@@ -173,11 +173,11 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
         If the video cannot be read, naming it.
     """
     from .io.atomic import check_output, replacing
-    from .pipeline import RUN_INFO
+    from .pipeline import RUN_INFO, SINK_FILES
 
     out_dir = Path(out_dir)
     target = out_dir / "report.html"
-    tracks = out_dir / "tracks.txt"
+    tracks = out_dir / SINK_FILES["tracks"]
     if not tracks.is_file():
         raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
                                 "track --out-dir wrote")
@@ -203,16 +203,16 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
         gt = html.escape(str(info.get("gt", "")))
         parts.append(f"<h2>Scores</h2><p>Against {gt}, over the frames tracked.</p>"
                      + _score_table({name: info["scores"]}))
-    video = out_dir / "annotated.mp4"
+    video = out_dir / SINK_FILES["video"]
     if video.is_file():
         parts.append("<h2>Annotated video</h2>"
                      f"<video controls loop muted autoplay preload='auto' "
                      f"src='{_data('video/webm', _webm(video))}'></video>"
                      "<p id='video-note' class='note' hidden>This browser cannot play the "
                      "video (WebM, VP8): annotated.mp4 beside this page is the same.</p>")
-    plot = out_dir / "trajectories.png"
+    plot = out_dir / SINK_FILES["plot"]
     figures = ([("Trajectories", plot.read_bytes())] if plot.is_file() else [])
-    figures += _gt_plots(out_dir, info)
+    figures += _gt_plots(tracks, name, info)
     if info.get("gt") and not Path(info["gt"]).is_file():
         parts.append(f"<p class='note'>The ground truth, {html.escape(info['gt'])}, is not "
                      "there any more: no plot of HOTA over α nor timeline.</p>")

@@ -208,7 +208,7 @@ def _chunk_summary(y: Any, first: int) -> dict:
     bad = np.argwhere(np.isinf(y))
     inf = None if not len(bad) else ((int(bad[0][0]) + first,) + tuple(int(i) for i in bad[0][1:]),
                                      float(y[tuple(bad[0])]))
-    return dict(measured=o.obs.any(axis=(0, 1)), partial=o.has_partial, count=o.count, inf=inf)
+    return dict(measured=o.measured, partial=o.has_partial, count=o.count, inf=inf)
 
 
 def _chunk_sums(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...],
@@ -394,7 +394,7 @@ def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tupl
     partial = any(s["partial"] for s in summary)
     count = _add([s["count"] for s in summary])
     _check_em(measured, partial, dict(p, x0=x0, P0=P0), learn, Q_form, R_form)
-    # a prior given per series stays with the chunks (None here: see _Summed._priors)
+    # a prior given per series stays with the chunks (None here: see _Summed._pass)
     p0: dict[str, Any] = dict(p, x0=x0 if x0s is None else None, P0=P0 if P0s is None else None)
 
     def estep(params: dict, now: tuple[str, ...]) -> _Summed:

@@ -261,7 +261,7 @@ def kalman_filter(
     if B > 1 and P0_.shape[0] == 1:  # only then can the series share their covariances
         mask = np.isnan(y)
         shared = bool((mask == mask[0]).all())
-    if shared and store_covs and not np.isnan(y[0]).any():
+    if shared and store_covs and not mask[0].any():
         # every step fully measured: the covariances once, by the one-series kernel (which
         # stops updating them once they reach their steady state), and the gains and the
         # Cholesky factors of S from its predicted covariances

@@ -217,7 +217,7 @@ def em(
                           max_iter=int(max_iter), progress=progress)
     y, params = _problem(ys, F, Q, H, R, x0, P0, learned, max_iter)
     o = _Observed(y)
-    _check_em(o.obs.any(axis=(0, 1)), o.has_partial, params, learned, Q_form, R_form)
+    _check_em(o.measured, o.has_partial, params, learned, Q_form, R_form)
     if pooled or y.shape[0] == 1:
         return _fit_in_memory(y, params, learned, Q_form, R_form, float(tol), int(max_iter),
                               progress, o=o)
@@ -542,7 +542,7 @@ class _Structured:
         if diag:
             if not np.all(np.diag(p["R"]) > 0):
                 raise ValueError(f"R's diagonal must be > 0 to learn it; got {np.diag(p['R'])}")
-            _check_measured(self.o.obs.any(axis=(0, 1)), "its variance in R")
+            _check_measured(self.o.measured, "its variance in R")
         self.nq = 1 if "Q" in learn else 0
         self.nr = (m if R_form == "diag" else 1) if "R" in learn else 0
         n_meas = self.o.count  # series that measured something, per step
@@ -681,14 +681,16 @@ def _fit(estep: Any, B: int, T: int, p: dict[str, np.ndarray], learn: tuple[str,
 class _Observed:
     """What every E-step needs of the measurements ``y (B, T, m)`` (NaN: missing), worked out
     once for all iterations: ``obs`` (True where measured), ``y0`` (``y`` with 0 where
-    missing), per series and step (``(B, T)``) ``full`` (every component measured) and
-    ``partial`` (some but not all), ``has_partial`` (any such step), and ``count`` ``(T,)``,
-    how many series measured something at each step."""
+    missing), ``measured`` ``(m,)`` (each component measured at some step of some series), per
+    series and step (``(B, T)``) ``full`` (every component measured) and ``partial`` (some but
+    not all), ``has_partial`` (any such step), and ``count`` ``(T,)``, how many series
+    measured something at each step."""
 
     def __init__(self, y: np.ndarray) -> None:
         self.y = y
         self.obs = ~np.isnan(y)
         self.y0 = np.where(self.obs, y, 0.0)
+        self.measured = self.obs.any(axis=(0, 1))
         self.full = self.obs.all(axis=-1)
         some = self.obs.any(axis=-1)
         self.partial = some & ~self.full
