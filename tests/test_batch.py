@@ -4,6 +4,8 @@ middle of a job run again to the same outputs."""
 
 import os
 import signal
+import subprocess
+import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -13,7 +15,7 @@ import numpy as np
 import pytest
 
 from tests.test_fit import _sequence
-from vistrack.batch import expand_inputs, plan, run_jobs, track_many
+from vistrack.batch import expand_inputs, plan, process_pool, run_jobs, track_many
 from vistrack.cli import main
 from vistrack.data import demo_clip
 from vistrack.pipeline import track_sequence
@@ -90,9 +92,9 @@ def test_a_failing_input_is_reported_and_the_others_finish(bench, tmp_path):
     assert stop[2].error.startswith("not run")
 
 
-def _pool_workers() -> list[int]:
-    """This process's children that are process-pool workers."""
-    out = []
+def _children(parent: int) -> dict[int, bytes]:
+    """The processes whose parent is ``parent``, with their command lines."""
+    out = {}
     for pid in os.listdir("/proc"):
         if not pid.isdigit():
             continue
@@ -101,10 +103,14 @@ def _pool_workers() -> list[int]:
             cmd = Path(f"/proc/{pid}/cmdline").read_bytes()
         except OSError:
             continue
-        ppid = int(stat.rsplit(")", 1)[1].split()[1])
-        if ppid == os.getpid() and b"spawn_main" in cmd:
-            out.append(int(pid))
+        if int(stat.rsplit(")", 1)[1].split()[1]) == parent:
+            out[int(pid)] = cmd
     return out
+
+
+def _pool_workers() -> list[int]:
+    """This process's children that are spawned process-pool workers."""
+    return [pid for pid, cmd in _children(os.getpid()).items() if b"spawn_main" in cmd]
 
 
 @pytest.mark.skipif(not Path("/proc").is_dir(), reason="finds the workers in /proc (Linux)")
@@ -140,6 +146,67 @@ def test_a_worker_killed_mid_job_is_replaced_and_the_outputs_are_complete(tmp_pa
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no partial file left
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux")
+def test_the_command_forks_its_workers_and_one_terminated_mid_job_is_replaced(tmp_path):
+    """`vistrack track` with several inputs keeps to one thread until its workers start, so
+    that they are forked from it (its imports inherited, not done again in each); a forked
+    worker sent SIGTERM dies as a spawned one would (not through the command's own SIGTERM
+    handler), and its job runs again: every output whole, as each input alone gives it."""
+    rng = np.random.default_rng(9)
+    seqs = [_sequence(tmp_path / "in" / f"LONG-{k}", rng, n_objects=400, T=150,
+                      std=(0.002, 0.00005)) for k in range(3)]
+    out = tmp_path / "out"
+    cmd = [str(Path(sys.executable).parent / "vistrack"), "track", *map(str, seqs), "--out",
+           str(out), "--jobs", "2", "--quiet"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    workers: dict[int, bytes] = {}
+    deadline = time.monotonic() + 120
+    while not workers and proc.poll() is None and time.monotonic() < deadline:
+        if out.exists() and any(p.name.startswith(".") for p in out.iterdir()):
+            workers = _children(proc.pid)
+            parent = Path(f"/proc/{proc.pid}/cmdline").read_bytes()
+            if workers:
+                os.kill(min(workers), signal.SIGTERM)
+        time.sleep(0.01)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert workers, "no worker was seen running a job"
+    # forked: a worker's command line is the command's own (a spawned one's is spawn_main)
+    assert all(c == parent for c in workers.values())
+    assert proc.returncode == 0, stderr
+    assert "3 of 3 inputs tracked" in stdout
+    for seq in seqs:
+        assert (out / f"{seq.name}.txt").read_bytes() == _alone(seq, tmp_path / f"{seq.name}.txt")
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]
+
+
+def _how_started() -> str:
+    import multiprocessing
+
+    return multiprocessing.get_start_method()
+
+
+def test_workers_are_spawned_while_another_thread_runs():
+    """Forking a process with other threads can copy a lock one of them holds: then the
+    workers start fresh."""
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        with process_pool(1, imports=("vistrack.pipeline",)) as pool:
+            assert pool.submit(_how_started).result() == "spawn"
+    finally:
+        stop.set()
+        other.join()
+
+
+def test_the_command_line_does_not_start_numpy_before_it_knows_the_command():
+    """Importing vistrack (and its command line) leaves numpy, and the BLAS threads it starts,
+    to the command: one that hands its inputs to workers gives itself one thread first."""
+    code = "import sys, vistrack.cli; print('numpy' in sys.modules)"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert r.stdout.strip() == "False"
+
+
 def test_inputs_expand_and_are_checked(bench, tmp_path):
     assert [p.name for p in expand_inputs([bench])] == ["SIM-0", "SIM-1", "SIM-2"]
     with pytest.raises(ValueError, match="given twice"):
@@ -173,7 +240,7 @@ def test_vistrack_track_with_several_inputs(bench, tmp_path, capsys):
     assert "--gt goes with one input" in capsys.readouterr().err
 
 
-def test_scoring_many_pairs_at_once_gives_the_same_scores(bench, tmp_path):
+def test_scoring_many_pairs_at_once_gives_the_same_scores(bench, tmp_path, capsys):
     from vistrack.evaluation import evaluate_files
 
     outcomes = track_many([bench], tmp_path / "out", jobs=1)
@@ -190,6 +257,13 @@ def test_scoring_many_pairs_at_once_gives_the_same_scores(bench, tmp_path):
             assert all(np.array_equal(a[k], b[k]) for k in a), name
     with pytest.raises(ValueError, match="jobs"):
         evaluate_files(pairs, jobs=0)
+    # vistrack eval scores the sequences on a process each by default: the same table
+    tables = []
+    for jobs in ([], ["--jobs", "1"]):
+        assert main(["eval", "--gt-dir", str(bench), "--pred-dir", str(tmp_path / "out"),
+                     "--json", *jobs]) == 0
+        tables.append(capsys.readouterr().out)
+    assert tables[0] == tables[1] and '"SIM-2"' in tables[0]
 
 
 def test_several_videos_from_pixels(tmp_path, capsys):

@@ -20,11 +20,12 @@ Names load on first use, so ``import vistrack`` costs little memory.
 import importlib
 from typing import Any
 
-from .types import Detections, Frame, Gaussian, Tracks
-
-# Everything else loads on first use (PEP 562), so that `import vistrack` stays light: numba
-# and scipy, which the filters and trackers need, cost about 100 MB of memory on their own.
+# Every name loads on first use (PEP 562), so that `import vistrack` stays light: numba and
+# scipy, which the filters and trackers need, cost about 100 MB of memory on their own, and
+# numpy, which even the types need, starts its BLAS threads when it loads (a command that
+# only hands its inputs to worker processes sets their number first, vistrack.batch)
 _LAZY = {
+    **{name: "types" for name in ("Detections", "Frame", "Gaussian", "Tracks")},
     **{name: "filters" for name in (
         "EnsembleKalmanFilter", "ExtendedKalmanFilter", "FilterResult", "IMMFilter",
         "KalmanFilter", "OnlineFilter", "ParticleFilter", "SmoothResult",
@@ -38,7 +39,7 @@ _LAZY = {
     "run": "pipeline",
 }
 _SUBMODULES = ("association", "evaluation", "filters", "frontends", "io", "models", "pipeline",
-               "simulate", "tracking", "viz")
+               "simulate", "tracking", "types", "viz")
 
 
 def __getattr__(name: str) -> Any:

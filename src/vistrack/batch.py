@@ -40,10 +40,11 @@ if TYPE_CHECKING:
 # made, so that `vistrack track` with one input does not pay for it
 
 __all__ = ["Job", "Outcome", "is_benchmark", "expand_inputs", "plan", "track_many", "run_jobs",
-           "progress_lines", "process_pool"]
+           "progress_lines", "process_pool", "one_thread_here"]
 
-_ONE_THREAD = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-               "NUMBA_NUM_THREADS")
+_PIPELINE = f"{__package__}.pipeline"  # what the jobs run (_run)
+_BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+_ONE_THREAD = (*_BLAS_THREADS, "NUMBA_NUM_THREADS")
 
 
 def _is_sequence(path: Path) -> bool:
@@ -170,17 +171,35 @@ def _run(job: Job) -> Outcome:
                    tracks=run.tracks, seconds=time.perf_counter() - t0)
 
 
-def process_pool(workers: int) -> ProcessPoolExecutor:
-    """A pool of ``workers`` fresh processes (spawned: no state copied from this one), each
-    with one BLAS and OpenMP thread unless the environment sets them."""
+def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecutor:
+    """A pool of ``workers`` processes, each with one BLAS and OpenMP thread unless the
+    environment sets them.
+
+    On Linux, when this process has one thread, the workers are forked from it after it has
+    imported ``imports`` (what the jobs run), so that each starts with them loaded, as a
+    forked process safely can when no other thread holds a lock. Otherwise (another thread
+    running, such as a BLAS pool started with more than one thread; not Linux) they are
+    spawned: fresh processes that import what they need. A forked worker's signal handlers
+    are Python's defaults, as a spawned one's.
+    """
+    import importlib
     import multiprocessing
+    import sys
     from concurrent.futures import ProcessPoolExecutor
 
+    fork = sys.platform.startswith("linux") and _threads() == 1
+    if fork:
+        for name in imports:  # before the environment below: this process's own threads
+            importlib.import_module(name)
+        fork = _threads() == 1
     saved = {k: os.environ.get(k) for k in _ONE_THREAD}
     try:
         for k in _ONE_THREAD:
             os.environ.setdefault(k, "1")
-        pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+        pool = ProcessPoolExecutor(workers,
+                                   mp_context=multiprocessing.get_context("fork" if fork
+                                                                          else "spawn"),
+                                   initializer=_default_signals if fork else None)
         # the processes start at the first submission: start them now, with this environment
         for f in [pool.submit(os.getpid) for _ in range(workers)]:
             f.result()
@@ -191,6 +210,37 @@ def process_pool(workers: int) -> ProcessPoolExecutor:
             else:
                 os.environ[k] = v
     return pool
+
+
+def one_thread_here() -> None:
+    """Give this process one BLAS and OpenMP thread, as its workers have (unless the
+    environment sets them), for a process that only hands out jobs, so that it stays
+    single-threaded and :func:`process_pool` can fork its workers. It acts only before numpy
+    is first imported: a numpy loaded already keeps the threads it started, and then the
+    environment is left as it is."""
+    import sys
+
+    if "numpy" not in sys.modules:
+        for k in _BLAS_THREADS:
+            os.environ.setdefault(k, "1")
+
+
+def _threads() -> int:
+    """This process's threads (Linux's ``/proc/self/stat``; 0 where it cannot be read)."""
+    try:
+        with open("/proc/self/stat", "rb") as f:
+            return int(f.read().rsplit(b")", 1)[1].split()[17])
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
+def _default_signals() -> None:
+    """In a forked worker: Ctrl-C and SIGTERM act as in a fresh process (the parent's own
+    handlers, such as the command line's SIGTERM, are its own)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def default_jobs() -> int:
@@ -286,7 +336,7 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
         size = workers or default_jobs()
         pending = _largest_first(jobs, range(n))
         while pending and not stopped():
-            pool = process_pool(min(size, len(pending)))
+            pool = process_pool(min(size, len(pending)), imports=(_PIPELINE,))
             running: dict[Future, int] = {}
             queue, died, broken = list(pending), [], False
             try:

@@ -225,6 +225,12 @@ def _tracker_and_numbers(args: argparse.Namespace) -> tuple[str, bool, str]:
 
 
 def _track(args: argparse.Namespace) -> int:
+    from .batch import is_benchmark
+
+    if (len(args.input) > 1 or is_benchmark(Path(args.input[0])) or args.jobs is not None
+            or args.scheduler is not None):
+        return _track_many(args)
+
     from .config import config_toml
     from .io.atomic import check_output
     from .pipeline import TrackRun, VideoRun, track_sequence, track_video, video_outputs
@@ -233,11 +239,6 @@ def _track(args: argparse.Namespace) -> int:
     def fail(text: str) -> int:
         return _fail("track", text)
 
-    from .batch import is_benchmark
-
-    if (len(args.input) > 1 or is_benchmark(Path(args.input[0])) or args.jobs is not None
-            or args.scheduler is not None):
-        return _track_many(args)
     if args.keep_going:
         return fail("--keep-going goes with several inputs")
     args.input = args.input[0]
@@ -360,7 +361,9 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
 def _track_many(args: argparse.Namespace) -> int:
     """``vistrack track`` on several inputs (vistrack.batch): in parallel, a line as each is
     done, a table at the end; exit status 1 if any failed."""
-    from .batch import Outcome, plan, progress_lines, run_jobs
+    from .batch import Outcome, one_thread_here, plan, progress_lines, run_jobs
+
+    one_thread_here()  # before numpy: this process hands out the inputs, its workers track
     from .io.atomic import check_output
     from .tracking.box import TRACKERS as BOX_PRESETS
 
@@ -517,6 +520,11 @@ def _track_one(args: argparse.Namespace) -> int:
 def _eval(args: argparse.Namespace) -> int:
     import json
 
+    from .batch import default_jobs, one_thread_here
+
+    jobs = default_jobs() if args.jobs is None else args.jobs
+    if jobs > 1 and args.gt_dir:
+        one_thread_here()  # before numpy: the sequences are scored by the workers
     from .evaluation import evaluate_files
 
     pairs = []
@@ -550,7 +558,7 @@ def _eval(args: argparse.Namespace) -> int:
 
         for path in plots:
             check_output(path, force=args.force, name="--plots")
-    res = evaluate_files(pairs, benchmark=args.benchmark, jobs=args.jobs)
+    res = evaluate_files(pairs, benchmark=args.benchmark, jobs=jobs)
     for warning in res.warnings:
         print(f"vistrack eval: warning: {warning}", file=sys.stderr)
     if plots:
@@ -792,7 +800,7 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--force", action="store_true", help="overwrite existing plots")
     ev.add_argument("--jobs", type=int, metavar="N",
                     help="with --gt-dir: sequences scored at once, each in a process of its "
-                    "own (default 1)")
+                    "own (default: one for each core)")
     ev.add_argument("--pred-dir", help="folder of results SEQ.txt")
     ev.add_argument("--benchmark", default="auto", choices=("auto", "MOT15", "MOT16", "MOT17",
                                                            "MOT20"),

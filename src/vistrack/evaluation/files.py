@@ -114,9 +114,9 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     if jobs is not None and jobs < 1:
         raise ValueError(f"jobs must be 1 or more; got {jobs}")
     if executor is None and (jobs or 1) > 1 and len(pairs) > 1:
-        from ..batch import process_pool  # a pool of fresh processes, one BLAS thread each
+        from ..batch import process_pool  # one BLAS thread a worker
 
-        with process_pool(min(jobs or 1, len(pairs))) as pool:
+        with process_pool(min(jobs or 1, len(pairs)), imports=(__name__,)) as pool:
             scored = list(pool.map(_score, pairs, [benchmark] * len(pairs)))
     elif executor is not None:
         futures = [executor.submit(_score, pair, benchmark) for pair in pairs]
