@@ -78,14 +78,18 @@ ONE_ARENA = {"MALLOC_ARENA_MAX": "1"}
 
 def local_cluster(workers: int, env: dict[str, str] | None = None):
     """A Dask cluster of ``workers`` processes, one thread each, on localhost with no
-    dashboard; one BLAS thread a worker, and without the nanny's MALLOC_TRIM_THRESHOLD_
-    (``env``: more of the workers' environment, by default one malloc arena)."""
+    dashboard; one BLAS thread a worker, without the nanny's MALLOC_TRIM_THRESHOLD_ (``env``:
+    more of the workers' environment, by default one malloc arena) and without Dask's
+    profiler."""
     import dask
     import distributed
 
     one = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
     env = ONE_ARENA if env is None else env
-    with dask.config.set({"distributed.nanny.pre-spawn-environ": {**one, **env}}):
+    # Dask's statistical profiler samples each worker's thread every 10 ms (the frames walked
+    # under the GIL): off, as on a cluster that runs numeric tasks and is not being profiled
+    with dask.config.set({"distributed.nanny.pre-spawn-environ": {**one, **env},
+                          "distributed.worker.profile.enabled": False}):
         return distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
                                         processes=True, dashboard_address=None)
 
@@ -314,7 +318,8 @@ def main(argv: list[str] | None = None) -> int:
                 "",
                 "The cluster's workers: one thread each, one BLAS thread, one malloc arena "
                 "(`MALLOC_ARENA_MAX=1`), and no `MALLOC_TRIM_THRESHOLD_` from the nanny, set "
-                "through `distributed.nanny.pre-spawn-environ`.",
+                "through `distributed.nanny.pre-spawn-environ`; Dask's profiler off "
+                "(`distributed.worker.profile.enabled: false`).",
                 "",
                 "| chunks | where | wall s | against one process |",
                 "|---|---|---:|---:|",
