@@ -83,7 +83,8 @@ def cluster():
 
 
 @pytest.mark.slow
-def test_many_inputs_on_a_dask_cluster_give_what_each_gives_alone(bench, tmp_path, cluster):  # noqa: F811
+def test_many_inputs_on_a_dask_cluster_give_what_each_gives_alone(bench, tmp_path, cluster,  # noqa: F811
+                                                                   capsys):
     from distributed import Client
 
     from vistrack.batch import track_many
@@ -99,6 +100,17 @@ def test_many_inputs_on_a_dask_cluster_give_what_each_gives_alone(bench, tmp_pat
                  cluster.scheduler_address, "--quiet"]) == 0
     assert [p.read_bytes() for p in sorted(out.iterdir())] == \
         [o.out.read_bytes() for o in outcomes]
+    capsys.readouterr()
+    # and scored there: the table of one process
+    tables = []
+    for where in (["--scheduler", cluster.scheduler_address], ["--jobs", "1"]):
+        assert main(["eval", "--gt-dir", str(bench), "--pred-dir", str(out), "--json",
+                     *where]) == 0
+        tables.append(capsys.readouterr().out)
+    assert tables[0] == tables[1] and '"SIM-1"' in tables[0]
+    assert main(["eval", "--gt-dir", str(bench), "--pred-dir", str(out), "--jobs", "2",
+                 "--scheduler", cluster.scheduler_address]) == 2
+    assert "--jobs goes with the local pool" in capsys.readouterr().err
 
 
 def _em_problem(B=30, T=80, missing=True):

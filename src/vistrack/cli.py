@@ -523,7 +523,7 @@ def _eval(args: argparse.Namespace) -> int:
     from .batch import default_jobs, one_thread_here
 
     jobs = default_jobs() if args.jobs is None else args.jobs
-    if jobs > 1 and args.gt_dir:
+    if jobs > 1 and args.gt_dir and args.scheduler is None:
         one_thread_here()  # before numpy: the sequences are scored by the workers
     from .evaluation import evaluate_files
 
@@ -551,6 +551,8 @@ def _eval(args: argparse.Namespace) -> int:
     # a missing or malformed file is a user's mistake: main prints it in one line
     if args.jobs is not None and args.jobs < 1:
         return _fail("eval", f"--jobs must be 1 or more; got {args.jobs}")
+    if args.scheduler is not None and args.jobs is not None:
+        return _fail("eval", "--jobs goes with the local pool; the cluster has its own workers")
     plots = [] if args.plots is None else [Path(args.plots) / "hota_alpha.png"] + [
         Path(args.plots) / f"timeline_{name}.png" for name, *_ in pairs]
     if plots:
@@ -558,7 +560,17 @@ def _eval(args: argparse.Namespace) -> int:
 
         for path in plots:
             check_output(path, force=args.force, name="--plots")
-    res = evaluate_files(pairs, benchmark=args.benchmark, jobs=jobs)
+    if args.scheduler is not None:
+        try:
+            from distributed import Client
+        except ImportError:
+            return _fail("eval", "--scheduler needs Dask's distributed (pip install "
+                         "'vistrack[dask]')")
+        with Client(args.scheduler, set_as_default=False) as client:
+            res = evaluate_files(pairs, benchmark=args.benchmark,
+                                 executor=client.get_executor())
+    else:
+        res = evaluate_files(pairs, benchmark=args.benchmark, jobs=jobs)
     for warning in res.warnings:
         print(f"vistrack eval: warning: {warning}", file=sys.stderr)
     if plots:
@@ -801,6 +813,10 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--jobs", type=int, metavar="N",
                     help="with --gt-dir: sequences scored at once, each in a process of its "
                     "own (default: one for each core)")
+    ev.add_argument("--scheduler", metavar="ADDRESS",
+                    help="with --gt-dir: score the sequences on the running Dask cluster whose "
+                    "scheduler is at ADDRESS (tcp://host:8786), each worker with vistrack "
+                    "installed and the files on a filesystem it shares (needs vistrack[dask])")
     ev.add_argument("--pred-dir", help="folder of results SEQ.txt")
     ev.add_argument("--benchmark", default="auto", choices=("auto", "MOT15", "MOT16", "MOT17",
                                                            "MOT20"),
