@@ -266,6 +266,45 @@ def test_scoring_many_pairs_at_once_gives_the_same_scores(bench, tmp_path, capsy
     assert tables[0] == tables[1] and '"SIM-2"' in tables[0]
 
 
+def test_scoring_keeps_going_past_a_sequence_it_cannot_read(bench, tmp_path, capsys):
+    import json
+
+    from vistrack.evaluation import evaluate_files
+
+    out = tmp_path / "out"
+    track_many([bench], out, jobs=1)
+    (out / "SIM-1.txt").write_text("1,1,10,20,30,40,1,-1,-1,-1\n2,1,10,x,30,40,1,-1,-1,-1\n")
+    pairs = [(s.name, s / "gt" / "gt.txt", out / f"{s.name}.txt", s / "seqinfo.ini")
+             for s in sorted(bench.iterdir())]
+    good = evaluate_files([pairs[0], pairs[2]])
+    threads = ThreadPoolExecutor(2)
+    for where in (dict(jobs=1), dict(jobs=2), dict(executor=threads)):
+        res = evaluate_files(pairs, keep_going=True, **where)
+        assert sorted(res) == ["COMBINED", "SIM-0", "SIM-2"]
+        assert list(res.errors) == ["SIM-1"] and "SIM-1.txt" in res.errors["SIM-1"]
+        assert "line 2" in res.errors["SIM-1"]
+        # COMBINED over the sequences scored: as if the one left out were not there
+        a, b = vars(res["COMBINED"]), vars(good["COMBINED"])
+        assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in b)
+    threads.shutdown()
+    with pytest.raises(Exception, match="line 2"):
+        evaluate_files(pairs, keep_going=False)
+    # the command: one line for the sequence left out, the others' table, exit status 1
+    args = ["eval", "--gt-dir", str(bench), "--pred-dir", str(out), "--json"]
+    assert main(args) == 2  # without --keep-going, the error alone
+    assert "SIM-1.txt" in capsys.readouterr().err
+    assert main([*args, "--keep-going"]) == 1
+    cap = capsys.readouterr()
+    assert sorted(json.loads(cap.out)) == ["COMBINED", "SIM-0", "SIM-2"]
+    assert "vistrack eval: error: SIM-1: " in cap.err and "2 of 3 sequences scored" in cap.err
+    # a missing results file is one more error, not a stop
+    (out / "SIM-2.txt").unlink()
+    assert main([*args, "--keep-going"]) == 1
+    cap = capsys.readouterr()
+    assert sorted(json.loads(cap.out)) == ["SIM-0"]
+    assert "SIM-2: FileNotFoundError" in cap.err and "1 of 3 sequences scored" in cap.err
+
+
 def test_several_videos_from_pixels(tmp_path, capsys):
     import shutil
 

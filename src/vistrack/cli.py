@@ -533,7 +533,7 @@ def _eval(args: argparse.Namespace) -> int:
             return _fail("eval", "--gt-dir and --pred-dir go together")
         for seq in sorted(p for p in Path(args.gt_dir).iterdir() if (p / "gt" / "gt.txt").exists()):
             pred = Path(args.pred_dir) / f"{seq.name}.txt"
-            if not pred.exists():
+            if not pred.exists() and not args.keep_going:
                 return _fail("eval", f"no results for {seq.name}: {pred} does not exist")
             info = seq / "seqinfo.ini"
             pairs.append((seq.name, seq / "gt" / "gt.txt", pred, info if info.exists() else None))
@@ -568,29 +568,41 @@ def _eval(args: argparse.Namespace) -> int:
                          "'vistrack[dask]')")
         with Client(args.scheduler, set_as_default=False) as client:
             res = evaluate_files(pairs, benchmark=args.benchmark,
-                                 executor=client.get_executor())
+                                 executor=client.get_executor(), keep_going=args.keep_going)
     else:
-        res = evaluate_files(pairs, benchmark=args.benchmark, jobs=jobs)
+        res = evaluate_files(pairs, benchmark=args.benchmark, jobs=jobs,
+                             keep_going=args.keep_going)
     for warning in res.warnings:
         print(f"vistrack eval: warning: {warning}", file=sys.stderr)
+    for name, error in res.errors.items():
+        print(f"vistrack eval: error: {name}: {error}", file=sys.stderr)
+    if res.errors:
+        print(f"vistrack eval: {len(pairs) - len(res.errors)} of {len(pairs)} sequences scored; "
+              f"{len(res.errors)} not", file=sys.stderr)
+    status = 1 if res.errors else 0
+    if not res:  # nothing scored
+        return status
     if plots:
         from .evaluation.files import pair_matches
         from .io.atomic import made_folder, replacing
         from .viz.plots import plot_hota_alpha, plot_timeline
 
+        written = plots[:1] + [path for pair, path in zip(pairs, plots[1:])
+                               if pair[0] not in res.errors]
         with made_folder(plots[0].parent):
             with replacing(plots[0]) as part:
                 plot_hota_alpha(res, part)
             for pair, path in zip(pairs, plots[1:]):
-                with replacing(path) as part:
-                    plot_timeline(pair_matches(pair, args.benchmark), part, title=pair[0])
-        for path in plots:
+                if pair[0] not in res.errors:
+                    with replacing(path) as part:
+                        plot_timeline(pair_matches(pair, args.benchmark), part, title=pair[0])
+        for path in written:
             print(f"wrote {path}", file=sys.stderr)
     if args.json:
         print(json.dumps({k: v.summary() for k, v in res.items()}, indent=2))
-        return 0
+        return status
     _table(res)
-    return 0
+    return status
 
 
 def _table(res: dict, stream=None) -> None:
@@ -813,6 +825,10 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--jobs", type=int, metavar="N",
                     help="with --gt-dir: sequences scored at once, each in a process of its "
                     "own (default: one for each core)")
+    ev.add_argument("--keep-going", action="store_true",
+                    help="with --gt-dir: a sequence whose files are missing or cannot be read "
+                    "is named with its error and left out, the others are scored (COMBINED "
+                    "over them), and the exit status is 1")
     ev.add_argument("--scheduler", metavar="ADDRESS",
                     help="with --gt-dir: score the sequences on the running Dask cluster whose "
                     "scheduler is at ADDRESS (tcp://host:8786), each worker with vistrack "

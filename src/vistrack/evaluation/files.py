@@ -10,7 +10,7 @@ from .mot import Matches, MOTCounts, clear_matches, combine, evaluate_mot
 from .sanity import sanity_warnings
 
 if TYPE_CHECKING:
-    from concurrent.futures import Executor
+    from concurrent.futures import Executor, Future
 
 __all__ = ["evaluate_files", "pair_matches", "EvalResults"]
 
@@ -24,6 +24,9 @@ class EvalResults(dict[str, MOTCounts]):
     warnings : list of str
         One sentence per warning, naming the files, in the order of the sequences; empty when
         nothing looks wrong. ``vistrack eval`` prints each on stderr.
+    errors : dict of str to str
+        With ``keep_going``: each sequence that could not be scored, by name, and why (its
+        error in one line); it is not among the scores, nor in ``"COMBINED"``.
 
     Examples
     --------
@@ -32,16 +35,29 @@ class EvalResults(dict[str, MOTCounts]):
     (3, ['gt.txt looks like ...'])
     """
 
-    def __init__(self, *args, warnings: list[str] | None = None, **kwargs):
+    def __init__(self, *args, warnings: list[str] | None = None,
+                 errors: dict[str, str] | None = None, **kwargs):
         super().__init__(*args, **kwargs)
         self.warnings: list[str] = list(warnings or [])
+        self.errors: dict[str, str] = dict(errors or {})
 
 
-def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str
-           ) -> tuple[MOTCounts, list[str]]:
-    """One pair's counts and sanity warnings (in a worker, for :func:`evaluate_files`)."""
-    g, p, n = _read(pair)
-    return evaluate_mot(g, p, n, benchmark=benchmark), sanity_warnings(g, p)
+def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going: bool = False
+           ) -> tuple[MOTCounts | None, list[str], str]:
+    """One pair's counts, sanity warnings and (``keep_going``) the error that stopped it, in
+    one line ("" if none; raised without ``keep_going``); in a worker, for
+    :func:`evaluate_files`."""
+    try:
+        g, p, n = _read(pair)
+        return evaluate_mot(g, p, n, benchmark=benchmark), sanity_warnings(g, p), ""
+    except Exception as e:
+        if not keep_going:
+            raise
+        return None, [], _one_line(e)
+
+
+def _one_line(e: BaseException) -> str:
+    return f"{type(e).__name__}: {' '.join(str(e).split()) or type(e).__name__}"
 
 
 def _read(pair: tuple[str, Path, Path, Path | None]) -> tuple[MOTTable, MOTTable, int | None]:
@@ -49,6 +65,17 @@ def _read(pair: tuple[str, Path, Path, Path | None]) -> tuple[MOTTable, MOTTable
     _, gt, pred, info = pair
     n = read_seqinfo(info).seq_length if info is not None else None
     return read_mot(gt), read_mot(pred), n
+
+
+def _result(future: Future, keep_going: bool) -> tuple[MOTCounts | None, list[str], str]:
+    """A future's :func:`_score`; with ``keep_going``, the executor's own failure as the
+    pair's error."""
+    try:
+        return future.result()
+    except Exception as e:
+        if not keep_going:
+            raise
+        return None, [], _one_line(e)
 
 
 def pair_matches(pair: tuple[str, Path, Path, Path | None],
@@ -61,7 +88,8 @@ def pair_matches(pair: tuple[str, Path, Path, Path | None],
 
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
                    benchmark: str = "auto", jobs: int | None = None,
-                   executor: Executor | None = None) -> EvalResults:
+                   executor: Executor | None = None, keep_going: bool = False
+                   ) -> EvalResults:
     """Score ``(name, gt, results, seqinfo-or-None)`` pairs; adds ``"COMBINED"`` when there are
     several. Files that look unrelated, or ground truth that looks like detections, are warned
     about in the result's ``warnings`` (:func:`~vistrack.evaluation.sanity_warnings`).
@@ -80,12 +108,17 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     executor : concurrent.futures.Executor, optional
         Score the pairs there instead (``submit(fn, *args) -> future``; a Dask client's
         executor works).
+    keep_going : bool
+        A pair that cannot be read or scored (the errors below, or the executor's own) is
+        left out and named in the result's ``errors``, and the others are scored (True); or
+        its error is raised (False).
 
     Returns
     -------
     EvalResults
-        A dict: the counts of each sequence by name, and ``"COMBINED"``, their sum, when there
-        are several; its ``warnings`` list the sanity warnings of every pair.
+        A dict: the counts of each sequence by name, and ``"COMBINED"``, their sum, when
+        several were scored; its ``warnings`` list the sanity warnings of every pair, its
+        ``errors`` the pairs left out.
 
     Raises
     ------
@@ -117,15 +150,19 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
         from ..batch import process_pool  # one BLAS thread a worker
 
         with process_pool(min(jobs or 1, len(pairs)), imports=(__name__,)) as pool:
-            scored = list(pool.map(_score, pairs, [benchmark] * len(pairs)))
+            scored = list(pool.map(_score, pairs, [benchmark] * len(pairs),
+                                   [keep_going] * len(pairs)))
     elif executor is not None:
-        futures = [executor.submit(_score, pair, benchmark) for pair in pairs]
-        scored = [f.result() for f in futures]
+        futures = [executor.submit(_score, pair, benchmark, keep_going) for pair in pairs]
+        scored = [_result(f, keep_going) for f in futures]
     else:
-        scored = [_score(pair, benchmark) for pair in pairs]
-    for (name, *_), (counts, warned) in zip(pairs, scored):
+        scored = [_score(pair, benchmark, keep_going) for pair in pairs]
+    for (name, *_), (counts, warned, error) in zip(pairs, scored):
         out.warnings += warned
-        out[str(name)] = counts
+        if counts is None:
+            out.errors[str(name)] = error
+        else:
+            out[str(name)] = counts
     if len(out) > 1:
         out["COMBINED"] = combine(out.values())
     return out
