@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from tests.test_fit import _sequence
-from vistrack.batch import expand_inputs, plan, process_pool, run_jobs, track_many
+from vistrack.batch import expand_inputs, plan, run_jobs, track_many
 from vistrack.cli import main
 from vistrack.data import demo_clip
 from vistrack.pipeline import track_sequence
@@ -179,24 +179,53 @@ def test_the_command_forks_its_workers_and_one_terminated_mid_job_is_replaced(tm
     assert not [p for p in out.iterdir() if p.name.startswith(".")]
 
 
-def _how_started() -> str:
-    import multiprocessing
+HOW = """import multiprocessing, signal, sys
 
-    return multiprocessing.get_start_method()
+from vistrack import _compile
 
 
-def test_workers_are_spawned_while_another_thread_runs():
-    """Forking a process with other threads can copy a lock one of them holds: then the
-    workers start fresh."""
+def how():
+    return (multiprocessing.get_start_method(), "vistrack.pipeline" in sys.modules,
+            signal.getsignal(signal.SIGINT) == signal.SIG_IGN, len(_compile._watches))
+"""
+
+POOLS = """import signal, sys, threading
+sys.path.insert(0, sys.argv[1])
+from how import how
+from vistrack import _compile
+from vistrack.batch import process_pool
+
+def show():
+    with process_pool(1, imports=("vistrack.pipeline",)) as pool:
+        print(*pool.submit(how).result())
+
+if __name__ == "__main__":
+    with _compile.watch(None):  # a command's watch of numba's compilations
+        show()
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        show()
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     stop = threading.Event()
     other = threading.Thread(target=stop.wait)
     other.start()
-    try:
-        with process_pool(1, imports=("vistrack.pipeline",)) as pool:
-            assert pool.submit(_how_started).result() == "spawn"
-    finally:
-        stop.set()
-        other.join()
+    show()
+    stop.set()
+    other.join()
+"""
+
+
+def test_a_single_threaded_process_forks_its_workers_and_one_with_other_threads_spawns(
+        tmp_path):
+    """With one thread (BLAS given one), the workers are forked after the jobs' module is
+    imported, and start with it; Ctrl-C stays ignored if this process ignores it, and the
+    parent's compile watch is not theirs. With another thread running (a fork could copy a
+    lock it holds), they are spawned and import what they need."""
+    (tmp_path / "how.py").write_text(HOW)
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    r = subprocess.run([sys.executable, "-c", POOLS, str(tmp_path)], env=env,
+                       capture_output=True, text=True, check=True)
+    assert r.stdout.splitlines() == ["fork True False 0", "fork True True 0",
+                                     "spawn False False 0"]
 
 
 def test_the_command_line_does_not_start_numpy_before_it_knows_the_command():
@@ -297,12 +326,22 @@ def test_scoring_keeps_going_past_a_sequence_it_cannot_read(bench, tmp_path, cap
     cap = capsys.readouterr()
     assert sorted(json.loads(cap.out)) == ["COMBINED", "SIM-0", "SIM-2"]
     assert "vistrack eval: error: SIM-1: " in cap.err and "2 of 3 sequences scored" in cap.err
+    # the command as a user runs it: the sequences scored by forked workers, the same output
+    run = subprocess.run([str(Path(sys.executable).parent / "vistrack"), *args, "--keep-going"],
+                         capture_output=True, text=True)
+    assert (run.returncode, run.stdout, run.stderr) == (1, cap.out, cap.err)
+    one = ["eval", "--gt", str(bench / "SIM-0" / "gt" / "gt.txt"), "--pred",
+           str(out / "SIM-0.txt"), "--keep-going"]
+    assert main(one) == 2 and "--keep-going goes with --gt-dir" in capsys.readouterr().err
     # a missing results file is one more error, not a stop
     (out / "SIM-2.txt").unlink()
     assert main([*args, "--keep-going"]) == 1
     cap = capsys.readouterr()
     assert sorted(json.loads(cap.out)) == ["SIM-0"]
     assert "SIM-2: FileNotFoundError" in cap.err and "1 of 3 sequences scored" in cap.err
+    (out / "SIM-0.txt").unlink()  # nothing to score: still JSON
+    assert main([*args, "--keep-going"]) == 1
+    assert json.loads(capsys.readouterr().out) == {}
 
 
 def test_several_videos_from_pixels(tmp_path, capsys):

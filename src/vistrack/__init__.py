@@ -18,7 +18,10 @@ Names load on first use, so ``import vistrack`` costs little memory.
 """
 
 import importlib
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # what type checkers see; at run time they load on first use (below)
+    from .types import Detections, Frame, Gaussian, Tracks
 
 # Every name loads on first use (PEP 562), so that `import vistrack` stays light: numba and
 # scipy, which the filters and trackers need, cost about 100 MB of memory on their own, and

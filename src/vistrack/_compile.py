@@ -9,15 +9,18 @@ installs a listener for the duration of a command; :func:`seconds` is the compil
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import TextIO
 
 from . import _jit
 
-__all__ = ["watch", "seconds"]
+__all__ = ["watch", "seconds", "forget"]
 
 _total = 0.0
+# the watches under way: each one's hook for numba's import, its listener once registered, and
+# whether it is still active
+_watches: list[tuple[Callable[[], None], list[object], list[bool]]] = []
 
 
 def seconds() -> float:
@@ -66,13 +69,31 @@ def watch(stream: TextIO | None, what: str = "vistrack") -> Iterator[None]:
         event.register("numba:compile", listener)
         registered.append(listener)
 
+    watch_ = (register, registered, active)
+    _watches.append(watch_)
     _jit.on_import(register)
     try:
         yield
     finally:
-        active[0] = False
-        _jit.cancel(register)
-        if registered:
-            from numba.core import event
+        _stop(*watch_)
+        if watch_ in _watches:
+            _watches.remove(watch_)
 
-            event.unregister("numba:compile", registered[0])
+
+def _stop(register: Callable[[], None], registered: list[object], active: list[bool]) -> None:
+    active[0] = False
+    _jit.cancel(register)
+    if registered:
+        from numba.core import event
+
+        event.unregister("numba:compile", registered.pop())
+
+
+def forget() -> None:
+    """In a process forked while a :func:`watch` ran (a pool's worker): stop watching here and
+    start the count afresh, as in a process started anew (the watch is its parent's)."""
+    global _total
+    for watch_ in _watches:
+        _stop(*watch_)
+    _watches.clear()
+    _total = 0.0

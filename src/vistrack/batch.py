@@ -179,27 +179,35 @@ def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecut
     imported ``imports`` (what the jobs run), so that each starts with them loaded, as a
     forked process safely can when no other thread holds a lock. Otherwise (another thread
     running, such as a BLAS pool started with more than one thread; not Linux) they are
-    spawned: fresh processes that import what they need. A forked worker's signal handlers
-    are Python's defaults, as a spawned one's.
+    spawned: fresh processes that import what they need. A forked worker is then made like a
+    fresh one: Ctrl-C and SIGTERM act as Python's defaults (or stay ignored if this process
+    ignores them), and no compile watch of this process's (:mod:`vistrack._compile`) goes on
+    in it; warnings print as this process prints them.
     """
     import importlib
     import multiprocessing
+    import signal
     import sys
     from concurrent.futures import ProcessPoolExecutor
 
-    fork = sys.platform.startswith("linux") and _threads() == 1
+    fork = sys.platform.startswith("linux") and _one_thread()
     if fork:
         for name in imports:  # before the environment below: this process's own threads
             importlib.import_module(name)
-        fork = _threads() == 1
+        fork = _one_thread()
     saved = {k: os.environ.get(k) for k in _ONE_THREAD}
     try:
         for k in _ONE_THREAD:
             os.environ.setdefault(k, "1")
-        pool = ProcessPoolExecutor(workers,
-                                   mp_context=multiprocessing.get_context("fork" if fork
-                                                                          else "spawn"),
-                                   initializer=_default_signals if fork else None)
+        if fork:  # a fresh process's handlers: Python's, or ignored as here
+            ign = {s: signal.getsignal(s) == signal.SIG_IGN for s in (signal.SIGINT,
+                                                                     signal.SIGTERM)}
+            pool = ProcessPoolExecutor(
+                workers, mp_context=multiprocessing.get_context("fork"), initializer=_as_fresh,
+                initargs=(signal.SIG_IGN if ign[signal.SIGINT] else signal.default_int_handler,
+                          signal.SIG_IGN if ign[signal.SIGTERM] else signal.SIG_DFL))
+        else:
+            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
         # the processes start at the first submission: start them now, with this environment
         for f in [pool.submit(os.getpid) for _ in range(workers)]:
             f.result()
@@ -225,6 +233,19 @@ def one_thread_here() -> None:
             os.environ.setdefault(k, "1")
 
 
+def _one_thread(wait: float = 0.02) -> bool:
+    """Whether this process has one thread. A thread Python has joined (an earlier pool's)
+    can stay in the system's list for a moment after: while Python runs no other thread,
+    wait up to ``wait`` seconds for it to go."""
+    import threading
+
+    deadline = time.monotonic() + wait
+    while (n := _threads()) > 1 and threading.active_count() == 1 \
+            and time.monotonic() < deadline:
+        time.sleep(0.001)
+    return n == 1
+
+
 def _threads() -> int:
     """This process's threads (Linux's ``/proc/self/stat``; 0 where it cannot be read)."""
     try:
@@ -234,13 +255,17 @@ def _threads() -> int:
         return 0
 
 
-def _default_signals() -> None:
-    """In a forked worker: Ctrl-C and SIGTERM act as in a fresh process (the parent's own
-    handlers, such as the command line's SIGTERM, are its own)."""
+def _as_fresh(sigint: Any, sigterm: Any) -> None:
+    """In a forked worker: what a fresh process would have. The handlers of Ctrl-C and
+    SIGTERM given (the parent's own, such as the command line's SIGTERM, are its own), and
+    no compile watch of the parent's going on."""
     import signal
 
-    signal.signal(signal.SIGINT, signal.default_int_handler)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    from . import _compile
+
+    signal.signal(signal.SIGINT, sigint)
+    signal.signal(signal.SIGTERM, sigterm)
+    _compile.forget()
 
 
 def default_jobs() -> int:

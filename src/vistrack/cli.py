@@ -363,7 +363,8 @@ def _track_many(args: argparse.Namespace) -> int:
     done, a table at the end; exit status 1 if any failed."""
     from .batch import Outcome, one_thread_here, plan, progress_lines, run_jobs
 
-    one_thread_here()  # before numpy: this process hands out the inputs, its workers track
+    if args.own_process:
+        one_thread_here()  # before numpy: this process hands out the inputs, its workers track
     from .io.atomic import check_output
     from .tracking.box import TRACKERS as BOX_PRESETS
 
@@ -523,7 +524,7 @@ def _eval(args: argparse.Namespace) -> int:
     from .batch import default_jobs, one_thread_here
 
     jobs = default_jobs() if args.jobs is None else args.jobs
-    if jobs > 1 and args.gt_dir and args.scheduler is None:
+    if jobs > 1 and args.gt_dir and args.scheduler is None and args.own_process:
         one_thread_here()  # before numpy: the sequences are scored by the workers
     from .evaluation import evaluate_files
 
@@ -540,6 +541,9 @@ def _eval(args: argparse.Namespace) -> int:
         if not pairs:
             return _fail("eval", f"no SEQ/gt/gt.txt under {args.gt_dir}")
     elif args.gt and args.pred:
+        for flag in ("keep_going", "scheduler"):
+            if getattr(args, flag):
+                return _fail("eval", f"--{flag.replace('_', '-')} goes with --gt-dir")
         gt = Path(args.gt)
         # SEQ/gt/gt.txt, or a ground-truth file beside its seqinfo.ini (SEQ/gt.txt)
         seq = gt.parent.parent if gt.parent.name == "gt" else gt.parent
@@ -581,6 +585,8 @@ def _eval(args: argparse.Namespace) -> int:
               f"{len(res.errors)} not", file=sys.stderr)
     status = 1 if res.errors else 0
     if not res:  # nothing scored
+        if args.json:
+            print("{}")
         return status
     if plots:
         from .evaluation.files import pair_matches
@@ -875,6 +881,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if getattr(args, "seeds", 1) < 1:
         command.error(f"--seeds must be >= 1; got {args.seeds}")
     args.command_line = _command_line(sys.argv[1:] if argv is None else argv)
+    # the command is this process's own (vistrack's entry point), not a call from a program
+    # whose environment it must leave alone (batch.one_thread_here)
+    args.own_process = argv is None
     # SIGTERM stops a run as Ctrl-C does, for as long as main runs (signal handlers can be
     # set in the main thread only)
     old = (signal.signal(signal.SIGTERM, _terminate)

@@ -68,8 +68,8 @@ def _read(pair: tuple[str, Path, Path, Path | None]) -> tuple[MOTTable, MOTTable
 
 
 def _result(future: Future, keep_going: bool) -> tuple[MOTCounts | None, list[str], str]:
-    """A future's :func:`_score`; with ``keep_going``, the executor's own failure as the
-    pair's error."""
+    """A future's :func:`_score`; with ``keep_going``, its worker's failure (a pool broken by
+    a worker's death, an executor's own error) as the pair's error."""
     try:
         return future.result()
     except Exception as e:
@@ -109,9 +109,9 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
         Score the pairs there instead (``submit(fn, *args) -> future``; a Dask client's
         executor works).
     keep_going : bool
-        A pair that cannot be read or scored (the errors below, or the executor's own) is
-        left out and named in the result's ``errors``, and the others are scored (True); or
-        its error is raised (False).
+        A pair that cannot be read or scored (the errors below, or its worker's failure: the
+        pool's or the executor's) is left out and named in the result's ``errors``, and the
+        others are scored (True); or its error is raised (False).
 
     Returns
     -------
@@ -150,8 +150,8 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
         from ..batch import process_pool  # one BLAS thread a worker
 
         with process_pool(min(jobs or 1, len(pairs)), imports=(__name__,)) as pool:
-            scored = list(pool.map(_score, pairs, [benchmark] * len(pairs),
-                                   [keep_going] * len(pairs)))
+            futures = [pool.submit(_score, pair, benchmark, keep_going) for pair in pairs]
+            scored = [_result(f, keep_going) for f in futures]
     elif executor is not None:
         futures = [executor.submit(_score, pair, benchmark, keep_going) for pair in pairs]
         scored = [_result(f, keep_going) for f in futures]
