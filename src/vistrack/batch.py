@@ -164,11 +164,15 @@ def _run(job: Job) -> Outcome:
         else:
             run = track_video(job.input, job.out, **job.options)
     except Exception as e:  # noqa: BLE001 - reported, and the other jobs go on
-        text = " ".join(str(e).split()) or type(e).__name__
         return Outcome(job.input, job.out, False, seconds=time.perf_counter() - t0,
-                       error=f"{type(e).__name__}: {text}")
+                       error=_one_line(e))
     return Outcome(job.input, job.out, True, frames=run.frames, rows=run.rows,
                    tracks=run.tracks, seconds=time.perf_counter() - t0)
+
+
+def _one_line(e: BaseException) -> str:
+    """An error as one line: ``TypeName: its message`` (white space collapsed)."""
+    return f"{type(e).__name__}: {' '.join(str(e).split()) or type(e).__name__}"
 
 
 def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecutor:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ..batch import _one_line
 from ..io.motchallenge import MOTTable, read_mot, read_seqinfo
 from .mot import Matches, MOTCounts, clear_matches, combine, evaluate_mot
 from .sanity import sanity_warnings
@@ -54,10 +55,6 @@ def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going
         if not keep_going:
             raise
         return None, [], _one_line(e)
-
-
-def _one_line(e: BaseException) -> str:
-    return f"{type(e).__name__}: {' '.join(str(e).split()) or type(e).__name__}"
 
 
 def _read(pair: tuple[str, Path, Path, Path | None]) -> tuple[MOTTable, MOTTable, int | None]:
