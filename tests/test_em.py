@@ -405,3 +405,88 @@ def test_maximum_likelihood_names_what_it_cannot_learn_from():
 def test_fit_refuses_a_string_for_learn():
     with pytest.raises(ValueError, match="learn must be a sequence of names"):
         vt.KalmanFilter(CV, POS).fit(series(30, 22), learn="qR")
+
+
+def shared_problem(B, T, x0_per_series, rng):
+    """Series of the constant-velocity model far from the origin, some steps missing in all
+    of them, and a start away from the truth."""
+    ys = np.stack([series(T, s) for s in range(B)]) + 500.0
+    if T > 40:
+        ys[:, [3, 4, 30, T - 2]] = np.nan
+    p = {k: np.array(v, dtype=float) for k, v in cv_model().items()}
+    p.update(Q=2.0 * p["Q"], R=np.array([[1.0, 0.2], [0.2, 2.0]]))
+    if x0_per_series:
+        p["x0"] = rng.normal(500.0, 10.0, size=(B, 4))
+    return learn_module._Observed(ys), p
+
+
+@pytest.mark.parametrize("B, T, x0_per_series", [(1, 1000, False), (300, 200, True),
+                                                 (2, 2, False), (3, 1, True)])
+def test_the_compiled_e_step_equals_the_general_one(B, T, x0_per_series, rng):
+    """Series that share their covariances take one compiled pass, which stops computing
+    the covariances at their steady state; every sum the M-step uses equals the general
+    E-step's (filter, RTS smoother, sums in numpy), over blocks of series and a remainder."""
+    o, p = shared_problem(B, T, x0_per_series, rng)
+    learn = ("Q", "R", "x0", "P0")
+    assert learn_module._shares_covariances(o, p, learn)
+    fast, general = learn_module._estep(o, p, True), learn_module._EStep(o, p)
+    assert isinstance(fast, learn_module._SharedEStep)
+    np.testing.assert_allclose(fast.ll, general.ll, rtol=1e-12)
+    F = p["F"]
+    if T > 1:
+        np.testing.assert_allclose(fast.process_noise_sums(F).sum(axis=0),
+                                   general.process_noise_sums(F).sum(axis=0), rtol=1e-10)
+    np.testing.assert_allclose(fast.vv(p["H"]).sum(axis=0), general.vv(p["H"]).sum(axis=0),
+                               rtol=1e-10)
+    for a, b in zip(fast.prior(learn), general.prior(learn)):
+        np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-10)
+
+
+def test_the_process_noise_is_summed_term_by_term():
+    """``E[w_t w_t']`` from the smoothed means' differences and the covariances equals ``S11
+    - F S10' - S10 F' + F S00 F'`` (the textbook form) where that form loses nothing: near
+    the origin."""
+    ys = series(300, 3)[None]
+    p = {k: np.array(v, dtype=float) for k, v in cv_model().items()}
+    e = learn_module._EStep(learn_module._Observed(ys), p)
+    textbook = learn_module._process_noise_sums(*e.transition_sums(), p["F"])
+    np.testing.assert_allclose(e.process_noise_sums(p["F"]), textbook, rtol=1e-9, atol=1e-9)
+
+
+def test_em_with_the_compiled_e_step_equals_em_without_it(monkeypatch, rng):
+    o, p = shared_problem(40, 300, False, rng)
+    kw = dict(learn=("Q", "R", "x0", "P0"), Q_form="scaled", R_form="diag", tol=-np.inf,
+              max_iter=30)
+    fast = em(o.y, **p, **kw)
+    fast_ml = mle(o.y, **p, R_form="diag")
+    monkeypatch.setattr(learn_module, "_shares_covariances", lambda *a: False)
+    general = em(o.y, **p, **kw)
+    general_ml = mle(o.y, **p, R_form="diag")
+    np.testing.assert_allclose(fast.loglik, general.loglik, rtol=1e-11)
+    for name in ("Q", "R", "x0", "P0"):
+        np.testing.assert_allclose(getattr(fast, name), getattr(general, name), rtol=1e-8,
+                                   atol=1e-10, err_msg=name)
+    np.testing.assert_allclose(fast_ml.Q, general_ml.Q, rtol=1e-6)
+    np.testing.assert_allclose(fast_ml.R, general_ml.R, rtol=1e-6)
+
+
+def test_what_does_not_share_covariances_takes_the_general_e_step(rng):
+    o, p = shared_problem(3, 100, False, rng)
+    y = o.y.copy()
+    y[1, 50] = np.nan  # one series misses a step the others measure
+    assert not learn_module._shares_covariances(learn_module._Observed(y), p, ("Q", "R"))
+    y = o.y.copy()
+    y[:, 60, 0] = np.nan  # a step measured in part
+    assert not learn_module._shares_covariances(learn_module._Observed(y), p, ("Q", "R"))
+    assert not learn_module._shares_covariances(o, p, ("F", "Q"))
+    assert not learn_module._shares_covariances(o, {**p, "P0": np.stack([p["P0"]] * 3)},
+                                                ("Q",))
+
+
+def test_a_singular_predicted_covariance_is_named_as_by_the_smoother():
+    """The compiled E-step cannot invert a singular prediction for the smoother's gain; the
+    general one then says where."""
+    ys = series(50, 0)
+    model = {**cv_model(), "Q": np.zeros((4, 4)), "P0": np.zeros((4, 4))}
+    with pytest.raises(ValueError, match="from step 48 to 49 is not positive definite"):
+        em(ys, **model, learn=("Q", "R"), max_iter=3)

@@ -170,10 +170,12 @@ def _more_workloads(root: Path, clip: Path, d: Path, ys: Any, cv: Any, pos: Any)
         for _ in range(2):
             g = kf_update(kf_predict(g, F, Q), y, H, R)
             g = kf_step(g, y, F, Q, H, R)
-    # EM on a batch of series that share their covariances (the pooled M-step's kernel)
+    # EM on a batch of series that share their covariances: the compiled E-step, and the
+    # general one's smoother of shared gains (F learned)
     batch = np.stack([np.nan_to_num(ys), np.nan_to_num(ys) + 1.0])
-    vt.filters.em(batch, F=F, Q=Q, H=H, R=R, x0=np.zeros(4), P0=np.eye(4), learn=("Q", "R"),
-                  max_iter=2)
+    for learn in (("Q", "R"), ("F", "Q")):
+        vt.filters.em(batch, F=F, Q=Q, H=H, R=R, x0=np.zeros(4), P0=np.eye(4), learn=learn,
+                      max_iter=2)
     img = np.zeros((64, 64))
     img[20:23, 30:33] = 50.0
     vt.frontends.locate(img, diameter=5)

@@ -279,6 +279,12 @@ class _Summed:
     def transition_sums(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return self.sums["S"]
 
+    def process_noise_sums(self, Fn: np.ndarray) -> np.ndarray:
+        from .learn import _process_noise_sums
+
+        S11, S10, S00 = self.sums["S"]
+        return _process_noise_sums(S11, S10, S00, Fn)
+
     def H_sums(self) -> tuple[np.ndarray, np.ndarray]:
         return self.sums["H"]
 

@@ -34,9 +34,15 @@ nothing of ``R``): for a measured component its residual's square and :math:`H P
 a missing one of a step measured in part what the current ``R`` expects given the measured
 ones (the conditional Gaussian of ``v``). ``H`` is learned before ``R``, ``F`` before ``Q``
 and ``x0`` before ``P0``, each with the other's new value, as in pykalman, which the tests
-check this against step by step. When the series of a batch share their covariances (the same
-prior, the same steps missing: ``FilterResult.shared_covs``), the smoother's covariances and
-gains are computed once for all of them.
+check this against step by step. ``E[w_t w_t']`` is summed term by term, :math:`(m_t - F
+m_{t-1})(m_t - F m_{t-1})' + P_t - F C_t' - C_t F' + F P_{t-1} F'`, rather than from the
+:math:`S` above, whose terms grow with the state's distance from the origin and cancel. When
+the series of a batch share their covariances (the same prior, the same steps missing:
+``FilterResult.shared_covs``), the smoother's covariances and gains are computed once for all
+of them; when, moreover, the matrices are constant, every step is measured in full or not at
+all and neither ``F`` nor ``H`` is learned, the whole E-step is one compiled pass
+(:mod:`vistrack.filters._estep`), which also stops computing the covariances at their steady
+state; :func:`mle` uses the same E-step.
 
 Structured noise: ``"diag"`` keeps the diagonal of the full estimate; ``"scaled"`` learns one
 factor of the matrix given, ``Q_t = q Q^{(0)}_t``, :math:`q = \sum \operatorname{tr}(Q^{(0)+}_t
@@ -60,6 +66,7 @@ import numpy as np
 from .._jit import njit
 from .._prebuilt import kernel
 from .._validate import as_measurement_series, check_has_steps, check_prior
+from ._estep import estep_shared as _estep_shared
 from .kalman import FilterResult, _is_dask, kalman_filter
 from .smoothers import rts_smooth
 
@@ -231,8 +238,9 @@ def _fit_in_memory(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ..
     """:func:`_fit` on the series ``y (B, T, m)`` in memory, pooled (``o``: ``y``'s
     :class:`_Observed`, if already made)."""
     obs = _Observed(y) if o is None else o
-    return _fit(lambda params, _: _EStep(obs, params), y.shape[0], y.shape[1], p, learn,
-                Q_form, R_form, tol, max_iter, progress, label)
+    shared = _shares_covariances(obs, p, learn)
+    return _fit(lambda params, _: _estep(obs, params, shared), y.shape[0], y.shape[1], p,
+                learn, Q_form, R_form, tol, max_iter, progress, label)
 
 
 def _fit_each(y: np.ndarray, params: dict[str, np.ndarray], learn: tuple[str, ...],
@@ -534,6 +542,7 @@ class _Structured:
                              f"{p['R'].shape}")
         self.y, self.p, self.R_form = y, p, R_form
         self.o = _Observed(y)
+        self.shared = _shares_covariances(self.o, p, learn)
         self.R0 = np.diag(np.diag(p["R"])) if diag else p["R"]  # R as given, if not learned
         if "Q" in learn and not np.any(p["Q"]):
             raise ValueError("Q must not be zero to learn its factor q")
@@ -580,17 +589,14 @@ class _Structured:
         y, nq, nr = self.y, self.nq, self.nr
         T = y.shape[1]
         mp = self.model(theta)
-        res = kalman_filter(y, F=mp["F"], Q=mp["Q"], H=mp["H"], R=mp["R"], x0=mp["x0"],
-                            P0=mp["P0"])
-        ll = float(np.sum(res.loglik))
-        ms, Ps, X, mult = _smoothed(res, mp["F"], mp["Q"])
+        e = _estep(self.o, mp, self.shared)
+        ll = e.ll
         g = np.empty(nq + nr)
         if nq:
-            A = _process_noise_sums(*_transition_sums(ms, Ps, X, mult), _transitions(mp["F"], T))
-            tr = self.Q_scaled.trace(A)
+            tr = self.Q_scaled.trace(e.process_noise_sums(_transitions(mp["F"], T)))
             g[0] = -0.5 * self.Q_dof + 0.5 * tr / np.exp(theta[0])
         if nr:
-            V = _expected_vv(self.o, ms, Ps, mult, mp["H"], mp["R"])
+            V = e.vv(mp["H"])
             if self.R_form == "diag":
                 g[nq:] = (-0.5 * self.n_meas
                           + 0.5 * np.diagonal(V.sum(axis=0)) / np.exp(theta[nq:]))
@@ -654,13 +660,11 @@ def _fit(estep: Any, B: int, T: int, p: dict[str, np.ndarray], learn: tuple[str,
             break
         new = dict(p)
         if {"F", "Q"} & set(learn):
-            S11, S10, S00 = e.transition_sums()
-            Fn = _transitions(p["F"], T)
             if "F" in learn:
+                S11, S10, S00 = e.transition_sums()
                 new["F"] = np.linalg.solve(S00.sum(axis=0).T, S10.sum(axis=0).T).T
-                Fn = new["F"]
             if "Q" in learn:
-                A = _process_noise_sums(S11, S10, S00, Fn)
+                A = e.process_noise_sums(_transitions(new["F"], T))
                 new["Q"], q_new = _noise(A, np.full(T - 1, B), Q0, Q_form, Q_scaled)
                 q = q_new if Q_form == "scaled" else 1.0
         if "H" in learn:
@@ -687,7 +691,7 @@ class _Observed:
     measured something at each step."""
 
     def __init__(self, y: np.ndarray) -> None:
-        self.y = y
+        self.y = y = np.ascontiguousarray(y, dtype=np.float64)
         self.obs = ~np.isnan(y)
         self.y0 = np.where(self.obs, y, 0.0)
         self.measured = self.obs.any(axis=(0, 1))
@@ -696,6 +700,14 @@ class _Observed:
         self.partial = some & ~self.full
         self.has_partial = bool(self.partial.any())
         self.count = some.sum(axis=0)
+        self._yt: np.ndarray | None = None
+
+    @property
+    def yt(self) -> np.ndarray:
+        """``y`` as ``(T, m, B)``, the series last (contiguous), made when first asked for."""
+        if self._yt is None:
+            self._yt = np.ascontiguousarray(self.y.transpose(1, 2, 0))
+        return self._yt
 
 
 class _EStep:
@@ -720,6 +732,21 @@ class _EStep:
     def transition_sums(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return _transition_sums(*self.smoothed)
 
+    def process_noise_sums(self, Fn: np.ndarray) -> np.ndarray:
+        """``E[w_t w_t']`` summed over the batch, per transition ``(T - 1, n, n)``, ``w_t = x_t
+        - F_t x_{t-1}`` under the transitions ``Fn`` (:func:`_transitions`), term by term:
+        ``d_t d_t'`` of the smoothed means' ``d_t = m_t - F_t m_{t-1}``, and ``Ps_t - F_t C_t'
+        - C_t F_t' + F_t Ps_{t-1} F_t'`` with the lag-one covariance ``C_t = Ps_t X_{t-1}``.
+        (``S11 - F S10' - S10 F' + F S00 F'`` from :meth:`transition_sums` is the same sum, but
+        its terms grow with the state's size and cancel: far from the origin, digits lost.)"""
+        ms, Ps, X, mult = self.smoothed
+        Ft = np.swapaxes(Fn, -1, -2)
+        Fx = ms[:, :-1] @ Ft if Fn.ndim == 2 else np.einsum("tij,btj->bti", Fn, ms[:, :-1])
+        d = ms[:, 1:] - Fx
+        FC = Fn @ np.swapaxes(Ps[:, 1:] @ X, -1, -2)
+        cov = Ps[:, 1:] - FC - np.swapaxes(FC, -1, -2) + Fn @ Ps[:, :-1] @ Ft
+        return _outer_sum(d, d) + mult * cov.sum(axis=0)
+
     def H_sums(self) -> tuple[np.ndarray, np.ndarray]:
         ms, Ps, _, mult = self.smoothed
         return _H_sums(self.o, ms, Ps, mult)
@@ -735,20 +762,87 @@ class _EStep:
     def prior(self, learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
         """The prior ``x0``, ``P0`` after the M-step (those not in ``learn`` as they were)."""
         ms, Ps, _, _ = self.smoothed
-        x0, P0 = self.p["x0"], self.p["P0"]
-        if "x0" in learn:
-            if x0.ndim == 2:
-                x0 = ms[:, 0]
-            elif P0.ndim == 3:  # one x0 for priors of different covariances: weighted
-                W = np.linalg.inv(P0)
-                x0 = np.linalg.solve(W.sum(axis=0), np.einsum("bij,bj->i", W, ms[:, 0]))
-            else:
-                x0 = ms[:, 0].mean(axis=0)
-        if "P0" in learn:
-            d = ms[:, 0] - (x0 if x0.ndim == 2 else x0[None])
-            D = Ps[:, 0] + d[:, :, None] * d[:, None, :]  # Ps broadcast when shared
-            P0 = D if P0.ndim == 3 else D.mean(axis=0)
-        return x0, P0
+        return _prior_step(ms[:, 0], Ps[:, 0], self.p["x0"], self.p["P0"], learn)
+
+
+def _prior_step(ms0: np.ndarray, Ps0: np.ndarray, x0: np.ndarray, P0: np.ndarray,
+                learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The M-step of the prior from the first step's smoothed means ``ms0 (B, n)`` and
+    covariances ``Ps0 (B or 1, n, n)``: ``x0`` and ``P0`` if in ``learn``, else as given."""
+    if "x0" in learn:
+        if x0.ndim == 2:
+            x0 = ms0
+        elif P0.ndim == 3:  # one x0 for priors of different covariances: weighted
+            W = np.linalg.inv(P0)
+            x0 = np.linalg.solve(W.sum(axis=0), np.einsum("bij,bj->i", W, ms0))
+        else:
+            x0 = ms0.mean(axis=0)
+    if "P0" in learn:
+        d = ms0 - (x0 if x0.ndim == 2 else x0[None])
+        D = Ps0 + d[:, :, None] * d[:, None, :]  # Ps0 broadcast when shared
+        P0 = D if P0.ndim == 3 else D.mean(axis=0)
+    return x0, P0
+
+
+_SHARED_LEARNABLE = frozenset({"Q", "R", "x0", "P0"})
+
+
+def _shares_covariances(o: _Observed, p: dict[str, np.ndarray], learn: tuple[str, ...]) -> bool:
+    """Whether :class:`_SharedEStep` applies: constant ``F``, ``Q``, ``H``, ``R``, one prior
+    covariance, steps measured in full or not at all and the same in every series, and
+    neither ``F`` nor ``H`` learned (their M-steps need sums this E-step does not keep)."""
+    return (all(p[k].ndim == 2 for k in ("F", "Q", "H", "R", "P0"))
+            and not o.has_partial and bool((o.full == o.full[:1]).all())
+            and set(learn) <= _SHARED_LEARNABLE)
+
+
+class _SharedEStep:
+    """The E-step of :class:`_EStep` in one compiled pass (:func:`._estep.estep_shared`) for
+    series that share their covariances (:func:`_shares_covariances`): the M-step's sums are
+    totals over the steps, ``(1, d, d)``, which is all its noises' forms need when the
+    matrices are constant."""
+
+    def __init__(self, o: _Observed, p: dict[str, np.ndarray], out: np.ndarray) -> None:
+        self.o, self.p = o, p
+        self.A, self.V, self.ms0, self.Ps0 = out_arrays = _shared_outputs(o.y, p)
+        F, Q, H, R, P0 = (np.ascontiguousarray(p[k], dtype=np.float64)
+                          for k in ("F", "Q", "H", "R", "P0"))
+        x0 = np.ascontiguousarray(p["x0"], dtype=np.float64).reshape(-1, F.shape[0])
+        _estep_shared(o.yt, F, Q, H, R, x0, P0, *out_arrays, out)
+        self.ll = float(out[0])
+
+    def process_noise_sums(self, Fn: np.ndarray) -> np.ndarray:
+        """As :meth:`_EStep.process_noise_sums`, summed over the transitions as well, under
+        this model's ``F`` (never learned here: ``Fn`` is it)."""
+        return self.A[None]
+
+    def vv(self, H: np.ndarray) -> np.ndarray:
+        return self.V[None]
+
+    def R_count(self) -> np.ndarray:
+        return self.o.count
+
+    def prior(self, learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+        return _prior_step(self.ms0, self.Ps0[None], self.p["x0"], self.p["P0"], learn)
+
+
+def _shared_outputs(y: np.ndarray, p: dict[str, np.ndarray]) -> tuple[np.ndarray, ...]:
+    """The arrays :func:`._estep.estep_shared` writes: ``A``, ``V``, ``ms0``, ``Ps0``."""
+    B, _, m = y.shape
+    n = p["F"].shape[0]
+    return np.empty((n, n)), np.empty((m, m)), np.empty((B, n)), np.empty((n, n))
+
+
+def _estep(o: _Observed, p: dict[str, np.ndarray], shared: bool) -> _EStep | _SharedEStep:
+    """The E-step under the model ``p``: in one compiled pass where the series share their
+    covariances (``shared``, from :func:`_shares_covariances`), else :class:`_EStep`, which
+    also says where an innovation covariance is not positive definite."""
+    if shared:
+        out = np.empty(2)
+        e = _SharedEStep(o, p, out)
+        if out[1] == -1.0:
+            return e
+    return _EStep(o, p)
 
 
 def _psd(M: np.ndarray) -> np.ndarray:
