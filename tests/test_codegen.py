@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import vistrack as vt
-from vistrack.filters import _codegen, kalman_filter
+from vistrack.filters import _codegen, kalman_filter, kalman_filter_1d
 
 from .conftest import random_model
 from .test_kalman import filterpy_run, with_missing
@@ -174,9 +174,14 @@ def test_kernel_source_is_cached_in_the_cache_directory(tmp_path, monkeypatch):
     loglik, last = np.empty(1), np.empty((1, 1, 1))
     one = np.ones((1, 1, 1))
     assert kernel(ys, one, one, one, one, np.zeros((1, 1)), one, *out, loglik, last, True) == -1
-    ref = kalman_filter(ys[0], F=[[1.0]], Q=[[1.0]], H=[[1.0]], R=[[1.0]], x0=[0.0], P0=[[1.0]])
-    np.testing.assert_allclose(out[0][0], ref.means, rtol=1e-14)
-    assert loglik[0] == pytest.approx(float(ref.loglik), rel=1e-14)
+    # the oracle: the seeds' scalar equations, and the Gaussian density of each measurement
+    ref = kalman_filter_1d(ys[0, :, 0], d=1.0, m=1.0, sigma_d=1.0, sigma_m=1.0, x0=0.0,
+                           sigma0=1.0)
+    np.testing.assert_allclose(out[0][0, :, 0], ref.mean, rtol=1e-14)
+    seen = ~np.isnan(ys[0, :, 0])
+    s2 = ref.pred_std[seen] ** 2 + 1.0
+    ll = -0.5 * np.sum(np.log(2 * np.pi * s2) + (ys[0, seen, 0] - ref.pred_mean[seen]) ** 2 / s2)
+    assert loglik[0] == pytest.approx(ll, rel=1e-14)
 
 
 def test_small_or_large_models_use_the_loop_kernel():

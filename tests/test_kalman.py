@@ -255,6 +255,43 @@ def test_kernels_keep_batch_shape(rng):
     np.testing.assert_allclose(single.mean, [0.5, 0.0])
 
 
+def test_batches_of_any_rank_reach_the_kernels_with_one_batch_axis(rng, monkeypatch):
+    """The kernels are compiled at install for a single Gaussian and a batch of one axis; a
+    batch of two axes is passed as one (no compilation on first use) and comes back in its
+    shape, each Gaussian as if alone."""
+    from vistrack.filters import _kernels
+
+    ranks = []
+    for name in ("predict_batch_py", "update_batch_py", "step_batch"):
+        real = getattr(_kernels, name)
+
+        def spy(*args, _real=real):
+            ranks.append(tuple(x.ndim for x in args[:2]))
+            return _real(*args)
+
+        monkeypatch.setattr(_kernels, name, spy)
+    A = rng.normal(size=(2, 3, 2, 2))
+    g = vt.Gaussian(rng.normal(size=(2, 3, 2)), A @ np.swapaxes(A, -1, -2) + np.eye(2))
+    y = rng.normal(size=(2, 3, 1))
+    y[1, 2] = np.nan
+    F, Q, H, R = [[1.0, 1.0], [0.0, 1.0]], 0.1 * np.eye(2), [[1.0, 0.0]], [[0.5]]
+    batch = {"predict": kf_predict(g, F, Q), "update": _update(g, y, H, R),
+             "step": kf_step(g, y, F, Q, H, R)}
+    assert ranks == [(2, 3)] * 3
+    assert batch["update"][1].shape == (2, 3)
+    for i in range(2):
+        for j in range(3):
+            a = vt.Gaussian(g.mean[i, j], g.cov[i, j])
+            alone = {"predict": kf_predict(a, F, Q), "update": _update(a, y[i, j], H, R),
+                     "step": kf_step(a, y[i, j], F, Q, H, R)}
+            for key in ("predict", "step"):
+                np.testing.assert_array_equal(batch[key].mean[i, j], alone[key].mean)
+                np.testing.assert_array_equal(batch[key].cov[i, j], alone[key].cov)
+            np.testing.assert_array_equal(batch["update"][0].mean[i, j], alone["update"][0].mean)
+            np.testing.assert_array_equal(batch["update"][0].cov[i, j], alone["update"][0].cov)
+            assert batch["update"][1][i, j] == alone["update"][1]
+
+
 def test_kalman_filter_class_uses_true_dt(rng):
     """Variable time steps give the per-step matrices of the model (dropped frames, sort#22)."""
     cv, pos = vt.ConstantVelocity(dim=2, q=0.3), vt.Position(dim=2, r=0.5)

@@ -334,6 +334,14 @@ def _contiguous(a: np.ndarray) -> np.ndarray:
     return a if a.flags.c_contiguous else np.ascontiguousarray(a)
 
 
+def _one_batch_axis(a: np.ndarray, tail: int) -> np.ndarray:
+    """A contiguous ``a (..., *tail)`` whose batch axes, if more than one, are made one: the
+    kernels are compiled (at install) for a single Gaussian and for a batch of one axis, and a
+    batch of another rank would compile again on first use."""
+    a = _contiguous(a)
+    return a.reshape((-1,) + a.shape[a.ndim - tail:]) if a.ndim > tail + 1 else a
+
+
 def _small_matrix(value: ArrayLike, name: str, rows: int, cols: int) -> np.ndarray:
     """A constant ``(rows, cols)`` float64 matrix, checked for shape here (the kernels check
     finiteness and symmetry, which costs less there)."""
@@ -371,7 +379,7 @@ def _with_measurement(g: Gaussian, y: ArrayLike) -> tuple[np.ndarray, np.ndarray
         y = as_float_array(y, "y")
     if y.ndim != mean.ndim or y.shape[:-1] != mean.shape[:-1]:
         raise ValueError(f"y must have shape {mean.shape[:-1] + ('m',)} to match g; got {y.shape}")
-    return _contiguous(mean), _contiguous(g.cov), _contiguous(y)
+    return _one_batch_axis(mean, 1), _one_batch_axis(g.cov, 2), _one_batch_axis(y, 1)
 
 
 def kf_step(
@@ -428,7 +436,7 @@ def kf_step(
     )
     if code >= 0:
         _kernel_error(code, "F", "Q")
-    return Gaussian._trusted(mean, cov)
+    return Gaussian._trusted(mean.reshape(g.mean.shape), cov.reshape(g.cov.shape))
 
 
 def kf_predict(g: Gaussian, F: ArrayLike, Q: ArrayLike) -> Gaussian:
@@ -469,12 +477,12 @@ def kf_predict(g: Gaussian, F: ArrayLike, Q: ArrayLike) -> Gaussian:
         raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
     n = g.mean.shape[-1]
     code, mean, cov = _kernels.predict_batch_py(
-        _contiguous(g.mean), _contiguous(g.cov), _small_matrix(F, "F", n, n),
+        _one_batch_axis(g.mean, 1), _one_batch_axis(g.cov, 2), _small_matrix(F, "F", n, n),
         _small_matrix(Q, "Q", n, n),
     )
     if code >= 0:
         _kernel_error(code, "F", "Q")
-    return Gaussian._trusted(mean, cov)
+    return Gaussian._trusted(mean.reshape(g.mean.shape), cov.reshape(g.cov.shape))
 
 
 def kf_update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> Gaussian:
@@ -544,7 +552,9 @@ def _update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> tuple[Gaus
     )
     if code >= 0:
         _kernel_error(code, "H", "R")
-    return Gaussian._trusted(mean, cov), ll
+    batch = g.mean.shape[:-1]
+    return (Gaussian._trusted(mean.reshape(g.mean.shape), cov.reshape(g.cov.shape)),
+            ll.reshape(batch))
 
 
 @dataclass(frozen=True)
