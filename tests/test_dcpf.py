@@ -195,3 +195,34 @@ def test_pets09_clip_terms_of_the_observation_model():
     full, det_conf, det = mot(), mot(eta=0.0), mot(gamma=0.0, eta=0.0)
     assert min(full.MOTA, det_conf.MOTA, det.MOTA) > 0.45
     assert 2 * full.IDSW < det.IDSW
+
+
+def test_colour_features_count_each_boxs_pixels_in_a_reused_buffer():
+    """Each box's histogram, from the integral images, equals its pixels counted directly
+    (hue-saturation bins of the half-size frame); a buffer passed frame after frame is
+    written in place and gives the same features as a new one, and one of another shape is
+    not used."""
+    import cv2
+
+    from vistrack.tracking.dcpf import ColourFeatures
+
+    rng = np.random.default_rng(3)
+    frames = [rng.integers(0, 256, (60, 80, 3), dtype=np.uint8) for _ in range(2)]
+    boxes = np.array([[0, 0, 80, 60], [10, 6, 30, 20], [51, 33, 17, 9], [70, 50, 40, 40]])
+    buffer = ColourFeatures(frames[0]).integral
+    for image in frames:
+        f = ColourFeatures(image, out=buffer)
+        assert f.integral is buffer
+        hsv = cv2.cvtColor(cv2.resize(image, None, fx=0.5, fy=0.5,
+                                      interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2HSV)
+        b = (hsv[..., 0].astype(int) * 8 // 180) * 4 + hsv[..., 1].astype(int) * 4 // 256
+        want = []
+        for x, y, w, h in boxes / 2:
+            x0, y0 = int(np.clip(round(x), 0, 40)), int(np.clip(round(y), 0, 30))
+            x1, y1 = int(np.clip(round(x + w), 0, 40)), int(np.clip(round(y + h), 0, 30))
+            counts = np.bincount(b[y0:y1, x0:x1].ravel(), minlength=32).astype(float)
+            want.append(np.sqrt(counts / max(counts.sum(), 1.0)))
+        np.testing.assert_allclose(f(boxes), want, rtol=1e-12)
+        np.testing.assert_array_equal(f(boxes), ColourFeatures(image)(boxes))
+    other = ColourFeatures(frames[0], out=np.zeros((32, 5, 5), np.int32))
+    assert other.integral.shape == buffer.shape

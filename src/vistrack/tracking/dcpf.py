@@ -160,6 +160,9 @@ class ColourFeatures:
         Hue and saturation bins (``dim = bins × bins_s`` features).
     scale : float
         The frame is resized by this before the histograms are counted.
+    out : (dim, H', W') int32 ndarray, optional
+        Where to write the integral images (``H'``, ``W'``: the resized frame's size plus
+        one), to reuse one buffer frame after frame; used only if of that shape and type.
 
     Examples
     --------
@@ -170,7 +173,8 @@ class ColourFeatures:
     ((2, 32), 0.0)
     """
 
-    def __init__(self, image: np.ndarray, bins: int = 8, bins_s: int = 4, scale: float = 0.5):
+    def __init__(self, image: np.ndarray, bins: int = 8, bins_s: int = 4, scale: float = 0.5,
+                 out: np.ndarray | None = None):
         import cv2
 
         from .._validate import as_uint8_image
@@ -180,9 +184,16 @@ class ColourFeatures:
         hsv = cv2.cvtColor(small, cv2.COLOR_BGR2HSV)
         b = (hsv[..., 0].astype(np.int32) * bins // 180) * bins_s \
             + hsv[..., 1].astype(np.int32) * bins_s // 256
-        # one integral image per bin, laid out (H + 1, W + 1, bins) for lookups
-        self.integral = np.stack([cv2.integral((b == k).view(np.uint8))
-                                  for k in range(bins * bins_s)], axis=-1)
+        # one integral image per bin, (bins, H + 1, W + 1), each written in place: a tracker
+        # passes the same buffer every frame (a new 14 MB array a frame for 768 x 576, and a
+        # second to stack the bins, made the C allocator map and fault in fresh pages)
+        shape = (bins * bins_s, small.shape[0] + 1, small.shape[1] + 1)
+        ok = (out is not None and out.shape == shape and out.dtype == np.int32
+              and out.flags.c_contiguous)
+        integral = out if out is not None and ok else np.empty(shape, np.int32)
+        for k in range(shape[0]):
+            cv2.integral((b == k).view(np.uint8), sum=integral[k])
+        self.integral = integral
         self.scale = scale
         self.dim = bins * bins_s
 
@@ -200,14 +211,14 @@ class ColourFeatures:
             The square roots of their normalised histograms (unit length: dot products are
             Bhattacharyya coefficients).
         """
-        H, W = self.integral.shape[0] - 1, self.integral.shape[1] - 1
+        H, W = self.integral.shape[1] - 1, self.integral.shape[2] - 1
         b = np.asarray(xywh, float) * self.scale
         x0 = np.clip(np.round(b[..., 0]), 0, W).astype(int)
         y0 = np.clip(np.round(b[..., 1]), 0, H).astype(int)
         x1 = np.clip(np.round(b[..., 0] + b[..., 2]), 0, W).astype(int)
         y1 = np.clip(np.round(b[..., 1] + b[..., 3]), 0, H).astype(int)
         I = self.integral
-        h = I[y1, x1] - I[y0, x1] - I[y1, x0] + I[y0, x0]
+        h = np.moveaxis(I[:, y1, x1] - I[:, y0, x1] - I[:, y1, x0] + I[:, y0, x0], 0, -1)
         return np.sqrt(np.maximum(h, 0) / np.maximum(h.sum(-1, keepdims=True), 1.0))
 
 
@@ -257,6 +268,7 @@ class DetectorConfidencePF:
         self.confidence = confidence
         self.frame_rate = float(frame_rate)
         self._rng_seed = rng
+        self._integral: np.ndarray | None = None  # ColourFeatures' buffer, frame after frame
         self.reset()
 
     def reset(self) -> None:
@@ -344,7 +356,10 @@ class DetectorConfidencePF:
                              "your own), pass a ConfidenceMap to update(), or set gamma=0")
         img = np.asarray(image)
         H, W = img.shape[:2]
-        feats = ColourFeatures(img) if cfg.eta > 0 else None
+        feats = None
+        if cfg.eta > 0:
+            feats = ColourFeatures(img, out=self._integral)
+            self._integral = feats.integral  # this frame's buffer, for the next
         T, N = len(self.ids), cfg.n_particles
         det_xywh = detections.xywh if len(detections) else np.zeros((0, 4))
         det_c = det_xywh[:, :2] + det_xywh[:, 2:] / 2
