@@ -4,14 +4,15 @@ When ``F``, ``Q``, ``H`` and ``R`` are constant, every series has the same prior
 each step is measured in full or not at all, the same steps in every series, then every series
 shares one sequence of covariances, gains and smoother gains. :func:`estep_shared` computes that
 sequence once, the filter's and the smoother's, and stops computing it while it stays at its
-steady state (a stretch of measured steps over which the covariances no longer change: each
-step there is a copy of the one before). It then runs each series' means forward and back,
-a block of series at a time, and returns only what the M-step needs: the log-likelihood, the
-expected outer products of the process noise ``sum E[w_t w_t']`` (``w_t = x_t - F x_{t-1}``)
-and of the measurement noise ``sum E[v_t v_t']`` (``v_t = y_t - H x_t``), both summed over the
-steps and series, and the first step's smoothed means and covariance. The process noise's sum
-is taken term by term, not as ``S11 - F S10' - S10 F' + F S00 F'`` from sums of outer
-products of states, whose terms grow with the state's size and cancel.
+steady state (a stretch of measured steps over which the covariances no longer change, to a
+few units in the last place: each step there reads the last computed step's, by index). It
+then runs each series' means forward and back, a block of series at a time, and returns only
+what the M-step needs: the log-likelihood, the expected outer products of the process noise
+``sum E[w_t w_t']`` (``w_t = x_t - F x_{t-1}``) and of the measurement noise ``sum E[v_t
+v_t']`` (``v_t = y_t - H x_t``), both summed over the steps and series, and the first step's
+smoothed means and covariance. The process noise's sum is taken term by term, not as ``S11 -
+F S10' - S10 F' + F S00 F'`` from sums of outer products of states, whose terms grow with the
+state's distance from the origin and cancel.
 """
 
 from __future__ import annotations
