@@ -696,7 +696,7 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--tracker", metavar="NAME",
                        help="tracker: bytetrack (default) or sort; in video mode also dcpf "
                        "(the detector-confidence particle filter on HOG's confidence map, "
-                       "3-4 frames/s), single:METHOD (one object, from the first frame's "
+                       "about 9 frames/s), single:METHOD (one object, from the first frame's "
                        "most confident detection; METHOD as track-one's), or "
                        "module:callable, a tracker of your own (a callable returning an "
                        "object with step(frame, detections) -> Tracks and reset())")

@@ -280,7 +280,7 @@ def _smoothed_covariances(meas, F, H, Pp, Pf, same, src, X, xsrc, A, V, Ps0):
         for i in range(n):
             for j in range(n):
                 A[i, j] += a[i, j]
-        if same[t + 1] and t + 2 < T and same[t + 2] and _close(Pn, Ps):
+        if same[t + 1] and same[t + 2] and _close(Pn, Ps):  # same[T] is False
             steady = True
         for i in range(n):
             for j in range(n):

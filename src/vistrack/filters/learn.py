@@ -802,14 +802,16 @@ class _SharedEStep:
     totals over the steps, ``(1, d, d)``, which is all its noises' forms need when the
     matrices are constant."""
 
-    def __init__(self, o: _Observed, p: dict[str, np.ndarray], out: np.ndarray) -> None:
+    def __init__(self, o: _Observed, p: dict[str, np.ndarray]) -> None:
         self.o, self.p = o, p
+        out = np.empty(2)
         self.A, self.V, self.ms0, self.Ps0 = out_arrays = _shared_outputs(o.y, p)
         F, Q, H, R, P0 = (np.ascontiguousarray(p[k], dtype=np.float64)
                           for k in ("F", "Q", "H", "R", "P0"))
         x0 = np.ascontiguousarray(p["x0"], dtype=np.float64).reshape(-1, F.shape[0])
         _estep_shared(o.yt, F, Q, H, R, x0, P0, *out_arrays, out)
         self.ll = float(out[0])
+        self.done = out[1] == -1.0  # else the general E-step says what went wrong
 
     def process_noise_sums(self, Fn: np.ndarray) -> np.ndarray:
         """As :meth:`_EStep.process_noise_sums`, summed over the transitions as well, under
@@ -838,9 +840,8 @@ def _estep(o: _Observed, p: dict[str, np.ndarray], shared: bool) -> _EStep | _Sh
     covariances (``shared``, from :func:`_shares_covariances`), else :class:`_EStep`, which
     also says where an innovation covariance is not positive definite."""
     if shared:
-        out = np.empty(2)
-        e = _SharedEStep(o, p, out)
-        if out[1] == -1.0:
+        e = _SharedEStep(o, p)
+        if e.done:
             return e
     return _EStep(o, p)
 
