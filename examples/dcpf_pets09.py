@@ -103,9 +103,10 @@ def main():
     trackers = {(name, seed): DetectorConfidencePF(rng=seed, frame_rate=7, **cfg)  # 7 frames/s
                 for name, cfg in CONFIGS.items() for seed in range(SEEDS)}
     rows: dict[tuple[str, int], list] = {key: [] for key in trackers}
-    results, maps = {}, []
+    results, shown = {}, None  # the trackers at frame SHOW, and its map, for the figure
     for t, (image, cmap) in enumerate(zip(frames, confidence_maps(frames), strict=True), 1):
-        maps.append(cmap)
+        if t == SHOW:
+            shown = cmap
         for (name, seed), tracker in trackers.items():
             out = tracker.update(image, cmap.detections(DET_THRESHOLD), cmap)
             rows[name, seed] += [(t, i, *b) for i, b in zip(out.ids, out.xywh)]
@@ -135,7 +136,7 @@ def main():
     ax1, ax2 = fig.subplots(1, 2, width_ratios=[1.25, 1])
     ax1.imshow(frames[SHOW - 1][:, :, ::-1])
     particles, out = results["1: Det+DetConf+Class"]
-    cmap = maps[SHOW - 1]
+    cmap = shown
     k = int(np.argmin(np.abs(cmap.heights - 90)))
     ny, nx = cmap.scores[k].shape
     x0, y0 = cmap.origins[k]
