@@ -11,7 +11,7 @@ from .mot import Matches, MOTCounts, clear_matches, combine, evaluate_mot
 from .sanity import sanity_warnings
 
 if TYPE_CHECKING:
-    from concurrent.futures import Executor, Future
+    from concurrent.futures import Executor
 
 __all__ = ["evaluate_files", "pair_matches", "EvalResults"]
 
@@ -64,15 +64,21 @@ def _read(pair: tuple[str, Path, Path, Path | None]) -> tuple[MOTTable, MOTTable
     return read_mot(gt), read_mot(pred), n
 
 
-def _result(future: Future, keep_going: bool) -> tuple[MOTCounts | None, list[str], str]:
-    """A future's :func:`_score`; with ``keep_going``, its worker's failure (a pool broken by
-    a worker's death, an executor's own error) as the pair's error."""
-    try:
-        return future.result()
-    except Exception as e:
-        if not keep_going:
-            raise
-        return None, [], _one_line(e)
+def _score_on(executor: Executor, pairs: list[tuple[str, Path, Path, Path | None]],
+              benchmark: str, keep_going: bool) -> list[tuple[MOTCounts | None, list[str], str]]:
+    """Each pair's :func:`_score`, all submitted to ``executor`` at once, in the pairs' order;
+    with ``keep_going``, a pair's worker failure (a pool broken by a worker's death, an
+    executor's own error) as its error."""
+    futures = [executor.submit(_score, pair, benchmark, keep_going) for pair in pairs]
+    scored = []
+    for future in futures:
+        try:
+            scored.append(future.result())
+        except Exception as e:
+            if not keep_going:
+                raise
+            scored.append((None, [], _one_line(e)))
+    return scored
 
 
 def pair_matches(pair: tuple[str, Path, Path, Path | None],
@@ -147,11 +153,9 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
         from ..batch import process_pool  # one BLAS thread a worker
 
         with process_pool(min(jobs or 1, len(pairs)), imports=(__name__,)) as pool:
-            futures = [pool.submit(_score, pair, benchmark, keep_going) for pair in pairs]
-            scored = [_result(f, keep_going) for f in futures]
+            scored = _score_on(pool, pairs, benchmark, keep_going)
     elif executor is not None:
-        futures = [executor.submit(_score, pair, benchmark, keep_going) for pair in pairs]
-        scored = [_result(f, keep_going) for f in futures]
+        scored = _score_on(executor, pairs, benchmark, keep_going)
     else:
         scored = [_score(pair, benchmark, keep_going) for pair in pairs]
     for (name, *_), (counts, warned, error) in zip(pairs, scored):
