@@ -85,6 +85,7 @@ def test_a_partial_file_keeps_the_presets_other_values(tmp_path):
     ("[motion]\nstd_meas = [0.1, 0.2]\n", r"std_meas must be a number or a list of 4"),
     ("[motion]\nstd_pos = -1\n", "std_pos must be a finite number > 0"),
     ("[offline]\nmax_gap = -1\n", "max_gap must be a finite number >= 0"),
+    ("[offline]\nstart_score = 2.0\n", r"start_score must be in \[0, 1\] \(a calibrated"),
     ("tracker = 3\n", "tracker must be a table"),
 ])
 def test_a_bad_file_is_named_with_its_key(tmp_path, text, match):
@@ -105,6 +106,8 @@ def test_bad_files_and_values_on_the_command_line(seq, tmp_path):
     assert r.returncode == 2 and "--tracker bytetrack disagrees with [tracker] name" in r.stderr
     r = cli(seq, "--out", tmp_path / "r.txt", "--high", "1.5")
     assert r.returncode == 2 and "--high: high must be in [0, 1]" in r.stderr
+    r = cli(seq, "--out", tmp_path / "r.txt", "--offline", "--start-score", "1.5")
+    assert r.returncode == 2 and "--start-score: start_score must be in [0, 1]" in r.stderr
     r = cli(seq, "--out-dir", tmp_path / "v", "--min-track-score", "0.5")
     assert r.returncode == 2 and "--offline, its settings and --detections go with --out" in \
         r.stderr
@@ -140,18 +143,24 @@ OPTIONS = [("--scores", "raw", "scores", "raw"), ("--high", "0.7", "high", 0.7),
            ("--min-iou", "0.5", "min_iou", 0.5), ("--confirm-hits", "3", "confirm_hits", 3),
            ("--max-lost", "0.05", "max_lost", 0.05), ("--max-gap", "0.04", "max_gap", 0.04),
            ("--min-track-score", "0.99", "min_track_score", 0.99),
+           ("--start-score", "14.5", "start_score", 14.5),
            ("--link-gap", "0", "link_gap", 0.0), ("--still-camera", None, "camera_motion",
                                                   False)]
+# raw scores of -1 to 15 need thresholds on their scale (as in raw.toml below)
+RAW = dict(scores="raw", high=12.0, low=2.0, new_track=13.0, fuse_score=False)
 
 
 @pytest.mark.parametrize("option,value,key,expected", OPTIONS)
 def test_each_option_sets_its_value(seq, tmp_path, option, value, key, expected):
     flags = [option] + ([value] if value is not None else [])
-    offline = key in ("max_gap", "min_track_score", "link_gap")
+    offline = key in ("max_gap", "min_track_score", "start_score", "link_gap")
     if offline:
         flags.append("--offline")
-    if key == "scores":  # raw scores of -1 to 15 need thresholds on their scale
-        flags = ["--config", tmp_path / "raw.toml"]
+    # with calibrated scores every track of this scene starts at a confidence of 1: the
+    # start's threshold is tried on the raw scores
+    raw = key in ("scores", "start_score")
+    if raw:
+        flags = ([] if key == "scores" else flags) + ["--config", tmp_path / "raw.toml"]
         (tmp_path / "raw.toml").write_text('[tracker]\nscores = "raw"\nhigh = 12.0\n'
                                            'low = 2.0\nnew_track = 13.0\nfuse_score = false\n')
     r = cli(seq, "--out", tmp_path / "cli.txt", "--print-config", *flags)
@@ -160,11 +169,10 @@ def test_each_option_sets_its_value(seq, tmp_path, option, value, key, expected)
                           str(expected).lower() if isinstance(expected, bool) else
                           repr(expected))
     assert line in r.stdout.splitlines(), (line, r.stdout)
-    over = {key: expected}
-    if key == "scores":
-        over.update(high=12.0, low=2.0, new_track=13.0, fuse_score=False)
-    run = track_sequence(seq, tmp_path / "api.txt", offline=offline, **over)
-    default = track_sequence(seq, tmp_path / "default.txt", offline=offline)
+    base = RAW if key == "start_score" else {}
+    run = track_sequence(seq, tmp_path / "api.txt", offline=offline,
+                         **{**(RAW if raw else {}), key: expected})
+    default = track_sequence(seq, tmp_path / "default.txt", offline=offline, **base)
     cli_rows, api_rows = (tmp_path / "cli.txt").read_text(), (tmp_path / "api.txt").read_text()
     assert cli_rows == api_rows
     if key != "link_gap":  # nothing to join in this scene

@@ -501,6 +501,42 @@ def test_offline_mode_follows_tracks_back_through_low_score_detections():
     assert np.all(np.linalg.eigvalsh(ext.covs) > 0)
 
 
+def test_offline_mode_starts_tracks_only_at_confident_detections(tmp_path):
+    """Offline, a track starts only at a detection scoring ``start_score`` (0.8) or more,
+    though the tracker's ``new_track`` is 0.7 (raw scores): a person detected at 0.75 for 20
+    frames and 0.95 after is still reported from frame 1, followed back from frame 21, and a
+    box that stays in place at 0.78 all along, on no one (clutter), is not reported at all.
+    With ``start_score`` at or under ``new_track``, the clutter is a track, as online."""
+    from vistrack.io import write_mot
+    from vistrack.pipeline import track_sequence
+
+    T = 60
+    every = range(1, T + 1)
+    gt, dets = _walkers(np.random.default_rng(5),
+                        [((100, 200), (3, 0.5), every, every, lambda f: 0.75 if f <= 20 else 0.95),
+                         ((600, 300), (0, 0), every, every, lambda f: 0.78)], T)
+    person = gt.ids == 1
+    gt = MOTTable(gt.frames[person], gt.ids[person], gt.boxes[person], gt.conf[person],
+                  -np.ones(person.sum(), int), -np.ones(person.sum()))
+    seq = tmp_path / "SEQ"
+    (seq / "det").mkdir(parents=True)
+    f = np.concatenate([np.full(len(d), k) for k, d in enumerate(dets, start=1)])
+    write_mot(seq / "det" / "det.txt", f, -np.ones(len(f), int),
+              np.concatenate([d.xywh for d in dets]), np.concatenate([d.scores for d in dets]))
+    (seq / "seqinfo.ini").write_text(f"[Sequence]\nname=SEQ\nframeRate=25\nseqLength={T}\n"
+                                     "imWidth=1000\nimHeight=1000\n")
+    clear = {}
+    for start in (None, 0.7):  # the default, and no higher than new_track
+        run = track_sequence(seq, tmp_path / f"{start}.txt", offline=True, scores="raw",
+                             high=0.6, new_track=0.7,
+                             **({} if start is None else {"start_score": start}))
+        assert run.config.tracker.new_track == 0.7
+        assert run.config.offline.start_score == (0.8 if start is None else start)
+        clear[start] = evaluate_mot(gt, read_mot(run.out), T)
+    assert clear[None].FN == 0 and clear[None].FP == 0 and clear[None].IDSW == 0
+    assert clear[0.7].FN == 0 and clear[0.7].FP == T  # the clutter, from its first frame
+
+
 def test_offline_mode_links_tracks_across_a_long_occlusion():
     """A person hidden for 70 frames (longer than the 2 s a lost track is kept) comes back
     as a new track online; offline the two tracks are joined and the gap filled on the truth.

@@ -150,6 +150,8 @@ _SETTINGS = (
     ("max_gap", "offline", "max_gap", float, "SECONDS", "offline: the longest gap filled", 1.0),
     ("min_track_score", "offline", "min_track_score", float, "X",
      "offline: the lowest mean confidence of a track's detections kept", 0.75),
+    ("start_score", "offline", "start_score", float, "X",
+     "offline: the lowest confidence that starts a track, if above --new-track", 0.8),
     ("link_gap", "offline", "link_gap", float, "SECONDS",
      "offline: join tracks up to this far apart (0: never)", 2.0),
 )
@@ -282,7 +284,8 @@ def _track(args: argparse.Namespace) -> int:
                 return fail(f"--out {args.out}: {e}")
     else:
         offline_flags = [f for f in ("offline", "detections", "columns", "max_gap",
-                                     "min_track_score", "link_gap") if getattr(args, f)]
+                                     "min_track_score", "start_score", "link_gap")
+                         if getattr(args, f)]
         if offline_flags:
             return fail("--offline, its settings and --detections go with --out (use "
                         "--frontend detections:FILE with --out-dir)")
@@ -701,7 +704,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "module:callable, a tracker of your own (a callable returning an "
                        "object with step(frame, detections) -> Tracks and reset())")
     track.add_argument("--offline", action="store_true",
-                       help="smooth finished tracks, fill their gaps, drop tracks of weak "
+                       help="start tracks only at confident detections (--start-score), "
+                       "smooth finished tracks, fill their gaps, drop tracks of weak "
                        "detections, follow tracks back through unused detections and join "
                        "tracks across gaps; scores are calibrated on the whole file (--out)")
     track.add_argument("--still-camera", action="store_true",

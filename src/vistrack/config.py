@@ -73,6 +73,11 @@ class OfflineConfig:
     min_track_score : float
         The lowest mean score of a track's detections that is kept (a calibrated confidence
         with ``scores = "calibrated"``).
+    start_score : float
+        The lowest score that starts a track in the offline mode's pass, where it is above
+        the tracker's ``new_track`` (on the same scale): a track starts only at a detection
+        confident enough, and is then followed back through the less confident detections
+        before it (``extend_iou``), so that fewer tracks start from clutter.
     extend_iou : float
         Follow tracks back through the detections left over while one overlaps the backward
         prediction by this IoU (0: not at all).
@@ -100,6 +105,7 @@ class OfflineConfig:
     enabled: bool = False
     max_gap: float = 1.0
     min_track_score: float = 0.75
+    start_score: float = 0.8
     extend_iou: float = 0.5
     link_gap: float = 2.0
     link_iou: float = 0.3
@@ -137,6 +143,11 @@ class TrackConfig:
     offline : OfflineConfig
         The offline mode's settings.
 
+    Raises
+    ------
+    ValueError
+        If the scores are calibrated and ``offline.start_score`` is above 1.
+
     Examples
     --------
     >>> cfg = TrackConfig.preset("sort").with_values(tracker={"high": 0.5})
@@ -148,6 +159,12 @@ class TrackConfig:
     tracker: BoxTrackerConfig = field(default_factory=BoxTrackerConfig)
     motion: BoxMotion | None = None
     offline: OfflineConfig = field(default_factory=OfflineConfig)
+
+    def __post_init__(self) -> None:
+        # the offline start replaces the tracker's new_track, so it is on the same scale
+        if self.tracker.scores == "calibrated" and self.offline.start_score > 1:
+            raise ValueError(f"start_score must be in [0, 1] (a calibrated confidence); got "
+                             f"{self.offline.start_score!r}")
 
     @classmethod
     def preset(cls, name: str = "bytetrack") -> TrackConfig:

@@ -810,10 +810,12 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         The configuration (:func:`resolve_config`): a
         :class:`~vistrack.config.TrackConfig` or a preset's name in
         :data:`vistrack.tracking.TRACKERS`, and values put over it.
-        Offline, the finished tracks are smoothed, gaps filled, tracks of weak detections
-        dropped, tracks followed back through the detections left over and joined across
-        gaps (:func:`vistrack.tracking.smooth`), and calibrated scores are calibrated on the
-        whole file.
+        Offline, tracks start only at detections scoring the offline mode's
+        ``start_score`` or more (where it is above ``new_track``), the finished tracks are
+        smoothed, gaps filled, tracks of weak detections dropped, tracks followed back
+        through the detections left over and joined across gaps
+        (:func:`vistrack.tracking.smooth`), and calibrated scores are calibrated on the whole
+        file.
     force : bool
         Overwrite ``out``.
     progress
@@ -889,6 +891,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         calibration = ScoreCalibration.from_frames(
             per_frame, **tc.calibration_options(info.frame_rate))
         seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
+    if oc.enabled and oc.start_score > tc.new_track:
+        tc = replace(tc, new_track=oc.start_score)
     trk = BoxTracker(tc, motion=cfg.motion, frame_rate=info.frame_rate, record=oc.enabled,
                      image_size=(info.im_width, info.im_height), calibration=calibration)
     frames = (Frame(f, (f - 1) / info.frame_rate) for f in range(1, info.seq_length + 1))
