@@ -195,7 +195,8 @@ def derived_values(trk: BoxTracker) -> dict:
         ``std_vel_per_frame``; with calibrated scores also ``calibration`` (``"whole file"``
         or ``"online, at the last frame"``), ``calibration_outcomes``,
         ``calibration_top_persistence`` (when fitted to outcomes) and ``high_score``,
-        ``low_score`` and ``new_track_score``.
+        ``low_score`` and ``new_track_score`` (for the threshold tracks started at: offline,
+        the offline mode's ``start_score`` where it is above ``new_track``).
 
     Examples
     --------
