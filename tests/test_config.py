@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 import pytest
@@ -111,6 +111,9 @@ def test_bad_files_and_values_on_the_command_line(seq, tmp_path):
     r = cli(seq, "--out-dir", tmp_path / "v", "--min-track-score", "0.5")
     assert r.returncode == 2 and "--offline, its settings and --detections go with --out" in \
         r.stderr
+    r = cli(seq, "--out-dir", tmp_path / "v", "--link-gap", "0")  # a zero is a value given
+    assert r.returncode == 2 and "--offline, its settings and --detections go with --out" in \
+        r.stderr
     r = cli(seq, "--out-dir", tmp_path / "v", "--tracker", "dcpf", "--config",
             tmp_path / "s.toml")
     assert r.returncode == 2 and "--config goes with the box trackers" in r.stderr
@@ -146,6 +149,7 @@ OPTIONS = [("--scores", "raw", "scores", "raw"), ("--high", "0.7", "high", 0.7),
            ("--start-score", "14.5", "start_score", 14.5),
            ("--link-gap", "0", "link_gap", 0.0), ("--still-camera", None, "camera_motion",
                                                   False)]
+OFFLINE_KEYS = {f.name for f in fields(OfflineConfig)}
 # raw scores of -1 to 15 need thresholds on their scale (as in raw.toml below)
 RAW = dict(scores="raw", high=12.0, low=2.0, new_track=13.0, fuse_score=False)
 
@@ -153,7 +157,7 @@ RAW = dict(scores="raw", high=12.0, low=2.0, new_track=13.0, fuse_score=False)
 @pytest.mark.parametrize("option,value,key,expected", OPTIONS)
 def test_each_option_sets_its_value(seq, tmp_path, option, value, key, expected):
     flags = [option] + ([value] if value is not None else [])
-    offline = key in ("max_gap", "min_track_score", "start_score", "link_gap")
+    offline = key in OFFLINE_KEYS
     if offline:
         flags.append("--offline")
     # with calibrated scores every track of this scene starts at a confidence of 1: the
@@ -200,8 +204,6 @@ def test_each_flat_override_names_one_setting():
     """``resolve_config(**overrides)`` puts a name to the tracker's settings or the offline
     mode's: no name may be both (the tracker's calibration IoU was once ``link_iou``, the
     offline joining's too, and an override of it reached the offline mode only)."""
-    from dataclasses import fields
-
     from vistrack.tracking import BoxTrackerConfig
 
     tracker = {f.name for f in fields(BoxTrackerConfig)}

@@ -283,9 +283,9 @@ def _track(args: argparse.Namespace) -> int:
             except ImportError as e:
                 return fail(f"--out {args.out}: {e}")
     else:
-        offline_flags = [f for f in ("offline", "detections", "columns", "max_gap",
-                                     "min_track_score", "start_score", "link_gap")
-                         if getattr(args, f)]
+        offline_flags = [f for f in ("offline", "detections", "columns") if getattr(args, f)]
+        offline_flags += [o for o, table, *_ in _SETTINGS
+                          if table == "offline" and getattr(args, o) is not None]
         if offline_flags:
             return fail("--offline, its settings and --detections go with --out (use "
                         "--frontend detections:FILE with --out-dir)")
