@@ -4,7 +4,6 @@ memory, and leave no file under the final name until the run is complete."""
 
 from __future__ import annotations
 
-import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +14,8 @@ from vistrack.io.tracks import BoxesWriter, CSVWriter, MOTWriter, TrackRows, wri
 from vistrack.pipeline import run, track_sequence
 from vistrack.tracking import BoxTracker
 from vistrack.types import Detections, Frame, Tracks
+
+from .heap import heap_meter
 
 
 def random_tracks(rng, n_frames, *, max_rows=8, id_pool=60):
@@ -90,24 +91,25 @@ def test_frames_out_of_order_are_sorted_when_the_file_is_closed(tmp_path):
 
 
 def test_the_writers_hold_no_rows_and_write_as_the_frames_come(tmp_path):
-    """20,000 frames of 6 rows: the writers' Python memory stays where it was after the
-    first 1,000 frames (a TrackRows, which keeps the rows, grows by megabytes under the same
-    measure), and the rows are on disk under the partial name, none under the final one."""
+    """20,000 frames of 6 rows: the memory the process holds (:func:`heap_meter`) stays where
+    it was after the first 1,000 frames (a TrackRows, which keeps the rows, grows by megabytes
+    under the same measure), and the rows are on disk under the partial name, none under the
+    final one."""
     pool = random_tracks(np.random.default_rng(10), 50, max_rows=6, id_pool=6)
     pool = [t for _, t in pool if len(t) == 6]
     assert pool
 
     def traced_growth(sinks, n=20_000, settle=1_000):
-        tracemalloc.start()
+        held, done = heap_meter()
         try:
             for f in range(1, n + 1):
                 for sink in sinks:
                     sink.write(Frame(f, f / 25), pool[f % len(pool)])
                 if f == settle:
-                    start = tracemalloc.get_traced_memory()[0]
-            return tracemalloc.get_traced_memory()[0] - start
+                    start = held()
+            return held() - start
         finally:
-            tracemalloc.stop()
+            done()
 
     mot, csv = MOTWriter(tmp_path / "t.txt"), CSVWriter(tmp_path / "t.csv")
     boxes = BoxesWriter(tmp_path / "b.txt")
