@@ -83,10 +83,10 @@ def test_nees_and_nis_of_a_correct_filter_lie_in_the_chi2_band():
 
 def test_nis_counts_only_observed_components():
     pos = vt.Position(dim=2, r=1.0)
-    kf = vt.KalmanFilter(vt.ConstantPosition(dim=2, q=1.0), pos)
+    kf = vt.KalmanFilter(vt.ConstantVelocity(dim=2, q=1.0), pos)
     ys = np.array([[0.0, 0.0], [1.0, np.nan], [np.nan, np.nan]])
-    res = kf.filter(ys, x0=np.zeros(2), P0=np.eye(2))
-    v, dof = nis(ys, res, H=pos.H(2), R=pos.R())
+    res = kf.filter(ys, x0=np.zeros(4), P0=np.eye(4))
+    v, dof = nis(ys, res, H=pos.H(4), R=pos.R())
     np.testing.assert_array_equal(dof, [2, 1, 0])
     S = res.pred_covs[1, 0, 0] + 1.0
     assert v[1] == pytest.approx((1.0 - res.pred_means[1, 0]) ** 2 / S)

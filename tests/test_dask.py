@@ -60,9 +60,10 @@ def test_the_chunked_filter_checks_its_input():
 
 
 def test_vistrack_does_not_import_dask():
+    # a model of 2 states and 1 measurement, whose filter comes compiled with vistrack
     code = ("import sys, numpy as np, vistrack, vistrack.filters as f, vistrack.batch;"
-            "f.kalman_filter(np.zeros((3, 1)), F=np.eye(1), Q=np.eye(1), H=np.eye(1),"
-            " R=np.eye(1), x0=[0.0], P0=np.eye(1));"
+            "f.kalman_filter(np.zeros((3, 1)), F=np.eye(2), Q=np.eye(2), H=np.eye(1, 2),"
+            " R=np.eye(1), x0=[0.0, 0.0], P0=np.eye(2));"
             "print(sorted(m for m in sys.modules if m.split('.')[0] in ('dask', 'distributed')))")
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
                          text=True).stdout.strip()
