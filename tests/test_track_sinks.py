@@ -99,7 +99,7 @@ def test_the_writers_hold_no_rows_and_write_as_the_frames_come(tmp_path):
     pool = [t for _, t in pool if len(t) == 6]
     assert pool
 
-    def traced_growth(sinks, n=20_000, settle=1_000):
+    def growth(sinks, n=20_000, settle=1_000):
         held, done = heap_meter()
         try:
             for f in range(1, n + 1):
@@ -113,13 +113,13 @@ def test_the_writers_hold_no_rows_and_write_as_the_frames_come(tmp_path):
 
     mot, csv = MOTWriter(tmp_path / "t.txt"), CSVWriter(tmp_path / "t.csv")
     boxes = BoxesWriter(tmp_path / "b.txt")
-    streamed = traced_growth([mot, csv])
-    kept = traced_growth([TrackRows()])
+    streamed = growth([mot, csv])
+    kept = growth([TrackRows()])
     assert len(mot) == len(csv) == 120_000
     assert streamed < 64 * 1024, streamed
     assert kept > 3 * 2**20, kept  # the measure sees rows that are kept
     # the boxes writer keeps one box a frame (32 bytes), as an array, and nothing else
-    assert traced_growth([boxes]) < 20_000 * 32 * 2.5
+    assert growth([boxes]) < 20_000 * 32 * 2.5
     for path in (tmp_path / "t.txt", tmp_path / "t.csv", tmp_path / "b.txt"):
         assert not path.exists()
         assert partial_path(path).stat().st_size > 100_000  # all but the buffer's last bytes
