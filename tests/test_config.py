@@ -150,7 +150,7 @@ OPTIONS = [("--scores", "raw", "scores", "raw"), ("--high", "0.7", "high", 0.7),
            ("--link-gap", "0", "link_gap", 0.0), ("--still-camera", None, "camera_motion",
                                                   False)]
 OFFLINE_KEYS = {f.name for f in fields(OfflineConfig)}
-# raw scores of -1 to 15 need thresholds on their scale (as in raw.toml below)
+# raw scores of -1 to 15 need thresholds on their scale (raw.toml below holds them too)
 RAW = dict(scores="raw", high=12.0, low=2.0, new_track=13.0, fuse_score=False)
 
 
@@ -165,8 +165,7 @@ def test_each_option_sets_its_value(seq, tmp_path, option, value, key, expected)
     raw = key in ("scores", "start_score")
     if raw:
         flags = ([] if key == "scores" else flags) + ["--config", tmp_path / "raw.toml"]
-        (tmp_path / "raw.toml").write_text('[tracker]\nscores = "raw"\nhigh = 12.0\n'
-                                           'low = 2.0\nnew_track = 13.0\nfuse_score = false\n')
+        (tmp_path / "raw.toml").write_text(config_toml(resolve_config(**RAW)))
     r = cli(seq, "--out", tmp_path / "cli.txt", "--print-config", *flags)
     assert r.returncode == 0, r.stderr
     line = f"{key} = " + (f'"{expected}"' if isinstance(expected, str) else
