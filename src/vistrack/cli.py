@@ -133,6 +133,11 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+# the error for the offline mode, its settings or --detections given with --out-dir, from the
+# options or from --config's file
+_OFFLINE_NEEDS_OUT = ("--offline, its settings and --detections go with --out (use "
+                      "--frontend detections:FILE with --out-dir)")
+
 # command-line options that set the box tracker's configuration: (option, table, key, type,
 # metavar, help, the default as the help says it); vistrack.config is not imported to build the
 # parser (it loads the compiled tracker), and a test checks these defaults against it
@@ -287,8 +292,7 @@ def _track(args: argparse.Namespace) -> int:
         offline_flags += [o for o, table, *_ in _SETTINGS
                           if table == "offline" and getattr(args, o) is not None]
         if offline_flags:
-            return fail("--offline, its settings and --detections go with --out (use "
-                        "--frontend detections:FILE with --out-dir)")
+            return fail(_OFFLINE_NEEDS_OUT)
         video_outputs(args.out_dir, force=args.force, name="--out-dir")
     # with --print-config, stdout holds the configuration alone (the summary goes to stderr)
     report = sys.stderr if args.print_config else sys.stdout
@@ -314,8 +318,7 @@ def _track(args: argparse.Namespace) -> int:
               file=report)
     else:
         if cfg is not None and cfg.offline.enabled:
-            return fail("--offline, its settings and --detections go with --out (use "
-                        "--frontend detections:FILE with --out-dir)")
+            return fail(_OFFLINE_NEEDS_OUT)
         if args.report:  # before anything runs: a report that cannot be written fails now
             check_output(Path(args.out_dir) / "report.html", force=args.force, name="--report")
         run = track_video(args.input, args.out_dir, fps=args.fps, gt=args.gt,
