@@ -296,23 +296,28 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Se
     gs = np.searchsorted(gt.frames, frames, "left"), np.searchsorted(gt.frames, frames, "right")
     ps = (np.searchsorted(pred.frames, frames, "left"),
           np.searchsorted(pred.frames, frames, "right"))
+    # each row's part in it, once: whether a ground-truth row is scored and whether it is a
+    # distractor (a prediction matched to one is removed)
+    keep_gt = gt.conf != 0
+    if bench != "MOT15":
+        keep_gt &= gt.classes == 1
+    distractor = np.isin(gt.classes, distractors)
+    iou = _iou if not ((np.abs(gt.boxes) > _BIG).any() or (np.abs(pred.boxes) > _BIG).any()) \
+        else box_iou_xywh
     gt_ids, pred_ids, sims = [], [], []
-    for g0, g1, p0, p1 in zip(*gs, *ps):
-        g, p = gt[int(g0):int(g1)], pred[int(p0):int(p1)]
-        sim = box_iou_xywh(g.boxes, p.boxes)
-        keep_p = np.ones(len(p), bool)
-        if bench != "MOT15" and len(g) and len(p):
+    for g0, g1, p0, p1 in zip(gs[0].tolist(), gs[1].tolist(), ps[0].tolist(), ps[1].tolist()):
+        sim = iou(gt.boxes[g0:g1], pred.boxes[p0:p1])
+        keep_p = np.ones(p1 - p0, bool)
+        if bench != "MOT15" and g1 > g0 and p1 > p0:
             score = np.where(sim < 0.5 - _EPS, 0.0, sim)
             r, c = linear_sum_assignment(-score)
             ok = score[r, c] > _EPS
             r, c = r[ok], c[ok]
-            keep_p[c[np.isin(g.classes[r], distractors)]] = False
-        keep_g = g.conf != 0
-        if bench != "MOT15":
-            keep_g &= g.classes == 1
-        gt_ids.append(g.ids[keep_g])
-        pred_ids.append(p.ids[keep_p])
-        sims.append(sim[np.ix_(keep_g, keep_p)])
+            keep_p[c[distractor[g0:g1][r]]] = False
+        keep_g = keep_gt[g0:g1]
+        gt_ids.append(gt.ids[g0:g1][keep_g])
+        pred_ids.append(pred.ids[p0:p1][keep_p])
+        sims.append(sim[keep_g][:, keep_p])
     ug = np.unique(np.concatenate(gt_ids)) if gt_ids else np.zeros(0, np.int64)
     up = np.unique(np.concatenate(pred_ids)) if pred_ids else np.zeros(0, np.int64)
     return _Sequence([np.searchsorted(ug, i) for i in gt_ids],
@@ -762,33 +767,35 @@ def _hota(seq: _Sequence, out: MOTCounts) -> None:
         p_count[0, p] += 1
     with np.errstate(invalid="ignore", divide="ignore"):
         align = pot / (g_count + p_count - pot)
-    A = len(ALPHAS)
-    matches = np.zeros((A, n_g, n_p))
-    tp, fn, fp, loc = np.zeros(A), np.zeros(A), np.zeros(A), np.zeros(A)
+    # each frame's one-to-one matching once; what each alpha keeps of it, for all alphas at
+    # once from the matched pairs and their similarities
+    mg, mp, ms = [], [], []
+    n_gt = n_pred = 0
     for g, p, sim in zip(seq.gt_ids, seq.pred_ids, seq.sim):
-        if len(g) == 0:
-            fp += len(p)
-            continue
-        if len(p) == 0:
-            fn += len(g)
-            continue
-        r, c = linear_sum_assignment(-(align[g[:, None], p[None, :]] * sim))
-        s = sim[r, c]
-        for a, alpha in enumerate(ALPHAS):
-            ok = s >= alpha - _EPS
-            k = int(ok.sum())
-            tp[a] += k
-            fn[a] += len(g) - k
-            fp[a] += len(p) - k
-            if k:
-                loc[a] += s[ok].sum()
-                matches[a, g[r[ok]], p[c[ok]]] += 1
+        n_gt += len(g)
+        n_pred += len(p)
+        if len(g) and len(p):
+            r, c = linear_sum_assignment(-(align[g[:, None], p[None, :]] * sim))
+            mg.append(g[r])
+            mp.append(p[c])
+            ms.append(sim[r, c])
+    s = np.concatenate(ms) if ms else np.zeros(0)
+    # the pairs ever matched, and each match's pair
+    pair = np.concatenate(mg) * n_p + np.concatenate(mp) if ms else np.zeros(0, np.int64)
+    u, inv = np.unique(pair, return_inverse=True)
+    gc, pc = g_count[u // max(n_p, 1), 0], p_count[0, u % max(n_p, 1)]
+    A = len(ALPHAS)
+    tp, loc = np.zeros(A), np.zeros(A)
     ass_a, ass_re, ass_pr = np.zeros(A), np.zeros(A), np.zeros(A)
-    for a in range(A):
-        m = matches[a]
-        ass_a[a] = np.sum(m * m / np.maximum(1, g_count + p_count - m)) / max(1.0, tp[a])
-        ass_re[a] = np.sum(m * m / np.maximum(1, g_count)) / max(1.0, tp[a])
-        ass_pr[a] = np.sum(m * m / np.maximum(1, p_count)) / max(1.0, tp[a])
+    for a, alpha in enumerate(ALPHAS):
+        ok = s >= alpha - _EPS
+        tp[a], loc[a] = ok.sum(), s[ok].sum()
+        m = np.bincount(inv[ok], minlength=len(u)).astype(np.float64)  # matches per pair
+        k = max(1.0, tp[a])
+        ass_a[a] = np.sum(m * m / np.maximum(1, gc + pc - m)) / k
+        ass_re[a] = np.sum(m * m / np.maximum(1, gc)) / k
+        ass_pr[a] = np.sum(m * m / np.maximum(1, pc)) / k
+    fn, fp = n_gt - tp, n_pred - tp
     out.HOTA_TP, out.HOTA_FN, out.HOTA_FP = tp, fn, fp
     out.AssA_alpha, out.AssRe_alpha, out.AssPr_alpha = ass_a, ass_re, ass_pr
     out.LocA_alpha = np.maximum(1e-10, loc) / np.maximum(1e-10, tp)
