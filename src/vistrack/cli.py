@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import os
 import signal
@@ -124,7 +125,7 @@ def _demo(args: argparse.Namespace) -> int:
         clip = demo_clip()
         argv = ["track", str(clip.video), "--gt", str(clip.gt), "--out-dir",
                 str(Path(args.out) / "pets09-s2l1")] + (["--force"] if args.force else [])
-        track = build_parser().parse_args(argv)
+        track = _parser().parse_args(argv)
         track.command_line = getattr(args, "command_line", None)
         return int(track.func(track))
     from .demo import run_kalman_demo
@@ -865,6 +866,14 @@ def _one_line_warnings(command: str) -> Callable[..., None]:
     return show
 
 
+@functools.cache
+def _parser() -> argparse.ArgumentParser:
+    """The command line's parser, built once a process: parsing leaves it as it is, and
+    building it (every command's options, each help text looked up by gettext) takes a few
+    milliseconds that a program calling :func:`main` again and again would pay each time."""
+    return build_parser()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return its exit status.
 
@@ -877,7 +886,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     pipe closed early (``vistrack eval --json | head -1``), the rest of the output is
     dropped quietly and the status is 1, as Python's documentation recommends.
     """
-    parser = build_parser()
+    parser = _parser()
     args, extra = parser.parse_known_args(argv)
     command = _command_parser(parser, getattr(args, "command", None))
     if extra:  # said by the command's parser (parse_args would say it as vistrack's)
