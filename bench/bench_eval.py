@@ -1,6 +1,7 @@
-"""Scoring speed: vistrack's scorer beside TrackEval, the official MOTChallenge scorer, on
-the four sets of ``accuracy_mot.py`` (vistrack's own tracks of them), CLEAR MOT, identity
-and HOTA per sequence and COMBINED, the same scores from both.
+"""Scoring speed and memory: vistrack's scorer beside TrackEval, the official MOTChallenge
+scorer, on the four sets of ``accuracy_mot.py`` (vistrack's own tracks of them) and on a
+generated long sequence with many identities; CLEAR MOT, identity and HOTA per sequence and
+COMBINED, the same scores from both.
 
     python bench/bench_eval.py [--sets MOT15,MOT17,MOT16-FairMOT,KITTI] [--repeats 3]
                                [--write docs/benchmarks.md]
@@ -10,7 +11,8 @@ sequence of the set in one call, in this process (TrackEval on one core, as vist
 scorer runs); medians of ``--repeats`` rounds, each scorer in turn, after an untimed run
 of each. The conventions are ``accuracy_mot.py``'s: MOT15 and KITTI under MOT15's, MOT17
 and MOT16 under their own (distractors removed). Before the times are reported, every
-sequence's HOTA, MOTA and IDF1 are checked to agree with TrackEval's to 1e-9.
+sequence's HOTA, MOTA and IDF1 are checked to agree with TrackEval's to 1e-9. The peak of
+memory each scorer allocates is measured in one more run of each under tracemalloc.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import statistics
 import sys
 import tempfile
 import time
+import tracemalloc
 import warnings
 from pathlib import Path
 
@@ -29,12 +32,54 @@ import accuracy_mot as acc  # bench/ is on the path of its scripts
 import numpy as np
 
 from vistrack.evaluation import evaluate_files
+from vistrack.io import write_mot
 from vistrack.pipeline import track_sequence
 
 from _common import optional  # noqa: E402
 from _markdown import replace_section  # noqa: E402
 
 CONVENTION = {"MOT15": "MOT15", "MOT17": "MOT17", "MOT16-FairMOT": "MOT16", "KITTI": "MOT15"}
+
+
+LONG = "long, generated"
+
+
+def long_sequence(root: Path, n_frames: int) -> Path:
+    """A long sequence with many identities that never meet: ``n_frames`` frames of 40
+    objects each (1920 x 1080), a new set of 40 every 40 frames (as many objects as frames),
+    predicted with 2 pixels of noise under a new identity every 13 frames (about 4 times as
+    many); MOTChallenge's layout in ``root`` (``gt/gt.txt``, ``seqinfo.ini``, the results in
+    ``results.txt``)."""
+    rng = np.random.default_rng(0)
+    frames, ids, boxes = [], [], []
+    for k, start in enumerate(range(1, n_frames + 1, 40)):
+        x, y = rng.uniform(0, 1800, 40), rng.uniform(0, 900, 40)
+        v = rng.normal(0, 2, (40, 2))
+        for f in range(start, min(start + 40, n_frames + 1)):
+            frames.append(np.full(40, f))
+            ids.append(k * 40 + np.arange(1, 41))
+            boxes.append(np.c_[x + v[:, 0] * (f - start), y + v[:, 1] * (f - start),
+                               np.full(40, 40.0), np.full(40, 100.0)])
+    f, i, b = np.concatenate(frames), np.concatenate(ids), np.concatenate(boxes)
+    (root / "gt").mkdir(parents=True)
+    (root / "seqinfo.ini").write_text("[Sequence]\nname=long\nimDir=img1\nframeRate=30\n"
+                                      f"seqLength={n_frames}\nimWidth=1920\nimHeight=1080\n"
+                                      "imExt=.jpg\n")
+    write_mot(root / "gt" / "gt.txt", f, i, b, np.ones(len(f)))
+    pred = np.unique(i * 1000 + (f - 1) // 13, return_inverse=True)[1] + 1
+    write_mot(root / "results.txt", f, pred, b + rng.normal(0, 2, b.shape), np.ones(len(f)))
+    return root
+
+
+def traced_peak(fn) -> float:
+    """The peak of memory that ``fn()`` allocates, in MB, as tracemalloc sees it (numpy's
+    arrays included)."""
+    tracemalloc.start()
+    try:
+        fn()
+        return tracemalloc.get_traced_memory()[1] / 1e6
+    finally:
+        tracemalloc.stop()
 
 
 def trackeval_layout(seqs: list[Path], results: Path, root: Path) -> dict:
@@ -96,6 +141,8 @@ def main() -> None:
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sets", default=",".join(acc.SETS))
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--long-frames", type=int, default=1200,
+                    help="frames (and objects) of the generated long sequence")
     ap.add_argument("--write", metavar="MD")
     args = ap.parse_args()
     if not acc.DATA.exists():
@@ -108,11 +155,17 @@ def main() -> None:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        for name in names:
-            seqs, out = acc.sequences(name), tmp / name / "results"
-            for d in seqs:
-                track_sequence(d, out / f"{d.name}.txt", force=True)
-            bench = CONVENTION[name]
+        for name in names + [LONG]:
+            if name == LONG:
+                seqs = [long_sequence(tmp / "long" / "long", args.long_frames)]
+                out = tmp / "long" / "results"
+                out.mkdir()
+                (seqs[0] / "results.txt").rename(out / "long.txt")
+            else:
+                seqs, out = acc.sequences(name), tmp / name / "results"
+                for d in seqs:
+                    track_sequence(d, out / f"{d.name}.txt", force=True)
+            bench = CONVENTION.get(name, "MOT15")
             files = [(d.name, d / "gt" / "gt.txt", out / f"{d.name}.txt", d / "seqinfo.ini")
                      for d in seqs]
             runs = {"vistrack": lambda: evaluate_files(files, benchmark=bench)}
@@ -120,19 +173,23 @@ def main() -> None:
                 dataset = trackeval_layout(seqs, out, tmp / name / "trackeval")
                 runs["TrackEval"] = lambda: run_trackeval(te, dataset, bench)
             times, res = interleaved(runs, args.repeats)
+            peaks = {k: traced_peak(f) for k, f in runs.items()}
             ours = res["vistrack"]
             gt_boxes = sum(c.gt_dets for k, c in ours.items() if k != "COMBINED")
-            t_ours, t_ref = times["vistrack"], times.get("TrackEval")
             if te is not None:
                 check_equal(ours, res["TrackEval"], name)
-            rows.append((name, len(seqs), gt_boxes, t_ours, t_ref))
-            print(f"{name}: vistrack {t_ours:.3f} s, TrackEval "
-                  f"{'-' if t_ref is None else f'{t_ref:.3f} s'}", file=sys.stderr)
+            rows.append((name, len(seqs), gt_boxes, times, peaks))
+            print(f"{name}: " + ", ".join(f"{k} {v:.3f} s, {peaks[k]:.0f} MB"
+                                          for k, v in times.items()), file=sys.stderr)
     table = ["| set | sequences | ground-truth boxes scored | vistrack s | TrackEval s | "
-             "TrackEval, times vistrack's |", "|---|---:|---:|---:|---:|---:|"]
-    for name, n, boxes, a, b in rows:
+             "TrackEval, times vistrack's | vistrack MB | TrackEval MB |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for name, n, boxes, t, mb in rows:
+        a, b = t["vistrack"], t.get("TrackEval")
         table.append(f"| {name} | {n} | {boxes:,} | {a:.2f} | "
-                     + ("- | - |" if b is None else f"{b:.2f} | {b / a:.1f} |"))
+                     + ("- | - |" if b is None else f"{b:.2f} | {b / a:.1f} |")
+                     + f" {mb['vistrack']:.0f} | "
+                     + ("- |" if b is None else f"{mb['TrackEval']:.0f} |"))
     cmd = "python bench/bench_eval.py" + (f" --repeats {args.repeats}" if args.repeats != 3
                                           else "")
     section = "\n".join([
@@ -141,10 +198,13 @@ def main() -> None:
         f"Measured with `{cmd}` (Python {platform.python_version()}, numpy {np.__version__}, "
         f"{platform.machine()}, one core, {time.strftime('%Y-%m-%d')}): every sequence of the "
         "set scored in one call, its files read, CLEAR MOT, identity and HOTA per sequence and "
-        "COMBINED; vistrack's own tracks of the set (its defaults, online); medians of "
+        "COMBINED; vistrack's own tracks of the set (its defaults, online), and a generated "
+        "long sequence with many identities (3,000 frames of 40 objects, 3,000 objects, "
+        "12,000 predicted identities; see the script); medians of "
         f"{args.repeats} rounds, each scorer in turn, after an untimed run of each. HOTA, "
         "MOTA and IDF1 equal TrackEval's to 1e-9 on every sequence (checked before the times "
-        "are reported).",
+        "are reported). MB: the peak of memory each scorer allocates, in a run of its own "
+        "under tracemalloc (numpy's arrays included).",
         "",
         *table,
         ""])

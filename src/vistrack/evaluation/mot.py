@@ -754,36 +754,50 @@ def _identity(seq: _Sequence, out: MOTCounts) -> None:
 
 
 def _hota(seq: _Sequence, out: MOTCounts) -> None:
+    # the alignment of every pair of identities that ever overlap, kept for those pairs only
+    # (a long sequence may hold thousands of each, which never meet): each frame's overlapping
+    # pairs, their share of the frame's similarity, summed per pair in the order of the frames
     n_g, n_p = seq.n_gt_ids, seq.n_pred_ids
-    pot = np.zeros((n_g, n_p))
-    g_count, p_count = np.zeros((n_g, 1)), np.zeros((1, n_p))
+    g_count, p_count = np.zeros(n_g), np.zeros(n_p)
+    keys, shares, cells = [], [], []
     for g, p, sim in zip(seq.gt_ids, seq.pred_ids, seq.sim):
         denom = sim.sum(0)[None, :] + sim.sum(1)[:, None] - sim
-        s = np.zeros_like(sim)
+        share = np.zeros_like(sim)
         ok = denom > _EPS
-        s[ok] = sim[ok] / denom[ok]
-        pot[g[:, None], p[None, :]] += s
+        share[ok] = sim[ok] / denom[ok]
+        r, c = np.nonzero(sim > 0)
+        keys.append(g[r] * n_p + p[c])
+        shares.append(share[r, c])
+        cells.append((r, c))
         g_count[g] += 1
-        p_count[0, p] += 1
-    with np.errstate(invalid="ignore", divide="ignore"):
-        align = pot / (g_count + p_count - pot)
+        p_count[p] += 1
+    key = np.concatenate(keys) if keys else np.zeros(0, np.int64)
+    pairs, pair_of = np.unique(key, return_inverse=True)
+    pot = np.bincount(pair_of, weights=np.concatenate(shares) if shares else None,
+                      minlength=len(pairs))
+    gp, pp = g_count[pairs // max(n_p, 1)], p_count[pairs % max(n_p, 1)]
+    align = pot / (gp + pp - pot)
     # each frame's one-to-one matching once; what each alpha keeps of it, for all alphas at
     # once from the matched pairs and their similarities
     mg, mp, ms = [], [], []
     n_gt = n_pred = 0
-    for g, p, sim in zip(seq.gt_ids, seq.pred_ids, seq.sim):
+    o = 0
+    for g, p, sim, (r, c) in zip(seq.gt_ids, seq.pred_ids, seq.sim, cells):
         n_gt += len(g)
         n_pred += len(p)
+        score = np.zeros_like(sim)
+        score[r, c] = align[pair_of[o:o + len(r)]] * sim[r, c]
+        o += len(r)
         if len(g) and len(p):
-            r, c = linear_sum_assignment(-(align[g[:, None], p[None, :]] * sim))
-            mg.append(g[r])
-            mp.append(p[c])
-            ms.append(sim[r, c])
+            rr, cc = linear_sum_assignment(-score)
+            mg.append(g[rr])
+            mp.append(p[cc])
+            ms.append(sim[rr, cc])
     s = np.concatenate(ms) if ms else np.zeros(0)
     # the pairs ever matched, and each match's pair
     pair = np.concatenate(mg) * n_p + np.concatenate(mp) if ms else np.zeros(0, np.int64)
     u, inv = np.unique(pair, return_inverse=True)
-    gc, pc = g_count[u // max(n_p, 1), 0], p_count[0, u % max(n_p, 1)]
+    gc, pc = g_count[u // max(n_p, 1)], p_count[u % max(n_p, 1)]
     A = len(ALPHAS)
     tp, loc = np.zeros(A), np.zeros(A)
     ass_a, ass_re, ass_pr = np.zeros(A), np.zeros(A), np.zeros(A)
