@@ -302,11 +302,9 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Se
     if bench != "MOT15":
         keep_gt &= gt.classes == 1
     distractor = np.isin(gt.classes, distractors)
-    iou = _iou if not ((np.abs(gt.boxes) > _BIG).any() or (np.abs(pred.boxes) > _BIG).any()) \
-        else box_iou_xywh
     gt_ids, pred_ids, sims = [], [], []
     for g0, g1, p0, p1 in zip(gs[0].tolist(), gs[1].tolist(), ps[0].tolist(), ps[1].tolist()):
-        sim = iou(gt.boxes[g0:g1], pred.boxes[p0:p1])
+        sim = box_iou_xywh(gt.boxes[g0:g1], pred.boxes[p0:p1])
         keep_p = np.ones(p1 - p0, bool)
         if bench != "MOT15" and g1 > g0 and p1 > p0:
             score = np.where(sim < 0.5 - _EPS, 0.0, sim)
@@ -778,37 +776,37 @@ def _hota(seq: _Sequence, out: MOTCounts) -> None:
     gp, pp = g_count[pairs // max(n_p, 1)], p_count[pairs % max(n_p, 1)]
     align = pot / (gp + pp - pot)
     # each frame's one-to-one matching once; what each alpha keeps of it, for all alphas at
-    # once from the matched pairs and their similarities
-    mg, mp, ms = [], [], []
+    # once: each match's similarity and its pair among the overlapping ones (-1 for a match
+    # without overlap, which no alpha keeps)
+    matched, ms = [], []
     n_gt = n_pred = 0
     o = 0
     for g, p, sim, (r, c) in zip(seq.gt_ids, seq.pred_ids, seq.sim, cells):
         n_gt += len(g)
         n_pred += len(p)
-        score = np.zeros_like(sim)
-        score[r, c] = align[pair_of[o:o + len(r)]] * sim[r, c]
-        o += len(r)
         if len(g) and len(p):
+            here = pair_of[o:o + len(r)]
+            score = np.zeros_like(sim)
+            score[r, c] = align[here] * sim[r, c]
+            pair_at = np.full(sim.shape, -1)
+            pair_at[r, c] = here
             rr, cc = linear_sum_assignment(-score)
-            mg.append(g[rr])
-            mp.append(p[cc])
+            matched.append(pair_at[rr, cc])
             ms.append(sim[rr, cc])
+        o += len(r)
     s = np.concatenate(ms) if ms else np.zeros(0)
-    # the pairs ever matched, and each match's pair
-    pair = np.concatenate(mg) * n_p + np.concatenate(mp) if ms else np.zeros(0, np.int64)
-    u, inv = np.unique(pair, return_inverse=True)
-    gc, pc = g_count[u // max(n_p, 1)], p_count[u % max(n_p, 1)]
+    pair = np.concatenate(matched) if matched else np.zeros(0, np.int64)
     A = len(ALPHAS)
     tp, loc = np.zeros(A), np.zeros(A)
     ass_a, ass_re, ass_pr = np.zeros(A), np.zeros(A), np.zeros(A)
     for a, alpha in enumerate(ALPHAS):
         ok = s >= alpha - _EPS
         tp[a], loc[a] = ok.sum(), s[ok].sum()
-        m = np.bincount(inv[ok], minlength=len(u)).astype(np.float64)  # matches per pair
+        m = np.bincount(pair[ok], minlength=len(pairs)).astype(np.float64)  # per pair
         k = max(1.0, tp[a])
-        ass_a[a] = np.sum(m * m / np.maximum(1, gc + pc - m)) / k
-        ass_re[a] = np.sum(m * m / np.maximum(1, gc)) / k
-        ass_pr[a] = np.sum(m * m / np.maximum(1, pc)) / k
+        ass_a[a] = np.sum(m * m / np.maximum(1, gp + pp - m)) / k
+        ass_re[a] = np.sum(m * m / np.maximum(1, gp)) / k
+        ass_pr[a] = np.sum(m * m / np.maximum(1, pp)) / k
     fn, fp = n_gt - tp, n_pred - tp
     out.HOTA_TP, out.HOTA_FN, out.HOTA_FP = tp, fn, fp
     out.AssA_alpha, out.AssRe_alpha, out.AssPr_alpha = ass_a, ass_re, ass_pr
