@@ -175,9 +175,29 @@ def test_a_video_given_to_out_says_which_option_goes_with_videos(tmp_path):
     r = cli("track", VIDEO, "--out", tmp_path / "results.txt")
     assert r.returncode == 2 and r.stdout == ""
     assert r.stderr == (f"vistrack track: error: --out is for a MOTChallenge sequence folder "
-                        f"(seqinfo.ini, det/det.txt), and {VIDEO} is a file: track a video "
-                        "with --out-dir OUT/\n")
+                        f"(seqinfo.ini, det/det.txt) or a detections file (.txt, .csv), and "
+                        f"{VIDEO} is neither: track a video with --out-dir OUT/\n")
     assert not (tmp_path / "results.txt").exists()
+
+
+def test_a_detections_file_alone_needs_its_frame_rate_once(tmp_path, capsys, bad_sequence):
+    """A detections file alone, or a sequence folder without seqinfo.ini: the frame rate is
+    asked for by name before the file is read (it is malformed), and the file is given
+    once."""
+    det = bad_sequence / "det" / "det.txt"
+    out = tmp_path / "results.txt"
+    assert main(["track", str(det), "--out", str(out)]) == 2
+    one_line(capsys, "track", f"{det} is a detections file alone: give its frame rate with "
+             "--fps")
+    assert main(["track", str(det), "--out", str(out), "--fps", "10", "--detections",
+                 str(det)]) == 2
+    one_line(capsys, "track", f"{det} is a detections file, and --detections gives another: "
+             "give one")
+    (bad_sequence / "seqinfo.ini").unlink()
+    assert main(["track", str(bad_sequence), "--out", str(out)]) == 2
+    one_line(capsys, "track", f"{bad_sequence / 'seqinfo.ini'} does not exist; pass the frame "
+             "rate (--fps) to track the detections without it")
+    assert not out.exists()
 
 
 # ------------------------------------------------------------------- numbers and names

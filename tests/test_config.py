@@ -3,7 +3,9 @@ and bad files and values named."""
 
 from __future__ import annotations
 
+import math
 import re
+import shutil
 import subprocess
 import sys
 from dataclasses import fields, replace
@@ -13,7 +15,7 @@ import pytest
 
 from vistrack.config import ConfigError, OfflineConfig, TrackConfig, config_toml, read_config
 from vistrack.data import demo_clip
-from vistrack.io import write_mot
+from vistrack.io import read_mot, write_mot
 from vistrack.models import BoxMotion
 from vistrack.pipeline import resolve_config, track_sequence
 
@@ -138,6 +140,43 @@ def test_print_config_read_back_gives_identical_tracks(seq, tmp_path, offline):
     assert r.returncode == 0, r.stderr
     a, b = (tmp_path / "a.txt").read_text(), (tmp_path / "b.txt").read_text()
     assert a == b and len(a.splitlines()) > 500
+
+
+@pytest.mark.parametrize("offline", [False, True])
+def test_a_detections_file_alone_tracks_as_its_sequence_would(seq, tmp_path, offline):
+    """A detections file alone, at `--fps`, is tracked as a sequence folder whose
+    seqinfo.ini gives that frame rate, the file's last frame and an image as large as its
+    boxes reach; a folder without seqinfo.ini, at `--fps`, the same; and `--fps` is put over
+    a seqinfo.ini's frameRate."""
+    det = read_mot(seq / "det" / "det.txt")
+    far = det.boxes[:, :2] + det.boxes[:, 2:]
+
+    def folder(name, rate, info=True):
+        d = tmp_path / name
+        (d / "det").mkdir(parents=True)
+        shutil.copy(seq / "det" / "det.txt", d / "det" / "det.txt")
+        if info:
+            (d / "seqinfo.ini").write_text(
+                f"[Sequence]\nname={name}\nframeRate={rate}\nseqLength={det.frames.max()}\n"
+                f"imWidth={math.ceil(far[:, 0].max())}\nimHeight={math.ceil(far[:, 1].max())}\n")
+        return d
+
+    flags = ["--offline"] if offline else []
+    runs = {"given": [folder("GIVEN", 12.5)],
+            "alone": [seq / "det" / "det.txt", "--fps", "12.5"],
+            "no seqinfo": [folder("BARE", 25, info=False), "--fps", "12.5"],
+            "put over": [folder("OVER", 25), "--fps", "12.5"],
+            "25 frames/s": [folder("AT25", 25)]}
+    text = {}
+    for key, args in runs.items():
+        r = cli(*args, "--out", tmp_path / f"{key}.txt", *flags)
+        assert r.returncode == 0, (key, r.stderr)
+        assert f"over {det.frames.max()} frames from {len(det)} detections" in r.stdout
+        text[key] = (tmp_path / f"{key}.txt").read_text()
+    assert len(text["given"].splitlines()) > 500
+    assert text["alone"] == text["given"] == text["no seqinfo"] == text["put over"]
+    # the frame rate is the one given: at 25 frames/s the same file tracks otherwise
+    assert text["25 frames/s"] != text["given"]
 
 
 # every option: its value in the configuration used, and the same tracks as the API's

@@ -241,7 +241,14 @@ def _track(args: argparse.Namespace) -> int:
 
     from .config import config_toml
     from .io.atomic import check_output
-    from .pipeline import TrackRun, VideoRun, track_sequence, track_video, video_outputs
+    from .pipeline import (
+        DETECTION_SUFFIXES,
+        TrackRun,
+        VideoRun,
+        track_sequence,
+        track_video,
+        video_outputs,
+    )
     from .tracking.box import TRACKERS as BOX_PRESETS
 
     def fail(text: str) -> int:
@@ -269,16 +276,23 @@ def _track(args: argparse.Namespace) -> int:
                         f"({', '.join(sorted(BOX_PRESETS))}); --tracker {name} goes with "
                         "--out-dir")
     if args.out is not None:
-        for flag in ("gt", "fps") + _FRONTEND_OPTIONS:
+        for flag in ("gt",) + _FRONTEND_OPTIONS:
             if getattr(args, flag) is not None:
                 return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
         for flag in ("skip_bad_frames", "report"):
             if getattr(args, flag):
                 return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
         if Path(args.input).is_file():
-            return fail(f"--out is for a MOTChallenge sequence folder (seqinfo.ini, "
-                        f"det/det.txt), and {args.input} is a file: track a video with "
-                        "--out-dir OUT/")
+            if Path(args.input).suffix.lower() not in DETECTION_SUFFIXES:
+                return fail(f"--out is for a MOTChallenge sequence folder (seqinfo.ini, "
+                            f"det/det.txt) or a detections file (.txt, .csv), and "
+                            f"{args.input} is neither: track a video with --out-dir OUT/")
+            if args.detections is not None:
+                return fail(f"{args.input} is a detections file, and --detections gives "
+                            "another: give one")
+            if args.fps is None:
+                return fail(f"{args.input} is a detections file alone: give its frame rate "
+                            "with --fps")
         # before anything is read or computed: a run that cannot write fails now
         check_output(args.out, force=args.force, name="--out")
         if str(args.out).lower().endswith(".parquet"):
@@ -313,7 +327,7 @@ def _track(args: argparse.Namespace) -> int:
                             f"{bad[0]!r}")
             columns = {a.strip(): b.strip() for a, b in pairs}
         run = track_sequence(args.input, args.out, detections=args.detections, columns=columns,
-                             config=cfg, force=args.force, progress=progress)
+                             config=cfg, fps=args.fps, force=args.force, progress=progress)
         print(f"wrote {run.out}: {run.rows} boxes of {run.tracks} tracks over {run.frames} "
               f"frames from {run.detections} detections; tracker {run.fps:.0f} frames/s",
               file=report)
@@ -673,11 +687,13 @@ def build_parser() -> argparse.ArgumentParser:
     track = sub.add_parser(
         "track", help="track a MOTChallenge sequence's detections, or a video from pixels",
         description="With --out: track a MOTChallenge sequence folder's detections "
-        "(seqinfo.ini, det/det.txt) and write a results file. With --out-dir: track a video "
+        "(seqinfo.ini, det/det.txt), or a detections file alone (.txt or .csv, with --fps), "
+        "and write a results file. With --out-dir: track a video "
         "file, image folder or sequence folder from pixels and write tracks.txt, tracks.csv, "
         "annotated.mp4 and trajectories.png (and scores, given --gt).")
     track.add_argument("input", metavar="INPUT", nargs="+",
-                       help="MOTChallenge sequence folder (--out), or video (--out-dir); "
+                       help="MOTChallenge sequence folder or detections file (--out), or "
+                       "video (--out-dir); "
                        "several, or a folder of sequences, are tracked in parallel")
     track.add_argument("--out", help="results file to write (detections mode); with several "
                        "inputs, the folder of their results, NAME.txt each")
@@ -744,8 +760,9 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--onnx-layout", choices=("auto", "yolov8", "yolov5", "ssd"),
                        help="video mode, onnx: the model's output layout (default: auto, told "
                        "from the outputs' shapes)")
-    track.add_argument("--fps", type=float, help="video mode: the true frame rate, when the "
-                       "file's header is wrong")
+    track.add_argument("--fps", type=float, help="the true frame rate: video mode, when the "
+                       "file's header is wrong; --out, for a detections file alone or a "
+                       "sequence without seqinfo.ini (put over its frameRate where it has one)")
     track.add_argument("--gt", help="video mode: MOTChallenge ground truth to score against")
     track.add_argument("--stop", type=int, help="video mode: the last frame to track")
     track.add_argument("--skip-bad-frames", action="store_true",

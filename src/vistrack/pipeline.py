@@ -31,7 +31,7 @@ from ._memory import PeriodicRelease
 from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, evaluate_mot
 from .io.atomic import check_output, made_folder
-from .io.motchallenge import MOTTable, need_parquet, read_mot, read_seqinfo, write_mot
+from .io.motchallenge import MOTTable, SeqInfo, need_parquet, read_mot, read_seqinfo, write_mot
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
 from .models.box import BoxMotion
 from .tracking.base import Tracker
@@ -789,14 +789,17 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None) -> 
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,
                    columns: dict[str, str] | None = None,
                    config: TrackConfig | str | None = None, tracker: str | None = None,
-                   offline: bool | None = None, force: bool = False,
+                   offline: bool | None = None, fps: float | None = None, force: bool = False,
                    progress: TextIO | None = None, **overrides: object) -> TrackRun:
-    """Track a MOTChallenge sequence folder and write a results file.
+    """Track a MOTChallenge sequence folder, or a detections file alone, and write a results
+    file.
 
     Parameters
     ----------
     seq_dir : str or Path
-        A folder with ``seqinfo.ini`` and ``det/det.txt``.
+        A folder with ``seqinfo.ini`` and ``det/det.txt``; or a detections file (``.txt``,
+        MOTChallenge's format, or ``.csv``) with no sequence folder, tracked at ``fps`` over
+        its frames up to the last one it has, in an image as large as its boxes reach.
     out : str or Path
         The results file to write (not overwritten unless ``force``): MOTChallenge's text,
         or Parquet if its name ends in ``.parquet`` (the same rows, with the columns of
@@ -807,6 +810,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         :meth:`~vistrack.io.MOTTable.from_pandas` takes them).
     columns : dict, optional
         A CSV file's column names, ``{ours: theirs}`` (:meth:`~vistrack.io.MOTTable.from_pandas`).
+    fps : float, optional
+        The frame rate (frames a second): needed where there is no ``seqinfo.ini``, and put
+        over its ``frameRate`` where there is.
     config, tracker, offline, overrides
         The configuration (:func:`resolve_config`): a
         :class:`~vistrack.config.TrackConfig` or a preset's name in
@@ -831,15 +837,17 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     Raises
     ------
     FileNotFoundError
-        If ``seqinfo.ini`` or the detections file does not exist.
+        If the detections file does not exist, or ``seqinfo.ini`` does not and ``fps`` is
+        not given.
     FileExistsError
         If ``out`` exists and ``force`` is False.
     IsADirectoryError, NotADirectoryError, PermissionError
         If ``out`` cannot be written (:func:`vistrack.io.atomic.check_output`); checked
         first, before anything is read.
     ValueError
-        If ``seq_dir`` is a file, the detections run past the sequence's last frame, or the
-        configuration is invalid.
+        If ``seq_dir`` is a file other than a detections file (a video: :func:`track_video`)
+        or is one and ``detections`` is given too, ``fps`` is not a number > 0, the
+        detections run past the sequence's last frame, or the configuration is invalid.
     MOTFormatError
         If a file is malformed.
     ImportError
@@ -861,6 +869,11 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     (5, 5, 1, 'bytetrack')
     >>> (seq / "tracks.txt").read_text().splitlines()[0]
     '1,1,15.00,20.00,30.00,60.00,0.9,-1,-1,-1'
+
+    The same detections file alone, at 10 frames a second:
+
+    >>> track_sequence(seq / "det" / "det.txt", seq / "alone.txt", fps=10).rows
+    5
     """
     out = Path(out)
     check_output(out, force=force)
@@ -869,17 +882,46 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         need_parquet()
     cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
     seq_dir = Path(seq_dir)
-    if seq_dir.is_file():
-        raise ValueError(f"seq_dir {seq_dir} is a file; a MOTChallenge sequence is a folder "
-                         "(seqinfo.ini, det/det.txt), and a video is tracked by track_video")
-    info = read_seqinfo(seq_dir)
-    det_path = Path(detections) if detections is not None else seq_dir / "det" / "det.txt"
+    if fps is not None:
+        try:
+            ok = not isinstance(fps, bool) and 0 < float(fps) < np.inf
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ValueError(f"fps must be a number > 0; got {fps!r}")
+    alone = seq_dir.is_file()
+    if alone:
+        if seq_dir.suffix.lower() not in DETECTION_SUFFIXES:
+            raise ValueError(f"seq_dir {seq_dir} is a file but not a detections file "
+                             f"({', '.join(DETECTION_SUFFIXES)}); a MOTChallenge sequence is "
+                             "a folder (seqinfo.ini, det/det.txt), and a video is tracked by "
+                             "track_video")
+        if detections is not None:
+            raise ValueError(f"seq_dir {seq_dir} is a detections file and detections is "
+                             f"{detections}: give one")
+        det_path = seq_dir
+    else:
+        det_path = Path(detections) if detections is not None else seq_dir / "det" / "det.txt"
+    ini = None if alone else seq_dir / "seqinfo.ini"
+    has_info = ini is not None and ini.exists()
+    if not has_info and fps is None:
+        raise FileNotFoundError(
+            f"{seq_dir}: no seqinfo.ini to give the frame rate; pass it (--fps)" if alone
+            else f"{ini} does not exist; pass the frame rate (--fps) to track the detections "
+            "without it")
+    info = read_seqinfo(seq_dir) if has_info else None
     if not det_path.exists():
         raise FileNotFoundError(f"{det_path} does not exist (pass --detections FILE)")
     dets = read_detections(det_path, columns)
-    if len(dets) and dets.frames.max() > info.seq_length:
-        raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
-                         f"sequence's {info.seq_length} frames ({seq_dir / 'seqinfo.ini'})")
+    if info is None:
+        assert fps is not None  # refused above without seqinfo.ini
+        info = _info_from_detections(det_path if alone else seq_dir, dets, float(fps))
+    else:
+        if fps is not None:
+            info = replace(info, frame_rate=float(fps))
+        if len(dets) and dets.frames.max() > info.seq_length:
+            raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
+                             f"sequence's {info.seq_length} frames ({ini})")
     slices = dets.frame_slices(info.seq_length)
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
     per_frame = [Detections(boxes=xyxy[s], scores=dets.conf[s]) for s in slices]
@@ -895,7 +937,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     if oc.enabled and oc.start_score > tc.new_track:
         tc = replace(tc, new_track=oc.start_score)
     trk = BoxTracker(tc, motion=cfg.motion, frame_rate=info.frame_rate, record=oc.enabled,
-                     image_size=(info.im_width, info.im_height), calibration=calibration)
+                     image_size=(info.im_width, info.im_height) if info.im_width > 0 else None,
+                     calibration=calibration)
     frames = (Frame(f, (f - 1) / info.frame_rate) for f in range(1, info.seq_length + 1))
     # online, the rows go to the file as they come; offline, the tracker records its tracks,
     # which are smoothed at the end and written then. Parquet: the same rows, written as
@@ -925,6 +968,26 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     used = cfg if cfg.motion is not None else replace(cfg, motion=BoxMotion())
     return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds, used,
                     derived_values(trk))
+
+
+DETECTION_SUFFIXES = (".txt", ".csv")
+"""The suffixes of a detections file that :func:`track_sequence` takes without a sequence
+folder: MOTChallenge's text, or CSV with a header."""
+
+
+def _info_from_detections(path: Path, dets: MOTTable, fps: float) -> SeqInfo:
+    """The sequence a detections file describes, where no ``seqinfo.ini`` does: named after
+    ``path`` (the file's stem, or the folder's name), at ``fps``, up to its last frame, in an
+    image as large as its boxes reach (the image the coasting tracks must stay inside)."""
+    # a sequence folder's det/det.txt is named after the folder
+    name = path.name if path.is_dir() else (
+        path.parents[1].name if path.name == "det.txt" and path.parent.name == "det"
+        and path.parents[1].name else path.stem)
+    if not len(dets):
+        return SeqInfo(name, fps, 0, 0, 0)
+    far = dets.boxes[:, :2] + dets.boxes[:, 2:]
+    return SeqInfo(name, fps, int(dets.frames.max()), int(np.ceil(max(far[:, 0].max(), 1))),
+                   int(np.ceil(max(far[:, 1].max(), 1))))
 
 
 @contextmanager
