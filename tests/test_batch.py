@@ -269,6 +269,31 @@ def test_vistrack_track_with_several_inputs(bench, tmp_path, capsys):
     assert "--gt goes with one input" in capsys.readouterr().err
 
 
+def test_detections_files_alone_at_the_frame_rate_given(bench, tmp_path, capsys):
+    """Several detections files alone (and a folder without seqinfo.ini) at `--fps`: each
+    result is what tracking that file alone gives, named after its sequence; without the
+    frame rate they are refused before anything runs."""
+    bare = tmp_path / "BARE"
+    (bare / "det").mkdir(parents=True)
+    (bare / "det" / "det.txt").write_bytes((bench / "SIM-1" / "det" / "det.txt").read_bytes())
+    (tmp_path / "cam.txt").write_bytes((bench / "SIM-2" / "det" / "det.txt").read_bytes())
+    inputs = [bench / "SIM-0" / "det" / "det.txt", bare, tmp_path / "cam.txt"]
+    out = tmp_path / "results"
+    assert main(["track", *map(str, inputs), "--out", str(out), "--fps", "12", "--jobs",
+                 "2", "--quiet"]) == 0
+    assert "3 of 3 inputs tracked" in capsys.readouterr().out
+    assert sorted(p.name for p in out.iterdir()) == ["BARE.txt", "SIM-0.txt", "cam.txt"]
+    for name, path in zip(("SIM-0", "BARE", "cam"), inputs):
+        track_sequence(path, tmp_path / "alone.txt", fps=12, force=True)
+        assert (out / f"{name}.txt").read_bytes() == (tmp_path / "alone.txt").read_bytes()
+    assert main(["track", *map(str, inputs), "--out", str(tmp_path / "r2")]) == 2
+    assert (f"{inputs[0]} is a detections file alone: give its frame rate (fps, --fps)"
+            in capsys.readouterr().err)
+    assert not (tmp_path / "r2").exists()
+    with pytest.raises(ValueError, match="is not a MOTChallenge sequence folder"):
+        plan([bare], tmp_path / "r3")
+
+
 def test_scoring_many_pairs_at_once_gives_the_same_scores(bench, tmp_path, capsys):
     from vistrack.evaluation import evaluate_files
 
@@ -364,7 +389,7 @@ def test_several_videos_from_pixels(tmp_path, capsys):
         assert (out / name / "annotated.mp4").stat().st_size > 0
     # a sequence's own options belong to one input
     assert main(["track", str(a), str(b), "--out-dir", str(out), "--fps", "7"]) == 2
-    assert "--fps goes with one input" in capsys.readouterr().err
+    assert "--fps goes with one video, or with --out" in capsys.readouterr().err
 
 
 def test_a_job_that_cannot_be_sent_to_a_worker_is_reported(bench, tmp_path):

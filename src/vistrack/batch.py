@@ -126,11 +126,18 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
     :func:`expand_inputs`) to ``out/NAME.txt`` (``"detections"``) or ``out/NAME/``
     (``"pixels"``; a video's name without its suffix).
 
+    With ``"detections"``, an input may also be a detections file alone (``.txt``, ``.csv``),
+    or a folder with ``det/det.txt`` and no ``seqinfo.ini``, given the frame rate ``fps``
+    (:func:`~vistrack.pipeline.track_sequence`); its results are named as
+    :func:`~vistrack.io.motchallenge.sequence_name` names it (``SEQ.txt`` for
+    ``SEQ/det/det.txt``).
+
     Raises
     ------
     ValueError
-        If ``kind`` is unknown, with ``"detections"`` an input is not a sequence folder, or
-        two inputs would write to the same place.
+        If ``kind`` is unknown, with ``"detections"`` an input is not a sequence folder (or,
+        given ``fps``, a detections file or a folder with ``det/det.txt``), or two inputs
+        would write to the same place.
     """
     if kind not in ("detections", "pixels"):
         raise ValueError(f"kind must be 'detections' or 'pixels'; got {kind!r}")
@@ -138,10 +145,18 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
     jobs = []
     for path in expand_inputs(inputs):
         if kind == "detections":
-            if not _is_sequence(path):
+            from .io.motchallenge import DETECTION_SUFFIXES, sequence_name
+
+            alone = path.is_file() and path.suffix.lower() in DETECTION_SUFFIXES
+            if alone and options.get("fps") is None:
+                raise ValueError(f"{path} is a detections file alone: give its frame rate "
+                                 "(fps, --fps)")
+            if not (alone or _is_sequence(path) or (options.get("fps") is not None and (
+                    path / "det" / "det.txt").is_file())):
                 raise ValueError(f"{path} is not a MOTChallenge sequence folder (seqinfo.ini, "
-                                 "det/det.txt) nor a folder of them")
-            target = out / f"{path.name}.txt"
+                                 "det/det.txt), a detections file (.txt, .csv) nor a folder of "
+                                 "sequences")
+            target = out / f"{sequence_name(path)}.txt"
         else:
             target = out / (path.stem if path.is_file() else path.name)
         jobs.append(Job(path, target, kind, dict(options)))
@@ -284,7 +299,7 @@ def _size(job: Job) -> int:
     or the images of its folder (``img1/`` of a MOTChallenge sequence); 0 if unreadable."""
     path = job.input
     try:
-        if job.kind == "detections":
+        if job.kind == "detections" and not path.is_file():
             return Path(job.options.get("detections") or path / "det" / "det.txt").stat().st_size
         if path.is_file():
             return path.stat().st_size

@@ -241,8 +241,8 @@ def _track(args: argparse.Namespace) -> int:
 
     from .config import config_toml
     from .io.atomic import check_output
+    from .io.motchallenge import DETECTION_SUFFIXES
     from .pipeline import (
-        DETECTION_SUFFIXES,
         TrackRun,
         VideoRun,
         track_sequence,
@@ -400,9 +400,11 @@ def _track_many(args: argparse.Namespace) -> int:
                     "--out-dir OUT/ (from pixels, NAME/ each)")
     if args.jobs is not None and args.jobs < 1:
         return fail(f"--jobs must be 1 or more; got {args.jobs}")
-    for flag in ("print_config", "gt", "fps", "detections", "columns"):
+    for flag in ("print_config", "gt", "detections", "columns"):
         if getattr(args, flag):
             return fail(f"--{flag.replace('_', '-')} goes with one input")
+    if args.fps is not None and args.out is None:
+        return fail("--fps goes with one video, or with --out (every input's frame rate)")
     if args.report:
         return fail("--report goes with one input (vistrack report NAME/ makes an input's "
                     "page afterwards)")
@@ -423,6 +425,8 @@ def _track_many(args: argparse.Namespace) -> int:
             if getattr(args, flag) is not None:
                 return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
         kind, out, options["config"] = "detections", args.out, cfg
+        if args.fps is not None:
+            options["fps"] = args.fps
     else:
         if cfg is not None and cfg.offline.enabled:
             return fail("--offline goes with --out")
@@ -762,7 +766,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "from the outputs' shapes)")
     track.add_argument("--fps", type=float, help="the true frame rate: video mode, when the "
                        "file's header is wrong; --out, for a detections file alone or a "
-                       "sequence without seqinfo.ini (put over its frameRate where it has one)")
+                       "sequence without seqinfo.ini (put over its frameRate where it has one; "
+                       "with several inputs, every input's)")
     track.add_argument("--gt", help="video mode: MOTChallenge ground truth to score against")
     track.add_argument("--stop", type=int, help="video mode: the last frame to track")
     track.add_argument("--skip-bad-frames", action="store_true",

@@ -31,7 +31,15 @@ from ._memory import PeriodicRelease
 from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, evaluate_mot
 from .io.atomic import check_output, made_folder
-from .io.motchallenge import MOTTable, SeqInfo, need_parquet, read_mot, read_seqinfo, write_mot
+from .io.motchallenge import (
+    DETECTION_SUFFIXES,
+    MOTTable,
+    SeqInfo,
+    need_parquet,
+    read_mot,
+    read_seqinfo,
+    write_mot,
+)
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
 from .models.box import BoxMotion
 from .tracking.base import Tracker
@@ -915,7 +923,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     dets = read_detections(det_path, columns)
     if info is None:
         assert fps is not None  # refused above without seqinfo.ini
-        info = _info_from_detections(det_path if alone else seq_dir, dets, float(fps))
+        info = SeqInfo.from_detections(det_path if alone else seq_dir, dets, float(fps))
     else:
         if fps is not None:
             info = replace(info, frame_rate=float(fps))
@@ -968,26 +976,6 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     used = cfg if cfg.motion is not None else replace(cfg, motion=BoxMotion())
     return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds, used,
                     derived_values(trk))
-
-
-DETECTION_SUFFIXES = (".txt", ".csv")
-"""The suffixes of a detections file that :func:`track_sequence` takes without a sequence
-folder: MOTChallenge's text, or CSV with a header."""
-
-
-def _info_from_detections(path: Path, dets: MOTTable, fps: float) -> SeqInfo:
-    """The sequence a detections file describes, where no ``seqinfo.ini`` does: named after
-    ``path`` (the file's stem, or the folder's name), at ``fps``, up to its last frame, in an
-    image as large as its boxes reach (the image the coasting tracks must stay inside)."""
-    # a sequence folder's det/det.txt is named after the folder
-    name = path.name if path.is_dir() else (
-        path.parents[1].name if path.name == "det.txt" and path.parent.name == "det"
-        and path.parents[1].name else path.stem)
-    if not len(dets):
-        return SeqInfo(name, fps, 0, 0, 0)
-    far = dets.boxes[:, :2] + dets.boxes[:, 2:]
-    return SeqInfo(name, fps, int(dets.frames.max()), int(np.ceil(max(far[:, 0].max(), 1))),
-                   int(np.ceil(max(far[:, 1].max(), 1))))
 
 
 @contextmanager

@@ -10,12 +10,13 @@ from .motchallenge import (
     SeqInfo,
     read_mot,
     read_seqinfo,
+    sequence_name,
     write_mot,
 )
 from .tracks import BoxesWriter, CSVWriter, MOTWriter, Sink, TrackRows, write_boxes
 from .video import Frame, VideoError, VideoReader, VideoWriter
 
 __all__ = ["MOT_CLASSES", "MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "read_seqinfo",
-           "write_mot", "Frame", "VideoError", "VideoReader", "VideoWriter", "Sink",
-           "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes",
+           "sequence_name", "write_mot", "Frame", "VideoError", "VideoReader", "VideoWriter",
+           "Sink", "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes",
            "partial_path", "replacing", "open_replacing", "PartialFile"]

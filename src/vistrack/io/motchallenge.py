@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from ..types import _Index
 
 __all__ = ["MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "write_mot", "read_seqinfo",
-           "MOT_CLASSES"]
+           "MOT_CLASSES", "sequence_name"]
 
 MOT_CLASSES = {
     1: "pedestrian", 2: "person_on_vehicle", 3: "car", 4: "bicycle", 5: "motorbike",
@@ -925,6 +925,46 @@ class SeqInfo:
     im_height: int
     im_dir: str = "img1"
     im_ext: str = ".jpg"
+
+    @classmethod
+    def from_detections(cls, path: str | os.PathLike, table: MOTTable,
+                        frame_rate: float) -> SeqInfo:
+        """The sequence a detections file describes where no ``seqinfo.ini`` does: named as
+        :func:`sequence_name` names ``path``, at ``frame_rate``, as long as its last frame,
+        its image as large as its boxes reach (0 x 0 if it has none).
+
+        Examples
+        --------
+        >>> t = MOTTable.from_rows([(2, -1, 10, 20, 30, 40), (5, -1, 600, 300, 40.5, 80)])
+        >>> SeqInfo.from_detections("cam3/det/det.txt", t, 25.0)
+        SeqInfo(name='cam3', frame_rate=25.0, seq_length=5, im_width=641, im_height=380, im_dir='img1', im_ext='.jpg')
+        """  # noqa: E501
+        name = sequence_name(path)
+        if not len(table):
+            return cls(name, float(frame_rate), 0, 0, 0)
+        far = table.boxes[:, :2] + table.boxes[:, 2:]
+        return cls(name, float(frame_rate), int(table.frames.max()),
+                   int(np.ceil(max(far[:, 0].max(), 1))), int(np.ceil(max(far[:, 1].max(), 1))))
+
+
+DETECTION_SUFFIXES = (".txt", ".csv")
+"""The suffixes of a detections file tracked without a sequence folder: MOTChallenge's text,
+or CSV with a header."""
+
+
+def sequence_name(path: str | os.PathLike) -> str:
+    """The name of the sequence a folder or a detections file holds: a folder's name, or a
+    file's without its suffix, except MOTChallenge's ``SEQ/det/det.txt``, named ``SEQ``.
+
+    Examples
+    --------
+    >>> sequence_name("MOT17-02/det/det.txt"), sequence_name("dets/cam3.csv")
+    ('MOT17-02', 'cam3')
+    """
+    p = Path(path)
+    if p.name == "det.txt" and p.parent.name == "det" and p.parent.parent.name:
+        return p.parent.parent.name
+    return p.name if p.is_dir() else p.stem
 
 
 def _ini_error(exc: configparser.Error) -> str:
