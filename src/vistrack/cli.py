@@ -242,13 +242,7 @@ def _track(args: argparse.Namespace) -> int:
     from .config import config_toml
     from .io.atomic import check_output
     from .io.motchallenge import DETECTION_SUFFIXES
-    from .pipeline import (
-        TrackRun,
-        VideoRun,
-        track_sequence,
-        track_video,
-        video_outputs,
-    )
+    from .pipeline import TrackRun, VideoRun, track_sequence, track_video, video_outputs
     from .tracking.box import TRACKERS as BOX_PRESETS
 
     def fail(text: str) -> int:

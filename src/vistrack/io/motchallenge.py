@@ -936,9 +936,10 @@ class SeqInfo:
         Examples
         --------
         >>> t = MOTTable.from_rows([(2, -1, 10, 20, 30, 40), (5, -1, 600, 300, 40.5, 80)])
-        >>> SeqInfo.from_detections("cam3/det/det.txt", t, 25.0)
-        SeqInfo(name='cam3', frame_rate=25.0, seq_length=5, im_width=641, im_height=380, im_dir='img1', im_ext='.jpg')
-        """  # noqa: E501
+        >>> info = SeqInfo.from_detections("cam3/det/det.txt", t, 25.0)
+        >>> info.name, info.frame_rate, info.seq_length, (info.im_width, info.im_height)
+        ('cam3', 25.0, 5, (641, 380))
+        """
         name = sequence_name(path)
         if not len(table):
             return cls(name, float(frame_rate), 0, 0, 0)
