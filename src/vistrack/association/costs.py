@@ -366,7 +366,8 @@ def _grid_pairs(a, b, min_iou):
                         cap *= 2
                         rows2, cols2, vals2 = np.empty(cap, np.int64), np.empty(cap, np.int64), \
                             np.empty(cap)
-                        rows2[:n], cols2[:n], vals2[:n] = rows[:n], cols[:n], vals[:n]
+                        for q2 in range(n):  # a loop: see filters._kernels.copy_vec
+                            rows2[q2], cols2[q2], vals2[q2] = rows[q2], cols[q2], vals[q2]
                         rows, cols, vals = rows2, cols2, vals2
                     rows[n], cols[n], vals[n] = i, j, v
                     n += 1

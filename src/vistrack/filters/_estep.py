@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from ._kernels import _FM, _LOG2PI, CH, back_solve, chol_factor, forward_solve
+from ._kernels import _FM, _LOG2PI, CH, back_solve, chol_factor, copy_mat, forward_solve
 
 __all__ = ["estep_shared", "NOT_POSITIVE"]
 
@@ -94,7 +94,7 @@ def _covariances(meas, F, Q, H, R, P0, Pp, Pf, K, L, logdet, same, src):
                     Pp[t, i, j] = s
                     Pp[t, j, i] = s
         if not meas[t]:
-            Pf[t] = Pp[t]
+            copy_mat(Pf[t], Pp[t])
             for i in range(n):
                 for k in range(m):
                     K[t, i, k] = 0.0

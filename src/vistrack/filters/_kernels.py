@@ -574,6 +574,23 @@ def kf_means_shared(ys, F, H, x0, gains, chol, means, pmeans, loglik, store_pred
 
 
 @njit(cache=True)
+def copy_vec(dst, src):
+    """``dst[:] = src`` for two vectors of one length, as a loop. numba compiles an array's
+    slice assignment with the message of its shape check, 2-5 s the first time in a process:
+    the kernels copy with these instead."""
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(cache=True)
+def copy_mat(dst, src):
+    """``dst[:, :] = src`` for two matrices of one shape, as loops (see :func:`copy_vec`)."""
+    for i in range(src.shape[0]):
+        for k in range(src.shape[1]):
+            dst[i, k] = src[i, k]
+
+
+@njit(cache=True)
 def chol_factor(L, A, n):
     """Factor ``A = L L'`` (``A`` is ``n x n``; the lower triangle of ``L`` is written, the upper
     left as it was). Returns False if ``A`` is not positive definite."""
@@ -811,11 +828,11 @@ def online_kernel(n, m):
         if do_predict:
             predict_one(F, Q, 0, 0, x, P, xp, Pp, FP, n)
         else:
-            xp[:] = x
-            Pp[:, :] = P
+            copy_vec(xp, x)
+            copy_mat(Pp, P)
         if not do_update:
-            x[:] = xp
-            P[:, :] = Pp
+            copy_vec(x, xp)
+            copy_mat(P, Pp)
             return -1, 0.0
         ok, ll = update_one(H, R, 0, 0, y, xp, Pp, x, P, idx, e, Ut, KT, S, L, AP, W, n, m)
         return (-1 if ok else 4), ll
@@ -893,8 +910,8 @@ def single_kernel(n, m):
                     x[i] = s
             else:
                 if t == 0:
-                    xp[:] = x
-                    Pp[:, :] = P
+                    copy_vec(xp, x)
+                    copy_mat(Pp, P)
                 else:
                     predict_one(F, Q, t if F.shape[0] > 1 else 0, t if Q.shape[0] > 1 else 0,
                                 x, P, xp, Pp, FP, n)
@@ -923,8 +940,8 @@ def single_kernel(n, m):
                         for a in range(m):
                             ll_const -= math.log(L[a, a])
                     else:
-                        P_last[:, :] = P
-                        Pp_last[:, :] = Pp
+                        copy_mat(P_last, P)
+                        copy_mat(Pp_last, Pp)
                 else:
                     steady = False
                     P_last[:, :] = np.nan
@@ -935,7 +952,7 @@ def single_kernel(n, m):
                     for k in range(n):
                         pcovs[t, i, k] = Pp[i, k]
                         covs[t, i, k] = P[i, k]
-        last_P[:, :] = P
+        copy_mat(last_P, P)
         return -1, total
 
     return kernel(kf_single, f"{__name__}:single_kernel({n!r}, {m!r})")

@@ -21,7 +21,7 @@ from .._validate import (
     check_matrix_stack,
     check_psd,
 )
-from ._kernels import chol_solve, predict_one
+from ._kernels import chol_solve, copy_mat, copy_vec, predict_one
 from .kalman import FilterResult, _is_dask, _readonly, kalman_filter
 
 __all__ = ["SmoothResult", "rts_smooth", "two_filter_smooth"]
@@ -82,14 +82,14 @@ def _rts_kernel(n):
         dP = np.empty((n, n))
         GdP = np.empty((n, n))
         for b in range(B):
-            s_means[b, T - 1] = means[b, T - 1]
-            s_covs[b, T - 1] = covs[b, T - 1]
+            copy_vec(s_means[b, T - 1], means[b, T - 1])
+            copy_mat(s_covs[b, T - 1], covs[b, T - 1])
             for t in range(T - 2, -1, -1):
                 # the filter's prediction of t+1: xp = F m_t, FP = F P_t, Pp = F P_t F' + Q
                 predict_one(F, Q, t + 1 if F.shape[0] > 1 else 0, t + 1 if Q.shape[0] > 1 else 0,
                             means[b, t], covs[b, t], xp, Pp, FP, n)
                 # G' = Pp^-1 (F P_t)  (P_t symmetric, so F P_t = (P_t F')')
-                G[:, :] = FP
+                copy_mat(G, FP)
                 if not chol_solve(L, Pp, G, n, n):
                     return t
                 # m_s = m + G (m_s(t+1) - F m)

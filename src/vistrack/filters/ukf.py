@@ -170,7 +170,8 @@ def _update_one(G, Z, Wm, Wc, R, y, angles, x, P, xo, Po):
     Kt = Vt.copy()
     back_solve(L, Kt, m, n)
     w = np.empty((m, 1))
-    w[:, 0] = e
+    for a in range(m):  # a loop: see _kernels.copy_vec
+        w[a, 0] = e[a]
     forward_solve(L, w, m, 1)
     ll = -0.5 * nobs * math.log(2.0 * math.pi)
     for b in range(m):

@@ -81,7 +81,10 @@ def _prepare(img, centres, half, T, SD, Hinv, ok):
         if np.linalg.cond(Hm) > 1e12:
             ok[k] = False
             continue
-        Hinv[k] = np.linalg.inv(Hm)
+        inv = np.linalg.inv(Hm)
+        for a in range(inv.shape[0]):  # loops: see filters._kernels.copy_vec
+            for b in range(inv.shape[1]):
+                Hinv[k, a, b] = inv[a, b]
 
 
 def prepare_templates(image: np.ndarray, centres: np.ndarray, half: int):

@@ -368,7 +368,9 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, q, r, settings, shift):
         # the camera's shift from confirmed tracks and confident detections (see the module)
         sel = (ov >= cfg.camera_min_iou) & high_d[cols] & (state[rows] == CONFIRMED)
         pr, pc = gnn_pairs(rows[sel], cols[sel], 1.0 - ov[sel], K, D)
-        shift[:] = _camera_shift(mean, db, pr, pc, cfg.camera_min_matches, cfg.camera_sig)
+        est = _camera_shift(mean, db, pr, pc, cfg.camera_min_matches, cfg.camera_sig)
+        # element by element: a slice assignment costs numba a compilation of its error path
+        shift[0], shift[1] = est[0], est[1]
         if shift[0] != 0.0 or shift[1] != 0.0:
             for i in range(K):
                 mean[i, 0] += shift[0]

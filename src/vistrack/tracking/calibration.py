@@ -175,8 +175,9 @@ def _chain_step(t, gap, span, shift, head_box, head_cls, head_t, head_shift, hea
             n_new += 1
     first2 = np.empty(C + n_new, np.int64)
     state2 = np.empty(C + n_new, np.int8)
-    first2[:C] = first
-    state2[:C] = state
+    for i in range(C):  # a loop: a slice assignment costs numba a compilation of its error path
+        first2[i] = first[i]
+        state2[i] = state[i]
     k = C
     for j in range(N):
         if ids[j] < 0:
@@ -220,11 +221,15 @@ def _chain_step(t, gap, span, shift, head_box, head_cls, head_t, head_shift, hea
     for j in range(K):
         if not taken[j]:
             i = kept[j]
-            hb[m], hc[m], ht[m], hs[m], hid[m] = head_box[i], head_cls[i], head_t[i], \
-                head_shift[i], head_chain[i]
+            for a in range(4):  # loops: see the chains' first frames above
+                hb[m, a] = head_box[i, a]
+            hc[m], ht[m], hid[m] = head_cls[i], head_t[i], head_chain[i]
+            hs[m, 0], hs[m, 1] = head_shift[i, 0], head_shift[i, 1]
             m += 1
     for j in range(N):
-        hb[m], hc[m], ht[m], hid[m] = boxes[j], cls[j], t, ids[j]
+        for a in range(4):
+            hb[m, a] = boxes[j, a]
+        hc[m], ht[m], hid[m] = cls[j], t, ids[j]
         hs[m, 0], hs[m, 1] = shift[0], shift[1]
         m += 1
     # once more than half the table's chains are no longer referred to (by a head or an open
