@@ -198,6 +198,13 @@ def test_a_detections_file_alone_needs_its_frame_rate_once(tmp_path, capsys, bad
     one_line(capsys, "track", f"{bad_sequence / 'seqinfo.ini'} does not exist; pass the frame "
              "rate (--fps) to track the detections without it")
     assert not out.exists()
+    # the same from Python, which names the argument too
+    from vistrack.pipeline import track_sequence
+
+    with pytest.raises(FileNotFoundError) as e:
+        track_sequence(det, out)
+    assert str(e.value) == f"{det} is a detections file alone: give its frame rate (fps, --fps)"
+    assert not out.exists()
 
 
 # ------------------------------------------------------------------- numbers and names

@@ -142,6 +142,54 @@ def test_print_config_read_back_gives_identical_tracks(seq, tmp_path, offline):
     assert a == b and len(a.splitlines()) > 500
 
 
+@pytest.mark.parametrize("flags", [[], ["--high", "0.5", "--offline"], ["--tracker", "sort"],
+                                   ["--config", "FILE", "--max-lost", "1"]])
+def test_print_config_without_input_is_what_a_run_prints(seq, tmp_path, flags):
+    """`vistrack track --print-config` without INPUT prints, for the same options, what a run
+    of a sequence's detections prints but its [derived] table, and tracks nothing; read back
+    with `--config` it tracks as those options do."""
+    (tmp_path / "file.toml").write_text('[tracker]\nhigh = 0.55\n[motion]\nstd_pos = 0.04\n')
+    flags = [str(tmp_path / "file.toml") if f == "FILE" else f for f in flags]
+    alone = cli("--print-config", *flags)
+    assert alone.returncode == 0 and alone.stderr == "", alone.stderr
+    run = cli(seq, "--out", tmp_path / "a.txt", "--print-config", *flags)
+    assert run.returncode == 0, run.stderr
+    head, derived = run.stdout.split("\n[derived]")
+    text, note = alone.stdout.split("\n# a run adds [derived]")
+    assert text == head and "vistrack track INPUT --out FILE --print-config" in note
+    assert list(tmp_path.iterdir()) == sorted(tmp_path.glob("[af]*"))  # nothing else written
+    (tmp_path / "used.toml").write_text(alone.stdout)
+    back = cli(seq, "--out", tmp_path / "b.txt", "--config", tmp_path / "used.toml")
+    assert back.returncode == 0, back.stderr
+    a, b = (tmp_path / "a.txt").read_text(), (tmp_path / "b.txt").read_text()
+    assert a == b and len(a.splitlines()) > 500
+
+
+@pytest.mark.parametrize("flags, message", [
+    ([], "the following arguments are required: INPUT"),
+    (["--print-config", "--out", "r.txt"],
+     "--out goes with INPUT; without one, --print-config prints the configuration the other "
+     "options give"),
+    (["--print-config", "--frontend", "hog"],
+     "--frontend goes with INPUT; without one, --print-config prints the configuration the "
+     "other options give"),
+    (["--print-config", "--fps", "25"],
+     "--fps goes with INPUT; without one, --print-config prints the configuration the other "
+     "options give"),
+    (["--print-config", "--tracker", "dcpf"],
+     "--print-config goes with the box trackers (bytetrack, sort)"),
+    (["--print-config", "--high", "2"],
+     "--high: high must be in [0, 1] (a calibrated confidence); got 2.0"),
+])
+def test_print_config_without_input_refuses_what_belongs_to_a_run(tmp_path, flags, message):
+    """Without INPUT only the configuration's options are taken: one that belongs to a run
+    is named, as is a bad value; nothing is written."""
+    r = subprocess.run(CLI + flags, capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr.splitlines()[-1] == f"vistrack track: error: {message}"
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("offline", [False, True])
 def test_a_detections_file_alone_tracks_as_its_sequence_would(seq, tmp_path, offline):
     """A detections file alone, at `--fps`, is tracked as a sequence folder whose

@@ -141,12 +141,12 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
     """
     if kind not in ("detections", "pixels"):
         raise ValueError(f"kind must be 'detections' or 'pixels'; got {kind!r}")
+    from .io.motchallenge import DETECTION_SUFFIXES, sequence_name
+
     out = Path(out)
     jobs = []
     for path in expand_inputs(inputs):
         if kind == "detections":
-            from .io.motchallenge import DETECTION_SUFFIXES, sequence_name
-
             alone = path.is_file() and path.suffix.lower() in DETECTION_SUFFIXES
             if alone and options.get("fps") is None:
                 raise ValueError(f"{path} is a detections file alone: give its frame rate "

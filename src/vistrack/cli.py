@@ -232,9 +232,51 @@ def _tracker_and_numbers(args: argparse.Namespace) -> tuple[str, bool, str]:
     return name, box, problem
 
 
+# `vistrack track`'s options that belong to a run, refused without INPUT (the configuration
+# options alone may then be given, to --print-config)
+_RUN_OPTIONS = ("out", "out_dir", "jobs", "scheduler", "keep_going", "detections", "columns",
+                "fps", "gt", "skip_bad_frames", "report", "force") + _FRONTEND_OPTIONS
+
+
+def _print_config(args: argparse.Namespace) -> int:
+    """`vistrack track --print-config` without INPUT: the configuration that --tracker,
+    --config and the settings give, as a run of a sequence's detections (--out) uses it, with
+    no [derived] table (nothing is tracked)."""
+    from .config import config_toml
+
+    def fail(text: str) -> int:
+        return _fail("track", text)
+
+    for flag in _RUN_OPTIONS:
+        if getattr(args, flag) not in (None, False):
+            return fail(f"--{flag.replace('_', '-')} goes with INPUT; without one, "
+                        "--print-config prints the configuration the other options give")
+    name, box, problem = _tracker_and_numbers(args)
+    if problem:
+        return fail(problem)
+    if not box:
+        from .tracking.box import TRACKERS as BOX_PRESETS
+
+        return fail(f"--print-config goes with the box trackers "
+                    f"({', '.join(sorted(BOX_PRESETS))})")
+    cfg, problem = _box_config(args)
+    if problem:
+        return fail(problem)
+    assert cfg is not None  # a box tracker's
+    sys.stdout.write(config_toml(cfg.with_motion()))
+    print("\n# a run adds [derived], what it derives from its data (the frame rate, the image "
+          "size, the raw score\n# at each threshold): vistrack track INPUT --out FILE "
+          "--print-config")
+    return 0
+
+
 def _track(args: argparse.Namespace) -> int:
     from .batch import is_benchmark
 
+    if not args.input:
+        if not args.print_config:  # as argparse says it: INPUT is needed but for that
+            raise SystemExit(_fail("track", "the following arguments are required: INPUT"))
+        return _print_config(args)
     if (len(args.input) > 1 or is_benchmark(Path(args.input[0])) or args.jobs is not None
             or args.scheduler is not None):
         return _track_many(args)
@@ -689,10 +731,11 @@ def build_parser() -> argparse.ArgumentParser:
         "and write a results file. With --out-dir: track a video "
         "file, image folder or sequence folder from pixels and write tracks.txt, tracks.csv, "
         "annotated.mp4 and trajectories.png (and scores, given --gt).")
-    track.add_argument("input", metavar="INPUT", nargs="+",
+    track.add_argument("input", metavar="INPUT", nargs="*",
                        help="MOTChallenge sequence folder or detections file (--out), or "
                        "video (--out-dir); "
-                       "several, or a folder of sequences, are tracked in parallel")
+                       "several, or a folder of sequences, are tracked in parallel; none "
+                       "with --print-config: print the configuration the options give")
     track.add_argument("--out", help="results file to write (detections mode); with several "
                        "inputs, the folder of their results, NAME.txt each")
     track.add_argument("--out-dir", help="folder for the outputs (video mode); with several "
@@ -741,7 +784,8 @@ def build_parser() -> argparse.ArgumentParser:
     box.add_argument("--print-config", action="store_true",
                      help="print the configuration used, with the values derived from the "
                      "data (raw score of each threshold, frame rate), as TOML to stdout; "
-                     "the summary goes to stderr")
+                     "the summary goes to stderr. Without INPUT: print the configuration "
+                     "the options give, and track nothing")
     for option, _, _, kind, metavar, text, default in _SETTINGS:
         box.add_argument("--" + option.replace("_", "-"), type=kind, metavar=metavar,
                          choices=("calibrated", "raw") if option == "scores" else None,

@@ -196,6 +196,24 @@ class TrackConfig:
             raise ValueError(f"tracker must be one of {sorted(TRACKERS)}; got {name!r}")
         return cls(name=name, tracker=TRACKERS[name])
 
+    def with_motion(self) -> TrackConfig:
+        """This configuration with its motion: the default :class:`~vistrack.models.BoxMotion`
+        where it has none. A run of a sequence's detections uses it so, and reports it so
+        (``--print-config``).
+
+        Returns
+        -------
+        TrackConfig
+            ``self`` when it has a motion, else a copy with the default one.
+
+        Examples
+        --------
+        >>> cfg = TrackConfig.preset("bytetrack")
+        >>> cfg.motion is None, cfg.with_motion().motion == BoxMotion()
+        (True, True)
+        """
+        return self if self.motion is not None else replace(self, motion=BoxMotion())
+
     def with_values(self, tracker: dict | None = None, motion: dict | None = None,
                     offline: dict | None = None) -> TrackConfig:
         """A copy with some values changed (None values are left alone).

@@ -914,7 +914,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     has_info = ini is not None and ini.exists()
     if not has_info and fps is None:
         raise FileNotFoundError(
-            f"{seq_dir}: no seqinfo.ini to give the frame rate; pass it (--fps)" if alone
+            f"{seq_dir} is a detections file alone: give its frame rate (fps, --fps)" if alone
             else f"{ini} does not exist; pass the frame rate (--fps) to track the detections "
             "without it")
     info = read_seqinfo(seq_dir) if has_info else None
@@ -973,9 +973,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
             n_rows, n_tracks = len(F), len(np.unique(I))
         if parquet:
             read_mot(text).to_parquet(out)
-    used = cfg if cfg.motion is not None else replace(cfg, motion=BoxMotion())
-    return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds, used,
-                    derived_values(trk))
+    return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds,
+                    cfg.with_motion(), derived_values(trk))
 
 
 @contextmanager
