@@ -72,6 +72,8 @@ bench: $(VENV)/.bench-installed
 	$(PY) bench/bench_single.py --write docs/benchmarks.md
 	$(PY) bench/bench_snake.py --write docs/benchmarks.md
 	$(PY) bench/accuracy_mot.py --write docs/mot.md
+	$(PY) bench/accuracy_mot.py --every 3 --write docs/mot.md
+	$(PY) bench/accuracy_mot.py --every 6 --write docs/mot.md
 
 # boxmot for bench/accuracy_mot.py, in an environment of its own: it pins filterpy<2 and
 # opencv-python<5, and pulls torch (several GB)

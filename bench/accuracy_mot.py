@@ -3,7 +3,8 @@ the trackers a user would pick instead, each with its packaged defaults, scored 
 (vistrack's scorer, which equals TrackEval; COMBINED and per sequence).
 
     python bench/accuracy_mot.py [--sets MOT15,MOT17,MOT16-FairMOT,KITTI] [--no-peers]
-                                 [--boxmot-python PY] [--jitter SEEDS] [--write docs/mot.md]
+                                 [--boxmot-python PY] [--jitter SEEDS] [--every K]
+                                 [--write docs/mot.md]
 
 Sets (``../shared/data``): MOT15 train with SORT's Faster R-CNN detections, MOT17 train with
 the FRCNN detections, MOT16 train with FairMOT's detections (scores 0.5-0.99), and KITTI
@@ -17,6 +18,10 @@ ReID or camera motion compensation, ByteTrack, OC-SORT) in an interpreter of its
 since it pins ``filterpy<2`` and ``opencv-python<5``. boxmot refuses scores outside [0, 1]:
 PointRCNN's raw scores are clipped to [0, 1] for it, which scored higher than passing them
 through the logistic function (KITTI HOTA of its OC-SORT 58.6 against 56.3).
+
+``--every K`` tracks every set at a K-th of its frame rate: each sequence's every K-th frame
+(1, 1 + K, ...; detections and ground truth), renumbered, with ``frameRate`` divided by K. No
+setting was chosen at those rates; the COMBINED tables go to a section of their own.
 
 ``--jitter N`` also runs vistrack's online default N more times with every detection box
 moved by up to 0.05 pixel (uniform, seeds 1..N), and reports the spread of COMBINED HOTA: how
@@ -59,6 +64,38 @@ def sequences(name: str) -> list[Path]:
 def score(seqs: list[Path], results: Path) -> dict:
     return evaluate_files([(d.name, d / "gt" / "gt.txt", results / f"{d.name}.txt",
                             d / "seqinfo.ini") for d in seqs])
+
+
+def ordinal(k: int) -> str:
+    """3 -> "3rd", 6 -> "6th"."""
+    return f"{k}{'th' if 10 <= k % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(k % 10, 'th')}"
+
+
+def every_kth(seqs: list[Path], k: int, root: Path) -> list[Path]:
+    """The sequences at a ``k``-th of their frame rate, written under ``root`` with the same
+    names: frames 1, 1 + k, ... of the detections and the ground truth, numbered 1, 2, ...,
+    and ``frameRate`` / k, ``seqLength`` the frames kept, in ``seqinfo.ini``."""
+    out = []
+    for d in seqs:
+        o = root / d.name
+        for sub in ("det/det.txt", "gt/gt.txt"):
+            rows = np.loadtxt(d / sub, delimiter=",", ndmin=2)
+            rows = rows[(rows[:, 0] - 1) % k == 0]
+            rows[:, 0] = (rows[:, 0] - 1) // k + 1
+            (o / sub).parent.mkdir(parents=True, exist_ok=True)
+            np.savetxt(o / sub, rows, delimiter=",", fmt="%.10g")
+        info = read_seqinfo(d)
+        lines = []
+        for line in (d / "seqinfo.ini").read_text().splitlines():
+            key = line.split("=", 1)[0].strip().lower()
+            if key == "framerate":
+                line = f"frameRate={info.frame_rate / k:.10g}"
+            elif key == "seqlength":
+                line = f"seqLength={(info.seq_length - 1) // k + 1}"
+            lines.append(line)
+        (o / "seqinfo.ini").write_text("\n".join(lines) + "\n")
+        out.append(o)
+    return out
 
 
 # ----------------------------------------------------------------------------- runners
@@ -210,6 +247,7 @@ def main() -> None:
     ap.add_argument("--boxmot-python", type=Path, default=ROOT / ".venv-boxmot" / "bin" /
                     "python")
     ap.add_argument("--jitter", type=int, default=0, metavar="SEEDS")
+    ap.add_argument("--every", type=int, default=1, metavar="K")
     ap.add_argument("--write", metavar="MD")
     args = ap.parse_args()
     if not DATA.exists():
@@ -230,6 +268,8 @@ def main() -> None:
         tmp = Path(tmp)
         for name in names:
             seqs = sequences(name)
+            if args.every > 1:
+                seqs = every_kth(seqs, args.every, tmp / "every" / name)
             res, fps = {}, {}
             for label, offline in zip(VISTRACK, (False, True)):
                 fps[label] = run_vistrack(seqs, tmp / name / label, offline)
@@ -250,20 +290,33 @@ def main() -> None:
                 spread = (f"\n\nWith every box moved by up to 0.05 pixel ({args.jitter} seeds), "
                           f"vistrack's online COMBINED HOTA ranges {min(h):.2f}-{max(h):.2f}.")
             g = goals(res)
-            parts.append(f"### {name} ({len(seqs)} sequences)\n\n{combined_table(res, fps)}"
-                         + ("\n\nGoals:\n\n" + "\n".join(g) if g else "") + spread
-                         + f"\n\nHOTA / MOTA / IDF1 per sequence (peers: HOTA):\n\n"
-                         f"{per_sequence(res)}\n")
+            if args.every > 1:  # the COMBINED tables alone
+                parts.append(f"### {name}, every {ordinal(args.every)} frame ({len(seqs)} "
+                             f"sequences)\n\n{combined_table(res, fps)}"
+                             + ("\n\nGoals:\n\n" + "\n".join(g) if g else "") + spread + "\n")
+            else:
+                parts.append(f"### {name} ({len(seqs)} sequences)\n\n{combined_table(res, fps)}"
+                             + ("\n\nGoals:\n\n" + "\n".join(g) if g else "") + spread
+                             + f"\n\nHOTA / MOTA / IDF1 per sequence (peers: HOTA):\n\n"
+                             f"{per_sequence(res)}\n")
             print(parts[-1], flush=True)
     env = (f"Python {platform.python_version()}, numpy {np.__version__}, "
            f"{time.strftime('%Y-%m-%d')}")
     cmd = "python bench/accuracy_mot.py" + (f" --jitter {args.jitter}" if args.jitter else "")
-    section = ("## Accuracy on four sets, beside the peers\n\n"
-               f"Measured with `{cmd}` ({env}); vistrack's defaults, "
-               "the peers' packaged defaults, the frame rate from `seqinfo.ini`, TrackEval's "
-               "conventions (MOT15's for KITTI: ground-truth rows with conf 0 are ignored). "
-               "frames/s is the tracker alone, the median over sequences for boxmot.\n\n"
-               + "\n".join(parts) + "\n".join(notes))
+    if args.every > 1:
+        cmd += f" --every {args.every}"
+        section = (f"## Every {ordinal(args.every)} frame: the four sets at a lower frame "
+                   f"rate\n\nMeasured with `{cmd}` ({env}): each sequence's every "
+                   f"{ordinal(args.every)} frame (detections and ground truth), its frame rate "
+                   f"divided by {args.every}, a rate no setting was chosen at; otherwise as "
+                   "above. frames/s is the tracker alone.\n\n" + "\n".join(parts))
+    else:
+        section = ("## Accuracy on four sets, beside the peers\n\n"
+                   f"Measured with `{cmd}` ({env}); vistrack's defaults, "
+                   "the peers' packaged defaults, the frame rate from `seqinfo.ini`, "
+                   "TrackEval's conventions (MOT15's for KITTI: ground-truth rows with conf 0 "
+                   "are ignored). frames/s is the tracker alone, the median over sequences for "
+                   "boxmot.\n\n" + "\n".join(parts) + "\n".join(notes))
     if args.write:
         replace_section(args.write, section)
 
