@@ -287,3 +287,60 @@ def test_a_monotone_transform_of_a_real_detectors_scores_changes_no_track(
         gt = read_mot(seq / "gt" / "gt.txt")
         scores.add(round(evaluate_mot(gt, got, base.frames).HOTA, 12))
     assert len(scores) == 1 and len(ref) > 1000
+
+
+def _sequence(folder, frames, fps=2):
+    """A MOTChallenge sequence folder of ``frames`` (Detections) at ``fps``."""
+    from vistrack.io import write_mot
+
+    (folder / "det").mkdir(parents=True)
+    f = np.concatenate([np.full(len(d), k) for k, d in enumerate(frames, start=1)])
+    b = np.concatenate([d.xywh for d in frames])
+    s = np.concatenate([d.scores for d in frames])
+    write_mot(folder / "det" / "det.txt", f, -np.ones(len(f), int), b, s)
+    (folder / "seqinfo.ini").write_text(f"[Sequence]\nname={folder.name}\nframeRate={fps}\n"
+                                        f"seqLength={len(frames)}\nimWidth=1100\n"
+                                        "imHeight=1100\n")
+    return folder
+
+
+def test_a_run_says_when_the_calibration_cannot_tell_scores_apart(tmp_path):
+    """Where no detection persists (every box at a new place in every frame), the calibration
+    rates every score alike and every detection may start a track: track_sequence warns, the
+    command line in one line, and the tracks are still written. Where objects persist (with
+    clutter, or alone: then every detection is one), where every score is the same, or with
+    raw scores, nothing is said."""
+    import subprocess
+    import sys
+    import warnings
+
+    from vistrack.pipeline import track_sequence
+
+    rng = np.random.default_rng(5)
+    moving, _ = frames_with_clutter(rng, T=60)
+    jumping = [Detections(boxes=np.c_[xy, xy + [30, 80]], scores=rng.uniform(0, 1, 11))
+               for xy in rng.uniform(0, 1000, (60, 11, 2))]
+    same = [Detections(boxes=d.boxes, scores=np.ones(len(d))) for d in jumping]
+    only = [Detections(boxes=d.boxes[:8], scores=d.scores[:8]) for d in moving]  # all persist
+
+    def said(frames, name, **kw):
+        seq = _sequence(tmp_path / name, frames)
+        with warnings.catch_warnings(record=True) as w:
+            warnings.simplefilter("always")
+            run = track_sequence(seq, tmp_path / f"{name}.txt", **kw)
+        assert run.rows > 0
+        return [str(x.message) for x in w if issubclass(x.category, RuntimeWarning)]
+
+    got = said(jumping, "jumping")
+    assert len(got) == 1 and got[0].startswith(
+        f"{tmp_path / 'jumping'}: every detection counts as confident enough to start a track: "
+        "the score calibration finds the least confident persisting from frame to frame nearly "
+        "as often as the most confident, which persist at a rate of 0.00 at 2 frames/s; ")
+    assert said(jumping, "jumping-offline", offline=True) == [
+        got[0].replace("/jumping:", "/jumping-offline:")]
+    assert said(moving, "moving") == [] and said(same, "same") == [] and said(only, "only") == []
+    assert said(jumping, "jumping-raw", scores="raw") == []
+    r = subprocess.run([sys.executable, "-m", "vistrack.cli", "track", str(tmp_path / "jumping"),
+                        "--out", str(tmp_path / "cli.txt")], capture_output=True, text=True)
+    assert r.returncode == 0 and (tmp_path / "cli.txt").stat().st_size > 0
+    assert r.stderr == f"vistrack track: warning: {got[0]}\n"

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import importlib
 import time
+import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field, fields, replace
@@ -59,7 +60,7 @@ if TYPE_CHECKING:
 
 __all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "SINKS",
            "as_detector", "make_tracker", "track_sequence", "TrackRun", "resolve_config",
-           "derived_values", "track_video", "VideoRun", "track_one",
+           "derived_values", "calibration_warning", "track_video", "VideoRun", "track_one",
            "SingleRun", "video_outputs", "RUN_INFO", "fit_sequences", "FitRun"]
 
 
@@ -227,6 +228,57 @@ def derived_values(trk: BoxTracker) -> dict:
         for name in ("high", "low", "new_track"):
             out[f"{name}_score"] = cal.score_at(getattr(c, name))
     return out
+
+
+def calibration_warning(trk: BoxTracker, name: str) -> str | None:
+    """Why a box tracker's calibrated scores could not be told apart, as a warning, or None.
+
+    The score calibration (:mod:`vistrack.tracking.calibration`) rates a detection by how
+    nearly detections of its score persist from frame to frame, and lie on chains that last,
+    as the detector's most confident ones do. Where even the least confident detections do
+    that nearly as well as the most confident ones (the confidence of the lowest score seen
+    reaches ``new_track``) while the most confident themselves persist less than half the
+    time, nothing tells objects from clutter, and every detection counts as confident enough
+    to start a track, clutter too. That happens where hardly anything persists: at a low
+    frame rate, objects move too far between frames for their boxes to overlap. (Where
+    every detection persists, all are objects, and taking each as confident is right.)
+
+    Parameters
+    ----------
+    trk : BoxTracker
+        A box tracker that has tracked a sequence.
+    name : str
+        What to call the sequence in the message.
+
+    Returns
+    -------
+    str or None
+        The message; None with raw scores, before the calibration has outcomes, when all
+        scores are equal (nothing to tell apart), when the lowest score stays under
+        ``new_track``, or when the most confident detections persist half the time or more.
+
+    Examples
+    --------
+    >>> trk = BoxTracker("bytetrack", frame_rate=2.0)
+    >>> rng = np.random.default_rng(0)
+    >>> for f in range(40):  # boxes anywhere in every frame: none persists
+    ...     xy = rng.uniform(0, 900, (5, 2))
+    ...     _ = trk.step(f + 1, Detections(boxes=np.c_[xy, xy + 40], scores=rng.random(5)))
+    >>> print(calibration_warning(trk, "SEQ"))  # doctest: +ELLIPSIS
+    SEQ: every detection counts as confident ...
+    """
+    c = trk.config
+    cal = trk.score_calibration()
+    if c.scores != "calibrated" or cal is None or cal.n == 0 or len(cal.scores) < 2:
+        return None
+    if cal.confidence[0] < c.new_track or cal.top_persistence >= 0.5:
+        return None
+    return (f"{name}: every detection counts as confident enough to start a track: the score "
+            f"calibration finds the least confident persisting from frame to frame nearly as "
+            f"often as the most confident, which persist at a rate of "
+            f"{cal.top_persistence:.2f} at {trk.frame_rate:.3g} frames/s; thresholds on the "
+            f"scores themselves may track better (--scores raw with --high, --low and "
+            f"--new-track)")
 
 
 # -------------------------------------------------------------------------------- the loop
@@ -973,6 +1025,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
             n_rows, n_tracks = len(F), len(np.unique(I))
         if parquet:
             read_mot(text).to_parquet(out)
+    warning = calibration_warning(trk, str(det_path if alone else seq_dir))
+    if warning is not None:
+        warnings.warn(warning, RuntimeWarning, stacklevel=2)
     return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds,
                     cfg.with_motion(), derived_values(trk))
 
@@ -1401,6 +1456,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= last)]
         scores = evaluate_mot(g, read_mot(files["tracks"]), last, benchmark="auto")
     n_tracks = len(rows.identities)
+    if isinstance(trk, BoxTracker):
+        warning = calibration_warning(trk, str(video))
+        if warning is not None:
+            warnings.warn(warning, RuntimeWarning, stacklevel=2)
     result = VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
                       ctx.resolved if isinstance(trk, BoxTracker) else None,
                       derived_values(trk) if isinstance(trk, BoxTracker) else None,
