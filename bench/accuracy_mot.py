@@ -290,15 +290,13 @@ def main() -> None:
                 spread = (f"\n\nWith every box moved by up to 0.05 pixel ({args.jitter} seeds), "
                           f"vistrack's online COMBINED HOTA ranges {min(h):.2f}-{max(h):.2f}.")
             g = goals(res)
-            if args.every > 1:  # the COMBINED tables alone
-                parts.append(f"### {name}, every {ordinal(args.every)} frame ({len(seqs)} "
-                             f"sequences)\n\n{combined_table(res, fps)}"
-                             + ("\n\nGoals:\n\n" + "\n".join(g) if g else "") + spread + "\n")
-            else:
-                parts.append(f"### {name} ({len(seqs)} sequences)\n\n{combined_table(res, fps)}"
-                             + ("\n\nGoals:\n\n" + "\n".join(g) if g else "") + spread
-                             + f"\n\nHOTA / MOTA / IDF1 per sequence (peers: HOTA):\n\n"
-                             f"{per_sequence(res)}\n")
+            title = name if args.every == 1 else f"{name}, every {ordinal(args.every)} frame"
+            part = (f"### {title} ({len(seqs)} sequences)\n\n{combined_table(res, fps)}"
+                    + ("\n\nGoals:\n\n" + "\n".join(g) if g else "") + spread)
+            if args.every == 1:  # at a lower rate, the COMBINED tables alone
+                part += ("\n\nHOTA / MOTA / IDF1 per sequence (peers: HOTA):\n\n"
+                         f"{per_sequence(res)}")
+            parts.append(part + "\n")
             print(parts[-1], flush=True)
     env = (f"Python {platform.python_version()}, numpy {np.__version__}, "
            f"{time.strftime('%Y-%m-%d')}")

@@ -232,6 +232,13 @@ def _tracker_and_numbers(args: argparse.Namespace) -> tuple[str, bool, str]:
     return name, box, problem
 
 
+def _box_trackers() -> str:
+    """The box trackers' names, for messages: ``"the box trackers (bytetrack, sort)"``."""
+    from .tracking.box import TRACKERS as BOX_PRESETS
+
+    return f"the box trackers ({', '.join(sorted(BOX_PRESETS))})"
+
+
 # `vistrack track`'s options that belong to a run, refused without INPUT (the configuration
 # options alone may then be given, to --print-config)
 _RUN_OPTIONS = ("out", "out_dir", "jobs", "scheduler", "keep_going", "detections", "columns",
@@ -255,10 +262,7 @@ def _print_config(args: argparse.Namespace) -> int:
     if problem:
         return fail(problem)
     if not box:
-        from .tracking.box import TRACKERS as BOX_PRESETS
-
-        return fail(f"--print-config goes with the box trackers "
-                    f"({', '.join(sorted(BOX_PRESETS))})")
+        return fail(f"--print-config goes with {_box_trackers()}")
     cfg, problem = _box_config(args)
     if problem:
         return fail(problem)
@@ -285,7 +289,6 @@ def _track(args: argparse.Namespace) -> int:
     from .io.atomic import check_output
     from .io.motchallenge import DETECTION_SUFFIXES
     from .pipeline import TrackRun, VideoRun, track_sequence, track_video, video_outputs
-    from .tracking.box import TRACKERS as BOX_PRESETS
 
     def fail(text: str) -> int:
         return _fail("track", text)
@@ -305,12 +308,10 @@ def _track(args: argparse.Namespace) -> int:
         given = setting_flags + [f for f in ("still_camera", "config", "print_config")
                                  if getattr(args, f)]
         if given:
-            return fail(f"--{given[0].replace('_', '-')} goes with the box trackers "
-                        f"({', '.join(sorted(BOX_PRESETS))})")
+            return fail(f"--{given[0].replace('_', '-')} goes with {_box_trackers()}")
         if args.out is not None:
-            return fail(f"--out (a sequence's detections) goes with the box trackers "
-                        f"({', '.join(sorted(BOX_PRESETS))}); --tracker {name} goes with "
-                        "--out-dir")
+            return fail(f"--out (a sequence's detections) goes with {_box_trackers()}; "
+                        f"--tracker {name} goes with --out-dir")
     if args.out is not None:
         for flag in ("gt",) + _FRONTEND_OPTIONS:
             if getattr(args, flag) is not None:
@@ -423,7 +424,6 @@ def _track_many(args: argparse.Namespace) -> int:
     if args.own_process:
         one_thread_here()  # before numpy: this process hands out the inputs, its workers track
     from .io.atomic import check_output
-    from .tracking.box import TRACKERS as BOX_PRESETS
 
     def fail(text: str) -> int:
         return _fail("track", text)
@@ -455,8 +455,7 @@ def _track_many(args: argparse.Namespace) -> int:
     options: dict = {"force": args.force}
     if args.out is not None:
         if not box:
-            return fail(f"--out (sequences' detections) goes with the box trackers "
-                        f"({', '.join(sorted(BOX_PRESETS))})")
+            return fail(f"--out (sequences' detections) goes with {_box_trackers()}")
         for flag in _FRONTEND_OPTIONS:
             if getattr(args, flag) is not None:
                 return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
