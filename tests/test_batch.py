@@ -228,6 +228,40 @@ def test_a_single_threaded_process_forks_its_workers_and_one_with_other_threads_
                                      "spawn False False 0"]
 
 
+SCRIPT = """import sys
+from vistrack.batch import track_many
+
+{guard}outcomes = track_many([sys.argv[1]], sys.argv[2], jobs=2)
+{indent}print(*(o.ok for o in outcomes))
+"""
+
+
+@pytest.mark.parametrize("guarded", [False, True], ids=["unguarded", "guarded"])
+def test_a_script_without_a_main_guard_is_refused_before_any_job_runs(bench, tmp_path,
+                                                                     guarded):
+    """A script whose top level calls track_many without ``if __name__ == "__main__":``:
+    its spawned workers (it imported numpy, whose BLAS threads rule out a fork) import the
+    script, whose top level asks for a pool again. Refused there, in each worker, and in the
+    script, naming the guard: before, each worker tracked every input in a pool of its own and
+    the script's own jobs then failed on the files they had written. Guarded, it runs once."""
+    script = tmp_path / "many.py"
+    script.write_text(SCRIPT.format(guard='if __name__ == "__main__":\n    ' if guarded else "",
+                                    indent="    " if guarded else ""))
+    env = dict(os.environ, OMP_NUM_THREADS="2", OPENBLAS_NUM_THREADS="2")  # BLAS threads
+    r = subprocess.run([sys.executable, str(script), str(bench), str(tmp_path / "out")],
+                       cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
+    if guarded:
+        assert (r.returncode, r.stdout) == (0, "True True True\n"), r.stderr[-2000:]
+        return
+    assert r.returncode == 1 and r.stdout == ""
+    last = r.stderr.strip().splitlines()[-1]
+    assert last == ("RuntimeError: the pool's worker processes ended as they started (their "
+                    "errors are above); a script that starts a process pool (track_many, "
+                    "evaluate_files with jobs) must guard its top level with `if __name__ == "
+                    '"__main__":`, since each spawned worker imports the script')
+    assert not (tmp_path / "out").exists()
+
+
 def test_the_command_line_does_not_start_numpy_before_it_knows_the_command():
     """Importing vistrack (and its command line) leaves numpy, and the BLAS threads it starts,
     to the command: one that hands its inputs to workers gives itself one thread first."""

@@ -208,7 +208,12 @@ def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecut
     import signal
     import sys
     from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
 
+    if getattr(multiprocessing.current_process(), "_inheriting", False):
+        # a spawned worker importing the script that started it, whose top level asks for a
+        # pool again: its workers would be forked (it has one thread) and run the jobs again
+        raise RuntimeError(_UNGUARDED)
     fork = sys.platform.startswith("linux") and _one_thread()
     if fork:
         for name in imports:  # before the environment below: this process's own threads
@@ -228,8 +233,13 @@ def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecut
         else:
             pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
         # the processes start at the first submission: start them now, with this environment
-        for f in [pool.submit(os.getpid) for _ in range(workers)]:
-            f.result()
+        try:
+            for f in [pool.submit(os.getpid) for _ in range(workers)]:
+                f.result()
+        except BrokenProcessPool as e:
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise RuntimeError("the pool's worker processes ended as they started (their "
+                               f"errors are above); {_UNGUARDED}") from e
     finally:
         for k, v in saved.items():
             if v is None:
@@ -237,6 +247,11 @@ def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecut
             else:
                 os.environ[k] = v
     return pool
+
+
+_UNGUARDED = ("a script that starts a process pool (track_many, evaluate_files with jobs) must "
+              "guard its top level with `if __name__ == \"__main__\":`, since each spawned "
+              "worker imports the script")
 
 
 def one_thread_here() -> None:
