@@ -258,6 +258,9 @@ def test_an_unknown_tracker_lists_every_form(tmp_path, capsys, name):
      "vistrack track-one: error: argument --init: expected one argument"),
     (["eval", "--gt", "gt.txt", "--pred", "res.txt", "--jsn"],
      "vistrack eval: error: unrecognized arguments: --jsn"),
+    (["eval", "res.txt", "gt.txt"],
+     "vistrack eval: error: unrecognized arguments: res.txt gt.txt; vistrack eval takes its "
+     "files as options: --pred RESULTS --gt GROUND_TRUTH, or --pred-dir and --gt-dir"),
     (["demo", "kalman", "--seeds", "x"],
      "vistrack demo: error: argument --seeds: invalid int value: 'x'"),
     (["demo", "kalman", "--seeds", "0"], "vistrack demo: error: --seeds must be >= 1; got 0"),
@@ -400,6 +403,23 @@ def test_skip_bad_frames_carries_on_past_a_cut_short_jpeg(tmp_path, capsys):
     assert "000025.jpg" in warned[0]
     frames = read_mot(tmp_path / "b" / "tracks.txt").frames
     assert 25 not in frames and frames.max() > 25  # the frame after it keeps its number
+
+
+def test_eval_takes_a_sequence_folder_for_its_ground_truth(tmp_path, capsys):
+    """``--gt SEQ`` (as vistrack track takes a sequence) scores against SEQ/gt/gt.txt, with
+    SEQ/seqinfo.ini; a folder without gt/gt.txt is named."""
+    seq = tmp_path / "SEQ-1"
+    (seq / "gt").mkdir(parents=True)
+    (seq / "gt" / "gt.txt").write_bytes(GT.read_bytes())
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=SEQ-1\nseqLength=200\nframeRate=7\n"
+                                     "imWidth=768\nimHeight=576\n")
+    assert main(["eval", "--gt", str(seq / "gt" / "gt.txt"), "--pred", str(GT), "--json"]) == 0
+    want = capsys.readouterr().out
+    assert main(["eval", "--gt", str(seq), "--pred", str(GT), "--json"]) == 0
+    assert capsys.readouterr().out == want and '"SEQ-1"' in want
+    assert main(["eval", "--gt", str(tmp_path), "--pred", str(GT)]) == 2
+    one_line(capsys, "eval", f"--gt {tmp_path} is a folder without gt/gt.txt: give a "
+             "ground-truth file, or a sequence folder that holds gt/gt.txt")
 
 
 def test_eval_errors_are_one_line_and_debug_shows_them(tmp_path, capsys):

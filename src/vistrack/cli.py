@@ -605,6 +605,11 @@ def _eval(args: argparse.Namespace) -> int:
             if getattr(args, flag):
                 return _fail("eval", f"--{flag.replace('_', '-')} goes with --gt-dir")
         gt = Path(args.gt)
+        if gt.is_dir():  # the sequence folder, as vistrack track takes it
+            if not (gt / "gt" / "gt.txt").is_file():
+                return _fail("eval", f"--gt {gt} is a folder without gt/gt.txt: give a "
+                             "ground-truth file, or a sequence folder that holds gt/gt.txt")
+            gt = gt / "gt" / "gt.txt"
         # SEQ/gt/gt.txt, or a ground-truth file beside its seqinfo.ini (SEQ/gt.txt)
         seq = gt.parent.parent if gt.parent.name == "gt" else gt.parent
         info = seq / "seqinfo.ini"
@@ -886,7 +891,8 @@ def build_parser() -> argparse.ArgumentParser:
         "eval", help="score results against ground truth (HOTA, CLEAR MOT, IDF1)",
         description="Score MOTChallenge results as TrackEval does: HOTA, DetA, AssA, MOTA, "
         "MOTP, IDF1 and the counts, per sequence and combined.")
-    ev.add_argument("--gt", help="ground-truth file (SEQ/gt/gt.txt; seqinfo.ini is read beside)")
+    ev.add_argument("--gt", help="ground-truth file (SEQ/gt/gt.txt; seqinfo.ini is read "
+                    "beside), or the sequence folder SEQ holding it")
     ev.add_argument("--pred", help="results file")
     ev.add_argument("--gt-dir", help="folder of sequences SEQ/gt/gt.txt")
     ev.add_argument("--plots", metavar="DIR",
@@ -949,7 +955,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     args, extra = parser.parse_known_args(argv)
     command = _command_parser(parser, getattr(args, "command", None))
     if extra:  # said by the command's parser (parse_args would say it as vistrack's)
-        command.error(f"unrecognized arguments: {' '.join(extra)}")
+        hint = ""
+        if getattr(args, "command", None) == "eval" and not any(a.startswith("-") for a in extra):
+            hint = ("; vistrack eval takes its files as options: --pred RESULTS --gt "
+                    "GROUND_TRUTH, or --pred-dir and --gt-dir")
+        command.error(f"unrecognized arguments: {' '.join(extra)}{hint}")
     if not hasattr(args, "func"):
         parser.print_help()
         return 2
