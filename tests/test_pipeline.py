@@ -4,6 +4,7 @@ registries name the valid parts."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -241,6 +242,29 @@ def test_cli_takes_a_tracker_of_ones_own(tmp_path):
     box_only = subprocess.run(cmd[:6] + ["dcpf", "--high", "0.5"] + cmd[7:],
                               capture_output=True, text=True, env=env, cwd=tmp_path)
     assert box_only.returncode == 2 and "goes with the box trackers" in box_only.stderr
+
+
+def test_the_console_command_finds_a_tracker_module_in_the_current_folder(tmp_path):
+    """``vistrack track ... --tracker mytracker:make`` with mytracker.py in the current
+    folder, through the installed console command (whose path holds its own folder, not the
+    current one, as ``python -m`` would): found, as a newcomer expects."""
+    console = Path(sys.executable).with_name("vistrack")
+    if not console.exists():
+        pytest.skip(f"no console command beside {sys.executable} (vistrack not installed)")
+    frames, truth = red_disc_clip(T=6)
+    folder = write_clip(tmp_path / "frames", frames)
+    (tmp_path / "mytracker.py").write_text(
+        "from tests.test_pipeline import EveryDetection\n"
+        "def make():\n    return EveryDetection()\n")
+    det = tmp_path / "det.txt"
+    det.write_text("".join(",".join(map(str, [k + 1, -1, *truth[k], 0.9, -1, -1, -1])) + "\n"
+                           for k in range(6)))
+    env = dict(os.environ, PYTHONPATH=f"{ROOT}:{ROOT / 'src'}")
+    r = subprocess.run([str(console), "track", str(folder), "--tracker", "mytracker:make",
+                        "--frontend", f"detections:{det}", "--out-dir", str(tmp_path / "out"),
+                        "--fps", "25"], capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "tracked 6 frames: 6 boxes of 1 tracks" in r.stdout
 
 
 def test_boxes_writer_marks_frames_without_the_object(tmp_path):
