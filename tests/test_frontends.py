@@ -243,6 +243,27 @@ def test_a_binary_seqinfo_beside_the_images_is_named(tmp_path):
         VideoReader(tmp_path)
 
 
+def test_a_sequence_folder_with_fewer_images_than_its_seqinfo_says_warns_once(tmp_path):
+    """A sequence shipped with its first frames only (the shared MOT17's img1 holds 4-8 of
+    525-1050): one warning naming both counts, however often the folder is opened (the
+    background front-end opens it again for its start); none when every frame is there."""
+    (tmp_path / "img1").mkdir()
+    _folder(tmp_path / "img1", n=3)
+    info = tmp_path / "seqinfo.ini"
+    info.write_text("[Sequence]\nname=s\nimDir=img1\nframeRate=10\nseqLength=3\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(list(VideoReader(tmp_path))) == 3
+    info.write_text("[Sequence]\nname=s\nimDir=img1\nframeRate=10\nseqLength=525\n")
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        for _ in range(2):
+            assert len(list(VideoReader(tmp_path))) == 3
+    assert [str(x.message) for x in w] == [
+        f"{tmp_path / 'img1'} holds 3 images, but {info} gives seqLength=525: only those 3 "
+        "are tracked"]
+
+
 def test_pets_clip_and_a_motchallenge_image_folder():
     r = VideoReader(need(VTEST), fps=7, stop=3)
     f = list(r)

@@ -110,6 +110,9 @@ def _cv2():
     return cv2
 
 
+_SHORT_WARNED: set[Path] = set()
+
+
 class VideoReader:
     """Frames of a video file, an image folder, or a MOTChallenge sequence folder (its
     ``img1/``, with the frame rate of its ``seqinfo.ini``).
@@ -158,6 +161,12 @@ class VideoReader:
         If ``start`` is less than 1, ``prefetch`` negative, or the frame rate not a finite
         number > 0.
 
+    Warns
+    -----
+    RuntimeWarning
+        If a sequence folder's images are fewer than its ``seqinfo.ini``'s ``seqLength``
+        (once a process for a folder): those there are read.
+
     Examples
     --------
     >>> import tempfile, cv2
@@ -193,6 +202,7 @@ class VideoReader:
                     cp.read_string(info.read_bytes().decode("utf-8-sig"), source=str(info))
                     seq = cp["Sequence"] if "Sequence" in cp else {}
                     seq_fps = float(seq["frameRate"]) if "frameRate" in seq else None
+                    seq_length = int(seq["seqLength"]) if "seqLength" in seq else None
                 except (UnicodeDecodeError, configparser.Error, ValueError) as exc:
                     raise VideoError(f"{info} is not a readable seqinfo.ini ({exc})") from None
                 src = src / seq.get("imDir", "img1")
@@ -201,6 +211,14 @@ class VideoReader:
             self._files = sorted(p for p in src.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
             if not self._files:
                 raise VideoError(f"{src} holds no images ({', '.join(IMAGE_SUFFIXES)})")
+            if info.exists() and seq_length is not None and len(self._files) < seq_length \
+                    and src not in _SHORT_WARNED:
+                # a sequence shipped with its first frames only (MOT17's in the shared data);
+                # said once a process (a front-end may open the folder again for its start)
+                _SHORT_WARNED.add(src)
+                warnings.warn(f"{src} holds {len(self._files)} images, but {info} gives "
+                              f"seqLength={seq_length}: only those {len(self._files)} are "
+                              "tracked", RuntimeWarning, stacklevel=2)
             first = None
             for path in self._files:
                 im, why = self._load(path)
