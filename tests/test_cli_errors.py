@@ -226,7 +226,19 @@ def test_numbers_out_of_range_are_refused_before_reading(tmp_path, capsys, optio
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("init", ["1,2,3,nan", "1,2,0,4", "1,2,3"])
+def test_track_one_takes_a_box_as_otb_writes_it(tmp_path, capsys):
+    """--init separated by commas, by the tabs of a line of OTB's groundtruth_rect.txt pasted
+    as is, or by spaces: the same box, the same track."""
+    outs = []
+    for k, init in enumerate(("300,130,40,100", "300\t130\t40\t100", " 300 130, 40 100 ")):
+        out = tmp_path / f"b{k}.txt"
+        assert main(["track-one", str(VIDEO), "--init", init, "--out", str(out)]) == 0
+        outs.append(out.read_bytes())
+    assert outs[0] == outs[1] == outs[2] and outs[0].startswith(b"1,300.00,130.00,40.00,100.00\n")
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize("init", ["1,2,3,nan", "1,2,0,4", "1,2,3", "1\t2\t3", "1,,2,3,4"])
 def test_track_one_refuses_a_box_that_is_not_one(tmp_path, capsys, init):
     assert main(["track-one", str(VIDEO), "--init", init, "--out",
                  str(tmp_path / "b.txt")]) == 2

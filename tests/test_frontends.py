@@ -62,8 +62,19 @@ def test_bad_inputs_name_the_file(tmp_path):
     with pytest.raises(VideoError, match="bad.avi: OpenCV cannot open it"):
         VideoReader(bad)
     (tmp_path / "empty").mkdir()
-    with pytest.raises(VideoError, match="holds no images"):
+    with pytest.raises(VideoError) as e:
         VideoReader(tmp_path / "empty")
+    assert str(e.value) == (f"{tmp_path / 'empty'} holds no images (.jpg, .jpeg, .png, .bmp, "
+                            ".tif, .tiff)")
+    # an OTB sequence's folder (Crossing/img/0001.jpg): the folder of images is named
+    for k, name in enumerate(("img", "more")):
+        (tmp_path / "empty" / name).mkdir()
+        cv2.imwrite(str(tmp_path / "empty" / name / "0001.jpg"), np.zeros((4, 4, 3), np.uint8))
+        with pytest.raises(VideoError) as e:
+            VideoReader(tmp_path / "empty")
+        assert str(e.value) == (f"{tmp_path / 'empty'} holds no images (.jpg, .jpeg, .png, "
+                                ".bmp, .tif, .tiff)" + ("; its folder img holds images: give it",
+                                "; its folders img, more hold images: give one")[k])
     cv2.imwrite(str(tmp_path / "000001.png"), np.zeros((4, 4, 3), np.uint8))
     with pytest.raises(ValueError, match="fps must be a finite number > 0; got 0"):
         VideoReader(tmp_path, fps=0)

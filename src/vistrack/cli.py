@@ -6,6 +6,7 @@ import argparse
 import functools
 import math
 import os
+import re
 import signal
 import sys
 import threading
@@ -564,7 +565,8 @@ def _track_one(args: argparse.Namespace) -> int:
     from .pipeline import track_one
 
     try:
-        init = [float(v) for v in args.init.split(",")]
+        # commas, or the tabs or spaces of a line of OTB's groundtruth_rect.txt pasted as is
+        init = [float(v) for v in re.split(r"\s*,\s*|\s+", args.init.strip())]
         if len(init) != 4 or not all(math.isfinite(v) for v in init) or min(init[2:]) <= 0:
             raise ValueError
     except ValueError:
@@ -877,7 +879,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Follow one object through a video or image folder from its box in the "
         "first frame; write frame,x,y,w,h lines (frames from 1).")
     one.add_argument("input", metavar="INPUT", help="video file or image folder")
-    one.add_argument("--init", required=True, help="the first frame's box: x,y,w,h")
+    one.add_argument("--init", required=True,
+                     help="the first frame's box: x,y,w,h (or separated by tabs or spaces, as "
+                     "a line of OTB's groundtruth_rect.txt)")
     one.add_argument("--method", default="colour",
                      choices=("colour", "meanshift", "camshift", "particle", "template", "klt",
                               "wsl", "snake", "csrt", "kcf"),

@@ -210,7 +210,13 @@ class VideoReader:
                     raise FileNotFoundError(f"{src} does not exist ({info} names it)")
             self._files = sorted(p for p in src.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
             if not self._files:
-                raise VideoError(f"{src} holds no images ({', '.join(IMAGE_SUFFIXES)})")
+                # an OTB or VOT sequence's folder holds its images in a folder of its own
+                inner = sorted(d.name for d in src.iterdir() if d.is_dir() and any(
+                    p.suffix.lower() in IMAGE_SUFFIXES for p in d.iterdir()))
+                where = (f"; its folder{'s' if len(inner) > 1 else ''} "
+                         f"{', '.join(inner)} hold{'' if len(inner) > 1 else 's'} images: give "
+                         f"{'one' if len(inner) > 1 else 'it'}" if inner else "")
+                raise VideoError(f"{src} holds no images ({', '.join(IMAGE_SUFFIXES)}){where}")
             if info.exists() and seq_length is not None and len(self._files) < seq_length \
                     and src not in _SHORT_WARNED:
                 # a sequence shipped with its first frames only (MOT17's in the shared data);
