@@ -265,6 +265,9 @@ def test_a_sequence_folder_with_fewer_images_than_its_seqinfo_says_warns_once(tm
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert len(list(VideoReader(tmp_path))) == 3
+        # a length that is not a count is not this reader's to judge: no warning, no error
+        info.write_text("[Sequence]\nname=s\nimDir=img1\nframeRate=10\nseqLength=lots\n")
+        assert len(list(VideoReader(tmp_path))) == 3
     info.write_text("[Sequence]\nname=s\nimDir=img1\nframeRate=10\nseqLength=525\n")
     with warnings.catch_warnings(record=True) as w:
         warnings.simplefilter("always")

@@ -113,6 +113,15 @@ def _cv2():
 _SHORT_WARNED: set[Path] = set()
 
 
+def _holds_images(folder: Path) -> bool:
+    """Whether ``folder`` is a folder with an image in it (False if it cannot be listed)."""
+    try:
+        return folder.is_dir() and any(p.suffix.lower() in IMAGE_SUFFIXES
+                                       for p in folder.iterdir())
+    except OSError:
+        return False
+
+
 class VideoReader:
     """Frames of a video file, an image folder, or a MOTChallenge sequence folder (its
     ``img1/``, with the frame rate of its ``seqinfo.ini``).
@@ -193,7 +202,7 @@ class VideoReader:
         self.prefetch = int(prefetch)
         self.skip_bad = bool(skip_bad)
         self._files: list[Path] | None = None
-        seq_fps = None
+        seq_fps, seq_length = None, None
         if src.is_dir():
             info = src / "seqinfo.ini"
             if info.exists():
@@ -202,7 +211,8 @@ class VideoReader:
                     cp.read_string(info.read_bytes().decode("utf-8-sig"), source=str(info))
                     seq = cp["Sequence"] if "Sequence" in cp else {}
                     seq_fps = float(seq["frameRate"]) if "frameRate" in seq else None
-                    seq_length = int(seq["seqLength"]) if "seqLength" in seq else None
+                    length = str(seq.get("seqLength", "")).strip()
+                    seq_length = int(length) if length.isdigit() else None  # for a warning
                 except (UnicodeDecodeError, configparser.Error, ValueError) as exc:
                     raise VideoError(f"{info} is not a readable seqinfo.ini ({exc})") from None
                 src = src / seq.get("imDir", "img1")
@@ -211,13 +221,12 @@ class VideoReader:
             self._files = sorted(p for p in src.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
             if not self._files:
                 # an OTB or VOT sequence's folder holds its images in a folder of its own
-                inner = sorted(d.name for d in src.iterdir() if d.is_dir() and any(
-                    p.suffix.lower() in IMAGE_SUFFIXES for p in d.iterdir()))
+                inner = sorted(d.name for d in src.iterdir() if _holds_images(d))
                 where = (f"; its folder{'s' if len(inner) > 1 else ''} "
                          f"{', '.join(inner)} hold{'' if len(inner) > 1 else 's'} images: give "
                          f"{'one' if len(inner) > 1 else 'it'}" if inner else "")
                 raise VideoError(f"{src} holds no images ({', '.join(IMAGE_SUFFIXES)}){where}")
-            if info.exists() and seq_length is not None and len(self._files) < seq_length \
+            if seq_length is not None and len(self._files) < seq_length \
                     and src not in _SHORT_WARNED:
                 # a sequence shipped with its first frames only (MOT17's in the shared data);
                 # said once a process (a front-end may open the folder again for its start)
