@@ -218,8 +218,9 @@ def test_track_video_follows_one_object_by_name(tmp_path):
     assert success_rate(got.boxes, truth) > 0.9
 
 
-def test_cli_takes_a_tracker_of_ones_own(tmp_path):
-    """``--tracker module:callable``: the CLI makes it and runs it like any other."""
+def _own_tracker_case(tmp_path: Path) -> list[str]:
+    """A 6-frame clip, its detections, and mytracker.py (``make()`` returns an
+    EveryDetection) in ``tmp_path``: ``vistrack track``'s arguments for them."""
     frames, truth = red_disc_clip(T=6)
     folder = write_clip(tmp_path / "frames", frames)
     (tmp_path / "mytracker.py").write_text(
@@ -228,10 +229,14 @@ def test_cli_takes_a_tracker_of_ones_own(tmp_path):
     det = tmp_path / "det.txt"
     det.write_text("".join(",".join(map(str, [k + 1, -1, *truth[k], 0.9, -1, -1, -1])) + "\n"
                            for k in range(6)))
+    return ["track", str(folder), "--tracker", "mytracker:make", "--frontend",
+            f"detections:{det}", "--out-dir", str(tmp_path / "out"), "--fps", "25", "--force"]
+
+
+def test_cli_takes_a_tracker_of_ones_own(tmp_path):
+    """``--tracker module:callable``: the CLI makes it and runs it like any other."""
     env = {"PYTHONPATH": f"{tmp_path}:{ROOT}:{ROOT / 'src'}"}
-    cmd = [sys.executable, "-m", "vistrack.cli", "track", str(folder), "--tracker",
-           "mytracker:make", "--frontend", f"detections:{det}", "--out-dir",
-           str(tmp_path / "out"), "--fps", "25", "--force"]
+    cmd = [sys.executable, "-m", "vistrack.cli", *_own_tracker_case(tmp_path)]
     r = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert "tracked 6 frames: 6 boxes of 1 tracks" in r.stdout
@@ -251,18 +256,9 @@ def test_the_console_command_finds_a_tracker_module_in_the_current_folder(tmp_pa
     console = Path(sys.executable).with_name("vistrack")
     if not console.exists():
         pytest.skip(f"no console command beside {sys.executable} (vistrack not installed)")
-    frames, truth = red_disc_clip(T=6)
-    folder = write_clip(tmp_path / "frames", frames)
-    (tmp_path / "mytracker.py").write_text(
-        "from tests.test_pipeline import EveryDetection\n"
-        "def make():\n    return EveryDetection()\n")
-    det = tmp_path / "det.txt"
-    det.write_text("".join(",".join(map(str, [k + 1, -1, *truth[k], 0.9, -1, -1, -1])) + "\n"
-                           for k in range(6)))
     env = dict(os.environ, PYTHONPATH=f"{ROOT}:{ROOT / 'src'}")
-    r = subprocess.run([str(console), "track", str(folder), "--tracker", "mytracker:make",
-                        "--frontend", f"detections:{det}", "--out-dir", str(tmp_path / "out"),
-                        "--fps", "25"], capture_output=True, text=True, env=env, cwd=tmp_path)
+    r = subprocess.run([str(console), *_own_tracker_case(tmp_path)], capture_output=True,
+                       text=True, env=env, cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert "tracked 6 frames: 6 boxes of 1 tracks" in r.stdout
 
