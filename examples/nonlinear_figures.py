@@ -48,14 +48,15 @@ def particle_cloud(out: Path, seed: int = 3) -> Path:
     top = fig.subfigures(2, 1, height_ratios=[1, 1.1])
     axs = top[0].subplots(1, 4, sharex=True)
     jitter = rng.uniform(-0.4, 0.4, N)
-    panels = [(x0, None, f"resampled cloud at step {t - 1}"),
-              (drift, None, "predict: x/2 + 25x/(1+x²) + 8cos(1.2t)"),
-              (spread, None, "spread: + N(0, 10)"),
-              (spread, w, f"weight: p(y={ys[t, 0]:.1f} | x)")]
-    for ax, (p, wt, title) in zip(axs, panels):
+    # the first panel is the cloud at step t - 1, the others step t: each with its own truth
+    panels = [(x0, None, f"resampled cloud at step {t - 1}", t - 1),
+              (drift, None, f"predict to step {t}: x/2 + 25x/(1+x²) + 8cos(1.2t)", t),
+              (spread, None, "spread: + N(0, 10)", t),
+              (spread, w, f"weight: p(y={ys[t, 0]:.1f} | x)", t)]
+    for ax, (p, wt, title, step) in zip(axs, panels):
         size = 8 if wt is None else 2 + 600 * wt
         ax.scatter(p, jitter, s=size, alpha=0.5, color="C0" if wt is None else "C3", lw=0)
-        ax.axvline(xs[t, 0], color="k", lw=1, ls="--", label="true state")
+        ax.axvline(xs[step, 0], color="k", lw=1, ls="--", label="true state at that step")
         ax.set_title(title, fontsize=9)
         ax.set_yticks([])
         ax.set_xlabel("x")
