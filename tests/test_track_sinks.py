@@ -277,15 +277,15 @@ def test_the_trajectory_plot_draws_the_rows_it_was_given(tmp_path):
 
 def test_the_trajectory_plot_draws_all_tracks_in_two_artists(tmp_path):
     """Each track's centres in frame order (rows given in any order), its end dot at its last
-    centre, coloured by tab20 in the order of the ids; and as many artists for 300 tracks as
-    for 3, so that an hour of video draws in bounded memory."""
-    import matplotlib
-
+    centre, both in the identity's colour of the annotated video (``id_colour``, BGR there),
+    labelled with the identity at the dot up to 100 tracks; beyond, as many artists for 300
+    tracks as for 101, so that an hour of video draws in bounded memory."""
     from vistrack.viz import plot_trajectories
+    from vistrack.viz.annotate import id_colour
 
     rng = np.random.default_rng(5)
     children = []
-    for n in (3, 300):
+    for n in (3, 101, 300):
         lens = rng.integers(1, 30, n)
         ids = np.repeat(rng.permutation(np.arange(10, 10 + 7 * n, 7)), lens)
         frames = np.concatenate([rng.integers(1, 500) + np.arange(k) for k in lens])
@@ -300,11 +300,16 @@ def test_the_trajectory_plot_draws_all_tracks_in_two_artists(tmp_path):
         for got, w in zip(paths.get_segments(), want, strict=True):
             assert np.array_equal(got, w)
         assert np.array_equal(dots.get_offsets(), [w[-1] for w in want])
-        tab20 = matplotlib.colormaps["tab20"](np.arange(n) % 20)
-        assert np.array_equal(paths.get_colors(), tab20)
-        assert np.array_equal(dots.get_facecolors(), tab20)
+        rgba = np.c_[[np.array(id_colour(i)[::-1]) / 255 for i in np.unique(ids)], np.ones(n)]
+        assert np.allclose(paths.get_colors(), rgba, atol=1e-12)
+        assert np.allclose(dots.get_facecolors(), rgba, atol=1e-12)
+        labels = [(t.get_text(), t.xy) for t in ax.texts]
+        if n <= 100:
+            assert labels == [(str(i), tuple(w[-1])) for i, w in zip(np.unique(ids), want)]
+        else:
+            assert labels == []
         children.append(len(ax.get_children()))
-    assert children[0] == children[1]
+    assert children[1] == children[2] and children[0] == children[1] + 3
 
 
 @pytest.mark.parametrize("grey", [False, True])

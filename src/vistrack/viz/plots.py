@@ -225,12 +225,17 @@ def _import_agg() -> None:
     import matplotlib.figure  # noqa: F401
 
 
+_LABELLED = 100  # plot_trajectories labels each path with its identity up to this many
+
+
 def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
                       background: ArrayLike | None = None, path: str | os.PathLike | None = None,
                       *, title: str | None = None) -> Figure:
-    """Every track's path of centres ``(N, 2)`` (rows of ``frames`` and ``ids``), one colour
-    per identity, over a dimmed ``background`` image (RGB or grey) when given; saved to
-    ``path`` (PNG) when given. Returns the figure.
+    """Every track's path of centres ``(N, 2)`` (rows of ``frames`` and ``ids``), each in its
+    identity's colour in the annotated video (:func:`vistrack.viz.annotate.id_colour`) and,
+    when there are at most 100 tracks, labelled with its identity at its last centre (the
+    dot), over a dimmed ``background`` image (RGB or grey) when given; saved to ``path`` (PNG)
+    when given. Returns the figure.
 
     Parameters
     ----------
@@ -262,8 +267,10 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
     >>> [p.tolist() for p in paths.get_segments()], dots.get_offsets().tolist(), path.exists()
     ([[[0.0, 0.0], [1.0, 1.0]], [[5.0, 5.0], [6.0, 5.0]]], [[1.0, 1.0], [6.0, 5.0]], True)
     """
-    import matplotlib
+    from matplotlib import patheffects
     from matplotlib.collections import LineCollection
+
+    from .annotate import id_colour
 
     frames, ids, c = np.asarray(frames), np.asarray(ids), np.asarray(centres, dtype=float)
     if path is None:
@@ -283,10 +290,17 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
     paths = np.split(c[order], starts) if len(order) else []
     # every path one artist, and every end dot another: two artists a track (two thousand
     # tracks in an hour of video) took 66 MB more to draw, and four times as long
-    colours = matplotlib.colormaps["tab20"](np.arange(len(paths)) % 20)
+    track_ids = ids[order][np.r_[0, starts]] if len(order) else ids[:0]
+    # the annotated video's colour of each identity (BGR there), so a path and its boxes match
+    colours = np.array([id_colour(i)[::-1] for i in track_ids], float).reshape(-1, 3) / 255
     ax.add_collection(LineCollection(paths, colors=colours, linewidths=1.5))
     last = np.array([p[-1] for p in paths]).reshape(-1, 2)
     ax.scatter(last[:, 0], last[:, 1], s=9, c=colours, zorder=2.5)
+    if len(paths) <= _LABELLED:
+        for (x, y), i, col in zip(last, track_ids, colours):
+            ax.annotate(str(i), (x, y), xytext=(3, 3), textcoords="offset points", fontsize=7,
+                        color=col, fontweight="bold", path_effects=[
+                            patheffects.withStroke(linewidth=2, foreground="black")])
     ax.autoscale_view()
     if background is None:
         ax.invert_yaxis()
