@@ -1,5 +1,6 @@
 """The seeds' P vs PV multiple-model filter on a real pedestrian: PETS09-S2L1 (MOT15), person
-15, who stands for about 6 s among others and then walks.
+15, who walks in, stands about 6 s among others, edges forward, stands 3 s more and walks
+off.
 
     python examples/mm_pets09.py          # writes examples/figures/mm_pets09.png
 
@@ -41,8 +42,13 @@ def measurements():
             if ov.max() >= 0.5:
                 j = int(np.argmax(ov))
                 detected[k] = d.boxes[j, :2] + d.boxes[j, 2:] / 2
-    speed = np.r_[0.0, np.linalg.norm(np.diff(centres, axis=0), axis=1) * FPS]
-    return t.frames, centres, detected, np.convolve(speed, np.ones(5) / 5, mode="same")
+    step = np.linalg.norm(np.diff(centres, axis=0), axis=1) * FPS
+    speed = np.r_[step[0], step]  # the first frame's speed is its first step's
+    # a 5-frame mean, over the frames there are at the ends (no zeros padded in)
+    kernel = np.ones(5)
+    smooth = (np.convolve(speed, kernel, mode="same")
+              / np.convolve(np.ones_like(speed), kernel, mode="same"))
+    return t.frames, centres, detected, smooth
 
 
 def p_probability(ys):
@@ -75,7 +81,8 @@ def main():
     ax2.set_ylabel("P(position-only model)")
     ax2.set_xlabel("frame")
     ax2.set_ylim(-0.02, 1.02)
-    ax2.legend(loc="center right", fontsize=8)
+    # below the plot: inside, it covered the fall of P as the person walks off
+    ax2.legend(loc="upper center", bbox_to_anchor=(0.5, -0.22), ncols=3, fontsize=8)
     fig.tight_layout()
     OUT.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(OUT, dpi=100)
