@@ -30,6 +30,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
@@ -107,21 +108,27 @@ def rows_figure(rows, title):
                 ax.add_patch(Rectangle(box[:2], box[2], box[3], fill=False, ec="lime"))
                 ax.set_ylabel(f"frame {f}")
             if c == 3 and mask is not None and mask.any():
-                ax.contour(mask.astype(float), levels=[0.5], colors="red", linewidths=1)
+                # a tint rather than an outline: the covered part reaches the panel's edges,
+                # where an outline is left open (a stray line)
+                ax.imshow(np.where(mask, 1.0, np.nan), cmap=ListedColormap(["red"]),
+                          alpha=0.35, interpolation="nearest")
     fig.suptitle(title, fontsize=10)
     return fig, fig.add_subplot(grid[len(show), :])
 
 
 def occlusion_figure(log, rows):
     fig, ax = rows_figure(rows, f"WSL appearance model, PETS09-S2L1 person {TARGET} occluded "
-                          f"by person {OCCLUDER} (seed 000, Fig. 3)")
+                          f"by person {OCCLUDER}\n(seed 000, Fig. 3; red: where person "
+                          f"{OCCLUDER} covers the view)")
     f = log[:, 0]
     ax.plot(f, log[:, 2], "r.-", label="mean $o_s$ where person 13 covers the view")
     ax.plot(f, log[:, 3], "k.-", label="mean $o_s$ elsewhere in the view")
     ax.plot(f, log[:, 1], "g--", label="IoU of the tracked box with the annotation")
     ax.set_xlabel("frame")
+    ax.set_ylabel("mean, or IoU")
     ax.set_ylim(0, 1.02)
-    ax.legend(fontsize=8, loc="lower left")
+    # below the panel: inside, it hid the lowest o_s, the occlusion the figure is about
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.3), ncols=2)
     fig.tight_layout()
     return fig
 
@@ -153,14 +160,15 @@ def track_crossing():
 
 
 def crossing_figure(log, rows):
-    fig, ax = rows_figure(rows, "WSL appearance model, OTB Crossing: the background behind "
+    fig, ax = rows_figure(rows, "WSL appearance model, OTB Crossing: the background behind\n"
                           "turns from shade to sunlit stripes (no occlusion)")
     ax.plot(log[:, 0], log[:, 2], "k.-", ms=3, label="mean $o_s$")
     ax.plot(log[:, 0], log[:, 3], "b.-", ms=3, label="mean $m_s$")
     ax.plot(log[:, 0], log[:, 1], "g--", label="IoU of the tracked box with the annotation")
     ax.set_xlabel("frame")
+    ax.set_ylabel("mean, or IoU")
     ax.set_ylim(0, 1.02)
-    ax.legend(fontsize=8, loc="lower left")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.3), ncols=3)
     fig.tight_layout()
     return fig
 
@@ -193,10 +201,11 @@ def online_em_figure():
     ax1.plot(mu, "k-", lw=2, label=r"stable mean $\mu_s$")
     ax1.legend(fontsize=8, loc="upper right")
     ax1.set_title("Online EM of the WSL mixture on one pixel (seed 000, Fig. 2)")
-    ax2.plot(m[:, 0], "k-", label="S")
-    ax2.plot(m[:, 1], "r--", label="W")
-    ax2.plot(m[:, 2], "-", color="lightgreen", label="L")
+    ax2.plot(m[:, 0], "k-", label="S (stable)")
+    ax2.plot(m[:, 1], "r--", label="W (wandering)")
+    ax2.plot(m[:, 2], "-", color="tab:green", label="L (lost: outliers)")
     ax2.set_ylabel("mixing probability")
+    ax1.set_ylabel("pixel value")
     ax2.set_xlabel("frame")
     ax2.legend(fontsize=8)
     fig.tight_layout()
