@@ -103,10 +103,17 @@ def smoothing_1d(path: str | Path, *, T: int = 20, seed: int = 2) -> Path:
                       std=np.sqrt(bc_cov[:, 0, 0]), title="Backward estimates")
     plot_estimates_1d(axes[2], t, **common, mean=sm.means[:, 0], std=np.sqrt(sm.covs[:, 0, 0]),
                       title="Combined forward-backward estimates", mean_label="smoothed")
-    lo = np.nanmin(ys) - 4
-    hi = np.nanmax(ys) + 4
+    # every 3σ bar inside (the first prediction's, from the prior, reached past the
+    # measurements' range and lost its end cap)
+    bars = [(fwd.pred_means, fwd.pred_covs), (fwd.means, fwd.covs), (bp_mean, bp_cov),
+            (bc_mean, bc_cov), (sm.means, sm.covs)]
+    ends = [m[:, 0] + k * 3 * np.sqrt(c[:, 0, 0]) for m, c in bars for k in (-1, 1)]
+    lo = min(np.nanmin(ys) - 4, *(np.nanmin(e) - 0.5 for e in ends))
+    hi = max(np.nanmax(ys) + 4, *(np.nanmax(e) + 0.5 for e in ends))
     for ax in axes:
         ax.set_ylim(lo, hi)
+        ax.set_xlim(-0.6, T - 0.4)  # one range for the three (the backward's stopped short)
+        ax.set_title(ax.get_title() + " (bars: 3σ)")
     path = Path(path)
     fig.savefig(path, dpi=110)
     return path
@@ -190,6 +197,9 @@ def murphy_2d(path: str | Path, *, seed: int = 8) -> tuple[Path, float, float]:
     for a in axes:
         a.set_xlim(*lims[0])
         a.set_ylim(*lims[1])
+        # below the axes: inside, the legend sat on measurements
+        a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncols=3, fontsize=8)
+        a.set_title(a.get_title() + ", 1σ ellipses", fontsize=10)
     path = Path(path)
     fig.savefig(path, dpi=110)
     return path, ef, es
