@@ -87,11 +87,12 @@ def main():
                 label=f"{label}: success {100 * rate:.0f} %")
         print(f"  {label}: success (IoU > 0.5) {100 * rate:.0f} %, mean IoU "
               f"{overlaps(boxes, gt).mean():.2f}")
-    ax.axhline(0.5, color="grey", lw=0.5)
+    ax.axhline(0.5, color="grey", lw=0.5, label="IoU 0.5: success")
     ax.set_xlabel("frame")
     ax.set_ylabel("IoU with the annotation")
     ax.set_ylim(0, 1)
-    ax.legend(fontsize=8, loc="lower right")
+    # below the plot: inside, it covered the snake's curve over frames 143-165
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncols=2)
     fig.suptitle("VOT15 bag: colour and shape trackers alone and composed (seed 001); "
                  "dashed green: annotation, yellow: the composite's snake", fontsize=10)
     OUT.parent.mkdir(parents=True, exist_ok=True)

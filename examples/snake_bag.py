@@ -65,7 +65,7 @@ def main():
         ov = runs[first][0]
         ax.plot(np.arange(first + 1, len(frames) + 1), ov, "-", color=col,
                 label=f"started at frame {first}: success {np.mean(ov > 0.5):.0%}")
-    ax.axhline(0.5, color="grey", lw=0.5)
+    ax.axhline(0.5, color="grey", lw=0.5, label="IoU 0.5: success")
     ax.set_xlabel("frame")
     ax.set_ylabel("IoU with the annotation")
     ax.set_ylim(0, 1)
