@@ -182,8 +182,10 @@ class Annotator:
             cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 3, cv2.LINE_AA)
             cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5, c, 1, cv2.LINE_AA)
         if label:
-            cv2.putText(out, label, (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (0, 0, 0), 3,
-                        cv2.LINE_AA)
+            # white on a black box: an outlined label read double ("frame 101" as "1011") on
+            # a light background once the video was compressed
+            (w, h), base = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.6, 1)
+            cv2.rectangle(out, (4, 22 - h - 5), (12 + w, 22 + base + 2), (0, 0, 0), -1)
             cv2.putText(out, label, (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (255, 255, 255), 1,
                         cv2.LINE_AA)
         return out
