@@ -143,6 +143,14 @@ class Annotator:
         import cv2
 
         out = image.copy() if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+        if label:
+            # white on a black box: an outlined label read double ("frame 101" as "1011") on
+            # a light background once the video was compressed. Drawn first: the tracks go
+            # over it, so it hides none
+            (w, h), base = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.6, 1)
+            cv2.rectangle(out, (4, 22 - h - 5), (12 + w, 22 + base + 2), (0, 0, 0), -1)
+            cv2.putText(out, label, (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (255, 255, 255), 1,
+                        cv2.LINE_AA)
         self._n += 1
         boxes = tracks.boxes
         # tracks without boxes have points
@@ -181,13 +189,6 @@ class Annotator:
                 org = (int(cx) + 4, int(cy) - 4)
             cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 3, cv2.LINE_AA)
             cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5, c, 1, cv2.LINE_AA)
-        if label:
-            # white on a black box: an outlined label read double ("frame 101" as "1011") on
-            # a light background once the video was compressed
-            (w, h), base = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.6, 1)
-            cv2.rectangle(out, (4, 22 - h - 5), (12 + w, 22 + base + 2), (0, 0, 0), -1)
-            cv2.putText(out, label, (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (255, 255, 255), 1,
-                        cv2.LINE_AA)
         return out
 
 
