@@ -26,6 +26,7 @@ from itertools import islice
 from pathlib import Path
 
 import numpy as np
+from matplotlib import patheffects
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
@@ -147,8 +148,9 @@ def main():
     for p in particles:
         ax1.plot(p[:, 0], p[:, 1], ".", ms=1.5)
     for i, b in zip(out.ids, out.xywh):
-        ax1.add_patch(Rectangle(b[:2], b[2], b[3], fill=False, ec="white", lw=1))
-        ax1.text(b[0], b[1] - 3, str(i), color="white", fontsize=7)
+        ax1.add_patch(Rectangle(b[:2], b[2], b[3], fill=False, ec="white", lw=1.2))
+        ax1.text(b[0], b[1] - 3, str(i), color="white", fontsize=8, fontweight="bold",
+                 path_effects=[patheffects.withStroke(linewidth=2, foreground="black")])
     ax1.set_title(f"frame {SHOW}: particles, boxes, and the HOG confidence above 0.3 "
                   f"({cmap.heights[k]:.0f} px level)", fontsize=9)
     ax1.set_xticks([])
