@@ -492,3 +492,24 @@ def test_kalman_filter_class_predict_update_equal_the_functions_and_the_sequence
         total += ll
         np.testing.assert_allclose(g.mean, seq.means[:, t], rtol=1e-12, atol=1e-13)
     np.testing.assert_allclose(total, seq.loglik, rtol=1e-12)
+
+
+def test_a_series_of_the_wrong_width_and_a_position_wider_than_the_motion_are_named():
+    """Measurements three wide for a 2-D position: named with both sizes, by every method
+    that takes a series (numpy said it as a matrix product's core-dimension mismatch); a
+    3-D position of a 2-D motion (it would read x, y and vx as the position) is refused."""
+    kf = vt.KalmanFilter(vt.ConstantVelocity(dim=2), vt.Position(dim=2))
+    want = ("ys must have shape (T, 2) or (B, T, 2): 2 values a step, as Position(dim=2) "
+            "measures; got {}")
+    for shape in ((10, 3), (4, 10, 1)):
+        for method in (kf.filter, kf.smooth, kf.fit, kf.default_prior):
+            with pytest.raises(ValueError) as e:
+                method(np.zeros(shape))
+            assert str(e.value) == want.format(shape)
+    with pytest.raises(ValueError) as e:
+        vt.KalmanFilter(vt.ConstantVelocity(dim=2, q=1.0), vt.Position(dim=3))
+    assert str(e.value) == ("measurement Position(dim=3) measures 3 position components, but "
+                            "motion ConstantVelocity(dim=2, q=1.0) moves in 2")
+    # fewer is a choice (x alone of a 2-D motion), and works
+    one = vt.KalmanFilter(vt.ConstantVelocity(dim=2), vt.Position(dim=1))
+    assert one.filter(np.arange(5.0)[:, None]).means.shape == (5, 4)

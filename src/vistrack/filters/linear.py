@@ -91,11 +91,29 @@ class KalmanFilter:
             if missing:
                 raise TypeError(f"{name} must provide {', '.join(attrs)}; "
                                 f"{type(obj).__name__} lacks {', '.join(missing)}")
+        # a position measured in more dimensions than the motion has would read its rates as
+        # positions (Position(dim=3) of a 2-D constant velocity: x, y and vx)
+        from ..models.measurement import Position
+
+        if isinstance(measurement, Position) and isinstance(getattr(motion, "dim", None), int) \
+                and measurement.ndim_meas > motion.dim:  # type: ignore[attr-defined]
+            raise ValueError(f"measurement {measurement!r} measures {measurement.ndim_meas} "
+                             f"position components, but motion {motion!r} moves in "
+                             f"{motion.dim}")  # type: ignore[attr-defined]
         self.motion = motion
         self.measurement = measurement
 
     def __repr__(self) -> str:
         return f"KalmanFilter({self.motion!r}, {self.measurement!r})"
+
+    def _check_ys(self, ys: ArrayLike) -> None:
+        """Refuse a series whose last axis is not the measurement's size, naming both (numpy
+        would say it as a matrix product's mismatch)."""
+        shape = np.shape(ys)
+        m = self.measurement.ndim_meas
+        if len(shape) in (2, 3) and shape[-1] != m:
+            raise ValueError(f"ys must have shape (T, {m}) or (B, T, {m}): {m} values a step, "
+                             f"as {self.measurement!r} measures; got {shape}")
 
     def matrices(self, T: int, dt: ArrayLike = 1.0) -> dict[str, np.ndarray]:
         """The matrices ``F, Q, H, R`` of the models for ``T`` steps with time step(s) ``dt``.
@@ -232,6 +250,7 @@ class KalmanFilter:
         >>> x0, P0.diagonal()
         (array([2., 0.]), array([1.e+00, 1.e+06]))
         """
+        self._check_ys(ys)
         y, single = as_measurement_series(ys)
         check_has_steps(y[0] if single else y)
         n = self.motion.ndim_state
@@ -287,6 +306,7 @@ class KalmanFilter:
         >>> kf.filter(np.arange(5.0)[:, None]).means[-1].round(3)
         array([4., 1.])
         """
+        self._check_ys(ys)
         T = np.shape(ys)[-2] if np.ndim(ys) >= 2 else 0
         if x0 is None or P0 is None:
             dx0, dP0 = self.default_prior(ys)
@@ -363,6 +383,7 @@ class KalmanFilter:
         >>> sm.means.shape, sm.covs.shape, sm.filtered.means.shape
         ((5, 2), (5, 2, 2), (5, 2))
         """
+        self._check_ys(ys)
         T = np.shape(ys)[-2]
         mats = self.matrices(T, dt)
         res = self.filter(ys, dt=dt, x0=x0, P0=P0)
@@ -461,6 +482,7 @@ class KalmanFilter:
         if "R" in learned and not isinstance(meas, (Position, LinearMeasurement)):
             raise TypeError(f"learning R needs a Position or LinearMeasurement model; got "
                             f"{type(meas).__name__}")
+        self._check_ys(ys)
         y, _ = as_measurement_series(ys)
         T = y.shape[1]
         if x0 is None or P0 is None:
