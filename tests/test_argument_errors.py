@@ -141,3 +141,20 @@ def test_a_likelihood_of_minus_infinity_everywhere_is_still_degeneracy():
     pf = ParticleFilter(CV, lambda y, x: np.full(len(x), -np.inf), n_particles=50, rng=0)
     with pytest.raises(ParticleDegeneracyError, match="zero likelihood at step 0"):
         pf.filter(np.zeros((3, 1)), x0=[0.0, 1.0], P0=np.eye(2))
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: vt.Detections(points=[[1.0, 2.0], [np.nan, 1.0]]),
+     "points must be finite; points[1] = [nan, 1.0]"),
+    (lambda: vt.Detections(boxes=[[0, 0, 1, 1], [0, np.inf, 1, 1]]),
+     "boxes must be finite; boxes[1] = [0.0, inf, 1.0, 1.0]"),
+    (lambda: vt.Detections.from_xywh([[10, 10, 20, 40], [10, 10, -40, 80]]),
+     "xywh must have widths and heights >= 0; xywh[1] = [10.0, 10.0, -40.0, 80.0]"),
+])
+def test_detections_name_the_row_that_is_not_a_box_or_a_point(make, message):
+    """A NaN point was taken (a point tracker then started a track at NaN, and every later
+    step failed in scipy's k-d tree); a bad box is named by its row; a negative width is
+    named as given, not as the corners it makes."""
+    with pytest.raises(ValueError) as e:
+        make()
+    assert str(e.value) == message

@@ -192,7 +192,8 @@ class Detections:
             if b.ndim != 2 or b.shape[1] != 4:
                 raise ValueError(f"boxes must have shape (N, 4); got {b.shape}")
             if not np.isfinite(b).all():
-                raise ValueError("boxes must be finite")
+                i = int(np.flatnonzero(~np.isfinite(b).all(axis=1))[0])
+                raise ValueError(f"boxes must be finite; boxes[{i}] = {b[i].tolist()}")
             if (b[:, 2] < b[:, 0]).any() or (b[:, 3] < b[:, 1]).any():
                 i = int(np.flatnonzero((b[:, 2] < b[:, 0]) | (b[:, 3] < b[:, 1]))[0])
                 raise ValueError(f"boxes must be x0, y0, x1, y1 with x1 >= x0 and y1 >= y0; "
@@ -203,6 +204,9 @@ class Detections:
             p = np.asarray(self.points, dtype=np.float64)
             if p.ndim != 2:
                 raise ValueError(f"points must have shape (N, d); got {p.shape}")
+            if not np.isfinite(p).all():  # a tracker would start a track at NaN
+                i = int(np.flatnonzero(~np.isfinite(p).all(axis=1))[0])
+                raise ValueError(f"points must be finite; points[{i}] = {p[i].tolist()}")
             object.__setattr__(self, "points", p)
             n = len(p)
         for name, default, dtype in (("scores", 1.0, np.float64), ("classes", 0, np.int64)):
@@ -237,6 +241,10 @@ class Detections:
         [[10.0, 20.0, 40.0, 60.0]]
         """
         b = np.asarray(xywh, dtype=np.float64).reshape(-1, 4)
+        bad = np.flatnonzero((b[:, 2] < 0) | (b[:, 3] < 0))
+        if len(bad):  # named as given, not as the corners it would make
+            raise ValueError(f"xywh must have widths and heights >= 0; xywh[{int(bad[0])}] = "
+                             f"{b[bad[0]].tolist()}")
         # the fields are typed as the ndarrays __post_init__ makes of them; it takes array_like
         return cls(boxes=np.c_[b[:, :2], b[:, :2] + b[:, 2:]],
                    scores=scores, classes=classes)  # type: ignore[arg-type]
