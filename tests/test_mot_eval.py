@@ -5,6 +5,7 @@ of error; and the scores' definitions on small cases worked by hand."""
 from __future__ import annotations
 
 import dataclasses
+import re
 import subprocess
 import sys
 
@@ -418,6 +419,31 @@ def test_ground_truth_that_looks_like_detections(tmp_path):
         f"{res} looks like a detections or results file, not ground truth: its column 7 holds "
         "scores (0.9) where ground truth has 0 or 1, and it has no class column"]
     assert r["s"].TP == 2
+
+
+def test_mot17_ground_truth_with_a_class_of_none_of_theirs_is_warned_about(tmp_path):
+    """Nine columns, classes 1-13 but one 14: --benchmark auto falls back to MOT15's
+    convention (no distractors removed), which it now says, naming the row; MOT17 refuses the
+    file naming the same row; a file of MOT17 classes only, or of no classes, is not warned."""
+    from vistrack.evaluation import evaluate_files
+
+    gt = _rows(tmp_path / "gt.txt", [(1, 1, 10, 20, 30, 60, 1, 1, 1),
+                                     (2, 1, 10, 20, 30, 60, 1, 1, 1),
+                                     (3, 1, 10, 20, 30, 60, 1, 14, 1)])
+    res = _rows(tmp_path / "res.txt", [(1, 1, 10, 20, 30, 60, 1, -1, -1, -1)])
+    r = evaluate_files([("s", gt, res, None)])
+    assert r.warnings == [
+        f"{gt}, line 3: class 14 is not a MOT16/17/20 class (1-13), though most rows have one: "
+        "--benchmark auto scores the file as MOT15, without their preprocessing (--benchmark "
+        "MOT17 refuses it, naming the row)"]
+    with pytest.raises(ValueError, match=re.escape(f"{gt}, line 3, column 8 (class): class 14 "
+                                                   "is not a MOT17 class (1-13)")):
+        evaluate_files([("s", gt, res, None)], benchmark="MOT17")
+    ok = _rows(tmp_path / "ok.txt", [(1, 1, 10, 20, 30, 60, 1, 1, 1),
+                                     (2, 1, 10, 20, 30, 60, 1, 7, 1)])
+    assert evaluate_files([("s", ok, res, None)]).warnings == []
+    with pytest.raises(ValueError, match=r"pairs\[0\] is \("):
+        evaluate_files([(ok, res)])
 
 
 def test_cli_eval_prints_the_warnings_on_stderr(tmp_path, capsys):

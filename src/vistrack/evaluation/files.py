@@ -130,9 +130,10 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     MOTFormatError
         If a file is malformed.
     ValueError
-        If ``benchmark`` is not one of the names, or a file's rows go past the sequence, hold
-        an id twice in a frame or (ground truth of MOT16/17/20) a class outside 1-13, naming
-        the file and the line(s) of the row (see :func:`~vistrack.evaluation.evaluate_mot`).
+        If a pair is not four items, ``benchmark`` is not one of the names, or a file's rows
+        go past the sequence, hold an id twice in a frame or (ground truth of MOT16/17/20) a
+        class outside 1-13, naming the file and the line(s) of the row (see
+        :func:`~vistrack.evaluation.evaluate_mot`).
 
     Examples
     --------
@@ -149,6 +150,10 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     out = EvalResults()
     if jobs is not None and jobs < 1:
         raise ValueError(f"jobs must be 1 or more; got {jobs}")
+    for k, pair in enumerate(pairs):
+        if not isinstance(pair, (tuple, list)) or len(pair) != 4:
+            raise ValueError(f"pairs must hold (name, gt, results, seqinfo or None) tuples; "
+                             f"pairs[{k}] is {pair!r}")
     if executor is None and (jobs or 1) > 1 and len(pairs) > 1:
         from ..batch import process_pool  # one BLAS thread a worker
 

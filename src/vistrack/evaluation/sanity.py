@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..io.motchallenge import MOTTable
-from .mot import box_iou_xywh
+from .mot import _lines_of, _where, box_iou_xywh
 
 __all__ = ["sanity_warnings", "looks_like_detections"]
 
@@ -101,6 +101,16 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable) -> list[str]:
     why = looks_like_detections(gt)
     if why:
         out.append(f"{gname} looks like a detections or results file, not ground truth: {why}")
+    mot17 = np.isin(gt.classes, np.arange(1, 14)) if gt.columns == 9 and len(gt) else None
+    if mot17 is not None and 0.5 <= mot17.mean() < 1:
+        # MOT16/17/20 columns with a few classes that are none of theirs: --benchmark auto
+        # then scores the file as MOT15, without their preprocessing
+        bad = gt.classes[~mot17][0]
+        lines = _lines_of(gt.path, lambda row: len(row) == 9 and row[7] == bad)[:1]
+        out.append(f"{_where(gt, 'the ground truth', lines)}: class {bad:g} is not a MOT16/17/20 "
+                   "class (1-13), though most rows have one: --benchmark auto scores the file "
+                   "as MOT15, without their preprocessing (--benchmark MOT17 refuses it, naming "
+                   "the row)")
     if not len(gt) or not len(pred):
         return out
     common = np.intersect1d(gt.frames, pred.frames)
