@@ -158,6 +158,23 @@ def test_registries_list_the_valid_names():
         Registry("sink", {})["x"]
 
 
+def test_every_registry_the_docs_name_lists_its_names_for_a_wrong_one():
+    """docs/conventions.md: parts chosen by name come from registries whose unknown names
+    raise a ValueError listing the valid ones; the box-tracker presets, single-object
+    methods, background models, resamplers and assigners were plain dicts (KeyError)."""
+    from vistrack import association, filters, frontends, tracking
+
+    for registry, kind in ((tracking.TRACKERS, "box-tracker preset"),
+                           (tracking.METHODS, "single-object method"),
+                           (frontends.BACKGROUNDS, "background"),
+                           (filters.RESAMPLERS, "resampler"),
+                           (association.ASSIGNERS, "assigner")):
+        assert isinstance(registry, Registry)
+        with pytest.raises(ValueError) as e:
+            registry["nope"]
+        assert str(e.value) == f"{kind} must be one of {sorted(registry)}; got 'nope'"
+
+
 class EveryDetection:
     """A tracker of one's own: each detection is its own track, numbered in order."""
 

@@ -23,12 +23,13 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import _compile
 from ._memory import PeriodicRelease
+from ._registry import Registry
 from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, evaluate_mot
 from .io.atomic import check_output, made_folder
@@ -457,39 +458,6 @@ def _abort(sinks: Sequence[Sink]) -> None:
 
 
 # ---------------------------------------------------------------------------- registries
-T = TypeVar("T")
-
-
-class Registry(dict[str, T], Generic[T]):
-    """Parts by name: a ``dict`` whose missing names raise a ``ValueError`` that lists the
-    valid ones.
-
-    Parameters
-    ----------
-    kind : str
-        What the parts are, for the message (``"frontend"``, ``"tracker"``, ``"sink"``).
-    items : dict of str to part
-        The parts by name.
-
-    Examples
-    --------
-    >>> r = Registry("colour", {"red": 1, "blue": 2})
-    >>> r["red"]
-    1
-    >>> r["green"]
-    Traceback (most recent call last):
-    ...
-    ValueError: colour must be one of ['blue', 'red']; got 'green'
-    """
-
-    def __init__(self, kind: str, items: dict[str, T]):
-        super().__init__(items)
-        self.kind = kind
-
-    def __missing__(self, name: str) -> T:
-        raise ValueError(f"{self.kind} must be one of {sorted(self)}; got {name!r}")
-
-
 class _OncePerImage:
     """A confidence ``image -> ConfidenceMap`` evaluated once per image, so that a detector
     and a tracker asking for the same frame's map share it."""

@@ -22,6 +22,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
+from .._registry import Registry
 
 __all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_sparse", "greedy", "lsa",
            "nearest_neighbour", "components"]
@@ -486,7 +487,8 @@ def nearest_neighbour(cost: np.ndarray,
     return rows.astype(np.int64), best[rows].astype(np.int64)
 
 
-ASSIGNERS: dict[str, Callable] = {"gnn": gnn, "greedy": greedy, "nn": nearest_neighbour}
+ASSIGNERS: Registry[Callable] = Registry("assigner", {"gnn": gnn, "greedy": greedy,
+                                                   "nn": nearest_neighbour})
 """Assigners by name: ``f(cost (T, D), gate (T, D)) -> (rows, cols)``."""
 
 

@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike
 
 from .._jit import njit
 from .._prebuilt import Kernel, kernel
+from .._registry import Registry
 from .._validate import as_float_array, as_rng, check_has_steps, check_prior
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
@@ -169,12 +170,13 @@ def _residual(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
     return np.sort(np.concatenate([idx, _multinomial(r / r.sum(), rest, rng)]))
 
 
-RESAMPLERS: dict[str, Callable[[np.ndarray, int, np.random.Generator], np.ndarray]] = {
+RESAMPLERS: Registry[Callable[[np.ndarray, int, np.random.Generator], np.ndarray]] = Registry(
+    "resampler", {
     "multinomial": _multinomial,
     "stratified": _stratified,
     "systematic": _systematic,
     "residual": _residual,
-}
+})
 """Resampling schemes by name: ``f(weights, n, rng) -> indices (n,)``, sorted."""
 
 

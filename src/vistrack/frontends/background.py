@@ -36,6 +36,7 @@ import numpy as np
 
 from .._jit import bind, njit
 from .._prebuilt import kernel
+from .._registry import Registry
 from .._validate import as_uint8_image
 
 prange = range  # numba.prange once numba is imported: a parallel loop when compiled
@@ -359,7 +360,8 @@ class MOG2Background:
         return np.where(m > 200, np.uint8(255), np.uint8(0))
 
 
-BACKGROUNDS = {"selective": SelectiveBackground, "mog2": MOG2Background}
+BACKGROUNDS: Registry[type] = Registry("background", {"selective": SelectiveBackground,
+                                                       "mog2": MOG2Background})
 """Background models by name: ``selective`` (the seeds'), ``mog2`` (OpenCV)."""
 
 

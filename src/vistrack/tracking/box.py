@@ -66,6 +66,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
+from .._registry import Registry
 from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
@@ -207,12 +208,12 @@ class BoxTrackerConfig:
                     frame_rate=frame_rate, chain_span=self.chain_span, chain_gap=self.chain_gap)
 
 
-TRACKERS: dict[str, BoxTrackerConfig] = {
+TRACKERS: Registry[BoxTrackerConfig] = Registry("box-tracker preset", {
     "bytetrack": BoxTrackerConfig(),
     "sort": BoxTrackerConfig(two_stage=False, high=0.5, low=0.5, new_track=0.5, min_iou=0.3,
                              fuse_score=False, confirm_hits=3, max_lost=0.1,
                              camera_motion=False, coast_time=0.0),
-}
+})
 """Box-tracker configurations by name (``vistrack track --tracker NAME``)."""
 
 

@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
+from .._registry import Registry
 from .._validate import as_box, as_uint8_image
 from ._affine import prepare_templates, register
 from .appearance import WSLTracker
@@ -645,7 +646,7 @@ class OpenCVTracker(SingleObjectTracker):
         return self.box.copy()
 
 
-METHODS: dict[str, Callable[[], SingleObjectTracker]] = {
+METHODS: Registry[Callable[[], SingleObjectTracker]] = Registry("single-object method", {
     "klt": MedianFlow,
     "template": TemplateTracker,
     "colour": ColourTracker,
@@ -656,7 +657,7 @@ METHODS: dict[str, Callable[[], SingleObjectTracker]] = {
     "meanshift": lambda: ColourTracker(scales=(1.0,)),
     "csrt": lambda: OpenCVTracker("csrt"),
     "kcf": lambda: OpenCVTracker("kcf"),
-}
+})
 """Single-object trackers by name."""
 
 
