@@ -451,6 +451,21 @@ def test_offline_mode_drops_tracks_of_low_score_detections():
     assert len(smooth(tr, min_score=0.99)) == 0
 
 
+@pytest.mark.parametrize("option, value", [("max_gap", 0.5), ("max_gap", -1),
+                                           ("link_gap", 1.5), ("link_window", 0)])
+def test_smooth_counts_frames_and_refuses_what_is_not_a_count(option, value):
+    """``tracking.smooth`` takes its gaps in frames (the offline settings give seconds): 0.5,
+    meant as seconds, filled nothing before, and -1 was taken; both are named now."""
+    from vistrack.tracking import smooth
+
+    tr = BoxTracker("bytetrack", record=True)
+    tr.step(1, Detections.from_xywh([[10, 10, 20, 40]], [0.9]))
+    least = 1 if option == "link_window" else 0
+    with pytest.raises(ValueError) as e:
+        smooth(tr, **{option: value})
+    assert str(e.value) == f"{option} must be a whole number of frames >= {least}; got {value!r}"
+
+
 def _walkers(rng, paths, T, noise=1.0):
     """Truth and detections of boxes 40 x 100 moving with constant velocity: ``paths`` holds
     ``(start (x, y), velocity, frames present, frames detected, score(frame))``."""

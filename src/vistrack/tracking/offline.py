@@ -166,7 +166,14 @@ def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0, *,
     Raises
     ------
     ValueError
-        If the tracker was not created with ``record=True``.
+        If the tracker was not created with ``record=True``, or ``max_gap``, ``link_gap`` or
+        ``link_window`` is not a whole number of frames >= 0 (>= 1 for ``link_window``).
+
+    Notes
+    -----
+    ``max_gap``, ``link_gap`` and ``link_window`` count frames. The offline mode's settings
+    (:class:`vistrack.config.OfflineConfig`, ``vistrack track --offline``) give them in
+    seconds, turned into frames with the sequence's frame rate.
 
     Examples
     --------
@@ -187,6 +194,10 @@ def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0, *,
     """
     if not tracker.record:
         raise ValueError("the tracker must be created with record=True for offline smoothing")
+    for name, v, least in (("max_gap", max_gap, 0), ("link_gap", link_gap, 0),
+                           ("link_window", link_window, 1)):
+        if isinstance(v, bool) or int(v) != v or v < least:
+            raise ValueError(f"{name} must be a whole number of frames >= {least}; got {v!r}")
     if not tracker.history:
         return _empty()
     cam = {h[0]: h[9] for h in tracker.history}
