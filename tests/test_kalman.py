@@ -513,3 +513,17 @@ def test_a_series_of_the_wrong_width_and_a_position_wider_than_the_motion_are_na
     # fewer is a choice (x alone of a 2-D motion), and works
     one = vt.KalmanFilter(vt.ConstantVelocity(dim=2), vt.Position(dim=1))
     assert one.filter(np.arange(5.0)[:, None]).means.shape == (5, 4)
+
+
+def test_kf_update_names_the_measurement_when_h_and_r_agree_on_another_size():
+    """y three wide where H (2 x 4) and R (2 x 2) agree on two: y is named, not H; where H
+    disagrees with R or the state, H is named as before."""
+    g = vt.Gaussian(np.zeros(4), np.eye(4))
+    with pytest.raises(ValueError) as e:
+        kf_update(g, np.zeros(3), np.eye(2, 4), np.eye(2))
+    assert str(e.value) == ("y must have 2 values a Gaussian, one for each row of H (2, 4); "
+                            "got shape (3,)")
+    with pytest.raises(ValueError, match=r"H must have shape \(2, 4\); got \(3, 4\)"):
+        kf_update(g, np.zeros(2), np.eye(3, 4), np.eye(2))
+    with pytest.raises(ValueError, match=r"H must have shape \(2, 4\); got \(2, 3\)"):
+        kf_update(g, np.zeros(2), np.eye(2, 3), np.eye(2))

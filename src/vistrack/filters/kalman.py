@@ -544,8 +544,14 @@ def kf_update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> Gaussian
 def _update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> tuple[Gaussian, np.ndarray]:
     """:func:`kf_update` and ``log N(y; H m, H P H' + R)`` per Gaussian (0 where nothing is
     observed)."""
+    given = np.shape(y)
     mean, cov, y = _with_measurement(g, y)
     n, m = mean.shape[-1], y.shape[-1]
+    h, r = np.shape(H), np.shape(R)
+    if len(h) in (2, 3) and h[-1] == n and h[-2] != m and (len(r) < 2 or r[-2:] == (h[-2],) * 2):
+        # H fits the state and R fits H: the measurement is the one of the wrong size
+        raise ValueError(f"y must have {h[-2]} values a Gaussian, one for each row of H "
+                         f"{h}; got shape {given}")
     code, mean, cov, ll = _kernels.update_batch_py(
         mean, cov, y, _small_matrix(H, "H", m, n),
         _small_matrix(R, "R", m, m),
