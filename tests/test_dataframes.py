@@ -137,6 +137,14 @@ def test_detections_to_and_from_supervision_and_ultralytics():
     d = Detections.from_ultralytics(result)
     assert d.boxes.tolist() == theirs.xyxy.tolist() and d.classes.tolist() == [0, 3]
     np.testing.assert_allclose(d.scores, [0.9, 0.2], rtol=1e-6)
+    # the list of one that model(image) returns is taken as its result; a list of several,
+    # or a result without boxes (a classification model's), is named
+    listed = Detections.from_ultralytics([result])
+    assert listed.boxes.tolist() == d.boxes.tolist() and listed.scores.tolist() == d.scores.tolist()
+    with pytest.raises(TypeError, match=r"result must be one image's result; got a list of 2 "):
+        Detections.from_ultralytics([result, result])
+    with pytest.raises(TypeError, match="result must be a detection model's result, with boxes"):
+        Detections.from_ultralytics(SimpleNamespace(boxes=None))
 
 
 def test_tracks_written_as_parquet_are_the_text_files_rows(tmp_path):

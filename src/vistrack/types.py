@@ -290,7 +290,9 @@ class Detections:
     @classmethod
     def from_ultralytics(cls, result: Any) -> Detections:
         """From one image's ``ultralytics`` result (``result.boxes`` with ``xyxy``, ``conf``
-        and ``cls``, torch tensors or arrays; ultralytics is not imported).
+        and ``cls``, torch tensors or arrays; ultralytics is not imported), or the list of one
+        that ``model(image)`` returns. Raises ``TypeError`` for a list of several results, or a
+        result without boxes.
 
         Examples
         --------
@@ -305,7 +307,16 @@ class Detections:
                 x = getattr(x, step)() if hasattr(x, step) else x
             return np.asarray(x)
 
-        b = result.boxes
+        if isinstance(result, (list, tuple)):
+            # what ``model(image)`` returns: one result for each image given
+            if len(result) != 1:
+                raise TypeError(f"result must be one image's result; got a {type(result).__name__}"
+                                f" of {len(result)} (give results[k], one at a time)")
+            result = result[0]
+        b = getattr(result, "boxes", None)
+        if b is None:
+            raise TypeError(f"result must be a detection model's result, with boxes; this "
+                            f"{type(result).__name__} has none (a classification model's?)")
         return cls(boxes=array(b.xyxy).astype(np.float64).reshape(-1, 4),
                    scores=array(b.conf).astype(np.float64),
                    classes=array(b.cls).astype(np.int64))
