@@ -283,9 +283,10 @@ def _track(args: argparse.Namespace) -> int:
             raise SystemExit(_fail("track", "the following arguments are required: INPUT"))
         return _print_config(args)
     if ":" in (args.tracker or "") and not args.tracker.startswith("single:") \
-            and "" not in sys.path and os.getcwd() not in sys.path:
+            and args.own_process and "" not in sys.path and os.getcwd() not in sys.path:
         # --tracker module:callable finds a module of the current folder, as `python -m`
-        # would (a console script's path has its own folder instead); workers inherit it
+        # would (a console script's path has its own folder instead; a program calling main
+        # keeps its own path); workers inherit it
         sys.path.insert(0, os.getcwd())
     if (len(args.input) > 1 or is_benchmark(Path(args.input[0])) or args.jobs is not None
             or args.scheduler is not None):
