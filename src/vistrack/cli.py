@@ -283,7 +283,8 @@ def _track(args: argparse.Namespace) -> int:
             raise SystemExit(_fail("track", "the following arguments are required: INPUT"))
         return _print_config(args)
     if ":" in (args.tracker or "") and not args.tracker.startswith("single:") \
-            and args.own_process and "" not in sys.path and os.getcwd() not in sys.path:
+            and getattr(args, "own_process", False) and "" not in sys.path \
+            and os.getcwd() not in sys.path:
         # --tracker module:callable finds a module of the current folder, as `python -m`
         # would (a console script's path has its own folder instead; a program calling main
         # keeps its own path); workers inherit it
