@@ -467,3 +467,19 @@ def test_the_progress_bar_on_a_terminal_and_lines_elsewhere(tmp_path):
         "[1/3] A: 10 frames, 3 tracks, 0.2 s", "[2/3] B: failed: ValueError: bad",
         "[3/3] C: 5 frames, 2 tracks, 0.1 s"]
     assert progress_lines(None, 3) is None
+
+
+@pytest.mark.parametrize("option, error, message", [
+    ("bogus", TypeError, "bogus is no setting of the box tracker or the offline mode (those "
+                         "are assigner, "),
+    ("high", ValueError, "high must be in [0, 1] (a calibrated confidence); got 1.5"),
+])
+def test_options_are_checked_once_before_any_job(bench, tmp_path, option, error, message):
+    """An unknown option or a bad value is named once, before any job runs or anything is
+    written; before, every input failed with the same error in its outcome. The name is
+    vistrack's, not the dataclass __init__'s."""
+    value = 1.5 if option == "high" else 3
+    with pytest.raises(error) as e:
+        track_many([bench], tmp_path / "out", jobs=1, **{option: value})
+    assert str(e.value).startswith(message)
+    assert not (tmp_path / "out").exists()

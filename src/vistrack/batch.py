@@ -120,6 +120,10 @@ class Outcome:
     attempts: int = 1
 
 
+# track_sequence's options that are not the configuration's
+_RUN_OPTIONS = frozenset({"detections", "columns", "fps", "force", "progress"})
+
+
 def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detections",
          **options: Any) -> list[Job]:
     """The jobs of :func:`track_many`: each input (benchmark folders expanded,
@@ -136,12 +140,21 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
     ------
     ValueError
         If ``kind`` is unknown, with ``"detections"`` an input is not a sequence folder (or,
-        given ``fps``, a detections file or a folder with ``det/det.txt``), or two inputs
-        would write to the same place.
+        given ``fps``, a detections file or a folder with ``det/det.txt``) or a setting's
+        value is invalid, or two inputs would write to the same place.
+    TypeError
+        With ``"detections"``, if an option is no setting of ``track_sequence``.
     """
     if kind not in ("detections", "pixels"):
         raise ValueError(f"kind must be 'detections' or 'pixels'; got {kind!r}")
     from .io.motchallenge import DETECTION_SUFFIXES, sequence_name
+
+    if kind == "detections":
+        # the configuration every job would make, made once here: an unknown option or a bad
+        # value is named before any job runs, not once for each input
+        from .pipeline import resolve_config
+
+        resolve_config(**{k: v for k, v in options.items() if k not in _RUN_OPTIONS})
 
     out = Path(out)
     jobs = []

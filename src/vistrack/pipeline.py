@@ -45,7 +45,7 @@ from .io.motchallenge import (
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
 from .models.box import BoxMotion
 from .tracking.base import Tracker
-from .tracking.box import BoxTracker
+from .tracking.box import BoxTracker, BoxTrackerConfig
 from .tracking.calibration import ScoreCalibration
 from .tracking.offline import smooth
 from .types import Detections, Frame
@@ -130,6 +130,7 @@ def _progress(done: int, total: int, label: str, stream: TextIO | None) -> None:
 
 
 _OFFLINE_KEYS = {f.name for f in fields(OfflineConfig)}
+_TRACKER_KEYS = {f.name for f in fields(BoxTrackerConfig)}
 
 
 def resolve_config(config: TrackConfig | str | None = None, *, tracker: str | None = None,
@@ -180,6 +181,11 @@ def resolve_config(config: TrackConfig | str | None = None, *, tracker: str | No
         raise ValueError(f"tracker {tracker!r} and the configuration's {config.name!r} "
                          "disagree; give one")
     motion = overrides.pop("motion", None)
+    unknown = sorted(set(overrides) - _OFFLINE_KEYS - _TRACKER_KEYS)
+    if unknown:  # named here: the dataclass would say it of its __init__
+        raise TypeError(f"{unknown[0]} is no setting of the box tracker or the offline mode "
+                        f"(those are {', '.join(sorted(_TRACKER_KEYS | _OFFLINE_KEYS))}, and "
+                        "motion)")
     off = {k: overrides.pop(k) for k in list(overrides) if k in _OFFLINE_KEYS}
     if offline is not None:
         off["enabled"] = bool(offline)
