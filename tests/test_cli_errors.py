@@ -417,6 +417,16 @@ def test_skip_bad_frames_carries_on_past_a_cut_short_jpeg(tmp_path, capsys):
     assert 25 not in frames and frames.max() > 25  # the frame after it keeps its number
 
 
+def test_a_detections_file_given_to_out_dir_is_refused_naming_out(tmp_path, capsys):
+    """``vistrack track det.txt --out-dir OUT`` (a detections file in the mode for pixels):
+    OpenCV decoded the text as 243 frames of noise and the run "tracked" them, 0 boxes."""
+    assert main(["track", str(GT), "--out-dir", str(tmp_path / "out")]) == 2
+    one_line(capsys, "track", f"--out-dir is for a video, image folder or sequence folder from "
+             f"pixels, and {GT} is a detections file: track it with --out RESULTS.txt (and its "
+             "frame rate, --fps)")
+    assert not (tmp_path / "out").exists()
+
+
 def test_eval_takes_a_sequence_folder_for_its_ground_truth(tmp_path, capsys):
     """``--gt SEQ`` (as vistrack track takes a sequence) scores against SEQ/gt/gt.txt, with
     SEQ/seqinfo.ini; a folder without gt/gt.txt is named."""

@@ -347,6 +347,11 @@ def _track(args: argparse.Namespace) -> int:
                 need_parquet()
             except ImportError as e:
                 return fail(f"--out {args.out}: {e}")
+    elif Path(args.input).is_file() and Path(args.input).suffix.lower() in DETECTION_SUFFIXES:
+        # OpenCV would decode the text as frames of noise and the run would "track" them
+        return fail(f"--out-dir is for a video, image folder or sequence folder from pixels, and "
+                    f"{args.input} is a detections file: track it with --out RESULTS.txt "
+                    "(and its frame rate, --fps)")
     else:
         offline_flags = [f for f in ("offline", "detections", "columns") if getattr(args, f)]
         offline_flags += [o for o, table, *_ in _SETTINGS
