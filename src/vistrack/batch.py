@@ -120,10 +120,6 @@ class Outcome:
     attempts: int = 1
 
 
-# track_sequence's options that are not the configuration's
-_RUN_OPTIONS = frozenset({"detections", "columns", "fps", "force", "progress"})
-
-
 def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detections",
          **options: Any) -> list[Job]:
     """The jobs of :func:`track_many`: each input (benchmark folders expanded,
@@ -152,9 +148,15 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
     if kind == "detections":
         # the configuration every job would make, made once here: an unknown option or a bad
         # value is named before any job runs, not once for each input
-        from .pipeline import resolve_config
+        import inspect
 
-        resolve_config(**{k: v for k, v in options.items() if k not in _RUN_OPTIONS})
+        from .pipeline import resolve_config, track_sequence
+
+        # track_sequence's own options (detections, fps, ...), read from the two signatures
+        # rather than listed again here
+        run = set(inspect.signature(track_sequence).parameters) - set(
+            inspect.signature(resolve_config).parameters)
+        resolve_config(**{k: v for k, v in options.items() if k not in run})
 
     out = Path(out)
     jobs = []

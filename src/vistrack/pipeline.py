@@ -237,6 +237,14 @@ def derived_values(trk: BoxTracker) -> dict:
     return out
 
 
+def _warn_calibration(trk: BoxTracker, name: str) -> None:
+    """:func:`calibration_warning` as a ``RuntimeWarning`` of the run that called for it (of
+    :func:`track_sequence`'s or :func:`track_video`'s caller)."""
+    warning = calibration_warning(trk, name)
+    if warning is not None:
+        warnings.warn(warning, RuntimeWarning, stacklevel=3)
+
+
 def calibration_warning(trk: BoxTracker, name: str) -> str | None:
     """Why a box tracker's calibrated scores could not be told apart, as a warning, or None.
 
@@ -999,9 +1007,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
             n_rows, n_tracks = len(F), len(np.unique(I))
         if parquet:
             read_mot(text).to_parquet(out)
-    warning = calibration_warning(trk, str(det_path if alone else seq_dir))
-    if warning is not None:
-        warnings.warn(warning, RuntimeWarning, stacklevel=2)
+    _warn_calibration(trk, str(det_path if alone else seq_dir))
     return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds,
                     cfg.with_motion(), derived_values(trk))
 
@@ -1431,9 +1437,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         scores = evaluate_mot(g, read_mot(files["tracks"]), last, benchmark="auto")
     n_tracks = len(rows.identities)
     if isinstance(trk, BoxTracker):
-        warning = calibration_warning(trk, str(video))
-        if warning is not None:
-            warnings.warn(warning, RuntimeWarning, stacklevel=2)
+        _warn_calibration(trk, str(video))
     result = VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
                       ctx.resolved if isinstance(trk, BoxTracker) else None,
                       derived_values(trk) if isinstance(trk, BoxTracker) else None,

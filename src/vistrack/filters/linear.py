@@ -383,10 +383,9 @@ class KalmanFilter:
         >>> sm.means.shape, sm.covs.shape, sm.filtered.means.shape
         ((5, 2), (5, 2, 2), (5, 2))
         """
-        self._check_ys(ys)
         T = np.shape(ys)[-2]
         mats = self.matrices(T, dt)
-        res = self.filter(ys, dt=dt, x0=x0, P0=P0)
+        res = self.filter(ys, dt=dt, x0=x0, P0=P0)  # checks ys
         return rts_smooth(res, F=mats["F"], Q=mats["Q"])
 
     def fit(
