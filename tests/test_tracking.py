@@ -266,6 +266,39 @@ def test_compiled_step_equals_the_numpy_steps(config):
     assert assert_same_tracking(frames, config=config) > 500
 
 
+def test_read_only_detections_track_as_writable_ones():
+    """Boxes, scores and classes that are read-only (np.load with mmap_mode, pandas' views)
+    give the tracks writable ones give, compiled or not, with calibrated or raw scores; the
+    compiled path failed in numba's typing (a tuple of a read-only and a writable array), and
+    iou_pairs with it."""
+    rng = np.random.default_rng(8)
+    _, dets = scene(rng, n_obj=10, clutter=1.0)
+
+    def frozen(d):
+        arrays = [np.array(a) for a in (d.boxes, d.scores, d.classes)]
+        for a in arrays:
+            a.setflags(write=False)
+        return Detections(boxes=arrays[0], scores=arrays[1], classes=arrays[2])
+
+    for config in ({}, {"scores": "raw"}, {"compiled": False}):
+        runs = []
+        for make in (lambda d: d, frozen):
+            tr = BoxTracker(**config)
+            runs.append([tr.step(f, make(d)) for f, d in enumerate(dets, start=1)])
+        assert sum(len(o) for o in runs[0]) > 300
+        for a, b in zip(*runs):
+            assert np.array_equal(a.ids, b.ids) and np.array_equal(a.boxes, b.boxes)
+    a = dets[60].boxes
+    b = np.array(dets[61].boxes)
+    b.setflags(write=False)
+    want = iou_pairs(a, np.array(b), 0.1)
+    for x, y in ((a, b), (b, a)):
+        got = iou_pairs(x, y, 0.1)
+        mine = iou_pairs(np.array(x), np.array(y), 0.1)
+        assert all(np.array_equal(u, v) for u, v in zip(got, mine))
+    assert len(want[0]) > 5
+
+
 def camera_shifts(tracker, dets):
     """The camera shift the tracker applies at each frame, (T, 2)."""
     out = []

@@ -298,6 +298,16 @@ def mahalanobis_pairs(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike,
     return rows[ok], cols[ok], d2[ok]
 
 
+@njit(cache=True)
+def _finite(boxes):
+    # every value of the (N, 4) boxes finite
+    for j in range(boxes.shape[0]):
+        for k in range(4):
+            if not np.isfinite(boxes[j, k]):
+                return False
+    return True
+
+
 @njit(cache=True, error_model="numpy")
 def _grid_pairs(a, b, min_iou):
     # b bucketed by the grid cell of its corner (x0, y0), cells as large as b's largest box
@@ -306,11 +316,10 @@ def _grid_pairs(a, b, min_iou):
     # (a.x1, a.y1). Returns (rows, cols, iou, ok); ok is False for a non-finite box.
     cw, ch = 1e-9, 1e-9
     x_hi, y_hi = -np.inf, -np.inf
-    for arr in (a, b):
-        for j in range(arr.shape[0]):
-            for k in range(4):
-                if not np.isfinite(arr[j, k]):
-                    return (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(0), False)
+    # one call each rather than a loop over (a, b): numba iterates over a tuple only of one
+    # type, and a read-only array is of another type than a writable one
+    if not _finite(a) or not _finite(b):
+        return (np.empty(0, np.int64), np.empty(0, np.int64), np.empty(0), False)
     for j in range(b.shape[0]):
         cw = max(cw, b[j, 2] - b[j, 0])
         ch = max(ch, b[j, 3] - b[j, 1])

@@ -232,6 +232,17 @@ def _contiguous(a: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.float64)
 
 
+def _writable(d: Detections) -> Detections:
+    """``d``, or a copy of it whose arrays are writable where one of ``d``'s is read-only
+    (``np.load`` with ``mmap_mode``, ``setflags(write=False)``, pandas' views): the kernels
+    are compiled, at install, for writable arrays, and numba would compile each of them again
+    for a read-only one on first use."""
+    if all(a is None or a.flags.writeable for a in (d.boxes, d.scores, d.classes)):
+        return d
+    return replace(d, **{name: np.array(a) for name in ("boxes", "scores", "classes")
+                         if (a := getattr(d, name)) is not None})
+
+
 def _to_xyxy(m: np.ndarray) -> np.ndarray:
     c, s = m[:, 0:2], np.maximum(m[:, 2:4], 0.0)
     return np.concatenate([c - s / 2, c + s / 2], axis=1)
@@ -679,6 +690,7 @@ class BoxTracker:
             detections = Detections(boxes=np.zeros((0, 4)))
         if not isinstance(detections, Detections) or detections.boxes is None:
             raise TypeError("detections must be vistrack.Detections with boxes")
+        detections = _writable(detections)
         frame = frame_index(frame, self.frame)
         first = self.frame is None
         dt = 0.0 if self.frame is None else float(frame - self.frame)
@@ -686,7 +698,8 @@ class BoxTracker:
         time = frame / self.frame_rate
         cfg, t = self.config, self.tracks
         db, raw, dc = detections.boxes, detections.scores, detections.classes
-        assert raw is not None and dc is not None  # set by Detections.__post_init__
+        # set by Detections.__post_init__ (boxes checked above)
+        assert db is not None and raw is not None and dc is not None
         if np.isnan(raw).any():
             i = int(np.flatnonzero(np.isnan(raw))[0])
             raise ValueError(f"detection scores must not be NaN; scores[{i}] is NaN (frame "
