@@ -136,6 +136,43 @@ def test_bad_inputs_are_named():
         evaluate_mot(table([1], [1], [0]), table([1], [1], [0]), benchmark="KITTI")
 
 
+
+def test_a_frame_before_the_first_is_named_not_dropped():
+    """A table built in Python (read_mot refuses it) with a row of frame 0, as a tracker that
+    counts frames from 0 writes: it used to be left out of the scores without a word, and a
+    wrong box there scored as perfect."""
+    gt = MOTTable.from_rows([(0, 1, 0, 0, 10, 10), (1, 1, 0, 0, 10, 10)])
+    good = MOTTable.from_rows([(1, 1, 0, 0, 10, 10)])
+    with pytest.raises(ValueError) as e:
+        evaluate_mot(gt, good)
+    assert str(e.value) == ("ground truth: frame 0 is before the first (MOTChallenge frames "
+                            "count from 1)")
+    with pytest.raises(ValueError) as e:
+        evaluate_mot(good, MOTTable.from_rows([(-2, 1, 500, 0, 10, 10), (1, 1, 0, 0, 10, 10)]))
+    assert str(e.value) == ("prediction: frame -2 is before the first (MOTChallenge frames "
+                            "count from 1)")
+    assert evaluate_mot(good, good).MOTA == 1.0
+
+
+def test_two_pairs_of_one_name_are_refused(tmp_path):
+    """evaluate_files keys its results by name: a second pair of a name, or a pair named
+    COMBINED, would replace a sequence's scores with another's."""
+    from vistrack.evaluation import evaluate_files
+
+    g = tmp_path / "gt.txt"
+    g.write_text("1,1,0,0,10,10,1,1,1\n")
+    with pytest.raises(ValueError) as e:
+        evaluate_files([("seq", g, g, None), ("other", g, g, None), (1, g, g, None),
+                        ("1", g, g, None)])
+    assert str(e.value) == ("pairs[2] and pairs[3] are both named '1': each pair needs a name "
+                            "of its own")
+    with pytest.raises(ValueError) as e:
+        evaluate_files([("seq", g, g, None), ("COMBINED", g, g, None)])
+    assert str(e.value) == "pairs[1] is named 'COMBINED', the name of the sum of all"
+    assert sorted(evaluate_files([("a", g, g, None), ("b", g, g, None)])) == ["COMBINED", "a",
+                                                                               "b"]
+
+
 def motmetrics_summary(gt_path, pred_path):
     if not hasattr(np, "asfarray"):  # py-motmetrics 1.4 still calls np.asfarray (numpy < 2)
         np.asfarray = lambda a, dtype=float: np.asarray(a, dtype=dtype)  # noqa: NPY201 (the shim)

@@ -130,7 +130,8 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     MOTFormatError
         If a file is malformed.
     ValueError
-        If a pair is not four items, ``benchmark`` is not one of the names, or a file's rows
+        If a pair is not four items, two pairs have one name (or one is named
+        ``"COMBINED"``), ``benchmark`` is not one of the names, or a file's rows
         go past the sequence, hold an id twice in a frame or (ground truth of MOT16/17/20) a
         class outside 1-13, naming the file and the line(s) of the row (see
         :func:`~vistrack.evaluation.evaluate_mot`).
@@ -154,6 +155,15 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
         if not isinstance(pair, (tuple, list)) or len(pair) != 4:
             raise ValueError(f"pairs must hold (name, gt, results, seqinfo or None) tuples; "
                              f"pairs[{k}] is {pair!r}")
+    seen: dict[str, int] = {}
+    for k, (name, *_) in enumerate(pairs):
+        # the results are keyed by the name as text: two pairs of one name would keep one
+        if str(name) == "COMBINED":
+            raise ValueError(f"pairs[{k}] is named 'COMBINED', the name of the sum of all")
+        if str(name) in seen:
+            raise ValueError(f"pairs[{seen[str(name)]}] and pairs[{k}] are both named "
+                             f"{str(name)!r}: each pair needs a name of its own")
+        seen[str(name)] = k
     if executor is None and (jobs or 1) > 1 and len(pairs) > 1:
         from ..batch import process_pool  # one BLAS thread a worker
 

@@ -229,6 +229,11 @@ def _where(table: MOTTable, what: str, lines: list[int]) -> str:
 
 
 def _check_frames(table: MOTTable, what: str, n_frames: int) -> None:
+    if len(table) and table.frames.min() < 1:
+        first = int(table.frames.min())
+        lines = _lines_of(table.path, lambda row: row[0] == first)[:1]
+        raise ValueError(f"{_where(table, what, lines)}: frame {first} is before the "
+                         "first (MOTChallenge frames count from 1)")
     if len(table) and table.frames.max() > n_frames:
         last = int(table.frames.max())
         lines = _lines_of(table.path, lambda row: row[0] == last)[:1]
@@ -837,8 +842,9 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     Raises
     ------
     ValueError
-        If ``benchmark`` is not one of the names, a file has rows beyond ``n_frames`` or an id
-        twice in a frame, or MOT16/17/20 ground truth has a class outside 1-13. The message
+        If ``benchmark`` is not one of the names, a file has rows beyond ``n_frames`` or
+        before frame 1 (a table built in Python; ``read_mot`` refuses those) or an id twice in
+        a frame, or MOT16/17/20 ground truth has a class outside 1-13. The message
         names the table's file and, when it was read from one, the line(s) of the row:
         ``res.txt, lines 4 and 9: id 3 appears more than once in frame 2``.
 
