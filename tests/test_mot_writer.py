@@ -9,6 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from vistrack.io import MOTWriter, read_mot, write_mot
+from vistrack.io.motchallenge import _write_sorted
 from vistrack.types import Frame, Tracks
 
 ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.4g,-1,-1,-1\n"
@@ -48,8 +49,13 @@ def test_write_mot_is_the_percent_format_byte_for_byte(tmp_path, seed):
     f[rng.random(n) < 0.005] = np.iinfo(np.int64).min
     i = rng.integers(-5, 10 ** int(rng.integers(1, 16)), n)
     b, c = values(rng, 4 * n).reshape(n, 4), values(rng, n)
-    path = write_mot(tmp_path / "r.txt", f, i, b, c)
+    # the formatting of any values (write_mot refuses the rows read_mot would refuse; its
+    # valid rows are tested below)
+    path = _write_sorted(tmp_path / "r.txt", f, i, b, c)
     assert path.read_bytes() == percent_format(f, i, b, c)
+    ok = (f >= 1) & np.isfinite(b).all(axis=1) & (b[:, 2:] >= 0).all(axis=1) & np.isfinite(c)
+    valid = write_mot(tmp_path / "v.txt", f[ok], i[ok], b[ok], c[ok])
+    assert valid.read_bytes() == percent_format(f[ok], i[ok], b[ok], c[ok])
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -96,9 +102,45 @@ def test_write_mot_typical_results_then_read_back(tmp_path):
     st.integers(-2 ** 63, 2 ** 63 - 1), st.integers(-2 ** 63, 2 ** 63 - 1),
     *[st.floats(allow_nan=True, allow_infinity=True, width=64)] * 5), min_size=1, max_size=40))
 def test_write_mot_hypothesis_floats(tmp_path_factory, rows):
-    """Any int64 frames and ids and any doubles (subnormal, huge, -0.0, NaN)."""
+    """Any int64 frames and ids and any doubles (subnormal, huge, -0.0, NaN), formatted as
+    write_mot formats its rows."""
     a = list(zip(*rows))
     f, i = np.array(a[0], dtype=np.int64), np.array(a[1], dtype=np.int64)
     b, c = np.array(a[2:6], dtype=float).T, np.array(a[6], dtype=float)
-    path = write_mot(tmp_path_factory.getbasetemp() / "hyp.txt", f, i, b, c, force=True)
+    path = _write_sorted(tmp_path_factory.getbasetemp() / "hyp.txt", f, i, b, c)
     assert path.read_bytes() == percent_format(f, i, b, c)
+
+
+@pytest.mark.parametrize("frames, ids, boxes, conf, message", [
+    ([0, 2], [1, 1], [[0, 0, 1, 1]] * 2, None,
+     "frames[0] = 0: MOTChallenge frames count from 1"),
+    ([1, 2.7], [1, 1], [[0, 0, 1, 1]] * 2, None, "frames[1] = 2.7 is not a whole number"),
+    ([1, np.nan], [1, 1], [[0, 0, 1, 1]] * 2, None, "frames[1] = nan is not a whole number"),
+    ([1, 2], [1, 1.9], [[0, 0, 1, 1]] * 2, None, "ids[1] = 1.9 is not a whole number"),
+    ([1, 2], [1, 1], [[0, 0, 1, 1], [np.inf, 0, 1, 1]], None,
+     "boxes[1] = [inf, 0.0, 1.0, 1.0] is not finite"),
+    ([1, 2], [1, 1], [[0, 0, -5, 1], [0, 0, 1, 1]], None,
+     "boxes[0] = [0.0, 0.0, -5.0, 1.0] has a negative width or height"),
+    ([1, 2], [1, 1], [[0, 0, 1, 1]] * 2, [np.nan, 1], "conf[0] = nan is not finite"),
+    ([1], [1], [[0, 0, 1, 1, 1]], None, "boxes must have shape (N, 4); got (1, 5)"),
+])
+def test_write_mot_refuses_what_read_mot_would_refuse(tmp_path, frames, ids, boxes, conf,
+                                                      message):
+    """Each of these was written (frame 2.7 as 2, id 1.9 as 1, a NaN box as 'nan') into a
+    file read_mot then refused, or read back as other numbers; now nothing is written."""
+    path = tmp_path / "res.txt"
+    with pytest.raises(ValueError) as e:
+        write_mot(path, frames, ids, boxes, conf)
+    assert str(e.value) == message
+    assert not path.exists()
+
+
+def test_write_mot_takes_whole_floats_and_one_row_as_four_numbers(tmp_path):
+    """Frames and ids as floats that are whole numbers (a table read with pandas), and one
+    box given as four numbers, are written as read_mot reads them back."""
+    path = write_mot(tmp_path / "a.txt", np.array([2.0, 1.0]), np.array([7.0, 3.0]),
+                     [[0, 0, 10, 20], [1, 2, 3, 4]], [0.5, 0.25])
+    t = read_mot(path)
+    assert t.frames.tolist() == [1, 2] and t.ids.tolist() == [3, 7]
+    one = read_mot(write_mot(tmp_path / "b.txt", [4], [1], [1.5, 2, 3, 4]))
+    assert one.boxes.tolist() == [[1.5, 2.0, 3.0, 4.0]] and one.frames.tolist() == [4]

@@ -721,7 +721,9 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
     FileExistsError
         If ``path`` exists and ``force`` is False.
     ValueError
-        If the columns differ in length.
+        If the columns differ in length, or a row is one :func:`read_mot` would refuse: a
+        frame or id that is not a whole number, a frame below 1, a box that is not finite or
+        of negative width or height, a score that is not finite (naming the first such row).
 
     Examples
     --------
@@ -735,13 +737,33 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
     path = Path(path)
     if path.exists() and not force:
         raise FileExistsError(f"{path} exists; pass force=True (--force) to overwrite it")
-    f = np.asarray(frames, dtype=np.int64).ravel()
-    i = np.asarray(ids, dtype=np.int64).ravel()
-    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
+    f, i = _integers(frames, "frames"), _integers(ids, "ids")
+    b = np.asarray(boxes, dtype=float)
+    if b.size == 0 or b.shape == (4,):  # no rows, or one
+        b = b.reshape(-1, 4)
+    if b.ndim != 2 or b.shape[1] != 4:
+        raise ValueError(f"boxes must have shape (N, 4); got {b.shape}")
     c = np.ones(len(f)) if conf is None else np.asarray(conf, dtype=float).ravel()
     if not len(f) == len(i) == len(b) == len(c):
         raise ValueError(f"frames, ids, boxes and conf must have the same length; got "
                          f"{len(f)}, {len(i)}, {len(b)}, {len(c)}")
+    # what read_mot would refuse to read back
+    for bad, what in ((f < 1, "frames[{k}] = {v}: MOTChallenge frames count from 1"),
+                      (~np.isfinite(b).all(axis=1), "boxes[{k}] = {v} is not finite"),
+                      ((b[:, 2] < 0) | (b[:, 3] < 0), "boxes[{k}] = {v} has a negative "
+                       "width or height"),
+                      (~np.isfinite(c), "conf[{k}] = {v} is not finite")):
+        if bad.any():
+            k = int(np.argmax(bad))
+            v = {"frames": f, "boxes": b, "conf": c}[what.partition("[")[0]][k]
+            raise ValueError(what.format(k=k, v=v.tolist() if np.ndim(v) else v))
+    return _write_sorted(path, f, i, b, c)
+
+
+def _write_sorted(path: Path, f: np.ndarray, i: np.ndarray, b: np.ndarray,
+                  c: np.ndarray) -> Path:
+    """The rows, sorted by frame and id, formatted into ``path`` (any values: the checks are
+    :func:`write_mot`'s)."""
     if len(f) > 1 and not np.all((f[1:] > f[:-1]) | ((f[1:] == f[:-1]) & (i[1:] >= i[:-1]))):
         order = np.lexsort((i, f))
         f, i, b, c = f[order], i[order], b[order], c[order]
@@ -750,6 +772,19 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
             e = min(s + _WRITE_BLOCK, len(f))
             out.write(_format_rows(f[s:e], i[s:e], b[s:e], c[s:e]))
     return path
+
+
+def _integers(values: ArrayLike, name: str) -> np.ndarray:
+    """``values`` as int64, refusing one that is not a whole number (2.7 was written as 2)."""
+    a = np.asarray(values).ravel()
+    if a.dtype.kind in "iub":
+        return a.astype(np.int64, copy=False)
+    x = np.asarray(a, dtype=float)
+    bad = ~np.isfinite(x) | (x != np.round(x))
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is not a whole number")
+    return x.astype(np.int64)
 
 
 _ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.4g,-1,-1,-1\n"
