@@ -112,6 +112,17 @@ def _cv2():
 
 _SHORT_WARNED: set[Path] = set()
 
+_TEXT_SUFFIXES = (".txt", ".csv", ".tsv", ".json", ".toml", ".ini", ".md")
+"""Files that are text: refused as videos."""
+
+
+def _natural(path: Path) -> tuple:
+    """A sort key of a file's name with its numbers as numbers: ``2.png`` before ``10.png``,
+    as ``000002.png`` before ``000010.png`` (the name itself breaks ties: ``1.png``,
+    ``01.png``)."""
+    parts = re.split(r"(\d+)", path.name)
+    return tuple(int(t) if k % 2 else t for k, t in enumerate(parts)), path.name
+
 
 def _holds_images(folder: Path) -> bool:
     """Whether ``folder`` is a folder with an image in it (False if it cannot be listed)."""
@@ -129,8 +140,9 @@ class VideoReader:
     Parameters
     ----------
     source : str or Path
-        A video file, a folder of images (read in name order), or a MOTChallenge sequence
-        folder.
+        A video file, a folder of images (read in name order, numbers as numbers: ``2.png``
+        before ``10.png``), or a MOTChallenge sequence folder. A text file (``.txt``,
+        ``.csv``, ...) is refused.
     fps : float, optional
         Frames per second; default the sequence's ``seqinfo.ini``, else the container's header,
         else 30 (image folders). Give it when the header is wrong.
@@ -163,7 +175,8 @@ class VideoReader:
     FileNotFoundError
         If ``source`` (or the image folder its ``seqinfo.ini`` names) does not exist.
     VideoError
-        If OpenCV cannot open the video, the folder holds no images, its ``seqinfo.ini`` is
+        If ``source`` is a text file, OpenCV cannot open the video, the folder holds no
+        images, its ``seqinfo.ini`` is
         not a text INI file, or (while iterating, unless ``skip_bad``) an image is unreadable,
         cut short or of another size than the first, naming the file.
     ValueError
@@ -218,7 +231,8 @@ class VideoReader:
                 src = src / seq.get("imDir", "img1")
                 if not src.is_dir():
                     raise FileNotFoundError(f"{src} does not exist ({info} names it)")
-            self._files = sorted(p for p in src.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+            self._files = sorted((p for p in src.iterdir()
+                                  if p.suffix.lower() in IMAGE_SUFFIXES), key=_natural)
             if not self._files:
                 # an OTB or VOT sequence's folder holds its images in a folder of its own
                 inner = sorted(d.name for d in src.iterdir() if _holds_images(d))
@@ -249,6 +263,10 @@ class VideoReader:
             self.frame_count = len(self._files)
             header_fps = None
         else:
+            if src.suffix.lower() in _TEXT_SUFFIXES:
+                # FFmpeg opens text too, as frames of its characters drawn
+                raise VideoError(f"{src} is a {src.suffix} file, not a video: OpenCV would "
+                                 "decode its text as frames of noise")
             cv2 = _cv2()
             cap = cv2.VideoCapture(str(src))
             if not cap.isOpened():
