@@ -3,6 +3,7 @@ scikit-image's CIEDE2000, an independent colour-difference formula), and a trail
 while its track is in the frame."""
 
 import itertools
+import warnings
 
 import numpy as np
 import pytest
@@ -119,3 +120,22 @@ def test_the_timeline_draws_each_objects_matches(tmp_path):
     marks = ax.collections[1].get_offsets()
     assert marks.tolist() == [[5.0, 0.0]]  # the switch, on object 1's row
     assert (tmp_path / "t.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_the_timeline_of_a_ground_truth_with_nothing_to_score(tmp_path):
+    """Ground truth with no box to score (empty, all ignored, or starting after the frames
+    tracked): `vistrack eval --plots` and `track --report` failed in the timeline with an
+    IndexError; it is drawn empty."""
+    from vistrack.evaluation import clear_matches
+    from vistrack.io import MOTTable
+    from vistrack.viz import plot_timeline
+
+    pred = MOTTable.from_rows([(1, 7, 0, 0, 10, 10)])
+    m = clear_matches(MOTTable.from_rows([]), pred)
+    assert len(m.frames) == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # matplotlib's singular limits among them
+        fig = plot_timeline(m, tmp_path / "t.png", title="S")
+    assert (tmp_path / "t.png").stat().st_size > 0
+    assert fig.axes[0].get_title() == "S: 0 objects, 0 identity switches"
+    assert len(fig.axes[0].collections[0].get_paths()) == 0

@@ -115,3 +115,15 @@ def test_a_ground_truth_gone_is_said(run_dir, tmp_path):
     page = (moved / "report.html").read_text()
     assert "is not there any more" in page and page.count("<img ") == 1  # trajectories only
     assert f"<td>{100 * info['scores']['HOTA']:.1f}</td>" in page  # the scores kept in run.json
+
+
+def test_a_run_description_that_is_not_an_object_is_named(run_dir, tmp_path, capsys):
+    """A run.json holding a JSON list (or number) failed with AttributeError: 'list' object
+    has no attribute 'get'."""
+    odd = tmp_path / "odd"
+    shutil.copytree(run_dir, odd)
+    (odd / "run.json").write_text("[1, 2]")
+    assert main(["report", str(odd), "--force"]) == 2
+    assert capsys.readouterr().err.strip() == (f"vistrack report: error: {odd / 'run.json'}: not "
+                                               "a run's description (a JSON list, not an "
+                                               "object)")

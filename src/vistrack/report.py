@@ -189,6 +189,9 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
             info = json.loads(run_info.read_text())
         except ValueError as e:
             raise ValueError(f"{run_info}: not a run's description ({e})") from e
+        if not isinstance(info, dict):
+            raise ValueError(f"{run_info}: not a run's description (a JSON "
+                             f"{type(info).__name__}, not an object)")
     name = info.get("name") or out_dir.name
     parts = [f"<h1>vistrack report: {html.escape(name)}</h1>"]
     if info.get("command"):

@@ -420,7 +420,8 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
     order = np.lexsort((frames, gts))
     f, g, p = frames[order], gts[order], preds[order]
     # runs: the same object, the same predicted id (or missed), consecutive frames
-    new = np.r_[True, (g[1:] != g[:-1]) | (p[1:] != p[:-1]) | (f[1:] != f[:-1] + 1)]
+    new = (np.r_[True, (g[1:] != g[:-1]) | (p[1:] != p[:-1]) | (f[1:] != f[:-1] + 1)]
+           if len(f) else np.zeros(0, bool))  # no ground truth scored: no runs
     starts = np.flatnonzero(new)
     ends = np.r_[starts[1:], len(f)]
     for a, b in zip(starts, ends):
@@ -438,7 +439,11 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
                linewidths=1.5, zorder=3)
     if len(frames):
         ax.set_xlim(frames.min() - 1, frames.max() + 1)
-    ax.set_ylim(n - 0.5, -0.5)
+    else:
+        ax.set_xticks([])
+        ax.text(0.5, 0.5, "no ground-truth box to score", transform=ax.transAxes,
+                ha="center", va="center", color="0.4")
+    ax.set_ylim(max(n, 1) - 0.5, -0.5)  # one empty row when no object was scored
     step = max(1, int(np.ceil(n / 60)))
     ax.set_yticks(np.arange(0, n, step), [str(int(o)) for o in objects[::step]],
                   fontsize=7 if n > 30 else 9)
