@@ -256,6 +256,21 @@ def test_a_binary_seqinfo_beside_the_images_is_named(tmp_path):
         VideoReader(tmp_path)
 
 
+@pytest.mark.parametrize("rate", ["0", "-5", "inf"])
+def test_a_frame_rate_that_is_no_rate_is_named_in_its_seqinfo(tmp_path, rate):
+    """frameRate=0 fell back to 30 frames/s without a word, as no frameRate at all does;
+    -5 was refused as 'fps must be ...' without naming the file."""
+    (tmp_path / "img1").mkdir()
+    _folder(tmp_path / "img1", n=1)
+    (tmp_path / "seqinfo.ini").write_text(f"[Sequence]\nframeRate={rate}\n")
+    with pytest.raises(VideoError) as e:
+        VideoReader(tmp_path)
+    assert str(e.value) == (f"{tmp_path / 'seqinfo.ini'}: frameRate must be a finite number > "
+                            f"0; got {rate}")
+    (tmp_path / "seqinfo.ini").write_text("[Sequence]\nframeRate=2.5\n")
+    assert VideoReader(tmp_path).fps == 2.5
+
+
 def test_a_sequence_folder_with_fewer_images_than_its_seqinfo_says_warns_once(tmp_path):
     """A sequence shipped with its first frames only (the shared MOT17's img1 holds 4-8 of
     525-1050): one warning naming both counts, however often the folder is opened (the
