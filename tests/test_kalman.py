@@ -2,6 +2,7 @@
 equations."""
 
 import dataclasses
+import re
 
 import numpy as np
 import pytest
@@ -365,6 +366,17 @@ def test_kernel_argument_errors():
         kf_step(g, np.ones((3, 1)), E, E, bad, [[1.0]])
     with pytest.raises(ValueError, match="R must be symmetric"):
         kf_update(g, np.ones((3, 2)), E, [[1.0, 0.5], [0.0, 1.0]])
+    # an infinite measurement (NaN is a missing one): it gave means of NaN, where
+    # kalman_filter and OnlineFilter refuse it
+    y = np.ones((3, 1))
+    y[2, 0] = -np.inf
+    with pytest.raises(ValueError) as e:
+        kf_update(g, y, [[1.0, 0.0]], [[1.0]])
+    assert str(e.value) == "y must be finite or NaN (missing); y[2, 0] = -inf"
+    with pytest.raises(ValueError, match=re.escape("y[2, 0] = -inf")):
+        kf_step(g, y, E, E, [[1.0, 0.0]], [[1.0]])
+    y[2, 0] = np.nan
+    assert np.isfinite(kf_update(g, y, [[1.0, 0.0]], [[1.0]]).mean).all()
     with pytest.raises(ValueError, match="Q must be symmetric"):
         kf_predict(g, E, [[1.0, 0.5], [0.0, 1.0]])
     with pytest.raises(ValueError, match=r"H must have shape \(1, 2\); got \(1, 3\)"):

@@ -379,6 +379,10 @@ def _with_measurement(g: Gaussian, y: ArrayLike) -> tuple[np.ndarray, np.ndarray
         y = as_float_array(y, "y")
     if y.ndim != mean.ndim or y.shape[:-1] != mean.shape[:-1]:
         raise ValueError(f"y must have shape {mean.shape[:-1] + ('m',)} to match g; got {y.shape}")
+    if np.isinf(y).any():  # NaN is a missing value; an infinite one gave NaN means
+        idx = np.unravel_index(int(np.argmax(np.isinf(y))), y.shape)
+        raise ValueError(f"y must be finite or NaN (missing); y{[int(k) for k in idx]} = "
+                         f"{y[idx]}")
     return _one_batch_axis(mean, 1), _one_batch_axis(g.cov, 2), _one_batch_axis(y, 1)
 
 
@@ -414,8 +418,9 @@ def kf_step(
     TypeError
         If ``g`` is not a :class:`~vistrack.types.Gaussian`.
     ValueError
-        If a shape disagrees, a matrix is not finite, ``Q`` or ``R`` is not symmetric, or an
-        innovation covariance is not positive definite.
+        If a shape disagrees, ``y`` is infinite (NaN is a missing value), a matrix is not
+        finite, ``Q`` or ``R`` is not symmetric, or an innovation covariance is not positive
+        definite.
 
     Examples
     --------
@@ -520,8 +525,9 @@ def kf_update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> Gaussian
     TypeError
         If ``g`` is not a :class:`~vistrack.types.Gaussian`.
     ValueError
-        If a shape disagrees, ``H`` or ``R`` is not finite, ``R`` is not symmetric, or an
-        innovation covariance is not positive definite.
+        If a shape disagrees, ``y`` is infinite (NaN is a missing value), ``H`` or ``R`` is
+        not finite, ``R`` is not symmetric, or an innovation covariance is not positive
+        definite.
 
     References
     ----------
