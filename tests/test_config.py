@@ -110,6 +110,10 @@ def test_bad_files_and_values_on_the_command_line(seq, tmp_path):
     assert r.returncode == 2 and "--high: high must be in [0, 1]" in r.stderr
     r = cli(seq, "--out", tmp_path / "r.txt", "--offline", "--start-score", "1.5")
     assert r.returncode == 2 and "--start-score: start_score must be in [0, 1]" in r.stderr
+    # a track's mean confidence above 1 dropped every track (0 boxes, exit status 0)
+    r = cli(seq, "--out", tmp_path / "r.txt", "--offline", "--min-track-score", "2")
+    assert r.returncode == 2 and "--min-track-score: min_track_score must be in [0, 1]" in \
+        r.stderr and not (tmp_path / "r.txt").exists()
     r = cli(seq, "--out-dir", tmp_path / "v", "--min-track-score", "0.5")
     assert r.returncode == 2 and "--offline, its settings and --detections go with --out" in \
         r.stderr

@@ -146,7 +146,8 @@ class TrackConfig:
     Raises
     ------
     ValueError
-        If the scores are calibrated and ``offline.start_score`` is above 1.
+        If the scores are calibrated and ``offline.start_score`` or
+        ``offline.min_track_score`` is above 1.
 
     Examples
     --------
@@ -161,10 +162,13 @@ class TrackConfig:
     offline: OfflineConfig = field(default_factory=OfflineConfig)
 
     def __post_init__(self) -> None:
-        # the offline start replaces the tracker's new_track, so it is on the same scale
-        if self.tracker.scores == "calibrated" and self.offline.start_score > 1:
-            raise ValueError(f"start_score must be in [0, 1] (a calibrated confidence); got "
-                             f"{self.offline.start_score!r}")
+        # the offline start replaces the tracker's new_track, so it is on the same scale, and
+        # a track's mean score too (above 1, every track was dropped: 0 boxes)
+        for name in ("start_score", "min_track_score"):
+            value = getattr(self.offline, name)
+            if self.tracker.scores == "calibrated" and value > 1:
+                raise ValueError(f"{name} must be in [0, 1] (a calibrated confidence); got "
+                                 f"{value!r}")
 
     @classmethod
     def preset(cls, name: str = "bytetrack") -> TrackConfig:
