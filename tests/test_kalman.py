@@ -377,6 +377,11 @@ def test_kernel_argument_errors():
         kf_step(g, y, E, E, [[1.0, 0.0]], [[1.0]])
     y[2, 0] = np.nan
     assert np.isfinite(kf_update(g, y, [[1.0, 0.0]], [[1.0]]).mean).all()
+    many = vt.Gaussian(np.zeros((40, 2)), np.tile(np.eye(2), (40, 1, 1)))  # numpy's check
+    y = np.ones((40, 1))
+    y[31, 0] = np.inf
+    with pytest.raises(ValueError, match=re.escape("y[31, 0] = inf")):
+        kf_update(many, y, [[1.0, 0.0]], [[1.0]])
     with pytest.raises(ValueError, match="Q must be symmetric"):
         kf_predict(g, E, [[1.0, 0.5], [0.0, 1.0]])
     with pytest.raises(ValueError, match=r"H must have shape \(1, 2\); got \(1, 3\)"):

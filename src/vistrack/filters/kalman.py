@@ -16,6 +16,7 @@ definite.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -379,7 +380,9 @@ def _with_measurement(g: Gaussian, y: ArrayLike) -> tuple[np.ndarray, np.ndarray
         y = as_float_array(y, "y")
     if y.ndim != mean.ndim or y.shape[:-1] != mean.shape[:-1]:
         raise ValueError(f"y must have shape {mean.shape[:-1] + ('m',)} to match g; got {y.shape}")
-    if np.isinf(y).any():  # NaN is a missing value; an infinite one gave NaN means
+    # NaN is a missing value; an infinite one gave NaN means. One Gaussian's few values are
+    # checked in Python (0.5 µs against numpy's 1.9 for two), a batch's with numpy
+    if any(map(math.isinf, y.flat)) if y.size <= 16 else np.isinf(y).any():
         idx = np.unravel_index(int(np.argmax(np.isinf(y))), y.shape)
         raise ValueError(f"y must be finite or NaN (missing); y{[int(k) for k in idx]} = "
                          f"{y[idx]}")
