@@ -267,6 +267,7 @@ def test_a_frame_rate_that_is_no_rate_is_named_in_its_seqinfo(tmp_path, rate):
         VideoReader(tmp_path)
     assert str(e.value) == (f"{tmp_path / 'seqinfo.ini'}: frameRate must be a finite number > "
                             f"0; got {rate}")
+    assert VideoReader(tmp_path, fps=12).fps == 12  # the rate given overrides it
     (tmp_path / "seqinfo.ini").write_text("[Sequence]\nframeRate=2.5\n")
     assert VideoReader(tmp_path).fps == 2.5
 

@@ -228,8 +228,10 @@ class VideoReader:
                     seq_length = int(length) if length.isdigit() else None  # for a warning
                 except (UnicodeDecodeError, configparser.Error, ValueError) as exc:
                     raise VideoError(f"{info} is not a readable seqinfo.ini ({exc})") from None
-                if seq_fps is not None and not (np.isfinite(seq_fps) and seq_fps > 0):
-                    # 0 fell back to 30 frames/s without a word, as no frame rate at all
+                if fps is None and seq_fps is not None and not (np.isfinite(seq_fps)
+                                                                and seq_fps > 0):
+                    # 0 fell back to 30 frames/s without a word, as no frame rate at all;
+                    # the frame rate given (fps, --fps) overrides it
                     raise VideoError(f"{info}: frameRate must be a finite number > 0; got "
                                      f"{seq['frameRate']}")
                 src = src / seq.get("imDir", "img1")
