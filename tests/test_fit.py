@@ -159,6 +159,16 @@ def test_fit_sequences_from_ground_truth_and_from_a_first_pass(tmp_path):
         fit_sequences([])
 
 
+def test_two_sequence_folders_of_one_name_are_two_sequences(tmp_path):
+    """a/S and b/S (the same name in two folders): the held-out check scored them under their
+    names, so one replaced the other and `vistrack fit` failed with KeyError: 'COMBINED'."""
+    rng = np.random.default_rng(4)
+    seqs = [_sequence(tmp_path / k / "SIM", rng) for k in ("a", "b")]
+    run = fit_sequences(seqs, gt=True)
+    assert len(run.fit.per_sequence) == 2 and set(run.held_out) == {"learned", "given"}
+    assert all(0 < v["HOTA"] <= 1 for v in run.held_out.values())
+
+
 def test_fit_returns_the_learned_motion_only_where_it_tracked_held_out_sequences_better(
         tmp_path, monkeypatch, capsys):
     """The held-out check decides: the learned motion is returned (and written) if the

@@ -1160,7 +1160,8 @@ def _held_out(seqs: list[Path], cfg: TrackConfig, start: BoxMotion, rows: list[d
             if mode == "learned" and others:  # (else nothing was learned without it)
                 config = replace(online, motion=median_motion(others, start))
             track_sequence(seq, tmp / mode / f"{k}.txt", config=config)
-        c = evaluate_files([(seq.name, seq / "gt" / "gt.txt", tmp / mode / f"{k}.txt",
+        # named by position: two folders of one name (a/S, b/S) are two sequences
+        c = evaluate_files([(str(k), seq / "gt" / "gt.txt", tmp / mode / f"{k}.txt",
                              seq / "seqinfo.ini") for k, seq in enumerate(seqs)])["COMBINED"]
         out[mode] = {"HOTA": float(c.HOTA), "MOTA": float(c.MOTA), "IDF1": float(c.IDF1)}
         if progress is not None:
