@@ -219,8 +219,9 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
     - OTB ``groundtruth_rect.txt``: ``x y w h`` (tabs, spaces or commas), 1-based pixels,
       returned 0-based;
     - VOT ``groundtruth.txt``: 8 values a line, converted by :func:`region_to_bbox`;
-    - vistrack's ``boxes.txt``: ``frame,x,y,w,h`` (the frame numbers are not read: the
-      lines are taken in order).
+    - vistrack's ``boxes.txt``: ``frame,x,y,w,h``, whose frames must count up by one (the
+      lines are taken in order: a file reversed, or with a frame left out, was scored
+      against the wrong frames).
 
     Other files of 4 values a line are read as they are. Blank lines are skipped.
 
@@ -239,8 +240,9 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
     Raises
     ------
     ValueError
-        If a line is not numbers, not 4, 5 or 8 of them, or not as many as the line before;
-        the message names the file and line.
+        If a line is not numbers, not 4, 5 or 8 of them, or not as many as the line before,
+        or (``frame,x,y,w,h``) its frame is not the one after the line before's; the message
+        names the file and line.
 
     Examples
     --------
@@ -252,6 +254,7 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
     """
     path = Path(path)
     rows: list[list[float]] = []
+    lines: list[int] = []
     for n, line in enumerate(path.read_text().splitlines(), start=1):
         if not line.strip():
             continue
@@ -264,7 +267,12 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
                              f"(polygon) values; got {len(vals)}")
         if rows and len(vals) != len(rows[-1]):
             raise ValueError(f"{path}:{n}: {len(vals)} values after lines of {len(rows[-1])}")
+        if len(vals) == 5 and rows and vals[0] != rows[-1][0] + 1:
+            raise ValueError(f"{path}:{n}: frame {vals[0]:g} after frame {rows[-1][0]:g} (line "
+                             f"{lines[-1]}): the frames of frame,x,y,w,h lines must count up "
+                             "by one")
         rows.append(vals)
+        lines.append(n)
     a = np.array(rows, dtype=float)
     if a.size == 0:
         return np.zeros((0, 4))
