@@ -616,7 +616,7 @@ def test_hog_front_end_tracks_people(tmp_path):
 
 
 def test_image_folders_are_read_in_the_order_of_their_numbers(tmp_path):
-    """1.png ... 12.png (and frame_0.jpg ... frame_11.jpg) are frames 1 to 12 in that order,
+    """1.png ... 12.png (and frame_0.png ... frame_11.png) are frames 1 to 12 in that order,
     as the zero-padded 000001.png ... are; sorted as text, 10.png came second and a run
     scored HOTA 2 where the padded folder scored 68 on the bundled clip."""
     rng = np.random.default_rng(4)
