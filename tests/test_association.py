@@ -95,6 +95,82 @@ def test_gnn_equals_brute_force(seed):
     assert len(r) == n and cost[r, c].sum() == pytest.approx(total, abs=1e-9)
 
 
+def brute_force_limited(cost, gate, limit):
+    """The least total of cost - limit over every matching of allowed pairs (any size)."""
+    T, D = cost.shape
+    pairs = [(i, j) for i in range(T) for j in range(D) if gate[i, j] and cost[i, j] < limit]
+    best = 0.0
+    for k in range(1, min(T, D) + 1):
+        for chosen in itertools.combinations(pairs, k):
+            if len({i for i, _ in chosen}) == k and len({j for _, j in chosen}) == k:
+                best = min(best, sum(cost[i, j] - limit for i, j in chosen))
+    return best
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_gnn_with_a_limit_equals_brute_force(seed):
+    """With ``limit``, the pairs of least total ``cost - limit``, any number of them."""
+    rng = np.random.default_rng(100 + seed)
+    T, D = rng.integers(1, 6, 2)
+    cost = rng.uniform(0, 1, (T, D))
+    gate = rng.random((T, D)) < 0.7
+    limit = rng.uniform(0.3, 1.0)
+    r, c = gnn(cost, gate, limit=limit)
+    assert len(set(r)) == len(r) and len(set(c)) == len(c) and gate[r, c].all()
+    assert (cost[r, c] < limit).all()
+    assert (cost[r, c] - limit).sum() == pytest.approx(brute_force_limited(cost, gate, limit),
+                                                       abs=1e-9)
+
+
+def test_gnn_with_a_limit_equals_the_extended_assignment():
+    """``limit`` is ByteTrack's ``lapjv(cost, cost_limit=limit)``: the square problem whose
+    every track and detection may go to a dummy at ``limit / 2``, solved by scipy."""
+    from scipy.optimize import linear_sum_assignment
+
+    from vistrack.association import gnn_sparse, iou_pairs
+
+    rng = np.random.default_rng(21)
+    for n, m in [(60, 50), (40, 70), (1, 3)]:
+        centres = rng.uniform(0, 200, (max(n, m), 2))  # a crowd: people side by side
+        size = rng.uniform(20, 40, (max(n, m), 2))
+        a = np.c_[centres[:n] - size[:n] / 2, centres[:n] + size[:n] / 2]
+        moved = centres[:m] + rng.normal(0, 6, (m, 2))
+        b = np.c_[moved - size[:m] / 2, moved + size[:m] / 2]
+        cost = 1.0 - iou(a, b)
+        limit = 0.8
+        big = np.full((n + m, n + m), 0.0)
+        big[:n, :m] = np.where(cost < limit, cost, 1e6)
+        big[:n, m:] = np.where(np.eye(n, dtype=bool), limit / 2, 1e6)
+        big[n:, :m] = np.where(np.eye(m, dtype=bool), limit / 2, 1e6)
+        R, C = linear_sum_assignment(big)
+        real = (R < n) & (C < m)
+        want = (cost[R[real], C[real]] - limit).sum()
+        r, c = gnn(cost, limit=limit)
+        assert (cost[r, c] - limit).sum() == pytest.approx(want, abs=1e-9)
+        # the most pairs, without a limit, take more pairs at a worse total
+        r0, c0 = gnn(cost, cost < limit)
+        assert len(r0) >= len(r) and (cost[r0, c0] - limit).sum() >= want - 1e-9
+        # the sparse form, on the pairs that overlap at all
+        pr, pc, pv = iou_pairs(a, b, 0.0)
+        sr, sc = gnn_sparse(pr, pc, 1.0 - pv, (n, m), limit=limit)
+        assert sorted(zip(sr.tolist(), sc.tolist())) == sorted(zip(r.tolist(), c.tolist()))
+
+
+def test_a_limit_keeps_one_good_pair_over_two_poor_ones():
+    """Person 1 detected, person 0 missed, a stranger's box beside person 1: the most pairs
+    give track 0 person 1's box and track 1 the stranger's."""
+    from vistrack.association import gnn_sparse
+
+    cost = np.array([[0.7, np.inf], [0.1, 0.75]])   # rows: tracks 0, 1; columns: boxes 1, 2
+    assert [a.tolist() for a in gnn(cost)] == [[0, 1], [0, 1]]
+    assert [a.tolist() for a in gnn(cost, limit=0.8)] == [[1], [0]]
+    assert [a.tolist() for a in gnn(cost, limit=0.72)] == [[1], [0]]
+    # a pair at the limit gains nothing and is not taken
+    assert [a.tolist() for a in gnn(np.array([[0.8]]), limit=0.8)] == [[], []]
+    with pytest.raises(ValueError, match="limit must be a finite number or None; got inf"):
+        gnn_sparse([0], [0], [0.5], (1, 1), limit=np.inf)
+
+
 def test_components_give_the_whole_problems_answer_for_many_objects():
     """10,000 objects on a line, gated to their neighbours: solving each connected component
     alone gives the same number of pairs and total cost as one assignment over all."""

@@ -8,7 +8,11 @@ once (except ``"nn"``).
   least total cost (Crouse's shortest augmenting path, 2016, the algorithm of scipy's
   ``linear_sum_assignment``, compiled as :func:`lsa`). The gated graph is split into connected
   components first and each is solved on its own: the same answer, at the cost of the
-  components' sizes rather than the whole problem's (10,000 objects stay cheap);
+  components' sizes rather than the whole problem's (10,000 objects stay cheap). With a
+  ``limit`` (:func:`gnn`, :func:`gnn_sparse`), leaving a track and a detection unassigned
+  costs ``limit``, so a pair is assigned only where that lowers the total: in a crowd, two
+  poor pairs no longer outweigh one good one (what ByteTrack's ``lapjv(..., cost_limit)``
+  does);
 - ``"greedy"``: pairs in order of increasing cost, each taken if both ends are free;
 - ``"nn"``: each track takes its nearest allowed detection (the seeds' nearest neighbour); two
   tracks may take the same detection.
@@ -24,8 +28,8 @@ from .._jit import njit
 from .._prebuilt import kernel
 from .._registry import Registry
 
-__all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_sparse", "greedy", "lsa",
-           "nearest_neighbour", "components"]
+__all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_pairs_limited", "gnn_sparse",
+           "greedy", "lsa", "nearest_neighbour", "components"]
 
 _EMPTY = (np.zeros(0, np.int64), np.zeros(0, np.int64))
 
@@ -77,13 +81,27 @@ def components(gate: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
     return k, labels[:T], labels[T:]
 
 
-def gnn(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    r"""Global nearest neighbour: the most allowed pairs, and among those the least cost.
+def gnn(cost: np.ndarray, gate: np.ndarray | None = None,
+        limit: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    r"""Global nearest neighbour: the most allowed pairs, and among those the least cost; or,
+    with a ``limit``, the pairs of least total cost counting ``limit`` for each track and
+    detection left unassigned together.
 
-    Over the matchings ``A`` of allowed pairs (each track and each detection at most once)
-    of the largest size, the one that minimises
+    Without ``limit``: over the matchings ``A`` of allowed pairs (each track and each
+    detection at most once) of the largest size, the one that minimises
 
     .. math:: \sum_{(i, j) \in A} c_{ij}.
+
+    With ``limit`` :math:`L`: over all matchings of allowed pairs with :math:`c_{ij} < L`, the
+    one that minimises
+
+    .. math:: \sum_{(i, j) \in A} (c_{ij} - L),
+
+    the cost of the assignment when each unassigned track and each unassigned detection costs
+    :math:`L / 2` (the extended matrix of ByteTrack's ``lapjv(..., cost_limit=L)``). An
+    assignment may then leave a track and a detection that could be paired unpaired: where
+    one good pair competes with two poor ones (a person missed next to a person detected),
+    the most pairs would take the two poor ones and pass identities between neighbours.
 
     The gated graph is split into connected components (:func:`components`), each solved
     by :func:`lsa`; pairs whose track and detection have no other candidate are taken at
@@ -95,6 +113,9 @@ def gnn(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, n
         Cost of each pair; non-finite costs are never assigned.
     gate : (T, D) array_like of bool, optional
         The allowed pairs; default every pair of finite cost.
+    limit : float, optional
+        The cost of leaving a track and a detection unassigned; pairs costing ``limit`` or
+        more are never assigned. Default: none, the most pairs are assigned.
 
     Returns
     -------
@@ -122,10 +143,13 @@ def gnn(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, n
     [[0, 1], [1, 0]]
     >>> [a.tolist() for a in gnn(cost, gate=[[True, False], [True, False]])]
     [[0], [0]]
+    >>> crowd = np.array([[0.2, 0.7], [0.7, 9.0]])  # one good pair, or two poor ones
+    >>> [a.tolist() for a in gnn(crowd)], [a.tolist() for a in gnn(crowd, limit=0.8)]
+    ([[0, 1], [1, 0]], [[0], [0]])
     """
     cost, gate = _check(cost, gate)
     r, c = np.nonzero(gate)
-    return gnn_sparse(r, c, cost[r, c], cost.shape)
+    return gnn_sparse(r, c, cost[r, c], cost.shape, limit=limit)
 
 
 @njit(cache=True)
@@ -249,6 +273,20 @@ def _gated_lsa(cost, gate):
 
 
 @njit(cache=True)
+def _limited_lsa(cost, gate):
+    # costs relative to leaving the pair unassigned: a disallowed pair costs 0, as much as
+    # leaving it, so the least-cost full assignment takes the allowed pairs of least total
+    # (negative) cost, and the pairs that gain nothing are dropped
+    r, k = lsa(np.where(gate, cost, 0.0))
+    n = 0
+    for p in range(r.shape[0]):
+        if gate[r[p], k[p]] and cost[r[p], k[p]] < 0.0:
+            r[n], k[n] = r[p], k[p]
+            n += 1
+    return r[:n], k[:n]
+
+
+@njit(cache=True)
 def _pair_components(rows, cols, T):
     # union-find over tracks 0..T-1 and detections T..: the component of each pair
     parent = np.arange(T + (cols.max() + 1 if cols.shape[0] else 0))
@@ -297,6 +335,31 @@ def gnn_pairs(rows, cols, cost, T, D):
     >>> r.tolist(), c.tolist()
     ([0, 1], [1, 0])
     """
+    return _gnn_pairs(rows, cols, cost, T, D, False)
+
+
+@njit(cache=True)
+def gnn_pairs_limited(rows, cols, cost, T, D):
+    """The compiled core of :func:`gnn_sparse` with a ``limit``, for arguments already checked:
+    ``cost`` is each pair's cost minus the limit; of the pairs of negative cost, those of
+    least total cost are taken (see :func:`gnn`).
+
+    Examples
+    --------
+    >>> r, c = gnn_pairs_limited(np.array([0, 0, 1]), np.array([0, 1, 0]),
+    ...                          np.array([-0.6, -0.1, -0.1]), 2, 2)
+    >>> r.tolist(), c.tolist()
+    ([0], [0])
+    """
+    return _gnn_pairs(rows, cols, cost, T, D, True)
+
+
+@njit(cache=True)
+def _gnn_pairs(rows, cols, cost, T, D, limited):
+    # gnn_pairs, or with limited gnn_pairs_limited
+    if limited:  # a pair that gains nothing is as good as none
+        worth = cost < 0.0
+        rows, cols, cost = rows[worth], cols[worth], cost[worth]
     n = rows.shape[0]
     out_r, out_c = np.empty(n, np.int64), np.empty(n, np.int64)
     if n == 0:
@@ -346,7 +409,7 @@ def gnn_pairs(rows, cols, cost, T, D):
             p = order[q]
             sub[rmap[rows[p]], cmap[cols[p]]] = cost[p]
             gate[rmap[rows[p]], cmap[cols[p]]] = True
-        r, k = _gated_lsa(sub, gate)
+        r, k = _limited_lsa(sub, gate) if limited else _gated_lsa(sub, gate)
         for q in range(r.shape[0]):
             out_r[m], out_c[m] = ur[r[q]], uc[k[q]]
             m += 1
@@ -359,14 +422,18 @@ def gnn_pairs(rows, cols, cost, T, D):
 
 gnn_pairs_py = kernel(gnn_pairs)
 """:func:`gnn_pairs` for calls from Python (compiled code calls the numba function)."""
+gnn_pairs_limited_py = kernel(gnn_pairs_limited)
+""":func:`gnn_pairs_limited` for calls from Python."""
 
 
 def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
-               shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+               shape: tuple[int, int], limit: float | None = None,
+               ) -> tuple[np.ndarray, np.ndarray]:
     """Global nearest neighbour on a list of allowed pairs.
 
     :func:`gnn` on the allowed pairs only (``rows``, ``cols`` and their ``cost``), for
-    problems too large for a dense matrix: the same answer as ``gnn`` on the dense problem.
+    problems too large for a dense matrix: the same answer as ``gnn`` on the dense problem,
+    with or without ``limit`` (the cost of leaving a track and a detection unassigned).
 
     Parameters
     ----------
@@ -376,6 +443,9 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
         The cost of each pair, finite.
     shape : (int, int)
         ``(T, D)``, the numbers of tracks and detections.
+    limit : float, optional
+        The cost of leaving a track and a detection unassigned (:func:`gnn`); pairs costing
+        ``limit`` or more are never assigned. Default: none, the most pairs are assigned.
 
     Returns
     -------
@@ -385,8 +455,8 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
     Raises
     ------
     ValueError
-        If the three arrays are not 1-D of one length, an index is outside ``shape``, or a
-        cost is not finite.
+        If the three arrays are not 1-D of one length, an index is outside ``shape``, a cost
+        is not finite, or ``limit`` is given and not finite.
 
     Examples
     --------
@@ -407,7 +477,11 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
         raise ValueError(f"rows and cols must index a ({T}, {D}) problem")
     if not np.isfinite(cost).all():
         raise ValueError("cost must be finite on every pair")
-    return gnn_pairs_py(rows, cols, cost, T, D)
+    if limit is None:
+        return gnn_pairs_py(rows, cols, cost, T, D)
+    if not np.isfinite(limit):
+        raise ValueError(f"limit must be a finite number or None; got {limit}")
+    return gnn_pairs_limited_py(rows, cols, cost - limit, T, D)
 
 
 def greedy(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

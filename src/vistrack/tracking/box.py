@@ -37,7 +37,12 @@ One step, as on the slides (predict, associate, correct, manage):
    turning is followed by the tracks' own predictions. A jump larger than about a third of a
    box leaves too few overlapping pairs and goes unseen;
 2. **associate** by IoU between predicted and detected boxes, by global nearest neighbour with
-   a minimum IoU as the gate; a track only takes detections of its own class. With
+   a minimum IoU as the gate, which is also the price of a pair left unassigned
+   (:func:`~vistrack.association.gnn` with a ``limit``): the assignment takes the pairs of
+   most total similarity above the gate, not the most pairs, so that where one person is
+   missed beside another who is detected, the missed person's track does not take the
+   other's detection while the other's track takes a stranger's; a track only takes
+   detections of its own class. With
    ``two_stage`` (ByteTrack's idea, Zhang et al., 2022):
 
    - confirmed and lost tracks take the confident detections first (confidence ≥ ``high``);
@@ -68,7 +73,7 @@ from .._jit import njit
 from .._prebuilt import kernel
 from .._registry import Registry
 from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs
-from ..association.assign import gnn_pairs
+from ..association.assign import gnn_pairs, gnn_pairs_limited
 from ..association.costs import iou_pairs_same_class
 from ..filters.axes import (
     _predict_inplace,
@@ -110,7 +115,9 @@ class BoxTrackerConfig:
     new_track : float
         Lowest that starts a track.
     min_iou, min_iou_low, min_iou_tentative : float
-        IoU gates of the three stages.
+        IoU gates of the three stages. The gate is also what a track and a detection left
+        unassigned cost: a stage takes the pairs whose similarities above the gate add up
+        most, not the most pairs.
     fuse_score : bool
         The first stage's similarity is ``IoU * score`` (cost ``1 -`` it; its gate
         ``min_iou`` applies to it too, as in ByteTrack): a confident detection wins a tie,
@@ -314,7 +321,8 @@ _STAGE_STATES = np.array([[CONFIRMED, LOST], [CONFIRMED, CONFIRMED], [TENTATIVE,
 def _stage(rows, cols, ov, state, stage_state, det_ok, min_iou, fuse, ds, match, used, T, D):
     # one association stage over the candidate pairs whose track (state in stage_state, not
     # matched) and detection (det_ok, not used) are free and whose similarity, IoU (x score
-    # if fuse), is at least min_iou; cost 1 - similarity
+    # if fuse), is at least min_iou; cost 1 - similarity, and leaving a pair unassigned
+    # costs 1 - min_iou (gnn_pairs_limited)
     keep = np.empty(rows.shape[0], np.int64)
     n = 0
     for p in range(rows.shape[0]):
@@ -326,7 +334,7 @@ def _stage(rows, cols, ov, state, stage_state, det_ok, min_iou, fuse, ds, match,
             n += 1
     keep = keep[:n]
     cost = 1.0 - (ov[keep] * ds[cols[keep]] if fuse else ov[keep])
-    r, c = gnn_pairs(rows[keep], cols[keep], cost, T, D)
+    r, c = gnn_pairs_limited(rows[keep], cols[keep], cost - (1.0 - min_iou), T, D)
     for q in range(r.shape[0]):
         match[r[q]] = c[q]
         used[c[q]] = True
@@ -613,7 +621,7 @@ class BoxTracker:
             return r, c
         cost = 1.0 - sim[keep]
         if self.config.assigner == "gnn":
-            i, j = gnn_sparse(r, c, cost, (len(track_ok), len(det_ok)))
+            i, j = gnn_sparse(r, c, cost, (len(track_ok), len(det_ok)), limit=1.0 - min_iou)
             return i, j
         dense = np.full((len(track_ok), len(det_ok)), np.inf)
         dense[r, c] = cost
