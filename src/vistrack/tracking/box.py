@@ -333,8 +333,9 @@ def _stage(rows, cols, ov, state, stage_state, det_ok, min_iou, fuse, ds, match,
             keep[n] = p
             n += 1
     keep = keep[:n]
-    cost = 1.0 - (ov[keep] * ds[cols[keep]] if fuse else ov[keep])
-    r, c = gnn_pairs_limited(rows[keep], cols[keep], cost - (1.0 - min_iou), T, D)
+    # each pair's cost less the cost of leaving it unassigned
+    cost = (1.0 - (ov[keep] * ds[cols[keep]] if fuse else ov[keep])) - (1.0 - min_iou)
+    r, c = gnn_pairs_limited(rows[keep], cols[keep], cost, T, D)
     for q in range(r.shape[0]):
         match[r[q]] = c[q]
         used[c[q]] = True
