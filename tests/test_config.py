@@ -108,6 +108,14 @@ def test_bad_files_and_values_on_the_command_line(seq, tmp_path):
     assert r.returncode == 2 and "--tracker bytetrack disagrees with [tracker] name" in r.stderr
     r = cli(seq, "--out", tmp_path / "r.txt", "--high", "1.5")
     assert r.returncode == 2 and "--high: high must be in [0, 1]" in r.stderr
+    # --low above --high left the second stage no detection, without a word
+    r = cli(seq, "--out", tmp_path / "r.txt", "--low", "0.9", "--high", "0.3")
+    assert r.returncode == 2 and ("--low: low must be at most high with two_stage (the second "
+                                  "stage takes the detections between them); got low 0.9 above "
+                                  "high 0.3") in r.stderr and not (tmp_path / "r.txt").exists()
+    # the one-stage tracker has no second stage: its low is not compared
+    r = cli(seq, "--out", tmp_path / "sort.txt", "--tracker", "sort", "--high", "0.4")
+    assert r.returncode == 0, r.stderr
     r = cli(seq, "--out", tmp_path / "r.txt", "--offline", "--start-score", "1.5")
     assert r.returncode == 2 and "--start-score: start_score must be in [0, 1]" in r.stderr
     # a track's mean confidence above 1 dropped every track (0 boxes, exit status 0)

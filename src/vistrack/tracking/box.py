@@ -195,6 +195,10 @@ class BoxTrackerConfig:
             if not 0 <= getattr(self, name) <= 1:
                 raise bad(name, "in [0, 1]" + (" (a calibrated confidence)" if name in unit
                                                else ""))
+        if self.two_stage and self.low > self.high:
+            raise ValueError(f"low must be at most high with two_stage (the second stage takes "
+                             f"the detections between them); got low {self.low!r} above high "
+                             f"{self.high!r}")
         for name in ("calibration_iou", "calibration_top"):
             if not 0 < getattr(self, name) <= 1:
                 raise bad(name, "in (0, 1]")
