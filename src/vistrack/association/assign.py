@@ -357,9 +357,10 @@ def gnn_pairs_limited(rows, cols, cost, T, D):
 @njit(cache=True)
 def _gnn_pairs(rows, cols, cost, T, D, limited):
     # gnn_pairs, or with limited gnn_pairs_limited
-    if limited and not (cost < 0.0).all():  # a pair that gains nothing is as good as none
+    if limited:  # a pair that gains nothing is as good as none
         worth = cost < 0.0
-        rows, cols, cost = rows[worth], cols[worth], cost[worth]
+        if not worth.all():
+            rows, cols, cost = rows[worth], cols[worth], cost[worth]
     n = rows.shape[0]
     out_r, out_c = np.empty(n, np.int64), np.empty(n, np.int64)
     if n == 0:

@@ -254,7 +254,7 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
     """
     path = Path(path)
     rows: list[list[float]] = []
-    lines: list[int] = []
+    last = 0  # the line of rows[-1]
     for n, line in enumerate(path.read_text().splitlines(), start=1):
         if not line.strip():
             continue
@@ -269,10 +269,10 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
             raise ValueError(f"{path}:{n}: {len(vals)} values after lines of {len(rows[-1])}")
         if len(vals) == 5 and rows and vals[0] != rows[-1][0] + 1:
             raise ValueError(f"{path}:{n}: frame {vals[0]:g} after frame {rows[-1][0]:g} (line "
-                             f"{lines[-1]}): the frames of frame,x,y,w,h lines must count up "
+                             f"{last}): the frames of frame,x,y,w,h lines must count up "
                              "by one")
         rows.append(vals)
-        lines.append(n)
+        last = n
     a = np.array(rows, dtype=float)
     if a.size == 0:
         return np.zeros((0, 4))

@@ -747,15 +747,16 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
     if not len(f) == len(i) == len(b) == len(c):
         raise ValueError(f"frames, ids, boxes and conf must have the same length; got "
                          f"{len(f)}, {len(i)}, {len(b)}, {len(c)}")
-    # what read_mot would refuse to read back
-    for bad, what in ((f < 1, "frames[{k}] = {v}: MOTChallenge frames count from 1"),
-                      (~np.isfinite(b).all(axis=1), "boxes[{k}] = {v} is not finite"),
-                      ((b[:, 2] < 0) | (b[:, 3] < 0), "boxes[{k}] = {v} has a negative "
-                       "width or height"),
-                      (~np.isfinite(c), "conf[{k}] = {v} is not finite")):
+    # what read_mot would refuse to read back: (rows refused, their column, the message)
+    for bad, column, what in (
+            (f < 1, f, "frames[{k}] = {v}: MOTChallenge frames count from 1"),
+            (~np.isfinite(b).all(axis=1), b, "boxes[{k}] = {v} is not finite"),
+            ((b[:, 2] < 0) | (b[:, 3] < 0), b,
+             "boxes[{k}] = {v} has a negative width or height"),
+            (~np.isfinite(c), c, "conf[{k}] = {v} is not finite")):
         if bad.any():
             k = int(np.argmax(bad))
-            v = {"frames": f, "boxes": b, "conf": c}[what.partition("[")[0]][k]
+            v = column[k]
             raise ValueError(what.format(k=k, v=v.tolist() if np.ndim(v) else v))
     return _write_sorted(path, f, i, b, c)
 
