@@ -507,6 +507,55 @@ def test_cli_tracks_a_video(tmp_path):
     assert r.returncode == 2 and "--frontend goes with --out-dir" in r.stderr
 
 
+def test_a_frontends_option_with_another_frontend_is_refused(tmp_path):
+    """A front-end's own option (the blobs' smallest area, the ONNX model's classes) given
+    with a front-end that does not read it would change nothing: the API and the command
+    line refuse it, naming the option and the front-end it goes with, before anything is
+    read or written."""
+    from pathlib import Path
+
+    from vistrack.pipeline import FRONTEND_OPTIONS, track_video
+    from vistrack.types import Detections
+
+    video = (Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
+             / "pets09-s2l1.mp4")
+
+    class Mine:
+        def detect(self, image):
+            return Detections(boxes=np.zeros((0, 4)))
+
+    for frontend, option in [("hog", {"min_area": 100}), ("confidence", {"background": "mog2"}),
+                             ("bgsub", {"classes": [0]}), ("bgsub", {"onnx_layout": "yolov8"}),
+                             ("hog", {"det_threshold": 0.2}), (Mine(), {"n_init": 5})]:
+        (key,) = option
+        with pytest.raises(ValueError, match=f"^{key} goes with the "
+                           f"'{FRONTEND_OPTIONS[key]}' front-end"):
+            track_video(video, tmp_path / "out", frontend=frontend, stop=3, **option)
+    with pytest.raises(ValueError, match="min_area goes with the 'bgsub' front-end; the "
+                       "front-end here, 'confidence'"):
+        track_video(video, tmp_path / "out", tracker="dcpf", min_area=10, stop=3)
+    assert not (tmp_path / "out").exists()
+    # where each is read, it is taken (the blobs' area: fewer blobs when larger)
+    few = track_video(video, tmp_path / "big", min_area=5000, stop=30, annotate=False)
+    many = track_video(video, tmp_path / "small", min_area=200, stop=30, annotate=False)
+    assert few.rows < many.rows
+
+    def cli(*args):
+        return subprocess.run([sys.executable, "-m", "vistrack.cli", "track", str(video),
+                               "--out-dir", str(tmp_path / "c"), "--stop", "3", *args],
+                              capture_output=True, text=True)
+
+    r = cli("--frontend", "hog", "--min-area", "100")
+    assert r.returncode == 2 and "--min-area goes with --frontend bgsub, not --frontend hog" \
+        in r.stderr
+    r = cli("--classes", "0")
+    assert r.returncode == 2 and ("--classes goes with --frontend onnx:MODEL.onnx, not the "
+                                  "default front-end of --tracker bytetrack, bgsub") in r.stderr
+    r = cli("--tracker", "dcpf", "--background", "mog2")
+    assert r.returncode == 2 and "--background goes with --frontend bgsub" in r.stderr
+    assert not (tmp_path / "c").exists()
+
+
 def test_hog_finds_the_people_of_pets09():
     """OpenCV's HOG people detector (enlarged 2x: PETS09's people are smaller than its
     window) on frames of the bundled clip, against MOT15's ground truth."""

@@ -384,6 +384,9 @@ def _track(args: argparse.Namespace) -> int:
     else:
         if cfg is not None and cfg.offline.enabled:
             return fail(_OFFLINE_NEEDS_OUT)
+        problem = _frontend_problem(args, name)
+        if problem:
+            return fail(problem)
         if args.report:  # before anything runs: a report that cannot be written fails now
             check_output(Path(args.out_dir) / "report.html", force=args.force, name="--report")
         run = track_video(args.input, args.out_dir, fps=args.fps, gt=args.gt,
@@ -408,6 +411,20 @@ def _track(args: argparse.Namespace) -> int:
         assert run.config is not None  # a box tracker's run (others refuse --print-config)
         sys.stdout.write(config_toml(run.config, run.derived))
     return 0
+
+
+def _frontend_problem(args: argparse.Namespace, name: str) -> str:
+    """What is wrong with a front-end's own option given with another front-end (it would
+    change nothing), for --out-dir; "" if nothing."""
+    from .pipeline import default_frontend, unread_frontend_option
+
+    frontend = args.frontend or default_frontend(name)
+    unread = unread_frontend_option(frontend, {k: getattr(args, k) for k in _FRONTEND_OPTIONS})
+    if unread is None:
+        return ""
+    here = (f"--frontend {frontend}" if args.frontend
+            else f"the default front-end of --tracker {name}, {frontend}")
+    return f"--{unread[0].replace('_', '-')} goes with --frontend {unread[1]}, not {here}"
 
 
 def _video_options(args: argparse.Namespace, name: str, box: bool,
@@ -478,6 +495,9 @@ def _track_many(args: argparse.Namespace) -> int:
     else:
         if cfg is not None and cfg.offline.enabled:
             return fail("--offline goes with --out")
+        problem = _frontend_problem(args, name)
+        if problem:
+            return fail(problem)
         kind, out = "pixels", args.out_dir
         options.update(_video_options(args, name, box, cfg))
     jobs = plan(args.input, out, kind=kind, **options)

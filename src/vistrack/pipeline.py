@@ -634,6 +634,31 @@ FRONTENDS: Registry[Frontend] = Registry("frontend", {
 ``"onnx:MODEL.onnx"``, the user's own ONNX detector
 (:class:`~vistrack.frontends.onnx.ONNXDetector`)."""
 
+FRONTEND_OPTIONS = {"background": "bgsub", "min_area": "bgsub", "n_init": "bgsub",
+                    "det_threshold": "confidence", "classes": "onnx:MODEL.onnx",
+                    "onnx_layout": "onnx:MODEL.onnx"}
+"""The front-ends' own options (:func:`track_video`'s arguments) and the front-end that reads
+each; given with another front-end, one would change nothing, so it is refused."""
+
+
+def unread_frontend_option(frontend: object, options: dict) -> tuple[str, str] | None:
+    """The first option given (not None) in ``options`` that ``frontend`` does not read, and
+    the front-end that does (:data:`FRONTEND_OPTIONS`); None if it reads them all.
+
+    Examples
+    --------
+    >>> unread_frontend_option("hog", {"min_area": 100, "classes": None})
+    ('min_area', 'bgsub')
+    >>> unread_frontend_option("onnx:model.onnx", {"classes": [0], "onnx_layout": "auto"})
+    """
+    for key, owner in FRONTEND_OPTIONS.items():
+        if options.get(key) is None:
+            continue
+        if not isinstance(frontend, str) or not (
+                frontend.startswith("onnx:") if owner.startswith("onnx:") else frontend == owner):
+            return key, owner
+    return None
+
 
 def _frontend(name: str | Detector | Callable[[Frame], Detections | None] | None,
               ctx: Context) -> Callable[[Frame], Detections | None]:
@@ -718,6 +743,17 @@ TRACKERS: Registry[TrackerEntry] = _trackers()
 presets (:data:`vistrack.tracking.TRACKERS`), ``"dcpf"`` and ``"single:METHOD"`` (a
 single-object tracker, :data:`vistrack.tracking.METHODS`); also ``"module:callable"``, a
 callable of yours that returns a :class:`~vistrack.tracking.Tracker`."""
+
+
+def default_frontend(tracker: object) -> str:
+    """The front-end a tracker goes with when none is given: its entry's in :data:`TRACKERS`
+    (``confidence`` for ``dcpf``), else ``bgsub``.
+
+    >>> default_frontend("dcpf"), default_frontend("bytetrack")
+    ('confidence', 'bgsub')
+    """
+    return TRACKERS[tracker].frontend if isinstance(tracker, str) and tracker in TRACKERS \
+        else "bgsub"
 
 
 def make_tracker(tracker: str | Tracker, ctx: Context) -> tuple[Tracker, str]:
@@ -1282,13 +1318,14 @@ def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = F
 def track_video(video: str | Path, out_dir: str | Path, *,
                 frontend: str | Detector | Callable[[Frame], Detections | None] | None = None,
                 fps: float | None = None, tracker: str | Tracker = "bytetrack",
-                gt: str | Path | None = None, background: str = "selective",
-                min_area: float = 500.0, n_init: int = 20, stop: int | None = None,
+                gt: str | Path | None = None, background: str | None = None,
+                min_area: float | None = None, n_init: int | None = None,
+                stop: int | None = None,
                 skip_bad_frames: bool = False,
                 annotate: bool = True, force: bool = False, progress: TextIO | None = None,
                 confidence: Callable[[np.ndarray], ConfidenceMap] | None = None,
-                det_threshold: float = 0.5, classes: Sequence[int] | None = None,
-                onnx_layout: str = "auto", config: TrackConfig | None = None,
+                det_threshold: float | None = None, classes: Sequence[int] | None = None,
+                onnx_layout: str | None = None, config: TrackConfig | None = None,
                 command: str | None = None, **overrides: object) -> VideoRun:
     """Track a video (a file, an image folder or a MOTChallenge sequence folder) from pixels.
 
@@ -1325,20 +1362,24 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     confidence, det_threshold : callable, float
         The detector's continuous confidence, a callable ``image -> ConfidenceMap`` (default
         :class:`vistrack.frontends.detectors.HOGConfidence`), for ``dcpf`` and the
-        ``confidence`` front-end, and the SVM margin above which its peaks are detections.
+        ``confidence`` front-end, and the SVM margin above which its peaks are detections
+        (``confidence`` only; default 0.5).
     command : str, optional
         The command line that asked for this run, kept in ``run.json`` (written beside the
         outputs: the command, the input, the ground truth, the frames, the scores), which
         ``vistrack report`` reads.
     classes, onnx_layout : sequence of int, str
-        For ``onnx:MODEL``: the model's classes kept (default all) and its output layout
-        (:data:`~vistrack.frontends.onnx.LAYOUTS`; default told from the outputs).
+        For ``onnx:MODEL`` only: the model's classes kept (default all) and its output layout
+        (:data:`~vistrack.frontends.onnx.LAYOUTS`; default ``"auto"``, told from the
+        outputs).
     fps : float, optional
         The true frame rate, when the container's header is wrong.
     background, min_area, n_init : str, float, int
-        For ``bgsub``: the background model's name, the smallest blob in pixels, and the
-        frames whose median starts the model. A background model needs a still camera, so
-        with ``bgsub`` the box tracker's ``camera_motion`` is off unless passed.
+        For ``bgsub`` only: the background model's name (default ``"selective"``), the
+        smallest blob in pixels (500), and the frames whose median starts the model (20). A
+        background model needs a still camera, so with ``bgsub`` the box tracker's
+        ``camera_motion`` is off unless passed. A front-end's own option given with another
+        front-end would change nothing, and is refused (:data:`FRONTEND_OPTIONS`).
     stop : int, optional
         The last frame to track (default: all).
     skip_bad_frames : bool
@@ -1375,7 +1416,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         If the video, the ground truth or a detections file does not exist.
     ValueError
         If the video has no frames to track, ``config`` goes with a tracker that is not a
-        box tracker, or a name or a setting is invalid.
+        box tracker, a front-end's option is given with another front-end, or a name or a
+        setting is invalid.
     TypeError
         If ``confidence`` is not callable, or the tracker or front-end is not one.
 
@@ -1396,6 +1438,14 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     """
     from .io.video import VideoReader
 
+    name = default_frontend(tracker) if frontend is None else frontend
+    options = {"background": background, "min_area": min_area, "n_init": n_init,
+               "det_threshold": det_threshold, "classes": classes, "onnx_layout": onnx_layout}
+    unread = unread_frontend_option(name, options)
+    if unread is not None:
+        what = repr(name) if isinstance(name, str) else f"a {type(name).__name__}"
+        raise ValueError(f"{unread[0]} goes with the {unread[1]!r} front-end; the front-end "
+                         f"here, {what}, does not read it")
     files = video_outputs(out_dir, annotate=annotate, force=force)
     out_dir = Path(out_dir)
     gt_table = read_mot(gt) if gt is not None else None
@@ -1403,18 +1453,14 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                         f"{type(confidence).__name__}")
     reader = VideoReader(video, fps=fps, stop=stop, prefetch=8, skip_bad=skip_bad_frames)
+    # the options not given are left to the front-ends' own defaults
     ctx = Context(reader.fps, reader.size, reader, config, dict(overrides),
-                  {"background": background, "min_area": min_area, "n_init": n_init,
-                   "det_threshold": det_threshold, "confidence": confidence,
-                   "classes": classes, "onnx_layout": onnx_layout})
+                  {k: v for k, v in options.items() if v is not None}
+                  | {"confidence": confidence})
     box = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].box_config
     if config is not None and not box:
         raise ValueError(f"config is a box tracker's configuration; tracker {tracker!r} is "
                          "not a box tracker")
-    name = frontend
-    if name is None:
-        name = TRACKERS[tracker].frontend if isinstance(tracker, str) and tracker in TRACKERS \
-            else "bgsub"
     if box and config is None and isinstance(name, str) and name in FRONTENDS \
             and FRONTENDS[name].still_camera:
         # a background model works only with a still camera: nothing to compensate, and
