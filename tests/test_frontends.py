@@ -129,7 +129,7 @@ def test_a_truncated_image_is_named_or_skipped(tmp_path, ext):
             list(VideoReader(tmp_path, prefetch=prefetch))
         assert str(e.value).startswith(f"{files[2]}: {why}")
         frames, msg = _read(VideoReader(tmp_path, prefetch=prefetch, skip_bad=True))
-        assert [f.index for f in frames] == [1, 2, 4, 5]  # indices stay the files' positions
+        assert [f.index for f in frames] == [1, 2, 4, 5]  # indices stay the files' numbers
         assert len(msg) == 1 and msg[0].startswith(f"{files[2]}: {why}")
         assert msg[0].endswith("; skipped")
     # a bad first image: named when the reader is made, or skipped (the size is the next's)
@@ -143,6 +143,69 @@ def test_a_truncated_image_is_named_or_skipped(tmp_path, ext):
         f.write_bytes(b"")
     with pytest.raises(VideoError, match="holds no readable images"):
         VideoReader(tmp_path, skip_bad=True)
+
+
+def test_an_image_folder_is_numbered_by_its_names(tmp_path):
+    """A numbered image missing from a folder is a missing frame (warned once, naming it):
+    the images after it keep the frames their names give, as the detections and the ground
+    truth number them, instead of moving up one each. Names counted from 0 start at frame
+    1 as those counted from 1 do; names without increasing numbers go by position."""
+    from vistrack.io import read_mot
+    from vistrack.pipeline import track_sequence, track_video
+
+    for sub in ("gap", "gap2"):
+        (tmp_path / sub).mkdir()
+    files = _folder(tmp_path / "gap", n=8, ext=".png")
+    for k in (2, 5, 6):  # 000003, 000006, 000007
+        files[k].unlink()
+    with pytest.warns(RuntimeWarning, match=r"gap: no image for 3 frames \(3, 6, 7\), "):
+        VideoReader(tmp_path / "gap")
+    for prefetch in (0, 2):
+        frames, msg = _read(VideoReader(tmp_path / "gap", prefetch=prefetch))
+        assert [f.index for f in frames] == [1, 2, 4, 5, 8] and msg == []
+        assert [f.time for f in frames] == [0.0, 1 / 30, 3 / 30, 4 / 30, 7 / 30]
+    r = VideoReader(tmp_path / "gap", start=3, stop=7)
+    assert len(VideoReader(tmp_path / "gap")) == 8 and [f.index for f in r] == [4, 5]
+    # warned once a process, when first opened
+    gap2 = _folder(tmp_path / "gap2", n=3, ext=".png")
+    gap2[1].unlink()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        VideoReader(tmp_path / "gap2")
+        VideoReader(tmp_path / "gap2")
+    msg = [str(w.message) for w in caught]
+    assert msg == [f"{tmp_path / 'gap2'}: no image for frame 2, numbering the images by their "
+                   "names from 000001.png as frame 1: that frame is missing, and the images "
+                   "after a gap keep the frames their names give"]
+    # counted from 0, or named without numbers, or numbers out of name order
+    for names, want in [(["000000.png", "000001.png", "000003.png"], [1, 2, 4]),
+                        (["a.png", "b.png", "c.png"], [1, 2, 3]),
+                        (["x9.png", "y1.png", "z5.png"], [1, 2, 3])]:
+        d = tmp_path / names[0].split(".")[0] / names[1][0]
+        d.mkdir(parents=True)
+        for name, f in zip(names, _folder(d, n=3, ext=".png")):
+            f.rename(d / name)
+        with warnings.catch_warnings(record=True):
+            warnings.simplefilter("always")
+            frames, _ = _read(VideoReader(d))
+        assert [f.index for f in frames] == want, names
+
+    # tracked from the folder with a detections file, the frames after the gap keep their
+    # detections: the same rows as the file tracked alone, minus the missing frames'
+    dets = tmp_path / "det.txt"
+    dets.write_text("".join(f"{f},-1,{5 + 3 * f},10,20,20,0.9\n" for f in range(1, 9)))
+    gt = tmp_path / "gt.txt"
+    gt.write_text("".join(f"{f},1,{5 + 3 * f},10,20,20,1,-1,-1,-1\n" for f in range(1, 9)))
+    run = track_video(tmp_path / "gap", tmp_path / "out", frontend=f"detections:{dets}",
+                      gt=gt, annotate=False)
+    got = read_mot(run.files["tracks"])
+    assert run.frames == 5 and run.last == 8 and got.frames.tolist() == [1, 2, 4, 5, 8]
+    # each at its own frame's detection (a frame off would be 3 pixels off or more)
+    np.testing.assert_allclose(got.boxes[:, 0], [8, 11, 17, 20, 29], atol=1.5)
+    # scored over frames 1-8: the missing frames' people are missed, the rest found
+    assert run.scores.FN == 3 and run.scores.IDSW == 0 and run.scores.FP == 0
+    alone = track_sequence(dets, tmp_path / "alone.txt", fps=30)
+    assert read_mot(alone.out).frames.tolist() == list(range(1, 9))
 
 
 def test_a_jpeg_padded_after_its_end_marker_reads(tmp_path):

@@ -315,6 +315,10 @@ class LoopStats:
     seconds : dict of str to float
         Seconds in each stage: ``decode``, ``frontend``, ``tracker``, ``write`` and
         ``compile``.
+    last : int
+        The index of the last frame it went through (0: none); frames missing from the
+        source (an image folder's gaps, images skipped) make it more than the first index
+        plus ``frames - 1``.
 
     Examples
     --------
@@ -326,6 +330,7 @@ class LoopStats:
 
     frames: int
     seconds: dict
+    last: int = 0
 
 
 def as_detector(detector: Detector | Callable[[Frame], Detections | None] | None
@@ -425,7 +430,7 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
             raise TypeError(f"sinks[{k}] must have write(frame, tracks) and close(); got "
                             f"{type(sink).__name__}")
     sec = dict.fromkeys(("decode", "frontend", "tracker", "write", "compile"), 0.0)
-    n = 0
+    n = last = 0
     every = max(1, (total or 0) // 50)
     release = PeriodicRelease()  # freed frame buffers back to the system, on long runs
     t0, c0 = time.perf_counter(), _compile.seconds()
@@ -442,6 +447,7 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
             for sink in sinks:
                 sink.write(frame, tracks)
             n += 1
+            last = frame.index
             if total and (n % every == 0 or n == total):
                 _progress(n, total, label, progress)
             release()
@@ -460,7 +466,7 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
             raise
     release.end()
     sec["write"] += time.perf_counter() - t0
-    return LoopStats(n, sec)
+    return LoopStats(n, sec, last)
 
 
 def _abort(sinks: Sequence[Sink]) -> None:
@@ -1233,8 +1239,9 @@ class VideoRun:
         A box tracker's configuration.
     derived : dict or None
         :func:`derived_values` of a box tracker.
-    first : int
-        The first frame tracked (the last is ``first + frames - 1``).
+    first, last : int
+        The first and the last frame tracked (0: ``first + frames - 1``); frames missing
+        from the source between them are not counted in ``frames``.
 
     Examples
     --------
@@ -1254,6 +1261,7 @@ class VideoRun:
     config: TrackConfig | None = None
     derived: dict | None = None
     first: int = 1
+    last: int = 0
 
     @property
     def fps(self) -> float:
@@ -1479,7 +1487,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     assert isinstance(rows, MOTWriter)
     scores = None
     if gt_table is not None:  # scored over the frames tracked
-        last = reader.start + n - 1
+        last = stats.last
         g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= last)]
         scores = evaluate_mot(g, read_mot(files["tracks"]), last, benchmark="auto")
     n_tracks = len(rows.identities)
@@ -1488,7 +1496,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     result = VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
                       ctx.resolved if isinstance(trk, BoxTracker) else None,
                       derived_values(trk) if isinstance(trk, BoxTracker) else None,
-                      reader.start)
+                      reader.start, stats.last)
     _write_run_info(result, video, gt, command)
     return result
 
@@ -1504,7 +1512,7 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
     info = {"command": command, "vistrack": __version__, "name": Path(video).stem,
             "input": str(Path(video).resolve()),
             "gt": str(Path(gt).resolve()) if gt is not None else None,
-            "first_frame": run.first, "last_frame": run.first + run.frames - 1,
+            "first_frame": run.first, "last_frame": run.last or run.first + run.frames - 1,
             "frames": run.frames, "rows": run.rows, "tracks": run.tracks,
             "fps": round(run.fps, 1),
             "scores": run.scores.summary() if run.scores is not None else None}

@@ -111,6 +111,8 @@ def _cv2():
 
 
 _SHORT_WARNED: set[Path] = set()
+_GAP_WARNED: set[Path] = set()
+"""Image folders whose missing frame numbers were warned about (once a process)."""
 
 _TEXT_SUFFIXES = (".txt", ".csv", ".tsv", ".json", ".toml", ".ini", ".md")
 """Files that are text: refused as videos."""
@@ -122,6 +124,45 @@ def _natural(path: Path) -> tuple:
     ``01.png``)."""
     parts = re.split(r"(\d+)", path.name)
     return tuple(int(t) if k % 2 else t for k, t in enumerate(parts)), path.name
+
+
+def _numbered(files: list[Path]) -> list[int] | None:
+    """Each image's frame index from the last number in its name, counted from the first
+    image's number as 1 (``000001.jpg`` and ``000000.png`` alike start at frame 1), when every
+    name has a number and the numbers increase in name order; else None (then the images are
+    numbered by position).
+
+    >>> _numbered([Path("000001.jpg"), Path("000002.jpg"), Path("000004.jpg")])
+    [1, 2, 4]
+    >>> _numbered([Path("cam_0.png"), Path("cam_1.png")]), _numbered([Path("a.png")])
+    ([1, 2], None)
+    """
+    numbers = []
+    for path in files:
+        found = re.findall(r"\d+", path.stem)
+        if not found:
+            return None
+        numbers.append(int(found[-1]))
+    if any(b <= a for a, b in zip(numbers, numbers[1:])):
+        return None
+    return [n - numbers[0] + 1 for n in numbers]
+
+
+def _missing(index: list[int], limit: int = 5) -> tuple[int, str]:
+    """How many frame numbers between the first and the last of ``index`` (increasing) have
+    no image, and the first ``limit`` of them as text.
+
+    >>> _missing([1, 2, 4, 8])
+    (4, '3, 5, 6, 7')
+    """
+    gaps = [(a + 1, b - 1) for a, b in zip(index, index[1:]) if b > a + 1]
+    n = sum(hi - lo + 1 for lo, hi in gaps)
+    first: list[str] = []
+    for lo, hi in gaps:
+        first += [str(k) for k in range(lo, min(hi, lo + limit) + 1)]
+        if len(first) >= limit:
+            break
+    return n, ", ".join(first[:limit]) + (", ..." if n > limit else "")
 
 
 def _holds_images(folder: Path) -> bool:
@@ -141,8 +182,13 @@ class VideoReader:
     ----------
     source : str or Path
         A video file, a folder of images (read in name order, numbers as numbers: ``2.png``
-        before ``10.png``), or a MOTChallenge sequence folder. A text file (``.txt``,
-        ``.csv``, ...) is refused.
+        before ``10.png``), or a MOTChallenge sequence folder. An image is the frame the
+        last number in its name gives, counted from the first image's as 1 (``000001.jpg``
+        and ``000000.png`` are both frame 1), so a number with no image is a missing frame
+        (warned, once) and the frames after it keep their numbers, as detections and ground
+        truth number them; where a name has no number, or the numbers do not increase in
+        name order, the images are numbered by position. A text file (``.txt``, ``.csv``,
+        ...) is refused.
     fps : float, optional
         Frames per second; default the sequence's ``seqinfo.ini``, else the container's header,
         else 30 (image folders). Give it when the header is wrong.
@@ -157,9 +203,8 @@ class VideoReader:
     skip_bad : bool
         Image folders: skip an image that does not decode, a JPEG cut short, or an image of
         another size than the first readable one, with a ``RuntimeWarning`` naming the file,
-        instead of raising :class:`VideoError`. The frames after keep their indices (the
-        file's position in the folder, as MOTChallenge numbers frames), so a skipped image is
-        a missing index; ``len()`` still counts it.
+        instead of raising :class:`VideoError`. The frames after keep their indices, so a
+        skipped image is a missing index; ``len()`` still counts it.
 
     Attributes
     ----------
@@ -168,7 +213,8 @@ class VideoReader:
     size : (width, height)
         The frames' size (of the header, for video files).
     frame_count : int
-        Frames in the source (the header's count, for video files).
+        Frames in the source: the header's count, for video files; for image folders the
+        last image's frame, missing frames included.
 
     Raises
     ------
@@ -187,7 +233,8 @@ class VideoReader:
     -----
     RuntimeWarning
         If a sequence folder's images are fewer than its ``seqinfo.ini``'s ``seqLength``
-        (once a process for a folder): those there are read.
+        (once a process for a folder): those there are read. If an image folder's numbered
+        names skip a number (once a process for a folder): those frames are missing.
 
     Examples
     --------
@@ -266,7 +313,22 @@ class VideoReader:
             if first is None:
                 raise VideoError(f"{src} holds no readable images (every one fails to decode)")
             self.size = (first.shape[1], first.shape[0])
-            self.frame_count = len(self._files)
+            numbered = _numbered(self._files)
+            self._index = numbered or list(range(1, len(self._files) + 1))
+            self.frame_count = self._index[-1]
+            if numbered is not None and self.frame_count > len(self._files) \
+                    and src not in _GAP_WARNED:
+                # a frame dropped from a folder: its number is a missing frame, and the
+                # images after it keep the frames their names give, as detections and ground
+                # truth number them
+                _GAP_WARNED.add(src)
+                n, which = _missing(numbered)
+                what = f"frame {which}" if n == 1 else f"{n} frames ({which})"
+                warnings.warn(f"{src}: no image for {what}, numbering the images by their "
+                              f"names from {self._files[0].name} as frame 1: "
+                              f"{'that frame is' if n == 1 else 'those frames are'} missing, "
+                              "and the images after a gap keep the frames their names give",
+                              RuntimeWarning, stacklevel=2)
             header_fps = None
         else:
             if src.suffix.lower() in _TEXT_SUFFIXES:
@@ -385,8 +447,12 @@ class VideoReader:
         # frames in order, and the notes of a file that stops early or an image skipped
         last = self.frame_count if self.stop is None else min(self.stop, self.frame_count)
         if self._files is not None:
-            for k in range(self.start, last + 1):
-                im = self._image(self._files[k - 1])
+            for k, path in zip(self._index, self._files):
+                if k < self.start:
+                    continue
+                if k > last:
+                    return
+                im = self._image(path)
                 yield im if isinstance(im, _Note) else self._frame(k, im)
             return
         cv2 = _cv2()
