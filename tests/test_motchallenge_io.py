@@ -33,6 +33,28 @@ def test_reads_the_shared_files():
         assert len(read_mot(seq_dir("MOT17", name) / "det" / "det.txt")) > 0
 
 
+def test_frame_slices_are_found_when_asked_for():
+    """Each frame's rows, against a scan of the frame column, for frames with rows, frames
+    without and frames past the last; a file whose frame numbers lie 10^12 apart costs no
+    memory for the frames between (a list of slices would need tens of terabytes)."""
+    from vistrack.io.motchallenge import MOTTable
+
+    rng = np.random.default_rng(3)
+    frames = np.sort(rng.choice([1, 2, 2, 5, 5, 5, 9, 30], size=40))
+    t = MOTTable.from_rows([(f, k, 0, 0, 5, 5) for k, f in enumerate(frames)])
+    s = t.frame_slices(35)
+    assert len(s) == 35 and len(t.frame_slices()) == 30
+    for f in range(1, 36):
+        np.testing.assert_array_equal(t.ids[s[f - 1]], np.flatnonzero(frames == f))
+    assert s[-1] == s[34] and s[2:4] == [s[2], s[3]] and list(s)[4] == s[4]
+    with pytest.raises(IndexError, match="frame 36 is outside frames 1-35"):
+        s[35]
+    far = MOTTable.from_rows([(1, 1, 0, 0, 5, 5), (10**12, 2, 0, 0, 5, 5)])
+    sl = far.frame_slices()
+    assert len(sl) == 10**12 and far.ids[sl[10**12 - 1]].tolist() == [2]
+    assert far.ids[sl[5 * 10**11]].tolist() == []
+
+
 @pytest.mark.parametrize("text, where", [
     ("1,1,10,10,5,5,1\n2,1,10,x,5,5,1\n", "line 2, column 4 (top): not a number: 'x'"),
     ("1,1,10,10,5,5,1\n\n3,1,10,10,-5,5,1\n", "line 3, column 5 (width): width must be >= 0"),

@@ -1008,7 +1008,12 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                              f"sequence's {info.seq_length} frames ({ini})")
     slices = dets.frame_slices(info.seq_length)
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
-    per_frame = [Detections(boxes=xyxy[s], scores=dets.conf[s]) for s in slices]
+
+    def frame_detections(k: int) -> Detections:
+        # frame k's (from 1), made when asked for: memory does not grow with the frames
+        s = slices[k - 1]
+        return Detections(boxes=xyxy[s], scores=dets.conf[s])
+
     seconds = 0.0
     calibration = None
     tc, oc = cfg.tracker, cfg.offline
@@ -1016,7 +1021,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         # offline, the scores are calibrated on the whole file (see tracking.calibration)
         t0, c0 = time.perf_counter(), _compile.seconds()
         calibration = ScoreCalibration.from_frames(
-            per_frame, **tc.calibration_options(info.frame_rate))
+            (frame_detections(k) for k in range(1, info.seq_length + 1)),
+            **tc.calibration_options(info.frame_rate))
         seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
     if oc.enabled and oc.start_score > tc.new_track:
         tc = replace(tc, new_track=oc.start_score)
@@ -1030,7 +1036,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     text = out.with_name(f".{out.stem}.rows.txt") if parquet else out
     with made_folder(out.parent), _removed(text if parquet else None):
         writer = None if oc.enabled else MOTWriter(text)
-        stats = run(frames, lambda frame: per_frame[frame.index - 1], trk,
+        stats = run(frames, lambda frame: frame_detections(frame.index), trk,
                     [writer] if writer is not None else [], progress=progress,
                     total=info.seq_length, label=info.name)
         seconds += stats.seconds["tracker"]

@@ -24,9 +24,10 @@ import math
 import os
 import re
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
@@ -38,8 +39,8 @@ if TYPE_CHECKING:
 
     from ..types import _Index
 
-__all__ = ["MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "write_mot", "read_seqinfo",
-           "MOT_CLASSES", "sequence_name"]
+__all__ = ["FrameSlices", "MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "write_mot",
+           "read_seqinfo", "MOT_CLASSES", "sequence_name"]
 
 MOT_CLASSES = {
     1: "pedestrian", 2: "person_on_vehicle", 3: "car", 4: "bicycle", 5: "motorbike",
@@ -304,7 +305,7 @@ class MOTTable:
                                 or_fill("visibility", -1.0)])
         return cls.from_rows(rows if n else np.zeros((0, 9)), path)
 
-    def frame_slices(self, n_frames: int | None = None) -> list[slice]:
+    def frame_slices(self, n_frames: int | None = None) -> FrameSlices:
         """``slices[f - 1]`` selects the rows of frame ``f``, for ``f = 1 .. n_frames``
         (default: the last frame in the file).
 
@@ -315,8 +316,10 @@ class MOTTable:
 
         Returns
         -------
-        list of slice
-            One per frame, of the table's rows (empty for a frame without rows).
+        FrameSlices
+            One slice per frame, of the table's rows (empty for a frame without rows), each
+            found when asked for: memory does not grow with the frames, however far apart
+            the file's frame numbers lie.
 
         Raises
         ------
@@ -334,9 +337,40 @@ class MOTTable:
             raise ValueError(f"{self.path or 'MOTTable'}: rows must be sorted by frame "
                              f"(read_mot sorts them)")
         last = int(self.frames.max()) if len(self) else 0
-        n = last if n_frames is None else int(n_frames)
-        edges = np.searchsorted(self.frames, np.arange(1, n + 2))
-        return [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
+        return FrameSlices(self.frames, last if n_frames is None else int(n_frames))
+
+
+class FrameSlices(Sequence[slice]):
+    """The rows of each frame ``1 .. n`` of a table sorted by frame, ``slices[f - 1]``, found
+    by binary search when asked for (:meth:`MOTTable.frame_slices`).
+
+    Examples
+    --------
+    >>> s = FrameSlices(np.array([1, 3, 3]), 4)
+    >>> len(s), s[0], s[1], s[2], s[-1]
+    (4, slice(0, 1, None), slice(1, 1, None), slice(1, 3, None), slice(3, 3, None))
+    """
+
+    def __init__(self, frames: np.ndarray, n: int):
+        self._frames, self._n = frames, max(0, int(n))
+
+    def __len__(self) -> int:
+        return self._n
+
+    @overload
+    def __getitem__(self, k: int) -> slice: ...
+
+    @overload
+    def __getitem__(self, k: slice) -> list[slice]: ...
+
+    def __getitem__(self, k: int | slice) -> slice | list[slice]:
+        if isinstance(k, slice):
+            return [self[i] for i in range(*k.indices(self._n))]
+        i = int(k) + self._n if int(k) < 0 else int(k)
+        if not 0 <= i < self._n:
+            raise IndexError(f"frame {int(k) + 1} is outside frames 1-{self._n}")
+        a, b = np.searchsorted(self._frames, (i + 1, i + 2))
+        return slice(int(a), int(b))
 
 
 def _bad(path: str, line: int, column: int, text: str) -> MOTFormatError:
