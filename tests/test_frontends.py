@@ -145,6 +145,59 @@ def test_a_truncated_image_is_named_or_skipped(tmp_path, ext):
         VideoReader(tmp_path, skip_bad=True)
 
 
+def test_a_stream_without_a_frame_count_is_read_to_its_end(tmp_path):
+    """A raw MJPEG stream (JPEGs one after another, as some cameras write) has no frame
+    count in a header: OpenCV reports a negative one. Its frames are read to the end all the
+    same, from any start (read through, since such a stream may take a seek and not move),
+    and tracked, past the end of a detections file too."""
+    from vistrack.pipeline import track_video
+
+    stream = tmp_path / "cam.mjpeg"
+    with open(stream, "wb") as f:
+        for k in range(40):
+            f.write(cv2.imencode(".jpg", np.full((48, 64, 3), 5 * k, np.uint8))[1].tobytes())
+    r = VideoReader(stream)
+    assert r.frame_count == 0 and len(r) == 0
+    frames, msg = _read(r)
+    assert [f.index for f in frames] == list(range(1, 41)) and msg == []
+    for prefetch in (0, 2):
+        r = VideoReader(stream, start=5, stop=9, prefetch=prefetch)
+        assert len(r) == 5
+        # each frame's own image (JPEG's loss: within a grey level or two)
+        got = [(f.index, int(f.image[0, 0, 0])) for f in r]
+        assert [k for k, _ in got] == [5, 6, 7, 8, 9]
+        assert all(abs(v - 5 * (k - 1)) <= 2 for k, v in got)
+    assert list(VideoReader(stream, start=41)) == []
+    dets = tmp_path / "det.txt"
+    dets.write_text("".join(f"{f},-1,{5 + f},10,20,20,0.9\n" for f in range(1, 11)))
+    run = track_video(stream, tmp_path / "out", frontend=f"detections:{dets}", fps=10,
+                      annotate=False)
+    assert run.frames == 40 and run.last == 40 and run.rows >= 10
+
+
+def test_a_video_holding_more_frames_than_its_header_says_loses_none(tmp_path):
+    """An AVI whose header (the main header's total and the stream's length) says 10 frames
+    while it holds 30: all 30 are read, each its own image."""
+    import struct
+
+    path = tmp_path / "a.avi"
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10, (64, 48))
+    for k in range(30):
+        w.write(np.full((48, 64, 3), 5 * k, np.uint8))
+    w.release()
+    data = bytearray(path.read_bytes())
+    for tag, at in ((b"avih", 16), (b"strh", 32)):  # dwTotalFrames, dwLength
+        i = data.find(tag) + 8 + at
+        assert struct.unpack_from("<I", data, i)[0] == 30
+        struct.pack_into("<I", data, i, 10)
+    path.write_bytes(bytes(data))
+    r = VideoReader(path)
+    assert r.frame_count == 10
+    frames, msg = _read(r)
+    assert [f.index for f in frames] == list(range(1, 31)) and msg == []
+    assert all(abs(int(f.image[0, 0, 0]) - 5 * (f.index - 1)) <= 2 for f in frames)
+
+
 def test_an_image_folder_is_numbered_by_its_names(tmp_path):
     """A numbered image missing from a folder is a missing frame (warned once, naming it):
     the images after it keep the frames their names give, as the detections and the ground

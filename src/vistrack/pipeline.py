@@ -610,12 +610,15 @@ def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
     dets = read_mot(path)
-    last = int(dets.frames.max()) if len(dets) else 0
-    if ctx.reader is not None:
-        last = max(last, ctx.reader.start + len(ctx.reader))
-    slices = dets.frame_slices(last)
-    return lambda frame: Detections.from_xywh(dets.boxes[slices[frame.index - 1]],
-                                              dets.conf[slices[frame.index - 1]])
+    # every frame's rows, up to the file's last frame; none after it (a video may run past
+    # its header's count, or give none)
+    slices = dets.frame_slices()
+    none = slice(0, 0)
+
+    def detect(frame: Frame) -> Detections:
+        s = slices[frame.index - 1] if frame.index <= len(slices) else none
+        return Detections.from_xywh(dets.boxes[s], dets.conf[s])
+    return detect
 
 
 @dataclass(frozen=True)

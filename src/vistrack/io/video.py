@@ -213,8 +213,9 @@ class VideoReader:
     size : (width, height)
         The frames' size (of the header, for video files).
     frame_count : int
-        Frames in the source: the header's count, for video files; for image folders the
-        last image's frame, missing frames included.
+        Frames in the source: the header's count, for video files (0 where it gives none, as
+        a raw stream such as ``.mjpeg``; the frames are read to the file's end all the
+        same); for image folders the last image's frame, missing frames included.
 
     Raises
     ------
@@ -341,7 +342,11 @@ class VideoReader:
                 raise VideoError(f"{src}: OpenCV cannot open it as a video")
             self.size = (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)),
                          int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
-            self.frame_count = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+            # a raw stream (.mjpeg) or a recording never finalised has no count, or
+            # one that is negative or absurd: then 0, unknown, and the frames are read to
+            # their end all the same
+            count = cap.get(cv2.CAP_PROP_FRAME_COUNT)
+            self.frame_count = int(count) if 0 < count < 2**31 else 0
             header_fps = cap.get(cv2.CAP_PROP_FPS) or None
             cap.release()
         fps = fps if fps is not None else seq_fps or header_fps or 30.0
@@ -351,7 +356,10 @@ class VideoReader:
 
     def __len__(self) -> int:
         """Frames to yield, from the header's count for video files (the file may hold fewer:
-        reading then stops with a warning)."""
+        reading then stops with a warning; or more, which are read too); 0 where the header
+        gives no count and no ``stop`` is given."""
+        if self.frame_count == 0 and self._files is None:
+            return 0 if self.stop is None else max(0, self.stop - self.start + 1)
         stop = self.frame_count if self.stop is None else min(self.stop, self.frame_count)
         return max(0, stop - self.start + 1)
 
@@ -458,17 +466,27 @@ class VideoReader:
         cv2 = _cv2()
         cap = cv2.VideoCapture(str(self.source))
         try:
-            if self.start > 1:
-                cap.set(cv2.CAP_PROP_POS_FRAMES, self.start - 1)
-            for k in range(self.start, last + 1):
+            # a stream without a count may accept a seek and not move: it is read through
+            if self.start > 1 and (self.frame_count == 0
+                                   or not cap.set(cv2.CAP_PROP_POS_FRAMES, self.start - 1)):
+                for _ in range(self.start - 1):
+                    if not cap.grab():
+                        return
+            # to the end of the file, whatever its header's count (a frame past it is read
+            # too), or to stop
+            k = self.start
+            while self.stop is None or k <= self.stop:
                 ok, im = cap.read()
                 if not ok or im is None:
-                    yield _Note(f"{self.source}: reading stopped at frame {k} of the "
-                                f"{self.frame_count} its header gives (truncated or corrupt)")
+                    if k <= last:
+                        yield _Note(f"{self.source}: reading stopped at frame {k} of the "
+                                    f"{self.frame_count} its header gives (truncated or "
+                                    "corrupt)")
                     return
                 if self.grey:
                     im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
                 yield self._frame(k, im)
+                k += 1
         finally:
             cap.release()
 
