@@ -65,9 +65,35 @@ def test_other_column_names_and_missing_columns():
         MOTTable.from_pandas(rows.drop(columns="w"), columns=names, path="mine.csv")
     with pytest.raises(ValueError, match="no column 'frame'"):
         MOTTable.from_pandas(rows)
-    with pytest.raises(ValueError, match=r"frame 1.5 \(row 0\) is not a whole number"):
-        MOTTable.from_pandas(rows.assign(t=[1.5, 2]), columns=names)
     assert len(MOTTable.from_pandas(rows.iloc[:0], columns=names)) == 0
+
+
+@pytest.mark.parametrize("column, values, message", [
+    ("t", [1.5, 2], "row 1 after the header, column 't' (frame): frame must be an integer "
+                    ">= 1 (frames count from 1, as MOTChallenge's do); got 1.5"),
+    ("t", [1, 0], "row 2 after the header, column 't' (frame): frame must be an integer >= 1"),
+    ("track", [4, 4.5], "row 2 after the header, column 'track' (particle): an identity must "
+                        "be an integer; got 4.5"),
+    ("w", [10, -1], "row 2 after the header, column 'w' (bb_width): width must be >= 0; got -1"),
+    ("h", [np.nan, 20], "row 1 after the header, column 'h' (bb_height): not a finite number: "
+                        "nan (an empty cell, or NaN)"),
+    ("cx", [1, np.inf], "row 2 after the header, column 'cx' (x): not a finite number: inf"),
+    ("score", [0.9, "high"], "row 2 after the header, column 'score' (conf): not a number: "
+                             "'high'"),
+])
+def test_a_bad_value_is_named_by_row_and_column(column, values, message):
+    """What read_mot refuses in a text file, from_pandas refuses in a table (a CSV file of
+    detections), naming the row and the column: before, a frame 0 was dropped unseen, a
+    negative width or an empty cell stopped the run with a message naming neither."""
+    from vistrack.io import MOTFormatError
+
+    rows = pd.DataFrame({"t": [1, 2], "track": [4, 4], "cx": [15.0, 12.0], "cy": [30.0, 30.0],
+                         "w": [10.0, 10.0], "h": [20.0, 20.0], "score": [0.9, 0.8]})
+    names = {"frame": "t", "particle": "track", "x": "cx", "y": "cy", "bb_width": "w",
+             "bb_height": "h", "conf": "score"}
+    with pytest.raises(MOTFormatError) as e:
+        MOTTable.from_pandas(rows.assign(**{column: values}), columns=names, path="mine.csv")
+    assert str(e.value).startswith(f"mine.csv, {message}")
 
 
 def test_detections_from_a_csv_file_with_its_own_column_names(tmp_path, capsys):
@@ -95,6 +121,17 @@ def test_detections_from_a_csv_file_with_its_own_column_names(tmp_path, capsys):
     assert main(["track", str(seq), "--out", str(c), "--force", "--detections",
                  str(tmp_path / "dets.csv"), "--columns", "frame", "--quiet"]) == 2
     assert "OURS=THEIRS" in capsys.readouterr().err
+    # a CSV file counting frames from 0: refused, naming the row (its rows of frame 0 were
+    # left out unseen before)
+    zero = tmp_path / "zero.csv"
+    zero.write_text("frame,bb_left,bb_top,bb_width,bb_height,conf\n0,10,10,20,20,0.9\n"
+                    "1,11,10,20,20,0.9\n")
+    assert main(["track", str(zero), "--out", str(tmp_path / "z.txt"), "--fps", "10",
+                 "--quiet"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"vistrack track: error: {zero}, row 1 after the header, column 'frame': frame must "
+        "be an integer >= 1 (frames count from 1, as MOTChallenge's do); got 0")
+    assert not (tmp_path / "z.txt").exists()
 
 
 def test_detections_to_and_from_supervision_and_ultralytics():

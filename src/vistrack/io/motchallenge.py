@@ -250,7 +250,12 @@ class MOTTable:
         Raises
         ------
         ValueError
-            Naming the columns that are missing, or a frame that is not a whole number.
+            Naming the columns that are missing.
+        MOTFormatError
+            A ``ValueError`` naming the row and the column of a value that is not a finite
+            number (an empty cell is NaN), a frame that is not an integer >= 1 (so no row
+            of frame 0 is left out unseen), an identity that is not an integer, or a negative
+            width or height.
 
         Examples
         --------
@@ -267,8 +272,32 @@ class MOTTable:
         def name(ours: str) -> str:
             return names.get(ours, ours)
 
+        def at(k: int, ours: str) -> str:
+            # a row by its place among the rows (a CSV file's line k + 2, if it has no blank
+            # lines), and a column by its name
+            return (f"{path or 'the table'}, row {k + 1} after the header, column "
+                    f"{name(ours)!r}" + (f" ({ours})" if name(ours) != ours else ""))
+
         def get(ours: str) -> np.ndarray | None:
-            return np.asarray(df[name(ours)], dtype=float) if name(ours) in have else None
+            # the column as numbers, all finite, or the first that is not, by row
+            if name(ours) not in have:
+                return None
+            raw = np.asarray(df[name(ours)], dtype=object).ravel()
+            try:
+                v = raw.astype(float)
+            except (TypeError, ValueError):
+                for k, x in enumerate(raw):
+                    try:
+                        float(x)
+                    except (TypeError, ValueError):
+                        raise MOTFormatError(f"{at(k, ours)}: not a number: {x!r}") from None
+                raise  # unreachable: astype failed on a value that converts
+            bad = ~np.isfinite(v)
+            if bad.any():
+                k = int(np.argmax(bad))
+                raise MOTFormatError(f"{at(k, ours)}: not a finite number: {raw[k]!r}"
+                                     + (" (an empty cell, or NaN)" if np.isnan(v[k]) else ""))
+            return v
 
         where = f" in {path}" if path else ""
         frame = get("frame")
@@ -292,17 +321,27 @@ class MOTTable:
             left, top = x - w / 2, y - h / 2
         if w is None or h is None:
             raise ValueError(f"no column {name('bb_width')!r} or {name('bb_height')!r}{where}")
-        if n and not np.array_equal(frame, np.round(frame)):
-            k = int(np.flatnonzero(frame != np.round(frame))[0])
-            raise ValueError(f"frame {frame[k]} (row {k}){where} is not a whole number")
+        id_name = "particle" if name("particle") in have else "id"
+        ids = ident if ident is not None else np.full(n, -1.0)
+        for ours, v, bad, text in (
+                ("frame", frame, (frame < 1) | (frame != np.round(frame)),
+                 "frame must be an integer >= 1 (frames count from 1, as MOTChallenge's do)"),
+                ("frame", frame, frame > _INT_LIMIT, "frame must be at most 2**53"),
+                (id_name, ids, ids != np.round(ids), "an identity must be an integer"),
+                (id_name, ids, np.abs(ids) > _INT_LIMIT,
+                 "an identity must be between -2**53 and 2**53"),
+                ("bb_width", w, w < 0, "width must be >= 0"),
+                ("bb_height", h, h < 0, "height must be >= 0")):
+            if bad.any():
+                k = int(np.argmax(bad))
+                raise MOTFormatError(f"{at(k, ours)}: {text}; got {v[k]:g}")
 
         def or_fill(ours: str, fill: float) -> np.ndarray:
             v = get(ours)
             return v if v is not None else np.full(n, fill)
 
-        rows = np.column_stack([frame, ident if ident is not None else np.full(n, -1.0),
-                                left, top, w, h, or_fill("conf", 1.0), or_fill("class", -1.0),
-                                or_fill("visibility", -1.0)])
+        rows = np.column_stack([frame, ids, left, top, w, h, or_fill("conf", 1.0),
+                                or_fill("class", -1.0), or_fill("visibility", -1.0)])
         return cls.from_rows(rows if n else np.zeros((0, 9)), path)
 
     def frame_slices(self, n_frames: int | None = None) -> FrameSlices:
