@@ -233,7 +233,9 @@ def test_an_image_folder_is_numbered_by_its_names(tmp_path):
     # counted from 0, or named without numbers, or numbers out of name order
     for names, want in [(["000000.png", "000001.png", "000003.png"], [1, 2, 4]),
                         (["a.png", "b.png", "c.png"], [1, 2, 3]),
-                        (["x9.png", "y1.png", "z5.png"], [1, 2, 3])]:
+                        (["x9.png", "y1.png", "z5.png"], [1, 2, 3]),
+                        (["t1690000000000.png", "t1690000000033.png", "t1690000000067.png"],
+                         [1, 2, 3])]:
         d = tmp_path / names[0].split(".")[0] / names[1][0]
         d.mkdir(parents=True)
         for name, f in zip(names, _folder(d, n=3, ext=".png")):

@@ -129,13 +129,16 @@ def _natural(path: Path) -> tuple:
 def _numbered(files: list[Path]) -> list[int] | None:
     """Each image's frame index from the last number in its name, counted from the first
     image's number as 1 (``000001.jpg`` and ``000000.png`` alike start at frame 1), when every
-    name has a number and the numbers increase in name order; else None (then the images are
-    numbered by position).
+    name has a number, the numbers increase in name order, and they skip no more numbers than
+    there are images (a dropped frame is an exception; names that are timestamps skip many
+    between every two); else None (then the images are numbered by position).
 
     >>> _numbered([Path("000001.jpg"), Path("000002.jpg"), Path("000004.jpg")])
     [1, 2, 4]
     >>> _numbered([Path("cam_0.png"), Path("cam_1.png")]), _numbered([Path("a.png")])
     ([1, 2], None)
+    >>> _numbered([Path("t1690000000000.jpg"), Path("t1690000000033.jpg")]) is None
+    True
     """
     numbers = []
     for path in files:
@@ -143,7 +146,8 @@ def _numbered(files: list[Path]) -> list[int] | None:
         if not found:
             return None
         numbers.append(int(found[-1]))
-    if any(b <= a for a, b in zip(numbers, numbers[1:])):
+    if any(b <= a for a, b in zip(numbers, numbers[1:])) \
+            or numbers[-1] - numbers[0] + 1 > 2 * len(numbers):
         return None
     return [n - numbers[0] + 1 for n in numbers]
 
@@ -187,8 +191,8 @@ class VideoReader:
         and ``000000.png`` are both frame 1), so a number with no image is a missing frame
         (warned, once) and the frames after it keep their numbers, as detections and ground
         truth number them; where a name has no number, or the numbers do not increase in
-        name order, the images are numbered by position. A text file (``.txt``, ``.csv``,
-        ...) is refused.
+        name order, or they skip more numbers than there are images (timestamps), the
+        images are numbered by position. A text file (``.txt``, ``.csv``, ...) is refused.
     fps : float, optional
         Frames per second; default the sequence's ``seqinfo.ini``, else the container's header,
         else 30 (image folders). Give it when the header is wrong.
