@@ -282,20 +282,22 @@ class MOTTable:
             # the column as numbers, all finite, or the first that is not, by row
             if name(ours) not in have:
                 return None
-            raw = np.asarray(df[name(ours)], dtype=object).ravel()
+            column = df[name(ours)]
             try:
-                v = raw.astype(float)
+                v = np.asarray(column, dtype=float).ravel()
             except (TypeError, ValueError):
-                for k, x in enumerate(raw):
+                # the values one by one, as objects, for the first that is not a number
+                for k, x in enumerate(np.asarray(column, dtype=object).ravel()):
                     try:
                         float(x)
                     except (TypeError, ValueError):
                         raise MOTFormatError(f"{at(k, ours)}: not a number: {x!r}") from None
-                raise  # unreachable: astype failed on a value that converts
+                raise  # unreachable: the conversion failed on a value that converts
             bad = ~np.isfinite(v)
             if bad.any():
                 k = int(np.argmax(bad))
-                raise MOTFormatError(f"{at(k, ours)}: not a finite number: {raw[k]!r}"
+                x = np.asarray(column, dtype=object).ravel()[k]
+                raise MOTFormatError(f"{at(k, ours)}: not a finite number: {x!r}"
                                      + (" (an empty cell, or NaN)" if np.isnan(v[k]) else ""))
             return v
 
