@@ -78,6 +78,51 @@ def test_targets_are_kept_in_clutter(association):
         assert sum(ids) <= 8, ids
 
 
+def test_gnn_leaves_a_poor_pair_unassigned_rather_than_take_two():
+    """GNN with the gate as the price of a track or a measurement left unassigned (the
+    textbook GNN's non-assignment cost): of two tracks and two measurements, where track A
+    sits on measurement 1, track B is near it too and A's only other candidate, measurement
+    2, lies at the edge of A's gate, the assignment of least total d^2 - gate is A with 1
+    alone, B missed and 2 a new track; taking the most pairs would give A measurement 2 and
+    B measurement 1, moving both. Checked against a brute force over the matchings, on the
+    tracker's own predicted distances."""
+    from itertools import permutations
+
+    from vistrack.filters import kf_predict
+    from vistrack.models import ConstantPosition, Position
+    from vistrack.types import Gaussian
+
+    tr = PointTracker("gnn", motion=ConstantPosition(dim=2, q=0.01),
+                      measurement=Position(dim=2, r=1.0), confirm_hits=1, frame_rate=1.0)
+    tr.step(1, Detections(points=[[0.0, 0.0], [3.0, 0.0]]))  # tracks A (id 1) and B (id 2)
+    t = tr.tracks
+    g = kf_predict(Gaussian(t.mean, t.cov), tr.motion.F(1.0), tr.motion.Q(1.0))
+    z = np.array([[1.0, 0.0], [-4.1, 0.0]])
+    S = tr.H @ g.cov @ tr.H.T + tr.R
+    r = z[None, :, :] - (g.mean @ tr.H.T)[:, None, :]
+    d2 = np.einsum("kni,kij,knj->kn", r, np.linalg.inv(S), r)
+    gate = tr.threshold
+    # every matching of tracks to measurements within the gate (None: unassigned)
+    best, most = None, None
+    for perm in permutations([0, 1, None, None], 2):
+        pairs = [(k, n) for k, n in enumerate(perm) if n is not None]
+        if len({n for _, n in pairs}) < len(pairs) or any(d2[k, n] > gate for k, n in pairs):
+            continue
+        gain = sum(d2[k, n] - gate for k, n in pairs)
+        if best is None or gain < best[0]:
+            best = (gain, sorted(pairs))
+        key = (-len(pairs), sum(d2[k, n] for k, n in pairs))
+        if most is None or key < most[0]:
+            most = (key, sorted(pairs))
+    assert best[1] == [(0, 0)] and most[1] == [(0, 1), (1, 0)]  # the two rules differ here
+    out = tr.step(2, Detections(points=z))
+    # A (reported) at measurement 1; B missed this frame; measurement 2 a new track, id 3
+    assert out.ids.tolist() == [1] and np.abs(out.points[0] - z[0]).max() < 0.6
+    assert tr.tracks.ids.tolist() == [1, 2, 3]
+    assert tr.tracks.last_time.tolist() == [2.0, 1.0, 2.0]
+    np.testing.assert_allclose(tr.tracks.mean[2, :2], z[1])
+
+
 def test_point_tracker_arguments():
     with pytest.raises(ValueError, match="association must be one of"):
         PointTracker("mht")

@@ -8,8 +8,9 @@ Mahalanobis distance from each track's predicted measurement, :math:`d^2 \le \ch
 
 Association (``association=``):
 
-- ``"gnn"``: global nearest neighbour on :math:`d^2`; ``"nn"``: each track its nearest gated
-  measurement; ``"greedy"``;
+- ``"gnn"``: global nearest neighbour on :math:`d^2`, the gate being the price of a track or
+  a measurement left unassigned (the pairs of least total :math:`d^2 - \chi^2`, not the most
+  pairs); ``"nn"``: each track its nearest gated measurement; ``"greedy"``;
 - ``"pda"``: each track corrected with all its gated measurements weighted by their
   probabilities (PDA), for clutter; ``"jpda"``: the probabilities computed jointly for tracks
   that share measurements (:mod:`vistrack.association.pda`).
@@ -194,7 +195,8 @@ class PointTracker:
                 # connected group: thousands of points stay cheap
                 r, c, d2 = mahalanobis_pairs(zp, S, Z, self.threshold)
                 same = t.classes[r] == classes[c]
-                r, c = gnn_sparse(r[same], c[same], d2[same], (K, len(Z)))
+                r, c = gnn_sparse(r[same], c[same], d2[same], (K, len(Z)),
+                                  limit=self.threshold)
                 if len(r):
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
