@@ -245,8 +245,9 @@ def test_an_image_folder_is_numbered_by_its_names(tmp_path):
             frames, _ = _read(VideoReader(d))
         assert [f.index for f in frames] == want, names
 
-    # tracked from the folder with a detections file, the frames after the gap keep their
-    # detections: the same rows as the file tracked alone, minus the missing frames'
+    # tracked from the folder with a detections file, the frames after a gap keep their
+    # detections; the file tracked alone has a row in every frame, the folder none in the
+    # frames without an image
     dets = tmp_path / "det.txt"
     dets.write_text("".join(f"{f},-1,{5 + 3 * f},10,20,20,0.9\n" for f in range(1, 9)))
     gt = tmp_path / "gt.txt"
