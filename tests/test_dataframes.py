@@ -72,8 +72,8 @@ def test_other_column_names_and_missing_columns():
     ("t", [1.5, 2], "row 1 after the header, column 't' (frame): frame must be an integer "
                     ">= 1 (frames count from 1, as MOTChallenge's do); got 1.5"),
     ("t", [1, 0], "row 2 after the header, column 't' (frame): frame must be an integer >= 1"),
-    ("track", [4, 4.5], "row 2 after the header, column 'track' (particle): an identity must "
-                        "be an integer; got 4.5"),
+    ("track", [4, 4.5], "row 2 after the header, column 'track' (particle): id must be an "
+                        "integer; got 4.5"),
     ("w", [10, -1], "row 2 after the header, column 'w' (bb_width): width must be >= 0; got -1"),
     ("h", [np.nan, 20], "row 1 after the header, column 'h' (bb_height): not a finite number: "
                         "nan (an empty cell, or NaN)"),

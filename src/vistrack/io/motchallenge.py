@@ -323,27 +323,22 @@ class MOTTable:
             left, top = x - w / 2, y - h / 2
         if w is None or h is None:
             raise ValueError(f"no column {name('bb_width')!r} or {name('bb_height')!r}{where}")
-        id_name = "particle" if name("particle") in have else "id"
-        ids = ident if ident is not None else np.full(n, -1.0)
-        for ours, v, bad, text in (
-                ("frame", frame, (frame < 1) | (frame != np.round(frame)),
-                 "frame must be an integer >= 1 (frames count from 1, as MOTChallenge's do)"),
-                ("frame", frame, frame > _INT_LIMIT, "frame must be at most 2**53"),
-                (id_name, ids, ids != np.round(ids), "an identity must be an integer"),
-                (id_name, ids, np.abs(ids) > _INT_LIMIT,
-                 "an identity must be between -2**53 and 2**53"),
-                ("bb_width", w, w < 0, "width must be >= 0"),
-                ("bb_height", h, h < 0, "height must be >= 0")):
-            if bad.any():
-                k = int(np.argmax(bad))
-                raise MOTFormatError(f"{at(k, ours)}: {text}; got {v[k]:g}")
+        box = np.column_stack([frame, ident if ident is not None else np.full(n, -1.0),
+                               left, top, w, h])
+        # the rules a text file's rows obey (_check_rows), named by row and column here
+        found = _first_bad_row(box)
+        if found is not None:
+            k, col, text = found
+            ours = {0: "frame", 1: "particle" if name("particle") in have else "id",
+                    4: "bb_width", 5: "bb_height"}[col]
+            raise MOTFormatError(f"{at(k, ours)}: {text}")
 
         def or_fill(ours: str, fill: float) -> np.ndarray:
             v = get(ours)
             return v if v is not None else np.full(n, fill)
 
-        rows = np.column_stack([frame, ids, left, top, w, h, or_fill("conf", 1.0),
-                                or_fill("class", -1.0), or_fill("visibility", -1.0)])
+        rows = np.column_stack([box, or_fill("conf", 1.0), or_fill("class", -1.0),
+                                or_fill("visibility", -1.0)])
         return cls.from_rows(rows if n else np.zeros((0, 9)), path)
 
     def frame_slices(self, n_frames: int | None = None) -> FrameSlices:
@@ -461,6 +456,30 @@ def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
     return np.array(rows, dtype=float).reshape(len(rows), width or 10)
 
 
+_ROW_RULES = (
+    (0, lambda v: (v < 1) | (v != np.round(v)),
+     "frame must be an integer >= 1 (frames count from 1, as MOTChallenge's do)"),
+    (0, lambda v: v > _INT_LIMIT, "frame must be at most 2**53"),
+    (1, lambda v: v != np.round(v), "id must be an integer"),
+    (1, lambda v: np.abs(v) > _INT_LIMIT, "id must be between -2**53 and 2**53"),
+    (4, lambda v: v < 0, "width must be >= 0"),
+    (5, lambda v: v < 0, "height must be >= 0"),
+)
+"""What every row of a table must satisfy, whatever it was read from (a text file, a CSV
+file, a DataFrame): (column, the values that break the rule, what is wrong)."""
+
+
+def _first_bad_row(a: np.ndarray) -> tuple[int, int, str] | None:
+    """The first rule of :data:`_ROW_RULES` the rows ``a (N, >= 6)`` break: the first row
+    breaking it, its column and what is wrong with the value; None if none is broken."""
+    for col, breaks, text in _ROW_RULES:
+        bad = breaks(a[:, col])
+        if bad.any():
+            i = int(np.argmax(bad))
+            return i, col, f"{text}; got {a[i, col]:g}"
+    return None
+
+
 def _check_rows(path: str, a: np.ndarray, lines: list[str] | None) -> None:
     def line_of(i: int) -> int:
         if lines is None:
@@ -468,18 +487,10 @@ def _check_rows(path: str, a: np.ndarray, lines: list[str] | None) -> None:
         nonblank = [k for k, t in enumerate(lines, start=1) if t.strip()]
         return nonblank[i]
 
-    checks = [
-        (0, (a[:, 0] < 1) | (a[:, 0] != np.round(a[:, 0])), "frame must be an integer >= 1"),
-        (0, a[:, 0] > _INT_LIMIT, "frame must be at most 2**53"),
-        (1, a[:, 1] != np.round(a[:, 1]), "id must be an integer"),
-        (1, np.abs(a[:, 1]) > _INT_LIMIT, "id must be between -2**53 and 2**53"),
-        (4, a[:, 4] < 0, "width must be >= 0"),
-        (5, a[:, 5] < 0, "height must be >= 0"),
-    ]
-    for col, bad, text in checks:
-        if bad.any():
-            i = int(np.argmax(bad))
-            raise _bad(path, line_of(i), col + 1, f"{text}; got {a[i, col]:g}")
+    found = _first_bad_row(a)
+    if found is not None:
+        i, col, text = found
+        raise _bad(path, line_of(i), col + 1, text)
 
 
 # ---------------------------------------------------------------------------------------------
