@@ -80,17 +80,23 @@ def test_other_column_names_and_missing_columns():
     ("cx", [1, np.inf], "row 2 after the header, column 'cx' (x): not a finite number: inf"),
     ("score", [0.9, "high"], "row 2 after the header, column 'score' (conf): not a number: "
                              "'high'"),
+    ("kind", [1, 2.5], "row 2 after the header, column 'kind' (class): class must be an "
+                       "integer; got 2.5"),
 ])
 def test_a_bad_value_is_named_by_row_and_column(column, values, message):
     """What read_mot refuses in a text file, from_pandas refuses in a table (a CSV file of
     detections), naming the row and the column: before, a frame 0 was dropped unseen, a
-    negative width or an empty cell stopped the run with a message naming neither."""
+    negative width or an empty cell stopped the run with a message naming neither. A
+    fraction in the class column, read as no class (-1) before, is refused too: in a text
+    file the eighth value may be something else (MOT15's world x), in a column named as the
+    class it is not."""
     from vistrack.io import MOTFormatError
 
     rows = pd.DataFrame({"t": [1, 2], "track": [4, 4], "cx": [15.0, 12.0], "cy": [30.0, 30.0],
-                         "w": [10.0, 10.0], "h": [20.0, 20.0], "score": [0.9, 0.8]})
+                         "w": [10.0, 10.0], "h": [20.0, 20.0], "score": [0.9, 0.8],
+                         "kind": [1, 1]})
     names = {"frame": "t", "particle": "track", "x": "cx", "y": "cy", "bb_width": "w",
-             "bb_height": "h", "conf": "score"}
+             "bb_height": "h", "conf": "score", "class": "kind"}
     with pytest.raises(MOTFormatError) as e:
         MOTTable.from_pandas(rows.assign(**{column: values}), columns=names, path="mine.csv")
     assert str(e.value).startswith(f"mine.csv, {message}")

@@ -254,8 +254,8 @@ class MOTTable:
         MOTFormatError
             A ``ValueError`` naming the row and the column of a value that is not a finite
             number (an empty cell is NaN), a frame that is not an integer >= 1 (so no row
-            of frame 0 is left out unseen), an identity that is not an integer, or a negative
-            width or height.
+            of frame 0 is left out unseen), an identity or a class that is not an integer,
+            or a negative width or height.
 
         Examples
         --------
@@ -337,8 +337,14 @@ class MOTTable:
             v = get(ours)
             return v if v is not None else np.full(n, fill)
 
-        rows = np.column_stack([box, or_fill("conf", 1.0), or_fill("class", -1.0),
-                                or_fill("visibility", -1.0)])
+        kind = or_fill("class", -1.0)
+        # a text file's eighth value may be something else (MOT15's world x), read as no
+        # class; a column named as the class is one, so a fraction there is an error
+        bad = (kind != np.round(kind)) | (np.abs(kind) > _INT_LIMIT)
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise MOTFormatError(f"{at(k, 'class')}: class must be an integer; got {kind[k]:g}")
+        rows = np.column_stack([box, or_fill("conf", 1.0), kind, or_fill("visibility", -1.0)])
         return cls.from_rows(rows if n else np.zeros((0, 9)), path)
 
     def frame_slices(self, n_frames: int | None = None) -> FrameSlices:
