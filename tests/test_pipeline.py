@@ -377,3 +377,54 @@ def test_track_rows_equal_the_concatenated_frames():
     np.testing.assert_array_equal(rows.ids, want_ids)
     np.testing.assert_array_equal(rows.xywh, np.concatenate([b[2] for b in blocks]))
     np.testing.assert_array_equal(rows.scores, np.concatenate([b[3] for b in blocks]))
+
+
+def test_a_detections_file_with_boxes_of_no_area_says_so(tmp_path):
+    """A box of zero width or height (KITTI-0000-Car's det.txt has one, clipped at the
+    image's edge) overlaps no other box, itself in the next frame included, so no track can
+    follow it: a confident one that stays put is not reported after its first frame. That
+    used to happen without a word; the file's reader now warns, naming the first such box's
+    line (its frame in a CSV file, whose columns may lie in any order) and how many more
+    there are."""
+    import warnings
+
+    from vistrack.pipeline import track_sequence
+
+    # a person walking, and a flat box that stays where it is in every frame
+    rows = []
+    for f in range(1, 11):
+        rows.append(f"{f},-1,{10 + 3 * f},20,30,60,0.9")
+        rows.append(f"{f},-1,200,50,{0 if f != 4 else 20},40,0.95")
+    det = tmp_path / "det.txt"
+    det.write_text("\n".join(rows) + "\n")
+    with pytest.warns(RuntimeWarning) as got:  # scores as given: the flat box is confident
+        run_ = track_sequence(det, tmp_path / "out.txt", fps=10, scores="raw")
+    assert [str(w.message) for w in got] == [
+        f"{det}, line 2: a box of zero width (200, 50, 0, 40) and 8 more of zero width or "
+        "height: a box with no area overlaps no other, so no track can follow it from frame "
+        "to frame"]
+    out = read_mot(run_.out)
+    # the person is followed through the ten frames; the flat box only in the first frame,
+    # where every track is reported at once, and never after
+    flat = out.boxes[:, 0] == 200
+    assert out.frames[~flat].tolist() == list(range(1, 11)) and out.frames[flat].tolist() == [1]
+
+    csv = tmp_path / "det.csv"
+    csv.write_text("conf,frame,x0,y0,w,h\n0.9,3,5,5,10,0\n0.9,4,5,5,10,10\n")
+    names = {"bb_left": "x0", "bb_top": "y0", "bb_width": "w", "bb_height": "h"}
+    with pytest.warns(RuntimeWarning, match=rf"^{csv}, frame 3: a box of zero height "
+                                            r"\(5, 5, 10, 0\): a box with no area"):
+        track_sequence(csv, tmp_path / "csv.txt", fps=10, columns=names)
+
+    # --frontend detections:FILE reads the file the same way
+    frames, _ = red_disc_clip(T=10)
+    clip = write_clip(tmp_path / "frames", frames)
+    with pytest.warns(RuntimeWarning, match=rf"^{det}, line 2: a box of zero width"):
+        track_video(clip, tmp_path / "video", frontend=f"detections:{det}", fps=10,
+                    annotate=False, scores="raw")
+
+    # boxes with area: no warning
+    det.write_text("\n".join(r for r in rows if ",0,40," not in r) + "\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        track_sequence(det, tmp_path / "clean.txt", fps=10)

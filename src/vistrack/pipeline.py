@@ -31,7 +31,7 @@ from . import _compile
 from ._memory import PeriodicRelease
 from ._registry import Registry
 from .config import OfflineConfig, TrackConfig
-from .evaluation.mot import MOTCounts, evaluate_mot
+from .evaluation.mot import MOTCounts, _lines_of, evaluate_mot
 from .io.atomic import check_output, made_folder
 from .io.motchallenge import (
     DETECTION_SUFFIXES,
@@ -605,11 +605,31 @@ def _onnx(path: str | Path, ctx: Context) -> FrameDetector:
     return lambda frame: det.detect(_image(frame, "the ONNX model"))
 
 
+def _warn_no_area(dets: MOTTable, path: Path, stacklevel: int) -> None:
+    """Warn of a detections file's boxes of zero width or height, naming the first one's line
+    (its frame, where the line is not found: a CSV file's columns may lie in any order): a
+    box with no area overlaps no other, so no track can follow it from frame to frame."""
+    flat = (dets.boxes[:, 2] == 0) | (dets.boxes[:, 3] == 0)
+    if not flat.any():
+        return
+    k = int(np.argmax(flat))
+    f, box = int(dets.frames[k]), dets.boxes[k].tolist()
+    lines = _lines_of(str(path), lambda row: row[0] == f and row[2:6] == box)
+    where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
+    more = int(flat.sum()) - 1
+    warnings.warn(f"{where}: a box of zero {'width' if box[2] == 0 else 'height'} "
+                  f"({', '.join(f'{v:g}' for v in box)})"
+                  + (f" and {more} more of zero width or height" if more else "")
+                  + ": a box with no area overlaps no other, so no track can follow it from "
+                  "frame to frame", RuntimeWarning, stacklevel=stacklevel + 1)
+
+
 def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
     dets = read_mot(path)
+    _warn_no_area(dets, path, stacklevel=3)
     # every frame's rows, up to the file's last frame; none after it (a video may run past
     # its header's count, or give none)
     slices = dets.frame_slices()
@@ -1000,6 +1020,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     if not det_path.exists():
         raise FileNotFoundError(f"{det_path} does not exist (pass --detections FILE)")
     dets = read_detections(det_path, columns)
+    _warn_no_area(dets, det_path, stacklevel=2)
     if info is None:
         assert fps is not None  # refused above without seqinfo.ini
         info = SeqInfo.from_detections(det_path if alone else seq_dir, dets, float(fps))
