@@ -692,7 +692,9 @@ class BoxTracker:
             last frame is the gap in indices over ``frame_rate``, so gaps in frame numbers are
             predicted over. The image is not used.
         detections : Detections
-            The frame's detections, with boxes (None: no detections).
+            The frame's detections, with boxes (None: no detections). A box of zero width or
+            height overlaps no other, so no track follows it from frame to frame (a
+            detections file's reader in :mod:`vistrack.pipeline` warns of such boxes).
 
         Returns
         -------
