@@ -827,10 +827,9 @@ def make_tracker(tracker: str | Tracker, ctx: Context) -> tuple[Tracker, str]:
             raise TypeError(f"tracker must be a name in {sorted(TRACKERS)}, 'module:callable' "
                             f"or an object with step(frame, detections) -> Tracks; got "
                             f"{type(tracker).__name__}")
-        return tracker, "bgsub"
+        return tracker, default_frontend(tracker)
     if tracker in TRACKERS:
-        entry = TRACKERS[tracker]
-        return entry.make(ctx), entry.frontend
+        return TRACKERS[tracker].make(ctx), default_frontend(tracker)
     if ":" in tracker and not tracker.startswith("single:"):
         module, _, name = tracker.partition(":")
         try:
@@ -842,7 +841,7 @@ def make_tracker(tracker: str | Tracker, ctx: Context) -> tuple[Tracker, str]:
         if not callable(getattr(made, "step", None)):
             raise TypeError(f"tracker {tracker!r} made a {type(made).__name__}, which has no "
                             "step(frame, detections) -> Tracks")
-        return made, "bgsub"
+        return made, default_frontend(tracker)
     return TRACKERS[tracker].make(ctx), ""  # raises, listing the names
 
 
