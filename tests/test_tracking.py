@@ -730,3 +730,70 @@ def test_smoothing_the_size_follows_the_true_box_when_sizes_are_noisier():
     # measured: 1.9 against 2.4 pixels, mean IoU 0.871 against 0.862
     assert width_err["default"] < 0.9 * width_err["same"], width_err
     assert box_iou["default"] > box_iou["same"], box_iou
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_an_object_faster_than_its_size_a_frame_is_confirmed_by_its_gate(compiled):
+    """At 2 frames/s an object moving 1.5 widths a frame never overlaps its last box, and a
+    track with one update predicts it standing still: by overlap alone every detection
+    starts a new tentative track and none is confirmed, so the object is never reported. The
+    tentative track's gate, from its prediction's covariance (the velocity's prior over the
+    half second), takes the next detection; from then on the track's velocity is known and
+    the overlap follows it, one identity at the true boxes."""
+    def run(**kw):
+        tr = BoxTracker(scores="raw", frame_rate=2.0, compiled=compiled, **kw)
+        got = {}
+        for f in range(1, 12):
+            boxes = [[500.0, 400, 40, 80]]  # standing still: a track from the first frame
+            if f >= 2:
+                boxes.append([20.0 + 60 * (f - 2), 100, 40, 80])
+            out = tr.step(f, Detections.from_xywh(np.array(boxes), [0.9] * len(boxes)))
+            for i, b in zip(out.ids.tolist(), out.boxes):
+                if b[1] < 300:
+                    got.setdefault(i, []).append((f, b[0]))
+        return got
+
+    got = run()
+    assert list(got) == [2]
+    frames, x = np.array(got[2]).T
+    assert frames.tolist() == list(range(3, 12))  # confirmed by its second detection
+    np.testing.assert_allclose(x, 20.0 + 60 * (frames - 2), atol=0.5)
+    assert run(tentative_gate=0.0) == {}
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_tentative_gate_is_the_chi_square_of_the_innovation(compiled):
+    """The last stage's distance is the innovation's squared Mahalanobis distance, the
+    innovation's covariance ``S = H (F P F' + Q) H' + R`` computed here by hand from the
+    motion's initial covariance, transition and noise (8 states, full matrices): a detection
+    moved along x to ``d² = 13.0`` is taken, one at ``d² = 13.6`` is not (the gate 13.28).
+    With two detections in the gate neither is taken (no guess), nor is one that lies in two
+    tracks' gates."""
+    fps = 2.0
+    motion = BoxTracker(frame_rate=fps).motion
+    first = np.array([[100.0, 100, 40, 80]])  # cx, cy, w, h
+    m0, P0 = motion.initial(first)
+    F = motion.F(1.0)
+    pred = m0[0] @ F.T
+    P1 = F @ P0[0] @ F.T + np.diag(motion.Q_diag(pred[None, :4], 1.0)[0])
+    S = P1[:4, :4] + np.diag(motion.R_diag(pred[None, :4])[0])
+    sx = np.sqrt(S[0, 0])
+    assert 3 * sx > 40  # outside the overlap's reach: IoU 0
+
+    def second_frame(*dx, others=()):
+        tr = BoxTracker(scores="raw", frame_rate=fps, compiled=compiled, camera_motion=False)
+        tr.step(1, Detections.from_xywh(np.array([[900.0, 700, 40, 80]]), [0.9]))
+        starts = [first[0], *others]
+        tr.step(2, Detections.from_xywh(np.array([[900.0, 700, 40, 80]] + [
+            [b[0] - 20, b[1] - 40, 40, 80] for b in starts]), [0.9] * (1 + len(starts))))
+        boxes = [[900.0, 700, 40, 80]] + [[80.0 + d, 60, 40, 80] for d in dx]
+        out = tr.step(3, Detections.from_xywh(np.array(boxes), [0.9] * len(boxes)))
+        return sorted(out.ids.tolist())
+
+    inside, outside = sx * np.sqrt(13.0), sx * np.sqrt(13.6)
+    assert second_frame(inside) == [1, 2]
+    assert second_frame(outside) == [1]
+    assert second_frame(-inside) == [1, 2]
+    assert second_frame(inside, -inside) == [1]  # two in its gate: no guess
+    # a second tentative track whose gate holds the detection too
+    assert second_frame(inside, others=[first[0] + [2 * inside, 0, 0, 0]]) == [1]

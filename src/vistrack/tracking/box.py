@@ -49,6 +49,19 @@ One step, as on the slides (predict, associate, correct, manage):
    - tracks still unmatched and not lost take the less confident ones (``low`` ≤ confidence
      < ``high``), which are often the partly occluded objects a single threshold would drop;
    - tentative tracks take what is left of the confident detections;
+   - a tentative track still unmatched (updated once, with ``confirm_hits`` 2, so with no
+     velocity yet) takes a detection left over that could start a track itself (confidence
+     ≥ ``new_track``) within its prediction's gate: the squared Mahalanobis distance of the
+     box (centre and size) from the predicted one, with the prediction's covariance and the
+     detection noise, under ``tentative_gate`` (the 99 % point of chi-square with 4 degrees
+     of freedom), where the pair is unambiguous (no other such detection in the track's
+     gate, no other such track's gate holds the detection).
+     The overlap misses an object that moves more than its size between frames, as at a
+     low frame rate, and the prediction of a track with one update stands still; its
+     covariance, though, holds the velocity's prior uncertainty over the time between the
+     frames, so the gate widens as the frame rate falls and stays inside the overlap's reach
+     at a high one. Without it, such an object starts a new tentative track at every frame
+     and none is ever confirmed;
 
 3. **correct** the matched tracks with their detections (one batched Kalman update);
 4. **manage**: :mod:`vistrack.tracking.lifecycle`; unmatched confident detections with
@@ -118,6 +131,11 @@ class BoxTrackerConfig:
         IoU gates of the three stages. The gate is also what a track and a detection left
         unassigned cost: a stage takes the pairs whose similarities above the gate add up
         most, not the most pairs.
+    tentative_gate : float
+        The gate of the last stage, on the squared Mahalanobis distance from a tentative track
+        still unmatched of a detection left over that could start a track itself, over the
+        box's centre and size (13.28: chi-square's 99 % point with 4 degrees of freedom; 0:
+        no such stage; see the module).
     fuse_score : bool
         The first stage's similarity is ``IoU * score`` (cost ``1 -`` it; its gate
         ``min_iou`` applies to it too, as in ByteTrack): a confident detection wins a tie,
@@ -156,6 +174,7 @@ class BoxTrackerConfig:
     min_iou: float = 0.2
     min_iou_low: float = 0.3
     min_iou_tentative: float = 0.3
+    tentative_gate: float = 13.28
     fuse_score: bool = True
     confirm_hits: int = 2
     max_lost: float = 2.0
@@ -203,7 +222,7 @@ class BoxTrackerConfig:
             if not 0 < getattr(self, name) <= 1:
                 raise bad(name, "in (0, 1]")
         for name in ("max_lost", "coast_time", "coast_after", "camera_sig",
-                     "calibration_prior", "chain_span", "chain_gap"):
+                     "calibration_prior", "chain_span", "chain_gap", "tentative_gate"):
             if not 0 <= getattr(self, name) < np.inf:
                 raise bad(name, "a finite number >= 0")
         for name in ("confirm_hits", "camera_min_matches"):
@@ -223,7 +242,7 @@ TRACKERS: Registry[BoxTrackerConfig] = Registry("box-tracker preset", {
     "bytetrack": BoxTrackerConfig(),
     "sort": BoxTrackerConfig(two_stage=False, high=0.5, low=0.5, new_track=0.5, min_iou=0.3,
                              fuse_score=False, confirm_hits=3, max_lost=0.1,
-                             camera_motion=False, coast_time=0.0),
+                             camera_motion=False, coast_time=0.0, tentative_gate=0.0),
 })
 """Box-tracker configurations by name (``vistrack track --tracker NAME``)."""
 
@@ -632,6 +651,28 @@ class BoxTracker:
         dense[r, c] = cost
         return assign(dense, np.isfinite(dense), self.config.assigner)
 
+    def _tentative_in_gate(self, db: np.ndarray, dc: np.ndarray, free: np.ndarray,
+                           updated: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The last stage (see the module): the tentative tracks not ``updated``, each with
+        the one detection of ``free`` (left over, confident enough to start a track) of its
+        class within its gate, where no other track's gate holds that detection:
+        ``(tracks, detections)``."""
+        t = self.tracks
+        ti = np.flatnonzero((t.state == TENTATIVE) & ~updated)
+        # a box of no area has no noise to measure a distance by (the noise scales with
+        # the size): like the overlap, the gate follows none
+        di = np.flatnonzero(free & (db[:, 2] > db[:, 0]) & (db[:, 3] > db[:, 1]))
+        if len(ti) == 0 or len(di) == 0:
+            return ti[:0], di[:0]
+        e = _to_cxcywh(db[di])[None] - t.mean[ti, None, :4]
+        s = t.cov[ti, :, 0] + self._r[ti]  # the innovation's variances, per box value
+        with np.errstate(divide="ignore", invalid="ignore"):  # a track of no area: never in
+            d2 = ((e * e) / s[:, None]).sum(-1)
+        inside = (d2 < self.config.tentative_gate) & (t.classes[ti, None] == dc[di][None])
+        inside &= (inside.sum(1, keepdims=True) == 1) & (inside.sum(0, keepdims=True) == 1)
+        r, c = np.nonzero(inside)
+        return ti[r], di[c]
+
     def _associate_numpy(self, db: np.ndarray, ds: np.ndarray, dc: np.ndarray,
                          high: np.ndarray) -> tuple[np.ndarray, ...]:
         """The stages of association (see the module) in numpy, after :meth:`_predict`:
@@ -744,6 +785,13 @@ class BoxTracker:
             updated, free_d, mt, md = self._associate_numpy(db, ds, dc, high)
         self._camera_offset = self._camera_offset + self.camera_shift
         self._offsets[self._moved] += self.camera_shift
+        if cfg.tentative_gate > 0:
+            ti, di = self._tentative_in_gate(db, dc, free_d & (ds >= cfg.new_track), updated)
+            if len(ti):
+                if self.compiled:  # (numpy corrects every matched track below)
+                    self._update(ti, _to_cxcywh(db[di]))
+                updated[ti], free_d[di] = True, False
+                mt, md = np.r_[mt, ti], np.r_[md, di]
         if len(mt):
             if not self.compiled:
                 self._update(mt, _to_cxcywh(db[md]))
