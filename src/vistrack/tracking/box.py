@@ -664,14 +664,29 @@ class BoxTracker:
         di = np.flatnonzero(free & (db[:, 2] > db[:, 0]) & (db[:, 3] > db[:, 1]))
         if len(ti) == 0 or len(di) == 0:
             return ti[:0], di[:0]
-        e = _to_cxcywh(db[di])[None] - t.mean[ti, None, :4]
+        gate = self.config.tentative_gate
+        z = _to_cxcywh(db[di])
         s = t.cov[ti, :, 0] + self._r[ti]  # the innovation's variances, per box value
+        # the candidates: detections whose centre's x lies within the track's reach along x
+        # (necessary for d2 < gate), found by sorting, not over every track and detection
+        order = np.argsort(z[:, 0], kind="stable")
+        x = z[order, 0]
+        reach = np.sqrt(gate * s[:, 0])
+        lo = np.searchsorted(x, t.mean[ti, 0] - reach, side="left")
+        n = np.searchsorted(x, t.mean[ti, 0] + reach, side="right") - lo
+        rows = np.repeat(np.arange(len(ti)), n)
+        cols = order[np.repeat(lo - np.cumsum(n) + n, n) + np.arange(int(n.sum()))]
+        # and along y, before the whole distance
+        near = np.abs(z[cols, 1] - t.mean[ti[rows], 1]) <= np.sqrt(gate * s[rows, 1])
+        rows, cols = rows[near], cols[near]
+        e = z[cols] - t.mean[ti[rows], :4]
         with np.errstate(divide="ignore", invalid="ignore"):  # a track of no area: never in
-            d2 = ((e * e) / s[:, None]).sum(-1)
-        inside = (d2 < self.config.tentative_gate) & (t.classes[ti, None] == dc[di][None])
-        inside &= (inside.sum(1, keepdims=True) == 1) & (inside.sum(0, keepdims=True) == 1)
-        r, c = np.nonzero(inside)
-        return ti[r], di[c]
+            d2 = ((e * e) / s[rows]).sum(-1)
+        ok = (d2 < gate) & (t.classes[ti[rows]] == dc[di[cols]])
+        rows, cols = rows[ok], cols[ok]
+        alone = ((np.bincount(rows, minlength=len(ti)) == 1)[rows]
+                 & (np.bincount(cols, minlength=len(di)) == 1)[cols])
+        return ti[rows[alone]], di[cols[alone]]
 
     def _associate_numpy(self, db: np.ndarray, ds: np.ndarray, dc: np.ndarray,
                          high: np.ndarray) -> tuple[np.ndarray, ...]:
