@@ -659,11 +659,13 @@ class BoxTracker:
         ``(tracks, detections)``."""
         t = self.tracks
         ti = np.flatnonzero((t.state == TENTATIVE) & ~updated)
+        if len(ti) == 0:  # most frames: nothing more to do
+            return ti, ti
         # a box of no area has no noise to measure a distance by (the noise scales with
         # the size): like the overlap, the gate follows none
         di = np.flatnonzero(free & (db[:, 2] > db[:, 0]) & (db[:, 3] > db[:, 1]))
-        if len(ti) == 0 or len(di) == 0:
-            return ti[:0], di[:0]
+        if len(di) == 0:
+            return ti[:0], di
         gate = self.config.tentative_gate
         z = _to_cxcywh(db[di])
         s = t.cov[ti, :, 0] + self._r[ti]  # the innovation's variances, per box value
