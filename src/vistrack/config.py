@@ -109,7 +109,7 @@ class OfflineConfig:
     extend_iou: float = 0.5
     link_gap: float = 2.0
     link_iou: float = 0.3
-    link_window: float = 0.5
+    link_window: float = 0.3
 
     def __post_init__(self) -> None:
         if not isinstance(self.enabled, bool):
