@@ -797,3 +797,24 @@ def test_the_tentative_gate_is_the_chi_square_of_the_innovation(compiled):
     assert second_frame(inside, -inside) == [1]  # two in its gate: no guess
     # a second tentative track whose gate holds the detection too
     assert second_frame(inside, others=[first[0] + [2 * inside, 0, 0, 0]]) == [1]
+
+
+def test_smooth_defaults_are_the_offline_modes_at_the_trackers_frame_rate():
+    """Left out, ``smooth``'s gaps are the offline mode's seconds (``OfflineConfig``: gaps
+    filled up to 1 s) at the tracker's frame rate: at 10 frames/s a gap of 9 frames is
+    filled and one of 11 is not (before, a fixed 20 frames filled both)."""
+    from vistrack.config import OfflineConfig
+    from vistrack.tracking import smooth
+
+    assert OfflineConfig().max_gap == 1.0
+    for gap, filled in ((9, True), (11, False)):
+        tr = BoxTracker("bytetrack", record=True, frame_rate=10)
+        seen = [f for f in range(1, 31) if not 11 <= f < 11 + gap]
+        for f in range(1, 31):
+            boxes = [[10 + 2 * f, 20, 30, 60]] if f in seen else np.zeros((0, 4))
+            tr.step(f, Detections.from_xywh(boxes, [0.9] * len(boxes)))
+        s = smooth(tr)
+        assert np.unique(s.ids).tolist() == [1]
+        assert s.filled.any() == filled
+        assert len(s) == (30 if filled else len(seen))
+        assert len(smooth(tr, **OfflineConfig().frames(10.0))) == len(s)

@@ -122,6 +122,21 @@ class OfflineConfig:
             if getattr(self, name) > 1:
                 raise ValueError(f"{name} must be in [0, 1]; got {getattr(self, name)!r}")
 
+    def frames(self, frame_rate: float) -> dict[str, int]:
+        """The durations :func:`vistrack.tracking.smooth` counts in frames, at ``frame_rate``
+        frames a second: ``max_gap``, ``link_gap`` and ``link_window`` (at least 1).
+
+        Examples
+        --------
+        >>> OfflineConfig().frames(30.0)
+        {'max_gap': 30, 'link_gap': 60, 'link_window': 9}
+        >>> OfflineConfig().frames(2.5)
+        {'max_gap': 2, 'link_gap': 5, 'link_window': 1}
+        """
+        return {"max_gap": int(round(self.max_gap * frame_rate)),
+                "link_gap": int(round(self.link_gap * frame_rate)),
+                "link_window": max(1, int(round(self.link_window * frame_rate)))}
+
 
 _MOTION = ("std_pos", "std_vel", "std_meas", "init_pos", "init_vel", "frame_rate")
 

@@ -1067,11 +1067,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
             n_rows, n_tracks = len(writer), len(writer.identities)
         else:
             t0, c0 = time.perf_counter(), _compile.seconds()
-            fps = info.frame_rate
-            sm = smooth(trk, max_gap=int(round(oc.max_gap * fps)), min_score=oc.min_track_score,
+            sm = smooth(trk, min_score=oc.min_track_score,
                         extend_iou=oc.extend_iou if oc.extend_iou > 0 else None,
-                        link_gap=int(round(oc.link_gap * fps)), link_iou=oc.link_iou,
-                        link_window=max(1, round(oc.link_window * fps)))
+                        link_iou=oc.link_iou, **oc.frames(info.frame_rate))
             seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
             F, I = sm.frames, sm.ids
             write_mot(text, F, I, sm.xywh, np.where(sm.filled, 0.0, sm.scores), force=True)

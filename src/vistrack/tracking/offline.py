@@ -131,16 +131,16 @@ class _Track:
     last: tuple  # the same at the last update
 
 
-def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0, *,
-           extend_iou: float | None = 0.5, link_gap: int = 60, link_iou: float = 0.3,
-           link_window: int = 15) -> SmoothedTracks:
+def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float = 0.0, *,
+           extend_iou: float | None = 0.5, link_gap: int | None = None, link_iou: float = 0.3,
+           link_window: int | None = None) -> SmoothedTracks:
     """Smooth the tracks a ``BoxTracker(record=True)`` has followed (see the module).
 
     Parameters
     ----------
     tracker : BoxTracker
         A tracker created with ``record=True`` that has run over a sequence.
-    max_gap : int
+    max_gap : int, optional
         The longest gap (in frames without an update) that is filled.
     min_score : float
         The lowest mean score of a track's detections that is kept (the scores as the
@@ -154,6 +154,10 @@ def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0, *,
         when their boxes, carried across the gap by the velocities of their last and first
         ``link_window`` detected frames, overlap the other's by ``link_iou`` on average; the
         gap between them is filled from the smoother.
+
+        ``max_gap``, ``link_gap`` and ``link_window`` left out (None) are the offline mode's
+        defaults (:class:`vistrack.config.OfflineConfig`, in seconds) at the tracker's
+        ``frame_rate``: 30, 60 and 9 frames at 30 frames/s.
 
     Returns
     -------
@@ -173,7 +177,8 @@ def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0, *,
     -----
     ``max_gap``, ``link_gap`` and ``link_window`` count frames. The offline mode's settings
     (:class:`vistrack.config.OfflineConfig`, ``vistrack track --offline``) give them in
-    seconds, turned into frames with the sequence's frame rate.
+    seconds, turned into frames with the sequence's frame rate
+    (:meth:`vistrack.config.OfflineConfig.frames`).
 
     Examples
     --------
@@ -194,6 +199,12 @@ def smooth(tracker: BoxTracker, max_gap: int = 20, min_score: float = 0.0, *,
     """
     if not tracker.record:
         raise ValueError("the tracker must be created with record=True for offline smoothing")
+    from ..config import OfflineConfig  # (vistrack.config imports the trackers)
+
+    default = OfflineConfig().frames(tracker.frame_rate)
+    max_gap = default["max_gap"] if max_gap is None else max_gap
+    link_gap = default["link_gap"] if link_gap is None else link_gap
+    link_window = default["link_window"] if link_window is None else link_window
     for name, v, least in (("max_gap", max_gap, 0), ("link_gap", link_gap, 0),
                            ("link_window", link_window, 1)):
         if isinstance(v, bool) or int(v) != v or v < least:
