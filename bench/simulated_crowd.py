@@ -3,8 +3,8 @@
 it, vistrack beside the peers of ``accuracy_mot.py``, scored the same way (COMBINED over the
 draws).
 
-    python bench/simulated_crowd.py [--draws 3] [--set KEY=VALUE ...] [--no-peers]
-                                    [--boxmot-python PY] [--write docs/mot.md]
+    python bench/simulated_crowd.py [--draws 3] [--persistence RHO] [--set KEY=VALUE ...]
+                                    [--no-peers] [--boxmot-python PY] [--write docs/mot.md]
 
 The four sets of ``accuracy_mot.py`` are what vistrack's defaults were chosen on; this one is
 a check that a setting does not only fit them. The detector is simulated, one draw per seed:
@@ -20,6 +20,14 @@ a check that a setting does not only fit them. The detector is simulated, one dr
 - three score scales, one per draw in turn: ``(lo, hi)`` = (0.3, 0.9) as FairMOT's on new
   scenes, (0.5, 1.0) as a detector thresholded at 0.5, and (-2, 9) as raw logits (passed to
   the peers as they are, as ``accuracy_mot.py`` passes PointRCNN's; boxmot clips them).
+
+By default each frame's detections are drawn independently: a half-hidden person is missed in
+one frame and found in the next as often as not. A real detector's misses last (the person
+stays hidden, the image changes little from frame to frame): ``--persistence RHO`` makes each
+person's detection a two-state Markov chain with the same rate of detection, found in the next
+frame with probability ``p + RHO (1 - p)`` when found in this one and ``p (1 - RHO)`` when
+not, and the score's noise an AR(1) process with correlation ``RHO`` over the person's
+detections (0: the independent draws, the same as without the option).
 
 ``--set KEY=VALUE`` (repeatable) adds a row of vistrack with those settings over its defaults
 (fields of ``BoxTrackerConfig`` or ``OfflineConfig``), online and offline, to compare a
@@ -50,13 +58,48 @@ SOURCE = acc.DATA / "mot20" / "MOT20-01"
 SCALES = ((0.3, 0.9), (0.5, 1.0), (-2.0, 9.0))
 
 
-def simulate(seed: int, lo: float, hi: float, root: Path) -> Path:
+def _persist(u: np.ndarray, p: np.ndarray, ids: np.ndarray, frames: np.ndarray,
+             rho: float) -> np.ndarray:
+    """Which rows are detected: row k (a person ``ids[k]`` in frame ``frames[k]``) when
+    ``u[k]`` is below its chance, ``p[k]`` for a person's first row and after a frame it was
+    missed ``p (1 - rho)``, after a frame it was found ``p + rho (1 - p)`` (``rho`` 0:
+    ``u < p``, independent)."""
+    seen = u < p
+    if rho == 0:
+        return seen
+    prev = {}  # person -> (frame, found)
+    for k in np.lexsort((frames, ids)):
+        last = prev.get(ids[k])
+        q = p[k]
+        if last is not None and last[0] == frames[k] - 1:
+            q = p[k] + rho * (1 - p[k]) if last[1] else p[k] * (1 - rho)
+        seen[k] = u[k] < q
+        prev[ids[k]] = (frames[k], seen[k])
+    return seen
+
+
+def _ar1(e: np.ndarray, ids: np.ndarray, frames: np.ndarray, rho: float) -> np.ndarray:
+    """Standard normal noise ``e`` made an AR(1) process with correlation ``rho`` over each
+    person's rows in frame order (``rho`` 0: ``e`` itself)."""
+    if rho == 0:
+        return e
+    out = e.copy()
+    order = np.lexsort((frames, ids))
+    for a, b in zip(order[:-1], order[1:]):
+        if ids[a] == ids[b]:
+            out[b] = rho * out[a] + np.sqrt(1 - rho ** 2) * e[b]
+    return out
+
+
+def simulate(seed: int, lo: float, hi: float, root: Path, persistence: float = 0.0) -> Path:
     """One draw of detections for MOT20-01 into ``root/MOT20-01-sim{seed}`` (MOTChallenge
-    layout: ``det/det.txt``, ``gt/gt.txt``, ``seqinfo.ini``); returns the folder."""
+    layout: ``det/det.txt``, ``gt/gt.txt``, ``seqinfo.ini``), with misses and score noise
+    correlated from frame to frame by ``persistence`` (see the module); returns the folder."""
     rng = np.random.default_rng(seed)
     gt = np.loadtxt(SOURCE / "gt" / "gt.txt", delimiter=",", ndmin=2)
     gt = gt[(gt[:, 6] != 0) & (gt[:, 7] == 1)]
-    seen = rng.random(len(gt)) < 0.2 + 0.75 * gt[:, 8]
+    seen = _persist(rng.random(len(gt)), 0.2 + 0.75 * gt[:, 8], gt[:, 1], gt[:, 0],
+                    persistence)
     f, b, v = gt[seen, 0].astype(int), gt[seen, 2:6].copy(), gt[seen, 8]
     n = len(f)
     w, h = b[:, 2].copy(), b[:, 3].copy()
@@ -64,7 +107,8 @@ def simulate(seed: int, lo: float, hi: float, root: Path) -> Path:
     b[:, 1] += rng.normal(0, 0.03, n) * h
     b[:, 2] *= np.exp(rng.normal(0, 0.08, n))
     b[:, 3] *= np.exp(rng.normal(0, 0.05, n))
-    s = lo + (hi - lo) / (1 + np.exp(-(3 * (v - 0.4) + rng.normal(0, 1.0, n))))
+    e = _ar1(rng.normal(0, 1.0, n), gt[seen, 1], f, persistence)
+    s = lo + (hi - lo) / (1 + np.exp(-(3 * (v - 0.4) + e)))
     info = read_seqinfo(SOURCE)
     k = int(0.15 * n)
     cf = rng.integers(1, info.seq_length + 1, k)
@@ -99,12 +143,17 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--draws", type=int, default=3, help="simulated draws (seeds 0..N-1)")
+    ap.add_argument("--persistence", type=float, default=0.0, metavar="RHO",
+                    help="correlation of a person's detection and score from frame to frame, "
+                         "in [0, 1) (default 0: independent)")
     ap.add_argument("--set", type=parse_set, action="append", default=[], metavar="KEY=VALUE")
     ap.add_argument("--no-peers", action="store_true")
     ap.add_argument("--boxmot-python", type=Path,
                     default=acc.ROOT / ".venv-boxmot" / "bin" / "python")
     ap.add_argument("--write", metavar="MD")
     args = ap.parse_args()
+    if not 0 <= args.persistence < 1:
+        ap.error(f"--persistence must be in [0, 1); got {args.persistence}")
     if not SOURCE.exists():
         sys.exit(f"{SOURCE} not found: the shared data must be beside this checkout")
     warnings.filterwarnings("ignore")
@@ -117,7 +166,8 @@ def main() -> None:
     boxmot = None if args.no_peers or not args.boxmot_python.exists() else args.boxmot_python
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        seqs = [simulate(i, *SCALES[i % len(SCALES)], tmp / "data") for i in range(args.draws)]
+        seqs = [simulate(i, *SCALES[i % len(SCALES)], tmp / "data", args.persistence)
+                for i in range(args.draws)]
         res = {}
         for label, (kw, offline) in runs.items():
             out = tmp / "out" / label
@@ -146,15 +196,19 @@ def main() -> None:
                      + " |")
     cmd = "python bench/simulated_crowd.py" + (f" --draws {args.draws}" if args.draws != 3
                                                else "")
+    cmd += f" --persistence {args.persistence:g}" if args.persistence else ""
     cmd += "".join(f" --set {k}={json.dumps(v)}" for k, v in over.items())
+    lasting = (f" Here a person's misses last (`--persistence {args.persistence:g}`: found "
+               "again after a miss, or missed again after a find, less often than the rate "
+               "alone would have it), as a real detector's do." if args.persistence else "")
     section = "\n".join([
-        "## A simulated crowd",
+        "## A simulated crowd" + (" whose misses last" if args.persistence else ""),
         "",
         f"Measured with `{cmd}` (Python {platform.python_version()}, "
         f"{time.strftime('%Y-%m-%d')}): MOT20-01's ground truth with detections simulated from "
         "it (see the script: detection and score fall with a person's visibility, clutter at "
         "low scores, three score scales), a crowd that none of vistrack's settings was chosen "
-        "on. COMBINED over the draws:",
+        f"on.{lasting} COMBINED over the draws:",
         "",
         *rows,
         "",

@@ -1,0 +1,59 @@
+"""The simulated crowd's detector (``bench/simulated_crowd.py``): with ``--persistence`` a
+person's detection is a two-state Markov chain that keeps the rate of detection and makes
+misses last, and 0 draws exactly what the independent draws did."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+crowd = pytest.importorskip("simulated_crowd")
+
+
+def _rows(people=400, frames=250):
+    ids = np.repeat(np.arange(people), frames).astype(float)
+    fr = np.tile(np.arange(1, frames + 1), people).astype(float)
+    order = np.random.default_rng(0).permutation(len(ids))  # rows in any order
+    return ids[order], fr[order]
+
+
+@pytest.mark.parametrize("p, rho", [(0.5, 0.7), (0.8, 0.5), (0.3, 0.9)])
+def test_persistence_keeps_the_rate_and_gives_the_chains_transitions(p, rho):
+    """Closed form: the chain's stationary rate is ``p``; found after a find with probability
+    ``p + rho (1 - p)``, after a miss ``p (1 - rho)`` (100,000 draws: within 4 standard
+    errors; the rate's with the chain's ``(1 + rho) / (1 - rho)`` for its correlation)."""
+    ids, fr = _rows()
+    u = np.random.default_rng(1).random(len(ids))
+    seen = crowd._persist(u, np.full(len(ids), p), ids, fr, rho)
+    order = np.lexsort((fr, ids))
+    s, i = seen[order], ids[order]
+    same = i[1:] == i[:-1]
+    after_find, after_miss = s[1:][same & s[:-1]], s[1:][same & ~s[:-1]]
+    for got, want, n in ((seen.mean(), p, len(seen) * (1 - rho) / (1 + rho)),
+                         (after_find.mean(), p + rho * (1 - p), len(after_find)),
+                         (after_miss.mean(), p * (1 - rho), len(after_miss))):
+        assert abs(got - want) < 4 * np.sqrt(want * (1 - want) / n)
+
+
+def test_no_persistence_is_the_independent_draw():
+    ids, fr = _rows(20, 30)
+    u = np.random.default_rng(2).random(len(ids))
+    p = np.random.default_rng(3).random(len(ids))
+    assert np.array_equal(crowd._persist(u, p, ids, fr, 0.0), u < p)
+    e = np.random.default_rng(4).normal(size=len(ids))
+    assert crowd._ar1(e, ids, fr, 0.0) is e
+
+
+def test_score_noise_is_ar1_with_unit_variance():
+    """Closed form: an AR(1) process ``rho x + sqrt(1 - rho^2) e`` keeps variance 1 and has
+    lag-1 correlation ``rho`` within each person."""
+    ids, fr = _rows()
+    e = np.random.default_rng(5).normal(size=len(ids))
+    x = crowd._ar1(e, ids, fr, 0.6)
+    order = np.lexsort((fr, ids))
+    xs, i = x[order], ids[order]
+    same = i[1:] == i[:-1]
+    assert abs(x.var() - 1) < 0.03
+    assert abs(np.corrcoef(xs[1:][same], xs[:-1][same])[0, 1] - 0.6) < 0.01
