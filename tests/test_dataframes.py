@@ -102,6 +102,52 @@ def test_a_bad_value_is_named_by_row_and_column(column, values, message):
     assert str(e.value).startswith(f"mine.csv, {message}")
 
 
+def test_a_box_by_its_corners():
+    """``x1, y1, x2, y2`` (supervision's and YOLO's ``xyxy``) read as the box ``x1, y1,
+    x2 - x1, y2 - y1``; a far corner before the near one is named by row and column."""
+    from vistrack.io import MOTFormatError
+
+    rows = pd.DataFrame({"frame": [1, 2], "xmin": [10.0, 12.5], "y1": [20.0, 21.0],
+                         "xmax": [30.0, 40.0], "y2": [60.0, 81.0], "conf": [0.9, 0.8]})
+    t = MOTTable.from_pandas(rows, columns={"x1": "xmin", "x2": "xmax"})
+    assert t.boxes.tolist() == [[10.0, 20.0, 20.0, 40.0], [12.5, 21.0, 27.5, 60.0]]
+    assert t.conf.tolist() == [0.9, 0.8]
+    with pytest.raises(MOTFormatError) as e:
+        MOTTable.from_pandas(rows.assign(y2=[60.0, 20.0]), columns={"x1": "xmin", "x2": "xmax"},
+                             path="mine.csv")
+    assert str(e.value) == ("mine.csv, row 2 after the header, column 'y2': the box's far "
+                            "corner must not lie before its near one; y1 = 21, y2 = 20")
+    with pytest.raises(ValueError, match=r"or the corners 'x1', 'y1', 'x2', 'y2'\)$"):
+        MOTTable.from_pandas(rows.drop(columns="y2"))
+
+
+def test_detections_from_a_csv_file_of_corners_and_a_score_of_another_name(tmp_path, capsys):
+    """A YOLO-style CSV file (corners, ``confidence``, ``class_id``) tracks as the same
+    detections in MOTChallenge's format do; without its score named, the run says that every
+    detection scores 1 and which columns it did not read."""
+    from tests.test_fit import _sequence
+    from vistrack.cli import main
+
+    seq = _sequence(tmp_path / "SIM", np.random.default_rng(3))
+    det = read_mot(seq / "det" / "det.txt")
+    b = det.boxes
+    pd.DataFrame({"frame": det.frames, "x1": b[:, 0], "y1": b[:, 1], "x2": b[:, 0] + b[:, 2],
+                  "y2": b[:, 1] + b[:, 3], "confidence": det.conf,
+                  "class_id": np.zeros(len(b), int)}).to_csv(tmp_path / "yolo.csv", index=False)
+    a, c = tmp_path / "a.txt", tmp_path / "c.txt"
+    assert main(["track", str(seq), "--out", str(a), "--quiet"]) == 0
+    assert main(["track", str(seq), "--out", str(c), "--detections", str(tmp_path / "yolo.csv"),
+                 "--columns", "conf=confidence", "--quiet"]) == 0
+    ta, tc = read_mot(a), read_mot(c)
+    assert (ta.ids == tc.ids).all() and np.allclose(ta.boxes, tc.boxes, atol=0.011)
+    capsys.readouterr()
+    assert main(["track", str(seq), "--out", str(c), "--force", "--detections",
+                 str(tmp_path / "yolo.csv"), "--quiet"]) == 0
+    assert (f"vistrack track: warning: {tmp_path / 'yolo.csv'}: no column 'conf': every "
+            "detection scores 1 (columns not read: confidence, class_id; name the score's "
+            "column with --columns conf=NAME)") in capsys.readouterr().err
+
+
 def test_detections_from_a_csv_file_with_its_own_column_names(tmp_path, capsys):
     from tests.test_fit import _sequence
     from vistrack.cli import main

@@ -793,7 +793,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "MOTChallenge's format, or CSV with a header (.csv)")
     track.add_argument("--columns", metavar="OURS=THEIRS,...",
                        help="a CSV file's column names: frame, id (or particle), bb_left, "
-                       "bb_top, bb_width, bb_height (or x, y: the centre), conf, class "
+                       "bb_top, bb_width, bb_height (or x, y: the centre; or the corners "
+                       "x1, y1, x2, y2), conf, class "
                        "(e.g. frame=t,bb_width=w,bb_height=h,conf=score)")
     track.add_argument("--tracker", metavar="NAME",
                        help="tracker: bytetrack (default) or sort; in video mode also dcpf "

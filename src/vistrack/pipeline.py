@@ -879,6 +879,13 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None) -> 
     ------
     ValueError
         If ``columns`` is given for a MOTChallenge file, or the CSV file lacks a column.
+
+    Warns
+    -----
+    UserWarning
+        If the CSV file has no score column (``conf``, or the name ``columns`` gives it):
+        every detection then scores 1. The warning names the columns not read, one of which
+        may hold the scores under another name.
     """
     path = Path(path)
     if path.suffix.lower() != ".csv":
@@ -886,10 +893,22 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None) -> 
             raise ValueError(f"columns name a CSV file's columns; {path} is read as a "
                              "MOTChallenge file (its name does not end in .csv)")
         return read_mot(path)
-    from .io.motchallenge import _pandas
+    from .io.motchallenge import _CORNERS, _pandas
 
-    return MOTTable.from_pandas(_pandas("a CSV file of detections").read_csv(path), columns,
-                                path=str(path))
+    df = _pandas("a CSV file of detections").read_csv(path)
+    table = MOTTable.from_pandas(df, columns, path=str(path))
+    names = dict(columns or {})
+    conf = names.get("conf", "conf")
+    if conf not in df.columns:
+        ours = ("frame", "particle", "id", "bb_left", "bb_top", "bb_width", "bb_height", "x",
+                "y", *_CORNERS, "conf", "class", "visibility")
+        used = {names.get(c, c) for c in ours}
+        unread = [str(c) for c in df.columns if c not in used]
+        warnings.warn(f"{path}: no column {conf!r}: every detection scores 1"
+                      + (f" (columns not read: {', '.join(unread)}; name the score's column "
+                         f"with --columns conf=NAME)" if unread else ""),
+                      UserWarning, stacklevel=2)
+    return table
 
 
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,

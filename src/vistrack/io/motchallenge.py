@@ -234,8 +234,9 @@ class MOTTable:
                     path: str = "") -> MOTTable:
         """A table from a DataFrame (or any mapping of column names to arrays): ``frame``,
         an identity (``particle`` or ``id``; -1 for detections if neither) and a box,
-        ``bb_left, bb_top, bb_width, bb_height`` or its centre ``x, y`` with ``bb_width,
-        bb_height``; ``conf``, ``class`` and ``visibility`` if there (default 1, -1, -1).
+        ``bb_left, bb_top, bb_width, bb_height``, or its centre ``x, y`` with ``bb_width,
+        bb_height``, or its corners ``x1, y1, x2, y2`` (as supervision's and YOLO's ``xyxy``);
+        ``conf``, ``class`` and ``visibility`` if there (default 1, -1, -1).
 
         Parameters
         ----------
@@ -255,7 +256,8 @@ class MOTTable:
             A ``ValueError`` naming the row and the column of a value that is not a finite
             number (an empty cell is NaN), a frame that is not an integer >= 1 (so no row
             of frame 0 is left out unseen), an identity or a class that is not an integer,
-            or a negative width or height.
+            a negative width or height, or a far corner (``x2``, ``y2``) before the near
+            one.
 
         Examples
         --------
@@ -265,6 +267,9 @@ class MOTTable:
         ...                                         "bb_height": "h", "conf": "score"})
         >>> t.boxes.tolist(), t.ids.tolist(), t.conf.tolist()
         ([[10.0, 20.0, 10.0, 20.0], [35.0, 20.0, 10.0, 20.0]], [-1, -1], [0.9, 0.4])
+        >>> corners = {"frame": [1], "x1": [10.0], "y1": [20.0], "x2": [20.0], "y2": [40.0]}
+        >>> MOTTable.from_pandas(corners).boxes.tolist()
+        [[10.0, 20.0, 10.0, 20.0]]
         """
         names = dict(columns or {})
         have = set(df.keys())
@@ -312,17 +317,30 @@ class MOTTable:
             ident = get("id")
         w, h = get("bb_width"), get("bb_height")
         left, top = get("bb_left"), get("bb_top")
-        if left is None or top is None:
-            x, y = get("x"), get("y")
-            if x is None or y is None or w is None or h is None:
-                missing = [name(c) for c in ("bb_left", "bb_top", "bb_width", "bb_height")
-                           if get(c) is None]
-                raise ValueError(f"no box{where}: columns {missing} are missing (or give "
-                                 f"{name('x')!r}, {name('y')!r} with {name('bb_width')!r}, "
-                                 f"{name('bb_height')!r})")
+        x, y = get("x"), get("y")
+        corners = [c for c in map(get, _CORNERS) if c is not None]
+        if left is not None and top is not None:
+            if w is None or h is None:
+                raise ValueError(f"no column {name('bb_width')!r} or {name('bb_height')!r}"
+                                 f"{where}")
+        elif x is not None and y is not None and w is not None and h is not None:
             left, top = x - w / 2, y - h / 2
-        if w is None or h is None:
-            raise ValueError(f"no column {name('bb_width')!r} or {name('bb_height')!r}{where}")
+        elif len(corners) == 4:
+            x1, y1, x2, y2 = corners
+            for a, b, lo, hi in ((x1, x2, "x1", "x2"), (y1, y2, "y1", "y2")):
+                if (b < a).any():
+                    k = int(np.argmax(b < a))
+                    raise MOTFormatError(f"{at(k, hi)}: the box's far corner must not lie "
+                                         f"before its near one; {name(lo)} = {a[k]:g}, "
+                                         f"{name(hi)} = {b[k]:g}")
+            left, top, w, h = x1, y1, x2 - x1, y2 - y1
+        else:
+            missing = [name(c) for c in ("bb_left", "bb_top", "bb_width", "bb_height")
+                       if get(c) is None]
+            raise ValueError(f"no box{where}: columns {missing} are missing (or give "
+                             f"{name('x')!r}, {name('y')!r} with {name('bb_width')!r}, "
+                             f"{name('bb_height')!r}; or the corners "
+                             f"{', '.join(repr(name(c)) for c in _CORNERS)})")
         box = np.column_stack([frame, ident if ident is not None else np.full(n, -1.0),
                                left, top, w, h])
         # the rules a text file's rows obey (_check_rows), named by row and column here
@@ -429,6 +447,8 @@ def _read_text(path: str, what: str) -> str:
 # frames and ids beyond 2**53 are not integers a float holds exactly (nor fit in int64 when
 # much larger)
 _INT_LIMIT = 2.0 ** 53
+_CORNERS = ("x1", "y1", "x2", "y2")
+"""A box's corners, as :meth:`MOTTable.from_pandas` takes them (supervision's ``xyxy``)."""
 
 
 def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
