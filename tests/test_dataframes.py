@@ -145,7 +145,7 @@ def test_detections_from_a_csv_file_of_corners_and_a_score_of_another_name(tmp_p
                  str(tmp_path / "yolo.csv"), "--quiet"]) == 0
     assert (f"vistrack track: warning: {tmp_path / 'yolo.csv'}: no column 'conf': every "
             "detection scores 1 (columns not read: confidence, class_id; name the score's "
-            "column with --columns conf=NAME)") in capsys.readouterr().err
+            "column: --columns conf=NAME, or columns={'conf': NAME})") in capsys.readouterr().err
 
 
 def test_detections_from_a_csv_file_with_its_own_column_names(tmp_path, capsys):

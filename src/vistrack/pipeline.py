@@ -905,8 +905,8 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None) -> 
         used = {names.get(c, c) for c in ours}
         unread = [str(c) for c in df.columns if c not in used]
         warnings.warn(f"{path}: no column {conf!r}: every detection scores 1"
-                      + (f" (columns not read: {', '.join(unread)}; name the score's column "
-                         f"with --columns conf=NAME)" if unread else ""),
+                      + (f" (columns not read: {', '.join(unread)}; name the score's column: "
+                         "--columns conf=NAME, or columns={'conf': NAME})" if unread else ""),
                       UserWarning, stacklevel=2)
     return table
 

@@ -317,15 +317,22 @@ class MOTTable:
             ident = get("id")
         w, h = get("bb_width"), get("bb_height")
         left, top = get("bb_left"), get("bb_top")
-        x, y = get("x"), get("y")
-        corners = [c for c in map(get, _CORNERS) if c is not None]
+
+        def every(*columns: np.ndarray | None) -> list[np.ndarray] | None:
+            # the columns, if each is there
+            there = [c for c in columns if c is not None]
+            return there if len(there) == len(columns) else None
+
+        # the box in the first of its three forms whose columns are all there (the columns
+        # of the later ones are then not read)
         if left is not None and top is not None:
             if w is None or h is None:
                 raise ValueError(f"no column {name('bb_width')!r} or {name('bb_height')!r}"
                                  f"{where}")
-        elif x is not None and y is not None and w is not None and h is not None:
+        elif (centre := every(get("x"), get("y"), w, h)) is not None:
+            x, y, w, h = centre
             left, top = x - w / 2, y - h / 2
-        elif len(corners) == 4:
+        elif (corners := every(*map(get, _CORNERS))) is not None:
             x1, y1, x2, y2 = corners
             for a, b, lo, hi in ((x1, x2, "x1", "x2"), (y1, y2, "y1", "y2")):
                 if (b < a).any():
