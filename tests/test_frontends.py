@@ -723,6 +723,16 @@ def test_track_video_from_a_detections_file(tmp_path):
     np.testing.assert_allclose(a.boxes, b.boxes, atol=0.01)
     with pytest.raises(FileNotFoundError, match="nope.txt does not exist"):
         track_video(demo / "pets09-s2l1.mp4", tmp_path / "w", frontend="detections:nope.txt")
+    # the same detections as a CSV file, boxes by their corners: the same tracks
+    det = read_mot(seq / "det" / "det.txt")
+    corners = np.c_[det.frames, det.boxes[:, :2], det.boxes[:, :2] + det.boxes[:, 2:], det.conf]
+    np.savetxt(tmp_path / "dets.csv", corners, delimiter=",", fmt="%.17g",
+               header="frame,x1,y1,x2,y2,conf", comments="")
+    csv = track_video(demo / "pets09-s2l1.mp4", tmp_path / "c", stop=200, annotate=False,
+                      frontend=f"detections:{tmp_path / 'dets.csv'}")
+    c = read_mot(csv.files["tracks"])
+    np.testing.assert_array_equal(c.ids, a.ids)
+    np.testing.assert_allclose(c.boxes, a.boxes, atol=0.01)
 
 
 def test_track_video_with_a_detector_of_ones_own(tmp_path):

@@ -628,7 +628,7 @@ def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
-    dets = read_mot(path)
+    dets = read_detections(path)  # MOTChallenge's text, or a CSV file with a header
     _warn_no_area(dets, path, stacklevel=3)
     # every frame's rows, up to the file's last frame; none after it (a video may run past
     # its header's count, or give none)
