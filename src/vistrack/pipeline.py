@@ -893,16 +893,14 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None) -> 
             raise ValueError(f"columns name a CSV file's columns; {path} is read as a "
                              "MOTChallenge file (its name does not end in .csv)")
         return read_mot(path)
-    from .io.motchallenge import _CORNERS, _pandas
+    from .io.motchallenge import _COLUMNS, _pandas
 
     df = _pandas("a CSV file of detections").read_csv(path)
     table = MOTTable.from_pandas(df, columns, path=str(path))
     names = dict(columns or {})
     conf = names.get("conf", "conf")
     if conf not in df.columns:
-        ours = ("frame", "particle", "id", "bb_left", "bb_top", "bb_width", "bb_height", "x",
-                "y", *_CORNERS, "conf", "class", "visibility")
-        used = {names.get(c, c) for c in ours}
+        used = {names.get(c, c) for c in _COLUMNS}
         unread = [str(c) for c in df.columns if c not in used]
         warnings.warn(f"{path}: no column {conf!r}: every detection scores 1"
                       + (f" (columns not read: {', '.join(unread)}; name the score's column: "

@@ -456,6 +456,9 @@ def _read_text(path: str, what: str) -> str:
 _INT_LIMIT = 2.0 ** 53
 _CORNERS = ("x1", "y1", "x2", "y2")
 """A box's corners, as :meth:`MOTTable.from_pandas` takes them (supervision's ``xyxy``)."""
+_COLUMNS = ("frame", "particle", "id", "bb_left", "bb_top", "bb_width", "bb_height", "x", "y",
+            *_CORNERS, "conf", "class", "visibility")
+"""Every column :meth:`MOTTable.from_pandas` reads, by our name."""
 
 
 def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
