@@ -113,6 +113,29 @@ def test_the_online_calibration_learns_what_the_whole_file_gives():
     assert flat.n == 11 * (len(frames) - 2)
 
 
+@pytest.mark.parametrize("window", [1, 7, 50, 333])
+def test_a_window_holds_the_last_outcomes_of_all(window):
+    """With ``window``, after every frame the calibrator holds exactly the last ``window``
+    outcomes, in order, of those a calibrator holding all of them has (the oracle), through
+    frames of 0 to 11 detections, some resolving more outcomes at once than the window
+    holds."""
+    rng = np.random.default_rng(window)
+    frames, _ = frames_with_clutter(rng)
+    frames = [Detections(boxes=d.boxes[keep], scores=d.scores[keep])
+              for d in frames + frames[::-1]
+              for keep in [rng.random(len(d.boxes)) < rng.uniform(0, 1.5)]]
+    every, last = ScoreCalibrator(window=None), ScoreCalibrator(window=window)
+    for d in frames:
+        every.observe(d)
+        last.observe(d)
+        s_all, o_all = every.outcomes()
+        s, o = last.outcomes()
+        np.testing.assert_array_equal(s, s_all[-window:])
+        np.testing.assert_array_equal(o, o_all[-window:])
+        assert last.n == min(window, every.n)
+    assert every.n > 2000
+
+
 def flickering_scene(pan=0.0, T=40):
     """At 10 frames/s: four objects detected in every frame (score 0.9), four detected in two
     frames of three (0.5), one clutter box a frame, each far from every other (0.2); the

@@ -126,7 +126,6 @@ def isotonic_increasing(y: ArrayLike, weights: ArrayLike | None = None) -> np.nd
     return _pava(y, w) if len(y) else y.copy()
 
 
-@kernel
 @njit(cache=True)
 def _link(prev, prev_cls, cur, cur_cls, min_iou):
     # one-to-one links (GNN on 1 - IoU) between two frames' boxes of the same class
@@ -134,11 +133,10 @@ def _link(prev, prev_cls, cur, cur_cls, min_iou):
     return gnn_pairs(rows, cols, 1.0 - ov, prev.shape[0], cur.shape[0])
 
 
-@kernel
 @njit(cache=True)
 def _chain_step(t, gap, span, shift, head_box, head_cls, head_t, head_shift, head_chain,
                 first, state, open_s, open_chain, boxes, cls, s, min_iou):
-    # one frame of ScoreCalibrator's chains (see _extend_chains): returns the new heads, the
+    # one frame of ScoreCalibrator's chains (see _observe): returns the new heads, the
     # chains' first frames and states by chain number, the detections still open, and the
     # scores and outcomes resolved in this frame
     H, N, C = head_box.shape[0], boxes.shape[0], first.shape[0]
@@ -259,6 +257,42 @@ def _chain_step(t, gap, span, shift, head_box, head_cls, head_t, head_shift, hea
             still_c[j] = new_id[still_c[j]]
         first2, state2 = first3, state3
     return hb, hc, ht, hs, hid, first2, state2, still_s, still_c, out_s, out_p
+
+
+@kernel
+@njit(cache=True)
+def _observe(prev_box, prev_cls, boxes, cls, s, link_iou, shift, chains, t, gap, span,
+             head_box, head_cls, head_t, head_shift, head_chain, first, state, open_s,
+             open_chain):
+    # one frame of ScoreCalibrator.observe in one compiled call: the frame-to-frame links
+    # to the previous frame's detections (which of those are continued, which of these
+    # continue one), the image's shift summed (the links' median displacement, with chains
+    # and 3 links or more), and, with chains, _chain_step
+    P, N = prev_box.shape[0], boxes.shape[0]
+    fwd, back = np.zeros(P, np.bool_), np.zeros(N, np.bool_)
+    shift = shift.copy()
+    if P > 0 and N > 0:
+        r, c = _link(prev_box, prev_cls, boxes, cls, link_iou)
+        n = r.shape[0]
+        for k in range(n):
+            fwd[r[k]] = True
+            back[c[k]] = True
+        if chains and n >= 3:
+            d = np.empty(n)
+            for a in range(2):
+                for k in range(n):
+                    d[k] = (boxes[c[k], a] + boxes[c[k], a + 2] - prev_box[r[k], a]
+                            - prev_box[r[k], a + 2]) / 2
+                shift[a] = shift[a] + np.median(d)
+    if chains:
+        (head_box, head_cls, head_t, head_shift, head_chain, first, state, open_s, open_chain,
+         out_s, out_p) = _chain_step(t, gap, span, shift, head_box, head_cls, head_t,
+                                     head_shift, head_chain, first, state, open_s, open_chain,
+                                     boxes, cls, s, link_iou)
+    else:
+        out_s, out_p = np.zeros(0), np.zeros(0)
+    return (fwd, back, shift, head_box, head_cls, head_t, head_shift, head_chain, first, state,
+            open_s, open_chain, out_s, out_p)
 
 
 def _scores(scores: ArrayLike) -> np.ndarray:
@@ -479,8 +513,9 @@ class ScoreCalibration:
 
     def __call__(self, scores: ArrayLike) -> np.ndarray:
         s = _scores(scores)
+        # the last of the map's scores at or below each (side="right": at most len - 1)
         k = np.searchsorted(self.scores, s, side="right") - 1
-        return self.confidence[np.clip(k, 0, len(self.scores) - 1)]
+        return self.confidence[np.maximum(k, 0)]
 
     def score_at(self, level: float) -> float:
         """The lowest score whose confidence is at least ``level`` (``inf`` if none is).
@@ -655,7 +690,8 @@ class ScoreCalibrator:
         >>> cal.n, (cal.reset(), cal.n)[1]
         (1, 0)
         """
-        self._buf_s, self._buf_p = np.zeros(0), np.zeros(0)
+        # the outcomes held are _store[:, _lo:_hi] (scores, outcomes), appended at _hi
+        self._store, self._lo, self._hi = np.zeros((2, 1024)), 0, 0
         self._prev: tuple | None = None  # boxes, classes, scores, linked back, first frame
         self._new_since_fit = 0
         self._fit_n = -1
@@ -734,55 +770,63 @@ class ScoreCalibrator:
         1
         """
         if detections is None:
-            boxes, cls, s = np.zeros((0, 4)), np.zeros(0, np.int64), np.zeros(0)
+            # the last frame's detections get no frame-to-frame outcome (no next frame), and
+            # chains still open none
+            self._prev = None
+            return
+        if detections.boxes is None:
+            raise TypeError("detections must have boxes")
+        boxes = np.ascontiguousarray(detections.boxes, dtype=np.float64)
+        cls = np.ascontiguousarray(detections.classes)
+        s = _scores(detections.scores)  # type: ignore[arg-type]  # set by __post_init__
+        if self._prev is None:
+            pb, pc, ps, pl, first = np.zeros((0, 4)), cls[:0], s[:0], np.zeros(0, bool), True
         else:
-            if detections.boxes is None:
-                raise TypeError("detections must have boxes")
-            boxes = np.ascontiguousarray(detections.boxes, dtype=np.float64)
-            cls = np.ascontiguousarray(detections.classes)
-            s = _scores(detections.scores)  # type: ignore[arg-type]  # set by __post_init__
-        linked_back = np.zeros(len(s), bool)
-        if self._prev is not None:
             pb, pc, ps, pl, first = self._prev
-            linked_fwd = np.zeros(len(ps), bool)
-            if len(pb) and len(boxes):
-                r, c = _link(pb, pc, boxes, cls, self.link_iou)
-                linked_fwd[r] = True
-                linked_back[c] = True
-                if self.chain_span > 0 and len(r) >= 3:
-                    # the image's shift, for the chains: the links' median displacement
-                    d = (boxes[c, :2] + boxes[c, 2:] - pb[r, :2] - pb[r, 2:]) / 2
-                    self._shift = self._shift + np.median(d, axis=0)
-            if detections is not None and not first:
-                # the first and the last frame lack a neighbour: no outcome
-                self._push(ps, (pl & linked_fwd).astype(np.float64))
-        if detections is not None and self.chain_span > 0:
-            self._extend_chains(boxes, cls, s)
-        self._prev = None if detections is None else (boxes, cls, s, linked_back,
-                                                      self._prev is None)
+        chains = self.chain_span > 0
+        (linked_fwd, linked_back, self._shift, self._head_box, self._head_cls, self._head_t,
+         self._head_shift, self._head_chain, self._first, self._state, self._open_s,
+         self._open_chain, out_s, out_p) = _observe(
+            pb, pc, boxes, cls, s, self.link_iou, self._shift, chains, self._t, self._gap,
+            self._span, self._head_box, self._head_cls, self._head_t, self._head_shift,
+            self._head_chain, self._first, self._state, self._open_s, self._open_chain)
+        if self._prev is not None and not first:
+            # the first and the last frame lack a neighbour: no outcome
+            self._push(ps, (pl & linked_fwd).astype(np.float64))
+        if chains:
+            self._t += 1
+            self._push(out_s, out_p)
+        self._prev = (boxes, cls, s, linked_back, self._prev is None)
 
-    def _extend_chains(self, boxes: np.ndarray, cls: np.ndarray, s: np.ndarray) -> None:
-        """Link a frame's detections to the chains; resolve the chains that now span
-        ``chain_span`` or have ended, and push the outcomes of their detections (compiled:
-        :func:`_chain_step`)."""
-        t, self._t = self._t, self._t + 1
-        (self._head_box, self._head_cls, self._head_t, self._head_shift, self._head_chain,
-         self._first, self._state, self._open_s, self._open_chain, out_s, out_p) = \
-            _chain_step(t, self._gap, self._span, self._shift, self._head_box,
-                        self._head_cls, self._head_t, self._head_shift, self._head_chain,
-                        self._first, self._state, self._open_s, self._open_chain, boxes,
-                        cls, s, self.link_iou)
-        self._push(out_s, out_p)
+    @property
+    def _buf_s(self) -> np.ndarray:
+        return self._store[0, self._lo:self._hi]
+
+    @property
+    def _buf_p(self) -> np.ndarray:
+        return self._store[1, self._lo:self._hi]
 
     def _push(self, s: np.ndarray, p: np.ndarray) -> None:
-        if len(s) == 0:
+        """Append outcomes, keeping the last ``window``: into the store's free end, which is
+        made by moving the outcomes kept to its front (growing it where they do not fit
+        twice), so that each outcome is copied a bounded number of times on average."""
+        n = len(s)
+        if n == 0:
             return
-        self._buf_s = np.concatenate([self._buf_s, s])
-        self._buf_p = np.concatenate([self._buf_p, p])
-        if self.window is not None and len(self._buf_s) > self.window:
-            self._buf_s = self._buf_s[-self.window:]
-            self._buf_p = self._buf_p[-self.window:]
-        self._new_since_fit += len(s)
+        if self._hi + n > self._store.shape[1]:
+            held = self._hi - self._lo
+            keep = held if self.window is None else min(held, max(self.window - n, 0))
+            store = self._store
+            if 2 * (keep + n) > store.shape[1]:
+                store = np.empty((2, 2 * (keep + n)))
+            store[:, :keep] = self._store[:, self._hi - keep:self._hi]
+            self._store, self._lo, self._hi = store, 0, keep
+        self._store[0, self._hi:self._hi + n] = s
+        self._store[1, self._hi:self._hi + n] = p
+        self._hi += n
+        if self.window is not None and self._hi - self._lo > self.window:
+            self._lo = self._hi - self.window
+        self._new_since_fit += n
 
     def calibration(self) -> ScoreCalibration:
         """The map learnt so far: refitted when the outcomes held have grown by a tenth (or
