@@ -779,10 +779,12 @@ class ScoreCalibrator:
         boxes = np.ascontiguousarray(detections.boxes, dtype=np.float64)
         cls = np.ascontiguousarray(detections.classes)
         s = _scores(detections.scores)  # type: ignore[arg-type]  # set by __post_init__
+        # the previous frame: its boxes, classes, scores, which of them continued one of the
+        # frame before it, and whether it was the first (none, at the first frame: no links)
         if self._prev is None:
-            pb, pc, ps, pl, first = np.zeros((0, 4)), cls[:0], s[:0], np.zeros(0, bool), True
+            pb, pc, ps, pl, prev_first = np.zeros((0, 4)), cls[:0], s[:0], np.zeros(0, bool), True
         else:
-            pb, pc, ps, pl, first = self._prev
+            pb, pc, ps, pl, prev_first = self._prev
         chains = self.chain_span > 0
         (linked_fwd, linked_back, self._shift, self._head_box, self._head_cls, self._head_t,
          self._head_shift, self._head_chain, self._first, self._state, self._open_s,
@@ -790,8 +792,9 @@ class ScoreCalibrator:
             pb, pc, boxes, cls, s, self.link_iou, self._shift, chains, self._t, self._gap,
             self._span, self._head_box, self._head_cls, self._head_t, self._head_shift,
             self._head_chain, self._first, self._state, self._open_s, self._open_chain)
-        if self._prev is not None and not first:
-            # the first and the last frame lack a neighbour: no outcome
+        if not prev_first:
+            # the previous frame's detections persist if linked both ways (the first frame's
+            # have no frame before them, the last frame's none after: no outcome)
             self._push(ps, (pl & linked_fwd).astype(np.float64))
         if chains:
             self._t += 1
