@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from vistrack.association.costs import iou
 from vistrack.io import read_mot
 from vistrack.tracking import BoxTracker
 from vistrack.tracking.calibration import (
@@ -215,6 +216,76 @@ def test_the_rank_map_is_the_empirical_distribution_function():
     with pytest.raises(ValueError, match="no scores to rank"):
         ScoreCalibration.ranks([])
 
+
+def test_outcomes_against_the_ranking_beyond_their_noise_are_capped():
+    """Closed form: 300 outcomes at score 0 persisting at 0.9 (clutter that recurs in place),
+    300 at score 1 at 0.2, 400 at score 2 at 0.8. The plain isotonic fit pools the first two
+    (0.55, confidence 0.55 / 0.8); with the cap the first bin, below the top third and 0.7
+    above the fit of the bins above it (about 17 standard errors), is taken down to 0.2."""
+    s = np.repeat([0.0, 1.0, 2.0], [300, 300, 400])
+    p = np.r_[np.arange(300) < 270, np.arange(300) < 60, np.arange(400) < 320].astype(float)
+    plain = ScoreCalibration.fit(s, p, cap_sigma=np.inf)
+    np.testing.assert_allclose(plain.confidence, [0.55 / 0.8, 0.55 / 0.8, 1.0])
+    capped = ScoreCalibration.fit(s, p)
+    np.testing.assert_allclose(capped.confidence, [0.25, 0.25, 1.0])
+    assert capped.top_persistence == plain.top_persistence == 0.8
+    # at 20 standard errors the same outcomes are within the bound: pooled as before
+    np.testing.assert_array_equal(ScoreCalibration.fit(s, p, cap_sigma=20).confidence,
+                                  plain.confidence)
+    with pytest.raises(ValueError, match="cap_sigma must be > 0; got 0"):
+        ScoreCalibration.fit(s, p, cap_sigma=0)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_outcomes_that_agree_with_the_ranking_fit_as_isotonic(seed):
+    """Outcomes whose rate rises with the score, with their noise, and a dip at the very top
+    (the most confident persisting less than the next, as large fast objects do): the fit is
+    the plain isotonic one, exactly."""
+    rng = np.random.default_rng(seed)
+    s = rng.uniform(0, 1, 3000)
+    rate = np.where(s > 0.9, 0.6, 0.1 + 0.8 * s)
+    p = (rng.random(3000) < rate).astype(float)
+    np.testing.assert_array_equal(ScoreCalibration.fit(s, p).confidence,
+                                  ScoreCalibration.fit(s, p, cap_sigma=np.inf).confidence)
+
+
+def test_clutter_that_recurs_in_place_at_low_scores_starts_no_track():
+    """The objects and passing clutter of ``frames_with_clutter`` (tall boxes), and twelve
+    wide boxes that recur in place in 95 % of the frames, scoring below everything (no object
+    overlaps one at IoU 0.3). They persist as the objects do: the plain isotonic fit pools
+    them with the passing clutter scored above them, which then looks nearly as good as the
+    objects, and tracks follow the static boxes through the whole sequence. The capped fit
+    rates both no higher than the passing clutter alone: no track of the offline run (the
+    whole file's calibration) follows one, and online only the first frames' tracks do, while
+    the outcomes are too few to contradict the ranking."""
+    rng = np.random.default_rng(2)
+    frames, _ = frames_with_clutter(rng, T=150)
+    xy = rng.uniform(0, 900, (12, 2))
+    spots = np.c_[xy, xy + [80, 40]]
+    for f, d in enumerate(frames):
+        on = rng.random(12) < 0.95
+        frames[f] = Detections(boxes=np.r_[d.boxes, spots[on] + rng.normal(0, 1, (on.sum(), 1))],
+                               scores=np.r_[d.scores, rng.uniform(-0.1, 0.0, on.sum())])
+    s, p = persistence(frames)
+    static = s < 0
+    assert p[static].mean() > 0.8 and p[(s >= 0) & (s < 0.5)].mean() < 0.05
+    plain = ScoreCalibration.fit(s, p, cap_sigma=np.inf)
+    cal = ScoreCalibration.from_frames(frames)
+    assert plain(s[static]).min() > 0.7 and plain(np.array([0.25])).item() > 0.7
+    assert cal(s[static]).max() <= cal(np.array([0.25])).item() < 0.1
+    assert cal(s[s > 0.6]).mean() > 0.9  # objects only
+
+    def on_spots(tracker):
+        hits = []
+        for f, d in enumerate(frames, start=1):
+            n = int((iou(tracker.step(f, d).boxes, spots) >= 0.3).sum())
+            hits += [f] * n
+        return np.array(hits)
+
+    assert len(on_spots(BoxTracker(calibration=plain))) > 1000
+    assert len(on_spots(BoxTracker(calibration=cal))) == 0
+    online = on_spots(BoxTracker())
+    assert len(online) and online.max() <= 10
 
 def test_calibration_edge_cases_and_errors():
     """One score for all (nothing to tell apart: full confidence), frames without detections,

@@ -24,6 +24,17 @@ The two outcomes weigh the same: each detection contributes both. Then
 - ``P(outcome | score)`` is estimated by isotonic regression: the non-decreasing function of
   the score closest to the outcomes in least squares (pool-adjacent-violators, over the
   distinct scores weighted by their counts);
+- but where the outcomes contradict the detector's own ranking beyond their noise, the
+  ranking is trusted: false positives that recur in place (a poster, a reflection) persist
+  as an object does, mostly at low scores, and pooled with the detections scored above them
+  they would raise the confidence of every score in between. So the outcomes are grouped,
+  from the top score down, into bins of at least 2 % of them (and at least 50), and a bin
+  below the top third of the outcomes whose rate exceeds the isotonic fit of the bins above
+  it by more than ``cap_sigma`` (5) standard errors (the two rates' difference, with their
+  pooled rate's binomial variance) is taken down to that fit before the regression. Outcomes
+  that agree with the ranking, or disagree within their noise, are fitted as they are. Within
+  the top third, a dip (the most confident detections persisting less than the next: large,
+  near objects that move fast against their size) is motion, not clutter, and is pooled;
 - it is divided by the rate of the detector's most confident detections (the top ``top``
   fraction of the outcomes by score, 5 %, and at least 20 of them), since objects themselves
   persist less where they move fast against their size or the frame rate is low, and
@@ -45,6 +56,7 @@ which tracked best on the four sets of docs/mot.md).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
@@ -295,6 +307,53 @@ def _observe(prev_box, prev_cls, boxes, cls, s, link_iou, shift, chains, t, gap,
             open_s, open_chain, out_s, out_p)
 
 
+def _rank_capped(hits: np.ndarray, counts: np.ndarray, cap_sigma: float) -> np.ndarray:
+    """``hits`` (outcomes of 1 per distinct score, in increasing order of score) with each bin
+    below the top third that contradicts the fit of the bins above it beyond ``cap_sigma``
+    standard errors taken down to that fit (see the module)."""
+    n = counts.sum()
+    size = max(50.0, 0.02 * n)
+    # bins from the top: consecutive distinct scores, each bin closed once it holds `size`
+    # outcomes (grouped first by the outcomes above each score, then merged greedily)
+    rc = counts[::-1]
+    above = np.cumsum(rc) - rc  # outcomes scoring above each distinct score, from the top
+    first = np.flatnonzero(np.r_[True, np.diff((above // size).astype(np.int64)) > 0])
+    group_n = np.add.reduceat(rc, first)
+    starts, acc = [], size  # start (from the top) of each bin
+    for g, m in zip(first.tolist(), group_n.tolist()):
+        if acc >= size:
+            starts.append(g)
+            acc = 0.0
+        acc += m
+    if acc < size and len(starts) > 1:
+        starts.pop()  # the bottom's remainder joins the bin above it
+    if len(starts) < 2:
+        return hits
+    rh = hits[::-1]
+    bin_h = np.add.reduceat(rh, starts).tolist()
+    bin_c = np.add.reduceat(rc, starts).tolist()
+    bin_above = above[starts].tolist()
+    scale = [1.0] * len(starts)
+    stack: list[list[float]] = []  # [hits, outcomes] of the fit's blocks, from the top
+    for b, (h, c) in enumerate(zip(bin_h, bin_c)):
+        if stack and bin_above[b] >= n / 3:
+            up_h, up_c = stack[-1]
+            if h * up_c > up_h * c:  # the bin's rate above the fit of the bins above it
+                pooled = (h + up_h) / (c + up_c)
+                se = math.sqrt(pooled * (1.0 - pooled) * (1.0 / c + 1.0 / up_c))
+                if h / c - up_h / up_c > cap_sigma * se:
+                    scale[b] = (up_h / up_c) / (h / c)
+                    h = c * up_h / up_c
+        stack.append([h, c])
+        while len(stack) > 1 and stack[-1][0] * stack[-2][1] > stack[-2][0] * stack[-1][1]:
+            bh, bc = stack.pop()
+            stack[-1][0] += bh
+            stack[-1][1] += bc
+    if all(f == 1.0 for f in scale):
+        return hits
+    return (rh * np.repeat(scale, np.diff(starts + [len(rc)])))[::-1]
+
+
 def _scores(scores: ArrayLike) -> np.ndarray:
     s = np.asarray(scores, dtype=np.float64).ravel()
     bad = np.flatnonzero(np.isnan(s))
@@ -405,7 +464,7 @@ class ScoreCalibration:
 
     @classmethod
     def fit(cls, scores: ArrayLike, persisted: ArrayLike, *, top: float = 0.05,
-            top_min: int = 20) -> ScoreCalibration:
+            top_min: int = 20, cap_sigma: float = 5.0) -> ScoreCalibration:
         """Fit to scores and their outcomes (see the module): full confidence is the rate of
         the ``top`` fraction of the outcomes by score, and of at least
         ``top_min`` of them (a small sample's top fraction is a handful).
@@ -423,6 +482,10 @@ class ScoreCalibration:
         top_min : int
             The least number of detections it is taken over (all of them if there are
             fewer).
+        cap_sigma : float
+            How many standard errors a bin of outcomes below the top third may lie above the
+            fit of the bins scored above it before it is taken down to that fit (see the
+            module); ``inf``: the plain isotonic fit.
 
         Returns
         -------
@@ -433,8 +496,8 @@ class ScoreCalibration:
         Raises
         ------
         ValueError
-            If ``top`` is not in ``(0, 1]``, the shapes differ, there are no scores, or a
-            score is NaN.
+            If ``top`` is not in ``(0, 1]``, ``cap_sigma`` is not > 0, the shapes differ,
+            there are no scores, or a score is NaN.
 
         Examples
         --------
@@ -444,6 +507,8 @@ class ScoreCalibration:
         """
         if not 0 < top <= 1:
             raise ValueError(f"top must be in (0, 1]; got {top}")
+        if not cap_sigma > 0:
+            raise ValueError(f"cap_sigma must be > 0; got {cap_sigma}")
         s = _scores(scores)
         p = np.asarray(persisted, dtype=np.float64).ravel()
         if p.shape != s.shape:
@@ -452,6 +517,8 @@ class ScoreCalibration:
             raise ValueError("no scores to fit")
         u, inv, counts = np.unique(s, return_inverse=True, return_counts=True)
         hits = np.bincount(inv, weights=p, minlength=len(u))
+        if np.isfinite(cap_sigma):
+            hits = _rank_capped(hits, counts, cap_sigma)
         fit = _pava(hits / counts, counts.astype(np.float64))
         # the rate of the top fraction by score (ties at its edge included)
         above = np.cumsum(counts[::-1])[::-1]  # detections scoring >= u[k]
