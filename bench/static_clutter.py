@@ -1,5 +1,5 @@
 """Clutter that stays where it is: MOT17's FRCNN detections with a few false boxes added that
-recur in place, at scores below every real detection, vistrack beside the peers of
+recur in place, scoring no higher than the lowest real detection, vistrack beside the peers of
 ``accuracy_mot.py``, scored the same way (COMBINED over the seven sequences).
 
     python bench/static_clutter.py [--boxes 0,2,5] [--no-peers] [--boxmot-python PY]
