@@ -8,13 +8,15 @@ recur in place, scoring no higher than the lowest real detection, vistrack besid
 A detector fires again and again on the same poster, mannequin or reflection, mostly at low
 scores: such false positives persist from frame to frame as a real object does, which is what
 vistrack's score calibration learns confidence from (``vistrack.tracking.calibration``). For
-each sequence and each count ``K`` of ``--boxes``, ``K`` boxes are placed at random (seed 0):
-each of the size of one of the sequence's own detections, anywhere in the image, present in
-each frame with probability 0.9, moved by 2 pixels (standard deviation) from frame to frame,
-scoring uniformly between half the sequence's lowest score and its lowest score (written to
-four significant digits, as every score: a few equal the lowest). ``K = 0`` is
-MOT17 as it is. Trackers with fixed thresholds on the raw scores never start a track from
-these boxes; a calibration that trusted persistence over the detector's ranking would.
+each sequence and each count ``K`` of ``--boxes``, ``K`` places are drawn at random (seeded
+by the sequence's name), each with the size of one of the sequence's own detections,
+anywhere in the image; in each frame, each place has a box with probability 0.9, its corner
+moved from the place by 2 pixels (standard deviation, in x and y), scoring uniformly up to
+half the lowest score's magnitude below the sequence's lowest score (written to four
+significant digits, as every score: a few equal the lowest). ``K = 0`` is MOT17 as it is.
+Trackers whose thresholds on the raw scores lie above these scores (OC-SORT, BoT-SORT,
+boxmot's ByteTrack) never take them; a calibration that trusted persistence over the
+detector's ranking would start tracks from them.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import sys
 import tempfile
 import time
 import warnings
+import zlib
 from pathlib import Path
 
 import accuracy_mot as acc  # bench/ is on the path of its scripts
@@ -37,10 +40,10 @@ from vistrack.pipeline import track_sequence
 from _markdown import replace_section  # noqa: E402
 
 
-def add_clutter(src: Path, k: int, root: Path, seed: int = 0) -> Path:
+def add_clutter(src: Path, k: int, root: Path) -> Path:
     """A copy of sequence folder ``src`` under ``root`` (its ``seqinfo.ini`` and ground truth)
     with ``k`` boxes that stay in place added to its detections (see the module)."""
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(zlib.crc32(src.name.encode()))
     out = root / src.name
     (out / "det").mkdir(parents=True)
     (out / "gt").mkdir()
@@ -50,13 +53,14 @@ def add_clutter(src: Path, k: int, root: Path, seed: int = 0) -> Path:
     wh = det.boxes[rng.integers(0, len(det.conf), k), 2:]
     xy = rng.uniform(0, [info.im_width, info.im_height], (k, 2)) - wh / 2
     lo = float(det.conf.min())
+    spread = abs(lo) / 2 or 0.5
     frames, boxes, conf = [det.frames], [det.boxes], [det.conf]
     for f in range(1, info.seq_length + 1):
         on = rng.random(k) < 0.9
         n = int(on.sum())
         frames.append(np.full(n, f))
         boxes.append(np.c_[xy[on] + rng.normal(0, 2, (n, 2)), wh[on]])
-        conf.append(rng.uniform(lo / 2, lo, n))
+        conf.append(lo - spread * rng.random(n))
     f, b, c = np.concatenate(frames), np.concatenate(boxes), np.concatenate(conf)
     order = np.argsort(f, kind="stable")
     write_mot(out / "det" / "det.txt", f[order], np.full(len(f), -1), b[order], c[order])
@@ -118,10 +122,11 @@ def main() -> None:
         "",
         f"Measured with `{cmd}` (Python {platform.python_version()}, "
         f"{time.strftime('%Y-%m-%d')}): MOT17's FRCNN detections with boxes added that recur "
-        "in place (present in nine frames of ten, moved by 2 pixels), scoring below the "
+        "in place (in nine frames of ten, 2 pixels about their place), scoring below the "
         "lowest real detection (a few equal to it), as a detector's false positives on a "
         "poster or a reflection do (see the script). COMBINED HOTA / MOTA / IDF1 (false "
-        "positives), by the number of such boxes in each sequence:",
+        "positives), by the number of such boxes in each sequence; one draw of their places "
+        "and scores:",
         "",
         *rows,
         ""])

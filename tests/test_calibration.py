@@ -236,6 +236,23 @@ def test_outcomes_against_the_ranking_beyond_their_noise_are_capped():
         ScoreCalibration.fit(s, p, cap_sigma=0)
 
 
+
+def test_a_dip_within_the_top_third_is_pooled_not_capped():
+    """Closed form: 200 outcomes at score 3 persisting at 0.3 (the most confident, large and
+    fast), 1,800 at score 2 at 0.9, 2,000 at score 1 at 0.5 and 2,000 at score 0 at 0.2.
+    Score 2's bin lies 22 standard errors above the bin above it, but within the top third
+    (200 outcomes above it, of 6,000): it is pooled with score 3 (0.84), as the plain fit
+    does, and so is the top 5 %'s rate (score 3 and the ties of score 2). Were it capped
+    (to 0.3), score 1's bin would be capped too and every score from 1 up would be fully
+    confident."""
+    s = np.repeat([0.0, 1.0, 2.0, 3.0], [2000, 2000, 1800, 200])
+    p = np.r_[np.arange(2000) < 400, np.arange(2000) < 1000, np.arange(1800) < 1620,
+              np.arange(200) < 60].astype(float)
+    cal = ScoreCalibration.fit(s, p)
+    np.testing.assert_allclose(cal.confidence, [0.2 / 0.84, 0.5 / 0.84, 1.0, 1.0])
+    np.testing.assert_array_equal(cal.confidence,
+                                  ScoreCalibration.fit(s, p, cap_sigma=np.inf).confidence)
+
 @pytest.mark.parametrize("seed", range(5))
 def test_outcomes_that_agree_with_the_ranking_fit_as_isotonic(seed):
     """Outcomes whose rate rises with the score, with their noise, and a dip at the very top

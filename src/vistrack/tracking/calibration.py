@@ -32,9 +32,12 @@ The two outcomes weigh the same: each detection contributes both. Then
   below the top third of the outcomes whose rate exceeds the isotonic fit of the bins above
   it by more than ``cap_sigma`` (5) standard errors (the two rates' difference, with their
   pooled rate's binomial variance) is taken down to that fit before the regression. Outcomes
-  that agree with the ranking, or disagree within their noise, are fitted as they are. Within
-  the top third, a dip (the most confident detections persisting less than the next: large,
-  near objects that move fast against their size) is motion, not clutter, and is pooled;
+  that agree with the ranking, or disagree within their noise, are fitted as they are. The
+  outcomes are not independent (a chain's detections share one), so 5 binomial standard
+  errors are fewer true ones; and near a rate of 0 the normal approximation makes the bound
+  narrower than it reads. Within the top third, a dip (the most confident detections
+  persisting less than the next: large, near objects that move fast against their size) is
+  motion, not clutter, and is pooled;
 - it is divided by the rate of the detector's most confident detections (the top ``top``
   fraction of the outcomes by score, 5 %, and at least 20 of them), since objects themselves
   persist less where they move fast against their size or the frame rate is low, and
@@ -334,7 +337,9 @@ def _rank_capped(hits: np.ndarray, counts: np.ndarray, cap_sigma: float) -> np.n
     bin_c = np.add.reduceat(rc, starts).tolist()
     bin_above = above[starts].tolist()
     scale = [1.0] * len(starts)
-    stack: list[list[float]] = []  # [hits, outcomes] of the fit's blocks, from the top
+    # the fit of the bins above, as blocks of equal rate (pooled, so the lowest block holds
+    # every outcome at its rate), from the top: [hits, outcomes]
+    stack: list[list[float]] = []
     for b, (h, c) in enumerate(zip(bin_h, bin_c)):
         if stack and bin_above[b] >= n / 3:
             up_h, up_c = stack[-1]
@@ -343,9 +348,11 @@ def _rank_capped(hits: np.ndarray, counts: np.ndarray, cap_sigma: float) -> np.n
                 se = math.sqrt(pooled * (1.0 - pooled) * (1.0 / c + 1.0 / up_c))
                 if h / c - up_h / up_c > cap_sigma * se:
                     scale[b] = (up_h / up_c) / (h / c)
-                    h = c * up_h / up_c
+                    stack[-1][1] += c  # taken down to the block's rate: part of it
+                    stack[-1][0] += c * up_h / up_c
+                    continue
         stack.append([h, c])
-        while len(stack) > 1 and stack[-1][0] * stack[-2][1] > stack[-2][0] * stack[-1][1]:
+        while len(stack) > 1 and stack[-1][0] * stack[-2][1] >= stack[-2][0] * stack[-1][1]:
             bh, bc = stack.pop()
             stack[-1][0] += bh
             stack[-1][1] += bc
@@ -490,8 +497,9 @@ class ScoreCalibration:
         Returns
         -------
         ScoreCalibration
-            On the distinct scores: the isotonic fit of the outcomes over the top
-            outcomes' rate, clipped to 1 (all 1 when none of the top outcomes is 1).
+            On the distinct scores: the isotonic fit of the outcomes (bins that contradict
+            the ranking taken down first) over the top outcomes' rate, clipped to 1 (all 1
+            when none of the top outcomes is 1).
 
         Raises
         ------
