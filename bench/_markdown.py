@@ -18,3 +18,11 @@ def replace_section(path: str, section: str) -> None:
         text = text.rstrip() + "\n\n" + section
     with open(path, "w") as fh:
         fh.write(text)
+
+
+def publish(section: str, path: str | None) -> None:
+    """Print a benchmark's section, and write it into markdown file ``path`` if given
+    (:func:`replace_section`): what each script's ``--write`` does."""
+    print(section)
+    if path:
+        replace_section(path, section)

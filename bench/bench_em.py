@@ -36,7 +36,7 @@ from vistrack.filters import em, mle  # noqa: E402
 from vistrack.simulate import simulate_lgssm  # noqa: E402
 
 from _common import median_time, optional  # noqa: E402  (bench/ is on the path of its scripts)
-from _markdown import replace_section  # noqa: E402
+from _markdown import publish  # noqa: E402
 
 CV, POS = vt.ConstantVelocity(dim=2, q=0.5), vt.Position(dim=2, r=4.0)
 F, Q_TRUE, H, R_TRUE = CV.F(1.0), CV.Q(1.0), POS.H(4), POS.R()
@@ -273,9 +273,7 @@ def main() -> None:
                f"{platform.python_version()}, numpy {np.__version__}, one thread). "
                f"{__doc__.split(chr(10) + chr(10), 2)[2].strip()}\n\n{table}\nGoals:\n\n"
                + "\n".join(goals) + "\n")
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
 
 
 if __name__ == "__main__":

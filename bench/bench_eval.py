@@ -36,7 +36,7 @@ from vistrack.io import write_mot
 from vistrack.pipeline import track_sequence
 
 from _common import optional  # noqa: E402
-from _markdown import replace_section  # noqa: E402
+from _markdown import publish  # noqa: E402
 
 CONVENTION = {"MOT15": "MOT15", "MOT17": "MOT17", "MOT16-FairMOT": "MOT16", "KITTI": "MOT15"}
 
@@ -211,9 +211,7 @@ def main() -> None:
         "",
         *table,
         ""])
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
 
 
 if __name__ == "__main__":

@@ -27,7 +27,7 @@ import numpy as np  # noqa: E402
 import vistrack as vt  # noqa: E402
 
 from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
-from _markdown import replace_section  # noqa: E402
+from _markdown import publish  # noqa: E402
 
 F = vt.ConstantVelocity(dim=2).F(1.0)
 Q = 0.1 * np.eye(4)
@@ -327,9 +327,7 @@ def main() -> None:
     section = (f"## Kalman filter and smoother\n\nMeasured with `{cmd}` ({env}). "
                "The last column: how many times slower than the first vistrack row of the table.\n"
                f"{table}\n")
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
 
 
 if __name__ == "__main__":

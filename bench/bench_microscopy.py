@@ -27,7 +27,7 @@ from vistrack.frontends.spots import locate
 from vistrack.models import ConstantPosition, Position
 from vistrack.tracking import PointTracker
 
-from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
+from _markdown import publish  # noqa: E402  (bench/ is on the path of its scripts)
 
 FRAMES = Path(__file__).resolve().parents[2] / "shared" / "data" / "trackpy-bulk-water" / "frames"
 
@@ -113,9 +113,7 @@ trajectories are one vistrack identity throughout. vistrack keeps a lost particl
 predicting (its covariance growing) for 3 frames and takes it back within its gate, so it
 breaks fewer trajectories.
 """
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
 
 
 if __name__ == "__main__":

@@ -37,7 +37,7 @@ from vistrack.io import MOTTable, read_mot, write_mot
 from vistrack.io.motchallenge import _read_careful
 
 from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
-from _markdown import replace_section  # noqa: E402
+from _markdown import publish  # noqa: E402
 
 SEQ = Path(__file__).resolve().parents[2] / "shared" / "data" / "mot17" / "MOT17-04-FRCNN"
 BUDGET_S = 30.0
@@ -238,9 +238,7 @@ def main() -> None:
         "",
     ]
     section = "\n".join(lines)
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
     for p in work.iterdir():
         p.unlink()
     work.rmdir()

@@ -27,7 +27,7 @@ import vistrack as vt  # noqa: E402
 from vistrack.filters import ParticleFilter, UnscentedKalmanFilter, ukf_predict, ukf_update  # noqa: E402
 
 from _common import median_time, optional  # noqa: E402  (bench/ is on the path of its scripts)
-from _markdown import replace_section  # noqa: E402
+from _markdown import publish  # noqa: E402
 
 T = 100
 
@@ -245,9 +245,7 @@ def main():
     cmd = "python bench/bench_particle.py" + (" --quick" if args.quick else "")
     section = (f"## Particle filter and UKF\n\nMeasured with `{cmd}` ({env}). RMSE: of the "
                f"filtered mean against the simulated states.\n{to_markdown(rows)}\n")
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
 
 
 if __name__ == "__main__":

@@ -34,7 +34,7 @@ from vistrack.tracking import BoxTracker
 from vistrack.types import Detections
 
 from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
-from _markdown import replace_section  # noqa: E402
+from _markdown import publish  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 VIDEO = DATA / "opencv-vtest" / "vtest.avi"
@@ -246,9 +246,7 @@ def main():
                f"in one thread) takes {decode:.2f} ms a frame; both chains read the video "
                f"through `VideoReader(prefetch=8)`, which decodes in a second thread while "
                f"the frame before is processed, and their times are of the whole loop.\n")
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
 
 
 if __name__ == "__main__":

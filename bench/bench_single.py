@@ -23,7 +23,7 @@ from vistrack.evaluation.single import precision, read_boxes, success_curve, suc
 from vistrack.tracking.compose import Composite
 from vistrack.tracking.single import single_tracker
 
-from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
+from _markdown import publish  # noqa: E402  (bench/ is on the path of its scripts)
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 SEQS = {
@@ -82,9 +82,7 @@ def main():
            f"{time.strftime('%Y-%m-%d')}")
     section = (f"## Single-object tracking\n\nMeasured with `python bench/bench_single.py` "
                f"({env}), started from the first ground-truth box.\n\n" + "\n".join(t) + "\n")
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
 
 
 if __name__ == "__main__":

@@ -24,7 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from tests.test_snake import distance_to_ellipse, ellipse_frame  # noqa: E402
 from vistrack.tracking.snake import Snake  # noqa: E402
 
-from _markdown import replace_section  # noqa: E402  (bench/ is on the path of its scripts)
+from _markdown import publish  # noqa: E402  (bench/ is on the path of its scripts)
 
 
 def scene(T=30):
@@ -88,9 +88,7 @@ def main():
                f"320×240 ellipse moving 2 px a frame, growing and turning, with noise; 100 "
                f"contour points, each frame started from the last contour.\n\n"
                + "\n".join(t) + "\n")
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
 
 
 if __name__ == "__main__":

@@ -28,7 +28,7 @@ from vistrack.tracking import BoxTracker
 from vistrack.types import Detections
 
 from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
-from _markdown import replace_section  # noqa: E402
+from _markdown import publish  # noqa: E402
 
 SEQ = Path(__file__).resolve().parents[2] / "shared" / "data" / "mot17" / "MOT17-04-FRCNN"
 
@@ -232,9 +232,7 @@ def main():
     cmd = "python bench/bench_tracking.py" + (" --quick" if args.quick else "")
     section = (f"## Multi-object tracking\n\nMeasured with `{cmd}` ({env}). Time in the "
                f"trackers' own update calls only.\n\n" + "\n\n".join(parts) + "\n")
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
 
 
 if __name__ == "__main__":

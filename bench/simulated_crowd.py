@@ -52,7 +52,7 @@ import numpy as np
 from vistrack.io import read_seqinfo, write_mot
 from vistrack.pipeline import track_sequence
 
-from _markdown import replace_section  # noqa: E402
+from _markdown import publish  # noqa: E402
 
 SOURCE = acc.DATA / "mot20" / "MOT20-01"
 SCALES = ((0.3, 0.9), (0.5, 1.0), (-2.0, 9.0))
@@ -214,9 +214,7 @@ def main() -> None:
         "",
         *draws,
         ""])
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
 
 
 if __name__ == "__main__":

@@ -37,7 +37,7 @@ import numpy as np
 from vistrack.io import read_mot, read_seqinfo, write_mot
 from vistrack.pipeline import track_sequence
 
-from _markdown import replace_section  # noqa: E402
+from _markdown import publish  # noqa: E402
 
 
 def add_clutter(src: Path, k: int, root: Path) -> Path:
@@ -130,9 +130,7 @@ def main() -> None:
         "",
         *rows,
         ""])
-    print(section)
-    if args.write:
-        replace_section(args.write, section)
+    publish(section, args.write)
 
 
 if __name__ == "__main__":
