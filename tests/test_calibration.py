@@ -8,7 +8,7 @@ import pytest
 
 from vistrack.association.costs import iou
 from vistrack.io import read_mot
-from vistrack.tracking import BoxTracker
+from vistrack.tracking import BoxTracker, BoxTrackerConfig
 from vistrack.tracking.calibration import (
     ScoreCalibration,
     ScoreCalibrator,
@@ -135,6 +135,33 @@ def test_a_window_holds_the_last_outcomes_of_all(window):
         np.testing.assert_array_equal(o, o_all[-window:])
         assert last.n == min(window, every.n)
     assert every.n > 2000
+
+
+def test_the_calibrations_settings_reach_the_online_calibrator():
+    """``calibration_window`` (0: every outcome), ``calibration_top_min`` and
+    ``calibration_cap_sigma`` of the tracker's configuration are the calibrator's (the bound
+    reaching the fit: the test above); with a window of 50 it holds the last 50 outcomes of
+    those a tracker holding all of them has."""
+    t = BoxTracker(BoxTrackerConfig(calibration_window=50, calibration_top_min=7,
+                                    calibration_cap_sigma=3.0))
+    assert (t.calibrator.window, t.calibrator.top_min, t.calibrator.cap_sigma) == (50, 7, 3.0)
+    assert BoxTracker(calibration_window=0).calibrator.window is None
+    assert BoxTracker().calibrator.window == 20000
+    every = BoxTracker(calibration_window=0, calibration_top_min=7, calibration_cap_sigma=3.0)
+    for f, d in enumerate(frames_with_clutter(np.random.default_rng(4))[0], start=1):
+        t.step(f, d)
+        every.step(f, d)
+    s, p = every.calibrator.outcomes()
+    assert len(s) > 50
+    held = t.calibrator.outcomes()
+    np.testing.assert_array_equal(held[0], s[-50:])
+    np.testing.assert_array_equal(held[1], p[-50:])
+    for key, value, match in (("calibration_window", -1, "an integer >= 0"),
+                              ("calibration_cap_sigma", 0.0, r"> 0 \(inf: no bound\)"),
+                              ("calibration_top_min", 0, "an integer >= 1"),
+                              ("calibration_window", np.inf, "an integer")):
+        with pytest.raises(ValueError, match=f"{key} must be {match}"):
+            BoxTrackerConfig(**{key: value})
 
 
 def flickering_scene(pan=0.0, T=40):
@@ -303,6 +330,13 @@ def test_clutter_that_recurs_in_place_at_low_scores_starts_no_track():
     assert len(on_spots(BoxTracker(calibration=cal))) == 0
     online = on_spots(BoxTracker())
     assert len(online) and online.max() <= 10
+    # the bound is a tracker setting, online and (as the pipeline fits it) offline
+    unbounded = BoxTrackerConfig(calibration_cap_sigma=np.inf)
+    assert len(on_spots(BoxTracker(unbounded))) > 1000
+    whole = ScoreCalibration.from_frames(frames, **unbounded.calibration_options(30.0))
+    assert whole(s[static]).min() > 0.7
+    np.testing.assert_array_equal(
+        whole.confidence, ScoreCalibration.from_frames(frames, cap_sigma=np.inf).confidence)
 
 def test_calibration_edge_cases_and_errors():
     """One score for all (nothing to tell apart: full confidence), frames without detections,

@@ -46,10 +46,11 @@ def cli(*args):
 
 def test_a_configuration_reads_back_as_written(tmp_path):
     """Every preset, and one with values of every kind changed (a float, an integer, a bool,
-    a string, the motion's four measurement noises, the offline mode), is read back equal."""
+    a string, infinity, the motion's four measurement noises, the offline mode), is read back
+    equal."""
     changed = TrackConfig.preset("bytetrack").with_values(
         tracker={"high": 0.55, "confirm_hits": 3, "camera_motion": False, "scores": "raw",
-                 "new_track": 0.9},
+                 "new_track": 0.9, "calibration_cap_sigma": math.inf, "calibration_window": 0},
         motion={"std_meas": (0.03, 0.04, 0.05, 0.06), "frame_rate": 25.0},
         offline={"enabled": True, "max_gap": 0.75})
     for cfg in (TrackConfig.preset("bytetrack"), TrackConfig.preset("sort"), changed):
@@ -80,6 +81,8 @@ def test_a_partial_file_keeps_the_presets_other_values(tmp_path):
     ("[tracker]\nhihg = 0.5\n", r"\[tracker\] has no key 'hihg' \(keys: assigner"),
     ("[tracker]\nhigh = \"0.5\"\n", r"\[tracker\] high must be a number; got '0.5'"),
     ("[tracker]\nconfirm_hits = 2.5\n", r"\[tracker\] confirm_hits must be an integer"),
+    ("[tracker]\ncalibration_window = -1\n", r"calibration_window must be an integer >= 0"),
+    ("[tracker]\ncalibration_cap_sigma = 0\n", r"calibration_cap_sigma must be > 0"),
     ("[tracker]\ncamera_motion = 1\n", r"\[tracker\] camera_motion must be true or false"),
     ("[tracker]\nname = \"deepsort\"\n", r"\[tracker\] name must be one of \['bytetrack', "
                                          r"'sort'\]"),

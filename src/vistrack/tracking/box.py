@@ -159,6 +159,16 @@ class BoxTrackerConfig:
         frame, the fraction of the outcomes, by score, whose rate is full confidence, and
         how many outcomes weigh as much as the rank prior
         (:class:`~vistrack.tracking.calibration.ScoreCalibrator`).
+    calibration_top_min : int
+        The least number of outcomes the full confidence's rate is taken over.
+    calibration_window : int
+        How many outcomes the online calibration holds, the latest, so that it follows a
+        scene that changes (0: all of them; the offline mode fits every outcome).
+    calibration_cap_sigma : float
+        How many standard errors a bin of outcomes below the top third may lie above the fit
+        of the bins scored above it before it is taken down to that fit (the calibration's
+        bound on outcomes that contradict the detector's ranking; ``inf``: none, the plain
+        isotonic fit; :meth:`~vistrack.tracking.calibration.ScoreCalibration.fit`).
     chain_span, chain_gap : float
         With calibrated scores: seconds. A detection also counts as an object's if it lies on
         a chain of detections that spans ``chain_span`` or more, linked across gaps of up to
@@ -188,6 +198,9 @@ class BoxTrackerConfig:
     calibration_iou: float = 0.3
     calibration_top: float = 0.05
     calibration_prior: float = 0.0
+    calibration_top_min: int = 20
+    calibration_window: int = 20000
+    calibration_cap_sigma: float = 5.0
     chain_span: float = 1.0
     chain_gap: float = 0.2
 
@@ -200,7 +213,8 @@ class BoxTrackerConfig:
             v = getattr(self, name)
             if kind == "bool" and not isinstance(v, (bool, np.bool_)):
                 raise bad(name, "True or False")
-            if kind == "int" and (isinstance(v, bool) or v != int(v)):
+            if kind == "int" and (isinstance(v, bool) or not isinstance(v, (int, float, np.integer))
+                                  or not float(v).is_integer()):
                 raise bad(name, "an integer")
             if kind == "float" and (isinstance(v, bool) or not isinstance(v, (int, float))
                                     or np.isnan(v)):
@@ -225,9 +239,13 @@ class BoxTrackerConfig:
                      "calibration_prior", "chain_span", "chain_gap", "tentative_gate"):
             if not 0 <= getattr(self, name) < np.inf:
                 raise bad(name, "a finite number >= 0")
-        for name in ("confirm_hits", "camera_min_matches"):
+        for name in ("confirm_hits", "camera_min_matches", "calibration_top_min"):
             if getattr(self, name) < 1:
                 raise bad(name, "an integer >= 1")
+        if self.calibration_window < 0:
+            raise bad("calibration_window", "an integer >= 0 (0: every outcome)")
+        if not self.calibration_cap_sigma > 0:
+            raise bad("calibration_cap_sigma", "> 0 (inf: no bound)")
 
     def calibration_options(self, frame_rate: float) -> dict[str, Any]:
         """The score calibration's settings at ``frame_rate`` frames a second, as
@@ -235,6 +253,7 @@ class BoxTrackerConfig:
         :meth:`~vistrack.tracking.calibration.ScoreCalibration.from_frames` (offline) take
         them."""
         return dict(link_iou=self.calibration_iou, top=self.calibration_top,
+                    top_min=self.calibration_top_min, cap_sigma=self.calibration_cap_sigma,
                     frame_rate=frame_rate, chain_span=self.chain_span, chain_gap=self.chain_gap)
 
 
@@ -542,6 +561,7 @@ class BoxTracker:
         start again from 1."""
         c = self.config
         self.calibrator = (ScoreCalibrator(prior=c.calibration_prior,
+                                           window=c.calibration_window or None,
                                            **c.calibration_options(self.frame_rate))
                            if c.scores == "calibrated" and self.calibration is None else None)
         self.tracks.reset()

@@ -540,7 +540,8 @@ class ScoreCalibration:
 
     @classmethod
     def from_frames(cls, frames: Iterable[Detections], *, link_iou: float = 0.3,
-                    top: float = 0.05, frame_rate: float = 30.0, chain_span: float = 1.0,
+                    top: float = 0.05, top_min: int = 20, cap_sigma: float = 5.0,
+                    frame_rate: float = 30.0, chain_span: float = 1.0,
                     chain_gap: float = 0.2) -> ScoreCalibration:
         """Fit to a whole sequence of frames (the offline mode).
 
@@ -553,9 +554,10 @@ class ScoreCalibration:
             Every frame's detections, with boxes, in order.
         link_iou : float
             The IoU at which a detection continues one of the previous frame.
-        top : float
-            The fraction of the outcomes, by score, whose rate is full confidence (at least
-            20 of them).
+        top, top_min, cap_sigma : float, int, float
+            The fraction of the outcomes, by score, whose rate is full confidence, the least
+            number of them, and the bound on outcomes that contradict the detector's ranking
+            (:meth:`fit`).
         frame_rate, chain_span, chain_gap : float
             Frames a second, and the chains' span and gap in seconds (see
             :class:`ScoreCalibrator`).
@@ -584,7 +586,7 @@ class ScoreCalibration:
         """
         s, p = _outcomes(frames, link_iou=link_iou, frame_rate=frame_rate,
                          chain_span=chain_span, chain_gap=chain_gap)
-        return cls.fit(s, p, top=top)
+        return cls.fit(s, p, top=top, top_min=top_min, cap_sigma=cap_sigma)
 
     def __call__(self, scores: ArrayLike) -> np.ndarray:
         s = _scores(scores)
@@ -689,6 +691,11 @@ class ScoreCalibrator:
         The IoU at which a detection continues one of the previous frame (or a chain).
     top : float
         The fraction of the outcomes, by score, whose rate is full confidence.
+    top_min : int
+        The least number of outcomes that rate is taken over.
+    cap_sigma : float
+        The bound on outcomes that contradict the detector's ranking, in standard errors
+        (``inf``: none; :meth:`ScoreCalibration.fit`).
     prior : float
         How many outcomes weigh as much as the rank prior.
     window : int or None
@@ -707,8 +714,8 @@ class ScoreCalibrator:
     ------
     ValueError
         If ``link_iou`` or ``top`` is not in ``(0, 1]``, ``prior``, ``chain_span`` or
-        ``chain_gap`` is negative or not finite, ``frame_rate`` is not > 0 and finite, or
-        ``window`` is less than 1.
+        ``chain_gap`` is negative or not finite, ``frame_rate`` is not > 0 and finite,
+        ``cap_sigma`` is not > 0, or ``window`` or ``top_min`` is less than 1.
 
     Examples
     --------
@@ -730,13 +737,17 @@ class ScoreCalibrator:
     10 [0.0, 1.0]
     """
 
-    def __init__(self, *, link_iou: float = 0.3, top: float = 0.05, prior: float = 0.0,
-                 window: int | None = 20000, frame_rate: float = 30.0,
-                 chain_span: float = 1.0, chain_gap: float = 0.2):
+    def __init__(self, *, link_iou: float = 0.3, top: float = 0.05, top_min: int = 20,
+                 cap_sigma: float = 5.0, prior: float = 0.0, window: int | None = 20000,
+                 frame_rate: float = 30.0, chain_span: float = 1.0, chain_gap: float = 0.2):
         if not 0 < link_iou <= 1:
             raise ValueError(f"link_iou must be in (0, 1]; got {link_iou}")
         if not 0 < top <= 1:
             raise ValueError(f"top must be in (0, 1]; got {top}")
+        if not cap_sigma > 0:
+            raise ValueError(f"cap_sigma must be > 0; got {cap_sigma}")
+        if top_min < 1:
+            raise ValueError(f"top_min must be >= 1; got {top_min}")
         for name, v in (("prior", prior), ("chain_span", chain_span), ("chain_gap", chain_gap)):
             if not 0 <= v < np.inf:
                 raise ValueError(f"{name} must be a finite number >= 0; got {v}")
@@ -746,6 +757,7 @@ class ScoreCalibrator:
             raise ValueError(f"window must be >= 1 or None; got {window}")
         self.link_iou, self.top, self.prior, self.window = float(link_iou), float(top), \
             float(prior), window
+        self.top_min, self.cap_sigma = int(top_min), float(cap_sigma)
         self.frame_rate, self.chain_span, self.chain_gap = float(frame_rate), \
             float(chain_span), float(chain_gap)
         # in frames: a chain lasts once its last frame is this far after its first, and takes
@@ -935,7 +947,8 @@ class ScoreCalibrator:
             return ScoreCalibration([0.0], [1.0])  # nothing seen: nothing to tell apart
         w = n / (n + self.prior) if n + self.prior > 0 else 1.0
         if n:
-            cal = ScoreCalibration.fit(self._buf_s, self._buf_p, top=self.top)
+            cal = ScoreCalibration.fit(self._buf_s, self._buf_p, top=self.top,
+                                       top_min=self.top_min, cap_sigma=self.cap_sigma)
             cal = cal.blend(w, ranked) if w < 1 else cal
         else:
             cal = ScoreCalibration.ranks(ranked)
