@@ -146,6 +146,7 @@ def test_the_calibrations_settings_reach_the_online_calibrator():
                                     calibration_cap_sigma=3.0))
     assert (t.calibrator.window, t.calibrator.top_min, t.calibrator.cap_sigma) == (50, 7, 3.0)
     assert BoxTracker(calibration_window=0).calibrator.window is None
+    assert BoxTracker(calibration_window=50.0).calibrator.window == 50  # an integral float
     assert BoxTracker().calibrator.window == 20000
     every = BoxTracker(calibration_window=0, calibration_top_min=7, calibration_cap_sigma=3.0)
     for f, d in enumerate(frames_with_clutter(np.random.default_rng(4))[0], start=1):
@@ -337,6 +338,7 @@ def test_clutter_that_recurs_in_place_at_low_scores_starts_no_track():
     assert whole(s[static]).min() > 0.7
     np.testing.assert_array_equal(
         whole.confidence, ScoreCalibration.from_frames(frames, cap_sigma=np.inf).confidence)
+
 
 def test_calibration_edge_cases_and_errors():
     """One score for all (nothing to tell apart: full confidence), frames without detections,
