@@ -361,6 +361,11 @@ def test_calibration_edge_cases_and_errors():
         ScoreCalibrator(chain_gap=np.inf)
     with pytest.raises(ValueError, match="frame_rate must be > 0 and finite; got 0"):
         ScoreCalibrator(frame_rate=0.0)
+    for window in (0, 2.5, np.inf):
+        with pytest.raises(ValueError,
+                           match=f"window must be an integer >= 1 or None; got {window}"):
+            ScoreCalibrator(window=window)
+    assert ScoreCalibrator(window=50.0).window == 50  # an integral float, as a count
     with pytest.raises(ValueError, match="chain_span must be a finite number >= 0"):
         BoxTracker(chain_span=-0.5)
     with pytest.raises(ValueError, match="must be increasing"):

@@ -561,7 +561,7 @@ class BoxTracker:
         start again from 1."""
         c = self.config
         self.calibrator = (ScoreCalibrator(prior=c.calibration_prior,
-                                           window=int(c.calibration_window) or None,
+                                           window=c.calibration_window or None,
                                            **c.calibration_options(self.frame_rate))
                            if c.scores == "calibrated" and self.calibration is None else None)
         self.tracks.reset()

@@ -715,7 +715,8 @@ class ScoreCalibrator:
     ValueError
         If ``link_iou`` or ``top`` is not in ``(0, 1]``, ``prior``, ``chain_span`` or
         ``chain_gap`` is negative or not finite, ``frame_rate`` is not > 0 and finite,
-        ``cap_sigma`` is not > 0, or ``window`` or ``top_min`` is less than 1.
+        ``cap_sigma`` is not > 0, ``window`` is not an integer >= 1, or ``top_min`` is less
+        than 1.
 
     Examples
     --------
@@ -753,10 +754,10 @@ class ScoreCalibrator:
                 raise ValueError(f"{name} must be a finite number >= 0; got {v}")
         if not 0 < frame_rate < np.inf:
             raise ValueError(f"frame_rate must be > 0 and finite; got {frame_rate}")
-        if window is not None and window < 1:
-            raise ValueError(f"window must be >= 1 or None; got {window}")
-        self.link_iou, self.top, self.prior, self.window = float(link_iou), float(top), \
-            float(prior), window
+        if window is not None and not (window >= 1 and float(window).is_integer()):
+            raise ValueError(f"window must be an integer >= 1 or None; got {window}")
+        self.link_iou, self.top, self.prior = float(link_iou), float(top), float(prior)
+        self.window = None if window is None else int(window)  # it slices the store
         self.top_min, self.cap_sigma = int(top_min), float(cap_sigma)
         self.frame_rate, self.chain_span, self.chain_gap = float(frame_rate), \
             float(chain_span), float(chain_gap)
