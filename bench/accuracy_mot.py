@@ -4,7 +4,7 @@ the trackers a user would pick instead, each with its packaged defaults, scored 
 
     python bench/accuracy_mot.py [--sets MOT15,MOT17,MOT16-FairMOT,KITTI] [--no-peers]
                                  [--boxmot-python PY] [--jitter SEEDS] [--every K]
-                                 [--write docs/mot.md]
+                                 [--stride K] [--write docs/mot.md]
 
 Sets (``../shared/data``): MOT15 train with SORT's Faster R-CNN detections, MOT17 train with
 the FRCNN detections, MOT16 train with FairMOT's detections (scores 0.5-0.99), and KITTI
@@ -23,6 +23,14 @@ through the logistic function (KITTI HOTA of its OC-SORT 58.6 against 56.3).
 (1, 1 + K, ...; detections and ground truth), renumbered, with ``frameRate`` divided by K. No
 setting was chosen at those rates; the COMBINED tables go to a section of their own.
 
+``--stride K`` gives every set a detector that ran on every K-th frame only: each
+sequence's detections on frames 1, 1 + K, ... alone, numbered as the video's frames, scored
+against the ground truth of every frame. vistrack reads the file as it is (it finds the stride
+and tracks the detector's frames, predicting the tracks' boxes on the frames between online,
+filling them offline); each peer is given the detector's frames alone, numbered 1, 2, ...,
+at the frame rate divided by K (as ``--every K``), and its rows are written back at the
+video's frames: the most a user of it gets without writing more.
+
 ``--jitter N`` also runs vistrack's online default N more times with every detection box
 moved by up to 0.05 pixel (uniform, seeds 1..N), and reports the spread of COMBINED HOTA: how
 much of a difference between two settings is noise.
@@ -32,6 +40,7 @@ from __future__ import annotations
 
 import argparse
 import platform
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -96,6 +105,33 @@ def every_kth(seqs: list[Path], k: int, root: Path) -> list[Path]:
         (o / "seqinfo.ini").write_text("\n".join(lines) + "\n")
         out.append(o)
     return out
+
+
+def strided(seqs: list[Path], k: int, root: Path) -> list[Path]:
+    """The sequences with a detector that ran on every ``k``-th frame, written under ``root``
+    with the same names: the detections of frames 1, 1 + k, ... alone, numbered as before;
+    the ground truth and ``seqinfo.ini`` as they are."""
+    out = []
+    for d in seqs:
+        o = root / d.name
+        (o / "det").mkdir(parents=True, exist_ok=True)
+        (o / "gt").mkdir(parents=True, exist_ok=True)
+        rows = np.loadtxt(d / "det" / "det.txt", delimiter=",", ndmin=2)
+        np.savetxt(o / "det" / "det.txt", rows[(rows[:, 0] - 1) % k == 0], delimiter=",",
+                   fmt="%.10g")
+        shutil.copy(d / "gt" / "gt.txt", o / "gt" / "gt.txt")
+        shutil.copy(d / "seqinfo.ini", o / "seqinfo.ini")
+        out.append(o)
+    return out
+
+
+def renumber_back(src: Path, dst: Path, k: int) -> None:
+    """Every results file in ``src`` written to ``dst`` with its frame ``i`` as the video's
+    frame ``1 + (i - 1) k`` (the inverse of :func:`every_kth`'s numbering)."""
+    dst.mkdir(parents=True, exist_ok=True)
+    for f in src.glob("*.txt"):
+        t = read_mot(f)
+        write_mot(dst / f.name, 1 + (t.frames - 1) * k, t.ids, t.boxes, t.conf, force=True)
 
 
 # ----------------------------------------------------------------------------- runners
@@ -248,6 +284,7 @@ def main() -> None:
                     "python")
     ap.add_argument("--jitter", type=int, default=0, metavar="SEEDS")
     ap.add_argument("--every", type=int, default=1, metavar="K")
+    ap.add_argument("--stride", type=int, default=1, metavar="K")
     ap.add_argument("--write", metavar="MD")
     args = ap.parse_args()
     if not DATA.exists():
@@ -256,6 +293,9 @@ def main() -> None:
     bad = [s for s in names if s not in SETS]
     if bad:
         sys.exit(f"unknown set {bad[0]!r}; sets: {', '.join(SETS)}")
+    if args.every < 1 or args.stride < 1 or (args.every > 1 and args.stride > 1):
+        sys.exit(f"--every and --stride must be at least 1, and one of them 1; got "
+                 f"{args.every} and {args.stride}")
     warnings.filterwarnings("ignore")
     peers = {} if args.no_peers else trackers_peers()
     boxmot = None if args.no_peers else args.boxmot_python
@@ -267,20 +307,31 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         for name in names:
-            seqs = sequences(name)
+            seqs = peer_seqs = sequences(name)
             if args.every > 1:
-                seqs = every_kth(seqs, args.every, tmp / "every" / name)
+                seqs = peer_seqs = every_kth(seqs, args.every, tmp / "every" / name)
+            peer_out = tmp / name
+            if args.stride > 1:
+                # the peers get the detector's frames alone (see the module)
+                peer_seqs = every_kth(seqs, args.stride, tmp / "peers-in" / name)
+                seqs = strided(seqs, args.stride, tmp / "strided" / name)
+                peer_out = tmp / "peers-out" / name
             res, fps = {}, {}
             for label, offline in zip(VISTRACK, (False, True)):
                 fps[label] = run_vistrack(seqs, tmp / name / label, offline)
                 res[label] = score(seqs, tmp / name / label)
+            done = []
             for label, make in peers.items():
-                fps[label] = run_trackers(make, seqs, tmp / name / label)
-                res[label] = score(seqs, tmp / name / label)
+                fps[label] = run_trackers(make, peer_seqs, peer_out / label)
+                done.append(label)
             if boxmot is not None:
-                for label, f in run_boxmot(boxmot, seqs, tmp / name).items():
+                for label, f in run_boxmot(boxmot, peer_seqs, peer_out).items():
                     fps[label] = f
-                    res[label] = score(seqs, tmp / name / label)
+                    done.append(label)
+            for label in done:
+                if args.stride > 1:
+                    renumber_back(peer_out / label, tmp / name / label, args.stride)
+                res[label] = score(seqs, tmp / name / label)
             spread = ""
             if args.jitter:
                 h = [100 * res["vistrack"]["COMBINED"].HOTA]
@@ -290,10 +341,12 @@ def main() -> None:
                 spread = (f"\n\nWith every box moved by up to 0.05 pixel ({args.jitter} seeds), "
                           f"vistrack's online COMBINED HOTA ranges {min(h):.2f}-{max(h):.2f}.")
             g = goals(res)
-            title = name if args.every == 1 else f"{name}, every {ordinal(args.every)} frame"
+            title = (f"{name}, every {ordinal(args.every)} frame" if args.every > 1 else
+                     f"{name}, detections on every {ordinal(args.stride)} frame"
+                     if args.stride > 1 else name)
             part = (f"### {title} ({len(seqs)} sequences)\n\n{combined_table(res, fps)}"
                     + ("\n\nGoals:\n\n" + "\n".join(g) if g else "") + spread)
-            if args.every == 1:  # at a lower rate, the COMBINED tables alone
+            if args.every == 1 and args.stride == 1:  # otherwise the COMBINED tables alone
                 part += ("\n\nHOTA / MOTA / IDF1 per sequence (peers: HOTA):\n\n"
                          f"{per_sequence(res)}")
             parts.append(part + "\n")
@@ -301,7 +354,19 @@ def main() -> None:
     env = (f"Python {platform.python_version()}, numpy {np.__version__}, "
            f"{time.strftime('%Y-%m-%d')}")
     cmd = "python bench/accuracy_mot.py" + (f" --jitter {args.jitter}" if args.jitter else "")
-    if args.every > 1:
+    if args.stride > 1:
+        cmd += f" --stride {args.stride}"
+        k = ordinal(args.stride)
+        section = (f"## A detector run on every {k} frame: the four sets\n\nMeasured with "
+                   f"`{cmd}` ({env}): each sequence's detections on every {k} frame alone "
+                   f"(frames 1, {1 + args.stride}, {1 + 2 * args.stride}, ...), numbered as "
+                   "the video's frames, scored against the "
+                   "ground truth of every frame. vistrack reads the file as it is; each peer is "
+                   f"given the detector's frames alone, at the frame rate divided by "
+                   f"{args.stride}, its rows written back at the video's frames. frames/s is "
+                   "the tracker alone, over the video's frames for vistrack and the "
+                   "detector's for the peers.\n\n" + "\n".join(parts))
+    elif args.every > 1:
         cmd += f" --every {args.every}"
         section = (f"## Every {ordinal(args.every)} frame: the four sets at a lower frame "
                    f"rate\n\nMeasured with `{cmd}` ({env}): each sequence's every "

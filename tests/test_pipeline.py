@@ -428,3 +428,141 @@ def test_a_detections_file_with_boxes_of_no_area_says_so(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         track_sequence(det, tmp_path / "clean.txt", fps=10)
+
+
+def test_detection_stride_is_the_common_gap_between_the_frames_with_detections():
+    from vistrack.pipeline import detection_stride
+
+    every = np.repeat(np.arange(1, 40), 3)  # three rows a frame, every frame
+    assert detection_stride(every) == 1
+    for k in (2, 3, 5, 30):
+        frames = np.arange(7, 7 + 12 * k, k)
+        assert detection_stride(np.repeat(frames, 2)) == k
+        # one row off the grid: the detector ran on that frame too
+        assert detection_stride(np.r_[frames, frames[4] + 1]) == 1
+    # a grid with frames where the detector found nothing: still its stride
+    assert detection_stride(np.delete(np.arange(1, 100, 4), [3, 4, 9])) == 4
+    # too few frames to tell a stride from chance
+    assert detection_stride(np.arange(1, 19, 2)) == 1
+    assert detection_stride(np.arange(1, 21, 2)) == 2
+    assert detection_stride([]) == 1
+
+
+def test_a_detector_that_ran_on_every_other_frame_is_tracked_on_its_own_frames(tmp_path):
+    """A detector run on every 2nd frame, its rows numbered by the video's frames: the
+    frames between are not frames where it found nothing. Stepping through them as such
+    dropped every new track before it could be confirmed (a track needs two updates in a
+    row), and a person walking across was never reported after the first frame. The run
+    now tracks the frames the detector ran on, at half the frame rate, and says so; online,
+    each frame between has the tracks' boxes predicted from the frames before it, and
+    offline, boxes on the straight line between the smoothed ones: for a person walking at
+    a constant velocity, where they are. A video (``--frontend detections:FILE``) is still
+    tracked frame by frame; there a warning names the stride and the command that tracks
+    the detector's frames alone."""
+    import warnings
+
+    from vistrack.pipeline import track_sequence
+
+    def truth(f):
+        return np.array([10 + 4.0 * f, 20 + 1.0 * f, 30, 60])
+
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{f},-1,{','.join(f'{v:g}' for v in truth(f))},0.9\n"
+                           for f in range(1, 40, 2)))
+    with pytest.warns(RuntimeWarning) as got:
+        online = track_sequence(det, tmp_path / "on.txt", fps=20, scores="raw")
+    assert [str(w.message) for w in got] == [
+        f"{det}: detections on every 2nd frame only (frames 1, 3, 5, ...): tracked as a "
+        "sequence of those frames at 10 frames/s; the frames between have the tracks' "
+        "predicted boxes (score 0)"]
+    assert online.derived["detection_stride"] == 2 and online.derived["frame_rate"] == 10
+    on = read_mot(online.out)
+    # the track from the first frame (a track found in the first frame is reported at
+    # once), each frame between the detector's predicted from the ones before it only
+    assert on.frames.tolist() == list(range(1, 40)) and set(on.ids.tolist()) == {1}
+    between = on.frames % 2 == 0
+    assert (on.conf[between] == 0).all() and (on.conf[~between] > 0).all()
+    # once the filter has the person's velocity (3 frames), where they are
+    np.testing.assert_allclose(on.boxes[5:], [truth(f) for f in on.frames[5:]], atol=1.0)
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        before = track_sequence(det, tmp_path / "each.txt", fps=20, scores="raw",
+                                offline=True)
+    off = read_mot(before.out)
+    assert off.frames.tolist() == list(range(1, 40)) and set(off.ids.tolist()) == {1}
+    between = off.frames % 2 == 0
+    assert (off.conf[between] == 0).all() and (off.conf[~between] > 0).all()
+
+    # a video is tracked frame by frame: there the stride is only named, and the command
+    # that tracks the detector's frames alone
+    frames, boxes = red_disc_clip(T=24)
+    clip = write_clip(tmp_path / "frames", frames)
+    every2 = tmp_path / "disc.txt"
+    every2.write_text("".join(f"{f},-1,{','.join(f'{v:g}' for v in boxes[f - 1])},0.9\n"
+                              for f in range(1, 25, 2)))
+    with pytest.warns(RuntimeWarning, match=rf"^{every2}: detections on every 2nd frame only: "
+                                            r"a video is tracked frame by frame, .* vistrack "
+                                            r"track FILE --fps FPS --out RESULTS tracks the "
+                                            r"detector's frames alone$"):
+        track_video(clip, tmp_path / "video", frontend=f"detections:{every2}", fps=25,
+                    annotate=False, scores="raw")
+    # a filled box is halfway between its neighbours (written to 2 decimals), and every
+    # box within a pixel of where the person is (the smoother starts from no velocity)
+    np.testing.assert_allclose(off.boxes[1:-1][between[1:-1]],
+                               (off.boxes[:-2] + off.boxes[2:])[between[1:-1]] / 2, atol=0.011)
+    np.testing.assert_allclose(off.boxes, [truth(f) for f in off.frames], atol=1.0)
+
+
+def test_a_strided_detections_file_tracks_as_the_sequence_of_its_frames(tmp_path):
+    """Every 2nd (MOT17-09, 30 frames/s) or 3rd (KITTI-0001, 10 frames/s) frame's
+    detections, numbered by the video's frames, give online the same tracks, row for row,
+    as the same detections numbered 1, 2, 3, ... at the lower frame rate (the independent
+    run the stride stands for), and offline the same rows at those frames; the frames
+    between have the tracks' predicted boxes online and boxes filled between the smoothed
+    ones offline. The ground truth has people in those frames too: HOTA over every frame
+    rises above that of the rows at the detector's frames alone."""
+    import warnings
+
+    from vistrack.evaluation import evaluate_mot
+    from vistrack.pipeline import track_sequence
+
+    from .mot_oracles import SHARED
+
+    for bench, name, k in (("mot17", "MOT17-09-FRCNN", 2), ("kitti-tracking",
+                                                             "KITTI-0001-Car", 3)):
+        seq = SHARED / bench / name
+        if not seq.exists():
+            pytest.skip(f"{seq} not found: the shared data is not beside this checkout")
+        a = np.loadtxt(seq / "det" / "det.txt", delimiter=",", ndmin=2)
+        keep = a[(a[:, 0] - 1) % k == 0]
+        strided = tmp_path / f"{name}.det.txt"
+        np.savetxt(strided, keep, delimiter=",", fmt="%.6g")
+        info = dict(line.split("=", 1) for line in (seq / "seqinfo.ini").read_text().split()
+                    if "=" in line)
+        renum = tmp_path / name
+        (renum / "det").mkdir(parents=True)
+        r = keep.copy()
+        r[:, 0] = (r[:, 0] - 1) // k + 1
+        np.savetxt(renum / "det" / "det.txt", r, delimiter=",", fmt="%.6g")
+        (renum / "seqinfo.ini").write_text(
+            f"[Sequence]\nname={name}\nframeRate={float(info['frameRate']) / k}\n"
+            f"seqLength={(int(info['seqLength']) - 1) // k + 1}\nimWidth={info['imWidth']}\n"
+            f"imHeight={info['imHeight']}\n")
+        for offline in (False, True):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                a_run = track_sequence(seq, tmp_path / f"a{offline}.txt", detections=strided,
+                                       offline=offline, force=True)
+                b_run = track_sequence(renum, tmp_path / f"b{offline}.txt", offline=offline,
+                                       force=True)
+            got, want = read_mot(a_run.out), read_mot(b_run.out)
+            at = (got.frames - 1) % k == 0
+            np.testing.assert_array_equal(got.frames[at], (want.frames - 1) * k + 1)
+            np.testing.assert_array_equal(got.ids[at], want.ids)
+            np.testing.assert_array_equal(got.boxes[at], want.boxes)
+            assert (got.conf[~at] == 0).all() and len(np.unique(got.frames[~at])) > 100
+            gt = read_mot(seq / "gt" / "gt.txt")
+            n = int(info["seqLength"])
+            every = evaluate_mot(gt, got, n).HOTA
+            alone = evaluate_mot(gt, got[at], n).HOTA
+            assert every > alone + 0.05, (name, offline, every, alone)

@@ -790,7 +790,10 @@ def build_parser() -> argparse.ArgumentParser:
                        help="several inputs: after one fails, track the others (default: "
                        "start no new one)")
     track.add_argument("--detections", help="detections file (default INPUT/det/det.txt): "
-                       "MOTChallenge's format, or CSV with a header (.csv)")
+                       "MOTChallenge's format, or CSV with a header (.csv); a detector run on "
+                       "every k-th frame only (rows on frames 1, 1 + k, ...) is tracked on "
+                       "its own frames, the frames between given the tracks' predicted "
+                       "(offline: filled) boxes")
     track.add_argument("--columns", metavar="OURS=THEIRS,...",
                        help="a CSV file's column names: frame, id (or particle), bb_left, "
                        "bb_top, bb_width, bb_height (or x, y: the centre; or the corners "

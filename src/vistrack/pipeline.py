@@ -48,7 +48,7 @@ from .tracking.base import Tracker
 from .tracking.box import BoxTracker, BoxTrackerConfig
 from .tracking.calibration import ScoreCalibration
 from .tracking.offline import smooth
-from .types import Detections, Frame
+from .types import Detections, Frame, Tracks
 
 if TYPE_CHECKING:
     from typing import TextIO
@@ -61,8 +61,9 @@ if TYPE_CHECKING:
 
 __all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "SINKS",
            "as_detector", "make_tracker", "track_sequence", "TrackRun", "resolve_config",
-           "derived_values", "calibration_warning", "track_video", "VideoRun", "track_one",
-           "SingleRun", "video_outputs", "RUN_INFO", "fit_sequences", "FitRun"]
+           "derived_values", "calibration_warning", "detection_stride", "track_video",
+           "VideoRun", "track_one", "SingleRun", "video_outputs", "RUN_INFO", "fit_sequences",
+           "FitRun"]
 
 
 @dataclass(frozen=True)
@@ -87,7 +88,9 @@ class TrackRun:
     config : TrackConfig or None
         The configuration used (its motion filled in).
     derived : dict or None
-        :func:`derived_values` of the tracker.
+        :func:`derived_values` of the tracker, with ``detection_stride`` where the detections
+        lie on every k-th frame only (:func:`detection_stride`; the tracker's ``frame_rate``
+        is then the sequence's divided by k).
 
     Examples
     --------
@@ -630,6 +633,14 @@ def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
         raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
     dets = read_detections(path)  # MOTChallenge's text, or a CSV file with a header
     _warn_no_area(dets, path, stacklevel=3)
+    stride = detection_stride(dets.frames)
+    if stride > 1:
+        # the video's every frame is tracked; track_sequence tracks the detector's alone
+        warnings.warn(f"{path}: detections on every {_ordinal(stride)} frame only: a video is "
+                      "tracked frame by frame, each frame without detections as one where "
+                      "nothing was found, which drops new tracks before they are confirmed; "
+                      "vistrack track FILE --fps FPS --out RESULTS tracks the detector's "
+                      "frames alone", RuntimeWarning, stacklevel=3)
     # every frame's rows, up to the file's last frame; none after it (a video may run past
     # its header's count, or give none)
     slices = dets.frame_slices()
@@ -931,6 +942,12 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         Another detections file (default ``seq_dir/det/det.txt``): MOTChallenge's format, or
         a CSV file with a header (``.csv``; read by pandas, its columns as
         :meth:`~vistrack.io.MOTTable.from_pandas` takes them).
+        Where its rows lie on every k-th frame only (:func:`detection_stride`: a detector
+        run on every k-th frame), the tracker steps through those frames alone, at the frame
+        rate divided by k, and a ``RuntimeWarning`` says so; each frame between gets the
+        reported tracks' boxes as predicted from the frames before it
+        (:meth:`~vistrack.tracking.BoxTracker.boxes_ahead`), offline boxes on the straight
+        line between the smoothed ones, both with score 0.
     columns : dict, optional
         A CSV file's column names, ``{ours: theirs}`` (:meth:`~vistrack.io.MOTTable.from_pandas`).
     fps : float, optional
@@ -1048,10 +1065,26 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                              f"sequence's {info.seq_length} frames ({ini})")
     slices = dets.frame_slices(info.seq_length)
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
+    # the detector's own frames: every frame, or every stride-th one, where the frames
+    # between are not ones where it found nothing; the tracker runs on that timeline (step i
+    # the file's frame first + (i - 1) * stride, at frame_rate / stride), its rows written
+    # at the file's frames
+    stride = detection_stride(dets.frames)
+    first = (int(dets.frames.min()) - 1) % stride + 1 if stride > 1 else 1
+    steps = range(first, info.seq_length + 1, stride)
+    rate = info.frame_rate / stride
+    if stride > 1:
+        warnings.warn(f"{det_path}: detections on every {_ordinal(stride)} frame only "
+                      f"(frames {steps[0]}, {steps[1]}, {steps[2]}, ...): tracked as a "
+                      f"sequence of those frames at {rate:.4g} frames/s; the frames between "
+                      + ("are filled on the line between the smoothed boxes" if
+                         cfg.offline.enabled else "have the tracks' predicted boxes")
+                      + " (score 0)",
+                      RuntimeWarning, stacklevel=2)
 
-    def frame_detections(k: int) -> Detections:
-        # frame k's (from 1), made when asked for: memory does not grow with the frames
-        s = slices[k - 1]
+    def frame_detections(i: int) -> Detections:
+        # step i's (from 1), made when asked for: memory does not grow with the frames
+        s = slices[first + (i - 1) * stride - 1]
         return Detections(boxes=xyxy[s], scores=dets.conf[s])
 
     seconds = 0.0
@@ -1061,24 +1094,25 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         # offline, the scores are calibrated on the whole file (see tracking.calibration)
         t0, c0 = time.perf_counter(), _compile.seconds()
         calibration = ScoreCalibration.from_frames(
-            (frame_detections(k) for k in range(1, info.seq_length + 1)),
-            **tc.calibration_options(info.frame_rate))
+            (frame_detections(i) for i in range(1, len(steps) + 1)),
+            **tc.calibration_options(rate))
         seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
     if oc.enabled and oc.start_score > tc.new_track:
         tc = replace(tc, new_track=oc.start_score)
-    trk = BoxTracker(tc, motion=cfg.motion, frame_rate=info.frame_rate, record=oc.enabled,
+    trk = BoxTracker(tc, motion=cfg.motion, frame_rate=rate, record=oc.enabled,
                      image_size=(info.im_width, info.im_height) if info.im_width > 0 else None,
                      calibration=calibration)
-    frames = (Frame(f, (f - 1) / info.frame_rate) for f in range(1, info.seq_length + 1))
+    frames = (Frame(i, (i - 1) / rate) for i in range(1, len(steps) + 1))
     # online, the rows go to the file as they come; offline, the tracker records its tracks,
     # which are smoothed at the end and written then. Parquet: the same rows, written as
     # text beside it under a hidden name first
     text = out.with_name(f".{out.stem}.rows.txt") if parquet else out
     with made_folder(out.parent), _removed(text if parquet else None):
         writer = None if oc.enabled else MOTWriter(text)
-        stats = run(frames, lambda frame: frame_detections(frame.index), trk,
-                    [writer] if writer is not None else [], progress=progress,
-                    total=info.seq_length, label=info.name)
+        sinks = [] if writer is None else [writer if stride == 1 else _AtFileFrames(
+            writer, trk, first, stride, info.seq_length)]
+        stats = run(frames, lambda frame: frame_detections(frame.index), trk, sinks,
+                    progress=progress, total=len(steps), label=info.name)
         seconds += stats.seconds["tracker"]
         if writer is not None:
             n_rows, n_tracks = len(writer), len(writer.identities)
@@ -1086,16 +1120,109 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
             t0, c0 = time.perf_counter(), _compile.seconds()
             sm = smooth(trk, min_score=oc.min_track_score,
                         extend_iou=oc.extend_iou if oc.extend_iou > 0 else None,
-                        link_iou=oc.link_iou, **oc.frames(info.frame_rate))
+                        link_iou=oc.link_iou, **oc.frames(rate))
             seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
-            F, I = sm.frames, sm.ids
-            write_mot(text, F, I, sm.xywh, np.where(sm.filled, 0.0, sm.scores), force=True)
+            F, I, xywh = first + (sm.frames - 1) * stride, sm.ids, sm.xywh
+            conf = np.where(sm.filled, 0.0, sm.scores)
+            if stride > 1:
+                F, I, xywh, conf = _fill_between(F, I, xywh, conf, stride)
+            write_mot(text, F, I, xywh, conf, force=True)
             n_rows, n_tracks = len(F), len(np.unique(I))
         if parquet:
             read_mot(text).to_parquet(out)
     _warn_calibration(trk, str(det_path if alone else seq_dir))
+    derived = derived_values(trk)
+    if stride > 1:
+        derived["detection_stride"] = stride
     return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds,
-                    cfg.with_motion(), derived_values(trk))
+                    cfg.with_motion(), derived)
+
+
+def detection_stride(frames: ArrayLike, min_frames: int = 10) -> int:
+    """The detector's stride in a detections file: ``k`` where every row lies on one frame in
+    ``k`` (the detector ran on every ``k``-th frame), 1 where rows lie on consecutive frames.
+
+    The stride is the greatest common divisor of the gaps between the frames that have rows,
+    taken only over ``min_frames`` such frames or more: a detector that runs on every frame
+    gives rows on two consecutive frames somewhere, unless it finds almost nothing, and fewer
+    frames could share a divisor by chance.
+
+    Parameters
+    ----------
+    frames : (N,) array_like of int
+        The rows' frame numbers.
+    min_frames : int
+        The fewest frames with rows to find a stride in.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> detection_stride([1, 1, 4, 7, 10, 13, 16, 19, 22, 25, 28, 31])
+    3
+    >>> detection_stride([1, 4, 7, 8, 10, 13, 16, 19, 22, 25, 28])
+    1
+    >>> detection_stride([5, 10, 15])  # too few frames to tell
+    1
+    """
+    f = np.unique(np.asarray(frames, dtype=np.int64))
+    if len(f) < min_frames:
+        return 1
+    return max(1, int(np.gcd.reduce(np.diff(f))))
+
+
+class _AtFileFrames:
+    """A sink that writes step ``i`` of a detector's own timeline at the file's frame
+    ``first + (i - 1) * stride``, and at each frame after it up to the next step (and no
+    further than ``last``) the reported tracks as ``tracker`` predicts them there
+    (:meth:`BoxTracker.boxes_ahead`), with score 0 (:func:`track_sequence`)."""
+
+    def __init__(self, sink: MOTWriter, tracker: BoxTracker, first: int, stride: int,
+                 last: int) -> None:
+        self.sink, self.tracker = sink, tracker
+        self.first, self.stride, self.last = first, stride, last
+
+    def write(self, frame: Frame, tracks: Tracks) -> None:
+        f = self.first + (frame.index - 1) * self.stride
+        self.sink.write(Frame(f, frame.time), tracks)
+        zero = np.zeros(len(tracks))
+        for j in range(1, min(self.stride, self.last - f + 1)):
+            boxes = self.tracker.boxes_ahead(tracks.ids, j / self.stride)
+            self.sink.write(Frame(f + j, frame.time + j / self.stride / self.tracker.frame_rate),
+                            Tracks(ids=tracks.ids, boxes=boxes, points=None, scores=zero,
+                                   classes=tracks.classes))
+
+    def close(self) -> None:
+        self.sink.close()
+
+    def abort(self) -> None:
+        self.sink.abort()
+
+
+def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: np.ndarray,
+                  stride: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Rows for the frames between a track's rows ``stride`` frames apart, on the straight
+    line between them (score 0, as the offline mode's filled rows), all sorted by frame and
+    id."""
+    o = np.lexsort((frames, ids))
+    F, I, B, C = frames[o], ids[o], xywh[o], conf[o]
+    k = np.flatnonzero((I[1:] == I[:-1]) & (F[1:] - F[:-1] == stride))
+    w = np.arange(1, stride) / stride  # (stride - 1,) fractions of the way
+    nF = (F[k, None] + np.arange(1, stride)).ravel()
+    nI = np.repeat(I[k], stride - 1)
+    nB = (B[k, None] * (1 - w)[:, None] + B[k + 1, None] * w[:, None]).reshape(-1, 4)
+    F, I = np.r_[F, nF], np.r_[I, nI]
+    B, C = np.r_[B, nB], np.r_[C, np.zeros(len(nF))]
+    o = np.lexsort((I, F))
+    return F[o], I[o], B[o], C[o]
+
+
+def _ordinal(k: int) -> str:
+    """2nd, 3rd, 11th, 21st."""
+    end = "th" if 10 <= k % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(k % 10, "th")
+    return f"{k}{end}"
 
 
 @contextmanager

@@ -1,0 +1,59 @@
+"""``bench/accuracy_mot.py --stride K``'s inputs: a detector that ran on every K-th frame
+(its rows numbered by the video's frames, the ground truth of every frame kept), and the
+peers' rows, tracked on the detector's frames numbered 1, 2, ..., written back at the
+video's frames."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+acc = pytest.importorskip("accuracy_mot")
+
+from vistrack.io import read_mot  # noqa: E402
+from vistrack.pipeline import detection_stride  # noqa: E402
+
+
+def _sequence(root: Path) -> Path:
+    d = root / "SEQ"
+    (d / "det").mkdir(parents=True)
+    (d / "gt").mkdir()
+    (d / "det" / "det.txt").write_text("".join(
+        f"{f},-1,{10 + f},{20 + j},30,60,0.{5 + j}\n" for f in range(1, 31) for j in range(2)))
+    (d / "gt" / "gt.txt").write_text("".join(
+        f"{f},1,{10 + f},20,30,60,1,1,1\n" for f in range(1, 31)))
+    (d / "seqinfo.ini").write_text("[Sequence]\nname=SEQ\nframeRate=30\nseqLength=30\n"
+                                   "imWidth=640\nimHeight=480\n")
+    return d
+
+
+@pytest.mark.parametrize("k", [2, 3])
+def test_strided_keeps_every_kth_frames_detections_and_every_frames_truth(tmp_path, k):
+    d = _sequence(tmp_path)
+    (s,) = acc.strided([d], k, tmp_path / "strided")
+    det, full = read_mot(s / "det" / "det.txt"), read_mot(d / "det" / "det.txt")
+    keep = (full.frames - 1) % k == 0
+    np.testing.assert_array_equal(det.frames, full.frames[keep])
+    np.testing.assert_array_equal(det.boxes, full.boxes[keep])
+    np.testing.assert_array_equal(det.conf, full.conf[keep])
+    assert detection_stride(det.frames) == k
+    assert (s / "gt" / "gt.txt").read_text() == (d / "gt" / "gt.txt").read_text()
+    assert (s / "seqinfo.ini").read_text() == (d / "seqinfo.ini").read_text()
+
+
+@pytest.mark.parametrize("k", [2, 3])
+def test_renumber_back_inverts_every_kths_numbering(tmp_path, k):
+    """Rows on the detector's frames 1, 2, ... (``every_kth``) go back to the video's frames
+    1, 1 + k, ...: the ground truth taken through both is the ground truth of those frames."""
+    d = _sequence(tmp_path)
+    (e,) = acc.every_kth([d], k, tmp_path / "every")
+    (tmp_path / "rows").mkdir()
+    (tmp_path / "rows" / "SEQ.txt").write_text((e / "gt" / "gt.txt").read_text())
+    acc.renumber_back(tmp_path / "rows", tmp_path / "back", k)
+    back, gt = read_mot(tmp_path / "back" / "SEQ.txt"), read_mot(d / "gt" / "gt.txt")
+    keep = (gt.frames - 1) % k == 0
+    np.testing.assert_array_equal(back.frames, gt.frames[keep])
+    np.testing.assert_array_equal(back.ids, gt.ids[keep])
+    np.testing.assert_array_equal(back.boxes, gt.boxes[keep])
