@@ -456,9 +456,8 @@ def test_a_detector_that_ran_on_every_other_frame_is_tracked_on_its_own_frames(t
     now tracks the frames the detector ran on, at half the frame rate, and says so; online,
     each frame between has the tracks' boxes predicted from the frames before it, and
     offline, boxes on the straight line between the smoothed ones: for a person walking at
-    a constant velocity, where they are. A video (``--frontend detections:FILE``) is still
-    tracked frame by frame; there a warning names the stride and the command that tracks
-    the detector's frames alone."""
+    a constant velocity, where they are. A video tracked with these detections
+    (``--frontend detections:FILE``) is tracked the same way."""
     import warnings
 
     from vistrack.pipeline import track_sequence
@@ -493,19 +492,41 @@ def test_a_detector_that_ran_on_every_other_frame_is_tracked_on_its_own_frames(t
     between = off.frames % 2 == 0
     assert (off.conf[between] == 0).all() and (off.conf[~between] > 0).all()
 
-    # a video is tracked frame by frame: there the stride is only named, and the command
-    # that tracks the detector's frames alone
+    # a video from pixels with these detections (--frontend detections:FILE): the box
+    # tracker steps through the detector's frames alone there too, and every frame of the
+    # video gets the disc's box; another tracker is told that it steps through them all
     frames, boxes = red_disc_clip(T=24)
     clip = write_clip(tmp_path / "frames", frames)
     every2 = tmp_path / "disc.txt"
     every2.write_text("".join(f"{f},-1,{','.join(f'{v:g}' for v in boxes[f - 1])},0.9\n"
                               for f in range(1, 25, 2)))
+    with pytest.warns(RuntimeWarning) as got:
+        video = track_video(clip, tmp_path / "video", frontend=f"detections:{every2}", fps=25,
+                            annotate=False, scores="raw")
+    assert [str(w.message) for w in got] == [
+        f"{every2}: detections on every 2nd frame only (frames 1, 3, 5, ...): tracked as a "
+        "sequence of those frames at 12.5 frames/s; the frames between have the tracks' "
+        "predicted boxes (score 0)"]
+    assert video.derived["frame_rate"] == 12.5
+    rows = read_mot(video.files["tracks"])
+    assert rows.frames.tolist() == list(range(1, 25)) and set(rows.ids.tolist()) == {1}
+    np.testing.assert_allclose(rows.boxes[5:], boxes[5:], atol=1.0)
+
+    class Count:  # a tracker of one's own
+        def step(self, frame, detections):
+            return Tracks(ids=np.zeros(0, int), boxes=np.zeros((0, 4)), points=None,
+                          scores=np.zeros(0), classes=np.zeros(0, int))
+
+        def reset(self):
+            pass
+
     with pytest.warns(RuntimeWarning, match=rf"^{every2}: detections on every 2nd frame only: "
-                                            r"a video is tracked frame by frame, .* vistrack "
-                                            r"track FILE --fps FPS --out RESULTS tracks the "
-                                            r"detector's frames alone$"):
-        track_video(clip, tmp_path / "video", frontend=f"detections:{every2}", fps=25,
-                    annotate=False, scores="raw")
+                                            r"the tracker, Count, steps through every frame "
+                                            r"of the video, each frame without detections as "
+                                            r"one where nothing was found$"):
+        track_video(clip, tmp_path / "own", frontend=f"detections:{every2}", fps=25,
+                    annotate=False, tracker=Count())
+
     # a filled box is halfway between its neighbours (written to 2 decimals), and every
     # box within a pixel of where the person is (the smoother starts from no velocity)
     np.testing.assert_allclose(off.boxes[1:-1][between[1:-1]],

@@ -836,7 +836,8 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--frontend", help="video mode: bgsub (default; background model and "
                        "blobs), hog (OpenCV's people detector), confidence (the peaks of "
                        "HOG's confidence map; the default of dcpf), detections:FILE "
-                       "(MOTChallenge's format, or CSV with a header), or "
+                       "(MOTChallenge's format, or CSV with a header; as --detections, a "
+                       "detector run on every k-th frame is tracked on its own frames), or "
                        "onnx:MODEL.onnx (your own YOLO- or SSD-style detector; pip install "
                        "'vistrack[onnx]')")
     track.add_argument("--classes", type=_class_list, metavar="LIST",

@@ -627,29 +627,30 @@ def _warn_no_area(dets: MOTTable, path: Path, stacklevel: int) -> None:
                   "frame to frame", RuntimeWarning, stacklevel=stacklevel + 1)
 
 
+class _FileDetections:
+    """The ``detections:FILE`` front-end: each frame's rows of a detections file, up to the
+    file's last frame (none after it: a video may run past its header's count, or give
+    none); ``stride`` and ``first`` are :func:`detection_stride`'s and the first frame of
+    its grid (:func:`track_video` steps a box tracker through those frames alone)."""
+
+    def __init__(self, path: Path, dets: MOTTable) -> None:
+        self.path, self.dets = path, dets
+        self.slices = dets.frame_slices()
+        self.stride = detection_stride(dets.frames)
+        self.first = (int(dets.frames.min()) - 1) % self.stride + 1 if self.stride > 1 else 1
+
+    def __call__(self, frame: Frame) -> Detections:
+        s = self.slices[frame.index - 1] if frame.index <= len(self.slices) else slice(0, 0)
+        return Detections.from_xywh(self.dets.boxes[s], self.dets.conf[s])
+
+
 def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
     dets = read_detections(path)  # MOTChallenge's text, or a CSV file with a header
     _warn_no_area(dets, path, stacklevel=3)
-    stride = detection_stride(dets.frames)
-    if stride > 1:
-        # the video's every frame is tracked; track_sequence tracks the detector's alone
-        warnings.warn(f"{path}: detections on every {_ordinal(stride)} frame only: a video is "
-                      "tracked frame by frame, each frame without detections as one where "
-                      "nothing was found, which drops new tracks before they are confirmed; "
-                      "vistrack track FILE --fps FPS --out RESULTS tracks the detector's "
-                      "frames alone", RuntimeWarning, stacklevel=3)
-    # every frame's rows, up to the file's last frame; none after it (a video may run past
-    # its header's count, or give none)
-    slices = dets.frame_slices()
-    none = slice(0, 0)
-
-    def detect(frame: Frame) -> Detections:
-        s = slices[frame.index - 1] if frame.index <= len(slices) else none
-        return Detections.from_xywh(dets.boxes[s], dets.conf[s])
-    return detect
+    return _FileDetections(path, dets)
 
 
 @dataclass(frozen=True)
@@ -1066,25 +1067,19 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     slices = dets.frame_slices(info.seq_length)
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
     # the detector's own frames: every frame, or every stride-th one, where the frames
-    # between are not ones where it found nothing; the tracker runs on that timeline (step i
-    # the file's frame first + (i - 1) * stride, at frame_rate / stride), its rows written
-    # at the file's frames
+    # between are not ones where it found nothing; the tracker runs on that timeline, at
+    # frame_rate / stride (_OnDetectorFrames)
     stride = detection_stride(dets.frames)
     first = (int(dets.frames.min()) - 1) % stride + 1 if stride > 1 else 1
     steps = range(first, info.seq_length + 1, stride)
     rate = info.frame_rate / stride
     if stride > 1:
-        warnings.warn(f"{det_path}: detections on every {_ordinal(stride)} frame only "
-                      f"(frames {steps[0]}, {steps[1]}, {steps[2]}, ...): tracked as a "
-                      f"sequence of those frames at {rate:.4g} frames/s; the frames between "
-                      + ("are filled on the line between the smoothed boxes" if
-                         cfg.offline.enabled else "have the tracks' predicted boxes")
-                      + " (score 0)",
+        warnings.warn(_stride_warning(det_path, steps, rate, cfg.offline.enabled),
                       RuntimeWarning, stacklevel=2)
 
-    def frame_detections(i: int) -> Detections:
-        # step i's (from 1), made when asked for: memory does not grow with the frames
-        s = slices[first + (i - 1) * stride - 1]
+    def frame_detections(k: int) -> Detections:
+        # frame k's (from 1), made when asked for: memory does not grow with the frames
+        s = slices[k - 1]
         return Detections(boxes=xyxy[s], scores=dets.conf[s])
 
     seconds = 0.0
@@ -1094,25 +1089,24 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         # offline, the scores are calibrated on the whole file (see tracking.calibration)
         t0, c0 = time.perf_counter(), _compile.seconds()
         calibration = ScoreCalibration.from_frames(
-            (frame_detections(i) for i in range(1, len(steps) + 1)),
-            **tc.calibration_options(rate))
+            (frame_detections(k) for k in steps), **tc.calibration_options(rate))
         seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
     if oc.enabled and oc.start_score > tc.new_track:
         tc = replace(tc, new_track=oc.start_score)
     trk = BoxTracker(tc, motion=cfg.motion, frame_rate=rate, record=oc.enabled,
                      image_size=(info.im_width, info.im_height) if info.im_width > 0 else None,
                      calibration=calibration)
-    frames = (Frame(i, (i - 1) / rate) for i in range(1, len(steps) + 1))
+    frames = (Frame(f, (f - 1) / info.frame_rate) for f in range(1, info.seq_length + 1))
     # online, the rows go to the file as they come; offline, the tracker records its tracks,
     # which are smoothed at the end and written then. Parquet: the same rows, written as
     # text beside it under a hidden name first
     text = out.with_name(f".{out.stem}.rows.txt") if parquet else out
     with made_folder(out.parent), _removed(text if parquet else None):
         writer = None if oc.enabled else MOTWriter(text)
-        sinks = [] if writer is None else [writer if stride == 1 else _AtFileFrames(
-            writer, trk, first, stride, info.seq_length)]
-        stats = run(frames, lambda frame: frame_detections(frame.index), trk, sinks,
-                    progress=progress, total=len(steps), label=info.name)
+        stepper: Tracker = trk if stride == 1 else _OnDetectorFrames(trk, first, stride)
+        stats = run(frames, lambda frame: frame_detections(frame.index), stepper,
+                    [writer] if writer is not None else [], progress=progress,
+                    total=info.seq_length, label=info.name)
         seconds += stats.seconds["tracker"]
         if writer is not None:
             n_rows, n_tracks = len(writer), len(writer.identities)
@@ -1173,32 +1167,38 @@ def detection_stride(frames: ArrayLike, min_frames: int = 10) -> int:
     return max(1, int(np.gcd.reduce(np.diff(f))))
 
 
-class _AtFileFrames:
-    """A sink that writes step ``i`` of a detector's own timeline at the file's frame
-    ``first + (i - 1) * stride``, and at each frame after it up to the next step (and no
-    further than ``last``) the reported tracks as ``tracker`` predicts them there
-    (:meth:`BoxTracker.boxes_ahead`), with score 0 (:func:`track_sequence`)."""
+class _OnDetectorFrames:
+    """A box tracker stepped through the frames a detector ran on alone, every ``stride``-th
+    from ``first`` (the tracker's frame rate the video's divided by ``stride``; its frame
+    ``i`` the video's ``first + (i - 1) * stride``): at each frame between, the tracks it
+    reported last, at their boxes predicted that far ahead
+    (:meth:`BoxTracker.boxes_ahead`), with score 0; before ``first``, none."""
 
-    def __init__(self, sink: MOTWriter, tracker: BoxTracker, first: int, stride: int,
-                 last: int) -> None:
-        self.sink, self.tracker = sink, tracker
-        self.first, self.stride, self.last = first, stride, last
+    def __init__(self, tracker: BoxTracker, first: int, stride: int) -> None:
+        self.tracker, self.first, self.stride = tracker, first, stride
+        self._last = _no_tracks()
 
-    def write(self, frame: Frame, tracks: Tracks) -> None:
-        f = self.first + (frame.index - 1) * self.stride
-        self.sink.write(Frame(f, frame.time), tracks)
-        zero = np.zeros(len(tracks))
-        for j in range(1, min(self.stride, self.last - f + 1)):
-            boxes = self.tracker.boxes_ahead(tracks.ids, j / self.stride)
-            self.sink.write(Frame(f + j, frame.time + j / self.stride / self.tracker.frame_rate),
-                            Tracks(ids=tracks.ids, boxes=boxes, points=None, scores=zero,
-                                   classes=tracks.classes))
+    def step(self, frame: Frame, detections: Detections | None = None) -> Tracks:
+        j = frame.index - self.first
+        if j < 0:
+            return _no_tracks()
+        i, ahead = divmod(j, self.stride)
+        if ahead == 0:
+            self._last = self.tracker.step(
+                Frame(i + 1, i / self.tracker.frame_rate, frame.image), detections)
+            return self._last
+        t = self._last
+        return Tracks(ids=t.ids, boxes=self.tracker.boxes_ahead(t.ids, ahead / self.stride),
+                      points=None, scores=np.zeros(len(t)), classes=t.classes)
 
-    def close(self) -> None:
-        self.sink.close()
+    def reset(self) -> None:
+        self.tracker.reset()
+        self._last = _no_tracks()
 
-    def abort(self) -> None:
-        self.sink.abort()
+
+def _no_tracks() -> Tracks:
+    return Tracks(ids=np.zeros(0, np.int64), boxes=np.zeros((0, 4)), points=None,
+                  scores=np.zeros(0), classes=np.zeros(0, np.int64))
 
 
 def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: np.ndarray,
@@ -1217,6 +1217,15 @@ def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: n
     B, C = np.r_[B, nB], np.r_[C, np.zeros(len(nF))]
     o = np.lexsort((I, F))
     return F[o], I[o], B[o], C[o]
+
+
+def _stride_warning(path: str | Path, steps: range, rate: float, offline: bool) -> str:
+    """What a run says of a detector run on every ``steps.step``-th frame alone."""
+    return (f"{path}: detections on every {_ordinal(steps.step)} frame only (frames "
+            f"{steps[0]}, {steps[1]}, {steps[2]}, ...): tracked as a sequence of those frames "
+            f"at {rate:.4g} frames/s; the frames between "
+            + ("are filled on the line between the smoothed boxes" if offline else
+               "have the tracks' predicted boxes") + " (score 0)")
 
 
 def _ordinal(k: int) -> str:
@@ -1524,7 +1533,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         A name in :data:`FRONTENDS`: ``"bgsub"`` (the seeds' background model, then blobs),
         ``"hog"`` (OpenCV's people detector), ``"confidence"`` (the peaks of the detector's
         confidence map above ``det_threshold``); ``"detections:FILE"`` (a MOTChallenge
-        detections file); ``"onnx:MODEL.onnx"`` (your own ONNX detector, YOLO- or SSD-style,
+        detections file, or CSV; where its rows lie on every k-th frame only, a box tracker
+        steps through those frames alone, at the frame rate divided by k, and each frame
+        between gets its tracks' predicted boxes, as in :func:`track_sequence`);
+        ``"onnx:MODEL.onnx"`` (your own ONNX detector, YOLO- or SSD-style,
         run by onnxruntime: :class:`~vistrack.frontends.onnx.ONNXDetector`); or a detector
         of your own: any object with ``detect(image) ->
         Detections`` (:class:`vistrack.frontends.detectors.Detector`). Default: the
@@ -1647,9 +1659,28 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         ctx.overrides.setdefault("camera_motion", False)
     trk, _ = make_tracker(tracker, ctx)
     detect = _frontend(name, ctx)
+    stepper = trk
+    if isinstance(detect, _FileDetections) and detect.stride > 1:
+        k = detect.stride
+        if isinstance(trk, BoxTracker):
+            # a detector run on every k-th frame: the box tracker steps through its frames
+            # alone, at the video's frame rate / k (as track_sequence)
+            at_rate = replace(ctx, fps=ctx.fps / k)
+            box_trk, _ = make_tracker(tracker, at_rate)
+            assert isinstance(box_trk, BoxTracker)  # the same maker as trk's
+            trk, ctx.resolved = box_trk, at_rate.resolved
+            stepper = _OnDetectorFrames(box_trk, detect.first, k)
+            grid = range(detect.first, detect.first + 3 * k, k)
+            warnings.warn(_stride_warning(detect.path, grid, ctx.fps / k, offline=False),
+                          RuntimeWarning, stacklevel=2)
+        else:
+            warnings.warn(f"{detect.path}: detections on every {_ordinal(k)} frame only: "
+                          f"the tracker, {type(trk).__name__}, steps through every frame of "
+                          "the video, each frame without detections as one where nothing "
+                          "was found", RuntimeWarning, stacklevel=2)
     with made_folder(out_dir):  # removed again, if made here, when the run fails
         sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
-        stats = run(reader, detect, trk, list(sinks.values()), progress=progress,
+        stats = run(reader, detect, stepper, list(sinks.values()), progress=progress,
                     total=len(reader), label=reader.source.name)
     n = stats.frames
     if n == 0:
