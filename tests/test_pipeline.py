@@ -485,12 +485,17 @@ def test_a_detector_that_ran_on_every_other_frame_is_tracked_on_its_own_frames(t
     np.testing.assert_allclose(on.boxes[5:], [truth(f) for f in on.frames[5:]], atol=1.0)
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always")
-        before = track_sequence(det, tmp_path / "each.txt", fps=20, scores="raw",
-                                offline=True)
-    off = read_mot(before.out)
+        offline = track_sequence(det, tmp_path / "off.txt", fps=20, scores="raw",
+                                 offline=True)
+    off = read_mot(offline.out)
     assert off.frames.tolist() == list(range(1, 40)) and set(off.ids.tolist()) == {1}
     between = off.frames % 2 == 0
     assert (off.conf[between] == 0).all() and (off.conf[~between] > 0).all()
+    # a filled box is halfway between its neighbours (written to 2 decimals), and every
+    # box within a pixel of where the person is (the smoother starts from no velocity)
+    np.testing.assert_allclose(off.boxes[1:-1][between[1:-1]],
+                               (off.boxes[:-2] + off.boxes[2:])[between[1:-1]] / 2, atol=0.011)
+    np.testing.assert_allclose(off.boxes, [truth(f) for f in off.frames], atol=1.0)
 
     # a video from pixels with these detections (--frontend detections:FILE): the box
     # tracker steps through the detector's frames alone there too, and every frame of the
@@ -520,18 +525,15 @@ def test_a_detector_that_ran_on_every_other_frame_is_tracked_on_its_own_frames(t
         def reset(self):
             pass
 
-    with pytest.warns(RuntimeWarning, match=rf"^{every2}: detections on every 2nd frame only: "
-                                            r"the tracker, Count, steps through every frame "
-                                            r"of the video, each frame without detections as "
-                                            r"one where nothing was found$"):
-        track_video(clip, tmp_path / "own", frontend=f"detections:{every2}", fps=25,
-                    annotate=False, tracker=Count())
-
-    # a filled box is halfway between its neighbours (written to 2 decimals), and every
-    # box within a pixel of where the person is (the smoother starts from no velocity)
-    np.testing.assert_allclose(off.boxes[1:-1][between[1:-1]],
-                               (off.boxes[:-2] + off.boxes[2:])[between[1:-1]] / 2, atol=0.011)
-    np.testing.assert_allclose(off.boxes, [truth(f) for f in off.frames], atol=1.0)
+    for own, name in ((Count(), "Count"), (BoxTracker(frame_rate=25), "BoxTracker")):
+        # a box tracker made by the caller keeps the frame rate it was made with
+        with pytest.warns(RuntimeWarning, match=rf"^{every2}: detections on every 2nd frame "
+                                                rf"only: the tracker, {name}, steps through "
+                                                r"every frame of the video, each frame "
+                                                r"without detections as one where nothing was "
+                                                r"found$"):
+            track_video(clip, tmp_path / name, frontend=f"detections:{every2}", fps=25,
+                        annotate=False, tracker=own)
 
 
 def test_a_strided_detections_file_tracks_as_the_sequence_of_its_frames(tmp_path):
@@ -581,6 +583,7 @@ def test_a_strided_detections_file_tracks_as_the_sequence_of_its_frames(tmp_path
             np.testing.assert_array_equal(got.frames[at], (want.frames - 1) * k + 1)
             np.testing.assert_array_equal(got.ids[at], want.ids)
             np.testing.assert_array_equal(got.boxes[at], want.boxes)
+            np.testing.assert_array_equal(got.conf[at], want.conf)
             assert (got.conf[~at] == 0).all() and len(np.unique(got.frames[~at])) > 100
             gt = read_mot(seq / "gt" / "gt.txt")
             n = int(info["seqLength"])

@@ -1662,9 +1662,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     stepper = trk
     if isinstance(detect, _FileDetections) and detect.stride > 1:
         k = detect.stride
-        if isinstance(trk, BoxTracker):
+        if isinstance(trk, BoxTracker) and isinstance(tracker, str):
             # a detector run on every k-th frame: the box tracker steps through its frames
-            # alone, at the video's frame rate / k (as track_sequence)
+            # alone, at the video's frame rate / k (as track_sequence); one made by the
+            # caller keeps the rate it was made with, and every frame
             at_rate = replace(ctx, fps=ctx.fps / k)
             box_trk, _ = make_tracker(tracker, at_rate)
             assert isinstance(box_trk, BoxTracker)  # the same maker as trk's
