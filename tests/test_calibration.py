@@ -264,7 +264,6 @@ def test_outcomes_against_the_ranking_beyond_their_noise_are_capped():
         ScoreCalibration.fit(s, p, cap_sigma=0)
 
 
-
 def test_a_dip_within_the_top_third_is_pooled_not_capped():
     """Closed form: 200 outcomes at score 3 persisting at 0.3 (the most confident, large and
     fast), 1,800 at score 2 at 0.9, 2,000 at score 1 at 0.5 and 2,000 at score 0 at 0.2.
@@ -280,6 +279,7 @@ def test_a_dip_within_the_top_third_is_pooled_not_capped():
     np.testing.assert_allclose(cal.confidence, [0.2 / 0.84, 0.5 / 0.84, 1.0, 1.0])
     np.testing.assert_array_equal(cal.confidence,
                                   ScoreCalibration.fit(s, p, cap_sigma=np.inf).confidence)
+
 
 @pytest.mark.parametrize("seed", range(5))
 def test_outcomes_that_agree_with_the_ranking_fit_as_isotonic(seed):

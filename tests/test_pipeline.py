@@ -519,20 +519,22 @@ def test_a_detector_that_ran_on_every_other_frame_is_tracked_on_its_own_frames(t
 
     class Count:  # a tracker of one's own
         def step(self, frame, detections):
-            return Tracks(ids=np.zeros(0, int), boxes=np.zeros((0, 4)), points=None,
-                          scores=np.zeros(0), classes=np.zeros(0, int))
+            return Tracks.empty()
 
         def reset(self):
             pass
 
-    for own, name in ((Count(), "Count"), (BoxTracker(frame_rate=25), "BoxTracker")):
-        # a box tracker made by the caller keeps the frame rate it was made with
+    # a box tracker made by the caller, as an object or by module:callable, keeps the frame
+    # rate it was made with
+    owns = ((Count(), "Count"), (BoxTracker(frame_rate=25), "BoxTracker"),
+            ("vistrack.tracking:BoxTracker", "BoxTracker"))
+    for k, (own, name) in enumerate(owns):
         with pytest.warns(RuntimeWarning, match=rf"^{every2}: detections on every 2nd frame "
                                                 rf"only: the tracker, {name}, steps through "
                                                 r"every frame of the video, each frame "
                                                 r"without detections as one where nothing was "
                                                 r"found$"):
-            track_video(clip, tmp_path / name, frontend=f"detections:{every2}", fps=25,
+            track_video(clip, tmp_path / f"own{k}", frontend=f"detections:{every2}", fps=25,
                         annotate=False, tracker=own)
 
 

@@ -627,6 +627,13 @@ def _warn_no_area(dets: MOTTable, path: Path, stacklevel: int) -> None:
                   "frame to frame", RuntimeWarning, stacklevel=stacklevel + 1)
 
 
+def _detector_grid(frames: np.ndarray) -> tuple[int, int]:
+    """``(first, stride)``: the frames a detections file's detector ran on, every
+    ``stride``-th from ``first`` (:func:`detection_stride`; ``(1, 1)``: every frame)."""
+    stride = detection_stride(frames)
+    return ((int(frames.min()) - 1) % stride + 1 if stride > 1 else 1), stride
+
+
 class _FileDetections:
     """The ``detections:FILE`` front-end: each frame's rows of a detections file, up to the
     file's last frame (none after it: a video may run past its header's count, or give
@@ -636,8 +643,7 @@ class _FileDetections:
     def __init__(self, path: Path, dets: MOTTable) -> None:
         self.path, self.dets = path, dets
         self.slices = dets.frame_slices()
-        self.stride = detection_stride(dets.frames)
-        self.first = (int(dets.frames.min()) - 1) % self.stride + 1 if self.stride > 1 else 1
+        self.first, self.stride = _detector_grid(dets.frames)
 
     def __call__(self, frame: Frame) -> Detections:
         s = self.slices[frame.index - 1] if frame.index <= len(self.slices) else slice(0, 0)
@@ -1069,12 +1075,10 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     # the detector's own frames: every frame, or every stride-th one, where the frames
     # between are not ones where it found nothing; the tracker runs on that timeline, at
     # frame_rate / stride (_OnDetectorFrames)
-    stride = detection_stride(dets.frames)
-    first = (int(dets.frames.min()) - 1) % stride + 1 if stride > 1 else 1
-    steps = range(first, info.seq_length + 1, stride)
+    first, stride = _detector_grid(dets.frames)
     rate = info.frame_rate / stride
     if stride > 1:
-        warnings.warn(_stride_warning(det_path, steps, rate, cfg.offline.enabled),
+        warnings.warn(_stride_warning(det_path, first, stride, rate, cfg.offline.enabled),
                       RuntimeWarning, stacklevel=2)
 
     def frame_detections(k: int) -> Detections:
@@ -1089,7 +1093,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         # offline, the scores are calibrated on the whole file (see tracking.calibration)
         t0, c0 = time.perf_counter(), _compile.seconds()
         calibration = ScoreCalibration.from_frames(
-            (frame_detections(k) for k in steps), **tc.calibration_options(rate))
+            (frame_detections(k) for k in range(first, info.seq_length + 1, stride)),
+            **tc.calibration_options(rate))
         seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
     if oc.enabled and oc.start_score > tc.new_track:
         tc = replace(tc, new_track=oc.start_score)
@@ -1176,12 +1181,12 @@ class _OnDetectorFrames:
 
     def __init__(self, tracker: BoxTracker, first: int, stride: int) -> None:
         self.tracker, self.first, self.stride = tracker, first, stride
-        self._last = _no_tracks()
+        self._last = Tracks.empty()
 
     def step(self, frame: Frame, detections: Detections | None = None) -> Tracks:
         j = frame.index - self.first
         if j < 0:
-            return _no_tracks()
+            return Tracks.empty()
         i, ahead = divmod(j, self.stride)
         if ahead == 0:
             self._last = self.tracker.step(
@@ -1193,12 +1198,7 @@ class _OnDetectorFrames:
 
     def reset(self) -> None:
         self.tracker.reset()
-        self._last = _no_tracks()
-
-
-def _no_tracks() -> Tracks:
-    return Tracks(ids=np.zeros(0, np.int64), boxes=np.zeros((0, 4)), points=None,
-                  scores=np.zeros(0), classes=np.zeros(0, np.int64))
+        self._last = Tracks.empty()
 
 
 def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: np.ndarray,
@@ -1219,10 +1219,12 @@ def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: n
     return F[o], I[o], B[o], C[o]
 
 
-def _stride_warning(path: str | Path, steps: range, rate: float, offline: bool) -> str:
-    """What a run says of a detector run on every ``steps.step``-th frame alone."""
-    return (f"{path}: detections on every {_ordinal(steps.step)} frame only (frames "
-            f"{steps[0]}, {steps[1]}, {steps[2]}, ...): tracked as a sequence of those frames "
+def _stride_warning(path: str | Path, first: int, stride: int, rate: float,
+                    offline: bool) -> str:
+    """What a run says of a detector run on every ``stride``-th frame alone."""
+    return (f"{path}: detections on every {_ordinal(stride)} frame only (frames "
+            f"{first}, {first + stride}, {first + 2 * stride}, ...): tracked as a sequence of "
+            "those frames "
             f"at {rate:.4g} frames/s; the frames between "
             + ("are filled on the line between the smoothed boxes" if offline else
                "have the tracks' predicted boxes") + " (score 0)")
@@ -1657,28 +1659,27 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         # a background model works only with a still camera: nothing to compensate, and
         # blobs that split and merge would read as small shifts of the camera
         ctx.overrides.setdefault("camera_motion", False)
-    trk, _ = make_tracker(tracker, ctx)
     detect = _frontend(name, ctx)
-    stepper = trk
-    if isinstance(detect, _FileDetections) and detect.stride > 1:
-        k = detect.stride
-        if isinstance(trk, BoxTracker) and isinstance(tracker, str):
-            # a detector run on every k-th frame: the box tracker steps through its frames
-            # alone, at the video's frame rate / k (as track_sequence); one made by the
-            # caller keeps the rate it was made with, and every frame
-            at_rate = replace(ctx, fps=ctx.fps / k)
-            box_trk, _ = make_tracker(tracker, at_rate)
-            assert isinstance(box_trk, BoxTracker)  # the same maker as trk's
-            trk, ctx.resolved = box_trk, at_rate.resolved
-            stepper = _OnDetectorFrames(box_trk, detect.first, k)
-            grid = range(detect.first, detect.first + 3 * k, k)
-            warnings.warn(_stride_warning(detect.path, grid, ctx.fps / k, offline=False),
-                          RuntimeWarning, stacklevel=2)
-        else:
-            warnings.warn(f"{detect.path}: detections on every {_ordinal(k)} frame only: "
-                          f"the tracker, {type(trk).__name__}, steps through every frame of "
-                          "the video, each frame without detections as one where nothing "
-                          "was found", RuntimeWarning, stacklevel=2)
+    # a detector run on every k-th frame: a box tracker by name steps through its frames
+    # alone, at the video's frame rate / k (as track_sequence); any other tracker, or one
+    # made by the caller, keeps its rate and every frame
+    grid = detect if isinstance(detect, _FileDetections) and detect.stride > 1 else None
+    if box and grid is not None:
+        at_rate = replace(ctx, fps=ctx.fps / grid.stride)
+        trk, _ = make_tracker(tracker, at_rate)
+        assert isinstance(trk, BoxTracker)  # a box preset's
+        ctx.resolved = at_rate.resolved
+        stepper: Tracker = _OnDetectorFrames(trk, grid.first, grid.stride)
+        warnings.warn(_stride_warning(grid.path, grid.first, grid.stride, at_rate.fps,
+                                      offline=False), RuntimeWarning, stacklevel=2)
+    else:
+        trk, _ = make_tracker(tracker, ctx)
+        stepper = trk
+        if grid is not None:
+            warnings.warn(f"{grid.path}: detections on every {_ordinal(grid.stride)} frame "
+                          f"only: the tracker, {type(trk).__name__}, steps through every "
+                          "frame of the video, each frame without detections as one where "
+                          "nothing was found", RuntimeWarning, stacklevel=2)
     with made_folder(out_dir):  # removed again, if made here, when the run fails
         sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
         stats = run(reader, detect, stepper, list(sinks.values()), progress=progress,
