@@ -125,6 +125,51 @@ def test_a_byte_order_mark_and_crlf_read_as_plain_text(tmp_path):
         read_mot(bom)
 
 
+def test_values_separated_by_spaces_or_tabs_or_ending_in_a_separator(tmp_path):
+    """As TrackEval and py-motmetrics read them: a line without a comma splits at spaces or
+    tabs, and a separator ending a line is ignored; each file gives the comma file's table."""
+    rows = ["170,1,10.5,10,5,5,0.9,-1,-1,-1", "171,2,1,2,3,4,0,-1,-1,-1", "3,7,-4,2.25,3,4,1,1,1,1"]
+    want = tmp_path / "plain.txt"
+    want.write_text("\n".join(rows) + "\n")
+    want_t = read_mot(want)
+    variants = {
+        "spaces": [r.replace(",", " ") for r in rows],
+        "tabs": [r.replace(",", "\t") for r in rows],
+        "aligned": ["  ".join(f"{v:>6}" for v in r.split(",")) + "  " for r in rows],
+        "trailing": [r + "," for r in rows],
+        "comma_space": [r.replace(",", ", ") for r in rows],
+        "mixed": [rows[0], rows[1].replace(",", " "), rows[2] + ","],
+    }
+    for name, lines in variants.items():
+        p = tmp_path / f"{name}.txt"
+        p.write_text("\n".join(lines) + "\n")
+        got = read_mot(p)
+        for col in ("frames", "ids", "boxes", "conf"):
+            np.testing.assert_array_equal(getattr(got, col), getattr(want_t, col), err_msg=name)
+    p = tmp_path / "bad.txt"
+    p.write_text("1 1 10 10 5 5 1\n2\t1\t10\tx\t5\t5\t1\n3 1 10 10 5\n")
+    with pytest.raises(MOTFormatError, match=re.escape("bad.txt, line 2, column 4 (top): not a "
+                                                       "number: 'x'")):
+        read_mot(p)
+    p.write_text("1 1 10 10 5\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            "line 1, column 6 (height): expected at least 6 values (separated by commas, or "
+            "by spaces or tabs), got 5")):
+        read_mot(p)
+
+
+def test_a_header_line_is_named_as_one(tmp_path):
+    p = tmp_path / "det.txt"
+    p.write_text("frame,id,x,y,w,h,score\n1,-1,10,10,5,5,0.9\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            "det.txt, line 1, column 1 (frame): not a number: 'frame' (a header line? "
+            "MOTChallenge files have none; a .csv file's header names its columns)")):
+        read_mot(p)
+    p.write_text("1,-1,10,10,5,5,0.9\n2,-1,10,10,5,5,high\n")  # not a header: no hint
+    with pytest.raises(MOTFormatError, match=r"column 7 \(conf\): not a number: 'high'$"):
+        read_mot(p)
+
+
 @pytest.mark.parametrize("data, why", [
     (b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR", "(byte 0: b'\\x89' is not UTF-8)"),
     (b"1,1,10,10,5,5,1\n2,1,10,10,\xe9,5,1\n", "(byte 26: b'\\xe9' is not UTF-8)"),

@@ -1,7 +1,9 @@
 """MOTChallenge files: detections, ground truth and results (``det.txt``, ``gt.txt``, results),
 and ``seqinfo.ini``.
 
-Every row is ``frame, id, left, top, width, height, conf, ...``, comma-separated, frames from 1:
+Every row is ``frame, id, left, top, width, height, conf, ...``, frames from 1, its values
+separated by commas (or, on a line without a comma, by spaces or tabs, as TrackEval and
+py-motmetrics read them too; a separator ending the line is ignored):
 
 - detections: ``id = -1``, ``conf`` the detector's score;
 - ground truth (MOT16/17/20): ``conf`` is 0 for boxes to ignore, then ``class`` and
@@ -463,16 +465,19 @@ _COLUMNS = ("frame", "particle", "id", "bb_left", "bb_top", "bb_width", "bb_heig
 
 def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
     """Parse row by row, to name the first bad line and column."""
-    rows = []
+    rows: list[list[float]] = []
     width = None
     for k, raw in enumerate(lines, start=1):
         text = raw.strip()
         if not text:
             continue
-        cells = [c.strip() for c in text.split(",")]
+        cells = [c.strip() for c in text.split(",")] if "," in text else text.split()
+        if len(cells) > 1 and not cells[-1]:
+            cells.pop()  # a separator ending the line, as TrackEval ignores it
         if len(cells) < 6:
             raise _bad(path, k, len(cells) + 1,
-                       f"expected at least 6 comma-separated values, got {len(cells)}: {text!r}")
+                       f"expected at least 6 values (separated by commas, or by spaces or tabs), "
+                       f"got {len(cells)}: {text!r}")
         if len(cells) > 10:
             raise _bad(path, k, 11, f"expected at most 10 values, got {len(cells)}: {text!r}")
         if width is not None and len(cells) != width:
@@ -484,7 +489,10 @@ def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
             try:
                 v = float(c)
             except ValueError:
-                raise _bad(path, k, j, f"not a number: {c!r}") from None
+                header = (" (a header line? MOTChallenge files have none; a .csv file's header "
+                          "names its columns)" if not rows and any(ch.isalpha() for ch in text)
+                          else "")
+                raise _bad(path, k, j, f"not a number: {c!r}{header}") from None
             if not np.isfinite(v):
                 raise _bad(path, k, j, f"not a finite number: {c!r}")
             vals.append(v)
@@ -744,8 +752,8 @@ def read_mot(path: str | os.PathLike) -> MOTTable:
     Parameters
     ----------
     path : str or os.PathLike
-        The file: comma-separated rows of 6 to 10 numbers, all of one width (blank lines
-        skipped).
+        The file: rows of 6 to 10 numbers, all of one width, separated by commas (or, on a
+        line without a comma, by spaces or tabs; blank lines skipped).
 
     Returns
     -------
@@ -801,9 +809,12 @@ def _parse_lines(path: str, text: str, lines: list[str]) -> np.ndarray:
     a = None
     try:
         if text.strip():
+            first = next(t for t in lines if t.strip())
             with warnings.catch_warnings():  # a file of comments only: "no data"
                 warnings.simplefilter("ignore", UserWarning)
-                a = np.loadtxt(lines, delimiter=",", ndmin=2, dtype=float)
+                # values separated by commas, or (no comma) by spaces or tabs
+                a = np.loadtxt(lines, delimiter="," if "," in first else None, ndmin=2,
+                               dtype=float)
             if not 6 <= a.shape[1] <= 10 or not np.isfinite(a).all():
                 a = None
         else:
