@@ -4,7 +4,7 @@ the trackers a user would pick instead, each with its packaged defaults, scored 
 
     python bench/accuracy_mot.py [--sets MOT15,MOT17,MOT16-FairMOT,KITTI] [--no-peers]
                                  [--boxmot-python PY] [--jitter SEEDS] [--every K]
-                                 [--stride K] [--write docs/mot.md]
+                                 [--stride K] [--drop FRAC] [--write docs/mot.md]
 
 Sets (``../shared/data``): MOT15 train with SORT's Faster R-CNN detections, MOT17 train with
 the FRCNN detections, MOT16 train with FairMOT's detections (scores 0.5-0.99), and KITTI
@@ -30,6 +30,13 @@ and tracks the detector's frames, predicting the tracks' boxes on the frames bet
 filling them offline); each peer is given the detector's frames alone, numbered 1, 2, ...,
 at the frame rate divided by K (as ``--every K``), and its rows are written back at the
 video's frames: the most a user of it gets without writing more.
+
+``--drop FRAC`` gives every set a detector that did not deliver a fraction FRAC of the frames
+it ran on (as one dropping frames while busy does): each sequence's detections with the rows
+of that fraction of its frames with rows removed, the frames drawn at random (seed 0, one draw
+per sequence), scored against the ground truth of every frame. vistrack and the peers read
+the file as it is: no renumbering gives the peers the frames the detector delivered at their
+own times.
 
 ``--jitter N`` also runs vistrack's online default N more times with every detection box
 moved by up to 0.05 pixel (uniform, seeds 1..N), and reports the spread of COMBINED HOTA: how
@@ -119,6 +126,28 @@ def strided(seqs: list[Path], k: int, root: Path) -> list[Path]:
         rows = np.loadtxt(d / "det" / "det.txt", delimiter=",", ndmin=2)
         np.savetxt(o / "det" / "det.txt", rows[(rows[:, 0] - 1) % k == 0], delimiter=",",
                    fmt="%.10g")
+        shutil.copy(d / "gt" / "gt.txt", o / "gt" / "gt.txt")
+        shutil.copy(d / "seqinfo.ini", o / "seqinfo.ini")
+        out.append(o)
+    return out
+
+
+def dropped(seqs: list[Path], frac: float, root: Path, seed: int = 0) -> list[Path]:
+    """The sequences with a detector that did not deliver ``frac`` of its frames, written
+    under ``root`` with the same names: ``det.txt``'s lines as they are, but those of the
+    frames drawn (each frame with rows, with probability ``frac``; seed ``seed`` and the
+    sequence's place in ``seqs``); the ground truth and ``seqinfo.ini`` as they are."""
+    out = []
+    for i, d in enumerate(seqs):
+        o = root / d.name
+        (o / "det").mkdir(parents=True, exist_ok=True)
+        (o / "gt").mkdir(parents=True, exist_ok=True)
+        lines = (d / "det" / "det.txt").read_text().splitlines(keepends=True)
+        frames = np.array([int(float(t.split(",", 1)[0])) for t in lines], dtype=np.int64)
+        have = np.unique(frames)
+        gone = have[np.random.default_rng([seed, i]).random(len(have)) < frac]
+        keep = ~np.isin(frames, gone)
+        (o / "det" / "det.txt").write_text("".join(t for t, k in zip(lines, keep) if k))
         shutil.copy(d / "gt" / "gt.txt", o / "gt" / "gt.txt")
         shutil.copy(d / "seqinfo.ini", o / "seqinfo.ini")
         out.append(o)
@@ -285,6 +314,7 @@ def main() -> None:
     ap.add_argument("--jitter", type=int, default=0, metavar="SEEDS")
     ap.add_argument("--every", type=int, default=1, metavar="K")
     ap.add_argument("--stride", type=int, default=1, metavar="K")
+    ap.add_argument("--drop", type=float, default=0.0, metavar="FRAC")
     ap.add_argument("--write", metavar="MD")
     args = ap.parse_args()
     if not DATA.exists():
@@ -296,6 +326,8 @@ def main() -> None:
     if args.every < 1 or args.stride < 1 or (args.every > 1 and args.stride > 1):
         sys.exit(f"--every and --stride must be at least 1, and one of them 1; got "
                  f"{args.every} and {args.stride}")
+    if not 0 <= args.drop < 1 or (args.drop and (args.every > 1 or args.stride > 1)):
+        sys.exit(f"--drop must be at least 0 and below 1, and goes alone; got {args.drop}")
     warnings.filterwarnings("ignore")
     peers = {} if args.no_peers else trackers_peers()
     boxmot = None if args.no_peers else args.boxmot_python
@@ -316,6 +348,8 @@ def main() -> None:
                 peer_seqs = every_kth(seqs, args.stride, tmp / "peers-in" / name)
                 seqs = strided(seqs, args.stride, tmp / "strided" / name)
                 peer_out = tmp / "peers-out" / name
+            if args.drop:
+                seqs = peer_seqs = dropped(seqs, args.drop, tmp / "dropped" / name)
             res, fps = {}, {}
             for label, offline in zip(VISTRACK, (False, True)):
                 fps[label] = run_vistrack(seqs, tmp / name / label, offline)
@@ -343,10 +377,13 @@ def main() -> None:
             g = goals(res)
             title = (f"{name}, every {ordinal(args.every)} frame" if args.every > 1 else
                      f"{name}, detections on every {ordinal(args.stride)} frame"
-                     if args.stride > 1 else name)
+                     if args.stride > 1 else
+                     f"{name}, {args.drop:.0%} of the frames not delivered" if args.drop
+                     else name)
             part = (f"### {title} ({len(seqs)} sequences)\n\n{combined_table(res, fps)}"
                     + ("\n\nGoals:\n\n" + "\n".join(g) if g else "") + spread)
-            if args.every == 1 and args.stride == 1:  # otherwise the COMBINED tables alone
+            if args.every == 1 and args.stride == 1 and not args.drop:
+                # otherwise the COMBINED tables alone
                 part += ("\n\nHOTA / MOTA / IDF1 per sequence (peers: HOTA):\n\n"
                          f"{per_sequence(res)}")
             parts.append(part + "\n")
@@ -354,7 +391,14 @@ def main() -> None:
     env = (f"Python {platform.python_version()}, numpy {np.__version__}, "
            f"{time.strftime('%Y-%m-%d')}")
     cmd = "python bench/accuracy_mot.py" + (f" --jitter {args.jitter}" if args.jitter else "")
-    if args.stride > 1:
+    if args.drop:
+        cmd += f" --drop {args.drop:g}"
+        section = (f"## A detector that drops frames: the four sets\n\nMeasured with `{cmd}` "
+                   f"({env}): each sequence's detections without the rows of {args.drop:.0%} "
+                   "of its frames with rows, drawn at random (seed 0), scored against the "
+                   "ground truth of every frame. vistrack and the peers read the file as it "
+                   "is. frames/s is the tracker alone.\n\n" + "\n".join(parts))
+    elif args.stride > 1:
         cmd += f" --stride {args.stride}"
         k = ordinal(args.stride)
         section = (f"## A detector run on every {k} frame: the four sets\n\nMeasured with "

@@ -57,3 +57,22 @@ def test_renumber_back_inverts_every_kths_numbering(tmp_path, k):
     np.testing.assert_array_equal(back.frames, gt.frames[keep])
     np.testing.assert_array_equal(back.ids, gt.ids[keep])
     np.testing.assert_array_equal(back.boxes, gt.boxes[keep])
+
+
+def test_dropped_removes_the_rows_of_a_fraction_of_the_frames_and_keeps_the_rest(tmp_path):
+    """``--drop FRAC``: the lines of the frames drawn are gone, every other line is kept as
+    it was written, and the ground truth and ``seqinfo.ini`` are as they were."""
+    d = _sequence(tmp_path)
+    (o,) = acc.dropped([d], 0.3, tmp_path / "dropped")
+    lines = (d / "det" / "det.txt").read_text().splitlines(keepends=True)
+    kept = (o / "det" / "det.txt").read_text().splitlines(keepends=True)
+    gone = sorted({int(t.split(",")[0]) for t in lines} - {int(t.split(",")[0]) for t in kept})
+    assert kept == [t for t in lines if int(t.split(",")[0]) not in gone]
+    assert 3 <= len(gone) <= 16  # of 30 frames, each with probability 0.3
+    assert (o / "gt" / "gt.txt").read_text() == (d / "gt" / "gt.txt").read_text()
+    assert (o / "seqinfo.ini").read_text() == (d / "seqinfo.ini").read_text()
+    # the same draw each time, and none at 0
+    (again,) = acc.dropped([d], 0.3, tmp_path / "again")
+    assert (again / "det" / "det.txt").read_text() == (o / "det" / "det.txt").read_text()
+    (none,) = acc.dropped([d], 0.0, tmp_path / "none")
+    assert (none / "det" / "det.txt").read_text() == (d / "det" / "det.txt").read_text()

@@ -17,6 +17,7 @@ any tracker of your own) and :data:`SINKS` (the files of a run). :func:`track_se
 from __future__ import annotations
 
 import importlib
+import math
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -61,7 +62,8 @@ if TYPE_CHECKING:
 
 __all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "SINKS",
            "as_detector", "make_tracker", "track_sequence", "TrackRun", "resolve_config",
-           "derived_values", "calibration_warning", "detection_stride", "track_video",
+           "derived_values", "calibration_warning", "detection_stride", "undelivered_frames",
+           "track_video",
            "VideoRun", "track_one", "SingleRun", "video_outputs", "RUN_INFO", "fit_sequences",
            "FitRun"]
 
@@ -90,7 +92,8 @@ class TrackRun:
     derived : dict or None
         :func:`derived_values` of the tracker, with ``detection_stride`` where the detections
         lie on every k-th frame only (:func:`detection_stride`; the tracker's ``frame_rate``
-        is then the sequence's divided by k).
+        is then the sequence's divided by k), and ``undelivered_frames``, their number, where
+        frames without detections lie amid frames with many (:func:`undelivered_frames`).
 
     Examples
     --------
@@ -634,6 +637,62 @@ def _detector_grid(frames: np.ndarray) -> tuple[int, int]:
     return ((int(frames.min()) - 1) % stride + 1 if stride > 1 else 1), stride
 
 
+UNDELIVERED_AROUND = 5
+"""The fewest rows on each side of a run of frames without any for :func:`undelivered_frames`
+to take the run as frames the detector did not deliver: where a detector finds 5 objects a
+frame on average, it finds none in a frame it ran on with a chance below 1 % (e^-5)."""
+
+
+def undelivered_frames(frames: ArrayLike, first: int = 1, stride: int = 1,
+                       max_run: int | None = None,
+                       around: int = UNDELIVERED_AROUND) -> np.ndarray:
+    """The frames of a detector's grid (every ``stride``-th from ``first``) that have no rows
+    while the grid frames on either side of their run have ``around`` rows or more each:
+    frames the detector did not deliver (dropped while it was busy, a camera's glitch), not
+    frames where it found nothing.
+
+    Parameters
+    ----------
+    frames : (N,) array_like of int
+        The rows' frame numbers.
+    first, stride : int
+        The detector's grid (:func:`detection_stride`).
+    max_run : int, optional
+        Runs of more grid frames than this are left as frames where nothing was found.
+    around : int
+        The fewest rows in each of the frames either side of a run.
+
+    Returns
+    -------
+    (M,) int64 ndarray
+        Sorted frame numbers.
+
+    Examples
+    --------
+    Six boxes a frame, none in frames 4 and 7 (and none after frame 9):
+
+    >>> f = np.repeat([1, 2, 3, 5, 6, 8, 9], 6)
+    >>> undelivered_frames(f).tolist()
+    [4, 7]
+    >>> undelivered_frames(np.r_[f, 10]).tolist()  # frame 10's single box: frames 1-9 as before
+    [4, 7]
+    >>> undelivered_frames(np.repeat([1, 2, 3, 5, 6], [6, 6, 2, 6, 6])).tolist()  # 2 before 4
+    []
+    """
+    f = np.asarray(frames, dtype=np.int64).reshape(-1)
+    if len(f) == 0:
+        return np.zeros(0, np.int64)
+    grid = (f - first) // stride  # the grid frames' numbers from 0
+    on = (f - first) % stride == 0
+    count = np.bincount(grid[on], minlength=int(grid.max()) + 1)
+    have = np.flatnonzero(count)
+    gap = np.diff(have)
+    k = np.flatnonzero((gap > 1) & (count[have[:-1]] >= around) & (count[have[1:]] >= around)
+                       & (gap - 1 <= (np.inf if max_run is None else max_run)))
+    runs = [np.arange(have[i] + 1, have[i + 1]) for i in k]
+    return first + stride * (np.concatenate(runs) if runs else np.zeros(0, np.int64))
+
+
 class _FileDetections:
     """The ``detections:FILE`` front-end: each frame's rows of a detections file, up to the
     file's last frame (none after it: a video may run past its header's count, or give
@@ -954,7 +1013,11 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         rate divided by k, and a ``RuntimeWarning`` says so; each frame between gets the
         reported tracks' boxes as predicted from the frames before it
         (:meth:`~vistrack.tracking.BoxTracker.boxes_ahead`), offline boxes on the straight
-        line between the smoothed ones, both with score 0.
+        line between the smoothed ones, both with score 0. Frames without rows whose
+        neighbours on the detector's frames have 5 or more each
+        (:func:`undelivered_frames`, runs shorter than ``max_lost``) are taken as frames the
+        detector did not deliver and treated the same way: the tracker steps over them,
+        and a ``RuntimeWarning`` says so.
     columns : dict, optional
         A CSV file's column names, ``{ours: theirs}`` (:meth:`~vistrack.io.MOTTable.from_pandas`).
     fps : float, optional
@@ -1080,6 +1143,11 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     if stride > 1:
         warnings.warn(_stride_warning(det_path, first, stride, rate, cfg.offline.enabled),
                       RuntimeWarning, stacklevel=2)
+    # frames without rows amid frames with many: ones the detector did not deliver
+    skip = undelivered_frames(dets.frames, first, stride, _max_run(cfg.tracker, rate))
+    if len(skip):
+        warnings.warn(_undelivered_warning(det_path, skip, cfg.offline.enabled),
+                      RuntimeWarning, stacklevel=2)
 
     def frame_detections(k: int) -> Detections:
         # frame k's (from 1), made when asked for: memory does not grow with the frames
@@ -1108,7 +1176,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     text = out.with_name(f".{out.stem}.rows.txt") if parquet else out
     with made_folder(out.parent), _removed(text if parquet else None):
         writer = None if oc.enabled else MOTWriter(text)
-        stepper: Tracker = trk if stride == 1 else _OnDetectorFrames(trk, first, stride)
+        stepper: Tracker = (trk if stride == 1 and not len(skip)
+                            else _OnDetectorFrames(trk, first, stride, skip))
         stats = run(frames, lambda frame: frame_detections(frame.index), stepper,
                     [writer] if writer is not None else [], progress=progress,
                     total=info.seq_length, label=info.name)
@@ -1123,8 +1192,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
             seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
             F, I, xywh = first + (sm.frames - 1) * stride, sm.ids, sm.xywh
             conf = np.where(sm.filled, 0.0, sm.scores)
-            if stride > 1:
-                F, I, xywh, conf = _fill_between(F, I, xywh, conf, stride)
+            if stride > 1 or len(skip):
+                F, I, xywh, conf = _fill_between(F, I, xywh, conf, first, stride, skip)
             write_mot(text, F, I, xywh, conf, force=True)
             n_rows, n_tracks = len(F), len(np.unique(I))
         if parquet:
@@ -1133,6 +1202,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     derived = derived_values(trk)
     if stride > 1:
         derived["detection_stride"] = stride
+    if len(skip):
+        derived["undelivered_frames"] = len(skip)
     return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds,
                     cfg.with_motion(), derived)
 
@@ -1173,15 +1244,18 @@ def detection_stride(frames: ArrayLike, min_frames: int = 10) -> int:
 
 
 class _OnDetectorFrames:
-    """A box tracker stepped through the frames a detector ran on alone, every ``stride``-th
-    from ``first`` (the tracker's frame rate the video's divided by ``stride``; its frame
-    ``i`` the video's ``first + (i - 1) * stride``): at each frame between, the tracks it
-    reported last, at their boxes predicted that far ahead
-    (:meth:`BoxTracker.boxes_ahead`), with score 0; before ``first``, none."""
+    """A box tracker stepped through the frames a detector delivered alone, every
+    ``stride``-th from ``first`` but those in ``skip`` (:func:`undelivered_frames`; the
+    tracker's frame rate the video's divided by ``stride``; its frame ``i`` the video's
+    ``first + (i - 1) * stride``): at each frame between, the tracks it reported last, at
+    their boxes predicted that far ahead (:meth:`BoxTracker.boxes_ahead`), with score 0;
+    before ``first``, none."""
 
-    def __init__(self, tracker: BoxTracker, first: int, stride: int) -> None:
+    def __init__(self, tracker: BoxTracker, first: int, stride: int,
+                 skip: ArrayLike = ()) -> None:
         self.tracker, self.first, self.stride = tracker, first, stride
-        self._last = Tracks.empty()
+        self.skip = frozenset(np.asarray(skip, dtype=np.int64).tolist())
+        self._last, self._at = Tracks.empty(), first
 
     def step(self, frame: Frame, detections: Detections | None = None) -> Tracks:
         j = frame.index - self.first
@@ -1189,30 +1263,52 @@ class _OnDetectorFrames:
             return Tracks.empty()
         i, ahead = divmod(j, self.stride)
         if ahead == 0:
-            self._last = self.tracker.step(
-                Frame(i + 1, i / self.tracker.frame_rate, frame.image), detections)
-            return self._last
+            if frame.index not in self.skip:
+                self._last, self._at = self.tracker.step(
+                    Frame(i + 1, i / self.tracker.frame_rate, frame.image), detections
+                ), frame.index
+                return self._last
+            self.tracker.pass_over()
         t = self._last
-        return Tracks(ids=t.ids, boxes=self.tracker.boxes_ahead(t.ids, ahead / self.stride),
-                      points=None, scores=np.zeros(len(t)), classes=t.classes)
+        return Tracks(ids=t.ids, boxes=self.tracker.boxes_ahead(
+            t.ids, (frame.index - self._at) / self.stride), points=None,
+            scores=np.zeros(len(t)), classes=t.classes)
 
     def reset(self) -> None:
         self.tracker.reset()
-        self._last = Tracks.empty()
+        self._last, self._at = Tracks.empty(), self.first
+
+
+def _max_run(config: BoxTrackerConfig, rate: float) -> int:
+    """The longest run of frames at ``rate`` a lost track outlives (``max_lost``): longer
+    runs without detections are not taken as frames the detector did not deliver."""
+    return max(0, math.ceil(config.max_lost * rate) - 1)
 
 
 def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: np.ndarray,
-                  stride: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Rows for the frames between a track's rows ``stride`` frames apart, on the straight
-    line between them (score 0, as the offline mode's filled rows), all sorted by frame and
-    id."""
+                  first: int, stride: int, skip: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Rows for the frames between two rows of a track with no frame the tracker stepped
+    on between them (the detector's frames, every ``stride``-th from ``first``, but those
+    in ``skip``), on the straight line between the two (score 0, as the offline mode's
+    filled rows), all sorted by frame and id."""
     o = np.lexsort((frames, ids))
     F, I, B, C = frames[o], ids[o], xywh[o], conf[o]
-    k = np.flatnonzero((I[1:] == I[:-1]) & (F[1:] - F[:-1] == stride))
-    w = np.arange(1, stride) / stride  # (stride - 1,) fractions of the way
-    nF = (F[k, None] + np.arange(1, stride)).ravel()
-    nI = np.repeat(I[k], stride - 1)
-    nB = (B[k, None] * (1 - w)[:, None] + B[k + 1, None] * w[:, None]).reshape(-1, 4)
+    # stepped[f]: the frames up to f the tracker stepped on
+    end = int(F.max()) + 1 if len(F) else 1
+    on = np.zeros(end + 1, np.int64)
+    on[first:end + 1:stride] = 1
+    on[skip[skip <= end]] = 0
+    stepped = np.cumsum(on)
+    gap = F[1:] - F[:-1]
+    k = np.flatnonzero((I[1:] == I[:-1]) & (gap > 1)
+                       & (stepped[F[1:] - 1] == stepped[F[:-1]]))
+    n = gap[k] - 1  # frames to fill between each pair
+    at = np.repeat(k, n)
+    step = np.arange(len(at)) - np.repeat(np.cumsum(n) - n, n) + 1  # 1..n each
+    w = (step / np.repeat(gap[k], n))[:, None]  # fractions of the way
+    nF, nI = F[at] + step, I[at]
+    nB = B[at] * (1 - w) + B[at + 1] * w
     F, I = np.r_[F, nF], np.r_[I, nI]
     B, C = np.r_[B, nB], np.r_[C, np.zeros(len(nF))]
     o = np.lexsort((I, F))
@@ -1228,6 +1324,17 @@ def _stride_warning(path: str | Path, first: int, stride: int, rate: float,
             f"at {rate:.4g} frames/s; the frames between "
             + ("are filled on the line between the smoothed boxes" if offline else
                "have the tracks' predicted boxes") + " (score 0)")
+
+
+def _undelivered_warning(path: str | Path, skip: np.ndarray, offline: bool) -> str:
+    """What a run says of frames without detections amid frames with many."""
+    shown = ", ".join(map(str, skip[:5].tolist())) + (", ..." if len(skip) > 5 else "")
+    return (f"{path}: {len(skip)} frame{'s' if len(skip) > 1 else ''} without detections "
+            f"amid frames with {UNDELIVERED_AROUND} or more each (frame"
+            f"{'s' if len(skip) > 1 else ''} {shown}): taken as frames the detector did not "
+            "deliver; the tracks are carried across them, and "
+            + ("filled on the line between the smoothed boxes there" if offline else
+               "given their predicted boxes there") + " (score 0)")
 
 
 def _ordinal(k: int) -> str:
@@ -1661,21 +1768,29 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         ctx.overrides.setdefault("camera_motion", False)
     detect = _frontend(name, ctx)
     # a detector run on every k-th frame: a box tracker by name steps through its frames
-    # alone, at the video's frame rate / k (as track_sequence); any other tracker, or one
-    # made by the caller, keeps its rate and every frame
-    grid = detect if isinstance(detect, _FileDetections) and detect.stride > 1 else None
+    # alone, at the video's frame rate / k (as track_sequence), and over the frames it did
+    # not deliver; any other tracker, or one made by the caller, keeps its rate and every
+    # frame
+    grid = detect if isinstance(detect, _FileDetections) else None
     if box and grid is not None:
         at_rate = replace(ctx, fps=ctx.fps / grid.stride)
         trk, _ = make_tracker(tracker, at_rate)
         assert isinstance(trk, BoxTracker)  # a box preset's
         ctx.resolved = at_rate.resolved
-        stepper: Tracker = _OnDetectorFrames(trk, grid.first, grid.stride)
-        warnings.warn(_stride_warning(grid.path, grid.first, grid.stride, at_rate.fps,
-                                      offline=False), RuntimeWarning, stacklevel=2)
+        skip = undelivered_frames(grid.dets.frames, grid.first, grid.stride,
+                                  _max_run(trk.config, at_rate.fps))
+        stepper: Tracker = (_OnDetectorFrames(trk, grid.first, grid.stride, skip)
+                            if grid.stride > 1 or len(skip) else trk)
+        if grid.stride > 1:
+            warnings.warn(_stride_warning(grid.path, grid.first, grid.stride, at_rate.fps,
+                                          offline=False), RuntimeWarning, stacklevel=2)
+        if len(skip):
+            warnings.warn(_undelivered_warning(grid.path, skip, offline=False),
+                          RuntimeWarning, stacklevel=2)
     else:
         trk, _ = make_tracker(tracker, ctx)
         stepper = trk
-        if grid is not None:
+        if grid is not None and grid.stride > 1:
             warnings.warn(f"{grid.path}: detections on every {_ordinal(grid.stride)} frame "
                           f"only: the tracker, {type(trk).__name__}, steps through every "
                           "frame of the video, each frame without detections as one where "

@@ -653,6 +653,32 @@ class BoxTracker:
         """
         return axes_to_full(self.tracks.cov)
 
+    def pass_over(self) -> None:
+        """A frame the detector did not deliver, between two :meth:`step` calls (as
+        :func:`vistrack.pipeline.undelivered_frames` finds them): the tracks are left as
+        they are, and the next step predicts them over both frames; the score calibration
+        learnt online sees a frame without detections, as it sees one where nothing was
+        found, its links running from one frame to the next.
+
+        Examples
+        --------
+        A second person comes in frame 2; frame 3 is not delivered. Their track, started in
+        frame 2, is confirmed by its second update, in frame 4 (had frame 3 been one where
+        only the first person was found, it would have been dropped there):
+
+        >>> tr = BoxTracker(frame_rate=10)
+        >>> one = Detections.from_xywh([[200, 20, 30, 60]], [0.9])
+        >>> two = lambda x: Detections.from_xywh([[200, 20, 30, 60], [x, 20, 30, 60]],
+        ...                                      [0.9, 0.9])
+        >>> tr.step(1, one).ids.tolist(), tr.step(2, two(14)).ids.tolist()
+        ([1], [1])
+        >>> tr.pass_over()  # frame 3
+        >>> tr.step(4, two(22)).ids.tolist()
+        [1, 2]
+        """
+        if self.calibrator is not None:
+            self.calibrator.observe(Detections(boxes=np.zeros((0, 4)), scores=np.zeros(0)))
+
     def boxes_ahead(self, ids: ArrayLike, dt: float) -> np.ndarray:
         """The boxes of tracks predicted ``dt`` frames past the last step, along their
         filtered velocities (the motion's prediction of the state's mean, without its noise):
