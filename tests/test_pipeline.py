@@ -618,6 +618,14 @@ def test_frames_a_detector_did_not_deliver_are_tracked_over(tmp_path):
         video = track_video(clip, tmp_path / "video", frontend=f"detections:{file}", fps=25,
                             annotate=False, scores="raw")
     rows = read_mot(video.files["tracks"])
+    # a tracker made by the caller steps through every frame, and is told so
+    with pytest.warns(RuntimeWarning, match=rf"^{file}: 2 frames without detections amid "
+                                            r"frames with 5 or more each: the tracker, "
+                                            r"BoxTracker, steps through every frame of the "
+                                            r"video, each frame without detections as one "
+                                            r"where nothing was found$"):
+        track_video(clip, tmp_path / "own", frontend=f"detections:{file}", fps=25,
+                    annotate=False, tracker=BoxTracker(frame_rate=25))
     first = rows.frames == 1
     disc = rows.ids == rows.ids[first][np.abs(rows.boxes[first] - boxes[0]).sum(1).argmin()]
     np.testing.assert_array_equal(rows.frames[disc], np.arange(1, 25))

@@ -1795,6 +1795,12 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                           f"only: the tracker, {type(trk).__name__}, steps through every "
                           "frame of the video, each frame without detections as one where "
                           "nothing was found", RuntimeWarning, stacklevel=2)
+        elif grid is not None and len(skip := undelivered_frames(grid.dets.frames)):
+            warnings.warn(f"{grid.path}: {len(skip)} frame{'s' if len(skip) > 1 else ''} "
+                          f"without detections amid frames with {UNDELIVERED_AROUND} or more "
+                          f"each: the tracker, {type(trk).__name__}, steps through every "
+                          "frame of the video, each frame without detections as one where "
+                          "nothing was found", RuntimeWarning, stacklevel=2)
     with made_folder(out_dir):  # removed again, if made here, when the run fails
         sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
         stats = run(reader, detect, stepper, list(sinks.values()), progress=progress,
