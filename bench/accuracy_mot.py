@@ -114,21 +114,26 @@ def every_kth(seqs: list[Path], k: int, root: Path) -> list[Path]:
     return out
 
 
+def _beside(d: Path, o: Path) -> Path:
+    """``o``, a copy of the sequence ``d``'s ground truth and ``seqinfo.ini``, ready for
+    detections of its own: the path of its ``det.txt``, to write."""
+    (o / "det").mkdir(parents=True, exist_ok=True)
+    (o / "gt").mkdir(parents=True, exist_ok=True)
+    shutil.copy(d / "gt" / "gt.txt", o / "gt" / "gt.txt")
+    shutil.copy(d / "seqinfo.ini", o / "seqinfo.ini")
+    return o / "det" / "det.txt"
+
+
 def strided(seqs: list[Path], k: int, root: Path) -> list[Path]:
     """The sequences with a detector that ran on every ``k``-th frame, written under ``root``
     with the same names: the detections of frames 1, 1 + k, ... alone, numbered as before;
     the ground truth and ``seqinfo.ini`` as they are."""
     out = []
     for d in seqs:
-        o = root / d.name
-        (o / "det").mkdir(parents=True, exist_ok=True)
-        (o / "gt").mkdir(parents=True, exist_ok=True)
         rows = np.loadtxt(d / "det" / "det.txt", delimiter=",", ndmin=2)
-        np.savetxt(o / "det" / "det.txt", rows[(rows[:, 0] - 1) % k == 0], delimiter=",",
+        np.savetxt(_beside(d, root / d.name), rows[(rows[:, 0] - 1) % k == 0], delimiter=",",
                    fmt="%.10g")
-        shutil.copy(d / "gt" / "gt.txt", o / "gt" / "gt.txt")
-        shutil.copy(d / "seqinfo.ini", o / "seqinfo.ini")
-        out.append(o)
+        out.append(root / d.name)
     return out
 
 
@@ -139,18 +144,13 @@ def dropped(seqs: list[Path], frac: float, root: Path, seed: int = 0) -> list[Pa
     sequence's place in ``seqs``); the ground truth and ``seqinfo.ini`` as they are."""
     out = []
     for i, d in enumerate(seqs):
-        o = root / d.name
-        (o / "det").mkdir(parents=True, exist_ok=True)
-        (o / "gt").mkdir(parents=True, exist_ok=True)
         lines = (d / "det" / "det.txt").read_text().splitlines(keepends=True)
         frames = np.array([int(float(t.split(",", 1)[0])) for t in lines], dtype=np.int64)
         have = np.unique(frames)
         gone = have[np.random.default_rng([seed, i]).random(len(have)) < frac]
         keep = ~np.isin(frames, gone)
-        (o / "det" / "det.txt").write_text("".join(t for t, k in zip(lines, keep) if k))
-        shutil.copy(d / "gt" / "gt.txt", o / "gt" / "gt.txt")
-        shutil.copy(d / "seqinfo.ini", o / "seqinfo.ini")
-        out.append(o)
+        _beside(d, root / d.name).write_text("".join(t for t, k in zip(lines, keep) if k))
+        out.append(root / d.name)
     return out
 
 

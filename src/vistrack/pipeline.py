@@ -1140,14 +1140,6 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     # frame_rate / stride (_OnDetectorFrames)
     first, stride = _detector_grid(dets.frames)
     rate = info.frame_rate / stride
-    if stride > 1:
-        warnings.warn(_stride_warning(det_path, first, stride, rate, cfg.offline.enabled),
-                      RuntimeWarning, stacklevel=2)
-    # frames without rows amid frames with many: ones the detector did not deliver
-    skip = undelivered_frames(dets.frames, first, stride, _max_run(cfg.tracker, rate))
-    if len(skip):
-        warnings.warn(_undelivered_warning(det_path, skip, cfg.offline.enabled),
-                      RuntimeWarning, stacklevel=2)
 
     def frame_detections(k: int) -> Detections:
         # frame k's (from 1), made when asked for: memory does not grow with the frames
@@ -1176,8 +1168,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     text = out.with_name(f".{out.stem}.rows.txt") if parquet else out
     with made_folder(out.parent), _removed(text if parquet else None):
         writer = None if oc.enabled else MOTWriter(text)
-        stepper: Tracker = (trk if stride == 1 and not len(skip)
-                            else _OnDetectorFrames(trk, first, stride, skip))
+        stepper, skip = _on_detector_frames(trk, det_path, dets.frames, first, stride,
+                                            oc.enabled)
         stats = run(frames, lambda frame: frame_detections(frame.index), stepper,
                     [writer] if writer is not None else [], progress=progress,
                     total=info.seq_length, label=info.name)
@@ -1279,10 +1271,23 @@ class _OnDetectorFrames:
         self._last, self._at = Tracks.empty(), self.first
 
 
-def _max_run(config: BoxTrackerConfig, rate: float) -> int:
-    """The longest run of frames at ``rate`` a lost track outlives (``max_lost``): longer
-    runs without detections are not taken as frames the detector did not deliver."""
-    return max(0, math.ceil(config.max_lost * rate) - 1)
+def _on_detector_frames(trk: BoxTracker, path: str | Path, frames: np.ndarray, first: int,
+                        stride: int, offline: bool) -> tuple[Tracker, np.ndarray]:
+    """What steps ``trk`` (made at the detector's rate) through a detections file's frames,
+    and the frames the detector did not deliver (:func:`undelivered_frames`, runs a lost
+    track outlives: shorter than ``max_lost``): ``trk`` itself where it ran on every frame
+    and delivered them all, else :class:`_OnDetectorFrames`; a ``RuntimeWarning`` says which
+    frames it steps over."""
+    longest = max(0, math.ceil(trk.config.max_lost * trk.frame_rate) - 1)
+    skip = undelivered_frames(frames, first, stride, longest)
+    if stride > 1:
+        warnings.warn(_stride_warning(path, first, stride, trk.frame_rate, offline),
+                      RuntimeWarning, stacklevel=3)
+    if len(skip):
+        warnings.warn(_undelivered_warning(path, skip, offline), RuntimeWarning, stacklevel=3)
+    if stride == 1 and not len(skip):
+        return trk, skip
+    return _OnDetectorFrames(trk, first, stride, skip), skip
 
 
 def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: np.ndarray,
@@ -1326,11 +1331,16 @@ def _stride_warning(path: str | Path, first: int, stride: int, rate: float,
                "have the tracks' predicted boxes") + " (score 0)")
 
 
+def _undelivered(skip: np.ndarray | tuple) -> str:
+    """How many frames are without detections amid frames with many."""
+    return (f"{len(skip)} frame{'s' if len(skip) > 1 else ''} without detections amid frames "
+            f"with {UNDELIVERED_AROUND} or more each")
+
+
 def _undelivered_warning(path: str | Path, skip: np.ndarray, offline: bool) -> str:
     """What a run says of frames without detections amid frames with many."""
     shown = ", ".join(map(str, skip[:5].tolist())) + (", ..." if len(skip) > 5 else "")
-    return (f"{path}: {len(skip)} frame{'s' if len(skip) > 1 else ''} without detections "
-            f"amid frames with {UNDELIVERED_AROUND} or more each (frame"
+    return (f"{path}: {_undelivered(skip)} (frame"
             f"{'s' if len(skip) > 1 else ''} {shown}): taken as frames the detector did not "
             "deliver; the tracks are carried across them, and "
             + ("filled on the line between the smoothed boxes there" if offline else
@@ -1777,30 +1787,21 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         trk, _ = make_tracker(tracker, at_rate)
         assert isinstance(trk, BoxTracker)  # a box preset's
         ctx.resolved = at_rate.resolved
-        skip = undelivered_frames(grid.dets.frames, grid.first, grid.stride,
-                                  _max_run(trk.config, at_rate.fps))
-        stepper: Tracker = (_OnDetectorFrames(trk, grid.first, grid.stride, skip)
-                            if grid.stride > 1 or len(skip) else trk)
-        if grid.stride > 1:
-            warnings.warn(_stride_warning(grid.path, grid.first, grid.stride, at_rate.fps,
-                                          offline=False), RuntimeWarning, stacklevel=2)
-        if len(skip):
-            warnings.warn(_undelivered_warning(grid.path, skip, offline=False),
-                          RuntimeWarning, stacklevel=2)
+        stepper, _ = _on_detector_frames(trk, grid.path, grid.dets.frames, grid.first,
+                                         grid.stride, offline=False)
     else:
         trk, _ = make_tracker(tracker, ctx)
         stepper = trk
-        if grid is not None and grid.stride > 1:
-            warnings.warn(f"{grid.path}: detections on every {_ordinal(grid.stride)} frame "
-                          f"only: the tracker, {type(trk).__name__}, steps through every "
-                          "frame of the video, each frame without detections as one where "
-                          "nothing was found", RuntimeWarning, stacklevel=2)
-        elif grid is not None and len(skip := undelivered_frames(grid.dets.frames)):
-            warnings.warn(f"{grid.path}: {len(skip)} frame{'s' if len(skip) > 1 else ''} "
-                          f"without detections amid frames with {UNDELIVERED_AROUND} or more "
-                          f"each: the tracker, {type(trk).__name__}, steps through every "
-                          "frame of the video, each frame without detections as one where "
-                          "nothing was found", RuntimeWarning, stacklevel=2)
+        if grid is not None:
+            # what the file's frames are that this tracker steps through as found nothing
+            skip = undelivered_frames(grid.dets.frames) if grid.stride == 1 else ()
+            gaps = (f"detections on every {_ordinal(grid.stride)} frame only"
+                    if grid.stride > 1 else _undelivered(skip) if len(skip) else "")
+            if gaps:
+                warnings.warn(f"{grid.path}: {gaps}: the tracker, {type(trk).__name__}, steps "
+                              "through every frame of the video, each frame without "
+                              "detections as one where nothing was found", RuntimeWarning,
+                              stacklevel=2)
     with made_folder(out_dir):  # removed again, if made here, when the run fails
         sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
         stats = run(reader, detect, stepper, list(sinks.values()), progress=progress,

@@ -677,7 +677,7 @@ class BoxTracker:
         [1, 2]
         """
         if self.calibrator is not None:
-            self.calibrator.observe(Detections(boxes=np.zeros((0, 4)), scores=np.zeros(0)))
+            self.calibrator.observe(Detections(boxes=np.zeros((0, 4))))
 
     def boxes_ahead(self, ids: ArrayLike, dt: float) -> np.ndarray:
         """The boxes of tracks predicted ``dt`` frames past the last step, along their
