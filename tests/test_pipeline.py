@@ -430,6 +430,57 @@ def test_a_detections_file_with_boxes_of_no_area_says_so(tmp_path):
         track_sequence(det, tmp_path / "clean.txt", fps=10)
 
 
+def test_a_detections_file_of_several_classes_is_tracked_class_by_class(tmp_path):
+    """The eighth value of a detections file's rows is their class: a track takes detections
+    of its own class only, as the box trackers keep classes apart. It used to be dropped, so
+    a track followed whatever class came where it was. A file of more than one class also
+    says that the MOTChallenge results file does not carry them."""
+    import warnings
+
+    from vistrack.pipeline import track_sequence
+
+    # an object of class 1 moving right over frames 1-10, then one of class 2 taking up
+    # the same path over frames 11-20
+    def rows(classes):
+        return "".join(f"{f},-1,{10 + 3 * f},20,20,40,0.9,{classes(f)},-1,-1\n"
+                       for f in range(1, 21))
+
+    mixed = tmp_path / "mixed.txt"
+    mixed.write_text(rows(lambda f: 1 if f <= 10 else 2))
+    with pytest.warns(UserWarning) as got:
+        run_ = track_sequence(mixed, tmp_path / "mixed-out.txt", fps=10, scores="raw")
+    assert [str(w.message) for w in got] == [
+        f"{mixed}: detections of 2 classes (1, 2): each class is tracked apart, no track "
+        "taking another's detections, but the MOTChallenge results file has no class column"]
+    out = read_mot(run_.out)
+    before = set(out.ids[out.frames <= 10].tolist())
+    after = set(out.ids[out.frames >= 12].tolist())
+    # class 1's track, then class 2's from its confirmation (frame 12): two identities
+    assert len(before) == 1 and len(after) == 1 and before != after
+    assert out.frames[out.ids == after.pop()].tolist() == list(range(12, 21))
+
+    # one class (or none, -1): one track follows the path through all twenty frames
+    for kind in (lambda f: 1, lambda f: -1):
+        one = tmp_path / "one.txt"
+        one.write_text(rows(kind))
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            run_ = track_sequence(one, tmp_path / "one-out.txt", fps=10, scores="raw",
+                                  force=True)
+        out = read_mot(run_.out)
+        assert len(set(out.ids.tolist())) == 1 and out.frames.tolist() == list(range(1, 21))
+
+    # --frontend detections:FILE reads the classes the same way
+    frames, _ = red_disc_clip(T=20)
+    clip = write_clip(tmp_path / "frames", frames)
+    with pytest.warns(UserWarning, match=rf"^{mixed}: detections of 2 classes"):
+        track_video(clip, tmp_path / "video", frontend=f"detections:{mixed}", fps=10,
+                    annotate=False, scores="raw")
+    out = read_mot(tmp_path / "video" / "tracks.txt")
+    first, second = (set(out.ids[k].tolist()) for k in (out.frames <= 10, out.frames >= 12))
+    assert len(first) == 1 and len(second) == 1 and first != second
+
+
 def test_detection_stride_is_the_common_gap_between_the_frames_with_detections():
     from vistrack.pipeline import detection_stride
 

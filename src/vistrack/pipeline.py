@@ -630,6 +630,20 @@ def _warn_no_area(dets: MOTTable, path: Path, stacklevel: int) -> None:
                   "frame to frame", RuntimeWarning, stacklevel=stacklevel + 1)
 
 
+def _warn_classes(dets: MOTTable, path: Path, stacklevel: int) -> None:
+    """Warn that a detections file holds more than one class (the eighth value of a
+    MOTChallenge file's rows, a CSV file's ``class``): each is tracked apart, and the
+    MOTChallenge results file, which has no class column, does not say which class a track
+    is."""
+    kinds = np.unique(dets.classes)
+    if len(kinds) < 2:
+        return
+    shown = ", ".join(str(k) for k in kinds[:8]) + (", ..." if len(kinds) > 8 else "")
+    warnings.warn(f"{path}: detections of {len(kinds)} classes ({shown}): each class is "
+                  "tracked apart, no track taking another's detections, but the MOTChallenge "
+                  "results file has no class column", UserWarning, stacklevel=stacklevel + 1)
+
+
 def _detector_grid(frames: np.ndarray) -> tuple[int, int]:
     """``(first, stride)``: the frames a detections file's detector ran on, every
     ``stride``-th from ``first`` (:func:`detection_stride`; ``(1, 1)``: every frame)."""
@@ -706,7 +720,7 @@ class _FileDetections:
 
     def __call__(self, frame: Frame) -> Detections:
         s = self.slices[frame.index - 1] if frame.index <= len(self.slices) else slice(0, 0)
-        return Detections.from_xywh(self.dets.boxes[s], self.dets.conf[s])
+        return Detections.from_xywh(self.dets.boxes[s], self.dets.conf[s], self.dets.classes[s])
 
 
 def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
@@ -715,6 +729,7 @@ def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
         raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
     dets = read_detections(path)  # MOTChallenge's text, or a CSV file with a header
     _warn_no_area(dets, path, stacklevel=3)
+    _warn_classes(dets, path, stacklevel=3)
     return _FileDetections(path, dets)
 
 
@@ -1007,7 +1022,10 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     detections : str or Path, optional
         Another detections file (default ``seq_dir/det/det.txt``): MOTChallenge's format, or
         a CSV file with a header (``.csv``; read by pandas, its columns as
-        :meth:`~vistrack.io.MOTTable.from_pandas` takes them).
+        :meth:`~vistrack.io.MOTTable.from_pandas` takes them). Its classes (the eighth
+        value of a MOTChallenge file's rows, a CSV file's ``class``; -1 where there is none)
+        are tracked apart; the results file has no class column, and a file of more than one
+        class says so in a ``UserWarning``.
         Where its rows lie on every k-th frame only (:func:`detection_stride`: a detector
         run on every k-th frame), the tracker steps through those frames alone, at the frame
         rate divided by k, and a ``RuntimeWarning`` says so; each frame between gets the
@@ -1124,6 +1142,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         raise FileNotFoundError(f"{det_path} does not exist (pass --detections FILE)")
     dets = read_detections(det_path, columns)
     _warn_no_area(dets, det_path, stacklevel=2)
+    _warn_classes(dets, det_path, stacklevel=2)
     if info is None:
         assert fps is not None  # refused above without seqinfo.ini
         info = SeqInfo.from_detections(det_path if alone else seq_dir, dets, float(fps))
@@ -1144,7 +1163,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     def frame_detections(k: int) -> Detections:
         # frame k's (from 1), made when asked for: memory does not grow with the frames
         s = slices[k - 1]
-        return Detections(boxes=xyxy[s], scores=dets.conf[s])
+        return Detections(boxes=xyxy[s], scores=dets.conf[s], classes=dets.classes[s])
 
     seconds = 0.0
     calibration = None
