@@ -727,9 +727,7 @@ def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
-    dets = read_detections(path)  # MOTChallenge's text, or a CSV file with a header
-    _warn_no_area(dets, path, stacklevel=3)
-    _warn_classes(dets, path, stacklevel=3)
+    dets = read_detections(path, stacklevel=3)  # MOTChallenge's text, or CSV with a header
     return _FileDetections(path, dets)
 
 
@@ -963,9 +961,11 @@ def _trajectory_plot(path: Path, name: str) -> Sink:
     return TrajectoryPlot(path, name)
 
 
-def read_detections(path: str | Path, columns: dict[str, str] | None = None) -> MOTTable:
+def read_detections(path: str | Path, columns: dict[str, str] | None = None,
+                    stacklevel: int = 1) -> MOTTable:
     """A detections file: MOTChallenge's format, or a ``.csv`` file with a header whose
-    columns ``columns`` names (:meth:`~vistrack.io.MOTTable.from_pandas`).
+    columns ``columns`` names (:meth:`~vistrack.io.MOTTable.from_pandas`); ``stacklevel``
+    is that of its warnings of boxes of no area and of classes, from the caller.
 
     Raises
     ------
@@ -977,27 +977,34 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None) -> 
     UserWarning
         If the CSV file has no score column (``conf``, or the name ``columns`` gives it):
         every detection then scores 1. The warning names the columns not read, one of which
-        may hold the scores under another name.
+        may hold the scores under another name. If the file holds more than one class:
+        each is tracked apart, but the MOTChallenge results file has no class column.
+    RuntimeWarning
+        If a box has zero width or height, naming the first one's line (its frame in a CSV
+        file): such a box overlaps no other, so no track can follow it.
     """
     path = Path(path)
     if path.suffix.lower() != ".csv":
         if columns:
             raise ValueError(f"columns name a CSV file's columns; {path} is read as a "
                              "MOTChallenge file (its name does not end in .csv)")
-        return read_mot(path)
-    from .io.motchallenge import _COLUMNS, _pandas
+        table = read_mot(path)
+    else:
+        from .io.motchallenge import _COLUMNS, _pandas
 
-    df = _pandas("a CSV file of detections").read_csv(path)
-    table = MOTTable.from_pandas(df, columns, path=str(path))
-    names = dict(columns or {})
-    conf = names.get("conf", "conf")
-    if conf not in df.columns:
-        used = {names.get(c, c) for c in _COLUMNS}
-        unread = [str(c) for c in df.columns if c not in used]
-        warnings.warn(f"{path}: no column {conf!r}: every detection scores 1"
-                      + (f" (columns not read: {', '.join(unread)}; name the score's column: "
-                         "--columns conf=NAME, or columns={'conf': NAME})" if unread else ""),
-                      UserWarning, stacklevel=2)
+        df = _pandas("a CSV file of detections").read_csv(path)
+        table = MOTTable.from_pandas(df, columns, path=str(path))
+        names = dict(columns or {})
+        conf = names.get("conf", "conf")
+        if conf not in df.columns:
+            used = {names.get(c, c) for c in _COLUMNS}
+            unread = [str(c) for c in df.columns if c not in used]
+            warnings.warn(f"{path}: no column {conf!r}: every detection scores 1"
+                          + (f" (columns not read: {', '.join(unread)}; name the score's "
+                             "column: --columns conf=NAME, or columns={'conf': NAME})"
+                             if unread else ""), UserWarning, stacklevel=2)
+    _warn_no_area(table, path, stacklevel + 1)
+    _warn_classes(table, path, stacklevel + 1)
     return table
 
 
@@ -1140,9 +1147,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     info = read_seqinfo(seq_dir) if has_info else None
     if not det_path.exists():
         raise FileNotFoundError(f"{det_path} does not exist (pass --detections FILE)")
-    dets = read_detections(det_path, columns)
-    _warn_no_area(dets, det_path, stacklevel=2)
-    _warn_classes(dets, det_path, stacklevel=2)
+    dets = read_detections(det_path, columns, stacklevel=2)
     if info is None:
         assert fps is not None  # refused above without seqinfo.ini
         info = SeqInfo.from_detections(det_path if alone else seq_dir, dets, float(fps))
