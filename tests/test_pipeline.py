@@ -132,7 +132,7 @@ def test_run_feeds_sinks_and_writes_nothing_from_a_failed_run(tmp_path):
     got = read_mot(tmp_path / "t.txt")
     np.testing.assert_allclose(got.boxes, sinks[2].xywh, atol=0.005)
     assert len(got) == len(sinks[2]) == 10  # confirmed at once in the first frame
-    assert (tmp_path / "t.csv").read_text().splitlines()[0] == "frame,id,x,y,w,h,score"
+    assert (tmp_path / "t.csv").read_text().splitlines()[0] == "frame,id,x,y,w,h,score,class"
 
     def broken(f):
         if f.index == 5:
@@ -303,7 +303,7 @@ def test_a_video_where_nothing_is_tracked_still_writes_every_output(tmp_path):
     assert r.rows == 0 and r.tracks == 0
     assert all(p.exists() for p in r.files.values())
     assert (tmp_path / "out" / "tracks.txt").read_text() == ""
-    assert (tmp_path / "out" / "tracks.csv").read_text() == "frame,id,x,y,w,h,score\n"
+    assert (tmp_path / "out" / "tracks.csv").read_text() == "frame,id,x,y,w,h,score,class\n"
 
 
 def test_an_interrupted_run_leaves_the_earlier_outputs_as_they_were(tmp_path):
@@ -451,7 +451,8 @@ def test_a_detections_file_of_several_classes_is_tracked_class_by_class(tmp_path
         run_ = track_sequence(mixed, tmp_path / "mixed-out.txt", fps=10, scores="raw")
     assert [str(w.message) for w in got] == [
         f"{mixed}: detections of 2 classes (1, 2): each class is tracked apart, no track "
-        "taking another's detections, but the MOTChallenge results file has no class column"]
+        "taking another's detections, but a MOTChallenge results file has no class column "
+        "(a Parquet results file and tracks.csv have one)"]
     out = read_mot(run_.out)
     before = set(out.ids[out.frames <= 10].tolist())
     after = set(out.ids[out.frames >= 12].tolist())
@@ -479,6 +480,46 @@ def test_a_detections_file_of_several_classes_is_tracked_class_by_class(tmp_path
     out = read_mot(tmp_path / "video" / "tracks.txt")
     first, second = (set(out.ids[k].tolist()) for k in (out.frames <= 10, out.frames >= 12))
     assert len(first) == 1 and len(second) == 1 and first != second
+    # tracks.csv says which class each row's track is: the class of its detections
+    pd = pytest.importorskip("pandas")
+    csv = pd.read_csv(tmp_path / "video" / "tracks.csv")
+    assert list(csv.columns) == ["frame", "id", "x", "y", "w", "h", "score", "class"]
+    assert (csv["class"] == np.where(csv["id"] == first.pop(), 1, 2)).all()
+    # the same rows as tracks.txt (class 1's track coasts through frame 11)
+    assert sorted(zip(csv["frame"], csv["id"])) == sorted(zip(out.frames, out.ids))
+    assert set(csv.loc[csv["frame"] <= 11, "class"]) == {1}
+
+
+def test_a_parquet_results_file_carries_each_tracks_class(tmp_path):
+    """A MOTChallenge results file has no class column, so a detections file of several
+    classes loses them there; a Parquet results file (the same rows, with
+    ``MOTTable.to_pandas``'s columns) carries each row's class, online and offline: that of
+    the detections its track follows."""
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("pyarrow")
+    from vistrack.pipeline import track_sequence
+
+    # class 3 moving right along y = 20, class 5 moving left along y = 200, and a gap of
+    # frames 8-9 in class 5's detections, which the offline mode fills
+    rows = [f"{f},-1,{10 + 3 * f},20,20,40,0.9,3,-1,-1\n" for f in range(1, 21)]
+    rows += [f"{f},-1,{300 - 3 * f},200,20,40,0.9,5,-1,-1\n" for f in range(1, 21)
+             if f not in (8, 9)]
+    det = tmp_path / "two.csv"
+    pd.DataFrame([r.split(",")[:8] for r in rows],
+                 columns=["frame", "id", "bb_left", "bb_top", "bb_width", "bb_height", "conf",
+                          "class"]).astype(float).to_csv(det, index=False)
+    for offline in (False, True):
+        with pytest.warns(UserWarning, match="detections of 2 classes"):
+            run_ = track_sequence(det, tmp_path / f"out-{offline}.parquet", fps=10,
+                                  scores="raw", offline=offline)
+        table = pd.read_parquet(run_.out)
+        ids = table.groupby("class")["particle"].unique()  # the identity (trackpy's name)
+        assert sorted(ids.index) == [3, 5] and all(len(v) == 1 for v in ids)
+        # each row's class is its track's, and its boxes are that class's path
+        assert (table.loc[table["class"] == 3, "bb_top"] == 20).all()
+        assert (table.loc[table["class"] == 5, "bb_top"].round() == 200).all()
+        # offline, class 5's gap is filled: both tracks on all 20 frames
+        assert not offline or len(table) == 40
 
 
 def test_detection_stride_is_the_common_gap_between_the_frames_with_detections():

@@ -33,17 +33,19 @@ def random_tracks(rng, n_frames, *, max_rows=8, id_pool=60):
             xyxy[0] = [-0.0, 0.125, 2.675, 1.005]
             scores[0] = [np.nan, 0.99995, 1e-5, 123456.0][f % 4]
         out.append((Frame(f, (f - 1) / 25), Tracks(ids=ids, boxes=xyxy, points=None,
-                                                   scores=scores, classes=np.zeros(k, int))))
+                                                   scores=scores,
+                                                   classes=ids % 3 - 1)))  # a track's own
     return out
 
 
 def rows_of(frames):
-    """Every row (frame, id, x, y, w, h, score) in the order written, from the boxes."""
+    """Every row (frame, id, x, y, w, h, score, class) in the order written, from the boxes."""
     rows = []
     for frame, t in frames:
         b = np.asarray(t.boxes, float)
-        for i, (x0, y0, x1, y1), s in zip(t.ids.tolist(), b.tolist(), t.scores.tolist()):
-            rows.append((frame.index, i, x0, y0, x1 - x0, y1 - y0, s))
+        for i, (x0, y0, x1, y1), s, c in zip(t.ids.tolist(), b.tolist(), t.scores.tolist(),
+                                             t.classes.tolist()):
+            rows.append((frame.index, i, x0, y0, x1 - x0, y1 - y0, s, c))
     return rows
 
 
@@ -52,12 +54,13 @@ def mot_text(rows):
     id, rows of equal keys in the order written."""
     rows = sorted(rows, key=lambda r: (r[0], r[1]))
     return "".join(f"{f},{i},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{s:.4g},-1,-1,-1\n"
-                   for f, i, x, y, w, h, s in rows)
+                   for f, i, x, y, w, h, s, _ in rows)
 
 
 def csv_text(rows):
-    return "frame,id,x,y,w,h,score\n" + "".join(
-        f"{f},{i},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{s:.3f}\n" for f, i, x, y, w, h, s in rows)
+    return "frame,id,x,y,w,h,score,class\n" + "".join(
+        f"{f},{i},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{s:.3f},{c}\n"
+        for f, i, x, y, w, h, s, c in rows)
 
 
 def test_mot_and_csv_writers_write_the_same_bytes_as_the_whole_file_at_once(tmp_path):

@@ -632,16 +632,17 @@ def _warn_no_area(dets: MOTTable, path: Path, stacklevel: int) -> None:
 
 def _warn_classes(dets: MOTTable, path: Path, stacklevel: int) -> None:
     """Warn that a detections file holds more than one class (the eighth value of a
-    MOTChallenge file's rows, a CSV file's ``class``): each is tracked apart, and the
+    MOTChallenge file's rows, a CSV file's ``class``): each is tracked apart, and a
     MOTChallenge results file, which has no class column, does not say which class a track
-    is."""
+    is (a Parquet results file and ``tracks.csv`` do)."""
     kinds = np.unique(dets.classes)
     if len(kinds) < 2:
         return
     shown = ", ".join(str(k) for k in kinds[:8]) + (", ..." if len(kinds) > 8 else "")
     warnings.warn(f"{path}: detections of {len(kinds)} classes ({shown}): each class is "
-                  "tracked apart, no track taking another's detections, but the MOTChallenge "
-                  "results file has no class column", UserWarning, stacklevel=stacklevel + 1)
+                  "tracked apart, no track taking another's detections, but a MOTChallenge "
+                  "results file has no class column (a Parquet results file and tracks.csv "
+                  "have one)", UserWarning, stacklevel=stacklevel + 1)
 
 
 def _detector_grid(frames: np.ndarray) -> tuple[int, int]:
@@ -978,7 +979,7 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
         If the CSV file has no score column (``conf``, or the name ``columns`` gives it):
         every detection then scores 1. The warning names the columns not read, one of which
         may hold the scores under another name. If the file holds more than one class:
-        each is tracked apart, but the MOTChallenge results file has no class column.
+        each is tracked apart, but a MOTChallenge results file has no class column.
     RuntimeWarning
         If a box has zero width or height, naming the first one's line (its frame in a CSV
         file): such a box overlaps no other, so no track can follow it.
@@ -1031,8 +1032,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         a CSV file with a header (``.csv``; read by pandas, its columns as
         :meth:`~vistrack.io.MOTTable.from_pandas` takes them). Its classes (the eighth
         value of a MOTChallenge file's rows, a CSV file's ``class``; -1 where there is none)
-        are tracked apart; the results file has no class column, and a file of more than one
-        class says so in a ``UserWarning``.
+        are tracked apart; a MOTChallenge results file has no class column (a Parquet one
+        has: each row its track's class), and a file of more than one class says so in a
+        ``UserWarning``.
         Where its rows lie on every k-th frame only (:func:`detection_stride`: a detector
         run on every k-th frame), the tracker steps through those frames alone, at the frame
         rate divided by k, and a ``RuntimeWarning`` says so; each frame between gets the
@@ -1200,6 +1202,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         seconds += stats.seconds["tracker"]
         if writer is not None:
             n_rows, n_tracks = len(writer), len(writer.identities)
+            classes_of = writer.classes_of
         else:
             t0, c0 = time.perf_counter(), _compile.seconds()
             sm = smooth(trk, min_score=oc.min_track_score,
@@ -1212,8 +1215,12 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                 F, I, xywh, conf = _fill_between(F, I, xywh, conf, first, stride, skip)
             write_mot(text, F, I, xywh, conf, force=True)
             n_rows, n_tracks = len(F), len(np.unique(I))
+            known, at = np.unique(sm.ids, return_index=True)
+            classes_of = lambda ids: sm.classes[at][np.searchsorted(known, ids)]  # noqa: E731
         if parquet:
-            read_mot(text).to_parquet(out)
+            # the text has no class column; Parquet's has, each row its track's class
+            table = read_mot(text)
+            replace(table, classes=classes_of(table.ids).astype(np.int64)).to_parquet(out)
     _warn_calibration(trk, str(det_path if alone else seq_dir))
     derived = derived_values(trk)
     if stride > 1:

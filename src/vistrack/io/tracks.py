@@ -3,7 +3,7 @@
 Every sink answers ``write(frame, tracks)`` (one :class:`~vistrack.types.Frame` and the
 :class:`~vistrack.types.Tracks` reported in it) and ``close()``; :func:`vistrack.pipeline.run`
 feeds any list of them. Here: :class:`MOTWriter` (MOTChallenge results), :class:`CSVWriter`
-(``frame,id,x,y,w,h,score`` with a header) and :class:`BoxesWriter` (one object's
+(``frame,id,x,y,w,h,score,class`` with a header) and :class:`BoxesWriter` (one object's
 ``frame,x,y,w,h``, OTB-style), which write their rows as the frames come to a partial file
 renamed into place when closed (:mod:`vistrack.io.atomic`), so that a long run's memory does
 not grow with its rows; :class:`TrackRows` keeps the rows in memory instead. Pictures are
@@ -82,7 +82,7 @@ class Sink(Protocol):
         >>> sink = CSVWriter(path)
         >>> sink.close()
         >>> path.read_text()
-        'frame,id,x,y,w,h,score\\n'
+        'frame,id,x,y,w,h,score,class\\n'
         """
         ...
 
@@ -264,14 +264,14 @@ def _frame_and_id(line: str) -> tuple[int, int]:
 class _RowsFile:
     """Box tracks written as text rows, frame by frame, to the partial file of ``path``
     (:class:`~vistrack.io.atomic.PartialFile`), renamed into place when closed: only the
-    count of rows and the set of identities are kept, so memory does not grow with the
-    rows."""
+    count of rows and the identities, each with its class, are kept, so memory does not grow
+    with the rows."""
 
     def __init__(self, path: str | os.PathLike) -> None:
         self.path = Path(path)
         self._file = PartialFile(self.path)
         self._rows = 0
-        self._ids: set[int] = set()
+        self._ids: dict[int, int] = {}  # identity: its class (the latest written)
 
     def _columns(self, frame: Frame, tracks: Tracks
                  ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
@@ -281,7 +281,7 @@ class _RowsFile:
         xywh = np.asarray(tracks.xywh, dtype=float)
         scores = np.asarray(tracks.scores, dtype=float)
         self._rows += len(ids)
-        self._ids.update(ids.tolist())
+        self._ids.update(zip(ids.tolist(), np.asarray(tracks.classes).astype(int).tolist()))
         return int(frame.index), ids, xywh, scores
 
     def __len__(self) -> int:
@@ -304,6 +304,37 @@ class _RowsFile:
         >>> sink.abort()
         """
         return np.array(sorted(self._ids), dtype=int)
+
+    def classes_of(self, ids: ArrayLike) -> np.ndarray:
+        """The class of each of ``ids``, identities written so far (a box tracker's track
+        keeps the class of the detection it started from).
+
+        Parameters
+        ----------
+        ids : (N,) array_like of int
+            Identities written.
+
+        Returns
+        -------
+        (N,) int64 ndarray
+
+        Raises
+        ------
+        KeyError
+            If an identity was never written.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> sink = CSVWriter(pathlib.Path(tempfile.mkdtemp()) / "tracks.csv")
+        >>> sink.write(Frame(1, 0.0), Tracks(ids=np.array([4, 2]), boxes=np.ones((2, 4)),
+        ...                                  points=None, scores=np.ones(2),
+        ...                                  classes=np.array([3, 0])))
+        >>> sink.classes_of([2, 4, 4]).tolist()
+        [0, 3, 3]
+        >>> sink.abort()
+        """
+        return np.array([self._ids[int(i)] for i in np.asarray(ids).ravel()], dtype=np.int64)
 
     def abort(self) -> None:
         """Give the file up (a run that failed): the rows written are removed, and an earlier
@@ -412,8 +443,9 @@ class MOTWriter(_RowsFile):
 
 
 class CSVWriter(_RowsFile):
-    """Writes ``frame,id,x,y,w,h,score`` rows, with that header, in the order written (boxes
-    to 2 decimals, scores to 3), to ``path``.
+    """Writes ``frame,id,x,y,w,h,score,class`` rows, with that header, in the order written
+    (boxes to 2 decimals, scores to 3; the class is the track's, that of the detections it
+    follows, -1 where they had none), to ``path``.
 
     The rows go to a partial file beside ``path`` as the frames come, and replace ``path``
     only when closed (:class:`~vistrack.io.atomic.PartialFile`); :meth:`abort` removes them.
@@ -437,13 +469,13 @@ class CSVWriter(_RowsFile):
     ...                                  points=None, scores=np.array([0.9]), classes=np.zeros(1)))
     >>> sink.close()
     >>> print(path.read_text(), end="")
-    frame,id,x,y,w,h,score
-    1,1,10.00,20.00,30.00,60.00,0.900
+    frame,id,x,y,w,h,score,class
+    1,1,10.00,20.00,30.00,60.00,0.900,0
     """
 
-    _HEADER = "frame,id,x,y,w,h,score\n"
+    _HEADER = "frame,id,x,y,w,h,score,class\n"
     # %d, %.2f and %.3f are str.format's d, .2f and .3f
-    _ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.3f\n"
+    _ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.3f,%d\n"
 
     def __init__(self, path: str | os.PathLike) -> None:
         super().__init__(path)
@@ -477,15 +509,16 @@ class CSVWriter(_RowsFile):
         ...                                  points=None, scores=np.array([0.5]),
         ...                                  classes=np.zeros(1)))
         >>> print(sink._file.read(), end="")
-        frame,id,x,y,w,h,score
-        3,7,1.00,2.00,3.00,6.00,0.500
+        frame,id,x,y,w,h,score,class
+        3,7,1.00,2.00,3.00,6.00,0.500,0
         >>> sink.abort()
         """
         self._start()
         if not len(tracks):
             return
         f, ids, xywh, scores = self._columns(frame, tracks)
-        cells = zip([f] * len(ids), ids.tolist(), *xywh.T.tolist(), scores.tolist())
+        cells = zip([f] * len(ids), ids.tolist(), *xywh.T.tolist(), scores.tolist(),
+                    np.asarray(tracks.classes).astype(int).tolist())
         self._file.write((self._ROW * len(ids)) % tuple(itertools.chain.from_iterable(cells)))
 
     def close(self) -> None:
@@ -497,7 +530,7 @@ class CSVWriter(_RowsFile):
         >>> path = pathlib.Path(tempfile.mkdtemp()) / "out" / "tracks.csv"
         >>> CSVWriter(path).close()
         >>> path.read_text()
-        'frame,id,x,y,w,h,score\\n'
+        'frame,id,x,y,w,h,score,class\\n'
         """
         try:
             self._start()
