@@ -113,9 +113,16 @@ def test_bad_files_and_values_on_the_command_line(seq, tmp_path):
     assert r.returncode == 2 and "--high: high must be in [0, 1]" in r.stderr
     # --low above --high left the second stage no detection, without a word
     r = cli(seq, "--out", tmp_path / "r.txt", "--low", "0.9", "--high", "0.3")
-    assert r.returncode == 2 and ("--low: low must be at most high with two_stage (the second "
-                                  "stage takes the detections between them); got low 0.9 above "
-                                  "high 0.3") in r.stderr and not (tmp_path / "r.txt").exists()
+    assert r.returncode == 2 and not (tmp_path / "r.txt").exists()
+    assert ("--high, --low: low must be at most high with two_stage (the second stage takes the "
+            "detections between them); got low 0.9 above high 0.3") in r.stderr
+    # both below the default low (0.3), given together: set together, not --high checked
+    # against the default low first (which refused them)
+    r = cli(seq, "--out", tmp_path / "hl.txt", "--high", "0.2", "--low", "0.1", "--print-config")
+    assert r.returncode == 0, r.stderr
+    assert "\nhigh = 0.2\n" in r.stdout and "\nlow = 0.1\n" in r.stdout
+    r = cli(seq, "--out", tmp_path / "h.txt", "--high", "0.2")
+    assert r.returncode == 2 and "--high: low must be at most high" in r.stderr
     # the one-stage tracker has no second stage: its low is not compared
     r = cli(seq, "--out", tmp_path / "sort.txt", "--tracker", "sort", "--high", "0.4")
     assert r.returncode == 0, r.stderr

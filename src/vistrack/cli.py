@@ -177,13 +177,20 @@ def _box_config(args: argparse.Namespace):
                           f"\"{cfg.name}\" in {args.config}")
     else:
         cfg = base
-    for option, table, key, *_ in _SETTINGS:
-        value = getattr(args, option)
-        if value is not None:
-            try:
-                cfg = cfg.with_values(**{table: {key: value}})
-            except ValueError as exc:
-                return None, f"--{option.replace('_', '-')}: {exc}"
+    # the options given, set together: one checked against another's default first would
+    # refuse --high 0.2 --low 0.1 (low 0.3 above high 0.2)
+    given = [(option, table, key, getattr(args, option)) for option, table, key, *_ in _SETTINGS
+             if getattr(args, option) is not None]
+    tables: dict[str, dict[str, object]] = {}
+    for _, table, key, value in given:
+        tables.setdefault(table, {})[key] = value
+    try:
+        cfg = cfg.with_values(**tables)
+    except ValueError as exc:
+        # name the options the message is about (low and high: both), or else all given
+        names = [option for option, _, key, _ in given
+                 if re.search(rf"\b{key}\b", str(exc))] or [option for option, *_ in given]
+        return None, f"{', '.join('--' + n.replace('_', '-') for n in names)}: {exc}"
     if args.still_camera:
         cfg = cfg.with_values(tracker={"camera_motion": False})
     if args.offline:
