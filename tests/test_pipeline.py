@@ -490,6 +490,28 @@ def test_a_detections_file_of_several_classes_is_tracked_class_by_class(tmp_path
     assert set(csv.loc[csv["frame"] <= 11, "class"]) == {1}
 
 
+def test_the_results_never_overwrite_the_detections_file(tmp_path):
+    """``--out`` naming the detections file itself, with ``--force``, wrote the results over
+    the detections: the input was lost. It is refused, and the file left as it was."""
+    from vistrack.pipeline import track_sequence
+
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{f},-1,{10 + 2 * f},10,20,40,0.9\n" for f in range(1, 6)))
+    before = det.read_bytes()
+    for out in (det, tmp_path / "sub" / ".." / "det.txt"):
+        with pytest.raises(ValueError, match=r"is the detections file: the results would "
+                                             r"overwrite the detections; give another --out"):
+            track_sequence(det, out, fps=10, force=True)
+    seq = tmp_path / "seq"
+    (seq / "det").mkdir(parents=True)
+    (seq / "det" / "det.txt").write_bytes(before)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=5\n"
+                                     "imWidth=100\nimHeight=100\n")
+    with pytest.raises(ValueError, match="is the detections file"):
+        track_sequence(seq, seq / "det" / "det.txt", force=True)
+    assert det.read_bytes() == before == (seq / "det" / "det.txt").read_bytes()
+
+
 def test_a_parquet_results_file_carries_each_tracks_class(tmp_path):
     """A MOTChallenge results file has no class column, so a detections file of several
     classes loses them there; a Parquet results file (the same rows, with

@@ -1083,7 +1083,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         first, before anything is read.
     ValueError
         If ``seq_dir`` is a file other than a detections file (a video: :func:`track_video`)
-        or is one and ``detections`` is given too, ``fps`` is not a number > 0, the
+        or is one and ``detections`` is given too, ``fps`` is not a number > 0, ``out`` is
+        the detections file (even with ``force``: the results would overwrite it), the
         detections run past the sequence's last frame, or the configuration is invalid.
     MOTFormatError
         If a file is malformed.
@@ -1149,6 +1150,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     info = read_seqinfo(seq_dir) if has_info else None
     if not det_path.exists():
         raise FileNotFoundError(f"{det_path} does not exist (pass --detections FILE)")
+    if out.resolve() == det_path.resolve():
+        raise ValueError(f"--out {out} is the detections file: the results would overwrite "
+                         "the detections; give another --out")
     dets = read_detections(det_path, columns, stacklevel=2)
     if info is None:
         assert fps is not None  # refused above without seqinfo.ini
