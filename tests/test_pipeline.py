@@ -490,6 +490,28 @@ def test_a_detections_file_of_several_classes_is_tracked_class_by_class(tmp_path
     assert set(csv.loc[csv["frame"] <= 11, "class"]) == {1}
 
 
+def test_offline_tracks_a_file_with_nothing_to_calibrate_on_as_online(tmp_path):
+    """The offline mode calibrates the scores on the whole file first; a file with no
+    detection seen to persist or not (none at all, or all on one frame) left it nothing to
+    fit, and ``--offline`` stopped with ``no scores to fit``, naming nothing. It now
+    calibrates as it goes, as online, and writes what online writes."""
+    from vistrack.pipeline import track_sequence
+    from vistrack.tracking.calibration import NoOutcomesError, ScoreCalibration
+
+    files = {"empty": "", "one": "1,-1,10,10,50,50,0.9\n",
+             "two": "1,-1,10,10,50,50,0.9\n1,-1,100,10,50,50,0.5\n"}
+    for name, text in files.items():
+        det = tmp_path / f"{name}.txt"
+        det.write_text(text)
+        on = track_sequence(det, tmp_path / f"{name}-on.txt", fps=10)
+        off = track_sequence(det, tmp_path / f"{name}-off.txt", fps=10, offline=True)
+        assert on.out.read_text() == off.out.read_text()
+        assert off.rows == (0 if name == "empty" else 1)
+    with pytest.raises(NoOutcomesError, match="no scores to fit"):
+        ScoreCalibration.from_frames([Detections(boxes=np.array([[0.0, 0, 5, 5]]))])
+    assert issubclass(NoOutcomesError, ValueError)
+
+
 def test_the_results_never_overwrite_the_detections_file(tmp_path):
     """``--out`` naming the detections file itself, with ``--force``, wrote the results over
     the detections: the input was lost. It is refused, and the file left as it was."""

@@ -47,7 +47,7 @@ from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
 from .models.box import BoxMotion
 from .tracking.base import Tracker
 from .tracking.box import BoxTracker, BoxTrackerConfig
-from .tracking.calibration import ScoreCalibration
+from .tracking.calibration import NoOutcomesError, ScoreCalibration
 from .tracking.offline import smooth
 from .types import Detections, Frame, Tracks
 
@@ -1182,9 +1182,14 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     if oc.enabled and tc.scores == "calibrated":
         # offline, the scores are calibrated on the whole file (see tracking.calibration)
         t0, c0 = time.perf_counter(), _compile.seconds()
-        calibration = ScoreCalibration.from_frames(
-            (frame_detections(k) for k in range(first, info.seq_length + 1, stride)),
-            **tc.calibration_options(rate))
+        try:
+            calibration = ScoreCalibration.from_frames(
+                (frame_detections(k) for k in range(first, info.seq_length + 1, stride)),
+                **tc.calibration_options(rate))
+        except NoOutcomesError:
+            # no detection seen to persist or not (no detections, or all on one frame):
+            # nothing to fit, so the tracker calibrates as it goes, as online
+            calibration = None
         seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
     if oc.enabled and oc.start_score > tc.new_track:
         tc = replace(tc, new_track=oc.start_score)

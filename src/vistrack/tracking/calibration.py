@@ -74,7 +74,8 @@ from ..types import Detections
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-__all__ = ["ScoreCalibration", "ScoreCalibrator", "isotonic_increasing", "persistence"]
+__all__ = ["NoOutcomesError", "ScoreCalibration", "ScoreCalibrator", "isotonic_increasing",
+           "persistence"]
 
 
 @kernel
@@ -415,6 +416,11 @@ def _outcomes(frames: Iterable[Detections], **calibrator: Any) -> tuple[np.ndarr
     return cal.outcomes()
 
 
+class NoOutcomesError(ValueError):
+    """No outcome to fit a calibration to: no scores at all, or, over a whole sequence, no
+    detection that was seen to persist or not (:meth:`ScoreCalibration.from_frames`)."""
+
+
 class ScoreCalibration:
     """A fitted map from a detector's scores to calibrated confidences in ``[0, 1]`` (see the
     module). Call it on scores; :meth:`score_at` is the lowest score with a given confidence.
@@ -505,7 +511,8 @@ class ScoreCalibration:
         ------
         ValueError
             If ``top`` is not in ``(0, 1]``, ``cap_sigma`` is not > 0, the shapes differ,
-            there are no scores, or a score is NaN.
+            or a score is NaN; :class:`NoOutcomesError` (a ``ValueError``) if there are no
+            scores.
 
         Examples
         --------
@@ -522,7 +529,7 @@ class ScoreCalibration:
         if p.shape != s.shape:
             raise ValueError(f"persisted must have the shape of scores {s.shape}; got {p.shape}")
         if len(s) == 0:
-            raise ValueError("no scores to fit")
+            raise NoOutcomesError("no scores to fit")
         u, inv, counts = np.unique(s, return_inverse=True, return_counts=True)
         hits = np.bincount(inv, weights=p, minlength=len(u))
         if np.isfinite(cap_sigma):
@@ -569,9 +576,9 @@ class ScoreCalibration:
 
         Raises
         ------
-        ValueError
+        NoOutcomesError
             If no outcome is resolved: the frames but the first and the last hold no
-            detections, and no chain has lasted or ended.
+            detections, and no chain has lasted or ended (a ``ValueError``).
 
         Examples
         --------
