@@ -1,5 +1,6 @@
 """Tracks as pandas DataFrames, named as trackpy names particles' columns, and back."""
 
+import re
 import sys
 
 import numpy as np
@@ -60,8 +61,19 @@ def test_other_column_names_and_missing_columns():
     t = MOTTable.from_pandas(rows, columns=names, path="mine.csv")
     assert t.frames.tolist() == [1, 2] and t.boxes[:, 0].tolist() == [7.0, 10.0]
     assert t.conf.tolist() == [1.0, 1.0]
+    no_width = {k: v for k, v in names.items() if k != "bb_width"}
     with pytest.raises(ValueError, match=r"no box in mine.csv: columns \['bb_left', 'bb_top', "
-                                         r"'w'\]"):
+                                         r"'bb_width'\]"):
+        MOTTable.from_pandas(rows.drop(columns="w"), columns=no_width, path="mine.csv")
+    # a name in columns that is not ours, or not the table's, was ignored: the column then
+    # went unread (a class column under a mistyped name: every row class -1)
+    with pytest.raises(ValueError, match=re.escape(
+            "columns bb_widht=w: 'bb_widht' is not a column vistrack reads (did you mean "
+            "'bb_width'?); those are frame, particle, id, bb_left")):
+        MOTTable.from_pandas(rows, columns=names | {"bb_widht": "w"}, path="mine.csv")
+    with pytest.raises(ValueError, match=re.escape(
+            "columns bb_width=w: no column 'w' in mine.csv; columns: ['cx', 'cy', 'h', 't', "
+            "'track']")):
         MOTTable.from_pandas(rows.drop(columns="w"), columns=names, path="mine.csv")
     with pytest.raises(ValueError, match="no column 'frame'"):
         MOTTable.from_pandas(rows)

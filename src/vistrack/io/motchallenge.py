@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import ast
 import configparser
+import difflib
 import importlib
 import math
 import os
@@ -253,7 +254,8 @@ class MOTTable:
         Raises
         ------
         ValueError
-            Naming the columns that are missing.
+            Naming the columns that are missing, or a name in ``columns`` that is not one of
+            ours (or not one of the table's).
         MOTFormatError
             A ``ValueError`` naming the row and the column of a value that is not a finite
             number (an empty cell is NaN), a frame that is not an integer >= 1 (so no row
@@ -275,6 +277,17 @@ class MOTTable:
         """
         names = dict(columns or {})
         have = set(df.keys())
+        where = f" in {path}" if path else ""
+        for ours, theirs in names.items():
+            # a name mistyped on either side was ignored: the column then went unread
+            if ours not in _COLUMNS:
+                close = difflib.get_close_matches(str(ours), _COLUMNS, n=1)
+                raise ValueError(f"columns {ours}={theirs}: {ours!r} is not a column vistrack "
+                                 "reads" + (f" (did you mean {close[0]!r}?)" if close else "")
+                                 + f"; those are {', '.join(_COLUMNS)}")
+            if theirs not in have:
+                raise ValueError(f"columns {ours}={theirs}: no column {theirs!r}{where}; "
+                                 f"columns: {sorted(map(str, have))}")
 
         def name(ours: str) -> str:
             return names.get(ours, ours)
@@ -308,7 +321,6 @@ class MOTTable:
                                      + (" (an empty cell, or NaN)" if np.isnan(v[k]) else ""))
             return v
 
-        where = f" in {path}" if path else ""
         frame = get("frame")
         if frame is None:
             raise ValueError(f"no column {name('frame')!r} (the frame){where}; columns: "
