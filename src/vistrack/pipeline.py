@@ -258,11 +258,13 @@ def calibration_warning(trk: BoxTracker, name: str) -> str | None:
     nearly detections of its score persist from frame to frame, and lie on chains that last,
     as the detector's most confident ones do. Where even the least confident detections do
     that nearly as well as the most confident ones (the confidence of the lowest score seen
-    reaches ``new_track``) while the most confident themselves persist less than half the
-    time, nothing tells objects from clutter, and every detection counts as confident enough
-    to start a track, clutter too. That happens where hardly anything persists: at a low
-    frame rate, objects move too far between frames for their boxes to overlap. (Where
-    every detection persists, all are objects, and taking each as confident is right.)
+    reaches ``high``) while the most confident themselves persist less than half the time,
+    nothing tells objects from clutter, and every detection counts as confident, clutter
+    too: the first association stage takes them all, and where the lowest reaches
+    ``new_track`` as well, each starts a track. That happens where hardly anything persists:
+    at a low frame rate, objects move too far between frames for their boxes to overlap.
+    (Where every detection persists, all are objects, and taking each as confident is
+    right.)
 
     Parameters
     ----------
@@ -276,7 +278,7 @@ def calibration_warning(trk: BoxTracker, name: str) -> str | None:
     str or None
         The message; None with raw scores, before the calibration has outcomes, when all
         scores are equal (nothing to tell apart), when the lowest score stays under
-        ``new_track``, or when the most confident detections persist half the time or more.
+        ``high``, or when the most confident detections persist half the time or more.
 
     Examples
     --------
@@ -292,9 +294,11 @@ def calibration_warning(trk: BoxTracker, name: str) -> str | None:
     cal = trk.score_calibration()
     if c.scores != "calibrated" or cal is None or cal.n == 0 or len(cal.scores) < 2:
         return None
-    if cal.confidence[0] < c.new_track or cal.top_persistence >= 0.5:
+    if cal.confidence[0] < c.high or cal.top_persistence >= 0.5:
         return None
-    return (f"{name}: every detection counts as confident enough to start a track: the score "
+    what = ("confident enough to start a track" if cal.confidence[0] >= c.new_track else
+            "confident (the first association stage takes them all)")
+    return (f"{name}: every detection counts as {what}: the score "
             f"calibration finds the least confident persisting from frame to frame nearly as "
             f"often as the most confident, which persist at a rate of "
             f"{cal.top_persistence:.2f} at {trk.frame_rate:.3g} frames/s; thresholds on the "
