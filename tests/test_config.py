@@ -141,9 +141,20 @@ def test_bad_files_and_values_on_the_command_line(seq, tmp_path):
     r = cli(seq, "--out-dir", tmp_path / "v", "--tracker", "dcpf", "--config",
             tmp_path / "s.toml")
     assert r.returncode == 2 and "--config goes with the box trackers" in r.stderr
-    r = cli(seq, "--out", tmp_path / "r.txt", "--scores", "raw")  # raw scores of -1 to 15
-    assert r.returncode == 2 and "fuse_score weighs IoU by the score, which must lie in " \
-        "[0, 1]" in r.stderr
+    # raw scores of -1 to 15: refused before tracking, naming the file, the scores' range and
+    # the way out on the command line (it named a Python argument and frame 1)
+    r = cli(seq, "--out", tmp_path / "r.txt", "--scores", "raw")
+    det = read_mot(seq / "det" / "det.txt")
+    assert r.returncode == 2 and (
+        f"{seq / 'det' / 'det.txt'}: scores from {det.conf.min():.4g} to {det.conf.max():.4g}, "
+        "but with raw scores (--scores raw) the first association stage weighs IoU by the "
+        "score, which must lie in [0, 1]: calibrate them (--scores calibrated, the default), or "
+        "turn the weighing off (fuse_score = false under [tracker] in a --config file") in \
+        r.stderr and not (tmp_path / "r.txt").exists()
+    (tmp_path / "raw.toml").write_text('[tracker]\nscores = "raw"\nhigh = 5.0\nlow = 1.0\n'
+                                       'new_track = 8.0\nfuse_score = false\n')
+    r = cli(seq, "--out", tmp_path / "r.txt", "--config", tmp_path / "raw.toml")
+    assert r.returncode == 0 and len(read_mot(tmp_path / "r.txt")) > 0, r.stderr
 
 
 @pytest.mark.parametrize("offline", [False, True])

@@ -1087,7 +1087,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         first, before anything is read.
     ValueError
         If ``seq_dir`` is a file other than a detections file (a video: :func:`track_video`)
-        or is one and ``detections`` is given too, ``fps`` is not a number > 0, ``out`` is
+        or is one and ``detections`` is given too, ``fps`` is not a number > 0, scores lie
+        outside ``[0, 1]`` with raw scores weighing the first stage's IoU, ``out`` is
         the detections file (even with ``force``: the results would overwrite it), the
         detections run past the sequence's last frame, or the configuration is invalid.
     MOTFormatError
@@ -1167,6 +1168,15 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         if len(dets) and dets.frames.max() > info.seq_length:
             raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
                              f"sequence's {info.seq_length} frames ({ini})")
+    tc0 = cfg.tracker
+    if tc0.scores == "raw" and tc0.fuse_score and len(dets) and not (
+            (dets.conf >= 0) & (dets.conf <= 1)).all():
+        raise ValueError(f"{det_path}: scores from {dets.conf.min():.4g} to "
+                         f"{dets.conf.max():.4g}, but with raw scores (--scores raw) the first "
+                         "association stage weighs IoU by the score, which must lie in [0, 1]: "
+                         "calibrate them (--scores calibrated, the default), or turn the "
+                         "weighing off (fuse_score = false under [tracker] in a --config file; "
+                         "fuse_score=False in Python)")
     slices = dets.frame_slices(info.seq_length)
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
     # the detector's own frames: every frame, or every stride-th one, where the frames
