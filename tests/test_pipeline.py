@@ -5,6 +5,7 @@ registries name the valid parts."""
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -510,6 +511,25 @@ def test_offline_tracks_a_file_with_nothing_to_calibrate_on_as_online(tmp_path):
     with pytest.raises(NoOutcomesError, match="no scores to fit"):
         ScoreCalibration.from_frames([Detections(boxes=np.array([[0.0, 0, 5, 5]]))])
     assert issubclass(NoOutcomesError, ValueError)
+
+
+def test_a_frame_number_far_past_the_rest_is_named_not_tracked_for_ever(tmp_path):
+    """A stray frame number of 10^11 (a timestamp in the frame's column) asked
+    ``undelivered_frames`` for a count of every frame up to it (745 GiB: a traceback), and the
+    tracker would then have stepped through 10^11 frames. The runs of frames without rows
+    are found from the frames that have rows, and a detections file alone past
+    ``MAX_FRAMES`` is refused, naming the line."""
+    from vistrack.pipeline import MAX_FRAMES, track_sequence, undelivered_frames
+
+    frames = np.r_[np.repeat([1, 2, 4], 6), 10 ** 11]
+    assert undelivered_frames(frames).tolist() == [3]
+    det = tmp_path / "det.txt"
+    det.write_text("1,-1,10,10,20,40,0.9\n2,-1,12,10,20,40,0.9\n"
+                   f"{MAX_FRAMES + 1},-1,14,10,20,40,0.9\n")
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(det))}, line 3: frame "
+                                         rf"{MAX_FRAMES + 1} is beyond the 100,000,000 frames"):
+        track_sequence(det, tmp_path / "out.txt", fps=10)
+    assert not (tmp_path / "out.txt").exists()
 
 
 def test_the_results_never_overwrite_the_detections_file(tmp_path):

@@ -656,6 +656,11 @@ def _detector_grid(frames: np.ndarray) -> tuple[int, int]:
     return ((int(frames.min()) - 1) % stride + 1 if stride > 1 else 1), stride
 
 
+MAX_FRAMES = 10 ** 8
+"""The last frame a detections file without a sequence folder is tracked up to (39 days at
+30 frames/s): the tracker steps through every frame to its last, and a frame number that is a
+timestamp would keep it going for years."""
+
 UNDELIVERED_AROUND = 5
 """The fewest rows on each side of a run of frames without any for :func:`undelivered_frames`
 to take the run as frames the detector did not deliver: where a detector finds 5 objects a
@@ -703,10 +708,11 @@ def undelivered_frames(frames: ArrayLike, first: int = 1, stride: int = 1,
         return np.zeros(0, np.int64)
     grid = (f - first) // stride  # the grid frames' numbers from 0
     on = (f - first) % stride == 0
-    count = np.bincount(grid[on], minlength=int(grid.max()) + 1)
-    have = np.flatnonzero(count)
+    # the grid frames with rows and their counts (not a count for every frame up to the last,
+    # which a stray frame number of 10^11 made 745 GiB)
+    have, count = np.unique(grid[on], return_counts=True)
     gap = np.diff(have)
-    k = np.flatnonzero((gap > 1) & (count[have[:-1]] >= around) & (count[have[1:]] >= around)
+    k = np.flatnonzero((gap > 1) & (count[:-1] >= around) & (count[1:] >= around)
                        & (gap - 1 <= (np.inf if max_run is None else max_run)))
     runs = [np.arange(have[i] + 1, have[i + 1]) for i in k]
     return first + stride * (np.concatenate(runs) if runs else np.zeros(0, np.int64))
@@ -1088,7 +1094,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     ValueError
         If ``seq_dir`` is a file other than a detections file (a video: :func:`track_video`)
         or is one and ``detections`` is given too, ``fps`` is not a number > 0, scores lie
-        outside ``[0, 1]`` with raw scores weighing the first stage's IoU, ``out`` is
+        outside ``[0, 1]`` with raw scores weighing the first stage's IoU, a detections
+        file alone runs past frame :data:`MAX_FRAMES` (naming its line), ``out`` is
         the detections file (even with ``force``: the results would overwrite it), the
         detections run past the sequence's last frame, or the configuration is invalid.
     MOTFormatError
@@ -1161,6 +1168,14 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     dets = read_detections(det_path, columns, stacklevel=2)
     if info is None:
         assert fps is not None  # refused above without seqinfo.ini
+        if len(dets) and dets.frames.max() > MAX_FRAMES:
+            # tracked frame by frame up to its last frame: 10^11 would never end
+            f = int(dets.frames.max())
+            lines = _lines_of(str(det_path), lambda row: row[0] == f)
+            raise ValueError(f"{det_path}" + (f", line {lines[0]}" if lines else "")
+                             + f": frame {f} is beyond the {MAX_FRAMES:,} frames a detections "
+                             "file is tracked over (a timestamp or another column where the "
+                             "frame should be?)")
         info = SeqInfo.from_detections(det_path if alone else seq_dir, dets, float(fps))
     else:
         if fps is not None:
