@@ -513,6 +513,40 @@ def test_offline_tracks_a_file_with_nothing_to_calibrate_on_as_online(tmp_path):
     assert issubclass(NoOutcomesError, ValueError)
 
 
+def test_boxes_normalised_to_the_image_track_and_are_written_as_in_pixels(tmp_path):
+    """A detections file in fractions of the image (YOLO's xywhn) tracks as the same file in
+    pixels does (the tracker's noise scales with the boxes), but its results were written to
+    2 decimals, a hundredth of the image: KITTI-0004-Car's HOTA fell from 55.9 to 48.4. The
+    results now carry the decimals the boxes need (``box_decimals``), online and offline."""
+    from vistrack.pipeline import track_sequence
+
+    scale = np.array([1000.0, 500.0, 1000.0, 500.0])
+    rng = np.random.default_rng(4)
+    rows = []
+    for k in range(3):
+        start, v = rng.uniform([100, 100], [800, 400]), rng.uniform(-6, 6, 2)
+        for f in range(1, 31):
+            x, y = (start + v * f + rng.normal(0, 0.7, 2)).tolist()
+            rows.append((f, x, y, 30.0 + k, 70.0 + 2 * k, 0.9 - 0.1 * k))
+    pixels, unit = tmp_path / "px.txt", tmp_path / "unit.txt"
+    pixels.write_text("".join(f"{f},-1,{x!r},{y!r},{w!r},{h!r},{c!r}\n"
+                              for f, x, y, w, h, c in rows))
+    unit.write_text("".join(
+        "{},-1,{!r},{!r},{!r},{!r},{!r}\n".format(f, *(np.array([x, y, w, h]) / scale).tolist(),
+                                                  c)
+        for f, x, y, w, h, c in rows))
+    for offline in (False, True):
+        a = read_mot(track_sequence(pixels, tmp_path / f"a{offline}.txt", fps=10,
+                                    offline=offline).out)
+        b = read_mot(track_sequence(unit, tmp_path / f"b{offline}.txt", fps=10,
+                                    offline=offline).out)
+        assert len(a) > 60 and (a.frames == b.frames).all() and (a.ids == b.ids).all()
+        # each to its last decimal: a hundredth of a pixel, and 0.0001 of the image (4
+        # decimals: a thousandth of the boxes' median height, 0.14, or less)
+        np.testing.assert_allclose(b.boxes * scale, a.boxes, atol=0.005 + 0.5e-4 * 1000)
+        assert len((tmp_path / f"b{offline}.txt").read_text().split(",")[2]) == 6  # 0.xxxx
+
+
 def test_a_frame_number_far_past_the_rest_is_named_not_tracked_for_ever(tmp_path):
     """A stray frame number of 10^11 (a timestamp in the frame's column) asked
     ``undelivered_frames`` for a count of every frame up to it (745 GiB: a traceback), and the

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vistrack.io import PartialFile, partial_path, write_mot
+from vistrack.io import PartialFile, box_decimals, partial_path, write_mot
 from vistrack.io.motchallenge import _write_sorted
 from vistrack.io.tracks import BoxesWriter, CSVWriter, MOTWriter, TrackRows, write_boxes
 from vistrack.pipeline import run, track_sequence
@@ -49,11 +49,12 @@ def rows_of(frames):
     return rows
 
 
-def mot_text(rows):
+def mot_text(rows, decimals=2):
     """The results file formatted at once, row by row with str.format: sorted by frame, then
     id, rows of equal keys in the order written."""
     rows = sorted(rows, key=lambda r: (r[0], r[1]))
-    return "".join(f"{f},{i},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{s:.4g},-1,-1,-1\n"
+    d = decimals
+    return "".join(f"{f},{i},{x:.{d}f},{y:.{d}f},{w:.{d}f},{h:.{d}f},{s:.4g},-1,-1,-1\n"
                    for f, i, x, y, w, h, s, _ in rows)
 
 
@@ -83,6 +84,34 @@ def test_mot_and_csv_writers_write_the_same_bytes_as_the_whole_file_at_once(tmp_
     assert len(mot) == len(csv) == len(rows) > 10_000
     assert mot.identities.tolist() == sorted({r[1] for r in rows})
     assert sorted(p.name for p in tmp_path.iterdir()) == ["all.txt", "t.csv", "t.txt"]
+
+
+@pytest.mark.parametrize("decimals", [0, 5, 12])
+def test_boxes_in_other_units_are_written_with_more_decimals(tmp_path, decimals):
+    """Boxes normalised to the image (YOLO's xywhn: 0.13 tall) lost nearly everything to
+    MOTChallenge's 2 decimals; the writers take the decimals, streamed or whole, the same
+    bytes as str.format's."""
+    frames = random_tracks(np.random.default_rng(11), 200)
+    for _, t in frames:
+        t.boxes[:] = t.boxes / 997.0  # small, and not round in any base
+    rows = rows_of(frames)
+    mot, kept = MOTWriter(tmp_path / "t.txt", decimals), TrackRows()
+    for frame, t in frames:
+        mot.write(frame, t)
+        kept.write(frame, t)
+    mot.close()
+    assert (tmp_path / "t.txt").read_text() == mot_text(rows, decimals)
+    ok = np.isfinite(kept.scores)  # write_mot refuses NaN scores
+    write_mot(tmp_path / "w.txt", kept.frames[ok], kept.ids[ok], kept.xywh[ok], kept.scores[ok],
+              decimals=decimals)
+    assert (tmp_path / "w.txt").read_text() == mot_text([r for r, k in zip(rows, ok) if k],
+                                                        decimals)
+    with pytest.raises(ValueError, match="decimals must be an integer in 0-12; got 13"):
+        MOTWriter(tmp_path / "x.txt", 13)
+    with pytest.raises(ValueError, match="decimals must be an integer in 0-12; got 2.5"):
+        write_mot(tmp_path / "x.txt", [1], [1], [[0, 0, 1, 1]], decimals=2.5)
+    assert box_decimals([0.13] * 3) == 4 and box_decimals([10.0]) == 2
+    assert box_decimals([9.0]) == 3 and box_decimals([np.nan, 0.0]) == 2
 
 
 def test_frames_out_of_order_are_sorted_when_the_file_is_closed(tmp_path):

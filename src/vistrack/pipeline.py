@@ -38,6 +38,7 @@ from .io.motchallenge import (
     DETECTION_SUFFIXES,
     MOTTable,
     SeqInfo,
+    box_decimals,
     need_parquet,
     read_mot,
     read_seqinfo,
@@ -1231,7 +1232,10 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     # text beside it under a hidden name first
     text = out.with_name(f".{out.stem}.rows.txt") if parquet else out
     with made_folder(out.parent), _removed(text if parquet else None):
-        writer = None if oc.enabled else MOTWriter(text)
+        # boxes in pixels to MOTChallenge's hundredth; in smaller units (normalised to the
+        # image) to a thousandth of their typical height
+        decimals = box_decimals(dets.boxes[:, 3])
+        writer = None if oc.enabled else MOTWriter(text, decimals)
         stepper, skip = _on_detector_frames(trk, det_path, dets.frames, first, stride,
                                             oc.enabled)
         stats = run(frames, lambda frame: frame_detections(frame.index), stepper,
@@ -1251,7 +1255,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
             conf = np.where(sm.filled, 0.0, sm.scores)
             if stride > 1 or len(skip):
                 F, I, xywh, conf = _fill_between(F, I, xywh, conf, first, stride, skip)
-            write_mot(text, F, I, xywh, conf, force=True)
+            write_mot(text, F, I, xywh, conf, force=True, decimals=decimals)
             n_rows, n_tracks = len(F), len(np.unique(I))
             known, at = np.unique(sm.ids, return_index=True)
             classes_of = lambda ids: sm.classes[at][np.searchsorted(known, ids)]  # noqa: E731

@@ -8,6 +8,7 @@ from .motchallenge import (
     MOTFormatError,
     MOTTable,
     SeqInfo,
+    box_decimals,
     read_mot,
     read_seqinfo,
     sequence_name,
@@ -17,6 +18,7 @@ from .tracks import BoxesWriter, CSVWriter, MOTWriter, Sink, TrackRows, write_bo
 from .video import Frame, VideoError, VideoReader, VideoWriter
 
 __all__ = ["MOT_CLASSES", "MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "read_seqinfo",
-           "sequence_name", "write_mot", "Frame", "VideoError", "VideoReader", "VideoWriter",
+           "sequence_name", "write_mot", "box_decimals", "Frame", "VideoError", "VideoReader",
+           "VideoWriter",
            "Sink", "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes",
            "partial_path", "replacing", "open_replacing", "PartialFile"]

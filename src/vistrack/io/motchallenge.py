@@ -43,7 +43,7 @@ if TYPE_CHECKING:
     from ..types import _Index
 
 __all__ = ["FrameSlices", "MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "write_mot",
-           "read_seqinfo", "MOT_CLASSES", "sequence_name"]
+           "box_decimals", "read_seqinfo", "MOT_CLASSES", "sequence_name"]
 
 MOT_CLASSES = {
     1: "pedestrian", 2: "person_on_vehicle", 3: "car", 4: "bicycle", 5: "motorbike",
@@ -839,7 +839,8 @@ def _parse_lines(path: str, text: str, lines: list[str]) -> np.ndarray:
 
 
 def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes: ArrayLike,
-              conf: ArrayLike | None = None, *, force: bool = False) -> Path:
+              conf: ArrayLike | None = None, *, force: bool = False,
+              decimals: int = 2) -> Path:
     """Write a MOTChallenge results file: ``frame, id, left, top, width, height, conf, -1, -1,
     -1``, sorted by frame and id. Refuses to overwrite an existing file unless ``force``.
 
@@ -850,11 +851,14 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
     frames, ids : (N,) array_like
         Frame and identity of each row (integers).
     boxes : (N, 4) array_like
-        Boxes ``left, top, width, height``, written with two decimals.
+        Boxes ``left, top, width, height``, written with ``decimals`` decimals.
     conf : (N,) array_like, optional
         Scores, written with 4 significant digits; default 1.
     force : bool
         Overwrite an existing file.
+    decimals : int
+        The boxes' decimals: 2, MOTChallenge's (a hundredth of a pixel), or more for boxes
+        in other units (:func:`box_decimals`; 0 to 12).
 
     Returns
     -------
@@ -866,7 +870,8 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
     FileExistsError
         If ``path`` exists and ``force`` is False.
     ValueError
-        If the columns differ in length, or a row is one :func:`read_mot` would refuse: a
+        If ``decimals`` is not an integer in 0-12, the columns differ in length, or a row is
+        one :func:`read_mot` would refuse: a
         frame or id that is not a whole number, a frame below 1, a box that is not finite or
         of negative width or height, a score that is not finite (naming the first such row).
 
@@ -882,6 +887,7 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
     path = Path(path)
     if path.exists() and not force:
         raise FileExistsError(f"{path} exists; pass force=True (--force) to overwrite it")
+    _check_decimals(decimals)
     f, i = _integers(frames, "frames"), _integers(ids, "ids")
     b = np.asarray(boxes, dtype=float)
     if b.size == 0 or b.shape == (4,):  # no rows, or one
@@ -903,11 +909,62 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
             k = int(np.argmax(bad))
             v = column[k]
             raise ValueError(what.format(k=k, v=v.tolist() if np.ndim(v) else v))
-    return _write_sorted(path, f, i, b, c)
+    return _write_sorted(path, f, i, b, c, decimals)
+
+
+def _check_decimals(decimals: int) -> None:
+    if isinstance(decimals, bool) or not isinstance(decimals, (int, np.integer)) or not (
+            0 <= decimals <= 12):
+        raise ValueError(f"decimals must be an integer in 0-12; got {decimals!r}")
+
+
+def box_decimals(heights: ArrayLike) -> int:
+    """The decimals that write boxes of these heights to a thousandth of the typical one: 2
+    (MOTChallenge's hundredth of a pixel) for boxes 10 units tall or more, more for smaller
+    ones (boxes in fractions of the image, as YOLO's normalised ones: 0.13 tall, 4).
+
+    Parameters
+    ----------
+    heights : (N,) array_like
+        The boxes' heights (those above 0 count; none: 2).
+
+    Returns
+    -------
+    int
+        2 to 12.
+
+    Examples
+    --------
+    >>> box_decimals([80.0, 120.0]), box_decimals([0.13, 0.2]), box_decimals([])
+    (2, 4, 2)
+    """
+    h = np.asarray(heights, dtype=float).ravel()
+    h = h[np.isfinite(h) & (h > 0)]
+    if not len(h):
+        return 2
+    return int(min(12, max(2, math.ceil(math.log10(1000.0 / float(np.median(h))) - 1e-9))))
+
+
+def _row_format(decimals: int) -> str:
+    """``_ROW`` with the boxes to ``decimals`` decimals."""
+    box = f"%.{decimals}f"
+    return f"%d,%d,{box},{box},{box},{box},%.4g,-1,-1,-1\n"
+
+
+def _format_rows_with(f: np.ndarray, i: np.ndarray, b: np.ndarray, c: np.ndarray,
+                      decimals: int) -> bytes:
+    """The rows with the boxes to ``decimals`` decimals, as bytes (the column-wise formatter
+    for MOTChallenge's 2, Python's %-format row by row for others)."""
+    if decimals == 2:
+        return _format_rows(f, i, b, c)
+    row = _row_format(decimals)
+    cells = zip(f.tolist(), i.tolist(), *np.asarray(b, float).T.tolist(),
+                np.asarray(c, float).tolist())
+    return "".join(row % r for r in cells).encode()
 
 
 def _write_sorted(path: Path, f: np.ndarray, i: np.ndarray, b: np.ndarray,
-                  c: np.ndarray) -> Path:
+                  c: np.ndarray, decimals: int = 2) -> Path:
     """The rows, sorted by frame and id, formatted into ``path`` (any values: the checks are
     :func:`write_mot`'s)."""
     if len(f) > 1 and not np.all((f[1:] > f[:-1]) | ((f[1:] == f[:-1]) & (i[1:] >= i[:-1]))):
@@ -916,7 +973,7 @@ def _write_sorted(path: Path, f: np.ndarray, i: np.ndarray, b: np.ndarray,
     with replacing(path) as part, open(part, "wb") as out:
         for s in range(0, len(f), _WRITE_BLOCK):
             e = min(s + _WRITE_BLOCK, len(f))
-            out.write(_format_rows(f[s:e], i[s:e], b[s:e], c[s:e]))
+            out.write(_format_rows_with(f[s:e], i[s:e], b[s:e], c[s:e], decimals))
     return path
 
 
