@@ -274,6 +274,30 @@ def test_tracks_written_as_parquet_are_the_text_files_rows(tmp_path):
                                   read_mot(tmp_path / "tFalse.txt").to_pandas())
 
 
+def test_tracks_written_as_csv_have_a_header_and_read_back_as_detections(tmp_path):
+    """``--out tracks.csv`` wrote MOTChallenge's text, headerless, under a .csv name, which
+    ``vistrack track`` could not read back (a .csv file needs a header); it is now the
+    Parquet file's rows as CSV, read back by ``from_pandas`` and as detections."""
+    pd = pytest.importorskip("pandas")
+    from tests.test_fit import _sequence
+    from vistrack.io import MOTTable, read_mot
+    from vistrack.pipeline import track_sequence
+
+    seq = _sequence(tmp_path / "SIM", np.random.default_rng(3), n_objects=6, T=40)
+    for offline in (False, True):
+        txt = track_sequence(seq, tmp_path / f"t{offline}.txt", offline=offline)
+        csv = track_sequence(seq, tmp_path / f"t{offline}.csv", offline=offline)
+        assert (csv.rows, csv.tracks) == (txt.rows, txt.tracks) and csv.rows > 0
+        want = read_mot(txt.out)
+        df = pd.read_csv(csv.out)
+        assert list(df.columns) == list(want.to_pandas().columns)
+        back = MOTTable.from_pandas(df)
+        assert np.array_equal(back.boxes, want.boxes) and np.array_equal(back.ids, want.ids)
+        # and as the detections of another run: each box where the text file has it
+        again = track_sequence(csv.out, tmp_path / f"again{offline}.txt", fps=10)
+        assert again.detections == len(want)
+
+
 def test_parquet_without_pyarrow_is_a_clear_error(tmp_path, monkeypatch, capsys):
     from tests.test_fit import _sequence
     from vistrack.cli import main

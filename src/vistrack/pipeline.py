@@ -1036,8 +1036,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         its frames up to the last one it has, in an image as large as its boxes reach.
     out : str or Path
         The results file to write (not overwritten unless ``force``): MOTChallenge's text,
-        or Parquet if its name ends in ``.parquet`` (the same rows, with the columns of
-        :meth:`~vistrack.io.MOTTable.to_pandas`; needs pandas and pyarrow).
+        or Parquet if its name ends in ``.parquet`` (needs pandas and pyarrow), CSV with a
+        header if in ``.csv`` (needs pandas): the same rows, with the columns of
+        :meth:`~vistrack.io.MOTTable.to_pandas` and each track's class.
     detections : str or Path, optional
         Another detections file (default ``seq_dir/det/det.txt``): MOTChallenge's format, or
         a CSV file with a header (``.csv``; read by pandas, its columns as
@@ -1128,9 +1129,15 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     """
     out = Path(out)
     check_output(out, force=force)
-    parquet = out.suffix.lower() == ".parquet"
-    if parquet:
+    # Parquet and CSV: the text's rows as MOTTable.to_pandas names them, with a header
+    table_kind = {".parquet": "parquet", ".csv": "csv"}.get(out.suffix.lower())
+    parquet = table_kind is not None
+    if table_kind == "parquet":
         need_parquet()
+    elif table_kind == "csv":
+        from .io.motchallenge import _pandas
+
+        _pandas("a CSV results file")
     cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
     seq_dir = Path(seq_dir)
     if fps is not None:
@@ -1262,7 +1269,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         if parquet:
             # the text has no class column; Parquet's has, each row its track's class
             table = read_mot(text)
-            replace(table, classes=classes_of(table.ids).astype(np.int64)).to_parquet(out)
+            table = replace(table, classes=classes_of(table.ids).astype(np.int64))
+            table.to_parquet(out) if table_kind == "parquet" else table.to_csv(out)
     _warn_calibration(trk, str(det_path if alone else seq_dir))
     derived = derived_values(trk)
     if stride > 1:

@@ -232,6 +232,21 @@ class MOTTable:
             df.to_parquet(part, index=False, engine="pyarrow")
         return Path(path)
 
+    def to_csv(self, path: str | os.PathLike) -> Path:
+        """Write :meth:`to_pandas`'s frame to a CSV file with a header, whole or not at all;
+        ``MOTTable.from_pandas(pandas.read_csv(path))`` reads it back, as does ``vistrack
+        track`` as detections. Needs pandas.
+
+        Raises
+        ------
+        ImportError
+            If pandas is missing.
+        """
+        df = self.to_pandas()
+        with replacing(path) as part:
+            df.to_csv(part, index=False)
+        return Path(path)
+
     @classmethod
     def from_pandas(cls, df: Any, columns: dict[str, str] | None = None,
                     path: str = "") -> MOTTable:
