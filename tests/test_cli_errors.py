@@ -211,8 +211,13 @@ def test_a_detections_file_alone_needs_its_frame_rate_once(tmp_path, capsys, bad
 @pytest.mark.parametrize("option, value, message", [
     ("--min-area", "-1", "--min-area must be a number >= 0; got -1"),
     ("--min-area", "nan", "--min-area must be a number >= 0; got nan"),
-    ("--fps", "0", "--fps must be a number > 0; got 0"),
-    ("--fps", "inf", "--fps must be a number > 0; got inf"),
+    ("--fps", "0", "--fps must be a number from 0.001 to 1e+06 (frames a second); got 0"),
+    ("--fps", "inf", "--fps must be a number from 0.001 to 1e+06 (frames a second); got inf"),
+    # the motion's noise scales with powers of the rate: 1e-300 overflowed it (a traceback)
+    ("--fps", "1e-300", "--fps must be a number from 0.001 to 1e+06 (frames a second); got "
+                        "1e-300"),
+    ("--fps", "1e300", "--fps must be a number from 0.001 to 1e+06 (frames a second); got "
+                       "1e+300"),
     ("--stop", "-3", "--stop must be a frame number >= 1; got -3"),
     ("--high", "nan", "--high must be a finite number; got nan"),
     ("--max-lost", "inf", "--max-lost must be a finite number; got inf"),

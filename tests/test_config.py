@@ -341,6 +341,11 @@ def test_the_command_lines_defaults_are_the_configurations():
     cfg = TrackConfig.preset("bytetrack")
     for option, table, key, _, _, _, default in _SETTINGS:
         assert getattr(getattr(cfg, table), key) == default, option
+    # and --fps's range is the one the motion model scales to
+    from vistrack.cli import _FPS
+    from vistrack.models.box import FRAME_RATES
+
+    assert _FPS == FRAME_RATES
 
 
 def test_video_mode_options_keep_the_front_ends_defaults(tmp_path):

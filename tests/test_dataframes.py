@@ -198,6 +198,24 @@ def test_detections_from_a_csv_file_with_its_own_column_names(tmp_path, capsys):
     assert not (tmp_path / "z.txt").exists()
 
 
+def test_a_csv_file_pandas_cannot_read_is_named(tmp_path):
+    """pandas' own errors (a row of more values than the header, an empty file) came out
+    without the file's name: ``Error tokenizing data. C error: Expected 5 fields in line 3,
+    saw 6``."""
+    from vistrack.io.motchallenge import MOTFormatError
+    from vistrack.pipeline import track_sequence
+
+    bad, empty = tmp_path / "bad.csv", tmp_path / "empty.csv"
+    bad.write_text("frame,bb_left,bb_top,bb_width,bb_height\n1,2,3,4,5\n1,2,3,4,5,6\n")
+    empty.write_text("")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{bad}: not a CSV file of detections: Expected 5 fields in line 3, saw 6")):
+        track_sequence(bad, tmp_path / "b.txt", fps=10)
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{empty}: not a CSV file of detections: No columns to parse from file")):
+        track_sequence(empty, tmp_path / "e.txt", fps=10)
+
+
 def test_detections_to_and_from_supervision_and_ultralytics():
     sv = pytest.importorskip("supervision")
     from types import SimpleNamespace

@@ -103,7 +103,9 @@ def test_state_layout_matches_seed_2d_example():
         (lambda: BoxMotion(std_meas=(0.05, 0.05, 0.0, 0.05)),
          "std_meas must be a finite number > 0"),
         (lambda: BoxMotion(frame_rate=0), "frame_rate must be a finite number > 0"),
-        (lambda: BoxMotion().at_rate(np.inf), "frame_rate must be a finite number > 0"),
+        (lambda: BoxMotion().at_rate(np.inf), r"frame_rate must be a number from 0.001 to "
+                                               r"1e\+06 frames/s; got inf"),
+        (lambda: BoxMotion().at_rate(1e-300), "frame_rate must be a number from 0.001"),
         (lambda: ConstantAcceleration(discretisation="rk4"), "discretisation must be"),
         (lambda: Position(dim=2, r=0.0), "r must be a finite variance > 0"),
         (lambda: Position(dim=2, r=np.eye(3)), r"r must have shape \(2, 2\)"),

@@ -213,9 +213,15 @@ def _tracker_problem(name: str) -> str | None:
             f"your own); got {name!r}")
 
 
+# the frame rates the motion model scales to: vistrack.models.box.FRAME_RATES (not imported
+# to check the options; a test checks the two agree)
+_FPS = (1e-3, 1e6)
+
+
 def _number_problem(args: argparse.Namespace) -> str | None:
     """The first numeric option whose value is out of its range, as a message, or None."""
-    checks = (("fps", lambda v: math.isfinite(v) and v > 0, "a number > 0"),
+    checks = (("fps", lambda v: _FPS[0] <= v <= _FPS[1],
+               f"a number from {_FPS[0]:g} to {_FPS[1]:g} (frames a second)"),
               ("stop", lambda v: v >= 1, "a frame number >= 1"),
               ("min_area", lambda v: math.isfinite(v) and v >= 0, "a number >= 0"))
     for option, ok, what in checks:

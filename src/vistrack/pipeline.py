@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import importlib
 import math
+import re
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -36,6 +37,7 @@ from .evaluation.mot import MOTCounts, _lines_of, evaluate_mot
 from .io.atomic import check_output, made_folder
 from .io.motchallenge import (
     DETECTION_SUFFIXES,
+    MOTFormatError,
     MOTTable,
     SeqInfo,
     box_decimals,
@@ -45,7 +47,7 @@ from .io.motchallenge import (
     write_mot,
 )
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
-from .models.box import BoxMotion
+from .models.box import FRAME_RATES, BoxMotion
 from .tracking.base import Tracker
 from .tracking.box import BoxTracker, BoxTrackerConfig
 from .tracking.calibration import NoOutcomesError, ScoreCalibration
@@ -1004,7 +1006,14 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
     else:
         from .io.motchallenge import _COLUMNS, _pandas
 
-        df = _pandas("a CSV file of detections").read_csv(path)
+        pandas = _pandas("a CSV file of detections")
+        try:
+            df = pandas.read_csv(path)
+        except (pandas.errors.ParserError, pandas.errors.EmptyDataError) as e:
+            # pandas' own words ("Expected 5 fields in line 3, saw 6"), with the file's name
+            raise MOTFormatError(f"{path}: not a CSV file of detections: "
+                                 + re.sub(r"^(Error tokenizing data\. )?(C error: )?", "",
+                                          str(e).strip())) from None
         table = MOTTable.from_pandas(df, columns, path=str(path))
         names = dict(columns or {})
         conf = names.get("conf", "conf")
@@ -1142,11 +1151,12 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     seq_dir = Path(seq_dir)
     if fps is not None:
         try:
-            ok = not isinstance(fps, bool) and 0 < float(fps) < np.inf
+            ok = not isinstance(fps, bool) and FRAME_RATES[0] <= float(fps) <= FRAME_RATES[1]
         except (TypeError, ValueError):
             ok = False
         if not ok:
-            raise ValueError(f"fps must be a number > 0; got {fps!r}")
+            raise ValueError(f"fps must be a number from {FRAME_RATES[0]:g} to "
+                             f"{FRAME_RATES[1]:g} (frames a second); got {fps!r}")
     alone = seq_dir.is_file()
     if alone:
         if seq_dir.suffix.lower() not in DETECTION_SUFFIXES:

@@ -34,7 +34,12 @@ import numpy as np
 from .._jit import njit
 from .._prebuilt import kernel
 
-__all__ = ["BoxMotion"]
+__all__ = ["BoxMotion", "FRAME_RATES"]
+
+FRAME_RATES = (1e-3, 1e6)
+"""The frame rates (frames a second) a motion model is scaled to: one frame in 1,000 s to a
+million a second. The noise scales with powers of the rate (up to 1.5), so rates far outside
+overflow it, or make it 0."""
 
 
 @kernel
@@ -179,7 +184,7 @@ class BoxMotion:
         Raises
         ------
         ValueError
-            If ``frame_rate`` is not a finite number > 0.
+            If ``frame_rate`` is not a number in :data:`FRAME_RATES` (0.001 to 10^6).
 
         Examples
         --------
@@ -187,8 +192,9 @@ class BoxMotion:
         >>> m.at_rate(30.0) is m, m.at_rate(15.0).frame_rate
         (True, 15.0)
         """
-        if not (np.isfinite(frame_rate) and frame_rate > 0):
-            raise ValueError(f"frame_rate must be a finite number > 0; got {frame_rate}")
+        if not (np.isfinite(frame_rate) and FRAME_RATES[0] <= frame_rate <= FRAME_RATES[1]):
+            raise ValueError(f"frame_rate must be a number from {FRAME_RATES[0]:g} to "
+                             f"{FRAME_RATES[1]:g} frames/s; got {frame_rate:g}")
         if frame_rate == self.frame_rate:
             return self
         r = self.frame_rate / float(frame_rate)
