@@ -333,6 +333,26 @@ def test_each_flat_override_names_one_setting():
     assert cfg.tracker.calibration_iou == 0.5 and cfg.offline.link_iou == 0.4
 
 
+def test_offline_settings_without_the_offline_mode_say_they_change_nothing(seq, tmp_path):
+    """``--max-gap`` or ``--start-score`` without ``--offline`` gave the online tracks, byte
+    for byte, without a word; the run now says so. With ``--offline``, or a configuration file
+    that turns it on, nothing is said."""
+    r = cli(seq, "--out", tmp_path / "a.txt", "--max-gap", "2", "--start-score", "0.9")
+    assert r.returncode == 0 and ("vistrack track: warning: --max-gap, --start-score: offline "
+                                  "settings, which change nothing without --offline") in r.stderr
+    r = cli(seq, "--out", tmp_path / "b.txt", "--max-gap", "2", "--offline")
+    assert r.returncode == 0 and "warning" not in r.stderr
+    (tmp_path / "off.toml").write_text("[offline]\nenabled = true\n")
+    r = cli(seq, "--out", tmp_path / "c.txt", "--max-gap", "2", "--config", tmp_path / "off.toml")
+    assert r.returncode == 0 and "warning" not in r.stderr
+    assert (tmp_path / "b.txt").read_bytes() == (tmp_path / "c.txt").read_bytes()
+    # SORT has one stage: its low threshold is read by nothing
+    r = cli(seq, "--out", tmp_path / "s.txt", "--tracker", "sort", "--low", "0.1")
+    assert r.returncode == 0 and ("vistrack track: warning: --low: the second association "
+                                  "stage's threshold, which changes nothing with a tracker of "
+                                  "one stage (sort)") in r.stderr
+
+
 def test_the_command_lines_defaults_are_the_configurations():
     """The defaults `vistrack track --help` states are the configuration's own (the parser
     does not load the tracker to read them)."""

@@ -380,6 +380,16 @@ def _track(args: argparse.Namespace) -> int:
         cfg, problem = _box_config(args)
         if problem:
             return fail(problem)
+        unused = [o for o, table, *_ in _SETTINGS
+                  if table == "offline" and getattr(args, o) is not None]
+        if unused and cfg is not None and not cfg.offline.enabled:
+            warnings.warn(f"{', '.join('--' + o.replace('_', '-') for o in unused)}: offline "
+                          "settings, which change nothing without --offline", UserWarning,
+                          stacklevel=1)
+        if args.low is not None and cfg is not None and not cfg.tracker.two_stage:
+            warnings.warn("--low: the second association stage's threshold, which changes "
+                          f"nothing with a tracker of one stage ({cfg.name})", UserWarning,
+                          stacklevel=1)
     if args.out is not None:
         columns = None
         if args.columns:
@@ -833,7 +843,8 @@ def build_parser() -> argparse.ArgumentParser:
         "of detections that last, as the detector's best do; learnt from the detections, so "
         "any score scale works), or with --scores "
         "raw to the scores themselves. Each option is put over --config, and the file over "
-        "its preset ([tracker] name, which --tracker must then agree with).")
+        "its preset ([tracker] name, which --tracker must then agree with). The defaults "
+        "below are bytetrack's; --print-config --tracker NAME shows another preset's.")
     box.add_argument("--config", metavar="FILE",
                      help="the whole tracker configuration, TOML (as --print-config writes)")
     box.add_argument("--print-config", action="store_true",
