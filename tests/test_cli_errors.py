@@ -205,6 +205,10 @@ def test_a_detections_file_alone_needs_its_frame_rate_once(tmp_path, capsys, bad
         track_sequence(det, out)
     assert str(e.value) == f"{det} is a detections file alone: give its frame rate (fps, --fps)"
     assert not out.exists()
+    # a mistyped input is named as given (it was "nothere.txt/det/det.txt does not exist")
+    assert main(["track", str(tmp_path / "nothere.txt"), "--out", str(out), "--fps", "10"]) == 2
+    one_line(capsys, "track", f"{tmp_path / 'nothere.txt'} does not exist (a sequence folder, "
+             "or a detections file)")
 
 
 # ------------------------------------------------------------------- numbers and names
@@ -367,14 +371,16 @@ def test_debug_shows_a_user_errors_traceback(tmp_path, capsys):
     out = tmp_path / "boxes.txt"
     out.write_text("earlier")
     argv = ["track-one", str(VIDEO), "--init", "1,2,3,4", "--out", str(out)]
-    with pytest.raises(FileExistsError, match="pass --force"):
-        main(["--debug", *argv])
-    with pytest.raises(FileExistsError, match="pass --force"):
-        main([*argv, "--debug"])  # after the command too
+    # the traceback, then the one line; the status a user's mistake has without --debug (it
+    # was 1, a bug's)
+    for args in (["--debug", *argv], [*argv, "--debug"]):  # after the command too
+        assert main(args) == 2
+        err = capsys.readouterr().err
+        assert "Traceback (most recent call last)" in err and "FileExistsError: --out " in err
+        assert err.rstrip().splitlines()[-1].startswith("vistrack track-one: error: --out ")
     r = cli("--debug", *argv)
-    assert r.returncode == 1
+    assert r.returncode == 2
     assert "Traceback (most recent call last)" in r.stderr
-    assert r.stderr.rstrip().splitlines()[-1].startswith("FileExistsError: --out ")
 
 
 def test_a_bug_always_shows_its_traceback(tmp_path, monkeypatch):
@@ -453,5 +459,5 @@ def test_eval_errors_are_one_line_and_debug_shows_them(tmp_path, capsys):
     missing = tmp_path / "nothere.txt"
     assert main(["eval", "--gt", str(missing), "--pred", str(GT)]) == 2
     one_line(capsys, "eval", f"{missing}: No such file or directory")
-    with pytest.raises(FileNotFoundError):
-        main(["eval", "--debug", "--gt", str(missing), "--pred", str(GT)])
+    assert main(["eval", "--debug", "--gt", str(missing), "--pred", str(GT)]) == 2
+    assert "FileNotFoundError" in capsys.readouterr().err

@@ -10,6 +10,7 @@ import re
 import signal
 import sys
 import threading
+import traceback
 import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -1083,8 +1084,8 @@ def _run(args: argparse.Namespace) -> int:
             pass
         return 1
     except _user_errors() as exc:
-        if args.debug:
-            raise
+        if args.debug:  # the traceback, and still a user's mistake's status (2, not 1)
+            traceback.print_exc()
         return _fail(args.command, _message(exc))
 
 

@@ -1157,6 +1157,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         if not ok:
             raise ValueError(f"fps must be a number from {FRAME_RATES[0]:g} to "
                              f"{FRAME_RATES[1]:g} (frames a second); got {fps!r}")
+    if not seq_dir.exists():  # not "SEQ/det/det.txt does not exist" for a mistyped SEQ
+        raise FileNotFoundError(f"{seq_dir} does not exist (a sequence folder, or a "
+                                "detections file)")
     alone = seq_dir.is_file()
     if alone:
         if seq_dir.suffix.lower() not in DETECTION_SUFFIXES:
