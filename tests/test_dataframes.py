@@ -1,5 +1,6 @@
 """Tracks as pandas DataFrames, named as trackpy names particles' columns, and back."""
 
+import importlib.util
 import re
 import sys
 
@@ -298,6 +299,7 @@ def test_tracks_written_as_csv_have_a_header_and_read_back_as_detections(tmp_pat
     Parquet file's rows as CSV, read back by ``from_pandas`` and as detections."""
     pd = pytest.importorskip("pandas")
     from tests.test_fit import _sequence
+    from vistrack.evaluation import evaluate_files
     from vistrack.io import MOTTable, read_mot
     from vistrack.pipeline import track_sequence
 
@@ -314,6 +316,14 @@ def test_tracks_written_as_csv_have_a_header_and_read_back_as_detections(tmp_pat
         # and as the detections of another run: each box where the text file has it
         again = track_sequence(csv.out, tmp_path / f"again{offline}.txt", fps=10)
         assert again.detections == len(want)
+        # vistrack eval scores it as the text file (and the Parquet one)
+        scores = [evaluate_files([("s", seq / "gt" / "gt.txt", out, seq / "seqinfo.ini")])
+                  ["s"] for out in (txt.out, csv.out)]
+        if importlib.util.find_spec("pyarrow") is not None:
+            pq = track_sequence(seq, tmp_path / f"t{offline}.parquet", offline=offline)
+            scores.append(evaluate_files([("s", seq / "gt" / "gt.txt", pq.out,
+                                           seq / "seqinfo.ini")])["s"])
+        assert all(s.summary() == scores[0].summary() for s in scores) and scores[0].TP > 0
 
 
 def test_parquet_without_pyarrow_is_a_clear_error(tmp_path, monkeypatch, capsys):

@@ -960,7 +960,8 @@ def build_parser() -> argparse.ArgumentParser:
         "MOTP, IDF1 and the counts, per sequence and combined.")
     ev.add_argument("--gt", help="ground-truth file (SEQ/gt/gt.txt; seqinfo.ini is read "
                     "beside), or the sequence folder SEQ holding it")
-    ev.add_argument("--pred", help="results file")
+    ev.add_argument("--pred", help="results file: MOTChallenge's text, or the .parquet or .csv "
+                    "file vistrack track --out writes")
     ev.add_argument("--gt-dir", help="folder of sequences SEQ/gt/gt.txt")
     ev.add_argument("--plots", metavar="DIR",
                     help="also draw HOTA, DetA and AssA over the localisation threshold α, "

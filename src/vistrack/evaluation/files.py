@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..batch import _one_line
-from ..io.motchallenge import MOTTable, read_mot, read_seqinfo
+from ..io.motchallenge import MOTFormatError, MOTTable, read_mot, read_seqinfo
 from .mot import Matches, MOTCounts, clear_matches, combine, evaluate_mot
 from .sanity import sanity_warnings
 
@@ -61,7 +61,25 @@ def _read(pair: tuple[str, Path, Path, Path | None]) -> tuple[MOTTable, MOTTable
     """A pair's ground truth, results and sequence length (None without seqinfo.ini)."""
     _, gt, pred, info = pair
     n = read_seqinfo(info).seq_length if info is not None else None
-    return read_mot(gt), read_mot(pred), n
+    return read_mot(gt), _read_results(Path(pred)), n
+
+
+def _read_results(path: Path) -> MOTTable:
+    """A results file: MOTChallenge's text, or the Parquet or CSV file ``vistrack track
+    --out`` writes (``MOTTable.to_pandas``'s columns)."""
+    suffix = path.suffix.lower()
+    if suffix not in (".parquet", ".csv"):
+        return read_mot(path)
+    from ..io.motchallenge import _pandas, need_parquet
+
+    if suffix == ".parquet":
+        need_parquet()
+    pandas = _pandas("a CSV results file")
+    try:
+        df = pandas.read_parquet(path) if suffix == ".parquet" else pandas.read_csv(path)
+    except (pandas.errors.ParserError, pandas.errors.EmptyDataError) as e:
+        raise MOTFormatError(f"{path}: not a CSV results file: {e}") from None
+    return MOTTable.from_pandas(df, path=str(path))
 
 
 def _score_on(executor: Executor, pairs: list[tuple[str, Path, Path, Path | None]],
@@ -100,7 +118,8 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     Parameters
     ----------
     pairs : list of (str, Path, Path, Path or None)
-        Each sequence's name, ground-truth file, results file and ``seqinfo.ini`` (which
+        Each sequence's name, ground-truth file, results file (MOTChallenge's text, or the
+        ``.parquet`` or ``.csv`` file ``vistrack track --out`` writes) and ``seqinfo.ini`` (which
         gives the number of frames; None: the files' last frame).
     benchmark : {"auto", "MOT15", "MOT16", "MOT17", "MOT20"}
         The ground truth's preprocessing, passed to
