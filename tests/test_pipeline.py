@@ -566,6 +566,28 @@ def test_a_frame_number_far_past_the_rest_is_named_not_tracked_for_ever(tmp_path
     assert not (tmp_path / "out.txt").exists()
 
 
+def test_ground_truth_given_as_detections_is_named_as_such(tmp_path):
+    """Detections carry no identity (-1); ground truth or a tracker's results given as
+    detections were tracked without a word, their ignored boxes (conf 0) as detections. A
+    file whose every row has an identity now says so; detections do not."""
+    import warnings
+
+    from vistrack.pipeline import track_sequence
+
+    gt = tmp_path / "gt.txt"
+    gt.write_text("".join(f"{f},{i},{10 + 3 * f + 100 * i},20,20,40,1,1,1\n"
+                          for f in range(1, 11) for i in (1, 2)))
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{gt}: every row has an identity (the second value; detections have -1): ground "
+            "truth or tracks rather than detections?")):
+        track_sequence(gt, tmp_path / "a.txt", fps=10)
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{f},-1,{10 + 3 * f},20,20,40,0.9\n" for f in range(1, 11)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        track_sequence(det, tmp_path / "b.txt", fps=10)
+
+
 def test_the_results_never_overwrite_the_detections_file(tmp_path):
     """``--out`` naming the detections file itself, with ``--force``, wrote the results over
     the detections: the input was lost. It is refused, and the file left as it was."""

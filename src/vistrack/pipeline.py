@@ -1024,6 +1024,13 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
                           + (f" (columns not read: {', '.join(unread)}; name the score's "
                              "column: --columns conf=NAME, or columns={'conf': NAME})"
                              if unread else ""), UserWarning, stacklevel=2)
+    if len(table) and (table.ids >= 0).all():
+        # detections carry no identity (-1); a file whose every row has one is ground truth
+        # or a tracker's results, whose ignored boxes (conf 0) would be tracked as detections
+        warnings.warn(f"{path}: every row has an identity (the second value; detections have "
+                      "-1): ground truth or tracks rather than detections? The identities are "
+                      "not used, and each row is tracked as a detection scoring its conf",
+                      UserWarning, stacklevel=stacklevel + 1)
     _warn_no_area(table, path, stacklevel + 1)
     _warn_classes(table, path, stacklevel + 1)
     return table
