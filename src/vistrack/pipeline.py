@@ -1111,7 +1111,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         first, before anything is read.
     ValueError
         If ``seq_dir`` is a file other than a detections file (a video: :func:`track_video`)
-        or is one and ``detections`` is given too, ``fps`` is not a number > 0, scores lie
+        or is one and ``detections`` is given too, ``fps`` is not a number from 0.001 to
+        10^6 (:data:`vistrack.models.box.FRAME_RATES`), scores lie
         outside ``[0, 1]`` with raw scores weighing the first stage's IoU, a detections
         file alone runs past frame :data:`MAX_FRAMES` (naming its line), ``out`` is
         the detections file (even with ``force``: the results would overwrite it), the
@@ -1119,7 +1120,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     MOTFormatError
         If a file is malformed.
     ImportError
-        If ``out`` is Parquet and pandas or pyarrow is missing.
+        If ``out`` is Parquet and pandas or pyarrow is missing, or CSV and pandas is.
 
     Examples
     --------
@@ -1147,7 +1148,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     check_output(out, force=force)
     # Parquet and CSV: the text's rows as MOTTable.to_pandas names them, with a header
     table_kind = {".parquet": "parquet", ".csv": "csv"}.get(out.suffix.lower())
-    parquet = table_kind is not None
+    tabular = table_kind is not None
     if table_kind == "parquet":
         need_parquet()
     elif table_kind == "csv":
@@ -1257,8 +1258,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     # online, the rows go to the file as they come; offline, the tracker records its tracks,
     # which are smoothed at the end and written then. Parquet: the same rows, written as
     # text beside it under a hidden name first
-    text = out.with_name(f".{out.stem}.rows.txt") if parquet else out
-    with made_folder(out.parent), _removed(text if parquet else None):
+    text = out.with_name(f".{out.stem}.rows.txt") if tabular else out
+    with made_folder(out.parent), _removed(text if tabular else None):
         # boxes in pixels to MOTChallenge's hundredth; in smaller units (normalised to the
         # image) to a thousandth of their typical height
         decimals = box_decimals(dets.boxes[:, 3])
@@ -1286,11 +1287,14 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
             n_rows, n_tracks = len(F), len(np.unique(I))
             known, at = np.unique(sm.ids, return_index=True)
             classes_of = lambda ids: sm.classes[at][np.searchsorted(known, ids)]  # noqa: E731
-        if parquet:
-            # the text has no class column; Parquet's has, each row its track's class
+        if tabular:
+            # the text has no class column; Parquet's and CSV's have, each row its track's
             table = read_mot(text)
             table = replace(table, classes=classes_of(table.ids).astype(np.int64))
-            table.to_parquet(out) if table_kind == "parquet" else table.to_csv(out)
+            if table_kind == "parquet":
+                table.to_parquet(out)
+            else:
+                table.to_csv(out)
     _warn_calibration(trk, str(det_path if alone else seq_dir))
     derived = derived_values(trk)
     if stride > 1:
