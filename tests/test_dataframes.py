@@ -293,7 +293,7 @@ def test_tracks_written_as_parquet_are_the_text_files_rows(tmp_path):
                                   read_mot(tmp_path / "tFalse.txt").to_pandas())
 
 
-def test_tracks_written_as_csv_have_a_header_and_read_back_as_detections(tmp_path):
+def test_tracks_written_as_csv_have_a_header_and_read_back_as_detections(tmp_path, capsys):
     """``--out tracks.csv`` wrote MOTChallenge's text, headerless, under a .csv name, which
     ``vistrack track`` could not read back (a .csv file needs a header); it is now the
     Parquet file's rows as CSV, read back by ``from_pandas`` and as detections."""
@@ -324,6 +324,23 @@ def test_tracks_written_as_csv_have_a_header_and_read_back_as_detections(tmp_pat
             scores.append(evaluate_files([("s", seq / "gt" / "gt.txt", pq.out,
                                            seq / "seqinfo.ini")])["s"])
         assert all(s.summary() == scores[0].summary() for s in scores) and scores[0].TP > 0
+    # vistrack eval --pred-dir finds SEQ.csv (or SEQ.parquet) where there is no SEQ.txt, and
+    # refuses two files for one sequence
+    import json
+
+    from vistrack.cli import main
+
+    res = tmp_path / "res"
+    res.mkdir()
+    (res / "SIM.csv").write_bytes((tmp_path / "tFalse.csv").read_bytes())
+    assert main(["eval", "--gt-dir", str(tmp_path), "--pred-dir", str(res), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["SIM"]["HOTA"] == evaluate_files(
+        [("s", seq / "gt" / "gt.txt", tmp_path / "tFalse.txt", seq / "seqinfo.ini")]
+    )["s"].summary()["HOTA"]
+    (res / "SIM.txt").write_bytes((tmp_path / "tFalse.txt").read_bytes())
+    assert main(["eval", "--gt-dir", str(tmp_path), "--pred-dir", str(res)]) == 2
+    assert "results for SIM in more than one file" in capsys.readouterr().err
 
 
 def test_parquet_without_pyarrow_is_a_clear_error(tmp_path, monkeypatch, capsys):

@@ -651,7 +651,14 @@ def _eval(args: argparse.Namespace) -> int:
         if not (args.gt_dir and args.pred_dir):
             return _fail("eval", "--gt-dir and --pred-dir go together")
         for seq in sorted(p for p in Path(args.gt_dir).iterdir() if (p / "gt" / "gt.txt").exists()):
-            pred = Path(args.pred_dir) / f"{seq.name}.txt"
+            # SEQ.txt, or the .parquet or .csv file vistrack track --out writes
+            found = [Path(args.pred_dir) / f"{seq.name}{ext}"
+                     for ext in (".txt", ".parquet", ".csv")]
+            found = [q for q in found if q.exists()]
+            if len(found) > 1:
+                return _fail("eval", f"results for {seq.name} in more than one file: "
+                             f"{', '.join(map(str, found))}; keep one")
+            pred = found[0] if found else Path(args.pred_dir) / f"{seq.name}.txt"
             if not pred.exists() and not args.keep_going:
                 return _fail("eval", f"no results for {seq.name}: {pred} does not exist")
             info = seq / "seqinfo.ini"
@@ -980,7 +987,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="with --gt-dir: score the sequences on the running Dask cluster whose "
                     "scheduler is at ADDRESS (tcp://host:8786), each worker with vistrack "
                     "installed and the files on a filesystem it shares (needs vistrack[dask])")
-    ev.add_argument("--pred-dir", help="folder of results SEQ.txt")
+    ev.add_argument("--pred-dir", help="folder of results SEQ.txt (or SEQ.parquet, SEQ.csv)")
     ev.add_argument("--benchmark", default="auto", choices=("auto", "MOT15", "MOT16", "MOT17",
                                                            "MOT20"),
                     help="preprocessing of the ground truth (default: auto, from its columns)")
