@@ -296,6 +296,9 @@ def _track(args: argparse.Namespace) -> int:
         if not args.print_config:  # as argparse says it: INPUT is needed but for that
             raise SystemExit(_fail("track", "the following arguments are required: INPUT"))
         return _print_config(args)
+    # the offline mode's settings given: they go with --out, and need --offline to count
+    offline_given = [o for o, table, *_ in _SETTINGS
+                     if table == "offline" and getattr(args, o) is not None]
     if ":" in (args.tracker or "") and not args.tracker.startswith("single:") \
             and getattr(args, "own_process", False) and "" not in sys.path \
             and os.getcwd() not in sys.path:
@@ -368,9 +371,7 @@ def _track(args: argparse.Namespace) -> int:
                     "(and its frame rate, --fps)")
     else:
         offline_flags = [f for f in ("offline", "detections", "columns") if getattr(args, f)]
-        offline_flags += [o for o, table, *_ in _SETTINGS
-                          if table == "offline" and getattr(args, o) is not None]
-        if offline_flags:
+        if offline_flags or offline_given:
             return fail(_OFFLINE_NEEDS_OUT)
         video_outputs(args.out_dir, force=args.force, name="--out-dir")
     # with --print-config, stdout holds the configuration alone (the summary goes to stderr)
@@ -381,12 +382,10 @@ def _track(args: argparse.Namespace) -> int:
         cfg, problem = _box_config(args)
         if problem:
             return fail(problem)
-        unused = [o for o, table, *_ in _SETTINGS
-                  if table == "offline" and getattr(args, o) is not None]
-        if unused and cfg is not None and not cfg.offline.enabled:
-            warnings.warn(f"{', '.join('--' + o.replace('_', '-') for o in unused)}: offline "
-                          "settings, which change nothing without --offline", UserWarning,
-                          stacklevel=1)
+        if offline_given and cfg is not None and not cfg.offline.enabled:
+            named = ", ".join("--" + o.replace("_", "-") for o in offline_given)
+            warnings.warn(f"{named}: offline settings, which change nothing without --offline",
+                          UserWarning, stacklevel=1)
         if args.low is not None and cfg is not None and not cfg.tracker.two_stage:
             warnings.warn("--low: the second association stage's threshold, which changes "
                           f"nothing with a tracker of one stage ({cfg.name})", UserWarning,

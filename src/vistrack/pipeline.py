@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import importlib
 import math
-import re
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -37,7 +36,6 @@ from .evaluation.mot import MOTCounts, _lines_of, evaluate_mot
 from .io.atomic import check_output, made_folder
 from .io.motchallenge import (
     DETECTION_SUFFIXES,
-    MOTFormatError,
     MOTTable,
     SeqInfo,
     box_decimals,
@@ -1004,16 +1002,9 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
                              "MOTChallenge file (its name does not end in .csv)")
         table = read_mot(path)
     else:
-        from .io.motchallenge import _COLUMNS, _pandas
+        from .io.motchallenge import _COLUMNS, _read_csv
 
-        pandas = _pandas("a CSV file of detections")
-        try:
-            df = pandas.read_csv(path)
-        except (pandas.errors.ParserError, pandas.errors.EmptyDataError) as e:
-            # pandas' own words ("Expected 5 fields in line 3, saw 6"), with the file's name
-            raise MOTFormatError(f"{path}: not a CSV file of detections: "
-                                 + re.sub(r"^(Error tokenizing data\. )?(C error: )?", "",
-                                          str(e).strip())) from None
+        df = _read_csv(path, "a CSV file of detections")
         table = MOTTable.from_pandas(df, columns, path=str(path))
         names = dict(columns or {})
         conf = names.get("conf", "conf")

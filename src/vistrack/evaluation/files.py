@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..batch import _one_line
-from ..io.motchallenge import MOTFormatError, MOTTable, read_mot, read_seqinfo
+from ..io.motchallenge import MOTTable, read_mot, read_seqinfo
 from .mot import Matches, MOTCounts, clear_matches, combine, evaluate_mot
 from .sanity import sanity_warnings
 
@@ -70,15 +70,13 @@ def _read_results(path: Path) -> MOTTable:
     suffix = path.suffix.lower()
     if suffix not in (".parquet", ".csv"):
         return read_mot(path)
-    from ..io.motchallenge import _pandas, need_parquet
+    from ..io.motchallenge import _pandas, _read_csv, need_parquet
 
     if suffix == ".parquet":
         need_parquet()
-    pandas = _pandas("a CSV results file")
-    try:
-        df = pandas.read_parquet(path) if suffix == ".parquet" else pandas.read_csv(path)
-    except (pandas.errors.ParserError, pandas.errors.EmptyDataError) as e:
-        raise MOTFormatError(f"{path}: not a CSV results file: {e}") from None
+        df = _pandas("a Parquet results file").read_parquet(path)
+    else:
+        df = _read_csv(path, "a CSV results file")
     return MOTTable.from_pandas(df, path=str(path))
 
 

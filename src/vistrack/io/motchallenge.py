@@ -82,6 +82,18 @@ def _pandas(what: str) -> Any:
     return pandas
 
 
+def _read_csv(path: str | os.PathLike, what: str) -> Any:
+    """A CSV file with a header as a DataFrame; a file pandas cannot parse (a row of more
+    values than the header, an empty file) is a :class:`MOTFormatError` naming it, in pandas'
+    own words: ``"PATH: not WHAT: Expected 5 fields in line 3, saw 6"``."""
+    pandas = _pandas(what)
+    try:
+        return pandas.read_csv(path)
+    except (pandas.errors.ParserError, pandas.errors.EmptyDataError) as e:
+        reason = re.sub(r"^(Error tokenizing data\. )?(C error: )?", "", str(e).strip())
+        raise MOTFormatError(f"{path}: not {what}: {reason}") from None
+
+
 def need_parquet() -> None:
     """Raise ImportError, saying what to install, unless pandas and pyarrow are there."""
     for name in ("pandas", "pyarrow"):
@@ -1005,7 +1017,7 @@ def _integers(values: ArrayLike, name: str) -> np.ndarray:
     return x.astype(np.int64)
 
 
-_ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.4g,-1,-1,-1\n"
+_ROW = _row_format(2)  # "%d,%d,%.2f,%.2f,%.2f,%.2f,%.4g,-1,-1,-1\n"
 _WRITE_BLOCK = 16384  # rows formatted at a time: the temporaries stay in the cache
 
 

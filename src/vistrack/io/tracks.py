@@ -278,15 +278,16 @@ class _RowsFile:
         self._ids: dict[int, int] = {}  # identity: its class (the latest written)
 
     def _columns(self, frame: Frame, tracks: Tracks
-                 ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+                 ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, list[int]]:
         """The frame's index and its rows' ids, boxes ``x, y, w, h`` and scores, as
-        :class:`TrackRows` keeps them (int and float64), counted."""
+        :class:`TrackRows` keeps them (int and float64), and classes (a list), counted."""
         ids = np.asarray(tracks.ids).astype(int)
         xywh = np.asarray(tracks.xywh, dtype=float)
         scores = np.asarray(tracks.scores, dtype=float)
+        classes = np.asarray(tracks.classes).astype(int).tolist()
         self._rows += len(ids)
-        self._ids.update(zip(ids.tolist(), np.asarray(tracks.classes).astype(int).tolist()))
-        return int(frame.index), ids, xywh, scores
+        self._ids.update(zip(ids.tolist(), classes))
+        return int(frame.index), ids, xywh, scores, classes
 
     def __len__(self) -> int:
         return self._rows
@@ -425,7 +426,7 @@ class MOTWriter(_RowsFile):
         """
         if not len(tracks):
             return
-        f, ids, xywh, scores = self._columns(frame, tracks)
+        f, ids, xywh, scores, _ = self._columns(frame, tracks)
         if self._last is not None and f <= self._last:
             self._in_order = False  # sorted when closed
         self._last = f if self._last is None else max(self._last, f)
@@ -530,9 +531,8 @@ class CSVWriter(_RowsFile):
         self._start()
         if not len(tracks):
             return
-        f, ids, xywh, scores = self._columns(frame, tracks)
-        cells = zip([f] * len(ids), ids.tolist(), *xywh.T.tolist(), scores.tolist(),
-                    np.asarray(tracks.classes).astype(int).tolist())
+        f, ids, xywh, scores, classes = self._columns(frame, tracks)
+        cells = zip([f] * len(ids), ids.tolist(), *xywh.T.tolist(), scores.tolist(), classes)
         self._file.write((self._ROW * len(ids)) % tuple(itertools.chain.from_iterable(cells)))
 
     def close(self) -> None:
