@@ -133,7 +133,8 @@ def test_run_feeds_sinks_and_writes_nothing_from_a_failed_run(tmp_path):
     got = read_mot(tmp_path / "t.txt")
     np.testing.assert_allclose(got.boxes, sinks[2].xywh, atol=0.005)
     assert len(got) == len(sinks[2]) == 10  # confirmed at once in the first frame
-    assert (tmp_path / "t.csv").read_text().splitlines()[0] == "frame,id,x,y,w,h,score,class"
+    assert ((tmp_path / "t.csv").read_text().splitlines()[0]
+            == "frame,id,bb_left,bb_top,bb_width,bb_height,conf,class")
 
     def broken(f):
         if f.index == 5:
@@ -304,7 +305,8 @@ def test_a_video_where_nothing_is_tracked_still_writes_every_output(tmp_path):
     assert r.rows == 0 and r.tracks == 0
     assert all(p.exists() for p in r.files.values())
     assert (tmp_path / "out" / "tracks.txt").read_text() == ""
-    assert (tmp_path / "out" / "tracks.csv").read_text() == "frame,id,x,y,w,h,score,class\n"
+    assert ((tmp_path / "out" / "tracks.csv").read_text()
+            == "frame,id,bb_left,bb_top,bb_width,bb_height,conf,class\n")
 
 
 def test_an_interrupted_run_leaves_the_earlier_outputs_as_they_were(tmp_path):
@@ -484,11 +486,39 @@ def test_a_detections_file_of_several_classes_is_tracked_class_by_class(tmp_path
     # tracks.csv says which class each row's track is: the class of its detections
     pd = pytest.importorskip("pandas")
     csv = pd.read_csv(tmp_path / "video" / "tracks.csv")
-    assert list(csv.columns) == ["frame", "id", "x", "y", "w", "h", "score", "class"]
+    assert list(csv.columns) == ["frame", "id", "bb_left", "bb_top", "bb_width", "bb_height",
+                                "conf", "class"]
     assert (csv["class"] == np.where(csv["id"] == first.pop(), 1, 2)).all()
     # the same rows as tracks.txt (class 1's track coasts through frame 11)
     assert sorted(zip(csv["frame"], csv["id"])) == sorted(zip(out.frames, out.ids))
     assert set(csv.loc[csv["frame"] <= 11, "class"]) == {1}
+
+
+def test_a_videos_tracks_csv_reads_back_as_the_tracks(tmp_path):
+    """A video's ``tracks.csv`` was ``frame,id,x,y,w,h,score,class`` with ``x, y`` the box's
+    corner, while ``MOTTable.from_pandas`` (and ``vistrack track`` reading a CSV file) takes
+    ``x, y`` for its centre, as ``to_pandas`` and trackpy write it: read back, each box was
+    half its size off, or refused for want of ``bb_width``. Its columns are now MOTChallenge's
+    names, and it reads back as the rows of ``tracks.txt``, written beside it."""
+    pd = pytest.importorskip("pandas")
+    from vistrack.io import MOTTable
+
+    frames, truth = red_disc_clip(T=12)
+    clip = write_clip(tmp_path / "frames", frames)
+    dets = tmp_path / "dets.txt"
+    dets.write_text("".join(f"{k + 1},-1,{x:.2f},{y:.2f},{w:.2f},{h:.2f},0.9,3\n"
+                            for k, (x, y, w, h) in enumerate(truth)))
+    track_video(clip, tmp_path / "out", frontend=f"detections:{dets}", fps=10,
+                annotate=False, scores="raw")
+    txt = read_mot(tmp_path / "out" / "tracks.txt")
+    csv = MOTTable.from_pandas(pd.read_csv(tmp_path / "out" / "tracks.csv"))
+    assert len(txt) == len(csv) == 12
+    assert csv.frames.tolist() == txt.frames.tolist() and csv.ids.tolist() == txt.ids.tolist()
+    np.testing.assert_array_equal(csv.boxes, txt.boxes)  # both to 2 decimals
+    np.testing.assert_allclose(csv.conf, txt.conf, atol=5e-4)  # 3 decimals against more
+    assert set(csv.classes.tolist()) == {3}
+    # and the boxes are where the disc was (the filter's, within a pixel or two of it)
+    np.testing.assert_allclose(csv.boxes, truth, atol=2.0)
 
 
 def test_offline_tracks_a_file_with_nothing_to_calibrate_on_as_online(tmp_path):

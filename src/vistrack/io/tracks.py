@@ -3,8 +3,8 @@
 Every sink answers ``write(frame, tracks)`` (one :class:`~vistrack.types.Frame` and the
 :class:`~vistrack.types.Tracks` reported in it) and ``close()``; :func:`vistrack.pipeline.run`
 feeds any list of them. Here: :class:`MOTWriter` (MOTChallenge results), :class:`CSVWriter`
-(``frame,id,x,y,w,h,score,class`` with a header) and :class:`BoxesWriter` (one object's
-``frame,x,y,w,h``, OTB-style), which write their rows as the frames come to a partial file
+(``frame,id,bb_left,bb_top,bb_width,bb_height,conf,class`` with a header) and
+:class:`BoxesWriter` (one object's ``frame,x,y,w,h``, OTB-style), which write their rows as the frames come to a partial file
 renamed into place when closed (:mod:`vistrack.io.atomic`), so that a long run's memory does
 not grow with its rows; :class:`TrackRows` keeps the rows in memory instead. Pictures are
 sinks in :mod:`vistrack.viz`.
@@ -82,7 +82,7 @@ class Sink(Protocol):
         >>> sink = CSVWriter(path)
         >>> sink.close()
         >>> path.read_text()
-        'frame,id,x,y,w,h,score,class\\n'
+        'frame,id,bb_left,bb_top,bb_width,bb_height,conf,class\\n'
         """
         ...
 
@@ -458,9 +458,16 @@ class MOTWriter(_RowsFile):
 
 
 class CSVWriter(_RowsFile):
-    """Writes ``frame,id,x,y,w,h,score,class`` rows, with that header, in the order written
-    (boxes to 2 decimals, scores to 3; the class is the track's, that of the detections it
-    follows, -1 where they had none), to ``path``.
+    """Writes ``frame,id,bb_left,bb_top,bb_width,bb_height,conf,class`` rows, with that
+    header, in the order written (boxes to 2 decimals, scores to 3; the class is the track's,
+    that of the detections it follows, -1 where they had none), to ``path``.
+
+    The columns are MOTChallenge's, named as :meth:`MOTTable.from_pandas
+    <vistrack.io.motchallenge.MOTTable.from_pandas>` reads them, so the file reads back as
+    the table it holds (``MOTTable.from_pandas(pandas.read_csv(path))``), and ``vistrack
+    track`` reads it as detections. (Its header was ``frame,id,x,y,w,h,score,class``, where
+    ``x, y`` was the box's corner, while ``x, y`` is its centre in :meth:`MOTTable.to_pandas
+    <vistrack.io.motchallenge.MOTTable.to_pandas>`, trackpy's convention.)
 
     The rows go to a partial file beside ``path`` as the frames come, and replace ``path``
     only when closed (:class:`~vistrack.io.atomic.PartialFile`); :meth:`abort` removes them.
@@ -484,11 +491,11 @@ class CSVWriter(_RowsFile):
     ...                                  points=None, scores=np.array([0.9]), classes=np.zeros(1)))
     >>> sink.close()
     >>> print(path.read_text(), end="")
-    frame,id,x,y,w,h,score,class
+    frame,id,bb_left,bb_top,bb_width,bb_height,conf,class
     1,1,10.00,20.00,30.00,60.00,0.900,0
     """
 
-    _HEADER = "frame,id,x,y,w,h,score,class\n"
+    _HEADER = "frame,id,bb_left,bb_top,bb_width,bb_height,conf,class\n"
     # %d, %.2f and %.3f are str.format's d, .2f and .3f
     _ROW = "%d,%d,%.2f,%.2f,%.2f,%.2f,%.3f,%d\n"
 
@@ -524,7 +531,7 @@ class CSVWriter(_RowsFile):
         ...                                  points=None, scores=np.array([0.5]),
         ...                                  classes=np.zeros(1)))
         >>> print(sink._file.read(), end="")
-        frame,id,x,y,w,h,score,class
+        frame,id,bb_left,bb_top,bb_width,bb_height,conf,class
         3,7,1.00,2.00,3.00,6.00,0.500,0
         >>> sink.abort()
         """
@@ -544,7 +551,7 @@ class CSVWriter(_RowsFile):
         >>> path = pathlib.Path(tempfile.mkdtemp()) / "out" / "tracks.csv"
         >>> CSVWriter(path).close()
         >>> path.read_text()
-        'frame,id,x,y,w,h,score,class\\n'
+        'frame,id,bb_left,bb_top,bb_width,bb_height,conf,class\\n'
         """
         try:
             self._start()
