@@ -596,6 +596,39 @@ def test_a_frame_number_far_past_the_rest_is_named_not_tracked_for_ever(tmp_path
     assert not (tmp_path / "out.txt").exists()
 
 
+def test_a_stray_frame_far_past_the_rest_is_named_in_a_warning(tmp_path):
+    """Below ``MAX_FRAMES`` a stray frame number is tracked up to: rows on frames 1-525 and
+    one more on frame 1,000,000 took 2.5 minutes at 30 frames/s without a word. A run of
+    frames without rows longer than an hour at the file's rate and than ten times the frames
+    that have rows is now named, by the line after it; shorter runs are not."""
+    import warnings
+
+    from vistrack.pipeline import track_sequence
+
+    def rows(frames):
+        return "".join(f"{f},-1,{10 + 3 * (f % 20)},20,20,40,0.9\n" for f in frames)
+
+    det = tmp_path / "det.txt"
+    # at 0.01 frames/s an hour is 36 frames, so the bound is ten times the 20 frames with
+    # rows: 200
+    det.write_text(rows([*range(1, 20), 221]))
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{det}, line 20: frame 221 comes 201 frames without rows after frame 19, the "
+            "frame before with rows (5.6 hours at 0.01 frames/s), where 20 frames have rows: "
+            "the tracker steps through all 221 frames up to the last (a mistyped frame "
+            "number, or a timestamp where the frame should be?)")):
+        track_sequence(det, tmp_path / "a.txt", fps=0.01)
+    # the file's first rows after a long run from frame 1 are named the same way
+    det.write_text(rows([500, *range(501, 520)]))
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{det}, line 1: frame 500 comes 499 frames without rows after frame 1")):
+        track_sequence(det, tmp_path / "b.txt", fps=0.01, force=True)
+    det.write_text(rows([*range(1, 20), 220]))  # 200 frames between: no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        track_sequence(det, tmp_path / "c.txt", fps=0.01)
+
+
 def test_ground_truth_given_as_detections_is_named_as_such(tmp_path):
     """Detections carry no identity (-1); ground truth or a tracker's results given as
     detections were tracked without a word, their ignored boxes (conf 0) as detections. A

@@ -635,6 +635,32 @@ def _warn_no_area(dets: MOTTable, path: Path, stacklevel: int) -> None:
                   "frame to frame", RuntimeWarning, stacklevel=stacklevel + 1)
 
 
+def _warn_long_silence(dets: MOTTable, path: Path, frame_rate: float,
+                       stacklevel: int) -> None:
+    """Warn of a detections file (tracked without a sequence's length) whose frames with rows
+    leave a run of frames without any longer than an hour and than ten times the frames that
+    have rows: the tracker steps through every frame up to the last (at about 5,000 a
+    second), so a mistyped frame number, or a timestamp where the frame should be, makes a
+    short file a run of minutes. The warning names the line of the first row after the run."""
+    have = np.unique(dets.frames)
+    if not len(have):
+        return
+    gaps = np.diff(np.r_[0, have]) - 1  # the frames without rows before each with rows
+    k = int(np.argmax(gaps))
+    if gaps[k] <= max(3600 * frame_rate, 10 * len(have)):
+        return
+    f = int(have[k])
+    lines = _lines_of(str(path), lambda row: row[0] == f)
+    where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
+    after = f"frame {int(have[k - 1]):,}, the frame before with rows" if k else "frame 1"
+    warnings.warn(f"{where}: frame {f:,} comes {int(gaps[k]):,} frames without rows after "
+                  f"{after} ({gaps[k] / frame_rate / 3600:,.1f} hours at "
+                  f"{frame_rate:g} frames/s), where {len(have):,} frames have rows: the "
+                  f"tracker steps through all {int(have[-1]):,} frames up to the last (a "
+                  "mistyped frame number, or a timestamp where the frame should be?)",
+                  UserWarning, stacklevel=stacklevel + 1)
+
+
 def _warn_classes(dets: MOTTable, path: Path, stacklevel: int) -> None:
     """Warn that a detections file holds more than one class (the eighth value of a
     MOTChallenge file's rows, a CSV file's ``class``): each is tracked apart, and a
@@ -1196,6 +1222,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                              + f": frame {f} is beyond the {MAX_FRAMES:,} frames a detections "
                              "file is tracked over (a timestamp or another column where the "
                              "frame should be?)")
+        _warn_long_silence(dets, det_path, float(fps), stacklevel=2)
         info = SeqInfo.from_detections(det_path if alone else seq_dir, dets, float(fps))
     else:
         if fps is not None:
