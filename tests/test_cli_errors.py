@@ -143,6 +143,35 @@ def test_an_output_folder_that_cannot_be_written_is_refused(tmp_path, capsys, mo
              f"{tmp_path} (no permission)")
 
 
+def test_a_folder_that_refuses_new_files_is_named_not_a_partial_file(tmp_path, capsys,
+                                                                     monkeypatch):
+    """A folder may refuse new files whatever its permissions say (a read-only mount;
+    ``/proc``; root passes every access check): ``--out /proc/x.txt`` failed at the partial
+    file, ``/proc/.x.partial.txt: No such file or directory``, a name the user never gave.
+    The output is now refused up front, naming the option and the folder; a folder that
+    takes files is left as it was."""
+    import errno
+
+    import vistrack.io.atomic
+
+    vistrack.io.atomic.check_output(tmp_path / "a.txt")
+    assert list(tmp_path.iterdir()) == []  # the file made to find out is gone
+    if os.path.isdir("/proc/self"):  # Linux: /proc takes no new files, even from root
+        seq = tmp_path / "missing"
+        assert main(["track", str(seq), "--out", "/proc/vistrack-x.txt"]) == 2
+        one_line(capsys, "track", "--out /proc/vistrack-x.txt: cannot write in /proc (No "
+                 "such file or directory)")
+
+    def read_only(*args, **kwargs):
+        raise OSError(errno.EROFS, os.strerror(errno.EROFS))
+
+    monkeypatch.setattr(vistrack.io.atomic.tempfile, "mkstemp", read_only)
+    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir",
+                 str(tmp_path / "out")]) == 2
+    one_line(capsys, "track", f"--out-dir {tmp_path / 'out'}: cannot write in {tmp_path} "
+             f"({os.strerror(errno.EROFS)})")
+
+
 @pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0,
                     reason="permissions bind a user other than root on POSIX")
 def test_a_read_only_folder_is_refused(tmp_path, capsys):

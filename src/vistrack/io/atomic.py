@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
@@ -213,7 +214,8 @@ def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "o
         If ``path`` is to be a file, exists and ``force`` is False.
     PermissionError
         If the nearest existing folder at or above where ``path`` is written cannot be
-        written in.
+        written in: its permissions say so, or a file cannot be made there (``/proc``, a
+        read-only mount).
 
     Examples
     --------
@@ -252,5 +254,15 @@ def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "o
         raise NotADirectoryError(f"{name} {p}: {here} is a file, not a folder")
     if not os.access(here, os.W_OK | os.X_OK):
         raise PermissionError(f"{name} {p}: cannot write in {here} (no permission)")
+    # a folder may refuse new files whatever its permissions say (/proc, /sys, a read-only
+    # mount; root passes every access check): a file made and removed there tells, where a
+    # failure at the partial file's name, later, named a file the user never gave
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".vistrack-", suffix=".probe", dir=here)
+    except OSError as e:
+        raise PermissionError(f"{name} {p}: cannot write in {here} "
+                              f"({e.strerror or type(e).__name__})") from e
+    os.close(fd)
+    os.unlink(probe)
     if not folder and p.exists() and not force:
         raise FileExistsError(f"{name} {p} exists; pass --force to overwrite it")
