@@ -5,6 +5,7 @@ the trackers a user would pick instead, each with its packaged defaults, scored 
     python bench/accuracy_mot.py [--sets MOT15,MOT17,MOT16-FairMOT,KITTI] [--no-peers]
                                  [--boxmot-python PY] [--jitter SEEDS] [--every K]
                                  [--stride K] [--drop FRAC] [--write docs/mot.md]
+    python bench/accuracy_mot.py --set NAME=DIR [--set NAME=DIR ...] [options above]
 
 Sets (``../shared/data``): MOT15 train with SORT's Faster R-CNN detections, MOT17 train with
 the FRCNN detections, MOT16 train with FairMOT's detections (scores 0.5-0.99), and KITTI
@@ -38,6 +39,12 @@ per sequence), scored against the ground truth of every frame. vistrack and the 
 the file as it is: no renumbering gives the peers the frames the detector delivered at their
 own times.
 
+``--set NAME=DIR`` adds a set of your own: the sequence folders in DIR, each laid out as
+MOTChallenge's (``seqinfo.ini``, ``det/det.txt``, ``gt/gt.txt``), scored with TrackEval's
+conventions as the others are (MOT16/17/20's where the ground truth has classes, MOT15's
+where its class column is -1). Given alone, it runs that set only; ``--sets`` names the
+shared ones to run beside it. Tables of such sets are printed, not written to the docs.
+
 ``--jitter N`` also runs vistrack's online default N more times with every detection box
 moved by up to 0.05 pixel (uniform, seeds 1..N), and reports the spread of COMBINED HOTA: how
 much of a difference between two settings is noise.
@@ -70,16 +77,41 @@ SETS = {"MOT15": "mot15", "MOT17": "mot17", "MOT16-FairMOT": "mot16-fairmot",
 VISTRACK = ("vistrack", "vistrack offline")
 
 
-def sequences(name: str) -> list[Path]:
-    """The set's sequence folders with ground truth."""
-    root = DATA / SETS[name]
+def sequences(root: str | Path) -> list[Path]:
+    """The sequence folders with the frame rate, detections and ground truth in ``root``, a
+    folder, or a shared set by name (:data:`SETS`)."""
+    root = DATA / SETS[root] if isinstance(root, str) else root
     return sorted(p for p in root.iterdir()
-                  if (p / "seqinfo.ini").exists() and (p / "gt" / "gt.txt").exists())
+                  if (p / "seqinfo.ini").exists() and (p / "gt" / "gt.txt").exists()
+                  and (p / "det" / "det.txt").exists())
+
+
+def own_sets(given: list[str]) -> dict[str, Path]:
+    """``--set NAME=DIR`` options as ``{NAME: DIR}``, each DIR holding one sequence folder
+    or more; exits naming the option that is wrong."""
+    out: dict[str, Path] = {}
+    for g in given:
+        name, eq, folder = g.partition("=")
+        name = name.strip()
+        if not eq or not name or not folder:
+            sys.exit(f"--set {g}: expected NAME=DIR")
+        if name in SETS or name in out:
+            sys.exit(f"--set {g}: {name!r} names a set already")
+        root = Path(folder).expanduser()
+        if not root.is_dir():
+            sys.exit(f"--set {g}: {root} is not a folder")
+        if not sequences(root):
+            sys.exit(f"--set {g}: no sequence folder in {root} has seqinfo.ini, det/det.txt "
+                     "and gt/gt.txt")
+        out[name] = root
+    return out
 
 
 def score(seqs: list[Path], results: Path) -> dict:
-    return evaluate_files([(d.name, d / "gt" / "gt.txt", results / f"{d.name}.txt",
-                            d / "seqinfo.ini") for d in seqs])
+    """Each sequence's scores by name, and ``"COMBINED"`` (a set of one sequence: its own)."""
+    res = evaluate_files([(d.name, d / "gt" / "gt.txt", results / f"{d.name}.txt",
+                           d / "seqinfo.ini") for d in seqs])
+    return res if "COMBINED" in res else {**res, "COMBINED": res[seqs[0].name]}
 
 
 def ordinal(k: int) -> str:
@@ -307,7 +339,10 @@ def per_sequence(res: dict) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--sets", default=",".join(SETS))
+    ap.add_argument("--sets", default=None, help="the shared sets to run, of "
+                    f"{', '.join(SETS)} (all of them, unless --set is given)")
+    ap.add_argument("--set", action="append", default=[], metavar="NAME=DIR", dest="own",
+                    help="a set of your own: MOTChallenge sequence folders in DIR")
     ap.add_argument("--no-peers", action="store_true")
     ap.add_argument("--boxmot-python", type=Path, default=ROOT / ".venv-boxmot" / "bin" /
                     "python")
@@ -317,12 +352,18 @@ def main() -> None:
     ap.add_argument("--drop", type=float, default=0.0, metavar="FRAC")
     ap.add_argument("--write", metavar="MD")
     args = ap.parse_args()
-    if not DATA.exists():
-        sys.exit(f"{DATA} not found: the shared data must be beside this checkout")
-    names = [s.strip() for s in args.sets.split(",")]
+    own = own_sets(args.own)
+    given = args.sets if args.sets is not None else "" if own else ",".join(SETS)
+    names = [s.strip() for s in given.split(",") if s.strip()]
     bad = [s for s in names if s not in SETS]
     if bad:
-        sys.exit(f"unknown set {bad[0]!r}; sets: {', '.join(SETS)}")
+        sys.exit(f"unknown set {bad[0]!r}; sets: {', '.join(SETS)} (and your own: --set "
+                 "NAME=DIR)")
+    if names and not DATA.exists():
+        sys.exit(f"{DATA} not found: the shared data must be beside this checkout")
+    if own and args.write:
+        sys.exit("--write takes the shared sets' tables alone; --set's are printed")
+    roots = {**{n: DATA / SETS[n] for n in names}, **own}
     if args.every < 1 or args.stride < 1 or (args.every > 1 and args.stride > 1):
         sys.exit(f"--every and --stride must be at least 1, and one of them 1; got "
                  f"{args.every} and {args.stride}")
@@ -338,8 +379,8 @@ def main() -> None:
     parts, notes = [], []
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        for name in names:
-            seqs = peer_seqs = sequences(name)
+        for name, root in roots.items():
+            seqs = peer_seqs = sequences(root)
             if args.every > 1:
                 seqs = peer_seqs = every_kth(seqs, args.every, tmp / "every" / name)
             peer_out = tmp / name

@@ -1,7 +1,7 @@
 """``bench/accuracy_mot.py --stride K``'s inputs: a detector that ran on every K-th frame
 (its rows numbered by the video's frames, the ground truth of every frame kept), and the
 peers' rows, tracked on the detector's frames numbered 1, 2, ..., written back at the
-video's frames."""
+video's frames; and ``--set NAME=DIR``, a set of one's own."""
 
 import sys
 from pathlib import Path
@@ -76,3 +76,32 @@ def test_dropped_removes_the_rows_of_a_fraction_of_the_frames_and_keeps_the_rest
     assert (again / "det" / "det.txt").read_text() == (o / "det" / "det.txt").read_text()
     (none,) = acc.dropped([d], 0.0, tmp_path / "none")
     assert (none / "det" / "det.txt").read_text() == (d / "det" / "det.txt").read_text()
+
+
+def test_a_set_of_ones_own_runs_beside_the_shared_ones(tmp_path):
+    """``--set NAME=DIR`` runs the sequence folders in DIR as a set; its vistrack row is
+    what ``track_sequence`` and the scorer give on the same folder."""
+    import re
+    import subprocess
+
+    from vistrack.evaluation import evaluate_files
+    from vistrack.pipeline import track_sequence
+
+    d = _sequence(tmp_path / "mine")
+    bench = Path(acc.__file__)
+    r = subprocess.run([sys.executable, str(bench), "--set", f"mine={tmp_path / 'mine'}",
+                        "--no-peers"], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert "### mine (1 sequences)" in r.stdout
+    hota = float(re.search(r"^\| \*\*vistrack\*\* \| ([\d.]+) \|", r.stdout, re.M).group(1))
+    track_sequence(d, tmp_path / "SEQ.txt")
+    c = evaluate_files([("SEQ", d / "gt" / "gt.txt", tmp_path / "SEQ.txt",
+                         d / "seqinfo.ini")])["SEQ"]
+    assert hota == round(100 * c.HOTA, 1)
+    # a folder without sequences is named
+    (tmp_path / "empty").mkdir()
+    r = subprocess.run([sys.executable, str(bench), "--set", f"x={tmp_path / 'empty'}"],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 1 and r.stderr.strip().endswith(
+        f"--set x={tmp_path / 'empty'}: no sequence folder in {tmp_path / 'empty'} has "
+        "seqinfo.ini, det/det.txt and gt/gt.txt")
