@@ -228,11 +228,23 @@ def test_seqinfo_oddities(tmp_path, body, match):
 
 
 def test_a_class_column_that_holds_no_class(tmp_path):
-    """Column 8 is the class of MOT16/17/20 ground truth and a world x in MOT15's: a value that
-    is not an integer (3.5, 1e30) is no class (-1), read without a numpy warning."""
+    """Column 8 is the class of MOT16/17/20 ground truth and a world x in MOT15's (and in
+    MOTChallenge's detections files): a column with a value that is not an integer (3.5,
+    1e30) holds no class, and every row's is -1, whole numbers among them too (a world x of
+    2 was class 2, and its detection was tracked apart from the rest); read without a numpy
+    warning. A column of integers is one of classes."""
     p = tmp_path / "gt.txt"
     p.write_text("1,1,10,10,5,5,1,3.5,1\n1,2,10,10,5,5,1,1e30,1\n2,2,10,10,5,5,1,2,1\n"
                  "2,3,10,10,5,5,1,-9007199254740992,1\n")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert read_mot(p).classes.tolist() == [-1, -1, 2, -2 ** 53]
+        assert read_mot(p).classes.tolist() == [-1, -1, -1, -1]
+    p.write_text("1,1,10,10,5,5,1,7,1\n2,2,10,10,5,5,1,2,1\n2,3,10,10,5,5,1,-9007199254740992,1\n")
+    assert read_mot(p).classes.tolist() == [7, 2, -2 ** 53]
+    # ETH-Bahnhof's ground truth holds world coordinates there, none a whole number; one
+    # made whole is no class either
+    lines = (seq_dir("MOT15", "ETH-Bahnhof") / "gt" / "gt.txt").read_text().splitlines()
+    cells = lines[0].split(",")
+    cells[7] = "3"
+    p.write_text("\n".join([",".join(cells), *lines[1:]]) + "\n")
+    assert set(read_mot(p).classes.tolist()) == {-1}

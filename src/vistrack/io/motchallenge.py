@@ -117,8 +117,9 @@ class MOTTable:
     conf : (N,) float
         Score (detections, results) or the ground truth's "consider" flag (0: ignore).
     classes : (N,) int
-        Column 8: the ground-truth class of MOT16/17/20; -1 where absent (detections) or not
-        an integer of at most 2**53 in size (MOT15 ground truth holds a world ``x`` there).
+        Column 8: the ground-truth class of MOT16/17/20, or the detector's; -1 where absent,
+        and in every row where any row's is not an integer of at most 2**53 in size (MOT15
+        ground truth and MOTChallenge's detections files hold a world ``x`` there).
     visibility : (N,) float
         Column 9 of MOT16/17/20 ground truth, -1 where absent.
     path : str
@@ -193,8 +194,12 @@ class MOTTable:
             return a[:, j] if w > j else np.full(N, fill, dtype=float)
 
         c = col(7, -1.0)
-        if w > 7:  # a class is an integer; anything else (MOT15's world x) is none
-            c = np.where((c == np.round(c)) & (np.abs(c) <= _INT_LIMIT), c, -1.0)
+        if w > 7 and not ((c == np.round(c)) & (np.abs(c) <= _INT_LIMIT)).all():
+            # a class is an integer: a column holding anything else is MOT15's world x (as
+            # detections files have it there too, -1 where there is none), and none of its
+            # values is a class, a whole number among them (a world x of 3.000) no more
+            # than the rest
+            c = np.full(N, -1.0)
         return cls(frames=a[:, 0].astype(np.int64), ids=a[:, 1].astype(np.int64),
                    boxes=np.ascontiguousarray(a[:, 2:6]), conf=col(6, 1.0),
                    classes=c.astype(np.int64), visibility=col(8, -1.0), path=path, columns=w)

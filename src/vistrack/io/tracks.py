@@ -4,10 +4,11 @@ Every sink answers ``write(frame, tracks)`` (one :class:`~vistrack.types.Frame` 
 :class:`~vistrack.types.Tracks` reported in it) and ``close()``; :func:`vistrack.pipeline.run`
 feeds any list of them. Here: :class:`MOTWriter` (MOTChallenge results), :class:`CSVWriter`
 (``frame,id,bb_left,bb_top,bb_width,bb_height,conf,class`` with a header) and
-:class:`BoxesWriter` (one object's ``frame,x,y,w,h``, OTB-style), which write their rows as the frames come to a partial file
-renamed into place when closed (:mod:`vistrack.io.atomic`), so that a long run's memory does
-not grow with its rows; :class:`TrackRows` keeps the rows in memory instead. Pictures are
-sinks in :mod:`vistrack.viz`.
+:class:`BoxesWriter` (one object's ``frame,x,y,w,h``, OTB-style), which write their rows
+as the frames come to a partial file renamed into place when closed
+(:mod:`vistrack.io.atomic`), so that a long run's memory does not grow with its rows;
+:class:`TrackRows` keeps the rows in memory instead. Pictures are sinks in
+:mod:`vistrack.viz`.
 """
 
 from __future__ import annotations
