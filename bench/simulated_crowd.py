@@ -4,7 +4,8 @@ it, vistrack beside the peers of ``accuracy_mot.py``, scored the same way (COMBI
 draws).
 
     python bench/simulated_crowd.py [--draws 3] [--persistence RHO] [--set KEY=VALUE ...]
-                                    [--no-peers] [--boxmot-python PY] [--write docs/mot.md]
+                                    [--source DIR ...] [--no-peers] [--boxmot-python PY]
+                                    [--write docs/mot.md]
 
 The four sets of ``accuracy_mot.py`` are what vistrack's defaults were chosen on; this one is
 a check that a setting does not only fit them. The detector is simulated, one draw per seed:
@@ -15,7 +16,8 @@ a check that a setting does not only fit them. The detector is simulated, one dr
   and 5 %;
 - its score is ``lo + (hi - lo) * sigmoid(3 (v - 0.4) + N(0, 1))``: the less of a person is
   seen, the lower the score, with much overlap;
-- clutter: 15 % as many boxes again, of people's sizes, anywhere, in any frame, scoring
+- clutter: 15 % as many boxes again, of people's sizes (60-250 pixels tall in MOT20-01's
+  1080 rows, in proportion to the image's height elsewhere), anywhere, in any frame, scoring
   ``lo + (hi - lo) * sigmoid(N(-1.5, 1))``;
 - three score scales, one per draw in turn: ``(lo, hi)`` = (0.3, 0.9) as FairMOT's on new
   scenes, (0.5, 1.0) as a detector thresholded at 0.5, and (-2, 9) as raw logits (passed to
@@ -28,6 +30,10 @@ person's detection a two-state Markov chain with the same rate of detection, fou
 frame with probability ``p + RHO (1 - p)`` when found in this one and ``p (1 - RHO)`` when
 not, and the score's noise an AR(1) process with correlation ``RHO`` over the person's
 detections (0: the independent draws, the same as without the option).
+
+``--source DIR`` (repeatable) simulates the same detector on other scenes instead: MOT16,
+MOT17 or MOT20 sequence folders whose ground truth has classes and visibility (MOT17's
+``../shared/data/mot17/MOT17-*``, moving cameras among them), each draw covering them all.
 
 ``--set KEY=VALUE`` (repeatable) adds a row of vistrack with those settings over its defaults
 (fields of ``BoxTrackerConfig`` or ``OfflineConfig``), online and offline, to compare a
@@ -91,12 +97,14 @@ def _ar1(e: np.ndarray, ids: np.ndarray, frames: np.ndarray, rho: float) -> np.n
     return out
 
 
-def simulate(seed: int, lo: float, hi: float, root: Path, persistence: float = 0.0) -> Path:
-    """One draw of detections for MOT20-01 into ``root/MOT20-01-sim{seed}`` (MOTChallenge
-    layout: ``det/det.txt``, ``gt/gt.txt``, ``seqinfo.ini``), with misses and score noise
-    correlated from frame to frame by ``persistence`` (see the module); returns the folder."""
+def simulate(seed: int, lo: float, hi: float, root: Path, persistence: float = 0.0,
+             source: Path = SOURCE) -> Path:
+    """One draw of detections for ``source`` (MOT20-01; a MOT16/17/20 sequence folder with
+    ground truth) into ``root/NAME-sim{seed}`` (MOTChallenge layout: ``det/det.txt``,
+    ``gt/gt.txt``, ``seqinfo.ini``), with misses and score noise correlated from frame to
+    frame by ``persistence`` (see the module); returns the folder."""
     rng = np.random.default_rng(seed)
-    gt = np.loadtxt(SOURCE / "gt" / "gt.txt", delimiter=",", ndmin=2)
+    gt = np.loadtxt(source / "gt" / "gt.txt", delimiter=",", ndmin=2)
     gt = gt[(gt[:, 6] != 0) & (gt[:, 7] == 1)]
     seen = _persist(rng.random(len(gt)), 0.2 + 0.75 * gt[:, 8], gt[:, 1], gt[:, 0],
                     persistence)
@@ -109,21 +117,21 @@ def simulate(seed: int, lo: float, hi: float, root: Path, persistence: float = 0
     b[:, 3] *= np.exp(rng.normal(0, 0.05, n))
     e = _ar1(rng.normal(0, 1.0, n), gt[seen, 1], f, persistence)
     s = lo + (hi - lo) / (1 + np.exp(-(3 * (v - 0.4) + e)))
-    info = read_seqinfo(SOURCE)
+    info = read_seqinfo(source)
     k = int(0.15 * n)
     cf = rng.integers(1, info.seq_length + 1, k)
-    ch = rng.uniform(60, 250, k)
+    ch = rng.uniform(60, 250, k) * info.im_height / 1080  # MOT20-01's people, in its images
     cw = ch * rng.uniform(0.3, 0.5, k)
     cb = np.stack([rng.uniform(0, info.im_width - cw), rng.uniform(0, info.im_height - ch), cw,
                    ch], 1)
     cs = lo + (hi - lo) / (1 + np.exp(-rng.normal(-1.5, 1.0, k)))
     frames, boxes, scores = np.r_[f, cf], np.r_[b, cb], np.r_[s, cs]
     order = np.argsort(frames, kind="stable")
-    d = root / f"MOT20-01-sim{seed}"
+    d = root / f"{source.name}-sim{seed}"
     (d / "det").mkdir(parents=True)
     (d / "gt").mkdir()
-    shutil.copy(SOURCE / "seqinfo.ini", d)
-    shutil.copy(SOURCE / "gt" / "gt.txt", d / "gt")
+    shutil.copy(source / "seqinfo.ini", d)
+    shutil.copy(source / "gt" / "gt.txt", d / "gt")
     write_mot(d / "det" / "det.txt", frames[order], np.full(len(order), -1), boxes[order],
               scores[order])
     return d
@@ -147,6 +155,10 @@ def main() -> None:
                     help="correlation of a person's detection and score from frame to frame, "
                          "in [0, 1) (default 0: independent)")
     ap.add_argument("--set", type=parse_set, action="append", default=[], metavar="KEY=VALUE")
+    ap.add_argument("--source", type=Path, action="append", default=[], metavar="DIR",
+                    help="a MOT16/17/20 sequence folder with ground truth (visibility) to "
+                         "simulate from instead of MOT20-01 (repeatable: each draw covers "
+                         "them all)")
     ap.add_argument("--no-peers", action="store_true")
     ap.add_argument("--boxmot-python", type=Path,
                     default=acc.ROOT / ".venv-boxmot" / "bin" / "python")
@@ -154,8 +166,11 @@ def main() -> None:
     args = ap.parse_args()
     if not 0 <= args.persistence < 1:
         ap.error(f"--persistence must be in [0, 1); got {args.persistence}")
-    if not SOURCE.exists():
-        sys.exit(f"{SOURCE} not found: the shared data must be beside this checkout")
+    sources = args.source or [SOURCE]
+    for src in sources:
+        if not (src / "gt" / "gt.txt").exists() or not (src / "seqinfo.ini").exists():
+            sys.exit(f"{src}: no gt/gt.txt and seqinfo.ini" + (
+                ": the shared data must be beside this checkout" if src == SOURCE else ""))
     warnings.filterwarnings("ignore")
     over = dict(args.set)
     runs = {"vistrack": ({}, False), "vistrack offline": ({}, True)}
@@ -166,8 +181,8 @@ def main() -> None:
     boxmot = None if args.no_peers or not args.boxmot_python.exists() else args.boxmot_python
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        seqs = [simulate(i, *SCALES[i % len(SCALES)], tmp / "data", args.persistence)
-                for i in range(args.draws)]
+        seqs = [simulate(i, *SCALES[i % len(SCALES)], tmp / "data", args.persistence, src)
+                for i in range(args.draws) for src in sources]
         res = {}
         for label, (kw, offline) in runs.items():
             out = tmp / "out" / label
@@ -198,14 +213,17 @@ def main() -> None:
                                                else "")
     cmd += f" --persistence {args.persistence:g}" if args.persistence else ""
     cmd += "".join(f" --set {k}={json.dumps(v)}" for k, v in over.items())
+    cmd += "".join(f" --source {src}" for src in args.source)
+    who = ", ".join(src.name for src in sources)
     lasting = (f" Here a person's misses last (`--persistence {args.persistence:g}`: found "
                "again after a miss, or missed again after a find, less often than the rate "
                "alone would have it), as a real detector's do." if args.persistence else "")
     section = "\n".join([
-        "## A simulated crowd" + (" whose misses last" if args.persistence else ""),
+        ("## A simulated detector on other scenes" if args.source else "## A simulated crowd")
+        + (" whose misses last" if args.persistence else ""),
         "",
         f"Measured with `{cmd}` (Python {platform.python_version()}, "
-        f"{time.strftime('%Y-%m-%d')}): MOT20-01's ground truth with detections simulated from "
+        f"{time.strftime('%Y-%m-%d')}): {who}'s ground truth with detections simulated from "
         "it (see the script: detection and score fall with a person's visibility, clutter at "
         "low scores, three score scales), a crowd that none of vistrack's settings was chosen "
         f"on.{lasting} COMBINED over the draws:",

@@ -57,3 +57,35 @@ def test_score_noise_is_ar1_with_unit_variance():
     same = i[1:] == i[:-1]
     assert abs(x.var() - 1) < 0.03
     assert abs(np.corrcoef(xs[1:][same], xs[:-1][same])[0, 1] - 0.6) < 0.01
+
+
+def test_a_source_of_ones_own_is_simulated_in_its_own_images(tmp_path):
+    """``--source DIR``: the detector simulated from another sequence's ground truth, its
+    considered pedestrians only, its clutter people-sized in proportion to the image's
+    height (60-250 pixels in MOT20-01's 1080 rows), the sequence's frames and seqinfo.ini."""
+    from vistrack.io import read_mot
+
+    src = tmp_path / "SEQ"
+    (src / "gt").mkdir(parents=True)
+    rng = np.random.default_rng(0)
+    rows = [f"{f},{i},{100 + 20 * i + f},50,20,60,{int(i != 3)},{1 if i != 4 else 7},"
+            f"{rng.uniform(0.2, 1):.2f}\n" for f in range(1, 201) for i in range(1, 6)]
+    (src / "gt" / "gt.txt").write_text("".join(rows))
+    (src / "seqinfo.ini").write_text("[Sequence]\nname=SEQ\nframeRate=30\nseqLength=200\n"
+                                     "imWidth=640\nimHeight=480\n")
+    d = crowd.simulate(0, 0.5, 1.0, tmp_path / "out", 0.7, src)
+    assert d.name == "SEQ-sim0" and (d / "seqinfo.ini").read_text() == (
+        src / "seqinfo.ini").read_text()
+    det = read_mot(d / "det" / "det.txt")
+    assert det.frames.min() >= 1 and det.frames.max() <= 200
+    # each person's detections lie on its path (x moved by 0.05 of 20 px, y by 0.03 of 60,
+    # standard deviations): persons 1, 2 and 5 are found in most of the 200 frames, person 3
+    # (not considered) and 4 (not a pedestrian) never
+    on = [(np.abs(det.boxes[:, 0] - det.frames - (100 + 20 * i)) < 5)
+          & (np.abs(det.boxes[:, 1] - 50) < 10) for i in range(1, 6)]
+    assert [int(k.sum()) > 60 for k in on] == [True, True, False, False, True]
+    assert on[2].sum() == 0 and on[3].sum() == 0
+    # the rest is clutter, 15 % as many boxes, 60-250 pixels tall scaled by 480 / 1080
+    clutter = det.boxes[~np.any(on, axis=0), 3]
+    assert len(clutter) == int(0.15 * (len(det) - len(clutter)))
+    assert ((clutter >= 60 * 480 / 1080) & (clutter <= 250 * 480 / 1080)).all()
