@@ -217,6 +217,31 @@ def test_a_csv_file_pandas_cannot_read_is_named(tmp_path):
         track_sequence(empty, tmp_path / "e.txt", fps=10)
 
 
+def test_a_csv_file_separated_by_tabs_or_semicolons_reads_as_with_commas(tmp_path):
+    """A spreadsheet's export separates its values by tabs, or by semicolons with decimal
+    commas: its header was read as one column, and the file refused (``no column 'frame'
+    ... columns: ['frame\\tid\\t...']``). Where the header has no comma, the values are
+    split at tabs or semicolons, and the file tracks as the same rows with commas do."""
+    pytest.importorskip("pandas")
+    from vistrack.pipeline import track_sequence
+
+    rows = [(f, -1, 10.5 + 3 * f, 20, 30, 60, 0.9) for f in range(1, 11)]
+    head = ["frame", "id", "bb_left", "bb_top", "bb_width", "bb_height", "conf"]
+
+    def write(name, sep, decimal="."):
+        path = tmp_path / name
+        path.write_text("\n".join([sep.join(head)] + [
+            sep.join(str(v).replace(".", decimal) for v in r) for r in rows]) + "\n")
+        return path
+
+    comma = track_sequence(write("a.csv", ","), tmp_path / "a.txt", fps=10)
+    assert comma.rows == 10
+    for name, sep, decimal in (("t.csv", "\t", "."), ("s.csv", ";", "."),
+                               ("d.csv", ";", ",")):
+        track_sequence(write(name, sep, decimal), tmp_path / f"{name}.txt", fps=10)
+        assert (tmp_path / f"{name}.txt").read_text() == (tmp_path / "a.txt").read_text()
+
+
 def test_detections_to_and_from_supervision_and_ultralytics():
     sv = pytest.importorskip("supervision")
     from types import SimpleNamespace

@@ -82,13 +82,28 @@ def _pandas(what: str) -> Any:
     return pandas
 
 
+def _csv_dialect(path: str | os.PathLike) -> dict[str, str]:
+    """``read_csv``'s ``sep`` (and ``decimal``) for a CSV file, from its header and first row:
+    commas; or, where the header has none, tabs or semicolons (a spreadsheet's export), a
+    semicolon file's numbers with decimal commas where its first row has commas."""
+    with open(path, encoding="utf-8-sig", errors="replace") as fh:
+        header, row = fh.readline(), fh.readline()
+    if "," in header or not ("\t" in header or ";" in header):
+        return {"sep": ","}
+    if "\t" in header:
+        return {"sep": "\t"}
+    return {"sep": ";", "decimal": ","} if "," in row else {"sep": ";"}
+
+
 def _read_csv(path: str | os.PathLike, what: str) -> Any:
-    """A CSV file with a header as a DataFrame; a file pandas cannot parse (a row of more
-    values than the header, an empty file) is a :class:`MOTFormatError` naming it, in pandas'
-    own words: ``"PATH: not WHAT: Expected 5 fields in line 3, saw 6"``."""
+    """A CSV file with a header as a DataFrame, its values separated by commas, or by tabs or
+    semicolons where its header has no comma (:func:`_csv_dialect`); a file pandas cannot
+    parse (a row of more values than the header, an empty file) is a :class:`MOTFormatError`
+    naming it, in pandas' own words: ``"PATH: not WHAT: Expected 5 fields in line 3, saw
+    6"``."""
     pandas = _pandas(what)
     try:
-        return pandas.read_csv(path)
+        return pandas.read_csv(path, **_csv_dialect(path))
     except (pandas.errors.ParserError, pandas.errors.EmptyDataError) as e:
         reason = re.sub(r"^(Error tokenizing data\. )?(C error: )?", "", str(e).strip())
         raise MOTFormatError(f"{path}: not {what}: {reason}") from None
