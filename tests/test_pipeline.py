@@ -613,15 +613,16 @@ def test_a_stray_frame_far_past_the_rest_is_named_in_a_warning(tmp_path):
     # rows: 200
     det.write_text(rows([*range(1, 20), 221]))
     with pytest.warns(UserWarning, match=re.escape(
-            f"{det}, line 20: frame 221 comes 201 frames without rows after frame 19, the "
-            "frame before with rows (5.6 hours at 0.01 frames/s), where 20 frames have rows: "
-            "the tracker steps through all 221 frames up to the last (a mistyped frame "
+            f"{det}, line 20: frame 221's rows come after frames 20-220 without any (201 "
+            "frames, 5.6 hours at 0.01 frames/s), where 20 frames have rows: the tracker "
+            "steps through all 221 frames up to the last (a mistyped frame "
             "number, or a timestamp where the frame should be?)")):
         track_sequence(det, tmp_path / "a.txt", fps=0.01)
     # the file's first rows after a long run from frame 1 are named the same way
     det.write_text(rows([500, *range(501, 520)]))
     with pytest.warns(UserWarning, match=re.escape(
-            f"{det}, line 1: frame 500 comes 499 frames without rows after frame 1")):
+            f"{det}, line 1: frame 500's rows come after frames 1-499 without any (499 "
+            "frames")):
         track_sequence(det, tmp_path / "b.txt", fps=0.01, force=True)
     det.write_text(rows([*range(1, 20), 220]))  # 200 frames between: no warning
     with warnings.catch_warnings():

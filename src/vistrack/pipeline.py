@@ -639,7 +639,7 @@ def _warn_long_silence(dets: MOTTable, path: Path, frame_rate: float,
                        stacklevel: int) -> None:
     """Warn of a detections file (tracked without a sequence's length) whose frames with rows
     leave a run of frames without any longer than an hour and than ten times the frames that
-    have rows: the tracker steps through every frame up to the last (at about 5,000 a
+    have rows: the tracker steps through every frame up to the last (some thousands a
     second), so a mistyped frame number, or a timestamp where the frame should be, makes a
     short file a run of minutes. The warning names the line of the first row after the run."""
     have = np.unique(dets.frames)
@@ -652,9 +652,9 @@ def _warn_long_silence(dets: MOTTable, path: Path, frame_rate: float,
     f = int(have[k])
     lines = _lines_of(str(path), lambda row: row[0] == f)
     where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
-    after = f"frame {int(have[k - 1]):,}, the frame before with rows" if k else "frame 1"
-    warnings.warn(f"{where}: frame {f:,} comes {int(gaps[k]):,} frames without rows after "
-                  f"{after} ({gaps[k] / frame_rate / 3600:,.1f} hours at "
+    start = int(have[k - 1]) + 1 if k else 1
+    warnings.warn(f"{where}: frame {f:,}'s rows come after frames {start:,}-{f - 1:,} without "
+                  f"any ({int(gaps[k]):,} frames, {gaps[k] / frame_rate / 3600:,.1f} hours at "
                   f"{frame_rate:g} frames/s), where {len(have):,} frames have rows: the "
                   f"tracker steps through all {int(have[-1]):,} frames up to the last (a "
                   "mistyped frame number, or a timestamp where the frame should be?)",
