@@ -593,7 +593,8 @@ def test_track_video_writes_tracks_video_plot_and_scores(tmp_path):
     t = read_mot(run.files["tracks"])
     assert len(t) == run.rows and t.frames.max() <= 60
     csv = run.files["csv"].read_text().splitlines()
-    assert csv[0] == "frame,id,x,y,w,h,score,class" and len(csv) == run.rows + 1
+    assert csv[0] == "frame,id,bb_left,bb_top,bb_width,bb_height,conf,class"
+    assert len(csv) == run.rows + 1
     assert len(VideoReader(run.files["video"])) == 60
     assert cv2.imread(str(run.files["plot"])) is not None
     gt = read_mot(demo / "gt.txt")

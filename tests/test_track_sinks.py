@@ -59,7 +59,7 @@ def mot_text(rows, decimals=2):
 
 
 def csv_text(rows):
-    return "frame,id,x,y,w,h,score,class\n" + "".join(
+    return "frame,id,bb_left,bb_top,bb_width,bb_height,conf,class\n" + "".join(
         f"{f},{i},{x:.2f},{y:.2f},{w:.2f},{h:.2f},{s:.3f},{c}\n"
         for f, i, x, y, w, h, s, c in rows)
 
