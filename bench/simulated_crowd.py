@@ -225,8 +225,10 @@ def main() -> None:
         f"Measured with `{cmd}` (Python {platform.python_version()}, "
         f"{time.strftime('%Y-%m-%d')}): {who}'s ground truth with detections simulated from "
         "it (see the script: detection and score fall with a person's visibility, clutter at "
-        "low scores, three score scales), a crowd that none of vistrack's settings was chosen "
-        f"on.{lasting} COMBINED over the draws:",
+        "low scores, three score scales), "
+        + ("a detector that none of vistrack's settings was chosen on (on scenes some were)."
+           if args.source else "a crowd that none of vistrack's settings was chosen on.")
+        + f"{lasting} COMBINED over the draws:",
         "",
         *rows,
         "",
