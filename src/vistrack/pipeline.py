@@ -31,6 +31,7 @@ import numpy as np
 from . import _compile
 from ._memory import PeriodicRelease
 from ._registry import Registry
+from .association import iou_pairs
 from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, _lines_of, evaluate_mot
 from .io.atomic import check_output, made_folder
@@ -661,6 +662,50 @@ def _warn_long_silence(dets: MOTTable, path: Path, frame_rate: float,
                   UserWarning, stacklevel=stacklevel + 1)
 
 
+DUPLICATE_IOU = 0.7
+"""The IoU at which :func:`duplicate_share` counts two detections of a frame as one
+object's (a detector's own non-maximum suppression leaves hardly any pair above it)."""
+
+
+def duplicate_share(dets: MOTTable, min_iou: float = DUPLICATE_IOU) -> float:
+    """The share of a detections file's rows that overlap another row of their frame and
+    class at IoU ``min_iou`` or more: below 0.03 on every sequence of the shared data (its
+    detectors apply non-maximum suppression), 0.96 where each detection has a copy moved by
+    5 % of its size.
+
+    Examples
+    --------
+    >>> t = MOTTable.from_rows([(1, -1, 0, 0, 10, 10, 0.9), (1, -1, 1, 0, 10, 10, 0.8),
+    ...                         (1, -1, 50, 0, 10, 10, 0.7), (2, -1, 1, 0, 10, 10, 0.8)])
+    >>> duplicate_share(t)
+    0.5
+    """
+    n = 0
+    xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
+    for s in dets.frame_slices():
+        if s.stop - s.start < 2:
+            continue
+        r, c, _ = iou_pairs(xyxy[s], xyxy[s], min_iou)
+        same = (r != c) & (dets.classes[s][r] == dets.classes[s][c])
+        n += len(np.unique(r[same]))
+    return n / max(len(dets), 1)
+
+
+def _warn_duplicates(dets: MOTTable, path: Path, stacklevel: int) -> None:
+    """Warn of a detections file where one row in five or more overlaps another of its frame
+    and class at IoU 0.7 or more (:func:`duplicate_share`): a detector without non-maximum
+    suppression, whose copies of one object each start a track."""
+    share = duplicate_share(dets)
+    if share < 0.2:
+        return
+    warnings.warn(f"{path}: {share:.0%} of the detections overlap another of their frame and "
+                  f"class at IoU {DUPLICATE_IOU:g} or more (at most 3 % in detectors that apply "
+                  "non-maximum suppression): copies of one object, each of which starts a "
+                  f"track of its own; --nms-iou {DUPLICATE_IOU:g} (nms_iou under [tracker] in a "
+                  "--config file) keeps the most confident of each", UserWarning,
+                  stacklevel=stacklevel + 1)
+
+
 def _warn_classes(dets: MOTTable, path: Path, stacklevel: int) -> None:
     """Warn that a detections file holds more than one class (the eighth value of a
     MOTChallenge file's rows, a CSV file's ``class``): each is tracked apart, and a
@@ -1231,6 +1276,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
             raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
                              f"sequence's {info.seq_length} frames ({ini})")
     tc0 = cfg.tracker
+    if tc0.nms_iou >= 1:
+        _warn_duplicates(dets, det_path, stacklevel=2)
     if tc0.scores == "raw" and tc0.fuse_score and len(dets) and not (
             (dets.conf >= 0) & (dets.conf <= 1)).all():
         raise ValueError(f"{det_path}: scores from {dets.conf.min():.4g} to "

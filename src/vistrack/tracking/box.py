@@ -174,6 +174,11 @@ class BoxTrackerConfig:
         a chain of detections that spans ``chain_span`` or more, linked across gaps of up to
         ``chain_gap`` (0: frame-to-frame persistence alone; see
         :mod:`vistrack.tracking.calibration`).
+    nms_iou : float
+        Non-maximum suppression of each frame's detections before anything else: a detection
+        overlapping a more confident one of its class at IoU ``nms_iou`` or more is dropped,
+        for a detector that applies none, whose duplicates of one object would each start a
+        track of their own (1, the default: none dropped; detectors apply their own).
     """
 
     two_stage: bool = True
@@ -203,6 +208,7 @@ class BoxTrackerConfig:
     calibration_cap_sigma: float = 5.0
     chain_span: float = 1.0
     chain_gap: float = 0.2
+    nms_iou: float = 1.0
 
     def __post_init__(self) -> None:
         def bad(name: str, must: str) -> ValueError:
@@ -224,7 +230,8 @@ class BoxTrackerConfig:
         if self.assigner not in ASSIGNERS:
             raise bad("assigner", f"one of {sorted(ASSIGNERS)}")
         unit = ("high", "low", "new_track") if self.scores == "calibrated" else ()
-        for name in unit + ("min_iou", "min_iou_low", "min_iou_tentative", "camera_min_iou"):
+        for name in unit + ("min_iou", "min_iou_low", "min_iou_tentative", "camera_min_iou",
+                            "nms_iou"):
             if not 0 <= getattr(self, name) <= 1:
                 raise bad(name, "in [0, 1]" + (" (a calibrated confidence)" if name in unit
                                                else ""))
@@ -275,6 +282,59 @@ def _noise(mean: np.ndarray, dt: float,
     :class:`~vistrack.models.BoxMotion`, whose noise scales with the size)."""
     boxes = _predicted_values(mean, dt)  # mean[:, :4] + dt * mean[:, 4:]
     return motion.Q_diag(boxes, abs(dt)), motion.R_diag(boxes)
+
+
+def non_maximum(boxes: ArrayLike, scores: ArrayLike, classes: ArrayLike | None = None,
+                min_iou: float = 0.7) -> np.ndarray:
+    """Greedy non-maximum suppression: which boxes are kept when, from the most confident
+    down, each box kept drops every less confident one of its class that overlaps it at IoU
+    ``min_iou`` or more (ties in score by order).
+
+    Parameters
+    ----------
+    boxes : (N, 4) array_like
+        Boxes ``x0, y0, x1, y1``.
+    scores : (N,) array_like
+        Their scores (any scale: only their order counts).
+    classes : (N,) array_like of int, optional
+        Their classes (default one class): boxes of two classes never suppress each other.
+    min_iou : float
+        The IoU at which the less confident of two boxes is dropped.
+
+    Returns
+    -------
+    (N,) bool ndarray
+        True for the boxes kept.
+
+    Examples
+    --------
+    >>> non_maximum([[0, 0, 10, 10], [1, 0, 11, 10], [20, 0, 30, 10]], [0.8, 0.9, 0.5]).tolist()
+    [False, True, True]
+    >>> non_maximum([[0, 0, 10, 10], [1, 0, 11, 10]], [0.8, 0.9], classes=[0, 1]).tolist()
+    [True, True]
+    """
+    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
+    s = np.asarray(scores, dtype=float).reshape(-1)
+    c = np.zeros(len(b), np.int64) if classes is None else np.asarray(classes).reshape(-1)
+    keep = np.ones(len(b), bool)
+    if len(b) < 2:
+        return keep
+    r, k, _ = iou_pairs(b, b, min_iou)
+    pair = (r != k) & (c[r] == c[k])
+    r, k = r[pair], k[pair]
+    if not len(r):
+        return keep
+    order = np.lexsort((np.arange(len(b)), -s))  # most confident first, then by order
+    rank = np.empty(len(b), np.int64)
+    rank[order] = np.arange(len(b))
+    weaker = rank[k] > rank[r]
+    r, k = r[weaker], k[weaker]  # (stronger, weaker) pairs
+    by = np.argsort(rank[r], kind="stable")
+    r, k = r[by], k[by]
+    for i, j in zip(r.tolist(), k.tolist()):
+        if keep[i]:
+            keep[j] = False
+    return keep
 
 
 def _contiguous(a: np.ndarray) -> np.ndarray:
@@ -866,6 +926,11 @@ class BoxTracker:
             i = int(np.flatnonzero(np.isnan(raw))[0])
             raise ValueError(f"detection scores must not be NaN; scores[{i}] is NaN (frame "
                              f"{frame})")
+        if cfg.nms_iou < 1 and len(raw) > 1:
+            keep = non_maximum(db, raw, dc, cfg.nms_iou)
+            if not keep.all():
+                detections = detections[keep]
+                db, raw, dc = db[keep], raw[keep], dc[keep]
         if self.calibrator is not None:
             self.calibrator.observe(detections)
         ds = self.confidence(raw)
