@@ -111,3 +111,26 @@ def test_a_detector_without_suppression_on_a_real_sequence(tmp_path):
     plain, copies, suppressed = hota(None), hota(dup), hota(dup, nms_iou=0.7)
     assert copies < plain - 0.15
     assert suppressed > plain - 0.015
+
+
+def test_a_video_tracked_from_such_a_file_warns_too(tmp_path):
+    """``--frontend detections:FILE`` reads the file as ``vistrack track FILE`` does: the
+    same warning, none with ``nms_iou`` set, and then one track for the one disc."""
+    from vistrack.pipeline import track_video
+
+    from .test_pipeline import red_disc_clip, write_clip
+
+    frames, truth = red_disc_clip(T=12)
+    clip = write_clip(tmp_path / "frames", frames)
+    dets = tmp_path / "dets.txt"
+    dets.write_text("".join(f"{k + 1},-1,{x:.2f},{y:.2f},{w:.2f},{h:.2f},0.9\n"
+                            f"{k + 1},-1,{x + 1:.2f},{y:.2f},{w:.2f},{h:.2f},0.8\n"
+                            for k, (x, y, w, h) in enumerate(truth)))
+    with pytest.warns(UserWarning, match=re.escape(f"{dets}: 100% of the detections overlap")):
+        track_video(clip, tmp_path / "a", frontend=f"detections:{dets}", fps=10,
+                    annotate=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = track_video(clip, tmp_path / "b", frontend=f"detections:{dets}", fps=10,
+                        annotate=False, nms_iou=0.7)
+    assert r.tracks == 1

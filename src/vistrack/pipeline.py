@@ -811,6 +811,10 @@ def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
     dets = read_detections(path, stacklevel=3)  # MOTChallenge's text, or CSV with a header
+    nms = (ctx.config.tracker.nms_iou if ctx.config is not None
+           else ctx.overrides.get("nms_iou", 1.0))
+    if nms >= 1:
+        _warn_duplicates(dets, path, stacklevel=3)
     return _FileDetections(path, dets)
 
 
