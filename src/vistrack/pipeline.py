@@ -31,7 +31,7 @@ import numpy as np
 from . import _compile
 from ._memory import PeriodicRelease
 from ._registry import Registry
-from .association import iou_pairs
+from .association import overlapping_pairs
 from .config import OfflineConfig, TrackConfig
 from .evaluation.mot import MOTCounts, _lines_of, evaluate_mot
 from .io.atomic import check_output, made_folder
@@ -682,12 +682,11 @@ def duplicate_share(dets: MOTTable, min_iou: float = DUPLICATE_IOU) -> float:
     """
     n = 0
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
-    for s in dets.frame_slices():
-        if s.stop - s.start < 2:
-            continue
-        r, c, _ = iou_pairs(xyxy[s], xyxy[s], min_iou)
-        same = (r != c) & (dets.classes[s][r] == dets.classes[s][c])
-        n += len(np.unique(r[same]))
+    # the frames that have rows (sorted by frame), not every frame up to the last
+    _, start, count = np.unique(dets.frames, return_index=True, return_counts=True)
+    for a, m in zip(start[count > 1].tolist(), count[count > 1].tolist()):
+        r, _ = overlapping_pairs(xyxy[a:a + m], dets.classes[a:a + m], min_iou)
+        n += len(np.unique(r))
     return n / max(len(dets), 1)
 
 
@@ -811,10 +810,6 @@ def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
     dets = read_detections(path, stacklevel=3)  # MOTChallenge's text, or CSV with a header
-    nms = (ctx.config.tracker.nms_iou if ctx.config is not None
-           else ctx.overrides.get("nms_iou", 1.0))
-    if nms >= 1:
-        _warn_duplicates(dets, path, stacklevel=3)
     return _FileDetections(path, dets)
 
 
@@ -1961,6 +1956,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         trk, _ = make_tracker(tracker, at_rate)
         assert isinstance(trk, BoxTracker)  # a box preset's
         ctx.resolved = at_rate.resolved
+        if trk.config.nms_iou >= 1:  # as track_sequence warns, with the tracker's setting
+            _warn_duplicates(grid.dets, grid.path, stacklevel=2)
         stepper, _ = _on_detector_frames(trk, grid.path, grid.dets.frames, grid.first,
                                          grid.stride, offline=False)
     else:

@@ -17,8 +17,8 @@ from numpy.typing import ArrayLike
 from .._jit import njit
 from .._prebuilt import kernel
 
-__all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "giou", "euclidean",
-           "mahalanobis"]
+__all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "overlapping_pairs", "giou",
+           "euclidean", "mahalanobis"]
 
 
 def _boxes(b: ArrayLike, name: str) -> np.ndarray:
@@ -472,3 +472,39 @@ def iou_pairs(a: ArrayLike, b: ArrayLike,
     if not ok:
         raise ValueError("boxes must be finite")
     return rows, cols, vals
+
+
+def overlapping_pairs(boxes: ArrayLike, classes: ArrayLike | None = None,
+                      min_iou: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs of two different boxes of one set, of one class, whose IoU is at least
+    ``min_iou``, in both orders (:func:`iou_pairs` of the set with itself): one frame's
+    detections that overlap, as duplicates of one object do.
+
+    Parameters
+    ----------
+    boxes : (N, 4) array_like
+        Boxes ``x0, y0, x1, y1``.
+    classes : (N,) array_like of int, optional
+        Their classes (default one class): boxes of two classes are never paired.
+    min_iou : float
+        The least IoU of a pair kept; pairs must overlap in any case.
+
+    Returns
+    -------
+    rows, cols : (K,) ndarray of int64
+        The pairs ``(boxes[rows[k]], boxes[cols[k]])``, ``rows[k] != cols[k]``.
+
+    Examples
+    --------
+    >>> r, c = overlapping_pairs([[0, 0, 10, 10], [1, 0, 11, 10], [2, 0, 12, 10]], [0, 0, 1],
+    ...                          min_iou=0.5)
+    >>> r.tolist(), c.tolist()
+    ([0, 1], [1, 0])
+    """
+    b = _boxes(boxes, "boxes")
+    r, c, _ = iou_pairs(b, b, min_iou)
+    keep = r != c
+    if classes is not None:
+        cl = np.asarray(classes).reshape(-1)
+        keep &= cl[r] == cl[c]
+    return r[keep], c[keep]

@@ -85,7 +85,7 @@ import numpy as np
 from .._jit import njit
 from .._prebuilt import kernel
 from .._registry import Registry
-from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs
+from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs, overlapping_pairs
 from ..association.assign import gnn_pairs, gnn_pairs_limited
 from ..association.costs import iou_pairs_same_class
 from ..filters.axes import (
@@ -315,13 +315,10 @@ def non_maximum(boxes: ArrayLike, scores: ArrayLike, classes: ArrayLike | None =
     """
     b = np.asarray(boxes, dtype=float).reshape(-1, 4)
     s = np.asarray(scores, dtype=float).reshape(-1)
-    c = np.zeros(len(b), np.int64) if classes is None else np.asarray(classes).reshape(-1)
     keep = np.ones(len(b), bool)
     if len(b) < 2:
         return keep
-    r, k, _ = iou_pairs(b, b, min_iou)
-    pair = (r != k) & (c[r] == c[k])
-    r, k = r[pair], k[pair]
+    r, k = overlapping_pairs(b, classes, min_iou)
     if not len(r):
         return keep
     order = np.lexsort((np.arange(len(b)), -s))  # most confident first, then by order
