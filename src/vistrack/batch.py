@@ -32,19 +32,16 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-if TYPE_CHECKING:
-    from concurrent.futures import Executor, Future, ProcessPoolExecutor
-    from typing import TextIO
+from ._pool import default_jobs, one_line, one_thread_here, process_pool
 
-# concurrent.futures' process pool imports multiprocessing (12-18 ms): imported where a pool is
-# made, so that `vistrack track` with one input does not pay for it
+if TYPE_CHECKING:
+    from concurrent.futures import Executor, Future
+    from typing import TextIO
 
 __all__ = ["Job", "Outcome", "is_benchmark", "expand_inputs", "plan", "track_many", "run_jobs",
            "progress_lines", "process_pool", "one_thread_here"]
 
 _PIPELINE = f"{__package__}.pipeline"  # what the jobs run (_run)
-_BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-_ONE_THREAD = (*_BLAS_THREADS, "NUMBA_NUM_THREADS")
 
 
 def _is_sequence(path: Path) -> bool:
@@ -195,133 +192,10 @@ def _run(job: Job) -> Outcome:
             run = track_video(job.input, job.out, **job.options)
     except Exception as e:  # noqa: BLE001 - reported, and the other jobs go on
         return Outcome(job.input, job.out, False, seconds=time.perf_counter() - t0,
-                       error=_one_line(e))
+                       error=one_line(e))
     return Outcome(job.input, job.out, True, frames=run.frames, rows=run.rows,
                    tracks=run.tracks, seconds=time.perf_counter() - t0)
 
-
-def _one_line(e: BaseException) -> str:
-    """An error as one line: ``TypeName: its message`` (white space collapsed)."""
-    return f"{type(e).__name__}: {' '.join(str(e).split()) or type(e).__name__}"
-
-
-def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecutor:
-    """A pool of ``workers`` processes, each with one BLAS and OpenMP thread unless the
-    environment sets them.
-
-    On Linux, when this process has one thread, the workers are forked from it after it has
-    imported ``imports`` (what the jobs run), so that each starts with them loaded, as a
-    forked process safely can when no other thread holds a lock. Otherwise (another thread
-    running, such as a BLAS pool started with more than one thread; not Linux) they are
-    spawned: fresh processes that import what they need. A forked worker is then made like a
-    fresh one: Ctrl-C and SIGTERM act as Python's defaults (or stay ignored if this process
-    ignores them), and no compile watch of this process's (:mod:`vistrack._compile`) goes on
-    in it; warnings print as this process prints them.
-    """
-    import importlib
-    import multiprocessing
-    import signal
-    import sys
-    from concurrent.futures import ProcessPoolExecutor
-    from concurrent.futures.process import BrokenProcessPool
-
-    if getattr(multiprocessing.current_process(), "_inheriting", False):
-        # a spawned worker importing the script that started it, whose top level asks for a
-        # pool again: its workers would be forked (it has one thread) and run the jobs again
-        raise RuntimeError(_UNGUARDED)
-    fork = sys.platform.startswith("linux") and _one_thread()
-    if fork:
-        for name in imports:  # before the environment below: this process's own threads
-            importlib.import_module(name)
-        fork = _one_thread()
-    saved = {k: os.environ.get(k) for k in _ONE_THREAD}
-    try:
-        for k in _ONE_THREAD:
-            os.environ.setdefault(k, "1")
-        if fork:  # a fresh process's handlers: Python's, or ignored as here
-            ign = {s: signal.getsignal(s) == signal.SIG_IGN for s in (signal.SIGINT,
-                                                                     signal.SIGTERM)}
-            pool = ProcessPoolExecutor(
-                workers, mp_context=multiprocessing.get_context("fork"), initializer=_as_fresh,
-                initargs=(signal.SIG_IGN if ign[signal.SIGINT] else signal.default_int_handler,
-                          signal.SIG_IGN if ign[signal.SIGTERM] else signal.SIG_DFL))
-        else:
-            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
-        # the processes start at the first submission: start them now, with this environment
-        try:
-            for f in [pool.submit(os.getpid) for _ in range(workers)]:
-                f.result()
-        except BrokenProcessPool as e:
-            pool.shutdown(wait=True, cancel_futures=True)
-            raise RuntimeError("the pool's worker processes ended as they started (their "
-                               f"errors are above); {_UNGUARDED}") from e
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
-    return pool
-
-
-_UNGUARDED = ("a script that starts a process pool (track_many, evaluate_files with jobs) must "
-              "guard its top level with `if __name__ == \"__main__\":`, since each spawned "
-              "worker imports the script")
-
-
-def one_thread_here() -> None:
-    """Give this process one BLAS and OpenMP thread, as its workers have (unless the
-    environment sets them), for a process that only hands out jobs, so that it stays
-    single-threaded and :func:`process_pool` can fork its workers. It acts only before numpy
-    is first imported: a numpy loaded already keeps the threads it started, and then the
-    environment is left as it is."""
-    import sys
-
-    if "numpy" not in sys.modules:
-        for k in _BLAS_THREADS:
-            os.environ.setdefault(k, "1")
-
-
-def _one_thread(wait: float = 0.02) -> bool:
-    """Whether this process has one thread. A thread Python has joined (an earlier pool's)
-    can stay in the system's list for a moment after: while Python runs no other thread,
-    wait up to ``wait`` seconds for it to go."""
-    import threading
-
-    deadline = time.monotonic() + wait
-    while (n := _threads()) > 1 and threading.active_count() == 1 \
-            and time.monotonic() < deadline:
-        time.sleep(0.001)
-    return n == 1
-
-
-def _threads() -> int:
-    """This process's threads (Linux's ``/proc/self/stat``; 0 where it cannot be read)."""
-    try:
-        with open("/proc/self/stat", "rb") as f:
-            return int(f.read().rsplit(b")", 1)[1].split()[17])
-    except (OSError, ValueError, IndexError):
-        return 0
-
-
-def _as_fresh(sigint: Any, sigterm: Any) -> None:
-    """In a forked worker: what a fresh process would have. The handlers of Ctrl-C and
-    SIGTERM given (the parent's own, such as the command line's SIGTERM, are its own), and
-    no compile watch of the parent's going on."""
-    import signal
-
-    from . import _compile
-
-    signal.signal(signal.SIGINT, sigint)
-    signal.signal(signal.SIGTERM, sigterm)
-    _compile.forget()
-
-
-def default_jobs() -> int:
-    """The cores this process may use."""
-    if hasattr(os, "sched_getaffinity"):
-        return max(1, len(os.sched_getaffinity(0)))
-    return max(1, os.cpu_count() or 1)  # pragma: no cover - macOS, Windows
 
 
 def _size(job: Job) -> int:

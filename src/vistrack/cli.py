@@ -641,7 +641,7 @@ def _track_one(args: argparse.Namespace) -> int:
 def _eval(args: argparse.Namespace) -> int:
     import json
 
-    from .batch import default_jobs, one_thread_here
+    from ._pool import default_jobs, one_thread_here
 
     jobs = default_jobs() if args.jobs is None else args.jobs
     if jobs > 1 and args.gt_dir and args.scheduler is None and args.own_process:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..batch import _one_line
+from .._pool import one_line
 from ..io.motchallenge import MOTTable, read_mot, read_seqinfo
 from .mot import Matches, MOTCounts, clear_matches, combine, evaluate_mot
 from .sanity import sanity_warnings
@@ -54,7 +54,7 @@ def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going
     except Exception as e:
         if not keep_going:
             raise
-        return None, [], _one_line(e)
+        return None, [], one_line(e)
 
 
 def _read(pair: tuple[str, Path, Path, Path | None]) -> tuple[MOTTable, MOTTable, int | None]:
@@ -93,7 +93,7 @@ def _score_on(executor: Executor, pairs: list[tuple[str, Path, Path, Path | None
         except Exception as e:
             if not keep_going:
                 raise
-            scored.append((None, [], _one_line(e)))
+            scored.append((None, [], one_line(e)))
     return scored
 
 
@@ -182,7 +182,7 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
                              f"{str(name)!r}: each pair needs a name of its own")
         seen[str(name)] = k
     if executor is None and (jobs or 1) > 1 and len(pairs) > 1:
-        from ..batch import process_pool  # one BLAS thread a worker
+        from .._pool import process_pool  # one BLAS thread a worker
 
         with process_pool(min(jobs or 1, len(pairs)), imports=(__name__,)) as pool:
             scored = _score_on(pool, pairs, benchmark, keep_going)
