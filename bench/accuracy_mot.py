@@ -64,6 +64,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vistrack.detector_checks import ordinal
 from vistrack.evaluation import evaluate_files
 from vistrack.io import read_mot, read_seqinfo, write_mot
 from vistrack.pipeline import track_sequence
@@ -112,11 +113,6 @@ def score(seqs: list[Path], results: Path) -> dict:
     res = evaluate_files([(d.name, d / "gt" / "gt.txt", results / f"{d.name}.txt",
                            d / "seqinfo.ini") for d in seqs])
     return res if "COMBINED" in res else {**res, "COMBINED": res[seqs[0].name]}
-
-
-def ordinal(k: int) -> str:
-    """3 -> "3rd", 6 -> "6th"."""
-    return f"{k}{'th' if 10 <= k % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(k % 10, 'th')}"
 
 
 def every_kth(seqs: list[Path], k: int, root: Path) -> list[Path]:

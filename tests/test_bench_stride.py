@@ -12,8 +12,8 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
 acc = pytest.importorskip("accuracy_mot")
 
+from vistrack.detector_checks import detection_stride  # noqa: E402
 from vistrack.io import read_mot  # noqa: E402
-from vistrack.pipeline import detection_stride  # noqa: E402
 
 
 def _sequence(root: Path) -> Path:
@@ -21,7 +21,7 @@ def _sequence(root: Path) -> Path:
     (d / "det").mkdir(parents=True)
     (d / "gt").mkdir()
     (d / "det" / "det.txt").write_text("".join(
-        f"{f},-1,{10 + f},{20 + j},30,60,0.{5 + j}\n" for f in range(1, 31) for j in range(2)))
+        f"{f},-1,{10 + f},{20 + 80 * j},30,60,0.{5 + j}\n" for f in range(1, 31) for j in range(2)))
     (d / "gt" / "gt.txt").write_text("".join(
         f"{f},1,{10 + f},20,30,60,1,1,1\n" for f in range(1, 31)))
     (d / "seqinfo.ini").write_text("[Sequence]\nname=SEQ\nframeRate=30\nseqLength=30\n"

@@ -84,8 +84,9 @@ def test_a_detector_without_suppression_on_a_real_sequence(tmp_path):
     ``nms_iou`` 0.7 it scores 49.1. No sequence
     of the shared data has 3 % of its detections overlapping at 0.7 (MOT16-09 with FairMOT's
     the most, 2.4 %), nor MOT20-01's ground truth (3.0 %, a dense crowd); such copies, 96 %."""
+    from vistrack.detector_checks import duplicate_share
     from vistrack.evaluation import evaluate_mot
-    from vistrack.pipeline import duplicate_share, track_sequence
+    from vistrack.pipeline import track_sequence
 
     d = seq_dir("MOT17", "MOT17-09-FRCNN")
     t = read_mot(d / "det" / "det.txt")

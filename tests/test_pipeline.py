@@ -583,7 +583,8 @@ def test_a_frame_number_far_past_the_rest_is_named_not_tracked_for_ever(tmp_path
     tracker would then have stepped through 10^11 frames. The runs of frames without rows
     are found from the frames that have rows, and a detections file alone past
     ``MAX_FRAMES`` is refused, naming the line."""
-    from vistrack.pipeline import MAX_FRAMES, track_sequence, undelivered_frames
+    from vistrack.detector_checks import undelivered_frames
+    from vistrack.pipeline import MAX_FRAMES, track_sequence
 
     frames = np.r_[np.repeat([1, 2, 4], 6), 10 ** 11]
     assert undelivered_frames(frames).tolist() == [3]
@@ -707,7 +708,7 @@ def test_a_parquet_results_file_carries_each_tracks_class(tmp_path):
 
 
 def test_detection_stride_is_the_common_gap_between_the_frames_with_detections():
-    from vistrack.pipeline import detection_stride
+    from vistrack.detector_checks import detection_stride
 
     every = np.repeat(np.arange(1, 40), 3)  # three rows a frame, every frame
     assert detection_stride(every) == 1
@@ -815,7 +816,7 @@ def test_a_detector_that_ran_on_every_other_frame_is_tracked_on_its_own_frames(t
 
 
 def test_undelivered_frames_are_runs_without_rows_amid_frames_with_many():
-    from vistrack.pipeline import undelivered_frames
+    from vistrack.detector_checks import undelivered_frames
 
     busy = np.repeat(np.delete(np.arange(1, 31), [4, 11, 12, 19]), 5)  # 5 rows a frame
     assert undelivered_frames(busy).tolist() == [5, 12, 13, 20]
@@ -928,8 +929,9 @@ def test_a_detector_that_dropped_a_fifth_of_its_frames_tracks_as_well_as_with_th
     four are taken as not delivered, and no frame of it else."""
     import warnings
 
+    from vistrack.detector_checks import undelivered_frames
     from vistrack.evaluation import evaluate_mot
-    from vistrack.pipeline import track_sequence, undelivered_frames
+    from vistrack.pipeline import track_sequence
 
     from .mot_oracles import SHARED
 

@@ -31,8 +31,19 @@ import numpy as np
 from . import _compile
 from ._memory import PeriodicRelease
 from ._registry import Registry
-from .association import overlapping_pairs
 from .config import OfflineConfig, TrackConfig
+from .detector_checks import (
+    detector_grid,
+    ordinal,
+    stride_warning,
+    undelivered_frames,
+    undelivered_text,
+    undelivered_warning,
+    warn_classes,
+    warn_duplicates,
+    warn_long_silence,
+    warn_no_area,
+)
 from .evaluation.mot import MOTCounts, _lines_of, evaluate_mot
 from .io.atomic import check_output, made_folder
 from .io.motchallenge import (
@@ -64,8 +75,7 @@ if TYPE_CHECKING:
 
 __all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "SINKS",
            "as_detector", "make_tracker", "track_sequence", "TrackRun", "resolve_config",
-           "derived_values", "calibration_warning", "detection_stride", "undelivered_frames",
-           "track_video",
+           "derived_values", "calibration_warning", "track_video",
            "VideoRun", "track_one", "SingleRun", "video_outputs", "RUN_INFO", "fit_sequences",
            "FitRun"]
 
@@ -92,10 +102,11 @@ class TrackRun:
     config : TrackConfig or None
         The configuration used (its motion filled in).
     derived : dict or None
-        :func:`derived_values` of the tracker, with ``detection_stride`` where the detections
-        lie on every k-th frame only (:func:`detection_stride`; the tracker's ``frame_rate``
-        is then the sequence's divided by k), and ``undelivered_frames``, their number, where
-        frames without detections lie amid frames with many (:func:`undelivered_frames`).
+        :func:`derived_values` of the tracker, with ``detection_stride`` where the detections lie on
+        every k-th frame only (:func:`~vistrack.detector_checks.detection_stride`; the tracker's
+        ``frame_rate`` is then the sequence's divided by k), and ``undelivered_frames``, their
+        number, where frames without detections lie amid frames with many
+        (:func:`~vistrack.detector_checks.undelivered_frames`).
 
     Examples
     --------
@@ -617,188 +628,21 @@ def _onnx(path: str | Path, ctx: Context) -> FrameDetector:
     return lambda frame: det.detect(_image(frame, "the ONNX model"))
 
 
-def _warn_no_area(dets: MOTTable, path: Path, stacklevel: int) -> None:
-    """Warn of a detections file's boxes of zero width or height, naming the first one's line
-    (its frame, where the line is not found: a CSV file's columns may lie in any order): a
-    box with no area overlaps no other, so no track can follow it from frame to frame."""
-    flat = (dets.boxes[:, 2] == 0) | (dets.boxes[:, 3] == 0)
-    if not flat.any():
-        return
-    k = int(np.argmax(flat))
-    f, box = int(dets.frames[k]), dets.boxes[k].tolist()
-    lines = _lines_of(str(path), lambda row: row[0] == f and row[2:6] == box)
-    where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
-    more = int(flat.sum()) - 1
-    warnings.warn(f"{where}: a box of zero {'width' if box[2] == 0 else 'height'} "
-                  f"({', '.join(f'{v:g}' for v in box)})"
-                  + (f" and {more} more of zero width or height" if more else "")
-                  + ": a box with no area overlaps no other, so no track can follow it from "
-                  "frame to frame", RuntimeWarning, stacklevel=stacklevel + 1)
-
-
-def _warn_long_silence(dets: MOTTable, path: Path, frame_rate: float,
-                       stacklevel: int) -> None:
-    """Warn of a detections file (tracked without a sequence's length) whose frames with rows
-    leave a run of frames without any longer than an hour and than ten times the frames that
-    have rows: the tracker steps through every frame up to the last (some thousands a
-    second), so a mistyped frame number, or a timestamp where the frame should be, makes a
-    short file a run of minutes. The warning names the line of the first row after the run."""
-    have = np.unique(dets.frames)
-    if not len(have):
-        return
-    gaps = np.diff(np.r_[0, have]) - 1  # the frames without rows before each with rows
-    k = int(np.argmax(gaps))
-    if gaps[k] <= max(3600 * frame_rate, 10 * len(have)):
-        return
-    f = int(have[k])
-    lines = _lines_of(str(path), lambda row: row[0] == f)
-    where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
-    start = int(have[k - 1]) + 1 if k else 1
-    warnings.warn(f"{where}: frame {f:,}'s rows come after frames {start:,}-{f - 1:,} without "
-                  f"any ({int(gaps[k]):,} frames, {gaps[k] / frame_rate / 3600:,.1f} hours at "
-                  f"{frame_rate:g} frames/s), where {len(have):,} frames have rows: the "
-                  f"tracker steps through all {int(have[-1]):,} frames up to the last (a "
-                  "mistyped frame number, or a timestamp where the frame should be?)",
-                  UserWarning, stacklevel=stacklevel + 1)
-
-
-DUPLICATE_IOU = 0.7
-"""The IoU at which :func:`duplicate_share` counts two detections of a frame as one
-object's (a detector's own non-maximum suppression leaves hardly any pair above it)."""
-
-
-def duplicate_share(dets: MOTTable, min_iou: float = DUPLICATE_IOU) -> float:
-    """The share of a detections file's rows that overlap another row of their frame and
-    class at IoU ``min_iou`` or more: below 0.03 on every sequence of the shared data (its
-    detectors apply non-maximum suppression), 0.96 where each detection has a copy moved by
-    5 % of its size.
-
-    Examples
-    --------
-    >>> t = MOTTable.from_rows([(1, -1, 0, 0, 10, 10, 0.9), (1, -1, 1, 0, 10, 10, 0.8),
-    ...                         (1, -1, 50, 0, 10, 10, 0.7), (2, -1, 1, 0, 10, 10, 0.8)])
-    >>> duplicate_share(t)
-    0.5
-    """
-    n = 0
-    xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
-    # the frames that have rows (sorted by frame), not every frame up to the last
-    _, start, count = np.unique(dets.frames, return_index=True, return_counts=True)
-    for a, m in zip(start[count > 1].tolist(), count[count > 1].tolist()):
-        r, _ = overlapping_pairs(xyxy[a:a + m], dets.classes[a:a + m], min_iou)
-        n += len(np.unique(r))
-    return n / max(len(dets), 1)
-
-
-def _warn_duplicates(dets: MOTTable, path: Path, stacklevel: int) -> None:
-    """Warn of a detections file where one row in five or more overlaps another of its frame
-    and class at IoU 0.7 or more (:func:`duplicate_share`): a detector without non-maximum
-    suppression, whose copies of one object each start a track."""
-    share = duplicate_share(dets)
-    if share < 0.2:
-        return
-    warnings.warn(f"{path}: {share:.0%} of the detections overlap another of their frame and "
-                  f"class at IoU {DUPLICATE_IOU:g} or more (at most 3 % in detectors that apply "
-                  "non-maximum suppression): copies of one object, each of which starts a "
-                  f"track of its own; --nms-iou {DUPLICATE_IOU:g} (nms_iou under [tracker] in a "
-                  "--config file) keeps the most confident of each", UserWarning,
-                  stacklevel=stacklevel + 1)
-
-
-def _warn_classes(dets: MOTTable, path: Path, stacklevel: int) -> None:
-    """Warn that a detections file holds more than one class (the eighth value of a
-    MOTChallenge file's rows, a CSV file's ``class``): each is tracked apart, and a
-    MOTChallenge results file, which has no class column, does not say which class a track
-    is (a Parquet results file and ``tracks.csv`` do)."""
-    kinds = np.unique(dets.classes)
-    if len(kinds) < 2:
-        return
-    shown = ", ".join(str(k) for k in kinds[:8]) + (", ..." if len(kinds) > 8 else "")
-    warnings.warn(f"{path}: detections of {len(kinds)} classes ({shown}): each class is "
-                  "tracked apart, no track taking another's detections, but a MOTChallenge "
-                  "results file has no class column (a Parquet results file and tracks.csv "
-                  "have one)", UserWarning, stacklevel=stacklevel + 1)
-
-
-def _detector_grid(frames: np.ndarray) -> tuple[int, int]:
-    """``(first, stride)``: the frames a detections file's detector ran on, every
-    ``stride``-th from ``first`` (:func:`detection_stride`; ``(1, 1)``: every frame)."""
-    stride = detection_stride(frames)
-    return ((int(frames.min()) - 1) % stride + 1 if stride > 1 else 1), stride
-
-
 MAX_FRAMES = 10 ** 8
 """The last frame a detections file without a sequence folder is tracked up to (39 days at
 30 frames/s): the tracker steps through every frame to its last, and a frame number that is a
 timestamp would keep it going for years."""
 
-UNDELIVERED_AROUND = 5
-"""The fewest rows on each side of a run of frames without any for :func:`undelivered_frames`
-to take the run as frames the detector did not deliver: where a detector finds 5 objects a
-frame on average, it finds none in a frame it ran on with a chance below 1 % (e^-5)."""
-
-
-def undelivered_frames(frames: ArrayLike, first: int = 1, stride: int = 1,
-                       max_run: int | None = None,
-                       around: int = UNDELIVERED_AROUND) -> np.ndarray:
-    """The frames of a detector's grid (every ``stride``-th from ``first``) that have no rows
-    while the grid frames on either side of their run have ``around`` rows or more each:
-    frames the detector did not deliver (dropped while it was busy, a camera's glitch), not
-    frames where it found nothing.
-
-    Parameters
-    ----------
-    frames : (N,) array_like of int
-        The rows' frame numbers.
-    first, stride : int
-        The detector's grid (:func:`detection_stride`).
-    max_run : int, optional
-        Runs of more grid frames than this are left as frames where nothing was found.
-    around : int
-        The fewest rows in each of the frames either side of a run.
-
-    Returns
-    -------
-    (M,) int64 ndarray
-        Sorted frame numbers.
-
-    Examples
-    --------
-    Six boxes a frame, none in frames 4 and 7 (and none after frame 9):
-
-    >>> f = np.repeat([1, 2, 3, 5, 6, 8, 9], 6)
-    >>> undelivered_frames(f).tolist()
-    [4, 7]
-    >>> undelivered_frames(np.r_[f, 10]).tolist()  # frame 10's single box: frames 1-9 as before
-    [4, 7]
-    >>> undelivered_frames(np.repeat([1, 2, 3, 5, 6], [6, 6, 2, 6, 6])).tolist()  # 2 before 4
-    []
-    """
-    f = np.asarray(frames, dtype=np.int64).reshape(-1)
-    if len(f) == 0:
-        return np.zeros(0, np.int64)
-    grid = (f - first) // stride  # the grid frames' numbers from 0
-    on = (f - first) % stride == 0
-    # the grid frames with rows and their counts (not a count for every frame up to the last,
-    # which a stray frame number of 10^11 made 745 GiB)
-    have, count = np.unique(grid[on], return_counts=True)
-    gap = np.diff(have)
-    k = np.flatnonzero((gap > 1) & (count[:-1] >= around) & (count[1:] >= around)
-                       & (gap - 1 <= (np.inf if max_run is None else max_run)))
-    runs = [np.arange(have[i] + 1, have[i + 1]) for i in k]
-    return first + stride * (np.concatenate(runs) if runs else np.zeros(0, np.int64))
-
-
 class _FileDetections:
-    """The ``detections:FILE`` front-end: each frame's rows of a detections file, up to the
-    file's last frame (none after it: a video may run past its header's count, or give
-    none); ``stride`` and ``first`` are :func:`detection_stride`'s and the first frame of
+    """The ``detections:FILE`` front-end: each frame's rows of a detections file, up to the file's
+    last frame (none after it: a video may run past its header's count, or give none); ``stride``
+    and ``first`` are :func:`~vistrack.detector_checks.detection_stride`'s and the first frame of
     its grid (:func:`track_video` steps a box tracker through those frames alone)."""
 
     def __init__(self, path: Path, dets: MOTTable) -> None:
         self.path, self.dets = path, dets
         self.slices = dets.frame_slices()
-        self.first, self.stride = _detector_grid(dets.frames)
+        self.first, self.stride = detector_grid(dets.frames)
 
     def __call__(self, frame: Frame) -> Detections:
         s = self.slices[frame.index - 1] if frame.index <= len(self.slices) else slice(0, 0)
@@ -1092,8 +936,8 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
                       "-1): ground truth or tracks rather than detections? The identities are "
                       "not used, and each row is tracked as a detection scoring its conf",
                       UserWarning, stacklevel=stacklevel + 1)
-    _warn_no_area(table, path, stacklevel + 1)
-    _warn_classes(table, path, stacklevel + 1)
+    warn_no_area(table, path, stacklevel + 1)
+    warn_classes(table, path, stacklevel + 1)
     return table
 
 
@@ -1124,16 +968,16 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         are tracked apart; a MOTChallenge results file has no class column (a Parquet one
         has: each row its track's class), and a file of more than one class says so in a
         ``UserWarning``.
-        Where its rows lie on every k-th frame only (:func:`detection_stride`: a detector
-        run on every k-th frame), the tracker steps through those frames alone, at the frame
-        rate divided by k, and a ``RuntimeWarning`` says so; each frame between gets the
-        reported tracks' boxes as predicted from the frames before it
-        (:meth:`~vistrack.tracking.BoxTracker.boxes_ahead`), offline boxes on the straight
-        line between the smoothed ones, both with score 0. Frames without rows whose
+        Where its rows lie on every k-th frame only
+        (:func:`~vistrack.detector_checks.detection_stride`: a detector run on every k-th frame),
+        the tracker steps through those frames alone, at the frame rate divided by k, and a
+        ``RuntimeWarning`` says so; each frame between gets the reported tracks' boxes as predicted
+        from the frames before it (:meth:`~vistrack.tracking.BoxTracker.boxes_ahead`), offline boxes
+        on the straight line between the smoothed ones, both with score 0. Frames without rows whose
         neighbours on the detector's frames have 5 or more each
-        (:func:`undelivered_frames`, runs shorter than ``max_lost``) are taken as frames the
-        detector did not deliver and treated the same way: the tracker steps over them,
-        and a ``RuntimeWarning`` says so.
+        (:func:`~vistrack.detector_checks.undelivered_frames`, runs shorter than ``max_lost``) are
+        taken as frames the detector did not deliver and treated the same way: the tracker steps
+        over them, and a ``RuntimeWarning`` says so.
     columns : dict, optional
         A CSV file's column names, ``{ours: theirs}`` (:meth:`~vistrack.io.MOTTable.from_pandas`).
     fps : float, optional
@@ -1266,7 +1110,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                              + f": frame {f} is beyond the {MAX_FRAMES:,} frames a detections "
                              "file is tracked over (a timestamp or another column where the "
                              "frame should be?)")
-        _warn_long_silence(dets, det_path, float(fps), stacklevel=2)
+        warn_long_silence(dets, det_path, float(fps), stacklevel=2)
         info = SeqInfo.from_detections(det_path if alone else seq_dir, dets, float(fps))
     else:
         if fps is not None:
@@ -1276,7 +1120,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                              f"sequence's {info.seq_length} frames ({ini})")
     tc0 = cfg.tracker
     if tc0.nms_iou >= 1:
-        _warn_duplicates(dets, det_path, stacklevel=2)
+        warn_duplicates(dets, det_path, stacklevel=2)
     if tc0.scores == "raw" and tc0.fuse_score and len(dets) and not (
             (dets.conf >= 0) & (dets.conf <= 1)).all():
         raise ValueError(f"{det_path}: scores from {dets.conf.min():.4g} to "
@@ -1290,7 +1134,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     # the detector's own frames: every frame, or every stride-th one, where the frames
     # between are not ones where it found nothing; the tracker runs on that timeline, at
     # frame_rate / stride (_OnDetectorFrames)
-    first, stride = _detector_grid(dets.frames)
+    first, stride = detector_grid(dets.frames)
     rate = info.frame_rate / stride
 
     def frame_detections(k: int) -> Detections:
@@ -1369,46 +1213,11 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                     cfg.with_motion(), derived)
 
 
-def detection_stride(frames: ArrayLike, min_frames: int = 10) -> int:
-    """The detector's stride in a detections file: ``k`` where every row lies on one frame in
-    ``k`` (the detector ran on every ``k``-th frame), 1 where rows lie on consecutive frames.
-
-    The stride is the greatest common divisor of the gaps between the frames that have rows,
-    taken only over ``min_frames`` such frames or more: a detector that runs on every frame
-    gives rows on two consecutive frames somewhere, unless it finds almost nothing, and fewer
-    frames could share a divisor by chance.
-
-    Parameters
-    ----------
-    frames : (N,) array_like of int
-        The rows' frame numbers.
-    min_frames : int
-        The fewest frames with rows to find a stride in.
-
-    Returns
-    -------
-    int
-
-    Examples
-    --------
-    >>> detection_stride([1, 1, 4, 7, 10, 13, 16, 19, 22, 25, 28, 31])
-    3
-    >>> detection_stride([1, 4, 7, 8, 10, 13, 16, 19, 22, 25, 28])
-    1
-    >>> detection_stride([5, 10, 15])  # too few frames to tell
-    1
-    """
-    f = np.unique(np.asarray(frames, dtype=np.int64))
-    if len(f) < min_frames:
-        return 1
-    return max(1, int(np.gcd.reduce(np.diff(f))))
-
-
 class _OnDetectorFrames:
-    """A box tracker stepped through the frames a detector delivered alone, every
-    ``stride``-th from ``first`` but those in ``skip`` (:func:`undelivered_frames`; the
-    tracker's frame rate the video's divided by ``stride``; its frame ``i`` the video's
-    ``first + (i - 1) * stride``): at each frame between, the tracks it reported last, at
+    """A box tracker stepped through the frames a detector delivered alone, every ``stride``-th from
+    ``first`` but those in ``skip`` (:func:`~vistrack.detector_checks.undelivered_frames`; the
+    tracker's frame rate the video's divided by ``stride``; its frame ``i`` the video's ``first + (i
+    - 1) * stride``): at each frame between, the tracks it reported last, at
     their boxes predicted that far ahead (:meth:`BoxTracker.boxes_ahead`), with score 0;
     before ``first``, none."""
 
@@ -1442,18 +1251,18 @@ class _OnDetectorFrames:
 
 def _on_detector_frames(trk: BoxTracker, path: str | Path, frames: np.ndarray, first: int,
                         stride: int, offline: bool) -> tuple[Tracker, np.ndarray]:
-    """What steps ``trk`` (made at the detector's rate) through a detections file's frames,
-    and the frames the detector did not deliver (:func:`undelivered_frames`, runs a lost
-    track outlives: shorter than ``max_lost``): ``trk`` itself where it ran on every frame
+    """What steps ``trk`` (made at the detector's rate) through a detections file's frames, and the
+    frames the detector did not deliver (:func:`~vistrack.detector_checks.undelivered_frames`, runs
+    a lost track outlives: shorter than ``max_lost``): ``trk`` itself where it ran on every frame
     and delivered them all, else :class:`_OnDetectorFrames`; a ``RuntimeWarning`` says which
     frames it steps over."""
     longest = max(0, math.ceil(trk.config.max_lost * trk.frame_rate) - 1)
     skip = undelivered_frames(frames, first, stride, longest)
     if stride > 1:
-        warnings.warn(_stride_warning(path, first, stride, trk.frame_rate, offline),
+        warnings.warn(stride_warning(path, first, stride, trk.frame_rate, offline),
                       RuntimeWarning, stacklevel=3)
     if len(skip):
-        warnings.warn(_undelivered_warning(path, skip, offline), RuntimeWarning, stacklevel=3)
+        warnings.warn(undelivered_warning(path, skip, offline), RuntimeWarning, stacklevel=3)
     if stride == 1 and not len(skip):
         return trk, skip
     return _OnDetectorFrames(trk, first, stride, skip), skip
@@ -1487,39 +1296,6 @@ def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: n
     B, C = np.r_[B, nB], np.r_[C, np.zeros(len(nF))]
     o = np.lexsort((I, F))
     return F[o], I[o], B[o], C[o]
-
-
-def _stride_warning(path: str | Path, first: int, stride: int, rate: float,
-                    offline: bool) -> str:
-    """What a run says of a detector run on every ``stride``-th frame alone."""
-    return (f"{path}: detections on every {_ordinal(stride)} frame only (frames "
-            f"{first}, {first + stride}, {first + 2 * stride}, ...): tracked as a sequence of "
-            "those frames "
-            f"at {rate:.4g} frames/s; the frames between "
-            + ("are filled on the line between the smoothed boxes" if offline else
-               "have the tracks' predicted boxes") + " (score 0)")
-
-
-def _undelivered(skip: np.ndarray | tuple) -> str:
-    """How many frames are without detections amid frames with many."""
-    return (f"{len(skip)} frame{'s' if len(skip) > 1 else ''} without detections amid frames "
-            f"with {UNDELIVERED_AROUND} or more each")
-
-
-def _undelivered_warning(path: str | Path, skip: np.ndarray, offline: bool) -> str:
-    """What a run says of frames without detections amid frames with many."""
-    shown = ", ".join(map(str, skip[:5].tolist())) + (", ..." if len(skip) > 5 else "")
-    return (f"{path}: {_undelivered(skip)} (frame"
-            f"{'s' if len(skip) > 1 else ''} {shown}): taken as frames the detector did not "
-            "deliver; the tracks are carried across them, and "
-            + ("filled on the line between the smoothed boxes there" if offline else
-               "given their predicted boxes there") + " (score 0)")
-
-
-def _ordinal(k: int) -> str:
-    """2nd, 3rd, 11th, 21st."""
-    end = "th" if 10 <= k % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(k % 10, "th")
-    return f"{k}{end}"
 
 
 @contextmanager
@@ -1957,7 +1733,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         assert isinstance(trk, BoxTracker)  # a box preset's
         ctx.resolved = at_rate.resolved
         if trk.config.nms_iou >= 1:  # as track_sequence warns, with the tracker's setting
-            _warn_duplicates(grid.dets, grid.path, stacklevel=2)
+            warn_duplicates(grid.dets, grid.path, stacklevel=2)
         stepper, _ = _on_detector_frames(trk, grid.path, grid.dets.frames, grid.first,
                                          grid.stride, offline=False)
     else:
@@ -1966,8 +1742,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         if grid is not None:
             # what the file's frames are that this tracker steps through as found nothing
             skip = undelivered_frames(grid.dets.frames) if grid.stride == 1 else ()
-            gaps = (f"detections on every {_ordinal(grid.stride)} frame only"
-                    if grid.stride > 1 else _undelivered(skip) if len(skip) else "")
+            gaps = (f"detections on every {ordinal(grid.stride)} frame only"
+                    if grid.stride > 1 else undelivered_text(skip) if len(skip) else "")
             if gaps:
                 warnings.warn(f"{grid.path}: {gaps}: the tracker, {type(trk).__name__}, steps "
                               "through every frame of the video, each frame without "

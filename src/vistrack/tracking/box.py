@@ -712,7 +712,7 @@ class BoxTracker:
 
     def pass_over(self) -> None:
         """A frame the detector did not deliver, between two :meth:`step` calls (as
-        :func:`vistrack.pipeline.undelivered_frames` finds them): the tracks are left as
+        :func:`vistrack.detector_checks.undelivered_frames` finds them): the tracks are left as
         they are, and the next step predicts them over both frames; the score calibration
         learnt online sees a frame without detections, as it sees one where nothing was
         found, its links running from one frame to the next.
