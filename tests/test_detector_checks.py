@@ -1,0 +1,40 @@
+"""What a detections file tells of its detector: its stride, the frames it did not deliver."""
+
+import numpy as np
+
+from vistrack.detector_checks import detection_stride, undelivered_frames
+
+
+def test_detection_stride_is_the_common_gap_between_the_frames_with_detections():
+    every = np.repeat(np.arange(1, 40), 3)  # three rows a frame, every frame
+    assert detection_stride(every) == 1
+    for k in (2, 3, 5, 30):
+        frames = np.arange(7, 7 + 12 * k, k)
+        assert detection_stride(np.repeat(frames, 2)) == k
+        # one row off the grid: the detector ran on that frame too
+        assert detection_stride(np.r_[frames, frames[4] + 1]) == 1
+    # a grid with frames where the detector found nothing: still its stride
+    assert detection_stride(np.delete(np.arange(1, 100, 4), [3, 4, 9])) == 4
+    # too few frames to tell a stride from chance
+    assert detection_stride(np.arange(1, 19, 2)) == 1
+    assert detection_stride(np.arange(1, 21, 2)) == 2
+    assert detection_stride([]) == 1
+
+
+def test_undelivered_frames_are_runs_without_rows_amid_frames_with_many():
+    busy = np.repeat(np.delete(np.arange(1, 31), [4, 11, 12, 19]), 5)  # 5 rows a frame
+    assert undelivered_frames(busy).tolist() == [5, 12, 13, 20]
+    # runs longer than max_run are left as frames where nothing was found
+    assert undelivered_frames(busy, max_run=1).tolist() == [5, 20]
+    assert undelivered_frames(busy, max_run=0).tolist() == []
+    # 4 rows on one side: the detector may have found nothing there by chance
+    sparse = np.r_[busy[busy != 4], 4, 4, 4, 4]
+    assert undelivered_frames(sparse).tolist() == [12, 13, 20]
+    assert undelivered_frames(sparse, around=4).tolist() == [5, 12, 13, 20]
+    # before the first frame with rows and after the last: nothing to tell
+    assert undelivered_frames(busy + 10).tolist() == [15, 22, 23, 30]
+    # on a detector's grid (every 3rd frame from 2), the grid frames without rows alone
+    grid = np.repeat(np.delete(np.arange(2, 60, 3), [3, 7, 8]), 6)
+    assert undelivered_frames(grid, first=2, stride=3).tolist() == [11, 23, 26]
+    assert undelivered_frames(grid, first=2, stride=3, max_run=1).tolist() == [11]
+    assert undelivered_frames([]).tolist() == []
