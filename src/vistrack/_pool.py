@@ -2,8 +2,8 @@
 that is safe and spawned otherwise.
 
 Shared by :mod:`vistrack.batch` (sequences and videos tracked in parallel) and
-:mod:`vistrack.evaluation.files` (result files scored in parallel), so that neither imports
-the other's stage of the pipeline to get a pool.
+:mod:`vistrack.evaluation.files` (results files scored in parallel): the scoring gets its pool
+here, not from :mod:`vistrack.batch`, which imports the pipeline, which imports the scoring.
 """
 
 from __future__ import annotations
