@@ -48,7 +48,7 @@ def warn_no_area(dets: MOTTable, path: Path, stacklevel: int) -> None:
 
 
 def warn_long_silence(dets: MOTTable, path: Path, frame_rate: float,
-                       stacklevel: int) -> None:
+                      stacklevel: int) -> None:
     """Warn of a detections file (tracked without a sequence's length) whose frames with rows
     leave a run of frames without any longer than an hour and than ten times the frames that
     have rows: the tracker steps through every frame up to the last (some thousands a
@@ -231,7 +231,7 @@ def detection_stride(frames: ArrayLike, min_frames: int = 10) -> int:
 
 
 def stride_warning(path: str | Path, first: int, stride: int, rate: float,
-                    offline: bool) -> str:
+                   offline: bool) -> str:
     """What a run says of a detector run on every ``stride``-th frame alone."""
     return (f"{path}: detections on every {ordinal(stride)} frame only (frames "
             f"{first}, {first + stride}, {first + 2 * stride}, ...): tracked as a sequence of "

@@ -1214,10 +1214,10 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
 
 
 class _OnDetectorFrames:
-    """A box tracker stepped through the frames a detector delivered alone, every ``stride``-th from
-    ``first`` but those in ``skip`` (:func:`~vistrack.detector_checks.undelivered_frames`; the
-    tracker's frame rate the video's divided by ``stride``; its frame ``i`` the video's ``first + (i
-    - 1) * stride``): at each frame between, the tracks it reported last, at
+    """A box tracker stepped through the frames a detector delivered alone, every ``stride``-th
+    from ``first`` but those in ``skip`` (:func:`~vistrack.detector_checks.undelivered_frames`;
+    the tracker's frame rate the video's divided by ``stride``; its frame ``i`` the video's
+    ``first + (i - 1) * stride``): at each frame between, the tracks it reported last, at
     their boxes predicted that far ahead (:meth:`BoxTracker.boxes_ahead`), with score 0;
     before ``first``, none."""
 
