@@ -10,8 +10,8 @@ import warnings
 import numpy as np
 import pytest
 
+from vistrack.association import non_maximum
 from vistrack.io import read_mot, write_mot
-from vistrack.tracking.box import non_maximum
 
 from .mot_oracles import seq_dir
 

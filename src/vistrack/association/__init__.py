@@ -8,6 +8,7 @@ from .costs import (
     iou_pairs,
     iou_pairs_same_class,
     mahalanobis,
+    non_maximum,
     overlapping_pairs,
     paired_iou,
 )
@@ -17,5 +18,5 @@ from .pda import jpda_weights, likelihoods, pda_weights
 __all__ = ["ASSIGNERS", "assign", "components", "gnn", "gnn_sparse", "greedy", "lsa",
            "nearest_neighbour",
            "euclidean", "giou", "iou", "iou_pairs", "iou_pairs_same_class", "mahalanobis",
-           "overlapping_pairs", "paired_iou", "chi2_gate", "chi2_threshold",
+           "non_maximum", "overlapping_pairs", "paired_iou", "chi2_gate", "chi2_threshold",
            "jpda_weights", "likelihoods", "pda_weights"]

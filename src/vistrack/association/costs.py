@@ -17,8 +17,8 @@ from numpy.typing import ArrayLike
 from .._jit import njit
 from .._prebuilt import kernel
 
-__all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "overlapping_pairs", "giou",
-           "euclidean", "mahalanobis"]
+__all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "overlapping_pairs",
+           "non_maximum", "giou", "euclidean", "mahalanobis"]
 
 
 def _boxes(b: ArrayLike, name: str) -> np.ndarray:
@@ -508,3 +508,53 @@ def overlapping_pairs(boxes: ArrayLike, classes: ArrayLike | None = None,
         cl = np.asarray(classes).reshape(-1)
         keep &= cl[r] == cl[c]
     return r[keep], c[keep]
+
+
+def non_maximum(boxes: ArrayLike, scores: ArrayLike, classes: ArrayLike | None = None,
+                min_iou: float = 0.7) -> np.ndarray:
+    """Greedy non-maximum suppression: which boxes are kept when, from the most confident
+    down, each box kept drops every less confident one of its class that overlaps it at IoU
+    ``min_iou`` or more (ties in score by order).
+
+    Parameters
+    ----------
+    boxes : (N, 4) array_like
+        Boxes ``x0, y0, x1, y1``.
+    scores : (N,) array_like
+        Their scores (any scale: only their order counts).
+    classes : (N,) array_like of int, optional
+        Their classes (default one class): boxes of two classes never suppress each other.
+    min_iou : float
+        The IoU at which the less confident of two boxes is dropped.
+
+    Returns
+    -------
+    (N,) bool ndarray
+        True for the boxes kept.
+
+    Examples
+    --------
+    >>> non_maximum([[0, 0, 10, 10], [1, 0, 11, 10], [20, 0, 30, 10]], [0.8, 0.9, 0.5]).tolist()
+    [False, True, True]
+    >>> non_maximum([[0, 0, 10, 10], [1, 0, 11, 10]], [0.8, 0.9], classes=[0, 1]).tolist()
+    [True, True]
+    """
+    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
+    s = np.asarray(scores, dtype=float).reshape(-1)
+    keep = np.ones(len(b), bool)
+    if len(b) < 2:
+        return keep
+    r, k = overlapping_pairs(b, classes, min_iou)
+    if not len(r):
+        return keep
+    order = np.lexsort((np.arange(len(b)), -s))  # most confident first, then by order
+    rank = np.empty(len(b), np.int64)
+    rank[order] = np.arange(len(b))
+    weaker = rank[k] > rank[r]
+    r, k = r[weaker], k[weaker]  # (stronger, weaker) pairs
+    by = np.argsort(rank[r], kind="stable")
+    r, k = r[by], k[by]
+    for i, j in zip(r.tolist(), k.tolist()):
+        if keep[i]:
+            keep[j] = False
+    return keep

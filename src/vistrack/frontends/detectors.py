@@ -21,10 +21,12 @@ __all__ = ["Detector", "HOGDetector", "nms", "ConfidenceMap", "HOGConfidence",
            "ConfidencePeaks"]
 
 
-def nms(boxes: np.ndarray, scores: np.ndarray, max_iou: float) -> np.ndarray:
+def nms(boxes: np.ndarray, scores: np.ndarray, max_iou: float,
+        classes: np.ndarray | None = None) -> np.ndarray:
     """Greedy non-maximum suppression: indices of the boxes ``(N, 4)`` ``x0, y0, x1, y1``
-    kept, best score first; a box overlapping a kept one by more than ``max_iou`` is
-    dropped.
+    kept, best score first; a box overlapping a kept one of its class by more than
+    ``max_iou`` is dropped (:func:`vistrack.association.non_maximum`, which drops at
+    ``max_iou`` or more, with the next float above ``max_iou``).
 
     Parameters
     ----------
@@ -34,6 +36,8 @@ def nms(boxes: np.ndarray, scores: np.ndarray, max_iou: float) -> np.ndarray:
         Their scores (ties keep the earlier box first).
     max_iou : float
         The largest IoU with a kept box that a box may have and be kept.
+    classes : (N,) array_like of int, optional
+        Their classes (default one class): boxes of two classes never suppress each other.
 
     Returns
     -------
@@ -46,15 +50,11 @@ def nms(boxes: np.ndarray, scores: np.ndarray, max_iou: float) -> np.ndarray:
     >>> nms(boxes, np.array([0.5, 0.9, 0.1]), 0.5)
     array([1, 2])
     """
-    from ..association import iou
+    from ..association import non_maximum
 
     order = np.argsort(-np.asarray(scores), kind="stable")
-    ov = iou(boxes[order], boxes[order])
-    keep = np.ones(len(order), bool)
-    for a in range(len(order)):
-        if keep[a]:
-            keep[a + 1:] &= ov[a, a + 1:] <= max_iou
-    return order[keep]
+    keep = non_maximum(boxes, scores, classes, float(np.nextafter(max_iou, np.inf)))
+    return order[keep[order]]
 
 
 # the person inside HOG's 64x128 window, as in the INRIA data its SVM was trained on: 96 pixels

@@ -248,9 +248,7 @@ class ONNXDetector:
         boxes, scores, cls = boxes[keep].astype(np.float64), scores[keep].astype(np.float64), \
             cls[keep].astype(np.int64)
         if len(boxes):
-            # per class: each class's boxes moved far from the others' before one suppression
-            span = float(np.abs(boxes).max()) + 1.0
-            kept = nms(boxes + (cls * 2 * span)[:, None], scores, self.nms_iou)
+            kept = nms(boxes, scores, self.nms_iou, cls)  # per class
             boxes, scores, cls = boxes[kept], scores[kept], cls[kept]
         h, w = np.asarray(image).shape[:2]
         boxes = (boxes - offset) / scale
