@@ -4,7 +4,8 @@ the trackers a user would pick instead, each with its packaged defaults, scored 
 
     python bench/accuracy_mot.py [--sets MOT15,MOT17,MOT16-FairMOT,KITTI] [--no-peers]
                                  [--boxmot-python PY] [--jitter SEEDS] [--every K]
-                                 [--stride K] [--drop FRAC] [--write docs/mot.md]
+                                 [--stride K] [--drop FRAC] [--config FILE]
+                                 [--write docs/mot.md]
     python bench/accuracy_mot.py --set NAME=DIR [--set NAME=DIR ...] [options above]
 
 Sets (``../shared/data``): MOT15 train with SORT's Faster R-CNN detections, MOT17 train with
@@ -48,6 +49,14 @@ shared ones to run beside it. Tables of such sets are printed, not written to th
 ``--jitter N`` also runs vistrack's online default N more times with every detection box
 moved by up to 0.05 pixel (uniform, seeds 1..N), and reports the spread of COMBINED HOTA: how
 much of a difference between two settings is noise.
+
+``--config FILE`` adds vistrack's rows (online and offline) with the configuration in FILE, a
+TOML file as ``vistrack track --config`` reads (``vistrack track --print-config`` writes one
+to start from), beside the defaults' on the same detections: a setting compared against the
+defaults on every set. Their goals are checked as the defaults' are, the per-sequence tables
+get their columns, and with ``--jitter`` each seed's boxes are tracked with both and the
+difference in online COMBINED HOTA is reported per seed. Such tables are printed, not
+written to the docs.
 """
 
 from __future__ import annotations
@@ -64,6 +73,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vistrack.config import ConfigError, TrackConfig, read_config
 from vistrack.detector_checks import ordinal
 from vistrack.evaluation import evaluate_files
 from vistrack.io import read_mot, read_seqinfo, write_mot
@@ -76,6 +86,11 @@ DATA = ROOT.parent / "shared" / "data"
 SETS = {"MOT15": "mot15", "MOT17": "mot17", "MOT16-FairMOT": "mot16-fairmot",
         "KITTI": "kitti-tracking"}
 VISTRACK = ("vistrack", "vistrack offline")
+
+
+def is_vistrack(label: str) -> bool:
+    """A row of vistrack's: the defaults' (:data:`VISTRACK`) or a ``--config`` file's."""
+    return label.split(" (")[0] in VISTRACK
 
 
 def sequences(root: str | Path) -> list[Path]:
@@ -192,8 +207,10 @@ def renumber_back(src: Path, dst: Path, k: int) -> None:
 
 
 # ----------------------------------------------------------------------------- runners
-def run_vistrack(seqs: list[Path], out: Path, offline: bool, jitter: int = 0) -> float:
-    """Track every sequence into ``out``; returns the frames per second of the tracker."""
+def run_vistrack(seqs: list[Path], out: Path, offline: bool, jitter: int = 0,
+                 config: TrackConfig | None = None) -> float:
+    """Track every sequence into ``out`` (with ``config``, else the defaults); returns the
+    frames per second of the tracker."""
     frames, sec = 0, 0.0
     for d in seqs:
         det = None
@@ -205,8 +222,8 @@ def run_vistrack(seqs: list[Path], out: Path, offline: bool, jitter: int = 0) ->
             det = out / f"{d.name}.det.txt"
             out.mkdir(parents=True, exist_ok=True)
             write_mot(det, t.frames, t.ids, t.boxes + j, t.conf, force=True)
-        r = track_sequence(d, out / f"{d.name}.txt", detections=det, offline=offline,
-                           force=True)
+        r = track_sequence(d, out / f"{d.name}.txt", detections=det, config=config,
+                           offline=offline, force=True)
         frames, sec = frames + r.frames, sec + r.seconds
     return frames / max(sec, 1e-9)
 
@@ -282,7 +299,7 @@ def combined_table(res: dict, fps: dict) -> str:
     rows = [HEAD]
     for name, r in res.items():
         c = r["COMBINED"]
-        bold = "**" if name in VISTRACK else ""
+        bold = "**" if is_vistrack(name) else ""
         rows.append(f"| {bold}{name}{bold} | {fmt(c)} | {fps.get(name, float('nan')):.0f} |")
     return "\n".join(rows)
 
@@ -291,16 +308,14 @@ def goals(res: dict) -> list[str]:
     """The issue's goals on one set: online first on HOTA with MOTA and IDF1 within a point
     of the best peer (or above), offline first on all three, and no sequence more than 5 HOTA
     below the best peer on it."""
-    peers = {k: v for k, v in res.items() if k not in VISTRACK}
+    peers = {k: v for k, v in res.items() if not is_vistrack(k)}
     if not peers:
         return []
     best = {m: max(getattr(r["COMBINED"], m) for r in peers.values())
             for m in ("HOTA", "MOTA", "IDF1")}
     out = []
-    for name, first_on in (("vistrack", ("HOTA",)), ("vistrack offline",
-                                                      ("HOTA", "MOTA", "IDF1"))):
-        if name not in res:
-            continue
+    for name in (k for k in res if is_vistrack(k)):
+        first_on = ("HOTA", "MOTA", "IDF1") if " offline" in name else ("HOTA",)
         c = res[name]["COMBINED"]
         checks = []
         for m in ("HOTA", "MOTA", "IDF1"):
@@ -316,15 +331,17 @@ def goals(res: dict) -> list[str]:
 
 
 def per_sequence(res: dict) -> str:
-    peers = [k for k in res if k not in VISTRACK]
-    head = ("| sequence | vistrack | offline | best peer (HOTA) | "
-            + " | ".join(p.replace("trackers ", "t. ").replace("boxmot ", "b. ") for p in peers)
-            + " |")
-    rows = [head, "|---" * (4 + len(peers)) + "|"]
+    peers = [k for k in res if not is_vistrack(k)]
+    ours = [*VISTRACK, *(k for k in res if is_vistrack(k) and k not in VISTRACK)]
+    head = "| " + " | ".join(
+        ["sequence", "vistrack", "offline", *(v.replace("vistrack ", "") for v in ours[2:]),
+         "best peer (HOTA)",
+         *(p.replace("trackers ", "t. ").replace("boxmot ", "b. ") for p in peers)]) + " |"
+    rows = [head, "|---" * (2 + len(ours) + len(peers)) + "|"]
     seqs = [s for s in next(iter(res.values())) if s != "COMBINED"]
     for s in seqs:
         cells = [f"{100 * res[v][s].HOTA:.1f} / {100 * res[v][s].MOTA:.1f} / "
-                 f"{100 * res[v][s].IDF1:.1f}" if v in res else "" for v in VISTRACK]
+                 f"{100 * res[v][s].IDF1:.1f}" if v in res else "" for v in ours]
         best = max(peers, key=lambda p: res[p][s].HOTA) if peers else None
         cells.append(f"{100 * res[best][s].HOTA:.1f} ({best})" if best else "")
         cells += [f"{100 * res[p][s].HOTA:.1f}" for p in peers]
@@ -346,6 +363,9 @@ def main() -> None:
     ap.add_argument("--every", type=int, default=1, metavar="K")
     ap.add_argument("--stride", type=int, default=1, metavar="K")
     ap.add_argument("--drop", type=float, default=0.0, metavar="FRAC")
+    ap.add_argument("--config", type=Path, metavar="FILE",
+                    help="vistrack's rows with this configuration too (TOML, as vistrack "
+                         "track --config reads)")
     ap.add_argument("--write", metavar="MD")
     args = ap.parse_args()
     own = own_sets(args.own)
@@ -359,6 +379,15 @@ def main() -> None:
         sys.exit(f"{DATA} not found: the shared data must be beside this checkout")
     if own and args.write:
         sys.exit("--write takes the shared sets' tables alone; --set's are printed")
+    config, mine = None, ()
+    if args.config is not None:
+        if args.write:
+            sys.exit("--write takes the defaults' tables alone; --config's are printed")
+        try:
+            config = read_config(args.config)
+        except (OSError, ConfigError) as exc:
+            sys.exit(str(exc))
+        mine = tuple(f"{v} ({args.config.name})" for v in VISTRACK)
     roots = {**{n: DATA / SETS[n] for n in names}, **own}
     if args.every < 1 or args.stride < 1 or (args.every > 1 and args.stride > 1):
         sys.exit(f"--every and --stride must be at least 1, and one of them 1; got "
@@ -388,8 +417,9 @@ def main() -> None:
             if args.drop:
                 seqs = peer_seqs = dropped(seqs, args.drop, tmp / "dropped" / name)
             res, fps = {}, {}
-            for label, offline in zip(VISTRACK, (False, True)):
-                fps[label] = run_vistrack(seqs, tmp / name / label, offline)
+            for label, offline, cfg in (*zip(VISTRACK, (False, True), (None, None)),
+                                        *zip(mine, (False, True), (config, config))):
+                fps[label] = run_vistrack(seqs, tmp / name / label, offline, config=cfg)
                 res[label] = score(seqs, tmp / name / label)
             done = []
             for label, make in peers.items():
@@ -406,11 +436,21 @@ def main() -> None:
             spread = ""
             if args.jitter:
                 h = [100 * res["vistrack"]["COMBINED"].HOTA]
+                diffs = []
                 for seed in range(1, args.jitter + 1):
                     run_vistrack(seqs, tmp / name / f"jitter{seed}", False, jitter=seed)
                     h.append(100 * score(seqs, tmp / name / f"jitter{seed}")["COMBINED"].HOTA)
+                    if config is not None:
+                        run_vistrack(seqs, tmp / name / f"jitter{seed}-config", False,
+                                     jitter=seed, config=config)
+                        c = score(seqs, tmp / name / f"jitter{seed}-config")["COMBINED"]
+                        hota = 100 * c.HOTA
+                        diffs.append(f"seed {seed} {hota:.2f} ({hota - h[-1]:+.2f})")
                 spread = (f"\n\nWith every box moved by up to 0.05 pixel ({args.jitter} seeds), "
                           f"vistrack's online COMBINED HOTA ranges {min(h):.2f}-{max(h):.2f}.")
+                if diffs:
+                    spread += (f" With {args.config.name}, on the same boxes (against the "
+                               f"defaults'): {', '.join(diffs)}.")
             g = goals(res)
             title = (f"{name}, every {ordinal(args.every)} frame" if args.every > 1 else
                      f"{name}, detections on every {ordinal(args.stride)} frame"

@@ -4,8 +4,8 @@ it, vistrack beside the peers of ``accuracy_mot.py``, scored the same way (COMBI
 draws).
 
     python bench/simulated_crowd.py [--draws 3] [--persistence RHO] [--set KEY=VALUE ...]
-                                    [--source DIR ...] [--no-peers] [--boxmot-python PY]
-                                    [--write docs/mot.md]
+                                    [--config FILE] [--source DIR ...] [--no-peers]
+                                    [--boxmot-python PY] [--write docs/mot.md]
 
 The four sets of ``accuracy_mot.py`` are what vistrack's defaults were chosen on; this one is
 a check that a setting does not only fit them. The detector is simulated, one draw per seed:
@@ -37,7 +37,10 @@ MOT17 or MOT20 sequence folders whose ground truth has classes and visibility (M
 
 ``--set KEY=VALUE`` (repeatable) adds a row of vistrack with those settings over its defaults
 (fields of ``BoxTrackerConfig`` or ``OfflineConfig``), online and offline, to compare a
-setting against the defaults on the same draws.
+setting against the defaults on the same draws. ``--config FILE`` adds the rows of the
+configuration in FILE instead (a TOML file as ``vistrack track --config`` reads, the box
+motion's ``[motion]`` included), and ``--set`` is then put over it; such rows are printed,
+not written to the docs.
 """
 
 from __future__ import annotations
@@ -55,6 +58,7 @@ from pathlib import Path
 import accuracy_mot as acc  # bench/ is on the path of its scripts
 import numpy as np
 
+from vistrack.config import ConfigError, read_config
 from vistrack.io import read_seqinfo, write_mot
 from vistrack.pipeline import track_sequence
 
@@ -155,6 +159,9 @@ def main() -> None:
                     help="correlation of a person's detection and score from frame to frame, "
                          "in [0, 1) (default 0: independent)")
     ap.add_argument("--set", type=parse_set, action="append", default=[], metavar="KEY=VALUE")
+    ap.add_argument("--config", type=Path, metavar="FILE",
+                    help="vistrack's rows with this configuration too (TOML, as vistrack "
+                         "track --config reads); --set goes over it")
     ap.add_argument("--source", type=Path, action="append", default=[], metavar="DIR",
                     help="a MOT16/17/20 sequence folder with ground truth (visibility) to "
                          "simulate from instead of MOT20-01 (repeatable: each draw covers "
@@ -171,12 +178,23 @@ def main() -> None:
         if not (src / "gt" / "gt.txt").exists() or not (src / "seqinfo.ini").exists():
             sys.exit(f"{src}: no gt/gt.txt and seqinfo.ini" + (
                 ": the shared data must be beside this checkout" if src == SOURCE else ""))
+    config = None
+    if args.config is not None:
+        if args.write:
+            sys.exit("--write takes the defaults' rows and --set's alone; --config's are "
+                     "printed")
+        try:
+            config = read_config(args.config)
+        except (OSError, ConfigError) as exc:
+            sys.exit(str(exc))
     warnings.filterwarnings("ignore")
     over = dict(args.set)
-    runs = {"vistrack": ({}, False), "vistrack offline": ({}, True)}
-    if over:
-        tag = ", ".join(f"{k}={v}" for k, v in over.items())
-        runs |= {f"vistrack, {tag}": (over, False), f"vistrack offline, {tag}": (over, True)}
+    runs = {"vistrack": (None, {}, False), "vistrack offline": (None, {}, True)}
+    tag = ", ".join(([args.config.name] if config is not None else [])
+                    + [f"{k}={v}" for k, v in over.items()])
+    if tag:
+        runs |= {f"vistrack, {tag}": (config, over, False),
+                 f"vistrack offline, {tag}": (config, over, True)}
     peers = {} if args.no_peers else acc.trackers_peers()
     boxmot = None if args.no_peers or not args.boxmot_python.exists() else args.boxmot_python
     with tempfile.TemporaryDirectory() as tmp:
@@ -184,10 +202,11 @@ def main() -> None:
         seqs = [simulate(i, *SCALES[i % len(SCALES)], tmp / "data", args.persistence, src)
                 for i in range(args.draws) for src in sources]
         res = {}
-        for label, (kw, offline) in runs.items():
+        for label, (cfg, kw, offline) in runs.items():
             out = tmp / "out" / label
             for d in seqs:
-                track_sequence(d, out / f"{d.name}.txt", offline=offline, force=True, **kw)
+                track_sequence(d, out / f"{d.name}.txt", config=cfg, offline=offline,
+                               force=True, **kw)
             res[label] = acc.score(seqs, out)
         for label, make in peers.items():
             acc.run_trackers(make, seqs, tmp / "out" / label)

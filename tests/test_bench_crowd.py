@@ -89,3 +89,45 @@ def test_a_source_of_ones_own_is_simulated_in_its_own_images(tmp_path):
     clutter = det.boxes[~np.any(on, axis=0), 3]
     assert len(clutter) == int(0.15 * (len(det) - len(clutter)))
     assert ((clutter >= 60 * 480 / 1080) & (clutter <= 250 * 480 / 1080)).all()
+
+
+def test_a_configuration_file_is_tracked_beside_the_defaults(tmp_path):
+    """``--config FILE`` adds vistrack's rows with FILE's configuration, ``--set`` put over
+    it: FILE holding the defaults (as ``--print-config`` writes them), its rows are the
+    defaults', and with ``--set`` those of ``--set`` over the defaults; ``--write`` with it
+    exits naming the problem."""
+    import re
+    import subprocess
+
+    from vistrack.config import TrackConfig, config_toml
+
+    src = tmp_path / "SEQ"
+    (src / "gt").mkdir(parents=True)
+    (src / "gt" / "gt.txt").write_text("".join(
+        f"{f},{i},{100 + 60 * i + f},50,20,60,1,1,0.9\n" for f in range(1, 61)
+        for i in range(1, 4)))
+    (src / "seqinfo.ini").write_text("[Sequence]\nname=SEQ\nframeRate=30\nseqLength=60\n"
+                                     "imWidth=640\nimHeight=480\n")
+    cfg = tmp_path / "same.toml"
+    cfg.write_text(config_toml(TrackConfig.preset().with_motion()))
+    bench = Path(crowd.__file__)
+
+    def rows(*extra):
+        r = subprocess.run([sys.executable, str(bench), "--draws", "1", "--no-peers",
+                            "--source", str(src), *extra],
+                           capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr
+        return dict(re.findall(r"^\| \*\*(vistrack[^*]*)\*\* \| (.*) \|$", r.stdout, re.M))
+
+    mine = rows("--config", str(cfg))
+    assert mine["vistrack, same.toml"] == mine["vistrack"]
+    assert mine["vistrack offline, same.toml"] == mine["vistrack offline"]
+    over = rows("--config", str(cfg), "--set", "high=0.9", "--set", "new_track=0.95")
+    alone = rows("--set", "high=0.9", "--set", "new_track=0.95")
+    assert over["vistrack, same.toml, high=0.9, new_track=0.95"] == alone[
+        "vistrack, high=0.9, new_track=0.95"]
+    assert over["vistrack offline, same.toml, high=0.9, new_track=0.95"] == alone[
+        "vistrack offline, high=0.9, new_track=0.95"]
+    r = subprocess.run([sys.executable, str(bench), "--config", str(cfg), "--write",
+                        str(tmp_path / "x.md")], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 1 and "--config's are printed" in r.stderr

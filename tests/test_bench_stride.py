@@ -105,3 +105,58 @@ def test_a_set_of_ones_own_runs_beside_the_shared_ones(tmp_path):
     assert r.returncode == 1 and r.stderr.strip().endswith(
         f"--set x={tmp_path / 'empty'}: no sequence folder in {tmp_path / 'empty'} has "
         "seqinfo.ini, det/det.txt and gt/gt.txt")
+
+
+def test_a_configuration_file_runs_beside_the_defaults(tmp_path):
+    """``--config FILE`` adds vistrack's rows with FILE's configuration: each the HOTA that
+    ``track_sequence`` with that configuration and the scorer give on the same folder, the
+    defaults' rows as without the option, and with ``--jitter`` each seed's HOTA with FILE
+    beside the defaults'; ``--write`` with it, or a file with a key that is no setting,
+    exits naming the problem."""
+    import re
+    import subprocess
+
+    from vistrack.config import read_config
+    from vistrack.evaluation import evaluate_files
+    from vistrack.pipeline import track_sequence
+
+    d = _sequence(tmp_path / "mine")
+    cfg = tmp_path / "wide.toml"
+    # raw scores above the person's 0.5: only the other object (0.6) is tracked
+    cfg.write_text('[tracker]\nscores = "raw"\nhigh = 0.55\nnew_track = 0.55\n'
+                   "[motion]\nstd_pos = 0.2\n")
+    bench = Path(acc.__file__)
+    r = subprocess.run([sys.executable, str(bench), "--set", f"mine={tmp_path / 'mine'}",
+                        "--no-peers", "--config", str(cfg), "--jitter", "1"],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+
+    def row(label):
+        return float(re.search(rf"^\| \*\*{re.escape(label)}\*\* \| ([\d.]+) \|", r.stdout,
+                               re.M).group(1))
+
+    def hota(**kw):
+        out = tmp_path / f"SEQ-{len(list(tmp_path.glob('SEQ-*')))}.txt"
+        track_sequence(d, out, **kw)
+        return round(100 * evaluate_files([("SEQ", d / "gt" / "gt.txt", out,
+                                            d / "seqinfo.ini")])["SEQ"].HOTA, 1)
+
+    assert row("vistrack") == hota()
+    assert row("vistrack offline") == hota(offline=True)
+    assert row("vistrack (wide.toml)") == hota(config=read_config(cfg))
+    assert row("vistrack offline (wide.toml)") == hota(config=read_config(cfg), offline=True)
+    assert row("vistrack (wide.toml)") < row("vistrack")
+    assert "| sequence | vistrack | offline | (wide.toml) | offline (wide.toml) |" in r.stdout
+    # the moved boxes tracked with both: the person is never tracked with FILE's settings
+    spread = re.search(r"HOTA ranges ([\d.]+)-([\d.]+)\. With wide\.toml, on the same boxes "
+                       r"\(against the defaults'\): seed 1 ([\d.]+) \(([-+][\d.]+)\)\.",
+                       r.stdout)
+    assert spread is not None, r.stdout
+    assert float(spread.group(3)) == 0.0 and float(spread.group(4)) < 0
+    r = subprocess.run([sys.executable, str(bench), "--config", str(cfg), "--write",
+                        str(tmp_path / "x.md")], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 1 and "--config's are printed" in r.stderr
+    cfg.write_text("[motion]\nstd_mea = 0.1\n")
+    r = subprocess.run([sys.executable, str(bench), "--set", f"mine={tmp_path / 'mine'}",
+                        "--config", str(cfg)], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 1 and f"{cfg}: [motion] has no key 'std_mea'" in r.stderr
