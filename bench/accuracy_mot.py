@@ -315,7 +315,8 @@ def goals(res: dict) -> list[str]:
             for m in ("HOTA", "MOTA", "IDF1")}
     out = []
     for name in (k for k in res if is_vistrack(k)):
-        first_on = ("HOTA", "MOTA", "IDF1") if " offline" in name else ("HOTA",)
+        offline = name.split(" (")[0] == "vistrack offline"
+        first_on = ("HOTA", "MOTA", "IDF1") if offline else ("HOTA",)
         c = res[name]["COMBINED"]
         checks = []
         for m in ("HOTA", "MOTA", "IDF1"):

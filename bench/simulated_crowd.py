@@ -38,9 +38,9 @@ MOT17 or MOT20 sequence folders whose ground truth has classes and visibility (M
 ``--set KEY=VALUE`` (repeatable) adds a row of vistrack with those settings over its defaults
 (fields of ``BoxTrackerConfig`` or ``OfflineConfig``), online and offline, to compare a
 setting against the defaults on the same draws. ``--config FILE`` adds the rows of the
-configuration in FILE instead (a TOML file as ``vistrack track --config`` reads, the box
-motion's ``[motion]`` included), and ``--set`` is then put over it; such rows are printed,
-not written to the docs.
+configuration in FILE (a TOML file as ``vistrack track --config`` reads, the box motion's
+``[motion]`` included), and ``--set`` then goes over it instead of over the defaults; such
+rows are printed, not written to the docs.
 """
 
 from __future__ import annotations

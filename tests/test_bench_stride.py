@@ -160,3 +160,31 @@ def test_a_configuration_file_runs_beside_the_defaults(tmp_path):
     r = subprocess.run([sys.executable, str(bench), "--set", f"mine={tmp_path / 'mine'}",
                         "--config", str(cfg)], capture_output=True, text=True, timeout=600)
     assert r.returncode == 1 and f"{cfg}: [motion] has no key 'std_mea'" in r.stderr
+
+
+def test_goals_check_a_configuration_files_rows_as_the_defaults():
+    """The goal lines: online first on HOTA with MOTA and IDF1 within a point, offline first
+    on all three, the worst sequence within 5 HOTA of its best peer; a ``--config`` file's
+    rows (whatever the file's name) are checked as the defaults', and are no peer."""
+    from types import SimpleNamespace as S
+
+    def r(h, m, i, seq):
+        return {"COMBINED": S(HOTA=h, MOTA=m, IDF1=i), "A": S(HOTA=seq)}
+
+    res = {"vistrack": r(0.50, 0.40, 0.50, 0.50),
+           "vistrack offline": r(0.52, 0.45, 0.55, 0.52),
+           "vistrack (my offline.toml)": r(0.49, 0.40, 0.50, 0.40),
+           "vistrack offline (my offline.toml)": r(0.53, 0.43, 0.56, 0.53),
+           "peer": r(0.48, 0.44, 0.50, 0.46)}
+    lines = acc.goals(res)
+    assert [ln.split(":")[0] for ln in lines] == [
+        "- vistrack", "- vistrack offline", "- vistrack (my offline.toml)",
+        "- vistrack offline (my offline.toml)"]
+    # online: MOTA 40 within a point of 44? no; offline: MOTA 45 above 44
+    assert "MOTA 40.0 vs 44.0 MISSED" in lines[0] and "HOTA 50.0 vs 48.0 ok" in lines[0]
+    assert "MISSED" not in lines[1]
+    # the file's online row is an online row (HOTA first only), its sequence 6 below
+    assert "HOTA 49.0 vs 48.0 ok" in lines[2] and "IDF1 50.0 vs 50.0 ok" in lines[2]
+    assert "A -6.0 HOTA against its best peer MISSED" in lines[2]
+    # the file's offline row must be first on MOTA too: 43 against 44
+    assert "MOTA 43.0 vs 44.0 MISSED" in lines[3]
