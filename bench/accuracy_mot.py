@@ -93,6 +93,20 @@ def is_vistrack(label: str) -> bool:
     return label.split(" (")[0] in VISTRACK
 
 
+def config_given(path: Path | None, write: str | None) -> TrackConfig | None:
+    """The configuration of ``--config FILE`` (None without it), or an exit naming the
+    problem: a file that is missing or not a configuration, or ``--write`` beside it (the docs
+    hold the defaults' rows)."""
+    if path is None:
+        return None
+    if write:
+        sys.exit("--write takes no --config: --config's are printed, never written to the docs")
+    try:
+        return read_config(path)
+    except (OSError, ConfigError) as exc:
+        sys.exit(str(exc))
+
+
 def sequences(root: str | Path) -> list[Path]:
     """The sequence folders with the frame rate, detections and ground truth in ``root``, a
     folder, or a shared set by name (:data:`SETS`)."""
@@ -380,15 +394,8 @@ def main() -> None:
         sys.exit(f"{DATA} not found: the shared data must be beside this checkout")
     if own and args.write:
         sys.exit("--write takes the shared sets' tables alone; --set's are printed")
-    config, mine = None, ()
-    if args.config is not None:
-        if args.write:
-            sys.exit("--write takes the defaults' tables alone; --config's are printed")
-        try:
-            config = read_config(args.config)
-        except (OSError, ConfigError) as exc:
-            sys.exit(str(exc))
-        mine = tuple(f"{v} ({args.config.name})" for v in VISTRACK)
+    config = config_given(args.config, args.write)
+    mine = () if config is None else tuple(f"{v} ({args.config.name})" for v in VISTRACK)
     roots = {**{n: DATA / SETS[n] for n in names}, **own}
     if args.every < 1 or args.stride < 1 or (args.every > 1 and args.stride > 1):
         sys.exit(f"--every and --stride must be at least 1, and one of them 1; got "

@@ -58,7 +58,6 @@ from pathlib import Path
 import accuracy_mot as acc  # bench/ is on the path of its scripts
 import numpy as np
 
-from vistrack.config import ConfigError, read_config
 from vistrack.io import read_seqinfo, write_mot
 from vistrack.pipeline import track_sequence
 
@@ -178,15 +177,7 @@ def main() -> None:
         if not (src / "gt" / "gt.txt").exists() or not (src / "seqinfo.ini").exists():
             sys.exit(f"{src}: no gt/gt.txt and seqinfo.ini" + (
                 ": the shared data must be beside this checkout" if src == SOURCE else ""))
-    config = None
-    if args.config is not None:
-        if args.write:
-            sys.exit("--write takes the defaults' rows and --set's alone; --config's are "
-                     "printed")
-        try:
-            config = read_config(args.config)
-        except (OSError, ConfigError) as exc:
-            sys.exit(str(exc))
+    config = acc.config_given(args.config, args.write)
     warnings.filterwarnings("ignore")
     over = dict(args.set)
     runs = {"vistrack": (None, {}, False), "vistrack offline": (None, {}, True)}
