@@ -61,7 +61,7 @@ from .models.box import FRAME_RATES, BoxMotion
 from .tracking.base import Tracker
 from .tracking.box import BoxTracker, BoxTrackerConfig
 from .tracking.calibration import NoOutcomesError, ScoreCalibration
-from .tracking.offline import smooth
+from .tracking.offline import SmoothedTracks, smooth
 from .types import Detections, Frame, Tracks
 
 if TYPE_CHECKING:
@@ -1051,17 +1051,108 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     """
     out = Path(out)
     check_output(out, force=force)
-    # Parquet and CSV: the text's rows as MOTTable.to_pandas names them, with a header
-    table_kind = {".parquet": "parquet", ".csv": "csv"}.get(out.suffix.lower())
-    tabular = table_kind is not None
-    if table_kind == "parquet":
+    table_kind = _results_format(out)
+    cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
+    src = _read_sequence(Path(seq_dir), out, detections, columns, fps)
+    dets, info = src.dets, src.info
+    _check_detections(src, cfg.tracker)
+    slices = dets.frame_slices(info.seq_length)
+    xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
+    # the detector's own frames: every frame, or every stride-th one, where the frames
+    # between are not ones where it found nothing; the tracker runs on that timeline, at
+    # frame_rate / stride (_OnDetectorFrames)
+    first, stride = detector_grid(dets.frames)
+    rate = info.frame_rate / stride
+
+    def frame_detections(k: int) -> Detections:
+        # frame k's (from 1), made when asked for: memory does not grow with the frames
+        s = slices[k - 1]
+        return Detections(boxes=xyxy[s], scores=dets.conf[s], classes=dets.classes[s])
+
+    seconds = 0.0
+    calibration = None
+    tc, oc = cfg.tracker, cfg.offline
+    if oc.enabled and tc.scores == "calibrated":
+        # offline, the scores are calibrated on the whole file (see tracking.calibration)
+        calibration, seconds = _timed(_whole_file_calibration, (
+            frame_detections(k) for k in range(first, info.seq_length + 1, stride)), tc, rate)
+    if oc.enabled and oc.start_score > tc.new_track:
+        tc = replace(tc, new_track=oc.start_score)
+    trk = BoxTracker(tc, motion=cfg.motion, frame_rate=rate, record=oc.enabled,
+                     image_size=(info.im_width, info.im_height) if info.im_width > 0 else None,
+                     calibration=calibration)
+    frames = (Frame(f, (f - 1) / info.frame_rate) for f in range(1, info.seq_length + 1))
+    # online, the rows go to the file as they come; offline, the tracker records its tracks,
+    # which are smoothed at the end and written then. Parquet and CSV: the same rows,
+    # written as text beside it under a hidden name first
+    text = out.with_name(f".{out.stem}.rows.txt") if table_kind else out
+    with made_folder(out.parent), _removed(text if table_kind else None):
+        # boxes in pixels to MOTChallenge's hundredth; in smaller units (normalised to the
+        # image) to a thousandth of their typical height
+        decimals = box_decimals(dets.boxes[:, 3])
+        writer = None if oc.enabled else MOTWriter(text, decimals)
+        stepper, skip = _on_detector_frames(trk, src.det_path, dets.frames, first, stride,
+                                            oc.enabled)
+        stats = run(frames, lambda frame: frame_detections(frame.index), stepper,
+                    [writer] if writer is not None else [], progress=progress,
+                    total=info.seq_length, label=info.name)
+        seconds += stats.seconds["tracker"]
+        classes_of: Callable[[Any], np.ndarray]  # each track's class, by identity
+        if writer is not None:
+            n_rows, n_tracks = len(writer), len(writer.identities)
+            classes_of = writer.classes_of
+        else:
+            sm, sec = _timed(smooth, trk, min_score=oc.min_track_score,
+                             extend_iou=oc.extend_iou if oc.extend_iou > 0 else None,
+                             link_iou=oc.link_iou, **oc.frames(rate))
+            seconds += sec
+            n_rows, n_tracks, classes_of = _write_smoothed(sm, text, decimals, first, stride,
+                                                           skip)
+        if table_kind:
+            _write_table(text, out, table_kind, classes_of)
+    _warn_calibration(trk, src.label)
+    derived = derived_values(trk)
+    if stride > 1:
+        derived["detection_stride"] = stride
+    if len(skip):
+        derived["undelivered_frames"] = len(skip)
+    return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds,
+                    cfg.with_motion(), derived)
+
+
+# the stages of track_sequence: the results' format, the input read and checked, the whole
+# file's calibration (offline), the smoothed tracks written, the table beside the text
+def _results_format(out: Path) -> str | None:
+    """``"parquet"`` or ``"csv"`` for a results file of that suffix (the text's rows as
+    :meth:`~vistrack.io.MOTTable.to_pandas` names them, with a header; raises ImportError
+    before anything is read when what writes it is missing), None for MOTChallenge's text."""
+    kind = {".parquet": "parquet", ".csv": "csv"}.get(out.suffix.lower())
+    if kind == "parquet":
         need_parquet()
-    elif table_kind == "csv":
+    elif kind == "csv":
         from .io.motchallenge import _pandas
 
         _pandas("a CSV results file")
-    cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
-    seq_dir = Path(seq_dir)
+    return kind
+
+
+@dataclass(frozen=True)
+class _SequenceInput:
+    """What :func:`track_sequence` tracks: the detections file, the sequence's facts and
+    its rows; ``label`` names the input in warnings (the sequence folder, or the file
+    alone)."""
+
+    det_path: Path
+    label: str
+    info: SeqInfo
+    dets: MOTTable
+
+
+def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
+                   columns: dict[str, str] | None, fps: float | None) -> _SequenceInput:
+    """The detections of a sequence folder, or of a detections file alone, read and checked
+    against the sequence (:func:`track_sequence`'s errors; its warnings name the caller of
+    :func:`track_sequence`)."""
     if fps is not None:
         try:
             ok = not isinstance(fps, bool) and FRAME_RATES[0] <= float(fps) <= FRAME_RATES[1]
@@ -1099,7 +1190,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     if out.resolve() == det_path.resolve():
         raise ValueError(f"--out {out} is the detections file: the results would overwrite "
                          "the detections; give another --out")
-    dets = read_detections(det_path, columns, stacklevel=2)
+    # the warnings' stacklevels (here and in _check_detections) name track_sequence's caller
+    dets = read_detections(det_path, columns, stacklevel=3)
     if info is None:
         assert fps is not None  # refused above without seqinfo.ini
         if len(dets) and dets.frames.max() > MAX_FRAMES:
@@ -1110,7 +1202,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                              + f": frame {f} is beyond the {MAX_FRAMES:,} frames a detections "
                              "file is tracked over (a timestamp or another column where the "
                              "frame should be?)")
-        warn_long_silence(dets, det_path, float(fps), stacklevel=2)
+        warn_long_silence(dets, det_path, float(fps), stacklevel=3)
         info = SeqInfo.from_detections(det_path if alone else seq_dir, dets, float(fps))
     else:
         if fps is not None:
@@ -1118,99 +1210,68 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         if len(dets) and dets.frames.max() > info.seq_length:
             raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
                              f"sequence's {info.seq_length} frames ({ini})")
-    tc0 = cfg.tracker
-    if tc0.nms_iou >= 1:
-        warn_duplicates(dets, det_path, stacklevel=2)
-    if tc0.scores == "raw" and tc0.fuse_score and len(dets) and not (
+    return _SequenceInput(det_path, str(det_path if alone else seq_dir), info, dets)
+
+
+def _check_detections(src: _SequenceInput, tc: BoxTrackerConfig) -> None:
+    """Warn of duplicate boxes where the tracker does no suppression of its own; refuse
+    scores outside [0, 1] where raw scores weigh the first stage's IoU."""
+    dets = src.dets
+    if tc.nms_iou >= 1:
+        warn_duplicates(dets, src.det_path, stacklevel=3)
+    if tc.scores == "raw" and tc.fuse_score and len(dets) and not (
             (dets.conf >= 0) & (dets.conf <= 1)).all():
-        raise ValueError(f"{det_path}: scores from {dets.conf.min():.4g} to "
+        raise ValueError(f"{src.det_path}: scores from {dets.conf.min():.4g} to "
                          f"{dets.conf.max():.4g}, but with raw scores (--scores raw) the first "
                          "association stage weighs IoU by the score, which must lie in [0, 1]: "
                          "calibrate them (--scores calibrated, the default), or turn the "
                          "weighing off (fuse_score = false under [tracker] in a --config file; "
                          "fuse_score=False in Python)")
-    slices = dets.frame_slices(info.seq_length)
-    xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
-    # the detector's own frames: every frame, or every stride-th one, where the frames
-    # between are not ones where it found nothing; the tracker runs on that timeline, at
-    # frame_rate / stride (_OnDetectorFrames)
-    first, stride = detector_grid(dets.frames)
-    rate = info.frame_rate / stride
 
-    def frame_detections(k: int) -> Detections:
-        # frame k's (from 1), made when asked for: memory does not grow with the frames
-        s = slices[k - 1]
-        return Detections(boxes=xyxy[s], scores=dets.conf[s], classes=dets.classes[s])
 
-    seconds = 0.0
-    calibration = None
-    tc, oc = cfg.tracker, cfg.offline
-    if oc.enabled and tc.scores == "calibrated":
-        # offline, the scores are calibrated on the whole file (see tracking.calibration)
-        t0, c0 = time.perf_counter(), _compile.seconds()
-        try:
-            calibration = ScoreCalibration.from_frames(
-                (frame_detections(k) for k in range(first, info.seq_length + 1, stride)),
-                **tc.calibration_options(rate))
-        except NoOutcomesError:
-            # no detection seen to persist or not (no detections, or all on one frame):
-            # nothing to fit, so the tracker calibrates as it goes, as online
-            calibration = None
-        seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
-    if oc.enabled and oc.start_score > tc.new_track:
-        tc = replace(tc, new_track=oc.start_score)
-    trk = BoxTracker(tc, motion=cfg.motion, frame_rate=rate, record=oc.enabled,
-                     image_size=(info.im_width, info.im_height) if info.im_width > 0 else None,
-                     calibration=calibration)
-    frames = (Frame(f, (f - 1) / info.frame_rate) for f in range(1, info.seq_length + 1))
-    # online, the rows go to the file as they come; offline, the tracker records its tracks,
-    # which are smoothed at the end and written then. Parquet: the same rows, written as
-    # text beside it under a hidden name first
-    text = out.with_name(f".{out.stem}.rows.txt") if tabular else out
-    with made_folder(out.parent), _removed(text if tabular else None):
-        # boxes in pixels to MOTChallenge's hundredth; in smaller units (normalised to the
-        # image) to a thousandth of their typical height
-        decimals = box_decimals(dets.boxes[:, 3])
-        writer = None if oc.enabled else MOTWriter(text, decimals)
-        stepper, skip = _on_detector_frames(trk, det_path, dets.frames, first, stride,
-                                            oc.enabled)
-        stats = run(frames, lambda frame: frame_detections(frame.index), stepper,
-                    [writer] if writer is not None else [], progress=progress,
-                    total=info.seq_length, label=info.name)
-        seconds += stats.seconds["tracker"]
-        if writer is not None:
-            n_rows, n_tracks = len(writer), len(writer.identities)
-            classes_of = writer.classes_of
-        else:
-            t0, c0 = time.perf_counter(), _compile.seconds()
-            sm = smooth(trk, min_score=oc.min_track_score,
-                        extend_iou=oc.extend_iou if oc.extend_iou > 0 else None,
-                        link_iou=oc.link_iou, **oc.frames(rate))
-            seconds += (time.perf_counter() - t0) - (_compile.seconds() - c0)
-            F, I, xywh = first + (sm.frames - 1) * stride, sm.ids, sm.xywh
-            conf = np.where(sm.filled, 0.0, sm.scores)
-            if stride > 1 or len(skip):
-                F, I, xywh, conf = _fill_between(F, I, xywh, conf, first, stride, skip)
-            write_mot(text, F, I, xywh, conf, force=True, decimals=decimals)
-            n_rows, n_tracks = len(F), len(np.unique(I))
-            known, at = np.unique(sm.ids, return_index=True)
-            classes_of = lambda ids: sm.classes[at][np.searchsorted(known, ids)]  # noqa: E731
-        if tabular:
-            # the text has no class column; Parquet's and CSV's have, each row its track's
-            table = read_mot(text)
-            table = replace(table, classes=classes_of(table.ids).astype(np.int64))
-            if table_kind == "parquet":
-                table.to_parquet(out)
-            else:
-                table.to_csv(out)
-    _warn_calibration(trk, str(det_path if alone else seq_dir))
-    derived = derived_values(trk)
-    if stride > 1:
-        derived["detection_stride"] = stride
-    if len(skip):
-        derived["undelivered_frames"] = len(skip)
-    return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds,
-                    cfg.with_motion(), derived)
+def _timed(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> tuple[Any, float]:
+    """``fn(*args, **kwargs)`` and the seconds it took, less any spent compiling kernels."""
+    t0, c0 = time.perf_counter(), _compile.seconds()
+    result = fn(*args, **kwargs)
+    return result, (time.perf_counter() - t0) - (_compile.seconds() - c0)
+
+
+def _whole_file_calibration(frames: Iterable[Detections], tc: BoxTrackerConfig,
+                            rate: float) -> ScoreCalibration | None:
+    """The score calibration fitted to every frame's detections (offline); None where no
+    detection is seen to persist or not (no detections, or all on one frame): nothing to
+    fit, so the tracker calibrates as it goes, as online."""
+    try:
+        return ScoreCalibration.from_frames(frames, **tc.calibration_options(rate))
+    except NoOutcomesError:
+        return None
+
+
+def _write_smoothed(sm: SmoothedTracks, text: Path, decimals: int, first: int, stride: int,
+                    skip: np.ndarray) -> tuple[int, int, Callable[[Any], np.ndarray]]:
+    """The offline mode's end: the smoothed tracks (:func:`~vistrack.tracking.smooth`),
+    numbered by the sequence's frames (the frames between a detector's filled), written to
+    ``text``; returns the rows, the tracks and each track's class by identity."""
+    F, I, xywh = first + (sm.frames - 1) * stride, sm.ids, sm.xywh
+    conf = np.where(sm.filled, 0.0, sm.scores)
+    if stride > 1 or len(skip):
+        F, I, xywh, conf = _fill_between(F, I, xywh, conf, first, stride, skip)
+    write_mot(text, F, I, xywh, conf, force=True, decimals=decimals)
+    known, at = np.unique(sm.ids, return_index=True)
+    return len(F), len(np.unique(I)), lambda ids: sm.classes[at][np.searchsorted(known, ids)]
+
+
+def _write_table(text: Path, out: Path, kind: str,
+                 classes_of: Callable[[Any], np.ndarray]) -> None:
+    """The rows of ``text`` as Parquet or CSV at ``out``: the text has no class column;
+    Parquet's and CSV's have, each row its track's."""
+    table = read_mot(text)
+    table = replace(table, classes=classes_of(table.ids).astype(np.int64))
+    if kind == "parquet":
+        table.to_parquet(out)
+    else:
+        table.to_csv(out)
+
 
 
 class _OnDetectorFrames:
