@@ -264,6 +264,9 @@ def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[
     if len(ids) == 0:
         return []
     edges = np.flatnonzero(np.diff(ids)) + 1
+    # F(dt) once per distinct step, not once per step (nearly every step is one frame)
+    steps, step_of = np.unique(dt, return_inverse=True)
+    F_steps = np.stack([tracker.motion.F(d) for d in steps])
     out = []
     for a, b in zip(np.r_[0, edges], np.r_[edges, len(ids)]):
         u = np.flatnonzero(upd[a:b])
@@ -272,7 +275,7 @@ def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[
         last = a + int(u[-1]) + 1  # nothing after the last update
         L = last - a
         P = axes_to_full(cov[a:last])
-        F = np.stack([tracker.motion.F(d) for d in dt[a:last]])
+        F = F_steps[step_of[a:last]]
         Q = q[a:last, :, None] * np.eye(8)
         res = FilterResult(mean[a:last], P, None, None, np.zeros(()),
                            Gaussian(mean[last - 1], P[-1]))
