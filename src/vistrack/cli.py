@@ -19,7 +19,10 @@ from typing import TYPE_CHECKING, NoReturn
 from . import __version__, _compile
 
 if TYPE_CHECKING:
+    from typing import TextIO
+
     from .config import TrackConfig
+    from .pipeline import VideoRun
 
 DEMOS = ("kalman", "track")
 
@@ -315,8 +318,7 @@ def _track(args: argparse.Namespace) -> int:
 
     from .config import config_toml
     from .io.atomic import check_output
-    from .io.motchallenge import DETECTION_SUFFIXES
-    from .pipeline import TrackRun, VideoRun, track_sequence, track_video, video_outputs
+    from .pipeline import TrackRun, track_sequence, track_video
 
     def fail(text: str) -> int:
         return _fail("track", text)
@@ -331,52 +333,9 @@ def _track(args: argparse.Namespace) -> int:
     if problem:
         return fail(problem)
     progress = sys.stderr if sys.stderr.isatty() and not args.quiet else None
-    setting_flags = [o for o, *_ in _SETTINGS if getattr(args, o) is not None]
-    if not box:
-        given = setting_flags + [f for f in ("still_camera", "config", "print_config")
-                                 if getattr(args, f)]
-        if given:
-            return fail(f"--{given[0].replace('_', '-')} goes with {_box_trackers()}")
-        if args.out is not None:
-            return fail(f"--out (a sequence's detections) goes with {_box_trackers()}; "
-                        f"--tracker {name} goes with --out-dir")
-    if args.out is not None:
-        for flag in ("gt",) + _FRONTEND_OPTIONS:
-            if getattr(args, flag) is not None:
-                return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
-        for flag in ("skip_bad_frames", "report"):
-            if getattr(args, flag):
-                return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
-        if Path(args.input).is_file():
-            if Path(args.input).suffix.lower() not in DETECTION_SUFFIXES:
-                return fail(f"--out is for a MOTChallenge sequence folder (seqinfo.ini, "
-                            f"det/det.txt) or a detections file (.txt, .csv), and "
-                            f"{args.input} is neither: track a video with --out-dir OUT/")
-            if args.detections is not None:
-                return fail(f"{args.input} is a detections file, and --detections gives "
-                            "another: give one")
-            if args.fps is None:
-                return fail(f"{args.input} is a detections file alone: give its frame rate "
-                            "with --fps")
-        # before anything is read or computed: a run that cannot write fails now
-        check_output(args.out, force=args.force, name="--out")
-        if str(args.out).lower().endswith(".parquet"):
-            from .io.motchallenge import need_parquet
-
-            try:
-                need_parquet()
-            except ImportError as e:
-                return fail(f"--out {args.out}: {e}")
-    elif Path(args.input).is_file() and Path(args.input).suffix.lower() in DETECTION_SUFFIXES:
-        # OpenCV would decode the text as frames of noise and the run would "track" them
-        return fail(f"--out-dir is for a video, image folder or sequence folder from pixels, and "
-                    f"{args.input} is a detections file: track it with --out RESULTS.txt "
-                    "(and its frame rate, --fps)")
-    else:
-        offline_flags = [f for f in ("offline", "detections", "columns") if getattr(args, f)]
-        if offline_flags or offline_given:
-            return fail(_OFFLINE_NEEDS_OUT)
-        video_outputs(args.out_dir, force=args.force, name="--out-dir")
+    problem = _outputs_problem(args, name, box, offline_given)
+    if problem:
+        return fail(problem)
     # with --print-config, stdout holds the configuration alone (the summary goes to stderr)
     report = sys.stderr if args.print_config else sys.stdout
     run: TrackRun | VideoRun
@@ -385,23 +344,11 @@ def _track(args: argparse.Namespace) -> int:
         cfg, problem = _box_config(args)
         if problem:
             return fail(problem)
-        if offline_given and cfg is not None and not cfg.offline.enabled:
-            named = ", ".join("--" + o.replace("_", "-") for o in offline_given)
-            warnings.warn(f"{named}: offline settings, which change nothing without --offline",
-                          UserWarning, stacklevel=1)
-        if args.low is not None and cfg is not None and not cfg.tracker.two_stage:
-            warnings.warn("--low: the second association stage's threshold, which changes "
-                          f"nothing with a tracker of one stage ({cfg.name})", UserWarning,
-                          stacklevel=1)
+        _warn_unused_settings(args, cfg, offline_given)
     if args.out is not None:
-        columns = None
-        if args.columns:
-            pairs = [p.split("=", 1) for p in args.columns.split(",") if p.strip()]
-            bad = [p[0] for p in pairs if len(p) != 2 or not p[0].strip() or not p[1].strip()]
-            if bad:
-                return fail(f"--columns takes OURS=THEIRS pairs separated by commas; got "
-                            f"{bad[0]!r}")
-            columns = {a.strip(): b.strip() for a, b in pairs}
+        columns, problem = _columns(args.columns)
+        if problem:
+            return fail(problem)
         run = track_sequence(args.input, args.out, detections=args.detections, columns=columns,
                              config=cfg, fps=args.fps, force=args.force, progress=progress)
         print(f"wrote {run.out}: {run.rows} boxes of {run.tracks} tracks over {run.frames} "
@@ -418,25 +365,117 @@ def _track(args: argparse.Namespace) -> int:
         run = track_video(args.input, args.out_dir, fps=args.fps, gt=args.gt,
                           force=args.force, progress=progress,
                           **_video_options(args, name, box, cfg))
-        sec = dict(run.seconds)
-        compiling = sec.pop("compile", 0.0)
-        ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
-        print(f"tracked {run.frames} frames: {run.rows} boxes of {run.tracks} tracks; "
-              f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})"
-              + (f"; compiling took {compiling:.1f} s" if compiling >= 0.05 else ""),
-              file=report)
-        if args.report:
-            from .report import write_report
-
-            run.files["report"] = write_report(args.out_dir, force=True)
-        for key, path in run.files.items():
-            print(f"  {key:<7} {path}", file=report)
-        if run.scores is not None:
-            _table({Path(args.input).stem: run.scores}, report)
+        _print_video_run(args, run, report)
     if args.print_config:
         assert run.config is not None  # a box tracker's run (others refuse --print-config)
         sys.stdout.write(config_toml(run.config, run.derived))
     return 0
+
+
+def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
+                     offline_given: list[str]) -> str:
+    """What is wrong with one input's ``--out`` or ``--out-dir`` and the options that go with
+    either, "" if nothing; checked before anything is read or computed, so that a run that
+    cannot write its outputs fails now (raises as :func:`~vistrack.io.atomic.check_output`
+    and :func:`~vistrack.pipeline.video_outputs` do)."""
+    from .io.atomic import check_output
+    from .io.motchallenge import DETECTION_SUFFIXES
+    from .pipeline import video_outputs
+
+    setting_flags = [o for o, *_ in _SETTINGS if getattr(args, o) is not None]
+    if not box:
+        given = setting_flags + [f for f in ("still_camera", "config", "print_config")
+                                 if getattr(args, f)]
+        if given:
+            return f"--{given[0].replace('_', '-')} goes with {_box_trackers()}"
+        if args.out is not None:
+            return (f"--out (a sequence's detections) goes with {_box_trackers()}; "
+                    f"--tracker {name} goes with --out-dir")
+    if args.out is not None:
+        for flag in ("gt",) + _FRONTEND_OPTIONS:
+            if getattr(args, flag) is not None:
+                return f"--{flag.replace('_', '-')} goes with --out-dir"
+        for flag in ("skip_bad_frames", "report"):
+            if getattr(args, flag):
+                return f"--{flag.replace('_', '-')} goes with --out-dir"
+        if Path(args.input).is_file():
+            if Path(args.input).suffix.lower() not in DETECTION_SUFFIXES:
+                return (f"--out is for a MOTChallenge sequence folder (seqinfo.ini, "
+                        f"det/det.txt) or a detections file (.txt, .csv), and "
+                        f"{args.input} is neither: track a video with --out-dir OUT/")
+            if args.detections is not None:
+                return (f"{args.input} is a detections file, and --detections gives "
+                        "another: give one")
+            if args.fps is None:
+                return (f"{args.input} is a detections file alone: give its frame rate "
+                        "with --fps")
+        check_output(args.out, force=args.force, name="--out")
+        if str(args.out).lower().endswith(".parquet"):
+            from .io.motchallenge import need_parquet
+
+            try:
+                need_parquet()
+            except ImportError as e:
+                return f"--out {args.out}: {e}"
+    elif Path(args.input).is_file() and Path(args.input).suffix.lower() in DETECTION_SUFFIXES:
+        # OpenCV would decode the text as frames of noise and the run would "track" them
+        return (f"--out-dir is for a video, image folder or sequence folder from pixels, and "
+                f"{args.input} is a detections file: track it with --out RESULTS.txt "
+                "(and its frame rate, --fps)")
+    else:
+        offline_flags = [f for f in ("offline", "detections", "columns") if getattr(args, f)]
+        if offline_flags or offline_given:
+            return _OFFLINE_NEEDS_OUT
+        video_outputs(args.out_dir, force=args.force, name="--out-dir")
+    return ""
+
+
+def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
+                          offline_given: list[str]) -> None:
+    """Warn of settings given that the configuration makes change nothing: the offline
+    mode's without --offline, --low with a tracker of one stage."""
+    if cfg is None:
+        return
+    if offline_given and not cfg.offline.enabled:
+        named = ", ".join("--" + o.replace("_", "-") for o in offline_given)
+        warnings.warn(f"{named}: offline settings, which change nothing without --offline",
+                      UserWarning, stacklevel=1)
+    if args.low is not None and not cfg.tracker.two_stage:
+        warnings.warn("--low: the second association stage's threshold, which changes "
+                      f"nothing with a tracker of one stage ({cfg.name})", UserWarning,
+                      stacklevel=1)
+
+
+def _columns(text: str | None) -> tuple[dict[str, str] | None, str]:
+    """``--columns OURS=THEIRS,...`` as ``{ours: theirs}`` (None when not given), and what is
+    wrong with it ("" if nothing)."""
+    if not text:
+        return None, ""
+    pairs = [p.split("=", 1) for p in text.split(",") if p.strip()]
+    bad = [p[0] for p in pairs if len(p) != 2 or not p[0].strip() or not p[1].strip()]
+    if bad:
+        return None, f"--columns takes OURS=THEIRS pairs separated by commas; got {bad[0]!r}"
+    return {a.strip(): b.strip() for a, b in pairs}, ""
+
+
+def _print_video_run(args: argparse.Namespace, run: VideoRun, report: TextIO) -> None:
+    """A run from pixels in a few lines: counts and time a frame by stage, the files (and
+    the report page, with --report, written here), the scores against --gt."""
+    sec = dict(run.seconds)
+    compiling = sec.pop("compile", 0.0)
+    ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
+    print(f"tracked {run.frames} frames: {run.rows} boxes of {run.tracks} tracks; "
+          f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})"
+          + (f"; compiling took {compiling:.1f} s" if compiling >= 0.05 else ""),
+          file=report)
+    if args.report:
+        from .report import write_report
+
+        run.files["report"] = write_report(args.out_dir, force=True)
+    for key, path in run.files.items():
+        print(f"  {key:<7} {path}", file=report)
+    if run.scores is not None:
+        _table({Path(args.input).stem: run.scores}, report)
 
 
 def _frontend_problem(args: argparse.Namespace, name: str) -> str:
