@@ -303,6 +303,36 @@ def test_vistrack_track_with_several_inputs(bench, tmp_path, capsys):
     assert "--gt goes with one input" in capsys.readouterr().err
 
 
+def test_several_inputs_say_which_settings_change_nothing(bench, tmp_path, capsys):
+    """As with one input: the offline mode's settings without ``--offline``, and ``--low``
+    with a tracker of one stage, are said to change nothing, and with ``--out-dir`` the
+    offline settings are refused. With several inputs they were dropped without a word."""
+    for argv, said in (
+            (["--out", str(tmp_path / "a"), "--max-gap", "2"],
+             "vistrack track: warning: --max-gap: offline settings, which change nothing "
+             "without --offline"),
+            (["--out", str(tmp_path / "b"), "--tracker", "sort", "--low", "0.2"],
+             "vistrack track: warning: --low: the second association stage's threshold, which "
+             "changes nothing with a tracker of one stage (sort)")):
+        assert main(["track", str(bench), *argv, "--jobs", "1", "--quiet"]) == 0
+        cap = capsys.readouterr()
+        assert said in cap.err and "3 of 3 inputs tracked" in cap.out
+    # with the offline mode on, its settings count: nothing is said
+    assert main(["track", str(bench), "--out", str(tmp_path / "c"), "--max-gap", "2",
+                 "--offline", "--jobs", "1", "--quiet"]) == 0
+    assert "warning" not in capsys.readouterr().err
+    import shutil
+
+    clip = tmp_path / "clip.mp4"
+    shutil.copy(demo_clip().video, clip)
+    for flag in (["--max-gap", "2"], ["--offline"]):
+        assert main(["track", str(clip), str(demo_clip().video), "--out-dir",
+                     str(tmp_path / "d"), *flag, "--quiet"]) == 2
+        assert ("--offline, its settings and --detections go with --out"
+                in capsys.readouterr().err)
+    assert not (tmp_path / "d").exists()
+
+
 def test_detections_files_alone_at_the_frame_rate_given(bench, tmp_path, capsys):
     """Several detections files alone (and a folder without seqinfo.ini) at `--fps`: each
     result is what tracking that file alone gives, named after its sequence; without the

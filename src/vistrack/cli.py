@@ -314,7 +314,7 @@ def _track(args: argparse.Namespace) -> int:
         sys.path.insert(0, os.getcwd())
     if (len(args.input) > 1 or is_benchmark(Path(args.input[0])) or args.jobs is not None
             or args.scheduler is not None):
-        return _track_many(args)
+        return _track_many(args, offline_given)
 
     from .config import config_toml
     from .io.atomic import check_output
@@ -511,9 +511,11 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
     return options
 
 
-def _track_many(args: argparse.Namespace) -> int:
+def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     """``vistrack track`` on several inputs (vistrack.batch): in parallel, a line as each is
-    done, a table at the end; exit status 1 if any failed."""
+    done, a table at the end; exit status 1 if any failed. ``offline_given``: the offline
+    mode's settings given, refused with ``--out-dir`` and said to change nothing without
+    ``--offline``, as for one input."""
     from .batch import Outcome, one_thread_here, plan, progress_lines, run_jobs
 
     if args.own_process:
@@ -558,13 +560,14 @@ def _track_many(args: argparse.Namespace) -> int:
         if args.fps is not None:
             options["fps"] = args.fps
     else:
-        if cfg is not None and cfg.offline.enabled:
-            return fail("--offline goes with --out")
+        if (cfg is not None and cfg.offline.enabled) or offline_given:
+            return fail(_OFFLINE_NEEDS_OUT)
         problem = _frontend_problem(args, name)
         if problem:
             return fail(problem)
         kind, out = "pixels", args.out_dir
         options.update(_video_options(args, name, box, cfg))
+    _warn_unused_settings(args, cfg, offline_given)
     jobs = plan(args.input, out, kind=kind, **options)
     if kind == "detections":
         for job in jobs:  # before anything runs: a job that cannot write fails now
