@@ -458,6 +458,26 @@ def test_skip_bad_frames_carries_on_past_a_cut_short_jpeg(tmp_path, capsys):
     assert 25 not in frames and frames.max() > 25  # the frame after it keeps its number
 
 
+def test_skip_bad_frames_with_video_files_only_is_refused(tmp_path, capsys):
+    """--skip-bad-frames reads image folders; with a video file (or several inputs all video
+    files) it would change nothing, and was dropped without a word."""
+    import shutil
+
+    from vistrack.data import demo_clip
+
+    clip = tmp_path / "clip.mp4"
+    shutil.copy(demo_clip().video, clip)
+    out = tmp_path / "out"
+    assert main(["track", str(clip), "--out-dir", str(out), "--skip-bad-frames"]) == 2
+    assert (f"--skip-bad-frames goes with an image folder (or a sequence folder's img1/); "
+            f"{clip} is a video file, decoded as it is") in capsys.readouterr().err
+    assert main(["track", str(clip), str(demo_clip().video), "--out-dir", str(out),
+                 "--skip-bad-frames"]) == 2
+    assert (f"{clip}, {demo_clip().video} are video files, decoded as they are"
+            in capsys.readouterr().err)
+    assert not out.exists()
+
+
 def test_a_detections_file_given_to_out_dir_is_refused_naming_out(tmp_path, capsys):
     """``vistrack track det.txt --out-dir OUT`` (a detections file in the mode for pixels):
     OpenCV decoded the text as 243 frames of noise and the run "tracked" them, 0 boxes."""

@@ -426,8 +426,17 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
         offline_flags = [f for f in ("offline", "detections", "columns") if getattr(args, f)]
         if offline_flags or offline_given:
             return _OFFLINE_NEEDS_OUT
+        if args.skip_bad_frames and Path(args.input).is_file():
+            return _skip_bad_frames_problem([args.input])
         video_outputs(args.out_dir, force=args.force, name="--out-dir")
     return ""
+
+
+def _skip_bad_frames_problem(videos: Sequence[str]) -> str:
+    """--skip-bad-frames given with video files only, where it would change nothing."""
+    which = (f"{videos[0]} is a video file, decoded as it is" if len(videos) == 1
+             else f"{', '.join(map(str, videos))} are video files, decoded as they are")
+    return f"--skip-bad-frames goes with an image folder (or a sequence folder's img1/); {which}"
 
 
 def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
@@ -562,6 +571,8 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     else:
         if (cfg is not None and cfg.offline.enabled) or offline_given:
             return fail(_OFFLINE_NEEDS_OUT)
+        if args.skip_bad_frames and all(Path(i).is_file() for i in args.input):
+            return fail(_skip_bad_frames_problem(args.input))
         problem = _frontend_problem(args, name)
         if problem:
             return fail(problem)
