@@ -353,6 +353,42 @@ def test_offline_settings_without_the_offline_mode_say_they_change_nothing(seq, 
                                   "one stage (sort)") in r.stderr
 
 
+def test_still_camera_where_the_camera_is_taken_as_still_anyway_says_so(seq, tmp_path):
+    """``--still-camera`` with SORT (which estimates no camera motion), with a configuration
+    file that turns the camera's motion off, or from pixels with the bgsub front-end (a
+    background model: a still camera already) gave the same tracks, byte for byte, without a
+    word; the run now says so. With the default tracker, which estimates the camera's motion
+    (test_cli_still_camera_turns_camera_motion_off), nothing is said."""
+    import cv2
+
+    for extra, why in ((["--tracker", "sort"], "--tracker sort does not estimate the camera's "
+                        "motion"),
+                       (["--config", tmp_path / "still.toml"],
+                        f"{tmp_path / 'still.toml'} sets camera_motion = false")):
+        (tmp_path / "still.toml").write_text("[tracker]\ncamera_motion = false\n")
+        r = cli(seq, "--out", tmp_path / "a.txt", *extra, "--still-camera", "--force")
+        assert r.returncode == 0 and (f"vistrack track: warning: --still-camera changes nothing "
+                                      f"here: {why}") in r.stderr
+        r = cli(seq, "--out", tmp_path / "b.txt", *extra, "--force")
+        assert r.returncode == 0 and "warning" not in r.stderr
+        assert (tmp_path / "a.txt").read_bytes() == (tmp_path / "b.txt").read_bytes()
+    r = cli(seq, "--out", tmp_path / "c.txt", "--still-camera")
+    assert r.returncode == 0 and "warning" not in r.stderr
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for k in range(8):
+        img = np.zeros((60, 80, 3), np.uint8)
+        img[20:40, 5 + 5 * k:25 + 5 * k] = 255
+        cv2.imwrite(str(frames / f"{k + 1:06d}.png"), img)
+    for out, extra in (("v1", ["--still-camera"]), ("v2", [])):
+        r = cli(frames, "--out-dir", tmp_path / out, "--min-area", "50", "--quiet", *extra)
+        assert r.returncode == 0, r.stderr
+        assert ("--still-camera changes nothing here: the bgsub front-end takes the camera as "
+                "still" in r.stderr) == bool(extra)
+    assert (tmp_path / "v1" / "tracks.txt").read_bytes() == \
+        (tmp_path / "v2" / "tracks.txt").read_bytes()
+
+
 def test_the_command_lines_defaults_are_the_configurations():
     """The defaults `vistrack track --help` states are the configuration's own (the parser
     does not load the tracker to read them)."""

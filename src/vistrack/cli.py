@@ -442,7 +442,8 @@ def _skip_bad_frames_problem(videos: Sequence[str]) -> str:
 def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
                           offline_given: list[str]) -> None:
     """Warn of settings given that the configuration makes change nothing: the offline
-    mode's without --offline, --low with a tracker of one stage."""
+    mode's without --offline, --low with a tracker of one stage, --still-camera where the
+    camera's motion is not estimated anyway."""
     if cfg is None:
         return
     if offline_given and not cfg.offline.enabled:
@@ -453,6 +454,28 @@ def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
         warnings.warn("--low: the second association stage's threshold, which changes "
                       f"nothing with a tracker of one stage ({cfg.name})", UserWarning,
                       stacklevel=1)
+    why = _still_already(args) if args.still_camera else None
+    if why:
+        warnings.warn(f"--still-camera changes nothing here: {why}", UserWarning, stacklevel=1)
+
+
+def _still_already(args: argparse.Namespace) -> str | None:
+    """Why the camera's motion would not be estimated without ``--still-camera`` (so that
+    the option changes nothing), or None: the configuration file turns it off, the tracker
+    estimates none, or the front-end, from pixels, takes the camera as still."""
+    from .config import TrackConfig, read_config
+    from .pipeline import FRONTENDS, default_frontend
+
+    if args.config is not None:
+        return None if read_config(args.config).tracker.camera_motion else \
+            f"{args.config} sets camera_motion = false"
+    name = args.tracker or "bytetrack"
+    if not TrackConfig.preset(name).tracker.camera_motion:
+        return f"--tracker {name} does not estimate the camera's motion"
+    front = args.frontend or default_frontend(name)
+    if args.out_dir is not None and front in FRONTENDS and FRONTENDS[front].still_camera:
+        return f"the {front} front-end takes the camera as still"
+    return None
 
 
 def _columns(text: str | None) -> tuple[dict[str, str] | None, str]:
