@@ -237,6 +237,29 @@ def test_iou_pairs_with_far_apart_boxes():
     assert sorted(zip(r.tolist(), c.tolist())) == [(0, 0), (1, 1)]
 
 
+def test_iou_pairs_with_a_box_beyond_any_image():
+    """One box far from the rest along one axis (x at 1e20, 1e100 or -1e307; a detector's
+    garbage row) coarsened the grid alike on both axes until the other had less than one
+    cell, and the first so many that its count overflowed: 1e20 asked for tens of gigabytes
+    (MemoryError) and 1e100 crashed the process. The pairs are now the brute force's, and the
+    far box pairs with nothing."""
+    from vistrack.association import iou_pairs
+
+    rng = np.random.default_rng(3)
+    lo = rng.uniform(0, 600, (40, 2))
+    near = np.c_[lo, lo + rng.uniform(20, 60, (40, 2))]
+    for far in (1e15, 1e20, 1e100, -1e307, 1e307):
+        box = np.array([[far, 10.0, far + 30, 60.0]])
+        for a, b in ((near, np.r_[near, box]), (np.r_[near, box], near),
+                     (np.r_[box, near], np.r_[near, box, -box[:, [2, 1, 0, 3]]])):
+            r, c, v = iou_pairs(a, b, 0.1)
+            with np.errstate(invalid="ignore"):
+                dense = iou(a, b)
+            want = np.argwhere(dense >= 0.1)
+            assert sorted(zip(r.tolist(), c.tolist())) == sorted(map(tuple, want.tolist()))
+            np.testing.assert_allclose(v, dense[r, c], rtol=1e-12)
+
+
 def test_compiled_lsa_equals_scipy_pair_for_pair():
     """vistrack's compiled shortest augmenting path gives scipy's assignment exactly, ties
     included (integer costs), for wide, tall and square matrices."""

@@ -324,17 +324,28 @@ def _grid_pairs(a, b, min_iou):
         cw = max(cw, b[j, 2] - b[j, 0])
         ch = max(ch, b[j, 3] - b[j, 1])
         x_hi, y_hi = max(x_hi, b[j, 0]), max(y_hi, b[j, 1])
-    cells = ((x_hi - b[:, 0].min()) / cw + 1) * ((y_hi - b[:, 1].min()) / ch + 1)
-    limit = 4.0 * b.shape[0] + 1024
-    if cells > limit:
-        grow = np.sqrt(cells / limit)
-        cw, ch = cw * grow, ch * grow
     x_min, y_min = b[:, 0].min(), b[:, 1].min()
-    gx = np.empty(b.shape[0], np.int64)
-    gy = np.empty(b.shape[0], np.int64)
-    for j in range(b.shape[0]):
-        gx[j] = np.int64((b[j, 0] - x_min) / cw)
-        gy[j] = np.int64((b[j, 1] - y_min) / ch)
+    # at most `limit` cells in all: both axes coarsened alike, but an axis that would then
+    # have less than one cell kept as it is and the other coarsened further (boxes spread
+    # along a line, or one box far from the rest), so that neither axis' count overflows;
+    # one cell when the spread is beyond floating point
+    sx, sy = (x_hi - x_min) / cw + 1.0, (y_hi - y_min) / ch + 1.0
+    limit = 4.0 * b.shape[0] + 1024
+    if sx * sy > limit:
+        grow = np.sqrt(sx * sy / limit)
+        if sy < grow:
+            cw = cw * (sx * sy / limit)
+        elif sx < grow:
+            ch = ch * (sx * sy / limit)
+        else:
+            cw, ch = cw * grow, ch * grow
+    one_cell = not (np.isfinite(sx * sy) and np.isfinite(cw) and np.isfinite(ch))
+    gx = np.zeros(b.shape[0], np.int64)
+    gy = np.zeros(b.shape[0], np.int64)
+    if not one_cell:
+        for j in range(b.shape[0]):
+            gx[j] = np.int64((b[j, 0] - x_min) / cw)
+            gy[j] = np.int64((b[j, 1] - y_min) / ch)
     nx, ny = gx.max() + 1, gy.max() + 1
     counts = np.zeros(nx * ny + 1, np.int64)
     for j in range(b.shape[0]):
@@ -354,10 +365,13 @@ def _grid_pairs(a, b, min_iou):
     for i in range(a.shape[0]):
         ax0, ay0, ax1, ay1 = a[i, 0], a[i, 1], a[i, 2], a[i, 3]
         area_a = (ax1 - ax0) * (ay1 - ay0)
-        x_lo = max(np.int64(np.floor((ax0 - cw - x_min) / cw)), 0)
-        x_hi = min(np.int64(np.floor((ax1 - x_min) / cw)), nx - 1)
-        y_lo = max(np.int64(np.floor((ay0 - ch - y_min) / ch)), 0)
-        y_hi = min(np.int64(np.floor((ay1 - y_min) / ch)), ny - 1)
+        x_lo, x_hi, y_lo, y_hi = 0, 0, 0, 0
+        if not one_cell:
+            # clipped as floats first: a box far from every one of b would overflow the cast
+            x_lo = np.int64(min(max(np.floor((ax0 - cw - x_min) / cw), 0.0), float(nx)))
+            x_hi = np.int64(min(max(np.floor((ax1 - x_min) / cw), -1.0), nx - 1.0))
+            y_lo = np.int64(min(max(np.floor((ay0 - ch - y_min) / ch), 0.0), float(ny)))
+            y_hi = np.int64(min(max(np.floor((ay1 - y_min) / ch), -1.0), ny - 1.0))
         for cy in range(y_lo, y_hi + 1):
             for cx in range(x_lo, x_hi + 1):
                 k = cy * nx + cx
@@ -369,7 +383,7 @@ def _grid_pairs(a, b, min_iou):
                         continue
                     inter = iw * ih
                     v = inter / (area_a + (b[j, 2] - b[j, 0]) * (b[j, 3] - b[j, 1]) - inter)
-                    if v < min_iou or v <= 0.0:
+                    if not (v >= min_iou and v > 0.0):  # NaN too: areas beyond floating point
                         continue
                     if n == cap:
                         cap *= 2
