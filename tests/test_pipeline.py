@@ -653,6 +653,48 @@ def test_ground_truth_given_as_detections_is_named_as_such(tmp_path):
         track_sequence(det, tmp_path / "b.txt", fps=10)
 
 
+def test_detections_that_cannot_give_tracks_are_named(tmp_path):
+    """Four files tracked without a word though their scores or rows could not be what the
+    user meant: six values a row (no score: every detection scored 1, where a CSV file
+    without a score column is named), no rows at all (an empty result), raw scores all below
+    the new-track threshold (no track can start), and a CSV file whose identity column (not
+    "the second value") is filled. Each now says so; a plain detections file says nothing."""
+    import warnings
+
+    from vistrack.pipeline import track_sequence
+
+    six = tmp_path / "six.txt"
+    six.write_text("".join(f"{f},-1,{10 + 3 * f},20,20,40\n" for f in range(1, 11)))
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{six}: 6 values a row, no score (MOTChallenge's 7th value, conf): every "
+            "detection scores 1")):
+        run = track_sequence(six, tmp_path / "a.txt", fps=10)
+    assert run.rows == 10
+    empty = tmp_path / "empty.txt"
+    empty.write_text("")
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{empty}: no detections: nothing to track, and the results hold no rows")):
+        run = track_sequence(empty, tmp_path / "b.txt", fps=10)
+    assert run.rows == 0
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{f},-1,{10 + 3 * f},20,20,40,0.9\n" for f in range(1, 11)))
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{det}: every score lies below new_track 2 (the scores run 0.9 to 0.9), and with "
+            "raw scores (--scores raw) no track can start")):
+        run = track_sequence(det, tmp_path / "c.txt", fps=10, scores="raw", new_track=2.0)
+    assert run.rows == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert track_sequence(det, tmp_path / "d.txt", fps=10, scores="raw").rows == 10
+        assert track_sequence(det, tmp_path / "e.txt", fps=10).rows == 10
+    csv = tmp_path / "ids.csv"
+    csv.write_text("frame,x1,y1,x2,y2,conf,track\n"
+                   + "".join(f"{f},{10 + 3 * f},20,{30 + 3 * f},60,0.9,4\n" for f in range(1, 11)))
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{csv}: every row has an identity (column 'track'; detections have -1)")):
+        track_sequence(csv, tmp_path / "f.txt", fps=10, columns={"id": "track"})
+
+
 def test_the_results_never_overwrite_the_detections_file(tmp_path):
     """``--out`` naming the detections file itself, with ``--force``, wrote the results over
     the detections: the input was lost. It is refused, and the file left as it was."""

@@ -915,6 +915,11 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
             raise ValueError(f"columns name a CSV file's columns; {path} is read as a "
                              "MOTChallenge file (its name does not end in .csv)")
         table = read_mot(path)
+        if len(table) and table.columns < 7:
+            warnings.warn(f"{path}: {table.columns} values a row, no score (MOTChallenge's "
+                          "7th value, conf): every detection scores 1", UserWarning,
+                          stacklevel=stacklevel + 1)
+        who = "the second value"
     else:
         from .io.motchallenge import _COLUMNS, _read_csv
 
@@ -928,11 +933,16 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
             warnings.warn(f"{path}: no column {conf!r}: every detection scores 1"
                           + (f" (columns not read: {', '.join(unread)}; name the score's "
                              "column: --columns conf=NAME, or columns={'conf': NAME})"
-                             if unread else ""), UserWarning, stacklevel=2)
+                             if unread else ""), UserWarning, stacklevel=stacklevel + 1)
+        who = next((f"column {names.get(c, c)!r}" for c in ("particle", "id")
+                    if names.get(c, c) in df.columns), "the identity")
+    if not len(table):
+        warnings.warn(f"{path}: no detections: nothing to track, and the results hold no rows",
+                      UserWarning, stacklevel=stacklevel + 1)
     if len(table) and (table.ids >= 0).all():
         # detections carry no identity (-1); a file whose every row has one is ground truth
         # or a tracker's results, whose ignored boxes (conf 0) would be tracked as detections
-        warnings.warn(f"{path}: every row has an identity (the second value; detections have "
+        warnings.warn(f"{path}: every row has an identity ({who}; detections have "
                       "-1): ground truth or tracks rather than detections? The identities are "
                       "not used, and each row is tracked as a detection scoring its conf",
                       UserWarning, stacklevel=stacklevel + 1)
@@ -1214,11 +1224,18 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
 
 
 def _check_detections(src: _SequenceInput, tc: BoxTrackerConfig) -> None:
-    """Warn of duplicate boxes where the tracker does no suppression of its own; refuse
-    scores outside [0, 1] where raw scores weigh the first stage's IoU."""
+    """Warn of duplicate boxes where the tracker does no suppression of its own, and of raw
+    scores that all lie below the new-track threshold; refuse scores outside [0, 1] where raw
+    scores weigh the first stage's IoU."""
     dets = src.dets
     if tc.nms_iou >= 1:
         warn_duplicates(dets, src.det_path, stacklevel=3)
+    if tc.scores == "raw" and len(dets) and dets.conf.max() < tc.new_track:
+        warnings.warn(f"{src.det_path}: every score lies below new_track {tc.new_track:g} (the "
+                      f"scores run {dets.conf.min():.4g} to {dets.conf.max():.4g}), and with "
+                      "raw scores (--scores raw) no track can start: lower --new-track, or "
+                      "calibrate the scores (--scores calibrated, the default)", UserWarning,
+                      stacklevel=3)
     if tc.scores == "raw" and tc.fuse_score and len(dets) and not (
             (dets.conf >= 0) & (dets.conf <= 1)).all():
         raise ValueError(f"{src.det_path}: scores from {dets.conf.min():.4g} to "
