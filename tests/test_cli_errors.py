@@ -511,3 +511,21 @@ def test_eval_errors_are_one_line_and_debug_shows_them(tmp_path, capsys):
     one_line(capsys, "eval", f"{missing}: No such file or directory")
     assert main(["eval", "--debug", "--gt", str(missing), "--pred", str(GT)]) == 2
     assert "FileNotFoundError" in capsys.readouterr().err
+
+
+def test_a_videos_ground_truth_is_checked_before_anything_is_tracked(tmp_path, capsys):
+    """``--gt`` with a detections file (every id -1, so an identity twice in a frame) was
+    found faulty only by the scoring, after the whole video had been tracked and its outputs
+    written; a missing one was named without saying it was --gt's. Both are refused before
+    any output is made."""
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"1,-1,{10 + 50 * k},20,20,40,0.9\n" for k in range(3)))
+    assert main(["track", str(VIDEO), "--out-dir", str(tmp_path / "a"), "--gt", str(det),
+                 "--stop", "3", "--quiet"]) == 2
+    one_line(capsys, "track", f"{det}, lines 1 and 2: id -1 appears more than once in frame 1; "
+             "every id is -1: it looks like a detections file (det.txt), not ground truth")
+    missing = tmp_path / "nope.txt"
+    assert main(["track", str(VIDEO), "--out-dir", str(tmp_path / "b"), "--gt", str(missing),
+                 "--stop", "3", "--quiet"]) == 2
+    one_line(capsys, "track", f"{missing} does not exist (--gt FILE)")
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()

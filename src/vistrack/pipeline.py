@@ -1781,7 +1781,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                          f"here, {what}, does not read it")
     files = video_outputs(out_dir, annotate=annotate, force=force)
     out_dir = Path(out_dir)
-    gt_table = read_mot(gt) if gt is not None else None
+    gt_table = _ground_truth(gt) if gt is not None else None
     if confidence is not None and not callable(confidence):
         raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                         f"{type(confidence).__name__}")
@@ -1850,6 +1850,19 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                       reader.start, stats.last)
     _write_run_info(result, video, gt, command)
     return result
+
+
+def _ground_truth(gt: str | Path) -> MOTTable:
+    """The ground truth to score a video's tracks against, read and checked before anything
+    is tracked: a missing file named as ``--gt``'s, and the faults scoring would find after
+    the whole video (an identity twice in a frame, a detections file given as ground truth)
+    found now."""
+    try:
+        table = read_mot(gt)
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{gt} does not exist (--gt FILE)") from None
+    evaluate_mot(table, MOTTable.from_rows(np.zeros((0, 6)), str(gt)), benchmark="auto")
+    return table
 
 
 def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
