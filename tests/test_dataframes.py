@@ -76,8 +76,14 @@ def test_other_column_names_and_missing_columns():
             "columns bb_width=w: no column 'w' in mine.csv; columns: ['cx', 'cy', 'h', 't', "
             "'track']")):
         MOTTable.from_pandas(rows.drop(columns="w"), columns=names, path="mine.csv")
-    with pytest.raises(ValueError, match="no column 'frame'"):
+    with pytest.raises(ValueError, match=re.escape(
+            "no column 'frame' (the frame); columns: ['cx', 'cy', 'h', 't', 'track', 'w'] "
+            "(name the frame's column: --columns frame=NAME, or columns={'frame': NAME})")):
         MOTTable.from_pandas(rows)
+    # a column named as the frame's in another case is suggested
+    with pytest.raises(ValueError, match=re.escape(
+            "(did you mean 'Frame'? name the frame's column: --columns frame=NAME")):
+        MOTTable.from_pandas(rows.rename(columns={"t": "Frame"}))
     assert len(MOTTable.from_pandas(rows.iloc[:0], columns=names)) == 0
 
 

@@ -370,8 +370,13 @@ class MOTTable:
 
         frame = get("frame")
         if frame is None:
+            # a column of another case or spelling named as the one meant (Frame, frames)
+            lower = {str(c).lower(): str(c) for c in have}
+            close = difflib.get_close_matches(name("frame").lower(), lower, n=1, cutoff=0.7)
+            hint = (f"did you mean {lower[close[0]]!r}? " if close else "") + \
+                "name the frame's column: --columns frame=NAME, or columns={'frame': NAME}"
             raise ValueError(f"no column {name('frame')!r} (the frame){where}; columns: "
-                             f"{sorted(map(str, have))}")
+                             f"{sorted(map(str, have))} ({hint})")
         n = len(frame)
         ident = get("particle")
         if ident is None:
