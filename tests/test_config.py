@@ -78,7 +78,11 @@ def test_a_partial_file_keeps_the_presets_other_values(tmp_path):
 @pytest.mark.parametrize("text,match", [
     ("[tracker\nhigh = 0.5\n", r"not valid TOML: .*line 1, column 9"),
     ("[trakcer]\nhigh = 0.5\n", "unknown table or key 'trakcer'"),
-    ("[tracker]\nhihg = 0.5\n", r"\[tracker\] has no key 'hihg' \(keys: assigner"),
+    ("[tracker]\nhihg = 0.5\n", r"\[tracker\] has no key 'hihg'; did you mean 'high'\? "
+                                r"\(keys: assigner"),
+    ("[tracker]\nmax_gap = 0.5\n", r"\[tracker\] has no key 'max_gap'; it is a key of "
+                                   r"\[offline\] \(keys: assigner"),
+    ("[offline]\nzzz = 1\n", r"\[offline\] has no key 'zzz' \(keys: enabled"),
     ("[tracker]\nhigh = \"0.5\"\n", r"\[tracker\] high must be a number; got '0.5'"),
     ("[tracker]\nconfirm_hits = 2.5\n", r"\[tracker\] confirm_hits must be an integer"),
     ("[tracker]\ncalibration_window = -1\n", r"calibration_window must be an integer >= 0"),

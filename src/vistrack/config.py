@@ -27,6 +27,7 @@ values a run derived) that :func:`read_config` reads back to the same configurat
 
 from __future__ import annotations
 
+import difflib
 import math
 import os
 import sys
@@ -381,7 +382,12 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
         for key, value in given.items():
             kind = kinds[table].get(key)
             if kind is None:
-                raise ConfigError(f"{path}: [{table}] has no key {key!r} (keys: "
+                # a key of another table, or a near spelling of one of this table's
+                elsewhere = [t for t in kinds if key in kinds[t]]
+                close = difflib.get_close_matches(str(key), kinds[table], n=1)
+                hint = (f"; it is a key of [{elsewhere[0]}]" if elsewhere else
+                        f"; did you mean {close[0]!r}?" if close else "")
+                raise ConfigError(f"{path}: [{table}] has no key {key!r}{hint} (keys: "
                                   f"{', '.join(sorted(kinds[table]))})")
             if kind == "list":
                 ok = (isinstance(value, (int, float)) and not isinstance(value, bool)) or (
