@@ -658,7 +658,8 @@ def test_detections_that_cannot_give_tracks_are_named(tmp_path):
     user meant: six values a row (no score: every detection scored 1, where a CSV file
     without a score column is named), no rows at all (an empty result), raw scores all below
     the new-track threshold (no track can start), and a CSV file whose identity column (not
-    "the second value") is filled. Each now says so; a plain detections file says nothing."""
+    "the second value") is filled; and results asked for as JSON, written as MOTChallenge's
+    text. Each now says so; a plain detections file says nothing."""
     import warnings
 
     from vistrack.pipeline import track_sequence
@@ -687,6 +688,16 @@ def test_detections_that_cannot_give_tracks_are_named(tmp_path):
         warnings.simplefilter("error")
         assert track_sequence(det, tmp_path / "d.txt", fps=10, scores="raw").rows == 10
         assert track_sequence(det, tmp_path / "e.txt", fps=10).rows == 10
+    # a results file named for a format vistrack does not write gets MOTChallenge's text,
+    # and says so; .txt and no suffix do not
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{tmp_path / 'r.json'}: written as MOTChallenge text; .json is not a format "
+            "vistrack writes (.txt: MOTChallenge's text, .csv, .parquet)")):
+        track_sequence(det, tmp_path / "r.json", fps=10)
+    assert (tmp_path / "r.json").read_bytes() == (tmp_path / "e.txt").read_bytes()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        track_sequence(det, tmp_path / "results", fps=10)
     csv = tmp_path / "ids.csv"
     csv.write_text("frame,x1,y1,x2,y2,conf,track\n"
                    + "".join(f"{f},{10 + 3 * f},20,{30 + 3 * f},60,0.9,4\n" for f in range(1, 11)))

@@ -1137,6 +1137,11 @@ def _results_format(out: Path) -> str | None:
     :meth:`~vistrack.io.MOTTable.to_pandas` names them, with a header; raises ImportError
     before anything is read when what writes it is missing), None for MOTChallenge's text."""
     kind = {".parquet": "parquet", ".csv": "csv"}.get(out.suffix.lower())
+    if kind is None and out.suffix.lower() not in ("", ".txt"):
+        # results.json holding MOTChallenge's text would be read as JSON, and fail
+        warnings.warn(f"{out}: written as MOTChallenge text; {out.suffix} is not a format "
+                      "vistrack writes (.txt: MOTChallenge's text, .csv, .parquet)",
+                      UserWarning, stacklevel=3)
     if kind == "parquet":
         need_parquet()
     elif kind == "csv":
