@@ -344,6 +344,12 @@ def test_tracks_written_as_csv_have_a_header_and_read_back_as_detections(tmp_pat
         assert list(df.columns) == list(want.to_pandas().columns)
         back = MOTTable.from_pandas(df)
         assert np.array_equal(back.boxes, want.boxes) and np.array_equal(back.ids, want.ids)
+        # the centre as the box's decimals give it (0.01 of a pixel at most: a half of 0.01
+        # is 0.005), not left + width / 2's binary noise (118.86999999999999)
+        text = [line.split(",")[2:4] for line in csv.out.read_text().splitlines()[1:]]
+        assert max(len(v.partition(".")[2]) for row in text for v in row) <= 3
+        np.testing.assert_allclose(df[["x", "y"]].to_numpy(),
+                                   want.boxes[:, :2] + want.boxes[:, 2:] / 2, rtol=1e-14)
         # and as the detections of another run: each box where the text file has it
         again = track_sequence(csv.out, tmp_path / f"again{offline}.txt", fps=10)
         assert again.detections == len(want)

@@ -275,6 +275,10 @@ class MOTTable:
             If pandas is missing.
         """
         df = self.to_pandas()
+        # the centre, derived from the box, to 15 digits: 1283.7, not the 1283.6999999999998
+        # that left + width / 2 gives in binary (the box's own columns are written exactly)
+        for c in ("x", "y"):
+            df[c] = [f"{v:.15g}" for v in df[c].to_numpy()]
         with replacing(path) as part:
             df.to_csv(part, index=False)
         return Path(path)
