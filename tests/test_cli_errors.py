@@ -516,8 +516,9 @@ def test_eval_errors_are_one_line_and_debug_shows_them(tmp_path, capsys):
 def test_a_videos_ground_truth_is_checked_before_anything_is_tracked(tmp_path, capsys):
     """``--gt`` with a detections file (every id -1, so an identity twice in a frame) was
     found faulty only by the scoring, after the whole video had been tracked and its outputs
-    written; a missing one was named without saying it was --gt's. Both are refused before
-    any output is made."""
+    written; a missing one was named without saying it was --gt's, and a folder was "Is a
+    directory". These are refused before any output is made, and a sequence folder's
+    gt/gt.txt is read, as vistrack eval --gt reads it."""
     det = tmp_path / "det.txt"
     det.write_text("".join(f"1,-1,{10 + 50 * k},20,20,40,0.9\n" for k in range(3)))
     assert main(["track", str(VIDEO), "--out-dir", str(tmp_path / "a"), "--gt", str(det),
@@ -529,3 +530,17 @@ def test_a_videos_ground_truth_is_checked_before_anything_is_tracked(tmp_path, c
                  "--stop", "3", "--quiet"]) == 2
     one_line(capsys, "track", f"{missing} does not exist (--gt FILE)")
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+    # a folder: a sequence's, whose gt/gt.txt is read (as vistrack eval reads it), or not
+    assert main(["track", str(VIDEO), "--out-dir", str(tmp_path / "c"), "--gt", str(tmp_path),
+                 "--stop", "3", "--quiet"]) == 2
+    one_line(capsys, "track", f"--gt {tmp_path} is a folder without gt/gt.txt: give a "
+             "ground-truth file, or a sequence folder that holds gt/gt.txt")
+    seq = tmp_path / "seq"
+    (seq / "gt").mkdir(parents=True)
+    (seq / "gt" / "gt.txt").write_bytes(GT.read_bytes())
+    for name, gt in (("d", seq), ("e", GT)):
+        assert main(["track", str(VIDEO), "--out-dir", str(tmp_path / name), "--gt", str(gt),
+                     "--stop", "3", "--quiet"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert [x for x in out if x.startswith("pets09")] and \
+        len({x for x in out if x.startswith("pets09")}) == 1  # the same scores

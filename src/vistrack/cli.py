@@ -747,12 +747,12 @@ def _eval(args: argparse.Namespace) -> int:
         for flag in ("keep_going", "scheduler"):
             if getattr(args, flag):
                 return _fail("eval", f"--{flag.replace('_', '-')} goes with --gt-dir")
-        gt = Path(args.gt)
-        if gt.is_dir():  # the sequence folder, as vistrack track takes it
-            if not (gt / "gt" / "gt.txt").is_file():
-                return _fail("eval", f"--gt {gt} is a folder without gt/gt.txt: give a "
-                             "ground-truth file, or a sequence folder that holds gt/gt.txt")
-            gt = gt / "gt" / "gt.txt"
+        from .io.motchallenge import _ground_truth_file
+
+        try:  # a sequence folder's gt/gt.txt, as vistrack track takes the folder
+            gt = _ground_truth_file(args.gt)
+        except ValueError as exc:
+            return _fail("eval", str(exc))
         # SEQ/gt/gt.txt, or a ground-truth file beside its seqinfo.ini (SEQ/gt.txt)
         seq = gt.parent.parent if gt.parent.name == "gt" else gt.parent
         info = seq / "seqinfo.ini"

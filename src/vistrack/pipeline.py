@@ -50,6 +50,7 @@ from .io.motchallenge import (
     DETECTION_SUFFIXES,
     MOTTable,
     SeqInfo,
+    _ground_truth_file,
     box_decimals,
     need_parquet,
     read_mot,
@@ -1858,12 +1859,13 @@ def track_video(video: str | Path, out_dir: str | Path, *,
 
 
 def _ground_truth(gt: str | Path) -> MOTTable:
-    """The ground truth to score a video's tracks against, read and checked before anything
-    is tracked: a missing file named as ``--gt``'s, and the faults scoring would find after
+    """The ground truth to score a video's tracks against (a file, or a sequence folder's
+    ``gt/gt.txt``), read and checked before anything is tracked: a missing file named as
+    ``--gt``'s, and the faults scoring would find after
     the whole video (an identity twice in a frame, a detections file given as ground truth)
     found now."""
     try:
-        table = read_mot(gt)
+        table = read_mot(_ground_truth_file(gt))
     except FileNotFoundError:
         raise FileNotFoundError(f"{gt} does not exist (--gt FILE)") from None
     evaluate_mot(table, MOTTable.from_rows(np.zeros((0, 6)), str(gt)), benchmark="auto")

@@ -814,6 +814,24 @@ def _parse_plain(data: bytes) -> np.ndarray | None:
     return out
 
 
+def _ground_truth_file(gt: str | os.PathLike) -> Path:
+    """``gt`` as a ground-truth file: itself, or a sequence folder's ``gt/gt.txt`` (as
+    ``vistrack track`` takes a sequence folder).
+
+    Raises
+    ------
+    ValueError
+        If ``gt`` is a folder without ``gt/gt.txt``.
+    """
+    gt = Path(gt)
+    if gt.is_dir():
+        if not (gt / "gt" / "gt.txt").is_file():
+            raise ValueError(f"--gt {gt} is a folder without gt/gt.txt: give a ground-truth "
+                             "file, or a sequence folder that holds gt/gt.txt")
+        return gt / "gt" / "gt.txt"
+    return gt
+
+
 def read_mot(path: str | os.PathLike) -> MOTTable:
     """Read a MOTChallenge detection, ground-truth or results file.
 
