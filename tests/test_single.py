@@ -149,6 +149,40 @@ def test_cli_track_one(tmp_path):
     assert r.returncode == 2 and "--init must be x,y,w,h" in r.stderr
 
 
+def test_track_one_keeps_each_box_at_its_frame_across_missing_images(tmp_path):
+    """An image folder without 000004.png and 000005.png: the images after the gap are
+    frames 6-10 (as vistrack track numbers them, and as the warning says), but track-one
+    wrote their boxes as frames 4-8, so that with --gt each was scored against the box of
+    a frame two earlier. Each box is now at its frame, the skipped frames NaN, and the
+    scores those of the frames tracked against their own ground truth."""
+    from vistrack.pipeline import track_one
+
+    folder = tmp_path / "gap"
+    folder.mkdir()
+    truth = []
+    for k in range(10):
+        im = np.full((60, 120, 3), (40, 120, 40), np.uint8)
+        x = 10 + 8 * k  # far enough a frame that two frames' boxes overlap little
+        im[20:40, x:x + 20] = (0, 0, 255)
+        truth.append(f"{x + 1},21,20,20\n")  # OTB: 1-based
+        if k + 1 not in (4, 5):
+            cv2.imwrite(str(folder / f"{k + 1:06d}.png"), im)
+    gt = tmp_path / "groundtruth_rect.txt"
+    gt.write_text("".join(truth))
+    with pytest.warns(RuntimeWarning, match="no image for 2 frames"):
+        result = track_one(folder, [10, 20, 20, 20], tmp_path / "boxes.txt", method="wsl",
+                           gt=gt)
+    lines = (tmp_path / "boxes.txt").read_text().splitlines()
+    assert [line.split(",")[0] for line in lines] == [str(f) for f in range(1, 11)]
+    assert lines[3] == lines[4].replace("5,", "4,") == "4,nan,nan,nan,nan"
+    want = read_boxes(gt)
+    seen = np.isfinite(result.boxes[:, 0])
+    assert seen.tolist() == [f not in (4, 5) for f in range(1, 11)]
+    # scored frame by frame against the ground truth's line of the same frame
+    assert result.scores["success"] == pytest.approx(success_rate(result.boxes, want))
+    assert result.scores["success"] > 0.5
+
+
 def test_template_tracker_on_the_first_frames_of_otb_crossing():
     """Real frames: the affine template holds the pedestrian over the first 40 frames of
     Crossing (97.5 % measured); later the appearance changes and it drifts, which the

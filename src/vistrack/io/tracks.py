@@ -599,7 +599,9 @@ def write_boxes(path: str | os.PathLike, boxes: ArrayLike, *, force: bool = Fals
 
 class BoxesWriter:
     """One object's box in every frame, written as ``frame,x,y,w,h`` lines (frames counted
-    from 1, :func:`write_boxes`' format) to ``path``: a single-object tracker's track 1.
+    from 1 at the first frame written, :func:`write_boxes`' format) to ``path``: a
+    single-object tracker's track 1. Frames the source skips (an image folder without
+    ``000004.png``) get a line of NaN each, so that every line stays at its frame.
 
     Each frame's line goes to a partial file beside ``path`` as it comes, and replaces
     ``path`` only when closed (:class:`~vistrack.io.atomic.PartialFile`); :meth:`abort`
@@ -619,10 +621,13 @@ class BoxesWriter:
     ...              scores=np.ones(1), classes=np.zeros(1))
     >>> sink.write(Frame(1, 0.0), one)
     >>> sink.write(Frame(2, 0.04), Tracks.empty())
+    >>> sink.write(Frame(4, 0.12), one)
     >>> sink.close()
     >>> print(path.read_text(), end="")
     1,10.00,20.00,30.00,60.00
     2,nan,nan,nan,nan
+    3,nan,nan,nan,nan
+    4,10.00,20.00,30.00,60.00
     """
 
     # %d and %.2f are str.format's d and .2f
@@ -632,16 +637,23 @@ class BoxesWriter:
         self.path = Path(path)
         self._file = PartialFile(self.path)
         self._boxes = _Column()
+        self._first: int | None = None  # the first frame written: line 1
 
     def write(self, frame: Frame, tracks: Tracks) -> None:
-        """Write and keep the frame's box (NaN when no track is reported).
+        """Write and keep the frame's box (NaN when no track is reported), after a line of
+        NaN for each frame skipped since the last one written.
 
         Parameters
         ----------
         frame : Frame
-            The frame (its boxes are numbered in the order written, one per call, from 1).
+            The frame: line ``frame.index - first + 1``, ``first`` the first frame's index.
         tracks : Tracks
             The frame's box tracks; the first one's box is kept.
+
+        Raises
+        ------
+        ValueError
+            If the frame comes at or before the last one written.
 
         Examples
         --------
@@ -652,6 +664,15 @@ class BoxesWriter:
         array([[nan, nan, nan, nan]])
         >>> sink.abort()
         """
+        if self._first is None:
+            self._first = frame.index
+        line = frame.index - self._first + 1
+        if line <= self._boxes.n:
+            raise ValueError(f"frame {frame.index} comes after frame "
+                             f"{self._first + self._boxes.n - 1}: frames must increase")
+        while self._boxes.n < line - 1:  # frames the source skipped
+            self._boxes.add(np.full((1, 4), np.nan))
+            self._file.write(self._ROW % (self._boxes.n, *(np.nan,) * 4))
         box = np.asarray(tracks.xywh[0] if len(tracks) else np.full(4, np.nan), dtype=float)
         self._boxes.add(box.reshape(1, 4))
         self._file.write(self._ROW % (self._boxes.n, *box.tolist()))
