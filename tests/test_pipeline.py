@@ -224,6 +224,49 @@ def test_track_video_takes_any_tracker_and_detector(tmp_path):
         track_video(folder, tmp_path / "o2", tracker=42, frontend=Truth())
 
 
+def test_rows_past_the_videos_end_and_ground_truth_with_nothing_to_score_are_named(tmp_path):
+    """Detections (``detections:FILE``) and ground truth on frames past a video's last frame
+    were dropped without a word, and ground truth with no row on the frames tracked (empty,
+    or all of it past the end) gave a MOTA of -2200 % without one. Each is now named; with
+    ``stop`` before the end, rows after it are what was asked for, and nothing is said."""
+    import warnings
+
+    import cv2
+
+    from vistrack.pipeline import track_video
+
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k in range(5):
+        cv2.imwrite(str(folder / f"{k + 1:06d}.png"), np.zeros((60, 80, 3), np.uint8))
+
+    def rows(frames, ident):
+        return "".join(f"{f},{ident},{5 + 3 * f},20,20,30,1,1,1\n" for f in frames)
+
+    det, gt = tmp_path / "det.txt", tmp_path / "gt.txt"
+    det.write_text(rows(range(1, 8), -1))
+    gt.write_text(rows(range(1, 9), 1))
+    with pytest.warns(UserWarning) as seen:
+        run_ = track_video(folder, tmp_path / "a", frontend=f"detections:{det}", gt=gt,
+                           annotate=False)
+    said = [str(w.message) for w in seen]
+    assert f"{det}: 2 rows on frames 6-7, past the video's last frame (5): not tracked" in said
+    assert f"{gt}: 3 rows on frames 6-8, past the video's last frame (5): not scored" in said
+    assert run_.scores.TP > 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        track_video(folder, tmp_path / "b", frontend=f"detections:{det}", gt=gt, stop=3,
+                    annotate=False)
+    empty = tmp_path / "empty.txt"
+    empty.write_text("")
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{empty}: no ground-truth rows on the frames tracked (1-5): every box tracked "
+            "counts as a false positive")):
+        run_ = track_video(folder, tmp_path / "c", frontend=f"detections:{det}", gt=empty,
+                           annotate=False)
+    assert run_.scores.TP == 0 and run_.scores.FP > 0
+
+
 def test_track_video_follows_one_object_by_name(tmp_path):
     """``single:colour``: the first frame's detection starts it; it follows the disc."""
     frames, truth = red_disc_clip(T=20)

@@ -1842,10 +1842,23 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         raise ValueError(f"{video}: no frames to track")
     rows = sinks["tracks"]
     assert isinstance(rows, MOTWriter)
+    last = stats.last
+    if stop is None or stop > last:  # the video ended: rows past it were for nothing
+        for table, what, label in ((grid.dets if grid is not None else None, "not tracked",
+                                    grid.path if grid is not None else None),
+                                   (gt_table, "not scored", gt)):
+            if table is not None and len(table) and table.frames[-1] > last:
+                past = table.frames[table.frames > last]
+                warnings.warn(f"{label}: {len(past)} rows on frames {past[0]}-{past[-1]}, past "
+                              f"the video's last frame ({last}): {what}", UserWarning,
+                              stacklevel=2)
     scores = None
     if gt_table is not None:  # scored over the frames tracked
-        last = stats.last
         g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= last)]
+        if not len(g):
+            warnings.warn(f"{gt}: no ground-truth rows on the frames tracked ({reader.start}-"
+                          f"{last}): every box tracked counts as a false positive", UserWarning,
+                          stacklevel=2)
         scores = evaluate_mot(g, read_mot(files["tracks"]), last, benchmark="auto")
     n_tracks = len(rows.identities)
     if isinstance(trk, BoxTracker):
