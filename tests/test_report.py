@@ -57,6 +57,21 @@ def test_report_command_and_its_errors(run_dir, tmp_path, capsys):
     assert "<h1>vistrack report: bare</h1>" in page and page.count("<img ") == 1
 
 
+def test_a_run_over_an_earlier_ones_outputs_removes_its_page(run_dir, tmp_path, capsys):
+    """A run with --force replaced every output of an earlier run in the folder but left
+    its report.html, which still showed the earlier tracks and scores; without --force the
+    list of files in the way left the page out. Both now count it."""
+    out = tmp_path / "run"
+    shutil.copytree(run_dir, out)
+    clip = demo_clip()
+    args = ["track", str(clip.video), "--stop", "5", "--out-dir", str(out), "--quiet"]
+    assert main(args) == 2
+    assert f"{out / 'report.html'} exist; pass --force" in capsys.readouterr().err
+    assert main(args + ["--force"]) == 0
+    assert not (out / "report.html").exists()
+    assert json.loads((out / "run.json").read_text())["frames"] == 5
+
+
 def _browser() -> str:
     for name in ("chromium", "chromium-browser", "google-chrome"):
         path = shutil.which(name)

@@ -1610,13 +1610,18 @@ RUN_INFO = "run.json"
 command, the input, the ground truth, the frames, the scores), which
 :func:`vistrack.report.write_report` reads."""
 
+REPORT = "report.html"
+"""The page :func:`vistrack.report.write_report` writes beside a run's outputs; a run that
+replaces the outputs (``force``) removes an earlier run's, which would describe other
+tracks."""
+
 
 def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = False,
                   name: str = "out_dir") -> dict[str, Path]:
     """The file of each sink :func:`track_video` writes in ``out_dir``, checked before any
     work is done: ``out_dir`` is a folder or can be made one, can be written in, its
-    outputs (``run.json`` too, which is not a sink's) are not folders, and exist only if
-    ``force``.
+    outputs (``run.json`` too, which is not a sink's, and an earlier run's ``report.html``)
+    are not folders, and exist only if ``force``.
 
     ``name`` names the argument or option in the messages.
 
@@ -1641,7 +1646,8 @@ def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = F
     out_dir = Path(out_dir)
     check_output(out_dir, name=name, folder=True)
     files = {key: out_dir / SINK_FILES[key] for key in SINKS if annotate or key != "video"}
-    written = [*files.values(), out_dir / RUN_INFO]  # and how they were made
+    # and how they were made, and the page that showed an earlier run's
+    written = [*files.values(), out_dir / RUN_INFO, out_dir / REPORT]
     for p in written:
         if p.is_dir():
             raise IsADirectoryError(f"{name} {out_dir}: {p} is a folder, not a file")
@@ -1868,6 +1874,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                       derived_values(trk) if isinstance(trk, BoxTracker) else None,
                       reader.start, stats.last)
     _write_run_info(result, video, gt, command)
+    # an earlier run's page would show other tracks beside these outputs (a new one, if asked
+    # for, is written from run.json after this)
+    (out_dir / REPORT).unlink(missing_ok=True)
     return result
 
 

@@ -173,10 +173,10 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
         If the video cannot be read, naming it.
     """
     from .io.atomic import check_output, replacing
-    from .pipeline import RUN_INFO, SINK_FILES
+    from .pipeline import REPORT, RUN_INFO, SINK_FILES
 
     out_dir = Path(out_dir)
-    target = out_dir / "report.html"
+    target = out_dir / REPORT
     tracks = out_dir / SINK_FILES["tracks"]
     if not tracks.is_file():
         raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
