@@ -198,6 +198,35 @@ def test_a_video_holding_more_frames_than_its_header_says_loses_none(tmp_path):
     assert all(abs(int(f.image[0, 0, 0]) - 5 * (f.index - 1)) <= 2 for f in frames)
 
 
+@pytest.mark.parametrize("names, why", [
+    (["000001.jpg", "000002.jpg", "000002 (copy).jpg", "000003.jpg"],
+     "000002 (copy).jpg and 000002.jpg both give frame 2"),
+    (["000001.png", "000001.jpg", "000002.png"], "000001.jpg and 000001.png both give frame 1"),
+    (["000001.png", "000002.png", "notes.png"], "notes.png has no number"),
+    (["x9.png", "y1.png", "z5.png"], "y1.png comes after x9.png but numbers an earlier frame"),
+    (["a.png", "b.png", "c.png"], None),
+    (["t1690000000000.png", "t1690000000033.png", "t1690000000067.png"], None),
+])
+def test_images_numbered_by_place_instead_of_name_are_named(tmp_path, names, why):
+    """A stray copy (``000002 (copy).jpg``) or a second extension of one number in a folder
+    of numbered images made every image go by its place in name order, without a word: the
+    frames after it moved one later than their names, against detections and ground truth
+    numbered by name. That is now said once, with the reason; names without numbers, and
+    timestamps (numbers that skip too many), go by place as intended, and nothing is said."""
+    d = tmp_path / "f"
+    d.mkdir()
+    for name, f in zip(names, _folder(d, n=len(names), ext=".png")):
+        f.rename(d / name)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        frames, _ = _read(VideoReader(d))
+    assert [f.index for f in frames] == list(range(1, len(names) + 1))
+    said = [str(w.message) for w in caught]
+    assert said == ([] if why is None else [
+        f"{d}: {why}: the {len(names)} images are numbered by their place in name order "
+        f"instead (frames 1-{len(names)}), not by the frames their names give"])
+
+
 def test_an_image_folder_is_numbered_by_its_names(tmp_path):
     """A numbered image missing from a folder is a missing frame (warned once, naming it):
     the images after it keep the frames their names give, as the detections and the ground

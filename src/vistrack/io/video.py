@@ -152,6 +152,33 @@ def _numbered(files: list[Path]) -> list[int] | None:
     return [n - numbers[0] + 1 for n in numbers]
 
 
+def _unnumbered_why(files: list[Path]) -> str | None:
+    """Why images that are mostly numbered are numbered by position instead: a name without
+    a number among numbered ones (``notes.png``), or two names of one number, or numbers
+    that go back in name order (``000003 (copy).jpg`` beside ``000003.jpg``); None where no
+    name has a number, or the numbers only skip too many (timestamps), as intended.
+
+    >>> _unnumbered_why([Path("000001.jpg"), Path("000002.jpg")]) is None
+    True
+    >>> _unnumbered_why([Path("000001.jpg"), Path("000001.png"), Path("000002.jpg")])
+    '000001.jpg and 000001.png both give frame 1'
+    """
+    numbers = [re.findall(r"\d+", p.stem) for p in files]
+    if not any(numbers):
+        return None
+    for path, found in zip(files, numbers):
+        if not found:
+            return f"{path.name} has no number"
+    values = [int(f[-1]) for f in numbers]
+    for k in range(1, len(values)):
+        if values[k] == values[k - 1]:
+            return (f"{files[k - 1].name} and {files[k].name} both give frame "
+                    f"{values[k] - values[0] + 1}")
+        if values[k] < values[k - 1]:
+            return f"{files[k].name} comes after {files[k - 1].name} but numbers an earlier frame"
+    return None
+
+
 def _missing(index: list[int], limit: int = 5) -> tuple[int, str]:
     """How many frame numbers between the first and the last of ``index`` (increasing) have
     no image, and the first ``limit`` of them as text.
@@ -333,6 +360,15 @@ class VideoReader:
                               f"names from {self._files[0].name} as frame 1: "
                               f"{'that frame is' if n == 1 else 'those frames are'} missing, "
                               "and the images after a gap keep the frames their names give",
+                              RuntimeWarning, stacklevel=2)
+            why = _unnumbered_why(self._files) if numbered is None else None
+            if why and src not in _GAP_WARNED:
+                # images whose names give frames, but not one each: numbered by position,
+                # so that detections and ground truth numbered by name no longer match
+                _GAP_WARNED.add(src)
+                warnings.warn(f"{src}: {why}: the {len(self._files)} images are numbered by "
+                              f"their place in name order instead (frames 1-"
+                              f"{len(self._files)}), not by the frames their names give",
                               RuntimeWarning, stacklevel=2)
             header_fps = None
         else:
