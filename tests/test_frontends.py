@@ -86,6 +86,41 @@ def test_bad_inputs_name_the_file(tmp_path):
         VideoReader(tmp_path, start=0)
 
 
+@pytest.mark.parametrize("fps, size", [
+    (fps, (64, 48)) for fps in (0.001, 0.0015, 0.1, 1 / 3, 7, 12.5, 23.976, 29.97, 59.94, 1000,
+                                12345.678, 65535, 65536, 1e5, 1e6)] + [
+    ((0.0019, (16, 16))), (0.01, (4, 4)), (0.005, (8, 8)), (30, (2, 2))])
+def test_an_annotated_video_at_a_rate_mp4_cannot_hold_plays_at_the_nearest(tmp_path, fps, size):
+    """``--fps 65536`` (or 12345.678, or 0.001: rates the command line takes) tracked the
+    video, then failed writing it with "OpenCV cannot write an MP4 here", blaming the folder;
+    a tiny image at a low rate (16x16 at 0.0019 frames a second, where OpenCV's bit rate
+    rounds to 0) aborted the process in libavcodec. Such a rate is written as the nearest one
+    an MP4 holds, with a warning; a rate OpenCV itself opens a writer at (the oracle), at a
+    bit rate of at least 1, is kept as it is."""
+    from vistrack.io.video import _mp4_rate
+
+    play = _mp4_rate(fps, size[0] * size[1])
+    probe = cv2.VideoWriter(str(tmp_path / "probe.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), fps,
+                            size)
+    assert probe.isOpened() and fps * size[0] * size[1] >= 0.5 or play != fps
+    if fps * size[0] * size[1] >= 1:  # no bit rate of 0: OpenCV's opening is the oracle
+        assert probe.isOpened() == (play == fps)
+    probe.release()
+    out = tmp_path / "a.mp4"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with VideoWriter(out, fps=fps, name="shown.mp4") as w:
+            for k in range(3):
+                w.write(np.full((size[1], size[0], 3), 60 * k, np.uint8))
+    said = [str(c.message) for c in caught]
+    assert said == ([] if play == fps else [
+        f"shown.mp4: plays at {play:g} frames a second, the nearest rate an MP4 holds to "
+        f"{fps:g}"])
+    r = VideoReader(out)
+    assert len(r) == 3 and r.fps == pytest.approx(play, rel=1e-3, abs=1e-3)  # as OpenCV rounds
+    assert play * size[0] * size[1] >= 0.5
+
+
 def test_a_truncated_video_warns_with_the_frame_where_reading_stopped(tmp_path):
     src = need(VTEST)
     cut = tmp_path / "cut.avi"

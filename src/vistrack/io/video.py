@@ -15,6 +15,7 @@ cameras append, are fine) and an image of another size than the first raise
 from __future__ import annotations
 
 import configparser
+import math
 import re
 import warnings
 from collections.abc import Iterator
@@ -531,6 +532,38 @@ class VideoReader:
             cap.release()
 
 
+def _mp4_rate(fps: float, pixels: int) -> float:
+    """``fps``, or the nearest rate an MP4 of ``pixels`` pixels a frame holds where it holds
+    no such rate.
+
+    OpenCV writes a rate as the fraction ``round(fps 10^k) / 10^k`` within 0.001 of it,
+    reduced, and MPEG-4 holds a time base whose denominator is at most 65,535 (and not 0):
+    29.97 frames a second (2997/100) is held, 12345.678 (6172839/500) and 100000 are not,
+    nor 0.001 (0 at a thousandth's precision). And OpenCV sets the bit rate to the pixels a
+    second, rounded: where that is 0 (a 16x16 image at 0.0019 frames a second, 4x4 at 0.01)
+    libavcodec aborts the process at the first frame. Such rates get the nearest whole rate
+    up to 65,535 at or above ``1 / pixels``, or below 1 frame a second the nearest whole
+    number of seconds a frame up to 500.
+
+    >>> _mp4_rate(29.97, 768 * 576), _mp4_rate(1e5, 768 * 576), _mp4_rate(12345.678, 64)
+    (29.97, 65535.0, 12346.0)
+    >>> _mp4_rate(0.001, 768 * 576), _mp4_rate(0.01, 16), _mp4_rate(0.01, 4)
+    (0.002, 0.0625, 0.25)
+    """
+    lo = 1.0 / max(pixels, 1)
+    base = 1
+    rate = int(fps + 0.5)
+    while abs(rate / base - fps) > 0.001 and base < 10**9:
+        base *= 10
+        rate = int(fps * base + 0.5)
+    if fps >= lo and 0 < rate // math.gcd(rate, base) <= 65535:
+        return fps
+    f = max(fps, lo)
+    if f >= 1:
+        return float(min(max(round(f), 1), 65535))
+    return 1.0 / min(max(math.floor(1.0 / f), 1), 500)
+
+
 class VideoWriter:
     """Write frames to an MP4 file (``mp4v``), as a context manager.
 
@@ -539,9 +572,12 @@ class VideoWriter:
     path : str or Path
         The file to write; its folder is created (at the first frame).
     fps : float
-        Frames per second.
+        Frames per second; a rate an MP4 cannot hold (100000, 12345.678) is written as the
+        nearest one it can, with a warning.
     size : (width, height), optional
         Default: the first frame's.
+    name : str or Path, optional
+        What messages call the file (default ``path``: a partial file's final name).
 
     Attributes
     ----------
@@ -565,20 +601,27 @@ class VideoWriter:
     (5, (48, 32), 10.0)
     """
 
-    def __init__(self, path: str | Path, fps: float, size: tuple[int, int] | None = None):
+    def __init__(self, path: str | Path, fps: float, size: tuple[int, int] | None = None, *,
+                 name: str | Path | None = None):
         if not np.isfinite(fps) or fps <= 0:
             raise ValueError(f"fps must be a finite number > 0; got {fps}")
         self.path, self.fps, self.size = Path(path), float(fps), size
+        self.name = str(path if name is None else name)
         self._w: cv2.VideoWriter | None = None
         self.frames = 0
 
     def _open(self, size: tuple[int, int]) -> None:
         cv2 = _cv2()
         self.path.parent.mkdir(parents=True, exist_ok=True)
+        play = _mp4_rate(self.fps, size[0] * size[1])
+        if play != self.fps:
+            warnings.warn(f"{self.name}: plays at {play:g} frames a second, the nearest rate "
+                          f"an MP4 holds to {self.fps:g}", UserWarning, stacklevel=3)
+            self.fps = play
         w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), self.fps, size)
         self._w = w
         if not w.isOpened():
-            raise VideoError(f"{self.path}: OpenCV cannot write an MP4 here")
+            raise VideoError(f"{self.name}: OpenCV cannot write an MP4 here")
         self.size = size
 
     def write(self, image: np.ndarray) -> None:

@@ -232,7 +232,7 @@ class AnnotatedVideo:
         self.annotator = annotator or Annotator()
         # frames go to a partial file, renamed over ``path`` when the video is complete
         self._part = partial_path(self.path)
-        self._writer = VideoWriter(self._part, fps)
+        self._writer = VideoWriter(self._part, fps, name=self.path)
 
     def write(self, frame: Frame, tracks: Tracks) -> None:
         """Draw ``tracks`` on ``frame.image`` and write it.
