@@ -267,6 +267,43 @@ def test_rows_past_the_videos_end_and_ground_truth_with_nothing_to_score_are_nam
     assert run_.scores.TP == 0 and run_.scores.FP > 0
 
 
+def test_detections_outside_the_image_are_named(tmp_path):
+    """Detections that lie wholly outside the image (in the pixels of another image size,
+    or shifted) were tracked and written without a word, against a sequence's seqinfo.ini
+    and against a video's frames. From a twentieth of the boxes on, they are named, with the
+    first one's line; a few just past the edge (a detector extrapolating people who leave,
+    0.2-0.6 % of FairMOT's boxes on MOT16) are not."""
+    import warnings
+
+    import cv2
+
+    from vistrack.pipeline import track_sequence, track_video
+
+    seq = tmp_path / "seq"
+    (seq / "det").mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=40\n"
+                                     "imWidth=80\nimHeight=60\n")
+    inside = [f"{f},-1,{5 + f},10,10,20,0.9\n" for f in range(1, 41)]
+    shifted = [f"{f},-1,{2005 + 2 * f},10,10,20,0.9\n" for f in range(1, 41)]
+    det = seq / "det" / "det.txt"
+    det.write_text("".join(inside[:39] + shifted[39:]))  # 1 of 40: under a twentieth
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        track_sequence(seq, tmp_path / "a.txt")
+    det.write_text("".join(inside[:38] + shifted[38:]))  # 2 of 40
+    with pytest.warns(RuntimeWarning, match=re.escape(
+            f"{det}, line 39: a box (2083, 10, 10, 20) wholly outside the 80x60 image, and 1 "
+            "more of 40: tracked as the others, though nothing of the image is there")):
+        track_sequence(seq, tmp_path / "b.txt")
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for k in range(40):
+        cv2.imwrite(str(frames / f"{k + 1:06d}.png"), np.zeros((60, 80, 3), np.uint8))
+    with pytest.warns(RuntimeWarning, match=re.escape(
+            f"{det}, line 39: a box (2083, 10, 10, 20) wholly outside the 80x60 image")):
+        track_video(frames, tmp_path / "v", frontend=f"detections:{det}", annotate=False)
+
+
 def test_track_video_follows_one_object_by_name(tmp_path):
     """``single:colour``: the first frame's detection starts it; it follows the disc."""
     frames, truth = red_disc_clip(T=20)

@@ -43,6 +43,7 @@ from .detector_checks import (
     warn_duplicates,
     warn_long_silence,
     warn_no_area,
+    warn_outside,
 )
 from .evaluation.mot import MOTCounts, _lines_of, evaluate_mot
 from .io.atomic import check_output, made_folder
@@ -1226,6 +1227,7 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
         if len(dets) and dets.frames.max() > info.seq_length:
             raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
                              f"sequence's {info.seq_length} frames ({ini})")
+        warn_outside(dets, det_path, (info.im_width, info.im_height), stacklevel=3)
     return _SequenceInput(det_path, str(det_path if alone else seq_dir), info, dets)
 
 
@@ -1817,6 +1819,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     # not deliver; any other tracker, or one made by the caller, keeps its rate and every
     # frame
     grid = detect if isinstance(detect, _FileDetections) else None
+    if grid is not None:
+        warn_outside(grid.dets, grid.path, reader.size, stacklevel=2)
     if box and grid is not None:
         at_rate = replace(ctx, fps=ctx.fps / grid.stride)
         trk, _ = make_tracker(tracker, at_rate)
