@@ -152,6 +152,25 @@ def _read(reader):
     return frames, [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
 
 
+def test_a_skipped_image_is_named_once_by_a_run_from_pixels(tmp_path):
+    """The background model learns from the first frames with a reader of its own, and the
+    run reads them again: an image skipped among them (--skip-bad-frames) was named twice,
+    as was a video that stops early within them. Each is named once."""
+    from vistrack.pipeline import track_video
+
+    (tmp_path / "f").mkdir()
+    files = _folder(tmp_path / "f", n=8, ext=".png")
+    files[2].write_bytes(files[2].read_bytes()[:40])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run = track_video(tmp_path / "f", tmp_path / "out", skip_bad_frames=True,
+                          annotate=False)
+    said = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
+    assert run.frames == 7
+    assert said == [f"{files[2]}: not a readable image (OpenCV cannot decode it: corrupt or "
+                    "truncated); skipped"]
+
+
 @pytest.mark.parametrize("ext", [".jpg", ".png"])
 def test_a_truncated_image_is_named_or_skipped(tmp_path, ext):
     files = _folder(tmp_path, ext=ext)

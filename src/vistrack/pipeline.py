@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import importlib
 import math
+import re
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -602,9 +603,14 @@ def _bgsub(ctx: Context) -> FrameDetector:
     det = BlobDetector(opt.get("background", "selective"), min_area=opt.get("min_area", 500.0))
     if reader is not None:
         n_init = int(opt.get("n_init", 20))
-        det.initialize(_image(f, "the background model") for f in VideoReader(
-            reader.source, fps=reader.fps, grey=True, start=reader.start,
-            stop=reader.start + n_init - 1, skip_bad=reader.skip_bad))
+        with warnings.catch_warnings():
+            # the run reads these frames again, and says then what is wrong with them (an
+            # image skipped, a file that stops early): not twice
+            warnings.filterwarnings("ignore", message=re.escape(str(reader.source)),
+                                    category=RuntimeWarning)
+            det.initialize(_image(f, "the background model") for f in VideoReader(
+                reader.source, fps=reader.fps, grey=True, start=reader.start,
+                stop=reader.start + n_init - 1, skip_bad=reader.skip_bad))
     return lambda frame: det.detect(_image(frame, "the background model"))
 
 
