@@ -248,7 +248,7 @@ def test_rows_past_the_videos_end_and_ground_truth_with_nothing_to_score_are_nam
     gt.write_text(rows(range(1, 9), 1))
     with pytest.warns(UserWarning) as seen:
         run_ = track_video(folder, tmp_path / "a", frontend=f"detections:{det}", gt=gt,
-                           annotate=False)
+                           annotate=False, fps=25)
     said = [str(w.message) for w in seen]
     assert f"{det}: 2 rows on frames 6-7, past the video's last frame (5): not tracked" in said
     assert f"{gt}: 3 rows on frames 6-8, past the video's last frame (5): not scored" in said
@@ -256,15 +256,42 @@ def test_rows_past_the_videos_end_and_ground_truth_with_nothing_to_score_are_nam
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         track_video(folder, tmp_path / "b", frontend=f"detections:{det}", gt=gt, stop=3,
-                    annotate=False)
+                    annotate=False, fps=25)
     empty = tmp_path / "empty.txt"
     empty.write_text("")
     with pytest.warns(UserWarning, match=re.escape(
             f"{empty}: no ground-truth rows on the frames tracked (1-5): every box tracked "
             "counts as a false positive")):
         run_ = track_video(folder, tmp_path / "c", frontend=f"detections:{det}", gt=empty,
-                           annotate=False)
+                           annotate=False, fps=25)
     assert run_.scores.TP == 0 and run_.scores.FP > 0
+
+
+def test_an_image_folder_tracked_at_an_assumed_rate_says_so(tmp_path):
+    """An image folder has no frame rate, and was tracked at 30 frames/s without a word,
+    though the tracker's times (coasting, how long a lost track is kept) and its motion's
+    noise follow the rate; run.json did not say which rate was used. The run now says it
+    assumed 30, and run.json holds the rate; with fps given nothing is said."""
+    import json
+    import warnings
+
+    import cv2
+
+    from vistrack.pipeline import track_video
+
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k in range(4):
+        cv2.imwrite(str(folder / f"{k + 1:06d}.png"), np.zeros((60, 80, 3), np.uint8))
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{folder}: an image folder gives no frame rate: tracked at 30 frames/s (give the "
+            "true one with --fps, or fps=)")):
+        run_ = track_video(folder, tmp_path / "a", annotate=False)
+    assert json.loads((run_.out_dir / "run.json").read_text())["frame_rate"] == 30
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        run_ = track_video(folder, tmp_path / "b", annotate=False, fps=10)
+    assert json.loads((run_.out_dir / "run.json").read_text())["frame_rate"] == 10
 
 
 def test_detections_outside_the_image_are_named(tmp_path):

@@ -1806,6 +1806,12 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                         f"{type(confidence).__name__}")
     reader = VideoReader(video, fps=fps, stop=stop, prefetch=8, skip_bad=skip_bad_frames)
+    if reader.fps_from is None:
+        # the tracker's times (coasting, how long a lost track is kept) and its motion's
+        # noise follow the rate
+        warnings.warn(f"{video}: an image folder gives no frame rate: tracked at "
+                      f"{reader.fps:g} frames/s (give the true one with --fps, or fps=)",
+                      UserWarning, stacklevel=2)
     # the options not given are left to the front-ends' own defaults
     ctx = Context(reader.fps, reader.size, reader, config, dict(overrides),
                   {k: v for k, v in options.items() if v is not None}
@@ -1883,7 +1889,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                       ctx.resolved if isinstance(trk, BoxTracker) else None,
                       derived_values(trk) if isinstance(trk, BoxTracker) else None,
                       reader.start, stats.last)
-    _write_run_info(result, video, gt, command)
+    _write_run_info(result, video, gt, command, reader.fps)
     # an earlier run's page would show other tracks beside these outputs (a new one, if asked
     # for, is written from run.json after this)
     (out_dir / REPORT).unlink(missing_ok=True)
@@ -1905,8 +1911,9 @@ def _ground_truth(gt: str | Path) -> MOTTable:
 
 
 def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
-                    command: str | None) -> None:
-    """``run.json`` beside a run's outputs: how they were made (:mod:`vistrack.report`)."""
+                    command: str | None, frame_rate: float) -> None:
+    """``run.json`` beside a run's outputs: how they were made (:mod:`vistrack.report`;
+    ``fps`` the frames tracked a second, ``frame_rate`` the video's)."""
     import json
 
     from . import __version__
@@ -1917,7 +1924,7 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
             "gt": str(Path(gt).resolve()) if gt is not None else None,
             "first_frame": run.first, "last_frame": run.last or run.first + run.frames - 1,
             "frames": run.frames, "rows": run.rows, "tracks": run.tracks,
-            "fps": round(run.fps, 1),
+            "fps": round(run.fps, 1), "frame_rate": frame_rate,
             "scores": run.scores.summary() if run.scores is not None else None}
     with replacing(run.out_dir / RUN_INFO) as part:
         part.write_text(json.dumps(info, indent=2) + "\n")

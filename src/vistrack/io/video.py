@@ -242,6 +242,9 @@ class VideoReader:
     ----------
     fps : float
         The frame rate used.
+    fps_from : str or None
+        What gave it: ``"fps"`` (the argument), ``"seqinfo.ini"``, ``"the header"``; None
+        where nothing did (an image folder), and it is 30.
     size : (width, height)
         The frames' size (of the header, for video files).
     frame_count : int
@@ -390,6 +393,9 @@ class VideoReader:
             self.frame_count = int(count) if 0 < count < 2**31 else 0
             header_fps = cap.get(cv2.CAP_PROP_FPS) or None
             cap.release()
+        # where the rate comes from: None where nothing gives one (an image folder), 30
+        self.fps_from = ("fps" if fps is not None else "seqinfo.ini" if seq_fps
+                         else "the header" if header_fps else None)
         fps = fps if fps is not None else seq_fps or header_fps or 30.0
         if not np.isfinite(fps) or fps <= 0:
             raise ValueError(f"fps must be a finite number > 0; got {fps}")
