@@ -267,6 +267,35 @@ def test_rows_past_the_videos_end_and_ground_truth_with_nothing_to_score_are_nam
     assert run_.scores.TP == 0 and run_.scores.FP > 0
 
 
+def test_a_box_beyond_any_image_is_refused_by_its_line(tmp_path):
+    """A corrupt row with a box value of 1e100 crashed the process (the IoU pairs' grid),
+    1e308 failed with an OverflowError (the image's size taken from the boxes), and 1e160
+    made the tracker's own boxes NaN ("track boxes must be finite", naming nothing). Values
+    beyond 2^52 pixels, where a float no longer holds every whole pixel, are refused by
+    their line; the tracker refuses them too, by frame. 1e15 is tracked as any box."""
+    from vistrack.pipeline import track_sequence
+    from vistrack.tracking import BoxTracker
+    from vistrack.types import Detections
+
+    rows = "".join(f"{f},-1,{10 + 3 * f},20,20,40,0.9\n" for f in range(1, 11))
+    for far in ("1e100", "1e308", "-5e15"):
+        det = tmp_path / f"d{far}.txt"
+        det.write_text(rows + f"11,-1,{far},20,20,40,0.1\n")
+        with pytest.raises(ValueError, match=re.escape(
+                f"{det}, line 11: a box ({float(far):g}, 20, 20, 40) beyond 2^52 pixels, where "
+                "a float no longer holds every whole pixel: not a box of any image")):
+            track_sequence(det, tmp_path / "a.txt", fps=10)
+        assert not (tmp_path / "a.txt").exists()
+    det = tmp_path / "d15.txt"
+    det.write_text(rows + "11,-1,1e15,20,20,40,0.1\n")
+    assert track_sequence(det, tmp_path / "b.txt", fps=10).detections == 11
+    trk = BoxTracker()
+    with pytest.raises(ValueError, match=re.escape(
+            "detection boxes must lie within ±2^52 pixels, where a float holds every whole "
+            "pixel; boxes[1] = [0.0, 0.0, 1e+160, 1e+160] (frame 1)")):
+        trk.step(1, Detections(boxes=[[0, 0, 10, 10], [0, 0, 1e160, 1e160]], scores=[.9, .9]))
+
+
 def test_an_image_folder_tracked_at_an_assumed_rate_says_so(tmp_path):
     """An image folder has no frame rate, and was tracked at 30 frames/s without a word,
     though the tracker's times (coasting, how long a lost track is kept) and its motion's

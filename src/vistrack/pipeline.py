@@ -62,7 +62,7 @@ from .io.motchallenge import (
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
 from .models.box import FRAME_RATES, BoxMotion
 from .tracking.base import Tracker
-from .tracking.box import BoxTracker, BoxTrackerConfig
+from .tracking.box import MAX_PIXELS, BoxTracker, BoxTrackerConfig
 from .tracking.calibration import NoOutcomesError, ScoreCalibration
 from .tracking.offline import SmoothedTracks, smooth
 from .types import Detections, Frame, Tracks
@@ -947,6 +947,16 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
     if not len(table):
         warnings.warn(f"{path}: no detections: nothing to track, and the results hold no rows",
                       UserWarning, stacklevel=stacklevel + 1)
+    far = (np.abs(table.boxes) > MAX_PIXELS).any(axis=1)
+    if far.any():
+        # a corrupt row: refused here, by its line, rather than by the tracker at its frame
+        k = int(np.argmax(far))
+        f, box = int(table.frames[k]), table.boxes[k].tolist()
+        lines = _lines_of(str(path), lambda row: row[0] == f and row[2:6] == box)
+        where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
+        raise ValueError(f"{where}: a box ({', '.join(f'{v:g}' for v in box)}) beyond 2^52 "
+                         "pixels, where a float no longer holds every whole pixel: not a box of "
+                         "any image (a corrupt row?)")
     if len(table) and (table.ids >= 0).all():
         # detections carry no identity (-1); a file whose every row has one is ground truth
         # or a tracker's results, whose ignored boxes (conf 0) would be tracked as detections

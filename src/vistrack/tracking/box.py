@@ -264,6 +264,11 @@ class BoxTrackerConfig:
                     frame_rate=frame_rate, chain_span=self.chain_span, chain_gap=self.chain_gap)
 
 
+MAX_PIXELS = 2.0 ** 52
+"""The largest box value (in pixels) a box tracker takes: beyond it a float no longer holds
+every whole pixel, and the filters' variances (the squares of the sizes) soon overflow."""
+
+
 TRACKERS: Registry[BoxTrackerConfig] = Registry("box-tracker preset", {
     "bytetrack": BoxTrackerConfig(),
     "sort": BoxTrackerConfig(two_stage=False, high=0.5, low=0.5, new_track=0.5, min_iou=0.3,
@@ -872,6 +877,12 @@ class BoxTracker:
         if np.isnan(raw).any():
             i = int(np.flatnonzero(np.isnan(raw))[0])
             raise ValueError(f"detection scores must not be NaN; scores[{i}] is NaN (frame "
+                             f"{frame})")
+        if len(db) and np.abs(db).max() > MAX_PIXELS:
+            # the filters square a box's size; far past any image the squares overflow
+            i = int(np.flatnonzero((np.abs(db) > MAX_PIXELS).any(axis=1))[0])
+            raise ValueError(f"detection boxes must lie within ±2^52 pixels, where a float "
+                             f"holds every whole pixel; boxes[{i}] = {db[i].tolist()} (frame "
                              f"{frame})")
         if cfg.nms_iou < 1 and len(raw) > 1:
             keep = non_maximum(db, raw, dc, cfg.nms_iou)
