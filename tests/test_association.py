@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -202,6 +203,18 @@ def test_greedy_and_nearest_neighbour():
     with pytest.raises(ValueError, match=r"method must be one of \['gnn', 'greedy', 'nn'\]"):
         assign(cost, method="hungarian")
     assert [len(a) for a in assign(np.zeros((3, 0)))] == [0, 0]
+
+
+def test_a_gate_of_another_shape_is_named():
+    """A gate of another shape than the cost: (3, 2) failed with numpy's "operands could not
+    be broadcast", and (1, 2) was broadcast to every track without a word. Both are named."""
+    from vistrack.association import gnn
+
+    cost = np.array([[1.0, 2.0], [1.5, 9.0]])
+    for shape in ((3, 2), (1, 2), (2,)):
+        with pytest.raises(ValueError, match=re.escape(
+                f"gate must have the shape of cost (2, 2); got {shape}")):
+            gnn(cost, gate=np.ones(shape, bool))
 
 
 def test_sparse_pairs_and_assignment_equal_the_dense_ones():

@@ -38,10 +38,12 @@ def _check(cost: np.ndarray, gate: np.ndarray | None) -> tuple[np.ndarray, np.nd
     cost = np.asarray(cost, dtype=float)
     if cost.ndim != 2:
         raise ValueError(f"cost must be 2-D (tracks, detections); got shape {cost.shape}")
-    gate = np.isfinite(cost) if gate is None else np.asarray(gate, dtype=bool) & np.isfinite(cost)
-    if gate.shape != cost.shape:
+    if gate is None:
+        return cost, np.isfinite(cost)
+    gate = np.asarray(gate, dtype=bool)
+    if gate.shape != cost.shape:  # before combining: (1, D) would broadcast without a word
         raise ValueError(f"gate must have the shape of cost {cost.shape}; got {gate.shape}")
-    return cost, gate
+    return cost, gate & np.isfinite(cost)
 
 
 def components(gate: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
