@@ -249,6 +249,12 @@ def test_nonlinear_filter_errors_name_the_argument(rng):
         ekf_update(vt.Gaussian(np.ones(5), np.eye(5)), np.ones(3), meas)
     with pytest.raises(ValueError, match="g.cov must be positive definite"):
         ukf_update(vt.Gaussian(np.ones(5), -np.eye(5)), np.ones(2), meas)
+    # an infinite measurement gave a mean of [inf, nan, ...] without a word, as kf_update
+    # refuses it (NaN is a missing value)
+    for update in (ekf_update, ukf_update):
+        with pytest.raises(ValueError, match=r"y must be finite or NaN \(missing\); "
+                                             r"y\[0\] = inf"):
+            update(vt.Gaussian(np.ones(5), np.eye(5)), [np.inf, 0.1], meas)
     with pytest.raises(TypeError, match="motion must be a motion model"):
         ExtendedKalmanFilter(object(), meas)
     with pytest.raises(ValueError, match="n_members must be an integer >= 2"):

@@ -18,6 +18,10 @@ def check_y(y: ArrayLike, batch: tuple, m: int) -> np.ndarray:
     y = as_float_array(y, "y")
     if y.shape != batch + (m,):
         raise ValueError(f"y must have shape {batch + (m,)} to match g; got {y.shape}")
+    if np.isinf(y).any():  # as kf_update: an infinite value gave NaN means
+        idx = np.unravel_index(int(np.argmax(np.isinf(y))), y.shape)
+        raise ValueError(f"y must be finite or NaN (missing); y{[int(k) for k in idx]} = "
+                         f"{y[idx]}")
     return y
 
 
