@@ -204,6 +204,10 @@ def test_particle_filter_arguments_are_checked():
         ParticleFilter(lambda x, dt, t, rng: x, meas)
     with pytest.raises(ValueError, match=r"particles must have shape \(10, 1\)"):
         ParticleFilter(motion, meas, 10).filter(np.ones((3, 1)), particles=np.ones((5, 1)))
+    # the first cloud was drawn from N(x0, -1) with numpy's warning alone
+    with pytest.raises(ValueError, match="P0 must be positive semi-definite; its smallest "
+                                         "eigenvalue is -1"):
+        ParticleFilter(motion, meas, 10).filter(np.ones((3, 1)), x0=[0.0], P0=[[-1.0]])
 
 
 def compiled_models(model):

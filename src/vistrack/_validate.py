@@ -158,7 +158,8 @@ def check_has_steps(y: np.ndarray, name: str = "ys") -> None:
 def check_prior(x0: ArrayLike | None, P0: ArrayLike | None, n: int, *, batch: bool = True,
                 space: str = "") -> tuple[np.ndarray, np.ndarray]:
     """A prior mean ``(n,)`` (or ``(B, n)`` when ``batch``) and covariance ``(n, n)`` (or
-    ``(B, n, n)``) for a model whose state has ``n`` entries; each error names the argument
+    ``(B, n, n)``, symmetric positive semi-definite) for a model whose state has ``n``
+    entries; each error names the argument
     (``space`` is appended to the expected shape, e.g. " (the largest member's state)")."""
     for name, value in (("x0", x0), ("P0", P0)):
         if value is None:
@@ -171,6 +172,7 @@ def check_prior(x0: ArrayLike | None, P0: ArrayLike | None, n: int, *, batch: bo
     if P.shape[-2:] != (n, n):
         want = f"({n}, {n})" + (f" or (B, {n}, {n})" if batch else "")
         raise ValueError(f"P0 must have shape {want}{space}; got {_fmt_shape(P.shape)}")
+    check_psd(P, "P0")  # a particle filter drew its first cloud from -I without a word
     return x, P
 
 
