@@ -217,6 +217,24 @@ def test_a_gate_of_another_shape_is_named():
             gnn(cost, gate=np.ones(shape, bool))
 
 
+def test_suppression_names_scores_or_classes_of_another_length():
+    """non_maximum and overlapping_pairs with too few classes failed with an IndexError deep
+    inside, and with too few scores with numpy's "all keys need to be the same shape"."""
+    from vistrack.association import non_maximum, overlapping_pairs
+
+    boxes = [[0, 0, 10, 10], [1, 0, 11, 10], [20, 0, 30, 10]]
+    with pytest.raises(ValueError, match=re.escape("classes must have one value a box (3); "
+                                                   "got 1")):
+        overlapping_pairs(boxes, [0])
+    with pytest.raises(ValueError, match=re.escape("classes must have one value a box (3); "
+                                                   "got 2")):
+        non_maximum(boxes, [0.8, 0.9, 0.5], classes=[0, 1])
+    with pytest.raises(ValueError, match=re.escape("scores must have one value a box (3); "
+                                                   "got 2")):
+        non_maximum(boxes, [0.8, 0.9])
+    assert non_maximum(boxes, [0.8, 0.9, 0.5], classes=[0, 0, 1]).tolist() == [False, True, True]
+
+
 def test_sparse_pairs_and_assignment_equal_the_dense_ones():
     from vistrack.association import gnn_sparse, iou_pairs
 

@@ -516,10 +516,13 @@ def overlapping_pairs(boxes: ArrayLike, classes: ArrayLike | None = None,
     ([0, 1], [1, 0])
     """
     b = _boxes(boxes, "boxes")
+    if classes is not None:
+        cl = np.asarray(classes).reshape(-1)
+        if len(cl) != len(b):
+            raise ValueError(f"classes must have one value a box ({len(b)}); got {len(cl)}")
     r, c, _ = iou_pairs(b, b, min_iou)
     keep = r != c
     if classes is not None:
-        cl = np.asarray(classes).reshape(-1)
         keep &= cl[r] == cl[c]
     return r[keep], c[keep]
 
@@ -555,6 +558,8 @@ def non_maximum(boxes: ArrayLike, scores: ArrayLike, classes: ArrayLike | None =
     """
     b = np.asarray(boxes, dtype=float).reshape(-1, 4)
     s = np.asarray(scores, dtype=float).reshape(-1)
+    if len(s) != len(b):
+        raise ValueError(f"scores must have one value a box ({len(b)}); got {len(s)}")
     keep = np.ones(len(b), bool)
     if len(b) < 2:
         return keep
