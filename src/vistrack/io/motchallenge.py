@@ -946,8 +946,9 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
     ValueError
         If ``decimals`` is not an integer in 0-12, the columns differ in length, or a row is
         one :func:`read_mot` would refuse: a
-        frame or id that is not a whole number, a frame below 1, a box that is not finite or
-        of negative width or height, a score that is not finite (naming the first such row).
+        frame or id that is not a whole number or lies beyond 2**53, a frame below 1, a box
+        that is not finite or of negative width or height, a score that is not finite
+        (naming the first such row).
 
     Examples
     --------
@@ -1052,15 +1053,27 @@ def _write_sorted(path: Path, f: np.ndarray, i: np.ndarray, b: np.ndarray,
 
 
 def _integers(values: ArrayLike, name: str) -> np.ndarray:
-    """``values`` as int64, refusing one that is not a whole number (2.7 was written as 2)."""
+    """``values`` as int64, refusing one that is not a whole number (2.7 was written as 2), or
+    beyond 2**53 either way, which :func:`read_mot` refuses (and a uint64 above int64's range
+    was written as a negative number: 2**64 - 1 as -1, a detection's identity)."""
     a = np.asarray(values).ravel()
     if a.dtype.kind in "iub":
-        return a.astype(np.int64, copy=False)
+        big = np.abs(a.astype(float)) > _INT_LIMIT
+        if not big.any():
+            return a.astype(np.int64, copy=False)
+        k = int(np.argmax(big))
+        raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is beyond 2**53, which read_mot "
+                         "refuses")
     x = np.asarray(a, dtype=float)
     bad = ~np.isfinite(x) | (x != np.round(x))
     if bad.any():
         k = int(np.argmax(bad))
         raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is not a whole number")
+    big = np.abs(x) > _INT_LIMIT
+    if big.any():
+        k = int(np.argmax(big))
+        raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is beyond 2**53, which read_mot "
+                         "refuses")
     return x.astype(np.int64)
 
 
