@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from vistrack.io import MOTFormatError, read_mot, read_seqinfo, write_mot
+from vistrack.io import MOTFormatError, MOTTable, read_mot, read_seqinfo, write_mot
 from vistrack.io.motchallenge import _write_sorted
 
 from .mot_oracles import MOT15, MOT17, seq_dir
@@ -248,3 +248,22 @@ def test_a_class_column_that_holds_no_class(tmp_path):
     cells[7] = "3"
     p.write_text("\n".join([",".join(cells), *lines[1:]]) + "\n")
     assert set(read_mot(p).classes.tolist()) == {-1}
+
+
+@pytest.mark.parametrize("row, message", [
+    ((1.7, 1, 0, 0, 1, 1), "row 1, value 1 (frame): frame must be an integer; got 1.7"),
+    ((1, 2.7, 0, 0, 1, 1), "row 1, value 2 (id): id must be an integer; got 2.7"),
+    ((1e30, 1, 0, 0, 1, 1), "row 1, value 1 (frame): frame must be at most 2**53; got 1e+30"),
+    ((np.nan, 1, 0, 0, 1, 1), "row 1, value 1 (frame): not a finite number; got nan"),
+    ((1, 1, np.nan, 0, 10, 10), "row 1, value 3 (left): not a finite number; got nan"),
+    ((1, 1, 0, 0, 10, 10, np.inf), "row 1, value 7 (conf): not a finite number; got inf"),
+])
+def test_rows_a_table_cannot_hold_are_named(row, message):
+    """MOTTable.from_rows made frame 1.7 frame 1 and ids 2.7 and 2.2 one id (then "id 2
+    appears more than once"), a frame of NaN or 1e30 frame -2**63, and a NaN box reached
+    scipy's "matrix contains invalid numeric entries" in evaluate_mot. Each is named by its
+    row and value; a frame of 0 is kept, for evaluate_mot to name."""
+    with pytest.raises(ValueError) as e:
+        MOTTable.from_rows([(1, 1, 0, 0, 1, 1, 1)[:len(row)], row], path="mine")
+    assert str(e.value) == "mine, " + message.replace("row 1", "row 2")
+    assert MOTTable.from_rows([(0, 1, 0, 0, 1, 1)]).frames.tolist() == [0]

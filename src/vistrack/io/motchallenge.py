@@ -184,7 +184,12 @@ class MOTTable:
         Raises
         ------
         ValueError
-            If the rows have fewer than 6 values.
+            If the rows have fewer than 6 values; :class:`MOTFormatError` (a ``ValueError``)
+            naming the row and value for one the table cannot hold as given: a value that is
+            not finite, a frame or identity that is not an integer (1.7 was frame 1) or lies
+            beyond 2**53. A frame of 0 or a negative width it holds, as a tracker that
+            counts from 0 writes them, and :func:`~vistrack.evaluation.evaluate_mot` names
+            them.
 
         Examples
         --------
@@ -196,6 +201,23 @@ class MOTTable:
         a = a.reshape(-1, a.shape[-1] if a.ndim == 2 else 6)
         if a.shape[1] < 6:
             raise ValueError(f"rows need at least 6 values (frame, id, box); got {a.shape[1]}")
+        # what the table cannot hold as given (a frame of 1.7 was frame 1); a frame of 0 or a
+        # negative width it holds, and evaluate_mot names them
+        where = f"{path}, " if path else ""
+        for col, bad, text in ((None, lambda v: ~np.isfinite(v), "not a finite number"),
+                               (0, lambda v: v != np.round(v), "frame must be an integer"),
+                               (0, lambda v: np.abs(v) > _INT_LIMIT, "frame must be at most "
+                                                                      "2**53"),
+                               (1, lambda v: v != np.round(v), "id must be an integer"),
+                               (1, lambda v: np.abs(v) > _INT_LIMIT, "id must be between "
+                                                                      "-2**53 and 2**53")):
+            broken = bad(a) if col is None else bad(a[:, col])[:, None]
+            if broken.any():
+                i, j = (int(v) for v in np.argwhere(broken)[0])
+                c = j if col is None else col
+                name = _NAMES[c] if c < len(_NAMES) else f"value {c + 1}"
+                raise MOTFormatError(f"{where}row {i + 1}, value {c + 1} ({name}): {text}; got "
+                                     f"{a[i, c]:g}")
         # (np.take copies whole rows 2-3 times faster than a[order])
         return cls._of(np.take(a, np.argsort(a[:, 0], kind="stable"), axis=0), path)
 
