@@ -150,6 +150,17 @@ def test_a_likelihood_of_minus_infinity_everywhere_is_still_degeneracy():
      "boxes must be finite; boxes[1] = [0.0, inf, 1.0, 1.0]"),
     (lambda: vt.Detections.from_xywh([[10, 10, 20, 40], [10, 10, -40, 80]]),
      "xywh must have widths and heights >= 0; xywh[1] = [10.0, 10.0, -40.0, 80.0]"),
+    # a class of 1.7 was class 1, NaN failed in numpy's cast; boxes of shape (5, 0) were
+    # no detections at all; xywh of 3 values failed in numpy's reshape, and a non-finite one
+    # was named as the corners it made
+    (lambda: vt.Detections(boxes=[[0, 0, 1, 1], [0, 0, 2, 2]], classes=[1, 1.7]),
+     "classes must be whole numbers; classes[1] = 1.7"),
+    (lambda: vt.Detections(boxes=[[0, 0, 1, 1]], classes=[np.nan]),
+     "classes must be whole numbers; classes[0] = nan"),
+    (lambda: vt.Detections(boxes=np.zeros((5, 0))), "boxes must have shape (N, 4); got (5, 0)"),
+    (lambda: vt.Detections.from_xywh([1, 2, 3]), "xywh must have shape (N, 4); got (3,)"),
+    (lambda: vt.Detections.from_xywh([[1, 2, np.inf, 4]]),
+     "xywh must be finite; xywh[0] = [1.0, 2.0, inf, 4.0]"),
 ])
 def test_detections_name_the_row_that_is_not_a_box_or_a_point(make, message):
     """A NaN point was taken (a point tracker then started a track at NaN, and every later

@@ -142,6 +142,20 @@ def xyxy_to_xywh(boxes: np.ndarray) -> np.ndarray:
     return np.c_[b[:, :2], b[:, 2:] - b[:, :2]]
 
 
+def _whole_numbers(values: ArrayLike, name: str) -> np.ndarray:
+    """``values`` as int64, refusing a value that is not a whole number (a class of 1.7 was
+    class 1) or not finite, naming it."""
+    a = np.asarray(values)
+    if a.dtype.kind in "iub":
+        return a.astype(np.int64, copy=False)
+    x = np.asarray(a, dtype=np.float64)
+    bad = ~np.isfinite(x) | (x != np.round(x)) | (np.abs(x) > 2.0 ** 53)
+    if bad.any():
+        k = int(np.flatnonzero(bad.ravel())[0])
+        raise ValueError(f"{name} must be whole numbers; {name}[{k}] = {float(x.ravel()[k])!r}")
+    return x.astype(np.int64)
+
+
 @dataclass(frozen=True)
 class Detections:
     """One frame's detections, as columns: boxes or points, scores and classes.
@@ -187,8 +201,9 @@ class Detections:
         if (self.boxes is None) == (self.points is None):
             raise ValueError("Detections need boxes or points (one of them)")
         if self.boxes is not None:
-            b = np.asarray(self.boxes, dtype=np.float64).reshape(-1, 4) if np.size(
-                self.boxes) == 0 else np.asarray(self.boxes, dtype=np.float64)
+            b = np.asarray(self.boxes, dtype=np.float64)
+            if b.size == 0 and (b.ndim < 2 or b.shape[0] == 0):  # [] or (0, k): no boxes
+                b = b.reshape(0, 4)
             if b.ndim != 2 or b.shape[1] != 4:
                 raise ValueError(f"boxes must have shape (N, 4); got {b.shape}")
             if not np.isfinite(b).all():
@@ -211,7 +226,12 @@ class Detections:
             n = len(p)
         for name, default, dtype in (("scores", 1.0, np.float64), ("classes", 0, np.int64)):
             v = getattr(self, name)
-            v = np.full(n, default, dtype) if v is None else np.asarray(v, dtype=dtype)
+            if v is None:
+                v = np.full(n, default, dtype)
+            elif name == "classes":
+                v = _whole_numbers(v, "classes")
+            else:
+                v = np.asarray(v, dtype=dtype)
             if v.shape != (n,):
                 raise ValueError(f"{name} must have shape ({n},); got {v.shape}")
             object.__setattr__(self, name, v)
@@ -240,7 +260,14 @@ class Detections:
         >>> Detections.from_xywh([[10, 20, 30, 40]]).boxes.tolist()
         [[10.0, 20.0, 40.0, 60.0]]
         """
-        b = np.asarray(xywh, dtype=np.float64).reshape(-1, 4)
+        b = np.asarray(xywh, dtype=np.float64)
+        if b.shape == (4,) or (b.size == 0 and (b.ndim < 2 or b.shape[0] == 0)):
+            b = b.reshape(-1, 4)  # one box, or none
+        if b.ndim != 2 or b.shape[1] != 4:
+            raise ValueError(f"xywh must have shape (N, 4); got {b.shape}")
+        if not np.isfinite(b).all():
+            i = int(np.flatnonzero(~np.isfinite(b).all(axis=1))[0])
+            raise ValueError(f"xywh must be finite; xywh[{i}] = {b[i].tolist()}")
         bad = np.flatnonzero((b[:, 2] < 0) | (b[:, 3] < 0))
         if len(bad):  # named as given, not as the corners it would make
             raise ValueError(f"xywh must have widths and heights >= 0; xywh[{int(bad[0])}] = "
