@@ -152,6 +152,10 @@ def test_a_frame_before_the_first_is_named_not_dropped():
     assert str(e.value) == ("prediction: frame -2 is before the first (MOTChallenge frames "
                             "count from 1)")
     assert evaluate_mot(good, good).MOTA == 1.0
+    # n_frames of NaN was "cannot convert float NaN to integer", 2.5 frame 2
+    for n in (np.nan, 2.5, -1):
+        with pytest.raises(ValueError, match=f"n_frames must be a whole number >= 0; got {n}"):
+            evaluate_mot(good, good, n_frames=n)
 
 
 def test_two_pairs_of_one_name_are_refused(tmp_path):

@@ -200,6 +200,9 @@ def test_particle_filter_arguments_are_checked():
         ParticleFilter(motion, meas, resampling="best")
     with pytest.raises(ValueError, match="ess_threshold must be in"):
         ParticleFilter(motion, meas, ess_threshold=2.0)
+    for n in (np.nan, np.inf, 2.5, 0):  # NaN was "cannot convert float NaN to integer"
+        with pytest.raises(ValueError, match=f"n_particles must be an integer >= 1; got {n}"):
+            ParticleFilter(motion, meas, n_particles=n)
     with pytest.raises(ValueError, match="ndim_state is needed"):
         ParticleFilter(lambda x, dt, t, rng: x, meas)
     with pytest.raises(ValueError, match=r"particles must have shape \(10, 1\)"):

@@ -141,6 +141,12 @@ def test_coasting_reports_a_well_followed_track_through_a_short_miss():
     assert sorted(slow[16]) == sorted([A, B, C]) and slow[17] == []
     with pytest.raises(ValueError, match="image_size must be"):
         BoxTracker(image_size=(640, 0))
+    # NaN was taken, and then no track was ever reported coasting (every test against it
+    # false)
+    for size in ((np.nan, 480), (640, np.inf)):
+        with pytest.raises(ValueError, match=r"image_size must be \(width, height\), finite "
+                                             r"and > 0"):
+            BoxTracker(image_size=size)
 
 
 def test_classes_never_share_an_identity_and_reset():

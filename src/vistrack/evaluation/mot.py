@@ -267,6 +267,8 @@ def _n_frames(gt: MOTTable, pred: MOTTable, n_frames: int | None) -> int:
     """The sequence's length: ``n_frames`` if given, else the last frame of either table."""
     if n_frames is None:
         return int(max(gt.frames.max() if len(gt) else 0, pred.frames.max() if len(pred) else 0))
+    if not (0 <= n_frames < np.inf and int(n_frames) == n_frames):  # NaN too
+        raise ValueError(f"n_frames must be a whole number >= 0; got {n_frames}")
     return int(n_frames)
 
 

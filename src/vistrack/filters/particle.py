@@ -757,7 +757,7 @@ def _result(means: np.ndarray, covs: np.ndarray, modes: np.ndarray | None,
 def check_particle_options(n_particles: float, resampling: str,
                            ess_threshold: float) -> tuple[int, float]:
     """Check a particle filter's size, resampling scheme and ESS threshold."""
-    if int(n_particles) != n_particles or n_particles < 1:
+    if not (0 < n_particles < np.inf and int(n_particles) == n_particles):  # NaN too
         raise ValueError(f"n_particles must be an integer >= 1; got {n_particles}")
     if resampling not in RESAMPLERS:
         raise ValueError(f"resampling must be one of {sorted(RESAMPLERS)}; got {resampling!r}")

@@ -559,8 +559,10 @@ class BoxTracker:
         # the motion's noise at this tracker's frame rate (models/box.py)
         self.motion = (motion or BoxMotion()).at_rate(frame_rate)
         self.frame_rate = float(frame_rate)
-        if image_size is not None and (len(image_size) != 2 or min(image_size) <= 0):
-            raise ValueError(f"image_size must be (width, height) > 0; got {image_size}")
+        if image_size is not None and (len(image_size) != 2 or not all(
+                0 < float(v) < np.inf for v in image_size)):  # NaN: no track ever coasted
+            raise ValueError(f"image_size must be (width, height), finite and > 0; got "
+                             f"{image_size}")
         self.image_size = None if image_size is None else tuple(float(v) for v in image_size)
         self.tracks = TrackTable(8, cov_shape=(4, 3))
         self.record = bool(record)
