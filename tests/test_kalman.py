@@ -194,6 +194,23 @@ def test_all_missing_row_only_predicts(rng):
     np.testing.assert_array_equal(res.covs[2], res.pred_covs[2])
 
 
+def test_read_only_matrices_reach_the_kernels_as_writable_copies():
+    """The kernels are compiled at install for writable arrays; F, Q, H or R kept read-only
+    (setflags(write=False), as a model's constants may be) made kf_step compile them all
+    again on first use (26 s measured). They are copied, and the step is the same."""
+    from vistrack.filters.kalman import _small_matrix
+
+    F, Q, H, R = np.eye(2), np.eye(2) * 0.1, np.eye(2), np.eye(2) * 2.0
+    g = vt.Gaussian(np.zeros(2), np.eye(2))
+    want = vt.kf_step(g, [1.0, 2.0], F, Q, H, R)
+    for a in (F, Q, H, R):
+        a.setflags(write=False)
+    assert all(_small_matrix(a, "M", 2, 2).flags.writeable for a in (F, Q, H, R))
+    got = vt.kf_step(g, [1.0, 2.0], F, Q, H, R)
+    np.testing.assert_array_equal(got.mean, want.mean)
+    np.testing.assert_array_equal(got.cov, want.cov)
+
+
 def test_result_is_read_only(rng):
     mod = random_model(rng, 2, 1)
     res = kalman_filter(rng.normal(size=(5, 1)), **mod, x0=np.zeros(2), P0=np.eye(2))

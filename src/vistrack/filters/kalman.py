@@ -350,6 +350,10 @@ def _small_matrix(value: ArrayLike, name: str, rows: int, cols: int) -> np.ndarr
         arr = value
     else:
         arr = as_float_array(value, name)
+    if not arr.flags.writeable:
+        # the kernels are compiled (at install) for writable arrays: a read-only one (a model's
+        # matrix kept with setflags(write=False)) would compile each again, for seconds
+        arr = arr.copy()
     if arr.shape != (rows, cols):
         raise ValueError(f"{name} must have shape ({rows}, {cols}); got {arr.shape}")
     return arr
