@@ -4,6 +4,7 @@ Kalman filter on a linear model, log-domain weights, degeneracy, and the mode.""
 import dataclasses
 import gc
 import hashlib
+import re
 import warnings
 from pathlib import Path
 
@@ -200,6 +201,11 @@ def test_particle_filter_arguments_are_checked():
         ParticleFilter(motion, meas, resampling="best")
     with pytest.raises(ValueError, match="ess_threshold must be in"):
         ParticleFilter(motion, meas, ess_threshold=2.0)
+    cloud = np.zeros((10, 1))
+    cloud[3] = np.nan  # read as "every particle has zero likelihood": the target lost
+    with pytest.raises(ValueError, match=re.escape("particles must be finite; particles[3] = "
+                                                   "[nan]")):
+        ParticleFilter(motion, meas, 10).filter(np.ones((3, 1)), particles=cloud)
     for n in (np.nan, np.inf, 2.5, 0):  # NaN was "cannot convert float NaN to integer"
         with pytest.raises(ValueError, match=f"n_particles must be an integer >= 1; got {n}"):
             ParticleFilter(motion, meas, n_particles=n)

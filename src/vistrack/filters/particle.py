@@ -999,6 +999,9 @@ class ParticleFilter:
             x = as_float_array(particles, "particles", ndim=(2,))
             if x.shape != (N, n):
                 raise ValueError(f"particles must have shape ({N}, {n}); got {x.shape}")
+            if not np.isfinite(x).all():  # it read as every particle's likelihood being 0
+                i = int(np.flatnonzero(~np.isfinite(x).all(axis=1))[0])
+                raise ValueError(f"particles must be finite; particles[{i}] = {x[i].tolist()}")
             return x.copy()
         m0, C0 = check_prior(x0, P0, n, batch=False)
         return self.rng.multivariate_normal(m0, C0, size=N, method="eigh")
