@@ -201,6 +201,15 @@ def test_particle_filter_arguments_are_checked():
         ParticleFilter(motion, meas, resampling="best")
     with pytest.raises(ValueError, match="ess_threshold must be in"):
         ParticleFilter(motion, meas, ess_threshold=2.0)
+    # measurements of another size: named on the compiled path, an IndexError deep inside
+    # the numpy one (modes=True, compiled=False)
+    cv, pos = vt.ConstantVelocity(dim=1), vt.Position(dim=1)
+    for kw in ({"compiled": False}, {"compiled": True}):
+        for modes in (False, True):
+            with pytest.raises(ValueError, match="ys must have 1 measurement components; "
+                                                 "got 2"):
+                ParticleFilter(cv, pos, **kw).filter(np.zeros((3, 2)), x0=[0.0, 1.0],
+                                                      P0=np.eye(2), modes=modes)
     cloud = np.zeros((10, 1))
     cloud[3] = np.nan  # read as "every particle has zero likelihood": the target lost
     with pytest.raises(ValueError, match=re.escape("particles must be finite; particles[3] = "

@@ -860,9 +860,11 @@ class ParticleFilter:
                             f"{type(motion).__name__}")
         self._fused: _FusedParts | None = None
         self._whiten: dict[bytes, tuple[np.ndarray, float]] = {}
+        self._m: int | None = None  # a measurement model's components (None: a callable's)
         if hasattr(likelihood, "R"):
             me = MeasurementFunctions(
                 cast(MeasurementModel | NonlinearMeasurementModel, likelihood), self.ndim_state)
+            self._m = me.m
             gauss = self._gaussian_loglik(me)
             self._loglik = lambda y, x, t: np.asarray(gauss(y, x), dtype=float)
             if compiled and hasattr(motion, "Q") and resampling in _random.SCHEMES:
@@ -952,6 +954,9 @@ class ParticleFilter:
         """
         ys = as_float_array(ys, "ys", ndim=(2,))
         check_has_steps(ys)
+        if self._m is not None and ys.shape[1] != self._m:  # both paths, before any step
+            raise ValueError(f"ys must have {self._m} measurement components; got "
+                             f"{ys.shape[1]}")
         T = ys.shape[0]
         n, N, rng = self.ndim_state, self.n_particles, self.rng
         if self._fused is not None and not modes:
