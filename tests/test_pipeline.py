@@ -313,8 +313,8 @@ def test_an_image_folder_tracked_at_an_assumed_rate_says_so(tmp_path):
     for k in range(4):
         cv2.imwrite(str(folder / f"{k + 1:06d}.png"), np.zeros((60, 80, 3), np.uint8))
     with pytest.warns(UserWarning, match=re.escape(
-            f"{folder}: an image folder gives no frame rate: tracked at 30 frames/s (give the "
-            "true one with --fps, or fps=)")):
+            f"{folder} gives no frame rate (an image folder, or a video whose header has "
+            "none): tracked at 30 frames/s (give the true one with --fps, or fps=)")):
         run_ = track_video(folder, tmp_path / "a", annotate=False)
     assert json.loads((run_.out_dir / "run.json").read_text())["frame_rate"] == 30
     with warnings.catch_warnings():

@@ -1819,9 +1819,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     if reader.fps_from is None:
         # the tracker's times (coasting, how long a lost track is kept) and its motion's
         # noise follow the rate
-        warnings.warn(f"{video}: an image folder gives no frame rate: tracked at "
-                      f"{reader.fps:g} frames/s (give the true one with --fps, or fps=)",
-                      UserWarning, stacklevel=2)
+        warnings.warn(f"{video} gives no frame rate (an image folder, or a video whose "
+                      f"header has none): tracked at {reader.fps:g} frames/s (give the true "
+                      "one with --fps, or fps=)", UserWarning, stacklevel=2)
     # the options not given are left to the front-ends' own defaults
     ctx = Context(reader.fps, reader.size, reader, config, dict(overrides),
                   {k: v for k, v in options.items() if v is not None}
@@ -1908,10 +1908,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
 
 def _ground_truth(gt: str | Path) -> MOTTable:
     """The ground truth to score a video's tracks against (a file, or a sequence folder's
-    ``gt/gt.txt``), read and checked before anything is tracked: a missing file named as
-    ``--gt``'s, and the faults scoring would find after
-    the whole video (an identity twice in a frame, a detections file given as ground truth)
-    found now."""
+    ``gt/gt.txt``), read and checked before anything is tracked: a missing file is named as
+    ``--gt``'s, and the faults the scoring would find after the whole video (an identity
+    twice in a frame, a detections file given as ground truth) are found now."""
     try:
         table = read_mot(_ground_truth_file(gt))
     except FileNotFoundError:
