@@ -253,7 +253,7 @@ def test_a_class_column_that_holds_no_class(tmp_path):
 @pytest.mark.parametrize("row, message", [
     ((1.7, 1, 0, 0, 1, 1), "row 1, value 1 (frame): frame must be an integer; got 1.7"),
     ((1, 2.7, 0, 0, 1, 1), "row 1, value 2 (id): id must be an integer; got 2.7"),
-    ((1e30, 1, 0, 0, 1, 1), "row 1, value 1 (frame): frame must be at most 2**53; got 1e+30"),
+    ((1e30, 1, 0, 0, 1, 1), "row 1, value 1 (frame): frame must lie within ±2**53; got 1e+30"),
     ((np.nan, 1, 0, 0, 1, 1), "row 1, value 1 (frame): not a finite number; got nan"),
     ((1, 1, np.nan, 0, 10, 10), "row 1, value 3 (left): not a finite number; got nan"),
     ((1, 1, 0, 0, 10, 10, np.inf), "row 1, value 7 (conf): not a finite number; got inf"),

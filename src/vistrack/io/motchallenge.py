@@ -206,8 +206,8 @@ class MOTTable:
         where = f"{path}, " if path else ""
         for col, bad, text in ((None, lambda v: ~np.isfinite(v), "not a finite number"),
                                (0, lambda v: v != np.round(v), "frame must be an integer"),
-                               (0, lambda v: np.abs(v) > _INT_LIMIT, "frame must be at most "
-                                                                      "2**53"),
+                               (0, lambda v: np.abs(v) > _INT_LIMIT, "frame must lie "
+                                                                      "within ±2**53"),
                                (1, lambda v: v != np.round(v), "id must be an integer"),
                                (1, lambda v: np.abs(v) > _INT_LIMIT, "id must be between "
                                                                       "-2**53 and 2**53")):
