@@ -365,13 +365,13 @@ class VideoReader:
                               f"{'that frame is' if n == 1 else 'those frames are'} missing, "
                               "and the images after a gap keep the frames their names give",
                               RuntimeWarning, stacklevel=2)
-            why = _unnumbered_why(self._files) if numbered is None else None
-            if why and src not in _GAP_WARNED:
+            unnumbered = _unnumbered_why(self._files) if numbered is None else None
+            if unnumbered and src not in _GAP_WARNED:
                 # images whose names give frames, but not one each: numbered by position,
                 # so that detections and ground truth numbered by name no longer match
                 _GAP_WARNED.add(src)
-                warnings.warn(f"{src}: {why}: the {len(self._files)} images are numbered by "
-                              f"their place in name order instead (frames 1-"
+                warnings.warn(f"{src}: {unnumbered}: the {len(self._files)} images are "
+                              f"numbered by their place in name order instead (frames 1-"
                               f"{len(self._files)}), not by the frames their names give",
                               RuntimeWarning, stacklevel=2)
             header_fps = None
