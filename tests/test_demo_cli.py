@@ -32,6 +32,17 @@ def test_cli_rejects_bad_arguments(capsys):
     assert "--seeds must be >= 1" in capsys.readouterr().err
 
 
+def test_demo_out_that_is_a_file_is_named_as_out(tmp_path, capsys):
+    """``--out FILE`` said "FILE: File exists" (kalman) or named ``--out-dir FILE/pets09-s2l1``
+    (track), an option the user never gave."""
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    for name in ("kalman", "track"):
+        assert main(["demo", name, "--out", str(afile)]) == 2
+        assert capsys.readouterr().err == (f"vistrack demo: error: --out {afile} is a file, not "
+                                           "a folder\n")
+
+
 def test_console_script_runs():
     r = subprocess.run([sys.executable, "-m", "vistrack.cli", "--version"], capture_output=True,
                        text=True)

@@ -47,6 +47,12 @@ def test_report_command_and_its_errors(run_dir, tmp_path, capsys):
     assert capsys.readouterr().out.strip() == f"wrote {run_dir / 'report.html'}"
     assert main(["report", str(tmp_path)]) == 2
     assert "tracks.txt does not exist" in capsys.readouterr().err
+    # a file: it said FILE/tracks.txt does not exist
+    (tmp_path / "afile").write_text("")
+    assert main(["report", str(tmp_path / "afile")]) == 2
+    assert capsys.readouterr().err == (f"vistrack report: error: {tmp_path / 'afile'} is a "
+                                       "file: give the folder that vistrack track --out-dir "
+                                       "wrote\n")
     # without run.json: what the folder holds
     bare = tmp_path / "bare"
     bare.mkdir()

@@ -124,6 +124,11 @@ def _class_list(text: str) -> list[int]:
 
 
 def _demo(args: argparse.Namespace) -> int:
+    from .io.atomic import check_output
+
+    # the folder given, named as the option given (a file there was "afile: File exists",
+    # or "--out-dir afile/pets09-s2l1", an option the user never gave)
+    check_output(args.out, name="--out", folder=True)
     if args.name == "track":  # the main job on the clip that ships with vistrack
         from .data import demo_clip
 

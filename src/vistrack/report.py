@@ -163,6 +163,8 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
 
     Raises
     ------
+    NotADirectoryError
+        If ``out_dir`` is a file.
     FileNotFoundError
         If ``out_dir`` has no ``tracks.txt``.
     FileExistsError
@@ -178,6 +180,9 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     out_dir = Path(out_dir)
     target = out_dir / REPORT
     tracks = out_dir / SINK_FILES["tracks"]
+    if out_dir.is_file():
+        raise NotADirectoryError(f"{out_dir} is a file: give the folder that vistrack track "
+                                 "--out-dir wrote")
     if not tracks.is_file():
         raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
                                 "track --out-dir wrote")
