@@ -3,6 +3,7 @@ known truth, the two real sequences' targets, and `vistrack track-one`."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 
@@ -181,6 +182,12 @@ def test_track_one_keeps_each_box_at_its_frame_across_missing_images(tmp_path):
     # scored frame by frame against the ground truth's line of the same frame
     assert result.scores["success"] == pytest.approx(success_rate(result.boxes, want))
     assert result.scores["success"] > 0.5
+    # ground truth longer than the frames tracked: scored over those frames, and said so
+    gt.write_text("".join(truth + truth[:3]))
+    with pytest.warns(UserWarning, match=re.escape(f"{gt} has 13 boxes for 10 frames: the last "
+                                                   "3 are not scored")):
+        again = track_one(folder, [10, 20, 20, 20], tmp_path / "b.txt", method="wsl", gt=gt)
+    assert again.scores == result.scores
 
 
 def test_template_tracker_on_the_first_frames_of_otb_crossing():

@@ -2066,6 +2066,9 @@ def track_one(source: str | Path, init: ArrayLike, out: str | Path, *, method: s
     if truth is not None:
         if len(truth) < len(b):
             raise ValueError(f"{gt} has {len(truth)} boxes for {len(b)} frames")
+        if len(truth) > len(b):  # a ground truth of another, longer sequence?
+            warnings.warn(f"{gt} has {len(truth)} boxes for {len(b)} frames: the last "
+                          f"{len(truth) - len(b)} are not scored", UserWarning, stacklevel=2)
         t = truth[:len(b)]
         scores = {"success": success_rate(b, t), "auc": success_curve(b, t)[2],
                   "precision": precision(b, t)}
