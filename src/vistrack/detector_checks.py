@@ -29,6 +29,16 @@ __all__ = ["detection_stride", "detector_grid", "undelivered_frames", "duplicate
            "DUPLICATE_IOU", "UNDELIVERED_AROUND"]
 
 
+def first_box(dets: MOTTable, k: int, path: str | Path) -> tuple[str, str]:
+    """Where row ``k`` of a detections file is, for a message (``"PATH, line N"``, or its
+    frame where the line is not found: a CSV file's columns may lie in any order), and its
+    box as written there (``"1241, 185.448, 0, 188.552"``)."""
+    f, box = int(dets.frames[k]), dets.boxes[k].tolist()
+    lines = _lines_of(str(path), lambda row: row[0] == f and row[2:6] == box)
+    where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
+    return where, ", ".join(f"{v:g}" for v in box)
+
+
 def warn_no_area(dets: MOTTable, path: Path, stacklevel: int) -> None:
     """Warn of a detections file's boxes of zero width or height, naming the first one's line
     (its frame, where the line is not found: a CSV file's columns may lie in any order): a
@@ -37,12 +47,10 @@ def warn_no_area(dets: MOTTable, path: Path, stacklevel: int) -> None:
     if not flat.any():
         return
     k = int(np.argmax(flat))
-    f, box = int(dets.frames[k]), dets.boxes[k].tolist()
-    lines = _lines_of(str(path), lambda row: row[0] == f and row[2:6] == box)
-    where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
+    where, box = first_box(dets, k, path)
     more = int(flat.sum()) - 1
-    warnings.warn(f"{where}: a box of zero {'width' if box[2] == 0 else 'height'} "
-                  f"({', '.join(f'{v:g}' for v in box)})"
+    zero = "width" if dets.boxes[k, 2] == 0 else "height"
+    warnings.warn(f"{where}: a box of zero {zero} ({box})"
                   + (f" and {more} more of zero width or height" if more else "")
                   + ": a box with no area overlaps no other, so no track can follow it from "
                   "frame to frame", RuntimeWarning, stacklevel=stacklevel + 1)
@@ -68,12 +76,9 @@ def warn_outside(dets: MOTTable, path: str | Path, size: tuple[int, int],
         | (b[:, 1] + b[:, 3] <= 0)
     if out.sum() < OUTSIDE_SHARE * len(b):
         return
-    k = int(np.argmax(out))
-    f, box = int(dets.frames[k]), dets.boxes[k].tolist()
-    lines = _lines_of(str(path), lambda row: row[0] == f and row[2:6] == box)
-    where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
+    where, box = first_box(dets, int(np.argmax(out)), path)
     n = int(out.sum())
-    warnings.warn(f"{where}: a box ({', '.join(f'{v:g}' for v in box)}) wholly outside the "
+    warnings.warn(f"{where}: a box ({box}) wholly outside the "
                   f"{size[0]}x{size[1]} image" + (f", and {n - 1} more of {len(b)}" if n > 1
                                                   else "")
                   + ": tracked as the others, though nothing of the image is there (boxes in "

@@ -35,6 +35,7 @@ from ._registry import Registry
 from .config import OfflineConfig, TrackConfig
 from .detector_checks import (
     detector_grid,
+    first_box,
     ordinal,
     stride_warning,
     undelivered_frames,
@@ -950,13 +951,9 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
     far = (np.abs(table.boxes) > MAX_PIXELS).any(axis=1)
     if far.any():
         # a corrupt row: refused here, by its line, rather than by the tracker at its frame
-        k = int(np.argmax(far))
-        f, box = int(table.frames[k]), table.boxes[k].tolist()
-        lines = _lines_of(str(path), lambda row: row[0] == f and row[2:6] == box)
-        where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
-        raise ValueError(f"{where}: a box ({', '.join(f'{v:g}' for v in box)}) beyond 2^52 "
-                         "pixels, where a float no longer holds every whole pixel: not a box of "
-                         "any image (a corrupt row?)")
+        where, box = first_box(table, int(np.argmax(far)), path)
+        raise ValueError(f"{where}: a box ({box}) beyond 2^52 pixels, where a float no longer "
+                         "holds every whole pixel: not a box of any image (a corrupt row?)")
     if len(table) and (table.ids >= 0).all():
         # detections carry no identity (-1); a file whose every row has one is ground truth
         # or a tracker's results, whose ignored boxes (conf 0) would be tracked as detections
