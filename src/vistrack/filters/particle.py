@@ -1018,8 +1018,7 @@ class ParticleFilter:
         T, m = ys.shape
         n, N = self.ndim_state, self.n_particles
         R = me.Rm
-        if R.shape != (m, m):
-            raise ValueError(f"ys must have {R.shape[0]} measurement components; got {m}")
+        assert R.shape == (m, m)  # filter checked ys against the measurement model
         run = _fused_kernel(fref, href, n, m)
         dts, times = step_times(dt, times, T)
         # per step: the observed components, the whitening of their noise, the model's
