@@ -437,6 +437,61 @@ def test_image_folders_read_as_cv2_imread_reads_each_file(tmp_path, grey):
             np.testing.assert_array_equal(f.image, cv2.imread(str(path), flags))
 
 
+@pytest.mark.parametrize("ext", [".png", ".tif"])
+def test_16_bit_images_are_read_at_their_depth(tmp_path, ext):
+    """A 12-bit camera's images in 16-bit files (each value an 8-bit one times 16) are its
+    8-bit images again, said once; cv2.imread alone made them near black (values / 256)."""
+    rng = np.random.default_rng(1)
+    frames = [rng.integers(0, 256, (24, 32, 3), dtype=np.uint8) for _ in range(3)]
+    frames[0][0, 0] = 255  # the first image reaches the 12-bit top, 4080
+    for k, im in enumerate(frames):
+        assert cv2.imwrite(str(tmp_path / f"{k:06d}{ext}"), im.astype(np.uint16) * 16)
+    with pytest.warns(RuntimeWarning, match=r"values reach 4080\): read as 12-bit and scaled "
+                      r"to 8 bits \(values divided by 16\)"):
+        r = VideoReader(tmp_path)
+    got = [f.image for f in r]
+    assert all(g.dtype == np.uint8 and np.array_equal(g, im) for g, im in zip(got, frames))
+    # grey: OpenCV's grey of the 16-bit values to the nearest 8-bit level, as near as its
+    # grey of the 8-bit ones is to itself decoded another way (within one level)
+    with pytest.warns(RuntimeWarning, match="12-bit"):
+        grey = [f.image for f in VideoReader(tmp_path, grey=True)]
+    for g, im in zip(grey, frames):
+        ref = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY).astype(int)
+        assert g.dtype == np.uint8 and np.abs(g.astype(int) - ref).max() <= 1
+
+
+def test_16_bit_images_above_the_first_ones_depth_are_clipped_and_named(tmp_path):
+    dark = np.full((8, 8), 1000, np.uint16)  # 10 bits: divided by 4
+    bright = dark.copy()
+    bright[0, :4] = (1023, 1024, 4000, 65535)
+    cv2.imwrite(str(tmp_path / "000001.png"), dark)
+    cv2.imwrite(str(tmp_path / "000002.png"), bright)
+    cv2.imwrite(str(tmp_path / "000003.png"), bright)
+    with pytest.warns(RuntimeWarning, match=r"values reach 1000\): read as 10-bit"):
+        r = VideoReader(tmp_path, grey=True)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = [f.image for f in r]
+    assert [str(w.message) for w in caught] == [
+        f"{tmp_path / '000002.png'}: values above 1023, the 10-bit depth of 000001.png, "
+        "clipped to white (here and in any later image that has them)"]
+    assert got[0].max() == got[0].min() == 250
+    assert got[1][0, :5].tolist() == [255, 255, 255, 255, 250] == got[2][0, :5].tolist()
+
+
+def test_16_bit_images_of_8_bit_values_and_of_the_full_range(tmp_path):
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir(), b.mkdir()
+    cv2.imwrite(str(a / "1.png"), np.array([[0, 7, 200]], np.uint16))
+    cv2.imwrite(str(b / "1.png"), np.array([[0, 127, 128, 65535]], np.uint16))
+    with pytest.warns(RuntimeWarning, match=r"read as 8-bit and scaled to 8 bits \(values as "
+                      r"they are\)"):
+        assert next(iter(VideoReader(a, grey=True))).image.tolist() == [[0, 7, 200]]
+    with pytest.warns(RuntimeWarning, match=r"read as 16-bit .*values divided by 256"):
+        # to the nearest level: 127 / 256 rounds down, 128 / 256 up
+        assert next(iter(VideoReader(b, grey=True))).image.tolist() == [[0, 0, 1, 255]]
+
+
 def test_an_image_of_another_size_is_named_with_both_sizes(tmp_path):
     files = _folder(tmp_path, n=4, ext=".png")
     cv2.imwrite(str(files[2]), np.zeros((30, 40, 3), np.uint8))
