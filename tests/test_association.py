@@ -311,6 +311,29 @@ def test_compiled_lsa_equals_scipy_pair_for_pair():
     assert len(r) == len(c) == 0
 
 
+def test_compiled_lsa_takes_what_scipy_takes_and_refuses_what_it_refuses():
+    """Lists, integers, a transposed view and +inf (a pair not allowed) give scipy's pairs;
+    NaN, -inf, a 1-D cost and an infeasible one are refused by name. Before, a list raised
+    numba's TypingError and NaN gave an assignment."""
+    from scipy.optimize import linear_sum_assignment
+
+    from vistrack.association import lsa
+
+    big = np.arange(12.0).reshape(3, 4) % 5
+    for cost in ([[1.0, 2.0], [3.0, 0.5]], [[1, 2, 9], [3, 0, 1]], big.T,
+                 [[np.inf, 1.0], [2.0, np.inf]]):
+        r, c = lsa(cost)
+        R, C = linear_sum_assignment(np.asarray(cost, float))
+        assert r.tolist() == R.tolist() and c.tolist() == C.tolist()
+    for cost, msg in (([[0.0, np.nan], [1.0, 2.0]], r"cost\[0, 1\] is nan: costs must be "
+                       r"numbers or \+inf \(a pair not allowed\)"),
+                      ([[1.0, 2.0], [-np.inf, 0.0]], r"cost\[1, 0\] is -inf"),
+                      ([1.0, 2.0], r"cost must be a 2-D matrix; got shape \(2,\)"),
+                      ([[np.inf, np.inf], [1.0, 2.0]], "cost matrix is infeasible")):
+        with pytest.raises(ValueError, match=msg):
+            lsa(cost)
+
+
 def test_sparse_assignment_checks_its_arguments():
     from vistrack.association import gnn_sparse
 

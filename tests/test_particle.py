@@ -150,6 +150,22 @@ def test_ess_threshold_controls_resampling(rng):
     assert effective_sample_size(np.full(4, 0.25)) == pytest.approx(4.0)
 
 
+def test_effective_sample_size_of_any_weights_and_what_it_refuses():
+    """(sum w)^2 / sum w^2: the same for weights and any multiple of them; the filters' ess
+    (normalised weights) is that of their weights. Before, [] gave inf, a negative weight a
+    number and NaN NaN."""
+    rng = np.random.default_rng(3)
+    w = rng.uniform(0, 1, 50)
+    assert effective_sample_size(w) == pytest.approx(w.sum() ** 2 / (w ** 2).sum())
+    assert effective_sample_size(7.5 * w) == pytest.approx(effective_sample_size(w / w.sum()))
+    assert effective_sample_size([0.0, 2.0, 0.0]) == 1.0
+    for bad, msg in (([], "weights is empty"), ([0.5, -0.5, 1.0], r"weights\[1\] is -0.5"),
+                     ([0.5, np.nan], r"weights\[1\] is nan"), ([0.0, 0.0], "all 0"),
+                     (np.ones((2, 2)), "weights")):
+        with pytest.raises(ValueError, match=msg):
+            effective_sample_size(bad)
+
+
 def test_mode_finds_the_tallest_peak_and_its_weight():
     rng = np.random.default_rng(0)
     x = np.concatenate([rng.normal([-6, 0], 1.0, (4000, 2)), rng.normal([5, 3], 0.7, (2000, 2))])

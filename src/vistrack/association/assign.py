@@ -154,18 +154,17 @@ def gnn(cost: np.ndarray, gate: np.ndarray | None = None,
     return gnn_sparse(r, c, cost[r, c], cost.shape, limit=limit)
 
 
-@njit(cache=True)
-def lsa(cost):
+def lsa(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The least-cost assignment of a dense cost matrix, compiled.
 
     Crouse's shortest augmenting path (2016), the algorithm of scipy's
-    ``linear_sum_assignment``, step for step (ties are broken the same way), compiled so that
-    it can be called from other kernels.
+    ``linear_sum_assignment``, step for step (ties are broken the same way); the compiled
+    kernel (``_lsa``, a float64 C-ordered matrix, unchecked) is what other kernels call.
 
     Parameters
     ----------
-    cost : (n, m) ndarray of float64
-        Finite costs (every pair is allowed).
+    cost : (n, m) array_like
+        Costs; ``+inf`` forbids a pair.
 
     Returns
     -------
@@ -175,7 +174,8 @@ def lsa(cost):
     Raises
     ------
     ValueError
-        If the problem is infeasible (only with infinite costs).
+        If ``cost`` is not 2-D, holds NaN or ``-inf`` (naming the first such entry), or the
+        problem is infeasible (a row or column of ``+inf`` only, as scipy says).
 
     References
     ----------
@@ -188,6 +188,20 @@ def lsa(cost):
     >>> r.tolist(), c.tolist()
     ([0, 1], [1, 0])
     """
+    arr = np.ascontiguousarray(cost, dtype=np.float64)
+    if arr.ndim != 2:
+        raise ValueError(f"cost must be a 2-D matrix; got shape {arr.shape}")
+    bad = np.isnan(arr) | (arr == -np.inf)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise ValueError(f"cost[{i}, {j}] is {arr[i, j]}: costs must be numbers or +inf (a "
+                         "pair not allowed)")
+    return _lsa(arr)
+
+
+@njit(cache=True)
+def _lsa(cost):
+    # lsa's kernel: cost a float64 matrix without NaN or -inf
     transpose = cost.shape[0] > cost.shape[1]
     c = cost.T.copy() if transpose else cost
     nr, nc = c.shape
@@ -265,7 +279,7 @@ def _gated_lsa(cost, gate):
         return np.empty(0, np.int64), np.empty(0, np.int64)
     big = (hi - lo + 1.0) * (min(cost.shape[0], cost.shape[1]) + 1) + top
     c = np.where(gate, cost, big)
-    r, k = lsa(c)
+    r, k = _lsa(c)
     n = 0
     for p in range(r.shape[0]):
         if gate[r[p], k[p]]:
@@ -279,7 +293,7 @@ def _limited_lsa(cost, gate):
     # costs relative to leaving the pair unassigned: a disallowed pair costs 0, as much as
     # leaving it, so the least-cost full assignment takes the allowed pairs of least total
     # (negative) cost, and the pairs that gain nothing are dropped
-    r, k = lsa(np.where(gate, cost, 0.0))
+    r, k = _lsa(np.where(gate, cost, 0.0))
     n = 0
     for p in range(r.shape[0]):
         if gate[r[p], k[p]] and cost[r[p], k[p]] < 0.0:

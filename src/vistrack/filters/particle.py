@@ -265,26 +265,50 @@ def resample(weights: ArrayLike, method: str = "systematic", *, n: int | None = 
 
 
 def effective_sample_size(weights: ArrayLike) -> float:
-    r"""Effective sample size of normalised weights, :math:`N_\text{eff} = 1 / \sum_i w_i^2`.
+    r"""Effective sample size of weights, :math:`N_\text{eff} = (\sum_i w_i)^2 / \sum_i w_i^2`:
+    :math:`1 / \sum_i w_i^2` for normalised ones.
 
     ``N`` for equal weights, 1 when one particle has all the weight.
 
     Parameters
     ----------
     weights : (N,) array_like
-        Normalised weights (summing to one; not checked).
+        Weights, finite and >= 0, not all 0 (normalised or not).
 
     Returns
     -------
     float
         In ``[1, N]``.
 
+    Raises
+    ------
+    ValueError
+        If ``weights`` is not 1-D, is empty, or a weight is negative or not finite, or all are
+        0 (naming the first bad one).
+
     Examples
     --------
     >>> effective_sample_size([0.25, 0.25, 0.25, 0.25]), effective_sample_size([1.0, 0.0])
     (4.0, 1.0)
+    >>> effective_sample_size([3.0, 1.0])  # the same as (0.75, 0.25)
+    1.6
     """
-    w = np.asarray(weights, dtype=float)
+    w = as_float_array(weights, "weights", ndim=(1,))
+    if w.size == 0:
+        raise ValueError("weights is empty: no particles")
+    bad = ~np.isfinite(w) | (w < 0)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise ValueError(f"weights[{i}] is {w[i]}: weights must be finite and >= 0")
+    total = w.sum()
+    if total == 0:
+        raise ValueError(f"weights are all 0 (of {w.size} particles)")
+    w = w / total
+    return _ess(w)
+
+
+def _ess(w: np.ndarray) -> float:
+    # effective_sample_size of normalised weights, unchecked: the filters' own
     return float(1.0 / np.dot(w, w))
 
 
@@ -434,7 +458,7 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     N, n = x.shape
     if bandwidth is None:
         sd = np.sqrt(np.maximum(np.diagonal(_wcov(x, w)), 1e-300))
-        neff = effective_sample_size(w)
+        neff = _ess(w)
         h = sd * (4.0 / ((n + 2) * neff)) ** (1.0 / (n + 4))
     else:
         h = np.broadcast_to(np.asarray(bandwidth, dtype=float), (n,))
@@ -989,7 +1013,7 @@ class ParticleFilter:
             if modes:
                 assert mode_arr is not None and conf is not None  # allocated when modes
                 mode_arr[t], conf[t] = particle_mode(x, w)
-            ess[t] = effective_sample_size(w)
+            ess[t] = _ess(w)
             if ess[t] < self.ess_threshold * N or self.ess_threshold == 1.0:
                 x = x[RESAMPLERS[self.resampling](w, N, rng)]
                 logw = np.full(N, -math.log(N))

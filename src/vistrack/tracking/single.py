@@ -570,7 +570,8 @@ class ColourParticleTracker(ColourTracker):
     def _follow(self, image: np.ndarray) -> np.ndarray:
         import cv2
 
-        from ..filters import effective_sample_size, resample
+        from ..filters import resample
+        from ..filters.particle import _ess
 
         hsv = _hsv(image)
         bp = self._backproject(hsv)
@@ -590,7 +591,7 @@ class ColourParticleTracker(ColourTracker):
         s = self.size * np.exp(m[2])
         self.box = np.r_[m[:2] - s / 2, s]
         # resample when the effective sample size is below half
-        if effective_sample_size(self.w) < 0.5 * self.n:
+        if _ess(self.w) < 0.5 * self.n:
             idx = resample(self.w, "systematic", rng=self.rng)
             self.x, self.w = self.x[idx], np.full(self.n, 1.0 / self.n)
         self._learn(hsv)
