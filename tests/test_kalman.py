@@ -561,3 +561,37 @@ def test_kf_update_names_the_measurement_when_h_and_r_agree_on_another_size():
         kf_update(g, np.zeros(2), np.eye(3, 4), np.eye(2))
     with pytest.raises(ValueError, match=r"H must have shape \(2, 4\); got \(2, 3\)"):
         kf_update(g, np.zeros(2), np.eye(2, 3), np.eye(2))
+
+
+def test_single_steps_refuse_a_negative_variance_or_a_correlation_beyond_one():
+    """kf_predict, kf_update and kf_step accept every positive semi-definite Q and R (rank
+    deficient ones too: a constant-velocity model's discrete white-noise Q has rank 1 per
+    axis) and refuse a negative variance or a |correlation| above 1 by name; before, Q = -3 I
+    gave a prediction with covariance -2 I and R = -0.5 I an update with -I."""
+    rng = np.random.default_rng(4)
+    g = vt.Gaussian(np.zeros(3), np.eye(3))
+    F, H = np.eye(3), np.eye(3)
+    y = np.ones(3)
+    dt = 0.5
+    G = np.array([dt ** 2 / 2, dt, 1.0])
+    psd = [np.outer(G, G), np.zeros((3, 3)), np.diag([1.0, 0.0, 2.0])]
+    for _ in range(40):
+        A = rng.normal(size=(3, int(rng.integers(1, 4))))
+        psd.append(A @ A.T)
+    for M in psd:
+        assert np.linalg.eigvalsh(M).min() >= -1e-12  # the oracle: semi-definite
+        kf_predict(g, F, M)
+        kf_update(g, y, H, M + np.eye(3) * 1e-9)
+        kf_step(g, y, F, M, H, M + np.eye(3) * 1e-9)
+    bad = [-0.5 * np.eye(3), np.diag([1.0, -1e-3, 1.0]),
+           np.array([[1.0, 2.0, 0.0], [2.0, 1.0, 0.0], [0.0, 0.0, 1.0]])]
+    for M in bad:
+        assert np.linalg.eigvalsh(M).min() < 0
+        with pytest.raises(ValueError, match=r"^Q must be positive semi-definite"):
+            kf_predict(g, F, M)
+        with pytest.raises(ValueError, match=r"^R must be positive semi-definite"):
+            kf_update(g, y, H, M)
+        with pytest.raises(ValueError, match=r"^Q must be positive semi-definite"):
+            kf_step(g, y, F, M, H, np.eye(3))
+        with pytest.raises(ValueError, match=r"^R must be positive semi-definite"):
+            kf_step(g, y, F, np.eye(3), H, M)

@@ -111,7 +111,8 @@ def predict_batch(mean_in, cov_in, F2, Q2):
     """Predict a batch of Gaussians ``mean (..., n)``, ``cov (..., n, n)`` with ``F, Q (n, n)``.
 
     Returns ``(code, mean, cov)`` shaped like the inputs; ``code`` is -1, or 1 if ``F`` is not
-    finite, 2 if ``Q`` is not, 3 if ``Q`` is not symmetric.
+    finite, 2 if ``Q`` is not, 3 if ``Q`` is not symmetric, 8 if a variance of ``Q`` is
+    negative or a correlation beyond ±1.
     """
     n = F2.shape[0]
     F = F2.reshape((1, n, n))
@@ -322,8 +323,9 @@ def update_chunk(H, R, th, tr, yv, xp, Pp, x, P, AP, W, U, K, S, e, wv, obs, nob
 
 @njit(cache=True)
 def check_matrices(F, Q, sym_tol):
-    """0 if ``F`` and ``Q`` (``(1, n, n)`` / ``(1, r, r)``) are finite and ``Q`` symmetric; 1 if
-    ``F`` has a non-finite entry, 2 if ``Q`` has, 3 if ``Q`` is not symmetric."""
+    """0 if ``F`` and ``Q`` (``(1, n, n)`` / ``(1, r, r)``) are finite and ``Q`` symmetric with
+    variances >= 0 and correlations within ±1; 1 if ``F`` has a non-finite entry, 2 if ``Q``
+    has, 3 if ``Q`` is not symmetric, 8 if a variance or a correlation is not."""
     for v in F.ravel():
         if not math.isfinite(v):
             return 1
@@ -336,6 +338,18 @@ def check_matrices(F, Q, sym_tol):
             a, b = Q[0, i, k], Q[0, k, i]
             if abs(a - b) > sym_tol * max(abs(a), abs(b), 1e-300):
                 return 3
+    # what semi-definiteness asks of each variance and each pair: no variance below 0, no
+    # covariance beyond the product of the standard deviations (the full test costs more
+    # than a step; kalman_filter makes it)
+    top = 0.0
+    for i in range(r):
+        top = max(top, abs(Q[0, i, i]))
+    for i in range(r):
+        if Q[0, i, i] < -sym_tol * top:
+            return 8
+        for k in range(i + 1, r):
+            if Q[0, i, k] ** 2 > Q[0, i, i] * Q[0, k, k] * (1.0 + sym_tol) + (sym_tol * top) ** 2:
+                return 8
     return 0
 
 
@@ -343,7 +357,8 @@ def check_matrices(F, Q, sym_tol):
 def update_batch(mean_in, cov_in, y_in, H2, R2):
     """Correct a batch ``mean (..., n)``, ``cov (..., n, n)`` with ``y (..., m)``; ``H (m, n)``,
     ``R (m, m)``. Returns ``(code, mean, cov, loglik)`` shaped like the inputs; ``code`` is -1, or
-    1 ``H`` not finite, 2 ``R`` not finite, 3 ``R`` not symmetric, 4 ``S`` not positive definite.
+    1 ``H`` not finite, 2 ``R`` not finite, 3 ``R`` not symmetric, 4 ``S`` not positive definite,
+    8 a variance of ``R`` negative or a correlation beyond ±1.
     """
     m, n = H2.shape
     H = H2.reshape((1, m, n))
@@ -759,8 +774,8 @@ def update_one(H, R, th, tr, y, xp, Pp, x, P, idx, e, Ut, KT, S, L, AP, W, n, m)
 @njit(cache=True, fastmath=_FM)
 def step_batch(mean_in, cov_in, y_in, F2, Q2, H2, R2):
     """Predict with ``F, Q`` then correct with ``y, H, R``, for a batch of Gaussians of any batch
-    shape. Returns ``(code, mean, cov, loglik)``; codes as :func:`predict_batch` (1-3) and
-    :func:`update_batch` (5-7 for H/R, 4 for S)."""
+    shape. Returns ``(code, mean, cov, loglik)``; codes as :func:`predict_batch` (1-3, 8) and
+    :func:`update_batch` (5-7 and 12 for H/R, 4 for S)."""
     code, pm, pc = predict_batch(mean_in, cov_in, F2, Q2)
     if code >= 0:
         return code, pm, pc, np.empty(y_in.shape[:-1])

@@ -368,6 +368,10 @@ _KERNEL_ERRORS = {
     5: "H must be finite",
     6: "R must be finite",
     7: "R must be symmetric",
+    8: "{b} must be positive semi-definite: a variance (diagonal entry) is negative, or a "
+    "covariance is larger than the product of its two standard deviations",
+    12: "R must be positive semi-definite: a variance (diagonal entry) is negative, or a "
+    "covariance is larger than the product of its two standard deviations",
 }
 
 
@@ -421,8 +425,8 @@ def kf_step(
         If ``g`` is not a :class:`~vistrack.types.Gaussian`.
     ValueError
         If a shape disagrees, ``y`` is infinite (NaN is a missing value), a matrix is not
-        finite, ``Q`` or ``R`` is not symmetric, or an innovation covariance is not positive
-        definite.
+        finite, ``Q`` or ``R`` is not symmetric or has a negative variance or a correlation
+        beyond ±1, or an innovation covariance is not positive definite.
 
     Examples
     --------
@@ -456,8 +460,9 @@ def kf_predict(g: Gaussian, F: ArrayLike, Q: ArrayLike) -> Gaussian:
     g : Gaussian
         Estimates, batch shape ``(...)``, state size ``n``.
     F, Q : (n, n) array_like
-        Checked for shape, finiteness and the symmetry of ``Q`` (not for definiteness, which
-        would cost more than the prediction; :func:`kalman_filter` checks it).
+        Checked for shape, finiteness, the symmetry of ``Q`` and what semi-definiteness asks
+        of each variance and pair (variances >= 0, correlations within ±1); the full test of
+        definiteness would cost more than the prediction (:func:`kalman_filter` makes it).
 
     Returns
     -------
@@ -469,7 +474,8 @@ def kf_predict(g: Gaussian, F: ArrayLike, Q: ArrayLike) -> Gaussian:
     TypeError
         If ``g`` is not a :class:`~vistrack.types.Gaussian`.
     ValueError
-        If ``F`` or ``Q`` has the wrong shape or is not finite, or ``Q`` is not symmetric.
+        If ``F`` or ``Q`` has the wrong shape or is not finite, or ``Q`` is not symmetric or
+        has a negative variance or a correlation beyond ±1.
 
     Examples
     --------
@@ -514,8 +520,9 @@ def kf_update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> Gaussian
         One measurement per Gaussian; NaN components are missing (an all-NaN row leaves that
         Gaussian unchanged).
     H, R : (m, n) and (m, m) array_like
-        Checked for shape, finiteness and the symmetry of ``R``; a non-positive-definite
-        innovation covariance raises ``ValueError``.
+        Checked for shape, finiteness, the symmetry of ``R`` and its variances (>= 0) and
+        correlations (within ±1); a non-positive-definite innovation covariance raises
+        ``ValueError``.
 
     Returns
     -------
@@ -528,8 +535,8 @@ def kf_update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> Gaussian
         If ``g`` is not a :class:`~vistrack.types.Gaussian`.
     ValueError
         If a shape disagrees, ``y`` is infinite (NaN is a missing value), ``H`` or ``R`` is
-        not finite, ``R`` is not symmetric, or an innovation covariance is not positive
-        definite.
+        not finite, ``R`` is not symmetric or has a negative variance or a correlation beyond
+        ±1, or an innovation covariance is not positive definite.
 
     References
     ----------
