@@ -52,6 +52,29 @@ def test_a_trail_ends_with_its_track():
     assert (np.abs(back[60, 35].astype(int) - colour) < 60).all()
 
 
+def test_labels_and_lines_grow_with_a_large_image():
+    """On a 4K frame (2880 rows: 4 times 720) the frame label, the identity's number and the
+    box's line are 4 times as large as on a PAL frame (576 rows); before, they kept their PAL
+    size and were hard to read on a 4000x3000 image."""
+
+    def extents(h, w, scale):
+        tracks = Tracks(ids=np.array([7]), boxes=np.array([[w / 2, h / 2, w / 2 + 60 * scale,
+                                                            h / 2 + 150 * scale]]),
+                        points=None, scores=np.ones(1), classes=np.zeros(1))
+        out = Annotator().draw(np.full((h, w, 3), 128, np.uint8), tracks, label="frame 101")
+        dark = np.flatnonzero((out[:, 6 * scale] == 0).all(axis=1))  # the label's black box
+        row = out[h // 2 + 75 * scale, w // 2 - 20 * scale: w // 2 + 20 * scale]
+        line = int((row != 128).any(axis=1).sum())  # the box's left side, across
+        number = np.flatnonzero((out[: h // 2, w // 2: w // 2 + 60 * scale] != 128).any(axis=2)
+                                .any(axis=1))  # the identity's number, above the box
+        return dark.max() - dark.min() + 1, line, number.max() - number.min() + 1
+
+    (label, line, number), (label4, line4, number4) = extents(576, 768, 1), extents(2880, 3840, 4)
+    assert 3.4 <= label4 / label <= 4.6 and 3.4 <= number4 / number <= 4.6
+    # a line of thickness t covers t + 1 pixels across: 2 -> 3, 8 -> 9
+    assert (line, line4) == (3, 9)
+
+
 def test_hota_over_alpha_is_drawn_from_the_scores(tmp_path, capsys):
     from tests.test_fit import _sequence
     from vistrack.cli import main

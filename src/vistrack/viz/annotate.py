@@ -143,14 +143,20 @@ class Annotator:
         import cv2
 
         out = image.copy() if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+        # text and lines grow with images larger than 720 pixels on their short side, so that
+        # they read on a 4K frame as on a PAL one (sizes below are at scale 1)
+        z = max(1.0, min(out.shape[:2]) / 720)
+        thin, thick = max(1, round(z)), max(2, round(2 * z))
         if label:
             # white on a black box: an outlined label read double ("frame 101" as "1011") on
             # a light background once the video was compressed. Drawn first: the tracks go
             # over it, so it hides none
-            (w, h), base = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.6, 1)
-            cv2.rectangle(out, (4, 22 - h - 5), (12 + w, 22 + base + 2), (0, 0, 0), -1)
-            cv2.putText(out, label, (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (255, 255, 255), 1,
-                        cv2.LINE_AA)
+            (w, h), base = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * z, thin)
+            y = round(22 * z)
+            cv2.rectangle(out, (round(4 * z), y - h - round(5 * z)),
+                          (round(12 * z) + w, y + base + round(2 * z)), (0, 0, 0), -1)
+            cv2.putText(out, label, (round(8 * z), y), cv2.FONT_HERSHEY_SIMPLEX, 0.6 * z,
+                        (255, 255, 255), thin, cv2.LINE_AA)
         self._n += 1
         boxes = tracks.boxes
         # tracks without boxes have points
@@ -168,7 +174,7 @@ class Annotator:
             # centres are kept for ``trail`` frames, so that it goes on if the track returns)
             if i in present and len(t) > 1:
                 pts = np.round(np.array(t)).astype(np.int32).reshape(-1, 1, 2)
-                cv2.polylines(out, [pts], False, id_colour(i), 2, cv2.LINE_AA)
+                cv2.polylines(out, [pts], False, id_colour(i), thick, cv2.LINE_AA)
         covs = getattr(tracks, "covs", None)
         for k, i in enumerate(tracks.ids.tolist()):
             c = id_colour(i)
@@ -179,16 +185,17 @@ class Annotator:
                 ang = float(np.degrees(np.arctan2(vec[1, 1], vec[0, 1])))
                 cv2.ellipse(out, (int(round(cx)), int(round(cy))),
                             (max(int(round(ax[1])), 1), max(int(round(ax[0])), 1)), ang, 0, 360,
-                            c, 1, cv2.LINE_AA)
+                            c, thin, cv2.LINE_AA)
             if boxes is not None:
                 x0, y0, x1, y1 = np.round(boxes[k]).astype(int)
-                cv2.rectangle(out, (x0, y0), (x1, y1), c, 2)
-                org = (x0, max(y0 - 4, 12))
+                cv2.rectangle(out, (x0, y0), (x1, y1), c, thick)
+                org = (x0, max(y0 - round(4 * z), round(12 * z)))
             else:
-                cv2.circle(out, (int(round(cx)), int(round(cy))), 3, c, -1)
-                org = (int(cx) + 4, int(cy) - 4)
-            cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 3, cv2.LINE_AA)
-            cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5, c, 1, cv2.LINE_AA)
+                cv2.circle(out, (int(round(cx)), int(round(cy))), round(3 * z), c, -1)
+                org = (int(cx) + round(4 * z), int(cy) - round(4 * z))
+            cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z, (0, 0, 0),
+                        max(3, round(3 * z)), cv2.LINE_AA)
+            cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z, c, thin, cv2.LINE_AA)
         return out
 
 
