@@ -138,6 +138,25 @@ def test_a_ground_truth_gone_is_said(run_dir, tmp_path):
     assert f"<td>{100 * info['scores']['HOTA']:.1f}</td>" in page  # the scores kept in run.json
 
 
+def test_a_video_or_plot_gone_is_said(run_dir, tmp_path, capsys):
+    """A folder whose annotated.mp4 (or trajectories.png) was removed gets a page that says
+    so, and a warning; before, the page left the video out without a word."""
+    moved = tmp_path / "moved"
+    shutil.copytree(run_dir, moved)
+    (moved / "annotated.mp4").unlink()
+    assert main(["report", str(moved), "--force"]) == 0
+    page = (moved / "report.html").read_text()
+    assert "<video" not in page and page.count("<img ") == 3  # trajectories, HOTA, timeline
+    assert f"No annotated.mp4 in {moved} when this page was written: no annotated video." in page
+    assert f"warning: {moved}: no annotated.mp4: the report has no annotated video" in \
+        capsys.readouterr().err
+    (moved / "trajectories.png").unlink()
+    assert main(["report", str(moved), "--force"]) == 0
+    assert ("no annotated.mp4 nor trajectories.png: the report has no annotated video nor "
+            "plot of the trajectories") in capsys.readouterr().err
+    assert (moved / "report.html").read_text().count("<img ") == 2
+
+
 def test_a_run_description_that_is_not_an_object_is_named(run_dir, tmp_path, capsys):
     """A run.json holding a JSON list (or number) failed with AttributeError: 'list' object
     has no attribute 'get'."""

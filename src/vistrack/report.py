@@ -24,6 +24,7 @@ import json
 import os
 import sys
 import tempfile
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -173,6 +174,11 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
         If ``run.json`` cannot be read, naming it.
     vistrack.io.VideoError
         If the video cannot be read, naming it.
+
+    Warns
+    -----
+    RuntimeWarning
+        If ``annotated.mp4`` or ``trajectories.png`` is not there (the page says so too).
     """
     from .io.atomic import check_output, replacing
     from .pipeline import REPORT, RUN_INFO, SINK_FILES
@@ -219,6 +225,16 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
                      "<p id='video-note' class='note' hidden>This browser cannot play the "
                      "video (WebM, VP8): annotated.mp4 beside this page is the same.</p>")
     plot = out_dir / SINK_FILES["plot"]
+    absent = [f.name for f in (video, plot) if not f.is_file()]
+    part = {video.name: "annotated video", plot.name: "plot of the trajectories"}
+    if absent:
+        # removed, or never written (a run stopped before its end): said, not left out
+        what = " nor ".join(absent)
+        warnings.warn(f"{out_dir}: no {what}: the report has no "
+                      f"{' nor '.join(part[a] for a in absent)}", RuntimeWarning, stacklevel=2)
+        parts.append(f"<p class='note'>No {html.escape(what)} in {html.escape(str(out_dir))} "
+                     f"when this page was written: no {' nor '.join(part[a] for a in absent)}."
+                     "</p>")
     figures = ([("Trajectories", plot.read_bytes())] if plot.is_file() else [])
     figures += _gt_plots(tracks, name, info)
     if info.get("gt") and not Path(info["gt"]).is_file():
