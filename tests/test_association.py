@@ -66,6 +66,11 @@ def test_mahalanobis_and_gate():
     np.testing.assert_allclose(mahalanobis(zp, S, z), want, rtol=1e-10)
     assert chi2_gate(np.array([[9.20, 9.22]]), 2).tolist() == [[True, False]]  # chi2(2) 99 %
     np.testing.assert_allclose(euclidean([[0, 0]], [[3, 4]]), [[5.0]])
+    with pytest.raises(ValueError, match=r"^a must be points, \(N, d\) or one \(d,\); got "
+                       r"shape \(2, 3, 2\)$"):  # before: "must have the same point size"
+        euclidean(np.zeros((2, 3, 2)), np.zeros((2, 2)))
+    with pytest.raises(ValueError, match="same point size"):
+        euclidean(np.zeros((2, 3)), np.zeros((2, 2)))
     with pytest.raises(ValueError, match=r"S must have shape \(5, 3, 3\)"):
         mahalanobis(zp, S[:2], z)
 

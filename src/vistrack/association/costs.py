@@ -171,7 +171,7 @@ def euclidean(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If the points of ``a`` and ``b`` differ in size.
+        If ``a`` or ``b`` is not 1-D or 2-D, or their points differ in size.
 
     Examples
     --------
@@ -180,6 +180,9 @@ def euclidean(a: ArrayLike, b: ArrayLike) -> np.ndarray:
            [ 5.,  5.]])
     """
     a, b = np.atleast_2d(np.asarray(a, dtype=float)), np.atleast_2d(np.asarray(b, dtype=float))
+    for name, x in (("a", a), ("b", b)):
+        if x.ndim != 2:
+            raise ValueError(f"{name} must be points, (N, d) or one (d,); got shape {x.shape}")
     if a.shape[1] != b.shape[1]:
         raise ValueError(f"a and b must have the same point size; got {a.shape} and {b.shape}")
     return np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(-1))
