@@ -126,3 +126,29 @@ def test_jpda_reduces_to_pda_and_cheap_jpda_is_a_distribution():
     assert np.all(beta[~gate] == 0) and np.all(beta >= 0)
     with pytest.raises(ValueError, match="clutter_density must be > 0"):
         pda_weights(lik, gate, clutter_density=0.0)
+
+
+def test_a_certain_detection_p_detect_and_p_gate_1_is_the_limit_of_nearly_certain():
+    """P_D P_G = 1 makes every event that misses a track weigh 0. The weights are then the
+    limit of P_G -> 1: a track with nothing in its gate kept (beta0 = 1), and two tracks that
+    can share one detection only split it by their likelihoods. Before, both gave NaN."""
+    from vistrack.association import jpda_weights, pda_weights
+
+    b, b0 = pda_weights(np.array([[0.5, 0.2]]), np.array([[False, False]]), p_detect=1.0,
+                        p_gate=1.0)
+    assert b.tolist() == [[0.0, 0.0]] and b0.tolist() == [1.0]
+    rng = np.random.default_rng(2)
+    for _ in range(200):
+        T, D = rng.integers(1, 5, 2)
+        lik = rng.uniform(0.01, 1.0, (T, D))
+        gate = rng.random((T, D)) < 0.6
+        b, b0 = jpda_weights(lik, gate, p_detect=1.0, p_gate=1.0)
+        near, near0 = jpda_weights(lik, gate, p_detect=1.0, p_gate=1.0 - 1e-9)
+        assert np.isfinite(b).all() and np.isfinite(b0).all()
+        np.testing.assert_allclose(b, near, atol=1e-6)
+        np.testing.assert_allclose(b0, near0, atol=1e-6)
+        np.testing.assert_allclose(b.sum(1) + b0, 1.0)
+        pb, pb0 = pda_weights(lik, gate, p_detect=1.0, p_gate=1.0)
+        pn, pn0 = pda_weights(lik, gate, p_detect=1.0, p_gate=1.0 - 1e-9)
+        np.testing.assert_allclose(pb, pn, atol=1e-6)
+        np.testing.assert_allclose(pb0, pn0, atol=1e-6)

@@ -122,7 +122,8 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
         Probability that detection ``j`` is track ``t``'s; 0 outside the gate.
     beta0 : (T,) ndarray
         Probability that no detection is the track's. Each row of ``beta`` and its ``beta0``
-        sum to one.
+        sum to one (with :math:`P_D P_G = 1` and no detection in the gate, ``beta0`` is 1:
+        the limit as :math:`P_G \to 1`).
 
     Raises
     ------
@@ -149,7 +150,11 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     G = np.where(gate, p_detect * np.asarray(lik, dtype=float) / clutter_density, 0.0)
     B = 1.0 - p_detect * p_gate
     den = B + G.sum(1)
-    return G / den[:, None], B / den
+    # P_D P_G = 1 and nothing in the gate: a detection certain to be there is not; the track
+    # is left as it is (beta0 = 1), as jpda_weights leaves a track with none in its gate
+    none = den == 0
+    den[none] = 1.0
+    return G / den[:, None], np.where(none, 1.0, B / den)
 
 
 def _exact(G: np.ndarray, B: float) -> tuple[np.ndarray, np.ndarray]:
@@ -182,7 +187,44 @@ def _exact(G: np.ndarray, B: float) -> tuple[np.ndarray, np.ndarray]:
         choice[t] = -1
 
     rec(0, 1.0)
-    return beta / total, beta0 / total
+    if total > 0:
+        return beta / total, beta0 / total
+    return _fewest_missed(G)
+
+
+def _fewest_missed(G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_exact` in the limit B -> 0 (P_D P_G = 1, where every event that misses a track
+    weighs 0): an event weighs ``B^m`` times its pairs' product, ``m`` the tracks it misses,
+    so as B vanishes only the events that miss the fewest tracks count."""
+    T, D = G.shape
+    best = [T + 1, 0.0, np.zeros((T, D)), np.zeros(T)]  # fewest missed, total, beta, beta0
+    taken = np.zeros(D, bool)
+    choice = np.full(T, -1)
+
+    def rec(t: int, w: float, missed: int) -> None:
+        if missed > best[0]:
+            return
+        if t == T:
+            if missed < best[0]:
+                best[:] = [missed, 0.0, np.zeros((T, D)), np.zeros(T)]
+            best[1] += w
+            for s in range(T):
+                if choice[s] < 0:
+                    best[3][s] += w
+                else:
+                    best[2][s, choice[s]] += w
+            return
+        for j in np.flatnonzero(G[t] > 0):
+            if not taken[j]:
+                taken[j] = True
+                choice[t] = j
+                rec(t + 1, w * G[t, j], missed)
+                taken[j] = False
+        choice[t] = -1
+        rec(t + 1, w, missed + 1)
+
+    rec(0, 1.0, 0)
+    return best[2] / best[1], best[3] / best[1]
 
 
 def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
@@ -226,6 +268,8 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
         Marginal probability that detection ``j`` is track ``t``'s; 0 outside the gate.
     beta0 : (T,) ndarray
         Probability that no detection is the track's (1 for a track with none in its gate).
+        With :math:`P_D P_G = 1`, where every event that misses a track weighs 0, the limit
+        as :math:`P_G \to 1`: the events that miss the fewest tracks.
 
     Raises
     ------
