@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import as_float_array, as_rng, check_has_steps, check_prior
-from ..models.adapters import MeasurementFunctions, MotionFunctions, psd_sqrt
+from ..models.adapters import MeasurementFunctions, MotionFunctions, _plain_mean, psd_sqrt
 from ..models.protocols import (
     MeasurementModel,
     MotionModel,
@@ -257,7 +257,9 @@ def _enkf_update(ens: Ensemble, y: ArrayLike,
     y = check_y(y, X.shape[:-2], me.m)
     obs = ~np.isnan(y)
     Z = np.asarray(me.h(X), dtype=float)  # (..., N, m)
-    zbar = Z.mean(-2)
+    # the members' mean measurement: circular for angles (bearings either side of π average
+    # to π, not 0), as the model's mean gives it
+    zbar = Z.mean(-2) if me.mean is _plain_mean else me.mean(Z, np.full(Z.shape[-2], 1.0 / Z.shape[-2]))
     dZ = me.residual(Z, zbar[..., None, :]) * obs[..., None, :]
     dX = X - X.mean(-2)[..., None, :]
     C = np.swapaxes(dX, -1, -2) @ dZ / (N - 1)

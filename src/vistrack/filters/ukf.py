@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 from .._jit import njit
 from .._prebuilt import kernel
 from ..models.adapters import MeasurementFunctions, MotionFunctions
+from ..models.nonlinear import _offset_mean
 from ..models.protocols import (
     MeasurementModel,
     MotionModel,
@@ -94,10 +95,11 @@ def _points_one(x, P, scale, out):
 def _state_moments_one(Y, Wm, Wc, Q, mean, cov):
     K, n = Y.shape
     for k in range(n):
+        # about the first point, as _offset_mean: W_0 is about -10^6
         v = 0.0
-        for i in range(K):
-            v += Wm[i] * Y[i, k]
-        mean[k] = v
+        for i in range(1, K):
+            v += Wm[i] * (Y[i, k] - Y[0, k])
+        mean[k] = Y[0, k] + v
     for a in range(n):
         for b in range(a + 1):
             v = Q[a, b]
@@ -129,10 +131,11 @@ def _update_one(G, Z, Wm, Wc, R, y, angles, x, P, xo, Po):
                 c += Wm[i] * math.cos(Z[i, k])
             zhat[k] = math.atan2(s, c)
         else:
+            # about the first point, as _offset_mean: W_0 is about -10^6
             v = 0.0
-            for i in range(K):
-                v += Wm[i] * Z[i, k]
-            zhat[k] = v
+            for i in range(1, K):
+                v += Wm[i] * (Z[i, k] - Z[0, k])
+            zhat[k] = Z[0, k] + v
     rz = np.empty((K, m))
     e = np.empty(m)
     nobs = 0
@@ -536,7 +539,7 @@ def ukf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
 
 
 def _wmean(z: np.ndarray, w: np.ndarray) -> np.ndarray:
-    return np.einsum("...km,k->...m", z, w)
+    return _offset_mean(z, w)
 
 
 def _sub(a: np.ndarray, b: np.ndarray) -> np.ndarray:

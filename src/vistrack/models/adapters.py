@@ -11,7 +11,7 @@ from typing import cast
 
 import numpy as np
 
-from .nonlinear import AngleAwareMeasurement
+from .nonlinear import AngleAwareMeasurement, _offset_mean, _residual, _weighted_mean
 from .protocols import (
     MeasurementModel,
     MotionModel,
@@ -140,7 +140,7 @@ def _plain_residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _plain_mean(z: np.ndarray, w: np.ndarray) -> np.ndarray:
-    return np.einsum("...km,k->...m", z, w)
+    return _offset_mean(z, w)
 
 
 class MeasurementFunctions:
@@ -204,8 +204,13 @@ class MeasurementFunctions:
             )
         self.Rm = np.asarray(model.R(), dtype=float)
         self.m = self.Rm.shape[-1]
-        self.residual = residual or getattr(model, "residual", None) or _plain_residual
-        self.mean = mean or getattr(model, "mean", None) or _plain_mean
+        angles = tuple(int(k) for k in getattr(model, "angles", ()))
+        # a model with angles but no residual or mean of its own: its angles wrapped and
+        # averaged on the circle all the same, as the compiled kernels do (angle_mask)
+        self.residual = residual or getattr(model, "residual", None) or (
+            (lambda a, b: _residual(a, b, angles)) if angles else _plain_residual)
+        self.mean = mean or getattr(model, "mean", None) or (
+            (lambda z, w: _weighted_mean(z, w, angles)) if angles else _plain_mean)
         # "standard": residuals are differences (angles wrapped) and means weighted sums
         # (circular for angles), which the compiled one-Gaussian kernels reproduce
         own = type(model)
