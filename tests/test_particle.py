@@ -166,6 +166,28 @@ def test_effective_sample_size_of_any_weights_and_what_it_refuses():
             effective_sample_size(bad)
 
 
+@pytest.mark.parametrize("d", [1, 2, 4])
+def test_the_mode_of_one_peak_holds_all_the_weight(d):
+    """20,000 particles of a standard normal: one peak, so the mode's confidence is 1 and the
+    mode near 0. Starts in the tails that had not climbed the broad peak within the
+    mean-shift's steps, or stopped on a bump of a few particles, were peaks of their own:
+    confidence 0.17, 0.34 and 0.25 in 1, 2 and 4 dimensions."""
+    x = np.random.default_rng(0).normal(size=(20000, d))
+    mode, conf = particle_mode(x, np.full(20000, 1 / 20000))
+    assert conf == 1.0
+    assert np.abs(mode).max() < 0.3
+    if d == 1:
+        # a gamma(3) cloud's mode is its density's, 2: over 10 clouds (one cloud's estimate
+        # errs by 0.16, a standard deviation over 30 of them), within 3 standard errors
+        modes = []
+        for seed in range(10):
+            g = np.random.default_rng(seed).gamma(3.0, size=(20000, 1))
+            mode, conf = particle_mode(g, np.full(20000, 1 / 20000))
+            assert conf == 1.0
+            modes.append(mode[0])
+        assert abs(np.mean(modes) - 2.0) < 3 * 0.16 / np.sqrt(10)
+
+
 def test_mode_finds_the_tallest_peak_and_its_weight():
     rng = np.random.default_rng(0)
     x = np.concatenate([rng.normal([-6, 0], 1.0, (4000, 2)), rng.normal([5, 3], 0.7, (2000, 2))])

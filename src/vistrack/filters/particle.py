@@ -398,8 +398,10 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     A mean-shift with a Gaussian kernel of covariance ``bandwidth²`` (per dimension; default
     Silverman's rule on the weighted covariance) runs from the weighted mean and from
     ``n_starts - 1`` particles drawn by weight, so that every sizeable peak gets a start. End
-    points closer than one bandwidth are one peak; the peak with the highest kernel density
-    wins. Its confidence is the share of the weight of the particles nearer to it than to any
+    points closer than one bandwidth are one peak, and so are two with no real valley between
+    them (the density along the segment never a quarter below the lower end's: a start
+    still climbing a broad peak, or stopped on a bump of a few particles); the peak with the
+    highest kernel density wins. Its confidence is the share of the weight of the particles nearer to it than to any
     other peak found. Clouds larger than ``max_points`` are subsampled by systematic
     resampling for the search (the confidence uses every particle). The search draws from a
     generator of its own, so the estimate does not change the filter's random draws.
@@ -483,7 +485,37 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
         if all(((p - q) ** 2).sum() > 1.0 for q in peaks):
             peaks.append(p)
     P = np.array(peaks)
-    dens = (ws * np.exp(-0.5 * ((P[:, None, :] - z[None]) ** 2).sum(-1))).sum(1)
+
+    def density(points: np.ndarray) -> np.ndarray:
+        return (ws * np.exp(-0.5 * ((points[:, None, :] - z[None]) ** 2).sum(-1))).sum(1)
+
+    dens = density(P)
+    if len(P) > 1:
+        # a start from a far tail climbs a broad peak by a small fraction of its distance a
+        # step (h²/(σ² + h²) on a Gaussian) and may not have arrived, or stops on a bump of
+        # the kernel estimate (a few particles in a tail): two end points are one peak where
+        # the density along the segment between them stays within a quarter of the lower of
+        # the two (no real valley: two equal normals 3σ apart dip 36 % between them, 2.6σ
+        # apart 17 %), and the peak is the higher end. On 20,000 particles of a normal, the
+        # tail starts counted as peaks of their own gave confidence 0.17 in 1-D, 0.25 in 4-D.
+        a, b = np.triu_indices(len(P), 1)
+        t = np.linspace(0.1, 0.9, 9)[None, :, None]
+        seg = (P[a][:, None] + t * (P[b] - P[a])[:, None]).reshape(-1, n)
+        low = density(seg).reshape(len(a), -1).min(1)
+        same = low >= 0.75 * np.minimum(dens[a], dens[b])
+        root = list(range(len(P)))
+
+        def find(i: int) -> int:
+            while root[i] != i:
+                i = root[i]
+            return i
+
+        for i, j in zip(a[same], b[same]):
+            ri, rj = find(int(i)), find(int(j))
+            if ri != rj:
+                root[min(ri, rj, key=lambda r: dens[r])] = max(ri, rj, key=lambda r: dens[r])
+        keep = [i for i in range(len(P)) if find(i) == i]
+        P, dens = P[keep], dens[keep]
     best = int(np.argmax(dens))
     nearest = np.argmin(((x[:, None, :] / h - P[None]) ** 2).sum(-1), axis=1)
     return P[best] * h, min(1.0, float(w[nearest == best].sum()))
