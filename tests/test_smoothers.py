@@ -88,3 +88,23 @@ def test_rts_equals_filterpy_rts_smoother(rng, tv):
     sm = rts_smooth(res, F=mod["F"], Q=mod["Q"])
     np.testing.assert_allclose(sm.means, xs, rtol=1e-8, atol=1e-10)
     np.testing.assert_allclose(sm.covs, Ps, rtol=1e-8, atol=1e-10)
+
+
+def test_two_filter_smooth_names_an_exact_measurement():
+    """R singular on the observed components (the second component measured exactly): the
+    information filter cannot add H' R^-1 H, and says so with the step and the way out,
+    rts_smooth, which smooths it (its result at the last step is the filter's). Before:
+    numpy's LinAlgError, "Singular matrix"."""
+    rng = np.random.default_rng(90)
+    F, Q = 0.5 * rng.normal(size=(3, 3)), 0.1 * np.eye(3)
+    H, R = rng.normal(size=(2, 3)), np.array([[1.0, 0.0], [0.0, 0.0]])
+    ys = rng.normal(size=(10, 2))
+    model = dict(F=F, Q=Q, H=H, R=R, x0=np.zeros(3), P0=np.eye(3))
+    with pytest.raises(ValueError, match=r"^R at step 9 is singular on the observed "
+                       r"components: .*rts_smooth"):
+        two_filter_smooth(ys, **model)
+    fwd = kalman_filter(ys, **model)
+    sm = rts_smooth(fwd, F=F, Q=Q)
+    np.testing.assert_allclose(sm.means[-1], fwd.means[-1])
+    # the exact component is the measurement at every step
+    np.testing.assert_allclose((sm.means @ H.T)[:, 1], ys[:, 1], atol=1e-8)

@@ -257,7 +257,8 @@ def two_filter_smooth(
     Raises
     ------
     ValueError
-        As :func:`kalman_filter` raises.
+        As :func:`kalman_filter` raises; or if ``R`` is singular on the components observed
+        at a step (an exact measurement, which :func:`rts_smooth` smooths), naming the step.
 
     See Also
     --------
@@ -315,7 +316,13 @@ def two_filter_smooth(
         obs = ~np.isnan(y[:, t])  # (B, m)
         both = obs[:, :, None] & obs[:, None, :]
         Rm = np.where(both, Rt, np.eye(m))  # decouple missing components
-        W = np.linalg.solve(Rm, np.eye(m)) * both  # R_oo^-1 embedded, zero on missing
+        try:
+            W = np.linalg.solve(Rm, np.eye(m)) * both  # R_oo^-1 embedded, zero on missing
+        except np.linalg.LinAlgError:
+            raise ValueError(
+                f"R at step {t} is singular on the observed components: the backward filter "
+                "adds the information H' R^-1 H, which an exact measurement makes infinite "
+                "(rts_smooth of kalman_filter's result smooths it)") from None
         yt = np.where(obs, y[:, t], 0.0)
         HtW = Ht.T @ W  # (B, n, m)
         Lam = Lam + HtW @ Ht
