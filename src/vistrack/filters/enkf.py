@@ -259,7 +259,7 @@ def _enkf_update(ens: Ensemble, y: ArrayLike,
     Z = np.asarray(me.h(X), dtype=float)  # (..., N, m)
     # the members' mean measurement: circular for angles (bearings either side of π average
     # to π, not 0), as the model's mean gives it
-    zbar = Z.mean(-2) if me.mean is _plain_mean else me.mean(Z, np.full(Z.shape[-2], 1.0 / Z.shape[-2]))
+    zbar = Z.mean(-2) if me.mean is _plain_mean else me.mean(Z, np.full(N, 1.0 / N))
     dZ = me.residual(Z, zbar[..., None, :]) * obs[..., None, :]
     dX = X - X.mean(-2)[..., None, :]
     C = np.swapaxes(dX, -1, -2) @ dZ / (N - 1)

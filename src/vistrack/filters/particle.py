@@ -401,10 +401,11 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     points closer than one bandwidth are one peak, and so are two with no real valley between
     them (the density along the segment never a quarter below the lower end's: a start
     still climbing a broad peak, or stopped on a bump of a few particles); the peak with the
-    highest kernel density wins. Its confidence is the share of the weight of the particles nearer to it than to any
-    other peak found. Clouds larger than ``max_points`` are subsampled by systematic
-    resampling for the search (the confidence uses every particle). The search draws from a
-    generator of its own, so the estimate does not change the filter's random draws.
+    highest kernel density wins. Its confidence is the share of the weight of the particles
+    nearer to it than to any other peak found. Clouds larger than ``max_points`` are
+    subsampled by systematic resampling for the search (the confidence uses every particle).
+    The search draws from a generator of its own, so the estimate does not change the
+    filter's random draws.
 
     Each mean-shift step moves a point :math:`p` to the kernel-weighted mean of the
     particles,
