@@ -226,14 +226,14 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
                      "video (WebM, VP8): annotated.mp4 beside this page is the same.</p>")
     plot = out_dir / SINK_FILES["plot"]
     absent = [f.name for f in (video, plot) if not f.is_file()]
-    part = {video.name: "annotated video", plot.name: "plot of the trajectories"}
+    shown = {video.name: "annotated video", plot.name: "plot of the trajectories"}
     if absent:
         # removed, or never written (a run stopped before its end): said, not left out
         what = " nor ".join(absent)
         warnings.warn(f"{out_dir}: no {what}: the report has no "
-                      f"{' nor '.join(part[a] for a in absent)}", RuntimeWarning, stacklevel=2)
+                      f"{' nor '.join(shown[a] for a in absent)}", RuntimeWarning, stacklevel=2)
         parts.append(f"<p class='note'>No {html.escape(what)} in {html.escape(str(out_dir))} "
-                     f"when this page was written: no {' nor '.join(part[a] for a in absent)}."
+                     f"when this page was written: no {' nor '.join(shown[a] for a in absent)}."
                      "</p>")
     figures = ([("Trajectories", plot.read_bytes())] if plot.is_file() else [])
     figures += _gt_plots(tracks, name, info)

@@ -559,9 +559,10 @@ class VideoReader:
                 im = self._image(path)
                 yield im if isinstance(im, _Note) else self._frame(k, im)
                 if clipped == 0 and self._clipped:
-                    yield _Note(f"{path}: values above {(1 << self._bits) - 1}, the "
-                                f"{self._bits}-bit depth of {self._first.name}, clipped to "
-                                "white (here and in any later image that has them)")
+                    bits = self._bits or 16  # set where anything is clipped
+                    yield _Note(f"{path}: values above {(1 << bits) - 1}, the {bits}-bit "
+                                f"depth of {self._first.name}, clipped to white (here and in "
+                                "any later image that has them)")
             return
         cv2 = _cv2()
         cap = cv2.VideoCapture(str(self.source))
