@@ -814,6 +814,24 @@ def test_a_frontends_option_with_another_frontend_is_refused(tmp_path):
     assert not (tmp_path / "c").exists()
 
 
+def test_hog_on_images_smaller_than_its_window_finds_nobody():
+    """No 64x128 window fits (after the upscale): an empty answer. OpenCV's search crashed the
+    process on such images (40x100: a segmentation fault; 8x8: a double free) or failed an
+    assertion (64x32 at upscale 1), so the sweep runs in a process of its own."""
+    code = (
+        "import numpy as np\n"
+        "from vistrack.frontends import HOGDetector\n"
+        "sizes = [(40, 100), (8, 8), (64, 32)] + [(h, w) for h in range(4, 140, 9)\n"
+        "                                         for w in range(4, 80, 7)]\n"
+        "found = [len(HOGDetector(upscale=u).detect(np.zeros((h, w, 3), np.uint8)))\n"
+        "         for h, w in sizes for u in (1.0, 2.0)]\n"
+        "print(len(found), sum(found))\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.split() == [str(2 * (3 + 16 * 11)), "0"]
+
+
 def test_hog_finds_the_people_of_pets09():
     """OpenCV's HOG people detector (enlarged 2x: PETS09's people are smaller than its
     window) on frames of the bundled clip, against MOT15's ground truth."""

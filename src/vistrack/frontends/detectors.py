@@ -167,12 +167,15 @@ class HOGDetector:
         -------
         Detections
             Boxes of the people (in the image's pixels), after non-maximum suppression, with
-            scores ``1 / (1 + exp(-margin))``.
+            scores ``1 / (1 + exp(-margin))``; none where the image, upscaled, is smaller than
+            the 64x128 window.
 
         Examples
         --------
         >>> HOGDetector(upscale=1.0).detect(np.zeros((128, 64, 3), np.uint8)).boxes.shape
         (0, 4)
+        >>> len(HOGDetector().detect(np.zeros((40, 100, 3), np.uint8)))  # 80x200 upscaled
+        0
         """
         import cv2
 
@@ -180,6 +183,11 @@ class HOGDetector:
         if self.upscale != 1.0:
             im = cv2.resize(im, None, fx=self.upscale, fy=self.upscale,
                             interpolation=cv2.INTER_LINEAR)
+        win_w, win_h = self._hog.winSize
+        if im.shape[0] < win_h or im.shape[1] < win_w:
+            # no window fits: nobody to find (OpenCV's search crashed the process on such
+            # images, 40x100 at the default upscale, or failed an assertion)
+            return Detections(boxes=np.zeros((0, 4)))
         rects, weights = self._hog.detectMultiScale(im, hitThreshold=self.hit_threshold,
                                                     winStride=(8, 8), padding=(8, 8),
                                                     scale=self.scale)
