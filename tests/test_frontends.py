@@ -692,6 +692,54 @@ def test_blob_moments_give_the_drawn_ellipses():
     assert len(find_blobs(np.zeros((10, 10)))) == 0
 
 
+@pytest.mark.parametrize("bg", ["selective", "mog2"])
+def test_a_blob_detector_started_on_colour_frames_finds_as_one_started_on_grey(bg):
+    """The start frames are converted to grey, as the frames detect gives the model: started
+    on BGR frames, the selective model refused the first frame ('the model was built on (40,
+    60, 3)') and MOG2 started again on it, learning the person as background ([])."""
+    from vistrack.frontends import BlobDetector
+
+    person = np.full((40, 60, 3), 100, np.uint8)
+    person[10:30, 20:30] = 250
+    found = []
+    for shape in ((40, 60, 3), (40, 60)):
+        d = BlobDetector(bg, min_area=20)
+        d.initialize([np.full(shape, 100, np.uint8)] * 5)
+        found.append(d.detect(person).boxes.tolist())
+    assert found == [[[20.0, 10.0, 30.0, 30.0]]] * 2
+
+
+def test_find_blobs_opens_and_closes_as_scipy_at_every_size():
+    """The opening and closing by the elliptical element of any size, odd or even, are
+    scipy.ndimage's (the oracle) on random masks: the same regions, areas and centroids. With
+    OpenCV's morphologyEx an even size moved every region a pixel down and right (a 20x20
+    square opened at 4 and closed at 6 came out at (12, 12)-(32, 32)) and an opening added
+    pixels."""
+    from scipy import ndimage as ndi
+
+    from vistrack.frontends import find_blobs
+
+    square = np.zeros((40, 40), np.uint8)
+    square[10:30, 10:30] = 255
+    for o, c in ((4, 0), (4, 6), (2, 8), (3, 5)):
+        assert find_blobs(square, open_size=o, close_size=c).boxes.tolist() == [
+            [10.0, 10.0, 30.0, 30.0]]
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        m = np.zeros((50, 60), np.uint8)
+        m[10:40, 10:50] = rng.random((30, 40)) < 0.5
+        for size in range(2, 9):
+            se = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size)).astype(bool)
+            for kw, ref in (({"open_size": size, "close_size": 0}, ndi.binary_opening),
+                            ({"open_size": 0, "close_size": size}, ndi.binary_closing)):
+                got = find_blobs(m, min_area=0, **kw)
+                want = find_blobs(ref(m > 0, structure=se).astype(np.uint8), min_area=0,
+                                  open_size=0, close_size=0)
+                assert sorted(got.areas.tolist()) == sorted(want.areas.tolist())
+                np.testing.assert_allclose(np.sort(got.centroids, axis=0),
+                                           np.sort(want.centroids, axis=0))
+
+
 def test_background_and_blobs_find_the_people_of_pets09():
     """Real data: on PETS09-S2L1 (MOT15's ground truth), most blobs lie on annotated people."""
     from vistrack.io import read_mot

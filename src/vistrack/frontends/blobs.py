@@ -210,10 +210,20 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     if m.ndim != 2:
         raise ValueError(f"mask must be 2-D (H, W); got shape {m.shape}")
     m = (m != 0).astype(np.uint8)
-    for op, size in ((cv2.MORPH_OPEN, open_size), (cv2.MORPH_CLOSE, close_size)):
+    for opening, size in ((True, open_size), (False, close_size)):
         if size and size > 1:
             k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (int(size), int(size)))
-            m = cv2.morphologyEx(m, op, k)
+            # OpenCV's erode is the erosion by k, its dilate the dilation by k reflected
+            # (each anchored at a): the dilation by k itself is dilate by k reflected, at the
+            # reflected anchor. morphologyEx anchors both at size // 2 with k as it is, which
+            # for an even size is no opening (or closing): every region moved a pixel down
+            # and right, and an opening added pixels
+            a, b = int(size) // 2, int(size) - 1 - int(size) // 2
+            flipped = np.ascontiguousarray(k[::-1, ::-1])
+            if opening:
+                m = cv2.dilate(cv2.erode(m, k, anchor=(a, a)), flipped, anchor=(b, b))
+            else:
+                m = cv2.erode(cv2.dilate(m, flipped, anchor=(b, b)), k, anchor=(a, a))
     n, labels = cv2.connectedComponents(m, connectivity=8, ltype=cv2.CV_32S)
     s, lo, hi = _moments(labels, n)
     s, lo, hi = s[1:], lo[1:], hi[1:]
@@ -284,7 +294,8 @@ class BlobDetector:
         Parameters
         ----------
         images : iterable of ndarray
-            Frames ``(H, W)`` grey (as :meth:`detect` gives the model) or BGR, uint8.
+            Frames ``(H, W)`` grey or BGR, uint8: converted to grey, as :meth:`detect` gives
+            them to the model.
 
         Examples
         --------
@@ -293,7 +304,11 @@ class BlobDetector:
         >>> det.model.mean.shape
         (40, 60, 1)
         """
-        self.model.initialize(images)
+        from .._validate import as_uint8_image
+
+        # grey, as detect gives the model its frames: a BGR start made the selective model
+        # refuse the first grey frame, and MOG2 start again on it, learning the people there
+        self.model.initialize(as_uint8_image(im, grey=True) for im in images)
 
     def detect(self, image: np.ndarray) -> Detections:
         """The blobs of ``image``'s foreground as boxes ``x0, y0, x1, y1``.
