@@ -116,8 +116,9 @@ def test_gnn_leaves_a_poor_pair_unassigned_rather_than_take_two():
             most = (key, sorted(pairs))
     assert best[1] == [(0, 0)] and most[1] == [(0, 1), (1, 0)]  # the two rules differ here
     out = tr.step(2, Detections(points=z))
-    # A (reported) at measurement 1; B missed this frame; measurement 2 a new track, id 3
-    assert out.ids.tolist() == [1] and np.abs(out.points[0] - z[0]).max() < 0.6
+    # A (reported) at measurement 1; B missed this frame; measurement 2 a new track, id 3,
+    # reported at once (confirm_hits=1: its one update confirms it)
+    assert out.ids.tolist() == [1, 3] and np.abs(out.points[0] - z[0]).max() < 0.6
     assert tr.tracks.ids.tolist() == [1, 2, 3]
     assert tr.tracks.last_time.tolist() == [2.0, 1.0, 2.0]
     np.testing.assert_allclose(tr.tracks.mean[2, :2], z[1])

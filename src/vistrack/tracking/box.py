@@ -938,7 +938,8 @@ class BoxTracker:
             mean, cov = self.motion.initial(_to_cxcywh(db[new]))
             d = np.diagonal(cov, axis1=1, axis2=2)
             axes = np.stack([d[:, :4], np.zeros((len(new), 4)), d[:, 4:]], axis=-1)
-            t.add(mean, axes, time, dc[new], raw[new], confirmed=first)
+            # confirmed at once in the first frame, or where one update confirms
+            t.add(mean, axes, time, dc[new], raw[new], confirmed=first or cfg.confirm_hits <= 1)
             self._offsets = np.concatenate([self._offsets, np.zeros((len(new), 2))])
         if self.record:
             k = len(new)

@@ -214,8 +214,13 @@ class TrackTable:
             The tentative tracks not updated, and the tracks lost for more than ``max_lost``
             seconds since their last update.
         """
+        # lost for more than max_lost, whatever the rounding of the frames' times: k frames at
+        # 30 frames/s are k / 30 s, but (9 + 3) / 30 - 9 / 30 > 0.1 where (12 + 3) / 30 -
+        # 12 / 30 < 0.1, so a track lost for exactly max_lost was kept or deleted by where
+        # in the sequence its gap fell
+        slack = 1e-9 * max(1.0, abs(time))
         return (~updated & (self.state == TENTATIVE)) | (
-            (self.state == LOST) & (time - self.last_time > max_lost))
+            (self.state == LOST) & (time - self.last_time > max_lost + slack))
 
     def manage(self, updated: np.ndarray, time: float, confirm_hits: int,
                max_lost: float) -> np.ndarray:

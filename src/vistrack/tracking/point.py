@@ -235,8 +235,9 @@ class PointTracker:
         new = np.flatnonzero(~in_gate)
         if len(new):
             mean, cov = self._initial(Z[new])
+            # confirmed at once in the first frame, or where one update confirms
             t.add(mean, cov, time, classes[new], scores[new],
-                  confirmed=first)
+                  confirmed=first or self.confirm_hits <= 1)
         out = np.flatnonzero((t.state == CONFIRMED) & (t.last_time == time))
         H = self.H
         covs = H @ t.cov[out] @ H.T
