@@ -16,7 +16,9 @@ that frame as in the seeds' validation gates; the accepted ones correct the pred
 
 A member is anything with ``init(image, box)``, ``update(image) -> box`` and
 ``anchor(box)``; every tracker in :data:`vistrack.tracking.single.METHODS` except OpenCV's
-has ``anchor``.
+has ``anchor``. A member that measures the motion from the frame before (``"klt"``'s median
+flow, and the one that starts ``"template"``'s search) also has ``anchor_last(box)``, and is
+given the composite's estimate of that frame too.
 """
 
 from __future__ import annotations
@@ -173,6 +175,11 @@ class Composite(SingleObjectTracker):
         predicted = _box_of(g.mean)
         for tracker in self.members.values():
             tracker.anchor(predicted)
+            # a member that measures motion from the frame before (median flow) starts from
+            # the estimate of that frame: anchored on the prediction alone, it added the
+            # frame's motion twice and ran ahead of the target
+            if callable(getattr(tracker, "anchor_last", None)):
+                tracker.anchor_last(self.box)
         # every member is gated against the prediction, then the accepted ones correct it
         accepted = []
         for name, tracker in self.members.items():
