@@ -249,3 +249,14 @@ def test_step_refuses_a_starting_detection_outside_the_image():
     with pytest.raises(ValueError, match=r"^box \(x, y, w, h\) = \(800, 10, 40, 40\) lies "
                                          r"outside the 768x576 image$"):
         tracker.step(Frame(0, 0.0, _frame_768x576()), Detections.from_xywh([[800, 10, 40, 40]]))
+
+
+@pytest.mark.parametrize("method", ["colour", "meanshift", "camshift", "particle"])
+def test_a_colour_tracker_given_a_grey_image_says_so(method):
+    """The colour trackers need BGR frames: a grey one is named, with the trackers that take
+    it (OpenCV's 'Bad number of channels' error came out before)."""
+    from vistrack.tracking.single import single_tracker
+
+    with pytest.raises(ValueError, match=r"^image is grey \(100, 120\): the colour trackers "
+                       r".* need BGR frames \(H, W, 3\); template, klt, wsl and snake"):
+        single_tracker(method).init(np.zeros((100, 120), np.uint8), [40, 30, 30, 30])

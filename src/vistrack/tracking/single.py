@@ -68,7 +68,12 @@ def _grey(image: np.ndarray) -> np.ndarray:
 def _hsv(image: np.ndarray) -> np.ndarray:
     import cv2
 
-    return cv2.cvtColor(as_uint8_image(image, channels=(3,)), cv2.COLOR_BGR2HSV)
+    im = as_uint8_image(image, channels=(3,))
+    if im.ndim != 3:
+        raise ValueError(f"image is grey {im.shape}: the colour trackers (colour, meanshift, "
+                         "camshift, particle) need BGR frames (H, W, 3); template, klt, wsl "
+                         "and snake track grey ones")
+    return cv2.cvtColor(im, cv2.COLOR_BGR2HSV)
 
 
 class MedianFlow(SingleObjectTracker):
