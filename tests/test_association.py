@@ -334,9 +334,27 @@ def test_compiled_lsa_takes_what_scipy_takes_and_refuses_what_it_refuses():
                        r"numbers or \+inf \(a pair not allowed\)"),
                       ([[1.0, 2.0], [-np.inf, 0.0]], r"cost\[1, 0\] is -inf"),
                       ([1.0, 2.0], r"cost must be a 2-D matrix; got shape \(2,\)"),
+                      (5.0, r"cost must be a 2-D matrix; got shape \(\)"),
                       ([[np.inf, np.inf], [1.0, 2.0]], "cost matrix is infeasible")):
         with pytest.raises(ValueError, match=msg):
             lsa(cost)
+
+
+def test_the_compiled_assignment_is_callable_from_a_kernel():
+    """lsa_kernel, lsa without its checks, is what a user's numba kernel calls (lsa itself is
+    a Python function)."""
+    from numba import njit
+
+    from vistrack.association import lsa, lsa_kernel
+
+    @njit
+    def total(c):
+        r, k = lsa_kernel(c)
+        return c[r, k].sum()
+
+    cost = np.random.default_rng(5).uniform(0, 1, (6, 4))
+    r, c = lsa(cost)
+    assert total(cost) == pytest.approx(cost[r, c].sum())
 
 
 def test_sparse_assignment_checks_its_arguments():

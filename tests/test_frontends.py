@@ -446,8 +446,8 @@ def test_16_bit_images_are_read_at_their_depth(tmp_path, ext):
     frames[0][0, 0] = 255  # the first image reaches the 12-bit top, 4080
     for k, im in enumerate(frames):
         assert cv2.imwrite(str(tmp_path / f"{k:06d}{ext}"), im.astype(np.uint16) * 16)
-    with pytest.warns(RuntimeWarning, match=r"values reach 4080\): read as 12-bit and scaled "
-                      r"to 8 bits \(values divided by 16\)"):
+    with pytest.warns(RuntimeWarning, match=r"values up to 4080 in 3 of them, spread over the "
+                      r"folder\): read as 12-bit and scaled to 8 bits \(values divided by 16\)"):
         r = VideoReader(tmp_path)
     got = [f.image for f in r]
     assert all(g.dtype == np.uint8 and np.array_equal(g, im) for g, im in zip(got, frames))
@@ -460,23 +460,57 @@ def test_16_bit_images_are_read_at_their_depth(tmp_path, ext):
         assert g.dtype == np.uint8 and np.abs(g.astype(int) - ref).max() <= 1
 
 
-def test_16_bit_images_above_the_first_ones_depth_are_clipped_and_named(tmp_path):
+def test_16_bit_images_above_the_folders_depth_are_clipped_and_named(tmp_path):
+    """The depth holds the largest value of ten images spread over the folder's 25 (frames
+    1, 4, 6, ...): the second, not among them, has values above it, clipped and named."""
     dark = np.full((8, 8), 1000, np.uint16)  # 10 bits: divided by 4
     bright = dark.copy()
     bright[0, :4] = (1023, 1024, 4000, 65535)
-    cv2.imwrite(str(tmp_path / "000001.png"), dark)
-    cv2.imwrite(str(tmp_path / "000002.png"), bright)
-    cv2.imwrite(str(tmp_path / "000003.png"), bright)
-    with pytest.warns(RuntimeWarning, match=r"values reach 1000\): read as 10-bit"):
+    for k in range(25):
+        cv2.imwrite(str(tmp_path / f"{k + 1:06d}.png"), bright if k in (1, 2) else dark)
+    with pytest.warns(RuntimeWarning, match=r"values up to 1000 in 10 of them, spread over the "
+                      r"folder\): read as 10-bit"):
         r = VideoReader(tmp_path, grey=True)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         got = [f.image for f in r]
     assert [str(w.message) for w in caught] == [
-        f"{tmp_path / '000002.png'}: values above 1023, the 10-bit depth of 000001.png, "
-        "clipped to white (here and in any later image that has them)"]
+        f"{tmp_path / '000002.png'}: values above 1023, the folder's 10-bit depth, clipped to "
+        "white (here and in any later image that has them)"]
     assert got[0].max() == got[0].min() == 250
     assert got[1][0, :5].tolist() == [255, 255, 255, 255, 250] == got[2][0, :5].tolist()
+
+
+def test_a_dark_first_16_bit_image_does_not_set_the_depth(tmp_path):
+    """A 12-bit camera's first frame dark (values up to 100): the later images seen too set
+    12 bits, where the first alone set 8 and the others came out 93-96 % white."""
+    rng = np.random.default_rng(2)
+    frames = [np.full((16, 16), 100, np.uint16)] + [
+        rng.integers(0, 4096, (16, 16)).astype(np.uint16) for _ in range(4)]
+    for k, im in enumerate(frames):
+        cv2.imwrite(str(tmp_path / f"{k + 1:06d}.png"), im)
+    with pytest.warns(RuntimeWarning, match=r"read as 12-bit"):
+        got = [f.image for f in VideoReader(tmp_path, grey=True)]
+    for g, im in zip(got, frames):
+        np.testing.assert_array_equal(g, np.minimum((im.astype(int) + 8) >> 4, 255))
+
+
+def test_other_deep_images_are_read_as_opencv_reads_them(tmp_path):
+    """Signed 16-bit and floating-point TIFFs are read as cv2.imread reads them (8 bits), as
+    before the 16-bit reading: the deep reading made a signed image white and took a float
+    one that OpenCV could not read."""
+    rng = np.random.default_rng(3)
+    for name, im in (("signed", rng.integers(-300, 300, (12, 10)).astype(np.int16)),
+                     ("float", rng.random((12, 10, 3)).astype(np.float32))):
+        d = tmp_path / name
+        d.mkdir()
+        assert cv2.imwrite(str(d / "000001.tif"), im)
+        want = cv2.imread(str(d / "000001.tif"), cv2.IMREAD_COLOR)
+        if want is None:
+            with pytest.raises(VideoError, match="not a readable image"):
+                VideoReader(d)
+        else:
+            np.testing.assert_array_equal(next(iter(VideoReader(d))).image, want)
 
 
 def test_16_bit_images_of_8_bit_values_and_of_the_full_range(tmp_path):
@@ -484,8 +518,8 @@ def test_16_bit_images_of_8_bit_values_and_of_the_full_range(tmp_path):
     a.mkdir(), b.mkdir()
     cv2.imwrite(str(a / "1.png"), np.array([[0, 7, 200]], np.uint16))
     cv2.imwrite(str(b / "1.png"), np.array([[0, 127, 128, 65535]], np.uint16))
-    with pytest.warns(RuntimeWarning, match=r"read as 8-bit and scaled to 8 bits \(values as "
-                      r"they are\)"):
+    with pytest.warns(RuntimeWarning, match=r"values up to 200 in 1 of them.*read as 8-bit and "
+                      r"scaled to 8 bits \(values as they are\)"):
         assert next(iter(VideoReader(a, grey=True))).image.tolist() == [[0, 7, 200]]
     with pytest.warns(RuntimeWarning, match=r"read as 16-bit .*values divided by 256"):
         # to the nearest level: 127 / 256 rounds down, 128 / 256 up

@@ -396,3 +396,19 @@ def test_ukf_far_from_the_origin_is_the_kalman_filter(offset):
         y = np.broadcast_to(np.array([offset + 2.0]), shape + (1,))
         uu, kk = ukf_update(k, y, pos), kf_update(k, y, pos.H(2), pos.R())
         np.testing.assert_allclose(uu.mean - kk.mean, 0.0, atol=1e-6)
+
+
+def test_measurement_functions_of_a_model_with_angles_alone_pickle():
+    """The wrapped residual and circular mean of a model with angles alone are module
+    functions with the angles bound, so its filters pickle (they were lambdas, which do not:
+    a filter could not go to another process)."""
+    import pickle
+
+    from vistrack.models import MeasurementFunctions
+
+    me = MeasurementFunctions(_BearingOnly(), 2)
+    back = pickle.loads(pickle.dumps(me))
+    a, b = np.array([[np.pi - 0.01]]), np.array([[-np.pi + 0.01]])
+    np.testing.assert_allclose(back.residual(a, b), [[-0.02]], atol=1e-12)
+    m = back.mean(np.array([[np.pi - 0.01], [-np.pi + 0.01]]), np.array([0.5, 0.5]))
+    assert abs(wrap_angle(m[0] - np.pi)) < 1e-12  # π (or -π), not 0

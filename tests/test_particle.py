@@ -159,6 +159,7 @@ def test_effective_sample_size_of_any_weights_and_what_it_refuses():
     assert effective_sample_size(w) == pytest.approx(w.sum() ** 2 / (w ** 2).sum())
     assert effective_sample_size(7.5 * w) == pytest.approx(effective_sample_size(w / w.sum()))
     assert effective_sample_size([0.0, 2.0, 0.0]) == 1.0
+    assert effective_sample_size([1e308, 1e308]) == 2.0  # the sum overflowed: inf
     for bad, msg in (([], "weights is empty"), ([0.5, -0.5, 1.0], r"weights\[1\] is -0.5"),
                      ([0.5, np.nan], r"weights\[1\] is nan"), ([0.0, 0.0], "all 0"),
                      (np.ones((2, 2)), "weights")):
@@ -186,6 +187,22 @@ def test_the_mode_of_one_peak_holds_all_the_weight(d):
             assert conf == 1.0
             modes.append(mode[0])
         assert abs(np.mean(modes) - 2.0) < 3 * 0.16 / np.sqrt(10)
+
+
+def test_a_point_between_two_peaks_does_not_join_them():
+    """Peaks apart stay apart: a third, small peak between two (weights 0.45, 0.1, 0.45, 5
+    apart), or the weighted mean's start stuck in the valley of a mirrored cloud, had no
+    valley with either side and joined them into one peak of confidence 1."""
+    rng = np.random.default_rng(0)
+    k = rng.multinomial(20000, [0.45, 0.1, 0.45])
+    x = np.concatenate([rng.normal(-5, 1, k[0]), rng.normal(0, 1, k[1]),
+                        rng.normal(5, 1, k[2])])[:, None]
+    mode, conf = particle_mode(x, np.full(20000, 1 / 20000))
+    assert abs(abs(mode[0]) - 5) < 0.2 and conf == pytest.approx(0.45, abs=0.02)
+    half = rng.normal(3, 1, 10000)
+    mode, conf = particle_mode(np.concatenate([half, -half])[:, None], np.full(20000, 5e-5))
+    # the subsample's peaks a little off the mirror: a few particles nearest the other
+    assert abs(abs(mode[0]) - 3) < 0.2 and conf == pytest.approx(0.5, abs=0.01)
 
 
 def test_mode_finds_the_tallest_peak_and_its_weight():

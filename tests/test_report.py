@@ -167,3 +167,25 @@ def test_a_run_description_that_is_not_an_object_is_named(run_dir, tmp_path, cap
     assert capsys.readouterr().err.strip() == (f"vistrack report: error: {odd / 'run.json'}: not "
                                                "a run's description (a JSON list, not an "
                                                "object)")
+
+
+def test_a_run_without_a_video_by_choice_is_not_said_to_have_lost_it(tmp_path):
+    """track_video(annotate=False) writes no annotated.mp4, and run.json lists what it wrote:
+    the page and the command say nothing of a missing video (they did), but a plot removed
+    afterwards is still named."""
+    import warnings
+
+    from vistrack.pipeline import track_video
+    from vistrack.report import write_report
+
+    clip = demo_clip()
+    out = tmp_path / "run"
+    track_video(clip.video, out, stop=10, annotate=False)
+    assert "annotated.mp4" not in json.loads((out / "run.json").read_text())["outputs"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        page = write_report(out).read_text()
+    assert "<video" not in page and "No annotated.mp4" not in page
+    (out / "trajectories.png").unlink()
+    with pytest.warns(RuntimeWarning, match=r"no trajectories.png: the report has no plot"):
+        write_report(out, force=True)

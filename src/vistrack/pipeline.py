@@ -1931,7 +1931,8 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
             "first_frame": run.first, "last_frame": run.last or run.first + run.frames - 1,
             "frames": run.frames, "rows": run.rows, "tracks": run.tracks,
             "fps": round(run.fps, 1), "frame_rate": frame_rate,
-            "scores": run.scores.summary() if run.scores is not None else None}
+            "scores": run.scores.summary() if run.scores is not None else None,
+            "outputs": sorted(f.name for f in run.files.values())}
     with replacing(run.out_dir / RUN_INFO) as part:
         part.write_text(json.dumps(info, indent=2) + "\n")
 

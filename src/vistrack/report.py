@@ -178,7 +178,8 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     Warns
     -----
     RuntimeWarning
-        If ``annotated.mp4`` or ``trajectories.png`` is not there (the page says so too).
+        If ``annotated.mp4`` or ``trajectories.png`` is not there though the run wrote it
+        (``run.json``'s ``outputs``; the page says so too).
     """
     from .io.atomic import check_output, replacing
     from .pipeline import REPORT, RUN_INFO, SINK_FILES
@@ -225,7 +226,10 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
                      "<p id='video-note' class='note' hidden>This browser cannot play the "
                      "video (WebM, VP8): annotated.mp4 beside this page is the same.</p>")
     plot = out_dir / SINK_FILES["plot"]
-    absent = [f.name for f in (video, plot) if not f.is_file()]
+    # the ones the run wrote (run.json's outputs; a run with annotate=False made no video)
+    made = info.get("outputs")
+    absent = [f.name for f in (video, plot)
+              if not f.is_file() and (not isinstance(made, list) or f.name in made)]
     shown = {video.name: "annotated video", plot.name: "plot of the trajectories"}
     if absent:
         # removed, or never written (a run stopped before its end): said, not left out

@@ -29,7 +29,7 @@ from .._prebuilt import kernel
 from .._registry import Registry
 
 __all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_pairs_limited", "gnn_sparse",
-           "greedy", "lsa", "nearest_neighbour", "components"]
+           "greedy", "lsa", "lsa_kernel", "nearest_neighbour", "components"]
 
 _EMPTY = (np.zeros(0, np.int64), np.zeros(0, np.int64))
 
@@ -158,8 +158,8 @@ def lsa(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The least-cost assignment of a dense cost matrix, compiled.
 
     Crouse's shortest augmenting path (2016), the algorithm of scipy's
-    ``linear_sum_assignment``, step for step (ties are broken the same way); the compiled
-    kernel (``_lsa``, a float64 C-ordered matrix, unchecked) is what other kernels call.
+    ``linear_sum_assignment``, step for step (ties are broken the same way), checked; other
+    compiled kernels call :func:`lsa_kernel`, the same without the checks.
 
     Parameters
     ----------
@@ -175,7 +175,7 @@ def lsa(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ------
     ValueError
         If ``cost`` is not 2-D, holds NaN or ``-inf`` (naming the first such entry), or the
-        problem is infeasible (a row or column of ``+inf`` only, as scipy says).
+        problem is infeasible: no ``min(n, m)`` pairs of finite cost (as scipy says).
 
     References
     ----------
@@ -188,20 +188,29 @@ def lsa(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     >>> r.tolist(), c.tolist()
     ([0, 1], [1, 0])
     """
-    arr = np.ascontiguousarray(cost, dtype=np.float64)
+    arr = np.asarray(cost, dtype=np.float64)
     if arr.ndim != 2:
         raise ValueError(f"cost must be a 2-D matrix; got shape {arr.shape}")
+    arr = np.ascontiguousarray(arr)
     bad = np.isnan(arr) | (arr == -np.inf)
     if bad.any():
         i, j = np.argwhere(bad)[0]
         raise ValueError(f"cost[{i}, {j}] is {arr[i, j]}: costs must be numbers or +inf (a "
                          "pair not allowed)")
-    return _lsa(arr)
+    return lsa_kernel(arr)
 
 
 @njit(cache=True)
-def _lsa(cost):
-    # lsa's kernel: cost a float64 matrix without NaN or -inf
+def lsa_kernel(cost):
+    """:func:`lsa` compiled, for other kernels: ``cost`` a float64 matrix without NaN or
+    ``-inf``, not checked.
+
+    Examples
+    --------
+    >>> r, c = lsa_kernel(np.array([[4.0, 1.0, 3.0], [2.0, 0.0, 5.0]]))
+    >>> r.tolist(), c.tolist()
+    ([0, 1], [1, 0])
+    """
     transpose = cost.shape[0] > cost.shape[1]
     c = cost.T.copy() if transpose else cost
     nr, nc = c.shape
@@ -279,7 +288,7 @@ def _gated_lsa(cost, gate):
         return np.empty(0, np.int64), np.empty(0, np.int64)
     big = (hi - lo + 1.0) * (min(cost.shape[0], cost.shape[1]) + 1) + top
     c = np.where(gate, cost, big)
-    r, k = _lsa(c)
+    r, k = lsa_kernel(c)
     n = 0
     for p in range(r.shape[0]):
         if gate[r[p], k[p]]:
@@ -293,7 +302,7 @@ def _limited_lsa(cost, gate):
     # costs relative to leaving the pair unassigned: a disallowed pair costs 0, as much as
     # leaving it, so the least-cost full assignment takes the allowed pairs of least total
     # (negative) cost, and the pairs that gain nothing are dropped
-    r, k = _lsa(np.where(gate, cost, 0.0))
+    r, k = lsa_kernel(np.where(gate, cost, 0.0))
     n = 0
     for p in range(r.shape[0]):
         if gate[r[p], k[p]] and cost[r[p], k[p]] < 0.0:

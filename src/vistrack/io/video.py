@@ -271,10 +271,11 @@ class VideoReader:
         If a sequence folder's images are fewer than its ``seqinfo.ini``'s ``seqLength``
         (once a process for a folder): those there are read. If an image folder's numbered
         names skip a number (once a process for a folder): those frames are missing. If a
-        folder's images are 16-bit (PNG, TIFF): each is scaled to 8 bits by the depth its
-        first image needs (10, 12, 14 or 16 bits; a 12-bit camera's values divided by 16),
-        where ``cv2.imread`` divides by 256 and leaves such images near black; and, while
-        iterating, at the first image with values above that depth, which are clipped.
+        folder's images are 16-bit (PNG, TIFF): each is scaled to 8 bits by the depth (8,
+        10, 12, 14 or 16 bits) that holds the largest value of up to ten images spread over
+        the folder (a 12-bit camera's values divided by 16), where ``cv2.imread`` divides by
+        256 and leaves such images near black; and, while iterating, at the first image with
+        values above that depth, which are clipped.
 
     Examples
     --------
@@ -355,7 +356,7 @@ class VideoReader:
                     raise VideoError(f"{path}: {why}")
             if first is None:
                 raise VideoError(f"{src} holds no readable images (every one fails to decode)")
-            self._depth(first, self._first.name)
+            self._depth(first)
             self.size = (first.shape[1], first.shape[0])
             numbered = _numbered(self._files)
             self._index = numbered or list(range(1, len(self._files) + 1))
@@ -424,50 +425,62 @@ class VideoReader:
         im, why = self._decode(path)
         return (None, why) if im is None else (self._to_8bit(im), "")
 
-    def _depth(self, first: np.ndarray, name: str) -> None:
-        """The bits of a folder's images deeper than 8 bits a channel, from its first image
-        (``first``, as decoded), and the note that says so."""
+    def _depth(self, first: np.ndarray) -> None:
+        """The bits of a folder's 16-bit images (``first``, the first readable one, as
+        decoded), from the largest value of up to ten images spread over the folder, and the
+        note that says so."""
         if first.dtype != np.uint16:
             return
-        top = int(first.max())
-        # the depth a camera delivers (10, 12, 14 or 16 bits) that holds the first image
+        assert self._files is not None
+        picks = np.unique(np.linspace(0, len(self._files) - 1, 10).round().astype(int))
+        top, seen = int(first.max()), 1
+        for k in picks[1:]:
+            im, _ = self._decode(self._files[k])
+            if im is not None and im.dtype == np.uint16:
+                top, seen = max(top, int(im.max())), seen + 1
+        # the depth a camera delivers (8, 10, 12, 14 or 16 bits) that holds them: a dark
+        # first image alone would have set too few bits, and the later ones clipped to white
         self._bits = min(16, max(8, top.bit_length() + top.bit_length() % 2))
         scale = f"divided by {1 << (self._bits - 8)}" if self._bits > 8 else "as they are"
-        warnings.warn(f"{self.source}: 16-bit images ({name}'s values reach {top}): read as "
-                      f"{self._bits}-bit and scaled to 8 bits (values {scale}); values above "
-                      f"{(1 << self._bits) - 1} in later images are clipped to white",
-                      RuntimeWarning, stacklevel=3)
+        warnings.warn(f"{self.source}: 16-bit images (values up to {top} in {seen} of them, "
+                      f"spread over the folder): read as {self._bits}-bit and scaled to 8 "
+                      f"bits (values {scale}); values above {(1 << self._bits) - 1} in other "
+                      "images are clipped to white", RuntimeWarning, stacklevel=3)
 
     def _to_8bit(self, im: np.ndarray) -> np.ndarray:
-        """An image of 8 bits a channel: 16-bit ones scaled down by the folder's depth to the
-        nearest level (:meth:`_depth`; clipped above it, counted in ``_clipped``), other
-        depths converted as ``cv2.convertScaleAbs`` converts them."""
+        """An image of 8 bits a channel (:meth:`_decode` gives 8 or 16): 16-bit ones scaled
+        down by the folder's depth to the nearest level (:meth:`_depth`; clipped above it,
+        counted in ``_clipped``)."""
         if im.dtype == np.uint8:
             return im
-        if im.dtype == np.uint16:
-            bits = self._bits if self._bits is not None else 16
-            top = (1 << bits) - 1
-            if bits < 16 and im.max() > top:
-                self._clipped += 1
-                im = np.minimum(im, top)
-            shift = bits - 8
-            if shift == 0:
-                return im.astype(np.uint8)
-            # to the nearest level (65535 rounds up to 256, hence the clip)
-            return np.minimum((im + np.uint32(1 << (shift - 1))) >> shift, 255).astype(np.uint8)
-        cv2 = _cv2()
-        return cv2.convertScaleAbs(im)
+        bits = self._bits if self._bits is not None else 16
+        top = (1 << bits) - 1
+        if bits < 16 and im.max() > top:
+            self._clipped += 1
+            im = np.minimum(im, top)
+        shift = bits - 8
+        if shift == 0:
+            return im.astype(np.uint8)
+        # to the nearest level, in 32 bits (65535 + 128 wraps around in 16), then the clip
+        # (65535 rounds up to 256)
+        wide = im.astype(np.uint32) + (1 << (shift - 1))
+        return np.minimum(wide >> shift, 255).astype(np.uint8)
 
     def _decode(self, path: Path) -> tuple[np.ndarray | None, str]:
-        """The image at its own depth (16-bit PNG and TIFF stay 16-bit), or None and why not.
+        """The image, 8-bit, or 16-bit where the file is unsigned 16-bit (PNG, TIFF), or None
+        and why not. Other depths (signed, floating point) are read as ``cv2.imread``
+        reads them, at 8 bits.
 
         A JPEG is read once: its bytes are checked for the image's end-of-image marker (data
         after it are fine) and decoded from memory, as ``cv2.imread`` decodes the file."""
         cv2 = _cv2()
-        flags = (cv2.IMREAD_GRAYSCALE if self.grey else cv2.IMREAD_COLOR) | cv2.IMREAD_ANYDEPTH
+        plain = cv2.IMREAD_GRAYSCALE if self.grey else cv2.IMREAD_COLOR
+        flags = plain | cv2.IMREAD_ANYDEPTH
         unreadable = "not a readable image (OpenCV cannot decode it: corrupt or truncated)"
         if path.suffix.lower() not in (".jpg", ".jpeg"):
             im = cv2.imread(str(path), flags)
+            if im is not None and im.dtype not in (np.uint8, np.uint16):
+                im = cv2.imread(str(path), plain)
             return (None, unreadable) if im is None else (im, "")
         data = path.read_bytes()
         if data[:2] == b"\xff\xd8" and _jpeg_end(data) is None:
@@ -560,9 +573,9 @@ class VideoReader:
                 yield im if isinstance(im, _Note) else self._frame(k, im)
                 if clipped == 0 and self._clipped:
                     bits = self._bits or 16  # set where anything is clipped
-                    yield _Note(f"{path}: values above {(1 << bits) - 1}, the {bits}-bit "
-                                f"depth of {self._first.name}, clipped to white (here and in "
-                                "any later image that has them)")
+                    yield _Note(f"{path}: values above {(1 << bits) - 1}, the folder's "
+                                f"{bits}-bit depth, clipped to white (here and in any later "
+                                "image that has them)")
             return
         cv2 = _cv2()
         cap = cv2.VideoCapture(str(self.source))

@@ -7,6 +7,7 @@ with."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 from typing import cast
 
 import numpy as np
@@ -208,9 +209,9 @@ class MeasurementFunctions:
         # a model with angles but no residual or mean of its own: its angles wrapped and
         # averaged on the circle all the same, as the compiled kernels do (angle_mask)
         self.residual = residual or getattr(model, "residual", None) or (
-            (lambda a, b: _residual(a, b, angles)) if angles else _plain_residual)
+            partial(_residual, angles=angles) if angles else _plain_residual)
         self.mean = mean or getattr(model, "mean", None) or (
-            (lambda z, w: _weighted_mean(z, w, angles)) if angles else _plain_mean)
+            partial(_weighted_mean, angles=angles) if angles else _plain_mean)
         # "standard": residuals are differences (angles wrapped) and means weighted sums
         # (circular for angles), which the compiled one-Gaussian kernels reproduce
         own = type(model)

@@ -178,8 +178,9 @@ class Composite(SingleObjectTracker):
             # a member that measures motion from the frame before (median flow) starts from
             # the estimate of that frame: anchored on the prediction alone, it added the
             # frame's motion twice and ran ahead of the target
-            if callable(getattr(tracker, "anchor_last", None)):
-                tracker.anchor_last(self.box)
+            anchor_last = getattr(tracker, "anchor_last", None)
+            if callable(anchor_last):
+                anchor_last(self.box)
         # every member is gated against the prediction, then the accepted ones correct it
         accepted = []
         for name, tracker in self.members.items():
