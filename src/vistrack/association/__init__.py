@@ -1,26 +1,26 @@
 """Data association: costs between tracks and detections, gates, and assignment."""
 
 from .assign import (
-                     ASSIGNERS,
-                     assign,
-                     components,
-                     gnn,
-                     gnn_sparse,
-                     greedy,
-                     lsa,
-                     lsa_kernel,
-                     nearest_neighbour,
+    ASSIGNERS,
+    assign,
+    components,
+    gnn,
+    gnn_sparse,
+    greedy,
+    lsa,
+    lsa_kernel,
+    nearest_neighbour,
 )
 from .costs import (
-                     euclidean,
-                     giou,
-                     iou,
-                     iou_pairs,
-                     iou_pairs_same_class,
-                     mahalanobis,
-                     non_maximum,
-                     overlapping_pairs,
-                     paired_iou,
+    euclidean,
+    giou,
+    iou,
+    iou_pairs,
+    iou_pairs_same_class,
+    mahalanobis,
+    non_maximum,
+    overlapping_pairs,
+    paired_iou,
 )
 from .gating import chi2_gate, chi2_threshold
 from .pda import jpda_weights, likelihoods, pda_weights
