@@ -676,6 +676,11 @@ def test_background_by_name_and_errors():
         background("knn")
     with pytest.raises(ValueError, match="alpha must be in"):
         SelectiveBackground(alpha=0)
+    # min_sigma 0 (taken before): a still scene's every pixel passes D² >= T·0, foreground
+    # for good, since foreground is never learnt
+    with pytest.raises(ValueError, match=r"min_sigma must be > 0 \(grey levels\): at 0 every "
+                       r"pixel that never changed is foreground; got 0"):
+        SelectiveBackground(min_sigma=0)
     bg = SelectiveBackground(n_init=3)
     im = np.zeros((4, 5), np.uint8)
     assert [int(bg.apply(im).sum()) for _ in range(3)] == [0, 0, 0] and bg.mean is not None

@@ -111,7 +111,7 @@ class SelectiveBackground:
     ------
     ValueError
         If ``alpha`` is not in (0, 1], ``threshold`` not > 0, ``n_init`` less than 1 or
-        ``min_sigma`` negative.
+        ``min_sigma`` not > 0.
 
     Examples
     --------
@@ -133,8 +133,11 @@ class SelectiveBackground:
             raise ValueError(f"threshold must be > 0; got {threshold}")
         if int(n_init) < 1:
             raise ValueError(f"n_init must be >= 1; got {n_init}")
-        if not min_sigma >= 0:
-            raise ValueError(f"min_sigma must be >= 0; got {min_sigma}")
+        if not min_sigma > 0:
+            # at 0 a pixel that never changed has σ = 0 and passes D² >= T σ² with D = 0:
+            # the whole of a still scene is foreground, and foreground is never learnt
+            raise ValueError(f"min_sigma must be > 0 (grey levels): at 0 every pixel that "
+                             f"never changed is foreground; got {min_sigma}")
         self.alpha, self.threshold, self.n_init = float(alpha), float(threshold), int(n_init)
         self.min_sigma, self.freeze = float(min_sigma), bool(freeze)
         self.mean: np.ndarray | None = None  # B (H, W, C) float32
