@@ -49,6 +49,22 @@ def test_identity_switching_is_the_seeds_multiple_model_filter(rng):
                                rtol=1e-9)
 
 
+def test_a_model_of_probability_0_still_runs_its_own_filter(rng):
+    """Π = I and a prior of (1, 0): the second model has no mass to mix, and keeps running on
+    its own, as the Kalman filter of its model does (the oracle); it was reset to a zero mean
+    and covariance at every step. The combined estimate is the first model's."""
+    T = 12
+    _, ys = vt.simulate.simulate(vt.ConstantVelocity(dim=1, q=0.5), vt.Position(dim=1), T,
+                                 x0=[5.0, 1.0], rng=rng)
+    x0, P0, qs = np.array([5.0, 1.0]), np.eye(2), (0.01, 2.0)
+    res = IMMFilter([cv(q) for q in qs], np.eye(2), mode_probs=[1.0, 0.0]).filter(
+        ys, x0=x0, P0=P0)
+    for j, q in enumerate(qs):
+        np.testing.assert_allclose(res.member_means[j], kf_run(q, ys, x0, P0).means, rtol=1e-10)
+    np.testing.assert_allclose(res.means, kf_run(qs[0], ys, x0, P0).means, rtol=1e-10)
+    np.testing.assert_allclose(res.mode_probs[:, 1], 0.0)
+
+
 def manoeuvre(rng, T=80, switch=40):
     """1-D: speed 1, then at ``switch`` a jump to speed -3 (known switch time)."""
     v = np.where(np.arange(T) < switch, 1.0, -3.0)

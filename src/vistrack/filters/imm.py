@@ -344,7 +344,15 @@ class IMMFilter:
                 log_c = _logsumexp(a, 1)  # (B, M)
                 with np.errstate(invalid="ignore"):
                     w = np.exp(a - log_c[:, None, :])  # (B, i, j)
-                w = np.nan_to_num(w)  # a model with c̄_j = 0 has no mass to mix
+                # a model with c̄_j = 0 has no mass to mix: it keeps its own estimate (mixed
+                # from nothing it was reset to a zero mean and covariance, its member means
+                # meaningless while its probability stayed 0)
+                w = np.nan_to_num(w)
+                empty = ~np.isfinite(log_c)  # (B, M)
+                if empty.any():
+                    b, j = np.nonzero(empty)
+                    w[b, :, j] = 0.0
+                    w[b, j, j] = 1.0
                 gs = [_mix(gs, w[:, :, j], gs[j]) for j in range(M)]
                 gs = [f.predict(g, float(dts[t]), float(times[t]))
                       for f, g in zip(self.filters, gs)]
