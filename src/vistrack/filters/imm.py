@@ -350,9 +350,9 @@ class IMMFilter:
                 w = np.nan_to_num(w)
                 empty = ~np.isfinite(log_c)  # (B, M)
                 if empty.any():
-                    b, j = np.nonzero(empty)
-                    w[b, :, j] = 0.0
-                    w[b, j, j] = 1.0
+                    series, model = np.nonzero(empty)
+                    w[series, :, model] = 0.0
+                    w[series, model, model] = 1.0
                 gs = [_mix(gs, w[:, :, j], gs[j]) for j in range(M)]
                 gs = [f.predict(g, float(dts[t]), float(times[t]))
                       for f, g in zip(self.filters, gs)]
