@@ -156,6 +156,20 @@ def _whole_numbers(values: ArrayLike, name: str) -> np.ndarray:
     return x.astype(np.int64)
 
 
+def _box_rows(values: ArrayLike, name: str, *, one: bool = False) -> np.ndarray:
+    """``values`` as finite rows of four floats ``(N, 4)``: ``[]`` or ``(0, k)`` as none, and
+    with ``one`` a lone ``(4,)`` as one box; each error names ``name`` (and the row)."""
+    b = np.asarray(values, dtype=np.float64)
+    if (one and b.shape == (4,)) or (b.size == 0 and (b.ndim < 2 or b.shape[0] == 0)):
+        b = b.reshape(-1, 4)
+    if b.ndim != 2 or b.shape[1] != 4:
+        raise ValueError(f"{name} must have shape (N, 4); got {b.shape}")
+    if not np.isfinite(b).all():
+        i = int(np.flatnonzero(~np.isfinite(b).all(axis=1))[0])
+        raise ValueError(f"{name} must be finite; {name}[{i}] = {b[i].tolist()}")
+    return b
+
+
 @dataclass(frozen=True)
 class Detections:
     """One frame's detections, as columns: boxes or points, scores and classes.
@@ -201,14 +215,7 @@ class Detections:
         if (self.boxes is None) == (self.points is None):
             raise ValueError("Detections need boxes or points (one of them)")
         if self.boxes is not None:
-            b = np.asarray(self.boxes, dtype=np.float64)
-            if b.size == 0 and (b.ndim < 2 or b.shape[0] == 0):  # [] or (0, k): no boxes
-                b = b.reshape(0, 4)
-            if b.ndim != 2 or b.shape[1] != 4:
-                raise ValueError(f"boxes must have shape (N, 4); got {b.shape}")
-            if not np.isfinite(b).all():
-                i = int(np.flatnonzero(~np.isfinite(b).all(axis=1))[0])
-                raise ValueError(f"boxes must be finite; boxes[{i}] = {b[i].tolist()}")
+            b = _box_rows(self.boxes, "boxes")
             if (b[:, 2] < b[:, 0]).any() or (b[:, 3] < b[:, 1]).any():
                 i = int(np.flatnonzero((b[:, 2] < b[:, 0]) | (b[:, 3] < b[:, 1]))[0])
                 raise ValueError(f"boxes must be x0, y0, x1, y1 with x1 >= x0 and y1 >= y0; "
@@ -260,14 +267,7 @@ class Detections:
         >>> Detections.from_xywh([[10, 20, 30, 40]]).boxes.tolist()
         [[10.0, 20.0, 40.0, 60.0]]
         """
-        b = np.asarray(xywh, dtype=np.float64)
-        if b.shape == (4,) or (b.size == 0 and (b.ndim < 2 or b.shape[0] == 0)):
-            b = b.reshape(-1, 4)  # one box, or none
-        if b.ndim != 2 or b.shape[1] != 4:
-            raise ValueError(f"xywh must have shape (N, 4); got {b.shape}")
-        if not np.isfinite(b).all():
-            i = int(np.flatnonzero(~np.isfinite(b).all(axis=1))[0])
-            raise ValueError(f"xywh must be finite; xywh[{i}] = {b[i].tolist()}")
+        b = _box_rows(xywh, "xywh", one=True)
         bad = np.flatnonzero((b[:, 2] < 0) | (b[:, 3] < 0))
         if len(bad):  # named as given, not as the corners it would make
             raise ValueError(f"xywh must have widths and heights >= 0; xywh[{int(bad[0])}] = "

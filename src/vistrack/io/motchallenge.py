@@ -1079,24 +1079,19 @@ def _integers(values: ArrayLike, name: str) -> np.ndarray:
     beyond 2**53 either way, which :func:`read_mot` refuses (and a uint64 above int64's range
     was written as a negative number: 2**64 - 1 as -1, a detection's identity)."""
     a = np.asarray(values).ravel()
-    if a.dtype.kind in "iub":
-        big = np.abs(a.astype(float)) > _INT_LIMIT
-        if not big.any():
-            return a.astype(np.int64, copy=False)
-        k = int(np.argmax(big))
-        raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is beyond 2**53, which read_mot "
-                         "refuses")
-    x = np.asarray(a, dtype=float)
-    bad = ~np.isfinite(x) | (x != np.round(x))
-    if bad.any():
-        k = int(np.argmax(bad))
-        raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is not a whole number")
+    integer = a.dtype.kind in "iub"
+    x = a.astype(float)
+    if not integer:
+        bad = ~np.isfinite(x) | (x != np.round(x))
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is not a whole number")
     big = np.abs(x) > _INT_LIMIT
     if big.any():
         k = int(np.argmax(big))
         raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is beyond 2**53, which read_mot "
                          "refuses")
-    return x.astype(np.int64)
+    return a.astype(np.int64, copy=False) if integer else x.astype(np.int64)
 
 
 _ROW = _row_format(2)  # "%d,%d,%.2f,%.2f,%.2f,%.2f,%.4g,-1,-1,-1\n"
