@@ -158,62 +158,29 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
 
 
 def _exact(G: np.ndarray, B: float) -> tuple[np.ndarray, np.ndarray]:
-    """Marginal association probabilities by enumerating every feasible joint event."""
+    """Marginal association probabilities by enumerating every feasible joint event.
+
+    An event weighs ``B^m`` times its pairs' product, ``m`` the tracks it misses; the sums are
+    kept by ``m``, so that where ``B`` is 0 (P_D P_G = 1, every event that misses a track
+    weighing 0) the limit as ``B`` vanishes is at hand: the events that miss the fewest."""
     T, D = G.shape
-    beta = np.zeros((T, D))
-    beta0 = np.zeros(T)
-    total = 0.0
-    taken = np.zeros(D, bool)
-    choice = np.full(T, -1)
-
-    def rec(t: int, w: float) -> None:
-        nonlocal total
-        if t == T:
-            total += w
-            for s in range(T):
-                if choice[s] < 0:
-                    beta0[s] += w
-                else:
-                    beta[s, choice[s]] += w
-            return
-        choice[t] = -1
-        rec(t + 1, w * B)
-        for j in np.flatnonzero(G[t] > 0):
-            if not taken[j]:
-                taken[j] = True
-                choice[t] = j
-                rec(t + 1, w * G[t, j])
-                taken[j] = False
-        choice[t] = -1
-
-    rec(0, 1.0)
-    if total > 0:
-        return beta / total, beta0 / total
-    return _fewest_missed(G)
-
-
-def _fewest_missed(G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_exact` in the limit B -> 0 (P_D P_G = 1, where every event that misses a track
-    weighs 0): an event weighs ``B^m`` times its pairs' product, ``m`` the tracks it misses,
-    so as B vanishes only the events that miss the fewest tracks count."""
-    T, D = G.shape
-    best = [T + 1, 0.0, np.zeros((T, D)), np.zeros(T)]  # fewest missed, total, beta, beta0
+    total = np.zeros(T + 1)  # by the tracks missed
+    beta = np.zeros((T + 1, T, D))
+    beta0 = np.zeros((T + 1, T))
     taken = np.zeros(D, bool)
     choice = np.full(T, -1)
 
     def rec(t: int, w: float, missed: int) -> None:
-        if missed > best[0]:
-            return
         if t == T:
-            if missed < best[0]:
-                best[:] = [missed, 0.0, np.zeros((T, D)), np.zeros(T)]
-            best[1] += w
+            total[missed] += w
             for s in range(T):
                 if choice[s] < 0:
-                    best[3][s] += w
+                    beta0[missed, s] += w
                 else:
-                    best[2][s, choice[s]] += w
+                    beta[missed, s, choice[s]] += w
             return
+        choice[t] = -1
+        rec(t + 1, w, missed + 1)
         for j in np.flatnonzero(G[t] > 0):
             if not taken[j]:
                 taken[j] = True
@@ -221,10 +188,14 @@ def _fewest_missed(G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                 rec(t + 1, w * G[t, j], missed)
                 taken[j] = False
         choice[t] = -1
-        rec(t + 1, w, missed + 1)
 
     rec(0, 1.0, 0)
-    return best[2] / best[1], best[3] / best[1]
+    power = B ** np.arange(T + 1)
+    norm = power @ total
+    if norm > 0:
+        return np.tensordot(power, beta, 1) / norm, power @ beta0 / norm
+    m = int(np.flatnonzero(total > 0)[0])
+    return beta[m] / total[m], beta0[m] / total[m]
 
 
 def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
