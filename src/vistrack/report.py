@@ -233,12 +233,11 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     shown = {video.name: "annotated video", plot.name: "plot of the trajectories"}
     if absent:
         # removed, or never written (a run stopped before its end): said, not left out
-        what = " nor ".join(absent)
-        warnings.warn(f"{out_dir}: no {what}: the report has no "
-                      f"{' nor '.join(shown[a] for a in absent)}", RuntimeWarning, stacklevel=2)
+        what, lost = " nor ".join(absent), " nor ".join(shown[a] for a in absent)
+        warnings.warn(f"{out_dir}: no {what}: the report has no {lost}", RuntimeWarning,
+                      stacklevel=2)
         parts.append(f"<p class='note'>No {html.escape(what)} in {html.escape(str(out_dir))} "
-                     f"when this page was written: no {' nor '.join(shown[a] for a in absent)}."
-                     "</p>")
+                     f"when this page was written: no {lost}.</p>")
     figures = ([("Trajectories", plot.read_bytes())] if plot.is_file() else [])
     figures += _gt_plots(tracks, name, info)
     if info.get("gt") and not Path(info["gt"]).is_file():
