@@ -152,3 +152,89 @@ def test_a_certain_detection_p_detect_and_p_gate_1_is_the_limit_of_nearly_certai
         pn, pn0 = pda_weights(lik, gate, p_detect=1.0, p_gate=1.0 - 1e-9)
         np.testing.assert_allclose(pb, pn, atol=1e-6)
         np.testing.assert_allclose(pb0, pn0, atol=1e-6)
+
+
+def brute_jipda(lik, gate, eps, pd, lam, pg):
+    """Every joint hypothesis of which tracks exist and which detection each existing one
+    made, weighed by the likelihood of the whole set of detections: lam for each detection
+    that is clutter, pd * lik for a track's (in its gate), 1 - pd * pg for a track that
+    exists and made none, and each track's prior of existing or not."""
+    T, D = lik.shape
+    ex, joint = np.zeros(T), np.zeros((T, D))
+    total = 0.0
+    options = [["absent", "missed"] + [j for j in range(D) if gate[t, j]] for t in range(T)]
+    for event in itertools.product(*options):
+        used = [j for j in event if not isinstance(j, str)]
+        if len(used) != len(set(used)):
+            continue
+        w = lam ** (D - len(used))
+        for t, j in enumerate(event):
+            w *= (1 - eps[t] if j == "absent" else
+                  eps[t] * (1 - pd * pg) if j == "missed" else eps[t] * pd * lik[t, j])
+        total += w
+        for t, j in enumerate(event):
+            if j != "absent":
+                ex[t] += w
+            if not isinstance(j, str):
+                joint[t, j] += w
+    ex, joint = ex / total, joint / total
+    return joint / ex[:, None], 1 - joint.sum(1) / ex, ex
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_jipda_and_ipda_equal_brute_force_over_existence_and_events(seed):
+    """JIPDA's existence and its association probabilities given existence against every
+    joint hypothesis written out; IPDA's against the same with each track alone."""
+    from vistrack.association import ipda_weights, jipda_weights
+
+    rng = np.random.default_rng(seed)
+    T, D = int(rng.integers(1, 4)), int(rng.integers(0, 5))
+    lik = rng.uniform(0.001, 0.05, (T, D))
+    gate = rng.random((T, D)) < 0.7
+    eps = rng.uniform(0.05, 0.99, T)
+    pd, lam, pg = 0.85, 0.01, 0.97
+    beta, beta0, ex = jipda_weights(lik, gate, eps, p_detect=pd, clutter_density=lam, p_gate=pg)
+    want = brute_jipda(lik, gate, eps, pd, lam, pg)
+    for got, w in zip((beta, beta0, ex), want):
+        np.testing.assert_allclose(got, w, rtol=1e-10, atol=1e-14)
+    beta, beta0, ex = ipda_weights(lik, gate, eps, p_detect=pd, clutter_density=lam, p_gate=pg)
+    for t in range(T):
+        want = brute_jipda(lik[t:t + 1], gate[t:t + 1], eps[t:t + 1], pd, lam, pg)
+        for got, w in zip((beta[t:t + 1], beta0[t:t + 1], ex[t:t + 1]), want):
+            np.testing.assert_allclose(got, w, rtol=1e-10, atol=1e-14)
+    # given existence, IPDA's association is PDA's
+    b, b0 = pda_weights(lik, gate, p_detect=pd, clutter_density=lam, p_gate=pg)
+    np.testing.assert_allclose(beta, b, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(beta0, b0, rtol=1e-12)
+
+
+def test_jipda_of_certain_tracks_is_jpda_and_clutter_lowers_existence_on_average():
+    """With every existence 1, JIPDA is JPDA and the existence stays 1. And IPDA's evidence
+    in clutter alone (Poisson detections, uniform over a track's gate) multiplies the odds of
+    existence by 1 on average: the mean of the posterior odds over many draws equals the
+    prior's, while the median falls."""
+    from scipy.stats import chi2
+
+    from vistrack.association import ipda_weights, jipda_weights
+
+    rng = np.random.default_rng(5)
+    lik = rng.uniform(0.001, 0.05, (3, 4))
+    gate = rng.random((3, 4)) < 0.7
+    b, b0, ex = jipda_weights(lik, gate, np.ones(3))
+    jb, jb0 = jpda_weights(lik, gate)
+    np.testing.assert_allclose(b, jb, rtol=1e-12)
+    np.testing.assert_allclose(b0, jb0, rtol=1e-12)
+    np.testing.assert_allclose(ex, 1.0)
+    # one track at the origin, S = I in 2-D, gate 99 %: its area is pi * g; clutter of
+    # density lam falls in it, each point's likelihood N(z; 0, I)
+    pd, pg, lam = 0.9, 0.99, 0.02
+    g = chi2.ppf(pg, 2)
+    odds = []
+    for _ in range(20000):
+        k = rng.poisson(lam * np.pi * g)
+        r = np.sqrt(g * rng.random(k))
+        lk = np.exp(-0.5 * r ** 2) / (2 * np.pi)
+        e = ipda_weights(lk[None], np.ones((1, k), bool), [0.5], p_detect=pd,
+                         clutter_density=lam, p_gate=pg)[2][0]
+        odds.append(e / (1 - e))
+    assert abs(np.mean(odds) - 1.0) < 0.05 and np.median(odds) < 0.2

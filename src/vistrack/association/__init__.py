@@ -23,10 +23,10 @@ from .costs import (
     paired_iou,
 )
 from .gating import chi2_gate, chi2_threshold
-from .pda import jpda_weights, likelihoods, pda_weights
+from .pda import ipda_weights, jipda_weights, jpda_weights, likelihoods, pda_weights
 
 __all__ = ["ASSIGNERS", "assign", "components", "gnn", "gnn_sparse", "greedy", "lsa", "lsa_kernel",
            "nearest_neighbour",
            "euclidean", "giou", "iou", "iou_pairs", "iou_pairs_same_class", "mahalanobis",
            "non_maximum", "overlapping_pairs", "paired_iou", "chi2_gate", "chi2_threshold",
-           "jpda_weights", "likelihoods", "pda_weights"]
+           "ipda_weights", "jipda_weights", "jpda_weights", "likelihoods", "pda_weights"]

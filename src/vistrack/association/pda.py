@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike
 from .assign import components
 from .costs import cholesky_innovations
 
-__all__ = ["pda_weights", "jpda_weights", "likelihoods"]
+__all__ = ["pda_weights", "jpda_weights", "ipda_weights", "jipda_weights", "likelihoods"]
 
 
 def likelihoods(z_pred: ArrayLike, S: ArrayLike, Z: ArrayLike) -> np.ndarray:
@@ -157,14 +157,16 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     return G / den[:, None], np.where(none, 1.0, B / den)
 
 
-def _exact(G: np.ndarray, B: float) -> tuple[np.ndarray, np.ndarray]:
+def _exact(G: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Marginal association probabilities by enumerating every feasible joint event.
 
-    An event weighs ``B^m`` times its pairs' product, ``m`` the tracks it misses; the sums are
-    kept by ``m``, so that where ``B`` is 0 (P_D P_G = 1, every event that misses a track
-    weighing 0) the limit as ``B`` vanishes is at hand: the events that miss the fewest."""
+    An event weighs its pairs' product times ``B[t]`` for each track ``t`` it misses. A miss
+    of a track whose ``B`` is 0 (P_D P_G = 1: certain to be detected, in its gate) is
+    counted instead, and the sums kept by that count, so that the limit as such a ``B``
+    vanishes is at hand: the events that miss the fewest of those tracks."""
     T, D = G.shape
-    total = np.zeros(T + 1)  # by the tracks missed
+    zero = B == 0
+    total = np.zeros(T + 1)  # by the tracks of B = 0 missed
     beta = np.zeros((T + 1, T, D))
     beta0 = np.zeros((T + 1, T))
     taken = np.zeros(D, bool)
@@ -180,7 +182,10 @@ def _exact(G: np.ndarray, B: float) -> tuple[np.ndarray, np.ndarray]:
                     beta[missed, s, choice[s]] += w
             return
         choice[t] = -1
-        rec(t + 1, w, missed + 1)
+        if zero[t]:
+            rec(t + 1, w, missed + 1)
+        else:
+            rec(t + 1, w * B[t], missed)
         for j in np.flatnonzero(G[t] > 0):
             if not taken[j]:
                 taken[j] = True
@@ -190,12 +195,35 @@ def _exact(G: np.ndarray, B: float) -> tuple[np.ndarray, np.ndarray]:
         choice[t] = -1
 
     rec(0, 1.0, 0)
-    power = B ** np.arange(T + 1)
-    norm = power @ total
-    if norm > 0:
-        return np.tensordot(power, beta, 1) / norm, power @ beta0 / norm
-    m = int(np.flatnonzero(total > 0)[0])
+    m = int(np.flatnonzero(total > 0)[0])  # the empty event (every track missed) counts
     return beta[m] / total[m], beta0[m] / total[m]
+
+
+def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """The joint association probabilities of :func:`jpda_weights`, with ``G (T, D)`` (0
+    outside the gates) and each track's weight of a miss ``B (T,)``."""
+    T, D = G.shape
+    beta, beta0 = np.zeros((T, D)), np.ones(T)
+    if T == 0:
+        return beta, np.zeros(0)
+    if not gate.any():
+        return beta, beta0
+    k, lt, ld = components(gate)
+    for c in np.unique(lt[gate.any(1)]):
+        ti, di = np.flatnonzero(lt == c), np.flatnonzero(ld == c)
+        g = G[np.ix_(ti, di)]
+        if len(ti) <= max_exact and len(di) <= max_exact:
+            b, b0 = _exact(g, B[ti])
+        else:  # Fitzgerald's cheap JPDA
+            den = g.sum(1)[:, None] + g.sum(0)[None, :] - g + B[ti, None]
+            b = g / den
+            b0 = np.clip(1.0 - b.sum(1), 0.0, 1.0)
+            s = b.sum(1) + b0
+            b, b0 = b / s[:, None], b0 / s
+        beta[np.ix_(ti, di)] = b
+        beta0[ti] = b0
+    return beta, beta0
 
 
 def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
@@ -267,26 +295,178 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     _check(p_detect, clutter_density, p_gate)
     lik = np.asarray(lik, dtype=float)
     gate = np.asarray(gate, dtype=bool) & (lik > 0)
-    T, D = lik.shape
+    G = np.where(gate, p_detect * lik / clutter_density, 0.0)
+    B = np.full(len(G), 1.0 - p_detect * p_gate)
+    return _joint(G, B, gate, max_exact)
+
+
+def _existence(existence: ArrayLike, T: int) -> np.ndarray:
+    eps = np.asarray(existence, dtype=float)
+    if eps.shape != (T,):
+        raise ValueError(f"existence must have one probability per track, shape ({T},); "
+                         f"got shape {eps.shape}")
+    bad = ~((eps >= 0.0) & (eps <= 1.0))
+    if bad.any():
+        raise ValueError(f"existence must be probabilities in [0, 1]; got {eps[bad][0]} "
+                         f"(track {int(np.flatnonzero(bad)[0])})")
+    return eps
+
+
+def _given_existence(beta: np.ndarray, beta0: np.ndarray, eps: np.ndarray, B: float
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """From the probabilities of each track's events, where missing a track means it was
+    missed (``eps B``) or is not there (``1 - eps``): the posterior existence, and the
+    association probabilities given that the track exists."""
+    miss = 1.0 - eps * (1.0 - B)  # the weight of "no detection is the track's"
+    with np.errstate(invalid="ignore", divide="ignore"):
+        missed = np.where(miss > 0, beta0 * (eps * B) / miss, 0.0)
+    post = beta.sum(1) + missed
+    # no evidence can make a track certain not to be there exist: one whose every event
+    # weighs 0 given it exists (P_D P_G = 1 and nothing in its gate) keeps its estimate
+    none = post <= 0
+    post[none] = 1.0
+    b, b0 = beta / post[:, None], np.where(none, 1.0, missed / post)
+    post[none] = 0.0
+    return b, b0, np.minimum(post, 1.0)
+
+
+def ipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
+                 p_detect: float = 0.9, clutter_density: float = 1e-4, p_gate: float = 0.99
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""Integrated PDA: each track's association probabilities and its probability of existence.
+
+    A track of clutter (started from a false detection, or left behind by a target that has
+    gone) is never missed by PDA in clutter: some false detection usually falls in its gate.
+    IPDA (Mušicki, Evans and Stanković, 1994) carries each track's probability
+    :math:`\varepsilon` that its target exists; with
+    :math:`G_j = P_D \ell_j / \lambda` and :math:`B = 1 - P_D P_G`, the frame's evidence
+    multiplies the odds of existence by :math:`\Lambda = B + \sum_j G_j`:
+
+    .. math:: \varepsilon = \frac{\Lambda \varepsilon^-}{1 - \varepsilon^- + \Lambda
+              \varepsilon^-},
+
+    where :math:`\varepsilon^-` is the prior of the frame (the last posterior times the
+    chance of surviving the time between). Clutter alone gives :math:`\Lambda` a mean of 1
+    and a negative mean logarithm, so the existence of a track of clutter falls. Given that
+    the target exists, the association probabilities are PDA's (:func:`pda_weights`).
+
+    Parameters
+    ----------
+    lik : (T, D) array_like
+        Likelihoods :math:`\ell_{tj}` (:func:`likelihoods`).
+    gate : (T, D) array_like of bool
+        The detections in each track's gate.
+    existence : (T,) array_like
+        Each track's prior probability of existence :math:`\varepsilon^-`, in [0, 1].
+    p_detect, clutter_density, p_gate : float
+        As for :func:`pda_weights`.
+
+    Returns
+    -------
+    beta : (T, D) ndarray
+        Probability that detection ``j`` is track ``t``'s, given the track exists.
+    beta0 : (T,) ndarray
+        Probability that no detection is the track's, given it exists.
+    existence : (T,) ndarray
+        Posterior probability of existence. (With :math:`P_D P_G = 1`, a track with nothing in
+        its gate cannot exist: 0; if its prior was 1, its association is left as it is,
+        ``beta0`` 1.)
+
+    Raises
+    ------
+    ValueError
+        If a probability or the density is out of range, or ``existence`` does not have one
+        probability in [0, 1] per track.
+
+    See Also
+    --------
+    jipda_weights : The same for tracks that compete for detections, jointly.
+
+    References
+    ----------
+    .. [1] D. Mušicki, R. Evans and S. Stanković, "Integrated probabilistic data association",
+       *IEEE Transactions on Automatic Control* 39(6), 1994.
+
+    Examples
+    --------
+    One detection near the track and one far from it, in the gate; then nothing in the gate:
+
+    >>> b, b0, e = ipda_weights(np.array([[0.02, 0.001]]), np.array([[True, True]]), [0.5],
+    ...                         p_detect=0.9, clutter_density=0.01, p_gate=1.0)
+    >>> b.round(3).tolist(), round(float(b0[0]), 3), round(float(e[0]), 3)  # odds x 1.99
+    ([[0.905, 0.045]], 0.05, 0.666)
+    >>> round(float(ipda_weights(np.zeros((1, 0)), np.zeros((1, 0), bool), [0.5],
+    ...                          p_detect=0.9, p_gate=1.0)[2][0]), 3)      # odds x 0.1
+    0.091
+    """
+    _check(p_detect, clutter_density, p_gate)
+    lik = np.asarray(lik, dtype=float)
+    gate = np.asarray(gate, dtype=bool)
+    eps = _existence(existence, len(lik))
     G = np.where(gate, p_detect * lik / clutter_density, 0.0)
     B = 1.0 - p_detect * p_gate
-    beta, beta0 = np.zeros((T, D)), np.ones(T)
-    if T == 0:
-        return beta, np.zeros(0)
-    if not gate.any():
-        return beta, beta0
-    k, lt, ld = components(gate)
-    for c in np.unique(lt[gate.any(1)]):
-        ti, di = np.flatnonzero(lt == c), np.flatnonzero(ld == c)
-        g = G[np.ix_(ti, di)]
-        if len(ti) <= max_exact and len(di) <= max_exact:
-            b, b0 = _exact(g, B)
-        else:  # Fitzgerald's cheap JPDA
-            den = g.sum(1)[:, None] + g.sum(0)[None, :] - g + B
-            b = g / den
-            b0 = np.clip(1.0 - b.sum(1), 0.0, 1.0)
-            s = b.sum(1) + b0
-            b, b0 = b / s[:, None], b0 / s
-        beta[np.ix_(ti, di)] = b
-        beta0[ti] = b0
-    return beta, beta0
+    # the single track's events: not there (1 - eps), missed (eps B), detection j (eps G_j)
+    den = (1.0 - eps) + eps * (B + G.sum(1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        beta = np.where(den[:, None] > 0, eps[:, None] * G / den[:, None], 0.0)
+        beta0 = np.where(den > 0, (1.0 - eps * (1.0 - B)) / den, 1.0)
+    return _given_existence(beta, beta0, eps, B)
+
+
+def jipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
+                  p_detect: float = 0.9, clutter_density: float = 1e-4, p_gate: float = 0.99,
+                  max_exact: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""Joint integrated PDA: JPDA over tracks that may not exist.
+
+    Each track of a joint event either is not there (weight :math:`1 - \varepsilon_t`), is
+    there and missed (:math:`\varepsilon_t B`) or is there and takes detection ``j``
+    (:math:`\varepsilon_t G_{tj}`, :math:`G_{tj} = P_D \ell_{tj} / \lambda`); not being
+    there and being missed both leave it without a detection, so the joint events are
+    JPDA's (:func:`jpda_weights`) with :math:`G_{tj}` weighed by :math:`\varepsilon_t` and a
+    miss by :math:`1 - \varepsilon_t P_D P_G`: JPDA with detection probability
+    :math:`\varepsilon_t P_D` (Mušicki and Evans, 2004). The posterior existence is the
+    probability of the events where the track takes a detection, plus the share
+    :math:`\varepsilon_t B / (1 - \varepsilon_t P_D P_G)` of those where it takes none. A
+    lone track gets :func:`ipda_weights`' values. Clusters larger than ``max_exact`` get
+    Fitzgerald's cheap JPDA on these weights.
+
+    Parameters
+    ----------
+    lik, gate, existence, p_detect, clutter_density, p_gate
+        As for :func:`ipda_weights`.
+    max_exact : int
+        As for :func:`jpda_weights`.
+
+    Returns
+    -------
+    beta, beta0, existence : ndarray
+        As for :func:`ipda_weights`: the association probabilities given each track exists,
+        and the posterior existence.
+
+    Raises
+    ------
+    ValueError
+        As for :func:`ipda_weights`.
+
+    References
+    ----------
+    .. [1] D. Mušicki and R. Evans, "Joint integrated probabilistic data association:
+       JIPDA", *IEEE Transactions on Aerospace and Electronic Systems* 40(3), 2004.
+
+    Examples
+    --------
+    Two tracks share a detection; the second, less likely to exist, gets less of it:
+
+    >>> b, b0, e = jipda_weights(np.array([[0.02], [0.02]]), np.ones((2, 1), bool),
+    ...                          [0.9, 0.3], p_detect=0.9, clutter_density=0.01,
+    ...                          p_gate=1.0)
+    >>> b.round(3).ravel().tolist(), e.round(3).tolist()
+    ([0.912, 0.654], [0.911, 0.11])
+    """
+    _check(p_detect, clutter_density, p_gate)
+    lik = np.asarray(lik, dtype=float)
+    gate = np.asarray(gate, dtype=bool) & (lik > 0)
+    eps = _existence(existence, len(lik))
+    G = np.where(gate, (eps * p_detect)[:, None] * lik / clutter_density, 0.0)
+    beta, beta0 = _joint(G, 1.0 - eps * p_detect * p_gate, gate, max_exact)
+    return _given_existence(beta, beta0, eps, 1.0 - p_detect * p_gate)

@@ -196,7 +196,8 @@ class TrackTable:
         self.state[confirm] = CONFIRMED
         self.state[~updated & (self.state == CONFIRMED)] = LOST
 
-    def ended(self, updated: np.ndarray, time: float, max_lost: float) -> np.ndarray:
+    def ended(self, updated: np.ndarray, time: float, max_lost: float, *,
+              miss_ends_tentative: bool = True) -> np.ndarray:
         """The tracks to delete after :meth:`advance` (the second half of :meth:`manage`).
 
         Parameters
@@ -207,20 +208,27 @@ class TrackTable:
             The frame's time (seconds).
         max_lost : float
             Seconds a lost track is kept after its last update.
+        miss_ends_tentative : bool
+            Whether a tentative track not updated ends; if not (a tracker that decides by
+            other evidence, such as a probability of existence), a tentative track ends as a
+            lost one does, ``max_lost`` seconds after its last update.
 
         Returns
         -------
         (K,) bool ndarray
-            The tentative tracks not updated, and the tracks lost for more than ``max_lost``
-            seconds since their last update.
+            The tentative tracks not updated (with ``miss_ends_tentative``), and the tracks
+            lost (or tentative, without it) for more than ``max_lost`` seconds since their
+            last update.
         """
         # lost for more than max_lost, whatever the rounding of the frames' times: k frames at
         # 30 frames/s are k / 30 s, but (9 + 3) / 30 - 9 / 30 > 0.1 where (12 + 3) / 30 -
         # 12 / 30 < 0.1, so a track lost for exactly max_lost was kept or deleted by where
         # in the sequence its gap fell
         slack = 1e-9 * max(1.0, abs(time))
-        return (~updated & (self.state == TENTATIVE)) | (
-            (self.state == LOST) & (time - self.last_time > max_lost + slack))
+        stale = time - self.last_time > max_lost + slack
+        if not miss_ends_tentative:
+            return (self.state != CONFIRMED) & stale
+        return (~updated & (self.state == TENTATIVE)) | ((self.state == LOST) & stale)
 
     def manage(self, updated: np.ndarray, time: float, confirm_hits: int,
                max_lost: float) -> np.ndarray:

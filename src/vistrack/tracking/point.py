@@ -13,11 +13,25 @@ Association (``association=``):
   pairs); ``"nn"``: each track its nearest gated measurement; ``"greedy"``;
 - ``"pda"``: each track corrected with all its gated measurements weighted by their
   probabilities (PDA), for clutter; ``"jpda"``: the probabilities computed jointly for tracks
-  that share measurements (:mod:`vistrack.association.pda`).
+  that share measurements (:mod:`vistrack.association.pda`);
+- ``"ipda"``, ``"jipda"``: PDA and JPDA with each track's probability of existence (IPDA,
+  JIPDA), which decides when a track is confirmed and deleted.
 
 New tentative tracks start from the measurements no track took (``gnn``, ``nn``, ``greedy``) or
-that are inside no track's gate (``pda``, ``jpda``), with zero velocity and ``init_speed`` as
+that are inside no track's gate (the PDA family), with zero velocity and ``init_speed`` as
 its standard deviation.
+
+Confirmation and deletion (:mod:`vistrack.tracking.lifecycle`): by counting, for all but IPDA
+and JIPDA, ``confirm_hits`` updates in a row to confirm and ``max_lost`` seconds without one to
+delete. In clutter, though, PDA and JPDA update a track whenever a measurement falls in its
+gate, and one usually does: a track of clutter, or one left behind by a target that has
+gone, is seldom missed and never deleted. IPDA and JIPDA (seed 003: "need to know when to
+terminate a track") carry each track's probability of existence, the prior of a frame being
+the last posterior times ``p_survive`` to the power of the time between (in seconds), and
+the frame's evidence moving it (:func:`~vistrack.association.ipda_weights`): a new track
+starts at ``init_existence``, is confirmed once its existence reaches
+``confirm_existence``, and is deleted once it falls below ``delete_existence`` (or it has
+not been updated for ``max_lost`` seconds); a tentative track is not deleted for a miss.
 """
 
 from __future__ import annotations
@@ -26,22 +40,33 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..association import assign, chi2_threshold, gnn_sparse, jpda_weights, likelihoods, mahalanobis
+from ..association import (
+    assign,
+    chi2_threshold,
+    gnn_sparse,
+    ipda_weights,
+    jipda_weights,
+    jpda_weights,
+    likelihoods,
+    mahalanobis,
+    pda_weights,
+)
 from ..association.costs import mahalanobis_pairs
-from ..association.pda import pda_weights
 from ..filters import kf_predict, kf_update, pda_update
 from ..models import ConstantVelocity, Position
 from ..types import Detections, Frame, Gaussian, Tracks
 from .base import frame_index
-from .lifecycle import CONFIRMED, TrackTable
+from .lifecycle import CONFIRMED, TENTATIVE, TrackTable
 
 if TYPE_CHECKING:
     from ..models.protocols import MeasurementModel, MotionModel
 
 __all__ = ["PointTracker", "POINT_ASSOCIATIONS"]
 
-POINT_ASSOCIATIONS = ("gnn", "nn", "greedy", "pda", "jpda")
+POINT_ASSOCIATIONS = ("gnn", "nn", "greedy", "pda", "jpda", "ipda", "jipda")
 """Association methods of :class:`PointTracker`."""
+
+_EXISTENCE = ("ipda", "jipda")
 
 
 class PointTracker:
@@ -55,20 +80,36 @@ class PointTracker:
         Linear models: ``F(dt)``, ``Q(dt)`` and ``H(n)``, ``R()``. Default: constant velocity
         in 2-D with ``q = 1`` and position measurements with ``r = 1``.
     p_detect, clutter_density : float
-        Detection probability and clutter per unit area (PDA and JPDA).
+        Detection probability and clutter per unit area (the PDA family).
     p_gate : float
         Gate probability ``p``: measurements beyond the ``p`` quantile of chi-square are not
         associated.
     init_speed : float
         Standard deviation of a new track's velocity, per axis.
     confirm_hits, max_lost, frame_rate
-        As for :class:`~vistrack.tracking.BoxTracker`.
+        As for :class:`~vistrack.tracking.BoxTracker` (``confirm_hits`` is not used by IPDA and
+        JIPDA).
+    p_survive : float
+        IPDA and JIPDA: probability that a target is still there one second later, in
+        (0, 1].
+    init_existence, confirm_existence, delete_existence : float
+        IPDA and JIPDA: a new track's probability of existence, the existence that confirms
+        a track, and the existence below which a track is deleted; ``0 <= delete_existence
+        < init_existence < 1`` and ``delete_existence < confirm_existence <= 1``.
+
+    Attributes
+    ----------
+    tracks : TrackTable
+        Every track, tentative, confirmed or lost (:mod:`vistrack.tracking.lifecycle`).
+    existence : (K,) ndarray
+        Each track's probability of existence after the last frame (IPDA and JIPDA; 1 for
+        the other associations).
 
     Raises
     ------
     ValueError
-        If ``association`` is not in :data:`POINT_ASSOCIATIONS`, or ``frame_rate`` is not
-        > 0.
+        If ``association`` is not in :data:`POINT_ASSOCIATIONS`, ``frame_rate`` is not > 0, or
+        an existence setting is out of its range.
 
     Examples
     --------
@@ -83,7 +124,9 @@ class PointTracker:
                  measurement: MeasurementModel | None = None,
                  p_detect: float = 0.9, clutter_density: float = 1e-4, p_gate: float = 0.99,
                  init_speed: float = 10.0, confirm_hits: int = 3, max_lost: float = 1.0,
-                 frame_rate: float = 30.0):
+                 frame_rate: float = 30.0, p_survive: float = 0.99,
+                 init_existence: float = 0.2, confirm_existence: float = 0.95,
+                 delete_existence: float = 0.01):
         if association not in POINT_ASSOCIATIONS:
             raise ValueError(f"association must be one of {list(POINT_ASSOCIATIONS)}; "
                              f"got {association!r}")
@@ -102,6 +145,20 @@ class PointTracker:
         if not frame_rate > 0:
             raise ValueError(f"frame_rate must be > 0; got {frame_rate}")
         self.frame_rate = float(frame_rate)
+        if not 0.0 < p_survive <= 1.0:
+            raise ValueError(f"p_survive must be in (0, 1]; got {p_survive}")
+        if not 0.0 <= delete_existence < init_existence < 1.0:
+            raise ValueError("the existence settings must have 0 <= delete_existence < "
+                             f"init_existence < 1; got delete_existence {delete_existence}, "
+                             f"init_existence {init_existence}")
+        if not delete_existence < confirm_existence <= 1.0:
+            raise ValueError("the existence settings must have delete_existence < "
+                             f"confirm_existence <= 1; got delete_existence {delete_existence}, "
+                             f"confirm_existence {confirm_existence}")
+        self.p_survive = float(p_survive)
+        self.init_existence = float(init_existence)
+        self.confirm_existence = float(confirm_existence)
+        self.delete_existence = float(delete_existence)
         self.tracks = TrackTable(n)
         self.reset()
 
@@ -117,6 +174,7 @@ class PointTracker:
         [1]
         """
         self.tracks.reset()
+        self.existence = np.zeros(0)
         self.frame: int | None = None
 
     def _initial(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -211,11 +269,17 @@ class PointTracker:
                 in_gate = gate.any(0)
             if gate is None:
                 pass
-            elif self.association in ("pda", "jpda") and len(Z):
+            elif self.association in ("pda", "jpda", "ipda", "jipda"):
                 lik = likelihoods(zp, S, Z)
-                weigh = jpda_weights if self.association == "jpda" else pda_weights
-                beta, beta0 = weigh(lik, gate, p_detect=self.p_detect,
-                                    clutter_density=self.clutter_density, p_gate=self.p_gate)
+                args = dict(p_detect=self.p_detect, clutter_density=self.clutter_density,
+                            p_gate=self.p_gate)
+                if self.association in _EXISTENCE:
+                    prior = self.existence * self.p_survive ** dt
+                    weigh = ipda_weights if self.association == "ipda" else jipda_weights
+                    beta, beta0, self.existence = weigh(lik, gate, prior, **args)
+                else:
+                    weigh2 = pda_weights if self.association == "pda" else jpda_weights
+                    beta, beta0 = weigh2(lik, gate, **args)
                 hit = gate.any(1)
                 if hit.any():
                     upd = pda_update(g[hit], Z, self.H, self.R, beta[hit], beta0[hit])
@@ -231,13 +295,27 @@ class PointTracker:
                 in_gate = np.zeros(len(Z), bool)  # every measurement not taken starts a track
                 in_gate[c] = True
             t.mean, t.cov = mean, cov
-        t.manage(updated, time, self.confirm_hits, self.max_lost)
+        if self.association in _EXISTENCE:
+            t.advance(updated, time, confirm_hits=np.iinfo(np.int64).max)
+            t.state[updated & (t.state == TENTATIVE)
+                    & (self.existence >= self.confirm_existence)] = CONFIRMED
+            dead = (self.existence < self.delete_existence) | t.ended(
+                updated, time, self.max_lost, miss_ends_tentative=False)
+            t.keep(~dead)
+            self.existence = self.existence[~dead]
+        else:
+            self.existence = self.existence[t.manage(updated, time, self.confirm_hits,
+                                                     self.max_lost)]
         new = np.flatnonzero(~in_gate)
         if len(new):
             mean, cov = self._initial(Z[new])
-            # confirmed at once in the first frame, or where one update confirms
-            t.add(mean, cov, time, classes[new], scores[new],
-                  confirmed=first or self.confirm_hits <= 1)
+            if self.association in _EXISTENCE:  # confirmed by its existence alone
+                start = self.init_existence
+                confirmed = start >= self.confirm_existence
+            else:  # confirmed at once in the first frame, or where one update confirms
+                start, confirmed = 1.0, first or self.confirm_hits <= 1
+            t.add(mean, cov, time, classes[new], scores[new], confirmed=confirmed)
+            self.existence = np.concatenate([self.existence, np.full(len(new), start)])
         out = np.flatnonzero((t.state == CONFIRMED) & (t.last_time == time))
         H = self.H
         covs = H @ t.cov[out] @ H.T
