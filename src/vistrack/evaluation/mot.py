@@ -148,12 +148,18 @@ _BIG = 2.0 ** 500  # below it, no sum or product of the IoU overflows
 
 
 def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    # TrackEval's operations, in its order (corners first, each area from its corners): a
+    # pair whose IoU is 0.5 in exact arithmetic rounds to the same side of the threshold,
+    # and two pairs equal in exact arithmetic rank the same way, as in its scores. (Areas as
+    # w * h round differently in the last bits for decimals such as 813.27.)
     ax0, ay0, ax1, ay1 = a[:, 0:1], a[:, 1:2], a[:, 0:1] + a[:, 2:3], a[:, 1:2] + a[:, 3:4]
     bx0, by0, bx1, by1 = b[:, 0], b[:, 1], b[:, 0] + b[:, 2], b[:, 1] + b[:, 3]
-    iw = np.clip(np.minimum(ax1, bx1) - np.maximum(ax0, bx0), 0, None)
-    ih = np.clip(np.minimum(ay1, by1) - np.maximum(ay0, by0), 0, None)
-    inter = iw * ih
-    union = (a[:, 2:3] * a[:, 3:4]) + (b[:, 2] * b[:, 3]) - inter
+    inter = (np.maximum(np.minimum(ax1, bx1) - np.maximum(ax0, bx0), 0)
+             * np.maximum(np.minimum(ay1, by1) - np.maximum(ay0, by0), 0))
+    area_a, area_b = (ax1 - ax0) * (ay1 - ay0), (bx1 - bx0) * (by1 - by0)
+    union = area_a + area_b - inter
+    inter[(area_a <= _EPS)[:, 0], :] = 0.0
+    inter[:, area_b <= _EPS] = 0.0
     inter[union <= _EPS] = 0.0
     union[union <= _EPS] = 1.0
     return inter / union
@@ -167,9 +173,10 @@ def _iou_scaled(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     for pos, size in ((0, 2), (1, 3)):  # the x axis, then the y axis
         v = np.stack([a[:, pos], a[:, size], b[:, pos], b[:, size]], axis=1)
         v = np.ldexp(v, -np.frexp(np.abs(v).max(1))[1][:, None])
+        a1, b1 = v[:, 0] + v[:, 1], v[:, 2] + v[:, 3]  # as _iou: corners first
         lo = np.maximum(v[:, 0], v[:, 2])
-        hi = np.minimum(v[:, 0] + v[:, 1], v[:, 2] + v[:, 3])
-        cols.append((np.clip(hi - lo, 0, None), v[:, 1], v[:, 3]))
+        hi = np.minimum(a1, b1)
+        cols.append((np.clip(hi - lo, 0, None), a1 - v[:, 0], b1 - v[:, 2]))
     (iw, aw, bw), (ih, ah, bh) = cols
     inter = iw * ih
     union = aw * ah + bw * bh - inter

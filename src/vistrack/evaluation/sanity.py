@@ -111,6 +111,24 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable) -> list[str]:
                    "class (1-13), though most rows have one: --benchmark auto scores the file "
                    "as MOT15, without their preprocessing (--benchmark MOT17 refuses it, naming "
                    "the row)")
+    elif gt.columns == 9 and len(gt) and (gt.classes == -1).all():
+        # a value in column 8 that is not a whole number makes the reader take the column
+        # for no classes at all (MOT15's world x): one such row among MOT16/17/20 classes
+        # turns the whole file into MOT15's convention
+        odd: list[float] = []
+
+        def fraction(row: list[float]) -> bool:
+            if len(row) == 9 and not float(row[7]).is_integer():
+                odd.append(row[7])
+                return True
+            return False
+
+        lines = _lines_of(gt.path, fraction)[:1]
+        if lines:
+            out.append(f"{_where(gt, 'the ground truth', lines)}: class {odd[0]:g} is not a "
+                       "whole number, so no value of column 8 is read as a class: --benchmark "
+                       "auto scores the file as MOT15, without the preprocessing of MOT16/17/20 "
+                       "(--benchmark MOT17 refuses it, naming the row)")
     if not len(gt) or not len(pred):
         return out
     common = np.intersect1d(gt.frames, pred.frames)
