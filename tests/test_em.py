@@ -56,6 +56,72 @@ def test_each_iteration_equals_pykalmans_em(learn):
         np.testing.assert_allclose(fit.loglik[-1], pk.loglikelihood(X), rtol=1e-9)
 
 
+def test_masked_measurements_are_missing_as_in_pykalmans_em():
+    """A numpy masked array, pykalman's missing steps, has its masked entries missing, whatever
+    lies under the mask; before, the placeholders were fitted as measurements."""
+    pykalman = pytest.importorskip("pykalman")
+    ys = series(120, 3)
+    rows = [0, 5, 17, 18, 90]
+    mask = np.zeros(ys.shape, bool)
+    mask[rows] = True
+    masked = np.ma.masked_array(np.where(mask, -999.0, ys), mask=mask)
+    start = dict(F=CV.F(1.0), Q=np.eye(4), H=POS.H(4), R=np.eye(2), x0=np.ones(4),
+                 P0=np.eye(4))
+    pk = pykalman.KalmanFilter(
+        transition_matrices=start["F"], observation_matrices=start["H"],
+        transition_covariance=start["Q"], observation_covariance=start["R"],
+        initial_state_mean=start["x0"], initial_state_covariance=start["P0"],
+        em_vars=["transition_covariance", "observation_covariance"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        pk = pk.em(masked, n_iter=3)
+    fit = em(masked, **start, max_iter=3, tol=-np.inf)
+    np.testing.assert_allclose(fit.Q, pk.transition_covariance, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(fit.R, pk.observation_covariance, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(fit.loglik[-1], pk.loglikelihood(masked), rtol=1e-9)
+    # mle and a batch given as a list of masked series: masked is NaN (the documented missing
+    # value), a component masked alone too
+    masked[7, 1] = np.ma.masked
+    nan = np.where(masked.mask, np.nan, masked.data)
+    a, b = mle(masked, **cv_model()), mle(nan, **cv_model())
+    np.testing.assert_array_equal(a.Q, b.Q)
+    np.testing.assert_array_equal(a.R, b.R)
+    a = em([masked, masked[::-1]], **cv_model(), max_iter=3)
+    b = em(np.stack([nan, nan[::-1]]), **cv_model(), max_iter=3)
+    np.testing.assert_array_equal(a.loglik, b.loglik)
+    np.testing.assert_array_equal(a.Q, b.Q)
+    P0 = np.ma.masked_array(np.eye(4), mask=np.eye(4, k=1, dtype=bool))
+    with pytest.raises(ValueError, match=r"P0 must not have masked entries .*P0\[0, 1\] is"):
+        em(nan, **{**cv_model(), "P0": P0})
+
+
+@pytest.mark.parametrize("F, match", [
+    (np.ones(4), r"F must be 2-D or 3-D; got shape \(4,\)"),
+    (1.0, r"F must be 2-D or 3-D; got shape \(\)"),
+    (np.eye(3), r"F must have shape \(4, 4\) or \(T=20, 4, 4\); got \(3, 3\)"),
+    (np.eye(5), r"F must have shape \(4, 4\) or \(T=20, 4, 4\); got \(5, 5\)"),
+])
+def test_a_malformed_F_is_named_as_by_kalman_filter(F, match):
+    """em and mle named x0 for a malformed F (a 1-D F: "x0 must have shape (0,) or (B, 0);
+    got (4,)"; a 3 x 3 F: "x0 must have shape (3,) ..."): the model is checked before the
+    prior, with kalman_filter's message."""
+    ys = series(20, 4)
+    model = {**cv_model(), "F": F}
+    for fit in (vt.filters.kalman_filter, em, mle):
+        with pytest.raises(ValueError, match=match):
+            fit(ys, **model)
+    # the other matrices as well, before the iterations
+    for name, bad, msg in (("Q", np.eye(3), r"Q must have shape \(4, 4\)"),
+                           ("H", np.eye(2, 3), r"H must have shape \(2, 4\)"),
+                           ("R", -np.eye(2), "R must be positive semi-definite")):
+        for fit in (vt.filters.kalman_filter, em, mle):
+            with pytest.raises(ValueError, match=msg):
+                fit(ys, **{**cv_model(), name: bad})
+    # and the prior, where F and the other matrices agree on the state
+    with pytest.raises(ValueError, match=r"x0 must have shape \(4,\)"):
+        em(ys, **{**cv_model(), "x0": np.zeros(3)})
+
+
 @pytest.mark.parametrize("R_form", ["full", "diag", "scaled"])
 def test_log_likelihood_never_decreases_with_missing_steps_and_components(R_form, rng):
     ys = np.stack([series(120, s) for s in range(3)])

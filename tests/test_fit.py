@@ -109,6 +109,19 @@ def test_matched_series_pairs_each_detection_with_one_object():
         matched_series([1], [1], ref[:1], [1], det[:1], min_iou=0)
 
 
+def test_matched_series_names_the_frame_an_identity_is_duplicated_in():
+    """The frame was looked up by its offset from the first: frame 16 named for a duplicate
+    in frame 14 (frames 10, 13, 14, 14, 16), an IndexError for one in frame 50 (frames 10,
+    50, 50). Oracle: the frames as given."""
+    box, far = [0, 0, 10, 20.0], [100, 100, 10, 20.0]
+    for frames, dup in (([10, 13, 14, 14, 16], 14), ([10, 50, 50], 50),
+                        ([50, 50, 10], 50), ([3, 3, 7, 7], 3), ([10**6, 5, 10**6], 10**6)):
+        # the second box of a frame apart from the first: each matches its own detection
+        boxes = np.array([far if f in frames[:k] else box for k, f in enumerate(frames)])
+        with pytest.raises(ValueError, match=f"identity 7 appears twice in frame {dup}$"):
+            matched_series(frames, [7] * len(frames), boxes, frames, boxes, min_length=2)
+
+
 def _sequence(folder, rng, n_objects=12, T=60, fps=15.0, std=(0.003, 0.001)):
     """A MOTChallenge sequence of simulated people: seqinfo.ini, det/det.txt, gt/gt.txt
     (``std``: the motion noise; a long sequence needs little, or sizes wander below 0)."""

@@ -157,11 +157,41 @@ def test_nonlinear_members_with_different_state_sizes(rng):
         ([[0.9, 0.2], [0.1, 0.9]], {}, "rows summing to 1"),
         ([[1.0]], {}, r"transition must have shape \(2, 2\)"),
         ([[0.9, 0.1], [0.1, 0.9]], {"mode_probs": [0.5, 0.6]}, "mode_probs must be 2"),
+        # NaN passed the checks (NaN < 0 and |NaN - 1| > 1e-9 are both False)
+        ([[0.9, 0.1], [0.1, 0.9]], {"mode_probs": [0.5, np.nan]},
+         r"mode_probs must be finite; mode_probs\[1\] = nan"),
+        ([[0.9, 0.1], [0.1, 0.9]], {"mode_probs": [np.nan, np.nan]},
+         r"mode_probs must be finite; mode_probs\[0\] = nan"),
+        ([[0.9, 0.1], [0.1, 0.9]], {"mode_probs": [np.inf, 0.0]},
+         r"mode_probs must be finite; mode_probs\[0\] = inf"),
+        ([[0.9, np.nan], [0.1, 0.9]], {}, r"transition must be finite; transition\[0, 1\] = nan"),
     ],
 )
 def test_bad_arguments_raise(transition, kwargs, match):
     with pytest.raises(ValueError, match=match):
         IMMFilter([cv(0.1), cv(1.0)], transition, **kwargs)
+
+
+def test_masked_measurements_are_missing():
+    """A numpy masked array's masked entries are missing, as NaN (the documented convention);
+    before, the values under the mask were measured."""
+    _, ys = vt.simulate.simulate(vt.ConstantVelocity(dim=2, q=0.3), vt.Position(dim=2), 30,
+                                 x0=[0.0, 0.0, 1.0, 0.5], rng=3)
+    mask = np.zeros(ys.shape, bool)
+    mask[[4, 11, 12]] = True
+    mask[20, 1] = True
+    masked = np.ma.masked_array(np.where(mask, 1e6, ys), mask=mask)
+    nan = np.where(mask, np.nan, ys)
+    imm = IMMFilter([cv(0.1, dim=2), cv(3.0, dim=2)], [[0.95, 0.05], [0.05, 0.95]])
+    kw = dict(x0=[0.0, 0.0, 1.0, 0.5], P0=np.eye(4))
+    a, b = imm.filter(masked, **kw), imm.filter(nan, **kw)
+    np.testing.assert_array_equal(a.means, b.means)
+    np.testing.assert_array_equal(a.mode_probs, b.mode_probs)
+    assert np.abs(a.means[:, :2] - ys).max() < 10
+    # a prior has no missing value: a masked entry is named, not carried as NaN
+    x0 = np.ma.masked_array([0.0, 0.0, 1.0, 0.5], mask=[0, 0, 1, 0])
+    with pytest.raises(ValueError, match=r"x0 must not have masked entries .*; x0\[2\] is masked"):
+        imm.filter(nan, x0=x0, P0=np.eye(4))
 
 
 def test_zero_likelihood_everywhere_is_reported():

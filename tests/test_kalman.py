@@ -194,6 +194,46 @@ def test_all_missing_row_only_predicts(rng):
     np.testing.assert_array_equal(res.covs[2], res.pred_covs[2])
 
 
+def test_masked_measurements_are_missing_as_in_pykalman(rng):
+    """A numpy masked array, pykalman's way of marking missing steps, has its masked entries
+    missing whatever values lie under the mask. Before, np.asarray dropped the mask and the
+    placeholders were measured (the review's example: log-likelihood -1379134.8 instead of
+    pykalman's -4.0953)."""
+    n, m, T = 4, 2, 40
+    mod = random_model(rng, n, m)
+    _, ys = vt.simulate.simulate_lgssm(T, **mod, x0=np.zeros(n), rng=rng)
+    rows = [0, 3, 17, 18, 39]
+    mask = np.zeros(ys.shape, bool)
+    mask[rows] = True
+    masked = np.ma.masked_array(np.where(mask, -999.0, ys), mask=mask)
+    x0, P0 = rng.normal(size=n), 3.0 * np.eye(n)
+    pk = pykalman.KalmanFilter(transition_matrices=mod["F"], transition_covariance=mod["Q"],
+                               observation_matrices=mod["H"], observation_covariance=mod["R"],
+                               initial_state_mean=x0, initial_state_covariance=P0)
+    pm, pP = pk.filter(masked)
+    sm, sP = pk.smooth(masked)
+    res = kalman_filter(masked, **mod, x0=x0, P0=P0)
+    np.testing.assert_allclose(res.means, pm, rtol=RTOL, atol=1e-10)
+    np.testing.assert_allclose(res.covs, pP, rtol=RTOL, atol=1e-10)
+    assert res.loglik == pytest.approx(pk.loglikelihood(masked), rel=1e-10)
+    smooth = vt.rts_smooth(res, F=mod["F"], Q=mod["Q"])
+    np.testing.assert_allclose(smooth.means, sm, rtol=RTOL, atol=1e-10)
+    np.testing.assert_allclose(smooth.covs, sP, rtol=RTOL, atol=1e-10)
+    # a masked component is a missing one, NaN (the documented convention), in the functions
+    # and the model-built filter alike; the caller's array is left as it was
+    masked[[5, 9], [1, 0]] = np.ma.masked
+    nan = np.where(masked.mask, np.nan, masked.data)
+    for a, b in ((kalman_filter(masked, **mod, x0=x0, P0=P0),
+                  kalman_filter(nan, **mod, x0=x0, P0=P0)),
+                 (vt.KalmanFilter(vt.ConstantVelocity(dim=2), vt.Position(dim=2)).filter(
+                     masked, x0=x0, P0=P0),
+                  vt.KalmanFilter(vt.ConstantVelocity(dim=2), vt.Position(dim=2)).filter(
+                      nan, x0=x0, P0=P0))):
+        np.testing.assert_array_equal(a.means, b.means)
+        np.testing.assert_array_equal(a.loglik, b.loglik)
+    assert np.all(masked.data[rows] == -999.0) and masked.mask.sum() == len(rows) * m + 2
+
+
 def test_read_only_matrices_reach_the_kernels_as_writable_copies():
     """The kernels are compiled at install for writable arrays; F, Q, H or R kept read-only
     (setflags(write=False), as a model's constants may be) made kf_step compile them all

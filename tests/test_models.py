@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
+from vistrack.filters import kalman_filter
 from vistrack.models import (
     BoxMotion,
     ConstantAcceleration,
@@ -58,6 +59,54 @@ def test_periodic_exact_equals_van_loan(omega, dt):
     F, Q = van_loan(A, np.array([[0.0], [1.0]]), 0.3, dt)
     np.testing.assert_allclose(model.F(dt), F, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(model.Q(dt), Q, rtol=1e-9, atol=1e-14)
+
+
+def periodic_van_loan_q(omega, q, dt):
+    A = np.array([[0.0, 1.0], [-(omega**2), 0.0]])
+    return van_loan(A, np.array([[0.0], [1.0]]), q, dt)[1]
+
+
+@pytest.mark.parametrize("omega,dt", [(1e-8, 1.0), (1e-5, 1.0), (1e-3, 2.0), (0.05, 1.0),
+                                      (1.0, 1e-7), (1.0, 1e-4), (3.0, 0.01), (1.0, 0.1),
+                                      (1.0, 0.49), (1.0, 0.51)])
+def test_periodic_q_is_exact_where_omega_dt_is_small(omega, dt):
+    """Q11 = q/ω² (dt/2 - sin(2ωdt)/(4ω)) cancelled for small ω dt: 0 instead of 1/3 at
+    ω = 1e-8, dt = 1, and Q not positive semi-definite (smallest eigenvalue -0.207), which
+    kalman_filter refused. Oracle: Van Loan's matrix exponential, directly and (accurate for
+    any dt) at dt = 1 and frequency ω dt, scaled back: Q(dt; ω) = dt D Q(1; ω dt) D with
+    D = diag(dt, 1)."""
+    Q = Periodic(dim=1, omega=omega, q=0.7).Q(dt)
+    D = np.diag([dt, 1.0])
+    np.testing.assert_allclose(Q, dt * D @ periodic_van_loan_q(omega * dt, 0.7, 1.0) @ D,
+                               rtol=1e-12, atol=0)
+    np.testing.assert_allclose(Q, periodic_van_loan_q(omega, 0.7, dt), rtol=1e-12, atol=0)
+    np.linalg.cholesky(Q)  # positive definite for dt > 0
+    kalman_filter(np.zeros((3, 1)), F=Periodic(omega=omega).F(dt), Q=Q, H=[[1.0, 0.0]],
+                  R=[[1.0]], x0=[0.0, 0.0], P0=np.eye(2))
+
+
+def test_periodic_q_tends_to_constant_velocity_as_omega_tends_to_zero():
+    """As ω → 0 the oscillator is a free particle: Q → q [[dt³/3, dt²/2], [dt²/2, dt]], to
+    within O((ω dt)²) = 1e-16 at ω = 1e-8; the frequency need not be representable squared
+    or cubed (ω = 1e-200)."""
+    for omega in (1e-8, 1e-200):
+        for dt in (1e-6, 0.3, 1.0, 40.0):
+            np.testing.assert_allclose(Periodic(dim=2, omega=omega, q=0.7).Q(dt),
+                                       ConstantVelocity(dim=2, q=0.7).Q(dt), rtol=1e-12,
+                                       atol=0)
+
+
+def test_periodic_q_of_mixed_steps_is_each_steps():
+    """A dt array with steps on both sides of the series' range (2 ω dt < 1 and >= 1) gives
+    each step's matrix; its entries are continuous across the switch (at 2 ω dt = 1, the
+    closed form is still exact to a few rounding errors)."""
+    p = Periodic(dim=1, omega=1.0, q=0.7)
+    dts = np.array([0.0, 1e-6, np.nextafter(0.5, 0.0), 0.5, 2.0])
+    np.testing.assert_array_equal(p.Q(dts), np.stack([p.Q(d) for d in dts]))
+    np.testing.assert_array_equal(p.Q(0.0), np.zeros((2, 2)))
+    np.testing.assert_allclose(p.Q(dts[2]), p.Q(dts[3]), rtol=1e-14)
+    for d in dts[1:]:
+        np.testing.assert_allclose(p.Q(d), periodic_van_loan_q(1.0, 0.7, d), rtol=1e-12, atol=0)
 
 
 def test_seed_euler_matrices():

@@ -108,3 +108,41 @@ def test_two_filter_smooth_names_an_exact_measurement():
     np.testing.assert_allclose(sm.means[-1], fwd.means[-1])
     # the exact component is the measurement at every step
     np.testing.assert_allclose((sm.means @ H.T)[:, 1], ys[:, 1], atol=1e-8)
+
+
+def test_masked_measurements_are_smoothed_as_missing_as_by_pykalman(rng):
+    """A numpy masked array (pykalman's missing steps) is smoothed with its masked entries
+    missing, one series or a list of them (a batch). Before, the values under the mask were
+    measured: the review's positions [-85.8, -195.7, -310.2, -381.7] for pykalman's
+    [0.065, 1.052, 2.057, 3.067]."""
+    pykalman = pytest.importorskip("pykalman")
+    F, Q = np.array([[1.0, 1.0], [0.0, 1.0]]), 0.01 * np.eye(2)
+    H, R = np.array([[1.0, 0.0]]), np.array([[0.25]])
+    model = dict(F=F, Q=Q, H=H, R=R, x0=np.zeros(2), P0=np.eye(2))
+    ym = np.ma.masked_array([[0.1], [0.9], [-999.0], [3.2]], mask=[[0], [0], [1], [0]])
+    pk = pykalman.KalmanFilter(transition_matrices=F, observation_matrices=H,
+                               transition_covariance=Q, observation_covariance=R,
+                               initial_state_mean=np.zeros(2), initial_state_covariance=np.eye(2))
+    sm, sP = pk.smooth(ym)
+    np.testing.assert_allclose(sm[:, 0], [0.065, 1.052, 2.057, 3.067], atol=5e-4)
+    two = two_filter_smooth(ym, **model)
+    np.testing.assert_allclose(two.means, sm, rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(two.covs, sP, rtol=1e-8, atol=1e-10)
+    # a batch given as a list of masked series: each its own mask
+    mod = random_model(rng, 3, 2)
+    _, ys = vt.simulate.simulate_lgssm(30, **mod, x0=np.zeros(3), n_series=2, rng=rng)
+    series = []
+    for b in range(2):
+        mask = np.zeros(ys[b].shape, bool)
+        mask[rng.choice(30, 6, replace=False)] = True
+        series.append(np.ma.masked_array(np.where(mask, 1e6, ys[b]), mask=mask))
+    batch = two_filter_smooth(series, **mod, x0=np.zeros(3), P0=np.eye(3))
+    for b, y in enumerate(series):
+        pk = pykalman.KalmanFilter(transition_matrices=mod["F"], observation_matrices=mod["H"],
+                                   transition_covariance=mod["Q"],
+                                   observation_covariance=mod["R"],
+                                   initial_state_mean=np.zeros(3),
+                                   initial_state_covariance=np.eye(3))
+        sm, sP = pk.smooth(y)
+        np.testing.assert_allclose(batch.means[b], sm, rtol=1e-8, atol=1e-10)
+        np.testing.assert_allclose(batch.covs[b], sP, rtol=1e-8, atol=1e-10)

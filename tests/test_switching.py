@@ -96,3 +96,19 @@ def test_bad_systems_raise():
         SwitchingLinearSystem([cv, ca], vt.Position(dim=1), np.eye(2))
     with pytest.raises(ValueError, match="rows sum to 1"):
         SwitchingLinearSystem([cv, cv], vt.Position(dim=1), [[0.5, 0.6], [0.5, 0.5]])
+
+
+@pytest.mark.parametrize("transition, mode_probs, match", [
+    ([[0.9, 0.1], [0.3, 0.7]], [0.5, np.nan], r"mode_probs must be finite; mode_probs\[1\] = nan"),
+    ([[0.9, 0.1], [0.3, 0.7]], [np.nan, np.nan], r"mode_probs\[0\] = nan"),
+    ([[0.9, 0.1], [0.3, 0.7]], [np.inf, 0.0], r"mode_probs must be finite; mode_probs\[0\] = inf"),
+    ([[0.9, 0.1], [np.nan, 0.7]], None, r"transition must be finite; transition\[1, 0\] = nan"),
+])
+def test_a_nan_probability_is_named(transition, mode_probs, match):
+    """NaN mode_probs were accepted (NaN < 0 and |NaN - 1| > 1e-9 are both False): sample()
+    then failed in numpy ("Probabilities contain NaN") and the IMM built from the system
+    reported zero likelihood at step 0. The documented contract: finite non-negative
+    probabilities summing to one, a bad one named."""
+    cv = vt.ConstantVelocity(dim=1)
+    with pytest.raises(ValueError, match=match):
+        SwitchingLinearSystem([cv, cv], vt.Position(dim=1), transition, mode_probs=mode_probs)

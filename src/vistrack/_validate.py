@@ -34,9 +34,29 @@ def _fmt_shape(shape: tuple[int, ...]) -> str:
     return "(" + ", ".join(str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
 
 
+def _masked_as_nan(value: np.ma.MaskedArray, name: str) -> np.ndarray:
+    """A numpy masked array as a float64 array with NaN at its masked entries (the package's
+    missing value), rather than the placeholder values under the mask."""
+    try:
+        arr = np.ma.getdata(value).astype(np.float64)  # a copy: the caller's data is kept
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"{name} must be an array of numbers; got {type(value).__name__} of "
+                        f"{value.dtype}") from exc
+    arr[np.ma.getmaskarray(value)] = np.nan
+    return arr
+
+
 def as_float_array(value: ArrayLike | None, name: str, *,
                    ndim: tuple[int, ...] | None = None) -> np.ndarray:
-    """Convert ``value`` to a C-contiguous float64 array, checking its number of dimensions."""
+    """Convert ``value`` to a C-contiguous float64 array, checking its number of dimensions.
+
+    A numpy masked array (``numpy.ma``, pykalman's way of marking missing measurements)
+    gives NaN at its masked entries: missing where NaN means missing (measurements), and an
+    error naming the entry where values must be finite, instead of the values under the
+    mask read as data.
+    """
+    if isinstance(value, np.ma.MaskedArray):
+        value = _masked_as_nan(value, name)
     try:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -150,7 +170,23 @@ def as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
 
 def as_measurement_series(ys: ArrayLike, name: str = "ys") -> tuple[np.ndarray, bool]:
     """Measurements ``(T, m)`` or ``(B, T, m)`` as ``(B, T, m)`` float64 (NaN: missing), and
-    whether a single series was given; an infinite value is named with its index."""
+    whether a single series was given; an infinite value is named with its index.
+
+    The masked entries of a numpy masked array (pykalman's convention), or of the masked
+    series of a list of them (a batch), are missing: NaN.
+
+    Examples
+    --------
+    >>> ys = np.ma.masked_array([[0.1], [-999.0], [3.2]], mask=[[0], [1], [0]])
+    >>> y, single = as_measurement_series(ys)
+    >>> y[0, :, 0], single
+    (array([0.1, nan, 3.2]), True)
+    """
+    if isinstance(ys, (list, tuple)) and any(isinstance(s, np.ma.MaskedArray) for s in ys):
+        try:  # one masked array with every series' mask (np.asarray would drop them)
+            ys = np.ma.array(ys)
+        except (TypeError, ValueError):
+            pass  # ragged or not numbers: as_float_array names the argument
     y = as_float_array(ys, name, ndim=(2, 3))
     if np.isinf(y).any():
         idx = tuple(int(i) for i in np.argwhere(np.isinf(y))[0])
@@ -171,10 +207,16 @@ def check_prior(x0: ArrayLike | None, P0: ArrayLike | None, n: int, *, batch: bo
     """A prior mean ``(n,)`` (or ``(B, n)`` when ``batch``) and covariance ``(n, n)`` (or
     ``(B, n, n)``, symmetric positive semi-definite) for a model whose state has ``n``
     entries; each error names the argument
-    (``space`` is appended to the expected shape, e.g. " (the largest member's state)")."""
+    (``space`` is appended to the expected shape, e.g. " (the largest member's state)"). A
+    numpy masked array with a masked entry is refused: a prior has no missing value."""
     for name, value in (("x0", x0), ("P0", P0)):
         if value is None:
             raise ValueError(f"{name} is required (the prior of the first step); got None")
+        if isinstance(value, np.ma.MaskedArray) and np.ma.is_masked(value):
+            # (as_float_array would make it NaN, which the filters would carry silently)
+            idx = [int(i) for i in np.argwhere(np.ma.getmaskarray(value))[0]]
+            raise ValueError(f"{name} must not have masked entries (a prior has no missing "
+                             f"value); {name}{idx} is masked")
     x = as_float_array(x0, "x0", ndim=(1, 2) if batch else (1,))
     if x.shape[-1] != n:
         want = f"({n},)" + (f" or (B, {n})" if batch else "")

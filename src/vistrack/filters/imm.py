@@ -38,7 +38,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, check_has_steps, check_prior
+from .._validate import as_float_array, check_finite, check_has_steps, check_prior
 from ..models.protocols import MotionModel, NonlinearMotionModel
 from ..models.switching import SwitchingLinearSystem
 from ..types import Gaussian
@@ -178,9 +178,9 @@ class IMMFilter:
     TypeError
         If a member lacks ``predict`` or ``update``.
     ValueError
-        If there are no members, ``transition`` is not a non-negative ``(M, M)`` matrix with
-        rows summing to one, or ``mode_probs`` is not ``M`` non-negative numbers summing to
-        one.
+        If there are no members, ``transition`` is not a finite non-negative ``(M, M)``
+        matrix with rows summing to one, or ``mode_probs`` is not ``M`` finite non-negative
+        numbers summing to one (a NaN or infinite entry is named).
 
     Notes
     -----
@@ -260,6 +260,7 @@ class IMMFilter:
                 raise TypeError(f"filters[{k}] must have predict(g, dt, t) and update(g, y); "
                                 f"got {type(f).__name__}")
         Pi = as_float_array(transition, "transition", ndim=(2,))
+        check_finite(Pi, "transition")
         if Pi.shape != (M, M):
             raise ValueError(f"transition must have shape ({M}, {M}); got {Pi.shape}")
         if np.any(Pi < 0) or not np.allclose(Pi.sum(1), 1.0, atol=1e-9):
@@ -267,6 +268,7 @@ class IMMFilter:
                              f"are {Pi.sum(1).tolist()}")
         mu = np.full(M, 1.0 / M) if mode_probs is None else as_float_array(
             mode_probs, "mode_probs", ndim=(1,))
+        check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)
         if mu.shape != (M,) or np.any(mu < 0) or abs(mu.sum() - 1.0) > 1e-9:
             raise ValueError(f"mode_probs must be {M} non-negative numbers summing to 1; "
                              f"got {mu.tolist()}")
@@ -282,8 +284,9 @@ class IMMFilter:
         Parameters
         ----------
         ys : (T, m) or (B, T, m) array_like
-            Measurements; NaN components are missing, and a step whose measurement is all NaN
-            is predicted only (the mode probabilities are then only mixed).
+            Measurements; NaN components (or the masked entries of a numpy masked array) are
+            missing, and a step whose measurement is all NaN is predicted only (the mode
+            probabilities are then only mixed).
         x0 : (n,) or (B, n) array_like
             Prior mean of the first step in the largest member's state space (each member
             takes its leading part).
@@ -509,7 +512,8 @@ class SwitchingParticleFilter:
         Parameters
         ----------
         ys : (T, m) array_like
-            Measurements; NaN components are missing.
+            Measurements; NaN components (or the masked entries of a numpy masked array) are
+            missing.
         x0 : (n,) array_like
             Prior mean of the first step.
         P0 : (n, n) array_like

@@ -65,7 +65,13 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_measurement_series, check_has_steps, check_prior
+from .._validate import (
+    as_float_array,
+    as_measurement_series,
+    check_has_steps,
+    check_linear_gaussian,
+    check_prior,
+)
 from ._estep import estep_shared as _estep_shared
 from .kalman import FilterResult, _is_dask, kalman_filter
 from .smoothers import rts_smooth
@@ -154,7 +160,8 @@ def em(
     Parameters
     ----------
     ys : (T, m) or (B, T, m) array_like, or (B, T, m) Dask array
-        Measurements, NaN where missing (a whole step or some components), as for
+        Measurements, NaN where missing (a whole step or some components; the masked entries
+        of a numpy masked array, pykalman's convention, are missing too), as for
         :func:`kalman_filter`. A Dask array chunked along the batch axis is fitted chunk by
         chunk where its chunks are (:func:`vistrack.filters.chunked.em`): pooled, the chunks'
         sums added at each iteration (numpy parameters returned, equal to the in-memory fit
@@ -279,7 +286,11 @@ def _problem(ys: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLi
     y, _ = as_measurement_series(ys)
     check_has_steps(y)
     _check_steps(y.shape[1], learn)
-    n = np.shape(F)[-1] if np.ndim(F) >= 2 else 0
+    # the model before the prior, as kalman_filter checks it: a malformed F is named, not
+    # the x0 that disagrees with it
+    F_ = as_float_array(F, "F", ndim=(2, 3))
+    n = _state_size(F_.shape[-1], x0, P0)
+    check_linear_gaussian(F, Q, H, R, n, y.shape[2], y.shape[1])
     x0_, P0_ = check_prior(x0, P0, n)
     B = y.shape[0]
     for name, a, nd in (("x0", x0_, 2), ("P0", P0_, 3)):
@@ -292,6 +303,19 @@ def _problem(ys: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLi
         raise ValueError("ys has no measurement: every value is NaN")
     return y, {k: np.asarray(v, dtype=np.float64)
                for k, v in (("F", F), ("Q", Q), ("H", H), ("R", R), ("x0", x0_), ("P0", P0_))}
+
+
+def _state_size(n_F: int, x0: Any, P0: Any) -> int:
+    """The state size to check the model against: the prior's where ``x0`` and ``P0`` agree
+    on one (then an ``F``, ``Q`` or ``H`` of another is the argument named, as by
+    :func:`kalman_filter`), else ``F``'s ``n_F`` (and the prior is named)."""
+    try:
+        sx, sP = np.shape(x0), np.shape(P0)
+    except ValueError:  # ragged: check_prior names it
+        return n_F
+    if len(sx) in (1, 2) and len(sP) in (2, 3) and sP[-2:] == (sx[-1], sx[-1]):
+        return int(sx[-1])
+    return n_F
 
 
 def _check_max_iter(max_iter: Any) -> None:
@@ -391,7 +415,8 @@ def mle(
     Parameters
     ----------
     ys : (T, m) or (B, T, m) array_like
-        Measurements, NaN where missing; a batch is pooled (one ``q`` and ``R`` for all).
+        Measurements, NaN (or masked, in a numpy masked array) where missing; a batch is
+        pooled (one ``q`` and ``R`` for all).
     F, Q, H, R, x0, P0 : array_like
         The model, as for :func:`kalman_filter`; ``Q`` and ``R`` are the start and the
         shapes of their structure (``R`` diagonal for ``"diag"``: its off-diagonal entries

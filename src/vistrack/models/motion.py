@@ -106,6 +106,24 @@ def _as_dt(dt: float | np.ndarray) -> np.ndarray:
     return d
 
 
+_SIN_TERMS = 12  # of the series below; for u < 2 the first term left out, u^24/25!, is < 1.1e-18
+
+
+def _sin_series(u2: np.ndarray, first: int) -> np.ndarray:
+    r"""``sum_k (-1)^k u^(2k) / (2k + first)!`` for ``u2 = u²``, by Horner's rule:
+    ``sin(u) / u`` for ``first=1``, ``(u - sin u) / u³`` for ``first=3``, accurate to rounding
+    for ``|u| < 2``, where the closed forms cancel (``u - sin u`` loses half its digits at
+    ``u = 1e-4``, all of them below ``u = 4e-8``).
+
+    >>> float(_sin_series(np.array(1e-20), 3)), float(_sin_series(np.array(0.0), 1))
+    (0.16666666666666666, 1.0)
+    """
+    out = np.zeros_like(u2)
+    for k in reversed(range(_SIN_TERMS)):
+        out = (-1) ** k / factorial(2 * k + first) + u2 * out
+    return out
+
+
 def _check_q(q: float) -> float:
     q = float(q)
     if not np.isfinite(q) or q < 0:
@@ -367,7 +385,12 @@ class Periodic:
 
     ``Q`` is the exact covariance of white-noise acceleration of density ``q``:
     ``Q11 = q/ω² (dt/2 - sin(2ωdt)/(4ω))``, ``Q12 = q sin²(ωdt)/(2ω²)``,
-    ``Q22 = q (dt/2 + sin(2ωdt)/(4ω))`` (Euler: ``q dt`` on the velocity).
+    ``Q22 = q (dt/2 + sin(2ωdt)/(4ω))`` (Euler: ``q dt`` on the velocity). For
+    ``u = 2ωdt < 1`` the same are computed as ``Q11 = 2 q dt³ (u - sin u)/u³``,
+    ``Q12 = q dt² (sin(ωdt)/(ωdt))² / 2``, ``Q22 = q dt (1 + sin(u)/u) / 2`` with the
+    series of these ratios, since ``dt/2 - sin(2ωdt)/(4ω)`` cancels (to zero, and ``Q`` to
+    a matrix that is not positive semi-definite, at ``ω dt = 1e-8``); as ``ω → 0`` ``Q``
+    tends to :class:`ConstantVelocity`'s, ``q [[dt³/3, dt²/2], [dt²/2, dt]]``.
 
     Parameters
     ----------
@@ -483,10 +506,23 @@ class Periodic:
         if self.discretisation == "euler":
             out[..., 1, 1] = q * d
         else:
-            s2 = np.sin(2 * w * d) / (4 * w)
-            out[..., 0, 0] = q / w**2 * (d / 2 - s2)
-            out[..., 0, 1] = out[..., 1, 0] = q * np.sin(w * d) ** 2 / (2 * w**2)
-            out[..., 1, 1] = q * (d / 2 + s2)
+            dd = d.reshape(-1)
+            q11, q12, q22 = np.empty_like(dd), np.empty_like(dd), np.empty_like(dd)
+            small = 2 * w * dd < 1.0  # the closed forms cancel: the series (see the class)
+            ds = dd[small]
+            u2 = (2 * w * ds) ** 2
+            q11[small] = 2 * q * ds**3 * _sin_series(u2, 3)
+            q12[small] = q / 2 * (ds * _sin_series(u2 / 4, 1)) ** 2
+            q22[small] = q * ds * (1 + _sin_series(u2, 1)) / 2
+            if not small.all():
+                db = dd[~small]
+                s2 = np.sin(2 * w * db) / (4 * w)
+                q11[~small] = q / w**2 * (db / 2 - s2)
+                q12[~small] = q * np.sin(w * db) ** 2 / (2 * w**2)
+                q22[~small] = q * (db / 2 + s2)
+            out[..., 0, 0] = q11.reshape(d.shape)
+            out[..., 0, 1] = out[..., 1, 0] = q12.reshape(d.shape)
+            out[..., 1, 1] = q22.reshape(d.shape)
         return np.kron(out, np.eye(self.dim))
 
     def f(self, x: np.ndarray, dt: float = 1.0) -> np.ndarray:

@@ -20,7 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_rng
+from .._validate import as_float_array, as_rng, check_finite
 from .measurement import MeasurementModel
 from .motion import MotionModel
 
@@ -64,9 +64,9 @@ class SwitchingLinearSystem:
     Raises
     ------
     ValueError
-        If there are no motions, they differ in state size, ``transition`` is not a
+        If there are no motions, they differ in state size, ``transition`` is not a finite
         non-negative ``(k, k)`` matrix whose rows sum to one, or ``mode_probs`` is not ``k``
-        non-negative numbers summing to one.
+        finite non-negative numbers summing to one (a NaN or infinite entry is named).
 
     References
     ----------
@@ -98,12 +98,14 @@ class SwitchingLinearSystem:
         self.ndim_state = sizes.pop()
         self.measurement = measurement
         Pi = as_float_array(transition, "transition", ndim=(2,))
+        check_finite(Pi, "transition")
         if Pi.shape != (k, k) or np.any(Pi < 0) or not np.allclose(Pi.sum(1), 1.0, atol=1e-9):
             raise ValueError(f"transition must be a ({k}, {k}) non-negative matrix whose rows sum "
                              f"to 1; got shape {Pi.shape} and row sums {Pi.sum(1).tolist()}")
         self.transition = Pi
         mu = np.full(k, 1.0 / k) if mode_probs is None else as_float_array(
             mode_probs, "mode_probs", ndim=(1,))
+        check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)
         if mu.shape != (k,) or np.any(mu < 0) or abs(mu.sum() - 1.0) > 1e-9:
             raise ValueError(f"mode_probs must be {k} non-negative numbers summing to 1; "
                              f"got {mu.tolist()}")

@@ -108,9 +108,10 @@ def matched_series(ref_frames: np.ndarray, ref_ids: np.ndarray, ref_boxes: np.nd
         if len(rows) < min_length:
             continue
         frames = rf[rows]
-        if len(np.unique(frames)) != len(frames):
+        seen, counts = np.unique(frames, return_counts=True)
+        if len(seen) != len(frames):  # named: the first frame it appears in twice
             raise ValueError(f"reference identity {i} appears twice in frame "
-                             f"{int(frames[np.argmax(np.bincount(frames - frames.min()))])}")
+                             f"{int(seen[np.argmax(counts > 1)])}")
         t = np.arange(frames.min(), frames.max() + 1)
         z, ref = np.full((len(t), 4), np.nan), np.full((len(t), 4), np.nan)
         b, g = db[match[rows]], rb[rows]
