@@ -174,3 +174,51 @@ def test_pets09_person_held_through_an_occlusion_by_another():
             outside.append(tr.ownership[0][~mask].mean())
     assert len(inside) >= 4
     assert np.mean(inside) < np.mean(outside) - 0.1
+
+
+def test_a_long_occlusion_leaves_the_stable_component_where_it_was():
+    """120 frames of an occluder (τ = 2): m_s reaches its floor of 1e-12 and stays there, but
+    the moments M1, M2 decayed on alone, so μ_s = M1 / m_s fell to 0.000 (a value never
+    observed) and the stable component never recovered (m_s = 1e-12 100 frames after the
+    target was back). Oracle: the same online EM written in μ_s and E_s[d²] (the weighted
+    means of the data S owned, which cannot underflow), with scipy's densities."""
+    model = WSLModel((1,), tau=2.0)
+    model.init([0.5])
+    a = model.alpha
+    m, mu, s2, prev = model.m[:, 0].copy(), 0.5, 0.05 ** 2 + 0.25, 0.5
+    data = [0.5] * 20 + [0.9] * 120 + [0.5] * 100
+    m_s = []
+    for d in data:
+        model.update([d])
+        var = max(s2 - mu * mu, 0.02 ** 2)
+        p = m * np.array([norm.pdf(d, mu, np.sqrt(var)), norm.pdf(d, prev, 0.08), 1.0])
+        o = p / p.sum()
+        raw = a * o + (1 - a) * m
+        mu = (a * o[0] * d + (1 - a) * m[0] * mu) / raw[0]
+        s2 = (a * o[0] * d * d + (1 - a) * m[0] * s2) / raw[0]
+        m = np.maximum(raw, 1e-12)
+        m /= m.sum()
+        prev = d
+        np.testing.assert_allclose(model.mu_s[0], mu, rtol=1e-9)
+        np.testing.assert_allclose(model.var_s[0], max(s2 - mu * mu, 0.02 ** 2), rtol=1e-9)
+        np.testing.assert_allclose(model.m[:, 0], m, rtol=1e-9, atol=1e-15)
+        m_s.append(model.m[0, 0])
+    assert m_s[139] == pytest.approx(1e-12)                  # the occluder took the pixel
+    assert abs(model.mu_s[0] - 0.5) < 1e-9                    # and left μ_s where it was
+    assert min(i for i in range(140, 240) if m_s[i] > 0.5) - 139 <= 25  # back in 21 frames
+    assert m_s[-1] > 0.99
+
+
+def test_mixing_probabilities_and_shape_must_be_finite_and_integral():
+    """m0 of NaN or inf passed `(m0 <= 0).any()` and gave NaN likelihoods; a shape of 2.5
+    was cut to 2."""
+    for m0 in [(np.nan, 0.15, 0.45), (np.inf, 0.15, 0.45), (0.4, 0.15, -np.inf)]:
+        with pytest.raises(ValueError, match=r"m0 must be three finite positive mixing "
+                                             r"probabilities; got \["):
+            WSLModel((2,), m0=m0)
+    with pytest.raises(ValueError, match=r"shape must be a tuple of integers; got \(2.5,\)"):
+        WSLModel((2.5,))
+    assert WSLModel((2.0, np.int64(3))).shape == (2, 3)       # integral values are taken
+    model = WSLModel((2,), m0=(2.0, 1.0, 1.0))
+    model.init([0.5, 0.5])
+    assert np.isfinite(model.log_likelihood([0.5, 0.5]))

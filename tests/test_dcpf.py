@@ -4,6 +4,8 @@ half the time."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -226,3 +228,80 @@ def test_colour_features_count_each_boxs_pixels_in_a_reused_buffer():
         np.testing.assert_array_equal(f(boxes), ColourFeatures(image)(boxes))
     other = ColourFeatures(frames[0], out=np.zeros((32, 5, 5), np.int32))
     assert other.integral.shape == buffer.shape
+
+
+def test_the_younger_target_ends_after_more_than_merge_time_of_overlap():
+    """"Overlapping for more than merge_time seconds": the timer added 1/frame_rate a frame
+    and compared with <= merge_time, so at 10 frames/s and merge_time=0.3 the younger
+    ended after exactly 3 frames of overlap (0.1 + 0.1 + 0.1 > 0.3), and at 5 frames/s and
+    0.6 after exactly 0.6 s. Oracle: the frames in a row in which the two confirmed
+    targets' boxes overlap by more than merge_iou, counted from the boxes, against the first
+    k with k / frame_rate > merge_time in exact fractions."""
+    from fractions import Fraction
+
+    from vistrack.association import iou
+    from vistrack.tracking.lifecycle import TENTATIVE
+
+    im = np.zeros((240, 320, 3), np.uint8)
+    cases = [(10, "0.3"), (10, "0.35"), (10, "0.25"), (7, Fraction(3, 7)), (5, "0.6"),
+             (30, "0.1"), (25, "0.2")]
+    for frame_rate, merge_time in cases:
+        exact = Fraction(merge_time)
+        trk = DetectorConfidencePF(frame_rate=frame_rate, gamma=0.0, eta=0.0,
+                                   merge_time=float(exact), max_lost=100.0, rng=0)
+        run, ended = 0, None
+        for t in range(60):
+            bx = max(100.0, 130.0 - 2 * t)  # the second walks onto the first, and stays
+            det = Detections(boxes=np.array([[100.0, 60, 124, 120], [bx + 1, 60, bx + 25, 120]]),
+                             scores=np.full(2, 0.9))
+            before = len(trk.ids)
+            trk.update(im, det)
+            if before == 2 and len(trk.ids) == 1:
+                ended = run + 1  # this frame overlapped too (or the timer had restarted)
+                break
+            if len(trk.ids) == 2:
+                b = trk.tracks.mean
+                xyxy = np.c_[b[:, :2], b[:, :2] + b[:, 2:]]
+                over = iou(xyxy, xyxy)[0, 1] > 0.5 and (trk.tracks.state != TENTATIVE).all()
+                run = run + 1 if over else 0
+        want = next(k for k in range(1, 100) if Fraction(k, frame_rate) > exact)
+        assert ended == want, (frame_rate, merge_time, ended, want)
+
+
+def test_every_setting_is_checked_and_named():
+    """sigma_det=0 was taken (NaN detection terms: nothing was ever associated), a NaN
+    sigma_pos or size_rate was an IndexError in update(), n_particles=2.5 a TypeError, and
+    n_particles=1 with confirm=0 one message for four settings."""
+    cases = [({"n_particles": 2.5}, "n_particles must be an integer >= 2; got 2.5"),
+             ({"n_particles": 1}, "n_particles must be an integer >= 2; got 1"),
+             ({"confirm": 0}, "confirm must be an integer >= 1; got 0"),
+             ({"epochs": 1.5}, "epochs must be an integer >= 0; got 1.5"),
+             ({"sigma_det": 0.0}, "sigma_det must be a finite number > 0; got 0.0"),
+             ({"sigma_det": -0.1}, "sigma_det must be a finite number > 0; got -0.1"),
+             ({"sigma_det": np.inf}, "sigma_det must be a finite number > 0; got inf"),
+             ({"sigma_pos": np.nan}, "sigma_pos must be a number (not NaN); got nan"),
+             ({"sigma_vel": -0.02}, "sigma_vel must be a finite number >= 0; got -0.02"),
+             ({"size_rate": np.nan}, "size_rate must be a number (not NaN); got nan"),
+             ({"size_rate": 1.5}, "size_rate must be in [0, 1]"),
+             ({"learning_rate": np.inf}, "learning_rate must be a finite number >= 0; got inf"),
+             ({"gamma": np.inf}, "gamma must be finite; got inf"),
+             ({"max_lost": -1.0}, "max_lost must be >= 0; got -1.0"),
+             ({"merge_time": np.nan}, "merge_time must be a number (not NaN); got nan"),
+             ({"alpha": "1"}, "alpha must be a number; got '1'"),
+             ({"epochs": True}, "epochs must be a number; got True")]
+    for kw, msg in cases:
+        with pytest.raises(ValueError, match=re.escape(msg)):
+            DCPFConfig(**kw)
+        with pytest.raises(ValueError, match=re.escape(msg)):
+            DetectorConfidencePF(**({"gamma": 0.0} | kw))
+    # integral values of other types are the integers; the defaults are what they were
+    cfg = DCPFConfig(n_particles=50.0, confirm=np.int64(1), epochs=0)
+    assert (cfg.n_particles, cfg.confirm, cfg.epochs) == (50, 1, 0)
+    assert all(type(v) is int for v in (cfg.n_particles, cfg.confirm, cfg.epochs))
+    im = np.zeros((120, 160, 3), np.uint8)
+    det = Detections(boxes=np.array([[50.0, 30, 74, 90]]), scores=np.array([0.9]))
+    trk = DetectorConfidencePF(cfg, gamma=0.0)
+    for _ in range(3):
+        out = trk.update(im, det)
+    assert trk.particles.shape == (1, 50, 4) and len(out) == 1
+    np.testing.assert_allclose(out.boxes[0], det.boxes[0], atol=3.0)

@@ -414,3 +414,197 @@ def test_result_arrays_are_read_only_as_the_kalman_filters(compiled, modes):
         assert not a.flags.writeable, name
         with pytest.raises(ValueError, match="read-only"):
             a[...] = 0
+
+
+def test_resample_takes_only_an_integral_n_and_names_it_as_given():
+    """n=2.7 was cut to 2 indices without a word, and n=0.5 reported "got 0"; numpy integers
+    and integral floats are counts as before."""
+    for n, shown in ((2.7, "2.7"), (0.5, "0.5"), (np.float64(3.9), "3.9"), (np.nan, "nan"),
+                     (True, "True"), ("3", "'3'")):
+        with pytest.raises(ValueError, match=f"n must be an integer; got {re.escape(shown)}$"):
+            resample([0.5, 0.5], n=n, rng=0)
+    with pytest.raises(ValueError, match="n must be >= 1; got -2"):
+        resample([0.5, 0.5], n=-2)
+    for method in sorted(RESAMPLERS):
+        want = resample(W, method, n=5, rng=9)
+        assert want.shape == (5,)
+        for n in (5.0, np.int64(5), np.float32(5)):
+            np.testing.assert_array_equal(resample(W, method, n=n, rng=9), want)
+
+
+@pytest.mark.parametrize("method", sorted(RESAMPLERS))
+def test_every_registered_scheme_takes_weights_of_any_scale(method):
+    """RESAMPLERS' functions are f(weights, n, rng): three normalised the weights and
+    'residual' did not (floor(4 (2, 1, 1)) = 16 copies for 4 draws: "negative dimensions are
+    not allowed"). The draws of w and of c w are the same (exactly, for scales that divide
+    exactly), unbiased on the package's test weights scaled by 7.5, and the residual scheme
+    keeps its deterministic part floor(n w / sum w) there, as the compiled kernel's does."""
+    f = RESAMPLERS[method]
+    want = f(np.array([0.5, 0.25, 0.25]), 4, np.random.default_rng(0))
+    for scaled in ([2.0, 1.0, 1.0], [0.2, 0.1, 0.1], [1e-300, 5e-301, 5e-301]):
+        got = f(np.array(scaled), 4, np.random.default_rng(0))
+        np.testing.assert_array_equal(got, want)
+    rng = np.random.default_rng(3)
+    N, reps = 16, 4000
+    counts = np.stack([np.bincount(f(W * 7.5, N, rng), minlength=len(W)) for _ in range(reps)])
+    assert (counts.sum(1) == N).all() and np.all(counts[:, W == 0] == 0)
+    se = np.sqrt(np.maximum(N * W * (1 - W), 0.25) / reps)
+    assert np.all(np.abs(counts.mean(0) - N * W) < 5 * se)
+    if method == "residual":
+        s = _random.seed(np.random.default_rng(5))
+        kernel = np.stack([np.bincount(_random.resample_indices(W * 7.5, 3, s, N),
+                                       minlength=len(W)) for _ in range(200)])
+        for c in (counts, kernel):
+            assert (c >= np.floor(N * W)).all()
+
+
+def test_mode_ignores_particles_of_zero_weight_however_near():
+    """A start whose nearest particle has zero weight, with every weighted particle more than
+    ~38 bandwidths away: the mean-shift kernel was scaled by that particle's term, every
+    other term underflowed to 0 and the mode was (nan, 1.0). Oracles: the cloud without the
+    zero-weight particle, and the maximum of the weighted kernel density on a fine grid (the
+    two weighted clusters are symmetric: its peaks are at their midpoints, -99.75 with 0.6 of
+    the weight)."""
+    x = np.array([[-100.0], [-99.5], [0.0], [99.5], [100.0]])
+    w = np.array([0.3, 0.3, 0.0, 0.2, 0.2])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                        # no 0/0 on the way
+        mode, conf = particle_mode(x, w, bandwidth=1.0)
+    keep = w > 0
+    alone, conf_alone = particle_mode(x[keep], w[keep], bandwidth=1.0)
+    grid = np.linspace(-101, 101, 404001)
+    kde = (w * np.exp(-0.5 * (grid[:, None] - x[:, 0]) ** 2)).sum(1)
+    np.testing.assert_allclose(mode, alone, atol=1e-9)
+    np.testing.assert_allclose(mode, [grid[np.argmax(kde)]], atol=1e-3)
+    assert mode[0] == pytest.approx(-99.75, abs=1e-6)
+    assert conf == conf_alone == pytest.approx(0.6)
+    # in 2-D, zero-weight particles between weighted clusters 80 bandwidths apart
+    rng = np.random.default_rng(1)
+    a, b = rng.normal([-40, 0], 0.3, (50, 2)), rng.normal([40, 0], 0.3, (30, 2))
+    x2 = np.concatenate([a, rng.normal(0, 5, (40, 2)), b])
+    w2 = np.concatenate([np.full(50, 0.7 / 50), np.zeros(40), np.full(30, 0.3 / 30)])
+    mode2, conf2 = particle_mode(x2, w2, bandwidth=0.5, n_starts=20)
+    pos = w2 > 0
+    alone2, _ = particle_mode(x2[pos], w2[pos], bandwidth=0.5, n_starts=20)
+    assert np.isfinite(mode2).all() and np.linalg.norm(mode2 - [-40, 0]) < 0.3
+    assert np.linalg.norm(mode2 - alone2) < 1e-6 and conf2 == pytest.approx(0.7)
+
+
+def test_mode_arguments_are_checked_and_named():
+    """particle_mode checked nothing: 1-D particles and a weight too many were numpy's
+    unpacking and matmul errors, bandwidth=0 a silent NaN, max_points=0 a ZeroDivisionError,
+    an empty cloud an IndexError."""
+    x, w = np.array([[0.0], [0.1], [5.0]]), np.array([0.4, 0.4, 0.2])
+    cases = [
+        (([0.0, 2.0], [0.25, 0.75]), {}, r"particles must be 2-D; got shape \(2,\)"),
+        (([[0.0], [2.0]], [0.25, 0.5, 0.25]), {},
+         r"weights must have shape \(2,\), one per particle"),
+        ((x, w), {"bandwidth": 0.0}, r"bandwidth must be finite and > 0; got 0.0"),
+        ((x, w), {"bandwidth": [1.0, np.nan]}, r"bandwidth must be a number or \(1,\)"),
+        ((np.zeros((3, 2)), w), {"bandwidth": [1.0, -1.0]},
+         r"bandwidth must be finite and > 0; got \[1.0, -1.0\]"),
+        ((x, w), {"max_points": 0}, "max_points must be >= 1; got 0"),
+        ((x, w), {"n_starts": 0}, "n_starts must be >= 1; got 0"),
+        ((x, w), {"n_starts": 2.5}, "n_starts must be an integer; got 2.5"),
+        ((x, w), {"max_iter": -1}, "max_iter must be >= 0; got -1"),
+        ((np.zeros((0, 1)), np.zeros(0)), {},
+         r"particles must hold at least one particle; got shape \(0, 1\)"),
+        ((x, [0.5, np.nan, 0.5]), {}, r"weights\[1\] is nan: weights must be finite"),
+        ((x, [0.5, -0.1, 0.6]), {}, r"weights\[1\] is -0.1: weights must be finite and >= 0"),
+        ((x, np.zeros(3)), {}, r"weights are all 0 \(of 3 particles\)"),
+        (([[0.0], [np.inf], [1.0]], w), {}, r"particles must be finite; particles\[1, 0\]"),
+    ]
+    for args, kw, msg in cases:
+        with pytest.raises(ValueError, match=msg):
+            particle_mode(*args, **kw)
+    # valid arguments of other types give what they gave
+    want = particle_mode(x, w, bandwidth=0.5)
+    got = particle_mode(x.tolist(), w.tolist(), bandwidth=[0.5], n_starts=8.0,
+                        max_points=np.int64(5000))
+    np.testing.assert_array_equal(got[0], want[0])
+    assert got[1] == want[1]
+
+
+def test_a_propagate_callable_must_return_n_finite_particles_of_the_state():
+    """A propagate callable returning (N, 1) for a 2-D state was broadcast into (T, 2) means
+    (both columns the position) with a (500, 1) last cloud, or failed in the measurement
+    model's matmul; the shape and finiteness are checked each step, naming the callable."""
+    def forgets_velocity(x, dt, t, rng):
+        return (x[:, :1] + x[:, -1:] * dt) + rng.normal(0, 0.1, (len(x), 1))
+
+    def blows_up(x, dt, t, rng):
+        out = x + rng.normal(0, 0.1, x.shape)
+        if t >= 3:
+            out[7, 1] = np.inf
+        return out
+
+    def loglik(y, x):
+        return -0.5 * (y[0] - x[:, 0]) ** 2
+
+    ys = np.arange(5.0)[:, None]
+    prior = {"x0": [0.0, 1.0], "P0": 0.1 * np.eye(2)}
+    for likelihood in (loglik, vt.Position(dim=1)):
+        with pytest.raises(ValueError, match=re.escape(
+                "motion (a propagate callable) must return particles of shape (N, n) = "
+                "(500, 2); got shape (500, 1) at step 1")):
+            ParticleFilter(forgets_velocity, likelihood, 500, rng=0, ndim_state=2).filter(
+                ys, **prior)
+        with pytest.raises(ValueError, match=re.escape(
+                "motion (a propagate callable) returned non-finite particles at step 3 "
+                "(1 of 500); particles[7] = [")):
+            ParticleFilter(blows_up, likelihood, 500, rng=0, ndim_state=2).filter(ys, **prior)
+    # a correct callable: the same as the motion model it copies (a linear-Gaussian model,
+    # drawn from the same generator on the numpy path)
+    cv = vt.ConstantVelocity(dim=1, q=0.1)
+    F, S = cv.F(1.0), np.linalg.cholesky(cv.Q(1.0))
+
+    def propagate(x, dt, t, rng):
+        return x @ F.T + rng.standard_normal(x.shape) @ S.T
+
+    a = ParticleFilter(propagate, loglik, 500, rng=0, ndim_state=2).filter(ys, **prior)
+    assert a.particles.shape == (500, 2) and np.isfinite(a.means).all()
+    assert np.abs(a.means[:, 0] - ys[:, 0]).max() < 0.5
+
+
+def test_a_non_finite_prior_is_named_not_read_as_degeneracy():
+    """x0 or P0 with NaN or inf went into multivariate_normal and came out as
+    "ParticleDegeneracyError: every particle has zero likelihood at step 0" (or, with no
+    measurement, silently NaN means), on both paths."""
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1)
+    cases = [({"x0": [np.nan, 0.0], "P0": np.eye(2)}, "x0 must be finite; x0[0] = nan"),
+             ({"x0": [np.inf, 0.0], "P0": np.eye(2)}, "x0 must be finite; x0[0] = inf"),
+             ({"x0": [0.0, 0.0], "P0": np.full((2, 2), np.nan)},
+              "P0 must be finite; P0[0, 0] = nan"),
+             ({"x0": [0.0, 0.0], "P0": [[1.0, 0.0], [0.0, np.inf]]},
+              "P0 must be finite; P0[1, 1] = inf")]
+    for compiled in (True, False):
+        for ys in (np.zeros((2, 1)), np.full((2, 1), np.nan)):
+            for prior, msg in cases:
+                with pytest.raises(ValueError, match=re.escape(msg)):
+                    ParticleFilter(cv, pos, 10, rng=0, compiled=compiled).filter(ys, **prior)
+
+
+def test_a_likelihood_of_plus_infinity_is_named_not_read_as_degeneracy():
+    """+inf from a likelihood callable (a bug, as NaN) made log-sum-exp NaN and was reported
+    as "every particle has zero likelihood ... the filter has lost the target"."""
+    def loglik(y, x):
+        out = -0.5 * (y[0] - x[:, 0]) ** 2
+        out[3] = np.inf
+        return out
+
+    pf = ParticleFilter(vt.ConstantVelocity(dim=1, q=0.1), loglik, n_particles=100, rng=0)
+    with pytest.raises(ValueError, match=re.escape(
+            "likelihood returned +inf for 1 of 100 particles at step 0 (measurement [0.0]); "
+            "it must return log p(y | x) for each particle, finite or -inf where y is "
+            "impossible")):
+        pf.filter(np.zeros((3, 1)), x0=[0.0, 0.0], P0=np.eye(2))
+    # -inf is an impossible particle, as before: its weight is 0
+    def impossible(y, x):
+        out = -0.5 * (y[0] - x[:, 0]) ** 2
+        out[:50] = -np.inf
+        return out
+
+    res = ParticleFilter(vt.ConstantVelocity(dim=1, q=0.1), impossible, n_particles=100,
+                         rng=0, ess_threshold=0.0).filter(np.zeros((1, 1)), x0=[0.0, 0.0],
+                                                          P0=np.eye(2))
+    assert (res.weights[:50] == 0).all() and res.weights.sum() == pytest.approx(1.0)

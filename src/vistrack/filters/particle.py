@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike
 from .._jit import njit
 from .._prebuilt import Kernel, kernel
 from .._registry import Registry
-from .._validate import as_float_array, as_rng, check_has_steps, check_prior
+from .._validate import as_float_array, as_rng, check_finite, check_has_steps, check_prior
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
     MeasurementModel,
@@ -81,17 +81,48 @@ class ParticleDegeneracyError(RuntimeError):
 
 def _user_loglik(ll: object, N: int, t: int, y: np.ndarray) -> np.ndarray:
     """The values a user's log-likelihood callable returned at step ``t``, checked: ``N`` of
-    them, none NaN (``-inf`` is an impossible particle; NaN is a bug in the callable)."""
+    them, none NaN or ``+inf`` (``-inf`` is an impossible particle; NaN is a bug in the
+    callable, and so is ``+inf``, which read as every particle having zero likelihood)."""
     a = np.asarray(ll, dtype=float)
     if a.shape != (N,):
         raise ValueError(f"likelihood must return (N,) = ({N},) log-likelihoods, one per "
                          f"particle; got shape {a.shape} at step {t}")
-    nan = np.isnan(a)
-    if nan.any():
-        raise ValueError(f"likelihood returned NaN for {int(nan.sum())} of {N} particles at "
-                         f"step {t} (measurement {y.tolist()}); it must return log p(y | x) for "
-                         "each particle, -inf where y is impossible")
+    for bad, what in ((np.isnan(a), "NaN"), (a == np.inf, "+inf")):
+        if bad.any():
+            raise ValueError(f"likelihood returned {what} for {int(bad.sum())} of {N} particles "
+                             f"at step {t} (measurement {y.tolist()}); it must return "
+                             "log p(y | x) for each particle, finite or -inf where y is "
+                             "impossible")
     return a
+
+
+def _user_particles(x: object, N: int, n: int, t: int) -> np.ndarray:
+    """The particles a user's ``propagate`` callable returned at step ``t``, checked: shape
+    ``(N, n)`` (an ``(N, 1)`` for a 2-D state was broadcast into the estimates), finite. A
+    float array is returned as it is."""
+    a = x if isinstance(x, np.ndarray) and x.dtype.kind == "f" else np.asarray(x, dtype=float)
+    if a.shape != (N, n):
+        raise ValueError(f"motion (a propagate callable) must return particles of shape "
+                         f"(N, n) = ({N}, {n}); got shape {a.shape} at step {t}")
+    bad = ~np.isfinite(a).all(axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"motion (a propagate callable) returned non-finite particles at step "
+                         f"{t} ({int(bad.sum())} of {N}); particles[{i}] = {a[i].tolist()}")
+    return a
+
+
+def _count(value: object, name: str, low: int) -> int:
+    """``value`` as an ``int``: an integer (Python or numpy, or a float with an integral
+    value) of at least ``low``; else ``ValueError`` naming ``name`` and the value as given."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+            value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name} must be an integer; got {value!r}")
+    if not (math.isfinite(value) and float(value).is_integer()):
+        raise ValueError(f"{name} must be an integer; got {value}")  # 2.7 was cut to 2
+    if value < low:
+        raise ValueError(f"{name} must be >= {low}; got {value}")
+    return int(value)
 
 
 def _degenerate(t: int, y: np.ndarray) -> ParticleDegeneracyError:
@@ -160,6 +191,12 @@ def _systematic(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def _residual(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    # weights of any positive scale, as the other schemes (floor(n w) of (2, 1, 1) was 16
+    # copies of 4); a sum within rounding of 1 is taken as it is, so that normalised weights
+    # give the same draws as before
+    s = w.sum()
+    if abs(s - 1.0) > 1e-9 * max(1, len(w)) ** 0.5:
+        w = w / s
     nw = n * w
     copies = np.floor(nw).astype(np.int64)
     idx = np.repeat(np.arange(len(w)), copies)
@@ -177,7 +214,8 @@ RESAMPLERS: Registry[Callable[[np.ndarray, int, np.random.Generator], np.ndarray
     "systematic": _systematic,
     "residual": _residual,
 })
-"""Resampling schemes by name: ``f(weights, n, rng) -> indices (n,)``, sorted."""
+"""Resampling schemes by name: ``f(weights, n, rng) -> indices (n,)``, sorted; the weights
+need not sum to 1 (any positive scale)."""
 
 
 def _check_weights(weights: ArrayLike) -> np.ndarray:
@@ -219,7 +257,8 @@ def resample(weights: ArrayLike, method: str = "systematic", *, n: int | None = 
     method : {'systematic', 'stratified', 'residual', 'multinomial'}
         A name of :data:`RESAMPLERS`.
     n : int, optional
-        How many to draw (per set), >= 1.
+        How many to draw (per set), an integer >= 1 (a float with an integral value, such as
+        ``3.0``, is taken; ``2.7`` is refused).
     rng : numpy.random.Generator, int or None
         Random generator or seed.
 
@@ -232,7 +271,7 @@ def resample(weights: ArrayLike, method: str = "systematic", *, n: int | None = 
     ------
     ValueError
         If ``method`` is unknown, the weights are empty, negative, not finite or do not sum
-        to one, or ``n < 1``.
+        to one, or ``n`` is not an integer >= 1.
 
     References
     ----------
@@ -252,9 +291,7 @@ def resample(weights: ArrayLike, method: str = "systematic", *, n: int | None = 
     if method not in RESAMPLERS:
         raise ValueError(f"method must be one of {sorted(RESAMPLERS)}; got {method!r}")
     w = _check_weights(weights)
-    n = w.shape[-1] if n is None else int(n)
-    if n < 1:
-        raise ValueError(f"n must be >= 1; got {n}")
+    n = w.shape[-1] if n is None else _count(n, "n", 1)
     gen = as_rng(rng)
     if w.ndim == 1:
         return RESAMPLERS[method](w, n, gen)
@@ -423,7 +460,7 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     particles : (N, n) array_like
         The particles.
     weights : (N,) array_like
-        Normalised weights.
+        Normalised weights (zero weights are particles that count for nothing).
     bandwidth : float or (n,) array_like, optional
         Kernel standard deviation per dimension; default Silverman's rule.
     n_starts : int
@@ -439,6 +476,14 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
         The mode.
     confidence : float
         Share of the weight in the mode's peak, in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        If ``particles`` is not 2-D, empty or not finite, ``weights`` is not one finite
+        weight >= 0 per particle or all are 0, ``bandwidth`` is not finite and > 0 (one, or
+        one per dimension), or ``n_starts`` or ``max_points`` is not an integer >= 1 or
+        ``max_iter`` one >= 0.
 
     References
     ----------
@@ -456,15 +501,32 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     >>> round(float(mode[0])), round(conf, 1)
     (4, 0.7)
     """
-    x = np.asarray(particles, dtype=float)
-    w = np.asarray(weights, dtype=float)
+    x, w = _particles_and_weights(particles, weights)
     N, n = x.shape
+    if N == 0:
+        raise ValueError(f"particles must hold at least one particle; got shape {x.shape}")
+    check_finite(x, "particles")
+    bad = ~np.isfinite(w) | (w < 0)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise ValueError(f"weights[{i}] is {w[i]}: weights must be finite and >= 0")
+    if not w.max() > 0:
+        raise ValueError(f"weights are all 0 (of {N} particles)")
+    n_starts = _count(n_starts, "n_starts", 1)
+    max_iter = _count(max_iter, "max_iter", 0)
+    max_points = _count(max_points, "max_points", 1)
     if bandwidth is None:
         sd = np.sqrt(np.maximum(np.diagonal(_wcov(x, w)), 1e-300))
         neff = _ess(w)
         h = sd * (4.0 / ((n + 2) * neff)) ** (1.0 / (n + 4))
     else:
-        h = np.broadcast_to(np.asarray(bandwidth, dtype=float), (n,))
+        hb = as_float_array(bandwidth, "bandwidth", ndim=(0, 1))
+        if hb.size not in (1, n):
+            raise ValueError(f"bandwidth must be a number or ({n},), one per dimension; got "
+                             f"shape {hb.shape}")
+        if not (np.isfinite(hb).all() and (hb > 0).all()):
+            raise ValueError(f"bandwidth must be finite and > 0; got {hb.tolist()}")
+        h = np.broadcast_to(hb, (n,))
     search = np.random.default_rng(0)  # the estimate must not consume the filter's randomness
     if N > max_points:
         xs, ws = x[_systematic(w, max_points, search)], np.full(max_points, 1.0 / max_points)
@@ -473,8 +535,15 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     z = xs / h
     picks = _systematic(ws, max(n_starts - 1, 1), search)
     starts = np.concatenate([[_wmean(xs, ws)], xs[picks]]) / h
+    # the kernel is scaled by its largest term over the particles of positive weight (those
+    # of zero weight are infinitely far): scaled by the nearest particle, one of zero weight
+    # underflowed every other term to 0, and the step to 0/0, when the weighted ones were
+    # more than ~38 bandwidths away
+    zero = None if ws.min() > 0 else ws == 0
     for _ in range(max_iter):
         d2 = ((starts[:, None, :] - z[None]) ** 2).sum(-1)  # (S, N)
+        if zero is not None:
+            d2 = np.where(zero, np.inf, d2)
         k = ws * np.exp(-0.5 * (d2 - d2.min(1, keepdims=True)))
         new = (k @ z) / k.sum(1, keepdims=True)
         done = np.max(np.abs(new - starts)) < 1e-6
@@ -838,11 +907,13 @@ class ParticleFilter:
     motion
         A motion model (``f`` and ``Q``, or ``F`` and ``Q``); particles move by ``f`` plus
         Gaussian noise of covariance ``Q(dt)``. Or a callable
-        ``propagate(particles (N, n), dt, t, rng) -> (N, n)`` for any other dynamics.
+        ``propagate(particles (N, n), dt, t, rng) -> (N, n)`` for any other dynamics (its
+        output is checked at each step: shape ``(N, n)``, finite).
     likelihood
         A measurement model (``h``, ``R``: a Gaussian likelihood with the model's residual),
         or a callable ``log_likelihood(y, particles (N, n)) -> (N,)`` returning
-        ``log p(y | x_i)`` (image likelihoods plug in here).
+        ``log p(y | x_i)`` (image likelihoods plug in here): finite, or ``-inf`` where ``y``
+        is impossible.
     n_particles : int
         Number ``N`` of particles, >= 1.
     resampling : str
@@ -900,6 +971,7 @@ class ParticleFilter:
         self.n_particles, self.ess_threshold = check_particle_options(
             n_particles, resampling, ess_threshold)
         self.resampling, self.rng = resampling, as_rng(rng)
+        self._user_motion = False  # a propagate callable, whose output is checked each step
         if hasattr(motion, "Q"):
             mo = MotionFunctions(cast(MotionModel | NonlinearMotionModel, motion))
             self.ndim_state = mo.n
@@ -908,6 +980,7 @@ class ParticleFilter:
             if ndim_state is None:
                 raise ValueError("ndim_state is needed when motion is a callable")
             self.ndim_state, self._propagate = int(ndim_state), motion
+            self._user_motion = True
         else:
             raise TypeError(f"motion must be a motion model or a callable; got "
                             f"{type(motion).__name__}")
@@ -991,9 +1064,10 @@ class ParticleFilter:
         ParticleDegeneracyError
             If every particle gets zero likelihood (the message names the step).
         ValueError
-            If ``ys`` has no step, the prior or ``particles`` has the wrong shape, or a
-            ``likelihood`` callable returns other than ``N`` values or a NaN (the message
-            names the step).
+            If ``ys`` has no step, the prior or ``particles`` has the wrong shape or is not
+            finite, a ``likelihood`` callable returns other than ``N`` values, a NaN or
+            ``+inf``, or a ``propagate`` callable returns other than ``(N, n)`` finite
+            particles (the message names the step).
 
         Examples
         --------
@@ -1025,6 +1099,8 @@ class ParticleFilter:
         for t in range(T):
             if t > 0:
                 x = self._propagate(x, float(dts[t]), float(times[t]), rng)
+                if self._user_motion:
+                    x = _user_particles(x, N, n, t)
             if not np.isnan(ys[t]).all():
                 a = logw + self._loglik(ys[t], x, t)
                 top = np.max(a)
@@ -1061,6 +1137,9 @@ class ParticleFilter:
                 i = int(np.flatnonzero(~np.isfinite(x).all(axis=1))[0])
                 raise ValueError(f"particles must be finite; particles[{i}] = {x[i].tolist()}")
             return x.copy()
+        for name, value in (("x0", x0), ("P0", P0)):
+            if value is not None:  # NaN read as every particle's likelihood being 0, too
+                check_finite(as_float_array(value, name), name)
         m0, C0 = check_prior(x0, P0, n, batch=False)
         return self.rng.multivariate_normal(m0, C0, size=N, method="eigh")
 

@@ -75,8 +75,8 @@ class WSLModel:
     Raises
     ------
     ValueError
-        If ``shape`` is empty or not positive, a scale or ``tau`` is not a finite positive
-        number, or ``m0`` is not three positive numbers.
+        If ``shape`` is empty or not positive integers, a scale or ``tau`` is not a finite
+        positive number, or ``m0`` is not three finite positive numbers.
 
     References
     ----------
@@ -97,7 +97,11 @@ class WSLModel:
     def __init__(self, shape: tuple[int, ...], *, tau: float = 20.0, sigma_w: float = 0.08,
                  sigma_s0: float = 0.05, sigma_min: float = 0.02,
                  m0: tuple[float, float, float] = (0.4, 0.15, 0.45), lost_density: float = 1.0):
-        self.shape = tuple(int(s) for s in np.atleast_1d(shape))
+        dims = np.atleast_1d(shape)
+        if dims.ndim != 1 or dims.dtype.kind not in "iuf" or not (
+                np.isfinite(dims).all() and (dims == np.round(dims)).all()):
+            raise ValueError(f"shape must be a tuple of integers; got {shape!r}")  # 2.5 was 2
+        self.shape = tuple(int(s) for s in dims)
         if not self.shape or min(self.shape) < 1:
             raise ValueError(f"shape must be positive; got {shape!r}")
         for name, v in (("tau", tau), ("sigma_w", sigma_w), ("sigma_s0", sigma_s0),
@@ -105,9 +109,9 @@ class WSLModel:
             if not np.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be positive; got {v!r}")
         m0_arr = np.asarray(m0, dtype=float)
-        if m0_arr.shape != (3,) or (m0_arr <= 0).any():
-            raise ValueError("m0 must be three positive mixing probabilities; got "
-                             f"{m0_arr.tolist()}")
+        if m0_arr.shape != (3,) or not (np.isfinite(m0_arr).all() and (m0_arr > 0).all()):
+            raise ValueError("m0 must be three finite positive mixing probabilities; got "
+                             f"{m0_arr.tolist()}")  # NaN and inf gave NaN mixtures
         self.alpha = 1.0 - float(np.exp(-1.0 / tau))
         self.sigma_w, self.sigma_s0 = float(sigma_w), float(sigma_s0)
         self.sigma_min = float(sigma_min)
@@ -242,7 +246,10 @@ class WSLModel:
 
         The mixing probabilities and the stable component's moments move towards the
         observation by ``alpha``, weighted by the ownerships (see the module); ``σ_s`` is
-        floored at ``sigma_min``, and ``d`` becomes the wandering component's mean.
+        floored at ``sigma_min``, and ``d`` becomes the wandering component's mean. A mixing
+        probability is floored at ``1e-12`` (``log m`` stays finite); where ``m_s`` is, the
+        moments ``M_1``, ``M_2`` are scaled with it, so that a pixel occluded for any time
+        keeps ``μ_s`` and ``σ_s`` and recovers its stable component when the target is back.
 
         Parameters
         ----------
@@ -276,11 +283,19 @@ class WSLModel:
             raise ValueError(f"update takes one observation of shape {self.shape}; got {d.shape}")
         o = self.ownership(d)
         a = self.alpha
-        self.m = a * o + (1 - a) * self.m
-        self.m = np.maximum(self.m, 1e-12)   # keeps log m finite
+        m = a * o + (1 - a) * self.m
+        self.m = np.maximum(m, 1e-12)   # keeps log m finite
         self.m /= self.m.sum(axis=0)
         self.M1 = a * o[0] * d + (1 - a) * self.M1
         self.M2 = a * o[0] * d ** 2 + (1 - a) * self.M2
+        floored = m[0] < 1e-12
+        if floored.any():
+            # the moments follow m_s up to its floor (m_s > 0: (1 - a) times the last one):
+            # they decayed on alone, and after a long occlusion μ_s = M1 / m_s fell to 0 and
+            # m_s never recovered
+            scale = np.where(floored, self.m[0] / m[0], 1.0)
+            self.M1 = self.M1 * scale
+            self.M2 = self.M2 * scale
         self.mu_s = self.M1 / self.m[0]
         self.var_s = np.maximum(self.M2 / self.m[0] - self.mu_s ** 2, self.sigma_min ** 2)
         self.prev = d.copy()

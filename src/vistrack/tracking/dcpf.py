@@ -51,7 +51,7 @@ it is supported. Times are frames over ``frame_rate``; the defaults (1.5 s and 0
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -108,6 +108,15 @@ class DCPFConfig:
     learning_rate, epochs : float, int
         The classifier's gradient steps each frame.
 
+    Raises
+    ------
+    ValueError
+        If a setting is not a number or is NaN, ``beta``, ``gamma`` or ``eta`` is negative
+        or infinite or all are 0, ``n_particles`` is not an integer >= 2, ``confirm`` one
+        >= 1 or ``epochs`` one >= 0, ``sigma_det`` is not finite and > 0, ``sigma_pos``,
+        ``sigma_vel`` or ``learning_rate`` not finite and >= 0, ``size_rate`` not in
+        [0, 1], or ``max_lost`` or ``merge_time`` negative (each error names the setting).
+
     Examples
     --------
     >>> DCPFConfig(eta=0.0).max_lost
@@ -136,16 +145,40 @@ class DCPFConfig:
     epochs: int = 10
 
     def __post_init__(self) -> None:
+        def bad(name: str, must: str) -> ValueError:
+            return ValueError(f"{name} must be {must}; got {getattr(self, name)}")
+
+        for f in fields(self):  # numbers, not NaN (a NaN sigma_pos was an IndexError later)
+            v = getattr(self, f.name)
+            if isinstance(v, (bool, np.bool_)) or not isinstance(
+                    v, (int, float, np.integer, np.floating)):
+                raise ValueError(f"{f.name} must be a number; got {v!r}")
+            if np.isnan(v):
+                raise bad(f.name, "a number (not NaN)")
         for name in ("beta", "gamma", "eta"):
             if getattr(self, name) < 0:
-                raise ValueError(f"{name} must be >= 0; got {getattr(self, name)}")
+                raise bad(name, ">= 0")
+            if getattr(self, name) == np.inf:  # inf / inf: NaN weights
+                raise bad(name, "finite")
         if self.beta + self.gamma + self.eta <= 0:
             raise ValueError("at least one of beta, gamma and eta must be > 0")
-        if self.n_particles < 2 or self.confirm < 1 or not self.max_lost >= 0 \
-                or not self.merge_time >= 0:
-            raise ValueError(f"need n_particles >= 2, confirm >= 1, max_lost >= 0 and "
-                             f"merge_time >= 0; got {self.n_particles}, {self.confirm}, "
-                             f"{self.max_lost}, {self.merge_time}")
+        for name, low in (("n_particles", 2), ("confirm", 1), ("epochs", 0)):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and float(v).is_integer() and v >= low):  # 2.5: TypeError
+                raise bad(name, f"an integer >= {low}")
+            object.__setattr__(self, name, int(v))  # 100.0 particles is 100 (frozen)
+        # sigma_det = 0 gave NaN detection terms (0 / 0 at the detection), and nothing was
+        # ever associated
+        if not 0 < self.sigma_det < np.inf:
+            raise bad("sigma_det", "a finite number > 0")
+        for name in ("sigma_pos", "sigma_vel", "learning_rate"):
+            if not 0 <= getattr(self, name) < np.inf:
+                raise bad(name, "a finite number >= 0")
+        if not 0 <= self.size_rate <= 1:
+            raise bad("size_rate", "in [0, 1] (the weight of a detection's size)")
+        for name in ("max_lost", "merge_time"):
+            if not getattr(self, name) >= 0:
+                raise bad(name, ">= 0")
 
 
 class ColourFeatures:
@@ -446,7 +479,10 @@ class DetectorConfidencePF:
             both = confirmed[:, None] & confirmed[None, :]
             covered = cast(np.ndarray, ((ov > cfg.merge_iou) & both).any(0))  # (T,) array
         self.overlapped = np.where(covered, self.overlapped + 1 / self.frame_rate, 0.0)
-        keep &= self.overlapped <= cfg.merge_time
+        # for more than merge_time, whatever the rounding of the sum of the frames' 1 /
+        # frame_rate (0.1 + 0.1 + 0.1 > 0.3 ended a target after 0.3 s at 10 frames/s), as
+        # TrackTable.ended does for max_lost
+        keep &= self.overlapped <= cfg.merge_time + 1e-9 * max(1.0, cfg.merge_time)
         report = (tab.state == CONFIRMED) & supported & keep
         out = Tracks(ids=tab.ids[report].copy(),
                      boxes=np.c_[est[report, :2], est[report, :2] + est[report, 2:]],
