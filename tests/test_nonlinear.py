@@ -241,6 +241,14 @@ def test_nonlinear_filter_errors_name_the_argument(rng):
         flt.filter(np.zeros((3, 3)), x0=np.ones(5), P0=np.eye(5))
     with pytest.raises(ValueError, match=r"^x0 must have shape \(5,\) or \(B, 5\); got \(4,\)$"):
         flt.filter(np.ones((3, 2)), x0=np.ones(4), P0=np.eye(5))
+    # a NaN or infinite prior is named (the EKF and the EnKF gave NaN estimates without a word)
+    x0 = np.ones(5)
+    x0[2] = np.nan
+    for f in (flt, EnsembleKalmanFilter(motion, meas, n_members=20, rng=0)):
+        with pytest.raises(ValueError, match=r"^x0 must be finite; x0\[2\] = nan$"):
+            f.filter(np.ones((3, 2)), x0=x0, P0=np.eye(5))
+        with pytest.raises(ValueError, match=r"^P0 must be finite; P0\[0, 0\] = inf$"):
+            f.filter(np.ones((3, 2)), x0=np.ones(5), P0=np.diag([np.inf, 1, 1, 1, 1]))
     with pytest.raises(ValueError, match=r"dt must be a scalar or have shape \(3,\); got \(2,\)"):
         flt.filter(np.ones((3, 2)), x0=np.ones(5), P0=np.eye(5), dt=[1.0, 2.0])
     with pytest.raises(ValueError, match=r"times must have shape \(3,\)"):

@@ -208,7 +208,8 @@ def check_prior(x0: ArrayLike | None, P0: ArrayLike | None, n: int, *, batch: bo
     ``(B, n, n)``, symmetric positive semi-definite) for a model whose state has ``n``
     entries; each error names the argument
     (``space`` is appended to the expected shape, e.g. " (the largest member's state)"). A
-    numpy masked array with a masked entry is refused: a prior has no missing value."""
+    numpy masked array with a masked entry is refused: a prior has no missing value, nor a
+    NaN or an infinite entry."""
     for name, value in (("x0", x0), ("P0", P0)):
         if value is None:
             raise ValueError(f"{name} is required (the prior of the first step); got None")
@@ -218,6 +219,9 @@ def check_prior(x0: ArrayLike | None, P0: ArrayLike | None, n: int, *, batch: bo
             raise ValueError(f"{name} must not have masked entries (a prior has no missing "
                              f"value); {name}{idx} is masked")
     x = as_float_array(x0, "x0", ndim=(1, 2) if batch else (1,))
+    # a NaN mean went through the extended and ensemble filters as NaN estimates, and
+    # an IMM's as "every model gives zero likelihood"
+    check_finite(x, "x0")
     if x.shape[-1] != n:
         want = f"({n},)" + (f" or (B, {n})" if batch else "")
         raise ValueError(f"x0 must have shape {want}{space}; got {_fmt_shape(x.shape)}")
@@ -225,6 +229,7 @@ def check_prior(x0: ArrayLike | None, P0: ArrayLike | None, n: int, *, batch: bo
     if P.shape[-2:] != (n, n):
         want = f"({n}, {n})" + (f" or (B, {n}, {n})" if batch else "")
         raise ValueError(f"P0 must have shape {want}{space}; got {_fmt_shape(P.shape)}")
+    check_finite(P, "P0")
     check_psd(P, "P0")  # a particle filter drew its first cloud from -I without a word
     return x, P
 

@@ -180,14 +180,23 @@ def resample_into(w, scheme, st, cw, out):
             k += 1
         return st
     if scheme == 3:  # residual: floor(n w_i) copies, the rest multinomial on what remains
+        # (n w_i within 4 N ulp below a whole number counts as it, as particle._whole_copies:
+        # n equal weights give one copy each, not a draw at random; the plain floor where
+        # that would make more than n)
+        grace = 1.0 + 4.0 * N * 2.220446049250313e-16
+        whole = 0
+        for i in range(N):
+            whole += math.floor(n * (w[i] / total) * grace)
+        if whole > n:
+            grace = 1.0
         k, rest = 0, 0.0
         for i in range(N):
             nw = n * (w[i] / total)
-            copies = math.floor(nw)
+            copies = math.floor(nw * grace)
             for _ in range(int(copies)):
                 out[k] = i
                 k += 1
-            rest += nw - copies
+            rest += max(nw - copies, 0.0)
             cw[i] = rest
         if k < n:
             for i in range(N):
