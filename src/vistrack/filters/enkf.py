@@ -336,7 +336,8 @@ class EnsembleKalmanFilter:
         Parameters
         ----------
         ys : (T, m) or (B, T, m) array_like
-            Measurements; NaN components are missing.
+            Measurements; NaN components (or masked entries of a numpy masked array) are
+            missing.
         x0 : (n,) or (B, n) array_like
             Prior mean of the first step.
         P0 : (n, n) or (B, n, n) array_like

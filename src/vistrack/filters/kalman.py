@@ -170,7 +170,8 @@ def kalman_filter(
     Parameters
     ----------
     ys : (T, m) or (B, T, m) array_like
-        Measurements. A NaN component is missing: a row of NaN means no measurement at that step
+        Measurements. A NaN component (or a masked entry of a numpy masked array, pykalman's
+        convention) is missing: a row of NaN means no measurement at that step
         (predict only); NaN in some components updates with the others.
     F, Q : (n, n) or (T, n, n) array_like
         Dynamics and process noise, constant or per step (``F[t]`` predicts step ``t``; the
@@ -631,7 +632,7 @@ def kalman_filter_1d(
     Parameters
     ----------
     ys : (T,) array_like
-        Measurements; NaN where missing.
+        Measurements; NaN (or masked, in a numpy masked array) where missing.
     d, m : float or (T,) array_like
         Dynamics and measurement coefficients :math:`d_i`, :math:`m_i` (``d[0]`` unused).
     sigma_d, sigma_m : float or (T,) array_like

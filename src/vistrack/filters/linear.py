@@ -230,7 +230,7 @@ class KalmanFilter:
         Parameters
         ----------
         ys : (T, m) or (B, T, m) array_like
-            Measurements, NaN where missing.
+            Measurements, NaN (or masked, in a numpy masked array) where missing.
         scale : float
             The prior's standard deviation on the unmeasured part of the state, in units of
             the largest measurement standard deviation.
@@ -282,7 +282,8 @@ class KalmanFilter:
         Parameters
         ----------
         ys : (T, m) or (B, T, m) array_like
-            Measurements; NaN components are missing.
+            Measurements; NaN components (or masked entries of a numpy masked array) are
+            missing.
         dt : float or array_like
             A scalar, the ``T-1`` intervals between steps, or ``T`` values with ``dt[0]``
             unused.
@@ -363,7 +364,8 @@ class KalmanFilter:
         Parameters
         ----------
         ys : (T, m) or (B, T, m) array_like
-            Measurements; NaN components are missing.
+            Measurements; NaN components (or masked entries of a numpy masked array) are
+            missing.
         dt : float or array_like
             As in :meth:`filter`.
         x0, P0 : array_like, optional
@@ -410,7 +412,8 @@ class KalmanFilter:
         Parameters
         ----------
         ys : (T, m) or (B, T, m) array_like
-            Measurements; NaN components are missing.
+            Measurements; NaN components (or masked entries of a numpy masked array) are
+            missing.
         dt : float or array_like
             As in :meth:`filter`.
         learn : sequence of {"q", "R"}

@@ -1052,7 +1052,8 @@ class ParticleFilter:
         ----------
         ys : (T, m) array_like
             Measurements; a row of NaN is predicted only (NaN in some components: the
-            Gaussian likelihood uses the others).
+            Gaussian likelihood uses the others); masked entries of a numpy masked array are
+            NaN.
         x0 : (n,) array_like, optional
             Prior mean of the first step (when ``particles`` is not given).
         P0 : (n, n) array_like, optional

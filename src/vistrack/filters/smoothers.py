@@ -237,7 +237,8 @@ def two_filter_smooth(
     Parameters
     ----------
     ys : (T, m) or (B, T, m) array_like
-        Measurements; NaN components are missing.
+        Measurements; NaN components (or masked entries of a numpy masked array) are
+        missing.
     F, Q : (n, n) or (T, n, n) array_like
         Dynamics and process noise, constant or per step.
     H, R : (m, n) and (m, m), or (T, m, n) and (T, m, m) array_like
