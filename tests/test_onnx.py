@@ -56,6 +56,17 @@ def test_letterbox_centres_the_scaled_image():
     assert (out.shape, r, left, top) == ((64, 64), 0.64, 16.0, 0.0)
 
 
+def test_letterboxed_boxes_map_back_by_the_resized_image_s_own_factors(tmp_path):
+    """An image of 129 x 65 fits the 64 x 64 input at r = 64/129 as 64 x 32 whole pixels (32.25
+    rounded): the box of the whole resized content, (0, 16)-(64, 48) in the input, is the whole
+    image, (0, 0)-(129, 65). Mapped back by r on both axes it was 64.5 rows high (a 1920 x 1081
+    frame came back 1080 high, a 3840 x 2163 one 2160)."""
+    cols = np.array([[32, 32, 64, 32, 0.9]] + [[0, 0, 0, 0, 0]] * 8, np.float32)
+    det = ONNXDetector(constant_model(tmp_path / "whole.onnx", [cols.T[None]]))
+    d = det.detect(np.zeros((65, 129, 3), np.uint8))
+    np.testing.assert_allclose(d.boxes, [[0, 0, 129, 65]], atol=1e-4)
+
+
 def test_yolov8_layout(tmp_path):
     # (1, 4 + C, N): C = 3 classes, N = 4 boxes, one per column
     cols = np.array([

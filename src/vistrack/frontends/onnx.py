@@ -45,9 +45,11 @@ LAYOUTS = ("auto", "yolov8", "yolov5", "ssd")
 
 def letterbox(image: np.ndarray, size: tuple[int, int],
               fill: int = 114) -> tuple[np.ndarray, float, tuple[float, float]]:
-    """``image`` scaled by the largest factor that fits it in ``size = (height, width)``,
-    centred and padded with ``fill``; the factor and the padding ``(left, top)``, so that a
-    point ``p`` of the result is ``(p - (left, top)) / factor`` in the image.
+    """``image`` scaled by the largest factor ``r`` that fits it in ``size = (height, width)``,
+    centred and padded with ``fill``; the factor and the padding ``(left, top)``. The image
+    is resized to whole pixels, ``nw = round(w r)`` by ``nh = round(h r)``, so a point
+    ``(x, y)`` of the result is ``((x - left) w / nw, (y - top) h / nh)`` in the image (which
+    ``(p - (left, top)) / r`` is to within half a pixel of the result).
 
     Examples
     --------
@@ -180,7 +182,10 @@ class ONNXDetector:
         h, w = image.shape[:2]
         if self.resize == "letterbox":
             fitted, r, (left, top) = letterbox(image, (H, W))
-            scale, offset = np.full(4, r), np.array([left, top, left, top])
+            # the resized image's own factors, whole pixels over the image's (r itself put a
+            # 1920 x 1081 frame's full box back at 1080 rows, a 3840 x 2163 one's at 2160)
+            rx, ry = round(w * r) / w, round(h * r) / h
+            scale, offset = np.array([rx, ry, rx, ry]), np.array([left, top, left, top])
         else:
             fitted = cv2.resize(image, (W, H), interpolation=cv2.INTER_LINEAR)
             scale = np.array([W / w, H / h, W / w, H / h])

@@ -99,9 +99,12 @@ def _refine(image, coords, r, mask, max_iterations, shift):
     rg = np.empty(n)
     for k in range(n):
         cy, cx = coords[k, 0], coords[k, 1]
+        py, px = cy, cx  # the disc last measured (where max_iterations runs out, it is the
+        # one before the move: its centre of mass, mass and size are reported, as trackpy's)
         my = mx = 0.0
         m = 0.0
         for _ in range(max_iterations):
+            py, px = cy, cx
             m = my = mx = 0.0
             for i in range(2 * r + 1):
                 for j in range(2 * r + 1):
@@ -129,10 +132,10 @@ def _refine(image, coords, r, mask, max_iterations, shift):
         m = g = 0.0
         for i in range(2 * r + 1):
             for j in range(2 * r + 1):
-                v = mask[i, j] * image[cy - r + i, cx - r + j]
+                v = mask[i, j] * image[py - r + i, px - r + j]
                 m += v
                 g += v * ((i - r) ** 2 + (j - r) ** 2)
-        out[k, 0], out[k, 1] = cx + mx, cy + my
+        out[k, 0], out[k, 1] = px + mx, py + my
         mass[k] = m
         rg[k] = np.sqrt(g / m) if m > 0 else 0.0
     return out, mass, rg
@@ -140,7 +143,8 @@ def _refine(image, coords, r, mask, max_iterations, shift):
 
 def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
            separation: float | None = None, noise_size: float = 1.0,
-           smoothing_size: int | None = None, threshold: float = 1.0, invert: bool = False,
+           smoothing_size: int | None = None, threshold: float | None = None,
+           invert: bool = False,
            percentile: float = 64.0, max_iterations: int = 10) -> Spots:
     """Find the spots of a grey image (see the module).
 
@@ -153,14 +157,15 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     minmass : float
         Smallest integrated brightness kept (in the input's grey levels; strictly above it).
     separation : float, optional
-        Smallest distance between spots; default ``diameter + 1``.
+        Smallest distance between spots, > 0; default ``diameter + 1``.
     noise_size : float
-        Standard deviation of the Gaussian that removes pixel noise.
+        Standard deviation of the Gaussian that removes pixel noise, >= 0 (0: none).
     smoothing_size : int, optional
         Side of the boxcar that estimates the background, odd and larger than
         ``noise_size``; default ``diameter``.
-    threshold : float
-        Band-passed values below it become 0.
+    threshold : float, optional
+        Band-passed values below it become 0; default 1 grey level for an integer image and
+        1/255 for a float one (trackpy's: an image of floats in [0, 1] found no spot at 1).
     invert : bool
         Spots darker than the background.
     percentile : float
@@ -178,7 +183,8 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     ------
     ValueError
         If ``image`` is neither ``(H, W)`` nor ``(H, W, 3)``, ``diameter`` is not an odd
-        integer >= 3, or ``smoothing_size`` is even or not larger than ``noise_size``.
+        integer >= 3, ``noise_size`` is negative, ``separation`` not > 0, or
+        ``smoothing_size`` is even or not larger than ``noise_size``.
 
     References
     ----------
@@ -210,21 +216,31 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         raise ValueError(f"diameter must be an odd integer >= 3; got {diameter}")
     r = diameter // 2
     sep = float(diameter + 1 if separation is None else separation)
+    if not (np.isfinite(sep) and sep > 0):
+        raise ValueError(f"separation must be a finite number > 0; got {separation}")
+    if not (np.isfinite(noise_size) and noise_size >= 0):
+        raise ValueError(f"noise_size must be a finite number >= 0 (0: no smoothing); got "
+                         f"{noise_size}")
     smooth = diameter if smoothing_size is None else int(smoothing_size)
     if smooth % 2 == 0 or smooth <= noise_size:
         raise ValueError(f"smoothing_size must be odd and larger than noise_size; got {smooth}")
     if invert:
         im = (np.iinfo(im.dtype).max - im if np.issubdtype(im.dtype, np.integer)
               else im.max() - im)
+    if threshold is None:
+        threshold = 1.0 if np.issubdtype(im.dtype, np.integer) else 1.0 / 255
     raw = im.astype(np.float64)
     # 1. band-pass, then integers 0-255. As trackpy does, the boxcar of an integer image is
     # taken in its own integer type (each pass rounds)
     import cv2
 
-    rad = int(4.0 * noise_size + 0.5)  # the Gaussian truncated at 4 sigma, zero outside
-    g = np.exp(-0.5 * np.arange(-rad, rad + 1) ** 2 / noise_size ** 2)
-    g /= g.sum()
-    low = cv2.sepFilter2D(raw, cv2.CV_64F, g, g, borderType=cv2.BORDER_CONSTANT)
+    if noise_size > 0:
+        rad = int(4.0 * noise_size + 0.5)  # the Gaussian truncated at 4 sigma, zero outside
+        g = np.exp(-0.5 * np.arange(-rad, rad + 1) ** 2 / noise_size ** 2)
+        g /= g.sum()
+        low = cv2.sepFilter2D(raw, cv2.CV_64F, g, g, borderType=cv2.BORDER_CONSTANT)
+    else:  # no smoothing (trackpy's noise_size 0; the Gaussian's weights were NaN)
+        low = raw
     back = im.copy()
     for axis in (0, 1):
         ndimage.uniform_filter1d(back, smooth, axis, output=back, mode="nearest")
