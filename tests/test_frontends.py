@@ -697,7 +697,7 @@ def test_blob_moments_give_the_drawn_ellipses():
     """Filled ellipses of known centre, semi-axes and orientation: the moments give them back
     (the ellipse of the same second moments has semi-axes 2 sqrt(eigenvalue))."""
     truth = [((60.0, 50.0), (30, 12), 20.0), ((200.0, 120.0), (18, 18), 0.0),
-             ((140.0, 60.0), (40, 8), -55.0)]
+             ((140.0, 60.0), (40, 8), -55.0), ((250.0, 50.0), (25, 10), 150.0)]
     m = np.zeros((200, 300), np.uint8)
     pixels = []
     for c, ax, ang in truth:
@@ -709,7 +709,7 @@ def test_blob_moments_give_the_drawn_ellipses():
         m |= one
     m[5, 5] = m[190, 290] = 255  # specks
     b = find_blobs(m, min_area=20, open_size=0, close_size=0)
-    assert len(b) == 3
+    assert len(b) == 4
     order = [int(np.argmin(np.linalg.norm(b.centroids - np.array(c), axis=1))) for c, _, _ in truth]
     for k, (c, ax, ang), (n, cov) in zip(order, truth, pixels):
         # the moments of the drawn pixels exactly (numpy's covariance of their coordinates)
@@ -719,13 +719,15 @@ def test_blob_moments_give_the_drawn_ellipses():
         # pixel of boundary that rasterising adds
         np.testing.assert_allclose(b.centroids[k], c, atol=0.5)
         np.testing.assert_allclose(b.axes[k], ax, atol=1.0)
+        # one orientation, one angle, in [-90, 90) degrees (150 reads as -30: the
+        # eigenvector's sign is LAPACK's, and angles came out a half-turn apart)
+        assert -np.pi / 2 <= b.angles[k] < np.pi / 2
         if ax[0] != ax[1]:
-            d = (np.degrees(b.angles[k]) - ang + 90) % 180 - 90
-            assert abs(d) < 1.5
+            assert abs(np.degrees(b.angles[k]) - ((ang + 90) % 180 - 90)) < 1.5
         x0, y0, x1, y1 = b.boxes[k]
         assert x0 <= c[0] - ax[1] and x1 >= c[0] + ax[1] and y0 < c[1] < y1
     d = b.detections("points")
-    assert d.points.shape == (3, 2) and b.detections().boxes.shape == (3, 4)
+    assert d.points.shape == (4, 2) and b.detections().boxes.shape == (4, 4)
     second = sorted(n for n, _ in pixels)[1]
     assert len(find_blobs(m, min_area=20, max_area=second, open_size=0, close_size=0)) == 2
     assert len(find_blobs(np.zeros((10, 10)))) == 0

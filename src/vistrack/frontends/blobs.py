@@ -36,7 +36,7 @@ class Blobs:
     """Regions of one frame, as columns: ``centroids (N, 2)`` (x, y), ``covs (N, 2, 2)`` of
     the pixel coordinates, ``areas (N,)`` in pixels, ``boxes (N, 4)`` (``x0, y0, x1, y1``,
     bounding the pixels), and the equivalent ellipses' ``axes (N, 2)`` (semi-major, semi-minor)
-    and ``angles (N,)`` (radians, of the major axis from +x towards +y).
+    and ``angles (N,)`` (radians, of the major axis from +x towards +y, in [-π/2, π/2)).
 
     What :func:`find_blobs` returns; ``len()`` is the number of regions.
 
@@ -54,7 +54,8 @@ class Blobs:
         Semi-axes of the equivalent ellipses, ``2 √λ`` of the covariance's eigenvalues,
         major first.
     angles : (N,) ndarray
-        Orientation of the major axis, radians from +x towards +y.
+        Orientation of the major axis, radians from +x towards +y, in [-π/2, π/2) (an axis
+        has no direction: one orientation, one angle).
 
     Examples
     --------
@@ -238,6 +239,9 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     lam, vec = np.linalg.eigh(covs) if len(area) else (np.zeros((0, 2)), np.zeros((0, 2, 2)))
     axes = 2.0 * np.sqrt(np.maximum(lam[:, ::-1], 0.0))
     angles = np.arctan2(vec[:, 1, 1], vec[:, 0, 1]) if len(area) else np.zeros(0)
+    # the eigenvector's sign is LAPACK's choice: two blobs of one orientation came out a
+    # half-turn apart (an ellipse at 30 degrees as -149.8)
+    angles = (angles + np.pi / 2) % np.pi - np.pi / 2
     boxes = np.c_[lo, hi + 1].astype(float)
     return Blobs(c, covs, area, boxes, axes, angles)
 
