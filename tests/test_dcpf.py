@@ -65,6 +65,39 @@ def test_hog_confidence_cells_are_opencv_hog_windows():
                                atol=1e-5)
 
 
+def test_hog_confidence_on_small_frames_leaves_out_the_levels_that_do_not_fit():
+    """A 160 x 120 frame holds fewer than 2 x 2 windows at the tallest people's level (121
+    pixels: the frame resized to 119 rows, under one 128-row window): that level was kept, as
+    a grid of one row or clamped to the window's size (its cells then mapped to the wrong
+    place), and the map refused it ("each level's scores must be a 2-D grid"). It is left
+    out; the levels kept are the ones whose every cell is OpenCV's window, as above; on a
+    frame too small for any level the peaks are none, as HOGDetector finds nobody there."""
+    import cv2
+
+    from vistrack.frontends.detectors import ConfidencePeaks, HOGDetector, ImageTooSmall
+
+    rng = np.random.default_rng(4)
+    img = cv2.GaussianBlur(rng.integers(0, 255, (160, 120, 3), dtype=np.uint8), (0, 0), 2)
+    hog = HOGConfidence()
+    cm = hog(img)
+    fits = [h for h in hog.heights
+            if round(120 * 96 / h) >= 72 and round(160 * 96 / h) >= 136]
+    assert cm.heights.tolist() == fits == [46.0, 58.0, 75.0, 96.0]
+    ref = cv2.HOGDescriptor()
+    ref.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+    for h in fits:
+        f = 96 / h
+        small = cv2.resize(img, (int(round(120 * f)), int(round(160 * f))))
+        loc, w = ref.detect(small, hitThreshold=-1e9, winStride=(8, 8), padding=(0, 0))
+        centres = (np.asarray(loc, float).reshape(-1, 2) + [32, 64]) / f
+        np.testing.assert_allclose(cm.score(centres[:, 0], centres[:, 1], h),
+                                   np.asarray(w, float).ravel(), rtol=1e-5, atol=1e-5)
+    tiny = np.zeros((30, 30, 3), np.uint8)
+    with pytest.raises(ImageTooSmall, match="image of 30 x 30 pixels is too small"):
+        hog(tiny)
+    assert len(ConfidencePeaks(hog).detect(tiny)) == len(HOGDetector().detect(tiny)) == 0
+
+
 def crossing_scene(T=60, miss=0.5, seed=0):
     """Two people (20 x 50 boxes), red and blue, crossing paths on a grey ground; each is
     detected with probability ``1 - miss``; the confidence map has a peak of margin 2 on a

@@ -312,7 +312,10 @@ class ConfidenceMap:
             u = (x[sel] - self.origins[k, 0]) / self.strides[k]
             v = (y[sel] - self.origins[k, 1]) / self.strides[k]
             ny, nx = s.shape
-            ok = (u >= 0) & (u <= nx - 1) & (v >= 0) & (v <= ny - 1)
+            # (a centre on the grid's edge, the cell's own, is inside to within rounding:
+            # 1e-9 of a cell; it was -inf where (x - origin) / stride came to 16 + 4e-15)
+            e = 1e-9
+            ok = (u >= -e) & (u <= nx - 1 + e) & (v >= -e) & (v <= ny - 1 + e)
             j0 = np.clip(np.floor(u).astype(int), 0, nx - 2)
             i0 = np.clip(np.floor(v).astype(int), 0, ny - 2)
             fu, fv = u - j0, v - i0
@@ -369,6 +372,11 @@ class ConfidenceMap:
         return Detections.from_xywh(b[keep], 1.0 / (1.0 + np.exp(-sc[keep])))
 
 
+class ImageTooSmall(ValueError):
+    """An image smaller than every level of a :class:`HOGConfidence` can hold a grid of
+    windows in."""
+
+
 class HOGConfidence:
     """OpenCV's HOG people detector evaluated densely: every window at a stride of 8 pixels on
     an image resized so that a person of each given box height fills the window, giving a
@@ -386,13 +394,17 @@ class HOGConfidence:
     Raises
     ------
     ValueError
-        If ``heights`` is not a non-empty list of positive numbers.
+        If ``heights`` is not a non-empty list of positive numbers; called on an image
+        smaller than every level can hold 2 x 2 windows in, :class:`ImageTooSmall` (a
+        ``ValueError``).
 
     Notes
     -----
     Call it on an image (grey or BGR uint8) for its :class:`ConfidenceMap`: level ``k`` is
     HOG's SVM margin of every window at a stride of 8 pixels of the image resized by
-    ``96 / heights[k]``, with ``origins`` and ``strides`` in the original image's pixels.
+    ``96 / heights[k]``, with ``origins`` and ``strides`` in the original image's pixels. A
+    level whose resized image holds fewer than 2 x 2 windows (the tallest people's, in a
+    frame under about 170 pixels high) is left out of the map.
 
     Examples
     --------
@@ -418,11 +430,15 @@ class HOGConfidence:
 
         im = as_uint8_image(image)
         H, W = im.shape[:2]
-        scores, origins, strides = [], [], []
+        heights, scores, origins, strides = [], [], [], []
         for h in self.heights:
             f = _INNER_H * 128 / h
-            small = cv2.resize(im, (max(64, int(round(W * f))), max(128, int(round(H * f)))),
-                               interpolation=cv2.INTER_LINEAR)
+            sw, sh = int(round(W * f)), int(round(H * f))
+            if sw < 64 + 8 or sh < 128 + 8:
+                # fewer than 2 x 2 windows fit the resized image: no grid to interpolate
+                # (the tallest people's levels of a small frame); the level is left out
+                continue
+            small = cv2.resize(im, (sw, sh), interpolation=cv2.INTER_LINEAR)
             found, w = self._hog.detect(small, hitThreshold=-1e9, winStride=(8, 8),
                                         padding=(0, 0))
             loc = np.asarray(found, float).reshape(-1, 2)
@@ -436,7 +452,14 @@ class HOGConfidence:
             # (8j + 32, 8i + 64), which is (8j + 32) / f in the image
             origins.append((32 / f, 64 / f))
             strides.append(8 / f)
-        return ConfidenceMap(self.heights, scores, origins, strides)
+            heights.append(h)
+        if not heights:
+            raise ImageTooSmall(f"image of {W} x {H} pixels is too small for HOG's levels: "
+                                f"the one for people {self.heights.min():g} pixels tall needs "
+                                f"{int(np.ceil(72 * self.heights.min() / (_INNER_H * 128)))} x "
+                                f"{int(np.ceil(136 * self.heights.min() / (_INNER_H * 128)))} "
+                                "or more")
+        return ConfidenceMap(np.array(heights), scores, origins, strides)
 
 
 class ConfidencePeaks:
@@ -490,4 +513,8 @@ class ConfidencePeaks:
         >>> len(ConfidencePeaks(HOGConfidence()).detect(np.zeros((240, 320, 3), np.uint8)))
         0
         """
-        return self.confidence(image).detections(self.threshold)
+        try:
+            cmap = self.confidence(image)
+        except ImageTooSmall:  # as HOGDetector: nothing found in a frame smaller than a person
+            return Detections(boxes=np.zeros((0, 4)))
+        return cmap.detections(self.threshold)
