@@ -475,6 +475,57 @@ def test_an_interrupted_run_leaves_the_earlier_outputs_as_they_were(tmp_path):
     assert not (tmp_path / "new").exists()
 
 
+def test_a_run_found_wrong_at_its_end_writes_nothing(tmp_path):
+    """What fails only once the frames are through (a video with no frame to track; results
+    that cannot be scored against --gt, a tracker reporting one id twice in a frame; a
+    track-one --gt shorter than the video) was found after the outputs were committed: the
+    error came with the files written, over an earlier run's with force (docs/errors.md:
+    "a run that fails ... leaves no file under a final name"). Now an earlier run's files
+    stay byte for byte, and a folder the run made is removed again."""
+    from vistrack.pipeline import track_one
+
+    frames, truth = red_disc_clip(T=8)
+    folder = write_clip(tmp_path / "frames", frames)
+
+    class Truth:
+        k = 0
+
+        def detect(self, image):
+            self.k += 1
+            return Detections.from_xywh([truth[self.k - 1]], [0.9])
+
+    out = tmp_path / "out"
+    track_video(folder, out, frontend=Truth(), fps=25)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    empty = tmp_path / "empty.avi"  # a video with a header and no frame
+    cv2.VideoWriter(str(empty), cv2.VideoWriter_fourcc(*"MJPG"), 25, (64, 48)).release()
+    with pytest.raises(ValueError, match="no frames to track"):
+        track_video(empty, out, frontend=Truth(), fps=25, force=True)
+
+    class Twice:  # one id twice in every frame
+        def reset(self):
+            pass
+
+        def step(self, frame, detections=None):
+            return Tracks(ids=np.array([1, 1]), boxes=np.array([[1.0, 1, 9, 9], [20, 1, 29, 9]]),
+                          points=None, scores=np.ones(2), classes=np.zeros(2, int))
+
+    gt = tmp_path / "gt.txt"
+    gt.write_text("".join(f"{k},1,{x:.1f},{y:.1f},{w:.1f},{h:.1f},1,1,1\n"
+                          for k, (x, y, w, h) in enumerate(truth, 1)))
+    with pytest.raises(ValueError, match="id 1 appears more than once in frame 1"):
+        track_video(folder, out, tracker=Twice(), frontend=Truth(), fps=25, gt=gt, force=True)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    with pytest.raises(ValueError, match="no frames to track"):
+        track_video(empty, tmp_path / "new" / "out", frontend=Truth(), fps=25)
+    assert not (tmp_path / "new").exists()
+    short = tmp_path / "short.txt"
+    short.write_text("".join(f"{x},{y},{w},{h}\n" for x, y, w, h in truth[:3]))
+    with pytest.raises(ValueError, match="has 3 boxes for 8 frames"):
+        track_one(folder, truth[0], tmp_path / "one" / "boxes.txt", gt=short)
+    assert not (tmp_path / "one").exists()
+
+
 def test_the_cli_says_an_interrupted_run_in_one_line(tmp_path, monkeypatch, capsys):
     import vistrack.pipeline
     from vistrack.cli import main

@@ -402,7 +402,8 @@ def as_detector(detector: Detector | Callable[[Frame], Detections | None] | None
 
 def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detections | None] | None,
         tracker: Tracker, sinks: Sequence[Sink] = (), *, progress: TextIO | None = None,
-        total: int | None = None, label: str = "") -> LoopStats:
+        total: int | None = None, label: str = "",
+        check: Callable[[LoopStats], None] | None = None) -> LoopStats:
     """The pipeline's one loop: every frame of ``source`` through ``detector``, ``tracker``
     and ``sinks``.
 
@@ -423,6 +424,10 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
         close, it and the sinks after it are aborted.
     progress : stream, optional
         Where to draw a progress bar (of ``total`` frames, named ``label``).
+    check : callable, optional
+        Called with the loop's :class:`LoopStats` once the source has ended, before the
+        sinks are closed: if it raises, the sinks are aborted as for a failed loop, so a run
+        found wrong at its end (no frame, results that cannot be scored) writes nothing.
 
     Returns
     -------
@@ -481,6 +486,8 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
             t0, c0 = time.perf_counter(), _compile.seconds()
             sec["write"] += (t0 - t3) - (c0 - c3)
             sec["compile"] += c0 - c1
+        if check is not None:
+            check(LoopStats(n, sec, last))
     except BaseException:
         _abort(sinks)
         raise
@@ -1862,13 +1869,28 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                               "through every frame of the video, each frame without "
                               "detections as one where nothing was found", RuntimeWarning,
                               stacklevel=2)
+    scored: list[MOTCounts] = []
+
+    def check(stats: LoopStats) -> None:
+        # what can still fail is found before the sinks are closed: a failed run writes
+        # nothing, and with force an earlier run's files stay as they were
+        if stats.frames == 0:
+            raise ValueError(f"{video}: no frames to track")
+        if gt_table is not None:  # scored over the frames tracked
+            g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= stats.last)]
+            if not len(g):
+                warnings.warn(f"{gt}: no ground-truth rows on the frames tracked "
+                              f"({reader.start}-{stats.last}): every box tracked counts as a "
+                              "false positive", UserWarning, stacklevel=4)
+            tracks = sinks["tracks"]
+            assert isinstance(tracks, MOTWriter)
+            scored.append(evaluate_mot(g, tracks.written(), stats.last, benchmark="auto"))
+
     with made_folder(out_dir):  # removed again, if made here, when the run fails
         sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
         stats = run(reader, detect, stepper, list(sinks.values()), progress=progress,
-                    total=len(reader), label=reader.source.name)
+                    total=len(reader), label=reader.source.name, check=check)
     n = stats.frames
-    if n == 0:
-        raise ValueError(f"{video}: no frames to track")
     rows = sinks["tracks"]
     assert isinstance(rows, MOTWriter)
     last = stats.last
@@ -1881,14 +1903,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 warnings.warn(f"{label}: {len(past)} rows on frames {past[0]}-{past[-1]}, past "
                               f"the video's last frame ({last}): {what}", UserWarning,
                               stacklevel=2)
-    scores = None
-    if gt_table is not None:  # scored over the frames tracked
-        g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= last)]
-        if not len(g):
-            warnings.warn(f"{gt}: no ground-truth rows on the frames tracked ({reader.start}-"
-                          f"{last}): every box tracked counts as a false positive", UserWarning,
-                          stacklevel=2)
-        scores = evaluate_mot(g, read_mot(files["tracks"]), last, benchmark="auto")
+    scores = scored[0] if scored else None
     n_tracks = len(rows.identities)
     if isinstance(trk, BoxTracker):
         _warn_calibration(trk, str(video))
@@ -2056,14 +2071,17 @@ def track_one(source: str | Path, init: ArrayLike, out: str | Path, *, method: s
         return start if frame.index == first else None
 
     writer = BoxesWriter(out)
+
+    def check(stats: LoopStats) -> None:  # before the file is written (run's check)
+        if truth is not None and len(truth) < len(writer.boxes):
+            raise ValueError(f"{gt} has {len(truth)} boxes for {len(writer.boxes)} frames")
+
     with made_folder(out.parent):  # removed again, if made here, when the run fails
         stats = run(reader, detect, tracker, [writer], progress=progress, total=len(reader),
-                    label=reader.source.name)
+                    label=reader.source.name, check=check)
     b = writer.boxes
     scores = None
     if truth is not None:
-        if len(truth) < len(b):
-            raise ValueError(f"{gt} has {len(truth)} boxes for {len(b)} frames")
         if len(truth) > len(b):  # a ground truth of another, longer sequence?
             warnings.warn(f"{gt} has {len(truth)} boxes for {len(b)} frames: the last "
                           f"{len(truth) - len(b)} are not scored", UserWarning, stacklevel=2)

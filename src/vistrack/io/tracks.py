@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import itertools
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
@@ -23,7 +24,7 @@ import numpy as np
 from ..types import Frame, Tracks
 from .atomic import PartialFile, open_replacing
 from .motchallenge import _ROW as _MOT_ROW
-from .motchallenge import _check_decimals, _format_rows, _format_rows_with
+from .motchallenge import MOTTable, _check_decimals, _format_rows, _format_rows_with, read_mot
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -433,6 +434,24 @@ class MOTWriter(_RowsFile):
         self._last = f if self._last is None else max(self._last, f)
         order = np.argsort(ids, kind="stable")
         self._file.write(_mot_text(f, ids[order], xywh[order], scores[order], self.decimals))
+
+    def written(self) -> MOTTable:
+        """The rows written so far, as the file will hold them (its text read back, before
+        :meth:`close`: what a run scores before it commits its files).
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> sink = MOTWriter(pathlib.Path(tempfile.mkdtemp()) / "tracks.txt")
+        >>> sink.write(Frame(3, 0.1), Tracks(ids=np.array([2]), boxes=np.array([[1, 2, 4, 6.0]]),
+        ...                                  points=None, scores=np.ones(1), classes=np.zeros(1)))
+        >>> t = sink.written()
+        >>> t.frames.tolist(), t.ids.tolist(), t.boxes.tolist(), sink.path.exists()
+        ([3], [2], [[1.0, 2.0, 3.0, 4.0]], False)
+        >>> sink.abort()
+        """
+        self._file.read()  # flushed to the partial file
+        return replace(read_mot(self._file.part), path=str(self.path))
 
     def close(self) -> None:
         """Finish the file (sorting it by frame and id if frames came out of order) and
