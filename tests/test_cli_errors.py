@@ -277,6 +277,35 @@ def test_track_one_takes_a_box_as_otb_writes_it(tmp_path, capsys):
     capsys.readouterr()
 
 
+def test_track_one_starts_from_the_ground_truth_s_first_box_without_init(tmp_path, capsys):
+    """OTB's groundtruth_rect.txt counts pixels from 1 and --init from 0: its first line
+    pasted as --init started the tracker a pixel off the box it is scored against (IoU 0.86
+    on the first frame itself). Without --init, --gt's first box is the start, converted as
+    the scoring reads it (read_boxes: 0-based), so the first frame's box is the ground
+    truth's exactly; the same for groundtruth_rect.1.txt, OTB's name for a second object,
+    which was read 1-based. Neither --init nor --gt: named. A box outside the first frame is
+    named as --init."""
+    from vistrack.evaluation.single import read_boxes
+
+    for name in ("groundtruth_rect.txt", "groundtruth_rect.1.txt"):
+        gt = tmp_path / name
+        gt.write_text("".join(f"{301 + k}\t{131}\t40\t100\n" for k in range(200)))
+        out = tmp_path / f"{name}.boxes.txt"
+        assert main(["track-one", str(VIDEO), "--gt", str(gt), "--out", str(out)]) == 0
+        first = read_boxes(out)[0]
+        assert first.tolist() == read_boxes(gt)[0].tolist() == [300.0, 130.0, 40.0, 100.0]
+    capsys.readouterr()
+    assert main(["track-one", str(VIDEO), "--out", str(tmp_path / "b.txt")]) == 2
+    one_line(capsys, "track-one", "--init is required: the object's box x,y,w,h in the first "
+             "frame (or --gt, whose first box is then the start)")
+    assert main(["track-one", str(VIDEO), "--init", "5000,10,20,20", "--out",
+                 str(tmp_path / "b.txt")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("vistrack track-one: error: --init (x, y, w, h) = (5000, 10, 20, 20) "
+                          "lies outside the "), err
+    assert not (tmp_path / "b.txt").exists()
+
+
 @pytest.mark.parametrize("init", ["1,2,3,nan", "1,2,0,4", "1,2,3", "1\t2\t3", "1,,2,3,4"])
 def test_track_one_refuses_a_box_that_is_not_one(tmp_path, capsys, init):
     assert main(["track-one", str(VIDEO), "--init", init, "--out",

@@ -698,11 +698,15 @@ def _track_one(args: argparse.Namespace) -> int:
     from .io.atomic import check_output
     from .pipeline import track_one
 
+    init: list[float] | None = None
+    if args.init is None and args.gt is None:
+        return _fail("track-one", "--init is required: the object's box x,y,w,h in the first "
+                     "frame (or --gt, whose first box is then the start)")
     try:
-        # commas, or the tabs or spaces of a line of OTB's groundtruth_rect.txt pasted as is
-        init = [float(v) for v in re.split(r"\s*,\s*|\s+", args.init.strip())]
-        if len(init) != 4 or not all(math.isfinite(v) for v in init) or min(init[2:]) <= 0:
-            raise ValueError
+        if args.init is not None:  # commas, or the tabs or spaces of a line of a boxes file
+            init = [float(v) for v in re.split(r"\s*,\s*|\s+", args.init.strip())]
+            if len(init) != 4 or not all(math.isfinite(v) for v in init) or min(init[2:]) <= 0:
+                raise ValueError
     except ValueError:
         return _fail("track-one", f"--init must be x,y,w,h (four finite numbers, w and h "
                      f"> 0); got {args.init!r}")
@@ -710,7 +714,7 @@ def _track_one(args: argparse.Namespace) -> int:
     check_output(args.out, force=args.force, name="--out")
     run = track_one(args.input, init, args.out, method=args.method, gt=args.gt,
                     force=args.force, progress=sys.stderr if sys.stderr.isatty()
-                    and not args.quiet else None)
+                    and not args.quiet else None, init_name="--init")
     print(f"wrote {run.out}: {len(run.boxes)} boxes; {args.method} {run.fps:.0f} frames/s")
     if run.scores is not None:
         s = run.scores
@@ -1027,9 +1031,11 @@ def build_parser() -> argparse.ArgumentParser:
         description="Follow one object through a video or image folder from its box in the "
         "first frame; write frame,x,y,w,h lines (frames from 1).")
     one.add_argument("input", metavar="INPUT", help="video file or image folder")
-    one.add_argument("--init", required=True,
-                     help="the first frame's box: x,y,w,h (or separated by tabs or spaces, as "
-                     "a line of OTB's groundtruth_rect.txt)")
+    one.add_argument("--init",
+                     help="the first frame's box: x,y,w,h in 0-based pixels (or separated by "
+                     "tabs or spaces; OTB's groundtruth_rect.txt counts from 1: subtract 1 from "
+                     "x and y, or leave --init out and give --gt, whose first box is then the "
+                     "start); a negative x as --init=-5,10,20,20")
     one.add_argument("--method", default="colour",
                      choices=("colour", "meanshift", "camshift", "particle", "template", "klt",
                               "wsl", "snake", "csrt", "kcf"),

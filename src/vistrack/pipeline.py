@@ -62,7 +62,7 @@ from .io.motchallenge import (
 )
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
 from .models.box import FRAME_RATES, BoxMotion
-from .tracking.base import Tracker
+from .tracking.base import Tracker, check_start_box
 from .tracking.box import MAX_PIXELS, BoxTracker, BoxTrackerConfig
 from .tracking.calibration import NoOutcomesError, ScoreCalibration
 from .tracking.offline import SmoothedTracks, smooth
@@ -1994,9 +1994,9 @@ class SingleRun:
         return (len(self.boxes) - 1) / max(self.seconds, 1e-12)
 
 
-def track_one(source: str | Path, init: ArrayLike, out: str | Path, *, method: str = "colour",
-              gt: str | Path | None = None, force: bool = False,
-              progress: TextIO | None = None) -> SingleRun:
+def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
+              method: str = "colour", gt: str | Path | None = None, force: bool = False,
+              progress: TextIO | None = None, init_name: str = "init") -> SingleRun:
     """Follow one object from its box ``init`` (``x, y, w, h`` in the first frame) through a
     video or image folder, and write ``frame,x,y,w,h`` lines (frames from 1) to ``out``.
 
@@ -2009,8 +2009,10 @@ def track_one(source: str | Path, init: ArrayLike, out: str | Path, *, method: s
     ----------
     source : str or Path
         A video file or an image folder.
-    init : (4,) array_like
-        The object's box ``x, y, w, h`` in the first frame.
+    init : (4,) array_like or None
+        The object's box ``x, y, w, h`` in the first frame, in 0-based pixels (the top-left
+        pixel's corner at 0, 0; OTB's files count from 1); None: ``gt``'s first box (read
+        by :func:`~vistrack.evaluation.single.read_boxes`, 0-based).
     out : str or Path
         The boxes file to write (not overwritten unless ``force``).
     method : str
@@ -2021,6 +2023,8 @@ def track_one(source: str | Path, init: ArrayLike, out: str | Path, *, method: s
         Overwrite ``out``.
     progress
         A stream for a progress bar, or None.
+    init_name : str
+        What an error about the start box calls it (``--init`` on the command line).
 
     Returns
     -------
@@ -2035,8 +2039,8 @@ def track_one(source: str | Path, init: ArrayLike, out: str | Path, *, method: s
         If ``out`` cannot be written (:func:`vistrack.io.atomic.check_output`); checked
         first, before anything is read.
     ValueError
-        If ``method`` is unknown, ``init`` is not a box, or ``gt`` has fewer boxes than
-        frames.
+        If ``method`` is unknown, ``init`` is not a box, is less than half inside the first
+        frame, or is None without ``gt``, or ``gt`` has fewer boxes than frames.
 
     Examples
     --------
@@ -2062,13 +2066,22 @@ def track_one(source: str | Path, init: ArrayLike, out: str | Path, *, method: s
     out = Path(out)
     check_output(out, force=force)
     tracker = single_tracker(method)
-    start = Detections.from_xywh(as_box(init)[None])
     truth = read_boxes(gt) if gt is not None else None
+    if init is None:
+        if truth is None or not len(truth):
+            raise ValueError(f"{init_name} is required: the object's box in the first frame "
+                             "(or a ground truth, whose first box is then the start)")
+        init = truth[0]
+    start = Detections.from_xywh(as_box(init, init_name)[None])
     reader = VideoReader(source, prefetch=4)
     first = reader.start
 
     def detect(frame: Frame) -> Detections | None:
-        return start if frame.index == first else None
+        if frame.index != first:
+            return None
+        if frame.image is not None:  # named as the caller gave it
+            check_start_box(frame.image, start.xywh[0], init_name)
+        return start
 
     writer = BoxesWriter(out)
 

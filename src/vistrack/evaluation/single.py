@@ -10,6 +10,7 @@ Boxes are ``x, y, w, h`` (top-left corner and size), one per frame.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -213,10 +214,14 @@ def region_to_bbox(polygons: ArrayLike, rule: str = "area") -> np.ndarray:
     return np.c_[cx - w / 2, cy - h / 2, w, h]
 
 
+_OTB_NAME = re.compile(r"groundtruth_rect(\.\d+)?\.txt")
+
+
 def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
     """Ground-truth or result boxes ``x, y, w, h`` from a text file.
 
-    - OTB ``groundtruth_rect.txt``: ``x y w h`` (tabs, spaces or commas), 1-based pixels,
+    - OTB ``groundtruth_rect.txt`` (``groundtruth_rect.1.txt``, ``.2.txt`` for a sequence of
+      two objects): ``x y w h`` (tabs, spaces or commas), 1-based pixels,
       returned 0-based;
     - VOT ``groundtruth.txt``: 8 values a line, converted by :func:`region_to_bbox`;
     - vistrack's ``boxes.txt``: ``frame,x,y,w,h``, whose frames must count up by one (the
@@ -280,6 +285,6 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
         return region_to_bbox(a, rule)
     if a.shape[1] == 5:
         return a[:, 1:]
-    if path.name == "groundtruth_rect.txt":  # OTB: 1-based pixels
-        a[:, :2] -= 1
+    if _OTB_NAME.fullmatch(path.name):  # OTB: 1-based pixels (groundtruth_rect.1.txt for a
+        a[:, :2] -= 1  # sequence's second object, as Jogging's)
     return a
