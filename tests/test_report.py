@@ -189,3 +189,21 @@ def test_a_run_without_a_video_by_choice_is_not_said_to_have_lost_it(tmp_path):
     (out / "trajectories.png").unlink()
     with pytest.warns(RuntimeWarning, match=r"no trajectories.png: the report has no plot"):
         write_report(out, force=True)
+
+
+def test_a_ground_truth_given_as_its_sequence_folder_is_shown(tmp_path, capsys):
+    """--gt SEQ_FOLDER (its gt/gt.txt scored) was stored in run.json as the folder, which the
+    page took for a ground truth gone: "is not there any more", without the HOTA-over-alpha
+    plot and the timeline. run.json now names the file scored."""
+    clip = demo_clip()
+    seq = tmp_path / "seq"
+    (seq / "gt").mkdir(parents=True)
+    shutil.copy(clip.gt, seq / "gt" / "gt.txt")
+    out = tmp_path / "run"
+    assert main(["track", str(clip.video), "--gt", str(seq), "--stop", "20", "--out-dir",
+                 str(out), "--report"]) == 0
+    capsys.readouterr()
+    assert json.loads((out / "run.json").read_text())["gt"] == str((seq / "gt" / "gt.txt")
+                                                                 .resolve())
+    page = (out / "report.html").read_text()
+    assert "not there any more" not in page and page.count("<img ") == 3

@@ -1942,7 +1942,8 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
 
     info = {"command": command, "vistrack": __version__, "name": Path(video).stem,
             "input": str(Path(video).resolve()),
-            "gt": str(Path(gt).resolve()) if gt is not None else None,
+            # the file scored (a sequence folder's gt/gt.txt), which the report reads
+            "gt": str(Path(_ground_truth_file(gt)).resolve()) if gt is not None else None,
             "first_frame": run.first, "last_frame": run.last or run.first + run.frames - 1,
             "frames": run.frames, "rows": run.rows, "tracks": run.tracks,
             "fps": round(run.fps, 1), "frame_rate": frame_rate,
