@@ -526,6 +526,27 @@ def test_a_run_found_wrong_at_its_end_writes_nothing(tmp_path):
     assert not (tmp_path / "one").exists()
 
 
+def test_the_folder_of_the_images_tracked_is_no_output_folder(tmp_path):
+    """out_dir the image folder itself (or a sequence's img1/) put trajectories.png among
+    the frames, and the next run read it as one (failing, or with skip_bad_frames numbering
+    every image after it a frame early). Refused before anything is written; the sequence
+    folder above its img1/ is a fine output folder."""
+    frames, truth = red_disc_clip(T=4)
+    (tmp_path / "seq").mkdir()
+    (tmp_path / "seq" / "seqinfo.ini").write_text("[Sequence]\nimDir=img1\nframeRate=25\n")
+    folder = write_clip(tmp_path / "seq" / "img1", frames)
+    images = sorted(p.name for p in folder.iterdir())
+
+    def boxes(image):
+        return Detections.from_xywh([truth[0]], [0.9])
+
+    for source in (folder, tmp_path / "seq"):
+        with pytest.raises(ValueError, match="is the folder of the images being tracked"):
+            track_video(source, folder, frontend=boxes, fps=25)
+    assert sorted(p.name for p in folder.iterdir()) == images
+    assert track_video(tmp_path / "seq", tmp_path / "seq", frontend=boxes).frames == 4
+
+
 def test_the_cli_says_an_interrupted_run_in_one_line(tmp_path, monkeypatch, capsys):
     import vistrack.pipeline
     from vistrack.cli import main

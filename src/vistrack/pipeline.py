@@ -1820,6 +1820,12 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                         f"{type(confidence).__name__}")
     reader = VideoReader(video, fps=fps, stop=stop, prefetch=8, skip_bad=skip_bad_frames)
+    if reader.image_folder is not None and out_dir.resolve() == reader.image_folder.resolve():
+        # the outputs among the frames: the next run reads trajectories.png as one (and fails,
+        # or with skip_bad_frames numbers every image after it a frame early)
+        raise ValueError(f"{out_dir} is the folder of the images being tracked: the outputs "
+                         "would be read as frames by the next run; write them to another "
+                         "folder (--out-dir)")
     if reader.fps_from is None:
         # the tracker's times (coasting, how long a lost track is kept) and its motion's
         # noise follow the rate

@@ -251,6 +251,9 @@ class VideoReader:
         Frames in the source: the header's count, for video files (0 where it gives none, as
         a raw stream such as ``.mjpeg``; the frames are read to the file's end all the
         same); for image folders the last image's frame, missing frames included.
+    image_folder : Path or None
+        The folder the images are read from (a sequence folder's ``img1/``); None for a
+        video file.
 
     Raises
     ------
@@ -402,6 +405,8 @@ class VideoReader:
             self.frame_count = int(count) if 0 < count < 2**31 else 0
             header_fps = cap.get(cv2.CAP_PROP_FPS) or None
             cap.release()
+        # the folder the images are read from (a sequence's img1/), None for a video file
+        self.image_folder: Path | None = self._files[0].parent if self._files else None
         # where the rate comes from: None where nothing gives one (an image folder), 30
         self.fps_from = ("fps" if fps is not None else "seqinfo.ini" if seq_fps
                          else "the header" if header_fps else None)
