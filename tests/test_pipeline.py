@@ -257,6 +257,17 @@ def test_rows_past_the_videos_end_and_ground_truth_with_nothing_to_score_are_nam
         warnings.simplefilter("error")
         track_video(folder, tmp_path / "b", frontend=f"detections:{det}", gt=gt, stop=3,
                     annotate=False, fps=25)
+    # stop at a frame whose image is missing: the run stopped at 2, the folder goes on to 5
+    # (it said the rows from 3 on lay past the video's last frame, 2)
+    (folder / "000003.png").unlink()
+    with warnings.catch_warnings(record=True) as seen_c:
+        warnings.simplefilter("always")
+        track_video(folder, tmp_path / "stop_missing", frontend=f"detections:{det}", gt=gt, stop=3,
+                    annotate=False, fps=25)
+    said = [str(w.message) for w in seen_c]
+    assert any("no image for frame 3" in m for m in said), said
+    assert not any("past the video" in m for m in said), said
+    (folder / "000003.png").write_bytes((folder / "000002.png").read_bytes())
     empty = tmp_path / "empty.txt"
     empty.write_text("")
     with pytest.warns(UserWarning, match=re.escape(

@@ -1900,7 +1900,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     rows = sinks["tracks"]
     assert isinstance(rows, MOTWriter)
     last = stats.last
-    if stop is None or stop > last:  # the video ended: rows past it were for nothing
+    # the video ended before stop (not --stop's own end, nor a missing image at it: a folder
+    # without its frame 5 stopped at 5 warned of "rows past the video's last frame (4)")
+    ended = stop is None or (reader.frame_count < stop if reader.frame_count else last < stop)
+    if ended:  # rows past the video's last frame were for nothing
         for table, what, label in ((grid.dets if grid is not None else None, "not tracked",
                                     grid.path if grid is not None else None),
                                    (gt_table, "not scored", gt)):
