@@ -277,6 +277,19 @@ def test_track_one_takes_a_box_as_otb_writes_it(tmp_path, capsys):
     capsys.readouterr()
 
 
+def test_out_with_a_trailing_slash_is_a_folder_with_one_input_too(tmp_path, capsys,
+                                                                   monkeypatch):
+    """--out RESULTS/ with several inputs writes RESULTS/NAME.txt; with one input it wrote a
+    file named RESULTS (Path drops the slash). It is the folder in both cases."""
+    dets = tmp_path / "cam3.txt"
+    dets.write_text("".join(f"{f},-1,{10 + 2 * f},20,30,60,0.9,-1,-1,-1\n"
+                            for f in range(1, 11)))
+    monkeypatch.chdir(tmp_path)
+    assert main(["track", str(dets), "--fps", "25", "--out", "res/"]) == 0
+    assert capsys.readouterr().out.startswith(f"wrote {Path('res') / 'cam3.txt'}: ")
+    assert (tmp_path / "res").is_dir() and (tmp_path / "res" / "cam3.txt").is_file()
+
+
 def test_track_one_starts_from_the_ground_truth_s_first_box_without_init(tmp_path, capsys):
     """OTB's groundtruth_rect.txt counts pixels from 1 and --init from 0: its first line
     pasted as --init started the tracker a pixel off the box it is scored against (IoU 0.86

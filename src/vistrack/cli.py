@@ -334,6 +334,12 @@ def _track(args: argparse.Namespace) -> int:
     if (args.out is None) == (args.out_dir is None):
         return fail("give --out RESULTS.txt (a MOTChallenge sequence's detections) or "
                     "--out-dir OUT/ (from pixels)")
+    if args.out is not None and args.out.endswith(("/", os.sep)):
+        # a folder, as with several inputs: RESULTS/NAME.txt (Path dropped the slash, and
+        # one input wrote a file named RESULTS)
+        from .io.motchallenge import sequence_name
+
+        args.out = str(Path(args.out) / f"{sequence_name(args.input)}.txt")
     name, box, problem = _tracker_and_numbers(args)
     if problem:
         return fail(problem)
@@ -893,7 +899,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "several, or a folder of sequences, are tracked in parallel; none "
                        "with --print-config: print the configuration the options give")
     track.add_argument("--out", help="results file to write (detections mode); with several "
-                       "inputs, the folder of their results, NAME.txt each")
+                       "inputs, or ending in /, the folder of their results, NAME.txt each")
     track.add_argument("--out-dir", help="folder for the outputs (video mode); with several "
                        "inputs, a folder NAME/ each inside it")
     track.add_argument("--jobs", type=int, metavar="N",
