@@ -4,6 +4,7 @@ unknown trackers, a closed pipe, and ``--debug``."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -275,6 +276,42 @@ def test_track_one_takes_a_box_as_otb_writes_it(tmp_path, capsys):
         outs.append(out.read_bytes())
     assert outs[0] == outs[1] == outs[2] and outs[0].startswith(b"1,300.00,130.00,40.00,100.00\n")
     capsys.readouterr()
+
+
+def test_columns_name_a_csv_s_columns_from_pixels_and_for_eval(tmp_path, capsys):
+    """A CSV of detections with other column names, as --frontend detections:FILE: the error
+    said to name them with --columns, which --out-dir then refused ("--offline, its settings
+    and --detections go with --out"); and vistrack eval gave the same advice without having
+    the option. Both take --columns now: the same rows under other names track and score
+    exactly as under MOTChallenge's."""
+    from vistrack.io import read_mot
+
+    gt = read_mot(GT)
+    g = gt[gt.frames <= 12]
+    header = {"std": "frame,id,bb_left,bb_top,bb_width,bb_height,conf",
+              "own": "t,tid,l,top,w,h,score"}
+    for name, head in header.items():
+        (tmp_path / f"{name}.csv").write_text(head + "\n" + "".join(
+            f"{f},-1,{x},{y},{w},{h},0.9\n" for f, (x, y, w, h) in zip(g.frames, g.boxes)))
+    own = "frame=t,id=tid,bb_left=l,bb_top=top,bb_width=w,bb_height=h,conf=score"
+    runs = {}
+    for name, extra in (("std", []), ("own", ["--columns", own])):
+        out = tmp_path / f"out_{name}"
+        assert main(["track", str(VIDEO), "--frontend", f"detections:{tmp_path / name}.csv",
+                     "--stop", "12", "--out-dir", str(out), "--quiet"] + extra) == 0
+        runs[name] = (out / "tracks.txt").read_bytes()
+    assert runs["own"] == runs["std"] and runs["std"]
+    capsys.readouterr()
+    # the tracks as a CSV of other names, scored with --columns: as the text file
+    t = read_mot(tmp_path / "out_std" / "tracks.txt")
+    (tmp_path / "res.csv").write_text("t,tid,l,top,w,h\n" + "".join(
+        f"{f},{i},{x},{y},{w},{h}\n" for f, i, (x, y, w, h) in zip(t.frames, t.ids, t.boxes)))
+    scores = []
+    for pred, extra in ((tmp_path / "out_std" / "tracks.txt", []),
+                        (tmp_path / "res.csv", ["--columns", own.rsplit(",", 1)[0]])):
+        assert main(["eval", "--gt", str(GT), "--pred", str(pred), "--json"] + extra) == 0
+        scores.append(json.loads(capsys.readouterr().out)["pets09-s2l1"])
+    assert scores[0] == scores[1] and scores[0]["TP"] > 0
 
 
 def test_out_with_a_trailing_slash_is_a_folder_with_one_input_too(tmp_path, capsys,

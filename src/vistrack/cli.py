@@ -434,9 +434,12 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
                 f"{args.input} is a detections file: track it with --out RESULTS.txt "
                 "(and its frame rate, --fps)")
     else:
-        offline_flags = [f for f in ("offline", "detections", "columns") if getattr(args, f)]
+        offline_flags = [f for f in ("offline", "detections") if getattr(args, f)]
         if offline_flags or offline_given:
             return _OFFLINE_NEEDS_OUT
+        _, problem = _columns(args.columns)  # for --frontend detections:FILE
+        if problem:
+            return problem
         if args.skip_bad_frames and Path(args.input).is_file():
             return _skip_bad_frames_problem([args.input])
         video_outputs(args.out_dir, force=args.force, name="--out-dir")
@@ -527,7 +530,8 @@ def _frontend_problem(args: argparse.Namespace, name: str) -> str:
     from .pipeline import default_frontend, unread_frontend_option
 
     frontend = args.frontend or default_frontend(name)
-    unread = unread_frontend_option(frontend, {k: getattr(args, k) for k in _FRONTEND_OPTIONS})
+    unread = unread_frontend_option(frontend, {k: getattr(args, k, None)
+                                               for k in _FRONTEND_OPTIONS + ("columns",)})
     if unread is None:
         return ""
     here = (f"--frontend {frontend}" if args.frontend
@@ -541,6 +545,9 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
     many: the front-end's, and the tracker's configuration, a file used as it is, or the
     options given over the front-end's defaults (bgsub: a still camera)."""
     options = {k: getattr(args, k) for k in _FRONTEND_OPTIONS if getattr(args, k) is not None}
+    columns, _ = _columns(getattr(args, "columns", None))  # checked before, with its message
+    if columns is not None:  # a CSV file's columns, for --frontend detections:FILE
+        options["columns"] = columns
     options.update(tracker=name, skip_bad_frames=args.skip_bad_frames,
                    command=getattr(args, "command_line", None))
     if args.config is not None or not box:
@@ -778,6 +785,9 @@ def _eval(args: argparse.Namespace) -> int:
     # a missing or malformed file is a user's mistake: main prints it in one line
     if args.jobs is not None and args.jobs < 1:
         return _fail("eval", f"--jobs must be 1 or more; got {args.jobs}")
+    columns, problem = _columns(args.columns)
+    if problem:
+        return _fail("eval", problem)
     if args.scheduler is not None and args.jobs is not None:
         return _fail("eval", "--jobs goes with the local pool; the cluster has its own workers")
     plots = [] if args.plots is None else [Path(args.plots) / "hota_alpha.png"] + [
@@ -795,10 +805,11 @@ def _eval(args: argparse.Namespace) -> int:
                          "'vistrack[dask]')")
         with Client(args.scheduler, set_as_default=False) as client:
             res = evaluate_files(pairs, benchmark=args.benchmark,
-                                 executor=client.get_executor(), keep_going=args.keep_going)
+                                 executor=client.get_executor(), keep_going=args.keep_going,
+                                 columns=columns)
     else:
         res = evaluate_files(pairs, benchmark=args.benchmark, jobs=jobs,
-                             keep_going=args.keep_going)
+                             keep_going=args.keep_going, columns=columns)
     for warning in res.warnings:
         print(f"vistrack eval: warning: {warning}", file=sys.stderr)
     for name, error in res.errors.items():
@@ -1065,6 +1076,10 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--pred", help="results file: MOTChallenge's text, or the .parquet or .csv "
                     "file vistrack track --out writes")
     ev.add_argument("--gt-dir", help="folder of sequences SEQ/gt/gt.txt")
+    ev.add_argument("--columns", metavar="OURS=THEIRS,...",
+                    help="the results' column names in a .csv or .parquet file: frame, id, "
+                    "bb_left, bb_top, bb_width, bb_height (or x, y: the centre; or the corners "
+                    "x1, y1, x2, y2), conf (e.g. frame=t,id=tid,bb_width=w,bb_height=h)")
     ev.add_argument("--plots", metavar="DIR",
                     help="also draw HOTA, DetA and AssA over the localisation threshold α, "
                     "each sequence and COMBINED, into DIR/hota_alpha.png, and each "

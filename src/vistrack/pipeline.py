@@ -669,7 +669,8 @@ def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
-    dets = read_detections(path, stacklevel=3)  # MOTChallenge's text, or CSV with a header
+    # MOTChallenge's text, or CSV with a header (its columns named by columns=, --columns)
+    dets = read_detections(path, ctx.options.get("columns"), stacklevel=3)
     return _FileDetections(path, dets)
 
 
@@ -697,7 +698,7 @@ FRONTENDS: Registry[Frontend] = Registry("frontend", {
 
 FRONTEND_OPTIONS = {"background": "bgsub", "min_area": "bgsub", "n_init": "bgsub",
                     "det_threshold": "confidence", "classes": "onnx:MODEL.onnx",
-                    "onnx_layout": "onnx:MODEL.onnx"}
+                    "onnx_layout": "onnx:MODEL.onnx", "columns": "detections:FILE"}
 """The front-ends' own options (:func:`track_video`'s arguments) and the front-end that reads
 each; given with another front-end, one would change nothing, so it is refused."""
 
@@ -715,8 +716,9 @@ def unread_frontend_option(frontend: object, options: dict) -> tuple[str, str] |
     for key, owner in FRONTEND_OPTIONS.items():
         if options.get(key) is None:
             continue
+        prefix = owner.split(":", 1)[0] + ":" if ":" in owner else None
         if not isinstance(frontend, str) or not (
-                frontend.startswith("onnx:") if owner.startswith("onnx:") else frontend == owner):
+                frontend.startswith(prefix) if prefix else frontend == owner):
             return key, owner
     return None
 
@@ -1690,7 +1692,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 confidence: Callable[[np.ndarray], ConfidenceMap] | None = None,
                 det_threshold: float | None = None, classes: Sequence[int] | None = None,
                 onnx_layout: str | None = None, config: TrackConfig | None = None,
-                command: str | None = None, **overrides: object) -> VideoRun:
+                command: str | None = None, columns: dict[str, str] | None = None,
+                **overrides: object) -> VideoRun:
     """Track a video (a file, an image folder or a MOTChallenge sequence folder) from pixels.
 
     Writes into ``out_dir`` (:data:`SINKS`): ``tracks.txt`` (MOTChallenge results),
@@ -1739,6 +1742,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         For ``onnx:MODEL`` only: the model's classes kept (default all) and its output layout
         (:data:`~vistrack.frontends.onnx.LAYOUTS`; default ``"auto"``, told from the
         outputs).
+    columns : dict, optional
+        For ``detections:FILE`` only: the names of a CSV file's columns, ``{ours: theirs}``
+        (:func:`read_detections`; ``--columns`` on the command line).
     fps : float, optional
         The true frame rate, when the container's header is wrong.
     background, min_area, n_init : str, float, int
@@ -1807,7 +1813,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
 
     name = default_frontend(tracker) if frontend is None else frontend
     options = {"background": background, "min_area": min_area, "n_init": n_init,
-               "det_threshold": det_threshold, "classes": classes, "onnx_layout": onnx_layout}
+               "det_threshold": det_threshold, "classes": classes, "onnx_layout": onnx_layout,
+               "columns": columns}
     unread = unread_frontend_option(name, options)
     if unread is not None:
         what = repr(name) if isinstance(name, str) else f"a {type(name).__name__}"

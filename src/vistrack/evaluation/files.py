@@ -43,13 +43,13 @@ class EvalResults(dict[str, MOTCounts]):
         self.errors: dict[str, str] = dict(errors or {})
 
 
-def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going: bool = False
-           ) -> tuple[MOTCounts | None, list[str], str]:
+def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going: bool = False,
+           columns: dict[str, str] | None = None) -> tuple[MOTCounts | None, list[str], str]:
     """One pair's counts, sanity warnings and (``keep_going``) the error that stopped it, in
     one line ("" if none; raised without ``keep_going``); in a worker, for
     :func:`evaluate_files`."""
     try:
-        g, p, n = _read(pair)
+        g, p, n = _read(pair, columns)
         return evaluate_mot(g, p, n, benchmark=benchmark), sanity_warnings(g, p), ""
     except Exception as e:
         if not keep_going:
@@ -57,18 +57,22 @@ def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going
         return None, [], one_line(e)
 
 
-def _read(pair: tuple[str, Path, Path, Path | None]) -> tuple[MOTTable, MOTTable, int | None]:
+def _read(pair: tuple[str, Path, Path, Path | None], columns: dict[str, str] | None = None
+          ) -> tuple[MOTTable, MOTTable, int | None]:
     """A pair's ground truth, results and sequence length (None without seqinfo.ini)."""
     _, gt, pred, info = pair
     n = read_seqinfo(info).seq_length if info is not None else None
-    return read_mot(gt), _read_results(Path(pred)), n
+    return read_mot(gt), _read_results(Path(pred), columns), n
 
 
-def _read_results(path: Path) -> MOTTable:
+def _read_results(path: Path, columns: dict[str, str] | None = None) -> MOTTable:
     """A results file: MOTChallenge's text, or the Parquet or CSV file ``vistrack track
-    --out`` writes (``MOTTable.to_pandas``'s columns)."""
+    --out`` writes (``MOTTable.to_pandas``'s columns, or those ``columns`` names)."""
     suffix = path.suffix.lower()
     if suffix not in (".parquet", ".csv"):
+        if columns:
+            raise ValueError(f"columns name a CSV or Parquet file's columns; {path} is read as "
+                             "a MOTChallenge text file")
         return read_mot(path)
     from ..io.motchallenge import _pandas, _read_csv, need_parquet
 
@@ -77,15 +81,16 @@ def _read_results(path: Path) -> MOTTable:
         df = _pandas("a Parquet results file").read_parquet(path)
     else:
         df = _read_csv(path, "a CSV results file")
-    return MOTTable.from_pandas(df, path=str(path))
+    return MOTTable.from_pandas(df, columns, path=str(path))
 
 
 def _score_on(executor: Executor, pairs: list[tuple[str, Path, Path, Path | None]],
-              benchmark: str, keep_going: bool) -> list[tuple[MOTCounts | None, list[str], str]]:
+              benchmark: str, keep_going: bool, columns: dict[str, str] | None = None
+              ) -> list[tuple[MOTCounts | None, list[str], str]]:
     """Each pair's :func:`_score`, all submitted to ``executor`` at once, in the pairs' order;
     with ``keep_going``, a pair's worker failure (a pool broken by a worker's death, an
     executor's own error) as its error."""
-    futures = [executor.submit(_score, pair, benchmark, keep_going) for pair in pairs]
+    futures = [executor.submit(_score, pair, benchmark, keep_going, columns) for pair in pairs]
     scored = []
     for future in futures:
         try:
@@ -107,8 +112,8 @@ def pair_matches(pair: tuple[str, Path, Path, Path | None],
 
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
                    benchmark: str = "auto", jobs: int | None = None,
-                   executor: Executor | None = None, keep_going: bool = False
-                   ) -> EvalResults:
+                   executor: Executor | None = None, keep_going: bool = False,
+                   columns: dict[str, str] | None = None) -> EvalResults:
     """Score ``(name, gt, results, seqinfo-or-None)`` pairs; adds ``"COMBINED"`` when there are
     several. Files that look unrelated, or ground truth that looks like detections, are warned
     about in the result's ``warnings`` (:func:`~vistrack.evaluation.sanity_warnings`).
@@ -132,6 +137,10 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
         A pair that cannot be read or scored (the errors below, or its worker's failure: the
         pool's or the executor's) is left out and named in the result's ``errors``, and the
         others are scored (True); or its error is raised (False).
+    columns : dict, optional
+        The names of the results' columns in CSV or Parquet files, ``{ours: theirs}``
+        (:meth:`MOTTable.from_pandas <vistrack.io.MOTTable.from_pandas>`; ``vistrack eval
+        --columns``).
 
     Returns
     -------
@@ -185,11 +194,11 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
         from .._pool import process_pool  # one BLAS thread a worker
 
         with process_pool(min(jobs or 1, len(pairs)), imports=(__name__,)) as pool:
-            scored = _score_on(pool, pairs, benchmark, keep_going)
+            scored = _score_on(pool, pairs, benchmark, keep_going, columns)
     elif executor is not None:
-        scored = _score_on(executor, pairs, benchmark, keep_going)
+        scored = _score_on(executor, pairs, benchmark, keep_going, columns)
     else:
-        scored = [_score(pair, benchmark, keep_going) for pair in pairs]
+        scored = [_score(pair, benchmark, keep_going, columns) for pair in pairs]
     for (name, *_), (counts, warned, error) in zip(pairs, scored):
         out.warnings += warned
         if counts is None:
