@@ -75,6 +75,30 @@ def test_labels_and_lines_grow_with_a_large_image():
     assert (line, line4) == (3, 9)
 
 
+def test_boxes_not_finite_are_left_out_and_far_ones_drawn_as_near_ones():
+    """A NaN or infinite box made OpenCV fail ("Can't parse 'pt1'"), and the annotated video
+    with it; so did one beyond OpenCV's integers (x = -3e9). The first are left out (the
+    frame as without them), the last drawn as the same box reaching just off the image."""
+    def draw(*boxes):
+        b = np.array(boxes, float)
+        t = Tracks(ids=np.arange(1, len(b) + 1), boxes=b, points=None, scores=np.ones(len(b)),
+                   classes=np.zeros(len(b)))
+        return Annotator().draw(np.zeros((60, 80, 3), np.uint8), t)
+
+    fine = [20.0, 10, 50, 40]
+    alone = draw(fine)
+    for bad in ([np.nan, 1, 5, 5], [0, 0, np.inf, 5]):
+        # the bad box is track 1 and the fine one track 2: drawn as track 2 alone would be
+        t = Tracks(ids=np.array([1, 2]), boxes=np.array([bad, fine]), points=None,
+                   scores=np.ones(2), classes=np.zeros(2))
+        want = Annotator().draw(np.zeros((60, 80, 3), np.uint8),
+                                Tracks(ids=np.array([2]), boxes=np.array([fine]), points=None,
+                                       scores=np.ones(1), classes=np.zeros(1)))
+        assert (Annotator().draw(np.zeros((60, 80, 3), np.uint8), t) == want).all()
+    assert alone.any()
+    np.testing.assert_array_equal(draw([-3e9, 10, 40, 30]), draw([-100, 10, 40, 30]))
+
+
 def test_hota_over_alpha_is_drawn_from_the_scores(tmp_path, capsys):
     from tests.test_fit import _sequence
     from vistrack.cli import main

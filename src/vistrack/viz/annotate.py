@@ -159,29 +159,41 @@ class Annotator:
                         (255, 255, 255), thin, cv2.LINE_AA)
         self._n += 1
         boxes = tracks.boxes
+        ids = tracks.ids
+        covs = getattr(tracks, "covs", None)
+        # a box or point that is not finite has nowhere to be drawn (OpenCV failed on it, and
+        # the annotated video with it); one far outside the image is drawn clipped to where
+        # OpenCV's integers reach, off the image as it is
+        geometry = boxes if boxes is not None else tracks.points[:, :2]  # type: ignore[index]
+        keep = np.isfinite(geometry).all(1)
+        if not keep.all():
+            ids, geometry = ids[keep], geometry[keep]
+            covs = covs[keep] if covs is not None else None
+        reach = 16.0 * max(out.shape[:2])
+        geometry = np.clip(geometry, -reach, reach)
+        if boxes is not None:
+            boxes = geometry
         # tracks without boxes have points
-        centres = ((boxes[:, :2] + boxes[:, 2:]) / 2 if boxes is not None
-                   else tracks.points[:, :2])  # type: ignore[index]
-        for k, i in enumerate(tracks.ids.tolist()):
+        centres = (boxes[:, :2] + boxes[:, 2:]) / 2 if boxes is not None else geometry
+        for k, i in enumerate(ids.tolist()):
             t = self._trails.setdefault(i, deque(maxlen=self.trail))
             t.append(centres[k])
             self._last[i] = self._n
         for i in [i for i, n in self._last.items() if self._n - n > self.trail]:
             del self._trails[i], self._last[i]
-        present = set(tracks.ids.tolist())
+        present = set(ids.tolist())
         for i, t in self._trails.items():
             # a trail ends with its track: drawn only while the identity is in the frame (its
             # centres are kept for ``trail`` frames, so that it goes on if the track returns)
             if i in present and len(t) > 1:
                 pts = np.round(np.array(t)).astype(np.int32).reshape(-1, 1, 2)
                 cv2.polylines(out, [pts], False, id_colour(i), thick, cv2.LINE_AA)
-        covs = getattr(tracks, "covs", None)
-        for k, i in enumerate(tracks.ids.tolist()):
+        for k, i in enumerate(ids.tolist()):
             c = id_colour(i)
             cx, cy = centres[k]
-            if covs is not None:
+            if covs is not None and np.isfinite(covs[k][:2, :2]).all():
                 lam, vec = np.linalg.eigh(covs[k][:2, :2])
-                ax = self.nsigma * np.sqrt(np.maximum(lam, 0.0))
+                ax = np.minimum(self.nsigma * np.sqrt(np.maximum(lam, 0.0)), reach)
                 ang = float(np.degrees(np.arctan2(vec[1, 1], vec[0, 1])))
                 cv2.ellipse(out, (int(round(cx)), int(round(cy))),
                             (max(int(round(ax[1])), 1), max(int(round(ax[0])), 1)), ang, 0, 360,
