@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from vistrack.io import MOTFormatError, MOTTable, read_mot
-from vistrack.io.motchallenge import _parse_lines, _parse_plain, _read_careful
+from vistrack.io.motchallenge import _parse_lines, _parse_plain, _read_careful, _row_lines
 
 from .conftest import SHARED
 from .test_fuzz_inputs import KINDS, damage
@@ -180,6 +180,38 @@ def mot_text(seed: int) -> str:
             _number(r), _number(r)]
         rows.append(",".join(head + [_number(r) for _ in range(width - 2)]))
     return "\n".join(rows) + r.choice(["", "\n", "\n\n"])
+
+
+# lines that hold no row, or a row with a comment
+NOT_ROWS = ["", "  ", "\t", "#", "# a comment", "# frame,id,left,top", "  # indented, comma",
+            "#1,1,1,1,1,1"]
+
+
+@pytest.mark.parametrize("seed", range(200))
+def test_each_row_is_on_the_line_messages_name(tmp_path, seed):
+    """The careful reader's row i is on line _row_lines(lines)[i], the line its messages name,
+    whichever of its parsers (numpy's reader, or line by line) read the file: blank lines,
+    comment lines and comments hold no row. The oracle: each of those lines read alone gives
+    that row, to the bit, and they are as many as the rows."""
+    r = random.Random(seed)
+    lines = mot_text(seed).splitlines()
+    for _ in range(r.randrange(1, 5)):
+        lines.insert(r.randrange(len(lines) + 1), r.choice(NOT_ROWS))
+    k = r.randrange(len(lines))
+    if lines[k].strip() and not lines[k].lstrip().startswith("#"):
+        lines[k] += r.choice([" # note", "#", "# x,y", ","])  # a comment, or a trailing comma
+    if r.random() < 0.3:
+        lines = [line.replace(",", " ") for line in lines]
+    text = "\n".join(lines) + "\n"
+    try:
+        a = _parse_lines("gt.txt", text, lines)
+    except MOTFormatError:
+        return
+    where = _row_lines(lines)
+    assert len(where) == len(a), text
+    for i, n in enumerate(where):
+        alone = _parse_lines("gt.txt", lines[n - 1], [lines[n - 1]])
+        assert same_bits(alone[0], a[i]), (text, n)
 
 
 FUZZ = settings(max_examples=1500, derandomize=True, deadline=None, database=None,

@@ -267,3 +267,190 @@ def test_rows_a_table_cannot_hold_are_named(row, message):
         MOTTable.from_rows([(1, 1, 0, 0, 1, 1, 1)[:len(row)], row], path="mine")
     assert str(e.value) == "mine, " + message.replace("row 1", "row 2")
     assert MOTTable.from_rows([(0, 1, 0, 0, 1, 1)]).frames.tolist() == [0]
+
+
+# the lines around a bad row: every kind of line that holds no row, and rows
+FILLER = {
+    "comment": "# frame,id,left,top,width,height,conf",
+    "comment_no_comma": "# produced by my detector",
+    "hash_alone": "#",
+    "blank": "",
+    "row": "5,-1,10,10,20,20,0.9",
+    "row_with_comment": "6,-1,10,10,20,20,0.9 # a note, with a comma",
+    "row_hash_glued": "7,-1,10,10,20,20,0.9#note",
+}
+
+
+@pytest.mark.parametrize("before", [
+    ["comment", "row", "row"],
+    ["comment_no_comma", "row"],
+    ["comment", "comment", "blank", "row", "hash_alone", "row_with_comment"],
+    ["row", "comment", "row_hash_glued", "blank", "comment_no_comma"],
+    ["row_with_comment", "row_with_comment", "comment"],
+])
+@pytest.mark.parametrize("bad, message", [
+    ("9,-1,10,10,-20,20,0.9", "column 5 (width): width must be >= 0; got -20"),
+    ("9,-1,10,10,20,-3,0.9", "column 6 (height): height must be >= 0; got -3"),
+    ("0,-1,10,10,20,20,0.9", "column 1 (frame): frame must be an integer >= 1"),
+    ("9,1.5,10,10,20,20,0.9", "column 2 (id): id must be an integer; got 1.5"),
+    # rows numpy's reader refuses, read line by line: a comment there is one too
+    ("9,-1,10,10,20,20,nan", "column 7 (conf): not a finite number: 'nan'"),
+    ("9,-1,10,x,20,20,0.9", "column 4 (top): not a number: 'x'"),
+])
+def test_a_bad_row_after_comment_lines_is_named_by_its_line(tmp_path, before, bad, message):
+    """np.loadtxt drops '#' comments (to the end of a line) and lines left empty; the line
+    named for a bad row counted only the lines that were not blank, so every line after a
+    comment line was one too early ("det.txt, line 3" for the row on line 4), and a file
+    read line by line (numpy's reader refused a row) named the comment line itself ("got 2:
+    '# header'"). The line is the file's: its position among all the file's lines."""
+    lines = [FILLER[k] for k in before] + [bad] + [FILLER["row"], FILLER["comment"]]
+    want = lines.index(bad) + 1
+    for sep in (",", " "):  # commas; spaces (a comment with a comma or without before them)
+        text = "\n".join(line.replace(",", sep) if not line.startswith("#") else line
+                         for line in lines) + "\n"
+        p = tmp_path / "det.txt"
+        p.write_text(text)
+        with pytest.raises(MOTFormatError) as e:
+            read_mot(p)
+        assert str(e.value).startswith(f"{p}, line {want}, {message}"), (sep, str(e.value))
+        assert text.splitlines()[want - 1].split("#")[0].strip() == bad.replace(",", sep)
+
+
+@pytest.mark.parametrize("text", ids=["comment", "comma_comment", "noted", "trailing",
+                                   "indented"], argvalues=[
+    "# frame id left top width height\n{rows}",  # a comment without a comma, rows with
+    "# frame,id,left,top,width,height\n{spaced}",  # a comment with commas, rows without
+    "{rows_noted}\n# end\n",  # a comment ending each row
+    "# only a comment\n\n{rows_trailing}",  # a separator ending each row: read line by line
+    "{spaced}\n   # indented comment\n",
+])
+def test_comment_lines_read_as_numpy_reads_them(tmp_path, text):
+    """A comment line before the rows chose the separator (a comment without a comma before
+    rows with commas: every row one value), and the rows numpy's reader refused were read line
+    by line, where a comment was refused ("got 2: '# header'"): each file reads as its rows
+    alone do, to the bit."""
+    rows = ["3,7,-4.5,2.25,3,4,0.912345678901", "1,2,10.1,20,30,40.75,1", "2,-1,0,0,5,5,0.5"]
+    p, clean = tmp_path / "gt.txt", tmp_path / "clean.txt"
+    clean.write_text("\n".join(rows) + "\n")
+    want = read_mot(clean)
+    p.write_text(text.format(rows="\n".join(rows), spaced="\n".join(r.replace(",", " ")
+                                                                     for r in rows),
+                             rows_noted="\n".join(f"{r} # row {k}" for k, r in enumerate(rows)),
+                             rows_trailing="\n".join(r + "," for r in rows)))
+    got = read_mot(p)
+    for col in ("frames", "ids", "boxes", "conf", "classes", "visibility"):
+        a, b = getattr(got, col), getattr(want, col)
+        assert a.dtype == b.dtype and a.tobytes() == b.tobytes(), col
+    assert got.columns == want.columns
+    p.write_text("# nothing but comments\n#\n\n")
+    assert len(read_mot(p)) == 0
+    # a '#' inside a row cuts it short, as numpy's reader cuts it, and the message says so
+    p.write_text(f"{rows[0]}\n1,2,10#1,20,30,40,1\n")
+    with pytest.raises(MOTFormatError) as e:
+        read_mot(p)
+    assert str(e.value) == (f"{p}, line 2, column 4 (top): expected at least 6 values "
+                            "(separated by commas, or by spaces or tabs), got 3: "
+                            "'1,2,10#1,20,30,40,1' ('#' starts a comment, to the end of the "
+                            "line)")
+
+
+HEADER = "frame,id,bb_left,bb_top,bb_width,bb_height,conf\n"
+
+
+@pytest.mark.parametrize("data, bad", ids=["latin1_header", "latin1_deep", "bom_latin1",
+                                            "utf16", "utf16le", "utf16be"], argvalues=[
+    # cp1252 / Latin-1 (Excel's "CSV"): a column's name, a value deep in the file (pandas
+    # counted its position from the start of the piece it decoded)
+    (b"frame,bb_left,bb_top,bb_width,bb_height,conf,Gr\xf6\xdfe\n1,10,10,20,20,0.9,1\n", b"\xf6"),
+    ((HEADER + "1,-1,10,10,20,20,0.9\n" * 20_000).encode() + b"2,-1,10,10,20,20,0.9\xb5\n",
+     b"\xb5"),
+    # after a UTF-8 byte-order mark, counted
+    (b"\xef\xbb\xbf" + HEADER.encode() + b"1,-1,10,10,20,20,0.9\xe9\n", b"\xe9"),
+    # UTF-16 (Excel's "Unicode Text"), its byte-order mark first; without one, NUL bytes
+    (("\ufeff" + HEADER + "1,-1,10,10,20,20,0.9\n").encode("utf-16-le"), b"\xff"),
+    ((HEADER + "1,-1,10,10,20,20,0.9\n").encode("utf-16-le"), b"\x00"),
+    ((HEADER + "1,-1,10,10,20,20,0.9\n").encode("utf-16-be"), b"\x00"),
+])
+def test_a_csv_file_that_is_not_utf8_is_named_with_the_byte(tmp_path, data, bad):
+    """pandas' UnicodeDecodeError passed through: "error: 'utf-8' codec can't decode byte
+    0xf6 in position 2" named no file, and its position was not the file's. The file is
+    named, and its first byte that is not UTF-8 (or a NUL byte), by its offset in the file,
+    as read_mot names a text file's."""
+    from vistrack.evaluation.files import _read_results
+    from vistrack.pipeline import read_detections
+
+    p = tmp_path / "dets.csv"
+    p.write_bytes(data)
+    k = data.index(bad)
+    why = f"byte {k} is a NUL byte" if bad == b"\x00" else f"byte {k}: {bad!r} is not UTF-8"
+    utf16 = " (it looks like UTF-16 text)" if b"\x00" in data else ""
+    for read in (read_detections, _read_results):
+        with pytest.raises(MOTFormatError) as e:
+            read(p)
+        assert str(e.value) == f"{p} is not a text CSV file ({why}); save it as UTF-8{utf16}"
+
+
+def test_a_headerless_csv_file_is_named_as_one(tmp_path):
+    """A MOTChallenge text file saved as .csv had its first row read as the header: "no column
+    'frame' (the frame) in dets.csv; columns: ['-1', '-1.1', ..., '0.995474', '1', ...]
+    (name the frame's column: --columns frame=NAME ...)". Said to have no header instead;
+    whatever separates the values; its first row still no one's data."""
+    from vistrack.evaluation.files import _read_results
+    from vistrack.pipeline import read_detections
+
+    rows = ["1,-1,649.441,231.502,44.417,86.13,0.995474,-1,-1,-1",
+            "1,-1,252.783,207.732,35.813,96.641,0.991175,-1,-1,-1",
+            "2,-1,647,230.5,44,86,0.99,-1,-1,-1"]
+    variants = {"comma": rows, "tab": [r.replace(",", "\t") for r in rows],
+                "semicolon": [r.replace(",", ";") for r in rows],
+                "decimal_comma": [r.replace(",", ";").replace(".", ",") for r in rows]}
+    for name, lines in variants.items():
+        p = tmp_path / f"{name}.csv"
+        p.write_text("\n".join(lines) + "\n")
+        want = (f"{p}: no header: its first line holds numbers, not the columns' names (a "
+                "MOTChallenge text file? name it .txt to read it as one; or add a header line "
+                "naming the columns, as 'frame,id,bb_left,bb_top,bb_width,bb_height,conf')")
+        for read in (read_detections, lambda p: read_detections(p, {"frame": "t"}),
+                     _read_results):
+            with pytest.raises(MOTFormatError) as e:
+                read(p)
+            assert str(e.value) == want, name
+    # named .txt, it is one
+    p = tmp_path / "dets.txt"
+    p.write_text("\n".join(rows) + "\n")
+    assert read_mot(p).frames.tolist() == [1, 1, 2]
+    # numbered columns: pandas' own header (0 ... n - 1), or numbers named in columns
+    seven = [r[:r.index(",-1,-1,-1")] for r in rows]
+    p = tmp_path / "numbered.csv"
+    p.write_text("0,1,2,3,4,5,6\n" + "\n".join(seven) + "\n")
+    assert read_detections(p, {"frame": "0", "id": "1", "bb_left": "2", "bb_top": "3",
+                               "bb_width": "4", "bb_height": "5",
+                               "conf": "6"}).frames.tolist() == [1, 1, 2]
+    with pytest.raises(ValueError, match=re.escape("no column 'frame' (the frame)")):
+        read_detections(p)
+    p = tmp_path / "named.csv"
+    p.write_text("\n".join(seven) + "\n")
+    t = read_detections(p, {"frame": "1", "id": "-1", "bb_left": "649.441",
+                            "bb_top": "231.502", "bb_width": "44.417", "bb_height": "86.13",
+                            "conf": "0.995474"})
+    assert t.boxes.tolist() == [[252.783, 207.732, 35.813, 96.641], [647, 230.5, 44, 86]]
+    # a DataFrame's numbered columns are not a file's first line
+    pd = pytest.importorskip("pandas")
+    with pytest.raises(ValueError, match=re.escape("no column 'frame' (the frame)")):
+        MOTTable.from_pandas(pd.DataFrame(np.ones((2, 6))))
+
+
+def test_a_text_file_after_a_byte_order_mark_names_the_byte_that_is_not_utf8(tmp_path):
+    """The byte named counts from the file's start: decoded as utf-8-sig, the positions left
+    the mark's 3 bytes out, and the message named a byte 3 before the bad one."""
+    import re
+
+    from vistrack.io import read_mot
+
+    data = "\ufeff1,-1,10,20,30,40,0.9\n2,-1,10,20,30,40,0.9\n".encode() + b"3,-1,1\xf6,2,3,4,1\n"
+    path = tmp_path / "bom.txt"
+    path.write_bytes(data)
+    at = data.index(bytes([0xF6]))
+    with pytest.raises(ValueError, match=re.escape(
+            f"bom.txt is not a text MOTChallenge file (byte {at}: b'\\xf6' is not UTF-8)")):
+        read_mot(path)

@@ -251,10 +251,13 @@ def decode_text(data: bytes, path: object, what: str, error: type[Exception]) ->
     """``data`` as UTF-8 text (a byte-order mark dropped), or ``error`` saying that ``path`` is
     not a text ``what`` file, and at which byte."""
     try:
-        text = data.decode("utf-8-sig")
+        # utf-8, and the mark dropped after: utf-8-sig's positions leave the mark's 3 bytes
+        # out, so the byte named was 3 before the one that is not UTF-8
+        text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise error(f"{path} is not a text {what} file (byte {exc.start}: "
                     f"{data[exc.start:exc.start + 1]!r} is not UTF-8)") from None
+    text = text.removeprefix("\ufeff")
     if "\x00" in text:
         raise error(f"{path} is not a text {what} file (byte {data.index(0)} is a NUL byte)")
     return text

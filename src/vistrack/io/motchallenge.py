@@ -3,7 +3,8 @@ and ``seqinfo.ini``.
 
 Every row is ``frame, id, left, top, width, height, conf, ...``, frames from 1, its values
 separated by commas (or, on a line without a comma, by spaces or tabs, as TrackEval and
-py-motmetrics read them too; a separator ending the line is ignored):
+py-motmetrics read them too; a separator ending the line is ignored; blank lines, and ``#``
+comments to the end of a line, are skipped, as numpy's ``loadtxt`` skips them):
 
 - detections: ``id = -1``, ``conf`` the detector's score;
 - ground truth (MOT16/17/20): ``conf`` is 0 for boxes to ignore, then ``class`` and
@@ -100,13 +101,43 @@ def _read_csv(path: str | os.PathLike, what: str) -> Any:
     semicolons where its header has no comma (:func:`_csv_dialect`); a file pandas cannot
     parse (a row of more values than the header, an empty file) is a :class:`MOTFormatError`
     naming it, in pandas' own words: ``"PATH: not WHAT: Expected 5 fields in line 3, saw
-    6"``."""
+    6"``, and so is a file that is not UTF-8 text (:func:`_not_utf8`)."""
     pandas = _pandas(what)
     try:
-        return pandas.read_csv(path, **_csv_dialect(path))
+        df = pandas.read_csv(path, **_csv_dialect(path))
     except (pandas.errors.ParserError, pandas.errors.EmptyDataError) as e:
         reason = re.sub(r"^(Error tokenizing data\. )?(C error: )?", "", str(e).strip())
         raise MOTFormatError(f"{path}: not {what}: {reason}") from None
+    except UnicodeDecodeError as e:
+        # pandas names neither the file nor the byte (its position counts from the start of
+        # the piece it was decoding)
+        raise _not_utf8(path, e) from None
+    if any("\x00" in str(c) for c in df.columns):  # UTF-16 without a byte-order mark
+        raise _not_utf8(path, None)
+    return df
+
+
+def _not_utf8(path: str | os.PathLike, exc: UnicodeDecodeError | None) -> MOTFormatError:
+    """The error for a CSV file that is not UTF-8 text, naming it and the first byte (from the
+    file's start, a byte-order mark counted) that is not UTF-8 or is a NUL byte, as read_mot
+    names a text file's: ``"PATH is not a text CSV file (byte 20: b'\\xf6' is not UTF-8);
+    save it as UTF-8"``. ``exc``: pandas' error, for its reason should the file's bytes decode
+    (they did not, for pandas)."""
+    data = Path(path).read_bytes()
+    try:
+        data.decode("utf-8")  # (a byte-order mark decodes: the position is the file's)
+    except UnicodeDecodeError as e:
+        why = f"byte {e.start}: {data[e.start:e.start + 1]!r} is not UTF-8"
+    else:
+        nul = data.find(b"\x00")
+        why = f"byte {nul} is a NUL byte" if nul >= 0 else (exc.reason if exc else "not UTF-8")
+    # Excel's "Unicode Text" export: UTF-16, its byte-order mark first, or (none) a NUL byte
+    # beside each ASCII one
+    head = data[:64]
+    utf16 = head[:2] in (b"\xff\xfe", b"\xfe\xff") or (
+        len(head.strip(b"\x00")) > 1 and (set(head[1::2]) == {0} or set(head[::2]) == {0}))
+    return MOTFormatError(f"{path} is not a text CSV file ({why}); save it as UTF-8"
+                          + (" (it looks like UTF-16 text)" if utf16 else ""))
 
 
 def need_parquet() -> None:
@@ -334,7 +365,9 @@ class MOTTable:
             number (an empty cell is NaN), a frame that is not an integer >= 1 (so no row
             of frame 0 is left out unseen), an identity or a class that is not an integer,
             a negative width or height, or a far corner (``x2``, ``y2``) before the near
-            one.
+            one; and, for columns missing from a ``.csv`` file (``path``) whose header is
+            numbers only, that the file has no header (a MOTChallenge text file named
+            ``.csv``: its first row was read as the header).
 
         Examples
         --------
@@ -351,6 +384,23 @@ class MOTTable:
         names = dict(columns or {})
         have = set(df.keys())
         where = f" in {path}" if path else ""
+
+        def no_header() -> None:
+            # a MOTChallenge text file named .csv: its first row was read as the header, and
+            # its columns named by numbers, whichever of ',', ';', tab separates them (the
+            # header of a frame of numbered columns, 0 to n - 1, or one whose numbered
+            # columns are named in `columns`, is one)
+            header = [c for c in df.keys() if isinstance(c, str)]
+            if (str(path).lower().endswith(".csv") and header and len(header) == len(have)
+                    and all(_NUMBER.fullmatch(x) for c in header for x in re.split("[;\t]", c))
+                    and header != [str(k) for k in range(len(header))]
+                    and not have & set(names.values())):
+                raise MOTFormatError(
+                    f"{path}: no header: its first line holds numbers, not the columns' "
+                    "names (a MOTChallenge text file? name it .txt to read it as one; or add "
+                    "a header line naming the columns, as "
+                    "'frame,id,bb_left,bb_top,bb_width,bb_height,conf')")
+
         for ours, theirs in names.items():
             # a name mistyped on either side was ignored: the column then went unread
             if ours not in _COLUMNS:
@@ -359,6 +409,7 @@ class MOTTable:
                                  "reads" + (f" (did you mean {close[0]!r}?)" if close else "")
                                  + f"; those are {', '.join(_COLUMNS)}")
             if theirs not in have:
+                no_header()
                 raise ValueError(f"columns {ours}={theirs}: no column {theirs!r}{where}; "
                                  f"columns: {sorted(map(str, have))}")
 
@@ -396,6 +447,7 @@ class MOTTable:
 
         frame = get("frame")
         if frame is None:
+            no_header()
             # a column of another case or spelling named as the one meant (Frame, frames)
             lower = {str(c).lower(): str(c) for c in have}
             close = difflib.get_close_matches(name("frame").lower(), lower, n=1, cutoff=0.7)
@@ -434,6 +486,7 @@ class MOTTable:
                                          f"{name(hi)} = {b[k]:g}")
             left, top, w, h = x1, y1, x2 - x1, y2 - y1
         else:
+            no_header()
             missing = [name(c) for c in ("bb_left", "bb_top", "bb_width", "bb_height")
                        if get(c) is None]
             raise ValueError(f"no box{where}: columns {missing} are missing (or give "
@@ -548,31 +601,56 @@ def _read_text(path: str, what: str) -> str:
 _INT_LIMIT = 2.0 ** 53
 _CORNERS = ("x1", "y1", "x2", "y2")
 """A box's corners, as :meth:`MOTTable.from_pandas` takes them (supervision's ``xyxy``)."""
+_NUMBER = re.compile(r"\s*[-+]?(?:[0-9]+(?:[.,][0-9]*)?|[.,][0-9]+)(?:[eE][-+]?[0-9]+)?"
+                     r"(?:\.[0-9]+)?\s*")
+"""A header cell that is a number (a decimal comma too), as pandas names a column by it
+(``.1``, ``.2`` ... after a number the header has already)."""
 _COLUMNS = ("frame", "particle", "id", "bb_left", "bb_top", "bb_width", "bb_height", "x", "y",
             *_CORNERS, "conf", "class", "visibility")
 """Every column :meth:`MOTTable.from_pandas` reads, by our name."""
 
 
+def _row_text(line: str) -> str:
+    """The part of ``line`` that holds values: before a ``#`` (a comment, to the end of the
+    line, as np.loadtxt drops it), stripped; empty for a blank or comment-only line, which
+    holds no row."""
+    return line.split("#", 1)[0].strip()
+
+
+def _row_lines(lines: list[str]) -> list[int]:
+    """The numbers (from 1) of the lines that hold a row, in order: the careful reader's row
+    ``i`` is on line ``_row_lines(lines)[i]``. Its two parsers skip the same lines, those of
+    no :func:`_row_text`: :func:`_parse_slow` by it, np.loadtxt a line left empty once its
+    comment is dropped, or blank too between spaces and tabs (between commas it refuses a
+    blank line, and :func:`_parse_slow` reads the file)."""
+    return [k for k, t in enumerate(lines, start=1) if _row_text(t)]
+
+
 def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
-    """Parse row by row, to name the first bad line and column."""
+    """Parse row by row, to name the first bad line and column; blank lines, comment-only
+    lines and comments (``#`` to the end of the line) hold no values, as for np.loadtxt."""
     rows: list[list[float]] = []
     width = None
     for k, raw in enumerate(lines, start=1):
-        text = raw.strip()
+        text = _row_text(raw)
         if not text:
             continue
         cells = [c.strip() for c in text.split(",")] if "," in text else text.split()
         if len(cells) > 1 and not cells[-1]:
             cells.pop()  # a separator ending the line, as TrackEval ignores it
+        # the line as it is, and what a '#' in it does to the count
+        line = repr(raw.strip()) + (" ('#' starts a comment, to the end of the line)"
+                                    if "#" in raw else "")
         if len(cells) < 6:
             raise _bad(path, k, len(cells) + 1,
                        f"expected at least 6 values (separated by commas, or by spaces or tabs), "
-                       f"got {len(cells)}: {text!r}")
+                       f"got {len(cells)}: {line}")
         if len(cells) > 10:
-            raise _bad(path, k, 11, f"expected at most 10 values, got {len(cells)}: {text!r}")
+            raise _bad(path, k, 11, f"expected at most 10 values, got {len(cells)}: {line}")
         if width is not None and len(cells) != width:
             raise _bad(path, k, min(len(cells), width) + 1,
-                       f"{len(cells)} values where the lines before have {width}")
+                       f"{len(cells)} values where the lines before have {width}"
+                       + (f": {line}" if "#" in raw else ""))
         width = len(cells)
         vals = []
         for j, c in enumerate(cells, start=1):
@@ -615,16 +693,14 @@ def _first_bad_row(a: np.ndarray) -> tuple[int, int, str] | None:
 
 
 def _check_rows(path: str, a: np.ndarray, lines: list[str] | None) -> None:
-    def line_of(i: int) -> int:
-        if lines is None:
-            return i + 1
-        nonblank = [k for k, t in enumerate(lines, start=1) if t.strip()]
-        return nonblank[i]
-
+    """:class:`MOTFormatError` naming the line and column of the first row of ``a`` that
+    breaks a rule of :data:`_ROW_RULES`: row ``i`` is on line ``i + 1`` if ``lines`` is None
+    (the plain reader's rows, one a line), else on the ``i``-th line of ``lines`` that holds
+    a row (:func:`_row_lines`: blank and comment lines do not)."""
     found = _first_bad_row(a)
     if found is not None:
         i, col, text = found
-        raise _bad(path, line_of(i), col + 1, text)
+        raise _bad(path, i + 1 if lines is None else _row_lines(lines)[i], col + 1, text)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -861,7 +937,8 @@ def read_mot(path: str | os.PathLike) -> MOTTable:
     ----------
     path : str or os.PathLike
         The file: rows of 6 to 10 numbers, all of one width, separated by commas (or, on a
-        line without a comma, by spaces or tabs; blank lines skipped).
+        line without a comma, by spaces or tabs; blank lines, and ``#`` comments to the end
+        of a line, skipped).
 
     Returns
     -------
@@ -873,7 +950,8 @@ def read_mot(path: str | os.PathLike) -> MOTTable:
     FileNotFoundError
         If the file does not exist.
     MOTFormatError
-        For a malformed row, naming the file, line and column (1-based), e.g.
+        For a malformed row, naming the file, line and column (1-based, every line counted,
+        blank and comment lines too), e.g.
         ``gt.txt, line 12, column 5 (width): width must be >= 0; got -3``; for a file that is
         not UTF-8 text (``gt.txt is not a text MOTChallenge file (...)``).
 
@@ -917,7 +995,9 @@ def _parse_lines(path: str, text: str, lines: list[str]) -> np.ndarray:
     a = None
     try:
         if text.strip():
-            first = next(t for t in lines if t.strip())
+            # the first line that holds a row (a comment line before it may have commas or
+            # none, whatever the rows have)
+            first = next((t for t in map(_row_text, lines) if t), "")
             with warnings.catch_warnings():  # a file of comments only: "no data"
                 warnings.simplefilter("ignore", UserWarning)
                 # values separated by commas, or (no comma) by spaces or tabs
