@@ -222,3 +222,49 @@ def test_mixing_probabilities_and_shape_must_be_finite_and_integral():
     model = WSLModel((2,), m0=(2.0, 1.0, 1.0))
     model.init([0.5, 0.5])
     assert np.isfinite(model.log_likelihood([0.5, 0.5]))
+
+
+def _uniform_object():
+    """A 320x240 frame with a large uniform red object, and a 40-pixel box well inside it:
+    every window of the search has the same likelihood."""
+    im = np.full((240, 320, 3), 128, np.uint8)
+    im[60:180, 80:240] = (0, 0, 200)
+    return im, np.array([140.0, 100.0, 40.0, 40.0])
+
+
+def test_equally_likely_windows_keep_the_predicted_box():
+    """Where every candidate window is as likely as every other (no texture), the box is the
+    prediction. np.argmax took the first window, offset (-r, -r), and the constant-velocity
+    prediction added that jump again: the same frame repeated gave [130, 90], [110, 70],
+    [83.8, 60], ... against [140, 100] every frame. With scales (0.95, 1, 1.05) the first
+    scale, 0.95, won the tie too and the box shrank. Oracle: the documented contract (of
+    equally likely offsets the one nearest the prediction; of scales the one nearest 1)."""
+    im, box = _uniform_object()
+    for scales in [(1.0,), (0.95, 1.0, 1.05)]:
+        tr = WSLTracker(scales=scales)
+        tr.init(im, box)
+        for _ in range(6):
+            np.testing.assert_array_equal(tr.update(im), box)
+        assert tr.velocity.tolist() == [0.0, 0.0]
+
+
+def test_without_texture_the_box_goes_on_at_its_velocity():
+    """A textured target moving (3, 1) pixels a frame, then frames without texture: the box
+    goes on at its last velocity (the prediction, nearest of the equally likely windows),
+    not to the first window of the search. Oracle: constant velocity in closed form (a
+    32-pixel box: one view pixel is one image pixel, so the search lands on whole pixels)."""
+    rng = np.random.default_rng(4)
+    tex = (rng.random((32, 32)) * 255).astype(np.uint8)
+    tr = WSLTracker(blur=0.0)
+    frames = []
+    for k in range(6):
+        im = np.full((240, 320), 128, np.uint8)
+        im[100 + k:132 + k, 100 + 3 * k:132 + 3 * k] = tex
+        frames.append(im)
+    tr.init(frames[0], [100, 100, 32, 32])
+    for k in range(1, 6):
+        np.testing.assert_allclose(tr.update(frames[k]), [100 + 3 * k, 100 + k, 32, 32],
+                                   atol=1e-9)
+    flat = np.full((240, 320), 128, np.uint8)
+    for k in range(6, 10):
+        np.testing.assert_allclose(tr.update(flat), [100 + 3 * k, 100 + k, 32, 32], atol=1e-9)

@@ -260,3 +260,198 @@ def test_a_colour_tracker_given_a_grey_image_says_so(method):
     with pytest.raises(ValueError, match=r"^image is grey \(100, 120\): the colour trackers "
                        r".* need BGR frames \(H, W, 3\); template, klt, wsl and snake"):
         single_tracker(method).init(np.zeros((100, 120), np.uint8), [40, 30, 30, 30])
+
+
+def _dots(dots, shift=(0, 0), drop=()):
+    """A grey frame of bright dots (one Shi-Tomasi corner each) on a flat background, moved
+    by ``shift`` and without the dots numbered in ``drop``."""
+    im = np.full((200, 240), 60, np.uint8)
+    for k, (x, y) in enumerate(dots):
+        if k not in drop:
+            im[y + shift[1], x + shift[0]] = 255
+    return cv2.GaussianBlur(im, (0, 0), 1.5)
+
+
+_DOTS = [(60, 60), (100, 60), (140, 70), (70, 120), (120, 130)]
+
+
+def test_klt_moves_a_box_with_few_corners_by_the_exact_shift():
+    """Median flow keeps the better half of its features by forward-backward error. A box
+    with exactly 4 corners kept them (only fewer than 4 fell back to a grid), the half left
+    2, fewer than the 3 it needs, and the box never moved; so did one with 5 corners of which
+    one or two were lost in the next frame. Oracle: the scene's translation, (3, 1)."""
+    from vistrack.tracking.single import MedianFlow
+
+    box = [40, 40, 120, 110]
+    mask = np.zeros((200, 240), np.uint8)
+    mask[40:150, 40:160] = 255
+    for dots, drop in ((_DOTS[:4], ()), (_DOTS, (0,)), (_DOTS, (0, 1))):
+        first = _dots(dots)
+        corners = cv2.goodFeaturesToTrack(first, 100, 0.01, 2, mask=mask, blockSize=3)
+        assert len(corners) == len(dots)  # one corner a dot, as the test means
+        t = MedianFlow()
+        t.init(first, box)
+        np.testing.assert_allclose(t.update(_dots(dots, (3, 1), drop)), [43, 41, 120, 110],
+                                   atol=0.01)
+    # one dot of five left: too few features pass the check, and the box stays
+    t = MedianFlow()
+    t.init(_dots(_DOTS), box)
+    assert t.update(_dots(_DOTS, (3, 1), (0, 1, 2, 3))).tolist() == box
+
+
+def test_klt_follows_a_box_under_4_pixels_inside_the_image():
+    """A box under 4 pixels a side was refused (None: never moved) though it lay inside the
+    image; the docstring promised None only for a box (almost) outside it. A sliver of a
+    larger box, under 4 of its pixels inside, still is. Oracle: the translation, (3, 1)."""
+    from vistrack.tracking.single import MedianFlow
+
+    rng = np.random.default_rng(0)
+    scene = cv2.GaussianBlur(rng.integers(0, 256, (240, 320), dtype=np.uint8), (0, 0), 2)
+    shifted = np.roll(scene, (1, 3), axis=(0, 1))
+    for box in ([150, 100, 3, 3], [150, 100, 2, 2], [150, 100, 1, 1], [150.2, 100.2, 0.5, 0.5],
+                [150, 100, 1, 8], [150, 100, 10, 10]):
+        t = MedianFlow()
+        t.init(scene, box)
+        np.testing.assert_allclose(t.update(shifted), np.r_[box[0] + 3, box[1] + 1, box[2:]],
+                                   atol=0.01)
+    t = MedianFlow()
+    t.init(scene, [150, 100, 40, 40])
+    t.anchor_last([-37, 100, 40, 40])   # 3 of its 40 pixels' columns in the image
+    assert t.motion(shifted) is None
+    t.anchor_last([-40, 100, 40, 40])   # outside
+    assert t.motion(shifted) is None
+
+
+def test_colour_tracker_keeps_its_size_on_unchanged_frames():
+    """Of the scales (0.93, 1, 1.07) whose boxes separate the colours equally well, np.argmax
+    took the first, 0.93: on the same frame again and again a 1-pixel box shrank to 0.0007
+    in 100 frames, and a 40-pixel box inside a uniform object to 19.4 in 10. Oracle: a
+    static scene (the box is the start box), and the tie checked in the contrast itself."""
+    from vistrack.tracking.single import ColourTracker, _contrast
+
+    im = np.full((60, 80, 3), (40, 120, 40), np.uint8)
+    im[30, 40] = (0, 0, 255)
+    t = ColourTracker()
+    t.init(im, [40, 30, 1, 1])
+    for _ in range(100):
+        np.testing.assert_array_equal(t.update(im), [40, 30, 1, 1])
+    im = np.full((240, 320, 3), 128, np.uint8)
+    im[60:180, 80:240] = (0, 0, 200)
+    t = ColourTracker()
+    t.init(im, [140, 100, 40, 40])
+    bp = t._backproject(cv2.cvtColor(im, cv2.COLOR_BGR2HSV)).astype(np.float64)
+    sc = np.array([0.93, 1.0, 1.07])[:, None]
+    boxes = np.c_[160 - sc * 20, 120 - sc * 20, sc * 40, sc * 40]
+    contrast = _contrast(cv2.integral(bp), boxes)
+    assert contrast[0] == contrast[1] == contrast[2]   # a tie
+    for _ in range(10):
+        np.testing.assert_array_equal(t.update(im), [140, 100, 40, 40])
+    with pytest.raises(ValueError, match=r"^scales must be one or more finite positive "
+                                         r"numbers; got \(0.9, 0.0\)$"):
+        ColourTracker(scales=(0.9, 0.0))
+
+
+def test_camshift_box_is_its_windows_bounding_box():
+    """The box is the bounding box of CamShift's rotated window: cv2.boundingRect of the
+    corners gave whole pixels, first and last included, 1-2 pixels larger ([38, 18, 25, 25]
+    for a window bounded by [38.97, 18.97, 23.07, 23.07]), and the histogram was learnt from
+    that. Oracle: the bounding box of a rectangle of size (w, h) turned by θ in closed form,
+    half-extents (|w cos θ| + |h sin θ|) / 2 and (|w sin θ| + |h cos θ|) / 2."""
+    from vistrack.tracking.single import CamShiftTracker
+
+    im = np.full((120, 160, 3), (40, 120, 40), np.uint8)
+    cv2.ellipse(im, (80, 60), (24, 10), 30, 0, 360, (0, 0, 255), -1)
+    for start in ([56, 48, 48, 24], [40, 20, 20, 20]):
+        t = CamShiftTracker(rate=0.0)
+        t.init(im, [56, 48, 48, 24])
+        t.box = np.array(start, float)
+        bp = t._backproject(cv2.cvtColor(im, cv2.COLOR_BGR2HSV))
+        bp[bp < 128] = 0
+        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.5)
+        (cx, cy), (w, h), angle = cv2.CamShift(bp, tuple(start), crit)[0]
+        a = np.deg2rad(angle)
+        ex = (abs(w * np.cos(a)) + abs(h * np.sin(a))) / 2
+        ey = (abs(w * np.sin(a)) + abs(h * np.cos(a))) / 2
+        np.testing.assert_allclose(t.update(im), [cx - ex, cy - ey, 2 * ex, 2 * ey], atol=1e-3)
+
+
+def _brute_mean_shift(weights, box):
+    """Flat-kernel mean shift by brute force: a window of the box's size (pixels x .. x + w
+    - 1), pixel-centre coordinates, zero weight outside the image; its fixed point."""
+    x, y, w, h = box
+    ys, xs = np.mgrid[0:weights.shape[0], 0:weights.shape[1]]
+    for _ in range(200):
+        inside = (xs >= x) & (xs < x + w) & (ys >= y) & (ys < y + h)
+        wt = weights * inside
+        nx = round((wt * xs).sum() / wt.sum() - (w - 1) / 2)
+        ny = round((wt * ys).sum() / wt.sum() - (h - 1) / 2)
+        if (nx, ny) == (x, y):
+            return x, y
+        x, y = nx, ny
+    raise AssertionError("no fixed point")
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_mean_shift_at_the_border_stays_at_its_mode(side):
+    """OpenCV's mean shift clips its window to the image and goes on with the clipped
+    window; the centre was taken from it, so that at the border the box walked inwards on
+    the same frame again and again (x 84, 82, 81, 80.5, 80). Oracle: brute-force flat-kernel
+    mean shift on the back-projection, zero outside the image (OpenCV measures the shift
+    from the window's centre in pixel-edge coordinates, half a pixel off the pixels'
+    centres; in these scenes, a fixed model, the two rules have the same fixed point)."""
+    from vistrack.tracking.single import ColourTracker
+
+    im = np.full((60, 100, 3), (40, 120, 40), np.uint8)
+    x0 = 88 if side == "right" else -8
+    im[20:40, max(x0, 0):x0 + 20] = (0, 0, 255)   # a red object cut by the border
+    for scales in [(1.0,), (0.93, 1.0, 1.07)]:
+        t = ColourTracker(rate=0.0, scales=scales)
+        t.init(im, [x0, 20, 20, 20])
+        bp = t._backproject(cv2.cvtColor(im, cv2.COLOR_BGR2HSV)).astype(float)
+        mode = _brute_mean_shift(bp, (x0, 20, 20, 20))
+        assert mode != (x0, 20)   # the start is not the mode: the test moves the window
+        for _ in range(8):
+            np.testing.assert_array_equal(t.update(im), [*mode, 20, 20])
+
+
+def test_opencv_trackers_refuse_boxes_they_cannot_start_on():
+    """Boxes that pass validation but that OpenCV's trackers fail on inside, with a
+    cv2.error: under 2 whole pixels for CSRT, 0 for KCF, and small boxes at the image's right
+    or bottom edge for CSRT. Each is a ValueError naming the box. Oracle: the documented
+    contract, and that the boxes just above the least start."""
+    im = _frame_768x576()
+    for method, box, message in [
+        ("csrt", [100, 100, 1, 1], "box (x, y, w, h) = (100, 100, 1, 1), whole pixels "
+                                   "(100, 100, 1, 1): OpenCV's csrt needs w and h of at least 2 "
+                                   "whole pixels"),
+        ("csrt", [100.2, 100.2, 0.4, 3], "box (x, y, w, h) = (100.2, 100.2, 0.4, 3), whole "
+                                         "pixels (100, 100, 0, 3): OpenCV's csrt needs w and h "
+                                         "of at least 2 whole pixels"),
+        ("kcf", [100.2, 100.2, 0.4, 0.4], "box (x, y, w, h) = (100.2, 100.2, 0.4, 0.4), whole "
+                                          "pixels (100, 100, 0, 0): OpenCV's kcf needs w and h "
+                                          "of at least 1 whole pixel"),
+    ]:
+        tracker = single_tracker(method)
+        with pytest.raises(ValueError, match="^" + re.escape(message) + "$"):
+            tracker.init(im, box)
+        assert not tracker.started
+    tracker = single_tracker("csrt")
+    with pytest.raises(ValueError, match=r"^box \(x, y, w, h\) = \(766, 100, 2, 2\), whole "
+                                         r"pixels \(766, 100, 2, 2\): OpenCV's csrt cannot "
+                                         r"start there: \(-215"):
+        tracker.init(im, [766, 100, 2, 2])
+    assert not tracker.started
+    for method, box in (("csrt", [100, 100, 2, 2]), ("kcf", [100, 100, 1, 1])):
+        tracker = single_tracker(method)
+        tracker.init(im, box)
+        assert tracker.update(im).shape == (4,)
+
+
+def test_cli_track_one_names_a_box_opencv_cannot_start_on(tmp_path):
+    sequence(CROSSING / "img", "*.jpg")
+    r = subprocess.run([sys.executable, "-m", "vistrack.cli", "track-one", str(CROSSING / "img"),
+                        "--init", "100,100,1,1", "--method", "csrt", "--out",
+                        str(tmp_path / "b.txt")], capture_output=True, text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert ("error: box (x, y, w, h) = (100, 100, 1, 1), whole pixels (100, 100, 1, 1): "
+            "OpenCV's csrt needs w and h of at least 2 whole pixels") in r.stderr

@@ -83,10 +83,11 @@ class MedianFlow(SingleObjectTracker):
     ----------
     grid : int
         Features are the best Shi-Tomasi corners in the box, up to ``grid²`` (a regular
-        ``grid × grid`` of points where the box has too little texture).
+        ``grid × grid`` of points where the box has too little texture: fewer than 5
+        corners).
     fb_max : float
         Forward-backward error (pixels) above which a feature is not used; of the others,
-        the better half by that error moves the box.
+        the better half by that error (but no fewer than 3) moves the box.
     win_size, levels : int
         Lucas-Kanade window (pixels) and pyramid levels above the image.
 
@@ -132,8 +133,10 @@ class MedianFlow(SingleObjectTracker):
         -------
         tuple of ((2,) ndarray, float) or None
             The median displacement ``dx, dy`` of the reliable features, and the median
-            ratio of their pairwise distances (the scale); None when the box lies (almost)
-            outside the image or fewer than 3 features pass the checks.
+            ratio of their pairwise distances (the scale); None when the box lies outside
+            the image or, for a box at least 4 pixels on a side, less than 4 pixels of it
+            lies inside, or when fewer than 3 features pass the forward-backward check (of
+            those that do, the better half moves the box, and never fewer than 3).
 
         Examples
         --------
@@ -150,16 +153,25 @@ class MedianFlow(SingleObjectTracker):
 
         x, y, w, h = self.box
         H, W = grey.shape
+        if min(x + w, W) <= max(x, 0) or min(y + h, H) <= max(y, 0):
+            return None  # outside the image
+        # the pixels the box covers in the image, at least one in each direction
         x0, y0 = int(max(x, 0)), int(max(y, 0))
-        x1, y1 = int(min(x + w, W)), int(min(y + h, H))
-        if x1 - x0 < 4 or y1 - y0 < 4:
+        x1, y1 = max(int(min(x + w, W)), x0 + 1), max(int(min(y + h, H)), y0 + 1)
+        # a sliver of a box (under 4 pixels of it in the image) has too little of the object
+        # to follow; a box under 4 pixels itself is followed where it all lies in the image
+        # (a 3x3 box was refused inside the image, and never moved)
+        need_x = min(4, max(int(np.floor(x + w)) - int(np.floor(x)), 1))
+        need_y = min(4, max(int(np.floor(y + h)) - int(np.floor(y)), 1))
+        if x1 - x0 < need_x or y1 - y0 < need_y:
             return None
         mask = np.zeros_like(self.prev)
         mask[y0:y1, x0:x1] = 255
         p0 = cv2.goodFeaturesToTrack(self.prev, self.grid ** 2, 0.01, 2, mask=mask,
                                      blockSize=3)
-        if p0 is None or len(p0) < 4:
-            # too little texture: a regular grid instead
+        if p0 is None or len(p0) < 5:
+            # too little texture for 3 features to outlast the better half below (of 4
+            # corners, 2 were left, and the box never moved): a regular grid instead
             gx, gy = np.meshgrid(np.linspace(x0, x1 - 1, self.grid),
                                  np.linspace(y0, y1 - 1, self.grid))
             p0 = np.c_[gx.ravel(), gy.ravel()].astype(np.float32).reshape(-1, 1, 2)
@@ -170,10 +182,12 @@ class MedianFlow(SingleObjectTracker):
             grey, self.prev, p1, None, **self.lk)
         fb = np.linalg.norm((pb - p0).reshape(-1, 2), axis=1)
         ok = st.ravel().astype(bool) & sb.ravel().astype(bool) & (fb <= self.fb_max)
-        # the better half by forward-backward error, as median flow does
-        ok &= fb <= np.median(fb[ok]) if ok.any() else ok
         if ok.sum() < 3:
             return None
+        # the better half by forward-backward error, as median flow does, but no fewer than
+        # 3 (of 3 or 4 reliable features the half left 2, and the box did not move)
+        passed = np.sort(fb[ok])
+        ok &= fb <= max(np.median(passed), passed[2])
         a, b = p0.reshape(-1, 2)[ok], p1.reshape(-1, 2)[ok]
         d = np.median(b - a, axis=0)
         i, j = np.triu_indices(len(a), 1)
@@ -383,6 +397,41 @@ def _contrast(integral: np.ndarray, b: np.ndarray) -> np.ndarray:
     return inner / np.maximum(n_in, 1) - (outer - inner) / np.maximum(n_out - n_in, 1)
 
 
+def _mean_shift(bp: np.ndarray, box: np.ndarray) -> tuple[float, float]:
+    """The centre of ``cv2.meanShift``'s window on the back-projection ``bp``, started at
+    ``box`` rounded to whole pixels, the window keeping its size where it crosses the image's
+    edge (what lies outside weighs nothing).
+
+    OpenCV clips its window to the image and carries on with the clipped window, so that
+    near an edge the window's centre was the clipped part's: on unchanged frames the box
+    walked inwards (x 84, 82, 81, 80.5, 80 for a window whose mean-shift mode is 84). Here
+    the back-projection is padded with zeros by the window's size on each side, which OpenCV
+    never reaches; away from the edges the window, and the centre, are OpenCV's own. A
+    window wholly outside the image is OpenCV's to place (it moves one to the image's
+    centre), as before.
+
+    Examples
+    --------
+    A blob cut by the right edge, the window started on it, half outside:
+
+    >>> bp = np.zeros((60, 100), np.uint8); bp[20:40, 88:] = 255
+    >>> _mean_shift(bp, np.array([88.0, 20, 20, 20]))
+    (94.0, 30.0)
+    """
+    import cv2
+
+    x, y, w, h = np.round(box).astype(int)
+    w, h = max(w, 1), max(h, 1)
+    H, W = bp.shape
+    crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.5)
+    if x + w <= 0 or y + h <= 0 or x >= W or y >= H:
+        _, (x, y, w, h) = cv2.meanShift(bp, (x, y, w, h), crit)
+        return x + w / 2.0, y + h / 2.0
+    padded = cv2.copyMakeBorder(bp, h, h, w, w, cv2.BORDER_CONSTANT, value=0)
+    _, (px, py, pw, ph) = cv2.meanShift(padded, (x + w, y + h, w, h), crit)
+    return float(px - w + pw / 2), float(py - h + ph / 2)
+
+
 class ColourTracker(SingleObjectTracker):
     """Mean shift on a colour back-projection, with an online histogram (see the module).
 
@@ -394,8 +443,9 @@ class ColourTracker(SingleObjectTracker):
         Weight of the current box's histogram in the model each frame (0 keeps the first).
     scales : tuple of float
         Relative sizes tried around the mean-shift position each frame; the one whose box
-        best separates the object's colour from the ring around it is kept (``(1.0,)``: a
-        fixed size, ``"meanshift"`` in :data:`METHODS`).
+        best separates the object's colour from the ring around it is kept, and of those
+        that separate it equally well the one nearest 1 (``(1.0,)``: a fixed size,
+        ``"meanshift"`` in :data:`METHODS`).
 
     References
     ----------
@@ -418,6 +468,8 @@ class ColourTracker(SingleObjectTracker):
     def __init__(self, bins: int = 32, rate: float = 0.05, scales: tuple = (0.93, 1.0, 1.07)):
         self.bins, self.rate = int(bins), float(rate)
         self.scales = tuple(float(v) for v in scales)
+        if not self.scales or not all(np.isfinite(v) and v > 0 for v in self.scales):
+            raise ValueError(f"scales must be one or more finite positive numbers; got {scales!r}")
 
     def _hist(self, hsv: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         import cv2
@@ -457,14 +509,13 @@ class ColourTracker(SingleObjectTracker):
 
         hsv = _hsv(image)
         bp = self._backproject(hsv)
-        x, y, w, h = np.round(self.box).astype(int)
-        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.5)
-        _, (x, y, w, h) = cv2.meanShift(bp, (x, y, max(w, 1), max(h, 1)), crit)
-        cx, cy = x + w / 2, y + h / 2
+        cx, cy = _mean_shift(bp, self.box)
         w, h = self.box[2], self.box[3]
         # the scale whose box best separates the object's colour from its surroundings:
-        # mean back-projection inside minus in the ring around it
-        sc = np.array(self.scales)[:, None]
+        # mean back-projection inside minus in the ring around it; of scales that tie, the
+        # one nearest 1 (the first, 0.93, shrank the box to nothing on unchanged frames)
+        sc = np.array(self.scales)
+        sc = sc[np.argsort(np.abs(np.log(sc)), kind="stable"), None]  # 1 first
         boxes = np.c_[cx - sc * w / 2, cy - sc * h / 2, sc * w, sc * h]
         self.box = boxes[int(np.argmax(_contrast(cv2.integral(bp.astype(np.float64)), boxes)))]
         self._learn(hsv)
@@ -515,7 +566,7 @@ class CamShiftTracker(ColourTracker):
     >>> t = CamShiftTracker()
     >>> t.init(image(30), [30, 20, 20, 20])
     >>> [t.update(image(x)).round().tolist()[0] for x in (33, 36, 39)]
-    [30.0, 34.0, 36.0]
+    [31.0, 35.0, 37.0]
     """
 
     def _follow(self, image: np.ndarray) -> np.ndarray:
@@ -532,8 +583,11 @@ class CamShiftTracker(ColourTracker):
         rect, _ = cv2.CamShift(bp, (x, y, max(w, 1), max(h, 1)), crit)
         (cx, cy), (rw, rh), _ = rect
         if rw > 1 and rh > 1:
-            bx, by, bw, bh = cv2.boundingRect(cv2.boxPoints(rect).astype(np.float32))
-            self.box = np.array([bx, by, bw, bh], float)
+            # the corners' own bounding box (cv2.boundingRect's whole pixels, first and last
+            # included, made the box 1-2 pixels larger than the window, and learnt from that)
+            pts = cv2.boxPoints(rect)
+            lo, hi = pts.min(axis=0), pts.max(axis=0)
+            self.box = np.r_[lo, hi - lo].astype(float)
         self._learn(hsv)
         return self.box.copy()
 
@@ -643,6 +697,10 @@ class ColourParticleTracker(ColourTracker):
         return self.box.copy()
 
 
+# the least w and h (whole pixels) OpenCV's trackers start on: CSRT fails on 1, KCF on 0
+_OPENCV_LEAST = {"csrt": 2, "kcf": 1}
+
+
 class OpenCVTracker(SingleObjectTracker):
     """OpenCV contrib's CSRT or KCF behind the same interface (for comparison).
 
@@ -658,7 +716,10 @@ class OpenCVTracker(SingleObjectTracker):
     Raises
     ------
     ValueError
-        If ``kind`` is neither.
+        If ``kind`` is neither; from :meth:`init`, if the box's width or height is less
+        than OpenCV's least once rounded (2 pixels for CSRT, 1 for KCF), or OpenCV's
+        tracker cannot start on it (CSRT cannot on small boxes at the image's right or
+        bottom edge), the message naming the box.
 
     Examples
     --------
@@ -669,6 +730,10 @@ class OpenCVTracker(SingleObjectTracker):
     >>> t.init(scene, [40, 30, 40, 40])
     >>> t.update(np.roll(scene, (1, 3), axis=(0, 1))).shape
     (4,)
+    >>> t.init(scene, [40, 30, 1.4, 3])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: box (x, y, w, h) = (40, 30, 1.4, 3), whole pixels (40, 30, 1, 3): OpenCV's ...
     """
 
     def __init__(self, kind: str = "csrt"):
@@ -678,11 +743,27 @@ class OpenCVTracker(SingleObjectTracker):
                                                         "kcf": cv2.TrackerKCF.create}
         if kind not in makers:
             raise ValueError(f"kind must be one of {sorted(makers)}; got {kind!r}")
-        self._make = makers[kind]
+        self.kind, self._make = kind, makers[kind]
 
     def _start(self, image: np.ndarray, b: np.ndarray) -> None:
-        self._t = self._make()
-        self._t.init(np.asarray(image), tuple(int(round(v)) for v in b))
+        import cv2
+
+        r = tuple(int(round(v)) for v in b)
+        where = (f"box (x, y, w, h) = ({', '.join(f'{v:g}' for v in b)}), whole pixels "
+                 f"({', '.join(str(v) for v in r)})")
+        least = _OPENCV_LEAST[self.kind]
+        if min(r[2:]) < least:
+            # smaller, OpenCV's tracker fails inside with an assertion (OpenCV 5.0)
+            raise ValueError(f"{where}: OpenCV's {self.kind} needs w and h of at least "
+                             f"{least} whole pixel{'s' if least > 1 else ''}")
+        tracker = self._make()
+        try:
+            tracker.init(np.asarray(image), r)
+        except cv2.error as e:
+            # e.g. CSRT on a small box at the image's right or bottom edge
+            reason = str(e).strip().splitlines()[-1].split("error: ", 1)[-1]
+            raise ValueError(f"{where}: OpenCV's {self.kind} cannot start there: {reason}") from e
+        self._t = tracker
         self.box = b
 
     def _follow(self, image: np.ndarray) -> np.ndarray:
