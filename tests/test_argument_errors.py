@@ -122,7 +122,8 @@ def test_a_likelihood_returning_nan_is_a_value_error_naming_the_step():
     pf = ParticleFilter(CV, loglik, n_particles=1000, rng=0)
     with pytest.raises(ValueError, match=re.escape(
             "likelihood returned NaN for 7 of 1000 particles at step 2 (measurement [2.0]); it "
-            "must return log p(y | x) for each particle, -inf where y is impossible") + "$"):
+            "must return log p(y | x) for each particle, finite or -inf where y is impossible")
+            + "$"):
         pf.filter(np.arange(5.0)[:, None], x0=[0.0, 1.0], P0=np.eye(2))
 
 
