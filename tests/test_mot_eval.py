@@ -578,3 +578,23 @@ print(fn is sys.modules["scipy.optimize"].linear_sum_assignment)
     out = subprocess.run([sys.executable, "-c", fallback], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["True"]
+
+
+@pytest.mark.parametrize("sep", [",", " ", "\t"])
+def test_a_row_found_wrong_while_scoring_is_named_by_its_line_whatever_the_separator(tmp_path,
+                                                                                     sep):
+    """read_mot reads values separated by spaces or tabs as by commas; the line of a row found
+    wrong while scoring was looked up in commas only, so a space-separated file was named
+    without its lines."""
+    from vistrack.evaluation import evaluate_files
+
+    gt = tmp_path / "gt.txt"
+    gt.write_text("# ground truth\n" + "".join(
+        sep.join(map(str, (f, 1, 10, 20, 30, 60, 1, 1, 1))) + "\n" for f in (1, 2)))
+    res = tmp_path / "res.txt"
+    res.write_text("".join(sep.join(map(str, r)) + "\n" for r in (
+        (1, 3, 10, 20, 30, 60, 1, -1, -1, -1), (2, 3, 10, 20, 30, 60, 1, -1, -1, -1),
+        (2, 3, 40, 20, 30, 60, 1, -1, -1, -1))))
+    with pytest.raises(ValueError, match=re.escape(
+            f"{res}, lines 2 and 3: id 3 appears more than once in frame 2")):
+        evaluate_files([("s", gt, res, None)])

@@ -216,8 +216,15 @@ def _lines_of(path: str, match: Callable[[list[float]], bool]) -> list[int]:
         return []
     found = []
     for k, raw in enumerate(text.splitlines(), start=1):  # as read_mot counts lines
+        text = raw.split("#", 1)[0].strip()
+        # a row's values as read_mot reads them: separated by commas, or on a line without a
+        # comma by spaces or tabs (a space-separated file's rows were never found: messages
+        # named the file without its line), a separator ending the line ignored
+        cells = [c.strip() for c in text.split(",")] if "," in text else text.split()
+        if len(cells) > 1 and not cells[-1]:
+            cells.pop()
         try:  # a blank or comment line (np.loadtxt skips those) is not a row
-            row = [float(c) for c in raw.split("#", 1)[0].split(",")]
+            row = [float(c) for c in cells]
         except ValueError:
             continue
         if len(row) >= 6 and match(row):
