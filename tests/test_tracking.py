@@ -899,3 +899,46 @@ def test_a_lost_track_is_kept_max_lost_wherever_its_gap_falls(rate):
                 dets = Detections.from_xywh(d, [0.9] * len(d)) if d else None
                 ids |= set(tr.step(f, dets).ids.tolist())
             assert (ids == {1}) == same, (last, miss, sorted(ids))
+
+
+def test_pass_over_counts_the_frame_for_default_indices():
+    """After pass_over, step(None) numbered the next frame as the one passed over and
+    predicted over one frame where two had gone: the same steps with explicit indices are
+    the oracle."""
+    det = lambda f: Detections.from_xywh([[100 + 10 * f, 20, 30, 60]], [0.9])  # noqa: E731
+    a, b = BoxTracker(frame_rate=10), BoxTracker(frame_rate=10)
+    for f in (1, 2):
+        a.step(f, det(f))
+        b.step(None, det(f))
+    a.pass_over()
+    b.pass_over()
+    oa, ob = a.step(4, det(4)), b.step(None, det(4))
+    assert a.frame == b.frame == 4
+    np.testing.assert_array_equal(oa.boxes, ob.boxes)
+    np.testing.assert_array_equal(a.tracks.mean, b.tracks.mean)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_lost_tracks_end_after_max_lost_whatever_the_frame_numbers(compiled):
+    """Frames numbered by milliseconds since 1970 (frame_rate 1000): the slack for the
+    times' rounding was 1e-9 of the time, 1.7 s there, and a lost track outlived max_lost by
+    it. And a gap in the frames stepped longer than max_lost let a track lost for 3 s take a
+    detection (max_lost 2 s), where stepping through the frames between deleted it. Oracle:
+    the same detections from frame 1, stepped through every frame."""
+    def run(t0, step_all):
+        tr = BoxTracker(frame_rate=1000, max_lost=2.0, compiled=compiled)
+        box = Detections.from_xywh([[100, 20, 30, 60]], [0.9])
+        none = Detections(boxes=np.zeros((0, 4)))
+        tr.step(t0 + 1, box)  # a track, confirmed at once in the first frame
+        gone = None  # the first frame where track 1 is no more
+        for f in range(2, 5000) if step_all else (2, 4999):
+            tr.step(t0 + f, box if f == 4999 else none)
+            if gone is None and 1 not in tr.tracks.ids:
+                gone = f
+        return gone if step_all else None, tr.tracks.ids.tolist()
+
+    # lost after frame 1 (0.001 s), more than 2 s lost at frame 2002: deleted there
+    assert run(0, True) == (2002, [2]) == run(1_700_000_000_000, True)
+    # stepped with a gap (frames 3-4998 left out), the same end: track 1, lost for 5 s, does
+    # not take the detection of frame 4999 (which starts track 2); it did
+    assert run(0, False) == (None, [2]) == run(1_700_000_000_000, False)

@@ -580,6 +580,7 @@ class BoxTracker:
                            if c.scores == "calibrated" and self.calibration is None else None)
         self.tracks.reset()
         self.frame: int | None = None
+        self._passed = 0  # frames passed over since the last step (pass_over)
         self.history: list = []
         self._q, self._r = np.zeros((0, 8)), np.zeros((0, 4))
         self._confirmed: set = set()
@@ -692,6 +693,8 @@ class BoxTracker:
         """
         if self.calibrator is not None:
             self.calibrator.observe(Detections(boxes=np.zeros((0, 4))))
+        if self.frame is not None:  # step(None) next is the frame after this one
+            self._passed += 1
 
     def boxes_ahead(self, ids: ArrayLike, dt: float) -> np.ndarray:
         """The boxes of tracks predicted ``dt`` frames past the last step, along their
@@ -867,8 +870,11 @@ class BoxTracker:
         if not isinstance(detections, Detections) or detections.boxes is None:
             raise TypeError("detections must be vistrack.Detections with boxes")
         detections = _writable(detections)
-        frame = frame_index(frame, self.frame)
+        # (None: the frame after the last one stepped or passed over)
+        frame = frame_index(frame, self.frame) if frame is not None or self.frame is None \
+            else self.frame + 1 + self._passed
         first = self.frame is None
+        self._passed = 0
         dt = 0.0 if self.frame is None else float(frame - self.frame)
         self.frame = frame
         time = frame / self.frame_rate
@@ -901,6 +907,15 @@ class BoxTracker:
                              "(use scores='calibrated', or fuse_score=False)")
         high = ds >= cfg.high
         self.camera_shift = np.zeros(2)
+        if dt > 1 and len(t):
+            # frames left out of the steps (a gap in their indices): the tracks that stepping
+            # through them would have deleted, lost longer than max_lost at the frame before
+            # this one, are deleted before they can take a detection (one last seen 3 s
+            # before was found again, max_lost 2 s)
+            gone = t.stale((frame - 1) / self.frame_rate, cfg.max_lost)
+            if gone.any():
+                t.keep(~gone)
+                self._offsets = self._offsets[~gone]
         self._predict(dt)
         if self.compiled:
             c = _contiguous  # one compiled signature for every layout of the input

@@ -220,15 +220,33 @@ class TrackTable:
             lost (or tentative, without it) for more than ``max_lost`` seconds since their
             last update.
         """
-        # lost for more than max_lost, whatever the rounding of the frames' times: k frames at
-        # 30 frames/s are k / 30 s, but (9 + 3) / 30 - 9 / 30 > 0.1 where (12 + 3) / 30 -
-        # 12 / 30 < 0.1, so a track lost for exactly max_lost was kept or deleted by where
-        # in the sequence its gap fell
-        slack = 1e-9 * max(1.0, abs(time))
-        stale = time - self.last_time > max_lost + slack
+        stale = self.stale(time, max_lost)  # (with a slack for the times' rounding)
         if not miss_ends_tentative:
             return (self.state != CONFIRMED) & stale
         return (~updated & (self.state == TENTATIVE)) | ((self.state == LOST) & stale)
+
+    def stale(self, time: float, max_lost: float) -> np.ndarray:
+        """The tracks whose last update is more than ``max_lost`` seconds before ``time``
+        (:meth:`ended`'s rule, whatever their state: a tracker stepped over a gap in its
+        frames longer than that deletes them before it associates).
+
+        Examples
+        --------
+        >>> t = TrackTable(1)
+        >>> t.add(np.zeros((2, 1)), np.ones((2, 1, 1)), 0.0, np.zeros(2, np.int64),
+        ...       np.ones(2), confirmed=True)
+        >>> t.last_time[1] = 2.5
+        >>> t.stale(3.0, max_lost=2.0).tolist(), t.stale(2.0, max_lost=2.0).tolist()
+        ([True, False], [False, False])
+        """
+        # lost for more than max_lost, whatever the rounding of the frames' times: k frames at
+        # 30 frames/s are k / 30 s, but (9 + 3) / 30 - 9 / 30 > 0.1 where (12 + 3) / 30 -
+        # 12 / 30 < 0.1, so a track lost for exactly max_lost was kept or deleted by where
+        # in the sequence its gap fell. The slack is a few units of the times' rounding (it
+        # was 1e-9 of the time: frames numbered by milliseconds since 1970, 1.7e9 s, kept
+        # lost tracks 1.7 s longer)
+        slack = 16 * float(np.spacing(max(1.0, abs(time))))
+        return np.asarray(time - self.last_time > max_lost + slack)
 
     def manage(self, updated: np.ndarray, time: float, confirm_hits: int,
                max_lost: float) -> np.ndarray:
