@@ -519,3 +519,15 @@ def test_the_warning_also_says_when_every_detection_is_confident_but_not_all_sta
     assert warning(0.75).startswith("SEQ: every detection counts as confident enough to start "
                                     "a track: ")
     assert warning(0.55) is None and warning(0.65, top_persistence=0.5) is None
+
+
+@pytest.mark.parametrize("persisted", [[0, np.nan, 1], [0, 2, 1], [0, -1, 1]])
+def test_outcomes_outside_0_1_are_named(persisted):
+    """An outcome is 0, 1 or a weight between: NaN and -1 failed with the fit's internal
+    "confidence must be non-decreasing", 2 was fitted, and all -1 gave a top persistence of
+    -1."""
+    from vistrack.tracking.calibration import ScoreCalibration
+
+    with pytest.raises(ValueError, match=r"persisted must hold outcomes in \[0, 1\]; "
+                                         r"persisted\[1\] = "):
+        ScoreCalibration.fit([0.1, 0.5, 0.9], persisted)

@@ -1,6 +1,7 @@
 """What a detections file tells of its detector: its stride, the frames it did not deliver."""
 
 import numpy as np
+import pytest
 
 from vistrack.detector_checks import detection_stride, undelivered_frames
 
@@ -38,3 +39,13 @@ def test_undelivered_frames_are_runs_without_rows_amid_frames_with_many():
     assert undelivered_frames(grid, first=2, stride=3).tolist() == [11, 23, 26]
     assert undelivered_frames(grid, first=2, stride=3, max_run=1).tolist() == [11]
     assert undelivered_frames([]).tolist() == []
+
+
+@pytest.mark.parametrize("kw, msg", [(dict(stride=0), "stride must be an integer >= 1; got 0"),
+                                     (dict(stride=-1), "stride must be an integer >= 1; got -1"),
+                                     (dict(around=0), "around must be an integer >= 1; got 0"),
+                                     (dict(max_run=-1), "max_run must be an integer >= 0")])
+def test_undelivered_frames_names_a_grid_out_of_its_domain(kw, msg):
+    """A stride of 0 divided by zero (and returned nothing), -1 returned frames out of order."""
+    with pytest.raises(ValueError, match=msg):
+        undelivered_frames(np.repeat([1, 2, 3, 5, 6], 6), **kw)

@@ -942,3 +942,33 @@ def test_lost_tracks_end_after_max_lost_whatever_the_frame_numbers(compiled):
     # stepped with a gap (frames 3-4998 left out), the same end: track 1, lost for 5 s, does
     # not take the detection of frame 4999 (which starts track 2); it did
     assert run(0, False) == (None, [2]) == run(1_700_000_000_000, False)
+
+
+def test_settings_and_arguments_out_of_their_domain_are_named():
+    """Numbers numpy makes are numbers (np.float32(0.5) was refused as "not a number", and
+    an integer beyond int64 ended in an OverflowError inside the compiled tracker);
+    boxes_ahead took id 1.7 for track 1 and a NaN dt for a number; smooth() failed on a NaN
+    or infinite frame count inside int(), and took an IoU of 5."""
+    from vistrack.tracking import BoxTrackerConfig, smooth
+
+    c = BoxTrackerConfig(high=np.float32(0.5), low=np.int64(0), confirm_hits=np.float64(3))
+    assert (c.high, c.low, c.confirm_hits) == (0.5, 0.0, 3)
+    assert type(c.high) is float and type(c.confirm_hits) is int
+    with pytest.raises(ValueError, match="camera_min_matches must be an integer"):
+        BoxTrackerConfig(camera_min_matches=2 ** 63)
+    tr = BoxTracker(frame_rate=10, record=True)
+    for f in range(1, 4):
+        out = tr.step(f, Detections.from_xywh([[10 + 4 * f, 20, 30, 60]], [0.9]))
+    with pytest.raises(ValueError, match=r"ids must be track identities \(integers\); got \[1.7\]"):
+        tr.boxes_ahead([1.7], 1.0)
+    with pytest.raises(ValueError, match="dt must be a finite number of frames; got nan"):
+        tr.boxes_ahead(out.ids, float("nan"))
+    np.testing.assert_array_equal(tr.boxes_ahead(np.array([1.0]), 1.0),
+                                  tr.boxes_ahead([1], 1.0))
+    for kw, msg in ((dict(max_gap=float("nan")), "max_gap must be a whole number"),
+                    (dict(link_gap=float("inf")), "link_gap must be a whole number"),
+                    (dict(link_iou=5.0), r"link_iou must be an IoU in \[0, 1\]; got 5.0"),
+                    (dict(extend_iou=float("nan")), r"extend_iou must be an IoU in \[0, 1\]"),
+                    (dict(min_score=float("nan")), "min_score must be a finite number")):
+        with pytest.raises(ValueError, match=msg):
+            smooth(tr, **kw)

@@ -206,6 +206,11 @@ def undelivered_frames(frames: ArrayLike, first: int = 1, stride: int = 1,
     (M,) int64 ndarray
         Sorted frame numbers.
 
+    Raises
+    ------
+    ValueError
+        If ``stride`` or ``around`` is not an integer >= 1, or ``max_run`` one >= 0.
+
     Examples
     --------
     Six boxes a frame, none in frames 4 and 7 (and none after frame 9):
@@ -218,6 +223,11 @@ def undelivered_frames(frames: ArrayLike, first: int = 1, stride: int = 1,
     >>> undelivered_frames(np.repeat([1, 2, 3, 5, 6], [6, 6, 2, 6, 6])).tolist()  # 2 before 4
     []
     """
+    for name, v, least in (("stride", stride, 1), ("around", around, 1),
+                           ("max_run", 0 if max_run is None else max_run, 0)):
+        # (a stride of 0 divided by zero, -1 gave frames out of order)
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < least:
+            raise ValueError(f"{name} must be an integer >= {least}; got {v!r}")
     f = np.asarray(frames, dtype=np.int64).reshape(-1)
     if len(f) == 0:
         return np.zeros(0, np.int64)

@@ -215,16 +215,24 @@ class BoxTrackerConfig:
             return ValueError(f"{name} must be {must}; got {getattr(self, name)!r}")
 
         kinds = {f.name: f.type for f in fields(self)}
+        number = (int, float, np.integer, np.floating)  # numpy's too (np.float32(0.5) was
+        # refused as "not a number"), each kept as Python's own type
         for name, kind in kinds.items():
             v = getattr(self, name)
-            if kind == "bool" and not isinstance(v, (bool, np.bool_)):
-                raise bad(name, "True or False")
-            if kind == "int" and (isinstance(v, bool) or not isinstance(v, (int, float, np.integer))
-                                  or not float(v).is_integer()):
-                raise bad(name, "an integer")
-            if kind == "float" and (isinstance(v, bool) or not isinstance(v, (int, float))
-                                    or np.isnan(v)):
-                raise bad(name, "a number")
+            if kind == "bool":
+                if not isinstance(v, (bool, np.bool_)):
+                    raise bad(name, "True or False")
+                object.__setattr__(self, name, bool(v))
+            if kind == "int":
+                if (isinstance(v, (bool, np.bool_)) or not isinstance(v, number)
+                        or not np.isfinite(v) or not float(v).is_integer()
+                        or not -2**63 <= v < 2**63):  # the compiled tracker's int64
+                    raise bad(name, "an integer")
+                object.__setattr__(self, name, int(v))
+            if kind == "float":
+                if isinstance(v, (bool, np.bool_)) or not isinstance(v, number) or np.isnan(v):
+                    raise bad(name, "a number")
+                object.__setattr__(self, name, float(v))
         if self.scores not in ("calibrated", "raw"):
             raise bad("scores", "'calibrated' or 'raw'")
         if self.assigner not in ASSIGNERS:
@@ -716,7 +724,8 @@ class BoxTracker:
         Raises
         ------
         ValueError
-            If an id is not a track alive after the last step.
+            If an id is not an integer, or not a track alive after the last step, or ``dt``
+            is not finite.
 
         Examples
         --------
@@ -729,7 +738,17 @@ class BoxTracker:
         ([[42.0, 20.0, 72.0, 80.0]], [[43.9, 20.0, 73.9, 80.0]])
         """
         t = self.tracks
-        want = np.asarray(ids, dtype=np.int64).reshape(-1)
+        given = np.asarray(ids).reshape(-1)
+        if given.dtype.kind not in "iu":
+            # 1.7 was read as track 1 (cast to integers), NaN as garbage
+            raw = np.asarray(given, dtype=float) if given.dtype.kind in "fb" else None
+            if raw is None or given.dtype.kind == "b" or not (
+                    np.isfinite(raw).all() and (raw == np.round(raw)).all()):
+                raise ValueError(f"ids must be track identities (integers); got "
+                                 f"{given.tolist()[:5]}")
+        if not np.isfinite(dt):
+            raise ValueError(f"dt must be a finite number of frames; got {dt!r}")
+        want = given.astype(np.int64)
         order = np.argsort(t.ids, kind="stable")
         at = np.minimum(np.searchsorted(t.ids[order], want), max(len(order) - 1, 0))
         found = (t.ids[order][at] == want) if len(order) else np.zeros(len(want), bool)

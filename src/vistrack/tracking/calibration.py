@@ -511,8 +511,8 @@ class ScoreCalibration:
         ------
         ValueError
             If ``top`` is not in ``(0, 1]``, ``cap_sigma`` is not > 0, the shapes differ,
-            or a score is NaN; :class:`NoOutcomesError` (a ``ValueError``) if there are no
-            scores.
+            a score is NaN, or an outcome is not in [0, 1]; :class:`NoOutcomesError` (a
+            ``ValueError``) if there are no scores.
 
         Examples
         --------
@@ -528,6 +528,10 @@ class ScoreCalibration:
         p = np.asarray(persisted, dtype=np.float64).ravel()
         if p.shape != s.shape:
             raise ValueError(f"persisted must have the shape of scores {s.shape}; got {p.shape}")
+        bad = ~((p >= 0) & (p <= 1))  # NaN too: an outcome is 0, 1 or a weight between
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise ValueError(f"persisted must hold outcomes in [0, 1]; persisted[{i}] = {p[i]}")
         if len(s) == 0:
             raise NoOutcomesError("no scores to fit")
         u, inv, counts = np.unique(s, return_inverse=True, return_counts=True)

@@ -170,8 +170,9 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float = 0
     Raises
     ------
     ValueError
-        If the tracker was not created with ``record=True``, or ``max_gap``, ``link_gap`` or
-        ``link_window`` is not a whole number of frames >= 0 (>= 1 for ``link_window``).
+        If the tracker was not created with ``record=True``, ``max_gap``, ``link_gap`` or
+        ``link_window`` is not a whole number of frames >= 0 (>= 1 for ``link_window``),
+        ``link_iou`` or ``extend_iou`` is not in [0, 1], or ``min_score`` is not finite.
 
     Notes
     -----
@@ -207,8 +208,15 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float = 0
     link_window = default["link_window"] if link_window is None else link_window
     for name, v, least in (("max_gap", max_gap, 0), ("link_gap", link_gap, 0),
                            ("link_window", link_window, 1)):
-        if isinstance(v, bool) or int(v) != v or v < least:
+        # (checked before int(): NaN and inf failed there, naming nothing)
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                or not np.isfinite(v) or int(v) != v or v < least:
             raise ValueError(f"{name} must be a whole number of frames >= {least}; got {v!r}")
+    for name, v in (("link_iou", link_iou), ("extend_iou", extend_iou)):
+        if v is not None and not 0.0 <= v <= 1.0:  # an IoU (NaN fails this too)
+            raise ValueError(f"{name} must be an IoU in [0, 1]; got {v!r}")
+    if not np.isfinite(min_score):
+        raise ValueError(f"min_score must be a finite number; got {min_score!r}")
     if not tracker.history:
         return _empty()
     cam = {h[0]: h[9] for h in tracker.history}
