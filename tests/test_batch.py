@@ -513,3 +513,51 @@ def test_options_are_checked_once_before_any_job(bench, tmp_path, option, error,
         track_many([bench], tmp_path / "out", jobs=1, **{option: value})
     assert str(e.value).startswith(message)
     assert not (tmp_path / "out").exists()
+
+
+def test_an_input_of_dot_or_dot_dot_is_named_from_the_folder_it_resolves_to(
+        bench, tmp_path, monkeypatch, capsys):
+    # "." and ".." name nothing: the outputs are named from the folder they resolve to, and
+    # stay inside the output folder (before: out/.txt, and out/.. wrote into out's parent)
+    monkeypatch.chdir(bench / "SIM-0")
+    out = tmp_path / "many"
+    assert main(["track", ".", "../SIM-1", "--out", str(out), "--jobs", "1", "--quiet"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["SIM-0.txt", "SIM-1.txt"]
+    assert (out / "SIM-0.txt").read_bytes() == _alone(bench / "SIM-0", tmp_path / "a.txt")
+    assert "SIM-0.txt" in capsys.readouterr().out
+    assert plan(["."], out)[0].out == out / "SIM-0.txt"
+    monkeypatch.chdir(bench / "SIM-0" / "det")
+    assert plan([".."], out)[0].out == out / "SIM-0.txt"
+    assert plan(["../."], out, kind="pixels")[0].out == out / "SIM-0"
+    # (a benchmark folder given as ".." is its sequences, as given by name)
+    assert [j.out.name for j in plan(["../.."], out)] == ["SIM-0.txt", "SIM-1.txt",
+                                                          "SIM-2.txt"]
+    (tmp_path / "frames" / "inner").mkdir(parents=True)
+    monkeypatch.chdir(tmp_path / "frames" / "inner")
+    assert plan([".."], out, kind="pixels")[0].out == out / "frames"
+    # one input, --out FOLDER/ names it the same way
+    monkeypatch.chdir(bench / "SIM-2")
+    assert main(["track", ".", "--out", f"{tmp_path / 'one'}/", "--quiet"]) == 0
+    assert [p.name for p in (tmp_path / "one").iterdir()] == ["SIM-2.txt"]
+    # a path that resolves to no name (the root folder) is refused, named
+    with pytest.raises(ValueError, match="'?/'? has no name"):
+        plan(["/"], out, kind="pixels")
+
+
+def test_existing_outputs_of_several_videos_are_refused_before_any_runs(tmp_path, capsys):
+    import shutil
+
+    clip = demo_clip().video
+    a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
+    shutil.copy(clip, a)
+    shutil.copy(clip, b)
+    out = tmp_path / "out"
+    (out / "b").mkdir(parents=True)
+    (out / "b" / "tracks.txt").write_text("an earlier result\n")
+    # before: a was tracked and written, then b failed (FileExistsError, exit 1)
+    assert main(["track", str(a), str(b), "--out-dir", str(out), "--stop", "5", "--jobs",
+                 "1", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "tracks.txt" in err and "--force" in err
+    assert sorted(p.name for p in out.iterdir()) == ["b"]
+    assert (out / "b" / "tracks.txt").read_text() == "an earlier result\n"

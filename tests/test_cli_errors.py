@@ -623,3 +623,27 @@ def test_a_videos_ground_truth_is_checked_before_anything_is_tracked(tmp_path, c
     out = capsys.readouterr().out.splitlines()
     assert [x for x in out if x.startswith("pets09")] and \
         len({x for x in out if x.startswith("pets09")}) == 1  # the same scores
+
+
+def test_a_configuration_file_without_a_name_goes_over_the_tracker_given(tmp_path, capsys):
+    # before: "--tracker sort disagrees with [tracker] name = "bytetrack"", a name the file
+    # does not give
+    import tomllib
+
+    from vistrack.config import TrackConfig
+
+    path = tmp_path / "f.toml"
+    path.write_text("[tracker]\nhigh = 0.5\n")
+    assert main(["track", "--print-config", "--tracker", "sort", "--config", str(path)]) == 0
+    table = tomllib.loads(capsys.readouterr().out)["tracker"]
+    sort = TrackConfig.preset("sort").tracker
+    assert table["name"] == "sort" and table["high"] == 0.5
+    assert table["two_stage"] == sort.two_stage and table["low"] == sort.low
+    path.write_text('[tracker]\nname = "bytetrack"\n')
+    assert main(["track", "--print-config", "--tracker", "sort", "--config", str(path)]) == 2
+    assert 'disagrees with [tracker] name = "bytetrack"' in capsys.readouterr().err
+    # a value of the file that an option makes invalid: the file is named
+    path.write_text('[tracker]\nscores = "raw"\n[offline]\nstart_score = 3.0\n')
+    assert main(["track", "--print-config", "--config", str(path), "--scores",
+                 "calibrated"]) == 2
+    assert f"--scores over {path}: start_score must be in [0, 1]" in capsys.readouterr().err

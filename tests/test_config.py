@@ -473,3 +473,47 @@ def test_an_interrupted_sequence_leaves_no_folder_it_made(seq, tmp_path, monkeyp
         track_sequence(seq, out)
     assert seen == [".tracks.partial.txt"]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_numpy_scalars_and_whole_floats_are_written_as_read_config_reads_them(tmp_path):
+    # before: `high = np.float64(0.5)`, `camera_motion = False` (not TOML), and an integer
+    # setting given as 3.0 written `confirm_hits = 3.0`, which read_config refuses
+    cases = [{"tracker": {"confirm_hits": 3.0}}, {"tracker": {"high": np.float64(0.5)}},
+             {"tracker": {"camera_motion": np.False_}},
+             {"tracker": {"calibration_window": np.int64(100)}},
+             {"motion": {"std_pos": np.float64(0.1), "frame_rate": np.float32(25.0)}},
+             {"offline": {"max_gap": np.float64(0.5), "enabled": True}}]
+    path = tmp_path / "c.toml"
+    for values in cases:
+        cfg = TrackConfig.preset().with_values(**values)
+        text = config_toml(cfg, {"frame_rate": np.float64(30.0), "sequences": np.int64(2)})
+        assert "np." not in text and "True" not in text and "False" not in text
+        path.write_text(text)
+        assert read_config(path) == cfg, values
+    assert "confirm_hits = 3\n" in config_toml(TrackConfig.preset().with_values(
+        tracker={"confirm_hits": 3.0}))
+
+
+@pytest.mark.parametrize("text, match", [
+    ('[tracker]\nname = ["sort"]\n', r"\[tracker\] name must be one of .*; got \['sort'\]"),
+    ("[tracker]\nname = 3\n", r"\[tracker\] name must be one of .*; got 3"),
+    ("[tracker]\ncamera_min_matches = 9223372036854775808\n",
+     r"\[tracker\] camera_min_matches must be an integer from -9223372036854775808 to "
+     r"9223372036854775807; got 9223372036854775808"),
+    ("[tracker]\nconfirm_hits = -9223372036854775809\n",
+     "confirm_hits must be an integer from"),
+])
+def test_a_name_that_is_no_string_and_an_integer_beyond_int64_are_named(tmp_path, text, match):
+    # before: "unhashable type: 'list'" naming neither file nor key; and an integer beyond
+    # int64 read, printed, then an OverflowError in the middle of the run
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=match) as e:
+        read_config(path)
+    assert str(path) in str(e.value)
+
+
+def test_the_largest_int64_is_read(tmp_path):
+    path = tmp_path / "big.toml"
+    path.write_text("[tracker]\ncamera_min_matches = 9223372036854775807\n")
+    assert read_config(path).tracker.camera_min_matches == 2 ** 63 - 1

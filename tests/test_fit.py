@@ -247,3 +247,20 @@ def test_vistrack_fit_writes_a_configuration_that_track_reads(tmp_path, capsys):
     assert main(["fit", *seqs, "--out", str(out), "--quiet", "--force"]) == 0
     assert "not checked on held-out sequences" in capsys.readouterr().out
     assert tomllib.loads(out.read_text())["derived"]["written"] == "learned"
+
+
+def test_a_sequence_given_twice_is_refused(tmp_path, capsys, monkeypatch):
+    """One sequence given twice (or by two paths) was learned from twice and "held out" from
+    itself: `fit S S ../x/S --gt` reported three times its objects."""
+    rng = np.random.default_rng(6)
+    seq = _sequence(tmp_path / "SIM", rng)
+    other = _sequence(tmp_path / "SIM-B", rng)
+    for given in ([seq, seq], [seq, other, tmp_path / "SIM-B" / ".." / "SIM"]):
+        with pytest.raises(ValueError, match="given twice"):
+            fit_sequences(given, gt=True)
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "fit.toml"
+    assert main(["fit", "SIM", str(seq), "--gt", "--out", str(out), "--quiet"]) == 2
+    assert "SIM is given twice" in capsys.readouterr().err and not out.exists()
+    # distinct sequences: as before
+    assert len(fit_sequences([seq, other], gt=True).fit.per_sequence) == 2

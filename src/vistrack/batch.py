@@ -38,8 +38,8 @@ if TYPE_CHECKING:
     from concurrent.futures import Executor, Future
     from typing import TextIO
 
-__all__ = ["Job", "Outcome", "is_benchmark", "expand_inputs", "plan", "track_many", "run_jobs",
-           "progress_lines", "process_pool", "one_thread_here"]
+__all__ = ["Job", "Outcome", "is_benchmark", "expand_inputs", "check_distinct", "plan",
+           "track_many", "run_jobs", "progress_lines", "process_pool", "one_thread_here"]
 
 _PIPELINE = f"{__package__}.pipeline"  # what the jobs run (_run)
 
@@ -78,13 +78,55 @@ def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
                               key=lambda p: p.name))
         else:
             out.append(path)
+    check_distinct(out)
+    return out
+
+
+def check_distinct(paths: Iterable[str | Path]) -> None:
+    """Check that no two of ``paths`` resolve to the same file or folder.
+
+    Raises
+    ------
+    ValueError
+        If a path is given twice (two spellings of one path count as one).
+
+    Examples
+    --------
+    >>> check_distinct(["a", "b"])
+    >>> check_distinct(["a", "./a"])
+    Traceback (most recent call last):
+    ...
+    ValueError: a is given twice (as a too)
+    """
     seen: dict[Path, Path] = {}
-    for p in out:
+    for p in map(Path, paths):
         key = p.resolve()
         if key in seen:
             raise ValueError(f"{p} is given twice (as {seen[key]} too)")
         seen[key] = p
-    return out
+
+
+def _output_name(path: Path, kind: str) -> str:
+    """The name of ``path``'s outputs: :func:`~vistrack.io.motchallenge.sequence_name`
+    (``"detections"``), or a video's name without its suffix, a folder's name
+    (``"pixels"``); a path ending in ``.`` or ``..`` is named from the folder it resolves to.
+
+    Raises
+    ------
+    ValueError
+        If the path resolves to no name (the root folder).
+    """
+    from .io.motchallenge import sequence_name
+
+    if kind == "detections":
+        return sequence_name(path)
+    if path.is_file():
+        return path.stem
+    named = path.resolve() if path.name in ("", ".", "..") else path
+    if named.name in ("", ".", ".."):
+        raise ValueError(f"{path} has no name to name its outputs after (it resolves to "
+                         f"{named})")
+    return named.name
 
 
 @dataclass(frozen=True)
@@ -134,13 +176,14 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
     ValueError
         If ``kind`` is unknown, with ``"detections"`` an input is not a sequence folder (or,
         given ``fps``, a detections file or a folder with ``det/det.txt``) or a setting's
-        value is invalid, or two inputs would write to the same place.
+        value is invalid, two inputs would write to the same place, or an input resolves to
+        no name to name its outputs after (the root folder).
     TypeError
         With ``"detections"``, if an option is no setting of ``track_sequence``.
     """
     if kind not in ("detections", "pixels"):
         raise ValueError(f"kind must be 'detections' or 'pixels'; got {kind!r}")
-    from .io.motchallenge import DETECTION_SUFFIXES, sequence_name
+    from .io.motchallenge import DETECTION_SUFFIXES
 
     if kind == "detections":
         # the configuration every job would make, made once here: an unknown option or a bad
@@ -168,9 +211,9 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
                 raise ValueError(f"{path} is not a MOTChallenge sequence folder (seqinfo.ini, "
                                  "det/det.txt), a detections file (.txt, .csv) nor a folder of "
                                  "sequences")
-            target = out / f"{sequence_name(path)}.txt"
+            target = out / f"{_output_name(path, kind)}.txt"
         else:
-            target = out / (path.stem if path.is_file() else path.name)
+            target = out / _output_name(path, kind)
         jobs.append(Job(path, target, kind, dict(options)))
     names: dict[Path, Path] = {}
     for job in jobs:

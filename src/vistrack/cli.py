@@ -183,7 +183,8 @@ def _box_config(args: argparse.Namespace):
 
     base = TrackConfig.preset(args.tracker or "bytetrack")
     if args.config is not None:
-        cfg = read_config(args.config)
+        # a file without [tracker] name goes over --tracker's preset
+        cfg = read_config(args.config, base if args.tracker is not None else None)
         if args.tracker is not None and args.tracker != cfg.name:
             return None, (f"--tracker {args.tracker} disagrees with [tracker] name = "
                           f"\"{cfg.name}\" in {args.config}")
@@ -200,9 +201,11 @@ def _box_config(args: argparse.Namespace):
         cfg = cfg.with_values(**tables)
     except ValueError as exc:
         # name the options the message is about (low and high: both), or else all given
-        names = [option for option, _, key, _ in given
-                 if re.search(rf"\b{key}\b", str(exc))] or [option for option, *_ in given]
-        return None, f"{', '.join('--' + n.replace('_', '-') for n in names)}: {exc}"
+        named = [option for option, _, key, _ in given if re.search(rf"\b{key}\b", str(exc))]
+        names = named or [option for option, *_ in given]
+        # a value the message is about that no option gave comes from the file
+        where = f" over {args.config}" if args.config is not None and not named else ""
+        return None, f"{', '.join('--' + n.replace('_', '-') for n in names)}{where}: {exc}"
     if args.still_camera:
         cfg = cfg.with_values(tracker={"camera_motion": False})
     if args.offline:
@@ -481,7 +484,8 @@ def _still_already(args: argparse.Namespace) -> str | None:
     from .pipeline import FRONTENDS, default_frontend
 
     if args.config is not None:
-        return None if read_config(args.config).tracker.camera_motion else \
+        base = TrackConfig.preset(args.tracker) if args.tracker is not None else None
+        return None if read_config(args.config, base).tracker.camera_motion else \
             f"{args.config} sets camera_motion = false"
     name = args.tracker or "bytetrack"
     if not TrackConfig.preset(name).tracker.camera_motion:
@@ -571,6 +575,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     if args.own_process:
         one_thread_here()  # before numpy: this process hands out the inputs, its workers track
     from .io.atomic import check_output
+    from .pipeline import video_outputs
 
     def fail(text: str) -> int:
         return _fail("track", text)
@@ -621,9 +626,11 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         options.update(_video_options(args, name, box, cfg))
     _warn_unused_settings(args, cfg, offline_given)
     jobs = plan(args.input, out, kind=kind, **options)
-    if kind == "detections":
-        for job in jobs:  # before anything runs: a job that cannot write fails now
+    for job in jobs:  # before anything runs: a job that cannot write fails now
+        if kind == "detections":
             check_output(job.out, force=args.force, name="--out")
+        else:
+            video_outputs(job.out, force=args.force, name="--out-dir")
     if args.scheduler is not None:
         if args.jobs is not None:
             return fail("--jobs goes with the local pool; the cluster has its own workers")
@@ -637,11 +644,14 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     else:
         outcomes = run_jobs(jobs, workers=args.jobs, keep_going=args.keep_going,
                             on_done=progress(len(jobs)))
-    width = max(len(o.input.name) for o in outcomes)
+    # an input's name, or the path given where its name says nothing (".", "..")
+    names = [o.input.name if o.input.name not in ("", ".", "..") else str(o.input)
+             for o in outcomes]
+    width = max(map(len, names))
     print(f"{'input':{width}s}  status  frames  tracks  seconds  output")
-    for o in outcomes:
+    for o, input_name in zip(outcomes, names):
         status = "ok" if o.ok else ("failed" if o.attempts else "not run")
-        print(f"{o.input.name:{width}s}  {status:6s}  {o.frames:6d}  {o.tracks:6d}  "
+        print(f"{input_name:{width}s}  {status:6s}  {o.frames:6d}  {o.tracks:6d}  "
               f"{o.seconds:7.1f}  {o.out if o.ok else o.error}")
     bad = [o for o in outcomes if not o.ok]
     print(f"{len(outcomes) - len(bad)} of {len(outcomes)} inputs tracked"

@@ -35,6 +35,8 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import cast
 
+import numpy as np
+
 from ._validate import decode_text
 from .models.box import BoxMotion
 from .tracking.box import TRACKERS, BoxTrackerConfig
@@ -302,6 +304,9 @@ def _kind(value: object, kind: str) -> bool:
     return True
 
 
+# the integers a file may give: those numpy's int64 holds
+_INT64 = (-(2 ** 63), 2 ** 63 - 1)
+
 _KIND_WORDS = {"bool": "true or false", "int": "an integer", "float": "a number",
                "str": "a string"}
 
@@ -364,7 +369,7 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
             raise ConfigError(f"{path}: {table} must be a table ([{table}])")
     tracker = dict(data.get("tracker", {}))
     name = tracker.pop("name", None)
-    if name is not None and name not in TRACKERS:
+    if name is not None and (not isinstance(name, str) or name not in TRACKERS):
         raise ConfigError(f"{path}: [tracker] name must be one of {sorted(TRACKERS)}; got "
                           f"{name!r}")
     cfg = base if base is not None else TrackConfig.preset(name or "bytetrack")
@@ -400,6 +405,10 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
             elif not _kind(value, kind):
                 raise ConfigError(f"{path}: [{table}] {key} must be {_KIND_WORDS[kind]}; got "
                                   f"{value!r}")
+            elif kind == "int" and not _INT64[0] <= value <= _INT64[1]:
+                # TOML allows it; numpy's int64 (the trackers' arrays) would overflow later
+                raise ConfigError(f"{path}: [{table}] {key} must be an integer from "
+                                  f"{_INT64[0]} to {_INT64[1]}; got {value!r}")
             elif kind == "float":
                 given[key] = float(value)
     try:
@@ -408,7 +417,13 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
         raise ConfigError(f"{path}: {exc}") from None
 
 
-def _value(v: object) -> str:
+def _value(v: object, kind: str | None = None) -> str:
+    """``v`` as a TOML value; numpy's scalars as Python's, and a whole float as an integer
+    where the field's ``kind`` is ``"int"`` (which :func:`read_config` reads)."""
+    if isinstance(v, np.generic):  # np.float64(0.5), np.False_: their repr is no TOML
+        v = v.item()
+    if kind == "int" and isinstance(v, float) and v.is_integer():
+        v = int(v)
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, str):
@@ -454,13 +469,16 @@ def config_toml(cfg: TrackConfig, derived: dict | None = None) -> str:
     """
     lines = ["# vistrack track configuration: vistrack track ... --config FILE",
              "", "[tracker]", f"name = {_value(cfg.name)}"]
-    lines += [f"{k} = {_value(v)}" for k, v in asdict(cfg.tracker).items()]
+    kinds = {f.name: cast(str, f.type) for f in (*fields(BoxTrackerConfig),
+                                                  *fields(OfflineConfig))}
+    lines += [f"{k} = {_value(v, kinds[k])}" for k, v in asdict(cfg.tracker).items()]
     if cfg.motion is not None:
         lines += ["", "[motion]"]
         for k in _MOTION:
             v = getattr(cfg.motion, k)
             lines.append(f"{k} = {_value([float(x) for x in v] if k == 'std_meas' else v)}")
-    lines += ["", "[offline]"] + [f"{k} = {_value(v)}" for k, v in asdict(cfg.offline).items()]
+    lines += ["", "[offline]"] + [f"{k} = {_value(v, kinds[k])}"
+                                  for k, v in asdict(cfg.offline).items()]
     if derived:
         lines += ["", "[derived]  # what the run derived from the data; not read back"]
         lines += [f"{k} = {_value(v)}" for k, v in derived.items()]

@@ -1491,15 +1491,19 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
     FileNotFoundError
         If a sequence lacks ``det/det.txt``, or ``gt/gt.txt`` with ``gt``.
     ValueError
-        If no sequences are given, or no object is detected in two frames or more.
+        If no sequences are given, a sequence is given twice (two paths of one folder), or
+        no object is detected in two frames or more.
     """
     import tempfile
 
+    from .batch import check_distinct
     from .tracking.fit import fit_box_motion, matched_series
 
     seqs = [Path(d) for d in seq_dirs]
     if not seqs:
         raise ValueError("no sequences to learn from")
+    # one sequence given twice would be learned from twice, and held out from itself
+    check_distinct(seqs)
     cfg = resolve_config(config)
     start = cfg.motion if cfg.motion is not None else BoxMotion()
     series: list[tuple[list[Series], float]] = []

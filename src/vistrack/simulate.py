@@ -180,8 +180,10 @@ def simulate(
     Raises
     ------
     ValueError
-        If ``dt`` is neither a scalar nor ``T-1`` or ``T`` values, or a model or the prior
-        is invalid (:func:`simulate_lgssm` lists the checks of the linear path).
+        If ``T`` is not a positive integer, ``n_series < 1``, ``x0`` is not finite, ``P0``
+        is not symmetric positive semi-definite, ``dt`` is neither a scalar nor ``T-1`` or
+        ``T`` values, or a model is invalid (:func:`simulate_lgssm` lists the checks of the
+        linear path), with either kind of model.
 
     See Also
     --------
@@ -203,6 +205,9 @@ def simulate(
     >>> xs.shape, ys.shape
     ((3, 20, 1), (3, 20, 1))
     """
+    # the checks of simulate_lgssm, made here for the nonlinear path too
+    if int(T) != T or T < 1:
+        raise ValueError(f"T must be a positive integer; got {T}")
     nonlinear = hasattr(motion, "jacobian") or hasattr(measurement, "jacobian")
     if not nonlinear:
         # neither model has a jacobian: both are linear
@@ -221,12 +226,21 @@ def _simulate_nonlinear(motion, measurement, T, x0, P0, dt, n_series, gen):
     mo = MotionFunctions(motion)
     me = MeasurementFunctions(measurement, mo.n)
     n, B = mo.n, 1 if n_series is None else int(n_series)
+    if B < 1:
+        raise ValueError(f"n_series must be >= 1; got {n_series}")
     x0_ = as_float_array(x0, "x0", ndim=(1,))
     if x0_.shape != (n,):
         raise ValueError(f"x0 must have shape ({n},); got {x0_.shape}")
-    x = np.broadcast_to(x0_, (B, n)).copy()
+    check_finite(x0_, "x0")
+    P0_ = None
     if P0 is not None:
-        x += gen.standard_normal((B, n)) @ psd_sqrt(as_float_array(P0, "P0", ndim=(2,))).T
+        P0_ = as_float_array(P0, "P0", ndim=(2,))
+        if P0_.shape != (n, n):
+            raise ValueError(f"P0 must have shape ({n}, {n}); got {P0_.shape}")
+        check_psd(P0_, "P0")
+    x = np.broadcast_to(x0_, (B, n)).copy()
+    if P0_ is not None:
+        x += gen.standard_normal((B, n)) @ psd_sqrt(P0_).T
     dts = np.broadcast_to(dt_steps(dt, T), (T,))
     times = np.concatenate([[0.0], np.cumsum(dts[1:])])
     Rs = psd_sqrt(me.Rm)

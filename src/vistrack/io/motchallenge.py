@@ -1378,6 +1378,13 @@ or CSV with a header."""
 def sequence_name(path: str | os.PathLike) -> str:
     """The name of the sequence a folder or a detections file holds: a folder's name, or a
     file's without its suffix, except MOTChallenge's ``SEQ/det/det.txt``, named ``SEQ``.
+    A path whose last part names nothing (``.``, ``..``) is named from the folder it
+    resolves to.
+
+    Raises
+    ------
+    ValueError
+        If the path resolves to no name (the root folder).
 
     Examples
     --------
@@ -1385,6 +1392,11 @@ def sequence_name(path: str | os.PathLike) -> str:
     ('MOT17-02', 'cam3')
     """
     p = Path(path)
+    if p.name in ("", ".", ".."):
+        p = p.resolve()
+        if p.name in ("", ".", ".."):
+            raise ValueError(f"{path} has no name to name its results after (it resolves "
+                             f"to {p})")
     if p.name == "det.txt" and p.parent.name == "det" and p.parent.parent.name:
         return p.parent.parent.name
     return p.name if p.is_dir() else p.stem

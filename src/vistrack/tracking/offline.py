@@ -212,9 +212,9 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float = 0
         if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
                 or not np.isfinite(v) or int(v) != v or v < least:
             raise ValueError(f"{name} must be a whole number of frames >= {least}; got {v!r}")
-    for name, v in (("link_iou", link_iou), ("extend_iou", extend_iou)):
-        if v is not None and not 0.0 <= v <= 1.0:  # an IoU (NaN fails this too)
-            raise ValueError(f"{name} must be an IoU in [0, 1]; got {v!r}")
+    for name, iou in (("link_iou", link_iou), ("extend_iou", extend_iou)):
+        if iou is not None and not 0.0 <= iou <= 1.0:  # an IoU (NaN fails this too)
+            raise ValueError(f"{name} must be an IoU in [0, 1]; got {iou!r}")
     if not np.isfinite(min_score):
         raise ValueError(f"min_score must be a finite number; got {min_score!r}")
     if not tracker.history:
