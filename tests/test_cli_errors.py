@@ -647,3 +647,17 @@ def test_a_configuration_file_without_a_name_goes_over_the_tracker_given(tmp_pat
     assert main(["track", "--print-config", "--config", str(path), "--scores",
                  "calibrated"]) == 2
     assert f"--scores over {path}: start_score must be in [0, 1]" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("flag, value", [("--jobs", "2"), ("--scheduler", "tcp://x:1")])
+def test_jobs_and_scheduler_go_with_several_inputs(tmp_path, capsys, flag, value):
+    """One input with --jobs went the several inputs' way: --out res.txt made a folder
+    res.txt/ holding NAME.txt, where without --jobs it is the file. Refused, as --keep-going
+    is, before anything is read or written."""
+    dets = tmp_path / "cam3.txt"
+    dets.write_text("1,-1,10,20,30,60,0.9,-1,-1,-1\n")
+    assert main(["track", str(dets), "--fps", "25", "--out", str(tmp_path / "res.txt"), flag,
+                 value]) == 2
+    one_line(capsys, "track", f"{flag} goes with several inputs (or a folder of sequences); "
+             f"{dets} is one")
+    assert not (tmp_path / "res.txt").exists()

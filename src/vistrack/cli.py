@@ -320,8 +320,7 @@ def _track(args: argparse.Namespace) -> int:
         # would (a console script's path has its own folder instead; a program calling main
         # keeps its own path); workers inherit it
         sys.path.insert(0, os.getcwd())
-    if (len(args.input) > 1 or is_benchmark(Path(args.input[0])) or args.jobs is not None
-            or args.scheduler is not None):
+    if len(args.input) > 1 or is_benchmark(Path(args.input[0])):
         return _track_many(args, offline_given)
 
     from .config import config_toml
@@ -333,6 +332,11 @@ def _track(args: argparse.Namespace) -> int:
 
     if args.keep_going:
         return fail("--keep-going goes with several inputs")
+    for flag in ("jobs", "scheduler"):
+        # one input took the several inputs' way: --out res.txt made a folder res.txt/
+        if getattr(args, flag) is not None:
+            return fail(f"--{flag} goes with several inputs (or a folder of sequences); "
+                        f"{args.input[0]} is one")
     args.input = args.input[0]
     if (args.out is None) == (args.out_dir is None):
         return fail("give --out RESULTS.txt (a MOTChallenge sequence's detections) or "
