@@ -262,3 +262,20 @@ def test_a_dask_worker_killed_mid_job_is_replaced_and_the_outputs_are_complete(t
     for o in outcomes:
         assert o.out.read_bytes() == _alone(o.input, tmp_path / f"{o.input.name}.txt")
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no partial file left
+
+
+def test_em_on_dask_names_a_malformed_f_as_in_memory():
+    """em on a Dask array fitted chunk by chunk checked the model against F's own size, so a
+    3 x 3 F for a 4-state prior was reported as Q's shape; it is named as F, as em names it
+    on a numpy array."""
+    from vistrack.filters import em
+
+    rng = np.random.default_rng(0)
+    ys = rng.normal(size=(4, 20, 2))
+    model = dict(F=np.eye(3), Q=np.eye(4), H=np.eye(2, 4), R=np.eye(2), x0=np.zeros(4),
+                 P0=np.eye(4))
+    match = r"F must have shape \(4, 4\) or \(T=20, 4, 4\); got \(3, 3\)"
+    with pytest.raises(ValueError, match=match):
+        em(ys, **model, max_iter=2)
+    with pytest.raises(ValueError, match=match):
+        em(da.from_array(ys, chunks=(2, 20, 2)), **model, max_iter=2)

@@ -354,14 +354,16 @@ def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tupl
     import dask
 
     from .._validate import check_linear_gaussian
-    from .learn import _check_em, _check_steps, _fit
+    from .learn import _check_em, _check_steps, _fit, _state_size
 
     ys, spans = _batch_blocks(ys)
     B, T, m = ys.shape
     if T == 0:
         raise ValueError(f"ys must have at least one step; got shape {ys.shape}")
     _check_steps(T, learn)
-    n = np.shape(F)[-1] if np.ndim(F) >= 2 else 0
+    # the prior's state size, where x0 and P0 agree on one, as em in memory: a 3 x 3 F for a
+    # 2-state prior is named as F, not Q
+    n = _state_size(np.shape(F)[-1] if np.ndim(F) >= 2 else 0, x0, P0)
     check_linear_gaussian(F, Q, H, R, n, m, T)
     x0, P0 = (x0 if _is_dask(x0) else np.asarray(x0, dtype=np.float64),
               P0 if _is_dask(P0) else np.asarray(P0, dtype=np.float64))
