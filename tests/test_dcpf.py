@@ -171,6 +171,9 @@ def test_configuration_is_checked():
         DCPFConfig(beta=-1)
     with pytest.raises(ValueError, match="at least one"):
         DCPFConfig(beta=0, gamma=0, eta=0)
+    for alpha in (np.inf, -1.0):  # a weight: inf made every association score inf or NaN
+        with pytest.raises(ValueError, match="alpha must be a finite number >= 0"):
+            DCPFConfig(alpha=alpha)
     tracker = DetectorConfidencePF()
     with pytest.raises(ValueError, match="needs the detector.s confidence"):
         tracker.update(np.zeros((10, 10, 3), np.uint8), Detections.from_xywh(np.zeros((0, 4))))

@@ -179,6 +179,8 @@ class DCPFConfig:
         for name in ("max_lost", "merge_time"):
             if not getattr(self, name) >= 0:
                 raise bad(name, ">= 0")
+        if not 0 <= self.alpha < np.inf:  # a weight (inf made every score inf or NaN)
+            raise bad("alpha", "a finite number >= 0")
 
 
 class ColourFeatures:
