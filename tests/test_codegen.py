@@ -182,6 +182,17 @@ def test_kernel_source_is_cached_in_the_cache_directory(tmp_path, monkeypatch):
     s2 = ref.pred_std[seen] ** 2 + 1.0
     ll = -0.5 * np.sum(np.log(2 * np.pi * s2) + (ys[0, seen, 0] - ref.pred_mean[seen]) ** 2 / s2)
     assert loglik[0] == pytest.approx(ll, rel=1e-14)
+    # a source file damaged into bytes that are not UTF-8 is rewritten (its reading raised
+    # UnicodeDecodeError, which stopped the filter)
+    damaged = bytearray(path.read_bytes())
+    damaged[100:102] = b"\xff\xfe"
+    path.write_bytes(bytes(damaged))
+    _codegen.batch_kernel.cache_clear()
+    try:
+        _codegen.batch_kernel(1, 1, *codes)
+    finally:
+        _codegen.batch_kernel.cache_clear()
+    assert path.read_text(encoding="utf-8") == _codegen.source(1, 1, *codes)
 
 
 def test_small_or_large_models_use_the_loop_kernel():

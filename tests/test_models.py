@@ -271,3 +271,20 @@ def test_detected_sizes_are_noisier_than_centres(bench):
     cx, cy, w, h = 1.4826 * np.median(np.abs(np.concatenate(errors)), axis=0)
     # measured: MOT15 0.10, 0.039, 0.18, 0.087; MOT17 0.022, 0.014, 0.038, 0.025
     assert w > 1.4 * h and w > 1.4 * cx and h > 1.4 * cy, (cx, cy, w, h)
+
+
+def test_box_motion_names_boxes_of_the_wrong_shape_and_a_negative_dt():
+    """The compiled noise kernel reads 4 values a row unchecked: (2, 3) boxes were read past
+    the array's end, a (4,) box failed in numba's typing; a negative dt gave negative
+    variances."""
+    from vistrack.models import BoxMotion
+
+    m = BoxMotion()
+    for bad in (np.ones((2, 3)), np.ones(4), np.ones((1, 5))):
+        for call in (m.Q_diag, m.R_diag, m.initial):
+            with pytest.raises(ValueError, match=r"boxes must have shape \(K, 4\)"):
+                call(bad)
+    with pytest.raises(ValueError, match="dt must be a finite number of frames >= 0; got -1"):
+        m.Q_diag(np.ones((1, 4)), dt=-1)
+    box = np.array([[100, 50, 20.0, 40.0]])
+    np.testing.assert_allclose(m.Q_diag(box, dt=2.0), 2 * m.Q_diag(box))

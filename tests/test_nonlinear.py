@@ -420,3 +420,21 @@ def test_measurement_functions_of_a_model_with_angles_alone_pickle():
     np.testing.assert_allclose(back.residual(a, b), [[-0.02]], atol=1e-12)
     m = back.mean(np.array([[np.pi - 0.01], [-np.pi + 0.01]]), np.array([0.5, 0.5]))
     assert abs(wrap_angle(m[0] - np.pi)) < 1e-12  # π (or -π), not 0
+
+
+def test_angles_at_the_boundary_are_in_minus_pi_pi():
+    """(-π, π], as documented: np.mod of a hair below 0 rounds up to 2π, so a hair above π
+    was wrapped to -π; and a bearing straight behind along -x with dy = -0.0 came out -π
+    (atan2(-0.0, -1)) where dy = +0.0 gives π, numpy and compiled alike."""
+    from vistrack.models.nonlinear import wrap_angle
+
+    above = np.nextafter(np.pi, 4)
+    assert -np.pi < wrap_angle(above) <= np.pi  # it was -π
+    w = wrap_angle(np.array([above, -np.pi, np.pi, 3 * np.pi, -3 * np.pi]))
+    assert ((w > -np.pi) & (w <= np.pi)).all()
+    rb = RangeBearing(ndim_state=4)
+    for x in ([-1.0, -0.0, 0, 0], [-1.0, 0.0, 0, 0]):
+        assert rb.h(np.array(x))[1] == np.pi
+        out = np.empty(2)
+        RangeBearing.jit_h(np.array(x), np.zeros(2), out)
+        assert out[1] == np.pi

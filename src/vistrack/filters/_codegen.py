@@ -477,7 +477,7 @@ def _write(path: Path, src: str) -> None:
     neither concurrent processes nor threads share one), replaced atomically: a reader never
     sees half a file."""
     with tempfile.NamedTemporaryFile("w", dir=path.parent, prefix=f"{path.stem}.",
-                                     suffix=".tmp", delete=False) as f:
+                                     suffix=".tmp", delete=False, encoding="utf-8") as f:
         f.write(src)
     try:
         os.replace(f.name, path)
@@ -517,7 +517,9 @@ def _source_file(name: str, src: str) -> Path | None:
                         RuntimeWarning, stacklevel=4)
                     continue
             p = d / f"{name}.py"
-            if not p.exists() or p.read_text() != src:
+            # compared as bytes: a file damaged into bytes that are not UTF-8 raised
+            # UnicodeDecodeError (not an OSError) and stopped the filter; it is rewritten
+            if not p.exists() or p.read_bytes() != src.encode("utf-8"):
                 _write(p, src)
             return p
         except OSError:

@@ -657,8 +657,10 @@ def run(x, xb, ys, obs, nobs, Linv, c, angles, dts, times, fp, hp, S, scheme, th
                 for a in range(no):
                     k = obs[t, a]
                     d = ys[t, k] - z[k]
-                    if angles[k]:
+                    if angles[k]:  # into (-π, π], as models.nonlinear.wrap_angle
                         d = math.pi - ((math.pi - d) % (2.0 * math.pi))
+                        if d <= -math.pi:
+                            d += 2.0 * math.pi
                     r[a] = d
                 for a in range(no):
                     v = 0.0

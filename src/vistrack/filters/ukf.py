@@ -111,7 +111,10 @@ def _state_moments_one(Y, Wm, Wc, Q, mean, cov):
 
 @njit(cache=True, error_model="numpy")
 def _wrap(d):
-    return math.pi - ((math.pi - d) % (2.0 * math.pi))
+    # into (-π, π], as models.nonlinear.wrap_angle (the modulo of a hair below 0 rounds up
+    # to 2π: a hair above π came out as -π)
+    w = math.pi - ((math.pi - d) % (2.0 * math.pi))
+    return w + 2.0 * math.pi if w <= -math.pi else w
 
 
 @kernel

@@ -61,6 +61,16 @@ def _size_scaled(boxes, std, dt):
     return out
 
 
+def _box_rows(boxes: np.ndarray) -> np.ndarray:
+    """``boxes`` as a C-contiguous float64 ``(K, 4)`` array, checked: the compiled kernel
+    reads each row's 4 values unchecked (a (K, 3) array was read past its end, a (4,) one
+    failed in numba's typing)."""
+    b = np.ascontiguousarray(boxes, dtype=np.float64)
+    if b.ndim != 2 or b.shape[1] != 4:
+        raise ValueError(f"boxes must have shape (K, 4), rows cx, cy, w, h; got {b.shape}")
+    return b
+
+
 class BoxMotion:
     r"""Constant velocity of box centre and size with size-scaled noise.
 
@@ -236,7 +246,7 @@ class BoxMotion:
         boxes : (K, 4) array_like
             Boxes ``[cx, cy, w, h]`` whose sizes scale the noise.
         dt : float
-            Time step, in frames; the variances are proportional to it.
+            Time step, in frames (finite, >= 0); the variances are proportional to it.
 
         Returns
         -------
@@ -248,7 +258,10 @@ class BoxMotion:
         >>> BoxMotion().Q_diag(np.array([[100, 50, 20.0, 40.0]]))[0, :4].round(4).tolist()
         [1.0, 4.0, 1.0, 4.0]
         """
-        return _size_scaled(np.ascontiguousarray(boxes, dtype=np.float64), self._std_q, float(dt))
+        dt = float(dt)
+        if not 0.0 <= dt < np.inf:  # variances proportional to it: -1 gave negative ones
+            raise ValueError(f"dt must be a finite number of frames >= 0; got {dt}")
+        return _size_scaled(_box_rows(boxes), self._std_q, dt)
 
     def Q(self, boxes: np.ndarray, dt: float = 1.0) -> np.ndarray:
         """Process noise of boxes over ``dt``: :meth:`Q_diag` as diagonal matrices.
@@ -290,7 +303,7 @@ class BoxMotion:
         >>> BoxMotion().R_diag(np.array([[100, 50, 20.0, 40.0]])).round(2).tolist()
         [[1.0, 4.0, 4.0, 8.16]]
         """
-        return _size_scaled(np.ascontiguousarray(boxes, dtype=np.float64), self.std_meas, 1.0)
+        return _size_scaled(_box_rows(boxes), self.std_meas, 1.0)
 
     def R(self, boxes: np.ndarray) -> np.ndarray:
         """Measurement noise of boxes: :meth:`R_diag` as diagonal matrices.
@@ -334,7 +347,7 @@ class BoxMotion:
         >>> mean[0, 4:].tolist(), np.sqrt(cov[0].diagonal()).round(3).tolist()
         ([0.0, 0.0, 0.0, 0.0], [2.0, 4.0, 2.0, 4.0, 1.25, 2.5, 1.25, 2.5])
         """
-        b = np.asarray(boxes, dtype=float)
+        b = _box_rows(boxes)
         s = self._scale(b)
         d = np.concatenate([(self.init_pos * self.std_pos * s) ** 2,
                             (self.init_vel * self.std_vel * s) ** 2], axis=1)

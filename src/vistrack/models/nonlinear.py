@@ -64,7 +64,10 @@ def wrap_angle(a: np.ndarray) -> np.ndarray:
     >>> wrap_angle([np.pi, -np.pi, 1.5 * np.pi, 0.25]).round(4)
     array([ 3.1416,  3.1416, -1.5708,  0.25  ])
     """
-    return np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2.0 * np.pi)
+    w = np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2.0 * np.pi)
+    # np.mod of a hair below 0 rounds up to 2π: a hair above π came out as -π, outside the
+    # range (and a residual at the boundary flipped by 2π)
+    return np.where(w <= -np.pi, w + 2.0 * np.pi, w)
 
 
 def numerical_jacobian(fun: Callable[[np.ndarray], np.ndarray], x: np.ndarray,
@@ -527,7 +530,8 @@ def _range_bearing_h(x, params, out):
     """
     dx, dy = x[0] - params[0], x[1] - params[1]
     out[0] = math.sqrt(dx * dx + dy * dy)
-    out[1] = math.atan2(dy, dx)
+    b = math.atan2(dy, dx)
+    out[1] = b + 2.0 * math.pi if b <= -math.pi else b  # (-π, π], as h: atan2(-0.0, -1) = -π
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -876,7 +880,8 @@ class RangeBearing(AngleAwareMeasurement):
         """
         x = np.asarray(x, dtype=float)
         dx, dy = x[..., 0] - self.sensor[0], x[..., 1] - self.sensor[1]
-        return np.stack([np.hypot(dx, dy), np.arctan2(dy, dx)], axis=-1)
+        # (arctan2(-0.0, -1) is -π: the bearing is wrapped into (-π, π] as documented)
+        return np.stack([np.hypot(dx, dy), wrap_angle(np.arctan2(dy, dx))], axis=-1)
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         r"""The Jacobian ``∂h/∂x``: with :math:`(d_x, d_y)` the position relative to the sensor
