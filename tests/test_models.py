@@ -288,3 +288,19 @@ def test_box_motion_names_boxes_of_the_wrong_shape_and_a_negative_dt():
         m.Q_diag(np.ones((1, 4)), dt=-1)
     box = np.array([[100, 50, 20.0, 40.0]])
     np.testing.assert_allclose(m.Q_diag(box, dt=2.0), 2 * m.Q_diag(box))
+
+
+def test_nonlinear_filters_name_a_linear_model_of_per_step_matrices():
+    """A LinearMotion or LinearMeasurement with matrices per step (T, ...) went into the
+    adapters of the nonlinear filters as one matrix: f of a (1, n) state came back (1, 1, n),
+    h failed in matmul, R was taken for one covariance. Named now, with where they go."""
+    from vistrack.models import LinearMeasurement, LinearMotion
+    from vistrack.models.adapters import MeasurementFunctions, MotionFunctions
+
+    with pytest.raises(ValueError, match=r"motion has per-step matrices \(3 steps\)"):
+        MotionFunctions(LinearMotion(np.stack([np.eye(1), 2 * np.eye(1), 3 * np.eye(1)]),
+                                     np.eye(1)))
+    with pytest.raises(ValueError, match=r"measurement has per-step matrices \(3 steps\)"):
+        MeasurementFunctions(LinearMeasurement(np.ones((3, 1, 2)), np.eye(1)), 2)
+    MotionFunctions(LinearMotion(np.eye(2), np.eye(2)))  # constant ones, as before
+    MeasurementFunctions(LinearMeasurement(np.ones((1, 2)), np.eye(1)), 2)
