@@ -101,10 +101,11 @@ class MotionFunctions:
             )
         if self.n < 1:
             raise TypeError(f"motion must have ndim_state >= 1; got {type(model).__name__}")
-        if self.linear and getattr(model, "n_steps", None) is not None:
+        steps = getattr(model, "n_steps", None)
+        if self.linear and steps is not None:
             # F (T, n, n) per step: f and jacobian took the stack for one matrix (a state of
             # (1, n) came back (1, 1, n))
-            raise ValueError(f"motion has per-step matrices ({model.n_steps} steps), which the "
+            raise ValueError(f"motion has per-step matrices ({steps} steps), which the "
                              "nonlinear filters do not take; give one F and Q (kalman_filter "
                              "takes per-step ones)")
         self._Q: dict = {}
@@ -202,10 +203,11 @@ class MeasurementFunctions:
         self.model = model
         self.linear = hasattr(model, "H") and not hasattr(model, "jacobian")
         if self.linear:
-            if getattr(model, "n_steps", None) is not None:
+            steps = getattr(model, "n_steps", None)
+            if steps is not None:
                 # H (T, m, n) or R (T, m, m) per step: h failed in matmul, R was taken for one
                 # covariance
-                raise ValueError(f"measurement has per-step matrices ({model.n_steps} steps), "
+                raise ValueError(f"measurement has per-step matrices ({steps} steps), "
                                  "which the nonlinear filters do not take; give one H and R "
                                  "(kalman_filter takes per-step ones)")
             self.H = np.asarray(cast(MeasurementModel, model).H(n), dtype=float)
