@@ -438,3 +438,19 @@ def test_angles_at_the_boundary_are_in_minus_pi_pi():
         out = np.empty(2)
         RangeBearing.jit_h(np.array(x), np.zeros(2), out)
         assert out[1] == np.pi
+
+
+def test_models_name_a_state_of_the_wrong_size_and_a_dt_of_several_values():
+    """A 4-entry state in CoordinatedTurn.f failed with "not enough values to unpack",
+    CoordinatedTurn.Q([1.0]) with float()'s "only 0-dimensional arrays", and
+    RangeBearing(ndim_state=4) took a 6-entry state, its Jacobian 2 x 4."""
+    ct, rb = CoordinatedTurn(), RangeBearing(ndim_state=4)
+    for call in (ct.f, ct.jacobian):
+        with pytest.raises(ValueError, match=r"x must be CoordinatedTurn states of 5 entries"):
+            call(np.zeros(4))
+    with pytest.raises(ValueError, match=r"dt must be one value; got shape \(1,\)"):
+        ct.Q([1.0])
+    for call in (rb.h, rb.jacobian):
+        with pytest.raises(ValueError, match=r"x must be RangeBearing states of 4 entries"):
+            call(np.ones(6))
+    assert rb.jacobian(np.ones((3, 4))).shape == (3, 2, 4)

@@ -27,6 +27,7 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._jit import njit
 from .._validate import as_float_array, check_matrix_stack, check_psd
@@ -68,6 +69,17 @@ def wrap_angle(a: np.ndarray) -> np.ndarray:
     # np.mod of a hair below 0 rounds up to 2π: a hair above π came out as -π, outside the
     # range (and a residual at the boundary flipped by 2π)
     return np.where(w <= -np.pi, w + 2.0 * np.pi, w)
+
+
+def _states(x: ArrayLike, n: int, model: str) -> np.ndarray:
+    """``x`` as float states ``(..., n)``, or ``ValueError`` naming ``x`` and the model (a
+    state of another size was unpacked into numpy's "not enough values to unpack", or taken
+    as it came)."""
+    a = np.asarray(x, dtype=float)
+    if a.ndim == 0 or a.shape[-1] != n:
+        raise ValueError(f"x must be {model} states of {n} entries (last axis); got shape "
+                         f"{a.shape}")
+    return a
 
 
 def numerical_jacobian(fun: Callable[[np.ndarray], np.ndarray], x: np.ndarray,
@@ -710,7 +722,7 @@ class CoordinatedTurn:
         >>> CoordinatedTurn().f(np.array([0.0, 0.0, 1.0, 0.0, np.pi / 2])).round(3)
         array([0.637, 0.637, 0.   , 1.   , 1.571])
         """
-        x = np.asarray(x, dtype=float)
+        x = _states(x, 5, "CoordinatedTurn")
         px, py, vx, vy, w = np.moveaxis(x, -1, 0)
         sa, ca, s, c, _, _ = self._coeffs(w, dt, derivatives=False)
         return np.stack([px + s * vx - c * vy, py + c * vx + s * vy,
@@ -745,7 +757,7 @@ class CoordinatedTurn:
                [0. , 1. , 1. ],
                [0. , 0. , 1. ]])
         """
-        x = np.asarray(x, dtype=float)
+        x = _states(x, 5, "CoordinatedTurn")
         _, _, vx, vy, w = np.moveaxis(x, -1, 0)
         sa, ca, s, c, ds, dc = self._coeffs(w, dt)
         J = np.zeros(x.shape[:-1] + (5, 5))
@@ -774,7 +786,10 @@ class CoordinatedTurn:
         >>> CoordinatedTurn(q=0.1, q_turn=0.01).Q(2.0).diagonal().round(3)
         array([0.267, 0.267, 0.2  , 0.2  , 0.02 ])
         """
-        d = float(_as_dt(dt))
+        d_arr = _as_dt(dt)
+        if d_arr.ndim:
+            raise ValueError(f"dt must be one value; got shape {d_arr.shape}")
+        d = float(d_arr)
         Q = np.zeros((5, 5))
         for i in range(2):
             Q[i, i] = self.q * d**3 / 3
@@ -878,7 +893,7 @@ class RangeBearing(AngleAwareMeasurement):
         >>> RangeBearing(sensor=(1.0, 1.0)).h(np.array([4.0, 5.0, 0.0, 0.0])).round(4)
         array([5.    , 0.9273])
         """
-        x = np.asarray(x, dtype=float)
+        x = _states(x, self.ndim_state, "RangeBearing")
         dx, dy = x[..., 0] - self.sensor[0], x[..., 1] - self.sensor[1]
         # (arctan2(-0.0, -1) is -π: the bearing is wrapped into (-π, π] as documented)
         return np.stack([np.hypot(dx, dy), wrap_angle(np.arctan2(dy, dx))], axis=-1)
@@ -904,7 +919,7 @@ class RangeBearing(AngleAwareMeasurement):
         array([[ 0.6 ,  0.8 ,  0.  ,  0.  ],
                [-0.16,  0.12,  0.  ,  0.  ]])
         """
-        x = np.asarray(x, dtype=float)
+        x = _states(x, self.ndim_state, "RangeBearing")
         dx, dy = x[..., 0] - self.sensor[0], x[..., 1] - self.sensor[1]
         r2 = dx * dx + dy * dy
         r = np.sqrt(r2)
