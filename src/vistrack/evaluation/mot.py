@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import decode_text
-from ..io.motchallenge import MOTTable
+from ..io.motchallenge import MOTTable, _row_cells
 
 _LSA: list[Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]] = []
 
@@ -216,15 +216,9 @@ def _lines_of(path: str, match: Callable[[list[float]], bool]) -> list[int]:
         return []
     found = []
     for k, raw in enumerate(text.splitlines(), start=1):  # as read_mot counts lines
-        text = raw.split("#", 1)[0].strip()
-        # a row's values as read_mot reads them: separated by commas, or on a line without a
-        # comma by spaces or tabs (a space-separated file's rows were never found: messages
-        # named the file without its line), a separator ending the line ignored
-        cells = [c.strip() for c in text.split(",")] if "," in text else text.split()
-        if len(cells) > 1 and not cells[-1]:
-            cells.pop()
-        try:  # a blank or comment line (np.loadtxt skips those) is not a row
-            row = [float(c) for c in cells]
+        try:  # a row's values as read_mot splits them (commas, or spaces and tabs); a blank
+            # or comment line (np.loadtxt skips those) is not a row
+            row = [float(c) for c in _row_cells(raw)]
         except ValueError:
             continue
         if len(row) >= 6 and match(row):

@@ -617,6 +617,20 @@ def _row_text(line: str) -> str:
     return line.split("#", 1)[0].strip()
 
 
+def _row_cells(line: str) -> list[str]:
+    """The values of ``line`` as text, as the careful reader splits them: the part before a
+    ``#`` (:func:`_row_text`), separated by commas, or on a line without a comma by spaces
+    or tabs, a separator ending the line ignored (as TrackEval ignores it); ``[]`` for a
+    line that holds no row."""
+    text = _row_text(line)
+    if not text:
+        return []
+    cells = [c.strip() for c in text.split(",")] if "," in text else text.split()
+    if len(cells) > 1 and not cells[-1]:
+        cells.pop()
+    return cells
+
+
 def _row_lines(lines: list[str]) -> list[int]:
     """The numbers (from 1) of the lines that hold a row, in order: the careful reader's row
     ``i`` is on line ``_row_lines(lines)[i]``. Its two parsers skip the same lines, those of
@@ -632,12 +646,9 @@ def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
     rows: list[list[float]] = []
     width = None
     for k, raw in enumerate(lines, start=1):
-        text = _row_text(raw)
-        if not text:
+        cells = _row_cells(raw)
+        if not cells:
             continue
-        cells = [c.strip() for c in text.split(",")] if "," in text else text.split()
-        if len(cells) > 1 and not cells[-1]:
-            cells.pop()  # a separator ending the line, as TrackEval ignores it
         # the line as it is, and what a '#' in it does to the count
         line = repr(raw.strip()) + (" ('#' starts a comment, to the end of the line)"
                                     if "#" in raw else "")
@@ -657,9 +668,9 @@ def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
             try:
                 v = float(c)
             except ValueError:
+                words = not rows and any(ch.isalpha() for cell in cells for ch in cell)
                 header = (" (a header line? MOTChallenge files have none; a .csv file's header "
-                          "names its columns)" if not rows and any(ch.isalpha() for ch in text)
-                          else "")
+                          "names its columns)" if words else "")
                 raise _bad(path, k, j, f"not a number: {c!r}{header}") from None
             if not np.isfinite(v):
                 raise _bad(path, k, j, f"not a finite number: {c!r}")
