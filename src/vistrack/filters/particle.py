@@ -346,15 +346,22 @@ def effective_sample_size(weights: ArrayLike) -> float:
     w = as_float_array(weights, "weights", ndim=(1,))
     if w.size == 0:
         raise ValueError("weights is empty: no particles")
+    top = _some_weight(w)
+    w = w / top  # first by the largest: the sum of 1e308 and 1e308 overflowed
+    return _ess(w / w.sum())
+
+
+def _some_weight(w: np.ndarray) -> float:
+    """The largest of the weights ``w`` (1-D, not empty), checked: each finite and >= 0, and
+    not all 0; each error names the first bad one."""
     bad = ~np.isfinite(w) | (w < 0)
     if bad.any():
         i = int(np.argmax(bad))
         raise ValueError(f"weights[{i}] is {w[i]}: weights must be finite and >= 0")
-    top = w.max()
+    top = float(w.max())
     if top == 0:
         raise ValueError(f"weights are all 0 (of {w.size} particles)")
-    w = w / top  # first by the largest: the sum of 1e308 and 1e308 overflowed
-    return _ess(w / w.sum())
+    return top
 
 
 def _ess(w: np.ndarray) -> float:
@@ -519,12 +526,7 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     if N == 0:
         raise ValueError(f"particles must hold at least one particle; got shape {x.shape}")
     check_finite(x, "particles")
-    bad = ~np.isfinite(w) | (w < 0)
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise ValueError(f"weights[{i}] is {w[i]}: weights must be finite and >= 0")
-    if not w.max() > 0:
-        raise ValueError(f"weights are all 0 (of {N} particles)")
+    _some_weight(w)
     n_starts = _count(n_starts, "n_starts", 1)
     max_iter = _count(max_iter, "max_iter", 0)
     max_points = _count(max_points, "max_points", 1)
