@@ -106,29 +106,6 @@ def check_distinct(paths: Iterable[str | Path]) -> None:
         seen[key] = p
 
 
-def _output_name(path: Path, kind: str) -> str:
-    """The name of ``path``'s outputs: :func:`~vistrack.io.motchallenge.sequence_name`
-    (``"detections"``), or a video's name without its suffix, a folder's name
-    (``"pixels"``); a path ending in ``.`` or ``..`` is named from the folder it resolves to.
-
-    Raises
-    ------
-    ValueError
-        If the path resolves to no name (the root folder).
-    """
-    from .io.motchallenge import sequence_name
-
-    if kind == "detections":
-        return sequence_name(path)
-    if path.is_file():
-        return path.stem
-    named = path.resolve() if path.name in ("", ".", "..") else path
-    if named.name in ("", ".", ".."):
-        raise ValueError(f"{path} has no name to name its outputs after (it resolves to "
-                         f"{named})")
-    return named.name
-
-
 @dataclass(frozen=True)
 class Job:
     """One input to track: ``kind`` ``"detections"`` (a sequence's detections into the
@@ -183,7 +160,7 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
     """
     if kind not in ("detections", "pixels"):
         raise ValueError(f"kind must be 'detections' or 'pixels'; got {kind!r}")
-    from .io.motchallenge import DETECTION_SUFFIXES
+    from .io.motchallenge import DETECTION_SUFFIXES, sequence_name
 
     if kind == "detections":
         # the configuration every job would make, made once here: an unknown option or a bad
@@ -211,9 +188,9 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
                 raise ValueError(f"{path} is not a MOTChallenge sequence folder (seqinfo.ini, "
                                  "det/det.txt), a detections file (.txt, .csv) nor a folder of "
                                  "sequences")
-            target = out / f"{_output_name(path, kind)}.txt"
-        else:
-            target = out / _output_name(path, kind)
+            target = out / f"{sequence_name(path)}.txt"
+        else:  # a video's name without its suffix, a folder's name
+            target = out / sequence_name(path)
         jobs.append(Job(path, target, kind, dict(options)))
     names: dict[Path, Path] = {}
     for job in jobs:
