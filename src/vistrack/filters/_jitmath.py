@@ -1,4 +1,5 @@
-"""Elementary functions for compiled loops that LLVM can vectorise.
+"""Elementary functions for compiled loops: ones LLVM can vectorise, and the angle wrap the
+compiled filters share.
 
 numba compiles ``math.exp`` to a call into the C library, one element at a time; a loop that
 calls it cannot be vectorised. :func:`exp_weight` is ``exp`` written as arithmetic (Cody-Waite
@@ -7,6 +8,8 @@ particle cloud's log weights into weights.
 """
 
 from __future__ import annotations
+
+import math
 
 from .._jit import intrinsic, njit
 
@@ -78,3 +81,12 @@ def exp_weight(x):
     # 2^k: the low bits of kd hold k; (k + 1023) << 52 is the double 2^k
     scale = _int_bits_as_float((_float_bits_as_int(kd) + 1023) << 52)
     return p * scale if x > -708.0 else (x if x != x else 0.0)
+
+
+@njit(inline="always", error_model="numpy")
+def wrap_angle(d):
+    """``d`` plus a multiple of ``2π``, in ``(-π, π]``: the compiled filters' residual of an
+    angle, as :func:`vistrack.models.nonlinear.wrap_angle` wraps arrays (the modulo of a hair
+    below 0 rounds up to ``2π``: a hair above ``π`` would come out as ``-π``)."""
+    w = math.pi - ((math.pi - d) % (2.0 * math.pi))
+    return w + 2.0 * math.pi if w <= -math.pi else w

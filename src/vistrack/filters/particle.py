@@ -608,7 +608,7 @@ _FUSED = """
 import math
 import numpy as np
 from numba import njit
-from vistrack.filters._jitmath import exp_weight
+from vistrack.filters._jitmath import exp_weight, wrap_angle
 from vistrack.filters._random import normal, resample_into
 from {fmod} import {fname} as f
 from {hmod} import {hname} as h
@@ -659,10 +659,8 @@ def run(x, xb, ys, obs, nobs, Linv, c, angles, dts, times, fp, hp, S, scheme, th
                 for a in range(no):
                     k = obs[t, a]
                     d = ys[t, k] - z[k]
-                    if angles[k]:  # into (-π, π], as models.nonlinear.wrap_angle
-                        d = math.pi - ((math.pi - d) % (2.0 * math.pi))
-                        if d <= -math.pi:
-                            d += 2.0 * math.pi
+                    if angles[k]:
+                        d = wrap_angle(d)
                     r[a] = d
                 for a in range(no):
                     v = 0.0

@@ -44,6 +44,7 @@ from ..models.protocols import (
     NonlinearMotionModel,
 )
 from ..types import Gaussian
+from ._jitmath import wrap_angle
 from ._kernels import back_solve, chol_factor, forward_solve
 from ._nonlinear import (
     check_gaussian,
@@ -109,14 +110,6 @@ def _state_moments_one(Y, Wm, Wc, Q, mean, cov):
             cov[b, a] = v
 
 
-@njit(cache=True, error_model="numpy")
-def _wrap(d):
-    # into (-π, π], as models.nonlinear.wrap_angle (the modulo of a hair below 0 rounds up
-    # to 2π: a hair above π came out as -π)
-    w = math.pi - ((math.pi - d) % (2.0 * math.pi))
-    return w + 2.0 * math.pi if w <= -math.pi else w
-
-
 @kernel
 @njit(cache=True, error_model="numpy")
 def _update_one(G, Z, Wm, Wc, R, y, angles, x, P, xo, Po):
@@ -146,10 +139,10 @@ def _update_one(G, Z, Wm, Wc, R, y, angles, x, P, xo, Po):
         obs = not math.isnan(y[k])
         nobs += obs
         d = y[k] - zhat[k] if obs else 0.0
-        e[k] = _wrap(d) if angles[k] else d
+        e[k] = wrap_angle(d) if angles[k] else d
         for i in range(K):
             d = Z[i, k] - zhat[k]
-            rz[i, k] = (_wrap(d) if angles[k] else d) if obs else 0.0
+            rz[i, k] = (wrap_angle(d) if angles[k] else d) if obs else 0.0
     S = np.empty((m, m))
     for a in range(m):
         for b in range(a + 1):
