@@ -21,6 +21,11 @@ since it pins ``filterpy<2`` and ``opencv-python<5``. boxmot refuses scores outs
 PointRCNN's raw scores are clipped to [0, 1] for it, which scored higher than passing them
 through the logistic function (KITTI HOTA of its OC-SORT 58.6 against 56.3).
 
+``--sets MOT15-ACF`` runs a set held out from the defaults' choice: MOT15's official public
+detections, from the ACF detector, on the five training sequences that have them and ground
+truth, scores unbounded (about -0.8 to 139). No setting was chosen on it; it is run by name
+only, and written to a section of its own.
+
 ``--every K`` tracks every set at a K-th of its frame rate: each sequence's every K-th frame
 (1, 1 + K, ...; detections and ground truth), renumbered, with ``frameRate`` divided by K. No
 setting was chosen at those rates; the COMBINED tables go to a section of their own.
@@ -85,6 +90,12 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data"
 SETS = {"MOT15": "mot15", "MOT17": "mot17", "MOT16-FairMOT": "mot16-fairmot",
         "KITTI": "kitti-tracking"}
+HELD_OUT = {"MOT15-ACF": ("mot15", "det_public_acf.txt")}
+"""Shared sets no setting was chosen on, run by name only (``--sets MOT15-ACF``): the folder
+in ``../shared/data`` and the detections file beside ``det.txt`` in each sequence's ``det/``.
+MOT15-ACF is MOT15's official public detections, from the ACF detector, on the five
+sequences that have them and ground truth: another detector on MOT15's scenes, its scores
+unbounded (about -0.8 to 139)."""
 VISTRACK = ("vistrack", "vistrack offline")
 
 
@@ -116,6 +127,17 @@ def sequences(root: str | Path) -> list[Path]:
                   and (p / "det" / "det.txt").exists())
 
 
+def held_out(name: str, root: Path) -> Path:
+    """The held-out set ``name`` (:data:`HELD_OUT`) laid out as the others are, under
+    ``root``: each of its sequences that has the set's detections file and ground truth, with
+    that file as ``det/det.txt``, the ground truth and ``seqinfo.ini`` as they are."""
+    folder, det = HELD_OUT[name]
+    for d in sorted((DATA / folder).iterdir()):
+        if (d / "det" / det).exists() and (d / "gt" / "gt.txt").exists():
+            shutil.copy(d / "det" / det, _beside(d, root / d.name))
+    return root
+
+
 def own_sets(given: list[str]) -> dict[str, Path]:
     """``--set NAME=DIR`` options as ``{NAME: DIR}``, each DIR holding one sequence folder
     or more; exits naming the option that is wrong."""
@@ -125,7 +147,7 @@ def own_sets(given: list[str]) -> dict[str, Path]:
         name = name.strip()
         if not eq or not name or not folder:
             sys.exit(f"--set {g}: expected NAME=DIR")
-        if name in SETS or name in out:
+        if name in SETS or name in HELD_OUT or name in out:
             sys.exit(f"--set {g}: {name!r} names a set already")
         root = Path(folder).expanduser()
         if not root.is_dir():
@@ -368,7 +390,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sets", default=None, help="the shared sets to run, of "
-                    f"{', '.join(SETS)} (all of them, unless --set is given)")
+                    f"{', '.join(SETS)} (all of them, unless --set is given), or "
+                    f"{', '.join(HELD_OUT)} (held out: by name only)")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=DIR", dest="own",
                     help="a set of your own: MOTChallenge sequence folders in DIR")
     ap.add_argument("--no-peers", action="store_true")
@@ -386,17 +409,21 @@ def main() -> None:
     own = own_sets(args.own)
     given = args.sets if args.sets is not None else "" if own else ",".join(SETS)
     names = [s.strip() for s in given.split(",") if s.strip()]
-    bad = [s for s in names if s not in SETS]
+    bad = [s for s in names if s not in SETS and s not in HELD_OUT]
     if bad:
-        sys.exit(f"unknown set {bad[0]!r}; sets: {', '.join(SETS)} (and your own: --set "
-                 "NAME=DIR)")
+        sys.exit(f"unknown set {bad[0]!r}; sets: {', '.join([*SETS, *HELD_OUT])} (and your "
+                 "own: --set NAME=DIR)")
+    held = [s for s in names if s in HELD_OUT]
+    if held and args.write and (len(held) < len(names) or own or args.every > 1
+                                or args.stride > 1 or args.drop):
+        sys.exit(f"--write with {held[0]} takes it alone, at its own frame rate: its tables "
+                 "have a section of their own")
     if names and not DATA.exists():
         sys.exit(f"{DATA} not found: the shared data must be beside this checkout")
     if own and args.write:
         sys.exit("--write takes the shared sets' tables alone; --set's are printed")
     config = config_given(args.config, args.write)
     mine = () if config is None else tuple(f"{v} ({args.config.name})" for v in VISTRACK)
-    roots = {**{n: DATA / SETS[n] for n in names}, **own}
     if args.every < 1 or args.stride < 1 or (args.every > 1 and args.stride > 1):
         sys.exit(f"--every and --stride must be at least 1, and one of them 1; got "
                  f"{args.every} and {args.stride}")
@@ -412,6 +439,8 @@ def main() -> None:
     parts, notes = [], []
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
+        roots = {**{n: DATA / SETS[n] if n in SETS else held_out(n, tmp / "held-out" / n)
+                    for n in names}, **own}
         for name, root in roots.items():
             seqs = peer_seqs = sequences(root)
             if args.every > 1:
@@ -475,8 +504,18 @@ def main() -> None:
             print(parts[-1], flush=True)
     env = (f"Python {platform.python_version()}, numpy {np.__version__}, "
            f"{time.strftime('%Y-%m-%d')}")
-    cmd = "python bench/accuracy_mot.py" + (f" --jitter {args.jitter}" if args.jitter else "")
-    if args.drop:
+    cmd = ("python bench/accuracy_mot.py" + (f" --sets {','.join(held)}" if held else "")
+           + (f" --jitter {args.jitter}" if args.jitter else ""))
+    if held:
+        section = ("## A detector no setting was chosen on: MOT15's ACF detections\n\n"
+                   f"Measured with `{cmd}` ({env}): MOT15's official public detections, from "
+                   "the ACF detector, on the five training sequences that have them and "
+                   "ground truth (`det/det_public_acf.txt` in `../shared/data/mot15`), its "
+                   "scores unbounded (about -0.8 to 139); otherwise as above. The peers are "
+                   "given the raw scores, as a user would give them (boxmot's clipped to [0, "
+                   "1], which it requires: almost every one becomes 1). frames/s is the "
+                   "tracker alone.\n\n" + "\n".join(parts))
+    elif args.drop:
         cmd += f" --drop {args.drop:g}"
         section = (f"## A detector that drops frames: the four sets\n\nMeasured with `{cmd}` "
                    f"({env}): each sequence's detections without the rows of {args.drop:.0%} "

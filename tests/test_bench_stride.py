@@ -188,3 +188,36 @@ def test_goals_check_a_configuration_files_rows_as_the_defaults():
     assert "A -6.0 HOTA against its best peer MISSED" in lines[2]
     # the file's offline row must be first on MOTA too: 43 against 44
     assert "MOTA 43.0 vs 44.0 MISSED" in lines[3]
+
+
+def test_held_out_set_takes_its_own_detections_file(tmp_path, monkeypatch):
+    """``--sets MOT15-ACF``: each sequence of the shared folder that has the set's detections
+    file and ground truth, laid out with that file as ``det/det.txt``; a sequence without
+    either is left out, and the folder's own ``det.txt`` is not read."""
+    data = tmp_path / "data"
+    (data / "mot15").mkdir(parents=True)
+    a, b, c = (_sequence(tmp_path / n).rename(data / "mot15" / n) for n in ("A", "B", "C"))
+    (a / "det" / "det_public_acf.txt").write_text("1,-1,5,6,7,8,42.5\n")
+    (b / "det" / "det_public_acf.txt").write_text("1,-1,5,6,7,8,-0.3\n")
+    (b / "gt" / "gt.txt").unlink()  # no ground truth: not scored, left out
+    monkeypatch.setattr(acc, "DATA", data)
+    root = acc.held_out("MOT15-ACF", tmp_path / "out")
+    assert [d.name for d in acc.sequences(root)] == ["A"]
+    d = root / "A"
+    assert (d / "det" / "det.txt").read_text() == "1,-1,5,6,7,8,42.5\n"
+    assert (d / "gt" / "gt.txt").read_text() == (a / "gt" / "gt.txt").read_text()
+    assert (d / "seqinfo.ini").read_text() == (a / "seqinfo.ini").read_text()
+    assert c.exists()
+
+
+def test_held_out_sets_are_run_by_name_and_written_alone(tmp_path):
+    """A held-out set is no default set, and ``--write`` takes it alone."""
+    import subprocess
+
+    assert "MOT15-ACF" not in acc.SETS and "MOT15-ACF" in acc.HELD_OUT
+    bench = Path(acc.__file__)
+    r = subprocess.run([sys.executable, str(bench), "--sets", "MOT15,MOT15-ACF", "--no-peers",
+                        "--write", str(tmp_path / "x.md")], capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 1 and "--write with MOT15-ACF takes it alone" in r.stderr
+    assert not (tmp_path / "x.md").exists()
