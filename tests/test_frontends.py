@@ -781,6 +781,21 @@ def test_find_blobs_opens_and_closes_as_scipy_at_every_size():
                                            np.sort(want.centroids, axis=0))
 
 
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.float32, np.float64, np.int32])
+def test_threshold_converts_colour_of_any_depth_to_grey(dtype):
+    """A BGR pixel (100, 150, 200) is grey 0.114 * 100 + 0.587 * 150 + 0.299 * 200 = 159.25
+    (OpenCV's weights): above 159, not above 160, whatever the image's type. float64 (numpy's
+    own float) stopped in cv2.cvtColor, which takes none but 8 and 16 bits and float32."""
+    from vistrack.frontends import threshold
+
+    im = np.zeros((2, 3, 3), dtype)
+    im[1, 2] = (100, 150, 200)
+    assert threshold(im, 158.5).tolist() == [[0, 0, 0], [0, 0, 255]]
+    assert threshold(im, 160).tolist() == [[0] * 3] * 2
+    bgra = np.concatenate([im, np.full((2, 3, 1), 7, dtype)], axis=2)
+    assert threshold(bgra, 158.5).tolist() == [[0, 0, 0], [0, 0, 255]]
+
+
 def test_background_and_blobs_find_the_people_of_pets09():
     """Real data: on PETS09-S2L1 (MOT15's ground truth), most blobs lie on annotated people."""
     from vistrack.io import read_mot

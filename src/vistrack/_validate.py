@@ -18,6 +18,7 @@ if TYPE_CHECKING:
 __all__ = [
     "as_box",
     "as_uint8_image",
+    "bgr_to_grey",
     "as_float_array",
     "check_finite",
     "check_matrix_stack",
@@ -83,6 +84,23 @@ def as_uint8_image(image: ArrayLike, name: str = "image", channels: tuple[int, .
 
         im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY if im.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
     return im
+
+
+def bgr_to_grey(im: np.ndarray) -> np.ndarray:
+    """The grey image of a BGR (or BGRA) ``(H, W, C)`` image of any numeric type: OpenCV's
+    conversion where it takes the type (uint8, uint16, float32), otherwise OpenCV's weights
+    (0.114 B + 0.587 G + 0.299 R) in float64, rounded back into an integer type (OpenCV
+    refuses float64, numpy's own float, and the wider integers)."""
+    im = np.ascontiguousarray(im[..., :3])
+    if im.dtype in (np.uint8, np.uint16, np.float32):
+        import cv2
+
+        return cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
+    g = im.astype(np.float64) @ np.array([0.114, 0.587, 0.299])
+    if np.issubdtype(im.dtype, np.integer):
+        info = np.iinfo(im.dtype)
+        return np.clip(np.rint(g), info.min, info.max).astype(im.dtype)
+    return g
 
 
 def as_box(box: ArrayLike, name: str = "box") -> np.ndarray:

@@ -21,6 +21,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
+from .._validate import bgr_to_grey
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -139,9 +140,7 @@ def threshold(image: ArrayLike, level: float, above: bool = True) -> np.ndarray:
     """
     im = np.asarray(image)
     if im.ndim == 3:
-        import cv2
-
-        im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
+        im = bgr_to_grey(im)
     m = im > level if above else im < level
     return m.astype(np.uint8) * 255
 

@@ -5,7 +5,8 @@ give the same positions.
 1. **band-pass**: a Gaussian of ``noise_size`` removes pixel noise, a boxcar of
    ``smoothing_size`` (default ``diameter``) estimates the background (in the image's own
    integer type, as trackpy computes it), which is subtracted;
-   values below ``threshold`` become 0; the result is scaled to 0–255 integers;
+   values below ``threshold`` become 0; the result is scaled to integers, over the range of
+   the image's own integer type (0–65535 for 16 bits), 0–255 for a float image (trackpy's);
 2. **local maxima**: pixels equal to the grey dilation over a square inscribed in the circle of
    diameter ``separation`` (default ``diameter + 1``), brighter than the ``percentile`` of the
    image's non-zero pixels, and away from the margins;
@@ -27,6 +28,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
+from .._validate import bgr_to_grey
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -206,9 +208,7 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
 
     im = np.asarray(image)
     if im.ndim == 3:
-        import cv2
-
-        im = cv2.cvtColor(np.ascontiguousarray(im[..., :3]), cv2.COLOR_BGR2GRAY)
+        im = bgr_to_grey(im)
     if im.ndim != 2:
         raise ValueError(f"image must be (H, W) or (H, W, 3); got shape {im.shape}")
     diameter = int(diameter)
@@ -230,7 +230,7 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     if threshold is None:
         threshold = 1.0 if np.issubdtype(im.dtype, np.integer) else 1.0 / 255
     raw = im.astype(np.float64)
-    # 1. band-pass, then integers 0-255. As trackpy does, the boxcar of an integer image is
+    # 1. band-pass, then integers. As trackpy does, the boxcar of an integer image is
     # taken in its own integer type (each pass rounds)
     import cv2
 
@@ -246,9 +246,17 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         ndimage.uniform_filter1d(back, smooth, axis, output=back, mode="nearest")
     bp = low - back.astype(np.float64)
     bp = np.where(bp >= threshold, bp, 0.0)
+    # integers as trackpy makes them: the input's own integer type (a 16-bit camera's
+    # 0-65535), 0-255 for a float image
+    kind = im.dtype if np.issubdtype(im.dtype, np.integer) else np.dtype(np.uint8)
     top = bp.max()
-    scale = 255.0 / top if top > 0 else 1.0
-    img = (scale * bp.clip(min=0.0)).astype(np.uint8)
+    scale = float(np.iinfo(kind).max) / top if top > 0 else 1.0
+    img = scale * bp.clip(min=0.0)
+    if kind in (np.uint8, np.uint16, np.int16):
+        img = img.astype(kind)
+    else:  # OpenCV's dilation takes no wider integers: their values, truncated, as floats
+        # (a 64-bit integer's top, 2^63 - 1 as a float, would not fit back into it)
+        img = np.floor(img)
     empty = Spots(np.zeros((0, 2)), np.zeros(0), np.zeros(0))
     # 2. local maxima
     lit = img[img > 0]
