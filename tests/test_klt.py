@@ -43,6 +43,21 @@ def test_features_follow_a_known_subpixel_motion():
     assert f.residuals[old].max() < 0.3 and len(f) >= 160
 
 
+def test_a_frame_of_another_size_is_refused_with_or_without_features():
+    """The contract (``ValueError`` on a frame whose size differs from the previous one's)
+    holds after a frame with no features too, where the check was skipped and the new size
+    taken in silence; after ``reset`` any size starts afresh."""
+    rng = np.random.default_rng(0)
+    small = shifted(texture(rng, (30, 40)), 0, 0)
+    for first in (np.zeros((60, 80), np.uint8), shifted(texture(rng, (60, 80)), 0, 0)):
+        klt = KLTTracker(20)
+        assert (len(klt.track(first)) > 0) == (first.max() > 0)
+        with pytest.raises(ValueError, match="image is 40x30; the previous frame was 80x60"):
+            klt.track(small)
+        klt.reset()
+        assert len(klt.track(small)) > 0
+
+
 def test_large_motions_are_found_by_discrete_search():
     """Without a pyramid, Lucas-Kanade loses a 9-pixel jump; the NCC search finds it."""
     rng = np.random.default_rng(1)

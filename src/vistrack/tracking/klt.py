@@ -328,10 +328,11 @@ class KLTTracker:
         """
         grey = as_uint8_image(image, grey=True)
         terminated = 0
+        if self._prev is not None and grey.shape != self._prev.shape:
+            # (whether or not the last frame left features to follow)
+            raise ValueError(f"image is {grey.shape[1]}x{grey.shape[0]}; the previous "
+                             f"frame was {self._prev.shape[1]}x{self._prev.shape[0]}")
         if self._prev is not None and len(self.ids):
-            if grey.shape != self._prev.shape:
-                raise ValueError(f"image is {grey.shape[1]}x{grey.shape[0]}; the previous "
-                                 f"frame was {self._prev.shape[1]}x{self._prev.shape[0]}")
             p0 = self.points.astype(np.float32)
             p1, ok = self._lk(self._prev, grey, p0)
             # the patch must still look like the last frame's
