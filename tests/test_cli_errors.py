@@ -354,6 +354,16 @@ def test_track_one_starts_from_the_ground_truth_s_first_box_without_init(tmp_pat
     assert err.startswith("vistrack track-one: error: --init (x, y, w, h) = (5000, 10, 20, 20) "
                           "lies outside the "), err
     assert not (tmp_path / "b.txt").exists()
+    # without --init, a start outside the frame is --gt's first box (another sequence's
+    # ground truth, most likely), and so named: it blamed --init, which was not given
+    other = tmp_path / "other.txt"
+    other.write_text("5001,11,20,20\n")
+    assert main(["track-one", str(VIDEO), "--gt", str(other), "--out",
+                 str(tmp_path / "b.txt")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"vistrack track-one: error: the start, {other}'s first box (x, y, w, "
+                          "h) = (5001, 11, 20, 20) lies outside the "), err
+    assert not (tmp_path / "b.txt").exists()
 
 
 @pytest.mark.parametrize("init", ["1,2,3,nan", "1,2,0,4", "1,2,3", "1\t2\t3", "1,,2,3,4"])
@@ -590,6 +600,46 @@ def test_eval_errors_are_one_line_and_debug_shows_them(tmp_path, capsys):
     one_line(capsys, "eval", f"{missing}: No such file or directory")
     assert main(["eval", "--debug", "--gt", str(missing), "--pred", str(GT)]) == 2
     assert "FileNotFoundError" in capsys.readouterr().err
+
+
+def test_a_front_end_or_detections_file_that_is_no_file_is_named(tmp_path, capsys):
+    """``--frontend detections:`` with no name read ``.`` and said ".: Is a directory",
+    ``onnx:`` said ". does not exist"; a folder given as the file, or to ``--detections``,
+    was "Is a directory" without the option. Each names the option now, and nothing is
+    written."""
+    for spec, msg in (("detections:", "--frontend detections:FILE needs a file's name after "
+                                      "'detections:'; got 'detections:'"),
+                      ("onnx:", "--frontend onnx:MODEL.onnx needs a file's name after 'onnx:'; "
+                                "got 'onnx:'"),
+                      (f"detections:{tmp_path}",
+                       f"{tmp_path} is a folder, not a file (--frontend detections:FILE)"),
+                      (f"onnx:{tmp_path}",
+                       f"{tmp_path} is a folder, not a file (--frontend onnx:MODEL.onnx)")):
+        assert main(["track", str(VIDEO), "--frontend", spec, "--out-dir",
+                     str(tmp_path / "o"), "--quiet"]) == 2
+        one_line(capsys, "track", msg)
+    seq = tmp_path / "seq"
+    (seq / "det").mkdir(parents=True)
+    (seq / "det" / "det.txt").write_text("1,-1,10,10,20,40,0.9\n")
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=5\n"
+                                     "imWidth=100\nimHeight=100\n")
+    assert main(["track", str(seq), "--detections", str(tmp_path), "--out",
+                 str(tmp_path / "o.txt")]) == 2
+    one_line(capsys, "track", f"{tmp_path} is a folder, not a detections file "
+             "(--detections FILE)")
+    assert not (tmp_path / "o").exists() and not (tmp_path / "o.txt").exists()
+
+
+def test_eval_refuses_one_pair_beside_folders(tmp_path, capsys):
+    """``--gt``/``--pred`` beside ``--gt-dir``/``--pred-dir``: the pair was dropped without
+    a word and the folders scored."""
+    for extra in (["--gt-dir", str(tmp_path)], ["--pred-dir", str(tmp_path)],
+                  ["--gt-dir", str(tmp_path), "--pred-dir", str(tmp_path)]):
+        assert main(["eval", "--gt", str(GT), "--pred", str(GT), *extra]) == 2
+        one_line(capsys, "eval", "give --gt and --pred, or --gt-dir and --pred-dir, not both")
+    assert main(["eval", "--pred", str(GT), "--gt-dir", str(tmp_path),
+                 "--pred-dir", str(tmp_path)]) == 2
+    one_line(capsys, "eval", "give --gt and --pred, or --gt-dir and --pred-dir, not both")
 
 
 def test_a_videos_ground_truth_is_checked_before_anything_is_tracked(tmp_path, capsys):

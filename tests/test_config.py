@@ -179,6 +179,32 @@ def test_print_config_read_back_gives_identical_tracks(seq, tmp_path, offline):
     assert a == b and len(a.splitlines()) > 500
 
 
+def test_print_config_of_a_run_given_fps_warns_where_read_back_without_it(seq, tmp_path):
+    """The frame rate is the input's, not a setting: a file printed by a run given ``--fps``
+    and read back without it tracked at the sequence's own rate, other tracks without a
+    word. The file records the option ([derived] fps_option); read back without it (or with
+    another) the run warns, and with it the tracks are identical."""
+    r = cli(seq, "--out", tmp_path / "a.txt", "--print-config", "--fps", "12.5")
+    assert r.returncode == 0, r.stderr
+    (tmp_path / "used.toml").write_text(r.stdout)
+    assert "fps_option = 12.5" in r.stdout and "frame_rate = 12.5" in r.stdout
+    warning = (f"vistrack track: warning: {tmp_path / 'used.toml'} was printed by a run given "
+               "--fps 12.5 ([derived] fps_option); this run is given ")
+    r = cli(seq, "--out", tmp_path / "b.txt", "--config", tmp_path / "used.toml")
+    assert r.returncode == 0 and warning + "no --fps (its input's frame rate): give --fps " \
+        "12.5 for that run's tracks" in r.stderr, r.stderr
+    assert (tmp_path / "b.txt").read_text() != (tmp_path / "a.txt").read_text()
+    r = cli(seq, "--out", tmp_path / "c.txt", "--config", tmp_path / "used.toml", "--fps", "10")
+    assert r.returncode == 0 and warning + "--fps 10" in r.stderr, r.stderr
+    r = cli(seq, "--out", tmp_path / "d.txt", "--config", tmp_path / "used.toml", "--fps",
+            "12.5")
+    assert r.returncode == 0 and "warning" not in r.stderr, r.stderr
+    assert (tmp_path / "d.txt").read_text() == (tmp_path / "a.txt").read_text()
+    # printed without --fps: nothing recorded, nothing to warn of
+    r = cli(seq, "--out", tmp_path / "e.txt", "--print-config")
+    assert r.returncode == 0 and "fps_option" not in r.stdout
+
+
 @pytest.mark.parametrize("flags", [[], ["--high", "0.5", "--offline"], ["--tracker", "sort"],
                                    ["--config", "FILE", "--max-lost", "1"]])
 def test_print_config_without_input_is_what_a_run_prints(seq, tmp_path, flags):

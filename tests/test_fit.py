@@ -264,3 +264,25 @@ def test_a_sequence_given_twice_is_refused(tmp_path, capsys, monkeypatch):
     assert "SIM is given twice" in capsys.readouterr().err and not out.exists()
     # distinct sequences: as before
     assert len(fit_sequences([seq, other], gt=True).fit.per_sequence) == 2
+
+
+def test_a_file_or_a_folder_of_sequences_given_to_fit(tmp_path, capsys):
+    """A file given as a sequence was read as its seqinfo.ini ("not a valid INI file", "byte
+    16 is not UTF-8", or ".../seqinfo.ini/det/det.txt does not exist"): named as a file now.
+    A folder of sequences, which ``vistrack track`` takes for its sequences, said
+    "seqinfo.ini does not exist": ``vistrack fit`` takes it for its sequences too, and
+    ``fit_sequences`` names it."""
+    rng = np.random.default_rng(7)
+    seqs = [_sequence(tmp_path / "bench" / f"SIM-{k}", rng) for k in range(2)]
+    out = tmp_path / "fit.toml"
+    for f in (seqs[0] / "seqinfo.ini", seqs[0] / "det" / "det.txt"):
+        assert main(["fit", str(f), "--gt", "--out", str(out), "--quiet"]) == 2
+        assert capsys.readouterr().err == (f"vistrack fit: error: {f} is a file, not a sequence "
+                                           "folder (seqinfo.ini, det/det.txt)\n")
+    assert not out.exists()
+    with pytest.raises(FileNotFoundError, match="is a folder of sequences; give the sequence "
+                                                "folders in it"):
+        fit_sequences([tmp_path / "bench"], gt=True)
+    assert main(["fit", str(tmp_path / "bench"), "--gt", "--out", str(out), "--quiet"]) == 0
+    assert "learned from the ground truth of 2 of 2 sequences" in capsys.readouterr().out
+    assert read_config(out).motion == fit_sequences(seqs, gt=True).config.motion

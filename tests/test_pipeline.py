@@ -945,6 +945,36 @@ def test_the_results_never_overwrite_the_detections_file(tmp_path):
     with pytest.raises(ValueError, match="is the detections file"):
         track_sequence(seq, seq / "det" / "det.txt", force=True)
     assert det.read_bytes() == before == (seq / "det" / "det.txt").read_bytes()
+    # nor the sequence's other files: with --force its seqinfo.ini became results (the next
+    # run failed on it) and its ground truth was replaced by the tracks without a word;
+    # other detections given, its own det.txt is still its own
+    (seq / "gt").mkdir()
+    (seq / "gt" / "gt.txt").write_text("1,1,10,10,20,40,1,1,1\n")
+    files = {p: p.read_bytes() for p in seq.rglob("*") if p.is_file()}
+    for out, what in ((seq / "seqinfo.ini", "seqinfo.ini"), (seq / "gt" / "gt.txt", "ground truth"),
+                      (seq / "det" / ".." / "det" / "det.txt", "detections file")):
+        with pytest.raises(ValueError, match=re.escape(
+                f"--out {out} is the sequence's {what}: the results would overwrite it; give "
+                "another --out")):
+            track_sequence(seq, out, detections=det, force=True)
+    assert {p: p.read_bytes() for p in seq.rglob("*") if p.is_file()} == files
+
+
+def test_a_detection_beyond_the_sequences_frames_is_named_by_its_line(tmp_path):
+    """A detection on a frame past seqinfo.ini's seqLength names the first such line, as
+    ``vistrack eval`` names a ground-truth row past it."""
+    from vistrack.pipeline import track_sequence
+
+    seq = tmp_path / "seq"
+    (seq / "det").mkdir(parents=True)
+    (seq / "det" / "det.txt").write_text(
+        "".join(f"{f},-1,{10 + 2 * f},10,20,40,0.9\n" for f in (1, 2, 7, 3, 9)))
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=5\n"
+                                     "imWidth=100\nimHeight=100\n")
+    with pytest.raises(ValueError) as e:
+        track_sequence(seq, tmp_path / "out.txt")
+    assert str(e.value) == (f"{seq / 'det' / 'det.txt'}, line 3: frame 7 is beyond the "
+                            f"sequence's 5 frames ({seq / 'seqinfo.ini'})")
 
 
 def test_a_parquet_results_file_carries_each_tracks_class(tmp_path):

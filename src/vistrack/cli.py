@@ -386,7 +386,11 @@ def _track(args: argparse.Namespace) -> int:
         _print_video_run(args, run, report)
     if args.print_config:
         assert run.config is not None  # a box tracker's run (others refuse --print-config)
-        sys.stdout.write(config_toml(run.config, run.derived))
+        derived = dict(run.derived or {})
+        if args.fps is not None:  # the frame rate is the input's, not the configuration's:
+            # a file read back with --config warns where the run is given another
+            derived["fps_option"] = float(args.fps)
+        sys.stdout.write(config_toml(run.config, derived))
     return 0
 
 
@@ -478,6 +482,30 @@ def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
     why = _still_already(args) if args.still_camera else None
     if why:
         warnings.warn(f"--still-camera changes nothing here: {why}", UserWarning, stacklevel=1)
+    printed = _printed_fps(args.config) if args.config is not None else None
+    if printed is not None and printed != args.fps:
+        # the frame rate is no setting: --config does not set it, and a file printed by a
+        # run given --fps tracked another way without a word
+        warnings.warn(f"{args.config} was printed by a run given --fps {printed:g} ([derived] "
+                      f"fps_option); this run is given "
+                      + (f"--fps {args.fps:g}" if args.fps is not None
+                         else "no --fps (its input's frame rate)")
+                      + f": give --fps {printed:g} for that run's tracks", UserWarning,
+                      stacklevel=1)
+
+
+def _printed_fps(path: str) -> float | None:
+    """The ``--fps`` of the run that printed the configuration file ``path`` (its
+    ``[derived] fps_option``), or None (not given, or not readable: read_config names
+    that)."""
+    import tomllib
+
+    try:
+        value = tomllib.loads(Path(path).read_text()).get("derived", {}).get("fps_option")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) \
+        else None
 
 
 def _still_already(args: argparse.Namespace) -> str | None:
@@ -664,6 +692,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
 
 
 def _fit(args: argparse.Namespace) -> int:
+    from .batch import expand_inputs
     from .config import TrackConfig, config_toml, read_config
     from .io.atomic import check_output, open_replacing
     from .pipeline import fit_sequences
@@ -671,7 +700,8 @@ def _fit(args: argparse.Namespace) -> int:
     check_output(args.out, force=args.force, name="--out")
     cfg = read_config(args.config) if args.config is not None else TrackConfig.preset()
     progress = sys.stderr if not args.quiet else None
-    run = fit_sequences(args.inputs, gt=args.gt, config=cfg, held_out=not args.no_held_out,
+    inputs = expand_inputs(args.inputs)  # a folder of sequences: its sequences, as track's
+    run = fit_sequences(inputs, gt=args.gt, config=cfg, held_out=not args.no_held_out,
                         keep_learned=args.keep_learned, progress=progress)
     rows = run.fit.per_sequence
     from .models.box import BoxMotion
@@ -679,7 +709,7 @@ def _fit(args: argparse.Namespace) -> int:
     given = cfg.motion if cfg.motion is not None else BoxMotion()
     learned = run.fit.motion
     n_obj, n_det = sum(r["objects"] for r in rows), sum(r["detections"] for r in rows)
-    print(f"learned from the {run.reference} of {len(rows)} of {len(args.inputs)} sequences: "
+    print(f"learned from the {run.reference} of {len(rows)} of {len(inputs)} sequences: "
           f"{n_obj} objects, {n_det} matched detections")
     print(f"{'value':14s} {'given':>9s} {'learned':>9s}   each sequence (min-max)")
     values = [("std_pos", given.std_pos, learned.std_pos, [r["std_pos"] for r in rows]),
@@ -761,6 +791,9 @@ def _eval(args: argparse.Namespace) -> int:
     from .evaluation import evaluate_files
 
     pairs = []
+    if (args.gt_dir or args.pred_dir) and (args.gt or args.pred):
+        # (the one pair was dropped without a word, and the folders scored)
+        return _fail("eval", "give --gt and --pred, or --gt-dir and --pred-dir, not both")
     if args.gt_dir or args.pred_dir:
         if not (args.gt_dir and args.pred_dir):
             return _fail("eval", "--gt-dir and --pred-dir go together")
@@ -1041,7 +1074,8 @@ def build_parser() -> argparse.ArgumentParser:
         "others and with the given configuration, scores both, and writes the learned "
         "values only if they scored the higher HOTA (else the given configuration).")
     fit.add_argument("inputs", metavar="SEQ_DIR", nargs="+",
-                     help="MOTChallenge sequence folders (seqinfo.ini, det/det.txt)")
+                     help="MOTChallenge sequence folders (seqinfo.ini, det/det.txt), or a "
+                     "folder of them")
     fit.add_argument("--out", required=True, help="configuration file to write (TOML)")
     fit.add_argument("--gt", action="store_true",
                      help="learn from each sequence's ground truth (SEQ_DIR/gt/gt.txt)")

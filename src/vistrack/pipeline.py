@@ -728,10 +728,17 @@ def _frontend(name: str | Detector | Callable[[Frame], Detections | None] | None
     """A front-end by name (:data:`FRONTENDS`, or ``detections:FILE``), or a detector of
     your own (:func:`as_detector`)."""
     if isinstance(name, str):
-        if name.startswith("detections:"):
-            return _detections_file(name.split(":", 1)[1], ctx)
-        if name.startswith("onnx:"):
-            return _onnx(name.split(":", 1)[1], ctx)
+        for kind, form, make in (("detections", "detections:FILE", _detections_file),
+                                 ("onnx", "onnx:MODEL.onnx", _onnx)):
+            if name.startswith(kind + ":"):
+                path = name.split(":", 1)[1]
+                # ("" read as ".", a folder, which was "Is a directory" or "does not exist")
+                if not path:
+                    raise ValueError(f"--frontend {form} needs a file's name after "
+                                     f"'{kind}:'; got {name!r}")
+                if Path(path).is_dir():
+                    raise ValueError(f"{path} is a folder, not a file (--frontend {form})")
+                return make(path, ctx)
         if name not in FRONTENDS:
             raise ValueError(f"frontend must be one of {sorted(FRONTENDS)}, detections:FILE "
                              f"or onnx:MODEL.onnx; got {name!r}")
@@ -1226,9 +1233,19 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
     info = read_seqinfo(seq_dir) if has_info else None
     if not det_path.exists():
         raise FileNotFoundError(f"{det_path} does not exist (pass --detections FILE)")
+    if det_path.is_dir():
+        raise ValueError(f"{det_path} is a folder, not a detections file"
+                         + (" (--detections FILE)" if detections is not None else ""))
     if out.resolve() == det_path.resolve():
         raise ValueError(f"--out {out} is the detections file: the results would overwrite "
                          "the detections; give another --out")
+    if not alone:  # nor any other file of the sequence (--force overwrote them)
+        for what, own in (("seqinfo.ini", seq_dir / "seqinfo.ini"),
+                          ("ground truth", seq_dir / "gt" / "gt.txt"),
+                          ("detections file", seq_dir / "det" / "det.txt")):
+            if own.exists() and out.resolve() == own.resolve():
+                raise ValueError(f"--out {out} is the sequence's {what}: the results would "
+                                 "overwrite it; give another --out")
     # the warnings' stacklevels (here and in _check_detections) name track_sequence's caller
     dets = read_detections(det_path, columns, stacklevel=3)
     if info is None:
@@ -1247,8 +1264,11 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
         if fps is not None:
             info = replace(info, frame_rate=float(fps))
         if len(dets) and dets.frames.max() > info.seq_length:
-            raise ValueError(f"{det_path}: frame {int(dets.frames.max())} is beyond the "
-                             f"sequence's {info.seq_length} frames ({ini})")
+            n = info.seq_length
+            f = int(dets.frames[dets.frames > n].min())  # the first frame beyond, its line
+            lines = _lines_of(str(det_path), lambda row: row[0] == f)
+            raise ValueError(f"{det_path}" + (f", line {lines[0]}" if lines else "")
+                             + f": frame {f} is beyond the sequence's {n} frames ({ini})")
         warn_outside(dets, det_path, (info.im_width, info.im_height), stacklevel=3)
     return _SequenceInput(det_path, str(det_path if alone else seq_dir), info, dets)
 
@@ -1489,10 +1509,11 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
     Raises
     ------
     FileNotFoundError
-        If a sequence lacks ``det/det.txt``, or ``gt/gt.txt`` with ``gt``.
+        If a sequence lacks ``det/det.txt``, or ``gt/gt.txt`` with ``gt``, or is a folder of
+        sequences (``vistrack fit`` takes one for its sequences).
     ValueError
-        If no sequences are given, a sequence is given twice (two paths of one folder), or
-        no object is detected in two frames or more.
+        If no sequences are given, a sequence is given twice (two paths of one folder) or is
+        a file, or no object is detected in two frames or more.
     """
     import tempfile
 
@@ -1507,6 +1528,14 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
     cfg = resolve_config(config)
     start = cfg.motion if cfg.motion is not None else BoxMotion()
     series: list[tuple[list[Series], float]] = []
+    for seq in seqs:  # before anything is learnt (a file was read as its seqinfo.ini)
+        if seq.is_file():
+            raise ValueError(f"{seq} is a file, not a sequence folder (seqinfo.ini, "
+                             "det/det.txt)")
+        if seq.is_dir() and not (seq / "seqinfo.ini").exists() and any(
+                (p / "seqinfo.ini").exists() for p in seq.iterdir() if p.is_dir()):
+            raise FileNotFoundError(f"{seq / 'seqinfo.ini'} does not exist: {seq} is a "
+                                    "folder of sequences; give the sequence folders in it")
     with tempfile.TemporaryDirectory(prefix="vistrack-fit-") as tmp:
         for seq in seqs:
             info = read_seqinfo(seq)
@@ -2093,6 +2122,9 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
             raise ValueError(f"{init_name} is required: the object's box in the first frame "
                              "(or a ground truth, whose first box is then the start)")
         init = truth[0]
+        # an error about the start box is about the ground truth's first box: one of another
+        # sequence, most likely (it blamed --init, which was not given)
+        init_name = f"the start, {gt}'s first box"
     start = Detections.from_xywh(as_box(init, init_name)[None])
     reader = VideoReader(source, prefetch=4)
     first = reader.start
