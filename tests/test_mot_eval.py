@@ -459,7 +459,9 @@ def test_ground_truth_that_looks_like_detections(tmp_path):
     assert r.warnings == [
         f"{res} looks like a detections or results file, not ground truth: its column 7 holds "
         "scores (0.9) where ground truth has 0 or 1, and it has no class column"]
-    assert r["s"].TP == 2
+    # scored as TrackEval reads such a file: its flags 0.9 and 0.4 as integers are 0, every
+    # row ignored, every prediction false (the warning says why)
+    assert (r["s"].TP, r["s"].FP) == (0, 2)
 
 
 def test_mot17_ground_truth_with_a_class_of_none_of_theirs_is_warned_about(tmp_path):
@@ -598,3 +600,27 @@ def test_a_row_found_wrong_while_scoring_is_named_by_its_line_whatever_the_separ
     with pytest.raises(ValueError, match=re.escape(
             f"{res}, lines 2 and 3: id 3 appears more than once in frame 2")):
         evaluate_files([("s", gt, res, None)])
+
+
+@pytest.mark.parametrize("bench", ["MOT15", "MOT17"])
+def test_a_fractional_consider_flag_is_read_as_trackeval_reads_it(bench, tmp_path):
+    """TrackEval reads ground truth's column 7 as an integer (``int(0.5)`` is 0: the row is
+    ignored); vistrack scored every row whose flag was not exactly 0 (MOTA 1.0 against
+    TrackEval's 0.0 on a row of 0.5). The flags 0.5, 0.3, 1.5, -1 and -0.5, against
+    TrackEval itself."""
+    flags = [0.5, 1, 0.3, 1.5, -1, -0.5, 1]
+    gt_rows = [(f, 1, 10 + 3 * f, 20, 30, 60, c, 1, 1) for f, c in enumerate(flags, start=1)]
+    gt_rows += [(f, 2, 200, 50, 30, 60, 1, 1, 1) for f in range(1, 8)]
+    d = tmp_path / "seq"
+    (d / "gt").mkdir(parents=True)
+    _rows(d / "gt" / "gt.txt", gt_rows)
+    (d / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=7\n"
+                                   "imWidth=640\nimHeight=480\n")
+    # exact predictions of both, a second identity for the first from frame 4 on
+    pred = _rows(tmp_path / "seq.txt", [(f, 7 if f < 4 else 8, 10 + 3 * f, 20, 30, 60, 1, -1, -1,
+                                         -1) for f in range(1, 8)]
+                 + [(f, 9, 200, 50, 30, 60, 1, -1, -1, -1) for f in range(1, 8)])
+    ref = trackeval_scores(bench, {"seq": d}, {"seq": pred}, tmp_path / "te")
+    ours = evaluate_mot(read_mot(d / "gt" / "gt.txt"), read_mot(pred), 7, benchmark=bench)
+    compare(ours, ref["seq"])
+    assert ours.FP == 3  # the rows of 0.5, 0.3 and -0.5: ignored, their predictions false

@@ -47,7 +47,7 @@ from .detector_checks import (
     warn_no_area,
     warn_outside,
 )
-from .evaluation.mot import MOTCounts, _lines_of, evaluate_mot
+from .evaluation.mot import MOTCounts, _lines_of, considered, evaluate_mot
 from .io.atomic import check_output, made_folder
 from .io.motchallenge import (
     DETECTION_SUFFIXES,
@@ -1471,7 +1471,8 @@ class FitRun:
 
 def _gt_reference(seq: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     gt = read_mot(seq / "gt" / "gt.txt")
-    keep = gt.conf > 0 if gt.conf is not None else np.ones(len(gt), bool)  # 0: to ignore
+    # the rows the scoring considers (0: to ignore), as TrackEval reads the flag
+    keep = considered(gt.conf) if gt.conf is not None else np.ones(len(gt), bool)
     return gt.frames[keep], gt.ids[keep], gt.boxes[keep]
 
 

@@ -85,7 +85,7 @@ def _scipy_lsa() -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
     return lsa
 
 __all__ = ["MOTCounts", "evaluate_mot", "combine", "box_iou_xywh", "ALPHAS", "Matches",
-           "clear_matches", "SCORE_COLUMNS"]
+           "clear_matches", "SCORE_COLUMNS", "considered"]
 
 SCORE_COLUMNS = (("HOTA", True), ("DetA", True), ("AssA", True), ("MOTA", True),
                  ("MOTP", True), ("IDF1", True), ("IDP", True), ("IDR", True), ("TP", False),
@@ -205,6 +205,19 @@ def _benchmark_of(gt: MOTTable, benchmark: str) -> str:
     return "MOT17" if has_classes else "MOT15"
 
 
+def considered(conf: np.ndarray) -> np.ndarray:
+    """Which ground-truth rows are scored by their flag (column 7, ``conf``), as TrackEval
+    reads it: the flag as an integer (truncated, ``int(0.5)`` is 0), other than 0. A row of
+    0.5 was scored where TrackEval ignores it (MOTA 1.0 against its 0.0 on one such row).
+
+    Examples
+    --------
+    >>> considered(np.array([1.0, 0.0, 0.5, -1.0, 1.5, -0.5])).tolist()
+    [True, False, False, True, True, False]
+    """
+    return np.trunc(np.asarray(conf, dtype=np.float64)) != 0
+
+
 def _lines_of(path: str, match: Callable[[list[float]], bool]) -> list[int]:
     """The lines (from 1) of the MOTChallenge file ``path`` whose row ``match`` accepts, for a
     message; empty for a table not read from a file (or a file no longer readable)."""
@@ -313,7 +326,7 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Se
           np.searchsorted(pred.frames, frames, "right"))
     # each row's part in it, once: whether a ground-truth row is scored and whether it is a
     # distractor (a prediction matched to one is removed)
-    keep_gt = gt.conf != 0
+    keep_gt = considered(gt.conf)
     if bench != "MOT15":
         keep_gt &= gt.classes == 1
     distractor = np.isin(gt.classes, distractors)
