@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 
@@ -916,6 +917,26 @@ def test_pass_over_counts_the_frame_for_default_indices():
     assert a.frame == b.frame == 4
     np.testing.assert_array_equal(oa.boxes, ob.boxes)
     np.testing.assert_array_equal(a.tracks.mean, b.tracks.mean)
+
+
+def test_a_frame_passed_over_is_not_stepped_after():
+    """The frame passed over is past: stepping it after all took it twice (the tracks
+    predicted over one frame where two had gone, the calibration shown it empty and then
+    with its boxes), where a frame stepped twice is refused. Refused too, and the tracker
+    left as it was: the next frame steps as it would have."""
+    det = lambda f: Detections.from_xywh([[100 + 10 * f, 20, 30, 60]], [0.9])  # noqa: E731
+    a, b = BoxTracker(frame_rate=10), BoxTracker(frame_rate=10)
+    for tr in (a, b):
+        tr.step(1, det(1))
+        tr.step(2, det(2))
+        tr.pass_over()  # frame 3
+    with pytest.raises(ValueError, match=re.escape(
+            "frame must increase; got 3 after 3, a frame passed over (pass_over)")):
+        a.step(3, det(3))
+    with pytest.raises(ValueError, match="got 2 after 3"):
+        a.step(2, det(2))
+    np.testing.assert_array_equal(a.step(4, det(4)).boxes, b.step(4, det(4)).boxes)
+    assert a.calibrator.outcomes()[1].tolist() == b.calibrator.outcomes()[1].tolist()
 
 
 @pytest.mark.parametrize("compiled", [True, False])

@@ -889,9 +889,17 @@ class BoxTracker:
         if not isinstance(detections, Detections) or detections.boxes is None:
             raise TypeError("detections must be vistrack.Detections with boxes")
         detections = _writable(detections)
-        # (None: the frame after the last one stepped or passed over)
-        frame = frame_index(frame, self.frame) if frame is not None or self.frame is None \
-            else self.frame + 1 + self._passed
+        # after the last frame stepped or passed over (None: the one after it); a frame
+        # passed over and then stepped was taken twice (predicted over one frame, not two,
+        # and seen by the calibration twice)
+        last = None if self.frame is None else self.frame + self._passed
+        try:
+            frame = frame_index(frame, last)
+        except ValueError:
+            if not self._passed:
+                raise
+            raise ValueError(f"frame must increase; got {frame_index(frame, None)} after "
+                             f"{last}, a frame passed over (pass_over)") from None
         first = self.frame is None
         self._passed = 0
         dt = 0.0 if self.frame is None else float(frame - self.frame)
