@@ -61,7 +61,13 @@ def confidence_maps(frames: list[np.ndarray]) -> Iterator[ConfidenceMap]:
     heights = HOGConfidence().heights
     if CACHE.exists():
         z = np.load(CACHE)
-        if np.array_equal(z["heights"], heights):
+        # the cache matches if its levels map to the image as this version's do (the first
+        # frame's map, made to compare; before 2026-12-01 the grids were placed by the
+        # nominal resize factor, one stride for both axes)
+        first = HOGConfidence(heights)(frames[0])
+        if (np.array_equal(z["heights"], heights) and z["strides"].shape == first.strides.shape
+                and np.array_equal(z["strides"], first.strides)
+                and np.array_equal(z["origins"], first.origins)):
             stored = [z[f"level{k}"] for k in range(len(heights))]  # each read once
             origins, strides = z["origins"], z["strides"]
             for t in range(len(stored[0])):
@@ -141,10 +147,10 @@ def main():
     k = int(np.argmin(np.abs(cmap.heights - 90)))
     ny, nx = cmap.scores[k].shape
     x0, y0 = cmap.origins[k]
-    st = cmap.strides[k]
+    sx, sy = cmap.strides[k]  # the cells' spacing along x and y
     conf = np.ma.masked_less(1 / (1 + np.exp(-cmap.scores[k])), 0.3)
     ax1.imshow(conf, cmap="autumn_r", alpha=0.5, vmin=0.3, vmax=1,
-               extent=(x0 - st / 2, x0 + st * (nx - 0.5), y0 + st * (ny - 0.5), y0 - st / 2))
+               extent=(x0 - sx / 2, x0 + sx * (nx - 0.5), y0 + sy * (ny - 0.5), y0 - sy / 2))
     for p in particles:
         ax1.plot(p[:, 0], p[:, 1], ".", ms=1.5)
     for i, b in zip(out.ids, out.xywh):

@@ -216,16 +216,18 @@ class ConfidenceMap:
         person-like); for HOG, the SVM margin.
     origins : (L, 2) float
         Image position of each level's first cell.
-    strides : (L,) float
-        Image pixels between cells of each level.
+    strides : (L,) or (L, 2) float
+        Image pixels between cells of each level: one for both axes, or along x and y (a
+        grid computed on an image resized to whole pixels is stretched a little differently
+        along each).
     aspect : float
         Box width over height (default: the person inside HOG's window, 32 / 96).
 
     Raises
     ------
     ValueError
-        If the four have not one entry per level (at least one), or a level's scores are not
-        a 2-D grid of at least 2 x 2.
+        If the four have not one entry per level (at least one; ``strides`` one or two
+        numbers each), or a level's scores are not a 2-D grid of at least 2 x 2.
 
     Examples
     --------
@@ -243,7 +245,10 @@ class ConfidenceMap:
         self.heights = np.asarray(heights, float)
         self.scores = [np.asarray(s, float) for s in scores]
         self.origins = np.asarray(origins, float).reshape(-1, 2)
-        self.strides = np.asarray(strides, float).reshape(-1)
+        st = np.asarray(strides, float)
+        # (L, 2): x and y; one stride per level serves both
+        self.strides = (np.repeat(st.reshape(-1, 1), 2, axis=1) if st.ndim <= 1
+                        else st if st.ndim == 2 and st.shape[1] == 2 else st.reshape(-1, 1))
         L = len(self.heights)
         if not (len(self.scores) == L == len(self.origins) == len(self.strides)) or L == 0:
             raise ValueError(f"heights, scores, origins and strides must have one entry per "
@@ -309,8 +314,8 @@ class ConfidenceMap:
             sel = lev == k
             if not sel.any():
                 continue
-            u = (x[sel] - self.origins[k, 0]) / self.strides[k]
-            v = (y[sel] - self.origins[k, 1]) / self.strides[k]
+            u = (x[sel] - self.origins[k, 0]) / self.strides[k, 0]
+            v = (y[sel] - self.origins[k, 1]) / self.strides[k, 1]
             ny, nx = s.shape
             # (a centre on the grid's edge, the cell's own, is inside to within rounding:
             # 1e-9 of a cell; it was -inf where (x - origin) / stride came to 16 + 4e-15)
@@ -361,8 +366,8 @@ class ConfidenceMap:
             i, j = np.nonzero(peak & (s > threshold))
             h = self.heights[k]
             w = self.aspect * h
-            cx = self.origins[k, 0] + self.strides[k] * j
-            cy = self.origins[k, 1] + self.strides[k] * i
+            cx = self.origins[k, 0] + self.strides[k, 0] * j
+            cy = self.origins[k, 1] + self.strides[k, 1] * i
             boxes.append(np.c_[cx - w / 2, cy - h / 2, np.full(len(i), w), np.full(len(i), h)])
             scores.append(s[i, j])
         b, sc = np.concatenate(boxes), np.concatenate(scores)
@@ -409,8 +414,8 @@ class HOGConfidence:
     Examples
     --------
     >>> cmap = HOGConfidence()(np.zeros((240, 320, 3), np.uint8))
-    >>> cmap.heights.tolist(), cmap.scores[3].shape, float(cmap.strides[3])
-    ([46.0, 58.0, 75.0, 96.0, 121.0], (15, 33), 8.0)
+    >>> cmap.heights.tolist(), cmap.scores[3].shape, cmap.strides[3].tolist()
+    ([46.0, 58.0, 75.0, 96.0, 121.0], (15, 33), [8.0, 8.0])
     """
 
     def __init__(self, heights: ArrayLike = (46, 58, 75, 96, 121)):
@@ -449,9 +454,12 @@ class HOGConfidence:
                 np.asarray(w, float).ravel()
             scores.append(grid)
             # cell (i, j): the window at (8j, 8i) of the resized image, centred at
-            # (8j + 32, 8i + 64), which is (8j + 32) / f in the image
-            origins.append((32 / f, 64 / f))
-            strides.append(8 / f)
+            # (8j + 32, 8i + 64), which is ((8j + 32) / fx, (8i + 64) / fy) in the image, by
+            # the factors of the resize made (to whole pixels: f itself put the last
+            # windows' centres up to 0.4 pixel off, and beyond the grid)
+            fx, fy = sw / W, sh / H
+            origins.append((32 / fx, 64 / fy))
+            strides.append((8 / fx, 8 / fy))
             heights.append(h)
         if not heights:
             raise ImageTooSmall(f"image of {W} x {H} pixels is too small for HOG's levels: "

@@ -23,8 +23,9 @@ detection. Pairs with ``S`` below ``min_score`` are not matched.
 - ``d_c(p)``: the detector's confidence at the particle (a :class:`ConfidenceMap` at the
   target's height, its score squashed by a logistic). ``p_o(tr)`` says how much that
   confidence can be the target's own; here it is ``1 / (1 + k)`` with ``k`` the other targets
-  whose boxes overlap this one's (the confidence map cannot tell people apart where they
-  overlap), which is our reading of the seed's term;
+  whose boxes overlap this one's by more than 0.2 IoU (the confidence map cannot tell people
+  apart where they overlap that much; boxes that touch at their edges do not share a
+  person), which is our reading of the seed's term;
 - ``c_tr(p)``: the target's own classifier at the particle's box: a logistic regression on
   the box's hue-saturation histogram, trained online by a few steps of gradient descent
   each frame, with the target's box as the positive and the other targets' boxes and
@@ -444,7 +445,7 @@ class DetectorConfidencePF:
                 xyxy = np.c_[boxes[:, :2], boxes[:, :2] + boxes[:, 2:]]
                 ov = iou(xyxy, xyxy)
                 np.fill_diagonal(ov, 0.0)
-                p_o = 1.0 / (1.0 + (ov > 0.2).sum(1))
+                p_o = 1.0 / (1.0 + (ov > 0.2).sum(1))  # (the module's 0.2 IoU)
                 w += cfg.gamma * dc * p_o[:, None]
             if cfg.eta > 0:
                 assert feats is not None  # made above when eta > 0
