@@ -316,6 +316,27 @@ def test_a_bad_row_after_comment_lines_is_named_by_its_line(tmp_path, before, ba
         assert text.splitlines()[want - 1].split("#")[0].strip() == bad.replace(",", sep)
 
 
+@pytest.mark.parametrize("char", ["\f", "\x0b", "\x1c", "\x85", "\u2028"])
+def test_a_bad_row_is_named_by_its_line_as_editors_count_them(tmp_path, char):
+    """Lines are broken at \\n, \\r\\n or \\r alone, as editors, ``wc -l`` and numpy's reader
+    count them: Python's ``splitlines`` also breaks at a form feed and six others, and a
+    comment holding one put the line named for a bad row one past it ("line 4" for the row
+    on line 3), in ``read_mot`` and in the scoring's messages alike."""
+    from vistrack.evaluation.mot import _lines_of
+
+    p = tmp_path / "gt.txt"
+    p.write_text(f"1,1,10,10,20,20,1\n# page{char}break\n2,1,10,10,20,-3,1\n", encoding="utf-8")
+    assert len(p.read_bytes().split(b"\n")) - 1 == 3
+    with pytest.raises(MOTFormatError) as e:
+        read_mot(p)
+    assert str(e.value) == f"{p}, line 3, column 6 (height): height must be >= 0; got -3"
+    assert _lines_of(str(p), lambda row: row[0] == 2) == [3]
+    crlf = tmp_path / "crlf.txt"  # \r\n and a lone \r: one line break each, as before
+    crlf.write_bytes(b"1,1,10,10,20,20,1\r\n# note\r2,1,10,10,20,-3,1\r\n")
+    with pytest.raises(MOTFormatError, match=", line 3, column 6"):
+        read_mot(crlf)
+
+
 @pytest.mark.parametrize("text", ids=["comment", "comma_comment", "noted", "trailing",
                                    "indented"], argvalues=[
     "# frame id left top width height\n{rows}",  # a comment without a comma, rows with

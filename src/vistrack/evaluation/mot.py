@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import decode_text
-from ..io.motchallenge import MOTTable, _row_cells
+from ..io.motchallenge import MOTTable, _row_cells, _text_lines
 
 _LSA: list[Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]] = []
 
@@ -228,7 +228,7 @@ def _lines_of(path: str, match: Callable[[list[float]], bool]) -> list[int]:
     except (OSError, ValueError):
         return []
     found = []
-    for k, raw in enumerate(text.splitlines(), start=1):  # as read_mot counts lines
+    for k, raw in enumerate(_text_lines(text), start=1):  # as read_mot counts lines
         try:  # a row's values as read_mot splits them (commas, or spaces and tabs); a blank
             # or comment line (np.loadtxt skips those) is not a row
             row = [float(c) for c in _row_cells(raw)]

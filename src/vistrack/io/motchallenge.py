@@ -610,6 +610,26 @@ _COLUMNS = ("frame", "particle", "id", "bb_left", "bb_top", "bb_width", "bb_heig
 """Every column :meth:`MOTTable.from_pandas` reads, by our name."""
 
 
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
+
+
+def _text_lines(text: str) -> list[str]:
+    r"""``text``'s lines as editors, ``wc -l`` and numpy's reader count them: broken at
+    ``\n``, ``\r\n`` or a lone ``\r`` only (``str.splitlines`` also breaks at a form feed,
+    ``\x0b``, ``\x1c``-``\x1e``, ``\x85``, U+2028 and U+2029, which put the lines named
+    in messages past the ones meant), without an empty last line after a final break.
+
+    Examples
+    --------
+    >>> _text_lines("1,2\r\n# a\fcomment\n3,4\n")
+    ['1,2', '# a\x0ccomment', '3,4']
+    """
+    lines = _LINE_BREAK.split(text)
+    if lines and lines[-1] == "":
+        lines.pop()
+    return lines
+
+
 def _row_text(line: str) -> str:
     """The part of ``line`` that holds values: before a ``#`` (a comment, to the end of the
     line, as np.loadtxt drops it), stripped; empty for a blank or comment-only line, which
@@ -994,7 +1014,7 @@ def _read_careful(path: str, data: bytes) -> np.ndarray:
     """The rows of ``data`` (the file ``path``'s bytes), checked, or :class:`MOTFormatError`
     naming the file, and the line and column of a bad row."""
     text = decode_text(data, path, "MOTChallenge", MOTFormatError)
-    lines = text.splitlines()
+    lines = _text_lines(text)
     a = _parse_lines(path, text, lines)
     _check_rows(path, a, lines)
     return a
