@@ -227,6 +227,22 @@ def test_seqinfo_oddities(tmp_path, body, match):
         assert str(e.value) == f"{p}{sep}{match}"
 
 
+def test_seqinfo_counts_written_as_floats_are_read(tmp_path):
+    """seqLength, imWidth and imHeight are counts: written 600.0 or 6e2 (a finite number > 0,
+    as the contract asks, and whole), they were refused as "not int", where frameRate=1e1 was
+    read; a count that is not whole is named."""
+    p = tmp_path / "seqinfo.ini"
+    p.write_text("[Sequence]\nframeRate=1e1\nseqLength=6e2\nimWidth=1920.0\nimHeight=1080\n")
+    info = read_seqinfo(p)
+    assert (info.frame_rate, info.seq_length, info.im_width, info.im_height) == (10.0, 600, 1920,
+                                                                                1080)
+    assert all(type(v) is int for v in (info.seq_length, info.im_width, info.im_height))
+    p.write_text("[Sequence]\nframeRate=10\nseqLength=600.5\nimWidth=1920\nimHeight=1080\n")
+    with pytest.raises(MOTFormatError) as e:
+        read_seqinfo(p)
+    assert str(e.value) == f"{p}: seqLength must be a whole number; got 600.5"
+
+
 def test_a_class_column_that_holds_no_class(tmp_path):
     """Column 8 is the class of MOT16/17/20 ground truth and a world x in MOT15's (and in
     MOTChallenge's detections files): a column with a value that is not an integer (3.5,

@@ -1471,7 +1471,8 @@ def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
     MOTFormatError
         If it is not a UTF-8 text INI file, has no ``[Sequence]`` section, or lacks
         ``frameRate``, ``seqLength``, ``imWidth`` or ``imHeight`` or has one that is not a
-        finite number > 0, naming the file.
+        finite number > 0 (the last three whole numbers, written ``600`` or ``600.0``), naming
+        the file.
 
     Examples
     --------
@@ -1503,11 +1504,16 @@ def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
         if key not in s:
             raise MOTFormatError(f"{path}: [Sequence] has no {key}")
         try:
-            v = kind(s[key])
+            # a count written as a float (600.0, 6e2) is a number > 0 as the contract asks
+            v = float(s[key]) if kind is int else kind(s[key])
         except ValueError:
             raise MOTFormatError(f"{path}: {key} = {s[key]!r} is not {kind.__name__}") from None
         if kind is not str and not 0 < v < np.inf:
             raise MOTFormatError(f"{path}: {key} must be a finite number > 0; got {s[key]}")
+        if kind is int:
+            if not float(v).is_integer():
+                raise MOTFormatError(f"{path}: {key} must be a whole number; got {s[key]}")
+            v = int(v)
         return v
 
     return SeqInfo(name=s.get("name", path.parent.name), frame_rate=get("frameRate", float),
