@@ -56,6 +56,27 @@ def test_image_folder_and_mp4_round_trip(tmp_path):
     assert np.mean([np.abs(a.astype(int) - b).mean() for a, b in zip(back, frames)]) < 6
 
 
+@pytest.mark.parametrize("size", [(47, 31), (48, 31), (47, 32)])
+def test_a_video_of_odd_size_loses_no_pixel(tmp_path, size):
+    """MP4 holds even sizes only, and OpenCV's encoder cut an odd width's last column and an
+    odd height's last row (47 x 31 frames read back 46 x 30, a white last column gone). Such
+    frames are written a pixel wider or taller, the last column or row repeated: every pixel
+    of the frame reads back, up to the codec's error."""
+    W, H = size
+    frame = np.full((H, W, 3), 60, np.uint8)
+    frame[:, -1] = 255  # the last column white, the last row grey-blue
+    frame[-1, :-1] = (200, 120, 40)
+    w = VideoWriter(tmp_path / "odd.mp4", fps=10)
+    for _ in range(3):
+        w.write(frame)
+    assert w.size == (W, H)
+    w.close()
+    back = [f.image for f in VideoReader(tmp_path / "odd.mp4")]
+    assert len(back) == 3 and back[0].shape == (H + H % 2, W + W % 2, 3)
+    err = np.abs(back[1][:H, :W].astype(int) - frame).mean(axis=(0, 2))
+    assert err.max() < 12, err  # every column of the frame, the last one included
+
+
 def test_bad_inputs_name_the_file(tmp_path):
     with pytest.raises(FileNotFoundError, match="nope.avi does not exist"):
         VideoReader(tmp_path / "nope.avi")

@@ -696,7 +696,10 @@ class VideoWriter:
             warnings.warn(f"{self.name}: plays at {play:g} frames a second, the nearest rate "
                           f"an MP4 holds to {self.fps:g}", UserWarning, stacklevel=3)
             self.fps = play
-        w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), self.fps, size)
+        # MP4 (mp4v) holds even sizes only: OpenCV's encoder cut an odd width's last column
+        # and an odd height's last row; such frames are padded by one instead (write)
+        even = (size[0] + size[0] % 2, size[1] + size[1] % 2)
+        w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), self.fps, even)
         self._w = w
         if not w.isOpened():
             raise VideoError(f"{self.name}: OpenCV cannot write an MP4 here")
@@ -705,7 +708,10 @@ class VideoWriter:
     def write(self, image: np.ndarray) -> None:
         """Append a ``(H, W, 3)`` BGR or ``(H, W)`` grey uint8 frame of the writer's size.
 
-        The first frame opens the file (at ``size``, or the frame's own size).
+        The first frame opens the file (at ``size``, or the frame's own size). MP4 holds even
+        sizes only: a frame of odd width or height is written with its last column or row
+        repeated once, so the video is a pixel wider or taller and loses none of it (OpenCV's
+        encoder cut them).
 
         Parameters
         ----------
@@ -741,6 +747,8 @@ class VideoWriter:
                              f"{self.size[0]}x{self.size[1]}")
         if im.ndim == 2:
             im = np.repeat(im[:, :, None], 3, axis=2)
+        if size[0] % 2 or size[1] % 2:  # the last column or row repeated (see _open)
+            im = np.pad(im, ((0, size[1] % 2), (0, size[0] % 2), (0, 0)), mode="edge")
         self._w.write(np.ascontiguousarray(im))
         self.frames += 1
 
