@@ -433,15 +433,20 @@ def test_scoring_keeps_going_past_a_sequence_it_cannot_read(bench, tmp_path, cap
     assert json.loads(capsys.readouterr().out) == {}
 
 
-def test_several_videos_from_pixels(tmp_path, capsys):
+def _two_clips(folder):
+    """Two copies of the bundled clip, ``folder/a.mp4`` and ``folder/b.mp4``."""
     import shutil
 
+    a, b = folder / "a.mp4", folder / "b.mp4"
+    for copy in (a, b):
+        shutil.copy(demo_clip().video, copy)
+    return a, b
+
+
+def test_several_videos_from_pixels(tmp_path, capsys):
     from vistrack.pipeline import track_video
 
-    clip = demo_clip().video
-    a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
-    shutil.copy(clip, a)
-    shutil.copy(clip, b)
+    a, b = _two_clips(tmp_path)
     out = tmp_path / "out"
     assert main(["track", str(a), str(b), "--out-dir", str(out), "--stop", "20", "--jobs",
                  "2", "--still-camera", "--quiet"]) == 0
@@ -545,12 +550,7 @@ def test_an_input_of_dot_or_dot_dot_is_named_from_the_folder_it_resolves_to(
 
 
 def test_existing_outputs_of_several_videos_are_refused_before_any_runs(tmp_path, capsys):
-    import shutil
-
-    clip = demo_clip().video
-    a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
-    shutil.copy(clip, a)
-    shutil.copy(clip, b)
+    a, b = _two_clips(tmp_path)
     out = tmp_path / "out"
     (out / "b").mkdir(parents=True)
     (out / "b" / "tracks.txt").write_text("an earlier result\n")

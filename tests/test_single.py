@@ -207,10 +207,17 @@ def _frame_768x576():
     return im
 
 
+def _refuses_start(method, im, box, message):
+    """``method``'s tracker refuses to start at ``box``, with exactly ``message``, and is left
+    unstarted."""
+    tracker = single_tracker(method)
+    with pytest.raises(ValueError, match="^" + re.escape(message) + "$"):
+        tracker.init(im, box)
+    assert not tracker.started
+
+
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_every_tracker_refuses_a_start_box_outside_the_image(method):
-    import re
-
     im = _frame_768x576()
     for box, msg in [
         ([800, 10, 40, 40], "box (x, y, w, h) = (800, 10, 40, 40) lies outside the 768x576 "
@@ -226,10 +233,7 @@ def test_every_tracker_refuses_a_start_box_outside_the_image(method):
                                "area inside the 768x576 image; a start box must be at least "
                                "half inside"),
     ]:
-        tracker = single_tracker(method)
-        with pytest.raises(ValueError, match="^" + re.escape(msg) + "$"):
-            tracker.init(im, box)
-        assert not tracker.started
+        _refuses_start(method, im, box, msg)
 
 
 @pytest.mark.parametrize("method", sorted(METHODS))
@@ -431,10 +435,7 @@ def test_opencv_trackers_refuse_boxes_they_cannot_start_on():
                                           "pixels (100, 100, 0, 0): OpenCV's kcf needs w and h "
                                           "of at least 1 whole pixel"),
     ]:
-        tracker = single_tracker(method)
-        with pytest.raises(ValueError, match="^" + re.escape(message) + "$"):
-            tracker.init(im, box)
-        assert not tracker.started
+        _refuses_start(method, im, box, message)
     tracker = single_tracker("csrt")
     with pytest.raises(ValueError, match=r"^box \(x, y, w, h\) = \(766, 100, 2, 2\), whole "
                                          r"pixels \(766, 100, 2, 2\): OpenCV's csrt cannot "
