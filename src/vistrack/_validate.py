@@ -80,9 +80,7 @@ def as_uint8_image(image: ArrayLike, name: str = "image", channels: tuple[int, .
         raise ValueError(f"{name} must be (H, W) or (H, W, C) uint8 with C in {channels}; got "
                          f"shape {_fmt_shape(im.shape)} {im.dtype}")
     if grey and im.ndim == 3:
-        import cv2
-
-        im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY if im.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
+        im = bgr_to_grey(im)
     return im
 
 
