@@ -839,6 +839,74 @@ def test_background_and_blobs_find_the_people_of_pets09():
     assert total > 300 and on / total > 0.8
 
 
+
+def _texture(shape=(240, 320), seed=0):
+    rng = np.random.default_rng(seed)
+    return cv2.GaussianBlur(rng.integers(0, 255, shape, np.uint8), (0, 0), 3)
+
+
+@pytest.mark.parametrize("dx, dy", [(3.5, -2.25), (-17.0, 9.0), (0.0, 0.0)])
+def test_view_shift_finds_the_translation_applied(dx, dy):
+    """Oracle: the image moved by a known translation (sub-pixel, by bilinear warping)."""
+    from vistrack.frontends import view_shift
+
+    img = _texture((480, 640))
+    moved = cv2.warpAffine(img, np.float32([[1, 0, dx], [0, 1, dy]]), (640, 480),
+                           flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    got_dx, got_dy, response = view_shift(img, moved)
+    # the documented accuracy: a quarter of a reduced pixel, reduced 3 times (640 / 192)
+    assert (got_dx, got_dy) == pytest.approx((dx, dy), abs=0.75)
+    assert response > 0.5
+    assert view_shift(img, moved, width=640)[:2] == pytest.approx((dx, dy), abs=0.2)
+    colour = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
+    assert view_shift(colour, moved)[:2] == (got_dx, got_dy)  # BGR taken as its grey
+    with pytest.raises(ValueError, match="one size; got 640x480 and 320x240"):
+        view_shift(img, img[:240, :320])
+    with pytest.raises(ValueError, match="at least 16 pixels on a side; got 20x10"):
+        view_shift(img[:10, :20], img[:10, :20])
+    with pytest.raises(ValueError, match="width must be at least 16; got 8"):
+        view_shift(img, img, width=8)
+
+
+def test_blob_detector_tells_a_moving_view_from_a_still_one():
+    """The bundled clip (PETS09-S2L1, a still camera, people walking) is still at every
+    check; the same frames cropped from a window that pans 1.5 pixels a frame move."""
+    from pathlib import Path
+
+    from vistrack.frontends import BlobDetector
+
+    clip = Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
+    frames = [f.image for f in VideoReader(clip / "pets09-s2l1.mp4", grey=True, stop=120)]
+    still = BlobDetector()
+    still.initialize(frames[:20])
+    moves = []
+    for im in frames:
+        still.detect(im)
+        moves.append(still.view_moves)
+    assert len(still.view_shifts) == 11 and not any(moves)
+    assert max(still.view_shifts) < 3.0
+
+    pan = BlobDetector()
+    crops = [im[40:440, round(1.5 * k):round(1.5 * k) + 560] for k, im in enumerate(frames)]
+    pan.initialize(crops[:20])
+    first = None
+    for k, im in enumerate(crops):
+        pan.detect(im)
+        if first is None and pan.view_moves:
+            first = k
+    # a check every 10 frames (frames 0, 10, ...), moving once five checks are in (frame 50)
+    assert first == 50 and np.median(pan.view_shifts) == pytest.approx(15.0, abs=1.0)
+    off = BlobDetector(check_view=0)
+    off.initialize(crops[:20])
+    for im in crops:
+        off.detect(im)
+    assert off.view_shifts == [] and not off.view_moves
+    with pytest.raises(ValueError, match="check_view must be a whole number >= 0; got 2.5"):
+        BlobDetector(check_view=2.5)
+    with pytest.raises(ValueError, match="max_shift must be > 0; got 0"):
+        BlobDetector(max_shift=0)
+
+
 # ------------------------------------------------------------------- from pixels, end to end
 
 def test_track_video_writes_tracks_video_plot_and_scores(tmp_path):
@@ -868,6 +936,33 @@ def test_track_video_writes_tracks_video_plot_and_scores(tmp_path):
         track_video(demo / "pets09-s2l1.mp4", tmp_path / "out", stop=5)
     with pytest.raises(ValueError, match="frontend must be one of"):
         track_video(demo / "pets09-s2l1.mp4", tmp_path / "o2", frontend="yolo", stop=5)
+
+
+def test_track_video_says_once_that_the_view_moves(tmp_path):
+    """A panning view (the bundled clip cropped from a moving window) tracked with the
+    background model: one warning, naming the file, how far it moves and what to use; the
+    bundled clip itself (a still camera): none."""
+    from pathlib import Path
+
+    from vistrack.pipeline import track_video
+
+    demo = Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
+    pan = tmp_path / "pan.mp4"
+    with VideoWriter(pan, fps=7) as w:
+        for k, f in enumerate(VideoReader(demo / "pets09-s2l1.mp4", stop=80)):
+            w.write(f.image[40:440, round(1.5 * k):round(1.5 * k) + 560])
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        track_video(pan, tmp_path / "out")
+    said = [str(m.message) for m in got if "the view moves" in str(m.message)]
+    assert len(said) == 1
+    assert re.fullmatch(rf"{re.escape(str(pan))}: the view moves \(by 1[4-6] pixels every 10 "
+                        r"frames, in median, found by frame 51\): the background model needs a "
+                        r"still camera, .* \(--frontend hog, or onnx:MODEL.onnx\)", said[0])
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        track_video(demo / "pets09-s2l1.mp4", tmp_path / "still", stop=80)
+    assert not [m for m in got if "the view moves" in str(m.message)]
 
 
 def test_cli_tracks_a_video(tmp_path):

@@ -619,7 +619,24 @@ def _bgsub(ctx: Context) -> FrameDetector:
             det.initialize(_image(f, "the background model") for f in VideoReader(
                 reader.source, fps=reader.fps, grey=True, start=reader.start,
                 stop=reader.start + n_init - 1, skip_bad=reader.skip_bad))
-    return lambda frame: det.detect(_image(frame, "the background model"))
+    source = reader.source if reader is not None else "the frames"
+    said = False
+
+    def detect(frame: Frame) -> Detections:
+        nonlocal said
+        found = det.detect(_image(frame, "the background model"))
+        if not said and det.view_moves:
+            said = True
+            shift = float(np.median(det.view_shifts[-5:]))
+            warnings.warn(
+                f"{source}: the view moves (by {shift:.0f} pixels every {det.check_view} "
+                f"frames, in median, found by frame {frame.index}): the background model needs a "
+                f"still camera, and its blobs follow the image's motion rather than objects; "
+                f"track with a detector (--frontend hog, or onnx:MODEL.onnx)",
+                RuntimeWarning, stacklevel=2)
+        return found
+
+    return detect
 
 
 def _hog(ctx: Context) -> FrameDetector:

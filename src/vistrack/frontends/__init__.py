@@ -9,7 +9,7 @@ Detections`` (:class:`Detector`). Trackers that follow features, templates, colo
 contours or appearance models from frame to frame are in :mod:`vistrack.tracking`.
 """
 
-from .background import BACKGROUNDS, MOG2Background, SelectiveBackground, background
+from .background import BACKGROUNDS, MOG2Background, SelectiveBackground, background, view_shift
 from .blobs import BlobDetector, Blobs, find_blobs, threshold
 from .detectors import ConfidenceMap, ConfidencePeaks, Detector, HOGConfidence, HOGDetector
 from .onnx import ONNXDetector
@@ -17,4 +17,5 @@ from .spots import Spots, locate
 
 __all__ = ["BACKGROUNDS", "MOG2Background", "SelectiveBackground", "background", "Blobs",
            "BlobDetector", "find_blobs", "threshold", "Detector", "HOGDetector", "Spots",
-           "locate", "ConfidenceMap", "HOGConfidence", "ConfidencePeaks", "ONNXDetector"]
+           "locate", "ConfidenceMap", "HOGConfidence", "ConfidencePeaks", "ONNXDetector",
+           "view_shift"]

