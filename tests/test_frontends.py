@@ -981,6 +981,20 @@ def test_track_video_says_once_that_the_view_moves(tmp_path):
         track_video(demo / "pets09-s2l1.mp4", tmp_path / "still", stop=80)
     assert not [m for m in got if "the view moves" in str(m.message)]
 
+    # ten textured frames, ten blank, ...: a textured frame's corners are found in none of the
+    # blank frame checked next (inf), and a blank frame has none to follow (no check)
+    jump = tmp_path / "jump.mp4"
+    with VideoWriter(jump, fps=7) as w:
+        for k in range(110):
+            im = _texture((240, 320), k) if k // 10 % 2 == 0 else np.full((240, 320), 128, np.uint8)
+            w.write(cv2.cvtColor(im, cv2.COLOR_GRAY2BGR))
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        track_video(jump, tmp_path / "jumped")
+    said = [str(m.message) for m in got if "the view moves" in str(m.message)]
+    assert len(said) == 1 and "the view moves (beyond following, in most checks, every 10 " \
+        "frames, in median, found by frame 91)" in said[0]
+
 
 def test_cli_tracks_a_video(tmp_path):
     import subprocess

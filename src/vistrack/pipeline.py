@@ -628,8 +628,11 @@ def _bgsub(ctx: Context) -> FrameDetector:
         if not said and det.view_moves:
             said = True
             shift = float(np.median(det.view_shifts[-5:]))
+            # inf: most checks found no corner of one frame in the next
+            how = (f"by {shift:.0f} pixels" if math.isfinite(shift)
+                   else "beyond following, in most checks,")
             warnings.warn(
-                f"{source}: the view moves (by {shift:.0f} pixels every {det.check_view} "
+                f"{source}: the view moves ({how} every {det.check_view} "
                 f"frames, in median, found by frame {frame.index}): the background model needs a "
                 f"still camera, and its blobs follow the image's motion rather than objects; "
                 f"track with a detector (--frontend hog, or onnx:MODEL.onnx)",

@@ -472,9 +472,10 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256) -> tuple[float
     p = cv2.goodFeaturesToTrack(small_a, 200, 0.01, 7)
     if p is None or len(p) < 10:
         return float("nan"), float("nan"), float("nan")
-    lk = {"winSize": (21, 21), "maxLevel": 3}
-    q, there, _ = cv2.calcOpticalFlowPyrLK(small_a, small_b, p, None, **lk)
-    r, back, _ = cv2.calcOpticalFlowPyrLK(small_b, small_a, q, None, **lk)
+    q, there, _ = cv2.calcOpticalFlowPyrLK(small_a, small_b, p, np.empty_like(p), winSize=(21, 21),
+                                           maxLevel=3)
+    r, back, _ = cv2.calcOpticalFlowPyrLK(small_b, small_a, q, np.empty_like(q), winSize=(21, 21),
+                                          maxLevel=3)
     ok = (there[:, 0] == 1) & (back[:, 0] == 1) & (np.hypot(*(r - p)[:, 0].T) < 1.0)
     followed = float(ok.mean())
     if ok.sum() < 10:
