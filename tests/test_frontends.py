@@ -913,6 +913,8 @@ def test_blob_detector_tells_a_moving_view_from_a_still_one():
             first = k
     # a check every 10 frames (frames 0, 10, ...), moving once five checks are in (frame 50)
     assert first == 50 and np.median(pan.view_shifts) == pytest.approx(15.0, abs=1.0)
+    assert pan.view_motion == np.median(pan.view_shifts[-5:])
+    assert still.view_motion == np.median(still.view_shifts[-5:]) < 0.5
     off = BlobDetector(check_view=0)
     off.initialize(crops[:20])
     for im in crops:

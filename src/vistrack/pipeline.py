@@ -627,7 +627,8 @@ def _bgsub(ctx: Context) -> FrameDetector:
         found = det.detect(_image(frame, "the background model"))
         if not said and det.view_moves:
             said = True
-            shift = float(np.median(det.view_shifts[-5:]))
+            shift = det.view_motion
+            assert shift is not None  # set once the view moves
             # inf: most checks found no corner of one frame in the next
             how = (f"by {shift:.0f} pixels" if math.isfinite(shift)
                    else "beyond following, in most checks,")

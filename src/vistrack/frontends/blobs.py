@@ -288,6 +288,9 @@ class BlobDetector:
         How far the view moved between each two checks, in pixels (``inf`` where the corners
         of one could not be followed into the next; a check of a frame without corners adds
         none).
+    view_motion : float or None
+        The median of the last five :attr:`view_shifts` (None before five checks): how far
+        the view moves between two checks, updated at each check.
 
     Raises
     ------
@@ -317,13 +320,14 @@ class BlobDetector:
         self.min_area, self.open_size, self.close_size = float(min_area), open_size, close_size
         self.check_view, self.max_shift = int(check_view), float(max_shift)
         self.view_shifts: list[float] = []
+        self.view_motion: float | None = None
         self._frames = 0
         self._last_check: np.ndarray | None = None
 
     @property
     def view_moves(self) -> bool:
-        """Whether the view moves: the median of the last five :attr:`view_shifts` is
-        ``max_shift`` or more.
+        """Whether the view moves: :attr:`view_motion`, the median of the last five
+        :attr:`view_shifts`, is ``max_shift`` or more.
 
         Examples
         --------
@@ -337,8 +341,7 @@ class BlobDetector:
         >>> det.view_moves, [round(s) for s in det.view_shifts]
         (True, [6, 6, 6, 6, 6, 6])
         """
-        last = self.view_shifts[-5:]
-        return len(last) == 5 and float(np.median(last)) >= self.max_shift
+        return self.view_motion is not None and self.view_motion >= self.max_shift
 
     def initialize(self, images: Iterable[np.ndarray]) -> None:
         """Start the background model from ``images`` (an iterable of frames).
@@ -397,6 +400,9 @@ class BlobDetector:
                 if followed == followed:  # NaN: no corners to follow, no evidence either way
                     # corners found but not followed: the view changed beyond Lucas-Kanade
                     self.view_shifts.append(float(np.hypot(dx, dy)) if dx == dx else np.inf)
+                    last = self.view_shifts[-5:]
+                    if len(last) == 5:  # once a check, not once a frame
+                        self.view_motion = float(np.median(last))
             self._last_check = grey
         self._frames += 1
         mask = self.model.apply(grey)
