@@ -2,6 +2,7 @@
 (Debian's headless Chromium, which .ci/run installs when missing): no console message, every
 image shown, the video decoded, and a screenshot that is not blank."""
 
+import html
 import json
 import re
 import shutil
@@ -207,3 +208,32 @@ def test_a_ground_truth_given_as_its_sequence_folder_is_shown(tmp_path, capsys):
                                                                  .resolve())
     page = (out / "report.html").read_text()
     assert "not there any more" not in page and page.count("<img ") == 3
+
+
+def test_the_run_keeps_its_warnings_and_the_page_lists_them(run_dir, tmp_path, capsys):
+    """A run's warnings went to stderr only: a batch of videos printed them interleaved, and
+    nothing beside the outputs said that a run had been warned (an assumed frame rate, a
+    moving view). run.json now keeps each message as it was shown, and the page lists them;
+    a run with nothing to say keeps an empty list and the page has no such section."""
+    import cv2
+
+    assert json.loads((run_dir / "run.json").read_text())["warnings"] == []
+    assert "<h2>Warnings</h2>" not in (run_dir / "report.html").read_text()
+
+    folder = tmp_path / "frames"  # an image folder: no frame rate to read
+    folder.mkdir()
+    for k in range(4):
+        im = np.zeros((60, 80, 3), np.uint8)
+        im[20:40, 10 + 5 * k:30 + 5 * k] = 255
+        cv2.imwrite(str(folder / f"{k + 1:06d}.png"), im)
+    out = tmp_path / "out"
+    capsys.readouterr()
+    assert main(["track", str(folder), "--out-dir", str(out), "--report", "--quiet"]) == 0
+    printed = [line.removeprefix("vistrack track: warning: ")
+               for line in capsys.readouterr().err.splitlines()
+               if line.startswith("vistrack track: warning: ")]
+    kept = json.loads((out / "run.json").read_text())["warnings"]
+    assert kept == printed and len(kept) == 1
+    assert kept[0].startswith(f"{folder} gives no frame rate")
+    page = (out / "report.html").read_text()
+    assert f"<h2>Warnings</h2><ul class='warnings'><li>{html.escape(kept[0])}</li></ul>" in page

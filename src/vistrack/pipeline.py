@@ -1686,7 +1686,7 @@ class VideoRun:
 
 RUN_INFO = "run.json"
 """The file :func:`track_video` writes beside its outputs to say how they were made (the
-command, the input, the ground truth, the frames, the scores), which
+command, the input, the ground truth, the frames, the scores, the warnings), which
 :func:`vistrack.report.write_report` reads."""
 
 REPORT = "report.html"
@@ -1791,8 +1791,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         (``confidence`` only; default 0.5).
     command : str, optional
         The command line that asked for this run, kept in ``run.json`` (written beside the
-        outputs: the command, the input, the ground truth, the frames, the scores), which
-        ``vistrack report`` reads.
+        outputs: the command, the input, the ground truth, the frames, the scores, and the
+        messages of the warnings the run gave), which ``vistrack report`` reads.
     classes, onnx_layout : sequence of int, str
         For ``onnx:MODEL`` only: the model's classes kept (default all) and its output layout
         (:data:`~vistrack.frontends.onnx.LAYOUTS`; default ``"auto"``, told from the
@@ -1866,127 +1866,128 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     """
     from .io.video import VideoReader
 
-    name = default_frontend(tracker) if frontend is None else frontend
-    options = {"background": background, "min_area": min_area, "n_init": n_init,
-               "det_threshold": det_threshold, "classes": classes, "onnx_layout": onnx_layout,
-               "columns": columns}
-    unread = unread_frontend_option(name, options)
-    if unread is not None:
-        what = repr(name) if isinstance(name, str) else f"a {type(name).__name__}"
-        raise ValueError(f"{unread[0]} goes with the {unread[1]!r} front-end; the front-end "
-                         f"here, {what}, does not read it")
-    files = video_outputs(out_dir, annotate=annotate, force=force)
-    out_dir = Path(out_dir)
-    gt_table = _ground_truth(gt) if gt is not None else None
-    if confidence is not None and not callable(confidence):
-        raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
-                        f"{type(confidence).__name__}")
-    reader = VideoReader(video, fps=fps, stop=stop, prefetch=8, skip_bad=skip_bad_frames)
-    if reader.image_folder is not None and out_dir.resolve() == reader.image_folder.resolve():
-        # the outputs among the frames: the next run reads trajectories.png as one (and fails,
-        # or with skip_bad_frames numbers every image after it a frame early)
-        raise ValueError(f"{out_dir} is the folder of the images being tracked: the outputs "
-                         "would be read as frames by the next run; write them to another "
-                         "folder (--out-dir)")
-    if reader.fps_from is None:
-        # the tracker's times (coasting, how long a lost track is kept) and its motion's
-        # noise follow the rate
-        warnings.warn(f"{video} gives no frame rate (an image folder, or a video whose "
-                      f"header has none): tracked at {reader.fps:g} frames/s (give the true "
-                      "one with --fps, or fps=)", UserWarning, stacklevel=2)
-    # the options not given are left to the front-ends' own defaults
-    ctx = Context(reader.fps, reader.size, reader, config, dict(overrides),
-                  {k: v for k, v in options.items() if v is not None}
-                  | {"confidence": confidence})
-    box = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].box_config
-    if config is not None and not box:
-        raise ValueError(f"config is a box tracker's configuration; tracker {tracker!r} is "
-                         "not a box tracker")
-    if box and config is None and isinstance(name, str) and name in FRONTENDS \
-            and FRONTENDS[name].still_camera:
-        # a background model works only with a still camera: nothing to compensate, and
-        # blobs that split and merge would read as small shifts of the camera
-        ctx.overrides.setdefault("camera_motion", False)
-    detect = _frontend(name, ctx)
-    # a detector run on every k-th frame: a box tracker by name steps through its frames
-    # alone, at the video's frame rate / k (as track_sequence), and over the frames it did
-    # not deliver; any other tracker, or one made by the caller, keeps its rate and every
-    # frame
-    grid = detect if isinstance(detect, _FileDetections) else None
-    if grid is not None:
-        warn_outside(grid.dets, grid.path, reader.size, stacklevel=2)
-    if box and grid is not None:
-        at_rate = replace(ctx, fps=ctx.fps / grid.stride)
-        trk, _ = make_tracker(tracker, at_rate)
-        assert isinstance(trk, BoxTracker)  # a box preset's
-        ctx.resolved = at_rate.resolved
-        if trk.config.nms_iou >= 1:  # as track_sequence warns, with the tracker's setting
-            warn_duplicates(grid.dets, grid.path, stacklevel=2)
-        stepper, _ = _on_detector_frames(trk, grid.path, grid.dets.frames, grid.first,
-                                         grid.stride, offline=False)
-    else:
-        trk, _ = make_tracker(tracker, ctx)
-        stepper = trk
+    with _shown_warnings() as said:  # kept in run.json, each still shown as it comes
+        name = default_frontend(tracker) if frontend is None else frontend
+        options = {"background": background, "min_area": min_area, "n_init": n_init,
+                   "det_threshold": det_threshold, "classes": classes, "onnx_layout": onnx_layout,
+                   "columns": columns}
+        unread = unread_frontend_option(name, options)
+        if unread is not None:
+            what = repr(name) if isinstance(name, str) else f"a {type(name).__name__}"
+            raise ValueError(f"{unread[0]} goes with the {unread[1]!r} front-end; the front-end "
+                             f"here, {what}, does not read it")
+        files = video_outputs(out_dir, annotate=annotate, force=force)
+        out_dir = Path(out_dir)
+        gt_table = _ground_truth(gt) if gt is not None else None
+        if confidence is not None and not callable(confidence):
+            raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
+                            f"{type(confidence).__name__}")
+        reader = VideoReader(video, fps=fps, stop=stop, prefetch=8, skip_bad=skip_bad_frames)
+        if reader.image_folder is not None and out_dir.resolve() == reader.image_folder.resolve():
+            # the outputs among the frames: the next run reads trajectories.png as one (and fails,
+            # or with skip_bad_frames numbers every image after it a frame early)
+            raise ValueError(f"{out_dir} is the folder of the images being tracked: the outputs "
+                             "would be read as frames by the next run; write them to another "
+                             "folder (--out-dir)")
+        if reader.fps_from is None:
+            # the tracker's times (coasting, how long a lost track is kept) and its motion's
+            # noise follow the rate
+            warnings.warn(f"{video} gives no frame rate (an image folder, or a video whose "
+                          f"header has none): tracked at {reader.fps:g} frames/s (give the true "
+                          "one with --fps, or fps=)", UserWarning, stacklevel=2)
+        # the options not given are left to the front-ends' own defaults
+        ctx = Context(reader.fps, reader.size, reader, config, dict(overrides),
+                      {k: v for k, v in options.items() if v is not None}
+                      | {"confidence": confidence})
+        box = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].box_config
+        if config is not None and not box:
+            raise ValueError(f"config is a box tracker's configuration; tracker {tracker!r} is "
+                             "not a box tracker")
+        if box and config is None and isinstance(name, str) and name in FRONTENDS \
+                and FRONTENDS[name].still_camera:
+            # a background model works only with a still camera: nothing to compensate, and
+            # blobs that split and merge would read as small shifts of the camera
+            ctx.overrides.setdefault("camera_motion", False)
+        detect = _frontend(name, ctx)
+        # a detector run on every k-th frame: a box tracker by name steps through its frames
+        # alone, at the video's frame rate / k (as track_sequence), and over the frames it did
+        # not deliver; any other tracker, or one made by the caller, keeps its rate and every
+        # frame
+        grid = detect if isinstance(detect, _FileDetections) else None
         if grid is not None:
-            # what the file's frames are that this tracker steps through as found nothing
-            skip = undelivered_frames(grid.dets.frames) if grid.stride == 1 else ()
-            gaps = (f"detections on every {ordinal(grid.stride)} frame only"
-                    if grid.stride > 1 else undelivered_text(skip) if len(skip) else "")
-            if gaps:
-                warnings.warn(f"{grid.path}: {gaps}: the tracker, {type(trk).__name__}, steps "
-                              "through every frame of the video, each frame without "
-                              "detections as one where nothing was found", RuntimeWarning,
-                              stacklevel=2)
-    scored: list[MOTCounts] = []
+            warn_outside(grid.dets, grid.path, reader.size, stacklevel=2)
+        if box and grid is not None:
+            at_rate = replace(ctx, fps=ctx.fps / grid.stride)
+            trk, _ = make_tracker(tracker, at_rate)
+            assert isinstance(trk, BoxTracker)  # a box preset's
+            ctx.resolved = at_rate.resolved
+            if trk.config.nms_iou >= 1:  # as track_sequence warns, with the tracker's setting
+                warn_duplicates(grid.dets, grid.path, stacklevel=2)
+            stepper, _ = _on_detector_frames(trk, grid.path, grid.dets.frames, grid.first,
+                                             grid.stride, offline=False)
+        else:
+            trk, _ = make_tracker(tracker, ctx)
+            stepper = trk
+            if grid is not None:
+                # what the file's frames are that this tracker steps through as found nothing
+                skip = undelivered_frames(grid.dets.frames) if grid.stride == 1 else ()
+                gaps = (f"detections on every {ordinal(grid.stride)} frame only"
+                        if grid.stride > 1 else undelivered_text(skip) if len(skip) else "")
+                if gaps:
+                    warnings.warn(f"{grid.path}: {gaps}: the tracker, {type(trk).__name__}, steps "
+                                  "through every frame of the video, each frame without "
+                                  "detections as one where nothing was found", RuntimeWarning,
+                                  stacklevel=2)
+        scored: list[MOTCounts] = []
 
-    def check(stats: LoopStats) -> None:
-        # what can still fail is found before the sinks are closed: a failed run writes
-        # nothing, and with force an earlier run's files stay as they were
-        if stats.frames == 0:
-            raise ValueError(f"{video}: no frames to track")
-        if gt_table is not None:  # scored over the frames tracked
-            g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= stats.last)]
-            if not len(g):
-                warnings.warn(f"{gt}: no ground-truth rows on the frames tracked "
-                              f"({reader.start}-{stats.last}): every box tracked counts as a "
-                              "false positive", UserWarning, stacklevel=4)
-            tracks = sinks["tracks"]
-            assert isinstance(tracks, MOTWriter)
-            scored.append(evaluate_mot(g, tracks.written(), stats.last, benchmark="auto"))
+        def check(stats: LoopStats) -> None:
+            # what can still fail is found before the sinks are closed: a failed run writes
+            # nothing, and with force an earlier run's files stay as they were
+            if stats.frames == 0:
+                raise ValueError(f"{video}: no frames to track")
+            if gt_table is not None:  # scored over the frames tracked
+                g = gt_table[(gt_table.frames >= reader.start) & (gt_table.frames <= stats.last)]
+                if not len(g):
+                    warnings.warn(f"{gt}: no ground-truth rows on the frames tracked "
+                                  f"({reader.start}-{stats.last}): every box tracked counts as a "
+                                  "false positive", UserWarning, stacklevel=4)
+                tracks = sinks["tracks"]
+                assert isinstance(tracks, MOTWriter)
+                scored.append(evaluate_mot(g, tracks.written(), stats.last, benchmark="auto"))
 
-    with made_folder(out_dir):  # removed again, if made here, when the run fails
-        sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
-        stats = run(reader, detect, stepper, list(sinks.values()), progress=progress,
-                    total=len(reader), label=reader.source.name, check=check)
-    n = stats.frames
-    rows = sinks["tracks"]
-    assert isinstance(rows, MOTWriter)
-    last = stats.last
-    # the video ended before stop (not --stop's own end, nor a missing image at it: a folder
-    # without its frame 5 stopped at 5 warned of "rows past the video's last frame (4)")
-    ended = stop is None or (reader.frame_count < stop if reader.frame_count else last < stop)
-    if ended:  # rows past the video's last frame were for nothing
-        for table, what, label in ((grid.dets if grid is not None else None, "not tracked",
-                                    grid.path if grid is not None else None),
-                                   (gt_table, "not scored", gt)):
-            if table is not None and len(table) and table.frames[-1] > last:
-                past = table.frames[table.frames > last]
-                warnings.warn(f"{label}: {len(past)} rows on frames {past[0]}-{past[-1]}, past "
-                              f"the video's last frame ({last}): {what}", UserWarning,
-                              stacklevel=2)
-    scores = scored[0] if scored else None
-    n_tracks = len(rows.identities)
-    if isinstance(trk, BoxTracker):
-        _warn_calibration(trk, str(video))
-    result = VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
-                      ctx.resolved if isinstance(trk, BoxTracker) else None,
-                      derived_values(trk) if isinstance(trk, BoxTracker) else None,
-                      reader.start, stats.last)
-    _write_run_info(result, video, gt, command, reader.fps)
-    # an earlier run's page would show other tracks beside these outputs (a new one, if asked
-    # for, is written from run.json after this)
-    (out_dir / REPORT).unlink(missing_ok=True)
-    return result
+        with made_folder(out_dir):  # removed again, if made here, when the run fails
+            sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
+            stats = run(reader, detect, stepper, list(sinks.values()), progress=progress,
+                        total=len(reader), label=reader.source.name, check=check)
+        n = stats.frames
+        rows = sinks["tracks"]
+        assert isinstance(rows, MOTWriter)
+        last = stats.last
+        # the video ended before stop (not --stop's own end, nor a missing image at it: a folder
+        # without its frame 5 stopped at 5 warned of "rows past the video's last frame (4)")
+        ended = stop is None or (reader.frame_count < stop if reader.frame_count else last < stop)
+        if ended:  # rows past the video's last frame were for nothing
+            for table, what, label in ((grid.dets if grid is not None else None, "not tracked",
+                                        grid.path if grid is not None else None),
+                                       (gt_table, "not scored", gt)):
+                if table is not None and len(table) and table.frames[-1] > last:
+                    past = table.frames[table.frames > last]
+                    warnings.warn(f"{label}: {len(past)} rows on frames {past[0]}-{past[-1]}, past "
+                                  f"the video's last frame ({last}): {what}", UserWarning,
+                                  stacklevel=2)
+        scores = scored[0] if scored else None
+        n_tracks = len(rows.identities)
+        if isinstance(trk, BoxTracker):
+            _warn_calibration(trk, str(video))
+        result = VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
+                          ctx.resolved if isinstance(trk, BoxTracker) else None,
+                          derived_values(trk) if isinstance(trk, BoxTracker) else None,
+                          reader.start, stats.last)
+        _write_run_info(result, video, gt, command, reader.fps, said)
+        # an earlier run's page would show other tracks beside these outputs (a new one, if asked
+        # for, is written from run.json after this)
+        (out_dir / REPORT).unlink(missing_ok=True)
+        return result
 
 
 def _ground_truth(gt: str | Path) -> MOTTable:
@@ -2002,10 +2003,39 @@ def _ground_truth(gt: str | Path) -> MOTTable:
     return table
 
 
+@contextmanager
+def _shown_warnings() -> Iterator[list[str]]:
+    """The messages of the warnings shown while inside, in the order shown: each is still
+    shown as it comes (by whatever shows warnings outside: the command line's one line, a
+    test's recorder), and kept. Warnings that the filters hide or turn into errors are not
+    kept.
+
+    Examples
+    --------
+    >>> with warnings.catch_warnings(record=True):
+    ...     with _shown_warnings() as said:
+    ...         warnings.warn("a.txt: no detections", UserWarning)
+    >>> said
+    ['a.txt: no detections']
+    """
+    said: list[str] = []
+    with warnings.catch_warnings():
+        show = warnings.showwarning
+
+        def keep(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                 file: Any = None, line: str | None = None) -> None:
+            said.append(str(message))
+            show(message, category, filename, lineno, file, line)
+
+        warnings.showwarning = keep
+        yield said
+
+
 def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
-                    command: str | None, frame_rate: float) -> None:
+                    command: str | None, frame_rate: float, said: Sequence[str] = ()) -> None:
     """``run.json`` beside a run's outputs: how they were made (:mod:`vistrack.report`;
-    ``fps`` the frames tracked a second, ``frame_rate`` the video's)."""
+    ``fps`` the frames tracked a second, ``frame_rate`` the video's, ``warnings`` the
+    messages of the warnings the run gave, ``said``)."""
     import json
 
     from . import __version__
@@ -2019,7 +2049,8 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
             "frames": run.frames, "rows": run.rows, "tracks": run.tracks,
             "fps": round(run.fps, 1), "frame_rate": frame_rate,
             "scores": run.scores.summary() if run.scores is not None else None,
-            "outputs": sorted(f.name for f in run.files.values())}
+            "outputs": sorted(f.name for f in run.files.values()),
+            "warnings": list(said)}
     with replacing(run.out_dir / RUN_INFO) as part:
         part.write_text(json.dumps(info, indent=2) + "\n")
 

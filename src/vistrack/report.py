@@ -11,8 +11,8 @@ the video are embedded as ``data:`` URIs. A short script marks the video ``data-
 
 ``run.json`` (:data:`vistrack.pipeline.RUN_INFO`), which ``vistrack track --out-dir``
 writes beside its outputs, says how they
-were made (the command, the input, the ground truth, the scores); without it the page shows
-what the folder holds.
+were made (the command, the input, the ground truth, the scores, the warnings the run gave,
+which the page lists); without it the page shows what the folder holds.
 """
 
 from __future__ import annotations
@@ -129,7 +129,7 @@ table.scores { border-collapse: collapse; font-variant-numeric: tabular-nums; }
 table.scores td, table.scores th { border-bottom: 1px solid #ddd; padding: 0.2em 0.5em;
                                    text-align: right; }
 img, video { max-width: 100%; border: 1px solid #ccc; }
-.note { color: #a00; }
+.note, ul.warnings { color: #a00; }
 """
 
 _SCRIPT = """
@@ -214,6 +214,10 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
             f"{info.get('rows', 0)} boxes of {info.get('tracks', 0)} tracks, "
             f"{info.get('fps', 0):.0f} frames/s without writing; vistrack "
             f"{html.escape(str(info.get('vistrack', '')))}.</p>")
+    said = info.get("warnings")
+    if isinstance(said, list) and said:  # what the run warned of, beside its numbers
+        parts.append("<h2>Warnings</h2><ul class='warnings'>"
+                     + "".join(f"<li>{html.escape(str(m))}</li>" for m in said) + "</ul>")
     if info.get("scores"):
         gt = html.escape(str(info.get("gt", "")))
         parts.append(f"<h2>Scores</h2><p>Against {gt}, over the frames tracked.</p>"
