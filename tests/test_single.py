@@ -246,6 +246,44 @@ def test_every_tracker_starts_at_a_box_inside_or_half_inside(method):
         assert out.shape == (4,) and np.isfinite(out).all()
 
 
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_every_tracker_refuses_a_frame_of_another_shape(method):
+    """A frame of another size, or grey after colour, went on inside each tracker in its own
+    way: a cv2.error from inside OpenCV (Lucas-Kanade's pyramids for klt and template, KCF on
+    grey), or a box followed on in pixels of another image (colour, camshift, wsl, snake,
+    csrt). update now refuses it, naming both shapes, and the tracker still follows frames
+    of the first one's shape."""
+    im = _frame_768x576()
+    tracker = single_tracker(method)
+    tracker.init(im, [300, 200, 60, 60])
+    for other in (im[:288, :384], cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)):
+        with pytest.raises(ValueError, match="^" + re.escape(
+                f"image is {other.shape}; the tracker started on a (576, 768, 3) image: give "
+                "it the frames of one video, each of the first frame's shape") + "$"):
+            tracker.update(other)
+    assert np.isfinite(tracker.update(np.roll(im, 2, axis=1))).all()
+
+
+def test_opencv_trackers_name_an_image_they_cannot_take():
+    """CSRT given float pixels failed with "cannot start there: 'depth' is 6", as though the
+    box were at fault, and KCF with a cv2.error on update; BGRA, with an assertion on
+    channels. Both now say what an image must be, as the other trackers do."""
+    im = _frame_768x576()
+    for method in ("csrt", "kcf"):
+        for bad, got in ((im.astype(np.float64), "(576, 768, 3) float64"),
+                         (np.dstack([im, im[..., :1]]), "(576, 768, 4) uint8")):
+            tracker = single_tracker(method)
+            with pytest.raises(ValueError, match="^" + re.escape(
+                    f"image must be (H, W) or (H, W, C) uint8 with C in (3,); got shape {got}")
+                    + "$"):
+                tracker.init(bad, [300, 200, 60, 60])
+            assert not tracker.started
+        grey = single_tracker(method)  # grey frames throughout: OpenCV's trackers take them
+        g = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
+        grey.init(g, [300, 200, 60, 60])
+        assert grey.update(g).shape == (4,)
+
+
 def test_step_refuses_a_starting_detection_outside_the_image():
     from vistrack.types import Detections, Frame
 

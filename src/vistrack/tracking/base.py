@@ -222,6 +222,7 @@ class SingleObjectTracker:
     """
 
     _started: bool = False
+    _shape: tuple[int, ...] = ()
 
     def _start(self, image: np.ndarray, box: np.ndarray) -> None:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -262,6 +263,7 @@ class SingleObjectTracker:
         check_start_box(image, b)
         self._start(image, b)
         self._started = True
+        self._shape = np.shape(image)  # the frames to come are of its kind (update)
 
     def update(self, image: np.ndarray) -> np.ndarray:
         """The object's box ``(4,)`` (``x, y, w, h``) in the next ``image``.
@@ -280,6 +282,10 @@ class SingleObjectTracker:
         ------
         RuntimeError
             If the tracker has not been started (:meth:`init` or :meth:`step`).
+        ValueError
+            If ``image`` differs in shape from the first frame's (its size, or grey against
+            colour): the box is in the first frame's pixels, and each tracker would fail
+            inside OpenCV, or follow on, in its own way.
 
         Examples
         --------
@@ -291,10 +297,18 @@ class SingleObjectTracker:
         >>> t.init(image(30), [30, 20, 20, 20])
         >>> [t.update(image(x)).round().tolist()[0] for x in (33, 36)]
         [33.0, 36.0]
+        >>> t.update(image(39)[:30])  # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        ValueError: image is (30, 80, 3); the tracker started on a (60, 80, 3) image: ...
         """
         if not self._started:
             raise RuntimeError(f"{type(self).__name__}.update before init: start it with "
                                "init(image, box) or step(frame, detections)")
+        if np.shape(image) != self._shape:
+            raise ValueError(f"image is {np.shape(image)}; the tracker started on a "
+                             f"{self._shape} image: give it the frames of one video, each "
+                             "of the first frame's shape")
         return self._follow(image)
 
     @property

@@ -716,10 +716,10 @@ class OpenCVTracker(SingleObjectTracker):
     Raises
     ------
     ValueError
-        If ``kind`` is neither; from :meth:`init`, if the box's width or height is less
-        than OpenCV's least once rounded (2 pixels for CSRT, 1 for KCF), or OpenCV's
-        tracker cannot start on it (CSRT cannot on small boxes at the image's right or
-        bottom edge), the message naming the box.
+        If ``kind`` is neither; from :meth:`init`, if the image is not 8-bit grey or BGR,
+        the box's width or height is less than OpenCV's least once rounded (2 pixels for
+        CSRT, 1 for KCF), or OpenCV's tracker cannot start on it (CSRT cannot on small boxes
+        at the image's right or bottom edge), the message naming the box.
 
     Examples
     --------
@@ -748,6 +748,9 @@ class OpenCVTracker(SingleObjectTracker):
     def _start(self, image: np.ndarray, b: np.ndarray) -> None:
         import cv2
 
+        # OpenCV's own failures on another kind of image read as the box's (CSRT on float
+        # pixels: "cannot start there: 'depth' is 6")
+        image = as_uint8_image(image, channels=(3,))
         r = tuple(int(round(v)) for v in b)
         where = (f"box (x, y, w, h) = ({', '.join(f'{v:g}' for v in b)}), whole pixels "
                  f"({', '.join(str(v) for v in r)})")
@@ -758,7 +761,7 @@ class OpenCVTracker(SingleObjectTracker):
                              f"{least} whole pixel{'s' if least > 1 else ''}")
         tracker = self._make()
         try:
-            tracker.init(np.asarray(image), r)
+            tracker.init(image, r)
         except cv2.error as e:
             # e.g. CSRT on a small box at the image's right or bottom edge
             reason = str(e).strip().splitlines()[-1].split("error: ", 1)[-1]
@@ -767,7 +770,7 @@ class OpenCVTracker(SingleObjectTracker):
         self.box = b
 
     def _follow(self, image: np.ndarray) -> np.ndarray:
-        ok, b = self._t.update(np.asarray(image))
+        ok, b = self._t.update(as_uint8_image(image, channels=(3,)))
         if ok:
             self.box = np.asarray(b, float)
         return self.box.copy()
