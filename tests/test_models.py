@@ -96,6 +96,24 @@ def test_periodic_q_tends_to_constant_velocity_as_omega_tends_to_zero():
                                        atol=0)
 
 
+def test_periodic_f_tends_to_constant_velocity_for_any_small_omega():
+    """F's sin(ω dt)/ω lost the step where ω dt is subnormal: 0 instead of 0.3 at
+    ω = 5e-324 and dt = 0.3 (ω dt rounds to 0), 0.2999 at ω = 1e-320. Oracle: the free
+    particle's F = [[1, dt], [0, 1]], which the oscillator tends to as ω → 0 (each entry
+    within (ω dt)² max(dt, 1) of it, below rounding but at ω = 1e-8), and, for ω dt from
+    1e-3 to 3, Van Loan's matrix exponential."""
+    for omega in (5e-324, 1e-320, 1e-310, 1e-200, 1e-8):
+        for dt in (1e-6, 0.3, 1.0, 40.0):
+            np.testing.assert_allclose(Periodic(dim=2, omega=omega).F(dt),
+                                       ConstantVelocity(dim=2).F(dt), rtol=1e-15,
+                                       atol=(omega * max(dt, 1.0)) ** 2 * max(dt, 1.0))
+    for omega, dt in ((1e-3, 1.0), (0.5, 1.9), (1.0, 0.999), (1.0, 1.001), (3.0, 1.0)):
+        A = np.array([[0.0, 1.0], [-(omega**2), 0.0]])
+        np.testing.assert_allclose(Periodic(dim=1, omega=omega).F(dt),
+                                   van_loan(A, np.array([[0.0], [1.0]]), 1.0, dt)[0],
+                                   rtol=1e-13, atol=1e-15)
+
+
 def test_periodic_q_of_mixed_steps_is_each_steps():
     """A dt array with steps on both sides of the series' range (2 ω dt < 1 and >= 1) gives
     each step's matrix; its entries are continuous across the switch (at 2 ω dt = 1, the

@@ -472,9 +472,15 @@ class Periodic:
             out[..., 1, 0] = -(w**2) * d
             out[..., 1, 1] = 1.0
         else:
-            c, s = np.cos(w * d), np.sin(w * d)
+            wd = w * d
+            c, s = np.cos(wd), np.sin(wd)
+            # sin(ωdt)/ω as dt sin(u)/u, by the series below u = 1: a subnormal ω dt rounds
+            # (to 0 at ω = 5e-324), and sin(ωdt)/ω with it, where the limit is dt
+            small = wd < 1.0
+            sinc = np.where(small, _sin_series(np.where(small, wd, 0.0) ** 2, 1),
+                            s / np.where(small, 1.0, wd))
             out[..., 0, 0] = c
-            out[..., 0, 1] = s / w
+            out[..., 0, 1] = d * sinc
             out[..., 1, 0] = -w * s
             out[..., 1, 1] = c
         return np.kron(out, np.eye(self.dim))
