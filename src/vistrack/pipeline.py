@@ -630,14 +630,22 @@ def _bgsub(ctx: Context) -> FrameDetector:
             shift = det.view_motion
             assert shift is not None  # set once the view moves
             # inf: most checks found no corner of one frame in the next
-            how = (f"by {shift:.0f} pixels" if math.isfinite(shift)
-                   else "beyond following, in most checks,")
-            warnings.warn(
-                f"{source}: the view moves ({how} every {det.check_view} "
-                f"frames, in median, found by frame {frame.index}): the background model needs a "
-                f"still camera, and its blobs follow the image's motion rather than objects; "
-                f"track with a detector (--frontend hog, or onnx:MODEL.onnx)",
-                RuntimeWarning, stacklevel=2)
+            how = (f"by {shift:.0f} pixels every {det.check_view} frames, in median"
+                   if math.isfinite(shift) else
+                   f"further than corners can be followed over {det.check_view} frames, in "
+                   "most checks")
+            moves = f"{source}: the view moves ({how}; found by frame {frame.index})"
+            if det.following_from is not None:
+                warnings.warn(
+                    f"{moves}: the background model follows it, as a shift of the whole "
+                    "image (not a view that turns or zooms), and learns each part of the "
+                    "scene as it comes into view; a detector (--frontend hog, or "
+                    "onnx:MODEL.onnx) needs no still camera", RuntimeWarning, stacklevel=2)
+            else:
+                warnings.warn(
+                    f"{moves}: the background model needs a still camera, and its blobs "
+                    "follow the image's motion rather than objects; track with a detector "
+                    "(--frontend hog, or onnx:MODEL.onnx)", RuntimeWarning, stacklevel=2)
         return found
 
     return detect

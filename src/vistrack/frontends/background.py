@@ -26,17 +26,22 @@ the model on frames where things move, or with more of them.
 ``freeze=True`` stops learning (the model stays ``B_0``, ``J_0``); OpenCV's KNN and GSOC
 subtractors ignore ``learningRate=0``. Masks are uint8, 255 for foreground, as OpenCV's.
 
-Both models need a still camera: where the view moves, every edge of the scene is foreground
-and the blobs follow the image's motion rather than objects.
+Both models are made for a still camera: where the view moves, every edge of the scene is
+foreground and the blobs follow the image's motion rather than objects.
 :func:`~vistrack.frontends.view_shift` measures how far the view moved between two frames
 (the median motion of corners followed from one to the other), so that a run can say so
-(:class:`~vistrack.frontends.BlobDetector` checks it as it goes).
+(:class:`~vistrack.frontends.BlobDetector` checks it as it goes). The selective model can
+follow a view that shifts: :meth:`SelectiveBackground.move` moves it by whole pixels, each
+pixel that comes into view learning from its first ``n_new`` frames, and
+:meth:`SelectiveBackground.initialize` takes frames of a moving view with their shifts.
+MOG2's state is OpenCV's, and cannot be moved.
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -44,6 +49,9 @@ from .._jit import bind, njit
 from .._prebuilt import kernel
 from .._registry import Registry
 from .._validate import as_uint8_image
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 prange = range  # numba.prange once numba is imported: a parallel loop when compiled
 bind(globals(), prange="prange")
@@ -90,6 +98,17 @@ def _selective_colour(img, B, J2, T, min_var, alpha, mask):
         J2[i, 2] += w * (v2 * v2 - J2[i, 2])
 
 
+def _moved(a: np.ndarray, dx: int, dy: int, fill: float) -> np.ndarray:
+    """``a`` (H, W, ...) with its content moved ``dx`` pixels right and ``dy`` down, the
+    pixels it leaves ``fill``."""
+    out = np.full_like(a, fill)
+    H, W = a.shape[:2]
+    if abs(dx) < W and abs(dy) < H:
+        out[max(dy, 0):H + min(dy, 0), max(dx, 0):W + min(dx, 0)] = \
+            a[max(-dy, 0):H + min(-dy, 0), max(-dx, 0):W + min(-dx, 0)]
+    return out
+
+
 class SelectiveBackground:
     """The seeds' selective running mean/variance background model (see the module).
 
@@ -106,6 +125,10 @@ class SelectiveBackground:
         Floor of ``σ``, in grey levels.
     freeze : bool
         Keep the initial model (no learning).
+    n_new : int
+        For a model that moves with the view (:meth:`move`): the frames a pixel that came
+        into view learns from (the mean of each frame that saw it) before it tells
+        foreground from background there.
 
     Attributes
     ----------
@@ -117,8 +140,8 @@ class SelectiveBackground:
     Raises
     ------
     ValueError
-        If ``alpha`` is not in (0, 1], ``threshold`` not > 0, ``n_init`` less than 1 or
-        ``min_sigma`` not > 0.
+        If ``alpha`` is not in (0, 1], ``threshold`` not > 0, ``n_init`` less than 1,
+        ``min_sigma`` not > 0, or ``n_new`` not a whole number >= 1.
 
     Examples
     --------
@@ -133,30 +156,36 @@ class SelectiveBackground:
     """
 
     def __init__(self, alpha: float = 0.02, threshold: float = 25.0, n_init: int = 20,
-                 min_sigma: float = 6.0, freeze: bool = False):
+                 min_sigma: float = 6.0, freeze: bool = False, n_new: int = 5):
         if not 0.0 < alpha <= 1.0:
             raise ValueError(f"alpha must be in (0, 1]; got {alpha}")
         if not threshold > 0:
             raise ValueError(f"threshold must be > 0; got {threshold}")
         if int(n_init) < 1:
             raise ValueError(f"n_init must be >= 1; got {n_init}")
+        if not (n_new >= 1 and float(n_new).is_integer()):
+            raise ValueError(f"n_new must be a whole number >= 1; got {n_new}")
         if not min_sigma > 0:
             # at 0 a pixel that never changed has σ = 0 and passes D² >= T σ² with D = 0:
             # the whole of a still scene is foreground, and foreground is never learnt
             raise ValueError(f"min_sigma must be > 0 (grey levels): at 0 every pixel that "
                              f"never changed is foreground; got {min_sigma}")
         self.alpha, self.threshold, self.n_init = float(alpha), float(threshold), int(n_init)
-        self.min_sigma, self.freeze = float(min_sigma), bool(freeze)
+        self.min_sigma, self.freeze, self.n_new = float(min_sigma), bool(freeze), int(n_new)
         self.mean: np.ndarray | None = None  # B (H, W, C) float32
         self.mean_sq: np.ndarray | None = None  # J² (H, W, C) float32
         self._buffer: list[np.ndarray] = []
+        # how many frames saw each pixel, where fewer than n_new did (pixels that came into
+        # view, move): None where every pixel was seen by all the frames that started it
+        self._seen: np.ndarray | None = None
 
     @staticmethod
     def _as3(image: np.ndarray) -> np.ndarray:
         im = as_uint8_image(image, channels=(1, 3))
         return im[:, :, None] if im.ndim == 2 else im
 
-    def initialize(self, frames: Iterable[np.ndarray]) -> SelectiveBackground:
+    def initialize(self, frames: Iterable[np.ndarray],
+                   shifts: ArrayLike | None = None) -> SelectiveBackground:
         """``B_0`` = the per-pixel median of ``frames``, ``σ_0`` their median absolute deviation
         from it times 1.4826 (the standard deviation, for Gaussian noise).
 
@@ -164,6 +193,11 @@ class SelectiveBackground:
         ----------
         frames : iterable of ndarray
             Frames ``(H, W)`` grey or ``(H, W, 3)`` BGR, uint8, all of one size.
+        shifts : (N, 2) array_like of int, optional
+            For a view that moves: how far each frame's content lies from where it lies in
+            the last frame, whole pixels ``dx, dy`` (the last frame's row ``0, 0``). Each frame
+            is moved by its row onto the last one's pixels, and a pixel takes the median of
+            the frames that saw it (the last frame's value where none other did).
 
         Returns
         -------
@@ -173,7 +207,8 @@ class SelectiveBackground:
         Raises
         ------
         ValueError
-            If there are no frames.
+            If there are no frames, or ``shifts`` is not one row of two whole numbers for
+            each frame.
 
         Examples
         --------
@@ -188,12 +223,82 @@ class SelectiveBackground:
         if len(images) == 0:
             raise ValueError("initialize needs at least one frame")
         stack = np.stack(images)
-        self.mean = np.median(stack, axis=0).astype(np.float32)
-        mad = np.median(np.abs(stack.astype(np.float32) - self.mean), axis=0)
+        if shifts is None:
+            self.mean = np.median(stack, axis=0).astype(np.float32)
+            mad = np.median(np.abs(stack.astype(np.float32) - self.mean), axis=0)
+        else:
+            d = np.asarray(shifts, dtype=np.float64)
+            if d.shape != (len(images), 2) or not (np.isfinite(d).all()
+                                                   and (d == np.round(d)).all()):
+                raise ValueError(f"shifts must be one row of two whole numbers for each of the "
+                                 f"{len(images)} frames; got shape {d.shape}")
+            seen = np.full(stack.shape, np.nan, np.float32)
+            for k, (dx, dy) in enumerate(d.astype(np.int64)):
+                seen[k] = _moved(stack[k].astype(np.float32), int(dx), int(dy), np.nan)
+            seen[-1] = stack[-1]  # the last frame's own pixels: every pixel seen once
+            with warnings.catch_warnings():  # (no all-NaN pixel: the last frame sees each)
+                warnings.simplefilter("ignore", RuntimeWarning)
+                self.mean = np.nanmedian(seen, axis=0).astype(np.float32)
+                mad = np.nanmedian(np.abs(seen - self.mean), axis=0)
+            count = (~np.isnan(seen[..., 0])).sum(axis=0)
+            # seen by fewer than n_new frames: they go on learning as new pixels do
+            self._seen = np.minimum(count, self.n_new).astype(np.int32)
+            # with too few frames to spread, σ from the floor (as new pixels start)
+            mad = np.where(count[..., None] >= 3, mad, np.float32(self.min_sigma / 1.4826))
         var = (1.4826 * mad) ** 2
         self.mean_sq = (self.mean * self.mean + var).astype(np.float32)
         self._buffer = []
+        if shifts is None:
+            self._seen = None
         return self
+
+    def move(self, dx: int, dy: int, image: np.ndarray) -> None:
+        """Move the model with the view: the content of the scene moved ``dx, dy`` whole
+        pixels (right and down) in the image, so each pixel takes the model of the pixel
+        ``dx, dy`` before it. The pixels that come into view start from ``image`` (the
+        frame they came into view in): ``B = I``, ``σ = min_sigma``.
+
+        Parameters
+        ----------
+        dx, dy : int
+            The displacement, whole pixels.
+        image : (H, W) or (H, W, 3) ndarray
+            The frame the model moves to, of the model's size and channels.
+
+        Raises
+        ------
+        RuntimeError
+            If the model is not initialised yet.
+        ValueError
+            If ``dx`` or ``dy`` is not a whole number, or the image's shape differs from the
+            model's.
+
+        Examples
+        --------
+        >>> bg = SelectiveBackground().initialize([np.arange(12, dtype=np.uint8).reshape(3, 4)])
+        >>> bg.move(1, 0, np.full((3, 4), 99, np.uint8))
+        >>> bg.mean[..., 0].tolist()
+        [[99.0, 0.0, 1.0, 2.0], [99.0, 4.0, 5.0, 6.0], [99.0, 8.0, 9.0, 10.0]]
+        """
+        if self.mean is None or self.mean_sq is None:
+            raise RuntimeError("the model is not initialised yet")
+        if not (float(dx).is_integer() and float(dy).is_integer()):
+            raise ValueError(f"dx and dy must be whole numbers of pixels; got {dx}, {dy}")
+        im = self._as3(image)
+        if im.shape != self.mean.shape:
+            raise ValueError(f"image has shape {im.shape}; the model was built on "
+                             f"{self.mean.shape}")
+        new = im.astype(np.float32)
+        self.mean = _moved(self.mean, int(dx), int(dy), np.nan)
+        self.mean_sq = _moved(self.mean_sq, int(dx), int(dy), np.nan)
+        come = np.isnan(self.mean)
+        self.mean[come] = new[come]
+        self.mean_sq[come] = new[come] ** 2 + np.float32(self.min_sigma ** 2)
+        seen = (np.full(im.shape[:2], self.n_new, np.int32) if self._seen is None
+                else self._seen)
+        # seen by this frame alone: they learn from the frames to come before they tell
+        # anything apart (apply)
+        self._seen = _moved(seen, int(dx), int(dy), 1)
 
     @property
     def variance(self) -> np.ndarray:
@@ -268,12 +373,29 @@ class SelectiveBackground:
         args = (np.float32(self.threshold), np.float32(self.min_sigma ** 2),
                 np.float32(0.0 if self.freeze else self.alpha), mask.reshape(-1))
         im = np.ascontiguousarray(im)
+        young = None
+        if self._seen is not None:
+            young = self._seen < self.n_new
+            if young.any():
+                before, before_sq = self.mean[young], self.mean_sq[young]
+            else:  # every pixel seen by n_new frames: as a model never moved
+                self._seen, young = None, None
         if C == 1:
             _selective_grey(im.reshape(-1), self.mean.reshape(-1), self.mean_sq.reshape(-1),
                             *args)
         else:  # 3 channels (checked by _as3)
             _selective_colour(im.reshape(-1, C), self.mean.reshape(-1, C),
                               self.mean_sq.reshape(-1, C), *args)
+        if young is not None and self._seen is not None:
+            # pixels seen by fewer than n_new frames (come into view): the mean of every
+            # frame that saw them, as yet nothing told apart there (a person who walks in
+            # with them is not learnt whole, as taking one frame would)
+            n = (self._seen[young] + 1).astype(np.float32)[:, None]
+            v = im[young].astype(np.float32)
+            self.mean[young] = before + (v - before) / n
+            self.mean_sq[young] = before_sq + (v * v - before_sq) / n
+            self._seen[young] += 1
+            mask[young] = 0
         return mask
 
 
