@@ -1073,8 +1073,25 @@ def test_track_video_says_once_that_the_view_moves(tmp_path):
     said = [str(m.message) for m in got if "the view moves" in str(m.message)]
     assert len(said) == 1
     assert re.fullmatch(rf"{re.escape(str(pan))}: the view moves \(by 1[4-6] pixels every 10 "
-                        r"frames, in median; found by frame 51\): the background model needs a "
-                        r"still camera, .* \(--frontend hog, or onnx:MODEL.onnx\)", said[0])
+                        r"frames, in median; found by frame 51\): MOG2's background model "
+                        r"cannot follow it, .* the selective model \(--background selective, "
+                        r"the default\) follows it, .*", said[0])
+    # told that the camera is still (--still-camera): not followed, and said so
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        track_video(pan, tmp_path / "still_camera", follow_view=False)
+    said = [str(m.message) for m in got if "the view moves" in str(m.message)]
+    assert len(said) == 1 and "found by frame 51): it is taken as still (--still-camera, or " \
+        "follow_view=False), and the blobs follow the image's motion rather than objects; " \
+        "without --still-camera the background model follows it" in said[0]
+    with pytest.raises(ValueError, match="follow_view goes with the 'bgsub' front-end"):
+        track_video(pan, tmp_path / "hog", frontend="hog", follow_view=False)
+    # the command line's --still-camera is follow_view=False
+    r = subprocess.run([sys.executable, "-m", "vistrack.cli", "track", str(pan), "--out-dir",
+                        str(tmp_path / "cli"), "--still-camera", "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0 and "found by frame 51): it is taken as still (--still-camera" \
+        in r.stderr and "changes nothing" not in r.stderr
     with warnings.catch_warnings(record=True) as got:
         warnings.simplefilter("always")
         track_video(demo / "pets09-s2l1.mp4", tmp_path / "still", stop=80)

@@ -511,7 +511,9 @@ def _printed_fps(path: str) -> float | None:
 def _still_already(args: argparse.Namespace) -> str | None:
     """Why the camera's motion would not be estimated without ``--still-camera`` (so that
     the option changes nothing), or None: the configuration file turns it off, the tracker
-    estimates none, or the front-end, from pixels, takes the camera as still."""
+    estimates none, or the front-end, from pixels, takes the camera as still and cannot
+    follow a view that moves (``bgsub`` with MOG2; the selective model follows one unless
+    ``--still-camera``)."""
     from .config import TrackConfig, read_config
     from .pipeline import FRONTENDS, default_frontend
 
@@ -523,8 +525,11 @@ def _still_already(args: argparse.Namespace) -> str | None:
     if not TrackConfig.preset(name).tracker.camera_motion:
         return f"--tracker {name} does not estimate the camera's motion"
     front = args.frontend or default_frontend(name)
-    if args.out_dir is not None and front in FRONTENDS and FRONTENDS[front].still_camera:
-        return f"the {front} front-end takes the camera as still"
+    # the selective background model follows a view that moves, unless --still-camera: there
+    # it changes something; MOG2's state cannot be moved
+    if args.out_dir is not None and front in FRONTENDS and FRONTENDS[front].still_camera \
+            and args.background == "mog2":
+        return f"the {front} front-end with --background mog2 takes the camera as still"
     return None
 
 
@@ -580,12 +585,17 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
     """``track_video``'s keyword arguments from ``vistrack track``'s options, for one input or
     many: the front-end's, and the tracker's configuration, a file used as it is, or the
     options given over the front-end's defaults (bgsub: a still camera)."""
+    from .pipeline import FRONTENDS, default_frontend
+
     options = {k: getattr(args, k) for k in _FRONTEND_OPTIONS if getattr(args, k) is not None}
     columns, _ = _columns(getattr(args, "columns", None))  # checked before, with its message
     if columns is not None:  # a CSV file's columns, for --frontend detections:FILE
         options["columns"] = columns
     options.update(tracker=name, skip_bad_frames=args.skip_bad_frames,
                    command=getattr(args, "command_line", None))
+    front = args.frontend or default_frontend(name)
+    if args.still_camera and front in FRONTENDS and FRONTENDS[front].still_camera:
+        options["follow_view"] = False  # the background model: the view is not followed
     if args.config is not None or not box:
         if cfg is not None:
             options["config"] = cfg
@@ -995,7 +1005,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "tracks across gaps; scores are calibrated on the whole file (--out)")
     track.add_argument("--still-camera", action="store_true",
                        help="the camera does not move: no camera-motion compensation (on by "
-                       "default in bytetrack, except with the bgsub front-end)")
+                       "default in bytetrack, except with the bgsub front-end, whose "
+                       "background model follows a view that moves unless this is given)")
     box = track.add_argument_group(
         "box tracker settings", "The thresholds apply to calibrated confidences in [0, 1] "
         "(how nearly detections of a score persist from frame to frame, and lie on chains "

@@ -608,7 +608,8 @@ def _bgsub(ctx: Context) -> FrameDetector:
     from .io.video import VideoReader
 
     opt, reader = ctx.options, ctx.reader
-    det = BlobDetector(opt.get("background", "selective"), min_area=opt.get("min_area", 500.0))
+    det = BlobDetector(opt.get("background", "selective"), min_area=opt.get("min_area", 500.0),
+                       follow_view=opt.get("follow_view", True))
     if reader is not None:
         n_init = int(opt.get("n_init", 20))
         with warnings.catch_warnings():
@@ -642,10 +643,16 @@ def _bgsub(ctx: Context) -> FrameDetector:
                     "scene as it comes into view; a detector (--frontend hog, or "
                     "onnx:MODEL.onnx) needs no still camera", RuntimeWarning, stacklevel=2)
             else:
+                why, instead = (("it is taken as still (--still-camera, or follow_view=False)",
+                                 "without --still-camera the background model follows it")
+                                if not det.follow_view else
+                                ("MOG2's background model cannot follow it",
+                                 "the selective model (--background selective, the default) "
+                                 "follows it"))
                 warnings.warn(
-                    f"{moves}: the background model needs a still camera, and its blobs "
-                    "follow the image's motion rather than objects; track with a detector "
-                    "(--frontend hog, or onnx:MODEL.onnx)", RuntimeWarning, stacklevel=2)
+                    f"{moves}: {why}, and the blobs follow the image's motion rather than "
+                    f"objects; {instead}, and a detector (--frontend hog, or onnx:MODEL.onnx) "
+                    "needs no still camera", RuntimeWarning, stacklevel=2)
         return found
 
     return detect
@@ -726,6 +733,7 @@ FRONTENDS: Registry[Frontend] = Registry("frontend", {
 (:class:`~vistrack.frontends.onnx.ONNXDetector`)."""
 
 FRONTEND_OPTIONS = {"background": "bgsub", "min_area": "bgsub", "n_init": "bgsub",
+                    "follow_view": "bgsub",
                     "det_threshold": "confidence", "classes": "onnx:MODEL.onnx",
                     "onnx_layout": "onnx:MODEL.onnx", "columns": "detections:FILE"}
 """The front-ends' own options (:func:`track_video`'s arguments) and the front-end that reads
@@ -1749,7 +1757,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 fps: float | None = None, tracker: str | Tracker = "bytetrack",
                 gt: str | Path | None = None, background: str | None = None,
                 min_area: float | None = None, n_init: int | None = None,
-                stop: int | None = None,
+                follow_view: bool | None = None, stop: int | None = None,
                 skip_bad_frames: bool = False,
                 annotate: bool = True, force: bool = False, progress: TextIO | None = None,
                 confidence: Callable[[np.ndarray], ConfidenceMap] | None = None,
@@ -1810,10 +1818,13 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         (:func:`read_detections`; ``--columns`` on the command line).
     fps : float, optional
         The true frame rate, when the container's header is wrong.
-    background, min_area, n_init : str, float, int
+    background, min_area, n_init, follow_view : str, float, int, bool
         For ``bgsub`` only: the background model's name (default ``"selective"``), the
-        smallest blob in pixels (500), and the frames whose median starts the model (20). A
-        background model needs a still camera, so with ``bgsub`` the box tracker's
+        smallest blob in pixels (500), the frames whose median starts the model (20), and
+        whether the selective model follows a view that moves (default True; False: the
+        camera is still, and a view found moving is only said to move:
+        :class:`~vistrack.frontends.BlobDetector`). The background model takes the view as
+        still, moving itself where the view moves, so with ``bgsub`` the box tracker's
         ``camera_motion`` is off unless passed. A front-end's own option given with another
         front-end would change nothing, and is refused (:data:`FRONTEND_OPTIONS`).
     stop : int, optional
@@ -1877,8 +1888,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     with _shown_warnings() as said:  # kept in run.json, each still shown as it comes
         name = default_frontend(tracker) if frontend is None else frontend
         options = {"background": background, "min_area": min_area, "n_init": n_init,
-                   "det_threshold": det_threshold, "classes": classes, "onnx_layout": onnx_layout,
-                   "columns": columns}
+                   "follow_view": follow_view, "det_threshold": det_threshold,
+                   "classes": classes, "onnx_layout": onnx_layout, "columns": columns}
         unread = unread_frontend_option(name, options)
         if unread is not None:
             what = repr(name) if isinstance(name, str) else f"a {type(name).__name__}"
