@@ -156,7 +156,7 @@ class SelectiveBackground:
     """
 
     def __init__(self, alpha: float = 0.02, threshold: float = 25.0, n_init: int = 20,
-                 min_sigma: float = 6.0, freeze: bool = False, n_new: int = 5):
+                 min_sigma: float = 6.0, freeze: bool = False, n_new: int = 3):
         if not 0.0 < alpha <= 1.0:
             raise ValueError(f"alpha must be in (0, 1]; got {alpha}")
         if not threshold > 0:
@@ -256,7 +256,9 @@ class SelectiveBackground:
         """Move the model with the view: the content of the scene moved ``dx, dy`` whole
         pixels (right and down) in the image, so each pixel takes the model of the pixel
         ``dx, dy`` before it. The pixels that come into view start from ``image`` (the
-        frame they came into view in): ``B = I``, ``σ = min_sigma``.
+        frame they came into view in: ``B = I``, ``σ = min_sigma``) and then take the mean
+        of the first ``n_new`` frames given to :meth:`apply` (this one too, where it is
+        given next), finding nothing until then.
 
         Parameters
         ----------
@@ -296,9 +298,9 @@ class SelectiveBackground:
         self.mean_sq[come] = new[come] ** 2 + np.float32(self.min_sigma ** 2)
         seen = (np.full(im.shape[:2], self.n_new, np.int32) if self._seen is None
                 else self._seen)
-        # seen by this frame alone: they learn from the frames to come before they tell
+        # seen by no frame applied yet: they learn from the frames to come before they tell
         # anything apart (apply)
-        self._seen = _moved(seen, int(dx), int(dy), 1)
+        self._seen = _moved(seen, int(dx), int(dy), 0)
 
     @property
     def variance(self) -> np.ndarray:
@@ -373,11 +375,12 @@ class SelectiveBackground:
         args = (np.float32(self.threshold), np.float32(self.min_sigma ** 2),
                 np.float32(0.0 if self.freeze else self.alpha), mask.reshape(-1))
         im = np.ascontiguousarray(im)
-        young = None
+        young = None  # the flat indices of the pixels seen by fewer than n_new frames
         if self._seen is not None:
-            young = self._seen < self.n_new
-            if young.any():
-                before, before_sq = self.mean[young], self.mean_sq[young]
+            young = np.flatnonzero(self._seen < self.n_new)
+            if len(young):
+                before = self.mean.reshape(-1, C)[young]
+                before_sq = self.mean_sq.reshape(-1, C)[young]
             else:  # every pixel seen by n_new frames: as a model never moved
                 self._seen, young = None, None
         if C == 1:
@@ -390,12 +393,13 @@ class SelectiveBackground:
             # pixels seen by fewer than n_new frames (come into view): the mean of every
             # frame that saw them, as yet nothing told apart there (a person who walks in
             # with them is not learnt whole, as taking one frame would)
-            n = (self._seen[young] + 1).astype(np.float32)[:, None]
-            v = im[young].astype(np.float32)
-            self.mean[young] = before + (v - before) / n
-            self.mean_sq[young] = before_sq + (v * v - before_sq) / n
-            self._seen[young] += 1
-            mask[young] = 0
+            seen = self._seen.reshape(-1)
+            n = (seen[young] + 1).astype(np.float32)[:, None]
+            v = im.reshape(-1, C)[young].astype(np.float32)
+            self.mean.reshape(-1, C)[young] = before + (v - before) / n
+            self.mean_sq.reshape(-1, C)[young] = before_sq + (v * v - before_sq) / n
+            seen[young] += 1
+            mask.reshape(-1)[young] = 0
         return mask
 
 

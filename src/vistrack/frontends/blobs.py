@@ -277,7 +277,7 @@ class BlobDetector:
     starts again in the same way from the ``n_init`` frames after the motion was found, the
     moved model serving until then. Only a shift of the whole image is followed: a view that
     turns or zooms is not. On the bundled PETS09-S2L1 clip cropped to 560 × 400 from a
-    window that moves 1 pixel a frame (docs/frontends.md) the tracks score 30.8 HOTA against
+    window that moves 1 pixel a frame (docs/frontends.md) the tracks score 31.1 HOTA against
     the ground truth cropped the same way, where the whole still clip's tracks, cropped,
     score 33.2, and the model that does not follow 17.6.
 
