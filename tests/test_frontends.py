@@ -1012,6 +1012,36 @@ def test_blob_detector_follows_a_panning_view():
     assert found == 100 and fixed_found == 0
 
 
+def test_blob_detector_follows_a_view_that_begins_to_move():
+    """Oracle: the scene above, still for 40 frames and then panned 3 pixels a frame, the
+    square walking across it. The pan is found by the third check after it began (frame 70);
+    from there the model, moved by the 90 pixels the view moved meanwhile, finds the square's
+    box exactly in every frame, where the model that does not follow finds it in none."""
+    from vistrack.frontends import BlobDetector
+
+    scene = cv2.normalize(_texture((300, 900), 4), None, 0, 255, cv2.NORM_MINMAX)
+
+    def frame(k):
+        v = 3 * max(0, k - 40)  # the view
+        im = scene[30:270, v:v + 320].copy()
+        x = (5 * k - 150 if k <= 40 else 50 + 2 * (k - 40)) - v  # the square, in the image
+        patch = im[100:160, 160 + x:190 + x].astype(int)
+        im[100:160, 160 + x:190 + x] = np.where(patch > 128, patch - 80, patch + 80)
+        return im, [160 + x, 100, 190 + x, 160]
+
+    for follow in (True, False):
+        det = BlobDetector(min_area=200, follow_view=follow)
+        det.initialize([frame(k)[0] for k in range(20)])
+        found = [det.detect(im).boxes.tolist() == [box]
+                 for im, box in (frame(k) for k in range(20, 140))]
+        assert all(found[:21])  # still: frames 20-40
+        if follow:
+            assert det.following_from == 50  # the 51st frame given to detect, frame 70
+            assert all(found[50:]) and not any(found[25:50])
+        else:
+            assert det.following_from is None and not any(found[25:])
+
+
 # ------------------------------------------------------------------- from pixels, end to end
 
 def test_track_video_writes_tracks_video_plot_and_scores(tmp_path):
