@@ -1143,20 +1143,6 @@ def test_track_video_says_once_that_the_view_moves(tmp_path):
         "frames, in most checks; found by frame 1)" in said[0]
 
 
-def _window_rows(rows, x0, y0, w, h):
-    """MOTChallenge rows (frame, id, x, y, w, h, ...) seen through a window at ``x0[f - 1],
-    y0[f - 1]`` of size ``w, h`` in frame ``f``: boxes moved into it and clipped to it, those
-    with less than half their area inside left out."""
-    r = np.array(rows, float)
-    f = r[:, 0].astype(int) - 1
-    a, b = r[:, 2] - x0[f], r[:, 3] - y0[f]
-    ca, cb = np.clip(a, 0, w), np.clip(b, 0, h)
-    cc, cd = np.clip(a + r[:, 4], 0, w), np.clip(b + r[:, 5], 0, h)
-    inside = (cc - ca) * (cd - cb) >= 0.5 * r[:, 4] * r[:, 5]
-    r[:, 2], r[:, 3], r[:, 4], r[:, 5] = ca, cb, cc - ca, cd - cb
-    return r[inside]
-
-
 def test_blobs_of_a_panning_view_are_the_still_views_blobs():
     """Oracle: the same algorithm on frames that do not move. The bundled clip (a still
     camera) cropped to 560 x 400 from a window that moves 1 pixel a frame: following the
@@ -1192,6 +1178,32 @@ def test_blobs_of_a_panning_view_are_the_still_views_blobs():
     assert want > 300 and found >= 0.95 * want and found_fixed < 0.5 * want
 
 
+def test_the_moving_view_benchmarks_windows_and_ground_truth():
+    """bench/moving_view.py: every window lies inside the 768 x 576 frame in every frame, the
+    wandering ones move by their speed (a frame's step rounded to whole pixels), and
+    seen_through moves, clips and leaves out boxes as documented (a box with exactly half
+    its area inside is kept)."""
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+    import moving_view
+
+    for _, corners, (w, h) in moving_view.windows():
+        assert corners.shape == (moving_view.N, 2)
+        assert (corners >= 0).all() and (corners[:, 0] + w <= 768).all() \
+            and (corners[:, 1] + h <= 576).all()
+    steps = np.hypot(*np.diff(moving_view.wander(0, 6.0, (480, 360)), axis=0).T)
+    assert np.median(steps) == pytest.approx(6.0, abs=0.75)
+    rows = np.array([[1, 1, 10, 20, 30, 40, 1], [1, 2, 0, 15, 30, 10, 1],
+                     [1, 3, -10, 15, 30, 10, 1], [1, 4, -11, 15, 30, 10, 1],
+                     [2, 5, 90, 0, 20, 20, 1]], float)
+    got = moving_view.seen_through(rows, np.array([[5, 10], [80, 0]]), (100, 50))
+    np.testing.assert_array_equal(got[:, :6], [[1, 1, 5, 10, 30, 40],  # inside
+                                               [1, 2, 0, 5, 25, 10],  # clipped
+                                               [1, 3, 0, 5, 15, 10],  # half inside: kept
+                                               [2, 5, 10, 0, 20, 20]])  # id 4: 14/30 in
+
+
 def test_track_video_follows_a_panning_view_against_the_ground_truth(tmp_path):
     """Oracle: the bundled clip's ground truth, moved and clipped with a window that moves 1
     pixel a frame (the crop above): the tracks of the panning view score 34.4 HOTA, the
@@ -1204,15 +1216,18 @@ def test_track_video_follows_a_panning_view_against_the_ground_truth(tmp_path):
     from vistrack.io import MOTTable
     from vistrack.pipeline import track_video
 
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+    from moving_view import seen_through  # the windows' ground truth, as the benchmark's
+
     demo = Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
     n, w, h = 120, 560, 400
-    x0, y0 = np.arange(n, dtype=float) + 80, np.full(n, 40.0)
+    corners = np.c_[np.arange(n) + 80, np.full(n, 40)]
     pan = tmp_path / "pan.mp4"
     with VideoWriter(pan, fps=7) as out:
         for k, f in enumerate(VideoReader(demo / "pets09-s2l1.mp4", stop=n)):
             out.write(f.image[40:40 + h, 80 + k:80 + k + w])
     gt_rows = np.loadtxt(demo / "gt.txt", delimiter=",")
-    gt = MOTTable.from_rows(_window_rows(gt_rows[gt_rows[:, 0] <= n], x0, y0, w, h), "gt")
+    gt = MOTTable.from_rows(seen_through(gt_rows[gt_rows[:, 0] <= n], corners, (w, h)), "gt")
 
     def hota(video, out, **kw):
         with warnings.catch_warnings():
@@ -1220,7 +1235,7 @@ def test_track_video_follows_a_panning_view_against_the_ground_truth(tmp_path):
             run = track_video(video, tmp_path / out, annotate=False, stop=n, **kw)
         rows = np.loadtxt(run.files["tracks"], delimiter=",", ndmin=2)
         if video != pan:  # the still clip's tracks, seen through the window
-            rows = _window_rows(rows, x0, y0, w, h)
+            rows = seen_through(rows, corners, (w, h))
         return evaluate_mot(gt, MOTTable.from_rows(rows[:, :7], "tracks"), n).HOTA
 
     follows = hota(pan, "follows")
