@@ -1010,6 +1010,9 @@ def test_blob_detector_follows_a_panning_view():
         found += follows.detect(im).boxes.tolist() == [box]
         fixed_found += fixed.detect(im).boxes.tolist() == [box]
     assert found == 100 and fixed_found == 0
+    with pytest.raises(ValueError, match=r"image has shape \(100, 320, 1\); the model was built "
+                                         r"on \(240, 320, 1\)"):
+        follows.detect(frame(120)[0][:100])  # the model's own message, not view_shift's
 
 
 def test_blob_detector_follows_a_view_that_begins_to_move():

@@ -501,7 +501,7 @@ class BlobDetector:
 
         assert self._prev is not None and isinstance(self.model, SelectiveBackground)
         start, self._start = self._start, None
-        if self._prev is not grey:
+        if self._prev is not grey and self._prev.shape == grey.shape:  # (else apply says)
             known = [at for f, at in zip(*start) if np.array_equal(f, grey)] if start else []
             # one of the frames that started the model: its place is known (the content
             # moves from the last of them back to it)
