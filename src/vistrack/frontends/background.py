@@ -532,7 +532,8 @@ def background(name: str = "selective", **kwargs: Any) -> SelectiveBackground | 
     return BACKGROUNDS[name](**kwargs)
 
 
-def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256) -> tuple[float, float, float]:
+def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256,
+               refine: bool = False) -> tuple[float, float, float]:
     """How far the view moved from frame ``a`` to frame ``b``: the median displacement of up
     to 200 corners of ``a`` (Shi-Tomasi) followed into ``b`` by pyramidal Lucas-Kanade and
     back (kept where they come back within a pixel), on copies reduced by a whole factor to
@@ -551,6 +552,13 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256) -> tuple[float
     width : int
         About how many pixels across the reduced copies are (at least 16): fewer is faster
         and coarser.
+    refine : bool
+        Follow the corners again on the frames themselves, from where the reduced copies
+        put them (Lucas-Kanade on two levels, and back within half a pixel), and take their
+        median: on copies reduced by 2 or more, sub-pixel estimates lean towards whole
+        reduced pixels (a view panned a quarter of a pixel a frame read 0.05 pixel short a
+        frame at 640 pixels across, reduced by 2; refined, within 0.02, and shifts over
+        10 frames within 0.002). About 1.2 ms more for 640 × 576 frames.
 
     Returns
     -------
@@ -607,4 +615,18 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256) -> tuple[float
     if ok.sum() < 10:
         return float("nan"), float("nan"), followed
     d = (q - p)[ok, 0]
-    return float(np.median(d[:, 0]) * s), float(np.median(d[:, 1]) * s), followed
+    dx, dy = float(np.median(d[:, 0]) * s), float(np.median(d[:, 1]) * s)
+    if refine and s > 1:
+        # the corners kept, at the centres of the pixels they stand for, from the estimate
+        at = (p[ok] * s + (s - 1) / 2).astype(np.float32)
+        guess = at + np.array([dx, dy], np.float32)
+        q1, there1, _ = cv2.calcOpticalFlowPyrLK(a, b, at, guess, winSize=(21, 21), maxLevel=1,
+                                                 flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+        r1, back1, _ = cv2.calcOpticalFlowPyrLK(b, a, q1, at.copy(), winSize=(21, 21),
+                                                maxLevel=1, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+        kept = ((there1[:, 0] == 1) & (back1[:, 0] == 1)
+                & (np.hypot(*(r1 - at)[:, 0].T) < 0.5))
+        if kept.sum() >= 10:
+            d1 = (q1 - at)[kept, 0]
+            dx, dy = float(np.median(d1[:, 0])), float(np.median(d1[:, 1]))
+    return dx, dy, followed

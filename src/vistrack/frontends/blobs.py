@@ -245,15 +245,6 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     return Blobs(c, covs, area, boxes, axes, angles)
 
 
-def _step_width(image: np.ndarray) -> int:
-    """The reduced width at which the view's shift from one frame to the next is measured:
-    frames reduced by 3 at most. Steps of a few pixels measured on copies reduced further are
-    biased (Lucas-Kanade's sub-pixel estimates lean towards whole reduced pixels), and a
-    model that follows them drifts: 3 pixels a frame on 1920 x 1080 frames read 0.06 pixel
-    short at a reduction by 7 (3.6 pixels over 59 frames) and 0.002 at 3 (0.1 pixel)."""
-    return max(256, -(-image.shape[1] // 3))
-
-
 class BlobDetector:
     """The seeds' background subtraction and blobs as a detector: each frame's foreground
     mask from a background model (:func:`~vistrack.frontends.background`), cleaned by an
@@ -287,7 +278,7 @@ class BlobDetector:
     scene's edges were foreground, which the selective model does not learn, so what it
     learnt of the scene before stays whole). Only a shift of the whole image is followed: a
     view that turns or zooms is not. On the bundled PETS09-S2L1 clip cropped to 560 × 400 from a
-    window that moves 1 pixel a frame (docs/frontends.md) the tracks score 31.1 HOTA against
+    window that moves 1 pixel a frame (docs/frontends.md) the tracks score 31.3 HOTA against
     the ground truth cropped the same way, where the whole still clip's tracks, cropped,
     score 33.2, and the model that does not follow 17.6.
 
@@ -359,8 +350,10 @@ class BlobDetector:
         self.following_from: int | None = None
         self._frames = 0
         self._last_check: np.ndarray | None = None
-        self._prev: np.ndarray | None = None  # the frame before, while following the view
-        self._offset = np.zeros(2)  # the view's motion not yet moved into the model (< 1/2)
+        # following the view: the frame before, the last frame's place (how far the view's
+        # content moved since following began) and the whole pixels the model has moved
+        self._prev: np.ndarray | None = None
+        self._at, self._moved = np.zeros(2), np.zeros(2)
         self._start: tuple[list[np.ndarray], np.ndarray] | None = None
         self._check_moves: list[tuple[float, float]] = []  # each check's dx, dy (NaN: none)
 
@@ -421,7 +414,7 @@ class BlobDetector:
         # no corners to follow: no evidence either way, as detect's checks
         steps, evidence = [], []
         for a, b in zip(frames, frames[1:]):
-            dx, dy, followed = view_shift(a, b, width=_step_width(a))
+            dx, dy, followed = view_shift(a, b, refine=True)
             steps.append((dx, dy))
             evidence.append(followed == followed)
         d = np.array(steps)
@@ -504,23 +497,28 @@ class BlobDetector:
                           close_size=self.close_size).detections("boxes")
 
     def _followed(self, grey: np.ndarray) -> np.ndarray:
-        """The foreground mask of ``grey``, the model first moved by the view's motion since
-        the frame before (whole pixels; the rest carried to the next frame)."""
+        """The foreground mask of ``grey``, the model first moved to the view's place in it
+        (whole pixels; the fraction left to the next frame): the place of the frame before
+        plus the view's shift between them (:func:`~vistrack.frontends.view_shift`, refined
+        on the frames themselves: small shifts, which Lucas-Kanade follows on any texture,
+        where shifts over many frames of a repetitive one are taken for others)."""
         from .background import SelectiveBackground, view_shift
 
         assert self._prev is not None and isinstance(self.model, SelectiveBackground)
         start, self._start = self._start, None
         if self._prev is not grey and self._prev.shape == grey.shape:  # (else apply says)
             known = [at for f, at in zip(*start) if np.array_equal(f, grey)] if start else []
-            # one of the frames that started the model: its place is known (the content
-            # moves from the last of them back to it)
-            dx, dy = -known[0] if known else view_shift(self._prev, grey,
-                                                        width=_step_width(grey))[:2]
-            if dx == dx:  # NaN (nothing followed): taken as still
-                self._offset += (dx, dy)
-            step = np.round(self._offset)
-            self._offset -= step
+            if known:
+                # one of the frames that started the model: its place is known (the content
+                # moves from the last of them back to it)
+                self._at = -np.asarray(known[0], float)
+            else:
+                d = np.array(view_shift(self._prev, grey, refine=True)[:2])
+                if d[0] == d[0]:  # NaN (nothing followed): taken as still
+                    self._at = self._at + d
+            step = np.round(self._at) - self._moved
             if step.any():
                 self.model.move(int(step[0]), int(step[1]), grey)
+                self._moved += step
         self._prev = grey
         return self.model.apply(grey)
