@@ -62,6 +62,14 @@ def test_measures_in_closed_form(tmp_path):
             read_boxes(mine)
         assert str(e.value) == (f"{mine}:{line}: {message}: the frames of frame,x,y,w,h lines "
                                 "must count up by one")
+    # a form feed inside a line is white space in it, as an editor shows one line (it was
+    # broken into two: "2 values" at line 2), and the lines after keep their numbers
+    feed = tmp_path / "feed.txt"
+    feed.write_text("11,21,30,40\n12,21,\f30,40\n13,21,30\n")
+    with pytest.raises(ValueError, match=r"feed.txt:3: expected 4 \(x y w h\), 5 .* got 3$"):
+        read_boxes(feed)
+    feed.write_text("11,21,30,40\n12,21,\f30,40\n")
+    assert read_boxes(feed).tolist() == [[11, 21, 30, 40], [12, 21, 30, 40]]
 
 
 def scene(rng, T=60, kind="colour"):

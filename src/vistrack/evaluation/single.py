@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..io.motchallenge import _text_lines
 from ..io.tracks import write_boxes
 
 __all__ = ["success_rate", "success_curve", "precision", "region_to_bbox", "read_boxes",
@@ -260,7 +261,9 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
     path = Path(path)
     rows: list[list[float]] = []
     last = 0  # the line of rows[-1]
-    for n, line in enumerate(path.read_text().splitlines(), start=1):
+    # lines as editors count them, as the MOTChallenge reader does (str.splitlines also
+    # breaks at a form feed, which made a box line two)
+    for n, line in enumerate(_text_lines(path.read_text()), start=1):
         if not line.strip():
             continue
         try:
