@@ -290,12 +290,12 @@ class SelectiveBackground:
         if im.shape != self.mean.shape:
             raise ValueError(f"image has shape {im.shape}; the model was built on "
                              f"{self.mean.shape}")
-        new = im.astype(np.float32)
         self.mean = _moved(self.mean, int(dx), int(dy), np.nan)
         self.mean_sq = _moved(self.mean_sq, int(dx), int(dy), np.nan)
         come = np.isnan(self.mean)
-        self.mean[come] = new[come]
-        self.mean_sq[come] = new[come] ** 2 + np.float32(self.min_sigma ** 2)
+        new = im[come].astype(np.float32)  # (those pixels alone, not the whole frame)
+        self.mean[come] = new
+        self.mean_sq[come] = new ** 2 + np.float32(self.min_sigma ** 2)
         seen = (np.full(im.shape[:2], self.n_new, np.int32) if self._seen is None
                 else self._seen)
         # seen by no frame applied yet: they learn from the frames to come before they tell
@@ -532,6 +532,27 @@ def background(name: str = "selective", **kwargs: Any) -> SelectiveBackground | 
     return BACKGROUNDS[name](**kwargs)
 
 
+def _there_and_back(a: np.ndarray, b: np.ndarray, p: np.ndarray, *, levels: int,
+                    within: float, guess: np.ndarray | None = None,
+                    back: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Points ``p`` (N, 1, 2) of ``a`` followed into ``b`` by pyramidal Lucas-Kanade (from
+    ``guess``, or from ``p``) and back into ``a`` (from ``back``, or from where they
+    landed): where they landed, and which were followed both ways and came back within
+    ``within`` pixels of where they were."""
+    import cv2
+
+    def follow(x: np.ndarray, y: np.ndarray, pts: np.ndarray,
+               start: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        found, status, _ = cv2.calcOpticalFlowPyrLK(
+            x, y, pts, np.empty_like(pts) if start is None else start, winSize=(21, 21),
+            maxLevel=levels, flags=0 if start is None else cv2.OPTFLOW_USE_INITIAL_FLOW)
+        return found, status
+
+    q, there = follow(a, b, p, guess)
+    r, again = follow(b, a, q, back)
+    return q, (there[:, 0] == 1) & (again[:, 0] == 1) & (np.hypot(*(r - p)[:, 0].T) < within)
+
+
 def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256,
                refine: bool = False) -> tuple[float, float, float]:
     """How far the view moved from frame ``a`` to frame ``b``: the median displacement of up
@@ -606,11 +627,7 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256,
     p = cv2.goodFeaturesToTrack(small_a, 200, 0.01, 7)
     if p is None or len(p) < 10:
         return float("nan"), float("nan"), float("nan")
-    q, there, _ = cv2.calcOpticalFlowPyrLK(small_a, small_b, p, np.empty_like(p), winSize=(21, 21),
-                                           maxLevel=3)
-    r, back, _ = cv2.calcOpticalFlowPyrLK(small_b, small_a, q, np.empty_like(q), winSize=(21, 21),
-                                          maxLevel=3)
-    ok = (there[:, 0] == 1) & (back[:, 0] == 1) & (np.hypot(*(r - p)[:, 0].T) < 1.0)
+    q, ok = _there_and_back(small_a, small_b, p, levels=3, within=1.0)
     followed = float(ok.mean())
     if ok.sum() < 10:
         return float("nan"), float("nan"), followed
@@ -619,13 +636,8 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256,
     if refine and s > 1:
         # the corners kept, at the centres of the pixels they stand for, from the estimate
         at = (p[ok] * s + (s - 1) / 2).astype(np.float32)
-        guess = at + np.array([dx, dy], np.float32)
-        q1, there1, _ = cv2.calcOpticalFlowPyrLK(a, b, at, guess, winSize=(21, 21), maxLevel=1,
-                                                 flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
-        r1, back1, _ = cv2.calcOpticalFlowPyrLK(b, a, q1, at.copy(), winSize=(21, 21),
-                                                maxLevel=1, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
-        kept = ((there1[:, 0] == 1) & (back1[:, 0] == 1)
-                & (np.hypot(*(r1 - at)[:, 0].T) < 0.5))
+        q1, kept = _there_and_back(a, b, at, levels=1, within=0.5,
+                                   guess=at + np.array([dx, dy], np.float32), back=at.copy())
         if kept.sum() >= 10:
             d1 = (q1 - at)[kept, 0]
             dx, dy = float(np.median(d1[:, 0])), float(np.median(d1[:, 1]))

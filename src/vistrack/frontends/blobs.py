@@ -429,14 +429,14 @@ class BlobDetector:
             return
         self.view_motion = motion
         # the frames after the last step not followed, each moved by the steps after it
-        first = int(np.flatnonzero(np.isnan(d[:, 0]))[-1]) + 1 if np.isnan(d[:, 0]).any() else 0
-        after = np.cumsum(d[first:][::-1], axis=0)[::-1] if first < len(d) else np.zeros((0, 2))
-        shifts = np.round(np.vstack([after, np.zeros((1, 2))]))
-        self.model.initialize(frames[first:], shifts=shifts)
-        self.following_from, self._prev = 0, frames[-1]  # the model in the last one's pixels
+        lost = np.flatnonzero(np.isnan(d[:, 0]))
+        first = int(lost[-1]) + 1 if len(lost) else 0
         # where each of these frames lies against the last: a run tracks from the first of
         # them again, which may lie further from the last than Lucas-Kanade follows
-        self._start = (frames[first:], np.vstack([after, np.zeros((1, 2))]))
+        places = np.vstack([np.cumsum(d[first:][::-1], axis=0)[::-1], np.zeros((1, 2))])
+        self.model.initialize(frames[first:], shifts=np.round(places))
+        self.following_from, self._prev = 0, frames[-1]  # the model in the last one's pixels
+        self._start = (frames[first:], places)
 
     def detect(self, image: np.ndarray) -> Detections:
         """The blobs of ``image``'s foreground as boxes ``x0, y0, x1, y1``.
