@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._validate import bgr_to_grey
 from ..types import Frame
 
 if TYPE_CHECKING:
@@ -428,7 +429,10 @@ class VideoReader:
         """The image, 8 bits a channel, or None and why not (:meth:`_decode`,
         :meth:`_to_8bit`)."""
         im, why = self._decode(path)
-        return (None, why) if im is None else (self._to_8bit(im), "")
+        if im is None:
+            return None, why
+        im = self._to_8bit(im)
+        return (bgr_to_grey(im) if self.grey else im), ""
 
     def _depth(self, first: np.ndarray) -> None:
         """The bits of a folder's 16-bit images (``first``, the first readable one, as
@@ -479,7 +483,10 @@ class VideoReader:
         A JPEG is read once: its bytes are checked for the image's end-of-image marker (data
         after it are fine) and decoded from memory, as ``cv2.imread`` decodes the file."""
         cv2 = _cv2()
-        plain = cv2.IMREAD_GRAYSCALE if self.grey else cv2.IMREAD_COLOR
+        # colour even for a grey reader (:meth:`_load` converts): OpenCV's own grey decoding
+        # (a JPEG's luma, a PNG's rounding) differs by a level from the BGR image converted,
+        # as a frame given in colour is converted, in half the pixels of a colour PNG
+        plain = cv2.IMREAD_COLOR
         flags = plain | cv2.IMREAD_ANYDEPTH
         unreadable = "not a readable image (OpenCV cannot decode it: corrupt or truncated)"
         if path.suffix.lower() not in (".jpg", ".jpeg"):
@@ -603,7 +610,7 @@ class VideoReader:
                                     "corrupt)")
                     return
                 if self.grey:
-                    im = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
+                    im = bgr_to_grey(im)
                 yield self._frame(k, im)
                 k += 1
         finally:
