@@ -431,6 +431,17 @@ def test_still_camera_where_the_camera_is_taken_as_still_anyway_says_so(seq, tmp
         assert "changes nothing" not in r.stderr or out == "v3"
     assert (tmp_path / "v1" / "tracks.txt").read_bytes() == \
         (tmp_path / "v2" / "tracks.txt").read_bytes()
+    # with a tracker or a file that estimates no camera motion, the selective model is still
+    # told not to follow the view: the option is not said to change nothing (it was)
+    for out, extra in (("v4", ["--tracker", "sort"]),
+                       ("v5", ["--config", tmp_path / "still.toml"])):
+        r = cli(frames, "--out-dir", tmp_path / out, "--min-area", "50", "--quiet",
+                "--still-camera", *extra)
+        assert r.returncode == 0 and "changes nothing" not in r.stderr, r.stderr
+    r = cli(frames, "--out-dir", tmp_path / "v6", "--min-area", "50", "--quiet",
+            "--still-camera", "--tracker", "sort", "--background", "mog2")
+    assert r.returncode == 0 and "--still-camera changes nothing here: --tracker sort does " \
+        "not estimate the camera's motion" in r.stderr
 
 
 def test_the_command_lines_defaults_are_the_configurations():

@@ -509,26 +509,29 @@ def _printed_fps(path: str) -> float | None:
 
 
 def _still_already(args: argparse.Namespace) -> str | None:
-    """Why the camera's motion would not be estimated without ``--still-camera`` (so that
-    the option changes nothing), or None: the configuration file turns it off, the tracker
-    estimates none, or the front-end, from pixels, takes the camera as still and cannot
-    follow a view that moves (``bgsub`` with MOG2; the selective model follows one unless
-    ``--still-camera``)."""
+    """Why ``--still-camera`` changes nothing here, or None: the configuration file or the
+    tracker estimates no camera motion, or the front-end, from pixels, takes the camera as
+    still and cannot follow a view that moves (``bgsub`` with MOG2). The selective model
+    follows a view that moves unless ``--still-camera``, whatever the tracker: with it, the
+    option always changes something."""
     from .config import TrackConfig, read_config
     from .pipeline import FRONTENDS, default_frontend
 
-    if args.config is not None:
-        base = TrackConfig.preset(args.tracker) if args.tracker is not None else None
-        return None if read_config(args.config, base).tracker.camera_motion else \
-            f"{args.config} sets camera_motion = false"
     name = args.tracker or "bytetrack"
-    if not TrackConfig.preset(name).tracker.camera_motion:
-        return f"--tracker {name} does not estimate the camera's motion"
     front = args.frontend or default_frontend(name)
     # the selective background model follows a view that moves, unless --still-camera: there
-    # it changes something; MOG2's state cannot be moved
-    if args.out_dir is not None and front in FRONTENDS and FRONTENDS[front].still_camera \
-            and args.background == "mog2":
+    # it changes something, whatever the tracker; MOG2's state cannot be moved
+    still_front = args.out_dir is not None and front in FRONTENDS and \
+        FRONTENDS[front].still_camera
+    if still_front and args.background != "mog2":
+        return None
+    if args.config is not None:
+        base = TrackConfig.preset(args.tracker) if args.tracker is not None else None
+        if not read_config(args.config, base).tracker.camera_motion:
+            return f"{args.config} sets camera_motion = false"
+    elif not TrackConfig.preset(name).tracker.camera_motion:
+        return f"--tracker {name} does not estimate the camera's motion"
+    if still_front:
         return f"the {front} front-end with --background mog2 takes the camera as still"
     return None
 
