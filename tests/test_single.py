@@ -282,7 +282,7 @@ def test_opencv_trackers_name_an_image_they_cannot_take():
                          (np.dstack([im, im[..., :1]]), "(576, 768, 4) uint8")):
             tracker = single_tracker(method)
             with pytest.raises(ValueError, match="^" + re.escape(
-                    f"image must be (H, W) or (H, W, C) uint8 with C in (3,); got shape {got}")
+                    f"image must be (H, W) or (H, W, C) uint8 with C in (1, 3); got shape {got}")
                     + "$"):
                 tracker.init(bad, [300, 200, 60, 60])
             assert not tracker.started
@@ -290,6 +290,9 @@ def test_opencv_trackers_name_an_image_they_cannot_take():
         g = cv2.cvtColor(im, cv2.COLOR_BGR2GRAY)
         grey.init(g, [300, 200, 60, 60])
         assert grey.update(g).shape == (4,)
+        one = single_tracker(method)  # (H, W, 1) too, as before the check (it refused them)
+        one.init(g[..., None], [300, 200, 60, 60])
+        np.testing.assert_array_equal(one.update(g[..., None]), grey.box)
 
 
 def test_step_refuses_a_starting_detection_outside_the_image():

@@ -68,7 +68,7 @@ def _grey(image: np.ndarray) -> np.ndarray:
 def _hsv(image: np.ndarray) -> np.ndarray:
     import cv2
 
-    im = as_uint8_image(image, channels=(3,))
+    im = as_uint8_image(image, channels=(1, 3))
     if im.ndim != 3:
         raise ValueError(f"image is grey {im.shape}: the colour trackers (colour, meanshift, "
                          "camshift, particle) need BGR frames (H, W, 3); template, klt, wsl "
@@ -750,7 +750,7 @@ class OpenCVTracker(SingleObjectTracker):
 
         # OpenCV's own failures on another kind of image read as the box's (CSRT on float
         # pixels: "cannot start there: 'depth' is 6")
-        image = as_uint8_image(image, channels=(3,))
+        image = as_uint8_image(image, channels=(1, 3))
         r = tuple(int(round(v)) for v in b)
         where = (f"box (x, y, w, h) = ({', '.join(f'{v:g}' for v in b)}), whole pixels "
                  f"({', '.join(str(v) for v in r)})")
@@ -770,7 +770,7 @@ class OpenCVTracker(SingleObjectTracker):
         self.box = b
 
     def _follow(self, image: np.ndarray) -> np.ndarray:
-        ok, b = self._t.update(as_uint8_image(image, channels=(3,)))
+        ok, b = self._t.update(as_uint8_image(image, channels=(1, 3)))
         if ok:
             self.box = np.asarray(b, float)
         return self.box.copy()
