@@ -553,8 +553,8 @@ def _there_and_back(a: np.ndarray, b: np.ndarray, p: np.ndarray, *, levels: int,
     return q, (there[:, 0] == 1) & (again[:, 0] == 1) & (np.hypot(*(r - p)[:, 0].T) < within)
 
 
-def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256,
-               refine: bool = False) -> tuple[float, float, float]:
+def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool = False,
+               guess: tuple[float, float] | None = None) -> tuple[float, float, float]:
     """How far the view moved from frame ``a`` to frame ``b``: the median displacement of up
     to 200 corners of ``a`` (Shi-Tomasi) followed into ``b`` by pyramidal Lucas-Kanade and
     back (kept where they come back within a pixel), on copies reduced by a whole factor to
@@ -580,6 +580,10 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256,
         reduced pixels (a view panned a quarter of a pixel a frame read 0.05 pixel short a
         frame at 640 pixels across, reduced by 2; refined, within 0.02, and shifts over
         10 frames within 0.002). About 1.2 ms more for 640 × 576 frames.
+    guess : (float, float), optional
+        About how far the view moved (``dx, dy``, pixels): the corners are looked for in
+        ``b`` from there, so that a shift further than Lucas-Kanade's reach is found where
+        it lies near the guess.
 
     Returns
     -------
@@ -608,6 +612,13 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256,
     >>> dx, dy, followed = view_shift(img, moved)
     >>> round(dx), round(dy), followed > 0.9
     (12, -8, True)
+
+    Moved 90 pixels, further than the corners are followed from where they were; from a
+    guess of 80:
+
+    >>> far = np.roll(img, 90, axis=1)
+    >>> round(view_shift(img, far)[0]) == 90, round(view_shift(img, far, guess=(80, 0))[0])
+    (False, 90)
     """
     import cv2
 
@@ -627,7 +638,14 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256,
     p = cv2.goodFeaturesToTrack(small_a, 200, 0.01, 7)
     if p is None or len(p) < 10:
         return float("nan"), float("nan"), float("nan")
-    q, ok = _there_and_back(small_a, small_b, p, levels=3, within=1.0)
+    if guess is None:
+        q, ok = _there_and_back(small_a, small_b, p, levels=3, within=1.0)
+    else:
+        g = np.asarray(guess, np.float32).reshape(2) / s
+        if not np.isfinite(g).all():
+            raise ValueError(f"guess must be two finite numbers; got {guess!r}")
+        q, ok = _there_and_back(small_a, small_b, p, levels=3, within=1.0, guess=p + g,
+                                back=p.copy())
     followed = float(ok.mean())
     if ok.sum() < 10:
         return float("nan"), float("nan"), followed

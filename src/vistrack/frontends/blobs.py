@@ -314,8 +314,8 @@ class BlobDetector:
         the frames that started the model show the view moving, the median of their shifts
         over ``check_view`` frames.
     following_from : int or None
-        The frame (counted from 0, the first given to :meth:`detect`) from which the model
-        follows the view; None while it does not.
+        The frame (counted from 0, the first given to :meth:`detect` since
+        :meth:`initialize`) from which the model follows the view; None while it does not.
 
     Raises
     ------
@@ -344,9 +344,14 @@ class BlobDetector:
         self.model = make_background(background)
         self.min_area, self.open_size, self.close_size = float(min_area), open_size, close_size
         self.check_view, self.max_shift = int(check_view), float(max_shift)
+        self.follow_view = bool(follow_view)
+        self._reset()
+
+    def _reset(self) -> None:
+        """The view's checks and its following as before any frame (:meth:`initialize`
+        starts again from here)."""
         self.view_shifts: list[float] = []
         self.view_motion: float | None = None
-        self.follow_view = bool(follow_view)
         self.following_from: int | None = None
         self._frames = 0
         self._last_check: np.ndarray | None = None
@@ -383,7 +388,8 @@ class BlobDetector:
         ``check_view`` frames and their shifts over ``check_view`` frames are ``max_shift``
         or more in median, the frames are moved onto the last before their median is taken,
         and the model follows the view from the first frame :meth:`detect` is given (the
-        frame after them, or the first of them again, whose place is known).
+        frame after them, or the first of them again, whose place is known). What earlier
+        frames told of the view (its checks, its following) is forgotten: a new start.
 
         Parameters
         ----------
@@ -404,9 +410,10 @@ class BlobDetector:
         # grey, as detect gives the model its frames: a BGR start made the selective model
         # refuse the first grey frame, and MOG2 start again on it, learning the people there
         frames = [as_uint8_image(im, grey=True) for im in images]
+        self._reset()  # a new start: what earlier frames said of the view no longer holds
         k = self.check_view
         if not (self.follow_view and isinstance(self.model, SelectiveBackground) and k
-                and len(frames) > k and self.following_from is None):
+                and len(frames) > k):
             self.model.initialize(frames)
             return
         # the view's shift from each frame to the next (small, so followed reliably where
@@ -418,6 +425,25 @@ class BlobDetector:
             steps.append((dx, dy))
             evidence.append(followed == followed)
         d = np.array(steps)
+        # steps not followed (a blank or blurred frame, a flash) bridged where the frames
+        # either side of them follow one into the other, the frames between placed on the
+        # straight line: else the frames before them had no place, and a run that tracks
+        # them again found its first frame's place across all the frames (wrongly)
+        lost = np.isnan(d[:, 0])
+        i = 0
+        while i < len(d):
+            if not lost[i]:
+                i += 1
+                continue
+            j = i
+            while j < len(d) and lost[j]:
+                j += 1
+            if j > i + 1 and j < len(d):  # frames i and j, with the frames between
+                bridge = view_shift(frames[i], frames[j], refine=True)
+                if bridge[0] == bridge[0]:
+                    d[i:j] = np.array(bridge[:2]) / (j - i)
+                    evidence[i:j] = [True] * (j - i)
+            i = j
         # the view's motion over each check_view frames: where the median is max_shift or
         # more, the view moves from the start, and the frames are moved onto the last (by
         # the sum of the steps after them) before their median is taken
@@ -482,15 +508,20 @@ class BlobDetector:
                 and self.following_from is None and self.view_moves
                 and self.model.mean is not None):
             # from here the model follows the view, first moved by how far the view moved
-            # since it began to (the checks that found it moving): what it learnt of the
-            # scene before stays in its place (while the view moved unfollowed, the scene's
-            # edges were foreground, and the selective model learnt none of them)
+            # since it began to: what it learnt of the scene before stays in its place
+            # (while the view moved unfollowed, the scene's edges were foreground, and the
+            # selective model learnt none of them). How far: this frame against the model's
+            # own image, from the checks that found the view moving (which miss the part of
+            # a check's interval the view moved in before it moved max_shift in one)
             self.following_from, self._prev = self._frames, grey
             moved = [m for m, size in zip(self._check_moves[-5:], self.view_shifts[-5:])
                      if self.max_shift <= size < np.inf]
-            total = np.round(np.sum(moved, axis=0)) if moved else np.zeros(2)
-            if total.any():
-                self.model.move(int(total[0]), int(total[1]), grey)
+            total = np.sum(moved, axis=0) if moved else np.zeros(2)
+            here = self._against_model(grey, total)
+            self._at = here if here[0] == here[0] else np.round(total)
+            self._moved = np.round(self._at)
+            if self._moved.any():
+                self.model.move(int(self._moved[0]), int(self._moved[1]), grey)
         self._frames += 1
         mask = self._followed(grey) if self._prev is not None else self.model.apply(grey)
         return find_blobs(mask, min_area=self.min_area, open_size=self.open_size,
@@ -514,11 +545,31 @@ class BlobDetector:
                 self._at = -np.asarray(known[0], float)
             else:
                 d = np.array(view_shift(self._prev, grey, refine=True)[:2])
-                if d[0] == d[0]:  # NaN (nothing followed): taken as still
+                if d[0] == d[0]:
                     self._at = self._at + d
+                else:
+                    # the frame before not followed into this one (it or this one blank,
+                    # blurred, a flash): this one against the model's own image, which lies
+                    # at the place the model was moved to; where that fails too, it is
+                    # taken as still (a step lost had been taken as still for good: the
+                    # model kept the error and found the scene's edges ever after)
+                    here = self._against_model(grey, self._at - self._moved)
+                    if here[0] == here[0]:
+                        self._at = self._moved + here
             step = np.round(self._at) - self._moved
             if step.any():
                 self.model.move(int(step[0]), int(step[1]), grey)
                 self._moved += step
         self._prev = grey
         return self.model.apply(grey)
+
+    def _against_model(self, grey: np.ndarray, guess: np.ndarray) -> np.ndarray:
+        """How far ``grey``'s content lies from the selective model's image (its mean, in
+        the pixels the model was moved to), looked for from ``guess``; NaN where not
+        followed (:func:`~vistrack.frontends.view_shift`)."""
+        from .background import SelectiveBackground, view_shift
+
+        assert isinstance(self.model, SelectiveBackground) and self.model.mean is not None
+        mean = np.clip(np.rint(self.model.mean[..., 0]), 0, 255).astype(np.uint8)
+        return np.array(view_shift(mean, grey, refine=True,
+                                   guess=(float(guess[0]), float(guess[1])))[:2])
