@@ -76,3 +76,16 @@ def test_a_wheel_carries_the_clip_and_runs_the_demo_from_another_folder(tmp_path
     for name in ("tracks.txt", "tracks.csv"):
         assert (elsewhere / "out" / "pets09-s2l1" / name).read_bytes() == \
             (mine / "pets09-s2l1" / name).read_bytes()
+
+
+def test_python_m_vistrack_is_the_command():
+    """``python -m vistrack`` runs the ``vistrack`` command (it said "No module named
+    vistrack.__main__"): the same version, and a user's mistake's status and message."""
+    import vistrack
+
+    r = subprocess.run([sys.executable, "-m", "vistrack", "--version"], capture_output=True,
+                       text=True)
+    assert r.returncode == 0 and r.stdout.strip() == f"vistrack {vistrack.__version__}"
+    r = subprocess.run([sys.executable, "-m", "vistrack", "track", "no-such-file.txt", "--out",
+                        "x.txt"], capture_output=True, text=True)
+    assert r.returncode == 2 and r.stderr.startswith("vistrack track: ")
