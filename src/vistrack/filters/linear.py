@@ -571,7 +571,7 @@ class OnlineFilter:
 
     def __init__(self, kf: KalmanFilter, x0: ArrayLike, P0: ArrayLike, *, dt: float = 1.0):
         n = kf.motion.ndim_state
-        x, P = _prior(x0, P0, 1)
+        x, P = _prior(x0, P0, 1, n)
         if x.shape != (1, n) or P.shape[0] != 1:
             raise ValueError(f"x0 must have shape ({n},) and P0 ({n}, {n}); got {np.shape(x0)}, "
                              f"{np.shape(P0)}")
