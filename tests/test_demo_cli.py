@@ -23,6 +23,23 @@ def test_demo_writes_the_figures(tmp_path, capsys):
     assert "mean over 20 seeds" in out
 
 
+def test_demo_kalman_keeps_earlier_figures_without_force(tmp_path, capsys):
+    """A second run replaced the figures without a word, where ``demo track`` (and every
+    other command) asks for --force; --seeds given to 'track' was taken and ignored."""
+    assert main(["demo", "kalman", "--out", str(tmp_path), "--seeds", "1"]) == 0
+    assert "mean over 1 seed:        filtered" in capsys.readouterr().out
+    before = {p.name: p.stat().st_mtime_ns for p in tmp_path.glob("*.png")}
+    assert main(["demo", "kalman", "--out", str(tmp_path), "--seeds", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("vistrack demo: error: ") and err.rstrip().endswith(
+        f"{tmp_path / 'kalman_2d.png'} exist; pass --force to overwrite them")
+    assert {p.name: p.stat().st_mtime_ns for p in tmp_path.glob("*.png")} == before
+    assert main(["demo", "kalman", "--out", str(tmp_path), "--seeds", "1", "--force"]) == 0
+    with pytest.raises(SystemExit):
+        main(["demo", "track", "--out", str(tmp_path), "--seeds", "5"])
+    assert "--seeds goes with 'vistrack demo kalman'" in capsys.readouterr().err
+
+
 def test_cli_rejects_bad_arguments(capsys):
     with pytest.raises(SystemExit):
         main(["demo", "nosuchdemo"])

@@ -140,7 +140,8 @@ def _demo(args: argparse.Namespace) -> int:
         return int(track.func(track))
     from .demo import run_kalman_demo
 
-    print(run_kalman_demo(args.out, n_seeds=args.seeds))
+    print(run_kalman_demo(args.out, n_seeds=1000 if args.seeds is None else args.seeds,
+                          force=args.force))
     return 0
 
 
@@ -953,8 +954,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", default="out", metavar="OUT",
                       help="folder for what the demo writes (default: out)")
     demo.add_argument("--force", action="store_true",
-                      help="track: replace the results of an earlier run")
-    demo.add_argument("--seeds", type=int, default=1000,
+                      help="replace the results of an earlier run")
+    demo.add_argument("--seeds", type=int,
                       help="kalman: simulated runs for the error statistics (default: 1000)")
     _runs(demo, _demo, debug_help)
     track = sub.add_parser(
@@ -1210,8 +1211,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not hasattr(args, "func"):
         parser.print_help()
         return 2
-    if getattr(args, "seeds", 1) < 1:
-        command.error(f"--seeds must be >= 1; got {args.seeds}")
+    seeds = getattr(args, "seeds", None)
+    if seeds is not None and seeds < 1:
+        command.error(f"--seeds must be >= 1; got {seeds}")
+    if seeds is not None and getattr(args, "name", None) == "track":
+        command.error("--seeds goes with 'vistrack demo kalman' (the error statistics' runs); "
+                      "'track' takes none")
     args.command_line = _command_line(sys.argv[1:] if argv is None else argv)
     # the command is this process's own (vistrack's entry point), not a call from a program
     # whose environment it must leave alone (batch.one_thread_here)
