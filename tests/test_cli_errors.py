@@ -211,6 +211,24 @@ def test_a_video_given_to_out_says_which_option_goes_with_videos(tmp_path):
     assert not (tmp_path / "results.txt").exists()
 
 
+def test_an_image_folder_given_to_out_says_which_option_goes_with_it(tmp_path, capsys):
+    """It said the folder's seqinfo.ini did not exist and to pass --fps, and given --fps, that
+    det/det.txt did not exist: advice that led away from --out-dir."""
+    import cv2
+    import numpy as np
+
+    folder = tmp_path / "img"
+    folder.mkdir()
+    for k in range(3):
+        cv2.imwrite(str(folder / f"{k + 1:06d}.jpg"), np.zeros((16, 16, 3), np.uint8))
+    for extra in ([], ["--fps", "30"]):
+        assert main(["track", str(folder), "--out", str(tmp_path / "r.txt"), *extra]) == 2
+        one_line(capsys, "track", "--out is for a MOTChallenge sequence folder (seqinfo.ini, "
+                 f"det/det.txt) or a detections file (.txt, .csv), and {folder} is a folder "
+                 "of images: track it from its pixels with --out-dir OUT/")
+    assert not (tmp_path / "r.txt").exists()
+
+
 def test_a_detections_file_alone_needs_its_frame_rate_once(tmp_path, capsys, bad_sequence):
     """A detections file alone, or a sequence folder without seqinfo.ini: the frame rate is
     asked for by name before the file is read (it is malformed), and the file is given

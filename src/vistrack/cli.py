@@ -403,6 +403,7 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
     and :func:`~vistrack.pipeline.video_outputs` do)."""
     from .io.atomic import check_output
     from .io.motchallenge import DETECTION_SUFFIXES
+    from .io.video import _holds_images
     from .pipeline import video_outputs
 
     setting_flags = [o for o, *_ in _SETTINGS if getattr(args, o) is not None]
@@ -421,6 +422,13 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
         for flag in ("skip_bad_frames", "report"):
             if getattr(args, flag):
                 return f"--{flag.replace('_', '-')} goes with --out-dir"
+        folder = Path(args.input)
+        if folder.is_dir() and args.detections is None and not (folder / "seqinfo.ini").exists() \
+                and not (folder / "det" / "det.txt").exists() and _holds_images(folder):
+            # (it said seqinfo.ini was missing, then, given --fps, det/det.txt)
+            return (f"--out is for a MOTChallenge sequence folder (seqinfo.ini, det/det.txt) "
+                    f"or a detections file (.txt, .csv), and {args.input} is a folder of "
+                    "images: track it from its pixels with --out-dir OUT/")
         if Path(args.input).is_file():
             if Path(args.input).suffix.lower() not in DETECTION_SUFFIXES:
                 return (f"--out is for a MOTChallenge sequence folder (seqinfo.ini, "
