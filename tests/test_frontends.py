@@ -1251,6 +1251,36 @@ def test_track_video_follows_a_pan_read_from_colour_images(tmp_path):
     assert (run.rows, run.tracks) == (0, 0)
 
 
+def test_track_video_says_when_the_front_end_found_nothing(tmp_path):
+    """A still, empty scene tracked from its pixels: the results hold no rows, and the run
+    says so, with what to try (it said nothing: 0 boxes of 0 tracks, as though tracking had
+    failed unseen). run.json keeps the warning; a run that finds something gives none."""
+    import json
+
+    from vistrack.pipeline import track_video
+    from vistrack.types import Detections
+
+    folder = tmp_path / "img"
+    folder.mkdir()
+    scene = cv2.normalize(_texture((120, 160), 3), None, 0, 255, cv2.NORM_MINMAX)
+    for k in range(30):
+        cv2.imwrite(str(folder / f"{k + 1:06d}.png"), scene)
+    with pytest.warns(UserWarning) as got:
+        run = track_video(folder, tmp_path / "out", fps=10, annotate=False)
+    said = [str(w.message) for w in got if "found nothing" in str(w.message)]
+    assert run.rows == 0 and said == [
+        f"{folder}: the bgsub front-end found nothing in 30 frames (blobs of 500 pixels or "
+        "more where a frame differs from the background model; to find more, try a smaller "
+        "--min-area, --background mog2, or a detector: --frontend hog): the results hold no "
+        "rows"]
+    assert said[0] in json.loads((tmp_path / "out" / "run.json").read_text())["warnings"]
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        track_video(folder, tmp_path / "det", fps=10, annotate=False,
+                    frontend=lambda f: Detections.from_xywh([[10, 10, 20, 40]], [0.9]))
+    assert not [w for w in got if "found nothing" in str(w.message)]
+
+
 def test_track_video_says_once_that_the_view_moves(tmp_path):
     """A panning view (the bundled clip cropped from a moving window) tracked with the
     background model: one warning, naming the file, how far it moves and what to use; the

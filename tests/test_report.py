@@ -228,7 +228,8 @@ def test_the_run_keeps_its_warnings_and_the_page_lists_them(run_dir, tmp_path, c
         cv2.imwrite(str(folder / f"{k + 1:06d}.png"), im)
     out = tmp_path / "out"
     capsys.readouterr()
-    assert main(["track", str(folder), "--out-dir", str(out), "--report", "--quiet"]) == 0
+    assert main(["track", str(folder), "--out-dir", str(out), "--report", "--quiet",
+                 "--min-area", "50"]) == 0  # (the square's blobs: found)
     printed = [line.removeprefix("vistrack track: warning: ")
                for line in capsys.readouterr().err.splitlines()
                if line.startswith("vistrack track: warning: ")]

@@ -1974,11 +1974,34 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 assert isinstance(tracks, MOTWriter)
                 scored.append(evaluate_mot(g, tracks.written(), stats.last, benchmark="auto"))
 
+        found = 0  # what a front-end from pixels found (a detections file is checked as read)
+        call = as_detector(detect)
+        if grid is None and call is not None:
+            inner = call
+
+            def counted(frame: Frame) -> Detections | None:
+                nonlocal found
+                d = inner(frame)
+                found += 0 if d is None else len(d)
+                return d
+
+            call = counted
         with made_folder(out_dir):  # removed again, if made here, when the run fails
             sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
-            stats = run(reader, detect, stepper, list(sinks.values()), progress=progress,
+            stats = run(reader, call, stepper, list(sinks.values()), progress=progress,
                         total=len(reader), label=reader.source.name, check=check)
         n = stats.frames
+        if grid is None and call is not None and not found:
+            # an empty result said nothing: tracks, video and plot written, none with a box
+            what = f"the {name} front-end" if isinstance(name, str) else "the front-end"
+            hint = ""
+            if name == "bgsub":
+                hint = (f" (blobs of {ctx.options.get('min_area', 500.0):g} pixels or more "
+                        "where a frame differs from the background model; to find more, try "
+                        "a smaller --min-area, --background mog2, or a detector: --frontend "
+                        "hog)")
+            warnings.warn(f"{video}: {what} found nothing in {n} frames{hint}: the results "
+                          "hold no rows", UserWarning, stacklevel=2)
         rows = sinks["tracks"]
         assert isinstance(rows, MOTWriter)
         last = stats.last
