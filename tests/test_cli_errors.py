@@ -142,6 +142,17 @@ def test_an_output_folder_that_cannot_be_written_is_refused(tmp_path, capsys, mo
                  str(tmp_path / "boxes.txt")]) == 2
     one_line(capsys, "track-one", f"--out {tmp_path / 'boxes.txt'}: cannot write in "
              f"{tmp_path} (no permission)")
+    # on a read-only mount access() fails too: said as such (it said "no permission")
+    real = os.statvfs(tmp_path)
+
+    class ReadOnly:
+        f_flag = real.f_flag | os.ST_RDONLY
+
+    monkeypatch.setattr(vistrack.io.atomic.os, "statvfs", lambda path: ReadOnly())
+    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir",
+                 str(tmp_path / "out")]) == 2
+    one_line(capsys, "track", f"--out-dir {tmp_path / 'out'}: cannot write in {tmp_path} "
+             "(a read-only file system)")
 
 
 def test_a_folder_that_refuses_new_files_is_named_not_a_partial_file(tmp_path, capsys,

@@ -253,7 +253,13 @@ def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "o
     if here.exists() and not here.is_dir():
         raise NotADirectoryError(f"{name} {p}: {here} is a file, not a folder")
     if not os.access(here, os.W_OK | os.X_OK):
-        raise PermissionError(f"{name} {p}: cannot write in {here} (no permission)")
+        why = "no permission"
+        try:  # access() fails on a read-only mount too, whatever the permissions say
+            if os.statvfs(here).f_flag & os.ST_RDONLY:
+                why = "a read-only file system"
+        except (OSError, AttributeError):  # (no statvfs on Windows)
+            pass
+        raise PermissionError(f"{name} {p}: cannot write in {here} ({why})")
     # a folder may refuse new files whatever its permissions say (/proc, /sys, a read-only
     # mount; root passes every access check): a file made and removed there tells, where a
     # failure at the partial file's name, later, named a file the user never gave
