@@ -75,6 +75,36 @@ def test_labels_and_lines_grow_with_a_large_image():
     assert (line, line4) == (3, 9)
 
 
+def test_an_identity_is_numbered_inside_the_image_and_off_the_frame_label():
+    """A box reaching past the image's top-left corner: its number was drawn at the box's
+    left edge, off the image (a sliver of it showed); now whole, inside the image, at the
+    box's top. Under the frame's label, a box's number went over the label; now below it."""
+    import cv2
+
+    grey = np.full((120, 160, 3), 128, np.uint8)
+
+    def draw(box, label=None):
+        t = Tracks(ids=np.array([5]), boxes=np.array([box], float), points=None,
+                   scores=np.ones(1), classes=np.zeros(1))
+        return Annotator().draw(grey, t, label=label)
+
+    # the box's own lines lie off the image but for its right and bottom sides, far away:
+    # what is drawn in the corner is the number (its colour, and its black outline)
+    out = draw([-15, -10, 120, 100])
+    corner = out[:25, :25]
+    assert (corner == id_colour(5)).all(axis=2).any() and (corner < 40).all(axis=2).any()
+    # a box just below the label: its number, above it, went over the label; now the rows
+    # of the label are as drawn without the track, and the number is inside the box
+    _, base = cv2.getTextSize("frame 2", cv2.FONT_HERSHEY_SIMPLEX, 0.6, 1)
+    bottom = 22 + base + 2  # the label's black box ends here
+    empty = Tracks(ids=np.zeros(0, int), boxes=np.zeros((0, 4)), points=None,
+                   scores=np.zeros(0), classes=np.zeros(0))
+    alone = Annotator().draw(grey, empty, label="frame 2")
+    out = draw([6, bottom + 3, 60, 100], label="frame 2")
+    np.testing.assert_array_equal(out[:bottom + 1], alone[:bottom + 1])
+    assert (out[bottom + 5:bottom + 30, 8:30] == id_colour(5)).all(axis=2).any()
+
+
 def test_boxes_not_finite_are_left_out_and_far_ones_drawn_as_near_ones():
     """A NaN or infinite box made OpenCV fail ("Can't parse 'pt1'"), and the annotated video
     with it; so did one beyond OpenCV's integers (x = -3e9). The first are left out (the

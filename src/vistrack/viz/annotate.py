@@ -147,14 +147,16 @@ class Annotator:
         # they read on a 4K frame as on a PAL one (sizes below are at scale 1)
         z = max(1.0, min(out.shape[:2]) / 720)
         thin, thick = max(1, round(z)), max(2, round(2 * z))
+        H, W = out.shape[:2]
+        banner = (0, 0)  # the label's box: right and bottom edges
         if label:
             # white on a black box: an outlined label read double ("frame 101" as "1011") on
             # a light background once the video was compressed. Drawn first: the tracks go
             # over it, so it hides none
             (w, h), base = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * z, thin)
             y = round(22 * z)
-            cv2.rectangle(out, (round(4 * z), y - h - round(5 * z)),
-                          (round(12 * z) + w, y + base + round(2 * z)), (0, 0, 0), -1)
+            banner = (round(12 * z) + w, y + base + round(2 * z))
+            cv2.rectangle(out, (round(4 * z), y - h - round(5 * z)), banner, (0, 0, 0), -1)
             cv2.putText(out, label, (round(8 * z), y), cv2.FONT_HERSHEY_SIMPLEX, 0.6 * z,
                         (255, 255, 255), thin, cv2.LINE_AA)
         self._n += 1
@@ -198,13 +200,19 @@ class Annotator:
                 cv2.ellipse(out, (int(round(cx)), int(round(cy))),
                             (max(int(round(ax[1])), 1), max(int(round(ax[0])), 1)), ang, 0, 360,
                             c, thin, cv2.LINE_AA)
+            (tw, th), tb = cv2.getTextSize(str(i), cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z, thin)
             if boxes is not None:
                 x0, y0, x1, y1 = np.round(boxes[k]).astype(int)
                 cv2.rectangle(out, (x0, y0), (x1, y1), c, thick)
-                org = (x0, max(y0 - round(4 * z), round(12 * z)))
+                x, y = x0, y0 - round(4 * z)  # above the box
+                top = banner[1] if x < banner[0] else 0
+                if y - th < top:  # off the image, or under the frame's label: inside, at the top
+                    y = max(y0, top) + th + round(4 * z)
             else:
                 cv2.circle(out, (int(round(cx)), int(round(cy))), round(3 * z), c, -1)
-                org = (int(cx) + round(4 * z), int(cy) - round(4 * z))
+                x, y = int(cx) + round(4 * z), int(cy) - round(4 * z)
+            # the whole number inside the image (a box past the left edge showed a sliver)
+            org = (min(max(x, 0), max(W - tw, 0)), min(max(y, th), max(H - tb, th)))
             cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z, (0, 0, 0),
                         max(3, round(3 * z)), cv2.LINE_AA)
             cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z, c, thin, cv2.LINE_AA)
