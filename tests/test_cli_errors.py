@@ -240,6 +240,22 @@ def test_an_image_folder_given_to_out_says_which_option_goes_with_it(tmp_path, c
     assert not (tmp_path / "r.txt").exists()
 
 
+def test_a_file_that_is_not_a_video_is_said_once(tmp_path):
+    """FFmpeg's own line ("[mov,mp4,m4a,3gp,3g2,mj2 @ 0x...] moov atom not found") came before
+    vistrack's message of the same fault; a log level of the user's own still shows it."""
+    bad = tmp_path / "notvideo.mp4"
+    bad.write_text("hello\n")
+    env = {k: v for k, v in ENV.items() if k != "OPENCV_FFMPEG_LOGLEVEL"}
+    r = subprocess.run([sys.executable, "-m", "vistrack", "track", str(bad), "--out-dir",
+                        str(tmp_path / "out")], capture_output=True, text=True, env=env)
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr == f"vistrack track: error: {bad}: OpenCV cannot open it as a video\n"
+    r = subprocess.run([sys.executable, "-m", "vistrack", "track", str(bad), "--out-dir",
+                        str(tmp_path / "out")], capture_output=True, text=True,
+                       env=env | {"OPENCV_FFMPEG_LOGLEVEL": "16"})
+    assert "moov atom not found" in r.stdout + r.stderr  # (OpenCV prints it on stdout)
+
+
 def test_a_detections_file_alone_needs_its_frame_rate_once(tmp_path, capsys, bad_sequence):
     """A detections file alone, or a sequence folder without seqinfo.ini: the frame rate is
     asked for by name before the file is read (it is malformed), and the file is given

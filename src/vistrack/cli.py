@@ -1229,6 +1229,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     # the command is this process's own (vistrack's entry point), not a call from a program
     # whose environment it must leave alone (batch.one_thread_here)
     args.own_process = argv is None
+    if args.own_process:
+        # FFmpeg's own log lines (OpenCV's video reading: "[mov,mp4,... @ 0x...] moov atom
+        # not found") came before vistrack's message of the same fault: one line is said of
+        # each. Set before OpenCV first opens a video; a value of the user's own is kept
+        os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
     # SIGTERM stops a run as Ctrl-C does, for as long as main runs (signal handlers can be
     # set in the main thread only)
     old = (signal.signal(signal.SIGTERM, _terminate)
