@@ -71,6 +71,63 @@ def test_the_largest_inputs_start_first_and_outcomes_keep_the_inputs_order(bench
     assert [o.input.name for o in outcomes] == ["SIM-0", "SIM-1", "SIM-2"]
 
 
+def test_inputs_finished_before_an_interrupt_are_reported(tmp_path, monkeypatch):
+    """Ctrl-C while waiting for the jobs: the ones already finished (their outputs whole)
+    are reported, a line each, before the interrupt goes on; they went unsaid, the table
+    never printed, and a user could not tell which outputs were written. Oracle: two jobs,
+    the first finished, the second not, and the wait interrupted."""
+    import concurrent.futures
+    from concurrent.futures import Future
+
+    from vistrack.batch import Job, Outcome, run_jobs
+
+    jobs = [Job(tmp_path / name, tmp_path / f"{name}.txt", "detections") for name in "AB"]
+    futures = []
+
+    class Frozen:  # the first job done, the second never
+        def submit(self, fn, job):
+            f = Future()
+            if job.input.name == "A":
+                f.set_result(Outcome(job.input, job.out, True, frames=3, tracks=1))
+            futures.append(f)
+            return f
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(concurrent.futures, "wait", interrupted)
+    said = []
+    with pytest.raises(KeyboardInterrupt):
+        run_jobs(jobs, executor=Frozen(), on_done=lambda o, k, n: said.append((o.input.name,
+                                                                            o.ok, k, n)))
+    assert said == [("A", True, 1, 2)]
+
+
+def test_an_interrupted_batch_names_the_outputs_it_wrote(bench, tmp_path, monkeypatch, capsys):
+    """Ctrl-C during ``vistrack track A B C --out DIR``: the command names the inputs whose
+    outputs this run wrote (each whole: written under a partial name and renamed), those a
+    worker wrote as the signal came included, and not an earlier run's files. Before, it
+    said "interrupted" alone. Oracle: a run that writes SIM-0's results, then is
+    interrupted; SIM-1's results are an earlier run's."""
+    import vistrack.batch
+
+    out = tmp_path / "res"
+    out.mkdir()
+    (out / "SIM-1.txt").write_text("an earlier run's\n")
+    old = time.time() - 60
+    os.utime(out / "SIM-1.txt", (old, old))
+
+    def interrupted(jobs, **kwargs):
+        (out / "SIM-0.txt").write_text("this run's\n")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(vistrack.batch, "run_jobs", interrupted)
+    assert main(["track", str(bench), "--out", str(out), "--force"]) == 130
+    assert capsys.readouterr().err.splitlines()[-2:] == [
+        "vistrack track: 1 of 3 inputs written before it stopped: SIM-0.txt",
+        "vistrack track: interrupted; earlier outputs are kept"]
+
+
 def _broken(tmp_path: Path, bench: Path) -> Path:
     bad = tmp_path / "BAD"
     (bad / "det").mkdir(parents=True)

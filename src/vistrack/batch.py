@@ -283,6 +283,16 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
     def stopped() -> bool:
         return not keep_going and any(not o.ok for o in outcomes.values())
 
+    def report_finished(running: dict[Future, int]) -> None:
+        # stopped by Ctrl-C or a signal while waiting: the jobs that had finished are said
+        # (their outputs are whole) before it goes on; they were lost unsaid. Those the
+        # signal stopped in their workers failed of it (numba's "SystemError: ... returned a
+        # result with an exception set"): not said as failures of their own
+        for f, i in running.items():
+            if i not in outcomes and f.done() and not f.cancelled() and f.exception() is None \
+                    and f.result().ok:
+                done(i, f.result())
+
     if executor is None and (workers or default_jobs()) == 1:
         for i, job in enumerate(jobs):
             if stopped():
@@ -294,12 +304,16 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
         for i in _largest_first(jobs, range(n)):
             attempts[i] += 1
             futures[executor.submit(_run, jobs[i])] = i
-        for f in _as_done(futures, stopped):
-            i = futures[f]
-            try:
-                done(i, f.result())
-            except Exception as e:  # noqa: BLE001 - the executor's own failure
-                failed(i, f"{type(e).__name__}: {e}")
+        try:
+            for f in _as_done(futures, stopped):
+                i = futures[f]
+                try:
+                    done(i, f.result())
+                except Exception as e:  # noqa: BLE001 - the executor's own failure
+                    failed(i, f"{type(e).__name__}: {e}")
+        except BaseException:
+            report_finished(futures)
+            raise
     else:
         size = workers or default_jobs()
         pending = _largest_first(jobs, range(n))
@@ -343,6 +357,12 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
                             died.append(i)
                         else:
                             failed(i, f"{type(error).__name__}: {error}")
+            except BaseException:
+                # the jobs under way finish (their workers do not take Ctrl-C) and write whole
+                # outputs: said once they have, with those finished before
+                pool.shutdown(wait=True, cancel_futures=True)
+                report_finished(running)
+                raise
             finally:
                 pool.shutdown(wait=True, cancel_futures=True)
             pending = []

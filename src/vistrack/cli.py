@@ -10,6 +10,7 @@ import re
 import signal
 import sys
 import threading
+import time
 import traceback
 import warnings
 from collections.abc import Callable, Sequence
@@ -624,7 +625,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     done, a table at the end; exit status 1 if any failed. ``offline_given``: the offline
     mode's settings given, refused with ``--out-dir`` and said to change nothing without
     ``--offline``, as for one input."""
-    from .batch import Outcome, one_thread_here, plan, progress_lines, run_jobs
+    from .batch import Job, Outcome, one_thread_here, plan, progress_lines, run_jobs
 
     if args.own_process:
         one_thread_here()  # before numpy: this process hands out the inputs, its workers track
@@ -696,8 +697,24 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
             outcomes = run_jobs(jobs, executor=client.get_executor(),
                                 keep_going=args.keep_going, on_done=progress(len(jobs)))
     else:
-        outcomes = run_jobs(jobs, workers=args.jobs, keep_going=args.keep_going,
-                            on_done=progress(len(jobs)))
+        t0 = time.time()
+        try:
+            outcomes = run_jobs(jobs, workers=args.jobs, keep_going=args.keep_going,
+                                on_done=progress(len(jobs)))
+        except (KeyboardInterrupt, Terminated):
+            # which inputs' outputs this run wrote (each written whole, or not at all): the
+            # workers stop with the run, and one may have written its file as the signal
+            # came, without a line said of it
+            from .pipeline import SINK_FILES
+
+            def mtime(job: Job) -> float:
+                f = job.out if kind == "detections" else job.out / SINK_FILES["tracks"]
+                return f.stat().st_mtime if f.exists() else -math.inf
+
+            written = [j.out.name for j in jobs if mtime(j) >= t0 - 0.05]
+            print(f"vistrack track: {len(written)} of {len(jobs)} inputs written before it "
+                  f"stopped{': ' if written else ''}{', '.join(written)}", file=sys.stderr)
+            raise
     # an input's name, or the path given where its name says nothing (".", "..")
     names = [o.input.name if o.input.name not in ("", ".", "..") else str(o.input)
              for o in outcomes]
