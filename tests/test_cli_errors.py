@@ -372,6 +372,27 @@ def test_out_with_a_trailing_slash_is_a_folder_with_one_input_too(tmp_path, caps
     assert (tmp_path / "res").is_dir() and (tmp_path / "res" / "cam3.txt").is_file()
 
 
+def test_out_named_as_a_file_with_several_inputs_is_refused(tmp_path, capsys):
+    """--out multi.txt with several inputs (or a folder of sequences) made a folder named
+    multi.txt, which looked like one results file: refused, saying --out is a folder there."""
+    seqs = []
+    for name in ("A", "B"):
+        seq = tmp_path / name
+        (seq / "det").mkdir(parents=True)
+        (seq / "seqinfo.ini").write_text("[Sequence]\nframeRate=25\nseqLength=10\nimWidth=640\n"
+                                         "imHeight=480\n")
+        (seq / "det" / "det.txt").write_text("".join(f"{f},-1,{10 + 2 * f},20,30,60,0.9\n"
+                                                     for f in range(1, 11)))
+        seqs.append(str(seq))
+    for out in ("multi.txt", "multi.CSV", "multi.parquet"):
+        assert main(["track", *seqs, "--out", str(tmp_path / out)]) == 2
+        one_line(capsys, "track", f"--out {tmp_path / out} names a file; with 2 inputs --out is "
+                 "a folder, each sequence's results NAME.txt in it: give --out RESULTS/")
+        assert not (tmp_path / out).exists()
+    assert main(["track", *seqs, "--out", str(tmp_path / "res")]) == 0
+    assert sorted(p.name for p in (tmp_path / "res").iterdir()) == ["A.txt", "B.txt"]
+
+
 def test_track_one_starts_from_the_ground_truth_s_first_box_without_init(tmp_path, capsys):
     """OTB's groundtruth_rect.txt counts pixels from 1 and --init from 0: its first line
     pasted as --init started the tracker a pixel off the box it is scored against (IoU 0.86

@@ -641,6 +641,13 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     if (args.out is None) == (args.out_dir is None):
         return fail("give --out RESULTS/ (each sequence's detections, NAME.txt each) or "
                     "--out-dir OUT/ (from pixels, NAME/ each)")
+    if args.out is not None and Path(args.out).suffix.lower() in (".txt", ".csv", ".parquet") \
+            and not Path(args.out).is_dir():
+        # (a folder of that name was made, which looked like one results file)
+        many = (f"{len(args.input)} inputs" if len(args.input) > 1 else
+                f"{args.input[0]}, a folder of sequences,")
+        return fail(f"--out {args.out} names a file; with {many} --out is a folder, each "
+                    "sequence's results NAME.txt in it: give --out RESULTS/")
     if args.jobs is not None and args.jobs < 1:
         return fail(f"--jobs must be 1 or more; got {args.jobs}")
     for flag in ("print_config", "gt", "detections", "columns"):
