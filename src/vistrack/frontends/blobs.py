@@ -263,7 +263,9 @@ class BlobDetector:
     (the median of five checks by 21 or more). A textured object that covers a quarter of a
     still frame moves the median of five checks by 1.6 at most; one that covers a third of
     it or more and crosses it for 30 frames or more (a bus passing near the camera) is taken
-    for the view.
+    for the view; so is a smaller textured one crossing a scene of faint texture while the
+    model starts (the corners followed are then the object's alone): ``follow_view=False``
+    where the camera is known to be still.
 
     Where the view moves, the selective model follows it (``follow_view``; MOG2's state is
     OpenCV's own, and cannot be moved): from then on the detector measures the view's shift
