@@ -1170,7 +1170,7 @@ def test_blob_detector_catches_up_with_a_view_that_began_to_move_mid_check(speed
 
     scene = _pan_scene()
     for start in range(41, 60, 2):
-        def frame(k):
+        def frame(k, start=start):
             v = speed * min(max(0, k - start), 60)
             return scene[:, v:v + 320]
 
