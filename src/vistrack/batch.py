@@ -358,8 +358,9 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
                         else:
                             failed(i, f"{type(error).__name__}: {error}")
             except BaseException:
-                # the jobs under way finish (their workers do not take Ctrl-C) and write whole
-                # outputs: said once they have, with those finished before
+                # the jobs under way end first (their workers take the signal too: each
+                # stops, its output not written, or has just finished and written it whole),
+                # then those finished are said
                 pool.shutdown(wait=True, cancel_futures=True)
                 report_finished(running)
                 raise
