@@ -1247,7 +1247,8 @@ def test_track_video_follows_a_pan_read_from_colour_images(tmp_path):
         cv2.imwrite(str(folder / f"{k + 1:06d}.png"), scene[30:270, 7 * k:7 * k + 320])
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*the view moves", category=RuntimeWarning)
-        run = track_video(folder, tmp_path / "out", fps=10, annotate=False)
+        with pytest.warns(UserWarning, match="found nothing in 60 frames"):
+            run = track_video(folder, tmp_path / "out", fps=10, annotate=False)
     assert (run.rows, run.tracks) == (0, 0)
 
 
@@ -1502,7 +1503,9 @@ def test_a_frontends_option_with_another_frontend_is_refused(tmp_path):
         track_video(video, tmp_path / "out", tracker="dcpf", min_area=10, stop=3)
     assert not (tmp_path / "out").exists()
     # where each is read, it is taken (the blobs' area: fewer blobs when larger)
-    few = track_video(video, tmp_path / "big", min_area=5000, stop=30, annotate=False)
+    with pytest.warns(UserWarning, match="the bgsub front-end found nothing in 30 frames "
+                      r"\(blobs of 5000 pixels or more"):
+        few = track_video(video, tmp_path / "big", min_area=5000, stop=30, annotate=False)
     many = track_video(video, tmp_path / "small", min_area=200, stop=30, annotate=False)
     assert few.rows < many.rows
 
