@@ -271,6 +271,51 @@ if __name__ == "__main__":
 """
 
 
+CTRL_C = """import os, signal, sys, threading, time
+from vistrack._pool import process_pool
+
+def interrupted():
+    os.kill(os.getpid(), signal.SIGINT)
+    time.sleep(5)
+    return "not interrupted"
+
+def check():
+    with process_pool(1) as pool:
+        pid = pool.submit(os.getpid).result()
+        os.kill(pid, signal.SIGINT)  # between jobs: the worker waits on the pool's queue
+        time.sleep(0.3)
+        alive = pool.submit(os.getpid).result() == pid
+        try:
+            got = pool.submit(interrupted).result()
+        except KeyboardInterrupt:
+            got = "KeyboardInterrupt"
+        print(alive, got, pool.submit(os.getpid).result() == pid)
+
+if __name__ == "__main__":
+    check()  # forked
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    check()  # spawned
+    stop.set()
+    other.join()
+"""
+
+
+def test_a_worker_takes_ctrl_c_in_a_job_and_not_between_jobs(tmp_path):
+    """Ctrl-C stops the job a worker runs (KeyboardInterrupt, its outputs unwound), and is
+    left to the pool between jobs: raised while the worker waited on the pool's queue, it
+    ended the worker (the pool broken), could leave the queue's lock held (a batch hung on
+    Ctrl-C about once in 30), and the pool then ended its other workers at once, leaving
+    their outputs under partial names. Forked and spawned workers alike."""
+    (tmp_path / "ctrl_c.py").write_text(CTRL_C)
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1",
+               PYTHONPATH=str(Path(__file__).parents[1] / "src"))
+    r = subprocess.run([sys.executable, str(tmp_path / "ctrl_c.py")], env=env,
+                       capture_output=True, text=True, timeout=120)
+    assert r.stdout.splitlines() == ["True KeyboardInterrupt True"] * 2, r.stderr
+
+
 def test_a_single_threaded_process_forks_its_workers_and_one_with_other_threads_spawns(
         tmp_path):
     """With one thread (BLAS given one), the workers are forked after the jobs' module is

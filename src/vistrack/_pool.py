@@ -39,9 +39,13 @@ def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecut
     forked process safely can when no other thread holds a lock. Otherwise (another thread
     running, such as a BLAS pool started with more than one thread; not Linux) they are
     spawned: fresh processes that import what they need. A forked worker is then made like a
-    fresh one: Ctrl-C and SIGTERM act as Python's defaults (or stay ignored if this process
-    ignores them), and no compile watch of this process's (:mod:`vistrack._compile`) goes on
-    in it; warnings print as this process prints them.
+    fresh one: SIGTERM acts as Python's default (or stays ignored if this process ignores
+    it), and no compile watch of this process's (:mod:`vistrack._compile`) goes on in it;
+    warnings print as this process prints them. Ctrl-C (unless ignored here) stops the job a
+    worker runs, as in any process, and is left to the pool between jobs: raised while a
+    worker waited on the pool's queues, it could leave a queue's lock held, and the pool hung
+    (about 1 in 30 batches given Ctrl-C), or, ending its other workers at once, left their
+    outputs under partial names (1-4 in 30).
     """
     import importlib
     import multiprocessing
@@ -49,6 +53,12 @@ def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecut
     import sys
     from concurrent.futures import ProcessPoolExecutor
     from concurrent.futures.process import BrokenProcessPool
+
+    class _Jobs(ProcessPoolExecutor):
+        """Each job run by :func:`_in_job`."""
+
+        def submit(self, fn: Any, /, *args: Any, **kwargs: Any) -> Any:
+            return super().submit(_in_job, fn, *args, **kwargs)
 
     if getattr(multiprocessing.current_process(), "_inheriting", False):
         # a spawned worker importing the script that started it, whose top level asks for a
@@ -66,12 +76,13 @@ def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecut
         if fork:  # a fresh process's handlers: Python's, or ignored as here
             ign = {s: signal.getsignal(s) == signal.SIG_IGN for s in (signal.SIGINT,
                                                                      signal.SIGTERM)}
-            pool = ProcessPoolExecutor(
+            pool = _Jobs(
                 workers, mp_context=multiprocessing.get_context("fork"), initializer=_as_fresh,
-                initargs=(signal.SIG_IGN if ign[signal.SIGINT] else signal.default_int_handler,
+                initargs=(signal.SIG_IGN if ign[signal.SIGINT] else _on_sigint,
                           signal.SIG_IGN if ign[signal.SIGTERM] else signal.SIG_DFL))
         else:
-            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+            pool = _Jobs(workers, mp_context=multiprocessing.get_context("spawn"),
+                         initializer=_as_spawned)
         # the processes start at the first submission: start them now, with this environment
         try:
             for f in [pool.submit(os.getpid) for _ in range(workers)]:
@@ -127,6 +138,33 @@ def _threads() -> int:
             return int(f.read().rsplit(b")", 1)[1].split()[17])
     except (OSError, ValueError, IndexError):
         return 0
+
+
+_busy = False  # in a worker: a job of the pool's runs (_in_job)
+
+
+def _on_sigint(signum: int, frame: Any) -> None:
+    """A worker's Ctrl-C: KeyboardInterrupt in the job under way; none between jobs."""
+    if _busy:
+        raise KeyboardInterrupt
+
+
+def _in_job(fn: Any, *args: Any, **kwargs: Any) -> Any:
+    """Run a job in a worker, Ctrl-C taken while it runs (:func:`_on_sigint`)."""
+    global _busy
+    _busy = True
+    try:
+        return fn(*args, **kwargs)
+    finally:
+        _busy = False
+
+
+def _as_spawned() -> None:
+    """In a spawned worker: Ctrl-C as :func:`_on_sigint` (unless ignored)."""
+    import signal
+
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGINT, _on_sigint)
 
 
 def _as_fresh(sigint: Any, sigterm: Any) -> None:
