@@ -624,3 +624,33 @@ def test_a_fractional_consider_flag_is_read_as_trackeval_reads_it(bench, tmp_pat
     ours = evaluate_mot(read_mot(d / "gt" / "gt.txt"), read_mot(pred), 7, benchmark=bench)
     compare(ours, ref["seq"])
     assert ours.FP == 3  # the rows of 0.5, 0.3 and -0.5: ignored, their predictions false
+
+
+def test_what_is_not_a_readable_table_is_named(tmp_path):
+    """A path, an array or a table built by hand with a NaN box, columns of two lengths or
+    a frame of 1.5 failed inside numpy or SciPy's assignment ("'str' object has no attribute
+    'frames'", "matrix contains invalid numeric entries"), or scored silently; each is now
+    named, with the argument."""
+    from vistrack.evaluation.mot import clear_matches
+
+    good = MOTTable.from_rows([(1, 1, 0, 0, 10, 10), (2, 1, 1, 0, 10, 10)])
+    path = tmp_path / "gt.txt"
+    path.write_text("1,1,0,0,10,10,1,1,1\n")
+    for gt, pred, error, message in [
+            (str(path), good, TypeError, "gt must be a MOTTable (vistrack.io.read_mot reads a "
+             "file; evaluate_files scores files); got str"),
+            (good, np.zeros((2, 6)), TypeError, "pred must be a MOTTable (vistrack.io.read_mot "
+             "reads a file; evaluate_files scores files); got ndarray"),
+            (dataclasses.replace(good, boxes=np.array([[0, 0, 10, 10], [np.nan, 0, 10, 10]])),
+             good, ValueError, "gt.boxes[1] is not finite: [nan, 0.0, 10.0, 10.0]"),
+            (good, dataclasses.replace(good, ids=np.array([1])), ValueError,
+             "pred.ids must be an array of shape (N,) = (2,), as frames; got ndarray of shape "
+             "(1,)"),
+            (good, dataclasses.replace(good, boxes=np.zeros(4)), ValueError,
+             "pred.boxes must be an array of shape (N, 4) = (2, 4); got ndarray of shape (4,)"),
+            (dataclasses.replace(good, frames=np.array([1.5, 2])), good, ValueError,
+             "gt.frames[0] must be a whole number; got 1.5")]:
+        for score in (evaluate_mot, clear_matches):
+            with pytest.raises(error, match="^" + re.escape(message) + "$"):
+                score(gt, pred)
+    assert evaluate_mot(good, good).MOTA == 1.0

@@ -29,6 +29,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, fields
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -284,8 +285,40 @@ def _check_unique(table: MOTTable, what: str) -> None:
                      f"frame {frame}{hint}")
 
 
+def _check_table(table: Any, name: str) -> None:
+    """A TypeError or ValueError naming ``name`` where ``table`` is not a MOTTable whose
+    columns the scoring can read (a path, a DataFrame or a table built by hand with a NaN
+    box failed inside numpy or SciPy's assignment, naming neither)."""
+    if not isinstance(table, MOTTable):
+        raise TypeError(f"{name} must be a MOTTable (vistrack.io.read_mot reads a file; "
+                        "evaluate_files scores files); got "
+                        f"{type(table).__name__}")
+    n = len(table.frames) if getattr(table.frames, "ndim", 0) == 1 else -1
+    for col in ("frames", "ids", "conf"):
+        v = getattr(table, col)
+        if not isinstance(v, np.ndarray) or v.shape != (n,):
+            like = "" if col == "frames" else f" = ({n},), as frames"
+            raise ValueError(f"{name}.{col} must be an array of shape (N,){like}; got "
+                             f"{type(v).__name__} of shape {np.shape(v)}")
+    if not isinstance(table.boxes, np.ndarray) or table.boxes.shape != (n, 4):
+        raise ValueError(f"{name}.boxes must be an array of shape (N, 4) = ({n}, 4); got "
+                         f"{type(table.boxes).__name__} of shape {np.shape(table.boxes)}")
+    bad = ~np.isfinite(table.boxes).all(axis=1)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"{name}.boxes[{k}] is not finite: {table.boxes[k].tolist()}")
+    if n and table.frames.dtype.kind == "f":  # (frames before the first: _check_frames)
+        part = table.frames != np.floor(table.frames)
+        if part.any():
+            k = int(np.flatnonzero(part)[0])
+            raise ValueError(f"{name}.frames[{k}] must be a whole number; got "
+                             f"{table.frames[k]}")
+
+
 def _n_frames(gt: MOTTable, pred: MOTTable, n_frames: int | None) -> int:
     """The sequence's length: ``n_frames`` if given, else the last frame of either table."""
+    _check_table(gt, "gt")
+    _check_table(pred, "pred")
     if n_frames is None:
         return int(max(gt.frames.max() if len(gt) else 0, pred.frames.max() if len(pred) else 0))
     if not (0 <= n_frames < np.inf and int(n_frames) == n_frames):  # NaN too
