@@ -186,6 +186,13 @@ def test_print_config_read_back_gives_identical_tracks(seq, tmp_path, offline):
     assert r.returncode == 0, r.stderr
     a, b = (tmp_path / "a.txt").read_text(), (tmp_path / "b.txt").read_text()
     assert a == b and len(a.splitlines()) > 500
+    # the file given to track_sequence's config, as a path or its name (it was taken for a
+    # preset's: "tracker must be one of ['bytetrack', 'sort']; got '.../used.toml'")
+    from vistrack.pipeline import track_sequence
+
+    for k, config in enumerate((tmp_path / "used.toml", str(tmp_path / "used.toml"))):
+        track_sequence(seq, tmp_path / f"api{k}.txt", config=config)
+        assert (tmp_path / f"api{k}.txt").read_text() == a
 
 
 def test_print_config_of_a_run_given_fps_warns_where_read_back_without_it(seq, tmp_path):

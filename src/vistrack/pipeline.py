@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import importlib
 import math
+import os
 import re
 import time
 import warnings
@@ -156,7 +157,8 @@ _OFFLINE_KEYS = {f.name for f in fields(OfflineConfig)}
 _TRACKER_KEYS = {f.name for f in fields(BoxTrackerConfig)}
 
 
-def resolve_config(config: TrackConfig | str | None = None, *, tracker: str | None = None,
+def resolve_config(config: TrackConfig | str | os.PathLike | None = None, *,
+                   tracker: str | None = None,
                    offline: bool | None = None, **overrides: Any) -> TrackConfig:
     """The configuration of a run: ``config`` (a :class:`~vistrack.config.TrackConfig` or a
     preset's name; default the ``tracker`` preset, else ``bytetrack``), with ``offline`` and
@@ -165,8 +167,11 @@ def resolve_config(config: TrackConfig | str | None = None, *, tracker: str | No
 
     Parameters
     ----------
-    config : TrackConfig, str or None
-        The configuration, or a preset's name in :data:`vistrack.tracking.TRACKERS`.
+    config : TrackConfig, str, path or None
+        The configuration, a preset's name in :data:`vistrack.tracking.TRACKERS`, or a
+        configuration file (a path, or a name ending in ``.toml``), as ``vistrack track
+        --config FILE`` takes it (:func:`~vistrack.config.read_config`, over the ``tracker``
+        preset where given).
     tracker : str, optional
         A preset's name; it must agree with ``config`` when both are given.
     offline : bool, optional
@@ -195,6 +200,17 @@ def resolve_config(config: TrackConfig | str | None = None, *, tracker: str | No
     >>> resolve_config(offline=True).offline.enabled
     True
     """
+    from .tracking.box import TRACKERS as BOX_PRESETS
+
+    if isinstance(config, os.PathLike) or (isinstance(config, str)
+                                           and config not in BOX_PRESETS
+                                           and (config.lower().endswith(".toml")
+                                                or os.sep in config or "/" in config)):
+        # a configuration file, as `vistrack track --config FILE` takes (it was taken for a
+        # preset's name: "tracker must be one of ['bytetrack', 'sort']; got 'used.toml'")
+        from .config import read_config
+
+        config = read_config(config, TrackConfig.preset(tracker) if tracker else None)
     if isinstance(config, str) or config is None:
         if isinstance(config, str) and tracker is not None and tracker != config:
             raise ValueError(f"tracker {tracker!r} and config {config!r} disagree")
@@ -1021,7 +1037,8 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
 
 def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Path | None = None,
                    columns: dict[str, str] | None = None,
-                   config: TrackConfig | str | None = None, tracker: str | None = None,
+                   config: TrackConfig | str | os.PathLike | None = None,
+                   tracker: str | None = None,
                    offline: bool | None = None, fps: float | None = None, force: bool = False,
                    progress: TextIO | None = None, **overrides: object) -> TrackRun:
     """Track a MOTChallenge sequence folder, or a detections file alone, and write a results
@@ -1063,8 +1080,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         over its ``frameRate`` where there is.
     config, tracker, offline, overrides
         The configuration (:func:`resolve_config`): a
-        :class:`~vistrack.config.TrackConfig` or a preset's name in
-        :data:`vistrack.tracking.TRACKERS`, and values put over it.
+        :class:`~vistrack.config.TrackConfig`, a preset's name in
+        :data:`vistrack.tracking.TRACKERS` or a configuration file (as ``--config FILE``),
+        and values put over it.
         Offline, tracks start only at detections scoring the offline mode's
         ``start_score`` or more (where it is above ``new_track``), the finished tracks are
         smoothed, gaps filled, tracks of weak detections dropped, tracks followed back
