@@ -114,6 +114,28 @@ def test_many_inputs_on_a_dask_cluster_give_what_each_gives_alone(bench, tmp_pat
     assert "--jobs goes with the local pool" in capsys.readouterr().err
 
 
+@pytest.mark.slow
+def test_a_scheduler_that_does_not_answer_is_one_line(bench, tmp_path, capsys):
+    """--scheduler at an address where nothing listens: Dask's own 55-line traceback came
+    after 30 s with the status of a bug (1); now one line naming the address, status 2."""
+    pytest.importorskip("distributed")
+    import socket
+
+    from vistrack.cli import main
+
+    with socket.socket() as s:  # a port free now, where nothing will listen
+        s.bind(("127.0.0.1", 0))
+        address = f"tcp://127.0.0.1:{s.getsockname()[1]}"
+    for seq in bench.iterdir():  # each sequence's ground truth as its results
+        (tmp_path / f"{seq.name}.txt").write_text((seq / "gt" / "gt.txt").read_text())
+    assert main(["eval", "--gt-dir", str(bench), "--pred-dir", str(tmp_path),
+                 "--scheduler", address]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and len(err.splitlines()) == 1
+    assert err.startswith(f"vistrack eval: error: --scheduler {address}: no Dask scheduler "
+                          "answers there (")
+
+
 def _em_problem(B=30, T=80, missing=True):
     from vistrack.simulate import simulate_lgssm
 
