@@ -115,7 +115,7 @@ def test_many_inputs_on_a_dask_cluster_give_what_each_gives_alone(bench, tmp_pat
 
 
 @pytest.mark.slow
-def test_a_scheduler_that_does_not_answer_is_one_line(bench, tmp_path, capsys):
+def test_a_scheduler_that_does_not_answer_is_one_line(bench, tmp_path, capsys):  # noqa: F811
     """--scheduler at an address where nothing listens: Dask's own 55-line traceback came
     after 30 s with the status of a bug (1); now one line naming the address, status 2."""
     pytest.importorskip("distributed")
