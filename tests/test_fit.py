@@ -286,3 +286,27 @@ def test_a_file_or_a_folder_of_sequences_given_to_fit(tmp_path, capsys):
     assert main(["fit", str(tmp_path / "bench"), "--gt", "--out", str(out), "--quiet"]) == 0
     assert "learned from the ground truth of 2 of 2 sequences" in capsys.readouterr().out
     assert read_config(out).motion == fit_sequences(seqs, gt=True).config.motion
+
+
+def test_fit_gt_checks_every_sequence_first_and_leaves_a_folders_test_sequences_out(
+        tmp_path, capsys):
+    """A sequence without ground truth failed with --gt after the others were learnt from
+    (`vistrack fit ../shared/data/mot15 --gt`: TUD-Campus, the ninth); named alone it is
+    refused before anything is learnt, with how many lack one, and in a folder of sequences
+    it is left out, said in a warning, as `vistrack eval --gt-dir` leaves it out."""
+    rng = np.random.default_rng(5)
+    root = tmp_path / "set"
+    seqs = [_sequence(root / f"SIM-{k}", rng) for k in range(3)]
+    (seqs[1] / "gt" / "gt.txt").unlink()
+    with pytest.raises(FileNotFoundError) as e:
+        fit_sequences(seqs, gt=True, progress=None)
+    assert str(e.value) == (f"{seqs[1] / 'gt' / 'gt.txt'} does not exist (--gt learns from "
+                            "each sequence's ground truth): 1 of 3 sequences lacks gt/gt.txt")
+    out = tmp_path / "fit.toml"
+    assert main(["fit", str(root), "--gt", "--out", str(out), "--quiet", "--no-held-out"]) == 0
+    captured = capsys.readouterr()
+    assert "vistrack fit: warning: 1 of the 3 sequences has no gt/gt.txt and is left out: " \
+        "SIM-1" in captured.err
+    assert "learned from the ground truth of 2 of 2 sequences" in captured.out
+    assert main(["fit", *map(str, seqs), "--gt", "--out", str(out), "--force"]) == 2
+    assert "1 of 3 sequences lacks gt/gt.txt" in capsys.readouterr().err

@@ -767,6 +767,19 @@ def _fit(args: argparse.Namespace) -> int:
     cfg = read_config(args.config) if args.config is not None else TrackConfig.preset()
     progress = sys.stderr if not args.quiet else None
     inputs = expand_inputs(args.inputs)  # a folder of sequences: its sequences, as track's
+    if args.gt:
+        # a folder's sequences without ground truth (a set's test sequences) are left out,
+        # as `vistrack eval --gt-dir` leaves them; a sequence named alone must have one
+        named = {Path(i).resolve() for i in args.inputs}
+        left = [s for s in inputs if Path(s).resolve() not in named
+                and not (Path(s) / "gt" / "gt.txt").exists()]
+        if left and len(left) < len(inputs):
+            one = len(left) == 1
+            warnings.warn(f"{len(left)} of the {len(inputs)} sequences {'has' if one else 'have'}"
+                          f" no gt/gt.txt and {'is' if one else 'are'} left out: "
+                          f"{', '.join(Path(s).name for s in left)}",
+                          UserWarning, stacklevel=2)
+            inputs = [s for s in inputs if s not in left]
     run = fit_sequences(inputs, gt=args.gt, config=cfg, held_out=not args.no_held_out,
                         keep_learned=args.keep_learned, progress=progress)
     rows = run.fit.per_sequence

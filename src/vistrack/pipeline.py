@@ -1592,6 +1592,18 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
                 (p / "seqinfo.ini").exists() for p in seq.iterdir() if p.is_dir()):
             raise FileNotFoundError(f"{seq / 'seqinfo.ini'} does not exist: {seq} is a "
                                     "folder of sequences; give the sequence folders in it")
+    # every file each sequence needs, before anything is learnt: a folder whose last
+    # sequence had no ground truth failed after learning from the others
+    for need, why in ((Path("det") / "det.txt", ""),
+                      *(((Path("gt") / "gt.txt",
+                          " (--gt learns from each sequence's ground truth)"),) if gt else ())):
+        missing = [seq / need for seq in seqs if not (seq / need).exists()]
+        if missing:
+            more = f" and {len(missing) - 1} more" if len(missing) > 1 else ""
+            raise FileNotFoundError(f"{missing[0]}{more} do{'es' if not more else ''} not "
+                                    f"exist{why}: {len(missing)} of {len(seqs)} sequences "
+                                    f"lack{'s' if len(missing) == 1 else ''} "
+                                    f"{need.as_posix()}")
     with tempfile.TemporaryDirectory(prefix="vistrack-fit-") as tmp:
         for seq in seqs:
             info = read_seqinfo(seq)
