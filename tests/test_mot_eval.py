@@ -654,3 +654,19 @@ def test_what_is_not_a_readable_table_is_named(tmp_path):
             with pytest.raises(error, match="^" + re.escape(message) + "$"):
                 score(gt, pred)
     assert evaluate_mot(good, good).MOTA == 1.0
+
+
+def test_a_missing_results_file_is_named_missing_with_columns_given(tmp_path):
+    """With columns given (a CSV's names), a results file that is not there was blamed on
+    them ("columns name a CSV or Parquet file's columns; ... is read as a MOTChallenge text
+    file"); it is named as missing, as without columns."""
+    from vistrack.evaluation import evaluate_files
+
+    gt = tmp_path / "gt.txt"
+    gt.write_text("1,1,0,0,10,10,1,1,1\n")
+    pairs = [("A", gt, tmp_path / "A.txt", None)]
+    res = evaluate_files(pairs, keep_going=True, columns={"frame": "t"})
+    assert res.errors == {"A": f"FileNotFoundError: {tmp_path / 'A.txt'} does not exist"}
+    (tmp_path / "A.txt").write_text("1,1,0,0,10,10,1,-1,-1,-1\n")
+    res = evaluate_files(pairs, keep_going=True, columns={"frame": "t"})
+    assert res.errors["A"].startswith("ValueError: columns name a CSV or Parquet file's")

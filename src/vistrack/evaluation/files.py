@@ -70,6 +70,8 @@ def _read_results(path: Path, columns: dict[str, str] | None = None) -> MOTTable
     --out`` writes (``MOTTable.to_pandas``'s columns, or those ``columns`` names)."""
     suffix = path.suffix.lower()
     if suffix not in (".parquet", ".csv"):
+        if columns and not path.exists():  # what is wrong is that it is missing
+            raise FileNotFoundError(f"{path} does not exist")
         if columns:
             raise ValueError(f"columns name a CSV or Parquet file's columns; {path} is read as "
                              "a MOTChallenge text file")
