@@ -393,3 +393,14 @@ def test_parquet_without_pyarrow_is_a_clear_error(tmp_path, monkeypatch, capsys)
     err = capsys.readouterr().err
     assert "pyarrow is missing" in err and "vistrack[parquet]" in err
     assert not (tmp_path / "t.parquet").exists()
+
+
+def test_columns_given_as_the_command_lines_text_are_named():
+    """`columns="frame=t"` (the command line's --columns form) failed with "dictionary
+    update sequence element #0 has length 1; 2 is required", naming nothing."""
+    from vistrack.io import MOTTable
+
+    with pytest.raises(TypeError, match=r"^columns must be a dict \{ours: theirs\}, such as "
+                       r"\{'frame': 't'\}; got the text 'frame=t' \(the command line's "
+                       r"--columns OURS=THEIRS,\.\.\. form\)$"):
+        MOTTable.from_pandas({"t": [1]}, "frame=t")

@@ -381,6 +381,11 @@ class MOTTable:
         >>> MOTTable.from_pandas(corners).boxes.tolist()
         [[10.0, 20.0, 10.0, 20.0]]
         """
+        if isinstance(columns, str):  # (dict() of it: "dictionary update sequence element
+            # #0 has length 1; 2 is required")
+            raise TypeError(f"columns must be a dict {{ours: theirs}}, such as {{'frame': "
+                            f"'t'}}; got the text {columns!r} (the command line's --columns "
+                            "OURS=THEIRS,... form)")
         names = dict(columns or {})
         have = set(df.keys())
         where = f" in {path}" if path else ""
