@@ -404,3 +404,17 @@ def test_columns_given_as_the_command_lines_text_are_named():
                        r"\{'frame': 't'\}; got the text 'frame=t' \(the command line's "
                        r"--columns OURS=THEIRS,\.\.\. form\)$"):
         MOTTable.from_pandas({"t": [1]}, "frame=t")
+
+
+def test_supervision_boxes_of_another_shape_are_named():
+    """An xyxy of shape (2, 8) became 4 boxes without a word, and one of shape (3,) failed
+    with numpy's "cannot reshape array of size 3 into shape (4)"."""
+    from types import SimpleNamespace
+
+    from vistrack.types import Detections
+
+    for shape in ((2, 8), (3,)):
+        with pytest.raises(ValueError, match=rf"^xyxy must have shape \(N, 4\); got "
+                                             rf"{re.escape(str(shape))}$"):
+            Detections.from_supervision(SimpleNamespace(xyxy=np.zeros(shape)))
+    assert len(Detections.from_supervision(SimpleNamespace(xyxy=np.zeros((0,))))) == 0

@@ -1692,3 +1692,21 @@ def test_a_text_file_is_not_read_as_a_video(tmp_path):
                        text=True)
     assert r.returncode == 2 and not (tmp_path / "b.txt").exists()
     assert r.stderr.strip().splitlines()[-1] == f"vistrack track-one: error: {e.value}"
+
+
+def test_a_stop_before_the_start_and_a_negative_area_are_named(tmp_path):
+    """`track_video(stop=-5)` said "no frames to track", and `min_area=-5` was taken (the
+    command line refuses --min-area -1)."""
+    from vistrack.frontends import BlobDetector
+
+    video = _folder(tmp_path, n=3, ext=".png")[0].parent
+    for stop in (-5, 0):
+        with pytest.raises(ValueError, match=rf"^stop must be >= start \(1\): the last frame "
+                                             rf"read; got {stop}$"):
+            VideoReader(video, stop=stop)
+    with pytest.raises(ValueError, match=r"^stop must be >= start \(3\)"):
+        VideoReader(video, start=3, stop=2)
+    assert len(list(VideoReader(video, start=2, stop=2))) == 1
+    for bad in (-5, np.inf, np.nan):
+        with pytest.raises(ValueError, match=r"^min_area must be >= 0 and finite; got "):
+            BlobDetector(min_area=bad)

@@ -993,3 +993,17 @@ def test_settings_and_arguments_out_of_their_domain_are_named():
                     (dict(min_score=float("nan")), "min_score must be a finite number")):
         with pytest.raises(ValueError, match=msg):
             smooth(tr, **kw)
+
+
+def test_box_tracker_names_a_setting_it_has_not_and_a_rate_that_is_no_number():
+    """`BoxTracker(hihg=0.5)` gave the dataclass's "__init__() got an unexpected keyword
+    argument"; `frame_rate="30"`, "'>' not supported between instances of 'str' and 'int'"."""
+    from vistrack.tracking import BoxTracker
+
+    with pytest.raises(TypeError, match=r"^hihg is no setting of BoxTrackerConfig \(did you "
+                                        r"mean 'high'\?\)$"):
+        BoxTracker(hihg=0.5)
+    for bad in ("30", True, None):
+        with pytest.raises(TypeError, match=r"^frame_rate must be a number; got "):
+            BoxTracker(frame_rate=bad)
+    assert BoxTracker(frame_rate=np.float32(25)).frame_rate == 25.0

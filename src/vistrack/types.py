@@ -290,7 +290,11 @@ class Detections:
         >>> d.boxes.tolist(), d.scores.tolist(), d.classes.tolist()
         ([[10.0, 20.0, 40.0, 60.0]], [0.8], [2])
         """
-        xyxy = np.asarray(detections.xyxy, dtype=np.float64).reshape(-1, 4)
+        xyxy = np.asarray(detections.xyxy, dtype=np.float64)
+        if xyxy.size == 0:
+            xyxy = xyxy.reshape(0, 4)
+        elif xyxy.ndim != 2 or xyxy.shape[1] != 4:  # (a (2, 8) was read as 4 boxes)
+            raise ValueError(f"xyxy must have shape (N, 4); got {xyxy.shape}")
         return cls(boxes=xyxy, scores=getattr(detections, "confidence", None),
                    classes=getattr(detections, "class_id", None))
 

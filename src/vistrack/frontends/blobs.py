@@ -343,6 +343,8 @@ class BlobDetector:
             raise ValueError(f"check_view must be a whole number >= 0; got {check_view}")
         if not max_shift > 0:
             raise ValueError(f"max_shift must be > 0; got {max_shift}")
+        if not 0 <= min_area < np.inf:  # (-5 was taken; the command line refuses it)
+            raise ValueError(f"min_area must be >= 0 and finite; got {min_area}")
         self.model = make_background(background)
         self.min_area, self.open_size, self.close_size = float(min_area), open_size, close_size
         self.check_view, self.max_shift = int(check_view), float(max_shift)

@@ -302,6 +302,9 @@ class VideoReader:
         if int(start) < 1:
             raise ValueError(f"start must be >= 1 (frames count from 1); got {start}")
         self.start, self.stop = int(start), None if stop is None else int(stop)
+        if self.stop is not None and self.stop < self.start:  # ("no frames to track")
+            raise ValueError(f"stop must be >= start ({self.start}): the last frame read; "
+                             f"got {stop}")
         if int(prefetch) < 0:
             raise ValueError(f"prefetch must be >= 0; got {prefetch}")
         self.prefetch = int(prefetch)

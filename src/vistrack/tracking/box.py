@@ -555,6 +555,14 @@ class BoxTracker:
             if config not in TRACKERS:
                 raise ValueError(f"tracker must be one of {sorted(TRACKERS)}; got {config!r}")
             config = TRACKERS[config]
+        unknown = sorted(set(overrides) - {f.name for f in fields(BoxTrackerConfig)})
+        if unknown:  # (the dataclass said "__init__() got an unexpected keyword argument")
+            import difflib
+
+            near = difflib.get_close_matches(unknown[0], [f.name for f in
+                                                          fields(BoxTrackerConfig)], 1)
+            raise TypeError(f"{unknown[0]} is no setting of BoxTrackerConfig"
+                            + (f" (did you mean {near[0]!r}?)" if near else ""))
         self.config = replace(config, **overrides) if overrides else config
         if calibration is not None and not isinstance(calibration, ScoreCalibration):
             raise TypeError(f"calibration must be a ScoreCalibration; got "
@@ -562,6 +570,10 @@ class BoxTracker:
         if calibration is not None and self.config.scores != "calibrated":
             raise ValueError("calibration goes with scores='calibrated'")
         self.calibration = calibration
+        if isinstance(frame_rate, (bool, str)) or not isinstance(frame_rate, (int, float,
+                                                                            np.number)):
+            raise TypeError(f"frame_rate must be a number; got {type(frame_rate).__name__} "
+                            f"{frame_rate!r}")
         if not frame_rate > 0:
             raise ValueError(f"frame_rate must be > 0; got {frame_rate}")
         # the motion's noise at this tracker's frame rate (models/box.py)
