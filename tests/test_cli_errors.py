@@ -777,3 +777,23 @@ def test_jobs_and_scheduler_go_with_several_inputs(tmp_path, capsys, flag, value
     one_line(capsys, "track", f"{flag} goes with several inputs (or a folder of sequences); "
              f"{dets} is one")
     assert not (tmp_path / "res.txt").exists()
+
+
+def test_eval_names_a_folder_given_for_a_file_and_the_reverse(tmp_path, capsys):
+    """`--pred DIR` said "Is a directory", `--pred-dir FILE` looked for FILE/SEQ.txt, and
+    `--jobs` with one pair was taken without a word where `--keep-going` was refused."""
+    seq = tmp_path / "SEQ"
+    (seq / "gt").mkdir(parents=True)
+    (seq / "gt" / "gt.txt").write_text("1,1,0,0,10,10,1,1,1\n")
+    res = tmp_path / "res"
+    res.mkdir()
+    (res / "SEQ.txt").write_text("1,1,0,0,10,10,1,-1,-1,-1\n")
+    assert main(["eval", "--gt", str(seq), "--pred", str(res)]) == 2
+    one_line(capsys, "eval", f"--pred {res} is a folder, not a results file (a folder of them: "
+             f"--gt-dir SETDIR --pred-dir {res})")
+    assert main(["eval", "--gt-dir", str(tmp_path), "--pred-dir", str(res / "SEQ.txt")]) == 2
+    one_line(capsys, "eval", f"--pred-dir {res / 'SEQ.txt'} is a file, not a folder (one file: "
+             "--pred)")
+    assert main(["eval", "--gt", str(seq), "--pred", str(res / "SEQ.txt"), "--jobs", "2"]) == 2
+    one_line(capsys, "eval", "--jobs goes with --gt-dir")
+    assert main(["eval", "--gt-dir", str(tmp_path), "--pred-dir", str(res), "--jobs", "1"]) == 0

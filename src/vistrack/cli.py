@@ -876,6 +876,11 @@ def _eval(args: argparse.Namespace) -> int:
     if args.gt_dir or args.pred_dir:
         if not (args.gt_dir and args.pred_dir):
             return _fail("eval", "--gt-dir and --pred-dir go together")
+        for flag in ("gt_dir", "pred_dir"):  # (a file's name became a folder of results)
+            if Path(getattr(args, flag)).is_file():
+                single = "--gt" if flag == "gt_dir" else "--pred"
+                return _fail("eval", f"--{flag.replace('_', '-')} {getattr(args, flag)} is a "
+                             f"file, not a folder (one file: {single})")
         for seq in sorted(p for p in Path(args.gt_dir).iterdir() if (p / "gt" / "gt.txt").exists()):
             # SEQ.txt, or the .parquet or .csv file vistrack track --out writes
             found = [Path(args.pred_dir) / f"{seq.name}{ext}"
@@ -892,9 +897,12 @@ def _eval(args: argparse.Namespace) -> int:
         if not pairs:
             return _fail("eval", f"no SEQ/gt/gt.txt under {args.gt_dir}")
     elif args.gt and args.pred:
-        for flag in ("keep_going", "scheduler"):
-            if getattr(args, flag):
+        for flag in ("keep_going", "scheduler", "jobs"):
+            if getattr(args, flag) is not None and getattr(args, flag) is not False:
                 return _fail("eval", f"--{flag.replace('_', '-')} goes with --gt-dir")
+        if Path(args.pred).is_dir():  # ("Is a directory")
+            return _fail("eval", f"--pred {args.pred} is a folder, not a results file (a "
+                         "folder of them: --gt-dir SETDIR --pred-dir " f"{args.pred})")
         from .io.motchallenge import _ground_truth_file
 
         try:  # a sequence folder's gt/gt.txt, as vistrack track takes the folder
