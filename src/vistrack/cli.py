@@ -148,8 +148,10 @@ def _demo(args: argparse.Namespace) -> int:
 
 # the error for the offline mode, its settings or --detections given with --out-dir, from the
 # options or from --config's file
-_OFFLINE_NEEDS_OUT = ("--offline, its settings and --detections go with --out (use "
-                      "--frontend detections:FILE with --out-dir)")
+_OFFLINE_NEEDS_OUT = ("--offline, its settings and --detections go with --out, a "
+                      "sequence's detections into a results file (with --out-dir a video is "
+                      "tracked online, its detections read from a file with --frontend "
+                      "detections:FILE)")
 
 # command-line options that set the box tracker's configuration: (option, table, key, type,
 # metavar, help, the default as the help says it); vistrack.config is not imported to build the
