@@ -418,3 +418,21 @@ def test_supervision_boxes_of_another_shape_are_named():
                                              rf"{re.escape(str(shape))}$"):
             Detections.from_supervision(SimpleNamespace(xyxy=np.zeros(shape)))
     assert len(Detections.from_supervision(SimpleNamespace(xyxy=np.zeros((0,))))) == 0
+
+
+def test_detections_of_words_name_the_column():
+    """A class's name, a word for a score or a box: numpy's "could not convert string to
+    float" named no column."""
+    from vistrack.types import Detections
+
+    box = np.zeros((1, 4))
+    for kw, message in (({"classes": ["person"]}, "classes must be numbers; classes[0] "
+                         "(flattened) is 'person'; map class names to numbers first"),
+                        ({"scores": ["high"]}, "scores must be numbers; scores[0] (flattened) "
+                         "is 'high'")):
+        with pytest.raises(ValueError, match="^" + re.escape(message) + "$"):
+            Detections(boxes=box, **kw)
+    with pytest.raises(ValueError, match=r"^boxes must be numbers; boxes\[1\] \(flattened\) "
+                                         r"is 'a'$"):
+        Detections(boxes=[[0, "a", 1, 1]])
+    assert Detections(boxes=box, scores=["0.5"], classes=["2"]).classes.tolist() == [2]

@@ -489,6 +489,11 @@ def test_online_filter_errors_leave_the_state_unchanged():
     np.testing.assert_array_equal(f.cov, before.cov)
     with pytest.raises(ValueError, match=r"x0 must have shape \(2,\)"):
         kf.online([0.0, 1.0, 2.0], np.eye(3))
+    # a dt that is no number: named ("could not convert string to float: 'a'")
+    for bad in ("a", [1, 2], object()):
+        with pytest.raises(ValueError, match=r"^dt must be a number; got "):
+            f.predict(dt=bad)
+    np.testing.assert_array_equal(f.mean, before.mean)
     # x0 of the wrong length, P0 of the model's: x0 is named (P0 was), as filter() names it
     with pytest.raises(ValueError, match=r"^x0 must have shape \(2,\) or \(B=1, 2\) to match "
                                          r"P0 and F; got \(3,\)$"):

@@ -1278,3 +1278,13 @@ def test_a_strided_detections_file_tracks_as_the_sequence_of_its_frames(tmp_path
             every = evaluate_mot(gt, got, n).HOTA
             alone = evaluate_mot(gt, got[at], n).HOTA
             assert every > alone + 0.05, (name, offline, every, alone)
+
+
+def test_progress_that_is_no_stream_is_named(tmp_path):
+    """`progress=True` failed with "'bool' object has no attribute 'write'" once the run was
+    under way; it is named before anything is written."""
+    from vistrack.tracking import BoxTracker
+
+    with pytest.raises(TypeError, match=r"^progress must be a text stream \(sys.stderr, say\) "
+                                        r"or None; got bool$"):
+        run([Frame(1, 0.0)], None, BoxTracker(), progress=True)

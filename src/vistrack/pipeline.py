@@ -473,6 +473,10 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
     if not callable(getattr(tracker, "step", None)):
         raise TypeError(f"tracker must have step(frame, detections) -> Tracks; got "
                         f"{type(tracker).__name__}")
+    if progress is not None and not callable(getattr(progress, "write", None)):
+        # (progress=True: "'bool' object has no attribute 'write'", after the first frames)
+        raise TypeError(f"progress must be a text stream (sys.stderr, say) or None; got "
+                        f"{type(progress).__name__}")
     for k, sink in enumerate(sinks):
         if not isinstance(sink, Sink):
             raise TypeError(f"sinks[{k}] must have write(frame, tracks) and close(); got "

@@ -142,13 +142,30 @@ def xyxy_to_xywh(boxes: np.ndarray) -> np.ndarray:
     return np.c_[b[:, :2], b[:, 2:] - b[:, :2]]
 
 
+def _floats(values: ArrayLike, name: str) -> np.ndarray:
+    """``values`` as float64, or a ValueError naming ``name`` where one is not a number (a
+    class's name, a word): numpy's "could not convert string to float" named nothing."""
+    try:
+        return np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        flat = np.asarray(values, dtype=object).ravel()
+        for k, v in enumerate(flat):
+            try:
+                float(v)
+            except (TypeError, ValueError):
+                raise ValueError(f"{name} must be numbers; {name}[{k}] (flattened) is {v!r}"
+                                 + ("; map class names to numbers first" if name == "classes"
+                                    else "")) from None
+        raise
+
+
 def _whole_numbers(values: ArrayLike, name: str) -> np.ndarray:
     """``values`` as int64, refusing a value that is not a whole number (a class of 1.7 was
     class 1) or not finite, naming it."""
     a = np.asarray(values)
     if a.dtype.kind in "iub":
         return a.astype(np.int64, copy=False)
-    x = np.asarray(a, dtype=np.float64)
+    x = _floats(a, name)
     bad = ~np.isfinite(x) | (x != np.round(x)) | (np.abs(x) > 2.0 ** 53)
     if bad.any():
         k = int(np.flatnonzero(bad.ravel())[0])
@@ -159,7 +176,7 @@ def _whole_numbers(values: ArrayLike, name: str) -> np.ndarray:
 def _box_rows(values: ArrayLike, name: str, *, one: bool = False) -> np.ndarray:
     """``values`` as finite rows of four floats ``(N, 4)``: ``[]`` or ``(0, k)`` as none, and
     with ``one`` a lone ``(4,)`` as one box; each error names ``name`` (and the row)."""
-    b = np.asarray(values, dtype=np.float64)
+    b = _floats(values, name)
     if (one and b.shape == (4,)) or (b.size == 0 and (b.ndim < 2 or b.shape[0] == 0)):
         b = b.reshape(-1, 4)
     if b.ndim != 2 or b.shape[1] != 4:
@@ -238,7 +255,7 @@ class Detections:
             elif name == "classes":
                 v = _whole_numbers(v, "classes")
             else:
-                v = np.asarray(v, dtype=dtype)
+                v = _floats(v, name)
             if v.shape != (n,):
                 raise ValueError(f"{name} must have shape ({n},); got {v.shape}")
             object.__setattr__(self, name, v)

@@ -664,7 +664,10 @@ class OnlineFilter:
 
     def _run(self, y: ArrayLike | None, predict: bool, update: bool, dt: float | None) -> float:
         if predict:
-            d = self._dt0 if dt is None else float(dt)
+            try:
+                d = self._dt0 if dt is None else float(dt)
+            except (TypeError, ValueError):  # ("could not convert string to float")
+                raise ValueError(f"dt must be a number; got {dt!r}") from None
             if d != self._dt:
                 self._set_dt(d)
         if update:
