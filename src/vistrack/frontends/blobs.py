@@ -433,14 +433,14 @@ class BlobDetector:
         # either side of them follow one into the other, the frames between placed on the
         # straight line: else the frames before them had no place, and a run that tracks
         # them again found its first frame's place across all the frames (wrongly)
-        lost = np.isnan(d[:, 0])
+        unfollowed = np.isnan(d[:, 0])
         i = 0
         while i < len(d):
-            if not lost[i]:
+            if not unfollowed[i]:
                 i += 1
                 continue
             j = i
-            while j < len(d) and lost[j]:
+            while j < len(d) and unfollowed[j]:
                 j += 1
             if j > i + 1 and j < len(d):  # frames i and j, with the frames between
                 bridge = view_shift(frames[i], frames[j], refine=True)
