@@ -1611,13 +1611,8 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
     with tempfile.TemporaryDirectory(prefix="vistrack-fit-") as tmp:
         for seq in seqs:
             info = read_seqinfo(seq)
-            det_path = seq / "det" / "det.txt"
-            if not det_path.exists():
-                raise FileNotFoundError(f"{det_path} does not exist")
+            det_path = seq / "det" / "det.txt"  # (checked above, with gt/gt.txt)
             if gt:
-                if not (seq / "gt" / "gt.txt").exists():
-                    raise FileNotFoundError(f"{seq / 'gt' / 'gt.txt'} does not exist (--gt "
-                                            "learns from each sequence's ground truth)")
                 ref = _gt_reference(seq)
             else:
                 first = Path(tmp) / f"{len(series)}.txt"
