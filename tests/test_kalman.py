@@ -450,6 +450,22 @@ def test_kernel_argument_errors():
         kalman_filter_1d(np.ones(4), d=1, m=1, sigma_d=1, sigma_m=np.ones(3), x0=0, sigma0=1)
 
 
+@pytest.mark.parametrize("bad,message", [
+    ({"ys": [1.0, np.inf, 2.0]}, "ys[1] = inf"),
+    ({"x0": np.nan}, "x0 must be a finite number; got nan"),
+    ({"sigma0": np.inf}, "sigma0 must be a finite number >= 0; got inf"),
+    ({"sigma0": -1.0}, "sigma0 must be a finite number >= 0; got -1.0"),
+    ({"sigma_m": -0.5}, "sigma_m must be standard deviations >= 0; got -0.5"),
+])
+def test_scalar_filter_refuses_what_gave_infinite_or_nan_means(bad, message):
+    """An infinite measurement or a NaN prior gave inf or NaN means without a word, where
+    the matrix filter refuses them by name."""
+    args = {"ys": [1.0, 2.0, 3.0], "d": 1.0, "m": 1.0, "sigma_d": 0.5, "sigma_m": 1.0,
+            "x0": 0.0, "sigma0": 1.0} | bad
+    with pytest.raises(ValueError, match=re.escape(message)):
+        kalman_filter_1d(args.pop("ys"), **args)
+
+
 def test_online_filter_equals_the_sequence_filter(rng):
     cv, pos = vt.ConstantVelocity(dim=2, q=0.3), vt.Position(dim=2, r=0.7)
     kf = vt.KalmanFilter(cv, pos)

@@ -653,7 +653,8 @@ def kalman_filter_1d(
     Raises
     ------
     ValueError
-        If an array parameter does not have shape ``(T,)`` or is not finite.
+        If an array parameter does not have shape ``(T,)``, a parameter is not finite, ``ys``
+        holds an infinity (NaN is a missing step), or a standard deviation is negative.
 
     Examples
     --------
@@ -663,6 +664,7 @@ def kalman_filter_1d(
     (array([0.5 , 0.5 , 1.25]), array([0.707, 0.866, 0.707]))
     """
     y = as_float_array(ys, "ys", ndim=(1,))
+    check_not_infinite(y, "ys")
     T = y.shape[0]
     par = {}
     for name, v in (("d", d), ("m", m), ("sigma_d", sigma_d), ("sigma_m", sigma_m)):
@@ -670,7 +672,14 @@ def kalman_filter_1d(
         if a.ndim == 1 and a.shape[0] != T:
             raise ValueError(f"{name} must be a scalar or have shape (T={T},); got {a.shape}")
         check_finite(a, name)
+        if name.startswith("sigma") and (a < 0).any():
+            raise ValueError(f"{name} must be standard deviations >= 0; got {a.min()}")
         par[name] = np.broadcast_to(a, (T,))
+    for name, v in (("x0", x0), ("sigma0", sigma0)):
+        a = float(as_float_array(v, name, ndim=(0,)))
+        if not np.isfinite(a) or (name == "sigma0" and a < 0):
+            raise ValueError(f"{name} must be a finite number{' >= 0' * (name == 'sigma0')}; "
+                             f"got {a}")
     out = {k: np.empty(T) for k in ("pred_mean", "pred_std", "mean", "std")}
     xp, sp = float(x0), float(sigma0)
     for i in range(T):
