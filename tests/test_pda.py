@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -238,3 +239,69 @@ def test_jipda_of_certain_tracks_is_jpda_and_clutter_lowers_existence_on_average
                          clutter_density=lam, p_gate=pg)[2][0]
         odds.append(e / (1 - e))
     assert abs(np.mean(odds) - 1.0) < 0.05 and np.median(odds) < 0.2
+
+
+def test_a_nan_detection_outside_every_gate_changes_nothing():
+    """A NaN detection is outside the gates chi2_gate draws, so its weight is 0; it still
+    made every track's mean and covariance NaN (0 × NaN in the sums)."""
+    from vistrack.association import chi2_gate, mahalanobis
+
+    rng = np.random.default_rng(3)
+    g, H, R = random_tracks(rng, 3)
+    Z = np.vstack([rng.normal(size=(2, 2)), [np.nan, np.nan]])
+    zp, S = g.mean @ H.T, H @ g.cov @ H.T + R
+    gate = chi2_gate(mahalanobis(zp, S, Z), 2)
+    assert not gate[:, 2].any()
+    for weigh in (pda_weights, jpda_weights):
+        beta, beta0 = weigh(likelihoods(zp, S, Z), gate, clutter_density=0.01)
+        assert (beta[:, 2] == 0).all()
+        post = pda_update(g, Z, H, R, beta, beta0)
+        kept = pda_update(g, Z[:2], H, R, beta[:, :2], beta0)  # the oracle: the column dropped
+        np.testing.assert_allclose(post.mean, kept.mean, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(post.cov, kept.cov, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("weigh", ["pda", "jpda", "ipda", "jipda"])
+def test_the_four_weightings_name_a_nan_likelihood_in_the_gate_and_a_gate_of_another_shape(weigh):
+    """A NaN likelihood in the gate gave three different answers (NaN weights, the whole
+    gate dropped, the pair dropped); a gate of another shape, numpy's broadcast error."""
+    from vistrack import association
+
+    fn = getattr(association, f"{weigh}_weights")
+    extra = ([0.5],) if weigh.startswith(("i", "ji")) else ()
+    with pytest.raises(ValueError, match=r"lik\[0, 0\] = nan"):
+        fn(np.array([[np.nan, 0.1]]), np.ones((1, 2), bool), *extra)
+    with pytest.raises(ValueError, match=r"gate must have the shape of lik, \(1, 3\); got \(1, 2\)"):
+        fn(np.ones((1, 3)), np.ones((1, 2), bool), *extra)
+    # outside the gate a NaN likelihood is not looked at: the same as a likelihood of 0
+    a = fn(np.array([[np.nan, 0.1]]), np.array([[False, True]]), *extra)
+    b = fn(np.array([[0.0, 0.1]]), np.array([[False, True]]), *extra)
+    for x, y in zip(a, b):
+        np.testing.assert_array_equal(x, y)
+
+
+@pytest.mark.parametrize("change,message", [
+    ({"g": Gaussian(np.zeros(2), np.eye(2))}, "g must be a batch of tracks, batch shape (T,)"),
+    ({"Z": np.zeros((2, 3))}, "Z must have shape (D, 2); got (2, 3)"),
+    ({"beta": np.full((2, 2), 0.5)}, "beta must have shape (1, 2), tracks by detections"),
+    ({"beta0": np.zeros(2)}, "beta0 must have shape (1,); got (2,)"),
+    ({"H": np.eye(3)}, "H must have shape (m, 2); got (3, 3)"),
+    ({"R": np.eye(3)}, "R must have shape (2, 2), as H has 2 rows; got (3, 3)"),
+    ({"Z": np.array([[0.5, 0.0], [np.nan, 0.0]])},
+     "Z[1] is not finite but has weight beta[0, 1] = 0.4"),
+])
+def test_pda_update_names_what_does_not_fit(change, message):
+    args = {"g": Gaussian(np.zeros((1, 2)), np.eye(2)[None]), "Z": np.zeros((2, 2)),
+            "H": np.eye(2), "R": np.eye(2), "beta": np.array([[0.5, 0.4]]),
+            "beta0": np.array([0.1])} | change
+    with pytest.raises(ValueError, match=re.escape(message)):
+        pda_update(**args)
+
+
+def test_likelihoods_names_s_and_z_of_the_wrong_shape_as_mahalanobis_does():
+    zp = np.zeros((2, 2))
+    with pytest.raises(ValueError, match=re.escape("S must have shape (2, 2, 2); got (2, 2)")):
+        likelihoods(zp, np.eye(2), np.zeros((3, 2)))
+    with pytest.raises(ValueError, match=re.escape("Z must have shape (D, 2); got (3, 3)")):
+        likelihoods(zp, np.stack([np.eye(2)] * 2), np.zeros((3, 3)))
+    assert likelihoods(zp, np.stack([np.eye(2)] * 2), []).shape == (2, 0)

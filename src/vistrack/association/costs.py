@@ -188,8 +188,8 @@ def euclidean(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     return np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(-1))
 
 
-def _innovations(z_pred: ArrayLike, S: ArrayLike,
-                 z: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _innovations(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, z_name: str = "z"
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     # predicted measurements (T, m), innovation covariances (T, m, m), detections (D, m)
     zp = np.atleast_2d(np.asarray(z_pred, dtype=float))
     S = np.asarray(S, dtype=float)
@@ -198,7 +198,7 @@ def _innovations(z_pred: ArrayLike, S: ArrayLike,
     if S.shape != (T, m, m):
         raise ValueError(f"S must have shape ({T}, {m}, {m}); got {S.shape}")
     if z.shape[1:] != (m,) and z.size:
-        raise ValueError(f"z must have shape (D, {m}); got {z.shape}")
+        raise ValueError(f"{z_name} must have shape (D, {m}); got {z.shape}")
     return zp, S, z
 
 

@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .assign import components
-from .costs import cholesky_innovations
+from .costs import _innovations, cholesky_innovations
 
 __all__ = ["pda_weights", "jpda_weights", "ipda_weights", "jipda_weights", "likelihoods"]
 
@@ -63,23 +63,45 @@ def likelihoods(z_pred: ArrayLike, S: ArrayLike, Z: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If an ``S_t`` is not positive definite (as :func:`~vistrack.association.mahalanobis`).
+        If ``S`` is not ``(T, m, m)`` or ``Z`` not ``(D, m)``, or an ``S_t`` is not positive
+        definite (as :func:`~vistrack.association.mahalanobis`).
 
     Examples
     --------
     >>> likelihoods(np.zeros((1, 2)), np.eye(2)[None], np.array([[0.0, 0.0], [1.0, 0.0]]))
     array([[0.15915494, 0.09653235]])
     """
-    zp, S, Z = (np.asarray(a, dtype=float) for a in (z_pred, S, Z))
+    zp, S, Z = _innovations(z_pred, S, Z, "Z")
     T, m = zp.shape
-    if len(Z) == 0 or T == 0:
-        return np.zeros((T, len(Z)))
+    if Z.size == 0 or T == 0:
+        return np.zeros((T, len(Z) if Z.size else 0))
     L = cholesky_innovations(S)
     r = Z[None, :, :] - zp[:, None, :]
     w = np.linalg.solve(L, np.swapaxes(r, 1, 2))
     d2 = (w * w).sum(1)
     logdet = 2 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(1)
     return np.exp(-0.5 * d2 - 0.5 * logdet[:, None] - 0.5 * m * np.log(2 * np.pi))
+
+
+def _lik_gate(lik: ArrayLike, gate: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """``lik`` as floats and ``gate`` as bools, both ``(T, D)``; a likelihood inside the gate
+    must be a finite number >= 0 (a NaN detection's is NaN: outside every gate that
+    :func:`~vistrack.association.chi2_gate` draws, refused inside one). The pairs of
+    likelihood 0 are taken out of the gate: no event may hold them."""
+    lik = np.asarray(lik, dtype=float)
+    if lik.ndim != 2:
+        raise ValueError(f"lik must have shape (T, D), tracks by detections; got shape "
+                         f"{lik.shape}")
+    gate = np.asarray(gate)
+    if gate.shape != lik.shape:
+        raise ValueError(f"gate must have the shape of lik, {lik.shape}; got {gate.shape}")
+    gate = gate.astype(bool)
+    bad = gate & ~(np.isfinite(lik) & (lik >= 0))
+    if bad.any():
+        t, j = (int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(f"lik must be finite and >= 0 inside the gate; lik[{t}, {j}] = "
+                         f"{lik[t, j]}")
+    return lik, gate & (lik > 0)
 
 
 def _check(p_detect: float, clutter_density: float, p_gate: float) -> None:
@@ -128,7 +150,8 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     Raises
     ------
     ValueError
-        If a probability or the density is out of range.
+        If a probability or the density is out of range, ``gate`` does not have the shape of
+        ``lik``, or a likelihood inside the gate is not a finite number >= 0.
 
     See Also
     --------
@@ -147,7 +170,8 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     ([[0.643, 0.321]], 0.036)
     """
     _check(p_detect, clutter_density, p_gate)
-    G = np.where(gate, p_detect * np.asarray(lik, dtype=float) / clutter_density, 0.0)
+    lik, gate = _lik_gate(lik, gate)
+    G = np.where(gate, p_detect * lik / clutter_density, 0.0)
     B = 1.0 - p_detect * p_gate
     den = B + G.sum(1)
     # P_D P_G = 1 and nothing in the gate: a detection certain to be there is not; the track
@@ -273,7 +297,8 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     Raises
     ------
     ValueError
-        If a probability or the density is out of range.
+        If a probability or the density is out of range, ``gate`` does not have the shape of
+        ``lik``, or a likelihood inside the gate is not a finite number >= 0.
 
     References
     ----------
@@ -293,8 +318,7 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
            [0.   , 0.924]]), array([0.051, 0.076]))
     """
     _check(p_detect, clutter_density, p_gate)
-    lik = np.asarray(lik, dtype=float)
-    gate = np.asarray(gate, dtype=bool) & (lik > 0)
+    lik, gate = _lik_gate(lik, gate)
     G = np.where(gate, p_detect * lik / clutter_density, 0.0)
     B = np.full(len(G), 1.0 - p_detect * p_gate)
     return _joint(G, B, gate, max_exact)
@@ -375,8 +399,9 @@ def ipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     Raises
     ------
     ValueError
-        If a probability or the density is out of range, or ``existence`` does not have one
-        probability in [0, 1] per track.
+        If a probability or the density is out of range, ``gate`` does not have the shape of
+        ``lik``, a likelihood inside the gate is not a finite number >= 0, or ``existence``
+        does not have one probability in [0, 1] per track.
 
     See Also
     --------
@@ -400,8 +425,7 @@ def ipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     0.091
     """
     _check(p_detect, clutter_density, p_gate)
-    lik = np.asarray(lik, dtype=float)
-    gate = np.asarray(gate, dtype=bool)
+    lik, gate = _lik_gate(lik, gate)
     eps = _existence(existence, len(lik))
     G = np.where(gate, p_detect * lik / clutter_density, 0.0)
     B = 1.0 - p_detect * p_gate
@@ -464,8 +488,7 @@ def jipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     ([0.912, 0.654], [0.911, 0.11])
     """
     _check(p_detect, clutter_density, p_gate)
-    lik = np.asarray(lik, dtype=float)
-    gate = np.asarray(gate, dtype=bool) & (lik > 0)
+    lik, gate = _lik_gate(lik, gate)
     eps = _existence(existence, len(lik))
     G = np.where(gate, (eps * p_detect)[:, None] * lik / clutter_density, 0.0)
     beta, beta0 = _joint(G, 1.0 - eps * p_detect * p_gate, gate, max_exact)

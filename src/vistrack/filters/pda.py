@@ -49,6 +49,12 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
     Gaussian
         The corrected tracks, batch shape ``(T,)``.
 
+    Raises
+    ------
+    ValueError
+        If a shape does not agree with the others (each named), or a detection that is not
+        finite has a weight above 0 (one outside every gate, of weight 0, adds nothing).
+
     References
     ----------
     .. [1] Y. Bar-Shalom and E. Tse, "Tracking in a cluttered environment with probabilistic
@@ -68,13 +74,38 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
     (array([[0., 0.]]), array([0.752, 0.505]))
     """
     m, P = g.mean, g.cov
+    if m.ndim != 2:
+        raise ValueError(f"g must be a batch of tracks, batch shape (T,); got batch shape "
+                         f"{m.shape[:-1]}")
+    T, n = m.shape
     H = np.asarray(H, dtype=float)
+    if H.ndim != 2 or H.shape[1] != n:
+        raise ValueError(f"H must have shape (m, {n}); got {H.shape}")
+    k = H.shape[0]
     R = np.asarray(R, dtype=float)
-    Z = np.asarray(Z, dtype=float).reshape(-1, H.shape[0])
+    if R.shape != (k, k):
+        raise ValueError(f"R must have shape ({k}, {k}), as H has {k} rows; got {R.shape}")
+    Z = np.asarray(Z, dtype=float)
+    if Z.size == 0:
+        Z = Z.reshape(0, k)
+    if Z.ndim != 2 or Z.shape[1] != k:
+        raise ValueError(f"Z must have shape (D, {k}); got {Z.shape}")
+    beta, beta0 = np.asarray(beta, dtype=float), np.asarray(beta0, dtype=float)
+    if beta.shape != (T, len(Z)):
+        raise ValueError(f"beta must have shape ({T}, {len(Z)}), tracks by detections; got "
+                         f"{beta.shape}")
+    if beta0.shape != (T,):
+        raise ValueError(f"beta0 must have shape ({T},); got {beta0.shape}")
+    used = beta > 0
+    bad = used & ~np.isfinite(Z).all(1)[None, :]
+    if bad.any():
+        t, j = (int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(f"Z[{j}] is not finite but has weight beta[{t}, {j}] = {beta[t, j]}")
     zp = m @ H.T
     S = H @ P @ H.T + R
     K = np.swapaxes(np.linalg.solve(S, H @ P), 1, 2)  # P H' S^-1
-    nu_j = Z[None, :, :] - zp[:, None, :]  # (T, D, m)
+    # a detection of weight 0 adds nothing (a NaN one, outside the gate, too)
+    nu_j = np.where(used[:, :, None], Z[None, :, :] - zp[:, None, :], 0.0)  # (T, D, m)
     nu = np.einsum("td,tdm->tm", beta, nu_j)
     spread = np.einsum("td,tdm,tdn->tmn", beta, nu_j, nu_j) - nu[:, :, None] * nu[:, None, :]
     mean = m + np.einsum("tnm,tm->tn", K, nu)
