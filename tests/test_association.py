@@ -366,3 +366,19 @@ def test_sparse_assignment_checks_its_arguments():
         gnn_sparse([0, 1], [0], [1.0, 1.0], (2, 2))
     with pytest.raises(ValueError, match="finite"):
         gnn_sparse([0, 1], [0, 1], [1.0, np.nan], (2, 2))
+
+
+@pytest.mark.parametrize("m", [0, -1, 2.7, True, "2", None])
+def test_the_gate_names_degrees_of_freedom_that_are_not_a_whole_number_from_1(m):
+    """0 and -1 gave a NaN threshold, so a gate that kept nothing; 2.7 was taken as 2."""
+    with pytest.raises(ValueError, match="m must be a whole number of degrees of freedom >= 1"):
+        chi2_gate(np.zeros((1, 1)), m)
+
+
+def test_the_gate_threshold_is_scipys_quantile():
+    from scipy.stats import chi2
+
+    from vistrack.association import chi2_threshold
+
+    for m in (1, 2, 3.0, np.int64(4)):
+        assert chi2_threshold(m, 0.95) == pytest.approx(chi2.ppf(0.95, int(m)), rel=1e-12)

@@ -30,7 +30,7 @@ def chi2_threshold(m: int, p: float = 0.99) -> float:
     Raises
     ------
     ValueError
-        If ``p`` is not in (0, 1).
+        If ``p`` is not in (0, 1), or ``m`` is not a whole number >= 1.
 
     Examples
     --------
@@ -39,6 +39,13 @@ def chi2_threshold(m: int, p: float = 0.99) -> float:
     """
     if not 0.0 < p < 1.0:
         raise ValueError(f"p must be in (0, 1); got {p}")
+    try:
+        whole = not isinstance(m, (bool, np.bool_, str)) and float(m).is_integer() and m >= 1
+    except (TypeError, ValueError):
+        whole = False
+    if not whole:
+        raise ValueError(f"m must be a whole number of degrees of freedom >= 1, the size of a "
+                         f"measurement; got {m!r}")
     from scipy.stats import chi2  # here: scipy.stats takes about 0.4 s to import
 
     return float(chi2.ppf(p, int(m)))
