@@ -382,7 +382,8 @@ E = np.eye(2)
 @pytest.mark.parametrize(
     "kwargs,exc,match",
     [
-        (dict(ys=np.ones((5, 3))), ValueError, r"H must have shape \(3, 2\)"),
+        (dict(ys=np.ones((5, 3))), ValueError,
+         r"ys must have 2 values a step, as H \(2, 2\) and R \(2, 2\) measure; got 3"),
         (dict(ys=np.ones(5)), ValueError, "ys must be 2-D or 3-D; got shape"),
         (dict(ys=[[np.inf, 1.0]] * 3), ValueError, "ys must be finite or NaN"),
         (dict(F=[[1.0, np.nan], [0.0, 1.0]]), ValueError, r"F must be finite; F\[0, 0, 1\] = nan"),
@@ -660,3 +661,14 @@ def test_single_steps_refuse_a_negative_variance_or_a_correlation_beyond_one():
             kf_step(g, y, F, M, H, np.eye(3))
         with pytest.raises(ValueError, match=r"^R must be positive semi-definite"):
             kf_step(g, y, F, np.eye(3), H, M)
+
+
+def test_the_filter_class_names_ys_and_dt_where_numpy_or_another_argument_was_named():
+    kf = vt.KalmanFilter(vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1, r=1.0))
+    with pytest.raises(ValueError, match=re.escape("ys must be 2-D or 3-D; got shape (4,)")):
+        kf.smooth(np.ones(4))  # an IndexError before
+    g = vt.Gaussian(np.zeros(2), np.eye(2))
+    with pytest.raises(ValueError, match=re.escape("dt must be one time step, for every "
+                                                   "estimate of g; got shape (2,)")):
+        kf.predict(g, dt=np.array([1.0, 2.0]))  # "F must have shape (2, 2)" before
+    np.testing.assert_array_equal(kf.predict(g, dt=np.float64(2.0)).mean, [0.0, 0.0])

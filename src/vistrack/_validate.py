@@ -253,7 +253,13 @@ def check_prior(x0: ArrayLike | None, P0: ArrayLike | None, n: int, *, batch: bo
 def check_linear_gaussian(F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, n: int, m: int,
                           T: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """A linear-Gaussian model's ``F (n, n)``, ``Q (n, n)``, ``H (m, n)``, ``R (m, m)``, each
-    constant or one per step (``T``), checked (``Q`` and ``R`` positive semi-definite)."""
+    constant or one per step (``T``), checked (``Q`` and ``R`` positive semi-definite).
+    Where ``H`` and ``R`` agree on a measurement size other than the series' ``m``, the series
+    ``ys`` is the one named."""
+    hs, rs = np.shape(H), np.shape(R)
+    if len(hs) >= 2 and len(rs) >= 2 and hs[-1] == n and hs[-2] == rs[-1] == rs[-2] != m:
+        raise ValueError(f"ys must have {hs[-2]} value{'s' * (hs[-2] != 1)} a step, as H "
+                         f"({hs[-2]}, {n}) and R ({hs[-2]}, {hs[-2]}) measure; got {m}")
     F_ = check_matrix_stack(F, "F", n, n, T)
     Q_ = check_matrix_stack(Q, "Q", n, n, T)
     H_ = check_matrix_stack(H, "H", m, n, T)

@@ -181,6 +181,9 @@ class KalmanFilter:
         >>> kf.predict(Gaussian(np.array([0.0, 1.0]), np.eye(2)), dt=2.0).mean
         array([2., 1.])
         """
+        if np.ndim(dt) != 0:
+            raise ValueError(f"dt must be one time step, for every estimate of g; got shape "
+                             f"{np.shape(dt)}")
         return kf_predict(g, self.motion.F(dt), self.motion.Q(dt))
 
     def update(self, g: Gaussian, y: ArrayLike) -> tuple[Gaussian, np.ndarray]:
@@ -385,9 +388,8 @@ class KalmanFilter:
         >>> sm.means.shape, sm.covs.shape, sm.filtered.means.shape
         ((5, 2), (5, 2, 2), (5, 2))
         """
-        T = np.shape(ys)[-2]
-        mats = self.matrices(T, dt)
         res = self.filter(ys, dt=dt, x0=x0, P0=P0)  # checks ys
+        mats = self.matrices(np.shape(ys)[-2], dt)
         return rts_smooth(res, F=mats["F"], Q=mats["Q"])
 
     def fit(
