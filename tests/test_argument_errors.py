@@ -170,3 +170,35 @@ def test_detections_name_the_row_that_is_not_a_box_or_a_point(make, message):
     with pytest.raises(ValueError) as e:
         make()
     assert str(e.value) == message
+
+
+@pytest.mark.parametrize("name", sorted(FILTERS))
+def test_every_filter_names_ys_of_another_width_and_its_infinite_step(name):
+    """The IMM named ``y`` (one step's) where ``ys`` had two values a step; the particle
+    filter took an infinite measurement for a lost target, and the EKF, UKF and EnKF named
+    the step's ``y[0]`` instead of the series' ``ys[1, 0]``."""
+    with pytest.raises(ValueError, match=r"^ys must have (1 |shape \(T, 1\)).*got (2|\(4, 2\))$"):
+        FILTERS[name](np.zeros((4, 2)), [0.0, 1.0], np.eye(2))
+    with pytest.raises(ValueError, match=re.escape(
+            "ys must be finite or NaN (missing); ys[1, 0] = inf") + "$"):
+        FILTERS[name](np.array([[0.0], [np.inf], [1.0]]), [0.0, 1.0], np.eye(2))
+
+
+@pytest.mark.parametrize("name", sorted(FILTERS))
+def test_every_filter_takes_a_singular_prior(name):
+    """A prior known exactly along a direction is positive semi-definite, as the prior check
+    accepts; the EnKF could not sample its ensemble from it."""
+    P0 = np.array([[1.0, 1.0], [1.0, 1.0]])
+    res = FILTERS[name](np.array([[0.0], [1.0], [2.0]]), [0.0, 1.0], P0)
+    assert np.isfinite(res.means).all()
+
+
+def test_an_ensemble_drawn_from_a_singular_covariance_has_that_covariance():
+    from vistrack.filters.enkf import Ensemble
+
+    cov = np.array([[4.0, 2.0, 0.0], [2.0, 1.0, 0.0], [0.0, 0.0, 0.0]])  # rank 1
+    mean, got = Ensemble.sample([1.0, 2.0, 3.0], cov, 40_000, rng=0).moments()
+    np.testing.assert_allclose(got, cov, atol=0.08)
+    np.testing.assert_allclose(mean, [1.0, 2.0, 3.0], atol=0.03)
+    with pytest.raises(ValueError, match="cov must be positive semi-definite"):
+        Ensemble.sample([0.0, 0.0], -np.eye(2), 10, rng=0)

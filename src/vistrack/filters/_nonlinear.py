@@ -63,12 +63,14 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
     defaults to the cumulative sum of ``dt`` with ``times[0] = 0``."""
     Y = as_float_array(ys, "ys", ndim=(2, 3))
     check_has_steps(Y)
+    if Y.shape[-1] != m:
+        raise ValueError(f"ys must have {m} measurement components (last axis); got "
+                         f"{Y.shape[-1]}")
+    check_not_infinite(Y, "ys")  # here, to name the step in the series
     single = Y.ndim == 2
     if single:
         Y = Y[None]
-    B, T, mm = Y.shape
-    if mm != m:
-        raise ValueError(f"ys must have {m} measurement components (last axis); got {mm}")
+    B, T, _ = Y.shape
     dts, times = step_times(dt, times, T)
     if state is None:
         mean0, cov0 = check_prior(x0, P0, n)

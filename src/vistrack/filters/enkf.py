@@ -80,7 +80,7 @@ class Ensemble:
         mean : (..., n) array_like
             Means; the leading dimensions index the batch.
         cov : (n, n) or (..., n, n) array_like
-            Covariances, positive definite.
+            Covariances, positive semi-definite (a singular one draws on its subspace).
         n_members : int
             Members per ensemble.
         rng : numpy.random.Generator, int or None
@@ -94,7 +94,7 @@ class Ensemble:
         Raises
         ------
         ValueError
-            If ``cov`` is not positive definite.
+            If ``cov`` is not positive semi-definite.
 
         Examples
         --------
@@ -103,10 +103,16 @@ class Ensemble:
         """
         rng = as_rng(rng)
         mean = np.asarray(mean, dtype=float)
+        cov = np.asarray(cov, dtype=float)
         try:
-            L = np.linalg.cholesky(np.asarray(cov, dtype=float))
+            L = np.linalg.cholesky(cov)
         except np.linalg.LinAlgError:
-            raise ValueError("cov must be positive definite to sample an ensemble") from None
+            # singular (a state known exactly along some direction): L L' = V diag(w) V'
+            w, V = np.linalg.eigh(0.5 * (cov + np.swapaxes(cov, -1, -2)))
+            if (w < -1e-10 * np.abs(w).max(-1, keepdims=True)).any() or not np.isfinite(w).all():
+                raise ValueError("cov must be positive semi-definite to sample an ensemble"
+                                 ) from None
+            L = V * np.sqrt(np.clip(w, 0.0, None))[..., None, :]
         z = rng.standard_normal(mean.shape[:-1] + (int(n_members), mean.shape[-1]))
         return cls(mean[..., None, :] + z @ np.swapaxes(L, -1, -2))
 

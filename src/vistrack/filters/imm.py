@@ -38,7 +38,13 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, check_finite, check_has_steps, check_prior
+from .._validate import (
+    as_float_array,
+    check_finite,
+    check_has_steps,
+    check_not_infinite,
+    check_prior,
+)
 from ..models.protocols import MotionModel, NonlinearMotionModel
 from ..models.switching import SwitchingLinearSystem
 from ..types import Gaussian
@@ -324,6 +330,12 @@ class IMMFilter:
         """
         ys = as_float_array(ys, "ys", ndim=(2, 3))
         check_has_steps(ys)
+        meas = getattr(self.filters[self.ref], "measurement", None)
+        m = getattr(meas, "ndim_meas", ys.shape[-1])
+        if ys.shape[-1] != m:
+            raise ValueError(f"ys must have {m} measurement components (last axis), as "
+                             f"{meas!r} measures; got {ys.shape[-1]}")
+        check_not_infinite(ys, "ys")
         single = ys.ndim == 2
         if single:
             ys = ys[None]
@@ -530,7 +542,8 @@ class SwitchingParticleFilter:
         Raises
         ------
         ValueError
-            If ``x0`` or ``P0`` has the wrong shape.
+            If ``x0`` or ``P0`` has the wrong shape, ``ys`` is not ``(T, m)`` for the
+            system's measurement or holds an infinity, or ``dt`` is not one number.
 
         Examples
         --------
@@ -550,6 +563,13 @@ class SwitchingParticleFilter:
         check_has_steps(ys)
         T, n, k = ys.shape[0], sysm.ndim_state, len(sysm.motions)
         H, R = sysm.measurement.H(n), sysm.measurement.R()
+        if ys.shape[1] != len(R):
+            raise ValueError(f"ys must have shape (T, {len(R)}): {len(R)} values a step, as "
+                             f"the system's measurement model measures; got {ys.shape}")
+        check_not_infinite(ys, "ys")
+        if np.ndim(dt) != 0:
+            raise ValueError(f"dt must be one time step, the same for every step; got shape "
+                             f"{np.shape(dt)}")
         Fs = [m.F(dt) for m in sysm.motions]
         Qs = [m.Q(dt) for m in sysm.motions]
         cum = np.cumsum(sysm.transition, axis=1)

@@ -35,7 +35,14 @@ from numpy.typing import ArrayLike
 from .._jit import njit
 from .._prebuilt import Kernel, kernel
 from .._registry import Registry
-from .._validate import as_float_array, as_rng, check_finite, check_has_steps, check_prior
+from .._validate import (
+    as_float_array,
+    as_rng,
+    check_finite,
+    check_has_steps,
+    check_not_infinite,
+    check_prior,
+)
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
     MeasurementModel,
@@ -1080,8 +1087,8 @@ class ParticleFilter:
         ParticleDegeneracyError
             If every particle gets zero likelihood (the message names the step).
         ValueError
-            If ``ys`` has no step, the prior or ``particles`` has the wrong shape or is not
-            finite, a ``likelihood`` callable returns other than ``N`` values, a NaN or
+            If ``ys`` has no step or holds an infinity (NaN is missing), the prior or
+            ``particles`` has the wrong shape or is not finite, a ``likelihood`` callable returns other than ``N`` values, a NaN or
             ``+inf``, or a ``propagate`` callable returns other than ``(N, n)`` finite
             particles (the message names the step).
 
@@ -1100,6 +1107,7 @@ class ParticleFilter:
         if self._m is not None and ys.shape[1] != self._m:  # both paths, before any step
             raise ValueError(f"ys must have {self._m} measurement components; got "
                              f"{ys.shape[1]}")
+        check_not_infinite(ys, "ys")  # every particle's likelihood 0: not a lost target
         T = ys.shape[0]
         n, N, rng = self.ndim_state, self.n_particles, self.rng
         if self._fused is not None and not modes:
