@@ -271,7 +271,8 @@ def test_the_four_weightings_name_a_nan_likelihood_in_the_gate_and_a_gate_of_ano
     extra = ([0.5],) if weigh.startswith(("i", "ji")) else ()
     with pytest.raises(ValueError, match=r"lik\[0, 0\] = nan"):
         fn(np.array([[np.nan, 0.1]]), np.ones((1, 2), bool), *extra)
-    with pytest.raises(ValueError, match=r"gate must have the shape of lik, \(1, 3\); got \(1, 2\)"):
+    with pytest.raises(ValueError,
+                       match=r"gate must have the shape of lik, \(1, 3\); got \(1, 2\)"):
         fn(np.ones((1, 3)), np.ones((1, 2), bool), *extra)
     # outside the gate a NaN likelihood is not looked at: the same as a likelihood of 0
     a = fn(np.array([[np.nan, 0.1]]), np.array([[False, True]]), *extra)

@@ -676,10 +676,10 @@ def kalman_filter_1d(
             raise ValueError(f"{name} must be standard deviations >= 0; got {a.min()}")
         par[name] = np.broadcast_to(a, (T,))
     for name, v in (("x0", x0), ("sigma0", sigma0)):
-        a = float(as_float_array(v, name, ndim=(0,)))
-        if not np.isfinite(a) or (name == "sigma0" and a < 0):
+        x = float(as_float_array(v, name, ndim=(0,)))
+        if not np.isfinite(x) or (name == "sigma0" and x < 0):
             raise ValueError(f"{name} must be a finite number{' >= 0' * (name == 'sigma0')}; "
-                             f"got {a}")
+                             f"got {x}")
     out = {k: np.empty(T) for k in ("pred_mean", "pred_std", "mean", "std")}
     xp, sp = float(x0), float(sigma0)
     for i in range(T):

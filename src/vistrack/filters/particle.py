@@ -1088,9 +1088,9 @@ class ParticleFilter:
             If every particle gets zero likelihood (the message names the step).
         ValueError
             If ``ys`` has no step or holds an infinity (NaN is missing), the prior or
-            ``particles`` has the wrong shape or is not finite, a ``likelihood`` callable returns other than ``N`` values, a NaN or
-            ``+inf``, or a ``propagate`` callable returns other than ``(N, n)`` finite
-            particles (the message names the step).
+            ``particles`` has the wrong shape or is not finite, a ``likelihood`` callable
+            returns other than ``N`` values, a NaN or ``+inf``, or a ``propagate`` callable
+            returns other than ``(N, n)`` finite particles (the message names the step).
 
         Examples
         --------
