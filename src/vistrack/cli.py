@@ -1013,8 +1013,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="vistrack", description="Visual object tracking: filters, trackers, scores."
     )
     parser.add_argument("--version", action="version", version=f"vistrack {__version__}")
-    debug_help = ("show the traceback of a user's mistake too (a bug's is always shown), "
-                  "instead of one line")
+    debug_help = ("show the traceback of a user's mistake found while running too (a bug's "
+                  "is always shown; a bad option is one line either way)")
     parser.add_argument("--debug", action="store_true", help=debug_help)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     demo = sub.add_parser(
