@@ -322,3 +322,19 @@ def test_nonlinear_filters_name_a_linear_model_of_per_step_matrices():
         MeasurementFunctions(LinearMeasurement(np.ones((3, 1, 2)), np.eye(1)), 2)
     MotionFunctions(LinearMotion(np.eye(2), np.eye(2)))  # constant ones, as before
     MeasurementFunctions(LinearMeasurement(np.ones((1, 2)), np.eye(1)), 2)
+
+
+@pytest.mark.parametrize("model", [ConstantVelocity(dim=2), ConstantAcceleration(dim=1),
+                                   Periodic(omega=0.7)])
+def test_f_with_a_time_step_for_each_state_is_each_state_propagated_alone(model):
+    """With dt an array, F(dt) is a stack and ``x @ F.T`` transposed the stack's three axes:
+    a (2, 2, 2) answer for two states of a 1-D constant velocity, and no error for three
+    states against two time steps."""
+    rng = np.random.default_rng(0)
+    n = model.ndim_state
+    x, dt = rng.normal(size=(3, n)), np.array([0.5, 1.0, 2.5])
+    want = np.stack([model.F(d) @ xi for xi, d in zip(x, dt)])  # the oracle: one at a time
+    np.testing.assert_allclose(model.f(x, dt), want, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(model.f(x[0], dt), [model.F(d) @ x[0] for d in dt], atol=1e-12)
+    with pytest.raises(ValueError, match=r"x must have one state for each of the 3 time steps"):
+        model.f(rng.normal(size=(2, n)), dt)

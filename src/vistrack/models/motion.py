@@ -20,6 +20,7 @@ from math import factorial
 from typing import Literal, Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._validate import as_float_array, check_matrix_stack, check_psd
 
@@ -104,6 +105,20 @@ def _as_dt(dt: float | np.ndarray) -> np.ndarray:
         bad = d[~(np.isfinite(d) & (d >= 0))].ravel()[0]
         raise ValueError(f"dt must be finite and >= 0; got {bad}")
     return d
+
+
+def _apply(F: np.ndarray, x: ArrayLike) -> np.ndarray:
+    """``F x`` for states ``x (..., n)``: one ``F (n, n)`` for all, or a stack ``(K, n, n)``
+    (a ``dt`` for each of ``K`` states, or ``K`` time steps of one state)."""
+    x = np.asarray(x)
+    if F.ndim == 2:
+        return x @ F.T
+    try:
+        return np.einsum("...ij,...j->...i", F, x)
+    except ValueError:
+        raise ValueError(f"x must have one state for each of the {len(F)} time steps in dt, "
+                         f"shape ({len(F)}, {F.shape[-1]}), or be one state; got shape "
+                         f"{x.shape}") from None
 
 
 _SIN_TERMS = 12  # of the series below; for u < 2 the first term left out, u^24/25!, is < 1.1e-18
@@ -230,8 +245,9 @@ class _Kinematic:
         ----------
         x : (..., n) array_like
             States, one per row.
-        dt : float
-            Time step.
+        dt : float or (K,) array_like
+            Time step; or one for each of ``K`` states ``x (K, n)`` (or ``K`` steps of one
+            state ``x (n,)``).
 
         Returns
         -------
@@ -243,7 +259,7 @@ class _Kinematic:
         >>> ConstantVelocity(dim=1).f(np.array([0.0, 2.0]), dt=0.5)
         array([1., 2.])
         """
-        return np.asarray(x) @ self.F(dt).T
+        return _apply(self.F(dt), x)
 
 
 class ConstantPosition(_Kinematic):
@@ -538,8 +554,9 @@ class Periodic:
         ----------
         x : (..., n) array_like
             States, one per row.
-        dt : float
-            Time step.
+        dt : float or (K,) array_like
+            Time step; or one for each of ``K`` states ``x (K, n)`` (or ``K`` steps of one
+            state ``x (n,)``).
 
         Returns
         -------
@@ -551,7 +568,7 @@ class Periodic:
         >>> Periodic(omega=1.0).f(np.array([1.0, 0.0]), dt=np.pi).round(12)
         array([-1., -0.])
         """
-        return np.asarray(x) @ self.F(dt).T
+        return _apply(self.F(dt), x)
 
 
 class LinearMotion:
