@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -200,3 +202,58 @@ def test_existence_settings_are_checked():
         ipda_weights(np.ones((1, 1)), np.ones((1, 1), bool), [1.2])
     with pytest.raises(ValueError, match=r"one probability per track, shape \(2,\)"):
         ipda_weights(np.ones((2, 1)), np.ones((2, 1), bool), [0.5])
+
+
+@pytest.mark.parametrize("association", POINT_ASSOCIATIONS)
+def test_frames_not_stepped_delete_what_stepping_them_would_have(association):
+    """A track last updated 4 s before, with max_lost 1 s, took the detection of a frame
+    stepped to over a gap and kept its identity; stepping the frames between without
+    detections deleted it (BoxTracker deletes such tracks before associating)."""
+    def points(*p):
+        return Detections(points=np.array(p, float))
+
+    skipped = PointTracker(association, frame_rate=1.0, max_lost=1.0)
+    skipped.step(1, points([0.0, 0.0]))
+    stepped = PointTracker(association, frame_rate=1.0, max_lost=1.0)
+    stepped.step(1, points([0.0, 0.0]))
+    for f in (2, 3, 4):
+        stepped.step(f, None)
+    for tr in (skipped, stepped):
+        tr.step(5, points([0.5, 0.0]))
+    assert skipped.tracks.ids.tolist() == stepped.tracks.ids.tolist() == [2]
+    assert len(skipped.existence) == len(skipped.tracks)
+    # within max_lost, the gap is bridged: the track keeps its identity
+    near = PointTracker(association, frame_rate=1.0, max_lost=5.0)
+    near.step(1, points([0.0, 0.0]))
+    assert 1 in near.step(3, points([0.5, 0.0])).ids.tolist() + near.tracks.ids.tolist()
+
+
+def test_a_track_starts_where_a_measurement_of_another_h_puts_it():
+    """With H = 2 [I 0] a track started at z itself, so its predicted measurement was 2 z
+    and a still target started a new track every frame (ids 1 to 5)."""
+    from vistrack.models import LinearMeasurement
+
+    H = np.hstack([2 * np.eye(2), np.zeros((2, 2))])
+    tr = PointTracker("gnn", measurement=LinearMeasurement(H, np.eye(2)), frame_rate=10.0,
+                      init_speed=1.0)
+    for f in range(1, 6):
+        out = tr.step(f, Detections(points=[[100.0, 100.0]]))
+    assert out.ids.tolist() == tr.tracks.ids.tolist() == [1]
+    np.testing.assert_allclose(tr.tracks.mean[0], np.linalg.pinv(H) @ [100.0, 100.0],
+                               atol=1e-6)
+
+
+@pytest.mark.parametrize("setting,message", [
+    ({"max_lost": float("nan")}, "max_lost must be a finite number of seconds >= 0; got nan"),
+    ({"max_lost": -1.0}, "max_lost must be a finite number of seconds >= 0; got -1.0"),
+    ({"confirm_hits": 2.5}, "confirm_hits must be a whole number >= 1; got 2.5"),
+    ({"confirm_hits": 0}, "confirm_hits must be a whole number >= 1; got 0"),
+    ({"frame_rate": float("inf")}, "frame_rate must be a finite number > 0; got inf"),
+    ({"p_gate": 1.0}, "p_gate must be in (0, 1); got 1.0"),
+    ({"init_speed": float("nan")}, "init_speed must be a finite number > 0; got nan"),
+])
+def test_point_tracker_settings_out_of_range_are_named(setting, message):
+    """A NaN max_lost kept lost tracks for ever, 2.5 hits confirmed at 2, an infinite frame
+    rate froze time, and p_gate 1 was named as chi2_threshold's p."""
+    with pytest.raises(ValueError, match=re.escape(message)):
+        PointTracker(**setting)

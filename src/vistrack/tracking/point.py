@@ -85,7 +85,9 @@ class PointTracker:
         Gate probability ``p``: measurements beyond the ``p`` quantile of chi-square are not
         associated.
     init_speed : float
-        Standard deviation of a new track's velocity, per axis.
+        Standard deviation of a new track's velocity, per axis (of each state component its
+        first measurement does not determine). A new track starts at ``pinv(H) z``: the
+        measured position, for ``H = [I 0]``.
     confirm_hits, max_lost, frame_rate
         As for :class:`~vistrack.tracking.BoxTracker` (``confirm_hits`` is not used by IPDA and
         JIPDA).
@@ -108,8 +110,9 @@ class PointTracker:
     Raises
     ------
     ValueError
-        If ``association`` is not in :data:`POINT_ASSOCIATIONS`, ``frame_rate`` is not > 0, or
-        an existence setting is out of its range.
+        If ``association`` is not in :data:`POINT_ASSOCIATIONS`, ``frame_rate``, ``max_lost``
+        or ``init_speed`` is not a finite number in its range, ``confirm_hits`` not a whole
+        number >= 1, ``p_gate`` not in (0, 1), or an existence setting is out of its range.
 
     Examples
     --------
@@ -138,13 +141,27 @@ class PointTracker:
         self.R = np.asarray(self.measurement.R(), dtype=float)
         self.m = self.H.shape[0]
         self.p_detect, self.clutter_density = float(p_detect), float(clutter_density)
+        if not 0.0 < p_gate < 1.0:
+            raise ValueError(f"p_gate must be in (0, 1); got {p_gate}")
         self.p_gate = float(p_gate)
         self.threshold = chi2_threshold(self.m, p_gate)
+        if not (np.isfinite(init_speed) and init_speed > 0):
+            raise ValueError(f"init_speed must be a finite number > 0; got {init_speed}")
         self.init_speed = float(init_speed)
+        if isinstance(confirm_hits, bool) or not (float(confirm_hits).is_integer()
+                                                  and confirm_hits >= 1):
+            raise ValueError(f"confirm_hits must be a whole number >= 1; got {confirm_hits}")
+        if not (np.isfinite(max_lost) and max_lost >= 0):
+            raise ValueError(f"max_lost must be a finite number of seconds >= 0; got {max_lost}")
         self.confirm_hits, self.max_lost = int(confirm_hits), float(max_lost)
-        if not frame_rate > 0:
-            raise ValueError(f"frame_rate must be > 0; got {frame_rate}")
+        if not (np.isfinite(frame_rate) and frame_rate > 0):
+            raise ValueError(f"frame_rate must be a finite number > 0; got {frame_rate}")
         self.frame_rate = float(frame_rate)
+        # a new track starts where its first measurement puts it: pinv(H) z (the measured
+        # components, for the usual H = [I 0]); what H does not see, with init_speed
+        self._Hp = np.linalg.pinv(self.H)
+        self._plain = self.H.shape[1] >= self.m and np.array_equal(
+            self.H, np.eye(self.m, self.H.shape[1]))
         if not 0.0 < p_survive <= 1.0:
             raise ValueError(f"p_survive must be in (0, 1]; got {p_survive}")
         if not 0.0 <= delete_existence < init_existence < 1.0:
@@ -179,11 +196,17 @@ class PointTracker:
 
     def _initial(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         n, m = self.tracks.n, self.m
-        mean = np.zeros((len(z), n))
-        mean[:, :m] = z  # derivative-major states: the measured position first
-        cov = np.zeros((n, n))
-        cov[:m, :m] = self.R
-        cov[m:, m:] = self.init_speed ** 2 * np.eye(n - m)
+        if self._plain:  # H = [I 0]: derivative-major states, the measured position first
+            mean = np.zeros((len(z), n))
+            mean[:, :m] = z
+            cov = np.zeros((n, n))
+            cov[:m, :m] = self.R
+            cov[m:, m:] = self.init_speed ** 2 * np.eye(n - m)
+        else:  # the state the measurement determines, and init_speed across what it does not
+            Hp = self._Hp
+            mean = z @ Hp.T
+            null = np.eye(n) - Hp @ self.H
+            cov = Hp @ self.R @ Hp.T + self.init_speed ** 2 * null @ null.T
         return mean, np.broadcast_to(cov, (len(z), n, n)).copy()
 
     def step(self, frame: Frame | int | None = None,
@@ -234,10 +257,19 @@ class PointTracker:
             raise ValueError(f"points must have {self.m} coordinates; got {Z.shape[1]}")
         frame = frame_index(frame, self.frame)
         first = self.frame is None
-        dt = 0.0 if self.frame is None else (frame - self.frame) / self.frame_rate
+        gap = 0 if self.frame is None else frame - self.frame
+        dt = gap / self.frame_rate
         self.frame = frame
         time = frame / self.frame_rate
         t = self.tracks
+        if gap > 1 and len(t):
+            # frames not stepped: the tracks that stepping them (without detections) would have
+            # deleted, lost longer than max_lost at the frame before, are deleted before they
+            # can take a detection (as BoxTracker.step does)
+            gone = t.stale((frame - 1) / self.frame_rate, self.max_lost)
+            if gone.any():
+                t.keep(~gone)
+                self.existence = self.existence[~gone]
         K = len(t)
         updated = np.zeros(K, bool)
         in_gate = np.zeros(len(Z), bool)
