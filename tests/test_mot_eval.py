@@ -670,3 +670,60 @@ def test_a_missing_results_file_is_named_missing_with_columns_given(tmp_path):
     (tmp_path / "A.txt").write_text("1,1,0,0,10,10,1,-1,-1,-1\n")
     res = evaluate_files(pairs, keep_going=True, columns={"frame": "t"})
     assert res.errors["A"].startswith("ValueError: columns name a CSV or Parquet file's")
+
+
+def _one_sequence(tmp_path, seqinfo):
+    seq = tmp_path / "S"
+    (seq / "gt").mkdir(parents=True)
+    (seq / "gt" / "gt.txt").write_text("1,1,0,0,10,10,1,-1,-1,-1\n2,1,0,0,10,10,1,-1,-1,-1\n")
+    (seq / "seqinfo.ini").write_text(seqinfo)
+    return seq
+
+
+def test_a_csv_results_file_is_named_without_a_line_read_as_another_format(tmp_path):
+    """The line was found by re-reading the CSV as MOTChallenge text, frame and id first:
+    with the columns in another order it named another, valid row."""
+    from vistrack.evaluation import evaluate_files
+
+    seq = _one_sequence(tmp_path, "[Sequence]\nname=S\nseqLength=3\n")
+    pred = tmp_path / "r.csv"
+    pred.write_text("id,frame,bb_left,bb_top,bb_width,bb_height\n1,2,0,0,10,10\n"
+                    "2,1,0,0,10,10\n2,1,50,0,10,10\n")
+    with pytest.raises(ValueError, match=re.escape(f"{pred}: id 2 appears more than once in "
+                                                   "frame 1") + "$"):
+        evaluate_files([("S", seq / "gt" / "gt.txt", pred, seq / "seqinfo.ini")])
+    pred.write_text("id,frame,bb_left,bb_top,bb_width,bb_height\n9,1,0,0,10,10\n1,9,0,0,10,10\n")
+    with pytest.raises(ValueError, match=re.escape(f"{pred}: frame 9 is beyond the sequence's "
+                                                   "3 frames") + "$"):
+        evaluate_files([("S", seq / "gt" / "gt.txt", pred, seq / "seqinfo.ini")])
+
+
+def test_scoring_needs_only_seq_length_of_seqinfo_as_trackeval_reads_it(tmp_path):
+    """TrackEval reads seqLength alone; vistrack eval refused the file for its missing
+    frameRate, imWidth and imHeight, which scoring does not use."""
+    from vistrack.evaluation import evaluate_files
+
+    short = _one_sequence(tmp_path / "a", "[Sequence]\nname=S\nseqLength=3\n")
+    full = _one_sequence(tmp_path / "b", "[Sequence]\nname=S\nseqLength=3\nframeRate=10\n"
+                                         "imWidth=100\nimHeight=100\n")
+    got = [evaluate_files([("S", s / "gt" / "gt.txt", s / "gt" / "gt.txt", s / "seqinfo.ini")])
+           for s in (short, full)]
+    for field in dataclasses.fields(got[0]["S"]):
+        np.testing.assert_array_equal(getattr(got[0]["S"], field.name),
+                                      getattr(got[1]["S"], field.name))
+    assert got[0]["S"].TP == 2
+    (short / "seqinfo.ini").write_text("[Sequence]\nname=S\n")
+    with pytest.raises(ValueError, match="seqinfo.ini: \\[Sequence\\] has no seqLength"):
+        evaluate_files([("S", short / "gt" / "gt.txt", short / "gt" / "gt.txt",
+                         short / "seqinfo.ini")])
+
+
+def test_a_bad_benchmark_is_the_call_s_error_with_keep_going_too(tmp_path):
+    """With keep_going the benchmark was checked in each worker: every pair failed of it and
+    an empty result came back, where the docstring promises a ValueError."""
+    from vistrack.evaluation import evaluate_files
+
+    gt = _one_sequence(tmp_path, "[Sequence]\nname=S\nseqLength=3\n") / "gt" / "gt.txt"
+    with pytest.raises(ValueError, match="benchmark must be one of 'auto', .*; got 'MOT18'"):
+        evaluate_files([("a", gt, gt, None), ("b", gt, gt, None)], benchmark="MOT18",
+                       keep_going=True)

@@ -505,3 +505,15 @@ def test_cli_track_one_names_a_box_opencv_cannot_start_on(tmp_path):
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert ("error: box (x, y, w, h) = (100, 100, 1, 1), whole pixels (100, 100, 1, 1): "
             "OpenCV's csrt needs w and h of at least 2 whole pixels") in r.stderr
+
+
+def test_read_boxes_reads_utf8_with_a_mark_and_names_a_file_that_is_not_text(tmp_path):
+    """A UTF-16 file raised a bare UnicodeDecodeError naming no file; a UTF-8 byte-order mark
+    (which the MOTChallenge reader drops) made the first line 'not numbers'."""
+    bom = tmp_path / "bom.txt"
+    bom.write_bytes(b"\xef\xbb\xbf1,2,3,4\n")
+    assert read_boxes(bom).tolist() == [[1.0, 2.0, 3.0, 4.0]]
+    utf16 = tmp_path / "utf16.txt"
+    utf16.write_bytes("1,2,3,4\n".encode("utf-16"))
+    with pytest.raises(ValueError, match=re.escape(f"{utf16} is not a text boxes file (byte 0")):
+        read_boxes(utf16)

@@ -6,8 +6,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .._pool import one_line
-from ..io.motchallenge import MOTTable, read_mot, read_seqinfo
-from .mot import Matches, MOTCounts, clear_matches, combine, evaluate_mot
+from ..io.motchallenge import MOTTable, read_mot, read_seq_length
+from .mot import BENCHMARKS, Matches, MOTCounts, clear_matches, combine, evaluate_mot
 from .sanity import sanity_warnings
 
 if TYPE_CHECKING:
@@ -61,7 +61,7 @@ def _read(pair: tuple[str, Path, Path, Path | None], columns: dict[str, str] | N
           ) -> tuple[MOTTable, MOTTable, int | None]:
     """A pair's ground truth, results and sequence length (None without seqinfo.ini)."""
     _, gt, pred, info = pair
-    n = read_seqinfo(info).seq_length if info is not None else None
+    n = read_seq_length(info) if info is not None else None
     return read_mot(gt), _read_results(Path(pred), columns), n
 
 
@@ -179,6 +179,9 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     out = EvalResults()
     if jobs is not None and jobs < 1:
         raise ValueError(f"jobs must be 1 or more; got {jobs}")
+    if benchmark not in BENCHMARKS:  # an argument's error, not a file's (keep_going)
+        raise ValueError(f"benchmark must be one of {', '.join(map(repr, BENCHMARKS))}; got "
+                         f"{benchmark!r}")
     for k, pair in enumerate(pairs):
         if not isinstance(pair, (tuple, list)) or len(pair) != 4:
             raise ValueError(f"pairs must hold (name, gt, results, seqinfo or None) tuples; "

@@ -196,10 +196,15 @@ class _Sequence:
     pred_labels: np.ndarray | None = None
 
 
+BENCHMARKS = ("auto", "MOT15", "MOT16", "MOT17", "MOT20")
+"""The scoring conventions ``benchmark`` names (``auto``: MOT17's for a nine-column ground
+truth of MOT16/17/20 classes, MOT15's otherwise)."""
+
+
 def _benchmark_of(gt: MOTTable, benchmark: str) -> str:
     if benchmark != "auto":
-        if benchmark not in ("MOT15", "MOT16", "MOT17", "MOT20"):
-            raise ValueError(f"benchmark must be 'auto', 'MOT15', 'MOT16', 'MOT17' or 'MOT20'; "
+        if benchmark not in BENCHMARKS:
+            raise ValueError(f"benchmark must be one of {', '.join(map(repr, BENCHMARKS))}; "
                              f"got {benchmark!r}")
         return benchmark
     has_classes = gt.columns == 9 and len(gt) and np.isin(gt.classes, np.arange(1, 14)).all()
@@ -221,8 +226,10 @@ def considered(conf: np.ndarray) -> np.ndarray:
 
 def _lines_of(path: str, match: Callable[[list[float]], bool]) -> list[int]:
     """The lines (from 1) of the MOTChallenge file ``path`` whose row ``match`` accepts, for a
-    message; empty for a table not read from a file (or a file no longer readable)."""
-    if not path:
+    message; empty for a table not read from a file (or a file no longer readable), and for
+    a CSV or Parquet file, whose columns need not start with frame and id (the message then
+    names the file, the frame and the id)."""
+    if not path or Path(path).suffix.lower() in (".csv", ".parquet"):
         return []
     try:
         text = decode_text(Path(path).read_bytes(), path, "MOTChallenge", ValueError)

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._validate import decode_text
 from ..io.motchallenge import _text_lines
 from ..io.tracks import write_boxes
 
@@ -246,9 +247,9 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
     Raises
     ------
     ValueError
-        If a line is not numbers, not 4, 5 or 8 of them, or not as many as the line before,
-        or (``frame,x,y,w,h``) its frame is not the one after the line before's; the message
-        names the file and line.
+        If the file is not UTF-8 text, a line is not numbers, not 4, 5 or 8 of them, or not
+        as many as the line before, or (``frame,x,y,w,h``) its frame is not the one after the
+        line before's; the message names the file and line.
 
     Examples
     --------
@@ -263,7 +264,9 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
     last = 0  # the line of rows[-1]
     # lines as editors count them, as the MOTChallenge reader does (str.splitlines also
     # breaks at a form feed, which made a box line two)
-    for n, line in enumerate(_text_lines(path.read_text()), start=1):
+    # UTF-8 whatever the locale, a byte-order mark dropped, the file named where it is not text
+    text = decode_text(path.read_bytes(), path, "boxes", ValueError)
+    for n, line in enumerate(_text_lines(text), start=1):
         if not line.strip():
             continue
         try:

@@ -10,6 +10,7 @@ from .motchallenge import (
     SeqInfo,
     box_decimals,
     read_mot,
+    read_seq_length,
     read_seqinfo,
     sequence_name,
     write_mot,
@@ -18,7 +19,7 @@ from .tracks import BoxesWriter, CSVWriter, MOTWriter, Sink, TrackRows, write_bo
 from .video import Frame, VideoError, VideoReader, VideoWriter
 
 __all__ = ["MOT_CLASSES", "MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "read_seqinfo",
-           "sequence_name", "write_mot", "box_decimals", "Frame", "VideoError", "VideoReader",
-           "VideoWriter",
+           "read_seq_length", "sequence_name", "write_mot", "box_decimals", "Frame", "VideoError",
+           "VideoReader", "VideoWriter",
            "Sink", "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes",
            "partial_path", "replacing", "open_replacing", "PartialFile"]

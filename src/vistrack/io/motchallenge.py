@@ -44,7 +44,7 @@ if TYPE_CHECKING:
     from ..types import _Index
 
 __all__ = ["FrameSlices", "MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "write_mot",
-           "box_decimals", "read_seqinfo", "MOT_CLASSES", "sequence_name"]
+           "box_decimals", "read_seqinfo", "read_seq_length", "MOT_CLASSES", "sequence_name"]
 
 MOT_CLASSES = {
     1: "pedestrian", 2: "person_on_vehicle", 3: "car", 4: "bicycle", 5: "motorbike",
@@ -1489,6 +1489,39 @@ def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
     >>> info.name, info.frame_rate, info.seq_length, (info.im_width, info.im_height)
     ('S', 25.0, 3, (640, 480))
     """
+    path, s = _sequence_section(path)
+    return SeqInfo(name=s.get("name", path.parent.name),
+                   frame_rate=_seqinfo_value(path, s, "frameRate", float),
+                   seq_length=_seqinfo_value(path, s, "seqLength", int),
+                   im_width=_seqinfo_value(path, s, "imWidth", int),
+                   im_height=_seqinfo_value(path, s, "imHeight", int),
+                   im_dir=s.get("imDir", "img1"), im_ext=s.get("imExt", ".jpg"))
+
+
+def read_seq_length(path: str | os.PathLike) -> int:
+    """``seqLength`` of ``seqinfo.ini`` (or of the one inside a sequence folder), the one
+    value scoring needs: the other keys :func:`read_seqinfo` requires may be absent, as
+    TrackEval reads such files.
+
+    Raises
+    ------
+    FileNotFoundError, MOTFormatError
+        As :func:`read_seqinfo`, for ``seqLength`` alone.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "seqinfo.ini").write_text("[Sequence]\\nname=S\\nseqLength=3\\n")
+    >>> read_seq_length(d)
+    3
+    """
+    path, s = _sequence_section(path)
+    return int(_seqinfo_value(path, s, "seqLength", int))
+
+
+def _sequence_section(path: str | os.PathLike) -> tuple[Path, Any]:
+    """The file and its ``[Sequence]`` section (see :func:`read_seqinfo`'s errors)."""
     path = Path(path)
     if path.is_dir():
         path = path / "seqinfo.ini"
@@ -1503,25 +1536,23 @@ def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
         raise MOTFormatError(f"{path}{_ini_error(exc)}") from None
     if "Sequence" not in cp:
         raise MOTFormatError(f"{path}: no [Sequence] section")
-    s = cp["Sequence"]
+    return path, cp["Sequence"]
 
-    def get(key: str, kind: type) -> Any:
-        if key not in s:
-            raise MOTFormatError(f"{path}: [Sequence] has no {key}")
-        try:
-            # a count written as a float (600.0, 6e2) is a number > 0 as the contract asks
-            v = float(s[key]) if kind is int else kind(s[key])
-        except ValueError:
-            raise MOTFormatError(f"{path}: {key} = {s[key]!r} is not {kind.__name__}") from None
-        if kind is not str and not 0 < v < np.inf:
-            raise MOTFormatError(f"{path}: {key} must be a finite number > 0; got {s[key]}")
-        if kind is int:
-            if not float(v).is_integer():
-                raise MOTFormatError(f"{path}: {key} must be a whole number; got {s[key]}")
-            v = int(v)
-        return v
 
-    return SeqInfo(name=s.get("name", path.parent.name), frame_rate=get("frameRate", float),
-                   seq_length=get("seqLength", int), im_width=get("imWidth", int),
-                   im_height=get("imHeight", int), im_dir=s.get("imDir", "img1"),
-                   im_ext=s.get("imExt", ".jpg"))
+def _seqinfo_value(path: Path, s: Any, key: str, kind: type) -> Any:
+    """``key`` of the section ``s``: a finite number > 0 (a whole one for ``int``, written
+    ``600`` or ``600.0``), or a MOTFormatError naming the file."""
+    if key not in s:
+        raise MOTFormatError(f"{path}: [Sequence] has no {key}")
+    try:
+        # a count written as a float (600.0, 6e2) is a number > 0 as the contract asks
+        v = float(s[key]) if kind is int else kind(s[key])
+    except ValueError:
+        raise MOTFormatError(f"{path}: {key} = {s[key]!r} is not {kind.__name__}") from None
+    if kind is not str and not 0 < v < np.inf:
+        raise MOTFormatError(f"{path}: {key} must be a finite number > 0; got {s[key]}")
+    if kind is int:
+        if not float(v).is_integer():
+            raise MOTFormatError(f"{path}: {key} must be a whole number; got {s[key]}")
+        v = int(v)
+    return v
