@@ -1,5 +1,7 @@
 """Motion and measurement models against closed forms and a Van Loan matrix-exponential oracle."""
 
+import re
+
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -15,6 +17,7 @@ from vistrack.models import (
     LinearMotion,
     Periodic,
     Position,
+    SwitchingLinearSystem,
 )
 
 
@@ -338,3 +341,17 @@ def test_f_with_a_time_step_for_each_state_is_each_state_propagated_alone(model)
     np.testing.assert_allclose(model.f(x[0], dt), [model.F(d) @ x[0] for d in dt], atol=1e-12)
     with pytest.raises(ValueError, match=r"x must have one state for each of the 3 time steps"):
         model.f(rng.normal(size=(2, n)), dt)
+
+
+@pytest.mark.parametrize("call,exc,match", [
+    (lambda: ConstantVelocity(q="a"), TypeError, "q must be a number; got 'a'"),
+    (lambda: Periodic(omega="a"), TypeError, "omega must be a number; got 'a'"),
+    (lambda: ConstantVelocity(dim="2"), ValueError, "dim must be 1, 2 or 3; got '2'"),
+    (lambda: SwitchingLinearSystem([ConstantVelocity(dim=1)], Position(dim=1), [[1.0]]).sample(
+        -1, x0=[0.0, 0.0], rng=0), ValueError, "T must be a whole number of steps >= 0; got -1"),
+])
+def test_arguments_that_float_or_numpy_named_no_further_are_named(call, exc, match):
+    """float()'s "could not convert string to float", numpy's "negative dimensions are not
+    allowed", and a dim of '2' shown as 2."""
+    with pytest.raises(exc, match=re.escape(match)):
+        call()

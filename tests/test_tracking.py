@@ -144,10 +144,14 @@ def test_coasting_reports_a_well_followed_track_through_a_short_miss():
         BoxTracker(image_size=(640, 0))
     # NaN was taken, and then no track was ever reported coasting (every test against it
     # false)
-    for size in ((np.nan, 480), (640, np.inf)):
+    for size in ((np.nan, 480), (640, np.inf), 5, (640, 480, 3)):  # 5: len() of an int
         with pytest.raises(ValueError, match=r"image_size must be \(width, height\), finite "
                                              r"and > 0"):
             BoxTracker(image_size=size)
+    # a motion without BoxMotion's methods: an AttributeError about at_rate before
+    with pytest.raises(TypeError, match="motion must be a vistrack.models.BoxMotion, or have "
+                                        "its at_rate, initial, Q_diag, R_diag; got str 'x'"):
+        BoxTracker(motion="x")
 
 
 def test_classes_never_share_an_identity_and_reset():

@@ -139,16 +139,24 @@ def _sin_series(u2: np.ndarray, first: int) -> np.ndarray:
     return out
 
 
+def _number(value: float, name: str) -> float:
+    """``value`` as a float, or a TypeError naming ``name`` (float() names neither)."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a number; got {value!r}") from None
+
+
 def _check_q(q: float) -> float:
-    q = float(q)
+    q = _number(q, "q")
     if not np.isfinite(q) or q < 0:
         raise ValueError(f"q must be a finite number >= 0; got {q}")
     return q
 
 
 def _check_dim(dim: int) -> int:
-    if int(dim) != dim or not 1 <= dim <= 3:
-        raise ValueError(f"dim must be 1, 2 or 3; got {dim}")
+    if isinstance(dim, (str, bytes)) or int(dim) != dim or not 1 <= dim <= 3:
+        raise ValueError(f"dim must be 1, 2 or 3; got {dim!r}")
     return int(dim)
 
 
@@ -445,7 +453,7 @@ class Periodic:
         discretisation: Discretisation = "exact",
     ):
         self.dim = _check_dim(dim)
-        self.omega = float(omega)
+        self.omega = _number(omega, "omega")
         if not np.isfinite(self.omega) or self.omega <= 0:
             raise ValueError(f"omega must be a finite number > 0; got {omega}")
         self.q = _check_q(q)

@@ -160,6 +160,9 @@ class SwitchingLinearSystem:
         >>> zs.shape, xs.shape, ys.shape
         ((50,), (50, 2), (50, 1))
         """
+        if isinstance(T, bool) or not (float(T).is_integer() and T >= 0):
+            raise ValueError(f"T must be a whole number of steps >= 0; got {T}")
+        T = int(T)
         gen = as_rng(rng)
         n = self.ndim_state
         H, R = np.asarray(self.measurement.H(n)), np.asarray(self.measurement.R())

@@ -576,10 +576,15 @@ class BoxTracker:
                             f"{frame_rate!r}")
         if not frame_rate > 0:
             raise ValueError(f"frame_rate must be > 0; got {frame_rate}")
+        lacks = [a for a in ("at_rate", "initial", "Q_diag", "R_diag")
+                 if motion is not None and not callable(getattr(motion, a, None))]
+        if lacks:  # what the docstring asks of a motion that is not a BoxMotion
+            raise TypeError(f"motion must be a vistrack.models.BoxMotion, or have its "
+                            f"{', '.join(lacks)}; got {type(motion).__name__} {motion!r}")
         # the motion's noise at this tracker's frame rate (models/box.py)
         self.motion = (motion or BoxMotion()).at_rate(frame_rate)
         self.frame_rate = float(frame_rate)
-        if image_size is not None and (len(image_size) != 2 or not all(
+        if image_size is not None and (np.shape(image_size) != (2,) or not all(
                 0 < float(v) < np.inf for v in image_size)):  # NaN: no track ever coasted
             raise ValueError(f"image_size must be (width, height), finite and > 0; got "
                              f"{image_size}")
