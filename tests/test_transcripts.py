@@ -8,7 +8,8 @@ stderr is compared with the lines shown under it. Times are the one thing left o
 frames/s, the milliseconds a frame, a batch's seconds, and the note a first run gives when
 it compiles. Lines are compared as a multiset (a batch's pool finishes its inputs in any
 order); where the docs elide lines with ``...``, the lines shown must each be printed.
-Blocks that cannot run as written are listed in ``NOT_RUN`` with the reason.
+Blocks that cannot run as written are listed in ``NOT_RUN`` with the reason. README's
+``python`` blocks run in order in one namespace, each printing the output shown under it.
 """
 
 import os
@@ -136,3 +137,48 @@ def test_transcript(where, steps, tmp_path):
             f"{where}: `$ {cmd}` printed\n{run.stdout}{run.stderr}\n"
             f"lines shown in the docs but not printed: {list(missing)}\n"
             f"lines printed but not shown: {list(extra)}")
+
+
+def python_blocks(path):
+    """``(line, code, shown)`` for each ``python`` block of ``path``, ``shown`` the lines of
+    a plain block right after it (its printed output), or None."""
+    lines = path.read_text(encoding="utf-8").splitlines()
+    fences = [k for k, text in enumerate(lines) if text.lstrip().startswith("```")]
+    blocks = list(zip(fences[::2], fences[1::2]))
+    for (a, b), after in zip(blocks, [*blocks[1:], None]):
+        if lines[a].strip() != "```python":
+            continue
+        shown = None
+        if after is not None and lines[after[0]].strip() == "```" and \
+                not "\n".join(lines[b + 1:after[0]]).strip():
+            body = lines[after[0] + 1:after[1]]
+            shown = None if body and body[0].startswith("$ ") else body
+        yield a + 1, "\n".join(lines[a + 1:b]), shown
+
+
+PYTHON_NOT_RUN = {"from ultralytics import YOLO": "the user's own model and video"}
+
+
+@pytest.mark.slow
+def test_the_readme_python_blocks_run_in_order_and_print_what_is_shown(tmp_path, monkeypatch):
+    """README's Python blocks, run one after the other in one namespace as a reader pastes
+    them (a block used a name no block defined: NameError), each printing the output block
+    shown under it."""
+    import contextlib
+    import io
+
+    (tmp_path / "out").mkdir()
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    ran = 0
+    for line, code, shown in python_blocks(ROOT / "README.md"):
+        if any(code.startswith(start) for start in PYTHON_NOT_RUN):
+            continue
+        printed = io.StringIO()
+        with contextlib.redirect_stdout(printed):
+            exec(compile(code, f"README.md:{line}", "exec"), namespace)  # noqa: S102
+        ran += 1
+        if shown is not None:
+            assert [normalise(x) for x in printed.getvalue().splitlines()] == \
+                [normalise(x) for x in shown], f"README.md:{line} printed {printed.getvalue()}"
+    assert ran >= 4
