@@ -23,6 +23,29 @@ VTEST = SHARED / "data" / "opencv-vtest" / "vtest.avi"
 # ----------------------------------------------------------------------------- video
 
 
+@pytest.mark.parametrize("prefetch,read,corrupt", [(1, 2, False), (4, 2, False),
+                                                    (1, 2, True)])
+def test_a_reader_left_as_its_thread_hands_over_the_end_does_not_hang(tmp_path, prefetch, read,
+                                                                      corrupt):
+    """The thread put the end (or the error of a corrupt last image) into a full queue with
+    no timeout: a reader closed ``prefetch`` frames before the end waited for ever."""
+    import threading
+    import time
+
+    for k in range(1, 4 if prefetch == 1 else 7):
+        cv2.imwrite(str(tmp_path / f"{k:06d}.png"), np.full((4, 6, 3), 40 * k, np.uint8))
+    if corrupt:
+        (tmp_path / "000004.png").write_bytes(b"not a png")
+    it = iter(VideoReader(tmp_path, prefetch=prefetch))
+    for _ in range(read):
+        next(it)
+    time.sleep(0.5)  # the thread has decoded the rest and waits to hand over the end
+    closer = threading.Thread(target=it.close, daemon=True)
+    closer.start()
+    closer.join(10)
+    assert not closer.is_alive(), "closing the reader hung"
+
+
 def test_image_folder_and_mp4_round_trip(tmp_path):
     rng = np.random.default_rng(0)
     frames = [cv2.GaussianBlur(rng.integers(0, 255, (48, 64, 3), dtype=np.uint8), (9, 9), 3)

@@ -539,23 +539,29 @@ class VideoReader:
         stop = threading.Event()
         end = object()
 
+        def hand(item: object) -> bool:
+            # to the caller, unless it has stopped reading (then nothing takes from the
+            # queue: a put that waits for room would wait for ever, and the caller's join
+            # with it)
+            while not stop.is_set():
+                try:
+                    q.put(item, timeout=0.1)
+                    return True
+                except queue.Full:
+                    continue
+            return False
+
         def work() -> None:
             # what goes wrong is handed to the caller's thread, in order: the notes of a
             # truncated file or a skipped image (warned there, not here: the warnings machinery
             # is not thread-safe) and the error
             try:
                 for f in self._frames():
-                    while not stop.is_set():
-                        try:
-                            q.put(f, timeout=0.1)
-                            break
-                        except queue.Full:
-                            continue
-                    if stop.is_set():
+                    if not hand(f):
                         return
-                q.put((end, None))
+                hand((end, None))
             except BaseException as exc:
-                q.put((end, exc))
+                hand((end, exc))
 
         t = threading.Thread(target=work, name="vistrack-video-reader", daemon=True)
         t.start()
