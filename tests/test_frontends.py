@@ -126,7 +126,7 @@ def test_bad_inputs_name_the_file(tmp_path):
         VideoReader(tmp_path, fps=0)
     with pytest.raises(ValueError, match="fps must be a finite number > 0; got -1"):
         VideoWriter(tmp_path / "x.mp4", fps=-1)
-    with pytest.raises(ValueError, match="start must be >= 1"):
+    with pytest.raises(ValueError, match=r"start must be a whole number >= 1 \(frames count "):
         VideoReader(tmp_path, start=0)
 
 
@@ -1724,11 +1724,21 @@ def test_a_stop_before_the_start_and_a_negative_area_are_named(tmp_path):
 
     video = _folder(tmp_path, n=3, ext=".png")[0].parent
     for stop in (-5, 0):
-        with pytest.raises(ValueError, match=rf"^stop must be >= start \(1\): the last frame "
-                                             rf"read; got {stop}$"):
+        with pytest.raises(ValueError, match=rf"^stop must be a whole number >= 1 \(the last "
+                                             rf"frame read, from start = 1\); got {stop}$"):
             VideoReader(video, stop=stop)
-    with pytest.raises(ValueError, match=r"^stop must be >= start \(3\)"):
+    with pytest.raises(ValueError, match=r"^stop must be a whole number >= 3 \(the last frame "
+                                         r"read, from start = 3\); got 2$"):
         VideoReader(video, start=3, stop=2)
+    # int() cut 2.7 to 2 (a frame early), and "x" gave int()'s message
+    with pytest.raises(ValueError, match=r"^start must be a whole number >= 1 .*; got 2.7$"):
+        VideoReader(video, start=2.7)
+    with pytest.raises(TypeError, match=r"^start must be a number; got 'x'$"):
+        VideoReader(video, start="x")
+    with pytest.raises(ValueError, match=r"^prefetch must be a whole number >= 0 .*; got 1.5$"):
+        VideoReader(video, prefetch=1.5)
+    with pytest.raises(TypeError, match=r"^fps must be a number; got '30'$"):
+        VideoReader(video, fps="30")
     assert len(list(VideoReader(video, start=2, stop=2))) == 1
     for bad in (-5, np.inf, np.nan):
         with pytest.raises(ValueError, match=r"^min_area must be >= 0 and finite; got "):

@@ -348,7 +348,8 @@ def test_f_with_a_time_step_for_each_state_is_each_state_propagated_alone(model)
     (lambda: Periodic(omega="a"), TypeError, "omega must be a number; got 'a'"),
     (lambda: ConstantVelocity(dim="2"), ValueError, "dim must be 1, 2 or 3; got '2'"),
     (lambda: SwitchingLinearSystem([ConstantVelocity(dim=1)], Position(dim=1), [[1.0]]).sample(
-        -1, x0=[0.0, 0.0], rng=0), ValueError, "T must be a whole number of steps >= 0; got -1"),
+        -1, x0=[0.0, 0.0], rng=0), ValueError,
+     "T must be a whole number >= 0 (a number of steps); got -1"),
 ])
 def test_arguments_that_float_or_numpy_named_no_further_are_named(call, exc, match):
     """float()'s "could not convert string to float", numpy's "negative dimensions are not

@@ -8,7 +8,7 @@ surfacing later as a broadcasting error or a silent NaN.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -68,6 +68,27 @@ def as_float_array(value: ArrayLike | None, name: str, *,
     if not arr.flags.c_contiguous:  # (np.ascontiguousarray would turn a scalar into 1-D)
         arr = np.ascontiguousarray(arr)
     return arr
+
+
+def as_number(value: Any, name: str) -> float:
+    """``value`` as a float, or a TypeError naming ``name`` (``float()`` names neither)."""
+    if isinstance(value, (str, bytes)):
+        raise TypeError(f"{name} must be a number; got {value!r}")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a number; got {value!r}") from None
+
+
+def as_whole(value: Any, name: str, minimum: int, what: str = "") -> int:
+    """``value`` as an int, or an error naming ``name``: a TypeError for what is not a
+    number, a ValueError for one that is not whole or is below ``minimum`` (``int()`` would
+    cut 2.5 to 2). ``what`` says what it counts (``"frames count from 1"``)."""
+    v = as_number(value, name) if not isinstance(value, (bool, np.bool_)) else None
+    if v is None or not (np.isfinite(v) and v.is_integer() and v >= minimum):
+        raise ValueError(f"{name} must be a whole number >= {minimum}"
+                         f"{f' ({what})' if what else ''}; got {value!r}")
+    return int(v)
 
 
 def as_uint8_image(image: ArrayLike, name: str = "image", channels: tuple[int, ...] = (1, 3, 4),

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._validate import bgr_to_grey
+from .._validate import as_number, as_whole, bgr_to_grey
 from ..types import Frame
 
 if TYPE_CHECKING:
@@ -299,15 +299,14 @@ class VideoReader:
         if not src.exists():
             raise FileNotFoundError(f"{src} does not exist")
         self.source, self.grey = src, bool(grey)
-        if int(start) < 1:
-            raise ValueError(f"start must be >= 1 (frames count from 1); got {start}")
-        self.start, self.stop = int(start), None if stop is None else int(stop)
-        if self.stop is not None and self.stop < self.start:  # ("no frames to track")
-            raise ValueError(f"stop must be >= start ({self.start}): the last frame read; "
-                             f"got {stop}")
-        if int(prefetch) < 0:
-            raise ValueError(f"prefetch must be >= 0; got {prefetch}")
-        self.prefetch = int(prefetch)
+        # whole numbers: int() cut 2.7 to 2 (a frame early) and named nothing for "x"
+        self.start = as_whole(start, "start", 1, "frames count from 1")
+        # (before the start: "no frames to track")
+        self.stop = None if stop is None else as_whole(
+            stop, "stop", self.start, f"the last frame read, from start = {self.start}")
+        self.prefetch = as_whole(prefetch, "prefetch", 0, "frames decoded ahead")
+        if fps is not None:
+            fps = as_number(fps, "fps")
         self.skip_bad = bool(skip_bad)
         self._files: list[Path] | None = None
         # a folder's 16-bit images: their depth in bits, and how many were clipped above it
@@ -697,6 +696,7 @@ class VideoWriter:
 
     def __init__(self, path: str | Path, fps: float, size: tuple[int, int] | None = None, *,
                  name: str | Path | None = None):
+        fps = as_number(fps, "fps")
         if not np.isfinite(fps) or fps <= 0:
             raise ValueError(f"fps must be a finite number > 0; got {fps}")
         self.path, self.fps, self.size = Path(path), float(fps), size

@@ -22,7 +22,7 @@ from typing import Literal, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, check_matrix_stack, check_psd
+from .._validate import as_float_array, as_number, check_matrix_stack, check_psd
 
 __all__ = [
     "MotionModel",
@@ -139,16 +139,8 @@ def _sin_series(u2: np.ndarray, first: int) -> np.ndarray:
     return out
 
 
-def _number(value: float, name: str) -> float:
-    """``value`` as a float, or a TypeError naming ``name`` (float() names neither)."""
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a number; got {value!r}") from None
-
-
 def _check_q(q: float) -> float:
-    q = _number(q, "q")
+    q = as_number(q, "q")
     if not np.isfinite(q) or q < 0:
         raise ValueError(f"q must be a finite number >= 0; got {q}")
     return q
@@ -453,7 +445,7 @@ class Periodic:
         discretisation: Discretisation = "exact",
     ):
         self.dim = _check_dim(dim)
-        self.omega = _number(omega, "omega")
+        self.omega = as_number(omega, "omega")
         if not np.isfinite(self.omega) or self.omega <= 0:
             raise ValueError(f"omega must be a finite number > 0; got {omega}")
         self.q = _check_q(q)

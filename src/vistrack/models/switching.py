@@ -20,7 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_rng, check_finite
+from .._validate import as_float_array, as_rng, as_whole, check_finite
 from .measurement import MeasurementModel
 from .motion import MotionModel
 
@@ -160,9 +160,7 @@ class SwitchingLinearSystem:
         >>> zs.shape, xs.shape, ys.shape
         ((50,), (50, 2), (50, 1))
         """
-        if isinstance(T, bool) or not (float(T).is_integer() and T >= 0):
-            raise ValueError(f"T must be a whole number of steps >= 0; got {T}")
-        T = int(T)
+        T = as_whole(T, "T", 0, "a number of steps")
         gen = as_rng(rng)
         n = self.ndim_state
         H, R = np.asarray(self.measurement.H(n)), np.asarray(self.measurement.R())

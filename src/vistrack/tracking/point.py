@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._validate import as_whole
 from ..association import (
     assign,
     chi2_threshold,
@@ -148,9 +149,7 @@ class PointTracker:
         if not (np.isfinite(init_speed) and init_speed > 0):
             raise ValueError(f"init_speed must be a finite number > 0; got {init_speed}")
         self.init_speed = float(init_speed)
-        if isinstance(confirm_hits, bool) or not (float(confirm_hits).is_integer()
-                                                  and confirm_hits >= 1):
-            raise ValueError(f"confirm_hits must be a whole number >= 1; got {confirm_hits}")
+        confirm_hits = as_whole(confirm_hits, "confirm_hits", 1)
         if not (np.isfinite(max_lost) and max_lost >= 0):
             raise ValueError(f"max_lost must be a finite number of seconds >= 0; got {max_lost}")
         self.confirm_hits, self.max_lost = int(confirm_hits), float(max_lost)
