@@ -370,7 +370,7 @@ def test_calibration_edge_cases_and_errors():
         BoxTracker(chain_span=-0.5)
     with pytest.raises(ValueError, match="must be increasing"):
         ScoreCalibration([0.2, 0.1], [0.0, 1.0])
-    with pytest.raises(ValueError, match=r"detection scores must not be NaN; scores\[0\]"):
+    with pytest.raises(ValueError, match=r"scores must be finite; scores\[0\] = nan"):
         BoxTracker().step(1, Detections(boxes=boxes, scores=[np.nan]))
 
 

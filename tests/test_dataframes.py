@@ -436,3 +436,24 @@ def test_detections_of_words_name_the_column():
                                          r"is 'a'$"):
         Detections(boxes=[[0, "a", 1, 1]])
     assert Detections(boxes=box, scores=["0.5"], classes=["2"]).classes.tolist() == [2]
+
+
+def test_detections_refuse_scores_that_are_no_real_number_and_classes_that_would_wrap():
+    """An infinite score was tracked and written to results read_mot then refused; a NaN one
+    failed only at the tracker's step; a uint64 class of 2**64 - 1 became -1."""
+    from vistrack.types import Detections
+
+    box = np.zeros((2, 4))
+    with pytest.raises(ValueError, match=re.escape(
+            "scores must be finite; scores[1] = inf (the logit of a probability of 0 or 1? "
+            "clip the probabilities first)")):
+        Detections(boxes=box, scores=[0.5, np.inf])
+    for scores in ([np.nan, 1.0], [None, 1.0]):
+        with pytest.raises(ValueError, match=re.escape("scores must be finite; scores[0] = nan")
+                           + "$"):
+            Detections(boxes=box, scores=scores)
+    with pytest.raises(ValueError, match=re.escape(
+            "classes must be whole numbers within ±(2**53 - 1); classes[0] = "
+            "18446744073709551615")):
+        Detections(boxes=box, classes=np.array([2**64 - 1, 1], np.uint64))
+    assert Detections(boxes=box, scores=[-5.0, 1e9]).scores.tolist() == [-5.0, 1e9]

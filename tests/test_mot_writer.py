@@ -54,7 +54,7 @@ def test_write_mot_is_the_percent_format_byte_for_byte(tmp_path, seed):
     path = _write_sorted(tmp_path / "r.txt", f, i, b, c)
     assert path.read_bytes() == percent_format(f, i, b, c)
     ok = (f >= 1) & np.isfinite(b).all(axis=1) & (b[:, 2:] >= 0).all(axis=1) & np.isfinite(c)
-    ok &= (f <= 2**53) & (np.abs(i) <= 2**53)  # read_mot's bound on frames and ids
+    ok &= (f < 2**53) & (np.abs(i) < 2**53)  # read_mot's bound on frames and ids
     valid = write_mot(tmp_path / "v.txt", f[ok], i[ok], b[ok], c[ok])
     assert valid.read_bytes() == percent_format(f[ok], i[ok], b[ok], c[ok])
 
@@ -127,11 +127,15 @@ def test_write_mot_hypothesis_floats(tmp_path_factory, rows):
     # an id of 2**64 - 1 (uint64) was written as -1, a detection's; frame 2**62 was written
     # into a file read_mot refused
     ([1], np.array([2**64 - 1], np.uint64), [[0, 0, 1, 1]], None,
-     "ids[0] = 18446744073709551615 is beyond 2**53, which read_mot refuses"),
+     "ids[0] = 18446744073709551615 is not within ±(2**53 - 1), which read_mot refuses"),
     ([2**62], [1], [[0, 0, 1, 1]], None,
-     "frames[0] = 4611686018427387904 is beyond 2**53, which read_mot refuses"),
+     "frames[0] = 4611686018427387904 is not within ±(2**53 - 1), which read_mot refuses"),
     ([1.0e17], [1], [[0, 0, 1, 1]], None,
-     "frames[0] = 1e+17 is beyond 2**53, which read_mot refuses"),
+     "frames[0] = 1e+17 is not within ±(2**53 - 1), which read_mot refuses"),
+    # 2**53 + 1 was let through (as a float it is 2**53) and read back as 2**53: two
+    # identities one
+    ([1, 1], np.array([2**53 - 1, 2**53 + 1]), [[0, 0, 1, 1]] * 2, None,
+     "ids[1] = 9007199254740993 is not within ±(2**53 - 1), which read_mot refuses"),
 ])
 def test_write_mot_refuses_what_read_mot_would_refuse(tmp_path, frames, ids, boxes, conf,
                                                       message):

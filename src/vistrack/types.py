@@ -161,12 +161,18 @@ def _floats(values: ArrayLike, name: str) -> np.ndarray:
 
 def _whole_numbers(values: ArrayLike, name: str) -> np.ndarray:
     """``values`` as int64, refusing a value that is not a whole number (a class of 1.7 was
-    class 1) or not finite, naming it."""
+    class 1), not finite, or not within ±(2**53 - 1) (a uint64 of 2**64 - 1 became -1),
+    naming it."""
     a = np.asarray(values)
     if a.dtype.kind in "iub":
+        big = (a >= 2**53) | (a <= -(2**53))  # compared as integers
+        if big.any():
+            k = int(np.flatnonzero(big.ravel())[0])
+            raise ValueError(f"{name} must be whole numbers within ±(2**53 - 1); {name}[{k}] = "
+                             f"{a.ravel()[k].tolist()!r}")
         return a.astype(np.int64, copy=False)
     x = _floats(a, name)
-    bad = ~np.isfinite(x) | (x != np.round(x)) | (np.abs(x) > 2.0 ** 53)
+    bad = ~np.isfinite(x) | (x != np.round(x)) | (np.abs(x) >= 2.0 ** 53)
     if bad.any():
         k = int(np.flatnonzero(bad.ravel())[0])
         raise ValueError(f"{name} must be whole numbers; {name}[{k}] = {float(x.ravel()[k])!r}")
@@ -256,6 +262,12 @@ class Detections:
                 v = _whole_numbers(v, "classes")
             else:
                 v = _floats(v, name)
+                if not np.isfinite(v).all():  # any real number ranks; inf and NaN do not
+                    i = int(np.flatnonzero(~np.isfinite(v.ravel()))[0])
+                    bad = float(v.ravel()[i])
+                    raise ValueError(f"scores must be finite; scores[{i}] = {bad}" + (
+                        " (the logit of a probability of 0 or 1? clip the probabilities "
+                        "first)" if np.isinf(bad) else ""))
             if v.shape != (n,):
                 raise ValueError(f"{name} must have shape ({n},); got {v.shape}")
             object.__setattr__(self, name, v)

@@ -164,7 +164,7 @@ class MOTTable:
         Score (detections, results) or the ground truth's "consider" flag (0: ignore).
     classes : (N,) int
         Column 8: the ground-truth class of MOT16/17/20, or the detector's; -1 where absent,
-        and in every row where any row's is not an integer of at most 2**53 in size (MOT15
+        and in every row where any row's is not an integer below 2**53 in size (MOT15
         ground truth and MOTChallenge's detections files hold a world ``x`` there).
     visibility : (N,) float
         Column 9 of MOT16/17/20 ground truth, -1 where absent.
@@ -218,7 +218,7 @@ class MOTTable:
             If the rows have fewer than 6 values; :class:`MOTFormatError` (a ``ValueError``)
             naming the row and value for one the table cannot hold as given: a value that is
             not finite, a frame or identity that is not an integer (1.7 was frame 1) or lies
-            beyond 2**53. A frame of 0 or a negative width it holds, as a tracker that
+            from 2**53 on. A frame of 0 or a negative width it holds, as a tracker that
             counts from 0 writes them, and :func:`~vistrack.evaluation.evaluate_mot` names
             them.
 
@@ -237,11 +237,11 @@ class MOTTable:
         where = f"{path}, " if path else ""
         for col, bad, text in ((None, lambda v: ~np.isfinite(v), "not a finite number"),
                                (0, lambda v: v != np.round(v), "frame must be an integer"),
-                               (0, lambda v: np.abs(v) > _INT_LIMIT, "frame must lie "
-                                                                      "within ±2**53"),
+                               (0, lambda v: np.abs(v) >= _INT_LIMIT, "frame must lie "
+                                                                       "within ±(2**53 - 1)"),
                                (1, lambda v: v != np.round(v), "id must be an integer"),
-                               (1, lambda v: np.abs(v) > _INT_LIMIT, "id must be between "
-                                                                      "-2**53 and 2**53")):
+                               (1, lambda v: np.abs(v) >= _INT_LIMIT, "id must lie "
+                                                                       "within ±(2**53 - 1)")):
             broken = bad(a) if col is None else bad(a[:, col])[:, None]
             if broken.any():
                 i, j = (int(v) for v in np.argwhere(broken)[0])
@@ -262,7 +262,7 @@ class MOTTable:
             return a[:, j] if w > j else np.full(N, fill, dtype=float)
 
         c = col(7, -1.0)
-        if w > 7 and not ((c == np.round(c)) & (np.abs(c) <= _INT_LIMIT)).all():
+        if w > 7 and not ((c == np.round(c)) & (np.abs(c) < _INT_LIMIT)).all():
             # a class is an integer: a column holding anything else is MOT15's world x (as
             # detections files have it there too, -1 where there is none), and none of its
             # values is a class, a whole number among them (a world x of 3.000) no more
@@ -515,7 +515,7 @@ class MOTTable:
         kind = or_fill("class", -1.0)
         # a text file's eighth value may be something else (MOT15's world x), read as no
         # class; a column named as the class is one, so a fraction there is an error
-        bad = (kind != np.round(kind)) | (np.abs(kind) > _INT_LIMIT)
+        bad = (kind != np.round(kind)) | (np.abs(kind) >= _INT_LIMIT)
         if bad.any():
             k = int(np.argmax(bad))
             raise MOTFormatError(f"{at(k, 'class')}: class must be an integer; got {kind[k]:g}")
@@ -601,7 +601,7 @@ def _read_text(path: str, what: str) -> str:
     return decode_text(Path(path).read_bytes(), path, what, MOTFormatError)
 
 
-# frames and ids beyond 2**53 are not integers a float holds exactly (nor fit in int64 when
+# frames and ids from 2**53 on are not integers a float holds exactly (nor fit in int64 when
 # much larger)
 _INT_LIMIT = 2.0 ** 53
 _CORNERS = ("x1", "y1", "x2", "y2")
@@ -707,9 +707,9 @@ def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
 _ROW_RULES = (
     (0, lambda v: (v < 1) | (v != np.round(v)),
      "frame must be an integer >= 1 (frames count from 1, as MOTChallenge's do)"),
-    (0, lambda v: v > _INT_LIMIT, "frame must be at most 2**53"),
+    (0, lambda v: v >= _INT_LIMIT, "frame must be below 2**53"),
     (1, lambda v: v != np.round(v), "id must be an integer"),
-    (1, lambda v: np.abs(v) > _INT_LIMIT, "id must be between -2**53 and 2**53"),
+    (1, lambda v: np.abs(v) >= _INT_LIMIT, "id must lie within ±(2**53 - 1)"),
     (4, lambda v: v < 0, "width must be >= 0"),
     (5, lambda v: v < 0, "height must be >= 0"),
 )
@@ -1084,7 +1084,7 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
     ValueError
         If ``decimals`` is not an integer in 0-12, the columns differ in length, or a row is
         one :func:`read_mot` would refuse: a
-        frame or id that is not a whole number or lies beyond 2**53, a frame below 1, a box
+        frame or id that is not a whole number or lies from 2**53 on, a frame below 1, a box
         that is not finite or of negative width or height, a score that is not finite
         (naming the first such row).
 
@@ -1192,7 +1192,7 @@ def _write_sorted(path: Path, f: np.ndarray, i: np.ndarray, b: np.ndarray,
 
 def _integers(values: ArrayLike, name: str) -> np.ndarray:
     """``values`` as int64, refusing one that is not a whole number (2.7 was written as 2), or
-    beyond 2**53 either way, which :func:`read_mot` refuses (and a uint64 above int64's range
+    from 2**53 on either way, which :func:`read_mot` refuses (and a uint64 above int64's range
     was written as a negative number: 2**64 - 1 as -1, a detection's identity)."""
     a = np.asarray(values).ravel()
     integer = a.dtype.kind in "iub"
@@ -1202,11 +1202,13 @@ def _integers(values: ArrayLike, name: str) -> np.ndarray:
         if bad.any():
             k = int(np.argmax(bad))
             raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is not a whole number")
-    big = np.abs(x) > _INT_LIMIT
+    # compared as integers where they are (2**53 + 1 becomes 2**53 as a float): from 2**53
+    # on, a float no longer holds every integer, and read_mot refuses them
+    big = ((a >= 2**53) | (a <= -(2**53))) if integer else (np.abs(x) >= _INT_LIMIT)
     if big.any():
         k = int(np.argmax(big))
-        raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is beyond 2**53, which read_mot "
-                         "refuses")
+        raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is not within ±(2**53 - 1), which "
+                         "read_mot refuses")
     return a.astype(np.int64, copy=False) if integer else x.astype(np.int64)
 
 
