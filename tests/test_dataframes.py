@@ -457,3 +457,19 @@ def test_detections_refuse_scores_that_are_no_real_number_and_classes_that_would
             "18446744073709551615")):
         Detections(boxes=box, classes=np.array([2**64 - 1, 1], np.uint64))
     assert Detections(boxes=box, scores=[-5.0, 1e9]).scores.tolist() == [-5.0, 1e9]
+
+
+def test_a_semicolon_csv_whose_first_rows_are_whole_numbers_reads_its_decimal_commas(tmp_path):
+    """The decimal comma was looked for in the first row alone: a file whose first row held
+    whole numbers was read with decimal points, and '10,5' two rows on was refused. pandas,
+    told the dialect, reads it."""
+    import pandas as pd
+
+    from vistrack.io.motchallenge import _read_csv
+
+    p = tmp_path / "semi.csv"
+    p.write_text("frame;id;bb_left;bb_top;bb_width;bb_height;conf\n1;1;10;20;30;40;1\n"
+                 "2;1;10,5;20,25;30;40;0,5\n")
+    np.testing.assert_array_equal(_read_csv(p, "a CSV file").to_numpy(),
+                                  pd.read_csv(p, sep=";", decimal=",").to_numpy())
+    assert _read_csv(p, "a CSV file").to_numpy()[1, 2:4].tolist() == [10.5, 20.25]

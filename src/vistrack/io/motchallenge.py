@@ -84,16 +84,18 @@ def _pandas(what: str) -> Any:
 
 
 def _csv_dialect(path: str | os.PathLike) -> dict[str, str]:
-    """``read_csv``'s ``sep`` (and ``decimal``) for a CSV file, from its header and first row:
+    """``read_csv``'s ``sep`` (and ``decimal``) for a CSV file, from its header (and rows):
     commas; or, where the header has none, tabs or semicolons (a spreadsheet's export), a
-    semicolon file's numbers with decimal commas where its first row has commas."""
+    semicolon file's numbers with decimal commas where any of its rows has a comma (its
+    first rows may hold whole numbers only)."""
     with open(path, encoding="utf-8-sig", errors="replace") as fh:
-        header, row = fh.readline(), fh.readline()
-    if "," in header or not ("\t" in header or ";" in header):
-        return {"sep": ","}
-    if "\t" in header:
-        return {"sep": "\t"}
-    return {"sep": ";", "decimal": ","} if "," in row else {"sep": ";"}
+        header = fh.readline()
+        if "," in header or not ("\t" in header or ";" in header):
+            return {"sep": ","}
+        if "\t" in header:
+            return {"sep": "\t"}
+        # a comma in a semicolon file is a decimal one
+        return {"sep": ";", "decimal": ","} if any("," in row for row in fh) else {"sep": ";"}
 
 
 def _read_csv(path: str | os.PathLike, what: str) -> Any:
