@@ -4,6 +4,7 @@ memory, and leave no file under the final name until the run is complete."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +22,8 @@ from .heap import heap_meter
 
 def random_tracks(rng, n_frames, *, max_rows=8, id_pool=60):
     """Frames 1..n of box tracks with random ids (int32 or int64), boxes and scores, and some
-    awkward values (negative zero, halves that round either way, huge and NaN scores)."""
+    awkward values (negative zero, halves that round either way, huge and tiny negative
+    scores)."""
     out = []
     for f in range(1, n_frames + 1):
         k = int(rng.integers(0, max_rows + 1))
@@ -31,7 +33,7 @@ def random_tracks(rng, n_frames, *, max_rows=8, id_pool=60):
         scores = rng.uniform(-1, 17, k)
         if k and f % 7 == 0:
             xyxy[0] = [-0.0, 0.125, 2.675, 1.005]
-            scores[0] = [np.nan, 0.99995, 1e-5, 123456.0][f % 4]
+            scores[0] = [-1e-300, 0.99995, 1e-5, 123456.0][f % 4]
         out.append((Frame(f, (f - 1) / 25), Tracks(ids=ids, boxes=xyxy, points=None,
                                                    scores=scores,
                                                    classes=ids % 3 - 1)))  # a track's own
@@ -76,8 +78,7 @@ def test_mot_and_csv_writers_write_the_same_bytes_as_the_whole_file_at_once(tmp_
     csv.close()
     assert (tmp_path / "t.txt").read_text() == mot_text(rows)
     assert (tmp_path / "t.csv").read_text() == csv_text(rows)
-    # and what write_mot's formatting makes of the rows kept in memory (write_mot itself
-    # refuses the NaN scores among them, which read_mot would refuse)
+    # and what write_mot's formatting makes of the rows kept in memory
     _write_sorted(tmp_path / "all.txt", np.asarray(kept.frames, np.int64),
                   np.asarray(kept.ids, np.int64), kept.xywh, kept.scores)
     assert (tmp_path / "t.txt").read_bytes() == (tmp_path / "all.txt").read_bytes()
@@ -101,11 +102,9 @@ def test_boxes_in_other_units_are_written_with_more_decimals(tmp_path, decimals)
         kept.write(frame, t)
     mot.close()
     assert (tmp_path / "t.txt").read_text() == mot_text(rows, decimals)
-    ok = np.isfinite(kept.scores)  # write_mot refuses NaN scores
-    write_mot(tmp_path / "w.txt", kept.frames[ok], kept.ids[ok], kept.xywh[ok], kept.scores[ok],
+    write_mot(tmp_path / "w.txt", kept.frames, kept.ids, kept.xywh, kept.scores,
               decimals=decimals)
-    assert (tmp_path / "w.txt").read_text() == mot_text([r for r, k in zip(rows, ok) if k],
-                                                        decimals)
+    assert (tmp_path / "w.txt").read_text() == mot_text(rows, decimals)
     with pytest.raises(ValueError, match="decimals must be an integer in 0-12; got 13"):
         MOTWriter(tmp_path / "x.txt", 13)
     with pytest.raises(ValueError, match="decimals must be an integer in 0-12; got 2.5"):
@@ -432,3 +431,23 @@ def test_replacing_removes_the_folders_it_made_when_interrupted(tmp_path):
     with pytest.raises(KeyboardInterrupt), replacing(tmp_path / "a" / "b" / "x.txt") as part:
         raise KeyboardInterrupt
     assert [p.name for p in (tmp_path / "a").iterdir()] == ["keep.txt"]
+
+
+@pytest.mark.parametrize("frame,ids,box,score,message", [
+    (0, [1], [0.0, 0.0, 1.0, 1.0], 1.0, "frame 0: MOTChallenge frames count from 1"),
+    (1, [1], [np.nan, 0.0, 1.0, 1.0], 1.0, "frame 1, track 1: box (x, y, w, h) [nan, 0.0, "),
+    (1, [1.7], [0.0, 0.0, 1.0, 1.0], 1.0, "frame 1: ids[0] = 1.7 is not a whole number"),
+    (1, [1], [0.0, 0.0, 1.0, 1.0], np.inf, "frame 1, track 1: box (x, y, w, h) [0.0, 0.0, 1.0,"
+                                           " 1.0], score inf: a row read_mot refuses"),
+])
+@pytest.mark.parametrize("sink", [MOTWriter, CSVWriter])
+def test_the_file_sinks_refuse_rows_read_mot_would_refuse(tmp_path, sink, frame, ids, box,
+                                                          score, message):
+    """The sinks wrote frame 0, NaN boxes and infinite scores, which read_mot then refused
+    (as write_mot refuses them), and wrote track 1.7 as track 1."""
+    x0, y0, w, h = box
+    tracks = Tracks(ids=np.asarray(ids), boxes=np.array([[x0, y0, x0 + w, y0 + h]]),
+                    points=None, scores=np.array([score]), classes=np.zeros(1, int))
+    out = sink(tmp_path / ("t.txt" if sink is MOTWriter else "t.csv"))
+    with pytest.raises(ValueError, match="^" + re.escape(message)):
+        out.write(Frame(frame, 0.0), tracks)

@@ -24,7 +24,14 @@ import numpy as np
 from ..types import Frame, Tracks
 from .atomic import PartialFile, open_replacing
 from .motchallenge import _ROW as _MOT_ROW
-from .motchallenge import MOTTable, _check_decimals, _format_rows, _format_rows_with, read_mot
+from .motchallenge import (
+    MOTTable,
+    _check_decimals,
+    _format_rows,
+    _format_rows_with,
+    _integers,
+    read_mot,
+)
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -282,14 +289,30 @@ class _RowsFile:
     def _columns(self, frame: Frame, tracks: Tracks
                  ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, list[int]]:
         """The frame's index and its rows' ids, boxes ``x, y, w, h`` and scores, as
-        :class:`TrackRows` keeps them (int and float64), and classes (a list), counted."""
-        ids = np.asarray(tracks.ids).astype(int)
+        :class:`TrackRows` keeps them (int and float64), and classes (a list), counted; a
+        row :func:`~vistrack.io.read_mot` would refuse to read back (as
+        :func:`~vistrack.io.write_mot` refuses it) is a ValueError naming the frame."""
+        f = int(frame.index)
+        if f < 1:
+            raise ValueError(f"frame {f}: MOTChallenge frames count from 1 (read_mot refuses "
+                             f"frame {f})")
+        try:  # 1.7 was written as track 1
+            ids = _integers(tracks.ids, "ids")
+        except ValueError as e:
+            raise ValueError(f"frame {f}: {e}") from None
         xywh = np.asarray(tracks.xywh, dtype=float)
         scores = np.asarray(tracks.scores, dtype=float)
+        bad = ~np.isfinite(xywh).all(axis=1) | (xywh[:, 2:] < 0).any(axis=1) | ~np.isfinite(
+            scores)
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise ValueError(f"frame {f}, track {ids[k]}: box (x, y, w, h) "
+                             f"{xywh[k].tolist()}, score {scores[k]}: a row read_mot refuses "
+                             "(a box must be finite with w, h >= 0, a score finite)")
         classes = np.asarray(tracks.classes).astype(int).tolist()
         self._rows += len(ids)
         self._ids.update(zip(ids.tolist(), classes))
-        return int(frame.index), ids, xywh, scores, classes
+        return f, ids, xywh, scores, classes
 
     def __len__(self) -> int:
         return self._rows
