@@ -1743,3 +1743,55 @@ def test_a_stop_before_the_start_and_a_negative_area_are_named(tmp_path):
     for bad in (-5, np.inf, np.nan):
         with pytest.raises(ValueError, match=r"^min_area must be >= 0 and finite; got "):
             BlobDetector(min_area=bad)
+
+
+def test_a_frame_of_another_size_is_named_by_both_background_models():
+    """MOG2 started its mixture afresh on a frame of another size or type, without a word
+    (then a 100-pixel square was never foreground again); the selective model took such a
+    frame among its first and failed at numpy's stack, naming nothing."""
+    rng = np.random.default_rng(0)
+    frames = [np.clip(100 + rng.normal(0, 2, (40, 60)), 0, 255).astype(np.uint8)
+              for _ in range(10)]
+    square = frames[0].copy()
+    square[10:20, 20:30] = 200
+    mog = MOG2Background(history=50).initialize(frames)
+    for other, shape in ((np.zeros((30, 50), np.uint8), "50x30 with 1"),
+                         (np.zeros((40, 60, 3), np.uint8), "60x40 with 3")):
+        with pytest.raises(ValueError, match=re.escape(
+                f"image is {shape} channel(s); the model's frames are 60x40 with 1")):
+            mog.apply(other)
+    assert int(mog.apply(square).sum()) // 255 == 100  # the model kept
+    sel = SelectiveBackground(n_init=3)
+    sel.apply(frames[0])
+    with pytest.raises(ValueError, match=re.escape("image is 60x30 with 1 channel(s)")):
+        sel.apply(frames[0][:30])
+    with pytest.raises(ValueError, match=re.escape("frames[1] is 60x40 with 3 channel(s)")):
+        SelectiveBackground().initialize([frames[0], np.zeros((40, 60, 3), np.uint8)])
+
+
+def test_hog_takes_a_bgra_image_as_its_bgr():
+    """A PNG with transparency (trackpy's frames are RGBA) failed OpenCV's assertion
+    (img.type() == CV_8U || img.type() == CV_8UC3), naming no argument."""
+    from vistrack.frontends.detectors import HOGConfidence, HOGDetector
+
+    rng = np.random.default_rng(1)
+    bgr = rng.integers(0, 256, (300, 200, 3), dtype=np.uint8)
+    bgra = np.dstack([bgr, np.full((300, 200), 255, np.uint8)])
+    a, b = HOGConfidence()(bgra), HOGConfidence()(bgr)
+    for x, y in zip(a.scores, b.scores):
+        np.testing.assert_array_equal(x, y)
+    det = HOGDetector(upscale=1.0, hit_threshold=-2.0)
+    np.testing.assert_array_equal(det.detect(bgra).boxes, det.detect(bgr).boxes)
+
+
+def test_view_shift_scales_by_the_reduction_each_axis_had():
+    """The unrefined estimate was scaled by the whole reduction s where the size was not a
+    multiple of it (a 1279-pixel width by 4 is 319 pixels, 4.009 each): -23.93 for a view
+    moved by exactly -24 (an integer crop, the ground truth)."""
+    rng = np.random.default_rng(0)
+    big = cv2.GaussianBlur(rng.integers(0, 256, (800, 1600), dtype=np.uint8), (0, 0), 3)
+    a, b = big[100:676, 200:1479], big[88:664, 224:1503]
+    from vistrack.frontends import view_shift
+
+    dx, dy, _ = view_shift(a, b)
+    assert abs(dx + 24) < 0.03 and abs(dy - 12) < 0.03

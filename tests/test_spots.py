@@ -163,3 +163,17 @@ def test_float_images_noise_size_0_and_bad_settings():
         locate(im, 9, noise_size=-1)
     with pytest.raises(ValueError, match="separation must be a finite number > 0; got 0"):
         locate(im, 9, separation=0)
+
+
+def test_no_move_of_the_disc_still_measures_its_centre_of_mass_as_trackpy_does():
+    """max_iterations=0 returned the integer maxima themselves; trackpy measures the disc at
+    the maximum once (it takes 0 as 1)."""
+    tp = pytest.importorskip("trackpy")
+    y, x = np.mgrid[0:40, 0:40]
+    im = (200 * np.exp(-((x - 20.3) ** 2 + (y - 15.6) ** 2) / 8)).astype(np.uint8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # trackpy: "max_iterations has to be larger than 0"
+        want = tp.locate(im, 9, max_iterations=0, engine="python")[["x", "y"]].to_numpy()
+    np.testing.assert_allclose(locate(im, 9, max_iterations=0).centroids, want, atol=1e-9)
+    with pytest.raises(ValueError, match="max_iterations must be a whole number >= 0; got -1"):
+        locate(im, 9, max_iterations=-1)

@@ -222,6 +222,7 @@ class SelectiveBackground:
         images = [self._as3(f) for f in frames]
         if len(images) == 0:
             raise ValueError("initialize needs at least one frame")
+        _one_shape([f.shape for f in images], "frames")
         stack = np.stack(images)
         if shifts is None:
             self.mean = np.median(stack, axis=0).astype(np.float32)
@@ -362,6 +363,8 @@ class SelectiveBackground:
         """
         im = self._as3(image)
         if self.mean is None:
+            if self._buffer and im.shape != self._buffer[0].shape:  # named now, not at the stack
+                _one_shape([self._buffer[0].shape, im.shape], "image")
             self._buffer.append(im.copy())
             if len(self._buffer) >= self.n_init:
                 self.initialize(self._buffer)
@@ -444,6 +447,7 @@ class MOG2Background:
                                                      bool(detect_shadows))
         self.freeze = bool(freeze)
         self._seen = 0
+        self._shape: tuple[int, ...] | None = None  # (H, W, C) of the frames learnt from
 
     def initialize(self, frames: Iterable[np.ndarray]) -> MOG2Background:
         """Learn from ``frames`` first (each is one step of the mixture's learning).
@@ -465,9 +469,20 @@ class MOG2Background:
         0
         """
         for f in frames:
-            self._m.apply(np.asarray(f))
+            self._m.apply(self._same(f))
             self._seen += 1
         return self
+
+    def _same(self, image: np.ndarray) -> np.ndarray:
+        # OpenCV starts its mixture afresh on a frame of another size or type, without a word
+        # (a frame of zeros of another size, and then nothing was ever foreground again)
+        im = np.asarray(image)
+        shape = im.shape if im.ndim == 3 else im.shape + (1,)
+        if self._shape is None:
+            self._shape = shape
+        elif shape != self._shape:
+            _one_shape([self._shape, shape], "image")
+        return im
 
     def apply(self, image: np.ndarray) -> np.ndarray:
         """The foreground mask ``(H, W)`` uint8 (255 foreground) of one frame, and the model's
@@ -491,9 +506,20 @@ class MOG2Background:
         """
         # MOG2 honours learningRate=0 (unlike KNN and GSOC), so freezing works after warm-up
         rate = 0.0 if self.freeze and self._seen else -1.0
-        m = self._m.apply(np.asarray(image), learningRate=rate)
+        m = self._m.apply(self._same(image), learningRate=rate)
         self._seen += 1
         return np.where(m > 200, np.uint8(255), np.uint8(0))
+
+
+def _one_shape(shapes: list[tuple[int, ...]], name: str) -> None:
+    """A ValueError naming ``name`` where the frames' shapes ``(H, W, C)`` differ (numpy's
+    "all input arrays must have the same shape" named neither)."""
+    first = shapes[0]
+    for k, shape in enumerate(shapes[1:], start=1):
+        if shape != first:
+            what = f"{name}[{k}]" if name == "frames" else name
+            raise ValueError(f"{what} is {shape[1]}x{shape[0]} with {shape[2]} channel(s); the "
+                             f"model's frames are {first[1]}x{first[0]} with {first[2]}")
 
 
 BACKGROUNDS: Registry[type] = Registry("background", {"selective": SelectiveBackground,
@@ -633,6 +659,9 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool =
         raise ValueError(f"the frames must be at least 16 pixels on a side; got {w}x{h}")
     s = max(1, min(w // width, h // 16))
     size = (w // s, h // s)
+    # the reduction along each axis: s where it divides the size, a little more where not
+    # (a 1279-pixel width by 4 is 319 pixels: 4.009 each)
+    sx, sy = w / size[0], h / size[1]
     small_a, small_b = (cv2.resize(x, size, interpolation=cv2.INTER_AREA) if s > 1 else x
                         for x in (a, b))
     p = cv2.goodFeaturesToTrack(small_a, 200, 0.01, 7)
@@ -641,7 +670,7 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool =
     if guess is None:
         q, ok = _there_and_back(small_a, small_b, p, levels=3, within=1.0)
     else:
-        g = np.asarray(guess, np.float32).reshape(2) / s
+        g = np.asarray(guess, np.float32).reshape(2) / np.array([sx, sy], np.float32)
         if not np.isfinite(g).all():
             raise ValueError(f"guess must be two finite numbers; got {guess!r}")
         q, ok = _there_and_back(small_a, small_b, p, levels=3, within=1.0, guess=p + g,
@@ -650,10 +679,11 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool =
     if ok.sum() < 10:
         return float("nan"), float("nan"), followed
     d = (q - p)[ok, 0]
-    dx, dy = float(np.median(d[:, 0]) * s), float(np.median(d[:, 1]) * s)
+    dx, dy = float(np.median(d[:, 0]) * sx), float(np.median(d[:, 1]) * sy)
     if refine and s > 1:
         # the corners kept, at the centres of the pixels they stand for, from the estimate
-        at = (p[ok] * s + (s - 1) / 2).astype(np.float32)
+        scale = np.array([sx, sy])
+        at = (p[ok] * scale + (scale - 1) / 2).astype(np.float32)
         q1, kept = _there_and_back(a, b, at, levels=1, within=0.5,
                                    guess=at + np.array([dx, dy], np.float32), back=at.copy())
         if kept.sum() >= 10:

@@ -106,6 +106,16 @@ class Detector(Protocol):
         ...
 
 
+def _hog_image(image: np.ndarray) -> np.ndarray:
+    """An 8-bit grey or BGR image for OpenCV's HOG, which takes no other: a BGRA one (a PNG
+    with transparency) without its alpha; anything else a ValueError naming ``image``
+    (OpenCV's assertion named neither)."""
+    from .._validate import as_uint8_image
+
+    im = as_uint8_image(image)
+    return np.ascontiguousarray(im[..., :3]) if im.ndim == 3 and im.shape[2] == 4 else im
+
+
 class HOGDetector:
     """Dalal and Triggs' HOG people detector (OpenCV's default people SVM), with non-maximum
     suppression; boxes are the person inside each detection window (its central 50 % of the
@@ -179,7 +189,7 @@ class HOGDetector:
         """
         import cv2
 
-        im = np.asarray(image)
+        im = _hog_image(image)
         if self.upscale != 1.0:
             im = cv2.resize(im, None, fx=self.upscale, fy=self.upscale,
                             interpolation=cv2.INTER_LINEAR)
@@ -431,9 +441,7 @@ class HOGConfidence:
     def __call__(self, image: np.ndarray) -> ConfidenceMap:
         import cv2
 
-        from .._validate import as_uint8_image
-
-        im = as_uint8_image(image)
+        im = _hog_image(image)
         H, W = im.shape[:2]
         heights, scores, origins, strides = [], [], [], []
         for h in self.heights:

@@ -28,7 +28,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import bgr_to_grey
+from .._validate import as_whole, bgr_to_grey
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -174,7 +174,8 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         A local maximum must be brighter than this percentile of the band-passed image's
         non-zero pixels.
     max_iterations : int
-        Most moves of the disc in the refinement.
+        Most moves of the disc in the refinement (>= 0); the centre of mass of the disc at
+        the local maximum is measured even with 0, as trackpy's ``locate`` does.
 
     Returns
     -------
@@ -185,8 +186,9 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     ------
     ValueError
         If ``image`` is neither ``(H, W)`` nor ``(H, W, 3)``, ``diameter`` is not an odd
-        integer >= 3, ``noise_size`` is negative, ``separation`` not > 0, or
-        ``smoothing_size`` is even or not larger than ``noise_size``.
+        integer >= 3, ``noise_size`` is negative, ``separation`` not > 0,
+        ``smoothing_size`` is even or not larger than ``noise_size``, or ``max_iterations``
+        is not a whole number >= 0.
 
     References
     ----------
@@ -277,7 +279,9 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     if len(coords) == 0:
         return empty
     # 3. refine
-    pos, mass, rg = _refine(img.astype(np.float64), coords, r, _disc(r), int(max_iterations),
+    # at least the first disc measured (0 reported the integer maxima themselves)
+    moves = max(1, as_whole(max_iterations, "max_iterations", 0))
+    pos, mass, rg = _refine(img.astype(np.float64), coords, r, _disc(r), moves,
                             0.6)
     # 4. of each pair of spots closer than the separation, the less massive goes (ties: the
     # one further from the origin, as trackpy); then the mass limit
