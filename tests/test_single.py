@@ -18,7 +18,15 @@ from vistrack.evaluation.single import (
     success_curve,
     success_rate,
 )
-from vistrack.tracking.single import METHODS, single_tracker
+from vistrack.tracking.appearance import WSLTracker
+from vistrack.tracking.klt import KLTTracker
+from vistrack.tracking.single import (
+    METHODS,
+    ColourParticleTracker,
+    ColourTracker,
+    MedianFlow,
+    single_tracker,
+)
 
 from .conftest import SHARED
 
@@ -517,3 +525,30 @@ def test_read_boxes_reads_utf8_with_a_mark_and_names_a_file_that_is_not_text(tmp
     utf16.write_bytes("1,2,3,4\n".encode("utf-16"))
     with pytest.raises(ValueError, match=re.escape(f"{utf16} is not a text boxes file (byte 0")):
         read_boxes(utf16)
+
+
+@pytest.mark.parametrize("make,message", [
+    (lambda: KLTTracker(half=0),
+     "half must be a whole number >= 1; got 0"),
+    (lambda: KLTTracker(fb_max=np.nan),
+     "fb_max must be a finite number > 0; got nan"),
+    (lambda: KLTTracker(win_size=2),
+     "win_size must be a whole number >= 3; got 2"),
+    (lambda: KLTTracker(quality=0),
+     "quality must be a finite number > 0 and <= 1; got 0"),
+    (lambda: MedianFlow(levels=-1),
+     "levels must be a whole number >= 0; got -1"),
+    (lambda: ColourTracker(bins=0),
+     "bins must be a whole number >= 2; got 0"),
+    (lambda: ColourParticleTracker(sharpness=np.inf),
+     "sharpness must be a finite number >= 0; got inf"),
+    (lambda: WSLTracker(scales=(0.0,)),
+     "scales must be one or more finite positive numbers; got (0.0,)"),
+])
+def test_tracker_settings_that_gave_silent_nonsense_or_opencvs_assertions_are_named(make,
+                                                                                   message):
+    """half=0 found no feature and a NaN fb_max ended every one, both without a word; an
+    infinite sharpness gave NaN boxes and a scale of 0 a box of no size; a window of 2 or a
+    bins of 0 failed inside OpenCV, naming no setting."""
+    with pytest.raises(ValueError, match="^" + re.escape(message) + "$"):
+        make()

@@ -91,6 +91,20 @@ def as_whole(value: Any, name: str, minimum: int, what: str = "") -> int:
     return int(v)
 
 
+def as_finite(value: Any, name: str, low: float | None = None, *, above: bool = False,
+              high: float | None = None) -> float:
+    """``value`` as a finite float ``>= low`` (``> low`` with ``above``) and ``<= high``, or
+    an error naming ``name`` (a NaN setting compared false everywhere and was taken)."""
+    v = as_number(value, name)
+    if not (np.isfinite(v) and (low is None or (v > low if above else v >= low))
+            and (high is None or v <= high)):
+        limits = [f"{'>' if above else '>='} {low:g}" if low is not None else "",
+                  f"<= {high:g}" if high is not None else ""]
+        raise ValueError(f"{name} must be a finite number{' ' if any(limits) else ''}"
+                         f"{' and '.join(x for x in limits if x)}; got {value!r}")
+    return v
+
+
 def as_uint8_image(image: ArrayLike, name: str = "image", channels: tuple[int, ...] = (1, 3, 4),
                    grey: bool = False) -> np.ndarray:
     """An 8-bit ``(H, W)`` or ``(H, W, C)`` image, checked; ``grey=True`` converts colour

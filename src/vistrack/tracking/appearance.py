@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._validate import as_box, as_uint8_image
+from .._validate import as_box, as_finite, as_uint8_image, as_whole
 from .base import SingleObjectTracker
 
 if TYPE_CHECKING:
@@ -369,11 +369,12 @@ class WSLTracker(SingleObjectTracker):
 
     def __init__(self, size: int = 32, radius: int = 8, scales: tuple = (1.0,),
                  blur: float = 1.0, **model: Any):
-        if size < 8 or radius < 1:
-            raise ValueError(f"need size >= 8 and radius >= 1; got size={size}, radius={radius}")
-        self.size, self.radius = int(size), int(radius)
+        self.size, self.radius = as_whole(size, "size", 8), as_whole(radius, "radius", 1)
         self.scales = tuple(float(s) for s in scales)
-        self.blur, self.model_args = float(blur), model
+        if not self.scales or not all(np.isfinite(v) and v > 0 for v in self.scales):
+            # a scale of 0 made a box of no size; none kept the prediction for ever
+            raise ValueError(f"scales must be one or more finite positive numbers; got {scales!r}")
+        self.blur, self.model_args = as_finite(blur, "blur", 0.0), model
 
     def _prepare(self, image: np.ndarray) -> np.ndarray:
         import cv2

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import as_uint8_image
+from .._validate import as_finite, as_uint8_image, as_whole
 from ..types import Detections, Frame, Tracks
 from ._affine import patch_ncc, prepare_templates, register
 from .base import frame_image
@@ -151,14 +151,19 @@ class KLTTracker:
                  levels: int = 2, fb_max: float = 1.0, affine_check: bool = True,
                  half: int = 5, max_residual: float = 0.5, search_radius: int = 24,
                  min_ncc: float = 0.8):
-        if int(max_features) < 1:
-            raise ValueError(f"max_features must be >= 1; got {max_features}")
-        self.max_features, self.quality = int(max_features), float(quality)
-        self.min_distance, self.block_size = float(min_distance), int(block_size)
-        self.win_size, self.levels, self.fb_max = int(win_size), int(levels), float(fb_max)
-        self.affine_check, self.half = bool(affine_check), int(half)
-        self.max_residual, self.search_radius = float(max_residual), int(search_radius)
-        self.min_ncc = float(min_ncc)
+        # each named where it is wrong (OpenCV's assertions named none; half=0 found no
+        # feature and a NaN fb_max ended every one, without a word)
+        self.max_features = as_whole(max_features, "max_features", 1)
+        self.quality = as_finite(quality, "quality", 0.0, above=True, high=1.0)
+        self.min_distance = as_finite(min_distance, "min_distance", 0.0)
+        self.block_size = as_whole(block_size, "block_size", 1)
+        self.win_size = as_whole(win_size, "win_size", 3)
+        self.levels = as_whole(levels, "levels", 0)
+        self.fb_max = as_finite(fb_max, "fb_max", 0.0, above=True)
+        self.affine_check, self.half = bool(affine_check), as_whole(half, "half", 1)
+        self.max_residual = as_finite(max_residual, "max_residual", 0.0, above=True)
+        self.search_radius = as_whole(search_radius, "search_radius", 0)
+        self.min_ncc = as_finite(min_ncc, "min_ncc", -1.0, high=1.0)
         self.reset()
 
     def reset(self) -> None:

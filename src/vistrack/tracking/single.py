@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any, TypedDict
 import numpy as np
 
 from .._registry import Registry
-from .._validate import as_box, as_uint8_image
+from .._validate import as_box, as_finite, as_uint8_image, as_whole
 from ._affine import prepare_templates, register
 from .appearance import WSLTracker
 from .base import SingleObjectTracker
@@ -112,8 +112,10 @@ class MedianFlow(SingleObjectTracker):
 
     def __init__(self, grid: int = 10, fb_max: float = 2.0, win_size: int = 11,
                  levels: int = 3):
-        self.grid, self.fb_max = int(grid), float(fb_max)
-        self.lk = _LKArgs(winSize=(int(win_size), int(win_size)), maxLevel=int(levels))
+        self.grid = as_whole(grid, "grid", 2)
+        self.fb_max = as_finite(fb_max, "fb_max", 0.0, above=True)
+        win_size, levels = as_whole(win_size, "win_size", 3), as_whole(levels, "levels", 0)
+        self.lk = _LKArgs(winSize=(win_size, win_size), maxLevel=levels)
 
     def _start(self, image: np.ndarray, box: np.ndarray) -> None:
         self.prev = _grey(image)
@@ -466,7 +468,8 @@ class ColourTracker(SingleObjectTracker):
     """
 
     def __init__(self, bins: int = 32, rate: float = 0.05, scales: tuple = (0.93, 1.0, 1.07)):
-        self.bins, self.rate = int(bins), float(rate)
+        self.bins = as_whole(bins, "bins", 2)  # 0 failed inside OpenCV's histogram
+        self.rate = as_finite(rate, "rate", 0.0, high=1.0)
         self.scales = tuple(float(v) for v in scales)
         if not self.scales or not all(np.isfinite(v) and v > 0 for v in self.scales):
             raise ValueError(f"scales must be one or more finite positive numbers; got {scales!r}")
@@ -632,7 +635,10 @@ class ColourParticleTracker(ColourTracker):
     def __init__(self, n_particles: int = 300, step: float = 0.15, sharpness: float = 30.0,
                  rng: np.random.Generator | int | None = 0, **kwargs: Any):
         super().__init__(**kwargs)
-        self.n, self.step_size, self.sharpness = int(n_particles), float(step), float(sharpness)
+        # an infinite sharpness gave NaN boxes, a NaN step an IndexError
+        self.n = as_whole(n_particles, "n_particles", 1)
+        self.step_size = as_finite(step, "step", 0.0)
+        self.sharpness = as_finite(sharpness, "sharpness", 0.0)
         self._seed = rng
 
     def _start(self, image: np.ndarray, box: np.ndarray) -> None:
