@@ -379,3 +379,44 @@ def test_every_setting_is_checked_and_named():
         out = trk.update(im, det)
     assert trk.particles.shape == (1, 50, 4) and len(out) == 1
     np.testing.assert_allclose(out.boxes[0], det.boxes[0], atol=3.0)
+
+
+def test_detections_of_no_area_are_left_out_once_said():
+    """A detection of no height started a target every frame (its height ratio 0/0, with
+    numpy's "invalid value" warnings), one of no width was confirmed and reported as a
+    track of no width."""
+    import warnings
+
+    from vistrack.types import Frame
+
+    image = np.zeros((200, 300, 3), np.uint8)
+    boxes = [[50, 50, 50, 90], [100, 50, 140, 150], [200, 50, 200, 150]]  # x0, y0, x1, y1
+    tracker = DetectorConfidencePF(rng=0, gamma=0.0, eta=0.0)
+    alone = DetectorConfidencePF(rng=0, gamma=0.0, eta=0.0)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        for f in range(1, 6):
+            frame = Frame(f, (f - 1) / 7, image)
+            out = tracker.step(frame, Detections(boxes=boxes, scores=[0.9] * 3))
+            ref = alone.step(frame, Detections(boxes=boxes[1:2], scores=[0.9]))
+    assert [str(w.message) for w in said] == [
+        "frame 1: 2 detection(s) of no width or height left out (a box with no area can be "
+        "no target's); said once"]
+    assert tracker.tracks.ids.tolist() == [1]
+    np.testing.assert_array_equal(out.boxes, ref.boxes)  # as if they were not there
+
+
+@pytest.mark.parametrize("change,message", [
+    ({"strides": [[8.0]]}, "strides must be one number > 0 per level, or an x and a y per "
+                           "level, shape (1, 2); got [[8.0]]"),
+    ({"strides": [0.0]}, "strides must be one number > 0 per level"),
+    ({"origins": [[0.0, 0.0, 0.0]]}, "origins must be an x and a y per level, finite"),
+    ({"heights": [0.0]}, "heights must be finite and > 0; got [0.0]"),
+])
+def test_a_confidence_map_names_its_strides_origins_and_heights(change, message):
+    """A (L, 1) stride failed at score() with an IndexError, three origins at a reshape, and
+    a stride of 0 scored -inf everywhere without a word."""
+    args = {"heights": [100.0], "scores": [np.zeros((5, 6))], "origins": [(10.0, 20.0)],
+            "strides": [8.0]} | change
+    with pytest.raises(ValueError, match=re.escape(message)):
+        ConfidenceMap(**args)

@@ -76,3 +76,18 @@ def test_without_edges_the_contour_holds_its_prediction():
     np.testing.assert_allclose(after, before)
     with pytest.raises(ValueError, match="control_points must have shape \\(12, 2\\)"):
         s.init(np.zeros((5, 2)))
+
+
+def test_a_snake_started_from_nan_or_a_zero_radius_is_named():
+    """A NaN centre or control point tracked an all-NaN contour without an error; a NaN std
+    failed in the Kalman update as "H P H' + R is not positive definite"."""
+    import re
+
+    s = Snake(n_control=8, n_samples=16)
+    with pytest.raises(ValueError, match=re.escape("control_points must be finite; "
+                                                   "control_points[0] = [nan, 60.0]")):
+        s.init_circle((np.nan, 60), 26)
+    with pytest.raises(ValueError, match="std must be a finite number > 0; got nan"):
+        s.init_circle((80, 60), 26, std=np.nan)
+    with pytest.raises(ValueError, match="radius must be a finite number > 0; got 0"):
+        s.init_circle((80, 60), 0)

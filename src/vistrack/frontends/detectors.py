@@ -252,9 +252,12 @@ class ConfidenceMap:
     def __init__(self, heights: ArrayLike, scores: Sequence[ArrayLike], origins: ArrayLike,
                  strides: ArrayLike,
                  aspect: float = _INNER_W * 64 / (_INNER_H * 128)):
-        self.heights = np.asarray(heights, float)
+        self.heights = np.asarray(heights, float).reshape(-1)
         self.scores = [np.asarray(s, float) for s in scores]
-        self.origins = np.asarray(origins, float).reshape(-1, 2)
+        o = np.asarray(origins, float)
+        if o.size % 2 or not np.isfinite(o).all():  # a reshape's message named nothing
+            raise ValueError(f"origins must be an x and a y per level, finite; got {o.tolist()}")
+        self.origins = o.reshape(-1, 2)
         st = np.asarray(strides, float)
         # (L, 2): x and y; one stride per level serves both
         self.strides = (np.repeat(st.reshape(-1, 1), 2, axis=1) if st.ndim <= 1
@@ -266,6 +269,14 @@ class ConfidenceMap:
                              f"{len(self.strides)}")
         if any(s.ndim != 2 or min(s.shape) < 2 for s in self.scores):
             raise ValueError("each level's scores must be a 2-D grid of at least 2 x 2")
+        # (a stride of (L, 1) failed at score() with an IndexError, a stride of 0 gave -inf
+        # everywhere)
+        if self.strides.shape != (L, 2) or not (np.isfinite(self.strides).all()
+                                                 and (self.strides > 0).all()):
+            raise ValueError(f"strides must be one number > 0 per level, or an x and a y per "
+                             f"level, shape ({L}, 2); got {st.tolist()}")
+        if not (np.isfinite(self.heights).all() and (self.heights > 0).all()):
+            raise ValueError(f"heights must be finite and > 0; got {self.heights.tolist()}")
         self.aspect = float(aspect)
 
     def level(self, h: ArrayLike) -> np.ndarray:

@@ -52,6 +52,7 @@ it is supported. Times are frames over ``frame_rate``; the defaults (1.5 s and 0
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING, Any, cast
 
@@ -321,6 +322,7 @@ class DetectorConfidencePF:
         self.overlapped = np.zeros(0)
         self.weights_clf = np.zeros((0, 0))
         self.frame = 0
+        self._said_unsized = False
 
     @property
     def ids(self) -> np.ndarray:
@@ -398,6 +400,17 @@ class DetectorConfidencePF:
             self._integral = feats.integral  # this frame's buffer, for the next
         T, N = len(self.ids), cfg.n_particles
         det_xywh = detections.xywh if len(detections) else np.zeros((0, 4))
+        sized = (det_xywh[:, 2] > 0) & (det_xywh[:, 3] > 0)
+        if not sized.all():
+            # a box of no width or height is no target's: one of no height started a target
+            # every frame (its height ratio 0/0), one of no width a track of no width
+            if not self._said_unsized:
+                warnings.warn(f"frame {self.frame}: {int((~sized).sum())} detection(s) of no "
+                              "width or height left out (a box with no area can be no "
+                              "target's); said once", RuntimeWarning, stacklevel=3)
+                self._said_unsized = True
+            detections = detections[sized]
+            det_xywh = det_xywh[sized]
         det_c = det_xywh[:, :2] + det_xywh[:, 2:] / 2
 
         # predict: constant velocity, noise scaled by each target's height

@@ -24,7 +24,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_box, as_uint8_image
+from .._validate import as_box, as_finite, as_uint8_image
 from ..filters import kf_predict, kf_update
 from ..types import Gaussian
 from .base import SingleObjectTracker
@@ -199,6 +199,11 @@ class Snake:
         Q = np.asarray(control_points, dtype=float)
         if Q.shape != (self.n, 2):
             raise ValueError(f"control_points must have shape ({self.n}, 2); got {Q.shape}")
+        if not np.isfinite(Q).all():  # a NaN point tracked an all-NaN contour without a word
+            k = int(np.flatnonzero(~np.isfinite(Q).all(axis=1))[0])
+            raise ValueError(f"control_points must be finite; control_points[{k}] = "
+                             f"{Q[k].tolist()}")
+        std = as_finite(std, "std", 0.0, above=True)
         # state: x coordinates of the control points, then y
         self.state = Gaussian(np.r_[Q[:, 0], Q[:, 1]], std ** 2 * np.eye(2 * self.n))
 
@@ -223,6 +228,7 @@ class Snake:
         >>> round(float(r.min()), 1), round(float(r.max()), 1)
         (26.0, 26.0)
         """
+        radius = as_finite(radius, "radius", 0.0, above=True)
         a = 2 * np.pi * np.arange(self.n) / self.n
         # the spline through points on a circle of radius R has radius about R (2 + cos(2π/n))/3
         R = radius * 3 / (2 + np.cos(2 * np.pi / self.n))
