@@ -81,6 +81,12 @@ class Blobs:
         """As :class:`~vistrack.types.Detections`: ``"boxes"`` or ``"points"`` (centroids);
         scores are 1.
 
+        The two are in the conventions of their kinds, half a pixel apart: a box's corners
+        are pixel edges, ``[x0, y0, x1 + 1, y1 + 1]`` for the pixels ``x0..x1, y0..y1`` (as
+        MOTChallenge's and OpenCV's boxes count), and a centroid is a mean of pixel indices,
+        pixel centres at whole numbers (as image moments and trackpy count). The centre of a
+        symmetric blob's box is its centroid plus ``(0.5, 0.5)``.
+
         Parameters
         ----------
         kind : {"boxes", "points"}
