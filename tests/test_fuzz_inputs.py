@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from vistrack.config import ConfigError, TrackConfig, config_toml, read_config
-from vistrack.io import MOTFormatError, read_mot, read_seqinfo
+from vistrack.io import MOTFormatError, read_mot, read_seq_length, read_seqinfo
 
 # about 24 s for the readers and 30 s for eval on an idle 2-CPU machine (two to four times that
 # when it is loaded): more than the ~20 s a test outside the slow set may take
@@ -458,7 +458,7 @@ def run_eval(paths, gt: bytes, res: bytes, info: bytes | None, benchmark: str) -
         check_eval_error(str(e), {gt_path: gt, res_path: res, info_path: info})
         return
     g, p = read_mot(gt_path), read_mot(res_path)
-    frames = (read_seqinfo(info_path).seq_length if info is not None else
+    frames = (read_seq_length(info_path) if info is not None else
               int(max([0, *g.frames[-1:], *p.frames[-1:]])))
     c = out["seq"]
     check_scores(c.summary(), len(g), len(p), frames)
@@ -566,7 +566,7 @@ def test_eval_command_line(eval_files, gt_kinds, res_kinds, seed):
             s = json.loads(out)["seq"]
             assert len(s) == 29 and all(np.isfinite(v) for v in s.values())
             g, p = read_mot(gt_path), read_mot(res_path)
-            frames = (read_seqinfo(info_path).seq_length if info is not None else
+            frames = (read_seq_length(info_path) if info is not None else
                       int(max([0, *g.frames[-1:], *p.frames[-1:]])))
             check_scores(s, len(g), len(p), frames)
         else:

@@ -71,6 +71,9 @@ def test_mot_writer_is_the_percent_format_byte_for_byte(tmp_path, seed):
         n = len(ids)
         b, c = values(rng, 4 * n).reshape(n, 4), values(rng, n)
         ok = np.isfinite(b).all(axis=1) & (np.abs(b) < 1e15).all(axis=1)
+        # the rows the writer takes, those read_mot reads back (finite, w and h >= 0; it
+        # refuses the others, tests/test_track_sinks.py)
+        ok &= (b[:, 2:] >= 0).all(axis=1) & np.isfinite(c)
         ids, b, c = ids[ok], b[ok], c[ok]  # boxes as Tracks holds them: finite corners
         tracks = Tracks(ids=ids, boxes=np.c_[b[:, :2], b[:, :2] + b[:, 2:]], points=None,
                         scores=c, classes=np.zeros(len(ids)))
