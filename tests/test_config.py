@@ -556,3 +556,30 @@ def test_the_largest_int64_is_read(tmp_path):
     path = tmp_path / "big.toml"
     path.write_text("[tracker]\ncamera_min_matches = 9223372036854775807\n")
     assert read_config(path).tracker.camera_min_matches == 2 ** 63 - 1
+
+
+def test_offline_scores_on_raw_scores_below_zero_track_as_shifted_ones(seq, tmp_path):
+    """With raw scores, the offline mode's min_track_score and start_score had to be >= 0,
+    so scores shifted below 0 (a detector's logits) lost every track: 0 boxes whatever the
+    setting. Shifting the scores and every threshold by one constant must give the same
+    tracks (the oracle)."""
+    rows = (seq / "det" / "det.txt").read_text().splitlines()
+    shifted = tmp_path / "SHIFTED"
+    (shifted / "det").mkdir(parents=True)
+    shutil.copy(seq / "seqinfo.ini", shifted / "seqinfo.ini")
+    (shifted / "det" / "det.txt").write_text("".join(
+        ",".join(c[:6] + [repr(float(c[6]) - 20.0)] + c[7:]) + "\n"
+        for c in (r.split(",") for r in rows)))
+    out = {}
+    for name, folder, d in (("as", seq, 0.0), ("shifted", shifted, -20.0)):
+        (tmp_path / f"{name}.toml").write_text(
+            f'[tracker]\nscores = "raw"\nfuse_score = false\nhigh = {6 + d}\nlow = {1 + d}\n'
+            f"new_track = {8 + d}\n[offline]\nenabled = true\nmin_track_score = {7 + d}\n"
+            f"start_score = {9 + d}\n")
+        r = cli(folder, "--out", tmp_path / f"{name}.txt", "--config", tmp_path / f"{name}.toml")
+        assert r.returncode == 0, r.stderr
+        out[name] = [line.split(",")[:6] for line in
+                     (tmp_path / f"{name}.txt").read_text().splitlines()]
+    assert out["as"] == out["shifted"] and len(out["as"]) > 500
+    with pytest.raises(ValueError, match=r"min_track_score must be in \[0, 1\] \(a calibrated"):
+        TrackConfig().with_values(offline={"min_track_score": -0.5})

@@ -92,8 +92,10 @@ class OfflineConfig:
     Raises
     ------
     ValueError
-        If ``enabled`` is not a bool, a number is negative or not finite, or an IoU is
-        above 1.
+        If ``enabled`` is not a bool, a number is not finite, a duration or IoU negative, or
+        an IoU above 1 (``min_track_score`` and ``start_score`` may be any finite number: on
+        raw scores, as the detector gives them; :class:`TrackConfig` keeps calibrated ones in
+        [0, 1]).
 
     Examples
     --------
@@ -117,10 +119,16 @@ class OfflineConfig:
     def __post_init__(self) -> None:
         if not isinstance(self.enabled, bool):
             raise ValueError(f"enabled must be true or false; got {self.enabled!r}")
+        # the two scores may be any number on raw scores (a detector's logits run below 0;
+        # TrackConfig checks them against [0, 1] where they are calibrated confidences)
+        scores = ("min_track_score", "start_score")
         for f in fields(self)[1:]:
             v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < math.inf:
-                raise ValueError(f"{f.name} must be a finite number >= 0; got {v!r}")
+            low = -math.inf if f.name in scores else 0
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not low <= v < math.inf \
+                    or math.isnan(v):
+                raise ValueError(f"{f.name} must be a finite number"
+                                 f"{'' if f.name in scores else ' >= 0'}; got {v!r}")
         for name in ("extend_iou", "link_iou"):
             if getattr(self, name) > 1:
                 raise ValueError(f"{name} must be in [0, 1]; got {getattr(self, name)!r}")
@@ -165,7 +173,7 @@ class TrackConfig:
     ------
     ValueError
         If the scores are calibrated and ``offline.start_score`` or
-        ``offline.min_track_score`` is above 1.
+        ``offline.min_track_score`` is outside [0, 1].
 
     Examples
     --------
@@ -184,7 +192,7 @@ class TrackConfig:
         # a track's mean score too (above 1, every track was dropped: 0 boxes)
         for name in ("start_score", "min_track_score"):
             value = getattr(self.offline, name)
-            if self.tracker.scores == "calibrated" and value > 1:
+            if self.tracker.scores == "calibrated" and not 0 <= value <= 1:
                 raise ValueError(f"{name} must be in [0, 1] (a calibrated confidence); got "
                                  f"{value!r}")
 
