@@ -797,3 +797,83 @@ def test_eval_names_a_folder_given_for_a_file_and_the_reverse(tmp_path, capsys):
     assert main(["eval", "--gt", str(seq), "--pred", str(res / "SEQ.txt"), "--jobs", "2"]) == 2
     one_line(capsys, "eval", "--jobs goes with --gt-dir")
     assert main(["eval", "--gt-dir", str(tmp_path), "--pred-dir", str(res), "--jobs", "1"]) == 0
+
+
+def _sequence(folder, n_frames=10, seqinfo=True):
+    """A sequence folder of ``n_frames`` at 10 frames/s, one detection a frame."""
+    (folder / "det").mkdir(parents=True)
+    (folder / "det" / "det.txt").write_text("".join(
+        f"{f},-1,{10 + 2 * f},20,20,40,0.9,-1,-1,-1\n" for f in range(1, n_frames + 1)))
+    if seqinfo:
+        (folder / "seqinfo.ini").write_text(
+            f"[Sequence]\nname={folder.name}\nframeRate=10\nseqLength={n_frames}\n"
+            "imWidth=200\nimHeight=100\n")
+    return folder
+
+
+def test_what_a_batch_or_a_folder_of_results_leaves_out_is_said(tmp_path, capsys):
+    """Results that are no sequence's (a misspelt name) and sequences without ground truth
+    were left out of `eval --gt-dir` without a word; a folder of sequences left out its
+    sub-folders without seqinfo.ini without one ("1 of 1 inputs tracked")."""
+    gt_dir, pred_dir = tmp_path / "gt", tmp_path / "pred"
+    a = _sequence(gt_dir / "A")
+    (a / "gt").mkdir()
+    (a / "gt" / "gt.txt").write_text("".join(f"{f},1,{10 + 2 * f},20,20,40,1,1,1\n"
+                                             for f in range(1, 11)))
+    _sequence(gt_dir / "B")  # no ground truth
+    pred_dir.mkdir()
+    for name in ("A.txt", "B.txt", "a_typo.txt"):
+        (pred_dir / name).write_text((a / "gt" / "gt.txt").read_text())
+    assert main(["eval", "--gt-dir", str(gt_dir), "--pred-dir", str(pred_dir)]) == 0
+    err = capsys.readouterr().err
+    assert (f"vistrack eval: warning: 1 sequence folder of {gt_dir} has no gt/gt.txt and is "
+            "left out: B\n") in err
+    assert (f"vistrack eval: warning: 2 files of {pred_dir} match no sequence with ground "
+            f"truth in {gt_dir} and are not scored: B.txt, a_typo.txt\n") in err
+    _sequence(tmp_path / "set" / "C", seqinfo=False)
+    _sequence(tmp_path / "set" / "D")
+    assert main(["track", str(tmp_path / "set"), "--out", str(tmp_path / "res"), "--jobs", "1",
+                 "--quiet"]) == 0
+    assert (f"vistrack track: warning: {tmp_path / 'set'}: 1 folder without seqinfo.ini is no "
+            "sequence of the set and is left out: C (name it as inputs, with --fps, to track "
+            "them)") in capsys.readouterr().err
+
+
+def test_options_of_one_input_given_to_a_batch_are_refused(tmp_path, capsys):
+    """With several inputs, --frontend detections:FILE tracked every input from the one
+    file, and --skip-bad-frames with --out was taken and ignored (one input refuses it)."""
+    _sequence(tmp_path / "set" / "A")
+    _sequence(tmp_path / "set" / "B")
+    for k in (1, 2):
+        (tmp_path / f"v{k}").mkdir()
+    for args, message in (
+            (["track", str(tmp_path / "v1"), str(tmp_path / "v2"), "--out-dir",
+              str(tmp_path / "o"), "--frontend", "detections:d.txt"],
+             "--frontend detections:d.txt goes with one input: a detections file is one "
+             "video's"),
+            (["track", str(tmp_path / "set"), "--out", str(tmp_path / "r"), "--skip-bad-frames"],
+             "--skip-bad-frames goes with --out-dir")):
+        assert main(args) == 2
+        one_line(capsys, "track", message)
+
+
+def test_an_image_folder_longer_than_its_sequence_says_so(tmp_path):
+    """A sequence's img1/ with more images than seqLength was tracked whole without a word
+    (fewer warned)."""
+    import re
+
+    import cv2
+    import numpy as np
+
+    from vistrack.io import VideoReader
+
+    seq = tmp_path / "S"
+    (seq / "img1").mkdir(parents=True)
+    for k in range(1, 6):
+        cv2.imwrite(str(seq / "img1" / f"{k:06d}.png"), np.zeros((4, 6, 3), np.uint8))
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=S\nimDir=img1\nframeRate=10\n"
+                                     "seqLength=3\nimWidth=6\nimHeight=4\nimExt=.png\n")
+    with pytest.warns(RuntimeWarning, match=re.escape(
+            f"{seq / 'img1'} holds 5 images, but {seq / 'seqinfo.ini'} gives seqLength=3: all "
+            "5 are tracked")):
+        assert len(list(VideoReader(seq))) == 5

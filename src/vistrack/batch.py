@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import os
 import time
+import warnings
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -59,7 +60,9 @@ def is_benchmark(path: Path) -> bool:
 
 def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
     """The inputs, each benchmark folder (a folder of sequence folders, each with
-    ``seqinfo.ini``) replaced by its sequences, sorted by name; other inputs as given.
+    ``seqinfo.ini``) replaced by its sequences, sorted by name; other inputs as given. A
+    benchmark folder's sub-folders that hold detections or images but no ``seqinfo.ini`` are
+    left out with a warning naming them (given alone, with ``--fps``, they are tracked).
 
     Raises
     ------
@@ -76,6 +79,15 @@ def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
         if is_benchmark(path):
             out.extend(sorted((p for p in path.iterdir() if _is_sequence(p)),
                               key=lambda p: p.name))
+            left = sorted(p.name for p in path.iterdir() if p.is_dir() and not _is_sequence(p)
+                          and ((p / "det" / "det.txt").is_file() or (p / "img1").is_dir()))
+            if left:  # (the count said "1 of 1 inputs tracked" without them)
+                warnings.warn(f"{path}: {len(left)} folder{'s' * (len(left) > 1)} without "
+                              f"seqinfo.ini {'are' if len(left) > 1 else 'is'} no sequence of "
+                              f"the set and {'are' if len(left) > 1 else 'is'} left out: "
+                              f"{', '.join(left)} (name {'them' if len(left) > 1 else 'it'} "
+                              "as inputs, with --fps, to track them)", UserWarning,
+                              stacklevel=2)
         else:
             out.append(path)
     check_distinct(out)

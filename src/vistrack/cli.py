@@ -675,6 +675,10 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     for flag in ("print_config", "gt", "detections", "columns"):
         if getattr(args, flag):
             return fail(f"--{flag.replace('_', '-')} goes with one input")
+    if (args.frontend or "").startswith("detections:"):
+        # (every input was tracked from the one file)
+        return fail(f"--frontend {args.frontend} goes with one input: a detections file is "
+                    "one video's")
     if args.fps is not None and args.out is None:
         return fail("--fps goes with one video, or with --out (every input's frame rate)")
     if args.report:
@@ -695,6 +699,8 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         for flag in _FRONTEND_OPTIONS:
             if getattr(args, flag) is not None:
                 return fail(f"--{flag.replace('_', '-')} goes with --out-dir")
+        if args.skip_bad_frames:  # (taken and ignored, where one input refuses it)
+            return fail("--skip-bad-frames goes with --out-dir")
         kind, out, options["config"] = "detections", args.out, cfg
         if args.fps is not None:
             options["fps"] = args.fps
@@ -898,6 +904,25 @@ def _eval(args: argparse.Namespace) -> int:
             pairs.append((seq.name, seq / "gt" / "gt.txt", pred, info if info.exists() else None))
         if not pairs:
             return _fail("eval", f"no SEQ/gt/gt.txt under {args.gt_dir}")
+        # what is left out is said: sequences without ground truth (a set's test sequences),
+        # and results that are no sequence's (a misspelt name), which were never scored
+        left = sorted(p.name for p in Path(args.gt_dir).iterdir() if p.is_dir()
+                      and not (p / "gt" / "gt.txt").exists() and any(
+                          (p / q).exists() for q in ("seqinfo.ini", "det", "img1", "gt")))
+        if left:
+            print(f"vistrack eval: warning: {len(left)} sequence folder"
+                  f"{'s' * (len(left) > 1)} of {args.gt_dir} {'have' if len(left) > 1 else 'has'}"
+                  f" no gt/gt.txt and {'are' if len(left) > 1 else 'is'} left out: "
+                  f"{', '.join(left)}", file=sys.stderr)
+        scored = {name for name, *_ in pairs}
+        stray = sorted(p.name for p in Path(args.pred_dir).iterdir() if p.is_file()
+                       and p.suffix.lower() in (".txt", ".parquet", ".csv")
+                       and p.stem not in scored)
+        if stray:
+            print(f"vistrack eval: warning: {len(stray)} file{'s' * (len(stray) > 1)} of "
+                  f"{args.pred_dir} {'match' if len(stray) > 1 else 'matches'} no sequence "
+                  f"with ground truth in {args.gt_dir} and {'are' if len(stray) > 1 else 'is'}"
+                  f" not scored: {', '.join(stray)}", file=sys.stderr)
     elif args.gt and args.pred:
         for flag in ("keep_going", "scheduler", "jobs"):
             if getattr(args, flag) is not None and getattr(args, flag) is not False:

@@ -2037,15 +2037,18 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         # the video ended before stop (not --stop's own end, nor a missing image at it: a folder
         # without its frame 5 stopped at 5 warned of "rows past the video's last frame (4)")
         ended = stop is None or (reader.frame_count < stop if reader.frame_count else last < stop)
-        if ended:  # rows past the video's last frame were for nothing
-            for table, what, label in ((grid.dets if grid is not None else None, "not tracked",
-                                        grid.path if grid is not None else None),
-                                       (gt_table, "not scored", gt)):
-                if table is not None and len(table) and table.frames[-1] > last:
-                    past = table.frames[table.frames > last]
-                    warnings.warn(f"{label}: {len(past)} rows on frames {past[0]}-{past[-1]}, past "
-                                  f"the video's last frame ({last}): {what}", UserWarning,
-                                  stacklevel=2)
+        # rows past the video's last frame were for nothing; rows past --stop are what was
+        # asked for, and not said, but with --stop the rows past the video's own end are said
+        # still (they went without a word)
+        end = last if ended else (reader.frame_count or None)
+        for table, what, label in ((grid.dets if grid is not None else None, "not tracked",
+                                    grid.path if grid is not None else None),
+                                   (gt_table, "not scored", gt)):
+            if end is not None and table is not None and len(table) and table.frames[-1] > end:
+                past = table.frames[table.frames > end]
+                warnings.warn(f"{label}: {len(past)} rows on frames {past[0]}-{past[-1]}, past "
+                              f"the video's last frame ({end}): {what}", UserWarning,
+                              stacklevel=2)
         scores = scored[0] if scored else None
         n_tracks = len(rows.identities)
         if isinstance(trk, BoxTracker):

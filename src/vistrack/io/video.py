@@ -343,14 +343,19 @@ class VideoReader:
                          f"{', '.join(inner)} hold{'' if len(inner) > 1 else 's'} images: give "
                          f"{'one' if len(inner) > 1 else 'it'}" if inner else "")
                 raise VideoError(f"{src} holds no images ({', '.join(IMAGE_SUFFIXES)}){where}")
-            if seq_length is not None and len(self._files) < seq_length \
+            if seq_length is not None and len(self._files) != seq_length \
                     and src not in _SHORT_WARNED:
-                # a sequence shipped with its first frames only (MOT17's in the shared data);
-                # said once a process (a front-end may open the folder again for its start)
+                # a sequence shipped with its first frames only (MOT17's in the shared data),
+                # or a folder with more images than its sequence (tracked all the same, where
+                # --out refuses detections past seqLength, naming the line); said once a
+                # process (a front-end may open the folder again for its start)
                 _SHORT_WARNED.add(src)
+                few = len(self._files) < seq_length
                 warnings.warn(f"{src} holds {len(self._files)} images, but {info} gives "
-                              f"seqLength={seq_length}: only those {len(self._files)} are "
-                              "tracked", RuntimeWarning, stacklevel=2)
+                              f"seqLength={seq_length}: "
+                              + (f"only those {len(self._files)} are tracked" if few else
+                                 f"all {len(self._files)} are tracked"),
+                              RuntimeWarning, stacklevel=2)
             first = None
             for path in self._files:
                 im, why = self._decode(path)
