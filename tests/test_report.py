@@ -238,3 +238,13 @@ def test_the_run_keeps_its_warnings_and_the_page_lists_them(run_dir, tmp_path, c
     assert kept[0].startswith(f"{folder} gives no frame rate")
     page = (out / "report.html").read_text()
     assert f"<h2>Warnings</h2><ul class='warnings'><li>{html.escape(kept[0])}</li></ul>" in page
+    # the command's own warnings too, given before the run (a setting that changes nothing):
+    # they were printed and left out of run.json and the page
+    assert main(["track", str(folder), "--out-dir", str(out), "--report", "--quiet", "--force",
+                 "--min-area", "50", "--tracker", "sort", "--low", "0.2"]) == 0
+    printed = [line.removeprefix("vistrack track: warning: ")
+               for line in capsys.readouterr().err.splitlines()
+               if line.startswith("vistrack track: warning: ")]
+    kept = json.loads((out / "run.json").read_text())["warnings"]
+    assert kept == printed and len(kept) == 2 and kept[0].startswith("--low: ")
+    assert html.escape(kept[0]) in (out / "report.html").read_text()

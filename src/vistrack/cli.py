@@ -329,7 +329,14 @@ def _track(args: argparse.Namespace) -> int:
 
     from .config import config_toml
     from .io.atomic import check_output
-    from .pipeline import TrackRun, track_sequence, track_video
+    from .pipeline import (
+        TrackRun,
+        VideoRun,
+        _keep_warnings,
+        _shown_warnings,
+        track_sequence,
+        track_video,
+    )
 
     def fail(text: str) -> int:
         return _fail("track", text)
@@ -366,28 +373,37 @@ def _track(args: argparse.Namespace) -> int:
         cfg, problem = _box_config(args)
         if problem:
             return fail(problem)
-        _warn_unused_settings(args, cfg, offline_given)
-    if args.out is not None:
-        columns, problem = _columns(args.columns)
-        if problem:
-            return fail(problem)
-        run = track_sequence(args.input, args.out, detections=args.detections, columns=columns,
-                             config=cfg, fps=args.fps, force=args.force, progress=progress)
+    with _shown_warnings() as said:  # the command's warnings, kept in run.json with the run's
+        if box:
+            _warn_unused_settings(args, cfg, offline_given)
+        if args.out is not None:
+            columns, problem = _columns(args.columns)
+            if problem:
+                return fail(problem)
+            run = track_sequence(args.input, args.out, detections=args.detections,
+                                 columns=columns, config=cfg, fps=args.fps, force=args.force,
+                                 progress=progress)
+        else:
+            if cfg is not None and cfg.offline.enabled:
+                return fail(_OFFLINE_NEEDS_OUT)
+            problem = _frontend_problem(args, name)
+            if problem:
+                return fail(problem)
+            if args.report:  # before anything runs: a report that cannot be written fails now
+                check_output(Path(args.out_dir) / "report.html", force=args.force,
+                             name="--report")
+            run = track_video(args.input, args.out_dir, fps=args.fps, gt=args.gt,
+                              force=args.force, progress=progress,
+                              **_video_options(args, name, box, cfg))
+    if isinstance(run, VideoRun):
+        # run.json (and the report, from it) keeps the command's warnings too: one about a
+        # setting that changes nothing came before the run, and was left out
+        _keep_warnings(run.out_dir, said)
+        _print_video_run(args, run, report)
+    else:
         print(f"wrote {run.out}: {run.rows} boxes of {run.tracks} tracks over {run.frames} "
               f"frames from {run.detections} detections; tracker {run.fps:.0f} frames/s",
               file=report)
-    else:
-        if cfg is not None and cfg.offline.enabled:
-            return fail(_OFFLINE_NEEDS_OUT)
-        problem = _frontend_problem(args, name)
-        if problem:
-            return fail(problem)
-        if args.report:  # before anything runs: a report that cannot be written fails now
-            check_output(Path(args.out_dir) / "report.html", force=args.force, name="--report")
-        run = track_video(args.input, args.out_dir, fps=args.fps, gt=args.gt,
-                          force=args.force, progress=progress,
-                          **_video_options(args, name, box, cfg))
-        _print_video_run(args, run, report)
     if args.print_config:
         assert run.config is not None  # a box tracker's run (others refuse --print-config)
         derived = dict(run.derived or {})

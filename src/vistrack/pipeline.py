@@ -2129,6 +2129,22 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
         part.write_text(json.dumps(info, indent=2) + "\n")
 
 
+def _keep_warnings(out_dir: str | Path, said: Sequence[str]) -> None:
+    """``run.json``'s ``warnings`` (:func:`_write_run_info`) made ``said``: the warnings of the
+    whole command, those it gave before the run (a setting that changes nothing) with the
+    run's own, in the order shown."""
+    import json
+
+    from .io.atomic import replacing
+
+    path = Path(out_dir) / RUN_INFO
+    info = json.loads(path.read_text(encoding="utf-8"))
+    if info.get("warnings") != list(said):
+        info["warnings"] = list(said)
+        with replacing(path) as part:
+            part.write_text(json.dumps(info, indent=2) + "\n")
+
+
 # -------------------------------------------------------------------- one object, by hand
 @dataclass(frozen=True)
 class SingleRun:
