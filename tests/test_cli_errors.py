@@ -877,3 +877,19 @@ def test_an_image_folder_longer_than_its_sequence_says_so(tmp_path):
             f"{seq / 'img1'} holds 5 images, but {seq / 'seqinfo.ini'} gives seqLength=3: all "
             "5 are tracked")):
         assert len(list(VideoReader(seq))) == 5
+
+
+def test_a_sequence_and_its_own_images_or_detections_are_one_input(tmp_path):
+    """A batch from pixels given a sequence folder and its own img1/ tracked the same frames
+    twice, under two names (their paths differ)."""
+    from vistrack.batch import check_distinct
+
+    seq = _sequence(tmp_path / "S")
+    (seq / "img1").mkdir()
+    for other in (seq / "img1", seq / "det" / "det.txt"):
+        with pytest.raises(ValueError, match=f"is given twice .*{other.relative_to(seq)} is "
+                                             "the same input"):
+            check_distinct([seq, other])
+        with pytest.raises(ValueError, match="is given twice"):
+            check_distinct([other, seq])
+    check_distinct([seq, _sequence(tmp_path / "T")])  # two sequences: two inputs

@@ -95,7 +95,9 @@ def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
 
 
 def check_distinct(paths: Iterable[str | Path]) -> None:
-    """Check that no two of ``paths`` resolve to the same file or folder.
+    """Check that no two of ``paths`` resolve to the same file or folder, a sequence folder
+    counting as its images' folder and its detections file too (a sequence and its own
+    ``img1/`` are the same frames, tracked twice under two names).
 
     Raises
     ------
@@ -110,12 +112,32 @@ def check_distinct(paths: Iterable[str | Path]) -> None:
     ...
     ValueError: a is given twice (as a too)
     """
-    seen: dict[Path, Path] = {}
+    seen: dict[Path, tuple[Path, str]] = {}  # what each path is, and how
     for p in map(Path, paths):
-        key = p.resolve()
-        if key in seen:
-            raise ValueError(f"{p} is given twice (as {seen[key]} too)")
-        seen[key] = p
+        own = {p.resolve(): ""}
+        if _is_sequence(p):  # its frames and its detections, as given alone
+            for part in (_image_dir(p), "det/det.txt"):
+                own[(p / part).resolve()] = f"{p}/{part}"
+        for key, via in own.items():
+            if key in seen:
+                other, via_other = seen[key]
+                why = via or via_other
+                raise ValueError(f"{p} is given twice (as {other} too"
+                                 + (f": {why} is the same input" if why else "") + ")")
+        seen.update({key: (p, via) for key, via in own.items()})
+
+
+def _image_dir(sequence: Path) -> str:
+    """The images' folder a sequence's ``seqinfo.ini`` names (``imDir``; img1 where it names
+    none or cannot be read: the reader says what is wrong with it)."""
+    import configparser
+
+    cp = configparser.ConfigParser(interpolation=None)
+    try:
+        cp.read_string((sequence / "seqinfo.ini").read_text(encoding="utf-8-sig"))
+        return cp.get("Sequence", "imDir", fallback="img1") or "img1"
+    except (OSError, UnicodeDecodeError, configparser.Error):
+        return "img1"
 
 
 @dataclass(frozen=True)
