@@ -92,17 +92,28 @@ def as_whole(value: Any, name: str, minimum: int, what: str = "") -> int:
 
 
 def as_finite(value: Any, name: str, low: float | None = None, *, above: bool = False,
-              high: float | None = None) -> float:
+              high: float | None = None, what: str = "number") -> float:
     """``value`` as a finite float ``>= low`` (``> low`` with ``above``) and ``<= high``, or
-    an error naming ``name`` (a NaN setting compared false everywhere and was taken)."""
+    an error naming ``name`` (a NaN setting compared false everywhere and was taken);
+    ``what`` it is (``"number of seconds"``)."""
     v = as_number(value, name)
     if not (np.isfinite(v) and (low is None or (v > low if above else v >= low))
             and (high is None or v <= high)):
         limits = [f"{'>' if above else '>='} {low:g}" if low is not None else "",
                   f"<= {high:g}" if high is not None else ""]
-        raise ValueError(f"{name} must be a finite number{' ' if any(limits) else ''}"
+        raise ValueError(f"{name} must be a finite {what}{' ' if any(limits) else ''}"
                          f"{' and '.join(x for x in limits if x)}; got {value!r}")
     return v
+
+
+def as_scales(values: Any, name: str = "scales") -> tuple[float, ...]:
+    """``values`` as a tuple of one or more finite numbers > 0 (the relative sizes a
+    tracker tries), or a ValueError naming ``name``: a scale of 0 made a box of no size, and
+    none kept the prediction for ever."""
+    scales = tuple(float(v) for v in values)
+    if not scales or not all(np.isfinite(v) and v > 0 for v in scales):
+        raise ValueError(f"{name} must be one or more finite positive numbers; got {values!r}")
+    return scales
 
 
 def as_uint8_image(image: ArrayLike, name: str = "image", channels: tuple[int, ...] = (1, 3, 4),

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._validate import as_number, as_whole, bgr_to_grey
+from .._validate import as_finite, as_number, as_whole, bgr_to_grey
 from ..types import Frame
 
 if TYPE_CHECKING:
@@ -701,10 +701,8 @@ class VideoWriter:
 
     def __init__(self, path: str | Path, fps: float, size: tuple[int, int] | None = None, *,
                  name: str | Path | None = None):
-        fps = as_number(fps, "fps")
-        if not np.isfinite(fps) or fps <= 0:
-            raise ValueError(f"fps must be a finite number > 0; got {fps}")
-        self.path, self.fps, self.size = Path(path), float(fps), size
+        fps = as_finite(fps, "fps", 0.0, above=True)
+        self.path, self.fps, self.size = Path(path), fps, size
         self.name = str(path if name is None else name)
         self._w: cv2.VideoWriter | None = None
         self.frames = 0

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._validate import as_box, as_finite, as_uint8_image, as_whole
+from .._validate import as_box, as_finite, as_scales, as_uint8_image, as_whole
 from .base import SingleObjectTracker
 
 if TYPE_CHECKING:
@@ -370,10 +370,7 @@ class WSLTracker(SingleObjectTracker):
     def __init__(self, size: int = 32, radius: int = 8, scales: tuple = (1.0,),
                  blur: float = 1.0, **model: Any):
         self.size, self.radius = as_whole(size, "size", 8), as_whole(radius, "radius", 1)
-        self.scales = tuple(float(s) for s in scales)
-        if not self.scales or not all(np.isfinite(v) and v > 0 for v in self.scales):
-            # a scale of 0 made a box of no size; none kept the prediction for ever
-            raise ValueError(f"scales must be one or more finite positive numbers; got {scales!r}")
+        self.scales = as_scales(scales)
         self.blur, self.model_args = as_finite(blur, "blur", 0.0), model
 
     def _prepare(self, image: np.ndarray) -> np.ndarray:

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._validate import as_whole
+from .._validate import as_finite, as_whole
 from ..association import (
     assign,
     chi2_threshold,
@@ -146,16 +146,10 @@ class PointTracker:
             raise ValueError(f"p_gate must be in (0, 1); got {p_gate}")
         self.p_gate = float(p_gate)
         self.threshold = chi2_threshold(self.m, p_gate)
-        if not (np.isfinite(init_speed) and init_speed > 0):
-            raise ValueError(f"init_speed must be a finite number > 0; got {init_speed}")
-        self.init_speed = float(init_speed)
-        confirm_hits = as_whole(confirm_hits, "confirm_hits", 1)
-        if not (np.isfinite(max_lost) and max_lost >= 0):
-            raise ValueError(f"max_lost must be a finite number of seconds >= 0; got {max_lost}")
-        self.confirm_hits, self.max_lost = int(confirm_hits), float(max_lost)
-        if not (np.isfinite(frame_rate) and frame_rate > 0):
-            raise ValueError(f"frame_rate must be a finite number > 0; got {frame_rate}")
-        self.frame_rate = float(frame_rate)
+        self.init_speed = as_finite(init_speed, "init_speed", 0.0, above=True)
+        self.confirm_hits = as_whole(confirm_hits, "confirm_hits", 1)
+        self.max_lost = as_finite(max_lost, "max_lost", 0.0, what="number of seconds")
+        self.frame_rate = as_finite(frame_rate, "frame_rate", 0.0, above=True)
         # a new track starts where its first measurement puts it: pinv(H) z (the measured
         # components, for the usual H = [I 0]); what H does not see, with init_speed
         self._Hp = np.linalg.pinv(self.H)

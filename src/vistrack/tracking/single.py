@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any, TypedDict
 import numpy as np
 
 from .._registry import Registry
-from .._validate import as_box, as_finite, as_uint8_image, as_whole
+from .._validate import as_box, as_finite, as_scales, as_uint8_image, as_whole
 from ._affine import prepare_templates, register
 from .appearance import WSLTracker
 from .base import SingleObjectTracker
@@ -470,9 +470,7 @@ class ColourTracker(SingleObjectTracker):
     def __init__(self, bins: int = 32, rate: float = 0.05, scales: tuple = (0.93, 1.0, 1.07)):
         self.bins = as_whole(bins, "bins", 2)  # 0 failed inside OpenCV's histogram
         self.rate = as_finite(rate, "rate", 0.0, high=1.0)
-        self.scales = tuple(float(v) for v in scales)
-        if not self.scales or not all(np.isfinite(v) and v > 0 for v in self.scales):
-            raise ValueError(f"scales must be one or more finite positive numbers; got {scales!r}")
+        self.scales = as_scales(scales)
 
     def _hist(self, hsv: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         import cv2
