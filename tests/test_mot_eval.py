@@ -727,3 +727,32 @@ def test_a_bad_benchmark_is_the_call_s_error_with_keep_going_too(tmp_path):
     with pytest.raises(ValueError, match="benchmark must be one of 'auto', .*; got 'MOT18'"):
         evaluate_files([("a", gt, gt, None), ("b", gt, gt, None)], benchmark="MOT18",
                        keep_going=True)
+
+
+@pytest.mark.parametrize("bench", ["MOT15", "MOT17"])
+def test_a_sequence_whose_ground_truth_is_all_ignored_scores_as_trackeval(bench, tmp_path):
+    """A sequence with no ground truth left to count (every row's flag 0) and predictions:
+    TrackEval's MOTA for that sequence is 0 (its CLEAR metric returns before the final
+    fields), where (TP - FP - IDSW) / max(1, TP + FN) gave -FP (-5.0 here); summed over
+    several such sequences TrackEval's COMBINED is that formula again. Every score, per
+    sequence and COMBINED, against TrackEval itself."""
+    from vistrack.evaluation import evaluate_files
+
+    seqs, preds = {}, {}
+    for name, n_fp in (("a", 5), ("b", 3)):
+        d = tmp_path / name
+        (d / "gt").mkdir(parents=True)
+        _rows(d / "gt" / "gt.txt", [(f, 1, 10 + 3 * f, 20, 30, 60, 0, 1, 1)
+                                     for f in range(1, 7)])
+        (d / "seqinfo.ini").write_text(f"[Sequence]\nname={name}\nframeRate=10\nseqLength=6\n"
+                                       "imWidth=640\nimHeight=480\n")
+        seqs[name] = d
+        preds[name] = _rows(tmp_path / f"{name}.txt",
+                            [(f, 7, 300, 200, 30, 60, 1, -1, -1, -1) for f in range(1, n_fp + 1)])
+    ref = trackeval_scores(bench, seqs, preds, tmp_path / "te")
+    ours = evaluate_files([(n, d / "gt" / "gt.txt", preds[n], d / "seqinfo.ini")
+                           for n, d in seqs.items()], benchmark=bench)
+    for name, theirs in (("a", "a"), ("b", "b"), ("COMBINED", "COMBINED_SEQ")):
+        compare(ours[name], ref[theirs])
+    assert ours["a"].MOTA == 0.0 and ours["COMBINED"].MOTA == -8.0
+    assert (ours["a"] + MOTCounts()).MOTA == -5.0  # a sum, as TrackEval's COMBINED

@@ -430,6 +430,10 @@ class MOTCounts:
         HOTA's detection counts at each threshold of :data:`ALPHAS`.
     AssA_alpha, AssRe_alpha, AssPr_alpha, LocA_alpha : (19,) ndarray
         Association accuracy, recall and precision, and localisation accuracy, per threshold.
+    combined : bool
+        A sum of counts (``+``, :func:`combine`), not one sequence's: where no ground truth is
+        counted, TrackEval gives a sequence's MOTA as 0 and a sum's by the formula
+        (:attr:`MOTA`).
 
     References
     ----------
@@ -488,11 +492,13 @@ class MOTCounts:
     AssRe_alpha: np.ndarray = field(default_factory=lambda: np.zeros(len(ALPHAS)))
     AssPr_alpha: np.ndarray = field(default_factory=lambda: np.zeros(len(ALPHAS)))
     LocA_alpha: np.ndarray = field(default_factory=lambda: np.ones(len(ALPHAS)))
+    combined: bool = False
 
     def __add__(self, other: MOTCounts) -> MOTCounts:
-        out = MOTCounts()
+        out = MOTCounts(combined=True)
         for f in fields(self):
-            if f.name not in ("AssA_alpha", "AssRe_alpha", "AssPr_alpha", "LocA_alpha"):
+            if f.name not in ("AssA_alpha", "AssRe_alpha", "AssPr_alpha", "LocA_alpha",
+                              "combined"):
                 setattr(out, f.name, getattr(self, f.name) + getattr(other, f.name))
         tp = out.HOTA_TP
         for name in ("AssA_alpha", "AssRe_alpha", "AssPr_alpha"):
@@ -513,12 +519,21 @@ class MOTCounts:
     def MOTA(self) -> float:
         r"""CLEAR MOT accuracy, :math:`1 - (FN + FP + IDSW) / (TP + FN)`; can be negative.
 
+        As TrackEval gives it: a sequence without ground truth to count (``TP + FN`` 0)
+        scores 0, whatever it predicted; a sum of counts (:attr:`combined`), MOTChallenge's
+        COMBINED, scores :math:`(TP - FP - IDSW) / \max(1, TP + FN)`, which is then ``-FP``.
+
         Examples
         --------
         >>> c = MOTCounts(TP=8, FN=2, FP=1, IDSW=1, MOTP_sum=6.0, IDTP=6, IDFP=3, IDFN=4)
         >>> c.MOTA
         0.6
+        >>> none = MOTCounts(FP=5)  # no ground truth counted, five false positives
+        >>> none.MOTA, combine([none]).MOTA
+        (0.0, -5.0)
         """
+        if self.TP + self.FN == 0 and not self.combined:
+            return 0.0
         return (self.TP - self.FP - self.IDSW) / max(1, self.TP + self.FN)
 
     @property
