@@ -85,16 +85,19 @@ def test_a_partial_file_keeps_the_presets_other_values(tmp_path):
     ("[offline]\nzzz = 1\n", r"\[offline\] has no key 'zzz' \(keys: enabled"),
     ("[tracker]\nhigh = \"0.5\"\n", r"\[tracker\] high must be a number; got '0.5'"),
     ("[tracker]\nconfirm_hits = 2.5\n", r"\[tracker\] confirm_hits must be an integer"),
-    ("[tracker]\ncalibration_window = -1\n", r"calibration_window must be an integer >= 0"),
-    ("[tracker]\ncalibration_cap_sigma = 0\n", r"calibration_cap_sigma must be > 0"),
+    ("[tracker]\ncalibration_window = -1\n",
+     r"\[tracker\] calibration_window must be an integer >= 0"),
+    ("[tracker]\ncalibration_cap_sigma = 0\n", r"\[tracker\] calibration_cap_sigma must be > 0"),
     ("[tracker]\ncamera_motion = 1\n", r"\[tracker\] camera_motion must be true or false"),
     ("[tracker]\nname = \"deepsort\"\n", r"\[tracker\] name must be one of \['bytetrack', "
                                          r"'sort'\]"),
-    ("[tracker]\nhigh = 1.5\n", r"high must be in \[0, 1\] \(a calibrated confidence\)"),
+    ("[tracker]\nhigh = 1.5\n",
+     r"\[tracker\] high must be in \[0, 1\] \(a calibrated confidence\)"),
     ("[motion]\nstd_meas = [0.1, 0.2]\n", r"std_meas must be a number or a list of 4"),
-    ("[motion]\nstd_pos = -1\n", "std_pos must be a finite number > 0"),
-    ("[offline]\nmax_gap = -1\n", "max_gap must be a finite number >= 0"),
-    ("[offline]\nstart_score = 2.0\n", r"start_score must be in \[0, 1\] \(a calibrated"),
+    ("[motion]\nstd_pos = -1\n", r"\[motion\] std_pos must be a finite number > 0"),
+    ("[offline]\nmax_gap = -1\n", r"\[offline\] max_gap must be a finite number >= 0"),
+    ("[offline]\nstart_score = 2.0\n",
+     r"\[offline\] start_score must be in \[0, 1\] \(a calibrated"),
     ("tracker = 3\n", "tracker must be a table"),
     # a name that is no string ("unhashable type: 'list'", naming neither file nor key), and
     # an integer beyond int64 (read, printed, then an OverflowError in the middle of the run)
@@ -105,6 +108,8 @@ def test_a_partial_file_keeps_the_presets_other_values(tmp_path):
      r"9223372036854775807; got 9223372036854775808"),
     ("[tracker]\nconfirm_hits = -9223372036854775809\n",
      "confirm_hits must be an integer from"),
+    # a check across two keys of a table names the table too (it named none)
+    ("[tracker]\nhigh = 0.2\nlow = 0.5\n", r"bad.toml: \[tracker\] low must be at most high"),
 ])
 def test_a_bad_file_is_named_with_its_key(tmp_path, text, match):
     path = tmp_path / "bad.toml"

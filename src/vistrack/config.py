@@ -419,10 +419,12 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
                                   f"{_INT64[0]} to {_INT64[1]}; got {value!r}")
             elif kind == "float":
                 given[key] = float(value)
-    try:
-        return cfg.with_values(**values)
-    except ValueError as exc:
-        raise ConfigError(f"{path}: {exc}") from None
+    for table, given in values.items():  # one table at a time, to name the one that is wrong
+        try:
+            cfg = cfg.with_values(**{table: given})
+        except ValueError as exc:
+            raise ConfigError(f"{path}: [{table}] {exc}") from None
+    return cfg
 
 
 def _value(v: object, kind: str | None = None) -> str:
