@@ -245,6 +245,31 @@ def test_the_rank_map_is_the_empirical_distribution_function():
         ScoreCalibration.ranks([])
 
 
+@pytest.mark.parametrize("asked_each_frame", [True, False])
+def test_before_any_outcome_the_ranks_are_of_every_score_seen(asked_each_frame):
+    """Until the first outcome the map is the ranks of the scores seen so far (scipy's weak
+    percentile of score over all of them), frame by frame. It was kept from the first frame
+    it was asked for (the second frame's detections ranked among the first's alone, [0.5,
+    0.5, 1] below), and was built from the latest frame's scores alone, so asking early
+    changed later answers."""
+    from scipy.stats import percentileofscore
+
+    boxes = np.array([[10.0, 10, 40, 80], [200, 100, 230, 160]])
+    frames = [[0.9, 0.4], [0.2, 0.1], [0.35, 0.95]]
+    cal, seen = ScoreCalibrator(), []
+    for k, scores in enumerate(frames):
+        cal.observe(Detections(boxes=boxes + 300 * k, scores=scores))  # nothing persists
+        seen += scores
+        if asked_each_frame or k == 1:
+            q = [0.1, 0.4, 0.9, 0.05]
+            # one below every score seen takes the lowest score's rank
+            want = [percentileofscore(seen, max(x, min(seen)), kind="weak") / 100 for x in q]
+            if k < 2:
+                assert cal.n == 0
+                np.testing.assert_allclose(cal(q), want, rtol=0, atol=1e-12)
+    assert cal.n == 2  # the second frame's two detections are resolved at the third
+
+
 def test_outcomes_against_the_ranking_beyond_their_noise_are_capped():
     """Closed form: 300 outcomes at score 0 persisting at 0.9 (clutter that recurs in place),
     300 at score 1 at 0.2, 400 at score 2 at 0.8. The plain isotonic fit pools the first two

@@ -795,6 +795,9 @@ class ScoreCalibrator:
         self._new_since_fit = 0
         self._fit_n = -1
         self._cal: ScoreCalibration | None = None
+        # before the first outcome: every score seen, ranked by the map (refreshed each frame)
+        self._early: list[np.ndarray] = []
+        self._frames, self._fit_frames = 0, -1
         # the chains: the frame count, the image's shift summed over the frames, each chain's
         # last box (``_head_*``: box, class, frame, the summed shift then, chain), each chain's
         # first frame and state (0 open, 1 lasted, -1 ended short) by chain number (renumbered
@@ -899,6 +902,11 @@ class ScoreCalibrator:
             self._t += 1
             self._push(out_s, out_p)
         self._prev = (boxes, cls, s, linked_back, self._prev is None)
+        self._frames += 1
+        if self._hi > self._lo:
+            self._early = []
+        elif len(s):
+            self._early.append(s)
 
     @property
     def _buf_s(self) -> np.ndarray:
@@ -950,11 +958,12 @@ class ScoreCalibrator:
         pending = self._prev[2] if self._prev is not None else np.zeros(0)
         n = self.n
         stale = (self._cal is None or self._new_since_fit >= max(1, 0.1 * max(self._fit_n, 1))
-                 or (self._fit_n < self.prior and len(pending)))
+                 or (self._fit_n < self.prior and len(pending))
+                 or (n == 0 and self._frames != self._fit_frames))
         if not stale:
             assert self._cal is not None  # stale when nothing was fitted yet
             return self._cal
-        ranked = np.concatenate([self._buf_s, pending])
+        ranked = np.concatenate([self._buf_s, pending] if n else [np.zeros(0), *self._early])
         if len(ranked) == 0:
             return ScoreCalibration([0.0], [1.0])  # nothing seen: nothing to tell apart
         w = n / (n + self.prior) if n + self.prior > 0 else 1.0
@@ -965,6 +974,7 @@ class ScoreCalibrator:
         else:
             cal = ScoreCalibration.ranks(ranked)
         self._cal, self._fit_n, self._new_since_fit = cal, n, 0
+        self._fit_frames = self._frames
         return cal
 
     def __call__(self, scores: ArrayLike) -> np.ndarray:
