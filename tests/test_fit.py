@@ -122,6 +122,36 @@ def test_matched_series_names_the_frame_an_identity_is_duplicated_in():
             matched_series(frames, [7] * len(frames), boxes, frames, boxes, min_length=2)
 
 
+def test_matched_series_and_measurement_noise_name_what_does_not_fit():
+    """Boxes of another count than their frames were used up to the shorter (3 boxes, 2
+    frames: one object of 2 detections, without a word) or failed inside numpy (IndexError,
+    "operands could not be broadcast"); frames of 1.9 were cut to 1; ``min_length=0`` and
+    an empty list of series failed in numpy's reductions. Each is named."""
+    ref = np.array([[0, 0, 10, 20], [1, 0, 10, 20], [2, 0, 10, 20.0]])
+    for args, kw, message in [
+            (([1, 2, 3], [7, 7, 7], ref, [1, 2], ref), {},
+             r"det_boxes must be \(2, 4\), a box \[x, y, w, h\] for each of det_frames; "
+             r"got shape \(3, 4\)"),
+            (([1, 2, 3], [7, 7, 7], ref, [1, 2, 3, 3], ref), {}, r"det_boxes must be \(4, 4\)"),
+            (([1, 2, 3], [7, 7], ref, [1, 2, 3], ref), {},
+             r"ref_ids must be \(3,\), one for each of ref_frames; got shape \(2,\)"),
+            (([1, 2, 3], [7, 7, 7], ref[:, :2], [1, 2, 3], ref), {},
+             r"ref_boxes must be \(3, 4\).*got shape \(3, 2\)"),
+            (([1, 2], [7, 8], ref[:2], [1], ref[:1]), {"min_length": 0},
+             "min_length must be a whole number >= 1; got 0"),
+            (([1.9, 2.9], [7, 7], ref[:2], [1, 2], ref[:2]), {},
+             r"ref_frames must be whole numbers; ref_frames\[0\] is 1.9"),
+            (([1, 2], [7, 7], ref[:2], [1, np.nan], ref[:2]), {},
+             r"det_frames must be whole numbers; det_frames\[1\] is nan")]:
+        with pytest.raises(ValueError, match=message):
+            matched_series(*args, **kw)
+    with pytest.raises(ValueError, match="no matched detections: nothing to learn from"):
+        measurement_noise([])
+    # what fits is taken as before: frames as floats that are whole, one object of three
+    out = matched_series([1.0, 2, 3], [7, 7, 7], ref, [1, 2, 3], ref, min_length=1)
+    assert [f.tolist() for f, _, _ in out] == [[1, 2, 3]]
+
+
 def _sequence(folder, rng, n_objects=12, T=60, fps=15.0, std=(0.003, 0.001)):
     """A MOTChallenge sequence of simulated people: seqinfo.ini, det/det.txt, gt/gt.txt
     (``std``: the motion noise; a long sequence needs little, or sizes wander below 0)."""

@@ -37,7 +37,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from .._validate import as_whole
 from ..association.assign import gnn_sparse
 from ..association.costs import iou_pairs
 from ..models.box import BoxMotion
@@ -51,6 +53,19 @@ __all__ = ["MotionFit", "matched_series", "measurement_noise", "fit_box_motion",
 
 def _xyxy(boxes: np.ndarray) -> np.ndarray:
     return np.c_[boxes[:, :2], boxes[:, :2] + boxes[:, 2:]]
+
+
+def _whole(values: ArrayLike, name: str) -> np.ndarray:
+    """``values`` as a 1-D int64 array, or a ValueError naming ``name`` (frames and
+    identities of 1.9 were cut to 1)."""
+    a = np.asarray(values, np.float64)
+    if a.ndim != 1:
+        raise ValueError(f"{name} must be 1-D; got shape {a.shape}")
+    bad = np.flatnonzero(~np.isfinite(a) | (a != np.round(a)) | (np.abs(a) > 2.0**53))
+    if len(bad):
+        i = int(bad[0])
+        raise ValueError(f"{name} must be whole numbers; {name}[{i}] is {float(a[i])!r}")
+    return a.astype(np.int64)
 
 
 def matched_series(ref_frames: np.ndarray, ref_ids: np.ndarray, ref_boxes: np.ndarray,
@@ -88,11 +103,20 @@ def matched_series(ref_frames: np.ndarray, ref_ids: np.ndarray, ref_boxes: np.nd
     ...     [1, 2, 3], [7, 7, 7], ref, [1, 3, 3], det, min_length=2)]
     [([1, 2, 3], [5.0, nan, 7.5], [5.0, nan, 7.0])]
     """
-    rf, ri = np.asarray(ref_frames, np.int64), np.asarray(ref_ids, np.int64)
-    rb, df = np.asarray(ref_boxes, np.float64), np.asarray(det_frames, np.int64)
-    db = np.asarray(det_boxes, np.float64)
+    rf, ri = _whole(ref_frames, "ref_frames"), _whole(ref_ids, "ref_ids")
+    df = _whole(det_frames, "det_frames")
+    rb, db = np.asarray(ref_boxes, np.float64), np.asarray(det_boxes, np.float64)
+    for name, boxes, n, of in (("ref_boxes", rb, len(rf), "ref_frames"),
+                               ("det_boxes", db, len(df), "det_frames")):
+        if boxes.ndim != 2 or boxes.shape[1] != 4 or len(boxes) != n:
+            raise ValueError(f"{name} must be ({n}, 4), a box [x, y, w, h] for each of "
+                             f"{of}; got shape {boxes.shape}")
+    if len(ri) != len(rf):
+        raise ValueError(f"ref_ids must be ({len(rf)},), one for each of ref_frames; got "
+                         f"shape {ri.shape}")
     if not 0 < min_iou <= 1:
         raise ValueError(f"min_iou must be in (0, 1]; got {min_iou}")
+    min_length = as_whole(min_length, "min_length", 1)
     match = np.full(len(rf), -1)
     r_order, d_order = np.argsort(rf, kind="stable"), np.argsort(df, kind="stable")
     r_frames, d_frames = rf[r_order], df[d_order]
@@ -155,6 +179,8 @@ def measurement_noise(series: list[Series]) -> np.ndarray:
     >>> measurement_noise([(t, z, ref)]).round(4).tolist()  # cx errs by 1 of a width of 10
     [0.1483, 0.0, 0.0, 0.0]
     """
+    if not len(series):
+        raise ValueError("no matched detections: nothing to learn from (series is empty)")
     e = np.concatenate([(z - g) / g[:, [2, 3, 2, 3]] for _, z, g in series])
     e = e[np.isfinite(e).all(axis=1)]
     if not len(e):
