@@ -289,6 +289,26 @@ def test_outcomes_against_the_ranking_beyond_their_noise_are_capped():
         ScoreCalibration.fit(s, p, cap_sigma=0)
 
 
+def test_the_caps_bins_close_as_soon_as_they_hold_their_outcomes():
+    """Closed form: 201 outcomes over five scores (72, 17, 26, 11 and 75 of them, 49, 2, 1,
+    1 and 63 persisting), bins of at least 50 from the top: [75], [11 + 26 + 17 = 54 at
+    4/54] and [72 at 49/72], the last below the top third and 6.8 standard errors above the
+    bin above it, so taken down to 4/54 before the isotonic fit. The bins were first grouped
+    by the outcomes above each score in steps of 50, which made them [75] and [126]: the
+    low-scoring clutter pooled with the bin above it and nothing was capped (score 1 at 0.50
+    instead of 0.09)."""
+    counts, hits = np.array([72, 17, 26, 11, 75]), np.array([49, 2, 1, 1, 63])
+    s = np.repeat([1.0, 2, 3, 4, 5], counts)
+    p = np.concatenate([np.arange(c) < h for c, h in zip(counts, hits)]).astype(float)
+    low = 72 * 4 / 54  # score 1's persisting outcomes once capped
+    pooled = (low + 2 + 1) / (72 + 17 + 26)  # scores 1-3 (their rates 0.074, 0.12, 0.04)
+    top = 63 / 75  # the top 5 % (at least 20 outcomes) are all of score 5
+    want = np.r_[[pooled] * 3, 1 / 11, top] / top
+    np.testing.assert_allclose(ScoreCalibration.fit(s, p).confidence, want, rtol=1e-12)
+    np.testing.assert_allclose(ScoreCalibration.fit(s, p, cap_sigma=np.inf).confidence,
+                               np.r_[[53 / 126] * 4, top] / top, rtol=1e-12)
+
+
 def test_a_dip_within_the_top_third_is_pooled_not_capped():
     """Closed form: 200 outcomes at score 3 persisting at 0.3 (the most confident, large and
     fast), 1,800 at score 2 at 0.9, 2,000 at score 1 at 0.5 and 2,000 at score 0 at 0.2.

@@ -317,19 +317,18 @@ def _rank_capped(hits: np.ndarray, counts: np.ndarray, cap_sigma: float) -> np.n
     standard errors taken down to that fit (see the module)."""
     n = counts.sum()
     size = max(50.0, 0.02 * n)
-    # bins from the top: consecutive distinct scores, each bin closed once it holds `size`
-    # outcomes (grouped first by the outcomes above each score, then merged greedily)
+    # bins from the top: consecutive distinct scores, each bin closed as soon as it holds
+    # `size` outcomes
     rc = counts[::-1]
-    above = np.cumsum(rc) - rc  # outcomes scoring above each distinct score, from the top
-    first = np.flatnonzero(np.r_[True, np.diff((above // size).astype(np.int64)) > 0])
-    group_n = np.add.reduceat(rc, first)
-    starts, acc = [], size  # start (from the top) of each bin
-    for g, m in zip(first.tolist(), group_n.tolist()):
-        if acc >= size:
-            starts.append(g)
-            acc = 0.0
-        acc += m
-    if acc < size and len(starts) > 1:
+    cum = np.cumsum(rc)
+    above = cum - rc  # outcomes scoring above each distinct score, from the top
+    starts = [0]  # start (from the top) of each bin
+    while True:
+        end = int(np.searchsorted(cum, above[starts[-1]] + size)) + 1  # past the bin
+        if end >= len(rc):
+            break
+        starts.append(end)
+    if cum[-1] - above[starts[-1]] < size and len(starts) > 1:
         starts.pop()  # the bottom's remainder joins the bin above it
     if len(starts) < 2:
         return hits
