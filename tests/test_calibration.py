@@ -415,8 +415,15 @@ def test_calibration_edge_cases_and_errors():
         BoxTracker(chain_span=-0.5)
     with pytest.raises(ValueError, match="must be increasing"):
         ScoreCalibration([0.2, 0.1], [0.0, 1.0])
+    with pytest.raises(ValueError, match="must be increasing"):  # inf - inf was NaN: passed
+        ScoreCalibration([np.inf, np.inf], [0.5, 0.5])
     with pytest.raises(ValueError, match=r"scores must be finite; scores\[0\] = nan"):
         BoxTracker().step(1, Detections(boxes=boxes, scores=[np.nan]))
+    # a chain gap (or frame rate) of 1e300, finite as checked, overflowed the compiled
+    # step's integer frames: it is a gap that never ends a chain
+    one = Detections(boxes=np.array([[10.0, 10, 40, 80]]), scores=[0.9])
+    for kw in ({"chain_gap": 1e300}, {"frame_rate": 1e300}):
+        assert ScoreCalibration.from_frames([one] * 5, **kw)([0.9]).tolist() == [1.0]
 
 
 def test_scores_above_one_are_calibrated_or_refused():

@@ -467,7 +467,9 @@ class ScoreCalibration:
         if s.shape != c.shape or len(s) == 0:
             raise ValueError(f"scores and confidence must have one equal, non-zero length; got "
                              f"{s.shape} and {c.shape}")
-        if np.isnan(s).any() or (np.diff(s) <= 0).any():
+        with np.errstate(invalid="ignore"):  # inf - inf is NaN: not increasing
+            rising = bool((np.diff(s) > 0).all())
+        if np.isnan(s).any() or not rising:
             raise ValueError("scores must be increasing (distinct) and not NaN")
         if not ((c >= 0) & (c <= 1)).all() or (np.diff(c) < 0).any():
             raise ValueError("confidence must be non-decreasing, in [0, 1]")
@@ -774,7 +776,8 @@ class ScoreCalibrator:
         # in frames: a chain lasts once its last frame is this far after its first, and takes
         # a detection up to this many frames after its last
         self._span = self.chain_span * self.frame_rate
-        self._gap = max(1, int(round(self.chain_gap * self.frame_rate)))
+        # (held within int64, which the compiled step takes: a gap of 1e300 s is for ever)
+        self._gap = max(1, int(round(min(self.chain_gap * self.frame_rate, 2.0**62))))
         self.reset()
 
     def reset(self) -> None:
