@@ -84,6 +84,13 @@ def test_model_arguments_are_checked():
         model.ownership(np.zeros((3, 2)))
     with pytest.raises(ValueError, match=r"shape \(3, 2\)"):
         model.init(np.zeros((2, 3)))
+    # one NaN made its pixel, and every log-likelihood after it, NaN for good
+    with pytest.raises(ValueError, match=r"data must be finite; data\[1, 0\] is inf"):
+        model.init([[0.5, 0.5], [np.inf, 0.5], [0.5, 0.5]])
+    model.init(np.full((3, 2), 0.5))
+    with pytest.raises(ValueError, match=r"data must be finite; data\[2, 1\] is nan"):
+        model.update([[0.5, 0.5], [0.5, 0.5], [0.5, np.nan]])
+    assert np.isfinite(model.log_likelihood(np.full((3, 2), 0.5)))
 
 
 def textured_scene(T=40, occlude=range(15, 25), seed=3):

@@ -25,6 +25,7 @@ from vistrack.tracking.single import (
     ColourParticleTracker,
     ColourTracker,
     MedianFlow,
+    TemplateTracker,
     single_tracker,
 )
 
@@ -552,3 +553,84 @@ def test_tracker_settings_that_gave_silent_nonsense_or_opencvs_assertions_are_na
     bins of 0 failed inside OpenCV, naming no setting."""
     with pytest.raises(ValueError, match="^" + re.escape(message) + "$"):
         make()
+
+
+def _scene():
+    return cv2.GaussianBlur(np.random.default_rng(0).integers(0, 256, (120, 160), dtype=np.uint8),
+                            (0, 0), 2)
+
+
+def test_wsl_keeps_a_still_box_still_at_every_edge():
+    """Nothing moves, so the box stays. The centre was held within [0, W - 1] x [0, H - 1]:
+    a box half outside at the right or bottom edge (which may start there) moved a pixel in,
+    and a 1x1 image's box moved half out. Oracle: the box given."""
+    im = np.random.default_rng(0).integers(0, 256, (60, 80), dtype=np.uint8)
+    for box in ([70, 20, 20, 20], [20, 50, 20, 20], [-10, 20, 20, 20], [20, -10, 20, 20]):
+        t = single_tracker("wsl")
+        t.init(im, box)
+        assert t.update(im).tolist() == box
+    one = np.full((1, 1), 100, np.uint8)
+    t = single_tracker("wsl")
+    t.init(one, [0, 0, 1, 1])
+    assert t.update(one).tolist() == [0, 0, 1, 1]
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_a_refused_init_leaves_the_tracker_as_it_was(method):
+    """An ``init`` refused (a float image; a grey one for the colour trackers) leaves the
+    tracker following what it followed: its next box equals that of a tracker never given
+    the bad start. The colour trackers kept the refused box (meanshift then followed
+    [0, 0, 10, 10] from a red square at [30, 20, 20, 20])."""
+    def image(x):
+        im = np.full((60, 80, 3), (40, 120, 40), np.uint8)
+        im[20:40, x:x + 20] = (0, 0, 255)
+        im[::7, ::5] = 200  # texture for the grey trackers
+        return im
+
+    good, bad = single_tracker(method), single_tracker(method)
+    good.init(image(30), [30, 20, 20, 20])
+    bad.init(image(30), [30, 20, 20, 20])
+    refused = [image(30).astype(np.float64)]
+    if method in ("colour", "meanshift", "camshift", "particle"):
+        refused.append(image(30)[..., 0])
+    for im in refused:
+        with pytest.raises(ValueError):
+            bad.init(im, [0, 0, 10, 10])
+    np.testing.assert_array_equal(bad.update(image(32)), good.update(image(32)))
+
+
+@pytest.mark.parametrize("method", ["template", "klt", "wsl", "snake", "csrt", "kcf"])
+def test_a_single_channel_image_is_tracked_as_grey(method):
+    """``(H, W, 1)`` frames, which every image check takes, failed inside OpenCV ("'scn' is
+    1"); they are grey images, and track as the same frames ``(H, W)`` do."""
+    scene = _scene()
+    frames = [np.roll(scene, (k, 3 * k), axis=(0, 1)) for k in range(4)]
+    a, b = single_tracker(method), single_tracker(method)
+    a.init(frames[0], [40, 30, 40, 40])
+    b.init(frames[0][:, :, None], [40, 30, 40, 40])
+    for f in frames[1:]:
+        np.testing.assert_array_equal(b.update(f[:, :, None]), a.update(f))
+
+
+def test_kcf_tracks_grey_frames_as_their_bgr_copies():
+    """OpenCV's KCF on grey frames failed at its second update ("Matrix operand is an empty
+    matrix"); grey frames are given to it as BGR, and track as those do."""
+    scene = _scene()
+    frames = [np.roll(scene, (k, 3 * k), axis=(0, 1)) for k in range(5)]
+    grey, bgr = single_tracker("kcf"), single_tracker("kcf")
+    grey.init(frames[0], [40, 30, 40, 40])
+    bgr.init(cv2.cvtColor(frames[0], cv2.COLOR_GRAY2BGR), [40, 30, 40, 40])
+    for f in frames[1:]:
+        np.testing.assert_array_equal(grey.update(f),
+                                      bgr.update(cv2.cvtColor(f, cv2.COLOR_GRAY2BGR)))
+
+
+def test_template_tracker_settings_are_checked():
+    """A NaN ``max_residual`` turned every registration down (median flow alone, the box
+    4 pixels off a scaled and turned scene), ``iters=2.7`` was 2 and ``-5`` had no bound."""
+    for kw, message in (({"max_residual": np.nan}, "max_residual must be a finite number > 0"),
+                        ({"max_residual": 0}, "max_residual must be a finite number > 0"),
+                        ({"iters": 2.7}, "iters must be a whole number >= 1; got 2.7"),
+                        ({"iters": -5}, "iters must be a whole number >= 1; got -5")):
+        with pytest.raises(ValueError, match=re.escape(message)):
+            TemplateTracker(**kw)

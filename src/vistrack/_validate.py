@@ -125,7 +125,9 @@ def as_uint8_image(image: ArrayLike, name: str = "image", channels: tuple[int, .
                                                          and im.shape[2] not in channels):
         raise ValueError(f"{name} must be (H, W) or (H, W, C) uint8 with C in {channels}; got "
                          f"shape {_fmt_shape(im.shape)} {im.dtype}")
-    if grey and im.ndim == 3:
+    if im.ndim == 3 and im.shape[2] == 1:
+        im = im[:, :, 0]  # one channel is a grey image (OpenCV's conversions refuse it)
+    elif grey and im.ndim == 3:
         im = bgr_to_grey(im)
     return im
 

@@ -122,6 +122,10 @@ class WSLModel:
         d = np.asarray(d, dtype=float)
         if d.shape[-len(self.shape):] != self.shape:
             raise ValueError(f"{name} must end in shape {self.shape}; got {d.shape}")
+        if not np.isfinite(d).all():  # one NaN made its pixel NaN for good
+            i = tuple(int(v) for v in np.argwhere(~np.isfinite(d))[0])
+            raise ValueError(f"{name} must be finite; {name}[{', '.join(map(str, i))}] is "
+                             f"{float(d[i])}")
         return d
 
     def init(self, d: ArrayLike) -> None:
@@ -427,7 +431,9 @@ class WSLTracker(SingleObjectTracker):
                 best = (float(ll[i, j]), (j - r) * step, (i - r) * step, s)
         self.score, dx, dy, s = best
         H, W = g.shape
-        centre = np.clip(pred + [dx, dy], 0, [W - 1, H - 1])
+        # within the image's extent, [0, W] x [0, H] (a box half outside may start there):
+        # [W - 1, H - 1] moved a still box at the right or bottom edge by a pixel
+        centre = np.clip(pred + [dx, dy], 0, [W, H])
         self.velocity = centre - self.centre
         self.centre = centre
         self.w, self.h = self.w * s, self.h * s

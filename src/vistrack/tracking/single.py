@@ -292,7 +292,10 @@ class TemplateTracker(SingleObjectTracker):
     """
 
     def __init__(self, max_residual: float = 0.6, iters: int = 30):
-        self.max_residual, self.iters = float(max_residual), int(iters)
+        # a NaN max_residual turned every registration down (median flow alone), 2.7
+        # iterations were 2 and -5 had no bound
+        self.max_residual = as_finite(max_residual, "max_residual", 0.0, above=True)
+        self.iters = as_whole(iters, "iters", 1)
         self.flow = MedianFlow()
 
     def _start(self, image: np.ndarray, b: np.ndarray) -> None:
@@ -488,8 +491,9 @@ class ColourTracker(SingleObjectTracker):
         return ht / max(ht.sum(), 1.0), hb / max(hb.sum(), 1.0)
 
     def _start(self, image: np.ndarray, box: np.ndarray) -> None:
+        hsv = _hsv(image)  # first: an image refused leaves the tracker as it was
+        self.pt, self.pb = self._hist(hsv, box)
         self.box = box
-        self.pt, self.pb = self._hist(_hsv(image), self.box)
 
     def _backproject(self, hsv: np.ndarray) -> np.ndarray:
         # p(object | colour) with equal priors, 0-255
@@ -640,9 +644,9 @@ class ColourParticleTracker(ColourTracker):
         self._seed = rng
 
     def _start(self, image: np.ndarray, box: np.ndarray) -> None:
+        super()._start(image, box)  # first: an image refused leaves the tracker as it was
         # each start draws afresh from the seed (an integer seed: the same boxes again)
         self.rng = np.random.default_rng(self._seed)
-        super()._start(image, box)
         b = self.box
         self.size = b[2:].copy()
         self.x = np.tile([b[0] + b[2] / 2, b[1] + b[3] / 2, 0.0], (self.n, 1))
@@ -749,12 +753,20 @@ class OpenCVTracker(SingleObjectTracker):
             raise ValueError(f"kind must be one of {sorted(makers)}; got {kind!r}")
         self.kind, self._make = kind, makers[kind]
 
+    def _image(self, image: np.ndarray) -> np.ndarray:
+        import cv2
+
+        im = as_uint8_image(image, channels=(1, 3))
+        # KCF on grey frames failed in OpenCV on its second update ("empty matrix")
+        return cv2.cvtColor(im, cv2.COLOR_GRAY2BGR) if self.kind == "kcf" and im.ndim == 2 \
+            else im
+
     def _start(self, image: np.ndarray, b: np.ndarray) -> None:
         import cv2
 
         # OpenCV's own failures on another kind of image read as the box's (CSRT on float
         # pixels: "cannot start there: 'depth' is 6")
-        image = as_uint8_image(image, channels=(1, 3))
+        image = self._image(image)
         r = tuple(int(round(v)) for v in b)
         where = (f"box (x, y, w, h) = ({', '.join(f'{v:g}' for v in b)}), whole pixels "
                  f"({', '.join(str(v) for v in r)})")
@@ -774,7 +786,7 @@ class OpenCVTracker(SingleObjectTracker):
         self.box = b
 
     def _follow(self, image: np.ndarray) -> np.ndarray:
-        ok, b = self._t.update(as_uint8_image(image, channels=(1, 3)))
+        ok, b = self._t.update(self._image(image))
         if ok:
             self.box = np.asarray(b, float)
         return self.box.copy()

@@ -372,6 +372,7 @@ class SnakeTracker(SingleObjectTracker):
         self.snake = Snake(**snake)
 
     def _start(self, image: np.ndarray, b: np.ndarray) -> None:
+        as_uint8_image(image)  # a frame the updates would refuse is refused at the start
         s = self.snake
         # a cubic B-spline through control points on an ellipse lies inside them: the
         # ratio is (2 + cos(2π/n)) / 3, as in Snake.init_circle
