@@ -3,6 +3,8 @@ gate, and colour + shape on a synthetic scene where each alone fails."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -87,6 +89,14 @@ def test_members_are_checked():
         Composite({"x": Fixed([])})
     with pytest.raises(ValueError, match="gate"):
         Composite({"x": (Fixed([]), (0.1, 0.1))}, p_gate=1.0)
+    # each failed at the first update, naming q, Q or R, not the setting
+    for kw, message in (({"q_pos": -16.0}, "q_pos must be a finite number >= 0; got -16.0"),
+                        ({"q_size": np.nan}, "q_size must be a finite number >= 0; got nan")):
+        with pytest.raises(ValueError, match=re.escape(message)):
+            Composite({"x": (Fixed([]), (0.1, 0.1))}, **kw)
+    with pytest.raises(ValueError, match=re.escape(
+            "members['x']: noise must be positive and finite; got (inf, 1.0)")):
+        Composite({"x": (Fixed([]), (np.inf, 1.0))})
 
 
 def growing_ellipse_scene(T=30, seed=0):

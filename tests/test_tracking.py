@@ -1011,3 +1011,27 @@ def test_box_tracker_names_a_setting_it_has_not_and_a_rate_that_is_no_number():
         with pytest.raises(TypeError, match=r"^frame_rate must be a number; got "):
             BoxTracker(frame_rate=bad)
     assert BoxTracker(frame_rate=np.float32(25)).frame_rate == 25.0
+
+
+def test_a_frames_index_and_a_tracks_columns_are_checked():
+    """``Frame(2.5, ...)`` was taken as frame 2 and ``Frame("4", ...)`` as 4 (``int()``),
+    where a bare 2.5 is refused; ``TrackTable.add`` took columns of other lengths than the
+    tracks' means (2 tracks with 1 class and 3 scores), and every later row misaligned."""
+    from vistrack.tracking.base import frame_index
+    from vistrack.tracking.lifecycle import TrackTable
+    from vistrack.types import Frame
+
+    for index in (2.5, "4", True, np.float64(3.0)):
+        with pytest.raises(TypeError, match=re.escape(f"frame.index must be an int; got "
+                                                      f"{index!r}")):
+            frame_index(Frame(index, 0.1), 1)
+    assert frame_index(Frame(np.int32(4), 0.1), 1) == 4
+    t = TrackTable(2)
+    with pytest.raises(ValueError, match="classes must have one row for each of the 2 tracks' "
+                                         "mean; got 1"):
+        t.add(np.zeros((2, 2)), np.zeros((2, 2, 2)), 0.0, np.zeros(1, np.int64), np.ones(2),
+              confirmed=True)
+    with pytest.raises(ValueError, match="scores must have one row for each of the 2"):
+        t.add(np.zeros((2, 2)), np.zeros((2, 2, 2)), 0.0, np.zeros(2, np.int64), np.ones(3),
+              confirmed=True)
+    assert len(t.ids) == 0

@@ -114,6 +114,10 @@ def frame_index(frame: Frame | int | None, last: int | None) -> int:
     if frame is None:
         index = 1 if last is None else last + 1
     elif isinstance(frame, Frame):
+        if isinstance(frame.index, (bool, np.bool_)) or not isinstance(frame.index,
+                                                                      (int, np.integer)):
+            # int() cut 2.5 to 2 and read "4" as 4
+            raise TypeError(f"frame.index must be an int; got {frame.index!r}")
         index = int(frame.index)
     elif isinstance(frame, (int, np.integer)) and not isinstance(frame, bool):
         index = int(frame)

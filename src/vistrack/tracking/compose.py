@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from .._validate import as_finite
 from ..filters import kf_predict, kf_update
 from ..models import ConstantVelocity
 from ..types import Gaussian
@@ -96,7 +97,8 @@ class Composite(SingleObjectTracker):
     ------
     ValueError
         If ``members`` is empty, a member's value is not ``(tracker, (pos_sd, log_size_sd))``
-        with positive noise, or ``p_gate`` is not in ``(0, 1)``.
+        with positive, finite noise, ``q_pos`` or ``q_size`` is negative or not finite, or
+        ``p_gate`` is not in ``(0, 1)``.
     TypeError
         If a member lacks ``init``, ``update`` or ``anchor``.
 
@@ -138,8 +140,8 @@ class Composite(SingleObjectTracker):
             for attr in ("init", "update", "anchor"):
                 if not callable(getattr(tracker, attr, None)):
                     raise TypeError(f"members[{name!r}] has no {attr}() method")
-            if not (pos_sd > 0 and size_sd > 0):
-                raise ValueError(f"members[{name!r}]: noise must be positive; got "
+            if not (0 < pos_sd < np.inf and 0 < size_sd < np.inf):
+                raise ValueError(f"members[{name!r}]: noise must be positive and finite; got "
                                  f"{(pos_sd, size_sd)}")
             self.members[name] = tracker
             self.noise[name] = np.array([pos_sd, size_sd], float)
@@ -147,7 +149,9 @@ class Composite(SingleObjectTracker):
             raise ValueError(f"p_gate must be a probability in (0, 1); got {p_gate}")
         from scipy.stats import chi2
 
-        self.q_pos, self.q_size = float(q_pos), float(q_size)
+        # named here: a negative or NaN one failed at the first update, naming q or Q
+        self.q_pos = as_finite(q_pos, "q_pos", 0.0)
+        self.q_size = as_finite(q_size, "q_size", 0.0)
         self.threshold = float(chi2.ppf(p_gate, 4))
 
     def _start(self, image: np.ndarray, b: np.ndarray) -> None:

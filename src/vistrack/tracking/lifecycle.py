@@ -138,6 +138,10 @@ class TrackTable:
         ([1, 2], True, 3)
         """
         k = len(mean)
+        for name, column in (("cov", cov), ("classes", classes), ("scores", scores)):
+            if len(column) != k:  # one row per track in every column
+                raise ValueError(f"{name} must have one row for each of the {k} tracks' "
+                                 f"mean; got {len(column)}")
         self.mean = np.concatenate([self.mean, mean])
         self.cov = np.concatenate([self.cov, cov])
         self.ids = np.concatenate([self.ids, np.arange(self.next_id, self.next_id + k)])
