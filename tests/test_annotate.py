@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from vistrack.types import Tracks
+from vistrack.types import Frame, Tracks
 from vistrack.viz import Annotator, id_colour
 from vistrack.viz.annotate import PALETTE_SIZE
 
@@ -216,3 +216,49 @@ def test_the_timeline_of_a_ground_truth_with_nothing_to_score(tmp_path):
     assert (tmp_path / "t.png").stat().st_size > 0
     assert fig.axes[0].get_title() == "S: 0 objects, 0 identity switches"
     assert len(fig.axes[0].collections[0].get_paths()) == 0
+
+
+def test_names_are_drawn_as_written_and_whole_frames_counted(tmp_path):
+    """A sequence or video named with ``$`` was read by matplotlib as mathematics: ``a$b$c``
+    titled with an italic b, and ``p$^$q`` failed to draw (``vistrack track`` and ``eval
+    --plots`` then exited 2, with no plot, run.json or score table); a long name pushed the
+    title's counts and the legend out of the figure; a score of 0 or 100 lay hidden under
+    the axes' frame; a short timeline's frames were ticked 0.25, 0.5, ..."""
+    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from vistrack.evaluation import clear_matches, evaluate_mot
+    from vistrack.io import MOTTable
+    from vistrack.viz import plot_hota_alpha, plot_timeline
+    from vistrack.viz.plots import TrajectoryPlot
+
+    gt = MOTTable.from_rows([(1, 1, 0, 0, 10, 10), (2, 1, 1, 0, 10, 10)])
+    m = clear_matches(gt, gt)
+    for name in ("a$b$c", "p$^$q"):
+        fig = plot_timeline(m, tmp_path / "t.png", title=name)
+        title = fig.axes[0].title
+        FigureCanvasAgg(fig).draw()
+        # drawn as written: the text matplotlib lays out is the name, not mathematics
+        assert title._preprocess_math(title.get_text()) == (
+            f"{name}: 1 object, 0 identity switches", False)
+    long = "L" * 120
+    fig = plot_timeline(m, title=long)
+    assert fig.axes[0].get_title() == "L" * 29 + "…" + "L" * 30 + ": 1 object, 0 identity switches"
+    FigureCanvasAgg(fig).draw()
+    bbox = fig.axes[0].title.get_window_extent()
+    assert bbox.x0 >= 0 and bbox.x1 <= fig.bbox.x1  # the counts inside the figure
+    ticks = fig.axes[0].get_xticks()
+    assert np.array_equal(ticks, np.round(ticks))  # frames are whole
+    res = {long: evaluate_mot(gt, gt), "COMBINED": evaluate_mot(gt, gt)}
+    fig = plot_hota_alpha(res, tmp_path / "h.png")
+    assert all(not line.get_clip_on() for ax in fig.axes for line in ax.lines)  # 100 shown
+    legend = fig.axes[-1].get_legend()
+    FigureCanvasAgg(fig).draw()
+    assert legend.get_window_extent().x1 <= fig.bbox.x1
+    assert not legend.get_window_extent().overlaps(fig.axes[-1].get_window_extent())
+    plot = TrajectoryPlot(tmp_path / "p.png", "p$^$q.mp4")
+    plot.write(Frame(1, 0.0), Tracks(ids=np.array([1]), boxes=np.array([[0, 0, 4, 4.0]]),
+                                     points=None, scores=np.ones(1), classes=np.zeros(1)))
+    plot.close()
+    assert (tmp_path / "p.png").stat().st_size > 0
+    assert matplotlib.rcParams["text.usetex"] is False

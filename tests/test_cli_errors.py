@@ -893,3 +893,37 @@ def test_a_sequence_and_its_own_images_or_detections_are_one_input(tmp_path):
         with pytest.raises(ValueError, match="is given twice"):
             check_distinct([other, seq])
     check_distinct([seq, _sequence(tmp_path / "T")])  # two sequences: two inputs
+
+
+def test_eval_plots_of_a_sequence_with_a_long_name_and_scores_first(tmp_path, capsys,
+                                                                       monkeypatch):
+    """A sequence named with 234 characters or more (a legal folder name) failed `eval
+    --plots` with a traceback, "File name too long" (the plots' names add to it), and no
+    score table; its timeline now goes under a name cut and told apart by a hash of the
+    whole. The scores are printed before the plots are drawn: a plot that fails loses none."""
+    name = "S" * 240
+    gt_dir, pred_dir, plots = tmp_path / "gt", tmp_path / "pred", tmp_path / "plots"
+    seq = _sequence(gt_dir / name)
+    (seq / "gt").mkdir()
+    (seq / "gt" / "gt.txt").write_text("".join(f"{f},1,{10 + 2 * f},20,20,40,1,1,1\n"
+                                               for f in range(1, 11)))
+    pred_dir.mkdir()
+    (pred_dir / f"{name}.txt").write_text((seq / "gt" / "gt.txt").read_text())
+    args = ["eval", "--gt-dir", str(gt_dir), "--pred-dir", str(pred_dir), "--plots",
+            str(plots), "--jobs", "1"]
+    assert main(args) == 0
+    out, err = capsys.readouterr()
+    assert out.splitlines()[1].startswith(name) and " 100.0 " in out
+    timeline = [p.name for p in plots.iterdir() if p.name.startswith("timeline_")]
+    assert len(timeline) == 1 and len(timeline[0]) < 160
+    assert timeline[0].startswith("timeline_" + "S" * 100) and f"wrote {plots}" in err
+    assert main(args + ["--force"]) == 0  # again, over them
+
+    def broken(*a, **k):
+        raise RuntimeError("the plot failed")
+
+    monkeypatch.setattr("vistrack.viz.plots.plot_hota_alpha", broken)
+    capsys.readouterr()
+    with pytest.raises(RuntimeError, match="the plot failed"):
+        main(args + ["--force"])
+    assert name in capsys.readouterr().out  # the table came first

@@ -968,7 +968,7 @@ def _eval(args: argparse.Namespace) -> int:
     if args.scheduler is not None and args.jobs is not None:
         return _fail("eval", "--jobs goes with the local pool; the cluster has its own workers")
     plots = [] if args.plots is None else [Path(args.plots) / "hota_alpha.png"] + [
-        Path(args.plots) / f"timeline_{name}.png" for name, *_ in pairs]
+        Path(args.plots) / f"timeline_{_file_name(name)}.png" for name, *_ in pairs]
     if plots:
         from .io.atomic import check_output
 
@@ -999,6 +999,12 @@ def _eval(args: argparse.Namespace) -> int:
         if args.json:
             print("{}")
         return status
+    # the scores first: a plot that cannot be drawn or written loses none of them
+    if args.json:
+        print(json.dumps({k: v.summary() for k, v in res.items()}, indent=2))
+    else:
+        _table(res)
+    sys.stdout.flush()
     if plots:
         from .evaluation.files import pair_matches
         from .io.atomic import made_folder, replacing
@@ -1015,11 +1021,20 @@ def _eval(args: argparse.Namespace) -> int:
                         plot_timeline(pair_matches(pair, args.benchmark), part, title=pair[0])
         for path in written:
             print(f"wrote {path}", file=sys.stderr)
-    if args.json:
-        print(json.dumps({k: v.summary() for k, v in res.items()}, indent=2))
-        return status
-    _table(res)
     return status
+
+
+def _file_name(name: str, limit: int = 120) -> str:
+    """``name`` as part of a file's name: as it is, or, past ``limit`` characters, cut and
+    told apart by a hash of the whole (a file's name holds 255 bytes, and the plots' names
+    add to the sequence's; a name of 234 characters failed with "File name too long")."""
+    if len(name.encode()) <= limit:
+        return name
+    import hashlib
+
+    digest = hashlib.sha1(name.encode()).hexdigest()[:10]
+    cut = name.encode()[:limit - 11].decode(errors="ignore")
+    return f"{cut}-{digest}"
 
 
 def _table(res: dict, stream=None) -> None:
@@ -1263,7 +1278,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="also draw HOTA, DetA and AssA over the localisation threshold α, "
                     "each sequence and COMBINED, into DIR/hota_alpha.png, and each "
                     "sequence's objects over time, coloured by the predicted identity that "
-                    "covers them, switches marked, into DIR/timeline_SEQ.png")
+                    "covers them, switches marked, into DIR/timeline_SEQ.png (a name over "
+                    "120 bytes cut, with a hash of the whole)")
     ev.add_argument("--force", action="store_true", help="overwrite existing plots")
     ev.add_argument("--jobs", type=int, metavar="N",
                     help="with --gt-dir: sequences scored at once, each in a process of its "

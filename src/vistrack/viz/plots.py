@@ -23,6 +23,16 @@ __all__ = ["covariance_ellipse", "plot_estimates_1d", "plot_track_2d", "plot_tra
            "plot_hota_alpha", "plot_timeline", "TrajectoryPlot"]
 
 
+def _label(name: str, limit: int = 60) -> str:
+    """A name (a sequence's, a video's) as a title or legend shows it: its ``$`` taken
+    literally, not as matplotlib's mathematics (``a$b$c`` showed an italic b, ``p$^$q`` failed
+    to draw), and a name longer than ``limit`` characters cut in the middle, so that what
+    follows it in a title stays inside the figure."""
+    if len(name) > limit:
+        name = name[:limit // 2 - 1] + "…" + name[-(limit - limit // 2):]
+    return name.replace("$", r"\$")
+
+
 def _finish(ax: Axes, xlabel: str, ylabel: str, title: str | None) -> Axes:
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
@@ -358,10 +368,13 @@ def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = No
     for ax, metric in zip(axes, ("HOTA", "DetA", "AssA")):
         for k, name in enumerate(names):
             y = 100 * np.asarray(getattr(results[name], f"{metric}_alpha"), dtype=float)
+            # clip_on off: a score of 0 or 100 lies on the axes' frame, and was hidden
             if name == "COMBINED":
-                ax.plot(ALPHAS, y, color="black", linewidth=2.5, label=name)
+                ax.plot(ALPHAS, y, color="black", linewidth=2.5, label=name, clip_on=False,
+                        zorder=3)
             else:
-                ax.plot(ALPHAS, y, color=colours[k], linewidth=1, label=name)
+                ax.plot(ALPHAS, y, color=colours[k], linewidth=1, label=_label(name, 40),
+                        clip_on=False, zorder=2.5)
         ax.set_title(metric)
         ax.set_xlabel("localisation threshold α (IoU)")
         ax.set_xlim(0, 1)
@@ -369,7 +382,10 @@ def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = No
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("score (%)")
     if len(names) <= 20:
-        axes[-1].legend(fontsize=7, loc="lower left")
+        # beside the panels, where it hides no curve (inside the last one, 20 names covered
+        # a third of its width)
+        axes[-1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+                        borderaxespad=0)
     fig.tight_layout()
     if path is not None:
         fig.savefig(path, dpi=100)
@@ -405,6 +421,7 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
     """
     from matplotlib.collections import PolyCollection
     from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
 
     from .annotate import id_colour
 
@@ -452,7 +469,8 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
     ax.set_ylabel("ground-truth object")
     k = int(switches.sum())
     counts = f"{n} object{'s' if n != 1 else ''}, {k} identity switch{'es' if k != 1 else ''}"
-    ax.set_title(f"{title}: {counts}" if title else counts)
+    ax.set_title(f"{_label(title)}: {counts}" if title else counts)
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # frames are whole
     ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()
     if path is not None:
@@ -636,5 +654,5 @@ class TrajectoryPlot:
 
         with replacing(self.path) as part:  # an earlier plot stays until this one is saved
             plot_trajectories(frames, ids, self._centres.view((0, 2)), image, part,
-                              title=f"{self.name}: {len(np.unique(ids))} tracks, "
+                              title=f"{_label(self.name)}: {len(np.unique(ids))} tracks, "
                               f"{self._frames} frames")
