@@ -101,6 +101,33 @@ def test_chi2_band_matches_scipy():
         chi2_band(0)
 
 
+def test_the_consistency_scores_name_what_does_not_fit():
+    """A (1, 1) ``R`` for measurements of 2 values was added to every entry of ``S`` (NIS
+    2.998 where a right filter gives 2), a (1, n) ``H`` broadcast over the rows (NIS 31,952);
+    ``nees`` read a covariance that is not symmetric by its lower triangle, and failed inside
+    numpy on scalars; ``chi2_band(nan)`` gave a band of NaN; ``rmse`` of nothing was NaN."""
+    pos = vt.Position(dim=2, r=1.0)
+    kf = vt.KalmanFilter(vt.ConstantVelocity(dim=2, q=1.0), pos)
+    ys = np.array([[0.0, 0.0], [1.0, 0.5], [2.0, 1.0]])
+    res = kf.filter(ys, x0=np.zeros(4), P0=np.eye(4))
+    for kw, message in (({"H": pos.H(4), "R": [[1.0]]}, r"R must be \(2, 2\) or \(3, 2, 2\) "
+                         r"for ys of 2 values and states of 4; got \(1, 1\)"),
+                        ({"H": pos.H(4)[:1], "R": pos.R()}, r"H must be \(2, 4\)"),
+                        ({"H": np.tile(pos.H(4), (2, 1, 1)), "R": pos.R()},
+                         r"H must be \(2, 4\) or \(3, 2, 4\).*got \(2, 2, 4\)")):
+        with pytest.raises(ValueError, match=message):
+            nis(ys, res, **kw)
+    with pytest.raises(ValueError, match=r"covs must be symmetric; covs\[0, 1\] = 0.9"):
+        nees([1.0, 1.0], [0.0, 0.0], [[1.0, 0.9], [0.0, 1.0]])
+    with pytest.raises(ValueError, match="truth and means must have the same shape"):
+        nees(1.0, 0.0, 1.0)
+    for bad in (np.nan, 2.5):
+        with pytest.raises(ValueError, match="need whole numbers dof >= 1"):
+            chi2_band(bad)
+    with pytest.raises(ValueError, match="estimates and truth are empty"):
+        rmse([], [])
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("kernel", ["one series", "batch", "loop batch"])
 def test_covariances_stay_symmetric_positive_definite_over_a_million_steps(kernel, monkeypatch):

@@ -13,7 +13,11 @@ NONLINEAR = growth_model()
 @pytest.mark.parametrize("bad, match", [
     ({"T": 2.5}, "T must be a positive integer; got 2.5"),
     ({"T": 0}, "T must be a positive integer; got 0"),
-    ({"n_series": 0}, "n_series must be >= 1; got 0"),
+    ({"n_series": 0}, "n_series must be a whole number >= 1; got 0"),
+    # taken as 2 series, NaN states, NaN states after the first step (the nonlinear path)
+    ({"n_series": 2.7}, "n_series must be a whole number >= 1; got 2.7"),
+    ({"P0": "nan"}, r"P0 must be finite; P0\[0, 0\] = nan"),
+    ({"dt": [1.0, np.nan]}, "dt must be finite and >= 0; got nan"),
     ({"P0": "negative"}, "P0 must be positive semi-definite"),
     ({"P0": "wrong shape"}, r"P0 must have shape"),
     ({"x0": "nan"}, r"x0 must be finite; x0\[0\] = nan"),
@@ -25,7 +29,9 @@ def test_both_paths_refuse_the_same_bad_arguments(models, bad, match):
     n = 2 if models is LINEAR else 1
     kwargs = {"T": 3, "x0": np.full(n, 0.1), "P0": None, "n_series": None}
     kwargs.update(bad)
-    if kwargs["P0"] == "negative":
+    if isinstance(kwargs["P0"], str) and kwargs["P0"] == "nan":
+        kwargs["P0"] = np.full((n, n), np.nan)
+    elif kwargs["P0"] == "negative":
         kwargs["P0"] = np.diag([-1.0] + [1.0] * (n - 1))
     elif kwargs["P0"] == "wrong shape":
         kwargs["P0"] = np.eye(n + 1)

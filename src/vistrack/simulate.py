@@ -99,14 +99,13 @@ def simulate_lgssm(
     H_arr = as_float_array(H, "H", ndim=(2, 3))
     m = H_arr.shape[-2]
     F_, Q_, H_, R_ = check_linear_gaussian(F, Q, H_arr, R, n, m, T)
-    B = 1 if n_series is None else int(n_series)
-    if B < 1:
-        raise ValueError(f"n_series must be >= 1; got {n_series}")
+    B = _n_series(n_series)
     x = np.broadcast_to(x0_, (B, n)).copy()
     if P0 is not None:
         P0_ = as_float_array(P0, "P0", ndim=(2,))
         if P0_.shape != (n, n):
             raise ValueError(f"P0 must have shape ({n}, {n}); got {P0_.shape}")
+        check_finite(P0_, "P0")  # a NaN passed the PSD check and made every state NaN
         check_psd(P0_, "P0")
         x += gen.standard_normal((B, n)) @ psd_sqrt(P0_).T
     sq, sr = psd_sqrt(Q_), psd_sqrt(R_)
@@ -217,6 +216,17 @@ def simulate(
     return _simulate_nonlinear(motion, measurement, int(T), x0, P0, dt, n_series, as_rng(rng))
 
 
+def _n_series(n_series: int | None) -> int:
+    """How many series: 1 for None, else a whole number >= 1 (2.7 was taken as 2)."""
+    if n_series is None:
+        return 1
+    if isinstance(n_series, (bool, np.bool_)) or not (
+            isinstance(n_series, (int, np.integer, float, np.floating))
+            and float(n_series).is_integer()) or n_series < 1:
+        raise ValueError(f"n_series must be a whole number >= 1; got {n_series!r}")
+    return int(n_series)
+
+
 def _simulate_nonlinear(motion, measurement, T, x0, P0, dt, n_series, gen):
     """``x_t = f(x_{t-1}, dt_t, t) + w_t``, ``y_t = h(x_t) + v_t`` (angles wrapped), with
     ``t`` the cumulative time from 0."""
@@ -225,9 +235,7 @@ def _simulate_nonlinear(motion, measurement, T, x0, P0, dt, n_series, gen):
 
     mo = MotionFunctions(motion)
     me = MeasurementFunctions(measurement, mo.n)
-    n, B = mo.n, 1 if n_series is None else int(n_series)
-    if B < 1:
-        raise ValueError(f"n_series must be >= 1; got {n_series}")
+    n, B = mo.n, _n_series(n_series)
     x0_ = as_float_array(x0, "x0", ndim=(1,))
     if x0_.shape != (n,):
         raise ValueError(f"x0 must have shape ({n},); got {x0_.shape}")
@@ -237,11 +245,15 @@ def _simulate_nonlinear(motion, measurement, T, x0, P0, dt, n_series, gen):
         P0_ = as_float_array(P0, "P0", ndim=(2,))
         if P0_.shape != (n, n):
             raise ValueError(f"P0 must have shape ({n}, {n}); got {P0_.shape}")
+        check_finite(P0_, "P0")
         check_psd(P0_, "P0")
     x = np.broadcast_to(x0_, (B, n)).copy()
     if P0_ is not None:
         x += gen.standard_normal((B, n)) @ psd_sqrt(P0_).T
     dts = np.broadcast_to(dt_steps(dt, T), (T,))
+    if not (np.isfinite(dts[1:]) & (dts[1:] >= 0)).all():  # as the linear models refuse it
+        bad = dts[1:][~(np.isfinite(dts[1:]) & (dts[1:] >= 0))][0]
+        raise ValueError(f"dt must be finite and >= 0; got {bad}")
     times = np.concatenate([[0.0], np.cumsum(dts[1:])])
     Rs = psd_sqrt(me.Rm)
     xs, ys = np.empty((B, T, n)), np.empty((B, T, me.m))

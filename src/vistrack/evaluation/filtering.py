@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_measurement_series
+from .._validate import as_float_array, as_measurement_series, check_psd
 
 if TYPE_CHECKING:  # the filters import numba; scoring needs none of it
     from ..filters.kalman import FilterResult
@@ -59,6 +59,8 @@ def rmse(estimates: ArrayLike, truth: ArrayLike, *,
     if est.shape != tru.shape:
         raise ValueError(f"estimates and truth must have the same shape; got {est.shape} and "
                          f"{tru.shape}")
+    if est.size == 0:  # the mean of nothing was NaN, with numpy's warning
+        raise ValueError("estimates and truth are empty: no error to measure")
     return np.sqrt(np.mean((est - tru) ** 2, axis=axis))
 
 
@@ -109,11 +111,12 @@ def nees(truth: ArrayLike, means: ArrayLike, covs: ArrayLike) -> np.ndarray:
     x = as_float_array(truth, "truth")
     m = as_float_array(means, "means")
     P = as_float_array(covs, "covs")
-    if x.shape != m.shape or P.shape != m.shape + m.shape[-1:]:
+    if m.ndim == 0 or x.shape != m.shape or P.shape != m.shape + m.shape[-1:]:
         raise ValueError(
             f"truth and means must have the same shape (..., n) and covs (..., n, n); "
             f"got {x.shape}, {m.shape}, {P.shape}"
         )
+    check_psd(P, "covs")  # symmetric: its lower triangle alone was read
     return _quadratic(x - m, P)
 
 
@@ -178,7 +181,12 @@ def nis(ys: ArrayLike, result: FilterResult, *, H: ArrayLike,
     R_ = as_float_array(R, "R", ndim=(2, 3))
     if y.shape[:2] != pm.shape[:2]:
         raise ValueError(f"ys has shape {y.shape} but the result covers {pm.shape[:2]}")
-    m = y.shape[-1]
+    m, n, T = y.shape[-1], pm.shape[-1], y.shape[1]
+    # named here: a (1, 1) R was added to every entry of S, a (1, n) H broadcast over m rows
+    for name, arr, want in (("H", H_, (m, n)), ("R", R_, (m, m))):
+        if arr.shape[-2:] != want or (arr.ndim == 3 and arr.shape[0] != T):
+            raise ValueError(f"{name} must be {want} or ({T}, {want[0]}, {want[1]}) for ys of "
+                             f"{m} values and states of {n}; got {arr.shape}")
     Ht = np.swapaxes(H_, -1, -2)
     nu = y - pm @ Ht if H_.ndim == 2 else y - np.einsum("tmn,btn->btm", H_, pm)
     S = H_ @ pP @ Ht + R_
@@ -233,8 +241,11 @@ def chi2_band(dof: int, *, n_runs: int = 1, level: float = 0.95) -> tuple[float,
     """
     from scipy import stats  # imported here: scipy.stats costs ~60 MB and 0.8 s at import
 
-    if dof < 1 or n_runs < 1 or not 0 < level < 1:
-        raise ValueError(f"need dof >= 1, n_runs >= 1, 0 < level < 1; got {dof}, {n_runs}, {level}")
+    # written so that NaN fails too (it passed, and gave a band of NaN)
+    if not (dof >= 1 and n_runs >= 1 and 0 < level < 1) or int(dof) != dof \
+            or int(n_runs) != n_runs:
+        raise ValueError(f"need whole numbers dof >= 1 and n_runs >= 1, and 0 < level < 1; got "
+                         f"{dof}, {n_runs}, {level}")
     a = (1 - level) / 2
     k = dof * n_runs
     return float(stats.chi2.ppf(a, k) / n_runs), float(stats.chi2.ppf(1 - a, k) / n_runs)
