@@ -1795,3 +1795,18 @@ def test_view_shift_scales_by_the_reduction_each_axis_had():
 
     dx, dy, _ = view_shift(a, b)
     assert abs(dx + 24) < 0.03 and abs(dy - 12) < 0.03
+
+
+def test_hog_settings_are_checked():
+    """A scale of 1 or less (the step between pyramid levels), a NaN threshold: no
+    detection at all, without a word; an ``nms_iou`` of -1 or 5, which the ONNX front-end
+    refuses, was taken."""
+    from vistrack.frontends.detectors import HOGDetector
+
+    for kw, message in (({"scale": 1.0}, "scale must be a finite number > 1; got 1.0"),
+                        ({"scale": 0.5}, "scale must be a finite number > 1; got 0.5"),
+                        ({"hit_threshold": np.nan}, "hit_threshold must be a finite number"),
+                        ({"nms_iou": -1.0}, "nms_iou must be a finite number >= 0 and <= 1"),
+                        ({"nms_iou": 5.0}, "nms_iou must be a finite number >= 0 and <= 1")):
+        with pytest.raises(ValueError, match=re.escape(message)):
+            HOGDetector(**kw)

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from .._validate import as_finite
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -159,8 +160,10 @@ class HOGDetector:
         self._hog = cv2.HOGDescriptor()
         # the detector comes as a float32 array (asarray keeps it; the stubs say Sequence)
         self._hog.setSVMDetector(np.asarray(cv2.HOGDescriptor.getDefaultPeopleDetector()))
-        self.scale, self.hit_threshold, self.nms_iou = float(scale), float(hit_threshold), \
-            float(nms_iou)
+        # a scale of 1 or less, a NaN threshold: no detection at all, without a word
+        self.scale = as_finite(scale, "scale", 1.0, above=True)
+        self.hit_threshold = as_finite(hit_threshold, "hit_threshold")
+        self.nms_iou = as_finite(nms_iou, "nms_iou", 0.0, high=1.0)
         if not upscale > 0:
             raise ValueError(f"upscale must be > 0; got {upscale}")
         self.upscale = float(upscale)

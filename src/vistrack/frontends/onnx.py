@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._validate import as_uint8_image, as_whole
 from ..types import Detections
 from .detectors import nms
 
@@ -83,7 +84,8 @@ class ONNXDetector:
         How to read the outputs (:data:`LAYOUTS`).
     classes : sequence of int, optional
         Keep only these classes (the model's own indices: 0 is a person for COCO-trained
-        YOLO models); default all.
+        YOLO models; SSD's start at 1, 0 being the background); default all. A class the
+        model has not is refused at the first frame, when its outputs show how many it has.
     min_score : float
         Drop boxes scoring less (0.1 by default: a tracker's second stage uses the low ones).
     nms_iou : float
@@ -104,7 +106,13 @@ class ONNXDetector:
     FileNotFoundError
         If ``model`` does not exist.
     ValueError
-        If an option is invalid, or the model's outputs fit no layout (naming their shapes).
+        If an option is invalid, the model takes no image ``(1, 3, H, W)`` of 32- or 16-bit
+        floats, or its outputs fit no layout (naming their shapes).
+
+    Notes
+    -----
+    Boxes are mapped back to the image and clipped to it; a box wholly outside it (in the
+    letterbox's padding) is left out.
     """
 
     def __init__(self, model: str | Path, *, layout: str = "auto",
@@ -127,9 +135,10 @@ class ONNXDetector:
         if not 0.0 <= min_score <= 1.0 or not 0.0 <= nms_iou <= 1.0:
             raise ValueError(f"min_score and nms_iou must be within [0, 1]; got {min_score} "
                              f"and {nms_iou}")
-        if len(mean) != 3 or len(std) != 3 or not all(s > 0 for s in std):
-            raise ValueError(f"mean and std must be 3 numbers each, std above 0; got {mean} "
-                             f"and {std}")
+        if len(mean) != 3 or len(std) != 3 or not all(s > 0 for s in std) \
+                or not np.isfinite(np.r_[mean, std]).all():
+            raise ValueError(f"mean and std must be 3 finite numbers each, std above 0; got "
+                             f"{mean} and {std}")
         options = ort.SessionOptions()
         options.log_severity_level = 3
         try:
@@ -139,22 +148,39 @@ class ONNXDetector:
             raise ValueError(f"{path}: not an ONNX model onnxruntime can run "
                              f"({' '.join(str(e).split())})") from e
         inputs = self.session.get_inputs()
-        if len(inputs) != 1 or len(inputs[0].shape) != 4:
-            raise ValueError(f"{path}: the model must take one image (1, 3, H, W); it takes "
-                             f"{[(i.name, i.shape) for i in inputs]}")
+        types = {"tensor(float)": np.float32, "tensor(float16)": np.float16}
+        # an (H, W, 3) input or one of integers failed at the first frame in onnxruntime
+        if len(inputs) != 1 or len(inputs[0].shape) != 4 or inputs[0].shape[1] not in (
+                3, None) and isinstance(inputs[0].shape[1], int) \
+                or inputs[0].type not in types:
+            raise ValueError(f"{path}: the model must take one image (1, 3, H, W) of floats "
+                             f"(32 or 16 bits); it takes "
+                             f"{[(i.name, i.shape, i.type) for i in inputs]}")
+        self._dtype = types[inputs[0].type]
         self.input_name = inputs[0].name
         fixed = [d if isinstance(d, int) else None for d in inputs[0].shape[2:]]
         if input_size is None:
             size = (fixed[0] or 640, fixed[1] or 640)
         else:
-            size = (int(input_size[0]), int(input_size[1]))
+            if np.ndim(input_size) != 1 or len(input_size) != 2:
+                raise ValueError(f"input_size must be (height, width); got {input_size!r}")
+            size = (as_whole(input_size[0], "input_size[0]", 1),
+                    as_whole(input_size[1], "input_size[1]", 1))
             if any(f is not None and f != s for f, s in zip(fixed, size)):
                 raise ValueError(f"{path}: input_size {size} contradicts the model's input "
                                  f"{tuple(inputs[0].shape)}")
         self.size = size
         self.layout = layout if layout != "auto" else self._guess_layout(path)
         self.resize = resize or ("stretch" if self.layout == "ssd" else "letterbox")
+        if classes is not None:
+            # checked against the model's classes at the first frame (_check_classes): a
+            # class it has not, or an empty list, kept nothing, and the run blamed the model
+            classes = [as_whole(c, "classes", 0, "the model's class indices")
+                       for c in classes]
+            if not classes:
+                raise ValueError("classes must name one class or more (None: every class)")
         self.classes = None if classes is None else np.array(sorted(set(classes)), np.int64)
+        self._classes_checked = False
         self.min_score, self.nms_iou = float(min_score), float(nms_iou)
         self.mean = np.asarray(mean, np.float32).reshape(3, 1, 1)
         self.std = np.asarray(std, np.float32).reshape(3, 1, 1)
@@ -172,10 +198,25 @@ class ONNXDetector:
                          f"{[(o.name, o.shape) for o in outs]}; give the layout "
                          f"(one of {list(LAYOUTS[1:])})")
 
+    def _check_classes(self, first: int, n: int) -> None:
+        """The class filter against the model's classes ``first .. n - 1`` (SSD's 0 is the
+        background), once, at the first frame."""
+        self._classes_checked = True
+        if self.classes is not None and (self.classes.min() < first or self.classes.max() >= n):
+            bad = [int(c) for c in self.classes if not first <= c < n]
+            raise ValueError(f"classes {bad} are not among the model's classes {first} to "
+                             f"{n - 1} (--classes; its outputs have {n} class scores"
+                             f"{', 0 the background' if first else ''})")
+
     def _input(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The network's input, and the scale and offset ``(4,)`` that map its boxes back."""
         import cv2
 
+        image = as_uint8_image(image)  # float, 16-bit: OpenCV's error, or pixels past 1
+        if image.ndim == 3 and image.shape[2] == 4:
+            image = np.ascontiguousarray(image[..., :3])  # BGRA: without its alpha
+        if min(image.shape[:2]) < 1:
+            raise ValueError(f"image has no pixels; got shape {image.shape}")
         if image.ndim == 2:
             image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
         H, W = self.size
@@ -192,7 +233,7 @@ class ONNXDetector:
             offset = np.zeros(4)
         x = cv2.cvtColor(fitted, cv2.COLOR_BGR2RGB).transpose(2, 0, 1).astype(np.float32)
         x = (x / np.float32(255.0) - self.mean) / self.std
-        return x[None], scale, offset
+        return x[None].astype(self._dtype), scale, offset
 
     def _decode(self, outputs: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Boxes ``x0, y0, x1, y1`` in the input's pixels, scores and classes."""
@@ -209,6 +250,8 @@ class ONNXDetector:
                     or len(scores) != len(boxes) or scores.shape[1] < 2:
                 raise ValueError(f"SSD-style outputs must be boxes (1, N, 4) and scores (1, N, "
                                  f"C >= 2); got {outputs[0].shape} and {outputs[1].shape}")
+            if not self._classes_checked:
+                self._check_classes(1, scores.shape[1])
             cls = 1 + np.argmax(scores[:, 1:], axis=1)
             best = scores[np.arange(len(cls)), cls]
             H, W = self.size
@@ -225,12 +268,16 @@ class ONNXDetector:
             if a.shape[1] < 5:
                 raise ValueError(f"a YOLOv8-style output has 4 + C rows (C >= 1); got "
                                  f"{out.shape}")
+            if not self._classes_checked:
+                self._check_classes(0, a.shape[1] - 4)
             cls = np.argmax(a[:, 4:], axis=1)
             best = a[np.arange(len(a)), 4 + cls]
         else:
             if a.shape[1] < 6:
                 raise ValueError(f"a YOLOv5-style output has 5 + C columns (C >= 1); got "
                                  f"{out.shape}")
+            if not self._classes_checked:
+                self._check_classes(0, a.shape[1] - 5)
             cls = np.argmax(a[:, 5:], axis=1)
             best = a[:, 4] * a[np.arange(len(a)), 5 + cls]
         c, s = a[:, :2], a[:, 2:4] / 2
@@ -258,7 +305,10 @@ class ONNXDetector:
         h, w = np.asarray(image).shape[:2]
         boxes = (boxes - offset) / scale
         boxes = np.clip(boxes, 0.0, [w, h, w, h])
-        return Detections(boxes=boxes, scores=scores, classes=cls)
+        # a box wholly outside the image (in the letterbox's padding) is clipped to no area:
+        # not a detection in the image, and one no track could follow
+        inside = (boxes[:, 2] > boxes[:, 0]) & (boxes[:, 3] > boxes[:, 1])
+        return Detections(boxes=boxes[inside], scores=scores[inside], classes=cls[inside])
 
     def __repr__(self) -> str:
         classes = None if self.classes is None else self.classes.tolist()
