@@ -184,6 +184,10 @@ def test_what_the_onnx_detector_takes_is_named_before_the_first_frame(tmp_path):
     with pytest.raises(ValueError, match=r"classes \[5\] are not among the model's classes 0 "
                                          r"to 1 \(--classes; its outputs have 2 class scores\)"):
         ONNXDetector(model, classes=[0, 5]).detect(IMAGE)
+    refusing = ONNXDetector(model, classes=[5])
+    for _ in range(2):  # every frame, not the first alone
+        with pytest.raises(ValueError, match=r"classes \[5\]"):
+            refusing.detect(IMAGE)
     assert len(ONNXDetector(model, classes=[0]).detect(IMAGE)) == 1
     ssd = constant_model(tmp_path / "ssd.onnx", [np.full((1, 5, 4), 0.5, np.float32),
                                                   np.full((1, 5, 3), 0.3, np.float32)])

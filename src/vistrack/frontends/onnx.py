@@ -201,12 +201,12 @@ class ONNXDetector:
     def _check_classes(self, first: int, n: int) -> None:
         """The class filter against the model's classes ``first .. n - 1`` (SSD's 0 is the
         background), once, at the first frame."""
-        self._classes_checked = True
         if self.classes is not None and (self.classes.min() < first or self.classes.max() >= n):
             bad = [int(c) for c in self.classes if not first <= c < n]
             raise ValueError(f"classes {bad} are not among the model's classes {first} to "
                              f"{n - 1} (--classes; its outputs have {n} class scores"
                              f"{', 0 the background' if first else ''})")
+        self._classes_checked = True  # (after: refused again at the next frame, if asked)
 
     def _input(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The network's input, and the scale and offset ``(4,)`` that map its boxes back."""
