@@ -140,9 +140,9 @@ def test_matched_series_and_measurement_noise_name_what_does_not_fit():
             (([1, 2], [7, 8], ref[:2], [1], ref[:1]), {"min_length": 0},
              "min_length must be a whole number >= 1; got 0"),
             (([1.9, 2.9], [7, 7], ref[:2], [1, 2], ref[:2]), {},
-             r"ref_frames must be whole numbers; ref_frames\[0\] is 1.9"),
+             r"ref_frames must be whole numbers; ref_frames\[0\] = 1.9"),
             (([1, 2], [7, 7], ref[:2], [1, np.nan], ref[:2]), {},
-             r"det_frames must be whole numbers; det_frames\[1\] is nan")]:
+             r"det_frames must be whole numbers; det_frames\[1\] = nan")]:
         with pytest.raises(ValueError, match=message):
             matched_series(*args, **kw)
     with pytest.raises(ValueError, match="no matched detections: nothing to learn from"):

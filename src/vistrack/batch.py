@@ -130,13 +130,11 @@ def check_distinct(paths: Iterable[str | Path]) -> None:
 def _image_dir(sequence: Path) -> str:
     """The images' folder a sequence's ``seqinfo.ini`` names (``imDir``; img1 where it names
     none or cannot be read: the reader says what is wrong with it)."""
-    import configparser
+    from .io.motchallenge import _sequence_section
 
-    cp = configparser.ConfigParser(interpolation=None)
     try:
-        cp.read_string((sequence / "seqinfo.ini").read_text(encoding="utf-8-sig"))
-        return cp.get("Sequence", "imDir", fallback="img1") or "img1"
-    except (OSError, UnicodeDecodeError, configparser.Error):
+        return _sequence_section(sequence)[1].get("imDir", "img1") or "img1"
+    except (OSError, ValueError):  # MOTFormatError is one
         return "img1"
 
 

@@ -8,7 +8,14 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._validate import as_float_array, as_rng, check_finite, check_linear_gaussian, check_psd
+from ._validate import (
+    as_float_array,
+    as_rng,
+    as_whole,
+    check_finite,
+    check_linear_gaussian,
+    check_psd,
+)
 from .filters.linear import KalmanFilter, dt_steps
 from .models.adapters import psd_sqrt
 
@@ -218,13 +225,7 @@ def simulate(
 
 def _n_series(n_series: int | None) -> int:
     """How many series: 1 for None, else a whole number >= 1 (2.7 was taken as 2)."""
-    if n_series is None:
-        return 1
-    if isinstance(n_series, (bool, np.bool_)) or not (
-            isinstance(n_series, (int, np.integer, float, np.floating))
-            and float(n_series).is_integer()) or n_series < 1:
-        raise ValueError(f"n_series must be a whole number >= 1; got {n_series!r}")
-    return int(n_series)
+    return 1 if n_series is None else as_whole(n_series, "n_series", 1)
 
 
 def _simulate_nonlinear(motion, measurement, T, x0, P0, dt, n_series, gen):

@@ -107,10 +107,10 @@ class Detector(Protocol):
         ...
 
 
-def _hog_image(image: np.ndarray) -> np.ndarray:
-    """An 8-bit grey or BGR image for OpenCV's HOG, which takes no other: a BGRA one (a PNG
-    with transparency) without its alpha; anything else a ValueError naming ``image``
-    (OpenCV's assertion named neither)."""
+def bgr_or_grey(image: np.ndarray) -> np.ndarray:
+    """An 8-bit grey or BGR image for a detector (OpenCV's HOG, an ONNX model's input),
+    which takes no other: a BGRA one (a PNG with transparency) without its alpha; anything
+    else a ValueError naming ``image`` (OpenCV's assertion named neither)."""
     from .._validate import as_uint8_image
 
     im = as_uint8_image(image)
@@ -192,7 +192,7 @@ class HOGDetector:
         """
         import cv2
 
-        im = _hog_image(image)
+        im = bgr_or_grey(image)
         if self.upscale != 1.0:
             im = cv2.resize(im, None, fx=self.upscale, fy=self.upscale,
                             interpolation=cv2.INTER_LINEAR)
@@ -455,7 +455,7 @@ class HOGConfidence:
     def __call__(self, image: np.ndarray) -> ConfidenceMap:
         import cv2
 
-        im = _hog_image(image)
+        im = bgr_or_grey(image)
         H, W = im.shape[:2]
         heights, scores, origins, strides = [], [], [], []
         for h in self.heights:

@@ -34,9 +34,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import as_uint8_image, as_whole
+from .._validate import as_whole
 from ..types import Detections
-from .detectors import nms
+from .detectors import bgr_or_grey, nms
 
 __all__ = ["ONNXDetector", "LAYOUTS", "letterbox"]
 
@@ -212,9 +212,7 @@ class ONNXDetector:
         """The network's input, and the scale and offset ``(4,)`` that map its boxes back."""
         import cv2
 
-        image = as_uint8_image(image)  # float, 16-bit: OpenCV's error, or pixels past 1
-        if image.ndim == 3 and image.shape[2] == 4:
-            image = np.ascontiguousarray(image[..., :3])  # BGRA: without its alpha
+        image = bgr_or_grey(image)  # float, 16-bit: OpenCV's error, or pixels past 1
         if min(image.shape[:2]) < 1:
             raise ValueError(f"image has no pixels; got shape {image.shape}")
         if image.ndim == 2:

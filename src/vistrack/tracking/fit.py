@@ -43,6 +43,7 @@ from .._validate import as_whole
 from ..association.assign import gnn_sparse
 from ..association.costs import iou_pairs
 from ..models.box import BoxMotion
+from ..types import _whole_numbers
 
 Series = tuple[np.ndarray, np.ndarray, np.ndarray]
 """One object's frames, detections and reference boxes (:func:`matched_series`)."""
@@ -58,14 +59,10 @@ def _xyxy(boxes: np.ndarray) -> np.ndarray:
 def _whole(values: ArrayLike, name: str) -> np.ndarray:
     """``values`` as a 1-D int64 array, or a ValueError naming ``name`` (frames and
     identities of 1.9 were cut to 1)."""
-    a = np.asarray(values, np.float64)
+    a = _whole_numbers(values, name)
     if a.ndim != 1:
         raise ValueError(f"{name} must be 1-D; got shape {a.shape}")
-    bad = np.flatnonzero(~np.isfinite(a) | (a != np.round(a)) | (np.abs(a) > 2.0**53))
-    if len(bad):
-        i = int(bad[0])
-        raise ValueError(f"{name} must be whole numbers; {name}[{i}] is {float(a[i])!r}")
-    return a.astype(np.int64)
+    return a
 
 
 def matched_series(ref_frames: np.ndarray, ref_ids: np.ndarray, ref_boxes: np.ndarray,
