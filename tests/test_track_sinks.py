@@ -309,6 +309,30 @@ def test_the_trajectory_plot_draws_the_rows_it_was_given(tmp_path):
     assert (tmp_path / "t.png").read_bytes() == (tmp_path / "want.png").read_bytes()
 
 
+def test_a_nameless_trajectory_plot_titles_its_counts_alone(tmp_path):
+    """Without a name the title is the counts, the same PNG as the figure titled so: it
+    read ": 2 tracks, 3 frames" before; one track of one frame is "1 track, 1 frame"."""
+    from vistrack.viz import TrajectoryPlot, plot_trajectories
+
+    plot = TrajectoryPlot(tmp_path / "t.png")
+    boxes = np.array([[0, 0, 4, 4.0], [10, 10, 12, 12]])  # x1, y1, x2, y2
+    for f in range(1, 4):
+        plot.write(Frame(f, 0.0), Tracks(ids=np.array([1, 2]), boxes=boxes + f, points=None,
+                                         scores=np.ones(2), classes=np.zeros(2)))
+    plot.close()
+    centres = np.concatenate([((boxes + f)[:, :2] + (boxes + f)[:, 2:]) / 2 for f in range(1, 4)])
+    plot_trajectories(np.repeat([1, 2, 3], 2), np.tile([1, 2], 3), centres, None,
+                      tmp_path / "want.png", title="2 tracks, 3 frames")
+    assert (tmp_path / "t.png").read_bytes() == (tmp_path / "want.png").read_bytes()
+    one = TrajectoryPlot(tmp_path / "o.png", "x")  # one of each: no plural
+    one.write(Frame(1, 0.0), Tracks(ids=np.array([1]), boxes=boxes[:1], points=None,
+                                    scores=np.ones(1), classes=np.zeros(1)))
+    one.close()
+    plot_trajectories(np.array([1]), np.array([1]), np.array([[2.0, 2]]), None,
+                      tmp_path / "want1.png", title="x: 1 track, 1 frame")
+    assert (tmp_path / "o.png").read_bytes() == (tmp_path / "want1.png").read_bytes()
+
+
 def test_the_trajectory_plot_draws_all_tracks_in_two_artists(tmp_path):
     """Each track's centres in frame order (rows given in any order), its end dot at its last
     centre, both in the identity's colour of the annotated video (``id_colour``, BGR there),

@@ -558,7 +558,8 @@ class TrajectoryPlot:
     """A sink (:class:`~vistrack.io.tracks.Sink`) that collects every box track's centres
     (with their frames and identities, in arrays that double as they fill) and, when closed,
     plots them over the first frame (:func:`plot_trajectories`) to the PNG ``path``, titled
-    ``"{name}: {tracks} tracks, {frames} frames"``.
+    ``"{name}: {tracks} tracks, {frames} frames"`` (without ``"{name}: "`` when it has no
+    name).
 
     Parameters
     ----------
@@ -653,6 +654,7 @@ class TrajectoryPlot:
         from ..io import replacing
 
         with replacing(self.path) as part:  # an earlier plot stays until this one is saved
+            n, k = len(np.unique(ids)), self._frames
+            counts = f"{n} track{'s' if n != 1 else ''}, {k} frame{'s' if k != 1 else ''}"
             plot_trajectories(frames, ids, self._centres.view((0, 2)), image, part,
-                              title=f"{_label(self.name)}: {len(np.unique(ids))} tracks, "
-                              f"{self._frames} frames")
+                              title=f"{_label(self.name)}: {counts}" if self.name else counts)
