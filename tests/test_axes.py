@@ -140,3 +140,49 @@ def test_shapes_are_checked():
         axes_update(mean, cov, np.zeros((3, 4)), np.ones((3, 2)))
     with pytest.raises(ValueError, match="P must have shape"):
         full_to_axes(np.zeros((3, 7, 7)))
+
+
+def test_a_value_not_measured_is_left_as_the_full_filter_leaves_it():
+    """NaN in ``z``: that axis keeps its prediction, the others are corrected, as the full
+    filter with the component missing (``kalman_update``, the reference, drops it); it
+    turned the state into NaN before."""
+    from vistrack.filters.reference import kalman_update
+
+    rng = np.random.default_rng(8)
+    K, A = 6, 4
+    mean, cov = random_state(rng, K, A)
+    z = mean[:, :A] + rng.normal(0, 2, (K, A))
+    z[0, 1] = z[2, 0] = z[2, 3] = z[4] = np.nan
+    r = rng.uniform(0.1, 5, (K, A))
+    got_m, got_c = axes_update(mean, cov, z, r)
+    for k in range(K):
+        want_m, want_P, _ = kalman_update(mean[k], axes_to_full(cov[k]), z[k], np.eye(A, 2 * A),
+                                       np.diag(r[k]))
+        np.testing.assert_allclose(got_m[k], want_m, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(axes_to_full(got_c[k]), want_P, rtol=1e-10, atol=1e-12)
+    assert np.array_equal(got_m[4], mean[4]) and np.array_equal(got_c[4], cov[4])
+    # every value measured: the same numbers as before, bit for bit, with NaN elsewhere
+    full = ~np.isnan(z).any(axis=1)
+    m1, c1 = axes_update(mean[full], cov[full], z[full], r[full])
+    assert np.array_equal(m1, got_m[full]) and np.array_equal(c1, got_c[full])
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda m, c: axes_predict(m, c, np.ones(3), np.zeros((3, 2))),
+     r"dt must be one finite number of time units for every state; got array"),
+    (lambda m, c: axes_predict(m, c, float("nan"), np.zeros((3, 2))),
+     r"dt must be one finite number .*; got nan"),
+    (lambda m, c: axes_predict(m, c, 1.0, -np.ones((3, 2))),
+     r"q holds variances, finite and >= 0; q\[0, 0\] = -1.0"),
+    (lambda m, c: axes_update(m, c, np.zeros((3, 1)), [[1.0], [-1.0], [1.0]]),
+     r"r holds variances, finite and >= 0; r\[1, 0\] = -1.0"),
+    (lambda m, c: axes_update(m, c, [[0.0], [np.inf], [0.0]], np.ones((3, 1))),
+     r"z must be finite or NaN \(not measured\); z\[1, 0\] = inf"),
+])
+def test_bad_steps_are_named(call, message):
+    """A time step per state (three states, one axis) broadcast along the axes instead of the
+    states, a negative variance gave infinities with a RuntimeWarning alone: refused, each
+    naming its argument."""
+    mean, cov = np.zeros((3, 2)), np.tile([1.0, 0.0, 1.0], (3, 1, 1))
+    with pytest.raises(ValueError, match=message):
+        call(mean, cov)

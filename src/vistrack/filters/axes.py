@@ -66,11 +66,30 @@ def _state(mean: ArrayLike, cov: ArrayLike) -> tuple[np.ndarray, np.ndarray, int
     return m, c, A
 
 
-def _per_state(value: ArrayLike, name: str, shape: tuple[int, ...]) -> np.ndarray:
+def _per_state(value: ArrayLike, name: str, shape: tuple[int, ...], *,
+               variance: bool = False) -> np.ndarray:
+    """``value`` as floats of ``shape``; a ``variance`` finite and not below zero (else a
+    ValueError naming ``name`` and the first bad entry)."""
     v = np.asarray(value, dtype=np.float64)
     if v.shape != shape:
         raise ValueError(f"{name} must have shape {shape}; got {v.shape}")
+    if variance and not (np.isfinite(v).all() and (v >= 0).all()):
+        idx = tuple(int(i) for i in np.argwhere(~(np.isfinite(v) & (v >= 0)))[0])
+        raise ValueError(f"{name} holds variances, finite and >= 0; {name}{list(idx)} = "
+                         f"{v[idx]}")
     return v
+
+
+def _time_step(dt: object) -> float:
+    """``dt`` as a float: one finite number for every state (an array of one per state
+    broadcast along the axes instead, silently)."""
+    import numbers
+
+    if isinstance(dt, bool) or not isinstance(dt, (numbers.Real, np.ndarray)) or \
+            np.ndim(dt) != 0 or not np.isfinite(dt):
+        raise ValueError(f"dt must be one finite number of time units for every state; "
+                         f"got {dt!r}")
+    return float(dt)
 
 
 def axes_predict(mean: ArrayLike, cov: ArrayLike, dt: float,
@@ -98,6 +117,12 @@ def axes_predict(mean: ArrayLike, cov: ArrayLike, dt: float,
         ``F P F' + Q`` per axis:
         ``[pp + dt (2 pv + dt vv) + q_p, pv + dt vv, vv + q_v]``.
 
+    Raises
+    ------
+    ValueError
+        If ``dt`` is not one finite number, a shape does not match, or ``q`` holds a negative
+        or non-finite variance.
+
     Examples
     --------
     One box ``[cx, cy, w, h]`` moving 2 pixels a frame to the right:
@@ -110,7 +135,8 @@ def axes_predict(mean: ArrayLike, cov: ArrayLike, dt: float,
     ([12.0, 20.0, 4.0, 8.0], [2.5, 1.0, 1.5])
     """
     m, c, A = _state(mean, cov)
-    qd = _per_state(q, "q", m.shape)
+    dt = _time_step(dt)
+    qd = _per_state(q, "q", m.shape, variance=True)
     out = m.copy()
     out[..., :A] += dt * m[..., A:]
     pp, pv, vv = c[..., 0], c[..., 1], c[..., 2]
@@ -130,9 +156,11 @@ def axes_update(mean: ArrayLike, cov: ArrayLike, z: ArrayLike, r: ArrayLike,
     cov : array, shape (K, A, 3)
         Per-axis covariances ``[pp, pv, vv]``.
     z : array, shape (K, A)
-        One measurement of the values per state.
+        One measurement of the values per state; NaN where a value is not measured (its axis
+        is left as predicted, as :func:`~vistrack.filters.kf_update` leaves a missing
+        component).
     r : array, shape (K, A)
-        The diagonal of each measurement's noise ``R``.
+        The diagonal of each measurement's noise ``R`` (finite, ``>= 0``).
     rate_offset : array, shape (K, A), optional
         Added to the innovation the rates learn from, ``y + o`` (default none: the Kalman
         filter): motion the values were moved by outside the filter.
@@ -144,6 +172,12 @@ def axes_update(mean: ArrayLike, cov: ArrayLike, z: ArrayLike, r: ArrayLike,
         ``y = z - p`` (the rates' innovation ``y + o``).
     cov : ndarray, shape (K, A, 3)
         ``(I - K H) P`` per axis: ``[pp - k_p pp, pv - k_p pv, vv - k_v pv]``.
+
+    Raises
+    ------
+    ValueError
+        If a shape does not match, ``z`` holds an infinite value, or ``r`` a negative or
+        non-finite variance.
 
     Examples
     --------
@@ -157,11 +191,17 @@ def axes_update(mean: ArrayLike, cov: ArrayLike, z: ArrayLike, r: ArrayLike,
     """
     m, c, A = _state(mean, cov)
     shape = m.shape[:-1] + (A,)
-    zv, rv = _per_state(z, "z", shape), _per_state(r, "r", shape)
+    zv, rv = _per_state(z, "z", shape), _per_state(r, "r", shape, variance=True)
     pp, pv, vv = c[..., 0], c[..., 1], c[..., 2]
     S = pp + rv
     kp, kv = pp / S, pv / S
     y = zv - m[..., :A]
+    if np.isinf(zv).any():
+        idx = tuple(int(i) for i in np.argwhere(np.isinf(zv))[0])
+        raise ValueError(f"z must be finite or NaN (not measured); z{list(idx)} = {zv[idx]}")
+    missing = np.isnan(zv)
+    if missing.any():  # no gain on an axis not measured: it stays as predicted
+        kp, kv, y = (np.where(missing, 0.0, a) for a in (kp, kv, y))
     out = m.copy()
     out[..., :A] += kp * y
     if rate_offset is not None:
