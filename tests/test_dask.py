@@ -301,3 +301,74 @@ def test_em_on_dask_names_a_malformed_f_as_in_memory():
         em(ys, **model, max_iter=2)
     with pytest.raises(ValueError, match=match):
         em(da.from_array(ys, chunks=(2, 20, 2)), **model, max_iter=2)
+
+
+@pytest.mark.parametrize("learn", [("Q", "R"), ("F", "Q", "R")])
+def test_em_on_a_chunked_batch_learns_q_far_from_the_origin_as_in_memory(learn):
+    """A state a million units from the origin (UTM coordinates, say): the chunks' sums of
+    ``Q``'s M-step are added term by term, as in memory, so the fit equals the in-memory one
+    there, and with ``F`` as given (translation invariant) the fit near the origin. From the
+    transition sums, whose terms cancel there, ``Q`` was 20 % off at 1e6."""
+    import dask
+
+    from vistrack.filters import em
+
+    rng = np.random.default_rng(4)
+    B, T, F1 = 40, 200, np.array([[1, 1.0], [0, 1]])
+    X = np.zeros((B, T, 2))
+    X[:, 0] = [0.0, 3.0]
+    for t in range(1, T):
+        X[:, t] = X[:, t - 1] @ F1.T + rng.normal(size=(B, 2)) * 1e-2
+    ys = X[..., :1] + rng.normal(size=(B, T, 1)) * 0.5
+    start = dict(F=F1, Q=1e-3 * np.eye(2), H=np.array([[1.0, 0]]), R=[[1.0]], P0=np.eye(2))
+    # F is learned from sums about the origin, which lose digits far from it, in memory as
+    # here (a regression through the origin): 1e5 there, where the old Q was 0.2 % off
+    off = 1e5 if "F" in learn else 1e6
+    args = dict(start, x0=[off, 3.0], learn=learn, max_iter=10, tol=-np.inf)
+    in_memory = em(ys + off, **args)
+    with dask.config.set(scheduler="synchronous"):
+        far = em(da.from_array(ys + off, chunks=(10, T, 1)), **args)
+    for name in ("F", "Q", "R"):
+        want = getattr(in_memory, name)
+        np.testing.assert_allclose(getattr(far, name), want, rtol=1e-7 if name == "F" else 0,
+                                   atol=1e-8 * np.abs(want).max(), err_msg=name)
+    if "F" not in learn:
+        near = em(ys, **dict(args, x0=[0.0, 3.0]))
+        np.testing.assert_allclose(far.Q, near.Q, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(far.R, near.R, rtol=1e-9)
+
+
+def test_em_one_fit_per_series_on_a_chunked_batch_checks_as_in_memory():
+    """``pooled=False``: a model em refuses is refused at once (it was fitted, and its
+    log-likelihood fell; a zero "scaled" Q raised ZeroDivisionError when computed), and a
+    series' own fault when its chunk is computed, naming the series in the batch."""
+    import dask
+
+    from vistrack.filters import em
+
+    rng = np.random.default_rng(1)
+    ys = rng.normal(size=(4, 20, 2)).cumsum(axis=1)
+    chunked = da.from_array(ys, chunks=(2, 20, 2))
+    per_step = dict(START, Q=np.stack([np.eye(4) * (1 + t % 2) for t in range(20)]))
+    for model in (ys, chunked):
+        with pytest.raises(ValueError, match="learning F needs one Q for all steps"):
+            em(model, **per_step, learn=("F",), pooled=False)
+        with pytest.raises(ValueError, match=r"Q must not be zero to learn its factor"):
+            em(model, **dict(START, Q=np.zeros((4, 4))), learn=("Q",), Q_form="scaled",
+               pooled=False)
+    ys[3, :, 1] = np.nan
+    lazy = em(da.from_array(ys, chunks=(2, 20, 2)), **START, learn=("H",), pooled=False,
+              max_iter=3)
+    with pytest.raises(ValueError, match=r"series 3 of ys \(pooled=False\): component 1 of "
+                       "ys is never measured"):
+        dask.compute(lazy.H, scheduler="synchronous")
+
+
+def test_the_chunked_filter_takes_a_prior_with_a_batch_axis_of_one():
+    """``x0 (1, n)`` and ``P0 (1, n, n)``: one prior for every series, as the in-memory filter
+    and em take it (it was refused as a prior per series of the wrong batch)."""
+    ys = np.random.default_rng(2).normal(size=(4, 6, 2))
+    x0, P0 = np.arange(4.0)[None], np.eye(4)[None]
+    lazy = kalman_filter(da.from_array(ys, chunks=(2, 6, 2)), **MODEL, x0=x0, P0=P0)
+    want = kalman_filter(ys, **MODEL, x0=x0, P0=P0)
+    np.testing.assert_array_equal(lazy.means.compute(scheduler="synchronous"), want.means)

@@ -297,8 +297,8 @@ def test_the_score_equals_finite_differences_of_the_log_likelihood(R_form, rng):
     ys = np.stack([series(150, s) for s in (9, 10)])
     ys[rng.random(ys.shape) < 0.1] = np.nan  # missing components and steps
     m = cv_model()
-    y, p = learn_module._problem(ys, m["F"], m["Q"], m["H"], np.diag([1.0, 2.0]), m["x0"],
-                                 m["P0"], ("Q", "R"), 10)
+    y, p, _ = learn_module._problem(ys, m["F"], m["Q"], m["H"], np.diag([1.0, 2.0]), m["x0"],
+                                    m["P0"], ("Q", "R"), 10)
     lik = learn_module._Structured(y, p, ("Q", "R"), R_form)
     theta = lik.start() + rng.normal(0, 0.3, size=lik.nq + lik.nr)
     _, g = lik.value_and_grad(theta)
@@ -515,8 +515,38 @@ def test_the_process_noise_is_summed_term_by_term():
     ys = series(300, 3)[None]
     p = {k: np.array(v, dtype=float) for k, v in cv_model().items()}
     e = learn_module._EStep(learn_module._Observed(ys), p)
-    textbook = learn_module._process_noise_sums(*e.transition_sums(), p["F"])
+    S11, S10, S00 = e.transition_sums()
+    F = p["F"]
+    textbook = S11 - F @ np.swapaxes(S10, -1, -2) - S10 @ F.T + F @ S00 @ F.T
     np.testing.assert_allclose(e.process_noise_sums(p["F"]), textbook, rtol=1e-9, atol=1e-9)
+
+
+def test_one_fit_per_series_checks_each_series():
+    """With ``pooled=False`` each series is one fit, checked as one: a component one series
+    never measures leaves its row of ``H`` unknown though another series measures it (numpy's
+    "Singular matrix" before); the error names the series."""
+    ys = np.random.default_rng(0).normal(size=(3, 30, 2)).cumsum(axis=1)
+    ys[1, :, 1] = np.nan
+    M = dict(F=np.eye(2), Q=np.eye(2), H=np.eye(2), R=np.eye(2), x0=np.zeros(2), P0=np.eye(2))
+    with pytest.raises(ValueError, match="series 1 of ys \\(pooled=False\\): component 1 of ys "
+                       "is never measured: H's row for it cannot be learned"):
+        em(ys, **M, learn=("H",), pooled=False, max_iter=3)
+    em(ys, **M, learn=("H",), max_iter=3)  # pooled, another series measures it
+
+
+def test_one_fit_per_series_of_a_batch_of_one_keeps_the_batch_axis():
+    """``pooled=False`` on a batch ``(1, T, m)``: every attribute with its batch axis of one,
+    as for two series (it was the pooled fit's, without it); one series ``(T, m)`` has none."""
+    ys = np.stack([series(60, s) for s in (1, 2)])
+    start = {**cv_model(), "Q": np.eye(4), "R": np.eye(2)}
+    two = em(ys, **start, pooled=False, max_iter=5)
+    one = em(ys[:1], **start, pooled=False, max_iter=5)
+    for name in ("Q", "R", "F", "x0", "loglik", "iterations", "converged", "q"):
+        a, b = np.asarray(getattr(one, name)), np.asarray(getattr(two, name))
+        assert a.shape == (1,) + b.shape[1:], name
+        np.testing.assert_array_equal(a[0], b[0], err_msg=name)
+    alone = em(ys[0], **start, pooled=False, max_iter=5)
+    assert alone.Q.shape == (4, 4) and alone.loglik.shape == (6,)
 
 
 def test_em_with_the_compiled_e_step_equals_em_without_it(monkeypatch, rng):

@@ -54,6 +54,12 @@ def _whole_after_batch(a: Any, batch: tuple[int, ...] | None = None) -> Any:
     return a if a.chunks == want else a.rechunk(want)
 
 
+def _one_for_all(p: Any, ndim_shared: int) -> Any:
+    """A prior with a batch axis of one, ``(1, n)`` or ``(1, n, n)``, as the one for every
+    series (as the in-memory filter takes it); any other as given."""
+    return p[0] if np.ndim(p) == ndim_shared + 1 and np.shape(p)[0] == 1 else p
+
+
 def _per_series(p: Any, B: int, ndim_shared: int, name: str) -> Any:
     """A prior shared by all series (None), or one per series (its batch-first array)."""
     if np.ndim(p) == ndim_shared:
@@ -137,6 +143,7 @@ def kalman_filter(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any,
 
     ys, _ = _batch_blocks(ys)
     B, T, _ = ys.shape
+    x0, P0 = _one_for_all(x0, 1), _one_for_all(P0, 2)
     x0s, P0s = _per_series(x0, B, 1, "x0"), _per_series(P0, B, 2, "P0")
     n = int(np.shape(x0)[-1])
     model = dict(F=np.asarray(F), Q=np.asarray(Q), H=np.asarray(H), R=np.asarray(R))
@@ -212,19 +219,29 @@ def _chunk_summary(y: Any, first: int) -> dict:
 
 
 def _chunk_sums(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...],
-                H: np.ndarray | None) -> dict:
+                H: np.ndarray | None, Fn: np.ndarray | None = None) -> dict:
     """One chunk's E-step under the model ``p`` (its prior ``x0``, ``P0``): the
     log-likelihood and the sums of the M-step for ``learn``, summed over the chunk's series;
-    given ``H``, only the expected ``v v'`` of ``R``'s M-step under that ``H``."""
-    from .learn import _EStep, _Observed
+    given ``H``, only the expected ``v v'`` of ``R``'s M-step under that ``H``; given ``Fn``
+    (the transitions' ``F``, :func:`~vistrack.filters.learn._transitions`), only the expected
+    ``w w'`` of ``Q``'s under it. ``Q``'s sums are added term by
+    term under a known ``F`` (the model's, where ``F`` is not learned), never from
+    ``transition_sums``, whose terms grow with the state's distance from the origin and
+    cancel (see :mod:`vistrack.filters.learn`)."""
+    from .learn import _EStep, _Observed, _transitions
 
+    y = np.asarray(y)
     p = dict(p, x0=np.asarray(x0), P0=np.asarray(P0))
-    e = _EStep(_Observed(np.asarray(y)), p)
+    e = _EStep(_Observed(y), p)
     if H is not None:
         return {"V": e.vv(H)}
+    if Fn is not None:
+        return {"A": e.process_noise_sums(Fn)}
     out: dict[str, Any] = {"ll": e.ll}
-    if {"F", "Q"} & set(learn):
+    if "F" in learn:
         out["S"] = e.transition_sums()
+    elif "Q" in learn:
+        out["A"] = e.process_noise_sums(_transitions(p["F"], y.shape[1]))
     if "H" in learn:
         out["H"] = e.H_sums()
     elif "R" in learn:
@@ -262,7 +279,8 @@ class _Summed:
         self.sums = self._pass(learn, None)
         self.ll = float(self.sums["ll"])
 
-    def _pass(self, learn: tuple[str, ...], H: np.ndarray | None) -> dict:
+    def _pass(self, learn: tuple[str, ...], H: np.ndarray | None,
+              Fn: np.ndarray | None = None) -> dict:
         """:func:`_chunk_sums` of every chunk, computed where the chunks are, added. Each
         chunk has its prior: this iteration's where shared (``p``'s, which the M-step may
         have changed), else the chunk's part of the one given per series."""
@@ -272,7 +290,7 @@ class _Summed:
         model = {k: v for k, v in self.p.items() if k not in ("x0", "P0")}
         parts = dask.compute(*[
             dask.delayed(_chunk_sums)(y, c0 if x0 is None else x0, cP if P0 is None else P0,
-                                      model, learn, H)
+                                      model, learn, H, Fn)
             for y, c0, cP in self.chunks])
         return _add(list(parts))
 
@@ -280,10 +298,11 @@ class _Summed:
         return self.sums["S"]
 
     def process_noise_sums(self, Fn: np.ndarray) -> np.ndarray:
-        from .learn import _process_noise_sums
-
-        S11, S10, S00 = self.sums["S"]
-        return _process_noise_sums(S11, S10, S00, Fn)
+        if "A" in self.sums:  # summed under the model's F, not learned
+            return self.sums["A"]
+        # F learned: a second pass, with this iteration's F (the terms of the transition
+        # sums would cancel far from the origin), as R's with a new H
+        return self._pass((), None, Fn)["A"]
 
     def H_sums(self) -> tuple[np.ndarray, np.ndarray]:
         return self.sums["H"]
@@ -313,13 +332,14 @@ class _Summed:
 
 
 def _chunk_em(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...], Q_form: str,
-              R_form: str, tol: float, max_iter: int) -> tuple:
-    """One fit per series of a chunk, as :func:`vistrack.filters.em` with ``pooled=False``
-    fits them in memory; ``loglik`` padded with NaN to ``max_iter + 1``."""
+              R_form: str, tol: float, max_iter: int, first: int = 0) -> tuple:
+    """One fit per series of a chunk whose first series is ``first`` of the batch, as
+    :func:`vistrack.filters.em` with ``pooled=False`` fits them in memory; ``loglik`` padded
+    with NaN to ``max_iter + 1``."""
     from .learn import _fit_each
 
     p = dict(p, x0=np.asarray(x0), P0=np.asarray(P0))
-    f = _fit_each(np.asarray(y), p, learn, Q_form, R_form, tol, max_iter, None)
+    f = _fit_each(np.asarray(y), p, learn, Q_form, R_form, tol, max_iter, None, first)
     ll = np.full((f.loglik.shape[0], max_iter + 1), np.nan)
     ll[:, :f.loglik.shape[1]] = f.loglik
     return (f.F, f.Q, f.H, f.R, f.x0, f.P0, np.asarray(f.q, dtype=np.float64),
@@ -334,7 +354,8 @@ def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tupl
     axis (``learn``, the forms, ``tol`` and ``max_iter`` already checked).
 
     Pooled, each iteration runs the E-step on every chunk where the chunk is (one
-    ``dask.compute``; two when ``H`` and ``R`` are both learned) and adds the chunks' sums:
+    ``dask.compute``; two when ``H`` and ``R``, or ``F`` and ``Q``, are both learned: the
+    second under the new ``H`` or ``F``) and adds the chunks' sums:
     only the sums, a few ``(T, n, n)`` arrays a chunk, travel, and the parameters returned
     are numpy arrays. The measurements are read (or generated) again at each iteration:
     ``ys.persist()`` first where the cluster can hold them. The sums are added in another
@@ -342,7 +363,10 @@ def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tupl
 
     With ``pooled=False`` the result is lazy: a :class:`FitResult` of Dask arrays with a
     batch axis, each chunk's series fitted one by one where the chunk is, exactly as in
-    memory (``loglik`` padded with NaN to ``max_iter + 1`` iterations).
+    memory (``loglik`` padded with NaN to ``max_iter + 1`` iterations). What :func:`em`
+    refuses of the model alone is refused here at once; what it refuses of a series' data
+    (a component it never measures, with ``H`` learned) when that series' chunk is
+    computed.
 
     Raises
     ------
@@ -367,10 +391,7 @@ def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tupl
     check_linear_gaussian(F, Q, H, R, n, m, T)
     x0, P0 = (x0 if _is_dask(x0) else np.asarray(x0, dtype=np.float64),
               P0 if _is_dask(P0) else np.asarray(P0, dtype=np.float64))
-    if np.ndim(x0) == 2 and np.shape(x0)[0] == 1:
-        x0 = x0[0]
-    if np.ndim(P0) == 3 and np.shape(P0)[0] == 1:
-        P0 = P0[0]
+    x0, P0 = _one_for_all(x0, 1), _one_for_all(P0, 2)
     x0s, P0s = _per_series(x0, B, 1, "x0"), _per_series(P0, B, 2, "P0")
     if np.shape(x0)[-1] != n or np.shape(P0)[-2:] != (n, n):
         raise ValueError(f"x0 must have shape ({n},) or (B, {n}) and P0 ({n}, {n}) or "
@@ -384,6 +405,9 @@ def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tupl
         if progress is not None:
             raise ValueError("progress is not available with pooled=False on a Dask array: "
                              "each chunk is fitted where it is computed")
+        # the model's own faults now (as if every component were measured at every step);
+        # a series' data are checked where its chunk is fitted
+        _check_em(np.ones(m, bool), False, dict(p, x0=x0, P0=P0), learn, Q_form, R_form)
         return _lazy_fits(chunks, spans, p, learn, Q_form, R_form, tol, max_iter, n, m, T)
     for name, prior in (("x0", x0s), ("P0", P0s)):
         if name in learn and prior is not None:
@@ -431,7 +455,7 @@ def _lazy_fits(chunks: list, spans: list, p: dict, learn: tuple[str, ...], Q_for
     fields: list[list[Any]] = [[] for _ in per_fit]
     for (y, x0, P0), (a, b) in zip(chunks, spans):
         out = dask.delayed(_chunk_em, nout=len(per_fit))(y, x0, P0, p, learn, Q_form, R_form,
-                                                         tol, max_iter)
+                                                         tol, max_iter, a)
         for i, (s, dt) in enumerate(zip(per_fit, dtypes)):
             fields[i].append(da.from_delayed(out[i], (b - a,) + s, dtype=dt))
     F, Q, H, R, x0, P0, q, r, ll, its, conv = (da.concatenate(f) for f in fields)

@@ -229,10 +229,10 @@ def em(
         return chunked.em(ys, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0, learn=learned, Q_form=Q_form,
                           R_form=R_form, pooled=pooled, tol=float(tol),
                           max_iter=int(max_iter), progress=progress)
-    y, params = _problem(ys, F, Q, H, R, x0, P0, learned, max_iter)
+    y, params, single = _problem(ys, F, Q, H, R, x0, P0, learned, max_iter)
     o = _Observed(y)
     _check_em(o.measured, o.has_partial, params, learned, Q_form, R_form)
-    if pooled or y.shape[0] == 1:
+    if pooled or single:  # a batch of one, unpooled, keeps its batch axis
         return _fit_in_memory(y, params, learned, Q_form, R_form, float(tol), int(max_iter),
                               progress, o=o)
     return _fit_each(y, params, learned, Q_form, R_form, float(tol), int(max_iter), progress)
@@ -252,9 +252,12 @@ def _fit_in_memory(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ..
 
 def _fit_each(y: np.ndarray, params: dict[str, np.ndarray], learn: tuple[str, ...],
               Q_form: str, R_form: str, tol: float, max_iter: int,
-              progress: TextIO | None) -> FitResult:
+              progress: TextIO | None, first: int = 0) -> FitResult:
     """One fit per series of ``y (B, T, m)``, stacked along a batch axis (``loglik`` padded
-    with NaN after each series' last iteration)."""
+    with NaN after each series' last iteration); ``first``: the first series' index in the
+    whole batch, for messages. Each series is checked as :func:`em` checks a batch (a
+    component one series never measures leaves its row of ``H`` unknown, though another
+    series measures it), the error naming the series."""
     B = y.shape[0]
     fits = []
     for b in range(B):
@@ -263,8 +266,13 @@ def _fit_each(y: np.ndarray, params: dict[str, np.ndarray], learn: tuple[str, ..
             p["x0"] = p["x0"][b]
         if p["P0"].ndim == 3:
             p["P0"] = p["P0"][b]
+        o = _Observed(y[b:b + 1])
+        try:
+            _check_em(o.measured, o.has_partial, p, learn, Q_form, R_form)
+        except ValueError as e:
+            raise ValueError(f"series {first + b} of ys (pooled=False): {e}") from None
         fits.append(_fit_in_memory(y[b:b + 1], p, learn, Q_form, R_form, tol, max_iter,
-                                   progress, f"series {b}: "))
+                                   progress, f"series {first + b}: ", o=o))
     K = max(len(f.loglik) for f in fits)
     ll = np.full((B, K), np.nan)
     for b, f in enumerate(fits):
@@ -279,11 +287,11 @@ def _fit_each(y: np.ndarray, params: dict[str, np.ndarray], learn: tuple[str, ..
 
 def _problem(ys: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike,
              x0: ArrayLike, P0: ArrayLike, learn: tuple[str, ...],
-             max_iter: Any) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """The measurements as ``(B, T, m)`` and the model as float arrays, checked as far as
-    the filter's first run does not check them."""
+             max_iter: Any) -> tuple[np.ndarray, dict[str, np.ndarray], bool]:
+    """The measurements as ``(B, T, m)``, the model as float arrays, checked as far as the
+    filter's first run does not check them, and whether ``ys`` was one series ``(T, m)``."""
     _check_max_iter(max_iter)
-    y, _ = as_measurement_series(ys)
+    y, single = as_measurement_series(ys)
     check_has_steps(y)
     _check_steps(y.shape[1], learn)
     # the model before the prior, as kalman_filter checks it: a malformed F is named, not
@@ -302,7 +310,8 @@ def _problem(ys: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLi
     if not np.isfinite(y).any():
         raise ValueError("ys has no measurement: every value is NaN")
     return y, {k: np.asarray(v, dtype=np.float64)
-               for k, v in (("F", F), ("Q", Q), ("H", H), ("R", R), ("x0", x0_), ("P0", P0_))}
+               for k, v in (("F", F), ("Q", Q), ("H", H), ("R", R), ("x0", x0_),
+                            ("P0", P0_))}, single
 
 
 def _state_size(n_F: int, x0: Any, P0: Any) -> int:
@@ -467,7 +476,7 @@ def mle(
         raise ValueError(f"R_form must be 'diag' or 'scaled'; got {R_form!r}")
     if isinstance(xtol, bool) or not isinstance(xtol, numbers.Real) or not xtol > 0:
         raise ValueError(f"xtol must be a number > 0; got {xtol!r}")
-    y, p = _problem(ys, F, Q, H, R, x0, P0, learned, max_iter)
+    y, p, _ = _problem(ys, F, Q, H, R, x0, P0, learned, max_iter)
     lik = _Structured(y, p, learned, R_form)
     value_and_grad, model, nq, nr = lik.value_and_grad, lik.model, lik.nq, lik.nr
     theta0 = lik.start()
@@ -947,13 +956,6 @@ def _outer_sum(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``sum_b a[b, t] b[b, t]'`` for each ``t``: ``(B, T, i), (B, T, j) -> (T, i, j)`` (a
     matrix product per step, which numpy hands to BLAS; einsum would loop)."""
     return np.transpose(a, (1, 2, 0)) @ np.transpose(b, (1, 0, 2))
-
-
-def _process_noise_sums(S11: np.ndarray, S10: np.ndarray, S00: np.ndarray,
-                        Fn: np.ndarray) -> np.ndarray:
-    """``E[w_t w_t']`` summed over the batch, ``w_t = x_t - F_t x_{t-1}``, per transition."""
-    FS = Fn @ np.swapaxes(S10, -1, -2)
-    return S11 - FS - np.swapaxes(FS, -1, -2) + Fn @ S00 @ np.swapaxes(Fn, -1, -2)
 
 
 def _transitions(F: np.ndarray, T: int) -> np.ndarray:
