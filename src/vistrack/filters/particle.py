@@ -803,8 +803,11 @@ def _compiled_parts(mo: MotionFunctions, me: MeasurementFunctions):
     """What the compiled path needs of the models: the module-level compiled one-state ``f``
     and ``h`` and their parameters (``params(dt, t)`` per step, and a fixed array), from the
     models' ``jit_f``/``jit_h`` or, for linear models, ``F x`` and ``H x``. None when a model
-    has neither (a user model in Python runs on the numpy path)."""
+    has neither (a user model in Python runs on the numpy path), or the measurement's
+    residual is its own (the compiled path takes differences, angles wrapped)."""
     motion, meas = mo.model, me.model
+    if not me.standard:
+        return None
     fref = _jit_ref(getattr(motion, "jit_f", None))
     if fref is not None and hasattr(motion, "jit_params"):
         fparams = motion.jit_params

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from functools import partial
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
@@ -129,18 +129,38 @@ class MotionFunctions:
         return cast(NonlinearMotionModel, self.model).jacobian(x, dt, t)
 
     def Q(self, dt: float) -> np.ndarray:
-        """``Q(dt)``, computed once per distinct ``dt`` (models are immutable)."""
-        Q = self._Q.get(dt)
+        """``Q(dt)``, computed once per ``dt`` among the last few distinct ones (models are
+        immutable; timestamps that never repeat a step keep no more than those)."""
+        key = _dt_key(dt)
+        Q = self._Q.get(key)
         if Q is None:
-            Q = self._Q[dt] = np.asarray(self.model.Q(dt), dtype=float)
+            Q = _remember(self._Q, key, np.asarray(self.model.Q(dt), dtype=float))
         return Q
 
     def Q_sqrt(self, dt: float) -> np.ndarray:
-        """:func:`psd_sqrt` of ``Q(dt)``, once per distinct ``dt``: noise = eps @ Q_sqrt.T."""
-        A = self._Q_sqrt.get(dt)
+        """:func:`psd_sqrt` of ``Q(dt)``, as :meth:`Q` keeps it: noise = eps @ Q_sqrt.T."""
+        key = _dt_key(dt)
+        A = self._Q_sqrt.get(key)
         if A is None:
-            A = self._Q_sqrt[dt] = np.ascontiguousarray(psd_sqrt(self.Q(dt)))
+            A = _remember(self._Q_sqrt, key, np.ascontiguousarray(psd_sqrt(self.Q(dt))))
         return A
+
+
+_KEPT = 16
+"""How many distinct time steps' ``Q`` a model's functions keep."""
+
+
+def _dt_key(dt: Any) -> float:
+    """``dt`` as the key of the cache: a float (a 0-d array is not hashable)."""
+    return float(dt)
+
+
+def _remember(cache: dict, key: float, value: np.ndarray) -> np.ndarray:
+    """``value`` kept under ``key``, the oldest entry dropped past :data:`_KEPT`."""
+    if len(cache) >= _KEPT:
+        del cache[next(iter(cache))]
+    cache[key] = value
+    return value
 
 
 def _plain_residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -227,12 +247,13 @@ class MeasurementFunctions:
         self.mean = mean or getattr(model, "mean", None) or (
             partial(_weighted_mean, angles=angles) if angles else _plain_mean)
         # "standard": residuals are differences (angles wrapped) and means weighted sums
-        # (circular for angles), which the compiled one-Gaussian kernels reproduce
+        # (circular for angles), which the compiled one-Gaussian kernels reproduce; a model,
+        # linear or not, with a residual or mean of its own is not (a linear sensor of a
+        # heading wraps its residual)
         own = type(model)
         self.standard = residual is None and mean is None and (
-            self.linear
-            or (getattr(own, "residual", None) is AngleAwareMeasurement.residual
-                and getattr(own, "mean", None) is AngleAwareMeasurement.mean)
+            (getattr(own, "residual", None) is AngleAwareMeasurement.residual
+             and getattr(own, "mean", None) is AngleAwareMeasurement.mean)
             or not (hasattr(model, "residual") or hasattr(model, "mean")))
         self.angle_mask = np.zeros(self.m, dtype=np.bool_)
         self.angle_mask[list(getattr(model, "angles", ()))] = True

@@ -173,12 +173,17 @@ class NonlinearMotion:
         else:
             Qa = check_matrix_stack(Q, "Q", self.ndim_state, self.ndim_state)[0]
             check_psd(Qa, "Q")
-            self._Q = lambda dt: Qa.copy()
+            # a bound method, not a lambda: the model (and a filter holding it) pickles
+            self._Q_const = Qa
+            self._Q = self._constant_Q
         self._f = f
         self._jac = jacobian
 
     def __repr__(self) -> str:
         return f"NonlinearMotion(ndim_state={self.ndim_state})"
+
+    def _constant_Q(self, dt: float) -> np.ndarray:
+        return self._Q_const.copy()
 
     def f(self, x: np.ndarray, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
         """The mean transition: the given ``f(x, dt, t)``.
