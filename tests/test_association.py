@@ -382,3 +382,57 @@ def test_the_gate_threshold_is_scipys_quantile():
 
     for m in (1, 2, 3.0, np.int64(4)):
         assert chi2_threshold(m, 0.95) == pytest.approx(chi2.ppf(0.95, int(m)), rel=1e-12)
+
+
+def test_iou_pairs_of_one_class_are_the_dense_pairs_of_one_class():
+    """Against the dense IoU matrix masked by class (the oracle); classes of another length
+    than the boxes are refused (they were read past their end: 3,281 pairs for none)."""
+    from vistrack.association import iou, iou_pairs_same_class
+
+    rng = np.random.default_rng(0)
+    xy = rng.random((300, 2)) * 100
+    a = np.hstack([xy, xy + rng.uniform(2, 10, (300, 2))])
+    b = a[rng.permutation(300)] + rng.normal(0, 1, (300, 4))
+    b[:, 2:] = np.maximum(b[:, 2:], b[:, :2] + 0.5)
+    ac, bc = rng.integers(0, 3, 300), rng.integers(0, 3, 300)
+    r, c, v, ok = iou_pairs_same_class(a, ac, b, bc, 0.3)
+    dense = iou(a, b)
+    want = np.argwhere((dense >= 0.3) & (dense > 0) & (ac[:, None] == bc[None]))
+    order = np.lexsort((c, r))  # by row, as documented; within a row in the grid's order
+    assert ok and np.all(np.diff(r) >= 0) and np.array_equal(np.c_[r, c][order], want)
+    np.testing.assert_allclose(v, dense[r, c], rtol=1e-12)
+    for bad in (np.zeros(0, np.int64), np.zeros(10, np.int64)):
+        with pytest.raises(ValueError, match="a_cls must hold one class per box of a"):
+            iou_pairs_same_class(a, bad, b, bc, 0.3)
+        with pytest.raises(ValueError, match="b_cls must hold one class per box of b"):
+            iou_pairs_same_class(a, ac, b, bad, 0.3)
+
+
+def test_an_innovation_covariance_that_is_not_one_is_named_by_every_distance():
+    """A NaN ``S`` gave NaN distances (numpy's Cholesky factor of NaN is NaN, no error: the
+    track then took no detection, silently), and an indefinite ``S`` negative distances in
+    the sparse gate (its largest eigenvalue alone was checked), where the dense distance
+    refuses it: each refused, naming the track."""
+    from vistrack.association import likelihoods, mahalanobis
+    from vistrack.association.costs import mahalanobis_pairs
+
+    zp, z = np.zeros((2, 2)), np.array([[0.0, 3.0], [1.0, 0.0]])
+    nan = np.array([np.eye(2), [[np.nan, 0.0], [0.0, 1.0]]])
+    for f in (mahalanobis, likelihoods, lambda a, S, b: mahalanobis_pairs(a, S, b, 9.21)):
+        with pytest.raises(ValueError, match=r"S must be finite and positive definite for "
+                                             r"every track; S\[1\] is not finite"):
+            f(zp, nan, z)
+    indefinite = np.array([np.eye(2), np.diag([4.0, -1.0])])
+    with pytest.raises(ValueError, match=r"S\[1\] is not"):
+        mahalanobis(zp, indefinite, z)
+    with pytest.raises(ValueError, match=r"S must be positive definite for every track; "
+                                         r"S\[1\] is not"):
+        mahalanobis_pairs(zp, indefinite, z, 9.21)
+    # a positive definite S: the sparse pairs are the dense distances within the gate
+    S = np.array([np.eye(2), np.diag([4.0, 1.0])])
+    r, c, d2 = mahalanobis_pairs(zp, S, z, 9.21)
+    dense = mahalanobis(zp, S, z)
+    want = np.argwhere(dense <= 9.21)
+    order = np.lexsort((c, r))
+    assert np.array_equal(np.c_[r, c][order], want)
+    np.testing.assert_allclose(d2[order], dense[dense <= 9.21], rtol=1e-12)

@@ -197,6 +197,10 @@ def _innovations(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, z_name: str = "z
     T, m = zp.shape
     if S.shape != (T, m, m):
         raise ValueError(f"S must have shape ({T}, {m}, {m}); got {S.shape}")
+    finite = np.isfinite(S).all(axis=(1, 2))
+    if not finite.all():  # numpy's Cholesky factor of NaN is NaN, without an error
+        raise ValueError(f"S must be finite and positive definite for every track; S["
+                         f"{int(np.flatnonzero(~finite)[0])}] is not finite")
     if z.shape[1:] != (m,) and z.size:
         raise ValueError(f"{z_name} must have shape (D, {m}); got {z.shape}")
     return zp, S, z
@@ -286,11 +290,13 @@ def mahalanobis_pairs(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike,
         return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
     try:
         Sinv = np.linalg.inv(S)
-        lam = np.linalg.eigvalsh(S)[:, -1]
+        eig = np.linalg.eigvalsh(S)
     except np.linalg.LinAlgError:
         raise ValueError("S must be positive definite for every track") from None
-    if not (lam > 0).all():
-        raise ValueError("S must be positive definite for every track")
+    if not (eig[:, 0] > 0).all():  # the smallest: an indefinite S gave negative distances
+        raise ValueError(f"S must be positive definite for every track; S["
+                         f"{int(np.flatnonzero(eig[:, 0] <= 0)[0])}] is not")
+    lam = eig[:, -1]
     near = cKDTree(z).query_ball_point(zp, np.sqrt(threshold * lam) * (1 + 1e-9))
     counts = np.fromiter((len(x) for x in near), np.int64, T)
     rows = np.repeat(np.arange(T), counts)
@@ -429,6 +435,12 @@ def iou_pairs_same_class(a, a_cls, b, b_cls, min_iou):
     ok : bool
         False, and the pairs empty, when a box is not finite.
 
+    Raises
+    ------
+    ValueError
+        If ``a_cls`` or ``b_cls`` does not hold one class per box (the classes would be read
+        past their end).
+
     Examples
     --------
     >>> import numpy as np
@@ -437,6 +449,10 @@ def iou_pairs_same_class(a, a_cls, b, b_cls, min_iou):
     >>> c.tolist(), v.tolist(), ok
     ([1], [1.0], True)
     """
+    if a_cls.shape[0] != a.shape[0]:
+        raise ValueError("a_cls must hold one class per box of a")
+    if b_cls.shape[0] != b.shape[0]:
+        raise ValueError("b_cls must hold one class per box of b")
     rows, cols, vals, ok = _grid_pairs(a, b, min_iou)
     same = a_cls[rows] == b_cls[cols]
     return rows[same], cols[same], vals[same], ok
