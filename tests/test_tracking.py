@@ -1013,6 +1013,33 @@ def test_box_tracker_names_a_setting_it_has_not_and_a_rate_that_is_no_number():
     assert BoxTracker(frame_rate=np.float32(25)).frame_rate == 25.0
 
 
+def test_a_track_tables_updates_are_a_mask_of_its_tracks():
+    """``updated`` as indices (``[0, 0, 1, 1]``) was taken as a mask and its ``~`` as the
+    complement (two tentative tracks became lost, none deleted), and one entry was broadcast
+    to all: refused, naming it. The mask itself gives the rules' answer (the oracle: two
+    tentative tracks updated twice are confirmed, two missed are deleted)."""
+    from vistrack.tracking.lifecycle import CONFIRMED, TENTATIVE, TrackTable
+
+    def table():
+        t = TrackTable(1)
+        t.add(np.arange(4.0)[:, None], np.ones((4, 1, 1)), 0.0, np.zeros(4, np.int64),
+              np.ones(4), confirmed=False)
+        return t
+
+    for bad in (np.array([0, 0, 1, 1]), np.array([True]), np.ones(5, bool)):
+        t = table()
+        for name, args in (("manage", (0.1, 2, 1.0)), ("advance", (0.1, 2)),
+                           ("ended", (0.1, 1.0))):
+            with pytest.raises(ValueError, match=r"updated must be a bool mask of the 4 "
+                                                 r"tracks; got"):
+                getattr(t, name)(bad, *args)
+        assert t.state.tolist() == [TENTATIVE] * 4 and len(t) == 4  # untouched
+    t = table()
+    kept = t.manage(np.array([False, False, True, True]), 0.1, confirm_hits=2, max_lost=1.0)
+    assert kept.tolist() == [False, False, True, True]
+    assert t.ids.tolist() == [3, 4] and t.state.tolist() == [CONFIRMED] * 2
+
+
 def test_a_frames_index_and_a_tracks_columns_are_checked():
     """``Frame(2.5, ...)`` was taken as frame 2 and ``Frame("4", ...)`` as 4 (``int()``),
     where a bare 2.5 is refused; ``TrackTable.add`` took columns of other lengths than the

@@ -175,6 +175,15 @@ class TrackTable:
                      "scores"):
             setattr(self, name, getattr(self, name)[mask])
 
+    def _updated(self, updated: np.ndarray) -> np.ndarray:
+        """``updated`` checked: a bool mask of one entry per track (indices were taken as a
+        mask, ``~`` of integers is not the complement, and one entry broadcast to all)."""
+        u = np.asarray(updated)
+        if u.dtype != np.bool_ or u.shape != (len(self.ids),):
+            raise ValueError(f"updated must be a bool mask of the {len(self.ids)} tracks; got "
+                             f"{u.dtype} of shape {u.shape}")
+        return u
+
     def advance(self, updated: np.ndarray, time: float, confirm_hits: int) -> None:
         """After a frame's updates: count hits, confirm and lose (the first half of
         :meth:`manage`).
@@ -186,12 +195,14 @@ class TrackTable:
         Parameters
         ----------
         updated : (K,) bool ndarray
-            Which tracks were updated in this frame.
+            Which tracks were updated in this frame (anything else, such as their indices,
+            is a ValueError).
         time : float
             The frame's time (seconds).
         confirm_hits : int
             Updates in a row that confirm a tentative track (the one it started with counts).
         """
+        updated = self._updated(updated)
         self.hits = np.where(updated, self.hits + 1, 0)
         self.streak = np.where(updated, self.hits, self.streak)
         self.last_time = np.where(updated, float(time), self.last_time)
@@ -207,7 +218,8 @@ class TrackTable:
         Parameters
         ----------
         updated : (K,) bool ndarray
-            Which tracks were updated in this frame.
+            Which tracks were updated in this frame (anything else, such as their indices,
+            is a ValueError).
         time : float
             The frame's time (seconds).
         max_lost : float
@@ -224,6 +236,7 @@ class TrackTable:
             lost (or tentative, without it) for more than ``max_lost`` seconds since their
             last update.
         """
+        updated = self._updated(updated)
         stale = self.stale(time, max_lost)  # (with a slack for the times' rounding)
         if not miss_ends_tentative:
             return (self.state != CONFIRMED) & stale
@@ -266,7 +279,8 @@ class TrackTable:
         Parameters
         ----------
         updated : (K,) bool ndarray
-            Which tracks were updated in this frame.
+            Which tracks were updated in this frame (anything else, such as their indices,
+            is a ValueError).
         time : float
             The frame's time (seconds).
         confirm_hits : int
