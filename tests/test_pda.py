@@ -125,7 +125,7 @@ def test_jpda_reduces_to_pda_and_cheap_jpda_is_a_distribution():
     beta, beta0 = jpda_weights(lik, gate, max_exact=4)
     np.testing.assert_allclose(beta.sum(1) + beta0, 1.0)
     assert np.all(beta[~gate] == 0) and np.all(beta >= 0)
-    with pytest.raises(ValueError, match="clutter_density must be > 0"):
+    with pytest.raises(ValueError, match="clutter_density must be a finite number > 0"):
         pda_weights(lik, gate, clutter_density=0.0)
 
 
@@ -290,6 +290,16 @@ def test_the_four_weightings_name_a_nan_likelihood_in_the_gate_and_a_gate_of_ano
     ({"R": np.eye(3)}, "R must have shape (2, 2), as H has 2 rows; got (3, 3)"),
     ({"Z": np.array([[0.5, 0.0], [np.nan, 0.0]])},
      "Z[1] is not finite but has weight beta[0, 1] = 0.4"),
+    # weights that are not probabilities gave a covariance with a negative eigenvalue, or a
+    # NaN mean, without a word
+    ({"beta": np.array([[2.0, -1.0]]), "beta0": np.array([0.0])},
+     "beta must hold probabilities in [0, 1]; beta[0, 0] = 2.0"),
+    ({"beta": np.array([[0.5, np.nan]])},
+     "beta must hold probabilities in [0, 1]; beta[0, 1] = nan"),
+    ({"beta0": np.array([-0.1])}, "beta0 must hold probabilities in [0, 1]; beta0[0] = -0.1"),
+    ({"beta": np.array([[0.5, 0.5]])},
+     "beta0 and beta of a track must add up to 1 (one of its events happens); track 0's add "
+     "up to 1.1"),
 ])
 def test_pda_update_names_what_does_not_fit(change, message):
     args = {"g": Gaussian(np.zeros((1, 2)), np.eye(2)[None]), "Z": np.zeros((2, 2)),

@@ -251,9 +251,18 @@ def test_a_track_starts_where_a_measurement_of_another_h_puts_it():
     ({"frame_rate": float("inf")}, "frame_rate must be a finite number > 0; got inf"),
     ({"p_gate": 1.0}, "p_gate must be in (0, 1); got 1.0"),
     ({"init_speed": float("nan")}, "init_speed must be a finite number > 0; got nan"),
+    # the detection and clutter model were checked at the second frame, by the weights,
+    # and in the nearest-neighbour modes never
+    ({"association": "pda", "p_detect": 1.5}, "p_detect must be in (0, 1]; got 1.5"),
+    ({"association": "gnn", "p_detect": 0.0}, "p_detect must be in (0, 1]; got 0.0"),
+    ({"association": "gnn", "clutter_density": float("nan")},
+     "clutter_density must be a finite number > 0 (per unit of measurement space); got nan"),
+    ({"association": "jpda", "clutter_density": -1.0},
+     "clutter_density must be a finite number > 0 (per unit of measurement space); got -1.0"),
 ])
 def test_point_tracker_settings_out_of_range_are_named(setting, message):
     """A NaN max_lost kept lost tracks for ever, 2.5 hits confirmed at 2, an infinite frame
-    rate froze time, and p_gate 1 was named as chi2_threshold's p."""
+    rate froze time, p_gate 1 was named as chi2_threshold's p, and a p_detect of 1.5 was
+    named at the second frame."""
     with pytest.raises(ValueError, match=re.escape(message)):
         PointTracker(**setting)

@@ -31,6 +31,8 @@ when it has at most ``max_exact`` tracks and measurements, and otherwise gets Fi
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -107,8 +109,9 @@ def _lik_gate(lik: ArrayLike, gate: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
 def _check(p_detect: float, clutter_density: float, p_gate: float) -> None:
     if not 0.0 < p_detect <= 1.0:
         raise ValueError(f"p_detect must be in (0, 1]; got {p_detect}")
-    if not clutter_density > 0:
-        raise ValueError(f"clutter_density must be > 0 (per unit of measurement space); "
+    if not 0 < clutter_density < math.inf:
+        raise ValueError(f"clutter_density must be a finite number > 0 (per unit of "
+                         f"measurement space); "
                          f"got {clutter_density}")
     if not 0.0 < p_gate <= 1.0:
         raise ValueError(f"p_gate must be in (0, 1]; got {p_gate}")

@@ -52,8 +52,11 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
     Raises
     ------
     ValueError
-        If a shape does not agree with the others (each named), or a detection that is not
-        finite has a weight above 0 (one outside every gate, of weight 0, adds nothing).
+        If a shape does not agree with the others (each named), the weights of a track are
+        not probabilities (each in [0, 1], ``beta0`` and the track's row of ``beta`` adding
+        up to 1 within 1e-6: other weights give a covariance that is not one), or a
+        detection that is not finite has a weight above 0 (one outside every gate, of weight
+        0, adds nothing).
 
     References
     ----------
@@ -96,6 +99,7 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
                          f"{beta.shape}")
     if beta0.shape != (T,):
         raise ValueError(f"beta0 must have shape ({T},); got {beta0.shape}")
+    _check_weights(beta, beta0)
     used = beta > 0
     bad = used & ~np.isfinite(Z).all(1)[None, :]
     if bad.any():
@@ -112,3 +116,23 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
     KSK = K @ S @ np.swapaxes(K, 1, 2)
     cov = P - (1.0 - beta0)[:, None, None] * KSK + K @ spread @ np.swapaxes(K, 1, 2)
     return Gaussian(mean, 0.5 * (cov + np.swapaxes(cov, 1, 2)))
+
+
+def _check_weights(beta: np.ndarray, beta0: np.ndarray) -> None:
+    """Raise a ValueError naming the first track whose weights are not probabilities: each
+    in [0, 1] and the track's ``beta0`` and ``beta`` row adding up to 1 (within 1e-6)."""
+    inside = lambda a: np.isfinite(a) & (a >= 0) & (a <= 1)  # noqa: E731
+    bad = ~inside(beta)
+    if bad.any():
+        t, j = (int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(f"beta must hold probabilities in [0, 1]; beta[{t}, {j}] = "
+                         f"{beta[t, j]}")
+    if not inside(beta0).all():
+        t = int(np.flatnonzero(~inside(beta0))[0])
+        raise ValueError(f"beta0 must hold probabilities in [0, 1]; beta0[{t}] = {beta0[t]}")
+    total = beta0 + beta.sum(axis=1)
+    off = np.abs(total - 1.0) > 1e-6
+    if off.any():
+        t = int(np.flatnonzero(off)[0])
+        raise ValueError(f"beta0 and beta of a track must add up to 1 (one of its events "
+                         f"happens); track {t}'s add up to {total[t]:.9g}")

@@ -53,6 +53,7 @@ from ..association import (
     pda_weights,
 )
 from ..association.costs import mahalanobis_pairs
+from ..association.pda import _check as _check_pda
 from ..filters import kf_predict, kf_update, pda_update
 from ..models import ConstantVelocity, Position
 from ..types import Detections, Frame, Gaussian, Tracks
@@ -145,6 +146,7 @@ class PointTracker:
         if not 0.0 < p_gate < 1.0:
             raise ValueError(f"p_gate must be in (0, 1); got {p_gate}")
         self.p_gate = float(p_gate)
+        _check_pda(self.p_detect, self.clutter_density, self.p_gate)  # at once, any mode
         self.threshold = chi2_threshold(self.m, p_gate)
         self.init_speed = as_finite(init_speed, "init_speed", 0.0, above=True)
         self.confirm_hits = as_whole(confirm_hits, "confirm_hits", 1)
