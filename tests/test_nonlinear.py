@@ -97,7 +97,7 @@ def test_user_models_fall_back_to_finite_differences(rng):
          "R"),
         (lambda: NonlinearMeasurement(lambda x: x, R=np.eye(2), ndim_state=2, angles=(2,)),
          "angles must index components 0..1"),
-        (lambda: MerweScaledSigmaPoints(alpha=0.0), "alpha must be > 0"),
+        (lambda: MerweScaledSigmaPoints(alpha=0.0), "alpha must be a finite number > 0; got 0.0"),
     ],
 )
 def test_bad_model_arguments_raise(make, match):
@@ -549,3 +549,54 @@ def test_a_motion_of_constant_noise_pickles_with_its_filter():
     q = motion.Q(1.0)
     q[0, 0] = 99.0  # a copy: the model's noise stays
     assert motion.Q(1.0)[0, 0] == 0.3
+
+
+def _cv_ukf():
+    return UnscentedKalmanFilter(vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1))
+
+
+def _ct_rb(cls):
+    return cls(CoordinatedTurn(), RangeBearing(ndim_state=5))
+
+
+@pytest.mark.parametrize("call, error, message", [
+    # a prior for another number of series than ys: numpy's broadcasting error before
+    (lambda: _ct_rb(ExtendedKalmanFilter).filter(np.ones((3, 4, 2)), x0=np.zeros((2, 5)),
+                                                 P0=np.eye(5)),
+     ValueError, r"x0 must be one for all series or one per series of ys \(B=3\); got 2"),
+    (lambda: _ct_rb(EnsembleKalmanFilter).filter(np.ones((3, 4, 2)), x0=np.zeros(5),
+                                                 P0=np.stack([np.eye(5)] * 2)),
+     ValueError, r"P0 must be one for all series or one per series of ys \(B=3\); got 2"),
+    # a singular prior: "g.cov must be positive definite" named what the user never gave
+    (lambda: _cv_ukf().filter(np.ones((3, 1)), x0=[0, 0], P0=np.diag([1.0, 0.0])),
+     ValueError, r"P0 must be positive definite: the unscented filter draws its first sigma"),
+    (lambda: _cv_ukf().filter(np.ones((3, 1)), x0=[0, 0], P0=np.eye(2), times=[0, np.nan, 2]),
+     ValueError, r"times must be finite; times\[1\] = nan"),
+    # named as q before
+    (lambda: CoordinatedTurn(q_turn=-1.0), ValueError,
+     r"q_turn must be a finite number >= 0; got -1.0"),
+    # taken, and the filter blamed R or the covariance
+    (lambda: MerweScaledSigmaPoints(beta=np.nan), ValueError,
+     r"beta must be a finite number; got nan"),
+    (lambda: JulierSigmaPoints(kappa=np.inf), ValueError,
+     r"kappa must be a finite number; got inf"),
+    # cut to 2, and numpy's TypeError
+    (lambda: RangeBearing(ndim_state=2.5), ValueError,
+     r"ndim_state must be a whole number >= 2; got 2.5"),
+    (lambda: RangeBearing(r_range="1"), TypeError, r"r_range must be a number; got '1'"),
+])
+def test_nonlinear_filters_name_bad_arguments(call, error, message):
+    with pytest.raises(error, match=message):
+        call()
+
+
+def test_an_imm_of_nonlinear_members_names_a_measurement_of_another_size():
+    """The width check read ``ndim_meas``, which an EKF or UKF member's measurement functions
+    do not have: the error came later as "y must have shape (1, 1) to match g"."""
+    from vistrack.filters import IMMFilter
+
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1)
+    imm = IMMFilter([ExtendedKalmanFilter(cv, pos)] * 2, np.full((2, 2), 0.5))
+    with pytest.raises(ValueError, match=r"ys must have 1 measurement components \(last "
+                                         r"axis\), as Position\(dim=1\) measures; got 2"):
+        imm.filter(np.ones((3, 2)), x0=[0.0, 0.0], P0=np.eye(2))

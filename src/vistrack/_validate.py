@@ -267,13 +267,15 @@ def check_has_steps(y: np.ndarray, name: str = "ys") -> None:
 
 
 def check_prior(x0: ArrayLike | None, P0: ArrayLike | None, n: int, *, batch: bool = True,
-                space: str = "") -> tuple[np.ndarray, np.ndarray]:
+                space: str = "", series: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """A prior mean ``(n,)`` (or ``(B, n)`` when ``batch``) and covariance ``(n, n)`` (or
     ``(B, n, n)``, symmetric positive semi-definite) for a model whose state has ``n``
     entries; each error names the argument
     (``space`` is appended to the expected shape, e.g. " (the largest member's state)"). A
     numpy masked array with a masked entry is refused: a prior has no missing value, nor a
-    NaN or an infinite entry."""
+    NaN or an infinite entry. Given the number of ``series`` of the measurements, a prior
+    with a batch axis has one entry for all of them or one each (numpy's broadcasting error
+    named neither)."""
     for name, value in (("x0", x0), ("P0", P0)):
         if value is None:
             raise ValueError(f"{name} is required (the prior of the first step); got None")
@@ -295,6 +297,11 @@ def check_prior(x0: ArrayLike | None, P0: ArrayLike | None, n: int, *, batch: bo
         raise ValueError(f"P0 must have shape {want}{space}; got {_fmt_shape(P.shape)}")
     check_finite(P, "P0")
     check_psd(P, "P0")  # a particle filter drew its first cloud from -I without a word
+    if series is not None:
+        for name, a, nd in (("x0", x, 2), ("P0", P, 3)):
+            if a.ndim == nd and a.shape[0] not in (1, series):
+                raise ValueError(f"{name} must be one for all series or one per series of ys "
+                                 f"(B={series}); got {a.shape[0]}")
     return x, P
 
 

@@ -40,6 +40,9 @@ def step_times(dt: ArrayLike, times: ArrayLike | None, T: int) -> tuple[np.ndarr
     times = as_float_array(times, "times", ndim=(1,))
     if times.shape != (T,):
         raise ValueError(f"times must have shape ({T},); got {times.shape}")
+    if not np.isfinite(times).all():  # a model of time (growth) gave NaN states
+        k = int(np.flatnonzero(~np.isfinite(times))[0])
+        raise ValueError(f"times must be finite; times[{k}] = {times[k]}")
     return dts, times
 
 
@@ -73,7 +76,7 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
     B, T, _ = Y.shape
     dts, times = step_times(dt, times, T)
     if state is None:
-        mean0, cov0 = check_prior(x0, P0, n)
+        mean0, cov0 = check_prior(x0, P0, n, series=B)
         if B == 1 and mean0.ndim == 1 and cov0.ndim == 2:
             # one series: the state is one Gaussian, which runs the compiled one-Gaussian paths
             state = cast(State, Gaussian(mean0.copy(), cov0.copy()))

@@ -375,7 +375,7 @@ class EnsembleKalmanFilter:
         ys_arr = as_float_array(ys, "ys", ndim=(2, 3))
         check_has_steps(ys_arr)
         B = 1 if ys_arr.ndim == 2 else ys_arr.shape[0]
-        x0, P0 = check_prior(x0, P0, n)
+        x0, P0 = check_prior(x0, P0, n, series=B)
         x0 = np.broadcast_to(x0, (B, n))
         P0 = np.broadcast_to(P0, (B, n, n))
         ens = Ensemble.sample(x0, P0, self.n_members, self.rng)

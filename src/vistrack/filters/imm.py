@@ -331,17 +331,18 @@ class IMMFilter:
         ys = as_float_array(ys, "ys", ndim=(2, 3))
         check_has_steps(ys)
         meas = getattr(self.filters[self.ref], "measurement", None)
-        m = getattr(meas, "ndim_meas", ys.shape[-1])
+        # a measurement model's size, or a nonlinear member's measurement functions' (m)
+        m = getattr(meas, "ndim_meas", None) or getattr(meas, "m", None) or ys.shape[-1]
         if ys.shape[-1] != m:
             raise ValueError(f"ys must have {m} measurement components (last axis), as "
-                             f"{meas!r} measures; got {ys.shape[-1]}")
+                             f"{getattr(meas, 'model', meas)!r} measures; got {ys.shape[-1]}")
         check_not_infinite(ys, "ys")
         single = ys.ndim == 2
         if single:
             ys = ys[None]
         B, T, _ = ys.shape
         n = self.sizes[self.ref]
-        x0, P0 = check_prior(x0, P0, n, space=" (the largest member's state)")
+        x0, P0 = check_prior(x0, P0, n, space=" (the largest member's state)", series=B)
         x0 = np.broadcast_to(x0, (B, n))
         P0 = np.broadcast_to(P0, (B, n, n))
         gs = [Gaussian(x0[:, :k].copy(), P0[:, :k, :k].copy()) for k in self.sizes]

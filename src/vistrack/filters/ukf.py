@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike
 
 from .._jit import njit
 from .._prebuilt import kernel
+from .._validate import check_prior
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.nonlinear import _offset_mean
 from ..models.protocols import (
@@ -293,8 +294,9 @@ class MerweScaledSigmaPoints(_SigmaPoints):
     Raises
     ------
     ValueError
-        If ``alpha`` is not > 0 (and, when points or weights are asked for a state size
-        ``n``, if :math:`\alpha^2 (n + \kappa) \le 0`).
+        If ``alpha`` is not a finite number > 0, ``beta`` or ``kappa`` not a finite number
+        (and, when points or weights are asked for a state size ``n``, if
+        :math:`\alpha^2 (n + \kappa) \le 0`).
 
     Notes
     -----
@@ -324,9 +326,12 @@ class MerweScaledSigmaPoints(_SigmaPoints):
     """
 
     def __init__(self, alpha: float = 1e-3, beta: float = 2.0, kappa: float = 0.0):
-        if not alpha > 0:
-            raise ValueError(f"alpha must be > 0; got {alpha}")
-        self.alpha, self.beta, self.kappa = float(alpha), float(beta), float(kappa)
+        from .._validate import as_finite
+
+        # a NaN beta or an infinite kappa was taken, and the filter then blamed R or the
+        # covariance
+        self.alpha = as_finite(alpha, "alpha", 0.0, above=True)
+        self.beta, self.kappa = as_finite(beta, "beta"), as_finite(kappa, "kappa")
 
     def __repr__(self) -> str:
         return f"MerweScaledSigmaPoints(alpha={self.alpha}, beta={self.beta}, kappa={self.kappa})"
@@ -403,7 +408,9 @@ class JulierSigmaPoints(_SigmaPoints):
     """
 
     def __init__(self, kappa: float = 0.0):
-        self.kappa = float(kappa)
+        from .._validate import as_finite
+
+        self.kappa = as_finite(kappa, "kappa")
 
     def __repr__(self) -> str:
         return f"JulierSigmaPoints(kappa={self.kappa})"
@@ -751,7 +758,8 @@ class UnscentedKalmanFilter:
         Raises
         ------
         ValueError
-            If the shapes disagree with the models, or a covariance is not positive definite.
+            If the shapes disagree with the models, or a covariance is not positive definite
+            (``P0`` named: the first sigma points are drawn from it).
 
         Examples
         --------
@@ -764,6 +772,13 @@ class UnscentedKalmanFilter:
         >>> res.means.shape, res.loglik.shape
         ((2, 5, 2), (2,))
         """
+        _, P = check_prior(x0, P0, self.motion.n)
+        try:  # the prior check takes a semi-definite P0; sigma points need a definite one
+            np.linalg.cholesky(P)
+        except np.linalg.LinAlgError:
+            raise ValueError("P0 must be positive definite: the unscented filter draws its "
+                             "first sigma points from it (a zero variance has no square "
+                             "root to spread them by)") from None
         return run_sequence(ys, x0, P0, self.motion.n, self.measurement.m, dt, times,
                             self.predict, self.update)
 

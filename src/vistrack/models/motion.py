@@ -139,10 +139,10 @@ def _sin_series(u2: np.ndarray, first: int) -> np.ndarray:
     return out
 
 
-def _check_q(q: float) -> float:
-    q = as_number(q, "q")
+def _check_q(q: float, name: str = "q") -> float:
+    q = as_number(q, name)
     if not np.isfinite(q) or q < 0:
-        raise ValueError(f"q must be a finite number >= 0; got {q}")
+        raise ValueError(f"{name} must be a finite number >= 0; got {q}")
     return q
 
 

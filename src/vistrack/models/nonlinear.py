@@ -682,7 +682,7 @@ class CoordinatedTurn:
 
     def __init__(self, q: float = 1.0, q_turn: float = 0.01):
         self.q = _check_q(q)
-        self.q_turn = _check_q(q_turn)
+        self.q_turn = _check_q(q_turn, "q_turn")
 
     def __repr__(self) -> str:
         return f"CoordinatedTurn(q={self.q}, q_turn={self.q_turn})"
@@ -866,16 +866,15 @@ class RangeBearing(AngleAwareMeasurement):
 
     def __init__(self, r_range: float = 1.0, r_bearing: float = 1e-4, sensor=(0.0, 0.0),
                  ndim_state: int = 4):
-        for name, v in (("r_range", r_range), ("r_bearing", r_bearing)):
-            if not np.isfinite(v) or v <= 0:
-                raise ValueError(f"{name} must be a finite variance > 0; got {v}")
-        self._R = np.diag([float(r_range), float(r_bearing)])
+        from .._validate import as_finite, as_whole
+
+        self._R = np.diag([as_finite(r_range, "r_range", 0.0, above=True, what="variance"),
+                           as_finite(r_bearing, "r_bearing", 0.0, above=True,
+                                     what="variance")])
         self.sensor = as_float_array(sensor, "sensor", ndim=(1,))
         if self.sensor.shape != (2,):
             raise ValueError(f"sensor must have shape (2,); got {self.sensor.shape}")
-        if int(ndim_state) < 2:
-            raise ValueError(f"ndim_state must be at least 2; got {ndim_state}")
-        self.ndim_state = int(ndim_state)
+        self.ndim_state = as_whole(ndim_state, "ndim_state", 2)  # 2.5 was cut to 2
 
     def __repr__(self) -> str:
         return f"RangeBearing(sensor={self.sensor.tolist()}, ndim_state={self.ndim_state})"
