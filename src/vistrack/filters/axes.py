@@ -85,11 +85,13 @@ def _time_step(dt: object) -> float:
     broadcast along the axes instead, silently)."""
     import numbers
 
-    if isinstance(dt, bool) or not isinstance(dt, (numbers.Real, np.ndarray)) or \
-            np.ndim(dt) != 0 or not np.isfinite(dt):
-        raise ValueError(f"dt must be one finite number of time units for every state; "
-                         f"got {dt!r}")
-    return float(dt)
+    if isinstance(dt, np.ndarray) and dt.ndim == 0 or \
+            isinstance(dt, numbers.Real) and not isinstance(dt, bool):
+        value = float(dt)  # a real number, or a 0-d array
+        if np.isfinite(value):
+            return value
+    raise ValueError(f"dt must be one finite number of time units for every state; "
+                     f"got {dt!r}")
 
 
 def axes_predict(mean: ArrayLike, cov: ArrayLike, dt: float,
