@@ -436,3 +436,23 @@ def test_an_innovation_covariance_that_is_not_one_is_named_by_every_distance():
     order = np.lexsort((c, r))
     assert np.array_equal(np.c_[r, c][order], want)
     np.testing.assert_allclose(d2[order], dense[dense <= 9.21], rtol=1e-12)
+
+
+def test_giou_refuses_an_inverted_box_and_components_take_a_list():
+    """GIoU of a box whose corners are swapped was 400 (its negative area and hull), outside
+    its [-1, 1]; ``components`` of a list of lists (array_like, as documented) raised
+    AttributeError."""
+    from vistrack.association import components, giou
+
+    with pytest.raises(ValueError, match=re.escape("b[0] = [10.0, 10.0, -10.0, -10.0] is not a "
+                                                   "box x0, y0, x1, y1 with x0 <= x1")):
+        giou([[0, 0, 1, 1]], [[10, 10, -10, -10]])
+    # a point is still a box: IoU 0, and the hull is the unit box itself (0 - 0 / 1)
+    assert giou([[0, 0, 1, 1]], [[0, 0, 0, 0]]).tolist() == [[0.0]]
+    gate = [[True, False, False], [True, False, False], [False, False, True]]
+    k, tl, dl = components(gate)
+    want = components(np.array(gate))
+    assert k == want[0] == 3 and tl.tolist() == want[1].tolist() and dl.tolist() == \
+        want[2].tolist()
+    with pytest.raises(ValueError, match=r"gate must be a 2-D mask, tracks by detections"):
+        components([True, False])

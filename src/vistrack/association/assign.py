@@ -71,6 +71,10 @@ def components(gate: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
     >>> k, tl.tolist(), dl.tolist()     # {t0, t1, d0}, {t2, d2}, {d1}
     (3, [0, 0, 1], [0, 2, 1])
     """
+    gate = np.asarray(gate, dtype=bool)  # array_like, as documented (a list had no shape)
+    if gate.ndim != 2:
+        raise ValueError(f"gate must be a 2-D mask, tracks by detections; got shape "
+                         f"{gate.shape}")
     T, D = gate.shape
     r, c = np.nonzero(gate)
     # scipy.sparse here, not at the top: importing it takes 0.25-0.4 s, which the box

@@ -132,7 +132,9 @@ def giou(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``a`` or ``b`` is not empty and not of shape ``(., 4)``.
+        If ``a`` or ``b`` is not empty and not of shape ``(., 4)``, or holds a box whose
+        ``x1 < x0`` or ``y1 < y0`` (its negative area and hull gave values far outside
+        [-1, 1]).
 
     References
     ----------
@@ -146,6 +148,12 @@ def giou(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     [[-0.3333333333333333]]
     """
     a, b = _boxes(a, "a"), _boxes(b, "b")
+    for name, x in (("a", a), ("b", b)):
+        inverted = (x[:, 2] < x[:, 0]) | (x[:, 3] < x[:, 1])
+        if inverted.any():
+            k = int(np.flatnonzero(inverted)[0])
+            raise ValueError(f"{name}[{k}] = {x[k].tolist()} is not a box x0, y0, x1, y1 with "
+                             "x0 <= x1 and y0 <= y1")
     inter, union = _overlap(a[:, None], b[None, :])
     cw = np.maximum(a[:, None, 2], b[None, :, 2]) - np.minimum(a[:, None, 0], b[None, :, 0])
     ch = np.maximum(a[:, None, 3], b[None, :, 3]) - np.minimum(a[:, None, 1], b[None, :, 1])
