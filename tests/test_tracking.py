@@ -1043,7 +1043,8 @@ def test_a_track_tables_updates_are_a_mask_of_its_tracks():
 def test_a_frames_index_and_a_tracks_columns_are_checked():
     """``Frame(2.5, ...)`` was taken as frame 2 and ``Frame("4", ...)`` as 4 (``int()``),
     where a bare 2.5 is refused; ``TrackTable.add`` took columns of other lengths than the
-    tracks' means (2 tracks with 1 class and 3 scores), and every later row misaligned."""
+    tracks' means (2 tracks with 1 class and 3 scores), and every later row misaligned, rows
+    of another width (named by numpy's concatenate), and float classes."""
     from vistrack.tracking.base import frame_index
     from vistrack.tracking.lifecycle import TrackTable
     from vistrack.types import Frame
@@ -1062,3 +1063,15 @@ def test_a_frames_index_and_a_tracks_columns_are_checked():
         t.add(np.zeros((2, 2)), np.zeros((2, 2, 2)), 0.0, np.zeros(2, np.int64), np.ones(3),
               confirmed=True)
     assert len(t.ids) == 0
+    # rows of another width (numpy's concatenate error before), and float classes (the column
+    # turned to float for good)
+    with pytest.raises(ValueError, match=r"mean must have rows of shape \(2,\); got \(3,\)"):
+        t.add(np.zeros((1, 3)), np.zeros((1, 2, 2)), 0.0, np.zeros(1, np.int64), np.ones(1),
+              confirmed=True)
+    with pytest.raises(ValueError, match=r"cov must have rows of shape \(2, 2\); got \(3, 3\)"):
+        t.add(np.zeros((1, 2)), np.zeros((1, 3, 3)), 0.0, np.zeros(1, np.int64), np.ones(1),
+              confirmed=True)
+    with pytest.raises(ValueError, match="classes must be integers; got float64"):
+        t.add(np.zeros((1, 2)), np.zeros((1, 2, 2)), 0.0, np.zeros(1), np.ones(1),
+              confirmed=True)
+    assert len(t.ids) == 0 and t.classes.dtype == np.int64

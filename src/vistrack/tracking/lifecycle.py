@@ -142,6 +142,14 @@ class TrackTable:
             if len(column) != k:  # one row per track in every column
                 raise ValueError(f"{name} must have one row for each of the {k} tracks' "
                                  f"mean; got {len(column)}")
+        # each row as the table's (numpy's concatenate named neither), and classes whole:
+        # float classes turned the column to float for every later track
+        for name, column, shape in (("mean", mean, (self.n,)), ("cov", cov, self.cov_shape)):
+            if np.shape(column)[1:] != shape:
+                raise ValueError(f"{name} must have rows of shape {shape}; got "
+                                 f"{np.shape(column)[1:]}")
+        if k and not np.issubdtype(np.asarray(classes).dtype, np.integer):
+            raise ValueError(f"classes must be integers; got {np.asarray(classes).dtype}")
         self.mean = np.concatenate([self.mean, mean])
         self.cov = np.concatenate([self.cov, cov])
         self.ids = np.concatenate([self.ids, np.arange(self.next_id, self.next_id + k)])
