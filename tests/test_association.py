@@ -456,3 +456,34 @@ def test_giou_refuses_an_inverted_box_and_components_take_a_list():
         want[2].tolist()
     with pytest.raises(ValueError, match=r"gate must be a 2-D mask, tracks by detections"):
         components([True, False])
+
+
+def test_gnn_with_costs_near_the_largest_float_is_the_scaled_problem():
+    """Costs of 5e307 made the penalty for disallowed pairs overflow to inf, and a component
+    that must hold such a pair was called infeasible; the answer is that of the same costs
+    scaled down (assignment is invariant to a positive scale), checked here against brute
+    force over every matching."""
+    from vistrack.association import gnn
+
+    rng = np.random.default_rng(3)
+    for scale in (1e300, 5e307, 1.7e308):
+        for _ in range(20):
+            unit = rng.uniform(-1, 1, (3, 4))
+            gate = rng.random((3, 4)) < 0.6
+            gate[0, 0] = True
+            r, c = gnn(unit * scale, gate)
+            # brute force on the unit costs: most pairs, then least cost
+            best = None
+            for cols in itertools.permutations(range(4), 3):
+                pairs = [(i, j) for i, j in enumerate(cols) if gate[i, j]]
+                key = (-len(pairs), sum(unit[i, j] for i, j in pairs))
+                if best is None or key < best[0]:
+                    best = (key, pairs)
+            got = sorted(zip(r.tolist(), c.tolist()))
+            assert len(got) == -best[0][0]
+            assert sum(unit[i, j] for i, j in got) == pytest.approx(best[0][1], abs=1e-12)
+    # rows 0 and 1 may take column 0 alone: one of them is left over (a disallowed pair in
+    # the full assignment); row 1 takes it, at cost 0 against 5e307
+    gate = np.array([[1, 0, 0], [1, 0, 0], [1, 1, 1]], bool)
+    r, c = gnn(np.array([[5e307, 0, 0], [0.0, 0, 0], [0.0, 0, 0]]), gate)
+    assert r.tolist() == [1, 2] and c[0] == 0 and c[1] in (1, 2)

@@ -291,6 +291,11 @@ def _gated_lsa(cost, gate):
     if not any_ok:
         return np.empty(0, np.int64), np.empty(0, np.int64)
     big = (hi - lo + 1.0) * (min(cost.shape[0], cost.shape[1]) + 1) + top
+    if not np.isfinite(big):
+        # costs near the largest float: the same problem scaled into [-1, 1] (the penalty
+        # overflowed to inf, and a component with a disallowed pair was called infeasible)
+        cost = cost / top
+        big = 3.0 * (min(cost.shape[0], cost.shape[1]) + 1) + 1.0
     c = np.where(gate, cost, big)
     r, k = lsa_kernel(c)
     n = 0
