@@ -148,3 +148,59 @@ def test_static_camera_features_stay_put_on_pets09():
         if not on_person:
             moved.append(np.linalg.norm(p - q))
     assert len(moved) > 150 and np.median(moved) < 0.1 and np.percentile(moved, 95) < 0.5
+
+
+def _scene(seed=0, shape=(240, 320)):
+    rng = np.random.default_rng(seed)
+    return cv2.GaussianBlur(rng.integers(0, 256, shape).astype(np.uint8), (0, 0), 2)
+
+
+def test_drawing_on_a_grey_frame_after_tracking_changes_nothing():
+    """The tracker kept the caller's grey frame itself as its reference: circles drawn on it
+    to show the features ended 868 of them over five frames of a 1-pixel pan. The same
+    features with and without drawing (the oracle: the run that does not draw)."""
+    scene = _scene()
+    runs = []
+    for draw in (False, True):
+        klt, out = KLTTracker(max_features=200), []
+        for k in range(6):
+            f = np.roll(scene, k, axis=1).copy()
+            feats = klt.track(f)
+            out.append((feats.ids.tolist(), feats.points.tolist(), feats.terminated))
+            if draw:
+                for x, y in feats.points:
+                    cv2.circle(f, (int(round(x)), int(round(y))), 3, 255, 1)
+        runs.append(out)
+    assert runs[0] == runs[1] and sum(t for *_, t in runs[0]) == 0
+
+
+def _ncc(a, pa, b, pb, half):
+    """Normalised cross-correlation of the patches at sub-pixel places (OpenCV's bilinear
+    sampling, independent of vistrack's)."""
+    size = (2 * half + 1, 2 * half + 1)
+    out = []
+    for (xa, ya), (xb, yb) in zip(pa, pb):
+        u = cv2.getRectSubPix(a, size, (float(xa), float(ya))).ravel() - 0.0
+        v = cv2.getRectSubPix(b, size, (float(xb), float(yb))).ravel() - 0.0
+        u, v = u - u.mean(), v - v.mean()
+        out.append(float(u @ v / np.sqrt((u @ u) * (v @ v))))
+    return np.array(out)
+
+
+def test_a_feature_the_search_found_meets_min_ncc_too():
+    """A feature the discrete search found was kept at a correlation of 0.7 at its integer
+    place, whatever ``min_ncc``, and never checked at its refined place: with ``min_ncc``
+    0.95 two were kept at 0.73. Every feature kept correlates with its last patch by at least
+    ``min_ncc`` (measured with OpenCV's sampling)."""
+    rng = np.random.default_rng(0)
+    scene = _scene()
+    noisy = lambda im: np.clip(im + rng.normal(0, 12, im.shape), 0, 255).astype(np.uint8)  # noqa: E731
+    a, b = noisy(scene), noisy(np.roll(scene, 2, axis=1))
+    for min_ncc in (0.95, 0.8):
+        klt = KLTTracker(max_features=200, min_ncc=min_ncc, affine_check=False)
+        f0, f1 = klt.track(a), klt.track(b)
+        kept = np.isin(f0.ids, f1.ids)
+        n = int(kept.sum())
+        ncc = _ncc(a.astype(np.float32), f0.points[kept], b.astype(np.float32),
+                   f1.points[:n], 5)
+        assert (ncc >= min_ncc - 1e-4).all(), ncc.min()

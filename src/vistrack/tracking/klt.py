@@ -122,7 +122,8 @@ class KLTTracker:
     search_radius : int
         Discrete search window for features Lucas-Kanade loses; 0 turns it off.
     min_ncc : float
-        Smallest correlation of a feature's patch with the previous frame's.
+        Smallest correlation of a feature's patch with the previous frame's (a feature the
+        discrete search found too, at its refined place).
 
     Raises
     ------
@@ -351,6 +352,9 @@ class KLTTracker:
                 if good.any():
                     idx = np.flatnonzero(lost)[good]
                     ref, st = self._lk(self._prev, grey, p0[idx], guess=found[good])
+                    # the refined place meets the frame-to-frame check too (the search's own
+                    # bar, 0.7 at an integer place, kept features below min_ncc)
+                    st &= patch_ncc(self._prev32, p0[idx], g32, ref, self.half) >= self.min_ncc
                     p1[idx[st]] = ref[st]
                     ok[idx[st]] = searched[idx[st]] = True
             # forward-backward, for every feature in one call
@@ -376,7 +380,9 @@ class KLTTracker:
             keep = ok
             for name in ("ids", "points", "ages", "residuals", "_T", "_SD", "_Hinv", "_p"):
                 setattr(self, name, getattr(self, name)[keep])
-        self._prev = grey
+        # the caller's own array when it was grey uint8 already: copied, or drawing on the
+        # frame after this call (to show the features) changed the next frame's reference
+        self._prev = grey.copy() if np.shares_memory(grey, image) else grey
         self._prev32 = grey.astype(np.float32)
         self._spawn(grey)
         return Features(self.ids.copy(), self.points.astype(float), self.ages.copy(),
