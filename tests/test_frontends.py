@@ -1810,3 +1810,29 @@ def test_hog_settings_are_checked():
                         ({"nms_iou": 5.0}, "nms_iou must be a finite number >= 0 and <= 1")):
         with pytest.raises(ValueError, match=re.escape(message)):
             HOGDetector(**kw)
+
+
+def test_writing_on_a_grey_frame_after_detection_changes_nothing():
+    """The detector kept the caller's grey frame itself for its view checks: a frame drawn
+    over after ``detect`` (here, filled with noise) made a still camera's view "move" and the
+    model follow it from frame 50. The same blobs, view and following as the run that leaves
+    its frames alone (the oracle)."""
+    from vistrack.frontends import BlobDetector
+
+    rng = np.random.default_rng(0)
+    scene = cv2.GaussianBlur(rng.integers(0, 256, (240, 320)).astype(np.uint8), (0, 0), 2)
+    runs = []
+    for scribble in (False, True):
+        det = BlobDetector(min_area=20)
+        det.initialize([scene.copy() for _ in range(20)])
+        out = []
+        for k in range(60):
+            f = scene.copy()
+            f[50:80, 50 + 2 * k:70 + 2 * k] = 255
+            d = det.detect(f)
+            out.append((d.boxes.tolist(), det.view_moves, det.following_from))
+            if scribble:
+                f[:] = rng.integers(0, 256, f.shape)
+        runs.append(out)
+    assert runs[0] == runs[1] and runs[0][-1][1:] == (False, None)
+    assert all(len(boxes) == 1 for boxes, *_ in runs[0][1:])

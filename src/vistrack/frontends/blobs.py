@@ -419,7 +419,9 @@ class BlobDetector:
 
         # grey, as detect gives the model its frames: a BGR start made the selective model
         # refuse the first grey frame, and MOG2 start again on it, learning the people there
-        frames = [as_uint8_image(im, grey=True) for im in images]
+        # (copies of the caller's own grey frames: the last is kept as the reference of the
+        # next, and drawing on it after this call must not change that)
+        frames = [_own(as_uint8_image(im, grey=True), im) for im in images]
         self._reset()  # a new start: what earlier frames said of the view no longer holds
         k = self.check_view
         if not (self.follow_view and isinstance(self.model, SelectiveBackground) and k
@@ -502,7 +504,7 @@ class BlobDetector:
         from .._validate import as_uint8_image
         from .background import SelectiveBackground, view_shift
 
-        grey = as_uint8_image(image, grey=True)
+        grey = _own(as_uint8_image(image, grey=True), image)  # kept as the next's reference
         if self.check_view and self._frames % self.check_view == 0:
             if self._last_check is not None and self._last_check.shape == grey.shape:
                 dx, dy, followed = view_shift(self._last_check, grey)
@@ -583,3 +585,8 @@ class BlobDetector:
         mean = np.clip(np.rint(self.model.mean[..., 0]), 0, 255).astype(np.uint8)
         return np.array(view_shift(mean, grey, refine=True,
                                    guess=(float(guess[0]), float(guess[1])))[:2])
+
+
+def _own(grey: np.ndarray, image: np.ndarray) -> np.ndarray:
+    """``grey``, copied where it is the caller's ``image`` itself (or a view of it)."""
+    return grey.copy() if np.shares_memory(grey, image) else grey
