@@ -672,3 +672,35 @@ def test_the_filter_class_names_ys_and_dt_where_numpy_or_another_argument_was_na
                                                    "estimate of g; got shape (2,)")):
         kf.predict(g, dt=np.array([1.0, 2.0]))  # "F must have shape (2, 2)" before
     np.testing.assert_array_equal(kf.predict(g, dt=np.float64(2.0)).mean, [0.0, 0.0])
+
+
+def test_the_steady_state_waits_for_every_variance_at_its_own_scale():
+    """A fast random walk (variance 1e8) beside a static level (variance about 1e-2 / t): the
+    level's variance moves by far less than 8 ulp of 1e8 a step long before it converges,
+    and the shortcut froze it at step 189 (its last mean 20 of its standard deviations off,
+    the log-likelihood 22 lower). The oracle is the closed form of a static level, the
+    posterior variance 1 / (1/P0 + t/r) and mean their precision-weighted sum; the one-series
+    kernel, a batch (the generated kernel) and the same model as a per-step stack (no
+    shortcut) all give it."""
+    rng = np.random.default_rng(5)
+    T = 20000
+    F, Q, H, R = np.eye(2), np.diag([1e8, 0.0]), np.eye(2), np.diag([1e8, 1e-2])
+    ys = np.c_[1e4 * rng.standard_normal(T), 3.0 + 0.1 * rng.standard_normal(T)]
+    kw = dict(Q=Q, H=H, R=R)
+    t = np.arange(1, T + 1)
+    for P1 in (1.0, 1.5):
+        want_var = 1 / (1 / P1 + t / 1e-2)
+        want_mean = np.cumsum(ys[:, 1]) / 1e-2 * want_var
+        one = kalman_filter(ys, F=F, **kw, x0=[0.0, 0.0], P0=np.diag([1e8, P1]))
+        np.testing.assert_allclose(one.covs[:, 1, 1], want_var, rtol=1e-9)
+        np.testing.assert_allclose(one.means[:, 1], want_mean, rtol=1e-9)
+        stack = kalman_filter(ys, F=np.tile(F, (T, 1, 1)), **kw, x0=[0.0, 0.0],
+                              P0=np.diag([1e8, P1]))
+        assert float(one.loglik) == pytest.approx(float(stack.loglik), rel=1e-12)
+    P0 = np.stack([np.diag([1e8, 1.0 + 0.5 * b]) for b in range(6)])  # a covariance each
+    batch = kalman_filter(np.stack([ys] * 6), F=F, **kw, x0=np.zeros((6, 2)), P0=P0)
+    for b in (0, 1, 5):
+        want_var = 1 / (1 / P0[b, 1, 1] + t / 1e-2)
+        np.testing.assert_allclose(batch.covs[b, :, 1, 1], want_var, rtol=1e-9)
+        np.testing.assert_allclose(batch.means[b, :, 1],
+                                   np.cumsum(ys[:, 1]) / 1e-2 * want_var, rtol=1e-9)

@@ -21,8 +21,9 @@ covariance ``S``, gains by triangular solves, the Joseph form evaluated as ``AP 
 missing components decoupled in ``S`` so that their gain is zero. A dense ``F`` and ``H`` give
 the generic kernel for that state and measurement size. As in the one-series kernel, constant
 matrices and fully observed steps lead to a steady state: once two fully observed steps leave
-every covariance of a chunk unchanged to 8 ulp, only the means are computed, until a step with a
-missing component.
+every covariance of a chunk unchanged to 8 ulp (each entry of its own scale, the square root of
+the product of its two variances), only the means are computed, until a step with a missing
+component.
 
 The source of each kernel is written to a file in the user's cache directory
 (``$VISTRACK_CACHE_DIR``, else ``$XDG_CACHE_HOME/vistrack/kernels`` or
@@ -207,13 +208,16 @@ def _update(n, m, ch, cr, w: _Layout) -> list[str]:
             ha = _sum(_term(ch[k][l], f"h{k}_{l}", f"ap{i}_{l}") for l in range(n))
             rk = _sum(_term(cr[k2][k], f"r{k2}_{k}", f"k{i}_{k2}") for k2 in range(m))
             L.append(f"wk{i}_{k} = {ha} - ({rk})")
-    # count the entries of P that moved by more than 8 ulp of its scale since the last step
-    # (NaN counts as moved), and keep the gain and the factor of S for a steady state
-    L.append("tol = 8.0 * EPS * max(" + ", ".join(f"abs(pp{i}_{i})" for i in range(n))
-             + ")" if n > 1 else "tol = 8.0 * EPS * abs(pp0_0)")
+    # count the entries of P that moved by more than 8 ulp of their own scale, sqrt(P_ii
+    # P_ll) of the last step's P, since the last step (NaN counts as moved: against the
+    # largest variance, a small one still converging was frozen far from its limit), and
+    # keep the gain and the factor of S for a steady state
+    for a, (i, l) in enumerate(tri):
+        if i == l:
+            L.append(f"sd{i} = math.sqrt(abs({w('PP', a)}))")
     for a, (i, l) in enumerate(tri):
         L.append(f"pn = ap{i}_{l} - (" + _sum(f"wk{i}_{k} * k{l}_{k}" for k in range(m)) + ")")
-        L.append(f"nmoved += not abs(pn - {w('PP', a)}) <= tol")
+        L.append(f"nmoved += not abs(pn - {w('PP', a)}) <= 8.0 * EPS * sd{i} * sd{l}")
         L.append(f"{w('PP', a)} = pn")
     for i in range(n):
         for k in range(m):

@@ -864,7 +864,8 @@ def single_kernel(n, m):
 
     With constant matrices, the covariance recursion converges to its steady state (the seeds'
     "Riccati" values) within tens of steps. Once two consecutive fully observed steps leave P and
-    the predicted P unchanged to within 8 ulp of their scale, P, the gain and S are frozen and
+    the predicted P unchanged to within 8 ulp, each entry of its own scale
+    :math:`\sqrt{P_{ii} P_{kk}}`, P, the gain and S are frozen and
     each step costs only the mean recursion: the recursion is contractive there, so the results
     stay within rounding of the full computation. A step with a missing component leaves the
     steady state until it converges again.
@@ -937,17 +938,17 @@ def single_kernel(n, m):
                 total += ll
                 if constant and observed == m and t > 0:
                     # converged: P and Pp within a few ulp of the last step's (the recursion
-                    # can end in a cycle of last-bit changes rather than an exact fixed point)
-                    scale = 0.0
-                    for i in range(n):
-                        scale = max(scale, abs(Pp[i, i]))
-                    tol = 8.0 * _EPS * scale
+                    # can end in a cycle of last-bit changes rather than an exact fixed point),
+                    # each entry against its own scale sqrt(P_ii P_kk): against the largest
+                    # variance, a small one still converging was frozen far from its limit
                     same = True
                     for i in range(n):
                         for k in range(n):
+                            tol = 8.0 * _EPS * math.sqrt(abs(P[i, i] * P[k, k]))
+                            tolp = 8.0 * _EPS * math.sqrt(abs(Pp[i, i] * Pp[k, k]))
                             # written so that NaN (no previous step) counts as a change
                             if not (abs(P[i, k] - P_last[i, k]) <= tol
-                                    and abs(Pp[i, k] - Pp_last[i, k]) <= tol):
+                                    and abs(Pp[i, k] - Pp_last[i, k]) <= tolp):
                                 same = False
                     if same:
                         steady = True
