@@ -865,7 +865,7 @@ def single_kernel(n, m):
     With constant matrices, the covariance recursion converges to its steady state (the seeds'
     "Riccati" values) within tens of steps. Once two consecutive fully observed steps leave P and
     the predicted P unchanged to within 8 ulp, each entry of its own scale
-    :math:`\sqrt{P_{ii} P_{kk}}`, P, the gain and S are frozen and
+    ``sqrt(P_ii P_kk)``, P, the gain and S are frozen and
     each step costs only the mean recursion: the recursion is contractive there, so the results
     stay within rounding of the full computation. A step with a missing component leaves the
     steady state until it converges again.
