@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vistrack.io import PartialFile, box_decimals, partial_path, write_mot
+from vistrack.io import PartialFile, box_decimals, partial_path, replacing, write_mot
 from vistrack.io.motchallenge import _write_sorted
 from vistrack.io.tracks import BoxesWriter, CSVWriter, MOTWriter, TrackRows, write_boxes
 from vistrack.pipeline import run, track_sequence
@@ -156,7 +156,8 @@ def test_the_writers_hold_no_rows_and_write_as_the_frames_come(tmp_path):
     assert growth([boxes]) < 20_000 * 32 * 2.5
     for path in (tmp_path / "t.txt", tmp_path / "t.csv", tmp_path / "b.txt"):
         assert not path.exists()
-        assert partial_path(path).stat().st_size > 100_000  # all but the buffer's last bytes
+        [part] = _partials(path)
+        assert part.stat().st_size > 100_000  # all but the buffer's last bytes
     mot.close()
     csv.close()
     boxes.close()
@@ -216,7 +217,11 @@ def test_an_interrupted_run_leaves_no_file_under_a_final_name(tmp_path):
 
     with pytest.raises(KeyboardInterrupt):
         run(frames, look, BoxTracker(), sinks(fresh))
-    assert seen == [sorted(partial_path(fresh / n).name for n in names)]
+    assert len(seen) == 1 and len(seen[0]) == len(names)
+    for n in names:  # one partial file each, under a hidden name of its own
+        stem, suffix = n.split(".")
+        assert sum(bool(re.fullmatch(rf"\.{stem}\.[0-9a-f]{{8}}\.partial\.{suffix}", m))
+                   for m in seen[0]) == 1
     assert list(fresh.iterdir()) == []
 
     # an earlier run's files stay byte for byte
@@ -255,6 +260,49 @@ def test_a_partial_file_that_cannot_be_renamed_is_removed(tmp_path):
     assert (tmp_path / "t.txt").is_dir()
 
 
+def test_replacing_removes_its_partial_file_when_the_rename_fails(tmp_path):
+    """As a PartialFile does (above): the rename over a folder failed and left the partial
+    file behind, for write_mot, tables, plots and the report."""
+    (tmp_path / "res.txt").mkdir()
+    (tmp_path / "res.txt" / "k").write_text("x")
+    with pytest.raises(OSError):
+        write_mot(tmp_path / "res.txt", [1], [1], [[0, 0, 1, 1]], force=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["res.txt"]
+    with pytest.raises(OSError), replacing(tmp_path / "res.txt") as part:
+        part.write_text("rows")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["res.txt"]
+
+
+def test_two_writers_of_one_path_each_write_their_own_partial_file(tmp_path):
+    """Two runs (or writers) given the same output shared one partial file: each truncated it
+    and wrote at its own offset, and the first to finish renamed the mixture into place (a
+    NUL byte at 162,200; a row of 12 values). Each now writes its own, and the file is one
+    writer's whole output, the last to finish; a name too long for the partial name's
+    additions is cut to fit, with a hash (an OSError after the whole run before)."""
+    from vistrack.io import read_mot
+
+    out = tmp_path / "same.txt"
+    a, b = MOTWriter(out), MOTWriter(out)
+    rows = [Tracks(ids=np.array([i]), boxes=np.array([[0, 0, 10, 10.0]]) + i, points=None,
+                   scores=np.ones(1), classes=np.zeros(1)) for i in range(1, 3000)]
+    for f, t in enumerate(rows, 1):
+        a.write(Frame(f, f / 25), t)
+        if f > 1500:  # the second starts halfway
+            b.write(Frame(f, f / 25), t)
+    assert len(list(tmp_path.glob(".same.*.partial.txt"))) == 2
+    a.close()
+    assert len(read_mot(out)) == 2999
+    b.close()
+    got = read_mot(out)
+    assert len(got) == 1499 and got.frames.min() == 1501
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["same.txt"]
+    long = tmp_path / ("r" * 251 + ".txt")  # 255 bytes: the longest name the folder takes
+    write_mot(long, [1], [1], [[0, 0, 1, 1]])
+    assert read_mot(long).ids.tolist() == [1]
+    part = partial_path(long)
+    assert len(part.name.encode()) <= 255 and part.parent == tmp_path
+
+
 def test_track_sequence_online_writes_what_the_rows_kept_in_memory_give(tmp_path):
     """The online results of a sequence, written as the frames come, equal write_mot of the
     same tracker's rows kept in memory; the counts are the file's."""
@@ -286,7 +334,7 @@ def test_track_sequence_online_writes_what_the_rows_kept_in_memory_give(tmp_path
     write_mot(tmp_path / "want.txt", rows.frames, rows.ids, rows.xywh, rows.scores)
     assert (tmp_path / "online.txt").read_bytes() == (tmp_path / "want.txt").read_bytes()
     assert r.rows == len(rows) > 100 and r.tracks == len(np.unique(rows.ids)) >= 4
-    assert not partial_path(tmp_path / "online.txt").exists()
+    assert not _partials(tmp_path / "online.txt")
     assert isinstance(r.out, Path)
 
 
@@ -475,3 +523,9 @@ def test_the_file_sinks_refuse_rows_read_mot_would_refuse(tmp_path, sink, frame,
     out = sink(tmp_path / ("t.txt" if sink is MOTWriter else "t.csv"))
     with pytest.raises(ValueError, match="^" + re.escape(message)):
         out.write(Frame(frame, 0.0), tracks)
+
+
+def _partials(path):
+    """The partial files of ``path`` on disk (their names carry a token of their own)."""
+    path = Path(path)
+    return sorted(path.parent.glob(f".{path.stem}.*.partial{path.suffix}"))

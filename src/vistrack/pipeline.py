@@ -49,7 +49,7 @@ from .detector_checks import (
     warn_outside,
 )
 from .evaluation.mot import MOTCounts, _lines_of, considered, evaluate_mot
-from .io.atomic import check_output, made_folder
+from .io.atomic import check_output, hidden_path, made_folder
 from .io.motchallenge import (
     DETECTION_SUFFIXES,
     MOTTable,
@@ -1185,7 +1185,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     # online, the rows go to the file as they come; offline, the tracker records its tracks,
     # which are smoothed at the end and written then. Parquet and CSV: the same rows,
     # written as text beside it under a hidden name first
-    text = out.with_name(f".{out.stem}.rows.txt") if table_kind else out
+    text = hidden_path(out, "rows.txt") if table_kind else out
     with made_folder(out.parent), _removed(text if table_kind else None):
         # boxes in pixels to MOTChallenge's hundredth; in smaller units (normalised to the
         # image) to a thousandth of their typical height

@@ -5,7 +5,9 @@ the file of an earlier run as it was."""
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
+import secrets
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -15,11 +17,41 @@ __all__ = ["partial_path", "replacing", "open_replacing", "PartialFile", "check_
            "made_folder"]
 
 
+_NAME_MAX = 255
+"""The longest file name (bytes) most file systems take."""
+
+
+def hidden_path(path: str | os.PathLike, tail: str) -> Path:
+    """A hidden name beside ``path``, ``.{stem}.{token}.{tail}``, its token new at each call:
+    two runs (or two writers) given the same output never share one, and a stem too long for
+    the file system with the rest is cut, a hash of it kept (the name fits in 255 bytes)."""
+    p = Path(path)
+    rest = f".{secrets.token_hex(4)}.{tail}"
+    stem = p.stem
+    room = _NAME_MAX - 1 - len(rest.encode())
+    if len(stem.encode()) > room:
+        digest = hashlib.sha1(stem.encode()).hexdigest()[:8]
+        stem = stem.encode()[:max(room - 9, 0)].decode(errors="ignore") + "~" + digest
+    return p.with_name(f".{stem}{rest}")
+
+
 def partial_path(path: str | os.PathLike) -> Path:
     """Where ``path`` is written until it is complete: a hidden name in the same folder with
-    the same suffix (a video writer picks its container by the suffix)."""
+    the same suffix (a video writer picks its container by the suffix),
+    ``.{stem}.{token}.partial{suffix}``, new at each call (two runs writing one output each
+    write their own and the last rename wins, where a shared one mixed their rows), and
+    within 255 bytes however long ``path``'s name (:func:`hidden_path`).
+
+    Examples
+    --------
+    >>> a, b = partial_path("out/tracks.txt"), partial_path("out/tracks.txt")
+    >>> a.parent.name, a.name.startswith(".tracks."), a.name.endswith(".partial.txt"), a != b
+    ('out', True, True, True)
+    >>> len(partial_path("r" * 251 + ".txt").name.encode())
+    255
+    """
     p = Path(path)
-    return p.with_name(f".{p.stem}.partial{p.suffix}")
+    return hidden_path(p, f"partial{p.suffix}")
 
 
 def _make_folder(path: Path) -> list[Path]:
@@ -96,11 +128,11 @@ def replacing(path: str | os.PathLike) -> Iterator[Path]:
     made = _make_folder(p.parent)
     try:
         yield part
+        os.replace(part, p)  # (failing, as over a folder: the partial file removed too)
     except BaseException:
         part.unlink(missing_ok=True)
         _remove_empty(made)
         raise
-    os.replace(part, p)
 
 
 @contextlib.contextmanager
