@@ -357,6 +357,23 @@ def test_columns_name_a_csv_s_columns_from_pixels_and_for_eval(tmp_path, capsys)
         assert main(["eval", "--gt", str(GT), "--pred", str(pred), "--json"] + extra) == 0
         scores.append(json.loads(capsys.readouterr().out)["pets09-s2l1"])
     assert scores[0] == scores[1] and scores[0]["TP"] > 0
+    # --plots read the CSV again without --columns: the scores, then "no column 'frame'";
+    # the same timeline as the text file's now (the plot's own bytes)
+    plots = {}
+    for pred, extra in ((tmp_path / "out_std" / "tracks.txt", []),
+                        (tmp_path / "res.csv", ["--columns", own.rsplit(",", 1)[0]])):
+        folder = tmp_path / f"plots_{pred.suffix[1:]}"
+        assert main(["eval", "--gt", str(GT), "--pred", str(pred), "--plots", str(folder)]
+                    + extra) == 0
+        plots[pred.suffix] = sorted((p.name, p.stat().st_size > 0) for p in folder.iterdir())
+    assert plots[".csv"] == plots[".txt"] and len(plots[".txt"]) == 2
+    # a space after each comma, as read_mot takes it in a text file: the columns were named
+    # " bb_left" and so on, and eval said they were missing
+    (tmp_path / "sp.csv").write_text("frame, id, bb_left, bb_top, bb_width, bb_height\n" + "".join(
+        f"{f}, {i}, {x}, {y}, {w}, {h}\n" for f, i, (x, y, w, h) in zip(t.frames, t.ids, t.boxes)))
+    capsys.readouterr()
+    assert main(["eval", "--gt", str(GT), "--pred", str(tmp_path / "sp.csv"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["pets09-s2l1"] == scores[0]
 
 
 def test_out_with_a_trailing_slash_is_a_folder_with_one_input_too(tmp_path, capsys,

@@ -1018,7 +1018,8 @@ def _eval(args: argparse.Namespace) -> int:
             for pair, path in zip(pairs, plots[1:]):
                 if pair[0] not in res.errors:
                     with replacing(path) as part:
-                        plot_timeline(pair_matches(pair, args.benchmark), part, title=pair[0])
+                        plot_timeline(pair_matches(pair, args.benchmark, columns), part,
+                                      title=pair[0])
         for path in written:
             print(f"wrote {path}", file=sys.stderr)
     return status

@@ -104,12 +104,12 @@ def _score_on(executor: Executor, pairs: list[tuple[str, Path, Path, Path | None
     return scored
 
 
-def pair_matches(pair: tuple[str, Path, Path, Path | None],
-                 benchmark: str = "auto") -> Matches:
+def pair_matches(pair: tuple[str, Path, Path, Path | None], benchmark: str = "auto",
+                 columns: dict[str, str] | None = None) -> Matches:
     """The CLEAR MOT matches of one ``(name, gt, results, seqinfo-or-None)`` pair, frame by
     frame (:func:`~vistrack.evaluation.clear_matches`), read as :func:`evaluate_files` reads
-    it."""
-    return clear_matches(*_read(pair), benchmark=benchmark)
+    it (a CSV or Parquet file's ``columns`` named as there)."""
+    return clear_matches(*_read(pair, columns), benchmark=benchmark)
 
 
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,

@@ -106,7 +106,9 @@ def _read_csv(path: str | os.PathLike, what: str) -> Any:
     6"``, and so is a file that is not UTF-8 text (:func:`_not_utf8`)."""
     pandas = _pandas(what)
     try:
-        df = pandas.read_csv(path, **_csv_dialect(path))
+        # spaces after the separators skipped, as read_mot skips them: a header "frame, id,
+        # bb_left, ..." named its columns " id", " bb_left" and lost every one
+        df = pandas.read_csv(path, skipinitialspace=True, **_csv_dialect(path))
     except (pandas.errors.ParserError, pandas.errors.EmptyDataError) as e:
         reason = re.sub(r"^(Error tokenizing data\. )?(C error: )?", "", str(e).strip())
         raise MOTFormatError(f"{path}: not {what}: {reason}") from None
@@ -116,6 +118,7 @@ def _read_csv(path: str | os.PathLike, what: str) -> Any:
         raise _not_utf8(path, e) from None
     if any("\x00" in str(c) for c in df.columns):  # UTF-16 without a byte-order mark
         raise _not_utf8(path, None)
+    df.columns = [c.strip() if isinstance(c, str) else c for c in df.columns]  # "id " too
     return df
 
 
