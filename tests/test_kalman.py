@@ -704,3 +704,70 @@ def test_the_steady_state_waits_for_every_variance_at_its_own_scale():
         np.testing.assert_allclose(batch.covs[b, :, 1, 1], want_var, rtol=1e-9)
         np.testing.assert_allclose(batch.means[b, :, 1],
                                    np.cumsum(ys[:, 1]) / 1e-2 * want_var, rtol=1e-9)
+
+
+def test_a_models_filter_names_a_prior_of_another_size_and_takes_every_form_of_dt():
+    """A prior of 1 state for a model of 2 was named as F ("F must have shape (1, 1) ...;
+    got (2, 2)"), a matrix the user never gave, in KalmanFilter.filter and simulate;
+    LinearMotion refused the T-1 intervals it is documented to take (the unused first step
+    was given dt 0) and np.diff(times, prepend=nan). Each form of dt filters as the scalar
+    (the oracle: the same discrete model)."""
+    from vistrack.filters import KalmanFilter
+    from vistrack.models import ConstantVelocity, LinearMeasurement, LinearMotion, Position
+    from vistrack.simulate import simulate
+
+    kf = KalmanFilter(ConstantVelocity(dim=1), Position(dim=1))
+    with pytest.raises(ValueError, match=re.escape("x0 must have shape (2,) or (B, 2), as the "
+                                                   "motion model ConstantVelocity(dim=1")):
+        kf.filter(np.arange(5.0)[:, None], x0=[0.0], P0=[[1.0]])
+    with pytest.raises(ValueError, match=re.escape("P0 must have shape (2, 2) or (B, 2, 2)")):
+        kf.filter(np.arange(5.0)[:, None], x0=[0.0, 0.0], P0=[[1.0]])
+    with pytest.raises(ValueError, match=re.escape("x0 must have shape (4,)")):
+        simulate(ConstantVelocity(dim=2), Position(dim=2), 3, x0=[0.0, 0.0])
+    lin = KalmanFilter(LinearMotion([[1.0, 1.0], [0.0, 1.0]], 0.1 * np.eye(2)),
+                       LinearMeasurement([[1.0, 0.0]], [[1.0]]))
+    ys = np.arange(5.0)[:, None] ** 1.5
+    prior = dict(x0=[0.0, 0.0], P0=np.eye(2))
+    want = lin.filter(ys, **prior).means
+    times = np.arange(5.0)
+    for dt in (np.ones(4), np.ones(5), np.diff(times, prepend=np.nan)):
+        np.testing.assert_array_equal(lin.filter(ys, dt=dt, **prior).means, want)
+    cv = KalmanFilter(ConstantVelocity(dim=1, q=0.3), Position(dim=1))
+    np.testing.assert_array_equal(cv.filter(ys, dt=np.diff(times, prepend=np.nan), **prior).means,
+                                  cv.filter(ys, dt=1.0, **prior).means)
+
+
+def test_one_step_and_the_1d_filter_name_what_the_n_d_filter_names():
+    """kf_step given a measurement of the wrong size named H (kf_update names y, and kf_step
+    says it makes the same checks); the 1-D filter returned NaN (or raised ZeroDivisionError)
+    where the n-D filter with n = 1 refuses a step of zero innovation variance; and a
+    LinearMotion with a Q per step and one F refused f(x)."""
+    from vistrack.models import LinearMotion
+
+    g = vt.Gaussian(np.zeros(2), np.eye(2))
+    args = (np.eye(2), np.eye(2), [[1.0, 0.0]], [[1.0]])
+    for call in (lambda: kf_step(g, [1.0, 2.0], *args),
+                 lambda: kf_update(g, [1.0, 2.0], *args[2:])):
+        with pytest.raises(ValueError, match=re.escape("y must have 1 values a Gaussian, one "
+                                                       "for each row of H (1, 2); got shape "
+                                                       "(2,)")):
+            call()
+    for kw in (dict(sigma_m=[1.0, 0.0, 0.0], sigma_d=0.0), dict(sigma_m=0.0, sigma0=0.0),
+               dict(m=0.0, sigma_m=0.0)):
+        model = dict(d=1.0, m=1.0, sigma_d=0.5, sigma_m=1.0, x0=0.0, sigma0=1.0) | kw
+        with pytest.raises(ValueError, match=r"the innovation variance sigma_m\^2 \+ m\^2 "
+                                             r"pred_std\^2 is 0 at step \d"):
+            kalman_filter_1d([1.0, 2.0, 3.0], **model)
+        T = 3
+        arr = {k: np.broadcast_to(np.asarray(v, float), (T,)) for k, v in model.items()
+               if k not in ("x0", "sigma0")}
+        if "sigma_d" in kw:
+            continue  # (the n-D filter's Joseph form leaves 6e-33 there, and goes on)
+        with pytest.raises(ValueError, match="not positive definite"):  # the n-D filter
+            kalman_filter(np.array([1.0, 2.0, 3.0])[:, None], F=arr["d"][:, None, None],
+                          Q=(arr["sigma_d"] ** 2)[:, None, None], H=arr["m"][:, None, None],
+                          R=(arr["sigma_m"] ** 2)[:, None, None], x0=[model["x0"]],
+                          P0=[[model["sigma0"] ** 2]])
+    F = np.array([[1.0, 1.0], [0.0, 1.0]])
+    per_step_q = LinearMotion(F, np.stack([np.eye(2)] * 3))
+    np.testing.assert_array_equal(per_step_q.f(np.array([0.0, 2.0])), F @ [0.0, 2.0])

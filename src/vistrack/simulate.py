@@ -217,6 +217,9 @@ def simulate(
     nonlinear = hasattr(motion, "jacobian") or hasattr(measurement, "jacobian")
     if not nonlinear:
         # neither model has a jacobian: both are linear
+        from .filters.linear import _prior_of
+
+        _prior_of(motion, x0, P0 if P0 is not None else np.eye(int(motion.ndim_state)))
         mats = KalmanFilter(cast("MotionModel", motion),
                             cast("MeasurementModel", measurement)).matrices(int(T), dt)
         return simulate_lgssm(T, **mats, x0=x0, P0=P0, n_series=n_series, rng=rng)

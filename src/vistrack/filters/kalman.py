@@ -440,8 +440,10 @@ def kf_step(
     >>> g.mean.round(2)
     array([2.82, 0.86])
     """
+    given = np.shape(y)
     mean, cov, y = _with_measurement(g, y)
     n, m = mean.shape[-1], y.shape[-1]
+    _check_y_fits(given, n, m, H, R)
     code, mean, cov, ll = _kernels.step_batch(
         mean, cov, y, _small_matrix(F, "F", n, n),
         _small_matrix(Q, "Q", n, n), _small_matrix(H, "H", m, n), _small_matrix(R, "R", m, m),
@@ -557,17 +559,22 @@ def kf_update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> Gaussian
     return _update(g, y, H, R)[0]
 
 
+def _check_y_fits(given: tuple[int, ...], n: int, m: int, H: ArrayLike, R: ArrayLike) -> None:
+    """Name ``y`` when ``H`` fits the state and ``R`` fits ``H`` but ``y`` (of shape
+    ``given``, ``m`` values) does not: the measurement is the one of the wrong size."""
+    h, r = np.shape(H), np.shape(R)
+    if len(h) in (2, 3) and h[-1] == n and h[-2] != m and (len(r) < 2 or r[-2:] == (h[-2],) * 2):
+        raise ValueError(f"y must have {h[-2]} values a Gaussian, one for each row of H "
+                         f"{h}; got shape {given}")
+
+
 def _update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> tuple[Gaussian, np.ndarray]:
     """:func:`kf_update` and ``log N(y; H m, H P H' + R)`` per Gaussian (0 where nothing is
     observed)."""
     given = np.shape(y)
     mean, cov, y = _with_measurement(g, y)
     n, m = mean.shape[-1], y.shape[-1]
-    h, r = np.shape(H), np.shape(R)
-    if len(h) in (2, 3) and h[-1] == n and h[-2] != m and (len(r) < 2 or r[-2:] == (h[-2],) * 2):
-        # H fits the state and R fits H: the measurement is the one of the wrong size
-        raise ValueError(f"y must have {h[-2]} values a Gaussian, one for each row of H "
-                         f"{h}; got shape {given}")
+    _check_y_fits(given, n, m, H, R)
     code, mean, cov, ll = _kernels.update_batch_py(
         mean, cov, y, _small_matrix(H, "H", m, n),
         _small_matrix(R, "R", m, m),
@@ -654,7 +661,9 @@ def kalman_filter_1d(
     ------
     ValueError
         If an array parameter does not have shape ``(T,)``, a parameter is not finite, ``ys``
-        holds an infinity (NaN is a missing step), or a standard deviation is negative.
+        holds an infinity (NaN is a missing step), a standard deviation is negative, or the
+        innovation variance of an observed step is 0 (no measurement noise, and a state with
+        no uncertainty or ``m = 0``), as the n-D filter refuses such a step.
 
     Examples
     --------
@@ -692,6 +701,10 @@ def kalman_filter_1d(
             out["mean"][i], out["std"][i] = xp, sp
             continue
         den = sm**2 + mi**2 * sp**2
+        if not den > 0:  # as the n-D filter's innovation covariance (NaN, or 1/0, before)
+            raise ValueError(f"the innovation variance sigma_m^2 + m^2 pred_std^2 is 0 at step "
+                             f"{i}: a measurement without noise of a state without "
+                             f"uncertainty, or that does not see it (m[{i}] = {mi:g})")
         out["mean"][i] = (xp * sm**2 + mi * y[i] * sp**2) / den
         out["std"][i] = np.sqrt(sm**2 * sp**2 / den)
     _readonly(*out.values())

@@ -31,17 +31,23 @@ __all__ = ["KalmanFilter", "OnlineFilter"]
 
 def dt_steps(dt: ArrayLike, T: int) -> np.ndarray | float:
     """``dt`` for ``T`` steps: a scalar as a float, else ``(T,)`` with ``dt[t]`` the step from
-    ``t-1`` to ``t`` (the ``T-1`` intervals between steps gain an unused ``dt[0] = 0``)."""
+    ``t-1`` to ``t``. Step 0 has no prediction, so ``dt[0]`` is unused: given the first
+    interval's value (1 for one step), whether the ``T-1`` intervals were given or ``T``
+    values, so that a model that checks its steps (``LinearMotion`` takes 1 alone) sees none
+    it would refuse (a 0 the user never gave, or the NaN of ``np.diff(times,
+    prepend=np.nan)``)."""
     d = as_float_array(dt, "dt", ndim=(0, 1))
     if d.ndim == 0:
         return float(d)
     if d.shape[0] == T - 1:
-        d = np.concatenate([[0.0], d])  # step 0 has no prediction
+        d = np.concatenate([[np.nan], d])
     if d.shape[0] != T:
         raise ValueError(
             f"dt must be a scalar, the T-1={T - 1} intervals between steps or T={T} values "
             f"(dt[0] unused); got shape {d.shape}"
         )
+    d = d.copy()
+    d[0] = d[1] if T > 1 else 1.0
     return d
 
 
@@ -316,6 +322,7 @@ class KalmanFilter:
             dx0, dP0 = self.default_prior(ys)
             x0 = dx0 if x0 is None else x0
             P0 = dP0 if P0 is None else P0
+        _prior_of(self.motion, x0, P0)
         return kalman_filter(ys, **self.matrices(T, dt), x0=x0, P0=P0, store_covs=store_covs)
 
     def online(self, x0: ArrayLike, P0: ArrayLike, *, dt: float = 1.0) -> OnlineFilter:
@@ -766,3 +773,19 @@ class OnlineFilter:
         (array([3.1 , 1.04]), -1.458)
         """
         return self._run(y, True, True, dt)
+
+
+def _prior_of(motion: Any, x0: Any, P0: Any) -> None:
+    """Raise a ValueError naming ``x0`` or ``P0`` when its state size is not the motion
+    model's (the filter of the model's matrices named ``F``, which the user never gave);
+    shapes numpy cannot read are left to the filter's own checks."""
+    n = int(motion.ndim_state)
+    for name, value, tail, want in (("x0", x0, (n,), f"({n},) or (B, {n})"),
+                                    ("P0", P0, (n, n), f"({n}, {n}) or (B, {n}, {n})")):
+        try:
+            shape = np.shape(value)
+        except ValueError:  # ragged
+            continue
+        if shape[-len(tail):] != tail or len(shape) > len(tail) + 1:
+            raise ValueError(f"{name} must have shape {want}, as the motion model "
+                             f"{motion!r} has {n} states; got {shape}")

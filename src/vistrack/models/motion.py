@@ -715,6 +715,7 @@ class LinearMotion:
         >>> LinearMotion([[0.0, 1.0], [1.0, 0.0]], np.eye(2)).f(np.array([1.0, 2.0]))
         array([2., 1.])
         """
-        if self.n_steps is not None:
+        if self._F.shape[0] > 1:  # (a Q per step alone leaves one F to apply)
             raise ValueError("f(x) needs a constant F; this LinearMotion has one F per step")
-        return np.asarray(x) @ self.F(dt).T
+        self._check_dt(dt)
+        return np.asarray(x) @ self._F[0].T
