@@ -1836,3 +1836,43 @@ def test_writing_on_a_grey_frame_after_detection_changes_nothing():
         runs.append(out)
     assert runs[0] == runs[1] and runs[0][-1][1:] == (False, None)
     assert all(len(boxes) == 1 for boxes, *_ in runs[0][1:])
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: MOG2Background(history=0), "history must be a whole number >= 1; got 0"),
+    (lambda: MOG2Background(var_threshold=float("nan")),
+     "var_threshold must be a finite number > 0; got nan"),
+    (lambda: SelectiveBackground(n_init=2.5), "n_init must be a whole number >= 1; got 2.5"),
+    (lambda: SelectiveBackground(n_init=float("nan")),
+     "n_init must be a whole number >= 1; got nan"),
+])
+def test_background_models_name_bad_settings(call, message):
+    """Any MOG2 history and threshold were taken (0, -5, NaN), and n_init 2.5 was cut to 2
+    (NaN: "cannot convert float NaN to integer", naming nothing)."""
+    with pytest.raises(ValueError, match=re.escape(message)):
+        call()
+
+
+def test_mog2_refuses_a_frame_of_another_type_and_keeps_its_model():
+    """One float frame restarted OpenCV's mixture without a word (and the frames after it
+    restarted it again): what it had learnt was gone, and a changed scene was no longer
+    foreground. The float frame is refused, and the model answers as if it had not come (the
+    oracle: the same model without that frame); an (H, W, 1) frame is the grey frame."""
+    def run(middle):
+        mg = MOG2Background(history=50).initialize([np.full((20, 30), 100, np.uint8)] * 20)
+        if middle is not None:
+            try:
+                mg.apply(middle)
+            except ValueError as e:
+                assert "image must be (H, W) or (H, W, C) uint8 with C in (1, 3)" in str(e)
+        return mg.apply(np.full((20, 30), 200, np.uint8))
+
+    want = run(None)
+    assert want.max() == 255
+    np.testing.assert_array_equal(run(np.full((20, 30), 100, np.float32)), want)
+    np.testing.assert_array_equal(run(np.full((20, 30, 1), 100, np.uint8)),
+                                  run(np.full((20, 30), 100, np.uint8)))
+    from vistrack.frontends.blobs import threshold
+
+    one = np.array([[0, 100], [200, 255]], np.uint8)
+    np.testing.assert_array_equal(threshold(one[:, :, None], 150), threshold(one, 150))

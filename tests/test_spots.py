@@ -177,3 +177,28 @@ def test_no_move_of_the_disc_still_measures_its_centre_of_mass_as_trackpy_does()
     np.testing.assert_allclose(locate(im, 9, max_iterations=0).centroids, want, atol=1e-9)
     with pytest.raises(ValueError, match="max_iterations must be a whole number >= 0; got -1"):
         locate(im, 9, max_iterations=-1)
+
+
+def test_a_separation_below_a_pixel_and_a_one_channel_image_equal_trackpy():
+    """A separation under 0.71 made the dilation's side 0, which OpenCV takes as its default
+    3 x 3 (54 spots where trackpy finds 62); an (H, W, 1) image, grey elsewhere in vistrack,
+    raised OpenCV's "Bad number of channels". Both against trackpy's locate (the oracle)."""
+    tp = pytest.importorskip("trackpy")
+    tp.quiet()
+    rng = np.random.default_rng(4)
+    H, W = 120, 160
+    y, x = np.mgrid[0:H, 0:W]
+    centres = np.c_[rng.uniform(10, W - 10, 70), rng.uniform(10, H - 10, 70)]
+    im = 10 + sum(120 * np.exp(-((x - a) ** 2 + (y - b) ** 2) / (2 * 1.5 ** 2))
+                  for a, b in centres)
+    im = np.clip(im + rng.normal(0, 3, im.shape), 0, 255).astype(np.uint8)
+    for sep, image in ((0.5, im), (None, im[:, :, None])):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            f = tp.locate(im, 7, separation=sep, minmass=30) if sep else tp.locate(im, 7,
+                                                                                 minmass=30)
+        s = locate(image, 7, separation=sep, minmass=30)
+        assert len(s) == len(f) > 40
+        order = np.lexsort((f["x"].values, f["y"].values))
+        mine = np.lexsort((s.centroids[:, 0], s.centroids[:, 1]))
+        np.testing.assert_allclose(s.centroids[mine], f[["x", "y"]].values[order], atol=1e-9)

@@ -48,7 +48,7 @@ import numpy as np
 from .._jit import bind, njit
 from .._prebuilt import kernel
 from .._registry import Registry
-from .._validate import as_uint8_image
+from .._validate import as_finite, as_uint8_image, as_whole
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -161,8 +161,7 @@ class SelectiveBackground:
             raise ValueError(f"alpha must be in (0, 1]; got {alpha}")
         if not threshold > 0:
             raise ValueError(f"threshold must be > 0; got {threshold}")
-        if int(n_init) < 1:
-            raise ValueError(f"n_init must be >= 1; got {n_init}")
+        n_init = as_whole(n_init, "n_init", 1)  # 2.5 was cut to 2, NaN unnamed
         if not (n_new >= 1 and float(n_new).is_integer()):
             raise ValueError(f"n_new must be a whole number >= 1; got {n_new}")
         if not min_sigma > 0:
@@ -443,7 +442,10 @@ class MOG2Background:
                  detect_shadows: bool = True, freeze: bool = False):
         import cv2
 
-        self._m = cv2.createBackgroundSubtractorMOG2(int(history), float(var_threshold),
+        # each named (any history and threshold were taken: 0, -5, a NaN)
+        history = as_whole(history, "history", 1)
+        var_threshold = as_finite(var_threshold, "var_threshold", 0.0, above=True)
+        self._m = cv2.createBackgroundSubtractorMOG2(history, var_threshold,
                                                      bool(detect_shadows))
         self.freeze = bool(freeze)
         self._seen = 0
@@ -476,7 +478,8 @@ class MOG2Background:
     def _same(self, image: np.ndarray) -> np.ndarray:
         # OpenCV starts its mixture afresh on a frame of another size or type, without a word
         # (a frame of zeros of another size, and then nothing was ever foreground again)
-        im = np.asarray(image)
+        # uint8 as documented: a float frame restarted the mixture too, without a word
+        im = as_uint8_image(image, channels=(1, 3))
         shape = im.shape if im.ndim == 3 else im.shape + (1,)
         if self._shape is None:
             self._shape = shape

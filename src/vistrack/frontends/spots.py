@@ -209,7 +209,9 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     from scipy import ndimage
 
     im = np.asarray(image)
-    if im.ndim == 3:
+    if im.ndim == 3 and im.shape[2] == 1:
+        im = im[:, :, 0]  # one channel is a grey image (OpenCV's conversion refuses it)
+    elif im.ndim == 3:
         im = bgr_to_grey(im)
     if im.ndim != 2:
         raise ValueError(f"image must be (H, W) or (H, W, 3); got shape {im.shape}")
@@ -265,7 +267,9 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     if lit.size == 0:
         return empty
     floor = np.percentile(lit, percentile)
-    box = int(2 * sep / np.sqrt(2))
+    # at least 1: below a separation of 0.71 the side was 0, which OpenCV takes as its
+    # default 3 x 3 (a square of side 0 dilates nothing, as trackpy's does)
+    box = max(1, int(2 * sep / np.sqrt(2)))
     # a flat square's dilation, zero outside the image; for an even side scipy's
     # grey_dilation (trackpy's) reflects the square, so its anchor is (box - 1) // 2
     a = (box - 1) // 2
