@@ -75,6 +75,31 @@ def test_sigterm_keeps_the_earlier_outputs_and_says_so_in_one_line(tmp_path):
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
 
 
+def test_a_full_disk_is_one_line_and_keeps_the_earlier_file(tmp_path, capsys, monkeypatch):
+    """The disk filling up while the results are written (ENOSPC at a write) printed a
+    traceback and exited 1, the status of a bug: one line now, the file named, status 2, the
+    earlier results byte for byte and no partial file left (the atomic writing, as before)."""
+    import errno
+
+    from vistrack.io.atomic import PartialFile
+
+    dets = tmp_path / "cam.txt"
+    dets.write_text("".join(f"{f},-1,{10 + 2 * f},20,30,60,0.9,-1,-1,-1\n" for f in range(1, 41)))
+    out = tmp_path / "res.txt"
+    out.write_text("earlier\n")
+
+    def full(self, text):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self.part))
+
+    monkeypatch.setattr(PartialFile, "write", full)
+    assert main(["track", str(dets), "--fps", "25", "--out", str(out), "--force"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("vistrack track: error: ")
+    assert err[0] == f"vistrack track: error: {out}: No space left on device"
+    assert out.read_text() == "earlier\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cam.txt", "res.txt"]
+
+
 def test_main_restores_the_sigterm_handler(tmp_path, capsys):
     old = signal.getsignal(signal.SIGTERM)
     assert main(["track", str(VIDEO), "--out-dir", str(tmp_path), "--min-area", "-1"]) == 2

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import functools
 import math
 import os
@@ -71,9 +72,14 @@ def _message(exc: BaseException) -> str:
     'a.txt: No such file or directory'
     >>> _message(ValueError("two\\nlines"))
     'two lines'
+    >>> _message(OSError(28, "No space left on device", "out/.res.0a1b2c3d.partial.txt"))
+    'out/res.txt: No space left on device'
     """
     if isinstance(exc, OSError) and exc.strerror and exc.filename is not None:
-        text = f"{exc.filename}: {exc.strerror}"
+        from .io.atomic import final_path
+
+        # an output's partial file is named by the output (a name the user gave)
+        text = f"{final_path(exc.filename)}: {exc.strerror}"
     else:
         text = str(exc) or type(exc).__name__
     return " ".join(line.strip() for line in text.splitlines())
@@ -1410,6 +1416,18 @@ def _run(args: argparse.Namespace) -> int:
         if args.debug:  # the traceback, and still a user's mistake's status (2, not 1)
             traceback.print_exc()
         return _fail(args.command, _message(exc))
+    except OSError as exc:
+        # the machine refusing an output (a full disk, a quota, a file size limit, a name too
+        # long) is no bug: one line, as a user's mistake, the earlier outputs kept
+        if exc.errno not in _REFUSED_WRITES:
+            raise
+        if args.debug:
+            traceback.print_exc()
+        return _fail(args.command, _message(exc))
+
+
+_REFUSED_WRITES = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.ENAMETOOLONG}
+"""The errors of a write the machine refuses (:func:`_run` says them in one line)."""
 
 
 if __name__ == "__main__":

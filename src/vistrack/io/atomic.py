@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import os
+import re
 import secrets
 import tempfile
 from collections.abc import Iterator
@@ -33,6 +34,22 @@ def hidden_path(path: str | os.PathLike, tail: str) -> Path:
         digest = hashlib.sha1(stem.encode()).hexdigest()[:8]
         stem = stem.encode()[:max(room - 9, 0)].decode(errors="ignore") + "~" + digest
     return p.with_name(f".{stem}{rest}")
+
+
+def final_path(path: str | os.PathLike) -> str:
+    """The output a partial file (:func:`partial_path`) is written for, or ``path`` as given
+    when it is no partial file, or one whose stem was cut to fit.
+
+    Examples
+    --------
+    >>> final_path("out/.tracks.0a1b2c3d.partial.txt"), final_path("out/tracks.txt")
+    ('out/tracks.txt', 'out/tracks.txt')
+    """
+    p = Path(path)
+    m = re.fullmatch(r"\.(.+)\.[0-9a-f]{8}\.partial(\.[^.]*)?", p.name)
+    if m is None or "~" in m.group(1):
+        return str(path)
+    return str(p.with_name(m.group(1) + (m.group(2) or "")))
 
 
 def partial_path(path: str | os.PathLike) -> Path:
