@@ -969,3 +969,24 @@ def test_eval_plots_of_a_sequence_with_a_long_name_and_scores_first(tmp_path, ca
     with pytest.raises(RuntimeError, match="the plot failed"):
         main(args + ["--force"])
     assert name in capsys.readouterr().out  # the table came first
+
+
+def test_eval_of_folders_finds_results_whose_suffix_is_upper_case(tmp_path, capsys):
+    """MOT17-02.TXT beside its sequence was called missing ("MOT17-02.txt does not exist")
+    and was no stray file either; --pred MOT17-02.TXT alone was scored. Found and scored the
+    same now (the oracle: the same rows under a lower-case suffix)."""
+    rows = "".join(f"{f},1,{10 + f},20,30,60,1,1,1\n" for f in range(1, 11))
+    seq = tmp_path / "set" / "SEQ-1" / "gt"
+    seq.mkdir(parents=True)
+    (seq / "gt.txt").write_text(rows)
+    scores = []
+    for name in ("SEQ-1.txt", "SEQ-1.TXT"):
+        pred = tmp_path / name.replace(".", "_")
+        pred.mkdir()
+        (pred / name).write_text(rows)
+        assert main(["eval", "--gt-dir", str(tmp_path / "set"), "--pred-dir", str(pred),
+                     "--json"]) == 0
+        cap = capsys.readouterr()
+        scores.append(json.loads(cap.out))
+        assert "warning" not in cap.err
+    assert scores[0] == scores[1] and scores[0]["SEQ-1"]["MOTA"] == 1.0

@@ -911,11 +911,15 @@ def _eval(args: argparse.Namespace) -> int:
                 single = "--gt" if flag == "gt_dir" else "--pred"
                 return _fail("eval", f"--{flag.replace('_', '-')} {getattr(args, flag)} is a "
                              f"file, not a folder (one file: {single})")
+        # SEQ.txt, or the .parquet or .csv file vistrack track --out writes, the suffix in
+        # any case (MOT17-02.TXT was called missing, and left out of the stray files too)
+        results: dict[str, list[Path]] = {}
+        if Path(args.pred_dir).is_dir():
+            for q in sorted(Path(args.pred_dir).iterdir()):
+                if q.is_file() and q.suffix.lower() in (".txt", ".parquet", ".csv"):
+                    results.setdefault(q.stem, []).append(q)
         for seq in sorted(p for p in Path(args.gt_dir).iterdir() if (p / "gt" / "gt.txt").exists()):
-            # SEQ.txt, or the .parquet or .csv file vistrack track --out writes
-            found = [Path(args.pred_dir) / f"{seq.name}{ext}"
-                     for ext in (".txt", ".parquet", ".csv")]
-            found = [q for q in found if q.exists()]
+            found = results.get(seq.name, [])
             if len(found) > 1:
                 return _fail("eval", f"results for {seq.name} in more than one file: "
                              f"{', '.join(map(str, found))}; keep one")
