@@ -534,7 +534,7 @@ def test_an_interrupted_sequence_leaves_no_folder_it_made(seq, tmp_path, monkeyp
     monkeypatch.setattr(vistrack.pipeline.BoxTracker, "step", interrupted)
     with pytest.raises(KeyboardInterrupt):
         track_sequence(seq, out)
-    assert len(seen) == 1 and re.fullmatch(r"\.tracks\.[0-9a-f]{8}\.partial\.txt", seen[0])
+    assert len(seen) == 1 and re.fullmatch(r"\.tracks\.[0-9a-f]{10}\.partial\.txt", seen[0])
     assert list(tmp_path.iterdir()) == []
 
 

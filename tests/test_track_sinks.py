@@ -4,6 +4,7 @@ memory, and leave no file under the final name until the run is complete."""
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -220,7 +221,7 @@ def test_an_interrupted_run_leaves_no_file_under_a_final_name(tmp_path):
     assert len(seen) == 1 and len(seen[0]) == len(names)
     for n in names:  # one partial file each, under a hidden name of its own
         stem, suffix = n.split(".")
-        assert sum(bool(re.fullmatch(rf"\.{stem}\.[0-9a-f]{{8}}\.partial\.{suffix}", m))
+        assert sum(bool(re.fullmatch(rf"\.{stem}\.[0-9a-f]{{10}}\.partial\.{suffix}", m))
                    for m in seen[0]) == 1
     assert list(fresh.iterdir()) == []
 
@@ -296,6 +297,20 @@ def test_two_writers_of_one_path_each_write_their_own_partial_file(tmp_path):
     got = read_mot(out)
     assert len(got) == 1499 and got.frames.min() == 1501
     assert sorted(p.name for p in tmp_path.iterdir()) == ["same.txt"]
+    # a writer killed (SIGKILL) leaves its partial file: the next to complete the output
+    # removes it, as the shared name used to be overwritten; a live writer's stays
+    import subprocess
+    import sys
+
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    dead = tmp_path / f".same.{int(gone.stdout) % 16**6:06x}beef.partial.txt"
+    live = tmp_path / f".same.{os.getppid() % 16**6:06x}beef.partial.txt"
+    dead.write_text("half")
+    live.write_text("half")
+    write_mot(out, [1], [1], [[0, 0, 1, 1]], force=True)
+    assert not dead.exists() and live.exists()
+    live.unlink()
     long = tmp_path / ("r" * 251 + ".txt")  # 255 bytes: the longest name the folder takes
     write_mot(long, [1], [1], [[0, 0, 1, 1]])
     assert read_mot(long).ids.tolist() == [1]

@@ -72,7 +72,7 @@ def _message(exc: BaseException) -> str:
     'a.txt: No such file or directory'
     >>> _message(ValueError("two\\nlines"))
     'two lines'
-    >>> _message(OSError(28, "No space left on device", "out/.res.0a1b2c3d.partial.txt"))
+    >>> _message(OSError(28, "No space left on device", "out/.res.000a1b2c3d.partial.txt"))
     'out/res.txt: No space left on device'
     """
     if isinstance(exc, OSError) and exc.strerror and exc.filename is not None:

@@ -23,17 +23,64 @@ _NAME_MAX = 255
 
 
 def hidden_path(path: str | os.PathLike, tail: str) -> Path:
-    """A hidden name beside ``path``, ``.{stem}.{token}.{tail}``, its token new at each call:
-    two runs (or two writers) given the same output never share one, and a stem too long for
-    the file system with the rest is cut, a hash of it kept (the name fits in 255 bytes)."""
+    """A hidden name beside ``path``, ``.{stem}.{token}.{tail}``, its token new at each call
+    (this process's id in 6 hex digits, then 4 random ones): two runs (or two writers) given
+    the same output never share one, and one left by a writer that died (SIGKILL, a worker
+    killed) is removed when another completes the output (:func:`commit_partial`). A stem too
+    long for the file system with the rest is cut, a hash of it kept (the name fits in 255
+    bytes)."""
     p = Path(path)
-    rest = f".{secrets.token_hex(4)}.{tail}"
+    return p.with_name(f"{_hidden_prefix(p, tail)}{os.getpid() % 16**6:06x}"
+                       f"{secrets.token_hex(2)}.{tail}")
+
+
+def _hidden_prefix(p: Path, tail: str) -> str:
+    """``.{stem}.`` of :func:`hidden_path`'s names for ``p`` and ``tail``, the stem cut to
+    fit (its hash kept) where the whole name would pass 255 bytes."""
     stem = p.stem
-    room = _NAME_MAX - 1 - len(rest.encode())
+    room = _NAME_MAX - len(f"..{'0' * _TOKEN}.{tail}".encode())
     if len(stem.encode()) > room:
         digest = hashlib.sha1(stem.encode()).hexdigest()[:8]
         stem = stem.encode()[:max(room - 9, 0)].decode(errors="ignore") + "~" + digest
-    return p.with_name(f".{stem}{rest}")
+    return f".{stem}."
+
+
+_TOKEN = 10
+"""The length of a hidden name's token: the writer's process id (6 hex digits) and 4 random
+hex digits."""
+
+
+def commit_partial(part: Path, path: Path) -> None:
+    """Rename the complete partial file ``part`` over ``path``, then remove the partial files
+    (:func:`partial_path`) of ``path`` that writers which died left (their process no longer
+    exists: killed before it could remove its own), as the shared partial name used to be
+    overwritten by the next run."""
+    os.replace(part, path)
+    tail = f"partial{path.suffix}"
+    prefix = _hidden_prefix(path, tail)
+    for other in path.parent.glob(f"{glob_escape(prefix)}*.{glob_escape(tail)}"):
+        token = other.name[len(prefix):-len(tail) - 1]
+        if len(token) != _TOKEN or not re.fullmatch(r"[0-9a-f]+", token):
+            continue
+        pid = int(token[:6], 16)
+        if pid != os.getpid() % 16**6 and not _alive(pid):
+            other.unlink(missing_ok=True)
+
+
+def glob_escape(text: str) -> str:
+    """``text`` with glob's special characters taken literally."""
+    return re.sub(r"([*?\[])", r"[\1]", text)
+
+
+def _alive(pid: int) -> bool:
+    """Whether a process ``pid`` exists (one of another user's counts)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True
+    return True
 
 
 def final_path(path: str | os.PathLike) -> str:
@@ -42,11 +89,11 @@ def final_path(path: str | os.PathLike) -> str:
 
     Examples
     --------
-    >>> final_path("out/.tracks.0a1b2c3d.partial.txt"), final_path("out/tracks.txt")
+    >>> final_path("out/.tracks.00a1b2c3d4.partial.txt"), final_path("out/tracks.txt")
     ('out/tracks.txt', 'out/tracks.txt')
     """
     p = Path(path)
-    m = re.fullmatch(r"\.(.+)\.[0-9a-f]{8}\.partial(\.[^.]*)?", p.name)
+    m = re.fullmatch(r"\.(.+)\.[0-9a-f]{10}\.partial(\.[^.]*)?", p.name)
     if m is None or "~" in m.group(1):
         return str(path)
     return str(p.with_name(m.group(1) + (m.group(2) or "")))
@@ -145,7 +192,7 @@ def replacing(path: str | os.PathLike) -> Iterator[Path]:
     made = _make_folder(p.parent)
     try:
         yield part
-        os.replace(part, p)  # (failing, as over a folder: the partial file removed too)
+        commit_partial(part, p)  # (failing, as over a folder: the partial file removed too)
     except BaseException:
         part.unlink(missing_ok=True)
         _remove_empty(made)
@@ -224,7 +271,7 @@ class PartialFile:
         it was."""
         try:
             self._open().close()
-            os.replace(self.part, self.path)
+            commit_partial(self.part, self.path)
         except BaseException:
             self.abort()
             raise

@@ -302,9 +302,11 @@ class AnnotatedVideo:
         >>> video.path.exists()   # no frame: no file
         False
         """
+        from ..io.atomic import commit_partial
+
         self._writer.close()
         if self._part.exists():
-            os.replace(self._part, self.path)
+            commit_partial(self._part, self.path)
 
     def abort(self) -> None:
         """Give the video up (a run that failed): the frames written are removed, and an
