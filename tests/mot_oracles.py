@@ -59,8 +59,10 @@ def noisy_predictions(gt_path: Path, out: Path, seed: int) -> Path:
     return write_mot(out, frames, ids, boxes, conf, force=True)
 
 
-def trackeval_scores(bench: str, seqs: dict[str, Path], preds: dict[str, Path], tmp: Path):
-    """TrackEval's MotChallenge2DBox results, per sequence and COMBINED, on these files."""
+def trackeval_scores(bench: str, seqs: dict[str, Path], preds: dict[str, Path], tmp: Path,
+                     raise_errors: bool = False):
+    """TrackEval's MotChallenge2DBox results, per sequence and COMBINED, on these files (its
+    errors raised with ``raise_errors``, which TrackEval otherwise logs and leaves out)."""
     te = pytest.importorskip("trackeval")
     gt_root, tr_root = tmp / "gt", tmp / "trackers"
     for name, d in seqs.items():
@@ -74,7 +76,8 @@ def trackeval_scores(bench: str, seqs: dict[str, Path], preds: dict[str, Path], 
     ev = te.Evaluator.get_default_eval_config()
     ev.update(USE_PARALLEL=False, PRINT_RESULTS=False, PRINT_CONFIG=False, TIME_PROGRESS=False,
               OUTPUT_SUMMARY=False, OUTPUT_DETAILED=False, PLOT_CURVES=False,
-              DISPLAY_LESS_PROGRESS=True, OUTPUT_EMPTY_CLASSES=False)
+              DISPLAY_LESS_PROGRESS=True, OUTPUT_EMPTY_CLASSES=False,
+              BREAK_ON_ERROR=raise_errors, RETURN_ON_ERROR=False, LOG_ON_ERROR=None)
     ds = te.datasets.MotChallenge2DBox.get_default_dataset_config()
     ds.update(GT_FOLDER=str(gt_root), TRACKERS_FOLDER=str(tr_root), BENCHMARK=bench,
               SPLIT_TO_EVAL="train", TRACKERS_TO_EVAL=["vt"], SEQMAP_FILE=str(seqmap),

@@ -756,3 +756,43 @@ def test_a_sequence_whose_ground_truth_is_all_ignored_scores_as_trackeval(bench,
         compare(ours[name], ref[theirs])
     assert ours["a"].MOTA == 0.0 and ours["COMBINED"].MOTA == -8.0
     assert (ours["a"] + MOTCounts()).MOTA == -5.0  # a sum, as TrackEval's COMBINED
+
+
+def test_results_of_other_classes_are_refused_as_trackeval_refuses_them(tmp_path):
+    """A multi-class tracker's results (class 3 in column 8) were scored as pedestrians on
+    MOT17, each car a false positive or a match; TrackEval (the oracle) refuses the file:
+    "Evaluation is only valid for pedestrian class". Refused too now, with the file, the line
+    and the column; classes -1 and 1 are scored by both, alike; a hand-built table's classes
+    of another length are named as its other columns are."""
+    from vistrack.evaluation import evaluate_files
+
+    seq = tmp_path / "gt" / "S-1"
+    (seq / "gt").mkdir(parents=True)
+    (seq / "gt" / "gt.txt").write_text("".join(f"{f},1,0,0,10,10,1,1,1\n" for f in (1, 2)))
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=S-1\nframeRate=10\nseqLength=2\n"
+                                     "imWidth=64\nimHeight=48\nimDir=img1\nimExt=.jpg\n")
+    for cls, refused in (("3", True), ("-1", False), ("1", False)):
+        pred = tmp_path / f"pred{cls}.txt"
+        pred.write_text("1,5,0,0,10,10,0.9,1,-1,-1\n"
+                        f"2,5,0,0,10,10,0.9,{cls},-1,-1\n")
+        if refused:
+            with pytest.raises(ValueError) as e:
+                evaluate_files([("S-1", seq / "gt" / "gt.txt", pred, seq / "seqinfo.ini")],
+                               benchmark="MOT17")
+            assert str(e.value).startswith(f"{pred}, line 2, column 8 (class): class 3: MOT17 "
+                                           "scores pedestrians alone")
+            with pytest.raises(Exception, match="only valid for pedestrian class"):
+                trackeval_scores("MOT17", {"S-1": seq}, {"S-1": pred}, tmp_path / f"te{cls}",
+                                 raise_errors=True)
+        else:
+            got = evaluate_files([("S-1", seq / "gt" / "gt.txt", pred, seq / "seqinfo.ini")],
+                                 benchmark="MOT17")["S-1"]
+            want = trackeval_scores("MOT17", {"S-1": seq}, {"S-1": pred}, tmp_path / f"te{cls}")
+            assert got.MOTA == pytest.approx(want["S-1"]["CLEAR"]["MOTA"])
+    n = 3
+    table = MOTTable(np.arange(1, n + 1), np.ones(n, int), np.c_[np.arange(n) * 1.0,
+                     np.zeros(n), np.full(n, 10.0), np.full(n, 10.0)], np.ones(n),
+                     np.ones(2, int), -np.ones(n), columns=9)
+    with pytest.raises(ValueError, match=re.escape("gt.classes must be an array of shape (N,) "
+                                                   "= (3,), as frames")):
+        evaluate_mot(table, table)
