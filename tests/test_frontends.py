@@ -243,6 +243,26 @@ def test_a_truncated_image_is_named_or_skipped(tmp_path, ext):
         VideoReader(tmp_path, skip_bad=True)
 
 
+@pytest.mark.parametrize("ext", [".jpg", ".png"])
+def test_an_image_that_cannot_be_read_at_all_is_named_or_skipped(tmp_path, ext):
+    """A broken link among the images (or a file the disk cannot read): a JPEG raised
+    FileNotFoundError even with skip_bad (as the first image too), and a PNG was called
+    "corrupt or truncated" after OpenCV's own warning lines. Named for what it is, and
+    skipped with skip_bad, as an image that does not decode is."""
+    files = _folder(tmp_path, ext=ext)
+    for k in (2, 0):
+        files[k].unlink()
+        files[k].symlink_to(tmp_path / "gone" / f"x{ext}")
+    why = "not a readable image: the file cannot be read (No such file or directory)"
+    with pytest.raises(VideoError, match=re.escape(f"{files[0]}: {why}")):
+        VideoReader(tmp_path)
+    for prefetch in (0, 3):
+        r = VideoReader(tmp_path, prefetch=prefetch, skip_bad=True)
+        frames, msg = _read(r)
+        assert [f.index for f in frames] == [2, 4, 5] and r.size == (64, 48)
+        assert msg == [f"{files[0]}: {why}; skipped", f"{files[2]}: {why}; skipped"]
+
+
 def test_a_stream_without_a_frame_count_is_read_to_its_end(tmp_path):
     """A raw MJPEG stream (JPEGs one after another, as some cameras write) has no frame
     count in a header: OpenCV reports a negative one. Its frames are read to the end all the

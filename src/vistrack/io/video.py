@@ -496,12 +496,18 @@ class VideoReader:
         plain = cv2.IMREAD_COLOR
         flags = plain | cv2.IMREAD_ANYDEPTH
         unreadable = "not a readable image (OpenCV cannot decode it: corrupt or truncated)"
+        try:  # a file that cannot be read at all (a broken link, an I/O error) says so, and
+            # is skipped as one that does not decode (it raised, or was called corrupt)
+            data = path.read_bytes() if path.suffix.lower() in (".jpg", ".jpeg") else b""
+            if not data and not path.is_file():
+                raise FileNotFoundError(2, "No such file or directory", str(path))
+        except OSError as e:
+            return None, f"not a readable image: the file cannot be read ({e.strerror or e})"
         if path.suffix.lower() not in (".jpg", ".jpeg"):
             im = cv2.imread(str(path), flags)
             if im is not None and im.dtype not in (np.uint8, np.uint16):
                 im = cv2.imread(str(path), plain)
             return (None, unreadable) if im is None else (im, "")
-        data = path.read_bytes()
         if data[:2] == b"\xff\xd8" and _jpeg_end(data) is None:
             return None, (f"a JPEG cut short (its {len(data)} bytes end before its end-of-image "
                           "marker FF D9): truncated or corrupt")
