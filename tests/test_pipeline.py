@@ -1292,3 +1292,26 @@ def test_progress_that_is_no_stream_is_named(tmp_path):
     with pytest.raises(TypeError, match=r"^progress must be a text stream \(sys.stderr, say\) "
                                         r"or None; got bool$"):
         run([Frame(1, 0.0)], None, BoxTracker(), progress=True)
+
+
+def test_a_dotted_folders_run_is_named_by_its_whole_name(tmp_path):
+    """``cam1.2024-05-01`` (a folder of images) was named ``cam1`` in run.json, the report's
+    title and the score table, where a batch names it ``cam1.2024-05-01``
+    (``sequence_name``, the oracle)."""
+    import json
+    import warnings
+
+    import cv2
+
+    from vistrack.io import sequence_name
+    from vistrack.pipeline import track_video
+
+    folder = tmp_path / "cam1.2024-05-01"
+    folder.mkdir()
+    for k in range(4):
+        cv2.imwrite(str(folder / f"{k + 1:06d}.png"), np.zeros((60, 80, 3), np.uint8))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run_ = track_video(folder, tmp_path / "out", annotate=False, fps=10)
+    name = json.loads((run_.out_dir / "run.json").read_text())["name"]
+    assert name == sequence_name(folder) == "cam1.2024-05-01"

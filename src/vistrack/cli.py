@@ -619,7 +619,9 @@ def _print_video_run(args: argparse.Namespace, run: VideoRun, report: TextIO) ->
     for key, path in run.files.items():
         print(f"  {key:<7} {path}", file=report)
     if run.scores is not None:
-        _table({Path(args.input).stem: run.scores}, report)
+        from .io.motchallenge import sequence_name
+
+        _table({sequence_name(args.input): run.scores}, report)  # (a dotted folder's whole name)
 
 
 def _frontend_problem(args: argparse.Namespace, name: str) -> str:

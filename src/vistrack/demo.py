@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -58,7 +59,7 @@ def constant_velocity_1d(path: str | Path, *, T: int = 20, seed: int = 2) -> Pat
         title="Kalman filter, 1-D constant velocity (bars: 3 standard deviations)",
     )
     path = Path(path)
-    fig.savefig(path, dpi=110)
+    _save(fig, path)
     return path
 
 
@@ -115,7 +116,7 @@ def smoothing_1d(path: str | Path, *, T: int = 20, seed: int = 2) -> Path:
         ax.set_xlim(-0.6, T - 0.4)  # one range for the three (the backward's stopped short)
         ax.set_title(ax.get_title() + " (bars: 3σ)")
     path = Path(path)
-    fig.savefig(path, dpi=110)
+    _save(fig, path)
     return path
 
 
@@ -201,8 +202,18 @@ def murphy_2d(path: str | Path, *, seed: int = 8) -> tuple[Path, float, float]:
         a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncols=3, fontsize=8)
         a.set_title(a.get_title() + ", 1σ ellipses", fontsize=10)
     path = Path(path)
-    fig.savefig(path, dpi=110)
+    _save(fig, path)
     return path, ef, es
+
+
+def _save(fig: Any, path: Path) -> None:
+    """Save the figure whole or not at all (:func:`~vistrack.io.atomic.replacing`): it was
+    written in place, and Ctrl-C while it was written left a figure of 124 bytes where an
+    earlier, complete one had been."""
+    from .io.atomic import replacing
+
+    with replacing(path) as part:
+        fig.savefig(part, dpi=110, format=path.suffix.lstrip(".") or "png")
 
 
 def run_kalman_demo(out_dir: str | Path, *, n_seeds: int = 1000, force: bool = False) -> str:

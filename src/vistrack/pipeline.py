@@ -59,6 +59,7 @@ from .io.motchallenge import (
     need_parquet,
     read_mot,
     read_seqinfo,
+    sequence_name,
     write_mot,
 )
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
@@ -2115,7 +2116,7 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
     from . import __version__
     from .io.atomic import replacing
 
-    info = {"command": command, "vistrack": __version__, "name": Path(video).stem,
+    info = {"command": command, "vistrack": __version__, "name": sequence_name(video),
             "input": str(Path(video).resolve()),
             # the file scored (a sequence folder's gt/gt.txt), which the report reads
             "gt": str(Path(_ground_truth_file(gt)).resolve()) if gt is not None else None,
