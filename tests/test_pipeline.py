@@ -1315,3 +1315,30 @@ def test_a_dotted_folders_run_is_named_by_its_whole_name(tmp_path):
         run_ = track_video(folder, tmp_path / "out", annotate=False, fps=10)
     name = json.loads((run_.out_dir / "run.json").read_text())["name"]
     assert name == sequence_name(folder) == "cam1.2024-05-01"
+
+
+def test_an_interrupt_while_the_outputs_are_renamed_keeps_the_earlier_set(tmp_path,
+                                                                          monkeypatch):
+    """Each output was renamed into place as its writer closed: Ctrl-C after tracks.txt's
+    rename left new tracks beside the earlier run's CSV, video, plot and run.json (whose
+    command then described another run). The outputs are renamed together now, run.json
+    with them: interrupted anywhere before, the earlier set stays whole, byte for byte (the
+    oracle: the files of the earlier run), with no partial file left."""
+    from vistrack.pipeline import track_video
+    from vistrack.viz.plots import TrajectoryPlot
+
+    clip = Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1" \
+        / "pets09-s2l1.mp4"
+    out = tmp_path / "out"
+    track_video(clip, out, stop=12, force=True)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert {"tracks.txt", "tracks.csv", "annotated.mp4", "trajectories.png",
+            "run.json"} <= set(before)
+
+    def interrupted(self):
+        raise KeyboardInterrupt  # the plot, closed after the tracks, video and CSV
+
+    monkeypatch.setattr(TrajectoryPlot, "close", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        track_video(clip, out, stop=12, min_area=150, force=True)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before

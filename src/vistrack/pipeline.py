@@ -49,7 +49,7 @@ from .detector_checks import (
     warn_outside,
 )
 from .evaluation.mot import MOTCounts, _lines_of, considered, evaluate_mot
-from .io.atomic import check_output, hidden_path, made_folder
+from .io.atomic import check_output, hidden_path, made_folder, remove_on_commit, together
 from .io.motchallenge import (
     DETECTION_SUFFIXES,
     MOTTable,
@@ -2016,53 +2016,59 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 return d
 
             call = counted
-        with made_folder(out_dir):  # removed again, if made here, when the run fails
+        # the folder removed again, if made here, when the run fails; the outputs renamed
+        # into place together, run.json with them, once all are complete (Ctrl-C between
+        # two left new tracks beside an earlier run's video, plot and run.json)
+        with made_folder(out_dir), together():
             sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
             stats = run(reader, call, stepper, list(sinks.values()), progress=progress,
                         total=len(reader), label=reader.source.name, check=check)
-        n = stats.frames
-        if grid is None and call is not None and not found:
-            # an empty result said nothing: tracks, video and plot written, none with a box
-            what = f"the {name} front-end" if isinstance(name, str) else "the front-end"
-            hint = ""
-            if name == "bgsub":
-                hint = (f" (blobs of {ctx.options.get('min_area', 500.0):g} pixels or more "
-                        "where a frame differs from the background model; to find more, try "
-                        "a smaller --min-area, --background mog2, or a detector: --frontend "
-                        "hog)")
-            warnings.warn(f"{video}: {what} found nothing in {n} frames{hint}: the results "
-                          "hold no rows", UserWarning, stacklevel=2)
-        rows = sinks["tracks"]
-        assert isinstance(rows, MOTWriter)
-        last = stats.last
-        # the video ended before stop (not --stop's own end, nor a missing image at it: a folder
-        # without its frame 5 stopped at 5 warned of "rows past the video's last frame (4)")
-        ended = stop is None or (reader.frame_count < stop if reader.frame_count else last < stop)
-        # rows past the video's last frame were for nothing; rows past --stop are what was
-        # asked for, and not said, but with --stop the rows past the video's own end are said
-        # still (they went without a word)
-        end = last if ended else (reader.frame_count or None)
-        for table, what, label in ((grid.dets if grid is not None else None, "not tracked",
-                                    grid.path if grid is not None else None),
-                                   (gt_table, "not scored", gt)):
-            if end is not None and table is not None and len(table) and table.frames[-1] > end:
-                past = table.frames[table.frames > end]
-                warnings.warn(f"{label}: {len(past)} rows on frames {past[0]}-{past[-1]}, past "
-                              f"the video's last frame ({end}): {what}", UserWarning,
-                              stacklevel=2)
-        scores = scored[0] if scored else None
-        n_tracks = len(rows.identities)
-        if isinstance(trk, BoxTracker):
-            _warn_calibration(trk, str(video))
-        result = VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
-                          ctx.resolved if isinstance(trk, BoxTracker) else None,
-                          derived_values(trk) if isinstance(trk, BoxTracker) else None,
-                          reader.start, stats.last)
-        _write_run_info(result, video, gt, command, reader.fps, said)
-        # an earlier run's page would show other tracks beside these outputs (a new one, if asked
-        # for, is written from run.json after this)
-        (out_dir / REPORT).unlink(missing_ok=True)
-        return result
+            n = stats.frames
+            if grid is None and call is not None and not found:
+                # an empty result said nothing: tracks, video and plot written, none with a box
+                what = f"the {name} front-end" if isinstance(name, str) else "the front-end"
+                hint = ""
+                if name == "bgsub":
+                    hint = (f" (blobs of {ctx.options.get('min_area', 500.0):g} pixels or "
+                            "more where a frame differs from the background model; to find "
+                            "more, try a smaller --min-area, --background mog2, or a "
+                            "detector: --frontend hog)")
+                warnings.warn(f"{video}: {what} found nothing in {n} frames{hint}: the "
+                              "results hold no rows", UserWarning, stacklevel=2)
+            rows = sinks["tracks"]
+            assert isinstance(rows, MOTWriter)
+            last = stats.last
+            # the video ended before stop (not --stop's own end, nor a missing image at it: a
+            # folder without its frame 5 stopped at 5 warned of "rows past the video's last
+            # frame (4)")
+            ended = stop is None or (reader.frame_count < stop if reader.frame_count
+                                     else last < stop)
+            # rows past the video's last frame were for nothing; rows past --stop are what was
+            # asked for, and not said, but with --stop the rows past the video's own end are
+            # said still (they went without a word)
+            end = last if ended else (reader.frame_count or None)
+            for table, what, label in ((grid.dets if grid is not None else None, "not tracked",
+                                        grid.path if grid is not None else None),
+                                       (gt_table, "not scored", gt)):
+                if end is not None and table is not None and len(table) and \
+                        table.frames[-1] > end:
+                    past = table.frames[table.frames > end]
+                    warnings.warn(f"{label}: {len(past)} rows on frames {past[0]}-{past[-1]}, "
+                                  f"past the video's last frame ({end}): {what}", UserWarning,
+                                  stacklevel=2)
+            scores = scored[0] if scored else None
+            n_tracks = len(rows.identities)
+            if isinstance(trk, BoxTracker):
+                _warn_calibration(trk, str(video))
+            result = VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
+                              ctx.resolved if isinstance(trk, BoxTracker) else None,
+                              derived_values(trk) if isinstance(trk, BoxTracker) else None,
+                              reader.start, stats.last)
+            _write_run_info(result, video, gt, command, reader.fps, said)
+            # an earlier run's page would show other tracks beside these outputs (a new one, if
+            # asked for, is written from run.json after this)
+            remove_on_commit(out_dir / REPORT)
+            return result
 
 
 def _ground_truth(gt: str | Path) -> MOTTable:

@@ -5,6 +5,7 @@ the file of an earlier run as it was."""
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import hashlib
 import os
 import re
@@ -15,7 +16,7 @@ from pathlib import Path
 from typing import IO
 
 __all__ = ["partial_path", "replacing", "open_replacing", "PartialFile", "check_output",
-           "made_folder"]
+           "made_folder", "together", "remove_on_commit"]
 
 
 _NAME_MAX = 255
@@ -50,11 +51,105 @@ _TOKEN = 10
 hex digits."""
 
 
+_GROUP: contextvars.ContextVar[list[tuple[Path | None, Path]] | None] = contextvars.ContextVar(
+    "vistrack_atomic_group", default=None)
+
+
+@contextlib.contextmanager
+def together() -> Iterator[None]:
+    """Outputs completed inside the block (:func:`commit_partial`, so every writer of this
+    module) are renamed into place together when it ends normally, with Ctrl-C and SIGTERM
+    held off while they are; when it raises, none is, their partial files are removed, and
+    the earlier outputs stay as they were, every one. A run's files then describe one run:
+    they were renamed one at a time as each closed, and Ctrl-C between two left new tracks
+    beside an earlier run's video, plot and ``run.json``. Inside another such block, the
+    outer one renames them.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> out = Path(tempfile.mkdtemp())
+    >>> _ = (out / "a.txt").write_text("earlier"); _ = (out / "b.txt").write_text("earlier")
+    >>> try:
+    ...     with together():
+    ...         with replacing(out / "a.txt") as part:
+    ...             _ = part.write_text("new")
+    ...         raise KeyboardInterrupt  # before b.txt was written
+    ... except KeyboardInterrupt:
+    ...     pass
+    >>> [(p.name, p.read_text()) for p in sorted(out.iterdir())]
+    [('a.txt', 'earlier'), ('b.txt', 'earlier')]
+    """
+    if _GROUP.get() is not None:
+        yield
+        return
+    pending: list[tuple[Path | None, Path]] = []
+    token = _GROUP.set(pending)
+    try:
+        yield
+    except BaseException:
+        for part, _ in pending:
+            if part is not None:
+                part.unlink(missing_ok=True)
+        raise
+    finally:
+        _GROUP.reset(token)
+    _apply(pending)
+
+
+def remove_on_commit(path: str | os.PathLike) -> None:
+    """Remove ``path`` (if there) where the outputs of :func:`together`'s block are renamed
+    into place, or now outside such a block: a file that would describe an earlier run."""
+    group = _GROUP.get()
+    if group is None:
+        Path(path).unlink(missing_ok=True)
+    else:
+        group.append((None, Path(path)))
+
+
+def _apply(pending: list[tuple[Path | None, Path]]) -> None:
+    """The renames (and removals) of a group, with SIGINT and SIGTERM held off (delivered
+    after) where this thread can hold them; a rename that fails removes the partial files
+    not yet renamed."""
+    import signal
+    import threading
+
+    held = hasattr(signal, "pthread_sigmask") and \
+        threading.current_thread() is threading.main_thread()
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM}) \
+        if held else None
+    try:
+        for k, (part, path) in enumerate(pending):
+            try:
+                if part is None:
+                    path.unlink(missing_ok=True)
+                else:
+                    _rename(part, path)
+            except BaseException:
+                for rest, _ in pending[k:]:
+                    if rest is not None:
+                        rest.unlink(missing_ok=True)
+                raise
+    finally:
+        if old is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def commit_partial(part: Path, path: Path) -> None:
-    """Rename the complete partial file ``part`` over ``path``, then remove the partial files
-    (:func:`partial_path`) of ``path`` that writers which died left (their process no longer
-    exists: killed before it could remove its own), as the shared partial name used to be
-    overwritten by the next run."""
+    """Rename the complete partial file ``part`` over ``path`` (inside :func:`together`'s
+    block, when the block ends), then remove the partial files (:func:`partial_path`) of
+    ``path`` that writers which died left (their process no longer exists: killed before it
+    could remove its own), as the shared partial name used to be overwritten by the next
+    run."""
+    group = _GROUP.get()
+    if group is not None:
+        group.append((part, path))
+        return
+    _rename(part, path)
+
+
+def _rename(part: Path, path: Path) -> None:
+    """:func:`commit_partial`'s rename and sweep."""
     os.replace(part, path)
     tail = f"partial{path.suffix}"
     prefix = _hidden_prefix(path, tail)
