@@ -149,6 +149,21 @@ def test_a_failing_input_is_reported_and_the_others_finish(bench, tmp_path):
     assert stop[2].error.startswith("not run")
 
 
+def test_without_keep_going_no_input_starts_after_the_first_failure(bench, tmp_path):
+    """With two workers, four inputs were handed to the pool at once: the largest, failing at
+    once, stopped nothing, since the pool ran those it held (two started after the failure).
+    One input a worker is handed over now: the failing one and the one beside it started,
+    the other two not (attempts 0, "not run")."""
+    bad = _broken(tmp_path, bench)
+    with open(bad / "det" / "det.txt", "a") as f:  # the largest input: the first to start
+        f.write("# " + "x" * 2_000_000 + "\n")
+    inputs = [bench / "SIM-0", bench / "SIM-1", bench / "SIM-2", bad]
+    stop = track_many(inputs, tmp_path / "stop", jobs=2, keep_going=False)
+    assert stop[3].attempts == 1 and not stop[3].ok
+    assert sum(o.attempts for o in stop[:3]) == 1
+    assert sum(o.error.startswith("not run") for o in stop[:3] if o.error) == 2
+
+
 def _children(parent: int) -> dict[int, bytes]:
     """The processes whose parent is ``parent``, with their command lines."""
     out = {}
@@ -561,6 +576,40 @@ def test_several_videos_from_pixels(tmp_path, capsys):
     # a sequence's own options belong to one input
     assert main(["track", str(a), str(b), "--out-dir", str(out), "--fps", "7"]) == 2
     assert "--fps goes with one video, or with --out" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGTERM to one process (POSIX)")
+def test_sigterm_to_the_batch_alone_stops_its_workers(tmp_path):
+    """``kill PID`` (or ``docker stop``) signals the command's own process, not its workers:
+    it waited for them, and they ran the jobs under way and the queued ones to their end
+    (every input written, 6 s after the signal for short clips; an hour for long videos).
+    The workers are stopped as by Ctrl-C now: status 143 at once, the inputs under way not
+    written (nothing of them left, not even a partial file), the others not started."""
+    import shutil
+    import signal
+    import time
+
+    clips = []
+    for name in "abcd":
+        shutil.copy(demo_clip().video, tmp_path / f"{name}.mp4")
+        clips.append(str(tmp_path / f"{name}.mp4"))
+    out = tmp_path / "out"
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).parents[1] / "src"))
+    proc = subprocess.Popen([sys.executable, "-m", "vistrack.cli", "track", *clips,
+                             "--out-dir", str(out), "--jobs", "2", "--quiet"], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not list(out.glob("*/.*.partial.*")) and proc.poll() is None and \
+            time.monotonic() < deadline:  # the workers write their first frames' rows
+        time.sleep(0.01)
+    assert proc.poll() is None, "the batch ended before it could be stopped"
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 143, stderr
+    assert time.monotonic() - t0 < 10, stderr  # (0.2 s here; 3.5 s before, 3 written)
+    assert "terminated" in stderr and "0 of 4 inputs written" in stderr
+    assert not list(out.glob("*/*")), stderr  # nothing written, nothing partial
 
 
 def test_a_job_that_cannot_be_sent_to_a_worker_is_reported(bench, tmp_path):

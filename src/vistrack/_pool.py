@@ -149,6 +149,20 @@ def _on_sigint(signum: int, frame: Any) -> None:
         raise KeyboardInterrupt
 
 
+def stop_workers(pool: Any) -> None:
+    """Ctrl-C to each worker process of ``pool`` (a process pool of :func:`process_pool`):
+    for a stop the workers did not take themselves (SIGTERM sent to this process alone, as
+    ``kill PID`` or ``docker stop`` sends it), so that the jobs under way stop, their
+    outputs not written (they ran to their end: an hour of video each)."""
+    import signal
+
+    for proc in list(getattr(pool, "_processes", {}).values()):
+        try:
+            os.kill(proc.pid, signal.SIGINT)
+        except (ProcessLookupError, PermissionError):
+            pass
+
+
 def _in_job(fn: Any, *args: Any, **kwargs: Any) -> Any:
     """Run a job in a worker, Ctrl-C taken while it runs (:func:`_on_sigint`)."""
     global _busy

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ._pool import default_jobs, one_line, one_thread_here, process_pool
+from ._pool import default_jobs, one_line, one_thread_here, process_pool, stop_workers
 
 if TYPE_CHECKING:
     from concurrent.futures import Executor, Future
@@ -355,9 +355,10 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
             queue, died, broken = list(pending), [], False
             try:
                 while (queue or running) and not broken:
-                    # twice as many jobs submitted as workers, the rest waiting here: a stop
-                    # after a failure leaves them unstarted
-                    while queue and len(running) < 2 * size and not stopped():
+                    # one job a worker handed to the pool, the rest waiting here: a stop (a
+                    # failure, a signal) leaves them unstarted. (Twice as many were handed
+                    # over, and those the pool had queued ran after the stop)
+                    while queue and len(running) < size and not stopped():
                         i = queue.pop(0)
                         try:
                             f = pool.submit(_run, jobs[i])
@@ -379,6 +380,10 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
                             broken = True
                         except Exception as e:  # noqa: BLE001 - a job that cannot be sent
                             failed(i, f"{type(e).__name__}: {e}")
+                    if stopped():  # a failure: the jobs not yet started stay so (they ran)
+                        for f in list(running):
+                            if f.cancel():
+                                running.pop(f)
                 if broken:  # the other jobs under way end with the pool
                     wait(running)
                     for f, i in running.items():
@@ -389,10 +394,15 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
                             died.append(i)
                         else:
                             failed(i, f"{type(error).__name__}: {error}")
-            except BaseException:
+            except BaseException as exc:
                 # the jobs under way end first (their workers take the signal too: each
                 # stops, its output not written, or has just finished and written it whole),
-                # then those finished are said
+                # then those finished are said. SIGTERM sent to this process alone reached no
+                # worker: they are stopped as by Ctrl-C (they ran every job to its end)
+                if type(exc).__name__ == "Terminated":
+                    stop_workers(pool)
+                for f in running:
+                    f.cancel()  # (those not yet handed to a worker)
                 pool.shutdown(wait=True, cancel_futures=True)
                 report_finished(running)
                 raise
