@@ -362,7 +362,15 @@ def test_every_setting_is_checked_and_named():
              ({"max_lost": -1.0}, "max_lost must be >= 0; got -1.0"),
              ({"merge_time": np.nan}, "merge_time must be a number (not NaN); got nan"),
              ({"alpha": "1"}, "alpha must be a number; got '1'"),
-             ({"epochs": True}, "epochs must be a number; got True")]
+             ({"epochs": True}, "epochs must be a number; got True"),
+             # taken before: two people who never met lost their identities every merge_time,
+             # or a new identity every frame was started and none reported
+             ({"merge_iou": -1.0}, "merge_iou must be in [0, 1]; got -1.0"),
+             ({"max_overlap": -0.5}, "max_overlap must be in [0, 1]; got -0.5"),
+             ({"min_confidence": 2.0}, "min_confidence must be in [0, 1]; got 2.0"),
+             ({"gate_heights": -1.0},
+              "gate_heights must be a finite number > 0 (box heights); got -1.0"),
+             ({"init_score": np.inf}, "init_score must be finite; got inf")]
     for kw, msg in cases:
         with pytest.raises(ValueError, match=re.escape(msg)):
             DCPFConfig(**kw)
@@ -420,3 +428,53 @@ def test_a_confidence_map_names_its_strides_origins_and_heights(change, message)
             "strides": [8.0]} | change
     with pytest.raises(ValueError, match=re.escape(message)):
         ConfidenceMap(**args)
+
+
+def _walker(t, seen=True):
+    """One person walking right, 2 pixels a frame; no detection where ``seen`` is False."""
+    if not seen:
+        return Detections(boxes=np.zeros((0, 4)))
+    cx = 60 + 2 * t
+    return Detections(boxes=np.array([[cx - 12, 100, cx + 12, 160.0]]), scores=np.array([0.9]))
+
+
+def test_step_follows_the_frames_own_index_and_time():
+    """step() counted its calls, not the frames: a target was kept across a gap of 13.9 s
+    (frames 3 to 100 at 7 frames/s) against max_lost 1.5 s, and a frame before the last was
+    taken. The frames' own indices now (as the box trackers take them, the oracle): the
+    target ends over the gap, and a frame going back is refused; confirm=1 reports a target
+    in the frame it starts (its first frame was lost)."""
+    from vistrack.tracking import BoxTracker
+    from vistrack.types import Frame
+
+    im = np.full((300, 600, 3), 128, np.uint8)
+    trk = DetectorConfidencePF(rng=0, gamma=0.0, eta=0.0, frame_rate=7, confirm=1)
+    box = BoxTracker(frame_rate=7)
+    outs = [trk.step(Frame(t, (t - 1) / 7, im), _walker(t)).ids.tolist() for t in (1, 2, 3)]
+    assert outs == [[1], [1], [1]]
+    trk.step(Frame(100, 99 / 7, im), _walker(100, seen=False))
+    assert len(trk.ids) == 0  # lost for 13.9 s: ended
+    for t in (1, 2, 3):
+        box.step(Frame(t, (t - 1) / 7), _walker(t))
+    box.step(Frame(100, 99 / 7), _walker(100, seen=False))
+    assert len(box.tracks.ids) == 0  # the same rule
+    with pytest.raises(ValueError, match="frame"):
+        trk.step(Frame(50, 49 / 7, im), _walker(50))
+
+
+def test_a_confidence_map_giving_nan_is_named():
+    """NaN scores from a user's confidence map failed inside resample ("weights must be
+    finite and >= 0"), of weights the user never gave."""
+    class Broken(ConfidenceMap):
+        def score(self, *args, **kwargs):
+            return np.full(np.shape(args[0]), np.nan)
+
+    im = np.full((120, 160, 3), 128, np.uint8)
+    cmap = ConfidenceMap([64.0], [np.zeros((10, 12))], [(0.0, 0.0)], [16.0])
+    broken = Broken([64.0], [np.zeros((10, 12))], [(0.0, 0.0)], [16.0])
+    trk = DetectorConfidencePF(rng=0, eta=0.0)
+    det = Detections(boxes=np.array([[50.0, 30, 74, 90]]), scores=np.array([0.9]))
+    trk.update(im, det, cmap)
+    with pytest.raises(ValueError, match=r"frame 2: the confidence map \(Broken\) gave a "
+                                         "score that is not a number"):
+        trk.update(im, det, broken)

@@ -61,7 +61,7 @@ import numpy as np
 from ..association import greedy, iou
 from ..filters.particle import resample
 from ..types import Detections, Frame, Tracks
-from .base import frame_image
+from .base import frame_image, frame_index
 from .lifecycle import CONFIRMED, TENTATIVE, TrackTable
 
 if TYPE_CHECKING:
@@ -116,8 +116,10 @@ class DCPFConfig:
         If a setting is not a number or is NaN, ``beta``, ``gamma`` or ``eta`` is negative
         or infinite or all are 0, ``n_particles`` is not an integer >= 2, ``confirm`` one
         >= 1 or ``epochs`` one >= 0, ``sigma_det`` is not finite and > 0, ``sigma_pos``,
-        ``sigma_vel`` or ``learning_rate`` not finite and >= 0, ``size_rate`` not in
-        [0, 1], or ``max_lost`` or ``merge_time`` negative (each error names the setting).
+        ``sigma_vel`` or ``learning_rate`` not finite and >= 0, ``size_rate``,
+        ``max_overlap``, ``merge_iou`` or ``min_confidence`` not in [0, 1], ``gate_heights``
+        not finite and > 0, ``min_score`` or ``init_score`` not finite, or ``max_lost`` or
+        ``merge_time`` negative (each error names the setting).
 
     Examples
     --------
@@ -183,6 +185,16 @@ class DCPFConfig:
                 raise bad(name, ">= 0")
         if not 0 <= self.alpha < np.inf:  # a weight (inf made every score inf or NaN)
             raise bad("alpha", "a finite number >= 0")
+        # each was taken whatever it was: merge_iou -1 ended two people who never met every
+        # merge_time, gate_heights -1 started a new identity every frame and reported none
+        for name in ("max_overlap", "merge_iou", "min_confidence"):
+            if not 0 <= getattr(self, name) <= 1:
+                raise bad(name, "in [0, 1]")
+        if not 0 < self.gate_heights < np.inf:
+            raise bad("gate_heights", "a finite number > 0 (box heights)")
+        for name in ("min_score", "init_score"):  # (a detector's scores need not be in [0, 1])
+            if not np.isfinite(getattr(self, name)):
+                raise bad(name, "finite")
 
 
 class ColourFeatures:
@@ -299,11 +311,13 @@ class DetectorConfidencePF:
         if confidence is not None and not callable(confidence):
             raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                             f"{type(confidence).__name__}")
-        if not (np.isfinite(frame_rate) and frame_rate > 0):
-            raise ValueError(f"frame_rate must be a finite number > 0; got {frame_rate}")
+        from .._validate import as_finite
+
+        if isinstance(frame_rate, (bool, np.bool_)):  # (True was taken as 1 frame/s)
+            raise TypeError(f"frame_rate must be a number; got {frame_rate!r}")
         self.config = config
         self.confidence = confidence
-        self.frame_rate = float(frame_rate)
+        self.frame_rate = as_finite(frame_rate, "frame_rate", 0.0, above=True)
         self._rng_seed = rng
         self._integral: np.ndarray | None = None  # ColourFeatures' buffer, frame after frame
         self.reset()
@@ -322,6 +336,7 @@ class DetectorConfidencePF:
         self.overlapped = np.zeros(0)
         self.weights_clf = np.zeros((0, 0))
         self.frame = 0
+        self._last_index: int | None = None  # the last frame step() was given
         self._said_unsized = False
 
     @property
@@ -346,10 +361,15 @@ class DetectorConfidencePF:
             confidence at their particles (1 without the confidence term).
         """
         image = frame_image(frame, "DetectorConfidencePF")
+        # the frame's own index: a gap in the frames (images skipped as bad) is time, which
+        # ends a target lost longer than max_lost (calls were counted: 13.9 s away, a target
+        # kept its identity), and a frame before the last is refused, as by the box trackers
+        index = frame_index(frame, self._last_index)
+        self._last_index = index
         if detections is None:
             detections = Detections(boxes=np.zeros((0, 4)))
         cmap = self.confidence(image) if self.confidence is not None else None
-        return self.update(image, detections, cmap)
+        return self.update(image, detections, cmap, _index=index)
 
     # ------------------------------------------------------------------ helpers
     def _boxes(self, centres: np.ndarray, size: np.ndarray) -> np.ndarray:
@@ -381,12 +401,12 @@ class DetectorConfidencePF:
 
     # ------------------------------------------------------------------ one frame
     def update(self, image: np.ndarray, detections: Detections,
-               confidence: ConfidenceMap | None = None) -> Tracks:
+               confidence: ConfidenceMap | None = None, *, _index: int | None = None) -> Tracks:
         """One frame with its confidence map given: ``image`` (BGR), its ``detections`` and
         a :class:`~vistrack.frontends.detectors.ConfidenceMap` (None when ``gamma`` is 0);
-        as :meth:`step`."""
+        as :meth:`step`, the frame the one after the last."""
         cfg = self.config
-        self.frame += 1
+        self.frame = self.frame + 1 if _index is None else _index
         time = self.frame / self.frame_rate
         if cfg.gamma > 0 and confidence is None:
             raise ValueError("the detector-confidence term (gamma > 0) needs the detector's "
@@ -453,6 +473,10 @@ class DetectorConfidencePF:
                 # not None with gamma > 0: checked above
                 dc = _sigmoid(confidence.score(  # type: ignore[union-attr]
                     p[..., 0], p[..., 1], self.size[:, None, 1], outside=-10.0))
+                if not np.isfinite(dc).all():  # ("weights must be finite" in resample, before)
+                    raise ValueError(f"frame {self.frame}: the confidence map "
+                                     f"({type(confidence).__name__}) gave a score that is not a "
+                                     "number at the particles of a target")
                 conf_mean = dc.mean(1)
                 boxes = self._boxes(p[..., :2].mean(1), self.size)
                 xyxy = np.c_[boxes[:, :2], boxes[:, :2] + boxes[:, 2:]]
@@ -526,7 +550,26 @@ class DetectorConfidencePF:
                     exyxy = np.c_[est[:, :2], est[:, :2] + est[:, 2:]]
                     cand = cand[iou(cxyxy, exyxy).max(1) <= cfg.max_overlap]
                 self._start(cand, feats, time)
+                if cfg.confirm <= 1 and len(cand):
+                    # confirmed as they start: reported in this frame too (they were not, so
+                    # every track lost its first frame, and a target of one frame was never
+                    # reported), at their detections' boxes, scored as the others
+                    new_ids = self.ids[-len(cand):]
+                    scores = (self._confidence_at(confidence, cand) if cfg.gamma > 0
+                              else np.ones(len(cand)))
+                    out = Tracks(ids=np.r_[out.ids, new_ids],
+                                 boxes=np.r_[out.boxes, np.c_[cand[:, :2],
+                                                              cand[:, :2] + cand[:, 2:]]],
+                                 points=None, scores=np.r_[out.scores, scores],
+                                 classes=np.zeros(len(out.ids) + len(cand), np.int64))
         return out
+
+    def _confidence_at(self, confidence: Any, boxes: np.ndarray) -> np.ndarray:
+        """The detector confidence at the newest targets' particles (the score a reported
+        target carries), one a box of ``boxes`` (x, y, w, h), the targets last in the table."""
+        p = self.particles[-len(boxes):]
+        return _sigmoid(confidence.score(p[..., 0], p[..., 1], self.size[-len(boxes):, None, 1],
+                                         outside=-10.0)).mean(1)
 
     def _select(self, keep: np.ndarray) -> None:
         self.tracks.keep(keep)
