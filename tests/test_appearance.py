@@ -275,3 +275,14 @@ def test_without_texture_the_box_goes_on_at_its_velocity():
     flat = np.full((240, 320), 128, np.uint8)
     for k in range(6, 10):
         np.testing.assert_allclose(tr.update(flat), [100 + 3 * k, 100 + k, 32, 32], atol=1e-9)
+
+
+def test_a_wsl_trackers_model_settings_are_checked_when_it_is_made():
+    """WSLTracker(tau=-1) and WSLTracker(bogus=3) were taken, and failed at init(), on the
+    first frame: refused when the tracker is made, as WSLModel refuses them."""
+    for kw, error in (({"tau": -1}, ValueError), ({"bogus": 3}, TypeError)):
+        with pytest.raises(error) as want:
+            WSLModel((8, 8), **kw)
+        with pytest.raises(error) as got:
+            WSLTracker(**kw)
+        assert str(got.value) == str(want.value)

@@ -94,9 +94,10 @@ def test_members_are_checked():
                         ({"q_size": np.nan}, "q_size must be a finite number >= 0; got nan")):
         with pytest.raises(ValueError, match=re.escape(message)):
             Composite({"x": (Fixed([]), (0.1, 0.1))}, **kw)
-    with pytest.raises(ValueError, match=re.escape(
-            "members['x']: noise must be positive and finite; got (inf, 1.0)")):
-        Composite({"x": (Fixed([]), (np.inf, 1.0))})
+    for noise in ((np.inf, 1.0), ("a", 1), (True, 1)):  # ("a" a bare TypeError, True 1.0)
+        with pytest.raises(ValueError, match=re.escape(
+                f"members['x']: noise must be two positive, finite numbers; got {noise!r}")):
+            Composite({"x": (Fixed([]), noise)})
 
 
 def growing_ellipse_scene(T=30, seed=0):

@@ -376,6 +376,7 @@ class WSLTracker(SingleObjectTracker):
         self.size, self.radius = as_whole(size, "size", 8), as_whole(radius, "radius", 1)
         self.scales = as_scales(scales)
         self.blur, self.model_args = as_finite(blur, "blur", 0.0), model
+        WSLModel((1, 1), **model)  # its settings checked now (they failed at init())
 
     def _prepare(self, image: np.ndarray) -> np.ndarray:
         import cv2

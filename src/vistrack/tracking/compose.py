@@ -140,9 +140,12 @@ class Composite(SingleObjectTracker):
             for attr in ("init", "update", "anchor"):
                 if not callable(getattr(tracker, attr, None)):
                     raise TypeError(f"members[{name!r}] has no {attr}() method")
-            if not (0 < pos_sd < np.inf and 0 < size_sd < np.inf):
-                raise ValueError(f"members[{name!r}]: noise must be positive and finite; got "
-                                 f"{(pos_sd, size_sd)}")
+            ok = all(isinstance(v, (int, float, np.integer, np.floating))
+                     and not isinstance(v, (bool, np.bool_)) for v in (pos_sd, size_sd))
+            if not (ok and 0 < pos_sd < np.inf and 0 < size_sd < np.inf):
+                # ("a", 1) was a bare "'<' not supported", (True, 1) taken as 1.0
+                raise ValueError(f"members[{name!r}]: noise must be two positive, finite "
+                                 f"numbers; got {(pos_sd, size_sd)!r}")
             self.members[name] = tracker
             self.noise[name] = np.array([pos_sd, size_sd], float)
         if not (0 < p_gate < 1):
