@@ -720,7 +720,7 @@ def test_a_models_filter_names_a_prior_of_another_size_and_takes_every_form_of_d
     with pytest.raises(ValueError, match=re.escape("x0 must have shape (2,) or (B, 2), as the "
                                                    "motion model ConstantVelocity(dim=1")):
         kf.filter(np.arange(5.0)[:, None], x0=[0.0], P0=[[1.0]])
-    with pytest.raises(ValueError, match=re.escape("P0 must have shape (2, 2) or (B, 2, 2)")):
+    with pytest.raises(ValueError, match=re.escape("P0 must have shape (2, 2) or (B=1, 2, 2)")):
         kf.filter(np.arange(5.0)[:, None], x0=[0.0, 0.0], P0=[[1.0]])
     with pytest.raises(ValueError, match=re.escape("x0 must have shape (4,)")):
         simulate(ConstantVelocity(dim=2), Position(dim=2), 3, x0=[0.0, 0.0])

@@ -567,9 +567,6 @@ def _ct_rb(cls):
     (lambda: _ct_rb(EnsembleKalmanFilter).filter(np.ones((3, 4, 2)), x0=np.zeros(5),
                                                  P0=np.stack([np.eye(5)] * 2)),
      ValueError, r"P0 must be one for all series or one per series of ys \(B=3\); got 2"),
-    # a singular prior: "g.cov must be positive definite" named what the user never gave
-    (lambda: _cv_ukf().filter(np.ones((3, 1)), x0=[0, 0], P0=np.diag([1.0, 0.0])),
-     ValueError, r"P0 must be positive definite: the unscented filter draws its first sigma"),
     (lambda: _cv_ukf().filter(np.ones((3, 1)), x0=[0, 0], P0=np.eye(2), times=[0, np.nan, 2]),
      ValueError, r"times must be finite; times\[1\] = nan"),
     # named as q before

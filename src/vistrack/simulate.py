@@ -219,7 +219,10 @@ def simulate(
         # neither model has a jacobian: both are linear
         from .filters.linear import _prior_of
 
-        _prior_of(motion, x0, P0 if P0 is not None else np.eye(int(motion.ndim_state)))
+        if P0 is not None:
+            _prior_of(motion, x0, P0)
+        elif np.ndim(x0) == 1:  # (the first state exactly x0)
+            _prior_of(motion, x0, np.eye(len(x0)))
         mats = KalmanFilter(cast("MotionModel", motion),
                             cast("MeasurementModel", measurement)).matrices(int(T), dt)
         return simulate_lgssm(T, **mats, x0=x0, P0=P0, n_series=n_series, rng=rng)

@@ -776,16 +776,16 @@ class OnlineFilter:
 
 
 def _prior_of(motion: Any, x0: Any, P0: Any) -> None:
-    """Raise a ValueError naming ``x0`` or ``P0`` when its state size is not the motion
-    model's (the filter of the model's matrices named ``F``, which the user never gave);
-    shapes numpy cannot read are left to the filter's own checks."""
+    """Raise a ValueError naming ``x0`` when ``x0`` and ``P0`` agree on a state size that is
+    not the motion model's (the filter of the model's matrices named ``F``, which the user
+    never gave); a prior that disagrees with itself, or that numpy cannot read, is left to
+    the filter's own checks, which name it."""
     n = int(motion.ndim_state)
-    for name, value, tail, want in (("x0", x0, (n,), f"({n},) or (B, {n})"),
-                                    ("P0", P0, (n, n), f"({n}, {n}) or (B, {n}, {n})")):
-        try:
-            shape = np.shape(value)
-        except ValueError:  # ragged
-            continue
-        if shape[-len(tail):] != tail or len(shape) > len(tail) + 1:
-            raise ValueError(f"{name} must have shape {want}, as the motion model "
-                             f"{motion!r} has {n} states; got {shape}")
+    try:
+        sx, sP = np.shape(x0), np.shape(P0)
+    except ValueError:  # ragged
+        return
+    if len(sx) in (1, 2) and len(sP) in (2, 3) and sP[-2:] == (sx[-1], sx[-1]) \
+            and sx[-1] != n:
+        raise ValueError(f"x0 must have shape ({n},) or (B, {n}), as the motion model "
+                         f"{motion!r} has {n} states; got {sx} (and P0 {sP})")

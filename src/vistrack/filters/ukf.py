@@ -35,7 +35,6 @@ from numpy.typing import ArrayLike
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import check_prior
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.nonlinear import _offset_mean
 from ..models.protocols import (
@@ -758,8 +757,7 @@ class UnscentedKalmanFilter:
         Raises
         ------
         ValueError
-            If the shapes disagree with the models, or a covariance is not positive definite
-            (``P0`` named: the first sigma points are drawn from it).
+            If the shapes disagree with the models, or a covariance is not positive definite.
 
         Examples
         --------
@@ -772,13 +770,6 @@ class UnscentedKalmanFilter:
         >>> res.means.shape, res.loglik.shape
         ((2, 5, 2), (2,))
         """
-        _, P = check_prior(x0, P0, self.motion.n)
-        try:  # the prior check takes a semi-definite P0; sigma points need a definite one
-            np.linalg.cholesky(P)
-        except np.linalg.LinAlgError:
-            raise ValueError("P0 must be positive definite: the unscented filter draws its "
-                             "first sigma points from it (a zero variance has no square "
-                             "root to spread them by)") from None
         return run_sequence(ys, x0, P0, self.motion.n, self.measurement.m, dt, times,
                             self.predict, self.update)
 
