@@ -222,7 +222,7 @@ def simulate(
         if P0 is not None:
             _prior_of(motion, x0, P0)
         elif np.ndim(x0) == 1:  # (the first state exactly x0)
-            _prior_of(motion, x0, np.eye(len(x0)))
+            _prior_of(motion, x0, np.eye(np.shape(x0)[0]))
         mats = KalmanFilter(cast("MotionModel", motion),
                             cast("MeasurementModel", measurement)).matrices(int(T), dt)
         return simulate_lgssm(T, **mats, x0=x0, P0=P0, n_series=n_series, rng=rng)
