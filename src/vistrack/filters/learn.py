@@ -299,12 +299,7 @@ def _problem(ys: ArrayLike, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLi
     F_ = as_float_array(F, "F", ndim=(2, 3))
     n = _state_size(F_.shape[-1], x0, P0)
     check_linear_gaussian(F, Q, H, R, n, y.shape[2], y.shape[1])
-    x0_, P0_ = check_prior(x0, P0, n)
-    B = y.shape[0]
-    for name, a, nd in (("x0", x0_, 2), ("P0", P0_, 3)):
-        if a.ndim == nd and a.shape[0] not in (1, B):
-            raise ValueError(f"{name} must be one for all series or one per series (B={B}); "
-                             f"got {a.shape[0]}")
+    x0_, P0_ = check_prior(x0, P0, n, series=y.shape[0])
     x0_ = x0_[0] if x0_.ndim == 2 and x0_.shape[0] == 1 else x0_
     P0_ = P0_[0] if P0_.ndim == 3 and P0_.shape[0] == 1 else P0_
     if not np.isfinite(y).any():

@@ -23,7 +23,7 @@ from ..models.motion import MotionModel
 from ..types import Gaussian
 from . import _kernels
 from .kalman import FilterResult, _kernel_error, _prior, _update, kalman_filter, kf_predict
-from .learn import FitResult, _names, em, mle
+from .learn import FitResult, _names, _state_size, em, mle
 from .smoothers import SmoothResult, rts_smooth
 
 __all__ = ["KalmanFilter", "OnlineFilter"]
@@ -781,11 +781,7 @@ def _prior_of(motion: Any, x0: Any, P0: Any) -> None:
     never gave); a prior that disagrees with itself, or that numpy cannot read, is left to
     the filter's own checks, which name it."""
     n = int(motion.ndim_state)
-    try:
-        sx, sP = np.shape(x0), np.shape(P0)
-    except ValueError:  # ragged
-        return
-    if len(sx) in (1, 2) and len(sP) in (2, 3) and sP[-2:] == (sx[-1], sx[-1]) \
-            and sx[-1] != n:
+    if _state_size(n, x0, P0) != n:  # the size x0 and P0 agree on, where they do
         raise ValueError(f"x0 must have shape ({n},) or (B, {n}), as the motion model "
-                         f"{motion!r} has {n} states; got {sx} (and P0 {sP})")
+                         f"{motion!r} has {n} states; got {np.shape(x0)} (and P0 "
+                         f"{np.shape(P0)})")

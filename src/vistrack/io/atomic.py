@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import glob
 import hashlib
 import os
 import re
@@ -153,18 +154,13 @@ def _rename(part: Path, path: Path) -> None:
     os.replace(part, path)
     tail = f"partial{path.suffix}"
     prefix = _hidden_prefix(path, tail)
-    for other in path.parent.glob(f"{glob_escape(prefix)}*.{glob_escape(tail)}"):
+    for other in path.parent.glob(f"{glob.escape(prefix)}*.{glob.escape(tail)}"):
         token = other.name[len(prefix):-len(tail) - 1]
         if len(token) != _TOKEN or not re.fullmatch(r"[0-9a-f]+", token):
             continue
         pid = int(token[:6], 16)
         if pid != os.getpid() % 16**6 and not _alive(pid):
             other.unlink(missing_ok=True)
-
-
-def glob_escape(text: str) -> str:
-    """``text`` with glob's special characters taken literally."""
-    return re.sub(r"([*?\[])", r"[\1]", text)
 
 
 def _alive(pid: int) -> bool:

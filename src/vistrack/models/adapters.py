@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from functools import partial
-from typing import Any, cast
+from typing import cast
 
 import numpy as np
 
@@ -131,7 +131,7 @@ class MotionFunctions:
     def Q(self, dt: float) -> np.ndarray:
         """``Q(dt)``, computed once per ``dt`` among the last few distinct ones (models are
         immutable; timestamps that never repeat a step keep no more than those)."""
-        key = _dt_key(dt)
+        key = float(dt)  # (a 0-d array is not hashable)
         Q = self._Q.get(key)
         if Q is None:
             Q = _remember(self._Q, key, np.asarray(self.model.Q(dt), dtype=float))
@@ -139,7 +139,7 @@ class MotionFunctions:
 
     def Q_sqrt(self, dt: float) -> np.ndarray:
         """:func:`psd_sqrt` of ``Q(dt)``, as :meth:`Q` keeps it: noise = eps @ Q_sqrt.T."""
-        key = _dt_key(dt)
+        key = float(dt)  # (a 0-d array is not hashable)
         A = self._Q_sqrt.get(key)
         if A is None:
             A = _remember(self._Q_sqrt, key, np.ascontiguousarray(psd_sqrt(self.Q(dt))))
@@ -148,11 +148,6 @@ class MotionFunctions:
 
 _KEPT = 16
 """How many distinct time steps' ``Q`` a model's functions keep."""
-
-
-def _dt_key(dt: Any) -> float:
-    """``dt`` as the key of the cache: a float (a 0-d array is not hashable)."""
-    return float(dt)
 
 
 def _remember(cache: dict, key: float, value: np.ndarray) -> np.ndarray:
