@@ -125,10 +125,8 @@ def as_uint8_image(image: ArrayLike, name: str = "image", channels: tuple[int, .
                                                          and im.shape[2] not in channels):
         raise ValueError(f"{name} must be (H, W) or (H, W, C) uint8 with C in {channels}; got "
                          f"shape {_fmt_shape(im.shape)} {im.dtype}")
-    if im.ndim == 3 and im.shape[2] == 1:
-        im = im[:, :, 0]  # one channel is a grey image (OpenCV's conversions refuse it)
-    elif grey and im.ndim == 3:
-        im = bgr_to_grey(im)
+    if im.ndim == 3 and (grey or im.shape[2] == 1):
+        im = bgr_to_grey(im)  # (one channel: the grey image itself)
     return im
 
 
@@ -136,7 +134,10 @@ def bgr_to_grey(im: np.ndarray) -> np.ndarray:
     """The grey image of a BGR (or BGRA) ``(H, W, C)`` image of any numeric type: OpenCV's
     conversion where it takes the type (uint8, uint16, float32), otherwise OpenCV's weights
     (0.114 B + 0.587 G + 0.299 R) in float64, rounded back into an integer type (OpenCV
-    refuses float64, numpy's own float, and the wider integers)."""
+    refuses float64, numpy's own float, and the wider integers). One channel ``(H, W, 1)`` is
+    the grey image already (OpenCV's conversion refuses it)."""
+    if im.shape[-1] == 1:
+        return im[..., 0]
     im = np.ascontiguousarray(im[..., :3])
     if im.dtype in (np.uint8, np.uint16, np.float32):
         import cv2

@@ -380,10 +380,6 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
                             broken = True
                         except Exception as e:  # noqa: BLE001 - a job that cannot be sent
                             failed(i, f"{type(e).__name__}: {e}")
-                    if stopped():  # a failure: the jobs not yet started stay so (they ran)
-                        for f in list(running):
-                            if f.cancel():
-                                running.pop(f)
                 if broken:  # the other jobs under way end with the pool
                     wait(running)
                     for f, i in running.items():
@@ -401,8 +397,6 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
                 # worker: they are stopped as by Ctrl-C (they ran every job to its end)
                 if type(exc).__name__ == "Terminated":
                     stop_workers(pool)
-                for f in running:
-                    f.cancel()  # (those not yet handed to a worker)
                 pool.shutdown(wait=True, cancel_futures=True)
                 report_finished(running)
                 raise

@@ -248,6 +248,24 @@ def _lines_of(path: str, match: Callable[[list[float]], bool]) -> list[int]:
     return found
 
 
+def _class_row(table: MOTTable, what: str, bad: Callable[[float], bool]
+               ) -> tuple[str, float | None]:
+    """Where the first row of ``table`` whose class (column 8) ``bad`` accepts is (``path,
+    line 4, column 8 (class)``, or the file alone), and its class as written (3.5, 1e30;
+    None when no line is found)."""
+    seen: list[float] = []
+
+    def first(row: list[float]) -> bool:
+        if len(row) > 7 and bad(row[7]) and not seen:
+            seen.append(row[7])
+            return True
+        return False
+
+    lines = _lines_of(table.path, first)[:1]
+    return (_where(table, what, lines) + (", column 8 (class)" if lines else ""),
+            seen[0] if seen else None)
+
+
 def _where(table: MOTTable, what: str, lines: list[int]) -> str:
     """``path, line 4`` / ``path, lines 4 and 9``, or the file (or ``what``) alone."""
     name = table.path or what
@@ -345,33 +363,15 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Se
     if bench != "MOT15" and len(gt):
         bad = ~np.isin(gt.classes, np.arange(1, 14))
         if bad.any():
-            seen: list[float] = []  # the first bad row's value, as written (3.5, 1e30)
-
-            def other(row: list[float]) -> bool:
-                if len(row) > 7 and row[7] not in range(1, 14) and not seen:
-                    seen.append(row[7])
-                    return True
-                return False
-
-            lines = _lines_of(gt.path, other)[:1]
-            where = _where(gt, "ground truth", lines) + (", column 8 (class)" if lines else "")
-            value = f"{seen[0]:g}" if seen else str(int(gt.classes[np.argmax(bad)]))
+            where, written = _class_row(gt, "ground truth", lambda c: c not in range(1, 14))
+            value = f"{written:g}" if written is not None else str(int(gt.classes[np.argmax(bad)]))
             raise ValueError(f"{where}: class {value} is not a {bench} class (1-13)")
     if bench != "MOT15" and len(pred) and (pred.classes > 1).any():
         # TrackEval refuses such results ("only valid for pedestrian class"): a car of a
         # tracker of many classes was counted as a pedestrian, a false positive or a match
-        cls: list[float] = []
-
-        def other_class(row: list[float]) -> bool:
-            if len(row) > 7 and row[7] > 1 and not cls:
-                cls.append(row[7])
-                return True
-            return False
-
-        lines = _lines_of(pred.path, other_class)[:1]
-        where = _where(pred, "prediction", lines) + (", column 8 (class)" if lines else "")
-        value = f"{cls[0]:g}" if cls else f"{pred.classes[np.argmax(pred.classes > 1)]:g}"
-        raise ValueError(f"{where}: class {value}: {bench} scores pedestrians alone (class 1, "
+        where, written = _class_row(pred, "prediction", lambda c: c > 1)
+        first = written if written is not None else pred.classes[np.argmax(pred.classes > 1)]
+        raise ValueError(f"{where}: class {first:g}: {bench} scores pedestrians alone (class 1, "
                          "or -1 where the tracker gives none); give a pedestrian tracker's "
                          "results, or those of class 1 alone")
     distractors = np.array(_DISTRACTORS.get(bench, ()), dtype=np.int64)

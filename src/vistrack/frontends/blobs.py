@@ -145,9 +145,7 @@ def threshold(image: ArrayLike, level: float, above: bool = True) -> np.ndarray:
            [  0,   0]], dtype=uint8)
     """
     im = np.asarray(image)
-    if im.ndim == 3 and im.shape[2] == 1:
-        im = im[:, :, 0]  # one channel is a grey image (OpenCV's conversion refuses it)
-    elif im.ndim == 3:
+    if im.ndim == 3:
         im = bgr_to_grey(im)
     m = im > level if above else im < level
     return m.astype(np.uint8) * 255

@@ -209,9 +209,7 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     from scipy import ndimage
 
     im = np.asarray(image)
-    if im.ndim == 3 and im.shape[2] == 1:
-        im = im[:, :, 0]  # one channel is a grey image (OpenCV's conversion refuses it)
-    elif im.ndim == 3:
+    if im.ndim == 3:
         im = bgr_to_grey(im)
     if im.ndim != 2:
         raise ValueError(f"image must be (H, W) or (H, W, 3); got shape {im.shape}")

@@ -471,8 +471,7 @@ class DetectorConfidencePF:
                     w[has] += cfg.beta * np.exp(-0.5 * d2 / sd[:, None] ** 2)
             if cfg.gamma > 0:
                 # not None with gamma > 0: checked above
-                dc = _sigmoid(confidence.score(  # type: ignore[union-attr]
-                    p[..., 0], p[..., 1], self.size[:, None, 1], outside=-10.0))
+                dc = self._confidence(confidence, p, self.size)
                 if not np.isfinite(dc).all():  # ("weights must be finite" in resample, before)
                     raise ValueError(f"frame {self.frame}: the confidence map "
                                      f"({type(confidence).__name__}) gave a score that is not a "
@@ -555,8 +554,10 @@ class DetectorConfidencePF:
                     # every track lost its first frame, and a target of one frame was never
                     # reported), at their detections' boxes, scored as the others
                     new_ids = self.ids[-len(cand):]
-                    scores = (self._confidence_at(confidence, cand) if cfg.gamma > 0
-                              else np.ones(len(cand)))
+                    k = len(cand)
+                    scores = (self._confidence(confidence, self.particles[-k:],
+                                               self.size[-k:]).mean(1) if cfg.gamma > 0
+                              else np.ones(k))
                     out = Tracks(ids=np.r_[out.ids, new_ids],
                                  boxes=np.r_[out.boxes, np.c_[cand[:, :2],
                                                               cand[:, :2] + cand[:, 2:]]],
@@ -564,12 +565,11 @@ class DetectorConfidencePF:
                                  classes=np.zeros(len(out.ids) + len(cand), np.int64))
         return out
 
-    def _confidence_at(self, confidence: Any, boxes: np.ndarray) -> np.ndarray:
-        """The detector confidence at the newest targets' particles (the score a reported
-        target carries), one a box of ``boxes`` (x, y, w, h), the targets last in the table."""
-        p = self.particles[-len(boxes):]
-        return _sigmoid(confidence.score(p[..., 0], p[..., 1], self.size[-len(boxes):, None, 1],
-                                         outside=-10.0)).mean(1)
+    @staticmethod
+    def _confidence(confidence: Any, p: np.ndarray, size: np.ndarray) -> np.ndarray:
+        """The detector's confidence, squashed to (0, 1), at particles ``p (T, N, 4)`` of
+        targets of sizes ``size (T, 2)``: ``(T, N)`` (its mean is a reported target's score)."""
+        return _sigmoid(confidence.score(p[..., 0], p[..., 1], size[:, None, 1], outside=-10.0))
 
     def _select(self, keep: np.ndarray) -> None:
         self.tracks.keep(keep)
