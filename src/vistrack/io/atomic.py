@@ -6,11 +6,8 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
-import glob
-import hashlib
 import os
 import re
-import secrets
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -31,6 +28,8 @@ def hidden_path(path: str | os.PathLike, tail: str) -> Path:
     killed) is removed when another completes the output (:func:`commit_partial`). A stem too
     long for the file system with the rest is cut, a hash of it kept (the name fits in 255
     bytes)."""
+    import secrets  # (here: 3 ms an import, on every command's start at the top)
+
     p = Path(path)
     return p.with_name(f"{_hidden_prefix(p, tail)}{os.getpid() % 16**6:06x}"
                        f"{secrets.token_hex(2)}.{tail}")
@@ -42,6 +41,8 @@ def _hidden_prefix(p: Path, tail: str) -> str:
     stem = p.stem
     room = _NAME_MAX - len(f"..{'0' * _TOKEN}.{tail}".encode())
     if len(stem.encode()) > room:
+        import hashlib
+
         digest = hashlib.sha1(stem.encode()).hexdigest()[:8]
         stem = stem.encode()[:max(room - 9, 0)].decode(errors="ignore") + "~" + digest
     return f".{stem}."
@@ -151,6 +152,8 @@ def commit_partial(part: Path, path: Path) -> None:
 
 def _rename(part: Path, path: Path) -> None:
     """:func:`commit_partial`'s rename and sweep."""
+    import glob
+
     os.replace(part, path)
     tail = f"partial{path.suffix}"
     prefix = _hidden_prefix(path, tail)
