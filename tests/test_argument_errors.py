@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import vistrack as vt
+from vistrack.evaluation.filtering import chi2_band
 from vistrack.filters import (
     EnsembleKalmanFilter,
     ExtendedKalmanFilter,
@@ -19,7 +20,12 @@ from vistrack.filters import (
     kalman_filter,
     rts_smooth,
 )
+from vistrack.frontends.background import SelectiveBackground
+from vistrack.frontends.blobs import BlobDetector
 from vistrack.models import SwitchingLinearSystem
+from vistrack.simulate import simulate_lgssm
+from vistrack.tracking.calibration import ScoreCalibrator
+from vistrack.tracking.dcpf import DCPFConfig
 
 CV, POS = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1, r=1.0)
 MATS = dict(F=np.array([[1.0, 1.0], [0.0, 1.0]]), Q=0.01 * np.eye(2), H=np.array([[1.0, 0.0]]),
@@ -202,3 +208,54 @@ def test_an_ensemble_drawn_from_a_singular_covariance_has_that_covariance():
     np.testing.assert_allclose(mean, [1.0, 2.0, 3.0], atol=0.03)
     with pytest.raises(ValueError, match="cov must be positive semi-definite"):
         Ensemble.sample([0.0, 0.0], -np.eye(2), 10, rng=0)
+
+
+# booleans and non-finite values where a whole number or a number is asked for: int(True) ==
+# True and float(True) == 1.0, so True passed as 1; int(NaN) and int(inf) raised errors that
+# name nothing
+WHOLE_CASES = [
+    (lambda v: vt.ConstantVelocity(dim=v), "dim must be 1, 2 or 3"),
+    (lambda v: vt.Position(dim=v), "dim must be 1, 2 or 3"),
+    (lambda v: simulate_lgssm(v, **MATS, x0=[0.0, 1.0], rng=0), "T must be a positive integer"),
+    (lambda v: EnsembleKalmanFilter(CV, POS, n_members=v), "n_members must be"),
+    (lambda v: SelectiveBackground(n_new=v), "n_new must be"),
+    (lambda v: BlobDetector(check_view=v), "check_view must be"),
+    (lambda v: ScoreCalibrator(window=v), "window must be"),
+    (lambda v: DCPFConfig(n_particles=v), "n_particles must be"),
+    (lambda v: chi2_band(v), "need whole numbers dof >= 1"),
+]
+
+
+@pytest.mark.parametrize("value", [True, np.bool_(True), np.nan, np.inf, 2.5])
+@pytest.mark.parametrize("case", range(len(WHOLE_CASES)))
+def test_whole_number_settings_refuse_booleans_and_non_finite(case, value):
+    make, message = WHOLE_CASES[case]
+    with pytest.raises(ValueError, match=f"{re.escape(message)}.*got {re.escape(repr(value))}"):
+        make(value)
+
+
+def test_whole_number_settings_take_integral_floats_and_numpy_integers():
+    # (what was taken before stays taken)
+    assert vt.ConstantVelocity(dim=2.0).dim == 2
+    assert vt.ConstantVelocity(dim=np.int64(3)).dim == 3
+    xs, _ = simulate_lgssm(np.float64(4.0), **MATS, x0=[0.0, 1.0], rng=0)
+    assert xs.shape == (4, 2)
+
+
+@pytest.mark.parametrize("value", [True, False, np.bool_(True)])
+def test_a_boolean_is_not_a_number(value):
+    with pytest.raises(TypeError, match=f"q must be a number; got {re.escape(repr(value))}"):
+        vt.ConstantVelocity(dim=1, q=value)
+
+
+@pytest.mark.parametrize("value", ["no", 0, 1, None])
+def test_store_covs_must_be_true_or_false(value):
+    ys = np.zeros((3, 1))
+    said = f"store_covs must be True or False; got {re.escape(repr(value))}"
+    with pytest.raises(TypeError, match=said):
+        kalman_filter(ys, **MATS, x0=[0.0, 1.0], P0=np.eye(2), store_covs=value)
+    with pytest.raises(TypeError, match="store_covs must be True or False"):
+        KalmanFilter(CV, POS).filter(ys, store_covs=value)
+    # numpy's bools are bools: False stores no covariances
+    assert kalman_filter(ys, **MATS, x0=[0.0, 1.0], P0=np.eye(2),
+                         store_covs=np.bool_(False)).covs is None

@@ -70,8 +70,14 @@ def test_image_folder_and_mp4_round_trip(tmp_path):
     with VideoWriter(out, fps=5) as w:
         for im in frames:
             w.write(im)
-        with pytest.raises(ValueError, match="frame 7 is 10x10; the video is 64x48"):
+        # the errors name the file (a run writes several videos)
+        with pytest.raises(ValueError, match=re.escape(f"{out}: frame 7 is 10x10; the video "
+                                                       "is 64x48")):
             w.write(np.zeros((10, 10, 3), np.uint8))
+        with pytest.raises(ValueError, match=re.escape(f"{out}: frame 7: image must be (H, W) "
+                                                       "or (H, W, 3) uint8; got (48, 64, 3) "
+                                                       "float64")):
+            w.write(np.zeros((48, 64, 3)))
     r = VideoReader(out)
     back = [f.image for f in r]
     assert len(back) == 6 and r.fps == 5.0 and r.size == (64, 48)

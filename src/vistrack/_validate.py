@@ -71,8 +71,9 @@ def as_float_array(value: ArrayLike | None, name: str, *,
 
 
 def as_number(value: Any, name: str) -> float:
-    """``value`` as a float, or a TypeError naming ``name`` (``float()`` names neither)."""
-    if isinstance(value, (str, bytes)):
+    """``value`` as a float, or a TypeError naming ``name`` (``float()`` names neither). A
+    boolean is not a number here (``float(True)`` is 1.0: ``q=True`` was taken as 1)."""
+    if isinstance(value, (str, bytes, bool, np.bool_)):
         raise TypeError(f"{name} must be a number; got {value!r}")
     try:
         return float(value)
@@ -80,15 +81,38 @@ def as_number(value: Any, name: str) -> float:
         raise TypeError(f"{name} must be a number; got {value!r}") from None
 
 
+def is_whole(value: Any, minimum: float | None = None) -> bool:
+    """Whether ``value`` is a whole number ``>= minimum``: an int, or a float with an
+    integral value (Python's or numpy's); not a boolean (``int(True) == True``), a string, NaN
+    or infinity (``int()`` of these raised errors that name nothing, or passed)."""
+    if isinstance(value, (str, bytes, bool, np.bool_)):
+        return False
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return False
+    return math.isfinite(v) and v.is_integer() and (minimum is None or v >= minimum)
+
+
 def as_whole(value: Any, name: str, minimum: int, what: str = "") -> int:
-    """``value`` as an int, or an error naming ``name``: a TypeError for what is not a
-    number, a ValueError for one that is not whole or is below ``minimum`` (``int()`` would
-    cut 2.5 to 2). ``what`` says what it counts (``"frames count from 1"``)."""
-    v = as_number(value, name) if not isinstance(value, (bool, np.bool_)) else None
-    if v is None or not (np.isfinite(v) and v.is_integer() and v >= minimum):
+    """``value`` as an int, or an error naming ``name``: a TypeError for a string, a
+    ValueError for anything else that is not a whole number, or is below ``minimum``
+    (``int()`` would cut 2.5 to 2). ``what`` says what it counts (``"frames count from
+    1"``)."""
+    if isinstance(value, (str, bytes)):
+        as_number(value, name)  # (raises its TypeError)
+    if not is_whole(value, minimum):
         raise ValueError(f"{name} must be a whole number >= {minimum}"
                          f"{f' ({what})' if what else ''}; got {value!r}")
-    return int(v)
+    return int(value)
+
+
+def as_flag(value: Any, name: str) -> bool:
+    """``value`` as a bool: True or False (Python's or numpy's), or a TypeError naming
+    ``name`` (``store_covs="no"`` was true)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False; got {value!r}")
+    return bool(value)
 
 
 def as_finite(value: Any, name: str, low: float | None = None, *, above: bool = False,

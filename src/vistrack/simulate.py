@@ -15,6 +15,7 @@ from ._validate import (
     check_finite,
     check_linear_gaussian,
     check_psd,
+    is_whole,
 )
 from .filters.linear import KalmanFilter, dt_steps
 from .models.adapters import psd_sqrt
@@ -96,8 +97,8 @@ def simulate_lgssm(
     >>> xs.shape, ys.shape
     ((5, 1), (5, 1))
     """
-    if int(T) != T or T < 1:
-        raise ValueError(f"T must be a positive integer; got {T}")
+    if not is_whole(T, 1):
+        raise ValueError(f"T must be a positive integer; got {T!r}")
     T = int(T)
     gen = as_rng(rng)
     x0_ = as_float_array(x0, "x0", ndim=(1,))
@@ -212,8 +213,8 @@ def simulate(
     ((3, 20, 1), (3, 20, 1))
     """
     # the checks of simulate_lgssm, made here for the nonlinear path too
-    if int(T) != T or T < 1:
-        raise ValueError(f"T must be a positive integer; got {T}")
+    if not is_whole(T, 1):
+        raise ValueError(f"T must be a positive integer; got {T!r}")
     nonlinear = hasattr(motion, "jacobian") or hasattr(measurement, "jacobian")
     if not nonlinear:
         # neither model has a jacobian: both are linear

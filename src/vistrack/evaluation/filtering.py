@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_measurement_series, check_psd
+from .._validate import as_float_array, as_measurement_series, check_psd, is_whole
 
 if TYPE_CHECKING:  # the filters import numba; scoring needs none of it
     from ..filters.kalman import FilterResult
@@ -242,10 +242,9 @@ def chi2_band(dof: int, *, n_runs: int = 1, level: float = 0.95) -> tuple[float,
     from scipy import stats  # imported here: scipy.stats costs ~60 MB and 0.8 s at import
 
     # written so that NaN fails too (it passed, and gave a band of NaN)
-    if not (dof >= 1 and n_runs >= 1 and 0 < level < 1) or int(dof) != dof \
-            or int(n_runs) != n_runs:
+    if not (is_whole(dof, 1) and is_whole(n_runs, 1) and 0 < level < 1):
         raise ValueError(f"need whole numbers dof >= 1 and n_runs >= 1, and 0 < level < 1; got "
-                         f"{dof}, {n_runs}, {level}")
+                         f"{dof!r}, {n_runs!r}, {level!r}")
     a = (1 - level) / 2
     k = dof * n_runs
     return float(stats.chi2.ppf(a, k) / n_runs), float(stats.chi2.ppf(1 - a, k) / n_runs)

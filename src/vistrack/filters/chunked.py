@@ -139,8 +139,10 @@ def kalman_filter(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any,
     """
     import dask.array as da
 
+    from .._validate import as_flag
     from .kalman import FilterResult
 
+    store_covs = as_flag(store_covs, "store_covs")
     ys, _ = _batch_blocks(ys)
     B, T, _ = ys.shape
     x0, P0 = _one_for_all(x0, 1), _one_for_all(P0, 2)

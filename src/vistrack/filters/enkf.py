@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_rng, check_has_steps, check_prior
+from .._validate import as_float_array, as_rng, check_has_steps, check_prior, is_whole
 from ..models.adapters import MeasurementFunctions, MotionFunctions, _plain_mean, psd_sqrt
 from ..models.protocols import (
     MeasurementModel,
@@ -325,8 +325,8 @@ class EnsembleKalmanFilter:
     def __init__(self, motion: MotionModel | NonlinearMotionModel,
                  measurement: MeasurementModel | NonlinearMeasurementModel, n_members: int = 100, *,
                  rng: np.random.Generator | int | None = None, residual: Callable | None = None):
-        if int(n_members) != n_members or n_members < 2:
-            raise ValueError(f"n_members must be an integer >= 2; got {n_members}")
+        if not is_whole(n_members, 2):
+            raise ValueError(f"n_members must be an integer >= 2; got {n_members!r}")
         self.motion = MotionFunctions(motion)
         self.measurement = MeasurementFunctions(measurement, self.motion.n, residual)
         self.n_members = int(n_members)

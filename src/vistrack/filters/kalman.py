@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import (
+    as_flag,
     as_float_array,
     as_measurement_series,
     check_finite,
@@ -244,6 +245,7 @@ def kalman_filter(
     >>> res.means.shape, res.loglik.shape, res.shared_covs
     ((2, 4, 2), (2,), True)
     """
+    store_covs = as_flag(store_covs, "store_covs")  # ("no" was true)
     if _is_dask(ys):  # a batch larger than memory: filtered lazily, chunk by chunk
         from . import chunked
 

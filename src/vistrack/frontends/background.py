@@ -48,7 +48,7 @@ import numpy as np
 from .._jit import bind, njit
 from .._prebuilt import kernel
 from .._registry import Registry
-from .._validate import as_finite, as_uint8_image, as_whole
+from .._validate import as_finite, as_uint8_image, as_whole, is_whole
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -162,8 +162,8 @@ class SelectiveBackground:
         if not threshold > 0:
             raise ValueError(f"threshold must be > 0; got {threshold}")
         n_init = as_whole(n_init, "n_init", 1)  # 2.5 was cut to 2, NaN unnamed
-        if not (n_new >= 1 and float(n_new).is_integer()):
-            raise ValueError(f"n_new must be a whole number >= 1; got {n_new}")
+        if not is_whole(n_new, 1):
+            raise ValueError(f"n_new must be a whole number >= 1; got {n_new!r}")
         if not min_sigma > 0:
             # at 0 a pixel that never changed has σ = 0 and passes D² >= T σ² with D = 0:
             # the whole of a still scene is foreground, and foreground is never learnt

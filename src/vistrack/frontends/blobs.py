@@ -21,7 +21,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import bgr_to_grey
+from .._validate import bgr_to_grey, is_whole
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -345,8 +345,8 @@ class BlobDetector:
                  max_shift: float = 4.0, follow_view: bool = True):
         from .background import background as make_background
 
-        if not (check_view >= 0 and float(check_view).is_integer()):
-            raise ValueError(f"check_view must be a whole number >= 0; got {check_view}")
+        if not is_whole(check_view, 0):
+            raise ValueError(f"check_view must be a whole number >= 0; got {check_view!r}")
         if not max_shift > 0:
             raise ValueError(f"max_shift must be > 0; got {max_shift}")
         if not 0 <= min_area < np.inf:  # (-5 was taken; the command line refuses it)

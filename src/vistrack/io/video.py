@@ -761,15 +761,15 @@ class VideoWriter:
         """
         im = np.asarray(image)
         if im.dtype != np.uint8 or im.ndim not in (2, 3) or (im.ndim == 3 and im.shape[2] != 3):
-            raise ValueError(f"image must be (H, W) or (H, W, 3) uint8; got {im.shape} "
-                             f"{im.dtype}")
+            raise ValueError(f"{self.name}: frame {self.frames + 1}: image must be (H, W) or "
+                             f"(H, W, 3) uint8; got {im.shape} {im.dtype}")
         size = (im.shape[1], im.shape[0])
         if self._w is None:
             self._open(self.size or size)
         assert self._w is not None and self.size is not None  # both set by _open
         if size != self.size:
-            raise ValueError(f"frame {self.frames + 1} is {size[0]}x{size[1]}; the video is "
-                             f"{self.size[0]}x{self.size[1]}")
+            raise ValueError(f"{self.name}: frame {self.frames + 1} is {size[0]}x{size[1]}; the "
+                             f"video is {self.size[0]}x{self.size[1]}")
         if im.ndim == 2:
             im = np.repeat(im[:, :, None], 3, axis=2)
         if size[0] % 2 or size[1] % 2:  # the last column or row repeated (see _open)

@@ -12,7 +12,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from .._validate import as_float_array, check_matrix_stack, check_psd
+from .._validate import as_float_array, check_matrix_stack, check_psd, is_whole
 
 __all__ = ["MeasurementModel", "Position", "LinearMeasurement"]
 
@@ -106,8 +106,8 @@ class Position:
     """
 
     def __init__(self, dim: int = 2, r: float | np.ndarray = 1.0):
-        if int(dim) != dim or not 1 <= dim <= 3:
-            raise ValueError(f"dim must be 1, 2 or 3; got {dim}")
+        if not (is_whole(dim, 1) and dim <= 3):
+            raise ValueError(f"dim must be 1, 2 or 3; got {dim!r}")
         self.ndim_meas = int(dim)
         r_arr = as_float_array(r, "r", ndim=(0, 2))
         if r_arr.ndim == 0:

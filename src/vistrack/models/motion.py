@@ -22,7 +22,7 @@ from typing import Literal, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_number, check_matrix_stack, check_psd
+from .._validate import as_float_array, as_number, check_matrix_stack, check_psd, is_whole
 
 __all__ = [
     "MotionModel",
@@ -147,7 +147,7 @@ def _check_q(q: float, name: str = "q") -> float:
 
 
 def _check_dim(dim: int) -> int:
-    if isinstance(dim, (str, bytes)) or int(dim) != dim or not 1 <= dim <= 3:
+    if not (is_whole(dim, 1) and dim <= 3):
         raise ValueError(f"dim must be 1, 2 or 3; got {dim!r}")
     return int(dim)
 

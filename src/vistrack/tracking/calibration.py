@@ -67,6 +67,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
+from .._validate import is_whole
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
 from ..types import Detections
@@ -766,8 +767,8 @@ class ScoreCalibrator:
                 raise ValueError(f"{name} must be a finite number >= 0; got {v}")
         if not 0 < frame_rate < np.inf:
             raise ValueError(f"frame_rate must be > 0 and finite; got {frame_rate}")
-        if window is not None and not (window >= 1 and float(window).is_integer()):
-            raise ValueError(f"window must be an integer >= 1 or None; got {window}")
+        if window is not None and not is_whole(window, 1):
+            raise ValueError(f"window must be an integer >= 1 or None; got {window!r}")
         self.link_iou, self.top, self.prior = float(link_iou), float(top), float(prior)
         self.window = None if window is None else int(window)  # it slices the store
         self.top_min, self.cap_sigma = int(top_min), float(cap_sigma)

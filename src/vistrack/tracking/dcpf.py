@@ -58,6 +58,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from .._validate import is_whole
 from ..association import greedy, iou
 from ..filters.particle import resample
 from ..types import Detections, Frame, Tracks
@@ -168,7 +169,7 @@ class DCPFConfig:
             raise ValueError("at least one of beta, gamma and eta must be > 0")
         for name, low in (("n_particles", 2), ("confirm", 1), ("epochs", 0)):
             v = getattr(self, name)
-            if not (np.isfinite(v) and float(v).is_integer() and v >= low):  # 2.5: TypeError
+            if not is_whole(v, low):
                 raise bad(name, f"an integer >= {low}")
             object.__setattr__(self, name, int(v))  # 100.0 particles is 100 (frozen)
         # sigma_det = 0 gave NaN detection terms (0 / 0 at the detection), and nothing was

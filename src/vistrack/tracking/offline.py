@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._validate import is_whole
 from ..association import gnn_sparse, iou_pairs, paired_iou
 from ..filters.axes import axes_predict, axes_to_full, axes_update, full_to_axes
 from ..filters.kalman import FilterResult
@@ -209,8 +210,7 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float = 0
     for name, v, least in (("max_gap", max_gap, 0), ("link_gap", link_gap, 0),
                            ("link_window", link_window, 1)):
         # (checked before int(): NaN and inf failed there, naming nothing)
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
-                or not np.isfinite(v) or int(v) != v or v < least:
+        if not is_whole(v, least):
             raise ValueError(f"{name} must be a whole number of frames >= {least}; got {v!r}")
     for name, iou in (("link_iou", link_iou), ("extend_iou", extend_iou)):
         if iou is not None and not 0.0 <= iou <= 1.0:  # an IoU (NaN fails this too)
