@@ -9,10 +9,16 @@ centre and velocity in pixels a frame, moved by constant velocity with Gaussian 
 The box's size is the target's, learnt from the detections associated with it.
 
 **Association.** Detections are matched to targets greedily, best pair first, by the seed's
-score ``S(tr, d) = g(tr, d) · (c_tr(d) + α · Σ_p p_N(d - p) / N)``: a gate ``g`` (the
-detection's centre within ``gate_heights`` heights of the target's and its height within a factor
-1.5), the target's classifier at the detection, and how densely its particles lie around the
-detection. Pairs with ``S`` below ``min_score`` are not matched.
+score ``S(tr, d) = g(tr, d) · (c_tr(d) + α · p(d))``: a gate ``g`` (the detection's centre
+within ``gate_heights`` heights of the target's and its height within a factor 1.5), the
+target's classifier at the detection, and how well the detection fits the particles'
+prediction. The seed's ``p(d)`` is the particles' density at the detection, ``Σ_p p_N(d - p)
+/ N`` with a fixed kernel; that falls as the cloud spreads while the target goes
+undetected, so a person missed for a second was never found again, whatever ``max_lost``.
+Here ``p(d)`` is the predictive density of the detection's centre, a Gaussian of the
+particles' mean and covariance plus the detection's noise (``sigma_det`` of the height), over
+its value at the mean: 1 at the predicted place however uncertain it is. Pairs with ``S``
+below ``min_score`` are not matched.
 
 **Observation model**, each particle's weight (seed 004, slide "Observation model"):
 
@@ -88,7 +94,7 @@ class DCPFConfig:
     sigma_det : float
         Standard deviation of the detection term, as a fraction of the height.
     alpha : float
-        Weight of the particle density in the association score.
+        Weight of the predictive density (see the module) in the association score.
     gate_heights : float
         A detection's centre must lie within this many heights of the target's.
     min_score : float
@@ -440,13 +446,11 @@ class DetectorConfidencePF:
         p[..., :2] += p[..., 2:] + self.rng.standard_normal((T, N, 2)) * cfg.sigma_pos * h
         p[..., 2:] += self.rng.standard_normal((T, N, 2)) * cfg.sigma_vel * h
 
-        # associate greedily by S(tr, d) = g · (c_tr(d) + α · density of particles at d)
+        # associate greedily by S(tr, d) = g · (c_tr(d) + α · predictive density at d)
         match = np.full(T, -1)
         if T and len(det_c):
-            sd = cfg.sigma_det * self.size[:, 1]
-            d2 = ((det_c[None, :, None, :] - p[:, None, :, :2]) ** 2).sum(-1)
-            density = np.exp(-0.5 * d2 / sd[:, None, None] ** 2).mean(-1)       # (T, D)
             centre = p[..., :2].mean(1)
+            density = self._predictive(centre, p[..., :2], det_c)               # (T, D)
             dist = np.linalg.norm(det_c[None] - centre[:, None], axis=-1)
             ratio = det_xywh[None, :, 3] / self.size[:, None, 1]
             gate = ((dist <= cfg.gate_heights * self.size[:, None, 1]) & (ratio < 1.5)
@@ -565,6 +569,18 @@ class DetectorConfidencePF:
                                  points=None, scores=np.r_[out.scores, scores],
                                  classes=np.zeros(len(out.ids) + len(cand), np.int64))
         return out
+
+    def _predictive(self, centre: np.ndarray, xy: np.ndarray, det_c: np.ndarray) -> np.ndarray:
+        """How well each detection's centre ``det_c (D, 2)`` fits each target's prediction
+        ``(T, D)``: the predictive density of the detection, a Gaussian of the particles'
+        mean ``centre (T, 2)`` and covariance (of ``xy (T, N, 2)``) plus the detection's
+        noise (``sigma_det`` of the height), over its value at the mean (1 there)."""
+        sd2 = (self.config.sigma_det * self.size[:, 1]) ** 2
+        dev = xy - centre[:, None]
+        S = np.einsum("tni,tnj->tij", dev, dev) / xy.shape[1] + sd2[:, None, None] * np.eye(2)
+        e = det_c[None] - centre[:, None]                                      # (T, D, 2)
+        m2 = np.einsum("tdi,tij,tdj->td", e, np.linalg.inv(S), e)
+        return np.exp(-0.5 * m2)
 
     @staticmethod
     def _confidence(confidence: Any, p: np.ndarray, size: np.ndarray) -> np.ndarray:
