@@ -1,6 +1,7 @@
 """Figures of the nonlinear and multiple-model filters, from real runs of vistrack.
 
     python examples/nonlinear_figures.py            # writes examples/figures/*.png
+    python examples/nonlinear_figures.py OUT_DIR    # writes OUT_DIR/*.png
 
 - particle_cloud.png: one step of the particle filter on the growth model (seed 004 "Particle
   Filtering": resample, predict, spread, weight), and the cloud over 60 steps with the truth.
@@ -14,7 +15,6 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -147,6 +147,10 @@ def main(out: Path) -> list[Path]:
 
 
 if __name__ == "__main__":
-    target = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parent / "figures"
-    for p in main(target):
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
+    parser.add_argument("out_dir", nargs="?", type=Path, default=Path(__file__).parent / "figures",
+                        help="the folder the figures are written to (default: examples/figures)")
+    for p in main(parser.parse_args().out_dir):
         print("wrote", p)

@@ -125,6 +125,16 @@ def test_nonlinear_example_figures(tmp_path):
         assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
 
 
+def test_nonlinear_example_help_writes_nothing(tmp_path):
+    """``--help`` was taken as the output folder: it made ``--help/`` and wrote the figures
+    there."""
+    script = Path(__file__).parents[1] / "examples" / "nonlinear_figures.py"
+    r = subprocess.run([sys.executable, str(script), "--help"], capture_output=True, text=True,
+                       cwd=tmp_path)
+    assert r.returncode == 0 and r.stdout.startswith("usage: nonlinear_figures.py")
+    assert "out_dir" in r.stdout and list(tmp_path.iterdir()) == []
+
+
 def test_a_figure_interrupted_while_saved_leaves_the_earlier_one(tmp_path, capsys,
                                                                   monkeypatch):
     """The figures were saved in place: Ctrl-C while kalman_2d.png was written left 124 bytes
