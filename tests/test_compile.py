@@ -47,6 +47,27 @@ def test_message_once_on_a_cold_cache_and_none_on_a_warm_one(tmp_path):
     assert warm.strip() == "'' False"  # loaded from the cache: nothing compiled, nothing said
 
 
+def test_the_message_speaks_of_rates_only_where_the_command_prints_them():
+    """``vistrack demo kalman`` printed "rates below leave this out" and no rate."""
+    @njit
+    def once(x):
+        return x * 3.0
+
+    @njit
+    def twice(x):
+        return x * 5.0
+
+    told, untold = io.StringIO(), io.StringIO()
+    with _compile.watch(told):
+        once(1.0)
+    with _compile.watch(untold, rates=False):
+        twice(1.0)
+    assert told.getvalue() == ("vistrack: compiling its kernels for this machine, once (later "
+                               "runs reuse them); rates below leave this out\n")
+    assert untold.getvalue() == ("vistrack: compiling its kernels for this machine, once "
+                                 "(later runs reuse them)\n")
+
+
 class _CompilingTracker:
     """Compiles a new kernel at its first step (as the box tracker does on a first run)."""
 

@@ -29,9 +29,10 @@ def seconds() -> float:
 
 
 @contextmanager
-def watch(stream: TextIO | None, what: str = "vistrack") -> Iterator[None]:
+def watch(stream: TextIO | None, what: str = "vistrack", rates: bool = True) -> Iterator[None]:
     """Count top-level numba compilations while the block runs; before the first, write one
-    line to ``stream`` (none if it is None) saying that kernels are being compiled, once.
+    line to ``stream`` (none if it is None) saying that kernels are being compiled, once,
+    and, with ``rates``, that the rates the command prints leave that time out.
 
     Imports nothing: the listener is registered once numba is imported (a command served by
     the kernels compiled at install never imports it, :mod:`vistrack._jit`)."""
@@ -53,8 +54,8 @@ def watch(stream: TextIO | None, what: str = "vistrack") -> Iterator[None]:
                 if self.depth == 0:
                     if not said[0] and stream is not None:
                         print(f"{what}: compiling its kernels for this machine, once (later "
-                              "runs reuse them); rates below leave this out", file=stream,
-                              flush=True)
+                              "runs reuse them)" + ("; rates below leave this out" if rates
+                                                    else ""), file=stream, flush=True)
                     said[0] = True
                     self.start = time.perf_counter()
                 self.depth += 1
