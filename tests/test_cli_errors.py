@@ -247,6 +247,31 @@ def test_a_video_given_to_out_says_which_option_goes_with_videos(tmp_path):
     assert not (tmp_path / "results.txt").exists()
 
 
+def test_a_text_file_given_to_out_is_not_sent_to_out_dir(tmp_path, capsys):
+    """README.md given to --out was told to be tracked as a video with --out-dir, which then
+    said it is not a video."""
+    notes = tmp_path / "notes.md"
+    notes.write_text("# not detections\n")
+    assert main(["track", str(notes), "--out", str(tmp_path / "r.txt"), "--fps", "10"]) == 2
+    one_line(capsys, "track", f"--out is for a MOTChallenge sequence folder (seqinfo.ini, "
+             f"det/det.txt) or a detections file (.txt, .csv), and {notes} is neither (a .md "
+             "file)")
+
+
+def test_gt_with_out_names_the_command_that_scores(tmp_path, capsys):
+    """--gt with --out sent a user who wants scores to --out-dir, which tracks from pixels."""
+    seq = tmp_path / "seq"
+    (seq / "det").mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=2\n"
+                                     "imWidth=320\nimHeight=240\n")
+    (seq / "det" / "det.txt").write_text("1,-1,10,10,20,40,0.9\n")
+    out = tmp_path / "r.txt"
+    assert main(["track", str(seq), "--out", str(out), "--gt", str(GT)]) == 2
+    one_line(capsys, "track", f"--gt goes with --out-dir; score {out} after tracking with "
+             f"vistrack eval --gt GT --pred {out}")
+    assert not out.exists()
+
+
 def test_an_image_folder_given_to_out_says_which_option_goes_with_it(tmp_path, capsys):
     """It said the folder's seqinfo.ini did not exist and to pass --fps, and given --fps, that
     det/det.txt did not exist: advice that led away from --out-dir."""
@@ -474,6 +499,18 @@ def test_track_one_starts_from_the_ground_truth_s_first_box_without_init(tmp_pat
     assert not (tmp_path / "b.txt").exists()
 
 
+def test_track_one_names_a_missing_gt_as_track_does(tmp_path, capsys):
+    """A missing --gt file was said as "FILE: No such file or directory", naming no option
+    (vistrack track says "... does not exist (--gt FILE)")."""
+    missing = tmp_path / "groundtruth.txt"
+    out = tmp_path / "b.txt"
+    assert main(["track-one", str(VIDEO), "--gt", str(missing), "--out", str(out)]) == 2
+    one_line(capsys, "track-one", f"{missing} does not exist (--gt FILE)")
+    assert main(["track", str(VIDEO), "--gt", str(missing), "--out-dir", str(tmp_path / "o")]) == 2
+    one_line(capsys, "track", f"{missing} does not exist (--gt FILE)")
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("init", ["1,2,3,nan", "1,2,0,4", "1,2,3", "1\t2\t3", "1,,2,3,4"])
 def test_track_one_refuses_a_box_that_is_not_one(tmp_path, capsys, init):
     assert main(["track-one", str(VIDEO), "--init", init, "--out",
@@ -505,7 +542,15 @@ def test_an_unknown_tracker_lists_every_form(tmp_path, capsys, name):
     (["track-one", "clip.mp4", "--out", "b.txt", "--init"],
      "vistrack track-one: error: argument --init: expected one argument"),
     (["eval", "--gt", "gt.txt", "--pred", "res.txt", "--jsn"],
-     "vistrack eval: error: unrecognized arguments: --jsn"),
+     "vistrack eval: error: unrecognized arguments: --jsn; did you mean --json?"),
+    # a misspelt option is told the nearest one, as a misspelt key of a --config file is
+    (["track", "seq", "--out", "r.txt", "--hihg", "0.5"],
+     "vistrack track: error: unrecognized arguments: --hihg 0.5; did you mean --high?"),
+    (["track", "seq", "--out", "r.txt", "--still-camra"],
+     "vistrack track: error: unrecognized arguments: --still-camra; did you mean "
+     "--still-camera?"),
+    (["track", "clip.mp4", "--outdir=out"],
+     "vistrack track: error: unrecognized arguments: --outdir=out; did you mean --out-dir?"),
     (["eval", "res.txt", "gt.txt"],
      "vistrack eval: error: unrecognized arguments: res.txt gt.txt; vistrack eval takes its "
      "files as options: --pred RESULTS --gt GROUND_TRUTH, or --pred-dir and --gt-dir"),

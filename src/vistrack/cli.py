@@ -94,6 +94,20 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {_message(ValueError(message))}\n")
 
 
+def _option_hint(parser: argparse.ArgumentParser, extra: Sequence[str]) -> str:
+    """``"; did you mean --high?"`` for the first unknown option in ``extra`` that is close
+    to one of ``parser``'s (as a misspelt key of a ``--config`` file is told), else ""."""
+    import difflib
+
+    known = [o for a in parser._actions for o in a.option_strings if o.startswith("--")]
+    for arg in extra:
+        if arg.startswith("--"):
+            close = difflib.get_close_matches(arg.split("=", 1)[0], known, n=1, cutoff=0.75)
+            if close:
+                return f"; did you mean {close[0]}?"
+    return ""
+
+
 def _command_parser(parser: argparse.ArgumentParser, command: str | None
                     ) -> argparse.ArgumentParser:
     """The parser of ``command`` (``vistrack track``), or ``parser`` itself."""
@@ -428,7 +442,7 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
     and :func:`~vistrack.pipeline.video_outputs` do)."""
     from .io.atomic import check_output
     from .io.motchallenge import DETECTION_SUFFIXES
-    from .io.video import _holds_images
+    from .io.video import _TEXT_SUFFIXES, _holds_images
     from .pipeline import video_outputs
 
     setting_flags = [o for o, *_ in _SETTINGS if getattr(args, o) is not None]
@@ -441,7 +455,11 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
             return (f"--out (a sequence's detections) goes with {_box_trackers()}; "
                     f"--tracker {name} goes with --out-dir")
     if args.out is not None:
-        for flag in ("gt",) + _FRONTEND_OPTIONS:
+        if args.gt is not None:
+            # (a user who wants scores was sent to --out-dir, which tracks from pixels)
+            return (f"--gt goes with --out-dir; score {args.out} after tracking with "
+                    f"vistrack eval --gt GT --pred {args.out}")
+        for flag in _FRONTEND_OPTIONS:
             if getattr(args, flag) is not None:
                 return f"--{flag.replace('_', '-')} goes with --out-dir"
         for flag in ("skip_bad_frames", "report"):
@@ -455,10 +473,14 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
                     f"or a detections file (.txt, .csv), and {args.input} is a folder of "
                     "images: track it from its pixels with --out-dir OUT/")
         if Path(args.input).is_file():
-            if Path(args.input).suffix.lower() not in DETECTION_SUFFIXES:
+            suffix = Path(args.input).suffix.lower()
+            if suffix not in DETECTION_SUFFIXES:
+                # (a text file is no video either: --out-dir OUT/ then said it was not one)
                 return (f"--out is for a MOTChallenge sequence folder (seqinfo.ini, "
                         f"det/det.txt) or a detections file (.txt, .csv), and "
-                        f"{args.input} is neither: track a video with --out-dir OUT/")
+                        f"{args.input} is neither" + (
+                            f" (a {suffix} file)" if suffix in _TEXT_SUFFIXES
+                            else ": track a video with --out-dir OUT/"))
             if args.detections is not None:
                 return (f"{args.input} is a detections file, and --detections gives "
                         "another: give one")
@@ -822,13 +844,13 @@ def _fit(args: argparse.Namespace) -> int:
     n_obj, n_det = sum(r["objects"] for r in rows), sum(r["detections"] for r in rows)
     print(f"learned from the {run.reference} of {len(rows)} of {len(inputs)} sequences: "
           f"{n_obj} objects, {n_det} matched detections")
-    print(f"{'value':14s} {'given':>9s} {'learned':>9s}   each sequence (min-max)")
+    print(f"{'value':14s} {'given':>9s} {'learned':>9s}   each sequence (min to max)")
     values = [("std_pos", given.std_pos, learned.std_pos, [r["std_pos"] for r in rows]),
               ("std_vel", given.std_vel, learned.std_vel, [r["std_vel"] for r in rows])]
     values += [(f"std_meas {c}", given.std_meas[i], learned.std_meas[i],
                 [r["std_meas"][i] for r in rows]) for i, c in enumerate(("cx", "cy", "w", "h"))]
     for name, a, b, each in values:
-        print(f"{name:14s} {a:9.4g} {b:9.4g}   {min(each):.4g}-{max(each):.4g}")
+        print(f"{name:14s} {a:9.4g} {b:9.4g}   {min(each):.4g} to {max(each):.4g}")
     print("(fractions of the box's size; std_pos and std_vel per frame at 30 frames/s)")
     derived: dict = {"learned_from": run.reference, "sequences": len(rows),
                      "objects": n_obj, "detections": n_det}
@@ -1352,6 +1374,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if getattr(args, "command", None) == "eval" and not any(a.startswith("-") for a in extra):
             hint = ("; vistrack eval takes its files as options: --pred RESULTS --gt "
                     "GROUND_TRUTH, or --pred-dir and --gt-dir")
+        else:
+            hint = _option_hint(command, extra)
         command.error(f"unrecognized arguments: {' '.join(extra)}{hint}")
     if not hasattr(args, "func"):
         parser.print_help()
@@ -1396,7 +1420,10 @@ def _run(args: argparse.Namespace) -> int:
     try:
         if args.command in ("track", "track-one", "demo"):
             # a first run compiles the kernels: say so once, and leave it out of the rates
-            with _compile.watch(None if getattr(args, "quiet", False) else sys.stderr):
+            # (which demo kalman does not print)
+            rates = not (args.command == "demo" and getattr(args, "name", None) == "kalman")
+            with _compile.watch(None if getattr(args, "quiet", False) else sys.stderr,
+                                rates=rates):
                 status = args.func(args)
         else:
             status = args.func(args)

@@ -798,8 +798,8 @@ def _frontend(name: str | Detector | Callable[[Frame], Detections | None] | None
                     raise ValueError(f"{path} is a folder, not a file (--frontend {form})")
                 return make(path, ctx)
         if name not in FRONTENDS:
-            raise ValueError(f"frontend must be one of {sorted(FRONTENDS)}, detections:FILE "
-                             f"or onnx:MODEL.onnx; got {name!r}")
+            raise ValueError(f"--frontend must be {', '.join(sorted(FRONTENDS))}, "
+                             f"detections:FILE or onnx:MODEL.onnx; got {name!r}")
         return FRONTENDS[name].make(ctx)
     detect = as_detector(name) if name is not None else None
     if detect is None:
@@ -2266,7 +2266,12 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     out = Path(out)
     check_output(out, force=force)
     tracker = single_tracker(method)
-    truth = read_boxes(gt) if gt is not None else None
+    truth = None
+    if gt is not None:
+        try:
+            truth = read_boxes(gt)
+        except FileNotFoundError:  # (named as the track command names it)
+            raise FileNotFoundError(f"{gt} does not exist (--gt FILE)") from None
     if init is None:
         if truth is None or not len(truth):
             raise ValueError(f"{init_name} is required: the object's box in the first frame "
