@@ -226,7 +226,7 @@ WHOLE_CASES = [
 ]
 
 
-@pytest.mark.parametrize("value", [True, np.bool_(True), np.nan, np.inf, 2.5])
+@pytest.mark.parametrize("value", [True, np.bool_(True), np.array(True), np.nan, np.inf, 2.5])
 @pytest.mark.parametrize("case", range(len(WHOLE_CASES)))
 def test_whole_number_settings_refuse_booleans_and_non_finite(case, value):
     make, message = WHOLE_CASES[case]
@@ -238,6 +238,10 @@ def test_whole_number_settings_take_integral_floats_and_numpy_integers():
     # (what was taken before stays taken)
     assert vt.ConstantVelocity(dim=2.0).dim == 2
     assert vt.ConstantVelocity(dim=np.int64(3)).dim == 3
+    # an integer too large for a float is whole, and named where it is out of range (float()
+    # of it overflowed, naming nothing)
+    with pytest.raises(ValueError, match="dim must be 1, 2 or 3"):
+        vt.ConstantVelocity(dim=10**400)
     xs, _ = simulate_lgssm(np.float64(4.0), **MATS, x0=[0.0, 1.0], rng=0)
     assert xs.shape == (4, 2)
 

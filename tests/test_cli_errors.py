@@ -268,8 +268,11 @@ def test_gt_with_out_names_the_command_that_scores(tmp_path, capsys):
     out = tmp_path / "r.txt"
     assert main(["track", str(seq), "--out", str(out), "--gt", str(GT)]) == 2
     one_line(capsys, "track", f"--gt goes with --out-dir; score {out} after tracking with "
-             f"vistrack eval --gt GT --pred {out}")
+             f"vistrack eval --gt {GT} --pred {out}")
     assert not out.exists()
+    # a video's scores are --out-dir's: no advice to keep --out, which cannot track it
+    assert main(["track", str(VIDEO), "--out", str(out), "--gt", str(GT)]) == 2
+    one_line(capsys, "track", "--gt goes with --out-dir")
 
 
 def test_an_image_folder_given_to_out_says_which_option_goes_with_it(tmp_path, capsys):
@@ -508,6 +511,8 @@ def test_track_one_names_a_missing_gt_as_track_does(tmp_path, capsys):
     one_line(capsys, "track-one", f"{missing} does not exist (--gt FILE)")
     assert main(["track", str(VIDEO), "--gt", str(missing), "--out-dir", str(tmp_path / "o")]) == 2
     one_line(capsys, "track", f"{missing} does not exist (--gt FILE)")
+    assert main(["track-one", str(VIDEO), "--gt", str(tmp_path), "--out", str(out)]) == 2
+    one_line(capsys, "track-one", f"{tmp_path} is a folder, not a file (--gt FILE)")
     assert not out.exists()
 
 

@@ -512,6 +512,23 @@ def test_smooth_counts_frames_and_refuses_what_is_not_a_count(option, value):
     assert str(e.value) == f"{option} must be a whole number of frames >= {least}; got {value!r}"
 
 
+def test_smooth_takes_whole_numbers_of_any_type():
+    """3.0 frames or a Fraction passed the check and then failed as an index
+    (IndexError naming nothing); each is taken as the int it is."""
+    from fractions import Fraction
+
+    from vistrack.tracking import smooth
+
+    tr = BoxTracker("bytetrack", record=True)
+    for t in range(1, 12):
+        if not 5 <= t < 8:
+            tr.step(t, Detections.from_xywh([[10 + 2 * t, 10, 20, 40]], [0.9]))
+    want = smooth(tr, link_window=3, link_gap=30, max_gap=0)
+    for v in (3.0, np.float32(3.0), Fraction(3), np.int64(3)):
+        got = smooth(tr, link_window=v, link_gap=30, max_gap=0)
+        assert np.array_equal(got.boxes, want.boxes) and np.array_equal(got.ids, want.ids)
+
+
 def _walkers(rng, paths, T, noise=1.0):
     """Truth and detections of boxes 40 x 100 moving with constant velocity: ``paths`` holds
     ``(start (x, y), velocity, frames present, frames detected, score(frame))``."""

@@ -70,10 +70,16 @@ def as_float_array(value: ArrayLike | None, name: str, *,
     return arr
 
 
+def _is_boolean(value: Any) -> bool:
+    """Whether ``value`` is a boolean: Python's, numpy's, or a 0-d array of them."""
+    return isinstance(value, (bool, np.bool_)) or (
+        isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind == "b")
+
+
 def as_number(value: Any, name: str) -> float:
     """``value`` as a float, or a TypeError naming ``name`` (``float()`` names neither). A
     boolean is not a number here (``float(True)`` is 1.0: ``q=True`` was taken as 1)."""
-    if isinstance(value, (str, bytes, bool, np.bool_)):
+    if isinstance(value, (str, bytes)) or _is_boolean(value):
         raise TypeError(f"{name} must be a number; got {value!r}")
     try:
         return float(value)
@@ -85,22 +91,25 @@ def is_whole(value: Any, minimum: float | None = None) -> bool:
     """Whether ``value`` is a whole number ``>= minimum``: an int, or a float with an
     integral value (Python's or numpy's); not a boolean (``int(True) == True``), a string, NaN
     or infinity (``int()`` of these raised errors that name nothing, or passed)."""
-    if isinstance(value, (str, bytes, bool, np.bool_)):
+    if isinstance(value, (str, bytes)) or _is_boolean(value):
         return False
+    if isinstance(value, (int, np.integer)):  # (float() of 10**400 overflows)
+        return bool(minimum is None or value >= minimum)
     try:
         v = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         return False
     return math.isfinite(v) and v.is_integer() and (minimum is None or v >= minimum)
 
 
 def as_whole(value: Any, name: str, minimum: int, what: str = "") -> int:
-    """``value`` as an int, or an error naming ``name``: a TypeError for a string, a
-    ValueError for anything else that is not a whole number, or is below ``minimum``
+    """``value`` as an int, or an error naming ``name``: a TypeError for what is no number (a
+    string, None), a ValueError for anything else that is not a whole number (a boolean
+    too), or is below ``minimum``
     (``int()`` would cut 2.5 to 2). ``what`` says what it counts (``"frames count from
     1"``)."""
-    if isinstance(value, (str, bytes)):
-        as_number(value, name)  # (raises its TypeError)
+    if not (_is_boolean(value) or isinstance(value, (int, np.integer))):
+        as_number(value, name)  # (a TypeError for what is no number: a string, None)
     if not is_whole(value, minimum):
         raise ValueError(f"{name} must be a whole number >= {minimum}"
                          f"{f' ({what})' if what else ''}; got {value!r}")
@@ -108,9 +117,9 @@ def as_whole(value: Any, name: str, minimum: int, what: str = "") -> int:
 
 
 def as_flag(value: Any, name: str) -> bool:
-    """``value`` as a bool: True or False (Python's or numpy's), or a TypeError naming
-    ``name`` (``store_covs="no"`` was true)."""
-    if not isinstance(value, (bool, np.bool_)):
+    """``value`` as a bool: True or False (Python's or numpy's, or a 0-d array of one), or a
+    TypeError naming ``name`` (``store_covs="no"`` was true)."""
+    if not _is_boolean(value):
         raise TypeError(f"{name} must be True or False; got {value!r}")
     return bool(value)
 

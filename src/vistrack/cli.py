@@ -456,9 +456,16 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
                     f"--tracker {name} goes with --out-dir")
     if args.out is not None:
         if args.gt is not None:
-            # (a user who wants scores was sent to --out-dir, which tracks from pixels)
-            return (f"--gt goes with --out-dir; score {args.out} after tracking with "
-                    f"vistrack eval --gt GT --pred {args.out}")
+            # a user who wants a detections source's scores was sent to --out-dir, which
+            # tracks from pixels; a video's or an image folder's are --out-dir's
+            src = Path(args.input)
+            detections = args.detections is not None or (
+                src.is_file() and src.suffix.lower() in DETECTION_SUFFIXES) or (
+                src.is_dir() and ((src / "seqinfo.ini").exists()
+                                  or (src / "det" / "det.txt").exists()))
+            return "--gt goes with --out-dir" + (
+                f"; score {args.out} after tracking with vistrack eval --gt {args.gt} --pred "
+                f"{args.out}" if detections else "")
         for flag in _FRONTEND_OPTIONS:
             if getattr(args, flag) is not None:
                 return f"--{flag.replace('_', '-')} goes with --out-dir"

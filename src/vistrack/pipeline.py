@@ -2272,6 +2272,8 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
             truth = read_boxes(gt)
         except FileNotFoundError:  # (named as the track command names it)
             raise FileNotFoundError(f"{gt} does not exist (--gt FILE)") from None
+        except IsADirectoryError:
+            raise IsADirectoryError(f"{gt} is a folder, not a file (--gt FILE)") from None
     if init is None:
         if truth is None or not len(truth):
             raise ValueError(f"{init_name} is required: the object's box in the first frame "

@@ -204,6 +204,8 @@ def kalman_filter(
         a value is not finite, ``Q``, ``R`` or ``P0`` is not symmetric
         positive semi-definite, or an innovation covariance ``H P H' + R`` is not positive
         definite (the message names the step).
+    TypeError
+        If ``store_covs`` is not True or False.
 
     See Also
     --------

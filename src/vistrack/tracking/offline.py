@@ -212,6 +212,8 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float = 0
         # (checked before int(): NaN and inf failed there, naming nothing)
         if not is_whole(v, least):
             raise ValueError(f"{name} must be a whole number of frames >= {least}; got {v!r}")
+    # (3.0 frames, or a Fraction, was used as an index below)
+    max_gap, link_gap, link_window = int(max_gap), int(link_gap), int(link_window)
     for name, iou in (("link_iou", link_iou), ("extend_iou", extend_iou)):
         if iou is not None and not 0.0 <= iou <= 1.0:  # an IoU (NaN fails this too)
             raise ValueError(f"{name} must be an IoU in [0, 1]; got {iou!r}")
