@@ -105,9 +105,8 @@ def is_whole(value: Any, minimum: float | None = None) -> bool:
 def as_whole(value: Any, name: str, minimum: int, what: str = "") -> int:
     """``value`` as an int, or an error naming ``name``: a TypeError for what is no number (a
     string, None), a ValueError for anything else that is not a whole number (a boolean
-    too), or is below ``minimum``
-    (``int()`` would cut 2.5 to 2). ``what`` says what it counts (``"frames count from
-    1"``)."""
+    too), or is below ``minimum`` (``int()`` would cut 2.5 to 2). ``what`` says what it
+    counts (``"frames count from 1"``)."""
     if not (_is_boolean(value) or isinstance(value, (int, np.integer))):
         as_number(value, name)  # (a TypeError for what is no number: a string, None)
     if not is_whole(value, minimum):

@@ -14,7 +14,7 @@ within ``gate_heights`` heights of the target's and its height within a factor 1
 target's classifier at the detection, and how well the detection fits the particles'
 prediction. The seed's ``p(d)`` is the particles' density at the detection, ``Σ_p p_N(d - p)
 / N`` with a fixed kernel; that falls as the cloud spreads while the target goes
-undetected, so a person missed for a second was never found again, whatever ``max_lost``.
+undetected, so a person missed for about a second was not found again, whatever ``max_lost``.
 Here ``p(d)`` is the predictive density of the detection's centre, a Gaussian of the
 particles' mean and covariance plus the detection's noise (``sigma_det`` of the height), over
 its value at the mean: 1 at the predicted place however uncertain it is. Pairs with ``S``
