@@ -455,14 +455,14 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
             return (f"--out (a sequence's detections) goes with {_box_trackers()}; "
                     f"--tracker {name} goes with --out-dir")
     if args.out is not None:
+        folder = Path(args.input)
+        sequence = folder.is_dir() and ((folder / "seqinfo.ini").exists()
+                                        or (folder / "det" / "det.txt").exists())
         if args.gt is not None:
             # a user who wants a detections source's scores was sent to --out-dir, which
             # tracks from pixels; a video's or an image folder's are --out-dir's
-            src = Path(args.input)
-            detections = args.detections is not None or (
-                src.is_file() and src.suffix.lower() in DETECTION_SUFFIXES) or (
-                src.is_dir() and ((src / "seqinfo.ini").exists()
-                                  or (src / "det" / "det.txt").exists()))
+            detections = args.detections is not None or sequence or (
+                folder.is_file() and folder.suffix.lower() in DETECTION_SUFFIXES)
             return "--gt goes with --out-dir" + (
                 f"; score {args.out} after tracking with vistrack eval --gt {args.gt} --pred "
                 f"{args.out}" if detections else "")
@@ -472,9 +472,8 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
         for flag in ("skip_bad_frames", "report"):
             if getattr(args, flag):
                 return f"--{flag.replace('_', '-')} goes with --out-dir"
-        folder = Path(args.input)
-        if folder.is_dir() and args.detections is None and not (folder / "seqinfo.ini").exists() \
-                and not (folder / "det" / "det.txt").exists() and _holds_images(folder):
+        if folder.is_dir() and args.detections is None and not sequence \
+                and _holds_images(folder):
             # (it said seqinfo.ini was missing, then, given --fps, det/det.txt)
             return (f"--out is for a MOTChallenge sequence folder (seqinfo.ini, det/det.txt) "
                     f"or a detections file (.txt, .csv), and {args.input} is a folder of "

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validate import is_whole
+
 __all__ = ["chi2_gate", "chi2_threshold"]
 
 
@@ -39,11 +41,7 @@ def chi2_threshold(m: int, p: float = 0.99) -> float:
     """
     if not 0.0 < p < 1.0:
         raise ValueError(f"p must be in (0, 1); got {p}")
-    try:
-        whole = not isinstance(m, (bool, np.bool_, str)) and float(m).is_integer() and m >= 1
-    except (TypeError, ValueError):
-        whole = False
-    if not whole:
+    if not is_whole(m, 1):
         raise ValueError(f"m must be a whole number of degrees of freedom >= 1, the size of a "
                          f"measurement; got {m!r}")
     from scipy.stats import chi2  # here: scipy.stats takes about 0.4 s to import

@@ -320,8 +320,6 @@ class DetectorConfidencePF:
                             f"{type(confidence).__name__}")
         from .._validate import as_finite
 
-        if isinstance(frame_rate, (bool, np.bool_)):  # (True was taken as 1 frame/s)
-            raise TypeError(f"frame_rate must be a number; got {frame_rate!r}")
         self.config = config
         self.confidence = confidence
         self.frame_rate = as_finite(frame_rate, "frame_rate", 0.0, above=True)
