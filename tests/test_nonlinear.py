@@ -133,6 +133,51 @@ def test_ekf_and_ukf_equal_the_kalman_filter_on_a_linear_model(rng, name):
     assert res.loglik == pytest.approx(float(kf.loglik), rel=1e-10)
 
 
+SINGULAR = {"two states equal": [[1.0, 1.0], [1.0, 1.0]],
+            "a velocity known": [[2.0, 0.0], [0.0, 0.0]],
+            "the state known": [[0.0, 0.0], [0.0, 0.0]]}
+
+
+@pytest.mark.parametrize("P0", SINGULAR.values(), ids=SINGULAR.keys())
+@pytest.mark.parametrize("batch", [False, True], ids=["one series", "a batch"])
+def test_the_ukf_from_a_singular_prior_is_the_kalman_filter(P0, batch):
+    """A prior known exactly along a direction has no Cholesky factor, but its sigma points
+    are well defined (at the mean along that direction): on a linear model the UKF from it is
+    the Kalman filter, one series (compiled points) or a batch (numpy's), updating from the
+    prior or predicting from it first. It was refused (or, with fused multiply-add, taken only
+    when the rounding of a pivot came out positive)."""
+    motion, meas = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1, r=1.0)
+    mats = dict(F=motion.F(1.0), Q=motion.Q(1.0), H=meas.H(2), R=meas.R())
+    x0 = np.array([0.5, 1.0])
+    for ys in (np.array([[0.3], [np.nan], [1.2], [2.9]]),
+               np.array([[np.nan], [0.3], [1.2], [2.9]])):
+        if batch:
+            ys = np.stack([ys, ys + 0.5])
+        res = UnscentedKalmanFilter(motion, meas).filter(ys, x0=x0, P0=P0)
+        kf = kalman_filter(ys, **mats, x0=x0, P0=P0)
+        np.testing.assert_allclose(res.means, kf.means, rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(res.covs, kf.covs, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(res.loglik, kf.loglik, rtol=1e-10)
+
+
+@pytest.mark.parametrize("pts", [MerweScaledSigmaPoints(alpha=0.5), JulierSigmaPoints(1.0)])
+def test_sigma_points_of_a_singular_covariance_have_that_covariance(pts):
+    """The points' weighted mean and covariance are the Gaussian's, for a semi-definite
+    covariance too (3 states, rank 1 and 2); one that is not semi-definite is refused."""
+    Wm, Wc = pts.weights(3)
+    x = np.array([1.0, -2.0, 0.5])
+    v = np.array([[1.0, 2.0, -1.0]])
+    for P in (v.T @ v, np.diag([4.0, 0.0, 1e-3]), np.zeros((3, 3))):
+        for got in (pts.points_one(x, P), pts.points(np.stack([x, x]), P)[1]):
+            d = got - x
+            np.testing.assert_allclose(Wm @ got, x, rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose((Wc[:, None] * d).T @ d, P, rtol=1e-12, atol=1e-14)
+    bad = np.array([[1.0, 2.0, 0.0], [2.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    for draw in (lambda: pts.points_one(x, bad), lambda: pts.points(np.stack([x, x]), bad)):
+        with pytest.raises(ValueError, match="^P must be positive semi-definite to draw sigma"):
+            draw()
+
+
 def test_batched_updates_equal_one_at_a_time(rng):
     motion, meas, ys, x0, P0, _ = linear_problem(rng)
     B = 5

@@ -63,11 +63,63 @@ __all__ = [
 ]
 
 
+_NOT_PSD = "P must be positive semi-definite to draw sigma points"
+
+
 def _sqrt(P: np.ndarray, scale: float) -> np.ndarray:
+    A = scale * P
     try:
-        return np.linalg.cholesky(scale * P)
+        return np.linalg.cholesky(A)
     except np.linalg.LinAlgError:
-        raise ValueError("g.cov must be positive definite to draw sigma points") from None
+        pass
+    # singular (a state known exactly along some direction): factor each as _psd_factor does
+    n = A.shape[-1]
+    flat = np.ascontiguousarray(A, dtype=np.float64).reshape(-1, n, n)
+    L = np.zeros_like(flat)
+    for b in range(flat.shape[0]):
+        if not _psd_factor(L[b], flat[b], n):
+            raise ValueError(_NOT_PSD)
+    return L.reshape(A.shape)
+
+
+@njit(cache=True, error_model="numpy")
+def _psd_factor(L, A, n):
+    """Factor a positive semi-definite ``A = L L'`` (``n x n``; the lower triangle of ``L`` is
+    written, the upper left as it was): Cholesky's steps (as ``chol_factor``, to the bit where
+    every pivot is beyond rounding), but a pivot within rounding of zero is zero, and so is
+    its column below it, whose entries must then be within rounding of zero too. Returns
+    False if ``A`` is not positive semi-definite (or holds NaN).
+
+    A covariance known exactly along a direction (``[[1, 1], [1, 1]]``: the two states equal)
+    has no Cholesky factor, but its sigma points are well defined: along that direction they
+    all lie at the mean."""
+    top = 0.0
+    for i in range(n):
+        top = max(top, A[i, i])
+    tol = 8.0 * n * 2.220446049250313e-16 * top  # the pivots' rounding, n steps of eps each
+    off = math.sqrt(tol * top) + tol  # |A_ri|^2 <= A_ii A_rr of a semi-definite matrix
+    for i in range(n):
+        d = A[i, i]
+        for p in range(i):
+            d -= L[i, p] * L[i, p]
+        pivot = d > tol
+        if not (pivot or d >= -tol):
+            return False
+        if pivot:
+            L[i, i] = math.sqrt(d)
+        else:
+            L[i, i] = 0.0
+        for r in range(i + 1, n):
+            s = A[r, i]
+            for p in range(i):
+                s -= L[r, p] * L[i, p]
+            if pivot:
+                L[r, i] = s / L[i, i]
+            elif abs(s) <= off:
+                L[r, i] = 0.0
+            else:
+                return False
+    return True
 
 
 # ---------------------------------------------------------------- compiled, one Gaussian
@@ -80,7 +132,7 @@ def _sqrt(P: np.ndarray, scale: float) -> np.ndarray:
 def _points_one(x, P, scale, out):
     n = x.shape[0]
     L = np.zeros((n, n))  # (the upper triangle stays zero)
-    if not chol_factor(L, scale * P, n):
+    if not _psd_factor(L, scale * P, n):
         return False
     for k in range(n):
         out[0, k] = x[k]
@@ -211,7 +263,7 @@ class _SigmaPoints:
         x : (n,) ndarray
             Mean.
         P : (n, n) ndarray
-            Covariance, positive definite.
+            Covariance, positive semi-definite.
 
         Returns
         -------
@@ -221,7 +273,7 @@ class _SigmaPoints:
         Raises
         ------
         ValueError
-            If ``P`` is not positive definite, or the points' parameters give
+            If ``P`` is not positive semi-definite, or the points' parameters give
             :math:`n + \lambda \le 0`.
 
         Examples
@@ -236,7 +288,7 @@ class _SigmaPoints:
         n = x.shape[0]
         out = np.empty((2 * n + 1, n))
         if not _points_one(x, P, float(n + self._lam(n)), out):
-            raise ValueError("g.cov must be positive definite to draw sigma points")
+            raise ValueError(_NOT_PSD)
         return out
 
     def points(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -250,7 +302,7 @@ class _SigmaPoints:
         x : (..., n) ndarray
             Means; the leading dimensions index the batch.
         P : (..., n, n) ndarray
-            Covariances, positive definite.
+            Covariances, positive semi-definite.
 
         Returns
         -------
@@ -260,7 +312,7 @@ class _SigmaPoints:
         Raises
         ------
         ValueError
-            If a covariance is not positive definite, or the points' parameters give
+            If a covariance is not positive semi-definite, or the points' parameters give
             :math:`n + \lambda \le 0`.
 
         Examples
@@ -478,7 +530,7 @@ def ukf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     Parameters
     ----------
     g : Gaussian
-        Mean ``(..., n)`` and covariance ``(..., n, n)``, positive definite; the leading
+        Mean ``(..., n)`` and covariance ``(..., n, n)``, positive semi-definite; the leading
         dimensions index the batch.
     motion : motion model
         Nonlinear (``f``, ``jacobian``, ``Q``; :mod:`vistrack.models.nonlinear`) or linear
@@ -506,7 +558,7 @@ def ukf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
         If ``g`` is not a :class:`~vistrack.types.Gaussian`, or ``motion`` is not a motion
         model.
     ValueError
-        If a covariance is not positive definite (no sigma points).
+        If a covariance is not positive semi-definite (no sigma points).
 
     References
     ----------
@@ -575,7 +627,7 @@ def ukf_update(g: Gaussian, y: ArrayLike,
     Parameters
     ----------
     g : Gaussian
-        The prior: mean ``(..., n)`` and covariance ``(..., n, n)``, positive definite.
+        The prior: mean ``(..., n)`` and covariance ``(..., n, n)``, positive semi-definite.
     y : (..., m) array_like
         One measurement per Gaussian; NaN components are missing (they neither correct the
         state nor count in the log-likelihood).
@@ -607,7 +659,7 @@ def ukf_update(g: Gaussian, y: ArrayLike,
         measurement model.
     ValueError
         If ``y`` does not have shape ``(..., m)`` matching ``g``, a covariance is not
-        positive definite, or the innovation covariance is not (``R`` must be positive
+        positive semi-definite, or the innovation covariance is not (``R`` must be positive
         definite on the observed components).
 
     References
@@ -742,7 +794,8 @@ class UnscentedKalmanFilter:
         x0 : (n,) or (B, n) array_like
             Prior mean of the first step.
         P0 : (n, n) or (B, n, n) array_like
-            Prior covariance of the first step, positive definite.
+            Prior covariance of the first step, positive semi-definite (a state known exactly
+            along a direction has its sigma points there at the mean).
         dt : float or (T,) array_like
             Time step; ``dt[t]`` is the step from ``t-1`` to ``t``.
         times : (T,) array_like, optional
@@ -757,7 +810,8 @@ class UnscentedKalmanFilter:
         Raises
         ------
         ValueError
-            If the shapes disagree with the models, or a covariance is not positive definite.
+            If the shapes disagree with the models, or a covariance is not positive
+            semi-definite.
 
         Examples
         --------
