@@ -117,6 +117,69 @@ def compare_builds_with_numba() -> int:
     return checked
 
 
+@pytest.mark.slow
+def test_the_kalman_kernels_give_the_same_bits_whatever_numba_compiled_before(tmp_path):
+    """The Kalman update, filter, smoother and EM kernels, compiled by numba in one process from
+    an empty cache, compiled after another process compiled and cached the Cholesky solves they
+    call, and built ahead of time: the same bits. (With fused multiply-add allowed, the first two
+    differed in the update and EM: the kernel that loaded the solves from the cache could not
+    inline them.)"""
+
+    def bits(cache, prebuilt="0"):
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / cache),
+                   VISTRACK_CACHE_DIR=str(tmp_path / "kernels"), VISTRACK_PREBUILT=prebuilt)
+        r = subprocess.run([sys.executable, "-c", "from tests.test_prebuilt import "
+                            "kalman_bits as f; print(f())"], cwd=ROOT, env=env,
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr[-3000:]
+        return ast.literal_eval(r.stdout.strip().splitlines()[-1])
+
+    fresh = bits("fresh")
+    solves = textwrap.dedent("""
+        import numpy as np
+        from vistrack.filters._kernels import chol_solve
+        chol_solve(np.zeros((3, 3)), np.eye(3), np.ones((3, 2)), 3, 2)
+    """)
+    subprocess.run([sys.executable, "-c", solves], cwd=ROOT, check=True,
+                   env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "solves first")))
+    assert bits("solves first") == fresh
+    if _prebuilt.status().startswith("ahead-of-time kernels in use"):
+        assert bits("ahead of time", prebuilt="1") == fresh
+
+
+def kalman_bits() -> dict[str, str]:
+    """Digests of the outputs of the Kalman kernels on fixed data (the test above, in a process
+    of its own)."""
+    import hashlib
+
+    import vistrack as vt
+    from vistrack.filters import _kernels
+
+    rng = np.random.default_rng(0)
+
+    def digest(*arrays):
+        return hashlib.sha256(b"".join(np.ascontiguousarray(a).tobytes()
+                                       for a in arrays)).hexdigest()[:16]
+
+    out = {}
+    for n, m, B in [(4, 2, 3), (4, 2, 20), (6, 3, 2)]:  # one at a time, in chunks; 6 states
+        G = rng.normal(size=(B, n, n))
+        P = G @ G.transpose(0, 2, 1) + 0.1 * np.eye(n)
+        x, y = rng.normal(size=(B, n)), rng.normal(size=(B, m))
+        H, R = np.eye(m, n), np.diag(rng.uniform(0.1, 2.0, m))
+        out[f"update {n}x{m}x{B}"] = digest(*_kernels.update_batch_py(x, P, y, H, R)[1:])
+    cv, pos = vt.ConstantVelocity(dim=2, q=0.3), vt.Position(dim=2, r=0.7)
+    model = dict(F=cv.F(1.0), Q=cv.Q(1.0), H=pos.H(4), R=pos.R())
+    ys = rng.normal(size=(3, 60, 2)).cumsum(1)
+    res = vt.filters.kalman_filter(ys, **model, x0=np.zeros(4), P0=np.eye(4))
+    out["filter"] = digest(res.means, res.covs, res.loglik)
+    sm = vt.filters.rts_smooth(res, F=model["F"], Q=model["Q"])
+    out["smoother"] = digest(sm.means, sm.covs)
+    fit = vt.filters.em(ys, **model, x0=np.zeros(4), P0=np.eye(4), max_iter=5)
+    out["em"] = digest(fit.Q, fit.R)
+    return out
+
+
 def _copy(x):
     if isinstance(x, np.ndarray):
         c = x.copy()
