@@ -160,10 +160,28 @@ def test_the_ukf_from_a_singular_prior_is_the_kalman_filter(P0, batch):
         np.testing.assert_allclose(res.loglik, kf.loglik, rtol=1e-10)
 
 
+def test_the_ukf_from_a_prior_singular_to_rounding_is_the_kalman_filter():
+    """A rank-2 prior of 4 states whose smallest eigenvalue came out -1.2e-15 (of 5.6) in
+    floating point: the prior check accepts it, and so do the sigma points (a Cholesky factor
+    with a tolerance refused it)."""
+    V = np.array([[-1.3, 0.3], [1.3, -0.4], [-1.3, -1.5], [-0.7, 1.6]])
+    P0 = V @ V.T
+    motion, meas = vt.ConstantVelocity(dim=2, q=0.1), vt.Position(dim=2, r=1.0)
+    mats = dict(F=motion.F(1.0), Q=motion.Q(1.0), H=meas.H(4), R=meas.R())
+    ys = np.array([[0.3, -0.2], [np.nan, np.nan], [1.2, 0.4], [2.9, 1.1]])
+    for y in (ys, np.stack([ys, ys + 0.5])):
+        res = UnscentedKalmanFilter(motion, meas).filter(y, x0=np.zeros(4), P0=P0)
+        kf = kalman_filter(y, **mats, x0=np.zeros(4), P0=P0)
+        np.testing.assert_allclose(res.means, kf.means, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(res.covs, kf.covs, rtol=1e-9, atol=1e-11)
+
+
 @pytest.mark.parametrize("pts", [MerweScaledSigmaPoints(alpha=0.5), JulierSigmaPoints(1.0)])
 def test_sigma_points_of_a_singular_covariance_have_that_covariance(pts):
     """The points' weighted mean and covariance are the Gaussian's, for a semi-definite
-    covariance too (3 states, rank 1 and 2); one that is not semi-definite is refused."""
+    covariance too (3 states, rank 1 and 2, and zero); a covariance that is not semi-definite
+    is refused, named as the caller's argument; one that is positive definite keeps its
+    Cholesky factor however badly scaled, and a batch's other members keep theirs."""
     Wm, Wc = pts.weights(3)
     x = np.array([1.0, -2.0, 0.5])
     v = np.array([[1.0, 2.0, -1.0]])
@@ -173,9 +191,21 @@ def test_sigma_points_of_a_singular_covariance_have_that_covariance(pts):
             np.testing.assert_allclose(Wm @ got, x, rtol=1e-12, atol=1e-12)
             np.testing.assert_allclose((Wc[:, None] * d).T @ d, P, rtol=1e-12, atol=1e-14)
     bad = np.array([[1.0, 2.0, 0.0], [2.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-    for draw in (lambda: pts.points_one(x, bad), lambda: pts.points(np.stack([x, x]), bad)):
-        with pytest.raises(ValueError, match="^P must be positive semi-definite to draw sigma"):
+    for draw, name in ((lambda: pts.points_one(x, bad), "P"),
+                       (lambda: pts.points(np.stack([x, x]), bad), "P"),
+                       (lambda: ukf_update(vt.Gaussian(x, bad), np.ones(1),
+                                           vt.Position(dim=1, r=1.0), points=pts), "g.cov")):
+        with pytest.raises(ValueError, match=f"^{name} must be positive semi-definite; its "
+                                             "smallest eigenvalue is -1$"):
             draw()
+    with pytest.raises(ValueError, match="^P must be finite to draw sigma points$"):
+        pts.points_one(x, np.diag([1.0, np.nan, 1.0]))
+    tiny = np.diag([1.0, 1e-16, 4.0])
+    n_lam = 3 + pts._lam(3)
+    np.testing.assert_allclose(pts.points_one(np.zeros(3), tiny)[1:4],
+                               np.sqrt(n_lam * np.diag(tiny)) * np.eye(3), rtol=1e-15)
+    both = pts.points(np.stack([x, x]), np.stack([tiny, v.T @ v]))
+    np.testing.assert_array_equal(both[0], pts.points(x, tiny))
 
 
 def test_batched_updates_equal_one_at_a_time(rng):
@@ -300,7 +330,7 @@ def test_nonlinear_filter_errors_name_the_argument(rng):
         flt.filter(np.ones((3, 2)), x0=np.ones(5), P0=np.eye(5), times=[0.0, 1.0])
     with pytest.raises(ValueError, match=r"y must have shape \(2,\)"):
         ekf_update(vt.Gaussian(np.ones(5), np.eye(5)), np.ones(3), meas)
-    with pytest.raises(ValueError, match="g.cov must be positive definite"):
+    with pytest.raises(ValueError, match=r"^g.cov must be positive semi-definite; its smallest "):
         ukf_update(vt.Gaussian(np.ones(5), -np.eye(5)), np.ones(2), meas)
     # an infinite measurement gave a mean of [inf, nan, ...] without a word, as kf_update
     # refuses it (NaN is a missing value)

@@ -2,7 +2,8 @@ r"""The unscented Kalman filter (seed 004: "propagate just a few sample points (
 around the mean exactly, then recover the covariance from them").
 
 Sigma points :math:`\chi_0 = x`, :math:`\chi_{\pm i} = x \pm (\sqrt{(n + \lambda) P})_i`
-(columns of the Cholesky factor), with mean weights ``Wm`` and covariance weights ``Wc``:
+(columns of the Cholesky factor; of a singular covariance, which has none, the symmetric
+root from its eigendecomposition), with mean weights ``Wm`` and covariance weights ``Wc``:
 
 - :class:`MerweScaledSigmaPoints` (van der Merwe's scaled points, parameters α, β, κ):
   :math:`\lambda = \alpha^2 (n + \kappa) - n`, :math:`W^m_0 = \lambda / (n + \lambda)`,
@@ -35,7 +36,8 @@ from numpy.typing import ArrayLike
 
 from .._jit import njit
 from .._prebuilt import kernel
-from ..models.adapters import MeasurementFunctions, MotionFunctions
+from .._validate import check_psd
+from ..models.adapters import MeasurementFunctions, MotionFunctions, psd_sqrt
 from ..models.nonlinear import _offset_mean
 from ..models.protocols import (
     MeasurementModel,
@@ -63,63 +65,37 @@ __all__ = [
 ]
 
 
-_NOT_PSD = "P must be positive semi-definite to draw sigma points"
-
-
-def _sqrt(P: np.ndarray, scale: float) -> np.ndarray:
-    A = scale * P
+def _sqrt(P: np.ndarray, scale: float, name: str) -> np.ndarray:
+    """Square roots ``L L' = scale P`` of a stack of covariances: LAPACK's Cholesky factors, or
+    where one has none, :func:`_root_semidefinite`'s."""
     try:
-        return np.linalg.cholesky(A)
+        return np.linalg.cholesky(scale * P)
     except np.linalg.LinAlgError:
-        pass
-    # singular (a state known exactly along some direction): factor each as _psd_factor does
-    n = A.shape[-1]
-    flat = np.ascontiguousarray(A, dtype=np.float64).reshape(-1, n, n)
-    L = np.zeros_like(flat)
-    for b in range(flat.shape[0]):
-        if not _psd_factor(L[b], flat[b], n):
-            raise ValueError(_NOT_PSD)
-    return L.reshape(A.shape)
+        return _root_semidefinite(P, scale, name)
 
 
-@njit(cache=True, error_model="numpy")
-def _psd_factor(L, A, n):
-    """Factor a positive semi-definite ``A = L L'`` (``n x n``; the lower triangle of ``L`` is
-    written, the upper left as it was): Cholesky's steps (as ``chol_factor``, to the bit where
-    every pivot is beyond rounding), but a pivot within rounding of zero is zero, and so is
-    its column below it, whose entries must then be within rounding of zero too. Returns
-    False if ``A`` is not positive semi-definite (or holds NaN).
-
-    A covariance known exactly along a direction (``[[1, 1], [1, 1]]``: the two states equal)
-    has no Cholesky factor, but its sigma points are well defined: along that direction they
-    all lie at the mean."""
-    top = 0.0
-    for i in range(n):
-        top = max(top, A[i, i])
-    tol = 8.0 * n * 2.220446049250313e-16 * top  # the pivots' rounding, n steps of eps each
-    off = math.sqrt(tol * top) + tol  # |A_ri|^2 <= A_ii A_rr of a semi-definite matrix
-    for i in range(n):
-        d = A[i, i]
-        for p in range(i):
-            d -= L[i, p] * L[i, p]
-        pivot = d > tol
-        if not (pivot or d >= -tol):
-            return False
-        if pivot:
-            L[i, i] = math.sqrt(d)
-        else:
-            L[i, i] = 0.0
-        for r in range(i + 1, n):
-            s = A[r, i]
-            for p in range(i):
-                s -= L[r, p] * L[i, p]
-            if pivot:
-                L[r, i] = s / L[i, i]
-            elif abs(s) <= off:
-                L[r, i] = 0.0
-            else:
-                return False
-    return True
+def _root_semidefinite(P: np.ndarray, scale: float, name: str) -> np.ndarray:
+    """Square roots ``L L' = scale P`` of a stack of covariances of which some have no Cholesky
+    factor: a state known exactly along a direction (``[[1, 1], [1, 1]]``: two states equal; a
+    zero variance) makes a covariance singular, and its sigma points are still well defined,
+    at the mean along that direction. Each matrix keeps its Cholesky factor if it has one
+    (so that a series' points do not depend on the others of its batch); the others take the
+    symmetric root from their eigendecomposition. The stack is checked first as the filters
+    check a prior (finite, symmetric, no eigenvalue below -1e-10 of its largest entry), the
+    error naming ``name``."""
+    P = np.asarray(P)
+    if not np.isfinite(P).all():
+        raise ValueError(f"{name} must be finite to draw sigma points")
+    check_psd(P, name)
+    n = P.shape[-1]
+    flat = (scale * P).reshape(-1, n, n)
+    out = np.empty(flat.shape, np.result_type(flat.dtype, np.float32))
+    for b, a in enumerate(flat):
+        try:
+            out[b] = np.linalg.cholesky(a)
+        except np.linalg.LinAlgError:
+            out[b] = psd_sqrt(a)
+    return out.reshape(P.shape)
 
 
 # ---------------------------------------------------------------- compiled, one Gaussian
@@ -132,7 +108,7 @@ def _psd_factor(L, A, n):
 def _points_one(x, P, scale, out):
     n = x.shape[0]
     L = np.zeros((n, n))  # (the upper triangle stays zero)
-    if not _psd_factor(L, scale * P, n):
+    if not chol_factor(L, scale * P, n):
         return False
     for k in range(n):
         out[0, k] = x[k]
@@ -255,8 +231,9 @@ class _SigmaPoints:
         r"""Sigma points of one Gaussian, by a compiled kernel.
 
         The same points as :meth:`points`: :math:`\chi_0 = x`, then
-        :math:`x + (\sqrt{(n + \lambda) P})_i` for each column ``i`` of the Cholesky factor,
-        then :math:`x - (\sqrt{(n + \lambda) P})_i`.
+        :math:`x + (\sqrt{(n + \lambda) P})_i` for each column ``i`` of the Cholesky factor
+        (of a singular ``P``, the symmetric root from its eigendecomposition), then
+        :math:`x - (\sqrt{(n + \lambda) P})_i`.
 
         Parameters
         ----------
@@ -285,17 +262,23 @@ class _SigmaPoints:
                [-1.732,  0.   ],
                [ 0.   , -1.732]])
         """
+        return self._one(x, P, "P")
+
+    def _one(self, x: np.ndarray, P: np.ndarray, name: str) -> np.ndarray:
         n = x.shape[0]
         out = np.empty((2 * n + 1, n))
-        if not _points_one(x, P, float(n + self._lam(n)), out):
-            raise ValueError(_NOT_PSD)
+        scale = float(n + self._lam(n))
+        if not _points_one(x, P, scale, out):  # no Cholesky factor: see _root_semidefinite
+            Lt = _root_semidefinite(P, scale, name).T
+            out[0], out[1:n + 1], out[n + 1:] = x, x + Lt, x - Lt
         return out
 
     def points(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
         r"""Sigma points of a batch of Gaussians.
 
         :math:`\chi_0 = x`, then :math:`x + (\sqrt{(n + \lambda) P})_i` for each column ``i``
-        of the Cholesky factor, then :math:`x - (\sqrt{(n + \lambda) P})_i`.
+        of the Cholesky factor (of a singular ``P``, the symmetric root from its
+        eigendecomposition), then :math:`x - (\sqrt{(n + \lambda) P})_i`.
 
         Parameters
         ----------
@@ -321,8 +304,11 @@ class _SigmaPoints:
         >>> pts.shape, pts[0, :, 0].round(3).tolist()
         ((3, 5, 2), [0.0, 0.707, 0.0, -0.707, 0.0])
         """
+        return self._many(x, P, "P")
+
+    def _many(self, x: np.ndarray, P: np.ndarray, name: str) -> np.ndarray:
         n = x.shape[-1]
-        L = _sqrt(P, n + self._lam(n))
+        L = _sqrt(P, n + self._lam(n), name)
         Lt = np.swapaxes(L, -1, -2)  # row i = column i of L
         return np.concatenate([x[..., None, :], x[..., None, :] + Lt, x[..., None, :] - Lt],
                               axis=-2)
@@ -582,11 +568,11 @@ def ukf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     n = g.mean.shape[-1]
     Wm, Wc = points.weights(n)
     if g.mean.ndim == 1 and state_mean is None and state_residual is None:
-        gamma = np.asarray(mo.f(points.points_one(g.mean, g.cov), dt, t), dtype=float)
+        gamma = np.asarray(mo.f(points._one(g.mean, g.cov, "g.cov"), dt, t), dtype=float)
         mean, cov = np.empty(n), np.empty((n, n))
         _state_moments_one(gamma, Wm, Wc, np.asarray(mo.Q(dt), dtype=float), mean, cov)
         return Gaussian(mean, cov)
-    chi = points.points(g.mean, g.cov)
+    chi = points._many(g.mean, g.cov, "g.cov")
     gamma = np.asarray(mo.f(chi, dt, t), dtype=float)
     mean, cov, _ = _transform(gamma, Wm, Wc, state_mean or _wmean, state_residual or _sub)
     return Gaussian(mean, symmetric(cov + mo.Q(dt)))
@@ -703,7 +689,7 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
     points = points or MerweScaledSigmaPoints()
     Wm, Wc = points.weights(n)
     if g.mean.ndim == 1 and me.standard and state_residual is None:
-        gamma = points.points_one(g.mean, g.cov)
+        gamma = points._one(g.mean, g.cov, "g.cov")
         xo, Po = np.empty(n), np.empty((n, n))
         ok, ll1 = _update_one(gamma, np.asarray(me.h(gamma), dtype=float), Wm, Wc, me.Rm, y,
                               me.angle_mask, g.mean, g.cov, xo, Po)
@@ -712,7 +698,7 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
                              "positive definite on the observed components")
         out = Gaussian(xo, Po)
         return out, np.asarray(ll1)
-    gamma = points.points(g.mean, g.cov)
+    gamma = points._many(g.mean, g.cov, "g.cov")
     obs = ~np.isnan(y)
     zs = np.asarray(me.h(gamma), dtype=float)
     zhat, Pzz, rz = _transform(zs, Wm, Wc, me.mean, me.residual)
