@@ -147,6 +147,41 @@ def test_the_kalman_kernels_give_the_same_bits_whatever_numba_compiled_before(tm
         assert bits("ahead of time", prebuilt="1") == fresh
 
 
+@pytest.mark.slow
+def test_the_affine_registration_gives_the_same_bits_compiled_or_loaded(tmp_path):
+    """The template and KLT trackers' multi-threaded registration (compiled on first use, not
+    ahead of time): the process that compiles it and the next, which loads it from numba's
+    cache, give the same bits. With fastmath=True they differed."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+               VISTRACK_CACHE_DIR=str(tmp_path / "kernels"))
+
+    def bits():
+        r = subprocess.run([sys.executable, "-c", "from tests.test_prebuilt import "
+                            "registration_bits as f; print(f())"], cwd=ROOT, env=env,
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr[-3000:]
+        return r.stdout.strip().splitlines()[-1]
+
+    assert bits() == bits()
+
+
+def registration_bits() -> str:
+    """A digest of the affine registration of 40 features on a fixed image (the test above)."""
+    import hashlib
+
+    from vistrack.tracking import _affine
+
+    rng = np.random.default_rng(0)
+    img = (rng.random((120, 160)) * 255 + np.add.outer(np.arange(120), np.arange(160)))
+    img = img.astype(np.float32)
+    c = rng.uniform(20, 100, size=(40, 2))
+    T, SD, Hinv, _ = _affine.prepare_templates(img, c, 7)
+    p = np.zeros((40, 6))
+    p[:, 4:] = c + rng.normal(0, 0.7, (40, 2))
+    rms = _affine.register(img, 7, T, SD, Hinv, p)
+    return hashlib.sha256(p.tobytes() + rms.tobytes()).hexdigest()[:16]
+
+
 def kalman_bits() -> dict[str, str]:
     """Digests of the outputs of the Kalman kernels on fixed data (the test above, in a process
     of its own)."""
