@@ -15,6 +15,7 @@ from vistrack.filters import (
     ekf_update,
     enkf_update,
     kalman_filter,
+    ukf_predict,
     ukf_update,
 )
 from vistrack.models import (
@@ -206,6 +207,26 @@ def test_sigma_points_of_a_singular_covariance_have_that_covariance(pts):
                                np.sqrt(n_lam * np.diag(tiny)) * np.eye(3), rtol=1e-15)
     both = pts.points(np.stack([x, x]), np.stack([tiny, v.T @ v]))
     np.testing.assert_array_equal(both[0], pts.points(x, tiny))
+    with pytest.raises(ValueError, match=r"^P\[1\] must be positive semi-definite; its "):
+        pts.points(np.stack([x, x]), np.stack([tiny, bad]))
+
+
+def test_one_gaussian_and_a_batch_of_one_get_the_same_points_of_a_singular_covariance():
+    """A rank-4 covariance of 5 states (smallest eigenvalue -3.9e-15 by rounding) has a
+    Cholesky factor by the compiled factorisation and none by LAPACK's: the one-Gaussian path
+    and the batch path took different roots (points 7 apart, a coordinated turn's prediction
+    4.6), both with the right moments; they take the same now."""
+    P = np.array([[6.0, 1, 1, 3, -1], [1, 14, -8, -3, 11], [1, -8, 7, 4, -6],
+                  [3, -3, 4, 15, -7], [-1, 11, -6, -7, 11]])
+    x = np.array([10.0, 0, 0, 1, 0.3])
+    for pts in (MerweScaledSigmaPoints(alpha=0.5), JulierSigmaPoints(1.0)):
+        np.testing.assert_allclose(pts.points_one(x, P), pts.points(x[None], P[None])[0],
+                                   rtol=0, atol=1e-12)
+        ct = vt.models.CoordinatedTurn(q=0.01)
+        one = ukf_predict(vt.Gaussian(x, P), ct, points=pts)
+        batch = ukf_predict(vt.Gaussian(x[None], P[None]), ct, points=pts)
+        np.testing.assert_allclose(one.mean, batch.mean[0], rtol=0, atol=1e-10)
+        np.testing.assert_allclose(one.cov, batch.cov[0], rtol=0, atol=1e-9)
 
 
 def test_batched_updates_equal_one_at_a_time(rng):

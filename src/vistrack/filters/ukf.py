@@ -2,8 +2,8 @@ r"""The unscented Kalman filter (seed 004: "propagate just a few sample points (
 around the mean exactly, then recover the covariance from them").
 
 Sigma points :math:`\chi_0 = x`, :math:`\chi_{\pm i} = x \pm (\sqrt{(n + \lambda) P})_i`
-(columns of the Cholesky factor; of a singular covariance, which has none, the symmetric
-root from its eigendecomposition), with mean weights ``Wm`` and covariance weights ``Wc``:
+(columns of the Cholesky factor; of a singular covariance, which may have none, a root
+from its eigendecomposition), with mean weights ``Wm`` and covariance weights ``Wc``:
 
 - :class:`MerweScaledSigmaPoints` (van der Merwe's scaled points, parameters α, β, κ):
   :math:`\lambda = \alpha^2 (n + \kappa) - n`, :math:`W^m_0 = \lambda / (n + \lambda)`,
@@ -76,25 +76,37 @@ def _sqrt(P: np.ndarray, scale: float, name: str) -> np.ndarray:
 
 def _root_semidefinite(P: np.ndarray, scale: float, name: str) -> np.ndarray:
     """Square roots ``L L' = scale P`` of a stack of covariances of which some have no Cholesky
-    factor: a state known exactly along a direction (``[[1, 1], [1, 1]]``: two states equal; a
-    zero variance) makes a covariance singular, and its sigma points are still well defined,
-    at the mean along that direction. Each matrix keeps its Cholesky factor if it has one
-    (so that a series' points do not depend on the others of its batch); the others take the
-    symmetric root from their eigendecomposition. The stack is checked first as the filters
-    check a prior (finite, symmetric, no eigenvalue below -1e-10 of its largest entry), the
-    error naming ``name``."""
+    factor by LAPACK, or none by :func:`chol_factor` (the one-Gaussian path's).
+
+    A state known exactly along a direction (``[[1, 1], [1, 1]]``: two states equal; a zero
+    variance) makes a covariance singular, and its sigma points are still well defined, at
+    the mean along that direction. Each matrix takes LAPACK's factor if it has one (so that a
+    series' points do not depend on the others of its batch), else :func:`chol_factor`'s (a
+    singular matrix may have one by rounding where LAPACK finds none: the one-Gaussian path
+    then gives the same points), else a root from its eigendecomposition (the eigenvectors
+    scaled by the square roots of their eigenvalues), after the check the filters give a prior
+    (finite, symmetric, no eigenvalue below -1e-10 of its largest entry), the error naming
+    ``name`` and the matrix's index in the stack."""
     P = np.asarray(P)
-    if not np.isfinite(P).all():
-        raise ValueError(f"{name} must be finite to draw sigma points")
-    check_psd(P, name)
-    n = P.shape[-1]
-    flat = (scale * P).reshape(-1, n, n)
+    n, lead = P.shape[-1], P.shape[:-2]
+    flat = P.reshape(-1, n, n)
     out = np.empty(flat.shape, np.result_type(flat.dtype, np.float32))
-    for b, a in enumerate(flat):
+    for b, p in enumerate(flat):
+        where = name + str(list(map(int, np.unravel_index(b, lead)))) if lead else name
+        if not np.isfinite(p).all():  # (LAPACK's factor of NaN is NaN, without an error)
+            raise ValueError(f"{where} must be finite to draw sigma points")
+        a = scale * p
         try:
             out[b] = np.linalg.cholesky(a)
+            continue
         except np.linalg.LinAlgError:
-            out[b] = psd_sqrt(a)
+            pass
+        L = np.zeros((n, n))
+        if chol_factor(L, np.ascontiguousarray(a, dtype=np.float64), n):
+            out[b] = L
+            continue
+        check_psd(p, where)
+        out[b] = psd_sqrt(a)
     return out.reshape(P.shape)
 
 
@@ -232,7 +244,7 @@ class _SigmaPoints:
 
         The same points as :meth:`points`: :math:`\chi_0 = x`, then
         :math:`x + (\sqrt{(n + \lambda) P})_i` for each column ``i`` of the Cholesky factor
-        (of a singular ``P``, the symmetric root from its eigendecomposition), then
+        (of a singular ``P``, which may have none, a root from its eigendecomposition), then
         :math:`x - (\sqrt{(n + \lambda) P})_i`.
 
         Parameters
@@ -277,7 +289,7 @@ class _SigmaPoints:
         r"""Sigma points of a batch of Gaussians.
 
         :math:`\chi_0 = x`, then :math:`x + (\sqrt{(n + \lambda) P})_i` for each column ``i``
-        of the Cholesky factor (of a singular ``P``, the symmetric root from its
+        of the Cholesky factor (of a singular ``P``, which may have none, a root from its
         eigendecomposition), then :math:`x - (\sqrt{(n + \lambda) P})_i`.
 
         Parameters

@@ -101,10 +101,10 @@ def prepare_templates(image: np.ndarray, centres: np.ndarray, half: int):
     return T, SD, Hinv, ok
 
 
-# fast-math without "no NaN" and "no inf": with them (fastmath=True), the registration loaded
-# from numba's cache gave other bits than in the process that compiled it (211 of 280 values
-# of a 40-feature test, up to 5e-14 apart); these flags give the compiling process's bits
-# either way
+# fast-math without "no NaN", "no inf" and approximate functions: with fastmath=True, the
+# registration loaded from numba's cache gave other bits than in the process that compiled it
+# (about three quarters of the values of a 40-feature test, up to 7e-14 apart); these flags
+# give the compiling process's bits either way (tests/test_prebuilt.py)
 @njit(cache=True, parallel=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
 def _register(img, half, T, SD, Hinv, p, iters, eps, rms):
     K = p.shape[0]
