@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import check_psd
+from .._validate import check_finite, check_psd
 from ..models.adapters import MeasurementFunctions, MotionFunctions, psd_sqrt
 from ..models.nonlinear import _offset_mean
 from ..models.protocols import (
@@ -74,7 +74,8 @@ def _sqrt(P: np.ndarray, scale: float, name: str) -> np.ndarray:
         return _root_semidefinite(P, scale, name)
 
 
-def _root_semidefinite(P: np.ndarray, scale: float, name: str) -> np.ndarray:
+def _root_semidefinite(P: np.ndarray, scale: float, name: str, *,
+                       compiled: bool = True) -> np.ndarray:
     """Square roots ``L L' = scale P`` of a stack of covariances of which some have no Cholesky
     factor by LAPACK, or none by :func:`chol_factor` (the one-Gaussian path's).
 
@@ -86,15 +87,14 @@ def _root_semidefinite(P: np.ndarray, scale: float, name: str) -> np.ndarray:
     then gives the same points), else a root from its eigendecomposition (the eigenvectors
     scaled by the square roots of their eigenvalues), after the check the filters give a prior
     (finite, symmetric, no eigenvalue below -1e-10 of its largest entry), the error naming
-    ``name`` and the matrix's index in the stack."""
+    ``name`` and the matrix's index in the stack. ``compiled=False``: the caller's
+    :func:`chol_factor` already found none."""
     P = np.asarray(P)
+    check_finite(P, name)  # (LAPACK's factor of NaN is NaN, without an error)
     n, lead = P.shape[-1], P.shape[:-2]
     flat = P.reshape(-1, n, n)
     out = np.empty(flat.shape, np.result_type(flat.dtype, np.float32))
     for b, p in enumerate(flat):
-        where = name + str(list(map(int, np.unravel_index(b, lead)))) if lead else name
-        if not np.isfinite(p).all():  # (LAPACK's factor of NaN is NaN, without an error)
-            raise ValueError(f"{where} must be finite to draw sigma points")
         a = scale * p
         try:
             out[b] = np.linalg.cholesky(a)
@@ -102,10 +102,10 @@ def _root_semidefinite(P: np.ndarray, scale: float, name: str) -> np.ndarray:
         except np.linalg.LinAlgError:
             pass
         L = np.zeros((n, n))
-        if chol_factor(L, np.ascontiguousarray(a, dtype=np.float64), n):
+        if compiled and chol_factor(L, np.ascontiguousarray(a, dtype=np.float64), n):
             out[b] = L
             continue
-        check_psd(p, where)
+        check_psd(p, name + str(list(map(int, np.unravel_index(b, lead)))) if lead else name)
         out[b] = psd_sqrt(a)
     return out.reshape(P.shape)
 
@@ -281,7 +281,7 @@ class _SigmaPoints:
         out = np.empty((2 * n + 1, n))
         scale = float(n + self._lam(n))
         if not _points_one(x, P, scale, out):  # no Cholesky factor: see _root_semidefinite
-            Lt = _root_semidefinite(P, scale, name).T
+            Lt = _root_semidefinite(P, scale, name, compiled=False).T
             out[0], out[1:n + 1], out[n + 1:] = x, x + Lt, x - Lt
         return out
 
