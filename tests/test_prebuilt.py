@@ -74,13 +74,19 @@ def test_each_build_equals_numbas_compilation_on_first_use(tmp_path):
     seed_numba_cache(tmp_path / "numba")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"),
                VISTRACK_CACHE_DIR=str(tmp_path / "kernels"))
-    r = subprocess.run([sys.executable, "-c", "from tests.test_prebuilt import "
-                        "compare_builds_with_numba as f; print(f())"], cwd=ROOT, env=env,
-                       capture_output=True, text=True)
-    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    compared = _in_a_process("compare_builds_with_numba", env)
     spec = json.loads(_prebuilt.SIGNATURES.read_text())["kernels"]
     # every build was used and compared at least once
-    assert int(r.stdout.split()[-1]) >= sum(map(len, spec.values()))
+    assert int(compared) >= sum(map(len, spec.values()))
+
+
+def _in_a_process(function: str, env: dict) -> str:
+    """The last line ``function()`` of this module prints in a Python process of its own with
+    the environment ``env`` (a first use: nothing this process compiled or cached enters)."""
+    r = subprocess.run([sys.executable, "-c", f"from tests.test_prebuilt import {function} "
+                        "as f; print(f())"], cwd=ROOT, env=env, capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    return r.stdout.strip().splitlines()[-1]
 
 
 def compare_builds_with_numba() -> int:
@@ -128,11 +134,7 @@ def test_the_kalman_kernels_give_the_same_bits_whatever_numba_compiled_before(tm
     def bits(cache, prebuilt="0"):
         env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / cache),
                    VISTRACK_CACHE_DIR=str(tmp_path / "kernels"), VISTRACK_PREBUILT=prebuilt)
-        r = subprocess.run([sys.executable, "-c", "from tests.test_prebuilt import "
-                            "kalman_bits as f; print(f())"], cwd=ROOT, env=env,
-                           capture_output=True, text=True)
-        assert r.returncode == 0, r.stderr[-3000:]
-        return ast.literal_eval(r.stdout.strip().splitlines()[-1])
+        return ast.literal_eval(_in_a_process("kalman_bits", env))
 
     fresh = bits("fresh")
     solves = textwrap.dedent("""
@@ -154,15 +156,7 @@ def test_the_affine_registration_gives_the_same_bits_compiled_or_loaded(tmp_path
     cache, give the same bits. With fastmath=True they differed."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"),
                VISTRACK_CACHE_DIR=str(tmp_path / "kernels"))
-
-    def bits():
-        r = subprocess.run([sys.executable, "-c", "from tests.test_prebuilt import "
-                            "registration_bits as f; print(f())"], cwd=ROOT, env=env,
-                           capture_output=True, text=True)
-        assert r.returncode == 0, r.stderr[-3000:]
-        return r.stdout.strip().splitlines()[-1]
-
-    assert bits() == bits()
+    assert _in_a_process("registration_bits", env) == _in_a_process("registration_bits", env)
 
 
 def registration_bits() -> str:
