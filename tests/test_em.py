@@ -508,6 +508,34 @@ def test_the_compiled_e_step_equals_the_general_one(B, T, x0_per_series, rng):
         np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-10)
 
 
+@pytest.mark.parametrize("B, T", [(1, 1000), (130, 60), (2, 2)])
+def test_the_compiled_e_step_reads_nothing_left_in_its_work_space(B, T, rng):
+    """EM gives the compiled E-step one work space for all its iterations (arrays allocated
+    afresh at each call doubled a first fit's time): what a call left there, or NaN, changes
+    nothing of the next, to the bit, over blocks of series and a remainder; a work space too
+    small is refused before anything is written."""
+    from vistrack.filters._estep import WORK_TOO_SMALL, estep_shared, work_layout
+
+    o, p = shared_problem(B, T, True, rng)
+    first = learn_module._SharedEStep(o, p)
+    work = o.work(4)
+    assert o.work(4) is work and work.shape == (work_layout.py_func(T, 4, 2, B)[0],)
+    learn_module._SharedEStep(o, {**p, "Q": 7.0 * p["Q"]})  # another model's run left there
+    again = learn_module._SharedEStep(o, p)
+    work[:] = np.nan
+    after_nan = learn_module._SharedEStep(o, p)
+    for e in (again, after_nan):
+        assert e.done and e.ll == first.ll
+        for name in ("A", "V", "ms0", "Ps0"):
+            assert getattr(e, name).tobytes() == getattr(first, name).tobytes(), name
+
+    args = [np.ascontiguousarray(p[k]) for k in ("F", "Q", "H", "R")]
+    outs = [np.full_like(a, -1.0) for a in (first.A, first.V, first.ms0, first.Ps0)]
+    out = np.zeros(2)
+    estep_shared(o.yt, *args, p["x0"], p["P0"], *outs, np.empty(work.size - 1), out)
+    assert out[1] == WORK_TOO_SMALL and all((a == -1.0).all() for a in outs)
+
+
 def test_the_process_noise_is_summed_term_by_term():
     """``E[w_t w_t']`` from the smoothed means' differences and the covariances equals ``S11
     - F S10' - S10 F' + F S00 F'`` (the textbook form) where that form loses nothing: near

@@ -25,11 +25,15 @@ from .._jit import njit
 from .._prebuilt import kernel
 from ._kernels import _FM, _LOG2PI, CH, back_solve, chol_factor, copy_mat, forward_solve
 
-__all__ = ["estep_shared", "NOT_POSITIVE"]
+__all__ = ["estep_shared", "work_layout", "NOT_POSITIVE", "WORK_TOO_SMALL"]
 
 NOT_POSITIVE = -2.0
 """``out[1]`` when a predicted covariance is singular: the smoother's gain needs its inverse
 (the caller then takes the general path, which says where)."""
+
+WORK_TOO_SMALL = -3.0
+"""``out[1]`` when the work space given is smaller than :func:`work_layout`'s size (nothing
+computed)."""
 
 _TINY = 4.0 * float(np.finfo(np.float64).eps)
 
@@ -306,25 +310,56 @@ def _add_repeats(a, v, repeats, A, V):
             V[k, q] += repeats * v[k, q]
 
 
+@njit(cache=True)
+def work_layout(T, n, m, B):
+    """The work space of :func:`estep_shared` for ``B`` series of ``T`` steps, ``n`` states and
+    ``m`` measured values: ``(size, rows, means, gap)``, its floats, the rows of series in a
+    block of the means' pass (:data:`CH` series at most, 8 more: see :func:`estep_shared`),
+    the floats of each of that pass's two arrays of means ``(T, n, rows)``, and the floats
+    between them. (From Python, ``work_layout.py_func``, which calls nothing compiled.)"""
+    rows = min(CH, B) + 8
+    means = T * n * rows
+    gap = ((2048 - 8 * means) % 4096) // 8
+    size = 2 * T * n * n + T * n * m + T * m * m + T + max(T - 1, 1) * n * n + 2 * means + gap
+    return size, rows, means, gap
+
+
 @kernel
 @njit(cache=True, fastmath=_FM)
-def estep_shared(yt, F, Q, H, R, x0, P0, A, V, ms0, Ps0, out):
+def estep_shared(yt, F, Q, H, R, x0, P0, A, V, ms0, Ps0, work, out):
     """The E-step of series ``ys (B, T, m)`` that share their covariances (see the module),
     from the prior ``x0 (1 or B, n)``, ``P0 (n, n)``: writes ``A (n, n) = sum E[w_t w_t']``
     over the transitions and series, ``V (m, m) = sum E[v_t v_t']`` over the measured steps
     and series, the smoothed first means ``ms0 (B, n)`` and covariance ``Ps0 (n, n)``, and
     ``out = [log-likelihood, status]``: status -1 when done, the step whose innovation
-    covariance is not positive definite, or :data:`NOT_POSITIVE`."""
+    covariance is not positive definite, :data:`NOT_POSITIVE` or :data:`WORK_TOO_SMALL`.
+
+    ``work`` holds the large arrays, at least :func:`work_layout`'s size: EM calls this once an
+    iteration, and arrays allocated afresh at each call cost as much again in a process that
+    has not yet freed memory of that size (the allocator maps new pages for them)."""
     T, m, B = yt.shape
     n = F.shape[0]
+    need, Wr, size, pad = work_layout(T, n, m, B)
+    if work.shape[0] < need:
+        out[1] = WORK_TOO_SMALL
+        return
     meas = np.empty(T, np.bool_)
     for t in range(T):
         meas[t] = not math.isnan(yt[t, 0, 0])
-    Pp = np.empty((T, n, n))
-    Pf = np.empty((T, n, n))
-    K = np.empty((T, n, m))
-    L = np.zeros((T, m, m))
-    logdet = np.empty(T)
+    o = 0
+    Pp = work[o:o + T * n * n].reshape((T, n, n))
+    o += T * n * n
+    Pf = work[o:o + T * n * n].reshape((T, n, n))
+    o += T * n * n
+    K = work[o:o + T * n * m].reshape((T, n, m))
+    o += T * n * m
+    L = work[o:o + T * m * m].reshape((T, m, m))
+    L[:] = 0.0
+    o += T * m * m
+    logdet = work[o:o + T]
+    o += T
+    X = work[o:o + max(T - 1, 1) * n * n].reshape((max(T - 1, 1), n, n))
+    o += max(T - 1, 1) * n * n
     same = np.zeros(T + 1, np.bool_)  # same[T] False: no step after the last
     src = np.empty(T, np.int64)
     xsrc = np.empty(max(T - 1, 1), np.int64)
@@ -335,7 +370,6 @@ def estep_shared(yt, F, Q, H, R, x0, P0, A, V, ms0, Ps0, out):
     if bad >= 0:
         out[1] = bad
         return
-    X = np.empty((max(T - 1, 1), n, n))
     if not _smoothed_covariances(meas, F, H, Pp, Pf, same, src, X, xsrc, A, V, Ps0):
         out[1] = NOT_POSITIVE
         return
@@ -355,14 +389,10 @@ def estep_shared(yt, F, Q, H, R, x0, P0, A, V, ms0, Ps0, out):
     # Each row of series is 64 bytes longer than the series: the processor stalls a load
     # whose address matches a pending store's in its last 12 bits, which rows of 128 series
     # (1 KiB) and page-aligned arrays would bring about at every step (3 to 4 times slower,
-    # measured). The corrected and predicted means share one buffer, the second 2 KiB off a
-    # multiple of 4 KiB from the first.
-    Wr = W + 8
-    size = T * n * Wr
-    pad = ((2048 - 8 * size) % 4096) // 8
-    buf = np.empty(2 * size + pad)
-    xf = buf[:size].reshape((T, n, Wr))  # each block's corrected and predicted means
-    xp = buf[size + pad:].reshape((T, n, Wr))
+    # measured). The predicted means lie 2 KiB off a multiple of 4 KiB from the corrected.
+    xf = work[o:o + size].reshape((T, n, Wr))  # each block's corrected and predicted means
+    o += size + pad
+    xp = work[o:o + size].reshape((T, n, Wr))
     x = np.empty((n, Wr))
     s = np.empty((n, Wr))
     sn = np.empty((n, Wr))

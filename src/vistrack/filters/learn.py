@@ -72,6 +72,7 @@ from .._validate import (
     check_linear_gaussian,
     check_prior,
 )
+from ._estep import WORK_TOO_SMALL, work_layout
 from ._estep import estep_shared as _estep_shared
 from .kalman import FilterResult, _is_dask, kalman_filter
 from .smoothers import rts_smooth
@@ -730,6 +731,7 @@ class _Observed:
         self.has_partial = bool(self.partial.any())
         self.count = some.sum(axis=0)
         self._yt: np.ndarray | None = None
+        self._work: np.ndarray | None = None
 
     @property
     def yt(self) -> np.ndarray:
@@ -737,6 +739,15 @@ class _Observed:
         if self._yt is None:
             self._yt = np.ascontiguousarray(self.y.transpose(1, 2, 0))
         return self._yt
+
+    def work(self, n: int) -> np.ndarray:
+        """The work space of :func:`._estep.estep_shared` for ``n`` states, made when first
+        asked for and the same for every iteration after."""
+        B, T, m = self.y.shape
+        size = work_layout.py_func(T, n, m, B)[0]
+        if self._work is None or self._work.shape[0] < size:
+            self._work = np.empty(size)
+        return self._work
 
 
 class _EStep:
@@ -838,7 +849,9 @@ class _SharedEStep:
         F, Q, H, R, P0 = (np.ascontiguousarray(p[k], dtype=np.float64)
                           for k in ("F", "Q", "H", "R", "P0"))
         x0 = np.ascontiguousarray(p["x0"], dtype=np.float64).reshape(-1, F.shape[0])
-        _estep_shared(o.yt, F, Q, H, R, x0, P0, *out_arrays, out)
+        _estep_shared(o.yt, F, Q, H, R, x0, P0, *out_arrays, o.work(F.shape[0]), out)
+        if out[1] == WORK_TOO_SMALL:  # pragma: no cover - work() sizes it
+            raise RuntimeError("the shared E-step's work space is too small")
         self.ll = float(out[0])
         self.done = out[1] == -1.0  # else the general E-step says what went wrong
 
