@@ -360,6 +360,42 @@ def test_a_command_served_by_the_build_does_not_import_numba(tmp_path):
     assert out.strip().splitlines()[-1] == "numba imported: False"
 
 
+def test_the_record_keeps_only_the_types_python_called_a_kernel_with(monkeypatch, tmp_path):
+    """A kernel that another compiled function calls is compiled for the caller's types too
+    (when the caller is compiled, not loaded from numba's cache): ``record`` leaves those
+    out, and a kernel no Python call reached, so that the record does not depend on what
+    numba's cache held."""
+    from vistrack import _prebuilt_build
+
+    @njit
+    def inner(x):
+        return x * 2.0
+
+    @njit
+    def outer(x):
+        return inner(x) + 1.0  # compiles inner for float64 as its callee
+
+    @njit
+    def never(x):
+        return x
+
+    monkeypatch.setattr(_prebuilt, "_REGISTRY", {})
+    k = _prebuilt.kernel(inner, key="tests:inner")
+    _prebuilt.kernel(never, key="tests:never")
+    never(np.zeros(2))  # compiled, but not through its kernel
+
+    def workloads(root):
+        assert outer(1.5) == 4.0
+        k(np.arange(3.0))
+        k(np.zeros((2, 2)))
+
+    monkeypatch.setattr(_prebuilt_build, "_workloads", workloads)
+    recorded = _prebuilt_build.record(tmp_path)
+    assert len(inner.nopython_signatures) == 3  # the float64 callee's, and Python's two
+    arrays = [[_prebuilt.encode(types.Array(types.float64, n, "C"))] for n in (1, 2)]
+    assert recorded == {"tests:inner": arrays}
+
+
 def test_the_argument_types_survive_json():
     from numba.np.numpy_support import from_dtype
 

@@ -182,16 +182,41 @@ def _more_workloads(root: Path, clip: Path, d: Path, ys: Any, cv: Any, pos: Any)
 
 
 def record(root: Path) -> dict[str, list[Any]]:
-    """Run :func:`_workloads` and return each wrapped kernel's argument types (encoded), in
-    the order they were compiled."""
-    _workloads(root)
+    """Run :func:`_workloads` and return each wrapped kernel's argument types (encoded) that
+    Python called it with, in the order they were compiled. A kernel that another compiled
+    function also calls is compiled for that caller's types too, when the caller is compiled
+    rather than loaded from numba's cache; those are left out, so that the record does not
+    depend on what the cache held (a build for them would serve no call)."""
+    called: dict[str, set[Any] | None] = {}  # None: a call of types only numba knows
+    original = _prebuilt.Kernel.__call__
+
+    def spy(self: _prebuilt.Kernel, *args: Any) -> Any:
+        key = [_prebuilt._argument(a) for a in args]
+        seen = called.setdefault(self.key, set())
+        if seen is not None:
+            if any(k is None for k in key):
+                called[self.key] = None
+            else:
+                seen.add(_prebuilt._frozen([_prebuilt._encoded(k) for k in key]))
+        return original(self, *args)
+
+    _prebuilt.Kernel.__call__ = spy  # type: ignore[method-assign]
+    try:
+        _workloads(root)
+    finally:
+        _prebuilt.Kernel.__call__ = original  # type: ignore[method-assign]
     out: dict[str, list[Any]] = {}
     for key, k in sorted(_prebuilt._REGISTRY.items()):
+        if key not in called:
+            continue
         sigs = []
         for args in k.jit.nopython_signatures:
             encoded = [encode(t) for t in args.args]
             if tuple(decode(e) for e in encoded) != tuple(args.args):
                 raise TypeError(f"{key}: {args.args} does not survive encoding")
+            seen = called[key]
+            if seen is not None and _prebuilt._frozen(encoded) not in seen:
+                continue
             sigs.append(encoded)
         if sigs:
             out[key] = sigs
