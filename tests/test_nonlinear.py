@@ -693,3 +693,51 @@ def test_an_imm_of_nonlinear_members_names_a_measurement_of_another_size():
     with pytest.raises(ValueError, match=r"ys must have 1 measurement components \(last "
                                          r"axis\), as Position\(dim=1\) measures; got 2"):
         imm.filter(np.ones((3, 2)), x0=[0.0, 0.0], P0=np.eye(2))
+
+
+def _nan_after(step):
+    """A constant-velocity motion whose ``f`` gives NaN for the predictions to ``step`` and
+    after, and a position measurement whose ``h`` gives NaN where the position passes
+    ``step - 0.5`` (the series below moves one a step): a model that fails mid-run."""
+    F = np.array([[1.0, 1.0], [0.0, 1.0]])
+
+    def f(x, dt, t):
+        return x @ F.T + (np.nan if t >= step else 0.0)
+
+    def h(x):
+        return np.where(x[..., :1] > step - 0.5, np.nan, x[..., :1])
+
+    jac_h = lambda x: np.broadcast_to(np.array([[1.0, 0.0]]), x.shape[:-1] + (1, 2))  # noqa: E731
+    motion = NonlinearMotion(f, 0.01 * np.eye(2), 2, jacobian=lambda x, dt, t: np.broadcast_to(
+        F, x.shape[:-1] + (2, 2)))
+    return motion, NonlinearMeasurement(h, np.eye(1), ndim_state=2, jacobian=jac_h)
+
+
+@pytest.mark.parametrize("cls", [ExtendedKalmanFilter, UnscentedKalmanFilter,
+                                 EnsembleKalmanFilter])
+@pytest.mark.parametrize("batch", [False, True])
+def test_a_model_that_gives_nan_mid_run_is_named_at_the_first_step_it_did(cls, batch):
+    """NaN from the user's ``f`` or ``h`` was carried silently to every later step (the EKF,
+    the UKF on a batch), or reported a step late as the next step's "g.cov must be finite"
+    or as R not positive definite (the UKF on one series): the filter now names the step
+    and the series where the prediction or the correction first stopped being finite."""
+    ys = np.arange(8.0)[:, None] + 0.01 * np.sin(np.arange(8.0))[:, None]
+    Y = np.stack([ys, ys]) if batch else ys
+    series = " of series 0" if batch else ""
+    motion, measurement = _nan_after(5)
+    linear_pos = vt.Position(dim=1)
+    kw = {"n_members": 64, "rng": 0} if cls is EnsembleKalmanFilter else {}
+    with np.errstate(invalid="ignore"):
+        with pytest.raises(ValueError, match=f"^the prediction to step 5{series} is not finite "
+                           r"\(mean \[nan nan\].*: the motion model gave NaN or infinity there"):
+            cls(motion, linear_pos, **kw).filter(Y, x0=[0.0, 1.0], P0=np.eye(2))
+        if cls is EnsembleKalmanFilter:
+            return  # its measurement model is linear
+        cv = vt.ConstantVelocity(dim=1, q=0.01)
+        match = (f"the correction at step 5{series} is not finite.*the measurement model gave"
+                 if batch or cls is ExtendedKalmanFilter else
+                 r"^step 5: the measurement model gave NaN or infinity at sigma point 0: h\(")
+        with pytest.raises(ValueError, match=match):
+            cls(cv, measurement).filter(Y, x0=[0.0, 1.0], P0=np.eye(2))
+    res = cls(cv, measurement).filter(Y[..., :5, :], x0=[0.0, 1.0], P0=np.eye(2))
+    assert np.isfinite(res.means).all()  # before it, the same model runs

@@ -89,19 +89,29 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
     pmeans = np.empty((B, T, n))
     pcovs = np.empty((B, T, n, n))
     loglik = np.zeros(B)
-    for t in range(T):
-        if t > 0:
-            state = predict(state, float(dts[t]), float(times[t]))
-        pm, pc = _moments(state)
-        pmeans[:, t], pcovs[:, t] = pm, pc
-        y = Y[..., t, :]
-        if np.isnan(y).all():
-            mean, cov = pm, pc
-        else:
-            state, ll = update(state, y)
-            loglik += ll
-            mean, cov = _moments(state)
-        means[:, t], covs[:, t] = mean, cov
+    t, predicted = 0, 0  # the steps whose predictions are stored
+    try:
+        for t in range(T):
+            if t > 0:
+                state = predict(state, float(dts[t]), float(times[t]))
+            pm, pc = _moments(state)
+            pmeans[:, t], pcovs[:, t] = pm, pc
+            predicted = t + 1
+            y = Y[..., t, :]
+            if np.isnan(y).all():
+                mean, cov = pm, pc
+            else:
+                state, ll = update(state, y)
+                loglik += ll
+                mean, cov = _moments(state)
+            means[:, t], covs[:, t] = mean, cov
+    except ValueError as e:  # a state the step could not take: where it went wrong first
+        raise ValueError(_not_finite(pmeans[:, :predicted], pcovs[:, :predicted],
+                                     means[:, :t], covs[:, :t], B > 1)
+                         or f"step {t}: {e}") from e
+    bad = _not_finite(pmeans, pcovs, means, covs, B > 1)
+    if bad:
+        raise ValueError(bad)
     last = Gaussian(means[:, -1], covs[:, -1])
     if single:
         means, covs, pmeans, pcovs = means[0], covs[0], pmeans[0], pcovs[0]
@@ -109,6 +119,32 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
         last = Gaussian(last.mean[0], last.cov[0])
     _readonly(means, covs, pmeans, pcovs)
     return FilterResult(means, covs, pmeans, pcovs, np.asarray(loglik), last, False)
+
+
+def _not_finite(pmeans: np.ndarray, pcovs: np.ndarray, means: np.ndarray, covs: np.ndarray,
+                batch: bool) -> str | None:
+    """The first step whose prediction or correction ``(B, T, ...)`` is not finite, said (a
+    model that gave NaN or infinity, which every step after would carry), or None. The
+    corrections may stop a step before the predictions."""
+    ok_p = np.isfinite(pmeans).all(-1) & np.isfinite(pcovs).all((-2, -1))
+    ok_c = np.ones_like(ok_p)
+    T = means.shape[1]
+    ok_c[:, :T] = np.isfinite(means).all(-1) & np.isfinite(covs).all((-2, -1))
+    bad = ~(ok_p & ok_c)
+    if not bad.any():
+        return None
+    t = int(np.flatnonzero(bad.any(axis=0))[0])
+    b = int(np.flatnonzero(bad[:, t])[0])
+    series = f" of series {b}" if batch else ""
+    if not ok_p[b, t]:
+        m, P = pmeans[b, t], pcovs[b, t]
+        what, model = f"the prediction to step {t}{series}", "the motion model"
+    else:
+        m, P = means[b, t], covs[b, t]
+        what, model = f"the correction at step {t}{series}", "the measurement model"
+    return (f"{what} is not finite (mean {np.array2string(m, precision=4)}, variances "
+            f"{np.array2string(np.diagonal(P), precision=4)}): {model} gave NaN or infinity "
+            "there")
 
 
 def _moments(state: Gaussian | _Moments) -> tuple[np.ndarray, np.ndarray]:

@@ -359,6 +359,13 @@ class EnsembleKalmanFilter:
             The ensembles' sample means ``(..., T, n)`` and covariances ``(..., T, n, n)``,
             their predictions, and the log-likelihood ``(...)``.
 
+        Raises
+        ------
+        ValueError
+            If the shapes disagree with the models, ``P0`` is not positive semi-definite, or a
+            model gives NaN or infinity (the error names the first step, and series, whose
+            prediction or correction it made so).
+
         Examples
         --------
         Two series at once:

@@ -703,9 +703,14 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
     if g.mean.ndim == 1 and me.standard and state_residual is None:
         gamma = points._one(g.mean, g.cov, "g.cov")
         xo, Po = np.empty(n), np.empty((n, n))
-        ok, ll1 = _update_one(gamma, np.asarray(me.h(gamma), dtype=float), Wm, Wc, me.Rm, y,
-                              me.angle_mask, g.mean, g.cov, xo, Po)
+        z = np.asarray(me.h(gamma), dtype=float)
+        ok, ll1 = _update_one(gamma, z, Wm, Wc, me.Rm, y, me.angle_mask, g.mean, g.cov, xo, Po)
         if not ok:
+            if not np.isfinite(z).all():
+                k = int(np.flatnonzero(~np.isfinite(z).all(axis=-1))[0])
+                raise ValueError(f"the measurement model gave NaN or infinity at sigma point "
+                                 f"{k}: h({np.array2string(gamma[k], precision=4)}) = "
+                                 f"{np.array2string(z[k], precision=4)}")
             raise ValueError("the innovation covariance is not positive definite; R must be "
                              "positive definite on the observed components")
         out = Gaussian(xo, Po)
@@ -808,8 +813,9 @@ class UnscentedKalmanFilter:
         Raises
         ------
         ValueError
-            If the shapes disagree with the models, or a covariance is not positive
-            semi-definite.
+            If the shapes disagree with the models, a covariance is not positive
+            semi-definite, or a model gives NaN or infinity (the error names the first step,
+            and series, whose prediction or correction it made so).
 
         Examples
         --------
