@@ -362,9 +362,9 @@ def test_a_command_served_by_the_build_does_not_import_numba(tmp_path):
 
 def test_the_record_keeps_only_the_types_python_called_a_kernel_with(monkeypatch, tmp_path):
     """A kernel that another compiled function calls is compiled for the caller's types too
-    (when the caller is compiled, not loaded from numba's cache): ``record`` leaves those
-    out, and a kernel no Python call reached, so that the record does not depend on what
-    numba's cache held."""
+    (when the caller is compiled, not loaded from numba's cache), literals among them, which
+    have no encoding: ``record`` leaves those out, and a kernel no Python call reached, so
+    that the record does not depend on what numba's cache held."""
     from vistrack import _prebuilt_build
 
     @njit
@@ -373,7 +373,7 @@ def test_the_record_keeps_only_the_types_python_called_a_kernel_with(monkeypatch
 
     @njit
     def outer(x):
-        return inner(x) + 1.0  # compiles inner for float64 as its callee
+        return inner(x) + inner(3)  # compiles inner for float64 and the literal 3 (callee)
 
     @njit
     def never(x):
@@ -385,15 +385,36 @@ def test_the_record_keeps_only_the_types_python_called_a_kernel_with(monkeypatch
     never(np.zeros(2))  # compiled, but not through its kernel
 
     def workloads(root):
-        assert outer(1.5) == 4.0
+        assert outer(1.5) == 9.0
         k(np.arange(3.0))
         k(np.zeros((2, 2)))
 
     monkeypatch.setattr(_prebuilt_build, "_workloads", workloads)
     recorded = _prebuilt_build.record(tmp_path)
-    assert len(inner.nopython_signatures) == 3  # the float64 callee's, and Python's two
+    assert len(inner.nopython_signatures) == 4  # the callee's two, and Python's two
     arrays = [[_prebuilt.encode(types.Array(types.float64, n, "C"))] for n in (1, 2)]
     assert recorded == {"tests:inner": arrays}
+
+
+def test_a_ukf_batch_with_a_singular_member_does_not_import_numba():
+    """The sigma points of a batch member with no Cholesky factor by LAPACK come from the
+    compiled factor, called from Python: served by the build, as the one-Gaussian path's
+    calls are (it compiled with numba, about a second, on a build that otherwise never
+    imports it)."""
+    script = textwrap.dedent("""
+        import sys
+        import numpy as np
+        import vistrack as vt
+        from vistrack.filters import UnscentedKalmanFilter
+        ukf = UnscentedKalmanFilter(vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1))
+        ys = np.stack([np.arange(5.0), -np.arange(5.0)])[..., None]
+        P0 = np.stack([np.eye(2), np.ones((2, 2))])  # the second: two states equal
+        assert np.isfinite(ukf.filter(ys, x0=[0.0, 0.0], P0=P0).means).all()
+        print("numba imported:", "numba" in sys.modules)
+    """)
+    out = subprocess.run([sys.executable, "-c", script], check=True, capture_output=True,
+                         text=True).stdout
+    assert out.strip().splitlines()[-1] == "numba imported: False"
 
 
 def test_the_argument_types_survive_json():

@@ -56,6 +56,10 @@ from ._nonlinear import (
 from .kalman import FilterResult
 from .reference import masked_innovation, symmetric
 
+_chol_factor = kernel(chol_factor)
+""":func:`chol_factor` for calls from Python (built at install: a batch with a singular member
+does not compile it with numba)."""
+
 __all__ = [
     "MerweScaledSigmaPoints",
     "JulierSigmaPoints",
@@ -102,7 +106,7 @@ def _root_semidefinite(P: np.ndarray, scale: float, name: str, *,
         except np.linalg.LinAlgError:
             pass
         L = np.zeros((n, n))
-        if compiled and chol_factor(L, np.ascontiguousarray(a, dtype=np.float64), n):
+        if compiled and _chol_factor(L, np.ascontiguousarray(a, dtype=np.float64), n):
             out[b] = L
             continue
         check_psd(p, name + str(list(map(int, np.unravel_index(b, lead)))) if lead else name)
