@@ -741,3 +741,57 @@ def test_a_model_that_gives_nan_mid_run_is_named_at_the_first_step_it_did(cls, b
             cls(cv, measurement).filter(Y, x0=[0.0, 1.0], P0=np.eye(2))
     res = cls(cv, measurement).filter(Y[..., :5, :], x0=[0.0, 1.0], P0=np.eye(2))
     assert np.isfinite(res.means).all()  # before it, the same model runs
+
+
+@pytest.mark.parametrize("cls", [ExtendedKalmanFilter, UnscentedKalmanFilter,
+                                 EnsembleKalmanFilter])
+def test_a_models_own_error_mid_run_keeps_its_type(cls):
+    """An error a step raises is prefixed with the step only when it is a plain ValueError;
+    the model's own (numpy's LinAlgError, a subclass of ValueError, or the user's) passes as
+    it was, for the caller that catches it."""
+    class OffTheMap(ValueError):
+        pass
+
+    F = np.array([[1.0, 1.0], [0.0, 1.0]])
+    kw = {"n_members": 16, "rng": 0} if cls is EnsembleKalmanFilter else {}
+    ys = np.arange(6.0)[:, None]
+    for error in (np.linalg.LinAlgError, OffTheMap):
+        def f(x, dt, t, error=error):
+            if t >= 3:
+                raise error("out of the model's domain")
+            return x @ F.T
+
+        motion = NonlinearMotion(f, 0.01 * np.eye(2), 2, jacobian=lambda x, dt, t:
+                                 np.broadcast_to(F, x.shape[:-1] + (2, 2)))
+        with pytest.raises(error, match="^out of the model's domain$") as info:
+            cls(motion, vt.Position(dim=1), **kw).filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
+        assert type(info.value) is error
+
+    def g(x, dt, t):
+        if t >= 3:
+            raise ValueError("plain")
+        return x @ F.T
+
+    with pytest.raises(ValueError, match="^step 3: plain$"):
+        cls(NonlinearMotion(g, 0.01 * np.eye(2), 2), vt.Position(dim=1), **kw).filter(
+            ys, x0=[0.0, 1.0], P0=np.eye(2))
+
+
+def test_the_ukf_blames_h_only_for_a_component_it_uses():
+    """A component missing from ``y`` is not used, so ``h``'s NaN there is no fault: where
+    the innovation covariance fails for another reason (here Julier's negative centre weight
+    on a steep ``h``), the error says so rather than blaming ``h``; NaN in a used component
+    is named."""
+    def h(x, bad=1):
+        z = np.stack([100 * x[..., 0] ** 2, x[..., 1]], axis=-1)
+        z[..., bad] = np.nan
+        return z
+
+    g, points = vt.Gaussian(np.zeros(2), np.eye(2)), JulierSigmaPoints(kappa=-1.9)
+    me = NonlinearMeasurement(h, np.eye(2), ndim_state=2)
+    with pytest.raises(ValueError, match="^the innovation covariance is not positive definite"):
+        ukf_update(g, [1.0, np.nan], me, points=points)
+    me = NonlinearMeasurement(lambda x: h(x, bad=0), np.eye(2), ndim_state=2)
+    with pytest.raises(ValueError, match=r"^the measurement model gave NaN or infinity at sigma "
+                       r"point 0: h\(\[0\. 0\.\]\) = \[nan  0\.\]$"):
+        ukf_update(g, [1.0, 0.5], me, points=points)

@@ -106,9 +106,13 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
                 mean, cov = _moments(state)
             means[:, t], covs[:, t] = mean, cov
     except ValueError as e:  # a state the step could not take: where it went wrong first
-        raise ValueError(_not_finite(pmeans[:, :predicted], pcovs[:, :predicted],
-                                     means[:, :t], covs[:, :t], B > 1)
-                         or f"step {t}: {e}") from e
+        bad = _not_finite(pmeans[:, :predicted], pcovs[:, :predicted], means[:, :t],
+                          covs[:, :t], B > 1)
+        if bad:
+            raise ValueError(bad) from e
+        if type(e) is ValueError:
+            raise ValueError(f"step {t}: {e}") from e
+        raise  # the model's own error (numpy's LinAlgError, a user's class) as it was
     bad = _not_finite(pmeans, pcovs, means, covs, B > 1)
     if bad:
         raise ValueError(bad)

@@ -710,8 +710,9 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
         z = np.asarray(me.h(gamma), dtype=float)
         ok, ll1 = _update_one(gamma, z, Wm, Wc, me.Rm, y, me.angle_mask, g.mean, g.cov, xo, Po)
         if not ok:
-            if not np.isfinite(z).all():
-                k = int(np.flatnonzero(~np.isfinite(z).all(axis=-1))[0])
+            zo = z[:, ~np.isnan(y)]  # (a missing component's value is not used)
+            if not np.isfinite(zo).all():
+                k = int(np.flatnonzero(~np.isfinite(zo).all(axis=-1))[0])
                 raise ValueError(f"the measurement model gave NaN or infinity at sigma point "
                                  f"{k}: h({np.array2string(gamma[k], precision=4)}) = "
                                  f"{np.array2string(z[k], precision=4)}")
