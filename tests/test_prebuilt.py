@@ -380,6 +380,10 @@ def test_the_record_keeps_only_the_types_python_called_a_kernel_with(monkeypatch
         return x
 
     monkeypatch.setattr(_prebuilt, "_REGISTRY", {})
+    if _prebuilt._load() is not None:  # the build in use: record refuses
+        with pytest.raises(RuntimeError, match="run it with VISTRACK_PREBUILT=0"):
+            _prebuilt_build.record(tmp_path)
+    monkeypatch.setattr(_prebuilt, "_load", lambda: None)
     k = _prebuilt.kernel(inner, key="tests:inner")
     _prebuilt.kernel(never, key="tests:never")
     never(np.zeros(2))  # compiled, but not through its kernel
@@ -388,6 +392,7 @@ def test_the_record_keeps_only_the_types_python_called_a_kernel_with(monkeypatch
         assert outer(1.5) == 9.0
         k(np.arange(3.0))
         k(np.zeros((2, 2)))
+        k(np.arange(4.0).view(np.ma.MaskedArray))  # a type no build serves (numba decides)
 
     monkeypatch.setattr(_prebuilt_build, "_workloads", workloads)
     recorded = _prebuilt_build.record(tmp_path)

@@ -189,18 +189,22 @@ def record(root: Path) -> dict[str, list[Any]]:
     Python called it with, in the order they were compiled. A kernel that another compiled
     function also calls is compiled for that caller's types too, when the caller is compiled
     rather than loaded from numba's cache; those are left out, so that the record does not
-    depend on what the cache held (a build for them would serve no call)."""
-    called: dict[str, set[Any] | None] = {}  # None: a call of types only numba knows
+    depend on what the cache held (a build for them would serve no call), and so is a call
+    with an argument :func:`._prebuilt._argument` does not know (no build serves it).
+
+    Numba must compile every call: with the build in use, the calls it serves would never
+    reach numba and would be missing (``main`` turns it off; a RuntimeError here)."""
+    if _prebuilt._load() is not None:
+        raise RuntimeError("record needs numba to compile every kernel, and the kernels built "
+                           "ahead of time are in use: run it with VISTRACK_PREBUILT=0")
+    called: dict[str, set[Any]] = {}
     original = _prebuilt.Kernel.__call__
 
     def spy(self: _prebuilt.Kernel, *args: Any) -> Any:
         key = [_prebuilt._argument(a) for a in args]
         seen = called.setdefault(self.key, set())
-        if seen is not None:
-            if any(k is None for k in key):
-                called[self.key] = None
-            else:
-                seen.add(_prebuilt._frozen([_prebuilt._encoded(k) for k in key]))
+        if all(k is not None for k in key):
+            seen.add(_prebuilt._frozen([_prebuilt._encoded(k) for k in key]))
         return original(self, *args)
 
     _prebuilt.Kernel.__call__ = spy  # type: ignore[method-assign]
@@ -215,8 +219,7 @@ def record(root: Path) -> dict[str, list[Any]]:
         sigs = []
         for args in k.jit.nopython_signatures:
             encoded = [encode(t) for t in args.args]
-            seen = called[key]
-            if seen is not None and _prebuilt._frozen(encoded) not in seen:
+            if _prebuilt._frozen(encoded) not in called[key]:
                 continue  # (a callee's types may be literals, which no Python call has)
             if tuple(decode(e) for e in encoded) != tuple(args.args):
                 raise TypeError(f"{key}: {args.args} does not survive encoding")
@@ -410,6 +413,7 @@ def main(argv: list[str] | None = None) -> int:
         _build_part(json.loads(a.job.read_text(encoding="utf-8")))
         return 0
     if a.command == "record":
+        os.environ["VISTRACK_PREBUILT"] = "0"  # numba compiles every call (see record)
         kernels = record(a.root)
         text = json.dumps({"kernels": kernels}, indent=1) + "\n"
         SIGNATURES.write_text(text, encoding="utf-8")
