@@ -353,8 +353,7 @@ def estep_shared(yt, F, Q, H, R, x0, P0, A, V, ms0, Ps0, work, out):
     o += T * n * n
     K = work[o:o + T * n * m].reshape((T, n, m))
     o += T * n * m
-    L = work[o:o + T * m * m].reshape((T, m, m))
-    L[:] = 0.0
+    L = work[o:o + T * m * m].reshape((T, m, m))  # (read on and below the diagonal only)
     o += T * m * m
     logdet = work[o:o + T]
     o += T
