@@ -3,9 +3,9 @@
 it, vistrack beside the peers of ``accuracy_mot.py``, scored the same way (COMBINED over the
 draws).
 
-    python bench/simulated_crowd.py [--draws 3] [--persistence RHO] [--set KEY=VALUE ...]
-                                    [--config FILE] [--source DIR ...] [--no-peers]
-                                    [--boxmot-python PY] [--write docs/mot.md]
+    python bench/simulated_crowd.py [--draws 3] [--persistence RHO] [--box-noise K]
+                                    [--set KEY=VALUE ...] [--config FILE] [--source DIR ...]
+                                    [--no-peers] [--boxmot-python PY] [--write docs/mot.md]
 
 The four sets of ``accuracy_mot.py`` are what vistrack's defaults were chosen on; this one is
 a check that a setting does not only fit them. The detector is simulated, one draw per seed:
@@ -30,6 +30,10 @@ person's detection a two-state Markov chain with the same rate of detection, fou
 frame with probability ``p + RHO (1 - p)`` when found in this one and ``p (1 - RHO)`` when
 not, and the score's noise an AR(1) process with correlation ``RHO`` over the person's
 detections (0: the independent draws, the same as without the option).
+
+``--box-noise K`` multiplies the four standard deviations of the boxes' noise by ``K``: a
+detector that places its boxes less well (or better) than the one above, whose errors no
+setting of vistrack's box filter was chosen for.
 
 ``--source DIR`` (repeatable) simulates the same detector on other scenes instead: MOT16,
 MOT17 or MOT20 sequence folders whose ground truth has classes and visibility (MOT17's
@@ -101,11 +105,12 @@ def _ar1(e: np.ndarray, ids: np.ndarray, frames: np.ndarray, rho: float) -> np.n
 
 
 def simulate(seed: int, lo: float, hi: float, root: Path, persistence: float = 0.0,
-             source: Path = SOURCE) -> Path:
+             source: Path = SOURCE, box_noise: float = 1.0) -> Path:
     """One draw of detections for ``source`` (MOT20-01; a MOT16/17/20 sequence folder with
     ground truth) into ``root/NAME-sim{seed}`` (MOTChallenge layout: ``det/det.txt``,
     ``gt/gt.txt``, ``seqinfo.ini``), with misses and score noise correlated from frame to
-    frame by ``persistence`` (see the module); returns the folder."""
+    frame by ``persistence`` and the boxes' noise times ``box_noise`` (see the module);
+    returns the folder."""
     rng = np.random.default_rng(seed)
     gt = np.loadtxt(source / "gt" / "gt.txt", delimiter=",", ndmin=2)
     gt = gt[(gt[:, 6] != 0) & (gt[:, 7] == 1)]
@@ -114,10 +119,10 @@ def simulate(seed: int, lo: float, hi: float, root: Path, persistence: float = 0
     f, b, v = gt[seen, 0].astype(int), gt[seen, 2:6].copy(), gt[seen, 8]
     n = len(f)
     w, h = b[:, 2].copy(), b[:, 3].copy()
-    b[:, 0] += rng.normal(0, 0.05, n) * w
-    b[:, 1] += rng.normal(0, 0.03, n) * h
-    b[:, 2] *= np.exp(rng.normal(0, 0.08, n))
-    b[:, 3] *= np.exp(rng.normal(0, 0.05, n))
+    b[:, 0] += rng.normal(0, 0.05 * box_noise, n) * w
+    b[:, 1] += rng.normal(0, 0.03 * box_noise, n) * h
+    b[:, 2] *= np.exp(rng.normal(0, 0.08 * box_noise, n))
+    b[:, 3] *= np.exp(rng.normal(0, 0.05 * box_noise, n))
     e = _ar1(rng.normal(0, 1.0, n), gt[seen, 1], f, persistence)
     s = lo + (hi - lo) / (1 + np.exp(-(3 * (v - 0.4) + e)))
     info = read_seqinfo(source)
@@ -157,6 +162,9 @@ def main() -> None:
     ap.add_argument("--persistence", type=float, default=0.0, metavar="RHO",
                     help="correlation of a person's detection and score from frame to frame, "
                          "in [0, 1) (default 0: independent)")
+    ap.add_argument("--box-noise", type=float, default=1.0, metavar="K",
+                    help="the boxes' noise (the four standard deviations) times K, > 0 "
+                         "(default 1): a detector that places its boxes less well")
     ap.add_argument("--set", type=parse_set, action="append", default=[], metavar="KEY=VALUE")
     ap.add_argument("--config", type=Path, metavar="FILE",
                     help="vistrack's rows with this configuration too (TOML, as vistrack "
@@ -172,6 +180,8 @@ def main() -> None:
     args = ap.parse_args()
     if not 0 <= args.persistence < 1:
         ap.error(f"--persistence must be in [0, 1); got {args.persistence}")
+    if not 0 < args.box_noise < np.inf:
+        ap.error(f"--box-noise must be > 0 and finite; got {args.box_noise}")
     sources = args.source or [SOURCE]
     for src in sources:
         if not (src / "gt" / "gt.txt").exists() or not (src / "seqinfo.ini").exists():
@@ -190,7 +200,8 @@ def main() -> None:
     boxmot = None if args.no_peers or not args.boxmot_python.exists() else args.boxmot_python
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        seqs = [simulate(i, *SCALES[i % len(SCALES)], tmp / "data", args.persistence, src)
+        seqs = [simulate(i, *SCALES[i % len(SCALES)], tmp / "data", args.persistence, src,
+                         args.box_noise)
                 for i in range(args.draws) for src in sources]
         res = {}
         for label, (cfg, kw, offline) in runs.items():
@@ -222,6 +233,7 @@ def main() -> None:
     cmd = "python bench/simulated_crowd.py" + (f" --draws {args.draws}" if args.draws != 3
                                                else "")
     cmd += f" --persistence {args.persistence:g}" if args.persistence else ""
+    cmd += f" --box-noise {args.box_noise:g}" if args.box_noise != 1 else ""
     cmd += "".join(f" --set {k}={json.dumps(v)}" for k, v in over.items())
     cmd += "".join(f" --source {src}" for src in args.source)
     who = ", ".join(src.name for src in sources)
@@ -230,7 +242,8 @@ def main() -> None:
                "alone would have it), as a real detector's do." if args.persistence else "")
     section = "\n".join([
         ("## A simulated detector on other scenes" if args.source else "## A simulated crowd")
-        + (" whose misses last" if args.persistence else ""),
+        + (" whose misses last" if args.persistence else "")
+        + (f", its boxes {args.box_noise:g} times as noisy" if args.box_noise != 1 else ""),
         "",
         f"Measured with `{cmd}` (Python {platform.python_version()}, "
         f"{time.strftime('%Y-%m-%d')}): {who}'s ground truth with detections simulated from "
