@@ -152,10 +152,12 @@ def test_matched_series_and_measurement_noise_name_what_does_not_fit():
     assert [f.tolist() for f, _, _ in out] == [[1, 2, 3]]
 
 
-def _sequence(folder, rng, n_objects=12, T=60, fps=15.0, std=(0.003, 0.001)):
+def _sequence(folder, rng, n_objects=12, T=60, fps=15.0, std=(0.003, 0.001),
+              meas=(0.04, 0.03, 0.08, 0.05)):
     """A MOTChallenge sequence of simulated people: seqinfo.ini, det/det.txt, gt/gt.txt
-    (``std``: the motion noise; a long sequence needs little, or sizes wander below 0)."""
-    truth, dets = _simulate(rng, n_objects, T, *std, (0.04, 0.03, 0.08, 0.05))
+    (``std``: the motion noise; a long sequence needs little, or sizes wander below 0;
+    ``meas``: the detections' noise, fractions of the width and height)."""
+    truth, dets = _simulate(rng, n_objects, T, *std, meas)
     (folder / "det").mkdir(parents=True)
     (folder / "gt").mkdir()
     (folder / "seqinfo.ini").write_text(f"[Sequence]\nname={folder.name}\nframeRate={fps}\n"
@@ -189,8 +191,11 @@ def test_fit_sequences_from_ground_truth_and_from_a_first_pass(tmp_path):
     assert first.reference == "first pass" and first.held_out is None
     # its smoothed boxes follow the detections partly: the detections' spread about them is
     # smaller than about the truth
-    assert (0 < first.config.motion.std_meas).all()
-    assert (first.config.motion.std_meas < run.fit.motion.std_meas).all()
+    assert (0 < first.fit.motion.std_meas).all()
+    assert (first.fit.motion.std_meas < run.fit.motion.std_meas).all()
+    # and nothing checks it: the given configuration, whose measurement noise (0.05, 0.05,
+    # 0.1, 0.071) is above every value learned here, is returned as it was
+    assert first.chosen == "measurement" and first.config == TrackConfig.preset()
     assert fit_sequences(seqs, gt=True, held_out=False).held_out is None
     nogt = _sequence(tmp_path / "NOGT", rng)
     (nogt / "gt" / "gt.txt").unlink()
@@ -273,10 +278,49 @@ def test_vistrack_fit_writes_a_configuration_that_track_reads(tmp_path, capsys):
     # an existing file is not overwritten without --force
     assert main(["fit", *seqs, "--out", str(out), "--quiet"]) == 2
     assert "--force" in capsys.readouterr().err
-    # without ground truth nothing is held out: the learned values, said to be unchecked
+    # without ground truth nothing is held out: the given configuration, the detections
+    # straying less than it assumes, the learned values in [derived]
     assert main(["fit", *seqs, "--out", str(out), "--quiet", "--force"]) == 0
+    assert "the detections straying no more than it assumes" in capsys.readouterr().out
+    table = tomllib.loads(out.read_text())
+    assert table["derived"]["written"] == "measurement" and "learned_std_meas" in table[
+        "derived"]
+    assert "motion" not in table and read_config(out) == TrackConfig.preset()
+    # --keep-learned writes them all, said to be unchecked
+    assert main(["fit", *seqs, "--out", str(out), "--quiet", "--force", "--keep-learned"]) == 0
     assert "not checked on held-out sequences" in capsys.readouterr().out
     assert tomllib.loads(out.read_text())["derived"]["written"] == "learned"
+
+
+def test_without_ground_truth_only_a_larger_measurement_noise_is_taken(tmp_path, capsys):
+    """Learnt from a first pass, nothing checks the values: the given motion noise is kept,
+    and each measurement noise is the larger of the given and the learned one. Detections
+    straying 0.15 of the width along x and 0.25 of it in width (the defaults assume 0.05 and
+    0.1), and less than the defaults in y and height: cx and w raised to what was learned, cy
+    and h as given; a given configuration's motion is kept as it is, at its frame rate."""
+    rng = np.random.default_rng(6)
+    seqs = [_sequence(tmp_path / f"SIM-{k}", rng, meas=(0.15, 0.02, 0.25, 0.03))
+            for k in range(2)]
+    run = fit_sequences(seqs)
+    learned, got = run.fit.motion.std_meas, run.config.motion
+    base = BoxMotion()
+    assert run.chosen == "measurement"
+    assert learned[0] > base.std_meas[0] and learned[2] > base.std_meas[2]
+    assert learned[1] < base.std_meas[1] and learned[3] < base.std_meas[3]
+    np.testing.assert_array_equal(got.std_meas, [learned[0], base.std_meas[1], learned[2],
+                                                 base.std_meas[3]])
+    assert (got.std_pos, got.std_vel, got.init_pos, got.init_vel, got.frame_rate) == (
+        base.std_pos, base.std_vel, base.init_pos, base.init_vel, base.frame_rate)
+    given = replace(TrackConfig.preset(), motion=BoxMotion(std_pos=0.02, std_vel=0.001,
+                                                           std_meas=0.4, frame_rate=10.0))
+    mine = fit_sequences(seqs, config=given)
+    assert mine.config == given  # 0.4 everywhere: nothing learned is larger
+    assert fit_sequences(seqs, keep_learned=True).config.motion == run.fit.motion
+    out = tmp_path / "fit.toml"
+    assert main(["fit", *map(str, seqs), "--out", str(out), "--quiet"]) == 0
+    assert "its measurement noise raised to the learned one for cx, w" in capsys.readouterr(
+        ).out
+    assert read_config(out).motion == got
 
 
 def test_a_sequence_given_twice_is_refused(tmp_path, capsys, monkeypatch):

@@ -876,11 +876,19 @@ def _fit(args: argparse.Namespace) -> int:
         elif run.held_out["learned"]["HOTA"] <= run.held_out["given"]["HOTA"]:
             print("the learned values did not track the held-out sequences better than the "
                   "given configuration (HOTA): wrote them all the same (--keep-learned)")
+    elif run.chosen == "measurement":
+        raised = [c for c, a, b in zip(("cx", "cy", "w", "h"), given.std_meas,
+                                       learned.std_meas) if b > a]
+        print("without a ground truth nothing checks the learned values, and a first pass's "
+              "tracks follow their detections in part: wrote the given configuration, "
+              + (f"its measurement noise raised to the learned one for {', '.join(raised)}"
+                 if raised else "the detections straying no more than it assumes")
+              + "; the learned values in its [derived] table (--keep-learned writes them)")
     else:
         print("not checked on held-out sequences (that needs --gt, two sequences or more, and "
               "no --no-held-out): wrote the learned values")
     derived["written"] = run.chosen
-    if run.chosen == "given":
+    if run.chosen in ("given", "measurement"):
         derived.update({f"learned_{k}": (list(map(float, getattr(learned, k))) if k == "std_meas"
                                          else float(getattr(learned, k)))
                         for k in ("std_pos", "std_vel", "std_meas")})
@@ -1259,7 +1267,10 @@ def build_parser() -> argparse.ArgumentParser:
         "reads, and prints the learned values beside the given ones. With --gt and two "
         "sequences or more, also tracks each sequence with the values learned from the "
         "others and with the given configuration, scores both, and writes the learned "
-        "values only if they scored the higher HOTA (else the given configuration).")
+        "values only if they scored the higher HOTA (else the given configuration). Without "
+        "--gt nothing is scored: it writes the given configuration with each measurement "
+        "noise raised to the learned one where that is larger (a detector whose boxes stray "
+        "more than the configuration assumes).")
     fit.add_argument("inputs", metavar="SEQ_DIR", nargs="+",
                      help="MOTChallenge sequence folders (seqinfo.ini, det/det.txt), or a "
                      "folder of them")
@@ -1274,7 +1285,8 @@ def build_parser() -> argparse.ArgumentParser:
                      "learned values are written unchecked)")
     fit.add_argument("--keep-learned", action="store_true",
                      help="write the learned values even if they tracked the held-out "
-                     "sequences no better than the given configuration")
+                     "sequences no better than the given configuration (without --gt: all "
+                     "of them, the motion noise too)")
     fit.add_argument("--force", action="store_true", help="overwrite an existing --out")
     fit.add_argument("--quiet", action="store_true", help="no report of each sequence")
     _runs(fit, _fit, debug_help)
