@@ -9,7 +9,8 @@
   flow, WSL, snake and OpenCV's, by name in :data:`METHODS`, and their composition
   (:class:`~vistrack.tracking.compose.Composite`);
 - track management: :mod:`vistrack.tracking.lifecycle`;
-- a box tracker's noise learned from tracks: :func:`fit_box_motion`
+- a box tracker's noise learned from tracks: :func:`fit_box_motion` (and
+  :func:`smoothed_residual_share`, for tracks smoothed through the detections)
   (:mod:`vistrack.tracking.fit`).
 """
 
@@ -18,7 +19,13 @@ from .base import SingleObjectTracker, Tracker
 from .box import TRACKERS, BoxTracker, BoxTrackerConfig
 from .compose import Composite
 from .dcpf import DCPFConfig, DetectorConfidencePF
-from .fit import MotionFit, fit_box_motion, matched_series, measurement_noise
+from .fit import (
+    MotionFit,
+    fit_box_motion,
+    matched_series,
+    measurement_noise,
+    smoothed_residual_share,
+)
 from .klt import Features, KLTTracker
 from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable
 from .offline import SmoothedTracks, smooth
@@ -31,4 +38,4 @@ __all__ = ["Tracker", "SingleObjectTracker", "TRACKERS", "BoxTracker", "BoxTrack
            "POINT_ASSOCIATIONS", "PointTracker", "DCPFConfig", "DetectorConfidencePF",
            "Features", "KLTTracker", "METHODS", "single_tracker", "Composite", "Snake",
            "SnakeTracker", "MotionFit", "fit_box_motion", "matched_series",
-           "measurement_noise"]
+           "measurement_noise", "smoothed_residual_share"]
