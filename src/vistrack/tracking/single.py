@@ -177,10 +177,11 @@ class MedianFlow(SingleObjectTracker):
             gx, gy = np.meshgrid(np.linspace(x0, x1 - 1, self.grid),
                                  np.linspace(y0, y1 - 1, self.grid))
             p0 = np.c_[gx.ravel(), gy.ravel()].astype(np.float32).reshape(-1, 1, 2)
-        # nextPts=None: OpenCV allocates the output points
-        p1, st, _ = cv2.calcOpticalFlowPyrLK(  # type: ignore[call-overload]  # stubs forbid None
+        # nextPts=None: OpenCV allocates the output points (OpenCV 5.0's stubs forbid None
+        # there, 5.1's allow it: the ignore, and that it may be unused)
+        p1, st, _ = cv2.calcOpticalFlowPyrLK(  # type: ignore[call-overload, unused-ignore]
             self.prev, grey, p0, None, **self.lk)
-        pb, sb, _ = cv2.calcOpticalFlowPyrLK(  # type: ignore[call-overload]  # stubs forbid None
+        pb, sb, _ = cv2.calcOpticalFlowPyrLK(  # type: ignore[call-overload, unused-ignore]
             grey, self.prev, p1, None, **self.lk)
         fb = np.linalg.norm((pb - p0).reshape(-1, 2), axis=1)
         ok = st.ravel().astype(bool) & sb.ravel().astype(bool) & (fb <= self.fb_max)
