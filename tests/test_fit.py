@@ -419,7 +419,25 @@ def test_smoothed_residual_share_is_what_a_smoother_leaves_of_white_noise(fps):
         smoothed = rts_smooth(res, F=F, Q=Q).means[..., 0]
         resid = (z - smoothed)[:, 100:-100]
         assert abs(resid.var() / r ** 2 - share[i]) < 0.04 * share[i]
-    # the limits: a smoother that follows each detection leaves nothing, one that averages
-    # over many leaves all
+    # the limits: a smoother that follows each detection leaves nothing (the smallest
+    # positive float where nothing is left at all: something to divide by), one that
+    # averages over many leaves all
     assert smoothed_residual_share(BoxMotion(std_meas=1e-4)).max() < 1e-3
+    assert (smoothed_residual_share(BoxMotion(std_meas=1e-9).at_rate(1.0)) > 0).all()
     assert smoothed_residual_share(BoxMotion(std_pos=1e-6, std_vel=1e-7)).min() > 0.99
+
+
+@pytest.mark.filterwarnings("ignore:.*wholly outside the:RuntimeWarning")  # simulated paths
+def test_a_first_pass_on_a_detector_run_every_kth_frame_is_divided_at_its_own_rate(tmp_path):
+    """A detector run on every 3rd frame: the first pass tracks (and smooths) at a third of
+    the frame rate, and the spread about it is divided for that smoother; it comes out as
+    the simulated noise, 0.04, 0.03, 0.08 and 0.05 (within 20 %), as on every frame."""
+    rng = np.random.default_rng(8)
+    seqs = [_sequence(tmp_path / f"SIM-{k}", rng, T=180, std=(0.001, 0.0003)) for k in range(2)]
+    for seq in seqs:
+        det = seq / "det" / "det.txt"
+        rows = det.read_text().splitlines()
+        det.write_text("\n".join(r for r in rows if (int(r.split(",")[0]) - 1) % 3 == 0) + "\n")
+    with pytest.warns(RuntimeWarning, match="detections on every 3rd frame only"):
+        run = fit_sequences(seqs)
+    np.testing.assert_allclose(run.fit.motion.std_meas, [0.04, 0.03, 0.08, 0.05], rtol=0.2)

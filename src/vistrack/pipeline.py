@@ -1576,17 +1576,22 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
     Without ``gt`` nothing scores what was learned, and the first pass's tracks are no
     truth: smoothed through the detections, they follow their errors in part. The spread
     measured about them is divided for what the smoother takes of white errors
-    (:func:`~vistrack.tracking.fit.smoothed_residual_share`), but errors that persist from
-    frame to frame it follows as motion (MOT17's ``cx``: 0.012 of the width from a first
-    pass, 0.027 from the ground truth); and the motion noise of maximum likelihood tracks
-    worse than the defaults' (docs/mot.md). Tracked with everything learnt from a first pass
-    (before the division), each of the four sets of docs/mot.md lost 0.75 to 2.4 HOTA
-    online. So, unless ``keep_learned``, the motion returned keeps ``config``'s motion noise
-    and raises each measurement noise to the learned one only where that is larger: a
-    detector whose boxes visibly stray more than ``config`` assumes. On MOT17, MOT16 with
-    FairMOT and KITTI that is ``config`` itself, on MOT15 the width's noise 0.103 instead of
-    0.1 (HOTA within 0.05 either way); on a simulated detector whose boxes err 2.5 times as
-    much as ``bench/simulated_crowd.py``'s it gained 4.0 HOTA online and 4.8 offline.
+    (:func:`~vistrack.tracking.fit.smoothed_residual_share`, at the rate the first pass ran:
+    the detector's own frames), but errors that persist from frame to frame it follows as
+    motion (MOT17's ``cx``: 0.012 of the width from a first pass, 0.027 from the ground
+    truth); where objects move about as jumpily as the model's noise allows, the residuals
+    hold their motion too and the division overstates (people and cars move far more
+    smoothly); the rows the steady-state smoother does not describe (a track's ends, the
+    boxes followed back or filled offline) are few, and the spread is robust (a median
+    absolute deviation). And the motion noise of maximum likelihood tracks worse than the
+    defaults' (docs/mot.md). Tracked with everything learnt from a first pass (before the
+    division), each of the four sets of docs/mot.md lost 0.75 to 2.4 HOTA online. So,
+    unless ``keep_learned``, the motion returned keeps ``config``'s motion noise and raises
+    each measurement noise to the learned one only where that is larger: a detector whose
+    boxes visibly stray more than ``config`` assumes. On MOT17, MOT16 with FairMOT and KITTI
+    that is ``config`` itself, on MOT15 the width's noise 0.103 instead of 0.1 (HOTA within
+    0.05 either way); on a simulated detector whose boxes err 2.5 times as much as
+    ``bench/simulated_crowd.py``'s it gained 4.0 HOTA online and 4.8 offline.
 
     Raises
     ------
@@ -1610,6 +1615,7 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
     cfg = resolve_config(config)
     start = cfg.motion if cfg.motion is not None else BoxMotion()
     series: list[tuple[list[Series], float]] = []
+    smoothers: list[BoxMotion] = []
     for seq in seqs:  # before anything is learnt (a file was read as its seqinfo.ini)
         if seq.is_file():
             raise ValueError(f"{seq} is a file, not a sequence folder (seqinfo.ini, "
@@ -1645,11 +1651,13 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
             dets = read_mot(det_path)
             s = matched_series(*ref, dets.frames, dets.boxes)
             series.append((s, info.frame_rate))
+            # the first pass's smoother ran on the detector's own frames: every stride-th
+            smoothers.append(start.at_rate(info.frame_rate / detector_grid(dets.frames)[1]))
             if progress is not None:
                 n = sum(int(np.isfinite(z[:, 0]).sum()) for _, z, _ in s)
                 print(f"{info.name}: {len(s)} objects, {n} matched detections",
                       file=progress, flush=True)
-        learned = fit_box_motion(series, start=start, smoothed_by=None if gt else start)
+        learned = fit_box_motion(series, start=start, smoothed_by=None if gt else smoothers)
         scores = None
         if gt and held_out and len(seqs) > 1:
             scores = _held_out(seqs, cfg, start, learned.per_sequence, Path(tmp), progress)

@@ -24,7 +24,8 @@ Without ground truth the reference boxes are the first pass's smoothed estimates
 follow the detections partly: each detection's residual about them keeps only a share of its
 error's variance (:func:`smoothed_residual_share`, 0.1 to 0.65 for the default model at 7 to
 30 frames/s), so :func:`fit_box_motion` given ``smoothed_by`` divides the measured spread
-by the square root of that share. For white errors that recovers the truth (a simulated
+by the square root of that share. For white errors on objects that move much more smoothly
+than the model's noise allows (people and cars do), that recovers the truth (a simulated
 detector on MOT17's scenes, ``cx`` 0.128 of the width from a first pass against 0.138 from
 the ground truth, 0.077 undivided); a detector's errors that persist from frame to frame are
 followed by the smoother as motion and stay understated (MOT17's ``cx`` 0.012 from a first
@@ -34,13 +35,17 @@ This is the model that makes the detections most likely. It is not the one that 
 on the four sets of docs/mot.md, values learned from the other sequences of a set tracked
 each sequence worse than the defaults on MOT17, as did values chosen by tracking score
 (docs/mot.md, "What was tried"). :func:`vistrack.pipeline.fit_sequences` therefore checks
-learned values against the given configuration on held-out sequences when it can, and
-returns them only where they tracked those better.
+learned values against the given configuration on held-out sequences when it can (with a
+ground truth), and returns them only where they tracked those better; from a first pass,
+with nothing to check against, it returns the given configuration with each measurement
+noise raised to the learned one where that is larger.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -206,7 +211,11 @@ def smoothed_residual_share(motion: BoxMotion) -> np.ndarray:
     .. math:: \operatorname{Var}(v_0 - \sum_j w_j v_{-j}) = \sigma^2 \Big((1 - w_0)^2
               + \sum_{j \ne 0} w_j^2\Big)
 
-    of it (the object's own motion, which the smoother follows, left out). The weights
+    of it. The object's own motion is left out: it adds to a residual where the object moves
+    as jumpily as the model's noise allows, and hardly at all where it moves much more
+    smoothly, as people and cars do (the likeliest position noise for their detections is
+    near 0, docs/mot.md), or at a constant velocity, which the smoother follows exactly. The
+    weights
     are the smoother's response to one detection, from the filter's steady-state prior
     (the discrete algebraic Riccati equation), forward and back until they fall below
     ``1e-12`` of the first.
@@ -219,9 +228,9 @@ def smoothed_residual_share(motion: BoxMotion) -> np.ndarray:
     Returns
     -------
     (4,) ndarray
-        The shares, in ``(0, 1)``: small where the smoother follows each detection closely
-        (a large position noise against the measurement noise), near 1 where it averages
-        over many.
+        The shares, in ``(0, 1]``: small where the smoother follows each detection closely
+        (a large position noise against the measurement noise; at least the smallest
+        positive float), near 1 where it averages over many. Cached for each model.
 
     Examples
     --------
@@ -232,6 +241,11 @@ def smoothed_residual_share(motion: BoxMotion) -> np.ndarray:
     >>> smoothed_residual_share(BoxMotion().at_rate(7.0)).round(3).tolist()[0]
     0.104
     """
+    return _residual_share(motion).copy()
+
+
+@lru_cache(maxsize=64)
+def _residual_share(motion: BoxMotion) -> np.ndarray:
     from scipy.linalg import solve_discrete_are
 
     F = np.array([[1.0, 1.0], [0.0, 1.0]])
@@ -262,12 +276,14 @@ def smoothed_residual_share(motion: BoxMotion) -> np.ndarray:
             smoothed = C @ smoothed
             before.append(smoothed[0])
         out[i] = (1.0 - w0) ** 2 + float(np.sum(np.square(after)) + np.sum(np.square(before)))
-    return out
+    # a smoother that passes each detection through (a measurement noise negligible beside
+    # the motion's) leaves nothing to divide by: the smallest share a float holds instead
+    return np.clip(out, np.finfo(float).tiny, 1.0)
 
 
 def fit_box_motion(sequences: list[tuple[list[Series], float]], *,
                    start: BoxMotion | None = None,
-                   smoothed_by: BoxMotion | None = None) -> MotionFit:
+                   smoothed_by: Sequence[BoxMotion] | None = None) -> MotionFit:
     """Learn :class:`~vistrack.models.BoxMotion`'s noise from the series of
     :func:`matched_series` (see the module).
 
@@ -289,11 +305,12 @@ def fit_box_motion(sequences: list[tuple[list[Series], float]], *,
     start : BoxMotion, optional
         The model the search starts from and whose ``init_pos`` and ``init_vel`` are kept
         (default: ``BoxMotion()``).
-    smoothed_by : BoxMotion, optional
-        The reference boxes are estimates smoothed through the detections with this model
-        (a first pass, at each sequence's frame rate): each value's measured spread is
-        divided by the square root of :func:`smoothed_residual_share` there. Default: the
-        reference boxes are the truth.
+    smoothed_by : sequence of BoxMotion, optional
+        The reference boxes are estimates smoothed through the detections (a first pass):
+        for each sequence, the model its smoother ran with, at the frame rate it ran at (a
+        detector run on every k-th frame: the sequence's rate over k). Each value's measured
+        spread is divided by the square root of :func:`smoothed_residual_share` of it.
+        Default: the reference boxes are the truth.
 
     Returns
     -------
@@ -309,6 +326,9 @@ def fit_box_motion(sequences: list[tuple[list[Series], float]], *,
     from ..filters.kalman import kalman_filter
 
     start = start if start is not None else BoxMotion()
+    if smoothed_by is not None and len(smoothed_by) != len(sequences):
+        raise ValueError(f"smoothed_by must have one model for each of the "
+                         f"{len(sequences)} sequences; got {len(smoothed_by)}")
     F = BoxMotion().F(1.0)
     H = np.eye(4, 8)
     rows = []
@@ -318,7 +338,7 @@ def fit_box_motion(sequences: list[tuple[list[Series], float]], *,
             continue
         meas = measurement_noise(series)
         if smoothed_by is not None:
-            meas = meas / np.sqrt(smoothed_residual_share(smoothed_by.at_rate(fps)))
+            meas = meas / np.sqrt(smoothed_residual_share(smoothed_by[index]))
         meas = np.maximum(meas, 1e-6)
         m = start.at_rate(fps)
         T = max(len(t) for t, _, _ in series)
