@@ -1342,3 +1342,69 @@ def test_an_interrupt_while_the_outputs_are_renamed_keeps_the_earlier_set(tmp_pa
     with pytest.raises(KeyboardInterrupt):
         track_video(clip, out, stop=12, min_area=150, force=True)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("bench, name", [("mot17", "MOT17-05-FRCNN"),
+                                         ("kitti-tracking", "KITTI-0001-Car")])
+def test_tracks_follow_the_image_s_scale_and_ignore_the_rows_order(tmp_path, bench, name):
+    """A user's expectations of a box tracker on a real sequence (MOT17-05: 14 frames/s, a
+    walking camera; KITTI-0001: a car's camera, 10 frames/s), online and offline:
+
+    - the same video at twice or half its size (every box and the image times 2 or 0.5,
+      exact in floating point) gives the same tracks, each box times the same factor: the
+      noise, gates, camera shifts and calibration are all relative to the boxes. The results
+      file holds hundredths of a pixel, so the boxes agree to the two roundings' 0.005 each,
+      the scaled file's 0.005 / k in the given image's pixels;
+    - the detections' rows in another order within the file give the same boxes on the
+      same frames, and the same tracks: one track's boxes under one identity either way
+      (the identities' numbers may differ, as new tracks are numbered in the rows' order)."""
+    import warnings
+
+    from vistrack.pipeline import track_sequence
+
+    from .mot_oracles import SHARED
+
+    seq = SHARED / bench / name
+    if not seq.exists():
+        pytest.skip(f"{seq} not found: the shared data is not beside this checkout")
+    lines = (seq / "det" / "det.txt").read_text().splitlines()
+    info = (seq / "seqinfo.ini").read_text()
+
+    def copy(tag, rows, k=1.0):
+        d = tmp_path / tag
+        (d / "det").mkdir(parents=True)
+        (d / "det" / "det.txt").write_text("".join(r + "\n" for r in rows))
+        (d / "seqinfo.ini").write_text(re.sub(
+            r"(imWidth|imHeight)=(\d+)", lambda m: f"{m[1]}={int(int(m[2]) * k)}", info))
+        return d
+
+    def scaled(k):
+        return [",".join(c[:2] + [repr(float(v) * k) for v in c[2:6]] + c[6:])
+                for c in (r.split(",") for r in lines)]
+
+    order = np.random.default_rng(0).permutation(len(lines))
+    variants = {k: copy(f"x{k}", scaled(k), k) for k in (2.0, 0.5)}
+    shuffled = copy("shuffled", [lines[i] for i in order])
+    for offline in (False, True):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a lone class, camera notes
+            want = read_mot(track_sequence(seq, tmp_path / f"as{offline}.txt",
+                                           offline=offline).out)
+            for k, d in variants.items():
+                got = read_mot(track_sequence(d, tmp_path / f"x{k}{offline}.txt",
+                                              offline=offline).out)
+                np.testing.assert_array_equal(got.frames, want.frames)
+                np.testing.assert_array_equal(got.ids, want.ids)
+                np.testing.assert_allclose(got.boxes / k, want.boxes, rtol=0,
+                                           atol=0.005 + 0.005 / k + 1e-9)
+            got = read_mot(track_sequence(shuffled, tmp_path / f"sh{offline}.txt",
+                                          offline=offline).out)
+        assert len(got.frames) == len(want.frames) > 1000
+        key_want = {(int(f), *b): int(i) for f, i, b in zip(want.frames, want.ids,
+                                                            want.boxes.tolist())}
+        key_got = {(int(f), *b): int(i) for f, i, b in zip(got.frames, got.ids,
+                                                           got.boxes.tolist())}
+        assert key_got.keys() == key_want.keys()
+        pairs = {(key_want[k], key_got[k]) for k in key_want}
+        assert len(pairs) == len(set(want.ids.tolist())) == len(set(got.ids.tolist()))
