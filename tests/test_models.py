@@ -356,3 +356,45 @@ def test_arguments_that_float_or_numpy_named_no_further_are_named(call, exc, mat
     allowed", and a dim of '2' shown as 2."""
     with pytest.raises(exc, match=re.escape(match)):
         call()
+
+
+def test_psd_sqrt_is_the_principal_root_whatever_basis_lapack_returns():
+    """``psd_sqrt`` is the principal square root, which is unique: scipy's ``sqrtm`` of a
+    positive definite matrix, ``v v' / |v|`` of a rank-one ``v v'``, ``2 I`` of ``4 I``. Where
+    eigenvalues repeat, the eigenvectors LAPACK returns are any basis of their space, and
+    vary with the processor; the root must not. Its rows are checked against the same matrix
+    given in a rotated basis (``U S U'``, whose root is ``U A U'``), and a seeded simulation's
+    measurement noise of ``R = 4 I`` is 2 times the generator's standard normals."""
+    from scipy.linalg import sqrtm
+
+    from vistrack.models import psd_sqrt
+    from vistrack.simulate import simulate_lgssm
+
+    rng = np.random.default_rng(0)
+    Q = ConstantVelocity(dim=2, q=0.5).Q(0.7)  # the x and y blocks: repeated eigenvalues
+    M = rng.normal(size=(4, 4))
+    for S in (Q, np.eye(3) * 4.0, M @ M.T):
+        A = psd_sqrt(S)
+        np.testing.assert_allclose(A, A.T, rtol=0, atol=1e-14 * np.abs(S).max())
+        np.testing.assert_allclose(A, sqrtm(S).real, rtol=0, atol=1e-10 * np.abs(S).max())
+        U = np.linalg.qr(rng.normal(size=S.shape))[0]
+        np.testing.assert_allclose(psd_sqrt(U @ S @ U.T), U @ A @ U.T, rtol=0,
+                                   atol=1e-10 * np.abs(S).max())
+    np.testing.assert_array_equal(psd_sqrt(np.eye(3) * 4.0), np.eye(3) * 2.0)
+    v = np.array([1.0, -2.0, 0.5])
+    np.testing.assert_allclose(psd_sqrt(np.outer(v, v)), np.outer(v, v) / np.linalg.norm(v),
+                               rtol=0, atol=1e-12)
+    stack = np.stack([Q, 2 * Q])
+    np.testing.assert_allclose(psd_sqrt(stack)[1], np.sqrt(2) * psd_sqrt(Q), rtol=0, atol=1e-12)
+    # each step draws the state's noise (none at the first), then the measurement's
+    n, T = 2, 50
+    xs, ys = simulate_lgssm(T, F=np.eye(n), Q=np.zeros((n, n)), H=np.eye(n),
+                            R=4.0 * np.eye(n), x0=np.zeros(n), rng=3)
+    np.testing.assert_array_equal(xs, 0.0)
+    gen = np.random.default_rng(3)
+    want = []
+    for t in range(T):
+        if t > 0:
+            gen.standard_normal((1, n))  # the state's noise, times a zero root
+        want.append(2.0 * gen.standard_normal((1, n))[0])
+    np.testing.assert_array_equal(ys, np.array(want))

@@ -69,10 +69,34 @@ def test_rbpf_and_imm_against_the_exact_posterior():
     np.testing.assert_allclose(rb.covs[-1], cov, rtol=0.05)
     np.testing.assert_allclose(rb.mode_probs[-1], probs, atol=0.02)
     assert rb.loglik == pytest.approx(loglik, abs=0.05)
-    # the IMM merges the k^T Gaussians into k at every step: an approximation, but close here
-    imm = IMMFilter.from_system(slds).filter(ys, x0=x0, P0=P0)
-    assert np.all(np.abs(imm.means[-1] - mean) < 0.2 * sd)
-    np.testing.assert_allclose(imm.mode_probs[-1], probs, atol=0.1)
+
+
+def test_imm_is_near_the_exact_posterior_and_nearer_than_either_model_alone():
+    """The IMM merges the k^T Gaussians into k at every step: an approximation, whose error
+    depends on the draw (on one draw its mode probability was 0.126 from the exact one, on
+    another 0.003). Over 40 draws of 8 steps its last mean lies on average within 0.3 of the
+    exact posterior's standard deviation on each state (0.20 and 0.14 measured), nearer than
+    the Kalman filter of either mode alone (0.36 and 0.55 for the better on each), and its
+    mode probability within 0.1 (0.05 measured)."""
+    slds = make_system()
+    H, R = slds.measurement.H(2), slds.measurement.R()
+    x0, P0 = np.array([0.0, 1.0]), np.eye(2)
+    err_imm, err_alone, err_prob = [], [], []
+    for seed in range(40):
+        _, _, ys = slds.sample(8, x0=[0.0, 1.0], rng=seed)
+        ys[3] = np.nan
+        mean, cov, probs, _ = exact_posterior(slds, ys, x0, P0)
+        sd = np.sqrt(np.diag(cov))
+        imm = IMMFilter.from_system(slds).filter(ys, x0=x0, P0=P0)
+        err_imm.append(np.abs(imm.means[-1] - mean) / sd)
+        err_prob.append(np.abs(imm.mode_probs[-1] - probs).max())
+        err_alone.append([np.abs(kalman_filter(ys, F=m.F(1.0), Q=m.Q(1.0), H=H, R=R, x0=x0,
+                                               P0=P0).means[-1] - mean) / sd
+                          for m in slds.motions])
+    imm_mean, alone_mean = np.mean(err_imm, axis=0), np.mean(err_alone, axis=0)
+    assert np.all(imm_mean < 0.3), imm_mean
+    assert np.all(imm_mean < alone_mean.min(axis=0)), (imm_mean, alone_mean)
+    assert np.mean(err_prob) < 0.1
 
 
 def test_result_arrays_are_read_only_as_the_imms():
@@ -112,3 +136,27 @@ def test_a_nan_probability_is_named(transition, mode_probs, match):
     cv = vt.ConstantVelocity(dim=1)
     with pytest.raises(ValueError, match=match):
         SwitchingLinearSystem([cv, cv], vt.Position(dim=1), transition, mode_probs=mode_probs)
+
+
+@pytest.mark.parametrize("P0, match", [
+    ([[1.0, 0.0], [0.0, -1.0]],
+     r"^P0 must be positive semi-definite; its smallest eigenvalue is -1"),
+    (np.eye(3), r"^P0 must have shape \(2, 2\); got \(3, 3\)$"),
+    ([[1.0, np.nan], [np.nan, 1.0]], r"^P0 must be finite; P0\[0, 1\] = nan$"),
+])
+def test_sample_names_a_bad_prior(P0, match):
+    """A prior covariance that cannot be sampled is refused with ``P0`` named (numpy's
+    ``multivariate_normal`` only warned of an indefinite one, and drew from it)."""
+    with pytest.raises(ValueError, match=match):
+        make_system().sample(3, x0=[0.0, 1.0], P0=P0)
+
+
+def test_sample_with_a_prior_spreads_the_first_state_by_it():
+    """The first state is ``x0`` plus noise of covariance ``P0`` (over 4,000 draws, within
+    their sampling error), ``P0`` singular along one direction included."""
+    slds = make_system()
+    P0 = np.array([[4.0, 2.0], [2.0, 1.0]])  # rank one: the velocity half the position
+    first = np.array([slds.sample(1, x0=[1.0, 2.0], P0=P0, rng=s)[1][0] for s in range(4000)])
+    np.testing.assert_allclose(first.mean(axis=0), [1.0, 2.0], atol=4 * np.sqrt(4.0 / 4000))
+    np.testing.assert_allclose(np.cov(first.T), P0, rtol=0.1, atol=1e-12)
+    np.testing.assert_allclose(first[:, 1] - 2.0, 0.5 * (first[:, 0] - 1.0), atol=1e-12)

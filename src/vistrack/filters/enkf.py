@@ -107,12 +107,14 @@ class Ensemble:
         try:
             L = np.linalg.cholesky(cov)
         except np.linalg.LinAlgError:
-            # singular (a state known exactly along some direction): L L' = V diag(w) V'
-            w, V = np.linalg.eigh(0.5 * (cov + np.swapaxes(cov, -1, -2)))
+            # singular (a state known exactly along some direction): the principal root,
+            # unique, so the draws are the same on every machine (psd_sqrt)
+            sym = 0.5 * (cov + np.swapaxes(cov, -1, -2))
+            w = np.linalg.eigvalsh(sym)
             if (w < -1e-10 * np.abs(w).max(-1, keepdims=True)).any() or not np.isfinite(w).all():
                 raise ValueError("cov must be positive semi-definite to sample an ensemble"
                                  ) from None
-            L = V * np.sqrt(np.clip(w, 0.0, None))[..., None, :]
+            L = psd_sqrt(sym)
         z = rng.standard_normal(mean.shape[:-1] + (int(n_members), mean.shape[-1]))
         return cls(mean[..., None, :] + z @ np.swapaxes(L, -1, -2))
 

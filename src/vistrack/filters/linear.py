@@ -474,7 +474,7 @@ class KalmanFilter:
         >>> _, ys = simulate(truth.motion, truth.measurement, 2000, x0=np.zeros(4), rng=0)
         >>> kf, fit = KalmanFilter(ConstantVelocity(dim=2), Position(dim=2)).fit(ys)
         >>> round(kf.motion.q, 2), kf.measurement.R().diagonal().round(2), fit.converged
-        (0.52, array([4.1 , 3.89]), True)
+        (0.52, array([4.05, 3.92]), True)
         """
         learned = _names(learn, ("q", "R"))
         if method not in ("mle", "em"):

@@ -43,7 +43,7 @@ from .._validate import (
     check_not_infinite,
     check_prior,
 )
-from ..models.adapters import MeasurementFunctions, MotionFunctions
+from ..models.adapters import MeasurementFunctions, MotionFunctions, psd_sqrt
 from ..models.protocols import (
     MeasurementModel,
     MotionModel,
@@ -1102,8 +1102,16 @@ class ParticleFilter:
         ...                     n_particles=2000, rng=0)
         >>> ys = np.array([[0.0], [1.1], [np.nan], [2.9], [4.2]])
         >>> res = pf.filter(ys, x0=[0.0, 1.0], P0=np.eye(2), modes=True)
-        >>> res.means[:, 0].round(1) + 0.0, res.modes.shape
-        (array([0. , 1.1, 2.1, 2.9, 4.1]), (5, 2))
+        >>> res.modes.shape
+        (5, 2)
+
+        The model is linear-Gaussian, so the Kalman filter's means are the exact posterior's;
+        2,000 particles come within 0.1 of them (0.02 here):
+
+        >>> kf = vt.KalmanFilter(vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1, r=1.0))
+        >>> exact = kf.filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
+        >>> exact.means[:, 0].round(2), bool(np.abs(res.means - exact.means).max() < 0.1)
+        (array([0.  , 1.06, 2.1 , 2.94, 4.09]), True)
         """
         ys = as_float_array(ys, "ys", ndim=(2,))
         check_has_steps(ys)
@@ -1168,7 +1176,8 @@ class ParticleFilter:
             if value is not None:  # NaN read as every particle's likelihood being 0, too
                 check_finite(as_float_array(value, name), name)
         m0, C0 = check_prior(x0, P0, n, batch=False)
-        return self.rng.multivariate_normal(m0, C0, size=N, method="eigh")
+        # the principal root: the same particles on every machine (psd_sqrt)
+        return m0 + self.rng.standard_normal((N, n)) @ psd_sqrt(C0).T
 
     def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: ArrayLike,
                       times: ArrayLike | None) -> ParticleResult:

@@ -24,9 +24,15 @@ __all__ = ["MotionFunctions", "MeasurementFunctions", "psd_sqrt"]
 
 
 def psd_sqrt(S: np.ndarray) -> np.ndarray:
-    """A square root ``A`` with ``A A' = S`` of each of a stack of positive semi-definite
-    matrices, from the eigendecomposition (singular matrices allowed: process noise often acts
-    on some states only).
+    """The principal square root ``A`` (symmetric, ``A A' = A A = S``) of each of a stack of
+    positive semi-definite matrices, from the eigendecomposition (singular matrices allowed:
+    process noise often acts on some states only).
+
+    It is unique, so noise drawn as ``eps @ A.T`` is the same on every machine to rounding.
+    The eigenvectors alone are not: where eigenvalues repeat (``4 I``; the x and y blocks of
+    a constant-velocity model's ``Q``), LAPACK may return any orthonormal basis of their
+    space, and ``V diag(sqrt(w))``, the root this returned before, changed the draws of a
+    seeded simulation from one processor to another.
 
     Parameters
     ----------
@@ -36,7 +42,8 @@ def psd_sqrt(S: np.ndarray) -> np.ndarray:
     Returns
     -------
     (..., n, n) ndarray
-        ``A`` with ``A A' = S`` (negative eigenvalues from rounding taken as 0).
+        ``A`` with ``A A' = S`` (eigenvalues within rounding of 0, or negative from
+        rounding, taken as 0).
 
     Examples
     --------
@@ -46,8 +53,13 @@ def psd_sqrt(S: np.ndarray) -> np.ndarray:
     >>> bool(np.allclose(A @ A.T, S))
     True
     """
+    S = np.asarray(S, dtype=float)
     w, V = np.linalg.eigh(S)
-    return V * np.sqrt(np.clip(w, 0.0, None))[..., None, :]
+    # eigenvalues within rounding of 0 (n eps of the largest) are 0: the square root of a
+    # rounding error (1e-8 of the scale) would carry its sign and size, which vary by processor
+    tiny = S.shape[-1] * np.finfo(float).eps * np.abs(w).max(axis=-1, keepdims=True)
+    w = np.where(w > tiny, w, 0.0)
+    return (V * np.sqrt(w)[..., None, :]) @ np.swapaxes(V, -1, -2)
 
 
 class MotionFunctions:

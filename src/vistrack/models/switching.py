@@ -20,7 +20,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_rng, as_whole, check_finite
+from .._validate import as_float_array, as_rng, as_whole, check_finite, check_psd
+from .adapters import psd_sqrt
 from .measurement import MeasurementModel
 from .motion import MotionModel
 
@@ -167,8 +168,14 @@ class SwitchingLinearSystem:
         x = as_float_array(x0, "x0", ndim=(1,)).copy()
         if x.shape != (n,):
             raise ValueError(f"x0 must have shape ({n},); got {x.shape}")
+        # noise drawn by the principal roots, the same on every machine (psd_sqrt)
         if P0 is not None:
-            x = gen.multivariate_normal(x, as_float_array(P0, "P0", ndim=(2,)), method="eigh")
+            P0 = as_float_array(P0, "P0", ndim=(2,))
+            if P0.shape != (n, n):
+                raise ValueError(f"P0 must have shape ({n}, {n}); got {P0.shape}")
+            check_finite(P0, "P0")
+            check_psd(P0, "P0")
+            x = x + psd_sqrt(P0) @ gen.standard_normal(n)
         k = len(self.motions)
         zs, xs = np.empty(T, np.int64), np.empty((T, n))
         z = gen.choice(k, p=self.mode_probs)
@@ -176,7 +183,7 @@ class SwitchingLinearSystem:
             if t > 0:
                 z = gen.choice(k, p=self.transition[z])
                 m = self.motions[z]
-                x = m.F(dt) @ x + gen.multivariate_normal(np.zeros(n), m.Q(dt), method="eigh")
+                x = m.F(dt) @ x + psd_sqrt(m.Q(dt)) @ gen.standard_normal(n)
             zs[t], xs[t] = z, x
-        ys = xs @ H.T + gen.multivariate_normal(np.zeros(len(R)), R, size=T, method="eigh")
+        ys = xs @ H.T + gen.standard_normal((T, len(R))) @ psd_sqrt(R).T
         return zs, xs, ys
