@@ -20,7 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_rng, as_whole, check_finite, check_psd
+from .._validate import as_float_array, as_rng, as_whole, check_finite, check_prior
 from .adapters import psd_sqrt
 from .measurement import MeasurementModel
 from .motion import MotionModel
@@ -170,12 +170,8 @@ class SwitchingLinearSystem:
             raise ValueError(f"x0 must have shape ({n},); got {x.shape}")
         # noise drawn by the principal roots, the same on every machine (psd_sqrt)
         if P0 is not None:
-            P0 = as_float_array(P0, "P0", ndim=(2,))
-            if P0.shape != (n, n):
-                raise ValueError(f"P0 must have shape ({n}, {n}); got {P0.shape}")
-            check_finite(P0, "P0")
-            check_psd(P0, "P0")
-            x = x + psd_sqrt(P0) @ gen.standard_normal(n)
+            x, P0_ = check_prior(x, P0, n, batch=False)  # shape, finite, semi-definite
+            x = x + psd_sqrt(P0_) @ gen.standard_normal(n)
         k = len(self.motions)
         zs, xs = np.empty(T, np.int64), np.empty((T, n))
         z = gen.choice(k, p=self.mode_probs)
