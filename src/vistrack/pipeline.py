@@ -1644,15 +1644,16 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
                 ref = _gt_reference(seq)
             else:
                 first = Path(tmp) / f"{len(series)}.txt"
-                track_sequence(seq, first, config=replace(
+                run = track_sequence(seq, first, config=replace(
                     cfg, offline=replace(cfg.offline, enabled=True)))
                 t = read_mot(first)
                 ref = (t.frames, t.ids, t.boxes)
+                # its smoother ran on the detector's own frames: every stride-th
+                stride = (run.derived or {}).get("detection_stride", 1)
+                smoothers.append(start.at_rate(info.frame_rate / stride))
             dets = read_mot(det_path)
             s = matched_series(*ref, dets.frames, dets.boxes)
             series.append((s, info.frame_rate))
-            # the first pass's smoother ran on the detector's own frames: every stride-th
-            smoothers.append(start.at_rate(info.frame_rate / detector_grid(dets.frames)[1]))
             if progress is not None:
                 n = sum(int(np.isfinite(z[:, 0]).sum()) for _, z, _ in s)
                 print(f"{info.name}: {len(s)} objects, {n} matched detections",
