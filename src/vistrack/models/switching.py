@@ -173,13 +173,14 @@ class SwitchingLinearSystem:
             x, P0_ = check_prior(x, P0, n, batch=False)  # shape, finite, semi-definite
             x = x + psd_sqrt(P0_) @ gen.standard_normal(n)
         k = len(self.motions)
+        Fs = [m.F(dt) for m in self.motions]  # each mode's, once: dt is the same every step
+        roots = [psd_sqrt(m.Q(dt)) for m in self.motions]
         zs, xs = np.empty(T, np.int64), np.empty((T, n))
         z = gen.choice(k, p=self.mode_probs)
         for t in range(T):
             if t > 0:
                 z = gen.choice(k, p=self.transition[z])
-                m = self.motions[z]
-                x = m.F(dt) @ x + psd_sqrt(m.Q(dt)) @ gen.standard_normal(n)
+                x = Fs[z] @ x + roots[z] @ gen.standard_normal(n)
             zs[t], xs[t] = z, x
         ys = xs @ H.T + gen.standard_normal((T, len(R))) @ psd_sqrt(R).T
         return zs, xs, ys
