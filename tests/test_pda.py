@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import math
 import re
 
 import numpy as np
@@ -112,6 +113,49 @@ def test_jpda_equals_brute_force_enumeration(seed):
     want_b, want_b0 = brute_jpda(np.where(gate, pd * lik / lam, 0.0), 1 - pd * pg)
     np.testing.assert_allclose(beta, want_b, rtol=1e-10, atol=1e-14)
     np.testing.assert_allclose(beta0, want_b0, rtol=1e-10)
+
+
+@pytest.mark.parametrize("T, D", [(7, 3), (3, 8), (5, 6), (6, 2)])
+def test_jpda_equals_brute_force_with_more_tracks_or_more_detections(T, D):
+    """Clusters summed by the subsets of their tracks (T <= D) and of their detections (T >
+    D), past the random shapes above, against every event written out."""
+    rng = np.random.default_rng(T * 10 + D)
+    lik = rng.uniform(0.001, 0.05, (T, D))
+    gate = rng.random((T, D)) < 0.8
+    pd, lam, pg = 0.85, 0.01, 0.97
+    beta, beta0 = jpda_weights(lik, gate, p_detect=pd, clutter_density=lam, p_gate=pg)
+    want_b, want_b0 = brute_jpda(np.where(gate, pd * lik / lam, 0.0), 1 - pd * pg)
+    np.testing.assert_allclose(beta, want_b, rtol=1e-10, atol=1e-14)
+    np.testing.assert_allclose(beta0, want_b0, rtol=1e-10)
+
+
+@pytest.mark.parametrize("T, D", [(12, 12), (14, 5), (5, 14), (1, 9)])
+def test_jpda_of_a_dense_cluster_of_equal_weights_is_the_closed_form(T, D):
+    """Every track in every detection's gate with one likelihood: the events that pair k
+    tracks number C(T, k) C(D, k) k!, each weighing G^k B^(T - k), so a track is missed with
+    probability sum_k (1 - k/T) w_k / sum_k w_k and takes each detection with an equal share
+    of the rest. A 12 x 12 cluster has 1.4e11 events; it is computed exactly, not by
+    Fitzgerald's approximation."""
+    pd, lam, pg, ell = 0.9, 0.01, 0.99, 0.004
+    G, B = pd * ell / lam, 1 - pd * pg
+    k = np.arange(min(T, D) + 1)
+    w = np.array([math.comb(T, i) * math.comb(D, i) * math.factorial(i) * G ** i
+                  * B ** (T - i) for i in k])
+    missed = float(((1 - k / T) * w).sum() / w.sum())
+    beta, beta0 = jpda_weights(np.full((T, D), ell), np.ones((T, D), bool), p_detect=pd,
+                               clutter_density=lam, p_gate=pg)
+    np.testing.assert_allclose(beta0, missed, rtol=1e-12)
+    np.testing.assert_allclose(beta, (1 - missed) / D, rtol=1e-12)
+
+
+def test_max_exact_must_be_a_whole_number():
+    gate = np.ones((2, 2), bool)
+    for bad in (-1, 2.5, True):
+        with pytest.raises(ValueError, match=re.escape(f"max_exact must be a whole number "
+                                                       f">= 0; got {bad!r}")):
+            jpda_weights(np.full((2, 2), 0.01), gate, max_exact=bad)
+    with pytest.raises(TypeError, match="max_exact"):
+        jpda_weights(np.full((2, 2), 0.01), gate, max_exact="8")
 
 
 def test_jpda_reduces_to_pda_and_cheap_jpda_is_a_distribution():

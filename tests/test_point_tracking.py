@@ -174,7 +174,7 @@ def test_jipda_keeps_crossing_targets_in_clutter_without_false_tracks():
     """The crossing targets of test_targets_are_kept_in_clutter: JIPDA follows each as JPDA
     does, and the tracks that JPDA's count of hits confirms on clutter, or on a target that
     another track already follows (two tracks sharing its detections), lose their existence
-    instead: over the 55 frames scored, JPDA reports 27 boxes on no target or beyond one a
+    instead: over the 55 frames scored, JPDA reports 48 boxes on no target or beyond one a
     target, JIPDA 1."""
     def false_boxes(outs, truth):
         return sum(int((np.linalg.norm(o.points[:, None] - x[None], axis=-1).min(1)
