@@ -23,7 +23,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import as_float_array, as_rng, check_has_steps, check_prior, is_whole
-from ..models.adapters import MeasurementFunctions, MotionFunctions, _plain_mean, psd_sqrt
+from ..models.adapters import (
+    MeasurementFunctions,
+    MotionFunctions,
+    _plain_mean,
+    _principal_root,
+    psd_sqrt,
+)
 from ..models.protocols import (
     MeasurementModel,
     MotionModel,
@@ -110,11 +116,11 @@ class Ensemble:
             # singular (a state known exactly along some direction): the principal root,
             # unique, so the draws are the same on every machine (psd_sqrt)
             sym = 0.5 * (cov + np.swapaxes(cov, -1, -2))
-            w = np.linalg.eigvalsh(sym)
+            w, V = np.linalg.eigh(sym)
             if (w < -1e-10 * np.abs(w).max(-1, keepdims=True)).any() or not np.isfinite(w).all():
                 raise ValueError("cov must be positive semi-definite to sample an ensemble"
                                  ) from None
-            L = psd_sqrt(sym)
+            L = _principal_root(w, V)
         z = rng.standard_normal(mean.shape[:-1] + (int(n_members), mean.shape[-1]))
         return cls(mean[..., None, :] + z @ np.swapaxes(L, -1, -2))
 

@@ -53,11 +53,15 @@ def psd_sqrt(S: np.ndarray) -> np.ndarray:
     >>> bool(np.allclose(A @ A.T, S))
     True
     """
-    S = np.asarray(S, dtype=float)
-    w, V = np.linalg.eigh(S)
+    return _principal_root(*np.linalg.eigh(np.asarray(S, dtype=float)))
+
+
+def _principal_root(w: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """:func:`psd_sqrt` from the eigendecomposition ``w, V`` (``np.linalg.eigh``'s), for a
+    caller that has it already (to check the eigenvalues first)."""
     # eigenvalues within rounding of 0 (n eps of the largest) are 0: the square root of a
     # rounding error (1e-8 of the scale) would carry its sign and size, which vary by processor
-    tiny = S.shape[-1] * np.finfo(float).eps * np.abs(w).max(axis=-1, keepdims=True)
+    tiny = w.shape[-1] * np.finfo(float).eps * np.abs(w).max(axis=-1, keepdims=True)
     w = np.where(w > tiny, w, 0.0)
     return (V * np.sqrt(w)[..., None, :]) @ np.swapaxes(V, -1, -2)
 
