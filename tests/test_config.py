@@ -226,6 +226,36 @@ def test_print_config_of_a_run_given_fps_warns_where_read_back_without_it(seq, t
     assert r.returncode == 0 and "fps_option" not in r.stdout
 
 
+def test_a_config_file_is_read_once_a_command(seq, tmp_path, monkeypatch, capsys):
+    """The configuration and the warnings about it (``--still-camera`` where the file sets
+    no camera motion, ``--fps`` other than the one it was printed with) come from one read
+    of the file: it was read three times, so a file rewritten meanwhile could track with
+    one content and warn of another. Counted at the file system (every read of its bytes or
+    text)."""
+    from pathlib import Path
+
+    from vistrack.cli import main
+
+    file = tmp_path / "used.toml"
+    file.write_text("[tracker]\ncamera_motion = false\n[derived]\nfps_option = 12.5\n")
+    reads = []
+    for name in ("read_bytes", "read_text"):
+        real = getattr(Path, name)
+
+        def counted(self, *a, _real=real, **k):
+            if self == file:
+                reads.append(self)
+            return _real(self, *a, **k)
+
+        monkeypatch.setattr(Path, name, counted)
+    assert main(["track", str(seq), "--out", str(tmp_path / "a.txt"), "--config", str(file),
+                 "--still-camera"]) == 0
+    err = capsys.readouterr().err
+    assert f"--still-camera changes nothing here: {file} sets camera_motion = false" in err
+    assert f"{file} was printed by a run given --fps 12.5" in err
+    assert len(reads) == 1
+
+
 @pytest.mark.parametrize("flags", [[], ["--high", "0.5", "--offline"], ["--tracker", "sort"],
                                    ["--config", "FILE", "--max-lost", "1"]])
 def test_print_config_without_input_is_what_a_run_prints(seq, tmp_path, flags):

@@ -200,20 +200,31 @@ _SETTINGS = (
 )
 
 
+def _config_file(args: argparse.Namespace) -> tuple[TrackConfig, dict[str, Any]]:
+    """--config's configuration (a file without ``[tracker] name`` over --tracker's preset)
+    and its ``[derived]`` table, read once a command: the configuration, and the warnings
+    about what it makes of the other options, all come from the same read of the file."""
+    from .config import TrackConfig, read_config_file
+
+    memo = getattr(args, "config_file_read", None)
+    if memo is None:
+        base = TrackConfig.preset(args.tracker) if args.tracker is not None else None
+        memo = args.config_file_read = read_config_file(args.config, base)
+    return memo
+
+
 def _box_config(args: argparse.Namespace):
     """The box tracker's configuration from --tracker, --config and the setting options
     (in that order, each over the one before), or an error message."""
-    from .config import TrackConfig, read_config
+    from .config import TrackConfig
 
-    base = TrackConfig.preset(args.tracker or "bytetrack")
     if args.config is not None:
-        # a file without [tracker] name goes over --tracker's preset
-        cfg = read_config(args.config, base if args.tracker is not None else None)
+        cfg = _config_file(args)[0]
         if args.tracker is not None and args.tracker != cfg.name:
             return None, (f"--tracker {args.tracker} disagrees with [tracker] name = "
                           f"\"{cfg.name}\" in {args.config}")
     else:
-        cfg = base
+        cfg = TrackConfig.preset(args.tracker or "bytetrack")
     # the options given, set together: one checked against another's default first would
     # refuse --high 0.2 --low 0.1 (low 0.3 above high 0.2)
     given = [(option, table, key, getattr(args, option)) for option, table, key, *_ in _SETTINGS
@@ -544,7 +555,7 @@ def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
     why = _still_already(args) if args.still_camera else None
     if why:
         warnings.warn(f"--still-camera changes nothing here: {why}", UserWarning, stacklevel=1)
-    printed = _printed_fps(args.config) if args.config is not None else None
+    printed = _printed_fps(_config_file(args)[1]) if args.config is not None else None
     if printed is not None and printed != args.fps:
         # the frame rate is no setting: --config does not set it, and a file printed by a
         # run given --fps tracked another way without a word
@@ -556,16 +567,10 @@ def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
                       stacklevel=1)
 
 
-def _printed_fps(path: str) -> float | None:
-    """The ``--fps`` of the run that printed the configuration file ``path`` (its
-    ``[derived] fps_option``), or None (not given, or not readable: read_config names
-    that)."""
-    import tomllib
-
-    try:
-        value = tomllib.loads(Path(path).read_text()).get("derived", {}).get("fps_option")
-    except (OSError, ValueError, AttributeError):
-        return None
+def _printed_fps(derived: dict[str, Any]) -> float | None:
+    """The ``--fps`` of the run that printed a configuration file, from its ``[derived]``
+    table (``fps_option``), or None (not given)."""
+    value = derived.get("fps_option")
     return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) \
         else None
 
@@ -596,7 +601,7 @@ def _still_already(args: argparse.Namespace) -> str | None:
     still and cannot follow a view that moves (``bgsub`` with MOG2). The selective model
     follows a view that moves unless ``--still-camera``, whatever the tracker: with it, the
     option always changes something."""
-    from .config import TrackConfig, read_config
+    from .config import TrackConfig
     from .pipeline import FRONTENDS, default_frontend
 
     name = args.tracker or "bytetrack"
@@ -608,8 +613,7 @@ def _still_already(args: argparse.Namespace) -> str | None:
     if still_front and args.background != "mog2":
         return None
     if args.config is not None:
-        base = TrackConfig.preset(args.tracker) if args.tracker is not None else None
-        if not read_config(args.config, base).tracker.camera_motion:
+        if not _config_file(args)[0].tracker.camera_motion:
             return f"{args.config} sets camera_motion = false"
     elif not TrackConfig.preset(name).tracker.camera_motion:
         return f"--tracker {name} does not estimate the camera's motion"

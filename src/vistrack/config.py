@@ -33,7 +33,7 @@ import os
 import sys
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
@@ -354,6 +354,15 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
     >>> cfg.name, cfg.tracker.high, cfg.offline.enabled
     ('sort', 0.5, True)
     """
+    return read_config_file(path, base)[0]
+
+
+def read_config_file(path: str | os.PathLike, base: TrackConfig | None = None
+                     ) -> tuple[TrackConfig, dict[str, Any]]:
+    """:func:`read_config`'s configuration and the file's ``[derived]`` table (empty
+    without one), from one read of the file: what a run printed beside its configuration
+    (``vistrack track --print-config``), which the command line compares with the run it
+    is given to."""
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -424,7 +433,7 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
             cfg = cfg.with_values(**{table: given})
         except ValueError as exc:
             raise ConfigError(f"{path}: [{table}] {exc}") from None
-    return cfg
+    return cfg, dict(data.get("derived", {}))
 
 
 def _value(v: object, kind: str | None = None) -> str:
