@@ -41,7 +41,8 @@ from ._validate import decode_text
 from .models.box import BoxMotion
 from .tracking.box import TRACKERS, BoxTrackerConfig
 
-__all__ = ["OfflineConfig", "TrackConfig", "read_config", "config_toml", "ConfigError"]
+__all__ = ["OfflineConfig", "TrackConfig", "read_config", "read_config_file", "config_toml",
+           "ConfigError"]
 
 
 class ConfigError(ValueError):
