@@ -7,7 +7,7 @@ every feasible joint event, exactly. Two kinds of problem:
 
 - dense clusters: T tracks and D detections, every detection in every track's gate (the
   worst case for both: the events number 1,441,729 at 8 x 8 and 1.4e11 at 12 x 12);
-- scenes: 30 targets, about 30 clutter points a frame and 2-D measurements, gated at
+- scenes: 30 or 300 targets, as many clutter points and 2-D measurements, gated at
   chi-square 9.21 (99 %), as a point tracker's frame is, with the targets packed in a
   smaller or a larger area (more or fewer of them share detections).
 
@@ -63,10 +63,11 @@ def main() -> None:
     rng = np.random.default_rng(0)
     problems = [(f"dense {T} x {D}", *dense(rng, T, D), 7 if T < 12 else 3)
                 for T, D in [(4, 4), (6, 6), (8, 8), (10, 10), (12, 12), (20, 4)]]
-    for side in (60, 120):
-        lik, gate = scene(rng, side)
+    for side, n in ((60, 30), (120, 30), (200, 300), (400, 300)):
+        lik, gate = scene(rng, side, n, n)
         t, d = largest_cluster(gate)
-        problems.append((f"scene {side} x {side} (largest cluster {t} x {d})", lik, gate, 7))
+        problems.append((f"{n} targets, {side} x {side} (largest cluster {t} x {d})", lik,
+                         gate, 7))
     print("| problem | vistrack ms | pyehm EHM2 ms | pyehm / vistrack | largest difference |")
     print("|---|---|---|---|---|")
     for name, lik, gate, reps in problems:

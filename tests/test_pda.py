@@ -102,31 +102,56 @@ def brute_jpda(G, B):
     return beta / total, beta0 / total
 
 
-@pytest.mark.parametrize("seed", range(12))
-def test_jpda_equals_brute_force_enumeration(seed):
-    rng = np.random.default_rng(seed)
-    T, D = rng.integers(1, 5), rng.integers(0, 5)
+def against_brute_force(rng, T, D, density):
     lik = rng.uniform(0.001, 0.05, (T, D))
-    gate = rng.random((T, D)) < 0.7
+    gate = rng.random((T, D)) < density
     pd, lam, pg = 0.85, 0.01, 0.97
     beta, beta0 = jpda_weights(lik, gate, p_detect=pd, clutter_density=lam, p_gate=pg)
     want_b, want_b0 = brute_jpda(np.where(gate, pd * lik / lam, 0.0), 1 - pd * pg)
     np.testing.assert_allclose(beta, want_b, rtol=1e-10, atol=1e-14)
     np.testing.assert_allclose(beta0, want_b0, rtol=1e-10)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_jpda_equals_brute_force_enumeration(seed):
+    rng = np.random.default_rng(seed)
+    against_brute_force(rng, rng.integers(1, 5), rng.integers(0, 5), 0.7)
 
 
 @pytest.mark.parametrize("T, D", [(7, 3), (3, 8), (5, 6), (6, 2)])
 def test_jpda_equals_brute_force_with_more_tracks_or_more_detections(T, D):
     """Clusters summed by the subsets of their tracks (T <= D) and of their detections (T >
     D), past the random shapes above, against every event written out."""
-    rng = np.random.default_rng(T * 10 + D)
-    lik = rng.uniform(0.001, 0.05, (T, D))
-    gate = rng.random((T, D)) < 0.8
+    against_brute_force(np.random.default_rng(T * 10 + D), T, D, 0.8)
+
+
+def test_jpda_of_many_clusters_at_once_is_each_cluster_s_alone():
+    """Clusters of the same smaller side are computed together, the shorter padded: nine
+    blocks of 1-4 tracks and 1-6 detections (some summed by tracks, some by detections,
+    several sharing a stack; the one track of (1, 3) alone in its cluster), placed apart in
+    one problem, each against the brute force of its own block (a block that falls into two
+    clusters is their product), and two tracks with nothing in their gates left alone."""
+    rng = np.random.default_rng(7)
+    shapes = [(2, 3), (2, 5), (3, 3), (3, 6), (4, 2), (3, 1), (2, 2), (4, 4), (1, 3)]
+    T, D = sum(t for t, _ in shapes) + 2, sum(d for _, d in shapes)
+    lik, gate = rng.uniform(0.001, 0.05, (T, D)), np.zeros((T, D), bool)
+    blocks, t0, d0 = [], 0, 0
+    for t, d in shapes:
+        g = rng.random((t, d)) < 0.8
+        g[np.arange(t), np.arange(t) % d] = True  # each track with a detection in its gate
+        g[np.arange(d) % t, np.arange(d)] = True  # one cluster: every detection gated
+        gate[t0:t0 + t, d0:d0 + d] = g
+        blocks.append((slice(t0, t0 + t), slice(d0, d0 + d)))
+        t0, d0 = t0 + t, d0 + d
     pd, lam, pg = 0.85, 0.01, 0.97
     beta, beta0 = jpda_weights(lik, gate, p_detect=pd, clutter_density=lam, p_gate=pg)
-    want_b, want_b0 = brute_jpda(np.where(gate, pd * lik / lam, 0.0), 1 - pd * pg)
-    np.testing.assert_allclose(beta, want_b, rtol=1e-10, atol=1e-14)
-    np.testing.assert_allclose(beta0, want_b0, rtol=1e-10)
+    for rows, cols in blocks:
+        want_b, want_b0 = brute_jpda(np.where(gate, pd * lik / lam, 0.0)[rows, cols],
+                                     1 - pd * pg)
+        np.testing.assert_allclose(beta[rows, cols], want_b, rtol=1e-10, atol=1e-14)
+        np.testing.assert_allclose(beta0[rows], want_b0, rtol=1e-10)
+    assert beta0[-2:].tolist() == [1.0, 1.0] and not beta[-2:].any()
+    assert beta[~gate].max() == 0.0
 
 
 @pytest.mark.parametrize("T, D", [(12, 12), (14, 5), (5, 14), (1, 9)])
