@@ -20,6 +20,7 @@ from vistrack.filters import (
     kalman_filter,
     rts_smooth,
 )
+from vistrack.filters.enkf import Ensemble
 from vistrack.frontends.background import SelectiveBackground
 from vistrack.frontends.blobs import BlobDetector
 from vistrack.models import SwitchingLinearSystem
@@ -200,14 +201,17 @@ def test_every_filter_takes_a_singular_prior(name):
 
 
 def test_an_ensemble_drawn_from_a_singular_covariance_has_that_covariance():
-    from vistrack.filters.enkf import Ensemble
-
     cov = np.array([[4.0, 2.0, 0.0], [2.0, 1.0, 0.0], [0.0, 0.0, 0.0]])  # rank 1
     mean, got = Ensemble.sample([1.0, 2.0, 3.0], cov, 40_000, rng=0).moments()
     np.testing.assert_allclose(got, cov, atol=0.08)
     np.testing.assert_allclose(mean, [1.0, 2.0, 3.0], atol=0.03)
     with pytest.raises(ValueError, match="cov must be positive semi-definite"):
         Ensemble.sample([0.0, 0.0], -np.eye(2), 10, rng=0)
+    # a NaN covariance passed Cholesky's factorisation, and drew NaN members without a word
+    with pytest.raises(ValueError, match=re.escape("cov must be finite; cov[0, 1] = nan")):
+        Ensemble.sample([0.0, 0.0], [[1.0, np.nan], [np.nan, 1.0]], 10, rng=0)
+    with pytest.raises(ValueError, match=re.escape("mean must be finite; mean[1] = inf")):
+        Ensemble.sample([0.0, np.inf], np.eye(2), 10, rng=0)
 
 
 # booleans and non-finite values where a whole number or a number is asked for: int(True) ==
@@ -218,6 +222,7 @@ WHOLE_CASES = [
     (lambda v: vt.Position(dim=v), "dim must be 1, 2 or 3"),
     (lambda v: simulate_lgssm(v, **MATS, x0=[0.0, 1.0], rng=0), "T must be a positive integer"),
     (lambda v: EnsembleKalmanFilter(CV, POS, n_members=v), "n_members must be"),
+    (lambda v: Ensemble.sample([0.0], [[1.0]], v, rng=0), "n_members must be"),
     (lambda v: SelectiveBackground(n_new=v), "n_new must be"),
     (lambda v: BlobDetector(check_view=v), "check_view must be"),
     (lambda v: ScoreCalibrator(window=v), "window must be"),

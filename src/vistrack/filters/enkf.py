@@ -22,7 +22,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_rng, check_has_steps, check_prior, is_whole
+from .._validate import (
+    as_float_array,
+    as_rng,
+    as_whole,
+    check_finite,
+    check_has_steps,
+    check_prior,
+    is_whole,
+)
 from ..models.adapters import (
     MeasurementFunctions,
     MotionFunctions,
@@ -100,7 +108,8 @@ class Ensemble:
         Raises
         ------
         ValueError
-            If ``cov`` is not positive semi-definite.
+            If ``mean`` or ``cov`` has a NaN or an infinite entry, ``cov`` is not positive
+            semi-definite, or ``n_members`` is not a whole number >= 2.
 
         Examples
         --------
@@ -110,6 +119,10 @@ class Ensemble:
         rng = as_rng(rng)
         mean = np.asarray(mean, dtype=float)
         cov = np.asarray(cov, dtype=float)
+        # (a NaN covariance passed Cholesky's factorisation and drew NaN members)
+        check_finite(mean, "mean")
+        check_finite(cov, "cov")
+        n_members = as_whole(n_members, "n_members", 2)
         try:
             L = np.linalg.cholesky(cov)
         except np.linalg.LinAlgError:
