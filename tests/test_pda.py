@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 import math
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -126,11 +127,11 @@ def test_jpda_equals_brute_force_with_more_tracks_or_more_detections(T, D):
 
 
 def test_jpda_of_many_clusters_at_once_is_each_cluster_s_alone():
-    """Clusters of the same smaller side are computed together, the shorter padded: nine
-    blocks of 1-4 tracks and 1-6 detections (some summed by tracks, some by detections,
-    several sharing a stack; the one track of (1, 3) alone in its cluster), placed apart in
-    one problem, each against the brute force of its own block (a block that falls into two
-    clusters is their product), and two tracks with nothing in their gates left alone."""
+    """Nine blocks of 1-4 tracks and 1-6 detections (some summed by their tracks, some by
+    their detections; the one track of (1, 3) alone in its cluster, by PDA's closed form),
+    placed apart in one problem, each against the brute force of its own block (a block
+    that falls into two clusters is their product), and two tracks with nothing in their
+    gates left alone."""
     rng = np.random.default_rng(7)
     shapes = [(2, 3), (2, 5), (3, 3), (3, 6), (4, 2), (3, 1), (2, 2), (4, 4), (1, 3)]
     T, D = sum(t for t, _ in shapes) + 2, sum(d for _, d in shapes)
@@ -154,23 +155,67 @@ def test_jpda_of_many_clusters_at_once_is_each_cluster_s_alone():
     assert beta[~gate].max() == 0.0
 
 
-@pytest.mark.parametrize("T, D", [(12, 12), (14, 5), (5, 14), (1, 9)])
-def test_jpda_of_a_dense_cluster_of_equal_weights_is_the_closed_form(T, D):
-    """Every track in every detection's gate with one likelihood: the events that pair k
-    tracks number C(T, k) C(D, k) k!, each weighing G^k B^(T - k), so a track is missed with
-    probability sum_k (1 - k/T) w_k / sum_k w_k and takes each detection with an equal share
-    of the rest. A 12 x 12 cluster has 1.4e11 events; it is computed exactly, not by
-    Fitzgerald's approximation."""
-    pd, lam, pg, ell = 0.9, 0.01, 0.99, 0.004
+def equal_weights(T, D, pd=0.9, lam=0.01, pg=0.99, ell=0.004):
+    """JPDA of a dense cluster, every track in every detection's gate with one likelihood,
+    in closed form: the events that pair k tracks number C(T, k) C(D, k) k!, each weighing
+    G^k B^(T - k), or (G / B)^k over B^T, so a track is missed with probability
+    sum_k (1 - k/T) w_k / sum_k w_k and takes each detection with an equal share of the
+    rest. Returns vistrack's beta and beta0 and the closed form's two values."""
     G, B = pd * ell / lam, 1 - pd * pg
     k = np.arange(min(T, D) + 1)
-    w = np.array([math.comb(T, i) * math.comb(D, i) * math.factorial(i) * G ** i
-                  * B ** (T - i) for i in k])
+    w = np.array([math.comb(T, i) * math.comb(D, i) * math.factorial(i) * (G / B) ** i
+                  for i in k])
     missed = float(((1 - k / T) * w).sum() / w.sum())
     beta, beta0 = jpda_weights(np.full((T, D), ell), np.ones((T, D), bool), p_detect=pd,
                                clutter_density=lam, p_gate=pg)
+    return beta, beta0, (1 - missed) / D, missed
+
+
+@pytest.mark.parametrize("T, D", [(12, 12), (14, 5), (5, 14), (1, 9), (400, 2), (2, 400),
+                                  (12, 40)])
+def test_jpda_of_a_dense_cluster_of_equal_weights_is_the_closed_form(T, D):
+    """A 12 x 12 cluster has 1.4e11 events; it is computed exactly, not by Fitzgerald's
+    approximation. 400 tracks sharing 2 detections: the sums carry B^400 (1e-385), which
+    underflowed to an error (or, at 200 tracks and B = 0.02, to probabilities over 1)
+    before they were rescaled row by row."""
+    beta, beta0, share, missed = equal_weights(T, D)
     np.testing.assert_allclose(beta0, missed, rtol=1e-12)
-    np.testing.assert_allclose(beta, (1 - missed) / D, rtol=1e-12)
+    np.testing.assert_allclose(beta, share, rtol=1e-12)
+
+
+def test_a_cluster_too_costly_to_sum_gets_the_cheap_approximation():
+    """12 tracks among 200 detections, all in one another's gates: summed exactly it took
+    60 ms (12 among 1,000, 0.3 s), beyond four times a 12 x 12 cluster's cost, so it gets
+    Fitzgerald's cheap JPDA, as it did before the sums (its formula written out here), and
+    12 among 40 is still summed exactly (the closed form above)."""
+    beta, beta0, share, missed = equal_weights(12, 200)
+    assert abs(beta0[0] - missed) > 0.01
+    pd, lam, pg, ell = 0.9, 0.01, 0.99, 0.004
+    g = np.full((12, 200), pd * ell / lam)
+    b = g / (g.sum(1)[:, None] + g.sum(0)[None, :] - g + (1 - pd * pg))
+    b0 = np.clip(1 - b.sum(1), 0, 1)
+    np.testing.assert_allclose(beta, b / (b.sum(1) + b0)[:, None], rtol=1e-12)
+    np.testing.assert_allclose(beta0, b0 / (b.sum(1) + b0), rtol=1e-12, atol=1e-15)
+
+
+def test_a_pair_whose_weight_underflows_is_in_no_event():
+    """A likelihood of 5e-324 over a clutter density of 10 weighs 0 as a float. With P_D
+    P_G = 1 the lone track it belonged to got 0 / 0 (NaN, and a NaN existence from JIPDA);
+    it is left as a track with nothing in its gate is (beta0 1, as pda_weights leaves it),
+    and the other track keeps its detection."""
+    from vistrack.association import jipda_weights
+
+    lik = np.array([[5e-324, 0.0], [0.0, 0.2]])
+    gate = np.array([[True, False], [False, True]])
+    kw = dict(p_detect=1.0, clutter_density=10.0, p_gate=1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        b, b0 = jpda_weights(lik, gate, **kw)
+        pb, pb0 = pda_weights(lik, gate, **kw)
+        jb, jb0, ex = jipda_weights(lik, gate, [0.5, 1.0], **kw)
+    assert b.tolist() == pb.tolist() == [[0.0, 0.0], [0.0, 1.0]]
+    assert b0.tolist() == pb0.tolist() == [1.0, 0.0]
+    assert np.isfinite(jb).all() and np.isfinite(ex).all() and ex[1] == 1.0
 
 
 def test_max_exact_must_be_a_whole_number():
@@ -276,6 +321,30 @@ def test_jipda_and_ipda_equal_brute_force_over_existence_and_events(seed):
     b, b0 = pda_weights(lik, gate, p_detect=pd, clutter_density=lam, p_gate=pg)
     np.testing.assert_allclose(beta, b, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(beta0, b0, rtol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_jipda_with_tracks_certain_or_not_there_equals_brute_force(seed):
+    """Existence exactly 0 (a track whose weights are all 0, in no cluster) and exactly 1
+    beside others, against every joint hypothesis written out; a track that is not there
+    keeps its existence 0 and takes no detection."""
+    from vistrack.association import jipda_weights
+
+    rng = np.random.default_rng(100 + seed)
+    T, D = int(rng.integers(2, 5)), int(rng.integers(1, 5))
+    lik = rng.uniform(0.001, 0.05, (T, D))
+    gate = rng.random((T, D)) < 0.8
+    eps = rng.choice([0.0, 1.0, 0.5, 0.9], T)
+    eps[:2] = [0.0, 1.0]
+    pd, lam, pg = 0.85, 0.01, 0.97
+    beta, beta0, ex = jipda_weights(lik, gate, eps, p_detect=pd, clutter_density=lam, p_gate=pg)
+    with np.errstate(invalid="ignore", divide="ignore"):  # (the absent track's 0 / 0)
+        want_b, want_b0, want_ex = brute_jipda(lik, gate, eps, pd, lam, pg)
+    np.testing.assert_allclose(ex, want_ex, rtol=1e-10, atol=1e-14)
+    there = eps > 0
+    np.testing.assert_allclose(beta[there], want_b[there], rtol=1e-10, atol=1e-14)
+    np.testing.assert_allclose(beta0[there], want_b0[there], rtol=1e-10, atol=1e-14)
+    assert ex[0] == 0.0 and beta0[0] == 1.0 and not beta[0].any()
 
 
 def test_jipda_of_certain_tracks_is_jpda_and_clutter_lowers_existence_on_average():

@@ -25,7 +25,8 @@ proportional to :math:`\prod_{(t,j)} P_D \ell_{tj} / \lambda \prod_{t \text{ mis
 P_G)`. The gated problem is split into independent clusters. A cluster's marginals are summed
 exactly, over the subsets of its smaller side rather than over its events (a cost of
 :math:`T D 2^{\min(T, D)}`), when that side has at most ``max_exact`` tracks or
-measurements; a larger cluster gets Fitzgerald's "cheap JPDA" approximation (1985),
+measurements and the cost is at most four times a ``max_exact`` square's; a larger cluster
+gets Fitzgerald's "cheap JPDA" approximation (1985),
 :math:`\beta_{tj} = G_{tj} / (\sum_k G_{tk} + \sum_s G_{sj} - G_{tj} + B)` with
 :math:`G_{tj} = P_D \ell_{tj} / \lambda` and :math:`B = 1 - P_D P_G`.
 """
@@ -187,8 +188,9 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
 
 
 def _matchings(G: np.ndarray, a: np.ndarray, c: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """Every matching of the rows and columns of ``G``, summed over subsets of the columns.
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The probabilities of every matching of the rows and columns of ``G``, summed over
+    subsets of the columns.
 
     A matching (each row to at most one column and each column to at most one row, on pairs
     where ``G > 0``) weighs its pairs' ``G`` times ``a[i]`` for each row and ``c[k]`` for each
@@ -196,15 +198,18 @@ def _matchings(G: np.ndarray, a: np.ndarray, c: np.ndarray
     the ways rows ``0..i-1`` take exactly the columns ``U``, and ``R[U]`` that of the ways
     the rows from ``i`` on can take columns outside ``U``, the columns left over included;
     the weight of the matchings that pair ``(i, k)`` is ``G[i, k] F[i][U] R[U + k]`` summed
-    over the ``U`` without ``k``. The cost grows as ``rows x columns x 2**columns``, not as
-    the number of matchings (1,441,729 for 8 x 8).
+    over the ``U`` without ``k``, and row ``i``'s outcomes (a column each, or none) add up to
+    the total. The cost grows as ``rows x columns x 2**columns``, not as the number of
+    matchings (1,441,729 for 8 x 8). ``F`` and ``R`` are scaled to a largest entry of 1 at
+    each row, which each row's probabilities, taken over its own total, do not see: a
+    product of hundreds of ``a`` (a cluster of many tracks and few detections) underflowed.
 
     Where a ``c`` is 0, only the matchings that leave the fewest such columns unmatched are
     counted (rather than none, where every matching leaves one): the limit as those ``c``
     vanish. Every ``a`` must be > 0.
 
-    Returns the unnormalised weights of the pairs ``(I, K)``, of each row and each column
-    left unmatched, and the total."""
+    Returns the probabilities of the pairs ``(I, K)``, and of each row and each column left
+    unmatched."""
     I, K = G.shape
     n = 1 << K
     bit = (np.arange(n)[None, :] >> np.arange(K)[:, None]) & 1 == 1  # (K, n)
@@ -216,12 +221,13 @@ def _matchings(G: np.ndarray, a: np.ndarray, c: np.ndarray
         F[i + 1] = a[i] * F[i]
         for k in np.flatnonzero(G[i]):
             F[i + 1, on[k]] += G[i, k] * F[i, off[k]]
+        F[i + 1] /= F[i + 1].max()  # (> 0: leaving row i unmatched is always possible)
     zero = c == 0
     level = (~bit[zero]).sum(0)  # the columns of c = 0 each subset leaves unmatched
     left = np.prod(np.where(bit, 1.0, np.where(zero, 1.0, c)[:, None]), axis=0)
     R = np.where(level == level[F[I] > 0].min(), left, 0.0)
-    total = float(F[I] @ R)
-    col0 = np.array([F[I, u] @ R[u] for u in off])
+    R /= R.max()
+    col0 = np.array([F[I, u] @ R[u] for u in off]) / (F[I] @ R)
     pair, row0 = np.zeros((I, K)), np.zeros(I)
     for i in range(I - 1, -1, -1):
         row0[i] = a[i] * (F[i] @ R)
@@ -230,14 +236,33 @@ def _matchings(G: np.ndarray, a: np.ndarray, c: np.ndarray
             up = R[on[k]]
             pair[i, k] = G[i, k] * (F[i, off[k]] @ up)
             below[off[k]] += G[i, k] * up
-        R = below
-    return pair, row0, col0, total
+        total = row0[i] + pair[i].sum()
+        row0[i] /= total
+        pair[i] /= total
+        R = below / below.max()
+    return pair, row0, col0
 
 
 def _by_tracks(T: int, D: int, B: np.ndarray) -> bool:
     """Whether :func:`_exact` sums over subsets of the tracks (else of the detections): the
     smaller side, but always the tracks where a miss can weigh 0."""
     return T <= D or not bool((B > 0).all())
+
+
+def _work(rows: int, K: int) -> int:
+    """About what :func:`_matchings` costs, in numpy's element operations: a step of
+    ``2**K`` entries for each row and column, each step's call worth about 1,500."""
+    return rows * K * ((1 << K) + 1500)
+
+
+def _exact_is_affordable(T: int, D: int, B: np.ndarray, max_exact: int) -> bool:
+    """Whether :func:`_exact` computes a cluster of ``T`` tracks and ``D`` detections: the
+    side it sums over has at most ``max_exact``, and its work (:func:`_work`) is at most
+    four times a ``max_exact`` x ``max_exact`` cluster's (with 12, about 20 ms): a dozen
+    tracks among hundreds of clutter points, or a few among thousands, took a second or
+    more."""
+    K, rows = (T, D) if _by_tracks(T, D, B) else (D, T)
+    return K <= max_exact and _work(rows, K) <= 4 * _work(max_exact, max_exact)
 
 
 def _exact(G: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -249,10 +274,9 @@ def _exact(G: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     the smaller side (:func:`_matchings`), so its cost grows as ``T x D x 2**min(T, D)``."""
     T, D = G.shape
     if _by_tracks(T, D, B):
-        pair, _, beta0, total = _matchings(G.T, np.ones(D), B)
-        return pair.T / total, beta0 / total
-    pair, beta0, _, total = _matchings(G, B, np.ones(D))
-    return pair / total, beta0 / total
+        pair, _, beta0 = _matchings(G.T, np.ones(D), B)
+        return pair.T, beta0
+    return _matchings(G, B, np.ones(D))[:2]
 
 
 def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int
@@ -264,6 +288,10 @@ def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int
     beta, beta0 = np.zeros((T, D)), np.ones(T)
     if T == 0:
         return beta, np.zeros(0)
+    # a pair whose weight underflows to 0 (or a track whose existence is 0) can be in no
+    # event that counts: in no cluster either (with P_D P_G = 1 a lone track's PDA form
+    # below was 0 / 0)
+    gate = gate & (G > 0)
     if not gate.any():
         return beta, beta0
     k, lt, ld = components(gate)
@@ -277,8 +305,7 @@ def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int
     for c in np.unique(lt[has & ~lone]):
         ti, di = np.flatnonzero(lt == c), np.flatnonzero(ld == c)
         g = G[np.ix_(ti, di)]
-        side = len(ti) if _by_tracks(len(ti), len(di), B[ti]) else len(di)
-        if side <= max_exact:
+        if _exact_is_affordable(len(ti), len(di), B[ti], max_exact):
             b, b0 = _exact(g, B[ti])
         else:  # Fitzgerald's cheap JPDA
             den = g.sum(1)[:, None] + g.sum(0)[None, :] - g + B[ti, None]
@@ -308,8 +335,10 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     exactly: the events are summed by the subsets of that side, the weight of the ways the
     detections seen so far can take exactly a given set of tracks (or the tracks a given set
     of detections), at a cost of :math:`T D 2^{\min(T, D)}` rather than the number of events
-    (1,441,729 for 8 tracks and 8 detections all in one another's gates). A larger cluster
-    gets Fitzgerald's cheap JPDA (1985),
+    (1,441,729 for 8 tracks and 8 detections all in one another's gates). A cluster beyond
+    that, or one whose cost would be more than four times a dense ``max_exact`` x
+    ``max_exact`` cluster's (a dozen tracks among hundreds of clutter points), gets
+    Fitzgerald's cheap JPDA (1985),
     :math:`\beta_{tj} = G_{tj} / (\sum_k G_{tk} + \sum_s G_{sj} - G_{tj} + B)` with
     :math:`\beta_{t0} = \max(0, 1 - \sum_j \beta_{tj})`, each track's row then normalised to
     sum to one.
@@ -328,7 +357,8 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
         Gate probability :math:`P_G`, in (0, 1].
     max_exact : int
         A cluster is computed exactly when its tracks or its detections number at most this
-        (its tracks, where :math:`P_D P_G = 1`); the cost doubles with each one more on the
+        (its tracks, where :math:`P_D P_G = 1`), and its cost is at most four times a dense
+        ``max_exact`` x ``max_exact`` cluster's; the cost doubles with each one more on the
         smaller side (a dense 12 x 12 cluster about 5 ms, 16 x 16 about 0.1 s).
 
     Returns
@@ -497,8 +527,9 @@ def jipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     :math:`\varepsilon_t P_D` (Mušicki and Evans, 2004). The posterior existence is the
     probability of the events where the track takes a detection, plus the share
     :math:`\varepsilon_t B / (1 - \varepsilon_t P_D P_G)` of those where it takes none. A
-    lone track gets :func:`ipda_weights`' values. Clusters beyond ``max_exact`` (on both
-    sides) get Fitzgerald's cheap JPDA on these weights.
+    lone track gets :func:`ipda_weights`' values. A cluster that :func:`jpda_weights`
+    would not compute exactly (``max_exact``) gets Fitzgerald's cheap JPDA on these
+    weights.
 
     Parameters
     ----------
