@@ -183,6 +183,20 @@ def test_jpda_of_a_dense_cluster_of_equal_weights_is_the_closed_form(T, D):
     np.testing.assert_allclose(beta, share, rtol=1e-12)
 
 
+def test_clusters_of_two_tracks_have_no_cancellation():
+    """Clusters of two tracks have a closed form of their own, whose terms must not cancel:
+    two tracks that share a heavy detection, the second also seeing a faint one (1e-9 of
+    it), and misses weighing 1e-12, where the events that give each track a detection
+    weigh S1 S2 - sum_j G1j G2j = (1 + 1e-9) - 1 if written so (8e-8 off in floating
+    point). Against every event written out, to 1e-10."""
+    G = np.array([[1.0, 0.0], [1.0, 1e-9]])
+    B = 1e-12
+    beta, beta0 = jpda_weights(G, G > 0, p_detect=1.0, p_gate=1.0 - B, clutter_density=1.0)
+    want_b, want_b0 = brute_jpda(G, 1.0 - (1.0 - B))
+    np.testing.assert_allclose(beta, want_b, rtol=1e-10, atol=1e-300)
+    np.testing.assert_allclose(beta0, want_b0, rtol=1e-10)
+
+
 def test_a_cluster_too_costly_to_sum_gets_the_cheap_approximation():
     """12 tracks among 200 detections, all in one another's gates: summed exactly it took
     60 ms (12 among 1,000, 0.3 s), beyond four times a 12 x 12 cluster's cost, so it gets

@@ -279,6 +279,60 @@ def _exact(G: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return _matchings(G, B, np.ones(D))[:2]
 
 
+def _two_track_clusters(G: np.ndarray, B: np.ndarray, gate: np.ndarray, lt: np.ndarray,
+                        ld: np.ndarray, size: np.ndarray, beta: np.ndarray,
+                        beta0: np.ndarray) -> np.ndarray:
+    """The clusters of two tracks (the most common after lone tracks), in closed form, all
+    at once, into ``beta`` and ``beta0``; returns which tracks were done.
+
+    With ``S1``, ``S2`` the sums of each track's weights ``G1j``, ``G2j`` over the cluster's
+    detections and ``X2j`` the sum of track 2's over the detections other than ``j``, the
+    events weigh ``Z = B1 B2 + B2 S1 + B1 S2 + sum_j G1j X2j`` in all (both missed, one
+    takes a detection, each takes another); track 1 takes ``j`` in ``G1j (B2 + X2j)`` of
+    it and is missed in ``B1 (B2 + S2)`` (and so for track 2). Every term is a sum of
+    positive numbers (``X2j`` from running sums each way, not ``S2 - G2j``), so nothing
+    cancels. Where a ``B`` is 0 the limit is :func:`_exact`'s: those clusters are left to
+    it."""
+    done = np.zeros(len(B), bool)
+    two = np.flatnonzero((size[lt] == 2) & gate.any(1))
+    two = two[np.argsort(lt[two], kind="stable")]  # each cluster's two tracks side by side
+    t1, t2 = two[0::2], two[1::2]
+    ok = (B[t1] > 0) & (B[t2] > 0)
+    t1, t2 = t1[ok], t2[ok]
+    m = len(t1)
+    if m == 0:
+        return done
+    pair_of = np.full(size.shape[0], -1)
+    pair_of[lt[t1]] = np.arange(m)
+    cols = np.flatnonzero(pair_of[ld] >= 0)  # the detections of these clusters
+    pc = pair_of[ld[cols]]
+    order = np.argsort(pc, kind="stable")
+    cols, pc = cols[order], pc[order]
+    starts = np.searchsorted(pc, np.arange(m))
+    slot = np.arange(len(cols)) - starts[pc]
+    L = int(slot.max()) + 1
+    W1, W2 = np.zeros((m, L)), np.zeros((m, L))
+    W1[pc, slot] = np.where(gate[t1[pc], cols], G[t1[pc], cols], 0.0)
+    W2[pc, slot] = np.where(gate[t2[pc], cols], G[t2[pc], cols], 0.0)
+
+    def others(W: np.ndarray) -> np.ndarray:  # each entry's row sum without it
+        zero = np.zeros((m, 1))
+        before = np.concatenate([zero, np.cumsum(W[:, :-1], axis=1)], axis=1)
+        after = np.concatenate([np.cumsum(W[:, :0:-1], axis=1)[:, ::-1], zero], axis=1)
+        return before + after
+
+    X1, X2 = others(W1), others(W2)
+    S1, S2 = W1.sum(1), W2.sum(1)
+    B1, B2 = B[t1], B[t2]
+    Z = B1 * B2 + B2 * S1 + B1 * S2 + (W1 * X2).sum(1)
+    beta[t1[pc], cols] = (W1 * (B2[:, None] + X2) / Z[:, None])[pc, slot]
+    beta[t2[pc], cols] = (W2 * (B1[:, None] + X1) / Z[:, None])[pc, slot]
+    beta0[t1] = B1 * (B2 + S2) / Z
+    beta0[t2] = B2 * (B1 + S1) / Z
+    done[t1] = done[t2] = True
+    return done
+
+
 def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int
            ) -> tuple[np.ndarray, np.ndarray]:
     """The joint association probabilities of :func:`jpda_weights`, with ``G (T, D)`` (0
@@ -296,13 +350,15 @@ def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int
         return beta, beta0
     k, lt, ld = components(gate)
     has = gate.any(1)
-    lone = has & (np.bincount(lt[has], minlength=k)[lt] == 1)
+    size = np.bincount(lt[has], minlength=k)
+    lone = has & (size[lt] == 1)
     # a track alone in its cluster, its detections in no other track's gate: PDA's closed
     # form, for every such track at once (the sum over its events, and cheap JPDA's value)
     den = G[lone].sum(1) + B[lone]
     beta[lone] = G[lone] / den[:, None]
     beta0[lone] = B[lone] / den
-    for c in np.unique(lt[has & ~lone]):
+    done = lone | _two_track_clusters(G, B, gate, lt, ld, size, beta, beta0)
+    for c in np.unique(lt[has & ~done]):
         ti, di = np.flatnonzero(lt == c), np.flatnonzero(ld == c)
         g = G[np.ix_(ti, di)]
         if _exact_is_affordable(len(ti), len(di), B[ti], max_exact):
