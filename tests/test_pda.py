@@ -197,6 +197,39 @@ def test_clusters_of_two_tracks_have_no_cancellation():
     np.testing.assert_allclose(beta0, want_b0, rtol=1e-10)
 
 
+def test_clusters_of_two_tracks_with_huge_weights_do_not_overflow():
+    """Weights of 1e200 (a tiny innovation covariance, or a clutter density in odd units):
+    an event's two pairs weigh 1e400, past a float, and the closed form gave NaN. Each
+    event has one factor of each track's, so (G s, B) has the probabilities of (G, B / s):
+    against every event written out at the smaller scale."""
+    g = np.array([[1.0, 0.5], [0.7, 1.0]])
+    pd, pg = 0.9, 0.99
+    beta, beta0 = jpda_weights(1e200 * g, np.ones((2, 2), bool), p_detect=pd, p_gate=pg,
+                               clutter_density=1.0)
+    want_b, want_b0 = brute_jpda(pd * g, (1 - pd * pg) * 1e-200)
+    np.testing.assert_allclose(beta, want_b, rtol=1e-10)
+    np.testing.assert_allclose(beta0, want_b0, rtol=1e-10, atol=1e-300)
+
+
+def test_max_exact_bounds_and_unbounds_the_exact_sums():
+    """max_exact 0 asks for the cheap JPDA on every cluster of more than one track, two
+    tracks included (the formula written out); a huge max_exact (2**62) is no bound, and
+    costs nothing to check (its bound on the work was computed as 2**max_exact: seconds,
+    or a MemoryError)."""
+    g = np.array([[1.0, 0.5], [0.7, 1.0]])
+    kw = dict(p_detect=0.9, p_gate=0.99, clutter_density=1.0)
+    beta, beta0 = jpda_weights(g, np.ones((2, 2), bool), max_exact=0, **kw)
+    G, B = 0.9 * g, 1 - 0.9 * 0.99
+    b = G / (G.sum(1)[:, None] + G.sum(0)[None, :] - G + B)
+    b0 = np.clip(1 - b.sum(1), 0, 1)
+    np.testing.assert_allclose(beta, b / (b.sum(1) + b0)[:, None], rtol=1e-12)
+    rng = np.random.default_rng(4)
+    lik, gate = rng.uniform(0.5, 1.5, (3, 3)), np.ones((3, 3), bool)
+    for a, w in zip(jpda_weights(lik, gate, max_exact=2**62, **kw),
+                    brute_jpda(0.9 * lik, 1 - 0.9 * 0.99)):
+        np.testing.assert_allclose(a, w, rtol=1e-10)
+
+
 def test_a_cluster_too_costly_to_sum_gets_the_cheap_approximation():
     """12 tracks among 200 detections, all in one another's gates: summed exactly it took
     60 ms (12 among 1,000, 0.3 s), beyond four times a 12 x 12 cluster's cost, so it gets

@@ -22,11 +22,12 @@ probability :math:`P_G`, clutter of spatial density :math:`\lambda` and the like
 compete for measurements jointly: over every feasible joint event (each measurement to at most
 one track, each track at most one measurement, within the gates), with probability
 proportional to :math:`\prod_{(t,j)} P_D \ell_{tj} / \lambda \prod_{t \text{ missed}} (1 - P_D
-P_G)`. The gated problem is split into independent clusters. A cluster's marginals are summed
-exactly, over the subsets of its smaller side rather than over its events (a cost of
-:math:`T D 2^{\min(T, D)}`), when that side has at most ``max_exact`` tracks or
-measurements and the cost is at most four times a ``max_exact`` square's; a larger cluster
-gets Fitzgerald's "cheap JPDA" approximation (1985),
+P_G)`. The gated problem is split into independent clusters. A cluster's marginals are
+exact, in closed form for one or two tracks and otherwise summed over the subsets of its
+smaller side rather than over its events (a cost of :math:`T D 2^{\min(T, D)}`), when that
+side has at most ``max_exact`` tracks or measurements and the sum costs at most four times
+a ``max_exact`` square's; a larger cluster gets Fitzgerald's "cheap JPDA" approximation
+(1985),
 :math:`\beta_{tj} = G_{tj} / (\sum_k G_{tk} + \sum_s G_{sj} - G_{tj} + B)` with
 :math:`G_{tj} = P_D \ell_{tj} / \lambda` and :math:`B = 1 - P_D P_G`.
 """
@@ -262,7 +263,8 @@ def _exact_is_affordable(T: int, D: int, B: np.ndarray, max_exact: int) -> bool:
     tracks among hundreds of clutter points, or a few among thousands, took a second or
     more."""
     K, rows = (T, D) if _by_tracks(T, D, B) else (D, T)
-    return K <= max_exact and _work(rows, K) <= 4 * _work(max_exact, max_exact)
+    m = min(max_exact, 40)  # (a max_exact of 2**40 or more: no bound on the work, at once)
+    return K <= max_exact and _work(rows, K) <= 4 * _work(m, m)
 
 
 def _exact(G: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -280,7 +282,7 @@ def _exact(G: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _two_track_clusters(G: np.ndarray, B: np.ndarray, gate: np.ndarray, lt: np.ndarray,
-                        ld: np.ndarray, size: np.ndarray, beta: np.ndarray,
+                        ld: np.ndarray, size: np.ndarray, max_exact: int, beta: np.ndarray,
                         beta0: np.ndarray) -> np.ndarray:
     """The clusters of two tracks (the most common after lone tracks), in closed form, all
     at once, into ``beta`` and ``beta0``; returns which tracks were done.
@@ -291,13 +293,18 @@ def _two_track_clusters(G: np.ndarray, B: np.ndarray, gate: np.ndarray, lt: np.n
     takes a detection, each takes another); track 1 takes ``j`` in ``G1j (B2 + X2j)`` of
     it and is missed in ``B1 (B2 + S2)`` (and so for track 2). Every term is a sum of
     positive numbers (``X2j`` from running sums each way, not ``S2 - G2j``), so nothing
-    cancels. Where a ``B`` is 0 the limit is :func:`_exact`'s: those clusters are left to
-    it."""
+    cancels, and each track's weights and ``B`` are divided by their largest first (an
+    event has one factor of each track's), so that none overflows. Where a ``B`` is 0 the
+    limit is :func:`_exact`'s, and where ``max_exact`` is below the cluster's smaller side
+    (0, or 1 with two detections or more) the cheap JPDA is asked for: those clusters are
+    left to the general path. The cost is linear in the detections, so the bound on
+    :func:`_exact`'s work does not apply."""
     done = np.zeros(len(B), bool)
     two = np.flatnonzero((size[lt] == 2) & gate.any(1))
     two = two[np.argsort(lt[two], kind="stable")]  # each cluster's two tracks side by side
     t1, t2 = two[0::2], two[1::2]
-    ok = (B[t1] > 0) & (B[t2] > 0)
+    n_det = np.bincount(ld, minlength=size.shape[0])[lt[t1]]
+    ok = (B[t1] > 0) & (B[t2] > 0) & (np.minimum(n_det, 2) <= max_exact)
     t1, t2 = t1[ok], t2[ok]
     m = len(t1)
     if m == 0:
@@ -321,9 +328,11 @@ def _two_track_clusters(G: np.ndarray, B: np.ndarray, gate: np.ndarray, lt: np.n
         after = np.concatenate([np.cumsum(W[:, :0:-1], axis=1)[:, ::-1], zero], axis=1)
         return before + after
 
+    s1, s2 = np.maximum(B[t1], W1.max(1)), np.maximum(B[t2], W2.max(1))
+    W1, W2 = W1 / s1[:, None], W2 / s2[:, None]
+    B1, B2 = B[t1] / s1, B[t2] / s2
     X1, X2 = others(W1), others(W2)
     S1, S2 = W1.sum(1), W2.sum(1)
-    B1, B2 = B[t1], B[t2]
     Z = B1 * B2 + B2 * S1 + B1 * S2 + (W1 * X2).sum(1)
     beta[t1[pc], cols] = (W1 * (B2[:, None] + X2) / Z[:, None])[pc, slot]
     beta[t2[pc], cols] = (W2 * (B1[:, None] + X1) / Z[:, None])[pc, slot]
@@ -357,7 +366,7 @@ def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int
     den = G[lone].sum(1) + B[lone]
     beta[lone] = G[lone] / den[:, None]
     beta0[lone] = B[lone] / den
-    done = lone | _two_track_clusters(G, B, gate, lt, ld, size, beta, beta0)
+    done = lone | _two_track_clusters(G, B, gate, lt, ld, size, max_exact, beta, beta0)
     for c in np.unique(lt[has & ~done]):
         ti, di = np.flatnonzero(lt == c), np.flatnonzero(ld == c)
         g = G[np.ix_(ti, di)]
@@ -388,13 +397,14 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     :math:`\beta_{tj}` is the probability of the events that give detection ``j`` to track
     ``t``. The gated problem is split into independent clusters (:func:`components`). A
     cluster whose tracks or whose detections number at most ``max_exact`` is computed
-    exactly: the events are summed by the subsets of that side, the weight of the ways the
+    exactly (a cluster of two tracks by a closed form, whatever its detections; of more, the
+    events are summed by the subsets of that side, the weight of the ways the
     detections seen so far can take exactly a given set of tracks (or the tracks a given set
     of detections), at a cost of :math:`T D 2^{\min(T, D)}` rather than the number of events
-    (1,441,729 for 8 tracks and 8 detections all in one another's gates). A cluster beyond
-    that, or one whose cost would be more than four times a dense ``max_exact`` x
-    ``max_exact`` cluster's (a dozen tracks among hundreds of clutter points), gets
-    Fitzgerald's cheap JPDA (1985),
+    (1,441,729 for 8 tracks and 8 detections all in one another's gates)). A cluster beyond
+    that, or one of three tracks or more whose sum would cost more than four times a dense
+    ``max_exact`` x ``max_exact`` cluster's (a dozen tracks among hundreds of clutter
+    points), gets Fitzgerald's cheap JPDA (1985),
     :math:`\beta_{tj} = G_{tj} / (\sum_k G_{tk} + \sum_s G_{sj} - G_{tj} + B)` with
     :math:`\beta_{t0} = \max(0, 1 - \sum_j \beta_{tj})`, each track's row then normalised to
     sum to one.
@@ -413,9 +423,10 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
         Gate probability :math:`P_G`, in (0, 1].
     max_exact : int
         A cluster is computed exactly when its tracks or its detections number at most this
-        (its tracks, where :math:`P_D P_G = 1`), and its cost is at most four times a dense
-        ``max_exact`` x ``max_exact`` cluster's; the cost doubles with each one more on the
-        smaller side (a dense 12 x 12 cluster about 5 ms, 16 x 16 about 0.1 s).
+        (its tracks, where :math:`P_D P_G = 1`), and, for three tracks or more, its cost is
+        at most four times a dense ``max_exact`` x ``max_exact`` cluster's; the cost doubles
+        with each one more on the smaller side (a dense 12 x 12 cluster about 5 ms, 16 x 16
+        about 0.1 s). 0: every cluster of more than one track gets the cheap JPDA.
 
     Returns
     -------
