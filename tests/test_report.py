@@ -94,12 +94,19 @@ def test_the_page_in_a_real_browser(run_dir, tmp_path):
     common = [browser, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
               "--enable-logging=stderr", "--v=0", "--virtual-time-budget=15000",
               f"--user-data-dir={tmp_path / 'profile'}"]
-    dom = subprocess.run(common + ["--dump-dom", page], capture_output=True, text=True,
-                         timeout=180)
-    assert dom.returncode == 0, dom.stderr[-2000:]
+    # the video is marked once the browser has decoded its first frame; where the browser's
+    # virtual time ran out before that (a test process on each core beside it: the video
+    # neither marked playable nor failed: once in four runs of `make test` on 2026-12-02),
+    # it is asked again
+    for _ in range(3):
+        dom = subprocess.run(common + ["--dump-dom", page], capture_output=True, text=True,
+                             timeout=180)
+        assert dom.returncode == 0, dom.stderr[-2000:]
+        states = re.findall(r'data-state="([a-z]+)"', dom.stdout)
+        if {"playable", "error"} & set(states):
+            break
     console = [line for line in dom.stderr.splitlines() if ":CONSOLE" in line]
     assert not console, console  # no error, no warning, nothing logged by the page
-    states = re.findall(r'data-state="([a-z]+)"', dom.stdout)
     assert sorted(states) == ["playable", "shown", "shown", "shown"], states
     shot = tmp_path / "shot.png"
     subprocess.run(common + [f"--screenshot={shot}", "--window-size=1280,1400", page],
