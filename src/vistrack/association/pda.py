@@ -179,7 +179,13 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
     G = np.where(gate, p_detect * lik / clutter_density, 0.0)
-    B = 1.0 - p_detect * p_gate
+    return _pda(G, np.full(len(G), 1.0 - p_detect * p_gate))
+
+
+def _pda(G: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """PDA's weights of tracks each on its own, from their weights ``G (T, D)`` (0 outside
+    the gates) and misses ``B (T,)``: :func:`pda_weights`, and a track alone in its JPDA
+    cluster."""
     den = B + G.sum(1)
     # P_D P_G = 1 and nothing in the gate: a detection certain to be there is not; the track
     # is left as it is (beta0 = 1), as jpda_weights leaves a track with none in its gate
@@ -319,8 +325,8 @@ def _two_track_clusters(G: np.ndarray, B: np.ndarray, gate: np.ndarray, lt: np.n
     slot = np.arange(len(cols)) - starts[pc]
     L = int(slot.max()) + 1
     W1, W2 = np.zeros((m, L)), np.zeros((m, L))
-    W1[pc, slot] = np.where(gate[t1[pc], cols], G[t1[pc], cols], 0.0)
-    W2[pc, slot] = np.where(gate[t2[pc], cols], G[t2[pc], cols], 0.0)
+    W1[pc, slot] = G[t1[pc], cols]  # (0 outside the gates, as _joint's G is)
+    W2[pc, slot] = G[t2[pc], cols]
 
     def others(W: np.ndarray) -> np.ndarray:  # each entry's row sum without it
         zero = np.zeros((m, 1))
@@ -363,9 +369,7 @@ def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int
     lone = has & (size[lt] == 1)
     # a track alone in its cluster, its detections in no other track's gate: PDA's closed
     # form, for every such track at once (the sum over its events, and cheap JPDA's value)
-    den = G[lone].sum(1) + B[lone]
-    beta[lone] = G[lone] / den[:, None]
-    beta0[lone] = B[lone] / den
+    beta[lone], beta0[lone] = _pda(G[lone], B[lone])
     done = lone | _two_track_clusters(G, B, gate, lt, ld, size, max_exact, beta, beta0)
     for c in np.unique(lt[has & ~done]):
         ti, di = np.flatnonzero(lt == c), np.flatnonzero(ld == c)
