@@ -441,3 +441,42 @@ def test_a_first_pass_on_a_detector_run_every_kth_frame_is_divided_at_its_own_ra
     with pytest.warns(RuntimeWarning, match="detections on every 3rd frame only"):
         run = fit_sequences(seqs)
     np.testing.assert_allclose(run.fit.motion.std_meas, [0.04, 0.03, 0.08, 0.05], rtol=0.2)
+
+
+def test_fit_learns_the_same_from_a_detections_file_in_any_row_order(tmp_path, monkeypatch):
+    """Two detections tie for an object (the same box moved one pixel left and right: equal
+    overlap with its ground-truth box): which one is its measurement was decided by the
+    file's row order. Each frame's rows are taken in their own order (the more confident
+    first), so the file's order does not change what is learned."""
+    rng = np.random.default_rng(7)
+    T, w, h = 40, 40, 100
+    x = np.round(100 + np.cumsum(rng.normal(2, 1, T)))
+    gt = "".join(f"{t + 1},1,{x[t]:.0f},200,{w},{h},1,1,1\n" for t in range(T))
+    # the right-hand box scores more; each is exact in the file (whole pixels)
+    rows = [[f"{t + 1},-1,{x[t] + 1:.0f},200,{w},{h},0.9", f"{t + 1},-1,{x[t] - 1:.0f},200,"
+             f"{w},{h},0.8"] for t in range(T)]
+
+    def sequence(name, flip):
+        d = tmp_path / name
+        (d / "det").mkdir(parents=True)
+        (d / "gt").mkdir()
+        (d / "seqinfo.ini").write_text(f"[Sequence]\nname={name}\nframeRate=10\n"
+                                       f"seqLength={T}\nimWidth=1920\nimHeight=1080\n")
+        (d / "gt" / "gt.txt").write_text(gt)
+        (d / "det" / "det.txt").write_text("".join(
+            f"{r[::-1][k] if f else r[k]}\n" for r, f in zip(rows, flip) for k in (0, 1)))
+        return d
+
+    flips = rng.random(T) < 0.5  # about half the frames with the 0.8 row first
+    a = sequence("A", np.zeros(T, bool))
+    b = sequence("B", flips)
+
+    def learned(seq):
+        run = fit_sequences([seq], gt=True, held_out=False)
+        return run.fit.motion, run.fit.per_sequence[0]["std_meas"]
+
+    want = learned(a)
+    assert learned(b) == want
+    import vistrack.pipeline as pipeline
+    monkeypatch.setattr(pipeline, "in_own_order", lambda t: t)
+    assert learned(b) != want  # the file's order decided, without

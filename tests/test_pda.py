@@ -394,6 +394,35 @@ def test_jipda_with_tracks_certain_or_not_there_equals_brute_force(seed):
     assert ex[0] == 0.0 and beta0[0] == 1.0 and not beta[0].any()
 
 
+def test_jipda_of_tracks_certain_to_exist_and_to_be_detected_is_the_limit_of_existence():
+    """P_D P_G = 1 with existence 1 is a contradiction wherever a track must go without a
+    detection (two tracks, one detection): JIPDA gives the limit as the existence tends to
+    1, against every joint hypothesis written out at 1 - 1e-9, for existence, association
+    given existence and all."""
+    from vistrack.association import jipda_weights
+
+    rng = np.random.default_rng(4)
+    for _ in range(200):
+        T, D = int(rng.integers(1, 4)), int(rng.integers(0, 4))
+        lik = rng.uniform(0.001, 0.05, (T, D))
+        gate = rng.random((T, D)) < 0.7
+        eps = rng.choice([1.0, 0.5, 0.9], T)
+        b, b0, ex = jipda_weights(lik, gate, eps, p_detect=1.0, clutter_density=0.01,
+                                  p_gate=1.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            wb, wb0, wex = brute_jipda(lik, gate, np.where(eps == 1, 1 - 1e-9, eps), 1.0,
+                                       0.01, 1.0)
+        np.testing.assert_allclose(ex, wex, atol=1e-6)
+        there = wex > 1e-3
+        np.testing.assert_allclose(b[there], wb[there], atol=1e-6)
+        np.testing.assert_allclose(b0[there], wb0[there], atol=1e-6)
+    # the docstring's case: one detection between two tracks
+    b, b0, ex = jipda_weights([[0.02], [0.01]], [[True], [True]], [1.0, 1.0], p_detect=1.0,
+                              clutter_density=0.01, p_gate=1.0)
+    np.testing.assert_allclose(ex, [2 / 3, 1 / 3])
+    assert b.ravel().tolist() == [1.0, 1.0] and b0.tolist() == [0.0, 0.0]
+
+
 def test_jipda_of_certain_tracks_is_jpda_and_clutter_lowers_existence_on_average():
     """With every existence 1, JIPDA is JPDA and the existence stays 1. And IPDA's evidence
     in clutter alone (Poisson detections, uniform over a track's gate) multiplies the odds of

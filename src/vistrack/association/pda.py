@@ -613,7 +613,12 @@ def jipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     -------
     beta, beta0, existence : ndarray
         As for :func:`ipda_weights`: the association probabilities given each track exists,
-        and the posterior existence.
+        and the posterior existence. With :math:`P_D P_G = 1`, a track exists only in the
+        events where it takes a detection, so one whose prior is 1 has the posterior
+        existence of those events (the limit as the prior tends to 1): two such tracks with
+        one detection between them split it, each existing with the probability that the
+        detection is its own. :func:`jpda_weights` takes the other limit,
+        :math:`P_G \to 1` at a prior of 1, where both tracks exist and one is missed.
 
     Raises
     ------
