@@ -177,6 +177,36 @@ def test_a_limit_keeps_one_good_pair_over_two_poor_ones():
         gnn_sparse([0], [0], [0.5], (1, 1), limit=np.inf)
 
 
+def test_components_are_scipys_connected_components_labels_and_all():
+    """Random gates of every density, and long chains whose nodes come in a random order
+    (which the labels spread along the edges take too many rounds for: scipy's graph
+    does those), against scipy.sparse.csgraph.connected_components: the same number, and
+    the same label for each track and detection (components numbered by their first node)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    def scipys(gate):
+        T, D = gate.shape
+        r, c = np.nonzero(gate)
+        k, lab = connected_components(coo_matrix((np.ones(len(r)), (r, T + c)),
+                                                 shape=(T + D, T + D)), directed=False)
+        return k, lab[:T], lab[T:]
+
+    rng = np.random.default_rng(0)
+    gates = [rng.random(rng.integers(0, 40, 2)) < rng.uniform(0, 0.25) for _ in range(1500)]
+    for n in (10, 200, 1000):
+        chain = np.zeros((n, n), bool)
+        t, d = rng.permutation(n), rng.permutation(n)
+        chain[t, d] = chain[t[1:], d[:-1]] = True
+        gates.append(chain)
+    for gate in gates:
+        k, lt, ld = components(gate)
+        want = scipys(gate)
+        assert k == want[0]
+        np.testing.assert_array_equal(lt, want[1])
+        np.testing.assert_array_equal(ld, want[2])
+
+
 def test_components_give_the_whole_problems_answer_for_many_objects():
     """10,000 objects on a line, gated to their neighbours: solving each connected component
     alone gives the same number of pairs and total cost as one assignment over all."""

