@@ -114,6 +114,41 @@ def test_the_online_calibration_learns_what_the_whole_file_gives():
     assert flat.n == 11 * (len(frames) - 2)
 
 
+def test_a_frame_where_nothing_was_found_breaks_the_links_at_the_start_as_anywhere():
+    """Derived by hand, frame to frame: a frame without detections is one where nothing was
+    found. The detections of the frame after it continue nothing and do not persist, and
+    those of the frame before it are continued by nothing, whether the empty frame comes
+    first (a sequence whose objects come in later) or in the middle; only the very first
+    frame's detections, with nothing seen before them, get no outcome. Online and over the
+    whole file alike."""
+    frames, truth = frames_with_clutter(np.random.default_rng(3), T=40)
+    empty = Detections(boxes=np.zeros((0, 4)))
+
+    def outcomes(seq):
+        cal = ScoreCalibrator(window=None, chain_span=0.0)
+        for d in seq:
+            cal.observe(d)
+        return cal.outcomes()
+
+    s0, o0 = outcomes(frames)  # frames 1..38, eleven each
+    t = np.array(truth)
+    for lead in (1, 5):  # frame 0 gets outcomes too, all 0; the rest as before
+        s, o = outcomes([empty] * lead + frames)
+        assert len(s) == 11 * 39 and (o[:11] == 0).all()
+        np.testing.assert_array_equal(s[:11], frames[0].scores)
+        np.testing.assert_array_equal(s[11:], s0)
+        np.testing.assert_array_equal(o[11:], o0)
+        whole = ScoreCalibration.from_frames([empty] * lead + frames, chain_span=0.0)
+        np.testing.assert_array_equal(whole.confidence, ScoreCalibration.fit(s, o).confidence)
+    # an empty frame after frame 19: frames 19 and 20 do not persist, the others as before
+    s, o = outcomes(frames[:20] + [empty] + frames[20:])
+    assert len(s) == 11 * 38
+    o = o.reshape(38, 11).astype(bool)
+    broken = np.isin(np.arange(1, 39), [19, 20])
+    assert not o[broken].any()
+    np.testing.assert_array_equal(o[~broken], t[1:39][~broken])
+
+
 @pytest.mark.parametrize("window", [1, 7, 50, 333])
 def test_a_window_holds_the_last_outcomes_of_all(window):
     """With ``window``, after every frame the calibrator holds exactly the last ``window``

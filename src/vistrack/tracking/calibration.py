@@ -855,9 +855,10 @@ class ScoreCalibrator:
         Parameters
         ----------
         detections : Detections or None
-            The frame's detections, with boxes; None after the last frame (its detections
-            then get no frame-to-frame outcome, having no next frame, and chains still open
-            none).
+            The frame's detections, with boxes (none: a frame where nothing was found, whose
+            next frame's detections then continue nothing); None after the last frame (its
+            detections then get no frame-to-frame outcome, having no next frame, and chains
+            still open none).
 
         Raises
         ------
@@ -904,6 +905,10 @@ class ScoreCalibrator:
         if chains:
             self._t += 1
             self._push(out_s, out_p)
+        # a frame without detections is one where nothing was found, at the start as
+        # anywhere: the detections of the next continue nothing, and do not persist (only
+        # the very first frame's, with nothing seen before them, get no outcome; taking the
+        # first frame with detections as the first instead is in docs/mot.md, What was tried)
         self._prev = (boxes, cls, s, linked_back, self._prev is None)
         self._frames += 1
         if self._hi > self._lo:
