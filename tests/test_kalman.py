@@ -460,6 +460,19 @@ def test_kernel_argument_errors():
     with pytest.raises(ValueError, match="not positive definite"):
         kf_update(vt.Gaussian(np.zeros((3, 2)), np.zeros((3, 2, 2))), np.ones((3, 1)), [[1.0, 0.0]],
                   [[0.0]])
+    # a covariance whose NaN reaches S makes S not positive definite: named as such (it was
+    # the message above, about R)
+    cov = np.tile(np.eye(2), (2, 3, 1, 1))
+    cov[1, 2, 0, 0] = np.nan
+    nan_g = vt.Gaussian(np.zeros((2, 3, 2)), cov)
+    for call in (lambda: kf_update(nan_g, np.ones((2, 3, 1)), [[1.0, 0.0]], [[1.0]]),
+                 lambda: kf_step(nan_g, np.ones((2, 3, 1)), E, E, [[1.0, 0.0]], [[1.0]])):
+        with pytest.raises(ValueError) as e:
+            call()
+        assert str(e.value) == ("g.cov must be finite; g.cov[1, 2] (batch shape (2, 3)) holds "
+                                "NaN or infinity")
+    with pytest.raises(ValueError, match="^g.cov must be finite; it holds NaN or infinity$"):
+        kf_update(vt.Gaussian(np.zeros(2), np.full((2, 2), np.nan)), [1.0], [[1.0, 0.0]], [[1.0]])
     with pytest.raises(ValueError, match="sigma_m must be a scalar or have shape"):
         kalman_filter_1d(np.ones(4), d=1, m=1, sigma_d=1, sigma_m=np.ones(3), x0=0, sigma0=1)
 

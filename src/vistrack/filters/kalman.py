@@ -380,7 +380,16 @@ _KERNEL_ERRORS = {
 }
 
 
-def _kernel_error(code: int, a: str, b: str) -> None:
+def _kernel_error(code: int, a: str, b: str, g: Gaussian | None = None) -> None:
+    if code == 4 and g is not None:
+        # an innovation covariance that is not positive definite because P holds NaN or
+        # infinity: say so (checked only here, on the way to the error)
+        bad = ~np.isfinite(g.cov.reshape(-1, *g.cov.shape[-2:])).all(axis=(1, 2))
+        if bad.any():
+            batch = g.mean.shape[:-1]
+            i = tuple(int(k) for k in np.unravel_index(int(np.flatnonzero(bad)[0]), batch))
+            where = f"g.cov[{', '.join(map(str, i))}] (batch shape {batch})" if batch else "it"
+            raise ValueError(f"g.cov must be finite; {where} holds NaN or infinity")
     raise ValueError(_KERNEL_ERRORS[code].format(a=a, b=b))
 
 
@@ -453,7 +462,7 @@ def kf_step(
         _small_matrix(Q, "Q", n, n), _small_matrix(H, "H", m, n), _small_matrix(R, "R", m, m),
     )
     if code >= 0:
-        _kernel_error(code, "F", "Q")
+        _kernel_error(code, "F", "Q", g)
     return Gaussian._trusted(mean.reshape(g.mean.shape), cov.reshape(g.cov.shape))
 
 
@@ -584,7 +593,7 @@ def _update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> tuple[Gaus
         _small_matrix(R, "R", m, m),
     )
     if code >= 0:
-        _kernel_error(code, "H", "R")
+        _kernel_error(code, "H", "R", g)
     batch = g.mean.shape[:-1]
     return (Gaussian._trusted(mean.reshape(g.mean.shape), cov.reshape(g.cov.shape)),
             ll.reshape(batch))
