@@ -909,6 +909,21 @@ def test_detections_that_cannot_give_tracks_are_named(tmp_path):
             "raw scores (--scores raw) no track can start")):
         run = track_sequence(det, tmp_path / "c.txt", fps=10, scores="raw", new_track=2.0)
     assert run.rows == 0
+    # high above every score starts no track either (it wrote 0 boxes without a word)
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{det}: every score lies below high 5 (the scores run 0.9 to 0.9), and with raw "
+            "scores (--scores raw) no track can start (a track starts from a detection scoring "
+            "at least high and new_track): lower --high, or calibrate")):
+        run = track_sequence(det, tmp_path / "c2.txt", fps=10, scores="raw", high=5.0)
+    assert run.rows == 0
+    # offline, a min_track_score that drops every track says so
+    with pytest.warns(UserWarning, match=re.escape(
+            "min_score 1 (min_track_score under [offline] in a --config file, "
+            "--min-track-score) drops every one of the 1 confirmed tracks, the highest mean "
+            "confidence of a track's detections being 0.9: nothing is written")):
+        run = track_sequence(det, tmp_path / "c3.txt", fps=10, offline=True, scores="raw",
+                             min_track_score=1.0)
+    assert run.rows == 0
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert track_sequence(det, tmp_path / "d.txt", fps=10, scores="raw").rows == 10

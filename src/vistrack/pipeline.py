@@ -1359,15 +1359,21 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
 
 def _check_detections(src: _SequenceInput, tc: BoxTrackerConfig) -> None:
     """Warn of duplicate boxes where the tracker does no suppression of its own, and of raw
-    scores that all lie below the new-track threshold; refuse scores outside [0, 1] where raw
+    scores that all lie below the threshold a track starts at (``high`` or ``new_track``,
+    whichever is higher); refuse scores outside [0, 1] where raw
     scores weigh the first stage's IoU."""
     dets = src.dets
     if tc.nms_iou >= 1:
         warn_duplicates(dets, src.det_path, stacklevel=3)
-    if tc.scores == "raw" and len(dets) and dets.conf.max() < tc.new_track:
-        warnings.warn(f"{src.det_path}: every score lies below new_track {tc.new_track:g} (the "
+    # a track starts from a detection scoring at least high and new_track (--high 5 alone
+    # wrote 0 boxes without a word)
+    name, start = max((("new_track", tc.new_track), ("high", tc.high)), key=lambda t: t[1])
+    if tc.scores == "raw" and len(dets) and dets.conf.max() < start:
+        option = "--" + name.replace("_", "-")
+        warnings.warn(f"{src.det_path}: every score lies below {name} {start:g} (the "
                       f"scores run {dets.conf.min():.4g} to {dets.conf.max():.4g}), and with "
-                      "raw scores (--scores raw) no track can start: lower --new-track, or "
+                      "raw scores (--scores raw) no track can start (a track starts from a "
+                      f"detection scoring at least high and new_track): lower {option}, or "
                       "calibrate the scores (--scores calibrated, the default)", UserWarning,
                       stacklevel=3)
     if tc.scores == "raw" and tc.fuse_score and len(dets) and not (

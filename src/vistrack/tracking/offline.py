@@ -29,6 +29,7 @@ camera, where the tracker compensated its motion). Then
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -278,9 +279,12 @@ def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[
     steps, step_of = np.unique(dt, return_inverse=True)
     F_steps = np.stack([tracker.motion.F(d) for d in steps])
     out = []
+    best = -np.inf  # the highest mean confidence of a track dropped
     for a, b in zip(np.r_[0, edges], np.r_[edges, len(ids)]):
         u = np.flatnonzero(upd[a:b])
-        if tracker.confidence(score[a:b][u]).mean() < min_score:
+        mean_conf = float(tracker.confidence(score[a:b][u]).mean())
+        if mean_conf < min_score:
+            best = max(best, mean_conf)
             continue
         last = a + int(u[-1]) + 1  # nothing after the last update
         L = last - a
@@ -315,6 +319,13 @@ def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[
         out.append(_Track(int(ids[a]), int(cls[a]), f[rep], _to_xyxy(m_s[rep, :4]),
                           np.where(updated, score[a:last], 0.0)[rep], fill[rep], P_s[rep],
                           *ends))
+    if not out:
+        # a run that writes nothing says why (0 boxes of 0 tracks gave no reason)
+        warnings.warn(f"min_score {min_score:g} (min_track_score under [offline] in a "
+                      f"--config file, --min-track-score) drops every one of the "
+                      f"{len(edges) + 1} confirmed tracks, the highest mean confidence of a "
+                      f"track's detections being {best:.3g}: nothing is written",
+                      UserWarning, stacklevel=3)
     return out
 
 
