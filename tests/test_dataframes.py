@@ -208,16 +208,28 @@ def test_detections_from_a_csv_file_with_its_own_column_names(tmp_path, capsys):
 def test_a_csv_file_pandas_cannot_read_is_named(tmp_path):
     """pandas' own errors (a row of more values than the header, an empty file) came out
     without the file's name: ``Error tokenizing data. C error: Expected 5 fields in line 3,
-    saw 6``."""
+    saw 6``. A row of more values, or of fewer (which pandas fills with NaN, then named as
+    an empty cell of another column), is named by its line and its count against the
+    header's, blank lines counted as the file's lines."""
     from vistrack.io.motchallenge import MOTFormatError
     from vistrack.pipeline import track_sequence
 
     bad, empty = tmp_path / "bad.csv", tmp_path / "empty.csv"
+    short = tmp_path / "short.csv"
     bad.write_text("frame,bb_left,bb_top,bb_width,bb_height\n1,2,3,4,5\n1,2,3,4,5,6\n")
+    short.write_text("frame,bb_left,bb_top,bb_width,bb_height\n1,2,3,4,5\n\n2,2,3\n")
     empty.write_text("")
     with pytest.raises(MOTFormatError, match=re.escape(
-            f"{bad}: not a CSV file of detections: Expected 5 fields in line 3, saw 6")):
+            f"{bad}, line 3: 6 values where the header has 5")):
         track_sequence(bad, tmp_path / "b.txt", fps=10)
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{short}, line 4: 3 values where the header has 5")):
+        track_sequence(short, tmp_path / "s.txt", fps=10)
+    # an empty cell in a row of the header's length is named by its column, as before
+    short.write_text("frame,bb_left,bb_top,bb_width,bb_height\n1,2,3,4,5\n2,2,,4,5\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{short}, row 2 after the header, column 'bb_top': not a finite number: nan")):
+        track_sequence(short, tmp_path / "s.txt", fps=10)
     with pytest.raises(MOTFormatError, match=re.escape(
             f"{empty}: not a CSV file of detections: No columns to parse from file")):
         track_sequence(empty, tmp_path / "e.txt", fps=10)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import ast
 import configparser
+import csv
 import difflib
 import importlib
 import math
@@ -100,16 +101,19 @@ def _csv_dialect(path: str | os.PathLike) -> dict[str, str]:
 
 def _read_csv(path: str | os.PathLike, what: str) -> Any:
     """A CSV file with a header as a DataFrame, its values separated by commas, or by tabs or
-    semicolons where its header has no comma (:func:`_csv_dialect`); a file pandas cannot
-    parse (a row of more values than the header, an empty file) is a :class:`MOTFormatError`
-    naming it, in pandas' own words: ``"PATH: not WHAT: Expected 5 fields in line 3, saw
-    6"``, and so is a file that is not UTF-8 text (:func:`_not_utf8`)."""
+    semicolons where its header has no comma (:func:`_csv_dialect`); a row of more or fewer
+    values than the header is a :class:`MOTFormatError` naming the file and the line (``"PATH,
+    line 3: 4 values where the header has 6"``), another file pandas cannot parse (an empty
+    file) one naming the file, in pandas' own words (``"PATH: not WHAT: No columns to parse
+    from file"``), and so is a file that is not UTF-8 text (:func:`_not_utf8`)."""
     pandas = _pandas(what)
+    dialect = _csv_dialect(path)
     try:
         # spaces after the separators skipped, as read_mot skips them: a header "frame, id,
         # bb_left, ..." named its columns " id", " bb_left" and lost every one
-        df = pandas.read_csv(path, skipinitialspace=True, **_csv_dialect(path))
+        df = pandas.read_csv(path, skipinitialspace=True, **dialect)
     except (pandas.errors.ParserError, pandas.errors.EmptyDataError) as e:
+        _check_row_lengths(path, dialect["sep"])
         reason = re.sub(r"^(Error tokenizing data\. )?(C error: )?", "", str(e).strip())
         raise MOTFormatError(f"{path}: not {what}: {reason}") from None
     except UnicodeDecodeError as e:
@@ -119,7 +123,24 @@ def _read_csv(path: str | os.PathLike, what: str) -> Any:
     if any("\x00" in str(c) for c in df.columns):  # UTF-16 without a byte-order mark
         raise _not_utf8(path, None)
     df.columns = [c.strip() if isinstance(c, str) else c for c in df.columns]  # "id " too
+    if df.isna().to_numpy().any():
+        # pandas fills a short row's missing values with NaN, named later as empty cells
+        _check_row_lengths(path, dialect["sep"])
     return df
+
+
+def _check_row_lengths(path: str | os.PathLike, sep: str) -> None:
+    """Raise a :class:`MOTFormatError` naming the first line of a CSV file whose number of
+    values is not the header's (blank lines skipped, as pandas skips them)."""
+    with open(path, encoding="utf-8-sig", newline="") as fh:
+        rows = csv.reader(fh, delimiter=sep)
+        header = next(rows, None)
+        if header is None:
+            return
+        for row in rows:
+            if row and len(row) != len(header):
+                raise MOTFormatError(f"{path}, line {rows.line_num}: {len(row)} values where "
+                                     f"the header has {len(header)}")
 
 
 def _not_utf8(path: str | os.PathLike, exc: UnicodeDecodeError | None) -> MOTFormatError:
