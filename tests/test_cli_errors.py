@@ -338,6 +338,22 @@ def test_a_detections_file_alone_needs_its_frame_rate_once(tmp_path, capsys, bad
     assert main(["track", str(tmp_path / "nothere.txt"), "--out", str(out), "--fps", "10"]) == 2
     one_line(capsys, "track", f"{tmp_path / 'nothere.txt'} does not exist (a sequence folder, "
              "or a detections file)")
+    # --detections that does not exist is named alone (it asked to pass --detections, given);
+    # a sequence folder without det/det.txt points to the option
+    seq = tmp_path / "seq_no_det"
+    (seq / "det").mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=5\n"
+                                     "imWidth=640\nimHeight=480\n")
+    assert main(["track", str(seq), "--out", str(out), "--detections",
+                 str(tmp_path / "nosuch.txt")]) == 2
+    one_line(capsys, "track", f"{tmp_path / 'nosuch.txt'} does not exist")
+    assert main(["track", str(seq), "--out", str(out)]) == 2
+    one_line(capsys, "track", f"{seq / 'det' / 'det.txt'} does not exist (pass --detections "
+             "FILE, another file of detections)")
+    # --out and --out-dir together
+    assert main(["track", str(seq), "--out", str(out), "--out-dir", str(tmp_path / "o")]) == 2
+    one_line(capsys, "track", "give --out RESULTS.txt (a MOTChallenge sequence's detections) "
+             "or --out-dir OUT/ (from pixels), not both")
 
 
 # ------------------------------------------------------------------- numbers and names

@@ -382,7 +382,8 @@ def _track(args: argparse.Namespace) -> int:
     args.input = args.input[0]
     if (args.out is None) == (args.out_dir is None):
         return fail("give --out RESULTS.txt (a MOTChallenge sequence's detections) or "
-                    "--out-dir OUT/ (from pixels)")
+                    "--out-dir OUT/ (from pixels)"
+                    + (", not both" if args.out is not None else ""))
     if args.out is not None and args.out.endswith(("/", os.sep)):
         # a folder, as with several inputs: RESULTS/NAME.txt (Path dropped the slash, and
         # one input wrote a file named RESULTS)

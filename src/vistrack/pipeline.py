@@ -1316,7 +1316,10 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
             "without it")
     info = read_seqinfo(seq_dir) if has_info else None
     if not det_path.exists():
-        raise FileNotFoundError(f"{det_path} does not exist (pass --detections FILE)")
+        raise FileNotFoundError(
+            f"{det_path} does not exist" + ("" if detections is not None or alone else
+                                            " (pass --detections FILE, another file of "
+                                            "detections)"))
     if det_path.is_dir():
         raise ValueError(f"{det_path} is a folder, not a detections file"
                          + (" (--detections FILE)" if detections is not None else ""))
