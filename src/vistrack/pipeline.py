@@ -1363,8 +1363,8 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
 def _check_detections(src: _SequenceInput, tc: BoxTrackerConfig) -> None:
     """Warn of duplicate boxes where the tracker does no suppression of its own, and of raw
     scores that all lie below the threshold a track starts at (``high`` or ``new_track``,
-    whichever is higher); refuse scores outside [0, 1] where raw
-    scores weigh the first stage's IoU."""
+    whichever is higher); refuse scores outside [0, 1] where raw scores weigh the first
+    stage's IoU."""
     dets = src.dets
     if tc.nms_iou >= 1:
         warn_duplicates(dets, src.det_path, stacklevel=3)
