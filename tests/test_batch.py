@@ -443,10 +443,15 @@ def test_several_inputs_say_which_settings_change_nothing(bench, tmp_path, capsy
              "without --offline"),
             (["--out", str(tmp_path / "b"), "--tracker", "sort", "--low", "0.2"],
              "vistrack track: warning: --low: the second association stage's threshold, which "
-             "changes nothing with a tracker of one stage (sort)")):
+             "changes nothing with a tracker of one stage (sort) online (offline, it is also "
+             "the least score a track is followed back through)")):
         assert main(["track", str(bench), *argv, "--jobs", "1", "--quiet"]) == 0
         cap = capsys.readouterr()
         assert said in cap.err and "3 of 3 inputs tracked" in cap.out
+    # offline, --low sets which detections a track is followed back through: nothing is said
+    assert main(["track", str(bench), "--out", str(tmp_path / "b2"), "--tracker", "sort",
+                 "--low", "0.2", "--offline", "--jobs", "1", "--quiet"]) == 0
+    assert "warning" not in capsys.readouterr().err
     # with the offline mode on, its settings count: nothing is said
     assert main(["track", str(bench), "--out", str(tmp_path / "c"), "--max-gap", "2",
                  "--offline", "--jobs", "1", "--quiet"]) == 0

@@ -541,7 +541,7 @@ def _skip_bad_frames_problem(videos: Sequence[str]) -> str:
 def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
                           offline_given: list[str]) -> None:
     """Warn of settings given that the configuration makes change nothing: the offline
-    mode's without --offline, --low with a tracker of one stage, --still-camera where the
+    mode's without --offline, --low with a tracker of one stage online, --still-camera where the
     camera's motion is not estimated anyway."""
     if cfg is None:
         return
@@ -549,10 +549,13 @@ def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
         named = ", ".join("--" + o.replace("_", "-") for o in offline_given)
         warnings.warn(f"{named}: offline settings, which change nothing without --offline",
                       UserWarning, stacklevel=1)
-    if args.low is not None and not cfg.tracker.two_stage:
+    if args.low is not None and not cfg.tracker.two_stage and not cfg.offline.enabled:
+        # offline, low is also the least score of a detection a track is followed back
+        # through: it was said to change nothing there too
         warnings.warn("--low: the second association stage's threshold, which changes "
-                      f"nothing with a tracker of one stage ({cfg.name})", UserWarning,
-                      stacklevel=1)
+                      f"nothing with a tracker of one stage ({cfg.name}) online (offline, "
+                      "it is also the least score a track is followed back through)",
+                      UserWarning, stacklevel=1)
     why = _still_already(args) if args.still_camera else None
     if why:
         warnings.warn(f"--still-camera changes nothing here: {why}", UserWarning, stacklevel=1)
