@@ -916,6 +916,15 @@ def test_detections_that_cannot_give_tracks_are_named(tmp_path):
             "at least high and new_track): lower --high, or calibrate")):
         run = track_sequence(det, tmp_path / "c2.txt", fps=10, scores="raw", high=5.0)
     assert run.rows == 0
+    # offline, start_score too
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{det}: every score lies below start_score 0.95 (the scores run 0.9 to 0.9), and "
+            "with raw scores (--scores raw) no track can start (a track starts from a "
+            "detection scoring at least high, new_track and start_score): lower "
+            "--start-score, or calibrate")):
+        run = track_sequence(det, tmp_path / "c4.txt", fps=10, scores="raw", offline=True,
+                             start_score=0.95)
+    assert run.rows == 0
     # offline, a min_track_score that drops every track says so
     with pytest.warns(UserWarning, match=re.escape(
             "min_score 1 (min_track_score under [offline] in a --config file, "

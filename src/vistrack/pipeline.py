@@ -1180,7 +1180,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
     src = _read_sequence(Path(seq_dir), out, detections, columns, fps)
     dets, info = src.dets, src.info
-    _check_detections(src, cfg.tracker)
+    _check_detections(src, cfg.tracker, cfg.offline)
     slices = dets.frame_slices(info.seq_length)
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
     # the detector's own frames: every frame, or every stride-th one, where the frames
@@ -1360,23 +1360,28 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
     return _SequenceInput(det_path, str(det_path if alone else seq_dir), info, dets)
 
 
-def _check_detections(src: _SequenceInput, tc: BoxTrackerConfig) -> None:
+def _check_detections(src: _SequenceInput, tc: BoxTrackerConfig, oc: OfflineConfig) -> None:
     """Warn of duplicate boxes where the tracker does no suppression of its own, and of raw
-    scores that all lie below the threshold a track starts at (``high`` or ``new_track``,
-    whichever is higher); refuse scores outside [0, 1] where raw scores weigh the first
-    stage's IoU."""
+    scores that all lie below the threshold a track starts at (the highest of ``high``,
+    ``new_track`` and, offline, ``start_score``); refuse scores outside [0, 1] where raw
+    scores weigh the first stage's IoU."""
     dets = src.dets
     if tc.nms_iou >= 1:
         warn_duplicates(dets, src.det_path, stacklevel=3)
-    # a track starts from a detection scoring at least high and new_track (--high 5 alone
-    # wrote 0 boxes without a word)
-    name, start = max((("new_track", tc.new_track), ("high", tc.high)), key=lambda t: t[1])
+    # a track starts from a detection scoring at least high and new_track, offline
+    # start_score too (--high 5 alone wrote 0 boxes without a word)
+    starts = [("high", tc.high), ("new_track", tc.new_track)]
+    if oc.enabled:
+        starts.append(("start_score", oc.start_score))
+    name, start = max(starts, key=lambda t: t[1])
     if tc.scores == "raw" and len(dets) and dets.conf.max() < start:
         option = "--" + name.replace("_", "-")
+        names = ", ".join(n for n, _ in starts[:-1]) + f" and {starts[-1][0]}"
         warnings.warn(f"{src.det_path}: every score lies below {name} {start:g} (the "
                       f"scores run {dets.conf.min():.4g} to {dets.conf.max():.4g}), and with "
                       "raw scores (--scores raw) no track can start (a track starts from a "
-                      f"detection scoring at least high and new_track): lower {option}, or "
+                      f"detection scoring at least {names}): "
+                      f"lower {option}, or "
                       "calibrate the scores (--scores calibrated, the default)", UserWarning,
                       stacklevel=3)
     if tc.scores == "raw" and tc.fuse_score and len(dets) and not (
