@@ -279,6 +279,24 @@ def test_compiled_step_equals_the_numpy_steps(config):
     assert assert_same_tracking(frames, config=config) > 500
 
 
+def test_detections_index_as_arrays_do_one_integer_giving_one_row():
+    """A mask, indices, a slice or one integer (the last gave "boxes must have shape (N, 4);
+    got (4,)"): each the Detections of those rows, boxes, points, scores and classes alike;
+    an integer out of range is numpy's IndexError."""
+    d = Detections.from_xywh([[10, 20, 30, 40], [0, 0, 5, 5], [7, 7, 2, 2]],
+                             scores=[0.9, 0.3, 0.5], classes=[1, 2, 3])
+    for index, rows in ((1, [1]), (-1, [2]), (np.int64(0), [0]), ([2, 0], [2, 0]),
+                        (slice(1, None), [1, 2]), (d.scores > 0.4, [0, 2])):
+        one = d[index]
+        np.testing.assert_array_equal(one.boxes, d.boxes[rows])
+        np.testing.assert_array_equal(one.scores, d.scores[rows])
+        np.testing.assert_array_equal(one.classes, d.classes[rows])
+    p = Detections(points=[[1.0, 2.0], [3.0, 4.0]], scores=[0.2, 0.8])
+    assert p[1].points.tolist() == [[3.0, 4.0]] and len(p[1]) == 1
+    with pytest.raises(IndexError):
+        d[3]
+
+
 def test_read_only_detections_track_as_writable_ones():
     """Boxes, scores and classes that are read-only (np.load with mmap_mode, pandas' views)
     give the tracks writable ones give, compiled or not, with calibrated or raw scores; the

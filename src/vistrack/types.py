@@ -218,8 +218,9 @@ class Detections:
 
     Notes
     -----
-    Index with a boolean mask or indices (``dets[dets.scores > 0.5]``); ``len(dets)`` is the
-    number of detections. Instances are frozen; the arrays are stored as float64 (boxes,
+    Index with a boolean mask, indices or a slice (``dets[dets.scores > 0.5]``), or with one
+    integer for the Detections of that one row (``dets[0]``, ``len`` 1, as ``dets[[0]]``);
+    ``len(dets)`` is the number of detections. Instances are frozen; the arrays are stored as float64 (boxes,
     points, scores) and int64 (classes).
 
     Examples
@@ -227,6 +228,8 @@ class Detections:
     >>> d = Detections.from_xywh([[10, 20, 30, 40], [0, 0, 5, 5]], scores=[0.9, 0.3])
     >>> d[d.scores > 0.5].boxes.tolist(), d.centers[0].tolist()
     ([[10.0, 20.0, 40.0, 60.0]], [25.0, 40.0])
+    >>> d[-1].boxes.tolist(), d[-1].scores.tolist()
+    ([[0.0, 0.0, 5.0, 5.0]], [0.3])
     """
 
     boxes: np.ndarray | None = None
@@ -387,6 +390,10 @@ class Detections:
 
     def __getitem__(self, index: _Index) -> Detections:
         assert self.scores is not None and self.classes is not None  # set by __post_init__
+        if isinstance(index, (int, np.integer)) and not isinstance(index, (bool, np.bool_)):
+            # one detection, as a Detections of one row (it raised "boxes must have shape
+            # (N, 4); got (4,)")
+            index = [int(index)]
         return Detections(
             boxes=None if self.boxes is None else self.boxes[index],
             points=None if self.points is None else self.points[index],
