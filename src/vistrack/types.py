@@ -220,8 +220,8 @@ class Detections:
     -----
     Index with a boolean mask, indices or a slice (``dets[dets.scores > 0.5]``), or with one
     integer for the Detections of that one row (``dets[0]``, ``len`` 1, as ``dets[[0]]``);
-    ``len(dets)`` is the number of detections. Instances are frozen; the arrays are stored as float64 (boxes,
-    points, scores) and int64 (classes).
+    ``len(dets)`` is the number of detections. Instances are frozen; the arrays are stored as
+    float64 (boxes, points, scores) and int64 (classes).
 
     Examples
     --------
