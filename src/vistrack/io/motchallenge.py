@@ -135,8 +135,9 @@ def _check_row_lengths(path: str | os.PathLike, sep: str) -> None:
     with open(path, encoding="utf-8-sig", newline="") as fh:
         rows = csv.reader(fh, delimiter=sep)
         header = next(rows, None)
-        if header is None:
-            return
+        if header is None or all(_NUMBER.fullmatch(x.strip()) for c in header
+                                 for x in re.split("[;\t]", c)):
+            return  # no header at all (a MOTChallenge text file named .csv): named later
         for row in rows:
             if row and len(row) != len(header):
                 raise MOTFormatError(f"{path}, line {rows.line_num}: {len(row)} values where "
