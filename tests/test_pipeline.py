@@ -904,35 +904,29 @@ def test_detections_that_cannot_give_tracks_are_named(tmp_path):
     assert run.rows == 0
     det = tmp_path / "det.txt"
     det.write_text("".join(f"{f},-1,{10 + 3 * f},20,20,40,0.9\n" for f in range(1, 11)))
-    with pytest.warns(UserWarning, match=re.escape(
-            f"{det}: every score lies below new_track 2 (the scores run 0.9 to 0.9), and with "
-            "raw scores (--scores raw) no track can start")):
-        run = track_sequence(det, tmp_path / "c.txt", fps=10, scores="raw", new_track=2.0)
-    assert run.rows == 0
-    # high above every score starts no track either (it wrote 0 boxes without a word)
-    with pytest.warns(UserWarning, match=re.escape(
-            f"{det}: every score lies below high 5 (the scores run 0.9 to 0.9), and with raw "
-            "scores (--scores raw) no track can start (a track starts from a detection scoring "
-            "at least high and new_track): lower --high, or calibrate")):
-        run = track_sequence(det, tmp_path / "c2.txt", fps=10, scores="raw", high=5.0)
-    assert run.rows == 0
-    # offline, start_score too
-    with pytest.warns(UserWarning, match=re.escape(
-            f"{det}: every score lies below start_score 0.95 (the scores run 0.9 to 0.9), and "
-            "with raw scores (--scores raw) no track can start (a track starts from a "
-            "detection scoring at least high, new_track and start_score): lower "
-            "--start-score, or calibrate")):
-        run = track_sequence(det, tmp_path / "c4.txt", fps=10, scores="raw", offline=True,
-                             start_score=0.95)
-    assert run.rows == 0
-    # offline, a min_track_score that drops every track says so
-    with pytest.warns(UserWarning, match=re.escape(
-            "min_score 1 (min_track_score under [offline] in a --config file, "
-            "--min-track-score) drops every one of the 1 confirmed tracks, the highest mean "
-            "confidence of a track's detections being 0.9: nothing is written")):
-        run = track_sequence(det, tmp_path / "c3.txt", fps=10, offline=True, scores="raw",
-                             min_track_score=1.0)
-    assert run.rows == 0
+    # new_track or high above every raw score starts no track (high alone wrote 0 boxes
+    # without a word), nor offline start_score; offline, a min_track_score that drops every
+    # track says so
+    starts = "(a track starts from a detection scoring at least high and new_track)"
+    for name, kwargs, message in (
+            ("c", dict(scores="raw", new_track=2.0),
+             f"{det}: every score lies below new_track 2 (the scores run 0.9 to 0.9), and with "
+             f"raw scores (--scores raw) no track can start {starts}: lower --new-track"),
+            ("c2", dict(scores="raw", high=5.0),
+             f"{det}: every score lies below high 5 (the scores run 0.9 to 0.9), and with raw "
+             f"scores (--scores raw) no track can start {starts}: lower --high, or calibrate"),
+            ("c3", dict(scores="raw", offline=True, start_score=0.95),
+             f"{det}: every score lies below start_score 0.95 (the scores run 0.9 to 0.9), and "
+             "with raw scores (--scores raw) no track can start (a track starts from a "
+             "detection scoring at least high, new_track and start_score): lower "
+             "--start-score, or calibrate"),
+            ("c4", dict(scores="raw", offline=True, min_track_score=1.0),
+             "min_score 1 (min_track_score under [offline] in a --config file, "
+             "--min-track-score) drops every one of the 1 confirmed tracks, the highest mean "
+             "confidence of a track's detections being 0.9: nothing is written")):
+        with pytest.warns(UserWarning, match=re.escape(message)):
+            run = track_sequence(det, tmp_path / f"{name}.txt", fps=10, **kwargs)
+        assert run.rows == 0
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert track_sequence(det, tmp_path / "d.txt", fps=10, scores="raw").rows == 10
