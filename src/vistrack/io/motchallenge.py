@@ -135,8 +135,7 @@ def _check_row_lengths(path: str | os.PathLike, sep: str) -> None:
     with open(path, encoding="utf-8-sig", newline="") as fh:
         rows = csv.reader(fh, delimiter=sep)
         header = next(rows, None)
-        if header is None or all(_NUMBER.fullmatch(x.strip()) for c in header
-                                 for x in re.split("[;\t]", c)):
+        if header is None or _all_numbers(header):
             return  # no header at all (a MOTChallenge text file named .csv): named later
         for row in rows:
             if row and len(row) != len(header):
@@ -424,7 +423,7 @@ class MOTTable:
             # columns are named in `columns`, is one)
             header = [c for c in df.keys() if isinstance(c, str)]
             if (str(path).lower().endswith(".csv") and header and len(header) == len(have)
-                    and all(_NUMBER.fullmatch(x) for c in header for x in re.split("[;\t]", c))
+                    and _all_numbers(header)
                     and header != [str(k) for k in range(len(header))]
                     and not have & set(names.values())):
                 raise MOTFormatError(
@@ -637,6 +636,14 @@ _NUMBER = re.compile(r"\s*[-+]?(?:[0-9]+(?:[.,][0-9]*)?|[.,][0-9]+)(?:[eE][-+]?[
                      r"(?:\.[0-9]+)?\s*")
 """A header cell that is a number (a decimal comma too), as pandas names a column by it
 (``.1``, ``.2`` ... after a number the header has already)."""
+
+
+def _all_numbers(header: list[str]) -> bool:
+    """Whether every cell of a header is a number (a MOTChallenge text file's first row read
+    as one), each cell split at ';' and tabs too, whichever separated the values."""
+    return all(_NUMBER.fullmatch(x) for c in header for x in re.split("[;\t]", c))
+
+
 _COLUMNS = ("frame", "particle", "id", "bb_left", "bb_top", "bb_width", "bb_height", "x", "y",
             *_CORNERS, "conf", "class", "visibility")
 """Every column :meth:`MOTTable.from_pandas` reads, by our name."""
