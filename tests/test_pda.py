@@ -140,15 +140,18 @@ def test_clusters_summed_event_by_event_neither_overflow_nor_underflow():
     """A cluster of three tracks, two tracks' weights and misses multiplied by 1e200, or by
     1e-200 (every event has one factor of each track's, so the probabilities are the same):
     their product would overflow (1e400) or underflow."""
-    from vistrack.association.pda import _ENUMERATED, _enumerated, _n_events
+    from vistrack.association.pda import _clusters, _joint
 
     rng = np.random.default_rng(3)
     G, B = rng.uniform(0.5, 50, (3, 4)) * (rng.random((3, 4)) < 0.8), np.full(3, 0.1)
-    assert 3 * _n_events(3, 4) <= _ENUMERATED  # (the path jpda_weights takes for it)
+    # one cluster, summed event by event in the compiled call (none left to the subsets)
+    lt, ld, left = np.empty(3, np.int64), np.empty(4, np.int64), np.empty(3, bool)
+    assert _clusters(G, B, 12, 20_000, np.zeros((3, 4)), np.ones(3), lt, ld, left) == 1
+    assert not left[0] and (lt == 0).all()
     want = brute_jpda(G, 0.1)
     for k in (1.0, 1e200, 1e-200):
         s = np.array([k, k, 1.0])[:, None]
-        beta, beta0 = _enumerated(G * s, B * s[:, 0])
+        beta, beta0 = _joint(G * s, B * s[:, 0], np.ones((3, 4), bool), 12)
         np.testing.assert_allclose(beta, want[0], rtol=1e-12, atol=1e-15)
         np.testing.assert_allclose(beta0, want[1], rtol=1e-12)
 
