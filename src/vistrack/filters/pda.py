@@ -108,10 +108,15 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
     zp = m @ H.T
     S = H @ P @ H.T + R
     K = np.swapaxes(np.linalg.solve(S, H @ P), 1, 2)  # P H' S^-1
-    # a detection of weight 0 adds nothing (a NaN one, outside the gate, too)
-    nu_j = np.where(used[:, :, None], Z[None, :, :] - zp[:, None, :], 0.0)  # (T, D, m)
-    nu = np.einsum("td,tdm->tm", beta, nu_j)
-    spread = np.einsum("td,tdm,tdn->tmn", beta, nu_j, nu_j) - nu[:, :, None] * nu[:, None, :]
+    # the pairs of weight above 0 only (a detection of weight 0 adds nothing, a NaN one
+    # outside the gate too): a track's sums over its own, not over every detection
+    rows, cols = np.nonzero(used)
+    w = beta[rows, cols]
+    nu_p = Z[cols] - zp[rows]  # (P, k)
+    nu = np.stack([np.bincount(rows, w * nu_p[:, i], T) for i in range(k)], axis=-1)
+    outer = (w[:, None, None] * nu_p[:, :, None] * nu_p[:, None, :]).reshape(-1, k * k)
+    spread = (np.stack([np.bincount(rows, outer[:, i], T) for i in range(k * k)], axis=-1)
+              .reshape(T, k, k) - nu[:, :, None] * nu[:, None, :])
     mean = m + np.einsum("tnm,tm->tn", K, nu)
     KSK = K @ S @ np.swapaxes(K, 1, 2)
     cov = P - (1.0 - beta0)[:, None, None] * KSK + K @ spread @ np.swapaxes(K, 1, 2)

@@ -48,11 +48,9 @@ from ..association import (
     ipda_weights,
     jipda_weights,
     jpda_weights,
-    likelihoods,
-    mahalanobis,
     pda_weights,
 )
-from ..association.costs import mahalanobis_pairs
+from ..association.costs import cholesky_innovations, mahalanobis_pairs
 from ..association.pda import _check as _check_pda
 from ..filters import kf_predict, kf_update, pda_update
 from ..models import ConstantVelocity, Position
@@ -275,13 +273,14 @@ class PointTracker:
             zp = g.mean @ self.H.T
             S = self.H @ g.cov @ self.H.T + self.R
             mean, cov = g.mean.copy(), g.cov.copy()
+            # gated pairs only (a k-d tree finds the candidates): thousands of points stay
+            # cheap
+            r, c, d2 = mahalanobis_pairs(zp, S, Z, self.threshold)
+            same = t.classes[r] == classes[c]
+            r, c, d2 = r[same], c[same], d2[same]
             if self.association == "gnn" and len(Z):
-                # gated pairs only (a k-d tree finds the candidates), one assignment per
-                # connected group: thousands of points stay cheap
-                r, c, d2 = mahalanobis_pairs(zp, S, Z, self.threshold)
-                same = t.classes[r] == classes[c]
-                r, c = gnn_sparse(r[same], c[same], d2[same], (K, len(Z)),
-                                  limit=self.threshold)
+                # one assignment per connected group
+                r, c = gnn_sparse(r, c, d2, (K, len(Z)), limit=self.threshold)
                 if len(r):
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
@@ -290,14 +289,18 @@ class PointTracker:
                 in_gate[c] = True  # every measurement not taken starts a track
                 gate = None
             else:
-                d2 = mahalanobis(zp, S, Z) if len(Z) else np.zeros((K, 0))
-                gate = (d2 <= self.threshold) & (t.classes[:, None]
-                                                 == classes[None, :])
-                in_gate = gate.any(0)
+                gate = np.zeros((K, len(Z)), bool)
+                gate[r, c] = True
+                in_gate[c] = True
             if gate is None:
                 pass
             elif self.association in ("pda", "jpda", "ipda", "jipda"):
-                lik = likelihoods(zp, S, Z)
+                # the Gaussian likelihoods of the gated pairs (0 outside the gates)
+                L = cholesky_innovations(S)
+                logdet = 2 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(1)
+                lik = np.zeros((K, len(Z)))
+                lik[r, c] = np.exp(-0.5 * d2 - 0.5 * logdet[r]
+                                   - 0.5 * self.m * np.log(2 * np.pi))
                 args = dict(p_detect=self.p_detect, clutter_density=self.clutter_density,
                             p_gate=self.p_gate)
                 if self.association in _EXISTENCE:
@@ -307,13 +310,16 @@ class PointTracker:
                 else:
                     weigh2 = pda_weights if self.association == "pda" else jpda_weights
                     beta, beta0 = weigh2(lik, gate, **args)
-                hit = gate.any(1)
+                hit = np.zeros(K, bool)
+                hit[r] = True
                 if hit.any():
                     upd = pda_update(g[hit], Z, self.H, self.R, beta[hit], beta0[hit])
                     mean[hit], cov[hit] = upd.mean, upd.cov
                 updated = hit
             elif len(Z):
-                r, c = assign(d2, gate, self.association)
+                cost = np.full((K, len(Z)), np.inf)
+                cost[r, c] = d2
+                r, c = assign(cost, gate, self.association)
                 if len(r):
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
