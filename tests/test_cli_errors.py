@@ -354,6 +354,12 @@ def test_a_detections_file_alone_needs_its_frame_rate_once(tmp_path, capsys, bad
     assert main(["track", str(seq), "--out", str(out), "--out-dir", str(tmp_path / "o")]) == 2
     one_line(capsys, "track", "give --out RESULTS.txt (a MOTChallenge sequence's detections) "
              "or --out-dir OUT/ (from pixels), not both")
+    # --print-config with an input but no output: what it needs, and what it does without INPUT
+    assert main(["track", str(seq), "--print-config"]) == 2
+    one_line(capsys, "track", "give --out RESULTS.txt (a MOTChallenge sequence's detections) "
+             "or --out-dir OUT/ (from pixels); --print-config with INPUT tracks it, to show "
+             "what the run derives from it (without INPUT it prints the configuration the "
+             "options give)")
 
 
 # ------------------------------------------------------------------- numbers and names

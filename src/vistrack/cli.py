@@ -383,7 +383,10 @@ def _track(args: argparse.Namespace) -> int:
     if (args.out is None) == (args.out_dir is None):
         return fail("give --out RESULTS.txt (a MOTChallenge sequence's detections) or "
                     "--out-dir OUT/ (from pixels)"
-                    + (", not both" if args.out is not None else ""))
+                    + (", not both" if args.out is not None else "")
+                    + ("; --print-config with INPUT tracks it, to show what the run derives "
+                       "from it (without INPUT it prints the configuration the options give)"
+                       if args.print_config and args.out is None else ""))
     if args.out is not None and args.out.endswith(("/", os.sep)):
         # a folder, as with several inputs: RESULTS/NAME.txt (Path dropped the slash, and
         # one input wrote a file named RESULTS)
