@@ -908,6 +908,14 @@ def test_eval_names_a_folder_given_for_a_file_and_the_reverse(tmp_path, capsys):
     assert main(["eval", "--gt-dir", str(tmp_path), "--pred-dir", str(res / "SEQ.txt")]) == 2
     one_line(capsys, "eval", f"--pred-dir {res / 'SEQ.txt'} is a file, not a folder (one file: "
              "--pred)")
+    # a folder that does not exist is named as such (it was named as its first sequence's
+    # missing results file), with --keep-going too; and so is a --gt-dir
+    for keep in ([], ["--keep-going"]):
+        assert main(["eval", "--gt-dir", str(tmp_path), "--pred-dir", str(tmp_path / "no"),
+                     *keep]) == 2
+        one_line(capsys, "eval", f"--pred-dir {tmp_path / 'no'} does not exist")
+    assert main(["eval", "--gt-dir", str(tmp_path / "no"), "--pred-dir", str(res)]) == 2
+    one_line(capsys, "eval", f"--gt-dir {tmp_path / 'no'} does not exist")
     assert main(["eval", "--gt", str(seq), "--pred", str(res / "SEQ.txt"), "--jobs", "2"]) == 2
     one_line(capsys, "eval", "--jobs goes with --gt-dir")
     assert main(["eval", "--gt-dir", str(tmp_path), "--pred-dir", str(res), "--jobs", "1"]) == 0

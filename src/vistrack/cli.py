@@ -956,6 +956,10 @@ def _eval(args: argparse.Namespace) -> int:
         if not (args.gt_dir and args.pred_dir):
             return _fail("eval", "--gt-dir and --pred-dir go together")
         for flag in ("gt_dir", "pred_dir"):  # (a file's name became a folder of results)
+            if not Path(getattr(args, flag)).exists():  # (a missing --pred-dir was named
+                # as its first sequence's missing file)
+                return _fail("eval", f"--{flag.replace('_', '-')} {getattr(args, flag)} does "
+                             "not exist")
             if Path(getattr(args, flag)).is_file():
                 single = "--gt" if flag == "gt_dir" else "--pred"
                 return _fail("eval", f"--{flag.replace('_', '-')} {getattr(args, flag)} is a "
