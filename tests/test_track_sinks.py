@@ -433,6 +433,33 @@ def test_the_trajectory_plot_draws_all_tracks_in_two_artists(tmp_path):
     assert children[1] == children[2] and children[0] == children[1] + 3
 
 
+@pytest.mark.parametrize("background", [False, True])
+def test_labels_of_tracks_that_end_together_do_not_cover_one_another(tmp_path, background):
+    """Ten tracks ending within 3 pixels of one another (identities of one to three digits):
+    every label, drawn, lies clear of the others (matplotlib's own extents of the rendered
+    text), each still annotating its track's last centre; they were all drawn up and to the
+    right of their dots, over one another (the bundled clip's 1, 6 and 11)."""
+    from vistrack.viz import plot_trajectories
+
+    rng = np.random.default_rng(2)
+    ends = 300 + rng.uniform(-1.5, 1.5, (10, 2))
+    ids = np.array([1, 6, 11, 7, 100, 23, 5, 42, 9, 310])
+    frames = np.tile([1, 2], 10)
+    c = np.stack([ends - [40, 20], ends], axis=1).reshape(-1, 2)
+    image = np.full((576, 768, 3), 200, np.uint8) if background else None
+    fig = plot_trajectories(frames, np.repeat(ids, 2), c, image, tmp_path / "p.png")
+    ax = fig.axes[0]
+    fig.canvas.draw()
+    boxes = [t.get_window_extent() for t in ax.texts]
+    assert sorted(t.get_text() for t in ax.texts) == sorted(map(str, ids))
+    for t in ax.texts:
+        assert np.allclose(t.xy, ends[list(ids).index(int(t.get_text()))])
+    for a in range(len(boxes)):
+        for b in range(a):
+            assert not boxes[a].overlaps(boxes[b]), (ax.texts[a].get_text(),
+                                                     ax.texts[b].get_text())
+
+
 @pytest.mark.parametrize("grey", [False, True])
 def test_a_saved_plots_background_is_what_matplotlib_draws(tmp_path, grey):
     """Saved, the background is put under the drawing instead of being drawn by matplotlib;

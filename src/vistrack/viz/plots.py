@@ -306,11 +306,6 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
     ax.add_collection(LineCollection(paths, colors=colours, linewidths=1.5))
     last = np.array([p[-1] for p in paths]).reshape(-1, 2)
     ax.scatter(last[:, 0], last[:, 1], s=9, c=colours, zorder=2.5)
-    if len(paths) <= _LABELLED:
-        for (x, y), i, col in zip(last, track_ids, colours):
-            ax.annotate(str(i), (x, y), xytext=(3, 3), textcoords="offset points", fontsize=7,
-                        color=col, fontweight="bold", path_effects=[
-                            patheffects.withStroke(linewidth=2, foreground="black")])
     ax.autoscale_view()
     if background is None:
         ax.invert_yaxis()
@@ -319,6 +314,14 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
     ax.set_ylabel("y (pixels)")
     if title:
         ax.set_title(title)
+    if len(paths) <= _LABELLED:
+        labels = [str(i) for i in track_ids]
+        fig.tight_layout()  # (the axes' place, which the labels' offsets are measured in)
+        for (x, y), text, col, off in zip(last, labels, colours,
+                                          _label_offsets(ax, last, labels, 7)):
+            ax.annotate(text, (x, y), xytext=off, textcoords="offset points", fontsize=7,
+                        color=col, fontweight="bold", path_effects=[
+                            patheffects.withStroke(linewidth=2, foreground="black")])
     if path is not None and image is not None and bg is not None and (
             bg.ndim == 2 or (bg.ndim == 3 and bg.shape[2] == 3)):
         # saved with the background put under the drawing rather than drawn by matplotlib,
@@ -333,6 +336,34 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
         if path is not None:
             fig.savefig(path, dpi=100)
     return fig
+
+
+def _label_offsets(ax: Any, xy: np.ndarray, labels: list[str], size: float
+                   ) -> list[tuple[float, float]]:
+    """Offsets in points of each label from its point ``xy`` (data), in turn, so that no
+    label covers one placed before it where a place is free: up and to the right, else below,
+    to the left, or further up or down (a label that finds no free place takes the first).
+    Sizes are estimated from the font size (bold digits are about 0.7 of it wide, a line
+    about 1.2 of it high)."""
+    ax.apply_aspect()
+    pts = ax.transData.transform(np.asarray(xy, float).reshape(-1, 2)) * 72 / ax.figure.dpi
+    placed: list[tuple[float, float, float, float]] = []
+    out = []
+    for (px, py), text in zip(pts, labels):
+        w, h = 0.7 * size * len(text) + 2, 1.25 * size
+        tries = [(dx, dy) for k in range(4) for dy in (3 + k * h, -3 - (k + 1) * h)
+                 for dx in (3, -3 - w)]
+        for dx, dy in tries:
+            box = (px + dx, py + dy, px + dx + w, py + dy + h)
+            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3]
+                       for b in placed):
+                break
+        else:
+            dx, dy = tries[0]
+            box = (px + dx, py + dy, px + dx + w, py + dy + h)
+        placed.append(box)
+        out.append((dx, dy))
+    return out
 
 
 def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = None) -> Figure:
