@@ -421,6 +421,66 @@ def test_cli_takes_a_tracker_of_ones_own(tmp_path):
     assert box_only.returncode == 2 and "goes with the box trackers" in box_only.stderr
 
 
+def test_a_tracker_of_ones_own_that_fails_is_named_with_its_frame(tmp_path, capsys,
+                                                                    monkeypatch):
+    """``--tracker module:callable`` whose step returns something else than Tracks, or raises:
+    one line naming the class and the frame (it was a traceback from inside the writers,
+    'list' object has no attribute 'ids', and the bare message 'my bug')."""
+    from vistrack.cli import main
+
+    argv = _own_tracker_case(tmp_path)
+    (tmp_path / "mytracker.py").write_text(
+        "from tests.test_pipeline import EveryDetection\n"
+        "class Listing(EveryDetection):\n"
+        "    def step(self, frame, detections=None):\n"
+        "        return list(super().step(frame, detections).ids)\n"
+        "class Failing(EveryDetection):\n"
+        "    def step(self, frame, detections=None):\n"
+        "        if frame.index == 4:\n"
+        "            raise ValueError('my bug')\n"
+        "        return super().step(frame, detections)\n"
+        "def make():\n    return Listing()\n"
+        "def failing():\n    return Failing()\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.syspath_prepend(str(ROOT))
+    assert main(argv) == 2
+    assert capsys.readouterr().err == ("vistrack track: error: mytracker.Listing.step returned "
+                                       "a list at frame 1, not Tracks\n")
+    assert main([a.replace("mytracker:make", "mytracker:failing") for a in argv]) == 2
+    assert capsys.readouterr().err == ("vistrack track: error: my bug (at frame 4, in "
+                                       "mytracker.Failing.step)\n")
+    assert not (tmp_path / "out").exists()  # nothing written from part of a run
+
+
+def test_run_notes_the_frame_and_the_stage_an_error_came_from():
+    """The library's loop: an exception of the tracker or the detector is raised as it was,
+    with a note of the frame and the stage (shown under a traceback)."""
+    frames = [Frame(k, (k - 1) / 25) for k in range(1, 6)]
+    boxes = lambda f: Detections.from_xywh([[10.0, 20, 30, 60]], [0.9])  # noqa: E731
+
+    def detect(f):
+        if f.index == 3:
+            raise KeyError("lens cap")
+        return boxes(f)
+
+    with pytest.raises(KeyError, match="lens cap") as info:
+        run(frames, detect, BoxTracker(), [TrackRows()])
+    assert info.value.__notes__ == ["at frame 3, in the front-end"]
+
+    class Late(BoxTracker):
+        def step(self, frame, detections=None):
+            if frame.index == 5:
+                raise ZeroDivisionError("late")
+            return super().step(frame, detections)
+
+    with pytest.raises(ZeroDivisionError) as info:
+        run(frames, boxes, Late(), [TrackRows()])
+    assert info.value.__notes__ == [f"at frame 5, in {__name__}.{Late.__qualname__}.step"]
+    with pytest.raises(TypeError, match=r"\.step returned a NoneType at frame 1, not Tracks"):
+        run(frames, boxes, type("Nothing", (), {"step": lambda self, f, d: None})(),
+            [TrackRows()])
+
+
 def test_the_console_command_finds_a_tracker_module_in_the_current_folder(tmp_path):
     """``vistrack track ... --tracker mytracker:make`` with mytracker.py in the current
     folder, through the installed console command (whose path holds its own folder, not the

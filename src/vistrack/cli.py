@@ -82,6 +82,9 @@ def _message(exc: BaseException) -> str:
         text = f"{final_path(exc.filename)}: {exc.strerror}"
     else:
         text = str(exc) or type(exc).__name__
+    notes = getattr(exc, "__notes__", None)  # where it was raised (pipeline.run adds them)
+    if isinstance(notes, list) and notes:
+        text = f"{text} ({'; '.join(map(str, notes))})"
     return " ".join(line.strip() for line in text.splitlines())
 
 

@@ -491,9 +491,20 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
         for frame in source:
             t1, c1 = time.perf_counter(), _compile.seconds()
             sec["decode"] += (t1 - t0) - (c1 - c0)
-            d = detect(frame) if detect is not None else None
+            try:
+                d = detect(frame) if detect is not None else None
+            except Exception as exc:
+                _add_note(exc, f"at frame {frame.index}, in the front-end")
+                raise
             t2, c2 = time.perf_counter(), _compile.seconds()
-            tracks = tracker.step(frame, d)
+            try:
+                tracks = tracker.step(frame, d)
+            except Exception as exc:
+                _add_note(exc, f"at frame {frame.index}, in {_qualname(tracker)}.step")
+                raise
+            if not isinstance(tracks, Tracks):
+                raise TypeError(f"{_qualname(tracker)}.step returned a {type(tracks).__name__} "
+                                f"at frame {frame.index}, not Tracks")
             t3, c3 = time.perf_counter(), _compile.seconds()
             sec["frontend"] += (t2 - t1) - (c2 - c1)
             sec["tracker"] += (t3 - t2) - (c3 - c2)
@@ -522,6 +533,22 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
     release.end()
     sec["write"] += time.perf_counter() - t0
     return LoopStats(n, sec, last)
+
+
+def _qualname(obj: object) -> str:
+    """``module.Class`` of an object, as a user would find it in their code."""
+    kind = type(obj)
+    return f"{kind.__module__}.{kind.__qualname__}"
+
+
+def _add_note(exc: BaseException, note: str) -> None:
+    """Where ``exc`` was raised, as a note (``BaseException.add_note`` from Python 3.11;
+    the same ``__notes__`` list before): shown under a traceback, and after the message in
+    the command line's one-line errors."""
+    if hasattr(exc, "add_note"):
+        exc.add_note(note)
+    else:  # Python 3.10
+        exc.__notes__ = [*getattr(exc, "__notes__", ()), note]  # type: ignore[attr-defined]
 
 
 def _abort(sinks: Sequence[Sink]) -> None:
