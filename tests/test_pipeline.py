@@ -522,6 +522,49 @@ def test_a_video_where_nothing_is_tracked_still_writes_every_output(tmp_path):
             == "frame,id,bb_left,bb_top,bb_width,bb_height,conf,class\n")
 
 
+def test_a_video_whose_raw_scores_start_no_track_says_so(tmp_path):
+    """With raw scores all below the start threshold a video's run wrote no tracks without a
+    word, where a detections file tracked alone says so: a detections file through a video
+    is checked before it is tracked, a detector's scores after (the highest seen), and the
+    same run with the threshold below the scores tracks the disc and says nothing."""
+    import warnings
+
+    frames, truth = red_disc_clip(T=8)
+    folder = write_clip(tmp_path / "frames", frames)
+
+    class Truth:
+        def __init__(self):
+            self.k = 0
+
+        def detect(self, image):
+            self.k += 1
+            return Detections.from_xywh([truth[self.k - 1]], [0.5 + 0.01 * self.k])
+
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{f + 1},-1,{x:.2f},{y:.2f},{w:.2f},{h:.2f},0.9\n"
+                           for f, (x, y, w, h) in enumerate(truth)))
+    starts = "(a track starts from a detection scoring at least high and new_track)"
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{det}: every score lies below high 0.95 (the scores run 0.9 to 0.9), and with raw "
+            f"scores (--scores raw) no track can start {starts}: lower --high")):
+        r = track_video(folder, tmp_path / "a", frontend=f"detections:{det}", fps=25,
+                        annotate=False, scores="raw", high=0.95)
+    assert r.rows == 0
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{folder}: the front-end: every score lies below new_track 0.7 (the scores run "
+            f"0.51 to 0.58), and with raw scores (--scores raw) no track can start {starts}: "
+            "lower --new-track")):
+        r = track_video(folder, tmp_path / "b", frontend=Truth(), fps=25, annotate=False,
+                        scores="raw", high=0.5, new_track=0.7)
+    assert r.rows == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for name, frontend in (("c", f"detections:{det}"), ("d", Truth())):
+            r = track_video(folder, tmp_path / name, frontend=frontend, fps=25, annotate=False,
+                            scores="raw", high=0.5, new_track=0.5)
+            assert r.tracks == 1 and r.rows > 0
+
+
 def test_an_interrupted_run_leaves_the_earlier_outputs_as_they_were(tmp_path):
     """Ctrl-C in the middle of a run over an earlier run's folder (``force``): every file of
     the earlier run is still there, byte for byte, and no partial file is left beside it."""

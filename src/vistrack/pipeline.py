@@ -1395,22 +1395,9 @@ def _check_detections(src: _SequenceInput, tc: BoxTrackerConfig, oc: OfflineConf
     dets = src.dets
     if tc.nms_iou >= 1:
         warn_duplicates(dets, src.det_path, stacklevel=3)
-    # a track starts from a detection scoring at least high and new_track, offline
-    # start_score too (--high 5 alone wrote 0 boxes without a word)
-    starts = [("high", tc.high), ("new_track", tc.new_track)]
-    if oc.enabled:
-        starts.append(("start_score", oc.start_score))
-    name, start = max(starts, key=lambda t: t[1])
-    if tc.scores == "raw" and len(dets) and dets.conf.max() < start:
-        option = "--" + name.replace("_", "-")
-        names = ", ".join(n for n, _ in starts[:-1]) + f" and {starts[-1][0]}"
-        warnings.warn(f"{src.det_path}: every score lies below {name} {start:g} (the "
-                      f"scores run {dets.conf.min():.4g} to {dets.conf.max():.4g}), and with "
-                      "raw scores (--scores raw) no track can start (a track starts from a "
-                      f"detection scoring at least {names}): "
-                      f"lower {option}, or "
-                      "calibrate the scores (--scores calibrated, the default)", UserWarning,
-                      stacklevel=3)
+    if len(dets):
+        _warn_no_start(src.det_path, dets.conf, tc, oc.start_score if oc.enabled else None,
+                       stacklevel=3)
     if tc.scores == "raw" and tc.fuse_score and len(dets) and not (
             (dets.conf >= 0) & (dets.conf <= 1)).all():
         raise ValueError(f"{src.det_path}: scores from {dets.conf.min():.4g} to "
@@ -1419,6 +1406,26 @@ def _check_detections(src: _SequenceInput, tc: BoxTrackerConfig, oc: OfflineConf
                          "calibrate them (--scores calibrated, the default), or turn the "
                          "weighing off (fuse_score = false under [tracker] in a --config file; "
                          "fuse_score=False in Python)")
+
+
+def _warn_no_start(label: object, scores: np.ndarray, tc: BoxTrackerConfig,
+                   start_score: float | None, stacklevel: int) -> None:
+    """Warn where, with raw scores, every one of ``scores`` lies below the threshold a track
+    starts at: the highest of ``high``, ``new_track`` and, offline, ``start_score`` (``--high
+    5`` alone wrote 0 boxes without a word). ``stacklevel`` is the caller's own."""
+    starts = [("high", tc.high), ("new_track", tc.new_track)]
+    if start_score is not None:
+        starts.append(("start_score", start_score))
+    name, start = max(starts, key=lambda t: t[1])
+    if tc.scores != "raw" or not len(scores) or scores.max() >= start:
+        return
+    option = "--" + name.replace("_", "-")
+    names = ", ".join(n for n, _ in starts[:-1]) + f" and {starts[-1][0]}"
+    warnings.warn(f"{label}: every score lies below {name} {start:g} (the scores run "
+                  f"{scores.min():.4g} to {scores.max():.4g}), and with raw scores (--scores "
+                  "raw) no track can start (a track starts from a detection scoring at least "
+                  f"{names}): lower {option}, or calibrate the scores (--scores calibrated, "
+                  "the default)", UserWarning, stacklevel=stacklevel + 1)
 
 
 def _timed(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> tuple[Any, float]:
@@ -2097,6 +2104,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                                   "through every frame of the video, each frame without "
                                   "detections as one where nothing was found", RuntimeWarning,
                                   stacklevel=2)
+        if grid is not None and isinstance(trk, BoxTracker) and len(grid.dets):
+            _warn_no_start(grid.path, grid.dets.conf, trk.config, None, stacklevel=2)
         scored: list[MOTCounts] = []
 
         def check(stats: LoopStats) -> None:
@@ -2115,14 +2124,19 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 scored.append(evaluate_mot(g, tracks.written(), stats.last, benchmark="auto"))
 
         found = 0  # what a front-end from pixels found (a detections file is checked as read)
+        top, bottom = -np.inf, np.inf  # and the highest and lowest of its scores
         call = as_detector(detect)
         if grid is None and call is not None:
             inner = call
 
             def counted(frame: Frame) -> Detections | None:
-                nonlocal found
+                nonlocal found, top, bottom
                 d = inner(frame)
-                found += 0 if d is None else len(d)
+                if d is not None and len(d):
+                    found += len(d)
+                    assert d.scores is not None  # Detections fills them (1) where not given
+                    top = max(top, float(d.scores.max()))
+                    bottom = min(bottom, float(d.scores.min()))
                 return d
 
             call = counted
@@ -2145,6 +2159,11 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                             "detector: --frontend hog)")
                 warnings.warn(f"{video}: {what} found nothing in {n} frames{hint}: the "
                               "results hold no rows", UserWarning, stacklevel=2)
+            elif grid is None and found and isinstance(trk, BoxTracker):
+                # a detector's raw scores all below the start: its boxes were found and dropped
+                what = f"the {name} front-end" if isinstance(name, str) else "the front-end"
+                _warn_no_start(f"{video}: {what}", np.array([bottom, top]), trk.config, None,
+                               stacklevel=2)
             rows = sinks["tracks"]
             assert isinstance(rows, MOTWriter)
             last = stats.last
