@@ -411,7 +411,7 @@ def test_cli_takes_a_tracker_of_ones_own(tmp_path):
     cmd = [sys.executable, "-m", "vistrack.cli", *_own_tracker_case(tmp_path)]
     r = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=tmp_path)
     assert r.returncode == 0, r.stderr
-    assert "tracked 6 frames: 6 boxes of 1 tracks" in r.stdout
+    assert "tracked 6 frames: 6 boxes of 1 track;" in r.stdout
     bad = subprocess.run(cmd[:6] + ["nomodule:make"] + cmd[7:], capture_output=True, text=True,
                          env=env, cwd=tmp_path)
     assert bad.returncode == 2
@@ -492,7 +492,7 @@ def test_the_console_command_finds_a_tracker_module_in_the_current_folder(tmp_pa
     r = subprocess.run([str(console), *_own_tracker_case(tmp_path)], capture_output=True,
                        text=True, env=env, cwd=tmp_path)
     assert r.returncode == 0, r.stderr
-    assert "tracked 6 frames: 6 boxes of 1 tracks" in r.stdout
+    assert "tracked 6 frames: 6 boxes of 1 track;" in r.stdout
 
 
 def test_boxes_writer_marks_frames_without_the_object(tmp_path):
@@ -563,6 +563,36 @@ def test_a_video_whose_raw_scores_start_no_track_says_so(tmp_path):
             r = track_video(folder, tmp_path / name, frontend=frontend, fps=25, annotate=False,
                             scores="raw", high=0.5, new_track=0.5)
             assert r.tracks == 1 and r.rows > 0
+
+
+def test_a_videos_ground_truth_that_looks_unrelated_is_warned_of(tmp_path):
+    """Another clip's ground truth scores valid numbers (MOTA -100 here), which vistrack eval
+    warns of and a video's --gt did not: the disc's own truth scores 100 without a word, the
+    same boxes 300 pixels off are named as unrelated (no box of the tracks meets one)."""
+    import warnings
+
+    frames, truth = red_disc_clip(T=8)
+    folder = write_clip(tmp_path / "frames", frames)
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{f + 1},-1,{x:.2f},{y:.2f},{w:.2f},{h:.2f},0.9\n"
+                           for f, (x, y, w, h) in enumerate(truth)))
+    gts = {}
+    for name, dx in (("gt.txt", 0), ("far.txt", 300)):
+        gts[name] = tmp_path / name
+        gts[name].write_text("".join(f"{f + 1},1,{x + dx:.2f},{y:.2f},{w:.2f},{h:.2f},1,1,1\n"
+                                     for f, (x, y, w, h) in enumerate(truth)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = track_video(folder, tmp_path / "a", frontend=f"detections:{det}", fps=25,
+                        annotate=False, gt=gts["gt.txt"])
+    assert r.scores.MOTA == 1.0
+    with pytest.warns(UserWarning, match=re.escape(
+            f"predictions and ground truth look unrelated: no box of {tmp_path / 'b'}"
+            f"/tracks.txt overlaps a box of {gts['far.txt']} by IoU >= 0.5 in any of their 8 "
+            "common frames")):
+        r = track_video(folder, tmp_path / "b", frontend=f"detections:{det}", fps=25,
+                        annotate=False, gt=gts["far.txt"])
+    assert r.scores.MOTA == -1.0
 
 
 def test_an_interrupted_run_leaves_the_earlier_outputs_as_they_were(tmp_path):

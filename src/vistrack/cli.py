@@ -63,6 +63,11 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     return tuple(errors)
 
 
+def _n(count: int, one: str, many: str | None = None) -> str:
+    """``count`` and the word, in the singular for 1 (``1 track``, ``2 tracks``)."""
+    return f"{count} {one if count == 1 else many or one + 's'}"
+
+
 def _message(exc: BaseException) -> str:
     """An exception's message on one line; an OS error as ``FILE: what went wrong``.
 
@@ -439,9 +444,9 @@ def _track(args: argparse.Namespace) -> int:
         _keep_warnings(run.out_dir, said)
         _print_video_run(args, run, report)
     else:
-        print(f"wrote {run.out}: {run.rows} boxes of {run.tracks} tracks over {run.frames} "
-              f"frames from {run.detections} detections; tracker {run.fps:.0f} frames/s",
-              file=report)
+        print(f"wrote {run.out}: {_n(run.rows, 'box', 'boxes')} of {_n(run.tracks, 'track')} "
+              f"over {_n(run.frames, 'frame')} from {_n(run.detections, 'detection')}; tracker "
+              f"{run.fps:.0f} frames/s", file=report)
     if args.print_config:
         assert run.config is not None  # a box tracker's run (others refuse --print-config)
         derived = dict(run.derived or {})
@@ -650,7 +655,8 @@ def _print_video_run(args: argparse.Namespace, run: VideoRun, report: TextIO) ->
     sec = dict(run.seconds)
     compiling = sec.pop("compile", 0.0)
     ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
-    print(f"tracked {run.frames} frames: {run.rows} boxes of {run.tracks} tracks; "
+    print(f"tracked {_n(run.frames, 'frame')}: {_n(run.rows, 'box', 'boxes')} of "
+          f"{_n(run.tracks, 'track')}; "
           f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})"
           + (f"; compiling took {compiling:.1f} s" if compiling >= 0.05 else ""),
           file=report)

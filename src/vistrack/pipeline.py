@@ -49,6 +49,7 @@ from .detector_checks import (
     warn_outside,
 )
 from .evaluation.mot import MOTCounts, _lines_of, considered, evaluate_mot
+from .evaluation.sanity import sanity_warnings
 from .io.atomic import check_output, hidden_path, made_folder, remove_on_commit, together
 from .io.motchallenge import (
     DETECTION_SUFFIXES,
@@ -2121,7 +2122,11 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                                   "false positive", UserWarning, stacklevel=4)
                 tracks = sinks["tracks"]
                 assert isinstance(tracks, MOTWriter)
-                scored.append(evaluate_mot(g, tracks.written(), stats.last, benchmark="auto"))
+                written = tracks.written()
+                scored.append(evaluate_mot(g, written, stats.last, benchmark="auto"))
+                # as vistrack eval warns: another sequence's ground truth scores valid numbers
+                for message in sanity_warnings(g, written):
+                    warnings.warn(message, UserWarning, stacklevel=4)
 
         found = 0  # what a front-end from pixels found (a detections file is checked as read)
         top, bottom = -np.inf, np.inf  # and the highest and lowest of its scores
