@@ -350,6 +350,16 @@ def test_a_detections_file_alone_needs_its_frame_rate_once(tmp_path, capsys, bad
     assert main(["track", str(seq), "--out", str(out)]) == 2
     one_line(capsys, "track", f"{seq / 'det' / 'det.txt'} does not exist (pass --detections "
              "FILE, another file of detections)")
+    # a folder that is no sequence at all (neither file) is named as such; it was told its
+    # seqinfo.ini did not exist, to pass --fps, and then that its det/det.txt did not
+    odd = tmp_path / "notes"
+    odd.mkdir()
+    (odd / "readme.txt").write_text("hello\n")
+    for extra in ([], ["--fps", "10"]):
+        assert main(["track", str(odd), "--out", str(out), *extra]) == 2
+        one_line(capsys, "track", f"{odd} is not a MOTChallenge sequence (no seqinfo.ini, no "
+                 "det/det.txt) nor a folder of them: give a sequence folder or a detections "
+                 "file (with --fps), or track its images with --out-dir OUT/ instead of --out")
     # --out and --out-dir together
     assert main(["track", str(seq), "--out", str(out), "--out-dir", str(tmp_path / "o")]) == 2
     one_line(capsys, "track", "give --out RESULTS.txt (a MOTChallenge sequence's detections) "

@@ -1337,6 +1337,13 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
         det_path = Path(detections) if detections is not None else seq_dir / "det" / "det.txt"
     ini = None if alone else seq_dir / "seqinfo.ini"
     has_info = ini is not None and ini.exists()
+    if not alone and not has_info and detections is None and not det_path.exists():
+        # not "SEQ/seqinfo.ini does not exist; pass --fps", then "SEQ/det/det.txt does not
+        # exist", for a folder that is no sequence at all
+        raise FileNotFoundError(
+            f"{seq_dir} is not a MOTChallenge sequence (no seqinfo.ini, no det/det.txt) nor a "
+            "folder of them: give a sequence folder or a detections file (with --fps), or "
+            "track its images with --out-dir OUT/ instead of --out")
     if not has_info and fps is None:
         raise FileNotFoundError(
             f"{seq_dir} is a detections file alone: give its frame rate (fps, --fps)" if alone
