@@ -459,6 +459,13 @@ def test_columns_name_a_csv_s_columns_from_pixels_and_for_eval(tmp_path, capsys)
     capsys.readouterr()
     assert main(["eval", "--gt", str(GT), "--pred", str(tmp_path / "sp.csv"), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["pets09-s2l1"] == scores[0]
+    # a ground-truth file of another name, in a folder of other files, names the row after
+    # itself (it was named after the folder: "runs")
+    (tmp_path / "runs").mkdir()
+    (tmp_path / "runs" / "pets-truth.txt").write_bytes(GT.read_bytes())
+    assert main(["eval", "--gt", str(tmp_path / "runs" / "pets-truth.txt"), "--pred",
+                 str(tmp_path / "sp.csv"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out) == {"pets-truth": scores[0]}
 
 
 def test_out_with_a_trailing_slash_is_a_folder_with_one_input_too(tmp_path, capsys,

@@ -381,10 +381,12 @@ def test_cli_eval_table_keeps_its_columns_apart(tmp_path, capsys):
     assert cells["sequence"] == "s" and cells["MOTA"] == "-1300.0" and cells["FP"] == "13"
     ends = [[m.end() for m in re.finditer(r"\S+", line)] for line in (head, row)]
     assert ends[0][1:] == ends[1][1:] and len(ends[0]) == len(ends[1]) == 17
-    # a ground-truth file outside a gt folder is named by its own folder
-    flat = _rows(tmp_path / "s" / "flat.txt", [(1, 1, 0, 0, 20, 40, 1, 1, 1)])
-    assert main(["eval", "--gt", str(flat), "--pred", str(res)]) == 0
-    assert capsys.readouterr().out.splitlines()[1].split()[0] == "s"
+    # a gt.txt outside a gt folder is its folder's, named after it; a file of another name
+    # (KITTI's label_02/0004.txt) after itself
+    for name, label in (("gt.txt", "s"), ("flat.txt", "flat")):
+        flat = _rows(tmp_path / "s" / name, [(1, 1, 0, 0, 20, 40, 1, 1, 1)])
+        assert main(["eval", "--gt", str(flat), "--pred", str(res)]) == 0
+        assert capsys.readouterr().out.splitlines()[1].split()[0] == label
 
 
 # ------------------------------------------------------------------ sanity warnings

@@ -1024,11 +1024,13 @@ def _eval(args: argparse.Namespace) -> int:
             gt = _ground_truth_file(args.gt)
         except ValueError as exc:
             return _fail("eval", str(exc))
-        # SEQ/gt/gt.txt, or a ground-truth file beside its seqinfo.ini (SEQ/gt.txt)
+        # SEQ/gt/gt.txt, or a ground-truth file beside its seqinfo.ini (SEQ/gt.txt), named
+        # after SEQ; any other file after itself (runs/MOT17-09.txt, not "runs")
         seq = gt.parent.parent if gt.parent.name == "gt" else gt.parent
         info = seq / "seqinfo.ini"
-        pairs.append((seq.resolve().name or "sequence", gt, Path(args.pred),
-                      info if info.exists() else None))
+        own = gt.parent.name == "gt" or gt.name == "gt.txt" or info.exists()
+        pairs.append(((seq.resolve().name if own else gt.stem) or "sequence", gt,
+                      Path(args.pred), info if info.exists() else None))
     else:
         return _fail("eval", "give --gt and --pred, or --gt-dir and --pred-dir")
     # a missing or malformed file is a user's mistake: main prints it in one line
