@@ -468,6 +468,38 @@ def test_columns_name_a_csv_s_columns_from_pixels_and_for_eval(tmp_path, capsys)
     assert json.loads(capsys.readouterr().out) == {"pets-truth": scores[0]}
 
 
+def test_eval_of_a_run_stopped_early_says_the_frames_after_count_as_missed(tmp_path, capsys):
+    """A run with --stop scored against the whole clip's ground truth: the frames after its
+    last count as missed, which the scores alone do not say. Its run.json tells the frames
+    tracked; eval names them and counts the ground truth's rows after (counted here from the
+    file itself). The whole clip's run, or a results file without run.json, says nothing."""
+    rows = [line.split(",") for line in GT.read_text().splitlines() if line.strip()]
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{r[0]},-1,{r[2]},{r[3]},{r[4]},{r[5]},0.9\n" for r in rows))
+    after = sum(int(r[0]) > 12 for r in rows)
+    out = tmp_path / "stopped"
+    assert main(["track", str(VIDEO), "--frontend", f"detections:{det}", "--stop", "12",
+                 "--out-dir", str(out), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["eval", "--gt", str(GT), "--pred", str(out / "tracks.txt")]) == 0
+    err = capsys.readouterr().err
+    last = max(int(r[0]) for r in rows)
+    assert err == (f"vistrack eval: warning: {out / 'tracks.txt'}: its run ({out / 'run.json'}) "
+                   f"tracked frames 1-12 only, and {GT} runs to frame {last}: its {after} rows "
+                   "after frame 12 count as missed (FN)\n")
+    whole = tmp_path / "whole"
+    assert main(["track", str(VIDEO), "--frontend", f"detections:{det}", "--out-dir",
+                 str(whole), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["eval", "--gt", str(GT), "--pred", str(whole / "tracks.txt")]) == 0
+    assert capsys.readouterr().err == ""
+    import shutil
+
+    shutil.copy(out / "tracks.txt", tmp_path / "alone.txt")
+    assert main(["eval", "--gt", str(GT), "--pred", str(tmp_path / "alone.txt")]) == 0
+    assert capsys.readouterr().err == ""
+
+
 def test_out_with_a_trailing_slash_is_a_folder_with_one_input_too(tmp_path, capsys,
                                                                    monkeypatch):
     """--out RESULTS/ with several inputs writes RESULTS/NAME.txt; with one input it wrote a

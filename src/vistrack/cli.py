@@ -947,6 +947,37 @@ def _track_one(args: argparse.Namespace) -> int:
     return 0
 
 
+def _partial_runs(pairs: list[tuple[str, Path, Path, Path | None]],
+                  failed: dict[str, str]) -> list[str]:
+    """Warnings for results a run of vistrack wrote over part of the frames only (its
+    ``run.json`` beside them; ``--stop``, or a video shorter than its ground truth): the
+    ground truth's frames after its last count as missed."""
+    import json
+
+    from .io.motchallenge import read_mot
+    from .pipeline import RUN_INFO
+
+    out = []
+    for name, gt, pred, _ in pairs:
+        info = Path(pred).parent / RUN_INFO
+        if name in failed or not info.is_file():
+            continue
+        try:
+            run = json.loads(info.read_text(encoding="utf-8"))
+            last = int(run["last_frame"])
+            if Path(pred).name not in run["outputs"]:
+                continue
+        except (OSError, ValueError, KeyError, TypeError):
+            continue  # not a run's own file: nothing to tell from it
+        frames = read_mot(gt).frames
+        after = frames[frames > last]
+        if len(after):
+            out.append(f"{pred}: its run ({info}) tracked frames {run.get('first_frame', 1)}-"
+                       f"{last} only, and {gt} runs to frame {after[-1]}: its {len(after)} rows "
+                       f"after frame {last} count as missed (FN)")
+    return out
+
+
 def _eval(args: argparse.Namespace) -> int:
     import json
 
@@ -1061,7 +1092,7 @@ def _eval(args: argparse.Namespace) -> int:
     else:
         res = evaluate_files(pairs, benchmark=args.benchmark, jobs=jobs,
                              keep_going=args.keep_going, columns=columns)
-    for warning in res.warnings:
+    for warning in res.warnings + _partial_runs(pairs, res.errors):
         print(f"vistrack eval: warning: {warning}", file=sys.stderr)
     for name, error in res.errors.items():
         print(f"vistrack eval: error: {name}: {error}", file=sys.stderr)
