@@ -66,6 +66,17 @@ def test_other_column_names_and_missing_columns():
     with pytest.raises(ValueError, match=r"no box in mine.csv: columns \['bb_left', 'bb_top', "
                                          r"'bb_width'\]"):
         MOTTable.from_pandas(rows.drop(columns="w"), columns=no_width, path="mine.csv")
+    # the file's own columns are listed, as where the frame's is missing (they were not)
+    with pytest.raises(ValueError, match=re.escape(
+            "or the corners 'x1', 'y1', 'x2', 'y2'); columns: ['cx', 'cy', 'h', 't', 'track'] "
+            "(name yours: --columns bb_left=NAME,..., or columns={'bb_left': NAME, ...})")):
+        MOTTable.from_pandas(rows.drop(columns="w"), columns=no_width, path="mine.csv")
+    with pytest.raises(ValueError, match=re.escape(
+            "no column 'bb_width' in mine.csv; columns: ['h', 'l', 't', 'top', 'track']")):
+        MOTTable.from_pandas(rows.drop(columns=["w", "cx"]).rename(columns={"cy": "top"})
+                             .assign(l=1.0), path="mine.csv",
+                             columns={"frame": "t", "particle": "track", "bb_left": "l",
+                                      "bb_top": "top", "bb_height": "h"})
     # a name in columns that is not ours, or not the table's, was ignored: the column then
     # went unread (a class column under a mistyped name: every row class -1)
     with pytest.raises(ValueError, match=re.escape(
@@ -136,7 +147,9 @@ def test_a_box_by_its_corners():
                              path="mine.csv")
     assert str(e.value) == ("mine.csv, row 2 after the header, column 'y2': the box's far "
                             "corner must not lie before its near one; y1 = 21, y2 = 20")
-    with pytest.raises(ValueError, match=r"or the corners 'x1', 'y1', 'x2', 'y2'\)$"):
+    with pytest.raises(ValueError, match=re.escape(
+            "or the corners 'x1', 'y1', 'x2', 'y2'); columns: ['conf', 'frame', 'xmax', "
+            "'xmin', 'y1'] (name yours")):
         MOTTable.from_pandas(rows.drop(columns="y2"))
 
 

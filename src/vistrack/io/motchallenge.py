@@ -502,8 +502,9 @@ class MOTTable:
         # of the later ones are then not read)
         if left is not None and top is not None:
             if w is None or h is None:
-                raise ValueError(f"no column {name('bb_width')!r} or {name('bb_height')!r}"
-                                 f"{where}")
+                gone = " or ".join(repr(name(c)) for c, v in (("bb_width", w),
+                                                              ("bb_height", h)) if v is None)
+                raise ValueError(f"no column {gone}{where}; columns: {sorted(map(str, have))}")
         elif (centre := every(get("x"), get("y"), w, h)) is not None:
             x, y, w, h = centre
             left, top = x - w / 2, y - h / 2
@@ -523,7 +524,9 @@ class MOTTable:
             raise ValueError(f"no box{where}: columns {missing} are missing (or give "
                              f"{name('x')!r}, {name('y')!r} with {name('bb_width')!r}, "
                              f"{name('bb_height')!r}; or the corners "
-                             f"{', '.join(repr(name(c)) for c in _CORNERS)})")
+                             f"{', '.join(repr(name(c)) for c in _CORNERS)}); columns: "
+                             f"{sorted(map(str, have))} (name yours: --columns "
+                             "bb_left=NAME,..., or columns={'bb_left': NAME, ...})")
         box = np.column_stack([frame, ident if ident is not None else np.full(n, -1.0),
                                left, top, w, h])
         # the rules a text file's rows obey (_check_rows), named by row and column here
