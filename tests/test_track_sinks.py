@@ -460,6 +460,35 @@ def test_labels_of_tracks_that_end_together_do_not_cover_one_another(tmp_path, b
                                                      ax.texts[b].get_text())
 
 
+def test_labels_of_tracks_that_end_at_the_images_edge_stay_inside_it(tmp_path):
+    """Tracks that end at the image's right edge, its top, its top-right corner and its
+    bottom-left one: each label, drawn (matplotlib's extent of the rendered text), lies
+    inside the axes, still annotating its track's last centre, and clear of the others; the
+    label of a track ending at the right edge went across the frame (the bundled clip's 9)."""
+    from vistrack.viz import plot_trajectories
+
+    ends = np.array([[767.0, 300.0], [400.0, 0.5], [767.0, 0.5], [0.5, 575.0], [766.0, 320.0]])
+    ids = np.array([9, 12, 310, 4, 77])
+    frames = np.tile([1, 2], len(ids))
+    c = np.stack([ends + [-30, 30] * np.sign(ends - [384, 288]) * -1, ends], axis=1
+                 ).reshape(-1, 2)
+    image = np.full((576, 768, 3), 200, np.uint8)
+    fig = plot_trajectories(frames, np.repeat(ids, 2), c, image, tmp_path / "p.png")
+    ax = fig.axes[0]
+    fig.canvas.draw()
+    frame = ax.get_window_extent()
+    boxes = [t.get_window_extent() for t in ax.texts]
+    assert sorted(t.get_text() for t in ax.texts) == sorted(map(str, ids))
+    for t, box in zip(ax.texts, boxes):
+        assert np.allclose(t.xy, ends[list(ids).index(int(t.get_text()))])
+        assert (frame.x0 <= box.x0 and box.x1 <= frame.x1 and frame.y0 <= box.y0
+                and box.y1 <= frame.y1), (t.get_text(), box, frame)
+    for a in range(len(boxes)):
+        for b in range(a):
+            assert not boxes[a].overlaps(boxes[b]), (ax.texts[a].get_text(),
+                                                     ax.texts[b].get_text())
+
+
 @pytest.mark.parametrize("grey", [False, True])
 def test_a_saved_plots_background_is_what_matplotlib_draws(tmp_path, grey):
     """Saved, the background is put under the drawing instead of being drawn by matplotlib;

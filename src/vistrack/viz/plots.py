@@ -342,27 +342,30 @@ def _label_offsets(ax: Any, xy: np.ndarray, labels: list[str], size: float
                    ) -> list[tuple[float, float]]:
     """Offsets in points of each label from its point ``xy`` (data), in turn, so that no
     label covers one placed before it where a place is free: up and to the right, else below,
-    to the left, or further up or down (a label that finds no free place takes the first).
-    Sizes are estimated from the font size (bold digits are about 0.7 of it wide, a line
-    about 1.2 of it high)."""
+    to the left, or further up or down; the first such place inside the axes (a track that
+    ends at the image's right edge is labelled to its left, not across the frame), else the
+    first free one, else the first. Sizes are estimated from the font size (bold digits are
+    about 0.7 of it wide, a line about 1.2 of it high)."""
     ax.apply_aspect()
-    pts = ax.transData.transform(np.asarray(xy, float).reshape(-1, 2)) * 72 / ax.figure.dpi
+    scale = 72 / ax.figure.dpi
+    pts = ax.transData.transform(np.asarray(xy, float).reshape(-1, 2)) * scale
+    frame = ax.get_window_extent()
+    x0, y0, x1, y1 = (v * scale for v in (frame.x0, frame.y0, frame.x1, frame.y1))
     placed: list[tuple[float, float, float, float]] = []
     out = []
     for (px, py), text in zip(pts, labels):
         w, h = 0.7 * size * len(text) + 2, 1.25 * size
         tries = [(dx, dy) for k in range(4) for dy in (3 + k * h, -3 - (k + 1) * h)
                  for dx in (3, -3 - w)]
-        for dx, dy in tries:
-            box = (px + dx, py + dy, px + dx + w, py + dy + h)
-            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3]
-                       for b in placed):
-                break
-        else:
-            dx, dy = tries[0]
-            box = (px + dx, py + dy, px + dx + w, py + dy + h)
-        placed.append(box)
-        out.append((dx, dy))
+        boxes = [(px + dx, py + dy, px + dx + w, py + dy + h) for dx, dy in tries]
+        free = [k for k, box in enumerate(boxes)
+                if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3]
+                           for b in placed)]
+        inside = [k for k in free if x0 <= boxes[k][0] and boxes[k][2] <= x1
+                  and y0 <= boxes[k][1] and boxes[k][3] <= y1]
+        k = (inside or free or [0])[0]
+        placed.append(boxes[k])
+        out.append(tries[k])
     return out
 
 
