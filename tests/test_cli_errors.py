@@ -965,6 +965,10 @@ def test_eval_names_a_folder_given_for_a_file_and_the_reverse(tmp_path, capsys):
         one_line(capsys, "eval", f"--pred-dir {tmp_path / 'no'} does not exist")
     assert main(["eval", "--gt-dir", str(tmp_path / "no"), "--pred-dir", str(res)]) == 2
     one_line(capsys, "eval", f"--gt-dir {tmp_path / 'no'} does not exist")
+    # one sequence given as the set: the way to score it is named
+    assert main(["eval", "--gt-dir", str(seq), "--pred-dir", str(res)]) == 2
+    one_line(capsys, "eval", f"no SEQ/gt/gt.txt under {seq} ({seq} is one sequence: --gt "
+             f"{seq} --pred RESULTS.txt)")
     assert main(["eval", "--gt", str(seq), "--pred", str(res / "SEQ.txt"), "--jobs", "2"]) == 2
     one_line(capsys, "eval", "--jobs goes with --gt-dir")
     assert main(["eval", "--gt-dir", str(tmp_path), "--pred-dir", str(res), "--jobs", "1"]) == 0

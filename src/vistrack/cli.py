@@ -1022,7 +1022,9 @@ def _eval(args: argparse.Namespace) -> int:
             info = seq / "seqinfo.ini"
             pairs.append((seq.name, seq / "gt" / "gt.txt", pred, info if info.exists() else None))
         if not pairs:
-            return _fail("eval", f"no SEQ/gt/gt.txt under {args.gt_dir}")
+            hint = (f" ({args.gt_dir} is one sequence: --gt {args.gt_dir} --pred RESULTS.txt)"
+                    if (Path(args.gt_dir) / "gt" / "gt.txt").is_file() else "")
+            return _fail("eval", f"no SEQ/gt/gt.txt under {args.gt_dir}{hint}")
         # what is left out is said: sequences without ground truth (a set's test sequences),
         # and results that are no sequence's (a misspelt name), which were never scored
         left = sorted(p.name for p in Path(args.gt_dir).iterdir() if p.is_dir()
