@@ -200,28 +200,34 @@ def write_clip(folder, frames):
     return folder
 
 
+class TruthDetector:
+    """A detector of one's own: frame k's box is ``truth[k - 1]``, scored ``score(k)``; it
+    raises KeyboardInterrupt (Ctrl-C) at frame ``stop``."""
+
+    def __init__(self, truth, score=lambda k: 0.9, stop=None):
+        self.truth, self.score, self.stop, self.k = truth, score, stop, 0
+
+    def detect(self, image):
+        self.k += 1
+        if self.k == self.stop:
+            raise KeyboardInterrupt
+        return Detections.from_xywh([self.truth[self.k - 1]], [self.score(self.k)])
+
+
 def test_track_video_takes_any_tracker_and_detector(tmp_path):
     """A tracker and a detector of one's own, through track_video: the tracks written are
     the detector's boxes, as the tracker returned them."""
     frames, truth = red_disc_clip(T=12)
     folder = write_clip(tmp_path / "frames", frames)
 
-    class Truth:
-        def __init__(self):
-            self.k = 0
-
-        def detect(self, image):
-            self.k += 1
-            return Detections.from_xywh([truth[self.k - 1]], [0.8])
-
     mine = EveryDetection()
-    run_ = track_video(folder, tmp_path / "out", tracker=mine, frontend=Truth(), fps=25,
-                       annotate=False)
+    run_ = track_video(folder, tmp_path / "out", tracker=mine,
+                       frontend=TruthDetector(truth, lambda k: 0.8), fps=25, annotate=False)
     got = read_mot(run_.files["tracks"])
     assert run_.frames == 12 and mine.frames == 12 and run_.config is None
     np.testing.assert_allclose(got.boxes, truth, atol=0.005)
     with pytest.raises(TypeError, match="tracker must be a name in"):
-        track_video(folder, tmp_path / "o2", tracker=42, frontend=Truth())
+        track_video(folder, tmp_path / "o2", tracker=42, frontend=TruthDetector(truth))
 
 
 def test_rows_past_the_videos_end_and_ground_truth_with_nothing_to_score_are_named(tmp_path):
@@ -531,15 +537,7 @@ def test_a_video_whose_raw_scores_start_no_track_says_so(tmp_path):
 
     frames, truth = red_disc_clip(T=8)
     folder = write_clip(tmp_path / "frames", frames)
-
-    class Truth:
-        def __init__(self):
-            self.k = 0
-
-        def detect(self, image):
-            self.k += 1
-            return Detections.from_xywh([truth[self.k - 1]], [0.5 + 0.01 * self.k])
-
+    rising = lambda k: 0.5 + 0.01 * k  # noqa: E731
     det = tmp_path / "det.txt"
     det.write_text("".join(f"{f + 1},-1,{x:.2f},{y:.2f},{w:.2f},{h:.2f},0.9\n"
                            for f, (x, y, w, h) in enumerate(truth)))
@@ -554,12 +552,13 @@ def test_a_video_whose_raw_scores_start_no_track_says_so(tmp_path):
             f"{folder}: the front-end: every score lies below new_track 0.7 (the scores run "
             f"0.51 to 0.58), and with raw scores (--scores raw) no track can start {starts}: "
             "lower --new-track")):
-        r = track_video(folder, tmp_path / "b", frontend=Truth(), fps=25, annotate=False,
+        r = track_video(folder, tmp_path / "b", frontend=TruthDetector(truth, rising), fps=25,
+                        annotate=False,
                         scores="raw", high=0.5, new_track=0.7)
     assert r.rows == 0
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        for name, frontend in (("c", f"detections:{det}"), ("d", Truth())):
+        for name, frontend in (("c", f"detections:{det}"), ("d", TruthDetector(truth, rising))):
             r = track_video(folder, tmp_path / name, frontend=frontend, fps=25, annotate=False,
                             scores="raw", high=0.5, new_track=0.5)
             assert r.tracks == 1 and r.rows > 0
@@ -601,27 +600,17 @@ def test_an_interrupted_run_leaves_the_earlier_outputs_as_they_were(tmp_path):
     frames, truth = red_disc_clip(T=12)
     folder = write_clip(tmp_path / "frames", frames)
 
-    class Truth:
-        def __init__(self, stop=None):
-            self.k, self.stop = 0, stop
-
-        def detect(self, image):
-            self.k += 1
-            if self.k == self.stop:
-                raise KeyboardInterrupt
-            return Detections.from_xywh([truth[self.k - 1]], [0.9])
-
     out = tmp_path / "out"
-    first = track_video(folder, out, frontend=Truth(), fps=25)
+    first = track_video(folder, out, frontend=TruthDetector(truth), fps=25)
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     assert sorted(before) == sorted([p.name for p in first.files.values()] + ["run.json"])
     assert len(before) == 5 and all(before.values())
     with pytest.raises(KeyboardInterrupt):
-        track_video(folder, out, frontend=Truth(stop=6), fps=25, force=True)
+        track_video(folder, out, frontend=TruthDetector(truth, stop=6), fps=25, force=True)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     # into folders that did not exist: they are removed again, and the folder above is empty
     with pytest.raises(KeyboardInterrupt):
-        track_video(folder, tmp_path / "new" / "out", frontend=Truth(stop=6), fps=25)
+        track_video(folder, tmp_path / "new" / "out", frontend=TruthDetector(truth, stop=6), fps=25)
     assert not (tmp_path / "new").exists()
 
 
@@ -637,20 +626,13 @@ def test_a_run_found_wrong_at_its_end_writes_nothing(tmp_path):
     frames, truth = red_disc_clip(T=8)
     folder = write_clip(tmp_path / "frames", frames)
 
-    class Truth:
-        k = 0
-
-        def detect(self, image):
-            self.k += 1
-            return Detections.from_xywh([truth[self.k - 1]], [0.9])
-
     out = tmp_path / "out"
-    track_video(folder, out, frontend=Truth(), fps=25)
+    track_video(folder, out, frontend=TruthDetector(truth), fps=25)
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     empty = tmp_path / "empty.avi"  # a video with a header and no frame
     cv2.VideoWriter(str(empty), cv2.VideoWriter_fourcc(*"MJPG"), 25, (64, 48)).release()
     with pytest.raises(ValueError, match="no frames to track"):
-        track_video(empty, out, frontend=Truth(), fps=25, force=True)
+        track_video(empty, out, frontend=TruthDetector(truth), fps=25, force=True)
 
     class Twice:  # one id twice in every frame
         def reset(self):
@@ -664,10 +646,11 @@ def test_a_run_found_wrong_at_its_end_writes_nothing(tmp_path):
     gt.write_text("".join(f"{k},1,{x:.1f},{y:.1f},{w:.1f},{h:.1f},1,1,1\n"
                           for k, (x, y, w, h) in enumerate(truth, 1)))
     with pytest.raises(ValueError, match="id 1 appears more than once in frame 1"):
-        track_video(folder, out, tracker=Twice(), frontend=Truth(), fps=25, gt=gt, force=True)
+        track_video(folder, out, tracker=Twice(), frontend=TruthDetector(truth), fps=25, gt=gt,
+                    force=True)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     with pytest.raises(ValueError, match="no frames to track"):
-        track_video(empty, tmp_path / "new" / "out", frontend=Truth(), fps=25)
+        track_video(empty, tmp_path / "new" / "out", frontend=TruthDetector(truth), fps=25)
     assert not (tmp_path / "new").exists()
     short = tmp_path / "short.txt"
     short.write_text("".join(f"{x},{y},{w},{h}\n" for x, y, w, h in truth[:3]))
