@@ -256,6 +256,22 @@ def test_a_config_file_is_read_once_a_command(seq, tmp_path, monkeypatch, capsys
     assert len(reads) == 1
 
 
+def test_a_bad_config_file_is_named_before_an_existing_out(seq, tmp_path, capsys):
+    """A mistake in --config is reported even where --out exists: the run said "pass
+    --force" first, and only the run given --force named the file's mistake. Several inputs
+    already read the file first."""
+    from vistrack.cli import main
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[tracker]\nhihg = 0.5\n")
+    out = tmp_path / "exists.txt"
+    out.write_text("1,1,0,0,1,1,1,-1,-1,-1\n")
+    assert main(["track", str(seq), "--out", str(out), "--config", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "has no key 'hihg'; did you mean 'high'?" in err and "--force" not in err
+    assert out.read_text() == "1,1,0,0,1,1,1,-1,-1,-1\n"
+
+
 @pytest.mark.parametrize("flags", [[], ["--high", "0.5", "--offline"], ["--tracker", "sort"],
                                    ["--config", "FILE", "--max-lost", "1"]])
 def test_print_config_without_input_is_what_a_run_prints(seq, tmp_path, flags):

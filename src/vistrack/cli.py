@@ -405,17 +405,18 @@ def _track(args: argparse.Namespace) -> int:
     if problem:
         return fail(problem)
     progress = sys.stderr if sys.stderr.isatty() and not args.quiet else None
+    cfg = None
+    if box:  # before the outputs, as with several inputs: a bad --config is named even
+        # where --out exists (which said "pass --force", and the next run named the file)
+        cfg, problem = _box_config(args)
+        if problem:
+            return fail(problem)
     problem = _outputs_problem(args, name, box, offline_given)
     if problem:
         return fail(problem)
     # with --print-config, stdout holds the configuration alone (the summary goes to stderr)
     report = sys.stderr if args.print_config else sys.stdout
     run: TrackRun | VideoRun
-    cfg = None
-    if box:
-        cfg, problem = _box_config(args)
-        if problem:
-            return fail(problem)
     with _shown_warnings() as said:  # the command's warnings, kept in run.json with the run's
         if box:
             _warn_unused_settings(args, cfg, offline_given)
