@@ -262,3 +262,36 @@ def test_names_are_drawn_as_written_and_whole_frames_counted(tmp_path):
     plot.close()
     assert (tmp_path / "p.png").stat().st_size > 0
     assert matplotlib.rcParams["text.usetex"] is False
+
+
+def _points(n, rng, h, w):
+    return Tracks(ids=np.arange(1, n + 1), boxes=None,
+                  points=np.c_[rng.uniform(0, w - 1, n), rng.uniform(0, h - 1, n)],
+                  scores=np.ones(n), classes=np.zeros(n))
+
+
+def test_identity_numbers_are_left_out_where_they_would_hide_the_frame():
+    """Hundreds of particles in a microscope's frame (500 on 640x424, as in trackpy's
+    bulk-water clip): their numbers covered most of the image. By default a frame's numbers
+    are drawn only where they cover at most a tenth of it; ``labels`` forces either way."""
+    rng = np.random.default_rng(3)
+    grey = np.full((424, 640, 3), 128, np.uint8)
+    dense = _points(500, rng, 424, 640)
+    auto = Annotator().draw(grey, dense)
+    plain = Annotator(labels=False).draw(grey, dense)
+    numbered = Annotator(labels=True).draw(grey, dense)
+    np.testing.assert_array_equal(auto, plain)
+    # the numbers, forced, change much of the frame: that is what the default spares
+    assert (numbered != plain).any(axis=2).mean() > 0.1
+    # the dots are drawn either way: a point no other comes near (another's dot, of radius
+    # 3, could cover it) has its track's colour
+    d = np.hypot(*(dense.points[:, None] - dense.points[None]).transpose(2, 0, 1))
+    alone = np.sort(d, axis=1)[:, 1] > 8
+    assert alone.sum() > 100
+    for i, (x, y) in zip(dense.ids[alone], dense.points[alone]):
+        assert (plain[int(round(y)), int(round(x))] == id_colour(i)).all()
+    sparse = _points(8, rng, 576, 768)  # PETS09's people: numbered, as before
+    pal = np.full((576, 768, 3), 128, np.uint8)
+    with_numbers = Annotator(labels=True).draw(pal, sparse)
+    np.testing.assert_array_equal(Annotator().draw(pal, sparse), with_numbers)
+    assert (with_numbers != Annotator(labels=False).draw(pal, sparse)).any()

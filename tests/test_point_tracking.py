@@ -266,3 +266,67 @@ def test_point_tracker_settings_out_of_range_are_named(setting, message):
     named at the second frame."""
     with pytest.raises(ValueError, match=re.escape(message)):
         PointTracker(**setting)
+
+
+def test_point_tracks_run_through_the_pipeline_into_a_video_and_a_plot(tmp_path, monkeypatch):
+    """Point tracks go through :func:`vistrack.pipeline.run` into the annotated video (a dot
+    and a trail each) and the trajectory plot, whose paths are the tracker's points (it
+    took box tracks only: "xywh needs box tracks")."""
+    from vistrack.io import VideoReader
+    from vistrack.pipeline import run as run_pipeline
+    from vistrack.types import Frame
+    from vistrack.viz import AnnotatedVideo, TrajectoryPlot, plots
+
+    truth, zs = targets(np.random.default_rng(5), T=20)
+    frames = [Frame(k, (k - 1) / 10, np.full((220, 220, 3), 90, np.uint8))
+              for k in range(1, 21)]
+    given = iter(zs)
+
+    class Kept:  # the tracker's own outputs, as the oracle
+        def __init__(self):
+            self.rows = []
+
+        def write(self, frame, tracks):
+            self.rows += [(frame.index, i, x, y) for i, (x, y) in zip(tracks.ids, tracks.points)]
+
+        def close(self):
+            pass
+
+    drawn = {}
+    real = plots.plot_trajectories
+    monkeypatch.setattr(plots, "plot_trajectories", lambda f, i, c, *a, **k: (
+        drawn.update(frames=np.array(f), ids=np.array(i), centres=np.array(c)),
+        real(f, i, c, *a, **k))[1])
+    kept = Kept()
+    stats = run_pipeline(frames, lambda frame: Detections(points=next(given)),
+                         PointTracker("gnn", frame_rate=10.0),
+                         [kept, AnnotatedVideo(tmp_path / "a.mp4", 10),
+                          TrajectoryPlot(tmp_path / "t.png", "points")])
+    assert stats.frames == 20 and len(kept.rows) > 40
+    want = np.array(kept.rows)
+    np.testing.assert_array_equal(drawn["frames"], want[:, 0])
+    np.testing.assert_array_equal(drawn["ids"], want[:, 1])
+    np.testing.assert_array_equal(drawn["centres"], want[:, 2:])
+    assert (tmp_path / "t.png").stat().st_size > 0
+    assert sum(1 for _ in VideoReader(tmp_path / "a.mp4")) == 20
+
+
+def test_track_video_given_a_point_tracker_says_where_point_tracks_go(tmp_path):
+    """The results files of :func:`~vistrack.pipeline.track_video` are MOTChallenge's
+    boxes: a point tracker's tracks are refused at the first frame that has any, naming the
+    sink, the frame and where point tracks can go, and no output is left."""
+    from vistrack.io import VideoWriter
+    from vistrack.pipeline import track_video
+
+    video = tmp_path / "v.mp4"
+    with VideoWriter(video, 10) as w:
+        for _ in range(5):
+            w.write(np.full((64, 80, 3), 90, np.uint8))
+    with pytest.raises(ValueError, match=re.escape(
+            "frame 1: MOTWriter(" + str(tmp_path / "out" / "tracks.txt") + ") takes box tracks "
+            "(MOTChallenge's rows are boxes), and these tracks are points (a PointTracker's): "
+            "run them with vistrack.pipeline.run and sinks that take points")):
+        track_video(video, tmp_path / "out", fps=10,
+                    frontend=lambda f: Detections(points=[[10.0, 20.0]]),
+                    tracker=PointTracker("gnn", frame_rate=10.0, confirm_hits=1))
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

@@ -175,7 +175,7 @@ class TrackRows:
         if len(tracks):
             self._frames.add(np.full(len(tracks), int(frame.index)))
             self._ids.add(np.asarray(tracks.ids))
-            self._xywh.add(tracks.xywh)
+            self._xywh.add(_box_rows(tracks, frame, "TrackRows"))
             self._scores.add(np.asarray(tracks.scores, dtype=float))
 
     def close(self) -> None:
@@ -274,6 +274,18 @@ def _frame_and_id(line: str) -> tuple[int, int]:
     return int(f), int(i)
 
 
+def _box_rows(tracks: Tracks, frame: Frame, what: str) -> np.ndarray:
+    """The tracks' boxes ``x, y, w, h``; point tracks are a ValueError that says where they
+    can go instead (``what``: the sink, as the message names it)."""
+    if tracks.boxes is None:
+        raise ValueError(
+            f"frame {int(frame.index)}: {what} takes box tracks (MOTChallenge's rows are "
+            "boxes), and these tracks are points (a PointTracker's): run them with "
+            "vistrack.pipeline.run and sinks that take points (viz.AnnotatedVideo, "
+            "viz.TrajectoryPlot, or your own)")
+    return tracks.xywh
+
+
 class _RowsFile:
     """Box tracks written as text rows, frame by frame, to the partial file of ``path``
     (:class:`~vistrack.io.atomic.PartialFile`), renamed into place when closed: only the
@@ -300,7 +312,8 @@ class _RowsFile:
             ids = _integers(tracks.ids, "ids")
         except ValueError as e:
             raise ValueError(f"frame {f}: {e}") from None
-        xywh = np.asarray(tracks.xywh, dtype=float)
+        xywh = np.asarray(_box_rows(tracks, frame, f"{type(self).__name__}({self.path})"),
+                          dtype=float)
         scores = np.asarray(tracks.scores, dtype=float)
         bad = ~np.isfinite(xywh).all(axis=1) | (xywh[:, 2:] < 0).any(axis=1) | ~np.isfinite(
             scores)

@@ -78,6 +78,11 @@ def id_colour(i: int) -> tuple[int, int, int]:
     return _palette()[(int(i) - 1) % PALETTE_SIZE]
 
 
+LABEL_COVER = 0.1
+"""The share of a frame that :class:`Annotator`'s identity numbers may cover (each number's
+box with its outline) for them to be drawn, by default."""
+
+
 class Annotator:
     """Draws one frame's tracks, remembering each identity's recent centres for its trail.
 
@@ -88,6 +93,10 @@ class Annotator:
         identity unseen for that long is forgotten (memory stays bounded on long videos).
     nsigma : float
         Size of the covariance ellipse of a track's centre, in standard deviations.
+    labels : bool, optional
+        Draw each track's identity beside it. Default: in a frame whose numbers would
+        cover at most a tenth of the image (``LABEL_COVER``); among hundreds of
+        particles in a microscope's frame they hid the image, and are left out.
 
     Examples
     --------
@@ -100,8 +109,9 @@ class Annotator:
     True
     """
 
-    def __init__(self, trail: int = 30, nsigma: float = 2.0):
+    def __init__(self, trail: int = 30, nsigma: float = 2.0, labels: bool | None = None):
         self.trail, self.nsigma = int(trail), float(nsigma)
+        self.labels = labels
         self._trails: dict[int, deque] = {}
         self._last: dict[int, int] = {}
         self._n = 0
@@ -112,8 +122,8 @@ class Annotator:
 
         Each identity in its colour (:func:`id_colour`): its trail of recent centres, the
         ``nsigma`` ellipse of its centre's covariance (where the tracks have ``covs``), its
-        box (or a dot at its point) and its number; ``label`` at the top left. Each call is
-        one frame of the trails.
+        box (or a dot at its point) and its number (as ``labels`` says); ``label`` at the
+        top left. Each call is one frame of the trails.
 
         Parameters
         ----------
@@ -190,6 +200,11 @@ class Annotator:
             if i in present and len(t) > 1:
                 pts = np.round(np.array(t)).astype(np.int32).reshape(-1, 1, 2)
                 cv2.polylines(out, [pts], False, id_colour(i), thick, cv2.LINE_AA)
+        font, scale = cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z
+        sizes = [cv2.getTextSize(str(i), font, scale, thin) for i in ids.tolist()]
+        numbered = self.labels if self.labels is not None else sum(
+            (tw + 2 * thick) * (th + tb + 2 * thick) for (tw, th), tb in sizes
+        ) <= LABEL_COVER * H * W
         for k, i in enumerate(ids.tolist()):
             c = id_colour(i)
             cx, cy = centres[k]
@@ -200,7 +215,7 @@ class Annotator:
                 cv2.ellipse(out, (int(round(cx)), int(round(cy))),
                             (max(int(round(ax[1])), 1), max(int(round(ax[0])), 1)), ang, 0, 360,
                             c, thin, cv2.LINE_AA)
-            (tw, th), tb = cv2.getTextSize(str(i), cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z, thin)
+            (tw, th), tb = sizes[k]
             if boxes is not None:
                 x0, y0, x1, y1 = np.round(boxes[k]).astype(int)
                 cv2.rectangle(out, (x0, y0), (x1, y1), c, thick)
@@ -211,11 +226,13 @@ class Annotator:
             else:
                 cv2.circle(out, (int(round(cx)), int(round(cy))), round(3 * z), c, -1)
                 x, y = int(cx) + round(4 * z), int(cy) - round(4 * z)
+            if not numbered:
+                continue
             # the whole number inside the image (a box past the left edge showed a sliver)
             org = (min(max(x, 0), max(W - tw, 0)), min(max(y, th), max(H - tb, th)))
-            cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z, (0, 0, 0),
-                        max(3, round(3 * z)), cv2.LINE_AA)
-            cv2.putText(out, str(i), org, cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z, c, thin, cv2.LINE_AA)
+            cv2.putText(out, str(i), org, font, scale, (0, 0, 0), max(3, round(3 * z)),
+                        cv2.LINE_AA)
+            cv2.putText(out, str(i), org, font, scale, c, thin, cv2.LINE_AA)
         return out
 
 

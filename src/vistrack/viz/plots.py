@@ -589,9 +589,10 @@ def _bytes(colour: Any) -> np.ndarray:
 
 
 class TrajectoryPlot:
-    """A sink (:class:`~vistrack.io.tracks.Sink`) that collects every box track's centres
-    (with their frames and identities, in arrays that double as they fill) and, when closed,
-    plots them over the first frame (:func:`plot_trajectories`) to the PNG ``path``, titled
+    """A sink (:class:`~vistrack.io.tracks.Sink`) that collects every track's centres (a
+    box's centre, or a point track's point; with their frames and identities, in arrays
+    that double as they fill) and, when closed, plots them over the first frame
+    (:func:`plot_trajectories`) to the PNG ``path``, titled
     ``"{name}: {tracks} tracks, {frames} frames"`` (without ``"{name}: "`` when it has no
     name).
 
@@ -639,7 +640,7 @@ class TrajectoryPlot:
         frame : Frame
             The frame; the first one's image is the background.
         tracks : Tracks
-            Its box tracks.
+            Its tracks, boxes or points.
 
         Examples
         --------
@@ -659,10 +660,14 @@ class TrajectoryPlot:
             self._first = frame.image
         self._frames += 1
         if len(tracks):
-            xywh = tracks.xywh
+            if tracks.boxes is not None:
+                xywh = tracks.xywh
+                centres = xywh[:, :2] + xywh[:, 2:] / 2
+            else:  # a point track's path is its points' (x, y)
+                centres = np.asarray(tracks.points, dtype=float)[:, :2]
             self._frame_of.add(np.full(len(tracks), int(frame.index)))
             self._id_of.add(np.asarray(tracks.ids).astype(int))
-            self._centres.add(xywh[:, :2] + xywh[:, 2:] / 2)
+            self._centres.add(centres)
 
     def close(self) -> None:
         """Draw and save the figure.
