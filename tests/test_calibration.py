@@ -618,3 +618,83 @@ def test_outcomes_outside_0_1_are_named(persisted):
     with pytest.raises(ValueError, match=r"persisted must hold outcomes in \[0, 1\]; "
                                          r"persisted\[1\] = "):
         ScoreCalibration.fit([0.1, 0.5, 0.9], persisted)
+
+
+def _class_file(path, dets, scale, cls):
+    """``dets`` (one Detections a frame) as a CSV of detections of class ``cls``, each score
+    through ``scale``."""
+    import pandas as pd
+
+    rows = [(f, *b, scale(s), cls) for f, d in enumerate(dets, start=1)
+            for b, s in zip(d.xywh.tolist(), d.scores.tolist())]
+    table = pd.DataFrame(rows, columns=["frame", "bb_left", "bb_top", "bb_width", "bb_height",
+                                        "conf", "class"])
+    table.to_csv(path, index=False)
+    return table
+
+
+def _canonical(table):
+    """A results table's rows sorted by frame and box, each track renumbered by its first
+    row in that order: equal for the same tracks under other identities."""
+    t = table.sort_values(["frame", "bb_left", "bb_top", "bb_width", "bb_height"],
+                          kind="stable").reset_index(drop=True)
+    first = {}
+    ids = [first.setdefault(i, len(first) + 1) for i in t["particle"].tolist()]
+    return np.c_[t["frame"], ids, t[["bb_left", "bb_top", "bb_width", "bb_height", "conf"]]]
+
+
+@pytest.mark.parametrize("offline", [False, True], ids=["online", "offline"])
+def test_a_file_of_two_classes_tracks_each_class_as_tracked_alone(tmp_path, offline):
+    """A detector of two classes, each scored on a scale of its own (PointRCNN's cars from
+    −1 to 16, its pedestrians mostly below 1): one calibration over both rated the class of
+    lower scores as clutter (KITTI-0001's pedestrians, tracked in one file with its cars:
+    24.2 HOTA online against 49.5 alone). Each class is calibrated apart now, so with the
+    camera still (its motion is estimated from every track) the tracks of each class are
+    those of its detections tracked alone, boxes and confidences alike, up to identities."""
+    import pandas as pd
+
+    from vistrack.config import TrackConfig
+    from vistrack.pipeline import track_sequence
+
+    _, cars = scene(np.random.default_rng(21), clutter=3.0)
+    _, people = scene(np.random.default_rng(22), clutter=3.0, height=(20, 50))
+    assert all(len(d) for d in cars) and all(len(d) for d in people)  # no frame empty alone
+    tables = [_class_file(tmp_path / "cars.csv", cars, lambda s: 16 * s - 1, 2),
+              _class_file(tmp_path / "people.csv", people, lambda s: s ** 3 / 2, 0)]
+    pd.concat(tables).sort_values("frame", kind="stable").to_csv(tmp_path / "both.csv",
+                                                                  index=False)
+    cfg = TrackConfig.preset("bytetrack").with_values(
+        tracker={"camera_motion": False}, offline={"enabled": offline})
+    # the image's size given (a file alone is as large as its boxes reach, the two classes'
+    # together further than each one's)
+    (tmp_path / "seqinfo.ini").write_text("[Sequence]\nname=SCENE\nframeRate=25\n"
+                                          "seqLength=150\nimWidth=1000\nimHeight=1000\n")
+    out = {}
+    for name in ("cars", "people", "both"):
+        track_sequence(tmp_path, tmp_path / f"{name}-out.csv", config=cfg,
+                       detections=tmp_path / f"{name}.csv")
+        out[name] = pd.read_csv(tmp_path / f"{name}-out.csv")
+    both = out["both"]
+    for name, cls in (("cars", 2), ("people", 0)):
+        alone = _canonical(out[name])
+        assert len(alone) > 300
+        np.testing.assert_array_equal(_canonical(both[both["class"] == cls]), alone)
+
+
+def test_several_classes_name_the_calibration_each_has():
+    """With detections of several classes, a calibration is each class's: asking for the
+    tracker's one calibration, its one learner or the confidence of scores without their
+    classes says so, naming the classes."""
+    tr = BoxTracker()
+    d = Detections.from_xywh([[0, 0, 9, 9], [50, 0, 9, 9]], [0.9, 0.2], classes=[2, 0])
+    tr.step(1, d)
+    for call in (lambda: tr.score_calibration(), lambda: tr.calibrator,
+                 lambda: tr.confidence([0.5])):
+        with pytest.raises(ValueError, match=r"classes \[0, 2\] has a calibrat"):
+            call()
+    assert sorted(tr.score_calibrations()) == [0, 2]
+    # each class's confidences by its own map: the ranks of its own scores so far
+    np.testing.assert_array_equal(tr.confidence([0.9, 0.2], [2, 0]), [1.0, 1.0])
+    with pytest.raises(ValueError, match="classes must have one per score; got 1 classes "
+                                         "for 2 scores"):
+        tr.confidence([0.9, 0.2], [2])

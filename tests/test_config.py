@@ -634,3 +634,36 @@ def test_offline_scores_on_raw_scores_below_zero_track_as_shifted_ones(seq, tmp_
     assert out["as"] == out["shifted"] and len(out["as"]) > 500
     with pytest.raises(ValueError, match=r"min_track_score must be in \[0, 1\] \(a calibrated"):
         TrackConfig().with_values(offline={"min_track_score": -0.5})
+
+
+def test_print_config_of_two_classes_gives_each_class_its_thresholds_raw_scores(tmp_path,
+                                                                              capsys):
+    """With detections of two classes, each calibrated apart, ``--print-config`` gives the
+    raw score of each threshold for each class, as TOML tables by class; read back, the
+    file tracks identically."""
+    import pandas as pd
+
+    from vistrack.cli import main
+    from vistrack.config import _toml_loads
+
+    from .test_calibration import _class_file
+
+    _, cars = scene(np.random.default_rng(21), clutter=3.0)
+    _, people = scene(np.random.default_rng(22), clutter=3.0, height=(20, 50))
+    both = tmp_path / "both.csv"
+    pd.concat([_class_file(tmp_path / "c.csv", cars, lambda s: 16 * s - 1, 2),
+               _class_file(tmp_path / "p.csv", people, lambda s: s ** 3 / 2, 0)]).to_csv(
+        both, index=False)
+    assert main(["track", str(both), "--fps", "25", "--out", str(tmp_path / "a.csv"),
+                 "--print-config"]) == 0
+    text = capsys.readouterr().out
+    derived = _toml_loads(text)["derived"]
+    assert sorted(derived["high_score"]) == ["0", "2"]
+    # each class's threshold on its own scale: the cars' raw scores run from -1 to 15, the
+    # people's from 0 to 0.5
+    assert 0 < derived["high_score"]["0"] <= 0.5 < derived["high_score"]["2"] <= 15
+    assert derived["calibration_outcomes"]["0"] > 0 and derived["calibration_outcomes"]["2"] > 0
+    (tmp_path / "used.toml").write_text(text)
+    assert main(["track", str(both), "--fps", "25", "--out", str(tmp_path / "b.csv"),
+                 "--config", str(tmp_path / "used.toml")]) == 0
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()

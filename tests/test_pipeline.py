@@ -794,9 +794,10 @@ def test_a_detections_file_of_several_classes_is_tracked_class_by_class(tmp_path
     with pytest.warns(UserWarning) as got:
         run_ = track_sequence(mixed, tmp_path / "mixed-out.txt", fps=10, scores="raw")
     assert [str(w.message) for w in got] == [
-        f"{mixed}: detections of 2 classes (1, 2): each class is tracked apart, no track "
-        "taking another's detections, but a MOTChallenge results file has no class column "
-        "(a Parquet results file and tracks.csv have one)"]
+        f"{mixed}: detections of 2 classes (1, 2): each class is tracked apart, its scores "
+        "calibrated on their own, no track taking another's detections; "
+        f"{tmp_path / 'mixed-out.txt'}, MOTChallenge's text, has no class column (a .csv or "
+        ".parquet results file has one)"]
     out = read_mot(run_.out)
     before = set(out.ids[out.frames <= 10].tolist())
     after = set(out.ids[out.frames >= 12].tolist())
@@ -1136,9 +1137,11 @@ def test_a_parquet_results_file_carries_each_tracks_class(tmp_path):
                  columns=["frame", "id", "bb_left", "bb_top", "bb_width", "bb_height", "conf",
                           "class"]).astype(float).to_csv(det, index=False)
     for offline in (False, True):
-        with pytest.warns(UserWarning, match="detections of 2 classes"):
+        with pytest.warns(UserWarning, match="detections of 2 classes") as said:
             run_ = track_sequence(det, tmp_path / f"out-{offline}.parquet", fps=10,
                                   scores="raw", offline=offline)
+        # (the results file has a class column: the warning says nothing of one missing)
+        assert not any("no class column" in str(w.message) for w in said)
         table = pd.read_parquet(run_.out)
         ids = table.groupby("class")["particle"].unique()  # the identity (trackpy's name)
         assert sorted(ids.index) == [3, 5] and all(len(v) == 1 for v in ids)

@@ -450,6 +450,8 @@ def _value(v: object, kind: str | None = None) -> str:
         return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_value(x) for x in v) + "]"
+    if isinstance(v, dict):  # an inline table, its keys quoted (a class's "0", "2")
+        return "{" + ", ".join(f"{_value(str(k))} = {_value(x)}" for k, x in v.items()) + "}"
     if isinstance(v, float):
         if math.isinf(v):
             return "inf" if v > 0 else "-inf"

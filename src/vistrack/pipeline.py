@@ -25,6 +25,7 @@ import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field, fields, replace
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -253,7 +254,9 @@ def derived_values(trk: BoxTracker) -> dict:
         or ``"online, at the last frame"``), ``calibration_outcomes``,
         ``calibration_top_persistence`` (when fitted to outcomes) and ``high_score``,
         ``low_score`` and ``new_track_score`` (for the threshold tracks started at: offline,
-        the offline mode's ``start_score`` where it is above ``new_track``).
+        the offline mode's ``start_score`` where it is above ``new_track``); where the
+        detections are of several classes, each class calibrated apart, these four are
+        dicts by class (the class as a string).
 
     Examples
     --------
@@ -266,15 +269,24 @@ def derived_values(trk: BoxTracker) -> dict:
     if trk.image_size is not None:
         out["image_size"] = [int(v) for v in trk.image_size]
     out.update({"std_pos_per_frame": float(m.std_pos), "std_vel_per_frame": float(m.std_vel)})
-    cal = trk.score_calibration()
-    if cal is not None:
+    maps = trk.score_calibrations()
+    if maps:
         out["calibration"] = "whole file" if trk.calibration is not None else \
             "online, at the last frame"
-        out["calibration_outcomes"] = cal.n
-        if cal.n:
-            out["calibration_top_persistence"] = round(cal.top_persistence, 6)
+
+        def each(value: Callable[[ScoreCalibration], Any], fitted: bool = False) -> Any:
+            # one class: its value; several: a dict by class
+            got = {str(k): value(cal) for k, cal in sorted(maps.items())
+                   if cal.n or not fitted}
+            return next(iter(got.values())) if len(maps) == 1 else got
+
+        out["calibration_outcomes"] = each(lambda cal: cal.n)
+        if any(cal.n for cal in maps.values()):
+            out["calibration_top_persistence"] = each(
+                lambda cal: round(cal.top_persistence, 6), fitted=True)
         for name in ("high", "low", "new_track"):
-            out[f"{name}_score"] = cal.score_at(getattr(c, name))
+            out[f"{name}_score"] = each(partial(ScoreCalibration.score_at,
+                                                level=getattr(c, name)))
     return out
 
 
@@ -326,19 +338,24 @@ def calibration_warning(trk: BoxTracker, name: str) -> str | None:
     SEQ: every detection counts as confident ...
     """
     c = trk.config
-    cal = trk.score_calibration()
-    if c.scores != "calibrated" or cal is None or cal.n == 0 or len(cal.scores) < 2:
+    if c.scores != "calibrated":
         return None
-    if cal.confidence[0] < c.high or cal.top_persistence >= 0.5:
-        return None
-    what = ("confident enough to start a track" if cal.confidence[0] >= c.new_track else
-            "confident (the first association stage takes them all)")
-    return (f"{name}: every detection counts as {what}: the score "
-            f"calibration finds the least confident persisting from frame to frame nearly as "
-            f"often as the most confident, which persist at a rate of "
-            f"{cal.top_persistence:.2f} at {trk.frame_rate:.3g} frames/s; thresholds on the "
-            f"scores themselves may track better (--scores raw with --high, --low and "
-            f"--new-track)")
+    maps = trk.score_calibrations()
+    for k, cal in sorted(maps.items()):
+        if cal.n == 0 or len(cal.scores) < 2:
+            continue
+        if cal.confidence[0] < c.high or cal.top_persistence >= 0.5:
+            continue
+        what = ("confident enough to start a track" if cal.confidence[0] >= c.new_track else
+                "confident (the first association stage takes them all)")
+        which = f" of class {k}" if len(maps) > 1 else ""
+        return (f"{name}: every detection{which} counts as {what}: the score "
+                f"calibration finds the least confident persisting from frame to frame nearly "
+                f"as often as the most confident, which persist at a rate of "
+                f"{cal.top_persistence:.2f} at {trk.frame_rate:.3g} frames/s; thresholds on "
+                f"the scores themselves may track better (--scores raw with --high, --low and "
+                f"--new-track)")
+    return None
 
 
 # -------------------------------------------------------------------------------- the loop
@@ -999,10 +1016,12 @@ def _trajectory_plot(path: Path, name: str) -> Sink:
 
 
 def read_detections(path: str | Path, columns: dict[str, str] | None = None,
-                    stacklevel: int = 1) -> MOTTable:
+                    stacklevel: int = 1, *, classless: str | Path | None = None) -> MOTTable:
     """A detections file: MOTChallenge's format, or a ``.csv`` file with a header whose
     columns ``columns`` names (:meth:`~vistrack.io.MOTTable.from_pandas`); ``stacklevel``
-    is that of its warnings of boxes of no area and of classes, from the caller.
+    is that of its warnings of boxes of no area and of classes, from the caller;
+    ``classless``, a results file without a class column that the warning of several
+    classes then names.
 
     Raises
     ------
@@ -1015,7 +1034,8 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
         If the CSV file has no score column (``conf``, or the name ``columns`` gives it):
         every detection then scores 1. The warning names the columns not read, one of which
         may hold the scores under another name. If the file holds more than one class:
-        each is tracked apart, but a MOTChallenge results file has no class column.
+        each is tracked apart, its scores calibrated on their own (and ``classless`` has no
+        class column).
     RuntimeWarning
         If a box has zero width or height, naming the first one's line (its frame in a CSV
         file): such a box overlaps no other, so no track can follow it.
@@ -1064,7 +1084,8 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
                       "not used, and each row is tracked as a detection scoring its conf",
                       UserWarning, stacklevel=stacklevel + 1)
     warn_no_area(table, path, stacklevel + 1)
-    warn_classes(table, path, stacklevel + 1)
+    warn_classes(table, path, stacklevel + 1,
+                 None if classless is None else Path(classless))
     return in_own_order(table)
 
 
@@ -1369,7 +1390,9 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
                 raise ValueError(f"--out {out} is the sequence's {what}: the results would "
                                  "overwrite it; give another --out")
     # the warnings' stacklevels (here and in _check_detections) name track_sequence's caller
-    dets = read_detections(det_path, columns, stacklevel=3)
+    dets = read_detections(det_path, columns, stacklevel=3,
+                           classless=None if out.suffix.lower() in (".csv", ".parquet")
+                           else out)
     if info is None:
         assert fps is not None  # refused above without seqinfo.ini
         if len(dets) and dets.frames.max() > MAX_FRAMES:
@@ -1443,15 +1466,29 @@ def _timed(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> tuple[Any, floa
     return result, (time.perf_counter() - t0) - (_compile.seconds() - c0)
 
 
-def _whole_file_calibration(frames: Iterable[Detections], tc: BoxTrackerConfig,
-                            rate: float) -> ScoreCalibration | None:
-    """The score calibration fitted to every frame's detections (offline); None where no
-    detection is seen to persist or not (no detections, or all on one frame): nothing to
-    fit, so the tracker calibrates as it goes, as online."""
-    try:
-        return ScoreCalibration.from_frames(frames, **tc.calibration_options(rate))
-    except NoOutcomesError:
-        return None
+def _whole_file_calibration(frames: Iterable[Detections], tc: BoxTrackerConfig, rate: float
+                            ) -> ScoreCalibration | dict[int, ScoreCalibration] | None:
+    """The score calibration fitted to every frame's detections (offline), or, where they
+    are of several classes, one fitted to each class's detections alone, by class (a class
+    with nothing to fit left out). None where no detection is seen to persist or not (no
+    detections, or all on one frame): nothing to fit, so the tracker calibrates as it goes,
+    as online (a class left out, the same)."""
+    frames = list(frames)
+    classes = np.unique(np.concatenate([d.classes for d in frames] or [np.zeros(0)]))
+    options = tc.calibration_options(rate)
+    if len(classes) <= 1:
+        try:
+            return ScoreCalibration.from_frames(frames, **options)
+        except NoOutcomesError:
+            return None
+    out = {}
+    for k in classes.tolist():
+        try:
+            out[int(k)] = ScoreCalibration.from_frames(
+                [d[d.classes == k] for d in frames], **options)
+        except NoOutcomesError:
+            pass
+    return out or None
 
 
 def _write_smoothed(sm: SmoothedTracks, text: Path, decimals: int, first: int, stride: int,

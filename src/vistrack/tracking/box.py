@@ -6,7 +6,9 @@ One step, as on the slides (predict, associate, correct, manage):
    the detection's calibrated confidence in ``[0, 1]``, not to its raw score: how nearly
    detections of that score persist from frame to frame, and lie on chains of detections
    that last, as the detector's most confident ones do, learnt online from the frames seen
-   so far, or fitted to the whole file beforehand (:mod:`vistrack.tracking.calibration`).
+   so far, or fitted to the whole file beforehand (:mod:`vistrack.tracking.calibration`);
+   each class of detection from its own detections, so that a detector scoring two classes
+   on scales of their own has each tracked as in a file of its own.
    It depends on the order of the scores only, so one setting serves a detector
    thresholded at 0.5, one whose raw scores run from −1 to 16, and any strictly increasing
    transform of either, identically;
@@ -499,6 +501,12 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, q, r, settings, shift):
     return match, used, moved, True
 
 
+def _nothing_seen() -> ScoreCalibration:
+    """The calibration of a class with no detection seen: nothing to tell apart, confidence 1
+    for every score (as a :class:`ScoreCalibrator` gives before it has seen any)."""
+    return ScoreCalibration([0.0], [1.0])
+
+
 class BoxTracker:
     """A multi-object box tracker (see the module for the algorithm).
 
@@ -519,11 +527,15 @@ class BoxTracker:
         Keep every frame's filtered states and detections, for
         :func:`vistrack.tracking.offline.smooth` (the offline mode); memory then grows with the
         sequence.
-    calibration : ScoreCalibration, optional
+    calibration : ScoreCalibration or dict, optional
         With calibrated scores (``config.scores``), a fixed map from scores to confidences,
         such as one fitted to the whole sequence beforehand
         (:meth:`~vistrack.tracking.calibration.ScoreCalibration.from_frames`, the offline
-        mode); without it the tracker learns the map online from the frames it has seen.
+        mode), for every class; or a dict of such maps by detection class, each for its
+        class. Without one for a class, the tracker learns that class's map online from the
+        frames it has seen. Each class has a map of its own: a detector of people and cars
+        may score each on a scale of its own (PointRCNN's cars from −1 to 16, its
+        pedestrians mostly below 1), and tracking a file of both is then tracking each alone.
     compiled : bool
         Predict, associate and correct in one compiled call when the configuration allows it
         (``assigner="gnn"``); the results equal the numpy steps', which run otherwise.
@@ -564,9 +576,11 @@ class BoxTracker:
             raise TypeError(f"{unknown[0]} is no setting of BoxTrackerConfig"
                             + (f" (did you mean {near[0]!r}?)" if near else ""))
         self.config = replace(config, **overrides) if overrides else config
-        if calibration is not None and not isinstance(calibration, ScoreCalibration):
-            raise TypeError(f"calibration must be a ScoreCalibration; got "
-                            f"{type(calibration).__name__}")
+        if calibration is not None and not isinstance(calibration, ScoreCalibration) and not (
+                isinstance(calibration, dict) and all(
+                    isinstance(v, ScoreCalibration) for v in calibration.values())):
+            raise TypeError(f"calibration must be a ScoreCalibration, or a dict of them by "
+                            f"class; got {type(calibration).__name__}")
         if calibration is not None and self.config.scores != "calibrated":
             raise ValueError("calibration goes with scores='calibrated'")
         self.calibration = calibration
@@ -598,11 +612,10 @@ class BoxTracker:
     def reset(self) -> None:
         """Forget every track (and what the online score calibration learnt); identities
         start again from 1."""
-        c = self.config
-        self.calibrator = (ScoreCalibrator(prior=c.calibration_prior,
-                                           window=c.calibration_window or None,
-                                           **c.calibration_options(self.frame_rate))
-                           if c.scores == "calibrated" and self.calibration is None else None)
+        # the online calibration: a learner for each class without a fixed map, made when
+        # the class is first seen, in that order
+        self.calibrators: dict[int, ScoreCalibrator] = {}
+        self._observed = 0  # frames shown to the calibrators (a new one is shown as many)
         self.tracks.reset()
         self.frame: int | None = None
         self._passed = 0  # frames passed over since the last step (pass_over)
@@ -632,14 +645,105 @@ class BoxTracker:
         offset[:, :2] = self._moved[idx, None] * self.camera_shift
         t.mean[idx], t.cov[idx] = axes_update(t.mean[idx], t.cov[idx], z, self._r[idx], offset)
 
-    def score_calibration(self) -> ScoreCalibration | None:
-        """The calibration in use.
+    def _learns(self, k: int) -> bool:
+        """Whether class ``k``'s map is learnt online (calibrated scores, no fixed map)."""
+        cal = self.calibration
+        return self.config.scores == "calibrated" and (
+            cal is None or (isinstance(cal, dict) and k not in cal))
+
+    def _new_calibrator(self) -> ScoreCalibrator:
+        c = self.config
+        cal = ScoreCalibrator(prior=c.calibration_prior, window=c.calibration_window or None,
+                              **c.calibration_options(self.frame_rate))
+        nothing = Detections(boxes=np.zeros((0, 4)))
+        for _ in range(self._observed):  # the frames before the class was first seen held
+            cal.observe(nothing)        # none of it, as in a file of that class alone
+        return cal
+
+    def _observe(self, detections: Detections) -> None:
+        """Show one frame to the online calibration: each class's detections to its own
+        learner (the frame as it is where it holds one class, or none)."""
+        if self.config.scores != "calibrated" or isinstance(self.calibration, ScoreCalibration):
+            return
+        dc = detections.classes
+        assert dc is not None  # set by Detections.__post_init__
+        seen = np.unique(dc).tolist() if len(dc) else []
+        for k in seen:
+            if k not in self.calibrators and self._learns(k):
+                self.calibrators[k] = self._new_calibrator()
+        for k, cal in self.calibrators.items():
+            cal.observe(detections if seen == [k] or not seen else detections[dc == k])
+        self._observed += 1
+
+    @property
+    def calibrator(self) -> ScoreCalibrator | None:
+        """The online calibration's learner, where the detections seen so far are of one
+        class or none (a new one before any); None with raw scores or a fixed calibration.
+
+        Raises
+        ------
+        ValueError
+            If several classes have been seen: each has its own, in :attr:`calibrators`.
+
+        Examples
+        --------
+        >>> BoxTracker().calibrator.window, BoxTracker(scores="raw").calibrator
+        (20000, None)
+        """
+        if self.config.scores != "calibrated" or isinstance(self.calibration, ScoreCalibration):
+            return None
+        if len(self.calibrators) > 1:
+            raise ValueError(f"each of the classes {sorted(self.calibrators)} has a calibrator "
+                             "of its own: calibrators[class]")
+        if self.calibrators:
+            return next(iter(self.calibrators.values()))
+        return None if self.calibration else self._new_calibrator()
+
+    def score_calibrations(self) -> dict[int, ScoreCalibration]:
+        """The calibration of each class seen (or given a fixed map), by class.
+
+        Returns
+        -------
+        dict
+            Class to :class:`~vistrack.tracking.calibration.ScoreCalibration`: the fixed one,
+            or what the tracker has learnt so far; ``{}`` with raw scores, and with one fixed
+            map for every class, ``{-1: map}`` (for whichever class).
+
+        Examples
+        --------
+        >>> tr = BoxTracker()
+        >>> _ = tr.step(1, Detections.from_xywh([[0, 0, 9, 9], [50, 0, 9, 9]], [0.9, 0.2],
+        ...                                     classes=[2, 0]))
+        >>> sorted(tr.score_calibrations())
+        [0, 2]
+        """
+        if self.config.scores == "raw":
+            return {}
+        if isinstance(self.calibration, ScoreCalibration):
+            return {-1: self.calibration}
+        out: dict[int, ScoreCalibration] = dict(self.calibration or {})
+        out.update((k, cal.calibration()) for k, cal in self.calibrators.items())
+        return out
+
+    def score_calibration(self, cls: int | None = None) -> ScoreCalibration | None:
+        """The calibration in use for the detections of class ``cls``.
+
+        Parameters
+        ----------
+        cls : int, optional
+            A detection class; may be left out where one class has been seen (or none).
 
         Returns
         -------
         ScoreCalibration or None
             The fixed one (``calibration``), or what the tracker has learnt from the frames
-            so far; None with ``scores="raw"``.
+            so far (for a class not seen yet, confidence 1 for every score); None with
+            ``scores="raw"``.
+
+        Raises
+        ------
+        ValueError
+            If ``cls`` is left out where several classes have been seen.
 
         Examples
         --------
@@ -648,18 +752,26 @@ class BoxTracker:
         """
         if self.config.scores == "raw":
             return None
-        if self.calibration is not None:
+        if isinstance(self.calibration, ScoreCalibration):
             return self.calibration
-        assert self.calibrator is not None  # reset makes one for scores="calibrated"
-        return self.calibrator.calibration()
+        maps = self.score_calibrations()
+        if cls is None:
+            if len(maps) > 1:
+                raise ValueError(f"each of the classes {sorted(maps)} has a calibration of its "
+                                 "own: give cls")
+            return next(iter(maps.values())) if maps else _nothing_seen()
+        return maps[cls] if cls in maps else _nothing_seen()
 
-    def confidence(self, scores: ArrayLike) -> np.ndarray:
+    def confidence(self, scores: ArrayLike, classes: ArrayLike | None = None) -> np.ndarray:
         """Scores as the thresholds see them.
 
         Parameters
         ----------
         scores : (N,) array_like
             Raw detection scores.
+        classes : (N,) array_like, optional
+            Their classes, each calibrated by its own class's map (may be left out where one
+            class has been seen).
 
         Returns
         -------
@@ -667,13 +779,37 @@ class BoxTracker:
             Calibrated confidences in ``[0, 1]`` (by :meth:`score_calibration`), or the raw
             scores with ``scores="raw"``.
 
+        Raises
+        ------
+        ValueError
+            If ``classes`` is left out where several classes have been seen, or differs from
+            ``scores`` in length.
+
         Examples
         --------
         >>> BoxTracker(scores="raw").confidence([0.2, 3.0]).tolist()
         [0.2, 3.0]
         """
-        cal = self.score_calibration()
-        return np.asarray(scores, dtype=np.float64) if cal is None else cal(scores)
+        if self.config.scores == "raw":
+            return np.asarray(scores, dtype=np.float64)
+        if classes is None or isinstance(self.calibration, ScoreCalibration):
+            cal = self.score_calibration()
+            assert cal is not None
+            return cal(scores)
+        s = np.asarray(scores, dtype=np.float64).reshape(-1)
+        c = np.asarray(classes).reshape(-1)
+        if c.shape != s.shape:
+            raise ValueError(f"classes must have one per score; got {c.shape[0]} classes for "
+                             f"{s.shape[0]} scores")
+        # every class's map, each refitted as it would be tracked alone (once a frame)
+        maps = self.score_calibrations()
+        kinds = np.unique(c).tolist()
+        if len(kinds) == 1:
+            return (maps[kinds[0]] if kinds[0] in maps else _nothing_seen())(s)
+        out = np.empty(s.shape)
+        for k in kinds:
+            out[c == k] = (maps[k] if k in maps else _nothing_seen())(s[c == k])
+        return out
 
     def covariances(self) -> np.ndarray:
         """The tracks' full covariances, from the per-axis ones kept
@@ -716,8 +852,7 @@ class BoxTracker:
         >>> tr.step(4, two(22)).ids.tolist()
         [1, 2]
         """
-        if self.calibrator is not None:
-            self.calibrator.observe(Detections(boxes=np.zeros((0, 4))))
+        self._observe(Detections(boxes=np.zeros((0, 4))))
         if self.frame is not None:  # step(None) next is the frame after this one
             self._passed += 1
 
@@ -941,9 +1076,8 @@ class BoxTracker:
             if not keep.all():
                 detections = detections[keep]
                 db, raw, dc = db[keep], raw[keep], dc[keep]
-        if self.calibrator is not None:
-            self.calibrator.observe(detections)
-        ds = self.confidence(raw)
+        self._observe(detections)
+        ds = self.confidence(raw, dc)
         if cfg.scores == "raw" and cfg.fuse_score and len(ds) and not (
                 (ds >= 0) & (ds <= 1)).all():
             raise ValueError(f"fuse_score weighs IoU by the score, which must lie in [0, 1]; "

@@ -282,7 +282,7 @@ def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[
     best = -np.inf  # the highest mean confidence of a track dropped
     for a, b in zip(np.r_[0, edges], np.r_[edges, len(ids)]):
         u = np.flatnonzero(upd[a:b])
-        mean_conf = float(tracker.confidence(score[a:b][u]).mean())
+        mean_conf = float(tracker.confidence(score[a:b][u], cls[a:b][u]).mean())
         if mean_conf < min_score:
             best = max(best, mean_conf)
             continue
