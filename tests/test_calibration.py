@@ -698,3 +698,54 @@ def test_several_classes_name_the_calibration_each_has():
     with pytest.raises(ValueError, match="classes must have one per score; got 1 classes "
                                          "for 2 scores"):
         tr.confidence([0.9, 0.2], [2])
+
+
+@pytest.mark.parametrize("chain_span", [0.0, 0.3])
+def test_frames_without_detections_passed_over_quickly_leave_the_state_as_the_full_step(
+        monkeypatch, chain_span):
+    """A frame without detections after another, with no chain open, is passed over
+    without the compiled step (a class's calibration sees most frames empty in a file of
+    many classes): after every frame, the outcomes, the map and every array of the state
+    equal those of the full step, over runs of frames with and without detections."""
+    import vistrack.tracking.calibration as calibration
+
+    rng = np.random.default_rng(4)
+    frames = []
+    for f in range(400):
+        n = 0 if (f // 23) % 3 == 1 or rng.random() < 0.2 else rng.integers(1, 6)
+        xy = rng.uniform(0, 200, (n, 2)) if f % 2 else np.full((n, 2), 50.0) + f * 0.5
+        frames.append(Detections(boxes=np.c_[xy, xy + 30], scores=rng.random(n)))
+    cals = {}
+    for quiet in (True, False):
+        monkeypatch.setattr(calibration, "_QUIET", quiet)
+        cal = ScoreCalibrator(frame_rate=10.0, chain_span=chain_span, chain_gap=0.2)
+        states = []
+        for d in frames:
+            cal.observe(d)
+            m = cal.calibration()
+            states.append((cal.outcomes(), m.scores, m.confidence, cal._t, cal._frames,
+                           cal._head_box, cal._first, cal._state, cal._open_s, cal._shift,
+                           cal._prev[0], cal._prev[4]))
+        cals[quiet] = states
+    for a, b in zip(cals[True], cals[False]):
+        for x, y in zip(a, b):
+            if isinstance(x, tuple):
+                for u, v in zip(x, y):
+                    np.testing.assert_array_equal(u, v)
+            else:
+                np.testing.assert_array_equal(x, y)
+    # the quick way was taken: runs of empty frames after the chains ended
+    monkeypatch.setattr(calibration, "_QUIET", True)
+    seen = []
+    real = calibration._observe
+
+    def counted(*a):
+        seen.append(1)
+        return real(*a)
+
+    monkeypatch.setattr(calibration, "_observe", counted)
+    cal = ScoreCalibrator(frame_rate=10.0, chain_span=chain_span, chain_gap=0.2)
+    for d in frames:
+        cal.observe(d)
+    quick = len(frames) - len(seen)
+    assert quick > 50

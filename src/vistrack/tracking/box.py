@@ -501,6 +501,20 @@ def _associate(mean, cov, state, tclass, db, ds, dc, dt, q, r, settings, shift):
     return match, used, moved, True
 
 
+_NOTHING = Detections(boxes=np.zeros((0, 4)))
+"""A frame without detections, shown to a class's calibration where the frame holds none of
+that class (never changed)."""
+
+
+def _kinds(classes: np.ndarray) -> list:
+    """The distinct classes, increasing (one compare where there is one: the usual file)."""
+    if not len(classes):
+        return []
+    if (classes == classes[0]).all():
+        return [classes[0].item()]
+    return np.unique(classes).tolist()
+
+
 def _nothing_seen() -> ScoreCalibration:
     """The calibration of a class with no detection seen: nothing to tell apart, confidence 1
     for every score (as a :class:`ScoreCalibrator` gives before it has seen any)."""
@@ -655,9 +669,8 @@ class BoxTracker:
         c = self.config
         cal = ScoreCalibrator(prior=c.calibration_prior, window=c.calibration_window or None,
                               **c.calibration_options(self.frame_rate))
-        nothing = Detections(boxes=np.zeros((0, 4)))
         for _ in range(self._observed):  # the frames before the class was first seen held
-            cal.observe(nothing)        # none of it, as in a file of that class alone
+            cal.observe(_NOTHING)       # none of it, as in a file of that class alone
         return cal
 
     def _observe(self, detections: Detections) -> None:
@@ -667,12 +680,23 @@ class BoxTracker:
             return
         dc = detections.classes
         assert dc is not None  # set by Detections.__post_init__
-        seen = np.unique(dc).tolist() if len(dc) else []
+        if len(self.calibrators) == 1 and self.calibration is None:
+            (k, learner), = self.calibrators.items()
+            if not len(dc) or (dc == k).all():  # the one class seen so far (the usual file)
+                learner.observe(detections)
+                self._observed += 1
+                return
+        seen = _kinds(dc)
         for k in seen:
             if k not in self.calibrators and self._learns(k):
                 self.calibrators[k] = self._new_calibrator()
         for k, cal in self.calibrators.items():
-            cal.observe(detections if seen == [k] or not seen else detections[dc == k])
+            if seen == [k]:
+                cal.observe(detections)
+            elif k in seen:
+                cal.observe(detections[dc == k])
+            else:  # (one empty frame for every class the frame holds none of)
+                cal.observe(_NOTHING)
         self._observed += 1
 
     @property
@@ -803,7 +827,7 @@ class BoxTracker:
                              f"{s.shape[0]} scores")
         # every class's map, each refitted as it would be tracked alone (once a frame)
         maps = self.score_calibrations()
-        kinds = np.unique(c).tolist()
+        kinds = _kinds(c)
         if len(kinds) == 1:
             return (maps[kinds[0]] if kinds[0] in maps else _nothing_seen())(s)
         out = np.empty(s.shape)
@@ -1077,7 +1101,12 @@ class BoxTracker:
                 detections = detections[keep]
                 db, raw, dc = db[keep], raw[keep], dc[keep]
         self._observe(detections)
-        ds = self.confidence(raw, dc)
+        if len(self.calibrators) == 1 and self.calibration is None:
+            # one class seen, its map learnt online (the usual file; a frame of another class
+            # would have made another), as confidence() gives it
+            ds = next(iter(self.calibrators.values())).calibration()(raw)
+        else:
+            ds = self.confidence(raw, dc)
         if cfg.scores == "raw" and cfg.fuse_score and len(ds) and not (
                 (ds >= 0) & (ds <= 1)).all():
             raise ValueError(f"fuse_score weighs IoU by the score, which must lie in [0, 1]; "

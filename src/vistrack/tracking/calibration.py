@@ -416,6 +416,12 @@ def _outcomes(frames: Iterable[Detections], **calibrator: Any) -> tuple[np.ndarr
     return cal.outcomes()
 
 
+_QUIET = True
+"""Whether :meth:`ScoreCalibrator.observe` passes over a frame without detections quickly
+where the one before held none and no chain is open (the same state as the full step; a
+test compares the two)."""
+
+
 class NoOutcomesError(ValueError):
     """No outcome to fit a calibration to: no scores at all, or, over a whole sequence, no
     detection that was seen to persist or not (:meth:`ScoreCalibration.from_frames`)."""
@@ -892,6 +898,19 @@ class ScoreCalibrator:
         else:
             pb, pc, ps, pl, prev_first = self._prev
         chains = self.chain_span > 0
+        if _QUIET and not len(s) and not len(pb) and self._prev is not None and not (
+                len(self._head_box) or len(self._open_s)):
+            # a frame without detections after another, no chain open: nothing to link,
+            # resolve or end (the chains' table, every chain in it ended, is as the step
+            # before left it), only the time goes on (a detector of many classes shows each
+            # class's calibration every frame, most of them holding none of it)
+            if chains:
+                self._t += 1
+            self._prev = (boxes, cls, s, np.zeros(0, bool), False)
+            self._frames += 1
+            if self._hi > self._lo:
+                self._early = []
+            return
         (linked_fwd, linked_back, self._shift, self._head_box, self._head_cls, self._head_t,
          self._head_shift, self._head_chain, self._first, self._state, self._open_s,
          self._open_chain, out_s, out_p) = _observe(
