@@ -295,3 +295,24 @@ def test_identity_numbers_are_left_out_where_they_would_hide_the_frame():
     with_numbers = Annotator(labels=True).draw(pal, sparse)
     np.testing.assert_array_equal(Annotator().draw(pal, sparse), with_numbers)
     assert (with_numbers != Annotator(labels=False).draw(pal, sparse)).any()
+
+
+def test_identity_numbers_left_out_come_back_only_well_below_the_line():
+    """Near the line, frame by frame the count of tracks crosses it: the numbers came and
+    went. Once left out (the numbers would cover more than a tenth of the frame), they
+    come back only where they would cover a twentieth or less."""
+    rng = np.random.default_rng(8)
+    grey = np.full((424, 640, 3), 128, np.uint8)
+    sizes = [20, 100, 50, 100, 50, 20, 50]  # tracks a frame: numbers over 3 %, 15 %, 7 %
+
+    def numbered(ann, n):
+        t = _points(n, rng, 424, 640)
+        return not np.array_equal(ann.draw(grey, t), Annotator(labels=False).draw(grey, t))
+
+    ann = Annotator(trail=1)
+    got = [numbered(ann, n) for n in sizes]
+    # 50 tracks' numbers cover less than a tenth, more than a twentieth: drawn only while
+    # they were drawn in the frame before
+    fresh = Annotator(trail=1)
+    assert numbered(fresh, 50)
+    assert got == [True, False, False, False, False, True, True]

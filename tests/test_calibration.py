@@ -749,3 +749,21 @@ def test_frames_without_detections_passed_over_quickly_leave_the_state_as_the_fu
         cal.observe(d)
     quick = len(frames) - len(seen)
     assert quick > 50
+
+
+def test_the_calibrator_before_any_detection_is_the_first_classs():
+    """Before any detection the tracker's calibrator is one object, the one the first class
+    to come takes, shown every frame before (it was made anew at each access, and what was
+    done to it was lost); a fixed map by class must be keyed by the classes as integers
+    (``"2"``, as ``--print-config`` writes them, was never looked up)."""
+    tr = BoxTracker()
+    first = tr.calibrator
+    assert tr.calibrator is first
+    tr.step(1, Detections(boxes=np.zeros((0, 4))))
+    tr.step(2, Detections.from_xywh([[0, 0, 9, 9]], [0.9], classes=[2]))
+    assert tr.calibrator is first and tr.calibrators == {2: first}
+    cal = ScoreCalibration([0.0], [1.0])
+    with pytest.raises(TypeError, match="calibration's keys must be detection classes, "
+                                        "integers; got '2'"):
+        BoxTracker(calibration={"2": cal})
+    assert BoxTracker(calibration={np.int64(2): cal}).calibration == {2: cal}

@@ -794,8 +794,8 @@ def test_a_detections_file_of_several_classes_is_tracked_class_by_class(tmp_path
     with pytest.warns(UserWarning) as got:
         run_ = track_sequence(mixed, tmp_path / "mixed-out.txt", fps=10, scores="raw")
     assert [str(w.message) for w in got] == [
-        f"{mixed}: detections of 2 classes (1, 2): each class is tracked apart, its scores "
-        "calibrated on their own, no track taking another's detections; "
+        f"{mixed}: detections of 2 classes (1, 2): each class is tracked apart, no track "
+        "taking another's detections; "
         f"{tmp_path / 'mixed-out.txt'}, MOTChallenge's text, has no class column (a .csv or "
         ".parquet results file has one)"]
     out = read_mot(run_.out)

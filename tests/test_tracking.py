@@ -1110,3 +1110,37 @@ def test_a_frames_index_and_a_tracks_columns_are_checked():
         t.add(np.zeros((1, 2)), np.zeros((1, 2, 2)), 0.0, np.zeros(1), np.ones(1),
               confirmed=True)
     assert len(t.ids) == 0 and t.classes.dtype == np.int64
+
+
+def test_offline_tracks_are_followed_back_past_another_class_on_their_detections():
+    """Offline, a track is followed back through earlier detections of its class that no
+    reported box of its class covers: a box of another class over them (a person passing
+    a parked car, the person's detections weak until frame 20) took them out as if taken,
+    though no track takes another class's detections. The person's track is followed back
+    to frame 1 beside the car, as without it."""
+    from vistrack.tracking.offline import smooth
+
+    def frames(classes):
+        out = []
+        for f in range(1, 41):
+            boxes, scores, cls = [], [], []
+            if 2 in classes:  # a parked car, confident
+                boxes.append([100, 100, 160, 220]), scores.append(0.9), cls.append(2)
+            if 0 in classes:  # a person passing over it, weakly detected before frame 20
+                x = 100 + 0.5 * (40 - f)
+                boxes.append([x, 100, x + 60, 220]), scores.append(0.3 if f < 20 else 0.9)
+                cls.append(0)
+            out.append(Detections(boxes=np.array(boxes, float).reshape(-1, 4),
+                                  scores=np.array(scores), classes=np.array(cls)))
+        return out
+
+    def person(dets):
+        tr = BoxTracker("bytetrack", frame_rate=25, image_size=(1000, 1000),
+                        camera_motion=False, record=True, scores="raw")
+        for f, d in enumerate(dets, start=1):
+            tr.step(f, d)
+        sm = smooth(tr)
+        return sm.frames[sm.classes == 0].tolist()
+
+    assert person(frames({0})) == list(range(1, 41))
+    assert person(frames({0, 2})) == list(range(1, 41))

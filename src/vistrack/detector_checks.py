@@ -157,10 +157,10 @@ def warn_duplicates(dets: MOTTable, path: Path, stacklevel: int) -> None:
 def warn_classes(dets: MOTTable, path: Path, stacklevel: int,
                  classless: Path | None = None) -> None:
     """Warn that a detections file holds more than one class (the eighth value of a
-    MOTChallenge file's rows, a CSV file's ``class``): each is tracked apart, its scores
-    calibrated on their own; and where the results go to ``classless``, a MOTChallenge text
-    file, which has no class column, that it will not say which class a track is (a CSV or
-    Parquet results file and a video's ``tracks.csv`` do)."""
+    MOTChallenge file's rows, a CSV file's ``class``): each is tracked apart (with
+    calibrated scores, each class's calibrated on their own); and where the results go to
+    ``classless``, a MOTChallenge text file, which has no class column, that it will not say
+    which class a track is (a CSV or Parquet results file and a video's ``tracks.csv`` do)."""
     kinds = np.unique(dets.classes)
     if len(kinds) < 2:
         return
@@ -169,8 +169,8 @@ def warn_classes(dets: MOTTable, path: Path, stacklevel: int,
             f"; {classless}, MOTChallenge's text, has no class column (a .csv or .parquet "
             "results file has one)")
     warnings.warn(f"{path}: detections of {len(kinds)} classes ({shown}): each class is "
-                  "tracked apart, its scores calibrated on their own, no track taking "
-                  f"another's detections{lost}", UserWarning, stacklevel=stacklevel + 1)
+                  f"tracked apart, no track taking another's detections{lost}", UserWarning,
+                  stacklevel=stacklevel + 1)
 
 
 def detector_grid(frames: np.ndarray) -> tuple[int, int]:

@@ -273,6 +273,10 @@ def derived_values(trk: BoxTracker) -> dict:
     if maps:
         out["calibration"] = "whole file" if trk.calibration is not None else \
             "online, at the last frame"
+        if isinstance(trk.calibration, dict) and trk.calibrators:  # a class with nothing
+            # to fit in the whole file learnt online
+            online = ", ".join(str(k) for k in sorted(trk.calibrators))
+            out["calibration"] = f"whole file; online, at the last frame, for class {online}"
 
         def each(value: Callable[[ScoreCalibration], Any], fitted: bool = False) -> Any:
             # one class: its value; several: a dict by class
@@ -1034,8 +1038,7 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
         If the CSV file has no score column (``conf``, or the name ``columns`` gives it):
         every detection then scores 1. The warning names the columns not read, one of which
         may hold the scores under another name. If the file holds more than one class:
-        each is tracked apart, its scores calibrated on their own (and ``classless`` has no
-        class column).
+        each is tracked apart (and ``classless`` has no class column).
     RuntimeWarning
         If a box has zero width or height, naming the first one's line (its frame in a CSV
         file): such a box overlaps no other, so no track can follow it.

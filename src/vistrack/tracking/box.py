@@ -595,6 +595,13 @@ class BoxTracker:
                     isinstance(v, ScoreCalibration) for v in calibration.values())):
             raise TypeError(f"calibration must be a ScoreCalibration, or a dict of them by "
                             f"class; got {type(calibration).__name__}")
+        if isinstance(calibration, dict):
+            bad = [k for k in calibration if isinstance(k, (bool, np.bool_))
+                   or not isinstance(k, (int, np.integer))]
+            if bad:  # ("2", as --print-config writes the classes, was never looked up)
+                raise TypeError(f"calibration's keys must be detection classes, integers; "
+                                f"got {bad[0]!r}")
+            calibration = {int(k): v for k, v in calibration.items()}
         if calibration is not None and self.config.scores != "calibrated":
             raise ValueError("calibration goes with scores='calibrated'")
         self.calibration = calibration
@@ -627,9 +634,12 @@ class BoxTracker:
         """Forget every track (and what the online score calibration learnt); identities
         start again from 1."""
         # the online calibration: a learner for each class without a fixed map, made when
-        # the class is first seen, in that order
+        # the class is first seen, in that order; the first class's is made now (and shown
+        # the frames before it came, none of which held it), as the one calibrator was
         self.calibrators: dict[int, ScoreCalibrator] = {}
         self._observed = 0  # frames shown to the calibrators (a new one is shown as many)
+        self._unclaimed = (self._new_calibrator() if self.config.scores == "calibrated"
+                           and not isinstance(self.calibration, ScoreCalibration) else None)
         self.tracks.reset()
         self.frame: int | None = None
         self._passed = 0  # frames passed over since the last step (pass_over)
@@ -689,7 +699,10 @@ class BoxTracker:
         seen = _kinds(dc)
         for k in seen:
             if k not in self.calibrators and self._learns(k):
-                self.calibrators[k] = self._new_calibrator()
+                if self._unclaimed is not None:  # shown every frame so far, all without k
+                    self.calibrators[k], self._unclaimed = self._unclaimed, None
+                else:
+                    self.calibrators[k] = self._new_calibrator()
         for k, cal in self.calibrators.items():
             if seen == [k]:
                 cal.observe(detections)
@@ -697,12 +710,15 @@ class BoxTracker:
                 cal.observe(detections[dc == k])
             else:  # (one empty frame for every class the frame holds none of)
                 cal.observe(_NOTHING)
+        if self._unclaimed is not None:
+            self._unclaimed.observe(_NOTHING)
         self._observed += 1
 
     @property
     def calibrator(self) -> ScoreCalibrator | None:
         """The online calibration's learner, where the detections seen so far are of one
-        class or none (a new one before any); None with raw scores or a fixed calibration.
+        class or none (before any, the one the first class will take); None with raw scores
+        or one fixed calibration.
 
         Raises
         ------
@@ -721,7 +737,7 @@ class BoxTracker:
                              "of its own: calibrators[class]")
         if self.calibrators:
             return next(iter(self.calibrators.values()))
-        return None if self.calibration else self._new_calibrator()
+        return self._unclaimed
 
     def score_calibrations(self) -> dict[int, ScoreCalibration]:
         """The calibration of each class seen (or given a fixed map), by class.

@@ -334,16 +334,20 @@ def _extend_back(tracker: BoxTracker, tracks: list[_Track], cam: dict, min_iou: 
     filter from the smoothed first state, updated at each earlier frame by the free detection
     overlapping its prediction most (global nearest neighbour over the tracks being followed),
     until a frame has none. Free: of the track's class, scoring at least the tracker's
-    ``low``, and not overlapping a box already reported in that frame."""
+    ``low``, and not overlapping a box of its class already reported in that frame (another
+    class's track takes none of its detections, so in a file of several classes each is
+    followed back as in a file of its own)."""
     motion, low = tracker.motion, tracker.config.low
     frames = list(cam)  # the recorded frames, in order
     dets = {h[0]: h[10] for h in tracker.history}
     starts: dict[int, list[int]] = {}
     reported: dict[int, list[np.ndarray]] = {}
+    reported_cls: dict[int, list[int]] = {}
     for k, t in enumerate(tracks):
         starts.setdefault(t.first[0], []).append(k)
         for f, b in zip(t.frames.tolist(), t.boxes):
             reported.setdefault(f, []).append(b)
+            reported_cls.setdefault(f, []).append(t.cls)
     active = np.zeros(0, int)
     mean, cov = np.zeros((0, 8)), np.zeros((0, 4, 3))
     added: dict[int, list] = {}
@@ -357,7 +361,7 @@ def _extend_back(tracker: BoxTracker, tracks: list[_Track], cam: dict, min_iou: 
             free = conf >= low
             if f in reported and free.any():
                 r, c, _ = iou_pairs(db, np.array(reported[f]), _DUPLICATE_IOU)
-                free[r] = False
+                free[r[dc[r] == np.array(reported_cls[f])[c]]] = False
             rows, cols, ov = iou_pairs(_to_xyxy(pred), db, min_iou)
             ok = free[cols] & (dc[cols] == np.array([tracks[k].cls for k in active])[rows])
             r, c = gnn_sparse(rows[ok], cols[ok], 1.0 - ov[ok], (len(active), len(db)))

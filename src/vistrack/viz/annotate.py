@@ -94,9 +94,11 @@ class Annotator:
     nsigma : float
         Size of the covariance ellipse of a track's centre, in standard deviations.
     labels : bool, optional
-        Draw each track's identity beside it. Default: in a frame whose numbers would
-        cover at most a tenth of the image (``LABEL_COVER``); among hundreds of
-        particles in a microscope's frame they hid the image, and are left out.
+        Draw each track's identity beside it. Default: while the frame's numbers would
+        cover at most a tenth of the image (``LABEL_COVER``), and, once left out, again
+        only where they would cover a twentieth or less, so that they do not come and go
+        from frame to frame near the line; among hundreds of particles in a microscope's
+        frame they hid the image.
 
     Examples
     --------
@@ -112,6 +114,7 @@ class Annotator:
     def __init__(self, trail: int = 30, nsigma: float = 2.0, labels: bool | None = None):
         self.trail, self.nsigma = int(trail), float(nsigma)
         self.labels = labels
+        self._numbered = True  # (labels None) the numbers drawn in the last frame
         self._trails: dict[int, deque] = {}
         self._last: dict[int, int] = {}
         self._n = 0
@@ -202,9 +205,11 @@ class Annotator:
                 cv2.polylines(out, [pts], False, id_colour(i), thick, cv2.LINE_AA)
         font, scale = cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z
         sizes = [cv2.getTextSize(str(i), font, scale, thin) for i in ids.tolist()]
-        numbered = self.labels if self.labels is not None else sum(
-            (tw + 2 * thick) * (th + tb + 2 * thick) for (tw, th), tb in sizes
-        ) <= LABEL_COVER * H * W
+        numbered = self.labels
+        if numbered is None:
+            cover = sum((tw + 2 * thick) * (th + tb + 2 * thick) for (tw, th), tb in sizes)
+            line = LABEL_COVER if self._numbered else LABEL_COVER / 2
+            numbered = self._numbered = cover <= line * H * W
         for k, i in enumerate(ids.tolist()):
             c = id_colour(i)
             cx, cy = centres[k]
