@@ -488,6 +488,22 @@ class Tracks:
             raise ValueError("xywh needs box tracks; these tracks are points")
         return xyxy_to_xywh(self.boxes)
 
+    @property
+    def centers(self) -> np.ndarray:
+        """Box centres ``(K, 2)``, or the points ``(K, d)`` themselves (as
+        :attr:`Detections.centers`).
+
+        Examples
+        --------
+        >>> Tracks(ids=np.array([1]), boxes=np.array([[10.0, 20, 40, 60]]), points=None,
+        ...        scores=np.ones(1), classes=np.zeros(1)).centers.tolist()
+        [[25.0, 40.0]]
+        """
+        if self.boxes is None:
+            assert self.points is not None  # a tracker's tracks are boxes or points
+            return self.points
+        return 0.5 * (self.boxes[:, :2] + self.boxes[:, 2:])
+
 
 @dataclass(frozen=True)
 class Frame:

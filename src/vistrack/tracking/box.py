@@ -841,6 +841,10 @@ class BoxTracker:
         if c.shape != s.shape:
             raise ValueError(f"classes must have one per score; got {c.shape[0]} classes for "
                              f"{s.shape[0]} scores")
+        if len(self.calibrators) == 1 and self.calibration is None:
+            (k, learner), = self.calibrators.items()
+            if (c == k).all():  # the one class seen (the usual file): its map alone
+                return learner.calibration()(s)
         # every class's map, each refitted as it would be tracked alone (once a frame)
         maps = self.score_calibrations()
         kinds = _kinds(c)
@@ -892,7 +896,7 @@ class BoxTracker:
         >>> tr.step(4, two(22)).ids.tolist()
         [1, 2]
         """
-        self._observe(Detections(boxes=np.zeros((0, 4))))
+        self._observe(_NOTHING)
         if self.frame is not None:  # step(None) next is the frame after this one
             self._passed += 1
 
@@ -1117,12 +1121,7 @@ class BoxTracker:
                 detections = detections[keep]
                 db, raw, dc = db[keep], raw[keep], dc[keep]
         self._observe(detections)
-        if len(self.calibrators) == 1 and self.calibration is None:
-            # one class seen, its map learnt online (the usual file; a frame of another class
-            # would have made another), as confidence() gives it
-            ds = next(iter(self.calibrators.values())).calibration()(raw)
-        else:
-            ds = self.confidence(raw, dc)
+        ds = self.confidence(raw, dc)
         if cfg.scores == "raw" and cfg.fuse_score and len(ds) and not (
                 (ds >= 0) & (ds <= 1)).all():
             raise ValueError(f"fuse_score weighs IoU by the score, which must lie in [0, 1]; "

@@ -660,14 +660,9 @@ class TrajectoryPlot:
             self._first = frame.image
         self._frames += 1
         if len(tracks):
-            if tracks.boxes is not None:
-                xywh = tracks.xywh
-                centres = xywh[:, :2] + xywh[:, 2:] / 2
-            else:  # a point track's path is its points' (x, y)
-                centres = np.asarray(tracks.points, dtype=float)[:, :2]
             self._frame_of.add(np.full(len(tracks), int(frame.index)))
             self._id_of.add(np.asarray(tracks.ids).astype(int))
-            self._centres.add(centres)
+            self._centres.add(np.asarray(tracks.centers, dtype=float)[:, :2])
 
     def close(self) -> None:
         """Draw and save the figure.
