@@ -608,6 +608,37 @@ def test_the_warning_also_says_when_every_detection_is_confident_but_not_all_sta
     assert warning(0.55) is None and warning(0.65, top_persistence=0.5) is None
 
 
+def test_the_warning_names_every_class_it_holds_for():
+    """With a calibration for each class, every class whose detections all count as confident
+    is named, each with its own rate, in the order of the classes; a class whose calibration
+    tells its scores apart is not (only the first class was named before)."""
+    from vistrack.pipeline import calibration_warning
+
+    def cal(lowest, top_persistence):
+        return ScoreCalibration(np.array([0.1, 0.9]), np.array([lowest, 1.0]), n=100,
+                                top_persistence=top_persistence)
+
+    def warning(**by_class):
+        maps = {int(k[1:]): cal(*v) for k, v in by_class.items()}
+        return calibration_warning(BoxTracker("bytetrack", frame_rate=5.0, calibration=maps),
+                                   "SEQ")
+
+    both = warning(c7=(0.75, 0.2), c2=(0.65, 0.31), c0=(0.2, 0.1))
+    assert both == (
+        "SEQ: every detection of class 2 counts as confident (the first association stage "
+        "takes them all), its most confident persisting at a rate of 0.31; every detection of "
+        "class 7 counts as confident enough to start a track, its most confident persisting at "
+        "a rate of 0.20: the score calibration finds the least confident of each persisting "
+        "from frame to frame nearly as often as the most confident, at 5 frames/s; thresholds "
+        "on the scores themselves may track better (--scores raw with --high, --low and "
+        "--new-track)")
+    one = warning(c7=(0.75, 0.2), c0=(0.2, 0.1))
+    assert one.startswith("SEQ: every detection of class 7 counts as confident enough to "
+                          "start a track, its most confident persisting at a rate of 0.20: "
+                          "the score calibration finds the least confident of that class ")
+    assert warning(c7=(0.75, 0.6), c0=(0.2, 0.1)) is None
+
+
 @pytest.mark.parametrize("persisted", [[0, np.nan, 1], [0, 2, 1], [0, -1, 1]])
 def test_outcomes_outside_0_1_are_named(persisted):
     """An outcome is 0, 1 or a weight between: NaN and -1 failed with the fit's internal

@@ -327,9 +327,11 @@ def calibration_warning(trk: BoxTracker, name: str) -> str | None:
     Returns
     -------
     str or None
-        The message; None with raw scores, before the calibration has outcomes, when all
-        scores are equal (nothing to tell apart), when the lowest score stays under
-        ``high``, or when the most confident detections persist half the time or more.
+        The message, naming each class it holds for where the detections are of several
+        (each class has a calibration of its own); None with raw scores, before the
+        calibration has outcomes, when all scores are equal (nothing to tell apart), when the
+        lowest score stays under ``high``, or when the most confident detections persist half
+        the time or more.
 
     Examples
     --------
@@ -345,21 +347,30 @@ def calibration_warning(trk: BoxTracker, name: str) -> str | None:
     if c.scores != "calibrated":
         return None
     maps = trk.score_calibrations()
+    found = []  # (class, what it counts as, its most confident detections' persistence)
     for k, cal in sorted(maps.items()):
         if cal.n == 0 or len(cal.scores) < 2:
             continue
         if cal.confidence[0] < c.high or cal.top_persistence >= 0.5:
             continue
-        what = ("confident enough to start a track" if cal.confidence[0] >= c.new_track else
-                "confident (the first association stage takes them all)")
-        which = f" of class {k}" if len(maps) > 1 else ""
-        return (f"{name}: every detection{which} counts as {what}: the score "
-                f"calibration finds the least confident persisting from frame to frame nearly "
-                f"as often as the most confident, which persist at a rate of "
-                f"{cal.top_persistence:.2f} at {trk.frame_rate:.3g} frames/s; thresholds on "
-                f"the scores themselves may track better (--scores raw with --high, --low and "
-                f"--new-track)")
-    return None
+        found.append((k, "confident enough to start a track" if cal.confidence[0] >= c.new_track
+                      else "confident (the first association stage takes them all)",
+                      cal.top_persistence))
+    if not found:
+        return None
+    tail = (f" at {trk.frame_rate:.3g} frames/s; thresholds on the scores themselves may track "
+            f"better (--scores raw with --high, --low and --new-track)")
+    if len(maps) == 1:
+        _, what, rate = found[0]
+        return (f"{name}: every detection counts as {what}: the score calibration finds the "
+                f"least confident persisting from frame to frame nearly as often as the most "
+                f"confident, which persist at a rate of {rate:.2f}" + tail)
+    # every class it holds for, each with its own rate
+    each = "; ".join(f"every detection of class {k} counts as {what}, its most confident "
+                     f"persisting at a rate of {rate:.2f}" for k, what, rate in found)
+    return (f"{name}: {each}: the score calibration finds the least confident of "
+            f"{'that class' if len(found) == 1 else 'each'} persisting from frame to frame "
+            f"nearly as often as the most confident," + tail)
 
 
 # -------------------------------------------------------------------------------- the loop
