@@ -421,8 +421,12 @@ def test_sanity_warnings_of_unrelated_files(tmp_path):
     assert sanity_warnings(g, few) == [
         f"predictions and ground truth look unrelated: only 1 of the 11 boxes of {few.path} in "
         f"their 10 common frames overlap a box of {gt} by IoU >= 0.5"]
+    # no results at all: every ground-truth row is missed (nothing was said of it, and the
+    # zeros looked like scores); no ground truth at all: a sequence without objects
     empty = read_mot(_rows(tmp_path / "empty.txt", []))
-    assert sanity_warnings(g, empty) == [] and sanity_warnings(empty, far) == []
+    assert sanity_warnings(g, empty) == [
+        f"{empty.path} holds no rows: all 10 rows of {gt} count as missed (FN) or ignored"]
+    assert sanity_warnings(empty, far) == [] and sanity_warnings(empty, empty) == []
 
 
 def test_sanity_warnings_on_the_shared_files_and_a_chance_overlap(tmp_path):

@@ -71,7 +71,10 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable) -> list[str]:
       ground truth of another; a detector's 87-99 %): fewer than 10 % of the predicted boxes
       of the common frames meeting one is warned about too.
 
-    Nothing is said of an empty table (a tracker may find nothing).
+    - ``pred`` is empty while ``gt`` is not: every ground-truth box counts as missed (a
+      tracker may find nothing, but a results file of no rows is more often the wrong file,
+      or a run whose thresholds no detection reached). An empty ``gt`` is not warned about
+      (a sequence without objects).
 
     Parameters
     ----------
@@ -95,6 +98,8 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable) -> list[str]:
     >>> late = MOTTable.from_rows([(f, 7, 10, 0, 20, 40) for f in (8, 9)], path="res.txt")
     >>> print(*sanity_warnings(gt, late))
     predictions and ground truth look unrelated: res.txt has frames 8-9 and gt.txt frames 1-3, no frame in common
+    >>> print(*sanity_warnings(gt, MOTTable.from_rows([], path="res.txt")))
+    res.txt holds no rows: all 3 rows of gt.txt count as missed (FN) or ignored
     """  # noqa: E501
     out = []
     gname, pname = gt.path or "the ground truth", pred.path or "the predictions"
@@ -129,6 +134,9 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable) -> list[str]:
                        "whole number, so no value of column 8 is read as a class: --benchmark "
                        "auto scores the file as MOT15, without the preprocessing of MOT16/17/20 "
                        "(--benchmark MOT17 refuses it, naming the row)")
+    if len(gt) and not len(pred):
+        out.append(f"{pname} holds no rows: all {len(gt)} rows of {gname} count as missed "
+                   "(FN) or ignored")
     if not len(gt) or not len(pred):
         return out
     common = np.intersect1d(gt.frames, pred.frames)
