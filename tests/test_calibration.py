@@ -798,3 +798,87 @@ def test_the_calibrator_before_any_detection_is_the_first_classs():
                                         "integers; got '2'"):
         BoxTracker(calibration={"2": cal})
     assert BoxTracker(calibration={np.int64(2): cal}).calibration == {2: cal}
+
+
+def _fast(shift, frames=30, seed=0):
+    """Eight objects (30 x 80 pixels, scores 0.6-1) moving ``shift`` pixels a frame to the
+    right, each on a row of its own, and eight boxes of clutter (scores 0-0.5) at random
+    places in every frame. Two boxes of an object one frame apart overlap by IoU
+    ``(30 - shift) / (30 + shift)``, the clutter's hardly ever."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for f in range(frames):
+        x = 10.0 + shift * f
+        obj = np.array([[x, 100.0 * r, x + 30, 100.0 * r + 80] for r in range(8)])
+        xy = rng.uniform(0, 1000, (8, 2))
+        clutter = np.c_[xy, xy + [30, 80]]
+        out.append(Detections(boxes=np.r_[obj, clutter],
+                              scores=np.r_[np.linspace(0.6, 1.0, 8), rng.uniform(0, 0.5, 8)]))
+    return out
+
+
+@pytest.mark.parametrize("shift", [5, 18, 22, 27])
+def test_the_whole_files_calibration_loosens_its_links_where_objects_move_far(shift):
+    """Offline, where the most confident detections do not persist at the overlap the links
+    are made at (objects move further between frames than their boxes overlap by 0.3), the
+    outcomes are gathered again at 0.2, then 0.1, and the first overlap at which they persist
+    is taken: the largest of 0.3, 0.2 and 0.1 at or below the closed-form overlap of an
+    object's boxes one frame apart. There the map tells the objects from the clutter, which
+    at 0.3 it could not; where even 0.1 is too tight, the loosest is taken, and nothing is
+    told apart. ``min_link_iou`` bounds the steps; without it only ``link_iou`` is tried."""
+    frames = _fast(shift)
+    overlap = (30 - shift) / (30 + shift)  # the oracle: equal boxes moved along x
+    tried = [0.3, 0.2, 0.1]
+    want = next((v for v in tried if v <= overlap), 0.1)
+    cal = ScoreCalibration.from_frames(frames, frame_rate=10.0, min_link_iou=0.1)
+    assert cal.link_iou == want
+    objects, clutter = cal(np.linspace(0.6, 1.0, 8)), cal(np.linspace(0.0, 0.5, 9))
+    if overlap >= 0.1:
+        assert cal.top_persistence >= 0.5
+        assert objects.min() > 0.9 and clutter.max() < 0.2, (objects, clutter)
+    else:  # nothing persists at any overlap tried: nothing to tell apart
+        assert cal.top_persistence < 0.5 and (clutter == 1).all()
+    tight = ScoreCalibration.from_frames(frames, frame_rate=10.0)
+    assert tight.link_iou == 0.3
+    if overlap < 0.3:
+        assert tight.top_persistence < 0.5 and (tight(np.linspace(0.0, 0.5, 9)) == 1).all()
+    bounded = ScoreCalibration.from_frames(frames, frame_rate=10.0, min_link_iou=0.2)
+    assert bounded.link_iou == max(want, 0.2)
+    assert ScoreCalibration.from_frames(frames, frame_rate=10.0, link_iou=0.3,
+                                        min_link_iou=0.5).link_iou == 0.3
+
+
+def test_offline_runs_say_the_overlap_their_calibration_took(tmp_path):
+    """The offline mode fits its calibration at the loosened overlap by default
+    (``[offline] calibration_iou_min``, 0.1): on objects whose boxes overlap by 0.25 from one
+    frame to the next, ``[derived] calibration_iou`` is 0.2, and the run does not warn that
+    the scores could not be told apart, as the online run (which links at
+    ``calibration_iou``, 0.3) and the offline one with ``calibration_iou_min`` 0.3 do. Where
+    the boxes overlap well, nothing changes: the results are those of ``calibration_iou_min``
+    0.3, byte for byte."""
+    import warnings
+
+    from vistrack.config import OfflineConfig
+    from vistrack.pipeline import track_sequence
+
+    seq = _sequence(tmp_path / "fast", _fast(18), fps=10)
+
+    def run(name, **kw):
+        with warnings.catch_warnings(record=True) as w:
+            warnings.simplefilter("always")
+            r = track_sequence(seq, tmp_path / f"{name}.txt", **kw)
+        return r, [str(x.message) for x in w if "counts as confident" in str(x.message)]
+
+    r, said = run("loose", offline=True)
+    assert r.derived["calibration_iou"] == 0.2 and said == []
+    r, said = run("online")
+    assert "calibration_iou" not in r.derived and len(said) == 1
+    r, said = run("tight", offline=True, calibration_iou_min=0.3)
+    assert r.derived["calibration_iou"] == 0.3 and len(said) == 1
+    slow = _sequence(tmp_path / "slow", _fast(5), fps=10)
+    a = track_sequence(slow, tmp_path / "a.txt", offline=True)
+    track_sequence(slow, tmp_path / "b.txt", offline=True, calibration_iou_min=0.3)
+    assert a.derived["calibration_iou"] == 0.3
+    assert (tmp_path / "a.txt").read_bytes() == (tmp_path / "b.txt").read_bytes()
+    with pytest.raises(ValueError, match=r"calibration_iou_min must be in \(0, 1\]; got 0"):
+        OfflineConfig(calibration_iou_min=0)

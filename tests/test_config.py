@@ -82,7 +82,7 @@ def test_a_partial_file_keeps_the_presets_other_values(tmp_path):
                                 r"\(keys: assigner"),
     ("[tracker]\nmax_gap = 0.5\n", r"\[tracker\] has no key 'max_gap'; it is a key of "
                                    r"\[offline\] \(keys: assigner"),
-    ("[offline]\nzzz = 1\n", r"\[offline\] has no key 'zzz' \(keys: enabled"),
+    ("[offline]\nzzz = 1\n", r"\[offline\] has no key 'zzz' \(keys: calibration_iou_min, enabled"),
     ("[tracker]\nhigh = \"0.5\"\n", r"\[tracker\] high must be a number; got '0.5'"),
     ("[tracker]\nconfirm_hits = 2.5\n", r"\[tracker\] confirm_hits must be an integer"),
     ("[tracker]\ncalibration_window = -1\n",

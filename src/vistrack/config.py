@@ -89,6 +89,14 @@ class OfflineConfig:
         Join tracks up to ``link_gap`` seconds apart whose boxes, carried across the gap by
         the velocities of their last and first ``link_window`` seconds, overlap by
         ``link_iou`` on average (``link_gap`` 0: never).
+    calibration_iou_min : float
+        With calibrated scores, the loosest overlap the whole file's score calibration links
+        detections at: where the detector's most confident detections persist less than half
+        the time at the tracker's ``calibration_iou`` (objects that move too far between
+        frames for their boxes to overlap that much), the calibration is fitted again at
+        overlaps 0.1 lower, down to this
+        (:meth:`~vistrack.tracking.calibration.ScoreCalibration.from_frames`;
+        ``calibration_iou`` or more: never). Online, the tracker links at ``calibration_iou``.
 
     Raises
     ------
@@ -116,6 +124,7 @@ class OfflineConfig:
     link_gap: float = 2.0
     link_iou: float = 0.3
     link_window: float = 0.3
+    calibration_iou_min: float = 0.1
 
     def __post_init__(self) -> None:
         if not isinstance(self.enabled, bool):
@@ -133,6 +142,9 @@ class OfflineConfig:
         for name in ("extend_iou", "link_iou"):
             if getattr(self, name) > 1:
                 raise ValueError(f"{name} must be in [0, 1]; got {getattr(self, name)!r}")
+        if not 0 < self.calibration_iou_min <= 1:  # (at 0 every box would link to any)
+            raise ValueError(f"calibration_iou_min must be in (0, 1]; got "
+                             f"{self.calibration_iou_min!r}")
 
     def frames(self, frame_rate: float) -> dict[str, int]:
         """The durations :func:`vistrack.tracking.smooth` counts in frames, at ``frame_rate``

@@ -68,7 +68,7 @@ from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
 from .models.box import FRAME_RATES, BoxMotion
 from .tracking.base import Tracker, check_start_box
 from .tracking.box import MAX_PIXELS, BoxTracker, BoxTrackerConfig
-from .tracking.calibration import NoOutcomesError, ScoreCalibration
+from .tracking.calibration import TOP_PERSISTS, NoOutcomesError, ScoreCalibration
 from .tracking.offline import SmoothedTracks, smooth
 from .types import Detections, Frame, Tracks
 
@@ -252,7 +252,8 @@ def derived_values(trk: BoxTracker) -> dict:
         ``frame_rate``, ``image_size`` (when the tracker has one), ``std_pos_per_frame`` and
         ``std_vel_per_frame``; with calibrated scores also ``calibration`` (``"whole file"``
         or ``"online, at the last frame"``), ``calibration_outcomes``,
-        ``calibration_top_persistence`` (when fitted to outcomes) and ``high_score``,
+        ``calibration_top_persistence`` (when fitted to outcomes), ``calibration_iou`` (the
+        overlap a whole file's calibration linked detections at) and ``high_score``,
         ``low_score`` and ``new_track_score`` (for the threshold tracks started at: offline,
         the offline mode's ``start_score`` where it is above ``new_track``); where the
         detections are of several classes, each class calibrated apart, these four are
@@ -288,6 +289,10 @@ def derived_values(trk: BoxTracker) -> dict:
         if any(cal.n for cal in maps.values()):
             out["calibration_top_persistence"] = each(
                 lambda cal: round(cal.top_persistence, 6), fitted=True)
+        links = {str(k): cal.link_iou for k, cal in sorted(maps.items())
+                 if np.isfinite(cal.link_iou)}
+        if links:  # the whole file's overlap (offline: loosened where nothing persists)
+            out["calibration_iou"] = next(iter(links.values())) if len(maps) == 1 else links
         for name in ("high", "low", "new_track"):
             out[f"{name}_score"] = each(partial(ScoreCalibration.score_at,
                                                 level=getattr(c, name)))
@@ -351,7 +356,7 @@ def calibration_warning(trk: BoxTracker, name: str) -> str | None:
     for k, cal in sorted(maps.items()):
         if cal.n == 0 or len(cal.scores) < 2:
             continue
-        if cal.confidence[0] < c.high or cal.top_persistence >= 0.5:
+        if cal.confidence[0] < c.high or cal.top_persistence >= TOP_PERSISTS:
             continue
         found.append((k, "confident enough to start a track" if cal.confidence[0] >= c.new_track
                       else "confident (the first association stage takes them all)",
@@ -1263,7 +1268,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     if oc.enabled and tc.scores == "calibrated":
         # offline, the scores are calibrated on the whole file (see tracking.calibration)
         calibration, seconds = _timed(_whole_file_calibration, (
-            frame_detections(k) for k in range(first, info.seq_length + 1, stride)), tc, rate)
+            frame_detections(k) for k in range(first, info.seq_length + 1, stride)), tc, rate,
+            oc.calibration_iou_min)
     if oc.enabled and oc.start_score > tc.new_track:
         tc = replace(tc, new_track=oc.start_score)
     trk = BoxTracker(tc, motion=cfg.motion, frame_rate=rate, record=oc.enabled,
@@ -1480,16 +1486,18 @@ def _timed(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> tuple[Any, floa
     return result, (time.perf_counter() - t0) - (_compile.seconds() - c0)
 
 
-def _whole_file_calibration(frames: Iterable[Detections], tc: BoxTrackerConfig, rate: float
+def _whole_file_calibration(frames: Iterable[Detections], tc: BoxTrackerConfig, rate: float,
+                            min_iou: float | None = None
                             ) -> ScoreCalibration | dict[int, ScoreCalibration] | None:
     """The score calibration fitted to every frame's detections (offline), or, where they
     are of several classes, one fitted to each class's detections alone, by class (a class
-    with nothing to fit left out). None where no detection is seen to persist or not (no
-    detections, or all on one frame): nothing to fit, so the tracker calibrates as it goes,
-    as online (a class left out, the same)."""
+    with nothing to fit left out), its links loosened down to ``min_iou`` where the most
+    confident detections do not persist (:meth:`ScoreCalibration.from_frames`). None where
+    no detection is seen to persist or not (no detections, or all on one frame): nothing to
+    fit, so the tracker calibrates as it goes, as online (a class left out, the same)."""
     frames = list(frames)
     classes = np.unique(np.concatenate([d.classes for d in frames] or [np.zeros(0)]))
-    options = tc.calibration_options(rate)
+    options = dict(tc.calibration_options(rate), min_link_iou=min_iou)
     if len(classes) <= 1:
         try:
             return ScoreCalibration.from_frames(frames, **options)

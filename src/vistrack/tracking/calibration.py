@@ -75,8 +75,8 @@ from ..types import Detections
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-__all__ = ["NoOutcomesError", "ScoreCalibration", "ScoreCalibrator", "isotonic_increasing",
-           "persistence"]
+__all__ = ["NoOutcomesError", "ScoreCalibration", "ScoreCalibrator", "TOP_PERSISTS",
+           "isotonic_increasing", "persistence"]
 
 
 @kernel
@@ -416,6 +416,14 @@ def _outcomes(frames: Iterable[Detections], **calibrator: Any) -> tuple[np.ndarr
     return cal.outcomes()
 
 
+TOP_PERSISTS = 0.5
+"""The rate below which the detector's most confident detections are said not to persist
+(``ScoreCalibration.top_persistence``): at a lower one, outcomes tell objects from clutter no
+longer. :meth:`ScoreCalibration.from_frames` then loosens its links (``min_link_iou``), and
+:func:`vistrack.pipeline.calibration_warning` warns where every detection counts as
+confident."""
+
+
 _QUIET = True
 """Whether :meth:`ScoreCalibrator.observe` passes over a frame without detections quickly
 where the one before held none and no chain is open (the same state as the full step; a
@@ -443,12 +451,15 @@ class ScoreCalibration:
         How many outcomes the map was fitted to (0: none; the rank prior alone).
     top_persistence : float
         The rate of the top outcomes (by score) that the data part was divided by.
+    link_iou : float
+        The IoU at which the outcomes linked detections (:meth:`from_frames`; NaN where the
+        map was not fitted to frames).
 
     Attributes
     ----------
     scores, confidence : (M,) ndarray
         The map's points, as given.
-    n, top_persistence : int, float
+    n, top_persistence, link_iou : int, float, float
         As given.
 
     Raises
@@ -468,7 +479,7 @@ class ScoreCalibration:
     """
 
     def __init__(self, scores: ArrayLike, confidence: ArrayLike, *, n: int = 0,
-                 top_persistence: float = float("nan")):
+                 top_persistence: float = float("nan"), link_iou: float = float("nan")):
         s = np.asarray(scores, dtype=np.float64).ravel()
         c = np.asarray(confidence, dtype=np.float64).ravel()
         if s.shape != c.shape or len(s) == 0:
@@ -482,6 +493,7 @@ class ScoreCalibration:
             raise ValueError("confidence must be non-decreasing, in [0, 1]")
         self.scores, self.confidence = s, c
         self.n, self.top_persistence = int(n), float(top_persistence)
+        self.link_iou = float(link_iou)
 
     @classmethod
     def fit(cls, scores: ArrayLike, persisted: ArrayLike, *, top: float = 0.05,
@@ -561,11 +573,22 @@ class ScoreCalibration:
     def from_frames(cls, frames: Iterable[Detections], *, link_iou: float = 0.3,
                     top: float = 0.05, top_min: int = 20, cap_sigma: float = 5.0,
                     frame_rate: float = 30.0, chain_span: float = 1.0,
-                    chain_gap: float = 0.2) -> ScoreCalibration:
+                    chain_gap: float = 0.2, min_link_iou: float | None = None
+                    ) -> ScoreCalibration:
         """Fit to a whole sequence of frames (the offline mode).
 
         The outcomes a :class:`ScoreCalibrator` holds after the last frame (frame-to-frame
         persistence and chains), then :meth:`fit`.
+
+        With ``min_link_iou`` below ``link_iou``, the overlap that links detections is
+        loosened where the detector's most confident detections persist less than half the
+        time (``top_persistence`` under :data:`TOP_PERSISTS`): their objects then move too
+        far between frames, against their size, for their boxes to overlap by ``link_iou``
+        (a low frame rate, fast motion), and the outcomes no longer tell objects from
+        clutter. The outcomes are gathered again at overlaps 0.1 lower, down to
+        ``min_link_iou``, and the first at which the most confident persist half the time or
+        more is taken (the loosest where none does). Where they do at ``link_iou``, nothing
+        changes.
 
         Parameters
         ----------
@@ -580,11 +603,13 @@ class ScoreCalibration:
         frame_rate, chain_span, chain_gap : float
             Frames a second, and the chains' span and gap in seconds (see
             :class:`ScoreCalibrator`).
+        min_link_iou : float, optional
+            The loosest overlap tried (None, or ``link_iou`` or more: ``link_iou`` alone).
 
         Returns
         -------
         ScoreCalibration
-            The fitted map.
+            The fitted map; its ``link_iou`` is the overlap its outcomes were gathered at.
 
         Raises
         ------
@@ -600,12 +625,37 @@ class ScoreCalibration:
         ...                                      230 + 50 * f, 160]]), scores=np.array([0.9, 0.4]))
         ...           for f in range(6)]
         >>> cal = ScoreCalibration.from_frames(frames)
-        >>> cal([0.4, 0.9]).tolist(), cal.score_at(0.5)
-        ([0.0, 1.0], 0.9)
+        >>> cal([0.4, 0.9]).tolist(), cal.score_at(0.5), cal.link_iou
+        ([0.0, 1.0], 0.9, 0.3)
+
+        The object moving 0.6 of its width a frame (its boxes overlap by 0.4 / 1.6 = 0.25),
+        the clutter as before: at 0.3 nothing persists, and nothing tells the two apart; at
+        0.2 the object persists:
+
+        >>> fast = [Detections(boxes=np.array([[10.0 + 18 * f, 10, 40 + 18 * f, 80],
+        ...                                    [200 + 50 * f, 100, 230 + 50 * f, 160]]),
+        ...                    scores=np.array([0.9, 0.4])) for f in range(6)]
+        >>> cal = ScoreCalibration.from_frames(fast)
+        >>> cal([0.4, 0.9]).tolist(), cal.top_persistence
+        ([1.0, 1.0], 0.0)
+        >>> cal = ScoreCalibration.from_frames(fast, min_link_iou=0.1)
+        >>> cal([0.4, 0.9]).tolist(), cal.link_iou
+        ([0.0, 1.0], 0.2)
         """
-        s, p = _outcomes(frames, link_iou=link_iou, frame_rate=frame_rate,
-                         chain_span=chain_span, chain_gap=chain_gap)
-        return cls.fit(s, p, top=top, top_min=top_min, cap_sigma=cap_sigma)
+        frames = list(frames)
+        ious = [float(link_iou)]
+        if min_link_iou is not None:
+            # 0.1 lower each time (rounded: 0.3 - 0.1 - 0.1 falls short of 0.1)
+            while round(ious[-1] - 0.1, 10) >= min_link_iou and round(ious[-1] - 0.1, 10) > 0:
+                ious.append(round(ious[-1] - 0.1, 10))
+        for iou in ious:
+            s, p = _outcomes(frames, link_iou=iou, frame_rate=frame_rate,
+                             chain_span=chain_span, chain_gap=chain_gap)
+            cal = cls.fit(s, p, top=top, top_min=top_min, cap_sigma=cap_sigma)
+            cal.link_iou = iou
+            if cal.top_persistence >= TOP_PERSISTS:
+                break
+        return cal
 
     def __call__(self, scores: ArrayLike) -> np.ndarray:
         s = _scores(scores)
@@ -680,7 +730,8 @@ class ScoreCalibration:
         Returns
         -------
         ScoreCalibration
-            The blend, clipped to ``[0, 1]``, with this map's ``n`` and ``top_persistence``.
+            The blend, clipped to ``[0, 1]``, with this map's ``n``, ``top_persistence`` and
+            ``link_iou``.
 
         Examples
         --------
@@ -693,7 +744,7 @@ class ScoreCalibration:
         cdf = np.searchsorted(r, u, side="right") / len(r)
         c = weight * self(u) + (1.0 - weight) * cdf
         return ScoreCalibration(u, np.clip(c, 0.0, 1.0), n=self.n,
-                                top_persistence=self.top_persistence)
+                                top_persistence=self.top_persistence, link_iou=self.link_iou)
 
     def __repr__(self) -> str:
         return (f"ScoreCalibration({len(self.scores)} scores {self.scores[0]:.4g} .. "
