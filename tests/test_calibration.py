@@ -575,8 +575,11 @@ def test_a_run_says_when_the_calibration_cannot_tell_scores_apart(tmp_path):
         f"{tmp_path / 'jumping'}: every detection counts as confident enough to start a track: "
         "the score calibration finds the least confident persisting from frame to frame nearly "
         "as often as the most confident, which persist at a rate of 0.00 at 2 frames/s; ")
+    # offline, the whole file's calibration loosened its links first, and says so
     assert said(jumping, "jumping-offline", offline=True) == [
-        got[0].replace("/jumping:", "/jumping-offline:")]
+        got[0].replace("/jumping:", "/jumping-offline:").replace(
+            "the score calibration finds", "the score calibration, its links loosened to IoU "
+            "0.1, finds")]
     assert said(moving, "moving") == [] and said(same, "same") == [] and said(only, "only") == []
     assert said(jumping, "jumping-raw", scores="raw") == []
     r = subprocess.run([sys.executable, "-m", "vistrack.cli", "track", str(tmp_path / "jumping"),
@@ -628,14 +631,15 @@ def test_the_warning_names_every_class_it_holds_for():
         "SEQ: every detection of class 2 counts as confident (the first association stage "
         "takes them all), its most confident persisting at a rate of 0.31; every detection of "
         "class 7 counts as confident enough to start a track, its most confident persisting at "
-        "a rate of 0.20: the score calibration finds the least confident of each persisting "
-        "from frame to frame nearly as often as the most confident, at 5 frames/s; thresholds "
-        "on the scores themselves may track better (--scores raw with --high, --low and "
-        "--new-track)")
+        "a rate of 0.20: at 5 frames/s the score calibration finds the least confident of "
+        "each persisting from frame to frame nearly as often as the most confident; "
+        "thresholds on the scores themselves may track better (--scores raw with --high, "
+        "--low and --new-track, for every class)")
     one = warning(c7=(0.75, 0.2), c0=(0.2, 0.1))
     assert one.startswith("SEQ: every detection of class 7 counts as confident enough to "
                           "start a track, its most confident persisting at a rate of 0.20: "
-                          "the score calibration finds the least confident of that class ")
+                          "at 5 frames/s the score calibration finds the least confident of "
+                          "that class ")
     assert warning(c7=(0.75, 0.6), c0=(0.2, 0.1)) is None
 
 
@@ -851,7 +855,7 @@ def test_the_whole_files_calibration_loosens_its_links_where_objects_move_far(sh
 def test_offline_runs_say_the_overlap_their_calibration_took(tmp_path):
     """The offline mode fits its calibration at the loosened overlap by default
     (``[offline] calibration_iou_min``, 0.1): on objects whose boxes overlap by 0.25 from one
-    frame to the next, ``[derived] calibration_iou`` is 0.2, and the run does not warn that
+    frame to the next, ``[derived] calibration_link_iou`` is 0.2, and the run does not warn that
     the scores could not be told apart, as the online run (which links at
     ``calibration_iou``, 0.3) and the offline one with ``calibration_iou_min`` 0.3 do. Where
     the boxes overlap well, nothing changes: the results are those of ``calibration_iou_min``
@@ -870,15 +874,61 @@ def test_offline_runs_say_the_overlap_their_calibration_took(tmp_path):
         return r, [str(x.message) for x in w if "counts as confident" in str(x.message)]
 
     r, said = run("loose", offline=True)
-    assert r.derived["calibration_iou"] == 0.2 and said == []
+    assert r.derived["calibration_link_iou"] == 0.2 and said == []
     r, said = run("online")
-    assert "calibration_iou" not in r.derived and len(said) == 1
+    assert "calibration_link_iou" not in r.derived and len(said) == 1
     r, said = run("tight", offline=True, calibration_iou_min=0.3)
-    assert r.derived["calibration_iou"] == 0.3 and len(said) == 1
+    assert r.derived["calibration_link_iou"] == 0.3 and len(said) == 1
     slow = _sequence(tmp_path / "slow", _fast(5), fps=10)
     a = track_sequence(slow, tmp_path / "a.txt", offline=True)
     track_sequence(slow, tmp_path / "b.txt", offline=True, calibration_iou_min=0.3)
-    assert a.derived["calibration_iou"] == 0.3
+    assert a.derived["calibration_link_iou"] == 0.3
     assert (tmp_path / "a.txt").read_bytes() == (tmp_path / "b.txt").read_bytes()
     with pytest.raises(ValueError, match=r"calibration_iou_min must be in \(0, 1\]; got 0"):
         OfflineConfig(calibration_iou_min=0)
+
+
+def test_the_ladder_ends_at_its_least_overlap_and_blend_keeps_it():
+    """Steps of 0.1 from ``link_iou`` that fall short of ``min_link_iou`` end at the least
+    itself (0.35 to 0.1: 0.25, 0.15, then 0.1), so that the least named is always tried; a
+    blended map keeps the overlap its outcomes were gathered at."""
+    import vistrack.tracking.calibration as calibration
+
+    tried = []
+    outcomes = calibration._outcomes
+
+    def spy(frames, **kw):
+        tried.append(kw["link_iou"])
+        return outcomes(frames, **kw)
+
+    frames = _fast(27)  # overlap 0.053: nothing persists at any overlap tried
+    calibration._outcomes = spy
+    try:
+        for start, least, want in ((0.35, 0.1, [0.35, 0.25, 0.15, 0.1]),
+                                   (0.3, 0.1, [0.3, 0.2, 0.1]), (0.3, 0.05, [0.3, 0.2, 0.1, 0.05]),
+                                   (0.3, 0.3, [0.3]), (0.3, None, [0.3])):
+            tried.clear()
+            cal = ScoreCalibration.from_frames(frames, link_iou=start, min_link_iou=least,
+                                               frame_rate=10.0)
+            assert tried == want and cal.link_iou == want[-1]
+    finally:
+        calibration._outcomes = outcomes
+    assert cal.blend(0.5, np.array([0.1, 0.9])).link_iou == 0.3
+    assert np.isnan(ScoreCalibration.ranks([0.1, 0.9]).link_iou)
+
+
+def test_each_class_loosens_its_own_links(tmp_path):
+    """Offline, with detections of two classes, each class's calibration loosens its links
+    on its own: the class whose objects move far links at 0.2, the one whose objects move
+    little at 0.3, and ``[derived] calibration_link_iou`` gives both by class."""
+    import pandas as pd
+
+    from vistrack.pipeline import track_sequence
+
+    slow = [Detections(boxes=d.boxes + [0, 1000, 0, 1000], scores=d.scores) for d in _fast(5)]
+    tables = [_class_file(tmp_path / "fast.csv", _fast(18), lambda s: s, 1),
+              _class_file(tmp_path / "slow.csv", slow, lambda s: s, 2)]
+    pd.concat(tables).sort_values("frame", kind="stable").to_csv(tmp_path / "both.csv",
+                                                                  index=False)
+    run = track_sequence(tmp_path / "both.csv", tmp_path / "out.csv", fps=10, offline=True)
+    assert run.derived["calibration_link_iou"] == {"1": 0.2, "2": 0.3}

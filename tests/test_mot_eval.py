@@ -425,7 +425,9 @@ def test_sanity_warnings_of_unrelated_files(tmp_path):
     # zeros looked like scores); no ground truth at all: a sequence without objects
     empty = read_mot(_rows(tmp_path / "empty.txt", []))
     assert sanity_warnings(g, empty) == [
-        f"{empty.path} holds no rows: all 10 rows of {gt} count as missed (FN) or ignored"]
+        f"{empty.path} holds no rows: the 10 rows of {gt} on its frames 1-10 count as missed "
+        "(FN) or ignored"]
+    assert sanity_warnings(g, empty, empty_said=True) == []  # the caller said why
     assert sanity_warnings(empty, far) == [] and sanity_warnings(empty, empty) == []
 
 

@@ -594,6 +594,36 @@ def test_a_videos_ground_truth_that_looks_unrelated_is_warned_of(tmp_path):
     assert r.scores.MOTA == -1.0
 
 
+def test_a_videos_empty_results_are_warned_of_once(tmp_path):
+    """Results with no rows against a --gt that has some: a detector that found something
+    but started no track is told by the ground-truth check (the rows of the frames tracked,
+    missed); a front-end that found nothing says so itself, and the check says it no
+    second time."""
+    import warnings
+
+    frames, truth = red_disc_clip(T=8)
+    folder = write_clip(tmp_path / "frames", frames)
+    gt = tmp_path / "gt.txt"
+    gt.write_text("".join(f"{f + 1},1,{x:.2f},{y:.2f},{w:.2f},{h:.2f},1,1,1\n"
+                          for f, (x, y, w, h) in enumerate(truth)))
+
+    def said(name, frontend, **kw):
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always")
+            r = track_video(folder, tmp_path / name, frontend=frontend, fps=25,
+                            annotate=False, gt=gt, **kw)
+        assert r.rows == 0
+        return [str(w.message) for w in got if issubclass(w.category, UserWarning)]
+
+    # found, but every raw score under the start
+    got = said("low", TruthDetector(truth), scores="raw", high=0.95, new_track=0.95)
+    assert f"{tmp_path / 'low'}/tracks.txt holds no rows: the 8 rows of {gt} on its frames " \
+        "1-8 count as missed (FN) or ignored" in got
+    got = said("none", "bgsub", min_area=1e8)
+    assert sum("found nothing" in w for w in got) == 1
+    assert not any("holds no rows" in w for w in got)
+
+
 def test_an_interrupted_run_leaves_the_earlier_outputs_as_they_were(tmp_path):
     """Ctrl-C in the middle of a run over an earlier run's folder (``force``): every file of
     the earlier run is still there, byte for byte, and no partial file is left beside it."""

@@ -90,13 +90,14 @@ class OfflineConfig:
         the velocities of their last and first ``link_window`` seconds, overlap by
         ``link_iou`` on average (``link_gap`` 0: never).
     calibration_iou_min : float
-        With calibrated scores, the loosest overlap the whole file's score calibration links
-        detections at: where the detector's most confident detections persist less than half
-        the time at the tracker's ``calibration_iou`` (objects that move too far between
-        frames for their boxes to overlap that much), the calibration is fitted again at
-        overlaps 0.1 lower, down to this
-        (:meth:`~vistrack.tracking.calibration.ScoreCalibration.from_frames`;
-        ``calibration_iou`` or more: never). Online, the tracker links at ``calibration_iou``.
+        With calibrated scores, the loosest overlap at which the whole file's score
+        calibration links detections from frame to frame: where the detector's most
+        confident detections persist less than half the time at the tracker's
+        ``calibration_iou`` (objects that move too far between frames for their boxes to
+        overlap that much), the calibration is fitted again at overlaps 0.1 lower, down to
+        this (:meth:`~vistrack.tracking.calibration.ScoreCalibration.from_frames`;
+        ``calibration_iou`` or more: never). Online, the calibration links at
+        ``calibration_iou``; the tracker's association is the same either way.
 
     Raises
     ------

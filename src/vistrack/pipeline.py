@@ -252,12 +252,12 @@ def derived_values(trk: BoxTracker) -> dict:
         ``frame_rate``, ``image_size`` (when the tracker has one), ``std_pos_per_frame`` and
         ``std_vel_per_frame``; with calibrated scores also ``calibration`` (``"whole file"``
         or ``"online, at the last frame"``), ``calibration_outcomes``,
-        ``calibration_top_persistence`` (when fitted to outcomes), ``calibration_iou`` (the
-        overlap a whole file's calibration linked detections at) and ``high_score``,
-        ``low_score`` and ``new_track_score`` (for the threshold tracks started at: offline,
-        the offline mode's ``start_score`` where it is above ``new_track``); where the
-        detections are of several classes, each class calibrated apart, these four are
-        dicts by class (the class as a string).
+        ``calibration_top_persistence`` (when fitted to outcomes), ``calibration_link_iou``
+        (the overlap a whole file's calibration linked detections at, offline) and
+        ``high_score``, ``low_score`` and ``new_track_score`` (for the threshold tracks
+        started at: offline, the offline mode's ``start_score`` where it is above
+        ``new_track``); where the detections are of several classes, each class calibrated
+        apart, these are dicts by class (the class as a string).
 
     Examples
     --------
@@ -291,8 +291,10 @@ def derived_values(trk: BoxTracker) -> dict:
                 lambda cal: round(cal.top_persistence, 6), fitted=True)
         links = {str(k): cal.link_iou for k, cal in sorted(maps.items())
                  if np.isfinite(cal.link_iou)}
-        if links:  # the whole file's overlap (offline: loosened where nothing persists)
-            out["calibration_iou"] = next(iter(links.values())) if len(maps) == 1 else links
+        if links:  # the whole file's overlap (offline: loosened where nothing persists;
+            # not [tracker] calibration_iou, the setting it starts from)
+            out["calibration_link_iou"] = (next(iter(links.values())) if len(maps) == 1
+                                           else links)
         for name in ("high", "low", "new_track"):
             out[f"{name}_score"] = each(partial(ScoreCalibration.score_at,
                                                 level=getattr(c, name)))
@@ -333,7 +335,9 @@ def calibration_warning(trk: BoxTracker, name: str) -> str | None:
     -------
     str or None
         The message, naming each class it holds for where the detections are of several
-        (each class has a calibration of its own); None with raw scores, before the
+        (each class has a calibration of its own), and the overlap a whole file's calibration
+        loosened its links to (offline, :meth:`ScoreCalibration.from_frames`) where it did;
+        None with raw scores, before the
         calibration has outcomes, when all scores are equal (nothing to tell apart), when the
         lowest score stays under ``high``, or when the most confident detections persist half
         the time or more.
@@ -352,30 +356,36 @@ def calibration_warning(trk: BoxTracker, name: str) -> str | None:
     if c.scores != "calibrated":
         return None
     maps = trk.score_calibrations()
-    found = []  # (class, what it counts as, its most confident detections' persistence)
+    found = []  # (class, what it counts as, its most confident detections' persistence,
+    # the overlap its links were loosened to offline, or None)
     for k, cal in sorted(maps.items()):
         if cal.n == 0 or len(cal.scores) < 2:
             continue
         if cal.confidence[0] < c.high or cal.top_persistence >= TOP_PERSISTS:
             continue
+        loose = cal.link_iou if cal.link_iou < c.calibration_iou else None  # (NaN: online)
         found.append((k, "confident enough to start a track" if cal.confidence[0] >= c.new_track
                       else "confident (the first association stage takes them all)",
-                      cal.top_persistence))
+                      cal.top_persistence, loose))
     if not found:
         return None
-    tail = (f" at {trk.frame_rate:.3g} frames/s; thresholds on the scores themselves may track "
-            f"better (--scores raw with --high, --low and --new-track)")
+    raw = "thresholds on the scores themselves may track better (--scores raw with --high, " \
+          "--low and --new-track"
     if len(maps) == 1:
-        _, what, rate = found[0]
-        return (f"{name}: every detection counts as {what}: the score calibration finds the "
-                f"least confident persisting from frame to frame nearly as often as the most "
-                f"confident, which persist at a rate of {rate:.2f}" + tail)
+        _, what, rate, loose = found[0]
+        links = "" if loose is None else f", its links loosened to IoU {loose:g},"
+        return (f"{name}: every detection counts as {what}: the score calibration{links} finds "
+                f"the least confident persisting from frame to frame nearly as often as the "
+                f"most confident, which persist at a rate of {rate:.2f} at "
+                f"{trk.frame_rate:.3g} frames/s; {raw})")
     # every class it holds for, each with its own rate
     each = "; ".join(f"every detection of class {k} counts as {what}, its most confident "
-                     f"persisting at a rate of {rate:.2f}" for k, what, rate in found)
-    return (f"{name}: {each}: the score calibration finds the least confident of "
-            f"{'that class' if len(found) == 1 else 'each'} persisting from frame to frame "
-            f"nearly as often as the most confident," + tail)
+                     f"persisting at a rate of {rate:.2f}"
+                     + ("" if loose is None else f" with links loosened to IoU {loose:g}")
+                     for k, what, rate, loose in found)
+    return (f"{name}: {each}: at {trk.frame_rate:.3g} frames/s the score calibration finds the "
+            f"least confident of {'that class' if len(found) == 1 else 'each'} persisting from "
+            f"frame to frame nearly as often as the most confident; {raw}, for every class)")
 
 
 # -------------------------------------------------------------------------------- the loop
@@ -2191,7 +2201,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 written = tracks.written()
                 scored.append(evaluate_mot(g, written, stats.last, benchmark="auto"))
                 # as vistrack eval warns: another sequence's ground truth scores valid numbers
-                for message in sanity_warnings(g, written):
+                # (results left empty by a front-end that found nothing: the run says so
+                # itself, after the loop)
+                for message in sanity_warnings(g, written, empty_said=grid is None
+                                               and call is not None and not found):
                     warnings.warn(message, UserWarning, stacklevel=4)
 
         found = 0  # what a front-end from pixels found (a detections file is checked as read)

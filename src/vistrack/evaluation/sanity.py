@@ -61,7 +61,7 @@ def _frames(t: MOTTable) -> str:
     return f"frames {int(t.frames.min())}-{int(t.frames.max())}"
 
 
-def sanity_warnings(gt: MOTTable, pred: MOTTable) -> list[str]:
+def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False) -> list[str]:
     """Warnings that ``gt`` and ``pred`` may not be ground truth and results of one sequence.
 
     - ``gt`` looks like a detections or results file (:func:`looks_like_detections`);
@@ -80,6 +80,9 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable) -> list[str]:
     ----------
     gt, pred : MOTTable
         From :func:`vistrack.io.read_mot`, sorted by frame; their ``path`` names them.
+    empty_said : bool
+        Whether the caller has already said why ``pred`` is empty (a run whose front-end
+        found nothing): then its emptiness is not warned of again.
 
     Returns
     -------
@@ -99,7 +102,7 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable) -> list[str]:
     >>> print(*sanity_warnings(gt, late))
     predictions and ground truth look unrelated: res.txt has frames 8-9 and gt.txt frames 1-3, no frame in common
     >>> print(*sanity_warnings(gt, MOTTable.from_rows([], path="res.txt")))
-    res.txt holds no rows: all 3 rows of gt.txt count as missed (FN) or ignored
+    res.txt holds no rows: the 3 rows of gt.txt on its frames 1-3 count as missed (FN) or ignored
     """  # noqa: E501
     out = []
     gname, pname = gt.path or "the ground truth", pred.path or "the predictions"
@@ -134,9 +137,9 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable) -> list[str]:
                        "whole number, so no value of column 8 is read as a class: --benchmark "
                        "auto scores the file as MOT15, without the preprocessing of MOT16/17/20 "
                        "(--benchmark MOT17 refuses it, naming the row)")
-    if len(gt) and not len(pred):
-        out.append(f"{pname} holds no rows: all {len(gt)} rows of {gname} count as missed "
-                   "(FN) or ignored")
+    if len(gt) and not len(pred) and not empty_said:
+        out.append(f"{pname} holds no rows: the {len(gt)} rows of {gname} on its "
+                   f"{_frames(gt)} count as missed (FN) or ignored")
     if not len(gt) or not len(pred):
         return out
     common = np.intersect1d(gt.frames, pred.frames)

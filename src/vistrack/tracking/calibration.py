@@ -586,9 +586,9 @@ class ScoreCalibration:
         far between frames, against their size, for their boxes to overlap by ``link_iou``
         (a low frame rate, fast motion), and the outcomes no longer tell objects from
         clutter. The outcomes are gathered again at overlaps 0.1 lower, down to
-        ``min_link_iou``, and the first at which the most confident persist half the time or
-        more is taken (the loosest where none does). Where they do at ``link_iou``, nothing
-        changes.
+        ``min_link_iou`` (the last step shorter where it falls between two), and the first at
+        which the most confident persist half the time or more is taken (the loosest where
+        none does). Where they do at ``link_iou``, nothing changes.
 
         Parameters
         ----------
@@ -604,7 +604,8 @@ class ScoreCalibration:
             Frames a second, and the chains' span and gap in seconds (see
             :class:`ScoreCalibrator`).
         min_link_iou : float, optional
-            The loosest overlap tried (None, or ``link_iou`` or more: ``link_iou`` alone).
+            The loosest overlap tried, > 0 (None, or ``link_iou`` or more: ``link_iou``
+            alone).
 
         Returns
         -------
@@ -644,10 +645,13 @@ class ScoreCalibration:
         """
         frames = list(frames)
         ious = [float(link_iou)]
-        if min_link_iou is not None:
-            # 0.1 lower each time (rounded: 0.3 - 0.1 - 0.1 falls short of 0.1)
-            while round(ious[-1] - 0.1, 10) >= min_link_iou and round(ious[-1] - 0.1, 10) > 0:
+        if min_link_iou is not None and 0 < min_link_iou < link_iou:
+            # 0.1 lower each time (rounded: 0.3 - 0.1 - 0.1 falls short of 0.1), and the
+            # least itself last where it falls between two steps (0.35: 0.25, 0.15, 0.1)
+            while round(ious[-1] - 0.1, 10) >= min_link_iou:
                 ious.append(round(ious[-1] - 0.1, 10))
+            if ious[-1] > min_link_iou:
+                ious.append(float(min_link_iou))
         for iou in ious:
             s, p = _outcomes(frames, link_iou=iou, frame_rate=frame_rate,
                              chain_span=chain_span, chain_gap=chain_gap)
