@@ -2203,8 +2203,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 # as vistrack eval warns: another sequence's ground truth scores valid numbers
                 # (results left empty by a front-end that found nothing: the run says so
                 # itself, after the loop)
-                for message in sanity_warnings(g, written, empty_said=grid is None
-                                               and call is not None and not found):
+                for message in sanity_warnings(g, written, empty_said=found_nothing()):
                     warnings.warn(message, UserWarning, stacklevel=4)
 
         found = 0  # what a front-end from pixels found (a detections file is checked as read)
@@ -2224,6 +2223,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 return d
 
             call = counted
+
+        def found_nothing() -> bool:  # a front-end from pixels that found nothing (said below)
+            return grid is None and call is not None and not found
+
         # the folder removed again, if made here, when the run fails; the outputs renamed
         # into place together, run.json with them, once all are complete (Ctrl-C between
         # two left new tracks beside an earlier run's video, plot and run.json)
@@ -2232,7 +2235,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             stats = run(reader, call, stepper, list(sinks.values()), progress=progress,
                         total=len(reader), label=reader.source.name, check=check)
             n = stats.frames
-            if grid is None and call is not None and not found:
+            if found_nothing():
                 # an empty result said nothing: tracks, video and plot written, none with a box
                 what = f"the {name} front-end" if isinstance(name, str) else "the front-end"
                 hint = ""

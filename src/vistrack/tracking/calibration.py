@@ -643,7 +643,6 @@ class ScoreCalibration:
         >>> cal([0.4, 0.9]).tolist(), cal.link_iou
         ([0.0, 1.0], 0.2)
         """
-        frames = list(frames)
         ious = [float(link_iou)]
         if min_link_iou is not None and 0 < min_link_iou < link_iou:
             # 0.1 lower each time (rounded: 0.3 - 0.1 - 0.1 falls short of 0.1), and the
@@ -652,6 +651,7 @@ class ScoreCalibration:
                 ious.append(round(ious[-1] - 0.1, 10))
             if ious[-1] > min_link_iou:
                 ious.append(float(min_link_iou))
+            frames = list(frames)  # gone over once for each overlap tried
         for iou in ious:
             s, p = _outcomes(frames, link_iou=iou, frame_rate=frame_rate,
                              chain_span=chain_span, chain_gap=chain_gap)
