@@ -493,6 +493,29 @@ def test_detections_files_alone_at_the_frame_rate_given(bench, tmp_path, capsys)
         plan([bare], tmp_path / "r3")
 
 
+def test_the_summary_says_where_fps_was_put_over_seqinfo(bench, tmp_path, capsys):
+    """``--fps`` is put over a sequence's own ``frameRate`` (15 here): the summary says so,
+    for one input on its line and for several in a line naming each sequence and its own
+    rate; a detections file alone has none to put it over, and the same rate says nothing."""
+    seq = bench / "SIM-0"
+    assert main(["track", str(seq), "--out", str(tmp_path / "a.txt"), "--fps", "10"]) == 0
+    assert capsys.readouterr().out.rstrip().endswith(
+        f"; tracked at --fps 10 frames/s, over {seq / 'seqinfo.ini'}'s frameRate 15")
+    for fps in ([], ["--fps", "15"]):
+        assert main(["track", str(seq), "--out", str(tmp_path / "a.txt"), "--force",
+                     *fps]) == 0
+        assert "tracked at" not in capsys.readouterr().out
+    inputs = [bench / "SIM-1", seq / "det" / "det.txt", bench / "SIM-2"]
+    assert main(["track", *map(str, inputs), "--out", str(tmp_path / "r"), "--fps", "12.5",
+                 "--quiet"]) == 0
+    assert capsys.readouterr().out.splitlines()[-2:] == [
+        "3 of 3 inputs tracked",
+        "tracked at --fps 12.5 frames/s, over the frameRate of seqinfo.ini: SIM-1 15, SIM-2 15"]
+    assert main(["track", *map(str, inputs), "--out", str(tmp_path / "s"), "--fps", "15",
+                 "--quiet"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == "3 of 3 inputs tracked"
+
+
 def test_scoring_many_pairs_at_once_gives_the_same_scores(bench, tmp_path, capsys):
     from vistrack.evaluation import evaluate_files
 

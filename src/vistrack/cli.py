@@ -447,7 +447,7 @@ def _track(args: argparse.Namespace) -> int:
     else:
         print(f"wrote {run.out}: {_n(run.rows, 'box', 'boxes')} of {_n(run.tracks, 'track')} "
               f"over {_n(run.frames, 'frame')} from {_n(run.detections, 'detection')}; tracker "
-              f"{run.fps:.0f} frames/s", file=report)
+              f"{run.fps:.0f} frames/s{_fps_words(args)}", file=report)
     if args.print_config:
         assert run.config is not None  # a box tracker's run (others refuse --print-config)
         derived = dict(run.derived or {})
@@ -456,6 +456,25 @@ def _track(args: argparse.Namespace) -> int:
             derived["fps_option"] = float(args.fps)
         sys.stdout.write(config_toml(run.config, derived))
     return 0
+
+
+def _fps_words(args: argparse.Namespace) -> str:
+    own = _rate_overridden(args.fps, args.input)
+    return ("" if own is None else f"; tracked at --fps {args.fps:g} frames/s, over "
+            f"{Path(args.input) / 'seqinfo.ini'}'s frameRate {own:g}")
+
+
+def _rate_overridden(fps: float | None, seq: str | Path) -> float | None:
+    """The ``frameRate`` of ``seq/seqinfo.ini`` where ``--fps`` put another over it, else
+    None (no ``--fps``, no ``seqinfo.ini``, or the same rate): the run tracked at the
+    option's rate, and its summary says so."""
+    from .io.motchallenge import read_seqinfo
+
+    ini = Path(seq) / "seqinfo.ini"
+    if fps is None or not ini.is_file():
+        return None
+    own = read_seqinfo(ini).frame_rate
+    return None if math.isclose(own, fps) else own
 
 
 def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
@@ -835,6 +854,12 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     bad = [o for o in outcomes if not o.ok]
     print(f"{len(outcomes) - len(bad)} of {len(outcomes)} inputs tracked"
           + (f"; {len(bad)} not" if bad else ""))
+    if kind == "detections":
+        over = [(n, own) for o, n in zip(outcomes, names)
+                if (own := _rate_overridden(args.fps, o.input)) is not None]
+        if over:
+            print(f"tracked at --fps {args.fps:g} frames/s, over the frameRate of seqinfo.ini: "
+                  + ", ".join(f"{n} {own:g}" for n, own in over))
     return 1 if bad else 0
 
 
