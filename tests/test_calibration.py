@@ -804,6 +804,48 @@ def test_the_calibrator_before_any_detection_is_the_first_classs():
     assert BoxTracker(calibration={np.int64(2): cal}).calibration == {2: cal}
 
 
+def test_a_learner_put_in_the_trackers_place_is_the_one_it_learns_with():
+    """``tracker.calibrator = learner`` starts the online calibration from what ``learner``
+    learnt on other frames of the detector: after a frame, the tracker's confidences are
+    those of a copy of the learner shown the same frame (the objects above 0.9, the clutter
+    below 0.2), where a tracker left to learn from that frame alone ranks the scores. Where
+    nothing is learnt, or each of several classes has its own learner, the assignment is
+    refused by name."""
+    import copy
+
+    frames = _fast(5)
+    learner = ScoreCalibrator(**BoxTracker().config.calibration_options(30.0))
+    for d in frames[:-1]:
+        learner.observe(d)
+    twin = copy.deepcopy(learner)
+    tr, fresh = BoxTracker(), BoxTracker()
+    tr.calibrator = learner
+    assert tr.calibrator is learner
+    tr.step(1, frames[-1])
+    fresh.step(1, frames[-1])
+    twin.observe(frames[-1])
+    s = frames[-1].scores
+    assert tr.calibrator is learner and tr.calibrators == {0: learner}
+    np.testing.assert_array_equal(tr.confidence(s), twin.calibration()(s))
+    assert tr.confidence(s)[:8].min() > 0.9 > 0.2 > tr.confidence(s)[8:].max()
+    # the fresh tracker, with no outcome yet, ranks the scores (1/16 to 1): the weakest
+    # object 0.5625, the strongest clutter 0.5
+    np.testing.assert_array_equal(fresh.confidence(s), (np.argsort(np.argsort(s)) + 1) / 16)
+    with pytest.raises(TypeError, match="calibrator must be a ScoreCalibrator; got "
+                                        "ScoreCalibration"):
+        tr.calibrator = twin.calibration()
+    with pytest.raises(ValueError, match=r"learns no calibration \(scores='raw'\)"):
+        BoxTracker(scores="raw").calibrator = learner
+    with pytest.raises(ValueError, match="learns no calibration .a fixed calibration is "):
+        BoxTracker(calibration=twin.calibration()).calibrator = learner
+    two = BoxTracker()
+    two.step(1, Detections.from_xywh([[0, 0, 9, 9], [50, 0, 9, 9]], [0.9, 0.2],
+                                     classes=[2, 0]))
+    with pytest.raises(ValueError, match=r"classes \[0, 2\] has a calibrator of its own: "
+                                         r"calibrators\[class\] = learner"):
+        two.calibrator = learner
+
+
 def _fast(shift, frames=30, seed=0):
     """Eight objects (30 x 80 pixels, scores 0.6-1) moving ``shift`` pixels a frame to the
     right, each on a row of its own, and eight boxes of clutter (scores 0-0.5) at random

@@ -739,6 +739,35 @@ class BoxTracker:
             return next(iter(self.calibrators.values()))
         return self._unclaimed
 
+    @calibrator.setter
+    def calibrator(self, learner: ScoreCalibrator) -> None:
+        """Put ``learner`` in the place of the online calibration's learner (one that has
+        seen other frames of the same detector, to start from what it learnt), where the
+        detections seen so far are of one class or none.
+
+        Raises
+        ------
+        TypeError
+            If ``learner`` is not a :class:`~vistrack.tracking.calibration.ScoreCalibrator`.
+        ValueError
+            With raw scores or one fixed calibration (nothing is learnt), or where several
+            classes have been seen (``calibrators[class] = learner``).
+        """
+        if not isinstance(learner, ScoreCalibrator):
+            raise TypeError(f"calibrator must be a ScoreCalibrator; got "
+                            f"{type(learner).__name__}")
+        if self.config.scores != "calibrated" or isinstance(self.calibration, ScoreCalibration):
+            raise ValueError("calibrator: this tracker learns no calibration ("
+                             + ("scores='raw'" if self.config.scores != "calibrated"
+                                else "a fixed calibration is given") + ")")
+        if len(self.calibrators) > 1:
+            raise ValueError(f"each of the classes {sorted(self.calibrators)} has a calibrator "
+                             "of its own: calibrators[class] = learner")
+        if self.calibrators:
+            self.calibrators[next(iter(self.calibrators))] = learner
+        else:
+            self._unclaimed = learner
+
     def score_calibrations(self) -> dict[int, ScoreCalibration]:
         """The calibration of each class seen (or given a fixed map), by class.
 
