@@ -13,13 +13,18 @@ from its eigendecomposition), with mean weights ``Wm`` and covariance weights ``
 Prediction: :math:`x^- = \sum W^m_i f(\chi_i)`,
 :math:`P^- = \sum W^c_i (f(\chi_i) - x^-)(f(\chi_i) - x^-)^T + Q`. Correction with sigma
 points :math:`\gamma_i` drawn afresh from :math:`(x^-, P^-)`, so that they carry ``Q`` too
-(on a linear model this makes the UKF the Kalman filter):
-:math:`\hat z = \sum W^m_i h(\gamma_i)`, :math:`S = \sum W^c_i r_i r_i^T + R`,
-:math:`C = \sum W^c_i (\gamma_i - x^-) r_i^T`, :math:`K = C S^{-1}`,
+(on a linear model this makes the UKF the Kalman filter): with
+:math:`d_i = r(h(\gamma_i), h(\gamma_0))`, the differences from the central point (``r`` the
+measurement model's residual, angles wrapped), and :math:`m = \sum W^m_i d_i`,
+:math:`\hat z = h(\gamma_0) + m`, :math:`S = \sum W^c_i (d_i - m)(d_i - m)^T + R`,
+:math:`C = \sum W^c_i (\gamma_i - x^-)(d_i - m)^T`, :math:`K = C S^{-1}`,
 :math:`x^+ = x^- + K\, r(y, \hat z)`, :math:`P^+ = P^- - K S K^T`, the last evaluated as
 :math:`P^- - V V^T` with :math:`V = C L^{-T}`, :math:`S = L L^T`, so that it is symmetric by
-construction. ``r`` is the measurement model's residual (angles wrap) and :math:`\hat z` its
-mean (circular for angles). These are the equations of FilterPy's ``UnscentedKalmanFilter``,
+construction. On plain components these are the usual sums; an angle is averaged about the
+central point rather than on the circle (``atan2(Σ W sin, Σ W cos)``, which with the scaled
+points' first weight of about -10^6 turns by π once the angle's spread passes about √2), and
+with every residual about the same :math:`m` the covariances stay positive semi-definite. These
+are the equations of FilterPy's ``UnscentedKalmanFilter`` given that mean (its ``z_mean_fn``),
 which the tests check to 1e-8.
 
 References: Julier and Uhlmann (1997), "A new extension of the Kalman filter to nonlinear
@@ -164,29 +169,25 @@ def _update_one(G, Z, Wm, Wc, R, y, angles, x, P, xo, Po):
     m = Z.shape[1]
     zhat = np.empty(m)
     for k in range(m):
-        if angles[k]:
-            s, c = 0.0, 0.0
-            for i in range(K):
-                s += Wm[i] * math.sin(Z[i, k])
-                c += Wm[i] * math.cos(Z[i, k])
-            zhat[k] = math.atan2(s, c)
-        else:
-            # about the first point, as _offset_mean: W_0 is about -10^6
-            v = 0.0
-            for i in range(1, K):
-                v += Wm[i] * (Z[i, k] - Z[0, k])
-            zhat[k] = Z[0, k] + v
+        # the differences from the central point (an angle's wrapped), summed: W_0 is about
+        # -10^6 (as _offset_mean); the residuals are about the mean they give, unwrapped
+        # (_central_transform)
+        v = 0.0
+        for i in range(1, K):
+            d = Z[i, k] - Z[0, k]
+            v += Wm[i] * (wrap_angle(d) if angles[k] else d)
+        zhat[k] = v
     rz = np.empty((K, m))
     e = np.empty(m)
     nobs = 0
     for k in range(m):
         obs = not math.isnan(y[k])
         nobs += obs
-        d = y[k] - zhat[k] if obs else 0.0
+        d = y[k] - (Z[0, k] + zhat[k]) if obs else 0.0
         e[k] = wrap_angle(d) if angles[k] else d
         for i in range(K):
-            d = Z[i, k] - zhat[k]
-            rz[i, k] = (wrap_angle(d) if angles[k] else d) if obs else 0.0
+            d = Z[i, k] - Z[0, k]
+            rz[i, k] = ((wrap_angle(d) if angles[k] else d) - zhat[k]) if obs else 0.0
     S = np.empty((m, m))
     for a in range(m):
         for b in range(a + 1):
@@ -514,6 +515,25 @@ def _transform(pts: np.ndarray, Wm: np.ndarray, Wc: np.ndarray, mean_fn: Callabl
     return mean, cov, r
 
 
+def _central_transform(pts: np.ndarray, Wm: np.ndarray, Wc: np.ndarray,
+                       residual: Callable) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_transform` of sigma points ``(..., k, d)`` (the first the central one) for a
+    residual that is a difference, angles wrapped: the points' residuals from the central
+    one ``d_i``, their weighted sum ``m`` (the mean ``pts_0 + m``, left unwrapped), and the
+    covariance of ``d_i - m``. The circular mean of an angle, ``atan2(Σ W sin, Σ W cos)`` (the
+    model's ``mean``, right for an ensemble), is not the transform's: with scaled points
+    (α small, the first weight about -1/α²) ``Σ W cos`` is ``1 - σ²/2`` to second order, σ
+    the angle's spread, and past σ ≈ √2 it turns the mean by π; and residuals about a mean
+    wrapped back from beyond ±π of the central point leave a covariance that need not be
+    positive semi-definite. With every residual about the same ``m`` the covariance is
+    ``Σ_{i≥1} W_i d_i d_i' + (Σ W^c - 2) m m'``, positive semi-definite for van der Merwe's
+    points with β ≥ α², and for any points whose weights are all at least 0."""
+    d = residual(pts, pts[..., :1, :])
+    m = np.einsum("...km,k->...m", d, Wm)
+    r = d - m[..., None, :]
+    return pts[..., 0, :] + m, np.einsum("...ki,k,...kj->...ij", r, Wc, r), r
+
+
 def ukf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: float = 1.0,
                 t: float = 0.0, *,
                 points: _SigmaPoints | None = None, state_mean: Callable | None = None,
@@ -610,21 +630,26 @@ def ukf_update(g: Gaussian, y: ArrayLike,
     r"""UKF correction of a batch of Gaussians with a measurement each (NaN = missing).
 
     The sigma points :math:`\gamma_i` are drawn from ``g`` (so that they carry the process
-    noise of the prediction too). With :math:`r_i = r(h(\gamma_i), \hat z)`, over the observed
+    noise of the prediction too). With residuals :math:`r_i` (below), over the observed
     components,
 
     .. math::
 
-        \hat z = \sum_i W^m_i h(\gamma_i), \qquad
+        \hat z = h(\gamma_0) + m, \quad m = \sum_i W^m_i d_i, \qquad
         S = \sum_i W^c_i r_i r_i' + R, \qquad
         C = \sum_i W^c_i (\gamma_i - x) r_i',
 
         K = C S^{-1}, \qquad x^+ = x + K\, r(y, \hat z), \qquad
         P^+ = P - V V', \quad V = C L^{-T}, \quad S = L L',
 
-    the last form symmetric by construction. ``r`` is the measurement model's residual
-    (differences, angles wrapped) and :math:`\hat z` its mean (circular for angles). On a
-    linear model this is the Kalman update.
+    the last form symmetric by construction, where :math:`d_i = r(h(\gamma_i), h(\gamma_0))`
+    are the differences from the central sigma point and :math:`r_i = d_i - m`, ``r`` the
+    measurement model's residual (differences, angles wrapped): an angle is averaged about
+    the central point, not on the circle (whose mean, with the scaled points' first weight of
+    about -10^6, turns by π once the angle's spread passes about √2). A model with a
+    residual or mean of its own (or ``residual``, ``mean`` given) uses them instead:
+    :math:`\hat z` its mean of the :math:`h(\gamma_i)` and :math:`r_i = r(h(\gamma_i), \hat z)`.
+    On a linear model this is the Kalman update.
 
     Parameters
     ----------
@@ -723,7 +748,8 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
     gamma = points._many(g.mean, g.cov, "g.cov")
     obs = ~np.isnan(y)
     zs = np.asarray(me.h(gamma), dtype=float)
-    zhat, Pzz, rz = _transform(zs, Wm, Wc, me.mean, me.residual)
+    zhat, Pzz, rz = (_central_transform(zs, Wm, Wc, me.residual) if me.standard
+                     else _transform(zs, Wm, Wc, me.mean, me.residual))
     rz = rz * obs[..., None, :]  # missing components: no cross-covariance
     dx = (state_residual or _sub)(gamma, g.mean[..., None, :])
     C = np.einsum("...ki,k,...kj->...ij", dx, Wc, rz)

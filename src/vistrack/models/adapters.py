@@ -211,7 +211,9 @@ class MeasurementFunctions:
         Whether the model is linear.
     standard : bool
         Whether residuals are differences (angles wrapped) and means weighted sums (circular
-        for angles): what the compiled one-Gaussian UKF kernels reproduce.
+        for angles), the model's own neither: then the UKF (its compiled one-Gaussian
+        kernel and its batch alike) averages about the central sigma point, angles'
+        differences wrapped.
     angle_mask : (m,) ndarray of bool
         The components that are angles.
 
@@ -258,7 +260,8 @@ class MeasurementFunctions:
         self.mean = mean or getattr(model, "mean", None) or (
             partial(_weighted_mean, angles=angles) if angles else _plain_mean)
         # "standard": residuals are differences (angles wrapped) and means weighted sums
-        # (circular for angles), which the compiled one-Gaussian kernels reproduce; a model,
+        # (circular for angles), which the UKF replaces by its sums about the central sigma
+        # point (compiled for one Gaussian, numpy for a batch); a model,
         # linear or not, with a residual or mean of its own is not (a linear sensor of a
         # heading wraps its residual)
         own = type(model)

@@ -14,8 +14,9 @@ estimate). Every function takes a batch ``x (..., n)``. ``t`` is the time of the
 (the step index when ``dt = 1``); only time-varying models use it.
 
 Measurement models also give ``residual(a, b)`` (``a - b`` with angles wrapped to ``(-π, π]``)
-and ``mean(z, w)`` (a weighted mean with a circular mean for angles), which the UKF uses so that
-bearings near ±π average correctly.
+and ``mean(z, w)`` (a weighted mean with a circular mean for angles), which the ensemble KF uses
+so that bearings near ±π average correctly; the UKF averages such a model's angles about its
+central sigma point instead (:mod:`vistrack.filters.ukf`).
 
 User models: :class:`NonlinearMotion` and :class:`NonlinearMeasurement` wrap plain functions; a
 missing Jacobian falls back to :func:`numerical_jacobian` (central differences).
@@ -329,7 +330,8 @@ class AngleAwareMeasurement:
         Parameters
         ----------
         z : (..., N, m) ndarray
-            ``N`` measurements (sigma points, ensemble members) per batch entry.
+            ``N`` measurements (ensemble members; the UKF's sigma points only for a model
+            that overrides this) per batch entry.
         w : (N,) ndarray
             Weights, summing to one (the plain components use them as given, so the
             unscented transform's negative weights are allowed).
