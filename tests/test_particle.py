@@ -218,7 +218,8 @@ def test_mode_finds_the_tallest_peak_and_its_weight():
 
 def test_weighted_moments_take_lists_and_equal_numpy():
     """weighted_mean and weighted_cov against numpy's np.average and np.cov (aweights, no bias
-    correction), from lists as from arrays; wrong shapes are named."""
+    correction), from lists as from arrays and from weights on any scale (particle_mode too
+    gives the same mode); wrong shapes and bad weights are named."""
     rng = np.random.default_rng(4)
     x = rng.normal(size=(50, 3))
     w = rng.random(50)
@@ -228,6 +229,24 @@ def test_weighted_moments_take_lists_and_equal_numpy():
     for args in ((x, w), (x.tolist(), w.tolist())):
         np.testing.assert_allclose(weighted_mean(*args), mean, rtol=1e-12, atol=1e-15)
         np.testing.assert_allclose(weighted_cov(*args), cov, rtol=1e-12, atol=1e-15)
+    # weights as they come (likelihoods, on any scale) are divided by their sum, as
+    # np.average divides them; they were taken as normalised, and 3 w gave 3 times the mean
+    for scale in (3.0, 1e300, 1e-300):
+        np.testing.assert_allclose(weighted_mean(x, w * scale), mean, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(weighted_cov(x, w * scale), cov, rtol=1e-12, atol=1e-15)
+    mode = particle_mode(x, w)
+    for scale in (3.0, 1e300):
+        got = particle_mode(x, w * scale)
+        np.testing.assert_allclose(got[0], mode[0], rtol=1e-12, atol=1e-12)
+        assert got[1] == pytest.approx(mode[1], abs=1e-12)
+    for f in (weighted_mean, weighted_cov):
+        with pytest.raises(ValueError, match=r"weights\[2\] is -0.5: weights must be finite "
+                                             "and >= 0"):
+            f(x[:3], [0.5, 1.0, -0.5])
+        with pytest.raises(ValueError, match=r"weights\[1\] is nan"):
+            f(x[:3], [0.5, np.nan, 0.5])
+        with pytest.raises(ValueError, match=r"weights are all 0 \(of 3 particles\)"):
+            f(x[:3], [0.0, 0.0, 0.0])
     with pytest.raises(ValueError, match=r"weights must have shape \(50,\), one per particle"):
         weighted_cov(x, w[:-1].tolist())
     with pytest.raises(ValueError, match="particles must be 2-D"):

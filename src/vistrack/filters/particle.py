@@ -371,6 +371,13 @@ def _some_weight(w: np.ndarray) -> float:
     return top
 
 
+def _normalised(w: np.ndarray) -> np.ndarray:
+    """The weights ``w`` (1-D, not empty) checked as :func:`_some_weight` does and divided by
+    their sum (first by the largest, so that large weights do not overflow)."""
+    w = w / _some_weight(w)
+    return w / w.sum()
+
+
 def _ess(w: np.ndarray) -> float:
     # effective_sample_size of normalised weights, unchecked: the filters' own
     return float(1.0 / np.dot(w, w))
@@ -404,7 +411,8 @@ def weighted_mean(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
     particles : (N, n) array_like
         The particles.
     weights : (N,) array_like
-        Normalised weights (not checked).
+        Weights, finite and >= 0, not all 0; divided by their sum (likelihoods may be given
+        as they are, as to numpy's ``average``).
 
     Returns
     -------
@@ -414,14 +422,16 @@ def weighted_mean(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``particles`` is not 2-D or ``weights`` is not one weight per particle.
+        If ``particles`` is not 2-D, ``weights`` is not one weight per particle, or a weight
+        is negative or not finite, or all are 0 (naming the first bad one).
 
     Examples
     --------
-    >>> weighted_mean([[0.0], [2.0]], [0.25, 0.75])
-    array([1.5])
+    >>> weighted_mean([[0.0], [2.0]], [0.25, 0.75]), weighted_mean([[0.0], [2.0]], [1, 3])
+    (array([1.5]), array([1.5]))
     """
-    return _wmean(*_particles_and_weights(particles, weights))
+    x, w = _particles_and_weights(particles, weights)
+    return _wmean(x, _normalised(w))
 
 
 def weighted_cov(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
@@ -434,7 +444,7 @@ def weighted_cov(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
     particles : (N, n) array_like
         The particles.
     weights : (N,) array_like
-        Normalised weights (not checked).
+        Weights, finite and >= 0, not all 0; divided by their sum.
 
     Returns
     -------
@@ -444,14 +454,16 @@ def weighted_cov(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``particles`` is not 2-D or ``weights`` is not one weight per particle.
+        If ``particles`` is not 2-D, ``weights`` is not one weight per particle, or a weight
+        is negative or not finite, or all are 0 (naming the first bad one).
 
     Examples
     --------
     >>> weighted_cov([[0.0], [2.0]], [0.25, 0.75])
     array([[0.75]])
     """
-    return _wcov(*_particles_and_weights(particles, weights))
+    x, w = _particles_and_weights(particles, weights)
+    return _wcov(x, _normalised(w))
 
 
 def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayLike | None = None,
@@ -487,7 +499,8 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     particles : (N, n) array_like
         The particles.
     weights : (N,) array_like
-        Normalised weights (zero weights are particles that count for nothing).
+        Weights, finite and >= 0, not all 0, divided by their sum (zero weights are
+        particles that count for nothing).
     bandwidth : float or (n,) array_like, optional
         Kernel standard deviation per dimension; default Silverman's rule.
     n_starts : int
@@ -533,7 +546,7 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     if N == 0:
         raise ValueError(f"particles must hold at least one particle; got shape {x.shape}")
     check_finite(x, "particles")
-    _some_weight(w)
+    w = _normalised(w)
     n_starts = _count(n_starts, "n_starts", 1)
     max_iter = _count(max_iter, "max_iter", 0)
     max_points = _count(max_points, "max_points", 1)
