@@ -601,9 +601,9 @@ def test_an_unknown_tracker_lists_every_form(tmp_path, capsys, name):
 
     assert main(["track", str(VIDEO), "--out-dir", str(tmp_path / "out"), "--tracker",
                  name]) == 2
-    one_line(capsys, "track", "--tracker must be bytetrack, sort, dcpf, single:METHOD (METHOD "
-             f"one of {', '.join(sorted(METHODS))}) or module:callable (a tracker of your "
-             f"own); got {name!r}")
+    one_line(capsys, "track", "--tracker must be bytetrack, sort, dcpf, particles, "
+             f"single:METHOD (METHOD one of {', '.join(sorted(METHODS))}) or module:callable "
+             f"(a tracker of your own); got {name!r}")
 
 
 # ------------------------------------------------------------- argparse's own errors

@@ -1275,7 +1275,7 @@ def test_track_video_writes_tracks_video_plot_and_scores(tmp_path):
     assert run.scores.HOTA > 0.25  # people are tracked (PETS09 ground truth)
     with pytest.raises(FileExistsError, match="tracks.txt.*exist; pass --force"):
         track_video(demo / "pets09-s2l1.mp4", tmp_path / "out", stop=5)
-    with pytest.raises(ValueError, match="--frontend must be bgsub, confidence, hog, "
+    with pytest.raises(ValueError, match="--frontend must be bgsub, confidence, hog, spots, "
                                          "detections:FILE or onnx:MODEL.onnx; got"):
         track_video(demo / "pets09-s2l1.mp4", tmp_path / "o2", frontend="yolo", stop=5)
 

@@ -28,7 +28,8 @@ if TYPE_CHECKING:
 
 DEMOS = ("kalman", "track")
 
-_FRONTEND_OPTIONS = ("frontend", "stop", "min_area", "background", "classes", "onnx_layout")
+_FRONTEND_OPTIONS = ("frontend", "stop", "min_area", "background", "classes", "onnx_layout",
+                     "diameter", "minmass", "invert")
 """``vistrack track``'s options of the front-end, for video mode only (None when not given):
 passed on to ``track_video`` as they are."""
 
@@ -281,7 +282,10 @@ def _number_problem(args: argparse.Namespace) -> str | None:
     checks = (("fps", lambda v: _FPS[0] <= v <= _FPS[1],
                f"a number from {_FPS[0]:g} to {_FPS[1]:g} (frames a second)"),
               ("stop", lambda v: v >= 1, "a frame number >= 1"),
-              ("min_area", lambda v: math.isfinite(v) and v >= 0, "a number >= 0"))
+              ("min_area", lambda v: math.isfinite(v) and v >= 0, "a number >= 0"),
+              ("diameter", lambda v: v >= 3 and v % 2 == 1, "an odd number of pixels >= 3"),
+              ("minmass", lambda v: math.isfinite(v) and v >= 0, "a number >= 0"),
+              ("search_range", lambda v: math.isfinite(v) and v > 0, "a number of pixels > 0"))
     for option, ok, what in checks:
         value = getattr(args, option, None)
         if value is not None and not ok(value):
@@ -298,10 +302,20 @@ def _tracker_and_numbers(args: argparse.Namespace) -> tuple[str, bool, str]:
     the numbers given or the tracker's name ("" if nothing)."""
     from .tracking.box import TRACKERS as BOX_PRESETS
 
-    name = args.tracker or "bytetrack"
+    # spots are points: the tracker of points goes with them
+    name = args.tracker or ("particles" if args.frontend == "spots" else "bytetrack")
     box = name in BOX_PRESETS
     problem = _number_problem(args) or ("" if box else _tracker_problem(name) or "")
+    if not problem and getattr(args, "search_range", None) is not None and name != "particles":
+        problem = f"--search-range goes with --tracker particles, not {name}"
     return name, box, problem
+
+
+def _points(name: str) -> bool:
+    """Whether ``--tracker name`` gives point tracks (no ``tracks.txt``)."""
+    from .pipeline import TRACKERS
+
+    return name in TRACKERS and TRACKERS[name].points
 
 
 def _box_trackers() -> str:
@@ -558,7 +572,11 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
             return problem
         if args.skip_bad_frames and Path(args.input).is_file():
             return _skip_bad_frames_problem([args.input])
-        video_outputs(args.out_dir, force=args.force, name="--out-dir")
+        if args.report and _points(name):
+            return (f"--report shows box tracks (tracks.txt); --tracker {name} writes points "
+                    "(tracks.csv), the annotated video and trajectories.png")
+        video_outputs(args.out_dir, force=args.force, name="--out-dir",
+                      points=_points(name))
     return ""
 
 
@@ -675,8 +693,10 @@ def _print_video_run(args: argparse.Namespace, run: VideoRun, report: TextIO) ->
     sec = dict(run.seconds)
     compiling = sec.pop("compile", 0.0)
     ms = ", ".join(f"{k} {1e3 * v / run.frames:.2f}" for k, v in sec.items())
-    print(f"tracked {_n(run.frames, 'frame')}: {_n(run.rows, 'box', 'boxes')} of "
-          f"{_n(run.tracks, 'track')}; "
+    rows = (f"{_n(run.rows, 'position')} of {_n(run.tracks, 'particle')}"
+            if _points(_tracker_and_numbers(args)[0]) else
+            f"{_n(run.rows, 'box', 'boxes')} of {_n(run.tracks, 'track')}")
+    print(f"tracked {_n(run.frames, 'frame')}: {rows}; "
           f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})"
           + (f"; compiling took {compiling:.1f} s" if compiling >= 0.05 else ""),
           file=report)
@@ -720,6 +740,8 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
         options["columns"] = columns
     options.update(tracker=name, skip_bad_frames=args.skip_bad_frames,
                    command=getattr(args, "command_line", None))
+    if args.search_range is not None:  # the particles tracker's (checked before)
+        options["search_range"] = args.search_range
     front = args.frontend or default_frontend(name)
     if args.still_camera and front in FRONTENDS and FRONTENDS[front].still_camera:
         options["follow_view"] = False  # the background model: the view is not followed
@@ -812,7 +834,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         if kind == "detections":
             check_output(job.out, force=args.force, name="--out")
         else:
-            video_outputs(job.out, force=args.force, name="--out-dir")
+            video_outputs(job.out, force=args.force, name="--out-dir", points=_points(name))
     if args.scheduler is not None:
         if args.jobs is not None:
             return fail("--jobs goes with the local pool; the cluster has its own workers")
@@ -1263,7 +1285,9 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--tracker", metavar="NAME",
                        help="tracker: bytetrack (default) or sort; in video mode also dcpf "
                        "(the detector-confidence particle filter on HOG's confidence map, "
-                       "about 9 frames/s), single:METHOD (one object, from the first frame's "
+                       "about 9 frames/s), particles (drifting points, the default with "
+                       "--frontend spots; writes tracks.csv of frame,particle,x,y, no "
+                       "tracks.txt), single:METHOD (one object, from the first frame's "
                        "most confident detection; METHOD as track-one's), or "
                        "module:callable, a tracker of your own (a callable returning an "
                        "object with step(frame, detections) -> Tracks and reset())")
@@ -1298,7 +1322,8 @@ def build_parser() -> argparse.ArgumentParser:
                          f"{text} (default {default})")
     track.add_argument("--frontend", help="video mode: bgsub (default; background model and "
                        "blobs), hog (OpenCV's people detector), confidence (the peaks of "
-                       "HOG's confidence map; the default of dcpf), detections:FILE "
+                       "HOG's confidence map; the default of dcpf), spots (round spots of "
+                       "--diameter, microscopy; the default of particles), detections:FILE "
                        "(MOTChallenge's format, or CSV with a header; as --detections, a "
                        "detector run on every k-th frame is tracked on its own frames), or "
                        "onnx:MODEL.onnx (your own YOLO- or SSD-style detector; pip install "
@@ -1323,6 +1348,17 @@ def build_parser() -> argparse.ArgumentParser:
                        "seeds' running mean and variance)")
     track.add_argument("--min-area", type=float,
                        help="video mode, bgsub: the smallest blob, in pixels (default: 500)")
+    track.add_argument("--diameter", type=int, metavar="PX",
+                       help="video mode, spots: the spots' diameter in pixels, odd (round "
+                       "up); needed")
+    track.add_argument("--minmass", type=float, metavar="X",
+                       help="video mode, spots: the least integrated brightness of a spot, "
+                       "in grey levels (default: 0)")
+    track.add_argument("--invert", action="store_const", const=True,
+                       help="video mode, spots: spots darker than the background")
+    track.add_argument("--search-range", type=float, metavar="PX",
+                       help="--tracker particles: the farthest a particle moves between "
+                       "frames, in pixels, the radius of its gate (default: half --diameter)")
     track.add_argument("--report", action="store_true",
                        help="video mode: also write OUT/report.html, one page with the "
                        "command, the scores, the annotated video and the plots (as vistrack "

@@ -64,7 +64,7 @@ from .io.motchallenge import (
     sequence_name,
     write_mot,
 )
-from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, Sink
+from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, PointsCSVWriter, Sink
 from .models.box import FRAME_RATES, BoxMotion
 from .tracking.base import Tracker, check_start_box
 from .tracking.box import MAX_PIXELS, BoxTracker, BoxTrackerConfig
@@ -647,6 +647,9 @@ class Context:
         ConfidenceMap``; default :class:`~vistrack.frontends.HOGConfidence`).
     resolved : TrackConfig or None
         The configuration a box tracker was made with (set by its maker).
+    points : bool
+        Whether the run's tracker gives point tracks (its entry's in :data:`TRACKERS`): the
+        CSV sink then writes ``frame,particle,x,y``.
 
     Examples
     --------
@@ -663,6 +666,7 @@ class Context:
     overrides: dict = field(default_factory=dict)
     options: dict = field(default_factory=dict)
     resolved: TrackConfig | None = None
+    points: bool = False
     _confidence: _OncePerImage | None = field(default=None, init=False, repr=False)
 
     @property
@@ -776,6 +780,22 @@ def _onnx(path: str | Path, ctx: Context) -> FrameDetector:
     return lambda frame: det.detect(_image(frame, "the ONNX model"))
 
 
+def _spots(ctx: Context) -> FrameDetector:
+    from .frontends.spots import locate
+
+    opt = ctx.options
+    if opt.get("diameter") is None:
+        raise ValueError("the spots front-end needs the spots' diameter in pixels, odd "
+                         "(diameter=, --diameter): the size of feature it looks for")
+    diameter, minmass = opt["diameter"], float(opt.get("minmass", 0.0))
+    invert = bool(opt.get("invert", False))
+    locate(np.zeros((8, 8), np.uint8), diameter)  # a bad diameter named before any frame
+    if not (math.isfinite(minmass) and minmass >= 0):
+        raise ValueError(f"minmass must be a finite number >= 0; got {opt['minmass']}")
+    return lambda frame: locate(_image(frame, "the spots front-end"), diameter,
+                                minmass=minmass, invert=invert).detections()
+
+
 MAX_FRAMES = 10 ** 8
 """The last frame a detections file without a sequence folder is tracked up to (39 days at
 30 frames/s): the tracker steps through every frame to its last, and a frame number that is a
@@ -823,6 +843,8 @@ FRONTENDS: Registry[Frontend] = Registry("frontend", {
     "hog": Frontend(_hog, help="OpenCV's HOG people detector"),
     "confidence": Frontend(_confidence_peaks, help="the peaks of the detector's confidence "
                            "map (HOG's by default) above det_threshold"),
+    "spots": Frontend(_spots, help="round spots of a given diameter, bright or dark "
+                      "(microscopy; frontends.spots.locate, Crocker and Grier's, trackpy's)"),
 })
 """Front-ends by name; also ``"detections:FILE"``, a MOTChallenge detections file, and
 ``"onnx:MODEL.onnx"``, the user's own ONNX detector
@@ -831,7 +853,8 @@ FRONTENDS: Registry[Frontend] = Registry("frontend", {
 FRONTEND_OPTIONS = {"background": "bgsub", "min_area": "bgsub", "n_init": "bgsub",
                     "follow_view": "bgsub",
                     "det_threshold": "confidence", "classes": "onnx:MODEL.onnx",
-                    "onnx_layout": "onnx:MODEL.onnx", "columns": "detections:FILE"}
+                    "onnx_layout": "onnx:MODEL.onnx", "columns": "detections:FILE",
+                    "diameter": "spots", "minmass": "spots", "invert": "spots"}
 """The front-ends' own options (:func:`track_video`'s arguments) and the front-end that reads
 each; given with another front-end, one would change nothing, so it is refused."""
 
@@ -904,6 +927,47 @@ def _dcpf(ctx: Context) -> Tracker:
     return DetectorConfidencePF(confidence=ctx.confidence, frame_rate=ctx.fps, **ctx.overrides)
 
 
+PARTICLE_GATE = 0.999
+"""The gate probability of the ``particles`` tracker: its ``search_range`` is the radius of
+this quantile of a track's innovation, one frame after an update."""
+
+
+def _particles(ctx: Context) -> Tracker:
+    from .association.gating import chi2_threshold
+    from .models import ConstantPosition, Position
+    from .tracking import PointTracker
+
+    over = dict(ctx.overrides)
+    search = over.pop("search_range", None)
+    if search is None:
+        diameter = ctx.options.get("diameter")
+        if diameter is None:
+            raise ValueError("the particles tracker needs search_range (--search-range, the "
+                             "farthest a particle moves between frames, in pixels), or the "
+                             "spots' diameter to take half of it")
+        search = diameter / 2
+    search = float(search)
+    max_lost = float(over.pop("max_lost", 3.5 / ctx.fps))
+    if over:
+        raise ValueError(f"the particles tracker's settings are search_range and max_lost; got "
+                         f"{sorted(over)}")
+    r = PARTICLE_NOISE ** 2
+    # one frame after an update the innovation's variance per axis is r + q / fps + r
+    step = search ** 2 / chi2_threshold(2, PARTICLE_GATE) - 2 * r
+    if not (math.isfinite(search) and step > 0):
+        raise ValueError(f"search_range must be a finite number of pixels above "
+                         f"{math.sqrt(2 * r * chi2_threshold(2, PARTICLE_GATE)):.2f} (the "
+                         f"gate of the positions' own noise); got {search:g}")
+    return PointTracker("gnn", motion=ConstantPosition(dim=2, q=step * ctx.fps),
+                        measurement=Position(dim=2, r=r), frame_rate=ctx.fps, confirm_hits=1,
+                        max_lost=max_lost, p_gate=PARTICLE_GATE)
+
+
+PARTICLE_NOISE = 0.1
+"""The ``particles`` tracker's measurement noise, pixels (standard deviation per axis): the
+spots' positions, to about a tenth of a pixel."""
+
+
 def _single(method: str) -> Callable[[Context], Tracker]:
     def make(ctx: Context) -> Tracker:
         from .tracking.single import single_tracker
@@ -917,13 +981,15 @@ def _single(method: str) -> Callable[[Context], Tracker]:
 
 @dataclass(frozen=True)
 class TrackerEntry:
-    """A tracker in :data:`TRACKERS`: ``make(context) -> Tracker``, and the front-end it
-    goes with by default."""
+    """A tracker in :data:`TRACKERS`: ``make(context) -> Tracker``, the front-end it goes
+    with by default, whether its configuration is a box tracker's, and whether its tracks
+    are points (then :func:`track_video` writes no ``tracks.txt``)."""
 
     make: Callable[[Context], Tracker]
     frontend: str = "bgsub"
     box_config: bool = False
     help: str = ""
+    points: bool = False
 
 
 def _trackers() -> Registry[TrackerEntry]:
@@ -935,6 +1001,9 @@ def _trackers() -> Registry[TrackerEntry]:
              for name in BOX_PRESETS}
     items["dcpf"] = TrackerEntry(_dcpf, frontend="confidence",
                                  help="detector-confidence particle filter")
+    items["particles"] = TrackerEntry(_particles, frontend="spots", points=True,
+                                      help="drifting points linked frame to frame "
+                                      "(microscopy; tracking.PointTracker)")
     for name in METHODS:
         items[f"single:{name}"] = TrackerEntry(_single(name), help="one object, started at "
                                                "the first frame's most confident detection")
@@ -943,7 +1012,8 @@ def _trackers() -> Registry[TrackerEntry]:
 
 TRACKERS: Registry[TrackerEntry] = _trackers()
 """Trackers by name for :func:`track_video` (``vistrack track --tracker``): the box trackers'
-presets (:data:`vistrack.tracking.TRACKERS`), ``"dcpf"`` and ``"single:METHOD"`` (a
+presets (:data:`vistrack.tracking.TRACKERS`), ``"dcpf"``, ``"particles"`` (points) and
+``"single:METHOD"`` (a
 single-object tracker, :data:`vistrack.tracking.METHODS`); also ``"module:callable"``, a
 callable of yours that returns a :class:`~vistrack.tracking.Tracker`."""
 
@@ -1022,7 +1092,7 @@ def make_tracker(tracker: str | Tracker, ctx: Context) -> tuple[Tracker, str]:
 # ------------------------------------------------------------------------------- sinks
 SINKS: Registry[Callable[[Path, Context, str], Sink]] = Registry("sink", {
     "tracks": lambda path, ctx, name: MOTWriter(path),
-    "csv": lambda path, ctx, name: CSVWriter(path),
+    "csv": lambda path, ctx, name: PointsCSVWriter(path) if ctx.points else CSVWriter(path),
     "video": lambda path, ctx, name: _annotated_video(path, ctx.fps),
     "plot": lambda path, ctx, name: _trajectory_plot(path, name),
 })
@@ -1936,13 +2006,15 @@ tracks."""
 
 
 def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = False,
-                  name: str = "out_dir") -> dict[str, Path]:
+                  name: str = "out_dir", points: bool = False) -> dict[str, Path]:
     """The file of each sink :func:`track_video` writes in ``out_dir``, checked before any
     work is done: ``out_dir`` is a folder or can be made one, can be written in, its
     outputs (``run.json`` too, which is not a sink's, and an earlier run's ``report.html``)
     are not folders, and exist only if ``force``.
 
-    ``name`` names the argument or option in the messages.
+    ``name`` names the argument or option in the messages. With ``points`` (a tracker of
+    point tracks, whose rows are no boxes) there is no ``tracks.txt``; an earlier run's is
+    checked as the outputs are, and removed when the run's outputs are written.
 
     Raises
     ------
@@ -1964,9 +2036,12 @@ def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = F
     """
     out_dir = Path(out_dir)
     check_output(out_dir, name=name, folder=True)
-    files = {key: out_dir / SINK_FILES[key] for key in SINKS if annotate or key != "video"}
-    # and how they were made, and the page that showed an earlier run's
-    written = [*files.values(), out_dir / RUN_INFO, out_dir / REPORT]
+    files = {key: out_dir / SINK_FILES[key] for key in SINKS
+             if (annotate or key != "video") and not (points and key == "tracks")}
+    # and how they were made, and the page that showed an earlier run's (and its tracks.txt,
+    # where these tracks are points)
+    written = [*files.values(), out_dir / RUN_INFO, out_dir / REPORT,
+               *([out_dir / SINK_FILES["tracks"]] if points else [])]
     for p in written:
         if p.is_dir():
             raise IsADirectoryError(f"{name} {out_dir}: {p} is a folder, not a file")
@@ -1978,7 +2053,7 @@ def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = F
 
 def track_video(video: str | Path, out_dir: str | Path, *,
                 frontend: str | Detector | Callable[[Frame], Detections | None] | None = None,
-                fps: float | None = None, tracker: str | Tracker = "bytetrack",
+                fps: float | None = None, tracker: str | Tracker | None = None,
                 gt: str | Path | None = None, background: str | None = None,
                 min_area: float | None = None, n_init: int | None = None,
                 follow_view: bool | None = None, stop: int | None = None,
@@ -1988,14 +2063,16 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 det_threshold: float | None = None, classes: Sequence[int] | None = None,
                 onnx_layout: str | None = None, config: TrackConfig | None = None,
                 command: str | None = None, columns: dict[str, str] | None = None,
-                **overrides: object) -> VideoRun:
+                diameter: int | None = None, minmass: float | None = None,
+                invert: bool | None = None, **overrides: object) -> VideoRun:
     """Track a video (a file, an image folder or a MOTChallenge sequence folder) from pixels.
 
     Writes into ``out_dir`` (:data:`SINKS`): ``tracks.txt`` (MOTChallenge results),
     ``tracks.csv``, ``annotated.mp4`` (boxes, identities, trails and 2-sigma ellipses of the
     centres) and ``trajectories.png``, and ``run.json`` (how they were made, which
     :mod:`vistrack.report` reads); scores against ``gt`` (a MOTChallenge ground-truth file)
-    when given.
+    when given. A tracker of points (``particles``) writes no ``tracks.txt``: its
+    ``tracks.csv`` holds ``frame,particle,x,y`` (:class:`~vistrack.io.PointsCSVWriter`).
 
     Parameters
     ----------
@@ -2006,7 +2083,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     frontend : str or detector, optional
         A name in :data:`FRONTENDS`: ``"bgsub"`` (the seeds' background model, then blobs),
         ``"hog"`` (OpenCV's people detector), ``"confidence"`` (the peaks of the detector's
-        confidence map above ``det_threshold``); ``"detections:FILE"`` (a MOTChallenge
+        confidence map above ``det_threshold``), ``"spots"`` (round spots of ``diameter``
+        pixels, microscopy: :func:`~vistrack.frontends.spots.locate`);
+        ``"detections:FILE"`` (a MOTChallenge
         detections file, or CSV; where its rows lie on every k-th frame only, a box tracker
         steps through those frames alone, at the frame rate divided by k, and each frame
         between gets its tracks' predicted boxes, as in :func:`track_sequence`);
@@ -2014,14 +2093,18 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         run by onnxruntime: :class:`~vistrack.frontends.onnx.ONNXDetector`); or a detector
         of your own: any object with ``detect(image) ->
         Detections`` (:class:`vistrack.frontends.detectors.Detector`). Default: the
-        tracker's (``bgsub``; ``confidence`` for ``dcpf``).
-    tracker : str or Tracker
+        tracker's (``bgsub``; ``confidence`` for ``dcpf``, ``spots`` for ``particles``).
+    tracker : str or Tracker, optional
         A name in :data:`TRACKERS`: a box tracker's preset (``"bytetrack"``, ``"sort"``;
         ``overrides`` are fields of its configuration), ``"dcpf"`` (the detector-confidence
         particle filter; ``overrides`` are fields of its
-        :class:`~vistrack.tracking.dcpf.DCPFConfig`), ``"single:METHOD"`` (one object,
+        :class:`~vistrack.tracking.dcpf.DCPFConfig`), ``"particles"`` (drifting points,
+        linked by global nearest neighbour; ``overrides`` ``search_range``, the radius of a
+        track's gate one frame after an update in pixels, default half ``diameter``, and
+        ``max_lost``, seconds, default 3.5 frames), ``"single:METHOD"`` (one object,
         from the first frame's most confident detection); ``"module:callable"``; or any
-        tracker object (:class:`~vistrack.tracking.Tracker`).
+        tracker object (:class:`~vistrack.tracking.Tracker`). Default: ``"particles"`` with
+        the ``spots`` front-end, else ``"bytetrack"``.
     gt : str or Path, optional
         A MOTChallenge ground-truth file, scored over the frames tracked.
     confidence, det_threshold : callable, float
@@ -2042,6 +2125,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         (:func:`read_detections`; ``--columns`` on the command line).
     fps : float, optional
         The true frame rate, when the container's header is wrong.
+    diameter, minmass, invert : int, float, bool
+        For ``spots`` only: the spots' diameter in pixels, odd (needed), the least mass kept
+        (default 0), and whether the spots are darker than the background
+        (:func:`~vistrack.frontends.spots.locate`).
     background, min_area, n_init, follow_view : str, float, int, bool
         For ``bgsub`` only: the background model's name (default ``"selective"``), the
         smallest blob in pixels (500), the frames whose median starts the model (20), and
@@ -2110,16 +2197,28 @@ def track_video(video: str | Path, out_dir: str | Path, *,
     from .io.video import VideoReader
 
     with _shown_warnings() as said:  # kept in run.json, each still shown as it comes
+        if tracker is None:  # spots are points: the tracker of points goes with them
+            tracker = "particles" if frontend == "spots" else "bytetrack"
         name = default_frontend(tracker) if frontend is None else frontend
         options = {"background": background, "min_area": min_area, "n_init": n_init,
                    "follow_view": follow_view, "det_threshold": det_threshold,
-                   "classes": classes, "onnx_layout": onnx_layout, "columns": columns}
+                   "classes": classes, "onnx_layout": onnx_layout, "columns": columns,
+                   "diameter": diameter, "minmass": minmass, "invert": invert}
         unread = unread_frontend_option(name, options)
         if unread is not None:
             what = repr(name) if isinstance(name, str) else f"a {type(name).__name__}"
             raise ValueError(f"{unread[0]} goes with the {unread[1]!r} front-end; the front-end "
                              f"here, {what}, does not read it")
-        files = video_outputs(out_dir, annotate=annotate, force=force)
+        points = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].points
+        if name == "spots" and isinstance(tracker, str) and tracker in TRACKERS \
+                and TRACKERS[tracker].box_config:
+            raise ValueError(f"the spots front-end finds points, and the {tracker} tracker "
+                             "tracks boxes: track spots with the particles tracker (the "
+                             "default with them)")
+        if points and gt is not None:
+            raise ValueError(f"gt scores box tracks; the {tracker} tracker's are points (its "
+                             "tracks.csv holds each particle's positions)")
+        files = video_outputs(out_dir, annotate=annotate, force=force, points=points)
         out_dir = Path(out_dir)
         gt_table = _ground_truth(gt) if gt is not None else None
         if confidence is not None and not callable(confidence):
@@ -2141,7 +2240,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         # the options not given are left to the front-ends' own defaults
         ctx = Context(reader.fps, reader.size, reader, config, dict(overrides),
                       {k: v for k, v in options.items() if v is not None}
-                      | {"confidence": confidence})
+                      | {"confidence": confidence}, points=points)
         box = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].box_config
         if config is not None and not box:
             raise ValueError(f"config is a box tracker's configuration; tracker {tracker!r} is "
@@ -2244,6 +2343,12 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                             "more where a frame differs from the background model; to find "
                             "more, try a smaller --min-area, --background mog2, or a "
                             "detector: --frontend hog)")
+                elif name == "spots":
+                    hint = (f" ({'dark' if invert else 'bright'} spots of diameter {diameter} "
+                            f"whose mass is above {minmass or 0:g}; "
+                            + ("spots brighter than the background need no --invert"
+                               if invert else "for dark spots on a light background, --invert")
+                            + ", or another --diameter or --minmass)")
                 warnings.warn(f"{video}: {what} found nothing in {n} frames{hint}: the "
                               "results hold no rows", UserWarning, stacklevel=2)
             elif grid is None and found and isinstance(trk, BoxTracker):
@@ -2251,8 +2356,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 what = f"the {name} front-end" if isinstance(name, str) else "the front-end"
                 _warn_no_start(f"{video}: {what}", np.array([bottom, top]), trk.config, None,
                                stacklevel=2)
-            rows = sinks["tracks"]
-            assert isinstance(rows, MOTWriter)
+            rows = sinks["csv" if points else "tracks"]
+            assert isinstance(rows, (MOTWriter, PointsCSVWriter))
             last = stats.last
             # the video ended before stop (not --stop's own end, nor a missing image at it: a
             # folder without its frame 5 stopped at 5 warned of "rows past the video's last
@@ -2284,6 +2389,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             # an earlier run's page would show other tracks beside these outputs (a new one, if
             # asked for, is written from run.json after this)
             remove_on_commit(out_dir / REPORT)
+            if points:  # an earlier run's box tracks would read as this run's
+                remove_on_commit(out_dir / SINK_FILES["tracks"])
             return result
 
 

@@ -15,11 +15,20 @@ from .motchallenge import (
     sequence_name,
     write_mot,
 )
-from .tracks import BoxesWriter, CSVWriter, MOTWriter, Sink, TrackRows, write_boxes
+from .tracks import (
+    BoxesWriter,
+    CSVWriter,
+    MOTWriter,
+    PointsCSVWriter,
+    Sink,
+    TrackRows,
+    write_boxes,
+)
 from .video import Frame, VideoError, VideoReader, VideoWriter
 
 __all__ = ["MOT_CLASSES", "MOTFormatError", "MOTTable", "SeqInfo", "read_mot", "read_seqinfo",
            "read_seq_length", "sequence_name", "write_mot", "box_decimals", "Frame", "VideoError",
            "VideoReader", "VideoWriter",
-           "Sink", "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes",
+           "Sink", "TrackRows", "MOTWriter", "CSVWriter", "PointsCSVWriter", "BoxesWriter",
+           "write_boxes",
            "partial_path", "replacing", "open_replacing", "PartialFile"]

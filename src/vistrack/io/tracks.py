@@ -36,7 +36,8 @@ from .motchallenge import (
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-__all__ = ["Sink", "TrackRows", "MOTWriter", "CSVWriter", "BoxesWriter", "write_boxes"]
+__all__ = ["Sink", "TrackRows", "MOTWriter", "CSVWriter", "PointsCSVWriter", "BoxesWriter",
+           "write_boxes"]
 
 
 @runtime_checkable
@@ -281,8 +282,9 @@ def _box_rows(tracks: Tracks, frame: Frame, what: str) -> np.ndarray:
         raise ValueError(
             f"frame {int(frame.index)}: {what} takes box tracks (MOTChallenge's rows are "
             "boxes), and these tracks are points (a PointTracker's): run them with "
-            "vistrack.pipeline.run and sinks that take points (viz.AnnotatedVideo, "
-            "viz.TrajectoryPlot, or your own)")
+            "vistrack.pipeline.run and sinks that take points (io.PointsCSVWriter, "
+            "viz.AnnotatedVideo, viz.TrajectoryPlot, or your own), or track_video's "
+            "tracker 'particles'")
     return tracks.xywh
 
 
@@ -614,6 +616,78 @@ class CSVWriter(_RowsFile):
         except BaseException:
             self._file.abort()
             raise
+        self._file.commit()
+
+
+class PointsCSVWriter(_RowsFile):
+    """Writes point tracks as ``frame,particle,x,y`` rows, with that header (trackpy's
+    columns: a particle's identity and its position, the origin at the centre of pixel
+    (0, 0)), positions to 3 decimals, in the order written, to ``path``; what
+    :class:`CSVWriter` is for box tracks. The rows go to a partial file beside ``path`` as
+    the frames come, and replace ``path`` only when closed.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (overwritten; its folder is made if needed).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "tracks.csv"
+    >>> sink = PointsCSVWriter(path)
+    >>> sink.write(Frame(2, 0.0), Tracks(ids=np.array([5]), boxes=None,
+    ...                                  points=np.array([[12.25, 3.5]]),
+    ...                                  scores=np.ones(1), classes=np.zeros(1)))
+    >>> sink.close()
+    >>> print(path.read_text(), end="")
+    frame,particle,x,y
+    2,5,12.250,3.500
+    >>> len(sink), sink.identities.tolist()
+    (1, [5])
+    """
+
+    _HEADER = "frame,particle,x,y\n"
+    _ROW = "%d,%d,%.3f,%.3f\n"
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        super().__init__(path)
+        self._file.write(self._HEADER)
+
+    def write(self, frame: Frame, tracks: Tracks) -> None:
+        """Write one frame's rows (points), in the tracks' order.
+
+        Raises
+        ------
+        ValueError
+            If the tracks are boxes, a frame is below 1, an identity is not a whole number
+            or a position is not finite (each naming the frame).
+        """
+        f = int(frame.index)
+        if tracks.points is None or tracks.boxes is not None:
+            raise ValueError(f"frame {f}: PointsCSVWriter({self.path}) takes point tracks; "
+                             "these are boxes (CSVWriter writes them)")
+        if f < 1:
+            raise ValueError(f"frame {f}: frames count from 1")
+        if not len(tracks):
+            return
+        try:
+            ids = _integers(tracks.ids, "ids")
+        except ValueError as e:
+            raise ValueError(f"frame {f}: {e}") from None
+        xy = np.asarray(tracks.points, dtype=float)
+        bad = ~np.isfinite(xy).all(axis=1)
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise ValueError(f"frame {f}, particle {ids[k]}: position {xy[k].tolist()} is not "
+                             "finite")
+        self._rows += len(ids)
+        self._ids.update(zip(ids.tolist(), np.asarray(tracks.classes).astype(int).tolist()))
+        cells = zip([f] * len(ids), ids.tolist(), *xy.T.tolist())
+        self._file.write((self._ROW * len(ids)) % tuple(itertools.chain.from_iterable(cells)))
+
+    def close(self) -> None:
+        """Rename the file over ``path`` (the header alone if no frame came)."""
         self._file.commit()
 
 
