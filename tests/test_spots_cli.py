@@ -14,11 +14,12 @@ from vistrack.cli import main
 from .test_spots import FRAMES
 
 
-def _walk(folder, invert=False, seed=0):
+def _walk(folder, invert=False, seed=0, hidden=()):
     """20 frames (260 x 200) of 16 Gaussian spots (standard deviation 1.8 pixels, 150 grey
     levels above a background of 20, pixel noise 2), each on a random walk of 0.8 pixels a
-    step per axis, starting at least 25 pixels apart; dark on light with ``invert``.
-    Returns the true positions ``(frames, 16, 2)``."""
+    step per axis, starting at least 25 pixels apart; dark on light with ``invert``; the
+    first particle left out of the frames (numbered from 1) in ``hidden``. Returns the true
+    positions ``(frames, 16, 2)``."""
     rng = np.random.default_rng(seed)
     start = []
     while len(start) < 16:
@@ -30,7 +31,7 @@ def _walk(folder, invert=False, seed=0):
     folder.mkdir()
     for k, pts in enumerate(truth):
         im = 20 + sum(150 * np.exp(-((x - a) ** 2 + (y - b) ** 2) / (2 * 1.8 ** 2))
-                      for a, b in pts)
+                      for i, (a, b) in enumerate(pts) if not (i == 0 and k + 1 in hidden))
         im = np.clip(im + rng.normal(0, 2, im.shape), 0, 255).astype(np.uint8)
         cv2.imwrite(str(folder / f"{k + 1:03d}.png"), 255 - im if invert else im)
     return truth
@@ -73,6 +74,44 @@ def test_spots_from_the_command_line_follow_each_particle(tmp_path, capsys):
                  "--frontend", "spots", "--diameter", "9", "--minmass", "100", "--invert",
                  "--fps", "10", "--quiet"]) == 0
     assert (tmp_path / "out2" / "tracks.csv").read_bytes() == (out / "tracks.csv").read_bytes()
+
+
+def test_a_particle_missed_for_two_frames_keeps_its_identity_within_max_lost(tmp_path):
+    """A particle not found in frames 8 and 9 is taken back as the same identity by default
+    (kept 3 frames, 0.35 s at 10 frames/s); with --max-lost 0.1 (one frame) it comes back
+    as a new one. Every other particle is one identity either way."""
+    truth = _walk(tmp_path / "frames", hidden=(8, 9))
+    ids = {}
+    for extra in ([], ["--max-lost", "0.1"]):
+        out = tmp_path / f"out{len(extra)}"
+        assert main(["track", str(tmp_path / "frames"), "--out-dir", str(out), "--frontend",
+                     "spots", "--diameter", "9", "--minmass", "100", "--fps", "10", "--quiet",
+                     *extra]) == 0
+        rows = _rows(out / "tracks.csv")
+        of = {}
+        for k in range(20):
+            r = rows[rows[:, 0] == k + 1]
+            d = np.linalg.norm(r[:, None, 2:] - truth[k][None], axis=2)
+            for i, t in zip(r[:, 1].astype(int), d.argmin(1)):
+                of.setdefault(int(t), set()).add(i)
+        assert all(len(of[t]) == 1 for t in range(1, 16))
+        ids[len(extra)] = len(of[0])
+    assert ids == {0: 1, 2: 2}
+
+
+def test_box_settings_go_with_box_trackers_and_max_lost_with_particles(tmp_path, capsys):
+    """--max-lost is the particles tracker's too; with dcpf it is refused, for one input as
+    for several (where it was taken and ignored)."""
+    _walk(tmp_path / "a")
+    _walk(tmp_path / "a2", seed=1)
+    for inputs in ([tmp_path / "a"], [tmp_path / "a", tmp_path / "a2"]):
+        assert main(["track", *map(str, inputs), "--out-dir", str(tmp_path / "o"),
+                     "--tracker", "dcpf", "--max-lost", "1"]) == 2
+        assert ("--max-lost goes with the box trackers (bytetrack, sort) and particles"
+                in capsys.readouterr().err)
+        assert main(["track", *map(str, inputs), "--out-dir", str(tmp_path / "o"),
+                     "--tracker", "dcpf", "--high", "0.5"]) == 2
+        assert "--high goes with the box trackers (bytetrack, sort)\n" in capsys.readouterr().err
 
 
 def test_a_points_run_over_an_earlier_box_run_replaces_its_tracks(tmp_path, capsys):

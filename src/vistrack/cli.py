@@ -311,6 +311,19 @@ def _tracker_and_numbers(args: argparse.Namespace) -> tuple[str, bool, str]:
     return name, box, problem
 
 
+def _box_settings_given(args: argparse.Namespace, name: str) -> list[str]:
+    """The box trackers' setting options given (``max_lost`` is the particles' too)."""
+    return [o for o, *_ in _SETTINGS if getattr(args, o) is not None
+            and not (o == "max_lost" and _points(name))]
+
+
+def _box_setting_problem(option: str) -> str:
+    """``--option goes with the box trackers (...)``, and the particles tracker for
+    ``--max-lost``."""
+    return (f"--{option.replace('_', '-')} goes with {_box_trackers()}"
+            + (" and particles" if option == "max_lost" else ""))
+
+
 def _points(name: str) -> bool:
     """Whether ``--tracker name`` gives point tracks (no ``tracks.txt``)."""
     from .pipeline import TRACKERS
@@ -502,12 +515,12 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
     from .io.video import _TEXT_SUFFIXES, _holds_images
     from .pipeline import video_outputs
 
-    setting_flags = [o for o, *_ in _SETTINGS if getattr(args, o) is not None]
+    setting_flags = _box_settings_given(args, name)
     if not box:
         given = setting_flags + [f for f in ("still_camera", "config", "print_config")
                                  if getattr(args, f)]
         if given:
-            return f"--{given[0].replace('_', '-')} goes with {_box_trackers()}"
+            return _box_setting_problem(given[0])
         if args.out is not None:
             return (f"--out (a sequence's detections) goes with {_box_trackers()}; "
                     f"--tracker {name} goes with --out-dir")
@@ -742,6 +755,8 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
                    command=getattr(args, "command_line", None))
     if args.search_range is not None:  # the particles tracker's (checked before)
         options["search_range"] = args.search_range
+    if _points(name) and args.max_lost is not None:  # the particles tracker's too
+        options["max_lost"] = args.max_lost
     front = args.frontend or default_frontend(name)
     if args.still_camera and front in FRONTENDS and FRONTENDS[front].still_camera:
         options["follow_view"] = False  # the background model: the view is not followed
@@ -801,6 +816,9 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     name, box, problem = _tracker_and_numbers(args)
     if problem:
         return fail(problem)
+    given = _box_settings_given(args, name)
+    if not box and given:  # as for one input (they were taken and ignored)
+        return fail(_box_setting_problem(given[0]))
     cfg = None
     if box:
         cfg, problem = _box_config(args)
@@ -1358,7 +1376,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="video mode, spots: spots darker than the background")
     track.add_argument("--search-range", type=float, metavar="PX",
                        help="--tracker particles: the farthest a particle moves between "
-                       "frames, in pixels, the radius of its gate (default: half --diameter)")
+                       "frames, in pixels, the radius of its gate (default: half --diameter); "
+                       "its --max-lost is 3.5 frames by default")
     track.add_argument("--report", action="store_true",
                        help="video mode: also write OUT/report.html, one page with the "
                        "command, the scores, the annotated video and the plots (as vistrack "
