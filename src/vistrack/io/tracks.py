@@ -629,18 +629,18 @@ class PointsCSVWriter(_RowsFile):
     Parameters
     ----------
     path : str or os.PathLike
-        The file (overwritten; its folder is made if needed).
+        The CSV file to write, replaced when the sink is closed (its folder made if needed).
 
     Examples
     --------
-    >>> import tempfile, pathlib
-    >>> path = pathlib.Path(tempfile.mkdtemp()) / "tracks.csv"
-    >>> sink = PointsCSVWriter(path)
+    >>> from pathlib import Path
+    >>> from tempfile import mkdtemp
+    >>> sink = PointsCSVWriter(Path(mkdtemp()) / "tracks.csv")
     >>> sink.write(Frame(2, 0.0), Tracks(ids=np.array([5]), boxes=None,
     ...                                  points=np.array([[12.25, 3.5]]),
     ...                                  scores=np.ones(1), classes=np.zeros(1)))
     >>> sink.close()
-    >>> print(path.read_text(), end="")
+    >>> print(sink.path.read_text(), end="")
     frame,particle,x,y
     2,5,12.250,3.500
     >>> len(sink), sink.identities.tolist()
