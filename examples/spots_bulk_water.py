@@ -1,6 +1,8 @@
 """Particles in a microscope's video: spots (Crocker-Grier, as trackpy's `locate`) linked by
 the point tracker with the drifting-points model, through the pipeline's one loop into an
-annotated video, a trajectory plot and a CSV of trackpy's columns.
+annotated video, a trajectory plot and a CSV of trackpy's columns (`io.PointsCSVWriter`).
+`vistrack track FRAMES --out-dir OUT --frontend spots --diameter 11 --invert --minmass 20`
+does the same from the command line, with the `particles` tracker's own settings.
 
     python examples/spots_bulk_water.py [FRAMES] [OUT]
 
@@ -23,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from vistrack.frontends.spots import locate
-from vistrack.io import VideoReader
+from vistrack.io import PointsCSVWriter, VideoReader
 from vistrack.models import ConstantPosition, Position
 from vistrack.pipeline import run
 from vistrack.tracking import PointTracker
@@ -31,21 +33,6 @@ from vistrack.viz import AnnotatedVideo, TrajectoryPlot
 
 FRAMES = Path(__file__).resolve().parents[2] / "shared" / "data" / "trackpy-bulk-water" / "frames"
 FPS = 24.0
-
-
-class ParticleCSV:
-    """A sink of one's own: point tracks as ``frame,particle,x,y`` rows (trackpy's columns;
-    the track files of :func:`vistrack.pipeline.track_video` are MOTChallenge's boxes)."""
-
-    def __init__(self, path: Path):
-        self.path, self.rows = path, []
-
-    def write(self, frame, tracks):
-        for i, (x, y) in zip(tracks.ids.tolist(), tracks.points.tolist()):
-            self.rows.append(f"{frame.index},{i},{x:.3f},{y:.3f}\n")
-
-    def close(self):
-        self.path.write_text("frame,particle,x,y\n" + "".join(self.rows))
 
 
 def main() -> None:
@@ -62,13 +49,12 @@ def main() -> None:
     def spots(frame):
         return locate(frame.image, 11, invert=True, minmass=20).detections()
 
-    csv = ParticleCSV(out / "tracks.csv")
     stats = run(VideoReader(frames, fps=FPS), spots, tracker,
-                [csv, AnnotatedVideo(out / "annotated.mp4", FPS),
+                [PointsCSVWriter(out / "tracks.csv"), AnnotatedVideo(out / "annotated.mp4", FPS),
                  TrajectoryPlot(out / "trajectories.png", "bulk water")])
-    ids = np.array([int(row.split(",")[1]) for row in csv.rows])
-    lengths = np.bincount(ids)
-    print(f"{stats.frames} frames: {len(csv.rows)} positions of {np.count_nonzero(lengths)} "
+    rows = np.loadtxt(out / "tracks.csv", delimiter=",", skiprows=1, ndmin=2)
+    lengths = np.bincount(rows[:, 1].astype(int))
+    print(f"{stats.frames} frames: {len(rows)} positions of {np.count_nonzero(lengths)} "
           f"particles, {np.count_nonzero(lengths >= 25)} of them followed 25 frames or more")
     for name in ("tracks.csv", "annotated.mp4", "trajectories.png"):
         print(f"  {out / name}")

@@ -130,20 +130,27 @@ def test_a_points_run_over_an_earlier_box_run_replaces_its_tracks(tmp_path, caps
 
 
 @pytest.mark.parametrize("extra, message", [
-    ([], "the spots front-end needs the spots' diameter in pixels, odd"),
+    ([], "--frontend spots needs --diameter: the spots' diameter in pixels, odd (round up)"),
     (["--diameter", "8"], "--diameter must be an odd number of pixels >= 3; got 8"),
     (["--diameter", "9", "--minmass", "-1"], "--minmass must be a number >= 0; got -1"),
     (["--diameter", "9", "--tracker", "bytetrack"],
-     "the spots front-end finds points, and the bytetrack tracker tracks boxes: track spots "
-     "with the particles tracker"),
+     "--frontend spots finds points, and --tracker bytetrack tracks boxes: track spots with "
+     "--tracker particles (the default with them)"),
+    (["--diameter", "9", "--tracker", "dcpf"], "--tracker dcpf tracks boxes"),
+    (["--diameter", "9", "--tracker", "single:csrt"], "--tracker single:csrt tracks boxes"),
     (["--diameter", "9", "--search-range", "3", "--tracker", "sort"],
      "--search-range goes with --tracker particles, not sort"),
     (["--diameter", "9", "--search-range", "0.3"],
-     "search_range must be a finite number of pixels above 0.53"),
+     "--search-range must be above 0.53 pixels (the gate of the positions' own noise); got "
+     "0.3"),
+    (["--diameter", "9", "--max-lost", "-1"],
+     "--max-lost must be a number of seconds >= 0; got -1"),
     (["--diameter", "9", "--report"], "--report shows box tracks (tracks.txt); --tracker "
      "particles writes points"),
-    (["--diameter", "9", "--gt", "gt.txt"], "gt scores box tracks; the particles tracker's "
-     "are points"),
+    (["--diameter", "9", "--gt", "gt.txt"], "--gt scores box tracks; --tracker particles "
+     "gives points"),
+    (["--diameter", "9", "--still-camera"],
+     "--still-camera goes with the box trackers (bytetrack, sort)"),
 ])
 def test_spots_options_are_checked_by_name(tmp_path, monkeypatch, capsys, extra, message):
     """Each mistake is named before anything is written."""
@@ -156,12 +163,57 @@ def test_spots_options_are_checked_by_name(tmp_path, monkeypatch, capsys, extra,
     assert not (tmp_path / "out").exists()
 
 
-def test_diameter_goes_with_spots(tmp_path, capsys):
+def test_spots_and_particles_go_together(tmp_path, capsys):
+    """Spots' options with another front-end, the particles tracker with a front-end of
+    boxes, --out (a sequence's boxes) with spots, and, for several inputs too, a missing
+    --diameter or box settings: each named before anything runs. From Python the same
+    pairs are refused by track_video."""
+    from vistrack.pipeline import track_video
+
     _walk(tmp_path / "frames")
-    assert main(["track", str(tmp_path / "frames"), "--out-dir", str(tmp_path / "o"),
-                 "--frontend", "hog", "--diameter", "9", "--fps", "10"]) == 2
-    assert "--diameter goes with --frontend spots, not --frontend hog" in \
-        capsys.readouterr().err
+    _walk(tmp_path / "more", seed=1)
+    frames, out = str(tmp_path / "frames"), str(tmp_path / "o")
+    for args, message in (
+            ([frames, "--out-dir", out, "--frontend", "hog", "--diameter", "9"],
+             "--diameter goes with --frontend spots, not --frontend hog"),
+            ([frames, "--out-dir", out, "--tracker", "particles", "--frontend", "hog"],
+             "--tracker particles links points, and --frontend hog finds boxes: give it "
+             "--frontend spots"),
+            ([frames, "--out", str(tmp_path / "r.txt"), "--frontend", "spots"],
+             "--out (a sequence's detections) goes with the box trackers (bytetrack, sort); "
+             "--frontend spots, tracked by particles, goes with --out-dir"),
+            ([frames, str(tmp_path / "more"), "--out-dir", out, "--frontend", "spots"],
+             "--frontend spots needs --diameter"),
+            ([frames, str(tmp_path / "more"), "--out-dir", out, "--frontend", "spots",
+              "--diameter", "9", "--tracker", "sort"], "--tracker sort tracks boxes"),
+            ([frames, str(tmp_path / "more"), "--out-dir", out, "--frontend", "spots",
+              "--diameter", "9", "--config", str(tmp_path / "c.toml")],
+             "--config goes with the box trackers (bytetrack, sort)")):
+        assert main(["track", *args]) == 2, args
+        assert message in capsys.readouterr().err, args
+        assert not (tmp_path / "o").exists()
+    with pytest.raises(ValueError, match="the spots front-end finds points, and the dcpf "
+                                         "tracker tracks boxes"):
+        track_video(frames, out, frontend="spots", diameter=9, tracker="dcpf", fps=10)
+    with pytest.raises(ValueError, match="the particles tracker links points, and the hog "
+                                         "front-end finds boxes"):
+        track_video(frames, out, frontend="hog", tracker="particles", fps=10)
+    with pytest.raises(ValueError, match="the spots front-end needs the spots' diameter"):
+        track_video(frames, out, frontend="spots", fps=10)
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_points_run_has_no_report_page(tmp_path, capsys):
+    """vistrack report on a particles run's folder says why there is no page (it said its
+    tracks.txt did not exist, as though it were not the folder vistrack track wrote)."""
+    _walk(tmp_path / "frames")
+    out = tmp_path / "out"
+    assert main(["track", str(tmp_path / "frames"), "--out-dir", str(out), "--frontend",
+                 "spots", "--diameter", "9", "--fps", "10", "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["report", str(out)]) == 2
+    assert (f"{out} holds point tracks (tracks.csv, a particles run's): the report page shows "
+            "box tracks" in capsys.readouterr().err)
 
 
 def test_bulk_water_from_the_command_line_links_as_trackpy_does(tmp_path, capsys):

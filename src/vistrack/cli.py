@@ -522,8 +522,10 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
         if given:
             return _box_setting_problem(given[0])
         if args.out is not None:
+            what = (f"--tracker {name}" if args.tracker is not None
+                    else f"--frontend {args.frontend}, tracked by {name},")
             return (f"--out (a sequence's detections) goes with {_box_trackers()}; "
-                    f"--tracker {name} goes with --out-dir")
+                    f"{what} goes with --out-dir")
     if args.out is not None:
         folder = Path(args.input)
         sequence = folder.is_dir() and ((folder / "seqinfo.ini").exists()
@@ -733,11 +735,41 @@ def _frontend_problem(args: argparse.Namespace, name: str) -> str:
     frontend = args.frontend or default_frontend(name)
     unread = unread_frontend_option(frontend, {k: getattr(args, k, None)
                                                for k in _FRONTEND_OPTIONS + ("columns",)})
-    if unread is None:
+    if unread is not None:
+        here = (f"--frontend {frontend}" if args.frontend
+                else f"the default front-end of --tracker {name}, {frontend}")
+        return f"--{unread[0].replace('_', '-')} goes with --frontend {unread[1]}, not {here}"
+    return _points_problem(args, name, frontend)
+
+
+def _points_problem(args: argparse.Namespace, name: str, frontend: str) -> str:
+    """What is wrong with spots or the particles tracker as given ("" if nothing): checked
+    before anything is read, for one input or many, in the command line's words."""
+    from .pipeline import TRACKERS, min_search_range
+
+    points = _points(name)
+    if frontend == "spots":
+        if name in TRACKERS and not points:
+            return (f"--frontend spots finds points, and --tracker {name} tracks boxes: track "
+                    "spots with --tracker particles (the default with them)")
+        if args.diameter is None:
+            return ("--frontend spots needs --diameter: the spots' diameter in pixels, odd "
+                    "(round up)")
+    if not points:
         return ""
-    here = (f"--frontend {frontend}" if args.frontend
-            else f"the default front-end of --tracker {name}, {frontend}")
-    return f"--{unread[0].replace('_', '-')} goes with --frontend {unread[1]}, not {here}"
+    if frontend != "spots":
+        return (f"--tracker {name} links points, and --frontend {frontend} finds boxes: give "
+                "it --frontend spots")
+    if args.gt is not None:
+        return (f"--gt scores box tracks; --tracker {name} gives points (tracks.csv holds "
+                "each particle's positions)")
+    floor = min_search_range()
+    if args.search_range is not None and not args.search_range > floor:
+        return (f"--search-range must be above {floor:.2f} pixels (the gate of the positions' "
+                f"own noise); got {args.search_range:g}")
+    if args.max_lost is not None and not (math.isfinite(args.max_lost) and args.max_lost >= 0):
+        return f"--max-lost must be a number of seconds >= 0; got {args.max_lost:g}"
+    return ""
 
 
 def _video_options(args: argparse.Namespace, name: str, box: bool,
@@ -816,7 +848,8 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     name, box, problem = _tracker_and_numbers(args)
     if problem:
         return fail(problem)
-    given = _box_settings_given(args, name)
+    given = _box_settings_given(args, name) + [f for f in ("still_camera", "config")
+                                                if getattr(args, f)]
     if not box and given:  # as for one input (they were taken and ignored)
         return fail(_box_setting_problem(given[0]))
     cfg = None
@@ -896,7 +929,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
           + (f"; {len(bad)} not" if bad else ""))
     if kind == "detections":
         over = [(n, own) for o, n in zip(outcomes, names)
-                if (own := _rate_overridden(args.fps, o.input)) is not None]
+                if o.ok and (own := _rate_overridden(args.fps, o.input)) is not None]
         if over:
             print(f"tracked at --fps {args.fps:g} frames/s, over the frameRate of seqinfo.ini: "
                   + ", ".join(f"{n} {own:g}" for n, own in over))
@@ -1334,9 +1367,11 @@ def build_parser() -> argparse.ArgumentParser:
                      "the summary goes to stderr. Without INPUT: print the configuration "
                      "the options give, and track nothing")
     for option, _, _, kind, metavar, text, default in _SETTINGS:
+        # (the particles tracker's max_lost: 3.5 frames)
+        more = "; particles: 3.5 frames" if option == "max_lost" else ""
         box.add_argument("--" + option.replace("_", "-"), type=kind, metavar=metavar,
                          choices=("calibrated", "raw") if option == "scores" else None,
-                         help=f"{text} (default {default:g})" if kind is not str else
+                         help=f"{text} (default {default:g}{more})" if kind is not str else
                          f"{text} (default {default})")
     track.add_argument("--frontend", help="video mode: bgsub (default; background model and "
                        "blobs), hog (OpenCV's people detector), confidence (the peaks of "

@@ -954,10 +954,10 @@ def _particles(ctx: Context) -> Tracker:
     r = PARTICLE_NOISE ** 2
     # one frame after an update the innovation's variance per axis is r + q / fps + r
     step = search ** 2 / chi2_threshold(2, PARTICLE_GATE) - 2 * r
-    if not (math.isfinite(search) and step > 0):
+    if not (math.isfinite(search) and search > min_search_range()):
         raise ValueError(f"search_range must be a finite number of pixels above "
-                         f"{math.sqrt(2 * r * chi2_threshold(2, PARTICLE_GATE)):.2f} (the "
-                         f"gate of the positions' own noise); got {search:g}")
+                         f"{min_search_range():.2f} (the gate of the positions' own noise); "
+                         f"got {search:g}")
     return PointTracker("gnn", motion=ConstantPosition(dim=2, q=step * ctx.fps),
                         measurement=Position(dim=2, r=r), frame_rate=ctx.fps, confirm_hits=1,
                         max_lost=max_lost, p_gate=PARTICLE_GATE)
@@ -966,6 +966,19 @@ def _particles(ctx: Context) -> Tracker:
 PARTICLE_NOISE = 0.1
 """The ``particles`` tracker's measurement noise, pixels (standard deviation per axis): the
 spots' positions, to about a tenth of a pixel."""
+
+
+def min_search_range() -> float:
+    """The least ``search_range`` of the ``particles`` tracker, pixels: the gate of the
+    positions' own noise alone (a particle that does not move), below which the search range
+    would leave the particle's step a negative variance.
+
+    >>> round(min_search_range(), 2)
+    0.53
+    """
+    from .association.gating import chi2_threshold
+
+    return math.sqrt(2 * PARTICLE_NOISE ** 2 * chi2_threshold(2, PARTICLE_GATE))
 
 
 def _single(method: str) -> Callable[[Context], Tracker]:
@@ -2211,10 +2224,14 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                              f"here, {what}, does not read it")
         points = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].points
         if name == "spots" and isinstance(tracker, str) and tracker in TRACKERS \
-                and TRACKERS[tracker].box_config:
+                and not points:
             raise ValueError(f"the spots front-end finds points, and the {tracker} tracker "
                              "tracks boxes: track spots with the particles tracker (the "
                              "default with them)")
+        if points and isinstance(name, str) and name != "spots":
+            raise ValueError(f"the {tracker} tracker links points, and the {name} front-end "
+                             "finds boxes: give it the spots front-end (or a detector of "
+                             "your own that finds points)")
         if points and gt is not None:
             raise ValueError(f"gt scores box tracks; the {tracker} tracker's are points (its "
                              "tracks.csv holds each particle's positions)")
@@ -2385,7 +2402,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                               ctx.resolved if isinstance(trk, BoxTracker) else None,
                               derived_values(trk) if isinstance(trk, BoxTracker) else None,
                               reader.start, stats.last)
-            _write_run_info(result, video, gt, command, reader.fps, said)
+            _write_run_info(result, video, gt, command, reader.fps, said, points=points)
             # an earlier run's page would show other tracks beside these outputs (a new one, if
             # asked for, is written from run.json after this)
             remove_on_commit(out_dir / REPORT)
@@ -2436,10 +2453,12 @@ def _shown_warnings() -> Iterator[list[str]]:
 
 
 def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
-                    command: str | None, frame_rate: float, said: Sequence[str] = ()) -> None:
+                    command: str | None, frame_rate: float, said: Sequence[str] = (), *,
+                    points: bool = False) -> None:
     """``run.json`` beside a run's outputs: how they were made (:mod:`vistrack.report`;
     ``fps`` the frames tracked a second, ``frame_rate`` the video's, ``warnings`` the
-    messages of the warnings the run gave, ``said``)."""
+    messages of the warnings the run gave, ``said``; ``points`` where the tracks are points,
+    which have no ``tracks.txt``)."""
     import json
 
     from . import __version__
@@ -2454,7 +2473,7 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
             "fps": round(run.fps, 1), "frame_rate": frame_rate,
             "scores": run.scores.summary() if run.scores is not None else None,
             "outputs": sorted(f.name for f in run.files.values()),
-            "warnings": list(said)}
+            "warnings": list(said), "points": points}
     with replacing(run.out_dir / RUN_INFO) as part:
         part.write_text(json.dumps(info, indent=2) + "\n")
 

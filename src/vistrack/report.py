@@ -150,6 +150,16 @@ for (const img of document.querySelectorAll('img')) {
 """
 
 
+def _holds_points(run_info: Path) -> bool:
+    """Whether ``run.json`` says its run's tracks are points (``"points": true``)."""
+    import json
+
+    try:
+        return bool(json.loads(run_info.read_text()).get("points", False))
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
 def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     """Write ``out_dir/report.html`` (see the module) and return its path.
 
@@ -171,7 +181,8 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     FileExistsError
         If ``report.html`` exists and ``force`` is False.
     ValueError
-        If ``run.json`` cannot be read, naming it.
+        If ``run.json`` cannot be read, naming it, or says the run's tracks are points (a
+        ``particles`` run has no ``tracks.txt`` to show).
     vistrack.io.VideoError
         If the video cannot be read, naming it.
 
@@ -191,6 +202,10 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
         raise NotADirectoryError(f"{out_dir} is a file: give the folder that vistrack track "
                                  "--out-dir wrote")
     if not tracks.is_file():
+        if _holds_points(out_dir / RUN_INFO):
+            raise ValueError(f"{out_dir} holds point tracks (tracks.csv, a particles run's): "
+                             "the report page shows box tracks; its annotated video and "
+                             "trajectories.png are beside them")
         raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
                                 "track --out-dir wrote")
     check_output(target, force=force, name="report")

@@ -163,8 +163,9 @@ def _state_moments_one(Y, Wm, Wc, Q, mean, cov):
 @njit(cache=True, error_model="numpy")
 def _update_one(G, Z, Wm, Wc, R, y, angles, x, P, xo, Po):
     """Unscented correction of one Gaussian from its sigma points ``G`` and their
-    measurements ``Z`` (the equations of :func:`ukf_update`, angles wrapped and averaged on the
-    circle, NaN components of ``y`` missing). Returns ``(ok, loglik)``."""
+    measurements ``Z`` (the equations of :func:`ukf_update`: differences from the central
+    point, angles wrapped, and residuals about their unwrapped weighted sum; NaN components
+    of ``y`` missing). Returns ``(ok, loglik)``."""
     K, n = G.shape
     m = Z.shape[1]
     zhat = np.empty(m)

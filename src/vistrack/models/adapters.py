@@ -254,7 +254,8 @@ class MeasurementFunctions:
         self.m = self.Rm.shape[-1]
         angles = tuple(int(k) for k in getattr(model, "angles", ()))
         # a model with angles but no residual or mean of its own: its angles wrapped and
-        # averaged on the circle all the same, as the compiled kernels do (angle_mask)
+        # averaged on the circle all the same (the ensemble KF's mean; the UKF, compiled or
+        # not, averages them about its central sigma point: angle_mask)
         self.residual = residual or getattr(model, "residual", None) or (
             partial(_residual, angles=angles) if angles else _plain_residual)
         self.mean = mean or getattr(model, "mean", None) or (

@@ -718,7 +718,10 @@ class BoxTracker:
     def calibrator(self) -> ScoreCalibrator | None:
         """The online calibration's learner, where the detections seen so far are of one
         class or none (before any, the one the first class will take); None with raw scores
-        or one fixed calibration.
+        or one fixed calibration. Assign a
+        :class:`~vistrack.tracking.calibration.ScoreCalibrator` that has seen other frames of
+        the same detector to start from what it learnt (where one class or none has been
+        seen); :meth:`reset` makes a new one.
 
         Raises
         ------
