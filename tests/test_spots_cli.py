@@ -250,3 +250,17 @@ def test_bulk_water_from_the_command_line_links_as_trackpy_does(tmp_path, capsys
                 ids_of.setdefault(pid, set()).add(int(i))
     assert np.concatenate(near).all()
     assert np.mean([len(v) == 1 for v in ids_of.values()]) > 0.985
+
+
+def test_spots_that_find_nothing_say_what_was_looked_for(tmp_path, capsys):
+    """A mass threshold above every spot's finds nothing: the run says what it looked for
+    and what to change, and writes a header-only tracks.csv."""
+    _walk(tmp_path / "frames")
+    out = tmp_path / "out"
+    assert main(["track", str(tmp_path / "frames"), "--out-dir", str(out), "--frontend",
+                 "spots", "--diameter", "9", "--minmass", "1e6", "--fps", "10", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert ("the spots front-end found nothing in 20 frames (bright spots of diameter 9 whose "
+            "mass is above 1e+06; for dark spots on a light background, --invert, or another "
+            "--diameter or --minmass): the results hold no rows") in err
+    assert (out / "tracks.csv").read_text() == "frame,particle,x,y\n"
