@@ -316,3 +316,42 @@ def test_identity_numbers_left_out_come_back_only_well_below_the_line():
     fresh = Annotator(trail=1)
     assert numbered(fresh, 50)
     assert got == [True, False, False, False, False, True, True]
+
+
+def test_each_tracks_ellipse_is_its_covariances_closed_form():
+    """The 2-sigma ellipse of a covariance ``R(θ) diag(a², b²) R(θ)'`` has semi-axes 2a and
+    2b along θ: every pixel drawn away from a track's dot lies on that curve (within a
+    pixel), for three tracks of one frame at other angles and sizes; a track whose
+    covariance is not finite gets its dot and no ellipse."""
+    specs = [(1, (80.0, 60.0), 10.0, 3.0, 30.0), (2, (200.0, 60.0), 6.0, 6.0, 0.0),
+             (3, (80.0, 150.0), 12.0, 2.0, -65.0)]
+    covs, points = [], []
+    for _, centre, a, b, deg in specs:
+        t = np.radians(deg)
+        rot = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+        covs.append(rot @ np.diag([a * a, b * b]) @ rot.T)
+        points.append(centre)
+    covs.append(np.full((2, 2), np.nan))
+    points.append((200.0, 150.0))
+    tracks = Tracks(ids=np.array([1, 2, 3, 4]), boxes=None, points=np.array(points),
+                    scores=np.ones(4), classes=np.zeros(4), covs=np.array(covs))
+    out = Annotator(labels=False).draw(np.zeros((220, 280, 3), np.uint8), tracks)
+    ys, xs = np.mgrid[0:220, 0:280]
+    # each track's quarter of the image; the ellipses are drawn anti-aliased, so a pixel of
+    # the curve is one at half its colour's brightness or more
+    bright = out.max(axis=2).astype(float)
+    for i, (cx, cy), a, b, deg in specs:
+        near = (np.abs(xs - cx) < 70) & (np.abs(ys - cy) < 45)
+        mine = near & (bright >= max(id_colour(i)) / 2) & (np.hypot(xs - cx, ys - cy) > 4)
+        t = np.radians(deg)
+        u = (xs - cx) * np.cos(t) + (ys - cy) * np.sin(t)
+        v = -(xs - cx) * np.sin(t) + (ys - cy) * np.cos(t)
+        # the distance from the ellipse along the normal, about |F| / |grad F| for
+        # F = u² / A² + v² / B² - 1
+        A, B = 2 * a, 2 * b
+        f = u ** 2 / A ** 2 + v ** 2 / B ** 2 - 1
+        grad = 2 * np.hypot(u / A ** 2, v / B ** 2)
+        assert mine.sum() > 2 * (A + B)  # drawn all round
+        assert (np.abs(f[mine]) / grad[mine]).max() < 1.0
+    lone = (np.abs(xs - 200) < 70) & (np.abs(ys - 150) < 45) & (bright > 0)
+    assert lone.sum() > 0 and (np.hypot(xs[lone] - 200, ys[lone] - 150) <= 4).all()

@@ -203,6 +203,16 @@ class Annotator:
             if i in present and len(t) > 1:
                 pts = np.round(np.array(t)).astype(np.int32).reshape(-1, 1, 2)
                 cv2.polylines(out, [pts], False, id_colour(i), thick, cv2.LINE_AA)
+        if covs is not None:
+            # every ellipse's axes and angle in one call (eigh a track took 6 of the 18 ms of
+            # a frame of 520 particles); a covariance that is not finite draws none
+            c2 = np.asarray(covs, dtype=float)[:, :2, :2]
+            has_ellipse = np.isfinite(c2).all(axis=(1, 2))
+            lams, vecs = np.zeros((len(c2), 2)), np.zeros((len(c2), 2, 2))
+            if has_ellipse.any():
+                lams[has_ellipse], vecs[has_ellipse] = np.linalg.eigh(c2[has_ellipse])
+            semi = np.minimum(self.nsigma * np.sqrt(np.maximum(lams, 0.0)), reach)
+            angles = np.degrees(np.arctan2(vecs[:, 1, 1], vecs[:, 0, 1]))
         font, scale = cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z
         sizes = [cv2.getTextSize(str(i), font, scale, thin) for i in ids.tolist()]
         numbered = self.labels
@@ -213,13 +223,11 @@ class Annotator:
         for k, i in enumerate(ids.tolist()):
             c = id_colour(i)
             cx, cy = centres[k]
-            if covs is not None and np.isfinite(covs[k][:2, :2]).all():
-                lam, vec = np.linalg.eigh(covs[k][:2, :2])
-                ax = np.minimum(self.nsigma * np.sqrt(np.maximum(lam, 0.0)), reach)
-                ang = float(np.degrees(np.arctan2(vec[1, 1], vec[0, 1])))
+            if covs is not None and has_ellipse[k]:
+                ax = semi[k]
                 cv2.ellipse(out, (int(round(cx)), int(round(cy))),
-                            (max(int(round(ax[1])), 1), max(int(round(ax[0])), 1)), ang, 0, 360,
-                            c, thin, cv2.LINE_AA)
+                            (max(int(round(ax[1])), 1), max(int(round(ax[0])), 1)),
+                            float(angles[k]), 0, 360, c, thin, cv2.LINE_AA)
             (tw, th), tb = sizes[k]
             if boxes is not None:
                 x0, y0, x1, y1 = np.round(boxes[k]).astype(int)
