@@ -214,6 +214,7 @@ class Annotator:
             semi = np.minimum(self.nsigma * np.sqrt(np.maximum(lams, 0.0)), reach)
             angles = np.degrees(np.arctan2(vecs[:, 1, 1], vecs[:, 0, 1]))
         font, scale = cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z
+        gap, dot, halo = round(4 * z), round(3 * z), max(3, round(3 * z))  # (once a frame)
         sizes = [cv2.getTextSize(str(i), font, scale, thin) for i in ids.tolist()]
         numbered = self.labels
         if numbered is None:
@@ -232,18 +233,18 @@ class Annotator:
             if boxes is not None:
                 x0, y0, x1, y1 = np.round(boxes[k]).astype(int)
                 cv2.rectangle(out, (x0, y0), (x1, y1), c, thick)
-                x, y = x0, y0 - round(4 * z)  # above the box
+                x, y = x0, y0 - gap  # above the box
                 top = banner[1] if x < banner[0] else 0
                 if y - th < top:  # off the image, or under the frame's label: inside, at the top
-                    y = max(y0, top) + th + round(4 * z)
+                    y = max(y0, top) + th + gap
             else:
-                cv2.circle(out, (int(round(cx)), int(round(cy))), round(3 * z), c, -1)
-                x, y = int(cx) + round(4 * z), int(cy) - round(4 * z)
+                cv2.circle(out, (int(round(cx)), int(round(cy))), dot, c, -1)
+                x, y = int(cx) + gap, int(cy) - gap
             if not numbered:
                 continue
             # the whole number inside the image (a box past the left edge showed a sliver)
             org = (min(max(x, 0), max(W - tw, 0)), min(max(y, th), max(H - tb, th)))
-            cv2.putText(out, str(i), org, font, scale, (0, 0, 0), max(3, round(3 * z)),
+            cv2.putText(out, str(i), org, font, scale, (0, 0, 0), halo,
                         cv2.LINE_AA)
             cv2.putText(out, str(i), org, font, scale, c, thin, cv2.LINE_AA)
         return out
