@@ -781,15 +781,14 @@ def _onnx(path: str | Path, ctx: Context) -> FrameDetector:
 
 
 def _spots(ctx: Context) -> FrameDetector:
-    from .frontends.spots import locate
+    from .frontends.spots import _check_diameter, locate
 
     opt = ctx.options
     if opt.get("diameter") is None:
         raise ValueError("the spots front-end needs the spots' diameter in pixels, odd "
                          "(diameter=, --diameter): the size of feature it looks for")
-    diameter, minmass = opt["diameter"], float(opt.get("minmass", 0.0))
+    diameter, minmass = _check_diameter(opt["diameter"]), float(opt.get("minmass", 0.0))
     invert = bool(opt.get("invert", False))
-    locate(np.zeros((8, 8), np.uint8), diameter)  # a bad diameter named before any frame
     if not (math.isfinite(minmass) and minmass >= 0):
         raise ValueError(f"minmass must be a finite number >= 0; got {opt['minmass']}")
     return lambda frame: locate(_image(frame, "the spots front-end"), diameter,
@@ -951,16 +950,16 @@ def _particles(ctx: Context) -> Tracker:
     if over:
         raise ValueError(f"the particles tracker's settings are search_range and max_lost; got "
                          f"{sorted(over)}")
-    r = PARTICLE_NOISE ** 2
-    # one frame after an update the innovation's variance per axis is r + q / fps + r
-    step = search ** 2 / chi2_threshold(2, PARTICLE_GATE) - 2 * r
-    if not (math.isfinite(search) and search > min_search_range()):
-        raise ValueError(f"search_range must be a finite number of pixels above "
-                         f"{min_search_range():.2f} (the gate of the positions' own noise); "
-                         f"got {search:g}")
+    floor = min_search_range()
+    if not (math.isfinite(search) and search > floor):
+        raise ValueError(f"search_range must be a finite number of pixels above {floor:.2f} "
+                         f"(the gate of the positions' own noise); got {search:g}")
+    # one frame after an update the innovation's variance per axis is r + q / fps + r, and
+    # the gate's radius sqrt(chi2 (2 r + step)); the floor is that of step 0
+    step = (search ** 2 - floor ** 2) / chi2_threshold(2, PARTICLE_GATE)
     return PointTracker("gnn", motion=ConstantPosition(dim=2, q=step * ctx.fps),
-                        measurement=Position(dim=2, r=r), frame_rate=ctx.fps, confirm_hits=1,
-                        max_lost=max_lost, p_gate=PARTICLE_GATE)
+                        measurement=Position(dim=2, r=PARTICLE_NOISE ** 2), frame_rate=ctx.fps,
+                        confirm_hits=1, max_lost=max_lost, p_gate=PARTICLE_GATE)
 
 
 PARTICLE_NOISE = 0.1

@@ -143,6 +143,23 @@ def _refine(image, coords, r, mask, max_iterations, shift):
     return out, mass, rg
 
 
+def _check_diameter(diameter: int) -> int:
+    """``diameter`` as an int, checked: the spots' size in pixels, odd, at least 3.
+
+    Raises
+    ------
+    ValueError
+        If it is not.
+
+    >>> _check_diameter(11)
+    11
+    """
+    d = int(diameter)
+    if d < 3 or d % 2 == 0:
+        raise ValueError(f"diameter must be an odd integer >= 3; got {d}")
+    return d
+
+
 def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
            separation: float | None = None, noise_size: float = 1.0,
            smoothing_size: int | None = None, threshold: float | None = None,
@@ -213,9 +230,7 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         im = bgr_to_grey(im)
     if im.ndim != 2:
         raise ValueError(f"image must be (H, W) or (H, W, 3); got shape {im.shape}")
-    diameter = int(diameter)
-    if diameter < 3 or diameter % 2 == 0:
-        raise ValueError(f"diameter must be an odd integer >= 3; got {diameter}")
+    diameter = _check_diameter(diameter)
     r = diameter // 2
     sep = float(diameter + 1 if separation is None else separation)
     if not (np.isfinite(sep) and sep > 0):

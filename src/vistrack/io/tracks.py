@@ -310,10 +310,7 @@ class _RowsFile:
         if f < 1:
             raise ValueError(f"frame {f}: MOTChallenge frames count from 1 (read_mot refuses "
                              f"frame {f})")
-        try:  # 1.7 was written as track 1
-            ids = _integers(tracks.ids, "ids")
-        except ValueError as e:
-            raise ValueError(f"frame {f}: {e}") from None
+        ids = self._ids_of(f, tracks)
         xywh = np.asarray(_box_rows(tracks, frame, f"{type(self).__name__}({self.path})"),
                           dtype=float)
         scores = np.asarray(tracks.scores, dtype=float)
@@ -324,10 +321,22 @@ class _RowsFile:
             raise ValueError(f"frame {f}, track {ids[k]}: box (x, y, w, h) "
                              f"{xywh[k].tolist()}, score {scores[k]}: a row read_mot refuses "
                              "(a box must be finite with w, h >= 0, a score finite)")
+        return f, ids, xywh, scores, self._count(ids, tracks)
+
+    @staticmethod
+    def _ids_of(f: int, tracks: Tracks) -> np.ndarray:
+        """The tracks' identities as integers, a ValueError naming frame ``f`` otherwise."""
+        try:  # 1.7 was written as track 1
+            return _integers(tracks.ids, "ids")
+        except ValueError as e:
+            raise ValueError(f"frame {f}: {e}") from None
+
+    def _count(self, ids: np.ndarray, tracks: Tracks) -> list[int]:
+        """Count rows ``ids`` written, each identity with its class; returns the classes."""
         classes = np.asarray(tracks.classes).astype(int).tolist()
         self._rows += len(ids)
         self._ids.update(zip(ids.tolist(), classes))
-        return f, ids, xywh, scores, classes
+        return classes
 
     def __len__(self) -> int:
         return self._rows
@@ -671,18 +680,14 @@ class PointsCSVWriter(_RowsFile):
             raise ValueError(f"frame {f}: frames count from 1")
         if not len(tracks):
             return
-        try:
-            ids = _integers(tracks.ids, "ids")
-        except ValueError as e:
-            raise ValueError(f"frame {f}: {e}") from None
+        ids = self._ids_of(f, tracks)
         xy = np.asarray(tracks.points, dtype=float)
         bad = ~np.isfinite(xy).all(axis=1)
         if bad.any():
             k = int(np.argmax(bad))
             raise ValueError(f"frame {f}, particle {ids[k]}: position {xy[k].tolist()} is not "
                              "finite")
-        self._rows += len(ids)
-        self._ids.update(zip(ids.tolist(), np.asarray(tracks.classes).astype(int).tolist()))
+        self._count(ids, tracks)
         cells = zip([f] * len(ids), ids.tolist(), *xy.T.tolist())
         self._file.write((self._ROW * len(ids)) % tuple(itertools.chain.from_iterable(cells)))
 
