@@ -614,9 +614,89 @@ def test_several_videos_from_pixels(tmp_path, capsys):
         for f in ("tracks.txt", "tracks.csv"):
             assert (out / name / f).read_bytes() == (tmp_path / "alone" / f).read_bytes()
         assert (out / name / "annotated.mp4").stat().st_size > 0
-    # a sequence's own options belong to one input
-    assert main(["track", str(a), str(b), "--out-dir", str(out), "--fps", "7"]) == 2
-    assert "--fps goes with one video, or with --out" in capsys.readouterr().err
+
+
+def _image_folder(video, folder, frames):
+    """The first ``frames`` frames of ``video`` as PNG images in ``folder``, which gives no
+    frame rate."""
+    import cv2
+
+    folder.mkdir(parents=True)
+    cap = cv2.VideoCapture(str(video))
+    for k in range(frames):
+        ok, image = cap.read()
+        assert ok
+        cv2.imwrite(str(folder / f"{k + 1:06d}.png"), image)
+    cap.release()
+    return folder
+
+
+def test_several_inputs_from_pixels_take_one_frame_rate(tmp_path, capsys):
+    """Image folders give no frame rate, and each run says to give the true one with
+    ``--fps``; with several inputs ``--fps`` was refused, so they could only be tracked at
+    an assumed 30 frames/s. Now, as with ``--out``, it is every input's rate, put over any
+    an input gives (the clip's header says 7): each input is tracked as it is alone at that
+    rate, and a line after the table names each input whose own rate was replaced."""
+    import json
+
+    from vistrack.io import VideoReader
+    from vistrack.pipeline import track_video
+
+    clip, _ = _two_clips(tmp_path)
+    assert VideoReader(clip).own_fps == 7  # the header's, what the last line names
+    folders = [_image_folder(clip, tmp_path / name, 12) for name in ("f1", "f2")]
+    out = tmp_path / "out"
+    assert main(["track", str(folders[0]), str(folders[1]), str(clip), "--out-dir", str(out),
+                 "--fps", "10", "--stop", "12", "--still-camera", "--quiet"]) == 0
+    assert capsys.readouterr().out.splitlines()[-2:] == [
+        "3 of 3 inputs tracked",
+        "tracked at --fps 10 frames/s, over the rate of the video's header: a.mp4 7"]
+    for name, source in (("f1", folders[0]), ("a", clip)):
+        alone = track_video(source, tmp_path / f"alone-{name}", fps=10, stop=12,
+                            camera_motion=False, annotate=False)
+        assert json.loads((out / name / "run.json").read_text())["frame_rate"] == 10
+        assert (out / name / "tracks.txt").read_bytes() == \
+            (alone.out_dir / "tracks.txt").read_bytes()
+    # at the assumed 30 frames/s the tracks differ: the rate was the option's
+    with pytest.warns(UserWarning, match="gives no frame rate"):
+        at30 = track_video(folders[0], tmp_path / "at30", stop=12, camera_motion=False,
+                           annotate=False)
+    assert (at30.out_dir / "tracks.txt").read_bytes() != (out / "f1" / "tracks.txt").read_bytes()
+    # the folders alone, or the clip at its own rate: nothing was replaced, nothing said
+    assert main(["track", str(folders[0]), str(clip), "--out-dir", str(out), "--fps", "7",
+                 "--stop", "12", "--force", "--quiet"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == "2 of 2 inputs tracked"
+
+
+def test_one_input_from_pixels_says_which_rate_fps_was_put_over(tmp_path, capsys):
+    """``--fps`` over a video's header rate, or over the frameRate of an image sequence's
+    seqinfo.ini, was taken without a word, where a detections run names the frameRate it
+    replaced. The summary's first line now ends naming it; the same rate, or a folder that
+    gives none, says nothing. ``VideoReader.own_fps`` is the rate the source gives."""
+    from vistrack.io import VideoReader
+
+    clip, _ = _two_clips(tmp_path)
+    seq = tmp_path / "SEQ"
+    _image_folder(clip, seq / "img1", 8)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=SEQ\nimDir=img1\nframeRate=25\n"
+                                     "seqLength=8\nimWidth=768\nimHeight=576\n")
+    bare = _image_folder(clip, tmp_path / "bare", 8)
+    for source, own, where in ((clip, 7, "the header"), (seq, 25, "seqinfo.ini"),
+                               (bare, None, None)):
+        assert (VideoReader(source).own_fps, VideoReader(source).own_fps_from) == (own, where)
+        assert (VideoReader(source, fps=12).own_fps, VideoReader(source, fps=12).fps) == (own, 12)
+    words = {clip: f"; tracked at --fps 12 frames/s, over the rate of {clip}'s header, 7",
+             seq: f"; tracked at --fps 12 frames/s, over {seq / 'seqinfo.ini'}'s frameRate 25",
+             bare: ""}
+    for source, end in words.items():
+        assert main(["track", str(source), "--out-dir", str(tmp_path / "o"), "--fps", "12",
+                     "--stop", "8", "--force"]) == 0
+        first = capsys.readouterr().out.splitlines()[0]
+        assert first.endswith(end) if end else "tracked at --fps" not in first
+    for source, own in ((clip, "7"), (seq, "25")):  # the same rate as its own
+        assert main(["track", str(source), "--out-dir", str(tmp_path / "o"), "--fps", own,
+                     "--stop", "8", "--force"]) == 0
+        assert "tracked at --fps" not in capsys.readouterr().out
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGTERM to one process (POSIX)")

@@ -155,7 +155,8 @@ class Job:
 class Outcome:
     """How a :class:`Job` went: ``ok``, or ``error`` (one line: the exception's type and
     message); frames, rows and tracks written; seconds of the whole job; ``attempts`` (more
-    than 1 if a worker died under it)."""
+    than 1 if a worker died under it); ``replaced_rate``, an input from pixels' own frame rate
+    that ``fps`` was put over (:attr:`~vistrack.pipeline.VideoRun.replaced_rate`)."""
 
     input: Path
     out: Path
@@ -166,6 +167,7 @@ class Outcome:
     seconds: float = 0.0
     error: str = ""
     attempts: int = 1
+    replaced_rate: tuple[str, float] | None = None
 
 
 def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detections",
@@ -246,7 +248,8 @@ def _run(job: Job) -> Outcome:
         return Outcome(job.input, job.out, False, seconds=time.perf_counter() - t0,
                        error=one_line(e))
     return Outcome(job.input, job.out, True, frames=run.frames, rows=run.rows,
-                   tracks=run.tracks, seconds=time.perf_counter() - t0)
+                   tracks=run.tracks, seconds=time.perf_counter() - t0,
+                   replaced_rate=run.replaced_rate)
 
 
 

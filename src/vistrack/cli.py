@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from typing import TextIO
 
     from .config import TrackConfig
-    from .pipeline import VideoRun
+    from .pipeline import TrackRun, VideoRun
 
 DEMOS = ("kalman", "track")
 
@@ -396,7 +396,6 @@ def _track(args: argparse.Namespace) -> int:
     from .config import config_toml
     from .io.atomic import check_output
     from .pipeline import (
-        TrackRun,
         VideoRun,
         _keep_warnings,
         _shown_warnings,
@@ -474,7 +473,7 @@ def _track(args: argparse.Namespace) -> int:
     else:
         print(f"wrote {run.out}: {_n(run.rows, 'box', 'boxes')} of {_n(run.tracks, 'track')} "
               f"over {_n(run.frames, 'frame')} from {_n(run.detections, 'detection')}; tracker "
-              f"{run.fps:.0f} frames/s{_fps_words(args)}", file=report)
+              f"{run.fps:.0f} frames/s{_fps_words(args, run)}", file=report)
     if args.print_config:
         assert run.config is not None  # a box tracker's run (others refuse --print-config)
         derived = dict(run.derived or {})
@@ -485,23 +484,21 @@ def _track(args: argparse.Namespace) -> int:
     return 0
 
 
-def _fps_words(args: argparse.Namespace) -> str:
-    own = _rate_overridden(args.fps, args.input)
-    return ("" if own is None else f"; tracked at --fps {args.fps:g} frames/s, over "
-            f"{Path(args.input) / 'seqinfo.ini'}'s frameRate {own:g}")
+def _fps_words(args: argparse.Namespace, run: TrackRun | VideoRun) -> str:
+    """The end of one input's summary where ``--fps`` was put over the input's own frame
+    rate (``run.replaced_rate``), naming that rate and what gave it; "" otherwise."""
+    if run.replaced_rate is None:
+        return ""
+    source, own = run.replaced_rate
+    where = (f"{Path(args.input) / 'seqinfo.ini'}'s frameRate" if source == "seqinfo.ini"
+             else f"the rate of {args.input}'s header,")
+    return f"; tracked at --fps {args.fps:g} frames/s, over {where} {own:g}"
 
 
-def _rate_overridden(fps: float | None, seq: str | Path) -> float | None:
-    """The ``frameRate`` of ``seq/seqinfo.ini`` where ``--fps`` put another over it, else
-    None (no ``--fps``, no ``seqinfo.ini``, or the same rate): the run tracked at the
-    option's rate, and its summary says so."""
-    from .io.motchallenge import read_seqinfo
-
-    ini = Path(seq) / "seqinfo.ini"
-    if fps is None or not ini.is_file():
-        return None
-    own = read_seqinfo(ini).frame_rate
-    return None if math.isclose(own, fps) else own
+_RATE_SOURCES = {"seqinfo.ini": "the frameRate of seqinfo.ini",
+                 "the header": "the rate of the video's header"}
+"""What gave an input's own frame rate (:attr:`~vistrack.pipeline.VideoRun.replaced_rate`),
+as several inputs' summary names it."""
 
 
 def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
@@ -713,8 +710,8 @@ def _print_video_run(args: argparse.Namespace, run: VideoRun, report: TextIO) ->
             f"{_n(run.rows, 'box', 'boxes')} of {_n(run.tracks, 'track')}")
     print(f"tracked {_n(run.frames, 'frame')}: {rows}; "
           f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})"
-          + (f"; compiling took {compiling:.1f} s" if compiling >= 0.05 else ""),
-          file=report)
+          + (f"; compiling took {compiling:.1f} s" if compiling >= 0.05 else "")
+          + _fps_words(args, run), file=report)
     if args.report:
         from .report import write_report
 
@@ -840,8 +837,6 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         # (every input was tracked from the one file)
         return fail(f"--frontend {args.frontend} goes with one input: a detections file is "
                     "one video's")
-    if args.fps is not None and args.out is None:
-        return fail("--fps goes with one video, or with --out (every input's frame rate)")
     if args.report:
         return fail("--report goes with one input (vistrack report NAME/ makes an input's "
                     "page afterwards)")
@@ -867,8 +862,6 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         if args.skip_bad_frames:  # (taken and ignored, where one input refuses it)
             return fail("--skip-bad-frames goes with --out-dir")
         kind, out, options["config"] = "detections", args.out, cfg
-        if args.fps is not None:
-            options["fps"] = args.fps
     else:
         if (cfg is not None and cfg.offline.enabled) or offline_given:
             return fail(_OFFLINE_NEEDS_OUT)
@@ -879,6 +872,8 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
             return fail(problem)
         kind, out = "pixels", args.out_dir
         options.update(_video_options(args, name, box, cfg))
+    if args.fps is not None:  # every input's frame rate, put over any it gives
+        options["fps"] = args.fps
     _warn_unused_settings(args, cfg, offline_given)
     jobs = plan(args.input, out, kind=kind, **options)
     for job in jobs:  # before anything runs: a job that cannot write fails now
@@ -927,12 +922,12 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     bad = [o for o in outcomes if not o.ok]
     print(f"{len(outcomes) - len(bad)} of {len(outcomes)} inputs tracked"
           + (f"; {len(bad)} not" if bad else ""))
-    if kind == "detections":
-        over = [(n, own) for o, n in zip(outcomes, names)
-                if o.ok and (own := _rate_overridden(args.fps, o.input)) is not None]
-        if over:
-            print(f"tracked at --fps {args.fps:g} frames/s, over the frameRate of seqinfo.ini: "
-                  + ", ".join(f"{n} {own:g}" for n, own in over))
+    over = {source: ", ".join(f"{n} {o.replaced_rate[1]:g}" for o, n in zip(outcomes, names)
+                              if o.ok and o.replaced_rate and o.replaced_rate[0] == source)
+            for source in _RATE_SOURCES}
+    if any(over.values()):
+        print(f"tracked at --fps {args.fps:g} frames/s, over "
+              + "; over ".join(f"{_RATE_SOURCES[k]}: {v}" for k, v in over.items() if v))
     return 1 if bad else 0
 
 
@@ -1387,10 +1382,11 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--onnx-layout", choices=("auto", "yolov8", "yolov5", "ssd"),
                        help="video mode, onnx: the model's output layout (default: auto, told "
                        "from the outputs' shapes)")
-    track.add_argument("--fps", type=float, help="the true frame rate: video mode, when the "
-                       "file's header is wrong; --out, for a detections file alone or a "
-                       "sequence without seqinfo.ini (put over its frameRate where it has one; "
-                       "with several inputs, every input's)")
+    track.add_argument("--fps", type=float, help="the true frame rate: video mode, for an "
+                       "image folder or when the file's header is wrong; --out, for a "
+                       "detections file alone or a sequence without seqinfo.ini (put over the "
+                       "rate an input gives, where it gives one; with several inputs, every "
+                       "input's)")
     track.add_argument("--gt", help="video mode: MOTChallenge ground truth to score against")
     track.add_argument("--stop", type=int, help="video mode: the last frame to track")
     track.add_argument("--skip-bad-frames", action="store_true",

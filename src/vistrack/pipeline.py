@@ -115,6 +115,9 @@ class TrackRun:
         ``frame_rate`` is then the sequence's divided by k), and ``undelivered_frames``, their
         number, where frames without detections lie amid frames with many
         (:func:`~vistrack.detector_checks.undelivered_frames`).
+    replaced_rate : (str, float) or None
+        Where ``fps`` was put over the frame rate of the sequence's ``seqinfo.ini``:
+        ``("seqinfo.ini", its frameRate)``; None otherwise.
 
     Examples
     --------
@@ -132,6 +135,7 @@ class TrackRun:
     seconds: float
     config: TrackConfig | None = None
     derived: dict | None = None
+    replaced_rate: tuple[str, float] | None = None
 
     @property
     def fps(self) -> float:
@@ -1403,7 +1407,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     if len(skip):
         derived["undelivered_frames"] = len(skip)
     return TrackRun(out, info.seq_length, len(dets), n_rows, n_tracks, seconds,
-                    cfg.with_motion(), derived)
+                    cfg.with_motion(), derived, src.replaced_rate)
 
 
 # the stages of track_sequence: the results' format, the input read and checked, the whole
@@ -1431,12 +1435,13 @@ def _results_format(out: Path) -> str | None:
 class _SequenceInput:
     """What :func:`track_sequence` tracks: the detections file, the sequence's facts and
     its rows; ``label`` names the input in warnings (the sequence folder, or the file
-    alone)."""
+    alone); ``replaced_rate``, :attr:`TrackRun.replaced_rate`."""
 
     det_path: Path
     label: str
     info: SeqInfo
     dets: MOTTable
+    replaced_rate: tuple[str, float] | None = None
 
 
 def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
@@ -1483,6 +1488,7 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
             else f"{ini} does not exist; pass the frame rate (--fps) to track the detections "
             "without it")
     info = read_seqinfo(seq_dir) if has_info else None
+    replaced: tuple[str, float] | None = None  # seqinfo.ini's frameRate, where fps is put over
     if not det_path.exists():
         raise FileNotFoundError(
             f"{det_path} does not exist" + ("" if detections is not None or alone else
@@ -1519,6 +1525,8 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
         info = SeqInfo.from_detections(det_path if alone else seq_dir, dets, float(fps))
     else:
         if fps is not None:
+            if not math.isclose(info.frame_rate, float(fps)):
+                replaced = ("seqinfo.ini", info.frame_rate)
             info = replace(info, frame_rate=float(fps))
         if len(dets) and dets.frames.max() > info.seq_length:
             n = info.seq_length
@@ -1527,7 +1535,7 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
             raise ValueError(f"{det_path}" + (f", line {lines[0]}" if lines else "")
                              + f": frame {f} is beyond the sequence's {n} frames ({ini})")
         warn_outside(dets, det_path, (info.im_width, info.im_height), stacklevel=3)
-    return _SequenceInput(det_path, str(det_path if alone else seq_dir), info, dets)
+    return _SequenceInput(det_path, str(det_path if alone else seq_dir), info, dets, replaced)
 
 
 def _check_detections(src: _SequenceInput, tc: BoxTrackerConfig, oc: OfflineConfig) -> None:
@@ -1971,6 +1979,9 @@ class VideoRun:
     first, last : int
         The first and the last frame tracked (0: ``first + frames - 1``); frames missing
         from the source between them are not counted in ``frames``.
+    replaced_rate : (str, float) or None
+        Where ``fps`` was put over another frame rate that the source gives: what gives it
+        (``"the header"``, ``"seqinfo.ini"``) and that rate; None otherwise.
 
     Examples
     --------
@@ -1991,6 +2002,7 @@ class VideoRun:
     derived: dict | None = None
     first: int = 1
     last: int = 0
+    replaced_rate: tuple[str, float] | None = None
 
     @property
     def fps(self) -> float:
@@ -2400,7 +2412,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             result = VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
                               ctx.resolved if isinstance(trk, BoxTracker) else None,
                               derived_values(trk) if isinstance(trk, BoxTracker) else None,
-                              reader.start, stats.last)
+                              reader.start, stats.last, _replaced_rate(reader))
             _write_run_info(result, video, gt, command, reader.fps, said, points=points)
             # an earlier run's page would show other tracks beside these outputs (a new one, if
             # asked for, is written from run.json after this)
@@ -2408,6 +2420,15 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             if points:  # an earlier run's box tracks would read as this run's
                 remove_on_commit(out_dir / SINK_FILES["tracks"])
             return result
+
+
+def _replaced_rate(reader: VideoReader) -> tuple[str, float] | None:
+    """What gives the frame rate that ``fps`` was put over, and that rate
+    (:attr:`VideoRun.replaced_rate`); None where the source gives none, or the same."""
+    own = reader.own_fps
+    if reader.fps_from != "fps" or own is None or math.isclose(own, reader.fps):
+        return None
+    return str(reader.own_fps_from), own
 
 
 def _ground_truth(gt: str | Path) -> MOTTable:

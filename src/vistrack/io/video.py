@@ -246,6 +246,10 @@ class VideoReader:
     fps_from : str or None
         What gave it: ``"fps"`` (the argument), ``"seqinfo.ini"``, ``"the header"``; None
         where nothing did (an image folder), and it is 30.
+    own_fps, own_fps_from : float or None, str or None
+        The frame rate the source itself gives and what gives it (``"seqinfo.ini"``,
+        ``"the header"``), whether or not ``fps`` was put over it; None, None where it gives
+        none (an image folder) or none that is a rate (a frameRate of 0).
     size : (width, height)
         The frames' size (of the header, for video files).
     frame_count : int
@@ -418,6 +422,11 @@ class VideoReader:
         # where the rate comes from: None where nothing gives one (an image folder), 30
         self.fps_from = ("fps" if fps is not None else "seqinfo.ini" if seq_fps
                          else "the header" if header_fps else None)
+        # the rate the source gives, where fps is put over it too (the run says so)
+        own: tuple[float | None, str | None] = next(
+            ((float(r), f) for r, f in ((seq_fps, "seqinfo.ini"), (header_fps, "the header"))
+             if r is not None and np.isfinite(r) and r > 0), (None, None))
+        self.own_fps, self.own_fps_from = own
         fps = fps if fps is not None else seq_fps or header_fps or 30.0
         if not np.isfinite(fps) or fps <= 0:
             raise ValueError(f"fps must be a finite number > 0; got {fps}")
