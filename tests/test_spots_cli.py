@@ -198,6 +198,9 @@ def test_spots_and_particles_go_together(tmp_path, capsys):
     with pytest.raises(ValueError, match="the particles tracker links points, and the hog "
                                          "front-end finds boxes"):
         track_video(frames, out, frontend="hog", tracker="particles", fps=10)
+    with pytest.raises(ValueError, match="gt scores box tracks; the particles tracker's are "
+                                         "points"):
+        track_video(frames, out, frontend="spots", diameter=9, gt=tmp_path / "gt.txt", fps=10)
     with pytest.raises(ValueError, match="the spots front-end needs the spots' diameter"):
         track_video(frames, out, frontend="spots", fps=10)
     assert not (tmp_path / "o").exists()

@@ -742,24 +742,15 @@ def _frontend_problem(args: argparse.Namespace, name: str) -> str:
 def _points_problem(args: argparse.Namespace, name: str, frontend: str) -> str:
     """What is wrong with spots or the particles tracker as given ("" if nothing): checked
     before anything is read, for one input or many, in the command line's words."""
-    from .pipeline import TRACKERS, min_search_range
+    from .pipeline import min_search_range, points_problem
 
-    points = _points(name)
-    if frontend == "spots":
-        if name in TRACKERS and not points:
-            return (f"--frontend spots finds points, and --tracker {name} tracks boxes: track "
-                    "spots with --tracker particles (the default with them)")
-        if args.diameter is None:
-            return ("--frontend spots needs --diameter: the spots' diameter in pixels, odd "
-                    "(round up)")
-    if not points:
+    problem = points_problem(name, frontend, gt=args.gt is not None, cli=True)
+    if problem:
+        return problem
+    if frontend == "spots" and args.diameter is None:
+        return "--frontend spots needs --diameter: the spots' diameter in pixels, odd (round up)"
+    if not _points(name):
         return ""
-    if frontend != "spots":
-        return (f"--tracker {name} links points, and --frontend {frontend} finds boxes: give "
-                "it --frontend spots")
-    if args.gt is not None:
-        return (f"--gt scores box tracks; --tracker {name} gives points (tracks.csv holds "
-                "each particle's positions)")
     floor = min_search_range()
     if args.search_range is not None and not args.search_range > floor:
         return (f"--search-range must be above {floor:.2f} pixels (the gate of the positions' "

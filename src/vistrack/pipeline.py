@@ -1045,6 +1045,42 @@ def default_frontend(tracker: object) -> str:
         else "bgsub"
 
 
+def points_problem(tracker: object, frontend: object, *, gt: bool = False,
+                   cli: bool = False) -> str:
+    """What is wrong with a tracker and a front-end together where one is of points and the
+    other of boxes, or with ground truth (``gt``) for a tracker of points, "" if nothing: in
+    the arguments' words, or the command line's (``cli``), which checks the same before
+    anything runs. A tracker or a front-end that is an object of yours is not checked.
+
+    >>> points_problem("bytetrack", "spots", cli=True)[:60]
+    '--frontend spots finds points, and --tracker bytetrack track'
+    >>> points_problem("particles", "hog")[:58]
+    'the particles tracker links points, and the hog front-end '
+    >>> points_problem("particles", "spots"), points_problem("bytetrack", "hog", gt=True)
+    ('', '')
+    """
+    if not (isinstance(tracker, str) and tracker in TRACKERS):
+        return ""
+    points = TRACKERS[tracker].points
+    trk = f"--tracker {tracker}" if cli else f"the {tracker} tracker"
+    if frontend == "spots" and not points:
+        return ((f"--frontend spots finds points, and {trk} tracks boxes: track spots with "
+                 "--tracker particles") if cli else
+                (f"the spots front-end finds points, and {trk} tracks boxes: track spots "
+                 "with the particles tracker")) + " (the default with them)"
+    if points and isinstance(frontend, str) and frontend != "spots":
+        return (f"{trk} links points, and --frontend {frontend} finds boxes: give it "
+                "--frontend spots" if cli else
+                f"{trk} links points, and the {frontend} front-end finds boxes: give it the "
+                "spots front-end (or a detector of your own that finds points)")
+    if points and gt:
+        return (f"--gt scores box tracks; {trk} gives points (tracks.csv holds each "
+                "particle's positions)" if cli else
+                f"gt scores box tracks; {trk}'s are points (its tracks.csv holds each "
+                "particle's positions)")
+    return ""
+
+
 def make_tracker(tracker: str | Tracker, ctx: Context) -> tuple[Tracker, str]:
     """A tracker and its default front-end: ``tracker`` by name in :data:`TRACKERS`, as
     ``"module:callable"`` (the callable is called with no arguments), or a tracker object
@@ -2234,18 +2270,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             raise ValueError(f"{unread[0]} goes with the {unread[1]!r} front-end; the front-end "
                              f"here, {what}, does not read it")
         points = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].points
-        if name == "spots" and isinstance(tracker, str) and tracker in TRACKERS \
-                and not points:
-            raise ValueError(f"the spots front-end finds points, and the {tracker} tracker "
-                             "tracks boxes: track spots with the particles tracker (the "
-                             "default with them)")
-        if points and isinstance(name, str) and name != "spots":
-            raise ValueError(f"the {tracker} tracker links points, and the {name} front-end "
-                             "finds boxes: give it the spots front-end (or a detector of "
-                             "your own that finds points)")
-        if points and gt is not None:
-            raise ValueError(f"gt scores box tracks; the {tracker} tracker's are points (its "
-                             "tracks.csv holds each particle's positions)")
+        problem = points_problem(tracker, name, gt=gt is not None)
+        if problem:
+            raise ValueError(problem)
         files = video_outputs(out_dir, annotate=annotate, force=force, points=points)
         out_dir = Path(out_dir)
         gt_table = _ground_truth(gt) if gt is not None else None
