@@ -63,14 +63,19 @@ def test_other_column_names_and_missing_columns():
     assert t.frames.tolist() == [1, 2] and t.boxes[:, 0].tolist() == [7.0, 10.0]
     assert t.conf.tolist() == [1.0, 1.0]
     no_width = {k: v for k, v in names.items() if k != "bb_width"}
-    with pytest.raises(ValueError, match=r"no box in mine.csv: columns \['bb_left', 'bb_top', "
-                                         r"'bb_width'\]"):
-        MOTTable.from_pandas(rows.drop(columns="w"), columns=no_width, path="mine.csv")
-    # the file's own columns are listed, as where the frame's is missing (they were not)
+    # the centre with a height and no width: the width is named alone (it was "no box", the
+    # columns of the first form listed), and the file's own columns are listed
     with pytest.raises(ValueError, match=re.escape(
-            "or the corners 'x1', 'y1', 'x2', 'y2'); columns: ['cx', 'cy', 'h', 't', 'track'] "
-            "(name yours: --columns bb_left=NAME,..., or columns={'bb_left': NAME, ...})")):
+            "no column 'bb_width' in mine.csv (x, y are a box's centre with 'bb_width' and 'h', "
+            "or a point with neither); columns: ['cx', 'cy', 'h', 't', 'track']")):
         MOTTable.from_pandas(rows.drop(columns="w"), columns=no_width, path="mine.csv")
+    # no box in any form: the forms and the file's columns (they were not listed)
+    with pytest.raises(ValueError, match=re.escape(
+            "or the corners 'x1', 'y1', 'x2', 'y2'); columns: ['h', 't', 'track', 'w'] "
+            "(name yours: --columns bb_left=NAME,..., or columns={'bb_left': NAME, ...})")):
+        MOTTable.from_pandas(rows.drop(columns=["cx", "cy"]), path="mine.csv",
+                             columns={"frame": "t", "particle": "track", "bb_width": "w",
+                                      "bb_height": "h"})
     with pytest.raises(ValueError, match=re.escape(
             "no column 'bb_width' in mine.csv; columns: ['h', 'l', 't', 'top', 'track']")):
         MOTTable.from_pandas(rows.drop(columns=["w", "cx"]).rename(columns={"cy": "top"})

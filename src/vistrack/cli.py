@@ -1039,7 +1039,7 @@ def _partial_runs(pairs: list[tuple[str, Path, Path, Path | None]],
     ground truth's frames after its last count as missed."""
     import json
 
-    from .io.motchallenge import read_mot
+    from .evaluation.files import read_truth
     from .pipeline import RUN_INFO
 
     out = []
@@ -1054,7 +1054,7 @@ def _partial_runs(pairs: list[tuple[str, Path, Path, Path | None]],
                 continue
         except (OSError, ValueError, KeyError, TypeError):
             continue  # not a run's own file: nothing to tell from it
-        frames = read_mot(gt).frames
+        frames = read_truth(gt).frames
         after = frames[frames > last]
         if len(after):
             out.append(f"{pred}: its run ({info}) tracked frames {run.get('first_frame', 1)}-"
@@ -1157,6 +1157,10 @@ def _eval(args: argparse.Namespace) -> int:
     columns, problem = _columns(args.columns)
     if problem:
         return _fail("eval", problem)
+    zero = args.zero_distance
+    if zero is not None and not (math.isfinite(zero) and zero > 0):
+        return _fail("eval", f"--zero-distance must be a distance > 0 (where a pair counts for "
+                     f"nothing; a match lies within half of it); got {zero:g}")
     if args.scheduler is not None and args.jobs is not None:
         return _fail("eval", "--jobs goes with the local pool; the cluster has its own workers")
     plots = [] if args.plots is None else [Path(args.plots) / "hota_alpha.png"] + [
@@ -1175,10 +1179,10 @@ def _eval(args: argparse.Namespace) -> int:
         with client:
             res = evaluate_files(pairs, benchmark=args.benchmark,
                                  executor=client.get_executor(), keep_going=args.keep_going,
-                                 columns=columns)
+                                 columns=columns, zero_distance=zero)
     else:
         res = evaluate_files(pairs, benchmark=args.benchmark, jobs=jobs,
-                             keep_going=args.keep_going, columns=columns)
+                             keep_going=args.keep_going, columns=columns, zero_distance=zero)
     for warning in res.warnings + _partial_runs(pairs, res.errors):
         print(f"vistrack eval: warning: {warning}", file=sys.stderr)
     for name, error in res.errors.items():
@@ -1206,12 +1210,12 @@ def _eval(args: argparse.Namespace) -> int:
                                if pair[0] not in res.errors]
         with made_folder(plots[0].parent):
             with replacing(plots[0]) as part:
-                plot_hota_alpha(res, part)
+                plot_hota_alpha(res, part, zero_distance=zero)
             for pair, path in zip(pairs, plots[1:]):
                 if pair[0] not in res.errors:
                     with replacing(path) as part:
-                        plot_timeline(pair_matches(pair, args.benchmark, columns), part,
-                                      title=pair[0])
+                        plot_timeline(pair_matches(pair, args.benchmark, columns, zero),
+                                      part, title=pair[0])
         for path in written:
             print(f"wrote {path}", file=sys.stderr)
     return status
@@ -1481,9 +1485,11 @@ def build_parser() -> argparse.ArgumentParser:
         description="Score MOTChallenge results as TrackEval does: HOTA, DetA, AssA, MOTA, "
         "MOTP, IDF1 and the counts, per sequence and combined.")
     ev.add_argument("--gt", help="ground-truth file (SEQ/gt/gt.txt; seqinfo.ini is read "
-                    "beside), or the sequence folder SEQ holding it")
+                    "beside), or the sequence folder SEQ holding it; or a .csv or .parquet "
+                    "file, read by its columns' names (for points: frame, particle, x, y)")
     ev.add_argument("--pred", help="results file: MOTChallenge's text, or the .parquet or .csv "
-                    "file vistrack track --out writes")
+                    "file vistrack track --out writes (or the tracks.csv of points that "
+                    "--frontend spots writes)")
     ev.add_argument("--gt-dir", help="folder of sequences SEQ/gt/gt.txt")
     ev.add_argument("--columns", metavar="OURS=THEIRS,...",
                     help="the results' column names in a .csv or .parquet file: frame, id, "
@@ -1511,6 +1517,10 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--benchmark", default="auto", choices=("auto", "MOT15", "MOT16", "MOT17",
                                                            "MOT20"),
                     help="preprocessing of the ground truth (default: auto, from its columns)")
+    ev.add_argument("--zero-distance", type=float, metavar="PX",
+                    help="score positions rather than boxes (points, such as particles; or "
+                    "boxes' centres): a pair's similarity 1 - distance / PX, at least 0, in "
+                    "place of the IoU (TrackEval's for points): a match lies within PX/2")
     ev.add_argument("--json", action="store_true", help="print JSON instead of a table")
     _runs(ev, _eval, debug_help)
     return parser

@@ -1075,9 +1075,11 @@ def points_problem(tracker: object, frontend: object, *, gt: bool = False,
                 "spots front-end (or a detector of your own that finds points)")
     if points and gt:
         return (f"--gt scores box tracks; {trk} gives points (tracks.csv holds each "
-                "particle's positions)" if cli else
+                "particle's positions: score it afterwards with vistrack eval --gt TRUTH "
+                "--pred OUT/tracks.csv --zero-distance PX)" if cli else
                 f"gt scores box tracks; {trk}'s are points (its tracks.csv holds each "
-                "particle's positions)")
+                "particle's positions: score it afterwards with evaluate_files(..., "
+                "zero_distance=PX), or vistrack eval --zero-distance PX)")
     return ""
 
 
@@ -1207,6 +1209,12 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
 
         df = _read_csv(path, "a CSV file of detections")
         table = MOTTable.from_pandas(df, columns, path=str(path))
+        if len(table) and not table.boxes[:, 2:].any():
+            # x, y alone: points (trackpy's columns), which no box overlaps
+            raise ValueError(f"{path}: every row is a point, without a width or height: the "
+                             "box trackers track boxes (give bb_width and bb_height, or "
+                             "--columns naming them; a microscope's images are tracked as "
+                             "points with --frontend spots)")
         names = dict(columns or {})
         conf = names.get("conf", "conf")
         if conf not in df.columns:

@@ -7,7 +7,15 @@ from typing import TYPE_CHECKING
 
 from .._pool import one_line
 from ..io.motchallenge import MOTTable, read_mot, read_seq_length
-from .mot import BENCHMARKS, Matches, MOTCounts, clear_matches, combine, evaluate_mot
+from .mot import (
+    BENCHMARKS,
+    Matches,
+    MOTCounts,
+    check_zero_distance,
+    clear_matches,
+    combine,
+    evaluate_mot,
+)
 from .sanity import sanity_warnings
 
 if TYPE_CHECKING:
@@ -44,13 +52,15 @@ class EvalResults(dict[str, MOTCounts]):
 
 
 def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going: bool = False,
-           columns: dict[str, str] | None = None) -> tuple[MOTCounts | None, list[str], str]:
+           columns: dict[str, str] | None = None, zero_distance: float | None = None
+           ) -> tuple[MOTCounts | None, list[str], str]:
     """One pair's counts, sanity warnings and (``keep_going``) the error that stopped it, in
     one line ("" if none; raised without ``keep_going``); in a worker, for
     :func:`evaluate_files`."""
     try:
         g, p, n = _read(pair, columns)
-        return evaluate_mot(g, p, n, benchmark=benchmark), sanity_warnings(g, p), ""
+        return (evaluate_mot(g, p, n, benchmark=benchmark, zero_distance=zero_distance),
+                sanity_warnings(g, p, zero_distance=zero_distance), "")
     except Exception as e:
         if not keep_going:
             raise
@@ -59,10 +69,21 @@ def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going
 
 def _read(pair: tuple[str, Path, Path, Path | None], columns: dict[str, str] | None = None
           ) -> tuple[MOTTable, MOTTable, int | None]:
-    """A pair's ground truth, results and sequence length (None without seqinfo.ini)."""
+    """A pair's ground truth, results and sequence length (None without seqinfo.ini); ground
+    truth in a CSV or Parquet file is read by its own columns' names, ``columns`` naming the
+    results'."""
     _, gt, pred, info = pair
     n = read_seq_length(info) if info is not None else None
-    return read_mot(gt), _read_results(Path(pred), columns), n
+    return read_truth(gt), _read_results(Path(pred), columns), n
+
+
+def read_truth(path: str | Path) -> MOTTable:
+    """A ground-truth file: MOTChallenge's text, or a CSV or Parquet file read by its own
+    columns' names (:meth:`MOTTable.from_pandas <vistrack.io.MOTTable.from_pandas>`: a
+    box, or a point's ``x, y``)."""
+    path = Path(path)
+    return _read_results(path) if path.suffix.lower() in (".csv", ".parquet") else \
+        read_mot(path)
 
 
 def _read_results(path: Path, columns: dict[str, str] | None = None) -> MOTTable:
@@ -87,12 +108,14 @@ def _read_results(path: Path, columns: dict[str, str] | None = None) -> MOTTable
 
 
 def _score_on(executor: Executor, pairs: list[tuple[str, Path, Path, Path | None]],
-              benchmark: str, keep_going: bool, columns: dict[str, str] | None = None
+              benchmark: str, keep_going: bool, columns: dict[str, str] | None = None,
+              zero_distance: float | None = None
               ) -> list[tuple[MOTCounts | None, list[str], str]]:
     """Each pair's :func:`_score`, all submitted to ``executor`` at once, in the pairs' order;
     with ``keep_going``, a pair's worker failure (a pool broken by a worker's death, an
     executor's own error) as its error."""
-    futures = [executor.submit(_score, pair, benchmark, keep_going, columns) for pair in pairs]
+    futures = [executor.submit(_score, pair, benchmark, keep_going, columns, zero_distance)
+               for pair in pairs]
     scored = []
     for future in futures:
         try:
@@ -105,17 +128,21 @@ def _score_on(executor: Executor, pairs: list[tuple[str, Path, Path, Path | None
 
 
 def pair_matches(pair: tuple[str, Path, Path, Path | None], benchmark: str = "auto",
-                 columns: dict[str, str] | None = None) -> Matches:
+                 columns: dict[str, str] | None = None,
+                 zero_distance: float | None = None) -> Matches:
     """The CLEAR MOT matches of one ``(name, gt, results, seqinfo-or-None)`` pair, frame by
-    frame (:func:`~vistrack.evaluation.clear_matches`), read as :func:`evaluate_files` reads
-    it (a CSV or Parquet file's ``columns`` named as there)."""
-    return clear_matches(*_read(pair, columns), benchmark=benchmark)
+    frame (:func:`~vistrack.evaluation.clear_matches`), read and scored as
+    :func:`evaluate_files` does (a CSV or Parquet file's ``columns`` named as there;
+    positions by distance with ``zero_distance``)."""
+    return clear_matches(*_read(pair, columns), benchmark=benchmark,
+                         zero_distance=zero_distance)
 
 
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
                    benchmark: str = "auto", jobs: int | None = None,
                    executor: Executor | None = None, keep_going: bool = False,
-                   columns: dict[str, str] | None = None) -> EvalResults:
+                   columns: dict[str, str] | None = None,
+                   zero_distance: float | None = None) -> EvalResults:
     """Score ``(name, gt, results, seqinfo-or-None)`` pairs; adds ``"COMBINED"`` when there are
     several. Files that look unrelated, or ground truth that looks like detections, are warned
     about in the result's ``warnings`` (:func:`~vistrack.evaluation.sanity_warnings`).
@@ -125,7 +152,9 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     pairs : list of (str, Path, Path, Path or None)
         Each sequence's name, ground-truth file, results file (MOTChallenge's text, or the
         ``.parquet`` or ``.csv`` file ``vistrack track --out`` writes) and ``seqinfo.ini`` (which
-        gives the number of frames; None: the files' last frame).
+        gives the number of frames; None: the files' last frame). Ground truth may be a CSV or
+        Parquet file too, read by its own columns' names (``frame``, ``id`` or ``particle``,
+        and a box or, for points, ``x, y``).
     benchmark : {"auto", "MOT15", "MOT16", "MOT17", "MOT20"}
         The ground truth's preprocessing, passed to
         :func:`~vistrack.evaluation.evaluate_mot`.
@@ -143,6 +172,9 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
         The names of the results' columns in CSV or Parquet files, ``{ours: theirs}``
         (:meth:`MOTTable.from_pandas <vistrack.io.MOTTable.from_pandas>`; ``vistrack eval
         --columns``).
+    zero_distance : float, optional
+        Score positions rather than boxes, by their distance
+        (:func:`~vistrack.evaluation.evaluate_mot`; ``vistrack eval --zero-distance``).
 
     Returns
     -------
@@ -159,7 +191,8 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
         If a file is malformed.
     ValueError
         If a pair is not four items, two pairs have one name (or one is named
-        ``"COMBINED"``), ``benchmark`` is not one of the names, or a file's rows
+        ``"COMBINED"``), ``benchmark`` is not one of the names, ``zero_distance`` is not a
+        finite number > 0 (without it, a file of points alone), or a file's rows
         go past the sequence, hold an id twice in a frame or (ground truth of MOT16/17/20) a
         class outside 1-13, naming the file and the line(s) of the row (see
         :func:`~vistrack.evaluation.evaluate_mot`).
@@ -182,6 +215,8 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     if benchmark not in BENCHMARKS:  # an argument's error, not a file's (keep_going)
         raise ValueError(f"benchmark must be one of {', '.join(map(repr, BENCHMARKS))}; got "
                          f"{benchmark!r}")
+    if zero_distance is not None:  # (the same: not one pair's error)
+        zero_distance = check_zero_distance(zero_distance)
     for k, pair in enumerate(pairs):
         if not isinstance(pair, (tuple, list)) or len(pair) != 4:
             raise ValueError(f"pairs must hold (name, gt, results, seqinfo or None) tuples; "
@@ -199,11 +234,12 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
         from .._pool import process_pool  # one BLAS thread a worker
 
         with process_pool(min(jobs or 1, len(pairs)), imports=(__name__,)) as pool:
-            scored = _score_on(pool, pairs, benchmark, keep_going, columns)
+            scored = _score_on(pool, pairs, benchmark, keep_going, columns, zero_distance)
     elif executor is not None:
-        scored = _score_on(executor, pairs, benchmark, keep_going, columns)
+        scored = _score_on(executor, pairs, benchmark, keep_going, columns, zero_distance)
     else:
-        scored = [_score(pair, benchmark, keep_going, columns) for pair in pairs]
+        scored = [_score(pair, benchmark, keep_going, columns, zero_distance)
+                  for pair in pairs]
     for (name, *_), (counts, warned, error) in zip(pairs, scored):
         out.warnings += warned
         if counts is None:

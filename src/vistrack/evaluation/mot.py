@@ -27,6 +27,7 @@ LocA are averaged weighted by each sequence's true positives.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -86,8 +87,8 @@ def _scipy_lsa() -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
 
     return lsa
 
-__all__ = ["MOTCounts", "evaluate_mot", "combine", "box_iou_xywh", "ALPHAS", "Matches",
-           "clear_matches", "SCORE_COLUMNS", "considered"]
+__all__ = ["MOTCounts", "evaluate_mot", "combine", "box_iou_xywh", "point_similarity", "ALPHAS",
+           "Matches", "clear_matches", "SCORE_COLUMNS", "considered"]
 
 SCORE_COLUMNS = (("HOTA", True), ("DetA", True), ("AssA", True), ("MOTA", True),
                  ("MOTP", True), ("IDF1", True), ("IDP", True), ("IDR", True), ("TP", False),
@@ -147,6 +148,71 @@ def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
 
 
 _BIG = 2.0 ** 500  # below it, no sum or product of the IoU overflows
+
+
+def point_similarity(a: ArrayLike, b: ArrayLike, zero_distance: float) -> np.ndarray:
+    """The similarity of every position of ``a`` with every position of ``b``,
+    ``max(0, 1 - d / zero_distance)`` for ``d`` their Euclidean distance: TrackEval's for
+    points (its ``_calculate_euclidean_similarity``), where a box's IoU would not do. A match
+    (similarity 0.5 or more, as IoU 0.5 for boxes) lies within half of ``zero_distance``.
+
+    Parameters
+    ----------
+    a : (N, 4) array_like
+        Rows ``left, top, width, height``, each scored at its centre; a point is a row of
+        width and height 0 at it.
+    b : (M, 4) array_like
+        The same.
+    zero_distance : float
+        The distance at which the similarity falls to 0 (finite, > 0).
+
+    Returns
+    -------
+    (N, M) ndarray
+        In [0, 1].
+
+    Examples
+    --------
+    >>> point_similarity([[0, 0, 0, 0]], [[3, 4, 0, 0], [1, 0, 0, 0], [0, 0, 2, 2]],
+    ...                  zero_distance=10).round(3)
+    array([[0.5  , 0.9  , 0.859]])
+    """
+    a = np.asarray(a, dtype=float).reshape(-1, 4)
+    b = np.asarray(b, dtype=float).reshape(-1, 4)
+    ca, cb = a[:, :2] + a[:, 2:] / 2, b[:, :2] + b[:, 2:] / 2
+    dist = np.linalg.norm(ca[:, np.newaxis] - cb[np.newaxis, :], axis=2)
+    return np.maximum(0, 1 - dist / zero_distance)
+
+
+def _similarity(gt: MOTTable, pred: MOTTable, zero_distance: float | None
+                ) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """The similarity of a frame's rows: the boxes' IoU, or with ``zero_distance`` the
+    positions' (:func:`point_similarity`). Points (rows of no width and height) without it
+    are an error naming it: every IoU would be 0, every object missed."""
+    if zero_distance is None:
+        for table, what in ((gt, "ground truth"), (pred, "prediction")):
+            if len(table) and not (table.boxes[:, 2:] > 0).any():
+                raise ValueError(
+                    f"{table.path or 'the ' + what}: every row is a point (no width or "
+                    "height), which no IoU can score: score positions by distance, "
+                    "zero_distance= (vistrack eval --zero-distance PX), the distance at which "
+                    "a pair counts for nothing; a match lies within half of it")
+        return box_iou_xywh
+    zero = check_zero_distance(zero_distance)
+    return lambda a, b: point_similarity(a, b, zero)
+
+
+def check_zero_distance(zero_distance: Any) -> float:
+    """``zero_distance`` as a float, or a ValueError naming it: a finite number > 0."""
+    try:
+        ok = not isinstance(zero_distance, bool) and math.isfinite(zero_distance) \
+            and zero_distance > 0
+    except TypeError:
+        ok = False
+    if not ok:
+        raise ValueError(f"zero_distance must be a finite number > 0 (the distance at which a "
+                         f"pair's similarity falls to 0); got {zero_distance!r}")
+    return float(zero_distance)
 
 
 def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -352,8 +418,10 @@ def _n_frames(gt: MOTTable, pred: MOTTable, n_frames: int | None) -> int:
     return int(n_frames)
 
 
-def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Sequence:
+def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str,
+             zero_distance: float | None = None) -> _Sequence:
     bench = _benchmark_of(gt, benchmark)
+    similarity = _similarity(gt, pred, zero_distance)
     for table, what in ((gt, "ground truth"), (pred, "prediction")):
         if len(table) > 1 and np.any(np.diff(table.frames) < 0):
             raise ValueError(f"{table.path or what}: rows must be sorted by frame (read_mot "
@@ -390,7 +458,7 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str) -> _Se
     distractor = np.isin(gt.classes, distractors)
     gt_ids, pred_ids, sims = [], [], []
     for g0, g1, p0, p1 in zip(gs[0].tolist(), gs[1].tolist(), ps[0].tolist(), ps[1].tolist()):
-        sim = box_iou_xywh(gt.boxes[g0:g1], pred.boxes[p0:p1])
+        sim = similarity(gt.boxes[g0:g1], pred.boxes[p0:p1])
         keep_p = np.ones(p1 - p0, bool)
         if bench != "MOT15" and g1 > g0 and p1 > p0:
             score = np.where(sim < 0.5 - _EPS, 0.0, sim)
@@ -915,7 +983,7 @@ def _hota(seq: _Sequence, out: MOTCounts) -> None:
 
 
 def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
-                 benchmark: str = "auto") -> MOTCounts:
+                 benchmark: str = "auto", zero_distance: float | None = None) -> MOTCounts:
     """CLEAR MOT, identity and HOTA counts of predicted tracks against ground truth.
 
     Parameters
@@ -928,6 +996,11 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     benchmark : {"auto", "MOT15", "MOT16", "MOT17", "MOT20"}
         Which preprocessing. "auto" is MOT17 for ground truth with a class column (9 values a
         row, classes 1-13), else MOT15 (whose rows end in three world coordinates).
+    zero_distance : float, optional
+        Score positions rather than boxes: each row at its centre (a point, a row of width
+        and height 0, at itself), a pair's similarity ``max(0, 1 - d / zero_distance)`` in
+        place of the IoU (:func:`point_similarity`, TrackEval's for points). CLEAR MOT and
+        IDF1 match within half of it; HOTA's thresholds are on that similarity.
 
     Returns
     -------
@@ -940,7 +1013,8 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     ValueError
         If ``benchmark`` is not one of the names, a file has rows beyond ``n_frames`` or
         before frame 1 (a table built in Python; ``read_mot`` refuses those) or an id twice in
-        a frame, or MOT16/17/20 ground truth has a class outside 1-13. The message
+        a frame, or MOT16/17/20 ground truth has a class outside 1-13; if ``zero_distance``
+        is not a finite number > 0, or without it a table's rows are all points. The message
         names the table's file and, when it was read from one, the line(s) of the row:
         ``res.txt, lines 4 and 9: id 3 appears more than once in frame 2``.
 
@@ -971,7 +1045,7 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     (1, 0.75, 0.5)
     """
     n_frames = _n_frames(gt, pred, n_frames)
-    seq = _prepare(gt, pred, n_frames, benchmark)
+    seq = _prepare(gt, pred, n_frames, benchmark, zero_distance)
     out = MOTCounts(frames=n_frames, gt_dets=sum(len(g) for g in seq.gt_ids),
                     pred_dets=sum(len(p) for p in seq.pred_ids), gt_ids=seq.n_gt_ids,
                     pred_ids=seq.n_pred_ids)
@@ -1004,7 +1078,7 @@ class Matches:
 
 
 def clear_matches(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
-                  benchmark: str = "auto") -> Matches:
+                  benchmark: str = "auto", zero_distance: float | None = None) -> Matches:
     """The matches behind :func:`evaluate_mot`'s CLEAR MOT counts, frame by frame: what a
     per-object timeline draws.
 
@@ -1024,7 +1098,7 @@ def clear_matches(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     >>> m.frames.tolist(), m.pred_ids.tolist(), m.switches.tolist()
     ([1, 2, 3], [7, 8, -1], [False, True, False])
     """
-    seq = _prepare(gt, pred, _n_frames(gt, pred, n_frames), benchmark)
+    seq = _prepare(gt, pred, _n_frames(gt, pred, n_frames), benchmark, zero_distance)
     record: list = []
     _clear(seq, MOTCounts(), record)
     assert seq.frames is not None and seq.gt_labels is not None and seq.pred_labels is not None

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..io.motchallenge import MOTTable
-from .mot import _lines_of, _where, box_iou_xywh
+from .mot import _lines_of, _similarity, _where
 
 __all__ = ["sanity_warnings", "looks_like_detections"]
 
@@ -61,7 +61,8 @@ def _frames(t: MOTTable) -> str:
     return f"frames {int(t.frames.min())}-{int(t.frames.max())}"
 
 
-def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False) -> list[str]:
+def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False,
+                    zero_distance: float | None = None) -> list[str]:
     """Warnings that ``gt`` and ``pred`` may not be ground truth and results of one sequence.
 
     - ``gt`` looks like a detections or results file (:func:`looks_like_detections`);
@@ -83,6 +84,9 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False) -
     empty_said : bool
         Whether the caller has already said why ``pred`` is empty (a run whose front-end
         found nothing): then its emptiness is not warned of again.
+    zero_distance : float, optional
+        Positions scored by distance (:func:`~vistrack.evaluation.evaluate_mot`): a
+        predicted position meets the ground truth within half of it, not a box by IoU.
 
     Returns
     -------
@@ -152,16 +156,22 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False) -
     ps = np.searchsorted(pred.frames, common, side="left"), np.searchsorted(pred.frames, common,
                                                                              side="right")
     boxes = int(np.sum(ps[1] - ps[0]))  # predicted boxes in the common frames
+    similarity = _similarity(gt, pred, zero_distance)
     hits = 0
     for g0, g1, p0, p1 in zip(*gs, *ps):
-        hits += int((box_iou_xywh(gt.boxes[g0:g1], pred.boxes[p0:p1]) >= 0.5).any(0).sum())
+        hits += int((similarity(gt.boxes[g0:g1], pred.boxes[p0:p1]) >= 0.5).any(0).sum())
         if hits >= _CHANCE * boxes:
             return out
+    one, many = ("box", "boxes") if zero_distance is None else ("position", "positions")
+
+    def meet(s: str) -> str:  # (verb's ending) where a predicted row meets the ground truth
+        return (f"overlap{s} a box of {gname} by IoU >= 0.5" if zero_distance is None else
+                f"lie{s} within {zero_distance / 2:g} of a position of {gname}")
+
     if hits:
         out.append(f"predictions and ground truth look unrelated: only {hits} of the {boxes} "
-                   f"boxes of {pname} in their {len(common)} common frames overlap a box of "
-                   f"{gname} by IoU >= 0.5")
+                   f"{many} of {pname} in their {len(common)} common frames {meet('')}")
     else:
-        out.append(f"predictions and ground truth look unrelated: no box of {pname} overlaps a "
-                   f"box of {gname} by IoU >= 0.5 in any of their {len(common)} common frames")
+        out.append(f"predictions and ground truth look unrelated: no {one} of {pname} "
+                   f"{meet('s')} in any of their {len(common)} common frames")
     return out

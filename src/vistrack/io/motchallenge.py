@@ -369,6 +369,7 @@ class MOTTable:
         an identity (``particle`` or ``id``; -1 for detections if neither) and a box,
         ``bb_left, bb_top, bb_width, bb_height``, or its centre ``x, y`` with ``bb_width,
         bb_height``, or its corners ``x1, y1, x2, y2`` (as supervision's and YOLO's ``xyxy``);
+        or a point, ``x, y`` alone (trackpy's columns), as a box of width and height 0 there;
         ``conf``, ``class`` and ``visibility`` if there (default 1, -1, -1).
 
         Parameters
@@ -517,6 +518,15 @@ class MOTTable:
                                          f"before its near one; {name(lo)} = {a[k]:g}, "
                                          f"{name(hi)} = {b[k]:g}")
             left, top, w, h = x1, y1, x2 - x1, y2 - y1
+        elif (point := every(get("x"), get("y"))) is not None:
+            if w is not None or h is not None:  # one of a box's two: the other is missing
+                gone = repr(name("bb_width" if w is None else "bb_height"))
+                raise ValueError(f"no column {gone}{where} (x, y are a box's centre with "
+                                 f"{name('bb_width')!r} and {name('bb_height')!r}, or a "
+                                 f"point with neither); columns: {sorted(map(str, have))}")
+            # a point (trackpy's frame, particle, x, y): a row of width and height 0 there,
+            # which evaluate_mot scores by distance
+            (left, top), w, h = point, np.zeros(n), np.zeros(n)
         else:
             no_header()
             missing = [name(c) for c in ("bb_left", "bb_top", "bb_width", "bb_height")

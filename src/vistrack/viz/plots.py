@@ -369,7 +369,8 @@ def _label_offsets(ax: Any, xy: np.ndarray, labels: list[str], size: float
     return out
 
 
-def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = None) -> Figure:
+def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = None, *,
+                    zero_distance: float | None = None) -> Figure:
     """HOTA, DetA and AssA over the localisation threshold α (TrackEval's curves), one line
     per sequence of ``results`` and a thick black one for ``"COMBINED"`` when there; saved to
     ``path`` (PNG) when given, without pyplot. Returns the figure.
@@ -380,6 +381,10 @@ def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = No
         Scores by sequence (:func:`vistrack.evaluation.evaluate_files`).
     path : str or Path, optional
         Save the figure there (PNG, 100 dpi).
+    zero_distance : float, optional
+        The results scored positions by distance (``evaluate_mot(zero_distance=)``): α is a
+        threshold on the similarity ``1 - d / zero_distance``, not on the IoU, and the axis
+        says so.
 
     Examples
     --------
@@ -410,7 +415,8 @@ def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = No
                 ax.plot(ALPHAS, y, color=colours[k], linewidth=1, label=_label(name, 40),
                         clip_on=False, zorder=2.5)
         ax.set_title(metric)
-        ax.set_xlabel("localisation threshold α (IoU)")
+        ax.set_xlabel("localisation threshold α (IoU)" if zero_distance is None else
+                      f"localisation threshold α (1 - distance / {zero_distance:g})")
         ax.set_xlim(0, 1)
         ax.set_ylim(0, 100)
         ax.grid(alpha=0.3)
