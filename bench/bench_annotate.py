@@ -52,7 +52,7 @@ def scene(n: int, size: tuple[int, int], boxes: bool, seed: int = 0):
 
 
 def run_vistrack(frames, image):
-    ann = Annotator()
+    ann = Annotator(trail=20)
     for ids, centres, b, cov in frames:
         t = Tracks(ids=ids, boxes=b, points=None if b is not None else centres,
                    scores=np.ones(len(ids)), classes=np.zeros(len(ids)), covs=cov)

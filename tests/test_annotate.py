@@ -52,6 +52,44 @@ def test_a_trail_ends_with_its_track():
     assert (np.abs(back[60, 35].astype(int) - colour) < 60).all()
 
 
+def _point_track(i, x, y=60.0):
+    return Tracks(ids=np.array([i]), boxes=None, points=np.array([[x, y]]),
+                  scores=np.ones(1), classes=np.zeros(1))
+
+
+def test_a_trail_is_its_last_centres_however_often_it_wraps():
+    """A trail is an identity's last ``trail`` centres, oldest first, as one anti-aliased
+    line (kept in a ring whose last centres are one slice): a point on a zigzag, drawn with
+    a trail of 7 after 2 to 53 frames (before, at and past each wrap of the ring), gives
+    exactly OpenCV's line through those centres and the dot. An identity unseen for longer
+    than the trail starts a new one; a trail of less than 0 frames is refused."""
+    import cv2
+
+    black = np.zeros((120, 200, 3), np.uint8)
+    path = [(10.0 + 3 * k, 60.0 + (12 if k % 2 else -12) + 0.4 * k) for k in range(53)]
+    colour = id_colour(3)
+    for frames in (2, 6, 7, 8, 13, 14, 15, 22, 53):
+        ann = Annotator(trail=7, labels=False)
+        for x, y in path[:frames]:
+            out = ann.draw(black, _point_track(3, x, y))
+        want = black.copy()
+        last = np.round(np.array(path[max(0, frames - 7):frames])).astype(np.int32)
+        cv2.polylines(want, [last.reshape(-1, 1, 2)], False, colour, 2, cv2.LINE_AA)
+        cv2.circle(want, tuple(int(v) for v in last[-1]), 3, colour, -1)
+        np.testing.assert_array_equal(out, want, err_msg=f"after {frames} frames")
+    ann = Annotator(trail=4)
+    for x in range(10):
+        ann.draw(black, _point_track(2, float(x)))
+    empty = Tracks(ids=np.zeros(0, int), boxes=None, points=np.zeros((0, 2)),
+                   scores=np.zeros(0), classes=np.zeros(0))
+    for _ in range(5):  # unseen for longer than the trail: forgotten
+        ann.draw(black, empty)
+    out = ann.draw(black, _point_track(2, 60.0))
+    assert not out[60, :50].any()  # no line back to x 9
+    with pytest.raises(ValueError, match="trail must be a number of frames >= 0; got -1"):
+        Annotator(trail=-1)
+
+
 def test_labels_and_lines_grow_with_a_large_image():
     """On a 4K frame (2880 rows: 4 times 720) the frame label, the identity's number and the
     box's line are 4 times as large as on a PAL frame (576 rows); before, they kept their PAL

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import functools
 import os
-from collections import deque
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -113,11 +112,24 @@ class Annotator:
 
     def __init__(self, trail: int = 30, nsigma: float = 2.0, labels: bool | None = None):
         self.trail, self.nsigma = int(trail), float(nsigma)
+        if self.trail < 0:
+            raise ValueError(f"trail must be a number of frames >= 0; got {trail}")
         self.labels = labels
         self._numbered = True  # (labels None) the numbers drawn in the last frame
-        self._trails: dict[int, deque] = {}
+        # each identity's recent centres, in whole pixels, in a slot of one array: the
+        # centre of its c-th frame at c % trail and again at c % trail + trail, so that its
+        # last ``trail`` centres, oldest first, are one contiguous slice (a ring buffer read
+        # without a copy). ``_slot`` holds the identities in the order first seen, the order
+        # their trails are drawn in
+        self._slot: dict[int, int] = {}
         self._last: dict[int, int] = {}
+        self._buf = np.zeros((0, 2 * self.trail, 2), np.int32)
+        self._count = np.zeros(0, np.int64)
+        self._free: list[int] = []
         self._n = 0
+        # each number's text size at a scale and thickness, measured once (OpenCV's call for
+        # every number of every frame was a tenth of a frame of 520 particles)
+        self._sizes: dict[tuple[int, float, int], Any] = {}
 
     def draw(self, image: np.ndarray, tracks: Tracks, label: str | None = None) -> np.ndarray:
         """A copy of the BGR ``image`` with ``tracks`` (:class:`vistrack.tracking.Tracks`)
@@ -190,18 +202,16 @@ class Annotator:
             boxes = geometry
         # tracks without boxes have points
         centres = (boxes[:, :2] + boxes[:, 2:]) / 2 if boxes is not None else geometry
-        for k, i in enumerate(ids.tolist()):
-            t = self._trails.setdefault(i, deque(maxlen=self.trail))
-            t.append(centres[k])
-            self._last[i] = self._n
-        for i in [i for i, n in self._last.items() if self._n - n > self.trail]:
-            del self._trails[i], self._last[i]
+        self._remember(ids.tolist(), np.round(centres).astype(np.int32))
         present = set(ids.tolist())
-        for i, t in self._trails.items():
+        T, buf = self.trail, self._buf
+        for i, slot in self._slot.items():
             # a trail ends with its track: drawn only while the identity is in the frame (its
             # centres are kept for ``trail`` frames, so that it goes on if the track returns)
-            if i in present and len(t) > 1:
-                pts = np.round(np.array(t)).astype(np.int32).reshape(-1, 1, 2)
+            n = int(self._count[slot])
+            if i in present and n > 1 and T > 1:
+                head = n % T if n > T else 0  # the oldest centre kept
+                pts = buf[slot, head:head + min(n, T)].reshape(-1, 1, 2)
                 cv2.polylines(out, [pts], False, id_colour(i), thick, cv2.LINE_AA)
         if covs is not None:
             # every ellipse's axes and angle in one call (eigh a track took 6 of the 18 ms of
@@ -215,31 +225,39 @@ class Annotator:
             angles = np.degrees(np.arctan2(vecs[:, 1, 1], vecs[:, 0, 1]))
         font, scale = cv2.FONT_HERSHEY_SIMPLEX, 0.5 * z
         gap, dot, halo = round(4 * z), round(3 * z), max(3, round(3 * z))  # (once a frame)
-        sizes = [cv2.getTextSize(str(i), font, scale, thin) for i in ids.tolist()]
+        if len(self._sizes) > 16384:  # (bounded on a long video of many identities)
+            self._sizes.clear()
+        known = self._sizes
+        sizes = [known.get((i, scale, thin)) or known.setdefault(
+            (i, scale, thin), cv2.getTextSize(str(i), font, scale, thin)) for i in ids.tolist()]
         numbered = self.labels
         if numbered is None:
             cover = sum((tw + 2 * thick) * (th + tb + 2 * thick) for (tw, th), tb in sizes)
             line = LABEL_COVER if self._numbered else LABEL_COVER / 2
             numbered = self._numbered = cover <= line * H * W
+        # every track's whole pixels at once (as int(round(v)) each: half to even), and
+        # plain Python numbers for OpenCV
+        at = np.round(centres).astype(int).tolist()
+        cut = np.trunc(centres).astype(int).tolist()  # (as int(v): toward zero)
+        if covs is not None:
+            axes_px = np.maximum(np.round(semi).astype(int), 1)[:, ::-1].tolist()
+            turned = angles.tolist()
+        corners = np.round(boxes).astype(int).tolist() if boxes is not None else None
         for k, i in enumerate(ids.tolist()):
             c = id_colour(i)
-            cx, cy = centres[k]
             if covs is not None and has_ellipse[k]:
-                ax = semi[k]
-                cv2.ellipse(out, (int(round(cx)), int(round(cy))),
-                            (max(int(round(ax[1])), 1), max(int(round(ax[0])), 1)),
-                            float(angles[k]), 0, 360, c, thin, cv2.LINE_AA)
+                cv2.ellipse(out, at[k], axes_px[k], turned[k], 0, 360, c, thin, cv2.LINE_AA)
             (tw, th), tb = sizes[k]
-            if boxes is not None:
-                x0, y0, x1, y1 = np.round(boxes[k]).astype(int)
+            if corners is not None:
+                x0, y0, x1, y1 = corners[k]
                 cv2.rectangle(out, (x0, y0), (x1, y1), c, thick)
                 x, y = x0, y0 - gap  # above the box
                 top = banner[1] if x < banner[0] else 0
                 if y - th < top:  # off the image, or under the frame's label: inside, at the top
                     y = max(y0, top) + th + gap
             else:
-                cv2.circle(out, (int(round(cx)), int(round(cy))), dot, c, -1)
-                x, y = int(cx) + gap, int(cy) - gap
+                cv2.circle(out, at[k], dot, c, -1)
+                x, y = cut[k][0] + gap, cut[k][1] - gap
             if not numbered:
                 continue
             # the whole number inside the image (a box past the left edge showed a sliver)
@@ -248,6 +266,43 @@ class Annotator:
                         cv2.LINE_AA)
             cv2.putText(out, str(i), org, font, scale, c, thin, cv2.LINE_AA)
         return out
+
+
+    def _remember(self, ids: list[int], at: np.ndarray) -> None:
+        """Add this frame's centres ``at`` (whole pixels) to the trails of ``ids``, and forget
+        the identities unseen for ``trail`` frames."""
+        slots = []
+        for i in ids:
+            slot = self._slot.get(i)
+            if slot is None:
+                if not self._free:  # twice the slots, the new ones free
+                    old = len(self._count)
+                    grow = max(64, old)
+                    self._buf = np.concatenate(
+                        [self._buf, np.zeros((grow,) + self._buf.shape[1:], np.int32)])
+                    self._count = np.concatenate([self._count, np.zeros(grow, np.int64)])
+                    self._free = list(range(old + grow - 1, old - 1, -1))
+                slot = self._slot[i] = self._free.pop()
+            slots.append(slot)
+            self._last[i] = self._n
+        T = self.trail
+        if T and slots:
+            s = np.asarray(slots)
+            if len(set(slots)) == len(slots):
+                j = self._count[s] % T
+                self._buf[s, j] = at
+                self._buf[s, j + T] = at
+                self._count[s] += 1
+            else:  # an identity twice in one frame: each of its centres, in turn
+                for slot, xy in zip(slots, at):
+                    j = self._count[slot] % T
+                    self._buf[slot, j] = self._buf[slot, j + T] = xy
+                    self._count[slot] += 1
+        for i in [i for i, n in self._last.items() if self._n - n > T]:
+            slot = self._slot.pop(i)
+            del self._last[i]
+            self._count[slot] = 0
+            self._free.append(slot)
 
 
 class AnnotatedVideo:
