@@ -90,6 +90,45 @@ def test_a_trail_is_its_last_centres_however_often_it_wraps():
         Annotator(trail=-1)
 
 
+def test_a_long_trail_holds_what_it_was_given_and_trail_can_change():
+    """A trail of 100 is its last 100 centres past the ring's first sizes (it starts small and
+    grows as the trail does, so that a long trail asked for costs memory only as it fills);
+    ``trail`` changed between frames applies to every trail from the next frame: each keeps
+    its last centres up to the new length (it failed with an IndexError)."""
+    import cv2
+
+    black = np.zeros((200, 400, 3), np.uint8)
+    path = [(5.0 + 3 * k, 100.0 + (20 if k % 2 else -20) + 0.3 * k) for k in range(120)]
+    colour = id_colour(4)
+
+    def want(points):
+        out = black.copy()
+        pts = np.round(np.array(points)).astype(np.int32)
+        cv2.polylines(out, [pts.reshape(-1, 1, 2)], False, colour, 2, cv2.LINE_AA)
+        cv2.circle(out, tuple(int(v) for v in pts[-1]), 3, colour, -1)
+        return out
+
+    ann = Annotator(trail=100, labels=False)
+    for k, (x, y) in enumerate(path):
+        out = ann.draw(black, _point_track(4, x, y))
+        if k + 1 in (31, 33, 64, 65, 99, 100, 101, 120):
+            np.testing.assert_array_equal(out, want(path[max(0, k - 99):k + 1]), err_msg=k)
+    assert ann._buf.shape[1] == 200  # (the ring reached the trail: 2 x 100 centres a slot)
+    ann = Annotator(trail=5, labels=False)
+    for x, y in path[:10]:
+        ann.draw(black, _point_track(4, x, y))
+    ann.trail = 20  # the 5 centres kept, then up to 20
+    for k in range(10, 30):
+        out = ann.draw(black, _point_track(4, *path[k]))
+        np.testing.assert_array_equal(out, want(path[max(5, k - 19):k + 1]), err_msg=k)
+    ann.trail = 3
+    out = ann.draw(black, _point_track(4, *path[30]))
+    np.testing.assert_array_equal(out, want(path[28:31]))
+    ann.trail = -2
+    with pytest.raises(ValueError, match="trail must be a number of frames >= 0; got -2"):
+        ann.draw(black, _point_track(4, *path[31]))
+
+
 def test_labels_and_lines_grow_with_a_large_image():
     """On a 4K frame (2880 rows: 4 times 720) the frame label, the identity's number and the
     box's line are 4 times as large as on a PAL frame (576 rows); before, they kept their PAL

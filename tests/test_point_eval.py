@@ -124,14 +124,22 @@ def test_points_need_a_distance_and_a_distance_must_be_one():
     np.testing.assert_allclose(point_similarity([[0, 0, 10, 10]], [[3, 4, 10, 10]], 10), 0.5)
 
 
-def test_a_points_csv_reads_as_points_and_a_half_box_is_named():
-    """trackpy's columns (frame, particle, x, y) read as points, rows of width and height 0;
-    a box's centre with one of its width and height was, and is, refused naming the other;
-    corners beside x, y are still the box."""
-    t = MOTTable.from_pandas({"frame": [1, 2], "particle": [4, 4], "x": [10.5, 11.0],
-                              "y": [3.0, 3.5]})
+def test_a_points_csv_reads_as_points_where_asked_and_a_half_box_is_named():
+    """trackpy's columns (frame, particle, x, y) read as points, rows of width and height 0,
+    where they are to be scored by distance (``points=True``); otherwise they are no box, as
+    before (a table's size may be in columns of other names), the error now saying what
+    reads them. A box's centre with one of its width and height is refused naming the
+    other; corners beside x, y are still the box."""
+    rows = {"frame": [1, 2], "particle": [4, 4], "x": [10.5, 11.0], "y": [3.0, 3.5]}
+    t = MOTTable.from_pandas(rows, points=True)
     assert t.boxes.tolist() == [[10.5, 3.0, 0.0, 0.0], [11.0, 3.5, 0.0, 0.0]]
     assert t.ids.tolist() == [4, 4]
+    with pytest.raises(ValueError, match=r"no box in p.csv: .*; x, y alone are points, scored "
+                                         r"by distance with vistrack eval --zero-distance PX"):
+        MOTTable.from_pandas(rows, path="p.csv")
+    sized = dict(rows, w=[2.0, 2.0], h=[4.0, 4.0])  # a size the reader does not know by name
+    with pytest.raises(ValueError, match="no box in p.csv"):
+        MOTTable.from_pandas(sized, path="p.csv")
     with pytest.raises(ValueError, match=r"no column 'bb_height' in p.csv \(x, y are a box's "
                                          r"centre with 'bb_width' and 'bb_height', or a point "
                                          r"with neither\)"):
@@ -142,15 +150,34 @@ def test_a_points_csv_reads_as_points_and_a_half_box_is_named():
     assert both.boxes.tolist() == [[0.0, 0.0, 4.0, 2.0]]
 
 
-def test_a_detections_file_of_points_is_refused_by_the_box_trackers(tmp_path):
-    """A detections CSV of x, y alone was refused as having no box; read now as points, it is
-    refused by name: no box tracker can follow rows that no box overlaps."""
+def test_ground_truth_files_read_as_before_and_as_csv(tmp_path, capsys):
+    """MOTChallenge's text named .csv (no header) is still read as such for ground truth;
+    a CSV of boxes with a header is read as ground truth by vistrack eval and by vistrack
+    track --gt alike; a detections CSV of x, y alone is still no box to the box trackers."""
+    from vistrack.evaluation.files import read_truth
+    from vistrack.io import write_mot
     from vistrack.pipeline import track_sequence
 
+    rows = [(f, 1, 10.0 + 2 * f, 20.0, 30.0, 60.0) for f in range(1, 6)]
+    text = write_mot(tmp_path / "gt.txt", *zip(*[(f, i, (x, y, w, h))
+                                                 for f, i, x, y, w, h in rows]))
+    named = tmp_path / "gt_mot.csv"
+    named.write_bytes(text.read_bytes())
+    table = read_truth(named)
+    assert table.boxes.tolist() == read_mot(text).boxes.tolist()
+    boxes = tmp_path / "truth.csv"
+    boxes.write_text("frame,id,bb_left,bb_top,bb_width,bb_height\n" + "".join(
+        f"{f},{i},{x},{y},{w},{h}\n" for f, i, x, y, w, h in rows))
+    assert read_truth(boxes).boxes.tolist() == table.boxes.tolist()
+    for gt in (named, boxes):
+        assert main(["eval", "--gt", str(gt), "--pred", str(text), "--json"]) == 0
+        assert '"MOTA": 1.0' in capsys.readouterr().out
+    from vistrack.pipeline import _ground_truth
+
+    assert _ground_truth(boxes).boxes.tolist() == table.boxes.tolist()  # (vistrack track --gt)
     det = tmp_path / "pts.csv"
     det.write_text("frame,x,y,conf\n1,10,10,0.9\n2,11,10,0.9\n")
-    with pytest.raises(ValueError, match="pts.csv: every row is a point, without a width or "
-                                         "height: the box trackers track boxes"):
+    with pytest.raises(ValueError, match="no box in .*pts.csv"):
         track_sequence(det, tmp_path / "out.txt", fps=10)
 
 
@@ -176,7 +203,8 @@ def test_vistrack_eval_scores_points_files(tmp_path, capsys):
                         _points(pred[:, 0], pred[:, 1], pred[:, 2:4]), zero_distance=4)
     assert got == json.loads(json.dumps(want.summary()))
     assert main(["eval", "--gt", str(truth), "--pred", str(tracks)]) == 2
-    assert "every row is a point" in capsys.readouterr().err
+    assert "x, y alone are points, scored by distance with vistrack eval --zero-distance PX" \
+        in capsys.readouterr().err
     assert main(["eval", "--gt", str(truth), "--pred", str(tracks), "--zero-distance",
                  "0"]) == 2
     assert "--zero-distance must be a distance > 0" in capsys.readouterr().err

@@ -744,11 +744,14 @@ def _points_problem(args: argparse.Namespace, name: str, frontend: str) -> str:
     before anything is read, for one input or many, in the command line's words."""
     from .pipeline import min_search_range, points_problem
 
-    problem = points_problem(name, frontend, gt=args.gt is not None, cli=True)
+    problem = points_problem(name, frontend, cli=True)  # (the pairing; --gt after --diameter)
     if problem:
         return problem
     if frontend == "spots" and args.diameter is None:
         return "--frontend spots needs --diameter: the spots' diameter in pixels, odd (round up)"
+    problem = points_problem(name, frontend, gt=args.gt is not None, cli=True)
+    if problem:
+        return problem
     if not _points(name):
         return ""
     floor = min_search_range()
@@ -1033,7 +1036,7 @@ def _track_one(args: argparse.Namespace) -> int:
 
 
 def _partial_runs(pairs: list[tuple[str, Path, Path, Path | None]],
-                  failed: dict[str, str]) -> list[str]:
+                  failed: dict[str, str], points: bool = False) -> list[str]:
     """Warnings for results a run of vistrack wrote over part of the frames only (its
     ``run.json`` beside them; ``--stop``, or a video shorter than its ground truth): the
     ground truth's frames after its last count as missed."""
@@ -1054,7 +1057,7 @@ def _partial_runs(pairs: list[tuple[str, Path, Path, Path | None]],
                 continue
         except (OSError, ValueError, KeyError, TypeError):
             continue  # not a run's own file: nothing to tell from it
-        frames = read_truth(gt).frames
+        frames = read_truth(gt, points=points).frames
         after = frames[frames > last]
         if len(after):
             out.append(f"{pred}: its run ({info}) tracked frames {run.get('first_frame', 1)}-"
@@ -1183,7 +1186,7 @@ def _eval(args: argparse.Namespace) -> int:
     else:
         res = evaluate_files(pairs, benchmark=args.benchmark, jobs=jobs,
                              keep_going=args.keep_going, columns=columns, zero_distance=zero)
-    for warning in res.warnings + _partial_runs(pairs, res.errors):
+    for warning in res.warnings + _partial_runs(pairs, res.errors, zero is not None):
         print(f"vistrack eval: warning: {warning}", file=sys.stderr)
     for name, error in res.errors.items():
         print(f"vistrack eval: error: {name}: {error}", file=sys.stderr)

@@ -1209,12 +1209,6 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
 
         df = _read_csv(path, "a CSV file of detections")
         table = MOTTable.from_pandas(df, columns, path=str(path))
-        if len(table) and not table.boxes[:, 2:].any():
-            # x, y alone: points (trackpy's columns), which no box overlaps
-            raise ValueError(f"{path}: every row is a point, without a width or height: the "
-                             "box trackers track boxes (give bb_width and bb_height, or "
-                             "--columns naming them; a microscope's images are tracked as "
-                             "points with --frontend spots)")
         names = dict(columns or {})
         conf = names.get("conf", "conf")
         if conf not in df.columns:
@@ -2470,9 +2464,13 @@ def _ground_truth(gt: str | Path) -> MOTTable:
     """The ground truth to score a video's tracks against (a file, or a sequence folder's
     ``gt/gt.txt``), read and checked before anything is tracked: a missing file is named as
     ``--gt``'s, and the faults the scoring would find after the whole video (an identity
-    twice in a frame, a detections file given as ground truth) are found now."""
+    twice in a frame, a detections file given as ground truth) are found now. A CSV or
+    Parquet file is read as ``vistrack eval`` reads one (:func:`~vistrack.evaluation.files.
+    read_truth`)."""
+    from .evaluation.files import read_truth
+
     try:
-        table = read_mot(_ground_truth_file(gt))
+        table = read_truth(_ground_truth_file(gt))
     except FileNotFoundError:
         raise FileNotFoundError(f"{gt} does not exist (--gt FILE)") from None
     evaluate_mot(table, MOTTable.from_rows(np.zeros((0, 6)), str(gt)), benchmark="auto")

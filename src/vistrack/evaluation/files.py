@@ -58,7 +58,7 @@ def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going
     one line ("" if none; raised without ``keep_going``); in a worker, for
     :func:`evaluate_files`."""
     try:
-        g, p, n = _read(pair, columns)
+        g, p, n = _read(pair, columns, points=zero_distance is not None)
         return (evaluate_mot(g, p, n, benchmark=benchmark, zero_distance=zero_distance),
                 sanity_warnings(g, p, zero_distance=zero_distance), "")
     except Exception as e:
@@ -67,26 +67,46 @@ def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going
         return None, [], one_line(e)
 
 
-def _read(pair: tuple[str, Path, Path, Path | None], columns: dict[str, str] | None = None
-          ) -> tuple[MOTTable, MOTTable, int | None]:
+def _read(pair: tuple[str, Path, Path, Path | None], columns: dict[str, str] | None = None,
+          *, points: bool = False) -> tuple[MOTTable, MOTTable, int | None]:
     """A pair's ground truth, results and sequence length (None without seqinfo.ini); ground
     truth in a CSV or Parquet file is read by its own columns' names, ``columns`` naming the
-    results'."""
+    results'; ``points``, ``x, y`` alone read as points (:func:`read_truth`)."""
     _, gt, pred, info = pair
     n = read_seq_length(info) if info is not None else None
-    return read_truth(gt), _read_results(Path(pred), columns), n
+    return read_truth(gt, points=points), _read_results(Path(pred), columns, points), n
 
 
-def read_truth(path: str | Path) -> MOTTable:
-    """A ground-truth file: MOTChallenge's text, or a CSV or Parquet file read by its own
-    columns' names (:meth:`MOTTable.from_pandas <vistrack.io.MOTTable.from_pandas>`: a
-    box, or a point's ``x, y``)."""
+def read_truth(path: str | Path, *, points: bool = False) -> MOTTable:
+    """A ground-truth file: MOTChallenge's text (named ``.csv`` too, without a header, as it
+    always was read), or a CSV or Parquet file with a header, read by its own columns' names
+    (:meth:`MOTTable.from_pandas <vistrack.io.MOTTable.from_pandas>`: a box; with
+    ``points``, ``x, y`` alone as a point's, to be scored by distance)."""
     path = Path(path)
-    return _read_results(path) if path.suffix.lower() in (".csv", ".parquet") else \
-        read_mot(path)
+    suffix = path.suffix.lower()
+    if suffix == ".parquet" or (suffix == ".csv" and not _text_without_header(path)):
+        return _read_results(path, points=points)
+    return read_mot(path)
 
 
-def _read_results(path: Path, columns: dict[str, str] | None = None) -> MOTTable:
+def _text_without_header(path: Path) -> bool:
+    """Whether ``path``'s first line that holds values is numbers only: MOTChallenge's text
+    in a file named ``.csv`` (False where it cannot be read: the reader then says why)."""
+    from ..io.motchallenge import _all_numbers, _row_cells
+
+    try:
+        with open(path, encoding="utf-8-sig", errors="replace") as f:
+            for line in f:
+                cells = _row_cells(line)
+                if cells:
+                    return _all_numbers(cells)
+    except OSError:
+        pass
+    return False
+
+
+def _read_results(path: Path, columns: dict[str, str] | None = None,
+                  points: bool = False) -> MOTTable:
     """A results file: MOTChallenge's text, or the Parquet or CSV file ``vistrack track
     --out`` writes (``MOTTable.to_pandas``'s columns, or those ``columns`` names)."""
     suffix = path.suffix.lower()
@@ -104,7 +124,7 @@ def _read_results(path: Path, columns: dict[str, str] | None = None) -> MOTTable
         df = _pandas("a Parquet results file").read_parquet(path)
     else:
         df = _read_csv(path, "a CSV results file")
-    return MOTTable.from_pandas(df, columns, path=str(path))
+    return MOTTable.from_pandas(df, columns, path=str(path), points=points)
 
 
 def _score_on(executor: Executor, pairs: list[tuple[str, Path, Path, Path | None]],
@@ -134,8 +154,8 @@ def pair_matches(pair: tuple[str, Path, Path, Path | None], benchmark: str = "au
     frame (:func:`~vistrack.evaluation.clear_matches`), read and scored as
     :func:`evaluate_files` does (a CSV or Parquet file's ``columns`` named as there;
     positions by distance with ``zero_distance``)."""
-    return clear_matches(*_read(pair, columns), benchmark=benchmark,
-                         zero_distance=zero_distance)
+    return clear_matches(*_read(pair, columns, points=zero_distance is not None),
+                         benchmark=benchmark, zero_distance=zero_distance)
 
 
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,

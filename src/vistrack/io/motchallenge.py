@@ -364,13 +364,14 @@ class MOTTable:
 
     @classmethod
     def from_pandas(cls, df: Any, columns: dict[str, str] | None = None,
-                    path: str = "") -> MOTTable:
+                    path: str = "", *, points: bool = False) -> MOTTable:
         """A table from a DataFrame (or any mapping of column names to arrays): ``frame``,
         an identity (``particle`` or ``id``; -1 for detections if neither) and a box,
         ``bb_left, bb_top, bb_width, bb_height``, or its centre ``x, y`` with ``bb_width,
         bb_height``, or its corners ``x1, y1, x2, y2`` (as supervision's and YOLO's ``xyxy``);
-        or a point, ``x, y`` alone (trackpy's columns), as a box of width and height 0 there;
-        ``conf``, ``class`` and ``visibility`` if there (default 1, -1, -1).
+        or, with ``points``, a point, ``x, y`` alone (trackpy's columns), as a box of width
+        and height 0 there; ``conf``, ``class`` and ``visibility`` if there (default 1, -1,
+        -1).
 
         Parameters
         ----------
@@ -381,6 +382,10 @@ class MOTTable:
             "bb_width": "w"}``).
         path : str
             What the rows come from, for messages.
+        points : bool
+            Read ``x, y`` without a width and height as points, to be scored by distance
+            (:func:`~vistrack.evaluation.evaluate_mot`'s ``zero_distance``); without it,
+            such a table has no box, an error (its size columns may be named otherwise).
 
         Raises
         ------
@@ -518,12 +523,13 @@ class MOTTable:
                                          f"before its near one; {name(lo)} = {a[k]:g}, "
                                          f"{name(hi)} = {b[k]:g}")
             left, top, w, h = x1, y1, x2 - x1, y2 - y1
-        elif (point := every(get("x"), get("y"))) is not None:
-            if w is not None or h is not None:  # one of a box's two: the other is missing
-                gone = repr(name("bb_width" if w is None else "bb_height"))
-                raise ValueError(f"no column {gone}{where} (x, y are a box's centre with "
-                                 f"{name('bb_width')!r} and {name('bb_height')!r}, or a "
-                                 f"point with neither); columns: {sorted(map(str, have))}")
+        elif (point := every(get("x"), get("y"))) is not None and (
+                w is not None or h is not None):  # one of a box's two: the other is missing
+            gone = repr(name("bb_width" if w is None else "bb_height"))
+            raise ValueError(f"no column {gone}{where} (x, y are a box's centre with "
+                             f"{name('bb_width')!r} and {name('bb_height')!r}, or a point "
+                             f"with neither); columns: {sorted(map(str, have))}")
+        elif point is not None and points:
             # a point (trackpy's frame, particle, x, y): a row of width and height 0 there,
             # which evaluate_mot scores by distance
             (left, top), w, h = point, np.zeros(n), np.zeros(n)
@@ -536,7 +542,9 @@ class MOTTable:
                              f"{name('bb_height')!r}; or the corners "
                              f"{', '.join(repr(name(c)) for c in _CORNERS)}); columns: "
                              f"{sorted(map(str, have))} (name yours: --columns "
-                             "bb_left=NAME,..., or columns={'bb_left': NAME, ...})")
+                             "bb_left=NAME,..., or columns={'bb_left': NAME, ...})"
+                             + ("; x, y alone are points, scored by distance with vistrack "
+                                "eval --zero-distance PX" if point is not None else ""))
         box = np.column_stack([frame, ident if ident is not None else np.full(n, -1.0),
                                left, top, w, h])
         # the rules a text file's rows obey (_check_rows), named by row and column here

@@ -116,14 +116,17 @@ class Annotator:
             raise ValueError(f"trail must be a number of frames >= 0; got {trail}")
         self.labels = labels
         self._numbered = True  # (labels None) the numbers drawn in the last frame
-        # each identity's recent centres, in whole pixels, in a slot of one array: the
-        # centre of its c-th frame at c % trail and again at c % trail + trail, so that its
-        # last ``trail`` centres, oldest first, are one contiguous slice (a ring buffer read
-        # without a copy). ``_slot`` holds the identities in the order first seen, the order
-        # their trails are drawn in
+        # each identity's recent centres, in whole pixels, in a slot of one array: a ring
+        # of C centres, the c-th at c % C and again at c % C + C, so that its last C
+        # centres, oldest first, are one contiguous slice (read without a copy). C grows,
+        # doubling, as the centres held do, up to the trail, so that memory follows the
+        # trails drawn rather than the trail asked for. ``_slot`` holds the identities in the
+        # order first seen, the order their trails are drawn in
         self._slot: dict[int, int] = {}
         self._last: dict[int, int] = {}
-        self._buf = np.zeros((0, 2 * self.trail, 2), np.int32)
+        self._laid = self.trail  # the trail the slots are laid out for (trail may be changed)
+        self._C = min(self.trail, 32)
+        self._buf = np.zeros((0, 2 * self._C, 2), np.int32)
         self._count = np.zeros(0, np.int64)
         self._free: list[int] = []
         self._n = 0
@@ -204,15 +207,14 @@ class Annotator:
         centres = (boxes[:, :2] + boxes[:, 2:]) / 2 if boxes is not None else geometry
         self._remember(ids.tolist(), np.round(centres).astype(np.int32))
         present = set(ids.tolist())
-        T, buf = self.trail, self._buf
         for i, slot in self._slot.items():
             # a trail ends with its track: drawn only while the identity is in the frame (its
             # centres are kept for ``trail`` frames, so that it goes on if the track returns)
-            n = int(self._count[slot])
-            if i in present and n > 1 and T > 1:
-                head = n % T if n > T else 0  # the oldest centre kept
-                pts = buf[slot, head:head + min(n, T)].reshape(-1, 1, 2)
-                cv2.polylines(out, [pts], False, id_colour(i), thick, cv2.LINE_AA)
+            if i in present:
+                pts = self._window(slot)
+                if len(pts) > 1:
+                    cv2.polylines(out, [pts.reshape(-1, 1, 2)], False, id_colour(i), thick,
+                                  cv2.LINE_AA)
         if covs is not None:
             # every ellipse's axes and angle in one call (eigh a track took 6 of the 18 ms of
             # a frame of 520 particles); a covariance that is not finite draws none
@@ -268,9 +270,31 @@ class Annotator:
         return out
 
 
+    def _window(self, slot: int) -> np.ndarray:
+        """The centres of a slot's trail, oldest first, ``(k, 2)``: a view of the ring."""
+        n, C = int(self._count[slot]), self._C
+        head = n % C if n > C else 0  # (n > C only once the ring is the whole trail; C > 0)
+        return self._buf[slot, head:head + min(n, C)]
+
+    def _lay_out(self, C: int) -> None:
+        """The slots as rings of ``C`` centres, each slot's last ``C`` centres (or fewer)
+        kept, oldest first, from its start."""
+        buf = np.zeros((len(self._count), 2 * C, 2), np.int32)
+        count = np.zeros_like(self._count)
+        for slot in self._slot.values() if C else ():
+            kept = self._window(slot)[-C:]
+            buf[slot, :len(kept)] = kept
+            count[slot] = len(kept)
+        self._buf, self._count, self._C = buf, count, C
+
     def _remember(self, ids: list[int], at: np.ndarray) -> None:
         """Add this frame's centres ``at`` (whole pixels) to the trails of ``ids``, and forget
         the identities unseen for ``trail`` frames."""
+        if self.trail != self._laid:  # changed since the last frame: every trail follows it
+            if self.trail < 0:
+                raise ValueError(f"trail must be a number of frames >= 0; got {self.trail}")
+            self._laid = self.trail
+            self._lay_out(min(self.trail, max(self._C, 32)))
         slots = []
         for i in ids:
             slot = self._slot.get(i)
@@ -288,15 +312,21 @@ class Annotator:
         T = self.trail
         if T and slots:
             s = np.asarray(slots)
-            if len(set(slots)) == len(slots):
-                j = self._count[s] % T
+            twice = len(set(slots)) < len(slots)
+            # the ring grows before a trail of fewer centres than the trail would wrap
+            need = int((self._count[s] + (np.bincount(s)[s] if twice else 1)).max())
+            if need > self._C < T:
+                self._lay_out(min(T, max(2 * self._C, 1 << (need - 1).bit_length())))
+            C = self._C
+            if not twice:
+                j = self._count[s] % C
                 self._buf[s, j] = at
-                self._buf[s, j + T] = at
+                self._buf[s, j + C] = at
                 self._count[s] += 1
             else:  # an identity twice in one frame: each of its centres, in turn
                 for slot, xy in zip(slots, at):
-                    j = self._count[slot] % T
-                    self._buf[slot, j] = self._buf[slot, j + T] = xy
+                    j = self._count[slot] % C
+                    self._buf[slot, j] = self._buf[slot, j + C] = xy
                     self._count[slot] += 1
         for i in [i for i, n in self._last.items() if self._n - n > T]:
             slot = self._slot.pop(i)
