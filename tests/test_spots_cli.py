@@ -149,6 +149,7 @@ def test_a_points_run_over_an_earlier_box_run_replaces_its_tracks(tmp_path, caps
      "particles writes points"),
     (["--diameter", "9", "--gt", "gt.txt"], "--gt scores box tracks; --tracker particles "
      "gives points"),
+    (["--gt", "gt.txt"], "--frontend spots needs --diameter"),  # (the diameter named first)
     (["--diameter", "9", "--still-camera"],
      "--still-camera goes with the box trackers (bytetrack, sort)"),
 ])
