@@ -269,7 +269,6 @@ class Annotator:
             cv2.putText(out, str(i), org, font, scale, c, thin, cv2.LINE_AA)
         return out
 
-
     def _window(self, slot: int) -> np.ndarray:
         """The centres of a slot's trail, oldest first, ``(k, 2)``: a view of the ring."""
         n, C = int(self._count[slot]), self._C
@@ -291,9 +290,9 @@ class Annotator:
         """Add this frame's centres ``at`` (whole pixels) to the trails of ``ids``, and forget
         the identities unseen for ``trail`` frames."""
         if self.trail != self._laid:  # changed since the last frame: every trail follows it
-            if self.trail < 0:
+            if int(self.trail) < 0:
                 raise ValueError(f"trail must be a number of frames >= 0; got {self.trail}")
-            self._laid = self.trail
+            self.trail = self._laid = int(self.trail)  # (a whole number, as when made)
             self._lay_out(min(self.trail, max(self._C, 32)))
         slots = []
         for i in ids:
@@ -315,7 +314,7 @@ class Annotator:
             twice = len(set(slots)) < len(slots)
             # the ring grows before a trail of fewer centres than the trail would wrap
             need = int((self._count[s] + (np.bincount(s)[s] if twice else 1)).max())
-            if need > self._C < T:
+            if self._C < T and need > self._C:
                 self._lay_out(min(T, max(2 * self._C, 1 << (need - 1).bit_length())))
             C = self._C
             if not twice:
