@@ -147,8 +147,6 @@ def test_a_points_run_over_an_earlier_box_run_replaces_its_tracks(tmp_path, caps
      "--max-lost must be a number of seconds >= 0; got -1"),
     (["--diameter", "9", "--report"], "--report shows box tracks (tracks.txt); --tracker "
      "particles writes points"),
-    (["--diameter", "9", "--gt", "gt.txt"], "--gt scores box tracks; --tracker particles "
-     "gives points"),
     (["--gt", "gt.txt"], "--frontend spots needs --diameter"),  # (the diameter named first)
     (["--diameter", "9", "--still-camera"],
      "--still-camera goes with the box trackers (bytetrack, sort)"),
@@ -199,12 +197,44 @@ def test_spots_and_particles_go_together(tmp_path, capsys):
     with pytest.raises(ValueError, match="the particles tracker links points, and the hog "
                                          "front-end finds boxes"):
         track_video(frames, out, frontend="hog", tracker="particles", fps=10)
-    with pytest.raises(ValueError, match="gt scores box tracks; the particles tracker's are "
-                                         "points"):
-        track_video(frames, out, frontend="spots", diameter=9, gt=tmp_path / "gt.txt", fps=10)
+    with pytest.raises(ValueError, match="zero_distance scores the tracks against gt: give "
+                                         "gt too"):
+        track_video(frames, out, frontend="spots", diameter=9, zero_distance=4, fps=10)
     with pytest.raises(ValueError, match="the spots front-end needs the spots' diameter"):
         track_video(frames, out, frontend="spots", fps=10)
     assert not (tmp_path / "o").exists()
+
+
+def test_a_points_run_is_scored_against_ground_truth_points(tmp_path, capsys):
+    """``--gt TRUTH.csv`` (frame, particle, x, y) with spots: the particles are scored by
+    distance, by default at the diameter (a match within a particle's radius), or at
+    ``--zero-distance``, as vistrack eval scores tracks.csv afterwards; run.json keeps the
+    scores. Before, --gt was refused with points. The true walks: every particle found and
+    followed (MOTA 1, no switch). ``--zero-distance`` without --gt is refused."""
+    import json
+
+    from vistrack.evaluation import evaluate_files
+
+    truth = _walk(tmp_path / "frames")
+    gt = tmp_path / "truth.csv"
+    gt.write_text("frame,particle,x,y\n" + "".join(
+        f"{k + 1},{i + 1},{x!r},{y!r}\n" for k, pts in enumerate(truth.tolist())
+        for i, (x, y) in enumerate(pts)))
+    for extra, zero in (([], 9.0), (["--zero-distance", "3"], 3.0)):
+        out = tmp_path / f"out{zero:g}"
+        assert main(["track", str(tmp_path / "frames"), "--out-dir", str(out), "--frontend",
+                     "spots", "--diameter", "9", "--minmass", "100", "--fps", "10", "--gt",
+                     str(gt), *extra]) == 0
+        shown = capsys.readouterr().out.splitlines()
+        want = evaluate_files([("frames", gt, out / "tracks.csv", None)], zero_distance=zero)
+        scores = want["frames"]
+        assert scores.MOTA == 1.0 and scores.IDSW == 0 and scores.TP == truth.shape[0] * 16
+        assert shown[-1].split()[:2] == ["frames", f"{100 * scores.HOTA:.1f}"]
+        assert json.loads((out / "run.json").read_text())["scores"] == json.loads(
+            json.dumps(scores.summary()))
+    assert main(["track", str(tmp_path / "frames"), "--out-dir", str(tmp_path / "o2"),
+                 "--frontend", "spots", "--diameter", "9", "--zero-distance", "3"]) == 2
+    assert "--zero-distance goes with --gt" in capsys.readouterr().err
 
 
 def test_a_points_run_has_no_report_page(tmp_path, capsys):

@@ -285,7 +285,9 @@ def _number_problem(args: argparse.Namespace) -> str | None:
               ("min_area", lambda v: math.isfinite(v) and v >= 0, "a number >= 0"),
               ("diameter", lambda v: v >= 3 and v % 2 == 1, "an odd number of pixels >= 3"),
               ("minmass", lambda v: math.isfinite(v) and v >= 0, "a number >= 0"),
-              ("search_range", lambda v: math.isfinite(v) and v > 0, "a number of pixels > 0"))
+              ("search_range", lambda v: math.isfinite(v) and v > 0, "a number of pixels > 0"),
+              ("zero_distance", lambda v: math.isfinite(v) and v > 0,
+               "a distance > 0 (where a pair counts for nothing)"))
     for option, ok, what in checks:
         value = getattr(args, option, None)
         if value is not None and not ok(value):
@@ -341,7 +343,8 @@ def _box_trackers() -> str:
 # `vistrack track`'s options that belong to a run, refused without INPUT (the configuration
 # options alone may then be given, to --print-config)
 _RUN_OPTIONS = ("out", "out_dir", "jobs", "scheduler", "keep_going", "detections", "columns",
-                "fps", "gt", "skip_bad_frames", "report", "force") + _FRONTEND_OPTIONS
+                "fps", "gt", "zero_distance", "skip_bad_frames", "report",
+                "force") + _FRONTEND_OPTIONS
 
 
 def _print_config(args: argparse.Namespace) -> int:
@@ -523,6 +526,8 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
                     else f"--frontend {args.frontend}, tracked by {name},")
             return (f"--out (a sequence's detections) goes with {_box_trackers()}; "
                     f"{what} goes with --out-dir")
+    if args.zero_distance is not None and args.gt is None:
+        return "--zero-distance goes with --gt (it says how the tracks are scored against it)"
     if args.out is not None:
         folder = Path(args.input)
         sequence = folder.is_dir() and ((folder / "seqinfo.ini").exists()
@@ -744,14 +749,11 @@ def _points_problem(args: argparse.Namespace, name: str, frontend: str) -> str:
     before anything is read, for one input or many, in the command line's words."""
     from .pipeline import min_search_range, points_problem
 
-    problem = points_problem(name, frontend, cli=True)  # (the pairing; --gt after --diameter)
+    problem = points_problem(name, frontend, cli=True)
     if problem:
         return problem
     if frontend == "spots" and args.diameter is None:
         return "--frontend spots needs --diameter: the spots' diameter in pixels, odd (round up)"
-    problem = points_problem(name, frontend, gt=args.gt is not None, cli=True)
-    if problem:
-        return problem
     if not _points(name):
         return ""
     floor = min_search_range()
@@ -778,6 +780,8 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
                    command=getattr(args, "command_line", None))
     if args.search_range is not None:  # the particles tracker's (checked before)
         options["search_range"] = args.search_range
+    if getattr(args, "zero_distance", None) is not None:  # (with --gt, one input)
+        options["zero_distance"] = args.zero_distance
     if _points(name) and args.max_lost is not None:  # the particles tracker's too
         options["max_lost"] = args.max_lost
     front = args.frontend or default_frontend(name)
@@ -824,7 +828,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
                     "sequence's results NAME.txt in it: give --out RESULTS/")
     if args.jobs is not None and args.jobs < 1:
         return fail(f"--jobs must be 1 or more; got {args.jobs}")
-    for flag in ("print_config", "gt", "detections", "columns"):
+    for flag in ("print_config", "gt", "zero_distance", "detections", "columns"):
         if getattr(args, flag):
             return fail(f"--{flag.replace('_', '-')} goes with one input")
     if (args.frontend or "").startswith("detections:"):
@@ -1385,7 +1389,13 @@ def build_parser() -> argparse.ArgumentParser:
                        "detections file alone or a sequence without seqinfo.ini (put over the "
                        "rate an input gives, where it gives one; with several inputs, every "
                        "input's)")
-    track.add_argument("--gt", help="video mode: MOTChallenge ground truth to score against")
+    track.add_argument("--gt", help="video mode: MOTChallenge ground truth to score against "
+                       "(or a .csv or .parquet file with a header; for points, frame, "
+                       "particle, x, y)")
+    track.add_argument("--zero-distance", type=float, metavar="PX",
+                       help="with --gt: score positions by distance rather than boxes by "
+                       "IoU, a match within PX/2 (as vistrack eval --zero-distance); points "
+                       "(--frontend spots) are always scored so, by default at --diameter")
     track.add_argument("--stop", type=int, help="video mode: the last frame to track")
     track.add_argument("--skip-bad-frames", action="store_true",
                        help="image folders: skip an unreadable, cut-short or differently sized "

@@ -49,7 +49,7 @@ from .detector_checks import (
     warn_no_area,
     warn_outside,
 )
-from .evaluation.mot import MOTCounts, _lines_of, considered, evaluate_mot
+from .evaluation.mot import MOTCounts, _lines_of, check_zero_distance, considered, evaluate_mot
 from .evaluation.sanity import sanity_warnings
 from .io.atomic import check_output, hidden_path, made_folder, remove_on_commit, together
 from .io.motchallenge import (
@@ -1045,18 +1045,17 @@ def default_frontend(tracker: object) -> str:
         else "bgsub"
 
 
-def points_problem(tracker: object, frontend: object, *, gt: bool = False,
-                   cli: bool = False) -> str:
+def points_problem(tracker: object, frontend: object, *, cli: bool = False) -> str:
     """What is wrong with a tracker and a front-end together where one is of points and the
-    other of boxes, or with ground truth (``gt``) for a tracker of points, "" if nothing: in
-    the arguments' words, or the command line's (``cli``), which checks the same before
-    anything runs. A tracker or a front-end that is an object of yours is not checked.
+    other of boxes, "" if nothing: in the arguments' words, or the command line's (``cli``),
+    which checks the same before anything runs. A tracker or a front-end that is an object
+    of yours is not checked.
 
     >>> points_problem("bytetrack", "spots", cli=True)[:60]
     '--frontend spots finds points, and --tracker bytetrack track'
     >>> points_problem("particles", "hog")[:58]
     'the particles tracker links points, and the hog front-end '
-    >>> points_problem("particles", "spots"), points_problem("bytetrack", "hog", gt=True)
+    >>> points_problem("particles", "spots"), points_problem("bytetrack", "hog")
     ('', '')
     """
     if not (isinstance(tracker, str) and tracker in TRACKERS):
@@ -1073,13 +1072,6 @@ def points_problem(tracker: object, frontend: object, *, gt: bool = False,
                 "--frontend spots" if cli else
                 f"{trk} links points, and the {frontend} front-end finds boxes: give it the "
                 "spots front-end (or a detector of your own that finds points)")
-    if points and gt:
-        return (f"--gt scores box tracks; {trk} gives points (tracks.csv holds each "
-                "particle's positions: score it afterwards with vistrack eval --gt TRUTH "
-                "--pred OUT/tracks.csv --zero-distance PX)" if cli else
-                f"gt scores box tracks; {trk}'s are points (its tracks.csv holds each "
-                "particle's positions: score it afterwards with evaluate_files(..., "
-                "zero_distance=PX), or vistrack eval --zero-distance PX)")
     return ""
 
 
@@ -2126,7 +2118,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 onnx_layout: str | None = None, config: TrackConfig | None = None,
                 command: str | None = None, columns: dict[str, str] | None = None,
                 diameter: int | None = None, minmass: float | None = None,
-                invert: bool | None = None, **overrides: object) -> VideoRun:
+                invert: bool | None = None, zero_distance: float | None = None,
+                **overrides: object) -> VideoRun:
     """Track a video (a file, an image folder or a MOTChallenge sequence folder) from pixels.
 
     Writes into ``out_dir`` (:data:`SINKS`): ``tracks.txt`` (MOTChallenge results),
@@ -2168,7 +2161,13 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         tracker object (:class:`~vistrack.tracking.Tracker`). Default: ``"particles"`` with
         the ``spots`` front-end, else ``"bytetrack"``.
     gt : str or Path, optional
-        A MOTChallenge ground-truth file, scored over the frames tracked.
+        A MOTChallenge ground-truth file, scored over the frames tracked (or a CSV or Parquet
+        file with a header; for points, ``frame, particle, x, y``).
+    zero_distance : float, optional
+        With ``gt``: score positions by distance rather than boxes by IoU
+        (:func:`~vistrack.evaluation.evaluate_mot`; a match lies within half of it). Points
+        are always scored so, by default at the spots' ``diameter``: a match within a
+        particle's radius.
     confidence, det_threshold : callable, float
         The detector's continuous confidence, a callable ``image -> ConfidenceMap`` (default
         :class:`vistrack.frontends.detectors.HOGConfidence`), for ``dcpf`` and the
@@ -2272,12 +2271,18 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             raise ValueError(f"{unread[0]} goes with the {unread[1]!r} front-end; the front-end "
                              f"here, {what}, does not read it")
         points = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].points
-        problem = points_problem(tracker, name, gt=gt is not None)
+        problem = points_problem(tracker, name)
         if problem:
             raise ValueError(problem)
+        if zero_distance is not None and gt is None:
+            raise ValueError("zero_distance scores the tracks against gt: give gt too")
+        if points and gt is not None and zero_distance is None and diameter is not None:
+            zero_distance = float(diameter)  # a match within the particle's radius
+        if zero_distance is not None:
+            zero_distance = check_zero_distance(zero_distance)
         files = video_outputs(out_dir, annotate=annotate, force=force, points=points)
         out_dir = Path(out_dir)
-        gt_table = _ground_truth(gt) if gt is not None else None
+        gt_table = _ground_truth(gt, zero_distance) if gt is not None else None
         if confidence is not None and not callable(confidence):
             raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                             f"{type(confidence).__name__}")
@@ -2352,14 +2357,16 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                     warnings.warn(f"{gt}: no ground-truth rows on the frames tracked "
                                   f"({reader.start}-{stats.last}): every box tracked counts as a "
                                   "false positive", UserWarning, stacklevel=4)
-                tracks = sinks["tracks"]
-                assert isinstance(tracks, MOTWriter)
+                tracks = sinks["csv" if points else "tracks"]
+                assert isinstance(tracks, (MOTWriter, PointsCSVWriter))
                 written = tracks.written()
-                scored.append(evaluate_mot(g, written, stats.last, benchmark="auto"))
+                scored.append(evaluate_mot(g, written, stats.last, benchmark="auto",
+                                           zero_distance=zero_distance))
                 # as vistrack eval warns: another sequence's ground truth scores valid numbers
                 # (results left empty by a front-end that found nothing: the run says so
                 # itself, after the loop)
-                for message in sanity_warnings(g, written, empty_said=found_nothing()):
+                for message in sanity_warnings(g, written, empty_said=found_nothing(),
+                                               zero_distance=zero_distance):
                     warnings.warn(message, UserWarning, stacklevel=4)
 
         found = 0  # what a front-end from pixels found (a detections file is checked as read)
@@ -2460,20 +2467,22 @@ def _replaced_rate(reader: VideoReader) -> tuple[str, float] | None:
     return str(reader.own_fps_from), own
 
 
-def _ground_truth(gt: str | Path) -> MOTTable:
+def _ground_truth(gt: str | Path, zero_distance: float | None = None) -> MOTTable:
     """The ground truth to score a video's tracks against (a file, or a sequence folder's
     ``gt/gt.txt``), read and checked before anything is tracked: a missing file is named as
     ``--gt``'s, and the faults the scoring would find after the whole video (an identity
     twice in a frame, a detections file given as ground truth) are found now. A CSV or
     Parquet file is read as ``vistrack eval`` reads one (:func:`~vistrack.evaluation.files.
-    read_truth`)."""
+    read_truth`), x, y alone as points where they are scored by distance
+    (``zero_distance``)."""
     from .evaluation.files import read_truth
 
     try:
-        table = read_truth(_ground_truth_file(gt))
+        table = read_truth(_ground_truth_file(gt), points=zero_distance is not None)
     except FileNotFoundError:
         raise FileNotFoundError(f"{gt} does not exist (--gt FILE)") from None
-    evaluate_mot(table, MOTTable.from_rows(np.zeros((0, 6)), str(gt)), benchmark="auto")
+    evaluate_mot(table, MOTTable.from_rows(np.zeros((0, 6)), str(gt)), benchmark="auto",
+                 zero_distance=zero_distance)
     return table
 
 

@@ -691,6 +691,30 @@ class PointsCSVWriter(_RowsFile):
         cells = zip([f] * len(ids), ids.tolist(), *xy.T.tolist())
         self._file.write((self._ROW * len(ids)) % tuple(itertools.chain.from_iterable(cells)))
 
+    def written(self) -> MOTTable:
+        """The points written so far, as rows of width and height 0 (what a run scores by
+        distance before it commits its files, :func:`~vistrack.evaluation.evaluate_mot`'s
+        ``zero_distance``).
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> sink = PointsCSVWriter(pathlib.Path(tempfile.mkdtemp()) / "tracks.csv")
+        >>> sink.write(Frame(3, 0.1), Tracks(ids=np.array([2]), boxes=None,
+        ...                                  points=np.array([[1.5, 2.0]]),
+        ...                                  scores=np.ones(1), classes=np.zeros(1)))
+        >>> t = sink.written()
+        >>> t.frames.tolist(), t.ids.tolist(), t.boxes.tolist(), sink.path.exists()
+        ([3], [2], [[1.5, 2.0, 0.0, 0.0]], False)
+        >>> sink.abort()
+        """
+        lines = self._file.read().splitlines()[1:]  # (the header)
+        rows = np.array([[float(v) for v in line.split(",")] for line in lines]).reshape(-1, 4)
+        n = len(rows)
+        return MOTTable.from_rows(
+            np.c_[rows[:, :2], rows[:, 2:], np.zeros((n, 2)), np.ones(n), -np.ones((n, 2))]
+            if n else np.zeros((0, 9)), str(self.path))
+
     def close(self) -> None:
         """Rename the file over ``path`` (the header alone if no frame came)."""
         self._file.commit()
