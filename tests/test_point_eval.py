@@ -233,3 +233,27 @@ def test_the_hota_plot_of_points_says_what_its_threshold_is_on():
         "localisation threshold α (1 - distance / 4)"}
     assert {ax.get_xlabel() for ax in plot_hota_alpha(res).axes} == {
         "localisation threshold α (IoU)"}
+
+
+def test_a_box_run_scored_by_distance_says_so_to_its_report(tmp_path):
+    """``vistrack track VIDEO --gt GT --zero-distance 40``: the boxes are scored by their
+    centres' distance, run.json records the distance, and the report's plots use it (they
+    scored by IoU whatever the run had printed)."""
+    import json
+
+    from vistrack.data import demo_clip
+    from vistrack.report import _gt_plots
+
+    clip = demo_clip()
+    run = main(["track", str(clip.video), "--out-dir", str(tmp_path / "o"), "--gt",
+                str(clip.gt), "--stop", "20", "--zero-distance", "40", "--report", "--quiet"])
+    assert run == 0
+    info = json.loads((tmp_path / "o" / "run.json").read_text())
+    assert info["zero_distance"] == 40
+    gt = read_mot(clip.gt)
+    pred = read_mot(tmp_path / "o" / "tracks.txt")
+    want = evaluate_mot(gt[gt.frames <= 20], pred, 20, zero_distance=40)
+    assert info["scores"] == json.loads(json.dumps(want.summary()))
+    assert want.summary() != evaluate_mot(gt[gt.frames <= 20], pred, 20).summary()
+    assert len(_gt_plots(tmp_path / "o" / "tracks.txt", "clip", info)) == 2
+    assert (tmp_path / "o" / "report.html").stat().st_size > 0

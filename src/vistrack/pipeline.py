@@ -2449,7 +2449,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                               ctx.resolved if isinstance(trk, BoxTracker) else None,
                               derived_values(trk) if isinstance(trk, BoxTracker) else None,
                               reader.start, stats.last, _replaced_rate(reader))
-            _write_run_info(result, video, gt, command, reader.fps, said, points=points)
+            _write_run_info(result, video, gt, command, reader.fps, said, points=points,
+                            zero_distance=zero_distance)
             # an earlier run's page would show other tracks beside these outputs (a new one, if
             # asked for, is written from run.json after this)
             remove_on_commit(out_dir / REPORT)
@@ -2516,7 +2517,7 @@ def _shown_warnings() -> Iterator[list[str]]:
 
 def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
                     command: str | None, frame_rate: float, said: Sequence[str] = (), *,
-                    points: bool = False) -> None:
+                    points: bool = False, zero_distance: float | None = None) -> None:
     """``run.json`` beside a run's outputs: how they were made (:mod:`vistrack.report`;
     ``fps`` the frames tracked a second, ``frame_rate`` the video's, ``warnings`` the
     messages of the warnings the run gave, ``said``; ``points`` where the tracks are points,
@@ -2535,7 +2536,9 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
             "fps": round(run.fps, 1), "frame_rate": frame_rate,
             "scores": run.scores.summary() if run.scores is not None else None,
             "outputs": sorted(f.name for f in run.files.values()),
-            "warnings": list(said), "points": points}
+            "warnings": list(said), "points": points,
+            # how the scores were taken (None: boxes by IoU), for the report's plots
+            "zero_distance": zero_distance}
     with replacing(run.out_dir / RUN_INFO) as part:
         part.write_text(json.dumps(info, indent=2) + "\n")
 

@@ -103,6 +103,7 @@ def _gt_plots(tracks: Path, name: str, info: dict) -> list[tuple[str, bytes]]:
     """HOTA over α and the timeline of the run's ``tracks`` (its results file), when its
     ground truth is known and readable."""
     from .evaluation import clear_matches, evaluate_mot
+    from .evaluation.files import read_truth
     from .io.motchallenge import read_mot
     from .viz.plots import plot_hota_alpha, plot_timeline
 
@@ -110,14 +111,17 @@ def _gt_plots(tracks: Path, name: str, info: dict) -> list[tuple[str, bytes]]:
     if not gt_path or not Path(gt_path).is_file():
         return []
     first, last = int(info.get("first_frame", 1)), int(info.get("last_frame", 0))
-    gt, pred = read_mot(gt_path), read_mot(tracks)
+    zero = info.get("zero_distance")  # scored by distance (vistrack track --zero-distance)
+    gt, pred = read_truth(gt_path, points=zero is not None), read_mot(tracks)
     if last <= 0:
         last = int(pred.frames.max()) if len(pred) else 0
     g = gt[(gt.frames >= first) & (gt.frames <= last)]
     return [("HOTA, DetA and AssA over the localisation threshold α",
-             _png(plot_hota_alpha({name: evaluate_mot(g, pred, last)}))),
+             _png(plot_hota_alpha({name: evaluate_mot(g, pred, last, zero_distance=zero)},
+                                  zero_distance=zero))),
             ("Every object over time, coloured by the predicted identity that covers it",
-             _png(plot_timeline(clear_matches(g, pred, last), title=name)))]
+             _png(plot_timeline(clear_matches(g, pred, last, zero_distance=zero),
+                                title=name)))]
 
 
 _STYLE = """
