@@ -145,8 +145,6 @@ def test_a_points_run_over_an_earlier_box_run_replaces_its_tracks(tmp_path, caps
      "0.3"),
     (["--diameter", "9", "--max-lost", "-1"],
      "--max-lost must be a number of seconds >= 0; got -1"),
-    (["--diameter", "9", "--report"], "--report shows box tracks (tracks.txt); --tracker "
-     "particles writes points"),
     (["--gt", "gt.txt"], "--frontend spots needs --diameter"),  # (the diameter named first)
     (["--diameter", "9", "--still-camera"],
      "--still-camera goes with the box trackers (bytetrack, sort)"),
@@ -237,17 +235,34 @@ def test_a_points_run_is_scored_against_ground_truth_points(tmp_path, capsys):
     assert "--zero-distance goes with --gt" in capsys.readouterr().err
 
 
-def test_a_points_run_has_no_report_page(tmp_path, capsys):
-    """vistrack report on a particles run's folder says why there is no page (it said its
-    tracks.txt did not exist, as though it were not the folder vistrack track wrote)."""
-    _walk(tmp_path / "frames")
+def test_a_points_run_has_a_report_page(tmp_path, capsys):
+    """A particles run's page (--report, or vistrack report on its folder): its counts in
+    positions of particles, the scores against --gt and the plots of HOTA over α and the
+    timeline, scored by distance as the run was (the distance run.json keeps). Before, the
+    page was refused: it showed box tracks only."""
+    import json
+
+    from vistrack.evaluation import evaluate_files
+
+    truth = _walk(tmp_path / "frames")
+    gt = tmp_path / "truth.csv"
+    gt.write_text("frame,particle,x,y\n" + "".join(
+        f"{k + 1},{i + 1},{x!r},{y!r}\n" for k, pts in enumerate(truth.tolist())
+        for i, (x, y) in enumerate(pts)))
     out = tmp_path / "out"
     assert main(["track", str(tmp_path / "frames"), "--out-dir", str(out), "--frontend",
-                 "spots", "--diameter", "9", "--fps", "10", "--quiet"]) == 0
+                 "spots", "--diameter", "9", "--minmass", "100", "--fps", "10", "--gt",
+                 str(gt), "--report", "--quiet"]) == 0
     capsys.readouterr()
-    assert main(["report", str(out)]) == 2
-    assert (f"{out} holds point tracks (tracks.csv, a particles run's): the report page shows "
-            "box tracks" in capsys.readouterr().err)
+    page = (out / "report.html").read_text()
+    assert "20 frames of" in page and "320 positions of 16 particles" in page
+    assert page.count("<img ") == 3  # trajectories, HOTA over α, the timeline
+    assert json.loads((out / "run.json").read_text())["zero_distance"] == 9
+    scores = evaluate_files([("f", gt, out / "tracks.csv", None)], zero_distance=9)["f"]
+    assert f"<td>{100 * scores.HOTA:.1f}</td>" in page
+    assert main(["report", str(out), "--force"]) == 0  # (the WebM inside differs run to run)
+    again = (out / "report.html").read_text()
+    assert "320 positions of 16 particles" in again and again.count("<img ") == 3
 
 
 def test_bulk_water_from_the_command_line_links_as_trackpy_does(tmp_path, capsys):

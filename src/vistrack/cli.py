@@ -589,9 +589,6 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
             return problem
         if args.skip_bad_frames and Path(args.input).is_file():
             return _skip_bad_frames_problem([args.input])
-        if args.report and _points(name):
-            return (f"--report shows box tracks (tracks.txt); --tracker {name} writes points "
-                    "(tracks.csv), the annotated video and trajectories.png")
         video_outputs(args.out_dir, force=args.force, name="--out-dir",
                       points=_points(name))
     return ""

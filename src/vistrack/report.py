@@ -104,7 +104,6 @@ def _gt_plots(tracks: Path, name: str, info: dict) -> list[tuple[str, bytes]]:
     ground truth is known and readable."""
     from .evaluation import clear_matches, evaluate_mot
     from .evaluation.files import read_truth
-    from .io.motchallenge import read_mot
     from .viz.plots import plot_hota_alpha, plot_timeline
 
     gt_path = info.get("gt")
@@ -112,7 +111,8 @@ def _gt_plots(tracks: Path, name: str, info: dict) -> list[tuple[str, bytes]]:
         return []
     first, last = int(info.get("first_frame", 1)), int(info.get("last_frame", 0))
     zero = info.get("zero_distance")  # scored by distance (vistrack track --zero-distance)
-    gt, pred = read_truth(gt_path, points=zero is not None), read_mot(tracks)
+    # the run's own results: MOTChallenge's text, or a points run's tracks.csv
+    gt, pred = (read_truth(p, points=zero is not None) for p in (gt_path, tracks))
     if last <= 0:
         last = int(pred.frames.max()) if len(pred) else 0
     g = gt[(gt.frames >= first) & (gt.frames <= last)]
@@ -171,8 +171,8 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     ----------
     out_dir : str or Path
         A folder written by ``vistrack track --out-dir`` (:func:`vistrack.pipeline.track_video`):
-        ``tracks.txt`` at least; ``annotated.mp4``, ``trajectories.png`` and ``run.json``
-        when there.
+        ``tracks.txt`` at least (``tracks.csv`` for a points run, ``run.json`` saying so);
+        ``annotated.mp4``, ``trajectories.png`` and ``run.json`` when there.
     force : bool
         Replace an existing ``report.html``.
 
@@ -181,12 +181,11 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     NotADirectoryError
         If ``out_dir`` is a file.
     FileNotFoundError
-        If ``out_dir`` has no ``tracks.txt``.
+        If ``out_dir`` has no ``tracks.txt`` (a points run, no ``tracks.csv``).
     FileExistsError
         If ``report.html`` exists and ``force`` is False.
     ValueError
-        If ``run.json`` cannot be read, naming it, or says the run's tracks are points (a
-        ``particles`` run has no ``tracks.txt`` to show).
+        If ``run.json`` cannot be read, naming it.
     vistrack.io.VideoError
         If the video cannot be read, naming it.
 
@@ -201,15 +200,12 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
 
     out_dir = Path(out_dir)
     target = out_dir / REPORT
-    tracks = out_dir / SINK_FILES["tracks"]
+    points = _holds_points(out_dir / RUN_INFO)  # (a particles run: tracks.csv of points)
+    tracks = out_dir / SINK_FILES["csv" if points else "tracks"]
     if out_dir.is_file():
         raise NotADirectoryError(f"{out_dir} is a file: give the folder that vistrack track "
                                  "--out-dir wrote")
     if not tracks.is_file():
-        if _holds_points(out_dir / RUN_INFO):
-            raise ValueError(f"{out_dir} holds point tracks (tracks.csv, a particles run's): "
-                             "the report page shows box tracks; its annotated video and "
-                             "trajectories.png are beside them")
         raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
                                 "track --out-dir wrote")
     check_output(target, force=force, name="report")
@@ -230,7 +226,8 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     if info.get("frames"):
         parts.append(
             f"<p>{info['frames']} frames of {html.escape(str(info.get('input', '')))}: "
-            f"{info.get('rows', 0)} boxes of {info.get('tracks', 0)} tracks, "
+            f"{info.get('rows', 0)} {'positions' if points else 'boxes'} of "
+            f"{info.get('tracks', 0)} {'particles' if points else 'tracks'}, "
             f"{info.get('fps', 0):.0f} frames/s without writing; vistrack "
             f"{html.escape(str(info.get('vistrack', '')))}.</p>")
     said = info.get("warnings")
