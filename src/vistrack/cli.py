@@ -777,7 +777,7 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
                    command=getattr(args, "command_line", None))
     if args.search_range is not None:  # the particles tracker's (checked before)
         options["search_range"] = args.search_range
-    if getattr(args, "zero_distance", None) is not None:  # (with --gt, one input)
+    if args.zero_distance is not None:  # (with --gt, one input)
         options["zero_distance"] = args.zero_distance
     if _points(name) and args.max_lost is not None:  # the particles tracker's too
         options["max_lost"] = args.max_lost
@@ -1161,10 +1161,10 @@ def _eval(args: argparse.Namespace) -> int:
     columns, problem = _columns(args.columns)
     if problem:
         return _fail("eval", problem)
+    out_of_range = _number_problem(args)  # (--zero-distance, as vistrack track checks it)
+    if out_of_range:
+        return _fail("eval", out_of_range)
     zero = args.zero_distance
-    if zero is not None and not (math.isfinite(zero) and zero > 0):
-        return _fail("eval", f"--zero-distance must be a distance > 0 (where a pair counts for "
-                     f"nothing; a match lies within half of it); got {zero:g}")
     if args.scheduler is not None and args.jobs is not None:
         return _fail("eval", "--jobs goes with the local pool; the cluster has its own workers")
     plots = [] if args.plots is None else [Path(args.plots) / "hota_alpha.png"] + [

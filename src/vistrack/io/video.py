@@ -419,14 +419,14 @@ class VideoReader:
             cap.release()
         # the folder the images are read from (a sequence's img1/), None for a video file
         self.image_folder: Path | None = self._files[0].parent if self._files else None
-        # where the rate comes from: None where nothing gives one (an image folder), 30
-        self.fps_from = ("fps" if fps is not None else "seqinfo.ini" if seq_fps
-                         else "the header" if header_fps else None)
         # the rate the source gives, where fps is put over it too (the run says so)
         own: tuple[float | None, str | None] = next(
             ((float(r), f) for r, f in ((seq_fps, "seqinfo.ini"), (header_fps, "the header"))
              if r is not None and np.isfinite(r) and r > 0), (None, None))
         self.own_fps, self.own_fps_from = own
+        # where the rate comes from: None where nothing gives one (an image folder), 30 (a
+        # source's rate that is none, NaN or below 0, is refused below)
+        self.fps_from = "fps" if fps is not None else self.own_fps_from
         fps = fps if fps is not None else seq_fps or header_fps or 30.0
         if not np.isfinite(fps) or fps <= 0:
             raise ValueError(f"fps must be a finite number > 0; got {fps}")
