@@ -1291,7 +1291,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         the tracker steps through those frames alone, at the frame rate divided by k, and a
         ``RuntimeWarning`` says so; each frame between gets the reported tracks' boxes as predicted
         from the frames before it (:meth:`~vistrack.tracking.BoxTracker.boxes_ahead`), offline boxes
-        on the straight line between the smoothed ones, both with score 0. Frames without rows whose
+        on the straight line between the smoothed ones (after the detector's last frame, carried on
+        along it), both with score 0. Frames without rows whose
         neighbours on the detector's frames have 5 or more each
         (:func:`~vistrack.detector_checks.undelivered_frames`, runs shorter than ``max_lost``) are
         taken as frames the detector did not deliver and treated the same way: the tracker steps
@@ -1427,7 +1428,7 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
                              link_iou=oc.link_iou, **oc.frames(rate))
             seconds += sec
             n_rows, n_tracks, classes_of = _write_smoothed(sm, text, decimals, first, stride,
-                                                           skip)
+                                                           skip, info.seq_length)
         if table_kind:
             _write_table(text, out, table_kind, classes_of)
     _warn_calibration(trk, src.label)
@@ -1644,14 +1645,15 @@ def _whole_file_calibration(frames: Iterable[Detections], tc: BoxTrackerConfig, 
 
 
 def _write_smoothed(sm: SmoothedTracks, text: Path, decimals: int, first: int, stride: int,
-                    skip: np.ndarray) -> tuple[int, int, Callable[[Any], np.ndarray]]:
+                    skip: np.ndarray, last: int) -> tuple[int, int, Callable[[Any], np.ndarray]]:
     """The offline mode's end: the smoothed tracks (:func:`~vistrack.tracking.smooth`),
-    numbered by the sequence's frames (the frames between a detector's filled), written to
-    ``text``; returns the rows, the tracks and each track's class by identity."""
+    numbered by the sequence's frames (the frames between a detector's filled, and those after
+    its last up to ``last``, the sequence's), written to ``text``; returns the rows, the
+    tracks and each track's class by identity."""
     F, I, xywh = first + (sm.frames - 1) * stride, sm.ids, sm.xywh
     conf = np.where(sm.filled, 0.0, sm.scores)
     if stride > 1 or len(skip):
-        F, I, xywh, conf = _fill_between(F, I, xywh, conf, first, stride, skip)
+        F, I, xywh, conf = _fill_between(F, I, xywh, conf, first, stride, skip, last)
     write_mot(text, F, I, xywh, conf, force=True, decimals=decimals)
     known, at = np.unique(sm.ids, return_index=True)
     return len(F), len(np.unique(I)), lambda ids: sm.classes[at][np.searchsorted(known, ids)]
@@ -1726,12 +1728,15 @@ def _on_detector_frames(trk: BoxTracker, path: str | Path, frames: np.ndarray, f
 
 
 def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: np.ndarray,
-                  first: int, stride: int, skip: np.ndarray
+                  first: int, stride: int, skip: np.ndarray, last: int
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Rows for the frames between two rows of a track with no frame the tracker stepped
     on between them (the detector's frames, every ``stride``-th from ``first``, but those
-    in ``skip``), on the straight line between the two (score 0, as the offline mode's
-    filled rows), all sorted by frame and id."""
+    in ``skip``), on the straight line between the two; and for the frames after the last
+    one the tracker stepped on, up to ``last``, a row for each track it reported there, as
+    the online mode predicts them: its centre carried on along the line from its row before,
+    its size by the same factor each frame (a track of one row: its box as it is). All with
+    score 0, as the offline mode's filled rows; sorted by frame and id."""
     o = np.lexsort((frames, ids))
     F, I, B, C = frames[o], ids[o], xywh[o], conf[o]
     # stepped[f]: the frames up to f the tracker stepped on
@@ -1751,6 +1756,24 @@ def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: n
     nB = B[at] * (1 - w) + B[at + 1] * w
     F, I = np.r_[F, nF], np.r_[I, nI]
     B, C = np.r_[B, nB], np.r_[C, np.zeros(len(nF))]
+    # the frames after the detector's last (fewer than stride): each track there carried on
+    o = np.lexsort((F, I))
+    F, I, B, C = F[o], I[o], B[o], C[o]
+    end = first + (last - first) // stride * stride
+    ends = np.flatnonzero(F == end) if last > end else np.zeros(0, np.int64)
+    before = np.maximum(ends - 1, 0)
+    before = np.where((ends > 0) & (I[before] == I[ends]), before, ends)
+    # the centre on its line, the size by the same factor each frame (never below 0)
+    centre, size = B[:, :2] + B[:, 2:] / 2, B[:, 2:]
+    dt = np.maximum(F[ends] - F[before], 1)[:, None]
+    velocity = (centre[ends] - centre[before]) / dt
+    growth = np.log(size[ends] / size[before]) / dt
+    ahead = np.tile(np.arange(1, last - end + 1), len(ends))[:, None]  # 1.. each
+    at = np.repeat(ends, last - end) if len(ends) else ends
+    tc = centre[at] + np.repeat(velocity, last - end, axis=0) * ahead
+    ts = size[at] * np.exp(np.repeat(growth, last - end, axis=0) * ahead)
+    F, I = np.r_[F, F[at] + ahead[:, 0]], np.r_[I, I[at]]
+    B, C = np.r_[B, np.c_[tc - ts / 2, ts]], np.r_[C, np.zeros(len(at))]
     o = np.lexsort((I, F))
     return F[o], I[o], B[o], C[o]
 
