@@ -50,7 +50,8 @@ def test_a_configuration_reads_back_as_written(tmp_path):
     equal."""
     changed = TrackConfig.preset("bytetrack").with_values(
         tracker={"high": 0.55, "confirm_hits": 3, "camera_motion": False, "scores": "raw",
-                 "new_track": 0.9, "calibration_cap_sigma": math.inf, "calibration_window": 0},
+                 "new_track": 0.9, "calibration_cap_sigma": math.inf, "calibration_window": 0,
+                 "coast_rate": 0.4, "coast_window": 0.5},
         motion={"std_meas": (0.03, 0.04, 0.05, 0.06), "frame_rate": 25.0},
         offline={"enabled": True, "max_gap": 0.75})
     for cfg in (TrackConfig.preset("bytetrack"), TrackConfig.preset("sort"), changed):
@@ -88,6 +89,9 @@ def test_a_partial_file_keeps_the_presets_other_values(tmp_path):
     ("[tracker]\ncalibration_window = -1\n",
      r"\[tracker\] calibration_window must be an integer >= 0"),
     ("[tracker]\ncalibration_cap_sigma = 0\n", r"\[tracker\] calibration_cap_sigma must be > 0"),
+    ("[tracker]\ncoast_rate = 1.5\n", r"\[tracker\] coast_rate must be in \[0, 1\]; got 1.5"),
+    ("[tracker]\ncoast_window = 0\n",
+     r"\[tracker\] coast_window must be a finite number > 0 \(seconds\)"),
     ("[tracker]\ncamera_motion = 1\n", r"\[tracker\] camera_motion must be true or false"),
     ("[tracker]\nname = \"deepsort\"\n", r"\[tracker\] name must be one of \['bytetrack', "
                                          r"'sort'\]"),

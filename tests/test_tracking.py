@@ -106,40 +106,68 @@ def test_frame_gaps_predict_over_the_true_time():
     assert tr2.step(8, det(14)).ids.tolist() == []  # as if one frame: no match, new track
 
 
+def test_found_is_a_running_mean_of_updates_in_continuous_time():
+    """``TrackTable.found``: a track started at 0 s (1), updated at 0.1 s, missed at 0.2 s,
+    and updated at 0.4 s (the frame at 0.3 s passed over), with a window of 0.25 s. The oracle
+    is the running mean written out: each frame's value held over the time since the frame
+    before, weighed by ``exp(-age / window)``. A second track, started at 0.2 s, counts from
+    its start; ``first_time`` and ``last_time`` follow the updates; the window must be > 0."""
+    from vistrack.tracking.lifecycle import TrackTable
+
+    t = TrackTable(1, window=0.25)
+    t.add(np.zeros((1, 1)), np.ones((1, 1, 1)), 0.0, np.zeros(1, np.int64), np.ones(1),
+          confirmed=True)
+    t.advance(np.array([True]), 0.1, 2)
+    assert t.found.tolist() == [1.0]
+    t.advance(np.array([False]), 0.2, 2)
+    t.add(np.zeros((1, 1)), np.ones((1, 1, 1)), 0.2, np.zeros(1, np.int64), np.ones(1),
+          confirmed=False)
+    t.advance(np.array([True, True]), 0.4, 2)
+    a1, a2 = np.exp(-0.1 / 0.25), np.exp(-0.2 / 0.25)
+    want = [a2 * (a1 * 1.0 + (1 - a1) * 0.0) + (1 - a2) * 1.0, a2 * 1.0 + (1 - a2) * 1.0]
+    np.testing.assert_allclose(t.found, want, rtol=1e-12)
+    assert t.first_time.tolist() == [0.0, 0.2] and t.last_time.tolist() == [0.4, 0.4]
+    t.keep(np.array([False, True]))
+    assert t.found.tolist() == [1.0] and t.first_time.tolist() == [0.2]
+    for bad in (0, -1, np.inf, np.nan):
+        with pytest.raises(ValueError, match="window must be > 0 and finite"):
+            TrackTable(1, window=bad)
+
+
 def test_coasting_reports_a_well_followed_track_through_a_short_miss():
-    """Three people moving at constant velocity, all unseen in frames 16-19 of a 640 x 480
-    image. At 30 frames/s, A, followed 15 frames (0.5 s) in a row, is reported at its
-    prediction for 0.1 s, in frames 16-18 (on the truth: IoU > 0.9), and not in 19; B, followed
-    5 frames (0.17 s, under a third of a second), is not reported; C is reported in frame 16
-    and not in 17, where its prediction crosses the image's edge. At 10 frames/s the same
-    frames last three times longer: A and B are reported in frame 16 only."""
+    """Three people moving at constant velocity, all unseen in frames 36-39 of a 640 x 480
+    image. At 30 frames/s, A, followed 35 frames (1.13 s), is reported at its prediction for
+    0.1 s, in frames 36-38 (on the truth: IoU > 0.9), and not in 39; B, followed 15 frames
+    (0.47 s, under a second), is not reported; C is reported in frame 36 and not in 37, where
+    its prediction crosses the image's edge. At 10 frames/s the same frames last three times
+    longer: A, B (1.4 s now) and C are reported in frame 36 only."""
     def truth(f):
         return np.array([[100 + 4 * f, 200, 40, 100],    # A, seen from frame 1
-                         [300, 100 + 3 * f, 40, 100],    # B, seen from frame 11
-                         [400 + 12 * f, 300, 40, 100]],  # C, right edge 632 at 16, 644 at 17
+                         [300, 100 + 3 * f, 40, 100],    # B, seen from frame 21
+                         [160 + 12 * f, 300, 40, 100]],  # C, right edge 632 at 36, 644 at 37
                         float)
 
     def detections(f):
-        seen = [] if 16 <= f <= 19 else [0, 2] if f <= 10 else [0, 1, 2]
+        seen = [] if 36 <= f <= 39 else [0, 2] if f <= 20 else [0, 1, 2]
         return Detections.from_xywh(truth(f)[seen], np.full(len(seen), 0.9))
 
-    def run_ids(tracker, frames=22):
+    def run_ids(tracker, frames=42):
         out = {f: tracker.step(f, detections(f)) for f in range(1, frames + 1)}
         return out, {f: o.ids.tolist() for f, o in out.items()}
 
     out, ids = run_ids(BoxTracker("bytetrack", image_size=(640, 480)))
-    A, C = ids[10]
-    B, = set(ids[15]) - {A, C}
-    assert ids[16] == [A, C] and ids[17] == ids[18] == [A] and ids[19] == []
-    for f in (16, 17, 18):
+    A, C = ids[20]
+    B, = set(ids[35]) - {A, C}
+    assert ids[36] == [A, C] and ids[37] == ids[38] == [A] and ids[39] == []
+    for f in (36, 37, 38):
         truth_box = Detections.from_xywh(truth(f)[:1], [1.0]).boxes
         assert iou_pairs(out[f].boxes[:1], truth_box, 0.9)[2].size == 1
-    assert sorted(ids[20]) == sorted(ids[15])  # all found again under their identities
-    # without the image's size C is reported in frame 17 too; with coast_time=0, none is
-    assert run_ids(BoxTracker("bytetrack"), 17)[1][17] == [A, C]
-    assert run_ids(BoxTracker("bytetrack", coast_time=0.0), 17)[1][16] == []
+    assert sorted(ids[40]) == sorted(ids[35])  # all found again under their identities
+    # without the image's size C is reported in frame 37 too; with coast_time=0, none is
+    assert run_ids(BoxTracker("bytetrack"), 37)[1][37] == [A, C]
+    assert run_ids(BoxTracker("bytetrack", coast_time=0.0), 37)[1][36] == []
     slow = run_ids(BoxTracker("bytetrack", frame_rate=10.0, image_size=(640, 480)))[1]
-    assert sorted(slow[16]) == sorted([A, B, C]) and slow[17] == []
+    assert sorted(slow[36]) == sorted([A, B, C]) and slow[37] == []
     with pytest.raises(ValueError, match="image_size must be"):
         BoxTracker(image_size=(640, 0))
     # NaN was taken, and then no track was ever reported coasting (every test against it
@@ -152,6 +180,34 @@ def test_coasting_reports_a_well_followed_track_through_a_short_miss():
     with pytest.raises(TypeError, match="motion must be a vistrack.models.BoxMotion, or have "
                                         "its at_rate, initial, Q_diag, R_diag; got str 'x'"):
         BoxTracker(motion="x")
+
+
+def test_coasting_follows_how_often_a_track_is_found_not_one_run():
+    """A half-hidden person is missed now and then, not in one run. At 30 frames/s, D is
+    detected in two frames of every three and E in one of every three (after two in a row,
+    which start their tracks): D's track is found in 0.63 of its recent frames where it is
+    missed (``found``, over a third of a second: ``a (1 + a) / (1 + a + a²)`` for
+    ``a = exp(-0.1)``), E's in 0.33 (``a / (1 + a + a²)``), against ``coast_rate`` 0.5. So D
+    is reported at its prediction in every frame it is missed once it has been followed for a
+    second (``coast_after``) and in none before, E in none; both keep their identities.
+    (Reported only after an unbroken run of a third of a second before, D never was.)"""
+    def truth(f):
+        return np.array([[100 + 2 * f, 100, 40, 100], [400, 200 + f, 40, 100]], float)
+
+    def seen(f):
+        return [k for k, every in enumerate((2, 1)) if f <= 2 or (f - 3) % 3 < every]
+
+    tr = BoxTracker("bytetrack", image_size=(640, 480))
+    ids = {f: tr.step(f, Detections.from_xywh(truth(f)[seen(f)], [0.9] * len(seen(f)))).ids
+           for f in range(1, 61)}
+    D, E = ids[1].tolist()
+    a = np.exp(-0.1)
+    assert a * (1 + a) / (1 + a + a * a) > 0.5 > a / (1 + a + a * a)
+    for f in range(3, 61):
+        d_seen, e_seen = 0 in seen(f), 1 in seen(f)
+        # D's last update before a missed frame f is f - 1: followed (f - 2) / 30 s
+        assert (D in ids[f]) == (d_seen or (f - 2) / 30 >= 1 - 1e-9), f
+        assert (E in ids[f]) == e_seen, f
 
 
 def test_classes_never_share_an_identity_and_reset():

@@ -69,9 +69,12 @@ One step, as on the slides (predict, associate, correct, manage):
 4. **manage**: :mod:`vistrack.tracking.lifecycle`; unmatched confident detections with
    confidence ≥ ``new_track`` start tentative tracks;
 5. **report** the confirmed tracks updated in this frame, and, with ``coast_time``, a track
-   lost for at most that long after being updated in a row for ``coast_after`` seconds, at
-   its prediction, while that lies inside the image: a detector misses a person it has found
-   for a while for a moment (occlusion, blur) far more often than the person vanishes.
+   lost for at most that long, at its prediction, while that lies inside the image, where it
+   was followed for ``coast_after`` seconds or more and found in at least ``coast_rate`` of
+   its recent frames (:attr:`~vistrack.tracking.lifecycle.TrackTable.found`, over
+   ``coast_window`` seconds): a detector misses a person it has found for a while for a
+   moment (occlusion, blur) far more often than the person vanishes, and a half-hidden
+   person's misses come now and then, not in one run.
 
 ``"sort"`` is the one-stage tracker with a single threshold (Bewley et al., 2016),
 ``"bytetrack"`` the two-stage one; :data:`TRACKERS` maps names to configurations.
@@ -153,9 +156,12 @@ class BoxTrackerConfig:
     camera_min_iou, camera_min_matches, camera_sig : float, int, float
         The IoU of the pairs that estimate the shift, how many pairs it needs, and how many
         standard errors from zero it must be.
-    coast_time, coast_after : float
-        Report a lost track's prediction for up to ``coast_time`` seconds, if it had been
-        updated in a row for at least ``coast_after`` seconds (0: never).
+    coast_time, coast_after, coast_rate, coast_window : float
+        Report a lost track's prediction for up to ``coast_time`` seconds (0: never), if it
+        had been followed for at least ``coast_after`` seconds (from its first update to its
+        last) and found in at least ``coast_rate`` (in [0, 1]) of its recent frames, weighed
+        over ``coast_window`` seconds (> 0;
+        :attr:`~vistrack.tracking.lifecycle.TrackTable.found`).
     calibration_iou, calibration_top, calibration_prior : float
         With calibrated scores: the IoU at which a detection continues one of the previous
         frame, the fraction of the outcomes, by score, whose rate is full confidence, and
@@ -201,7 +207,9 @@ class BoxTrackerConfig:
     camera_min_matches: int = 3
     camera_sig: float = 2.0
     coast_time: float = 0.1
-    coast_after: float = 1 / 3
+    coast_after: float = 1.0
+    coast_rate: float = 0.5
+    coast_window: float = 1 / 3
     calibration_iou: float = 0.3
     calibration_top: float = 0.05
     calibration_prior: float = 0.0
@@ -241,7 +249,7 @@ class BoxTrackerConfig:
             raise bad("assigner", f"one of {sorted(ASSIGNERS)}")
         unit = ("high", "low", "new_track") if self.scores == "calibrated" else ()
         for name in unit + ("min_iou", "min_iou_low", "min_iou_tentative", "camera_min_iou",
-                            "nms_iou"):
+                            "nms_iou", "coast_rate"):
             if not 0 <= getattr(self, name) <= 1:
                 raise bad(name, "in [0, 1]" + (" (a calibrated confidence)" if name in unit
                                                else ""))
@@ -263,6 +271,8 @@ class BoxTrackerConfig:
             raise bad("calibration_window", "an integer >= 0 (0: every outcome)")
         if not self.calibration_cap_sigma > 0:
             raise bad("calibration_cap_sigma", "> 0 (inf: no bound)")
+        if not 0 < self.coast_window < np.inf:
+            raise bad("coast_window", "a finite number > 0 (seconds)")
 
     def calibration_options(self, frame_rate: float) -> dict[str, Any]:
         """The score calibration's settings at ``frame_rate`` frames a second, as
@@ -624,7 +634,7 @@ class BoxTracker:
             raise ValueError(f"image_size must be (width, height), finite and > 0; got "
                              f"{image_size}")
         self.image_size = None if image_size is None else tuple(float(v) for v in image_size)
-        self.tracks = TrackTable(8, cov_shape=(4, 3))
+        self.tracks = TrackTable(8, cov_shape=(4, 3), window=self.config.coast_window)
         self.record = bool(record)
         self.compiled = bool(compiled) and self.config.assigner == "gnn"
         self._association = _association(self.config)
@@ -1221,7 +1231,8 @@ class BoxTracker:
             self._confirmed.update(t.ids[t.state == CONFIRMED].tolist())
         report = (t.state == CONFIRMED) & (t.last_time == time)
         if cfg.coast_time > 0:
-            coast = ((t.state == LOST) & (t.streak >= cfg.coast_after * self.frame_rate - 1e-9)
+            coast = ((t.state == LOST) & (t.found >= cfg.coast_rate)
+                     & (t.last_time - t.first_time >= cfg.coast_after - 1e-9)
                      & (time - t.last_time <= cfg.coast_time + 0.5 / self.frame_rate))
             if self.image_size is not None and coast.any():
                 b = _to_xyxy(t.mean[:, :4])

@@ -27,8 +27,9 @@ TENTATIVE, CONFIRMED, LOST = 0, 1, 2
 class TrackTable:
     """Tracks as columns: ``mean (K, n)``, ``cov (K, *cov_shape)`` (default ``(n, n)``), ``ids``,
     ``state``, ``hits`` (updates in a row), ``streak`` (the length of the last run of updates
-    in a row, kept while the track is lost), ``last_time`` (of the last update), ``classes``
-    and ``scores``.
+    in a row, kept while the track is lost), ``first_time`` and ``last_time`` (of the first
+    and the last update), ``found`` (the share of its recent frames the track was updated
+    in), ``classes`` and ``scores``.
 
     The trackers correct the rows of ``mean`` and ``cov`` themselves; the table adds tracks
     (:meth:`add`), runs the lifecycle after each frame (:meth:`manage`, see the module) and
@@ -41,6 +42,8 @@ class TrackTable:
     cov_shape : tuple of int, optional
         Shape of one track's covariance; default ``(n, n)`` (the box tracker keeps ``(4, 3)``,
         per-axis covariances, :mod:`vistrack.filters.axes`).
+    window : float
+        Seconds: the time constant of ``found``'s weights (> 0).
 
     Attributes
     ----------
@@ -56,8 +59,12 @@ class TrackTable:
         Updates in a row, up to the last frame (0 after a miss).
     streak : (K,) int64 ndarray
         The length of the last run of updates in a row, kept while the track is lost.
-    last_time : (K,) float ndarray
-        Time of the last update (seconds).
+    first_time, last_time : (K,) float ndarray
+        Time of the first and of the last update (seconds).
+    found : (K,) float ndarray
+        The share of its recent frames the track was updated in: the mean of its updates (1)
+        and misses (0), each frame weighing the time since the frame before it, decayed by
+        ``exp(-age / window)``, as a running mean in continuous time (1 when it starts).
     classes : (K,) int64 ndarray
         Class of each track.
     scores : (K,) float ndarray
@@ -79,8 +86,11 @@ class TrackTable:
     ([1], True, [2])
     """
 
-    def __init__(self, n: int, cov_shape: tuple[int, ...] | None = None):
-        self.n = n
+    def __init__(self, n: int, cov_shape: tuple[int, ...] | None = None, *,
+                 window: float = 1 / 3):
+        if not 0 < window < np.inf:
+            raise ValueError(f"window must be > 0 and finite (seconds); got {window!r}")
+        self.n, self.window = n, float(window)
         self.cov_shape = (n, n) if cov_shape is None else tuple(cov_shape)
         self.reset()
 
@@ -102,17 +112,20 @@ class TrackTable:
         self.state = np.zeros(0, np.int8)
         self.hits = np.zeros(0, np.int64)
         self.streak = np.zeros(0, np.int64)
-        self.last_time = np.zeros(0)
+        self.first_time, self.last_time = np.zeros(0), np.zeros(0)
+        self.found = np.zeros(0)
         self.classes = np.zeros(0, np.int64)
         self.scores = np.zeros(0)
         self.next_id = 1
+        self._time: float | None = None  # of the last advance
 
     def __len__(self) -> int:
         return int(self.ids.shape[0])
 
     def add(self, mean: np.ndarray, cov: np.ndarray, time: float, classes: np.ndarray,
             scores: np.ndarray, confirmed: bool) -> None:
-        """Add new tracks, with the next identities, one hit and ``time`` as their last update.
+        """Add new tracks, with the next identities, one hit, ``found`` 1, and ``time`` as
+        their first and last update.
 
         Parameters
         ----------
@@ -158,7 +171,9 @@ class TrackTable:
                                                          np.int8)])
         self.hits = np.concatenate([self.hits, np.ones(k, np.int64)])
         self.streak = np.concatenate([self.streak, np.ones(k, np.int64)])
+        self.first_time = np.concatenate([self.first_time, np.full(k, float(time))])
         self.last_time = np.concatenate([self.last_time, np.full(k, float(time))])
+        self.found = np.concatenate([self.found, np.ones(k)])
         self.classes = np.concatenate([self.classes, classes])
         self.scores = np.concatenate([self.scores, scores])
 
@@ -179,8 +194,8 @@ class TrackTable:
         >>> t.ids.tolist(), t.mean.ravel().tolist()
         ([1, 3], [0.0, 2.0])
         """
-        for name in ("mean", "cov", "ids", "state", "hits", "streak", "last_time", "classes",
-                     "scores"):
+        for name in ("mean", "cov", "ids", "state", "hits", "streak", "first_time",
+                     "last_time", "found", "classes", "scores"):
             setattr(self, name, getattr(self, name)[mask])
 
     def _updated(self, updated: np.ndarray) -> np.ndarray:
@@ -197,8 +212,9 @@ class TrackTable:
         :meth:`manage`).
 
         The updated tracks get a hit (the others lose their run of hits) and ``time`` as
-        their last update; a tentative track with ``confirm_hits`` hits in a row, or a lost
-        track updated again, is confirmed; a confirmed track not updated is lost.
+        their last update, and ``found`` takes the frame in; a tentative track with
+        ``confirm_hits`` hits in a row, or a lost track updated again, is confirmed; a
+        confirmed track not updated is lost.
 
         Parameters
         ----------
@@ -211,6 +227,12 @@ class TrackTable:
             Updates in a row that confirm a tentative track (the one it started with counts).
         """
         updated = self._updated(updated)
+        # found: this frame weighs the time since the last (a frame passed over, none: its
+        # time goes to the next one stepped on)
+        dt = 0.0 if self._time is None else max(float(time) - self._time, 0.0)
+        keep = np.exp(-dt / self.window)
+        self.found = keep * self.found + (1 - keep) * updated
+        self._time = float(time)
         self.hits = np.where(updated, self.hits + 1, 0)
         self.streak = np.where(updated, self.hits, self.streak)
         self.last_time = np.where(updated, float(time), self.last_time)
