@@ -1505,6 +1505,24 @@ def test_offline_carries_the_tracks_on_after_a_strided_detectors_last_frame(tmp_
         assert (got.conf[got.frames == frame] == 0).all()
 
 
+def test_a_box_of_no_width_is_carried_on_without_nan():
+    """After the detector's last frame a track's size grows by the factor of its last frame;
+    a width of 0 (a detector's box of no width) gave log(0 / 0), and NaN would have been
+    written. It is held at 0, the height still grows by its factor (12 / 11.33 a frame), and
+    a track with rows on every detector frame is carried on along its line."""
+    from vistrack.pipeline import _fill_between
+
+    F, I = np.array([1, 4, 1, 4]), np.array([1, 1, 2, 2])
+    B = np.array([[0.0, 0, 0, 10], [3, 0, 0, 12], [5, 5, 4, 8], [6, 5, 4, 8]])
+    f, i, b, c = _fill_between(F, I, B, np.ones(4), 1, 3, np.zeros(0, np.int64), 6)
+    assert np.isfinite(b).all() and f.tolist() == [1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6]
+    one = b[i == 1]
+    assert (one[:, 2] == 0).all()
+    np.testing.assert_allclose(one[4:, 3], 12 * (12 / (34 / 3)) ** np.arange(1, 3))
+    np.testing.assert_allclose(b[i == 2][4:, 0], [19 / 3, 20 / 3])  # x: 1/3 a frame
+    assert (c[f > 4] == 0).all()
+
+
 def test_progress_that_is_no_stream_is_named(tmp_path):
     """`progress=True` failed with "'bool' object has no attribute 'write'" once the run was
     under way; it is named before anything is written."""

@@ -1767,7 +1767,9 @@ def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: n
     centre, size = B[:, :2] + B[:, 2:] / 2, B[:, 2:]
     dt = np.maximum(F[ends] - F[before], 1)[:, None]
     velocity = (centre[ends] - centre[before]) / dt
-    growth = np.log(size[ends] / size[before]) / dt
+    with np.errstate(divide="ignore", invalid="ignore"):  # a size of 0 (or less): held
+        growth = np.log(size[ends] / size[before]) / dt
+    growth[~np.isfinite(growth)] = 0.0
     ahead = np.tile(np.arange(1, last - end + 1), len(ends))[:, None]  # 1.. each
     at = np.repeat(ends, last - end) if len(ends) else ends
     tc = centre[at] + np.repeat(velocity, last - end, axis=0) * ahead
