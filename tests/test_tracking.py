@@ -132,6 +132,13 @@ def test_found_is_a_running_mean_of_updates_in_continuous_time():
     for bad in (0, -1, np.inf, np.nan):
         with pytest.raises(ValueError, match="window must be > 0 and finite"):
             TrackTable(1, window=bad)
+    # a track added before any frame was advanced: its first frame's time counts from its
+    # start (it was ignored, and a miss left found at 1)
+    t = TrackTable(1, window=1 / 3)
+    t.add(np.zeros((1, 1)), np.ones((1, 1, 1)), 0.0, np.zeros(1, np.int64), np.ones(1),
+          confirmed=True)
+    t.advance(np.array([False]), 0.1, 2)
+    np.testing.assert_allclose(t.found, [np.exp(-0.3)], rtol=1e-12)
 
 
 def test_coasting_reports_a_well_followed_track_through_a_short_miss():

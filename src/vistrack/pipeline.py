@@ -1733,9 +1733,10 @@ def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: n
     """Rows for the frames between two rows of a track with no frame the tracker stepped
     on between them (the detector's frames, every ``stride``-th from ``first``, but those
     in ``skip``), on the straight line between the two; and for the frames after the last
-    one the tracker stepped on, up to ``last``, a row for each track it reported there, as
-    the online mode predicts them: its centre carried on along the line from its row before,
-    its size by the same factor each frame (a track of one row: its box as it is). All with
+    one the tracker stepped on, up to ``last``, a row for each track it reported there: its
+    centre carried on along the line from its row before, as the online mode predicts it,
+    its size by the same factor each frame (a size of 0 held; a track of one row: its box as
+    it is). All with
     score 0, as the offline mode's filled rows; sorted by frame and id."""
     o = np.lexsort((frames, ids))
     F, I, B, C = frames[o], ids[o], xywh[o], conf[o]
@@ -1763,7 +1764,7 @@ def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: n
     ends = np.flatnonzero(F == end) if last > end else np.zeros(0, np.int64)
     before = np.maximum(ends - 1, 0)
     before = np.where((ends > 0) & (I[before] == I[ends]), before, ends)
-    # the centre on its line, the size by the same factor each frame (never below 0)
+    # the centre on its line, the size by the same factor each frame (so never below 0)
     centre, size = B[:, :2] + B[:, 2:] / 2, B[:, 2:]
     dt = np.maximum(F[ends] - F[before], 1)[:, None]
     velocity = (centre[ends] - centre[before]) / dt

@@ -174,6 +174,8 @@ class TrackTable:
         self.first_time = np.concatenate([self.first_time, np.full(k, float(time))])
         self.last_time = np.concatenate([self.last_time, np.full(k, float(time))])
         self.found = np.concatenate([self.found, np.ones(k)])
+        if self._time is None:  # the first frame: found's time counts from it
+            self._time = float(time)
         self.classes = np.concatenate([self.classes, classes])
         self.scores = np.concatenate([self.scores, scores])
 
