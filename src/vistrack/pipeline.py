@@ -1736,8 +1736,7 @@ def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: n
     one the tracker stepped on, up to ``last``, a row for each track it reported there: its
     centre carried on along the line from its row before, as the online mode predicts it,
     its size by the same factor each frame (a size of 0 held; a track of one row: its box as
-    it is). All with
-    score 0, as the offline mode's filled rows; sorted by frame and id."""
+    it is). All with score 0, as the offline mode's filled rows; sorted by frame and id."""
     o = np.lexsort((frames, ids))
     F, I, B, C = frames[o], ids[o], xywh[o], conf[o]
     # stepped[f]: the frames up to f the tracker stepped on

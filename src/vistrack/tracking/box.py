@@ -105,7 +105,7 @@ from ..models.box import BoxMotion
 from ..types import Detections, Frame, Tracks
 from .base import frame_index
 from .calibration import ScoreCalibration, ScoreCalibrator
-from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable
+from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, time_slack
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -1232,7 +1232,7 @@ class BoxTracker:
         report = (t.state == CONFIRMED) & (t.last_time == time)
         if cfg.coast_time > 0:
             coast = ((t.state == LOST) & (t.found >= cfg.coast_rate)
-                     & (t.last_time - t.first_time >= cfg.coast_after - 1e-9)
+                     & (t.last_time - t.first_time >= cfg.coast_after - time_slack(time))
                      & (time - t.last_time <= cfg.coast_time + 0.5 / self.frame_rate))
             if self.image_size is not None and coast.any():
                 b = _to_xyxy(t.mean[:, :4])

@@ -24,6 +24,14 @@ __all__ = ["TENTATIVE", "CONFIRMED", "LOST", "TrackTable", "Tracks"]
 TENTATIVE, CONFIRMED, LOST = 0, 1, 2
 
 
+def time_slack(time: float) -> float:
+    """A few units of the rounding of times near ``time`` (seconds): the margin a duration
+    measured between two frames' times is compared with (:meth:`TrackTable.stale`, coasting's
+    ``coast_after``), so that a duration of exactly a setting counts the same wherever in the
+    sequence it falls."""
+    return 16 * float(np.spacing(max(1.0, abs(time))))
+
+
 class TrackTable:
     """Tracks as columns: ``mean (K, n)``, ``cov (K, *cov_shape)`` (default ``(n, n)``), ``ids``,
     ``state``, ``hits`` (updates in a row), ``streak`` (the length of the last run of updates
@@ -294,8 +302,7 @@ class TrackTable:
         # in the sequence its gap fell. The slack is a few units of the times' rounding (it
         # was 1e-9 of the time: frames numbered by milliseconds since 1970, 1.7e9 s, kept
         # lost tracks 1.7 s longer)
-        slack = 16 * float(np.spacing(max(1.0, abs(time))))
-        return np.asarray(time - self.last_time > max_lost + slack)
+        return np.asarray(time - self.last_time > max_lost + time_slack(time))
 
     def manage(self, updated: np.ndarray, time: float, confirm_hits: int,
                max_lost: float) -> np.ndarray:
