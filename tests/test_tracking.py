@@ -139,6 +139,20 @@ def test_found_is_a_running_mean_of_updates_in_continuous_time():
           confirmed=True)
     t.advance(np.array([False]), 0.1, 2)
     np.testing.assert_allclose(t.found, [np.exp(-0.3)], rtol=1e-12)
+    # tracks added at different times before any advance, or long after the last one: each
+    # first step weighs the time since its own start (the whole gap since the last advance
+    # was weighed: exp(-3.3) where exp(-0.3) is right)
+    t = TrackTable(1, window=1 / 3)
+    for start in (0.0, 0.05):
+        t.add(np.zeros((1, 1)), np.ones((1, 1, 1)), start, np.zeros(1, np.int64), np.ones(1),
+              confirmed=True)
+    t.advance(np.array([False, False]), 0.1, 2)
+    np.testing.assert_allclose(t.found, [np.exp(-0.3), np.exp(-0.15)], rtol=1e-12)
+    t.keep(np.array([False, False]))
+    t.add(np.zeros((1, 1)), np.ones((1, 1, 1)), 1.0, np.zeros(1, np.int64), np.ones(1),
+          confirmed=True)
+    t.advance(np.array([False]), 1.1, 2)
+    np.testing.assert_allclose(t.found, [np.exp(-0.3)], rtol=1e-12)
 
 
 def test_coasting_reports_a_well_followed_track_through_a_short_miss():

@@ -71,7 +71,8 @@ class TrackTable:
         Time of the first and of the last update (seconds).
     found : (K,) float ndarray
         The share of its recent frames the track was updated in: the mean of its updates (1)
-        and misses (0), each frame weighing the time since the frame before it, decayed by
+        and misses (0), each frame weighing the time since the frame before it (or since
+        the track's start, if it started later), decayed by
         ``exp(-age / window)``, as a running mean in continuous time (1 when it starts).
     classes : (K,) int64 ndarray
         Class of each track.
@@ -182,8 +183,6 @@ class TrackTable:
         self.first_time = np.concatenate([self.first_time, np.full(k, float(time))])
         self.last_time = np.concatenate([self.last_time, np.full(k, float(time))])
         self.found = np.concatenate([self.found, np.ones(k)])
-        if self._time is None:  # the first frame: found's time counts from it
-            self._time = float(time)
         self.classes = np.concatenate([self.classes, classes])
         self.scores = np.concatenate([self.scores, scores])
 
@@ -238,9 +237,11 @@ class TrackTable:
         """
         updated = self._updated(updated)
         # found: this frame weighs the time since the last (a frame passed over, none: its
-        # time goes to the next one stepped on)
-        dt = 0.0 if self._time is None else max(float(time) - self._time, 0.0)
-        keep = np.exp(-dt / self.window)
+        # time goes to the next one stepped on), or since the track's start if it started
+        # later (added after the last advance, or before any)
+        start = self.first_time if self._time is None else np.maximum(self.first_time,
+                                                                      self._time)
+        keep = np.exp(-np.maximum(float(time) - start, 0.0) / self.window)
         self.found = keep * self.found + (1 - keep) * updated
         self._time = float(time)
         self.hits = np.where(updated, self.hits + 1, 0)
