@@ -149,6 +149,42 @@ def test_a_frame_where_nothing_was_found_breaks_the_links_at_the_start_as_anywhe
     np.testing.assert_array_equal(o[~broken], t[1:39][~broken])
 
 
+def test_a_detector_that_refills_one_buffer_every_frame_is_calibrated_as_fresh_arrays():
+    """A detector that writes each frame's boxes and scores into the same arrays (a real-time
+    detector's buffers): the calibrator keeps the previous frame past ``observe``, so it must
+    keep its own copy. The oracle is the same frames in fresh arrays, and the truth of the
+    scene (clutter at random places seldom persists). Kept as views, every
+    box continued itself and the clutter persisted (confidence 1 for its score, through the
+    tracker 0.54)."""
+    frames, truth = frames_with_clutter(np.random.default_rng(5), T=30)
+    fresh, reused = ScoreCalibrator(window=None), ScoreCalibrator(window=None)
+    buf_b, buf_s = np.empty((11, 4)), np.empty(11)
+    for d in frames:
+        fresh.observe(d)
+        buf_b[:], buf_s[:] = d.boxes, d.scores
+        reused.observe(Detections(boxes=buf_b, scores=buf_s))
+    for a, b in zip(fresh.outcomes(), reused.outcomes()):
+        np.testing.assert_array_equal(a, b)
+    # frame to frame alone: as the whole file's persistence gives, the clutter almost never
+    cal = ScoreCalibrator(window=None, chain_span=0.0)
+    for d in frames:
+        buf_b[:], buf_s[:] = d.boxes, d.scores
+        cal.observe(Detections(boxes=buf_b, scores=buf_s))
+    for a, b in zip(cal.outcomes(), persistence(frames)):
+        np.testing.assert_array_equal(a, b)
+    o, t = cal.outcomes()[1].astype(bool), np.concatenate(truth[1:-1])
+    assert o[t].all() and o[~t].mean() < 0.05
+    np.testing.assert_array_equal(reused([0.1, 0.5, 0.9]), fresh([0.1, 0.5, 0.9]))
+    # and through the tracker, whose calibrator sees the caller's arrays
+    trackers = BoxTracker("bytetrack"), BoxTracker("bytetrack")
+    for f, d in enumerate(frames, 1):
+        trackers[0].step(f, d)
+        buf_b[:], buf_s[:] = d.boxes, d.scores
+        trackers[1].step(f, Detections(boxes=buf_b, scores=buf_s))
+    np.testing.assert_array_equal(trackers[1].confidence([0.1, 0.5, 0.9]),
+                                  trackers[0].confidence([0.1, 0.5, 0.9]))
+
+
 @pytest.mark.parametrize("window", [1, 7, 50, 333])
 def test_a_window_holds_the_last_outcomes_of_all(window):
     """With ``window``, after every frame the calibrator holds exactly the last ``window``

@@ -50,9 +50,10 @@ leaves it, and every threshold on it, exactly unchanged.
 
 :class:`ScoreCalibration` is a fitted map; :meth:`ScoreCalibration.from_frames` fits one to a
 whole sequence (the offline mode). :class:`ScoreCalibrator` learns it online from the frames
-seen so far. Until its first outcome (the second frame's, known once the third is seen) the
-confidence is the rank of each score among those seen, so the first frames trust their
-best-scored detections most; with ``prior`` > 0 the rank keeps a weight after that
+seen so far. Until its first outcome (the second frame's, known once the third is seen; or
+the second frame's chains, where ``chain_span`` is one frame or less) the confidence is the
+rank of each score among those seen, so the first frames trust their best-scored detections
+most; with ``prior`` > 0 the rank keeps a weight after that
 (``c = w c_data + (1 - w) rank``, ``w = n / (n + prior)`` for ``n`` outcomes; 0 by default,
 which tracked best on the four sets of docs/mot.md).
 """
@@ -943,9 +944,12 @@ class ScoreCalibrator:
             return
         if detections.boxes is None:
             raise TypeError("detections must have boxes")
-        boxes = np.ascontiguousarray(detections.boxes, dtype=np.float64)
-        cls = np.ascontiguousarray(detections.classes)
-        s = _scores(detections.scores)  # type: ignore[arg-type]  # set by __post_init__
+        # copies: the frame is kept past this call (the previous frame, the first frames'
+        # scores), and a detector that refills one buffer every frame would otherwise change
+        # it under us (each box then continued itself, and clutter persisted)
+        boxes = np.array(detections.boxes, dtype=np.float64, order="C")
+        cls = np.array(detections.classes, order="C")
+        s = _scores(detections.scores).copy()  # type: ignore[arg-type]  # set by __post_init__
         # the previous frame: its boxes, classes, scores, which of them continued one of the
         # frame before it, and whether it was the first (none, at the first frame: no links)
         if self._prev is None:

@@ -20,8 +20,9 @@ camera, where the tracker compensated its motion). Then
   backwards from the smoothed first state, through the detections no track took: online, a
   track starts only at a detection confident enough to start one (``new_track``), and the
   same person is often detected less confidently in the frames before;
-- a track that ends is joined to one that starts up to ``link_gap`` frames later when each
-  one's box, carried across the gap by its velocity, overlaps the other's (online, a track
+- a track that ends is joined to one that starts up to ``link_gap`` frames later when their
+  boxes, each carried across the gap by its velocity, overlap the other's on average (the
+  mean of the two IoUs at least ``link_iou``; online, a track
   lost longer than ``max_lost`` is deleted and the person comes back under a new identity);
   the gap between them is filled by a smoother bridging it, from the first track's last
   state to the second one's first box.
