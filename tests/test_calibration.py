@@ -185,6 +185,29 @@ def test_a_detector_that_refills_one_buffer_every_frame_is_calibrated_as_fresh_a
                                   trackers[0].confidence([0.1, 0.5, 0.9]))
 
 
+def test_sequences_observed_one_after_another_are_linked_as_each_alone():
+    """``observe(None)`` ends a sequence: a calibrator that goes on to a second one resolves
+    every detection as two calibrators each given one sequence would (the oracle: the
+    whole-file outcomes of each, concatenated). The second sequence continues the first's
+    scene, whose chains (a second long, 20 frames seen) were all still open at the end: they
+    get no outcome, and the second's detections join none of them (they had: the first
+    sequence's open detections were resolved by the second's, and its chains went on)."""
+    frames, _ = frames_with_clutter(np.random.default_rng(7), T=40)
+    a, b = frames[:20], frames[20:]
+    cal = ScoreCalibrator(window=None)
+    for d in [*a, None, *b, None]:
+        cal.observe(d)
+    alone = []
+    for seq in (a, b):
+        one = ScoreCalibrator(window=None)
+        for d in [*seq, None]:
+            one.observe(d)
+        alone.append(one.outcomes())
+    want = [np.concatenate(x) for x in zip(*alone)]
+    for got, w in zip(cal.outcomes(), want):
+        np.testing.assert_array_equal(got, w)
+
+
 @pytest.mark.parametrize("window", [1, 7, 50, 333])
 def test_a_window_holds_the_last_outcomes_of_all(window):
     """With ``window``, after every frame the calibrator holds exactly the last ``window``

@@ -870,6 +870,10 @@ class ScoreCalibrator:
         # chain)
         self._t = 0
         self._shift = np.zeros(2)
+        self._end_chains()
+
+    def _end_chains(self) -> None:
+        # no chain any more: nothing for the next detections to join (see reset)
         self._head_box, self._head_cls = np.zeros((0, 4)), np.zeros(0, np.int64)
         self._head_t, self._head_shift = np.zeros(0, np.int64), np.zeros((0, 2))
         self._head_chain = np.zeros(0, np.int64)
@@ -920,7 +924,8 @@ class ScoreCalibrator:
             The frame's detections, with boxes (none: a frame where nothing was found, whose
             next frame's detections then continue nothing); None after the last frame (its
             detections then get no frame-to-frame outcome, having no next frame, and chains
-            still open none).
+            still open none; the detections of frames observed after it join none of this
+            sequence's chains, as in a sequence of their own).
 
         Raises
         ------
@@ -939,8 +944,10 @@ class ScoreCalibrator:
         """
         if detections is None:
             # the last frame's detections get no frame-to-frame outcome (no next frame), and
-            # chains still open none
+            # chains still open none: a sequence observed after this starts on its own, its
+            # detections continuing no chain of this one
             self._prev = None
+            self._end_chains()
             return
         if detections.boxes is None:
             raise TypeError("detections must have boxes")
