@@ -590,6 +590,16 @@ def test_offline_mode_drops_tracks_of_low_score_detections():
     kept = smooth(tr, min_score=0.85)
     assert np.unique(kept.ids).tolist() == [1] and len(kept) == 20
     assert len(smooth(tr, min_score=0.99)) == 0
+    # a detector of raw logits, below 0 throughout: kept without min_score (the default
+    # was 0, which dropped every track of negative mean score, and then warned that nothing
+    # was written), dropped by min_score=0 as asked
+    tr = BoxTracker("bytetrack", record=True, scores="raw", fuse_score=False, high=-2.0,
+                    new_track=-1.5, low=-5.0)
+    for f in range(1, 21):
+        tr.step(f, Detections.from_xywh([[100 + 3 * f, 50, 30, 60]], [-1.0]))
+    assert np.unique(smooth(tr).ids).tolist() == [1] and len(smooth(tr)) == 20
+    with pytest.warns(UserWarning, match="min_score 0 .* drops every one of the 1 confirmed"):
+        assert len(smooth(tr, min_score=0.0)) == 0
 
 
 @pytest.mark.parametrize("option, value", [("max_gap", 0.5), ("max_gap", -1),

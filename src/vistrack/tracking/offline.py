@@ -134,7 +134,7 @@ class _Track:
     last: tuple  # the same at the last update
 
 
-def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float = 0.0, *,
+def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float | None = None, *,
            extend_iou: float | None = 0.5, link_gap: int | None = None, link_iou: float = 0.3,
            link_window: int | None = None) -> SmoothedTracks:
     """Smooth the tracks a ``BoxTracker(record=True)`` has followed (see the module).
@@ -145,9 +145,10 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float = 0
         A tracker created with ``record=True`` that has run over a sequence.
     max_gap : int, optional
         The longest gap (in frames without an update) that is filled.
-    min_score : float
+    min_score : float, optional
         The lowest mean score of a track's detections that is kept (the scores as the
-        tracker's thresholds see them, :meth:`BoxTracker.confidence`).
+        tracker's thresholds see them, :meth:`BoxTracker.confidence`); None keeps every
+        track, whatever its scores (a raw score may be negative).
     extend_iou : float or None
         Follow each track back from its first update through the detections no track took
         (any score down to the tracker's ``low``), while one overlaps its backward prediction
@@ -175,7 +176,8 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float = 0
     ValueError
         If the tracker was not created with ``record=True``, ``max_gap``, ``link_gap`` or
         ``link_window`` is not a whole number of frames >= 0 (>= 1 for ``link_window``),
-        ``link_iou`` or ``extend_iou`` is not in [0, 1], or ``min_score`` is not finite.
+        ``link_iou`` or ``extend_iou`` is not in [0, 1], or ``min_score`` is given and not
+        finite.
 
     Notes
     -----
@@ -219,7 +221,7 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float = 0
     for name, iou in (("link_iou", link_iou), ("extend_iou", extend_iou)):
         if iou is not None and not 0.0 <= iou <= 1.0:  # an IoU (NaN fails this too)
             raise ValueError(f"{name} must be an IoU in [0, 1]; got {iou!r}")
-    if not np.isfinite(min_score):
+    if min_score is not None and not np.isfinite(min_score):
         raise ValueError(f"min_score must be a finite number; got {min_score!r}")
     if not tracker.history:
         return _empty()
@@ -256,7 +258,8 @@ def _correct(mean: np.ndarray, cov: np.ndarray, z: np.ndarray,
     return axes_update(mean, cov, z, motion.R_diag(mean[:, :4]))
 
 
-def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[_Track]:
+def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float | None
+                   ) -> list[_Track]:
     """RTS-smooth every confirmed track and fill its gaps of up to ``max_gap`` frames."""
     frame = np.concatenate([np.full(len(h[2]), h[0]) for h in tracker.history])
     dt = np.concatenate([np.full(len(h[2]), h[1]) for h in tracker.history])
@@ -283,10 +286,11 @@ def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[
     best = -np.inf  # the highest mean confidence of a track dropped
     for a, b in zip(np.r_[0, edges], np.r_[edges, len(ids)]):
         u = np.flatnonzero(upd[a:b])
-        mean_conf = float(tracker.confidence(score[a:b][u], cls[a:b][u]).mean())
-        if mean_conf < min_score:
-            best = max(best, mean_conf)
-            continue
+        if min_score is not None:
+            mean_conf = float(tracker.confidence(score[a:b][u], cls[a:b][u]).mean())
+            if mean_conf < min_score:
+                best = max(best, mean_conf)
+                continue
         last = a + int(u[-1]) + 1  # nothing after the last update
         L = last - a
         P = axes_to_full(cov[a:last])
@@ -320,7 +324,7 @@ def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float) -> list[
         out.append(_Track(int(ids[a]), int(cls[a]), f[rep], _to_xyxy(m_s[rep, :4]),
                           np.where(updated, score[a:last], 0.0)[rep], fill[rep], P_s[rep],
                           *ends))
-    if not out:
+    if not out and min_score is not None:
         # a run that writes nothing says why (0 boxes of 0 tracks gave no reason)
         warnings.warn(f"min_score {min_score:g} (min_track_score under [offline] in a "
                       f"--config file, --min-track-score) drops every one of the "
