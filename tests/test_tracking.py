@@ -873,14 +873,16 @@ def test_an_object_faster_than_its_size_a_frame_is_confirmed_by_its_gate(compile
     tentative track's gate, from its prediction's covariance (the velocity's prior over the
     half second), takes the next detection; from then on the track's velocity is known and
     the overlap follows it, one identity at the true boxes."""
-    def run(**kw):
+    def run(moving_score=0.9, **kw):
         tr = BoxTracker(scores="raw", frame_rate=2.0, compiled=compiled, **kw)
         got = {}
         for f in range(1, 12):
             boxes = [[500.0, 400, 40, 80]]  # standing still: a track from the first frame
-            if f >= 2:
+            scores = [0.9]
+            if f >= 2:  # the moving object, its first detection always confident
                 boxes.append([20.0 + 60 * (f - 2), 100, 40, 80])
-            out = tr.step(f, Detections.from_xywh(np.array(boxes), [0.9] * len(boxes)))
+                scores.append(0.9 if f == 2 else moving_score)
+            out = tr.step(f, Detections.from_xywh(np.array(boxes), scores))
             for i, b in zip(out.ids.tolist(), out.boxes):
                 if b[1] < 300:
                     got.setdefault(i, []).append((f, b[0]))
@@ -892,6 +894,11 @@ def test_an_object_faster_than_its_size_a_frame_is_confirmed_by_its_gate(compile
     assert frames.tolist() == list(range(3, 12))  # confirmed by its second detection
     np.testing.assert_allclose(x, 20.0 + 60 * (frames - 2), atol=0.5)
     assert run(tentative_gate=0.0) == {}
+    # the gate takes only a detection that could start a track itself: with new_track under
+    # high, one of confidence between them cannot (it went to the tentative track, which
+    # was confirmed by it)
+    assert list(run(high=0.8, new_track=0.5)) == [2]
+    assert run(high=0.8, new_track=0.5, moving_score=0.6) == {}
 
 
 @pytest.mark.parametrize("compiled", [True, False])

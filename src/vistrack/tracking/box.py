@@ -48,16 +48,17 @@ One step, as on the slides (predict, associate, correct, manage):
    ``two_stage`` (ByteTrack's idea, Zhang et al., 2022):
 
    - confirmed and lost tracks take the confident detections first (confidence ≥ ``high``);
-   - tracks still unmatched and not lost take the less confident ones (``low`` ≤ confidence
-     < ``high``), which are often the partly occluded objects a single threshold would drop;
+   - confirmed tracks still unmatched (not lost ones, nor tentative) take the less
+     confident ones (``low`` ≤ confidence < ``high``), which are often the partly occluded
+     objects a single threshold would drop;
    - tentative tracks take what is left of the confident detections;
    - a tentative track still unmatched (updated once, with ``confirm_hits`` 2, so with no
      velocity yet) takes a detection left over that could start a track itself (confidence
-     ≥ ``new_track``) within its prediction's gate: the squared Mahalanobis distance of the
-     box (centre and size) from the predicted one, with the prediction's covariance and the
-     detection noise, under ``tentative_gate`` (the 99 % point of chi-square with 4 degrees
-     of freedom), where the pair is unambiguous (no other such detection in the track's
-     gate, no other such track's gate holds the detection).
+     ≥ ``high`` and ≥ ``new_track``) within its prediction's gate: the squared Mahalanobis
+     distance of the box (centre and size) from the predicted one, with the prediction's
+     covariance and the detection noise, under ``tentative_gate`` (the 99 % point of
+     chi-square with 4 degrees of freedom), where the pair is unambiguous (no other such
+     detection in the track's gate, no other such track's gate holds the detection).
      The overlap misses an object that moves more than its size between frames, as at a
      low frame rate, and the prediction of a track with one update stands still; its
      covariance, though, holds the velocity's prior uncertainty over the time between the
@@ -69,12 +70,13 @@ One step, as on the slides (predict, associate, correct, manage):
 4. **manage**: :mod:`vistrack.tracking.lifecycle`; unmatched confident detections with
    confidence ≥ ``new_track`` start tentative tracks;
 5. **report** the confirmed tracks updated in this frame, and, with ``coast_time``, a track
-   lost for at most that long, at its prediction, while that lies inside the image, where it
-   was followed for ``coast_after`` seconds or more and found in at least ``coast_rate`` of
-   its recent frames (:attr:`~vistrack.tracking.lifecycle.TrackTable.found`, over
-   ``coast_window`` seconds): a detector misses a person it has found for a while for a
-   moment (occlusion, blur) far more often than the person vanishes, and a half-hidden
-   person's misses come now and then, not in one run.
+   lost for at most that long (to the nearest frame), at its prediction, while that lies
+   inside the image, where it was followed for ``coast_after`` seconds or more and found in
+   at least ``coast_rate`` of its recent frames
+   (:attr:`~vistrack.tracking.lifecycle.TrackTable.found`, over ``coast_window`` seconds):
+   a detector misses a person it has found for a while for a moment (occlusion, blur) far
+   more often than the person vanishes, and a half-hidden person's misses come now and
+   then, not in one run.
 
 ``"sort"`` is the one-stage tracker with a single threshold (Bewley et al., 2016),
 ``"bytetrack"`` the two-stage one; :data:`TRACKERS` maps names to configurations.
@@ -157,7 +159,8 @@ class BoxTrackerConfig:
         The IoU of the pairs that estimate the shift, how many pairs it needs, and how many
         standard errors from zero it must be.
     coast_time, coast_after, coast_rate, coast_window : float
-        Report a lost track's prediction for up to ``coast_time`` seconds (0: never), if it
+        Report a lost track's prediction for up to ``coast_time`` seconds, rounded to the
+        nearest frame (0: never; 0.1 s is 3 frames at 30 frames/s, 1 at 10 or at 7), if it
         had been followed for at least ``coast_after`` seconds (from its first update to its
         last) and found in at least ``coast_rate`` (in [0, 1]) of its recent frames, weighed
         over ``coast_window`` seconds (> 0;
@@ -1196,7 +1199,9 @@ class BoxTracker:
         self._camera_offset = self._camera_offset + self.camera_shift
         self._offsets[self._moved] += self.camera_shift
         if cfg.tentative_gate > 0:
-            ti, di = self._tentative_in_gate(db, dc, free_d & (ds >= cfg.new_track), updated)
+            # (left over and able to start a track: confident enough for both thresholds)
+            ti, di = self._tentative_in_gate(db, dc, free_d & high & (ds >= cfg.new_track),
+                                             updated)
             if len(ti):
                 if self.compiled:  # (numpy corrects every matched track below)
                     self._update(ti, _to_cxcywh(db[di]))
