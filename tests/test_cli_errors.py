@@ -1123,3 +1123,25 @@ def test_eval_of_folders_finds_results_whose_suffix_is_upper_case(tmp_path, caps
         scores.append(json.loads(cap.out))
         assert "warning" not in cap.err
     assert scores[0] == scores[1] and scores[0]["SEQ-1"]["MOTA"] == 1.0
+
+
+def test_columns_twice_and_an_out_over_the_config_are_refused(tmp_path, capsys):
+    """``--columns frame=t,frame=a`` kept the last pair and read the file by it, the first
+    going unread without a word; ``--out`` naming the ``--config`` file the run reads wrote
+    the results over it (with ``--force``). Both are refused before anything is read, and
+    the configuration keeps its bytes."""
+    (tmp_path / "d.csv").write_text("t,a,bb_left,bb_top,bb_width,bb_height,conf\n"
+                                    "1,2,10,20,30,40,0.9\n")
+    assert main(["track", str(tmp_path / "d.csv"), "--out", str(tmp_path / "o.txt"),
+                 "--fps", "10", "--columns", "frame=t,frame=a"]) == 2
+    one_line(capsys, "track", "--columns names 'frame' twice (frame=t, frame=a); give each "
+                              "of vistrack's columns one of yours")
+    seq = _sequence(tmp_path / "seq")
+    cfg = tmp_path / "c.toml"
+    assert main(["track", "--print-config"]) == 0
+    cfg.write_text(capsys.readouterr().out)
+    before = cfg.read_bytes()
+    assert main(["track", str(seq), "--out", str(cfg), "--config", str(cfg), "--force"]) == 2
+    one_line(capsys, "track", f"--out {cfg} is the --config file: the results would "
+                              "overwrite it; give another --out")
+    assert cfg.read_bytes() == before

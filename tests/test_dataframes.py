@@ -61,6 +61,22 @@ def test_other_column_names_and_missing_columns():
              "bb_height": "h"}
     t = MOTTable.from_pandas(rows, columns=names, path="mine.csv")
     assert t.frames.tolist() == [1, 2] and t.boxes[:, 0].tolist() == [7.0, 10.0]
+    # the columns named go before those read by their own names, where a file has both: the
+    # particle and bb_left, bb_top columns were read over --columns id=..., x=..., y=...
+    both = rows.assign(particle=[8, 9], bb_left=[0.0, 0.0], bb_top=[0.0, 0.0])
+    named = {"frame": "t", "id": "track", "x": "cx", "y": "cy", "bb_width": "w",
+             "bb_height": "h"}
+    t = MOTTable.from_pandas(both, columns=named)
+    assert t.ids.tolist() == [4, 4] and t.boxes[:, :2].tolist() == [[7.0, 20.0], [10.0, 20.0]]
+    corners = pd.DataFrame({"frame": [1], "bb_left": [0.0], "bb_top": [0.0], "x": [0.0],
+                            "y": [0.0], "bb_width": [1.0], "bb_height": [1.0], "a": [10.0],
+                            "b": [20.0], "c": [30.0], "d": [60.0]})
+    t = MOTTable.from_pandas(corners, columns={"x1": "a", "y1": "b", "x2": "c", "y2": "d"})
+    assert t.boxes.tolist() == [[10.0, 20.0, 20.0, 40.0]]
+    # and without columns, the file's own names in their order, as before
+    own = both.rename(columns={"t": "frame", "w": "bb_width", "h": "bb_height"})
+    t = MOTTable.from_pandas(own)
+    assert t.ids.tolist() == [9, 8] and t.boxes[:, :2].tolist() == [[0.0, 0.0], [0.0, 0.0]]
     assert t.conf.tolist() == [1.0, 1.0]
     no_width = {k: v for k, v in names.items() if k != "bb_width"}
     # the centre with a height and no width: the width is named alone (it was "no box", the
@@ -243,6 +259,14 @@ def test_a_csv_file_pandas_cannot_read_is_named(tmp_path):
     with pytest.raises(MOTFormatError, match=re.escape(
             f"{short}, line 4: 3 values where the header has 5")):
         track_sequence(short, tmp_path / "s.txt", fps=10)
+    # every row one value longer than the header: pandas takes the first column for the
+    # index and reads the rest shifted by one column, no value missing (it was tracked so,
+    # frame 100 at left 200, and nothing said)
+    bad.write_text("frame,bb_left,bb_top,bb_width,bb_height,conf\n1,100,200,50,120,0.9,1\n"
+                   "2,102,200,50,120,0.9,1\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{bad}, line 2: 7 values where the header has 6")):
+        track_sequence(bad, tmp_path / "b.txt", fps=10)
     # an empty cell in a row of the header's length is named by its column, as before
     short.write_text("frame,bb_left,bb_top,bb_width,bb_height\n1,2,3,4,5\n2,2,,4,5\n")
     with pytest.raises(MOTFormatError, match=re.escape(

@@ -567,6 +567,10 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
             if args.fps is None:
                 return (f"{args.input} is a detections file alone: give its frame rate "
                         "with --fps")
+        if args.config is not None and Path(args.out).resolve() == Path(args.config).resolve():
+            # (--force wrote the results over the configuration the run read)
+            return (f"--out {args.out} is the --config file: the results would overwrite it; "
+                    "give another --out")
         check_output(args.out, force=args.force, name="--out")
         if str(args.out).lower().endswith(".parquet"):
             from .io.motchallenge import need_parquet
@@ -698,6 +702,12 @@ def _columns(text: str | None) -> tuple[dict[str, str] | None, str]:
     bad = [p[0] for p in pairs if len(p) != 2 or not p[0].strip() or not p[1].strip()]
     if bad:
         return None, f"--columns takes OURS=THEIRS pairs separated by commas; got {bad[0]!r}"
+    ours = [a.strip() for a, _ in pairs]
+    twice = next((a for k, a in enumerate(ours) if a in ours[:k]), None)
+    if twice is not None:  # (the dict kept the last, and the first went unread)
+        given = ", ".join(f"{twice}={b.strip()}" for a, b in pairs if a.strip() == twice)
+        return None, (f"--columns names {twice!r} twice ({given}); give each of vistrack's "
+                      "columns one of yours")
     return {a.strip(): b.strip() for a, b in pairs}, ""
 
 

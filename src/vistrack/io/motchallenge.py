@@ -123,6 +123,10 @@ def _read_csv(path: str | os.PathLike, what: str) -> Any:
     if any("\x00" in str(c) for c in df.columns):  # UTF-16 without a byte-order mark
         raise _not_utf8(path, None)
     df.columns = [c.strip() if isinstance(c, str) else c for c in df.columns]  # "id " too
+    if not df.index.equals(pandas.RangeIndex(len(df))):
+        # every row one value longer than the header: pandas took the first column for the
+        # index and read each of the others under the name of the one before it
+        _check_row_lengths(path, dialect["sep"])
     if df.isna().to_numpy().any():
         # pandas fills a short row's missing values with NaN, named later as empty cells
         _check_row_lengths(path, dialect["sep"])
@@ -493,11 +497,19 @@ class MOTTable:
             raise ValueError(f"no column {name('frame')!r} (the frame){where}; columns: "
                              f"{sorted(map(str, have))} ({hint})")
         n = len(frame)
-        ident = get("particle")
+        # a column named in `columns` goes before one read by its own name: --columns id=tid
+        # on a file with a particle column too read the particle
+        mapped = set(names)
+        ident = None if "id" in mapped and "particle" not in mapped else get("particle")
         if ident is None:
             ident = get("id")
         w, h = get("bb_width"), get("bb_height")
-        left, top = get("bb_left"), get("bb_top")
+        corners_named = bool(mapped & set(_CORNERS)) and not mapped & {"bb_left", "bb_top",
+                                                                        "x", "y"}
+        if (mapped & {"x", "y"} or corners_named) and not mapped & {"bb_left", "bb_top"}:
+            left = top = None  # the box as named (a centre, or corners), not bb_left, bb_top
+        else:
+            left, top = get("bb_left"), get("bb_top")
 
         def every(*columns: np.ndarray | None) -> list[np.ndarray] | None:
             # the columns, if each is there
@@ -511,7 +523,7 @@ class MOTTable:
                 gone = " or ".join(repr(name(c)) for c, v in (("bb_width", w),
                                                               ("bb_height", h)) if v is None)
                 raise ValueError(f"no column {gone}{where}; columns: {sorted(map(str, have))}")
-        elif (centre := every(get("x"), get("y"), w, h)) is not None:
+        elif not corners_named and (centre := every(get("x"), get("y"), w, h)) is not None:
             x, y, w, h = centre
             left, top = x - w / 2, y - h / 2
         elif (corners := every(*map(get, _CORNERS))) is not None:
