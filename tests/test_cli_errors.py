@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -1145,3 +1146,34 @@ def test_columns_twice_and_an_out_over_the_config_are_refused(tmp_path, capsys):
     one_line(capsys, "track", f"--out {cfg} is the --config file: the results would "
                               "overwrite it; give another --out")
     assert cfg.read_bytes() == before
+
+
+def test_seqinfo_frame_rate_and_length_are_checked_where_read(tmp_path):
+    """``seqinfo.ini``'s frameRate out of range was named by the motion model, without the
+    file or the key; its seqLength had no bound (10^12 stepped through empty frames without
+    end); and ``--fps`` could not stand in for a frameRate the file lacks, though it is put
+    over the file's. The tracks with ``fps`` and no frameRate are those with frameRate
+    equal to it."""
+    from vistrack.io.motchallenge import MOTFormatError
+    from vistrack.pipeline import track_sequence
+
+    seq = _sequence(tmp_path / "seq")
+    ini = seq / "seqinfo.ini"
+    track_sequence(seq, tmp_path / "ref.txt")
+    text = ini.read_text()
+    ini.write_text(text.replace("frameRate=10\n", ""))
+    track_sequence(seq, tmp_path / "fps.txt", fps=10)
+    assert (tmp_path / "fps.txt").read_bytes() == (tmp_path / "ref.txt").read_bytes()
+    with pytest.raises(MOTFormatError, match=f"{re.escape(str(ini))}: \\[Sequence\\] has no "
+                                             "frameRate"):
+        track_sequence(seq, tmp_path / "no.txt")
+    ini.write_text(text.replace("frameRate=10", "frameRate=0.0005"))
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{ini}: frameRate must be from 0.001 to 1e+06 frames/s; got 0.0005 (give the "
+            "true rate with --fps)")):
+        track_sequence(seq, tmp_path / "slow.txt")
+    track_sequence(seq, tmp_path / "slow.txt", fps=10)  # --fps over it: tracked
+    ini.write_text(text.replace("seqLength=10", "seqLength=1e12"))
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{ini}: seqLength must be at most 100,000,000 frames; got 1,000,000,000,000")):
+        track_sequence(seq, tmp_path / "long.txt")

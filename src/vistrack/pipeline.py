@@ -54,6 +54,7 @@ from .evaluation.sanity import sanity_warnings
 from .io.atomic import check_output, hidden_path, made_folder, remove_on_commit, together
 from .io.motchallenge import (
     DETECTION_SUFFIXES,
+    MOTFormatError,
     MOTTable,
     SeqInfo,
     _ground_truth_file,
@@ -1343,7 +1344,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
         the detections file (even with ``force``: the results would overwrite it), the
         detections run past the sequence's last frame, or the configuration is invalid.
     MOTFormatError
-        If a file is malformed.
+        If a file is malformed, or ``seqinfo.ini``'s ``frameRate`` (without ``fps``, which
+        also stands in for one it lacks) is not from 0.001 to 10^6 or its ``seqLength``
+        is beyond :data:`MAX_FRAMES`.
     ImportError
         If ``out`` is Parquet and pandas or pyarrow is missing, or CSV and pandas is.
 
@@ -1518,7 +1521,18 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
             f"{seq_dir} is a detections file alone: give its frame rate (fps, --fps)" if alone
             else f"{ini} does not exist; pass the frame rate (--fps) to track the detections "
             "without it")
-    info = read_seqinfo(seq_dir) if has_info else None
+    # (--fps stands in for a frameRate the file lacks: it is put over the file's anyway)
+    info = read_seqinfo(seq_dir, frame_rate=fps) if has_info else None
+    if info is not None:
+        if fps is None and not FRAME_RATES[0] <= info.frame_rate <= FRAME_RATES[1]:
+            # (named by the motion model later, without the file or the key)
+            raise MOTFormatError(f"{ini}: frameRate must be from {FRAME_RATES[0]:g} to "
+                                 f"{FRAME_RATES[1]:g} frames/s; got {info.frame_rate:g} "
+                                 "(give the true rate with --fps)")
+        if info.seq_length > MAX_FRAMES:
+            # tracked frame by frame up to its last frame: 10^12 would never end
+            raise MOTFormatError(f"{ini}: seqLength must be at most {MAX_FRAMES:,} frames; "
+                                 f"got {info.seq_length:,}")
     replaced: tuple[str, float] | None = None  # seqinfo.ini's frameRate, where fps is put over
     if not det_path.exists():
         raise FileNotFoundError(

@@ -1525,13 +1525,16 @@ def _ini_error(exc: configparser.Error) -> str:
     return (f", line {line}" if line else "") + f": not a valid INI file: {what}"
 
 
-def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
+def read_seqinfo(path: str | os.PathLike, *, frame_rate: float | None = None) -> SeqInfo:
     """Read ``seqinfo.ini`` (or the ``seqinfo.ini`` inside a sequence folder).
 
     Parameters
     ----------
     path : str or os.PathLike
         The file, or the sequence folder holding it.
+    frame_rate : float, optional
+        The rate to take where the file has no ``frameRate`` (``vistrack track --fps``);
+        where it has one, that is read and checked as without it.
 
     Returns
     -------
@@ -1544,7 +1547,8 @@ def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
         If the file does not exist.
     MOTFormatError
         If it is not a UTF-8 text INI file, has no ``[Sequence]`` section, or lacks
-        ``frameRate``, ``seqLength``, ``imWidth`` or ``imHeight`` or has one that is not a
+        ``frameRate`` (without ``frame_rate``), ``seqLength``, ``imWidth`` or ``imHeight`` or
+        has one that is not a
         finite number > 0 (the last three whole numbers, written ``600`` or ``600.0``), naming
         the file.
 
@@ -1560,7 +1564,9 @@ def read_seqinfo(path: str | os.PathLike) -> SeqInfo:
     """
     path, s = _sequence_section(path)
     return SeqInfo(name=s.get("name", path.parent.name),
-                   frame_rate=_seqinfo_value(path, s, "frameRate", float),
+                   frame_rate=(float(frame_rate) if frame_rate is not None
+                               and "frameRate" not in s
+                               else _seqinfo_value(path, s, "frameRate", float)),
                    seq_length=_seqinfo_value(path, s, "seqLength", int),
                    im_width=_seqinfo_value(path, s, "imWidth", int),
                    im_height=_seqinfo_value(path, s, "imHeight", int),
