@@ -267,6 +267,12 @@ def test_a_csv_file_pandas_cannot_read_is_named(tmp_path):
     with pytest.raises(MOTFormatError, match=re.escape(
             f"{bad}, line 2: 7 values where the header has 6")):
         track_sequence(bad, tmp_path / "b.txt", fps=10)
+    # a column named twice in the header: pandas read the second as 'conf.1', which nothing
+    # read, without a word
+    bad.write_text("frame,bb_left,bb_top,bb_width,bb_height,conf,conf\n1,1,2,3,4,0.9,0.1\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{bad}, line 1: the header names column 'conf' twice; name each column once")):
+        track_sequence(bad, tmp_path / "b.txt", fps=10)
     # an empty cell in a row of the header's length is named by its column, as before
     short.write_text("frame,bb_left,bb_top,bb_width,bb_height\n1,2,3,4,5\n2,2,,4,5\n")
     with pytest.raises(MOTFormatError, match=re.escape(

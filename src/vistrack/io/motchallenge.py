@@ -123,6 +123,7 @@ def _read_csv(path: str | os.PathLike, what: str) -> Any:
     if any("\x00" in str(c) for c in df.columns):  # UTF-16 without a byte-order mark
         raise _not_utf8(path, None)
     df.columns = [c.strip() if isinstance(c, str) else c for c in df.columns]  # "id " too
+    _check_header_names(path, dialect["sep"])
     if not df.index.equals(pandas.RangeIndex(len(df))):
         # every row one value longer than the header: pandas took the first column for the
         # index and read each of the others under the name of the one before it
@@ -131,6 +132,21 @@ def _read_csv(path: str | os.PathLike, what: str) -> Any:
         # pandas fills a short row's missing values with NaN, named later as empty cells
         _check_row_lengths(path, dialect["sep"])
     return df
+
+
+def _check_header_names(path: str | os.PathLike, sep: str) -> None:
+    """Raise a :class:`MOTFormatError` naming a column that a CSV file's header names twice
+    (pandas reads the second as ``conf.1``, a column nothing then reads)."""
+    with open(path, encoding="utf-8-sig", newline="") as fh:
+        rows = csv.reader(fh, delimiter=sep)
+        header = next((r for r in rows if r), None)  # (pandas skips blank lines)
+        if header is None:
+            return
+        names = [c.strip() for c in header]
+        twice = next((c for k, c in enumerate(names) if c and c in names[:k]), None)
+        if twice is not None:
+            raise MOTFormatError(f"{path}, line {rows.line_num}: the header names column "
+                                 f"{twice!r} twice; name each column once")
 
 
 def _check_row_lengths(path: str | os.PathLike, sep: str) -> None:
