@@ -140,8 +140,8 @@ def _check_header_names(path: str | os.PathLike, sep: str) -> None:
     with open(path, encoding="utf-8-sig", newline="") as fh:
         rows = csv.reader(fh, delimiter=sep)
         header = next((r for r in rows if r), None)  # (pandas skips blank lines)
-        if header is None:
-            return
+        if header is None or _all_numbers(header):
+            return  # no header at all (a MOTChallenge text file named .csv): named later
         names = [c.strip() for c in header]
         twice = next((c for k, c in enumerate(names) if c and c in names[:k]), None)
         if twice is not None:
