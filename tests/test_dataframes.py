@@ -234,7 +234,7 @@ def test_detections_from_a_csv_file_with_its_own_column_names(tmp_path, capsys):
     assert main(["track", str(zero), "--out", str(tmp_path / "z.txt"), "--fps", "10",
                  "--quiet"]) == 2
     assert capsys.readouterr().err.strip() == (
-        f"vistrack track: error: {zero}, row 1 after the header, column 'frame': frame must "
+        f"vistrack track: error: {zero}, line 2, column 'frame': frame must "
         "be an integer >= 1 (frames count from 1, as MOTChallenge's do); got 0")
     assert not (tmp_path / "z.txt").exists()
 
@@ -273,10 +273,24 @@ def test_a_csv_file_pandas_cannot_read_is_named(tmp_path):
     with pytest.raises(MOTFormatError, match=re.escape(
             f"{bad}, line 1: the header names column 'conf' twice; name each column once")):
         track_sequence(bad, tmp_path / "b.txt", fps=10)
-    # an empty cell in a row of the header's length is named by its column, as before
-    short.write_text("frame,bb_left,bb_top,bb_width,bb_height\n1,2,3,4,5\n2,2,,4,5\n")
+    # a blank line before the header (pandas skips it): a short row was named as an empty
+    # cell of another column, "row 1 after the header"
+    short.write_text("\nframe,bb_left,bb_top,bb_width,bb_height\n2,2,3\n")
     with pytest.raises(MOTFormatError, match=re.escape(
-            f"{short}, row 2 after the header, column 'bb_top': not a finite number: nan")):
+            f"{short}, line 3: 3 values where the header has 5")):
+        track_sequence(short, tmp_path / "s.txt", fps=10)
+    # an empty cell in a row of the header's length is named by its column and its line
+    # (blank lines, lines of spaces and a quoted value's line break counted as the file's
+    # lines; it was "row 2 after the header", two lines off here)
+    short.write_text("frame,bb_left,bb_top,bb_width,bb_height,note\n1,2,3,4,5,\"two\nlines\"\n"
+                     "  \n\n2,2,,4,5,x\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{short}, line 6, column 'bb_top': not a finite number: nan")):
+        track_sequence(short, tmp_path / "s.txt", fps=10)
+    # a whitespace line is skipped by the row check as pandas skips it, not a row of 1 value
+    short.write_text("frame,bb_left,bb_top,bb_width,bb_height\n1,2,3,4,5\n   \n2,2,3\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{short}, line 4: 3 values where the header has 5")):
         track_sequence(short, tmp_path / "s.txt", fps=10)
     with pytest.raises(MOTFormatError, match=re.escape(
             f"{empty}: not a CSV file of detections: No columns to parse from file")):

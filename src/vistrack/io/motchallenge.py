@@ -25,11 +25,13 @@ import configparser
 import csv
 import difflib
 import importlib
+import itertools
 import math
 import os
 import re
 import warnings
-from collections.abc import Sequence
+from collections.abc import Generator, Sequence
+from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, overload
@@ -131,36 +133,76 @@ def _read_csv(path: str | os.PathLike, what: str) -> Any:
     if df.isna().to_numpy().any():
         # pandas fills a short row's missing values with NaN, named later as empty cells
         _check_row_lengths(path, dialect["sep"])
+    # its rows are the file's, in order: MOTTable.from_pandas names a bad value by its line
+    df.attrs["csv_sep"] = dialect["sep"]
     return df
+
+
+def _csv_lines(path: str | os.PathLike, sep: str) -> Generator[tuple[int, list[str]], None, None]:
+    """A CSV file's rows as pandas reads them, each with the line it starts on: ``(line,
+    values)``, blank lines skipped (spaces alone too, as pandas skips them)."""
+    with open(path, encoding="utf-8-sig", newline="") as fh:
+        rows = csv.reader(fh, delimiter=sep)
+        start = 1
+        for row in rows:
+            if row and (len(row) > 1 or row[0].strip()):
+                yield start, row
+            start = rows.line_num + 1  # (a quoted value may hold line breaks)
+
+
+def _csv_body(path: str | os.PathLike, sep: str
+              ) -> tuple[int, list[str], Generator[tuple[int, list[str]], None, None]] | None:
+    """A CSV file's header, the line it is on, and the rows after it (:func:`_csv_lines`);
+    None where it has no header: no row, or a first row of numbers only (a MOTChallenge text
+    file named .csv, which the reader names later)."""
+    lines = _csv_lines(path, sep)
+    line, header = next(lines, (0, []))
+    if not header or _all_numbers(header):
+        lines.close()
+        return None
+    return line, header, lines
 
 
 def _check_header_names(path: str | os.PathLike, sep: str) -> None:
     """Raise a :class:`MOTFormatError` naming a column that a CSV file's header names twice
     (pandas reads the second as ``conf.1``, a column nothing then reads)."""
-    with open(path, encoding="utf-8-sig", newline="") as fh:
-        rows = csv.reader(fh, delimiter=sep)
-        header = next((r for r in rows if r), None)  # (pandas skips blank lines)
-        if header is None or _all_numbers(header):
-            return  # no header at all (a MOTChallenge text file named .csv): named later
-        names = [c.strip() for c in header]
-        twice = next((c for k, c in enumerate(names) if c and c in names[:k]), None)
-        if twice is not None:
-            raise MOTFormatError(f"{path}, line {rows.line_num}: the header names column "
-                                 f"{twice!r} twice; name each column once")
+    body = _csv_body(path, sep)
+    if body is None:
+        return
+    line, header, rows = body
+    rows.close()
+    names = [c.strip() for c in header]
+    twice = next((c for k, c in enumerate(names) if c and c in names[:k]), None)
+    if twice is not None:
+        raise MOTFormatError(f"{path}, line {line}: the header names column {twice!r} twice; "
+                             "name each column once")
 
 
 def _check_row_lengths(path: str | os.PathLike, sep: str) -> None:
     """Raise a :class:`MOTFormatError` naming the first line of a CSV file whose number of
     values is not the header's (blank lines skipped, as pandas skips them)."""
-    with open(path, encoding="utf-8-sig", newline="") as fh:
-        rows = csv.reader(fh, delimiter=sep)
-        header = next(rows, None)
-        if header is None or _all_numbers(header):
-            return  # no header at all (a MOTChallenge text file named .csv): named later
-        for row in rows:
-            if row and len(row) != len(header):
-                raise MOTFormatError(f"{path}, line {rows.line_num}: {len(row)} values where "
-                                     f"the header has {len(header)}")
+    body = _csv_body(path, sep)
+    if body is None:
+        return
+    _, header, rows = body
+    with closing(rows):
+        for line, row in rows:
+            if len(row) != len(header):
+                raise MOTFormatError(f"{path}, line {line}: {len(row)} values where the "
+                                     f"header has {len(header)}")
+
+
+def _csv_row_line(path: str | os.PathLike, sep: str, k: int) -> int | None:
+    """The line of a CSV file that its row ``k`` after the header starts on, as pandas
+    counts its rows (:func:`_csv_lines`); None where it has no such row, or no header."""
+    try:
+        body = _csv_body(path, sep)
+    except (OSError, UnicodeDecodeError, csv.Error):  # (for a message: the row's place, then)
+        return None
+    if body is None:
+        return None
+    with closing(body[2]) as rows:
+        return next(itertools.islice(rows, k, None), (None, []))[0]
 
 
 def _not_utf8(path: str | os.PathLike, exc: UnicodeDecodeError | None) -> MOTFormatError:
@@ -413,13 +455,14 @@ class MOTTable:
             Naming the columns that are missing, or a name in ``columns`` that is not one of
             ours (or not one of the table's).
         MOTFormatError
-            A ``ValueError`` naming the row and the column of a value that is not a finite
-            number (an empty cell is NaN), a frame that is not an integer >= 1 (so no row
-            of frame 0 is left out unseen), an identity or a class that is not an integer,
-            a negative width or height, or a far corner (``x2``, ``y2``) before the near
-            one; and, for columns missing from a ``.csv`` file (``path``) whose header is
-            numbers only, that the file has no header (a MOTChallenge text file named
-            ``.csv``: its first row was read as the header).
+            A ``ValueError`` naming the row (its line, for a CSV file's rows as vistrack
+            reads them) and the column of a value that is not a finite number (an empty
+            cell is NaN), a frame that is not an integer >= 1 (so no row of frame 0 is left
+            out unseen), an identity or a class that is not an integer, a negative width or
+            height, or a far corner (``x2``, ``y2``) before the near one; and, for columns
+            missing from a ``.csv`` file (``path``) whose header is numbers only, that the
+            file has no header (a MOTChallenge text file named ``.csv``: its first row was
+            read as the header).
 
         Examples
         --------
@@ -474,10 +517,13 @@ class MOTTable:
             return names.get(ours, ours)
 
         def at(k: int, ours: str) -> str:
-            # a row by its place among the rows (a CSV file's line k + 2, if it has no blank
-            # lines), and a column by its name
-            return (f"{path or 'the table'}, row {k + 1} after the header, column "
-                    f"{name(ours)!r}" + (f" ({ours})" if name(ours) != ours else ""))
+            # a row by its line in the CSV file it was read from (by _read_csv, which marks
+            # the rows as the file's), or else by its place among the rows; a column by name
+            sep = getattr(df, "attrs", {}).get("csv_sep")
+            line = _csv_row_line(path, sep, k) if path and sep else None
+            row = f"line {line}" if line is not None else f"row {k + 1} after the header"
+            return (f"{path or 'the table'}, {row}, column {name(ours)!r}"
+                    + (f" ({ours})" if name(ours) != ours else ""))
 
         def get(ours: str) -> np.ndarray | None:
             # the column as numbers, all finite, or the first that is not, by row
