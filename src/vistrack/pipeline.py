@@ -1483,14 +1483,16 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
     """The detections of a sequence folder, or of a detections file alone, read and checked
     against the sequence (:func:`track_sequence`'s errors; its warnings name the caller of
     :func:`track_sequence`)."""
-    if fps is not None:
+    def a_frame_rate(x: Any) -> bool:  # one the motion model scales to
         try:
-            ok = not isinstance(fps, bool) and FRAME_RATES[0] <= float(fps) <= FRAME_RATES[1]
+            return (not isinstance(x, bool)
+                    and FRAME_RATES[0] <= float(x) <= FRAME_RATES[1])
         except (TypeError, ValueError):
-            ok = False
-        if not ok:
-            raise ValueError(f"fps must be a number from {FRAME_RATES[0]:g} to "
-                             f"{FRAME_RATES[1]:g} (frames a second); got {fps!r}")
+            return False
+
+    if fps is not None and not a_frame_rate(fps):
+        raise ValueError(f"fps must be a number from {FRAME_RATES[0]:g} to "
+                         f"{FRAME_RATES[1]:g} (frames a second); got {fps!r}")
     if not seq_dir.exists():  # not "SEQ/det/det.txt does not exist" for a mistyped SEQ
         raise FileNotFoundError(f"{seq_dir} does not exist (a sequence folder, or a "
                                 "detections file)")
@@ -1524,7 +1526,7 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
     # (--fps stands in for a frameRate the file lacks: it is put over the file's anyway)
     info = read_seqinfo(seq_dir, frame_rate=fps) if has_info else None
     if info is not None:
-        if fps is None and not FRAME_RATES[0] <= info.frame_rate <= FRAME_RATES[1]:
+        if fps is None and not a_frame_rate(info.frame_rate):
             # (named by the motion model later, without the file or the key)
             raise MOTFormatError(f"{ini}: frameRate must be from {FRAME_RATES[0]:g} to "
                                  f"{FRAME_RATES[1]:g} frames/s; got {info.frame_rate:g} "
