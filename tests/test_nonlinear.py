@@ -874,3 +874,35 @@ def test_the_ukf_blames_h_only_for_a_component_it_uses():
     with pytest.raises(ValueError, match=r"^the measurement model gave NaN or infinity at sigma "
                        r"point 0: h\(\[0\. 0\.\]\) = \[nan  0\.\]$"):
         ukf_update(g, [1.0, 0.5], me, points=points)
+
+
+def test_a_missing_component_where_h_gives_nan_is_not_used_on_any_path():
+    """A component missing from ``y`` is not used, whatever ``h`` (or its Jacobian) gives
+    there: ``h(x) = [x0, √x0]`` at a prior on ``x0 = 0`` is NaN for half the sigma points and
+    members, and its Jacobian NaN. The batched UKF, the EnKF and the EKF multiplied those NaN
+    by the mask's 0 and returned NaN for every estimate, without a word; the oracle is the
+    Kalman update on the observed component, which ``h`` takes linearly (the EnKF, drawing
+    its noise at random: the same update where ``h`` is finite on the missing component)."""
+    from vistrack.filters import kf_update
+
+    def h(x, missing=np.sqrt):
+        return np.stack([x[..., 0], missing(x[..., 0])], axis=-1)
+
+    me = NonlinearMeasurement(h, np.diag([0.5, 0.1]), ndim_state=2)
+    x, P, y = np.array([0.0, 1.0]), np.eye(2), np.array([1.0, np.nan])
+    ref = kf_update(vt.Gaussian(x, P), [1.0], np.array([[1.0, 0.0]]), [[0.5]])
+    with np.errstate(invalid="ignore"):
+        one = ukf_update(vt.Gaussian(x, P), y, me)
+        batch = ukf_update(vt.Gaussian(np.stack([x, x]), np.stack([P, P])), np.stack([y, y]), me)
+        ekf = ekf_update(vt.Gaussian(x, P), y, me)
+        ens = Ensemble.sample(x, P, 500, rng=0)
+        post = enkf_update(ens, y, me, rng=1)
+        finite = enkf_update(ens, y, NonlinearMeasurement(
+            lambda x: h(x, missing=np.abs), np.diag([0.5, 0.1]), ndim_state=2), rng=1)
+    for g in (one, ekf):
+        np.testing.assert_allclose(g.mean, ref.mean, atol=1e-9)
+        np.testing.assert_allclose(g.cov, ref.cov, atol=1e-9)
+    np.testing.assert_allclose(batch.mean, [ref.mean] * 2, atol=1e-9)
+    np.testing.assert_allclose(batch.cov, [ref.cov] * 2, atol=1e-9)
+    assert np.isfinite(post.members).all()
+    np.testing.assert_array_equal(post.members, finite.members)

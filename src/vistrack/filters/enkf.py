@@ -283,7 +283,9 @@ def _enkf_update(ens: Ensemble, y: ArrayLike,
         measurement, n, residual)
     y = check_y(y, X.shape[:-2], me.m)
     obs = ~np.isnan(y)
-    Z = np.asarray(me.h(X), dtype=float)  # (..., N, m)
+    # (..., N, m); a missing component's value is not used: 0, not NaN, where h has none
+    # there (NaN times the mask's 0 below is NaN, and made every member NaN)
+    Z = np.where(obs[..., None, :], np.asarray(me.h(X), dtype=float), 0.0)
     # the members' mean measurement: circular for angles (bearings either side of π average
     # to π, not 0), as the model's mean gives it
     zbar = Z.mean(-2) if me.mean is _plain_mean else me.mean(Z, np.full(N, 1.0 / N))

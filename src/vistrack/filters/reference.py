@@ -174,7 +174,8 @@ def condition_on(
     e = np.asarray(innovation, dtype=float)
     obs = (np.ones(e.shape, dtype=bool) if observed is None
            else np.asarray(observed, dtype=bool))
-    Hm = np.asarray(H, dtype=float) * obs[..., :, None]  # missing components: zero rows
+    # missing components: zero rows (whatever H holds there: a Jacobian may be NaN)
+    Hm = np.where(obs[..., :, None], np.asarray(H, dtype=float), 0.0)
     U = P @ _t(Hm)  # P H'
     e, S, L, ll = masked_innovation(e, Hm @ U + R, obs)
     K = gain(U, L)

@@ -748,7 +748,9 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
         return out, np.asarray(ll1)
     gamma = points._many(g.mean, g.cov, "g.cov")
     obs = ~np.isnan(y)
-    zs = np.asarray(me.h(gamma), dtype=float)
+    # a missing component's value is not used: 0, not NaN, where h has none there (NaN times
+    # the mask's 0 below is NaN, and made every estimate of the batch NaN)
+    zs = np.where(obs[..., None, :], np.asarray(me.h(gamma), dtype=float), 0.0)
     zhat, Pzz, rz = (_central_transform(zs, Wm, Wc, me.residual) if me.standard
                      else _transform(zs, Wm, Wc, me.mean, me.residual))
     rz = rz * obs[..., None, :]  # missing components: no cross-covariance
