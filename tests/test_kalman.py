@@ -797,3 +797,29 @@ def test_one_step_and_the_1d_filter_name_what_the_n_d_filter_names():
     F = np.array([[1.0, 1.0], [0.0, 1.0]])
     per_step_q = LinearMotion(F, np.stack([np.eye(2)] * 3))
     np.testing.assert_array_equal(per_step_q.f(np.array([0.0, 2.0])), F @ [0.0, 2.0])
+
+
+@pytest.mark.parametrize("batch", [False, True])
+@pytest.mark.parametrize("kind", ["kalman_filter", "ukf"])
+def test_changing_the_last_estimate_leaves_the_read_only_results_as_they_are(batch, kind):
+    """``FilterResult.last``, where a tracker goes on from, is the results' last estimate but
+    not a view of them: ``last.mean`` was a writable view of the read-only ``means`` (the
+    UKF's ``last.cov`` of ``covs``), so going on from it in place changed the stored results
+    (and what a smoother then read). The oracle is the results before the change."""
+    F, Q, H, R = [[1.0, 1.0], [0.0, 1.0]], 0.01 * np.eye(2), [[1.0, 0.0]], [[0.25]]
+    ys = np.array([[0.1], [0.9], [np.nan], [3.2]])
+    ys = np.stack([ys, ys + 1]) if batch else ys
+    if kind == "kalman_filter":
+        res = kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=[0.0, 1.0], P0=np.eye(2))
+    else:
+        res = vt.filters.UnscentedKalmanFilter(vt.ConstantVelocity(dim=1, q=0.01),
+                                               vt.Position(dim=1, r=0.25)).filter(
+            ys, x0=[0.0, 1.0], P0=np.eye(2))
+    means, covs = np.array(res.means), np.array(res.covs)
+    np.testing.assert_array_equal(res.last.mean, means[..., -1, :])
+    res.last.mean[...] = 1e9
+    if res.last.cov.flags.writeable:  # (one covariance shared by a batch: broadcast, read-only)
+        res.last.cov[...] = 1e9
+    np.testing.assert_array_equal(res.means, means)
+    np.testing.assert_array_equal(res.covs, covs)
+    assert not res.means.flags.writeable

@@ -116,7 +116,9 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
     bad = _not_finite(pmeans, pcovs, means, covs, B > 1)
     if bad:
         raise ValueError(bad)
-    last = Gaussian(means[:, -1], covs[:, -1])
+    # copies, not views of the results (which are made read-only below; a view made before
+    # would stay writable, and changing `last` in place changed them)
+    last = Gaussian(means[:, -1].copy(), covs[:, -1].copy())
     if single:
         means, covs, pmeans, pcovs = means[0], covs[0], pmeans[0], pcovs[0]
         loglik = loglik[0]

@@ -331,7 +331,9 @@ def kalman_filter(
         means, loglik, last_P = means[0], loglik[0], last_P[0]
         pred_means, covs, pcovs = (None if a is None else a[0]
                                    for a in (pred_means, covs, pcovs))
-    last = Gaussian(means[..., -1, :], last_P)
+    # a copy: a view made before the arrays are made read-only would stay writable, and a
+    # tracker going on from `last` in place changed the results' last means under them
+    last = Gaussian(means[..., -1, :].copy(), last_P)
     _readonly(means, covs, pred_means, pcovs, loglik)
     return FilterResult(means, covs, pred_means, pcovs, np.asarray(loglik), last, shared)
 
