@@ -1,6 +1,8 @@
 """Nonlinear models, EKF, UKF and EnKF: against finite differences, the Kalman filter on linear
 models, and FilterPy's UnscentedKalmanFilter."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -906,3 +908,33 @@ def test_a_missing_component_where_h_gives_nan_is_not_used_on_any_path():
     np.testing.assert_allclose(batch.cov, [ref.cov] * 2, atol=1e-9)
     assert np.isfinite(post.members).all()
     np.testing.assert_array_equal(post.members, finite.members)
+
+
+def test_a_step_per_estimate_and_a_singular_noise_are_named():
+    """A ``dt`` per estimate of a batch (tracks seen at different intervals) is refused by
+    every prediction with the Kalman filter's words; the UKF, EKF and EnKF failed inside
+    numpy (``only 0-dimensional arrays can be converted to Python scalars``, or a broadcast
+    of remapped shapes), naming nothing. A measurement noise singular on the observed
+    components, which a linear model accepts, is named by the particle filter on both paths
+    (it was numpy's bare ``Matrix is not positive definite``)."""
+    from vistrack.filters import ParticleFilter, enkf_predict
+
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1)
+    for B in (2, 3):
+        g = vt.Gaussian(np.tile([0.0, 1.0], (B, 1)), np.broadcast_to(np.eye(2), (B, 2, 2)))
+        dt = np.arange(1.0, B + 1)
+        shape = re.escape(f"got shape ({B},)")
+        for f in (vt.KalmanFilter, UnscentedKalmanFilter, ExtendedKalmanFilter):
+            with pytest.raises(ValueError, match="^dt must be one time step, for every "
+                               f"estimate of g; {shape}$"):
+                f(cv, pos).predict(g, dt=dt)
+        with pytest.raises(ValueError, match="^dt must be one time step, for every ensemble "
+                           f"of ens; {shape}$"):
+            enkf_predict(Ensemble(np.zeros((B, 10, 2))), cv, dt=dt, rng=0)
+    me = vt.models.LinearMeasurement(np.array([[1.0, 0.0], [1.0, 0.0]]), np.ones((2, 2)))
+    for compiled in (True, False):
+        with pytest.raises(ValueError, match=re.escape(
+                "the measurement model's R must be positive definite on the observed "
+                "components; on components [0, 1] it is not ([[1.0, 1.0], [1.0, 1.0]])")):
+            ParticleFilter(cv, me, 100, rng=0, compiled=compiled).filter(
+                np.ones((3, 2)), x0=[0.0, 1.0], P0=np.eye(2))

@@ -338,6 +338,31 @@ def test_compiled_path_equals_the_numpy_path_without_noise(model):
     assert not runs[0].resampled.any()
 
 
+@pytest.mark.parametrize("model", ["growth", "linear"])
+def test_the_step_before_the_first_measurement_is_not_used_on_either_path(model):
+    """``dt[0]`` is the step before the first measurement, which no filter takes:
+    ``np.diff(times, prepend=np.nan)`` gives NaN there, and the Kalman filter and the numpy
+    path ignore it. The compiled path evaluated the model at it and refused the run (``dt
+    must be finite and >= 0; got nan``). Each path now gives, with NaN or -1 there, exactly
+    the run with any valid step there; and, without noise, the two paths agree."""
+    motion, meas, x0, P0 = compiled_models(model)
+    times = np.cumsum(np.random.default_rng(2).uniform(0.5, 1.5, 25))
+    _, ys = vt.simulate.simulate(motion, meas, 25, x0=x0, dt=np.diff(times), rng=4)
+    cloud = np.random.default_rng(5).multivariate_normal(x0, P0, size=300)
+    runs = {}
+    for compiled in (True, False):
+        for first in (np.nan, -1.0, 0.7):
+            dt = np.concatenate([[first], np.diff(times)])
+            runs[compiled, first] = ParticleFilter(
+                motion, meas, n_particles=300, ess_threshold=0.0, rng=5,
+                compiled=compiled).filter(ys, dt=dt, particles=cloud)
+        for first in (np.nan, -1.0):
+            np.testing.assert_array_equal(runs[compiled, first].means,
+                                          runs[compiled, 0.7].means)
+    np.testing.assert_allclose(runs[True, np.nan].means, runs[False, np.nan].means,
+                               rtol=1e-9, atol=1e-10)
+
+
 @pytest.mark.parametrize("compiled", [True, False])
 def test_both_paths_approach_the_kalman_filter_with_resampling(rng, compiled):
     """With noise and resampling (every step, and by ESS), each path's mean is the Kalman

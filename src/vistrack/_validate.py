@@ -292,6 +292,14 @@ def as_measurement_series(ys: ArrayLike, name: str = "ys") -> tuple[np.ndarray, 
     return (y[None] if single else y), single
 
 
+def check_one_step(dt: Any, batch: str = "every estimate of g") -> None:
+    """Refuse a ``dt`` of more than one value: a prediction takes one time step for every
+    estimate of the batch (numpy's own errors, further on, named neither)."""
+    if np.ndim(dt) != 0:
+        raise ValueError(f"dt must be one time step, for {batch}; got shape "
+                         f"{np.shape(dt)}")
+
+
 def check_has_steps(y: np.ndarray, name: str = "ys") -> None:
     """Raise ``ValueError`` if a series ``(..., T, m)`` has no step (``T = 0``): a filter has
     nothing to return then, not even a last estimate."""

@@ -23,6 +23,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._validate import check_one_step
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
     MeasurementModel,
@@ -57,6 +58,7 @@ def ekf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     array([0.998, 0.05 , 0.995, 0.1  , 0.1  ])
     """
     g = check_gaussian(g)
+    check_one_step(dt)
     mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
     G = mo.jacobian(g.mean, dt, t)
     cov = symmetric(G @ g.cov @ np.swapaxes(G, -1, -2) + mo.Q(dt))

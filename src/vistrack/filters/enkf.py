@@ -28,6 +28,7 @@ from .._validate import (
     as_whole,
     check_finite,
     check_has_steps,
+    check_one_step,
     check_prior,
     is_whole,
 )
@@ -211,6 +212,7 @@ def enkf_predict(ens: Ensemble, motion: MotionModel | NonlinearMotionModel, dt: 
     >>> enkf_predict(ens, ConstantVelocity(dim=1, q=0.1), dt=1.0, rng=1).moments()[0].round(1)
     array([1., 1.])
     """
+    check_one_step(dt, "every ensemble of ens")
     mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
     x = np.asarray(mo.f(ens.members, dt, t), dtype=float)
     return Ensemble(x + _noise(as_rng(rng), x.shape, mo.Q_sqrt(dt)))

@@ -16,6 +16,7 @@ from .._validate import (
     as_measurement_series,
     check_has_steps,
     check_matrix_stack,
+    check_one_step,
     check_psd,
 )
 from ..models.measurement import LinearMeasurement, MeasurementModel, Position
@@ -187,9 +188,7 @@ class KalmanFilter:
         >>> kf.predict(Gaussian(np.array([0.0, 1.0]), np.eye(2)), dt=2.0).mean
         array([2., 1.])
         """
-        if np.ndim(dt) != 0:
-            raise ValueError(f"dt must be one time step, for every estimate of g; got shape "
-                             f"{np.shape(dt)}")
+        check_one_step(dt)
         return kf_predict(g, self.motion.F(dt), self.motion.Q(dt))
 
     def update(self, g: Gaussian, y: ArrayLike) -> tuple[Gaussian, np.ndarray]:

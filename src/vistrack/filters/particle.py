@@ -852,7 +852,12 @@ _FusedParts = tuple[tuple[str, str], Callable[..., Any], tuple[str, str], np.nda
 def _whitening(R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, float]:
     """For the observed components ``o`` of the noise ``R = L L'``: ``L^-1`` (a Gaussian's
     exponent is ``-|L^-1 r|^2 / 2``) and its constant ``-log det L - k/2 log 2π``."""
-    L = np.linalg.cholesky(R[np.ix_(o, o)])
+    try:
+        L = np.linalg.cholesky(R[np.ix_(o, o)])
+    except np.linalg.LinAlgError:  # (numpy's message names neither R nor the components)
+        raise ValueError(f"the measurement model's R must be positive definite on the observed "
+                         f"components; on components {o.tolist()} it is not "
+                         f"({R[np.ix_(o, o)].tolist()})") from None
     return np.linalg.inv(L), float(-np.log(np.diagonal(L)).sum()
                                    - 0.5 * len(o) * math.log(2 * math.pi))
 
@@ -1221,7 +1226,10 @@ class ParticleFilter:
                 Linv[p, :len(o), :len(o)], c[p] = self._whiten[key]
         which = which.ravel()
         obs, Linv, c, nobs = obs[which], Linv[which], c[which], seen.sum(1)
-        dts = np.ascontiguousarray(dts, dtype=float)
+        # dt[0], the step before the first measurement, is not used (as on the numpy path):
+        # the model is not evaluated at it (np.diff(times, prepend=np.nan) gives NaN there)
+        dts = np.array(dts, dtype=float)
+        dts[0] = dts[1] if T > 1 else 1.0
         times = np.ascontiguousarray(times, dtype=float)
         fp = np.asarray(fparams(dts, times), dtype=float).reshape(T, -1)
         if (dts == dts[0]).all():

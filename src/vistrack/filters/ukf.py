@@ -41,7 +41,7 @@ from numpy.typing import ArrayLike
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import check_finite, check_psd
+from .._validate import check_finite, check_one_step, check_psd
 from ..models.adapters import MeasurementFunctions, MotionFunctions, psd_sqrt
 from ..models.nonlinear import _offset_mean
 from ..models.protocols import (
@@ -600,6 +600,7 @@ def ukf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     array([0.997, 0.05 , 0.99 , 0.099, 0.1  ])
     """
     g = check_gaussian(g)
+    check_one_step(dt)
     mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
     points = points or MerweScaledSigmaPoints()
     n = g.mean.shape[-1]
