@@ -768,9 +768,24 @@ def test_background_by_name_and_errors():
         SelectiveBackground(alpha=0)
     # min_sigma 0 (taken before): a still scene's every pixel passes D² >= T·0, foreground
     # for good, since foreground is never learnt
-    with pytest.raises(ValueError, match=r"min_sigma must be > 0 \(grey levels\): at 0 every "
-                       r"pixel that never changed is foreground; got 0"):
+    with pytest.raises(ValueError, match=r"min_sigma must be > 0 and finite \(grey levels\): "
+                       r"at 0 every pixel that never changed is foreground; got 0"):
         SelectiveBackground(min_sigma=0)
+    # infinity (taken before): nothing was ever foreground, and nothing said why; so too a
+    # blob's area limit of NaN, and a HOG pyramid's height of NaN or infinity (which failed
+    # at the first image with "cannot convert float NaN to integer")
+    for kw in (dict(min_sigma=np.inf), dict(threshold=np.inf)):
+        name, = kw
+        with pytest.raises(ValueError, match=f"^{name} must be > 0 and finite.*; got inf$"):
+            SelectiveBackground(**kw)
+    with pytest.raises(ValueError, match="^min_area must be a number of pixels; got nan$"):
+        find_blobs(np.ones((4, 5)), min_area=np.nan)
+    from vistrack.frontends import HOGConfidence
+
+    for h in ([np.nan], [60.0, np.inf]):
+        with pytest.raises(ValueError, match=re.escape(f"heights must be finite and > 0; got "
+                                                       f"{h!r}")):
+            HOGConfidence(h)
     bg = SelectiveBackground(n_init=3)
     im = np.zeros((4, 5), np.uint8)
     assert [int(bg.apply(im).sum()) for _ in range(3)] == [0, 0, 0] and bg.mean is not None

@@ -159,16 +159,17 @@ class SelectiveBackground:
                  min_sigma: float = 6.0, freeze: bool = False, n_new: int = 3):
         if not 0.0 < alpha <= 1.0:
             raise ValueError(f"alpha must be in (0, 1]; got {alpha}")
-        if not threshold > 0:
-            raise ValueError(f"threshold must be > 0; got {threshold}")
+        if not 0 < threshold < np.inf:  # (infinity: nothing was ever foreground)
+            raise ValueError(f"threshold must be > 0 and finite; got {threshold}")
         n_init = as_whole(n_init, "n_init", 1)  # 2.5 was cut to 2, NaN unnamed
         if not is_whole(n_new, 1):
             raise ValueError(f"n_new must be a whole number >= 1; got {n_new!r}")
-        if not min_sigma > 0:
+        if not 0 < min_sigma < np.inf:
             # at 0 a pixel that never changed has σ = 0 and passes D² >= T σ² with D = 0:
-            # the whole of a still scene is foreground, and foreground is never learnt
-            raise ValueError(f"min_sigma must be > 0 (grey levels): at 0 every pixel that "
-                             f"never changed is foreground; got {min_sigma}")
+            # the whole of a still scene is foreground, and foreground is never learnt; at
+            # infinity nothing ever is
+            raise ValueError(f"min_sigma must be > 0 and finite (grey levels): at 0 every "
+                             f"pixel that never changed is foreground; got {min_sigma}")
         self.alpha, self.threshold, self.n_init = float(alpha), float(threshold), int(n_init)
         self.min_sigma, self.freeze, self.n_new = float(min_sigma), bool(freeze), int(n_new)
         self.mean: np.ndarray | None = None  # B (H, W, C) float32

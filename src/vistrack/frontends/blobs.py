@@ -198,7 +198,7 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     Raises
     ------
     ValueError
-        If ``mask`` is not 2-D.
+        If ``mask`` is not 2-D, or ``min_area`` or ``max_area`` is NaN.
 
     Examples
     --------
@@ -215,6 +215,9 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     m = np.asarray(mask)
     if m.ndim != 2:
         raise ValueError(f"mask must be 2-D (H, W); got shape {m.shape}")
+    for name, limit in (("min_area", min_area), ("max_area", max_area)):
+        if np.isnan(limit):  # (every region was dropped, without a word)
+            raise ValueError(f"{name} must be a number of pixels; got {limit}")
     m = (m != 0).astype(np.uint8)
     for opening, size in ((True, open_size), (False, close_size)):
         if size and size > 1:

@@ -446,8 +446,10 @@ class HOGConfidence:
         import cv2
 
         self.heights = np.asarray(heights, float)
-        if self.heights.ndim != 1 or len(self.heights) == 0 or (self.heights <= 0).any():
-            raise ValueError(f"heights must be positive; got {heights!r}")
+        if self.heights.ndim != 1 or len(self.heights) == 0 or not (
+                np.isfinite(self.heights) & (self.heights > 0)).all():
+            # (NaN failed at the first image: "cannot convert float NaN to integer")
+            raise ValueError(f"heights must be finite and > 0; got {heights!r}")
         self._hog = cv2.HOGDescriptor()
         # the detector comes as a float32 array (asarray keeps it; the stubs say Sequence)
         self._hog.setSVMDetector(np.asarray(cv2.HOGDescriptor.getDefaultPeopleDetector()))
