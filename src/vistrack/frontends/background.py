@@ -194,9 +194,11 @@ class SelectiveBackground:
         frames : iterable of ndarray
             Frames ``(H, W)`` grey or ``(H, W, 3)`` BGR, uint8, all of one size.
         shifts : (N, 2) array_like of int, optional
-            For a view that moves: how far each frame's content lies from where it lies in
-            the last frame, whole pixels ``dx, dy`` (the last frame's row ``0, 0``). Each frame
-            is moved by its row onto the last one's pixels, and a pixel takes the median of
+            For a view that moves: how far each frame's content has moved by the last frame,
+            whole pixels ``dx, dy``: what lies at ``(x, y)`` in the frame lies at ``(x + dx,
+            y + dy)`` in the last one (the last frame's row ``0, 0``; :meth:`move`'s sense,
+            summed over the frames after). Each frame is moved by its row onto the last one's
+            pixels, and a pixel takes the median of
             the frames that saw it (the last frame's value where none other did).
 
         Returns
