@@ -248,53 +248,36 @@ def test_a_csv_file_pandas_cannot_read_is_named(tmp_path):
     from vistrack.io.motchallenge import MOTFormatError
     from vistrack.pipeline import track_sequence
 
-    bad, empty = tmp_path / "bad.csv", tmp_path / "empty.csv"
-    short = tmp_path / "short.csv"
-    bad.write_text("frame,bb_left,bb_top,bb_width,bb_height\n1,2,3,4,5\n1,2,3,4,5,6\n")
-    short.write_text("frame,bb_left,bb_top,bb_width,bb_height\n1,2,3,4,5\n\n2,2,3\n")
-    empty.write_text("")
-    with pytest.raises(MOTFormatError, match=re.escape(
-            f"{bad}, line 3: 6 values where the header has 5")):
-        track_sequence(bad, tmp_path / "b.txt", fps=10)
-    with pytest.raises(MOTFormatError, match=re.escape(
-            f"{short}, line 4: 3 values where the header has 5")):
-        track_sequence(short, tmp_path / "s.txt", fps=10)
-    # every row one value longer than the header: pandas takes the first column for the
-    # index and reads the rest shifted by one column, no value missing (it was tracked so,
-    # frame 100 at left 200, and nothing said)
-    bad.write_text("frame,bb_left,bb_top,bb_width,bb_height,conf\n1,100,200,50,120,0.9,1\n"
-                   "2,102,200,50,120,0.9,1\n")
-    with pytest.raises(MOTFormatError, match=re.escape(
-            f"{bad}, line 2: 7 values where the header has 6")):
-        track_sequence(bad, tmp_path / "b.txt", fps=10)
-    # a column named twice in the header: pandas read the second as 'conf.1', which nothing
-    # read, without a word
-    bad.write_text("frame,bb_left,bb_top,bb_width,bb_height,conf,conf\n1,1,2,3,4,0.9,0.1\n")
-    with pytest.raises(MOTFormatError, match=re.escape(
-            f"{bad}, line 1: the header names column 'conf' twice; name each column once")):
-        track_sequence(bad, tmp_path / "b.txt", fps=10)
-    # a blank line before the header (pandas skips it): a short row was named as an empty
-    # cell of another column, "row 1 after the header"
-    short.write_text("\nframe,bb_left,bb_top,bb_width,bb_height\n2,2,3\n")
-    with pytest.raises(MOTFormatError, match=re.escape(
-            f"{short}, line 3: 3 values where the header has 5")):
-        track_sequence(short, tmp_path / "s.txt", fps=10)
-    # an empty cell in a row of the header's length is named by its column and its line
-    # (blank lines, lines of spaces and a quoted value's line break counted as the file's
-    # lines; it was "row 2 after the header", two lines off here)
-    short.write_text("frame,bb_left,bb_top,bb_width,bb_height,note\n1,2,3,4,5,\"two\nlines\"\n"
-                     "  \n\n2,2,,4,5,x\n")
-    with pytest.raises(MOTFormatError, match=re.escape(
-            f"{short}, line 6, column 'bb_top': not a finite number: nan")):
-        track_sequence(short, tmp_path / "s.txt", fps=10)
-    # a whitespace line is skipped by the row check as pandas skips it, not a row of 1 value
-    short.write_text("frame,bb_left,bb_top,bb_width,bb_height\n1,2,3,4,5\n   \n2,2,3\n")
-    with pytest.raises(MOTFormatError, match=re.escape(
-            f"{short}, line 4: 3 values where the header has 5")):
-        track_sequence(short, tmp_path / "s.txt", fps=10)
-    with pytest.raises(MOTFormatError, match=re.escape(
-            f"{empty}: not a CSV file of detections: No columns to parse from file")):
-        track_sequence(empty, tmp_path / "e.txt", fps=10)
+    path = tmp_path / "dets.csv"
+    head = "frame,bb_left,bb_top,bb_width,bb_height"
+    for text, message in [
+        (f"{head}\n1,2,3,4,5\n1,2,3,4,5,6\n", ", line 3: 6 values where the header has 5"),
+        (f"{head}\n1,2,3,4,5\n\n2,2,3\n", ", line 4: 3 values where the header has 5"),
+        # every row one value longer than the header: pandas takes the first column for the
+        # index and reads the rest shifted by one column, no value missing (it was tracked
+        # so, frame 100 at left 200, and nothing said)
+        (f"{head},conf\n1,100,200,50,120,0.9,1\n2,102,200,50,120,0.9,1\n",
+         ", line 2: 7 values where the header has 6"),
+        # a column named twice in the header: pandas read the second as 'conf.1', which
+        # nothing read, without a word
+        (f"{head},conf,conf\n1,1,2,3,4,0.9,0.1\n",
+         ", line 1: the header names column 'conf' twice; name each column once"),
+        # a blank line before the header (pandas skips it): a short row was named as an
+        # empty cell of another column, "row 1 after the header"
+        (f"\n{head}\n2,2,3\n", ", line 3: 3 values where the header has 5"),
+        # an empty cell in a row of the header's length is named by its column and its line
+        # (blank lines, lines of spaces and a quoted value's line break counted as the
+        # file's lines; it was "row 2 after the header", two lines off here)
+        (f"{head},note\n1,2,3,4,5,\"two\nlines\"\n  \n\n2,2,,4,5,x\n",
+         ", line 6, column 'bb_top': not a finite number: nan"),
+        # a line of spaces is skipped by the row check as pandas skips it, not a row of one
+        # value
+        (f"{head}\n1,2,3,4,5\n   \n2,2,3\n", ", line 4: 3 values where the header has 5"),
+        ("", ": not a CSV file of detections: No columns to parse from file"),
+    ]:
+        path.write_text(text)
+        with pytest.raises(MOTFormatError, match=re.escape(f"{path}{message}")):
+            track_sequence(path, tmp_path / "out.txt", fps=10)
 
 
 def test_a_csv_file_separated_by_tabs_or_semicolons_reads_as_with_commas(tmp_path):
