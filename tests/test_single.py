@@ -697,5 +697,17 @@ def test_frames_without_a_box_are_scored_as_otb_scores_them():
         precision([1, 2, 3, 4], [1, 2, 3, 4, 5])
     with pytest.raises(ValueError, match="pred and gt have no boxes"):
         success_rate(np.zeros((0, 4)), np.zeros((0, 4)))
+    # a threshold of NaN scored 0, one of -5 pixels 0, and an array was taken as one
+    # threshold per frame, each without a word; a string failed inside numpy
+    for score, bad, message in ((success_rate, np.nan, "finite IoU >= 0 and <= 1; got nan"),
+                                (success_rate, 1.5, "finite IoU >= 0 and <= 1; got 1.5"),
+                                (precision, -5, "finite number of pixels >= 0; got -5"),
+                                (precision, np.inf, "finite number of pixels >= 0; got inf")):
+        with pytest.raises(ValueError, match=re.escape(f"threshold must be a {message}")):
+            score(p, p, bad)
+    for score, bad in ((success_rate, [0.2, 0.6, 0.9]), (precision, "20")):
+        with pytest.raises(TypeError, match=re.escape(f"threshold must be a number; got "
+                                                      f"{bad!r}")):
+            score(p, p, bad)
     with pytest.raises(ValueError, match=re.escape("polygons must be (T, 8)")):
         region_to_bbox([[0, 0, 10, 10], [5, 5, 10, 10]])

@@ -3,6 +3,8 @@ boundaries."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from scipy.interpolate import BSpline
@@ -91,3 +93,25 @@ def test_a_snake_started_from_nan_or_a_zero_radius_is_named():
         s.init_circle((80, 60), 26, std=np.nan)
     with pytest.raises(ValueError, match="radius must be a finite number > 0; got 0"):
         s.init_circle((80, 60), 0)
+
+
+@pytest.mark.parametrize("setting, message", [
+    (dict(search=-1), "search must be a whole number >= 1 (pixels each way along a normal); "
+                      "got -1"),
+    (dict(min_edge=np.nan), "min_edge must be a finite number >= 0; got nan"),
+    (dict(n_control=4.7), "n_control must be a whole number >= 4 (control points of a closed "
+                          "B-spline); got 4.7"),
+    (dict(n_control=3), "n_control must be a whole number >= 4"),
+    (dict(q=np.inf), "q must be a finite number > 0; got inf"),
+    (dict(r=0), "r must be a finite number > 0; got 0"),
+])
+def test_a_snakes_settings_are_named_when_it_is_made(setting, message):
+    """A search of -1 or a min_edge of NaN gave a snake that never moved, n_control 4.7 was
+    cut to 4, 3 was named as ``n``, and an infinite q failed at the first update naming
+    ``Q``; each is now named by the tracker's own setting when it is made, as the other
+    trackers' are."""
+    from vistrack.tracking.snake import SnakeTracker
+
+    for make in (Snake, SnakeTracker):
+        with pytest.raises(ValueError, match="^" + re.escape(message)):
+            make(**setting)

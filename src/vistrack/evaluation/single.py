@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import decode_text
+from .._validate import as_finite, decode_text
 from ..io.motchallenge import _text_lines
 from ..io.tracks import write_boxes
 
@@ -121,7 +121,8 @@ def success_rate(pred: ArrayLike, gt: ArrayLike, threshold: float = 0.5) -> floa
     ------
     ValueError
         If ``pred`` or ``gt`` is not ``(T, 4)`` (or one box), they differ in length, or
-        they hold no box.
+        they hold no box; or ``threshold`` is not a number in [0, 1] (a TypeError for what
+        is no number).
 
     References
     ----------
@@ -132,6 +133,8 @@ def success_rate(pred: ArrayLike, gt: ArrayLike, threshold: float = 0.5) -> floa
     >>> success_rate([[0, 0, 10, 10], [5, 0, 10, 10]], [[0, 0, 10, 10], [0, 0, 10, 10]])
     0.5
     """
+    # (NaN scored 0 without a word, and an array was taken as a threshold per frame)
+    threshold = as_finite(threshold, "threshold", 0, high=1, what="IoU")
     return float(np.mean(_otb_overlaps(pred, gt) > threshold))
 
 
@@ -201,7 +204,8 @@ def precision(pred: ArrayLike, gt: ArrayLike, threshold: float = 20.0) -> float:
     ------
     ValueError
         If ``pred`` or ``gt`` is not ``(T, 4)`` (or one box), they differ in length, or
-        they hold no box.
+        they hold no box; or ``threshold`` is not a finite number >= 0 (a TypeError for what
+        is no number).
 
     References
     ----------
@@ -212,6 +216,7 @@ def precision(pred: ArrayLike, gt: ArrayLike, threshold: float = 20.0) -> float:
     >>> precision([[0, 0, 10, 10], [30, 0, 10, 10]], [[0, 0, 10, 10], [0, 0, 10, 10]])
     0.5
     """
+    threshold = as_finite(threshold, "threshold", 0, what="number of pixels")
     p, g, has = _otb(pred, gt)
     with np.errstate(invalid="ignore"):
         d = np.linalg.norm((p[:, :2] + p[:, 2:] / 2) - (g[:, :2] + g[:, 2:] / 2), axis=1)

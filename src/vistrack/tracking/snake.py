@@ -24,7 +24,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_box, as_finite, as_uint8_image
+from .._validate import as_box, as_finite, as_uint8_image, as_whole
 from ..filters import kf_predict, kf_update
 from ..types import Gaussian
 from .base import SingleObjectTracker
@@ -142,8 +142,9 @@ class Snake:
     Raises
     ------
     ValueError
-        If ``q`` or ``r`` is not > 0 (or the sizes are those :func:`bspline_matrix`
-        refuses).
+        If ``n_control`` is not a whole number >= 4, ``n_samples`` or ``search`` not one
+        >= 1, ``min_edge`` not a finite number >= 0, or ``q`` or ``r`` not a finite number
+        > 0 (a TypeError for what is no number).
 
     References
     ----------
@@ -165,13 +166,16 @@ class Snake:
 
     def __init__(self, n_control: int = 20, n_samples: int = 100, *, search: int = 10,
                  min_edge: float = 20.0, q: float = 4.0, r: float = 1.0):
-        self.n, self.m = int(n_control), int(n_samples)
+        # each named: a search of -1 or a min_edge of NaN gave a snake that never moved, a
+        # n_control of 4.7 was cut to 4, and an infinite q failed at the first update
+        self.n = as_whole(n_control, "n_control", 4, "control points of a closed B-spline")
+        self.m = as_whole(n_samples, "n_samples", 1)
         self.B = bspline_matrix(self.n, self.m)
         self.dB = bspline_matrix(self.n, self.m, derivative=True)
-        self.search, self.min_edge = int(search), float(min_edge)
-        if not (q > 0 and r > 0):
-            raise ValueError(f"q and r must be > 0; got q={q}, r={r}")
-        self.q, self.r = float(q), float(r)
+        self.search = as_whole(search, "search", 1, "pixels each way along a normal")
+        self.min_edge = as_finite(min_edge, "min_edge", 0)
+        self.q = as_finite(q, "q", 0, above=True)
+        self.r = as_finite(r, "r", 0, above=True)
         self.state: Gaussian | None = None
 
     def init(self, control_points: ArrayLike, std: float = 2.0) -> None:
