@@ -273,11 +273,24 @@ def test_a_csv_file_pandas_cannot_read_is_named(tmp_path):
         # a line of spaces is skipped by the row check as pandas skips it, not a row of one
         # value
         (f"{head}\n1,2,3,4,5\n   \n2,2,3\n", ", line 4: 3 values where the header has 5"),
+        # a line of a quoted empty value, or of a no-break space, is a row of one value to
+        # pandas, not a blank line (it was skipped, and the next row named instead)
+        (f"{head}\n1,2,3,4,5\n\"\"\n2,2,3,4,5\n", ", line 3: 1 values where the header has 5"),
+        (f"{head}\n1,2,3,4,5\n\xa0\n2,2,3,4,5\n", ", line 3: 1 values where the header has 5"),
+        # spaces after a separator are skipped, as pandas skips them: the quoted line break
+        # after ', ' is one value's (the bad value was named a line early)
+        (f"{head},note\n1, 2, 3, 4, 5, \"a\nb\"\n2, 2, bad, 4, 5, x\n",
+         ", line 4, column 'bb_top': not a number: 'bad'"),
         ("", ": not a CSV file of detections: No columns to parse from file"),
     ]:
         path.write_text(text)
         with pytest.raises(MOTFormatError, match=re.escape(f"{path}{message}")):
             track_sequence(path, tmp_path / "out.txt", fps=10)
+    # a blank line before the header, and a quoted value holding the separator after ', ':
+    # read, as pandas reads it (the row check, counting spaces as values, refused it)
+    path.write_text(f"\n{head},conf,note\n1, 2, 3, 4, 5, 0.9, \"a, b\"\n"
+                    "2, 2, 3, 4, 5, 0.9,\n")
+    assert track_sequence(path, tmp_path / "ok.txt", fps=10).detections == 2
 
 
 def test_a_csv_file_separated_by_tabs_or_semicolons_reads_as_with_commas(tmp_path):

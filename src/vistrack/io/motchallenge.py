@@ -139,14 +139,23 @@ def _read_csv(path: str | os.PathLike, what: str) -> Any:
 
 
 def _csv_lines(path: str | os.PathLike, sep: str) -> Generator[tuple[int, list[str]], None, None]:
-    """A CSV file's rows as pandas reads them, each with the line it starts on: ``(line,
-    values)``, blank lines skipped (spaces alone too, as pandas skips them)."""
+    """A CSV file's rows as pandas reads them (spaces after a separator skipped), each with
+    the line it starts on: ``(line, values)``, blank lines skipped: empty or unquoted spaces
+    and tabs alone, as pandas skips them (``""`` or a no-break space is a row of one value)."""
     with open(path, encoding="utf-8-sig", newline="") as fh:
-        rows = csv.reader(fh, delimiter=sep)
+        text: list[str] = []  # the lines of the row being read
+
+        def kept() -> Generator[str, None, None]:
+            for line in fh:
+                text.append(line)
+                yield line
+
+        rows = csv.reader(kept(), delimiter=sep, skipinitialspace=True)
         start = 1
         for row in rows:
-            if row and (len(row) > 1 or row[0].strip()):
+            if "".join(text).strip(" \t\r\n"):
                 yield start, row
+            text.clear()
             start = rows.line_num + 1  # (a quoted value may hold line breaks)
 
 
