@@ -1143,8 +1143,8 @@ def test_columns_twice_and_an_out_over_the_config_are_refused(tmp_path, capsys):
     cfg.write_text(capsys.readouterr().out)
     before = cfg.read_bytes()
     assert main(["track", str(seq), "--out", str(cfg), "--config", str(cfg), "--force"]) == 2
-    one_line(capsys, "track", f"--out {cfg} is the --config file: the results would "
-                              "overwrite it; give another --out")
+    one_line(capsys, "track", f"--out {cfg} is the configuration file (--config): the run "
+                              "would write over it; give another --out")
     assert cfg.read_bytes() == before
 
 

@@ -1105,8 +1105,8 @@ def test_the_results_never_overwrite_the_detections_file(tmp_path):
     det.write_text("".join(f"{f},-1,{10 + 2 * f},10,20,40,0.9\n" for f in range(1, 6)))
     before = det.read_bytes()
     for out in (det, tmp_path / "sub" / ".." / "det.txt"):
-        with pytest.raises(ValueError, match=r"is the detections file: the results would "
-                                             r"overwrite the detections; give another --out"):
+        with pytest.raises(ValueError, match=r"is the detections file: the run would write "
+                                             r"over it; give another --out"):
             track_sequence(det, out, fps=10, force=True)
     seq = tmp_path / "seq"
     (seq / "det").mkdir(parents=True)
@@ -1125,10 +1125,190 @@ def test_the_results_never_overwrite_the_detections_file(tmp_path):
     for out, what in ((seq / "seqinfo.ini", "seqinfo.ini"), (seq / "gt" / "gt.txt", "ground truth"),
                       (seq / "det" / ".." / "det" / "det.txt", "detections file")):
         with pytest.raises(ValueError, match=re.escape(
-                f"--out {out} is the sequence's {what}: the results would overwrite it; give "
+                f"--out {out} is the sequence's {what}: the run would write over it; give "
                 "another --out")):
             track_sequence(seq, out, detections=det, force=True)
     assert {p: p.read_bytes() for p in seq.rglob("*") if p.is_file()} == files
+
+
+def _mjpg_video(path, frames, fps=25):
+    h, w = frames[0].image.shape[:2]
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), fps, (w, h))
+    for f in frames:
+        vw.write(f.image)
+    vw.release()
+    return path
+
+
+def test_no_output_is_the_runs_own_input(tmp_path):
+    """With ``force``, ``track_one(video, out=video)`` wrote its boxes over the video, ``out``
+    naming ``gt`` replaced the ground truth by the boxes, and ``track_video`` wrote its
+    ``tracks.txt`` over a ``gt`` or a ``detections:FILE`` in the output folder (and its
+    ``annotated.mp4`` over the video tracked): the input was lost. Each is refused before
+    anything is read, by any path to the file (a hard link too), and every file keeps its
+    bytes."""
+    from vistrack.pipeline import track_one
+
+    frames, truth = red_disc_clip(T=6)
+    out = tmp_path / "out"
+    out.mkdir()
+    video = _mjpg_video(out / "annotated.mp4", frames)
+    gt = out / "tracks.txt"
+    gt.write_text("".join(f"{k},1,{x:.1f},{y:.1f},{w:.1f},{h:.1f},1,1,1\n"
+                          for k, (x, y, w, h) in enumerate(truth, 1)))
+    boxes = tmp_path / "boxes.txt"
+    boxes.write_text("".join(f"{x:.1f},{y:.1f},{w:.1f},{h:.1f}\n" for x, y, w, h in truth))
+    os.link(boxes, tmp_path / "hard.txt")
+    folder = write_clip(tmp_path / "frames", frames)
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+
+    def refused(what, call, *args, **kwargs):
+        with pytest.raises(ValueError, match=re.escape(what) + ": the run would write over it"):
+            call(*args, **kwargs)
+
+    refused(f"out {video} is the video tracked", track_one, video, truth[0], video, force=True)
+    refused(f"out {boxes} is the ground truth (--gt)", track_one, folder, None, boxes,
+            gt=boxes, force=True)
+    refused(f"out {tmp_path / 'hard.txt'} is the ground truth (--gt)", track_one, folder,
+            None, tmp_path / "hard.txt", gt=boxes, force=True)
+    refused(f"out_dir {out}: {gt} is the ground truth (--gt)", track_video, folder, out,
+            frontend=TruthDetector(truth), gt=gt, force=True)
+    refused(f"out_dir {out}: {gt} is the detections file (--frontend detections:FILE)",
+            track_video, folder, out, frontend=f"detections:{gt}", force=True)
+    refused(f"out_dir {out}: {video} is the video tracked", track_video, video, out,
+            frontend=TruthDetector(truth), force=True)
+    # a sequence folder as gt is its gt/gt.txt
+    seq = tmp_path / "seq"
+    (seq / "gt").mkdir(parents=True)
+    os.link(gt, seq / "gt" / "gt.txt")
+    refused(f"out_dir {out}: {gt} is the ground truth (--gt)", track_video, folder, out,
+            frontend=TruthDetector(truth), gt=seq, force=True)
+    (seq / "gt" / "gt.txt").unlink()
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
+    # an output of the same name elsewhere is no input
+    with pytest.warns(UserWarning, match="every row has an identity"):
+        track_video(folder, tmp_path / "out2", frontend=f"detections:{gt}", gt=gt, fps=25,
+                    annotate=False)
+    assert (tmp_path / "out2" / "tracks.txt").exists()
+
+
+def test_the_command_line_refuses_an_output_that_is_an_input_before_reading(tmp_path, capsys):
+    """``vistrack track --out-dir`` and ``track-one --out`` name an output that is the run's
+    own input before anything is read (the --config file too), and write nothing."""
+    from vistrack.cli import main
+
+    frames, truth = red_disc_clip(T=6)
+    video = _mjpg_video(tmp_path / "in.avi", frames)
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "tracks.txt").write_text("1,1,10,10,20,20,1,1,1\n")
+    assert main(["track", str(video), "--out-dir", str(out), "--gt", str(out / "tracks.txt"),
+                 "--frontend", "hog", "--force"]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"vistrack track: error: --out-dir {out}: {out / 'tracks.txt'} is the ground "
+                   "truth (--gt): the run would write over it; give another --out-dir\n")
+    assert main(["track-one", str(video), "--init", "30,30,20,20", "--out", str(video),
+                 "--force"]) == 2
+    assert capsys.readouterr().err == (f"vistrack track-one: error: --out {video} is the video "
+                                       "tracked: the run would write over it; give another "
+                                       "--out\n")
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["in.avi", "o", "tracks.txt"]
+
+
+def test_a_video_without_frames_is_named_by_every_front_end_and_track_one(tmp_path):
+    """A video with a header and no frame: the background model's start said "initialize
+    needs at least one frame" (no file named), and ``track_one`` wrote an empty boxes file
+    over an earlier one with force and gave -1e12 frames a second. Each now says the video
+    has no frames, and the earlier file keeps its bytes."""
+    from vistrack.pipeline import track_one
+
+    empty = tmp_path / "empty.avi"
+    cv2.VideoWriter(str(empty), cv2.VideoWriter_fourcc(*"MJPG"), 25, (64, 48)).release()
+    for frontend in ("bgsub", "hog"):
+        with pytest.raises(ValueError, match=re.escape(f"{empty}: no frames to track")):
+            track_video(empty, tmp_path / frontend, frontend=frontend)
+        assert not (tmp_path / frontend).exists()
+    boxes = tmp_path / "boxes.txt"
+    boxes.write_text("1,5.00,10.00,20.00,30.00\n")
+    with pytest.raises(ValueError, match=re.escape(f"{empty}: no frames to track")):
+        track_one(empty, [5, 10, 20, 30], boxes, force=True)
+    assert boxes.read_text() == "1,5.00,10.00,20.00,30.00\n"
+    from vistrack.pipeline import SingleRun
+
+    assert SingleRun(boxes, np.zeros((0, 4)), 0.0, None).fps == 0.0
+
+
+def test_a_header_frame_rate_out_of_range_names_the_video_and_fps(tmp_path):
+    """A video header's rate of 10^8 frames/s was named by the motion model, as
+    ``frame_rate``, an argument the caller never gave; one of NaN was "fps must be a finite
+    number", another. The first names the video and asks for the true rate; the second is
+    no rate (30 frames/s, said, as for a header without one)."""
+    import struct
+
+    frames, truth = red_disc_clip(T=4)
+    video = _mjpg_video(tmp_path / "v.avi", frames, fps=10)
+    data = bytearray(video.read_bytes())
+    at = data.index(b"strh") + 8 + 20  # the stream header's dwScale, dwRate
+    for name, scale, rate in (("huge", 1, 10**8), ("nan", 0, 0)):
+        patched = tmp_path / f"{name}.avi"
+        d = data.copy()
+        d[at:at + 8] = struct.pack("<II", scale, rate)
+        patched.write_bytes(bytes(d))
+        fps = cv2.VideoCapture(str(patched)).get(cv2.CAP_PROP_FPS)
+        if name == "huge":
+            assert fps == 1e8
+            with pytest.raises(ValueError, match=re.escape(
+                    f"{patched}: its header gives 1e+08 frames/s, and the tracker takes 0.001 "
+                    "to 1e+06 (give the true rate with --fps")):
+                track_video(patched, tmp_path / "o1", frontend=TruthDetector(truth))
+            run = track_video(patched, tmp_path / "o2", frontend=TruthDetector(truth), fps=10,
+                              annotate=False)
+            assert run.fps > 0 and run.frames == 4
+        elif not np.isfinite(fps) or fps <= 0:  # OpenCV's reading of a rate of 0 / 0
+            with pytest.warns(UserWarning, match="gives no frame rate"):
+                run = track_video(patched, tmp_path / "o3", frontend=TruthDetector(truth),
+                                  annotate=False)
+            assert run.frames == 4
+
+
+def test_a_sink_that_fails_to_start_leaves_no_partial_file_of_the_others(tmp_path, monkeypatch):
+    """A sink whose constructor fails (the plot's matplotlib import, done up front) left the
+    sinks made before it with their partial files, in the user's folder, and kept a folder the
+    run had made. Those are removed, and the user's own files kept."""
+    import vistrack.viz.plots as plots
+
+    def broken():
+        raise ImportError("matplotlib is broken (simulated)")
+
+    monkeypatch.setattr(plots, "_import_agg", broken)
+    frames, truth = red_disc_clip(T=4)
+    folder = write_clip(tmp_path / "frames", frames)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine\n")
+    for where in (out, tmp_path / "new" / "out"):
+        with pytest.raises(ImportError, match="simulated"):
+            track_video(folder, where, frontend=TruthDetector(truth), fps=25)
+    assert [p.name for p in out.iterdir()] == ["keep.txt"]
+    assert not (tmp_path / "new").exists()
+
+
+def test_a_run_without_a_video_removes_an_earlier_runs_video(tmp_path):
+    """``annotate=False`` with ``force`` over an earlier run's folder kept its
+    ``annotated.mp4``, which showed other tracks beside the new ones (and the report showed
+    it). Without ``force`` it is named as the outputs are; with it, removed as the new
+    outputs are written."""
+    frames, truth = red_disc_clip(T=4)
+    folder = write_clip(tmp_path / "frames", frames)
+    out = tmp_path / "out"
+    track_video(folder, out, frontend=TruthDetector(truth), fps=25)
+    assert (out / "annotated.mp4").exists()
+    with pytest.raises(FileExistsError, match="annotated.mp4"):
+        track_video(folder, out, frontend=TruthDetector(truth), fps=25, annotate=False)
+    assert (out / "annotated.mp4").exists()
+    track_video(folder, out, frontend=TruthDetector(truth), fps=25, annotate=False, force=True)
+    assert sorted(p.name for p in out.iterdir()) == ["run.json", "tracks.csv", "tracks.txt",
+                                                     "trajectories.png"]
 
 
 def test_a_detection_beyond_the_sequences_frames_is_named_by_its_line(tmp_path):

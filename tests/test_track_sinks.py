@@ -185,6 +185,17 @@ def test_the_boxes_writer_writes_what_write_boxes_writes(tmp_path):
     np.testing.assert_array_equal(w.boxes, np.array(want))
 
 
+@pytest.mark.parametrize("shape", [(3, 8), (4, 2), (3, 2), (4,), (2, 4, 1)])
+def test_write_boxes_refuses_what_is_not_one_box_a_frame(tmp_path, shape):
+    """A VOT polygon's (T, 8) corners, or (T, 2) centres, were reshaped into other boxes and
+    written without a word (and (3, 2) failed inside numpy's reshape)."""
+    with pytest.raises(ValueError, match=re.escape("boxes must be")):
+        write_boxes(tmp_path / "b.txt", np.ones(shape))
+    assert not (tmp_path / "b.txt").exists()
+    write_boxes(tmp_path / "none.txt", np.zeros((0, 4)))
+    assert (tmp_path / "none.txt").read_text() == ""
+
+
 def truth_detector(frames, stop=None):
     """Detections of three boxes moving apart, one call a frame; KeyboardInterrupt (Ctrl-C)
     in frame ``stop``."""

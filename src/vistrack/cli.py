@@ -510,10 +510,10 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
     either, "" if nothing; checked before anything is read or computed, so that a run that
     cannot write its outputs fails now (raises as :func:`~vistrack.io.atomic.check_output`
     and :func:`~vistrack.pipeline.video_outputs` do)."""
-    from .io.atomic import check_output
+    from .io.atomic import check_not_input, check_output
     from .io.motchallenge import DETECTION_SUFFIXES
     from .io.video import _TEXT_SUFFIXES, _holds_images
-    from .pipeline import video_outputs
+    from .pipeline import input_files, video_outputs
 
     setting_flags = _box_settings_given(args, name)
     if not box:
@@ -567,10 +567,9 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
             if args.fps is None:
                 return (f"{args.input} is a detections file alone: give its frame rate "
                         "with --fps")
-        if args.config is not None and Path(args.out).resolve() == Path(args.config).resolve():
-            # (--force wrote the results over the configuration the run read)
-            return (f"--out {args.out} is the --config file: the results would overwrite it; "
-                    "give another --out")
+        # (--force wrote the results over the configuration the run read; the sequence's
+        # own files are the pipeline's to name)
+        check_not_input([args.out], input_files(None, config=args.config), name="--out")
         check_output(args.out, force=args.force, name="--out")
         if str(args.out).lower().endswith(".parquet"):
             from .io.motchallenge import need_parquet
@@ -594,7 +593,9 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
         if args.skip_bad_frames and Path(args.input).is_file():
             return _skip_bad_frames_problem([args.input])
         video_outputs(args.out_dir, force=args.force, name="--out-dir",
-                      points=_points(name))
+                      points=_points(name),
+                      inputs=input_files(args.input, gt=args.gt, frontend=args.frontend,
+                                         config=args.config))
     return ""
 
 
@@ -814,8 +815,8 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
 
     if args.own_process:
         one_thread_here()  # before numpy: this process hands out the inputs, its workers track
-    from .io.atomic import check_output
-    from .pipeline import video_outputs
+    from .io.atomic import check_not_input, check_output
+    from .pipeline import input_files, video_outputs
 
     def fail(text: str) -> int:
         return _fail("track", text)
@@ -882,10 +883,13 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     _warn_unused_settings(args, cfg, offline_given)
     jobs = plan(args.input, out, kind=kind, **options)
     for job in jobs:  # before anything runs: a job that cannot write fails now
+        read = input_files(job.input, config=args.config)
         if kind == "detections":
+            check_not_input([job.out], read, name="--out")
             check_output(job.out, force=args.force, name="--out")
         else:
-            video_outputs(job.out, force=args.force, name="--out-dir", points=_points(name))
+            video_outputs(job.out, force=args.force, name="--out-dir", points=_points(name),
+                          inputs=read)
     if args.scheduler is not None:
         if args.jobs is not None:
             return fail("--jobs goes with the local pool; the cluster has its own workers")
@@ -1018,8 +1022,8 @@ def _fit(args: argparse.Namespace) -> int:
 
 
 def _track_one(args: argparse.Namespace) -> int:
-    from .io.atomic import check_output
-    from .pipeline import track_one
+    from .io.atomic import check_not_input, check_output
+    from .pipeline import input_files, track_one
 
     init: list[float] | None = None
     if args.init is None and args.gt is None:
@@ -1033,8 +1037,10 @@ def _track_one(args: argparse.Namespace) -> int:
     except ValueError:
         return _fail("track-one", f"--init must be x,y,w,h (four finite numbers, w and h "
                      f"> 0); got {args.init!r}")
-    # before anything is read or computed: a run that cannot write fails now
+    # before anything is read or computed: a run that cannot write fails now, nor write
+    # over what it reads
     check_output(args.out, force=args.force, name="--out")
+    check_not_input([args.out], input_files(args.input, gt=args.gt), name="--out")
     run = track_one(args.input, init, args.out, method=args.method, gt=args.gt,
                     force=args.force, progress=sys.stderr if sys.stderr.isatty()
                     and not args.quiet else None, init_name="--init")

@@ -17,6 +17,7 @@ any tracker of your own) and :data:`SINKS` (the files of a run). :func:`track_se
 from __future__ import annotations
 
 import importlib
+import itertools
 import math
 import os
 import re
@@ -51,7 +52,14 @@ from .detector_checks import (
 )
 from .evaluation.mot import MOTCounts, _lines_of, check_zero_distance, considered, evaluate_mot
 from .evaluation.sanity import sanity_warnings
-from .io.atomic import check_output, hidden_path, made_folder, remove_on_commit, together
+from .io.atomic import (
+    check_not_input,
+    check_output,
+    hidden_path,
+    made_folder,
+    remove_on_commit,
+    together,
+)
 from .io.motchallenge import (
     DETECTION_SUFFIXES,
     MOTFormatError,
@@ -722,9 +730,13 @@ def _bgsub(ctx: Context) -> FrameDetector:
             # image skipped, a file that stops early): not twice
             warnings.filterwarnings("ignore", message=re.escape(str(reader.source)),
                                     category=RuntimeWarning)
-            det.initialize(_image(f, "the background model") for f in VideoReader(
+            frames = (_image(f, "the background model") for f in VideoReader(
                 reader.source, fps=reader.fps, grey=True, start=reader.start,
                 stop=reader.start + n_init - 1, skip_bad=reader.skip_bad))
+            first = next(frames, None)
+            if first is None:  # (as the run says it: not "initialize needs at least one frame")
+                raise ValueError(f"{reader.source}: no frames to track")
+            det.initialize(itertools.chain([first], frames))
     source = reader.source if reader is not None else "the frames"
     said = False
 
@@ -1544,16 +1556,11 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
     if det_path.is_dir():
         raise ValueError(f"{det_path} is a folder, not a detections file"
                          + (" (--detections FILE)" if detections is not None else ""))
-    if out.resolve() == det_path.resolve():
-        raise ValueError(f"--out {out} is the detections file: the results would overwrite "
-                         "the detections; give another --out")
-    if not alone:  # nor any other file of the sequence (--force overwrote them)
-        for what, own in (("seqinfo.ini", seq_dir / "seqinfo.ini"),
-                          ("ground truth", seq_dir / "gt" / "gt.txt"),
-                          ("detections file", seq_dir / "det" / "det.txt")):
-            if own.exists() and out.resolve() == own.resolve():
-                raise ValueError(f"--out {out} is the sequence's {what}: the results would "
-                                 "overwrite it; give another --out")
+    # nor any other file of the sequence (--force overwrote them)
+    check_not_input([out], [("the detections file", det_path)] + ([] if alone else [
+        ("the sequence's seqinfo.ini", seq_dir / "seqinfo.ini"),
+        ("the sequence's ground truth", seq_dir / "gt" / "gt.txt"),
+        ("the sequence's detections file", seq_dir / "det" / "det.txt")]), name="--out")
     # the warnings' stacklevels (here and in _check_detections) name track_sequence's caller
     dets = read_detections(det_path, columns, stacklevel=3,
                            classless=None if out.suffix.lower() in (".csv", ".parquet")
@@ -2100,16 +2107,51 @@ replaces the outputs (``force``) removes an earlier run's, which would describe 
 tracks."""
 
 
+def input_files(video: str | Path | None, *, gt: str | Path | None = None,
+                frontend: object = None, config: str | Path | None = None
+                ) -> list[tuple[str, Path | None]]:
+    """The files a run of :func:`track_video` or :func:`track_one` reads, each with what a
+    message calls it (None where not given): no output may be one of them
+    (:func:`~vistrack.io.atomic.check_not_input`). ``gt`` is a file or a sequence folder
+    (its ``gt/gt.txt``); ``frontend`` a front-end's name (``detections:FILE`` and
+    ``onnx:MODEL.onnx`` read a file); ``config`` the configuration file read.
+
+    Examples
+    --------
+    >>> [(what, str(p)) for what, p in input_files("in.avi", frontend="detections:d.txt")
+    ...  if p is not None]
+    [('the video tracked', 'in.avi'), ('the detections file (--frontend detections:FILE)', \
+'d.txt')]
+    """
+    gt_file = None
+    if gt is not None:
+        g = Path(gt)
+        gt_file = g / "gt" / "gt.txt" if g.is_dir() else g
+    read: list[tuple[str, Path | None]] = [
+        ("the video tracked", None if video is None else Path(video)),
+        ("the ground truth (--gt)", gt_file),
+        ("the configuration file (--config)", None if config is None else Path(config))]
+    if isinstance(frontend, str):
+        for kind, form in (("detections", "detections:FILE"), ("onnx", "onnx:MODEL.onnx")):
+            if frontend.startswith(kind + ":") and frontend != kind + ":":
+                read.append((f"the {'detections file' if kind == 'detections' else 'model'} "
+                             f"(--frontend {form})", Path(frontend.split(":", 1)[1])))
+    return read
+
+
 def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = False,
-                  name: str = "out_dir", points: bool = False) -> dict[str, Path]:
+                  name: str = "out_dir", points: bool = False,
+                  inputs: Sequence[tuple[str, str | Path | None]] = ()) -> dict[str, Path]:
     """The file of each sink :func:`track_video` writes in ``out_dir``, checked before any
     work is done: ``out_dir`` is a folder or can be made one, can be written in, its
     outputs (``run.json`` too, which is not a sink's, and an earlier run's ``report.html``)
-    are not folders, and exist only if ``force``.
+    are not folders, exist only if ``force``, and are none of the run's ``inputs``
+    (:func:`input_files`), which ``force`` would write over.
 
     ``name`` names the argument or option in the messages. With ``points`` (a tracker of
-    point tracks, whose rows are no boxes) there is no ``tracks.txt``; an earlier run's is
-    checked as the outputs are, and removed when the run's outputs are written.
+    point tracks, whose rows are no boxes) there is no ``tracks.txt``, and without
+    ``annotate`` no ``annotated.mp4``; an earlier run's is checked as the outputs are, and
+    removed when the run's outputs are written.
 
     Raises
     ------
@@ -2121,6 +2163,8 @@ def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = F
         If the output folder (or the nearest existing one above it) cannot be written in.
     FileExistsError
         If an output exists and ``force`` is False.
+    ValueError
+        If an output is one of ``inputs``.
 
     Examples
     --------
@@ -2134,12 +2178,14 @@ def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = F
     files = {key: out_dir / SINK_FILES[key] for key in SINKS
              if (annotate or key != "video") and not (points and key == "tracks")}
     # and how they were made, and the page that showed an earlier run's (and its tracks.txt,
-    # where these tracks are points)
+    # where these tracks are points, and its video, where none is made)
     written = [*files.values(), out_dir / RUN_INFO, out_dir / REPORT,
-               *([out_dir / SINK_FILES["tracks"]] if points else [])]
+               *[out_dir / SINK_FILES[key] for key in ("tracks", "video") if key not in files]]
     for p in written:
         if p.is_dir():
             raise IsADirectoryError(f"{name} {out_dir}: {p} is a folder, not a file")
+    # (named first: "exist; pass --force" would have the input overwritten next)
+    check_not_input(written, inputs, name=name, given=out_dir)
     there = [str(p) for p in written if p.exists()]
     if there and not force:
         raise FileExistsError(f"{', '.join(there)} exist; pass --force to overwrite them")
@@ -2321,7 +2367,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             zero_distance = float(diameter)  # a match within the particle's radius
         if zero_distance is not None:
             zero_distance = check_zero_distance(zero_distance)
-        files = video_outputs(out_dir, annotate=annotate, force=force, points=points)
+        files = video_outputs(out_dir, annotate=annotate, force=force, points=points,
+                              inputs=input_files(video, gt=gt, frontend=name))
         out_dir = Path(out_dir)
         gt_table = _ground_truth(gt, zero_distance) if gt is not None else None
         if confidence is not None and not callable(confidence):
@@ -2334,6 +2381,13 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             raise ValueError(f"{out_dir} is the folder of the images being tracked: the outputs "
                              "would be read as frames by the next run; write them to another "
                              "folder (--out-dir)")
+        if reader.fps_from not in (None, "fps") \
+                and not FRAME_RATES[0] <= reader.fps <= FRAME_RATES[1]:
+            # (named by the motion model later, as frame_rate, without the file)
+            raise ValueError(f"{video}: its {reader.fps_from.removeprefix('the ')} gives "
+                             f"{reader.fps:g} frames/s, and the tracker takes "
+                             f"{FRAME_RATES[0]:g} to {FRAME_RATES[1]:g} (give the true rate "
+                             "with --fps, or fps=)")
         if reader.fps_from is None:
             # the tracker's times (coasting, how long a lost track is kept) and its motion's
             # noise follow the rate
@@ -2435,7 +2489,13 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         # into place together, run.json with them, once all are complete (Ctrl-C between
         # two left new tracks beside an earlier run's video, plot and run.json)
         with made_folder(out_dir), together():
-            sinks = {key: SINKS[key](path, ctx, reader.source.name) for key, path in files.items()}
+            sinks: dict[str, Sink] = {}
+            try:
+                for key, path in files.items():
+                    sinks[key] = SINKS[key](path, ctx, reader.source.name)
+            except BaseException:  # the partial files of those made (and the folder made)
+                _abort(list(sinks.values()))
+                raise
             stats = run(reader, call, stepper, list(sinks.values()), progress=progress,
                         total=len(reader), label=reader.source.name, check=check)
             n = stats.frames
@@ -2497,6 +2557,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             remove_on_commit(out_dir / REPORT)
             if points:  # an earlier run's box tracks would read as this run's
                 remove_on_commit(out_dir / SINK_FILES["tracks"])
+            if not annotate:  # and its video would show other tracks (the report showed it)
+                remove_on_commit(out_dir / SINK_FILES["video"])
             return result
 
 
@@ -2639,7 +2701,7 @@ class SingleRun:
         >>> SingleRun(Path("boxes.txt"), np.zeros((5, 4)), 0.1, None).fps
         40.0
         """
-        return (len(self.boxes) - 1) / max(self.seconds, 1e-12)
+        return max(len(self.boxes) - 1, 0) / max(self.seconds, 1e-12)
 
 
 def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
@@ -2688,7 +2750,9 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
         first, before anything is read.
     ValueError
         If ``method`` is unknown, ``init`` is not a box, is less than half inside the first
-        frame, or is None without ``gt``, or ``gt`` has fewer boxes than frames.
+        frame, or is None without ``gt``, ``gt`` has fewer boxes than frames, ``out`` is the
+        video or ``gt`` (:func:`~vistrack.io.atomic.check_not_input`), or the video has no
+        frames.
 
     Examples
     --------
@@ -2713,6 +2777,7 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
 
     out = Path(out)
     check_output(out, force=force)
+    check_not_input([out], input_files(source, gt=gt), name="out")
     tracker = single_tracker(method)
     truth = None
     if gt is not None:
@@ -2744,6 +2809,8 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     writer = BoxesWriter(out)
 
     def check(stats: LoopStats) -> None:  # before the file is written (run's check)
+        if stats.frames == 0:  # (an empty file was written, and "-1e12 frames/s" said)
+            raise ValueError(f"{source}: no frames to track")
         if truth is not None and len(truth) < len(writer.boxes):
             raise ValueError(f"{gt} has {len(truth)} boxes for {len(writer.boxes)} frames")
 

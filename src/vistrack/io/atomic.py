@@ -9,12 +9,12 @@ import contextvars
 import os
 import re
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import IO
 
 __all__ = ["partial_path", "replacing", "open_replacing", "PartialFile", "check_output",
-           "made_folder", "together", "remove_on_commit"]
+           "check_not_input", "made_folder", "together", "remove_on_commit"]
 
 
 _NAME_MAX = 255
@@ -462,3 +462,48 @@ def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "o
     os.unlink(probe)
     if not folder and p.exists() and not force:
         raise FileExistsError(f"{name} {p} exists; pass --force to overwrite it")
+
+
+def check_not_input(outputs: Iterable[str | os.PathLike],
+                    inputs: Iterable[tuple[str, str | os.PathLike | None]], *,
+                    name: str = "out", given: str | os.PathLike | None = None) -> None:
+    """Raise, before any work is done, if an output is one of the run's inputs: the same
+    file by any path to it (a symbolic or a hard link too), which ``force`` would write over
+    with what was read from it.
+
+    ``inputs`` are ``(what, path)`` pairs, ``what`` naming the input in the message (None
+    paths, and inputs that are no file, are skipped); ``name`` names the option, whose value
+    ``given`` is a folder the ``outputs`` are written in (default: each output is the
+    option's value itself).
+
+    Raises
+    ------
+    ValueError
+        If an output is an input.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> gt = Path(tempfile.mkdtemp()) / "gt.txt"
+    >>> _ = gt.write_text("1,1,0,0,5,5,1,1,1\\n")
+    >>> check_not_input([gt.parent / "tracks.txt"], [("the ground truth (--gt)", gt)])
+    >>> check_not_input([gt], [("the video", None), ("the ground truth (--gt)", gt)],
+    ...                 name="--out")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: --out .../gt.txt is the ground truth (--gt): the run would write over it; give \
+another --out
+    """
+    pairs = [(what, Path(src)) for what, src in inputs if src is not None]
+    for out in map(Path, outputs):
+        for what, src in pairs:
+            # (by its name, through a folder not made yet: "new/../in.txt"; or by its inode)
+            same = out.resolve() == src.resolve()
+            try:
+                same = same or os.path.samefile(out, src)
+            except (OSError, ValueError):  # one does not exist (or a name no file can have)
+                pass
+            if same and src.is_file():
+                where = f"{name} {out}" if given is None else f"{name} {given}: {out}"
+                raise ValueError(f"{where} is {what}: the run would write over it; give "
+                                 f"another {name}")

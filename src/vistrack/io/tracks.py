@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
+from .._validate import as_float_array
 from ..types import Frame, Tracks
 from .atomic import PartialFile, open_replacing
 from .motchallenge import _ROW as _MOT_ROW
@@ -737,6 +738,9 @@ def write_boxes(path: str | os.PathLike, boxes: ArrayLike, *, force: bool = Fals
     ------
     FileExistsError
         If ``path`` exists and ``force`` is False.
+    ValueError
+        If ``boxes`` is not ``(T, 4)`` (a VOT polygon's ``(T, 8)`` corners, or ``(T, 2)``
+        centres, were written as other boxes).
 
     Examples
     --------
@@ -747,9 +751,12 @@ def write_boxes(path: str | os.PathLike, boxes: ArrayLike, *, force: bool = Fals
     '1,1.00,2.00,30.00,40.00\\n'
     """
     path = Path(path)
+    b = as_float_array(boxes, "boxes", ndim=(2,))
+    if b.shape[1] != 4:
+        raise ValueError(f"boxes must be (T, 4), x, y, w, h in each frame; got shape "
+                         f"{b.shape}")
     if path.exists() and not force:
         raise FileExistsError(f"{path} exists; pass --force to overwrite it")
-    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
     with open_replacing(path) as fh:
         for k, (x, y, w, h) in enumerate(b, start=1):
             fh.write(f"{k},{x:.2f},{y:.2f},{w:.2f},{h:.2f}\n")

@@ -424,10 +424,11 @@ class VideoReader:
             ((float(r), f) for r, f in ((seq_fps, "seqinfo.ini"), (header_fps, "the header"))
              if r is not None and np.isfinite(r) and r > 0), (None, None))
         self.own_fps, self.own_fps_from = own
-        # where the rate comes from: None where nothing gives one (an image folder), 30 (a
-        # source's rate that is none, NaN or below 0, is refused below)
+        # where the rate comes from: None where nothing gives one (an image folder, a
+        # header's rate of 0, NaN or below 0, which was refused as "fps must be ...", an
+        # argument not given), and it is 30
         self.fps_from = "fps" if fps is not None else self.own_fps_from
-        fps = fps if fps is not None else seq_fps or header_fps or 30.0
+        fps = fps if fps is not None else self.own_fps or 30.0
         if not np.isfinite(fps) or fps <= 0:
             raise ValueError(f"fps must be a finite number > 0; got {fps}")
         self.fps = float(fps)
