@@ -3,6 +3,7 @@ microscopy clip; the point tracker on that clip beside trackpy's linking."""
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import cv2
@@ -176,6 +177,11 @@ def test_float_images_noise_size_0_and_bad_settings():
     with pytest.raises(ValueError, match="^smoothing_size must be a whole number >= 1; got "
                                          "10.5$"):
         locate(im, 9, smoothing_size=10.5)
+    # at its default (the diameter), a noise_size as large: "got None" named no value
+    with pytest.raises(ValueError, match=re.escape(
+            "smoothing_size must be odd and larger than noise_size (9); got 9 (the default, "
+            "diameter)")):
+        locate(im, 9, noise_size=9)
     bad = im / 255.0
     bad[3, 4] = np.nan
     with pytest.raises(ValueError, match=r"^image must be finite; image\[3, 4\] = nan"):
@@ -198,6 +204,11 @@ def test_dark_spots_of_a_signed_or_bool_image_are_found_with_invert():
     mask = blobs > 0.5
     np.testing.assert_array_equal(locate(~mask, 7, invert=True).centroids,
                                   locate(mask, 7).centroids)
+    # an int64 image whose range passes 2^63: max - v wrapped round in int64 (the image's
+    # background, at the top of the range, a bright plain, each spot a dip)
+    wide = (2.0**63 - 2**11 + dark / -dark.min() * 1.5 * 2.0**63).astype(np.int64)
+    assert int(wide.max()) - int(wide.min()) > 2**63
+    np.testing.assert_allclose(locate(wide, 7, invert=True).centroids, centres, atol=0.01)
 
 
 def test_no_move_of_the_disc_still_measures_its_centre_of_mass_as_trackpy_does():

@@ -170,7 +170,10 @@ def _inverted(im: np.ndarray) -> np.ndarray:
     if im.dtype.kind in "ui" and not (im.dtype.kind == "i" and im.min() < 0):
         return np.iinfo(im.dtype).max - im
     if im.dtype.kind == "i":  # (in its own type, which holds max - min unless it is wide)
-        out = int(im.max()) - im.astype(np.int64)
+        top = int(im.max())
+        if top - int(im.min()) > np.iinfo(np.int64).max:  # (int64 would wrap round)
+            return float(top) - im.astype(np.float64)
+        out = top - im.astype(np.int64)
         return out.astype(im.dtype) if out.max() <= np.iinfo(im.dtype).max else out
     return im.max() - im
 
@@ -258,8 +261,10 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
                          f"{noise_size}")
     smooth = diameter if smoothing_size is None else as_whole(smoothing_size, "smoothing_size", 1)
     if smooth % 2 == 0 or smooth <= noise_size:
-        raise ValueError(f"smoothing_size must be odd and larger than noise_size; got "
-                         f"{smoothing_size}")
+        # (at the default, the diameter: "got None" named no value)
+        raise ValueError(f"smoothing_size must be odd and larger than noise_size "
+                         f"({noise_size:g}); got {smooth}"
+                         + (" (the default, diameter)" if smoothing_size is None else ""))
     for name, value in (("minmass", minmass), ("threshold", threshold)):
         if value is not None and not np.isfinite(value):  # (NaN: every spot dropped)
             raise ValueError(f"{name} must be a finite number; got {value}")
