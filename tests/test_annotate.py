@@ -276,6 +276,29 @@ def test_the_timeline_draws_each_objects_matches(tmp_path):
     assert (tmp_path / "t.png").read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.parametrize("pid", [-1, -5])
+def test_a_track_numbered_minus_one_or_below_is_drawn_as_matched(tmp_path, pid):
+    """A results file whose track is numbered -1 (or -5) scores it as any track (TP 3), but
+    ``clear_matches`` gave -1 for it, read as a miss, and ``vistrack eval --plots`` drew the
+    whole object light grey, "missed". ``Matches.matched`` tells them apart; the timeline
+    draws the track's colour, and a miss beside it in grey."""
+    from vistrack.evaluation import clear_matches, evaluate_mot
+    from vistrack.io import MOTTable
+    from vistrack.viz import id_colour, plot_timeline
+
+    gt = MOTTable.from_rows([(f, 1, 10 * f, 0, 30, 40) for f in (1, 2, 3, 4)])
+    pred = MOTTable.from_rows([(f, pid, 10 * f, 0, 30, 40) for f in (1, 2, 3)])
+    c, m = evaluate_mot(gt, pred), clear_matches(gt, pred)
+    assert (c.TP, c.FN) == (3, 1)
+    assert m.matched.tolist() == [True, True, True, False]
+    assert m.pred_ids[m.matched].tolist() == [pid] * 3
+    runs = plot_timeline(m).axes[0].collections[0]
+    b, g, r = id_colour(pid)
+    assert np.allclose(runs.get_facecolors()[:, :3], [(r / 255, g / 255, b / 255),
+                                                      (0.85, 0.85, 0.85)])
+    assert [p.vertices[0, 0] for p in runs.get_paths()] == [0.5, 3.5]
+
+
 def test_the_timeline_of_a_ground_truth_with_nothing_to_score(tmp_path):
     """Ground truth with no box to score (empty, all ignored, or starting after the frames
     tracked): `vistrack eval --plots` and `track --report` failed in the timeline with an

@@ -4,6 +4,8 @@ Euclidean similarity."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -122,6 +124,23 @@ def test_points_need_a_distance_and_a_distance_must_be_one():
     assert evaluate_mot(box, far, zero_distance=10).TP == 2  # at similarity 0.5
     assert evaluate_mot(box, far, zero_distance=9.9).TP == 0
     np.testing.assert_allclose(point_similarity([[0, 0, 10, 10]], [[3, 4, 10, 10]], 10), 0.5)
+
+
+def test_positions_near_the_largest_float_are_scored_without_overflow():
+    """A finite box whose centre passes the largest float (left 1.7e308, width 1e308) gave a
+    NaN similarity, and ``vistrack eval --zero-distance`` stopped in SciPy's assignment
+    ("matrix contains invalid numeric entries"), naming nothing. Oracle: the same row is at
+    distance 0 from itself (similarity 1); rows 3e308 apart are as far as can be (0)."""
+    b = [1.7e308, 0, 1.0e308, 10]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_array_equal(point_similarity([b], [b], 10), [[1.0]])
+        np.testing.assert_array_equal(point_similarity([b], [[-1.7e308, 0, 0, 10]], 10), [[0.0]])
+        np.testing.assert_array_equal(point_similarity([[1e200, 0, 0, 0]], [[0, 0, 0, 0]],
+                                                       1e-300), [[0.0]])
+        t = MOTTable.from_rows([(1, 1, *b)])
+        c = evaluate_mot(t, t, zero_distance=10)
+    assert (c.TP, c.FP, c.FN, c.MOTA) == (1, 0, 0, 1.0)
 
 
 def test_a_points_csv_reads_as_points_where_asked_and_a_half_box_is_named():

@@ -179,9 +179,13 @@ def point_similarity(a: ArrayLike, b: ArrayLike, zero_distance: float) -> np.nda
     """
     a = np.asarray(a, dtype=float).reshape(-1, 4)
     b = np.asarray(b, dtype=float).reshape(-1, 4)
-    ca, cb = a[:, :2] + a[:, 2:] / 2, b[:, :2] + b[:, 2:] / 2
-    dist = np.linalg.norm(ca[:, np.newaxis] - cb[np.newaxis, :], axis=2)
-    return np.maximum(0, 1 - dist / zero_distance)
+    # the centres halved, which no finite row overflows (x + w / 2 near 1.7e308 was inf, and
+    # inf - inf a NaN that SciPy's assignment refused, naming nothing): exact, a power of 2;
+    # a distance past the largest float is inf, a similarity of 0
+    ca, cb = a[:, :2] / 2 + a[:, 2:] / 4, b[:, :2] / 2 + b[:, 2:] / 4
+    with np.errstate(over="ignore"):
+        dist = 2 * np.linalg.norm(ca[:, np.newaxis] - cb[np.newaxis, :], axis=2)
+        return np.maximum(0, 1 - dist / zero_distance)
 
 
 def _similarity(gt: MOTTable, pred: MOTTable, zero_distance: float | None
@@ -399,6 +403,12 @@ def _check_table(table: Any, name: str) -> None:
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise ValueError(f"{name}.boxes[{k}] is not finite: {table.boxes[k].tolist()}")
+    neg = (table.boxes[:, 2:] < 0).any(axis=1)
+    if neg.any():  # (scored as IoU 0, a miss and a false positive, without a word)
+        k = int(np.flatnonzero(neg)[0])
+        raise ValueError(f"{name}.boxes[{k}] has a negative width or height: "
+                         f"{table.boxes[k].tolist()} (x, y, w, h: a box of corners x1, y1, "
+                         "x2, y2?)")
     if n and table.frames.dtype.kind == "f":  # (frames before the first: _check_frames)
         part = table.frames != np.floor(table.frames)
         if part.any():
@@ -1065,16 +1075,21 @@ class Matches:
     frames, gt_ids : (N,) int ndarray
         The frame and the object's id in the ground truth, sorted by frame.
     pred_ids : (N,) int ndarray
-        The predicted track's id matched to it there, or -1 (missed).
+        The predicted track's id matched to it there (any integer: a results file may number
+        a track -1 or below), or -1 where it is missed.
     switches : (N,) bool ndarray
         True where the match's predicted id differs from the object's previous match's (an
         identity switch, as ``MOTCounts.IDSW`` counts them).
+    matched : (N,) bool ndarray
+        True where a predicted track covers the object (``TP``), False where it is missed
+        (``FN``): what tells a track numbered -1 from a miss.
     """
 
     frames: np.ndarray
     gt_ids: np.ndarray
     pred_ids: np.ndarray
     switches: np.ndarray
+    matched: np.ndarray
 
 
 def clear_matches(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
@@ -1084,7 +1099,8 @@ def clear_matches(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
 
     Parameters and errors as :func:`evaluate_mot`; ``Matches`` has one row for each scored
     ground-truth box (a MOT16/17/20 box of another class, or of confidence 0, is not), so
-    that the matched rows are ``TP``, the others ``FN``, and ``switches.sum()`` is ``IDSW``.
+    that the matched rows (``matched``) are ``TP``, the others ``FN``, and
+    ``switches.sum()`` is ``IDSW``.
 
     Examples
     --------
@@ -1095,8 +1111,8 @@ def clear_matches(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     ...                     np.full(n, 10.0), np.full(n, 10.0)], np.ones(n), -np.ones(n, int),
     ...                     -np.ones(n))
     >>> m = clear_matches(table([1, 1, 1], [0, 1, 2]), table([7, 8, 8], [0, 1, 9]))
-    >>> m.frames.tolist(), m.pred_ids.tolist(), m.switches.tolist()
-    ([1, 2, 3], [7, 8, -1], [False, True, False])
+    >>> m.frames.tolist(), m.pred_ids.tolist(), m.switches.tolist(), m.matched.tolist()
+    ([1, 2, 3], [7, 8, -1], [False, True, False], [True, True, False])
     """
     seq = _prepare(gt, pred, _n_frames(gt, pred, n_frames), benchmark, zero_distance)
     record: list = []
@@ -1104,7 +1120,7 @@ def clear_matches(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
     assert seq.frames is not None and seq.gt_labels is not None and seq.pred_labels is not None
     if not record:
         empty = np.zeros(0, np.int64)
-        return Matches(empty, empty, empty, np.zeros(0, bool))
+        return Matches(empty, empty, empty, np.zeros(0, bool), np.zeros(0, bool))
     k = np.concatenate([np.full(len(g), i) for i, g, _, _ in record])
     g = np.concatenate([g for _, g, _, _ in record])
     p = np.concatenate([p for _, _, p, _ in record])
@@ -1113,7 +1129,7 @@ def clear_matches(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
                    gt_ids=seq.gt_labels[g].astype(np.int64),
                    pred_ids=np.where(p >= 0, labels[np.maximum(p, 0)] if len(labels) else -1,
                                      -1).astype(np.int64),
-                   switches=np.concatenate([s for _, _, _, s in record]))
+                   switches=np.concatenate([s for _, _, _, s in record]), matched=p >= 0)
 
 
 def combine(counts: Iterable[MOTCounts]) -> MOTCounts:

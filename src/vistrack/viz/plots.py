@@ -454,7 +454,8 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
     >>> from vistrack.evaluation import Matches
     >>> m = Matches(frames=np.array([1, 2, 3, 1, 2]), gt_ids=np.array([5, 5, 5, 6, 6]),
     ...             pred_ids=np.array([7, 8, 8, -1, 9]),
-    ...             switches=np.array([False, True, False, False, False]))
+    ...             switches=np.array([False, True, False, False, False]),
+    ...             matched=np.array([True, True, True, False, True]))
     >>> ax = plot_timeline(m, title="demo").axes[0]
     >>> [t.get_text() for t in ax.get_yticklabels()], ax.get_title()
     (['5', '6'], 'demo: 2 objects, 1 identity switch')
@@ -467,6 +468,7 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
 
     frames, gts = np.asarray(matches.frames), np.asarray(matches.gt_ids)
     preds, switches = np.asarray(matches.pred_ids), np.asarray(matches.switches, bool)
+    hit = np.asarray(matches.matched, bool)  # (a track numbered -1 or below is no miss)
     objects, first = np.unique(gts, return_index=True)
     objects = objects[np.argsort(first, kind="stable")]  # in the order they appear
     row = {int(g): k for k, g in enumerate(objects)}
@@ -475,9 +477,10 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
     ax = fig.subplots()
     boxes, colours = [], []
     order = np.lexsort((frames, gts))
-    f, g, p = frames[order], gts[order], preds[order]
+    f, g, p, h = frames[order], gts[order], preds[order], hit[order]
     # runs: the same object, the same predicted id (or missed), consecutive frames
-    new = (np.r_[True, (g[1:] != g[:-1]) | (p[1:] != p[:-1]) | (f[1:] != f[:-1] + 1)]
+    new = (np.r_[True, (g[1:] != g[:-1]) | (p[1:] != p[:-1]) | (h[1:] != h[:-1])
+                 | (f[1:] != f[:-1] + 1)]
            if len(f) else np.zeros(0, bool))  # no ground truth scored: no runs
     starts = np.flatnonzero(new)
     ends = np.r_[starts[1:], len(f)]
@@ -485,7 +488,7 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
         y = row[int(g[a])]
         x0, x1 = f[a] - 0.5, f[b - 1] + 0.5
         boxes.append([(x0, y - 0.4), (x1, y - 0.4), (x1, y + 0.4), (x0, y + 0.4)])
-        if p[a] < 0:
+        if not h[a]:
             colours.append((0.85, 0.85, 0.85))
         else:
             b_, g_, r_ = id_colour(int(p[a]))
