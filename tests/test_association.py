@@ -268,6 +268,12 @@ def test_suppression_names_scores_or_classes_of_another_length():
                                                    "got 2")):
         non_maximum(boxes, [0.8, 0.9])
     assert non_maximum(boxes, [0.8, 0.9, 0.5], classes=[0, 0, 1]).tolist() == [False, True, True]
+    # boxes of another width were re-cut into (N, 4): (2, 8) as four boxes, (4, 3) as three
+    for shape in ((2, 8), (4, 3)):
+        with pytest.raises(ValueError, match=re.escape(
+                f"boxes must have shape (N, 4) (x0, y0, x1, y1); got {shape}")):
+            non_maximum(np.zeros(shape), [0.9] * (np.prod(shape) // 4))
+    assert non_maximum([], []).tolist() == []
 
 
 def test_sparse_pairs_and_assignment_equal_the_dense_ones():

@@ -241,6 +241,76 @@ def test_clusters_of_two_tracks_with_huge_weights_do_not_overflow():
     np.testing.assert_allclose(beta0, want_b0, rtol=1e-10, atol=1e-300)
 
 
+def _log_brute_jipda(log_lik, gate, eps, pd, log_lam, pg):
+    """JIPDA's probabilities with every joint event written out in logarithms (a weight
+    past the largest float is a finite logarithm): each track absent (1 - eps), there and
+    missed (eps (1 - pd pg)) or there with detection j (eps pd lik / lam). eps = 1 is JPDA,
+    one track alone IPDA (and PDA with eps = 1)."""
+    from scipy.special import logsumexp
+
+    T, D = log_lik.shape
+    logs, takes = [], []
+    for event in itertools.product(*[["absent", "missed"] + [j for j in range(D) if gate[t, j]]
+                                     for t in range(T)]):
+        used = [j for j in event if not isinstance(j, str)]
+        if len(used) != len(set(used)):
+            continue
+        lw = 0.0
+        for t, j in enumerate(event):
+            lw += (math.log1p(-eps[t]) if j == "absent" and eps[t] < 1 else -math.inf
+                   if j == "absent" else math.log(eps[t] * (1 - pd * pg)) if j == "missed"
+                   else math.log(eps[t] * pd) + log_lik[t, j] - log_lam)
+        logs.append(lw)
+        takes.append(event)
+    logs = np.array(logs) - logsumexp(logs)
+    ex, joint, missed = np.zeros(T), np.zeros((T, D)), np.zeros(T)
+    for lw, event in zip(logs, takes):
+        for t, j in enumerate(event):
+            if j != "absent":
+                ex[t] += math.exp(lw)
+            if j == "missed":  # (summed, not 1 - the others: that cancels to 0)
+                missed[t] += math.exp(lw)
+            elif not isinstance(j, str):
+                joint[t, j] += math.exp(lw)
+    return joint / ex[:, None], missed / ex, ex
+
+
+def test_weights_past_the_largest_float_give_the_limit_not_nan():
+    """A likelihood of 1e200 over a clutter density of 1e-110 is a weight of 1e310, past a
+    float: PDA, JPDA, IPDA and JIPDA gave NaN probabilities without a word. Each track's
+    factors are scaled alike where one overflows; against every event written out in
+    logarithms."""
+    from vistrack.association import ipda_weights, jipda_weights
+
+    log_lik = np.log(np.array([[1e200, 1.0, 1e199], [1.0, 1e200, 3.0], [2.0, 0.5, 1.0]]))
+    gate = np.array([[True, True, True], [True, True, False], [True, True, True]])
+    lik, pd, lam, pg = np.exp(log_lik), 0.9, 1e-110, 0.99
+    eps = np.array([0.5, 0.7, 0.9])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # (overflow encountered in multiply, before)
+        b, b0 = pda_weights(lik[:1], gate[:1], p_detect=pd, clutter_density=lam, p_gate=pg)
+        jb, jb0 = jpda_weights(lik, gate, p_detect=pd, clutter_density=lam, p_gate=pg)
+        ib, ib0, iex = ipda_weights(lik, gate, eps, p_detect=pd, clutter_density=lam,
+                                    p_gate=pg)
+        qb, qb0, qex = jipda_weights(lik, gate, eps, p_detect=pd, clutter_density=lam,
+                                     p_gate=pg)
+    ones = np.ones(3)
+    for got, want in [((b, b0), _log_brute_jipda(log_lik[:1], gate[:1], ones[:1], pd,
+                                                 math.log(lam), pg)[:2]),
+                      ((jb, jb0), _log_brute_jipda(log_lik, gate, ones, pd, math.log(lam),
+                                                   pg)[:2]),
+                      ((qb, qb0, qex), _log_brute_jipda(log_lik, gate, eps, pd, math.log(lam),
+                                                        pg))]:
+        for g, w in zip(got, want):
+            assert np.isfinite(g).all()
+            np.testing.assert_allclose(g, w, rtol=1e-9, atol=1e-300)
+    for t in range(3):
+        want = _log_brute_jipda(log_lik[t:t + 1], gate[t:t + 1], eps[t:t + 1], pd,
+                                math.log(lam), pg)
+        for g, w in zip((ib[t:t + 1], ib0[t:t + 1], iex[t:t + 1]), want):
+            np.testing.assert_allclose(g, w, rtol=1e-9, atol=1e-300)
+
+
 def test_max_exact_bounds_and_unbounds_the_exact_sums():
     """max_exact 0 asks for the cheap JPDA on every cluster of more than one track, two
     tracks included (the formula written out); a huge max_exact (2**62) is no bound, and
@@ -560,3 +630,10 @@ def test_likelihoods_names_s_and_z_of_the_wrong_shape_as_mahalanobis_does():
     with pytest.raises(ValueError, match=re.escape("Z must have shape (D, 2); got (3, 3)")):
         likelihoods(zp, np.stack([np.eye(2)] * 2), np.zeros((3, 3)))
     assert likelihoods(zp, np.stack([np.eye(2)] * 2), []).shape == (2, 0)
+    # a z_pred of another rank: Python's "too many values to unpack (expected 2)"
+    from vistrack.association import mahalanobis
+
+    for f in (likelihoods, mahalanobis):
+        with pytest.raises(ValueError, match=re.escape("z_pred must have shape (T, m); got "
+                                                       "(2, 1, 2)")):
+            f(np.zeros((2, 1, 2)), np.stack([np.eye(2)] * 2), np.zeros((3, 2)))

@@ -1204,6 +1204,23 @@ def test_a_frames_index_and_a_tracks_columns_are_checked():
         t.add(np.zeros((1, 2)), np.zeros((1, 2, 2)), 0.0, np.zeros(1), np.ones(1),
               confirmed=True)
     assert len(t.ids) == 0 and t.classes.dtype == np.int64
+    # no track added, in numpy's default empty (float) columns: the classes stayed float
+    t.add(np.zeros((0, 2)), np.zeros((0, 2, 2)), 0.0, np.zeros(0), np.zeros(0), confirmed=False)
+    t.add(np.zeros((1, 2)), np.eye(2)[None], 0.0, np.array([3]), np.ones(1), confirmed=False)
+    assert t.classes.dtype == np.int64 and t.classes.tolist() == [3] and t.ids.tolist() == [1]
+    # a max_lost (or a time) of NaN kept every lost track for good, without a word; the
+    # table is left as it was
+    t.add(np.zeros((1, 2)), np.eye(2)[None], 0.0, np.array([4]), np.ones(1), confirmed=True)
+    before = (t.state.copy(), t.hits.copy(), t.last_time.copy())
+    for max_lost, time in ((float("nan"), 1.0), (-1.0, 1.0), (1.0, float("nan"))):
+        with pytest.raises(ValueError, match=re.escape(
+                f"max_lost must be a number >= 0 (seconds) and time finite; got "
+                f"max_lost={max_lost}, time={time}")):
+            t.manage(np.array([False, False]), time, 3, max_lost)
+    for a, b in zip(before, (t.state, t.hits, t.last_time)):
+        np.testing.assert_array_equal(a, b)
+    # (inf: a lost track kept for good; the tentative one, not updated, deleted)
+    assert t.manage(np.array([False, False]), 1e9, 3, float("inf")).tolist() == [False, True]
 
 
 def test_offline_tracks_are_followed_back_past_another_class_on_their_detections():

@@ -202,6 +202,8 @@ def _innovations(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, z_name: str = "z
     zp = np.atleast_2d(np.asarray(z_pred, dtype=float))
     S = np.asarray(S, dtype=float)
     z = np.atleast_2d(np.asarray(z, dtype=float))
+    if zp.ndim != 2:  # (Python's "too many values to unpack")
+        raise ValueError(f"z_pred must have shape (T, m); got {zp.shape}")
     T, m = zp.shape
     if S.shape != (T, m, m):
         raise ValueError(f"S must have shape ({T}, {m}, {m}); got {S.shape}")
@@ -583,7 +585,7 @@ def non_maximum(boxes: ArrayLike, scores: ArrayLike, classes: ArrayLike | None =
     >>> non_maximum([[0, 0, 10, 10], [1, 0, 11, 10]], [0.8, 0.9], classes=[0, 1]).tolist()
     [True, True]
     """
-    b = np.asarray(boxes, dtype=float).reshape(-1, 4)
+    b = _boxes(boxes, "boxes")  # (reshaped to (-1, 4): (2, 8) boxes were cut into four)
     s = np.asarray(scores, dtype=float).reshape(-1)
     if len(s) != len(b):
         raise ValueError(f"scores must have one value a box ({len(b)}); got {len(s)}")

@@ -123,6 +123,26 @@ def _check(p_detect: float, clutter_density: float, p_gate: float) -> None:
         raise ValueError(f"p_gate must be in (0, 1]; got {p_gate}")
 
 
+def _weights(w: float | np.ndarray, lik: np.ndarray, gate: np.ndarray, clutter_density: float
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """The weights ``G = w lik / clutter_density`` inside the gates (0 outside), ``w`` being
+    ``P_D`` (or a column of ``eps_t P_D``), and each track's scale ``c (T,)`` they are
+    multiplied by: 1, but for a track whose weight passes the largest float (inf, and then
+    NaN probabilities), ``clutter_density / max_j lik_tj``. Every event's weight is a
+    product with one factor per track, each of a track's factors (its detections', a miss,
+    not being there) scaled alike, and the probabilities ratios of such sums: a factor per
+    track cancels, and the caller scales the track's other factors by ``c``."""
+    G = np.where(gate, w * lik / clutter_density, 0.0)
+    c = np.ones(len(G))
+    over = ~np.isfinite(G).all(axis=1)
+    if over.any():
+        top = np.where(gate[over], lik[over], 0.0).max(axis=1)
+        c[over] = clutter_density / top
+        ww = np.broadcast_to(w, lik.shape)[over] if np.ndim(w) else w
+        G[over] = np.where(gate[over], ww * (lik[over] / top[:, None]), 0.0)
+    return G, c
+
+
 def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
                 clutter_density: float = 1e-4, p_gate: float = 0.99
                 ) -> tuple[np.ndarray, np.ndarray]:
@@ -180,8 +200,9 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     """
     _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
-    G = np.where(gate, p_detect * lik / clutter_density, 0.0)
-    return _pda(G, np.full(len(G), 1.0 - p_detect * p_gate))
+    with np.errstate(over="ignore"):
+        G, c = _weights(p_detect, lik, gate, clutter_density)
+    return _pda(G, (1.0 - p_detect * p_gate) * c)
 
 
 def _pda(G: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -636,9 +657,9 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     """
     _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
-    G = np.where(gate, p_detect * lik / clutter_density, 0.0)
-    B = np.full(len(G), 1.0 - p_detect * p_gate)
-    return _joint(G, B, gate, max_exact)
+    with np.errstate(over="ignore"):
+        G, c = _weights(p_detect, lik, gate, clutter_density)
+    return _joint(G, (1.0 - p_detect * p_gate) * c, gate, max_exact)
 
 
 def _existence(existence: ArrayLike, T: int) -> np.ndarray:
@@ -744,13 +765,15 @@ def ipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
     eps = _existence(existence, len(lik))
-    G = np.where(gate, p_detect * lik / clutter_density, 0.0)
+    with np.errstate(over="ignore"):
+        G, c = _weights(p_detect, lik, gate, clutter_density)
     B = 1.0 - p_detect * p_gate
-    # the single track's events: not there (1 - eps), missed (eps B), detection j (eps G_j)
-    den = (1.0 - eps) + eps * (B + G.sum(1))
+    # the single track's events: not there (1 - eps), missed (eps B), detection j (eps G_j),
+    # each scaled by c
+    den = (1.0 - eps) * c + eps * (B * c + G.sum(1))
     with np.errstate(invalid="ignore", divide="ignore"):
         beta = np.where(den[:, None] > 0, eps[:, None] * G / den[:, None], 0.0)
-        beta0 = np.where(den > 0, (1.0 - eps * (1.0 - B)) / den, 1.0)
+        beta0 = np.where(den > 0, (1.0 - eps * (1.0 - B)) * c / den, 1.0)
     return _given_existence(beta, beta0, eps, B)
 
 
@@ -813,6 +836,7 @@ def jipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
     eps = _existence(existence, len(lik))
-    G = np.where(gate, (eps * p_detect)[:, None] * lik / clutter_density, 0.0)
-    beta, beta0 = _joint(G, 1.0 - eps * p_detect * p_gate, gate, max_exact)
+    with np.errstate(over="ignore"):
+        G, c = _weights((eps * p_detect)[:, None], lik, gate, clutter_density)
+    beta, beta0 = _joint(G, (1.0 - eps * p_detect * p_gate) * c, gate, max_exact)
     return _given_existence(beta, beta0, eps, 1.0 - p_detect * p_gate)

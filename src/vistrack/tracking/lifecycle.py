@@ -32,6 +32,14 @@ def time_slack(time: float) -> float:
     return 16 * float(np.spacing(max(1.0, abs(time))))
 
 
+def _check_lost(time: float, max_lost: float) -> None:
+    """A ValueError unless ``max_lost`` is a number >= 0 (inf: kept for good) and ``time``
+    finite (NaN kept every lost track for good, without a word)."""
+    if not (max_lost >= 0 and np.isfinite(time)):
+        raise ValueError(f"max_lost must be a number >= 0 (seconds) and time finite; got "
+                         f"max_lost={max_lost}, time={time}")
+
+
 class TrackTable:
     """Tracks as columns: ``mean (K, n)``, ``cov (K, *cov_shape)`` (default ``(n, n)``), ``ids``,
     ``state``, ``hits`` (updates in a row), ``streak`` (the length of the last run of updates
@@ -172,6 +180,8 @@ class TrackTable:
                                  f"{np.shape(column)[1:]}")
         if k and not np.issubdtype(np.asarray(classes).dtype, np.integer):
             raise ValueError(f"classes must be integers; got {np.asarray(classes).dtype}")
+        if not k:  # (an empty float column, numpy's default, turned the classes to float)
+            return
         self.mean = np.concatenate([self.mean, mean])
         self.cov = np.concatenate([self.cov, cov])
         self.ids = np.concatenate([self.ids, np.arange(self.next_id, self.next_id + k)])
@@ -303,6 +313,7 @@ class TrackTable:
         # in the sequence its gap fell. The slack is a few units of the times' rounding (it
         # was 1e-9 of the time: frames numbered by milliseconds since 1970, 1.7e9 s, kept
         # lost tracks 1.7 s longer)
+        _check_lost(time, max_lost)
         return np.asarray(time - self.last_time > max_lost + time_slack(time))
 
     def manage(self, updated: np.ndarray, time: float, confirm_hits: int,
@@ -346,6 +357,7 @@ class TrackTable:
         >>> t.manage(np.array([False]), 1.5, 3, 1.0), len(t)
         (array([False]), 0)
         """
+        _check_lost(time, max_lost)  # (before the table changes)
         self.advance(updated, time, confirm_hits)
         dead = self.ended(updated, time, max_lost)
         if dead.any():
