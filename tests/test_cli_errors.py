@@ -147,8 +147,8 @@ def test_out_dir_that_is_a_file_is_refused(tmp_path, capsys):
 def test_out_dir_with_earlier_outputs_needs_force(tmp_path, capsys):
     (tmp_path / "tracks.txt").write_text("earlier")
     assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir", str(tmp_path)]) == 2
-    one_line(capsys, "track", f"{tmp_path / 'tracks.txt'} exist; pass --force to overwrite "
-             "them")
+    one_line(capsys, "track", f"{tmp_path / 'tracks.txt'} exists; pass --force to overwrite "
+             "it")
     (tmp_path / "tracks.csv").mkdir()
     assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir", str(tmp_path),
                  "--force"]) == 2

@@ -704,7 +704,9 @@ def test_the_folder_of_the_images_tracked_is_no_output_folder(tmp_path):
         return Detections.from_xywh([truth[0]], [0.9])
 
     for source in (folder, tmp_path / "seq"):
-        with pytest.raises(ValueError, match="is the folder of the images being tracked"):
+        with pytest.raises(ValueError, match=re.escape(
+                f"{folder / 'trajectories.png'} lies in the folder of the images tracked, "
+                "among the files the run reads; give another out_dir")):
             track_video(source, folder, frontend=boxes, fps=25)
     assert sorted(p.name for p in folder.iterdir()) == images
     assert track_video(tmp_path / "seq", tmp_path / "seq", frontend=boxes).frames == 4
@@ -1144,9 +1146,10 @@ def test_no_output_is_the_runs_own_input(tmp_path):
     """With ``force``, ``track_one(video, out=video)`` wrote its boxes over the video, ``out``
     naming ``gt`` replaced the ground truth by the boxes, and ``track_video`` wrote its
     ``tracks.txt`` over a ``gt`` or a ``detections:FILE`` in the output folder (and its
-    ``annotated.mp4`` over the video tracked): the input was lost. Each is refused before
-    anything is read, by any path to the file (a hard link too), and every file keeps its
-    bytes."""
+    ``annotated.mp4`` over the video tracked), or wrote among the frames of an image folder:
+    the input was lost. Each is refused before anything is read, by any path to the file
+    through folders, and every file keeps its bytes; a link at the output's name is
+    replaced, not the file it points to, and is no input."""
     from vistrack.pipeline import track_one
 
     frames, truth = red_disc_clip(T=6)
@@ -1163,28 +1166,52 @@ def test_no_output_is_the_runs_own_input(tmp_path):
     before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
 
     def refused(what, call, *args, **kwargs):
-        with pytest.raises(ValueError, match=re.escape(what) + ": the run would write over it"):
+        with pytest.raises(ValueError, match=re.escape(what) + "(: the run would write over it|"
+                                             "; give another)"):
             call(*args, **kwargs)
 
     refused(f"out {video} is the video tracked", track_one, video, truth[0], video, force=True)
     refused(f"out {boxes} is the ground truth (--gt)", track_one, folder, None, boxes,
             gt=boxes, force=True)
-    refused(f"out {tmp_path / 'hard.txt'} is the ground truth (--gt)", track_one, folder,
-            None, tmp_path / "hard.txt", gt=boxes, force=True)
+    # named before "exists; pass --force", which would have it written over next
+    refused(f"out {boxes} is the ground truth (--gt)", track_one, folder, None, boxes, gt=boxes)
+    # through a folder that is a link to the input's
+    (tmp_path / "via").symlink_to(tmp_path)
+    refused(f"out {tmp_path / 'via' / 'boxes.txt'} is the ground truth (--gt)", track_one,
+            folder, None, tmp_path / "via" / "boxes.txt", gt=boxes, force=True)
+    # among the frames read (an image written over, or one more frame for the next run)
+    refused(f"out {folder / '000001.png'} lies in the folder of the images tracked, among "
+            "the files the run reads", track_one, folder, truth[0], folder / "000001.png",
+            force=True)
     refused(f"out_dir {out}: {gt} is the ground truth (--gt)", track_video, folder, out,
             frontend=TruthDetector(truth), gt=gt, force=True)
     refused(f"out_dir {out}: {gt} is the detections file (--frontend detections:FILE)",
             track_video, folder, out, frontend=f"detections:{gt}", force=True)
     refused(f"out_dir {out}: {video} is the video tracked", track_video, video, out,
             frontend=TruthDetector(truth), force=True)
-    # a sequence folder as gt is its gt/gt.txt
+    # a sequence folder as gt is its gt/gt.txt (here a link to the file written over)
     seq = tmp_path / "seq"
     (seq / "gt").mkdir(parents=True)
-    os.link(gt, seq / "gt" / "gt.txt")
+    (seq / "gt" / "gt.txt").symlink_to(gt)
     refused(f"out_dir {out}: {gt} is the ground truth (--gt)", track_video, folder, out,
             frontend=TruthDetector(truth), gt=seq, force=True)
     (seq / "gt" / "gt.txt").unlink()
-    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
+    # a sequence folder's seqinfo.ini and its imDir
+    (seq / "seqinfo.ini").write_text("[Sequence]\nimDir=frames\nframeRate=25\n")
+    os.symlink(folder, seq / "frames")
+    refused(f"out {seq / 'seqinfo.ini'} is the sequence's seqinfo.ini", track_one, seq,
+            truth[0], seq / "seqinfo.ini", force=True)
+    refused(f"out {seq / 'frames' / 'x.png'} lies in the folder of the images tracked, among "
+            "the files the run reads", track_one, seq, truth[0], seq / "frames" / "x.png")
+    (seq / "seqinfo.ini").unlink()
+    (seq / "frames").unlink()
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()
+            and "via" not in p.parts} == before
+    # a link at the output's name is replaced, not the file it points to: no input
+    (tmp_path / "link.txt").symlink_to(boxes)
+    track_one(folder, None, tmp_path / "link.txt", gt=boxes, force=True)
+    track_one(folder, None, tmp_path / "hard.txt", gt=boxes, force=True)
+    assert not (tmp_path / "link.txt").is_symlink() and boxes.read_bytes() == before[boxes]
     # an output of the same name elsewhere is no input
     with pytest.warns(UserWarning, match="every row has an identity"):
         track_video(folder, tmp_path / "out2", frontend=f"detections:{gt}", gt=gt, fps=25,
@@ -1213,6 +1240,16 @@ def test_the_command_line_refuses_an_output_that_is_an_input_before_reading(tmp_
                                        "tracked: the run would write over it; give another "
                                        "--out\n")
     assert sorted(p.name for p in tmp_path.rglob("*")) == ["in.avi", "o", "tracks.txt"]
+    # several inputs: one job's outputs may not be another's input (in.avi's video,
+    # o/in/annotated.mp4, over the input of that name)
+    (out / "in").mkdir()
+    other = _mjpg_video(out / "in" / "annotated.mp4", frames)
+    kept = other.read_bytes()
+    assert main(["track", str(other), str(video), "--out-dir", str(out), "--frontend", "hog",
+                 "--force", "--jobs", "1"]) == 2
+    err = capsys.readouterr().err
+    assert f"{other} is the video tracked: the run would write over it" in err, err
+    assert other.read_bytes() == kept
 
 
 def test_a_video_without_frames_is_named_by_every_front_end_and_track_one(tmp_path):
@@ -1258,7 +1295,7 @@ def test_a_header_frame_rate_out_of_range_names_the_video_and_fps(tmp_path):
         if name == "huge":
             assert fps == 1e8
             with pytest.raises(ValueError, match=re.escape(
-                    f"{patched}: its header gives 1e+08 frames/s, and the tracker takes 0.001 "
+                    f"{patched}: its header gives 1e+08 frames/s, and the box tracker takes 0.001 "
                     "to 1e+06 (give the true rate with --fps")):
                 track_video(patched, tmp_path / "o1", frontend=TruthDetector(truth))
             run = track_video(patched, tmp_path / "o2", frontend=TruthDetector(truth), fps=10,

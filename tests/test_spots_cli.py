@@ -124,7 +124,7 @@ def test_a_points_run_over_an_earlier_box_run_replaces_its_tracks(tmp_path, caps
     args = ["track", str(tmp_path / "frames"), "--out-dir", str(out), "--frontend", "spots",
             "--diameter", "9", "--fps", "10", "--quiet"]
     assert main(args) == 2
-    assert "tracks.txt exist; pass --force to overwrite them" in capsys.readouterr().err
+    assert "tracks.txt exists; pass --force to overwrite it" in capsys.readouterr().err
     assert main([*args, "--force"]) == 0
     assert not (out / "tracks.txt").exists() and (out / "tracks.csv").exists()
 

@@ -513,7 +513,7 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
     from .io.atomic import check_not_input, check_output
     from .io.motchallenge import DETECTION_SUFFIXES
     from .io.video import _TEXT_SUFFIXES, _holds_images
-    from .pipeline import input_files, video_outputs
+    from .pipeline import input_files, sequence_inputs, video_outputs
 
     setting_flags = _box_settings_given(args, name)
     if not box:
@@ -567,9 +567,10 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
             if args.fps is None:
                 return (f"{args.input} is a detections file alone: give its frame rate "
                         "with --fps")
-        # (--force wrote the results over the configuration the run read; the sequence's
-        # own files are the pipeline's to name)
-        check_not_input([args.out], input_files(None, config=args.config), name="--out")
+        # (--force wrote the results over the configuration the run read, or the sequence's
+        # own files; named before "exists; pass --force")
+        check_not_input([args.out], sequence_inputs(args.input, args.detections)
+                        + input_files(None, config=args.config), name="--out")
         check_output(args.out, force=args.force, name="--out")
         if str(args.out).lower().endswith(".parquet"):
             from .io.motchallenge import need_parquet
@@ -816,7 +817,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     if args.own_process:
         one_thread_here()  # before numpy: this process hands out the inputs, its workers track
     from .io.atomic import check_not_input, check_output
-    from .pipeline import input_files, video_outputs
+    from .pipeline import input_files, sequence_inputs, video_outputs
 
     def fail(text: str) -> int:
         return _fail("track", text)
@@ -882,8 +883,11 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         options["fps"] = args.fps
     _warn_unused_settings(args, cfg, offline_given)
     jobs = plan(args.input, out, kind=kind, **options)
+    # every job's inputs: one job's outputs may not be another's input either
+    read = [r for job in jobs for r in (sequence_inputs(job.input) if kind == "detections"
+                                        else input_files(job.input))]
+    read += input_files(None, config=args.config)
     for job in jobs:  # before anything runs: a job that cannot write fails now
-        read = input_files(job.input, config=args.config)
         if kind == "detections":
             check_not_input([job.out], read, name="--out")
             check_output(job.out, force=args.force, name="--out")
@@ -943,13 +947,15 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
 def _fit(args: argparse.Namespace) -> int:
     from .batch import expand_inputs
     from .config import TrackConfig, config_toml, read_config
-    from .io.atomic import check_output, open_replacing
-    from .pipeline import fit_sequences
+    from .io.atomic import check_not_input, check_output, open_replacing
+    from .pipeline import fit_sequences, sequence_inputs
 
+    inputs = expand_inputs(args.inputs)  # a folder of sequences: its sequences, as track's
+    # (--force wrote the configuration over a sequence's detections, or its ground truth)
+    check_not_input([args.out], [r for s in inputs for r in sequence_inputs(s)], name="--out")
     check_output(args.out, force=args.force, name="--out")
     cfg = read_config(args.config) if args.config is not None else TrackConfig.preset()
     progress = sys.stderr if not args.quiet else None
-    inputs = expand_inputs(args.inputs)  # a folder of sequences: its sequences, as track's
     if args.gt:
         # a folder's sequences without ground truth (a set's test sequences) are left out,
         # as `vistrack eval --gt-dir` leaves them; a sequence named alone must have one
@@ -1037,10 +1043,10 @@ def _track_one(args: argparse.Namespace) -> int:
     except ValueError:
         return _fail("track-one", f"--init must be x,y,w,h (four finite numbers, w and h "
                      f"> 0); got {args.init!r}")
-    # before anything is read or computed: a run that cannot write fails now, nor write
-    # over what it reads
-    check_output(args.out, force=args.force, name="--out")
+    # before anything is read or computed: a run that would write over what it reads, or
+    # cannot write, fails now
     check_not_input([args.out], input_files(args.input, gt=args.gt), name="--out")
+    check_output(args.out, force=args.force, name="--out")
     run = track_one(args.input, init, args.out, method=args.method, gt=args.gt,
                     force=args.force, progress=sys.stderr if sys.stderr.isatty()
                     and not args.quiet else None, init_name="--init")

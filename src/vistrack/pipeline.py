@@ -53,6 +53,7 @@ from .detector_checks import (
 from .evaluation.mot import MOTCounts, _lines_of, check_zero_distance, considered, evaluate_mot
 from .evaluation.sanity import sanity_warnings
 from .io.atomic import (
+    Input,
     check_not_input,
     check_output,
     hidden_path,
@@ -1385,6 +1386,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     5
     """
     out = Path(out)
+    # (named first: "exists; pass --force" would have the input overwritten next)
+    check_not_input([out], sequence_inputs(seq_dir, detections), name="--out")
     check_output(out, force=force)
     table_kind = _results_format(out)
     cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
@@ -1556,11 +1559,6 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
     if det_path.is_dir():
         raise ValueError(f"{det_path} is a folder, not a detections file"
                          + (" (--detections FILE)" if detections is not None else ""))
-    # nor any other file of the sequence (--force overwrote them)
-    check_not_input([out], [("the detections file", det_path)] + ([] if alone else [
-        ("the sequence's seqinfo.ini", seq_dir / "seqinfo.ini"),
-        ("the sequence's ground truth", seq_dir / "gt" / "gt.txt"),
-        ("the sequence's detections file", seq_dir / "det" / "det.txt")]), name="--out")
     # the warnings' stacklevels (here and in _check_detections) name track_sequence's caller
     dets = read_detections(det_path, columns, stacklevel=3,
                            classless=None if out.suffix.lower() in (".csv", ".parquet")
@@ -2109,12 +2107,14 @@ tracks."""
 
 def input_files(video: str | Path | None, *, gt: str | Path | None = None,
                 frontend: object = None, config: str | Path | None = None
-                ) -> list[tuple[str, Path | None]]:
+                ) -> list[Input]:
     """The files a run of :func:`track_video` or :func:`track_one` reads, each with what a
     message calls it (None where not given): no output may be one of them
     (:func:`~vistrack.io.atomic.check_not_input`). ``gt`` is a file or a sequence folder
     (its ``gt/gt.txt``); ``frontend`` a front-end's name (``detections:FILE`` and
-    ``onnx:MODEL.onnx`` read a file); ``config`` the configuration file read.
+    ``onnx:MODEL.onnx`` read a file); ``config`` the configuration file read. A video that
+    is a folder reads the images of its folder (a sequence's ``imDir``, and its
+    ``seqinfo.ini``): no output may be an image there.
 
     Examples
     --------
@@ -2127,10 +2127,28 @@ def input_files(video: str | Path | None, *, gt: str | Path | None = None,
     if gt is not None:
         g = Path(gt)
         gt_file = g / "gt" / "gt.txt" if g.is_dir() else g
-    read: list[tuple[str, Path | None]] = [
-        ("the video tracked", None if video is None else Path(video)),
-        ("the ground truth (--gt)", gt_file),
-        ("the configuration file (--config)", None if config is None else Path(config))]
+    from .io.video import IMAGE_SUFFIXES
+
+    read: list[Input] = []
+    if video is not None and Path(video).is_dir():
+        # the images (a sequence folder's imDir/), and the sequence's seqinfo.ini
+        v = Path(video)
+        images = v
+        if (v / "seqinfo.ini").is_file():
+            read.append(("the sequence's seqinfo.ini", v / "seqinfo.ini"))
+            import configparser
+
+            info = configparser.ConfigParser(interpolation=None)
+            try:
+                info.read(v / "seqinfo.ini", encoding="utf-8")
+                images = v / info.get("Sequence", "imDir", fallback="img1")
+            except (configparser.Error, UnicodeDecodeError, ValueError):
+                images = v / "img1"  # (the reader names what is wrong with the file)
+        read.append(("the folder of the images tracked", images, IMAGE_SUFFIXES))
+    else:
+        read.append(("the video tracked", None if video is None else Path(video)))
+    read += [("the ground truth (--gt)", gt_file),
+             ("the configuration file (--config)", None if config is None else Path(config))]
     if isinstance(frontend, str):
         for kind, form in (("detections", "detections:FILE"), ("onnx", "onnx:MODEL.onnx")):
             if frontend.startswith(kind + ":") and frontend != kind + ":":
@@ -2139,9 +2157,31 @@ def input_files(video: str | Path | None, *, gt: str | Path | None = None,
     return read
 
 
+def sequence_inputs(seq_dir: str | Path, detections: str | Path | None = None
+                    ) -> list[tuple[str, Path | None]]:
+    """The files :func:`track_sequence` reads, each with what a message calls it, which its
+    results may not be (:func:`~vistrack.io.atomic.check_not_input`): the detections file
+    (``seq_dir`` itself, ``detections``, or the sequence's ``det/det.txt``), and a sequence
+    folder's ``seqinfo.ini``, ``gt/gt.txt`` and ``det/det.txt``.
+
+    Examples
+    --------
+    >>> [(what, str(p)) for what, p in sequence_inputs("dets.txt")]
+    [('the detections file', 'dets.txt')]
+    """
+    seq = Path(seq_dir)
+    if not seq.is_dir():
+        return [("the detections file", seq)]
+    return [("the detections file", Path(detections) if detections is not None
+             else seq / "det" / "det.txt"),
+            ("the sequence's seqinfo.ini", seq / "seqinfo.ini"),
+            ("the sequence's ground truth", seq / "gt" / "gt.txt"),
+            ("the sequence's detections file", seq / "det" / "det.txt")]
+
+
 def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = False,
                   name: str = "out_dir", points: bool = False,
-                  inputs: Sequence[tuple[str, str | Path | None]] = ()) -> dict[str, Path]:
+                  inputs: Sequence[Input] = ()) -> dict[str, Path]:
     """The file of each sink :func:`track_video` writes in ``out_dir``, checked before any
     work is done: ``out_dir`` is a folder or can be made one, can be written in, its
     outputs (``run.json`` too, which is not a sink's, and an earlier run's ``report.html``)
@@ -2188,7 +2228,9 @@ def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = F
     check_not_input(written, inputs, name=name, given=out_dir)
     there = [str(p) for p in written if p.exists()]
     if there and not force:
-        raise FileExistsError(f"{', '.join(there)} exist; pass --force to overwrite them")
+        raise FileExistsError(f"{', '.join(there)} exist{'s' if len(there) == 1 else ''}; "
+                              "pass --force to overwrite "
+                              + ("it" if len(there) == 1 else "them"))
     return files
 
 
@@ -2381,13 +2423,6 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             raise ValueError(f"{out_dir} is the folder of the images being tracked: the outputs "
                              "would be read as frames by the next run; write them to another "
                              "folder (--out-dir)")
-        if reader.fps_from not in (None, "fps") \
-                and not FRAME_RATES[0] <= reader.fps <= FRAME_RATES[1]:
-            # (named by the motion model later, as frame_rate, without the file)
-            raise ValueError(f"{video}: its {reader.fps_from.removeprefix('the ')} gives "
-                             f"{reader.fps:g} frames/s, and the tracker takes "
-                             f"{FRAME_RATES[0]:g} to {FRAME_RATES[1]:g} (give the true rate "
-                             "with --fps, or fps=)")
         if reader.fps_from is None:
             # the tracker's times (coasting, how long a lost track is kept) and its motion's
             # noise follow the rate
@@ -2399,6 +2434,14 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                       {k: v for k, v in options.items() if v is not None}
                       | {"confidence": confidence}, points=points)
         box = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].box_config
+        if box and reader.fps_from not in (None, "fps") \
+                and not FRAME_RATES[0] <= reader.fps <= FRAME_RATES[1]:
+            # (named by the motion model later, as frame_rate, without the file; the other
+            # trackers take any rate)
+            raise ValueError(f"{video}: its {reader.fps_from.removeprefix('the ')} gives "
+                             f"{reader.fps:g} frames/s, and the box tracker takes "
+                             f"{FRAME_RATES[0]:g} to {FRAME_RATES[1]:g} (give the true rate "
+                             "with --fps, or fps=)")
         if config is not None and not box:
             raise ValueError(f"config is a box tracker's configuration; tracker {tracker!r} is "
                              "not a box tracker")
@@ -2776,8 +2819,8 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     from .tracking.single import single_tracker
 
     out = Path(out)
-    check_output(out, force=force)
     check_not_input([out], input_files(source, gt=gt), name="out")
+    check_output(out, force=force)
     tracker = single_tracker(method)
     truth = None
     if gt is not None:

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import IO
 
 __all__ = ["partial_path", "replacing", "open_replacing", "PartialFile", "check_output",
-           "check_not_input", "made_folder", "together", "remove_on_commit"]
+           "check_not_input", "Input", "made_folder", "together", "remove_on_commit"]
 
 
 _NAME_MAX = 255
@@ -464,22 +464,33 @@ def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "o
         raise FileExistsError(f"{name} {p} exists; pass --force to overwrite it")
 
 
-def check_not_input(outputs: Iterable[str | os.PathLike],
-                    inputs: Iterable[tuple[str, str | os.PathLike | None]], *,
-                    name: str = "out", given: str | os.PathLike | None = None) -> None:
-    """Raise, before any work is done, if an output is one of the run's inputs: the same
-    file by any path to it (a symbolic or a hard link too), which ``force`` would write over
-    with what was read from it.
+Input = tuple[str, str | os.PathLike | None] | tuple[str, str | os.PathLike | None,
+                                                     tuple[str, ...]]
+"""What a run reads, for :func:`check_not_input`: ``(what, file)``, or ``(what, folder,
+suffixes)``, a folder whose files of those suffixes it reads (the images of a video)."""
 
-    ``inputs`` are ``(what, path)`` pairs, ``what`` naming the input in the message (None
-    paths, and inputs that are no file, are skipped); ``name`` names the option, whose value
+
+def check_not_input(outputs: Iterable[str | os.PathLike], inputs: Iterable[Input], *,
+                    name: str = "out", given: str | os.PathLike | None = None) -> None:
+    """Raise, before any work is done, if an output would be written where one of the run's
+    inputs lies, which ``force`` would replace with what was read from it: at an input file
+    (by any path to it: through a folder that is a link, or ``new/../in.txt``), or directly
+    in an input folder under a name it reads (an image among a video's frames).
+
+    An output is renamed into place when written, which replaces a link at its name rather
+    than the file the link points to: an output that is a link (symbolic or hard) to an
+    input is no input.
+
+    ``inputs`` are ``(what, file)`` pairs, or ``(what, folder, suffixes)``, ``what`` naming
+    the input in the message (None paths, paths that do not exist, and a folder given as a
+    file, are skipped); ``name`` names the option, whose value
     ``given`` is a folder the ``outputs`` are written in (default: each output is the
     option's value itself).
 
     Raises
     ------
     ValueError
-        If an output is an input.
+        If an output is an input, or lies in an input folder.
 
     Examples
     --------
@@ -494,16 +505,27 @@ def check_not_input(outputs: Iterable[str | os.PathLike],
     ValueError: --out .../gt.txt is the ground truth (--gt): the run would write over it; give \
 another --out
     """
-    pairs = [(what, Path(src)) for what, src in inputs if src is not None]
+    read = []
+    for what, src, *among in inputs:
+        if src is None:
+            continue
+        p = Path(src)
+        if (p.is_dir() and among) or (p.is_file() and not among):
+            read.append((what, p.resolve(), tuple(among[0]) if among else None))
     for out in map(Path, outputs):
-        for what, src in pairs:
-            # (by its name, through a folder not made yet: "new/../in.txt"; or by its inode)
-            same = out.resolve() == src.resolve()
-            try:
-                same = same or os.path.samefile(out, src)
-            except (OSError, ValueError):  # one does not exist (or a name no file can have)
-                pass
-            if same and src.is_file():
-                where = f"{name} {out}" if given is None else f"{name} {given}: {out}"
+        parent = out.parent.resolve()  # (the output's own name is not followed: it is replaced)
+        at = parent / out.name
+        for what, src, suffixes in read:
+            where = f"{name} {out}" if given is None else f"{name} {given}: {out}"
+            if suffixes is not None:
+                if parent == src and out.suffix.lower() in suffixes:
+                    raise ValueError(f"{where} lies in {what}, among the files the run "
+                                     f"reads; give another {name}")
+                continue
+            # the same name, or the same file under the name in another case (a file system
+            # that ignores case; a hard link of another name is another name, replaced alone)
+            if at == src or (parent == src.parent and at.name.casefold() == src.name.casefold()
+                             and at.exists() and not at.is_symlink()
+                             and os.path.samefile(at, src)):
                 raise ValueError(f"{where} is {what}: the run would write over it; give "
                                  f"another {name}")

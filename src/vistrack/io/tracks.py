@@ -751,8 +751,8 @@ def write_boxes(path: str | os.PathLike, boxes: ArrayLike, *, force: bool = Fals
     '1,1.00,2.00,30.00,40.00\\n'
     """
     path = Path(path)
-    b = as_float_array(boxes, "boxes", ndim=(2,))
-    if b.shape[1] != 4:
+    b = as_float_array(boxes, "boxes")
+    if b.ndim != 2 or b.shape[1] != 4:
         raise ValueError(f"boxes must be (T, 4), x, y, w, h in each frame; got shape "
                          f"{b.shape}")
     if path.exists() and not force:
