@@ -711,3 +711,39 @@ def test_frames_without_a_box_are_scored_as_otb_scores_them():
             score(p, p, bad)
     with pytest.raises(ValueError, match=re.escape("polygons must be (T, 8)")):
         region_to_bbox([[0, 0, 10, 10], [5, 5, 10, 10]])
+
+
+@pytest.mark.parametrize("edge", ["left", "right", "top", "bottom"])
+def test_the_template_of_a_box_at_any_edge_of_the_image_is_kept(edge):
+    """The template was cut around the box's centre in a box's coordinates, half a pixel
+    past its centre in the pixels' indices: at the right or bottom edge its patch reached
+    past the image and the template was dropped (median flow alone, IoU 0.74), while at the
+    left and top it was kept. Mirror images of one scene turning 3 degrees a frame about the
+    box's centre and moving inwards; oracle: the start box's corners moved by the rotation
+    that made each frame (their bounding box)."""
+    from vistrack.tracking.single import TemplateTracker
+
+    rng = np.random.default_rng(1)
+    scene = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 2)
+    scene = cv2.normalize(scene, None, 0, 255, cv2.NORM_MINMAX)
+    # (the scene, mirrored for the right and bottom; the sign of the turn and of the move,
+    # inwards; the axis it moves along)
+    start, sign, axis = {"left": (scene, -1, 0), "right": (scene[:, ::-1].copy(), 1, 0),
+                         "top": (scene, -1, 1), "bottom": (scene[::-1].copy(), 1, 1)}[edge]
+    box = {"left": [0, 50, 20, 20], "right": [140, 50, 20, 20], "top": [70, 0, 20, 20],
+           "bottom": [70, 100, 20, 20]}[edge]
+    t = TemplateTracker()
+    t.init(start, box)
+    assert t.ok
+    c = np.array(box[:2], float) + 10.0
+    corners = np.array([[box[0], box[1]], [box[0] + 20, box[1]], [box[0], box[1] + 20],
+                        [box[0] + 20, box[1] + 20]], float) - 0.5
+    got, want = [], []
+    for k in range(1, 8):
+        M = cv2.getRotationMatrix2D((float(c[0] - 0.5), float(c[1] - 0.5)), 3.0 * k * sign, 1.0)
+        M[axis, 2] -= 3 * k * sign  # inwards
+        frame = cv2.warpAffine(start, M, (160, 120), borderMode=cv2.BORDER_REFLECT)
+        wc = corners @ M[:, :2].T + M[:, 2] + 0.5
+        want.append(np.r_[wc.min(0), wc.max(0) - wc.min(0)])
+        got.append(t.update(frame))
+    assert overlaps(np.array(got), np.array(want)).min() > 0.97

@@ -115,3 +115,31 @@ def test_a_snakes_settings_are_named_when_it_is_made(setting, message):
     for make in (Snake, SnakeTracker):
         with pytest.raises(ValueError, match="^" + re.escape(message)):
             make(**setting)
+
+
+def _disc(H, W, cx, cy, r, ss=16):
+    """A disc's coverage of each pixel, by 16 x 16 samples a pixel (pixel k spans [k, k + 1),
+    a box's coordinates)."""
+    ys, xs = (np.arange(H * ss) + 0.5) / ss, (np.arange(W * ss) + 0.5) / ss
+    inside = (xs[None] - cx) ** 2 + (ys[:, None] - cy) ** 2 <= r * r
+    return inside.astype(float).reshape(H, ss, W, ss).mean((1, 3))
+
+
+@pytest.mark.parametrize("cx,cy", [(80.0, 60.0), (80.5, 60.25)])
+def test_the_snakes_box_is_the_objects_not_half_a_pixel_before_it(cx, cy):
+    """The contour lies in the pixels' indices (pixel k's centre at k) and its bounding box
+    was reported as a box's coordinates (pixel k spans [k, k + 1)): half a pixel up and to
+    the left of the object. Oracle: a disc drawn by its exact coverage of each pixel, its
+    box ``cx - r, cy - r, 2r, 2r``, the snake started on that box and given the frame
+    again."""
+    from vistrack.tracking.snake import SnakeTracker
+
+    im = (_disc(120, 160, cx, cy, 30.0) * 255).round().astype(np.uint8)
+    t = SnakeTracker()
+    t.init(im, [cx - 30, cy - 30, 60, 60])
+    for _ in range(10):
+        box = t.update(im)
+    np.testing.assert_allclose(box[:2] + box[2:] / 2, [cx, cy], atol=0.05)
+    np.testing.assert_allclose(box[2:], [60, 60], atol=0.3)
+    t.anchor([40, 30, 30, 20])  # and a box given is the contour's box
+    np.testing.assert_allclose(t._bounds(), [40, 30, 30, 20], atol=1e-9)

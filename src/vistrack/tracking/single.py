@@ -258,6 +258,12 @@ class MedianFlow(SingleObjectTracker):
         self.box = as_box(box)
 
 
+def _index_centre(box: np.ndarray) -> np.ndarray:
+    """A box's centre in the pixels' indices, where the image is sampled (pixel ``k``'s
+    centre at ``k``; the box's ``x, y`` count pixel ``k`` as ``[k, k + 1)``)."""
+    return box[:2] + box[2:] / 2 - 0.5
+
+
 class TemplateTracker(SingleObjectTracker):
     """Affine template tracking of the first frame's central patch (see the module).
 
@@ -302,8 +308,18 @@ class TemplateTracker(SingleObjectTracker):
     def _start(self, image: np.ndarray, b: np.ndarray) -> None:
         grey = _grey(image).astype(np.float32)
         self.box0 = b
-        self.half = max(3, int(min(b[2], b[3]) / 2) - 1)
-        c = np.array([[b[0] + b[2] / 2, b[1] + b[3] / 2]])
+        # the warp's translation is the centre in the pixels' indices (pixel k's centre at
+        # k), half a pixel before the box's (pixel k spans [k, k + 1)): at the box's own,
+        # the patch of a box at the right or bottom edge reached past the image, and the
+        # template was dropped there (kept at the left and top)
+        c = _index_centre(b)[None]
+        # the box's central patch, smaller where the image's edge cuts it: its samples, and
+        # the pixel around them that its gradients need, lie where the image is sampled
+        # (0 <= x < W - 1)
+        H, W = grey.shape
+        cx, cy = c[0]
+        room = min(np.floor(cx), np.ceil(W - 2 - cx), np.floor(cy), np.ceil(H - 2 - cy)) - 1
+        self.half = max(3, min(int(min(b[2], b[3]) / 2) - 1, int(room)))
         self.T, self.SD, self.Hinv, ok = prepare_templates(grey, c, self.half)
         self.ok = bool(ok[0])
         self.p = np.zeros((1, 6))
@@ -317,7 +333,7 @@ class TemplateTracker(SingleObjectTracker):
         c = np.array([x + w / 2, y + h / 2])
         rel = np.array([[x, y], [x + w, y], [x, y + h], [x + w, y + h]]) - c
         A = np.array([[1 + p[0], p[2]], [p[1], 1 + p[3]]])
-        return rel @ A.T + p[4:]
+        return rel @ A.T + p[4:] + 0.5  # (the translation is in the pixels' indices)
 
     def _follow(self, image: np.ndarray) -> np.ndarray:
         grey = _grey(image)
@@ -330,7 +346,7 @@ class TemplateTracker(SingleObjectTracker):
         s = prior[2] / self.box[2] if self.box[2] > 0 else 1.0
         A = np.array([[1 + p[0, 0], p[0, 2]], [p[0, 1], 1 + p[0, 3]]]) * s
         p[0, :4] = [A[0, 0] - 1, A[1, 0], A[0, 1], A[1, 1] - 1]
-        p[0, 4:] = prior[:2] + prior[2:] / 2
+        p[0, 4:] = _index_centre(prior)
         rms = register(grey, self.half, self.T, self.SD, self.Hinv, p, iters=self.iters)
         self.residual = float(rms[0])
         if rms[0] <= self.max_residual:
@@ -340,7 +356,7 @@ class TemplateTracker(SingleObjectTracker):
             self.box = np.r_[lo, hi - lo]
         else:
             self.box = prior
-            self.p[0, 4:] = prior[:2] + prior[2:] / 2
+            self.p[0, 4:] = _index_centre(prior)
         self.flow.box = self.box.copy()
         return self.box.copy()
 
@@ -369,7 +385,7 @@ class TemplateTracker(SingleObjectTracker):
         p = self.p[0]
         A = np.array([[1 + p[0], p[2]], [p[1], 1 + p[3]]]) * s
         p[:4] = [A[0, 0] - 1, A[1, 0], A[0, 1], A[1, 1] - 1]
-        self.p[0, 4:] = b[:2] + b[2:] / 2
+        self.p[0, 4:] = _index_centre(b)
         self.box = b
         self.flow.anchor(b)
 

@@ -342,6 +342,13 @@ class Snake:
         return self.contour()
 
 
+_HALF = 0.5
+"""From the contour's coordinates, the pixels' indices where the image is sampled (pixel
+``k``'s centre at ``k``), to a box's (pixel ``k`` spans ``[k, k + 1)``): an edge between
+pixels 49 and 50 is at 49.5 in the first, 50 in the second (the box was half a pixel up
+and to the left of the object)."""
+
+
 class SnakeTracker(SingleObjectTracker):
     """A :class:`Snake` as a box tracker: started on the ellipse inscribed in the first box,
     its box is the contour's bounding box; ``anchor(box)`` moves and scales the contour so
@@ -359,7 +366,8 @@ class SnakeTracker(SingleObjectTracker):
 
     Examples
     --------
-    A disc of radius 30 (its box ``50, 30, 60, 60``), started from a smaller box:
+    A disc of radius 30 around pixel (80, 60), whose centre is at 80.5, 60.5 in a box's
+    coordinates (pixel ``k`` spans ``[k, k + 1)``), started from a smaller box:
 
     >>> import cv2
     >>> im = np.zeros((120, 160, 3), np.uint8)
@@ -368,8 +376,8 @@ class SnakeTracker(SingleObjectTracker):
     >>> t.init(im, [54, 34, 52, 52])
     >>> for _ in range(5):
     ...     box = t.update(im)
-    >>> box.round().tolist()
-    [50.0, 30.0, 60.0, 60.0]
+    >>> (box[:2] + box[2:] / 2).round(1).tolist(), box[2:].round().tolist()
+    ([80.5, 60.4], [60.0, 60.0])
     """
 
     def __init__(self, **snake: Any):
@@ -382,14 +390,14 @@ class SnakeTracker(SingleObjectTracker):
         # ratio is (2 + cos(2π/n)) / 3, as in Snake.init_circle
         k = 3 / (2 + np.cos(2 * np.pi / s.n))
         a = 2 * np.pi * np.arange(s.n) / s.n
-        c = b[:2] + b[2:] / 2
+        c = b[:2] + b[2:] / 2 - _HALF
         s.init(np.c_[c[0] + k * b[2] / 2 * np.cos(a), c[1] + k * b[3] / 2 * np.sin(a)])
         self.box = b
 
     def _bounds(self) -> np.ndarray:
         pts = self.snake.contour()
         lo, hi = pts.min(0), pts.max(0)
-        return np.r_[lo, np.maximum(hi - lo, 1e-6)]
+        return np.r_[lo + _HALF, np.maximum(hi - lo, 1e-6)]
 
     def _follow(self, image: np.ndarray) -> np.ndarray:
         self.snake.track(image)
@@ -410,9 +418,9 @@ class SnakeTracker(SingleObjectTracker):
         >>> t = SnakeTracker(n_control=8, n_samples=32)
         >>> t.init(np.zeros((120, 160), np.uint8), [50, 30, 60, 60])
         >>> t.anchor([40, 30, 30, 20])
-        >>> pts = t.snake.contour()
+        >>> pts = t.snake.contour()  # (in the pixels' indices: half a pixel before the box's)
         >>> pts.min(0).round(6).tolist(), pts.max(0).round(6).tolist()
-        ([40.0, 30.0], [70.0, 50.0])
+        ([39.5, 29.5], [69.5, 49.5])
         """
         b = as_box(box)
         cur = self._bounds()
@@ -422,7 +430,7 @@ class SnakeTracker(SingleObjectTracker):
         assert g is not None  # _bounds above needs (and checks) the state
         n = self.snake.n
         mean = g.mean.copy()
-        mean[:n] = c1[0] + s[0] * (mean[:n] - c0[0])
-        mean[n:] = c1[1] + s[1] * (mean[n:] - c0[1])
+        mean[:n] = c1[0] + s[0] * (mean[:n] + _HALF - c0[0]) - _HALF
+        mean[n:] = c1[1] + s[1] * (mean[n:] + _HALF - c0[1]) - _HALF
         self.snake.state = Gaussian(mean, g.cov)
         self.box = b
