@@ -402,7 +402,7 @@ def test_colour_tracker_keeps_its_size_on_unchanged_frames():
     im[60:180, 80:240] = (0, 0, 200)
     t = ColourTracker()
     t.init(im, [140, 100, 40, 40])
-    bp = t._backproject(cv2.cvtColor(im, cv2.COLOR_BGR2HSV)).astype(np.float64)
+    bp = t._backproject(t._cells(im)).astype(np.float64)
     sc = np.array([0.93, 1.0, 1.07])[:, None]
     boxes = np.c_[160 - sc * 20, 120 - sc * 20, sc * 40, sc * 40]
     contrast = _contrast(cv2.integral(bp), boxes)
@@ -428,7 +428,7 @@ def test_camshift_box_is_its_windows_bounding_box():
         t = CamShiftTracker(rate=0.0)
         t.init(im, [56, 48, 48, 24])
         t.box = np.array(start, float)
-        bp = t._backproject(cv2.cvtColor(im, cv2.COLOR_BGR2HSV))
+        bp = t._backproject(t._cells(im))
         bp[bp < 128] = 0
         crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.5)
         (cx, cy), (w, h), angle = cv2.CamShift(bp, tuple(start), crit)[0]
@@ -470,7 +470,7 @@ def test_mean_shift_at_the_border_stays_at_its_mode(side):
     for scales in [(1.0,), (0.93, 1.0, 1.07)]:
         t = ColourTracker(rate=0.0, scales=scales)
         t.init(im, [x0, 20, 20, 20])
-        bp = t._backproject(cv2.cvtColor(im, cv2.COLOR_BGR2HSV)).astype(float)
+        bp = t._backproject(t._cells(im)).astype(float)
         mode = _brute_mean_shift(bp, (x0, 20, 20, 20))
         assert mode != (x0, 20)   # the start is not the mode: the test moves the window
         for _ in range(8):
@@ -747,3 +747,32 @@ def test_the_template_of_a_box_at_any_edge_of_the_image_is_kept(edge):
         want.append(np.r_[wc.min(0), wc.max(0) - wc.min(0)])
         got.append(t.update(frame))
     assert overlaps(np.array(got), np.array(want)).min() > 0.97
+
+
+@pytest.mark.parametrize("method", ["colour", "meanshift", "camshift", "particle"])
+def test_the_colour_trackers_tell_colours_of_one_brightness_and_saturation_apart(method):
+    """A red disc on green of the same saturation and value (both 255): the colour model was
+    a saturation-value histogram, blind to hue, and every colour tracker stayed where it
+    started while the disc moved 40 pixels. Oracle: the disc's known box."""
+    from vistrack.tracking.single import single_tracker
+
+    def frame(cx):
+        im = np.full((120, 160, 3), (0, 255, 0), np.uint8)
+        cv2.circle(im, (cx, 60), 12, (0, 0, 255), -1)
+        return im
+
+    t = single_tracker(method)
+    t.init(frame(40), [28, 48, 24, 24])
+    for cx in range(44, 84, 4):
+        box = t.update(frame(cx))
+        truth = np.array([cx - 12 + 0.5, 48.5, 25, 25])  # (pixels cx - 12 to cx + 12)
+        assert overlaps(box[None], truth[None])[0] > 0.6, (cx, box)
+
+
+def test_the_colour_models_bins_are_bounded():
+    """bins³ cells: 1,000 bins a channel asked for 8 GB a histogram."""
+    from vistrack.tracking.single import ColourTracker
+
+    with pytest.raises(ValueError, match=re.escape("bins must be at most 64 a channel (64³ "
+                                                   "cells); got 65")):
+        ColourTracker(bins=65)
