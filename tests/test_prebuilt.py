@@ -303,6 +303,20 @@ def test_arguments_the_quick_check_does_not_know_find_no_build(value):
     assert key is None or _prebuilt._encoded(key)[1] is None
 
 
+def test_signatures_recorded_anew_make_a_build_stale(tmp_path, monkeypatch):
+    """``_prebuilt.json`` recorded anew (a kernel's arguments of another type) left the
+    extension in place current for ``make kernels``' ``--if-stale``, which built nothing: the
+    new signature was compiled on first use. The recorded signatures are part of the
+    sources' hash."""
+    info = dict(_prebuilt.machine(), sources=_prebuilt.source_hash(), kernels={})
+    (tmp_path / _prebuilt.BUILD_INFO).write_text(json.dumps(info))
+    assert _prebuilt.built(tmp_path)[1] == ""
+    other = tmp_path / "_prebuilt.json"
+    other.write_bytes(_prebuilt.SIGNATURES.read_bytes() + b" ")
+    monkeypatch.setattr(_prebuilt, "SIGNATURES", other)
+    assert _prebuilt.built(tmp_path)[1].startswith("built from other sources")
+
+
 def test_a_build_for_other_sources_or_another_machine_is_not_used(tmp_path, monkeypatch):
     assert _prebuilt.built(tmp_path) == (None, "not built")
     info = dict(_prebuilt.machine(), sources=_prebuilt.source_hash(), kernels={})

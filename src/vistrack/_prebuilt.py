@@ -54,11 +54,14 @@ _state: dict[str, Any] = {}
 
 
 def source_hash() -> str:
-    """A hash of every ``.py`` file in the package (paths and contents): compiled code is
-    current only if this has not changed since it was built."""
+    """A hash of every ``.py`` file in the package (paths and contents) and of the kernels'
+    recorded signatures (:data:`SIGNATURES`, the builds made): compiled code is current only
+    if this has not changed since it was built (a signature recorded anew went unbuilt by
+    ``make kernels``, which found the extension current)."""
     h = hashlib.sha256()
-    for path in sorted(PACKAGE.rglob("*.py")):
-        h.update(path.relative_to(PACKAGE).as_posix().encode())
+    for path in [*sorted(PACKAGE.rglob("*.py")), SIGNATURES]:
+        h.update(path.name.encode() if path == SIGNATURES
+                 else path.relative_to(PACKAGE).as_posix().encode())
         h.update(b"\0")
         h.update(path.read_bytes())
         h.update(b"\0")
