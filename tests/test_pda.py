@@ -311,6 +311,64 @@ def test_weights_past_the_largest_float_give_the_limit_not_nan():
             np.testing.assert_allclose(g, w, rtol=1e-9, atol=1e-300)
 
 
+def test_weights_whose_sum_passes_the_largest_float_and_the_cheap_jpda_of_them():
+    """Finite weights whose sum passes the largest float (two of 9e307) gave probabilities of
+    0 (IPDA: a track with two sure detections did not exist); and a rescaled track in
+    Fitzgerald's cheap JPDA (whose column sums mix the tracks) read as missed. Oracles: the
+    closed forms in exact rational arithmetic."""
+    from fractions import Fraction as F
+
+    from vistrack.association import ipda_weights
+
+    lik, gate = np.array([[1e304, 1e304]]), np.ones((1, 2), bool)
+    b, b0 = pda_weights(lik, gate, clutter_density=1e-4)
+    np.testing.assert_allclose(b, [[0.5, 0.5]], rtol=1e-12)
+    assert 0 < b0[0] < 1e-300
+    b, b0, ex = ipda_weights(lik, gate, [0.5], clutter_density=1e-4)
+    np.testing.assert_allclose(b, [[0.5, 0.5]], rtol=1e-12)
+    np.testing.assert_allclose(ex, [1.0], rtol=1e-12)
+    # the cheap JPDA (max_exact 0), its formula in exact arithmetic: G / (S_t + S_j - G + B)
+    pd, pg, lam = 0.9, 0.99, 1e-4
+    lik = np.array([[1e305, 2e305, 0.0], [1.0, 3.0, 0.5], [0.0, 2.0, 1.0]])
+    gate = lik > 0
+    beta, beta0 = jpda_weights(lik, gate, p_detect=pd, p_gate=pg, clutter_density=lam,
+                               max_exact=0)
+    G = [[F(pd) * F(x) / F(lam) if x > 0 else F(0) for x in row] for row in lik]
+    B = 1 - F(pd) * F(pg)
+    want = np.zeros((3, 3))
+    want0 = np.zeros(3)
+    for t in range(3):
+        b = [G[t][j] / (sum(G[t]) + sum(G[u][j] for u in range(3)) - G[t][j] + B)
+             if G[t][j] else F(0) for j in range(3)]
+        b0 = max(F(0), 1 - sum(b))
+        tot = sum(b) + b0
+        want[t] = [float(x / tot) for x in b]
+        want0[t] = float(b0 / tot)
+    np.testing.assert_allclose(beta, want, rtol=1e-9, atol=1e-300)
+    # (beta0 is 1 minus the row's sum, by the method's definition: to a few hundred units of
+    # a float's rounding of 1, here for a true 1e-305)
+    np.testing.assert_allclose(beta0, want0, rtol=1e-9, atol=1e-13)
+
+
+def test_weights_spanning_more_than_a_float_are_named_not_nan():
+    """With P_D P_G = 1 a track certain to exist has a miss of weight 0, and two rescaled
+    tracks (weights 1e309 against a miss of 0.5) have miss weights whose product underflows:
+    JIPDA gave NaN, and JPDA a row summing to 0.59. The weights are named instead."""
+    from vistrack.association import jipda_weights
+
+    with pytest.raises(ValueError, match=r"the association weights of track \d span more "
+                                         r"than a float holds: its likelihoods over "
+                                         r"clutter_density reach about 1e309 against a "
+                                         r"miss weight of 0.5"):
+        jipda_weights(np.array([[1e306], [1e306], [1.0]]), np.ones((3, 1), bool),
+                      [0.5, 0.5, 1.0], p_detect=1.0, p_gate=1.0, clutter_density=1e-3)
+    # the same weights 1e6 times smaller hold: the only event left, the third track's
+    b, b0, ex = jipda_weights(np.array([[1e300], [1e300], [1.0]]), np.ones((3, 1), bool),
+                              [0.5, 0.5, 1.0], p_detect=1.0, p_gate=1.0,
+                              clutter_density=1e-3)
+    np.testing.assert_allclose(ex, [0, 0, 1], atol=1e-12)
+
+
 def test_max_exact_bounds_and_unbounds_the_exact_sums():
     """max_exact 0 asks for the cheap JPDA on every cluster of more than one track, two
     tracks included (the formula written out); a huge max_exact (2**62) is no bound, and

@@ -35,6 +35,7 @@ a ``max_exact`` square's; a larger cluster gets Fitzgerald's "cheap JPDA" approx
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 
@@ -127,14 +128,16 @@ def _weights(w: float | np.ndarray, lik: np.ndarray, gate: np.ndarray, clutter_d
              ) -> tuple[np.ndarray, np.ndarray]:
     """The weights ``G = w lik / clutter_density`` inside the gates (0 outside), ``w`` being
     ``P_D`` (or a column of ``eps_t P_D``), and each track's scale ``c (T,)`` they are
-    multiplied by: 1, but for a track whose weight passes the largest float (inf, and then
-    NaN probabilities), ``clutter_density / max_j lik_tj``. Every event's weight is a
-    product with one factor per track, each of a track's factors (its detections', a miss,
-    not being there) scaled alike, and the probabilities ratios of such sums: a factor per
-    track cancels, and the caller scales the track's other factors by ``c``."""
+    multiplied by: 1, but for a track whose weights, or their sum, pass the largest float
+    (inf, and then NaN probabilities, or 0), ``clutter_density / max_j lik_tj``. Every
+    event's weight is a product with one factor per track, each of a track's factors (its
+    detections', a miss, not being there) scaled alike, and the probabilities ratios of
+    such sums: a factor per track cancels (but in Fitzgerald's cheap JPDA, whose sums mix
+    the tracks: :func:`_joint` takes the scales there), and the caller scales the track's
+    other factors by ``c``."""
     G = np.where(gate, w * lik / clutter_density, 0.0)
     c = np.ones(len(G))
-    over = ~np.isfinite(G).all(axis=1)
+    over = ~np.isfinite(G.sum(axis=1))
     if over.any():
         top = np.where(gate[over], lik[over], 0.0).max(axis=1)
         c[over] = clutter_density / top
@@ -541,11 +544,17 @@ def _clusters(G, B, max_exact, enumerated, beta, beta0, label_t, label_d, left):
     return n
 
 
-def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int
-           ) -> tuple[np.ndarray, np.ndarray]:
+def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int,
+           scale: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The joint association probabilities of :func:`jpda_weights`, with ``G (T, D)`` (0
     outside the gates) and each track's weight of a miss ``B (T,)``: the clusters and the
-    most common of them in :func:`_clusters`, the rest here."""
+    most common of them in :func:`_clusters`, the rest here. ``scale (T,)``: each track's
+    factors were multiplied by it (:func:`_weights`); the exact sums do not see it, and
+    Fitzgerald's cheap JPDA, whose sums mix the tracks, takes it out in logarithms.
+
+    Raises a ValueError where the weights of a rescaled track span more than a float holds
+    (against its miss, the events' products underflow), rather than give NaN or
+    probabilities that do not sum to 1."""
     max_exact = as_whole(max_exact, "max_exact", 0)
     T, D = G.shape
     beta, beta0 = np.zeros((T, D)), np.ones(T)
@@ -566,6 +575,8 @@ def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int
         g = G[np.ix_(ti, di)]
         if _exact_is_affordable(len(ti), len(di), B[ti], max_exact):
             b, b0 = _exact(g, B[ti])
+        elif scale is not None and (scale[ti] != 1).any():
+            b, b0 = _cheap_in_logs(g, B[ti], scale[ti])
         else:  # Fitzgerald's cheap JPDA
             den = g.sum(1)[:, None] + g.sum(0)[None, :] - g + B[ti, None]
             b = g / den
@@ -574,7 +585,49 @@ def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int
             b, b0 = b / s[:, None], b0 / s
         beta[np.ix_(ti, di)] = b
         beta0[ti] = b0
+    if scale is not None and (scale != 1).any():
+        total = beta.sum(1) + beta0
+        bad = ~np.isfinite(total) | (np.abs(total - 1) > 1e-9)
+        if bad.any():
+            t = int(np.flatnonzero(bad)[0])
+            with np.errstate(divide="ignore"):  # (in logarithms: past the largest float)
+                top = np.log10(G[t].max()) - np.log10(scale[t])
+                miss = np.log10(B[t]) - np.log10(scale[t])
+            raise ValueError(
+                f"the association weights of track {t} span more than a float holds: its "
+                f"likelihoods over clutter_density reach about 1e{top:.0f} against a miss "
+                f"weight of {10 ** miss if np.isfinite(miss) else 0:.3g}, and the joint "
+                "events' products underflow; the likelihoods (or clutter_density) are in "
+                "units of another scale?")
     return beta, beta0
+
+
+def _quiet_if(scale: np.ndarray) -> contextlib.AbstractContextManager:
+    """numpy's warnings off where a track was rescaled (:func:`_weights`): a product that
+    underflows is found, and named, by :func:`_joint` after the sums."""
+    if (scale != 1).any():
+        return np.errstate(invalid="ignore", divide="ignore", under="ignore")
+    return contextlib.nullcontext()
+
+
+def _cheap_in_logs(g: np.ndarray, B: np.ndarray, scale: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Fitzgerald's cheap JPDA, ``G_tj / (S_t + S_j - G_tj + B_t)``, on a cluster whose
+    tracks' factors were each multiplied by ``scale`` (one past the largest float): in
+    logarithms, the scales taken out (the column sums ``S_j`` mix the tracks)."""
+    with np.errstate(divide="ignore"):
+        lg = np.log(g) - np.log(scale)[:, None]  # -inf outside the gates
+        lb = np.log(B) - np.log(scale)
+    row = np.logaddexp.reduce(lg, axis=1)
+    col = np.logaddexp.reduce(lg, axis=0)
+    big = np.logaddexp(np.logaddexp(row[:, None], col[None, :]), lb[:, None])
+    # minus G_tj, which both sums hold: at most half of them, so nothing cancels
+    with np.errstate(divide="ignore", invalid="ignore"):
+        den = big + np.log1p(-np.exp(lg - big))
+        b = np.where(g > 0, np.exp(lg - den), 0.0)
+    b0 = np.clip(1.0 - b.sum(1), 0.0, 1.0)
+    s = b.sum(1) + b0
+    return b / s[:, None], b0 / s
 
 
 def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
@@ -659,7 +712,8 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     lik, gate = _lik_gate(lik, gate)
     with np.errstate(over="ignore"):
         G, c = _weights(p_detect, lik, gate, clutter_density)
-    return _joint(G, (1.0 - p_detect * p_gate) * c, gate, max_exact)
+    with _quiet_if(c):
+        return _joint(G, (1.0 - p_detect * p_gate) * c, gate, max_exact, c)
 
 
 def _existence(existence: ArrayLike, T: int) -> np.ndarray:
@@ -838,5 +892,6 @@ def jipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     eps = _existence(existence, len(lik))
     with np.errstate(over="ignore"):
         G, c = _weights((eps * p_detect)[:, None], lik, gate, clutter_density)
-    beta, beta0 = _joint(G, (1.0 - eps * p_detect * p_gate) * c, gate, max_exact)
+    with _quiet_if(c):
+        beta, beta0 = _joint(G, (1.0 - eps * p_detect * p_gate) * c, gate, max_exact, c)
     return _given_existence(beta, beta0, eps, 1.0 - p_detect * p_gate)
