@@ -351,22 +351,37 @@ def test_weights_whose_sum_passes_the_largest_float_and_the_cheap_jpda_of_them()
 
 
 def test_weights_spanning_more_than_a_float_are_named_not_nan():
-    """With P_D P_G = 1 a track certain to exist has a miss of weight 0, and two rescaled
-    tracks (weights 1e309 against a miss of 0.5) have miss weights whose product underflows:
-    JIPDA gave NaN, and JPDA a row summing to 0.59. The weights are named instead."""
+    """With P_D P_G = 1 a track certain to exist has a miss of weight 0, and the other two
+    tracks' misses are the only events left. Rescaled to weights of about 1 (not 1e300), two
+    misses of 5e-310 multiplied to 0: JIPDA gave NaN, and JPDA a row summing to 0.59. Now
+    the weights of 1e309 give the exact answer, and weights of 1e328 against a miss of 0.5,
+    past what any scaling of a float holds, are named."""
     from vistrack.association import jipda_weights
 
-    with pytest.raises(ValueError, match=r"the association weights of track \d span more "
-                                         r"than a float holds: its likelihoods over "
-                                         r"clutter_density reach about 1e309 against a "
-                                         r"miss weight of 0.5"):
-        jipda_weights(np.array([[1e306], [1e306], [1.0]]), np.ones((3, 1), bool),
-                      [0.5, 0.5, 1.0], p_detect=1.0, p_gate=1.0, clutter_density=1e-3)
-    # the same weights 1e6 times smaller hold: the only event left, the third track's
-    b, b0, ex = jipda_weights(np.array([[1e300], [1e300], [1.0]]), np.ones((3, 1), bool),
+    b, b0, ex = jipda_weights(np.array([[1e306], [1e306], [1.0]]), np.ones((3, 1), bool),
                               [0.5, 0.5, 1.0], p_detect=1.0, p_gate=1.0,
                               clutter_density=1e-3)
-    np.testing.assert_allclose(ex, [0, 0, 1], atol=1e-12)
+    np.testing.assert_array_equal(ex, [0, 0, 1])
+    np.testing.assert_array_equal(b.ravel(), [0, 0, 1])
+    with pytest.raises(ValueError, match=r"the association weights of track \d span more "
+                                         r"than a float holds: its likelihoods over "
+                                         r"clutter_density reach about 1e328 against a "
+                                         r"miss weight of 0.5"):
+        jipda_weights(np.array([[1e308], [1e308], [1.0]]), np.ones((3, 1), bool),
+                      [0.5, 0.5, 1.0], p_detect=1.0, p_gate=1.0, clutter_density=1e-20)
+    # a cluster's column sum past the largest float, every row finite (three weights of
+    # 9e307 on one detection): the cheap JPDA gave 0 and 1; Fitzgerald's formula, 1/3, 2/3
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        b, b0 = jpda_weights(np.array([[1e304]] * 3), np.ones((3, 1), bool),
+                             clutter_density=1e-4, max_exact=0)
+    np.testing.assert_allclose(b.ravel(), [1 / 3] * 3, rtol=1e-12)
+    np.testing.assert_allclose(b0, [2 / 3] * 3, rtol=1e-12)
+    # two tracks, one detection: which misses weighs by their misses' ratio, which a
+    # subnormal scale (weights taken to 1) held to a few digits (0.6658 for 2/3)
+    b, _ = jpda_weights(np.array([[1e308], [5e307]]), np.ones((2, 1), bool),
+                        clutter_density=1e-12)
+    np.testing.assert_allclose(b.ravel(), [2 / 3, 1 / 3], rtol=1e-9)
 
 
 def test_max_exact_bounds_and_unbounds_the_exact_sums():

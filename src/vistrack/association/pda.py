@@ -129,7 +129,9 @@ def _weights(w: float | np.ndarray, lik: np.ndarray, gate: np.ndarray, clutter_d
     """The weights ``G = w lik / clutter_density`` inside the gates (0 outside), ``w`` being
     ``P_D`` (or a column of ``eps_t P_D``), and each track's scale ``c (T,)`` they are
     multiplied by: 1, but for a track whose weights, or their sum, pass the largest float
-    (inf, and then NaN probabilities, or 0), ``clutter_density / max_j lik_tj``. Every
+    (inf, and then NaN probabilities, or 0), ``clutter_density 1e300 / max_j lik_tj``, which
+    takes its largest weight to ``w`` 1e300 (not to ``w``: its miss, ``B c``, fell to a
+    subnormal number of few digits, whose ratios between tracks the joint events weigh). Every
     event's weight is a product with one factor per track, each of a track's factors (its
     detections', a miss, not being there) scaled alike, and the probabilities ratios of
     such sums: a factor per track cancels (but in Fitzgerald's cheap JPDA, whose sums mix
@@ -140,10 +142,15 @@ def _weights(w: float | np.ndarray, lik: np.ndarray, gate: np.ndarray, clutter_d
     over = ~np.isfinite(G.sum(axis=1))
     if over.any():
         top = np.where(gate[over], lik[over], 0.0).max(axis=1)
-        c[over] = clutter_density / top
+        c[over] = clutter_density * (_LARGE / top)
         ww = np.broadcast_to(w, lik.shape)[over] if np.ndim(w) else w
-        G[over] = np.where(gate[over], ww * (lik[over] / top[:, None]), 0.0)
+        G[over] = np.where(gate[over], ww * (lik[over] / top[:, None]) * _LARGE, 0.0)
     return G, c
+
+
+_LARGE = 1e300
+"""A rescaled track's largest weight over ``P_D`` (:func:`_weights`): room below the largest
+float for a few thousand such weights summed."""
 
 
 def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
@@ -575,31 +582,41 @@ def _joint(G: np.ndarray, B: np.ndarray, gate: np.ndarray, max_exact: int,
         g = G[np.ix_(ti, di)]
         if _exact_is_affordable(len(ti), len(di), B[ti], max_exact):
             b, b0 = _exact(g, B[ti])
-        elif scale is not None and (scale[ti] != 1).any():
-            b, b0 = _cheap_in_logs(g, B[ti], scale[ti])
         else:  # Fitzgerald's cheap JPDA
-            den = g.sum(1)[:, None] + g.sum(0)[None, :] - g + B[ti, None]
-            b = g / den
-            b0 = np.clip(1.0 - b.sum(1), 0.0, 1.0)
-            s = b.sum(1) + b0
-            b, b0 = b / s[:, None], b0 / s
+            with np.errstate(over="ignore"):
+                den = g.sum(1)[:, None] + g.sum(0)[None, :] - g + B[ti, None]
+            if (scale is not None and (scale[ti] != 1).any()) or not np.isfinite(den).all():
+                # the tracks' scales taken out, or sums past the largest float: in logarithms
+                b, b0 = _cheap_in_logs(g, B[ti], np.ones(len(ti)) if scale is None
+                                       else scale[ti])
+            else:
+                b = g / den
+                b0 = np.clip(1.0 - b.sum(1), 0.0, 1.0)
+                s = b.sum(1) + b0
+                b, b0 = b / s[:, None], b0 / s
         beta[np.ix_(ti, di)] = b
         beta0[ti] = b0
     if scale is not None and (scale != 1).any():
         total = beta.sum(1) + beta0
         bad = ~np.isfinite(total) | (np.abs(total - 1) > 1e-9)
         if bad.any():
-            t = int(np.flatnonzero(bad)[0])
-            with np.errstate(divide="ignore"):  # (in logarithms: past the largest float)
-                top = np.log10(G[t].max()) - np.log10(scale[t])
-                miss = np.log10(B[t]) - np.log10(scale[t])
-            raise ValueError(
-                f"the association weights of track {t} span more than a float holds: its "
-                f"likelihoods over clutter_density reach about 1e{top:.0f} against a miss "
-                f"weight of {10 ** miss if np.isfinite(miss) else 0:.3g}, and the joint "
-                "events' products underflow; the likelihoods (or clutter_density) are in "
-                "units of another scale?")
+            _too_wide(int(np.flatnonzero(bad)[0]), G, B, scale)
     return beta, beta0
+
+
+def _too_wide(t: int, G: np.ndarray, B: np.ndarray, scale: np.ndarray | None) -> None:
+    """Raise the ValueError that names track ``t``'s weights as spanning more than a float
+    holds (their scale ``scale`` taken out, in logarithms)."""
+    c = 1.0 if scale is None else scale[t]
+    with np.errstate(divide="ignore"):  # (in logarithms: past the largest float)
+        top = np.log10(G[t].max()) - np.log10(c)
+        miss = np.log10(B[t]) - np.log10(c)
+    reach = f"about 1e{top:.0f}" if np.isfinite(top) else "more than 1e308"
+    raise ValueError(
+        f"the association weights of track {t} span more than a float holds: its "
+        f"likelihoods over clutter_density reach {reach} against a miss weight of "
+        f"{10 ** miss if np.isfinite(miss) else 0:.3g}, and the joint events' products "
+        "underflow; the likelihoods (or clutter_density) are in units of another scale?")
 
 
 def _quiet_if(scale: np.ndarray) -> contextlib.AbstractContextManager:
