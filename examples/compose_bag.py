@@ -66,17 +66,19 @@ def main():
     colours = ("tab:blue", "tab:orange", "tab:red")
     for c, k in enumerate(SHOW):
         ax = fig.add_subplot(grid[0, c])
+        # (imshow puts pixel k's centre at k, as the snake's contour has it; a box's pixel k
+        # spans [k, k + 1), half a pixel on)
         ax.imshow(frames[k][:, :, ::-1])
         for (label, (boxes, snaps)), col in zip(runs.items(), colours):
             b = boxes[k]
             ax.add_patch(Rectangle(
-                b[:2], b[2], b[3], fill=False, ec=col, lw=1.5))
+                b[:2] - 0.5, b[2], b[3], fill=False, ec=col, lw=1.5))
             if snaps.get(k) is not None and label.startswith("colour +"):
                 pts = np.vstack([snaps[k], snaps[k][:1]])
                 ax.plot(pts[:, 0], pts[:, 1], "-", color="yellow", lw=0.8)
         g = gt[k]
         ax.add_patch(Rectangle(
-            g[:2], g[2], g[3], fill=False, ec="lime", lw=1, ls="--"))
+            g[:2] - 0.5, g[2], g[3], fill=False, ec="lime", lw=1, ls="--"))
         ax.set_title(f"frame {k + 1}", fontsize=9)
         ax.set_xticks([])
         ax.set_yticks([])
