@@ -120,7 +120,7 @@ class Composite(SingleObjectTracker):
     ...     return im
     >>> tracker.init(image(30), [30, 20, 20, 20])
     >>> [tracker.update(image(x)).round().tolist()[0] for x in (33, 36, 39)]
-    [31.0, 33.0, 36.0]
+    [32.0, 35.0, 39.0]
     >>> tracker.accepted
     {'colour': True, 'shape': True}
     """
