@@ -896,13 +896,19 @@ def unread_frontend_option(frontend: object, options: dict) -> tuple[str, str] |
     return None
 
 
+_FILE_FRONTENDS: dict[str, tuple[str, str, Callable[[str | Path, Context], FrameDetector]]] = {
+    "detections": ("detections:FILE", "detections file", _detections_file),
+    "onnx": ("onnx:MODEL.onnx", "model", _onnx)}
+"""The front-ends named with a file, ``KIND:FILE``: their form, what the file is, and what
+makes them (:func:`_frontend`; :func:`input_files` lists the file among a run's inputs)."""
+
+
 def _frontend(name: str | Detector | Callable[[Frame], Detections | None] | None,
               ctx: Context) -> Callable[[Frame], Detections | None]:
     """A front-end by name (:data:`FRONTENDS`, or ``detections:FILE``), or a detector of
     your own (:func:`as_detector`)."""
     if isinstance(name, str):
-        for kind, form, make in (("detections", "detections:FILE", _detections_file),
-                                 ("onnx", "onnx:MODEL.onnx", _onnx)):
+        for kind, (form, _, make) in _FILE_FRONTENDS.items():
             if name.startswith(kind + ":"):
                 path = name.split(":", 1)[1]
                 # ("" read as ".", a folder, which was "Is a directory" or "does not exist")
@@ -1493,19 +1499,21 @@ class _SequenceInput:
     replaced_rate: tuple[str, float] | None = None
 
 
+def _a_frame_rate(x: Any) -> bool:
+    """Whether ``x`` is a frame rate the box tracker's motion model scales to
+    (:data:`~vistrack.models.box.FRAME_RATES`)."""
+    try:
+        return not isinstance(x, bool) and FRAME_RATES[0] <= float(x) <= FRAME_RATES[1]
+    except (TypeError, ValueError):
+        return False
+
+
 def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
                    columns: dict[str, str] | None, fps: float | None) -> _SequenceInput:
     """The detections of a sequence folder, or of a detections file alone, read and checked
     against the sequence (:func:`track_sequence`'s errors; its warnings name the caller of
     :func:`track_sequence`)."""
-    def a_frame_rate(x: Any) -> bool:  # one the motion model scales to
-        try:
-            return (not isinstance(x, bool)
-                    and FRAME_RATES[0] <= float(x) <= FRAME_RATES[1])
-        except (TypeError, ValueError):
-            return False
-
-    if fps is not None and not a_frame_rate(fps):
+    if fps is not None and not _a_frame_rate(fps):
         raise ValueError(f"fps must be a number from {FRAME_RATES[0]:g} to "
                          f"{FRAME_RATES[1]:g} (frames a second); got {fps!r}")
     if not seq_dir.exists():  # not "SEQ/det/det.txt does not exist" for a mistyped SEQ
@@ -1541,7 +1549,7 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
     # (--fps stands in for a frameRate the file lacks: it is put over the file's anyway)
     info = read_seqinfo(seq_dir, frame_rate=fps) if has_info else None
     if info is not None:
-        if fps is None and not a_frame_rate(info.frame_rate):
+        if fps is None and not _a_frame_rate(info.frame_rate):
             # (named by the motion model later, without the file or the key)
             raise MOTFormatError(f"{ini}: frameRate must be from {FRAME_RATES[0]:g} to "
                                  f"{FRAME_RATES[1]:g} frames/s; got {info.frame_rate:g} "
@@ -2123,37 +2131,34 @@ def input_files(video: str | Path | None, *, gt: str | Path | None = None,
     [('the video tracked', 'in.avi'), ('the detections file (--frontend detections:FILE)', \
 'd.txt')]
     """
+    from .io.video import IMAGE_SUFFIXES, VideoError, images_of
+
     gt_file = None
     if gt is not None:
-        g = Path(gt)
-        gt_file = g / "gt" / "gt.txt" if g.is_dir() else g
-    from .io.video import IMAGE_SUFFIXES
+        try:
+            gt_file = _ground_truth_file(gt)
+        except ValueError:  # (a folder without gt/gt.txt: the run names it, reading it)
+            pass
 
     read: list[Input] = []
     if video is not None and Path(video).is_dir():
         # the images (a sequence folder's imDir/), and the sequence's seqinfo.ini
         v = Path(video)
-        images = v
         if (v / "seqinfo.ini").is_file():
             read.append(("the sequence's seqinfo.ini", v / "seqinfo.ini"))
-            import configparser
-
-            info = configparser.ConfigParser(interpolation=None)
-            try:
-                info.read(v / "seqinfo.ini", encoding="utf-8")
-                images = v / info.get("Sequence", "imDir", fallback="img1")
-            except (configparser.Error, UnicodeDecodeError, ValueError):
-                images = v / "img1"  # (the reader names what is wrong with the file)
+        try:
+            images = images_of(v)
+        except VideoError:  # (the reader names what is wrong with the file)
+            images = v / "img1"
         read.append(("the folder of the images tracked", images, IMAGE_SUFFIXES))
     else:
         read.append(("the video tracked", None if video is None else Path(video)))
     read += [("the ground truth (--gt)", gt_file),
              ("the configuration file (--config)", None if config is None else Path(config))]
     if isinstance(frontend, str):
-        for kind, form in (("detections", "detections:FILE"), ("onnx", "onnx:MODEL.onnx")):
+        for kind, (form, what, _) in _FILE_FRONTENDS.items():
             if frontend.startswith(kind + ":") and frontend != kind + ":":
-                read.append((f"the {'detections file' if kind == 'detections' else 'model'} "
-                             f"(--frontend {form})", Path(frontend.split(":", 1)[1])))
+                read.append((f"the {what} (--frontend {form})", Path(frontend.split(":", 1)[1])))
     return read
 
 
@@ -2434,8 +2439,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                       {k: v for k, v in options.items() if v is not None}
                       | {"confidence": confidence}, points=points)
         box = isinstance(tracker, str) and tracker in TRACKERS and TRACKERS[tracker].box_config
-        if box and reader.fps_from not in (None, "fps") \
-                and not FRAME_RATES[0] <= reader.fps <= FRAME_RATES[1]:
+        if box and reader.fps_from not in (None, "fps") and not _a_frame_rate(reader.fps):
             # (named by the motion model later, as frame_rate, without the file; the other
             # trackers take any rate)
             raise ValueError(f"{video}: its {reader.fps_from.removeprefix('the ')} gives "

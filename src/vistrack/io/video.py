@@ -16,9 +16,10 @@ from __future__ import annotations
 
 import configparser
 import math
+import os
 import re
 import warnings
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -207,6 +208,31 @@ def _holds_images(folder: Path) -> bool:
         return False
 
 
+def _sequence_section(info: Path) -> Mapping[str, str]:
+    """The ``[Sequence]`` section of ``seqinfo.ini`` as :class:`VideoReader` reads it (a
+    byte-order mark taken off; empty without one), or a :class:`VideoError` naming the file."""
+    cp = configparser.ConfigParser(interpolation=None)
+    try:
+        cp.read_string(info.read_bytes().decode("utf-8-sig"), source=str(info))
+    except (UnicodeDecodeError, configparser.Error) as exc:
+        raise VideoError(f"{info} is not a readable seqinfo.ini ({exc})") from None
+    return cp["Sequence"] if "Sequence" in cp else {}
+
+
+def images_of(folder: str | os.PathLike) -> Path:
+    """The folder :class:`VideoReader` reads a folder's images from: a sequence folder's
+    ``imDir`` (``img1`` by default), or the folder itself.
+
+    Raises
+    ------
+    VideoError
+        If the sequence's ``seqinfo.ini`` cannot be read.
+    """
+    folder = Path(folder)
+    info = folder / "seqinfo.ini"
+    return folder / _sequence_section(info).get("imDir", "img1") if info.exists() else folder
+
+
 class VideoReader:
     """Frames of a video file, an image folder, or a MOTChallenge sequence folder (its
     ``img1/``, with the frame rate of its ``seqinfo.ini``).
@@ -320,15 +346,13 @@ class VideoReader:
         if src.is_dir():
             info = src / "seqinfo.ini"
             if info.exists():
-                cp = configparser.ConfigParser(interpolation=None)
+                seq = _sequence_section(info)
                 try:
-                    cp.read_string(info.read_bytes().decode("utf-8-sig"), source=str(info))
-                    seq = cp["Sequence"] if "Sequence" in cp else {}
                     seq_fps = float(seq["frameRate"]) if "frameRate" in seq else None
-                    length = str(seq.get("seqLength", "")).strip()
-                    seq_length = int(length) if length.isdigit() else None  # for a warning
-                except (UnicodeDecodeError, configparser.Error, ValueError) as exc:
+                except ValueError as exc:
                     raise VideoError(f"{info} is not a readable seqinfo.ini ({exc})") from None
+                length = str(seq.get("seqLength", "")).strip()
+                seq_length = int(length) if length.isdigit() else None  # for a warning
                 if fps is None and seq_fps is not None and not (np.isfinite(seq_fps)
                                                                 and seq_fps > 0):
                     # 0 fell back to 30 frames/s without a word, as no frame rate at all;

@@ -457,10 +457,7 @@ def _mean_shift(bp: np.ndarray, box: np.ndarray, iters: int = 20, eps: float = 0
         if i0 >= i1 or j0 >= j1:
             break  # (wholly outside the image)
         # each column's and row's share inside the window, and that share's centre
-        lo, hi = np.maximum(np.arange(i0, i1), x0), np.minimum(np.arange(i0 + 1, i1 + 1), x0 + w)
-        ax, mx = np.maximum(hi - lo, 0.0), (lo + hi) / 2
-        lo, hi = np.maximum(np.arange(j0, j1), y0), np.minimum(np.arange(j0 + 1, j1 + 1), y0 + h)
-        ay, my = np.maximum(hi - lo, 0.0), (lo + hi) / 2
+        (ax, mx), (ay, my) = _cut(i0, i1, x0, w), _cut(j0, j1, y0, h)
         mass = bp[j0:j1, i0:i1] * ay[:, None] * ax[None, :]
         total = mass.sum()
         if total <= 0:
@@ -471,6 +468,14 @@ def _mean_shift(bp: np.ndarray, box: np.ndarray, iters: int = 20, eps: float = 0
         if step < eps:
             break
     return cx, cy
+
+
+def _cut(k0: int, k1: int, start: float, length: float) -> tuple[np.ndarray, np.ndarray]:
+    """Each pixel ``k0 <= k < k1``'s share inside ``[start, start + length)`` (pixel ``k``
+    spans ``[k, k + 1)``), and the centre of that share."""
+    k = np.arange(k0, k1)
+    lo, hi = np.maximum(k, start), np.minimum(k + 1, start + length)
+    return np.maximum(hi - lo, 0.0), (lo + hi) / 2
 
 
 def _colour_cells(hsv: np.ndarray, bins: int) -> np.ndarray:
