@@ -137,9 +137,11 @@ def _weights(w: float | np.ndarray, lik: np.ndarray, gate: np.ndarray, clutter_d
     such sums: a factor per track cancels (but in Fitzgerald's cheap JPDA, whose sums mix
     the tracks: :func:`_joint` takes the scales there), and the caller scales the track's
     other factors by ``c``."""
-    G = np.where(gate, w * lik / clutter_density, 0.0)
+    with np.errstate(over="ignore"):  # (an overflow is what is rescaled here)
+        G = np.where(gate, w * lik / clutter_density, 0.0)
     c = np.ones(len(G))
-    over = ~np.isfinite(G.sum(axis=1))
+    with np.errstate(over="ignore"):
+        over = ~np.isfinite(G.sum(axis=1))
     if over.any():
         top = np.where(gate[over], lik[over], 0.0).max(axis=1)
         c[over] = clutter_density * (_LARGE / top)
@@ -210,8 +212,7 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     """
     _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
-    with np.errstate(over="ignore"):
-        G, c = _weights(p_detect, lik, gate, clutter_density)
+    G, c = _weights(p_detect, lik, gate, clutter_density)
     return _pda(G, (1.0 - p_detect * p_gate) * c)
 
 
@@ -727,8 +728,7 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     """
     _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
-    with np.errstate(over="ignore"):
-        G, c = _weights(p_detect, lik, gate, clutter_density)
+    G, c = _weights(p_detect, lik, gate, clutter_density)
     with _quiet_if(c):
         return _joint(G, (1.0 - p_detect * p_gate) * c, gate, max_exact, c)
 
@@ -836,8 +836,7 @@ def ipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
     eps = _existence(existence, len(lik))
-    with np.errstate(over="ignore"):
-        G, c = _weights(p_detect, lik, gate, clutter_density)
+    G, c = _weights(p_detect, lik, gate, clutter_density)
     B = 1.0 - p_detect * p_gate
     # the single track's events: not there (1 - eps), missed (eps B), detection j (eps G_j),
     # each scaled by c
@@ -907,8 +906,7 @@ def jipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
     eps = _existence(existence, len(lik))
-    with np.errstate(over="ignore"):
-        G, c = _weights((eps * p_detect)[:, None], lik, gate, clutter_density)
+    G, c = _weights((eps * p_detect)[:, None], lik, gate, clutter_density)
     with _quiet_if(c):
         beta, beta0 = _joint(G, (1.0 - eps * p_detect * p_gate) * c, gate, max_exact, c)
     return _given_existence(beta, beta0, eps, 1.0 - p_detect * p_gate)
