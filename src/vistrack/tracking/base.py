@@ -169,6 +169,19 @@ def frame_image(frame: Frame, who: str) -> np.ndarray:
     return np.asarray(image)
 
 
+_HALF = 0.5
+"""Half a pixel, between the two ways single-object trackers place a pixel: a box's
+coordinates count pixel ``k`` as ``[k, k + 1)``, while the image is sampled (templates
+cut, contours fitted, registrations solved) in the pixels' indices, pixel ``k``'s centre
+at ``k``. An edge between pixels 49 and 50 is at 50 in the first and 49.5 in the second
+(without the half pixel, boxes sat half a pixel up and to the left of the object)."""
+
+
+def _index_centre(box: np.ndarray) -> np.ndarray:
+    """A box's centre in the pixels' indices (:data:`_HALF`)."""
+    return box[:2] + box[2:] / 2 - _HALF
+
+
 def check_start_box(image: np.ndarray, box: np.ndarray, name: str = "box") -> None:
     """Refuse a start box ``x, y, w, h`` with less than half its area inside ``image``: a
     tracker has no object to learn there (and OpenCV's fail inside, others follow nothing).

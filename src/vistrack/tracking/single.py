@@ -44,7 +44,7 @@ from .._registry import Registry
 from .._validate import as_box, as_finite, as_scales, as_uint8_image, as_whole
 from ._affine import prepare_templates, register
 from .appearance import WSLTracker
-from .base import SingleObjectTracker
+from .base import _HALF, SingleObjectTracker, _index_centre
 from .snake import SnakeTracker
 
 if TYPE_CHECKING:
@@ -259,12 +259,6 @@ class MedianFlow(SingleObjectTracker):
         self.box = as_box(box)
 
 
-def _index_centre(box: np.ndarray) -> np.ndarray:
-    """A box's centre in the pixels' indices, where the image is sampled (pixel ``k``'s
-    centre at ``k``; the box's ``x, y`` count pixel ``k`` as ``[k, k + 1)``)."""
-    return box[:2] + box[2:] / 2 - 0.5
-
-
 class TemplateTracker(SingleObjectTracker):
     """Affine template tracking of the first frame's central patch (see the module).
 
@@ -334,7 +328,7 @@ class TemplateTracker(SingleObjectTracker):
         c = np.array([x + w / 2, y + h / 2])
         rel = np.array([[x, y], [x + w, y], [x, y + h], [x + w, y + h]]) - c
         A = np.array([[1 + p[0], p[2]], [p[1], 1 + p[3]]])
-        return rel @ A.T + p[4:] + 0.5  # (the translation is in the pixels' indices)
+        return rel @ A.T + p[4:] + _HALF  # (the translation is in the pixels' indices)
 
     def _follow(self, image: np.ndarray) -> np.ndarray:
         grey = _grey(image)

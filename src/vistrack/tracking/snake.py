@@ -27,7 +27,7 @@ from .._prebuilt import kernel
 from .._validate import as_box, as_finite, as_uint8_image, as_whole
 from ..filters import kf_predict, kf_update
 from ..types import Gaussian
-from .base import SingleObjectTracker
+from .base import _HALF, SingleObjectTracker, _index_centre
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -342,12 +342,6 @@ class Snake:
         return self.contour()
 
 
-_HALF = 0.5
-"""From the contour's coordinates, the pixels' indices where the image is sampled (pixel
-``k``'s centre at ``k``), to a box's (pixel ``k`` spans ``[k, k + 1)``): an edge between
-pixels 49 and 50 is at 49.5 in the first, 50 in the second (the box was half a pixel up
-and to the left of the object)."""
-
 
 class SnakeTracker(SingleObjectTracker):
     """A :class:`Snake` as a box tracker: started on the ellipse inscribed in the first box,
@@ -390,7 +384,7 @@ class SnakeTracker(SingleObjectTracker):
         # ratio is (2 + cos(2π/n)) / 3, as in Snake.init_circle
         k = 3 / (2 + np.cos(2 * np.pi / s.n))
         a = 2 * np.pi * np.arange(s.n) / s.n
-        c = b[:2] + b[2:] / 2 - _HALF
+        c = _index_centre(b)
         s.init(np.c_[c[0] + k * b[2] / 2 * np.cos(a), c[1] + k * b[3] / 2 * np.sin(a)])
         self.box = b
 
