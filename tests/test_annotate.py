@@ -299,6 +299,24 @@ def test_a_track_numbered_minus_one_or_below_is_drawn_as_matched(tmp_path, pid):
     assert [p.vertices[0, 0] for p in runs.get_paths()] == [0.5, 3.5]
 
 
+@pytest.mark.parametrize("field, value", [
+    ("matched", np.array([True, False])), ("switches", np.zeros(4, bool)),
+    ("pred_ids", np.array([[7], [8], [8]])), ("frames", np.array(1))])
+def test_matches_built_by_hand_with_fields_of_other_lengths_are_named(field, value):
+    """A ``Matches`` built by hand with ``matched`` of the wrong length failed later, in the
+    timeline, with numpy's IndexError; each field is checked against ``frames`` as it is
+    made."""
+    from vistrack.evaluation import Matches
+
+    fields = dict(frames=np.array([1, 2, 3]), gt_ids=np.array([5, 5, 5]),
+                  pred_ids=np.array([7, 8, 8]), switches=np.array([False, True, False]),
+                  matched=np.array([True, True, True]))
+    Matches(**fields)  # the same fields, each of length 3: accepted
+    fields[field] = value
+    with pytest.raises(ValueError, match=rf"Matches\.{field} must have shape \(N,\)"):
+        Matches(**fields)
+
+
 def test_the_timeline_of_a_ground_truth_with_nothing_to_score(tmp_path):
     """Ground truth with no box to score (empty, all ignored, or starting after the frames
     tracked): `vistrack eval --plots` and `track --report` failed in the timeline with an

@@ -1091,6 +1091,16 @@ class Matches:
     switches: np.ndarray
     matched: np.ndarray
 
+    def __post_init__(self) -> None:
+        # a Matches built by hand: one row per scored box in every field, or the timeline
+        # would index one field by another's rows
+        n = np.shape(self.frames)
+        for name in ("frames", "gt_ids", "pred_ids", "switches", "matched"):
+            shape = np.shape(getattr(self, name))
+            if len(shape) != 1 or shape != n:
+                raise ValueError(f"Matches.{name} must have shape (N,) as frames has, "
+                                 f"one row per scored box; got {shape} against {n}")
+
 
 def clear_matches(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
                   benchmark: str = "auto", zero_distance: float | None = None) -> Matches:
