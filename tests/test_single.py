@@ -749,6 +749,39 @@ def test_the_template_of_a_box_at_any_edge_of_the_image_is_kept(edge):
     assert overlaps(np.array(got), np.array(want)).min() > 0.97
 
 
+@pytest.mark.parametrize("turned_down", [6, 9])
+def test_the_template_keeps_the_scale_of_frames_whose_registration_it_turned_down(
+        turned_down):
+    """A frame whose registration is turned down takes the median flow's box; the warp kept
+    its last shape, so each such frame's change of scale was lost from it, and the next
+    registration started that far off. A scene zooming 5 % a frame about the image's centre,
+    with every registration turned down for 6 or 9 frames (``max_residual`` near 0), then
+    taken again, with 2 iterations: the box was 50.4 pixels wide for 54 after 6 frames, and
+    after 9 the registration failed (residual 0.80). Oracle: the start box scaled by the zoom
+    that made the frame."""
+    from vistrack.tracking.single import TemplateTracker
+
+    rng = np.random.default_rng(0)
+    scene = cv2.GaussianBlur(rng.integers(0, 256, (240, 320), dtype=np.uint8), (0, 0), 2)
+
+    def zoom(s):
+        M = cv2.getRotationMatrix2D((160, 120), 0, s)
+        return cv2.warpAffine(scene, M, (320, 240), borderMode=cv2.BORDER_REFLECT)
+
+    b0 = np.array([140.0, 100, 40, 40])
+    t = TemplateTracker(max_residual=1e-9, iters=2)
+    t.init(scene, b0)
+    for k in range(1, turned_down + 1):
+        t.update(zoom(1 + 0.05 * k))
+        assert t.residual > t.max_residual  # turned down: the median flow's box
+    t.max_residual = 0.6
+    s = 1 + 0.05 * (turned_down + 1)
+    got = t.update(zoom(s))
+    want = np.r_[(b0[:2] - [160, 120]) * s + [160, 120], b0[2:] * s]
+    assert t.residual < 0.1
+    assert np.abs(got - want).max() < 0.5
+
+
 @pytest.mark.parametrize("method", ["colour", "meanshift", "camshift", "particle"])
 def test_the_colour_trackers_tell_colours_of_one_brightness_and_saturation_apart(method):
     """A red disc on green of the same saturation and value (both 255): the colour model was

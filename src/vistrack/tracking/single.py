@@ -342,6 +342,7 @@ class TemplateTracker(SingleObjectTracker):
         A = np.array([[1 + p[0, 0], p[0, 2]], [p[0, 1], 1 + p[0, 3]]]) * s
         p[0, :4] = [A[0, 0] - 1, A[1, 0], A[0, 1], A[1, 1] - 1]
         p[0, 4:] = _index_centre(prior)
+        predicted = p.copy()
         rms = register(grey, self.half, self.T, self.SD, self.Hinv, p, iters=self.iters)
         self.residual = float(rms[0])
         if rms[0] <= self.max_residual:
@@ -350,8 +351,11 @@ class TemplateTracker(SingleObjectTracker):
             lo, hi = q.min(0), q.max(0)
             self.box = np.r_[lo, hi - lo]
         else:
+            # the median flow's box, and the warp predicted from it, scale included: with
+            # the last warp's shape kept, each frame turned down lost its change of scale,
+            # and the warp's box drifted from the box reported
             self.box = prior
-            self.p[0, 4:] = _index_centre(prior)
+            self.p = predicted
         self.flow.box = self.box.copy()
         return self.box.copy()
 
