@@ -949,8 +949,84 @@ def test_view_shift_finds_the_translation_applied(dx, dy):
         view_shift(img, img[:240, :320])
     with pytest.raises(ValueError, match="at least 16 pixels on a side; got 20x10"):
         view_shift(img[:10, :20], img[:10, :20])
-    with pytest.raises(ValueError, match="width must be at least 16; got 8"):
+    with pytest.raises(ValueError, match=re.escape("width must be a whole number >= 16 "
+                                                   "(pixels across the reduced copies); got 8")):
         view_shift(img, img, width=8)
+
+
+def test_view_shift_finds_a_faint_scene_moving_behind_one_bright_object():
+    """A night scene: vtest.avi's first frame at a tenth of its brightness, with a saturated
+    lit window moving with it. Shi-Tomasi keeps corners above 1 % of the strongest, which
+    the window's own took above every corner of the scene: its 4 were left and `view_shift`
+    gave NaN, so a panning night camera was never found. Oracle: the roll applied, and the
+    same dark frame without the window."""
+    from vistrack.frontends import view_shift
+
+    need(VTEST)
+    reader = cv2.VideoCapture(str(VTEST))
+    ok, frame = reader.read()
+    reader.release()
+    assert ok
+    dark = (cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY) * 0.1).round().astype(np.uint8)
+    lit = dark.copy()
+    lit[60:100, 480:520] = 255
+    for image in (dark, lit):
+        dx, dy, followed = view_shift(image, np.roll(image, (3, -4), axis=(0, 1)))
+        assert (dx, dy) == pytest.approx((-4, 3), abs=0.1)
+        assert followed > 0.9
+
+
+def test_view_shift_names_its_arguments():
+    """A width of 100.0 (from a configuration file) failed inside OpenCV's resize, one of
+    NaN was taken; a guess of three numbers failed in numpy's reshape, and a frame that is
+    no image was named "image" for either frame."""
+    from vistrack.frontends import view_shift
+
+    img = _texture((480, 640))
+    moved = np.roll(img, (2, 5), axis=(0, 1))
+    assert view_shift(img, moved, width=100.0) == view_shift(img, moved, width=100)
+    with pytest.raises(ValueError, match=r"width must be a whole number >= 16 .*got nan"):
+        view_shift(img, moved, width=float("nan"))
+    for guess in ((1, 2, 3), ("a", "b")):
+        with pytest.raises(ValueError, match=re.escape(f"guess must be two finite numbers, "
+                                                       f"dx and dy; got {guess!r}")):
+            view_shift(img, moved, guess=guess)
+    blank = np.zeros_like(img)  # (no corner: it returned NaN before the guess was read)
+    with pytest.raises(ValueError, match=re.escape("got (nan, 0)")):
+        view_shift(blank, blank, guess=(float("nan"), 0))
+    with pytest.raises(ValueError, match=r"^b must be \(H, W\) .* uint16"):
+        view_shift(img, moved.astype(np.uint16))
+
+
+@pytest.mark.parametrize("model", [SelectiveBackground, MOG2Background])
+def test_background_initialize_names_the_frame_that_is_no_image(model):
+    frames = [np.zeros((8, 8), np.uint8), np.zeros((8, 8), np.float32)]
+    with pytest.raises(ValueError, match=r"^frames\[1\] must be \(H, W\) .* float32"):
+        model().initialize(frames)
+
+
+def test_blob_settings_that_were_cut_or_taken_are_named():
+    """`threshold` at a NaN level gave an empty mask; `find_blobs` cut an opening of 2.7
+    to 2; `BlobDetector` took an opening of -3, as 0."""
+    from vistrack.frontends import BlobDetector
+    from vistrack.frontends.blobs import threshold
+
+    img = np.array([[0, 100], [200, 255]], np.uint8)
+    with pytest.raises(ValueError, match="level must be a number; got nan"):
+        threshold(img, float("nan"))
+    with pytest.raises(TypeError, match="level must be a number; got '150'"):
+        threshold(img, "150")
+    mask = np.zeros((20, 20), np.uint8)
+    for bad in ({"open_size": 2.7}, {"close_size": -1}):
+        name, value = next(iter(bad.items()))
+        with pytest.raises(ValueError, match=re.escape(
+                f"{name} must be a whole number >= 0 (pixels across; 0 skips it); "
+                f"got {value}")):
+            find_blobs(mask, **bad)
+        with pytest.raises(ValueError, match=re.escape(f"{name} must be a whole number")):
+            BlobDetector(**bad)
+    with pytest.raises(ValueError, match=re.escape("open_size must be a whole number >= 0")):
+        BlobDetector(open_size=-3)
 
 
 def test_view_shift_refined_on_the_frames_leans_to_no_whole_pixel():

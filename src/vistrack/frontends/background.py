@@ -180,8 +180,8 @@ class SelectiveBackground:
         self._seen: np.ndarray | None = None
 
     @staticmethod
-    def _as3(image: np.ndarray) -> np.ndarray:
-        im = as_uint8_image(image, channels=(1, 3))
+    def _as3(image: np.ndarray, name: str = "image") -> np.ndarray:
+        im = as_uint8_image(image, name, channels=(1, 3))
         return im[:, :, None] if im.ndim == 2 else im
 
     def initialize(self, frames: Iterable[np.ndarray],
@@ -221,7 +221,7 @@ class SelectiveBackground:
         >>> bg.mean.shape, round(float(bg.mean.mean()))
         ((40, 60, 1), 100)
         """
-        images = [self._as3(f) for f in frames]
+        images = [self._as3(f, f"frames[{k}]") for k, f in enumerate(frames)]
         if len(images) == 0:
             raise ValueError("initialize needs at least one frame")
         _one_shape([f.shape for f in images], "frames")
@@ -473,16 +473,16 @@ class MOG2Background:
         >>> int(bg.apply(np.zeros((4, 6), np.uint8)).max())
         0
         """
-        for f in frames:
-            self._m.apply(self._same(f))
+        for k, f in enumerate(frames):
+            self._m.apply(self._same(f, f"frames[{k}]"))
             self._seen += 1
         return self
 
-    def _same(self, image: np.ndarray) -> np.ndarray:
+    def _same(self, image: np.ndarray, name: str = "image") -> np.ndarray:
         # OpenCV starts its mixture afresh on a frame of another size or type, without a word
         # (a frame of zeros of another size, and then nothing was ever foreground again)
         # uint8 as documented: a float frame restarted the mixture too, without a word
-        im = as_uint8_image(image, channels=(1, 3))
+        im = as_uint8_image(image, name, channels=(1, 3))
         shape = im.shape if im.ndim == 3 else im.shape + (1,)
         if self._shape is None:
             self._shape = shape
@@ -585,6 +585,22 @@ def _there_and_back(a: np.ndarray, b: np.ndarray, p: np.ndarray, *, levels: int,
     return q, (there[:, 0] == 1) & (again[:, 0] == 1) & (np.hypot(*(r - p)[:, 0].T) < within)
 
 
+def _view_corners(image: np.ndarray) -> np.ndarray | None:
+    """Up to 200 Shi-Tomasi corners of ``image`` for :func:`view_shift`, at least 10 where
+    there are: OpenCV keeps the corners above a share of the strongest one, and one bright
+    object (a lamp, a lit window in a night scene) took that share above every corner of
+    the faint scene around it, so only the object's four were left. The share is lowered
+    (1 %, then 0.1 % and 0.01 % of the strongest) until 10 come back or none is left."""
+    import cv2
+
+    p = None
+    for quality in (0.01, 0.001, 0.0001):
+        p = cv2.goodFeaturesToTrack(image, 200, quality, 7)
+        if p is not None and len(p) >= 10:
+            break
+    return p
+
+
 def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool = False,
                guess: tuple[float, float] | None = None) -> tuple[float, float, float]:
     """How far the view moved from frame ``a`` to frame ``b``: the median displacement of up
@@ -625,13 +641,15 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool =
         Lucas-Kanade follows, or there is nothing to follow).
     followed : float
         The share of ``a``'s corners followed into ``b`` and back; NaN if ``a`` has fewer
-        than 10 corners (a blank or blurred frame).
+        than 10 corners, even at a hundredth of the usual share of the strongest (a blank or
+        blurred frame).
 
     Raises
     ------
     ValueError
-        If the frames differ in size, either is smaller than 16 pixels on a side, or
-        ``width`` is less than 16.
+        If the frames differ in size, either is smaller than 16 pixels on a side,
+        ``width`` is not a whole number of at least 16, or ``guess`` is not two finite
+        numbers.
 
     Examples
     --------
@@ -654,12 +672,20 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool =
     """
     import cv2
 
-    a, b = as_uint8_image(a, grey=True), as_uint8_image(b, grey=True)
+    a, b = as_uint8_image(a, "a", grey=True), as_uint8_image(b, "b", grey=True)
     if a.shape != b.shape:
         raise ValueError(f"the frames must have one size; got {a.shape[1]}x{a.shape[0]} and "
                          f"{b.shape[1]}x{b.shape[0]}")
-    if width < 16:
-        raise ValueError(f"width must be at least 16; got {width}")
+    # (a width of 100.0 failed inside OpenCV's resize, and one of NaN was taken)
+    width = as_whole(width, "width", 16, "pixels across the reduced copies")
+    moved = None
+    if guess is not None:  # (before the corners: a frame with none returned NaN first)
+        try:
+            moved = np.asarray(guess, np.float64)
+        except (TypeError, ValueError):
+            moved = np.full(0, np.nan)
+        if moved.shape != (2,) or not np.isfinite(moved).all():
+            raise ValueError(f"guess must be two finite numbers, dx and dy; got {guess!r}")
     h, w = a.shape
     if min(h, w) < 16:
         raise ValueError(f"the frames must be at least 16 pixels on a side; got {w}x{h}")
@@ -670,15 +696,13 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool =
     sx, sy = w / size[0], h / size[1]
     small_a, small_b = (cv2.resize(x, size, interpolation=cv2.INTER_AREA) if s > 1 else x
                         for x in (a, b))
-    p = cv2.goodFeaturesToTrack(small_a, 200, 0.01, 7)
+    p = _view_corners(small_a)
     if p is None or len(p) < 10:
         return float("nan"), float("nan"), float("nan")
-    if guess is None:
+    if moved is None:
         q, ok = _there_and_back(small_a, small_b, p, levels=3, within=1.0)
     else:
-        g = np.asarray(guess, np.float32).reshape(2) / np.array([sx, sy], np.float32)
-        if not np.isfinite(g).all():
-            raise ValueError(f"guess must be two finite numbers; got {guess!r}")
+        g = moved.astype(np.float32) / np.array([sx, sy], np.float32)
         q, ok = _there_and_back(small_a, small_b, p, levels=3, within=1.0, guess=p + g,
                                 back=p.copy())
     followed = float(ok.mean())

@@ -21,7 +21,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import bgr_to_grey, is_whole
+from .._validate import as_number, as_whole, bgr_to_grey, is_whole
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -144,6 +144,8 @@ def threshold(image: ArrayLike, level: float, above: bool = True) -> np.ndarray:
     array([[255, 255],
            [  0,   0]], dtype=uint8)
     """
+    if np.isnan(as_number(level, "level")):  # (compared false everywhere: an empty mask)
+        raise ValueError(f"level must be a number; got {level}")
     im = np.asarray(image)
     if im.ndim == 3:
         im = bgr_to_grey(im)
@@ -218,6 +220,9 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     for name, limit in (("min_area", min_area), ("max_area", max_area)):
         if np.isnan(limit):  # (every region was dropped, without a word)
             raise ValueError(f"{name} must be a number of pixels; got {limit}")
+    # (2.7 was cut to 2, and -3 taken as 0)
+    open_size = as_whole(open_size, "open_size", 0, "pixels across; 0 skips it")
+    close_size = as_whole(close_size, "close_size", 0, "pixels across; 0 skips it")
     m = (m != 0).astype(np.uint8)
     for opening, size in ((True, open_size), (False, close_size)):
         if size and size > 1:
@@ -355,7 +360,10 @@ class BlobDetector:
         if not 0 <= min_area < np.inf:  # (-5 was taken; the command line refuses it)
             raise ValueError(f"min_area must be >= 0 and finite; got {min_area}")
         self.model = make_background(background)
-        self.min_area, self.open_size, self.close_size = float(min_area), open_size, close_size
+        # (checked here, not at the first frame with a blob: -3 was taken)
+        self.open_size = as_whole(open_size, "open_size", 0, "pixels across; 0 skips it")
+        self.close_size = as_whole(close_size, "close_size", 0, "pixels across; 0 skips it")
+        self.min_area = float(min_area)
         self.check_view, self.max_shift = int(check_view), float(max_shift)
         self.follow_view = bool(follow_view)
         self._reset()
