@@ -204,3 +204,64 @@ def test_a_feature_the_search_found_meets_min_ncc_too():
         ncc = _ncc(a.astype(np.float32), f0.points[kept], b.astype(np.float32),
                    f1.points[:n], 5)
         assert (ncc >= min_ncc - 1e-4).all(), ncc.min()
+
+
+def test_features_start_inside_the_image_and_reach_max_features():
+    """The features were asked of OpenCV to exactly the number missing, and those too near
+    the border for their patch were dropped after: on vtest.avi 483 of 500 started, and the
+    count stayed short until a fifth was gone. Without the affine check the border's
+    features were kept, then ended by the correlation check with nothing moved (500, then
+    486 on the same frame again). Oracle: OpenCV's own corners of the frame, far more than
+    500 of them inside the border."""
+    frame = cv2.cvtColor(_vtest_frame(), cv2.COLOR_BGR2GRAY)
+    H, W = frame.shape
+    for check in (True, False):
+        klt = KLTTracker(500, affine_check=check)
+        first = klt.track(frame)
+        assert len(first) == 500
+        m = klt.half + 1  # the patch and the pixel around it inside the image
+        assert (first.points >= m).all() and (first.points <= [W - m - 2, H - m - 2]).all()
+        again = klt.track(frame)
+        assert again.terminated == 0 and len(again) == 500
+
+
+def test_top_ups_take_corners_of_the_share_of_the_frames_best():
+    """``quality`` is a share of the frame's strongest corner, but OpenCV takes it of the
+    strongest its mask leaves: with the features kept hidden, each top-up took weaker
+    corners (to 0.0057 of the frame's best for 0.01). Oracle: OpenCV's minimum eigenvalues
+    of the whole frame, at every feature started on vtest.avi's first frames."""
+    klt = KLTTracker(1000, quality=0.01)
+    seen: set = set()
+    for frame in _vtest_frames(4):
+        frame = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        f = klt.track(frame)
+        new = ~np.isin(f.ids, list(seen))
+        seen.update(f.ids.tolist())
+        if new.any():
+            eig = cv2.cornerMinEigenVal(frame, klt.block_size)
+            x, y = np.round(f.points[new]).astype(int).T
+            assert eig[y, x].min() >= 0.01 * eig.max() * (1 - 1e-6)
+    assert len(seen) > len(f)  # topped up on the way
+
+
+def _vtest_frames(n):
+    from .conftest import need
+
+    path = need(SHARED / "data" / "opencv-vtest" / "vtest.avi")
+    reader = cv2.VideoCapture(str(path))
+    frames = [reader.read()[1] for _ in range(n)]
+    reader.release()
+    assert all(f is not None for f in frames)
+    return frames
+
+
+def _vtest_frame():
+    return _vtest_frames(1)[0]
+
+
+def test_a_min_ncc_of_minus_one_is_refused():
+    """A patch that leaves its image, or is flat, scores -1: at ``min_ncc`` -1 such features
+    passed the correlation check."""
+    with pytest.raises(ValueError, match=r"min_ncc must be a finite number > -1 and <= 1; "
+                                         r"got -1"):
+        KLTTracker(min_ncc=-1)
