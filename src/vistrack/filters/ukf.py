@@ -119,6 +119,43 @@ def _root_semidefinite(P: np.ndarray, scale: float, name: str, *,
     return out.reshape(P.shape)
 
 
+def _settled(P: np.ndarray, prior: np.ndarray) -> np.ndarray:
+    """The corrected covariances ``P (..., n, n)``, each with the eigenvalues that rounding
+    took below zero, by no more than 1e-10 of its ``prior``'s largest entry, raised to 0.
+
+    ``P = prior - V'V`` cancels where a measurement pins a large prior down along some
+    directions: from a prior of rank 2 with entries near 2e6, measured to 1, the rounding
+    (about 1e-16 of the prior's entries) left eigenvalues of -1e-10 where the exact ones are
+    0, which is past the check of 1e-10 of the result's own largest entry (about 1), and the
+    next prediction refused its own prior as not positive semi-definite (23 of 200 random
+    such priors, at step 1). A matrix with a Cholesky factor, or whose smallest eigenvalue
+    passes that check, is returned as it is, bit for bit; one whose eigenvalues lie further
+    below is left for the check to name."""
+    n = P.shape[-1]
+    if P.ndim == 2 and _chol_factor(np.empty((n, n)), np.ascontiguousarray(P, np.float64), n):
+        return P  # (one Gaussian, the common case: one compiled call)
+    flat, before = P.reshape(-1, n, n), prior.reshape(-1, n, n)
+    if len(flat) > 1:
+        try:
+            np.linalg.cholesky(flat)  # (a batch: each matrix's factor, in one call)
+            return P
+        except np.linalg.LinAlgError:
+            pass
+    out = None
+    for b, p in enumerate(flat):
+        L = np.zeros((n, n))
+        if _chol_factor(L, np.ascontiguousarray(p, dtype=np.float64), n):
+            continue
+        w, V = np.linalg.eigh(p)
+        own = 1e-10 * np.abs(p).max()
+        if not -1e-10 * np.abs(before[b]).max() <= w[0] < -own:
+            continue
+        if out is None:
+            out = flat.copy()
+        out[b] = symmetric((V * np.maximum(w, 0.0)) @ V.T)
+    return P if out is None else out.reshape(P.shape)
+
+
 # ---------------------------------------------------------------- compiled, one Gaussian
 # For one Gaussian (the common case of a track) the sigma-point algebra is a few dozen numpy
 # calls on 5x5 matrices, whose overhead is most of the time; these kernels do it in three
@@ -745,7 +782,7 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
                                  f"{np.array2string(z[k], precision=4)}")
             raise ValueError("the innovation covariance is not positive definite; R must be "
                              "positive definite on the observed components")
-        out = Gaussian(xo, Po)
+        out = Gaussian(xo, _settled(Po, g.cov))
         return out, np.asarray(ll1)
     gamma = points._many(g.mean, g.cov, "g.cov")
     obs = ~np.isnan(y)
@@ -762,7 +799,7 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
     Vt = np.linalg.solve(L, np.swapaxes(C, -1, -2))  # (C L^-T)'
     K = np.swapaxes(np.linalg.solve(np.swapaxes(L, -1, -2), Vt), -1, -2)  # C S^-1 = V L^-1
     out = Gaussian(g.mean + (K @ e[..., None])[..., 0],
-                   symmetric(g.cov - np.swapaxes(Vt, -1, -2) @ Vt))
+                   _settled(symmetric(g.cov - np.swapaxes(Vt, -1, -2) @ Vt), g.cov))
     return out, ll
 
 
