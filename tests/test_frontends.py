@@ -954,26 +954,22 @@ def test_view_shift_finds_the_translation_applied(dx, dy):
         view_shift(img, img, width=8)
 
 
-def test_view_shift_finds_a_faint_scene_moving_behind_one_bright_object():
-    """A night scene: vtest.avi's first frame at a tenth of its brightness, with a saturated
-    lit window moving with it. Shi-Tomasi keeps corners above 1 % of the strongest, which
-    the window's own took above every corner of the scene: its 4 were left and `view_shift`
-    gave NaN, so a panning night camera was never found. Oracle: the roll applied, and the
-    same dark frame without the window."""
+def test_view_shift_does_not_take_a_bright_object_on_a_flat_noisy_frame_for_the_view():
+    """A flat frame of faint noise with one bright box moving 4 pixels a frame: Shi-Tomasi
+    keeps the box's 4 corners alone, and the frame is given up (NaN), the camera not read
+    as moving. Lowering the share of the strongest corner where fewer than 10 pass (tried,
+    for night scenes with one lit window) found corners in the noise that Lucas-Kanade
+    dragged along with the box, and gave a view moving 2.4 to 4.0 pixels a frame."""
     from vistrack.frontends import view_shift
 
-    need(VTEST)
-    reader = cv2.VideoCapture(str(VTEST))
-    ok, frame = reader.read()
-    reader.release()
-    assert ok
-    dark = (cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY) * 0.1).round().astype(np.uint8)
-    lit = dark.copy()
-    lit[60:100, 480:520] = 255
-    for image in (dark, lit):
-        dx, dy, followed = view_shift(image, np.roll(image, (3, -4), axis=(0, 1)))
-        assert (dx, dy) == pytest.approx((-4, 3), abs=0.1)
-        assert followed > 0.9
+    rng = np.random.default_rng(0)
+    frames = []
+    for k in range(1, 4):
+        img = np.full((120, 160), 90, np.uint8) + rng.integers(0, 5, (120, 160), np.uint8)
+        img[40:80, 4 * k:4 * k + 20] = 230
+        frames.append(cv2.imdecode(cv2.imencode(".jpg", img)[1], cv2.IMREAD_GRAYSCALE))
+    for a, b in zip(frames, frames[1:]):
+        assert np.isnan(view_shift(a, b)).all()
 
 
 def test_view_shift_names_its_arguments():

@@ -585,22 +585,6 @@ def _there_and_back(a: np.ndarray, b: np.ndarray, p: np.ndarray, *, levels: int,
     return q, (there[:, 0] == 1) & (again[:, 0] == 1) & (np.hypot(*(r - p)[:, 0].T) < within)
 
 
-def _view_corners(image: np.ndarray) -> np.ndarray | None:
-    """Up to 200 Shi-Tomasi corners of ``image`` for :func:`view_shift`, at least 10 where
-    there are: OpenCV keeps the corners above a share of the strongest one, and one bright
-    object (a lamp, a lit window in a night scene) took that share above every corner of
-    the faint scene around it, so only the object's four were left. The share is lowered
-    (1 %, then 0.1 % and 0.01 % of the strongest) until 10 come back or none is left."""
-    import cv2
-
-    p = None
-    for quality in (0.01, 0.001, 0.0001):
-        p = cv2.goodFeaturesToTrack(image, 200, quality, 7)
-        if p is not None and len(p) >= 10:
-            break
-    return p
-
-
 def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool = False,
                guess: tuple[float, float] | None = None) -> tuple[float, float, float]:
     """How far the view moved from frame ``a`` to frame ``b``: the median displacement of up
@@ -641,8 +625,8 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool =
         Lucas-Kanade follows, or there is nothing to follow).
     followed : float
         The share of ``a``'s corners followed into ``b`` and back; NaN if ``a`` has fewer
-        than 10 corners, even at a hundredth of the usual share of the strongest (a blank or
-        blurred frame).
+        than 10 corners (a blank or blurred frame; or a faint scene whose one bright object
+        takes Shi-Tomasi's share of the strongest corner above every corner around it).
 
     Raises
     ------
@@ -696,7 +680,7 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool =
     sx, sy = w / size[0], h / size[1]
     small_a, small_b = (cv2.resize(x, size, interpolation=cv2.INTER_AREA) if s > 1 else x
                         for x in (a, b))
-    p = _view_corners(small_a)
+    p = cv2.goodFeaturesToTrack(small_a, 200, 0.01, 7)
     if p is None or len(p) < 10:
         return float("nan"), float("nan"), float("nan")
     if moved is None:
