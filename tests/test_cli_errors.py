@@ -566,7 +566,7 @@ def test_track_one_starts_from_the_ground_truth_s_first_box_without_init(tmp_pat
     # ground truth, most likely), and so named: it blamed --init, which was not given
     other = tmp_path / "other.txt"
     other.write_text("5001,11,20,20\n")
-    assert main(["track-one", str(VIDEO), "--gt", str(other), "--out",
+    assert main(["track-one", str(VIDEO), "--gt", str(other), "--gt-origin", "0", "--out",
                  str(tmp_path / "b.txt")]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"vistrack track-one: error: the start, {other}'s first box (x, y, w, "
@@ -1177,3 +1177,62 @@ def test_seqinfo_frame_rate_and_length_are_checked_where_read(tmp_path):
     with pytest.raises(MOTFormatError, match=re.escape(
             f"{ini}: seqLength must be at most 100,000,000 frames; got 1,000,000,000,000")):
         track_sequence(seq, tmp_path / "long.txt")
+
+
+def test_track_one_reads_a_renamed_otb_file_as_it_says_and_names_an_empty_one(tmp_path,
+                                                                             capsys):
+    """A copy of OTB's groundtruth_rect.txt under another name was read as counting pixels
+    from 0 without a word: the start box and the scores moved by a pixel. It is now said,
+    and ``--gt-origin`` says which; an empty ground truth was answered "--init is
+    required", though a ground truth was given."""
+    import cv2
+    import numpy as np
+
+    from vistrack.evaluation.single import read_boxes
+
+    folder = tmp_path / "img"
+    folder.mkdir()
+    for k in range(3):
+        im = np.full((60, 80, 3), (40, 120, 40), np.uint8)
+        im[20:40, 10 + 3 * k:30 + 3 * k] = (0, 0, 255)
+        cv2.imwrite(str(folder / f"{k + 1:04d}.png"), im)
+    otb = tmp_path / "groundtruth_rect.txt"
+    otb.write_text("".join(f"{11 + 3 * k}\t21\t20\t20\n" for k in range(3)))
+    renamed = tmp_path / "object_gt.txt"
+    renamed.write_text(otb.read_text())
+    assert main(["track-one", str(folder), "--gt", str(otb), "--out", str(tmp_path / "a.txt"),
+                 "--quiet"]) == 0
+    assert "warning" not in capsys.readouterr().err
+    assert main(["track-one", str(folder), "--gt", str(renamed), "--out",
+                 str(tmp_path / "b.txt"), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert err == (f"vistrack track-one: warning: {renamed}: its x y w h boxes are read as "
+                   "counting pixels from 0, as any such file not named OTB's "
+                   "groundtruth_rect.txt (which counts from 1); --gt-origin 1 reads them from "
+                   "1, --gt-origin 0 keeps 0 without this warning\n")
+    assert read_boxes(tmp_path / "b.txt")[0].tolist() == [11, 21, 20, 20]  # read from 0
+    assert main(["track-one", str(folder), "--gt", str(renamed), "--gt-origin", "1", "--out",
+                 str(tmp_path / "c.txt"), "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+    assert (tmp_path / "c.txt").read_text() == (tmp_path / "a.txt").read_text()
+    assert main(["track-one", str(folder), "--gt", str(renamed), "--gt-origin", "0", "--out",
+                 str(tmp_path / "d.txt"), "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+    assert (tmp_path / "d.txt").read_text() == (tmp_path / "b.txt").read_text()
+    empty = tmp_path / "empty.txt"
+    empty.write_text("")
+    assert main(["track-one", str(folder), "--gt", str(empty), "--out",
+                 str(tmp_path / "e.txt")]) == 2
+    one_line(capsys, "track-one", f"{empty} has no boxes, so no first box to start from: "
+             "give --init, or a ground truth with a box for every frame")
+    assert main(["track-one", str(folder), "--init", "10,20,20,20", "--gt-origin", "1",
+                 "--out", str(tmp_path / "e.txt")]) == 2
+    one_line(capsys, "track-one", "--gt-origin says where --gt's boxes count from; give --gt")
+
+
+def test_the_particles_tracker_on_a_video_names_itself_for_a_missing_diameter(capsys):
+    """`--tracker particles` on a video was told that "--frontend spots needs --diameter",
+    an option the user never gave."""
+    assert main(["track", str(VIDEO), "--tracker", "particles", "--out-dir", "x"]) == 2
+    one_line(capsys, "track", "--tracker particles, whose front-end on a video is spots, "
+             "needs --diameter: the spots' diameter in pixels, odd (round up)")

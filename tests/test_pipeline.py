@@ -1051,6 +1051,13 @@ def test_detections_that_cannot_give_tracks_are_named(tmp_path):
             f"{empty}: no detections: nothing to track, and the results hold no rows")):
         run = track_sequence(empty, tmp_path / "b.txt", fps=10)
     assert run.rows == 0
+    for text in ("", "\n  \n"):  # a CSV file with no header either: failed in pandas' words
+        blank = tmp_path / "blank.csv"
+        blank.write_text(text)
+        with pytest.warns(UserWarning, match=re.escape(
+                f"{blank}: no detections: nothing to track, and the results hold no rows")):
+            run = track_sequence(blank, tmp_path / "b.txt", fps=10, force=True)
+        assert run.rows == 0
     det = tmp_path / "det.txt"
     det.write_text("".join(f"{f},-1,{10 + 3 * f},20,20,40,0.9\n" for f in range(1, 11)))
     # new_track or high above every raw score starts no track (high alone wrote 0 boxes

@@ -762,7 +762,10 @@ def _points_problem(args: argparse.Namespace, name: str, frontend: str) -> str:
     if problem:
         return problem
     if frontend == "spots" and args.diameter is None:
-        return "--frontend spots needs --diameter: the spots' diameter in pixels, odd (round up)"
+        # (--tracker particles alone was told of --frontend spots, which the user never gave)
+        which = ("--frontend spots" if args.frontend
+                 else f"--tracker {name}, whose front-end on a video is spots,")
+        return f"{which} needs --diameter: the spots' diameter in pixels, odd (round up)"
     if not _points(name):
         return ""
     floor = min_search_range()
@@ -1032,6 +1035,8 @@ def _track_one(args: argparse.Namespace) -> int:
     from .pipeline import input_files, track_one
 
     init: list[float] | None = None
+    if args.gt_origin is not None and args.gt is None:
+        return _fail("track-one", "--gt-origin says where --gt's boxes count from; give --gt")
     if args.init is None and args.gt is None:
         return _fail("track-one", "--init is required: the object's box x,y,w,h in the first "
                      "frame (or --gt, whose first box is then the start)")
@@ -1049,7 +1054,7 @@ def _track_one(args: argparse.Namespace) -> int:
     check_output(args.out, force=args.force, name="--out")
     run = track_one(args.input, init, args.out, method=args.method, gt=args.gt,
                     force=args.force, progress=sys.stderr if sys.stderr.isatty()
-                    and not args.quiet else None, init_name="--init")
+                    and not args.quiet else None, init_name="--init", gt_origin=args.gt_origin)
     print(f"wrote {run.out}: {len(run.boxes)} boxes; {args.method} {run.fps:.0f} frames/s")
     if run.scores is not None:
         s = run.scores
@@ -1509,6 +1514,9 @@ def build_parser() -> argparse.ArgumentParser:
     one.add_argument("--out", required=True, help="boxes file to write")
     one.add_argument("--gt", help="ground truth (OTB groundtruth_rect.txt, VOT groundtruth.txt "
                      "or a boxes file) to score against")
+    one.add_argument("--gt-origin", type=int, choices=(0, 1), default=None,
+                     help="where --gt's x y w h lines count pixels from: 1 (OTB's) or 0; "
+                     "default by its name, 1 for groundtruth_rect.txt, else 0 with a warning")
     one.add_argument("--force", action="store_true", help="overwrite an existing boxes file")
     one.add_argument("--quiet", action="store_true", help="no progress bar")
     _runs(one, _track_one, debug_help)

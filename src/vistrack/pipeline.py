@@ -1181,6 +1181,13 @@ def _trajectory_plot(path: Path, name: str) -> Sink:
     return TrajectoryPlot(path, name)
 
 
+def _blank(path: Path) -> bool:
+    """Whether the file holds nothing but white space (a few KiB read at most)."""
+    with open(path, "rb") as fh:
+        head = fh.read(4097)
+    return len(head) <= 4096 and not head.strip()
+
+
 def read_detections(path: str | Path, columns: dict[str, str] | None = None,
                     stacklevel: int = 1, *, classless: str | Path | None = None) -> MOTTable:
     """A detections file: MOTChallenge's format, or a ``.csv`` file with a header whose
@@ -1216,6 +1223,10 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
                           "7th value, conf): every detection scores 1", UserWarning,
                           stacklevel=stacklevel + 1)
         who = "the second value"
+    elif _blank(path):
+        # no header and no row: no detections, as an empty text file is (pandas' "No
+        # columns to parse from file" was an error)
+        table, who = MOTTable.from_rows([]), "the identity"
     else:
         from .io.motchallenge import _COLUMNS, _read_csv
 
@@ -2753,7 +2764,8 @@ class SingleRun:
 
 def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
               method: str = "colour", gt: str | Path | None = None, force: bool = False,
-              progress: TextIO | None = None, init_name: str = "init") -> SingleRun:
+              progress: TextIO | None = None, init_name: str = "init",
+              gt_origin: int | None = None) -> SingleRun:
     """Follow one object from its box ``init`` (``x, y, w, h`` in the first frame) through a
     video or image folder, and write ``frame,x,y,w,h`` lines (frames from 1) to ``out``.
 
@@ -2782,6 +2794,11 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
         A stream for a progress bar, or None.
     init_name : str
         What an error about the start box calls it (``--init`` on the command line).
+    gt_origin : {0, 1}, optional
+        Where ``gt``'s ``x y w h`` lines count pixels from (``origin`` of
+        :func:`~vistrack.evaluation.single.read_boxes`); None: by its name, 1 for OTB's
+        ``groundtruth_rect.txt``, else 0, with a warning where the two differ (a copy of
+        OTB's file renamed moved the start box and the scores by a pixel, without a word).
 
     Returns
     -------
@@ -2818,7 +2835,13 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     '2,15.00,20.00,20.00,20.00'
     """
     from ._validate import as_box
-    from .evaluation.single import precision, read_boxes, success_curve, success_rate
+    from .evaluation.single import (
+        boxes_origin,
+        precision,
+        read_boxes,
+        success_curve,
+        success_rate,
+    )
     from .io.video import VideoReader
     from .tracking.single import single_tracker
 
@@ -2829,15 +2852,26 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     truth = None
     if gt is not None:
         try:
-            truth = read_boxes(gt)
+            truth = read_boxes(gt, origin=gt_origin)
         except FileNotFoundError:  # (named as the track command names it)
             raise FileNotFoundError(f"{gt} does not exist (--gt FILE)") from None
         except IsADirectoryError:
             raise IsADirectoryError(f"{gt} is a folder, not a file (--gt FILE)") from None
+        # x y w h lines (the only ones whose origin matters: read from 1 they differ) under a
+        # name that is not OTB's: read from 0, and said so
+        if (gt_origin is None and not boxes_origin(gt) and len(truth)
+                and not np.array_equal(truth, read_boxes(gt, origin=1))):
+            warnings.warn(f"{gt}: its x y w h boxes are read as counting pixels from 0, as "
+                          "any such file not named OTB's groundtruth_rect.txt (which counts "
+                          "from 1); --gt-origin 1 reads them from 1, --gt-origin 0 keeps 0 "
+                          "without this warning", RuntimeWarning, stacklevel=2)
     if init is None:
-        if truth is None or not len(truth):
+        if truth is None:
             raise ValueError(f"{init_name} is required: the object's box in the first frame "
                              "(or a ground truth, whose first box is then the start)")
+        if not len(truth):
+            raise ValueError(f"{gt} has no boxes, so no first box to start from: give "
+                             f"{init_name}, or a ground truth with a box for every frame")
         init = truth[0]
         # an error about the start box is about the ground truth's first box: one of another
         # sequence, most likely (it blamed --init, which was not given)

@@ -27,7 +27,7 @@ from ..io.motchallenge import _text_lines
 from ..io.tracks import write_boxes
 
 __all__ = ["success_rate", "success_curve", "precision", "region_to_bbox", "read_boxes",
-           "write_boxes"]
+           "boxes_origin", "write_boxes"]
 
 
 def _boxes(value: ArrayLike, name: str, k: int = 4) -> np.ndarray:
@@ -277,7 +277,7 @@ def region_to_bbox(polygons: ArrayLike, rule: str = "area") -> np.ndarray:
 _OTB_NAME = re.compile(r"groundtruth_rect(\.\d+)?\.txt")
 
 
-def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
+def read_boxes(path: str | Path, rule: str = "area", origin: int | None = None) -> np.ndarray:
     """Ground-truth or result boxes ``x, y, w, h`` from a text file.
 
     - OTB ``groundtruth_rect.txt`` (``groundtruth_rect.1.txt``, ``.2.txt`` for a sequence of
@@ -296,6 +296,11 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
         The file.
     rule : {'area', 'minmax'}
         For polygons: see :func:`region_to_bbox`.
+    origin : {0, 1}, optional
+        Where the pixels of ``x y w h`` lines count from: 1 (OTB's), returned 0-based, or 0.
+        None: by the file's name, 1 for OTB's ``groundtruth_rect.txt`` (and ``.1.txt``,
+        ``.2.txt``), 0 for any other name (a copy of OTB's file under another name is read
+        from 0: :func:`boxes_origin` says which a file was read with).
 
     Returns
     -------
@@ -349,6 +354,21 @@ def read_boxes(path: str | Path, rule: str = "area") -> np.ndarray:
         return region_to_bbox(a, rule)
     if a.shape[1] == 5:
         return a[:, 1:]
-    if _OTB_NAME.fullmatch(path.name):  # OTB: 1-based pixels (groundtruth_rect.1.txt for a
-        a[:, :2] -= 1  # sequence's second object, as Jogging's)
+    if origin not in (None, 0, 1):
+        raise ValueError(f"origin must be 0, 1 or None (by the file's name); got {origin!r}")
+    if boxes_origin(path) if origin is None else origin:  # OTB: 1-based pixels
+        a[:, :2] -= 1
     return a
+
+
+def boxes_origin(path: str | Path) -> int:
+    """Where :func:`read_boxes` counts the pixels of a file of ``x y w h`` lines from, by its
+    name: 1 for OTB's ``groundtruth_rect.txt`` (``groundtruth_rect.1.txt`` for a sequence's
+    second object, as Jogging's), 0 for any other.
+
+    Examples
+    --------
+    >>> boxes_origin("Crossing/groundtruth_rect.txt"), boxes_origin("crossing_gt.txt")
+    (1, 0)
+    """
+    return 1 if _OTB_NAME.fullmatch(Path(path).name) else 0
