@@ -825,11 +825,19 @@ def test_eval_takes_a_sequence_folder_for_its_ground_truth(tmp_path, capsys):
 
 
 def test_eval_errors_are_one_line_and_debug_shows_them(tmp_path, capsys):
+    """A missing file is named with its option (it was "nothere.txt: No such file or
+    directory"); a malformed one by its line, and with --debug its traceback."""
     missing = tmp_path / "nothere.txt"
     assert main(["eval", "--gt", str(missing), "--pred", str(GT)]) == 2
-    one_line(capsys, "eval", f"{missing}: No such file or directory")
-    assert main(["eval", "--debug", "--gt", str(missing), "--pred", str(GT)]) == 2
-    assert "FileNotFoundError" in capsys.readouterr().err
+    one_line(capsys, "eval", f"--gt {missing} does not exist")
+    assert main(["eval", "--gt", str(GT), "--pred", str(missing)]) == 2
+    one_line(capsys, "eval", f"--pred {missing} does not exist")
+    bad = tmp_path / "bad.txt"
+    bad.write_text("1,1,10,10,5,5,1,-1,-1,-1\n2,x,10,10,5,5,1,-1,-1,-1\n")
+    assert main(["eval", "--gt", str(GT), "--pred", str(bad)]) == 2
+    assert capsys.readouterr().err.startswith(f"vistrack eval: error: {bad}, line 2")
+    assert main(["eval", "--debug", "--gt", str(GT), "--pred", str(bad)]) == 2
+    assert "MOTFormatError" in capsys.readouterr().err
 
 
 def test_a_front_end_or_detections_file_that_is_no_file_is_named(tmp_path, capsys):

@@ -1167,6 +1167,9 @@ def _eval(args: argparse.Namespace) -> int:
         if Path(args.pred).is_dir():  # ("Is a directory")
             return _fail("eval", f"--pred {args.pred} is a folder, not a results file (a "
                          "folder of them: --gt-dir SETDIR --pred-dir " f"{args.pred})")
+        for flag in ("gt", "pred"):  # ("nope.txt: No such file or directory", no option)
+            if not Path(getattr(args, flag)).exists():
+                return _fail("eval", f"--{flag} {getattr(args, flag)} does not exist")
         from .io.motchallenge import _ground_truth_file
 
         try:  # a sequence folder's gt/gt.txt, as vistrack track takes the folder
