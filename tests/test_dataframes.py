@@ -240,7 +240,7 @@ def test_detections_from_a_csv_file_with_its_own_column_names(tmp_path, capsys):
 
 
 def test_a_csv_file_pandas_cannot_read_is_named(tmp_path):
-    """pandas' own errors (a row of more values than the header, an empty file) came out
+    """pandas' own errors (a row of more values than the header) came out
     without the file's name: ``Error tokenizing data. C error: Expected 5 fields in line 3,
     saw 6``. A row of more values, or of fewer (which pandas fills with NaN, then named as
     an empty cell of another column), is named by its line and its count against the
@@ -281,7 +281,8 @@ def test_a_csv_file_pandas_cannot_read_is_named(tmp_path):
         # after ', ' is one value's (the bad value was named a line early)
         (f"{head},note\n1, 2, 3, 4, 5, \"a\nb\"\n2, 2, bad, 4, 5, x\n",
          ", line 4, column 'bb_top': not a number: 'bad'"),
-        ("", ": not a CSV file of detections: No columns to parse from file"),
+        # (an empty file, pandas' "No columns to parse from file" before, is a file of no
+        # detections: test_pipeline's test_detections_that_cannot_give_tracks_are_named)
     ]:
         path.write_text(text)
         with pytest.raises(MOTFormatError, match=re.escape(f"{path}{message}")):
