@@ -1219,6 +1219,10 @@ def test_track_one_reads_a_renamed_otb_file_as_it_says_and_names_an_empty_one(tm
                    "groundtruth_rect.txt (which counts from 1); --gt-origin 1 reads them from "
                    "1, --gt-origin 0 keeps 0 without this warning\n")
     assert read_boxes(tmp_path / "b.txt")[0].tolist() == [11, 21, 20, 20]  # read from 0
+    for bad in (2, True, "1"):  # named whatever the file holds (5 values a line here)
+        with pytest.raises(ValueError, match=re.escape(f"origin must be 0, 1 or None (by the "
+                                                       f"file's name); got {bad!r}")):
+            read_boxes(tmp_path / "b.txt", origin=bad)
     assert main(["track-one", str(folder), "--gt", str(renamed), "--gt-origin", "1", "--out",
                  str(tmp_path / "c.txt"), "--quiet"]) == 0
     assert capsys.readouterr().err == ""

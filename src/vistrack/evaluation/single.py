@@ -322,6 +322,9 @@ def read_boxes(path: str | Path, rule: str = "area", origin: int | None = None) 
     >>> read_boxes(path).tolist()                   # OTB: 1-based, returned 0-based
     [[10.0, 20.0, 30.0, 40.0], [11.0, 20.0, 30.0, 40.0]]
     """
+    if not (origin is None or (isinstance(origin, (int, np.integer))
+                               and not isinstance(origin, bool) and origin in (0, 1))):
+        raise ValueError(f"origin must be 0, 1 or None (by the file's name); got {origin!r}")
     path = Path(path)
     rows: list[list[float]] = []
     last = 0  # the line of rows[-1]
@@ -354,8 +357,6 @@ def read_boxes(path: str | Path, rule: str = "area", origin: int | None = None) 
         return region_to_bbox(a, rule)
     if a.shape[1] == 5:
         return a[:, 1:]
-    if origin not in (None, 0, 1):
-        raise ValueError(f"origin must be 0, 1 or None (by the file's name); got {origin!r}")
     if boxes_origin(path) if origin is None else origin:  # OTB: 1-based pixels
         a[:, :2] -= 1
     return a
