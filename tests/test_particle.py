@@ -273,7 +273,8 @@ def test_particle_filter_arguments_are_checked():
     motion, meas = vt.models.growth_model()
     with pytest.raises(ValueError, match="resampling must be one of"):
         ParticleFilter(motion, meas, resampling="best")
-    with pytest.raises(ValueError, match="ess_threshold must be in"):
+    with pytest.raises(ValueError, match=re.escape("ess_threshold must be a number in [0, 1]; "
+                                                   "got 2.0")):
         ParticleFilter(motion, meas, ess_threshold=2.0)
     # measurements of another size: named on the compiled path, an IndexError deep inside
     # the numpy one (modes=True, compiled=False)
@@ -289,9 +290,11 @@ def test_particle_filter_arguments_are_checked():
     with pytest.raises(ValueError, match=re.escape("particles must be finite; particles[3] = "
                                                    "[nan]")):
         ParticleFilter(motion, meas, 10).filter(np.ones((3, 1)), particles=cloud)
-    for n in (np.nan, np.inf, 2.5, 0):  # NaN was "cannot convert float NaN to integer"
-        with pytest.raises(ValueError, match=f"n_particles must be an integer >= 1; got {n}"):
+    for n in (np.nan, np.inf, 2.5):  # NaN was "cannot convert float NaN to integer"
+        with pytest.raises(ValueError, match=f"n_particles must be an integer; got {n}"):
             ParticleFilter(motion, meas, n_particles=n)
+    with pytest.raises(ValueError, match="n_particles must be >= 1; got 0"):
+        ParticleFilter(motion, meas, n_particles=0)
     with pytest.raises(ValueError, match="ndim_state is needed"):
         ParticleFilter(lambda x, dt, t, rng: x, meas)
     with pytest.raises(ValueError, match=r"particles must have shape \(10, 1\)"):
@@ -680,3 +683,125 @@ def test_residual_keeps_one_copy_of_each_of_n_equal_weights():
         for idx in (resample(w, "residual", n=n, rng=rng), _random.resample_indices(w, 3, s, n)):
             c = np.bincount(idx, minlength=N)
             assert c.sum() == n and (c >= floor).all()
+
+
+def _state_drawing(value_bits: str, at: int) -> np.ndarray:
+    """A xoshiro256++ state whose draw number ``at`` (from 0) gives 64 bits of ``'ones'`` (the
+    uniform 1 - 2**-53) or ``'zeros'`` (the uniform 0): a state of that output, walked back
+    ``at`` steps by the generator's inverse, worked out from its published step."""
+    m = (1 << 64) - 1
+
+    def rotr(x, k):
+        return ((x >> k) | (x << (64 - k))) & m
+
+    s0, s3 = 0, (m if value_bits == "ones" else 0)  # rotl(s0 + s3, 23) + s0
+    st = [s0, 0x9E3779B97F4A7C15, 0xD1B54A32D192ED03, s3]
+    for _ in range(at):
+        S0, S1, S2, S3 = st
+        x = rotr(S3, 45)  # s1 ^ s3
+        a = S0 ^ x
+        y, z = S1 ^ a, S2 ^ a  # s1 ^ s2, s2 ^ (s1 << 17)
+        w = y ^ z  # s1 ^ (s1 << 17)
+        b = (w ^ (w << 17) ^ (w << 34) ^ (w << 51)) & m
+        st = [a, b, y ^ b, x ^ b]
+    return np.array(st, dtype=np.uint64)
+
+
+def test_the_crafted_generator_states_draw_what_they_are_made_to():
+    """The oracle of the next test: the state made by walking back draws the chosen bits."""
+    for at in (0, 1, 2, 5):
+        u = _random.uniforms(_state_drawing("ones", at), np.empty(at + 1))
+        assert u[at] == 1.0 - 2.0**-53
+        assert _random.uniforms(_state_drawing("zeros", at), np.empty(at + 1))[at] == 0.0
+
+
+class _Uniforms:
+    """A generator whose every uniform is ``u`` and whose exponentials are given."""
+
+    def __init__(self, u=1.0 - 2.0**-53, exponentials=None):
+        self.u, self.e = u, exponentials
+
+    def random(self, size=None):
+        return self.u if size is None else np.full(size, self.u)
+
+    def standard_exponential(self, size):
+        return np.asarray(self.e, float)
+
+
+def test_a_uniform_rounded_up_to_one_never_draws_a_particle_of_weight_zero():
+    """Weights (1/2, 1/2, 0): the last particle has no weight, and the exact draws are 0, 1, 1
+    for every scheme here. A uniform within an ulp of 1 rounds up: systematic's last edge
+    ceil(3 - u0) is 2, so its third slot was filled with the last index; stratified's
+    (2 + U) / 3 and multinomial's e_3 / e_4 (a last exponential of 0) are exactly 1, and the
+    search ran on to the last index. Both paths, each scheme; the compiled one from
+    generator states made to draw that uniform."""
+    w = np.array([0.5, 0.5, 0.0])
+    exact = [0, 1, 1]
+    top = _Uniforms()
+    assert RESAMPLERS["systematic"](w, 3, top).tolist() == exact
+    assert RESAMPLERS["stratified"](w, 3, top).tolist() == exact
+    assert RESAMPLERS["multinomial"](w, 3, _Uniforms(exponentials=[1, 1, 1, 0])).tolist() \
+        == exact
+    from vistrack.filters.particle import _systematic_rows
+    rows = _systematic_rows(np.stack([w, w[[2, 0, 1]]]), np.full(2, 1.0 - 2.0**-53),
+                            np.empty((2, 3), np.int64))
+    assert rows.tolist() == [exact, [1, 2, 2]]
+    # residual: whole copies 1, 1, 0, and one draw on the remainders (1/2, 1/2, 0)
+    assert RESAMPLERS["residual"](w, 3, _Uniforms(exponentials=[1, 0])).tolist() == exact
+    # compiled: systematic's u0 is the first draw, stratified's third the last slot's, the
+    # multinomial's fourth (the sum's last exponential) and the residual's second
+    for scheme, bits, at in ((2, "ones", 0), (1, "ones", 2), (0, "zeros", 3), (3, "zeros", 1)):
+        idx = _random.resample_indices(w, scheme, _state_drawing(bits, at), 3)
+        assert idx.tolist() == exact, _random.SCHEMES[scheme]
+    # the fast branch of the compiled systematic scheme writes two slots ahead: zero weights
+    # after the last positive one (where the edges round, which index of positive weight a
+    # slot takes may differ from exact arithmetic: (1 + u0) / 4 rounds to 1/2)
+    w5 = np.array([0.25, 0.25, 0.5, 0.0, 0.0])
+    for idx in (_random.resample_indices(w5, 2, _state_drawing("ones", 0), 4),
+                RESAMPLERS["systematic"](w5, 4, top)):
+        assert len(idx) == 4 and (w5[idx] > 0).all() and idx[-1] == 2, idx
+
+
+def test_weights_normalised_in_float32_are_taken():
+    """Ten float32 weights divided by their sum are off 1 by up to some 6e-8 in float64, past the
+    check of 1e-9 sqrt(N) for float64 weights: they were refused. The tolerance is N ulp of
+    the array's own type; float64 weights keep theirs, and a float32 row off by 1e-3 is
+    still named."""
+    w = np.random.default_rng(4).random(10).astype(np.float32)
+    w /= w.sum()
+    assert abs(float(w.astype(float).sum()) - 1.0) > 1e-9 * np.sqrt(10)  # the case
+    for method in RESAMPLERS:
+        idx = resample(w, method, rng=0)
+        assert idx.shape == (10,) and (w[idx] > 0).all()
+    # the same draws as the weights made to sum to 1 in float64 (any positive scale is drawn
+    # alike by the schemes)
+    w64 = w.astype(float) / w.astype(float).sum()
+    np.testing.assert_array_equal(resample(w, rng=5), resample(w64, rng=5))
+    with pytest.raises(ValueError, match="weights must sum to 1; they sum to 1.00"):
+        resample(np.full(10, 0.1001, np.float32))
+    with pytest.raises(ValueError, match="weights must sum to 1"):
+        resample(w.astype(float) * (1 + 1e-8))
+
+
+@pytest.mark.parametrize("value, shown", [(True, "True"), (np.True_, "True"), ("5", "'5'"),
+                                          (2.5, "2.5"), (float("nan"), "nan"), (0, ">= 1")])
+def test_n_particles_of_another_kind_is_named(value, shown):
+    """``n_particles=True`` was taken as one particle and ``"5"`` failed in a bare TypeError;
+    both filters name it now."""
+    from vistrack.filters import SwitchingParticleFilter
+    from vistrack.models import SwitchingLinearSystem
+
+    slds = SwitchingLinearSystem([vt.ConstantVelocity(dim=1)], vt.Position(dim=1), [[1.0]])
+    for make in (lambda **kw: ParticleFilter(vt.ConstantVelocity(dim=1), vt.Position(dim=1),
+                                             **kw),
+                 lambda **kw: SwitchingParticleFilter(slds, **kw)):
+        with pytest.raises(ValueError, match="n_particles must be") as e:
+            make(n_particles=value)
+        assert shown in str(e.value)
+        for bad in (True, "0.5", float("nan"), 1.5):
+            with pytest.raises(ValueError, match="ess_threshold must be a number in"):
+                make(ess_threshold=bad)
+        with pytest.raises(ValueError, match="resampling must be one of"):
+            make(resampling=["systematic"])
+    assert ParticleFilter(vt.ConstantVelocity(dim=1), vt.Position(dim=1),
+                          n_particles=np.int32(7), ess_threshold=np.float32(0.5)).n_particles == 7

@@ -177,3 +177,58 @@ def test_transition_rows_off_one_by_1e_5_are_refused(row):
     with pytest.raises(ValueError, match="transition must be non-negative with rows summing"):
         IMMFilter([kf, kf], Pi)
     SwitchingLinearSystem([cv, cv], pos, [[1 - 1e-10, 1e-10], [0.0, 1.0]])  # within 1e-9
+
+
+class _TopUniforms:
+    """numpy's generator, except that every uniform is its largest, 1 - 2**-53."""
+
+    def __init__(self, seed):
+        self._g = np.random.default_rng(seed)
+
+    def random(self, size=None):
+        return 1.0 - 2.0**-53 if size is None else np.full(size, 1.0 - 2.0**-53)
+
+    def __getattr__(self, name):
+        return getattr(self._g, name)
+
+
+def test_a_mode_of_probability_zero_is_never_drawn():
+    """Rows within the system's 1e-9 of summing to 1 can sum below it: a row (0.7, 0.3 -
+    1e-12, 0) has cumulative sums that end at 1 - 1e-12, and a uniform above that went to the
+    last mode, of probability 0 (so did the first draw from mode_probs). With every uniform
+    the largest numpy gives, no particle may be in mode 2 at any step: its probability there
+    is exactly 0 (the exact posterior's, as the mode cannot be entered)."""
+    cv = vt.ConstantVelocity(dim=1, q=0.1)
+    Pi = [[0.7, 0.3 - 1e-12, 0.0], [0.4, 0.6 - 1e-12, 0.0], [0.5, 0.5, 0.0]]
+    slds = SwitchingLinearSystem([cv, cv, cv], vt.Position(dim=1), Pi,
+                                 mode_probs=[0.5, 0.5 - 1e-12, 0.0])
+    ys = np.arange(6.0)[:, None]
+    f = SwitchingParticleFilter(slds, n_particles=20, rng=0)
+    f.rng = _TopUniforms(0)
+    res = f.filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
+    assert (res.mode_probs[:, 2] == 0).all(), res.mode_probs
+    np.testing.assert_allclose(res.mode_probs.sum(1), 1.0)
+
+
+def test_an_ess_threshold_of_one_resamples_at_every_step_as_the_particle_filter():
+    """``ess_threshold=1`` resamples at every step, as ParticleFilter's docstring says and it
+    does; the switching filter compared ``ess < N``, so at equal weights (step 0 has no
+    measurement: ESS = N) it did not. The resampler's calls are counted."""
+    slds = make_system()
+    _, _, ys = slds.sample(8, x0=[0.0, 1.0], rng=2)
+    ys[0] = np.nan
+    calls = []
+
+    def counting(w, n, rng):
+        calls.append(len(w))
+        return np.arange(n)  # every particle once: the filter's estimates are unchanged
+
+    f = SwitchingParticleFilter(slds, n_particles=30, rng=3, ess_threshold=1.0)
+    f.resample = counting
+    f.filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
+    assert calls == [30] * 8
+    calls.clear()
+    f = SwitchingParticleFilter(slds, n_particles=30, rng=3, ess_threshold=0.0)
+    f.resample = counting
+    f.filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
+    assert calls == []

@@ -121,6 +121,8 @@ def _merge_uniforms(cw, scheme, st, out):
     # (k + U_k) / n, or multinomial (normalised cumulative sums of n + 1 exponentials, the
     # sum drawn first and the same draws again, from a copy of the state)
     n, last = out.shape[0], cw.shape[0] - 1
+    while last > 0 and cw[last - 1] >= cw[-1]:  # a u_k rounded up to 1 takes the last index of
+        last -= 1  # weight > 0, not one of weight 0 after it
     total, start = 1.0, st
     if scheme == 0:
         total = 0.0
@@ -154,11 +156,13 @@ def resample_into(w, scheme, st, cw, out):
     if scheme == 2:  # systematic: u_k = (k + u) / n; index i for every k < ceil(n c_i - u)
         u0, st = uniform(st)
         scale = n / total
-        c, i, k = 0.0, 0, 0
+        c, i, k, last = 0.0, 0, 0, 0
         while i < N and k < n - 1:
             # branch-free for up to 2 copies: write i to the next two slots whatever the
             # count (the next index overwrites what is not this one's); a loop for more
             c += w[i]
+            if w[i] > 0.0:
+                last = i
             edge = min(np.intp(math.ceil(c * scale - u0)), n)
             out[k] = i
             out[k + 1] = i
@@ -170,13 +174,17 @@ def resample_into(w, scheme, st, cw, out):
             i += 1
         while i < N:
             c += w[i]
+            if w[i] > 0.0:
+                last = i
             edge = min(np.intp(math.ceil(c * scale - u0)), n)
             while k < edge:
                 out[k] = i
                 k += 1
             i += 1
-        while k < n:  # rounding of the last cumulative weight
-            out[k] = N - 1
+        # rounding of the last edge (u0 within n/2 ulp of 1), and the slots the loop above
+        # wrote ahead: the last index of weight > 0 (N - 1 may have none)
+        while k < n:
+            out[k] = last
             k += 1
         return st
     if scheme == 3:  # residual: floor(n w_i) copies, the rest multinomial on what remains

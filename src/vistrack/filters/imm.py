@@ -469,7 +469,8 @@ class SwitchingParticleFilter:
         A name in :data:`~vistrack.filters.RESAMPLERS`.
     ess_threshold : float
         In [0, 1]: resample when the effective sample size falls below
-        ``ess_threshold * n_particles``.
+        ``ess_threshold * n_particles`` (1 resamples every step, 0 never), as
+        :class:`~vistrack.filters.ParticleFilter`.
     rng : numpy.random.Generator, int or None
         Random generator or seed.
 
@@ -575,11 +576,17 @@ class SwitchingParticleFilter:
                              f"{np.shape(dt)}")
         Fs = [m.F(dt) for m in sysm.motions]
         Qs = [m.Q(dt) for m in sysm.motions]
+        # cumulative rows divided by their ends, which are then exactly 1: a uniform below 1
+        # never passes the end, so no mode of probability 0 after the last is drawn (a row's
+        # sum may round below 1, and the draw was then taken to mode k - 1)
         cum = np.cumsum(sysm.transition, axis=1)
+        cum /= cum[:, -1:]
+        first = np.cumsum(sysm.mode_probs)
+        first /= first[-1]
         x0, P0 = check_prior(x0, P0, n, batch=False)
         mean = np.broadcast_to(x0, (N, n)).copy()
         cov = np.broadcast_to(P0, (N, n, n)).copy()
-        z = np.minimum(np.searchsorted(np.cumsum(sysm.mode_probs), rng.random(N), "right"), k - 1)
+        z = np.searchsorted(first, rng.random(N), "right")
         logw = np.full(N, -np.log(N))
         means, covs = np.empty((T, n)), np.empty((T, n, n))
         probs, ess = np.empty((T, k)), np.empty(T)
@@ -587,7 +594,7 @@ class SwitchingParticleFilter:
         for t in range(T):
             if t > 0:
                 u = rng.random(N)
-                z = np.minimum((u[:, None] >= cum[z]).sum(1), k - 1)
+                z = (u[:, None] >= cum[z]).sum(1)
                 for j in range(k):
                     idx = np.flatnonzero(z == j)
                     if len(idx):
@@ -607,7 +614,7 @@ class SwitchingParticleFilter:
             covs[t] = np.einsum("i,ijk->jk", w, cov + d[:, :, None] * d[:, None, :])
             probs[t] = np.bincount(z, weights=w, minlength=k)
             ess[t] = 1.0 / np.dot(w, w)
-            if ess[t] < self.ess_threshold * N:
+            if ess[t] < self.ess_threshold * N or self.ess_threshold == 1.0:
                 idx = self.resample(w, N, rng)
                 mean, cov, z = mean[idx], cov[idx], z[idx]
                 logw = np.full(N, -np.log(N))

@@ -141,11 +141,15 @@ def _degenerate(t: int, y: np.ndarray) -> ParticleDegeneracyError:
 @kernel
 @njit(cache=True)
 def _merge(cw, u, out):
-    """``out[k]`` = the first ``i`` with ``u[k] < cw[i]``, for sorted ``u`` (linear time)."""
+    """``out[k]`` = the first ``i`` with ``u[k] < cw[i]``, for sorted ``u`` (linear time); a
+    ``u[k]`` at or past the end (a uniform rounded up to 1) takes the first ``i`` at the end,
+    the last of positive weight (the last index, of weight 0, was drawn)."""
+    last = cw.shape[0] - 1
+    while last > 0 and cw[last - 1] >= cw[-1]:
+        last -= 1
     i = 0
-    n = cw.shape[0]
     for k in range(u.shape[0]):
-        while i < n - 1 and cw[i] <= u[k]:
+        while i < last and cw[i] <= u[k]:
             i += 1
         out[k] = i
     return out
@@ -176,15 +180,17 @@ def _systematic_kernel(w, u0, out):
     total = 0.0
     for i in range(w.shape[0]):
         total += w[i]
-    c, k = 0.0, 0
+    c, k, last = 0.0, 0, 0
     for i in range(w.shape[0]):
         c += w[i]
+        if w[i] > 0.0:
+            last = i
         edge = min(math.ceil(n * (c / total) - u0), n)
         while k < edge:
             out[k] = i
             k += 1
-    while k < n:  # rounding of the last cumulative weight
-        out[k] = w.shape[0] - 1
+    while k < n:  # rounding of the last edge (u0 within n/2 ulp of 1): the last of weight > 0
+        out[k] = last
         k += 1
     return out
 
@@ -246,7 +252,13 @@ def _check_weights(weights: ArrayLike) -> np.ndarray:
         bad = w[~(np.isfinite(w) & (w >= 0))][0]
         raise ValueError(f"weights must be finite and >= 0; got {bad}")
     s = w.sum(-1)
-    off = np.abs(s - 1.0) > 1e-9 * max(1, w.shape[-1]) ** 0.5
+    tol = 1e-9 * max(1, w.shape[-1]) ** 0.5
+    given = getattr(weights, "dtype", None)
+    if given is not None and np.issubdtype(given, np.floating) and given.itemsize < 8:
+        # weights normalised in float32 (or float16) are off by up to N of its ulp: 8e-9 for
+        # ten float32 weights was refused
+        tol = max(tol, w.shape[-1] * float(np.finfo(given).eps))
+    off = np.abs(s - 1.0) > tol
     if off.any():
         k = np.flatnonzero(np.ravel(off))[0]
         where = f"row {k} sums" if w.ndim == 2 else "they sum"
@@ -272,8 +284,9 @@ def resample(weights: ArrayLike, method: str = "systematic", *, n: int | None = 
     Parameters
     ----------
     weights : (N,) or (B, N) array_like
-        Normalised weights of one particle set, or of ``B`` sets (each row sums to 1), which
-        are resampled independently in one call.
+        Normalised weights of one particle set, or of ``B`` sets (each row sums to 1, within
+        ``1e-9 √N``, or ``N`` ulp of a float32 or float16 array), which are resampled
+        independently in one call.
     method : {'systematic', 'stratified', 'residual', 'multinomial'}
         A name of :data:`RESAMPLERS`.
     n : int, optional
@@ -921,14 +934,16 @@ def _result(means: np.ndarray, covs: np.ndarray, modes: np.ndarray | None,
 
 def check_particle_options(n_particles: float, resampling: str,
                            ess_threshold: float) -> tuple[int, float]:
-    """Check a particle filter's size, resampling scheme and ESS threshold."""
-    if not (0 < n_particles < np.inf and int(n_particles) == n_particles):  # NaN too
-        raise ValueError(f"n_particles must be an integer >= 1; got {n_particles}")
-    if resampling not in RESAMPLERS:
+    """Check a particle filter's size, resampling scheme and ESS threshold: a
+    ``ValueError`` naming the argument (a bool or a string is no number here)."""
+    n = _count(n_particles, "n_particles", 1)
+    if not isinstance(resampling, str) or resampling not in RESAMPLERS:
         raise ValueError(f"resampling must be one of {sorted(RESAMPLERS)}; got {resampling!r}")
-    if not 0.0 <= ess_threshold <= 1.0:
-        raise ValueError(f"ess_threshold must be in [0, 1]; got {ess_threshold}")
-    return int(n_particles), float(ess_threshold)
+    if isinstance(ess_threshold, (bool, np.bool_)) or not isinstance(
+            ess_threshold, (int, float, np.integer, np.floating)) \
+            or not 0.0 <= ess_threshold <= 1.0:  # NaN too
+        raise ValueError(f"ess_threshold must be a number in [0, 1]; got {ess_threshold!r}")
+    return n, float(ess_threshold)
 
 
 class ParticleFilter:
