@@ -561,6 +561,8 @@ def test_track_one_starts_from_the_ground_truth_s_first_box_without_init(tmp_pat
     err = capsys.readouterr().err
     assert err.startswith("vistrack track-one: error: --init (x, y, w, h) = (5000, 10, 20, 20) "
                           "lies outside the "), err
+    # the frame, and no front-end: track-one has none (it said "in the front-end")
+    assert err.rstrip().endswith("image (at frame 1)"), err
     assert not (tmp_path / "b.txt").exists()
     # without --init, a start outside the frame is --gt's first box (another sequence's
     # ground truth, most likely), and so named: it blamed --init, which was not given

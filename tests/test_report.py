@@ -54,6 +54,11 @@ def test_report_command_and_its_errors(run_dir, tmp_path, capsys):
     assert capsys.readouterr().err == (f"vistrack report: error: {tmp_path / 'afile'} is a "
                                        "file: give the folder that vistrack track --out-dir "
                                        "wrote\n")
+    # no such folder: it said NOPE/tracks.txt does not exist, as if the folder were there
+    assert main(["report", str(tmp_path / "nope")]) == 2
+    assert capsys.readouterr().err == (f"vistrack report: error: {tmp_path / 'nope'} does not "
+                                       "exist: give the folder that vistrack track --out-dir "
+                                       "wrote\n")
     # without run.json: what the folder holds
     bare = tmp_path / "bare"
     bare.mkdir()
@@ -255,3 +260,17 @@ def test_the_run_keeps_its_warnings_and_the_page_lists_them(run_dir, tmp_path, c
     kept = json.loads((out / "run.json").read_text())["warnings"]
     assert kept == printed and len(kept) == 2 and kept[0].startswith("--low: ")
     assert html.escape(kept[0]) in (out / "report.html").read_text()
+
+
+def test_the_page_says_the_frame_rate_the_run_said(tmp_path, capsys):
+    """run.json kept the rate rounded to a tenth and the page rounded it again: a run at
+    81.46 frames/s said 81 and its page 82. It is kept whole now, and both round it once."""
+    clip = demo_clip()
+    out = tmp_path / "run"
+    assert main(["track", str(clip.video), "--stop", "12", "--out-dir", str(out),
+                 "--report"]) == 0
+    said = re.search(r"(\d+) frames/s without writing", capsys.readouterr().out).group(1)
+    fps = json.loads((out / "run.json").read_text())["fps"]
+    assert f"{fps:.0f}" == said
+    assert f"{said} frames/s without writing" in (out / "report.html").read_text()
+    assert fps != round(fps, 1)  # the rate as measured, not rounded to a tenth

@@ -482,7 +482,8 @@ def as_detector(detector: Detector | Callable[[Frame], Detections | None] | None
 def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detections | None] | None,
         tracker: Tracker, sinks: Sequence[Sink] = (), *, progress: TextIO | None = None,
         total: int | None = None, label: str = "",
-        check: Callable[[LoopStats], None] | None = None) -> LoopStats:
+        check: Callable[[LoopStats], None] | None = None,
+        detector_label: str | None = "the front-end") -> LoopStats:
     """The pipeline's one loop: every frame of ``source`` through ``detector``, ``tracker``
     and ``sinks``.
 
@@ -507,6 +508,10 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
         Called with the loop's :class:`LoopStats` once the source has ended, before the
         sinks are closed: if it raises, the sinks are aborted as for a failed loop, so a run
         found wrong at its end (no frame, results that cannot be scored) writes nothing.
+    detector_label : str or None
+        What the detector is called in the note added to its errors ("at frame 7, in the
+        front-end"); None for the frame alone (the detector is the caller's own, such as a
+        single-object run's start box).
 
     Returns
     -------
@@ -556,7 +561,8 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
             try:
                 d = detect(frame) if detect is not None else None
             except Exception as exc:
-                _add_note(exc, f"at frame {frame.index}, in the front-end")
+                _add_note(exc, f"at frame {frame.index}" if detector_label is None
+                          else f"at frame {frame.index}, in {detector_label}")
                 raise
             t2, c2 = time.perf_counter(), _compile.seconds()
             try:
@@ -2694,7 +2700,9 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
             "gt": str(Path(_ground_truth_file(gt)).resolve()) if gt is not None else None,
             "first_frame": run.first, "last_frame": run.last or run.first + run.frames - 1,
             "frames": run.frames, "rows": run.rows, "tracks": run.tracks,
-            "fps": round(run.fps, 1), "frame_rate": frame_rate,
+            # unrounded: the report rounds it once, as the run's line did (81.46 was kept as
+            # 81.5, and the page said 82 where the run had said 81)
+            "fps": run.fps, "frame_rate": frame_rate,
             "scores": run.scores.summary() if run.scores is not None else None,
             "outputs": sorted(f.name for f in run.files.values()),
             "warnings": list(said), "points": points,
@@ -2897,7 +2905,7 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
 
     with made_folder(out.parent):  # removed again, if made here, when the run fails
         stats = run(reader, detect, tracker, [writer], progress=progress, total=len(reader),
-                    label=reader.source.name, check=check)
+                    label=reader.source.name, check=check, detector_label=None)
     b = writer.boxes
     scores = None
     if truth is not None:

@@ -205,6 +205,9 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     if out_dir.is_file():
         raise NotADirectoryError(f"{out_dir} is a file: give the folder that vistrack track "
                                  "--out-dir wrote")
+    if not out_dir.is_dir():  # (it said "nope/tracks.txt does not exist")
+        raise FileNotFoundError(f"{out_dir} does not exist: give the folder that vistrack "
+                                "track --out-dir wrote")
     if not tracks.is_file():
         raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
                                 "track --out-dir wrote")
