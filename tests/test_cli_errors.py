@@ -397,6 +397,21 @@ def test_numbers_out_of_range_are_refused_before_reading(tmp_path, capsys, optio
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("tracker", ["dcpf", "single:colour", "particles"])
+def test_trackers_of_any_frame_rate_take_any_fps_above_0(tmp_path, capsys, tracker):
+    """--fps 1e7 was refused for every tracker, the box trackers' range, where the others
+    take such a rate from a file's header; they take it from --fps too, and 0 is named."""
+    missing = tmp_path / "missing.mp4"
+    extra = ["--frontend", "spots", "--diameter", "5"] if tracker == "particles" else []
+    assert main(["track", str(missing), "--tracker", tracker, "--fps", "1e7", "--out-dir",
+                 str(tmp_path / "out"), *extra]) == 2
+    err = capsys.readouterr().err
+    assert "--fps" not in err and "missing.mp4" in err, err
+    assert main(["track", str(missing), "--tracker", tracker, "--fps", "0", "--out-dir",
+                 str(tmp_path / "out"), *extra]) == 2
+    one_line(capsys, "track", "--fps must be a number > 0 (frames a second); got 0")
+
+
 def test_track_one_takes_a_box_as_otb_writes_it(tmp_path, capsys):
     """--init separated by commas, by the tabs of a line of OTB's groundtruth_rect.txt pasted
     as is, or by spaces: the same box, the same track."""

@@ -277,10 +277,14 @@ def _tracker_problem(name: str) -> str | None:
 _FPS = (1e-3, 1e6)
 
 
-def _number_problem(args: argparse.Namespace) -> str | None:
-    """The first numeric option whose value is out of its range, as a message, or None."""
-    checks = (("fps", lambda v: _FPS[0] <= v <= _FPS[1],
-               f"a number from {_FPS[0]:g} to {_FPS[1]:g} (frames a second)"),
+def _number_problem(args: argparse.Namespace, box: bool = True) -> str | None:
+    """The first numeric option whose value is out of its range, as a message, or None.
+    ``--fps`` lies within the box trackers' rates for a box tracker (``box``); the other
+    trackers take any rate above 0, as they take a file's (1e7 was refused)."""
+    fps = ((lambda v: _FPS[0] <= v <= _FPS[1],
+            f"a number from {_FPS[0]:g} to {_FPS[1]:g} (frames a second)") if box else
+           (lambda v: 0 < v < math.inf, "a number > 0 (frames a second)"))
+    checks = (("fps", *fps),
               ("stop", lambda v: v >= 1, "a frame number >= 1"),
               ("min_area", lambda v: math.isfinite(v) and v >= 0, "a number >= 0"),
               ("diameter", lambda v: v >= 3 and v % 2 == 1, "an odd number of pixels >= 3"),
@@ -307,7 +311,7 @@ def _tracker_and_numbers(args: argparse.Namespace) -> tuple[str, bool, str]:
     # spots are points: the tracker of points goes with them
     name = args.tracker or ("particles" if args.frontend == "spots" else "bytetrack")
     box = name in BOX_PRESETS
-    problem = _number_problem(args) or ("" if box else _tracker_problem(name) or "")
+    problem = _number_problem(args, box) or ("" if box else _tracker_problem(name) or "")
     if not problem and getattr(args, "search_range", None) is not None and name != "particles":
         problem = f"--search-range goes with --tracker particles, not {name}"
     return name, box, problem
