@@ -116,13 +116,22 @@ def normal(st):
 
 
 @njit(inline="always")
+def last_drawable(cw):
+    """The first index of the cumulative weights ``cw`` that reaches their end: the last of
+    positive weight, which a uniform rounded up to 1 takes (the indices of weight 0 after it
+    have the same cumulative weight)."""
+    last = cw.shape[0] - 1
+    while last > 0 and cw[last - 1] >= cw[-1]:
+        last -= 1
+    return last
+
+
+@njit(inline="always")
 def _merge_uniforms(cw, scheme, st, out):
     # out[k] = the first i with u_k < cw[i], for sorted u_k in [0, 1): stratified
     # (k + U_k) / n, or multinomial (normalised cumulative sums of n + 1 exponentials, the
     # sum drawn first and the same draws again, from a copy of the state)
-    n, last = out.shape[0], cw.shape[0] - 1
-    while last > 0 and cw[last - 1] >= cw[-1]:  # a u_k rounded up to 1 takes the last index of
-        last -= 1  # weight > 0, not one of weight 0 after it
+    n, last = out.shape[0], last_drawable(cw)
     total, start = 1.0, st
     if scheme == 0:
         total = 0.0

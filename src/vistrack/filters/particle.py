@@ -52,6 +52,7 @@ from ..models.protocols import (
 )
 from . import _jitmath, _random
 from ._nonlinear import step_times
+from ._random import last_drawable
 from .kalman import _readonly
 
 __all__ = [
@@ -144,9 +145,7 @@ def _merge(cw, u, out):
     """``out[k]`` = the first ``i`` with ``u[k] < cw[i]``, for sorted ``u`` (linear time); a
     ``u[k]`` at or past the end (a uniform rounded up to 1) takes the first ``i`` at the end,
     the last of positive weight (the last index, of weight 0, was drawn)."""
-    last = cw.shape[0] - 1
-    while last > 0 and cw[last - 1] >= cw[-1]:
-        last -= 1
+    last = last_drawable(cw)
     i = 0
     for k in range(u.shape[0]):
         while i < last and cw[i] <= u[k]:
