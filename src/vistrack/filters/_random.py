@@ -127,6 +127,15 @@ def last_drawable(cw):
 
 
 @njit(inline="always")
+def last_positive(w):
+    """The last index of a positive weight in ``w`` (0 if none is)."""
+    last = w.shape[0] - 1
+    while last > 0 and not w[last] > 0.0:
+        last -= 1
+    return last
+
+
+@njit(inline="always")
 def _merge_uniforms(cw, scheme, st, out):
     # out[k] = the first i with u_k < cw[i], for sorted u_k in [0, 1): stratified
     # (k + U_k) / n, or multinomial (normalised cumulative sums of n + 1 exponentials, the
@@ -165,13 +174,11 @@ def resample_into(w, scheme, st, cw, out):
     if scheme == 2:  # systematic: u_k = (k + u) / n; index i for every k < ceil(n c_i - u)
         u0, st = uniform(st)
         scale = n / total
-        c, i, k, last = 0.0, 0, 0, 0
+        c, i, k = 0.0, 0, 0
         while i < N and k < n - 1:
             # branch-free for up to 2 copies: write i to the next two slots whatever the
             # count (the next index overwrites what is not this one's); a loop for more
             c += w[i]
-            if w[i] > 0.0:
-                last = i
             edge = min(np.intp(math.ceil(c * scale - u0)), n)
             out[k] = i
             out[k + 1] = i
@@ -183,15 +190,14 @@ def resample_into(w, scheme, st, cw, out):
             i += 1
         while i < N:
             c += w[i]
-            if w[i] > 0.0:
-                last = i
             edge = min(np.intp(math.ceil(c * scale - u0)), n)
             while k < edge:
                 out[k] = i
                 k += 1
             i += 1
         # rounding of the last edge (u0 within n/2 ulp of 1), and the slots the loop above
-        # wrote ahead: the last index of weight > 0 (N - 1 may have none)
+        # wrote ahead: the last index of weight > 0 (N - 1 may have none), sought only here
+        last = last_positive(w)
         while k < n:
             out[k] = last
             k += 1

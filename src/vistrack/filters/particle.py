@@ -52,7 +52,7 @@ from ..models.protocols import (
 )
 from . import _jitmath, _random
 from ._nonlinear import step_times
-from ._random import last_drawable
+from ._random import last_drawable, last_positive
 from .kalman import _readonly
 
 __all__ = [
@@ -179,18 +179,15 @@ def _systematic_kernel(w, u0, out):
     total = 0.0
     for i in range(w.shape[0]):
         total += w[i]
-    c, k, last = 0.0, 0, 0
+    c, k = 0.0, 0
     for i in range(w.shape[0]):
         c += w[i]
-        if w[i] > 0.0:
-            last = i
         edge = min(math.ceil(n * (c / total) - u0), n)
         while k < edge:
             out[k] = i
             k += 1
-    while k < n:  # rounding of the last edge (u0 within n/2 ulp of 1): the last of weight > 0
-        out[k] = last
-        k += 1
+    if k < n:  # rounding of the last edge (u0 within n/2 ulp of 1): the last of weight > 0
+        out[k:] = last_positive(w)
     return out
 
 
