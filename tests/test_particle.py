@@ -82,7 +82,7 @@ def test_resampling_arguments_are_checked():
         resample([1.1, -0.1])
     with pytest.raises(ValueError, match=r"method must be one of \['multinomial', 'residual', "):
         resample([1.0], "bogus")
-    with pytest.raises(ValueError, match="n must be >= 1"):
+    with pytest.raises(ValueError, match="n must be a whole number >= 1; got 0"):
         resample([1.0], n=0)
     with pytest.raises(ValueError, match="weights must sum to 1; row 1 sums to 0.5"):
         resample([[0.5, 0.5], [0.25, 0.25]])
@@ -273,8 +273,8 @@ def test_particle_filter_arguments_are_checked():
     motion, meas = vt.models.growth_model()
     with pytest.raises(ValueError, match="resampling must be one of"):
         ParticleFilter(motion, meas, resampling="best")
-    with pytest.raises(ValueError, match=re.escape("ess_threshold must be a number in [0, 1]; "
-                                                   "got 2.0")):
+    with pytest.raises(ValueError, match=re.escape("ess_threshold must be a finite number >= 0 "
+                                                   "and <= 1; got 2.0")):
         ParticleFilter(motion, meas, ess_threshold=2.0)
     # measurements of another size: named on the compiled path, an IndexError deep inside
     # the numpy one (modes=True, compiled=False)
@@ -291,9 +291,9 @@ def test_particle_filter_arguments_are_checked():
                                                    "[nan]")):
         ParticleFilter(motion, meas, 10).filter(np.ones((3, 1)), particles=cloud)
     for n in (np.nan, np.inf, 2.5):  # NaN was "cannot convert float NaN to integer"
-        with pytest.raises(ValueError, match=f"n_particles must be an integer; got {n}"):
+        with pytest.raises(ValueError, match=f"n_particles must be a whole number >= 1; got {n}"):
             ParticleFilter(motion, meas, n_particles=n)
-    with pytest.raises(ValueError, match="n_particles must be >= 1; got 0"):
+    with pytest.raises(ValueError, match="n_particles must be a whole number >= 1; got 0"):
         ParticleFilter(motion, meas, n_particles=0)
     with pytest.raises(ValueError, match="ndim_state is needed"):
         ParticleFilter(lambda x, dt, t, rng: x, meas)
@@ -466,11 +466,13 @@ def test_result_arrays_are_read_only_as_the_kalman_filters(compiled, modes):
 def test_resample_takes_only_an_integral_n_and_names_it_as_given():
     """n=2.7 was cut to 2 indices without a word, and n=0.5 reported "got 0"; numpy integers
     and integral floats are counts as before."""
-    for n, shown in ((2.7, "2.7"), (0.5, "0.5"), (np.float64(3.9), "3.9"), (np.nan, "nan"),
-                     (True, "True"), ("3", "'3'")):
-        with pytest.raises(ValueError, match=f"n must be an integer; got {re.escape(shown)}$"):
+    for n in (2.7, 0.5, np.float64(3.9), np.nan, True):
+        with pytest.raises(ValueError, match=f"n must be a whole number >= 1; got "
+                                             f"{re.escape(repr(n))}$"):
             resample([0.5, 0.5], n=n, rng=0)
-    with pytest.raises(ValueError, match="n must be >= 1; got -2"):
+    with pytest.raises(TypeError, match="n must be a number; got '3'$"):  # (no number at all)
+        resample([0.5, 0.5], n="3", rng=0)
+    with pytest.raises(ValueError, match="n must be a whole number >= 1; got -2"):
         resample([0.5, 0.5], n=-2)
     for method in sorted(RESAMPLERS):
         want = resample(W, method, n=5, rng=9)
@@ -550,10 +552,10 @@ def test_mode_arguments_are_checked_and_named():
         ((x, w), {"bandwidth": [1.0, np.nan]}, r"bandwidth must be a number or \(1,\)"),
         ((np.zeros((3, 2)), w), {"bandwidth": [1.0, -1.0]},
          r"bandwidth must be finite and > 0; got \[1.0, -1.0\]"),
-        ((x, w), {"max_points": 0}, "max_points must be >= 1; got 0"),
-        ((x, w), {"n_starts": 0}, "n_starts must be >= 1; got 0"),
-        ((x, w), {"n_starts": 2.5}, "n_starts must be an integer; got 2.5"),
-        ((x, w), {"max_iter": -1}, "max_iter must be >= 0; got -1"),
+        ((x, w), {"max_points": 0}, "max_points must be a whole number >= 1; got 0"),
+        ((x, w), {"n_starts": 0}, "n_starts must be a whole number >= 1; got 0"),
+        ((x, w), {"n_starts": 2.5}, "n_starts must be a whole number >= 1; got 2.5"),
+        ((x, w), {"max_iter": -1}, "max_iter must be a whole number >= 0; got -1"),
         ((np.zeros((0, 1)), np.zeros(0)), {},
          r"particles must hold at least one particle; got shape \(0, 1\)"),
         ((x, [0.5, np.nan, 0.5]), {}, r"weights\[1\] is nan: weights must be finite"),
@@ -783,11 +785,13 @@ def test_weights_normalised_in_float32_are_taken():
         resample(w.astype(float) * (1 + 1e-8))
 
 
-@pytest.mark.parametrize("value, shown", [(True, "True"), (np.True_, "True"), ("5", "'5'"),
-                                          (2.5, "2.5"), (float("nan"), "nan"), (0, ">= 1")])
-def test_n_particles_of_another_kind_is_named(value, shown):
+@pytest.mark.parametrize("value, shown, error", [
+    (True, "True", ValueError), (np.True_, "True", ValueError), ("5", "'5'", TypeError),
+    (2.5, "2.5", ValueError), (float("nan"), "nan", ValueError), (0, ">= 1", ValueError)])
+def test_n_particles_of_another_kind_is_named(value, shown, error):
     """``n_particles=True`` was taken as one particle and ``"5"`` failed in a bare TypeError;
-    both filters name it now."""
+    both filters name it now, by the package's rules for counts and bounded numbers (a
+    TypeError for what is no number, as every other setting's)."""
     from vistrack.filters import SwitchingParticleFilter
     from vistrack.models import SwitchingLinearSystem
 
@@ -795,11 +799,16 @@ def test_n_particles_of_another_kind_is_named(value, shown):
     for make in (lambda **kw: ParticleFilter(vt.ConstantVelocity(dim=1), vt.Position(dim=1),
                                              **kw),
                  lambda **kw: SwitchingParticleFilter(slds, **kw)):
-        with pytest.raises(ValueError, match="n_particles must be") as e:
+        with pytest.raises(error, match="n_particles must be") as e:
             make(n_particles=value)
         assert shown in str(e.value)
-        for bad in (True, "0.5", float("nan"), 1.5):
-            with pytest.raises(ValueError, match="ess_threshold must be a number in"):
+        for bad in (float("nan"), 1.5, -0.1, float("inf")):
+            with pytest.raises(ValueError, match=re.escape(
+                    f"ess_threshold must be a finite number >= 0 and <= 1; got {bad!r}")):
+                make(ess_threshold=bad)
+        for bad in (True, "0.5", None):
+            with pytest.raises(TypeError, match=re.escape(
+                    f"ess_threshold must be a number; got {bad!r}")):
                 make(ess_threshold=bad)
         with pytest.raises(ValueError, match="resampling must be one of"):
             make(resampling=["systematic"])

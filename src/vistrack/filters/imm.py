@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike
 
 from .._validate import (
     as_float_array,
+    as_rng,
     check_finite,
     check_has_steps,
     check_not_infinite,
@@ -50,6 +51,7 @@ from ..models.switching import SwitchingLinearSystem
 from ..types import Gaussian
 from ._nonlinear import step_times
 from .kalman import _readonly, _update, kf_predict
+from .particle import RESAMPLERS, _ess, check_particle_options, resample_now
 
 __all__ = ["GaussianFilter", "IMMFilter", "IMMResult", "SwitchingParticleFilter", "SwitchingResult"]
 
@@ -478,6 +480,8 @@ class SwitchingParticleFilter:
     ------
     ValueError
         If ``n_particles``, ``resampling`` or ``ess_threshold`` is invalid.
+    TypeError
+        If ``n_particles`` or ``ess_threshold`` is no number (a string).
 
     See Also
     --------
@@ -510,9 +514,6 @@ class SwitchingParticleFilter:
     def __init__(self, system: SwitchingLinearSystem, n_particles: int = 500, *,
                  resampling: str = "systematic", ess_threshold: float = 0.5,
                  rng: np.random.Generator | int | None = None):
-        from .._validate import as_rng
-        from .particle import RESAMPLERS, check_particle_options
-
         self.n_particles, self.ess_threshold = check_particle_options(
             n_particles, resampling, ess_threshold)
         self.system, self.resample, self.rng = system, RESAMPLERS[resampling], as_rng(rng)
@@ -613,8 +614,8 @@ class SwitchingParticleFilter:
             d = mean - means[t]
             covs[t] = np.einsum("i,ijk->jk", w, cov + d[:, :, None] * d[:, None, :])
             probs[t] = np.bincount(z, weights=w, minlength=k)
-            ess[t] = 1.0 / np.dot(w, w)
-            if ess[t] < self.ess_threshold * N or self.ess_threshold == 1.0:
+            ess[t] = _ess(w)
+            if resample_now(ess[t], self.ess_threshold, N):
                 idx = self.resample(w, N, rng)
                 mean, cov, z = mean[idx], cov[idx], z[idx]
                 logw = np.full(N, -np.log(N))

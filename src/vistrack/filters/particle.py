@@ -36,8 +36,10 @@ from .._jit import njit
 from .._prebuilt import Kernel, kernel
 from .._registry import Registry
 from .._validate import (
+    as_finite,
     as_float_array,
     as_rng,
+    as_whole,
     check_finite,
     check_has_steps,
     check_not_infinite,
@@ -118,19 +120,6 @@ def _user_particles(x: object, N: int, n: int, t: int) -> np.ndarray:
         raise ValueError(f"motion (a propagate callable) returned non-finite particles at step "
                          f"{t} ({int(bad.sum())} of {N}); particles[{i}] = {a[i].tolist()}")
     return a
-
-
-def _count(value: object, name: str, low: int) -> int:
-    """``value`` as an ``int``: an integer (Python or numpy, or a float with an integral
-    value) of at least ``low``; else ``ValueError`` naming ``name`` and the value as given."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(
-            value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name} must be an integer; got {value!r}")
-    if not (math.isfinite(value) and float(value).is_integer()):
-        raise ValueError(f"{name} must be an integer; got {value}")  # 2.7 was cut to 2
-    if value < low:
-        raise ValueError(f"{name} must be >= {low}; got {value}")
-    return int(value)
 
 
 def _degenerate(t: int, y: np.ndarray) -> ParticleDegeneracyError:
@@ -320,7 +309,7 @@ def resample(weights: ArrayLike, method: str = "systematic", *, n: int | None = 
     if method not in RESAMPLERS:
         raise ValueError(f"method must be one of {sorted(RESAMPLERS)}; got {method!r}")
     w = _check_weights(weights)
-    n = w.shape[-1] if n is None else _count(n, "n", 1)
+    n = w.shape[-1] if n is None else as_whole(n, "n", 1)
     gen = as_rng(rng)
     if w.ndim == 1:
         return RESAMPLERS[method](w, n, gen)
@@ -556,9 +545,9 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
         raise ValueError(f"particles must hold at least one particle; got shape {x.shape}")
     check_finite(x, "particles")
     w = _normalised(w)
-    n_starts = _count(n_starts, "n_starts", 1)
-    max_iter = _count(max_iter, "max_iter", 0)
-    max_points = _count(max_points, "max_points", 1)
+    n_starts = as_whole(n_starts, "n_starts", 1)
+    max_iter = as_whole(max_iter, "max_iter", 0)
+    max_points = as_whole(max_points, "max_points", 1)
     if bandwidth is None:
         sd = np.sqrt(np.maximum(np.diagonal(_wcov(x, w)), 1e-300))
         neff = _ess(w)
@@ -930,16 +919,20 @@ def _result(means: np.ndarray, covs: np.ndarray, modes: np.ndarray | None,
 
 def check_particle_options(n_particles: float, resampling: str,
                            ess_threshold: float) -> tuple[int, float]:
-    """Check a particle filter's size, resampling scheme and ESS threshold: a
-    ``ValueError`` naming the argument (a bool or a string is no number here)."""
-    n = _count(n_particles, "n_particles", 1)
+    """Check a particle filter's size, resampling scheme and ESS threshold, by the package's
+    rules for whole and bounded numbers: a ``TypeError`` naming the argument for what is no
+    number (a string), a ``ValueError`` for any other bad value (a bool is no count here)."""
+    n = as_whole(n_particles, "n_particles", 1)
     if not isinstance(resampling, str) or resampling not in RESAMPLERS:
         raise ValueError(f"resampling must be one of {sorted(RESAMPLERS)}; got {resampling!r}")
-    if isinstance(ess_threshold, (bool, np.bool_)) or not isinstance(
-            ess_threshold, (int, float, np.integer, np.floating)) \
-            or not 0.0 <= ess_threshold <= 1.0:  # NaN too
-        raise ValueError(f"ess_threshold must be a number in [0, 1]; got {ess_threshold!r}")
-    return n, float(ess_threshold)
+    return n, as_finite(ess_threshold, "ess_threshold", 0.0, high=1.0)
+
+
+def resample_now(ess: float, threshold: float, n: int) -> bool:
+    """Whether a particle filter of ``n`` particles resamples at an effective sample size
+    ``ess``: below ``threshold * n``, or always at ``threshold`` 1 (equal weights give
+    ``ess == n``, which is not below)."""
+    return ess < threshold * n or threshold == 1.0
 
 
 class ParticleFilter:
@@ -995,7 +988,8 @@ class ParticleFilter:
         If ``n_particles``, ``resampling`` or ``ess_threshold`` is invalid, or ``motion`` is
         a callable and ``ndim_state`` is missing.
     TypeError
-        If ``motion`` or ``likelihood`` is neither a model nor a callable.
+        If ``motion`` or ``likelihood`` is neither a model nor a callable, or
+        ``n_particles`` or ``ess_threshold`` is no number (a string).
 
     References
     ----------
@@ -1183,7 +1177,7 @@ class ParticleFilter:
                 assert mode_arr is not None and conf is not None  # allocated when modes
                 mode_arr[t], conf[t] = particle_mode(x, w)
             ess[t] = _ess(w)
-            if ess[t] < self.ess_threshold * N or self.ess_threshold == 1.0:
+            if resample_now(ess[t], self.ess_threshold, N):
                 x = x[RESAMPLERS[self.resampling](w, N, rng)]
                 logw = np.full(N, -math.log(N))
                 resampled[t] = True
