@@ -269,7 +269,7 @@ def test_bulk_water_from_the_command_line_links_as_trackpy_does(tmp_path, capsys
     """trackpy's bulk-water clip (50 frames, about 520 particles each) from the command line
     with its defaults (search range half the diameter, a particle kept 3 frames), beside
     trackpy's locate and link (search range 5 px, memory 3) on the same frames: every one of
-    trackpy's positions has a particle of ours within 0.5 pixel, and 99.0 % of trackpy's
+    trackpy's positions has a particle of ours within 0.5 pixel, and 99.4 % of trackpy's
     trajectories are one identity of ours throughout (measured)."""
     tp = pytest.importorskip("trackpy")
     import pandas as pd
@@ -298,7 +298,7 @@ def test_bulk_water_from_the_command_line_links_as_trackpy_does(tmp_path, capsys
             if ok:
                 ids_of.setdefault(pid, set()).add(int(i))
     assert np.concatenate(near).all()
-    assert np.mean([len(v) == 1 for v in ids_of.values()]) > 0.985
+    assert np.mean([len(v) == 1 for v in ids_of.values()]) > 0.99
 
 
 def test_spots_that_find_nothing_say_what_was_looked_for(tmp_path, capsys):

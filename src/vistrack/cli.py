@@ -1446,8 +1446,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="video mode, spots: spots darker than the background")
     track.add_argument("--search-range", type=float, metavar="PX",
                        help="--tracker particles: the farthest a particle moves between "
-                       "frames, in pixels, the radius of its gate (default: half --diameter); "
-                       "its --max-lost is 3.5 frames by default")
+                       "frames, in pixels: the radius of its gate one frame after it was "
+                       "found (the gate grows while it is missed), and the longest link "
+                       "(default: half --diameter); its --max-lost is 3.5 frames by default")
     track.add_argument("--report", action="store_true",
                        help="video mode: also write OUT/report.html, one page with the "
                        "command, the scores, the annotated video and the plots (as vistrack "

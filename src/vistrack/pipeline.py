@@ -958,7 +958,8 @@ def _dcpf(ctx: Context) -> Tracker:
 
 PARTICLE_GATE = 0.999
 """The gate probability of the ``particles`` tracker: its ``search_range`` is the radius of
-this quantile of a track's innovation, one frame after an update."""
+this quantile of a track's innovation, one frame after an update, and the longest link
+(``PointTracker(max_distance=)``) however far the gate grows while a particle is missed."""
 
 
 def _particles(ctx: Context) -> Tracker:
@@ -989,7 +990,8 @@ def _particles(ctx: Context) -> Tracker:
     step = (search ** 2 - floor ** 2) / chi2_threshold(2, PARTICLE_GATE)
     return PointTracker("gnn", motion=ConstantPosition(dim=2, q=step * ctx.fps),
                         measurement=Position(dim=2, r=PARTICLE_NOISE ** 2), frame_rate=ctx.fps,
-                        confirm_hits=1, max_lost=max_lost, p_gate=PARTICLE_GATE)
+                        confirm_hits=1, max_lost=max_lost, p_gate=PARTICLE_GATE,
+                        max_distance=search)
 
 
 PARTICLE_NOISE = 0.1
@@ -2306,7 +2308,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         particle filter; ``overrides`` are fields of its
         :class:`~vistrack.tracking.dcpf.DCPFConfig`), ``"particles"`` (drifting points,
         linked by global nearest neighbour; ``overrides`` ``search_range``, the radius of a
-        track's gate one frame after an update in pixels, default half ``diameter``, and
+        track's gate one frame after an update in pixels and the longest link, default
+        half ``diameter``, and
         ``max_lost``, seconds, default 3.5 frames), ``"single:METHOD"`` (one object,
         from the first frame's most confident detection); ``"module:callable"``; or any
         tracker object (:class:`~vistrack.tracking.Tracker`). Default: ``"particles"`` with

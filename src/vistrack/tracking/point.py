@@ -8,9 +8,13 @@ Mahalanobis distance from each track's predicted measurement, :math:`d^2 \le \ch
 
 Association (``association=``):
 
-- ``"gnn"``: global nearest neighbour on :math:`d^2`, the gate being the price of a track or
-  a measurement left unassigned (the pairs of least total :math:`d^2 - \chi^2`, not the most
-  pairs); ``"nn"``: each track its nearest gated measurement; ``"greedy"``;
+- ``"gnn"``: global nearest neighbour on each pair's likelihood, :math:`d^2 + \ln |S|`
+  against the :math:`\ln |S_1|` of a track one frame after an update
+  (:math:`S_1 = H Q H^T + 2R` over one frame), the gate being the price of a track or a
+  measurement left unassigned (the pairs of least total :math:`d^2 + \ln |S| / |S_1| -
+  \chi^2`, not the most pairs): on :math:`d^2` alone a track missed for frames, its gate
+  grown, was cheaper than one found in the frame before; ``"nn"``: each track its nearest
+  gated measurement; ``"greedy"``;
 - ``"pda"``: each track corrected with all its gated measurements weighted by their
   probabilities (PDA), for clutter; ``"jpda"``: the probabilities computed jointly for tracks
   that share measurements (:mod:`vistrack.association.pda`);
@@ -98,6 +102,11 @@ class PointTracker:
         IPDA and JIPDA: a new track's probability of existence, the existence that confirms
         a track, and the existence below which a track is deleted; ``0 <= delete_existence
         < init_existence < 1`` and ``delete_existence < confirm_existence <= 1``.
+    max_distance : float, optional
+        The longest link, in the measurement's units: a measurement farther than this from
+        a track's predicted measurement is not associated with it, however far the track's
+        gate has grown while it was missed (trackpy's ``search_range``). Default: the gate
+        alone.
 
     Attributes
     ----------
@@ -110,9 +119,10 @@ class PointTracker:
     Raises
     ------
     ValueError
-        If ``association`` is not in :data:`POINT_ASSOCIATIONS`, ``frame_rate``, ``max_lost``
-        or ``init_speed`` is not a finite number in its range, ``confirm_hits`` not a whole
-        number >= 1, ``p_gate`` not in (0, 1), or an existence setting is out of its range.
+        If ``association`` is not in :data:`POINT_ASSOCIATIONS`, ``frame_rate``,
+        ``max_lost``, ``init_speed`` or ``max_distance`` is not a finite number in its range,
+        ``confirm_hits`` not a whole number >= 1, ``p_gate`` not in (0, 1), or an existence
+        setting is out of its range.
 
     Examples
     --------
@@ -129,7 +139,7 @@ class PointTracker:
                  init_speed: float = 10.0, confirm_hits: int = 3, max_lost: float = 1.0,
                  frame_rate: float = 30.0, p_survive: float = 0.99,
                  init_existence: float = 0.2, confirm_existence: float = 0.95,
-                 delete_existence: float = 0.01):
+                 delete_existence: float = 0.01, max_distance: float | None = None):
         if association not in POINT_ASSOCIATIONS:
             raise ValueError(f"association must be one of {list(POINT_ASSOCIATIONS)}; "
                              f"got {association!r}")
@@ -150,6 +160,14 @@ class PointTracker:
         self.confirm_hits = as_whole(confirm_hits, "confirm_hits", 1)
         self.max_lost = as_finite(max_lost, "max_lost", 0.0, what="number of seconds")
         self.frame_rate = as_finite(frame_rate, "frame_rate", 0.0, above=True)
+        self.max_distance = None if max_distance is None else as_finite(
+            max_distance, "max_distance", 0.0, above=True)
+        # GNN's reference innovation: a track's one frame after an update (twice the
+        # measurement noise and a frame's process noise), whose likelihood at the gate's edge
+        # is the price of a pair left unassigned
+        S_ref = self.H @ np.asarray(self.motion.Q(1.0 / self.frame_rate), float) @ self.H.T \
+            + 2 * self.R
+        self._logdet_ref = float(np.linalg.slogdet(S_ref)[1])
         # a new track starts where its first measurement puts it: pinv(H) z (the measured
         # components, for the usual H = [I 0]); what H does not see, with init_speed
         self._Hp = np.linalg.pinv(self.H)
@@ -276,11 +294,18 @@ class PointTracker:
             # gated pairs only (a k-d tree finds the candidates): thousands of points stay
             # cheap
             r, c, d2 = mahalanobis_pairs(zp, S, Z, self.threshold)
-            same = t.classes[r] == classes[c]
-            r, c, d2 = r[same], c[same], d2[same]
+            keep = t.classes[r] == classes[c]
+            if self.max_distance is not None:  # however far the gate has grown
+                keep &= ((zp[r] - Z[c]) ** 2).sum(1) <= self.max_distance ** 2
+            r, c, d2 = r[keep], c[keep], d2[keep]
             if self.association == "gnn" and len(Z):
-                # one assignment per connected group
-                r, c = gnn_sparse(r, c, d2, (K, len(Z)), limit=self.threshold)
+                # one assignment per connected group, on each pair's likelihood against a
+                # track's one frame after an update: d² alone made a track lost for frames,
+                # its gate grown, cheaper than one found in the frame before
+                L = cholesky_innovations(S)
+                logdet = 2 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(1)
+                r, c = gnn_sparse(r, c, d2 + (logdet[r] - self._logdet_ref), (K, len(Z)),
+                                  limit=self.threshold)
                 if len(r):
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
