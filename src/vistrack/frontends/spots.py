@@ -28,7 +28,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_whole, bgr_to_grey
+from .._validate import as_whole, bgr_to_grey, is_whole
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -154,10 +154,10 @@ def _check_diameter(diameter: int) -> int:
     >>> _check_diameter(11)
     11
     """
-    d = int(diameter)
-    if d < 3 or d % 2 == 0:
-        raise ValueError(f"diameter must be an odd integer >= 3; got {d}")
-    return d
+    # (int() cut 10.5 to 10 and named that, took 9.9 as 9, and failed on NaN naming nothing)
+    if not is_whole(diameter, 3) or int(diameter) % 2 == 0:
+        raise ValueError(f"diameter must be an odd integer >= 3; got {diameter!r}")
+    return int(diameter)
 
 
 def _inverted(im: np.ndarray) -> np.ndarray:
@@ -222,7 +222,8 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     Raises
     ------
     ValueError
-        If ``image`` is neither ``(H, W)`` nor ``(H, W, 3)`` or holds NaN or infinity,
+        If ``image`` is neither ``(H, W)`` nor ``(H, W, C)`` with ``C`` 1, 3 (BGR) or 4
+        (BGRA), or holds NaN or infinity,
         ``diameter`` is not an odd integer >= 3, ``noise_size`` is negative, ``separation``
         not > 0, ``smoothing_size`` is not a whole number, is even or not larger than
         ``noise_size``, ``minmass`` or ``threshold`` is not finite, or ``max_iterations``
@@ -247,10 +248,15 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     from scipy import ndimage
 
     im = np.asarray(image)
-    if im.ndim == 3:
+    if im.ndim == 3 and im.shape[2] in (1, 3, 4):  # grey, BGR or BGRA
         im = bgr_to_grey(im)
     if im.ndim != 2:
-        raise ValueError(f"image must be (H, W) or (H, W, 3); got shape {im.shape}")
+        # (a one-page stack (1, H, W), as a TIFF reader gives it, was read as BGR: one row
+        # of H pixels, and no spot without a word)
+        hint = (": a stack of one page? pass image[0]" if im.ndim == 3 and im.shape[0] == 1
+                else ": one call a frame for a stack" if im.ndim == 3 else "")
+        raise ValueError(f"image must be (H, W), or (H, W, C) with C 1, 3 (BGR) or 4 (BGRA); "
+                         f"got shape {im.shape}{hint}")
     diameter = _check_diameter(diameter)
     r = diameter // 2
     sep = float(diameter + 1 if separation is None else separation)
@@ -266,7 +272,9 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
                          f"({noise_size:g}); got {smooth}"
                          + (" (the default, diameter)" if smoothing_size is None else ""))
     for name, value in (("minmass", minmass), ("threshold", threshold)):
-        if value is not None and not np.isfinite(value):  # (NaN: every spot dropped)
+        # (NaN: every spot dropped; a minmass of None failed after the whole search)
+        if (value is None and name == "minmass") or (
+                value is not None and not np.isfinite(value)):
             raise ValueError(f"{name} must be a finite number; got {value}")
     if im.dtype.kind == "f" and not np.isfinite(im).all():
         # one NaN made the band-pass's top NaN, and every value with it: no spot, no word
