@@ -126,6 +126,7 @@ class MotionFunctions:
                              "takes per-step ones)")
         self._Q: dict = {}
         self._Q_sqrt: dict = {}
+        self._seen: tuple = ()
 
     @property
     def ndim_state(self) -> int:
@@ -144,9 +145,24 @@ class MotionFunctions:
             return np.broadcast_to(cast(MotionModel, self.model).F(dt), x.shape + (self.n,))
         return cast(NonlinearMotionModel, self.model).jacobian(x, dt, t)
 
+    def _current(self) -> None:
+        """Forget the kept ``Q`` where a model's setting was set since (as
+        ``KalmanFilter.fit`` sets its copies' ``q``): kept under ``dt`` alone, the old
+        ``Q`` was used. A setting is compared by identity, so any assignment is seen; an
+        array changed in place is not."""
+        state = getattr(self.model, "__dict__", None)
+        values = () if state is None else tuple(state.values())
+        if len(values) != len(self._seen) or any(
+                a is not b for a, b in zip(values, self._seen)):
+            self._Q.clear()
+            self._Q_sqrt.clear()
+            self._seen = values  # (held, so no identity is reused)
+
     def Q(self, dt: float) -> np.ndarray:
-        """``Q(dt)``, computed once per ``dt`` among the last few distinct ones (models are
-        immutable; timestamps that never repeat a step keep no more than those)."""
+        """``Q(dt)``, computed once per ``dt`` among the last few distinct ones while the
+        model's settings stay as they are (timestamps that never repeat a step keep no more
+        than those)."""
+        self._current()
         key = float(dt)  # (a 0-d array is not hashable)
         Q = self._Q.get(key)
         if Q is None:
@@ -155,6 +171,7 @@ class MotionFunctions:
 
     def Q_sqrt(self, dt: float) -> np.ndarray:
         """:func:`psd_sqrt` of ``Q(dt)``, as :meth:`Q` keeps it: noise = eps @ Q_sqrt.T."""
+        self._current()
         key = float(dt)  # (a 0-d array is not hashable)
         A = self._Q_sqrt.get(key)
         if A is None:
