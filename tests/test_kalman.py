@@ -424,7 +424,10 @@ def test_bad_arguments_raise_naming_the_argument(kwargs, exc, match):
 
 def test_kernel_argument_errors():
     g = vt.Gaussian(np.zeros((3, 2)), np.broadcast_to(E, (3, 2, 2)))
-    with pytest.raises(ValueError, match=r"y must have shape \(3, 'm'\)"):
+    # (the shape was printed as a tuple with 'm' quoted in it)
+    with pytest.raises(ValueError, match=re.escape(
+            "y must have shape (3, m), a measurement of m values for each of g's (3,); got "
+            "(4, 1)")):
         kf_update(g, np.ones((4, 1)), [[1.0, 0.0]], [[1.0]])
     with pytest.raises(TypeError, match="g must be a vistrack.Gaussian"):
         kf_predict(np.zeros(2), E, E)
@@ -774,7 +777,7 @@ def test_one_step_and_the_1d_filter_name_what_the_n_d_filter_names():
     args = (np.eye(2), np.eye(2), [[1.0, 0.0]], [[1.0]])
     for call in (lambda: kf_step(g, [1.0, 2.0], *args),
                  lambda: kf_update(g, [1.0, 2.0], *args[2:])):
-        with pytest.raises(ValueError, match=re.escape("y must have 1 values a Gaussian, one "
+        with pytest.raises(ValueError, match=re.escape("y must have 1 value a Gaussian, one "
                                                        "for each row of H (1, 2); got shape "
                                                        "(2,)")):
             call()

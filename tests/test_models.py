@@ -176,6 +176,9 @@ def test_state_layout_matches_seed_2d_example():
         (lambda: BoxMotion().at_rate(np.inf), r"frame_rate must be a number from 0.001 to "
                                                r"1e\+06 frames/s; got inf"),
         (lambda: BoxMotion().at_rate(1e-300), "frame_rate must be a number from 0.001"),
+        # (NaN and infinity gave such a matrix; a boolean setting was taken as 1)
+        (lambda: BoxMotion().F(np.inf), "dt must be a finite number of frames; got inf"),
+        (lambda: BoxMotion().F(np.nan), "dt must be a finite number of frames; got nan"),
         (lambda: ConstantAcceleration(discretisation="rk4"), "discretisation must be"),
         (lambda: Position(dim=2, r=0.0), "r must be a finite variance > 0"),
         (lambda: Position(dim=2, r=np.eye(3)), r"r must have shape \(2, 2\)"),
@@ -309,6 +312,13 @@ def test_box_motion_names_boxes_of_the_wrong_shape_and_a_negative_dt():
         m.Q_diag(np.ones((1, 4)), dt=-1)
     box = np.array([[100, 50, 20.0, 40.0]])
     np.testing.assert_allclose(m.Q_diag(box, dt=2.0), 2 * m.Q_diag(box))
+    # a setting of another kind is named (True was taken as 1; a string rate failed in
+    # numpy's isfinite)
+    with pytest.raises(TypeError, match="std_pos must be a number; got True"):
+        BoxMotion(std_pos=True)
+    for bad in ("10", None):
+        with pytest.raises(TypeError, match=f"frame_rate must be a number; got {bad!r}"):
+            m.at_rate(bad)
 
 
 def test_nonlinear_filters_name_a_linear_model_of_per_step_matrices():

@@ -403,7 +403,9 @@ def _with_measurement(g: Gaussian, y: ArrayLike) -> tuple[np.ndarray, np.ndarray
     if not (type(y) is np.ndarray and y.dtype == np.float64):
         y = as_float_array(y, "y")
     if y.ndim != mean.ndim or y.shape[:-1] != mean.shape[:-1]:
-        raise ValueError(f"y must have shape {mean.shape[:-1] + ('m',)} to match g; got {y.shape}")
+        want = ", ".join(map(str, mean.shape[:-1] + ("m",)))  # (the tuple printed 'm' quoted)
+        raise ValueError(f"y must have shape ({want}), a measurement of m values for each of "
+                         f"g's {mean.shape[:-1]}; got {y.shape}")
     check_not_infinite(y)  # NaN is a missing value; an infinite one gave NaN means
     return _one_batch_axis(mean, 1), _one_batch_axis(g.cov, 2), _one_batch_axis(y, 1)
 
@@ -579,7 +581,8 @@ def _check_y_fits(given: tuple[int, ...], n: int, m: int, H: ArrayLike, R: Array
     ``given``, ``m`` values) does not: the measurement is the one of the wrong size."""
     h, r = np.shape(H), np.shape(R)
     if len(h) in (2, 3) and h[-1] == n and h[-2] != m and (len(r) < 2 or r[-2:] == (h[-2],) * 2):
-        raise ValueError(f"y must have {h[-2]} values a Gaussian, one for each row of H "
+        raise ValueError(f"y must have {h[-2]} value{'s' if h[-2] != 1 else ''} a Gaussian, "
+                         f"one for each row of H "
                          f"{h}; got shape {given}")
 
 

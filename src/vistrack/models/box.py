@@ -33,6 +33,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
+from .._validate import as_finite, as_number
 
 __all__ = ["BoxMotion", "FRAME_RATES"]
 
@@ -148,8 +149,7 @@ class BoxMotion:
         for name, v in (("std_pos", std_pos), ("std_vel", std_vel), ("init_pos", init_pos),
                         ("init_vel", init_vel), ("frame_rate", frame_rate),
                         *(("std_meas", m) for m in meas.ravel())):
-            if not np.isfinite(v) or v <= 0:
-                raise ValueError(f"{name} must be a finite number > 0; got {v}")
+            as_finite(v, name, 0.0, above=True)  # (True was taken as 1)
         self.std_pos, self.std_vel = std_pos, std_vel
         self._std_q = np.repeat(np.array([std_pos, std_vel], dtype=float), 4)
         self.std_meas = np.broadcast_to(meas, (4,)).copy()
@@ -195,6 +195,8 @@ class BoxMotion:
         ------
         ValueError
             If ``frame_rate`` is not a number in :data:`FRAME_RATES` (0.001 to 10^6).
+        TypeError
+            If it is no number (a string).
 
         Examples
         --------
@@ -202,6 +204,8 @@ class BoxMotion:
         >>> m.at_rate(30.0) is m, m.at_rate(15.0).frame_rate
         (True, 15.0)
         """
+        # (a string failed in numpy's isfinite, naming nothing)
+        frame_rate = as_number(frame_rate, "frame_rate")
         if not (np.isfinite(frame_rate) and FRAME_RATES[0] <= frame_rate <= FRAME_RATES[1]):
             raise ValueError(f"frame_rate must be a number from {FRAME_RATES[0]:g} to "
                              f"{FRAME_RATES[1]:g} frames/s; got {frame_rate:g}")
@@ -230,7 +234,9 @@ class BoxMotion:
         >>> BoxMotion().F(3.0)[:4, 4:].diagonal().tolist()
         [3.0, 3.0, 3.0, 3.0]
         """
-        return np.kron(np.array([[1.0, float(dt)], [0.0, 1.0]]), np.eye(4))
+        # (backwards too: the box filter predicts back; NaN and infinity gave such a matrix)
+        dt = as_finite(dt, "dt", what="number of frames")
+        return np.kron(np.array([[1.0, dt], [0.0, 1.0]]), np.eye(4))
 
     @staticmethod
     def _scale(boxes: np.ndarray) -> np.ndarray:
