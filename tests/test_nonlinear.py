@@ -426,8 +426,10 @@ def test_nonlinear_filter_errors_name_the_argument(rng):
             f.filter(np.ones((3, 2)), x0=x0, P0=np.eye(5))
         with pytest.raises(ValueError, match=r"^P0 must be finite; P0\[0, 0\] = inf$"):
             f.filter(np.ones((3, 2)), x0=np.ones(5), P0=np.diag([np.inf, 1, 1, 1, 1]))
-    with pytest.raises(ValueError, match=r"dt must be a scalar or have shape \(3,\); got \(2,\)"):
-        flt.filter(np.ones((3, 2)), x0=np.ones(5), P0=np.eye(5), dt=[1.0, 2.0])
+    with pytest.raises(ValueError, match=re.escape(
+            "dt must be a scalar, the T-1=2 intervals between steps or T=3 values (dt[0] "
+            "unused); got shape (4,)")):
+        flt.filter(np.ones((3, 2)), x0=np.ones(5), P0=np.eye(5), dt=[1.0, 2.0, 1.0, 1.0])
     with pytest.raises(ValueError, match=r"times must have shape \(3,\)"):
         flt.filter(np.ones((3, 2)), x0=np.ones(5), P0=np.eye(5), times=[0.0, 1.0])
     with pytest.raises(ValueError, match=r"y must have shape \(2,\)"):
@@ -991,3 +993,25 @@ def test_a_model_setting_changed_after_the_filter_was_made_is_used():
         made[name].rng, f.rng = np.random.default_rng(3), np.random.default_rng(3)
         np.testing.assert_array_equal(made[name].filter(ys, **prior).means,
                                       f.filter(ys, **prior).means, err_msg=name)
+
+
+def test_the_nonlinear_filters_take_the_intervals_between_steps_as_the_kalman_filter_does():
+    """``dt=np.diff(times)`` (T-1 intervals) was refused by the EKF, UKF, EnKF, particle and
+    IMM filters, which took only a scalar or T values, while ``KalmanFilter`` took it. On a
+    linear model the EKF and UKF are the Kalman filter, the oracle; every filter gives with
+    the intervals what it gives with ``np.diff(times, prepend=np.nan)``."""
+    from vistrack.filters import KalmanFilter, ParticleFilter
+
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.3), vt.Position(dim=1, r=1.0)
+    times = np.array([0.0, 0.5, 1.7, 2.0, 3.4])
+    ys, prior = np.array([[0.1], [0.9], [2.2], [2.1], [3.9]]), dict(x0=[0.0, 1.0], P0=np.eye(2))
+    want = KalmanFilter(cv, pos).filter(ys, dt=np.diff(times), **prior)
+    for F in (ExtendedKalmanFilter, UnscentedKalmanFilter):
+        got = F(cv, pos).filter(ys, dt=np.diff(times), **prior)
+        np.testing.assert_allclose(got.means, want.means, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(got.covs, want.covs, rtol=1e-9, atol=1e-12)
+    for make in (lambda: EnsembleKalmanFilter(cv, pos, n_members=30, rng=2),
+                 lambda: ParticleFilter(cv, pos, n_particles=100, rng=2)):
+        a = make().filter(ys, dt=np.diff(times), **prior).means
+        b = make().filter(ys, dt=np.diff(times, prepend=np.nan), **prior).means
+        np.testing.assert_array_equal(a, b)

@@ -29,11 +29,15 @@ def check_gaussian(g: object) -> Gaussian:
 
 
 def step_times(dt: ArrayLike, times: ArrayLike | None, T: int) -> tuple[np.ndarray, np.ndarray]:
-    """``dt`` (a scalar or ``(T,)``, ``dt[t]`` the step from ``t-1`` to ``t``) as ``(T,)``, and
-    the time of each step: ``times``, by default the cumulative ``dt`` from 0."""
+    """``dt`` (a scalar, the ``T-1`` intervals between steps, or ``(T,)`` with ``dt[t]`` the
+    step from ``t-1`` to ``t``, ``dt[0]`` unused) as ``(T,)``, as ``KalmanFilter`` takes it,
+    and the time of each step: ``times``, by default the cumulative ``dt`` from 0."""
     d = as_float_array(dt, "dt", ndim=(0, 1))
+    if d.ndim == 1 and d.shape == (T - 1,):  # np.diff(times), as the Kalman filter takes
+        d = np.concatenate([d[:1] if T > 1 else [1.0], d])
     if d.ndim == 1 and d.shape != (T,):
-        raise ValueError(f"dt must be a scalar or have shape ({T},); got {d.shape}")
+        raise ValueError(f"dt must be a scalar, the T-1={T - 1} intervals between steps or "
+                         f"T={T} values (dt[0] unused); got shape {d.shape}")
     dts = np.broadcast_to(d, (T,))
     if times is None:
         return dts, np.concatenate([[0.0], np.cumsum(dts[1:])])

@@ -301,7 +301,8 @@ class IMMFilter:
         P0 : (n, n) or (B, n, n) array_like
             Prior covariance of the first step.
         dt : float or (T,) array_like
-            Time step; ``dt[t]`` is the step from ``t-1`` to ``t``.
+            Time step: a scalar, the ``T-1`` intervals between steps (``np.diff(times)``),
+            or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused).
         times : (T,) array_like, optional
             Time of each step; default the cumulative ``dt`` from 0.
 

@@ -1096,7 +1096,8 @@ class ParticleFilter:
         particles : (N, n) array_like, optional
             The first cloud, instead of draws from ``N(x0, P0)``.
         dt : float or (T,) array_like
-            Time step; ``dt[t]`` is the step from ``t-1`` to ``t``.
+            Time step: a scalar, the ``T-1`` intervals between steps (``np.diff(times)``),
+            or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused).
         times : (T,) array_like, optional
             Time of each step; default the cumulative ``dt`` from 0.
         modes : bool

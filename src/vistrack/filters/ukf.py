@@ -872,7 +872,8 @@ class UnscentedKalmanFilter:
             Prior covariance of the first step, positive semi-definite (a state known exactly
             along a direction has its sigma points there at the mean).
         dt : float or (T,) array_like
-            Time step; ``dt[t]`` is the step from ``t-1`` to ``t``.
+            Time step: a scalar, the ``T-1`` intervals between steps (``np.diff(times)``),
+            or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused).
         times : (T,) array_like, optional
             Time of each step, passed to the model; default the cumulative ``dt`` from 0.
 
