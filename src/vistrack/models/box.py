@@ -148,7 +148,7 @@ class BoxMotion:
             raise ValueError(f"std_meas must be one number or 4 (cx, cy, w, h); got {std_meas!r}")
         for name, v in (("std_pos", std_pos), ("std_vel", std_vel), ("init_pos", init_pos),
                         ("init_vel", init_vel), ("frame_rate", frame_rate),
-                        *(("std_meas", m) for m in meas.ravel())):
+                        *(("std_meas", float(m)) for m in meas.ravel())):
             as_finite(v, name, 0.0, above=True)  # (True was taken as 1)
         self.std_pos, self.std_vel = std_pos, std_vel
         self._std_q = np.repeat(np.array([std_pos, std_vel], dtype=float), 4)

@@ -11,7 +11,7 @@ Association (``association=``):
 - ``"gnn"``: global nearest neighbour on each pair's likelihood, :math:`d^2 + \ln |S|`
   against the :math:`\ln |S_1|` of a track one frame after an update
   (:math:`S_1 = H Q H^T + 2R` over one frame), the gate being the price of a track or a
-  measurement left unassigned (the pairs of least total :math:`d^2 + \ln |S| / |S_1| -
+  measurement left unassigned (the pairs of least total :math:`d^2 + \ln(|S| / |S_1|) -
   \chi^2`, not the most pairs): on :math:`d^2` alone a track missed for frames, its gate
   grown, was cheaper than one found in the frame before; ``"nn"``: each track its nearest
   gated measurement; ``"greedy"``;
