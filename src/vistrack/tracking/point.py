@@ -73,6 +73,13 @@ POINT_ASSOCIATIONS = ("gnn", "nn", "greedy", "pda", "jpda", "ipda", "jipda")
 _EXISTENCE = ("ipda", "jipda")
 
 
+def _log_determinants(S: np.ndarray) -> np.ndarray:
+    """``ln |S_k|`` of innovation covariances ``S (K, m, m)``, from their Cholesky factors:
+    GNN's likelihood cost and the PDA family's likelihoods both take it."""
+    L = cholesky_innovations(S)
+    return 2 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(1)
+
+
 class PointTracker:
     """A multi-target point tracker (see the module).
 
@@ -302,8 +309,7 @@ class PointTracker:
                 # one assignment per connected group, on each pair's likelihood against a
                 # track's one frame after an update: d² alone made a track lost for frames,
                 # its gate grown, cheaper than one found in the frame before
-                L = cholesky_innovations(S)
-                logdet = 2 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(1)
+                logdet = _log_determinants(S)
                 r, c = gnn_sparse(r, c, d2 + (logdet[r] - self._logdet_ref), (K, len(Z)),
                                   limit=self.threshold)
                 if len(r):
@@ -321,8 +327,7 @@ class PointTracker:
                 pass
             elif self.association in ("pda", "jpda", "ipda", "jipda"):
                 # the Gaussian likelihoods of the gated pairs (0 outside the gates)
-                L = cholesky_innovations(S)
-                logdet = 2 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(1)
+                logdet = _log_determinants(S)
                 lik = np.zeros((K, len(Z)))
                 lik[r, c] = np.exp(-0.5 * d2 - 0.5 * logdet[r]
                                    - 0.5 * self.m * np.log(2 * np.pi))
