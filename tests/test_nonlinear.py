@@ -1015,3 +1015,26 @@ def test_the_nonlinear_filters_take_the_intervals_between_steps_as_the_kalman_fi
         a = make().filter(ys, dt=np.diff(times), **prior).means
         b = make().filter(ys, dt=np.diff(times, prepend=np.nan), **prior).means
         np.testing.assert_array_equal(a, b)
+
+
+def test_a_model_array_changed_in_place_is_used():
+    """A constant ``Q`` given as an array and changed in place (``m._Q_const[:] = ...``)
+    kept the same identity, so the nonlinear filters went on with the ``Q`` computed
+    before. The oracle is a filter made after the change."""
+    from vistrack.models import NonlinearMotion
+
+    Q0 = np.diag([0.1, 0.1])
+    motion = NonlinearMotion(lambda x, dt, t: x @ np.array([[1.0, 0.0], [dt, 1.0]]),
+                             Q0, ndim_state=2)
+    pos = vt.Position(dim=1, r=1.0)
+    ys, prior = np.arange(6.0)[:, None], dict(x0=[0.0, 0.0], P0=np.eye(2))
+    ekf, ukf = ExtendedKalmanFilter(motion, pos), UnscentedKalmanFilter(motion, pos)
+    before = ekf.filter(ys, **prior).covs
+    ukf.filter(ys, **prior)
+    motion._Q_const[:] = np.diag([5.0, 5.0])  # the same array, new values
+    fresh = NonlinearMotion(motion._f, np.diag([5.0, 5.0]), ndim_state=2)
+    for name, made, new in (("ekf", ekf, ExtendedKalmanFilter(fresh, pos)),
+                            ("ukf", ukf, UnscentedKalmanFilter(fresh, pos))):
+        got, want = made.filter(ys, **prior), new.filter(ys, **prior)
+        np.testing.assert_allclose(got.covs, want.covs, rtol=1e-12, err_msg=name)
+    assert not np.allclose(before, ekf.filter(ys, **prior).covs)

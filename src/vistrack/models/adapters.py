@@ -148,15 +148,19 @@ class MotionFunctions:
     def _current(self) -> None:
         """Forget the kept ``Q`` where a model's setting was set since (as
         ``KalmanFilter.fit`` sets its copies' ``q``): kept under ``dt`` alone, the old
-        ``Q`` was used. A setting is compared by identity, so any assignment is seen; an
-        array changed in place is not."""
+        ``Q`` was used. A setting is compared by identity, and an array setting by its
+        values too (against a copy), so an array changed in place is seen as well."""
         state = getattr(self.model, "__dict__", None)
         values = () if state is None else tuple(state.values())
-        if len(values) != len(self._seen) or any(
-                a is not b for a, b in zip(values, self._seen)):
+        seen = self._seen
+        if len(values) != len(seen) or any(
+                a is not b or (c is not None and not np.array_equal(a, c))
+                for a, (b, c) in zip(values, seen)):
             self._Q.clear()
             self._Q_sqrt.clear()
-            self._seen = values  # (held, so no identity is reused)
+            # (each value held, so no identity is reused; arrays copied as they were)
+            self._seen = tuple((v, v.copy() if isinstance(v, np.ndarray) else None)
+                               for v in values)
 
     def Q(self, dt: float) -> np.ndarray:
         """``Q(dt)``, computed once per ``dt`` among the last few distinct ones while the
