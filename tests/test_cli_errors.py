@@ -1265,3 +1265,43 @@ def test_the_particles_tracker_on_a_video_names_itself_for_a_missing_diameter(ca
     assert main(["track", str(VIDEO), "--tracker", "particles", "--out-dir", "x"]) == 2
     one_line(capsys, "track", "--tracker particles, whose front-end on a video is spots, "
              "needs --diameter: the spots' diameter in pixels, odd (round up)")
+
+
+def test_track_one_reads_its_ground_truth_once(tmp_path, monkeypatch, capsys):
+    """``track-one --gt`` read a file not named OTB's twice, the second time only to see
+    whether its lines were ``x y w h`` (whose origin matters); ``read_box_lines`` says how
+    many values its lines hold, so the file is read once."""
+    import cv2
+    import numpy as np
+
+    import vistrack.evaluation.single as single
+
+    folder = tmp_path / "img"
+    folder.mkdir()
+    for k in range(3):
+        im = np.full((60, 80, 3), (40, 120, 40), np.uint8)
+        im[20:40, 10 + 3 * k:30 + 3 * k] = (0, 0, 255)
+        cv2.imwrite(str(folder / f"{k + 1:04d}.png"), im)
+    files = {4: "".join(f"{10 + 3 * k} 20 20 20\n" for k in range(3)),
+             5: "".join(f"{k + 1},{10 + 3 * k},20,20,20\n" for k in range(3)),
+             8: "".join(f"{x},20,{x + 20},20,{x + 20},40,{x},40\n"
+                        for x in (10, 13, 16))}
+    reads = []
+    decode = single.decode_text
+    monkeypatch.setattr(single, "decode_text", lambda *a: reads.append(a[1]) or decode(*a))
+    for width, text in files.items():
+        gt = tmp_path / f"gt{width}.txt"
+        gt.write_text(text)
+        boxes, got = single.read_box_lines(gt)
+        assert got == width and boxes.shape == (3, 4)
+        np.testing.assert_allclose(boxes[:, 2:], 21.0 if width == 8 else 20.0)  # (pysot's +1)
+        reads.clear()
+        assert main(["track-one", str(folder), "--gt", str(gt), "--out",
+                     str(tmp_path / f"o{width}.txt"), "--quiet"]) == 0
+        assert reads == [gt]
+        warned = "its x y w h boxes are read as counting pixels from 0" in \
+            capsys.readouterr().err
+        assert warned == (width == 4)
+    empty = tmp_path / "empty.txt"
+    empty.write_text("\n")
+    assert single.read_box_lines(empty)[1] == 0

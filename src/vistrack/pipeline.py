@@ -2849,7 +2849,7 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     from .evaluation.single import (
         boxes_origin,
         precision,
-        read_boxes,
+        read_box_lines,
         success_curve,
         success_rate,
     )
@@ -2863,15 +2863,14 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     truth = None
     if gt is not None:
         try:
-            truth = read_boxes(gt, origin=gt_origin)
+            truth, width = read_box_lines(gt, origin=gt_origin)
         except FileNotFoundError:  # (named as the track command names it)
             raise FileNotFoundError(f"{gt} does not exist (--gt FILE)") from None
         except IsADirectoryError:
             raise IsADirectoryError(f"{gt} is a folder, not a file (--gt FILE)") from None
         # x y w h lines (the only ones whose origin matters: read from 1 they differ) under a
         # name that is not OTB's: read from 0, and said so
-        if (gt_origin is None and not boxes_origin(gt) and len(truth)
-                and not np.array_equal(truth, read_boxes(gt, origin=1))):
+        if gt_origin is None and not boxes_origin(gt) and width == 4:
             warnings.warn(f"{gt}: its x y w h boxes are read as counting pixels from 0, as "
                           "any such file not named OTB's groundtruth_rect.txt (which counts "
                           "from 1); --gt-origin 1 reads them from 1, --gt-origin 0 keeps 0 "

@@ -30,7 +30,7 @@ from ..io.motchallenge import _text_lines
 from ..io.tracks import write_boxes
 
 __all__ = ["success_rate", "success_curve", "precision", "region_to_bbox", "read_boxes",
-           "boxes_origin", "write_boxes"]
+           "read_box_lines", "boxes_origin", "write_boxes"]
 
 
 def _boxes(value: ArrayLike, name: str, k: int = 4) -> np.ndarray:
@@ -325,6 +325,23 @@ def read_boxes(path: str | Path, rule: str = "area", origin: int | None = None) 
     >>> read_boxes(path).tolist()                   # OTB: 1-based, returned 0-based
     [[10.0, 20.0, 30.0, 40.0], [11.0, 20.0, 30.0, 40.0]]
     """
+    return read_box_lines(path, rule, origin)[0]
+
+
+def read_box_lines(path: str | Path, rule: str = "area",
+                   origin: int | None = None) -> tuple[np.ndarray, int]:
+    """:func:`read_boxes`, and how many values the file's lines hold: 4 (``x y w h``, the
+    only lines whose ``origin`` matters), 5 (``frame,x,y,w,h``) or 8 (a polygon); 0 for a
+    file of no lines.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "boxes.txt"
+    >>> _ = path.write_text("1,10,20,30,40\n")
+    >>> read_box_lines(path)
+    (array([[10., 20., 30., 40.]]), 5)
+    """
     if not (origin is None or (isinstance(origin, (int, np.integer))
                                and not isinstance(origin, bool) and origin in (0, 1))):
         raise ValueError(f"origin must be 0, 1 or None (by the file's name); got {origin!r}")
@@ -355,14 +372,14 @@ def read_boxes(path: str | Path, rule: str = "area", origin: int | None = None) 
         last = n
     a = np.array(rows, dtype=float)
     if a.size == 0:
-        return np.zeros((0, 4))
+        return np.zeros((0, 4)), 0
     if a.shape[1] == 8:
-        return region_to_bbox(a, rule)
+        return region_to_bbox(a, rule), 8
     if a.shape[1] == 5:
-        return a[:, 1:]
+        return a[:, 1:], 5
     if boxes_origin(path) if origin is None else origin:  # OTB: 1-based pixels
         a[:, :2] -= 1
-    return a
+    return a, 4
 
 
 def boxes_origin(path: str | Path) -> int:
