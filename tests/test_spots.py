@@ -273,3 +273,32 @@ def test_images_of_other_shapes_and_bad_sizes_are_named():
     np.testing.assert_array_equal(locate(im, 9.0).centroids, want)  # an integral float
     with pytest.raises(ValueError, match="^minmass must be a finite number; got None$"):
         locate(im, 9, minmass=None)
+
+
+def test_half_floats_object_empty_images_and_a_separation_per_axis():
+    """A float16 image failed in the band-pass ("dtype('float16') not supported"), an object
+    array the same way, an empty image in numpy's reduction, and a separation per axis
+    (trackpy's anisotropic form, not supported here) in ``float()``, none naming its
+    argument. A half-float image now finds what trackpy finds in the same values."""
+    im = _two_spots() / 255.0
+    half = im.astype(np.float16)
+    s = locate(half, 9)
+    pos, mass = _trackpy(half.astype(np.float64), 9)
+    assert len(s) == 2
+    np.testing.assert_allclose(s.centroids, pos, atol=0.02)
+    np.testing.assert_allclose(s.centroids, [[20.3, 15.6], [45.0, 40.2]], atol=0.1)
+    with pytest.raises(ValueError, match=r"^image must hold real numbers \(integers or "
+                                         r"floats\); got dtype object$"):
+        locate(im.astype(object), 9)
+    with pytest.raises(ValueError, match=r"got dtype complex128$"):
+        locate(im + 0j, 9)
+    for shape in ((0, 0), (0, 64), (64, 0, 3)):
+        with pytest.raises(ValueError, match=re.escape(
+                f"image is empty (shape {shape[:2]}): no spot can be found in it")):
+            locate(np.zeros(shape), 9)
+    with pytest.raises(TypeError, match=re.escape(
+            "separation must be one number, the same along x and y; got (5, 5)")):
+        locate(im, 9, separation=(5, 5))
+    for name in ("separation", "noise_size", "minmass", "threshold"):
+        with pytest.raises(TypeError, match=f"^{name} must be a number; got '1'$"):
+            locate(im, 9, **{name: "1"})

@@ -28,7 +28,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_whole, bgr_to_grey, is_whole
+from .._validate import as_finite, as_number, as_whole, bgr_to_grey, is_whole
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -223,11 +223,15 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     ------
     ValueError
         If ``image`` is neither ``(H, W)`` nor ``(H, W, C)`` with ``C`` 1, 3 (BGR) or 4
-        (BGRA), or holds NaN or infinity,
+        (BGRA), is empty, holds no real numbers (an object or complex array), or holds NaN
+        or infinity,
         ``diameter`` is not an odd integer >= 3, ``noise_size`` is negative, ``separation``
         not > 0, ``smoothing_size`` is not a whole number, is even or not larger than
         ``noise_size``, ``minmass`` or ``threshold`` is not finite, or ``max_iterations``
         is not a whole number >= 0.
+    TypeError
+        If ``separation``, ``noise_size``, ``minmass`` or ``threshold`` is no number (a
+        string; ``separation`` a pair, one per axis, which is not supported).
 
     References
     ----------
@@ -248,6 +252,13 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     from scipy import ndimage
 
     im = np.asarray(image)
+    if im.dtype.kind not in "biuf":
+        # (an object or complex array failed deep in the band-pass: "array type dtype('O')
+        # not supported")
+        raise ValueError(f"image must hold real numbers (integers or floats); got dtype "
+                         f"{im.dtype}")
+    if im.dtype == np.float16:  # (the band-pass's filters take no half floats)
+        im = im.astype(np.float32)
     if im.ndim == 3 and im.shape[2] in (1, 3, 4):  # grey, BGR or BGRA
         im = bgr_to_grey(im)
     if im.ndim != 2:
@@ -257,11 +268,17 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
                 else ": one call a frame for a stack" if im.ndim == 3 else "")
         raise ValueError(f"image must be (H, W), or (H, W, C) with C 1, 3 (BGR) or 4 (BGRA); "
                          f"got shape {im.shape}{hint}")
+    if im.size == 0:  # (the band-pass's top failed: "zero-size array to reduction")
+        raise ValueError(f"image is empty (shape {im.shape}): no spot can be found in it")
     diameter = _check_diameter(diameter)
     r = diameter // 2
-    sep = float(diameter + 1 if separation is None else separation)
-    if not (np.isfinite(sep) and sep > 0):
-        raise ValueError(f"separation must be a finite number > 0; got {separation}")
+    if isinstance(separation, (tuple, list, np.ndarray)):
+        # (trackpy takes one per axis; float() of it said only "not 'tuple'")
+        raise TypeError(f"separation must be one number, the same along x and y; got "
+                        f"{separation!r}")
+    sep = as_finite(diameter + 1 if separation is None else separation, "separation", 0,
+                    above=True)
+    noise_size = as_number(noise_size, "noise_size")
     if not (np.isfinite(noise_size) and noise_size >= 0):
         raise ValueError(f"noise_size must be a finite number >= 0 (0: no smoothing); got "
                          f"{noise_size}")
@@ -274,7 +291,7 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     for name, value in (("minmass", minmass), ("threshold", threshold)):
         # (NaN: every spot dropped; a minmass of None failed after the whole search)
         if (value is None and name == "minmass") or (
-                value is not None and not np.isfinite(value)):
+                value is not None and not np.isfinite(as_number(value, name))):
             raise ValueError(f"{name} must be a finite number; got {value}")
     if im.dtype.kind == "f" and not np.isfinite(im).all():
         # one NaN made the band-pass's top NaN, and every value with it: no spot, no word
