@@ -1204,16 +1204,11 @@ def test_seqinfo_frame_rate_and_length_are_checked_where_read(tmp_path):
         track_sequence(seq, tmp_path / "long.txt")
 
 
-def test_track_one_reads_a_renamed_otb_file_as_it_says_and_names_an_empty_one(tmp_path,
-                                                                             capsys):
-    """A copy of OTB's groundtruth_rect.txt under another name was read as counting pixels
-    from 0 without a word: the start box and the scores moved by a pixel. It is now said,
-    and ``--gt-origin`` says which; an empty ground truth was answered "--init is
-    required", though a ground truth was given."""
+def _red_square_frames(tmp_path):
+    """A folder of three 80 x 60 frames, a red 20 x 20 square moving 3 pixels a frame from
+    (10, 20)."""
     import cv2
     import numpy as np
-
-    from vistrack.evaluation.single import read_boxes
 
     folder = tmp_path / "img"
     folder.mkdir()
@@ -1221,6 +1216,18 @@ def test_track_one_reads_a_renamed_otb_file_as_it_says_and_names_an_empty_one(tm
         im = np.full((60, 80, 3), (40, 120, 40), np.uint8)
         im[20:40, 10 + 3 * k:30 + 3 * k] = (0, 0, 255)
         cv2.imwrite(str(folder / f"{k + 1:04d}.png"), im)
+    return folder
+
+
+def test_track_one_reads_a_renamed_otb_file_as_it_says_and_names_an_empty_one(tmp_path,
+                                                                             capsys):
+    """A copy of OTB's groundtruth_rect.txt under another name was read as counting pixels
+    from 0 without a word: the start box and the scores moved by a pixel. It is now said,
+    and ``--gt-origin`` says which; an empty ground truth was answered "--init is
+    required", though a ground truth was given."""
+    from vistrack.evaluation.single import read_boxes
+
+    folder = _red_square_frames(tmp_path)
     otb = tmp_path / "groundtruth_rect.txt"
     otb.write_text("".join(f"{11 + 3 * k}\t21\t20\t20\n" for k in range(3)))
     renamed = tmp_path / "object_gt.txt"
@@ -1271,17 +1278,11 @@ def test_track_one_reads_its_ground_truth_once(tmp_path, monkeypatch, capsys):
     """``track-one --gt`` read a file not named OTB's twice, the second time only to see
     whether its lines were ``x y w h`` (whose origin matters); ``read_box_lines`` says how
     many values its lines hold, so the file is read once."""
-    import cv2
     import numpy as np
 
     import vistrack.evaluation.single as single
 
-    folder = tmp_path / "img"
-    folder.mkdir()
-    for k in range(3):
-        im = np.full((60, 80, 3), (40, 120, 40), np.uint8)
-        im[20:40, 10 + 3 * k:30 + 3 * k] = (0, 0, 255)
-        cv2.imwrite(str(folder / f"{k + 1:04d}.png"), im)
+    folder = _red_square_frames(tmp_path)
     files = {4: "".join(f"{10 + 3 * k} 20 20 20\n" for k in range(3)),
              5: "".join(f"{k + 1},{10 + 3 * k},20,20,20\n" for k in range(3)),
              8: "".join(f"{x},20,{x + 20},20,{x + 20},40,{x},40\n"
