@@ -189,11 +189,13 @@ def test_detector_confidence_carries_the_targets_through_missed_detections():
 
 def test_each_target_classifier_tells_its_person_from_the_other():
     """Detected every frame for 20 frames (before they meet), each target's online
-    classifier scores its own person's box high and the other person's low."""
+    classifier scores its own person's box high and the other person's low. The scene's
+    people move 4 pixels a frame, 0.8 of their height a second at 10 frames/s (a brisk
+    walk; at 30 they would run at 2.4 heights a second)."""
     from vistrack.tracking.dcpf import ColourFeatures
 
     frames, dets, maps, gt = crossing_scene(miss=0.0)
-    tracker = DetectorConfidencePF(rng=0, gamma=0.0)
+    tracker = DetectorConfidencePF(rng=0, gamma=0.0, frame_rate=10)
     for t in range(20):
         tracker.update(frames[t], dets[t])
     truth = gt.boxes[gt.frames == 21]
@@ -368,16 +370,26 @@ def test_the_younger_target_ends_after_more_than_merge_time_of_overlap():
                 run = run + 1 if over else 0
         want = next(k for k in range(1, 100) if Fraction(k, frame_rate) > exact)
         assert ended == want, (frame_rate, merge_time, ended, want)
+        assert trk.ids.tolist() == [1]  # the younger ended, not the older
 
 
 def test_every_setting_is_checked_and_named():
     """sigma_det=0 was taken (NaN detection terms: nothing was ever associated), a NaN
     sigma_pos or size_rate was an IndexError in update(), n_particles=2.5 a TypeError, and
     n_particles=1 with confirm=0 one message for four settings."""
-    cases = [({"n_particles": 2.5}, "n_particles must be an integer >= 2; got 2.5"),
-             ({"n_particles": 1}, "n_particles must be an integer >= 2; got 1"),
-             ({"confirm": 0}, "confirm must be an integer >= 1; got 0"),
-             ({"epochs": 1.5}, "epochs must be an integer >= 0; got 1.5"),
+    cases = [({"n_particles": 2.5}, "n_particles must be a whole number >= 2; got 2.5"),
+             ({"n_particles": 1}, "n_particles must be a whole number >= 2; got 1"),
+             ({"confirm": 0}, "confirm must be a whole number >= 1; got 0"),
+             ({"epochs": 1.5}, "epochs must be a whole number >= 0; got 1.5"),
+             ({"epochs": True}, "epochs must be a whole number >= 0; got True"),
+             ({"noise_rate": 0.0}, "noise_rate must be a finite number > 0 (frames a second); "
+                                   "got 0.0"),
+             # the score reaches 0.5 + alpha at most without the classifier, 1 + alpha with it
+             ({"alpha": 0.0, "eta": 0.0}, "min_score must be below the largest association "
+              "score, 0.5 (the classifier off: eta 0) + alpha = 0.5; got 0.6 (no detection "
+              "would ever be associated)"),
+             ({"alpha": 0.2, "min_score": 1.2}, "min_score must be below the largest "
+              "association score, 1 + alpha = 1.2; got 1.2"),
              ({"sigma_det": 0.0}, "sigma_det must be a finite number > 0; got 0.0"),
              ({"sigma_det": -0.1}, "sigma_det must be a finite number > 0; got -0.1"),
              ({"sigma_det": np.inf}, "sigma_det must be a finite number > 0; got inf"),
@@ -389,8 +401,6 @@ def test_every_setting_is_checked_and_named():
              ({"gamma": np.inf}, "gamma must be finite; got inf"),
              ({"max_lost": -1.0}, "max_lost must be >= 0; got -1.0"),
              ({"merge_time": np.nan}, "merge_time must be a number (not NaN); got nan"),
-             ({"alpha": "1"}, "alpha must be a number; got '1'"),
-             ({"epochs": True}, "epochs must be a number; got True"),
              # taken before: two people who never met lost their identities every merge_time,
              # or a new identity every frame was started and none reported
              ({"merge_iou": -1.0}, "merge_iou must be in [0, 1]; got -1.0"),
@@ -404,6 +414,14 @@ def test_every_setting_is_checked_and_named():
             DCPFConfig(**kw)
         with pytest.raises(ValueError, match=re.escape(msg)):
             DetectorConfidencePF(**({"gamma": 0.0} | kw))
+    # what is no number is a TypeError, as for every other setting of the package
+    for kw, msg in (({"alpha": "1"}, "alpha must be a number; got '1'"),
+                    ({"beta": None}, "beta must be a number; got None"),
+                    ({"gamma": True}, "gamma must be a number; got True"),
+                    ({"n_particles": "100"}, "n_particles must be a number; got '100'")):
+        with pytest.raises(TypeError, match=re.escape(msg)):
+            DCPFConfig(**kw)
+    assert DCPFConfig(alpha=0.0, eta=0.0, min_score=0.5).min_score == 0.5  # reachable
     # integral values of other types are the integers; the defaults are what they were
     cfg = DCPFConfig(n_particles=50.0, confirm=np.int64(1), epochs=0)
     assert (cfg.n_particles, cfg.confirm, cfg.epochs) == (50, 1, 0)
@@ -506,3 +524,184 @@ def test_a_confidence_map_giving_nan_is_named():
     with pytest.raises(ValueError, match=r"frame 2: the confidence map \(Broken\) gave a "
                                          "score that is not a number"):
         trk.update(im, det, broken)
+
+
+def _walk(trk, frames, speed=6.0, detected=lambda t: True, fps=10.0):
+    """Step ``trk`` through ``frames`` (indices) of a person 60 pixels tall walking right at
+    ``speed`` pixels a frame; the detection given where ``detected(t)``."""
+    from vistrack.types import Frame
+
+    im = np.zeros((240, 640, 3), np.uint8)
+    for t in frames:
+        box = np.array([[20.0 + speed * t, 80, 44 + speed * t, 140]])
+        det = Detections(boxes=box, scores=[0.9]) if detected(t) else None
+        trk.step(Frame(t, t / fps, im), det)
+
+
+def test_a_gap_of_frames_moves_the_targets_as_far():
+    """A gap in the frame indices (frames skipped as unreadable) counts as time for
+    ``max_lost``, but the particles moved one frame's worth: after frames 1-20 of a walker
+    at 6 pixels a frame and then frame 28, the cloud had moved 6.5 pixels where constant
+    velocity moves it 8 frames' worth. Oracle: the cloud's mean moves by ``k`` times its mean
+    velocity (no detection: every weight equal, the resampling keeps each particle), and
+    the velocity's spread grows as over ``k`` frames stepped one by one."""
+    cfg = dict(gamma=0.0, eta=0.0, sigma_pos=0.0, n_particles=4000, frame_rate=10.0, rng=1)
+    trk = DetectorConfidencePF(**cfg)
+    _walk(trk, range(1, 21))
+    p0 = trk.particles[0].copy()
+    _walk(trk, [28], detected=lambda t: False)
+    p1 = trk.particles[0]
+    u = p0[:, 2:].mean(0)
+    assert u[0] > 3.0  # (the cloud's velocity follows the walker's, 6)
+    np.testing.assert_allclose(p1[:, :2].mean(0), p0[:, :2].mean(0) + 8 * u, atol=0.05)
+    # the velocity's variance grew by 8 frames' (sigma_vel h)^2 r^3, r = 7/10
+    h = trk.size[0, 1]
+    grew = p1[:, 2:].var(0) - p0[:, 2:].var(0)
+    np.testing.assert_allclose(grew, 8 * (0.02 * h) ** 2 * 0.7 ** 3, rtol=0.1)
+    assert trk.ids.tolist() == [1]
+
+
+def test_the_motion_noise_is_the_same_in_a_second_at_any_frame_rate():
+    """``sigma_pos`` and ``sigma_vel`` were per frame whatever the frame rate, so at 30
+    frames/s a target's velocity spread 9 times as far in a second as at PETS09's 7, where
+    they were chosen, and a person missed for 1 s (under ``max_lost``) came back under a
+    new identity. Closed form: one target started by one detection (``confirm`` 1), no
+    detection after it, so every weight is equal and the resampling keeps each particle;
+    its velocity in pixels a second then has the variance ``(sigma_vel h)² (7² + 7³ t)``
+    after ``t`` seconds at any rate (a start spread of ``sigma_vel h`` a frame at 7 frames/s,
+    a random walk of ``(sigma_vel h)²`` a frame there), and its centre, without velocity
+    noise, ``(sigma_pos h)² (1 + 7 t)``."""
+    h = 60.0
+    for fps in (7.0, 10.0, 30.0):
+        trk = DetectorConfidencePF(gamma=0.0, eta=0.0, confirm=1, n_particles=20000,
+                                   frame_rate=fps, max_lost=5.0, rng=2)
+        n = int(round(fps))  # one second
+        _walk(trk, range(n + 1), speed=0.0, detected=lambda t: t == 0, fps=fps)
+        v = trk.particles[0, :, 2:] * fps
+        np.testing.assert_allclose(v.var(0), (0.02 * h) ** 2 * (49 + 343), rtol=0.05,
+                                   err_msg=str(fps))
+        still = DetectorConfidencePF(gamma=0.0, eta=0.0, confirm=1, n_particles=20000,
+                                     sigma_vel=0.0, frame_rate=fps, max_lost=5.0, rng=2)
+        _walk(still, range(n + 1), speed=0.0, detected=lambda t: t == 0, fps=fps)
+        np.testing.assert_allclose(still.particles[0, :, :2].var(0), (0.04 * h) ** 2 * 8,
+                                   rtol=0.05, err_msg=str(fps))
+
+
+@pytest.mark.parametrize("fps", [7.0, 30.0])
+def test_a_person_missed_for_a_second_keeps_their_identity_at_any_frame_rate(fps):
+    """A person walking 0.5 heights a second, missed for 1 s (``max_lost`` 1.5 s), with the
+    detection term alone: at 30 frames/s the per-frame noise spread the cloud so far that
+    the person came back under a new identity in 2 of 5 seeds; at 7 frames/s none did."""
+    for seed in range(5):
+        trk = DetectorConfidencePF(gamma=0.0, eta=0.0, frame_rate=fps, rng=seed)
+        n = int(round(4 * fps))
+        _walk(trk, range(n), speed=30.0 / fps, fps=fps,
+                detected=lambda t: not (1.5 * fps <= t < 2.5 * fps))
+        assert trk.ids.tolist() == [1], (fps, seed)
+
+
+def test_the_younger_target_ends_after_merge_time_across_gaps_of_frames():
+    """The merge timer added ``1 / frame_rate`` a step: with every 5th frame stepped at 10
+    frames/s, two targets on one person overlapped for 3 s (``merge_time`` 0.5 s) and
+    both stayed. Oracle: the overlap's time from the frames' indices, 0.5 s a step, each
+    step counting the time since the one before, as a frame counts 1 / frame_rate."""
+    from vistrack.types import Frame
+
+    im = np.zeros((240, 320, 3), np.uint8)
+    trk = DetectorConfidencePF(frame_rate=10, gamma=0.0, eta=0.0, max_lost=100.0, rng=0)
+    held = []
+    for t in range(1, 40, 5):  # two people 14 pixels apart (IoU 0.26), then on one place
+        gap = 14.0 if t < 10 else 3.0
+        det = Detections(boxes=np.array([[100.0, 60, 124, 120], [100 + gap, 60, 124 + gap, 120]]),
+                         scores=np.full(2, 0.9))
+        trk.step(Frame(t, t / 10, im), det)
+        held.append(trk.ids.tolist())
+    # frames 1 and 6 confirm both; 11 overlaps (0.5 s since 6, not more); 16 ends the younger
+    assert held[:3] == [[1, 2]] * 3 and held[3:] == [[1]] * 5, held
+
+
+def test_two_detections_of_one_person_start_one_target():
+    """``max_overlap`` was checked against the targets only, so two detections of one
+    person in one frame (IoU 0.82; a detection file has no suppression) started two
+    targets, both reported. The stronger starts one; one apart from it starts its own."""
+    im = np.zeros((240, 320, 3), np.uint8)
+    trk = DetectorConfidencePF(gamma=0.0, eta=0.0, rng=0)
+    boxes = np.array([[100.0, 60, 124, 120], [101.0, 61, 125, 121], [200.0, 60, 224, 120]])
+    for _ in range(3):
+        out = trk.update(im, Detections(boxes=boxes, scores=[0.8, 0.9, 0.85]))
+    assert trk.ids.tolist() == [1, 2] and len(out) == 2
+    np.testing.assert_allclose(out.boxes[0], boxes[1], atol=1.0)  # from the stronger
+
+
+def test_no_confidence_map_is_computed_without_its_term():
+    """With ``gamma`` 0 nothing reads the detector's confidence, but :meth:`step` computed
+    it every frame (a dense HOG map, 0.1 s a frame, for nothing)."""
+    from vistrack.types import Frame
+
+    calls = []
+    im = np.zeros((120, 160, 3), np.uint8)
+    trk = DetectorConfidencePF(gamma=0.0, confidence=lambda image: calls.append(1))
+    for t in range(4):
+        trk.step(Frame(t, t / 30, im), Detections(boxes=np.array([[50.0, 30, 74, 90]]),
+                                                  scores=[0.9]))
+    assert calls == [] and trk.ids.tolist() == [1]
+
+
+def test_the_particles_weights_are_the_observation_model():
+    """The weights given to the resampling against the seed's observation model computed
+    by hand, each term with a weight of its own: ``1e-6 + β exp(-|p - d*|² / 2 (σ_det h)²)``
+    for the target the detection was associated with, plus ``γ d_c(p) p_o`` everywhere,
+    ``p_o = 1 / (1 + k)`` for the ``k`` other targets overlapping at IoU > 0.2, ``d_c`` the
+    logistic of a plane's confidence (bilinear interpolation is exact on it)."""
+    import vistrack.tracking.dcpf as dcpf
+    from vistrack.association import iou
+
+    captured = []
+    resample = dcpf.resample
+
+    def spy(w, *a, **kw):
+        captured.append(np.array(w))
+        return resample(w, *a, **kw)
+
+    im = np.full((240, 320, 3), 128, np.uint8)
+    y, x = np.mgrid[0:40, 0:50] * 8.0
+    cmap = ConfidenceMap([60.0], [0.02 * x - 0.01 * y], [(0.0, 0.0)], [8.0])
+    trk = DetectorConfidencePF(rng=0, eta=0.0, sigma_pos=0.0, sigma_vel=0.0, frame_rate=10,
+                               beta=1.3, gamma=0.7, sigma_det=0.2, max_overlap=1.0)
+    boxes = np.array([[100.0, 60, 24, 60], [110.0, 62, 24, 60], [250.0, 100, 24, 60]])
+    trk.update(im, Detections.from_xywh(boxes, np.full(3, 0.9)), cmap)
+    trk.particles[..., :2] += np.random.default_rng(1).normal(0, 5, (3, 100, 2))
+    trk.particles[..., 2:] = 0.0
+    P, size = trk.particles[..., :2].copy(), trk.size.copy()
+    d = np.array([[103.0, 61, 24, 60]])
+    dcpf.resample = spy
+    try:
+        trk.update(im, Detections.from_xywh(d, np.array([0.9])), cmap)
+    finally:
+        dcpf.resample = resample
+    c = P.mean(1)
+    xyxy = np.c_[c - size / 2, c + size / 2]
+    ov = iou(xyxy, xyxy)
+    np.fill_diagonal(ov, 0.0)
+    p_o = 1.0 / (1.0 + (ov > 0.2).sum(1))
+    assert p_o.tolist() == [0.5, 0.5, 1.0]
+    want = 1e-6 + 0.7 / (1 + np.exp(-(0.02 * P[..., 0] - 0.01 * P[..., 1]))) * p_o[:, None]
+    centre = d[0, :2] + d[0, 2:] / 2
+    want[0] += 1.3 * np.exp(-0.5 * ((P[0] - centre) ** 2).sum(-1) / (0.2 * size[0, 1]) ** 2)
+    np.testing.assert_allclose(captured[0], want / want.sum(1, keepdims=True), rtol=1e-9)
+
+
+def test_a_detection_of_another_height_is_not_associated():
+    """The gate takes a detection whose height is within a factor 1.5 of the target's: one
+    1.6 times as tall, on the target's centre, starts no update of it (the target goes
+    unsupported and a tentative target starts from it), one 1.4 times as tall updates it."""
+    im = np.zeros((240, 320, 3), np.uint8)
+    for factor, updated in ((1.4, True), (1.6, False)):
+        trk = DetectorConfidencePF(gamma=0.0, eta=0.0, rng=0, max_overlap=1.0)
+        for _ in range(3):
+            trk.update(im, Detections.from_xywh(np.array([[100.0, 60, 24, 60]]), [0.9]))
+        h = 60 * factor
+        out = trk.update(im, Detections.from_xywh(np.array([[100.0, 90 - h / 2, 24, h]]),
+                                                  [0.9]))
+        assert (out.ids.tolist() == [1]) is updated, factor
+        assert len(trk.ids) == (1 if updated else 2), factor

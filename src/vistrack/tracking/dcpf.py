@@ -5,16 +5,23 @@ that target learnt online.
 
 **State and motion.** Each target has ``n_particles`` particles of ``(x, y, u, v)``: its box
 centre and velocity in pixels a frame, moved by constant velocity with Gaussian noise
-``(x, y) += (u, v) + ε_xy``, ``(u, v) += ε_uv``; the noise scales with the target's height.
-The box's size is the target's, learnt from the detections associated with it.
+``(x, y) += k (u, v) + ε_xy``, ``(u, v) += ε_uv`` over the ``k`` frames since the last one
+stepped; the noise scales with the target's height. ``sigma_pos`` and ``sigma_vel`` are its
+standard deviations over one frame at ``noise_rate`` frames a second (PETS09's 7, where they
+were chosen); at ``r = noise_rate / frame_rate`` they are those of the same random walks in
+continuous time, ``ε_xy`` of variance ``k r (sigma_pos h)²`` and ``ε_uv`` of variance
+``k r³ (sigma_vel h)²`` (the velocity in pixels a frame), so that a target moves and spreads
+as far in a second at any frame rate, and across a gap of frames as over the frames stepped
+one by one. The box's size is the target's, learnt from the detections associated with it.
 
 **Association.** Detections are matched to targets greedily, best pair first, by the seed's
 score ``S(tr, d) = g(tr, d) · (c_tr(d) + α · p(d))``: a gate ``g`` (the detection's centre
 within ``gate_heights`` heights of the target's and its height within a factor 1.5), the
-target's classifier at the detection, and how well the detection fits the particles'
-prediction. The seed's ``p(d)`` is the particles' density at the detection, ``Σ_p p_N(d - p)
-/ N`` with a fixed kernel; that falls as the cloud spreads while the target goes
-undetected, so a person missed for about a second was not found again, whatever ``max_lost``.
+target's classifier at the detection (0.5, no preference, with the classifier off:
+``eta`` 0), and how well the detection fits the particles' prediction. The seed's ``p(d)``
+is the particles' density at the detection, ``Σ_p p_N(d - p) / N`` with a fixed kernel;
+that falls as the cloud spreads while the target goes undetected, so a person missed for
+about a second was not found again, whatever ``max_lost``.
 Here ``p(d)`` is the predictive density of the detection's centre, a Gaussian of the
 particles' mean and covariance plus the detection's noise (``sigma_det`` of the height), over
 its value at the mean: 1 at the predicted place however uncertain it is. Pairs with ``S``
@@ -53,7 +60,9 @@ confidence at its particles is at least ``min_confidence``; unsupported for long
 whose boxes overlap by more than ``merge_iou`` for more than ``merge_time`` seconds in a
 row, the younger ends (two filters on one person). A target is reported in the frames where
 it is supported. Times are frames over ``frame_rate``; the defaults (1.5 s and 0.5 s) are
-10 and 3 frames at PETS09's 7 frames/s, where they were chosen.
+10 and 3 frames at PETS09's 7 frames/s, where they were chosen. New targets start from the
+strongest detections first, each overlapping neither a target nor a target started before
+it in the frame by more than ``max_overlap``.
 """
 
 from __future__ import annotations
@@ -64,7 +73,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from .._validate import is_whole
+from .._validate import as_number, as_whole
 from ..association import greedy, iou
 from ..filters.particle import resample
 from ..types import Detections, Frame, Tracks
@@ -90,11 +99,16 @@ class DCPFConfig:
     n_particles : int
         Particles per target.
     sigma_pos, sigma_vel : float
-        Per-frame noise of the centre and the velocity, as fractions of the target's height.
+        Noise of the centre and the velocity over one frame at ``noise_rate`` frames a
+        second, as fractions of the target's height (see the module for other rates).
+    noise_rate : float
+        The frame rate at which ``sigma_pos`` and ``sigma_vel`` are per frame.
     sigma_det : float
         Standard deviation of the detection term, as a fraction of the height.
     alpha : float
-        Weight of the predictive density (see the module) in the association score.
+        Weight of the predictive density (see the module) in the association score. The
+        score is at most ``1 + alpha`` (``0.5 + alpha`` with ``eta`` 0), so ``min_score``
+        must lie below that.
     gate_heights : float
         A detection's centre must lie within this many heights of the target's.
     min_score : float
@@ -119,14 +133,19 @@ class DCPFConfig:
 
     Raises
     ------
+    TypeError
+        If a setting is no number (a string, None, or a boolean where a real number is
+        asked for).
     ValueError
-        If a setting is not a number or is NaN, ``beta``, ``gamma`` or ``eta`` is negative
-        or infinite or all are 0, ``n_particles`` is not an integer >= 2, ``confirm`` one
-        >= 1 or ``epochs`` one >= 0, ``sigma_det`` is not finite and > 0, ``sigma_pos``,
-        ``sigma_vel`` or ``learning_rate`` not finite and >= 0, ``size_rate``,
-        ``max_overlap``, ``merge_iou`` or ``min_confidence`` not in [0, 1], ``gate_heights``
-        not finite and > 0, ``min_score`` or ``init_score`` not finite, or ``max_lost`` or
-        ``merge_time`` negative (each error names the setting).
+        If a setting is NaN, ``beta``, ``gamma`` or ``eta`` is negative or infinite or all
+        are 0, ``n_particles`` is not a whole number >= 2, ``confirm`` one >= 1 or
+        ``epochs`` one >= 0 (a boolean there too), ``sigma_det``, ``noise_rate`` or
+        ``gate_heights`` is not finite and > 0, ``sigma_pos``, ``sigma_vel``,
+        ``learning_rate`` or ``alpha`` not finite and >= 0, ``size_rate``, ``max_overlap``,
+        ``merge_iou`` or ``min_confidence`` not in [0, 1], ``min_score`` or ``init_score``
+        not finite, ``min_score`` at or above the largest association score (no detection
+        would ever be associated), or ``max_lost`` or ``merge_time`` negative (each error
+        names the setting).
 
     Examples
     --------
@@ -140,6 +159,7 @@ class DCPFConfig:
     n_particles: int = 100
     sigma_pos: float = 0.04
     sigma_vel: float = 0.02
+    noise_rate: float = 7.0
     sigma_det: float = 0.15
     alpha: float = 1.0
     gate_heights: float = 0.6
@@ -159,11 +179,16 @@ class DCPFConfig:
         def bad(name: str, must: str) -> ValueError:
             return ValueError(f"{name} must be {must}; got {getattr(self, name)}")
 
+        whole = {"n_particles": 2, "confirm": 1, "epochs": 0}
         for f in fields(self):  # numbers, not NaN (a NaN sigma_pos was an IndexError later)
             v = getattr(self, f.name)
-            if isinstance(v, (bool, np.bool_)) or not isinstance(
-                    v, (int, float, np.integer, np.floating)):
-                raise ValueError(f"{f.name} must be a number; got {v!r}")
+            if f.name in whole:  # 100.0 particles is 100 (frozen)
+                object.__setattr__(self, f.name, as_whole(v, f.name, whole[f.name]))
+                continue
+            if not isinstance(v, (int, float, np.integer, np.floating)):
+                as_number(v, f.name)  # (a TypeError for a string, None or a boolean)
+            if isinstance(v, (bool, np.bool_)):  # (not a number here: True was 1)
+                raise TypeError(f"{f.name} must be a number; got {v!r}")
             if np.isnan(v):
                 raise bad(f.name, "a number (not NaN)")
         for name in ("beta", "gamma", "eta"):
@@ -173,11 +198,6 @@ class DCPFConfig:
                 raise bad(name, "finite")
         if self.beta + self.gamma + self.eta <= 0:
             raise ValueError("at least one of beta, gamma and eta must be > 0")
-        for name, low in (("n_particles", 2), ("confirm", 1), ("epochs", 0)):
-            v = getattr(self, name)
-            if not is_whole(v, low):
-                raise bad(name, f"an integer >= {low}")
-            object.__setattr__(self, name, int(v))  # 100.0 particles is 100 (frozen)
         # sigma_det = 0 gave NaN detection terms (0 / 0 at the detection), and nothing was
         # ever associated
         if not 0 < self.sigma_det < np.inf:
@@ -199,9 +219,20 @@ class DCPFConfig:
                 raise bad(name, "in [0, 1]")
         if not 0 < self.gate_heights < np.inf:
             raise bad("gate_heights", "a finite number > 0 (box heights)")
+        if not 0 < self.noise_rate < np.inf:
+            raise bad("noise_rate", "a finite number > 0 (frames a second)")
         for name in ("min_score", "init_score"):  # (a detector's scores need not be in [0, 1])
             if not np.isfinite(getattr(self, name)):
                 raise bad(name, "finite")
+        # the classifier's term is below 1 (0.5 without it) and the predictive density at
+        # most 1: alpha 0 with eta 0 took every detection as no target's, without a word
+        top = (1.0 if self.eta > 0 else 0.5) + self.alpha
+        # (the density is 1 at the predicted place; the classifier's logistic stays below 1)
+        if self.min_score > top or (self.eta > 0 and self.min_score == top):
+            raise ValueError(
+                f"min_score must be below the largest association score, "
+                f"{'1' if self.eta > 0 else '0.5 (the classifier off: eta 0)'} + alpha = "
+                f"{top:g}; got {self.min_score} (no detection would ever be associated)")
 
 
 class ColourFeatures:
@@ -296,7 +327,8 @@ class DetectorConfidencePF:
     rng : int, numpy Generator or None
         The particles' randomness (default 0: the same tracks every run).
     frame_rate : float
-        Frames per second, to turn frames into time (``max_lost``, ``merge_time``).
+        Frames per second, to turn frames into time (``max_lost``, ``merge_time``, and the
+        motion's noise against ``noise_rate``).
     **overrides
         Fields of :class:`DCPFConfig`.
 
@@ -373,7 +405,9 @@ class DetectorConfidencePF:
         self._last_index = index
         if detections is None:
             detections = Detections(boxes=np.zeros((0, 4)))
-        cmap = self.confidence(image) if self.confidence is not None else None
+        # (with gamma 0 nothing reads it: a dense HOG map a frame was computed for nothing)
+        cmap = (self.confidence(image) if self.confidence is not None
+                and self.config.gamma > 0 else None)
         return self.update(image, detections, cmap, _index=index)
 
     # ------------------------------------------------------------------ helpers
@@ -411,6 +445,8 @@ class DetectorConfidencePF:
         a :class:`~vistrack.frontends.detectors.ConfidenceMap` (None when ``gamma`` is 0);
         as :meth:`step`, the frame the one after the last."""
         cfg = self.config
+        # frames since the last one stepped (a gap of frames moves the targets as far)
+        k = 1 if _index is None else max(1, _index - self.frame)
         self.frame = self.frame + 1 if _index is None else _index
         time = self.frame / self.frame_rate
         if cfg.gamma > 0 and confidence is None:
@@ -438,11 +474,15 @@ class DetectorConfidencePF:
             det_xywh = det_xywh[sized]
         det_c = det_xywh[:, :2] + det_xywh[:, 2:] / 2
 
-        # predict: constant velocity, noise scaled by each target's height
+        # predict: constant velocity over k frames, noise scaled by each target's height and,
+        # as random walks in continuous time, by the frames' duration against noise_rate's
         h = self.size[:, 1:2, None]
         p = self.particles
-        p[..., :2] += p[..., 2:] + self.rng.standard_normal((T, N, 2)) * cfg.sigma_pos * h
-        p[..., 2:] += self.rng.standard_normal((T, N, 2)) * cfg.sigma_vel * h
+        slow = cfg.noise_rate / self.frame_rate  # (the noise's rate over this one)
+        p[..., :2] += k * p[..., 2:] + self.rng.standard_normal((T, N, 2)) * cfg.sigma_pos * h \
+            * np.sqrt(k * slow)
+        p[..., 2:] += self.rng.standard_normal((T, N, 2)) * cfg.sigma_vel * h \
+            * np.sqrt(k * slow ** 3)
 
         # associate greedily by S(tr, d) = g · (c_tr(d) + α · predictive density at d)
         match = np.full(T, -1)
@@ -520,7 +560,7 @@ class DetectorConfidencePF:
             ov = np.triu(iou(xyxy, xyxy), 1)       # rows are older: ids grow with the index
             both = confirmed[:, None] & confirmed[None, :]
             covered = cast(np.ndarray, ((ov > cfg.merge_iou) & both).any(0))  # (T,) array
-        self.overlapped = np.where(covered, self.overlapped + 1 / self.frame_rate, 0.0)
+        self.overlapped = np.where(covered, self.overlapped + k / self.frame_rate, 0.0)
         # for more than merge_time, whatever the rounding of the sum of the frames' 1 /
         # frame_rate (0.1 + 0.1 + 0.1 > 0.3 ended a target after 0.3 s at 10 frames/s), as
         # TrackTable.ended does for max_lost
@@ -547,10 +587,7 @@ class DetectorConfidencePF:
             strong = free & (detections.scores >= cfg.init_score)
             if strong.any():
                 cand = det_xywh[strong]
-                cxyxy = np.c_[cand[:, :2], cand[:, :2] + cand[:, 2:]]
-                if len(est):
-                    exyxy = np.c_[est[:, :2], est[:, :2] + est[:, 2:]]
-                    cand = cand[iou(cxyxy, exyxy).max(1) <= cfg.max_overlap]
+                cand = cand[self._starts(cand, detections.scores[strong], est)]
                 self._start(cand, feats, time)
                 if cfg.confirm <= 1 and len(cand):
                     # confirmed as they start: reported in this frame too (they were not, so
@@ -567,6 +604,24 @@ class DetectorConfidencePF:
                                  points=None, scores=np.r_[out.scores, scores],
                                  classes=np.zeros(len(out.ids) + len(cand), np.int64))
         return out
+
+    def _starts(self, cand: np.ndarray, scores: np.ndarray, est: np.ndarray) -> np.ndarray:
+        """Which candidate boxes ``cand (C, 4)`` (``x, y, w, h``) start targets: taken by
+        ``scores``, highest first, each overlapping no target's box ``est`` and no candidate
+        taken before it by more than ``max_overlap`` (two detections of one person, which a
+        detection file may hold, started two targets, both reported until one ended)."""
+        limit = self.config.max_overlap
+        cxyxy = np.c_[cand[:, :2], cand[:, :2] + cand[:, 2:]]
+        ok = np.ones(len(cand), bool)
+        if len(est):
+            exyxy = np.c_[est[:, :2], est[:, :2] + est[:, 2:]]
+            ok = iou(cxyxy, exyxy).max(1) <= limit
+        among = iou(cxyxy, cxyxy)
+        taken = np.zeros(len(cand), bool)
+        for j in np.argsort(-scores, kind="stable"):
+            if ok[j] and not (among[j, taken] > limit).any():
+                taken[j] = True
+        return taken  # (in the detections' order, as before)
 
     def _predictive(self, centre: np.ndarray, xy: np.ndarray, det_c: np.ndarray) -> np.ndarray:
         """How well each detection's centre ``det_c (D, 2)`` fits each target's prediction
@@ -599,8 +654,9 @@ class DetectorConfidencePF:
         parts = np.zeros((k, N, 4))
         parts[..., :2] = c[:, None] + self.rng.standard_normal((k, N, 2)) \
             * self.config.sigma_pos * boxes[:, None, 3:4]
+        # the velocity's spread in pixels a second as at noise_rate, in pixels a frame here
         parts[..., 2:] = self.rng.standard_normal((k, N, 2)) * self.config.sigma_vel \
-            * boxes[:, None, 3:4]
+            * boxes[:, None, 3:4] * (self.config.noise_rate / self.frame_rate)
         dim = feats.dim + 1 if feats is not None else 1
         if self.weights_clf.shape[1] != dim:
             self.weights_clf = np.zeros((len(self.ids), dim))
