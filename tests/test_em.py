@@ -613,4 +613,75 @@ def test_a_singular_predicted_covariance_is_named_as_by_the_smoother():
     ys = series(50, 0)
     model = {**cv_model(), "Q": np.zeros((4, 4)), "P0": np.zeros((4, 4))}
     with pytest.raises(ValueError, match="from step 48 to 49 is not positive definite"):
-        em(ys, **model, learn=("Q", "R"), max_iter=3)
+        em(ys, **model, learn=("R",), max_iter=3)  # (a zero Q learned is refused first)
+
+
+def _augmented_R_step(ys, F, Q, H, R, x0, P0):
+    """One M-step of ``R`` by hand, with a plain RTS smoother on the state ``[x; v]``
+    (``v`` the measurement noise, drawn anew each step, so ``y = [H I] [x; v]`` exactly):
+    ``R = mean_t E[v_t v_t' | y]``, each step's measured components selected. Independent of
+    the package's filter, smoother and conditional expectations."""
+    n, m = F.shape[0], H.shape[0]
+    Fa = np.block([[F, np.zeros((n, m))], [np.zeros((m, n + m))]])
+    Qa = np.block([[Q, np.zeros((n, m))], [np.zeros((m, n)), R]])
+    Ha = np.c_[H, np.eye(m)]
+    mean, cov = np.r_[x0, np.zeros(m)], np.block([[P0, np.zeros((n, m))],
+                                                  [np.zeros((m, n)), R]])
+    fm, fP, pm, pP = [], [], [], []
+    for t, y in enumerate(ys):
+        if t:
+            mean, cov = Fa @ mean, Fa @ cov @ Fa.T + Qa
+        pm.append(mean)
+        pP.append(cov)
+        o = ~np.isnan(y)
+        Ho = Ha[o]
+        S = Ho @ cov @ Ho.T
+        K = cov @ Ho.T @ np.linalg.pinv(S)
+        mean = mean + K @ (y[o] - Ho @ mean)
+        cov = cov - K @ Ho @ cov
+        fm.append(mean)
+        fP.append(cov)
+    sm, sP = [fm[-1]], [fP[-1]]
+    for t in range(len(ys) - 2, -1, -1):
+        G = fP[t] @ Fa.T @ np.linalg.pinv(pP[t + 1])
+        sm.insert(0, fm[t] + G @ (sm[0] - pm[t + 1]))
+        sP.insert(0, fP[t] + G @ (sP[0] - pP[t + 1]) @ G.T)
+    return np.mean([P[n:, n:] + np.outer(x[n:], x[n:]) for x, P in zip(sm, sP)], axis=0)
+
+
+@pytest.mark.parametrize("R", [[[2.0, 1.2], [1.2, 1.5]], [[0.0, 0.0], [0.0, 1.0]]],
+                         ids=["correlated", "one-noiseless"])
+def test_R_from_steps_that_measure_some_components_equals_an_augmented_smoother(R):
+    """Where a step measures some components, the M-step of a full ``R`` needs the missing
+    noise given the measured one: ``E[v_m | v_o]`` through ``R_mo R_oo^-1``. Replacing it by
+    0 passed every test before; and a noiseless measured component (``R = diag(0, 1)``,
+    which the filter takes) made ``R_oo`` singular: a bare "Singular matrix" from numpy. The
+    oracle: the noise as part of the state, smoothed by hand."""
+    rng = np.random.default_rng(4)
+    model = {**cv_model(), "R": np.array(R)}
+    ys = series(120, 3, **model)
+    hide = rng.random(ys.shape) < 0.3
+    hide[hide.all(1)] = [True, False]  # every step measures something
+    ys[hide] = np.nan
+    fit = em(ys, **model, learn=("R",), max_iter=1, tol=-np.inf)
+    want = _augmented_R_step(ys, **{k: np.asarray(v, float) for k, v in model.items()})
+    np.testing.assert_allclose(fit.R, want, rtol=1e-7, atol=1e-9)
+
+
+def test_a_zero_noise_or_prior_learned_is_refused():
+    """A zero start is a fixed point of EM whatever the form: from ``Q = 0`` learned as
+    ``"full"`` EM stayed at ``|Q| = 1e-14`` and said it had converged (on 200 steps of a
+    constant-velocity model, 1,285 nats below the fit from the identity). Refused for
+    ``Q``, ``R`` and ``P0`` as for a ``"scaled"`` noise; ``pooled`` and ``progress`` are
+    checked before any work."""
+    ys = series(60, 0)
+    for name in ("Q", "R", "P0"):
+        model = cv_model()
+        model[name] = np.zeros_like(model[name])
+        with pytest.raises(ValueError, match=f"^{name} must not be zero to learn it: EM keeps "
+                                             f"a zero {name} zero"):
+            em(ys, **model, learn=(name,), Q_form="diag")
+    with pytest.raises(TypeError, match="^pooled must be True or False; got 'no'$"):
+        em(ys, **cv_model(), pooled="no")
+    with pytest.raises(TypeError, match=r"^progress must be a stream with write\(\)"):
+        em(ys, **cv_model(), progress=True)

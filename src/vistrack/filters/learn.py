@@ -12,7 +12,11 @@ Each iteration of EM runs the filter and the Rauch-Tung-Striebel smoother (the E
 the parameters learned to the maximum of the expected complete-data log-likelihood (the
 M-step), which never lowers the likelihood of the measurements (but once, on the first
 iteration, where the start lies outside the family learned: a per-step ``Q`` or ``R`` learned
-as one matrix). With smoothed means
+as one matrix, or a correlated one learned as ``"diag"``). A learned covariance keeps the
+null space of its start (EM's M-step sets it from expectations under the start, which lie
+in it): a zero ``Q``, ``R`` or ``P0`` stays zero, and is refused; a singular one, such as
+the Euler ``Q`` of a constant-velocity model, stays singular, so start from one of full
+rank where the truth may be. With smoothed means
 :math:`m_t`, covariances :math:`P_t`, the lag-one cross-covariances
 :math:`C_t = \operatorname{cov}(x_t, x_{t-1} \mid y) = P_t G_{t-1}'` (the smoother's
 gain :math:`G_{t-1} = P^+_{t-1} F_t' (P^-_t)^{-1}`) and the sums over the ``N = B (T-1)``
@@ -66,6 +70,7 @@ import numpy as np
 from .._jit import njit
 from .._prebuilt import kernel
 from .._validate import (
+    as_flag,
     as_float_array,
     as_measurement_series,
     check_has_steps,
@@ -201,8 +206,10 @@ def em(
         is given for another number of series, ``Q`` or ``F`` is learned from series of one
         step, ``F`` (``H``) is learned with a ``Q`` (``R``) that stays one per step, ``H``
         where some steps miss some components and ``R`` is not diagonal, or for a component
-        never measured, a ``"scaled"`` noise is zero, or the model's arguments are invalid
-        (as :func:`kalman_filter` says).
+        never measured, a learned ``Q``, ``R`` or ``P0`` is zero, or the model's arguments
+        are invalid (as :func:`kalman_filter` says).
+    TypeError
+        If ``pooled`` is not True or False, or ``progress`` has no ``write``.
 
     Examples
     --------
@@ -218,6 +225,11 @@ def em(
     True
     """
     learned = _names(learn, LEARNABLE)
+    pooled = as_flag(pooled, "pooled")  # ("no" was true: pooled)
+    if progress is not None and not callable(getattr(progress, "write", None)):
+        # (True failed at the first iteration: "'bool' object has no attribute 'write'")
+        raise TypeError(f"progress must be a stream with write() (e.g. sys.stderr) or None; "
+                        f"got {progress!r}")
     for name, form in (("Q_form", Q_form), ("R_form", R_form)):
         if form not in NOISE_FORMS:
             raise ValueError(f"{name} must be one of {list(NOISE_FORMS)}; got {form!r}")
@@ -362,6 +374,12 @@ def _check_em(measured: np.ndarray, partial: bool, p: dict[str, np.ndarray],
         if name in learn and form == "scaled" and not np.any(M):
             raise ValueError(f"{name} must not be zero to learn its factor ({name}_form="
                              "'scaled')")
+    # a zero start is a fixed point of EM whatever the form: "converged" at it, far from the
+    # maximum (the expected noise under a zero noise is zero)
+    for name in ("Q", "R", "P0"):
+        if name in learn and not np.any(p[name]):
+            raise ValueError(f"{name} must not be zero to learn it: EM keeps a zero {name} "
+                             "zero (start from one of full rank, e.g. the identity)")
     # F and H are learned unweighted by the noise: exact where that noise, after the M-step,
     # is one matrix for all steps (a per-step one would weigh each step by its inverse)
     for name, noise, form in (("F", "Q", Q_form), ("H", "R", R_form)):
@@ -436,7 +454,7 @@ def mle(
         (the central differences of the exact gradient), which also gives the standard
         errors.
     max_iter : int
-        The most L-BFGS iterations.
+        The most L-BFGS iterations, and the most Newton steps after them.
 
     Returns
     -------
@@ -1050,7 +1068,12 @@ def _expected_vv(o: _Observed, ms: np.ndarray, Ps: np.ndarray, mult: int, H: np.
         Eoo = ee + HPH[0 if mult > 1 else b, t][:, oi[:, None], oi]
         Roo = Rk[:, oi[:, None], oi]
         Rmo = Rk[:, mi[:, None], oi]
-        K = np.swapaxes(np.linalg.solve(Roo, np.swapaxes(Rmo, -1, -2)), -1, -2)  # Rmo Roo^-1
+        try:
+            K = np.swapaxes(np.linalg.solve(Roo, np.swapaxes(Rmo, -1, -2)), -1, -2)  # Rmo Roo^-1
+        except np.linalg.LinAlgError:
+            # a noiseless component measured (R = diag(0, 1), the filter takes it): the
+            # conditional of a degenerate Gaussian, by the pseudo-inverse
+            K = Rmo @ np.linalg.pinv(Roo, hermitian=True)
         Vk = np.empty((len(b), m, m))
         Vk[:, oi[:, None], oi] = Eoo
         KE = K @ Eoo
