@@ -338,7 +338,7 @@ def read_box_lines(path: str | Path, rule: str = "area",
     --------
     >>> import tempfile, pathlib
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "boxes.txt"
-    >>> _ = path.write_text("1,10,20,30,40\n")
+    >>> _ = path.write_text("1,10,20,30,40\\n")
     >>> read_box_lines(path)
     (array([[10., 20., 30., 40.]]), 5)
     """
