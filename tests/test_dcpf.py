@@ -591,7 +591,7 @@ def test_the_motion_noise_is_the_same_in_a_second_at_any_frame_rate():
 def test_a_person_missed_for_a_second_keeps_their_identity_at_any_frame_rate(fps):
     """A person walking 0.5 heights a second, missed for 1 s (``max_lost`` 1.5 s), with the
     detection term alone: at 30 frames/s the per-frame noise spread the cloud so far that
-    the person came back under a new identity in 2 of 5 seeds; at 7 frames/s none did."""
+    the person came back under a new identity in 3 of 5 seeds; at 7 frames/s none did."""
     for seed in range(5):
         trk = DetectorConfidencePF(gamma=0.0, eta=0.0, frame_rate=fps, rng=seed)
         n = int(round(4 * fps))
