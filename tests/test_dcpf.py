@@ -5,6 +5,8 @@ half the time."""
 from __future__ import annotations
 
 import re
+from decimal import Decimal
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -390,6 +392,10 @@ def test_every_setting_is_checked_and_named():
               "would ever be associated)"),
              ({"alpha": 0.2, "min_score": 1.2}, "min_score must be below the largest "
               "association score, 1 + alpha = 1.2; got 1.2"),
+             # 0.5 + alpha is met only by a detection exactly at the particles' mean
+             ({"alpha": 1.0, "eta": 0.0, "min_score": 1.5}, "min_score must be below the "
+              "largest association score, 0.5 (the classifier off: eta 0) + alpha = 1.5; "
+              "got 1.5"),
              ({"sigma_det": 0.0}, "sigma_det must be a finite number > 0; got 0.0"),
              ({"sigma_det": -0.1}, "sigma_det must be a finite number > 0; got -0.1"),
              ({"sigma_det": np.inf}, "sigma_det must be a finite number > 0; got inf"),
@@ -422,6 +428,18 @@ def test_every_setting_is_checked_and_named():
         with pytest.raises(TypeError, match=re.escape(msg)):
             DCPFConfig(**kw)
     assert DCPFConfig(alpha=0.0, eta=0.0, min_score=0.5).min_score == 0.5  # reachable
+    # any real number is stored as a float: a Decimal failed in isnan without naming the
+    # setting, and a 0-d array was stored as an array
+    exact = DCPFConfig(alpha=Decimal("0.5"), sigma_pos=Fraction(1, 25),
+                       min_score=np.array(0.7), beta=np.float32(2.0), gamma=1)
+    assert (exact.alpha, exact.sigma_pos, exact.min_score, exact.beta, exact.gamma) \
+        == (0.5, 0.04, 0.7, 2.0, 1.0)
+    assert all(type(v) is float for v in (exact.alpha, exact.sigma_pos, exact.min_score,
+                                          exact.beta, exact.gamma))
+    with pytest.raises(ValueError, match=re.escape("alpha must be a number (not NaN); got nan")):
+        DCPFConfig(alpha=Decimal("NaN"))
+    with pytest.raises(TypeError, match=re.escape("sigma_vel must be a number; got 1j")):
+        DCPFConfig(sigma_vel=1j)
     # integral values of other types are the integers; the defaults are what they were
     cfg = DCPFConfig(n_particles=50.0, confirm=np.int64(1), epochs=0)
     assert (cfg.n_particles, cfg.confirm, cfg.epochs) == (50, 1, 0)
@@ -559,6 +577,41 @@ def test_a_gap_of_frames_moves_the_targets_as_far():
     grew = p1[:, 2:].var(0) - p0[:, 2:].var(0)
     np.testing.assert_allclose(grew, 8 * (0.02 * h) ** 2 * 0.7 ** 3, rtol=0.1)
     assert trk.ids.tolist() == [1]
+
+
+@pytest.mark.parametrize("fps", [7.0, 30.0])
+def test_a_gap_of_frames_spreads_the_cloud_as_the_frames_stepped_one_by_one(fps):
+    """Across a gap of ``k`` frames the centre's noise was ``k`` frames' own, but left out how
+    far each frame's velocity noise moved the centre in the frames after it: after a gap of
+    1 s the centre's spread was 0.18 heights where the frames stepped one by one spread it
+    0.26 (7 frames/s) and 0.27 (30). Closed form: one target started by one detection, no
+    detection after it, so every weight is equal and the systematic resampling keeps each
+    particle in its place; each particle's noise over the gap, ``x1 - x0 - k u0`` and
+    ``u1 - u0``, then has the covariance of ``k`` steps of ``x += u + e_x, u += e_u``:
+    ``Var e_x = k a + b (k-1) k (2k-1) / 6``, ``Var e_u = k b``, ``Cov = b k (k-1) / 2``,
+    with ``a = r (sigma_pos h)²``, ``b = r³ (sigma_vel h)²``, ``r = 7 / fps``."""
+    def one(gap):
+        trk = DetectorConfidencePF(gamma=0.0, eta=0.0, confirm=1, n_particles=20000,
+                                   frame_rate=fps, max_lost=5.0, rng=3)
+        _walk(trk, [0], speed=0.0, fps=fps)
+        p0 = trk.particles[0].copy()
+        _walk(trk, [n] if gap else range(1, n + 1), speed=0.0, detected=lambda t: False,
+              fps=fps)
+        return p0, trk.particles[0], trk.size[0, 1]
+
+    n = k = int(round(fps))  # one second
+    p0, p1, h = one(gap=True)
+    r = 7.0 / fps
+    a, b = r * (0.04 * h) ** 2, r ** 3 * (0.02 * h) ** 2
+    for axis in (0, 1):
+        e = np.stack([p1[:, axis] - p0[:, axis] - k * p0[:, 2 + axis],
+                      p1[:, 2 + axis] - p0[:, 2 + axis]])
+        want = [[k * a + b * (k - 1) * k * (2 * k - 1) / 6, b * k * (k - 1) / 2],
+                [b * k * (k - 1) / 2, k * b]]
+        np.testing.assert_allclose(np.cov(e), want, rtol=0.05, err_msg=str(axis))
+    # and the cloud as a whole as the frames stepped one by one (another draw)
+    s0, s1, _ = one(gap=False)
+    np.testing.assert_allclose(p1.var(0), s1.var(0), rtol=0.06)
 
 
 def test_the_motion_noise_is_the_same_in_a_second_at_any_frame_rate():

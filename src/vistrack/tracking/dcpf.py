@@ -9,10 +9,13 @@ centre and velocity in pixels a frame, moved by constant velocity with Gaussian 
 stepped; the noise scales with the target's height. ``sigma_pos`` and ``sigma_vel`` are its
 standard deviations over one frame at ``noise_rate`` frames a second (PETS09's 7, where they
 were chosen); at ``r = noise_rate / frame_rate`` they are those of the same random walks in
-continuous time, ``ε_xy`` of variance ``k r (sigma_pos h)²`` and ``ε_uv`` of variance
-``k r³ (sigma_vel h)²`` (the velocity in pixels a frame), so that a target moves and spreads
-as far in a second at any frame rate, and across a gap of frames as over the frames stepped
-one by one. The box's size is the target's, learnt from the detections associated with it.
+continuous time, ``ε_uv`` of variance ``k b``, ``b = r³ (sigma_vel h)²`` (the velocity in
+pixels a frame), and ``ε_xy`` of variance ``k a``, ``a = r (sigma_pos h)²``, so that a target
+moves and spreads as far in a second at any frame rate. Across a gap of ``k > 1`` frames
+``ε_xy`` also carries how far each frame's velocity noise moved the centre in the frames after
+it: variance ``b (k-1) k (2k-1) / 6`` more, and covariance ``b k (k-1) / 2`` with ``ε_uv``,
+so that a gap spreads the cloud as the frames stepped one by one would. The box's size is
+the target's, learnt from the detections associated with it.
 
 **Association.** Detections are matched to targets greedily, best pair first, by the seed's
 score ``S(tr, d) = g(tr, d) · (c_tr(d) + α · p(d))``: a gate ``g`` (the detection's centre
@@ -185,11 +188,10 @@ class DCPFConfig:
             if f.name in whole:  # 100.0 particles is 100 (frozen)
                 object.__setattr__(self, f.name, as_whole(v, f.name, whole[f.name]))
                 continue
-            if not isinstance(v, (int, float, np.integer, np.floating)):
-                as_number(v, f.name)  # (a TypeError for a string, None or a boolean)
-            if isinstance(v, (bool, np.bool_)):  # (not a number here: True was 1)
-                raise TypeError(f"{f.name} must be a number; got {v!r}")
-            if np.isnan(v):
+            # a float (a TypeError naming the setting for a string, None or a boolean: True
+            # was 1); a Decimal failed in isnan without naming it, a 0-d array stayed one
+            object.__setattr__(self, f.name, as_number(v, f.name))
+            if np.isnan(getattr(self, f.name)):
                 raise bad(f.name, "a number (not NaN)")
         for name in ("beta", "gamma", "eta"):
             if getattr(self, name) < 0:
@@ -227,8 +229,9 @@ class DCPFConfig:
         # the classifier's term is below 1 (0.5 without it) and the predictive density at
         # most 1: alpha 0 with eta 0 took every detection as no target's, without a word
         top = (1.0 if self.eta > 0 else 0.5) + self.alpha
-        # (the density is 1 at the predicted place; the classifier's logistic stays below 1)
-        if self.min_score > top or (self.eta > 0 and self.min_score == top):
+        # (the classifier's logistic stays below 1, and the density is 1 only at the predicted
+        # place itself: the top is met only by the stand-in 0.5 alone, eta and alpha 0)
+        if self.min_score > top or (self.min_score == top and (self.eta > 0 or self.alpha > 0)):
             raise ValueError(
                 f"min_score must be below the largest association score, "
                 f"{'1' if self.eta > 0 else '0.5 (the classifier off: eta 0)'} + alpha = "
@@ -377,6 +380,11 @@ class DetectorConfidencePF:
         self._said_unsized = False
 
     @property
+    def _slow(self) -> float:
+        """``noise_rate / frame_rate``: the motion noise's rate against this one's."""
+        return self.config.noise_rate / self.frame_rate
+
+    @property
     def ids(self) -> np.ndarray:
         """The identities of the targets held ``(T,)``."""
         return self.tracks.ids
@@ -478,11 +486,23 @@ class DetectorConfidencePF:
         # as random walks in continuous time, by the frames' duration against noise_rate's
         h = self.size[:, 1:2, None]
         p = self.particles
-        slow = cfg.noise_rate / self.frame_rate  # (the noise's rate over this one)
-        p[..., :2] += k * p[..., 2:] + self.rng.standard_normal((T, N, 2)) * cfg.sigma_pos * h \
-            * np.sqrt(k * slow)
-        p[..., 2:] += self.rng.standard_normal((T, N, 2)) * cfg.sigma_vel * h \
-            * np.sqrt(k * slow ** 3)
+        slow = self._slow
+        z_pos = self.rng.standard_normal((T, N, 2))
+        if k == 1:
+            p[..., :2] += p[..., 2:] + z_pos * cfg.sigma_pos * h * np.sqrt(slow)
+            p[..., 2:] += self.rng.standard_normal((T, N, 2)) * cfg.sigma_vel * h \
+                * np.sqrt(slow ** 3)
+        else:
+            # k frames in one: the velocity's noise of each frame also moved the centre in
+            # the frames after it, so the centre's noise has, beyond k of one frame's, the
+            # variance b (k-1) k (2k-1) / 6 and the covariance b k (k-1) / 2 with the
+            # velocity's (b one frame's velocity variance); drawn as that correlated pair
+            z_vel = self.rng.standard_normal((T, N, 2))
+            a = (cfg.sigma_pos * h) ** 2 * slow
+            b = (cfg.sigma_vel * h) ** 2 * slow ** 3
+            p[..., :2] += k * p[..., 2:] + z_pos * np.sqrt(k * a + b * k * (k * k - 1) / 12) \
+                + z_vel * np.sqrt(b * k) * (k - 1) / 2
+            p[..., 2:] += z_vel * np.sqrt(b * k)
 
         # associate greedily by S(tr, d) = g · (c_tr(d) + α · predictive density at d)
         match = np.full(T, -1)
@@ -656,7 +676,7 @@ class DetectorConfidencePF:
             * self.config.sigma_pos * boxes[:, None, 3:4]
         # the velocity's spread in pixels a second as at noise_rate, in pixels a frame here
         parts[..., 2:] = self.rng.standard_normal((k, N, 2)) * self.config.sigma_vel \
-            * boxes[:, None, 3:4] * (self.config.noise_rate / self.frame_rate)
+            * boxes[:, None, 3:4] * self._slow
         dim = feats.dim + 1 if feats is not None else 1
         if self.weights_clf.shape[1] != dim:
             self.weights_clf = np.zeros((len(self.ids), dim))
