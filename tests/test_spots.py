@@ -299,6 +299,12 @@ def test_half_floats_object_empty_images_and_a_separation_per_axis():
     with pytest.raises(TypeError, match=re.escape(
             "separation must be one number, the same along x and y; got (5, 5)")):
         locate(im, 9, separation=(5, 5))
+    with pytest.raises(TypeError, match=re.escape("separation must be one number, the same "
+                                                  "along x and y; got array([5., 5.])")):
+        locate(im, 9, separation=np.array([5.0, 5.0]))
+    # a 0-d array is one number (it was refused as one per axis)
+    np.testing.assert_array_equal(locate(im, 9, separation=np.array(6.0)).centroids,
+                                  locate(im, 9, separation=6.0).centroids)
     for name in ("separation", "noise_size", "minmass", "threshold"):
         with pytest.raises(TypeError, match=f"^{name} must be a number; got '1'$"):
             locate(im, 9, **{name: "1"})

@@ -272,7 +272,8 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         raise ValueError(f"image is empty (shape {im.shape}): no spot can be found in it")
     diameter = _check_diameter(diameter)
     r = diameter // 2
-    if isinstance(separation, (tuple, list, np.ndarray)):
+    if isinstance(separation, (tuple, list)) or (
+            isinstance(separation, np.ndarray) and separation.ndim > 0):  # (0-d: one number)
         # (trackpy takes one per axis; float() of it said only "not 'tuple'")
         raise TypeError(f"separation must be one number, the same along x and y; got "
                         f"{separation!r}")
