@@ -180,6 +180,25 @@ def test_em_on_a_chunked_batch_equals_em_in_memory(kw):
     assert np.all(np.diff(got.loglik) >= -1e-9)
 
 
+def test_em_on_a_chunked_batch_of_padded_series_equals_em_in_memory():
+    """Series of unequal length, padded with missing steps: each chunk leaves its series'
+    padding out of ``Q``'s M-step and counts the transitions it keeps, as in memory."""
+    import dask
+
+    from vistrack.filters import em
+
+    ys = _em_problem(B=12, T=60, missing=False)
+    for b in range(12):
+        ys[b, 10 + 4 * b:] = np.nan
+    args = dict(START, learn=("F", "Q", "R"), max_iter=15, tol=-np.inf)
+    want = em(ys, **args)
+    with dask.config.set(scheduler="threads"):
+        got = em(da.from_array(ys, chunks=(5, 60, 2)), **args)
+    for name in ("F", "Q", "R", "loglik"):
+        np.testing.assert_allclose(getattr(got, name), getattr(want, name), rtol=1e-9,
+                                   atol=1e-12, err_msg=name)
+
+
 @pytest.mark.parametrize("per_series_prior", [False, True])
 def test_em_one_fit_per_series_on_a_chunked_batch_is_lazy_and_equal_chunk_by_chunk(
         per_series_prior):

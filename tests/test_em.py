@@ -685,3 +685,76 @@ def test_a_zero_noise_or_prior_learned_is_refused():
         em(ys, **cv_model(), pooled="no")
     with pytest.raises(TypeError, match=r"^progress must be a stream with write\(\)"):
         em(ys, **cv_model(), progress=True)
+
+
+@pytest.mark.parametrize("learn, Q_form", [(("Q", "R"), "full"), (("F", "Q", "R"), "diag"),
+                                           (("Q", "R", "x0", "P0"), "scaled")])
+def test_a_series_padded_with_missing_steps_is_fitted_as_the_series_alone(learn, Q_form):
+    """Steps after a series' last measurement (the padding of a shorter series in a batch)
+    tell nothing, but their transitions entered the M-steps of ``F`` and ``Q`` with the
+    current values' own terms, holding each step back toward them. Oracle: the same series
+    without the padding, which has the same likelihood for every model; every iteration
+    equal to rounding (before, ``Q`` differed from the first iteration on)."""
+    ys = series(120, 3)
+    ys[[10, 11, 40]] = np.nan
+    padded = np.concatenate([ys, np.full((200, 2), np.nan)])
+    start = dict(cv_model(), Q=np.eye(4), R=np.eye(2), F=CV.F(1.0) + 0.02 * np.eye(4))
+    if Q_form == "scaled":  # one Q a step, the padding's too
+        start["Q"] = np.stack([CV.Q(1.0 + 0.01 * t) for t in range(320)])
+    alone = em(ys, **dict(start, Q=start["Q"][:120] if Q_form == "scaled" else start["Q"]),
+               learn=learn, Q_form=Q_form, max_iter=6, tol=-np.inf)
+    fit = em(padded, **start, learn=learn, Q_form=Q_form, max_iter=6, tol=-np.inf)
+    np.testing.assert_allclose(fit.loglik, alone.loglik, rtol=1e-12)
+    for name in ("F", "H", "R", "x0", "P0", "q"):
+        np.testing.assert_allclose(getattr(fit, name), getattr(alone, name), rtol=1e-9,
+                                   atol=1e-12, err_msg=name)
+    Q = fit.Q[:120] if Q_form == "scaled" else fit.Q
+    np.testing.assert_allclose(Q, alone.Q, rtol=1e-9, atol=1e-12)
+    if Q_form == "full":  # and the score of mle, whose sums are the same E-step's
+        start["Q"] = CV.Q(1.0)
+        want, got = mle(ys, **start), mle(padded, **start)
+        assert got.converged and got.iterations == want.iterations
+        np.testing.assert_allclose([got.q, *got.r], [want.q, *want.r], rtol=1e-9)
+
+
+def test_series_of_unequal_length_pool_each_series_own_transitions():
+    """Pooled over series of 40, 90 and 150 steps padded to 150: the M-step of ``Q`` and
+    ``R`` is the mean over every series' own transitions and measured steps. Oracle:
+    pykalman's one EM iteration on each series alone, at its own length, weighed by its
+    transitions (``Q``) and steps (``R``); and the fit reaches the same likelihood in far
+    fewer iterations than it took when the padding's transitions held ``Q`` back."""
+    pykalman = pytest.importorskip("pykalman")
+    lengths = (40, 90, 150)
+    ys = np.full((3, 150, 2), np.nan)
+    for b, n in enumerate(lengths):
+        ys[b, :n] = series(n, 10 + b)
+    start = dict(cv_model(), Q=np.eye(4), R=np.eye(2))
+    Qs, Rs = [], []
+    for b, n in enumerate(lengths):
+        pk = pykalman.KalmanFilter(
+            transition_matrices=start["F"], observation_matrices=start["H"],
+            transition_covariance=start["Q"], observation_covariance=start["R"],
+            initial_state_mean=start["x0"], initial_state_covariance=start["P0"],
+            transition_offsets=np.zeros(4), observation_offsets=np.zeros(2),
+            em_vars=["transition_covariance", "observation_covariance"])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            pk = pk.em(ys[b, :n], n_iter=1)
+        Qs.append(pk.transition_covariance * (n - 1))
+        Rs.append(pk.observation_covariance * n)
+    fit = em(ys, **start, learn=("Q", "R"), max_iter=1, tol=-np.inf)
+    np.testing.assert_allclose(fit.Q, sum(Qs) / sum(n - 1 for n in lengths), rtol=1e-7)
+    np.testing.assert_allclose(fit.R, sum(Rs) / sum(lengths), rtol=1e-7)
+    # a random walk, 19 series of 50 steps and one of 1,000: 914 iterations to tol 1e-6
+    # with the padding's transitions in Q's M-step, 114 without, at the same maximum
+    walk = dict(F=[[1.0]], H=[[1.0]], x0=[0.0], P0=[[1.0]])
+    short = np.full((20, 1000, 1), np.nan)
+    for b in range(20):
+        n = 1000 if b == 19 else 50
+        short[b, :n] = simulate_lgssm(n, Q=[[0.5]], R=[[4.0]], rng=b, **walk)[1]
+    fit = em(short, Q=[[5.0]], R=[[0.4]], **walk, tol=1e-6, max_iter=2000)
+    assert fit.converged and fit.iterations < 200
+    best = mle(short, Q=[[5.0]], R=[[0.4]], **walk)
+    assert fit.loglik[-1] >= best.loglik[-1] - 1e-3
+    np.testing.assert_allclose([fit.Q[0, 0], fit.R[0, 0]], [best.Q[0, 0], best.R[0, 0]],
+                               rtol=2e-3)

@@ -217,7 +217,8 @@ def _chunk_summary(y: Any, first: int) -> dict:
     bad = np.argwhere(np.isinf(y))
     inf = None if not len(bad) else ((int(bad[0][0]) + first,) + tuple(int(i) for i in bad[0][1:]),
                                      float(y[tuple(bad[0])]))
-    return dict(measured=o.measured, partial=o.has_partial, count=o.count, inf=inf)
+    return dict(measured=o.measured, partial=o.has_partial, count=o.count,
+                move_count=o.move_count, inf=inf)
 
 
 def _chunk_sums(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...],
@@ -276,8 +277,9 @@ class _Summed:
     the chunks' log-likelihoods and sums, computed where the chunks are and added here."""
 
     def __init__(self, chunks: list, p: dict, learn: tuple[str, ...], B: int,
-                 count: np.ndarray) -> None:
+                 count: np.ndarray, move_count: np.ndarray) -> None:
         self.chunks, self.p, self.B, self.count = chunks, p, B, count
+        self.move_count = move_count
         self.sums = self._pass(learn, None)
         self.ll = float(self.sums["ll"])
 
@@ -316,6 +318,9 @@ class _Summed:
 
     def R_count(self) -> np.ndarray:
         return self.count
+
+    def Q_count(self) -> np.ndarray:
+        return self.move_count
 
     def prior(self, learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
         s, B = self.sums, self.B
@@ -427,12 +432,13 @@ def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tupl
         raise ValueError("ys has no measurement: every value is NaN")
     partial = any(s["partial"] for s in summary)
     count = _add([s["count"] for s in summary])
+    move_count = _add([s["move_count"] for s in summary])
     _check_em(measured, partial, dict(p, x0=x0, P0=P0), learn, Q_form, R_form)
     # a prior given per series stays with the chunks (None here: see _Summed._pass)
     p0: dict[str, Any] = dict(p, x0=x0 if x0s is None else None, P0=P0 if P0s is None else None)
 
     def estep(params: dict, now: tuple[str, ...]) -> _Summed:
-        return _Summed(chunks, params, now, B, count)
+        return _Summed(chunks, params, now, B, count, move_count)
 
     fit = _fit(estep, B, T, p0, learn, Q_form, R_form, tol, max_iter, progress)
     # a prior given per series and not learned is returned as given
