@@ -408,6 +408,31 @@ def test_one_x0_for_priors_of_different_covariances_reaches_the_maximum():
     np.testing.assert_allclose(slope, 0.0, atol=1e-3)
 
 
+@pytest.mark.parametrize("chunked", [False, True])
+def test_one_x0_for_priors_of_which_one_is_singular(chunked):
+    """A shared x0 with a P0 per series, one of them singular (a prior that knows the first
+    velocity exactly): the M-step inverted each P0, numpy's bare "Singular matrix". Oracle:
+    the limit of that P0 made regular by ``eps`` on its zero, ``eps`` -> 0, whose M-step is
+    the ordinary weighted one; along the direction held exactly, x0 stays as it was."""
+    ys = np.stack([series(50, b) for b in range(3)])
+    P0 = np.stack([np.diag([1.0, 1.0, 1.0, 0.0]), 100 * np.eye(4), np.eye(4)])
+    start = {**cv_model(), "P0": P0, "x0": np.full(4, 3.0)}
+    if chunked:
+        da = pytest.importorskip("dask.array")
+        ys = da.from_array(ys, chunks=(2, 50, 2))
+    fit = em(ys, **start, learn=("x0", "Q"), max_iter=4, tol=-np.inf)
+    assert fit.x0[3] == 3.0 and np.diff(fit.loglik).min() >= -1e-9
+    near = P0.copy()
+    near[0, 3, 3] = 1e-10
+    limit = em(ys, **{**start, "P0": near}, learn=("x0", "Q"), max_iter=4, tol=-np.inf)
+    np.testing.assert_allclose(fit.x0, limit.x0, rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(fit.Q, limit.Q, rtol=1e-6, atol=1e-9)
+    # every prior holding every direction: nothing to learn, x0 as it was
+    none = em(ys, **{**start, "P0": np.zeros((3, 4, 4))}, learn=("x0",), max_iter=2,
+              tol=-np.inf)
+    np.testing.assert_array_equal(none.x0, start["x0"])
+
+
 def test_a_prior_given_once_in_a_batch_axis_is_one_prior():
     ys = np.stack([series(60, b) for b in range(3)])
     start = {**cv_model(), "Q": np.eye(4)}

@@ -231,7 +231,7 @@ def _chunk_sums(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...],
     term under a known ``F`` (the model's, where ``F`` is not learned), never from
     ``transition_sums``, whose terms grow with the state's distance from the origin and
     cancel (see :mod:`vistrack.filters.learn`)."""
-    from .learn import _EStep, _Observed, _transitions
+    from .learn import _EStep, _Observed, _shared_x0_sums, _transitions
 
     y = np.asarray(y)
     p = dict(p, x0=np.asarray(x0), P0=np.asarray(P0))
@@ -254,8 +254,7 @@ def _chunk_sums(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...],
         d = ms[:, 0] - (p["x0"] if p["x0"].ndim == 2 else p["x0"][None])
         out["d"], out["dd"], out["P"] = d.sum(axis=0), d.T @ d, mult * Ps[:, 0].sum(axis=0)
         if p["P0"].ndim == 3:
-            W = np.linalg.inv(p["P0"])
-            out["W"], out["Wm"] = W.sum(axis=0), np.einsum("bij,bj->i", W, ms[:, 0])
+            out["W"], out["Wm"], out["N"] = _shared_x0_sums(p["P0"], ms[:, 0])
     return out
 
 
@@ -323,11 +322,13 @@ class _Summed:
         return self.move_count
 
     def prior(self, learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+        from .learn import _shared_x0
+
         s, B = self.sums, self.B
         c, P0 = self.p["x0"], self.p["P0"]
         x0 = c
         if "x0" in learn:  # (a shared x0: checked by em)
-            x0 = np.linalg.solve(s["W"], s["Wm"]) if "W" in s else c + s["d"] / B
+            x0 = _shared_x0(s["W"], s["Wm"], s["N"], c) if "W" in s else c + s["d"] / B
         if "P0" in learn:  # sum (m - x0)(m - x0)' from the sums around the old x0
             dd = s["dd"]
             if "x0" in learn:

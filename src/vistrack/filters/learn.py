@@ -852,8 +852,7 @@ def _prior_step(ms0: np.ndarray, Ps0: np.ndarray, x0: np.ndarray, P0: np.ndarray
         if x0.ndim == 2:
             x0 = ms0
         elif P0.ndim == 3:  # one x0 for priors of different covariances: weighted
-            W = np.linalg.inv(P0)
-            x0 = np.linalg.solve(W.sum(axis=0), np.einsum("bij,bj->i", W, ms0))
+            x0 = _shared_x0(*_shared_x0_sums(P0, ms0), x0)
         else:
             x0 = ms0.mean(axis=0)
     if "P0" in learn:
@@ -861,6 +860,41 @@ def _prior_step(ms0: np.ndarray, Ps0: np.ndarray, x0: np.ndarray, P0: np.ndarray
         D = Ps0 + d[:, :, None] * d[:, None, :]  # Ps0 broadcast when shared
         P0 = D if P0.ndim == 3 else D.mean(axis=0)
     return x0, P0
+
+
+def _shared_x0_sums(P0: np.ndarray, ms0: np.ndarray) -> tuple[np.ndarray, np.ndarray,
+                                                                np.ndarray]:
+    """The sums that give one ``x0`` for the priors ``P0 (B, n, n)`` of the series whose first
+    smoothed means are ``ms0 (B, n)``: ``sum W_b``, ``sum W_b ms0_b`` with ``W_b`` the
+    (pseudo-)inverse of ``P0_b``, and the sum of the projectors onto the directions a
+    singular ``P0_b`` holds exactly (0 where none is singular)."""
+    n = P0.shape[-1]
+    w, V = np.linalg.eigh(P0)
+    low = w <= n * np.finfo(float).eps * np.maximum(w[:, -1:], np.finfo(float).tiny)
+    if not low.any():
+        W = np.linalg.inv(P0)
+        fixed = np.zeros((n, n))
+    else:
+        W = (V / np.where(low, np.inf, w)[:, None, :]) @ np.swapaxes(V, -1, -2)
+        N = V * low[:, None, :]
+        fixed = (N @ np.swapaxes(N, -1, -2)).sum(axis=0)
+    return W.sum(axis=0), np.einsum("bij,bj->i", W, ms0), fixed
+
+
+def _shared_x0(W: np.ndarray, Wm: np.ndarray, fixed: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """The M-step of one ``x0`` from :func:`_shared_x0_sums` (added over the series) and the
+    current ``x0``: ``(sum W_b)^-1 sum W_b ms0_b``. Along a direction a singular prior holds
+    exactly, the first state equals ``x0`` with certainty, and the expected log-likelihood is
+    finite only there: ``x0`` stays as it is along those, and the rest is the weighted mean
+    over the others."""
+    if not fixed.any():
+        return np.linalg.solve(W, Wm)
+    w, V = np.linalg.eigh(fixed)
+    free = V[:, w <= len(w) * np.finfo(float).eps * max(w[-1], 1.0)]
+    if free.shape[1] == 0:
+        return x0
+    z = np.linalg.solve(free.T @ W @ free, free.T @ (Wm - W @ x0))
+    return x0 + free @ z
 
 
 _SHARED_LEARNABLE = frozenset({"Q", "R", "x0", "P0"})
