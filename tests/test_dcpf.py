@@ -395,7 +395,8 @@ def test_every_setting_is_checked_and_named():
              # 0.5 + alpha is met only by a detection exactly at the particles' mean
              ({"alpha": 1.0, "eta": 0.0, "min_score": 1.5}, "min_score must be below the "
               "largest association score, 0.5 (the classifier off: eta 0) + alpha = 1.5; "
-              "got 1.5"),
+              "got 1.5 (only a detection exactly at a target's predicted centre would be "
+              "associated)"),
              ({"sigma_det": 0.0}, "sigma_det must be a finite number > 0; got 0.0"),
              ({"sigma_det": -0.1}, "sigma_det must be a finite number > 0; got -0.1"),
              ({"sigma_det": np.inf}, "sigma_det must be a finite number > 0; got inf"),
@@ -428,6 +429,14 @@ def test_every_setting_is_checked_and_named():
         with pytest.raises(TypeError, match=re.escape(msg)):
             DCPFConfig(**kw)
     assert DCPFConfig(alpha=0.0, eta=0.0, min_score=0.5).min_score == 0.5  # reachable
+    # (an alpha too small to add to 0.5: every gated detection still scores 0.5)
+    assert DCPFConfig(alpha=1e-17, eta=0.0, min_score=0.5).min_score == 0.5
+    # an integer past the largest float is infinite (a bare OverflowError before), and named
+    # where a finite number is asked for
+    assert DCPFConfig(max_lost=10 ** 400).max_lost == np.inf
+    with pytest.raises(ValueError, match=re.escape("sigma_det must be a finite number > 0; "
+                                                   "got inf")):
+        DCPFConfig(sigma_det=10 ** 400)
     # any real number is stored as a float: a Decimal failed in isnan without naming the
     # setting, and a 0-d array was stored as an array
     exact = DCPFConfig(alpha=Decimal("0.5"), sigma_pos=Fraction(1, 25),
@@ -584,7 +593,7 @@ def test_a_gap_of_frames_spreads_the_cloud_as_the_frames_stepped_one_by_one(fps)
     """Across a gap of ``k`` frames the centre's noise was ``k`` frames' own, but left out how
     far each frame's velocity noise moved the centre in the frames after it: after a gap of
     1 s the centre's spread was 0.18 heights where the frames stepped one by one spread it
-    0.26 (7 frames/s) and 0.27 (30). Closed form: one target started by one detection, no
+    0.26 (7 frames/s) and 0.28 (30). Closed form: one target started by one detection, no
     detection after it, so every weight is equal and the systematic resampling keeps each
     particle in its place; each particle's noise over the gap, ``x1 - x0 - k u0`` and
     ``u1 - u0``, then has the covariance of ``k`` steps of ``x += u + e_x, u += e_u``:

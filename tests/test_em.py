@@ -783,3 +783,32 @@ def test_series_of_unequal_length_pool_each_series_own_transitions():
     assert fit.loglik[-1] >= best.loglik[-1] - 1e-3
     np.testing.assert_allclose([fit.Q[0, 0], fit.R[0, 0]], [best.Q[0, 0], best.R[0, 0]],
                                rtol=2e-3)
+
+
+def test_a_series_never_measured_after_its_first_step_or_at_all_says_nothing():
+    """Learning ``F`` from series with no transition up to their last measured step (a track
+    of one detection, padded) failed in numpy's solve ("Singular matrix") once padding was
+    left out: nothing depends on ``F`` there, and it is kept, as ``Q`` and ``R`` are. A
+    series never measured held the shared prior's M-steps back toward the current ``x0`` and
+    ``P0`` (its smoothed first state is the prior). Oracle: the batch without that series,
+    every iteration, in memory and on a Dask array."""
+    m = cv_model()
+    one = np.full((2, 30, 2), np.nan)
+    one[:, 0] = [[1.0, 2.0], [3.0, 1.0]]
+    fit = em(one, **m, learn=("F", "Q", "R"), max_iter=3, tol=-np.inf)
+    np.testing.assert_array_equal(fit.F, m["F"])
+    each = em(one, **m, learn=("F", "Q", "R"), pooled=False, max_iter=3, tol=-np.inf)
+    np.testing.assert_array_equal(each.F, np.stack([m["F"]] * 2))
+    ys = np.stack([series(60, b) for b in range(4)])
+    blank = np.concatenate([ys, np.full((1, 60, 2), np.nan)])
+    start = dict(m, Q=np.eye(4), x0=np.ones(4), P0=np.eye(4))
+    for learn in (("x0", "P0"), ("Q", "R", "x0"), ("F", "Q", "R", "P0")):
+        want = em(ys, **start, learn=learn, max_iter=5, tol=-np.inf)
+        got = [em(blank, **start, learn=learn, max_iter=5, tol=-np.inf)]
+        da = pytest.importorskip("dask.array")
+        got.append(em(da.from_array(blank, chunks=(4, 60, 2)), **start, learn=learn,
+                      max_iter=5, tol=-np.inf))
+        for fit in got:
+            for name in ("F", "Q", "R", "x0", "P0", "loglik"):
+                np.testing.assert_allclose(getattr(fit, name), getattr(want, name),
+                                           rtol=1e-9, atol=1e-12, err_msg=f"{learn} {name}")

@@ -78,11 +78,15 @@ def _is_boolean(value: Any) -> bool:
 
 def as_number(value: Any, name: str) -> float:
     """``value`` as a float, or a TypeError naming ``name`` (``float()`` names neither). A
-    boolean is not a number here (``float(True)`` is 1.0: ``q=True`` was taken as 1)."""
+    boolean is not a number here (``float(True)`` is 1.0: ``q=True`` was taken as 1); an
+    integer past the largest float is infinite (``float()`` raised a bare OverflowError),
+    which the caller's range check names."""
     if isinstance(value, (str, bytes)) or _is_boolean(value):
         raise TypeError(f"{name} must be a number; got {value!r}")
     try:
         return float(value)
+    except OverflowError:  # an integer past the largest float (10**400): infinite, as named
+        return float("inf") if value > 0 else float("-inf")
     except (TypeError, ValueError):
         raise TypeError(f"{name} must be a number; got {value!r}") from None
 

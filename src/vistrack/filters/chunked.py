@@ -250,11 +250,15 @@ def _chunk_sums(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...],
     elif "R" in learn:
         out["V"] = e.vv(p["H"])
     if {"x0", "P0"} & set(learn):
-        ms, Ps, _, mult = e.smoothed
-        d = ms[:, 0] - (p["x0"] if p["x0"].ndim == 2 else p["x0"][None])
-        out["d"], out["dd"], out["P"] = d.sum(axis=0), d.T @ d, mult * Ps[:, 0].sum(axis=0)
+        # over the series measured at some step: one never measured says nothing of the
+        # prior (learn._prior_step)
+        seen = e.o.seen
+        ms, Ps, _, _ = e.smoothed
+        d = ms[seen, 0] - (p["x0"] if p["x0"].ndim == 2 else p["x0"][None])
+        P = Ps[0, 0] * seen.sum() if len(Ps) == 1 else Ps[seen, 0].sum(axis=0)
+        out["d"], out["dd"], out["P"], out["n"] = d.sum(axis=0), d.T @ d, P, int(seen.sum())
         if p["P0"].ndim == 3:
-            out["W"], out["Wm"], out["N"] = _shared_x0_sums(p["P0"], ms[:, 0])
+            out["W"], out["Wm"], out["N"] = _shared_x0_sums(p["P0"][seen], ms[seen, 0])
     return out
 
 
@@ -324,7 +328,7 @@ class _Summed:
     def prior(self, learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
         from .learn import _shared_x0
 
-        s, B = self.sums, self.B
+        s, B = self.sums, self.sums["n"]  # (the series measured at some step)
         c, P0 = self.p["x0"], self.p["P0"]
         x0 = c
         if "x0" in learn:  # (a shared x0: checked by em)

@@ -46,7 +46,8 @@ m_{t-1})(m_t - F m_{t-1})' + P_t - F C_t' - C_t F' + F P_{t-1} F'`, rather than 
 the series of a batch share their covariances (the same prior, the same steps missing:
 ``FilterResult.shared_covs``), the smoother's covariances and gains are computed once for all
 of them; when, moreover, the matrices are constant, every step is measured in full or not at
-all and neither ``F`` nor ``H`` is learned, the whole E-step is one compiled pass
+all, the last step is measured (no padding) and neither ``F`` nor ``H`` is learned, the whole
+E-step is one compiled pass
 (:mod:`vistrack.filters._estep`), which also stops computing the covariances at their steady
 state; :func:`mle` uses the same E-step.
 
@@ -437,7 +438,9 @@ def mle(
         y]\big), \qquad \frac{\partial \log p(y)}{\partial \log r_i} = -\tfrac{N}{2} +
         \frac{1}{2 r_i} \sum_t E[v_{ti}^2 \mid y]
 
-    over the transitions of every series and the ``N`` steps that measured something. Where
+    over the transitions of every series up to its last measured step (those after it, a
+    shorter series' padding, add nothing to either term) and the ``N`` steps that measured
+    something. Where
     EM creeps towards the maximum, this reaches it in a few dozen evaluations of the filter
     and the smoother; both find the same maximum.
 
@@ -715,7 +718,7 @@ def _fit(estep: Any, B: int, T: int, p: dict[str, np.ndarray], learn: tuple[str,
             break
         new = dict(p)
         if {"F", "Q"} & set(learn):
-            if "F" in learn:
+            if "F" in learn and e.Q_count().any():  # (else nothing depends on F: kept)
                 S11, S10, S00 = e.transition_sums()
                 new["F"] = np.linalg.solve(S00.sum(axis=0).T, S10.sum(axis=0).T).T
             if "Q" in learn:
@@ -745,7 +748,9 @@ class _Observed:
     not all), ``has_partial`` (any such step), ``count`` ``(T,)``, how many series
     measured something at each step, ``moves`` ``(B, T - 1)``, True for each transition up
     to the series' last measured step (the M-steps of ``F`` and ``Q`` leave the others out),
-    ``move_count`` ``(T - 1,)`` their number per transition, and ``all_move`` (every one)."""
+    ``move_count`` ``(T - 1,)`` their number per transition, ``all_move`` (every one), and
+    ``seen`` ``(B,)``, each series measured at some step (the prior's M-steps leave the
+    others out)."""
 
     def __init__(self, y: np.ndarray) -> None:
         self.y = y = np.ascontiguousarray(y, dtype=np.float64)
@@ -762,6 +767,7 @@ class _Observed:
         self.moves = np.arange(1, T)[None, :] <= last[:, None]
         self.move_count = self.moves.sum(axis=0)
         self.all_move = bool(self.moves.all())
+        self.seen = last >= 0
         self._yt: np.ndarray | None = None
         self._work: np.ndarray | None = None
 
@@ -841,24 +847,29 @@ class _EStep:
     def prior(self, learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
         """The prior ``x0``, ``P0`` after the M-step (those not in ``learn`` as they were)."""
         ms, Ps, _, _ = self.smoothed
-        return _prior_step(ms[:, 0], Ps[:, 0], self.p["x0"], self.p["P0"], learn)
+        return _prior_step(ms[:, 0], Ps[:, 0], self.p["x0"], self.p["P0"], learn, self.o.seen)
 
 
 def _prior_step(ms0: np.ndarray, Ps0: np.ndarray, x0: np.ndarray, P0: np.ndarray,
-                learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+                learn: tuple[str, ...], seen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The M-step of the prior from the first step's smoothed means ``ms0 (B, n)`` and
-    covariances ``Ps0 (B or 1, n, n)``: ``x0`` and ``P0`` if in ``learn``, else as given."""
+    covariances ``Ps0 (B or 1, n, n)``: ``x0`` and ``P0`` if in ``learn``, else as given.
+    A series never measured (``seen (B,)`` False) says nothing of the prior: its smoothed
+    first state is the prior itself, which held each M-step back toward the current values;
+    it is left out (its own ``x0`` or ``P0``, given per series, kept)."""
+    if not seen.any():  # (em refuses measurements with no value; a guard)
+        return x0, P0
     if "x0" in learn:
         if x0.ndim == 2:
-            x0 = ms0
+            x0 = np.where(seen[:, None], ms0, x0)
         elif P0.ndim == 3:  # one x0 for priors of different covariances: weighted
-            x0 = _shared_x0(*_shared_x0_sums(P0, ms0), x0)
+            x0 = _shared_x0(*_shared_x0_sums(P0[seen], ms0[seen]), x0)
         else:
-            x0 = ms0.mean(axis=0)
+            x0 = ms0[seen].mean(axis=0)
     if "P0" in learn:
         d = ms0 - (x0 if x0.ndim == 2 else x0[None])
         D = Ps0 + d[:, :, None] * d[:, None, :]  # Ps0 broadcast when shared
-        P0 = D if P0.ndim == 3 else D.mean(axis=0)
+        P0 = np.where(seen[:, None, None], D, P0) if P0.ndim == 3 else D[seen].mean(axis=0)
     return x0, P0
 
 
@@ -944,7 +955,8 @@ class _SharedEStep:
         return self.o.move_count  # (every series' every transition: all_move)
 
     def prior(self, learn: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
-        return _prior_step(self.ms0, self.Ps0[None], self.p["x0"], self.p["P0"], learn)
+        return _prior_step(self.ms0, self.Ps0[None], self.p["x0"], self.p["P0"], learn,
+                           self.o.seen)
 
 
 def _shared_outputs(y: np.ndarray, p: dict[str, np.ndarray]) -> tuple[np.ndarray, ...]:

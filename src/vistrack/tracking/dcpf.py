@@ -11,7 +11,10 @@ standard deviations over one frame at ``noise_rate`` frames a second (PETS09's 7
 were chosen); at ``r = noise_rate / frame_rate`` they are those of the same random walks in
 continuous time, ``ε_uv`` of variance ``k b``, ``b = r³ (sigma_vel h)²`` (the velocity in
 pixels a frame), and ``ε_xy`` of variance ``k a``, ``a = r (sigma_pos h)²``, so that a target
-moves and spreads as far in a second at any frame rate. Across a gap of ``k > 1`` frames
+moves as far in a second at any frame rate and its velocity spreads as far; its centre
+nearly so (the velocity's noise moves it in whole frames: with the defaults its spread 1 s
+after a start is 0.26 of its height at 7 frames/s and 0.28 at 30). Across a gap of ``k > 1``
+frames
 ``ε_xy`` also carries how far each frame's velocity noise moved the centre in the frames after
 it: variance ``b (k-1) k (2k-1) / 6`` more, and covariance ``b k (k-1) / 2`` with ``ε_uv``,
 so that a gap spreads the cloud as the frames stepped one by one would. The box's size is
@@ -230,12 +233,16 @@ class DCPFConfig:
         # most 1: alpha 0 with eta 0 took every detection as no target's, without a word
         top = (1.0 if self.eta > 0 else 0.5) + self.alpha
         # (the classifier's logistic stays below 1, and the density is 1 only at the predicted
-        # place itself: the top is met only by the stand-in 0.5 alone, eta and alpha 0)
-        if self.min_score > top or (self.min_score == top and (self.eta > 0 or self.alpha > 0)):
+        # place itself: the top is met by every detection only where it is the stand-in 0.5,
+        # eta 0 and alpha 0 or too small to add to 0.5)
+        if self.min_score > top or (self.min_score == top and (self.eta > 0 or top > 0.5)):
             raise ValueError(
                 f"min_score must be below the largest association score, "
                 f"{'1' if self.eta > 0 else '0.5 (the classifier off: eta 0)'} + alpha = "
-                f"{top:g}; got {self.min_score} (no detection would ever be associated)")
+                f"{top:g}; got {self.min_score} ("
+                + ("no detection would ever be associated)" if self.min_score > top else
+                   "only a detection exactly at a target's predicted centre would be "
+                   "associated)"))
 
 
 class ColourFeatures:
