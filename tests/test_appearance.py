@@ -279,8 +279,11 @@ def test_without_texture_the_box_goes_on_at_its_velocity():
 
 def test_a_wsl_trackers_model_settings_are_checked_when_it_is_made():
     """WSLTracker(tau=-1) and WSLTracker(bogus=3) were taken, and failed at init(), on the
-    first frame: refused when the tracker is made, as WSLModel refuses them."""
-    for kw, error in (({"tau": -1}, ValueError), ({"bogus": 3}, TypeError)):
+    first frame: refused when the tracker is made, as WSLModel refuses them; a setting that
+    is no number is a TypeError naming it."""
+    for kw, error in (({"tau": -1}, ValueError), ({"bogus": 3}, TypeError),
+                      # (a string failed in numpy's isfinite, naming nothing)
+                      ({"lost_density": "x"}, TypeError)):
         with pytest.raises(error) as want:
             WSLModel((8, 8), **kw)
         with pytest.raises(error) as got:

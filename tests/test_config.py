@@ -420,6 +420,9 @@ def test_resolve_config_puts_values_over_a_preset():
     assert replace(OfflineConfig(), enabled=True).enabled
     with pytest.raises(ValueError, match="enabled must be true or false"):
         OfflineConfig(enabled=1)
+    # at 0 any two tracks within link_gap were joined, however far apart
+    with pytest.raises(ValueError, match=r"link_iou must be in \(0, 1\] \(at 0 any two tracks"):
+        OfflineConfig(link_iou=0.0)
 
 
 def test_each_flat_override_names_one_setting():

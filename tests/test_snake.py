@@ -86,9 +86,25 @@ def test_a_snake_started_from_nan_or_a_zero_radius_is_named():
     import re
 
     s = Snake(n_control=8, n_samples=16)
+    with pytest.raises(ValueError, match=re.escape("centre must be two finite numbers, x and "
+                                                   "y; got (nan, 60)")):
+        s.init_circle((np.nan, 60), 26)
+    # one number was a bare IndexError, and a third coordinate was dropped without a word
+    for centre in (5, (40, 30, 99)):
+        with pytest.raises(ValueError, match=re.escape(f"centre must be two finite numbers, "
+                                                       f"x and y; got {centre!r}")):
+            s.init_circle(centre, 10)
     with pytest.raises(ValueError, match=re.escape("control_points must be finite; "
                                                    "control_points[0] = [nan, 60.0]")):
-        s.init_circle((np.nan, 60), 26)
+        s.init(np.c_[[np.nan, 70, 80, 70, 60, 50, 40, 50], [60, 50, 60, 70, 80, 70, 60, 50]])
+    # the B-spline basis of 4.5 control points was a bare TypeError in numpy
+    from vistrack.tracking.snake import bspline_matrix
+    for n, m in ((4.5, 8), (6, 2.5), (np.nan, 8), (3, 8)):
+        with pytest.raises(ValueError, match=re.escape(
+                f"need n >= 4 control points and m >= 1 samples, whole numbers; got n={n}, "
+                f"m={m}")):
+            bspline_matrix(n, m)
+    np.testing.assert_array_equal(bspline_matrix(6.0, 12.0), bspline_matrix(6, 12))
     with pytest.raises(ValueError, match="std must be a finite number > 0; got nan"):
         s.init_circle((80, 60), 26, std=np.nan)
     with pytest.raises(ValueError, match="radius must be a finite number > 0; got 0"):

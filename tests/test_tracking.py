@@ -1121,11 +1121,24 @@ def test_settings_and_arguments_out_of_their_domain_are_named():
                                   tr.boxes_ahead([1], 1.0))
     for kw, msg in ((dict(max_gap=float("nan")), "max_gap must be a whole number"),
                     (dict(link_gap=float("inf")), "link_gap must be a whole number"),
-                    (dict(link_iou=5.0), r"link_iou must be an IoU in \[0, 1\]; got 5.0"),
+                    (dict(link_iou=5.0), r"link_iou must be an IoU in \(0, 1\]; got 5.0"),
+                    # 0 joined any two tracks within link_gap, however far apart
+                    (dict(link_iou=0.0), r"link_iou must be an IoU in \(0, 1\]; got 0.0"),
                     (dict(extend_iou=float("nan")), r"extend_iou must be an IoU in \[0, 1\]"),
                     (dict(min_score=float("nan")), "min_score must be a finite number")):
         with pytest.raises(ValueError, match=msg):
             smooth(tr, **kw)
+    # what is no number is named (None failed where a pair of tracks met, a string in a
+    # comparison, and a tracker of None in an attribute)
+    for kw, msg in ((dict(link_iou=None), "link_iou must be a number; got None"),
+                    (dict(link_iou="0.3"), "link_iou must be a number; got '0.3'"),
+                    (dict(extend_iou="0.5"), "extend_iou must be a number; got '0.5'"),
+                    (dict(min_score="0.5"), "min_score must be a number; got '0.5'")):
+        with pytest.raises(TypeError, match=re.escape(msg)):
+            smooth(tr, **kw)
+    with pytest.raises(TypeError, match=re.escape("tracker must be a BoxTracker(record=True); "
+                                                  "got None")):
+        smooth(None)
 
 
 def test_box_tracker_names_a_setting_it_has_not_and_a_rate_that_is_no_number():

@@ -88,7 +88,7 @@ class OfflineConfig:
     link_gap, link_iou, link_window : float
         Join tracks up to ``link_gap`` seconds apart whose boxes, carried across the gap by
         the velocities of their last and first ``link_window`` seconds, overlap by
-        ``link_iou`` on average (``link_gap`` 0: never).
+        ``link_iou`` on average (``link_gap`` 0: never; ``link_iou`` above 0).
     calibration_iou_min : float
         With calibrated scores, the loosest overlap at which the whole file's score
         calibration links detections from frame to frame: where the detector's most
@@ -143,6 +143,9 @@ class OfflineConfig:
         for name in ("extend_iou", "link_iou"):
             if getattr(self, name) > 1:
                 raise ValueError(f"{name} must be in [0, 1]; got {getattr(self, name)!r}")
+        if self.link_iou == 0:  # (any two tracks within link_gap were joined, however far)
+            raise ValueError("link_iou must be in (0, 1] (at 0 any two tracks within link_gap "
+                             "would be joined, however far apart); got 0")
         if not 0 < self.calibration_iou_min <= 1:  # (at 0 every box would link to any)
             raise ValueError(f"calibration_iou_min must be in (0, 1]; got "
                              f"{self.calibration_iou_min!r}")

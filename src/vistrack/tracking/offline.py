@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import is_whole
+from .._validate import as_finite, as_number, is_whole
 from ..association import gnn_sparse, iou_pairs, paired_iou
 from ..filters.axes import axes_predict, axes_to_full, axes_update, full_to_axes
 from ..filters.kalman import FilterResult
@@ -144,7 +144,11 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float | N
     tracker : BoxTracker
         A tracker created with ``record=True`` that has run over a sequence.
     max_gap : int, optional
-        The longest gap (in frames without an update) that is filled.
+        The longest gap (in frames without an update) that is filled. The frames filled are
+        those the tracker was stepped on: a frame never stepped (a loop over the frames of
+        a detections file skips those where nothing was detected) has no state and is not
+        written, so step every frame, with no detections where there are none, as
+        ``vistrack track`` does.
     min_score : float, optional
         The lowest mean score of a track's detections that is kept (the scores as the
         tracker's thresholds see them, :meth:`BoxTracker.confidence`); None keeps every
@@ -176,8 +180,11 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float | N
     ValueError
         If the tracker was not created with ``record=True``, ``max_gap``, ``link_gap`` or
         ``link_window`` is not a whole number of frames >= 0 (>= 1 for ``link_window``),
-        ``link_iou`` or ``extend_iou`` is not in [0, 1], or ``min_score`` is given and not
-        finite.
+        ``link_iou`` is not in (0, 1] or ``extend_iou`` not in [0, 1], or ``min_score`` is
+        given and not finite.
+    TypeError
+        If ``tracker`` is not a :class:`BoxTracker`, or a setting that is a number is given
+        as something else (a string, or None for ``link_iou``).
 
     Notes
     -----
@@ -203,6 +210,8 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float | N
     >>> rows.xywh[3:7, 0].round(1).tolist(), rows.filled[3:7].tolist()
     ([30.0, 35.0, 40.0, 45.0], [False, True, True, False])
     """
+    if not isinstance(tracker, BoxTracker):  # (None failed in an attribute, naming nothing)
+        raise TypeError(f"tracker must be a BoxTracker(record=True); got {tracker!r}")
     if not tracker.record:
         raise ValueError("the tracker must be created with record=True for offline smoothing")
     from ..config import OfflineConfig  # (vistrack.config imports the trackers)
@@ -218,11 +227,14 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float | N
             raise ValueError(f"{name} must be a whole number of frames >= {least}; got {v!r}")
     # (3.0 frames, or a Fraction, was used as an index below)
     max_gap, link_gap, link_window = int(max_gap), int(link_gap), int(link_window)
-    for name, iou in (("link_iou", link_iou), ("extend_iou", extend_iou)):
-        if iou is not None and not 0.0 <= iou <= 1.0:  # an IoU (NaN fails this too)
-            raise ValueError(f"{name} must be an IoU in [0, 1]; got {iou!r}")
-    if min_score is not None and not np.isfinite(min_score):
-        raise ValueError(f"min_score must be a finite number; got {min_score!r}")
+    # an IoU (NaN fails this too; a string was a TypeError in a comparison). link_iou 0 took
+    # any two tracks within link_gap as one, however far apart (extend_iou 0 takes only
+    # overlapping boxes: its pairs need some overlap), and None failed where a pair was met
+    link_iou = _iou(link_iou, "link_iou", zero=False)
+    if extend_iou is not None:
+        extend_iou = _iou(extend_iou, "extend_iou", zero=True)
+    if min_score is not None:
+        min_score = as_finite(min_score, "min_score")
     if not tracker.history:
         return _empty()
     cam = {h[0]: h[9] for h in tracker.history}
@@ -240,6 +252,14 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float | N
             np.concatenate([t.filled for t in tracks]), np.concatenate([t.covs for t in tracks])]
     by_frame = np.lexsort((cols[1], cols[0]))
     return SmoothedTracks(*(c[by_frame] for c in cols))
+
+
+def _iou(value: object, name: str, zero: bool) -> float:
+    """``value`` as an IoU in [0, 1] (``zero``) or (0, 1], or an error naming ``name``."""
+    v = as_number(value, name)
+    if not (0.0 < v <= 1.0 or (zero and v == 0.0)):  # (NaN fails both)
+        raise ValueError(f"{name} must be an IoU in {'[0' if zero else '(0'}, 1]; got {value!r}")
+    return v
 
 
 def _predict(mean: np.ndarray, cov: np.ndarray, dt: float,

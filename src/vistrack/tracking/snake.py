@@ -24,7 +24,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_box, as_finite, as_uint8_image, as_whole
+from .._validate import as_box, as_finite, as_float_array, as_uint8_image, as_whole, is_whole
 from ..filters import kf_predict, kf_update
 from ..types import Gaussian
 from .base import _HALF, SingleObjectTracker, _index_centre
@@ -57,7 +57,7 @@ def bspline_matrix(n: int, m: int, derivative: bool = False) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``n < 4`` or ``m < 1``.
+        If ``n < 4`` or ``m < 1``, or either is not a whole number.
 
     Examples
     --------
@@ -65,8 +65,11 @@ def bspline_matrix(n: int, m: int, derivative: bool = False) -> np.ndarray:
     >>> bool(np.allclose(B.sum(1), 1.0)), bool(np.allclose(bspline_matrix(6, 12, True).sum(1), 0))
     (True, True)
     """
-    if n < 4 or m < 1:
-        raise ValueError(f"need n >= 4 control points and m >= 1 samples; got n={n}, m={m}")
+    # (4.5 control points was a bare TypeError in numpy, NaN a cast warning)
+    if not (is_whole(n, 4) and is_whole(m, 1)):
+        raise ValueError(f"need n >= 4 control points and m >= 1 samples, whole numbers; "
+                         f"got n={n}, m={m}")
+    n, m = int(n), int(m)
     s = np.arange(m) * n / m
     i = np.floor(s).astype(int)
     t = s - i
@@ -224,6 +227,13 @@ class Snake:
         std : float
             Standard deviation of each control point coordinate, in pixels.
 
+        Raises
+        ------
+        ValueError
+            If ``centre`` is not two finite numbers or ``radius`` not a finite number > 0.
+        TypeError
+            If ``centre`` holds something other than numbers.
+
         Examples
         --------
         >>> s = Snake(n_control=8, n_samples=16)
@@ -236,7 +246,11 @@ class Snake:
         a = 2 * np.pi * np.arange(self.n) / self.n
         # the spline through points on a circle of radius R has radius about R (2 + cos(2π/n))/3
         R = radius * 3 / (2 + np.cos(2 * np.pi / self.n))
-        c = np.asarray(centre, dtype=float)
+        # (one number was a bare IndexError, a third coordinate dropped, NaN named as
+        # control_points)
+        c = as_float_array(centre, "centre")
+        if c.shape != (2,) or not np.isfinite(c).all():
+            raise ValueError(f"centre must be two finite numbers, x and y; got {centre!r}")
         self.init(np.c_[c[0] + R * np.cos(a), c[1] + R * np.sin(a)], std)
 
     @property
