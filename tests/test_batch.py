@@ -3,6 +3,7 @@ each input alone, failures reported without stopping the others, and a worker ki
 middle of a job run again to the same outputs."""
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -833,3 +834,71 @@ def test_existing_outputs_of_several_videos_are_refused_before_any_runs(tmp_path
     assert "tracks.txt" in err and "--force" in err
     assert sorted(p.name for p in out.iterdir()) == ["b"]
     assert (out / "b" / "tracks.txt").read_text() == "an earlier result\n"
+
+
+def test_an_inputs_error_keeps_where_it_was_raised_and_which_file():
+    """In a batch's table an error lost the note of where it was raised (``at frame 3, in
+    Bad.step``), which one input's message gives, and a full disk named no file."""
+    from vistrack._pool import one_line
+
+    e = ValueError("cannot follow these boxes")
+    e.add_note("at frame 3, in badtrk.Bad.step")
+    assert one_line(e) == ("ValueError: cannot follow these boxes (at frame 3, in "
+                           "badtrk.Bad.step)")
+    full = OSError(28, "No space left on device", "out/.A.0123456789.partial.txt")
+    assert one_line(full) == "OSError: out/A.txt: No space left on device"
+    assert one_line(ValueError("two\n  lines")) == "ValueError: two lines"
+
+
+def test_a_batchs_counts_of_processes_are_named(bench, tmp_path):
+    """``jobs=-1`` failed in the pool ("max_workers must be greater than 0") and ``jobs=0``
+    was taken as every core, which ``--jobs 0`` refuses."""
+    for jobs in (-1, 0, 1.5):
+        with pytest.raises(ValueError, match=re.escape(
+                f"jobs must be a whole number >= 1 (processes); got {jobs}")):
+            track_many([bench / "SIM-0"], tmp_path / "out", jobs=jobs)
+    with pytest.raises(ValueError, match=re.escape("workers must be a whole number >= 1 "
+                                                   "(processes); got 0")):
+        run_jobs(plan([bench / "SIM-0"], tmp_path / "out"), workers=0)
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_interrupted_batch_counts_a_point_trackers_outputs_as_written(tmp_path):
+    """A point tracker writes ``tracks.csv`` and no ``tracks.txt``: an interrupted batch of
+    them said "0 of 2 inputs written" where one was."""
+    import time
+
+    from vistrack.batch import Job
+    from vistrack.cli import _written_since
+
+    t0 = time.time()
+    jobs = [Job(Path(f"in{k}"), tmp_path / f"out{k}", "pixels") for k in range(3)]
+    jobs.append(Job(Path("seq"), tmp_path / "seq.txt", "detections"))
+    (tmp_path / "out0").mkdir()
+    (tmp_path / "out0" / "tracks.csv").write_text("frame,id,x,y\n")  # points
+    (tmp_path / "out1").mkdir()
+    (tmp_path / "out1" / "tracks.txt").write_text("")  # boxes
+    (tmp_path / "seq.txt").write_text("")
+    assert _written_since(jobs, t0) == ["out0", "out1", "seq.txt"]
+    assert _written_since(jobs, t0 + 60) == []
+
+
+def test_a_batch_stopped_early_on_a_terminal_clears_its_progress_bar(
+        bench, tmp_path, monkeypatch, capsys):
+    """Without ``--keep-going`` the inputs after a failure are not run, the bar was never
+    cleared and the table was printed on its line."""
+    import io
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    term = Terminal()
+    monkeypatch.setattr(sys, "stderr", term)
+    bad = _broken(tmp_path, bench)
+    status = main(["track", str(bench / "SIM-0"), str(bad), str(bench / "SIM-1"),
+                   "--out", str(tmp_path / "out"), "--jobs", "1"])
+    assert status == 1
+    assert term.getvalue().endswith("\r\x1b[K")  # the bar's line cleared
+    out = capsys.readouterr().out
+    assert out.startswith("input ") and "not run" in out

@@ -274,3 +274,22 @@ def test_the_page_says_the_frame_rate_the_run_said(tmp_path, capsys):
     assert f"{fps:.0f}" == said
     assert f"{said} frames/s without writing" in (out / "report.html").read_text()
     assert fps != round(fps, 1)  # the rate as measured, not rounded to a tenth
+
+
+def test_an_interrupt_while_the_page_is_made_says_the_outputs_were_written(
+        tmp_path, monkeypatch, capsys):
+    """The page is made (seconds, to re-encode the video) after the run's outputs are in
+    place: an interrupt then said "earlier outputs are kept" of outputs already replaced."""
+    import vistrack.report
+
+    def stopped(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(vistrack.report, "write_report", stopped)
+    out = tmp_path / "run"
+    assert main(["track", str(demo_clip().video), "--stop", "5", "--out-dir", str(out),
+                 "--report", "--quiet"]) == 130
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.startswith("vistrack track: interrupted after this run's outputs were written (")
+    assert err.endswith("); the report page was not") and str(out / "tracks.txt") in err
+    assert (out / "tracks.txt").exists() and not (out / "report.html").exists()

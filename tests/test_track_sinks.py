@@ -611,3 +611,30 @@ def _partials(path):
     """The partial files of ``path`` on disk (their names carry a token of their own)."""
     path = Path(path)
     return sorted(path.parent.glob(f".{path.stem}.*.partial{path.suffix}"))
+
+
+def test_a_full_disk_is_named_by_the_output_it_stopped(tmp_path, monkeypatch):
+    """A buffered write's "No space left on device" named no file: ``vistrack track: error:
+    [Errno 28] No space left on device``, and in a batch's table the same. The partial file's
+    name is given, which the command line turns into the output's."""
+    import vistrack.io.atomic as atomic
+    from vistrack.cli import _message
+
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full here to fill a disk with")
+    real_open = open
+    monkeypatch.setattr(atomic, "open", lambda path, mode: real_open("/dev/full", mode),
+                        raising=False)  # a full disk
+    out = tmp_path / "res.txt"
+    for last in ("write", "commit"):
+        f = PartialFile(out)
+        with pytest.raises(OSError) as e:
+            if last == "write":
+                for _ in range(100):  # past the write buffer
+                    f.write("1,1,10,20,30,40,1,-1,-1,-1\n" * 100)
+            else:
+                f.write("1,1,10,20,30,40,1,-1,-1,-1\n")  # in the buffer: the last flush
+                f.commit()
+        f.abort()
+        assert e.value.errno == 28 and _message(e.value) == f"{out}: No space left on device"
+        assert list(tmp_path.iterdir()) == []

@@ -19,15 +19,42 @@ if TYPE_CHECKING:
 # concurrent.futures' process pool imports multiprocessing (12-18 ms): imported where a pool is
 # made, so that `vistrack track` with one input does not pay for it
 
-__all__ = ["process_pool", "one_thread_here", "default_jobs", "one_line"]
+__all__ = ["process_pool", "one_thread_here", "default_jobs", "one_line", "message"]
 
 _BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _ONE_THREAD = (*_BLAS_THREADS, "NUMBA_NUM_THREADS")
 
 
+def message(exc: BaseException) -> str:
+    """An exception's message on one line; an OS error as ``FILE: what went wrong``, and the
+    notes of where it was raised (:func:`vistrack.pipeline.run` adds them) after it.
+
+    Examples
+    --------
+    >>> message(FileNotFoundError(2, "No such file or directory", "a.txt"))
+    'a.txt: No such file or directory'
+    >>> message(ValueError("two\\nlines"))
+    'two lines'
+    >>> message(OSError(28, "No space left on device", "out/.res.000a1b2c3d.partial.txt"))
+    'out/res.txt: No space left on device'
+    """
+    if isinstance(exc, OSError) and exc.strerror and exc.filename is not None:
+        from .io.atomic import final_path
+
+        # an output's partial file is named by the output (a name the user gave)
+        text = f"{final_path(exc.filename)}: {exc.strerror}"
+    else:
+        text = str(exc) or type(exc).__name__
+    notes = getattr(exc, "__notes__", None)  # where it was raised (pipeline.run adds them)
+    if isinstance(notes, list) and notes:
+        text = f"{text} ({'; '.join(map(str, notes))})"
+    return " ".join(line.strip() for line in text.splitlines())
+
+
 def one_line(e: BaseException) -> str:
-    """An error as one line: ``TypeName: its message`` (white space collapsed)."""
-    return f"{type(e).__name__}: {' '.join(str(e).split()) or type(e).__name__}"
+    """An error as one line: ``TypeName: its message`` (:func:`message`: with the file an OS
+    error names and the notes of where it was raised; white space collapsed)."""
+    return f"{type(e).__name__}: {' '.join(message(e).split())}"
 
 
 def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecutor:

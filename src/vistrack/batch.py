@@ -290,7 +290,9 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
         own failures are reported as the jobs' errors, not retried here.
     keep_going : bool
         After a job fails, run the others (True), or start no new job (False: the jobs not
-        started are reported as not run).
+        started are reported as not run). An ``executor`` is given every job at once, and
+        those it has started by the time the failure is seen run to their end (a thread
+        pool of one starts the next job as the failed one ends).
     retries : int
         Times a job whose worker died is run again, on a new pool (the pool made here only).
     on_done : callable, optional
@@ -303,6 +305,8 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
     from concurrent.futures import FIRST_COMPLETED, wait
     from concurrent.futures.process import BrokenProcessPool
 
+    if workers is not None:  # (-1 was the pool's "max_workers must be greater than 0")
+        workers = _count(workers, "workers")
     n = len(jobs)
     outcomes: dict[int, Outcome] = {}
     attempts = dict.fromkeys(range(n), 0)
@@ -419,6 +423,15 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
             for i, job in enumerate(jobs)]
 
 
+def _count(value: Any, name: str) -> int:
+    """A number of processes, checked (imported here: numpy, which the check imports, may
+    start its BLAS threads, and a process with more than one thread spawns its workers
+    rather than forking them)."""
+    from ._validate import as_whole
+
+    return as_whole(value, name, 1, "processes")
+
+
 def _as_done(futures: dict[Future, int], stopped: Callable[[], bool]) -> Iterable[Future]:
     """The futures as they finish; once ``stopped()``, the ones not started are cancelled."""
     from concurrent.futures import FIRST_COMPLETED, wait
@@ -476,6 +489,8 @@ def track_many(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "de
     ...                                                    jobs=1)]
     [('A', True, 3), ('B', True, 3)]
     """
+    if jobs is not None:  # (0 was taken as every core, which --jobs refuses)
+        jobs = _count(jobs, "jobs")
     planned = plan(inputs, out, kind=kind, **options)
     return run_jobs(planned, workers=jobs, executor=executor, keep_going=keep_going,
                     retries=retries, on_done=progress_lines(progress, len(planned)))

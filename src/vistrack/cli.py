@@ -23,6 +23,7 @@ from . import __version__, _compile
 if TYPE_CHECKING:
     from typing import TextIO
 
+    from .batch import Job
     from .config import TrackConfig
     from .pipeline import TrackRun, VideoRun
 
@@ -70,28 +71,11 @@ def _n(count: int, one: str, many: str | None = None) -> str:
 
 
 def _message(exc: BaseException) -> str:
-    """An exception's message on one line; an OS error as ``FILE: what went wrong``.
+    """An exception's message on one line (:func:`vistrack._pool.message`: an OS error as
+    ``FILE: what went wrong``, with the notes of where it was raised)."""
+    from ._pool import message
 
-    Examples
-    --------
-    >>> _message(FileNotFoundError(2, "No such file or directory", "a.txt"))
-    'a.txt: No such file or directory'
-    >>> _message(ValueError("two\\nlines"))
-    'two lines'
-    >>> _message(OSError(28, "No space left on device", "out/.res.000a1b2c3d.partial.txt"))
-    'out/res.txt: No space left on device'
-    """
-    if isinstance(exc, OSError) and exc.strerror and exc.filename is not None:
-        from .io.atomic import final_path
-
-        # an output's partial file is named by the output (a name the user gave)
-        text = f"{final_path(exc.filename)}: {exc.strerror}"
-    else:
-        text = str(exc) or type(exc).__name__
-    notes = getattr(exc, "__notes__", None)  # where it was raised (pipeline.run adds them)
-    if isinstance(notes, list) and notes:
-        text = f"{text} ({'; '.join(map(str, notes))})"
-    return " ".join(line.strip() for line in text.splitlines())
+    return message(exc)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -733,6 +717,9 @@ def _print_video_run(args: argparse.Namespace, run: VideoRun, report: TextIO) ->
     if args.report:
         from .report import write_report
 
+        # the run's outputs are in place: an interrupt while the page is made (seconds, to
+        # re-encode the video) said "earlier outputs are kept" of outputs already replaced
+        args.outputs_written = list(run.files.values())
         run.files["report"] = write_report(args.out_dir, force=True)
     for key, path in run.files.items():
         print(f"  {key:<7} {path}", file=report)
@@ -819,7 +806,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     done, a table at the end; exit status 1 if any failed. ``offline_given``: the offline
     mode's settings given, refused with ``--out-dir`` and said to change nothing without
     ``--offline``, as for one input."""
-    from .batch import Job, Outcome, one_thread_here, plan, progress_lines, run_jobs
+    from .batch import Outcome, one_thread_here, plan, progress_lines, run_jobs
 
     if args.own_process:
         one_thread_here()  # before numpy: this process hands out the inputs, its workers track
@@ -831,6 +818,13 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
 
     def progress(n: int) -> Callable[[Outcome, int, int], None] | None:
         return progress_lines(None if args.quiet else sys.stderr, n)
+
+    def clear_bar() -> None:
+        # a batch that stopped before its last input (not run, Ctrl-C) left the bar, and
+        # the table was printed on its line; cleared (a bar already cleared is an empty line)
+        if not args.quiet and sys.stderr.isatty():
+            sys.stderr.write("\r\x1b[K")
+            sys.stderr.flush()
 
     if (args.out is None) == (args.out_dir is None):
         return fail("give --out RESULTS/ (each sequence's detections, NAME.txt each) or "
@@ -909,27 +903,23 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         except ImportError:
             return fail("--scheduler needs Dask's distributed (pip install 'vistrack[dask]')")
         with client:
-            outcomes = run_jobs(jobs, executor=client.get_executor(),
-                                keep_going=args.keep_going, on_done=progress(len(jobs)))
+            try:
+                outcomes = run_jobs(jobs, executor=client.get_executor(),
+                                    keep_going=args.keep_going, on_done=progress(len(jobs)))
+            finally:
+                clear_bar()
     else:
         t0 = time.time()
         try:
             outcomes = run_jobs(jobs, workers=args.jobs, keep_going=args.keep_going,
                                 on_done=progress(len(jobs)))
         except (KeyboardInterrupt, Terminated):
-            # which inputs' outputs this run wrote (each written whole, or not at all): the
-            # workers stop with the run, and one may have written its file as the signal
-            # came, without a line said of it
-            from .pipeline import SINK_FILES
-
-            def mtime(job: Job) -> float:
-                f = job.out if kind == "detections" else job.out / SINK_FILES["tracks"]
-                return f.stat().st_mtime if f.exists() else -math.inf
-
-            written = [j.out.name for j in jobs if mtime(j) >= t0 - 0.05]
+            clear_bar()
+            written = _written_since(jobs, t0)
             print(f"vistrack track: {len(written)} of {len(jobs)} inputs written before it "
                   f"stopped{': ' if written else ''}{', '.join(written)}", file=sys.stderr)
             raise
+        clear_bar()
     # an input's name, or the path given where its name says nothing (".", "..")
     names = [o.input.name if o.input.name not in ("", ".", "..") else str(o.input)
              for o in outcomes]
@@ -949,6 +939,22 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         print(f"tracked at --fps {args.fps:g} frames/s, over "
               + "; over ".join(f"{_RATE_SOURCES[k]}: {v}" for k, v in over.items() if v))
     return 1 if bad else 0
+
+
+def _written_since(jobs: Sequence[Job], t0: float) -> list[str]:
+    """The names of the jobs whose outputs were written at ``t0`` (a time) or after: each is
+    written whole or not at all, and the workers stop with an interrupted run, one perhaps
+    writing its file as the signal came, without a line said of it. A job from pixels
+    counts by its tracks file, ``tracks.txt`` or, from a point tracker, ``tracks.csv`` (its
+    written inputs were counted as none)."""
+    from .pipeline import SINK_FILES
+
+    def mtime(job: Job) -> float:
+        files = ([job.out] if job.kind == "detections" else
+                 [job.out / SINK_FILES[k] for k in ("tracks", "csv")])
+        return max((f.stat().st_mtime for f in files if f.exists()), default=-math.inf)
+
+    return [j.out.name for j in jobs if mtime(j) >= t0 - 0.05]
 
 
 def _fit(args: argparse.Namespace) -> int:
@@ -1671,6 +1677,10 @@ def _run(args: argparse.Namespace) -> int:
         # tracks, boxes, video and plot are written under partial names and renamed only
         # when complete (vistrack.io.atomic): what an earlier run wrote is still there
         kept = "; earlier outputs are kept" if args.command in ("track", "track-one") else ""
+        written = getattr(args, "outputs_written", None)
+        if written:  # (stopped while --report's page was made)
+            kept = (f" after this run's outputs were written ({', '.join(map(str, written))}); "
+                    "the report page was not")
         how = "interrupted" if isinstance(exc, KeyboardInterrupt) else "terminated"
         print(f"vistrack {args.command}: {how}{kept}", file=sys.stderr)
         return 130 if isinstance(exc, KeyboardInterrupt) else 128 + signal.SIGTERM

@@ -346,11 +346,18 @@ class PartialFile:
     def write(self, text: str) -> None:
         """Append ``text`` to the partial file (opened, and its folder made, at the first
         call)."""
-        self._open().write(text)
+        with self._naming():
+            self._open().write(text)
+
+    def _naming(self) -> contextlib.AbstractContextManager:
+        """An OS error of a write or flush (a full disk) with the partial file's name, which
+        a buffered write leaves out ("[Errno 28] No space left on device" named no file)."""
+        return _naming(self.part)
 
     def read(self) -> str:
         """Everything written so far (the partial file read back)."""
-        self._open().flush()
+        with self._naming():
+            self._open().flush()
         return self.part.read_text()
 
     def truncate(self) -> None:
@@ -364,7 +371,8 @@ class PartialFile:
         written); on failure (a full disk at the last flush) remove it, leaving ``path`` as
         it was."""
         try:
-            self._open().close()
+            with self._naming():
+                self._open().close()
             commit_partial(self.part, self.path)
         except BaseException:
             self.abort()
@@ -383,6 +391,17 @@ class PartialFile:
             pass
         finally:
             self.part.unlink(missing_ok=True)
+
+
+@contextlib.contextmanager
+def _naming(path: Path) -> Iterator[None]:
+    """Give an OS error raised inside without a file name (a buffered write's) ``path``."""
+    try:
+        yield
+    except OSError as e:
+        if e.filename is None and e.strerror:
+            raise OSError(e.errno, e.strerror, str(path)) from e
+        raise
 
 
 def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "out",
