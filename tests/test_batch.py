@@ -902,3 +902,23 @@ def test_a_batch_stopped_early_on_a_terminal_clears_its_progress_bar(
     assert term.getvalue().endswith("\r\x1b[K")  # the bar's line cleared
     out = capsys.readouterr().out
     assert out.startswith("input ") and "not run" in out
+
+
+def test_each_inputs_run_json_keeps_the_commands_warnings(tmp_path, capsys):
+    """A setting that changes nothing is said once, before the run; one input's
+    ``run.json`` kept that warning, several inputs' did not (nor their report pages)."""
+    import json
+    import shutil
+
+    clip = tmp_path / "clip.mp4"
+    shutil.copy(demo_clip().video, clip)
+    out = tmp_path / "many"
+    assert main(["track", str(clip), str(demo_clip().video), "--out-dir", str(out),
+                 "--tracker", "sort", "--low", "0.2", "--stop", "5", "--jobs", "1",
+                 "--quiet"]) == 0
+    said = [line for line in capsys.readouterr().err.splitlines() if "--low" in line]
+    assert len(said) == 1
+    for name in ("clip", demo_clip().video.stem):
+        kept = json.loads((out / name / "run.json").read_text())["warnings"]
+        assert kept[0].startswith("--low: the second association stage's threshold") \
+            and kept[0] in said[0]

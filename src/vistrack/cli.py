@@ -882,7 +882,10 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         options.update(_video_options(args, name, box, cfg))
     if args.fps is not None:  # every input's frame rate, put over any it gives
         options["fps"] = args.fps
-    _warn_unused_settings(args, cfg, offline_given)
+    from .pipeline import _keep_warnings, _shown_warnings
+
+    with _shown_warnings() as said:  # kept in each input's run.json, as for one input
+        _warn_unused_settings(args, cfg, offline_given)
     jobs = plan(args.input, out, kind=kind, **options)
     # every job's inputs: one job's outputs may not be another's input either
     read = [r for job in jobs for r in (sequence_inputs(job.input) if kind == "detections"
@@ -920,6 +923,12 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
                   f"stopped{': ' if written else ''}{', '.join(written)}", file=sys.stderr)
             raise
         clear_bar()
+    if kind == "pixels" and said:
+        # run.json (and the report, from it) keeps the command's warnings before the run's
+        # own, as for one input: with several inputs they were left out
+        for o in outcomes:
+            if o.ok:
+                _keep_warnings(o.out, said, before=True)
     # an input's name, or the path given where its name says nothing (".", "..")
     names = [o.input.name if o.input.name not in ("", ".", "..") else str(o.input)
              for o in outcomes]

@@ -2715,18 +2715,20 @@ def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,
         part.write_text(json.dumps(info, indent=2) + "\n")
 
 
-def _keep_warnings(out_dir: str | Path, said: Sequence[str]) -> None:
+def _keep_warnings(out_dir: str | Path, said: Sequence[str], *, before: bool = False) -> None:
     """``run.json``'s ``warnings`` (:func:`_write_run_info`) made ``said``: the warnings of the
     whole command, those it gave before the run (a setting that changes nothing) with the
-    run's own, in the order shown."""
+    run's own, in the order shown; with ``before``, ``said`` are the command's alone, put
+    before the run's own (a run in a worker of a batch, which kept its own)."""
     import json
 
     from .io.atomic import replacing
 
     path = Path(out_dir) / RUN_INFO
     info = json.loads(path.read_text(encoding="utf-8"))
-    if info.get("warnings") != list(said):
-        info["warnings"] = list(said)
+    want = list(said) + (list(info.get("warnings", [])) if before else [])
+    if info.get("warnings") != want:
+        info["warnings"] = want
         with replacing(path) as part:
             part.write_text(json.dumps(info, indent=2) + "\n")
 
