@@ -922,3 +922,51 @@ def test_each_inputs_run_json_keeps_the_commands_warnings(tmp_path, capsys):
         kept = json.loads((out / name / "run.json").read_text())["warnings"]
         assert kept[0].startswith("--low: the second association stage's threshold") \
             and kept[0] in said[0]
+
+
+TERMINATED = """import os, signal, sys, threading
+from concurrent.futures.process import BrokenProcessPool
+from vistrack._pool import process_pool
+from vistrack.io.atomic import PartialFile
+
+def half_written(out):
+    f = PartialFile(out)
+    f.write("1,1,10,20,30,40,1,-1,-1,-1\\n")
+    f.read()  # (flushed: the partial file is on disk)
+    os.kill(os.getpid(), signal.SIGTERM)  # as timeout or kill -TERM -PGID sends it
+    return "not terminated"
+
+def check(folder):
+    with process_pool(1) as pool:
+        try:
+            got = pool.submit(half_written, os.path.join(folder, "res.txt")).result()
+        except BrokenProcessPool:
+            got = "died"
+    print(got, sorted(os.listdir(folder)))
+
+if __name__ == "__main__":
+    check(sys.argv[1])  # forked
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    check(sys.argv[2])  # spawned
+    stop.set()
+    other.join()
+"""
+
+
+def test_a_worker_sent_sigterm_removes_its_partial_files_and_dies(tmp_path):
+    """SIGTERM sent to the whole process group (``timeout``, ``kill -TERM -PGID``, a service
+    manager's stop) ended a worker at once, its outputs left under partial names until a
+    later run wrote the same outputs (and ``vistrack eval --pred-dir`` listed them). The
+    worker still dies of it, as the pool expects (its job run again elsewhere), forked or
+    spawned, but removes them first."""
+    (tmp_path / "terminated.py").write_text(TERMINATED)
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1",
+               PYTHONPATH=str(Path(__file__).parents[1] / "src"))
+    for name in ("forked", "spawned"):
+        (tmp_path / name).mkdir()
+    r = subprocess.run([sys.executable, str(tmp_path / "terminated.py"),
+                        str(tmp_path / "forked"), str(tmp_path / "spawned")], env=env,
+                       capture_output=True, text=True, timeout=120)
+    assert r.stdout.splitlines() == ["died []"] * 2, r.stderr

@@ -66,7 +66,8 @@ def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecut
     forked process safely can when no other thread holds a lock. Otherwise (another thread
     running, such as a BLAS pool started with more than one thread; not Linux) they are
     spawned: fresh processes that import what they need. A forked worker is then made like a
-    fresh one: SIGTERM acts as Python's default (or stays ignored if this process ignores
+    fresh one: SIGTERM acts as Python's default once the job's partial files are removed
+    (:func:`_on_sigterm`, in a spawned worker too; or stays ignored if this process ignores
     it), and no compile watch of this process's (:mod:`vistrack._compile`) goes on in it;
     warnings print as this process prints them. Ctrl-C (unless ignored here) stops the job a
     worker runs, as in any process, and is left to the pool between jobs: raised while a
@@ -106,7 +107,7 @@ def process_pool(workers: int, imports: Sequence[str] = ()) -> ProcessPoolExecut
             pool = _Jobs(
                 workers, mp_context=multiprocessing.get_context("fork"), initializer=_as_fresh,
                 initargs=(signal.SIG_IGN if ign[signal.SIGINT] else _on_sigint,
-                          signal.SIG_IGN if ign[signal.SIGTERM] else signal.SIG_DFL))
+                          signal.SIG_IGN if ign[signal.SIGTERM] else _on_sigterm))
         else:
             pool = _Jobs(workers, mp_context=multiprocessing.get_context("spawn"),
                          initializer=_as_spawned)
@@ -201,11 +202,28 @@ def _in_job(fn: Any, *args: Any, **kwargs: Any) -> Any:
 
 
 def _as_spawned() -> None:
-    """In a spawned worker: Ctrl-C as :func:`_on_sigint` (unless ignored)."""
+    """In a spawned worker: Ctrl-C as :func:`_on_sigint` and SIGTERM as :func:`_on_sigterm`
+    (unless ignored)."""
     import signal
 
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         signal.signal(signal.SIGINT, _on_sigint)
+    if signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _on_sigterm)
+
+
+def _on_sigterm(signum: int, frame: Any) -> None:
+    """SIGTERM in a worker: the partial files of its job removed, then the default action
+    (the process ends at once, as a fresh one would, and the pool sees it die). ``timeout``,
+    ``kill -TERM -PGID`` and a service manager's stop send it to every process of the group:
+    each worker's outputs under partial names stayed until a later run wrote them."""
+    import signal
+
+    from .io.atomic import remove_partials
+
+    remove_partials()
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    os.kill(os.getpid(), signal.SIGTERM)
 
 
 def _as_fresh(sigint: Any, sigterm: Any) -> None:

@@ -155,6 +155,7 @@ def _rename(part: Path, path: Path) -> None:
     import glob
 
     os.replace(part, path)
+    _NAMED.discard(part)
     tail = f"partial{path.suffix}"
     prefix = _hidden_prefix(path, tail)
     for other in path.parent.glob(f"{glob.escape(prefix)}*.{glob.escape(tail)}"):
@@ -209,7 +210,25 @@ def partial_path(path: str | os.PathLike) -> Path:
     255
     """
     p = Path(path)
-    return hidden_path(p, f"partial{p.suffix}")
+    part = hidden_path(p, f"partial{p.suffix}")
+    _NAMED.add(part)
+    return part
+
+
+_NAMED: set[Path] = set()
+"""The partial files this process has named and not yet renamed over their outputs."""
+
+
+def remove_partials() -> None:
+    """Remove the partial files this process has named that are still there: what a job
+    stopped by SIGTERM in a worker leaves (the default action ends the process at once, and
+    its partial files stayed until a later run wrote the same outputs)."""
+    for part in list(_NAMED):
+        try:
+            part.unlink()
+        except OSError:  # (never made, already renamed, or a folder)
+            pass
+    _NAMED.clear()
 
 
 def _make_folder(path: Path) -> list[Path]:
@@ -391,6 +410,7 @@ class PartialFile:
             pass
         finally:
             self.part.unlink(missing_ok=True)
+            _NAMED.discard(self.part)
 
 
 @contextlib.contextmanager
