@@ -944,7 +944,22 @@ def check(folder):
             got = "died"
     print(got, sorted(os.listdir(folder)))
 
+def theirs_kept(folder):
+    # a partial file of this process's, open while a forked worker dies of SIGTERM (as the
+    # pool sends its other workers when one dies): the worker's own are removed, not it
+    mine = PartialFile(os.path.join(folder, "mine.txt"))
+    mine.write("kept\\n")
+    mine.read()
+    with process_pool(1) as pool:
+        try:
+            pool.submit(half_written, os.path.join(folder, "res.txt")).result()
+        except BrokenProcessPool:
+            pass
+    mine.commit()
+    print(sorted(os.listdir(folder)))
+
 if __name__ == "__main__":
+    theirs_kept(sys.argv[3])
     check(sys.argv[1])  # forked
     stop = threading.Event()
     other = threading.Thread(target=stop.wait)
@@ -964,9 +979,11 @@ def test_a_worker_sent_sigterm_removes_its_partial_files_and_dies(tmp_path):
     (tmp_path / "terminated.py").write_text(TERMINATED)
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1",
                PYTHONPATH=str(Path(__file__).parents[1] / "src"))
-    for name in ("forked", "spawned"):
+    for name in ("forked", "spawned", "parent"):
         (tmp_path / name).mkdir()
     r = subprocess.run([sys.executable, str(tmp_path / "terminated.py"),
-                        str(tmp_path / "forked"), str(tmp_path / "spawned")], env=env,
+                        str(tmp_path / "forked"), str(tmp_path / "spawned"),
+                        str(tmp_path / "parent")], env=env,
                        capture_output=True, text=True, timeout=120)
-    assert r.stdout.splitlines() == ["died []"] * 2, r.stderr
+    assert r.stdout.splitlines() == ["['mine.txt']", "died []", "died []"], r.stderr
+    assert (tmp_path / "parent" / "mine.txt").read_text() == "kept\n"

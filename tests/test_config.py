@@ -423,6 +423,7 @@ def test_resolve_config_puts_values_over_a_preset():
     # at 0 any two tracks within link_gap were joined, however far apart
     with pytest.raises(ValueError, match=r"link_iou must be in \(0, 1\] \(at 0 any two tracks"):
         OfflineConfig(link_iou=0.0)
+    assert OfflineConfig(link_iou=0.0, link_gap=0.0).link_iou == 0.0  # (no joining)
 
 
 def test_each_flat_override_names_one_setting():

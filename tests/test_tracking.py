@@ -1139,6 +1139,8 @@ def test_settings_and_arguments_out_of_their_domain_are_named():
     with pytest.raises(TypeError, match=re.escape("tracker must be a BoxTracker(record=True); "
                                                   "got None")):
         smooth(None)
+    # with no joining (link_gap 0) link_iou says nothing: 0 is taken there
+    assert len(smooth(tr, link_gap=0, link_iou=0.0).frames) == len(smooth(tr, link_gap=0).frames)
 
 
 def test_box_tracker_names_a_setting_it_has_not_and_a_rate_that_is_no_number():

@@ -214,14 +214,18 @@ def _as_spawned() -> None:
 
 def _on_sigterm(signum: int, frame: Any) -> None:
     """SIGTERM in a worker: the partial files of its job removed, then the default action
-    (the process ends at once, as a fresh one would, and the pool sees it die). ``timeout``,
-    ``kill -TERM -PGID`` and a service manager's stop send it to every process of the group:
-    each worker's outputs under partial names stayed until a later run wrote them."""
+    (the process ends, as a fresh one would, and the pool sees it die; in a compiled call
+    that runs on, once it returns). ``timeout``, ``kill -TERM -PGID`` and a service
+    manager's stop send it to every process of the group: each worker's outputs under
+    partial names stayed until a later run wrote them. Nothing is imported here: a job
+    whose imports the signal came into (a spawned worker's first) has named no partial
+    file, and an import in the handler ran into them (a partly imported numpy)."""
     import signal
+    import sys
 
-    from .io.atomic import remove_partials
-
-    remove_partials()
+    remove = getattr(sys.modules.get("vistrack.io.atomic"), "remove_partials", None)
+    if remove is not None:
+        remove()
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     os.kill(os.getpid(), signal.SIGTERM)
 
@@ -229,14 +233,21 @@ def _on_sigterm(signum: int, frame: Any) -> None:
 def _as_fresh(sigint: Any, sigterm: Any) -> None:
     """In a forked worker: what a fresh process would have. The handlers of Ctrl-C and
     SIGTERM given (the parent's own, such as the command line's SIGTERM, are its own), and
-    no compile watch of the parent's going on."""
+    no compile watch or partial files of the parent's (:func:`_on_sigterm` removes a
+    worker's own)."""
     import signal
+    import sys
 
     from . import _compile
 
     signal.signal(signal.SIGINT, sigint)
     signal.signal(signal.SIGTERM, sigterm)
     _compile.forget()
+    # the parent's partial files are its own: a worker's SIGTERM removed them under it (one
+    # worker's death has the pool send SIGTERM to the others)
+    atomic = sys.modules.get("vistrack.io.atomic")
+    if atomic is not None:
+        atomic.forget_partials()
 
 
 def default_jobs() -> int:

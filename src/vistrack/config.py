@@ -143,7 +143,8 @@ class OfflineConfig:
         for name in ("extend_iou", "link_iou"):
             if getattr(self, name) > 1:
                 raise ValueError(f"{name} must be in [0, 1]; got {getattr(self, name)!r}")
-        if self.link_iou == 0:  # (any two tracks within link_gap were joined, however far)
+        if self.link_iou == 0 and self.link_gap > 0:  # (any two tracks within link_gap
+            # were joined, however far apart)
             raise ValueError("link_iou must be in (0, 1] (at 0 any two tracks within link_gap "
                              "would be joined, however far apart); got 0")
         if not 0 < self.calibration_iou_min <= 1:  # (at 0 every box would link to any)

@@ -211,12 +211,19 @@ def partial_path(path: str | os.PathLike) -> Path:
     """
     p = Path(path)
     part = hidden_path(p, f"partial{p.suffix}")
+    if len(_NAMED) >= 1024:  # (those given up without a rename: the files no longer there)
+        _NAMED.difference_update([q for q in _NAMED if not q.exists()])
     _NAMED.add(part)
     return part
 
 
 _NAMED: set[Path] = set()
 """The partial files this process has named and not yet renamed over their outputs."""
+
+
+def forget_partials() -> None:
+    """Forget the partial files named so far: in a forked process, they are its parent's."""
+    _NAMED.clear()
 
 
 def remove_partials() -> None:

@@ -180,8 +180,8 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float | N
     ValueError
         If the tracker was not created with ``record=True``, ``max_gap``, ``link_gap`` or
         ``link_window`` is not a whole number of frames >= 0 (>= 1 for ``link_window``),
-        ``link_iou`` is not in (0, 1] or ``extend_iou`` not in [0, 1], or ``min_score`` is
-        given and not finite.
+        ``link_iou`` is not in (0, 1] (or [0, 1] with ``link_gap`` 0, no joining) or
+        ``extend_iou`` not in [0, 1], or ``min_score`` is given and not finite.
     TypeError
         If ``tracker`` is not a :class:`BoxTracker`, or a setting that is a number is given
         as something else (a string, or None for ``link_iou``).
@@ -230,7 +230,7 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float | N
     # an IoU (NaN fails this too; a string was a TypeError in a comparison). link_iou 0 took
     # any two tracks within link_gap as one, however far apart (extend_iou 0 takes only
     # overlapping boxes: its pairs need some overlap), and None failed where a pair was met
-    link_iou = _iou(link_iou, "link_iou", zero=False)
+    link_iou = _iou(link_iou, "link_iou", zero=link_gap == 0)  # (0: any two tracks joined)
     if extend_iou is not None:
         extend_iou = _iou(extend_iou, "extend_iou", zero=True)
     if min_score is not None:

@@ -230,9 +230,10 @@ class Snake:
         Raises
         ------
         ValueError
-            If ``centre`` is not two finite numbers or ``radius`` not a finite number > 0.
+            If ``centre`` is not two finite numbers (None, or one string of a number, is
+            one value) or ``radius`` not a finite number > 0.
         TypeError
-            If ``centre`` holds something other than numbers.
+            If ``centre`` cannot be read as numbers at all (``"ab"``).
 
         Examples
         --------
