@@ -928,7 +928,10 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         # own, as for one input: with several inputs they were left out
         for o in outcomes:
             if o.ok:
-                _keep_warnings(o.out, said, before=True)
+                try:
+                    _keep_warnings(o.out, said, before=True)
+                except OSError:  # (a cluster's outputs out of reach here: printed above)
+                    pass
     # an input's name, or the path given where its name says nothing (".", "..")
     names = [o.input.name if o.input.name not in ("", ".", "..") else str(o.input)
              for o in outcomes]
