@@ -279,10 +279,9 @@ class _Summed:
     """An E-step over every chunk (the interface of :class:`vistrack.filters.learn._EStep`):
     the chunks' log-likelihoods and sums, computed where the chunks are and added here."""
 
-    def __init__(self, chunks: list, p: dict, learn: tuple[str, ...], B: int,
-                 count: np.ndarray, move_count: np.ndarray) -> None:
-        self.chunks, self.p, self.B, self.count = chunks, p, B, count
-        self.move_count = move_count
+    def __init__(self, chunks: list, p: dict, learn: tuple[str, ...], count: np.ndarray,
+                 move_count: np.ndarray) -> None:
+        self.chunks, self.p, self.count, self.move_count = chunks, p, count, move_count
         self.sums = self._pass(learn, None)
         self.ll = float(self.sums["ll"])
 
@@ -443,9 +442,9 @@ def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tupl
     p0: dict[str, Any] = dict(p, x0=x0 if x0s is None else None, P0=P0 if P0s is None else None)
 
     def estep(params: dict, now: tuple[str, ...]) -> _Summed:
-        return _Summed(chunks, params, now, B, count, move_count)
+        return _Summed(chunks, params, now, count, move_count)
 
-    fit = _fit(estep, B, T, p0, learn, Q_form, R_form, tol, max_iter, progress)
+    fit = _fit(estep, T, p0, learn, Q_form, R_form, tol, max_iter, progress)
     # a prior given per series and not learned is returned as given
     return replace(fit, x0=fit.x0 if x0s is None else x0s, P0=fit.P0 if P0s is None else P0s)
 

@@ -266,7 +266,7 @@ def _fit_in_memory(y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ..
     :class:`_Observed`, if already made)."""
     obs = _Observed(y) if o is None else o
     shared = _shares_covariances(obs, p, learn)
-    return _fit(lambda params, _: _estep(obs, params, shared), y.shape[0], y.shape[1], p,
+    return _fit(lambda params, _: _estep(obs, params, shared), y.shape[1], p,
                 learn, Q_form, R_form, tol, max_iter, progress, label)
 
 
@@ -592,7 +592,7 @@ class _Structured:
 
     def __init__(self, y: np.ndarray, p: dict[str, np.ndarray], learn: tuple[str, ...],
                  R_form: str) -> None:
-        B, T, m = y.shape
+        _, T, m = y.shape
         diag = R_form == "diag" and "R" in learn
         if diag and p["R"].ndim != 2:
             raise ValueError("R_form='diag' needs one R (m, m) for all steps; got "
@@ -690,10 +690,10 @@ class _Scaled:
         return int(np.sum(count * self.rank))
 
 
-def _fit(estep: Any, B: int, T: int, p: dict[str, np.ndarray], learn: tuple[str, ...],
+def _fit(estep: Any, T: int, p: dict[str, np.ndarray], learn: tuple[str, ...],
          Q_form: str, R_form: str, tol: float, max_iter: int, progress: TextIO | None,
          label: str = "") -> FitResult:
-    """EM pooled over a batch of ``B`` series of ``T`` steps; ``estep(p, learn)`` runs the
+    """EM pooled over a batch of series of ``T`` steps; ``estep(p, learn)`` runs the
     E-step under the model ``p`` and returns an object with the log-likelihood ``ll`` and the
     M-step's sums (:class:`_EStep` for a batch in memory, one whose sums are added chunk to
     chunk for a Dask array)."""

@@ -13,11 +13,11 @@ continuous time, ``ε_uv`` of variance ``k b``, ``b = r³ (sigma_vel h)²`` (the
 pixels a frame), and ``ε_xy`` of variance ``k a``, ``a = r (sigma_pos h)²``, so that a target
 moves as far in a second at any frame rate and its velocity spreads as far; its centre
 nearly so (the velocity's noise moves it in whole frames: with the defaults its spread 1 s
-after a start is 0.26 of its height at 7 frames/s and 0.28 at 30). Across a gap of ``k > 1``
-frames
-``ε_xy`` also carries how far each frame's velocity noise moved the centre in the frames after
-it: variance ``b (k-1) k (2k-1) / 6`` more, and covariance ``b k (k-1) / 2`` with ``ε_uv``,
-so that a gap spreads the cloud as the frames stepped one by one would. The box's size is
+after a start is 0.26 of its height at 7 frames/s and 0.28 at 30). Across a gap of
+``k > 1`` frames ``ε_xy`` also carries how far each frame's velocity noise moved the centre
+in the frames after it: variance ``b (k-1) k (2k-1) / 6`` more, and covariance
+``b k (k-1) / 2`` with ``ε_uv``, so that a gap spreads the cloud as the frames stepped one
+by one would. The box's size is
 the target's, learnt from the detections associated with it.
 
 **Association.** Detections are matched to targets greedily, best pair first, by the seed's
