@@ -307,6 +307,42 @@ def test_chains_across_gaps_count_flickering_objects(pan):
     assert np.count_nonzero(s == 0.2) == (T - 2) + (T - 3) and (o[s == 0.2] == 0).all()
 
 
+@pytest.mark.parametrize("pan", [0.0, 35.0])
+@pytest.mark.parametrize("rate", [10.0, 2.0])
+@pytest.mark.parametrize("k", [2, 3, 7])
+def test_chains_count_frames_not_calls(pan, rate, k):
+    """The flickering scene above at ``rate`` frames/s, and the same frames observed ``k``
+    frames apart (``step=k``) by a calibrator at ``k`` times the rate: the same times, so the
+    same outcomes, one by one (the oracle: the run at ``rate``, derived by hand above at 10).
+    Counting calls, the chains' 1 s spanned ``k`` seconds and their 0.2 s gap was 0.2 ``k``
+    s. At 10 frames/s the gap is 2 frames, and ``2 k`` at ``10 k``; at 2 frames/s it is less
+    than a frame (0.4), which a chain always bridges (1 frame), and ``k`` frames at ``2 k``,
+    a step. The outcomes at 2 frames/s differ from 10's: the flickering objects' chains end
+    at their first gap there (frame-to-frame alone then: 0 for them)."""
+    frames = flickering_scene(pan)
+    one = ScoreCalibrator(frame_rate=rate, window=None)
+    apart = ScoreCalibrator(frame_rate=rate * k, window=None)
+    for d in frames:
+        one.observe(d)
+        apart.observe(d, step=k)
+        for a, b in zip(one.outcomes(), apart.outcomes()):
+            assert a.tolist() == b.tolist()
+    s, o = one.outcomes()
+    assert o[s == 0.5].sum() == (0 if rate == 2 else 4 * 27)
+    assert (o[s == 0.9] == 1).all() and (o[s == 0.2] == 0).all()
+
+
+def test_a_step_must_be_a_whole_number_of_frames():
+    d = Detections(boxes=np.array([[10.0, 10, 40, 80]]), scores=[0.9])
+    for bad in (0, -1, 1.5, True, "2", np.nan):
+        with pytest.raises(ValueError, match=r"^step must be an integer >= 1 \(frames\); got "):
+            ScoreCalibrator().observe(d, step=bad)
+    cal = ScoreCalibrator()
+    cal.observe(d, step=np.int64(2))
+    cal.observe(d, step=2.0)
+    assert cal._t == 4
+
+
 def test_chains_no_longer_referred_to_are_forgotten():
     """A parked car detected in every frame keeps its chain for the whole run, while clutter
     begins a chain a box: the table of chains holds the ones still referred to (by a last

@@ -696,9 +696,10 @@ class BoxTracker:
             cal.observe(_NOTHING)       # none of it, as in a file of that class alone
         return cal
 
-    def _observe(self, detections: Detections) -> None:
-        """Show one frame to the online calibration: each class's detections to its own
-        learner (the frame as it is where it holds one class, or none)."""
+    def _observe(self, detections: Detections, step: int = 1) -> None:
+        """Show one frame, ``step`` frames after the one shown before, to the online
+        calibration: each class's detections to its own learner (the frame as it is where it
+        holds one class, or none)."""
         if self.config.scores != "calibrated" or isinstance(self.calibration, ScoreCalibration):
             return
         dc = detections.classes
@@ -706,7 +707,7 @@ class BoxTracker:
         if len(self.calibrators) == 1 and self.calibration is None:
             (k, learner), = self.calibrators.items()
             if not len(dc) or (dc == k).all():  # the one class seen so far (the usual file)
-                learner.observe(detections)
+                learner.observe(detections, step)
                 self._observed += 1
                 return
         seen = _kinds(dc)
@@ -718,13 +719,13 @@ class BoxTracker:
                     self.calibrators[k] = self._new_calibrator()
         for k, cal in self.calibrators.items():
             if seen == [k]:
-                cal.observe(detections)
+                cal.observe(detections, step)
             elif k in seen:
-                cal.observe(detections[dc == k])
+                cal.observe(detections[dc == k], step)
             else:  # (one empty frame for every class the frame holds none of)
-                cal.observe(_NOTHING)
+                cal.observe(_NOTHING, step)
         if self._unclaimed is not None:
-            self._unclaimed.observe(_NOTHING)
+            self._unclaimed.observe(_NOTHING, step)
         self._observed += 1
 
     @property
@@ -1142,6 +1143,9 @@ class BoxTracker:
             raise ValueError(f"frame must increase; got {frame_index(frame, None)} after "
                              f"{last}, a frame passed over (pass_over)") from None
         first = self.frame is None
+        # the frames since the last one stepped or passed over (1: the next frame): a gap in
+        # frame numbers is time to the calibration's chains and to coasting's rounding too
+        step = 1 if last is None else frame - last
         self._passed = 0
         dt = 0.0 if self.frame is None else float(frame - self.frame)
         self.frame = frame
@@ -1165,7 +1169,7 @@ class BoxTracker:
             if not keep.all():
                 detections = detections[keep]
                 db, raw, dc = db[keep], raw[keep], dc[keep]
-        self._observe(detections)
+        self._observe(detections, step)
         ds = self.confidence(raw, dc)
         if cfg.scores == "raw" and cfg.fuse_score and len(ds) and not (
                 (ds >= 0) & (ds <= 1)).all():
@@ -1238,7 +1242,8 @@ class BoxTracker:
         if cfg.coast_time > 0:
             coast = ((t.state == LOST) & (t.found >= cfg.coast_rate)
                      & (t.last_time - t.first_time >= cfg.coast_after - time_slack(time))
-                     & (time - t.last_time <= cfg.coast_time + 0.5 / self.frame_rate))
+                     # (coast_time to the nearest frame stepped: half a step's slack)
+                     & (time - t.last_time <= cfg.coast_time + 0.5 * step / self.frame_rate))
             if self.image_size is not None and coast.any():
                 b = _to_xyxy(t.mean[:, :4])
                 coast &= ((b[:, 0] >= 0) & (b[:, 1] >= 0) & (b[:, 2] <= self.image_size[0])

@@ -152,7 +152,7 @@ def _link(prev, prev_cls, cur, cur_cls, min_iou):
 
 
 @njit(cache=True)
-def _chain_step(t, gap, span, shift, head_box, head_cls, head_t, head_shift, head_chain,
+def _chain_step(t, gap, step, span, shift, head_box, head_cls, head_t, head_shift, head_chain,
                 first, state, open_s, open_chain, boxes, cls, s, min_iou):
     # one frame of ScoreCalibrator's chains (see _observe): returns the new heads, the
     # chains' first frames and states by chain number, the detections still open, and the
@@ -174,12 +174,12 @@ def _chain_step(t, gap, span, shift, head_box, head_cls, head_t, head_shift, hea
         for a in range(4):
             moved[j, a] = head_box[i, a] + shift[a % 2] - head_shift[i, a % 2]
         kcls[j] = head_cls[i]
-        age[j] = t - head_t[i]
+        age[j] = (t - head_t[i]) / step  # in steps of the frames observed
     ids = np.full(N, -1, np.int64)
     taken = np.zeros(K, np.bool_)
     if K > 0 and N > 0:
-        # one-to-one links (GNN) on 1 - IoU plus 0.01 a frame since the chain was last
-        # extended (the most recent chain wins a tie)
+        # one-to-one links (GNN) on 1 - IoU plus 0.01 a step (this frame's, in frames)
+        # since the chain was last extended (the most recent chain wins a tie)
         rows, cols, ov, _ = iou_pairs_same_class(moved, kcls, boxes, cls, min_iou)
         r, c = gnn_pairs(rows, cols, 1.0 - ov + 0.01 * age[rows], K, N)
         for m in range(r.shape[0]):
@@ -279,7 +279,7 @@ def _chain_step(t, gap, span, shift, head_box, head_cls, head_t, head_shift, hea
 
 @kernel
 @njit(cache=True)
-def _observe(prev_box, prev_cls, boxes, cls, s, link_iou, shift, chains, t, gap, span,
+def _observe(prev_box, prev_cls, boxes, cls, s, link_iou, shift, chains, t, gap, step, span,
              head_box, head_cls, head_t, head_shift, head_chain, first, state, open_s,
              open_chain):
     # one frame of ScoreCalibrator.observe in one compiled call: the frame-to-frame links
@@ -304,7 +304,7 @@ def _observe(prev_box, prev_cls, boxes, cls, s, link_iou, shift, chains, t, gap,
                 shift[a] = shift[a] + np.median(d)
     if chains:
         (head_box, head_cls, head_t, head_shift, head_chain, first, state, open_s, open_chain,
-         out_s, out_p) = _chain_step(t, gap, span, shift, head_box, head_cls, head_t,
+         out_s, out_p) = _chain_step(t, gap, step, span, shift, head_box, head_cls, head_t,
                                      head_shift, head_chain, first, state, open_s, open_chain,
                                      boxes, cls, s, link_iou)
     else:
@@ -839,9 +839,17 @@ class ScoreCalibrator:
         # in frames: a chain lasts once its last frame is this far after its first, and takes
         # a detection up to this many frames after its last
         self._span = self.chain_span * self.frame_rate
-        # (held within int64, which the compiled step takes: a gap of 1e300 s is for ever)
-        self._gap = max(1, int(round(min(self.chain_gap * self.frame_rate, 2.0**62))))
         self.reset()
+
+    def _gap_frames(self, step: int) -> int:
+        """The chains' gap in frames, where this frame comes ``step`` frames after the one
+        before: ``chain_gap`` rounded to a whole number of such steps, at least one (the
+        previous frame's detections always continue a chain), so that a detector delivering
+        every ``step``-th frame at ``step`` times the rate links as one delivering every frame
+        at the rate; with ``step`` 1, ``chain_gap`` rounded to whole frames."""
+        # (held within int64, which the compiled step takes: a gap of 1e300 s is for ever)
+        steps = round(min(self.chain_gap * self.frame_rate / step, 2.0**62 / step))
+        return step * max(1, int(steps))
 
     def reset(self) -> None:
         """Forget everything seen.
@@ -863,11 +871,11 @@ class ScoreCalibrator:
         # before the first outcome: every score seen, ranked by the map (refreshed each frame)
         self._early: list[np.ndarray] = []
         self._frames, self._fit_frames = 0, -1
-        # the chains: the frame count, the image's shift summed over the frames, each chain's
-        # last box (``_head_*``: box, class, frame, the summed shift then, chain), each chain's
-        # first frame and state (0 open, 1 lasted, -1 ended short) by chain number (renumbered
-        # as chains are forgotten), and the detections whose chain is still open (score,
-        # chain)
+        # the chains: the next frame's time in frames (the last one's plus 1), the image's
+        # shift summed over the frames, each chain's last box (``_head_*``: box, class, frame,
+        # the summed shift then, chain), each chain's first frame and state (0 open, 1 lasted,
+        # -1 ended short) by chain number (renumbered as chains are forgotten), and the
+        # detections whose chain is still open (score, chain)
         self._t = 0
         self._shift = np.zeros(2)
         self._end_chains()
@@ -914,7 +922,7 @@ class ScoreCalibrator:
         """
         return self._buf_s.copy(), self._buf_p.copy()
 
-    def observe(self, detections: Detections | None) -> None:
+    def observe(self, detections: Detections | None, step: int = 1) -> None:
         """Take one frame's detections (None: the sequence has ended): link them to the
         previous frame's, which are then resolved, and to the chains.
 
@@ -926,13 +934,20 @@ class ScoreCalibrator:
             detections then get no frame-to-frame outcome, having no next frame, and chains
             still open none; the detections of frames observed after it join none of this
             sequence's chains, as in a sequence of their own).
+        step : int
+            Frames since the frame observed before (1: the next one; more where frame
+            numbers were left out, as :meth:`BoxTracker.step
+            <vistrack.tracking.BoxTracker.step>` is given them): the chains' span and gap
+            are times, so they count the frames, not the calls. The frame-to-frame links
+            still run from the frame observed before, and a chain always takes a detection
+            of that frame, however long the step.
 
         Raises
         ------
         TypeError
             If the detections have no boxes.
         ValueError
-            If a score is NaN.
+            If a score is NaN, or ``step`` is not an integer >= 1.
 
         Examples
         --------
@@ -951,6 +966,9 @@ class ScoreCalibrator:
             return
         if detections.boxes is None:
             raise TypeError("detections must have boxes")
+        if isinstance(step, (bool, np.bool_)) or not is_whole(step, 1):
+            raise ValueError(f"step must be an integer >= 1 (frames); got {step!r}")
+        step = int(step)
         # copies: the frame is kept past this call (the previous frame, the first frames'
         # scores), and a detector that refills one buffer every frame would otherwise change
         # it under us (each box then continued itself, and clutter persisted)
@@ -971,7 +989,7 @@ class ScoreCalibrator:
             # before left it), only the time goes on (a detector of many classes shows each
             # class's calibration every frame, most of them holding none of it)
             if chains:
-                self._t += 1
+                self._t += step
             self._prev = (boxes, cls, s, np.zeros(0, bool), False)
             self._frames += 1
             if self._hi > self._lo:
@@ -980,15 +998,16 @@ class ScoreCalibrator:
         (linked_fwd, linked_back, self._shift, self._head_box, self._head_cls, self._head_t,
          self._head_shift, self._head_chain, self._first, self._state, self._open_s,
          self._open_chain, out_s, out_p) = _observe(
-            pb, pc, boxes, cls, s, self.link_iou, self._shift, chains, self._t, self._gap,
-            self._span, self._head_box, self._head_cls, self._head_t, self._head_shift,
-            self._head_chain, self._first, self._state, self._open_s, self._open_chain)
+            pb, pc, boxes, cls, s, self.link_iou, self._shift, chains, self._t + step - 1,
+            self._gap_frames(step), step, self._span, self._head_box, self._head_cls,
+            self._head_t, self._head_shift, self._head_chain, self._first, self._state,
+            self._open_s, self._open_chain)
         if not prev_first:
             # the previous frame's detections persist if linked both ways (the first frame's
             # have no frame before them, the last frame's none after: no outcome)
             self._push(ps, (pl & linked_fwd).astype(np.float64))
         if chains:
-            self._t += 1
+            self._t += step
             self._push(out_s, out_p)
         # a frame without detections is one where nothing was found, at the start as
         # anywhere: the detections of the next continue nothing, and do not persist (only
