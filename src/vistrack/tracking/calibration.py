@@ -966,7 +966,7 @@ class ScoreCalibrator:
             return
         if detections.boxes is None:
             raise TypeError("detections must have boxes")
-        if isinstance(step, (bool, np.bool_)) or not is_whole(step, 1):
+        if not is_whole(step, 1):  # (not a boolean either)
             raise ValueError(f"step must be an integer >= 1 (frames); got {step!r}")
         step = int(step)
         # copies: the frame is kept past this call (the previous frame, the first frames'
