@@ -150,7 +150,10 @@ class BoxTrackerConfig:
     confirm_hits : int
         Updates in a row that confirm a track.
     max_lost : float
-        Seconds a confirmed track may go unmatched before it is deleted.
+        Seconds a confirmed track may go unmatched before it is deleted. It is deleted after
+        the association of the first frame past them, so it can still take a detection there
+        (over a gap in frame numbers, tracks lost that long at the frame before are deleted
+        first).
     camera_motion : bool
         Move the predictions by the shift of the image between frames, estimated from the
         confidently matched tracks, track by track where it fits the detections (see the
