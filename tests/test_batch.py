@@ -987,3 +987,45 @@ def test_a_worker_sent_sigterm_removes_its_partial_files_and_dies(tmp_path):
                        capture_output=True, text=True, timeout=120)
     assert r.stdout.splitlines() == ["['mine.txt']", "died []", "died []"], r.stderr
     assert (tmp_path / "parent" / "mine.txt").read_text() == "kept\n"
+
+
+STAGED = """import os, signal, sys
+from concurrent.futures.process import BrokenProcessPool
+import vistrack.pipeline as pipeline
+from vistrack._pool import process_pool
+
+def stopped(text, out, kind, classes_of):
+    # the rows are in the staging file beside the CSV: stopped before the CSV is written
+    assert os.path.exists(text)
+    os.kill(os.getpid(), signal.SIGTERM)  # as timeout or kill -TERM -PGID sends it
+
+def track(det, out):
+    pipeline._write_table = stopped
+    pipeline.track_sequence(det, out, fps=10)
+    return "not terminated"
+
+if __name__ == "__main__":
+    folder = sys.argv[1]
+    with process_pool(1) as pool:
+        try:
+            got = pool.submit(track, os.path.join(folder, "det.txt"),
+                              os.path.join(folder, "res.csv")).result()
+        except BrokenProcessPool:
+            got = "died"
+    print(got, sorted(os.listdir(folder)))
+"""
+
+
+def test_a_worker_sent_sigterm_removes_a_csv_outputs_staging_file(tmp_path):
+    """A CSV or Parquet output is built from its rows written as text beside it under a
+    hidden name first; a worker stopped by SIGTERM while it was there left
+    ``.res.TOKEN.rows.txt`` behind (the worker's partial files were removed, not it)."""
+    (tmp_path / "staged.py").write_text(STAGED)
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "det.txt").write_text("".join(
+        f"{f},-1,{10 + 2 * f},20,30,60,0.9,-1,-1,-1\n" for f in range(1, 21)))
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1",
+               PYTHONPATH=str(Path(__file__).parents[1] / "src"))
+    r = subprocess.run([sys.executable, str(tmp_path / "staged.py"), str(tmp_path / "run")],
+                       env=env, capture_output=True, text=True, timeout=120)
+    assert r.stdout.splitlines() == ["died ['det.txt']"], r.stderr

@@ -638,3 +638,53 @@ def test_a_full_disk_is_named_by_the_output_it_stopped(tmp_path, monkeypatch):
         f.abort()
         assert e.value.errno == 28 and _message(e.value) == f"{out}: No space left on device"
         assert list(tmp_path.iterdir()) == []
+
+
+def test_a_processs_hidden_names_never_repeat_even_from_threads():
+    """A partial name's token was the process id and 4 random hex digits: 1,000 names in one
+    process repeated one another about 8 times, so two writers of one output in one process
+    (two threads) could write one partial file. The 4 digits now count: 65,536 names in a
+    row, from 8 threads at once, all differ."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from vistrack.io.atomic import final_path, hidden_path
+
+    def names(_):
+        return [hidden_path("out/tracks.txt", "partial.txt") for _ in range(16**4 // 8)]
+
+    with ThreadPoolExecutor(8) as pool:
+        got = [p for batch in pool.map(names, range(8)) for p in batch]
+    assert len(got) == len(set(got)) == 16**4
+    assert {final_path(p) for p in got} == {"out/tracks.txt"}
+
+
+def test_a_dead_writers_staging_file_is_removed_when_the_output_is_complete(tmp_path):
+    """A CSV's rows are staged as text beside it (``.res.TOKEN.rows.txt``); one left by a
+    writer that died is removed when another completes the CSV, as its partial files are,
+    and a live writer's stays. The staging file is gone when its block ends, however it
+    ends."""
+    import subprocess
+    import sys
+
+    from vistrack.io.atomic import _NAMED, staging
+
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    out = tmp_path / "res.csv"
+    dead = tmp_path / f".res.{int(gone.stdout) % 16**6:06x}beef.rows.txt"
+    live = tmp_path / f".res.{os.getppid() % 16**6:06x}beef.rows.txt"
+    dead.write_text("half")
+    live.write_text("half")
+    t = Tracks(ids=np.array([1]), boxes=np.array([[0, 0, 10, 10.0]]), points=None,
+               scores=np.ones(1), classes=np.zeros(1))
+    w = CSVWriter(out)
+    w.write(Frame(1, 0.0), t)
+    w.close()
+    assert not dead.exists() and live.exists()
+    live.unlink()
+    with pytest.raises(KeyboardInterrupt), staging(out) as rows:
+        rows.write_text("1,1,0,0,1,1,1,-1,-1,-1\n")
+        assert rows in _NAMED
+        raise KeyboardInterrupt
+    assert rows not in _NAMED
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["res.csv"]

@@ -24,7 +24,7 @@ import re
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field, fields, replace
 from functools import partial
 from pathlib import Path
@@ -56,9 +56,9 @@ from .io.atomic import (
     Input,
     check_not_input,
     check_output,
-    hidden_path,
     made_folder,
     remove_on_commit,
+    staging,
     together,
 )
 from .io.motchallenge import (
@@ -1449,8 +1449,8 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     # online, the rows go to the file as they come; offline, the tracker records its tracks,
     # which are smoothed at the end and written then. Parquet and CSV: the same rows,
     # written as text beside it under a hidden name first
-    text = hidden_path(out, "rows.txt") if table_kind else out
-    with made_folder(out.parent), _removed(text if table_kind else None):
+    with made_folder(out.parent), (staging(out) if table_kind
+                                   else nullcontext(out)) as text:
         # boxes in pixels to MOTChallenge's hundredth; in smaller units (normalised to the
         # image) to a thousandth of their typical height
         decimals = box_decimals(dets.boxes[:, 3])
@@ -1826,16 +1826,6 @@ def _fill_between(frames: np.ndarray, ids: np.ndarray, xywh: np.ndarray, conf: n
     B, C = np.r_[B, np.c_[tc - ts / 2, ts]], np.r_[C, np.zeros(len(at))]
     o = np.lexsort((I, F))
     return F[o], I[o], B[o], C[o]
-
-
-@contextmanager
-def _removed(path: Path | None) -> Iterator[None]:
-    """Remove ``path`` (if any) when the block ends, however it ends."""
-    try:
-        yield
-    finally:
-        if path is not None:
-            path.unlink(missing_ok=True)
 
 
 # --------------------------------------------------------------------------------- fit

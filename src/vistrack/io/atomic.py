@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import IO
 
 __all__ = ["partial_path", "replacing", "open_replacing", "PartialFile", "check_output",
-           "check_not_input", "Input", "made_folder", "together", "remove_on_commit"]
+           "check_not_input", "Input", "made_folder", "together", "remove_on_commit", "staging"]
 
 
 _NAME_MAX = 255
@@ -23,16 +23,36 @@ _NAME_MAX = 255
 
 def hidden_path(path: str | os.PathLike, tail: str) -> Path:
     """A hidden name beside ``path``, ``.{stem}.{token}.{tail}``, its token new at each call
-    (this process's id in 6 hex digits, then 4 random ones): two runs (or two writers) given
-    the same output never share one, and one left by a writer that died (SIGKILL, a worker
-    killed) is removed when another completes the output (:func:`commit_partial`). A stem too
-    long for the file system with the rest is cut, a hash of it kept (the name fits in 255
-    bytes)."""
-    import secrets  # (here: 3 ms an import, on every command's start at the top)
+    (this process's id in 6 hex digits, then 4 of a count this process keeps, from a random
+    start): two runs (or two writers) given the same output never share one, and one left by
+    a writer that died (SIGKILL, a worker killed) is removed when another completes the
+    output (:func:`commit_partial`). A stem too long for the file system with the rest is
+    cut, a hash of it kept (the name fits in 255 bytes).
 
+    Examples
+    --------
+    >>> names = {hidden_path("out/tracks.txt", "partial.txt") for _ in range(16**4)}
+    >>> len(names)  # a process's 65,536 names in a row all differ
+    65536
+    """
     p = Path(path)
     return p.with_name(f"{_hidden_prefix(p, tail)}{os.getpid() % 16**6:06x}"
-                       f"{secrets.token_hex(2)}.{tail}")
+                       f"{next(_COUNT) % 16**4:04x}.{tail}")
+
+
+def _counter() -> Iterator[int]:
+    """The count that :func:`hidden_path`'s tokens end in, from a random start (another
+    process, or one given the same id later, starts elsewhere). Four random hex digits at
+    each call repeated one another about 8 times in 1,000 names of one process, and two
+    writers of one output in one process could meet; ``next`` on a count is atomic, so
+    threads never share a value."""
+    import itertools
+    import secrets  # (here: 3 ms an import, on every command's start at the top)
+
+    return itertools.count(secrets.randbelow(16**4))
+
+
+_COUNT = _counter()
 
 
 def _hidden_prefix(p: Path, tail: str) -> str:
@@ -156,15 +176,15 @@ def _rename(part: Path, path: Path) -> None:
 
     os.replace(part, path)
     _NAMED.discard(part)
-    tail = f"partial{path.suffix}"
-    prefix = _hidden_prefix(path, tail)
-    for other in path.parent.glob(f"{glob.escape(prefix)}*.{glob.escape(tail)}"):
-        token = other.name[len(prefix):-len(tail) - 1]
-        if len(token) != _TOKEN or not re.fullmatch(r"[0-9a-f]+", token):
-            continue
-        pid = int(token[:6], 16)
-        if pid != os.getpid() % 16**6 and not _alive(pid):
-            other.unlink(missing_ok=True)
+    for tail in (f"partial{path.suffix}", STAGING_TAIL):
+        prefix = _hidden_prefix(path, tail)
+        for other in path.parent.glob(f"{glob.escape(prefix)}*.{glob.escape(tail)}"):
+            token = other.name[len(prefix):-len(tail) - 1]
+            if len(token) != _TOKEN or not re.fullmatch(r"[0-9a-f]+", token):
+                continue
+            pid = int(token[:6], 16)
+            if pid != os.getpid() % 16**6 and not _alive(pid):
+                other.unlink(missing_ok=True)
 
 
 def _alive(pid: int) -> bool:
@@ -218,7 +238,39 @@ def partial_path(path: str | os.PathLike) -> Path:
 
 
 _NAMED: set[Path] = set()
-"""The partial files this process has named and not yet renamed over their outputs."""
+"""The partial and staging files this process has named and not yet renamed over their
+outputs or removed."""
+
+
+STAGING_TAIL = "rows.txt"
+"""The tail of :func:`staging`'s hidden names."""
+
+
+@contextlib.contextmanager
+def staging(path: str | os.PathLike) -> Iterator[Path]:
+    """A hidden file beside ``path`` (:func:`hidden_path`, tail :data:`STAGING_TAIL`) for the
+    writer of ``path`` to build it from: removed when the block ends, however it ends; by
+    :func:`remove_partials` when a worker is stopped with SIGTERM inside the block; and, left
+    by a writer that died, when another completes ``path`` (:func:`commit_partial`).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> out = Path(tempfile.mkdtemp()) / "tracks.csv"
+    >>> with staging(out) as rows:
+    ...     _ = rows.write_text("1,1,0,0,1,1,1,-1,-1,-1\\n")
+    ...     rows.name.startswith(".tracks.") and rows.name.endswith(".rows.txt")
+    True
+    >>> rows.exists()
+    False
+    """
+    part = hidden_path(path, STAGING_TAIL)
+    _NAMED.add(part)
+    try:
+        yield part
+    finally:
+        part.unlink(missing_ok=True)
+        _NAMED.discard(part)
 
 
 def forget_partials() -> None:
@@ -227,9 +279,9 @@ def forget_partials() -> None:
 
 
 def remove_partials() -> None:
-    """Remove the partial files this process has named that are still there: what a job
-    stopped by SIGTERM in a worker leaves (the default action ends the process at once, and
-    its partial files stayed until a later run wrote the same outputs)."""
+    """Remove the partial and staging files this process has named that are still there:
+    what a job stopped by SIGTERM in a worker leaves (the default action ends the process at
+    once, and its partial files stayed until a later run wrote the same outputs)."""
     for part in list(_NAMED):
         try:
             part.unlink()
