@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import itertools
 import os
 import re
 import tempfile
@@ -40,19 +41,12 @@ def hidden_path(path: str | os.PathLike, tail: str) -> Path:
                        f"{next(_COUNT) % 16**4:04x}.{tail}")
 
 
-def _counter() -> Iterator[int]:
-    """The count that :func:`hidden_path`'s tokens end in, from a random start (another
-    process, or one given the same id later, starts elsewhere). Four random hex digits at
-    each call repeated one another about 8 times in 1,000 names of one process, and two
-    writers of one output in one process could meet; ``next`` on a count is atomic, so
-    threads never share a value."""
-    import itertools
-    import secrets  # (here: 3 ms an import, on every command's start at the top)
-
-    return itertools.count(secrets.randbelow(16**4))
-
-
-_COUNT = _counter()
+_COUNT = itertools.count(int.from_bytes(os.urandom(2), "big"))
+"""The count that :func:`hidden_path`'s tokens end in, from a random start (another process,
+or one given the same id later, starts elsewhere; ``os.urandom``, where ``secrets`` costs 3
+ms an import on every command's start). Four random hex digits at each call repeated one
+another about 8 times in 1,000 names of one process, and two writers of one output in one
+process could meet; ``next`` on a count is atomic, so threads never share a value."""
 
 
 def _hidden_prefix(p: Path, tail: str) -> str:
