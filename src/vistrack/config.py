@@ -73,7 +73,8 @@ class OfflineConfig:
     enabled : bool
         Smooth, fill, follow back and join when the sequence is over.
     max_gap : float
-        The longest gap in a track that is filled (seconds).
+        The longest gap in a track that is filled (seconds); the gap between two tracks
+        joined (``link_gap``) is filled whatever its length.
     min_track_score : float
         The lowest mean score of a track's detections that is kept (a calibrated confidence
         with ``scores = "calibrated"``).

@@ -22,10 +22,14 @@ camera, where the tracker compensated its motion). Then
   same person is often detected less confidently in the frames before;
 - a track that ends is joined to one that starts up to ``link_gap`` frames later when their
   boxes, each carried across the gap by its velocity, overlap the other's on average (the
-  mean of the two IoUs at least ``link_iou``; online, a track
-  lost longer than ``max_lost`` is deleted and the person comes back under a new identity);
-  the gap between them is filled by a smoother bridging it, from the first track's last
-  state to the second one's first box.
+  mean of the two IoUs at least ``link_iou``): online, a person who comes back where the
+  lost track's prediction does not reach starts a new track while the old one is still
+  kept; the gap between them is filled by a smoother bridging it, from the first track's
+  last state to the second one's first box, however long (up to ``link_gap``: the overlap
+  of the carried boxes is the evidence that bridges it, where a gap inside one track is
+  filled up to ``max_gap`` only). A track deleted online (lost longer than ``max_lost``,
+  as long as ``link_gap`` by default) is joined only where its successor was followed back
+  to within ``link_gap`` of it.
 """
 
 from __future__ import annotations
@@ -144,7 +148,9 @@ def smooth(tracker: BoxTracker, max_gap: int | None = None, min_score: float | N
     tracker : BoxTracker
         A tracker created with ``record=True`` that has run over a sequence.
     max_gap : int, optional
-        The longest gap (in frames without an update) that is filled. The frames filled are
+        The longest gap (in frames without an update) inside a track that is filled (the gap
+        between two joined tracks is filled whatever its length, up to ``link_gap``). The
+        frames filled are
         those the tracker was stepped on: a frame never stepped (a loop over the frames of
         a detections file skips those where nothing was detected) has no state and is not
         written, so step every frame, with no detections where there are none, as
