@@ -110,6 +110,59 @@ def test_two_filter_smooth_names_an_exact_measurement():
     np.testing.assert_allclose((sm.means @ H.T)[:, 1], ys[:, 1], atol=1e-8)
 
 
+def test_two_filter_smooth_names_an_r_singular_to_rounding():
+    """R = v v' is singular, but numpy's solve inverts its rounded form without a word: the
+    backward information was then wrong and the smoothed means 0.48 off the RTS smoother's
+    (the oracle: rts_smooth equals the batch posterior above). Its numerical rank is taken
+    as numpy's matrix_rank takes it, so a small but regular R is smoothed as before."""
+    rng = np.random.default_rng(3)
+    v = np.array([[0.3], [0.7]])
+    F, Q, H = np.eye(3) + 0.1 * rng.normal(size=(3, 3)), 0.1 * np.eye(3), rng.normal(size=(2, 3))
+    ys = rng.normal(size=(5, 2))
+    assert np.linalg.matrix_rank(v @ v.T) == 1
+    model = dict(F=F, Q=Q, H=H, x0=np.zeros(3), P0=np.eye(3))
+    with pytest.raises(ValueError, match=r"^R at step 4 is singular on the observed"):
+        two_filter_smooth(ys, **model, R=v @ v.T)
+    # regular, if small: as the RTS smoother
+    R = np.diag([1.0, 1e-8])
+    two = two_filter_smooth(ys, **model, R=R)
+    rts = rts_smooth(kalman_filter(ys, **model, R=R), F=F, Q=Q)
+    np.testing.assert_allclose(two.means, rts.means, atol=1e-7)
+    # the same problem measured in units 1e10 times smaller, a component missing at a step:
+    # the rank is judged on the observed block's own scale
+    ys[2, 1] = np.nan
+    small = dict(model, H=1e-10 * H)
+    R = np.diag([1.0, 0.5]) * 1e-20
+    two = two_filter_smooth(1e-10 * ys, **small, R=R)
+    rts = rts_smooth(kalman_filter(1e-10 * ys, **small, R=R), F=F, Q=Q)
+    np.testing.assert_allclose(two.means, rts.means, atol=1e-9)
+
+
+@pytest.mark.parametrize("case", ["short", "state", "nan_cov", "nan_mean"])
+def test_rts_checks_a_results_covs_against_its_means(rng, case):
+    """A FilterResult made by hand, its covs not matching its means: the compiled smoother
+    indexed covs by the means' shape, read and wrote past the arrays and crashed the
+    interpreter (heap corruption) or returned garbage; NaN came back as NaN. Each is now
+    named."""
+    from dataclasses import replace
+
+    mod = random_model(rng, 2, 1)
+    res = kalman_filter(rng.normal(size=(4, 1)), **mod, x0=np.zeros(2), P0=np.eye(2))
+    covs, means = np.array(res.covs), np.array(res.means)
+    if case == "short":
+        bad, msg = replace(res, covs=covs[:2]), r"result.covs must have shape \(4, 2, 2\)"
+    elif case == "state":
+        bad, msg = replace(res, covs=covs[:, :1, :1]), r"got \(4, 1, 1\)"
+    elif case == "nan_cov":
+        covs[1, 0, 0] = np.nan
+        bad, msg = replace(res, covs=covs), r"result.covs must be finite; result.covs\[1, 0, 0\]"
+    else:
+        means[2, 1] = np.inf
+        bad, msg = replace(res, means=means), r"result.means must be finite; result.means\[2, 1\]"
+    with pytest.raises(ValueError, match=msg):
+        rts_smooth(bad, F=mod["F"], Q=mod["Q"])
+
+
 def test_masked_measurements_are_smoothed_as_missing_as_by_pykalman(rng):
     """A numpy masked array (pykalman's missing steps) is smoothed with its masked entries
     missing, one series or a list of them (a batch). Before, the values under the mask were

@@ -16,6 +16,7 @@ from .._jit import njit
 from .._prebuilt import kernel
 from .._validate import (
     as_measurement_series,
+    check_finite,
     check_has_steps,
     check_linear_gaussian,
     check_matrix_stack,
@@ -129,9 +130,20 @@ def _filtered_arrays(result: FilterResult) -> tuple[np.ndarray, np.ndarray, bool
         raise TypeError(f"result must be a FilterResult; got {type(result).__name__}")
     if result.covs is None:
         raise ValueError("result has no covariances: run kalman_filter with store_covs=True")
-    single = result.means.ndim == 2
-    means = np.ascontiguousarray(result.means if not single else result.means[None])
-    covs = np.ascontiguousarray(result.covs if not single else result.covs[None])
+    # a FilterResult may be made by hand: the compiled smoother indexes covs by means' shape
+    means = np.asarray(result.means, dtype=float)
+    covs = np.asarray(result.covs, dtype=float)
+    if means.ndim not in (2, 3):
+        raise ValueError(f"result.means must have shape (T, n) or (B, T, n); got "
+                         f"{means.shape}")
+    if covs.shape != means.shape + means.shape[-1:]:
+        raise ValueError(f"result.covs must have shape {means.shape + means.shape[-1:]} (the "
+                         f"steps and states of result.means {means.shape}); got {covs.shape}")
+    check_finite(means, "result.means")
+    check_finite(covs, "result.covs")
+    single = means.ndim == 2
+    means = np.ascontiguousarray(means if not single else means[None])
+    covs = np.ascontiguousarray(covs if not single else covs[None])
     return means, covs, single
 
 
@@ -166,8 +178,9 @@ def rts_smooth(result: FilterResult, *, F: ArrayLike, Q: ArrayLike) -> SmoothRes
     TypeError
         If ``result`` is not a :class:`FilterResult`.
     ValueError
-        If ``result`` has no covariances, ``F`` or ``Q`` has the wrong shape or is invalid, or
-        a predicted covariance ``F P F' + Q`` is not positive definite.
+        If ``result`` has no covariances, its ``covs`` do not match its ``means`` in shape or
+        either has an entry that is not finite, ``F`` or ``Q`` has the wrong shape or is
+        invalid, or a predicted covariance ``F P F' + Q`` is not positive definite.
 
     See Also
     --------
@@ -208,7 +221,8 @@ def rts_smooth(result: FilterResult, *, F: ArrayLike, Q: ArrayLike) -> SmoothRes
     if bad >= 0:
         raise ValueError(
             f"the predicted covariance F P F' + Q from step {bad} to {bad + 1} is not positive "
-            "definite, so the RTS gain is undefined; make Q positive definite"
+            "definite, so the RTS gain is undefined; make Q positive definite (P is "
+            f"result.covs at step {bad}, a filter's covariance: positive semi-definite)"
         )
     if single:
         s_means, s_covs = s_means[0], s_covs[0]
@@ -316,8 +330,19 @@ def two_filter_smooth(
         Ht, Rt = H_[t if H_.shape[0] > 1 else 0], R_[t if R_.shape[0] > 1 else 0]
         obs = ~np.isnan(y[:, t])  # (B, m)
         both = obs[:, :, None] & obs[:, None, :]
-        Rm = np.where(both, Rt, np.eye(m))  # decouple missing components
+        # missing components decoupled, on the observed ones' scale (so that the rank test
+        # below is relative to the observed block)
+        diag = np.diagonal(Rt)
+        scale = np.where(obs, np.abs(diag), 0.0).max(axis=-1, initial=0.0)
+        scale = np.where(scale > 0, scale, 1.0)
+        Rm = np.where(both, Rt, np.eye(m) * scale[:, None, None])
+        ev = np.linalg.eigvalsh(Rm)
+        # singular to rounding: numerical rank below m (numpy's matrix_rank tolerance), where
+        # solve may still return a finite, wrong inverse
+        singular = (ev[:, 0] <= ev[:, -1] * m * np.finfo(float).eps).any()
         try:
+            if singular:
+                raise np.linalg.LinAlgError
             W = np.linalg.solve(Rm, np.eye(m)) * both  # R_oo^-1 embedded, zero on missing
         except np.linalg.LinAlgError:
             raise ValueError(
