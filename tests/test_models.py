@@ -210,6 +210,26 @@ def test_linear_gaussian_time_varying():
     assert model.H.shape == (1, 2)
 
 
+def test_a_stack_of_one_matrix_is_the_constant_as_kalman_filter_takes_it():
+    """F of shape (1, n, n) beside an H of 5 steps: kalman_filter takes the one F for every
+    step, where LinearGaussian said "per-step matrices disagree on the number of steps:
+    [1, 5]"; its filter now gives kalman_filter's answer on the same matrices."""
+    from vistrack.filters import kalman_filter
+
+    rng = np.random.default_rng(2)
+    F, Q = np.array([[[1.0, 1.0], [0.0, 1.0]]]), 0.1 * np.eye(2)
+    H, R = rng.normal(size=(5, 1, 2)), np.ones((1, 1, 1))
+    model = LinearGaussian(F, Q, H, R)
+    assert model.n_steps == 5
+    ys = rng.normal(size=(5, 1))
+    want = kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=np.zeros(2), P0=np.eye(2))
+    got = kalman_filter(ys, F=model.F, Q=model.Q, H=model.H, R=model.R, x0=np.zeros(2),
+                        P0=np.eye(2))
+    np.testing.assert_allclose(got.means, want.means, rtol=1e-12)
+    assert LinearMotion(F, np.stack([Q] * 3)).n_steps == 3
+    assert LinearMotion(F, Q).n_steps is None
+
+
 def test_box_measurement_noise_per_value():
     """R is diagonal with each value's standard deviation times the box's width (cx, w) or
     height (cy, h); one number sets all four."""

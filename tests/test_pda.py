@@ -257,9 +257,10 @@ def _log_brute_jipda(log_lik, gate, eps, pd, log_lam, pg):
             continue
         lw = 0.0
         for t, j in enumerate(event):
+            miss = eps[t] * (1 - pd * pg)  # (0 with P_D P_G = 1: no such event)
             lw += (math.log1p(-eps[t]) if j == "absent" and eps[t] < 1 else -math.inf
-                   if j == "absent" else math.log(eps[t] * (1 - pd * pg)) if j == "missed"
-                   else math.log(eps[t] * pd) + log_lik[t, j] - log_lam)
+                   if j == "absent" else (math.log(miss) if miss > 0 else -math.inf)
+                   if j == "missed" else math.log(eps[t] * pd) + log_lik[t, j] - log_lam)
         logs.append(lw)
         takes.append(event)
     logs = np.array(logs) - logsumexp(logs)
@@ -350,12 +351,16 @@ def test_weights_whose_sum_passes_the_largest_float_and_the_cheap_jpda_of_them()
     np.testing.assert_allclose(beta0, want0, rtol=1e-9, atol=1e-13)
 
 
-def test_weights_spanning_more_than_a_float_are_named_not_nan():
+def test_weights_spanning_more_than_a_float_give_the_exact_answer_not_nan():
     """With P_D P_G = 1 a track certain to exist has a miss of weight 0, and the other two
     tracks' misses are the only events left. Rescaled to weights of about 1 (not 1e300), two
     misses of 5e-310 multiplied to 0: JIPDA gave NaN, and JPDA a row summing to 0.59. Now
-    the weights of 1e309 give the exact answer, and weights of 1e328 against a miss of 0.5,
-    past what any scaling of a float holds, are named."""
+    the weights of 1e309 give the exact answer; and so do weights of 1e328 against a miss of
+    0.5, past what any scaling of a float holds, which were named as too wide: their cluster
+    is summed in logarithms. Beside them, three tracks among two detections whose weights
+    span 1e328 to 1e-280: each track's probabilities were those of another event (the second
+    track took the second detection, where, given it exists, it takes the first), against
+    every event written out in logarithms."""
     from vistrack.association import jipda_weights
 
     b, b0, ex = jipda_weights(np.array([[1e306], [1e306], [1.0]]), np.ones((3, 1), bool),
@@ -363,12 +368,18 @@ def test_weights_spanning_more_than_a_float_are_named_not_nan():
                               clutter_density=1e-3)
     np.testing.assert_array_equal(ex, [0, 0, 1])
     np.testing.assert_array_equal(b.ravel(), [0, 0, 1])
-    with pytest.raises(ValueError, match=r"the association weights of track \d span more "
-                                         r"than a float holds: its likelihoods over "
-                                         r"clutter_density reach about 1e328 against a "
-                                         r"miss weight of 0.5"):
-        jipda_weights(np.array([[1e308], [1e308], [1.0]]), np.ones((3, 1), bool),
-                      [0.5, 0.5, 1.0], p_detect=1.0, p_gate=1.0, clutter_density=1e-20)
+    b, b0, ex = jipda_weights(np.array([[1e308], [1e308], [1.0]]), np.ones((3, 1), bool),
+                              [0.5, 0.5, 1.0], p_detect=1.0, p_gate=1.0, clutter_density=1e-20)
+    np.testing.assert_array_equal(ex, [0, 0, 1])
+    np.testing.assert_array_equal(b.ravel(), [0, 0, 1])
+    lik = np.array([[1e308, 1e308], [1e308, 1.0], [1.0, 1e-300]])
+    got = jipda_weights(lik, np.ones((3, 2), bool), [0.5, 0.5, 1.0], p_detect=1.0,
+                        p_gate=1.0, clutter_density=1e-20)
+    want = _log_brute_jipda(np.log(lik), np.ones((3, 2), bool), [0.5, 0.5, 1.0], 1.0,
+                            math.log(1e-20), 1.0)
+    for g, w in zip(got, want):
+        np.testing.assert_allclose(g, w, atol=1e-12)
+    np.testing.assert_allclose(got[0], [[0, 1], [1, 0], [1, 0]], atol=1e-7)
     # a cluster's column sum past the largest float, every row finite (three weights of
     # 9e307 on one detection): the cheap JPDA gave 0 and 1; Fitzgerald's formula, 1/3, 2/3
     with warnings.catch_warnings():
@@ -382,6 +393,47 @@ def test_weights_spanning_more_than_a_float_are_named_not_nan():
     b, _ = jpda_weights(np.array([[1e308], [5e307]]), np.ones((2, 1), bool),
                         clutter_density=1e-12)
     np.testing.assert_allclose(b.ravel(), [2 / 3, 1 / 3], rtol=1e-9)
+
+
+def test_subset_sums_hold_weights_that_span_past_a_float(monkeypatch):
+    """The sums by subsets (a large cluster; forced here on small ones) scaled each row's
+    partial sums to a largest of 1, so a partial sum more than 1e308 below it was lost, and
+    with it every event it led to: with P_D P_G = 1 the one event that misses no track
+    (weight 1e-247) was lost and a miss given probability 1; weights of 1e-150 to 1e150 gave
+    errors of 1 and NaN. Such a cluster is now summed in logarithms, against every event
+    written out in logarithms."""
+    from vistrack.association import pda
+
+    monkeypatch.setattr(pda, "_ENUMERATED", 0)
+    # P_D = P_G = 1: the events that miss the fewest tracks
+    lik = np.array([[1e-250, 0.0], [1e80, 1e3]])
+    b, b0 = jpda_weights(lik, lik > 0, p_detect=1.0, clutter_density=1.0, p_gate=1.0)
+    np.testing.assert_array_equal(b, [[1, 0], [0, 1]])
+    np.testing.assert_array_equal(b0, [0, 0])
+    rng = np.random.default_rng(9)
+    for T, D in [(6, 3), (3, 6), (5, 4)]:
+        lik = 10 ** rng.uniform(-150, 150, (T, D))
+        gate = rng.random((T, D)) < 0.9
+        b, b0 = jpda_weights(lik, gate, p_detect=0.9, clutter_density=1.0, p_gate=0.99)
+        wb, wb0, _ = _log_brute_jipda(np.log(lik), gate, np.ones(T), 0.9, 0.0, 0.99)
+        np.testing.assert_allclose(b, wb, atol=1e-12)
+        np.testing.assert_allclose(b0, wb0, atol=1e-12)
+        assert np.isfinite(b).all() and np.isfinite(b0).all()
+
+
+def test_subset_sums_of_ordinary_weights_do_not_take_the_logarithms(monkeypatch):
+    """The logarithms are the exception: weights of 1e-10 to 1e10 are summed as before."""
+    from vistrack.association import pda
+
+    monkeypatch.setattr(pda, "_ENUMERATED", 0)
+    monkeypatch.setattr(pda, "_matchings_log", None)  # (calling it would raise)
+    rng = np.random.default_rng(4)
+    lik = 10 ** rng.uniform(-10, 10, (6, 5))
+    b, b0 = jpda_weights(lik, np.ones((6, 5), bool), p_detect=0.9, clutter_density=1.0)
+    wb, wb0, _ = _log_brute_jipda(np.log(lik), np.ones((6, 5), bool), np.ones(6), 0.9, 0.0,
+                                  0.99)
+    np.testing.assert_allclose(b, wb, atol=1e-12)
+    np.testing.assert_allclose(b0, wb0, atol=1e-12)
 
 
 def test_max_exact_bounds_and_unbounds_the_exact_sums():
@@ -687,6 +739,18 @@ def test_the_four_weightings_name_a_nan_likelihood_in_the_gate_and_a_gate_of_ano
     ({"beta": np.array([[0.5, 0.5]])},
      "beta0 and beta of a track must add up to 1 (one of its events happens); track 0's add "
      "up to 1.1"),
+    # a model that is not one: NaN posteriors, or a covariance larger than the prior's after
+    # a correction (R = -3 I), or numpy's "Singular matrix", each without naming it
+    ({"R": np.full((2, 2), np.nan)}, "R must be finite; R[0, 0] = nan"),
+    ({"H": np.array([[1.0, np.inf], [0.0, 1.0]])}, "H must be finite; H[0, 1] = inf"),
+    ({"g": Gaussian(np.array([[np.nan, 0.0]]), np.eye(2)[None])},
+     "g.mean must be finite; g.mean[0, 0] = nan"),
+    ({"g": Gaussian(np.zeros((1, 2)), np.full((1, 2, 2), np.nan))},
+     "g.cov must be finite; g.cov[0, 0, 0] = nan"),
+    ({"R": -3 * np.eye(2)}, "R must be positive semi-definite"),
+    ({"R": np.array([[1.0, 0.5], [0.0, 1.0]])}, "R must be symmetric"),
+    ({"g": Gaussian(np.zeros((1, 2)), np.zeros((1, 2, 2))), "R": np.zeros((2, 2))},
+     "the innovation covariance S = H P H' + R of track 0 is singular"),
 ])
 def test_pda_update_names_what_does_not_fit(change, message):
     args = {"g": Gaussian(np.zeros((1, 2)), np.eye(2)[None]), "Z": np.zeros((2, 2)),
@@ -710,3 +774,48 @@ def test_likelihoods_names_s_and_z_of_the_wrong_shape_as_mahalanobis_does():
         with pytest.raises(ValueError, match=re.escape("z_pred must have shape (T, m); got "
                                                        "(2, 1, 2)")):
             f(np.zeros((2, 1, 2)), np.stack([np.eye(2)] * 2), np.zeros((3, 2)))
+
+
+def test_a_track_s_prediction_that_is_not_finite_is_named_not_dropped():
+    """A NaN prediction's likelihoods were NaN, outside every gate: the track was given
+    beta0 = 1 and never corrected, without a word. And numpy's Cholesky factor reads the
+    lower triangle alone, so an S that is not symmetric was taken for another."""
+    from vistrack.association import mahalanobis
+    from vistrack.association.costs import mahalanobis_pairs
+
+    S, Z = np.stack([np.eye(2)] * 2), np.zeros((3, 2))
+    for f in (likelihoods, mahalanobis, lambda *a: mahalanobis_pairs(*a, threshold=9.0)):
+        with pytest.raises(ValueError, match=re.escape("z_pred must be finite; z_pred[1] = "
+                                                       "[nan, 0.0]")):
+            f(np.array([[0.0, 0.0], [np.nan, 0.0]]), S, Z)
+        with pytest.raises(ValueError, match=re.escape("S must be symmetric for every track; "
+                                                       "S[0] = [[1.0, 100.0], [0.0, 1.0]]")):
+            f(np.zeros((2, 2)), np.array([[[1.0, 100.0], [0.0, 1.0]], np.eye(2)]), Z)
+
+
+@pytest.mark.parametrize("weigh", ["pda", "jpda"])
+def test_a_gate_of_other_than_true_or_false_is_named(weigh):
+    """A gate of 0.5 or NaN was taken as inside."""
+    from vistrack.association import pda_weights
+
+    fn = pda_weights if weigh == "pda" else jpda_weights
+    for bad in (0.5, np.nan):
+        with pytest.raises(ValueError, match=re.escape("gate must hold True / False (or 1 / 0);"
+                                                       " gate[0, 1] = ")):
+            fn(np.full((1, 2), 0.1), np.array([[1.0, bad]]), clutter_density=0.01)
+    a = fn(np.full((1, 2), 0.1), np.array([[1, 0]]), clutter_density=0.01)
+    b = fn(np.full((1, 2), 0.1), np.array([[True, False]]), clutter_density=0.01)
+    for x, y in zip(a, b):
+        np.testing.assert_array_equal(x, y)
+
+
+def test_chi2_gate_names_a_negative_distance_and_a_p_that_is_not_a_number():
+    from vistrack.association import chi2_gate
+
+    np.testing.assert_array_equal(chi2_gate(np.array([[np.nan, 1.0]]), 2), [[False, True]])
+    with pytest.raises(ValueError, match=re.escape("d2 must hold squared distances, >= 0; "
+                                                   "d2[0, 1] = -1.0")):
+        chi2_gate(np.array([[1.0, -1.0]]), 2)
+    with pytest.raises(ValueError, match=re.escape("p must be a number in (0, 1); got "
+                                                   "array([0.9 , 0.99])")):
+        chi2_gate(np.array([[1.0]]), 2, p=np.array([0.9, 0.99]))

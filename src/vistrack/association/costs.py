@@ -211,6 +211,20 @@ def _innovations(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, z_name: str = "z
     if not finite.all():  # numpy's Cholesky factor of NaN is NaN, without an error
         raise ValueError(f"S must be finite and positive definite for every track; S["
                          f"{int(np.flatnonzero(~finite)[0])}] is not finite")
+    # (a track whose prediction is not finite would be outside every gate, and so dropped
+    # without a word)
+    ok = np.isfinite(zp).all(axis=1)
+    if not ok.all():
+        t = int(np.flatnonzero(~ok)[0])
+        raise ValueError(f"z_pred must be finite; z_pred[{t}] = {zp[t].tolist()}")
+    # numpy's Cholesky reads the lower triangle alone: an S that is not symmetric would be
+    # taken for another
+    asym = np.abs(S - np.swapaxes(S, 1, 2)).max(axis=(1, 2), initial=0.0) > 1e-8 * np.abs(
+        S).max(axis=(1, 2), initial=0.0)
+    if asym.any():
+        t = int(np.flatnonzero(asym)[0])
+        raise ValueError(f"S must be symmetric for every track; S[{t}] = {S[t].tolist()} is "
+                         "not")
     if z.shape[1:] != (m,) and z.size:
         raise ValueError(f"{z_name} must have shape (D, {m}); got {z.shape}")
     return zp, S, z
@@ -259,7 +273,8 @@ def mahalanobis(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If the shapes disagree, or an ``S_t`` is not positive definite.
+        If the shapes disagree, an ``S_t`` is not symmetric and positive definite, or a
+        ``z_pred`` is not finite (each named).
 
     Examples
     --------

@@ -32,15 +32,16 @@ def chi2_threshold(m: int, p: float = 0.99) -> float:
     Raises
     ------
     ValueError
-        If ``p`` is not in (0, 1), or ``m`` is not a whole number >= 1.
+        If ``p`` is not a number in (0, 1), or ``m`` is not a whole number >= 1.
 
     Examples
     --------
     >>> round(chi2_threshold(2, 0.99), 3)
     9.21
     """
-    if not 0.0 < p < 1.0:
-        raise ValueError(f"p must be in (0, 1); got {p}")
+    if not (isinstance(p, (int, float, np.integer, np.floating)) and not isinstance(p, bool)
+            and 0.0 < p < 1.0):
+        raise ValueError(f"p must be a number in (0, 1); got {p!r}")
     if not is_whole(m, 1):
         raise ValueError(f"m must be a whole number of degrees of freedom >= 1, the size of a "
                          f"measurement; got {m!r}")
@@ -66,11 +67,22 @@ def chi2_gate(d2: np.ndarray, m: int, p: float = 0.99) -> np.ndarray:
     Returns
     -------
     (T, D) ndarray of bool
-        ``d2 <= chi2_threshold(m, p)``.
+        ``d2 <= chi2_threshold(m, p)`` (a NaN distance, of a detection that is not finite,
+        is outside).
+
+    Raises
+    ------
+    ValueError
+        If ``d2`` has a negative entry (named), or as :func:`chi2_threshold` raises.
 
     Examples
     --------
     >>> chi2_gate(np.array([[1.0, 10.0]]), m=2)
     array([[ True, False]])
     """
-    return np.asarray(d2) <= chi2_threshold(m, p)
+    d2 = np.asarray(d2, dtype=float)
+    if (d2 < 0).any():  # (NaN, a detection that is not finite, is outside every gate)
+        where = [int(i) for i in np.argwhere(d2 < 0)[0]]
+        raise ValueError(f"d2 must hold squared distances, >= 0; d2{where} = "
+                         f"{d2[tuple(where)]}")
+    return d2 <= chi2_threshold(m, p)

@@ -72,8 +72,9 @@ def likelihoods(z_pred: ArrayLike, S: ArrayLike, Z: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``S`` is not ``(T, m, m)`` or ``Z`` not ``(D, m)``, or an ``S_t`` is not positive
-        definite (as :func:`~vistrack.association.mahalanobis`).
+        If ``S`` is not ``(T, m, m)`` or ``Z`` not ``(D, m)``, an ``S_t`` is not symmetric and
+        positive definite, or a ``z_pred`` is not finite (as
+        :func:`~vistrack.association.mahalanobis`).
 
     Examples
     --------
@@ -104,6 +105,14 @@ def _lik_gate(lik: ArrayLike, gate: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     gate = np.asarray(gate)
     if gate.shape != lik.shape:
         raise ValueError(f"gate must have the shape of lik, {lik.shape}; got {gate.shape}")
+    if gate.dtype != bool:
+        # (a gate of 0.5 or NaN would be taken as inside)
+        with np.errstate(invalid="ignore"):
+            odd = ~((gate == 0) | (gate == 1))
+        if odd.any():
+            t, j = (int(i) for i in np.argwhere(odd)[0])
+            raise ValueError(f"gate must hold True / False (or 1 / 0); gate[{t}, {j}] = "
+                             f"{gate[t, j]!r}")
     gate = gate.astype(bool)
     bad = gate & ~(np.isfinite(lik) & (lik >= 0))
     if bad.any():
@@ -192,7 +201,8 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     ------
     ValueError
         If a probability or the density is out of range, ``gate`` does not have the shape of
-        ``lik``, or a likelihood inside the gate is not a finite number >= 0.
+        ``lik`` or holds other than True / False (1 / 0), or a likelihood inside the gate is
+        not a finite number >= 0.
 
     See Also
     --------
@@ -269,28 +279,59 @@ def _matchings(G: np.ndarray, a: np.ndarray, c: np.ndarray
     vanish. Every ``a`` must be > 0.
 
     Returns the probabilities of the pairs ``(I, K)``, and of each row and each column left
-    unmatched."""
+    unmatched.
+
+    Where a product could fall below what a float holds (weights spanning about 1e280 or
+    more along the rows, where a partial sum would be lost and with it, perhaps, every event
+    it leads to), the cluster is summed again in logarithms (:func:`_matchings_log`)."""
     I, K = G.shape
     n = 1 << K
     bit, off, on = _subsets(K)
     F = np.zeros((I + 1, n))
     F[0, 0] = 1.0
+    # each row's smallest factor (its a, or a pair's G) times a lower bound on the positive
+    # entries of the scaled partial sums it multiplies is the least a term can be: kept
+    # above _TINY, no product underflows (the bound is carried from row to row, and the
+    # entries themselves looked at where it falls too low)
+    lo = np.minimum(a, np.where(G > 0, G, np.inf).min(1))
+    floor: float = 1.0
     for i in range(I):
+        if lo[i] * floor < _TINY:
+            return _matchings_log(G, a, c)
         # row i takes column k (in nz) on top of every subset without it: all such columns
         # at once, each subset's ways summed by bincount
         nz = np.flatnonzero(G[i])
         f = a[i] * F[i]
         if len(nz):
             f += np.bincount(on[nz].ravel(), (G[i, nz, None] * F[i][off[nz]]).ravel(), n)
-        F[i + 1] = f / f.max()  # (> 0: leaving row i unmatched is always possible)
+        top = f.max()  # (> 0: leaving row i unmatched is always possible)
+        if not math.isfinite(top):
+            return _matchings_log(G, a, c)
+        F[i + 1] = f / top
+        floor = lo[i] * floor / top
+        if floor < _TINY:  # (scaled, an entry may have fallen below what a float holds)
+            kept_min = _least_kept(f, F[i + 1])
+            if kept_min is None:
+                return _matchings_log(G, a, c)
+            floor = kept_min
     zero = c == 0
     level = (~bit[zero]).sum(0)  # the columns of c = 0 each subset leaves unmatched
     left = np.prod(np.where(bit, 1.0, np.where(zero, 1.0, c)[:, None]), axis=0)
-    R = np.where(level == level[F[I] > 0].min(), left, 0.0)
-    R /= R.max()
-    col0 = (F[I][off] * R[off]).sum(1) / (F[I] @ R)
+    kept = level == level[F[I] > 0].min()
+    R = np.where(kept, left, 0.0)
+    top = R.max()
+    if not (math.isfinite(top) and R[kept].min() >= _TINY * top):  # (none underflowed)
+        return _matchings_log(G, a, c)
+    R /= top
+    floor = R[kept].min()
+    whole = F[I] @ R
+    if not whole >= _TINY:  # (a sum of products of scaled entries: 1 at most)
+        return _matchings_log(G, a, c)
+    col0 = (F[I][off] * R[off]).sum(1) / whole
     pair, row0 = np.zeros((I, K)), np.zeros(I)
     for i in range(I - 1, -1, -1):
+        if lo[i] * floor < _TINY:
+            return _matchings_log(G, a, c)
         row0[i] = a[i] * (F[i] @ R)
         below = a[i] * R
         nz = np.flatnonzero(G[i])
@@ -299,9 +340,92 @@ def _matchings(G: np.ndarray, a: np.ndarray, c: np.ndarray
             pair[i, nz] = G[i, nz] * (F[i][off[nz]] * up).sum(1)
             below += np.bincount(off[nz].ravel(), (G[i, nz, None] * up).ravel(), n)
         total = row0[i] + pair[i].sum()
+        top = below.max()
+        if not (total >= _TINY and math.isfinite(total) and math.isfinite(top)):
+            return _matchings_log(G, a, c)
         row0[i] /= total
         pair[i] /= total
-        R = below / below.max()
+        R = below / top
+        floor = lo[i] * floor / top
+        if floor < _TINY:
+            kept_min = _least_kept(below, R)
+            if kept_min is None:
+                return _matchings_log(G, a, c)
+            floor = kept_min
+    return pair, row0, col0
+
+
+def _least_kept(raw: np.ndarray, scaled: np.ndarray) -> float | None:
+    """The least positive entry of ``scaled`` (``raw`` over its largest), or None where a
+    positive entry of ``raw`` scaled below :data:`_TINY` (to 0, or losing digits)."""
+    pos = raw > 0
+    least = scaled[pos].min()
+    return float(least) if least >= _TINY else None
+
+
+_TINY = 1e-280
+"""The least a product (or a row's total) in :func:`_matchings` may be before it sums the
+cluster in logarithms instead: 28 orders of magnitude above the smallest normal float, so
+that no term it keeps loses digits, and the terms it may lose (a product of two scaled
+entries below the smallest float, at most ``2**K`` of them) add up to less than 1e-23 of
+its row's total."""
+
+
+def _logsumexp_into(idx: np.ndarray, vals: np.ndarray, n: int) -> np.ndarray:
+    """``out[j] = log(sum(exp(vals[idx == j])))`` for ``j < n`` (``-inf`` where none)."""
+    top = np.full(n, -np.inf)
+    np.maximum.at(top, idx, vals)
+    shift = np.where(np.isfinite(top), top, 0.0)
+    with np.errstate(divide="ignore"):
+        return shift + np.log(np.bincount(idx, np.exp(vals - shift[idx]), n))
+
+
+def _lse(x: np.ndarray, axis: int | None = None) -> np.ndarray:
+    """``log(sum(exp(x)))`` along ``axis`` (``-inf`` for an empty or all ``-inf`` sum)."""
+    top = np.max(x, axis=axis, keepdims=True, initial=-np.inf)
+    shift = np.where(np.isfinite(top), top, 0.0)
+    with np.errstate(divide="ignore"):
+        out = shift + np.log(np.sum(np.exp(x - shift), axis=axis, keepdims=True))
+    return out.reshape(())[()] if axis is None else np.squeeze(out, axis)
+
+
+def _matchings_log(G: np.ndarray, a: np.ndarray, c: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_matchings` in logarithms: the same sums, each entry held to rounding whatever
+    the span of the weights (a few times slower)."""
+    I, K = G.shape
+    n = 1 << K
+    bit, off, on = _subsets(K)
+    with np.errstate(divide="ignore"):
+        lG, la = np.log(G), np.log(a)
+        lc = np.log(np.where(c == 0, 1.0, c))
+    F = np.full((I + 1, n), -np.inf)
+    F[0, 0] = 0.0
+    every = np.arange(n)
+    for i in range(I):
+        nz = np.flatnonzero(G[i])
+        idx = np.concatenate([every, on[nz].ravel()])
+        vals = np.concatenate([la[i] + F[i], (lG[i, nz, None] + F[i][off[nz]]).ravel()])
+        f = _logsumexp_into(idx, vals, n)
+        F[i + 1] = f - f.max()
+    zero = c == 0
+    level = (~bit[zero]).sum(0)
+    left = np.where(bit, 0.0, lc[:, None]).sum(0)
+    R = np.where(level == level[np.isfinite(F[I])].min(), left, -np.inf)
+    R -= R.max()
+    col0 = np.exp(_lse(F[I][off] + R[off], axis=1) - _lse(F[I] + R))
+    pair, row0 = np.zeros((I, K)), np.zeros(I)
+    for i in range(I - 1, -1, -1):
+        nz = np.flatnonzero(G[i])
+        l0 = la[i] + _lse(F[i] + R)
+        lp = lG[i, nz] + _lse(F[i][off[nz]] + R[on[nz]], axis=1)
+        total = _lse(np.concatenate([[l0], lp]))
+        row0[i] = np.exp(l0 - total)
+        pair[i, nz] = np.exp(lp - total)
+        idx = np.concatenate([every, off[nz].ravel()])
+        vals = np.concatenate([la[i] + R, (lG[i, nz, None] + R[on[nz]]).ravel()])
+        below = _logsumexp_into(idx, vals, n)
+        R = below - below.max()
     return pair, row0, col0
 
 
@@ -707,7 +831,8 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     ------
     ValueError
         If a probability or the density is out of range, ``gate`` does not have the shape of
-        ``lik``, or a likelihood inside the gate is not a finite number >= 0.
+        ``lik`` or holds other than True / False (1 / 0), or a likelihood inside the gate is
+        not a finite number >= 0.
 
     References
     ----------
@@ -809,8 +934,9 @@ def ipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     ------
     ValueError
         If a probability or the density is out of range, ``gate`` does not have the shape of
-        ``lik``, a likelihood inside the gate is not a finite number >= 0, or ``existence``
-        does not have one probability in [0, 1] per track.
+        ``lik`` or holds other than True / False (1 / 0), a likelihood inside the gate is
+        not a finite number >= 0, or ``existence`` does not have one probability in [0, 1]
+        per track.
 
     See Also
     --------

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._validate import check_finite, check_psd
 from ..types import Gaussian
 
 __all__ = ["pda_update"]
@@ -52,7 +53,9 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
     Raises
     ------
     ValueError
-        If a shape does not agree with the others (each named), the weights of a track are
+        If a shape does not agree with the others (each named), ``g``, ``H`` or ``R`` has an
+        entry that is not finite, ``R`` is not symmetric positive semi-definite, a track's
+        innovation covariance ``S`` is singular (naming the track), the weights of a track are
         not probabilities (each in [0, 1], ``beta0`` and the track's row of ``beta`` adding
         up to 1 within 1e-6: other weights give a covariance that is not one), or a
         detection that is not finite has a weight above 0 (one outside every gate, of weight
@@ -81,13 +84,18 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
         raise ValueError(f"g must be a batch of tracks, batch shape (T,); got batch shape "
                          f"{m.shape[:-1]}")
     T, n = m.shape
+    check_finite(m, "g.mean")
+    check_finite(P, "g.cov")
     H = np.asarray(H, dtype=float)
     if H.ndim != 2 or H.shape[1] != n:
         raise ValueError(f"H must have shape (m, {n}); got {H.shape}")
+    check_finite(H, "H")
     k = H.shape[0]
     R = np.asarray(R, dtype=float)
     if R.shape != (k, k):
         raise ValueError(f"R must have shape ({k}, {k}), as H has {k} rows; got {R.shape}")
+    check_finite(R, "R")
+    check_psd(R, "R")
     Z = np.asarray(Z, dtype=float)
     if Z.size == 0:
         Z = Z.reshape(0, k)
@@ -107,7 +115,12 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
         raise ValueError(f"Z[{j}] is not finite but has weight beta[{t}, {j}] = {beta[t, j]}")
     zp = m @ H.T
     S = H @ P @ H.T + R
-    K = np.swapaxes(np.linalg.solve(S, H @ P), 1, 2)  # P H' S^-1
+    try:
+        K = np.swapaxes(np.linalg.solve(S, H @ P), 1, 2)  # P H' S^-1
+    except np.linalg.LinAlgError:
+        t = next((t for t in range(T) if np.linalg.matrix_rank(S[t]) < k), 0)
+        raise ValueError(f"the innovation covariance S = H P H' + R of track {t} is singular: "
+                         f"g.cov[{t}] and R leave a measured direction without noise") from None
     # the pairs of weight above 0 only (a detection of weight 0 adds nothing, a NaN one
     # outside the gate too): a track's sums over its own, not over every detection
     rows, cols = np.nonzero(used)

@@ -204,10 +204,12 @@ class LinearMeasurement:
     def __init__(self, H: np.ndarray, R: np.ndarray):
         H_arr = as_float_array(H, "H", ndim=(2, 3))
         m, n = H_arr.shape[-2:]
-        T = H_arr.shape[0] if H_arr.ndim == 3 else None
+        # a stack of one matrix is the constant, as kalman_filter takes it
+        T = H_arr.shape[0] if H_arr.ndim == 3 and H_arr.shape[0] != 1 else None
         self._H = check_matrix_stack(H_arr, "H", m, n, T)
         R_arr = as_float_array(R, "R", ndim=(2, 3))
-        T = T if T is not None else (R_arr.shape[0] if R_arr.ndim == 3 else None)
+        T = T if T is not None else (R_arr.shape[0] if R_arr.ndim == 3 and R_arr.shape[0] != 1
+                                     else None)
         self._R = check_matrix_stack(R_arr, "R", m, m, T)
         check_psd(self._R, "R")
         self.ndim_meas = m

@@ -612,10 +612,12 @@ class LinearMotion:
     def __init__(self, F: np.ndarray, Q: np.ndarray):
         F_arr = as_float_array(F, "F", ndim=(2, 3))
         n = F_arr.shape[-1]
-        T = F_arr.shape[0] if F_arr.ndim == 3 else None
+        # a stack of one matrix is the constant, as kalman_filter takes it
+        T = F_arr.shape[0] if F_arr.ndim == 3 and F_arr.shape[0] != 1 else None
         self._F = check_matrix_stack(F_arr, "F", n, n, T)
         Q_arr = as_float_array(Q, "Q", ndim=(2, 3))
-        T = T if T is not None else (Q_arr.shape[0] if Q_arr.ndim == 3 else None)
+        T = T if T is not None else (Q_arr.shape[0] if Q_arr.ndim == 3 and Q_arr.shape[0] != 1
+                                     else None)
         self._Q = check_matrix_stack(Q_arr, "Q", n, n, T)
         check_psd(self._Q, "Q")
         self.ndim_state = n
