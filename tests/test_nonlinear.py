@@ -1038,3 +1038,32 @@ def test_a_model_array_changed_in_place_is_used():
         got, want = made.filter(ys, **prior), new.filter(ys, **prior)
         np.testing.assert_allclose(got.covs, want.covs, rtol=1e-12, err_msg=name)
     assert not np.allclose(before, ekf.filter(ys, **prior).covs)
+
+
+def test_an_ensemble_names_a_member_that_is_not_finite_and_a_cov_that_is_no_covariance():
+    """One NaN member of 100 made every member NaN at the next update (and the
+    log-likelihood NaN), without a word: the update names it. Ensemble.sample drew from the
+    lower triangle of a cov that is not symmetric (another covariance), and a cov of another
+    size than mean gave numpy's matmul error; the filter's own P0 check names the same
+    matrix."""
+    from vistrack.filters import Ensemble
+
+    members = np.random.default_rng(0).normal(size=(100, 2))
+    members[7, 0] = np.nan
+    pos = vt.Position(dim=1)
+    with pytest.raises(ValueError, match=re.escape("ens.members must be finite; "
+                                                   "ens.members[7, 0] = nan")):
+        enkf_update(Ensemble(members), [1.0], pos, rng=0)
+    with pytest.raises(ValueError, match=re.escape("ens.members must be finite")):
+        EnsembleKalmanFilter(vt.ConstantVelocity(dim=1, q=0.1), pos).update(Ensemble(members),
+                                                                            [1.0])
+    bad = np.array([[1.0, 0.9], [0.0, 1.0]])
+    with pytest.raises(ValueError, match=re.escape("cov must be symmetric; cov[0, 1] = 0.9")):
+        Ensemble.sample(np.zeros(2), bad, 10, rng=0)
+    with pytest.raises(ValueError, match=re.escape("cov must have shape (n, n) or (..., n, n) "
+                                                   "with n = 3, the size of mean (3,); got "
+                                                   "(2, 2)")):
+        Ensemble.sample(np.zeros(3), np.eye(2), 10, rng=0)
+    # a singular covariance still draws on its subspace
+    ens = Ensemble.sample(np.zeros(2), np.array([[1.0, 1.0], [1.0, 1.0]]), 50, rng=0)
+    np.testing.assert_allclose(ens.members[:, 0], ens.members[:, 1])

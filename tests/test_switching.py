@@ -232,3 +232,21 @@ def test_an_ess_threshold_of_one_resamples_at_every_step_as_the_particle_filter(
     f.resample = counting
     f.filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
     assert calls == []
+
+
+def test_a_measurement_no_particle_can_explain_is_named_as_the_imm_names_it():
+    """A finite measurement every model gives zero likelihood (1e200 for a walker near 5):
+    IMMFilter names it, where the switching particle filter's weights became NaN from that
+    step on (NaN means, mode probabilities and log-likelihood) with only a RuntimeWarning."""
+    slds = SwitchingLinearSystem([vt.ConstantVelocity(dim=1, q=0.01),
+                                  vt.ConstantVelocity(dim=1, q=4.0)],
+                                 vt.Position(dim=1, r=0.5), [[0.95, 0.05], [0.2, 0.8]])
+    ys = np.arange(10.0)[:, None]
+    ys[5] = 1e200
+    with pytest.raises(ValueError, match="zero likelihood to the measurement of series 0 at "
+                                         "step 5"):
+        IMMFilter.from_system(slds).filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
+    with pytest.raises(ValueError, match="every particle gives zero likelihood to the "
+                                         "measurement at step 5"):
+        SwitchingParticleFilter(slds, n_particles=50, rng=0).filter(ys, x0=[0.0, 1.0],
+                                                                    P0=np.eye(2))

@@ -30,6 +30,7 @@ from .._validate import (
     check_has_steps,
     check_one_step,
     check_prior,
+    check_psd,
     is_whole,
 )
 from ..models.adapters import (
@@ -109,8 +110,9 @@ class Ensemble:
         Raises
         ------
         ValueError
-            If ``mean`` or ``cov`` has a NaN or an infinite entry, ``cov`` is not positive
-            semi-definite, or ``n_members`` is not a whole number >= 2.
+            If ``mean`` or ``cov`` has a NaN or an infinite entry, their sizes disagree,
+            ``cov`` is not symmetric positive semi-definite, or ``n_members`` is not a whole
+            number >= 2.
 
         Examples
         --------
@@ -123,6 +125,12 @@ class Ensemble:
         # (a NaN covariance passed Cholesky's factorisation and drew NaN members)
         check_finite(mean, "mean")
         check_finite(cov, "cov")
+        n = mean.shape[-1] if mean.ndim else 0
+        if mean.ndim < 1 or cov.ndim < 2 or cov.shape[-2:] != (n, n):
+            raise ValueError(f"cov must have shape (n, n) or (..., n, n) with n = {n}, the size "
+                             f"of mean {mean.shape}; got {cov.shape}")
+        # (Cholesky reads the lower triangle alone: another matrix's draws)
+        check_psd(cov, "cov")
         n_members = as_whole(n_members, "n_members", 2)
         try:
             L = np.linalg.cholesky(cov)
@@ -252,6 +260,11 @@ def enkf_update(ens: Ensemble, y: ArrayLike,
         the Gaussian log-density of the innovation,
         :math:`\log N(r(y, \overline{h(x)}); 0, S)`, under the ensemble's moments.
 
+    Raises
+    ------
+    ValueError
+        If a member of ``ens`` is not finite (named), or ``y`` does not fit the measurement.
+
     References
     ----------
     .. [1] G. Evensen, "Sequential data assimilation with a nonlinear quasi-geostrophic model
@@ -280,6 +293,9 @@ def _enkf_update(ens: Ensemble, y: ArrayLike,
                  rng: np.random.Generator | int | None,
                  residual: Callable | None) -> tuple[Ensemble, np.ndarray]:
     X = ens.members
+    # (one member that is not finite made every member NaN, and the log-likelihood, without
+    # a word; the filter names a prediction that is not finite before it gets here)
+    check_finite(X, "ens.members")
     N, n = X.shape[-2:]
     me = measurement if isinstance(measurement, MeasurementFunctions) else MeasurementFunctions(
         measurement, n, residual)

@@ -549,7 +549,8 @@ class SwitchingParticleFilter:
         ------
         ValueError
             If ``x0`` or ``P0`` has the wrong shape, ``ys`` is not ``(T, m)`` for the
-            system's measurement or holds an infinity, or ``dt`` is not one number.
+            system's measurement or holds an infinity, ``dt`` is not one number, or every
+            particle gives a measurement zero likelihood (naming the step).
 
         Examples
         --------
@@ -607,6 +608,9 @@ class SwitchingParticleFilter:
                 mean, cov = g.mean.copy(), g.cov.copy()
                 a = logw + ll
                 norm = float(_logsumexp(a[None], 1)[0])
+                if not np.isfinite(norm):  # (the weights would be NaN from here on)
+                    raise ValueError(f"every particle gives zero likelihood to the "
+                                     f"measurement at step {t}")
                 total += norm
                 logw = a - norm
             w = np.exp(logw)
