@@ -2,6 +2,7 @@
 filter and the IMM against the exact posterior, enumerated over every mode sequence."""
 
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -250,3 +251,14 @@ def test_a_measurement_no_particle_can_explain_is_named_as_the_imm_names_it():
                                          "measurement at step 5"):
         SwitchingParticleFilter(slds, n_particles=50, rng=0).filter(ys, x0=[0.0, 1.0],
                                                                     P0=np.eye(2))
+
+
+def test_a_negative_transition_entry_is_named_not_its_rows_sums():
+    """[[1.1, -0.1], [0, 1]] sums to 1 on each row: the message gave the row sums, [1.0,
+    1.0], as if they were wrong; it names the negative entry now."""
+    bad = [[1.1, -0.1], [0.0, 1.0]]
+    cv = vt.ConstantVelocity(dim=1, q=0.1)
+    with pytest.raises(ValueError, match=re.escape("transition[0, 1] = -0.1")):
+        SwitchingLinearSystem([cv, cv], vt.Position(dim=1), bad)
+    with pytest.raises(ValueError, match=re.escape("transition[0, 1] = -0.1")):
+        IMMFilter([vt.KalmanFilter(cv, vt.Position(dim=1))] * 2, bad)

@@ -271,7 +271,11 @@ class IMMFilter:
         check_finite(Pi, "transition")
         if Pi.shape != (M, M):
             raise ValueError(f"transition must have shape ({M}, {M}); got {Pi.shape}")
-        if np.any(Pi < 0) or not np.allclose(Pi.sum(1), 1.0, rtol=0.0, atol=1e-9):
+        if np.any(Pi < 0):
+            i, j = (int(x) for x in np.argwhere(Pi < 0)[0])
+            raise ValueError(f"transition must be non-negative with rows summing to 1; "
+                             f"transition[{i}, {j}] = {Pi[i, j]}")
+        if not np.allclose(Pi.sum(1), 1.0, rtol=0.0, atol=1e-9):
             raise ValueError(f"transition must be non-negative with rows summing to 1; row sums "
                              f"are {Pi.sum(1).tolist()}")
         mu = np.full(M, 1.0 / M) if mode_probs is None else as_float_array(

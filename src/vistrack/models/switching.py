@@ -100,8 +100,11 @@ class SwitchingLinearSystem:
         self.measurement = measurement
         Pi = as_float_array(transition, "transition", ndim=(2,))
         check_finite(Pi, "transition")
-        if (Pi.shape != (k, k) or np.any(Pi < 0)
-                or not np.allclose(Pi.sum(1), 1.0, rtol=0.0, atol=1e-9)):
+        if Pi.shape == (k, k) and np.any(Pi < 0):
+            i, j = (int(x) for x in np.argwhere(Pi < 0)[0])
+            raise ValueError(f"transition must be a ({k}, {k}) non-negative matrix whose rows sum "
+                             f"to 1; transition[{i}, {j}] = {Pi[i, j]}")
+        if Pi.shape != (k, k) or not np.allclose(Pi.sum(1), 1.0, rtol=0.0, atol=1e-9):
             raise ValueError(f"transition must be a ({k}, {k}) non-negative matrix whose rows sum "
                              f"to 1; got shape {Pi.shape} and row sums {Pi.sum(1).tolist()}")
         self.transition = Pi
