@@ -4,6 +4,8 @@ and a region tracker through synthetic and real occlusions."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from scipy.stats import norm
@@ -289,3 +291,30 @@ def test_a_wsl_trackers_model_settings_are_checked_when_it_is_made():
         with pytest.raises(error) as got:
             WSLTracker(**kw)
         assert str(got.value) == str(want.value)
+
+
+def test_the_view_of_a_square_filling_its_box_is_symmetric():
+    """The view was sampled at the box's centre taken as a pixel index, half a pixel right
+    and down of the box's centre in the pixels' indices (the package's rule, base._HALF):
+    the view of a bright square exactly filling its box had a first column of 1.0 and a
+    last of 0.31. Now it is the same either way along each axis (the oracle: the square's
+    own symmetry)."""
+    img = np.zeros((100, 100), np.uint8)
+    img[40:60, 30:50] = 255
+    tr = WSLTracker(size=32, blur=0)
+    tr.init(img, np.array([30.0, 40.0, 20.0, 20.0]))
+    view = tr._sample(tr._prepare(img), *tr.centre, tr.w / tr.vw, tr.vw, tr.vh)
+    np.testing.assert_allclose(view, view[:, ::-1], atol=1e-9)
+    np.testing.assert_allclose(view, view[::-1, :], atol=1e-9)
+
+
+def test_settings_that_are_no_numbers_are_named():
+    """("a", 1, 1) was numpy's "could not convert string to float"; scales=1.0 "'float'
+    object is not iterable"; "abc" and [1, None] numpy's or Python's own words."""
+    with pytest.raises(ValueError, match=re.escape("m0 must be three finite positive mixing "
+                                                   "probabilities; got ('a', 1, 1)")):
+        WSLModel((3,), m0=("a", 1, 1))
+    for scales in (1.0, "abc", [1, None]):
+        with pytest.raises(ValueError, match=re.escape("scales must be one or more finite "
+                                                       f"positive numbers; got {scales!r}")):
+            WSLTracker(scales=scales)

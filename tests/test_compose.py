@@ -89,6 +89,13 @@ def test_members_are_checked():
         Composite({"x": Fixed([])})
     with pytest.raises(ValueError, match="gate"):
         Composite({"x": (Fixed([]), (0.1, 0.1))}, p_gate=1.0)
+    # a string or None was a bare "'<' not supported", an array numpy's "ambiguous"
+    for p in ("0.99", None, np.array([0.9, 0.9])):
+        with pytest.raises(ValueError, match=re.escape("p_gate must be a probability in (0, 1); "
+                                                       f"got {p!r}")):
+            Composite({"x": (Fixed([]), (0.1, 0.1))}, p_gate=p)
+    with pytest.raises(TypeError, match="members must be a mapping of names to"):
+        Composite([("x", (Fixed([]), (0.1, 0.1)))])
     # each failed at the first update, naming q, Q or R, not the setting
     for kw, message in (({"q_pos": -16.0}, "q_pos must be a finite number >= 0; got -16.0"),
                         ({"q_size": np.nan}, "q_size must be a finite number >= 0; got nan")):

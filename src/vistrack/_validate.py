@@ -146,7 +146,12 @@ def as_scales(values: Any, name: str = "scales") -> tuple[float, ...]:
     """``values`` as a tuple of one or more finite numbers > 0 (the relative sizes a
     tracker tries), or a ValueError naming ``name``: a scale of 0 made a box of no size, and
     none kept the prediction for ever."""
-    scales = tuple(float(v) for v in values)
+    try:  # (1.0 was "'float' object is not iterable", "abc" and None numpy's own words)
+        if isinstance(values, (str, bytes)):
+            raise TypeError
+        scales = tuple(float(as_number(v, name)) for v in values)
+    except (TypeError, ValueError):
+        scales = ()
     if not scales or not all(np.isfinite(v) and v > 0 for v in scales):
         raise ValueError(f"{name} must be one or more finite positive numbers; got {values!r}")
     return scales

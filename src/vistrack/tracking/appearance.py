@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._validate import as_box, as_finite, as_number, as_scales, as_uint8_image, as_whole
-from .base import SingleObjectTracker
+from .base import _HALF, SingleObjectTracker
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -109,10 +109,14 @@ class WSLModel:
             # (a string failed in numpy's isfinite, naming nothing)
             if not np.isfinite(as_number(v, name)) or v <= 0:
                 raise ValueError(f"{name} must be positive; got {v!r}")
-        m0_arr = np.asarray(m0, dtype=float)
+        try:  # ("a", 1, 1) was numpy's "could not convert string to float: 'a'"
+            m0_arr = np.asarray(m0, dtype=float)
+            got = m0_arr.tolist()
+        except (TypeError, ValueError):
+            m0_arr, got = np.full(1, np.nan), m0
         if m0_arr.shape != (3,) or not (np.isfinite(m0_arr).all() and (m0_arr > 0).all()):
             raise ValueError("m0 must be three finite positive mixing probabilities; got "
-                             f"{m0_arr.tolist()}")  # NaN and inf gave NaN mixtures
+                             f"{got!r}")  # NaN and inf gave NaN mixtures
         self.alpha = 1.0 - float(np.exp(-1.0 / tau))
         self.sigma_w, self.sigma_s0 = float(sigma_w), float(sigma_s0)
         self.sigma_min = float(sigma_min)
@@ -393,10 +397,13 @@ class WSLTracker(SingleObjectTracker):
 
     def _sample(self, g: np.ndarray, cx: float, cy: float, scale: float, out_w: int,
                 out_h: int) -> np.ndarray:
-        """The image around ``(cx, cy)`` at ``scale`` image pixels per view pixel, as an
-        ``(out_h, out_w)`` array centred there (bilinear, edges replicated)."""
+        """The image around ``(cx, cy)`` (in a box's coordinates, :data:`~.base._HALF`) at
+        ``scale`` image pixels per view pixel, as an ``(out_h, out_w)`` array centred there
+        (bilinear, edges replicated). Sampled at the box's centre taken as a pixel index, the
+        view of a square filling its box was lopsided (its first column 1.0, its last 0.31)."""
         import cv2
 
+        cx, cy = cx - _HALF, cy - _HALF  # the pixels' indices: pixel k's centre at k
         A = np.array([[scale, 0, cx - scale * (out_w - 1) / 2],
                       [0, scale, cy - scale * (out_h - 1) / 2]], dtype=np.float64)
         return cv2.warpAffine(g, A, (out_w, out_h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,

@@ -98,9 +98,10 @@ class Composite(SingleObjectTracker):
     ValueError
         If ``members`` is empty, a member's value is not ``(tracker, (pos_sd, log_size_sd))``
         with positive, finite noise, ``q_pos`` or ``q_size`` is negative or not finite, or
-        ``p_gate`` is not in ``(0, 1)``.
+        ``p_gate`` is not a number in ``(0, 1)``.
     TypeError
-        If a member lacks ``init``, ``update`` or ``anchor``.
+        If ``members`` is not a mapping, or a member lacks ``init``, ``update`` or
+        ``anchor``.
 
     Notes
     -----
@@ -127,6 +128,9 @@ class Composite(SingleObjectTracker):
 
     def __init__(self, members: Mapping[str, tuple[_Member, tuple[float, float]]], *,
                  q_pos: float = 16.0, q_size: float = 1e-3, p_gate: float = 0.999):
+        if not isinstance(members, Mapping):  # (a list was "'list' object has no 'items'")
+            raise TypeError(f"members must be a mapping of names to (tracker, (pos_sd, "
+                            f"log_size_sd)); got {type(members).__name__}")
         if not members:
             raise ValueError("members must name at least one tracker")
         self.members: dict[str, _Member] = {}
@@ -148,8 +152,10 @@ class Composite(SingleObjectTracker):
                                  f"numbers; got {(pos_sd, size_sd)!r}")
             self.members[name] = tracker
             self.noise[name] = np.array([pos_sd, size_sd], float)
-        if not (0 < p_gate < 1):
-            raise ValueError(f"p_gate must be a probability in (0, 1); got {p_gate}")
+        # (a string or None was a bare "'<' not supported", an array numpy's "ambiguous")
+        if not (isinstance(p_gate, (int, float, np.integer, np.floating))
+                and not isinstance(p_gate, (bool, np.bool_)) and 0 < p_gate < 1):
+            raise ValueError(f"p_gate must be a probability in (0, 1); got {p_gate!r}")
         from scipy.stats import chi2
 
         # named here: a negative or NaN one failed at the first update, naming q or Q
