@@ -777,6 +777,45 @@ def test_the_progress_bar_on_a_terminal_and_lines_elsewhere(tmp_path):
     assert progress_lines(None, 3) is None
 
 
+def test_each_progress_and_warning_line_is_one_write(tmp_path, monkeypatch):
+    """A batch's workers share stderr with the process handing out the inputs. print wrote
+    a line and its newline in two writes, and unbuffered (python -u) a worker's warning fell
+    between them: "... from frame to frame[15/20] KITTI-0010-Car: ..." and an empty line.
+    Each line is now one write, which a pipe keeps whole (under 4,096 bytes)."""
+    import io
+    import sys
+    import warnings
+
+    from vistrack.batch import Outcome, progress_lines
+    from vistrack.cli import _one_line_warnings
+
+    class Writes(io.StringIO):
+        def __init__(self):
+            super().__init__()
+            self.calls = []
+
+        def write(self, text):
+            self.calls.append(text)
+            return super().write(text)
+
+    out = Writes()
+    report = progress_lines(out, 2)
+    report(Outcome(Path("A"), tmp_path / "A.txt", True, 10, 30, 3, 0.2), 1, 2)
+    report(Outcome(Path("B"), tmp_path / "B.txt", False, error="ValueError: bad"), 2, 2)
+    assert out.calls == ["[1/2] A: 10 frames, 3 tracks, 0.2 s\n",
+                         "[2/2] B: failed: ValueError: bad\n"]
+    err = Writes()
+    monkeypatch.setattr(sys, "stderr", err)
+    show = _one_line_warnings("track")
+    show(UserWarning("a box of zero width"), UserWarning, "f.py", 1)
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        warnings.simplefilter("always")
+        warnings.warn("frames taken as not delivered", stacklevel=1)
+    assert err.calls == ["vistrack track: warning: a box of zero width\n",
+                         "vistrack track: warning: frames taken as not delivered\n"]
+
+
 @pytest.mark.parametrize("option, error, message", [
     ("bogus", TypeError, "bogus is no setting of the box tracker or the offline mode (those "
                          "are assigner, "),

@@ -525,7 +525,10 @@ def progress_lines(stream: TextIO | None,
                 f"failed: {o.error}")
         line = f"[{k}/{n}] {o.input.name}: {what}"
         if not bar:
-            print(line, file=stream, flush=True)
+            # one write for the line and its newline: print's two let a worker's warning,
+            # written to the same stderr unbuffered (python -u), fall between them
+            stream.write(line + "\n")
+            stream.flush()
             return
         stream.write(f"\r\x1b[K{line}\n")  # the bar's line cleared, the line, the bar again
         if k < n:

@@ -1597,7 +1597,10 @@ def _one_line_warnings(command: str) -> Callable[..., None]:
 
     def show(message: Warning | str, category: type[Warning], *rest: object,
              **kw: object) -> None:
-        print(f"vistrack {command}: warning: {message}", file=sys.stderr)
+        # one write for the line and its newline (print makes two): the workers of a batch
+        # share stderr, and unbuffered (python -u) another's line fell between them
+        sys.stderr.write(f"vistrack {command}: warning: {message}\n")
+        sys.stderr.flush()
 
     return show
 
