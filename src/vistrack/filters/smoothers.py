@@ -221,8 +221,8 @@ def rts_smooth(result: FilterResult, *, F: ArrayLike, Q: ArrayLike) -> SmoothRes
     if bad >= 0:
         raise ValueError(
             f"the predicted covariance F P F' + Q from step {bad} to {bad + 1} is not positive "
-            "definite, so the RTS gain is undefined; make Q positive definite (P is "
-            f"result.covs at step {bad}, a filter's covariance: positive semi-definite)"
+            "definite, so the RTS gain is undefined; make Q positive definite (P, the filtered "
+            f"covariance result.covs at step {bad}, must be positive semi-definite)"
         )
     if single:
         s_means, s_covs = s_means[0], s_covs[0]
