@@ -788,8 +788,8 @@ def test_a_track_s_prediction_that_is_not_finite_is_named_not_dropped():
         with pytest.raises(ValueError, match=re.escape("z_pred must be finite; z_pred[1] = "
                                                        "[nan, 0.0]")):
             f(np.array([[0.0, 0.0], [np.nan, 0.0]]), S, Z)
-        with pytest.raises(ValueError, match=re.escape("S must be symmetric for every track; "
-                                                       "S[0] = [[1.0, 100.0], [0.0, 1.0]]")):
+        with pytest.raises(ValueError, match=re.escape("S must be symmetric; S[0, 0, 1] = 100.0 "
+                                                       "but its transpose entry is 0.0")):
             f(np.zeros((2, 2)), np.array([[[1.0, 100.0], [0.0, 1.0]], np.eye(2)]), Z)
 
 

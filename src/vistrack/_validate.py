@@ -76,6 +76,13 @@ def _is_boolean(value: Any) -> bool:
         isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind == "b")
 
 
+def is_number(value: Any) -> bool:
+    """Whether ``value`` is one real number, Python's or numpy's (``np.float32(0.5)``), and
+    not a boolean, a string, None or an array (where ``0 < value < 1`` raised its own
+    error, or took ``True`` for 1)."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not _is_boolean(value)
+
+
 def as_number(value: Any, name: str) -> float:
     """``value`` as a float, or a TypeError naming ``name`` (``float()`` names neither). A
     boolean is not a number here (``float(True)`` is 1.0: ``q=True`` was taken as 1); an
@@ -237,12 +244,10 @@ def check_matrix_stack(
     return arr
 
 
-def check_psd(arr: np.ndarray, name: str, *, strict: bool = False) -> None:
-    """Check that every matrix of a stack ``(..., n, n)`` is symmetric positive (semi-)definite.
-
-    Symmetry is checked to a relative tolerance of 1e-8 of the largest entry; definiteness by the
-    smallest eigenvalue, to a tolerance of 1e-10 of the largest.
-    """
+def check_symmetric(arr: np.ndarray, name: str) -> np.ndarray:
+    """Check that every matrix of a stack ``(..., n, n)`` is symmetric, to a relative
+    tolerance of 1e-8 of its largest entry, naming the first entry that is not; returns each
+    matrix's scale, that largest entry (1 where all are 0), shaped ``(..., 1, 1)``."""
     scale = np.max(np.abs(arr), axis=(-2, -1), keepdims=True)
     scale = np.where(scale > 0, scale, 1.0)
     asym = np.abs(arr - np.swapaxes(arr, -1, -2)) > 1e-8 * scale
@@ -252,6 +257,17 @@ def check_psd(arr: np.ndarray, name: str, *, strict: bool = False) -> None:
             f"{name} must be symmetric; {name}{list(where)} = {arr[where]} but its transpose "
             f"entry is {arr[where[:-2] + (where[-1], where[-2])]}"
         )
+    return scale
+
+
+def check_psd(arr: np.ndarray, name: str, *, strict: bool = False) -> None:
+    """Check that every matrix of a stack ``(..., n, n)`` is symmetric positive (semi-)definite.
+
+    Symmetry is checked to a relative tolerance of 1e-8 of the largest entry
+    (:func:`check_symmetric`); definiteness by the smallest eigenvalue, to a tolerance of
+    1e-10 of the largest.
+    """
+    scale = check_symmetric(arr, name)
     eig = np.linalg.eigvalsh(arr)
     tol = 1e-10 * scale[..., 0]
     bad = eig[..., 0] <= tol[..., 0] if strict else eig[..., 0] < -tol[..., 0]

@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike
 
 from .._jit import njit
 from .._prebuilt import kernel
+from .._validate import check_symmetric
 
 __all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "overlapping_pairs",
            "non_maximum", "giou", "euclidean", "mahalanobis"]
@@ -219,12 +220,7 @@ def _innovations(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, z_name: str = "z
         raise ValueError(f"z_pred must be finite; z_pred[{t}] = {zp[t].tolist()}")
     # numpy's Cholesky reads the lower triangle alone: an S that is not symmetric would be
     # taken for another
-    asym = np.abs(S - np.swapaxes(S, 1, 2)).max(axis=(1, 2), initial=0.0) > 1e-8 * np.abs(
-        S).max(axis=(1, 2), initial=0.0)
-    if asym.any():
-        t = int(np.flatnonzero(asym)[0])
-        raise ValueError(f"S must be symmetric for every track; S[{t}] = {S[t].tolist()} is "
-                         "not")
+    check_symmetric(S, "S")
     if z.shape[1:] != (m,) and z.size:
         raise ValueError(f"{z_name} must have shape (D, {m}); got {z.shape}")
     return zp, S, z

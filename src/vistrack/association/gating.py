@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import is_whole
+from .._validate import is_number, is_whole
 
 __all__ = ["chi2_gate", "chi2_threshold"]
 
@@ -39,8 +39,7 @@ def chi2_threshold(m: int, p: float = 0.99) -> float:
     >>> round(chi2_threshold(2, 0.99), 3)
     9.21
     """
-    if not (isinstance(p, (int, float, np.integer, np.floating)) and not isinstance(p, bool)
-            and 0.0 < p < 1.0):
+    if not (is_number(p) and 0.0 < p < 1.0):
         raise ValueError(f"p must be a number in (0, 1); got {p!r}")
     if not is_whole(m, 1):
         raise ValueError(f"m must be a whole number of degrees of freedom >= 1, the size of a "

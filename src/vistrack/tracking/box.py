@@ -92,6 +92,7 @@ import numpy as np
 from .._jit import njit
 from .._prebuilt import kernel
 from .._registry import Registry
+from .._validate import is_number
 from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs, non_maximum
 from ..association.assign import gnn_pairs, gnn_pairs_limited
 from ..association.costs import iou_pairs_same_class
@@ -231,8 +232,8 @@ class BoxTrackerConfig:
             return ValueError(f"{name} must be {must}; got {getattr(self, name)!r}")
 
         kinds = {f.name: f.type for f in fields(self)}
-        number = (int, float, np.integer, np.floating)  # numpy's too (np.float32(0.5) was
-        # refused as "not a number"), each kept as Python's own type
+        # numbers are numpy's too (np.float32(0.5) was refused as "not a number"), each
+        # kept as Python's own type
         for name, kind in kinds.items():
             v = getattr(self, name)
             if kind == "bool":
@@ -240,13 +241,12 @@ class BoxTrackerConfig:
                     raise bad(name, "True or False")
                 object.__setattr__(self, name, bool(v))
             if kind == "int":
-                if (isinstance(v, (bool, np.bool_)) or not isinstance(v, number)
-                        or not np.isfinite(v) or not float(v).is_integer()
+                if (not is_number(v) or not np.isfinite(v) or not float(v).is_integer()
                         or not -2**63 <= v < 2**63):  # the compiled tracker's int64
                     raise bad(name, "an integer")
                 object.__setattr__(self, name, int(v))
             if kind == "float":
-                if isinstance(v, (bool, np.bool_)) or not isinstance(v, number) or np.isnan(v):
+                if not is_number(v) or np.isnan(v):
                     raise bad(name, "a number")
                 object.__setattr__(self, name, float(v))
         if self.scores not in ("calibrated", "raw"):

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from .._validate import as_finite
+from .._validate import as_finite, is_number
 from ..filters import kf_predict, kf_update
 from ..models import ConstantVelocity
 from ..types import Gaussian
@@ -144,17 +144,15 @@ class Composite(SingleObjectTracker):
             for attr in ("init", "update", "anchor"):
                 if not callable(getattr(tracker, attr, None)):
                     raise TypeError(f"members[{name!r}] has no {attr}() method")
-            ok = all(isinstance(v, (int, float, np.integer, np.floating))
-                     and not isinstance(v, (bool, np.bool_)) for v in (pos_sd, size_sd))
-            if not (ok and 0 < pos_sd < np.inf and 0 < size_sd < np.inf):
+            if not (is_number(pos_sd) and is_number(size_sd)
+                    and 0 < pos_sd < np.inf and 0 < size_sd < np.inf):
                 # ("a", 1) was a bare "'<' not supported", (True, 1) taken as 1.0
                 raise ValueError(f"members[{name!r}]: noise must be two positive, finite "
                                  f"numbers; got {(pos_sd, size_sd)!r}")
             self.members[name] = tracker
             self.noise[name] = np.array([pos_sd, size_sd], float)
         # (a string or None was a bare "'<' not supported", an array numpy's "ambiguous")
-        if not (isinstance(p_gate, (int, float, np.integer, np.floating))
-                and not isinstance(p_gate, (bool, np.bool_)) and 0 < p_gate < 1):
+        if not (is_number(p_gate) and 0 < p_gate < 1):
             raise ValueError(f"p_gate must be a probability in (0, 1); got {p_gate!r}")
         from scipy.stats import chi2
 
