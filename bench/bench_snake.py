@@ -72,7 +72,8 @@ def main():
     frames, geos = scene()
     run_vistrack(frames[:3], geos[:3])  # compiled code loaded
     rows = []
-    for name, fn in (("vistrack `Snake` (B-spline, radial search, Kalman)", run_vistrack),
+    for name, fn in (("vistrack `Snake` (B-spline, affine shape space, radial search, Kalman)",
+                      run_vistrack),
                      ("scikit-image `active_contour` (its defaults: up to 2,500 iterations)",
                       run_skimage)):
         sec, err = fn(frames, geos)

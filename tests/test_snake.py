@@ -120,6 +120,8 @@ def test_a_snake_started_from_nan_or_a_zero_radius_is_named():
     (dict(n_control=3), "n_control must be a whole number >= 4"),
     (dict(q=np.inf), "q must be a finite number > 0; got inf"),
     (dict(r=0), "r must be a finite number > 0; got 0"),
+    (dict(shape="similarity"), "shape must be one of 'affine', 'euclidean', 'free'; got "
+                               "'similarity'"),
 ])
 def test_a_snakes_settings_are_named_when_it_is_made(setting, message):
     """A search of -1 or a min_edge of NaN gave a snake that never moved, n_control 4.7 was
@@ -159,3 +161,97 @@ def test_the_snakes_box_is_the_objects_not_half_a_pixel_before_it(cx, cy):
     np.testing.assert_allclose(box[2:], [60, 60], atol=0.3)
     t.anchor([40, 30, 30, 20])  # and a box given is the contour's box
     np.testing.assert_allclose(t._bounds(), [40, 30, 30, 20], atol=1e-9)
+
+
+def _square(x, y, size=(480, 480)):
+    im = np.full(size, 30, np.uint8)
+    im[y:y + 20, x:x + 20] = 220
+    return im
+
+
+@pytest.mark.parametrize("shape", ["affine", "euclidean"])
+@pytest.mark.parametrize("v", [(3, 0), (0, 3), (3, 2), (-3, 2)])
+def test_a_shape_space_snake_keeps_a_moving_squares_box(shape, v):
+    """Free control points slide along the contour unseen by the edges (each measures only
+    along its normal): on a 20 px square moving (3, 2) px a frame the free snake's box was 11
+    px too tall after 20 frames and 165 px off after 60. In a shape space, with the template
+    fitted to the first frame, every side of the box stays within 2.5 px of the square's
+    (oracle: the square drawn; an eighth of its side, the lag of a random walk behind 3 px a
+    frame, which the affine space's shear turns partly into height) over 60 frames,
+    whichever way it moves, and it does not grow: the last 20 frames err by no more than a
+    quarter of a pixel beyond the first 20 (the free snake: 45 px, then 165)."""
+    from vistrack.tracking.snake import SnakeTracker
+
+    x0, y0 = 200 - 40 * np.sign(v[0]), 200 - 40 * np.sign(v[1])
+    t = SnakeTracker(n_control=12, n_samples=60, shape=shape)
+    t.init(_square(x0, y0), [x0, y0, 20, 20])
+    err = [np.abs(t.update(_square(x0 + v[0] * k, y0 + v[1] * k))
+                  - [x0 + v[0] * k, y0 + v[1] * k, 20, 20]).max() for k in range(1, 61)]
+    assert max(err) < 2.5
+    assert max(err[40:]) < max(err[:20]) + 0.25
+    assert t.snake.found.mean() > 0.9
+
+
+def test_the_shape_spaces_are_the_maps_they_name():
+    """``Q = Q₀ + W X``: the affine parameters move the template's control points by
+    ``x = tx + c + (1 + a) x₀ + b y₀``, ``y = ty + c + c' x₀ + (1 + d) y₀`` about its centre,
+    the Euclidean ones by a rotation and scale, the free ones each point by its own (oracle:
+    the maps written out)."""
+    rng = np.random.default_rng(3)
+    Q0 = rng.normal(50, 10, (8, 2))
+    c = Q0.mean(0)
+    p0 = Q0 - c
+    X = rng.normal(0, 0.1, 6) * [10, 10, 1, 1, 1, 1]
+    tx, ty, a, b, cc, d = X
+    from vistrack.types import Gaussian
+    for shape, want in (
+            ("affine", np.c_[tx + c[0] + (1 + a) * p0[:, 0] + b * p0[:, 1],
+                             ty + c[1] + cc * p0[:, 0] + (1 + d) * p0[:, 1]]),
+            ("euclidean", np.c_[tx + c[0] + (1 + a) * p0[:, 0] - b * p0[:, 1],
+                                ty + c[1] + b * p0[:, 0] + (1 + a) * p0[:, 1]]),
+            ("free", Q0 + np.c_[X[:2].repeat(4), X[2:4].repeat(4)])):
+        s = Snake(n_control=8, n_samples=16, shape=shape)
+        s.init(Q0)
+        np.testing.assert_allclose(s.control_points, Q0, atol=1e-12)
+        dim = {"affine": 6, "euclidean": 4, "free": 16}[shape]
+        assert s.state.mean.shape == (dim,)
+        x = X[:dim] if shape != "free" else np.r_[X[0].repeat(4), X[2].repeat(4),
+                                                  X[1].repeat(4), X[3].repeat(4)]
+        if shape == "free":
+            want = Q0 + np.c_[x[:8], x[8:]]
+        s.state = Gaussian(x, s.state.cov)
+        np.testing.assert_allclose(s.control_points, want, atol=1e-12)
+        np.testing.assert_allclose(s.contour(), bspline_matrix(8, 16) @ want, atol=1e-12)
+        # move_to takes the template about the points given, the covariance kept
+        P = s.state.cov.copy()
+        s.move_to(Q0 + 5)
+        np.testing.assert_allclose(s.control_points, Q0 + 5, atol=1e-12)
+        np.testing.assert_array_equal(s.state.cov, P)
+        assert not s.state.mean.any()
+
+
+def test_process_noise_moves_the_template_by_q_in_every_shape_space():
+    """``q`` is each control point's variance per frame for free points and translations,
+    and ``q / ρ²`` for a linear parameter (``ρ²`` the template's mean squared distance from
+    its centre), so that the linear part's noise moves each coordinate by ``q`` on average
+    (oracle: the mean over the coordinates of the prediction's variance, ``W P Wᵀ``, after
+    a blank frame, from a start of ``std``² per coordinate, in closed form)."""
+    blank = np.full((120, 160), 90, np.uint8)
+    for shape in ("affine", "euclidean", "free"):
+        s = Snake(n_control=12, n_samples=60, q=4.0, shape=shape)
+        s.init_circle((80, 60), 20, std=1.0)
+        s.track(blank)
+        var = np.einsum("ij,jk,ik->i", s._W, s.state.cov, s._W)
+        # translation alone: q + std² at every coordinate; the linear parameters add as
+        # much again on average (each coordinate's two terms: x₀² and y₀², over ρ²)
+        lin = var.mean() - (4.0 + 1.0)
+        assert lin == pytest.approx(0.0 if shape == "free" else 4.0 + 1.0, rel=1e-9, abs=1e-9)
+
+
+def test_the_trackers_settle_is_named():
+    from vistrack.tracking.snake import SnakeTracker
+
+    with pytest.raises(ValueError, match=re.escape(
+            "settle must be a whole number >= 0 (frames the free snake fits the first "
+            "frame); got -1")):
+        SnakeTracker(settle=-1)

@@ -4,8 +4,8 @@ control points (seed 001, "Snakes: basic approach"; Blake and Isard's active con
 The contour is a periodic uniform cubic B-spline, ``r(s) = U(s) Q`` with ``n`` control points
 ``Q``; it is sampled at ``m`` points ``r_k = B_k Q`` with unit normals ``ν_k``. Each frame:
 
-1. **predict** the control points (a random walk: ``Q`` keeps its value, its covariance grows
-   by ``q`` per frame and control point);
+1. **predict** the contour's shape (a random walk: it keeps its value, its covariance grows by
+   ``q`` pixels² per frame at each control point);
 2. **search radially for edges**: along each normal, within ``±search`` pixels of the
    predicted contour, the strongest change of intensity along the normal (above
    ``min_edge``) is the measured edge point ``p_k``;
@@ -14,6 +14,16 @@ The contour is a periodic uniform cubic B-spline, ``r(s) = U(s) Q`` with ``n`` c
    ``r`` (:func:`vistrack.filters.kf_update`, all measurements at once). With a flat prior this
    is exactly the least-squares fit of the seeds' slide; the prior keeps the contour where no
    edge is seen.
+
+The state lives in a **shape space** (Blake and Isard, ch. 4): the control points are
+``Q = Q₀ + W X``, a template ``Q₀`` (the contour :meth:`Snake.init` was given) moved by a few
+parameters ``X``. ``shape="affine"`` (the default) allows the template's translations and
+linear maps (6 parameters), ``"euclidean"`` translation, rotation and uniform scale (4), and
+``"free"`` every control point on its own (``2n``). An edge measures the contour only along its
+normal, so free control points may slide along the contour without any measurement seeing it;
+over frames they bunch, the contour folds, and a moving object's contour grows (a square moving
+(3, 2) pixels a frame: 11 pixels too tall after 20 frames). In a shape space the contour keeps
+the template's form, and 100 edges fix 6 parameters rather than 40.
 """
 
 from __future__ import annotations
@@ -33,6 +43,8 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
 __all__ = ["Snake", "SnakeTracker", "bspline_matrix"]
+
+_SHAPES = ("affine", "euclidean", "free")
 
 
 def bspline_matrix(n: int, m: int, derivative: bool = False) -> np.ndarray:
@@ -132,13 +144,23 @@ class Snake:
         Smallest intensity change over a pixel that counts as an edge.
     q, r : float
         Process variance per frame of each control point coordinate, and the variance of an
-        edge's position along its normal (pixels²).
+        edge's position along its normal (pixels²). In a shape space, ``q`` is each
+        parameter's variance scaled to move the template's control points by about as much:
+        ``q`` for a translation, ``q / ρ²`` for a linear parameter, ``ρ`` the template's RMS
+        distance from its centre.
+    shape : {"affine", "euclidean", "free"}
+        The shape space (see the module).
 
     Attributes
     ----------
     state : Gaussian or None
-        The control points' distribution: the ``n`` x coordinates, then the ``n`` y
-        coordinates (None before :meth:`init`).
+        The shape parameters' distribution ``X`` (None before :meth:`init`): for
+        ``"affine"`` the translation ``tx, ty`` and the linear map's change ``a, b, c, d``
+        (``x = tx + c₀ + (1 + a) x₀ + b y₀``, ``y = ty + c₀ + c x₀ + (1 + d) y₀`` about the
+        template's centre ``c₀``); for ``"euclidean"`` ``tx, ty, a, b`` with ``c = b`` and
+        ``d = a`` read as ``x = ... + (1 + a) x₀ − b y₀``, ``y = ... + b x₀ + (1 + a) y₀``; for
+        ``"free"`` each control point's own displacement, the ``n`` x coordinates then the
+        ``n`` y.
     found : (m,) bool ndarray
         Where :meth:`track` found an edge at the last frame.
 
@@ -146,8 +168,8 @@ class Snake:
     ------
     ValueError
         If ``n_control`` is not a whole number >= 4, ``n_samples`` or ``search`` not one
-        >= 1, ``min_edge`` not a finite number >= 0, or ``q`` or ``r`` not a finite number
-        > 0 (a TypeError for what is no number).
+        >= 1, ``min_edge`` not a finite number >= 0, ``q`` or ``r`` not a finite number
+        > 0 (a TypeError for what is no number), or ``shape`` not one of the three.
 
     References
     ----------
@@ -168,7 +190,8 @@ class Snake:
     """
 
     def __init__(self, n_control: int = 20, n_samples: int = 100, *, search: int = 10,
-                 min_edge: float = 20.0, q: float = 4.0, r: float = 1.0):
+                 min_edge: float = 20.0, q: float = 4.0, r: float = 1.0,
+                 shape: str = "affine"):
         # each named: a search of -1 or a min_edge of NaN gave a snake that never moved, a
         # n_control of 4.7 was cut to 4, and an infinite q failed at the first update
         self.n = as_whole(n_control, "n_control", 4, "control points of a closed B-spline")
@@ -179,7 +202,14 @@ class Snake:
         self.min_edge = as_finite(min_edge, "min_edge", 0)
         self.q = as_finite(q, "q", 0, above=True)
         self.r = as_finite(r, "r", 0, above=True)
+        if shape not in _SHAPES:
+            raise ValueError(f"shape must be one of {', '.join(map(repr, _SHAPES))}; "
+                             f"got {shape!r}")
+        self.shape = shape
         self.state: Gaussian | None = None
+        self._base = np.zeros(2 * self.n)   # Q₀, stacked x then y
+        self._W = np.eye(2 * self.n)        # Q = Q₀ + W X
+        self._qdiag = np.full(2 * self.n, self.q)
 
     def init(self, control_points: ArrayLike, std: float = 2.0) -> None:
         """Start from control points ``(n, 2)`` with standard deviation ``std`` pixels.
@@ -203,6 +233,35 @@ class Snake:
         >>> s.control_points[1].tolist(), float(s.state.cov[0, 0])
         ([10.0, 0.0], 4.0)
         """
+        Q = self._points(control_points)
+        std = as_finite(std, "std", 0.0, above=True)
+        self._template(Q)
+        # std pixels at each control point, as q is
+        self.state = Gaussian(np.zeros(len(self._qdiag)),
+                              std ** 2 / self.q * np.diag(self._qdiag))
+
+    def _template(self, Q: np.ndarray) -> None:
+        # the shape space about the control points Q (n, 2): Q₀, W, and the process noise of
+        # each parameter (q for translations and free points, q / ρ² for linear parameters)
+        n = self.n
+        self._base = np.r_[Q[:, 0], Q[:, 1]]
+        if self.shape == "free":
+            self._W = np.eye(2 * n)
+            self._qdiag = np.full(2 * n, self.q)
+            return
+        c = Q.mean(0)
+        x0, y0 = Q[:, 0] - c[0], Q[:, 1] - c[1]
+        rho2 = max(float((x0 ** 2 + y0 ** 2).mean()), 1e-12)
+        one, zero = np.ones(n), np.zeros(n)
+        cols = [np.r_[one, zero], np.r_[zero, one]]
+        if self.shape == "affine":
+            cols += [np.r_[x0, zero], np.r_[y0, zero], np.r_[zero, x0], np.r_[zero, y0]]
+        else:
+            cols += [np.r_[x0, y0], np.r_[-y0, x0]]
+        self._W = np.stack(cols, axis=1)
+        self._qdiag = np.r_[self.q, self.q, np.full(len(cols) - 2, self.q / rho2)]
+
+    def _points(self, control_points: ArrayLike) -> np.ndarray:
         Q = np.asarray(control_points, dtype=float)
         if Q.shape != (self.n, 2):
             raise ValueError(f"control_points must have shape ({self.n}, 2); got {Q.shape}")
@@ -210,9 +269,7 @@ class Snake:
             k = int(np.flatnonzero(~np.isfinite(Q).all(axis=1))[0])
             raise ValueError(f"control_points must be finite; control_points[{k}] = "
                              f"{Q[k].tolist()}")
-        std = as_finite(std, "std", 0.0, above=True)
-        # state: x coordinates of the control points, then y
-        self.state = Gaussian(np.r_[Q[:, 0], Q[:, 1]], std ** 2 * np.eye(2 * self.n))
+        return Q
 
     def init_circle(self, centre: ArrayLike, radius: float, std: float = 2.0) -> None:
         """Start from the spline closest to a circle (control points on a slightly larger
@@ -272,8 +329,39 @@ class Snake:
         """
         if self.state is None:  # AttributeError, as before this check (and for hasattr)
             raise AttributeError("the snake has no state yet: call init or init_circle first")
-        x = self.state.mean
+        x = self._base + self._W @ self.state.mean
         return np.c_[x[:self.n], x[self.n:]]
+
+    def move_to(self, control_points: ArrayLike) -> None:
+        """Put the contour's control points at ``control_points`` (n, 2), keeping the
+        state's covariance: the shape space is taken about the new points.
+
+        Parameters
+        ----------
+        control_points : (n, 2) array_like
+            The control points ``x, y``.
+
+        Raises
+        ------
+        AttributeError
+            Before :meth:`init` or :meth:`init_circle`.
+        ValueError
+            If ``control_points`` does not have shape ``(n, 2)`` or is not finite.
+
+        Examples
+        --------
+        >>> s = Snake(n_control=4, n_samples=8)
+        >>> s.init([[0, 0], [10, 0], [10, 10], [0, 10]])
+        >>> s.move_to([[5, 0], [15, 0], [15, 20], [5, 20]])
+        >>> s.control_points.tolist()
+        [[5.0, 0.0], [15.0, 0.0], [15.0, 20.0], [5.0, 20.0]]
+        """
+        g = self.state
+        if g is None:
+            raise AttributeError("the snake has no state yet: call init or init_circle first")
+        Q = self._points(control_points)
+        self._template(Q)
+        self.state = Gaussian(np.zeros_like(g.mean), g.cov)
 
     def contour(self) -> np.ndarray:
         """The contour's ``m`` sample points ``(m, 2)``.
@@ -337,8 +425,10 @@ class Snake:
             raise RuntimeError("call init or init_circle first")
         img = as_uint8_image(image, grey=True).astype(np.float32)
         n, m = self.n, self.m
-        g = kf_predict(self.state, np.eye(2 * n), self.q * np.eye(2 * n))
-        Q = np.c_[g.mean[:n], g.mean[n:]]
+        d = len(self._qdiag)
+        g = kf_predict(self.state, np.eye(d), np.diag(self._qdiag))
+        Qs = self._base + self._W @ g.mean
+        Q = np.c_[Qs[:n], Qs[n:]]
         pts, tang = self.B @ Q, self.dB @ Q
         norm = np.linalg.norm(tang, axis=1, keepdims=True)
         normals = np.c_[tang[:, 1], -tang[:, 0]] / np.maximum(norm, 1e-12)
@@ -350,8 +440,8 @@ class Snake:
             k = np.flatnonzero(found)
             # each edge measures the contour along its normal: ν_kᵀ B_k Q
             H = np.c_[normals[k, 0:1] * self.B[k], normals[k, 1:2] * self.B[k]]
-            z = (normals[k] * edges[k]).sum(1)
-            g = kf_update(g, z, H, self.r * np.eye(len(k)))
+            z = (normals[k] * edges[k]).sum(1) - H @ self._base
+            g = kf_update(g, z, H @ self._W, self.r * np.eye(len(k)))
         self.state = g
         self.found = found
         return self.contour()
@@ -363,8 +453,14 @@ class SnakeTracker(SingleObjectTracker):
     its box is the contour's bounding box; ``anchor(box)`` moves and scales the contour so
     that its bounding box is ``box``.
 
+    In a shape space (the default, affine), the template is the object's outline in the first
+    frame: the ellipse, as free control points, fitted to that frame ``settle`` times.
+
     Parameters
     ----------
+    settle : int
+        Fits of the free snake to the first frame that make the template (0: the ellipse
+        itself); unused with ``shape="free"``.
     **snake
         Passed to :class:`Snake`.
 
@@ -386,10 +482,11 @@ class SnakeTracker(SingleObjectTracker):
     >>> for _ in range(5):
     ...     box = t.update(im)
     >>> (box[:2] + box[2:] / 2).round(1).tolist(), box[2:].round().tolist()
-    ([80.5, 60.4], [60.0, 60.0])
+    ([80.6, 60.6], [60.0, 60.0])
     """
 
-    def __init__(self, **snake: Any):
+    def __init__(self, settle: int = 10, **snake: Any):
+        self.settle = as_whole(settle, "settle", 0, "frames the free snake fits the first frame")
         self.snake = Snake(**snake)
 
     def _start(self, image: np.ndarray, b: np.ndarray) -> None:
@@ -400,8 +497,17 @@ class SnakeTracker(SingleObjectTracker):
         k = 3 / (2 + np.cos(2 * np.pi / s.n))
         a = 2 * np.pi * np.arange(s.n) / s.n
         c = _index_centre(b)
-        s.init(np.c_[c[0] + k * b[2] / 2 * np.cos(a), c[1] + k * b[3] / 2 * np.sin(a)])
-        self.box = b
+        Q = np.c_[c[0] + k * b[2] / 2 * np.cos(a), c[1] + k * b[3] / 2 * np.sin(a)]
+        s.init(Q)
+        if s.shape != "free" and self.settle:
+            # the template: the object's outline in the first frame, found by the free snake
+            free = Snake(s.n, s.m, search=s.search, min_edge=s.min_edge, q=s.q, r=s.r,
+                         shape="free")
+            free.init(Q)
+            for _ in range(self.settle):
+                free.track(image)
+            s.init(free.control_points)
+        self.box = self._bounds()
 
     def _bounds(self) -> np.ndarray:
         pts = self.snake.contour()
@@ -435,11 +541,6 @@ class SnakeTracker(SingleObjectTracker):
         cur = self._bounds()
         s = b[2:] / cur[2:]
         c0, c1 = cur[:2] + cur[2:] / 2, b[:2] + b[2:] / 2
-        g = self.snake.state
-        assert g is not None  # _bounds above needs (and checks) the state
-        n = self.snake.n
-        mean = g.mean.copy()
-        mean[:n] = c1[0] + s[0] * (mean[:n] + _HALF - c0[0]) - _HALF
-        mean[n:] = c1[1] + s[1] * (mean[n:] + _HALF - c0[1]) - _HALF
-        self.snake.state = Gaussian(mean, g.cov)
+        Q = self.snake.control_points
+        self.snake.move_to(c1 + s * (Q + _HALF - c0) - _HALF)
         self.box = b
