@@ -128,7 +128,7 @@ def growing_ellipse_scene(T=30, seed=0):
     return frames, np.array(boxes)
 
 
-def test_colour_and_shape_hold_where_each_alone_fails():
+def test_colour_and_shape_hold_where_colour_and_the_free_snake_fail():
     """Mean shift keeps its window's size as the ellipse doubles; the free snake's radial
     search (10 px) cannot follow 11 px a frame; composed, colour gives the centre and the
     snake the size. The snake in its affine shape space (the default) follows alone: the
