@@ -13,8 +13,8 @@ above 20; a particle's position wanders by about a pixel a frame at 24 frames/s,
 a tenth of a pixel, and a track is kept through 3 missed frames, as trackpy's
 `link(search_range=5, memory=3)` there. The frames come as the video reader gives them, in
 colour, and `locate` makes them grey; the benchmark reads them grey with OpenCV, whose grey
-levels differ by up to 1, which moves spots near the mass threshold: 2,034 identities here
-against its 2,237, 473 against 475 of them followed 25 frames or more.
+levels differ by up to 1, which moves spots near the mass threshold: 2,018 identities here
+against its 2,222, 473 against 475 of them followed 25 frames or more.
 """
 
 from __future__ import annotations

@@ -427,3 +427,20 @@ def test_track_video_given_a_point_tracker_says_where_point_tracks_go(tmp_path):
                     frontend=lambda f: Detections(points=[[10.0, 20.0]]),
                     tracker=PointTracker("gnn", frame_rate=10.0, confirm_hits=1))
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+@pytest.mark.parametrize("init_speed", [10.0, 15.3, 20.0, 100.0])
+def test_gnn_takes_a_lone_measurement_inside_the_gate_however_uncertain_the_track(init_speed):
+    """The price of a pair left unassigned is the gate, and GNN's cost adds ln(|S| / |S₁|):
+    a track whose |S| exceeded |S₁| by e^χ² could take no measurement, even one on its
+    prediction (d² = 0, inside any gate) with no rival. From ``init_speed`` 15.2 at 1 frame/s
+    (S = init² + 2⅓ against S₁ = 2⅓ on each axis, 2 ln(S / S₁) ≥ χ²₂(0.99) = 9.21) a point
+    standing still started a new track every frame and was never reported after the first.
+    Oracle: the measurement on the prediction, the only one, as ``nn`` and ``greedy`` take
+    it; and a point moving 3 a frame, inside the gate from the second frame on."""
+    for z in (lambda f: [0.0, 0.0], lambda f: [3.0 * f, 1.0]):
+        for assoc in ("gnn", "nn", "greedy"):
+            tr = PointTracker(assoc, frame_rate=1.0, init_speed=init_speed, confirm_hits=2)
+            ids = [tr.step(f, Detections(points=[z(f)])).ids.tolist() for f in range(1, 8)]
+            assert ids == [[1]] * 7, (assoc, ids)
+            assert tr.tracks.ids.tolist() == [1]

@@ -13,7 +13,9 @@ Association (``association=``):
   (:math:`S_1 = H Q H^T + 2R` over one frame), the gate being the price of a track or a
   measurement left unassigned (the pairs of least total :math:`d^2 + \ln(|S| / |S_1|) -
   \chi^2`, not the most pairs): on :math:`d^2` alone a track missed for frames, its gate
-  grown, was cheaper than one found in the frame before; ``"nn"``: each track its nearest
+  grown, was cheaper than one found in the frame before; then the gated pairs of the tracks
+  and measurements left, on :math:`d^2` alone, so that a track however uncertain takes a
+  measurement inside its gate that no other track wants; ``"nn"``: each track its nearest
   gated measurement; ``"greedy"``;
 - ``"pda"``: each track corrected with all its gated measurements weighted by their
   probabilities (PDA), for clutter; ``"jpda"``: the probabilities computed jointly for tracks
@@ -310,8 +312,16 @@ class PointTracker:
                 # track's one frame after an update: d² alone made a track lost for frames,
                 # its gate grown, cheaper than one found in the frame before
                 logdet = _log_determinants(S)
-                r, c = gnn_sparse(r, c, d2 + (logdet[r] - self._logdet_ref), (K, len(Z)),
-                                  limit=self.threshold)
+                r1, c1 = gnn_sparse(r, c, d2 + (logdet[r] - self._logdet_ref), (K, len(Z)),
+                                    limit=self.threshold)
+                # then the gated pairs of the tracks and measurements left, on d² alone: a
+                # track whose |S| exceeds |S₁| by e^χ² (a new one of large init_speed, or one
+                # lost long) could take no measurement at all, even one on its prediction
+                # with no rival, and a new track started beside it every frame
+                free = ~np.isin(r, r1) & ~np.isin(c, c1)
+                r2, c2 = gnn_sparse(r[free], c[free], d2[free], (K, len(Z)),
+                                    limit=self.threshold)
+                r, c = np.r_[r1, r2], np.r_[c1, c2]
                 if len(r):
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
