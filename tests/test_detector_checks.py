@@ -44,8 +44,42 @@ def test_undelivered_frames_are_runs_without_rows_amid_frames_with_many():
 @pytest.mark.parametrize("kw, msg", [(dict(stride=0), "stride must be an integer >= 1; got 0"),
                                      (dict(stride=-1), "stride must be an integer >= 1; got -1"),
                                      (dict(around=0), "around must be an integer >= 1; got 0"),
-                                     (dict(max_run=-1), "max_run must be an integer >= 0")])
+                                     (dict(max_run=-1), "max_run must be an integer >= 0"),
+                                     (dict(first=1.5), "first must be an integer; got 1.5"),
+                                     (dict(first=True), "first must be an integer; got True")])
 def test_undelivered_frames_names_a_grid_out_of_its_domain(kw, msg):
-    """A stride of 0 divided by zero (and returned nothing), -1 returned frames out of order."""
+    """A stride of 0 divided by zero (and returned nothing), -1 returned frames out of order;
+    a ``first`` of 1.5 returned nothing, and of 1.0 float frames."""
     with pytest.raises(ValueError, match=msg):
         undelivered_frames(np.repeat([1, 2, 3, 5, 6], 6), **kw)
+
+
+def test_frame_numbers_that_are_not_whole_are_named():
+    """NaN was cast to -2^63 and 3.9 to 3 without a word: frame 2 and frame 4 were reported
+    as not delivered (the oracle: the rows' own frames, 1 and 3, and 1, 2, 3.9 and 5, have
+    no whole run between frames of 6 rows); a stride was found in frames 2.5, 4.5, ...."""
+    import re
+
+    cases = [(np.repeat([1, np.nan, 3], 6), "frames[6] = nan"),
+             (np.repeat([1, 2, 3.9, 5], 6), "frames[12] = 3.9"),
+             (np.arange(2, 40, 2.0) + 0.5, "frames[0] = 2.5")]
+    for frames, where in cases:
+        for f in (undelivered_frames, detection_stride):
+            with pytest.raises(ValueError, match=re.escape(f"frames must be whole numbers; "
+                                                           f"{where}")):
+                f(frames)
+    # whole numbers as floats, as a MOTChallenge reader gives them, are taken as before
+    assert undelivered_frames(np.repeat([1.0, 2.0, 3.0, 5.0, 6.0], 6)).tolist() == [4]
+    assert detection_stride(np.arange(1, 40, 3.0)) == 3
+
+
+def test_duplicate_share_names_an_overlap_out_of_its_domain():
+    """NaN and 2 gave 0.0, -1 gave 1.0."""
+    from vistrack.detector_checks import duplicate_share
+    from vistrack.io.motchallenge import MOTTable
+
+    t = MOTTable.from_rows([(1, -1, 0, 0, 10, 10, 0.9), (1, -1, 1, 0, 10, 10, 0.8)])
+    assert duplicate_share(t, 0.5) == 1.0
+    for v in (np.nan, 2.0, -1.0, 0.0, "0.5", True):
+        with pytest.raises(ValueError, match="min_iou must be a number in \\(0, 1\\]"):
+            duplicate_share(t, v)

@@ -1563,6 +1563,16 @@ def test_frames_a_detector_did_not_deliver_are_tracked_over(tmp_path):
                                             r"where nothing was found$"):
         track_video(clip, tmp_path / "own", frontend=f"detections:{file}", fps=25,
                     annotate=False, tracker=BoxTracker(frame_rate=25))
+    # a stray frame number far past the video: its run was listed frame by frame (a
+    # MemoryError of 745 GiB) before the tracker stepped the video's frames
+    stray = tmp_path / "stray.txt"
+    stray.write_text("".join(f"{f},-1,{100 + 10 * j},{5 + 20 * j},8,8,0.9\n"
+                             for f in (1, 2, 3, 10 ** 11) for j in range(6)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        own = track_video(clip, tmp_path / "stray", frontend=f"detections:{stray}", fps=25,
+                          annotate=False, tracker=BoxTracker(frame_rate=25))
+    assert read_mot(own.files["tracks"]).frames.max() <= 24
     first = rows.frames == 1
     disc = rows.ids == rows.ids[first][np.abs(rows.boxes[first] - boxes[0]).sum(1).argmin()]
     np.testing.assert_array_equal(rows.frames[disc], np.arange(1, 25))

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ._validate import is_number
 from .association import overlapping_pairs
 from .evaluation.mot import _lines_of
 from .io.motchallenge import MOTTable
@@ -128,7 +129,14 @@ def duplicate_share(dets: MOTTable, min_iou: float = DUPLICATE_IOU) -> float:
     ...                         (1, -1, 50, 0, 10, 10, 0.7), (2, -1, 1, 0, 10, 10, 0.8)])
     >>> duplicate_share(t)
     0.5
+
+    Raises
+    ------
+    ValueError
+        If ``min_iou`` is not a number in (0, 1] (NaN and 2 gave 0.0, -1 gave 1.0).
     """
+    if not (is_number(min_iou) and 0.0 < min_iou <= 1.0):
+        raise ValueError(f"min_iou must be a number in (0, 1]; got {min_iou!r}")
     n = 0
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
     # the frames that have rows (sorted by frame), not every frame up to the last
@@ -186,6 +194,23 @@ to take the run as frames the detector did not deliver: where a detector finds 5
 frame on average, it finds none in a frame it ran on with a chance below 1 % (e^-5)."""
 
 
+def _frame_numbers(frames: ArrayLike) -> np.ndarray:
+    """``frames`` as int64, each a whole number (NaN became -2^63 and 3.9 became 3 by the
+    cast, and frames that were never there were reported)."""
+    f = np.asarray(frames).reshape(-1)
+    if f.dtype.kind in "iu":
+        return f.astype(np.int64, copy=False)
+    try:
+        g = f.astype(np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"frames must be whole numbers; got {frames!r:.60}") from None
+    bad = ~(np.isfinite(g) & (g == np.round(g)))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"frames must be whole numbers; frames[{i}] = {float(g[i])!r}")
+    return g.astype(np.int64)
+
+
 def undelivered_frames(frames: ArrayLike, first: int = 1, stride: int = 1,
                        max_run: int | None = None,
                        around: int = UNDELIVERED_AROUND) -> np.ndarray:
@@ -213,7 +238,8 @@ def undelivered_frames(frames: ArrayLike, first: int = 1, stride: int = 1,
     Raises
     ------
     ValueError
-        If ``stride`` or ``around`` is not an integer >= 1, or ``max_run`` one >= 0.
+        If ``stride`` or ``around`` is not an integer >= 1, ``max_run`` one >= 0, ``first``
+        not an integer, or a frame not a whole number.
 
     Examples
     --------
@@ -232,9 +258,12 @@ def undelivered_frames(frames: ArrayLike, first: int = 1, stride: int = 1,
         # (a stride of 0 divided by zero, -1 gave frames out of order)
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < least:
             raise ValueError(f"{name} must be an integer >= {least}; got {v!r}")
-    f = np.asarray(frames, dtype=np.int64).reshape(-1)
+    if isinstance(first, bool) or not isinstance(first, (int, np.integer)):
+        raise ValueError(f"first must be an integer; got {first!r}")
+    f = _frame_numbers(frames)
     if len(f) == 0:
         return np.zeros(0, np.int64)
+    first = int(first)
     grid = (f - first) // stride  # the grid frames' numbers from 0
     on = (f - first) % stride == 0
     # the grid frames with rows and their counts (not a count for every frame up to the last,
@@ -267,6 +296,11 @@ def detection_stride(frames: ArrayLike, min_frames: int = 10) -> int:
     -------
     int
 
+    Raises
+    ------
+    ValueError
+        If a frame is not a whole number (NaN, 3.9).
+
     Examples
     --------
     >>> detection_stride([1, 1, 4, 7, 10, 13, 16, 19, 22, 25, 28, 31])
@@ -276,7 +310,7 @@ def detection_stride(frames: ArrayLike, min_frames: int = 10) -> int:
     >>> detection_stride([5, 10, 15])  # too few frames to tell
     1
     """
-    f = np.unique(np.asarray(frames, dtype=np.int64))
+    f = np.unique(_frame_numbers(frames))
     if len(f) < min_frames:
         return 1
     return max(1, int(np.gcd.reduce(np.diff(f))))

@@ -2486,7 +2486,11 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             stepper = trk
             if grid is not None:
                 # what the file's frames are that this tracker steps through as found nothing
-                skip = undelivered_frames(grid.dets.frames) if grid.stride == 1 else ()
+                # runs up to an hour (a longer silence is no frame the detector dropped; a
+                # stray frame number of 10^11 listed its run frame by frame: 745 GiB)
+                skip = (undelivered_frames(grid.dets.frames,
+                                           max_run=math.ceil(3600 * ctx.fps))
+                        if grid.stride == 1 else ())
                 gaps = (f"detections on every {ordinal(grid.stride)} frame only"
                         if grid.stride > 1 else undelivered_text(skip) if len(skip) else "")
                 if gaps:
