@@ -259,3 +259,28 @@ def test_classes_on_the_command_line_are_checked(capsys):
             main(["track", "x.mp4", "--out-dir", "o", "--classes", bad])
         assert e.value.code == 2
         assert "--classes" in capsys.readouterr().err
+
+
+def test_yolo_outputs_are_told_by_the_grid_not_by_their_longer_side(tmp_path):
+    """A YOLOv8 model of more classes than boxes (601 classes at 160 pixels: 605 rows, 525
+    columns) was read as transposed, or as YOLOv5's, and every detection was lost; a YOLOv5
+    model of more classes than boxes was read as YOLOv8's. The grid says which side is the
+    boxes: at 64 x 64, strides 8, 16 and 32 give 64 + 16 + 4 = 84 cells, one box each for
+    YOLOv8, three for YOLOv5 (oracle: the box worked by hand, class 7 at 0.9)."""
+    C = 100
+    v8 = np.zeros((4 + C, 84), np.float32)
+    v8[:4, 0] = [32, 32, 20, 10]
+    v8[4 + 7, 0] = 0.9
+    v5 = np.zeros((3 * 84, 5 + 3 * C), np.float32)
+    v5[0, :5] = [32, 32, 20, 10, 1.0]
+    v5[0, 5 + 7] = 0.9
+    for name, out, layout in (("v8", v8, "yolov8"), ("v8t", v8.T, "yolov8"),
+                              ("v5", v5, "yolov5")):
+        model = constant_model(tmp_path / f"{name}.onnx", [out[None]])
+        for given in ("auto", layout):
+            det = ONNXDetector(model, layout=given)
+            assert det.layout == layout
+            d = det.detect(IMAGE)
+            np.testing.assert_allclose(d.boxes, [to_image(22, 27, 42, 37)], atol=1e-4)
+            assert d.classes.tolist() == [7]
+            np.testing.assert_allclose(d.scores, [0.9], rtol=1e-6)

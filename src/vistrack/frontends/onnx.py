@@ -8,8 +8,8 @@ Output layouts (``layout``; ``"auto"`` tells them apart from the outputs' shapes
 
 - ``"yolov8"`` (YOLOv8, YOLO11 and later): one output ``(1, 4 + C, N)``: each of the
   ``N`` columns a box centre and size ``cx, cy, w, h`` in the network input's pixels and
-  ``C`` class scores. An export transposed to ``(1, N, 4 + C)`` is read too when
-  ``layout="yolov8"`` is given.
+  ``C`` class scores. An export transposed to ``(1, N, 4 + C)`` is read too (see
+  ``"auto"`` below for how it is told).
 - ``"yolov5"`` (YOLOv5, YOLOv7): one output ``(1, N, 5 + C)``: ``cx, cy, w, h``, an
   objectness and ``C`` class probabilities; a box's score is the objectness times its best
   class's probability.
@@ -17,8 +17,11 @@ Output layouts (``layout``; ``"auto"`` tells them apart from the outputs' shapes
   network input, and scores ``(1, N, C)`` whose class 0 is the background (the classes
   reported are 1 to ``C - 1``).
 
-``"auto"``: two outputs are SSD's; one output with fewer rows than columns is YOLOv8's,
-otherwise YOLOv5's.
+``"auto"``: two outputs are SSD's; one output whose rows or columns are one box a cell of
+YOLO's grid at the input's size (strides 8, 16 and 32: 8,400 at 640 × 640) is YOLOv8's
+(transposed if they are the rows), whose rows are three a cell YOLOv5's; otherwise one with
+fewer rows than columns is YOLOv8's, and the rest YOLOv5's. ``"yolov8"`` reads its output's
+orientation the same way.
 
 The image (BGR, as OpenCV and :class:`~vistrack.io.VideoReader` give it; grey is repeated)
 is converted to RGB, scaled to the input's size keeping its aspect (letterboxed: padded
@@ -185,6 +188,30 @@ class ONNXDetector:
         self.mean = np.asarray(mean, np.float32).reshape(3, 1, 1)
         self.std = np.asarray(std, np.float32).reshape(3, 1, 1)
 
+    def _cells(self) -> int:
+        """YOLO's grid cells at the input's size: its strides 8, 16 and 32 (YOLOv8 has one
+        box a cell, 8,400 at 640 × 640; YOLOv5 three)."""
+        H, W = self.size
+        return sum(-(-H // s) * -(-W // s) for s in (8, 16, 32))
+
+    def _yolo_layout(self, rows: int, cols: int) -> str:
+        """One output ``(1, rows, cols)``: YOLOv8's where a side is one box a grid cell,
+        YOLOv5's where the rows are three a cell; otherwise by which side is longer (a
+        model of more classes than boxes, 601 classes at 160 pixels, was read as YOLOv5's)."""
+        n = self._cells()
+        if n in (rows, cols) and rows != cols:
+            return "yolov8"
+        if rows == 3 * n:
+            return "yolov5"
+        return "yolov8" if rows < cols else "yolov5"
+
+    def _transposed(self, rows: int, cols: int) -> bool:
+        """Whether a YOLOv8 output ``(rows, cols)`` is the export transposed, ``(N, 4 + C)``."""
+        n = self._cells()
+        if n in (rows, cols) and rows != cols:
+            return rows == n
+        return rows > cols
+
     def _guess_layout(self, path: Path) -> str:
         outs = self.session.get_outputs()
         if len(outs) == 2:
@@ -192,7 +219,7 @@ class ONNXDetector:
         if len(outs) == 1 and len(outs[0].shape) == 3:
             rows, cols = outs[0].shape[1:]
             if isinstance(rows, int) and isinstance(cols, int):
-                return "yolov8" if rows < cols else "yolov5"
+                return self._yolo_layout(rows, cols)
             return "auto"  # open dimensions: decided on the first output seen
         raise ValueError(f"{path}: cannot tell the output layout from "
                          f"{[(o.name, o.shape) for o in outs]}; give the layout "
@@ -238,7 +265,7 @@ class ONNXDetector:
         layout = self.layout
         if layout == "auto":
             rows, cols = np.shape(outputs[0])[1:]
-            layout = self.layout = "yolov8" if rows < cols else "yolov5"
+            layout = self.layout = self._yolo_layout(rows, cols)
         if layout == "ssd":
             if len(outputs) != 2:
                 raise ValueError(f"an SSD-style model has two outputs (boxes, scores); this "
@@ -260,7 +287,7 @@ class ONNXDetector:
                              f"{[np.shape(o) for o in outputs]}")
         a = out[0]
         if layout == "yolov8":
-            if a.shape[0] > a.shape[1]:  # an export transposed to (N, 4 + C)
+            if self._transposed(*a.shape):  # an export transposed to (N, 4 + C)
                 a = a.T
             a = a.T  # (N, 4 + C)
             if a.shape[1] < 5:
