@@ -444,3 +444,29 @@ def test_gnn_takes_a_lone_measurement_inside_the_gate_however_uncertain_the_trac
             ids = [tr.step(f, Detections(points=[z(f)])).ids.tolist() for f in range(1, 8)]
             assert ids == [[1]] * 7, (assoc, ids)
             assert tr.tracks.ids.tolist() == [1]
+
+
+def test_point_tracker_settings_that_broke_later_are_named_when_it_is_made():
+    """Position(dim=3) on a motion in 2 read its third coordinate as the first velocity, and
+    a point moving (1, 0, 10) a frame started a new track every frame; init_speed 1e155
+    overflowed at the first step after the frame was counted (the frame could not be given
+    again); frame_rate 1e-300 gave GNN's price NaN; a probability given as a string was
+    float()-ed (p_detect) or failed on "'<' not supported"."""
+    from vistrack.models import ConstantVelocity, Position
+
+    with pytest.raises(ValueError, match=re.escape(
+            "the measurement measures 3 coordinates of a motion in 2: Position(dim=3) with "
+            "ConstantVelocity(dim=2, q=1.0)")):
+        PointTracker("gnn", motion=ConstantVelocity(dim=2), measurement=Position(dim=3))
+    PointTracker("gnn", motion=ConstantVelocity(dim=3), measurement=Position(dim=2))
+    with pytest.raises(ValueError, match="init_speed must be below 1e154"):
+        PointTracker(init_speed=1e155)
+    tr = PointTracker(init_speed=1e153)
+    tr.step(1, Detections(points=[[0.0, 0.0]]))
+    assert np.isfinite(tr.tracks.cov).all()
+    with pytest.raises(ValueError, match="frame_rate 1e-300 makes a frame's process noise"):
+        PointTracker(frame_rate=1e-300)
+    for name in ("p_detect", "clutter_density", "p_gate", "p_survive", "init_existence",
+                 "confirm_existence", "delete_existence"):
+        with pytest.raises(TypeError, match=f"^{name} must be a number; got '0.5'$"):
+            PointTracker(**{name: "0.5"})

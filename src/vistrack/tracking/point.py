@@ -46,7 +46,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._validate import as_finite, as_whole
+from .._validate import as_finite, as_whole, is_number
 from ..association import (
     assign,
     chi2_threshold,
@@ -130,8 +130,14 @@ class PointTracker:
     ValueError
         If ``association`` is not in :data:`POINT_ASSOCIATIONS`, ``frame_rate``,
         ``max_lost``, ``init_speed`` or ``max_distance`` is not a finite number in its range,
-        ``confirm_hits`` not a whole number >= 1, ``p_gate`` not in (0, 1), or an existence
-        setting is out of its range.
+        ``confirm_hits`` not a whole number >= 1, ``p_gate`` not in (0, 1), an existence
+        setting is out of its range, ``init_speed`` is 1e154 or more (its square a variance),
+        ``frame_rate`` so low that a frame's process noise is not finite, or a
+        :class:`~vistrack.models.Position` measures more coordinates than the motion has
+        (its third read the first velocity).
+    TypeError
+        If a probability, the clutter density or an existence setting is no number (a
+        string).
 
     Examples
     --------
@@ -153,8 +159,24 @@ class PointTracker:
             raise ValueError(f"association must be one of {list(POINT_ASSOCIATIONS)}; "
                              f"got {association!r}")
         self.association = association
+        # (a string was float()-ed for p_detect, and a bare "'<' not supported" for the rest)
+        for name, v in (("p_detect", p_detect), ("clutter_density", clutter_density),
+                        ("p_gate", p_gate), ("p_survive", p_survive),
+                        ("init_existence", init_existence),
+                        ("confirm_existence", confirm_existence),
+                        ("delete_existence", delete_existence)):
+            if not is_number(v):
+                raise TypeError(f"{name} must be a number; got {v!r}")
         self.motion = motion if motion is not None else ConstantVelocity(dim=2, q=1.0)
         self.measurement = measurement if measurement is not None else Position(dim=2, r=1.0)
+        space = getattr(self.motion, "dim", None)
+        if isinstance(self.measurement, Position) and space is not None \
+                and self.measurement.ndim_meas > space:
+            # (its third coordinate was read as the first velocity, and every frame started a
+            # new track, without a word)
+            raise ValueError(f"the measurement measures {self.measurement.ndim_meas} "
+                             f"coordinates of a motion in {space}: {self.measurement!r} with "
+                             f"{self.motion!r}")
         n = self.motion.ndim_state
         self.H = np.asarray(self.measurement.H(n), dtype=float)
         self.R = np.asarray(self.measurement.R(), dtype=float)
@@ -166,6 +188,11 @@ class PointTracker:
         _check_pda(self.p_detect, self.clutter_density, self.p_gate)  # at once, any mode
         self.threshold = chi2_threshold(self.m, p_gate)
         self.init_speed = as_finite(init_speed, "init_speed", 0.0, above=True)
+        if self.init_speed >= 1e154:
+            # (its square, a variance, overflowed at the first step, after the frame was
+            # counted: the frame could not be given again)
+            raise ValueError(f"init_speed must be below 1e154, its square a finite variance; "
+                             f"got {init_speed!r}")
         self.confirm_hits = as_whole(confirm_hits, "confirm_hits", 1)
         self.max_lost = as_finite(max_lost, "max_lost", 0.0, what="number of seconds")
         self.frame_rate = as_finite(frame_rate, "frame_rate", 0.0, above=True)
@@ -174,8 +201,12 @@ class PointTracker:
         # GNN's reference innovation: a track's one frame after an update (twice the
         # measurement noise and a frame's process noise), whose likelihood at the gate's edge
         # is the price of a pair left unassigned
-        S_ref = self.H @ np.asarray(self.motion.Q(1.0 / self.frame_rate), float) @ self.H.T \
-            + 2 * self.R
+        with np.errstate(over="ignore", invalid="ignore"):
+            S_ref = self.H @ np.asarray(self.motion.Q(1.0 / self.frame_rate), float) \
+                @ self.H.T + 2 * self.R
+        if not np.isfinite(S_ref).all():  # (NaN for GNN's price, and Q named at the 2nd step)
+            raise ValueError(f"frame_rate {frame_rate!r} makes a frame's process noise not "
+                             f"finite ({self.motion!r} over {1.0 / self.frame_rate:g} s)")
         self._logdet_ref = float(np.linalg.slogdet(S_ref)[1])
         # a new track starts where its first measurement puts it: pinv(H) z (the measured
         # components, for the usual H = [I 0]); what H does not see, with init_speed
@@ -245,7 +276,8 @@ class PointTracker:
         -------
         Tracks
             The confirmed tracks updated in this frame, with ``points`` and their
-            covariances (``covs (K, 2, 2)``, of the first two coordinates).
+            covariances (``covs (K, d, d)``, of the first ``d`` coordinates: two, or one
+            for points on a line).
 
         Raises
         ------
