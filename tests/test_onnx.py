@@ -16,7 +16,7 @@ from vistrack.frontends.onnx import ONNXDetector, letterbox  # noqa: E402
 
 
 def constant_model(path: Path, outputs: list[np.ndarray], size=(64, 64),
-                   names=("out0", "out1")) -> Path:
+                   names=("out0", "out1"), batch=1) -> Path:
     """A model taking an image (1, 3, H, W) and returning ``outputs`` whatever the image,
     each plus 0 times the image's mean, so that the input is used."""
     H, W = size
@@ -30,7 +30,7 @@ def constant_model(path: Path, outputs: list[np.ndarray], size=(64, 64),
         outs.append(helper.make_tensor_value_info(names[k], TensorProto.FLOAT, value.shape))
     graph = helper.make_graph(
         nodes, "constant", [helper.make_tensor_value_info("images", TensorProto.FLOAT,
-                                                          [1, 3, H, W])], outs, inits)
+                                                          [batch, 3, H, W])], outs, inits)
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
     model.ir_version = 8
     onnx.checker.check_model(model)
@@ -284,3 +284,31 @@ def test_yolo_outputs_are_told_by_the_grid_not_by_their_longer_side(tmp_path):
             np.testing.assert_allclose(d.boxes, [to_image(22, 27, 42, 37)], atol=1e-4)
             assert d.classes.tolist() == [7]
             np.testing.assert_allclose(d.scores, [0.9], rtol=1e-6)
+
+
+def test_a_model_s_odd_input_or_output_is_named(tmp_path):
+    """A batch fixed at 2 was taken and failed at the first frame in onnxruntime; an image of
+    (4, 8000) letterboxed to 0 rows (OpenCV's assertion); a NaN box from the model was named
+    as "boxes must be finite", an infinite score as a logit the user gave, a NaN score was
+    dropped; ``classes=0`` was "'int' object is not iterable"."""
+    import re
+
+    cols = np.array([[32, 32, 20, 10, 0.9]] + [[0, 0, 0, 0, 0]] * 8, np.float32)
+    with pytest.raises(ValueError, match=re.escape("the model must take one image (1, 3, H, W)")):
+        ONNXDetector(constant_model(tmp_path / "b2.onnx", [cols.T[None]], batch=2))
+    det = ONNXDetector(constant_model(tmp_path / "ok.onnx", [cols.T[None]]))
+    d = det.detect(np.zeros((4, 8000, 3), np.uint8))  # 64 x 0.03 rows: one row
+    assert np.isfinite(d.boxes).all()
+    out, r, _ = letterbox(np.zeros((4, 8000, 3), np.uint8), (64, 64))
+    assert out.shape == (64, 64, 3) and (out[..., 0] == 0).all(1).sum() == 1  # one row
+    for k, bad in ((0, np.nan), (4, np.inf), (4, np.nan)):
+        c = cols.copy()
+        c[0, k] = bad
+        model = constant_model(tmp_path / f"bad{k}{bad}.onnx", [c.T[None]])
+        with pytest.raises(ValueError, match=re.escape(
+                "the model gave 1 box(es) or score(s) that are not finite (box 0: ")
+                + f".*for this image \\({re.escape(str(model))}\\)"):
+            ONNXDetector(model).detect(IMAGE)
+    with pytest.raises(TypeError, match=re.escape(
+            "classes must be a sequence of class indices (e.g. [0]); got 0")):
+        ONNXDetector(constant_model(tmp_path / "c.onnx", [cols.T[None]]), classes=0)

@@ -66,7 +66,8 @@ def letterbox(image: np.ndarray, size: tuple[int, int],
     h, w = image.shape[:2]
     H, W = size
     r = min(H / h, W / w)
-    nw, nh = int(round(w * r)), int(round(h * r))
+    # at least a pixel each way: a (4, 8000) image at 640 was 0 rows high (OpenCV's assertion)
+    nw, nh = max(1, int(round(w * r))), max(1, int(round(h * r)))
     resized = cv2.resize(image, (nw, nh), interpolation=cv2.INTER_LINEAR) if (nw, nh) != (w, h) \
         else image
     left, top = (W - nw) / 2, (H - nh) / 2
@@ -110,7 +111,9 @@ class ONNXDetector:
         If ``model`` does not exist.
     ValueError
         If an option is invalid, the model takes no image ``(1, 3, H, W)`` of 32- or 16-bit
-        floats, or its outputs fit no layout (naming their shapes).
+        floats (a batch of one), or its outputs fit no layout (naming their shapes).
+    TypeError
+        If ``classes`` is not a sequence (a bare ``0``).
 
     Notes
     -----
@@ -152,9 +155,11 @@ class ONNXDetector:
                              f"({' '.join(str(e).split())})") from e
         inputs = self.session.get_inputs()
         types = {"tensor(float)": np.float32, "tensor(float16)": np.float16}
-        # an (H, W, 3) input or one of integers failed at the first frame in onnxruntime
+        # an (H, W, 3) input, one of integers, or a batch fixed at 2 failed at the first frame
+        # in onnxruntime
         if len(inputs) != 1 or len(inputs[0].shape) != 4 or inputs[0].shape[1] not in (
                 3, None) and isinstance(inputs[0].shape[1], int) \
+                or isinstance(inputs[0].shape[0], int) and inputs[0].shape[0] != 1 \
                 or inputs[0].type not in types:
             raise ValueError(f"{path}: the model must take one image (1, 3, H, W) of floats "
                              f"(32 or 16 bits); it takes "
@@ -173,8 +178,13 @@ class ONNXDetector:
                 raise ValueError(f"{path}: input_size {size} contradicts the model's input "
                                  f"{tuple(inputs[0].shape)}")
         self.size = size
+        self._path = path
         self.layout = layout if layout != "auto" else self._guess_layout(path)
         self.resize = resize or ("stretch" if self.layout == "ssd" else "letterbox")
+        if classes is not None and (isinstance(classes, (str, bytes))
+                                    or not np.iterable(classes)):
+            raise TypeError(f"classes must be a sequence of class indices (e.g. [0]); got "
+                            f"{classes!r}")
         if classes is not None:
             # checked against the model's classes at the first frame (_check_classes): a
             # class it has not, or an empty list, kept nothing, and the run blamed the model
@@ -250,7 +260,7 @@ class ONNXDetector:
             fitted, r, (left, top) = letterbox(image, (H, W))
             # the resized image's own factors, whole pixels over the image's (r itself put a
             # 1920 x 1081 frame's full box back at 1080 rows, a 3840 x 2163 one's at 2160)
-            rx, ry = round(w * r) / w, round(h * r) / h
+            rx, ry = max(1, round(w * r)) / w, max(1, round(h * r)) / h
             scale, offset = np.array([rx, ry, rx, ry]), np.array([left, top, left, top])
         else:
             fitted = cv2.resize(image, (W, H), interpolation=cv2.INTER_LINEAR)
@@ -314,11 +324,20 @@ class ONNXDetector:
         Raises
         ------
         ValueError
-            If the model's outputs do not fit its layout.
+            If the model's outputs do not fit its layout, or a box or score it gives is not
+            finite.
         """
         x, scale, offset = self._input(np.asarray(image))
         outputs = self.session.run(None, {self.input_name: x})
         boxes, scores, cls = self._decode(outputs)
+        # (a NaN box was named as "boxes must be finite", an infinite score as a logit the user
+        # gave, and a NaN score dropped without a word)
+        bad = ~(np.isfinite(boxes).all(1) & np.isfinite(scores))
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise ValueError(f"the model gave {int(bad.sum())} box(es) or score(s) that are not "
+                             f"finite (box {i}: {boxes[i].tolist()}, score {float(scores[i])}) "
+                             f"for this image ({self._path})")
         keep = scores >= self.min_score
         if self.classes is not None:
             keep &= np.isin(cls, self.classes)
