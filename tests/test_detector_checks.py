@@ -62,11 +62,14 @@ def test_frame_numbers_that_are_not_whole_are_named():
 
     cases = [(np.repeat([1, np.nan, 3], 6), "frames[6] = nan"),
              (np.repeat([1, 2, 3.9, 5], 6), "frames[12] = 3.9"),
-             (np.arange(2, 40, 2.0) + 0.5, "frames[0] = 2.5")]
+             (np.arange(2, 40, 2.0) + 0.5, "frames[0] = 2.5"),
+             (np.repeat([1.0, 2.0, 1e19], 6), "frames[12] = 1e+19"),  # cast to -2^63
+             (np.repeat(np.array([1, 2, 2 ** 63 + 5], np.uint64), 6),  # wrapped
+              "frames[12] = 9.223372036854776e+18")]
     for frames, where in cases:
         for f in (undelivered_frames, detection_stride):
-            with pytest.raises(ValueError, match=re.escape(f"frames must be whole numbers; "
-                                                           f"{where}")):
+            with pytest.raises(ValueError, match=re.escape(f"frames must be whole numbers below "
+                                                           f"2^63; {where}")):
                 f(frames)
     # whole numbers as floats, as a MOTChallenge reader gives them, are taken as before
     assert undelivered_frames(np.repeat([1.0, 2.0, 3.0, 5.0, 6.0], 6)).tolist() == [4]
@@ -83,3 +86,4 @@ def test_duplicate_share_names_an_overlap_out_of_its_domain():
     for v in (np.nan, 2.0, -1.0, 0.0, "0.5", True):
         with pytest.raises(ValueError, match="min_iou must be a number in \\(0, 1\\]"):
             duplicate_share(t, v)
+    assert duplicate_share(t, np.array(0.5)) == 1.0  # a 0-d array, as before

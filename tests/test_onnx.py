@@ -284,6 +284,16 @@ def test_yolo_outputs_are_told_by_the_grid_not_by_their_longer_side(tmp_path):
             np.testing.assert_allclose(d.boxes, [to_image(22, 27, 42, 37)], atol=1e-4)
             assert d.classes.tolist() == [7]
             np.testing.assert_allclose(d.scores, [0.9], rtol=1e-6)
+    # YOLOX's and YOLOv6's one box a cell with an objectness, (1, N, 5 + C), stay YOLOv5's:
+    # read as a transposed YOLOv8 export, the objectness became class 0's score
+    yolox = np.zeros((84, 5 + 20), np.float32)  # as 8,400 x 85 at 640
+    yolox[0, :5] = [32, 32, 20, 10, 0.9]
+    yolox[0, 5 + 2] = 0.8
+    det = ONNXDetector(constant_model(tmp_path / "yolox.onnx", [yolox[None]]))
+    assert det.layout == "yolov5"
+    d = det.detect(IMAGE)
+    assert d.classes.tolist() == [2]
+    np.testing.assert_allclose(d.scores, [0.72], rtol=1e-6)
 
 
 def test_a_model_s_odd_input_or_output_is_named(tmp_path):
@@ -309,6 +319,12 @@ def test_a_model_s_odd_input_or_output_is_named(tmp_path):
                 "the model gave 1 box(es) or score(s) that are not finite (box 0: ")
                 + f".*for this image \\({re.escape(str(model))}\\)"):
             ONNXDetector(model).detect(IMAGE)
+    # below min_score, such a row is one the detector drops anyway: the frame's box stays
+    c = cols.copy()
+    c[1] = [np.nan, 0, np.inf, 1, 0.0]
+    c[2, 4] = -np.inf
+    d = ONNXDetector(constant_model(tmp_path / "low.onnx", [c.T[None]])).detect(IMAGE)
+    np.testing.assert_allclose(d.scores, [0.9], rtol=1e-6)
     with pytest.raises(TypeError, match=re.escape(
             "classes must be a sequence of class indices (e.g. [0]); got 0")):
         ONNXDetector(constant_model(tmp_path / "c.onnx", [cols.T[None]]), classes=0)

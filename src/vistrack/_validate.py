@@ -83,6 +83,22 @@ def is_number(value: Any) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not _is_boolean(value)
 
 
+def is_real(value: Any) -> bool:
+    """Whether ``value`` reads as one real number: :func:`is_number`'s, a 0-d numeric array,
+    or another number type ``float()`` takes (``Fraction``, ``Decimal``); never a string, a
+    boolean or None."""
+    if is_number(value):
+        return True
+    if isinstance(value, (str, bytes)) or value is None or _is_boolean(value) \
+            or np.ndim(value) != 0 or getattr(value, "dtype", np.dtype(float)).kind not in "iuf":
+        return False
+    try:
+        float(value)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
 def as_number(value: Any, name: str) -> float:
     """``value`` as a float, or a TypeError naming ``name`` (``float()`` names neither). A
     boolean is not a number here (``float(True)`` is 1.0: ``q=True`` was taken as 1); an

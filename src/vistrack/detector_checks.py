@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._validate import is_number
+from ._validate import is_real
 from .association import overlapping_pairs
 from .evaluation.mot import _lines_of
 from .io.motchallenge import MOTTable
@@ -135,7 +135,7 @@ def duplicate_share(dets: MOTTable, min_iou: float = DUPLICATE_IOU) -> float:
     ValueError
         If ``min_iou`` is not a number in (0, 1] (NaN and 2 gave 0.0, -1 gave 1.0).
     """
-    if not (is_number(min_iou) and 0.0 < min_iou <= 1.0):
+    if not (is_real(min_iou) and 0.0 < float(min_iou) <= 1.0):
         raise ValueError(f"min_iou must be a number in (0, 1]; got {min_iou!r}")
     n = 0
     xyxy = np.c_[dets.boxes[:, :2], dets.boxes[:, :2] + dets.boxes[:, 2:]]
@@ -195,19 +195,20 @@ frame on average, it finds none in a frame it ran on with a chance below 1 % (e^
 
 
 def _frame_numbers(frames: ArrayLike) -> np.ndarray:
-    """``frames`` as int64, each a whole number (NaN became -2^63 and 3.9 became 3 by the
-    cast, and frames that were never there were reported)."""
+    """``frames`` as int64, each a whole number within int64 (NaN became -2^63 and 3.9
+    became 3 by the cast, and frames that were never there were reported)."""
     f = np.asarray(frames).reshape(-1)
-    if f.dtype.kind in "iu":
+    if f.dtype.kind == "i" or f.dtype.kind == "u" and (not len(f) or f.max() < 2 ** 63):
         return f.astype(np.int64, copy=False)
     try:
         g = f.astype(np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"frames must be whole numbers; got {frames!r:.60}") from None
-    bad = ~(np.isfinite(g) & (g == np.round(g)))
+        raise ValueError(f"frames must be whole numbers below 2^63; got {frames!r:.60}") from None
+    bad = ~(np.isfinite(g) & (g == np.round(g)) & (np.abs(g) < 2.0 ** 63))
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
-        raise ValueError(f"frames must be whole numbers; frames[{i}] = {float(g[i])!r}")
+        raise ValueError(f"frames must be whole numbers below 2^63; frames[{i}] = "
+                         f"{float(g[i])!r}")
     return g.astype(np.int64)
 
 

@@ -8,8 +8,8 @@ Output layouts (``layout``; ``"auto"`` tells them apart from the outputs' shapes
 
 - ``"yolov8"`` (YOLOv8, YOLO11 and later): one output ``(1, 4 + C, N)``: each of the
   ``N`` columns a box centre and size ``cx, cy, w, h`` in the network input's pixels and
-  ``C`` class scores. An export transposed to ``(1, N, 4 + C)`` is read too (see
-  ``"auto"`` below for how it is told).
+  ``C`` class scores. An export transposed to ``(1, N, 4 + C)`` is read too when
+  ``layout="yolov8"`` is given.
 - ``"yolov5"`` (YOLOv5, YOLOv7): one output ``(1, N, 5 + C)``: ``cx, cy, w, h``, an
   objectness and ``C`` class probabilities; a box's score is the objectness times its best
   class's probability.
@@ -17,11 +17,12 @@ Output layouts (``layout``; ``"auto"`` tells them apart from the outputs' shapes
   network input, and scores ``(1, N, C)`` whose class 0 is the background (the classes
   reported are 1 to ``C - 1``).
 
-``"auto"``: two outputs are SSD's; one output whose rows or columns are one box a cell of
-YOLO's grid at the input's size (strides 8, 16 and 32: 8,400 at 640 × 640) is YOLOv8's
-(transposed if they are the rows), whose rows are three a cell YOLOv5's; otherwise one with
-fewer rows than columns is YOLOv8's, and the rest YOLOv5's. ``"yolov8"`` reads its output's
-orientation the same way.
+``"auto"``: two outputs are SSD's; one output whose columns are one box a cell of YOLO's
+grid at the input's size (strides 8, 16 and 32: 8,400 at 640 × 640) is YOLOv8's, whose rows
+are three a cell YOLOv5's; otherwise one with fewer rows than columns is YOLOv8's, and the
+rest YOLOv5's (rows of one box a cell with 5 + C columns, YOLOX's or YOLOv6's, are read as
+YOLOv5's; a YOLOv8 export transposed to them needs ``layout="yolov8"``). ``"yolov8"`` reads
+its output's orientation by the grid too: transposed where its rows are one box a cell.
 
 The image (BGR, as OpenCV and :class:`~vistrack.io.VideoReader` give it; grey is repeated)
 is converted to RGB, scaled to the input's size keeping its aspect (letterboxed: padded
@@ -205,11 +206,13 @@ class ONNXDetector:
         return sum(-(-H // s) * -(-W // s) for s in (8, 16, 32))
 
     def _yolo_layout(self, rows: int, cols: int) -> str:
-        """One output ``(1, rows, cols)``: YOLOv8's where a side is one box a grid cell,
-        YOLOv5's where the rows are three a cell; otherwise by which side is longer (a
-        model of more classes than boxes, 601 classes at 160 pixels, was read as YOLOv5's)."""
+        """One output ``(1, rows, cols)``: YOLOv8's where its columns are one box a grid
+        cell, YOLOv5's where its rows are three a cell; otherwise by which side is longer (a
+        YOLOv8 model of more classes than boxes, 601 classes at 160 pixels, was read as
+        YOLOv5's). Rows of one box a cell are not told apart: a transposed YOLOv8 export and
+        YOLOX's or YOLOv6's ``(1, N, 5 + C)``, with an objectness, share them."""
         n = self._cells()
-        if n in (rows, cols) and rows != cols:
+        if cols == n and rows != cols:
             return "yolov8"
         if rows == 3 * n:
             return "yolov5"
@@ -332,7 +335,8 @@ class ONNXDetector:
         boxes, scores, cls = self._decode(outputs)
         # (a NaN box was named as "boxes must be finite", an infinite score as a logit the user
         # gave, and a NaN score dropped without a word)
-        bad = ~(np.isfinite(boxes).all(1) & np.isfinite(scores))
+        # among the boxes min_score would keep (a NaN score is none it can judge)
+        bad = ~(scores < self.min_score) & ~(np.isfinite(boxes).all(1) & np.isfinite(scores))
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
             raise ValueError(f"the model gave {int(bad.sum())} box(es) or score(s) that are not "

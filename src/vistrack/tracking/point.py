@@ -14,8 +14,9 @@ Association (``association=``):
   measurement left unassigned (the pairs of least total :math:`d^2 + \ln(|S| / |S_1|) -
   \chi^2`, not the most pairs): on :math:`d^2` alone a track missed for frames, its gate
   grown, was cheaper than one found in the frame before; then the gated pairs of the tracks
-  and measurements left, on :math:`d^2` alone, so that a track however uncertain takes a
-  measurement inside its gate that no other track wants; ``"nn"``: each track its nearest
+  and measurements left, on the same cost but each worth taking, so that a track however
+  uncertain takes a measurement inside its gate that no other track wants; ``"nn"``: each
+  track its nearest
   gated measurement; ``"greedy"``;
 - ``"pda"``: each track corrected with all its gated measurements weighted by their
   probabilities (PDA), for clutter; ``"jpda"``: the probabilities computed jointly for tracks
@@ -46,7 +47,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._validate import as_finite, as_whole, is_number
+from .._validate import as_finite, as_whole, is_real
 from ..association import (
     assign,
     chi2_threshold,
@@ -165,7 +166,7 @@ class PointTracker:
                         ("init_existence", init_existence),
                         ("confirm_existence", confirm_existence),
                         ("delete_existence", delete_existence)):
-            if not is_number(v):
+            if not is_real(v):
                 raise TypeError(f"{name} must be a number; got {v!r}")
         self.motion = motion if motion is not None else ConstantVelocity(dim=2, q=1.0)
         self.measurement = measurement if measurement is not None else Position(dim=2, r=1.0)
@@ -344,15 +345,18 @@ class PointTracker:
                 # track's one frame after an update: d² alone made a track lost for frames,
                 # its gate grown, cheaper than one found in the frame before
                 logdet = _log_determinants(S)
-                r1, c1 = gnn_sparse(r, c, d2 + (logdet[r] - self._logdet_ref), (K, len(Z)),
-                                    limit=self.threshold)
-                # then the gated pairs of the tracks and measurements left, on d² alone: a
-                # track whose |S| exceeds |S₁| by e^χ² (a new one of large init_speed, or one
-                # lost long) could take no measurement at all, even one on its prediction
-                # with no rival, and a new track started beside it every frame
+                cost = d2 + (logdet[r] - self._logdet_ref)
+                r1, c1 = gnn_sparse(r, c, cost, (K, len(Z)), limit=self.threshold)
+                # then the gated pairs of the tracks and measurements left, on the same cost
+                # but each of them worth taking: a track whose |S| exceeds |S₁| by e^χ² (a new
+                # one of large init_speed, or one lost long) could take no measurement at
+                # all, even one on its prediction with no rival, and a new track started
+                # beside it every frame
                 free = ~np.isin(r, r1) & ~np.isin(c, c1)
-                r2, c2 = gnn_sparse(r[free], c[free], d2[free], (K, len(Z)),
-                                    limit=self.threshold)
+                r2, c2 = r[free], c[free]
+                if len(r2):
+                    r2, c2 = gnn_sparse(r2, c2, cost[free], (K, len(Z)),
+                                        limit=float(cost[free].max()) + self.threshold)
                 r, c = np.r_[r1, r2], np.r_[c1, c2]
                 if len(r):
                     upd = kf_update(g[r], Z[c], self.H, self.R)
