@@ -1990,3 +1990,32 @@ def test_mog2_refuses_a_frame_of_another_type_and_keeps_its_model():
 
     one = np.array([[0, 100], [200, 255]], np.uint8)
     np.testing.assert_array_equal(threshold(one[:, :, None], 150), threshold(one, 150))
+
+
+def test_a_sequence_whose_first_images_are_missing_keeps_their_frame_numbers(tmp_path):
+    """A MOTChallenge sequence numbers its images as its frames (000001.jpg is frame 1, as
+    its det.txt and gt.txt number them): with 000001.png missing, the images were counted
+    from the first one present, every frame one too low, and the warning (4 images for a
+    seqLength of 5) did not say so. Oracle: the numbers in the file names. A folder that is
+    no sequence is still counted from its first image (000000.png or 000002.png: frame 1)."""
+    seq = tmp_path / "SEQ"
+    (seq / "img1").mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=SEQ\nimDir=img1\nframeRate=10\n"
+                                     "seqLength=5\n")
+    files = _folder(seq / "img1", n=5, ext=".png")
+    files[0].unlink()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        reader = VideoReader(seq)
+    said = [str(w.message) for w in caught]
+    assert f"{seq / 'img1'}: no image for frame 1: the sequence starts at 000002.png, frame 2, " \
+           "as seqinfo.ini and its files number it" in said
+    frames, _ = _read(reader)
+    assert [f.index for f in frames] == [2, 3, 4, 5]
+    np.testing.assert_array_equal(frames[0].image, cv2.imread(str(files[1])))
+    np.testing.assert_allclose([f.time for f in frames], [0.1, 0.2, 0.3, 0.4])
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    _folder(plain, n=3, ext=".png")[0].unlink()
+    frames, _ = _read(VideoReader(plain))
+    assert [f.index for f in frames] == [1, 2]

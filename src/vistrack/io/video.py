@@ -243,7 +243,9 @@ class VideoReader:
         A video file, a folder of images (read in name order, numbers as numbers: ``2.png``
         before ``10.png``), or a MOTChallenge sequence folder. An image is the frame the
         last number in its name gives, counted from the first image's as 1 (``000001.jpg``
-        and ``000000.png`` are both frame 1), so a number with no image is a missing frame
+        and ``000000.png`` are both frame 1; in a MOTChallenge sequence the number itself,
+        so one whose ``000001.jpg`` is missing starts at frame 2, warned), so a number with
+        no image is a missing frame
         (warned, once) and the frames after it keep their numbers, as detections and ground
         truth number them; where a name has no number, or the numbers do not increase in
         name order, or they skip more numbers than there are images (timestamps), the
@@ -343,9 +345,11 @@ class VideoReader:
         self._bits: int | None = None
         self._clipped = 0
         seq_fps, seq_length = None, None
+        in_sequence = False
         if src.is_dir():
             info = src / "seqinfo.ini"
             if info.exists():
+                in_sequence = True
                 seq = _sequence_section(info)
                 try:
                     seq_fps = float(seq["frameRate"]) if "frameRate" in seq else None
@@ -398,9 +402,24 @@ class VideoReader:
             self._depth(first)
             self.size = (first.shape[1], first.shape[0])
             numbered = _numbered(self._files)
+            start = 1
+            if numbered is not None and in_sequence:
+                # a MOTChallenge sequence numbers its images as its frames (000001.jpg is
+                # frame 1): one whose first images are missing starts later, where its
+                # detections and ground truth put it (counted from the first image present,
+                # every frame was one too low, and nothing said so)
+                start = max(1, int(re.findall(r"\d+", self._files[0].stem)[-1]))
+                numbered = [n + start - 1 for n in numbered]
             self._index = numbered or list(range(1, len(self._files) + 1))
             self.frame_count = self._index[-1]
-            if numbered is not None and self.frame_count > len(self._files) \
+            if start > 1 and src not in _GAP_WARNED:
+                _GAP_WARNED.add(src)
+                warnings.warn(f"{src}: no image for frame"
+                              f"{f's 1-{start - 1}' if start > 2 else ' 1'}: the sequence "
+                              f"starts at {self._files[0].name}, frame {start}, as "
+                              f"{info.name} and its files number it",
+                              RuntimeWarning, stacklevel=2)
+            elif numbered is not None and self.frame_count > len(self._files) \
                     and src not in _GAP_WARNED:
                 # a frame dropped from a folder: its number is a missing frame, and the
                 # images after it keep the frames their names give, as detections and ground
