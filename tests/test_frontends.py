@@ -2019,3 +2019,25 @@ def test_a_sequence_whose_first_images_are_missing_keeps_their_frame_numbers(tmp
     _folder(plain, n=3, ext=".png")[0].unlink()
     frames, _ = _read(VideoReader(plain))
     assert [f.index for f in frames] == [1, 2]
+
+
+def test_a_tiff_stack_is_named_not_read_as_its_first_page(tmp_path):
+    """A TIFF of several pages (a microscope's stack) was read as one frame, its first page,
+    given as a file or in a folder, and the others dropped without a word (oracle: OpenCV's
+    own count of its pages). A TIFF of one page is read as before."""
+    pages = [np.full((16, 24), 40 * k, np.uint8) for k in range(5)]
+    stack = tmp_path / "stack" / "stack.tif"
+    stack.parent.mkdir()
+    assert cv2.imwritemulti(str(stack), pages) and cv2.imcount(str(stack)) == 5
+    for src in (stack, stack.parent):
+        with pytest.raises(VideoError, match=re.escape(
+                f"{stack} is a TIFF of 5 pages (a stack): one image a file is read, so its "
+                "other pages would be lost; save the pages as numbered images in a folder "
+                "and give the folder")):
+            VideoReader(src)
+    one = tmp_path / "one" / "000001.tif"
+    one.parent.mkdir()
+    cv2.imwrite(str(one), pages[2])
+    for src in (one, one.parent):
+        frames, _ = _read(VideoReader(src))
+        assert [f.index for f in frames] == [1] and int(frames[0].image[0, 0, 0]) == 80

@@ -199,6 +199,23 @@ def _missing(index: list[int], limit: int = 5) -> tuple[int, str]:
     return n, ", ".join(first[:limit]) + (", ..." if n > limit else "")
 
 
+def _pages(path: Path) -> int:
+    """The pages of a TIFF file (1 for any other image, or one OpenCV cannot count)."""
+    if path.suffix.lower() not in (".tif", ".tiff"):
+        return 1
+    try:
+        return int(_cv2().imcount(str(path)))
+    except Exception:  # noqa: BLE001  (a corrupt file is named where it is decoded)
+        return 1
+
+
+def _stack_error(path: Path, pages: int) -> VideoError:
+    # (its first page alone was read, as one frame, and the rest dropped without a word)
+    return VideoError(f"{path} is a TIFF of {pages} pages (a stack): one image a file is read, "
+                      "so its other pages would be lost; save the pages as numbered images "
+                      "in a folder and give the folder")
+
+
 def _holds_images(folder: Path) -> bool:
     """Whether ``folder`` is a folder with an image in it (False if it cannot be listed)."""
     try:
@@ -295,8 +312,9 @@ class VideoReader:
     VideoError
         If ``source`` is a text file, OpenCV cannot open the video, the folder holds no
         images, its ``seqinfo.ini`` is
-        not a text INI file, or (while iterating, unless ``skip_bad``) an image is unreadable,
-        cut short or of another size than the first, naming the file.
+        not a text INI file, a TIFF given or in the folder has several pages (a stack, even
+        with ``skip_bad``), or (while iterating, unless ``skip_bad``) an image is
+        unreadable, cut short or of another size than the first, naming the file.
     ValueError
         If ``start`` is less than 1, ``prefetch`` negative, or the frame rate not a finite
         number > 0.
@@ -447,6 +465,9 @@ class VideoReader:
                 # FFmpeg opens text too, as frames of its characters drawn
                 raise VideoError(f"{src} is a {src.suffix} file, not a video: OpenCV would "
                                  "decode its text as frames of noise")
+            pages = _pages(src)
+            if pages > 1:
+                raise _stack_error(src, pages)
             cv2 = _cv2()
             cap = cv2.VideoCapture(str(src))
             if not cap.isOpened():
@@ -557,6 +578,9 @@ class VideoReader:
         except OSError as e:
             return None, f"not a readable image: the file cannot be read ({e.strerror or e})"
         if path.suffix.lower() not in (".jpg", ".jpeg"):
+            pages = _pages(path)
+            if pages > 1:
+                raise _stack_error(path, pages)
             im = cv2.imread(str(path), flags)
             if im is not None and im.dtype not in (np.uint8, np.uint16):
                 im = cv2.imread(str(path), plain)
