@@ -129,15 +129,19 @@ def _natural(path: Path) -> tuple:
     return tuple(int(t) if k % 2 else t for k, t in enumerate(parts)), path.name
 
 
-def _numbered(files: list[Path]) -> list[int] | None:
+def _numbered(files: list[Path], as_named: bool = False) -> list[int] | None:
     """Each image's frame index from the last number in its name, counted from the first
-    image's number as 1 (``000001.jpg`` and ``000000.png`` alike start at frame 1), when every
-    name has a number, the numbers increase in name order, and they skip no more numbers than
-    there are images (a dropped frame is an exception; names that are timestamps skip many
-    between every two); else None (then the images are numbered by position).
+    image's number as 1 (``000001.jpg`` and ``000000.png`` alike start at frame 1), or, with
+    ``as_named`` (a MOTChallenge sequence), from the first image's own number (at least 1),
+    when every name has a number, the numbers increase in name order, and they skip no more
+    numbers than there are images (a dropped frame is an exception; names that are
+    timestamps skip many between every two); else None (then the images are numbered by
+    position).
 
     >>> _numbered([Path("000001.jpg"), Path("000002.jpg"), Path("000004.jpg")])
     [1, 2, 4]
+    >>> _numbered([Path("000002.jpg"), Path("000003.jpg")], as_named=True)
+    [2, 3]
     >>> _numbered([Path("cam_0.png"), Path("cam_1.png")]), _numbered([Path("a.png")])
     ([1, 2], None)
     >>> _numbered([Path("t1690000000000.jpg"), Path("t1690000000033.jpg")]) is None
@@ -152,7 +156,8 @@ def _numbered(files: list[Path]) -> list[int] | None:
     if any(b <= a for a, b in zip(numbers, numbers[1:])) \
             or numbers[-1] - numbers[0] + 1 > 2 * len(numbers):
         return None
-    return [n - numbers[0] + 1 for n in numbers]
+    first = max(1, numbers[0]) if as_named else 1
+    return [n - numbers[0] + first for n in numbers]
 
 
 def _unnumbered_why(files: list[Path]) -> str | None:
@@ -419,15 +424,12 @@ class VideoReader:
                 raise VideoError(f"{src} holds no readable images (every one fails to decode)")
             self._depth(first)
             self.size = (first.shape[1], first.shape[0])
-            numbered = _numbered(self._files)
-            start = 1
-            if numbered is not None and in_sequence:
-                # a MOTChallenge sequence numbers its images as its frames (000001.jpg is
-                # frame 1): one whose first images are missing starts later, where its
-                # detections and ground truth put it (counted from the first image present,
-                # every frame was one too low, and nothing said so)
-                start = max(1, int(re.findall(r"\d+", self._files[0].stem)[-1]))
-                numbered = [n + start - 1 for n in numbered]
+            # a MOTChallenge sequence numbers its images as its frames (000001.jpg is frame 1):
+            # one whose first images are missing starts later, where its detections and
+            # ground truth put it (counted from the first image present, every frame was one
+            # too low, and nothing said so)
+            numbered = _numbered(self._files, as_named=in_sequence)
+            start = numbered[0] if numbered is not None else 1
             self._index = numbered or list(range(1, len(self._files) + 1))
             self.frame_count = self._index[-1]
             if start > 1 and src not in _GAP_WARNED:

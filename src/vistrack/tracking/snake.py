@@ -210,9 +210,11 @@ class Snake:
                              f"got {shape!r}")
         self.shape = shape
         self.state: Gaussian | None = None
-        self._base = np.zeros(2 * self.n)   # Q₀, stacked x then y
-        self._W = np.eye(2 * self.n)        # Q = Q₀ + W X
-        self._qdiag = np.full(2 * self.n, self.q)
+        # set by init (_template): Q₀ stacked x then y, W of Q = Q₀ + W X, each parameter's
+        # process variance
+        self._base: np.ndarray
+        self._W: np.ndarray
+        self._qdiag: np.ndarray
 
     def init(self, control_points: ArrayLike, std: float = 2.0) -> None:
         """Start from control points ``(n, 2)`` with standard deviation ``std`` pixels.
