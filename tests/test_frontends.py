@@ -330,13 +330,19 @@ def test_a_video_holding_more_frames_than_its_header_says_loses_none(tmp_path):
     (["x9.png", "y1.png", "z5.png"], "y1.png comes after x9.png but numbers an earlier frame"),
     (["a.png", "b.png", "c.png"], None),
     (["t1690000000000.png", "t1690000000033.png", "t1690000000067.png"], None),
+    (["im_001.png", "im_004.png", "im_007.png", "im_010.png"],
+     "the names step by 3 (im_001.png, im_004.png, ...), every 3rd frame"),
+    (["f_10.png", "f_20.png", "f_30.png"], "the names step by 10 (f_10.png, f_20.png, ...), "
+     "every 10th frame"),
 ])
 def test_images_numbered_by_place_instead_of_name_are_named(tmp_path, names, why):
     """A stray copy (``000002 (copy).jpg``) or a second extension of one number in a folder
     of numbered images made every image go by its place in name order, without a word: the
     frames after it moved one later than their names, against detections and ground truth
     numbered by name. That is now said once, with the reason; names without numbers, and
-    timestamps (numbers that skip too many), go by place as intended, and nothing is said."""
+    timestamps (numbers that skip too many, unevenly), go by place as intended, and nothing
+    is said. A folder thinned to every 3rd frame or more went by place without a word too,
+    where its detections and ground truth number the frames by name: said now."""
     d = tmp_path / "f"
     d.mkdir()
     for name, f in zip(names, _folder(d, n=len(names), ext=".png")):

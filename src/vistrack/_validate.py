@@ -406,6 +406,12 @@ def check_linear_gaussian(F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike
     return F_, Q_, H_, R_
 
 
+def ordinal(k: int) -> str:
+    """2nd, 3rd, 11th, 21st (for messages)."""
+    end = "th" if 10 <= k % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(k % 10, "th")
+    return f"{k}{end}"
+
+
 def decode_text(data: bytes, path: object, what: str, error: type[Exception]) -> str:
     """``data`` as UTF-8 text (a byte-order mark dropped), or ``error`` saying that ``path`` is
     not a text ``what`` file, and at which byte."""

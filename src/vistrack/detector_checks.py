@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._validate import is_real
+from ._validate import is_real, ordinal
 from .association import overlapping_pairs
 from .evaluation.mot import _lines_of
 from .io.motchallenge import MOTTable
@@ -342,9 +342,3 @@ def undelivered_warning(path: str | Path, skip: np.ndarray, offline: bool) -> st
             "deliver; the tracks are carried across them, and "
             + ("filled on the line between the smoothed boxes there" if offline else
                "given their predicted boxes there") + " (score 0)")
-
-
-def ordinal(k: int) -> str:
-    """2nd, 3rd, 11th, 21st."""
-    end = "th" if 10 <= k % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(k % 10, "th")
-    return f"{k}{end}"

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._validate import as_finite, as_number, as_whole, bgr_to_grey
+from .._validate import as_finite, as_number, as_whole, bgr_to_grey, ordinal
 from ..types import Frame
 
 if TYPE_CHECKING:
@@ -163,13 +163,17 @@ def _numbered(files: list[Path], as_named: bool = False) -> list[int] | None:
 def _unnumbered_why(files: list[Path]) -> str | None:
     """Why images that are mostly numbered are numbered by position instead: a name without
     a number among numbered ones (``notes.png``), or two names of one number, or numbers
-    that go back in name order (``000003 (copy).jpg`` beside ``000003.jpg``); None where no
-    name has a number, or the numbers only skip too many (timestamps), as intended.
+    that go back in name order (``000003 (copy).jpg`` beside ``000003.jpg``), or numbers that
+    step by one same amount of 2 or more (a folder thinned to every k-th frame, whose
+    detections and ground truth number the frames between too); None where no name has a
+    number, or the numbers only skip too many, unevenly (timestamps), as intended.
 
     >>> _unnumbered_why([Path("000001.jpg"), Path("000002.jpg")]) is None
     True
     >>> _unnumbered_why([Path("000001.jpg"), Path("000001.png"), Path("000002.jpg")])
     '000001.jpg and 000001.png both give frame 1'
+    >>> _unnumbered_why([Path("000001.jpg"), Path("000004.jpg"), Path("000007.jpg")])
+    'the names step by 3 (000001.jpg, 000004.jpg, ...), every 3rd frame'
     """
     numbers = [re.findall(r"\d+", p.stem) for p in files]
     if not any(numbers):
@@ -184,6 +188,12 @@ def _unnumbered_why(files: list[Path]) -> str | None:
                     f"{values[k] - values[0] + 1}")
         if values[k] < values[k - 1]:
             return f"{files[k].name} comes after {files[k - 1].name} but numbers an earlier frame"
+    steps = {b - a for a, b in zip(values, values[1:])}
+    if len(values) >= 3 and len(steps) == 1 and (step := steps.pop()) > 1:
+        # numbered by place, frame 2 is the name's frame 1 + step: said, as a thinned
+        # folder's detections number the frames between too (it went without a word)
+        return (f"the names step by {step} ({files[0].name}, {files[1].name}, ...), every "
+                f"{ordinal(step)} frame")
     return None
 
 
