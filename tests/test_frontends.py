@@ -1031,6 +1031,82 @@ def test_blob_settings_that_were_cut_or_taken_are_named():
         BlobDetector(open_size=-3)
 
 
+def test_an_empty_mask_has_no_blobs_and_nan_is_named():
+    """Both background models give a frame of no rows an empty (0, W) mask; `find_blobs`
+    failed on it inside OpenCV, naming nothing (and `BlobDetector.detect` with it). A NaN
+    pixel was a set pixel to `find_blobs` (a blob of it) and neither above nor below any
+    level to `threshold` (dropped from both masks): named now, as `locate` names it."""
+    from vistrack.frontends import BlobDetector
+    from vistrack.frontends.blobs import threshold
+
+    for model in (SelectiveBackground(), MOG2Background()):
+        model.initialize([np.full((0, 640), 100, np.uint8)] * 3)
+        mask = model.apply(np.full((0, 640), 100, np.uint8))
+        assert mask.shape == (0, 640)
+        for sizes in ({}, {"open_size": 0, "close_size": 0}):
+            b = find_blobs(mask, **sizes)
+            assert b.areas.shape == (0,) and b.boxes.shape == (0, 4)
+    det = BlobDetector(min_area=1)
+    det.initialize([np.full((0, 64), 100, np.uint8)] * 3)
+    assert det.detect(np.full((0, 64), 100, np.uint8)).boxes.shape == (0, 4)
+    m = np.zeros((3, 4))
+    m[1, 2] = np.nan
+    with pytest.raises(ValueError, match=re.escape("mask must have no NaN; mask[1, 2] is NaN")):
+        find_blobs(m, open_size=0, close_size=0)
+    with pytest.raises(ValueError, match=re.escape("image must have no NaN; image[1, 2] is NaN")):
+        threshold(m, 0.5)
+    for bad in (np.zeros(10), np.zeros((4, 4, 2))):
+        with pytest.raises(ValueError, match=re.escape(
+                f"image must be (H, W) grey or (H, W, C) with C 1, 3 (BGR) or 4 (BGRA); got "
+                f"shape {bad.shape}")):
+            threshold(bad, 5)
+    # grey, one channel and BGRA all threshold as grey
+    g = np.array([[0, 100], [200, 255]], np.uint8)
+    for im in (g, g[..., None], np.dstack([g, g, g, np.zeros_like(g)])):
+        assert threshold(im, 150).tolist() == [[0, 0], [255, 255]]
+
+
+def test_front_end_settings_of_no_number_are_named():
+    """Settings given as None or a string failed on "'<' not supported" (or in float()),
+    naming no argument; `locate`'s percentile out of [0, 100] was taken; a frame of
+    `BlobDetector.initialize` that is no image was named `image`, not by its place;
+    `initialize(shifts=...)` ignored a last row other than 0, 0, which by the argument's
+    meaning (each frame's shift to the last) it cannot be."""
+    from vistrack.frontends import BlobDetector, locate
+
+    for make, name, bad in ((lambda v: SelectiveBackground(alpha=v), "alpha", None),
+                            (lambda v: SelectiveBackground(threshold=v), "threshold", "25"),
+                            (lambda v: SelectiveBackground(min_sigma=v), "min_sigma", None),
+                            (lambda v: find_blobs(np.zeros((4, 4)), min_area=v), "min_area",
+                             None),
+                            (lambda v: find_blobs(np.zeros((4, 4)), max_area=v), "max_area",
+                             "9"),
+                            (lambda v: BlobDetector(min_area=v), "min_area", None),
+                            (lambda v: BlobDetector(max_shift=v), "max_shift", "4"),
+                            (lambda v: locate(np.zeros((16, 16)), 5, percentile=v),
+                             "percentile", None)):
+        with pytest.raises(TypeError, match=re.escape(f"{name} must be a number; got {bad!r}")):
+            make(bad)
+    for p in (150, -1, float("nan")):
+        with pytest.raises(ValueError, match=re.escape(
+                f"percentile must be a finite number >= 0 and <= 100; got {p!r}")):
+            locate(np.zeros((16, 16)), 5, percentile=p)
+    bg = SelectiveBackground().initialize([np.zeros((3, 4), np.uint8)])
+    with pytest.raises(ValueError, match=re.escape(
+            "dx and dy must be whole numbers of pixels; got 'a', 0")):
+        bg.move("a", 0, np.zeros((3, 4), np.uint8))
+    ok = np.zeros((8, 8), np.uint8)
+    with pytest.raises(ValueError, match=re.escape("images[1] must be (H, W)")):
+        BlobDetector().initialize([ok, np.zeros((8, 8))])
+    a = np.tile(np.arange(8, dtype=np.uint8) * 30, (4, 1))
+    for last in ([3, 0], [-50, 7]):
+        with pytest.raises(ValueError, match=re.escape(
+                f"shifts' last row is the last frame's shift to itself, 0, 0; got "
+                f"{last[0]}, {last[1]}")):
+            SelectiveBackground().initialize([a, a, a], shifts=[[0, 0], [0, 0], last])
+    SelectiveBackground().initialize([a, a, a], shifts=[[1, 0], [0, 0], [0, 0]])
+
+
 def test_view_shift_refined_on_the_frames_leans_to_no_whole_pixel():
     """Oracle: a view panned by a known sub-pixel amount a frame, made as a camera makes it
     (the bundled clip's frame enlarged 4 times, moved by whole pixels there, and averaged

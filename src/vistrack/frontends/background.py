@@ -23,7 +23,9 @@ first ``N`` frames is part of ``B_0``, and when it leaves, the uncovered backgro
 foreground (a "ghost") that is never learnt, since foreground pixels are not updated. Start
 the model on frames where things move, or with more of them.
 
-``freeze=True`` stops learning (the model stays ``B_0``, ``J_0``); OpenCV's KNN and GSOC
+``freeze=True`` stops learning (the model stays ``B_0``, ``J_0``; pixels that come into
+view where the model moves with the view still take their first ``n_new`` frames, having no
+model before them); OpenCV's KNN and GSOC
 subtractors ignore ``learningRate=0``. Masks are uint8, 255 for foreground, as OpenCV's.
 
 Both models are made for a still camera: where the view moves, every edge of the scene is
@@ -48,7 +50,7 @@ import numpy as np
 from .._jit import bind, njit
 from .._prebuilt import kernel
 from .._registry import Registry
-from .._validate import as_finite, as_uint8_image, as_whole, is_whole
+from .._validate import as_finite, as_number, as_uint8_image, as_whole, is_whole
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -124,7 +126,8 @@ class SelectiveBackground:
     min_sigma : float
         Floor of ``σ``, in grey levels.
     freeze : bool
-        Keep the initial model (no learning).
+        Keep the initial model (no learning; but pixels that come into view, :meth:`move`,
+        learn their first ``n_new`` frames).
     n_new : int
         For a model that moves with the view (:meth:`move`): the frames a pixel that came
         into view learns from (the mean of each frame that saw it) before it tells
@@ -157,14 +160,15 @@ class SelectiveBackground:
 
     def __init__(self, alpha: float = 0.02, threshold: float = 25.0, n_init: int = 20,
                  min_sigma: float = 6.0, freeze: bool = False, n_new: int = 3):
-        if not 0.0 < alpha <= 1.0:
+        # (None or "25" failed on "'<' not supported", naming no setting)
+        if not 0.0 < as_number(alpha, "alpha") <= 1.0:
             raise ValueError(f"alpha must be in (0, 1]; got {alpha}")
-        if not 0 < threshold < np.inf:  # (infinity: nothing was ever foreground)
+        if not 0 < as_number(threshold, "threshold") < np.inf:  # (infinity: nothing found)
             raise ValueError(f"threshold must be > 0 and finite; got {threshold}")
         n_init = as_whole(n_init, "n_init", 1)  # 2.5 was cut to 2, NaN unnamed
         if not is_whole(n_new, 1):
             raise ValueError(f"n_new must be a whole number >= 1; got {n_new!r}")
-        if not 0 < min_sigma < np.inf:
+        if not 0 < as_number(min_sigma, "min_sigma") < np.inf:
             # at 0 a pixel that never changed has σ = 0 and passes D² >= T σ² with D = 0:
             # the whole of a still scene is foreground, and foreground is never learnt; at
             # infinity nothing ever is
@@ -210,7 +214,7 @@ class SelectiveBackground:
         ------
         ValueError
             If there are no frames, or ``shifts`` is not one row of two whole numbers for
-            each frame.
+            each frame, the last ``0, 0``.
 
         Examples
         --------
@@ -235,6 +239,9 @@ class SelectiveBackground:
                                                    and (d == np.round(d)).all()):
                 raise ValueError(f"shifts must be one row of two whole numbers for each of the "
                                  f"{len(images)} frames; got shape {d.shape}")
+            if d[-1].any():  # (each row is a shift to the last frame: any other was ignored)
+                raise ValueError(f"shifts' last row is the last frame's shift to itself, 0, 0; "
+                                 f"got {d[-1, 0]:g}, {d[-1, 1]:g}")
             seen = np.full(stack.shape, np.nan, np.float32)
             for k, (dx, dy) in enumerate(d.astype(np.int64)):
                 seen[k] = _moved(stack[k].astype(np.float32), int(dx), int(dy), np.nan)
@@ -287,8 +294,8 @@ class SelectiveBackground:
         """
         if self.mean is None or self.mean_sq is None:
             raise RuntimeError("the model is not initialised yet")
-        if not (float(dx).is_integer() and float(dy).is_integer()):
-            raise ValueError(f"dx and dy must be whole numbers of pixels; got {dx}, {dy}")
+        if not (is_whole(dx) and is_whole(dy)):  # ("a" failed in float(), naming neither)
+            raise ValueError(f"dx and dy must be whole numbers of pixels; got {dx!r}, {dy!r}")
         im = self._as3(image)
         if im.shape != self.mean.shape:
             raise ValueError(f"image has shape {im.shape}; the model was built on "

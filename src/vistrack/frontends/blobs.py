@@ -123,8 +123,8 @@ def threshold(image: ArrayLike, level: float, above: bool = True) -> np.ndarray:
 
     Parameters
     ----------
-    image : (H, W) or (H, W, 3) array_like
-        Grey, or BGR (converted to grey).
+    image : (H, W) or (H, W, C) array_like
+        Grey, or BGR (``C`` 3) or BGRA (4), converted to grey; no NaN.
     level : float
         The threshold (strict: pixels equal to it are not set).
     above : bool
@@ -134,6 +134,12 @@ def threshold(image: ArrayLike, level: float, above: bool = True) -> np.ndarray:
     -------
     (H, W) uint8 ndarray
         255 where set, 0 elsewhere.
+
+    Raises
+    ------
+    ValueError
+        If ``image`` has another shape or a NaN pixel (neither above nor below any level),
+        or ``level`` is NaN.
 
     Examples
     --------
@@ -147,10 +153,22 @@ def threshold(image: ArrayLike, level: float, above: bool = True) -> np.ndarray:
     if np.isnan(as_number(level, "level")):  # (compared false everywhere: an empty mask)
         raise ValueError(f"level must be a number; got {level}")
     im = np.asarray(image)
+    if not (im.ndim == 2 or (im.ndim == 3 and im.shape[2] in (1, 3, 4))):
+        # (a 1-D image gave a 1-D mask; two channels failed in OpenCV, naming neither)
+        raise ValueError(f"image must be (H, W) grey or (H, W, C) with C 1, 3 (BGR) or 4 "
+                         f"(BGRA); got shape {im.shape}")
+    _check_no_nan(im, "image")  # (a NaN pixel is neither above nor below: dropped unsaid)
     if im.ndim == 3:
         im = bgr_to_grey(im)
     m = im > level if above else im < level
     return m.astype(np.uint8) * 255
+
+
+def _check_no_nan(im: np.ndarray, name: str) -> None:
+    """A float image's first NaN pixel, named (comparisons take it as neither set nor unset)."""
+    if im.dtype.kind in "fc" and np.isnan(im).any():
+        at = tuple(int(v) for v in np.argwhere(np.isnan(im))[0])
+        raise ValueError(f"{name} must have no NaN; {name}[{', '.join(map(str, at))}] is NaN")
 
 
 @kernel
@@ -185,7 +203,8 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     Parameters
     ----------
     mask : (H, W) array
-        Binary: non-zero pixels are set.
+        Binary: non-zero pixels are set (no NaN); one of no rows or columns, as the
+        background models give for such a frame, has no regions.
     min_area, max_area : float
         Limits on a region's pixel count (after the clean-up).
     open_size, close_size : int
@@ -200,7 +219,7 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     Raises
     ------
     ValueError
-        If ``mask`` is not 2-D, or ``min_area`` or ``max_area`` is NaN.
+        If ``mask`` is not 2-D or holds a NaN, or ``min_area`` or ``max_area`` is NaN.
 
     Examples
     --------
@@ -217,15 +236,18 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     m = np.asarray(mask)
     if m.ndim != 2:
         raise ValueError(f"mask must be 2-D (H, W); got shape {m.shape}")
+    _check_no_nan(m, "mask")  # (a NaN is non-zero: it was taken as a set pixel)
     for name, limit in (("min_area", min_area), ("max_area", max_area)):
-        if np.isnan(limit):  # (every region was dropped, without a word)
+        if np.isnan(as_number(limit, name)):  # (every region was dropped, without a word)
             raise ValueError(f"{name} must be a number of pixels; got {limit}")
     # (2.7 was cut to 2, and -3 taken as 0)
     open_size = as_whole(open_size, "open_size", 0, "pixels across; 0 skips it")
     close_size = as_whole(close_size, "close_size", 0, "pixels across; 0 skips it")
     m = (m != 0).astype(np.uint8)
     for opening, size in ((True, open_size), (False, close_size)):
-        if size and size > 1:
+        # (an empty mask, of a frame of no rows, which the background models give for
+        # one: OpenCV's assertion, naming nothing; it has no regions)
+        if size and size > 1 and m.size:
             k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (int(size), int(size)))
             # OpenCV's erode is the erosion by k, its dilate the dilation by k reflected
             # (each anchored at a): the dilation by k itself is dilate by k reflected, at the
@@ -238,7 +260,8 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
                 m = cv2.dilate(cv2.erode(m, k, anchor=(a, a)), flipped, anchor=(b, b))
             else:
                 m = cv2.erode(cv2.dilate(m, flipped, anchor=(b, b)), k, anchor=(a, a))
-    n, labels = cv2.connectedComponents(m, connectivity=8, ltype=cv2.CV_32S)
+    n, labels = (cv2.connectedComponents(m, connectivity=8, ltype=cv2.CV_32S) if m.size
+                 else (1, np.zeros(m.shape, np.int32)))
     s, lo, hi = _moments(labels, n)
     s, lo, hi = s[1:], lo[1:], hi[1:]
     keep = (s[:, 0] >= min_area) & (s[:, 0] <= max_area) & (s[:, 0] > 0)
@@ -255,6 +278,7 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     # the eigenvector's sign is LAPACK's choice: two blobs of one orientation came out a
     # half-turn apart (an ellipse at 30 degrees as -149.8)
     angles = (angles + np.pi / 2) % np.pi - np.pi / 2
+    angles[angles >= np.pi / 2] -= np.pi  # (an angle a rounding below -π/2 came out +π/2)
     boxes = np.c_[lo, hi + 1].astype(float)
     return Blobs(c, covs, area, boxes, axes, angles)
 
@@ -355,9 +379,11 @@ class BlobDetector:
 
         if not is_whole(check_view, 0):
             raise ValueError(f"check_view must be a whole number >= 0; got {check_view!r}")
-        if not max_shift > 0:
+        # (None or "4" failed on "'>' not supported", naming neither)
+        if not as_number(max_shift, "max_shift") > 0:
             raise ValueError(f"max_shift must be > 0; got {max_shift}")
-        if not 0 <= min_area < np.inf:  # (-5 was taken; the command line refuses it)
+        # (-5 was taken; the command line refuses it)
+        if not 0 <= as_number(min_area, "min_area") < np.inf:
             raise ValueError(f"min_area must be >= 0 and finite; got {min_area}")
         self.model = make_background(background)
         # (checked here, not at the first frame with a blob: -3 was taken)
@@ -432,7 +458,8 @@ class BlobDetector:
         # refuse the first grey frame, and MOG2 start again on it, learning the people there
         # (copies of the caller's own grey frames: the last is kept as the reference of the
         # next, and drawing on it after this call must not change that)
-        frames = [_own(as_uint8_image(im, grey=True), im) for im in images]
+        frames = [_own(as_uint8_image(im, f"images[{k}]", grey=True), im)
+                  for k, im in enumerate(images)]
         self._reset()  # a new start: what earlier frames said of the view no longer holds
         k = self.check_view
         if not (self.follow_view and isinstance(self.model, SelectiveBackground) and k

@@ -227,10 +227,11 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         or infinity,
         ``diameter`` is not an odd integer >= 3, ``noise_size`` is negative, ``separation``
         not > 0, ``smoothing_size`` is not a whole number, is even or not larger than
-        ``noise_size``, ``minmass`` or ``threshold`` is not finite, or ``max_iterations``
-        is not a whole number >= 0.
+        ``noise_size``, ``minmass`` or ``threshold`` is not finite, ``percentile`` is not
+        in [0, 100], or ``max_iterations`` is not a whole number >= 0.
     TypeError
-        If ``separation``, ``noise_size``, ``minmass`` or ``threshold`` is no number (a
+        If ``separation``, ``noise_size``, ``minmass``, ``threshold`` or ``percentile`` is
+        no number (a
         string; ``separation`` a pair, one per axis, which is not supported).
 
     References
@@ -294,6 +295,8 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         if (value is None and name == "minmass") or (
                 value is not None and not np.isfinite(as_number(value, name))):
             raise ValueError(f"{name} must be a finite number; got {value}")
+    # (None failed in the search, naming no argument; 150 was taken where nothing was lit)
+    percentile = as_finite(percentile, "percentile", 0.0, high=100.0)
     if im.dtype.kind == "f" and not np.isfinite(im).all():
         # one NaN made the band-pass's top NaN, and every value with it: no spot, no word
         r0, c0 = np.argwhere(~np.isfinite(im))[0]
