@@ -428,3 +428,98 @@ def test_psd_sqrt_is_the_principal_root_whatever_basis_lapack_returns():
             gen.standard_normal((1, n))  # the state's noise, times a zero root
         want.append(2.0 * gen.standard_normal((1, n))[0])
     np.testing.assert_array_equal(ys, np.array(want))
+
+
+def test_psd_sqrt_keeps_the_noise_of_a_matrix_of_scales_far_apart():
+    """A constant-acceleration ``Q`` at ``dt`` 1e-4 (seconds at 10 kHz) has a least
+    eigenvalue under the eigendecomposition's rounding of its largest, which the root took
+    as 0: the position's sampled variance was 35/36 of ``Q``'s, and at ``dt`` 1e-5 4.7 times
+    it on one axis. Oracle: ``A A' = Q`` to rounding, and a seeded simulation's position
+    noise against ``Q``'s variance. A matrix whose scales are near one another keeps its
+    symmetric root, bit for bit."""
+    from vistrack.models import ConstantAcceleration, psd_sqrt
+    from vistrack.models.adapters import _principal_root
+
+    for dt in (3e-4, 1e-4, 1e-5):
+        Q = ConstantAcceleration(dim=2, q=1.0).Q(dt)
+        A = psd_sqrt(Q)
+        d = np.sqrt(np.diag(Q))  # each entry against its variances' scale
+        np.testing.assert_allclose((A @ A.T) / np.outer(d, d), Q / np.outer(d, d), rtol=0,
+                                   atol=1e-9)
+    Q = ConstantAcceleration(dim=1, q=1.0).Q(1e-4)
+    e = np.random.default_rng(0).standard_normal((400_000, 3)) @ psd_sqrt(Q).T
+    assert abs(e[:, 0].var() / Q[0, 0] - 1) < 0.01  # (0.972 before)
+    S = np.diag([1e-20, 1.0, 1e20])
+    np.testing.assert_allclose(psd_sqrt(S), np.diag([1e-10, 1.0, 1e10]), rtol=1e-15)
+    for S in (ConstantAcceleration(dim=2, q=0.5).Q(0.1), np.eye(3) * 4.0,
+              np.array([[4.0, 0.0], [0.0, 0.0]])):
+        np.testing.assert_array_equal(psd_sqrt(S), _principal_root(*np.linalg.eigh(S)))
+
+
+def test_model_settings_that_were_cut_or_wrong_are_named():
+    """`MotionFunctions.f` with a `dt` for each state reversed the three axes of the F stack
+    (states of the wrong shape and values, no error; the model's own `f` is the oracle);
+    `NonlinearMotion`'s and `NonlinearMeasurement`'s `ndim_state` 2.5 was cut to 2 and an
+    angle index 0.5 to 0; `BoxMotion.Q_diag(dt=True)`, `std_meas` holding True and
+    `GrowthMeasurement(r=True)` were taken as 1; strings and arrays failed in numpy's words;
+    `Periodic.Q` overflowed for a large `omega`; a switching system with per-step models
+    failed in `sample`; `matched_series`' `min_iou` of no number failed on "'<'"."""
+    from vistrack.models import (
+        BoxMotion,
+        GrowthMeasurement,
+        LinearMotion,
+        NonlinearMeasurement,
+        NonlinearMotion,
+        Periodic,
+        Position,
+    )
+    from vistrack.models.adapters import MotionFunctions
+    from vistrack.models.switching import SwitchingLinearSystem
+
+    cv = ConstantVelocity(dim=1)
+    X, dt = np.array([[0.0, 1.0], [0.0, 2.0]]), np.array([1.0, 3.0])
+    np.testing.assert_array_equal(MotionFunctions(cv).f(X, dt, 0.0), cv.f(X, dt))
+    np.testing.assert_array_equal(MotionFunctions(cv).f(X, 2.0, 0.0), cv.f(X, 2.0))
+    with pytest.raises(ValueError, match=re.escape(
+            "x must be states of size 4, shape (..., 4); got shape (3,)")):
+        ConstantVelocity(dim=2).f(np.zeros(3))
+    for call, exc, msg in (
+            (lambda: NonlinearMotion(lambda x, dt, t: x, np.eye(2), ndim_state=2.5),
+             ValueError, "ndim_state must be a whole number >= 1; got 2.5"),
+            (lambda: NonlinearMotion(lambda x, dt, t: x, np.eye(2), ndim_state=0),
+             ValueError, "ndim_state must be a whole number >= 1; got 0"),
+            (lambda: NonlinearMeasurement(lambda x: x, np.eye(1), ndim_state=2.5),
+             ValueError, "ndim_state must be a whole number >= 1; got 2.5"),
+            (lambda: NonlinearMeasurement(lambda x: x, np.eye(1), 2, angles=(0.5,)),
+             ValueError, "angles must be a whole number >= 0; got 0.5"),
+            (lambda: BoxMotion().Q_diag(np.array([[0, 0, 10.0, 10.0]]), dt=True),
+             TypeError, "dt must be a number; got True"),
+            (lambda: BoxMotion().Q_diag(np.array([[0, 0, 10.0, 10.0]]), dt="x"),
+             TypeError, "dt must be a number; got 'x'"),
+            (lambda: BoxMotion(std_meas=(True, 0.1, 0.1, 0.1)),
+             TypeError, "std_meas must be a number; got True"),
+            (lambda: BoxMotion(std_meas="a"), TypeError, "std_meas must be a number; got 'a'"),
+            (lambda: GrowthMeasurement(r=True), TypeError, "r must be a number; got True"),
+            (lambda: GrowthMeasurement(r="a"), TypeError, "r must be a number; got 'a'")):
+        with pytest.raises(exc, match=re.escape(msg)):
+            call()
+    assert BoxMotion(std_meas=(0.1, 0.1, 0.2, 0.3)).std_meas.tolist() == [0.1, 0.1, 0.2, 0.3]
+    # the closed form, as numpy computes it: q / ω² (d/2 - sin(2ωd)/(4ω)), ...
+    Q = Periodic(omega=1e160, q=1.0).Q(1.0)
+    assert np.isfinite(Q).all() and Q[1, 1] == pytest.approx(0.5, rel=1e-12)
+    assert Q[0, 0] == pytest.approx(0.5e-320, rel=1e-2)
+    np.testing.assert_array_equal(Periodic(omega=2.0, q=0.3).Q(0.7),
+                                  Periodic(omega=2.0, q=0.3).Q(0.7))
+    steps = LinearMotion(np.stack([np.eye(2)] * 3), np.stack([np.eye(2)] * 3))
+    with pytest.raises(ValueError, match=re.escape(
+            "motions[1] has per-step matrices (3 steps); a switching system takes one model "
+            "of each kind for every step")):
+        SwitchingLinearSystem([cv, steps], Position(dim=1), [[0.9, 0.1], [0.1, 0.9]])
+    with pytest.raises(ValueError, match=re.escape(
+            "this LinearMeasurement's H has 3 columns; the motion model's state has 2")):
+        from vistrack.models import LinearMeasurement
+        SwitchingLinearSystem([cv], LinearMeasurement(np.eye(3), np.eye(3)), [[1.0]])
+    from vistrack.tracking.fit import matched_series
+    with pytest.raises(TypeError, match=re.escape("min_iou must be a number; got 'a'")):
+        matched_series(np.zeros(0), np.zeros(0), np.zeros((0, 4)), np.zeros(0),
+                       np.zeros((0, 4)), min_iou="a")

@@ -39,6 +39,18 @@ def psd_sqrt(S: np.ndarray) -> np.ndarray:
     S : (..., n, n) ndarray
         Symmetric positive semi-definite matrices.
 
+    Where the variances span so many orders that the eigenvalues' rounding (relative to the
+    largest) swallows real noise (a constant-acceleration ``Q`` at ``dt`` 1e-4: its least
+    eigenvalue, 1/36 of the position's variance, fell under the cut, and the root gave the
+    position 35/36 of its variance; at 1e-5 a variance 4.7 times too large), the root is
+    taken of the correlation matrix instead, ``A = D C^{1/2}`` with ``D = diag(S)^{1/2}``
+    and ``C = D^{-1} S D^{-1}``: not symmetric, still unique, ``A A' = S`` to rounding.
+
+    Parameters
+    ----------
+    S : (..., n, n) ndarray
+        Symmetric positive semi-definite matrices.
+
     Returns
     -------
     (..., n, n) ndarray
@@ -53,7 +65,22 @@ def psd_sqrt(S: np.ndarray) -> np.ndarray:
     >>> bool(np.allclose(A @ A.T, S))
     True
     """
-    return _principal_root(*np.linalg.eigh(np.asarray(S, dtype=float)))
+    S = np.asarray(S, dtype=float)
+    w, V = np.linalg.eigh(S)
+    A = _principal_root(w, V)
+    d = np.diagonal(S, axis1=-2, axis2=-1)
+    # each variance as the root gives it, against S's own: within rounding where the scales
+    # are near one another, off by a share where they span more than the eigenvalues hold
+    got = (A * A).sum(axis=-1)
+    tol = np.where(d > 0, 1e-8 * d, w.shape[-1] * np.finfo(float).eps
+                   * np.abs(w).max(axis=-1, keepdims=True))
+    off = (np.abs(got - d) > tol).any(axis=-1)
+    if off.any():
+        s = np.sqrt(np.maximum(d[off], 0.0))
+        s = np.where(s > 0, s, 1.0)  # (a zero variance: its row and column are 0)
+        C = S[off] / (s[..., :, None] * s[..., None, :])
+        A[off] = s[..., :, None] * _principal_root(*np.linalg.eigh(C))
+    return A
 
 
 def _principal_root(w: np.ndarray, V: np.ndarray) -> np.ndarray:
@@ -136,7 +163,10 @@ class MotionFunctions:
     def f(self, x: np.ndarray, dt: float, t: float) -> np.ndarray:
         """``x_t = f(x, dt, t)`` for states ``x (..., n)``."""
         if self.linear:
-            return x @ cast(MotionModel, self.model).F(dt).T
+            F = cast(MotionModel, self.model).F(dt)
+            # a dt per state gives F (K, n, n): .T reversed all three axes (wrong states,
+            # of the wrong shape, without a word)
+            return x @ F.T if F.ndim == 2 else (F @ x[..., None])[..., 0]
         return cast(NonlinearMotionModel, self.model).f(x, dt, t)
 
     def jacobian(self, x: np.ndarray, dt: float, t: float) -> np.ndarray:

@@ -143,13 +143,15 @@ class BoxMotion:
                  std_meas: float | tuple[float, float, float, float] = (1 / 20, 1 / 20, 1 / 10,
                                                                         1 / 14),
                  init_pos: float = 2.0, init_vel: float = 20.0, frame_rate: float = 30.0):
-        meas = np.asarray(std_meas, dtype=float)
-        if meas.shape not in ((), (4,)):
+        given = np.asarray(std_meas, dtype=object)
+        if given.shape not in ((), (4,)):
             raise ValueError(f"std_meas must be one number or 4 (cx, cy, w, h); got {std_meas!r}")
         for name, v in (("std_pos", std_pos), ("std_vel", std_vel), ("init_pos", init_pos),
                         ("init_vel", init_vel), ("frame_rate", frame_rate),
-                        *(("std_meas", float(m)) for m in meas.ravel())):
-            as_finite(v, name, 0.0, above=True)  # (True was taken as 1)
+                        *(("std_meas", m) for m in given.ravel())):
+            # (True was taken as 1, in std_meas too; "a" failed in float(), naming nothing)
+            as_finite(v, name, 0.0, above=True)
+        meas = given.astype(float)
         self.std_pos, self.std_vel = std_pos, std_vel
         self._std_q = np.repeat(np.array([std_pos, std_vel], dtype=float), 4)
         self.std_meas = np.broadcast_to(meas, (4,)).copy()
@@ -264,9 +266,9 @@ class BoxMotion:
         >>> BoxMotion().Q_diag(np.array([[100, 50, 20.0, 40.0]]))[0, :4].round(4).tolist()
         [1.0, 4.0, 1.0, 4.0]
         """
-        dt = float(dt)
-        if not 0.0 <= dt < np.inf:  # variances proportional to it: -1 gave negative ones
-            raise ValueError(f"dt must be a finite number of frames >= 0; got {dt}")
+        # variances proportional to it: -1 gave negative ones; True was taken as 1, and
+        # "x" or an array failed in float(), naming nothing
+        dt = as_finite(dt, "dt", 0.0, what="number of frames")
         return _size_scaled(_box_rows(boxes), self._std_q, dt)
 
     def Q(self, boxes: np.ndarray, dt: float = 1.0) -> np.ndarray:

@@ -112,6 +112,9 @@ def _apply(F: np.ndarray, x: ArrayLike) -> np.ndarray:
     (a ``dt`` for each of ``K`` states, or ``K`` time steps of one state)."""
     x = np.asarray(x)
     if F.ndim == 2:
+        if x.shape[-1:] != F.shape[-1:]:  # (matmul's mismatch named no argument)
+            raise ValueError(f"x must be states of size {F.shape[-1]}, shape (..., "
+                             f"{F.shape[-1]}); got shape {x.shape}")
         return x @ F.T
     try:
         return np.einsum("...ij,...j->...i", F, x)
@@ -539,8 +542,9 @@ class Periodic:
             if not small.all():
                 db = dd[~small]
                 s2 = np.sin(2 * w * db) / (4 * w)
-                q11[~small] = q / w**2 * (db / 2 - s2)
-                q12[~small] = q * np.sin(w * db) ** 2 / (2 * w**2)
+                # (w**2 of a Python float past 1.3e154 raised OverflowError: divided twice)
+                q11[~small] = q / w / w * (db / 2 - s2)
+                q12[~small] = q * np.sin(w * db) ** 2 / 2 / w / w
                 q22[~small] = q * (db / 2 + s2)
             out[..., 0, 0] = q11.reshape(d.shape)
             out[..., 0, 1] = out[..., 1, 0] = q12.reshape(d.shape)

@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._jit import njit
-from .._validate import as_float_array, check_matrix_stack, check_psd
+from .._validate import as_finite, as_float_array, as_whole, check_matrix_stack, check_psd
 from .motion import _as_dt, _check_q
 
 __all__ = [
@@ -168,7 +168,8 @@ class NonlinearMotion:
                  jacobian: Callable | None = None):
         if not callable(f):
             raise TypeError(f"f must be callable; got {type(f).__name__}")
-        self.ndim_state = int(ndim_state)
+        # (2.5 was cut to 2, and 0 failed in a reduction, naming nothing)
+        self.ndim_state = as_whole(ndim_state, "ndim_state", 1)
         if callable(Q):
             self._Q = Q
         else:
@@ -396,9 +397,9 @@ class NonlinearMeasurement(AngleAwareMeasurement):
         m = R_arr.shape[0]
         R_arr = check_matrix_stack(R_arr, "R", m, m)[0]
         check_psd(R_arr, "R", strict=True)
-        self.ndim_meas, self.ndim_state = m, int(ndim_state)
+        self.ndim_meas, self.ndim_state = m, as_whole(ndim_state, "ndim_state", 1)
         self._h, self._jac, self._R = h, jacobian, R_arr
-        self.angles = tuple(int(a) for a in angles)
+        self.angles = tuple(as_whole(a, "angles", 0) for a in angles)  # (0.5 was taken as 0)
         for a in self.angles:
             if not 0 <= a < m:
                 raise ValueError(f"angles must index components 0..{m - 1}; got {a}")
@@ -1131,9 +1132,8 @@ class GrowthMeasurement(AngleAwareMeasurement):
         return _NO_PARAMS
 
     def __init__(self, r: float = 1.0):
-        if not np.isfinite(r) or r <= 0:
-            raise ValueError(f"r must be a finite variance > 0; got {r}")
-        self._R = np.array([[float(r)]])
+        # ("a" failed in isfinite, naming nothing; True was taken as 1)
+        self._R = np.array([[as_finite(r, "r", 0.0, above=True, what="variance")]])
 
     def __repr__(self) -> str:
         return f"GrowthMeasurement(r={self._R[0, 0]})"

@@ -65,7 +65,8 @@ class SwitchingLinearSystem:
     Raises
     ------
     ValueError
-        If there are no motions, they differ in state size, ``transition`` is not a finite
+        If there are no motions, they differ in state size, a model has per-step matrices,
+        the measurement's ``H`` does not take the motions' states, ``transition`` is not a finite
         non-negative ``(k, k)`` matrix whose rows sum to one, or ``mode_probs`` is not ``k``
         finite non-negative numbers summing to one (a NaN or infinite entry is named).
 
@@ -97,6 +98,18 @@ class SwitchingLinearSystem:
         if len(sizes) != 1:
             raise ValueError(f"motions must share one state size; got sizes {sorted(sizes)}")
         self.ndim_state = sizes.pop()
+        # one F, Q, H and R for every step: a per-step stack (LinearMotion and
+        # LinearMeasurement take one) failed in sample, in numpy's words
+        for name, model in (*((f"motions[{i}]", m) for i, m in enumerate(self.motions)),
+                            ("measurement", measurement)):
+            steps = getattr(model, "n_steps", None)
+            if steps is not None:
+                raise ValueError(f"{name} has per-step matrices ({steps} steps); a switching "
+                                 "system takes one model of each kind for every step")
+        H = np.asarray(measurement.H(self.ndim_state))
+        if H.ndim != 2 or H.shape[1] != self.ndim_state:
+            raise ValueError(f"measurement must measure states of size {self.ndim_state}, as "
+                             f"the motions give them; its H is {H.shape}")
         self.measurement = measurement
         Pi = as_float_array(transition, "transition", ndim=(2,))
         check_finite(Pi, "transition")

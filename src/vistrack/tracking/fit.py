@@ -50,7 +50,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_whole
+from .._validate import as_number, as_whole
 from ..association.assign import gnn_sparse
 from ..association.costs import iou_pairs
 from ..models.box import BoxMotion
@@ -123,7 +123,7 @@ def matched_series(ref_frames: np.ndarray, ref_ids: np.ndarray, ref_boxes: np.nd
     if len(ri) != len(rf):
         raise ValueError(f"ref_ids must be ({len(rf)},), one for each of ref_frames; got "
                          f"shape {ri.shape}")
-    if not 0 < min_iou <= 1:
+    if not 0 < as_number(min_iou, "min_iou") <= 1:  # ("a" failed on "'<' not supported")
         raise ValueError(f"min_iou must be in (0, 1]; got {min_iou}")
     min_length = as_whole(min_length, "min_length", 1)
     match = np.full(len(rf), -1)
