@@ -3,6 +3,7 @@ scikit-image's CIEDE2000, an independent colour-difference formula), and a trail
 while its track is in the frame."""
 
 import itertools
+import re
 import warnings
 
 import numpy as np
@@ -473,3 +474,82 @@ def test_each_tracks_ellipse_is_its_covariances_closed_form():
         assert (np.abs(f[mine]) / grad[mine]).max() < 1.0
     lone = (np.abs(xs - 200) < 70) & (np.abs(ys - 150) < 45) & (bright > 0)
     assert lone.sum() > 0 and (np.hypot(xs[lone] - 200, ys[lone] - 150) <= 4).all()
+
+
+def test_a_box_or_point_wholly_off_the_image_has_no_number():
+    """The number of a box wholly past an edge was pulled inside, and stood at the edge over
+    nothing: such boxes and points are now drawn as without their number (the frame as with
+    the on-image tracks alone), while one partly inside keeps its number."""
+    img = np.full((120, 160, 3), 90, np.uint8)
+
+    def draw(ids, boxes=None, points=None):
+        n = len(ids)
+        t = Tracks(ids=np.array(ids), boxes=None if boxes is None else np.array(boxes, float),
+                   points=None if points is None else np.array(points, float),
+                   scores=np.ones(n), classes=np.zeros(n))
+        return Annotator().draw(img, t)
+
+    inside = [[40, 40, 70, 80]]
+    for off in ([200, 30, 240, 60], [20, -80, 50, -20], [-60, 50, -10, 90], [30, 130, 60, 170]):
+        np.testing.assert_array_equal(draw([1, 2], inside + [off]), draw([1], inside))
+    for off in ([175.0, 50.0], [-10.0, 50.0], [60.0, 130.0]):  # (its dot, too, off it)
+        np.testing.assert_array_equal(draw([1, 2], points=[[50.0, 50.0], off]),
+                                      draw([1], points=[[50.0, 50.0]]))
+    part = draw([1, 2], inside + [[-30, 50, 20, 90]])
+    assert not (part == draw([1, 2], inside + [[-30, 50, 0, 90]])).all()  # its number there
+    assert (part[:, :25] == id_colour(2)).all(axis=2).any()
+
+
+def test_an_annotated_frame_of_another_size_is_named_by_its_own_number(tmp_path):
+    """The writer counted the frames it had written: frame 103 of another size was called
+    "frame 3"; the video's own label says "frame 103"."""
+    from vistrack.viz.annotate import AnnotatedVideo
+
+    v = AnnotatedVideo(tmp_path / "a.mp4", fps=10)
+    for k in (101, 102):
+        v.write(Frame(k, 0.0, np.zeros((48, 64, 3), np.uint8)), Tracks.empty())
+    with pytest.raises(ValueError, match=re.escape(
+            f"{tmp_path / 'a.mp4'}: frame 103 is 64x50; the video is 64x48")):
+        v.write(Frame(103, 0.0, np.zeros((50, 64, 3), np.uint8)), Tracks.empty())
+    v.abort()
+
+
+def test_the_trajectory_plot_names_what_it_cannot_show(tmp_path):
+    """A track whose last centre was NaN lost its end dot and label (a track of one finite
+    centre vanished, still counted in the title); a third centre beside two frames was
+    dropped; one centre at x = 1e5 made the frame a strip; a uint16 RGB background of 300
+    wrapped to 44 where matplotlib clips it to 255. Oracle: the finite rows' own plot, the
+    image's extent, matplotlib's clipping."""
+    from vistrack.viz import plot_trajectories
+
+    fr, ids = [1, 2, 3, 1, 2, 3], [1, 1, 1, 2, 2, 2]
+    c = [[10, 10], [20, 20], [30, 30], [40, 40], [60, 50], [np.nan, np.nan]]
+    with pytest.warns(RuntimeWarning, match=re.escape(
+            "1 of the 6 centres are not finite (NaN or infinite boxes): left out of the plot")):
+        fig = plot_trajectories(fr, ids, c, path=tmp_path / "a.png")
+    dots = fig.axes[0].collections[1].get_offsets().tolist()
+    assert dots == [[30.0, 30.0], [60.0, 50.0]]
+    assert [t.get_text() for t in fig.axes[0].texts] == ["1", "2"]
+    with pytest.raises(ValueError, match=re.escape(
+            "frames, ids and centres must be one row each, centres (N, 2); got 2 frames, 2 "
+            "ids and centres of shape (3, 2)")):
+        plot_trajectories([1, 2], [1, 1], [[0, 0], [1, 1], [2, 2]])
+    bg = np.zeros((576, 768, 3), np.uint8)
+    with pytest.warns(RuntimeWarning, match=re.escape(
+            "1 of the 4 centres lie more than the image's size (768 x 576) outside it")):
+        fig = plot_trajectories([1, 2, 1, 2], [1, 1, 2, 2],
+                                [[100, 100], [120, 110], [300, 300], [1e5, 300]], bg,
+                                tmp_path / "b.png")
+    assert fig.axes[0].get_xlim() == (-0.5, 767.5)
+    assert fig.axes[0].get_ylim() == (575.5, -0.5)
+    fig = plot_trajectories([1, 2], [1, 1], [[-50, 10], [100, 700]], bg, tmp_path / "c.png")
+    assert fig.axes[0].get_xlim() == (-50, 767.5) and fig.axes[0].get_ylim() == (700, -0.5)
+    import matplotlib.image
+
+    plot_trajectories([1, 2], [1, 1], [[10, 10], [20, 20]], np.full((40, 60, 3), 300, np.uint16),
+                      tmp_path / "d.png")
+    centre = matplotlib.image.imread(tmp_path / "d.png")
+    h, w = centre.shape[:2]
+    light = centre[h // 2 - 5:h // 2 + 5, w // 2 + 40:w // 2 + 50, :3]
+    # 255 under the figure's white at alpha 0.45: white; 44 (wrapped) was a grey of about 160
+    assert light.min() > 0.95

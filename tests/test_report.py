@@ -293,3 +293,47 @@ def test_an_interrupt_while_the_page_is_made_says_the_outputs_were_written(
     assert err.startswith("vistrack track: interrupted after this run's outputs were written (")
     assert err.endswith("); the report page was not") and str(out / "tracks.txt") in err
     assert (out / "tracks.txt").exists() and not (out / "report.html").exists()
+
+
+def test_a_points_runs_folder_is_read_by_its_run_description(tmp_path, capsys):
+    """A points run's folder (tracks.csv, no tracks.txt) whose run.json could not be read
+    was taken for a box run's: "tracks.txt does not exist", where run.json was the fault;
+    without run.json it said the same of a folder holding tracks.csv. Now run.json is read
+    first and named, and a folder of tracks.csv alone is a points run's."""
+    pts = tmp_path / "pts"
+    pts.mkdir()
+    (pts / "tracks.csv").write_text("frame,particle,x,y\n1,1,10.0,12.0\n2,1,11.0,12.5\n")
+    assert main(["report", str(pts)]) == 0
+    assert "<h1>vistrack report: pts</h1>" in (pts / "report.html").read_text()
+    capsys.readouterr()  # (its warning: no video nor plot)
+    (pts / "run.json").write_text('{"points": true, broken')
+    assert main(["report", str(pts), "--force"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"vistrack report: error: {pts / 'run.json'}: not a run's "
+                          "description (Expecting property name enclosed in double quotes: "
+                          "line 1 column 18")
+
+
+def test_a_page_that_fails_still_shows_the_runs_files_and_scores(tmp_path, monkeypatch,
+                                                                   capsys):
+    """The page is made after the run's outputs and scores: when it failed (an OpenCV
+    without a WebM encoder), the command ended with the error alone, the files written and
+    the scores not shown."""
+    import vistrack.report
+    from vistrack.io import VideoError
+
+    def fails(*args, **kwargs):
+        raise VideoError("annotated.mp4: cannot be re-encoded")
+
+    monkeypatch.setattr(vistrack.report, "_webm", fails)
+    out, clip = tmp_path / "run", demo_clip()
+    assert main(["track", str(clip.video), "--gt", str(clip.gt), "--stop", "5", "--out-dir",
+                 str(out), "--report", "--quiet"]) == 2
+    said = capsys.readouterr()
+    lines = said.out.splitlines()
+    assert [ln.split()[0] for ln in lines[1:5]] == ["tracks", "csv", "video", "plot"]
+    assert lines[5].split()[:2] == ["sequence", "HOTA"] and lines[6].startswith("pets09-s2l1")
+    assert lines[7] == ("  the files above are written; --report's page is not, for the "
+                        "error below")
+    assert said.err.strip() == "vistrack track: error: annotated.mp4: cannot be re-encoded"
+    assert (out / "tracks.txt").exists() and not (out / "report.html").exists()

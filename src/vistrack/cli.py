@@ -714,19 +714,29 @@ def _print_video_run(args: argparse.Namespace, run: VideoRun, report: TextIO) ->
           f"{run.fps:.0f} frames/s without writing (ms a frame: {ms})"
           + (f"; compiling took {compiling:.1f} s" if compiling >= 0.05 else "")
           + _fps_words(args, run), file=report)
+    failed: Exception | None = None
     if args.report:
         from .report import write_report
 
         # the run's outputs are in place: an interrupt while the page is made (seconds, to
         # re-encode the video) said "earlier outputs are kept" of outputs already replaced
         args.outputs_written = list(run.files.values())
-        run.files["report"] = write_report(args.out_dir, force=True)
+        try:
+            run.files["report"] = write_report(args.out_dir, force=True)
+        except Exception as e:  # noqa: BLE001  (raised below, after the run's own results)
+            # (a page that failed, as with an OpenCV without a WebM encoder, hid the files
+            # written and the scores: the command ended with the error alone)
+            failed = e
     for key, path in run.files.items():
         print(f"  {key:<7} {path}", file=report)
     if run.scores is not None:
         from .io.motchallenge import sequence_name
 
         _table({sequence_name(args.input): run.scores}, report)  # (a dotted folder's whole name)
+    if failed is not None:
+        print("  the files above are written; --report's page is not, for the error below",
+              file=report)
+        raise failed
 
 
 def _frontend_problem(args: argparse.Namespace, name: str) -> str:

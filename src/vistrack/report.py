@@ -154,16 +154,6 @@ for (const img of document.querySelectorAll('img')) {
 """
 
 
-def _holds_points(run_info: Path) -> bool:
-    """Whether ``run.json`` says its run's tracks are points (``"points": true``)."""
-    import json
-
-    try:
-        return bool(json.loads(run_info.read_text()).get("points", False))
-    except (OSError, ValueError, AttributeError):
-        return False
-
-
 def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     """Write ``out_dir/report.html`` (see the module) and return its path.
 
@@ -200,18 +190,15 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
 
     out_dir = Path(out_dir)
     target = out_dir / REPORT
-    points = _holds_points(out_dir / RUN_INFO)  # (a particles run: tracks.csv of points)
-    tracks = out_dir / SINK_FILES["csv" if points else "tracks"]
     if out_dir.is_file():
         raise NotADirectoryError(f"{out_dir} is a file: give the folder that vistrack track "
                                  "--out-dir wrote")
     if not out_dir.is_dir():  # (it said "nope/tracks.txt does not exist")
         raise FileNotFoundError(f"{out_dir} does not exist: give the folder that vistrack "
                                 "track --out-dir wrote")
-    if not tracks.is_file():
-        raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
-                                "track --out-dir wrote")
-    check_output(target, force=force, name="report")
+    # run.json is read first: it says which tracks file the run wrote (a particles run's
+    # points are in tracks.csv), and one that cannot be read was taken for a box run's,
+    # whose missing tracks.txt was then the error
     info: dict = {}
     run_info = out_dir / RUN_INFO
     if run_info.is_file():
@@ -222,6 +209,15 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
         if not isinstance(info, dict):
             raise ValueError(f"{run_info}: not a run's description (a JSON "
                              f"{type(info).__name__}, not an object)")
+    # without run.json: a folder of tracks.csv alone is a points run's
+    points = bool(info.get("points", False)) if run_info.is_file() else (
+        not (out_dir / SINK_FILES["tracks"]).is_file()
+        and (out_dir / SINK_FILES["csv"]).is_file())
+    tracks = out_dir / SINK_FILES["csv" if points else "tracks"]
+    if not tracks.is_file():
+        raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
+                                "track --out-dir wrote")
+    check_output(target, force=force, name="report")
     name = info.get("name") or out_dir.name
     parts = [f"<h1>vistrack report: {html.escape(name)}</h1>"]
     if info.get("command"):

@@ -262,6 +262,13 @@ class Annotator:
                 x, y = cut[k][0] + gap, cut[k][1] - gap
             if not numbered:
                 continue
+            # a box or point wholly off the image has no number: pulled inside, it stood at
+            # the edge over nothing
+            if corners is not None:
+                if x1 <= 0 or y1 <= 0 or x0 >= W or y0 >= H:
+                    continue
+            elif not (0 <= at[k][0] < W and 0 <= at[k][1] < H):
+                continue
             # the whole number inside the image (a box past the left edge showed a sliver)
             org = (min(max(x, 0), max(W - tw, 0)), min(max(y, th), max(H - tb, th)))
             cv2.putText(out, str(i), org, font, scale, (0, 0, 0), halo,
@@ -375,6 +382,7 @@ class AnnotatedVideo:
         # frames go to a partial file, renamed over ``path`` when the video is complete
         self._part = partial_path(self.path)
         self._writer = VideoWriter(self._part, fps, name=self.path)
+        self._size: tuple[int, int] | None = None
 
     def write(self, frame: Frame, tracks: Tracks) -> None:
         """Draw ``tracks`` on ``frame.image`` and write it.
@@ -403,11 +411,20 @@ class AnnotatedVideo:
         """
         if frame.image is None:
             raise ValueError(f"AnnotatedVideo draws on images; frame {frame.index} has none")
+        size = frame.image.shape[1::-1]
+        if self._size is None:
+            self._size = size
+        elif size != self._size:  # (the writer counted its frames: "frame 3" for frame 103)
+            raise ValueError(f"{self.path}: frame {frame.index} is {size[0]}x{size[1]}; the "
+                             f"video is {self._size[0]}x{self._size[1]}")
         self._writer.write(self.annotator.draw(frame.image, tracks,
                                                label=f"frame {frame.index}"))
 
     def close(self) -> None:
-        """Finish the video file: it replaces any earlier ``path`` only now, complete.
+        """Finish the video file: it replaces any earlier ``path`` only now, complete. With
+        no frame written there is no video (an MP4 needs a frame's size): no file is made,
+        and an earlier ``path`` is left as it was (:func:`~vistrack.pipeline.track_video`
+        refuses a run of no frames before it closes its outputs).
 
         Examples
         --------

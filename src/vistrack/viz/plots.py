@@ -6,6 +6,7 @@ its own figure and can save it. None calls ``plt.show()``.
 
 from __future__ import annotations
 
+import warnings
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -282,7 +283,18 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
 
     from .annotate import id_colour
 
-    frames, ids, c = np.asarray(frames), np.asarray(ids), np.asarray(centres, dtype=float)
+    fr, ids_, c = np.asarray(frames), np.asarray(ids), np.asarray(centres, dtype=float)
+    # (a third centre beside two frames was dropped; other lengths failed in numpy's words)
+    if c.ndim != 2 or c.shape[1] != 2 or not len(fr) == len(ids_) == len(c):
+        raise ValueError(f"frames, ids and centres must be one row each, centres (N, 2); got "
+                         f"{len(fr)} frames, {len(ids_)} ids and centres of shape {c.shape}")
+    bad = ~np.isfinite(c).all(axis=1)
+    if bad.any():
+        # a track's NaN last centre was its end dot and label's place (neither was drawn;
+        # one with a single finite centre vanished): such rows are left out, and said
+        warnings.warn(f"{int(bad.sum())} of the {len(c)} centres are not finite (NaN or "
+                      "infinite boxes): left out of the plot", RuntimeWarning, stacklevel=2)
+        fr, ids_, c = fr[~bad], ids_[~bad], c[~bad]
     if path is None:
         import matplotlib.pyplot as plt
 
@@ -295,6 +307,7 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
     image, bg = None, None if background is None else np.asarray(background)
     if bg is not None:
         image = ax.imshow(bg, cmap="gray", alpha=0.45)
+    frames, ids = fr, ids_
     order = np.lexsort((frames, ids))
     starts = np.flatnonzero(np.diff(ids[order])) + 1
     paths = np.split(c[order], starts) if len(order) else []
@@ -310,6 +323,22 @@ def plot_trajectories(frames: ArrayLike, ids: ArrayLike, centres: ArrayLike,
     if background is None:
         ax.invert_yaxis()
         ax.set_aspect("equal", adjustable="box")
+    elif bg is not None and len(c):
+        # the view: the image and the paths near it, up to its own size past each edge (one
+        # centre at x = 1e5 made a 768-pixel frame a strip); what lies beyond is said
+        H, W = bg.shape[:2]
+        lo, hi = np.array([-0.5 - W, -0.5 - H]), np.array([2 * W - 0.5, 2 * H - 0.5])
+        far = ((c < lo) | (c > hi)).any(axis=1)
+        if far.any():
+            warnings.warn(f"{int(far.sum())} of the {len(c)} centres lie more than the "
+                          f"image's size ({W} x {H}) outside it: beyond the plot's view",
+                          RuntimeWarning, stacklevel=2)
+        near = c[~far]
+        x0, y0 = np.minimum(near.min(axis=0), -0.5) if len(near) else (-0.5, -0.5)
+        x1, y1 = np.maximum(near.max(axis=0), [W - 0.5, H - 0.5]) if len(near) else (
+            W - 0.5, H - 0.5)
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y1, y0)
     ax.set_xlabel("x (pixels)")
     ax.set_ylabel("y (pixels)")
     if title:
@@ -574,7 +603,8 @@ def _save_over(fig: Figure, ax: Axes, image: Any, background: np.ndarray,
         elif background.dtype.kind == "f":
             rgb = cv2.convertScaleAbs(np.clip(background, 0, 1).astype(np.float32), alpha=255)
         else:
-            rgb = np.asarray(background, np.uint8)
+            # (clipped, as matplotlib draws integer RGB: 300 in a uint16 image wrapped to 44)
+            rgb = np.clip(background, 0, 255).astype(np.uint8)
         shrink = (c1 - c0) * (r1 - r0) < rgb.shape[0] * rgb.shape[1]
         rgb = cv2.resize(rgb, (c1 - c0, r1 - r0),
                          interpolation=cv2.INTER_AREA if shrink else cv2.INTER_LINEAR)
