@@ -239,6 +239,12 @@ def test_hota_over_alpha_is_drawn_from_the_scores(tmp_path, capsys):
     capsys.readouterr()
     assert main(args) == 2 and "--force" in capsys.readouterr().err
     assert main(args + ["--force"]) == 0
+    # past 20 sequences (a whole MOT17 training split) the legend was left out, without a
+    # word: it says now what the thin lines are, and which is COMBINED
+    many = {f"S{k:02d}": res["S0"] for k in range(21)} | {"COMBINED": res["COMBINED"]}
+    legend = plot_hota_alpha(many).axes[-1].get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == ["21 sequences (named up to 20)",
+                                                          "COMBINED"]
 
 
 def test_the_timeline_draws_each_objects_matches(tmp_path):

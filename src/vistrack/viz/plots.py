@@ -455,6 +455,18 @@ def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = No
         # a third of its width)
         axes[-1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
                         borderaxespad=0)
+    else:
+        # too many to name (their colours repeat): the legend says what the lines are (it
+        # was left out, without a word, and COMBINED's line with it)
+        from matplotlib.lines import Line2D
+
+        seqs = len(names) - ("COMBINED" in results)
+        handles = [Line2D([], [], color="grey", linewidth=1,
+                          label=f"{seqs} sequences (named up to 20)")]
+        if "COMBINED" in results:
+            handles.append(Line2D([], [], color="black", linewidth=2.5, label="COMBINED"))
+        axes[-1].legend(handles=handles, fontsize=7, loc="upper left",
+                        bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
     fig.tight_layout()
     if path is not None:
         fig.savefig(path, dpi=100)
