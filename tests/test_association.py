@@ -523,3 +523,73 @@ def test_gnn_with_costs_near_the_largest_float_is_the_scaled_problem():
     gate = np.array([[1, 0, 0], [1, 0, 0], [1, 1, 1]], bool)
     r, c = gnn(np.array([[5e307, 0, 0], [0.0, 0, 0], [0.0, 0, 0]]), gate)
     assert r.tolist() == [1, 2] and c[0] == 0 and c[1] in (1, 2)
+
+
+def test_pairs_listed_twice_bad_gates_and_limits_are_named():
+    """`gnn_sparse` took a pair listed twice, the later cost overwriting the earlier, so the
+    answer hung on their order (oracle: no dense problem has two costs for one pair);
+    `limit` was checked only where a pair was allowed; a gate of NaN or 0.2 was cast to
+    True; an index or cost out of range was named without its place; a shape of 2.7 cut."""
+    from vistrack.association import gnn, gnn_sparse, greedy
+
+    rows, cols = np.array([0, 0, 0, 1, 1]), np.array([0, 0, 1, 0, 1])
+    for cost in ([1.0, 100, 60, 50, 60], [100.0, 1, 60, 50, 60]):
+        with pytest.raises(ValueError, match=re.escape(
+                "rows and cols must list each pair once; (0, 0) is listed twice")):
+            gnn_sparse(rows, cols, np.array(cost), (2, 2))
+    for call in (lambda: gnn(np.full((2, 2), np.inf), limit=np.nan),
+                 lambda: gnn(np.ones((2, 2)), limit=np.nan),
+                 lambda: gnn_sparse([], [], [], (2, 2), limit=np.nan)):
+        with pytest.raises(ValueError, match=re.escape(
+                "limit must be a finite number or None; got nan")):
+            call()
+    with pytest.raises(ValueError, match=re.escape(
+            "limit must be a finite number or None; got 'x'")):
+        gnn_sparse([], [], [], (2, 2), limit="x")
+    for f, gate, bad in ((gnn, [[np.nan, 0]], "nan"), (greedy, [[0.2, 0]], "0.2")):
+        with pytest.raises(ValueError, match=re.escape(
+                f"gate must be True/False (or 1/0) for each pair; gate[0, 0] is {bad}")):
+            f(np.array([[1.0, 2.0]]), gate=gate)
+    # 1/0 and booleans as before
+    assert [a.tolist() for a in gnn(np.array([[1.0, 2.0]]), gate=[[0, 1]])] == [[0], [1]]
+    with pytest.raises(ValueError, match=re.escape(
+            "rows and cols must index a (2, 2) problem; cols[1] is -1")):
+        gnn_sparse([0, 1], [0, -1], [1.0, 2.0], (2, 2))
+    with pytest.raises(ValueError, match=re.escape(
+            "cost must be finite on every pair; cost[1] is nan")):
+        gnn_sparse([0, 1], [0, 1], [1.0, np.nan], (2, 2))
+    with pytest.raises(ValueError, match=re.escape(
+            "shape must be two whole numbers >= 0 (tracks, detections); got (2.7, 3)")):
+        gnn_sparse([0], [0], [1.0], (2.7, 3))
+
+
+def test_boxes_and_detections_that_cannot_be_measured_are_named():
+    """A NaN box overlapped nothing (IoU 0, GIoU 0, ranked above a real far box) where
+    `iou_pairs` named it; a (3, 0) array of boxes or a (5, 0) one of detections was taken
+    for none, their rows dropped; `mahalanobis_pairs` took a threshold of NaN or -1 (no
+    pair), and failed on a NaN detection in scipy's words; `non_maximum` sorted a NaN score
+    last."""
+    from vistrack.association import giou, iou, mahalanobis, non_maximum
+    from vistrack.association.costs import mahalanobis_pairs
+
+    nan_box, box = [[0, 0, np.nan, 2]], [[0, 0, 2, 2]]
+    for f in (iou, giou):
+        with pytest.raises(ValueError, match=re.escape(
+                "a must be finite boxes; a[0] = [0.0, 0.0, nan, 2.0]")):
+            f(nan_box, box)
+    with pytest.raises(ValueError, match=re.escape(
+            "a must have shape (N, 4) (x0, y0, x1, y1); got (3, 0)")):
+        iou(np.zeros((3, 0)), box)
+    assert iou([], box).shape == (0, 1) and iou(np.zeros((0, 4)), box).shape == (0, 1)
+    S = np.eye(2)[None]
+    with pytest.raises(ValueError, match=re.escape("z must have shape (D, 2); got (5, 0)")):
+        mahalanobis([[0.0, 0.0]], S, np.zeros((5, 0)))
+    assert mahalanobis([[0.0, 0.0]], S, []).shape == (1, 0)
+    for t in (np.nan, -1):
+        with pytest.raises(ValueError, match=re.escape(
+                f"threshold must be a finite squared distance >= 0; got {t!r}")):
+            mahalanobis_pairs([[0.0, 0.0]], S, [[1.0, 0.0]], threshold=t)
+    with pytest.raises(ValueError, match=re.escape("z must be finite; z[0] = [nan, 0.0]")):
+        mahalanobis_pairs([[0.0, 0.0]], S, [[np.nan, 0.0], [1.0, 0.0]], threshold=4.0)
+    with pytest.raises(ValueError, match=re.escape("scores must be numbers; scores[1] is NaN")):
+        non_maximum([[0, 0, 10, 10], [1, 0, 11, 10]], [0.8, np.nan])

@@ -1315,3 +1315,42 @@ def test_offline_tracks_are_followed_back_past_another_class_on_their_detections
 
     assert person(frames({0})) == list(range(1, 41))
     assert person(frames({0, 2})) == list(range(1, 41))
+
+
+def test_a_track_tables_times_confirmations_and_kept_rows_are_checked():
+    """`add` took a NaN time (the track then kept lost for good, its `found` NaN);
+    `advance` took one and changed the table before `ended` named it; `confirm_hits` NaN
+    kept every track tentative, 0 or -1 confirmed as 1; `keep` with an index twice made two
+    tracks of one identity, which the table never reuses."""
+    from vistrack.tracking.lifecycle import CONFIRMED, TrackTable
+
+    def table():
+        t = TrackTable(1)
+        t.add(np.zeros((2, 1)), np.ones((2, 1, 1)), 0.0, np.zeros(2, np.int64), np.ones(2),
+              confirmed=True)
+        return t
+
+    with pytest.raises(ValueError, match=re.escape(
+            "time must be a finite number of seconds; got nan")):
+        table().add(np.zeros((1, 1)), np.ones((1, 1, 1)), np.nan, np.zeros(1, np.int64),
+                    np.ones(1), confirmed=True)
+    t = table()
+    before = (t.last_time.copy(), t.found.copy(), t.hits.copy())
+    with pytest.raises(ValueError, match=re.escape(
+            "time must be a finite number of seconds; got nan")):
+        t.advance(np.array([True, False]), np.nan, 2)
+    for now, then in zip((t.last_time, t.found, t.hits), before):
+        np.testing.assert_array_equal(now, then)
+    for bad in (np.nan, 0, -1, 1.5, True):
+        with pytest.raises(ValueError, match=re.escape(
+                f"confirm_hits must be a whole number >= 1; got {bad!r}")):
+            table().advance(np.array([True, True]), 0.1, bad)
+    t = table()
+    t.advance(np.array([True, True]), 0.1, 2.0)  # (a whole float, as before)
+    assert (t.state == CONFIRMED).all()
+    with pytest.raises(ValueError, match=re.escape(
+            "mask's indices must each be given once; got [0, 0, 1]")):
+        table().keep(np.array([0, 0, 1]))
+    t = table()
+    t.keep(np.array([1]))
+    assert t.ids.tolist() == [2]

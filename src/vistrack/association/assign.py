@@ -27,6 +27,7 @@ import numpy as np
 from .._jit import njit
 from .._prebuilt import kernel
 from .._registry import Registry
+from .._validate import is_real, is_whole
 
 __all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_pairs_limited", "gnn_sparse",
            "greedy", "lsa", "lsa_kernel", "nearest_neighbour", "components"]
@@ -40,7 +41,19 @@ def _check(cost: np.ndarray, gate: np.ndarray | None) -> tuple[np.ndarray, np.nd
         raise ValueError(f"cost must be 2-D (tracks, detections); got shape {cost.shape}")
     if gate is None:
         return cost, np.isfinite(cost)
-    gate = np.asarray(gate, dtype=bool)
+    given = np.asarray(gate)
+    if given.dtype != bool:
+        # (a NaN or 0.2 was cast to True: a pair allowed that was meant not to be)
+        flat = given.reshape(-1)
+        try:
+            odd = np.flatnonzero((flat != 0) & (flat != 1))
+        except TypeError:
+            odd = np.zeros(1, np.int64)
+        if odd.size:
+            at = tuple(int(v) for v in np.unravel_index(odd[0], given.shape))
+            raise ValueError(f"gate must be True/False (or 1/0) for each pair; gate"
+                             f"{list(at)} is {flat[odd[0]].item()!r}")
+    gate = given.astype(bool)
     if gate.shape != cost.shape:  # before combining: (1, D) would broadcast without a word
         raise ValueError(f"gate must have the shape of cost {cost.shape}; got {gate.shape}")
     return cost, gate & np.isfinite(cost)
@@ -149,7 +162,8 @@ def gnn(cost: np.ndarray, gate: np.ndarray | None = None,
     Raises
     ------
     ValueError
-        If ``cost`` is not 2-D or ``gate`` does not have its shape.
+        If ``cost`` is not 2-D, ``gate`` does not have its shape or holds values other than
+        True/False (1/0), or ``limit`` is given and not a finite number.
 
     See Also
     --------
@@ -508,8 +522,9 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
     Raises
     ------
     ValueError
-        If the three arrays are not 1-D of one length, an index is outside ``shape``, a cost
-        is not finite, or ``limit`` is given and not finite.
+        If the three arrays are not 1-D of one length, ``shape`` is not two whole numbers
+        >= 0, an index is outside it, a pair is listed twice, a cost is not finite, or
+        ``limit`` is given and not a finite number (each named).
 
     Examples
     --------
@@ -520,21 +535,39 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
     """
     rows, cols = np.ascontiguousarray(rows, np.int64), np.ascontiguousarray(cols, np.int64)
     cost = np.ascontiguousarray(cost, dtype=float)
+    if len(shape) != 2 or not all(is_whole(x, 0) for x in shape):  # (2.7 was cut to 2)
+        raise ValueError(f"shape must be two whole numbers >= 0 (tracks, detections); got "
+                         f"{tuple(shape)!r}")
     T, D = (int(x) for x in shape)
     if not rows.shape == cols.shape == cost.shape or rows.ndim != 1:
         raise ValueError(f"rows, cols and cost must be 1-D of one length; got shapes "
                          f"{rows.shape}, {cols.shape} and {cost.shape}")
+    # (checked with no pair too: NaN or "x" went unsaid where nothing was allowed)
+    if limit is not None and not (is_real(limit) and np.isfinite(float(limit))):
+        raise ValueError(f"limit must be a finite number or None; got {limit!r}")
     if len(rows) == 0:
         return _EMPTY
-    if rows.min() < 0 or rows.max() >= T or cols.min() < 0 or cols.max() >= D:
-        raise ValueError(f"rows and cols must index a ({T}, {D}) problem")
-    if not np.isfinite(cost).all():
-        raise ValueError("cost must be finite on every pair")
+    for name, idx, n in (("rows", rows, T), ("cols", cols, D)):
+        out = (idx < 0) | (idx >= n)
+        if out.any():
+            p = int(np.flatnonzero(out)[0])
+            raise ValueError(f"rows and cols must index a ({T}, {D}) problem; {name}[{p}] is "
+                             f"{int(idx[p])}")
+    finite = np.isfinite(cost)
+    if not finite.all():
+        p = int(np.flatnonzero(~finite)[0])
+        raise ValueError(f"cost must be finite on every pair; cost[{p}] is {cost[p]}")
+    # each pair once: a second listing overwrote the first's cost, so the answer hung on
+    # their order
+    key = np.sort(rows * max(D, 1) + cols)
+    twice = np.flatnonzero(key[1:] == key[:-1])
+    if twice.size:
+        k = int(key[twice[0]])
+        raise ValueError(f"rows and cols must list each pair once; ({k // max(D, 1)}, "
+                         f"{k % max(D, 1)}) is listed twice")
     if limit is None:
         return gnn_pairs_py(rows, cols, cost, T, D)
-    if not np.isfinite(limit):
-        raise ValueError(f"limit must be a finite number or None; got {limit}")
-    return gnn_pairs_limited_py(rows, cols, cost - limit, T, D)
+    return gnn_pairs_limited_py(rows, cols, cost - float(limit), T, D)
 
 
 def greedy(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -24,10 +24,15 @@ __all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "overlappin
 
 def _boxes(b: ArrayLike, name: str) -> np.ndarray:
     a = np.asarray(b, dtype=float)
-    if a.size == 0:
+    # none: (0, 4), or a bare [] (a (3, 0) array was taken for none, its 3 rows dropped)
+    if a.size == 0 and (a.ndim == 1 or a.shape[-1:] == (4,)) and a.ndim <= 2:
         return a.reshape(0, 4)
     if a.ndim != 2 or a.shape[1] != 4:
         raise ValueError(f"{name} must have shape (N, 4) (x0, y0, x1, y1); got {a.shape}")
+    finite = np.isfinite(a).all(axis=1)
+    if not finite.all():  # (a NaN box overlapped nothing: IoU 0, GIoU 0, without a word)
+        k = int(np.flatnonzero(~finite)[0])
+        raise ValueError(f"{name} must be finite boxes; {name}[{k}] = {a[k].tolist()}")
     return a
 
 
@@ -65,7 +70,8 @@ def iou(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``a`` or ``b`` is not empty and not of shape ``(., 4)``.
+        If ``a`` or ``b`` is not empty and not of shape ``(., 4)``, or holds a box that is
+        not finite (named).
 
     See Also
     --------
@@ -97,7 +103,7 @@ def paired_iou(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``a`` and ``b`` do not have the same shape ``(N, 4)``.
+        If ``a`` and ``b`` do not have the same shape ``(N, 4)``, or a box is not finite.
 
     Examples
     --------
@@ -133,9 +139,9 @@ def giou(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``a`` or ``b`` is not empty and not of shape ``(., 4)``, or holds a box whose
-        ``x1 < x0`` or ``y1 < y0`` (its negative area and hull gave values far outside
-        [-1, 1]).
+        If ``a`` or ``b`` is not empty and not of shape ``(., 4)``, or holds a box that is
+        not finite, or whose ``x1 < x0`` or ``y1 < y0`` (its negative area and hull gave
+        values far outside [-1, 1]).
 
     References
     ----------
@@ -221,7 +227,8 @@ def _innovations(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, z_name: str = "z
     # numpy's Cholesky reads the lower triangle alone: an S that is not symmetric would be
     # taken for another
     check_symmetric(S, "S")
-    if z.shape[1:] != (m,) and z.size:
+    # (none: a bare [] or (0, m); a (5, 0) array was taken for none, its rows dropped)
+    if z.shape[1:] != (m,) and not (z.size == 0 and z.shape in ((1, 0), (0, m))):
         raise ValueError(f"{z_name} must have shape (D, {m}); got {z.shape}")
     return zp, S, z
 
@@ -305,6 +312,10 @@ def mahalanobis_pairs(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike,
     """
     from scipy.spatial import cKDTree
 
+    from .._validate import as_finite
+
+    # (NaN or -1 gave no pair, without a word)
+    threshold = as_finite(threshold, "threshold", 0.0, what="squared distance")
     zp, S, z = _innovations(z_pred, S, z)
     T = len(zp)
     if T == 0 or z.size == 0:
@@ -318,6 +329,10 @@ def mahalanobis_pairs(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike,
         raise ValueError(f"S must be positive definite for every track; S["
                          f"{int(np.flatnonzero(eig[:, 0] <= 0)[0])}] is not")
     lam = eig[:, -1]
+    finite = np.isfinite(z).all(axis=1)
+    if not finite.all():  # (scipy's k-d tree: "data must be finite", naming no argument)
+        j = int(np.flatnonzero(~finite)[0])
+        raise ValueError(f"z must be finite; z[{j}] = {z[j].tolist()}")
     near = cKDTree(z).query_ball_point(zp, np.sqrt(threshold * lam) * (1 + 1e-9))
     counts = np.fromiter((len(x) for x in near), np.int64, T)
     rows = np.repeat(np.arange(T), counts)
@@ -600,6 +615,9 @@ def non_maximum(boxes: ArrayLike, scores: ArrayLike, classes: ArrayLike | None =
     s = np.asarray(scores, dtype=float).reshape(-1)
     if len(s) != len(b):
         raise ValueError(f"scores must have one value a box ({len(b)}); got {len(s)}")
+    if np.isnan(s).any():  # (no place in the order: sorted last, as the least confident)
+        raise ValueError(f"scores must be numbers; scores[{int(np.flatnonzero(np.isnan(s))[0])}]"
+                         " is NaN")
     keep = np.ones(len(b), bool)
     if len(b) < 2:
         return keep

@@ -40,6 +40,15 @@ def _check_lost(time: float, max_lost: float) -> None:
                          f"max_lost={max_lost}, time={time}")
 
 
+def _check_time(time: float) -> float:
+    """``time`` as a finite float, or a ValueError naming it (a NaN time kept a track lost
+    for good, and its ``found`` NaN, where :func:`_check_lost` was not reached first)."""
+    t = float(time)
+    if not np.isfinite(t):
+        raise ValueError(f"time must be a finite number of seconds; got {time!r}")
+    return t
+
+
 class TrackTable:
     """Tracks as columns: ``mean (K, n)``, ``cov (K, *cov_shape)`` (default ``(n, n)``), ``ids``,
     ``state``, ``hits`` (updates in a row), ``streak`` (the length of the last run of updates
@@ -168,6 +177,7 @@ class TrackTable:
         ([1, 2], True, 3)
         """
         k = len(mean)
+        time = _check_time(time)
         for name, column in (("cov", cov), ("classes", classes), ("scores", scores)):
             if len(column) != k:  # one row per track in every column
                 raise ValueError(f"{name} must have one row for each of the {k} tracks' "
@@ -213,9 +223,13 @@ class TrackTable:
         >>> t.ids.tolist(), t.mean.ravel().tolist()
         ([1, 3], [0.0, 2.0])
         """
+        rows = np.asarray(mask)
+        if rows.dtype != np.bool_ and len(np.unique(rows)) != rows.size:
+            # (a row kept twice gave two tracks of one identity, which is never reused)
+            raise ValueError(f"mask's indices must each be given once; got {rows.tolist()}")
         for name in ("mean", "cov", "ids", "state", "hits", "streak", "first_time",
                      "last_time", "found", "classes", "scores"):
-            setattr(self, name, getattr(self, name)[mask])
+            setattr(self, name, getattr(self, name)[rows])
 
     def _updated(self, updated: np.ndarray) -> np.ndarray:
         """``updated`` checked: a bool mask of one entry per track (indices were taken as a
@@ -246,6 +260,14 @@ class TrackTable:
             Updates in a row that confirm a tentative track (the one it started with counts).
         """
         updated = self._updated(updated)
+        # checked before the table changes (a NaN time was taken in, and named by ended only
+        # after; confirm_hits NaN kept every track tentative, 0 or -1 was 1)
+        time = _check_time(time)
+        if isinstance(confirm_hits, (bool, np.bool_)) or not (
+                isinstance(confirm_hits, (int, np.integer)) or (
+                    isinstance(confirm_hits, (float, np.floating))
+                    and float(confirm_hits).is_integer())) or confirm_hits < 1:
+            raise ValueError(f"confirm_hits must be a whole number >= 1; got {confirm_hits!r}")
         # found: this frame weighs the time since the last (a frame passed over, none: its
         # time goes to the next one stepped on), or since the track's start if it started
         # later (added after the last advance, or before any)
