@@ -186,3 +186,32 @@ def test_bad_steps_are_named(call, message):
     mean, cov = np.zeros((3, 2)), np.tile([1.0, 0.0, 1.0], (3, 1, 1))
     with pytest.raises(ValueError, match=message):
         call(mean, cov)
+
+
+def test_an_exact_value_measured_exactly_and_bad_offsets_are_named():
+    """`pp + r = 0` on a measured axis gave the state NaN with a RuntimeWarning alone, where
+    `kf_update` names it; a NaN `rate_offset` gave the rate NaN, and an infinite one on an
+    axis not measured too (documented as left as predicted); `axes_to_full` of a shape that
+    is no per-axis covariance failed with an IndexError."""
+    import re
+    import warnings
+
+    from vistrack.filters.axes import axes_to_full, axes_update
+
+    with pytest.raises(ValueError, match=re.escape(
+            "the innovation variance pp + r must be > 0 where a value is measured; at [0, 0] "
+            "it is 0.0")):
+        axes_update([[2.0, 1.0]], [[[0.0, 0.0, 1.0]]], [[2.0]], [[0.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # unmeasured, such an axis is left as predicted
+        m, c = axes_update([[2.0, 1.0]], [[[0.0, 0.0, 1.0]]], [[np.nan]], [[0.0]])
+    assert m.tolist() == [[2.0, 1.0]] and c.tolist() == [[[0.0, 0.0, 1.0]]]
+    with pytest.raises(ValueError, match=re.escape("rate_offset must be finite; "
+                                                   "rate_offset[0, 0] = nan")):
+        axes_update([[0.0, 0.0]], [[[1.0, 0.5, 1.0]]], [[1.0]], [[1.0]], rate_offset=[[np.nan]])
+    m, _ = axes_update([[0.0, 0.0, 0.0, 0.0]], [[[1.0, 0.5, 1.0]] * 2], [[1.0, np.nan]],
+                       [[1.0, 1.0]], rate_offset=[[0.5, 3.0]])
+    assert m[0, 3] == 0.0 and m[0, 2] == pytest.approx(0.25 * 1.5)
+    for bad in ([[1.0, 2.0]], [1.0, 2.0, 3.0]):
+        with pytest.raises(ValueError, match=re.escape("cov must have shape (..., A, 3)")):
+            axes_to_full(bad)

@@ -392,3 +392,36 @@ def test_the_chunked_filter_takes_a_prior_with_a_batch_axis_of_one():
     lazy = kalman_filter(da.from_array(ys, chunks=(2, 6, 2)), **MODEL, x0=x0, P0=P0)
     want = kalman_filter(ys, **MODEL, x0=x0, P0=P0)
     np.testing.assert_array_equal(lazy.means.compute(scheduler="synchronous"), want.means)
+
+
+def test_empty_and_unknown_chunks_and_errors_by_place_in_the_batch():
+    """A chunk of no series (a selection's, after `compute_chunk_sizes`) failed with an
+    IndexError; unknown chunk sizes (a boolean selection's) with "cannot convert float NaN
+    to integer"; an infinite measurement in the second chunk was named by its place in the
+    chunk (ys[1, ...] for ys[3, ...]) and an x0 of the wrong size with the chunk's B. Oracle:
+    the in-memory filter's own results and messages."""
+    import re
+
+    rng = np.random.default_rng(0)
+    F, H, R, Q = np.array([[1.0, 1.0], [0.0, 1.0]]), np.eye(1, 2), [[0.5]], np.diag([0.0, 0.1])
+    y = rng.normal(size=(4, 6, 1))
+    model = dict(F=F, Q=Q, H=H, R=R, x0=np.zeros(2), P0=np.eye(2))
+    want = rts_smooth(kalman_filter(y, **model), F=F, Q=Q).means
+    keep = np.array([True, True, False, True])
+    picked = da.from_array(y, chunks=(2, 6, 1))[da.from_array(keep, chunks=2)]
+    with pytest.raises(ValueError, match=re.escape(
+            "ys has chunks of unknown size (a boolean selection's): call "
+            "ys.compute_chunk_sizes() first")):
+        kalman_filter(picked, **model)
+    empty = da.from_array(y, chunks=((4, 0), -1, -1))  # (as a selection can leave them)
+    got = rts_smooth(kalman_filter(empty, **model), F=F, Q=Q).means.compute()
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    bad = y.copy()
+    bad[3, 2, 0] = np.inf
+    for ys in (bad, da.from_array(bad, chunks=(2, 6, 1))):
+        with pytest.raises(ValueError, match=re.escape(
+                "ys must be finite or NaN (missing); ys[3, 2, 0] = inf")):
+            kalman_filter(ys, **model).means.compute() if not isinstance(ys, np.ndarray) \
+                else kalman_filter(ys, **model)
+    with pytest.raises(ValueError, match=re.escape("(B=4, 2)")):
+        kalman_filter(da.from_array(y, chunks=(2, 6, 1)), **(model | {"x0": np.zeros((4, 3))}))

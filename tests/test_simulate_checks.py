@@ -50,3 +50,18 @@ def test_valid_nonlinear_draws_are_unchanged():
     np.testing.assert_array_equal(xs, again)
     gen = np.random.default_rng(0)
     np.testing.assert_array_equal(xs[:, 0, 0], 0.1 + np.sqrt(0.5) * gen.standard_normal(3))
+
+
+def test_an_initial_state_of_the_wrong_size_is_named_alone():
+    """`simulate`'s linear path named a P0 never given (the identity it built) and offered a
+    (B, n) x0 that it then refused: it names x0 and the one shape it takes."""
+    import re
+
+    from vistrack.models import ConstantVelocity, Position
+    from vistrack.simulate import simulate
+
+    with pytest.raises(ValueError, match=re.escape(
+            "x0 must have shape (2,), the motion's state; got (3,)")):
+        simulate(ConstantVelocity(dim=1, q=0.1), Position(dim=1), 3, x0=[0, 1, 2], rng=0)
+    xs, _ = simulate(ConstantVelocity(dim=1, q=0.1), Position(dim=1), 3, x0=[0, 1], rng=0)
+    assert xs.shape == (3, 2)

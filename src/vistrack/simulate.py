@@ -220,9 +220,16 @@ def simulate(
         # neither model has a jacobian: both are linear
         from .filters.linear import _prior_of
 
+        # x0 one state of the motion's size (simulate takes no batch of them; the message
+        # named a P0 built here, and offered a (B, n) that was then refused)
+        n = int(getattr(motion, "ndim_state", 0))
+        x0_ = as_float_array(x0, "x0", ndim=(1,))
+        if n and x0_.shape != (n,):
+            raise ValueError(f"x0 must have shape ({n},), the motion's state; got "
+                             f"{x0_.shape}")
         if P0 is not None:
             _prior_of(motion, x0, P0)
-        elif np.ndim(x0) == 1:  # (the first state exactly x0)
+        else:  # (the first state exactly x0)
             _prior_of(motion, x0, np.eye(np.shape(x0)[0]))
         mats = KalmanFilter(cast("MotionModel", motion),
                             cast("MeasurementModel", measurement)).matrices(int(T), dt)

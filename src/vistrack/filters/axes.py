@@ -178,8 +178,9 @@ def axes_update(mean: ArrayLike, cov: ArrayLike, z: ArrayLike, r: ArrayLike,
     Raises
     ------
     ValueError
-        If a shape does not match, ``z`` holds an infinite value, or ``r`` a negative or
-        non-finite variance.
+        If a shape does not match, ``z`` holds an infinite value, ``r`` a negative or
+        non-finite variance, ``rate_offset`` a value that is not finite, or a measured
+        value's innovation variance ``pp + r`` is not > 0 (each named).
 
     Examples
     --------
@@ -196,18 +197,30 @@ def axes_update(mean: ArrayLike, cov: ArrayLike, z: ArrayLike, r: ArrayLike,
     zv, rv = _per_state(z, "z", shape), _per_state(r, "r", shape, variance=True)
     pp, pv, vv = c[..., 0], c[..., 1], c[..., 2]
     S = pp + rv
-    kp, kv = pp / S, pv / S
-    y = zv - m[..., :A]
     if np.isinf(zv).any():
         idx = tuple(int(i) for i in np.argwhere(np.isinf(zv))[0])
         raise ValueError(f"z must be finite or NaN (not measured); z{list(idx)} = {zv[idx]}")
     missing = np.isnan(zv)
+    flat = ~missing & ~(S > 0)
+    if flat.any():
+        # a value known exactly measured exactly: no gain (0 / 0), and the state went NaN
+        # with a RuntimeWarning alone, where kf_update names it
+        idx = tuple(int(i) for i in np.argwhere(flat)[0])
+        raise ValueError(f"the innovation variance pp + r must be > 0 where a value is "
+                         f"measured; at {list(idx)} it is {S[idx]}")
+    with np.errstate(divide="ignore", invalid="ignore"):  # (unmeasured axes: no gain, below)
+        kp, kv = pp / S, pv / S
+    y = zv - m[..., :A]
     if missing.any():  # no gain on an axis not measured: it stays as predicted
         kp, kv, y = (np.where(missing, 0.0, a) for a in (kp, kv, y))
     out = m.copy()
     out[..., :A] += kp * y
     if rate_offset is not None:
-        y = y + _per_state(rate_offset, "rate_offset", shape)
+        o = _per_state(rate_offset, "rate_offset", shape)
+        if not np.isfinite(o).all():  # (a NaN made the rate NaN; inf did where unmeasured)
+            idx = tuple(int(i) for i in np.argwhere(~np.isfinite(o))[0])
+            raise ValueError(f"rate_offset must be finite; rate_offset{list(idx)} = {o[idx]}")
+        y = y + np.where(missing, 0.0, o)
     out[..., A:] += kv * y
     return out, np.stack([pp - kp * pp, pv - kp * pv, vv - kv * pv], axis=-1)
 
@@ -233,6 +246,8 @@ def axes_to_full(cov: ArrayLike) -> np.ndarray:
     [[1.0, 0.5], [0.5, 2.0]]
     """
     c = np.asarray(cov, dtype=np.float64)
+    if c.ndim < 2 or c.shape[-1] != 3:  # (an IndexError, naming nothing)
+        raise ValueError(f"cov must have shape (..., A, 3); got {c.shape}")
     A = c.shape[-2]
     P = np.zeros(c.shape[:-2] + (2 * A, 2 * A))
     a = np.arange(A)

@@ -41,6 +41,10 @@ __all__ = ["kalman_filter", "rts_smooth", "em"]
 def _batch_blocks(ys: Any) -> tuple[Any, list[tuple[int, int]]]:
     if ys.ndim != 3:
         raise ValueError(f"ys as a Dask array must have shape (B, T, m); got {ys.shape}")
+    if any(np.isnan(c) for axis in ys.chunks for c in axis):
+        # (a boolean selection's unknown sizes: "cannot convert float NaN to integer")
+        raise ValueError("ys has chunks of unknown size (a boolean selection's): call "
+                         "ys.compute_chunk_sizes() first")
     ys = _whole_after_batch(ys)
     edges = np.cumsum((0,) + ys.chunks[0])
     return ys, [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
@@ -70,17 +74,30 @@ def _per_series(p: Any, B: int, ndim_shared: int, name: str) -> Any:
     return p
 
 
-def _chunk_filter(y: np.ndarray, x0: Any, P0: Any, model: dict, store_covs: bool) -> tuple:
+def _chunk_filter(y: np.ndarray, x0: Any, P0: Any, model: dict, store_covs: bool,
+                  first: int = 0) -> tuple:
     from .kalman import kalman_filter as in_memory
 
-    r = in_memory(np.asarray(y), x0=np.asarray(x0), P0=np.asarray(P0), store_covs=store_covs,
-                  **model)
+    y = np.asarray(y)
+    inf = np.isinf(y)
+    if inf.any():  # named by its place in the batch (the chunk's own was named: ys[1, ...])
+        b, t, k = (int(v) for v in np.argwhere(inf)[0])
+        raise ValueError(f"ys must be finite or NaN (missing); ys[{first + b}, {t}, {k}] = "
+                         f"{y[b, t, k]}")
+    try:
+        r = in_memory(y, x0=np.asarray(x0), P0=np.asarray(P0), store_covs=store_covs, **model)
+    except ValueError as e:  # (its indices and B are the chunk's: said so)
+        if first == 0 and len(y) == 0:
+            raise
+        raise ValueError(f"{e} (in the chunk of ys's series {first}-{first + len(y) - 1}: "
+                         "indices and B there count within the chunk)") from None
     # the last state is a view of the means: copied, so that a result that needs only it
     # does not keep every chunk's means alive (a covariance shared by the chunk's series
     # stays one matrix, seen by every series, as in memory)
     cov = r.last.cov
-    cov = (np.broadcast_to(cov[0].copy(), cov.shape) if cov.ndim == 3 and cov.strides[0] == 0
-           else np.array(cov))
+    # (a chunk of no series, as a selection leaves: cov[0] was an IndexError)
+    cov = (np.broadcast_to(cov[0].copy(), cov.shape)
+           if cov.ndim == 3 and cov.strides[0] == 0 and len(cov) else np.array(cov))
     return (r.means, r.covs, r.pred_means, r.pred_covs, r.loglik, np.array(r.last.mean), cov)
 
 
@@ -92,13 +109,14 @@ def _one(block: Any) -> np.ndarray:
     return block
 
 
-def _block_filter(y: Any, *per_series: Any, x0: Any, P0: Any, given: tuple, model: dict,
-                  store_covs: bool) -> tuple:
-    """:func:`_chunk_filter` on one block, the priors given per series (``given``) among the
-    blocks after ``y``."""
+def _block_filter(y: Any, first: Any, *per_series: Any, x0: Any, P0: Any, given: tuple,
+                  model: dict, store_covs: bool) -> tuple:
+    """:func:`_chunk_filter` on one block (``first``: its series' places in the batch), the
+    priors given per series (``given``) among the blocks after it."""
     blocks = {name: _one(b) for name, b in zip(given, per_series)}
+    places = np.asarray(_one(first)).reshape(-1)
     return _chunk_filter(_one(y), blocks.get("x0", x0), blocks.get("P0", P0), model,
-                         store_covs)
+                         store_covs, int(places[0]) if len(places) else 0)
 
 
 def _pick(block: tuple, i: int) -> np.ndarray:
@@ -149,7 +167,14 @@ def kalman_filter(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any,
     x0s, P0s = _per_series(x0, B, 1, "x0"), _per_series(P0, B, 2, "P0")
     n = int(np.shape(x0)[-1])
     model = dict(F=np.asarray(F), Q=np.asarray(Q), H=np.asarray(H), R=np.asarray(R))
-    args: list[Any] = [ys, "btm"]
+    if model["F"].ndim >= 2 and model["F"].shape[-1] != n:
+        # at once, with the batch's B (a chunk's B and shape were named when it ran)
+        want = model["F"].shape[-1]
+        raise ValueError(f"x0 must have shape ({want},) or (B={B}, {want}), F's state size; "
+                         f"got {np.shape(x0)}")
+    # each series' place in the batch, chunked as ys: a block's first is its chunk's offset
+    places = da.from_array(np.arange(B, dtype=np.int64), chunks=(ys.chunks[0],))
+    args: list[Any] = [ys, "btm", places, "b"]
     given: list[str] = []
     for name, prior, index in (("x0", x0s, "bi"), ("P0", P0s, "bij")):
         if prior is not None:
