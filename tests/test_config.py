@@ -16,6 +16,7 @@ import pytest
 from vistrack.config import ConfigError, OfflineConfig, TrackConfig, config_toml, read_config
 from vistrack.data import demo_clip
 from vistrack.io import read_mot, write_mot
+from vistrack.io.motchallenge import read_seqinfo
 from vistrack.models import BoxMotion
 from vistrack.pipeline import resolve_config, track_sequence
 
@@ -91,7 +92,7 @@ def test_a_partial_file_keeps_the_presets_other_values(tmp_path):
     ("[tracker]\ncalibration_cap_sigma = 0\n", r"\[tracker\] calibration_cap_sigma must be > 0"),
     ("[tracker]\ncoast_rate = 1.5\n", r"\[tracker\] coast_rate must be in \[0, 1\]; got 1.5"),
     ("[tracker]\ncoast_window = 0\n",
-     r"\[tracker\] coast_window must be a finite number > 0 \(seconds\)"),
+     r"\[tracker\] coast_window must be a number of seconds > 0 and at most 1e\+09"),
     ("[tracker]\ncamera_motion = 1\n", r"\[tracker\] camera_motion must be true or false"),
     ("[tracker]\nname = \"deepsort\"\n", r"\[tracker\] name must be one of \['bytetrack', "
                                          r"'sort'\]"),
@@ -214,13 +215,22 @@ def test_print_config_of_a_run_given_fps_warns_where_read_back_without_it(seq, t
     (tmp_path / "used.toml").write_text(r.stdout)
     assert "fps_option = 12.5" in r.stdout and "frame_rate = 12.5" in r.stdout
     warning = (f"vistrack track: warning: {tmp_path / 'used.toml'} was printed by a run given "
-               "--fps 12.5 ([derived] fps_option); this run is given ")
+               "--fps 12.5 ([derived] fps_option), tracked at 12.5 frames/s; this run tracks "
+               "at ")
     r = cli(seq, "--out", tmp_path / "b.txt", "--config", tmp_path / "used.toml")
-    assert r.returncode == 0 and warning + "no --fps (its input's frame rate): give --fps " \
+    own = f"{read_seqinfo(seq).frame_rate:g}"
+    assert r.returncode == 0 and warning + f"{own} (its input's frame rate): give --fps " \
         "12.5 for that run's tracks" in r.stderr, r.stderr
     assert (tmp_path / "b.txt").read_text() != (tmp_path / "a.txt").read_text()
     r = cli(seq, "--out", tmp_path / "c.txt", "--config", tmp_path / "used.toml", "--fps", "10")
-    assert r.returncode == 0 and warning + "--fps 10" in r.stderr, r.stderr
+    assert r.returncode == 0 and warning + "10 (--fps 10)" in r.stderr, r.stderr
+    # printed with --fps the input's own rate: read back without it, the same tracks, and
+    # nothing to warn of (it warned, from --fps alone)
+    r = cli(seq, "--out", tmp_path / "f.txt", "--print-config", "--fps", own)
+    (tmp_path / "own.toml").write_text(r.stdout)
+    r = cli(seq, "--out", tmp_path / "g.txt", "--config", tmp_path / "own.toml")
+    assert r.returncode == 0 and "warning" not in r.stderr, r.stderr
+    assert (tmp_path / "g.txt").read_text() == (tmp_path / "f.txt").read_text()
     r = cli(seq, "--out", tmp_path / "d.txt", "--config", tmp_path / "used.toml", "--fps",
             "12.5")
     assert r.returncode == 0 and "warning" not in r.stderr, r.stderr
@@ -675,3 +685,63 @@ def test_print_config_of_two_classes_gives_each_class_its_thresholds_raw_scores(
     assert main(["track", str(both), "--fps", "25", "--out", str(tmp_path / "b.csv"),
                  "--config", str(tmp_path / "used.toml")]) == 0
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+
+
+def test_a_file_leaves_a_still_camera_front_end_its_own_default(tmp_path, capsys):
+    """With `--frontend bgsub` (a background model: a still camera) a --config file of
+    `[tracker] max_lost = 0.2` alone turned camera-motion compensation back on without a
+    word, where `--max-lost 0.2` leaves it off: the same tracks now (oracle: the option's
+    run); a file that sets `camera_motion = true` itself keeps it, and is said."""
+    from vistrack.cli import main
+
+    clip = demo_clip()
+    one = tmp_path / "one.toml"
+    one.write_text("[tracker]\nmax_lost = 0.2\n")
+    base = ["track", str(clip.video), "--stop", "30", "--quiet"]
+    assert main(base + ["--out-dir", str(tmp_path / "opt"), "--max-lost", "0.2"]) == 0
+    assert main(base + ["--out-dir", str(tmp_path / "cfg"), "--config", str(one)]) == 0
+    assert (tmp_path / "opt" / "tracks.txt").read_text() == \
+        (tmp_path / "cfg" / "tracks.txt").read_text()
+    on = tmp_path / "on.toml"
+    on.write_text("[tracker]\nmax_lost = 0.2\ncamera_motion = true\n")
+    capsys.readouterr()
+    assert main(["track", str(clip.video), "--stop", "30", "--out-dir", str(tmp_path / "on"),
+                 "--config", str(on)]) == 0
+    assert (f"{on}: camera_motion = true with the bgsub front-end, which needs a still camera"
+            in capsys.readouterr().err)
+
+
+def test_durations_and_rates_a_run_cannot_count_are_refused_when_read(seq, tmp_path):
+    """`--max-lost 1e308`, `--max-gap 1e308` and `[motion] frame_rate = 1e300` passed every
+    check and failed in the run with a traceback (OverflowError, status 1); a frame rate of
+    1e-300 was named as `std_vel ... got 0.0`, a key the file never set. Now each is refused
+    when read, naming the option or the file's key (status 2)."""
+    for extra, said in ((["--max-lost", "1e308"], "--max-lost: max_lost must be a number of "
+                         "seconds from 0 to 1e+09; got 1e+308"),
+                        (["--offline", "--max-gap", "1e308"], "--max-gap: max_gap must be a "
+                         "number of seconds from 0 to 1e+09; got 1e+308")):
+        r = cli(seq, "--out", tmp_path / "a.txt", *extra)
+        assert r.returncode == 2 and said in r.stderr, r.stderr
+    for rate in ("1e300", "1e-300"):
+        f = tmp_path / f"r{rate}.toml"
+        f.write_text(f"[motion]\nframe_rate = {rate}\n")
+        r = cli(seq, "--out", tmp_path / "a.txt", "--config", f)
+        assert r.returncode == 2 and (f"{f}: [motion] frame_rate must be a number from 0.001 "
+                                      f"to 1e+06 frames/s; got {float(rate)!r}") in r.stderr, \
+            r.stderr
+
+
+def test_a_start_score_that_changes_nothing_and_a_files_value_are_said(seq, tmp_path):
+    """`--start-score` at or below the online start changed nothing offline (0, 0.5 and 0.7
+    gave one file), without a word; `low` from a file against `--high` named `--high`
+    alone."""
+    r = cli(seq, "--out", tmp_path / "a.txt", "--offline", "--start-score", "0.5")
+    assert r.returncode == 0 and ("--start-score 0.5 changes nothing: offline, tracks start "
+                                  "from the detections the online start takes (new_track "
+                                  "0.7)") in r.stderr, r.stderr
+    r = cli(seq, "--out", tmp_path / "b.txt", "--offline", "--start-score", "0.9")
+    assert r.returncode == 0 and "start-score" not in r.stderr, r.stderr
+    low = tmp_path / "low.toml"
+    low.write_text("[tracker]\nlow = 0.5\n")
+    r = cli(seq, "--out", tmp_path / "c.txt", "--config", low, "--high", "0.4")
+    assert r.returncode == 2 and f"--high over {low}: low must be at most high" in r.stderr

@@ -197,13 +197,19 @@ def _config_file(args: argparse.Namespace) -> tuple[TrackConfig, dict[str, Any]]
     """--config's configuration (a file without ``[tracker] name`` over --tracker's preset)
     and its ``[derived]`` table, read once a command: the configuration, and the warnings
     about what it makes of the other options, all come from the same read of the file."""
-    from .config import TrackConfig, read_config_file
+    from .config import TrackConfig, _read_config_file
 
     memo = getattr(args, "config_file_read", None)
     if memo is None:
         base = TrackConfig.preset(args.tracker) if args.tracker is not None else None
-        memo = args.config_file_read = read_config_file(args.config, base)
-    return memo
+        memo = args.config_file_read = _read_config_file(args.config, base)
+    return memo[:2]
+
+
+def _config_file_keys(args: argparse.Namespace) -> dict[str, frozenset[str]]:
+    """The keys --config's file sets in each table, from the same read (:func:`_config_file`)."""
+    _config_file(args)
+    return args.config_file_read[2]
 
 
 def _box_config(args: argparse.Namespace):
@@ -231,8 +237,12 @@ def _box_config(args: argparse.Namespace):
         # name the options the message is about (low and high: both), or else all given
         named = [option for option, _, key, _ in given if re.search(rf"\b{key}\b", str(exc))]
         names = named or [option for option, *_ in given]
-        # a value the message is about that no option gave comes from the file
-        where = f" over {args.config}" if args.config is not None and not named else ""
+        # a value the message is about that no option gave comes from the file (low from
+        # the file against --high named --high alone)
+        keys = {key for _, key, _ in (m[1:4] for m in _SETTINGS)}
+        given_keys = {key for _, _, key, _ in given}
+        from_file = not named or any(re.search(rf"\b{k}\b", str(exc)) for k in keys - given_keys)
+        where = f" over {args.config}" if args.config is not None and from_file else ""
         return None, f"{', '.join('--' + n.replace('_', '-') for n in names)}{where}: {exc}"
     if args.still_camera:
         cfg = cfg.with_values(tracker={"camera_motion": False})
@@ -436,7 +446,7 @@ def _track(args: argparse.Namespace) -> int:
     run: TrackRun | VideoRun
     with _shown_warnings() as said:  # the command's warnings, kept in run.json with the run's
         if box:
-            _warn_unused_settings(args, cfg, offline_given)
+            _warn_unused_settings(args, cfg, offline_given, rate=False)
         if args.out is not None:
             columns, problem = _columns(args.columns)
             if problem:
@@ -456,6 +466,8 @@ def _track(args: argparse.Namespace) -> int:
             run = track_video(args.input, args.out_dir, fps=args.fps, gt=args.gt,
                               force=args.force, progress=progress,
                               **_video_options(args, name, box, cfg))
+        if box:
+            _warn_printed_rate(args, run)
     if isinstance(run, VideoRun):
         # run.json (and the report, from it) keeps the command's warnings too: one about a
         # setting that changes nothing came before the run, and was left out
@@ -596,12 +608,20 @@ def _skip_bad_frames_problem(videos: Sequence[str]) -> str:
 
 
 def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
-                          offline_given: list[str]) -> None:
+                          offline_given: list[str], rate: bool = True) -> None:
     """Warn of settings given that the configuration makes change nothing: the offline
-    mode's without --offline, --low with a tracker of one stage online, --still-camera where the
-    camera's motion is not estimated anyway."""
+    mode's without --offline, --low with a tracker of one stage online, --start-score at or
+    below the start online, --still-camera where the camera's motion is not estimated
+    anyway; and (``rate``) of a --config file printed by a run given another --fps."""
     if cfg is None:
         return
+    if cfg.offline.enabled and args.start_score is not None \
+            and cfg.offline.start_score <= cfg.tracker.new_track:
+        # (the offline start is taken only above the tracker's: 0, 0.5, 0.7 gave one file)
+        warnings.warn(f"--start-score {args.start_score:g} changes nothing: offline, tracks "
+                      "start from the detections the online start takes (new_track "
+                      f"{cfg.tracker.new_track:g}) or, above it, from --start-score's",
+                      UserWarning, stacklevel=1)
     if offline_given and not cfg.offline.enabled:
         named = ", ".join("--" + o.replace("_", "-") for o in offline_given)
         warnings.warn(f"{named}: offline settings, which change nothing without --offline",
@@ -616,7 +636,8 @@ def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
     why = _still_already(args) if args.still_camera else None
     if why:
         warnings.warn(f"--still-camera changes nothing here: {why}", UserWarning, stacklevel=1)
-    printed = _printed_fps(_config_file(args)[1]) if args.config is not None else None
+    printed = _printed_fps(_config_file(args)[1]) if args.config is not None and rate \
+        else None
     if printed is not None and printed != args.fps:
         # the frame rate is no setting: --config does not set it, and a file printed by a
         # run given --fps tracked another way without a word
@@ -626,6 +647,33 @@ def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
                          else "no --fps (its input's frame rate)")
                       + f": give --fps {printed:g} for that run's tracks", UserWarning,
                       stacklevel=1)
+
+
+def _warn_printed_rate(args: argparse.Namespace, run: TrackRun | VideoRun) -> None:
+    """After one input's run: warn where its --config file was printed by a run given
+    --fps whose tracker ran at another rate than this one's (``[derived] frame_rate``): the
+    frame rate is no setting, and the file alone does not give that run's tracks. (Said
+    before the run from --fps alone, it warned where this input's own rate is the one
+    printed, and the tracks were the same.)"""
+    if args.config is None or run.derived is None:
+        return
+    derived = _config_file(args)[1]
+    printed, then = _printed_fps(derived), derived.get("frame_rate")
+    now = run.derived.get("frame_rate")
+    if printed is None or printed == args.fps or now is None:
+        return
+    # the rate that run's tracker ran at ([derived] frame_rate; the option's, without it)
+    then = float(then) if isinstance(then, (int, float)) and not isinstance(then, bool) \
+        else printed
+    if then == float(now):
+        return
+    warnings.warn(f"{args.config} was printed by a run given --fps {printed:g} ([derived] "
+                  f"fps_option), tracked at {then:g} frames/s; this run tracks at "
+                  f"{float(now):g}"
+                  + (f" (--fps {args.fps:g})" if args.fps is not None
+                     else " (its input's frame rate)")
+                  + f": give --fps {printed:g} for that run's tracks", UserWarning,
+                  stacklevel=1)
 
 
 def _printed_fps(derived: dict[str, Any]) -> float | None:
@@ -801,6 +849,19 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
     if args.still_camera and front in FRONTENDS and FRONTENDS[front].still_camera:
         options["follow_view"] = False  # the background model: the view is not followed
     if args.config is not None or not box:
+        if cfg is not None and box and front in FRONTENDS and FRONTENDS[front].still_camera \
+                and cfg.tracker.camera_motion:
+            # a front-end that needs a still camera turns the compensation off, as without a
+            # file: where the file leaves camera_motion out, as there; where it sets it, said
+            # (a file of [tracker] max_lost alone turned it on without a word)
+            if "camera_motion" not in _config_file_keys(args)["tracker"]:
+                cfg = cfg.with_values(tracker={"camera_motion": False})
+            else:
+                warnings.warn(f"{args.config}: camera_motion = true with the {front} "
+                              "front-end, which needs a still camera (it follows a moving "
+                              "view itself): the tracker compensates camera motion too; set "
+                              "camera_motion = false, or leave it out, for the front-end's "
+                              "default", UserWarning, stacklevel=2)
         if cfg is not None:
             options["config"] = cfg
     else:

@@ -141,6 +141,13 @@ class OfflineConfig:
                     or math.isnan(v):
                 raise ValueError(f"{f.name} must be a finite number"
                                  f"{'' if f.name in scores else ' >= 0'}; got {v!r}")
+        from .models.box import MAX_SECONDS
+
+        for name in ("max_gap", "link_gap", "link_window"):
+            # seconds, counted in frames (frames()): 1e308 overflowed there, with a traceback
+            if getattr(self, name) > MAX_SECONDS:
+                raise ValueError(f"{name} must be a number of seconds from 0 to "
+                                 f"{MAX_SECONDS:g}; got {getattr(self, name)!r}")
         for name in ("extend_iou", "link_iou"):
             if getattr(self, name) > 1:
                 raise ValueError(f"{name} must be in [0, 1]; got {getattr(self, name)!r}")
@@ -382,6 +389,14 @@ def read_config_file(path: str | os.PathLike, base: TrackConfig | None = None
     without one), from one read of the file: what a run printed beside its configuration
     (``vistrack track --print-config``), which the command line compares with the run it
     is given to."""
+    return _read_config_file(path, base)[:2]
+
+
+def _read_config_file(path: str | os.PathLike, base: TrackConfig | None = None
+                      ) -> tuple[TrackConfig, dict[str, Any], dict[str, frozenset[str]]]:
+    """:func:`read_config_file`, and the keys the file sets in each table (``tracker``,
+    ``motion``, ``offline``): what it leaves to the preset, or to the command line's
+    front-end (a background model's still camera)."""
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -452,7 +467,8 @@ def read_config_file(path: str | os.PathLike, base: TrackConfig | None = None
             cfg = cfg.with_values(**{table: given})
         except ValueError as exc:
             raise ConfigError(f"{path}: [{table}] {exc}") from None
-    return cfg, dict(data.get("derived", {}))
+    keys = {t: frozenset(data.get(t, {})) for t in ("tracker", "motion", "offline")}
+    return cfg, dict(data.get("derived", {})), keys
 
 
 def _value(v: object, kind: str | None = None) -> str:

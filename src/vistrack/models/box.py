@@ -38,9 +38,14 @@ from .._validate import as_finite, as_number
 __all__ = ["BoxMotion", "FRAME_RATES"]
 
 FRAME_RATES = (1e-3, 1e6)
-"""The frame rates (frames a second) a motion model is scaled to: one frame in 1,000 s to a
-million a second. The noise scales with powers of the rate (up to 1.5), so rates far outside
-overflow it, or make it 0."""
+"""The frame rates (frames a second) a motion model is scaled to, and is given at: one frame
+in 1,000 s to a million a second. The noise scales with powers of the rate (up to 1.5), so
+rates far outside overflow it, or make it 0."""
+
+MAX_SECONDS = 1e9
+"""The longest duration a tracker's setting takes (about 32 years): counted in frames at
+the highest frame rate (:data:`FRAME_RATES`) it is still a whole number a frame counter
+holds (1e308 s overflowed)."""
 
 
 @kernel
@@ -151,6 +156,11 @@ class BoxMotion:
                         *(("std_meas", m) for m in given.ravel())):
             # (True was taken as 1, in std_meas too; "a" failed in float(), naming nothing)
             as_finite(v, name, 0.0, above=True)
+        if not FRAME_RATES[0] <= float(frame_rate) <= FRAME_RATES[1]:
+            # the rate its values are per frame at: scaled to another (at_rate) from 1e300
+            # they overflowed, from 1e-300 they were 0 ("std_vel must be ... got 0.0")
+            raise ValueError(f"frame_rate must be a number from {FRAME_RATES[0]:g} to "
+                             f"{FRAME_RATES[1]:g} frames/s; got {frame_rate!r}")
         meas = given.astype(float)
         self.std_pos, self.std_vel = std_pos, std_vel
         self._std_q = np.repeat(np.array([std_pos, std_vel], dtype=float), 4)

@@ -104,7 +104,7 @@ from ..filters.axes import (
     axes_to_full,
     axes_update,
 )
-from ..models.box import BoxMotion
+from ..models.box import MAX_SECONDS, BoxMotion
 from ..types import Detections, Frame, Tracks
 from .base import frame_index
 from .calibration import ScoreCalibration, ScoreCalibrator
@@ -266,10 +266,13 @@ class BoxTrackerConfig:
         for name in ("calibration_iou", "calibration_top"):
             if not 0 < getattr(self, name) <= 1:
                 raise bad(name, "in (0, 1]")
-        for name in ("max_lost", "coast_time", "coast_after", "camera_sig",
-                     "calibration_prior", "chain_span", "chain_gap", "tentative_gate"):
+        for name in ("camera_sig", "calibration_prior", "tentative_gate"):
             if not 0 <= getattr(self, name) < np.inf:
                 raise bad(name, "a finite number >= 0")
+        for name in ("max_lost", "coast_time", "coast_after", "chain_span", "chain_gap"):
+            # seconds, counted in frames: 1e308 overflowed there, with a traceback
+            if not 0 <= getattr(self, name) <= MAX_SECONDS:
+                raise bad(name, f"a number of seconds from 0 to {MAX_SECONDS:g}")
         for name in ("confirm_hits", "camera_min_matches", "calibration_top_min"):
             if getattr(self, name) < 1:
                 raise bad(name, "an integer >= 1")
@@ -277,8 +280,8 @@ class BoxTrackerConfig:
             raise bad("calibration_window", "an integer >= 0 (0: every outcome)")
         if not self.calibration_cap_sigma > 0:
             raise bad("calibration_cap_sigma", "> 0 (inf: no bound)")
-        if not 0 < self.coast_window < np.inf:
-            raise bad("coast_window", "a finite number > 0 (seconds)")
+        if not 0 < self.coast_window <= MAX_SECONDS:
+            raise bad("coast_window", f"a number of seconds > 0 and at most {MAX_SECONDS:g}")
 
     def calibration_options(self, frame_rate: float) -> dict[str, Any]:
         """The score calibration's settings at ``frame_rate`` frames a second, as
