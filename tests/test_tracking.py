@@ -1354,3 +1354,81 @@ def test_a_track_tables_times_confirmations_and_kept_rows_are_checked():
     t = table()
     t.keep(np.array([1]))
     assert t.ids.tolist() == [2]
+
+
+def test_a_refused_step_leaves_the_tracker_as_it_was():
+    """A frame refused (raw scores past [0, 1] with fuse_score; a box past 2^52 px) had been
+    taken as stepped: retried, it was "frame must increase", and the next frame predicted
+    over one frame where two had passed. Oracle: the same scene with the refused frame
+    passed over (`pass_over`), and a retry of it with good detections."""
+    from vistrack.tracking.box import BoxTracker
+    from vistrack.types import Detections
+
+    def boxes(f):
+        return [[10 + 5 * f, 20, 40 + 5 * f, 80], [200 - 4 * f, 100, 240 - 4 * f, 180]]
+
+    a, b = BoxTracker(scores="raw", high=0.5, new_track=0.5), BoxTracker(
+        scores="raw", high=0.5, new_track=0.5)
+    for f in (1, 2, 3):
+        for tr in (a, b):
+            tr.step(f, Detections(boxes=np.array(boxes(f), float), scores=[0.9, 0.8]))
+    with pytest.raises(ValueError, match="fuse_score weighs IoU by the score"):
+        a.step(4, Detections(boxes=np.array(boxes(4), float), scores=[1.2, 0.8]))
+    b.pass_over()
+    assert a.frame == 3
+    ra = a.step(5, Detections(boxes=np.array(boxes(5), float), scores=[0.9, 0.8]))
+    rb = b.step(5, Detections(boxes=np.array(boxes(5), float), scores=[0.9, 0.8]))
+    np.testing.assert_array_equal(ra.boxes, rb.boxes)
+    c = BoxTracker()
+    c.step(1, Detections(boxes=np.array(boxes(1), float), scores=[0.9, 0.8]))
+    with pytest.raises(ValueError, match="within ±2\\^52 pixels"):
+        c.step(2, Detections(boxes=np.array([[0, 0, 2.0**53, 10]]), scores=[0.9]))
+    c.step(2, Detections(boxes=np.array(boxes(2), float), scores=[0.9, 0.8]))  # a retry
+    assert c.frame == 2
+
+
+def test_box_tracker_arguments_of_the_wrong_kind_are_named():
+    """`confidence` took classes "0" or 0.5 as classes never seen (confidence 1) and named
+    `cls`, an argument of `score_calibration`, where several classes were seen;
+    `score_calibration(cls="2")` the same; a config given as a dict or None failed with an
+    AttributeError; `boxes_ahead`'s dt of "0.5" in numpy's words; `Tracks` of lists failed
+    in len(), and of columns of other lengths in the writer."""
+    from vistrack.tracking.box import BoxTracker
+    from vistrack.types import Detections, Tracks
+
+    tr = BoxTracker()
+    rng = np.random.default_rng(0)
+    for f in range(1, 40):
+        b = np.array([[10.0 + k * 50, 20, 40 + k * 50, 80] for k in range(4)])
+        tr.step(f, Detections(boxes=b + rng.normal(0, 1, b.shape),
+                              scores=[0.1, 0.5, 0.9, 0.95], classes=[0, 0, 2, 2]))
+    with pytest.raises(ValueError, match="classes must be whole numbers"):
+        tr.confidence([0.1, 0.9], classes=[0.5, 0.5])
+    # "0" is class 0, as Detections reads it (it was a class never seen: confidence 1)
+    np.testing.assert_array_equal(tr.confidence([0.1, 0.9], classes=["0", "0"]),
+                                  tr.confidence([0.1, 0.9], classes=[0, 0]))
+    with pytest.raises(ValueError, match="has a calibration of its own: give classes"):
+        tr.confidence([0.5])
+    with pytest.raises(ValueError, match="cls must be whole numbers"):
+        tr.score_calibration(cls=0.5)
+    for config in ({"two_stage": False}, None):
+        with pytest.raises(TypeError, match=re.escape(
+                "config must be a BoxTrackerConfig or a preset's name, one of ['bytetrack', "
+                f"'sort']; got {type(config).__name__}")):
+            BoxTracker(config)
+    out = tr.step(40, None)
+    for dt in ("0.5", None, [0.5, 1.0]):
+        with pytest.raises(ValueError, match=re.escape(
+                f"dt must be a finite number of frames; got {dt!r}")):
+            tr.boxes_ahead(tr.tracks.ids[:1], dt)
+    t = Tracks(ids=[1], boxes=[[10.0, 20, 40, 80]], points=None, scores=[0.9], classes=[0])
+    assert len(t) == 1 and t.centers.tolist() == [[25.0, 50.0]]
+    with pytest.raises(ValueError, match=re.escape(
+            "boxes must be one row a track, (2, 4); got shape (1, 4)")):
+        Tracks(ids=np.array([1, 2]), boxes=np.array([[10.0, 20, 40, 80]]), points=None,
+               scores=np.ones(2), classes=np.zeros(2, int))
+    with pytest.raises(ValueError, match=re.escape("scores must have one row a track (1)")):
+        Tracks(ids=[1], boxes=[[10.0, 20, 40, 80]], points=None, scores=[0.9, 0.8], classes=[0])
+    with pytest.raises(ValueError, match="Tracks hold boxes or points"):
+        Tracks(ids=[1], boxes=None, points=None, scores=[0.9], classes=[0])
+    assert len(out) >= 0

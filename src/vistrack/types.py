@@ -471,6 +471,32 @@ class Tracks:
     classes: np.ndarray
     covs: np.ndarray | None = None
 
+    def __post_init__(self) -> None:
+        # arrays, one row a track, boxes or points: a caller's own tracker's lists failed in
+        # len() ("'list' object has no attribute 'shape'"), and a short column in the writer
+        for name in ("ids", "boxes", "points", "scores", "classes", "covs"):
+            v = getattr(self, name)
+            if v is not None and not isinstance(v, np.ndarray):
+                object.__setattr__(self, name, np.asarray(v))
+        if (self.boxes is None) == (self.points is None):
+            raise ValueError("Tracks hold boxes or points: give one of them, the other None")
+        if self.ids.ndim != 1:
+            raise ValueError(f"ids must be one identity a track, (K,); got shape "
+                             f"{self.ids.shape}")
+        k = self.ids.shape[0]
+        geometry, name = ((self.boxes, "boxes") if self.boxes is not None
+                          else (self.points, "points"))
+        assert geometry is not None
+        if geometry.ndim != 2 or len(geometry) != k or (name == "boxes"
+                                                        and geometry.shape[1] != 4):
+            raise ValueError(f"{name} must be one row a track, ({k}, "
+                             f"{4 if name == 'boxes' else 'd'}); got shape {geometry.shape}")
+        for name in ("scores", "classes", "covs"):
+            v = getattr(self, name)
+            if v is not None and (v.ndim == 0 or len(v) != k):
+                raise ValueError(f"{name} must have one row a track ({k}); got shape "
+                                 f"{v.shape}")
+
     def __len__(self) -> int:
         return int(self.ids.shape[0])
 

@@ -105,7 +105,7 @@ from ..filters.axes import (
     axes_update,
 )
 from ..models.box import MAX_SECONDS, BoxMotion
-from ..types import Detections, Frame, Tracks
+from ..types import Detections, Frame, Tracks, _whole_numbers
 from .base import frame_index
 from .calibration import ScoreCalibration, ScoreCalibrator
 from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, time_slack
@@ -134,7 +134,8 @@ class BoxTrackerConfig:
     high, low : float
         Thresholds: confident detections, and the lowest used at all.
     new_track : float
-        Lowest that starts a track.
+        Lowest that starts a track (a detection must also reach ``high``: the new tracks
+        come from the confident detections no track took).
     min_iou, min_iou_low, min_iou_tentative : float
         IoU gates of the three stages. The gate is also what a track and a detection left
         unassigned cost: a stage takes the pairs whose similarities above the gate add up
@@ -600,6 +601,9 @@ class BoxTracker:
             if config not in TRACKERS:
                 raise ValueError(f"tracker must be one of {sorted(TRACKERS)}; got {config!r}")
             config = TRACKERS[config]
+        if not isinstance(config, BoxTrackerConfig):  # (a dict or None: an AttributeError)
+            raise TypeError(f"config must be a BoxTrackerConfig or a preset's name, one of "
+                            f"{sorted(TRACKERS)}; got {type(config).__name__}")
         unknown = sorted(set(overrides) - {f.name for f in fields(BoxTrackerConfig)})
         if unknown:  # (the dataclass said "__init__() got an unexpected keyword argument")
             import difflib
@@ -847,6 +851,8 @@ class BoxTracker:
         if isinstance(self.calibration, ScoreCalibration):
             return self.calibration
         maps = self.score_calibrations()
+        if cls is not None:  # ("2" or 0.5 was a class never seen: confidence 1)
+            cls = int(_whole_numbers(np.asarray([cls]), "cls")[0])
         if cls is None:
             if len(maps) > 1:
                 raise ValueError(f"each of the classes {sorted(maps)} has a calibration of its "
@@ -885,11 +891,17 @@ class BoxTracker:
         if self.config.scores == "raw":
             return np.asarray(scores, dtype=np.float64)
         if classes is None or isinstance(self.calibration, ScoreCalibration):
+            if classes is None and not isinstance(self.calibration, ScoreCalibration) \
+                    and len(self.score_calibrations()) > 1:
+                # (it said "give cls", an argument of score_calibration, not of this)
+                raise ValueError(f"each of the classes {sorted(self.score_calibrations())} "
+                                 "has a calibration of its own: give classes")
             cal = self.score_calibration()
             assert cal is not None
             return cal(scores)
         s = np.asarray(scores, dtype=np.float64).reshape(-1)
-        c = np.asarray(classes).reshape(-1)
+        # as Detections takes them ("0" or 0.5 was a class never seen: confidence 1)
+        c = _whole_numbers(np.asarray(classes).reshape(-1), "classes")
         if c.shape != s.shape:
             raise ValueError(f"classes must have one per score; got {c.shape[0]} classes for "
                              f"{s.shape[0]} scores")
@@ -994,7 +1006,7 @@ class BoxTracker:
                     np.isfinite(raw).all() and (raw == np.round(raw)).all()):
                 raise ValueError(f"ids must be track identities (integers); got "
                                  f"{given.tolist()[:5]}")
-        if not np.isfinite(dt):
+        if not (is_number(dt) and np.isfinite(float(dt))):  # ("0.5": numpy's words)
             raise ValueError(f"dt must be a finite number of frames; got {dt!r}")
         want = given.astype(np.int64)
         order = np.argsort(t.ids, kind="stable")
@@ -1149,17 +1161,12 @@ class BoxTracker:
             raise ValueError(f"frame must increase; got {frame_index(frame, None)} after "
                              f"{last}, a frame passed over (pass_over)") from None
         first = self.frame is None
-        # the frames since the last one stepped or passed over (1: the next frame): a gap in
-        # frame numbers is time to the calibration's chains and to coasting's rounding too
-        step = 1 if last is None else frame - last
-        self._passed = 0
-        dt = 0.0 if self.frame is None else float(frame - self.frame)
-        self.frame = frame
-        time = frame / self.frame_rate
         cfg, t = self.config, self.tracks
         db, raw, dc = detections.boxes, detections.scores, detections.classes
         # set by Detections.__post_init__ (boxes checked above)
         assert db is not None and raw is not None and dc is not None
+        # every check before the frame is taken: a frame refused had been counted as
+        # stepped (retried, "frame must increase"; the next one predicted a frame short)
         if np.isnan(raw).any():
             i = int(np.flatnonzero(np.isnan(raw))[0])
             raise ValueError(f"detection scores must not be NaN; scores[{i}] is NaN (frame "
@@ -1170,6 +1177,19 @@ class BoxTracker:
             raise ValueError(f"detection boxes must lie within ±2^52 pixels, where a float "
                              f"holds every whole pixel; boxes[{i}] = {db[i].tolist()} (frame "
                              f"{frame})")
+        if cfg.scores == "raw" and cfg.fuse_score and len(raw) and not (
+                (raw >= 0) & (raw <= 1)).all():
+            # (raw scores are the thresholds' confidences as they are)
+            raise ValueError(f"fuse_score weighs IoU by the score, which must lie in [0, 1]; "
+                             f"frame {frame} has scores from {raw.min():.4g} to "
+                             f"{raw.max():.4g} (use scores='calibrated', or fuse_score=False)")
+        # the frames since the last one stepped or passed over (1: the next frame): a gap in
+        # frame numbers is time to the calibration's chains and to coasting's rounding too
+        step = 1 if last is None else frame - last
+        self._passed = 0
+        dt = 0.0 if self.frame is None else float(frame - self.frame)
+        self.frame = frame
+        time = frame / self.frame_rate
         if cfg.nms_iou < 1 and len(raw) > 1:
             keep = non_maximum(db, raw, dc, cfg.nms_iou)
             if not keep.all():
@@ -1177,11 +1197,6 @@ class BoxTracker:
                 db, raw, dc = db[keep], raw[keep], dc[keep]
         self._observe(detections, step)
         ds = self.confidence(raw, dc)
-        if cfg.scores == "raw" and cfg.fuse_score and len(ds) and not (
-                (ds >= 0) & (ds <= 1)).all():
-            raise ValueError(f"fuse_score weighs IoU by the score, which must lie in [0, 1]; "
-                             f"frame {frame} has scores from {ds.min():.4g} to {ds.max():.4g} "
-                             "(use scores='calibrated', or fuse_score=False)")
         high = ds >= cfg.high
         self.camera_shift = np.zeros(2)
         if dt > 1 and len(t):
