@@ -196,3 +196,19 @@ def test_a_member_that_measures_motion_follows_a_constant_velocity_target(method
         x = 20 + speed * k
         assert abs(alone.update(image(x))[0] - x) < 0.5
         assert abs(comp.update(image(x))[0] - x) < 1.0
+
+
+def test_a_member_box_of_another_shape_is_named():
+    """A member whose `update` returns (1, 4) (or a box and a score) was rejected on every
+    frame as if it had failed, and the composite followed its own prediction without a
+    word; a NaN box is still a failure."""
+    img = np.zeros((60, 80, 3), np.uint8)
+    c = Composite({"a": (Fixed([[[32.0, 20, 10, 10]]]), (0.1, 0.1))})
+    c.init(img, np.array([30.0, 20, 10, 10]))
+    with pytest.raises(ValueError, match=re.escape(
+            "members['a'].update returned shape (1, 4); expected one box x, y, w, h, (4,)")):
+        c.update(img)
+    c = Composite({"a": (Fixed([[np.nan] * 4]), (0.1, 0.1))})
+    c.init(img, np.array([30.0, 20, 10, 10]))
+    c.update(img)
+    assert c.accepted == {"a": False}

@@ -849,3 +849,32 @@ def test_mean_shift_finds_the_objects_centre_to_a_tenth_of_a_pixel(method):
         t.init(square(30), [30, 20, 20, 20])
         xs = [t.update(square(30 + k * step))[0] for k in (1, 2, 3)]
         np.testing.assert_allclose(xs, [30 + k * step for k in (1, 2, 3)], atol=0.5)
+
+
+def test_a_polygon_of_no_area_is_an_absent_object_and_gt_origin_is_for_xywh_lines(tmp_path):
+    """A polygon of no area (all corners on a point or a line: VOT's absent object) became
+    a 1 x 1 box under the default rule (`+ 1`), scored as a box: success 1.0 where the
+    frame is absent (oracle: the module's rule, absent = a failure for success and a hit
+    for precision; `minmax` gave it so). `--gt-origin` with polygons or frame,x,y,w,h lines
+    changed nothing and said nothing."""
+    from vistrack.evaluation.single import precision, success_rate
+    from vistrack.pipeline import track_one
+
+    polys = [[100, 100, 140, 100, 140, 120, 100, 120], [0] * 8, [5, 5, 9, 5, 9, 5, 5, 5]]
+    for rule in ("area", "minmax"):
+        b = region_to_bbox(polys, rule)
+        assert (b[1:, 2] * b[1:, 3] == 0).all(), rule
+    assert (region_to_bbox(polys)[1:, 2:] == 0).all()
+    gt = region_to_bbox(polys)
+    pred = np.array([gt[0], [-0.5, -0.5, 1, 1], [300, 300, 10, 10]])
+    assert success_rate(pred, gt) == pytest.approx(1 / 3)  # frames 2, 3 absent: failures
+    assert precision(pred, gt) == 1.0  # and hits
+    frames = tmp_path / "img"
+    frames.mkdir()
+    for k in range(1, 4):
+        cv2.imwrite(str(frames / f"{k:04d}.png"), np.zeros((60, 80, 3), np.uint8))
+    lines = tmp_path / "poly.txt"
+    lines.write_text("10,10,30,10,30,30,10,30\n" * 3)
+    with pytest.raises(ValueError, match=re.escape(
+            f"gt_origin (--gt-origin) applies to x y w h lines; {lines} holds polygons")):
+        track_one(frames, None, tmp_path / "o.txt", gt=lines, gt_origin=1)

@@ -2864,6 +2864,12 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
             raise FileNotFoundError(f"{gt} does not exist (--gt FILE)") from None
         except IsADirectoryError:
             raise IsADirectoryError(f"{gt} is a folder, not a file (--gt FILE)") from None
+        if gt_origin is not None and width not in (0, 4):
+            # (taken, and changing nothing: polygons and frame,x,y,w,h lines have no origin
+            # to choose)
+            what = "polygons" if width == 8 else "frame,x,y,w,h lines"
+            raise ValueError(f"gt_origin (--gt-origin) applies to x y w h lines; {gt} holds "
+                             f"{what}")
         # x y w h lines (the only ones whose origin matters: read from 1 they differ) under a
         # name that is not OTB's: read from 0, and said so
         if gt_origin is None and not boxes_origin(gt) and width == 4:

@@ -230,9 +230,12 @@ def region_to_bbox(polygons: ArrayLike, rule: str = "area") -> np.ndarray:
     """Axis-aligned ``x, y, w, h`` boxes of VOT's rotated boxes (four corners).
 
     ``rule="area"``: the box centred on the corners' mean with the rotated box's area and the
-    corners' aspect ratio (VOT's and SiamFC's ``region_to_bbox``), whose width and height,
-    as theirs, count pixels inclusively (``+ 1``); ``"minmax"``: the corners' bounding box
-    (larger by up to twice for a box turned 45°).
+    corners' aspect ratio (SiamFC's ``region_to_bbox``), whose width and height, as its,
+    count pixels inclusively (``+ 1``); ``"minmax"``: the corners' bounding box (larger by up
+    to twice for a box turned 45°), as VOT's toolkit converts a polygon to a rectangle. A
+    polygon of no area (all corners on a line or a point: the object absent) is a box of no
+    size under either rule (``w = h = 0`` under ``"area"``), which success and precision
+    score as absent (SiamFC's gives NaN there; a 1 × 1 box was made of it, scored as a box).
 
     Parameters
     ----------
@@ -274,7 +277,9 @@ def region_to_bbox(polygons: ArrayLike, rule: str = "area") -> np.ndarray:
     a2 = (x2 - x1) * (y2 - y1)
     s = np.sqrt(np.divide(a1, a2, out=np.ones_like(a1), where=a2 > 0))
     w, h = s * (x2 - x1) + 1, s * (y2 - y1) + 1
-    return np.c_[cx - w / 2, cy - h / 2, w, h]
+    none = ~((a1 > 0) & (a2 > 0))
+    w, h = np.where(none, 0.0, w), np.where(none, 0.0, h)
+    return np.c_[np.where(none, cx, cx - w / 2), np.where(none, cy, cy - h / 2), w, h]
 
 
 _OTB_NAME = re.compile(r"groundtruth_rect(\.\d+)?\.txt")

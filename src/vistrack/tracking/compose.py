@@ -196,8 +196,13 @@ class Composite(SingleObjectTracker):
         accepted = []
         for name, tracker in self.members.items():
             box = np.asarray(tracker.update(image), float)
+            if box.shape != (4,):
+                # a member's programming error, not a failure: a (1, 4) box was rejected on
+                # every frame, and the composite followed its own prediction without a word
+                raise ValueError(f"members[{name!r}].update returned shape {box.shape}; "
+                                 "expected one box x, y, w, h, (4,)")
             self.boxes[name] = box
-            ok = box.shape == (4,) and bool(np.isfinite(box).all()) and box[2] > 0 and box[3] > 0
+            ok = bool(np.isfinite(box).all()) and box[2] > 0 and box[3] > 0
             if ok:
                 pos_sd, size_sd = self.noise[name]
                 R = np.diag([(pos_sd * size[0]) ** 2, (pos_sd * size[1]) ** 2,
