@@ -1079,7 +1079,7 @@ def test_detections_that_cannot_give_tracks_are_named(tmp_path):
             ("c4", dict(scores="raw", offline=True, min_track_score=1.0),
              "min_score 1 (min_track_score under [offline] in a --config file, "
              "--min-track-score) drops every one of the 1 confirmed tracks, the highest mean "
-             "confidence of a track's detections being 0.9: nothing is written")):
+             "confidence of a track's detections being 0.9: the results hold no rows")):
         with pytest.warns(UserWarning, match=re.escape(message)):
             run = track_sequence(det, tmp_path / f"{name}.txt", fps=10, **kwargs)
         assert run.rows == 0

@@ -355,7 +355,7 @@ def _smooth_tracks(tracker: BoxTracker, max_gap: int, min_score: float | None
         warnings.warn(f"min_score {min_score:g} (min_track_score under [offline] in a "
                       f"--config file, --min-track-score) drops every one of the "
                       f"{len(edges) + 1} confirmed tracks, the highest mean confidence of a "
-                      f"track's detections being {best:.3g}: nothing is written",
+                      f"track's detections being {best:.3g}: the results hold no rows",
                       UserWarning, stacklevel=3)
     return out
 
