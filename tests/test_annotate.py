@@ -501,6 +501,9 @@ def test_a_box_or_point_wholly_off_the_image_has_no_number():
     for off in ([175.0, 50.0], [-10.0, 50.0], [60.0, 130.0]):  # (its dot, too, off it)
         np.testing.assert_array_equal(draw([1, 2], points=[[50.0, 50.0], off]),
                                       draw([1], points=[[50.0, 50.0]]))
+    # a box whose right edge is drawn in column 0 is on the image: numbered
+    edge = draw([1, 2], inside + [[-30, 50, 0, 90]])
+    assert not (edge == draw([1], inside)).all()
     part = draw([1, 2], inside + [[-30, 50, 20, 90]])
     assert not (part == draw([1, 2], inside + [[-30, 50, 0, 90]])).all()  # its number there
     assert (part[:, :25] == id_colour(2)).all(axis=2).any()

@@ -587,8 +587,11 @@ def test_boxes_and_detections_that_cannot_be_measured_are_named():
     assert mahalanobis([[0.0, 0.0]], S, []).shape == (1, 0)
     for t in (np.nan, -1):
         with pytest.raises(ValueError, match=re.escape(
-                f"threshold must be a finite squared distance >= 0; got {t!r}")):
+                f"threshold must be a squared distance >= 0 (inf: no gate); got {t!r}")):
             mahalanobis_pairs([[0.0, 0.0]], S, [[1.0, 0.0]], threshold=t)
+    r, c, d2 = mahalanobis_pairs([[0.0, 0.0]], S, [[1.0, 1.0], [5.0, 5.0]], np.inf)  # no gate
+    assert c.tolist() == [0, 1] and d2.tolist() == [2.0, 50.0]
+    assert iou(np.zeros((0, 0)), box).shape == (0, 1)
     with pytest.raises(ValueError, match=re.escape("z must be finite; z[0] = [nan, 0.0]")):
         mahalanobis_pairs([[0.0, 0.0]], S, [[np.nan, 0.0], [1.0, 0.0]], threshold=4.0)
     with pytest.raises(ValueError, match=re.escape("scores must be numbers; scores[1] is NaN")):

@@ -737,8 +737,12 @@ def test_a_start_score_that_changes_nothing_and_a_files_value_are_said(seq, tmp_
     alone."""
     r = cli(seq, "--out", tmp_path / "a.txt", "--offline", "--start-score", "0.5")
     assert r.returncode == 0 and ("--start-score 0.5 changes nothing: offline, tracks start "
-                                  "from the detections the online start takes (new_track "
-                                  "0.7)") in r.stderr, r.stderr
+                                  "from the detections the online start takes (high 0.6 and "
+                                  "new_track 0.7)") in r.stderr, r.stderr
+    # between new_track and high, a track's detection must reach high anyway
+    r = cli(seq, "--out", tmp_path / "d.txt", "--offline", "--high", "0.8", "--low", "0.3",
+            "--start-score", "0.75")
+    assert r.returncode == 0 and "--start-score 0.75 changes nothing" in r.stderr, r.stderr
     r = cli(seq, "--out", tmp_path / "b.txt", "--offline", "--start-score", "0.9")
     assert r.returncode == 0 and "start-score" not in r.stderr, r.stderr
     low = tmp_path / "low.toml"

@@ -331,9 +331,9 @@ def test_a_video_holding_more_frames_than_its_header_says_loses_none(tmp_path):
     (["a.png", "b.png", "c.png"], None),
     (["t1690000000000.png", "t1690000000033.png", "t1690000000067.png"], None),
     (["im_001.png", "im_004.png", "im_007.png", "im_010.png"],
-     "the names step by 3 (im_001.png, im_004.png, ...), every 3rd frame"),
-    (["f_10.png", "f_20.png", "f_30.png"], "the names step by 10 (f_10.png, f_20.png, ...), "
-     "every 10th frame"),
+     "the names step by 3 (im_001.png, im_004.png, ...): every 3rd frame, or timestamps"),
+    (["f_10.png", "f_20.png", "f_30.png"], "the names step by 10 (f_10.png, f_20.png, ...): "
+     "every 10th frame, or timestamps"),
 ])
 def test_images_numbered_by_place_instead_of_name_are_named(tmp_path, names, why):
     """A stray copy (``000002 (copy).jpg``) or a second extension of one number in a folder

@@ -860,12 +860,12 @@ def test_a_polygon_of_no_area_is_an_absent_object_and_gt_origin_is_for_xywh_line
     from vistrack.evaluation.single import precision, success_rate
     from vistrack.pipeline import track_one
 
-    polys = [[100, 100, 140, 100, 140, 120, 100, 120], [0] * 8, [5, 5, 9, 5, 9, 5, 5, 5]]
+    polys = [[100, 100, 140, 100, 140, 120, 100, 120], [0] * 8, [5, 5, 9, 5, 9, 5, 5, 5],
+             [0, 0, 1, 1, 2, 2, 3, 3]]  # a point, a level line, a diagonal one
     for rule in ("area", "minmax"):
         b = region_to_bbox(polys, rule)
-        assert (b[1:, 2] * b[1:, 3] == 0).all(), rule
-    assert (region_to_bbox(polys)[1:, 2:] == 0).all()
-    gt = region_to_bbox(polys)
+        assert (b[1:, 2:] == 0).all() and (b[0, 2:] > 0).all(), rule
+    gt = region_to_bbox(polys[:3])
     pred = np.array([gt[0], [-0.5, -0.5, 1, 1], [300, 300, 10, 10]])
     assert success_rate(pred, gt) == pytest.approx(1 / 3)  # frames 2, 3 absent: failures
     assert precision(pred, gt) == 1.0  # and hits

@@ -1354,6 +1354,8 @@ def test_a_track_tables_times_confirmations_and_kept_rows_are_checked():
     t = table()
     t.keep(np.array([1]))
     assert t.ids.tolist() == [2]
+    t.keep([])  # (no row, as numpy takes an empty list)
+    assert len(t) == 0
 
 
 def test_a_refused_step_leaves_the_tracker_as_it_was():
@@ -1379,6 +1381,10 @@ def test_a_refused_step_leaves_the_tracker_as_it_was():
     ra = a.step(5, Detections(boxes=np.array(boxes(5), float), scores=[0.9, 0.8]))
     rb = b.step(5, Detections(boxes=np.array(boxes(5), float), scores=[0.9, 0.8]))
     np.testing.assert_array_equal(ra.boxes, rb.boxes)
+    # a score past [0, 1] that non-maximum suppression drops takes no part, as before
+    n = BoxTracker(scores="raw", high=0.5, new_track=0.5, nms_iou=0.5)
+    n.step(1, Detections(boxes=np.array([[10, 10, 50, 50], [11, 11, 51, 51]], float),
+                         scores=[0.9, -0.2]))
     c = BoxTracker()
     c.step(1, Detections(boxes=np.array(boxes(1), float), scores=[0.9, 0.8]))
     with pytest.raises(ValueError, match="within ±2\\^52 pixels"):
@@ -1431,4 +1437,5 @@ def test_box_tracker_arguments_of_the_wrong_kind_are_named():
         Tracks(ids=[1], boxes=[[10.0, 20, 40, 80]], points=None, scores=[0.9, 0.8], classes=[0])
     with pytest.raises(ValueError, match="Tracks hold boxes or points"):
         Tracks(ids=[1], boxes=None, points=None, scores=[0.9], classes=[0])
+    assert Tracks(ids=[], boxes=[], points=None, scores=[], classes=[]).boxes.shape == (0, 4)
     assert len(out) >= 0

@@ -615,13 +615,14 @@ def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
     anyway; and (``rate``) of a --config file printed by a run given another --fps."""
     if cfg is None:
         return
+    start = max(cfg.tracker.high, cfg.tracker.new_track)  # (a new track's detection: both)
     if cfg.offline.enabled and args.start_score is not None \
-            and cfg.offline.start_score <= cfg.tracker.new_track:
+            and cfg.offline.start_score <= start:
         # (the offline start is taken only above the tracker's: 0, 0.5, 0.7 gave one file)
         warnings.warn(f"--start-score {args.start_score:g} changes nothing: offline, tracks "
-                      "start from the detections the online start takes (new_track "
-                      f"{cfg.tracker.new_track:g}) or, above it, from --start-score's",
-                      UserWarning, stacklevel=1)
+                      "start from the detections the online start takes (high "
+                      f"{cfg.tracker.high:g} and new_track {cfg.tracker.new_track:g}) or, "
+                      "above them, from --start-score's", UserWarning, stacklevel=1)
     if offline_given and not cfg.offline.enabled:
         named = ", ".join("--" + o.replace("_", "-") for o in offline_given)
         warnings.warn(f"{named}: offline settings, which change nothing without --offline",

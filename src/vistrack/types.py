@@ -477,7 +477,10 @@ class Tracks:
         for name in ("ids", "boxes", "points", "scores", "classes", "covs"):
             v = getattr(self, name)
             if v is not None and not isinstance(v, np.ndarray):
-                object.__setattr__(self, name, np.asarray(v))
+                v = np.asarray(v)
+                if name == "boxes" and v.size == 0:  # ([] for no tracks, as Detections)
+                    v = v.reshape(0, 4)
+                object.__setattr__(self, name, v)
         if (self.boxes is None) == (self.points is None):
             raise ValueError("Tracks hold boxes or points: give one of them, the other None")
         if self.ids.ndim != 1:

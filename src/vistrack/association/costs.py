@@ -25,13 +25,12 @@ __all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "overlappin
 def _boxes(b: ArrayLike, name: str) -> np.ndarray:
     a = np.asarray(b, dtype=float)
     # none: (0, 4), or a bare [] (a (3, 0) array was taken for none, its 3 rows dropped)
-    if a.size == 0 and (a.ndim == 1 or a.shape[-1:] == (4,)) and a.ndim <= 2:
+    if a.size == 0 and (a.ndim == 1 or (a.ndim == 2 and (len(a) == 0 or a.shape[1] == 4))):
         return a.reshape(0, 4)
     if a.ndim != 2 or a.shape[1] != 4:
         raise ValueError(f"{name} must have shape (N, 4) (x0, y0, x1, y1); got {a.shape}")
-    finite = np.isfinite(a).all(axis=1)
-    if not finite.all():  # (a NaN box overlapped nothing: IoU 0, GIoU 0, without a word)
-        k = int(np.flatnonzero(~finite)[0])
+    if not np.isfinite(a).all():  # (a NaN box overlapped nothing: IoU 0, GIoU 0, unsaid)
+        k = int(np.flatnonzero(~np.isfinite(a).all(axis=1))[0])
         raise ValueError(f"{name} must be finite boxes; {name}[{k}] = {a[k].tolist()}")
     return a
 
@@ -312,10 +311,12 @@ def mahalanobis_pairs(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike,
     """
     from scipy.spatial import cKDTree
 
-    from .._validate import as_finite
+    from .._validate import as_number
 
-    # (NaN or -1 gave no pair, without a word)
-    threshold = as_finite(threshold, "threshold", 0.0, what="squared distance")
+    # (NaN or -1 gave no pair, without a word; inf is no gate, as before)
+    if not as_number(threshold, "threshold") >= 0:
+        raise ValueError(f"threshold must be a squared distance >= 0 (inf: no gate); got "
+                         f"{threshold!r}")
     zp, S, z = _innovations(z_pred, S, z)
     T = len(zp)
     if T == 0 or z.size == 0:

@@ -233,9 +233,9 @@ def region_to_bbox(polygons: ArrayLike, rule: str = "area") -> np.ndarray:
     corners' aspect ratio (SiamFC's ``region_to_bbox``), whose width and height, as its,
     count pixels inclusively (``+ 1``); ``"minmax"``: the corners' bounding box (larger by up
     to twice for a box turned 45°), as VOT's toolkit converts a polygon to a rectangle. A
-    polygon of no area (all corners on a line or a point: the object absent) is a box of no
-    size under either rule (``w = h = 0`` under ``"area"``), which success and precision
-    score as absent (SiamFC's gives NaN there; a 1 × 1 box was made of it, scored as a box).
+    polygon of no area (all corners on a point or one line: the object absent) is a box of no
+    size, ``w = h = 0``, under either rule, which success and precision score as absent
+    (SiamFC's gives NaN there; a 1 × 1 box was made of it, scored as a box).
 
     Parameters
     ----------
@@ -268,7 +268,8 @@ def region_to_bbox(polygons: ArrayLike, rule: str = "area") -> np.ndarray:
     xs, ys = q[:, 0::2], q[:, 1::2]
     x1, x2, y1, y2 = xs.min(1), xs.max(1), ys.min(1), ys.max(1)
     if rule == "minmax":
-        return np.c_[x1, y1, x2 - x1, y2 - y1]
+        none = _no_area(xs, ys)
+        return np.c_[x1, y1, np.where(none, 0.0, x2 - x1), np.where(none, 0.0, y2 - y1)]
     if rule != "area":
         raise ValueError(f"rule must be 'area' or 'minmax'; got {rule!r}")
     cx, cy = xs.mean(1), ys.mean(1)
@@ -277,9 +278,17 @@ def region_to_bbox(polygons: ArrayLike, rule: str = "area") -> np.ndarray:
     a2 = (x2 - x1) * (y2 - y1)
     s = np.sqrt(np.divide(a1, a2, out=np.ones_like(a1), where=a2 > 0))
     w, h = s * (x2 - x1) + 1, s * (y2 - y1) + 1
-    none = ~((a1 > 0) & (a2 > 0))
+    none = _no_area(xs, ys)
     w, h = np.where(none, 0.0, w), np.where(none, 0.0, h)
     return np.c_[np.where(none, cx, cx - w / 2), np.where(none, cy, cy - h / 2), w, h]
+
+
+def _no_area(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """Which polygons (corners ``xs, ys`` in order) enclose no area (the shoelace formula:
+    corners on a point or on any one line, however it runs) or have a corner that is not
+    finite: the object absent."""
+    area = 0.5 * np.abs((xs * np.roll(ys, -1, axis=1) - np.roll(xs, -1, axis=1) * ys).sum(1))
+    return ~((area > 0) & np.isfinite(area))
 
 
 _OTB_NAME = re.compile(r"groundtruth_rect(\.\d+)?\.txt")

@@ -208,7 +208,10 @@ def axes_update(mean: ArrayLike, cov: ArrayLike, z: ArrayLike, r: ArrayLike,
         idx = tuple(int(i) for i in np.argwhere(flat)[0])
         raise ValueError(f"the innovation variance pp + r must be > 0 where a value is "
                          f"measured; at {list(idx)} it is {S[idx]}")
-    with np.errstate(divide="ignore", invalid="ignore"):  # (unmeasured axes: no gain, below)
+    if missing.any():  # (an unmeasured axis may have S = 0: no gain there, below)
+        kp = np.divide(pp, S, out=np.zeros_like(S), where=~missing)
+        kv = np.divide(pv, S, out=np.zeros_like(S), where=~missing)
+    else:
         kp, kv = pp / S, pv / S
     y = zv - m[..., :A]
     if missing.any():  # no gain on an axis not measured: it stays as predicted

@@ -173,7 +173,7 @@ def _unnumbered_why(files: list[Path]) -> str | None:
     >>> _unnumbered_why([Path("000001.jpg"), Path("000001.png"), Path("000002.jpg")])
     '000001.jpg and 000001.png both give frame 1'
     >>> _unnumbered_why([Path("000001.jpg"), Path("000004.jpg"), Path("000007.jpg")])
-    'the names step by 3 (000001.jpg, 000004.jpg, ...), every 3rd frame'
+    'the names step by 3 (000001.jpg, 000004.jpg, ...): every 3rd frame, or timestamps'
     """
     numbers = [re.findall(r"\d+", p.stem) for p in files]
     if not any(numbers):
@@ -192,8 +192,8 @@ def _unnumbered_why(files: list[Path]) -> str | None:
     if len(values) >= 3 and len(steps) == 1 and (step := steps.pop()) > 1:
         # numbered by place, frame 2 is the name's frame 1 + step: said, as a thinned
         # folder's detections number the frames between too (it went without a word)
-        return (f"the names step by {step} ({files[0].name}, {files[1].name}, ...), every "
-                f"{ordinal(step)} frame")
+        return (f"the names step by {step} ({files[0].name}, {files[1].name}, ...): every "
+                f"{ordinal(step)} frame, or timestamps")
     return None
 
 

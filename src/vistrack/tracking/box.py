@@ -93,8 +93,8 @@ from .._jit import njit
 from .._prebuilt import kernel
 from .._registry import Registry
 from .._validate import is_number
-from ..association import ASSIGNERS, assign, gnn_sparse, iou_pairs, non_maximum
-from ..association.assign import gnn_pairs, gnn_pairs_limited
+from ..association import ASSIGNERS, assign, iou_pairs, non_maximum
+from ..association.assign import _gnn_sparse, gnn_pairs, gnn_pairs_limited
 from ..association.costs import iou_pairs_same_class
 from ..filters.axes import (
     _predict_inplace,
@@ -901,7 +901,9 @@ class BoxTracker:
             return cal(scores)
         s = np.asarray(scores, dtype=np.float64).reshape(-1)
         # as Detections takes them ("0" or 0.5 was a class never seen: confidence 1)
-        c = _whole_numbers(np.asarray(classes).reshape(-1), "classes")
+        c = np.asarray(classes).reshape(-1)
+        if c.dtype.kind not in "iu":  # (Detections' classes are int64 already)
+            c = _whole_numbers(c, "classes")
         if c.shape != s.shape:
             raise ValueError(f"classes must have one per score; got {c.shape[0]} classes for "
                              f"{s.shape[0]} scores")
@@ -1030,7 +1032,7 @@ class BoxTracker:
             return r, c
         cost = 1.0 - sim[keep]
         if self.config.assigner == "gnn":
-            i, j = gnn_sparse(r, c, cost, (len(track_ok), len(det_ok)), limit=1.0 - min_iou)
+            i, j = _gnn_sparse(r, c, cost, len(track_ok), len(det_ok), limit=1.0 - min_iou)
             return i, j
         dense = np.full((len(track_ok), len(det_ok)), np.inf)
         dense[r, c] = cost
@@ -1093,7 +1095,7 @@ class BoxTracker:
         self._moved = np.zeros(len(t), bool)
         if cfg.camera_motion and len(t) and len(ds):
             ok = (ov >= cfg.camera_min_iou) & high[cols] & (t.state[rows] == CONFIRMED)
-            i, j = gnn_sparse(rows[ok], cols[ok], 1.0 - ov[ok], (len(t), len(ds)))
+            i, j = _gnn_sparse(rows[ok], cols[ok], 1.0 - ov[ok], len(t), len(ds))
             self.camera_shift = _camera_shift(t.mean, db, i, j, cfg.camera_min_matches,
                                               cfg.camera_sig)
             if self.camera_shift.any():
@@ -1177,9 +1179,15 @@ class BoxTracker:
             raise ValueError(f"detection boxes must lie within ±2^52 pixels, where a float "
                              f"holds every whole pixel; boxes[{i}] = {db[i].tolist()} (frame "
                              f"{frame})")
+        if cfg.nms_iou < 1 and len(raw) > 1:  # (changes no state)
+            keep = non_maximum(db, raw, dc, cfg.nms_iou)
+            if not keep.all():
+                detections = detections[keep]
+                db, raw, dc = db[keep], raw[keep], dc[keep]
         if cfg.scores == "raw" and cfg.fuse_score and len(raw) and not (
                 (raw >= 0) & (raw <= 1)).all():
-            # (raw scores are the thresholds' confidences as they are)
+            # (raw scores are the thresholds' confidences as they are; those suppressed
+            # above take no part)
             raise ValueError(f"fuse_score weighs IoU by the score, which must lie in [0, 1]; "
                              f"frame {frame} has scores from {raw.min():.4g} to "
                              f"{raw.max():.4g} (use scores='calibrated', or fuse_score=False)")
@@ -1190,11 +1198,6 @@ class BoxTracker:
         dt = 0.0 if self.frame is None else float(frame - self.frame)
         self.frame = frame
         time = frame / self.frame_rate
-        if cfg.nms_iou < 1 and len(raw) > 1:
-            keep = non_maximum(db, raw, dc, cfg.nms_iou)
-            if not keep.all():
-                detections = detections[keep]
-                db, raw, dc = db[keep], raw[keep], dc[keep]
         self._observe(detections, step)
         ds = self.confidence(raw, dc)
         high = ds >= cfg.high

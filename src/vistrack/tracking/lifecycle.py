@@ -224,6 +224,8 @@ class TrackTable:
         ([1, 3], [0.0, 2.0])
         """
         rows = np.asarray(mask)
+        if rows.size == 0 and rows.dtype.kind == "f":  # ([]: no row, as numpy took it)
+            rows = rows.astype(np.int64)
         if rows.dtype != np.bool_ and len(np.unique(rows)) != rows.size:
             # (a row kept twice gave two tracks of one identity, which is never reused)
             raise ValueError(f"mask's indices must each be given once; got {rows.tolist()}")

@@ -265,7 +265,7 @@ class Annotator:
             # a box or point wholly off the image has no number: pulled inside, it stood at
             # the edge over nothing
             if corners is not None:
-                if x1 <= 0 or y1 <= 0 or x0 >= W or y0 >= H:
+                if x1 < 0 or y1 < 0 or x0 >= W or y0 >= H:  # (no pixel of it drawn)
                     continue
             elif not (0 <= at[k][0] < W and 0 <= at[k][1] < H):
                 continue
