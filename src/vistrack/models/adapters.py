@@ -34,11 +34,6 @@ def psd_sqrt(S: np.ndarray) -> np.ndarray:
     space, and ``V diag(sqrt(w))``, the root this returned before, changed the draws of a
     seeded simulation from one processor to another.
 
-    Parameters
-    ----------
-    S : (..., n, n) ndarray
-        Symmetric positive semi-definite matrices.
-
     Where the variances span so many orders that the eigenvalues' rounding (relative to the
     largest) swallows real noise (a constant-acceleration ``Q`` at ``dt`` 1e-4: its least
     eigenvalue, 1/36 of the position's variance, fell under the cut, and the root gave the
