@@ -59,6 +59,13 @@ def _check(cost: np.ndarray, gate: np.ndarray | None) -> tuple[np.ndarray, np.nd
     return cost, gate & np.isfinite(cost)
 
 
+def _check_limit(limit: float | None) -> None:
+    """A ValueError unless ``limit`` (:func:`gnn`'s, :func:`gnn_sparse`'s) is None or a finite
+    number."""
+    if limit is not None and not (is_real(limit) and np.isfinite(float(limit))):
+        raise ValueError(f"limit must be a finite number or None; got {limit!r}")
+
+
 def components(gate: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
     """Connected components of the bipartite graph of allowed track-detection pairs.
 
@@ -186,8 +193,7 @@ def gnn(cost: np.ndarray, gate: np.ndarray | None = None,
     ([[0, 1], [1, 0]], [[0], [0]])
     """
     cost, gate = _check(cost, gate)
-    if limit is not None and not (is_real(limit) and np.isfinite(float(limit))):
-        raise ValueError(f"limit must be a finite number or None; got {limit!r}")
+    _check_limit(limit)
     r, c = np.nonzero(gate)  # (each pair once, finite, in range: gnn_sparse's checks)
     T, D = cost.shape
     return _gnn_sparse(r, c, cost[r, c], T, D, limit=limit)
@@ -545,9 +551,7 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
     if not rows.shape == cols.shape == cost.shape or rows.ndim != 1:
         raise ValueError(f"rows, cols and cost must be 1-D of one length; got shapes "
                          f"{rows.shape}, {cols.shape} and {cost.shape}")
-    # (checked with no pair too: NaN or "x" went unsaid where nothing was allowed)
-    if limit is not None and not (is_real(limit) and np.isfinite(float(limit))):
-        raise ValueError(f"limit must be a finite number or None; got {limit!r}")
+    _check_limit(limit)  # (with no pair too: NaN or "x" went unsaid where none was allowed)
     if len(rows) == 0:
         return _EMPTY
     for name, idx, n in (("rows", rows, T), ("cols", cols, D)):

@@ -77,6 +77,16 @@ def _box_rows(boxes: np.ndarray) -> np.ndarray:
     return b
 
 
+def _frame_rate(value: float) -> float:
+    """``value`` as a frame rate within :data:`FRAME_RATES`, or an error naming
+    ``frame_rate`` (a string failed in numpy's isfinite, naming nothing)."""
+    rate = as_number(value, "frame_rate")
+    if not (np.isfinite(rate) and FRAME_RATES[0] <= rate <= FRAME_RATES[1]):
+        raise ValueError(f"frame_rate must be a number from {FRAME_RATES[0]:g} to "
+                         f"{FRAME_RATES[1]:g} frames/s; got {rate:g}")
+    return rate
+
+
 class BoxMotion:
     r"""Constant velocity of box centre and size with size-scaled noise.
 
@@ -156,11 +166,9 @@ class BoxMotion:
                         *(("std_meas", m) for m in given.ravel())):
             # (True was taken as 1, in std_meas too; "a" failed in float(), naming nothing)
             as_finite(v, name, 0.0, above=True)
-        if not FRAME_RATES[0] <= float(frame_rate) <= FRAME_RATES[1]:
-            # the rate its values are per frame at: scaled to another (at_rate) from 1e300
-            # they overflowed, from 1e-300 they were 0 ("std_vel must be ... got 0.0")
-            raise ValueError(f"frame_rate must be a number from {FRAME_RATES[0]:g} to "
-                             f"{FRAME_RATES[1]:g} frames/s; got {frame_rate!r}")
+        # the rate its values are per frame at: scaled to another (at_rate) from 1e300 they
+        # overflowed, from 1e-300 they were 0 ("std_vel must be ... got 0.0")
+        _frame_rate(frame_rate)
         meas = given.astype(float)
         self.std_pos, self.std_vel = std_pos, std_vel
         self._std_q = np.repeat(np.array([std_pos, std_vel], dtype=float), 4)
@@ -216,11 +224,7 @@ class BoxMotion:
         >>> m.at_rate(30.0) is m, m.at_rate(15.0).frame_rate
         (True, 15.0)
         """
-        # (a string failed in numpy's isfinite, naming nothing)
-        frame_rate = as_number(frame_rate, "frame_rate")
-        if not (np.isfinite(frame_rate) and FRAME_RATES[0] <= frame_rate <= FRAME_RATES[1]):
-            raise ValueError(f"frame_rate must be a number from {FRAME_RATES[0]:g} to "
-                             f"{FRAME_RATES[1]:g} frames/s; got {frame_rate:g}")
+        frame_rate = _frame_rate(frame_rate)
         if frame_rate == self.frame_rate:
             return self
         r = self.frame_rate / float(frame_rate)

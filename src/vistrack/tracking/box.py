@@ -535,6 +535,15 @@ def _kinds(classes: np.ndarray) -> list:
     return np.unique(classes).tolist()
 
 
+def _only_map(maps: dict[int, ScoreCalibration], give: str) -> ScoreCalibration:
+    """The one class's calibration among ``maps`` (no class seen: :func:`_nothing_seen`'s), or
+    a ValueError asking for the argument ``give`` that names the classes."""
+    if len(maps) > 1:
+        raise ValueError(f"each of the classes {sorted(maps)} has a calibration of its own: "
+                         f"give {give}")
+    return next(iter(maps.values())) if maps else _nothing_seen()
+
+
 def _nothing_seen() -> ScoreCalibration:
     """The calibration of a class with no detection seen: nothing to tell apart, confidence 1
     for every score (as a :class:`ScoreCalibrator` gives before it has seen any)."""
@@ -854,10 +863,7 @@ class BoxTracker:
         if cls is not None:  # ("2" or 0.5 was a class never seen: confidence 1)
             cls = int(_whole_numbers(np.asarray([cls]), "cls")[0])
         if cls is None:
-            if len(maps) > 1:
-                raise ValueError(f"each of the classes {sorted(maps)} has a calibration of its "
-                                 "own: give cls")
-            return next(iter(maps.values())) if maps else _nothing_seen()
+            return _only_map(maps, "cls")
         return maps[cls] if cls in maps else _nothing_seen()
 
     def confidence(self, scores: ArrayLike, classes: ArrayLike | None = None) -> np.ndarray:
@@ -890,15 +896,10 @@ class BoxTracker:
         """
         if self.config.scores == "raw":
             return np.asarray(scores, dtype=np.float64)
-        if classes is None or isinstance(self.calibration, ScoreCalibration):
-            if classes is None and not isinstance(self.calibration, ScoreCalibration) \
-                    and len(self.score_calibrations()) > 1:
-                # (it said "give cls", an argument of score_calibration, not of this)
-                raise ValueError(f"each of the classes {sorted(self.score_calibrations())} "
-                                 "has a calibration of its own: give classes")
-            cal = self.score_calibration()
-            assert cal is not None
-            return cal(scores)
+        if isinstance(self.calibration, ScoreCalibration):
+            return self.calibration(scores)
+        if classes is None:  # (it said "give cls", an argument of score_calibration's)
+            return _only_map(self.score_calibrations(), "classes")(scores)
         s = np.asarray(scores, dtype=np.float64).reshape(-1)
         # as Detections takes them ("0" or 0.5 was a class never seen: confidence 1)
         c = np.asarray(classes).reshape(-1)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validate import as_finite, is_whole
 from ..types import Tracks
 
 __all__ = ["TENTATIVE", "CONFIRMED", "LOST", "TrackTable", "Tracks"]
@@ -38,15 +39,6 @@ def _check_lost(time: float, max_lost: float) -> None:
     if not (max_lost >= 0 and np.isfinite(time)):
         raise ValueError(f"max_lost must be a number >= 0 (seconds) and time finite; got "
                          f"max_lost={max_lost}, time={time}")
-
-
-def _check_time(time: float) -> float:
-    """``time`` as a finite float, or a ValueError naming it (a NaN time kept a track lost
-    for good, and its ``found`` NaN, where :func:`_check_lost` was not reached first)."""
-    t = float(time)
-    if not np.isfinite(t):
-        raise ValueError(f"time must be a finite number of seconds; got {time!r}")
-    return t
 
 
 class TrackTable:
@@ -177,7 +169,8 @@ class TrackTable:
         ([1, 2], True, 3)
         """
         k = len(mean)
-        time = _check_time(time)
+        # (a NaN time kept a track lost for good, its found NaN)
+        time = as_finite(time, "time", what="number of seconds")
         for name, column in (("cov", cov), ("classes", classes), ("scores", scores)):
             if len(column) != k:  # one row per track in every column
                 raise ValueError(f"{name} must have one row for each of the {k} tracks' "
@@ -264,11 +257,8 @@ class TrackTable:
         updated = self._updated(updated)
         # checked before the table changes (a NaN time was taken in, and named by ended only
         # after; confirm_hits NaN kept every track tentative, 0 or -1 was 1)
-        time = _check_time(time)
-        if isinstance(confirm_hits, (bool, np.bool_)) or not (
-                isinstance(confirm_hits, (int, np.integer)) or (
-                    isinstance(confirm_hits, (float, np.floating))
-                    and float(confirm_hits).is_integer())) or confirm_hits < 1:
+        time = as_finite(time, "time", what="number of seconds")
+        if not is_whole(confirm_hits, 1):
             raise ValueError(f"confirm_hits must be a whole number >= 1; got {confirm_hits!r}")
         # found: this frame weighs the time since the last (a frame passed over, none: its
         # time goes to the next one stepped on), or since the track's start if it started
