@@ -114,7 +114,7 @@ def test_a_partial_file_keeps_the_presets_other_values(tmp_path):
     ("[tracker]\nconfirm_hits = -9223372036854775809\n",
      "confirm_hits must be an integer from"),
     # a check across two keys of a table names the table too (it named none)
-    ("[tracker]\nhigh = 0.2\nlow = 0.5\n", r"bad.toml: \[tracker\] low must be at most high"),
+    ("[tracker]\nhigh = 0.2\nlow = 0.5\n", r"bad.toml:3: \[tracker\] low must be at most high"),
 ])
 def test_a_bad_file_is_named_with_its_key(tmp_path, text, match):
     path = tmp_path / "bad.toml"
@@ -122,6 +122,42 @@ def test_a_bad_file_is_named_with_its_key(tmp_path, text, match):
     with pytest.raises(ConfigError, match=match) as e:
         read_config(path)
     assert str(path) in str(e.value)
+    # and with the line that sets the key (the table, for a table that is wrong); TOML's own
+    # syntax errors give theirs in its words
+    lines = text.splitlines()
+    line = (1 if text.startswith(("[trakcer]", "tracker =", "[tracker\n")) else
+            3 if "low = 0.5" in text else 2)
+    assert len(lines) >= line
+    if not text.startswith("[tracker\n"):
+        assert str(e.value).startswith(f"{path}:{line}: "), (str(e.value), lines[line - 1])
+
+
+@pytest.mark.parametrize("text, line, match", [
+    # under a header, after comments, blank lines and other tables; a quoted key
+    ('# mine\n\n[motion]\nstd_pos = 0.1\n\n[tracker]  # the box tracker\nname = "sort"\n'
+     '"high" = 1.5\n', 8, r"\[tracker\] high must be in \[0, 1\]"),
+    # a dotted key at the top, and an inline table
+    ('offline.enabled = true\noffline.max_gap = -2\n', 2, r"\[offline\] max_gap must be"),
+    ('motion = { std_pos = 0.1, std_vel = -1 }\n', 1, r"\[motion\] std_vel must be"),
+    # a key of the same name in another table before it is not the one; a table in a table
+    ('[tracker]\nmax_lost = 1\n[offline]\nmax_lost = 1\n', 4,
+     r"\[offline\] has no key 'max_lost'; it is a key of \[tracker\]"),
+    ('[tracker]\nhigh = 0.5\n[offline]\n[tracker.deeper]\nx = 1\n', 4,
+     r"\[tracker\] has no key 'deeper'"),
+    # a check across keys: the line of the key the message is about
+    ('[tracker]\nlow = 0.3\nhigh = 0.2\n', 2, r"\[tracker\] low must be at most high"),
+    # a table misspelt is named with a near one
+    ('# mine\n[trackr]\nhigh = 0.5\n', 2, r"unknown table or key 'trackr'; did you mean "
+                                             r"\[tracker\]\?"),
+])
+def test_a_bad_key_is_named_by_its_line(tmp_path, text, line, match):
+    """The message opens with FILE:LINE where LINE is the line that sets the key (counted
+    from 1, as editors count)."""
+    path = tmp_path / "c.toml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=match) as e:
+        read_config(path)
+    assert str(e.value).startswith(f"{path}:{line}: "), str(e.value)
 
 
 def test_bad_files_and_values_on_the_command_line(seq, tmp_path):

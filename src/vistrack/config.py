@@ -21,8 +21,8 @@ TOML.
 
 A file may hold any part: what it leaves out keeps the preset's value (``[tracker] name``,
 default ``bytetrack``). :func:`read_config` rejects unknown tables and keys, and values of the
-wrong kind, naming the file and the key; :func:`config_toml` writes a configuration (and the
-values a run derived) that :func:`read_config` reads back to the same configuration.
+wrong kind, naming the file, the line and the key; :func:`config_toml` writes a configuration
+(and the values a run derived) that :func:`read_config` reads back to the same configuration.
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from __future__ import annotations
 import difflib
 import math
 import os
+import re
 import sys
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
@@ -46,7 +47,8 @@ __all__ = ["OfflineConfig", "TrackConfig", "read_config", "read_config_file", "c
 
 
 class ConfigError(ValueError):
-    """A configuration file that cannot be used; the message names the file and the key.
+    """A configuration file that cannot be used; the message names the file, the line
+    and the key (``FILE:LINE: [table] key ...``).
 
     A ``ValueError``; :func:`read_config` raises it.
 
@@ -58,8 +60,8 @@ class ConfigError(ValueError):
     >>> try:
     ...     read_config(path)
     ... except ConfigError as e:
-    ...     print(str(e).split(": ", 1)[1])
-    [tracker] high must be a number; got 'x'
+    ...     print(pathlib.Path(str(e)).name)
+    bad.toml:2: [tracker] high must be a number; got 'x'
     """
 
 
@@ -344,6 +346,53 @@ _INT64 = (-(2 ** 63), 2 ** 63 - 1)
 _KIND_WORDS = {"bool": "true or false", "int": "an integer", "float": "a number",
                "str": "a string"}
 
+def _key_line(text: str, table: str, key: str | None = None) -> int | None:
+    r"""The line (from 1) of a TOML file's ``text`` that sets ``key`` of ``[table]`` (with
+    ``key`` None, the line where the table begins): under a ``[table]`` header, as a dotted
+    key ``table.key`` or in an inline table ``table = {key = ...}``. None where no line reads
+    so (a key written inside a string of several lines, say): the message then names the
+    file alone.
+
+    Examples
+    --------
+    >>> text = 'high = 1\n[tracker]\n"high" = 0.5  # the first stage\n[motion]\nstd_pos = 0\n'
+    >>> _key_line(text, "tracker", "high"), _key_line(text, "motion"), _key_line(text, "offline")
+    (3, 4, None)
+    >>> _key_line('offline = {enabled = true, max_gap = -1}\n', "offline", "max_gap")
+    1
+    >>> _key_line('tracker.high = 2\n', "tracker", "high")
+    1
+    """
+    def parts(dotted: str) -> list[str]:
+        return [p.strip().strip("\"'") for p in dotted.split(".")]
+
+    current: list[str] = []
+    for number, line in enumerate(text.splitlines(), 1):
+        # read with string methods, not patterns, so a long line costs its length once
+        line = line.strip()
+        if line.startswith("[["):  # an array of tables: none of ours
+            current = ["[["]
+            continue
+        if line.startswith("["):
+            name, _, rest = line[1:].partition("]")
+            if rest.strip()[:1] in ("", "#"):
+                current = parts(name)
+                if current == ([table] if key is None else [table, key]):
+                    return number
+            continue
+        said, equals, value = line.partition("=")
+        if not equals or "#" in said:
+            continue
+        where = current + parts(said)
+        if where[:1] != [table]:
+            continue
+        if key is None or where[:2] == [table, key]:
+            return number
+        if where == [table] and re.search(
+                rf"[{{,]\s*([\"']?){re.escape(key)}\1\s*=", value):
+            return number
+    return None
+
 
 def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> TrackConfig:
     """Read a configuration file (see the module) over ``base`` (default: the preset its
@@ -368,7 +417,7 @@ def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> Tra
         If the file does not exist.
     ConfigError
         For a file that is not UTF-8 text or not TOML, an unknown table or key, or a value
-        of the wrong kind or out of range, naming the file and the key.
+        of the wrong kind or out of range, naming the file, the line and the key.
 
     Examples
     --------
@@ -411,18 +460,26 @@ def _read_config_file(path: str | os.PathLike, base: TrackConfig | None = None
         raise ConfigError(f"{path}: not valid TOML: {exc}") from None
     except RecursionError:  # arrays or inline tables nested a thousand deep
         raise ConfigError(f"{path}: not valid TOML: nested too deep") from None
+    def at(table: str, key: str | None = None) -> str:
+        """The file, and the line that sets ``key`` of ``[table]`` where one does."""
+        line = _key_line(text, table, key)
+        return f"{path}:{line}" if line is not None else str(path)
+
     unknown = set(data) - {"tracker", "motion", "offline", "derived"}
     if unknown:
-        raise ConfigError(f"{path}: unknown table or key {sorted(unknown)[0]!r} (tables: "
+        first = sorted(unknown)[0]
+        close = difflib.get_close_matches(str(first), ["tracker", "motion", "offline"], n=1)
+        hint = f"; did you mean [{close[0]}]?" if close else ""
+        raise ConfigError(f"{at(first)}: unknown table or key {first!r}{hint} (tables: "
                           "[tracker], [motion], [offline], [derived])")
     for table in ("tracker", "motion", "offline", "derived"):
         if table in data and not isinstance(data[table], dict):
-            raise ConfigError(f"{path}: {table} must be a table ([{table}])")
+            raise ConfigError(f"{at(table)}: {table} must be a table ([{table}])")
     tracker = dict(data.get("tracker", {}))
     name = tracker.pop("name", None)
     if name is not None and (not isinstance(name, str) or name not in TRACKERS):
-        raise ConfigError(f"{path}: [tracker] name must be one of {sorted(TRACKERS)}; got "
-                          f"{name!r}")
+        raise ConfigError(f"{at('tracker', 'name')}: [tracker] name must be one of "
+                          f"{sorted(TRACKERS)}; got {name!r}")
     cfg = base if base is not None else TrackConfig.preset(name or "bytetrack")
     if name is not None and base is not None and name != base.name:
         cfg = replace(TrackConfig.preset(name), motion=base.motion, offline=base.offline)
@@ -443,22 +500,22 @@ def _read_config_file(path: str | os.PathLike, base: TrackConfig | None = None
                 close = difflib.get_close_matches(str(key), kinds[table], n=1)
                 hint = (f"; it is a key of [{elsewhere[0]}]" if elsewhere else
                         f"; did you mean {close[0]!r}?" if close else "")
-                raise ConfigError(f"{path}: [{table}] has no key {key!r}{hint} (keys: "
-                                  f"{', '.join(sorted(kinds[table]))})")
+                raise ConfigError(f"{at(table, key)}: [{table}] has no key {key!r}{hint} "
+                                  f"(keys: {', '.join(sorted(kinds[table]))})")
             if kind == "list":
                 ok = (isinstance(value, (int, float)) and not isinstance(value, bool)) or (
                     isinstance(value, list) and len(value) == 4
                     and all(_kind(v, "float") for v in value))
                 if not ok:
-                    raise ConfigError(f"{path}: [{table}] {key} must be a number or a list of "
-                                      f"4 numbers; got {value!r}")
+                    raise ConfigError(f"{at(table, key)}: [{table}] {key} must be a number "
+                                      f"or a list of 4 numbers; got {value!r}")
                 given[key] = tuple(value) if isinstance(value, list) else value
             elif not _kind(value, kind):
-                raise ConfigError(f"{path}: [{table}] {key} must be {_KIND_WORDS[kind]}; got "
-                                  f"{value!r}")
+                raise ConfigError(f"{at(table, key)}: [{table}] {key} must be "
+                                  f"{_KIND_WORDS[kind]}; got {value!r}")
             elif kind == "int" and not _INT64[0] <= value <= _INT64[1]:
                 # TOML allows it; numpy's int64 (the trackers' arrays) would overflow later
-                raise ConfigError(f"{path}: [{table}] {key} must be an integer from "
+                raise ConfigError(f"{at(table, key)}: [{table}] {key} must be an integer from "
                                   f"{_INT64[0]} to {_INT64[1]}; got {value!r}")
             elif kind == "float":
                 given[key] = float(value)
@@ -466,7 +523,12 @@ def _read_config_file(path: str | os.PathLike, base: TrackConfig | None = None
         try:
             cfg = cfg.with_values(**{table: given})
         except ValueError as exc:
-            raise ConfigError(f"{path}: [{table}] {exc}") from None
+            # the key the message is about: the one it opens with, else the first it names
+            said = str(exc)
+            named = [k for k in given if re.search(rf"\b{re.escape(str(k))}\b", said)]
+            first = re.match(r"\w+", said)
+            key = first[0] if first and first[0] in given else (named[0] if named else None)
+            raise ConfigError(f"{at(table, key)}: [{table}] {exc}") from None
     keys = {t: frozenset(data.get(t, {})) for t in ("tracker", "motion", "offline")}
     return cfg, dict(data.get("derived", {})), keys
 
