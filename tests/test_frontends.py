@@ -1087,6 +1087,13 @@ def test_front_end_settings_of_no_number_are_named():
                              "percentile", None)):
         with pytest.raises(TypeError, match=re.escape(f"{name} must be a number; got {bad!r}")):
             make(bad)
+    # a range of areas that no region fits found none, without a word; equal bounds are one
+    m = np.zeros((20, 20), np.uint8)
+    m[2:6, 2:6] = 1
+    with pytest.raises(ValueError, match=re.escape(
+            "max_area must be at least min_area; got max_area 10 below min_area 20")):
+        find_blobs(m, min_area=20, max_area=10, open_size=0, close_size=0)
+    assert len(find_blobs(m, min_area=16, max_area=16, open_size=0, close_size=0)) == 1
     for p in (150, -1, float("nan")):
         with pytest.raises(ValueError, match=re.escape(
                 f"percentile must be a finite number >= 0 and <= 100; got {p!r}")):

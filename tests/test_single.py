@@ -80,6 +80,21 @@ def test_measures_in_closed_form(tmp_path):
         read_boxes(feed)
     feed.write_text("11,21,30,40\n12,21,\f30,40\n")
     assert read_boxes(feed).tolist() == [[11, 21, 30, 40], [12, 21, 30, 40]]
+    # each x y w h (or polygon) line is a frame: a blank line among them put every later box
+    # a frame early, without a word (frame 3's box scored against frame 2); named now, with
+    # blank lines at the end still left alone
+    gap = tmp_path / "gap.txt"
+    for text, n in (("11,21,30,40\n\n12,21,30,40\n", 3), ("\n11,21,30,40\n", 2),
+                    ("1,1,9,9,1,9,9,1\n  \n\n2,2,9,9,2,9,9,2\n", 4)):
+        gap.write_text(text)
+        with pytest.raises(ValueError) as e:
+            read_boxes(gap)
+        blank = text.splitlines().index(next(t for t in text.splitlines() if not t.strip())) + 1
+        assert str(e.value) == (f"{gap}:{blank}: a blank line before the box of line {n}: "
+                                "each line is one frame's box (NaN,NaN,NaN,NaN for a frame "
+                                "without one)")
+    gap.write_text("11,21,30,40\n12,21,30,40\n\n\n")
+    assert read_boxes(gap).tolist() == [[11, 21, 30, 40], [12, 21, 30, 40]]
 
 
 def scene(rng, T=60, kind="colour"):
@@ -639,13 +654,15 @@ def test_template_tracker_settings_are_checked():
 
 def _otb_scores(res, anno):
     """OTB's toolkit (calcSeqErrRobust.m and its success and precision plots), written out:
-    a result that is NaN or of no size takes the one before it where the truth has no NaN;
+    a result that is NaN or of no size takes the one before it where the truth has no NaN
+    (MATLAB's `if` over a vector: true when every value is, so a box with some values NaN and
+    a size is kept);
     the first frame is the truth's; a truth that is not all > 0 counts -1 for both the
     overlap and the centre error (a failure for success, a hit for precision)."""
     res, anno = np.array(res, float), np.asarray(anno, float)
     for i in range(1, len(res)):
         r = res[i]
-        if (np.isnan(r).any() or r[2] <= 0 or r[3] <= 0) and not np.isnan(anno[i]).any():
+        if np.all((np.isnan(r) | (r[2] <= 0) | (r[3] <= 0)) & ~np.isnan(anno[i])):
             res[i] = res[i - 1]
     res[0] = anno[0]
     present = (anno > 0).sum(axis=1) == 4
@@ -680,6 +697,10 @@ def test_frames_without_a_box_are_scored_as_otb_scores_them():
         lost = rng.random(T) < 0.2
         lost[0] = False
         pred[lost] = rng.choice([np.nan, -3.0, 0.0])
+        # some values NaN (was carried as a lost box; a miss in OTB's toolkit), or infinite
+        part = ~lost & (rng.random(T) < 0.1)
+        part[0] = False
+        pred[part, rng.integers(0, 4)] = rng.choice([np.nan, np.inf])
         absent = rng.random(T) < 0.1
         absent[0] = False
         gt[absent] = rng.choice([np.nan, 0.0])

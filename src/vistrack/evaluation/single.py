@@ -6,15 +6,16 @@
 - **precision**: the fraction of frames whose centre error is at most 20 pixels.
 
 Boxes are ``x, y, w, h`` (top-left corner and size), one per frame. Frames without a box are
-scored as OTB's toolkit scores them (``calcSeqErrRobust``): a predicted box that is NaN or of
-no size (a tracker that lost the object) stands for the last box before it, where the
-ground truth has a box; a frame whose ground truth is NaN or of no size (the object absent)
-counts as a failure for success and as a hit for precision. (OTB also takes a true box
-whose ``x`` or ``y`` is 0 or less, in its 1-based pixels, as absent; vistrack's boxes count
-from 0, and a box at the image's edge is a box. OTB's toolkit also puts the ground truth's
-first box in place of the tracker's, the frame it started from; vistrack scores the
-tracker's own first box, which may come from a detection or be missing: with a NaN first box
-over four frames otherwise exact, the AUC is 0.714 where OTB's toolkit gives 0.952.)
+scored as OTB's toolkit scores them (``calcSeqErrRobust``): a predicted box that is NaN or
+of no size (a tracker that lost the object) stands for the last box before it, where the
+ground truth has a box (a box with only some of its values NaN, or infinite, is a miss); a
+frame whose ground truth is NaN or of no size (the object absent) counts as a failure for
+success and as a hit for precision. (OTB also takes a true box whose ``x`` or ``y`` is 0 or
+less, in its 1-based pixels, as absent; vistrack's boxes count from 0, and a box at the
+image's edge is a box. OTB's toolkit also puts the ground truth's first box in place of the
+tracker's, the frame it started from; vistrack scores the tracker's own first box, which may
+come from a detection or be missing: with a NaN first box over four frames otherwise exact,
+the AUC is 0.714 where OTB's toolkit gives 0.952.)
 """
 
 from __future__ import annotations
@@ -59,12 +60,15 @@ def _has_box(b: np.ndarray) -> np.ndarray:
 
 
 def _otb(pred: ArrayLike, gt: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The boxes as OTB scores them (see the module): each predicted box that is NaN or of no
-    size replaced by the one before it where the truth has no NaN, and which frames' ground
-    truth has a box."""
+    """The boxes as OTB scores them (see the module): each predicted box that is wholly NaN
+    or of no size replaced by the one before it where the truth has no NaN, and which frames'
+    ground truth has a box. (OTB's test is MATLAB's ``if`` over the four values, true when
+    all are: a box with some values NaN and a size is kept, and scores a miss.)"""
     p, g = _pair(pred, gt)
     p = p.copy()
-    lost = ~_has_box(p) & ~np.isnan(g).any(axis=1)
+    with np.errstate(invalid="ignore"):
+        gone = np.isnan(p).all(axis=1) | (p[:, 2] <= 0) | (p[:, 3] <= 0)
+    lost = gone & ~np.isnan(g).any(axis=1)
     for i in np.flatnonzero(lost):
         if i > 0:
             p[i] = p[i - 1]
@@ -329,7 +333,9 @@ def read_boxes(path: str | Path, rule: str = "area", origin: int | None = None) 
     ValueError
         If the file is not UTF-8 text, a line is not numbers, not 4, 5 or 8 of them, or not
         as many as the line before, or (``frame,x,y,w,h``) its frame is not the one after the
-        line before's; the message names the file and line.
+        line before's, or a blank line comes before a box of ``x y w h`` or polygon lines,
+        which number their frames by line (blank lines at the end are left alone); the
+        message names the file and line.
 
     Examples
     --------
@@ -366,8 +372,10 @@ def read_box_lines(path: str | Path, rule: str = "area",
     # breaks at a form feed, which made a box line two)
     # UTF-8 whatever the locale, a byte-order mark dropped, the file named where it is not text
     text = decode_text(path.read_bytes(), path, "boxes", ValueError)
+    blank = 0  # the first blank line not yet followed by a box
     for n, line in enumerate(_text_lines(text), start=1):
         if not line.strip():
+            blank = blank or n
             continue
         try:
             vals = [float(v) for v in line.replace(",", " ").replace("\t", " ").split()]
@@ -378,6 +386,12 @@ def read_box_lines(path: str | Path, rule: str = "area",
                              f"(polygon) values; got {len(vals)}")
         if rows and len(vals) != len(rows[-1]):
             raise ValueError(f"{path}:{n}: {len(vals)} values after lines of {len(rows[-1])}")
+        if blank and len(vals) != 5:
+            # a line is a frame: skipped, it put every later box a frame early
+            raise ValueError(f"{path}:{blank}: a blank line before the box of line {n}: each "
+                             "line is one frame's box (NaN,NaN,NaN,NaN for a frame without "
+                             "one)")
+        blank = 0
         if len(vals) == 5 and rows and vals[0] != rows[-1][0] + 1:
             raise ValueError(f"{path}:{n}: frame {vals[0]:g} after frame {rows[-1][0]:g} (line "
                              f"{last}): the frames of frame,x,y,w,h lines must count up "

@@ -219,7 +219,8 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     Raises
     ------
     ValueError
-        If ``mask`` is not 2-D or holds a NaN, or ``min_area`` or ``max_area`` is NaN.
+        If ``mask`` is not 2-D or holds a NaN, or ``min_area`` or ``max_area`` is NaN, or
+        ``max_area`` is below ``min_area``.
 
     Examples
     --------
@@ -240,6 +241,9 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     for name, limit in (("min_area", min_area), ("max_area", max_area)):
         if np.isnan(as_number(limit, name)):  # (every region was dropped, without a word)
             raise ValueError(f"{name} must be a number of pixels; got {limit}")
+    if max_area < min_area:  # (no region can be both: none was found, without a word)
+        raise ValueError(f"max_area must be at least min_area; got max_area {max_area} below "
+                         f"min_area {min_area}")
     # (2.7 was cut to 2, and -3 taken as 0)
     open_size = as_whole(open_size, "open_size", 0, "pixels across; 0 skips it")
     close_size = as_whole(close_size, "close_size", 0, "pixels across; 0 skips it")
