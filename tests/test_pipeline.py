@@ -267,6 +267,15 @@ def test_rows_past_the_videos_end_and_ground_truth_with_nothing_to_score_are_nam
     assert sorted(str(w.message) for w in seen_b) == sorted(
         [f"{det}: 2 rows on frames 6-7, past the video's last frame (5): not tracked",
          f"{gt}: 3 rows on frames 6-8, past the video's last frame (5): not scored"])
+    # one row, or rows of one frame, past the end: "1 rows on frames 6-6" before
+    for frames, said_as in (([1, 2, 6], "1 row on frame 6"), ([1, 6, 6], "2 rows on frame 6")):
+        det.write_text(rows(frames[:2], -1) + rows(frames[2:], -1))
+        with pytest.warns(UserWarning) as seen_c:
+            track_video(folder, tmp_path / said_as, frontend=f"detections:{det}",
+                        annotate=False, fps=25)
+        assert f"{det}: {said_as}, past the video's last frame (5): not tracked" in \
+            [str(w.message) for w in seen_c]
+    det.write_text(rows(range(1, 8), -1))
     # stop at a frame whose image is missing: the run stopped at 2, the folder goes on to 5
     # (it said the rows from 3 on lay past the video's last frame, 2)
     (folder / "000003.png").unlink()

@@ -2600,7 +2600,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 if end is not None and table is not None and len(table) and \
                         table.frames[-1] > end:
                     past = table.frames[table.frames > end]
-                    warnings.warn(f"{label}: {len(past)} rows on frames {past[0]}-{past[-1]}, "
+                    on = (f"1 row on frame {past[0]}" if len(past) == 1 else
+                          f"{len(past)} rows on frame {past[0]}" if past[0] == past[-1] else
+                          f"{len(past)} rows on frames {past[0]}-{past[-1]}")
+                    warnings.warn(f"{label}: {on}, "
                                   f"past the video's last frame ({end}): {what}", UserWarning,
                                   stacklevel=2)
             scores = scored[0] if scored else None
