@@ -318,3 +318,36 @@ def test_settings_that_are_no_numbers_are_named():
         with pytest.raises(ValueError, match=re.escape("scales must be one or more finite "
                                                        f"positive numbers; got {scales!r}")):
             WSLTracker(scales=scales)
+
+
+@pytest.mark.parametrize("w, h", [(3, 100), (100, 3), (4, 60), (60, 2)])
+def test_the_view_of_a_long_thin_box_spans_the_box(w, h):
+    """The view has at least 4 pixels a side, but one scale served both axes: a 3 x 100
+    box was viewed over its central 24 rows alone (the mean of a box bright only at its ends
+    0.0 against 0.6), a 100 x 3 one over 12.5 rows. Oracle: the box's own pixels, whose mean
+    the view's (bilinear, the view's pixels evenly over the box) must match, and a bar of
+    that shape moving 2 pixels a frame along its short side."""
+    img = np.zeros((240, 240), np.uint8)
+    x, y = 60, 60
+    region = img[y:y + h, x:x + w]
+    # bright at both ends of the long side only: a fifth of the box at each end
+    if h > w:
+        region[: h // 5], region[h - h // 5:] = 250, 250
+    else:
+        region[:, : w // 5], region[:, w - w // 5:] = 250, 250
+    t = WSLTracker(blur=0.0)
+    t.init(img, [x, y, w, h])
+    g = t._prepare(img)
+    view = t._sample(g, *t.centre, t.w / t.vw, t.vw, t.vh)
+    assert view.mean() == pytest.approx(g[y:y + h, x:x + w].mean(), rel=0.15)
+    # a bar of the box's shape, moving across its short side
+    bar = lambda k: np.pad(np.full((h, w), 200, np.uint8),  # noqa: E731
+                           ((y + (2 * k if w > h else 0), 240 - h - y - (2 * k if w > h else 0)),
+                            (x + (2 * k if h > w else 0), 240 - w - x - (2 * k if h > w else 0))),
+                           constant_values=20)
+    t = WSLTracker()
+    t.init(bar(0), [x, y, w, h])
+    for k in range(1, 6):
+        box = t.update(bar(k))
+    want = [x + (10 if h > w else 0), y + (10 if w > h else 0)]
+    assert np.abs(box[:2] - want).max() <= 1.0, (box, want)

@@ -3,6 +3,8 @@ against the first frame, affine registration of a known warp, and a static camer
 
 from __future__ import annotations
 
+import re
+
 import cv2
 import numpy as np
 import pytest
@@ -265,3 +267,59 @@ def test_a_min_ncc_of_minus_one_is_refused():
     with pytest.raises(ValueError, match=r"min_ncc must be a finite number > -1 and <= 1; "
                                          r"got -1"):
         KLTTracker(min_ncc=-1)
+
+
+@pytest.mark.parametrize("min_distance", [7.0, 10.9])
+def test_new_features_keep_min_distance_from_those_kept(min_distance):
+    """New features were kept from the old ones by circles drawn in whole pixels about
+    rounded points: a corner 9.54 px from a kept feature started with min_distance 10.9
+    (6.56 with 7). Oracle: every pair's distance, new to kept, over several top-ups."""
+    rng = np.random.default_rng(4)
+    base = texture(rng)
+    klt = KLTTracker(max_features=2000, min_distance=min_distance)
+    seen = klt.track(shifted(base, 0, 0))
+    topped = 0
+    for k in range(1, 8):
+        kept = set(seen.ids.tolist())
+        f = klt.track(shifted(base, 0.5 * k, 0.3 * k))
+        new = ~np.isin(f.ids, list(kept))
+        if new.any() and (~new).any():
+            topped += 1
+            d = np.linalg.norm(f.points[new][:, None] - f.points[~new][None], axis=2)
+            # the kept features' positions are this frame's; new ones were kept from where
+            # the kept ones were found this frame
+            assert d.min() >= min_distance, d.min()
+        seen = f
+    assert topped >= 1
+
+
+def test_patches_are_compared_inside_each_image_by_its_own_size():
+    """patch_ncc checked b's patch against a's size: a patch of a large b outside a small
+    a's bounds scored -1 (and a small b was read past its end). Oracle: the same pixels
+    copied, NCC 1, and a patch outside b, -1."""
+    from vistrack.tracking._affine import patch_ncc
+
+    rng = np.random.default_rng(5)
+    a = rng.uniform(0, 255, (20, 20)).astype(np.float32)
+    b = np.zeros((200, 200), np.float32)
+    b[95:106, 95:106] = a[5:16, 5:16]
+    assert patch_ncc(a, np.array([[10.0, 10.0]]), b, np.array([[100.0, 100.0]]), 5)[0] == \
+        pytest.approx(1.0)
+    assert patch_ncc(b, np.array([[100.0, 100.0]]), a, np.array([[10.0, 10.0]]), 5)[0] == \
+        pytest.approx(1.0)
+    assert patch_ncc(b, np.array([[100.0, 100.0]]), a, np.array([[100.0, 100.0]]), 5)[0] == -1
+
+
+def test_a_frame_too_small_for_any_patch_is_refused():
+    """With half=100 on a 160 x 120 frame no feature can be found, frame after frame, and
+    none was, without a word (half=0 is refused for that reason). Oracle: the corner mask's
+    own extent, which is empty below 2 half + 4 pixels."""
+    rng = np.random.default_rng(0)
+    frame = shifted(texture(rng, (120, 160)), 0, 0)
+    with pytest.raises(ValueError, match=re.escape(
+            "image is 160x120: a feature's patch of half=100 and the pixel around it need "
+            "204 pixels across and down")):
+        KLTTracker(half=100).track(frame)
+    with pytest.raises(ValueError, match="need 124 pixels"):
+        KLTTracker(half=60).track(frame)
+    assert len(KLTTracker(half=58).track(frame)) > 0  # 120 = 2 x 58 + 4: it fits

@@ -899,3 +899,80 @@ def test_a_polygon_of_no_area_is_an_absent_object_and_gt_origin_is_for_xywh_line
     with pytest.raises(ValueError, match=re.escape(
             f"gt_origin (--gt-origin) applies to x y w h lines; {lines} holds polygons")):
         track_one(frames, None, tmp_path / "o.txt", gt=lines, gt_origin=1)
+
+
+def test_a_template_that_is_not_registered_says_so_and_small_boxes_follow_the_flow():
+    """Where no template was cut (a flat box, a box at the edge of the image) the residual
+    stayed 0.0, a perfect fit, while no registration ran: NaN now. A box under 7 pixels on a
+    side had a 7 x 7 template, mostly background: the registration was trusted every frame
+    and held the box on the background while the object moved (10 px behind after 20
+    frames). Oracle: a 3 x 3 object moving 0.5 px a frame over a still textured scene,
+    and its known box."""
+    from vistrack.tracking.single import TemplateTracker
+
+    rng = np.random.default_rng(1)
+    scene = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 2)
+    t = TemplateTracker()
+    t.init(scene, [40, 30, 40, 40])
+    assert np.isnan(t.residual)  # none ran yet
+    t.update(np.roll(scene, (1, 3), axis=(0, 1)))
+    assert 0 <= t.residual < 0.1
+    flat = scene.copy()
+    flat[40:80, 40:80] = 128
+    t.init(flat, [45, 45, 30, 30])
+    t.update(flat)
+    assert not t.ok and np.isnan(t.residual)
+    # a small bright object moving right over the scene
+    obj = np.full((3, 3), 255, np.uint8)
+
+    def frame(k):
+        im = scene.copy()
+        x = 60 + 0.5 * k
+        M = np.float32([[1, 0, x], [0, 1, 50]])
+        layer = cv2.warpAffine(obj, M, (160, 120), flags=cv2.INTER_LINEAR)
+        mask = cv2.warpAffine(np.ones((3, 3), np.float32), M, (160, 120))
+        return (im * (1 - mask) + layer * mask).astype(np.uint8)
+
+    t = TemplateTracker()
+    t.init(frame(0), [60, 50, 3, 3])
+    assert not t.ok
+    for k in range(1, 21):
+        box = t.update(frame(k))
+        assert np.isnan(t.residual)
+    assert t.residual != t.residual and abs(box[0] - 70) < abs(box[0] - 60)
+
+
+@pytest.mark.parametrize("method", ["klt", "template", "colour", "meanshift", "camshift",
+                                    "particle", "wsl", "snake"])
+def test_anchor_before_init_is_named(method):
+    """anchor (and anchor_last) before init failed on an attribute (`'...' object has no
+    attribute 'box'`, `'_shift'`), or, for the colour trackers, took the box and failed at
+    the update after; update in the same state said "update before init"."""
+    from vistrack.tracking.single import single_tracker
+
+    t = single_tracker(method)
+    with pytest.raises(RuntimeError, match=r"\.anchor before init: start it with init"):
+        t.anchor([1, 2, 3, 4])
+    if hasattr(t, "anchor_last"):
+        with pytest.raises(RuntimeError, match=r"\.anchor_last before init"):
+            t.anchor_last([1, 2, 3, 4])
+
+
+def test_median_flows_motion_names_a_frame_it_cannot_use():
+    """MedianFlow.motion, public, checked nothing: a BGR frame failed in "too many values to
+    unpack", a float or resized one in OpenCV's assertion; before init, on an attribute."""
+    from vistrack.tracking.single import MedianFlow
+
+    rng = np.random.default_rng(0)
+    scene = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 2)
+    t = MedianFlow()
+    with pytest.raises(RuntimeError, match=r"MedianFlow\.motion before init"):
+        t.motion(scene)
+    t.init(scene, [40, 30, 40, 40])
+    for bad in (np.dstack([scene] * 3), scene.astype(np.float32), scene[:100]):
+        with pytest.raises(ValueError, match=re.escape(
+                "grey must be a grey uint8 image of the previous frame's size (120, 160); "
+                f"got shape {bad.shape}, dtype {bad.dtype}")):
+            t.motion(bad)
+    d, s = t.motion(np.roll(scene, (1, 3), axis=(0, 1)))
+    assert np.allclose(d, [3, 1], atol=0.05) and s == pytest.approx(1, abs=0.01)

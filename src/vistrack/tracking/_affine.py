@@ -207,13 +207,14 @@ def register(image: np.ndarray, half: int, T: np.ndarray, SD: np.ndarray, Hinv: 
 @njit(cache=True, parallel=True, fastmath=True)
 def _ncc(a, pa, b, pb, half, out):
     H, W = a.shape
+    Hb, Wb = b.shape  # (each patch against its own image: b's was checked against a's size)
     n = (2 * half + 1) ** 2
     for k in prange(pa.shape[0]):
         ax, ay, bx, by = pa[k, 0] - half, pa[k, 1] - half, pb[k, 0] - half, pb[k, 1] - half
         # both patches inside their images (checked once, not per pixel)
         if not (0.0 <= ax and ax + 2 * half < W - 1.0 and 0.0 <= ay and ay + 2 * half < H - 1.0
-                and 0.0 <= bx and bx + 2 * half < W - 1.0 and 0.0 <= by
-                and by + 2 * half < H - 1.0):
+                and 0.0 <= bx and bx + 2 * half < Wb - 1.0 and 0.0 <= by
+                and by + 2 * half < Hb - 1.0):
             out[k] = -1.0
             continue
         iax, iay, ibx, iby = int(ax), int(ay), int(bx), int(by)

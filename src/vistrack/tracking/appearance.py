@@ -317,9 +317,17 @@ class WSLModel:
         return o
 
 
-def _view_size(w: float, h: float, size: int) -> tuple[int, int]:
+def _view_size(w: float, h: float, size: int) -> tuple[int, int, float]:
+    """The view's pixels across and down for a box ``w × h``, ``size`` on its long side and
+    at least 4 on each, and how many times a view pixel's width its height spans of the
+    image: 1 (square pixels) unless a side was raised to 4, for a box longer than
+    ``size / 4`` to 1 (one scale on both axes viewed a 3 × 100 box's central 24 rows alone)."""
     s = size / max(w, h)
-    return max(4, int(round(w * s))), max(4, int(round(h * s)))
+    vw, vh = int(round(w * s)), int(round(h * s))
+    if min(vw, vh) >= 4:
+        return vw, vh, 1.0
+    vw, vh = max(4, vw), max(4, vh)
+    return vw, vh, (h / vh) / (w / vw)
 
 
 class WSLTracker(SingleObjectTracker):
@@ -404,14 +412,15 @@ class WSLTracker(SingleObjectTracker):
         import cv2
 
         cx, cy = cx - _HALF, cy - _HALF  # the pixels' indices: pixel k's centre at k
+        down = scale * self.aspect  # a view pixel's height in the image
         A = np.array([[scale, 0, cx - scale * (out_w - 1) / 2],
-                      [0, scale, cy - scale * (out_h - 1) / 2]], dtype=np.float64)
+                      [0, down, cy - down * (out_h - 1) / 2]], dtype=np.float64)
         return cv2.warpAffine(g, A, (out_w, out_h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                               borderMode=cv2.BORDER_REPLICATE).astype(float)
 
     def _start(self, image: np.ndarray, b: np.ndarray) -> None:
         g = self._prepare(image)
-        self.vw, self.vh = _view_size(b[2], b[3], self.size)
+        self.vw, self.vh, self.aspect = _view_size(b[2], b[3], self.size)
         self.w, self.h = float(b[2]), float(b[3])
         self.centre = np.array([b[0] + b[2] / 2, b[1] + b[3] / 2])
         self.velocity = np.zeros(2)
@@ -443,7 +452,7 @@ class WSLTracker(SingleObjectTracker):
             ll = self.model.log_likelihood(windows)
             i, j = np.unravel_index(near[int(np.argmax(ll.ravel()[near]))], ll.shape)
             if ll[i, j] > best[0]:
-                best = (float(ll[i, j]), (j - r) * step, (i - r) * step, s)
+                best = (float(ll[i, j]), (j - r) * step, (i - r) * step * self.aspect, s)
         self.score, dx, dy, s = best
         H, W = g.shape
         # within the image's extent, [0, W] x [0, H] (a box half outside may start there):
@@ -475,7 +484,10 @@ class WSLTracker(SingleObjectTracker):
         >>> t.centre.tolist(), t.box.tolist()
         ([25.0, 25.0], [10.0, 10.0, 30.0, 30.0])
         """
+        self._need_start("anchor")
         b = as_box(box)
         self.centre = b[:2] + b[2:] / 2
         self.w, self.h = float(b[2]), float(b[3])
+        if self.aspect != 1.0:  # a view of a side raised to 4 spans the new box
+            self.aspect = (self.h / self.vh) / (self.w / self.vw)
         self.box = b

@@ -247,6 +247,13 @@ class SingleObjectTracker:
     def _follow(self, image: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def _need_start(self, what: str) -> None:
+        """A ``RuntimeError`` naming the method ``what`` if the tracker holds no object yet
+        (the state it works on is made by :meth:`init`)."""
+        if not self._started:
+            raise RuntimeError(f"{type(self).__name__}.{what} before init: start it with "
+                               "init(image, box) or step(frame, detections)")
+
     def init(self, image: np.ndarray, box: ArrayLike) -> None:
         """Start following the object in ``box`` (``x, y, w, h``) of ``image``.
 
@@ -319,9 +326,7 @@ class SingleObjectTracker:
         ...
         ValueError: image is (30, 80, 3); the tracker started on a (60, 80, 3) image: ...
         """
-        if not self._started:
-            raise RuntimeError(f"{type(self).__name__}.update before init: start it with "
-                               "init(image, box) or step(frame, detections)")
+        self._need_start("update")
         if np.shape(image) != self._shape:
             raise ValueError(f"image is {np.shape(image)}; the tracker started on a "
                              f"{self._shape} image: give it the frames of one video, each "

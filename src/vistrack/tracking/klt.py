@@ -263,6 +263,15 @@ class KLTTracker:
         if new is None:
             return
         pts = new.reshape(-1, 2).astype(np.float32)
+        if len(self.points):
+            # the mask's circles are drawn in whole pixels about rounded points, so a corner
+            # could start up to 1.5 px nearer a kept feature than min_distance: measured
+            from scipy.spatial import cKDTree
+
+            near, _ = cKDTree(self.points).query(pts, distance_upper_bound=self.min_distance)
+            pts = pts[near >= self.min_distance]
+            if not len(pts):
+                return
         if self.affine_check:
             T, SD, Hinv, ok = prepare_templates(grey, pts, self.half)
             pts, T, SD, Hinv = pts[ok], T[ok], SD[ok], Hinv[ok]
@@ -304,7 +313,8 @@ class KLTTracker:
         TypeError
             If ``frame`` has no image.
         ValueError
-            If the image's size differs from the previous frame's.
+            If the image's size differs from the previous frame's, or it is under
+            ``2 half + 4`` pixels across or down, too small for any feature's patch.
 
         Examples
         --------
@@ -336,7 +346,8 @@ class KLTTracker:
         Raises
         ------
         ValueError
-            If the image's size differs from the previous frame's.
+            If the image's size differs from the previous frame's, or it is under
+            ``2 half + 4`` pixels across or down, too small for any feature's patch.
 
         Examples
         --------
@@ -351,6 +362,13 @@ class KLTTracker:
         """
         grey = as_uint8_image(image, grey=True)
         terminated = 0
+        if min(grey.shape) < 2 * self.half + 4:
+            # a feature's patch and the pixel around it that its gradients need: no frame
+            # this small can hold one (none was found, frame after frame, without a word)
+            raise ValueError(f"image is {grey.shape[1]}x{grey.shape[0]}: a feature's patch "
+                             f"of half={self.half} and the pixel around it need "
+                             f"{2 * self.half + 4} pixels across and down; give a smaller "
+                             "half or a larger image")
         if self._prev is not None and grey.shape != self._prev.shape:
             # (whether or not the last frame left features to follow)
             raise ValueError(f"image is {grey.shape[1]}x{grey.shape[0]}; the previous "

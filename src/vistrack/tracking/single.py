@@ -154,6 +154,13 @@ class MedianFlow(SingleObjectTracker):
         """
         import cv2
 
+        self._need_start("motion")
+        g = np.asarray(grey)
+        if g.shape != self.prev.shape or g.dtype != np.uint8:
+            # (a BGR frame failed in "too many values to unpack", one of another size or
+            # type in OpenCV's assertion)
+            raise ValueError(f"grey must be a grey uint8 image of the previous frame's size "
+                             f"{self.prev.shape}; got shape {g.shape}, dtype {g.dtype}")
         x, y, w, h = self.box
         H, W = grey.shape
         if min(x + w, W) <= max(x, 0) or min(y + h, H) <= max(y, 0):
@@ -235,6 +242,7 @@ class MedianFlow(SingleObjectTracker):
         >>> t.box.tolist()
         [30.0, 20.0, 10.0, 10.0]
         """
+        self._need_start("anchor")
         b = as_box(box)
         self.box = np.r_[b[:2] - self._shift, b[2:]]
 
@@ -256,6 +264,7 @@ class MedianFlow(SingleObjectTracker):
         >>> t.box.tolist()
         [12.0, 10.0, 20.0, 20.0]
         """
+        self._need_start("anchor_last")
         self.box = as_box(box)
 
 
@@ -273,7 +282,10 @@ class TemplateTracker(SingleObjectTracker):
     Attributes
     ----------
     residual : float
-        The registration's RMS residual at the last frame.
+        The registration's RMS residual at the last frame; NaN where none ran: before the
+        first :meth:`update`, or where no template was cut and the median flow alone
+        moves the box (a box under 7 pixels on a side, a flat one, or one whose central
+        patch the image's edge cuts to nothing).
 
     References
     ----------
@@ -316,12 +328,15 @@ class TemplateTracker(SingleObjectTracker):
         room = min(np.floor(cx), np.ceil(W - 2 - cx), np.floor(cy), np.ceil(H - 2 - cy)) - 1
         self.half = max(3, min(int(min(b[2], b[3]) / 2) - 1, int(room)))
         self.T, self.SD, self.Hinv, ok = prepare_templates(grey, c, self.half)
-        self.ok = bool(ok[0])
+        # a box under 7 pixels on a side has no central patch of the template's least size
+        # (7 x 7): its template was mostly background, and the registration, trusted, held
+        # the box still on the background while the object moved
+        self.ok = bool(ok[0]) and min(b[2], b[3]) >= 2 * 3 + 1
         self.p = np.zeros((1, 6))
         self.p[0, 4:] = c[0]
         self.flow.init(image, b)
         self.box = b.copy()
-        self.residual = 0.0
+        self.residual = float("nan")  # (0, a perfect fit, before any registration ran)
 
     def _corners(self, p: np.ndarray) -> np.ndarray:
         x, y, w, h = self.box0
@@ -379,6 +394,7 @@ class TemplateTracker(SingleObjectTracker):
         >>> t.box.tolist()
         [50.0, 40.0, 20.0, 20.0]
         """
+        self._need_start("anchor")
         b = as_box(box)
         s = np.sqrt(b[2] * b[3] / (self.box[2] * self.box[3]))
         p = self.p[0]
@@ -397,6 +413,7 @@ class TemplateTracker(SingleObjectTracker):
         box : (4,) array_like
             The box ``x, y, w, h`` in the frame last given.
         """
+        self._need_start("anchor_last")
         self.flow.anchor_last(box)
 
 
@@ -613,6 +630,7 @@ class ColourTracker(SingleObjectTracker):
         >>> t.box.tolist()
         [10.0, 10.0, 30.0, 30.0]
         """
+        self._need_start("anchor")
         self.box = as_box(box)
 
 
@@ -739,6 +757,7 @@ class ColourParticleTracker(ColourTracker):
         >>> (t.w @ t.x).round(3).tolist()  # the weighted mean centre and log scale
         [50.0, 30.0, 0.0]
         """
+        self._need_start("anchor")
         b = as_box(box)
         m = self.w @ self.x
         self.x[:, :2] += b[:2] + b[2:] / 2 - m[:2]

@@ -560,6 +560,7 @@ class SnakeTracker(SingleObjectTracker):
         >>> pts.min(0).round(6).tolist(), pts.max(0).round(6).tolist()
         ([39.5, 29.5], [69.5, 49.5])
         """
+        self._need_start("anchor")
         b = as_box(box)
         cur = self._bounds()
         s = b[2:] / cur[2:]
