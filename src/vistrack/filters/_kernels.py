@@ -339,10 +339,16 @@ def check_matrices(F, Q, sym_tol):
         if not math.isfinite(v):
             return 2
     r = Q.shape[1]
+    # symmetric to a tolerance of the matrix's largest entry, as the Python checks
+    # (_validate.check_symmetric): of each entry's own size, an off-diagonal entry near 0
+    # that rounding made differ from its transpose by 1e-17 refused a rotated isotropic R
+    big = 0.0
+    for v in Q.ravel():
+        big = max(big, abs(v))
+    tol = sym_tol * (big if big > 0.0 else 1.0)
     for i in range(r):
         for k in range(i + 1, r):
-            a, b = Q[0, i, k], Q[0, k, i]
-            if abs(a - b) > sym_tol * max(abs(a), abs(b), 1e-300):
+            if abs(Q[0, i, k] - Q[0, k, i]) > tol:
                 return 3
     # what semi-definiteness asks of each variance and each pair: no variance below 0, no
     # covariance beyond the product of the standard deviations (the full test costs more

@@ -30,6 +30,7 @@ from .._validate import (
     check_linear_gaussian,
     check_not_infinite,
     check_psd,
+    check_symmetric,
 )
 from ..types import Gaussian
 from . import _codegen, _kernels
@@ -256,7 +257,8 @@ def kalman_filter(
     y, single = as_measurement_series(ys)
     check_has_steps(y[0] if single else y)
     B, T, m = y.shape
-    x0_, P0_ = _prior(x0, P0, B, np.shape(F)[-1] if np.ndim(F) >= 2 else None)
+    f = _shape(F, "F")
+    x0_, P0_ = _prior(x0, P0, B, f[-1] if len(f) >= 2 else None)
     n = x0_.shape[1]
     F_, Q_, H_, R_ = check_linear_gaussian(F, Q, H, R, n, m, T)
 
@@ -328,7 +330,9 @@ def kalman_filter(
             covs = pcovs = None
     pred_means: np.ndarray | None = pmeans if store_covs else None
     if single:
-        means, loglik, last_P = means[0], loglik[0], last_P[0]
+        # loglik[0, ...]: a 0-d view, made read-only with the rest (a scalar, taken as a new
+        # array, was writable)
+        means, loglik, last_P = means[0], loglik[0, ...], last_P[0]
         pred_means, covs, pcovs = (None if a is None else a[0]
                                    for a in (pred_means, covs, pcovs))
     # a copy: a view made before the arrays are made read-only would stay writable, and a
@@ -382,23 +386,51 @@ _KERNEL_ERRORS = {
 }
 
 
-def _kernel_error(code: int, a: str, b: str, g: Gaussian | None = None) -> None:
-    if code == 4 and g is not None:
-        # an innovation covariance that is not positive definite because P holds NaN or
-        # infinity: say so (checked only here, on the way to the error)
-        bad = ~np.isfinite(g.cov.reshape(-1, *g.cov.shape[-2:])).all(axis=(1, 2))
-        if bad.any():
-            batch = g.mean.shape[:-1]
-            i = tuple(int(k) for k in np.unravel_index(int(np.flatnonzero(bad)[0]), batch))
-            where = f"g.cov[{', '.join(map(str, i))}] (batch shape {batch})" if batch else "it"
-            raise ValueError(f"g.cov must be finite; {where} holds NaN or infinity")
+def _check_finite_gaussian(g: Gaussian) -> None:
+    """Name a NaN or an infinite entry of ``g``: the step functions passed it on, and every
+    mean it touched came out NaN without a word. (A sum is finite when every entry is, and
+    costs less than the test of each; where it is not, each is tested, to name one.)"""
+    if not isinstance(g, Gaussian):
+        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
+    for arr, name in ((g.mean, "g.mean"), (g.cov, "g.cov")):
+        if not np.isfinite(arr.sum()):
+            check_finite(arr, name)
+
+
+def _matrix_entry(code: int, a: str, b: str, mats: dict[str, ArrayLike]) -> None:
+    """The entry a kernel's ``code`` is about, named from the matrices themselves (checked
+    in Python only here, on the way to the error)."""
+    name = {1: a, 2: b, 3: b, 8: b, 5: "H", 6: "R", 7: "R", 12: "R"}.get(code)
+    if name not in mats:
+        return
+    arr = np.asarray(mats[name], dtype=float)
+    if code in (1, 2, 5, 6):
+        check_finite(arr, name)
+    elif code in (3, 7):
+        check_symmetric(arr, name)
+    elif code in (8, 12):
+        d = np.diagonal(arr)
+        if (d < 0).any():
+            i = int(np.argmax(d < 0))
+            raise ValueError(f"{name} must be positive semi-definite; {name}[{i}, {i}] = "
+                             f"{d[i]:g}, a negative variance")
+        over = np.triu(arr ** 2 > np.outer(d, d), 1)
+        if over.any():
+            i, k = (int(v) for v in np.argwhere(over)[0])
+            raise ValueError(f"{name} must be positive semi-definite; {name}[{i}, {k}] = "
+                             f"{arr[i, k]:g}, beyond the product of the two standard "
+                             f"deviations, {np.sqrt(d[i] * d[k]):g}")
+
+
+def _kernel_error(code: int, a: str, b: str, mats: dict[str, ArrayLike] | None = None) -> None:
+    if mats:
+        _matrix_entry(code, a, b, mats)
     raise ValueError(_KERNEL_ERRORS[code].format(a=a, b=b))
 
 
 def _with_measurement(g: Gaussian, y: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Check ``g`` and one measurement per Gaussian; contiguous ``mean, cov, y`` for a kernel."""
-    if not isinstance(g, Gaussian):
-        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
+    _check_finite_gaussian(g)
     mean = g.mean
     if not (type(y) is np.ndarray and y.dtype == np.float64):
         y = as_float_array(y, "y")
@@ -466,7 +498,7 @@ def kf_step(
         _small_matrix(Q, "Q", n, n), _small_matrix(H, "H", m, n), _small_matrix(R, "R", m, m),
     )
     if code >= 0:
-        _kernel_error(code, "F", "Q", g)
+        _kernel_error(code, "F", "Q", {"F": F, "Q": Q, "H": H, "R": R})
     return Gaussian._trusted(mean.reshape(g.mean.shape), cov.reshape(g.cov.shape))
 
 
@@ -506,15 +538,14 @@ def kf_predict(g: Gaussian, F: ArrayLike, Q: ArrayLike) -> Gaussian:
     array([[2.1, 1. ],
            [1. , 1.1]])
     """
-    if not isinstance(g, Gaussian):
-        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
+    _check_finite_gaussian(g)
     n = g.mean.shape[-1]
     code, mean, cov = _kernels.predict_batch_py(
         _one_batch_axis(g.mean, 1), _one_batch_axis(g.cov, 2), _small_matrix(F, "F", n, n),
         _small_matrix(Q, "Q", n, n),
     )
     if code >= 0:
-        _kernel_error(code, "F", "Q")
+        _kernel_error(code, "F", "Q", {"F": F, "Q": Q})
     return Gaussian._trusted(mean.reshape(g.mean.shape), cov.reshape(g.cov.shape))
 
 
@@ -576,10 +607,20 @@ def kf_update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> Gaussian
     return _update(g, y, H, R)[0]
 
 
+def _shape(value: ArrayLike, name: str) -> tuple[int, ...]:
+    """``np.shape(value)``, or the error that names ``value`` where it has none (a ragged
+    list: numpy's "setting an array element with a sequence" before)."""
+    try:
+        return np.shape(value)
+    except ValueError:
+        as_float_array(value, name)
+        raise
+
+
 def _check_y_fits(given: tuple[int, ...], n: int, m: int, H: ArrayLike, R: ArrayLike) -> None:
     """Name ``y`` when ``H`` fits the state and ``R`` fits ``H`` but ``y`` (of shape
     ``given``, ``m`` values) does not: the measurement is the one of the wrong size."""
-    h, r = np.shape(H), np.shape(R)
+    h, r = _shape(H, "H"), _shape(R, "R")
     if len(h) in (2, 3) and h[-1] == n and h[-2] != m and (len(r) < 2 or r[-2:] == (h[-2],) * 2):
         raise ValueError(f"y must have {h[-2]} value{'s' if h[-2] != 1 else ''} a Gaussian, "
                          f"one for each row of H "
@@ -598,7 +639,7 @@ def _update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> tuple[Gaus
         _small_matrix(R, "R", m, m),
     )
     if code >= 0:
-        _kernel_error(code, "H", "R", g)
+        _kernel_error(code, "H", "R", {"H": H, "R": R})
     batch = g.mean.shape[:-1]
     return (Gaussian._trusted(mean.reshape(g.mean.shape), cov.reshape(g.cov.shape)),
             ll.reshape(batch))
@@ -627,6 +668,18 @@ class FilterResult1D:
     pred_std: np.ndarray
     mean: np.ndarray
     std: np.ndarray
+
+
+# the largest number whose square a float holds
+_SQRT_MAX = float(np.sqrt(np.finfo(float).max))
+
+
+def _check_square(a: np.ndarray, name: str) -> None:
+    """Name a value of ``kalman_filter_1d`` whose square (a variance, or a gain's factor)
+    no float holds: Python's ``OverflowError`` named none."""
+    if (np.abs(a) >= _SQRT_MAX).any():
+        raise ValueError(f"{name} must be below {_SQRT_MAX:.4g} in size, its square a finite "
+                         f"number; got {np.max(np.abs(a)):g}")
 
 
 def kalman_filter_1d(
@@ -701,12 +754,15 @@ def kalman_filter_1d(
         check_finite(a, name)
         if name.startswith("sigma") and (a < 0).any():
             raise ValueError(f"{name} must be standard deviations >= 0; got {a.min()}")
+        _check_square(a, name)
         par[name] = np.broadcast_to(a, (T,))
     for name, v in (("x0", x0), ("sigma0", sigma0)):
         x = float(as_float_array(v, name, ndim=(0,)))
         if not np.isfinite(x) or (name == "sigma0" and x < 0):
             raise ValueError(f"{name} must be a finite number{' >= 0' * (name == 'sigma0')}; "
                              f"got {x}")
+        if name == "sigma0":
+            _check_square(np.asarray(x), name)
     out = {k: np.empty(T) for k in ("pred_mean", "pred_std", "mean", "std")}
     xp, sp = float(x0), float(sigma0)
     for i in range(T):

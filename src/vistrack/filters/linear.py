@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import (
+    as_finite,
     as_float_array,
     as_measurement_series,
     check_has_steps,
@@ -189,7 +190,17 @@ class KalmanFilter:
         array([2., 1.])
         """
         check_one_step(dt)
+        self._check_state(g)
         return kf_predict(g, self.motion.F(dt), self.motion.Q(dt))
+
+    def _check_state(self, g: Gaussian) -> None:
+        """Name ``g`` whose state size is not the motion model's (the model's ``F`` or
+        ``H`` was named instead: matrices the caller never gave)."""
+        n = self.motion.ndim_state
+        if isinstance(g, Gaussian) and g.mean.shape[-1] != n:
+            raise ValueError(f"g must have a state of {n} values, the motion model's "
+                             f"({type(self.motion).__name__}); got {g.mean.shape[-1]} "
+                             f"(g.mean of shape {g.mean.shape})")
 
     def update(self, g: Gaussian, y: ArrayLike) -> tuple[Gaussian, np.ndarray]:
         """One correction by the measurement model (:func:`kf_update`) and its log-likelihood.
@@ -218,6 +229,7 @@ class KalmanFilter:
         (array([1., 1.]), -1.872)
         """
         n = self.motion.ndim_state
+        self._check_state(g)
         return _update(g, y, self.measurement.H(n), self.measurement.R())
 
     def default_prior(self, ys: ArrayLike, *,
@@ -241,7 +253,7 @@ class KalmanFilter:
             Measurements, NaN (or masked, in a numpy masked array) where missing.
         scale : float
             The prior's standard deviation on the unmeasured part of the state, in units of
-            the largest measurement standard deviation.
+            the largest measurement standard deviation: a finite number > 0.
 
         Returns
         -------
@@ -259,6 +271,8 @@ class KalmanFilter:
         (array([2., 0.]), array([1.e+00, 1.e+06]))
         """
         self._check_ys(ys)
+        # (NaN gave a prior of NaN, a string numpy's words, and -2 was taken as 2)
+        scale = as_finite(scale, "scale", 0.0, above=True)
         y, single = as_measurement_series(ys)
         check_has_steps(y[0] if single else y)
         n = self.motion.ndim_state
