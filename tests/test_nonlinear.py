@@ -841,9 +841,12 @@ def test_a_model_that_gives_nan_mid_run_is_named_at_the_first_step_it_did(cls, b
         if cls is EnsembleKalmanFilter:
             return  # its measurement model is linear
         cv = vt.ConstantVelocity(dim=1, q=0.01)
+        # the UKF names the sigma point, of a batch's too (a batch's NaN was found by the
+        # loop alone)
         match = (f"the correction at step 5{series} is not finite.*the measurement model gave"
-                 if batch or cls is ExtendedKalmanFilter else
-                 r"^step 5: the measurement model gave NaN or infinity at sigma point 0: h\(")
+                 if cls is ExtendedKalmanFilter else
+                 r"^step 5: the measurement model gave NaN or infinity at sigma point "
+                 + (r"\[0, 0\]" if batch else "0") + r": h\(")
         with pytest.raises(ValueError, match=match):
             cls(cv, measurement).filter(Y, x0=[0.0, 1.0], P0=np.eye(2))
     res = cls(cv, measurement).filter(Y[..., :5, :], x0=[0.0, 1.0], P0=np.eye(2))
@@ -1067,3 +1070,66 @@ def test_an_ensemble_names_a_member_that_is_not_finite_and_a_cov_that_is_no_cova
     # a singular covariance still draws on its subspace
     ens = Ensemble.sample(np.zeros(2), np.array([[1.0, 1.0], [1.0, 1.0]]), 50, rng=0)
     np.testing.assert_allclose(ens.members[:, 0], ens.members[:, 1])
+
+
+def test_the_unscented_and_ensemble_filters_name_what_they_cannot_use():
+    """A measurement model giving NaN at some sigma points (or members) made a batch's
+    estimates NaN in ukf_update, and every member NaN in enkf_update, without a word (a
+    single Gaussian's update named it); points_one took a covariance larger than x and used
+    its top-left block; points met numpy's broadcast error; weights(-1) and weights(2.5)
+    failed in numpy's words; a state of the wrong size met numpy's matmul error; an IMM
+    member without a motion model failed on the attribute."""
+    from vistrack.filters import (
+        IMMFilter,
+        JulierSigmaPoints,
+        KalmanFilter,
+        MerweScaledSigmaPoints,
+        enkf_predict,
+        enkf_update,
+        ukf_predict,
+        ukf_update,
+    )
+    from vistrack.filters.enkf import Ensemble
+    from vistrack.models import ConstantVelocity, NonlinearMeasurement, Position
+
+    h = NonlinearMeasurement(lambda x: np.where(x[..., :1] > 0.5, np.nan, x[..., :1]), [[0.5]],
+                             ndim_state=2)
+    p = MerweScaledSigmaPoints(alpha=1.0)
+    with pytest.raises(ValueError, match=re.escape(
+            "the measurement model gave NaN or infinity at sigma point [0, 1]: "
+            "h([1.4142 0.    ]) = [nan]")):
+        ukf_update(vt.Gaussian(np.zeros((1, 2)), np.eye(2)[None]), [[0.0]], h, points=p)
+    with pytest.raises(ValueError, match=r"the measurement model gave NaN or infinity at "
+                                         r"member \[\d+\]"):
+        enkf_update(Ensemble.sample([0, 0], np.eye(2), 50, rng=0), [0.0], h, rng=0)
+    for call in (lambda: p.points_one(np.zeros(2), np.diag([1.0, 4.0, 9.0])),
+                 lambda: p.points(np.zeros((3, 2)), np.diag([1.0, 4.0, 9.0]))):
+        with pytest.raises(ValueError, match=re.escape(
+                "P must be (..., 2, 2), the size of x's 2 values; got shape (3, 3)")):
+            call()
+    with pytest.raises(ValueError, match=re.escape("P must be symmetric")):
+        p.points_one(np.zeros(2), [[1.0, 0.9], [0.0, 1.0]])
+    assert p.points(np.zeros((3, 2)), np.eye(2)).shape == (3, 5, 2)
+    for points, n in ((MerweScaledSigmaPoints(), -1), (JulierSigmaPoints(3), 2.5)):
+        with pytest.raises(ValueError, match=re.escape(f"n must be a whole number >= 1; got "
+                                                       f"{n}")):
+            points.weights(n)
+    with pytest.raises(ValueError, match=re.escape(
+            "g must have a state of 4 values, the motion model's; got 2")):
+        ukf_predict(vt.Gaussian(np.zeros(2), np.eye(2)), ConstantVelocity(dim=2))
+    with pytest.raises(ValueError, match=re.escape(
+            "ens must have members of 4 values, the motion model's; got 2")):
+        enkf_predict(Ensemble.sample([0, 0], np.eye(2), 20, rng=0), ConstantVelocity(dim=2))
+
+    class NoMotion:
+        def predict(self, g, dt=1.0, t=0.0):
+            return g
+
+        def update(self, g, y):
+            return g, 0.0
+
+    kf = KalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1))
+    with pytest.raises(TypeError, match=re.escape(
+            "filters[1] must have predict(g, dt, t), update(g, y) and a motion model "
+            "(.motion.ndim_state); got NoMotion")):
+        IMMFilter([kf, NoMotion()], [[0.9, 0.1], [0.1, 0.9]])

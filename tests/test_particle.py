@@ -814,3 +814,59 @@ def test_n_particles_of_another_kind_is_named(value, shown, error):
             make(resampling=["systematic"])
     assert ParticleFilter(vt.ConstantVelocity(dim=1), vt.Position(dim=1),
                           n_particles=np.int32(7), ess_threshold=np.float32(0.5)).n_particles == 7
+
+
+def test_a_model_that_gives_nan_is_named_not_taken_for_a_lost_target():
+    """One particle's NaN log-weight made the largest NaN, and a model's error (a motion or
+    measurement function giving NaN for some particles, or a NaN dt) was raised as
+    ParticleDegeneracyError, "the filter has lost the target", which a caller catching it
+    to start again would hide. Oracle: the models, which give NaN where x > 0 (half the
+    cloud) and finite values elsewhere; and a target truly lost still is degeneracy."""
+    from vistrack.models import NonlinearMeasurement, NonlinearMotion
+
+    nm = NonlinearMotion(lambda x, dt, t: np.where(x[..., :1] > 0, np.nan, x), 0.1 * np.eye(2),
+                         2)
+    pf = ParticleFilter(nm, vt.Position(dim=1), 10, rng=0)
+    with pytest.raises(ValueError, match=r"the motion model gave NaN or infinity for \d+ of 10 "
+                                         r"particles at step 1; particles\[\d+\] = \[nan, nan\]"):
+        pf.filter(np.zeros((3, 1)), x0=[0, 0], P0=np.eye(2))
+    h = NonlinearMeasurement(lambda x: np.where(x[..., :1] > 0.5, np.nan, x[..., :1]), [[0.5]],
+                             ndim_state=2)
+    pf = ParticleFilter(vt.ConstantVelocity(dim=1, q=0.1), h, 10, rng=0)
+    with pytest.raises(ValueError, match=r"the measurement model gave NaN for \d+ of 10 "
+                                         r"particles at step 0 \(measurement \[0.0\]\)"):
+        pf.filter(np.zeros((3, 1)), x0=[0, 0], P0=np.eye(2))
+    for fused in (True, False):
+        pf = ParticleFilter(vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1), 10, rng=0)
+        if not fused:
+            pf._fused = None
+        with pytest.raises(ValueError, match=re.escape(
+                "dt must be finite (dt[0], before the first step, aside); the step to step 1 "
+                "is nan")):
+            pf.filter(np.zeros((3, 1)), x0=[0, 0], P0=np.eye(2), dt=[1, np.nan, 1])
+    # every particle's likelihood 0 at step 1: a lost target
+    pf = ParticleFilter(vt.ConstantVelocity(dim=1, q=0.1),
+                        lambda y, x: np.full(len(x), 0.0 if y[0] < 1 else -np.inf), 10,
+                        rng=0)
+    with pytest.raises(ParticleDegeneracyError, match="at step 1"):
+        pf.filter(np.array([[0.0], [5.0]]), x0=[0, 0], P0=np.eye(2))
+
+
+def test_clouds_and_priors_a_filter_cannot_use_are_named():
+    """weighted_mean and weighted_cov gave NaN for a NaN particle even of weight 0 (which
+    particle_mode names), and numpy's "zero-size array" for no particles; filter(particles=,
+    x0=, P0=) dropped x0 and P0 without a word; ndim_state 2.5 was cut to 2."""
+    for f in (weighted_mean, weighted_cov):
+        with pytest.raises(ValueError, match=re.escape("particles must be finite; "
+                                                       "particles[0, 0] = nan")):
+            f([[np.nan], [1.0]], [0.0, 1.0])
+        with pytest.raises(ValueError, match=re.escape(
+                "particles must hold at least one particle; got shape (0, 2)")):
+            f(np.zeros((0, 2)), [])
+    pf = ParticleFilter(vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1), 10, rng=0)
+    with pytest.raises(ValueError, match=re.escape(
+            "give particles or x0 and P0, not both; got particles and x0 and P0")):
+        pf.filter(np.zeros((3, 1)), particles=np.zeros((10, 2)), x0=[100, 0], P0=np.eye(2))
+    with pytest.raises(ValueError, match=re.escape("ndim_state must be a whole number >= 1; "
+                                                   "got 2.5")):
+        ParticleFilter(lambda x, dt, t, rng: x, vt.Position(dim=1), 10, ndim_state=2.5)

@@ -222,6 +222,9 @@ def enkf_predict(ens: Ensemble, motion: MotionModel | NonlinearMotionModel, dt: 
     """
     check_one_step(dt, "every ensemble of ens")
     mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
+    if ens.members.shape[-1] != mo.n:  # (numpy's matmul error, naming neither)
+        raise ValueError(f"ens must have members of {mo.n} values, the motion model's; got "
+                         f"{ens.members.shape[-1]}")
     x = np.asarray(mo.f(ens.members, dt, t), dtype=float)
     return Ensemble(x + _noise(as_rng(rng), x.shape, mo.Q_sqrt(dt)))
 
@@ -304,6 +307,12 @@ def _enkf_update(ens: Ensemble, y: ArrayLike,
     # (..., N, m); a missing component's value is not used: 0, not NaN, where h has none
     # there (NaN times the mask's 0 below is NaN, and made every member NaN)
     Z = np.where(obs[..., None, :], np.asarray(me.h(X), dtype=float), 0.0)
+    bad = ~np.isfinite(Z).all(axis=-1)
+    if bad.any():  # (every member came out NaN, without a word)
+        at = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(f"the measurement model gave NaN or infinity at member "
+                         f"[{', '.join(map(str, at))}]: h({np.array2string(X[at], precision=4)})"
+                         f" = {np.array2string(Z[at], precision=4)}")
     # the members' mean measurement: circular for angles (bearings either side of π average
     # to π, not 0), as the model's mean gives it
     zbar = Z.mean(-2) if me.mean is _plain_mean else me.mean(Z, np.full(N, 1.0 / N))

@@ -184,7 +184,7 @@ class IMMFilter:
     Raises
     ------
     TypeError
-        If a member lacks ``predict`` or ``update``.
+        If a member lacks ``predict``, ``update`` or a motion model (``motion``).
     ValueError
         If there are no members, ``transition`` is not a finite non-negative ``(M, M)``
         matrix with rows summing to one, or ``mode_probs`` is not ``M`` finite non-negative
@@ -264,9 +264,11 @@ class IMMFilter:
         if M < 1:
             raise ValueError("filters must hold at least one filter")
         for k, f in enumerate(self.filters):
-            if not (callable(getattr(f, "predict", None)) and callable(getattr(f, "update", None))):
-                raise TypeError(f"filters[{k}] must have predict(g, dt, t) and update(g, y); "
-                                f"got {type(f).__name__}")
+            if not (callable(getattr(f, "predict", None)) and callable(getattr(f, "update", None))
+                    and hasattr(getattr(f, "motion", None), "ndim_state")):
+                # (one without a motion model failed on the attribute, after every check)
+                raise TypeError(f"filters[{k}] must have predict(g, dt, t), update(g, y) and a "
+                                f"motion model (.motion.ndim_state); got {type(f).__name__}")
         Pi = as_float_array(transition, "transition", ndim=(2,))
         check_finite(Pi, "transition")
         if Pi.shape != (M, M):

@@ -389,6 +389,11 @@ def _particles_and_weights(particles: ArrayLike,
     if w.shape != x.shape[:1]:
         raise ValueError(f"weights must have shape ({x.shape[0]},), one per particle (row of "
                          f"particles); got {w.shape}")
+    # (a cloud of none failed in numpy's "zero-size array"; a NaN particle, even of weight
+    # 0, made the mean NaN without a word)
+    if x.shape[0] == 0:
+        raise ValueError(f"particles must hold at least one particle; got shape {x.shape}")
+    check_finite(x, "particles")
     return x, w
 
 
@@ -420,8 +425,9 @@ def weighted_mean(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``particles`` is not 2-D, ``weights`` is not one weight per particle, or a weight
-        is negative or not finite, or all are 0 (naming the first bad one).
+        If ``particles`` is not 2-D, empty or not finite, ``weights`` is not one weight per
+        particle, or a weight is negative or not finite, or all are 0 (naming the first bad
+        one).
 
     Examples
     --------
@@ -452,8 +458,9 @@ def weighted_cov(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``particles`` is not 2-D, ``weights`` is not one weight per particle, or a weight
-        is negative or not finite, or all are 0 (naming the first bad one).
+        If ``particles`` is not 2-D, empty or not finite, ``weights`` is not one weight per
+        particle, or a weight is negative or not finite, or all are 0 (naming the first bad
+        one).
 
     Examples
     --------
@@ -541,9 +548,6 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     """
     x, w = _particles_and_weights(particles, weights)
     N, n = x.shape
-    if N == 0:
-        raise ValueError(f"particles must hold at least one particle; got shape {x.shape}")
-    check_finite(x, "particles")
     w = _normalised(w)
     n_starts = as_whole(n_starts, "n_starts", 1)
     max_iter = as_whole(max_iter, "max_iter", 0)
@@ -1027,7 +1031,7 @@ class ParticleFilter:
         elif callable(motion):
             if ndim_state is None:
                 raise ValueError("ndim_state is needed when motion is a callable")
-            self.ndim_state, self._propagate = int(ndim_state), motion
+            self.ndim_state, self._propagate = as_whole(ndim_state, "ndim_state", 1), motion
             self._user_motion = True
         else:
             raise TypeError(f"motion must be a motion model or a callable; got "
@@ -1117,7 +1121,9 @@ class ParticleFilter:
             If ``ys`` has no step or holds an infinity (NaN is missing), the prior or
             ``particles`` has the wrong shape or is not finite, a ``likelihood`` callable
             returns other than ``N`` values, a NaN or ``+inf``, or a ``propagate`` callable
-            returns other than ``(N, n)`` finite particles (the message names the step).
+            returns other than ``(N, n)`` finite particles, or a motion or measurement model
+            gives NaN or infinity for some particle (not a lost target), or a ``dt`` after
+            the first is not finite (the message names the step).
 
         Examples
         --------
@@ -1164,7 +1170,7 @@ class ParticleFilter:
                 a = logw + self._loglik(ys[t], x, t)
                 top = np.max(a)
                 if not np.isfinite(top):
-                    raise _degenerate(t, ys[t])
+                    raise self._failure(t, ys[t], x)
                 w = np.exp(a - top)  # log-sum-exp: the largest weight is exp(0)
                 s = w.sum()
                 total += top + math.log(s)
@@ -1185,9 +1191,34 @@ class ParticleFilter:
         w = np.exp(logw)
         return _result(means, covs, mode_arr, conf, ess, resampled, total, x, w / w.sum())
 
+    def _failure(self, t: int, y: np.ndarray, x: np.ndarray) -> Exception:
+        """What no particle's weight being finite at step ``t`` means: a motion or a
+        measurement model that gave NaN or infinity (a ``ValueError`` naming it: one NaN
+        log-weight made the largest NaN, and a model's error read as a lost target), or
+        every particle's likelihood 0 (:class:`ParticleDegeneracyError`)."""
+        bad = ~np.isfinite(x).all(axis=1)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            return ValueError(f"the motion model gave NaN or infinity for {int(bad.sum())} of "
+                              f"{len(x)} particles at step {t}; particles[{i}] = "
+                              f"{x[i].tolist()}")
+        with np.errstate(all="ignore"):
+            ll = np.asarray(self._loglik(y, x, t), dtype=float)
+        if np.isnan(ll).any():
+            i = int(np.flatnonzero(np.isnan(ll))[0])
+            return ValueError(f"the measurement model gave NaN for {int(np.isnan(ll).sum())} "
+                              f"of {len(x)} particles at step {t} (measurement {y.tolist()}); "
+                              f"particles[{i}] = {x[i].tolist()}")
+        return _degenerate(t, y)
+
     def _initial(self, particles: ArrayLike | None, x0: ArrayLike | None,
                  P0: ArrayLike | None) -> np.ndarray:
         n, N = self.ndim_state, self.n_particles
+        if particles is not None and (x0 is not None or P0 is not None):
+            # (x0 and P0 were dropped without a word)
+            given = " and ".join(k for k, v in (("x0", x0), ("P0", P0)) if v is not None)
+            raise ValueError(f"give particles or x0 and P0, not both; got particles and "
+                             f"{given}")
         if particles is not None:
             x = as_float_array(particles, "particles", ndim=(2,))
             if x.shape != (N, n):
@@ -1253,6 +1284,6 @@ class ParticleFilter:
             _random.seed(self.rng), logw, w, np.zeros(N, np.int64), np.empty(N),
             means, covs, ess, resampled)
         if fail >= 0:
-            raise _degenerate(int(fail), ys[fail])
+            raise self._failure(int(fail), ys[fail], x)
         w = np.exp(logw - logw.max())
         return _result(means, covs, None, None, ess, resampled, float(loglik), x, w / w.sum())

@@ -41,7 +41,14 @@ from numpy.typing import ArrayLike
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import check_finite, check_one_step, check_psd
+from .._validate import (
+    as_float_array,
+    as_whole,
+    check_finite,
+    check_one_step,
+    check_psd,
+    check_symmetric,
+)
 from ..models.adapters import MeasurementFunctions, MotionFunctions, psd_sqrt
 from ..models.nonlinear import _offset_mean
 from ..models.protocols import (
@@ -317,7 +324,21 @@ class _SigmaPoints:
                [-1.732,  0.   ],
                [ 0.   , -1.732]])
         """
+        x = as_float_array(x, "x", ndim=(1,))
+        P = as_float_array(P, "P", ndim=(2,))
+        self._check_pair(x, P)
         return self._one(x, P, "P")
+
+    @staticmethod
+    def _check_pair(x: np.ndarray, P: np.ndarray) -> None:
+        """``P`` of ``x``'s size, both finite, ``P`` symmetric (a larger ``P`` was cut to its
+        top-left block by ``points_one``, and by ``points`` met numpy's broadcast error)."""
+        n = x.shape[-1]
+        if P.shape[-2:] != (n, n):
+            raise ValueError(f"P must be (..., {n}, {n}), the size of x's {n} values; got "
+                             f"shape {P.shape}")
+        check_finite(x, "x")
+        check_symmetric(P, "P")
 
     def _one(self, x: np.ndarray, P: np.ndarray, name: str) -> np.ndarray:
         n = x.shape[0]
@@ -359,6 +380,12 @@ class _SigmaPoints:
         >>> pts.shape, pts[0, :, 0].round(3).tolist()
         ((3, 5, 2), [0.0, 0.707, 0.0, -0.707, 0.0])
         """
+        x = as_float_array(x, "x", ndim=None)
+        P = as_float_array(P, "P", ndim=None)
+        if x.ndim < 1 or P.ndim < 2:
+            raise ValueError(f"x must be (..., n) and P (..., n, n); got shapes {x.shape} and "
+                             f"{P.shape}")
+        self._check_pair(x, P)
         return self._many(x, P, "P")
 
     def _many(self, x: np.ndarray, P: np.ndarray, name: str) -> np.ndarray:
@@ -460,6 +487,7 @@ class MerweScaledSigmaPoints(_SigmaPoints):
         >>> round(float(Wm.sum()), 12), round(float(Wc[0] - Wm[0]), 12)
         (1.0, 2.0)
         """
+        n = as_whole(n, "n", 1)  # (-1 and 2.5 failed in numpy's words)
         lam = self._lam(n)
         Wm = np.full(2 * n + 1, 0.5 / (n + lam))
         Wc = Wm.copy()
@@ -537,6 +565,7 @@ class JulierSigmaPoints(_SigmaPoints):
         >>> JulierSigmaPoints(kappa=0.0).weights(1)[0].tolist()
         [0.0, 0.5, 0.5]
         """
+        n = as_whole(n, "n", 1)  # (-1 and 2.5 failed in numpy's words)
         if not n + self.kappa > 0:
             raise ValueError(f"n + kappa must be > 0; got {n + self.kappa} for n={n}")
         W = np.full(2 * n + 1, 0.5 / (n + self.kappa))
@@ -641,6 +670,8 @@ def ukf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
     points = points or MerweScaledSigmaPoints()
     n = g.mean.shape[-1]
+    if n != mo.n:  # (numpy's matmul error, naming neither)
+        raise ValueError(f"g must have a state of {mo.n} values, the motion model's; got {n}")
     Wm, Wc = points.weights(n)
     if g.mean.ndim == 1 and state_mean is None and state_residual is None:
         gamma = np.asarray(mo.f(points._one(g.mean, g.cov, "g.cov"), dt, t), dtype=float)
@@ -756,6 +787,19 @@ def ukf_update(g: Gaussian, y: ArrayLike,
     return _ukf_update(g, y, measurement, points, residual, mean, state_residual)[0]
 
 
+def _check_model_values(z: np.ndarray, gamma: np.ndarray, model: str, f: str) -> None:
+    """Name a sigma point (or member) ``gamma[..., k, :]`` at which a model's ``z`` holds NaN
+    or infinity (a batch's estimates, or an ensemble's members, came out NaN without a
+    word, where a single Gaussian's update named it)."""
+    bad = ~np.isfinite(z).all(axis=-1)
+    if bad.any():
+        at = tuple(int(i) for i in np.argwhere(bad)[0])
+        where = f"[{', '.join(map(str, at))}]"
+        raise ValueError(f"{model} gave NaN or infinity at sigma point {where}: "
+                         f"{f}({np.array2string(gamma[at], precision=4)}) = "
+                         f"{np.array2string(z[at], precision=4)}")
+
+
 def _ukf_update(g: Gaussian, y: ArrayLike,
                 measurement: MeasurementModel | NonlinearMeasurementModel,
                 points: _SigmaPoints | None,
@@ -789,6 +833,7 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
     # a missing component's value is not used: 0, not NaN, where h has none there (NaN times
     # the mask's 0 below is NaN, and made every estimate of the batch NaN)
     zs = np.where(obs[..., None, :], np.asarray(me.h(gamma), dtype=float), 0.0)
+    _check_model_values(zs, gamma, "the measurement model", "h")
     zhat, Pzz, rz = (_central_transform(zs, Wm, Wc, me.residual) if me.standard
                      else _transform(zs, Wm, Wc, me.mean, me.residual))
     rz = rz * obs[..., None, :]  # missing components: no cross-covariance
