@@ -339,15 +339,16 @@ def test_a_detections_file_alone_needs_its_frame_rate_once(tmp_path, capsys, bad
     assert main(["track", str(tmp_path / "nothere.txt"), "--out", str(out), "--fps", "10"]) == 2
     one_line(capsys, "track", f"{tmp_path / 'nothere.txt'} does not exist (a sequence folder, "
              "or a detections file)")
-    # --detections that does not exist is named alone (it asked to pass --detections, given);
-    # a sequence folder without det/det.txt points to the option
+    # --detections that does not exist is named with its option, as --gt is (it asked to pass
+    # --detections, given; then it named the file alone); a sequence folder without
+    # det/det.txt points to the option
     seq = tmp_path / "seq_no_det"
     (seq / "det").mkdir(parents=True)
     (seq / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=5\n"
                                      "imWidth=640\nimHeight=480\n")
     assert main(["track", str(seq), "--out", str(out), "--detections",
                  str(tmp_path / "nosuch.txt")]) == 2
-    one_line(capsys, "track", f"{tmp_path / 'nosuch.txt'} does not exist")
+    one_line(capsys, "track", f"{tmp_path / 'nosuch.txt'} does not exist (--detections FILE)")
     assert main(["track", str(seq), "--out", str(out)]) == 2
     one_line(capsys, "track", f"{seq / 'det' / 'det.txt'} does not exist (pass --detections "
              "FILE, another file of detections)")
@@ -1306,3 +1307,18 @@ def test_track_one_reads_its_ground_truth_once(tmp_path, monkeypatch, capsys):
     empty = tmp_path / "empty.txt"
     empty.write_text("\n")
     assert single.read_box_lines(empty)[1] == 0
+
+
+def test_a_missing_detections_file_and_an_eleventh_value_are_named_plainly(bad_sequence,
+                                                                            tmp_path):
+    """`--detections nothere.txt` said "nothere.txt does not exist", naming no option (--gt
+    and the rest name theirs); a row of 12 values said "column 11 (column 11)"."""
+    r = cli("track", bad_sequence, "--out", tmp_path / "r.txt", "--detections",
+            tmp_path / "no.txt")
+    assert r.returncode == 2
+    assert f"{tmp_path / 'no.txt'} does not exist (--detections FILE)" in r.stderr
+    extra = tmp_path / "extra.txt"
+    extra.write_text("1,-1,1,2,3,4,0.9,-1,-1,-1,7,8\n")
+    r = cli("track", bad_sequence, "--out", tmp_path / "r.txt", "--detections", extra)
+    assert r.returncode == 2
+    assert f"{extra}, line 1, column 11: expected at most 10 values, got 12" in r.stderr

@@ -439,7 +439,10 @@ def test_sanity_warnings_on_the_shared_files_and_a_chance_overlap(tmp_path):
     assert sanity_warnings(gt, det) == []  # a detector's boxes meet the ground truth's
     # another sequence's ground truth as results: some boxes meet by chance (0.98 %)
     other = read_mot(seq_dir("MOT17", "MOT17-04-FRCNN") / "gt" / "gt.txt")
-    (w,) = sanity_warnings(gt, other)
+    # (MOT17-04's 1,050 frames against MOT17-09's 525: its later rows are said too)
+    past, w = sanity_warnings(gt, other)
+    assert past.startswith(f"{int((other.frames > 525).sum())} of the {len(other)} rows of "
+                           f"{other.path} lie past the last frame of {gt.path} (525)")
     assert w.startswith("predictions and ground truth look unrelated: only ")
     assert w.endswith(f"boxes of {other.path} in their 525 common frames overlap a box of "
                       f"{gt.path} by IoU >= 0.5")
@@ -809,3 +812,41 @@ def test_results_of_other_classes_are_refused_as_trackeval_refuses_them(tmp_path
     with pytest.raises(ValueError, match=re.escape("gt.classes must be an array of shape (N,) "
                                                    "= (3,), as frames")):
         evaluate_mot(table, table)
+
+
+def test_ground_truth_without_conf_is_said_to_count_every_row(tmp_path):
+    """A ground-truth file of 6 values a row has no conf, MOTChallenge's mark (0) of the rows
+    a benchmark ignores: every row counted, without a word (PETS09-S2L1's FN 941 became
+    1,091). Oracle: the same rows with conf 1, which count every row too, and no warning."""
+    import warnings
+
+    from vistrack.evaluation.files import read_truth
+
+    six, seven = tmp_path / "g6.txt", tmp_path / "g7.txt"
+    six.write_text("1,1,10,10,20,40\n2,1,12,10,20,40\n")
+    seven.write_text("1,1,10,10,20,40,1\n2,1,12,10,20,40,1\n")
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{six}: 6 values a row, no conf (MOTChallenge's 7th value, 0 on the rows a "
+            "benchmark ignores): every row is counted")):
+        a = read_truth(six)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        b = read_truth(seven)
+    assert len(a) == len(b) == 2
+
+
+def test_results_past_a_short_ground_truth_are_said():
+    """A ground truth of the first 100 frames scored results running to 795 with every later
+    row a false positive (MOTA -660), without a word; results shorter than the ground
+    truth were warned of already. Oracle: the frames themselves; a few rows past the end
+    (objects gone before the sequence ends) are not warned of."""
+    from vistrack.evaluation.sanity import sanity_warnings
+
+    gt = MOTTable.from_rows([(f, 1, 10, 0, 20, 40, 1, 1, 1.0) for f in range(1, 11)],
+                            path="gt.txt")
+    long = MOTTable.from_rows([(f, 7, 10, 0, 20, 40) for f in range(1, 41)], path="res.txt")
+    assert sanity_warnings(gt, long) == [
+        "30 of the 40 rows of res.txt lie past the last frame of gt.txt (10), on frames 11-40: "
+        "each counts as a false positive (a ground truth of part of the sequence?)"]
+    few = MOTTable.from_rows([(f, 7, 10, 0, 20, 40) for f in range(1, 13)], path="res.txt")
+    assert sanity_warnings(gt, few) == []

@@ -83,7 +83,20 @@ def test_write_then_read_and_no_overwrite(tmp_path):
     assert len(read_mot(p)) == 1
     (tmp_path / "s").mkdir()
     (tmp_path / "s" / "seqinfo.ini").write_text("[Sequence]\nname=s\nframeRate=abc\n")
-    with pytest.raises(MOTFormatError, match="frameRate = 'abc' is not float"):
+    # the line, and the words of the file's reader ("is not float" before, and no line)
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{tmp_path / 's' / 'seqinfo.ini'}:3: frameRate = 'abc' is not a number")):
+        read_seqinfo(tmp_path / "s")
+    (tmp_path / "s" / "seqinfo.ini").write_text(
+        "; made by hand\n[Other]\nseqLength = 4\n[Sequence]\nname=s\nframeRate=25\n"
+        "SEQLENGTH : 2.5\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{tmp_path / 's' / 'seqinfo.ini'}:7: seqLength must be a whole number; got 2.5")):
+        read_seqinfo(tmp_path / "s")
+    (tmp_path / "s" / "seqinfo.ini").write_text("[Sequence]\nname=s\nseqLength=3\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            "[Sequence] has no frameRate; give the rate (vistrack track --fps, read_seqinfo's "
+            "frame_rate)")):
         read_seqinfo(tmp_path / "s")
 
 
@@ -204,7 +217,7 @@ def test_huge_frames_and_ids_are_refused(tmp_path):
 @pytest.mark.parametrize("body, match", [
     ("[Sequence]\nname=50%\nframeRate=25\nseqLength=3\nimWidth=640\nimHeight=480\n", None),
     ("[Sequence]\nframeRate=inf\nseqLength=3\nimWidth=640\nimHeight=480\n",
-     "frameRate must be a finite number > 0; got inf"),
+     ":2: frameRate must be a finite number > 0; got inf"),
     ("[Sequence]\nframeRate=25\nframeRate=30\n",
      ", line 3: not a valid INI file: 'framerate' appears twice in [Sequence]"),
     ("frameRate=25\n", ", line 1: not a valid INI file: no [section] header before 'frameRate=25'"),
@@ -223,7 +236,7 @@ def test_seqinfo_oddities(tmp_path, body, match):
     else:
         with pytest.raises(MOTFormatError) as e:
             read_seqinfo(p)
-        sep = "" if match.startswith(",") else ": "
+        sep = "" if match.startswith((",", ":")) else ": "
         assert str(e.value) == f"{p}{sep}{match}"
 
 
@@ -240,7 +253,7 @@ def test_seqinfo_counts_written_as_floats_are_read(tmp_path):
     p.write_text("[Sequence]\nframeRate=10\nseqLength=600.5\nimWidth=1920\nimHeight=1080\n")
     with pytest.raises(MOTFormatError) as e:
         read_seqinfo(p)
-    assert str(e.value) == f"{p}: seqLength must be a whole number; got 600.5"
+    assert str(e.value) == f"{p}:3: seqLength must be a whole number; got 600.5"
 
 
 def test_a_class_column_that_holds_no_class(tmp_path):

@@ -337,3 +337,15 @@ def test_a_page_that_fails_still_shows_the_runs_files_and_scores(tmp_path, monke
                         "error below")
     assert said.err.strip() == "vistrack track: error: annotated.mp4: cannot be re-encoded"
     assert (out / "tracks.txt").exists() and not (out / "report.html").exists()
+
+
+def test_a_folder_without_its_run_description_is_said(run_dir, tmp_path, capsys):
+    """A run folder whose run.json was removed gave a page without the command, the counts
+    and the scores (the run had --gt), without a word, where a missing video is said."""
+    moved = tmp_path / "moved"
+    shutil.copytree(run_dir, moved)
+    (moved / "run.json").unlink()
+    assert main(["report", str(moved), "--force"]) == 0
+    assert (f"warning: {moved}: no run.json: the report has no command, counts, warnings or "
+            "scores of the run, only its files") in capsys.readouterr().err
+    assert "<h2>Scores</h2>" not in (moved / "report.html").read_text()

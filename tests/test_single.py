@@ -530,6 +530,12 @@ def test_cli_track_one_names_a_box_opencv_cannot_start_on(tmp_path):
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert ("error: box (x, y, w, h) = (100, 100, 1, 1), whole pixels (100, 100, 1, 1): "
             "OpenCV's csrt needs w and h of at least 2 whole pixels") in r.stderr
+    # a box whose width a float cannot hold at x = 1e17: a ZeroDivisionError's traceback
+    r = subprocess.run([sys.executable, "-m", "vistrack.cli", "track-one", str(CROSSING / "img"),
+                        "--init", "100000000000000000,10,5,5", "--out",
+                        str(tmp_path / "c.txt")], capture_output=True, text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert "has no size a float holds at its place" in r.stderr
 
 
 def test_read_boxes_reads_utf8_with_a_mark_and_names_a_file_that_is_not_text(tmp_path):
@@ -976,3 +982,43 @@ def test_median_flows_motion_names_a_frame_it_cannot_use():
             t.motion(bad)
     d, s = t.motion(np.roll(scene, (1, 3), axis=(0, 1)))
     assert np.allclose(d, [3, 1], atol=0.05) and s == pytest.approx(1, abs=0.01)
+
+
+@pytest.mark.parametrize("box", [[10, 10, 1e-200, 1e-200], [1e17, 10, 5, 5],
+                                 [10, 1e17, 5, 5]])
+def test_a_start_box_whose_size_floating_point_loses_is_refused(box):
+    """A start box of 1e-200 on a side (its area 0 in floating point), or at x = 1e17 (where
+    a float cannot hold its width: x + w == x), failed in a ZeroDivisionError with a
+    traceback from `vistrack track-one --init`. Oracle: floating point's own sums; a box
+    under a pixel is still followed (by the pixels about it)."""
+    from vistrack.tracking.single import single_tracker
+
+    with pytest.raises(ValueError, match=re.escape("has no size a float holds at its place")):
+        single_tracker("colour").init(np.zeros((60, 80, 3), np.uint8), box)
+    single_tracker("colour").init(np.zeros((60, 80, 3), np.uint8), [10, 10, 0.5, 0.5])
+
+
+def test_track_one_refuses_ground_truth_of_other_frames(tmp_path):
+    """frame,x,y,w,h lines numbered 201-320 were scored as the video's frames 1-120 without a
+    word (each line k against frame k). Oracle: the file's own first frame number against
+    the video's first; the same boxes numbered from 1 score as the x y w h file does."""
+    sequence(CROSSING / "img", "*.jpg")
+    rows = read_boxes(CROSSING / "groundtruth_rect.txt")
+    late, own = tmp_path / "late.txt", tmp_path / "own.txt"
+    late.write_text("".join(f"{201 + k},{x},{y},{w},{h}\n" for k, (x, y, w, h) in
+                            enumerate(rows.tolist())))
+    own.write_text("".join(f"{1 + k},{x},{y},{w},{h}\n" for k, (x, y, w, h) in
+                           enumerate(rows.tolist())))
+
+    def run(gt, out):
+        return subprocess.run([sys.executable, "-m", "vistrack.cli", "track-one",
+                               str(CROSSING / "img"), "--gt", str(gt), "--out",
+                               str(tmp_path / out)], capture_output=True, text=True)
+
+    r = run(late, "a.txt")
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert (f"error: {late}'s frame,x,y,w,h lines start at frame 201; the video's frames "
+            "start at 1") in r.stderr
+    mine, theirs = run(own, "b.txt"), run(CROSSING / "groundtruth_rect.txt", "c.txt")
+    assert mine.returncode == 0 and mine.stdout.splitlines()[-1] == \
+        theirs.stdout.splitlines()[-1]

@@ -1580,7 +1580,8 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
     replaced: tuple[str, float] | None = None  # seqinfo.ini's frameRate, where fps is put over
     if not det_path.exists():
         raise FileNotFoundError(
-            f"{det_path} does not exist" + ("" if detections is not None or alone else
+            f"{det_path} does not exist" + (" (--detections FILE)" if detections is not None
+                                            else "" if alone else
                                             " (pass --detections FILE, another file of "
                                             "detections)"))
     if det_path.is_dir():
@@ -2600,8 +2601,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 if end is not None and table is not None and len(table) and \
                         table.frames[-1] > end:
                     past = table.frames[table.frames > end]
-                    on = (f"1 row on frame {past[0]}" if len(past) == 1 else
-                          f"{len(past)} rows on frame {past[0]}" if past[0] == past[-1] else
+                    on = (f"{_count(len(past), 'row')} on frame {past[0]}"
+                          if past[0] == past[-1] else
                           f"{len(past)} rows on frames {past[0]}-{past[-1]}")
                     warnings.warn(f"{label}: {on}, "
                                   f"past the video's last frame ({end}): {what}", UserWarning,
@@ -2772,6 +2773,11 @@ class SingleRun:
         return max(len(self.boxes) - 1, 0) / max(self.seconds, 1e-12)
 
 
+def _count(n: int, one: str, many: str | None = None) -> str:
+    """``n`` and the noun in its number: "1 box", "2 boxes"."""
+    return f"{n} {one if n == 1 else many or one + 's'}"
+
+
 def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
               method: str = "colour", gt: str | Path | None = None, force: bool = False,
               progress: TextIO | None = None, init_name: str = "init",
@@ -2846,9 +2852,9 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     """
     from ._validate import as_box
     from .evaluation.single import (
+        _read_box_rows,
         boxes_origin,
         precision,
-        read_box_lines,
         success_curve,
         success_rate,
     )
@@ -2859,10 +2865,10 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     check_not_input([out], input_files(source, gt=gt), name="out")
     check_output(out, force=force)
     tracker = single_tracker(method)
-    truth = None
+    truth, gt_first = None, None
     if gt is not None:
         try:
-            truth, width = read_box_lines(gt, origin=gt_origin)
+            truth, width, gt_first = _read_box_rows(gt, origin=gt_origin)
         except FileNotFoundError:  # (named as the track command names it)
             raise FileNotFoundError(f"{gt} does not exist (--gt FILE)") from None
         except IsADirectoryError:
@@ -2894,6 +2900,12 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     start = Detections.from_xywh(as_box(init, init_name)[None])
     reader = VideoReader(source, prefetch=4)
     first = reader.start
+    if truth is not None and gt_first is not None and gt_first != first:
+        # frame,x,y,w,h lines number their frames: of frames 201-320, they were scored as
+        # the video's 1-120 without a word
+        raise ValueError(f"{gt}'s frame,x,y,w,h lines start at frame {gt_first}; the video's "
+                         f"frames start at {first}: a ground truth of other frames (its line "
+                         "k is scored against the video's k-th frame)")
 
     def detect(frame: Frame) -> Detections | None:
         if frame.index != first:
@@ -2908,7 +2920,8 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
         if stats.frames == 0:  # (an empty file was written, and "-1e12 frames/s" said)
             raise ValueError(f"{source}: no frames to track")
         if truth is not None and len(truth) < len(writer.boxes):
-            raise ValueError(f"{gt} has {len(truth)} boxes for {len(writer.boxes)} frames")
+            raise ValueError(f"{gt} has {_count(len(truth), 'box', 'boxes')} for "
+                             f"{_count(len(writer.boxes), 'frame')}")
 
     with made_folder(out.parent):  # removed again, if made here, when the run fails
         stats = run(reader, detect, tracker, [writer], progress=progress, total=len(reader),
@@ -2917,7 +2930,8 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     scores = None
     if truth is not None:
         if len(truth) > len(b):  # a ground truth of another, longer sequence?
-            warnings.warn(f"{gt} has {len(truth)} boxes for {len(b)} frames: the last "
+            warnings.warn(f"{gt} has {_count(len(truth), 'box', 'boxes')} for "
+                          f"{_count(len(b), 'frame')}: the last "
                           f"{len(truth) - len(b)} are not scored", UserWarning, stacklevel=2)
         t = truth[:len(b)]
         scores = {"success": success_rate(b, t), "auc": success_curve(b, t)[2],

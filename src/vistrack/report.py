@@ -218,6 +218,11 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
         raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
                                 "track --out-dir wrote")
     check_output(target, force=force, name="report")
+    if not run_info.is_file():
+        # (the page was written without the command, the counts and the scores, unsaid, as a
+        # missing video or plot is said)
+        warnings.warn(f"{out_dir}: no {RUN_INFO}: the report has no command, counts, warnings "
+                      "or scores of the run, only its files", RuntimeWarning, stacklevel=2)
     name = info.get("name") or out_dir.name
     parts = [f"<h1>vistrack report: {html.escape(name)}</h1>"]
     if info.get("command"):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -86,7 +87,14 @@ def read_truth(path: str | Path, *, points: bool = False) -> MOTTable:
     suffix = path.suffix.lower()
     if suffix == ".parquet" or (suffix == ".csv" and not _text_without_header(path)):
         return _read_results(path, points=points)
-    return read_mot(path)
+    table = read_mot(path)
+    if len(table) and table.columns < 7:
+        # (its rows to ignore, conf 0 in MOTChallenge's ground truth, were counted as people
+        # to find without a word: PETS09-S2L1's FN 941 became 1,091)
+        warnings.warn(f"{path}: {table.columns} values a row, no conf (MOTChallenge's 7th "
+                      "value, 0 on the rows a benchmark ignores): every row is counted",
+                      UserWarning, stacklevel=2)
+    return table
 
 
 def _text_without_header(path: Path) -> bool:

@@ -72,6 +72,8 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False,
       ground truth of another; a detector's 87-99 %): fewer than 10 % of the predicted boxes
       of the common frames meeting one is warned about too.
 
+    - a quarter or more of ``pred``'s rows lie past ``gt``'s last frame, where each counts
+      as a false positive (a ground truth of part of the sequence);
     - ``pred`` is empty while ``gt`` is not: every ground-truth box counts as missed (a
       tracker may find nothing, but a results file of no rows is more often the wrong file,
       or a run whose thresholds no detection reached). An empty ``gt`` is not warned about
@@ -151,6 +153,14 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False,
         out.append(f"predictions and ground truth look unrelated: {pname} has {_frames(pred)} "
                    f"and {gname} {_frames(gt)}, no frame in common")
         return out
+    last = int(gt.frames.max())
+    past = int(np.sum(pred.frames > last))
+    if past >= 0.25 * len(pred):
+        # (a ground truth cut short scored every later row as a false positive, without a
+        # word: MOTA -660 for results past a ground truth of the first 100 frames)
+        out.append(f"{past} of the {len(pred)} rows of {pname} lie past the last frame of "
+                   f"{gname} ({last}), on frames {last + 1}-{int(pred.frames.max())}: each "
+                   "counts as a false positive (a ground truth of part of the sequence?)")
     gs = np.searchsorted(gt.frames, common, side="left"), np.searchsorted(gt.frames, common,
                                                                            side="right")
     ps = np.searchsorted(pred.frames, common, side="left"), np.searchsorted(pred.frames, common,

@@ -362,6 +362,13 @@ def read_box_lines(path: str | Path, rule: str = "area",
     >>> read_box_lines(path)
     (array([[10., 20., 30., 40.]]), 5)
     """
+    return _read_box_rows(path, rule, origin)[:2]
+
+
+def _read_box_rows(path: str | Path, rule: str = "area", origin: int | None = None
+                   ) -> tuple[np.ndarray, int, int | None]:
+    """:func:`read_box_lines`, and the first line's frame number for ``frame,x,y,w,h``
+    lines (None for others, which number their frames by line)."""
     if not (origin is None or (isinstance(origin, (int, np.integer))
                                and not isinstance(origin, bool) and origin in (0, 1))):
         raise ValueError(f"origin must be 0, 1 or None (by the file's name); got {origin!r}")
@@ -400,14 +407,14 @@ def read_box_lines(path: str | Path, rule: str = "area",
         last = n
     a = np.array(rows, dtype=float)
     if a.size == 0:
-        return np.zeros((0, 4)), 0
+        return np.zeros((0, 4)), 0, None
     if a.shape[1] == 8:
-        return region_to_bbox(a, rule), 8
+        return region_to_bbox(a, rule), 8, None
     if a.shape[1] == 5:
-        return a[:, 1:], 5
+        return a[:, 1:], 5, int(a[0, 0]) if a[0, 0].is_integer() else None
     if boxes_origin(path) if origin is None else origin:  # OTB: 1-based pixels
         a[:, :2] -= 1
-    return a, 4
+    return a, 4, None
 
 
 def boxes_origin(path: str | Path) -> int:

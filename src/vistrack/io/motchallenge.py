@@ -721,8 +721,9 @@ class FrameSlices(Sequence[slice]):
 
 
 def _bad(path: str, line: int, column: int, text: str) -> MOTFormatError:
-    name = _NAMES[column - 1] if column <= len(_NAMES) else f"column {column}"
-    return MOTFormatError(f"{path}, line {line}, column {column} ({name}): {text}")
+    # (a column past MOTChallenge's ten has no name: "column 11 (column 11)" before)
+    name = f" ({_NAMES[column - 1]})" if column <= len(_NAMES) else ""
+    return MOTFormatError(f"{path}, line {line}, column {column}{name}: {text}")
 
 
 def _read_text(path: str, what: str) -> str:
@@ -1689,16 +1690,34 @@ def _seqinfo_value(path: Path, s: Any, key: str, kind: type) -> Any:
     """``key`` of the section ``s``: a finite number > 0 (a whole one for ``int``, written
     ``600`` or ``600.0``), or a MOTFormatError naming the file."""
     if key not in s:
-        raise MOTFormatError(f"{path}: [Sequence] has no {key}")
+        hint = ("; give the rate (vistrack track --fps, read_seqinfo's frame_rate)"
+                if key == "frameRate" else "")
+        raise MOTFormatError(f"{path}: [Sequence] has no {key}{hint}")
+    where = _ini_line(path, key)
     try:
         # a count written as a float (600.0, 6e2) is a number > 0 as the contract asks
         v = float(s[key]) if kind is int else kind(s[key])
     except ValueError:
-        raise MOTFormatError(f"{path}: {key} = {s[key]!r} is not {kind.__name__}") from None
+        # ("is not float", Python's word, and no line before)
+        raise MOTFormatError(f"{where}: {key} = {s[key]!r} is not a number") from None
     if kind is not str and not 0 < v < np.inf:
-        raise MOTFormatError(f"{path}: {key} must be a finite number > 0; got {s[key]}")
+        raise MOTFormatError(f"{where}: {key} must be a finite number > 0; got {s[key]}")
     if kind is int:
         if not float(v).is_integer():
-            raise MOTFormatError(f"{path}: {key} must be a whole number; got {s[key]}")
+            raise MOTFormatError(f"{where}: {key} must be a whole number; got {s[key]}")
         v = int(v)
     return v
+
+
+def _ini_line(path: Path, key: str) -> str:
+    """``path:LINE`` of the line that sets ``key`` in ``[Sequence]`` (keys are read without
+    regard to case, as configparser reads them), or ``path`` alone where none is found."""
+    section = ""
+    for n, line in enumerate(_read_text(os.fspath(path), "seqinfo.ini").splitlines(), 1):
+        t = line.strip()
+        if t.startswith("["):
+            section = t.strip("[] ")
+        elif section == "Sequence" and t.partition("=")[0].partition(":")[0].strip().lower() \
+                == key.lower():
+            return f"{path}:{n}"
+    return str(path)

@@ -183,8 +183,9 @@ def _index_centre(box: np.ndarray) -> np.ndarray:
 
 
 def check_start_box(image: np.ndarray, box: np.ndarray, name: str = "box") -> None:
-    """Refuse a start box ``x, y, w, h`` with less than half its area inside ``image``: a
-    tracker has no object to learn there (and OpenCV's fail inside, others follow nothing).
+    """Refuse a start box ``x, y, w, h`` with less than half its area inside ``image``, or
+    whose size floating point loses: a tracker has no object to learn there (and OpenCV's
+    fail inside, others follow nothing).
 
     Examples
     --------
@@ -199,12 +200,18 @@ def check_start_box(image: np.ndarray, box: np.ndarray, name: str = "box") -> No
         return  # not an image: the tracker's own check names it
     H, W = shape[:2]
     x, y, w, h = (float(v) for v in box)
+    where = f"{name} (x, y, w, h) = ({', '.join(f'{v:g}' for v in (x, y, w, h))})"
+    if not w * h > 0 or x + w == x or y + h == y:
+        # (1e-200 on a side, or a size lost at x = 1e17 in floating point, divided by an
+        # area of 0 in a ZeroDivisionError; a box under a pixel is followed, by the pixels
+        # about it)
+        raise ValueError(f"{where} has no size a float holds at its place (its area, or "
+                         "x + w against x, or y + h against y, rounds to nothing)")
     iw = max(0.0, min(x + w, W) - max(x, 0.0))
     ih = max(0.0, min(y + h, H) - max(y, 0.0))
     inside = iw * ih / (w * h)
     if inside >= 0.5:
         return
-    where = f"{name} (x, y, w, h) = ({', '.join(f'{v:g}' for v in (x, y, w, h))})"
     if inside == 0.0:
         raise ValueError(f"{where} lies outside the {W}x{H} image")
     raise ValueError(f"{where} has only {int(100 * inside)} % of its area inside the {W}x{H} "
