@@ -146,6 +146,8 @@ def test_a_bad_file_is_named_with_its_key(tmp_path, text, match):
      r"\[tracker\] has no key 'deeper'"),
     # a check across keys: the line of the key the message is about
     ('[tracker]\nlow = 0.3\nhigh = 0.2\n', 2, r"\[tracker\] low must be at most high"),
+    # an array of tables where a table goes
+    ('# mine\n[[tracker]]\nhigh = 0.5\n', 2, r"tracker must be a table \(\[tracker\]\)"),
     # a table misspelt is named with a near one
     ('# mine\n[trackr]\nhigh = 0.5\n', 2, r"unknown table or key 'trackr'; did you mean "
                                              r"\[tracker\]\?"),

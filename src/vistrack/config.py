@@ -370,7 +370,10 @@ def _key_line(text: str, table: str, key: str | None = None) -> int | None:
     for number, line in enumerate(text.splitlines(), 1):
         # read with string methods, not patterns, so a long line costs its length once
         line = line.strip()
-        if line.startswith("[["):  # an array of tables: none of ours
+        if line.startswith("[["):  # an array of tables: none of ours, but named where asked
+            name = line[2:].partition("]]")[0]
+            if key is None and parts(name) == [table]:
+                return number
             current = ["[["]
             continue
         if line.startswith("["):
