@@ -1322,3 +1322,20 @@ def test_a_missing_detections_file_and_an_eleventh_value_are_named_plainly(bad_s
     r = cli("track", bad_sequence, "--out", tmp_path / "r.txt", "--detections", extra)
     assert r.returncode == 2
     assert f"{extra}, line 1, column 11: expected at most 10 values, got 12" in r.stderr
+
+
+def test_a_confirm_hits_beyond_the_frames_is_said(tmp_path):
+    """--confirm-hits 100000 on 5 frames of detections wrote the first frame's tracks alone
+    (ByteTrack confirms those at once), without a word. Oracle: the file's own frames."""
+    seq = tmp_path / "seq"
+    (seq / "det").mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=5\n"
+                                     "imWidth=320\nimHeight=240\n")
+    (seq / "det" / "det.txt").write_text(
+        "".join(f"{f},-1,{10 + 2 * f},20,20,40,0.9,-1,-1,-1\n" for f in range(1, 6)))
+    r = cli("track", seq, "--out", tmp_path / "r.txt", "--confirm-hits", 6)
+    assert r.returncode == 0, r.stderr
+    assert ("confirm_hits 6 (--confirm-hits) is more than its 5 frames of detections: no track "
+            "is confirmed but those started on the first frame") in r.stderr
+    r = cli("track", seq, "--out", tmp_path / "s.txt", "--confirm-hits", 5)
+    assert "confirm_hits" not in r.stderr

@@ -1629,6 +1629,13 @@ def _check_detections(src: _SequenceInput, tc: BoxTrackerConfig, oc: OfflineConf
     if len(dets):
         _warn_no_start(src.det_path, dets.conf, tc, oc.start_score if oc.enabled else None,
                        stacklevel=3)
+        frames = int(dets.frames.max() - dets.frames.min()) + 1
+        if 1 < frames < tc.confirm_hits:  # (on one frame every track starts on the first)
+            # (--confirm-hits 100000 wrote the tracks of the first frame alone, unsaid)
+            warnings.warn(f"{src.det_path}: confirm_hits {tc.confirm_hits} (--confirm-hits) "
+                          f"is more than its {frames} frames of detections: no track is "
+                          "confirmed but those started on the first frame", UserWarning,
+                          stacklevel=3)
     if tc.scores == "raw" and tc.fuse_score and len(dets) and not (
             (dets.conf >= 0) & (dets.conf <= 1)).all():
         raise ValueError(f"{src.det_path}: scores from {dets.conf.min():.4g} to "
