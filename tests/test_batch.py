@@ -4,6 +4,7 @@ middle of a job run again to the same outputs."""
 
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -422,6 +423,16 @@ def test_vistrack_track_with_several_inputs(bench, tmp_path, capsys):
     text = capsys.readouterr().out
     assert "3 of 3 inputs tracked" in text
     assert (out / "SIM-2.txt").read_bytes() == _alone(bench / "SIM-2", tmp_path / "a.txt")
+    # names shorter than the header ("A" under "input"): the columns were shifted
+    short = tmp_path / "short"
+    short.mkdir()
+    for name in ("A", "B"):
+        shutil.copytree(bench / "SIM-0", short / name)
+    assert main(["track", str(short), "--out", str(tmp_path / "r3"), "--quiet"]) == 0
+    rows = [r for r in capsys.readouterr().out.splitlines() if r.split()[:1] in
+            (["input"], ["A"], ["B"])]
+    assert len(rows) == 3 and len({r.index(" ok") + 1 if " ok" in r else r.index("status")
+                                   for r in rows}) == 1, rows
     # outputs are not overwritten without --force, before anything runs
     assert main(["track", str(bench), "--out", str(out), "--quiet"]) == 2
     assert "--force" in capsys.readouterr().err

@@ -1007,7 +1007,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     # an input's name, or the path given where its name says nothing (".", "..")
     names = [o.input.name if o.input.name not in ("", ".", "..") else str(o.input)
              for o in outcomes]
-    width = max(map(len, names))
+    width = max(len("input"), *map(len, names))  # (names shorter than the header: misaligned)
     print(f"{'input':{width}s}  status  frames  tracks  seconds  output")
     for o, input_name in zip(outcomes, names):
         status = "ok" if o.ok else ("failed" if o.attempts else "not run")
