@@ -25,6 +25,18 @@ _BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _ONE_THREAD = (*_BLAS_THREADS, "NUMBA_NUM_THREADS")
 
 
+
+def counted(count: int, one: str, many: str | None = None) -> str:
+    """``count`` and the word, in the singular for 1 (``1 track``, ``2 tracks``, ``1 box``,
+    ``2 boxes`` with ``many``).
+
+    Examples
+    --------
+    >>> counted(1, "box", "boxes"), counted(3, "frame")
+    ('1 box', '3 frames')
+    """
+    return f"{count} {one if count == 1 else many or one + 's'}"
+
 def message(exc: BaseException) -> str:
     """An exception's message on one line; an OS error as ``FILE: what went wrong``, and the
     notes of where it was raised (:func:`vistrack.pipeline.run` adds them) after it.

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from . import __version__, _compile
+from ._pool import counted as _n
 
 if TYPE_CHECKING:
     from typing import TextIO
@@ -63,11 +64,6 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     if video is not None:
         errors.append(video.VideoError)
     return tuple(errors)
-
-
-def _n(count: int, one: str, many: str | None = None) -> str:
-    """``count`` and the word, in the singular for 1 (``1 track``, ``2 tracks``)."""
-    return f"{count} {one if count == 1 else many or one + 's'}"
 
 
 def _message(exc: BaseException) -> str:

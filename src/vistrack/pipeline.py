@@ -34,6 +34,7 @@ import numpy as np
 
 from . import _compile
 from ._memory import PeriodicRelease
+from ._pool import counted
 from ._registry import Registry
 from .config import OfflineConfig, TrackConfig
 from .detector_checks import (
@@ -2539,7 +2540,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         if grid is None and call is not None:
             inner = call
 
-            def counted(frame: Frame) -> Detections | None:
+            def counting(frame: Frame) -> Detections | None:
                 nonlocal found, top, bottom
                 d = inner(frame)
                 if d is not None and len(d):
@@ -2549,7 +2550,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                     bottom = min(bottom, float(d.scores.min()))
                 return d
 
-            call = counted
+            call = counting
 
         def found_nothing() -> bool:  # a front-end from pixels that found nothing (said below)
             return grid is None and call is not None and not found
@@ -2608,7 +2609,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 if end is not None and table is not None and len(table) and \
                         table.frames[-1] > end:
                     past = table.frames[table.frames > end]
-                    on = (f"{_count(len(past), 'row')} on frame {past[0]}"
+                    on = (f"{counted(len(past), 'row')} on frame {past[0]}"
                           if past[0] == past[-1] else
                           f"{len(past)} rows on frames {past[0]}-{past[-1]}")
                     warnings.warn(f"{label}: {on}, "
@@ -2780,11 +2781,6 @@ class SingleRun:
         return max(len(self.boxes) - 1, 0) / max(self.seconds, 1e-12)
 
 
-def _count(n: int, one: str, many: str | None = None) -> str:
-    """``n`` and the noun in its number: "1 box", "2 boxes"."""
-    return f"{n} {one if n == 1 else many or one + 's'}"
-
-
 def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
               method: str = "colour", gt: str | Path | None = None, force: bool = False,
               progress: TextIO | None = None, init_name: str = "init",
@@ -2927,8 +2923,8 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
         if stats.frames == 0:  # (an empty file was written, and "-1e12 frames/s" said)
             raise ValueError(f"{source}: no frames to track")
         if truth is not None and len(truth) < len(writer.boxes):
-            raise ValueError(f"{gt} has {_count(len(truth), 'box', 'boxes')} for "
-                             f"{_count(len(writer.boxes), 'frame')}")
+            raise ValueError(f"{gt} has {counted(len(truth), 'box', 'boxes')} for "
+                             f"{counted(len(writer.boxes), 'frame')}")
 
     with made_folder(out.parent):  # removed again, if made here, when the run fails
         stats = run(reader, detect, tracker, [writer], progress=progress, total=len(reader),
@@ -2937,8 +2933,8 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     scores = None
     if truth is not None:
         if len(truth) > len(b):  # a ground truth of another, longer sequence?
-            warnings.warn(f"{gt} has {_count(len(truth), 'box', 'boxes')} for "
-                          f"{_count(len(b), 'frame')}: the last "
+            warnings.warn(f"{gt} has {counted(len(truth), 'box', 'boxes')} for "
+                          f"{counted(len(b), 'frame')}: the last "
                           f"{len(truth) - len(b)} are not scored", UserWarning, stacklevel=2)
         t = truth[:len(b)]
         scores = {"success": success_rate(b, t), "auc": success_curve(b, t)[2],
