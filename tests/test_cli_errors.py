@@ -1339,3 +1339,13 @@ def test_a_confirm_hits_beyond_the_frames_is_said(tmp_path):
             "is confirmed but those started on the first frame") in r.stderr
     r = cli("track", seq, "--out", tmp_path / "s.txt", "--confirm-hits", 5)
     assert "confirm_hits" not in r.stderr
+
+
+def test_a_columns_pair_without_its_other_half_is_quoted_as_given(bad_sequence, tmp_path):
+    """`--columns frame=` was said as "got 'frame'", its "=" lost."""
+    for given in ("frame=", "=frame", "frame"):
+        r = cli("track", bad_sequence, "--out", tmp_path / "r.txt", "--columns",
+                f"id=track,{given}")
+        assert r.returncode == 2
+        assert f"--columns takes OURS=THEIRS pairs separated by commas; got {given!r}" in \
+            r.stderr, r.stderr

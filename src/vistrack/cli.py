@@ -733,8 +733,11 @@ def _columns(text: str | None) -> tuple[dict[str, str] | None, str]:
     wrong with it ("" if nothing)."""
     if not text:
         return None, ""
-    pairs = [p.split("=", 1) for p in text.split(",") if p.strip()]
-    bad = [p[0] for p in pairs if len(p) != 2 or not p[0].strip() or not p[1].strip()]
+    written = [p for p in text.split(",") if p.strip()]
+    pairs = [p.split("=", 1) for p in written]
+    # the pair as written ('frame=' was said as 'frame')
+    bad = [g for g, p in zip(written, pairs) if len(p) != 2 or not p[0].strip()
+           or not p[1].strip()]
     if bad:
         return None, f"--columns takes OURS=THEIRS pairs separated by commas; got {bad[0]!r}"
     ours = [a.strip() for a, _ in pairs]
