@@ -819,3 +819,23 @@ def test_chi2_gate_names_a_negative_distance_and_a_p_that_is_not_a_number():
     with pytest.raises(ValueError, match=re.escape("p must be a number in (0, 1); got "
                                                    "array([0.9 , 0.99])")):
         chi2_gate(np.array([[1.0]]), 2, p=np.array([0.9, 0.99]))
+
+
+def test_pda_update_refuses_an_innovation_covariance_singular_to_rounding():
+    """A rank-1 S whose pivot rounds to a tiny number above 0 (P = v v', R = 0) passed the
+    solve, and the covariance grew in a direction the prior gave no variance (trace 1.75
+    against the prior's 1.0), where kf_update and the association's costs refuse that S.
+    Oracle: the rank of v v', 1; of 1,000 random such P, every one is refused now."""
+    from vistrack import Gaussian
+    from vistrack.filters import pda_update
+
+    rng = np.random.default_rng(0)
+    for v in [np.array([0.6, 0.8])] + [rng.normal(size=2) for _ in range(1000)]:
+        P = np.outer(v, v)[None]
+        with pytest.raises(ValueError, match=re.escape(
+                "the innovation covariance S = H P H' + R of track 0 is singular")):
+            pda_update(Gaussian(np.zeros((1, 2)), P), [[1.0, 2.0]], np.eye(2),
+                       np.zeros((2, 2)), [[0.5]], [0.5])
+    ok = pda_update(Gaussian(np.zeros((2, 2)), np.tile(np.eye(2), (2, 1, 1))),
+                    [[1.0, 2.0]], np.eye(2), 0.1 * np.eye(2), [[0.5], [0.5]], [0.5, 0.5])
+    assert np.isfinite(ok.mean).all()

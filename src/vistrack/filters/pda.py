@@ -118,12 +118,17 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
         raise ValueError(f"Z[{j}] is not finite but has weight beta[{t}, {j}] = {beta[t, j]}")
     zp = m @ H.T
     S = H @ P @ H.T + R
-    try:
-        K = np.swapaxes(np.linalg.solve(S, H @ P), 1, 2)  # P H' S^-1
-    except np.linalg.LinAlgError:
-        t = next((t for t in range(T) if np.linalg.matrix_rank(S[t]) < k), 0)
-        raise ValueError(f"the innovation covariance S = H P H' + R of track {t} is singular: "
-                         f"g.cov[{t}] and R leave a measured direction without noise") from None
+    # positive definite to the tolerance of check_psd's strict test, its smallest eigenvalue
+    # above 1e-10 of its largest entry (the solve below refused only an exactly zero pivot:
+    # a rank-1 S whose pivot rounds to 1e-17 passed, and the covariance grew where the prior
+    # had none)
+    low = np.linalg.eigvalsh(S)[:, 0] <= 1e-10 * np.abs(S).max(axis=(1, 2))
+    bad = int(np.flatnonzero(low)[0]) if low.any() else None
+    if bad is not None:
+        raise ValueError(f"the innovation covariance S = H P H' + R of track {bad} is "
+                         f"singular: g.cov[{bad}] and R leave a measured direction without "
+                         "noise")
+    K = np.swapaxes(np.linalg.solve(S, H @ P), 1, 2)  # P H' S^-1
     # the pairs of weight above 0 only (a detection of weight 0 adds nothing, a NaN one
     # outside the gate too): a track's sums over its own, not over every detection
     rows, cols = np.nonzero(used)
