@@ -688,3 +688,55 @@ def test_a_dead_writers_staging_file_is_removed_when_the_output_is_complete(tmp_
         raise KeyboardInterrupt
     assert rows not in _NAMED
     assert sorted(p.name for p in tmp_path.iterdir()) == ["res.csv"]
+
+
+def test_a_video_cut_short_by_a_failed_write_is_named_and_replaces_nothing(tmp_path):
+    """OpenCV's writer says nothing of a write that fails: under a limit on a file's size
+    (as a full disk, or FAT32's 4 GiB), the annotated video was cut short without its index,
+    unreadable, and replaced an earlier complete one, the run saying it wrote it. Oracle:
+    the operating system's limit on the file's size (RLIMIT_FSIZE) in a child process;
+    the file's own frame count; the earlier video byte for byte."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "w.py"
+    script.write_text(
+        "import resource, sys, numpy as np\n"
+        "from vistrack.io.video import VideoWriter, VideoError\n"
+        "from vistrack.viz.annotate import AnnotatedVideo\n"
+        "from vistrack.types import Frame, Tracks\n"
+        "rng = np.random.default_rng(0)\n"
+        "resource.setrlimit(resource.RLIMIT_FSIZE, (200_000, resource.RLIM_INFINITY))\n"
+        "video = AnnotatedVideo(sys.argv[1], fps=10)\n"
+        "for k in range(1, 61):\n"
+        "    video.write(Frame(k, 0.0, rng.integers(0, 256, (240, 320, 3), np.uint8)),\n"
+        "                Tracks.empty())\n"
+        "try:\n"
+        "    video.close()\n"
+        "except VideoError as e:\n"
+        "    video.abort()\n"
+        "    print(e)\n")
+    out = tmp_path / "a.mp4"
+    out.write_bytes(b"an earlier complete video")
+    r = subprocess.run([sys.executable, str(script), str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert re.fullmatch(rf"{re.escape(str(out))}: the video file holds \d+ of the 60 frames "
+                        r"written to it: the disk is full, or a limit on a file's size was "
+                        r"reached\n", r.stdout), r.stdout
+    assert out.read_bytes() == b"an earlier complete video"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4", "w.py"]
+
+
+def test_a_video_writer_refuses_frames_after_close(tmp_path):
+    """A write after close began a new file over the closed one's frames: 15 counted, the
+    last 5 in the file."""
+    from vistrack.io.video import VideoReader, VideoWriter
+
+    w = VideoWriter(tmp_path / "v.mp4", fps=10)
+    for _ in range(10):
+        w.write(np.zeros((16, 16, 3), np.uint8))
+    w.close()
+    with pytest.raises(ValueError, match=re.escape("v.mp4: write after close: the video is "
+                                                   "finished, with 10 frames")):
+        w.write(np.zeros((16, 16, 3), np.uint8))
+    assert len(VideoReader(tmp_path / "v.mp4")) == 10

@@ -800,6 +800,7 @@ class VideoWriter:
         self.path, self.fps, self.size = Path(path), fps, size
         self.name = str(path if name is None else name)
         self._w: cv2.VideoWriter | None = None
+        self._closed = False
         self.frames = 0
 
     def _open(self, size: tuple[int, int]) -> None:
@@ -848,6 +849,9 @@ class VideoWriter:
         (1, (16, 16))
         >>> w.close()
         """
+        if self._closed:  # (a new file was begun over the closed one's frames)
+            raise ValueError(f"{self.name}: write after close: the video is finished, with "
+                             f"{self.frames} frames")
         im = np.asarray(image)
         if im.dtype != np.uint8 or im.ndim not in (2, 3) or (im.ndim == 3 and im.shape[2] != 3):
             raise ValueError(f"{self.name}: frame {self.frames + 1}: image must be (H, W) or "
@@ -869,6 +873,12 @@ class VideoWriter:
     def close(self) -> None:
         """Finish the file (nothing is written if no frame was); closing twice is harmless.
 
+        Raises
+        ------
+        VideoError
+            If the file does not hold every frame written (OpenCV's writer does not say
+            when a write fails: a full disk, or a limit on a file's size).
+
         Examples
         --------
         >>> import tempfile
@@ -878,9 +888,20 @@ class VideoWriter:
         >>> len(VideoReader(w.path))
         1
         """
+        self._closed = True
         if self._w is not None:
             self._w.release()
             self._w = None
+            # OpenCV's writer says nothing of a write that failed (a full disk, a limit on a
+            # file's size): a video cut short, without its index, was taken for complete and
+            # replaced a good one. Its frames are counted back from the file's own index.
+            cap = _cv2().VideoCapture(str(self.path))
+            got = int(cap.get(_cv2().CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0
+            cap.release()
+            if got != self.frames:
+                raise VideoError(f"{self.name}: the video file holds {got} of the "
+                                 f"{self.frames} frames written to it: the disk is full, or "
+                                 "a limit on a file's size was reached")
 
     def __enter__(self) -> VideoWriter:
         return self
