@@ -288,7 +288,10 @@ class VideoReader:
     grey : bool
         Yield ``(H, W)`` grey frames instead of BGR.
     start, stop : int, optional
-        The first and last frame index to yield (from 1, inclusive).
+        The first and last frame index to yield (from 1, inclusive). A video is sought to
+        ``start`` where OpenCV seeks exactly (MP4, MOV, MKV, WebM, AVI); others (MPEG
+        program and transport streams, a stream without a frame count) are read through to
+        it.
     prefetch : int
         Decode up to this many frames ahead in a background thread (OpenCV releases the GIL
         while it decodes), so that decoding overlaps the caller's work; 0 decodes in the
@@ -700,8 +703,11 @@ class VideoReader:
         cv2 = _cv2()
         cap = cv2.VideoCapture(str(self.source))
         try:
-            # a stream without a count may accept a seek and not move: it is read through
+            # a stream without a count may accept a seek and not move, and a transport or
+            # program stream (.ts, .mts, .mpg) lands on another frame than it reports (H.264
+            # in .ts: frame 31 for any start from 2 to 30): those are read through
             if self.start > 1 and (self.frame_count == 0
+                                   or self.source.suffix.lower() not in _SEEKABLE
                                    or not cap.set(cv2.CAP_PROP_POS_FRAMES, self.start - 1)):
                 for _ in range(self.start - 1):
                     if not cap.grab():
@@ -723,6 +729,11 @@ class VideoReader:
                 k += 1
         finally:
             cap.release()
+
+
+_SEEKABLE = frozenset({".mp4", ".m4v", ".mov", ".mkv", ".webm", ".avi"})
+"""Containers whose frame index OpenCV seeks to exactly (each checked against a reading
+through, frame by frame); a video of another is read through to its start."""
 
 
 def _mp4_rate(fps: float, pixels: int) -> float:
