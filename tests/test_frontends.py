@@ -334,6 +334,11 @@ def test_a_video_holding_more_frames_than_its_header_says_loses_none(tmp_path):
      "the names step by 3 (im_001.png, im_004.png, ...): every 3rd frame, or timestamps"),
     (["f_10.png", "f_20.png", "f_30.png"], "the names step by 10 (f_10.png, f_20.png, ...): "
      "every 10th frame, or timestamps"),
+    # runs one apart with a gap longer than the folder's count: frames 20-22 were numbered
+    # 4-6 without a word
+    ([f"{k:06d}.png" for k in (1, 2, 3, 20, 21, 22)],
+     "the names skip 16 numbers between 000003.png and 000020.png, more than the folder has "
+     "images: frames missing, or timestamps"),
 ])
 def test_images_numbered_by_place_instead_of_name_are_named(tmp_path, names, why):
     """A stray copy (``000002 (copy).jpg``) or a second extension of one number in a folder
@@ -2161,3 +2166,22 @@ def test_a_start_in_a_program_or_transport_stream_is_the_frame_asked_for(tmp_pat
     for start in range(2, 40):
         frame = next(iter(VideoReader(path, start=start)))
         assert (frame.index, index(frame.image)) == (start, start - 1)
+
+
+def test_a_sequences_images_go_by_their_names_across_a_long_gap(tmp_path):
+    """A MOTChallenge sequence's image names are its frame numbers: with frames 4-19 gone,
+    images 20-22 were numbered 4-6 by place (the gap longer than the images' count read as
+    timestamps), against detections and ground truth numbered by name. Oracle: the names."""
+    seq = tmp_path / "SEQ"
+    img = seq / "img1"
+    img.mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=SEQ\nimDir=img1\nframeRate=10\n"
+                                     "seqLength=22\nimWidth=32\nimHeight=24\nimExt=.png\n")
+    for k, f in zip((1, 2, 3, 20, 21, 22), _folder(img, n=6, ext=".png")):
+        f.rename(img / f"{k:06d}.png")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        frames, _ = _read(VideoReader(seq))
+    assert [f.index for f in frames] == [1, 2, 3, 20, 21, 22]
+    assert any("no image for 16 frames (4, 5, 6, 7, 8" in str(w.message) for w in caught), \
+        [str(w.message) for w in caught]

@@ -135,8 +135,8 @@ def _numbered(files: list[Path], as_named: bool = False) -> list[int] | None:
     ``as_named`` (a MOTChallenge sequence), from the first image's own number (at least 1),
     when every name has a number, the numbers increase in name order, and they skip no more
     numbers than there are images (a dropped frame is an exception; names that are
-    timestamps skip many between every two); else None (then the images are numbered by
-    position).
+    timestamps skip many between every two; a MOTChallenge sequence's names are its frame
+    numbers, however many they skip); else None (then the images are numbered by position).
 
     >>> _numbered([Path("000001.jpg"), Path("000002.jpg"), Path("000004.jpg")])
     [1, 2, 4]
@@ -153,8 +153,10 @@ def _numbered(files: list[Path], as_named: bool = False) -> list[int] | None:
         if not found:
             return None
         numbers.append(int(found[-1]))
+    # (a MOTChallenge sequence's names are its frame numbers, gaps or not: frames 1-3 and
+    # 20-22 were numbered 1-6 by position)
     if any(b <= a for a, b in zip(numbers, numbers[1:])) \
-            or numbers[-1] - numbers[0] + 1 > 2 * len(numbers):
+            or (not as_named and numbers[-1] - numbers[0] + 1 > 2 * len(numbers)):
         return None
     first = max(1, numbers[0]) if as_named else 1
     return [n - numbers[0] + first for n in numbers]
@@ -166,7 +168,9 @@ def _unnumbered_why(files: list[Path]) -> str | None:
     that go back in name order (``000003 (copy).jpg`` beside ``000003.jpg``), or numbers that
     step by one same amount of 2 or more (a folder thinned to every k-th frame, whose
     detections and ground truth number the frames between too); None where no name has a
-    number, or the numbers only skip too many, unevenly (timestamps), as intended.
+    number, or the numbers only skip too many, unevenly (timestamps), as intended. Runs of
+    numbers one apart with a gap between them longer than the folder's count of images are
+    frames missing, or timestamps: said too.
 
     >>> _unnumbered_why([Path("000001.jpg"), Path("000002.jpg")]) is None
     True
@@ -174,7 +178,9 @@ def _unnumbered_why(files: list[Path]) -> str | None:
     '000001.jpg and 000001.png both give frame 1'
     >>> _unnumbered_why([Path("000001.jpg"), Path("000004.jpg"), Path("000007.jpg")])
     'the names step by 3 (000001.jpg, 000004.jpg, ...): every 3rd frame, or timestamps'
-    """
+    >>> print(_unnumbered_why([Path(f"{k:06d}.jpg") for k in (1, 2, 3, 20, 21, 22)]))
+    the names skip 16 numbers between 000003.jpg and 000020.jpg, more than the folder has images: frames missing, or timestamps
+    """  # noqa: E501
     numbers = [re.findall(r"\d+", p.stem) for p in files]
     if not any(numbers):
         return None
@@ -194,6 +200,14 @@ def _unnumbered_why(files: list[Path]) -> str | None:
         # folder's detections number the frames between too (it went without a word)
         return (f"the names step by {step} ({files[0].name}, {files[1].name}, ...): every "
                 f"{ordinal(step)} frame, or timestamps")
+    ones = sum(b - a == 1 for a, b in zip(values, values[1:]))
+    if ones >= len(values) // 2 and values[-1] - values[0] + 1 > 2 * len(values):
+        # runs of frames one apart with a long gap between: frames missing, not timestamps
+        # (which skip many between every two), numbered by place without a word before
+        k = max(range(1, len(values)), key=lambda i: values[i] - values[i - 1])
+        return (f"the names skip {values[k] - values[k - 1] - 1} numbers between "
+                f"{files[k - 1].name} and {files[k].name}, more than the folder has images: "
+                "frames missing, or timestamps")
     return None
 
 
