@@ -3,6 +3,7 @@ a never decreasing likelihood, frozen parameters untouched, pooled batches, the
 missing-step equivalence and known parameters recovered."""
 
 import io
+import re
 import warnings
 
 import numpy as np
@@ -836,3 +837,29 @@ def test_the_shared_e_step_waits_for_each_variance_at_its_own_scale():
                           x0=np.zeros((B, 2)), P0=P0).loglik.sum()
     assert shared.loglik[0] == pytest.approx(exact, abs=1e-6)
     np.testing.assert_allclose(np.diagonal(shared.Q), np.diagonal(general.Q), rtol=1e-6)
+
+
+def test_mle_says_when_it_stops_on_the_bound_of_its_search():
+    """mle searches each noise factor within e^±20 of its start: a random walk scaled by
+    1e5, started from Q = R = 1, stopped at q = r = 4.85e8 (e^20), converged False, with
+    no word and no word of the bound in the docs. Oracle: the truth (q = 0.5, r = 4 in the
+    data's units times 1e10), which em, without a bound, finds."""
+    import warnings
+
+    from vistrack.filters import em, mle
+
+    rng = np.random.default_rng(1)
+    T, s = 3000, 1e5
+    x = np.cumsum(rng.normal(0, np.sqrt(0.5), T))
+    ys = (s * (x + rng.normal(0, 2, T)))[:, None]
+    kw = dict(F=np.eye(1), Q=np.eye(1), H=np.eye(1), R=np.eye(1), x0=np.zeros(1),
+              P0=np.eye(1) * s ** 2)
+    with pytest.warns(RuntimeWarning, match=re.escape(
+            "mle: q, r[0] reached e^±20 times its start, the bound of the search")):
+        fit = mle(ys, **kw)
+    assert not fit.converged and fit.q == pytest.approx(np.exp(20))
+    learned = em(ys, **kw, max_iter=300, tol=1e-9)
+    assert learned.Q[0, 0] / s ** 2 == pytest.approx(0.5, rel=0.15)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mle(ys / s, **{**kw, "P0": np.eye(1)})  # at the data's scale: no bound reached

@@ -65,6 +65,7 @@ References
 from __future__ import annotations
 
 import numbers
+import warnings
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, TextIO
 
@@ -452,7 +453,9 @@ def mle(
     F, Q, H, R, x0, P0 : array_like
         The model, as for :func:`kalman_filter`; ``Q`` and ``R`` are the start and the
         shapes of their structure (``R`` diagonal for ``"diag"``: its off-diagonal entries
-        are dropped).
+        are dropped). Each factor is searched within ``e^±20`` (about 5e8) of its start, so
+        that the filter stays finite; a fit that ends on that bound is warned of (start
+        nearer the data's scale, or learn by :func:`em`, which has no bound).
     learn : sequence of {"Q", "R"}
         Which noise to learn; the rest stays as given.
     R_form : {"diag", "scaled"}
@@ -555,6 +558,15 @@ def mle(
     else:
         info = _information(value_and_grad, theta)
     best = model(theta)
+    lo, hi = np.array([b[0] for b in bounds]), np.array([b[1] for b in bounds])
+    edge = np.flatnonzero((theta <= lo) | (theta >= hi))
+    if len(edge):
+        # (a random walk scaled by 1e5, from Q = R = 1, stopped at q = r = 4.85e8, unsaid)
+        names = ["q"] * nq + (["r"] if R_form != "diag" else [f"r[{i}]" for i in range(nr)])
+        which = ", ".join(names[i] for i in edge)
+        warnings.warn(f"mle: {which} reached e^±20 times its start, the bound of the search: "
+                      "the fit is not the maximum; start Q and R nearer the data's scale, or "
+                      "learn them by em", RuntimeWarning, stacklevel=2)
     q = float(np.exp(theta[0])) if nq else 1.0
     r: float | np.ndarray = (np.exp(theta[nq:]) if R_form == "diag" else float(
         np.exp(theta[nq]))) if nr else 1.0
