@@ -863,3 +863,16 @@ def test_mle_says_when_it_stops_on_the_bound_of_its_search():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         mle(ys / s, **{**kw, "P0": np.eye(1)})  # at the data's scale: no bound reached
+
+
+def test_an_unpooled_series_without_a_measurement_is_named():
+    """With pooled=False a series of NaN alone came back converged at its start (loglik 0),
+    where em refuses it given alone and the docs say each series is checked so."""
+    ys = np.random.default_rng(0).normal(size=(3, 20, 1))
+    ys[1] = np.nan
+    kw = dict(F=np.eye(1), Q=np.eye(1), H=np.eye(1), R=np.eye(1), x0=np.zeros(1), P0=np.eye(1))
+    with pytest.raises(ValueError, match=re.escape(
+            "series 1 of ys (pooled=False): it has no measurement: every value is NaN")):
+        em(ys, **kw, pooled=False)
+    with pytest.raises(ValueError, match=re.escape("ys has no measurement")):
+        em(ys[1], **kw)

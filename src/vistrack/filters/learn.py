@@ -288,6 +288,9 @@ def _fit_each(y: np.ndarray, params: dict[str, np.ndarray], learn: tuple[str, ..
         if p["P0"].ndim == 3:
             p["P0"] = p["P0"][b]
         o = _Observed(y[b:b + 1])
+        if not np.isfinite(y[b]).any():  # (it came back "converged" at its start, unsaid)
+            raise ValueError(f"series {first + b} of ys (pooled=False): it has no "
+                             "measurement: every value is NaN")
         try:
             _check_em(o.measured, o.has_partial, p, learn, Q_form, R_form)
         except ValueError as e:
