@@ -740,3 +740,60 @@ def test_a_video_writer_refuses_frames_after_close(tmp_path):
                                                    "finished, with 10 frames")):
         w.write(np.zeros((16, 16, 3), np.uint8))
     assert len(VideoReader(tmp_path / "v.mp4")) == 10
+
+
+def test_ctrl_c_from_another_thread_waits_for_the_groups_renames(tmp_path):
+    """The group's renames held SIGINT off with a mask of the main thread's alone: the system
+    handed the signal to another thread (decoding's, numba's), Python raised it in the main
+    thread between two renames, and new tracks stood beside an earlier run's other files.
+    Oracle: the files' contents after a SIGINT sent from another thread during the second of
+    three renames: all new, and the KeyboardInterrupt after them."""
+    import signal
+    import threading
+
+    from vistrack.io import atomic
+    from vistrack.io.atomic import replacing, together
+
+    names = ["a.txt", "b.txt", "c.txt"]
+    for n in names:
+        (tmp_path / n).write_text("earlier")
+    rename, calls = atomic._rename, []
+
+    def slow(part, path):
+        calls.append(path.name)
+        if len(calls) == 2:
+            sender = threading.Thread(target=os.kill, args=(os.getpid(), signal.SIGINT))
+            sender.start()
+            sender.join()
+            for _ in range(100):  # a Python handler runs between bytecodes: give it some
+                sum(range(100))
+        rename(part, path)
+
+    atomic._rename = slow
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with together():
+                for n in names:
+                    with replacing(tmp_path / n) as part:
+                        part.write_text("new")
+    finally:
+        atomic._rename = rename
+    assert calls == names
+    assert [(tmp_path / n).read_text() for n in names] == ["new"] * 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == names
+
+
+def test_a_video_given_up_is_released_without_its_check(tmp_path):
+    """SIGTERM between a frame's write and its count left the writer a frame short of the
+    file; given up after the failure, the video's check raised its own error in place of
+    the interrupt (status 2) and left the partial file behind. Oracle: the folder, empty
+    of partial files, and abort raising nothing."""
+    from vistrack.types import Frame, Tracks
+    from vistrack.viz.annotate import AnnotatedVideo
+
+    video = AnnotatedVideo(tmp_path / "a.mp4", fps=10)
+    for k in range(1, 4):
+        video.write(Frame(k, 0.0, np.zeros((24, 32, 3), np.uint8)), Tracks.empty())
+    video._writer.frames -= 1  # as a signal between the write and its count leaves it
+    video.abort()
+    assert list(tmp_path.iterdir()) == []

@@ -1760,16 +1760,14 @@ def _run(args: argparse.Namespace) -> int:
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return status
     except (KeyboardInterrupt, Terminated) as exc:
-        # tracks, boxes, video and plot are written under partial names and renamed only
-        # when complete (vistrack.io.atomic): what an earlier run wrote is still there
-        kept = "; earlier outputs are kept" if args.command in ("track", "track-one") else ""
-        written = getattr(args, "outputs_written", None)
-        if written:  # (stopped while --report's page was made)
-            kept = (f" after this run's outputs were written ({', '.join(map(str, written))}); "
-                    "the report page was not")
-        how = "interrupted" if isinstance(exc, KeyboardInterrupt) else "terminated"
-        print(f"vistrack {args.command}: {how}{kept}", file=sys.stderr)
-        return 130 if isinstance(exc, KeyboardInterrupt) else 128 + signal.SIGTERM
+        return _stopped(args, exc)
+    except SystemError as exc:
+        # a signal's handler that raised as a compiled (numba) function returned: CPython
+        # raises SystemError, "returned a result with an exception set", the interrupt its
+        # cause (a traceback and status 1, 1 SIGTERM in 15 during the front-end's moments)
+        if isinstance(exc.__cause__, (KeyboardInterrupt, Terminated)):
+            return _stopped(args, exc.__cause__)
+        raise
     except BrokenPipeError:
         # https://docs.python.org/3/library/signal.html#note-on-sigpipe: the reader has
         # gone; send the rest of stdout (and the flush at exit) to devnull
@@ -1791,6 +1789,20 @@ def _run(args: argparse.Namespace) -> int:
         if args.debug:
             traceback.print_exc()
         return _fail(args.command, _message(exc))
+
+
+def _stopped(args: argparse.Namespace, exc: BaseException) -> int:
+    """Ctrl-C's or SIGTERM's one line and exit status."""
+    # tracks, boxes, video and plot are written under partial names and renamed only when
+    # complete (vistrack.io.atomic): what an earlier run wrote is still there
+    kept = "; earlier outputs are kept" if args.command in ("track", "track-one") else ""
+    written = getattr(args, "outputs_written", None)
+    if written:  # (stopped while --report's page was made)
+        kept = (f" after this run's outputs were written ({', '.join(map(str, written))}); "
+                "the report page was not")
+    how = "interrupted" if isinstance(exc, KeyboardInterrupt) else "terminated"
+    print(f"vistrack {args.command}: {how}{kept}", file=sys.stderr)
+    return 130 if isinstance(exc, KeyboardInterrupt) else 128 + signal.SIGTERM
 
 
 _REFUSED_WRITES = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.ENAMETOOLONG}

@@ -12,7 +12,7 @@ import re
 import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 __all__ = ["partial_path", "replacing", "open_replacing", "PartialFile", "check_output",
            "check_not_input", "Input", "made_folder", "together", "remove_on_commit", "staging"]
@@ -125,15 +125,24 @@ def remove_on_commit(path: str | os.PathLike) -> None:
 
 def _apply(pending: list[tuple[Path | None, Path]]) -> None:
     """The renames (and removals) of a group, with SIGINT and SIGTERM held off (delivered
-    after) where this thread can hold them; a rename that fails removes the partial files
-    not yet renamed."""
+    after) where this is the main thread; a rename that fails removes the partial files not
+    yet renamed.
+
+    They are held off by handlers of Python's that note them, for Python runs every signal's
+    handler in the main thread whichever thread the system hands it to: a mask of this
+    thread's (``pthread_sigmask``) left the signal to the process's other threads (decoding,
+    numba's), and Ctrl-C between two renames left new tracks beside an earlier run's video."""
     import signal
     import threading
 
-    held = hasattr(signal, "pthread_sigmask") and \
-        threading.current_thread() is threading.main_thread()
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM}) \
-        if held else None
+    held: list[int] = []
+    saved: dict[int, Any] = {}
+    if threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            old = signal.getsignal(sig)
+            if old is not None:  # (a handler set outside Python cannot be put back)
+                saved[sig] = old
+                signal.signal(sig, lambda number, _frame: held.append(number))
     try:
         for k, (part, path) in enumerate(pending):
             try:
@@ -147,8 +156,10 @@ def _apply(pending: list[tuple[Path | None, Path]]) -> None:
                         rest.unlink(missing_ok=True)
                 raise
     finally:
-        if old is not None:
-            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        for number, handler in saved.items():
+            signal.signal(number, handler)
+    if held:  # delivered now, to the handlers put back
+        signal.raise_signal(held[0])
 
 
 def commit_partial(part: Path, path: Path) -> None:

@@ -895,6 +895,14 @@ class VideoWriter:
         self._w.write(np.ascontiguousarray(im))
         self.frames += 1
 
+    def abandon(self) -> None:
+        """Release the file without checking it (a run that failed, whose file is removed):
+        a check there would put its own error in the failure's place."""
+        self._closed = True
+        if self._w is not None:
+            self._w.release()
+            self._w = None
+
     def close(self) -> None:
         """Finish the file (nothing is written if no frame was); closing twice is harmless.
 

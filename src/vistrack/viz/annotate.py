@@ -443,5 +443,5 @@ class AnnotatedVideo:
     def abort(self) -> None:
         """Give the video up (a run that failed): the frames written are removed, and an
         earlier ``path`` is left as it was."""
-        self._writer.close()
+        self._writer.abandon()
         self._part.unlink(missing_ok=True)
