@@ -3,6 +3,7 @@ independent transcription of the seeds' formulas, and the PETS09-S2L1 clip."""
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -2185,3 +2186,32 @@ def test_a_sequences_images_go_by_their_names_across_a_long_gap(tmp_path):
     assert [f.index for f in frames] == [1, 2, 3, 20, 21, 22]
     assert any("no image for 16 frames (4, 5, 6, 7, 8" in str(w.message) for w in caught), \
         [str(w.message) for w in caught]
+
+
+def test_a_name_opencv_cannot_open_is_refused_before_it_stops_the_process(tmp_path):
+    """A file name of bytes that are not UTF-8 (which Python keeps as surrogates) reached
+    OpenCV's reader, writer or imread, which ended the process: status 139, no word,
+    partial files left. Oracle: the name's own bytes, and a child process's status."""
+    bad = os.fsdecode(b"p\xe9")
+    script = (
+        "import os, sys, numpy as np\n"
+        "from pathlib import Path\n"
+        "from vistrack.io.video import VideoReader, VideoWriter, VideoError\n"
+        "d = Path(sys.argv[1])\n"
+        f"bad = os.fsdecode({os.fsencode(bad)!r})\n"
+        "(d / (bad + '.mp4')).write_bytes(b'0')\n"
+        "(d / 'f').mkdir(); (d / 'f' / (bad + '.png')).write_bytes(b'0')\n"
+        "for make in (lambda: VideoReader(d / (bad + '.mp4')), lambda: VideoReader(d / 'f'),\n"
+        "             lambda: VideoWriter(d / (bad + 'o.mp4'), 10).write(\n"
+        "                 np.zeros((8, 8, 3), np.uint8))):\n"
+        "    try:\n"
+        "        make()\n"
+        "    except VideoError as e:\n"
+        "        print(e)\n")
+    r = subprocess.run([sys.executable, "-c", script, str(tmp_path)], capture_output=True,
+                       text=True)
+    assert r.returncode == 0, (r.returncode, r.stderr)
+    lines = r.stdout.splitlines()
+    assert len(lines) == 3 and all(
+        "the name is not UTF-8 text, which OpenCV cannot open (it stops the process): "
+        "rename it" in line for line in lines), lines

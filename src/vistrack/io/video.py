@@ -380,6 +380,7 @@ class VideoReader:
         src = Path(source)
         if not src.exists():
             raise FileNotFoundError(f"{src} does not exist")
+        _opencv_name(src)
         self.source, self.grey = src, bool(grey)
         # whole numbers: int() cut 2.7 to 2 (a frame early) and named nothing for "x"
         self.start = as_whole(start, "start", 1, "frames count from 1")
@@ -418,6 +419,8 @@ class VideoReader:
                     raise FileNotFoundError(f"{src} does not exist ({info} names it)")
             self._files = sorted((p for p in src.iterdir()
                                   if p.suffix.lower() in IMAGE_SUFFIXES), key=_natural)
+            for path in self._files:
+                _opencv_name(path)
             if not self._files:
                 # an OTB or VOT sequence's folder holds its images in a folder of its own
                 inner = sorted(d.name for d in src.iterdir() if _holds_images(d))
@@ -745,6 +748,17 @@ class VideoReader:
             cap.release()
 
 
+def _opencv_name(path: Path, name: str | None = None) -> None:
+    """Refuse a path that is not UTF-8 text (bytes a file system holds, which Python keeps
+    as surrogates): OpenCV's readers and writer take such a name and end the process
+    (a segmentation fault, status 139, no word, partial files left)."""
+    try:
+        os.fsencode(path).decode("utf-8")
+    except UnicodeDecodeError:
+        raise VideoError(f"{str(name or path)!r}: the name is not UTF-8 text, which OpenCV "
+                         "cannot open (it stops the process): rename it") from None
+
+
 _SEEKABLE = frozenset({".mp4", ".m4v", ".mov", ".mkv", ".webm", ".avi"})
 """Containers whose frame index OpenCV seeks to exactly (each checked against a reading
 through, frame by frame); a video of another is read through to its start."""
@@ -830,6 +844,7 @@ class VideoWriter:
 
     def _open(self, size: tuple[int, int]) -> None:
         cv2 = _cv2()
+        _opencv_name(self.path, self.name)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         play = _mp4_rate(self.fps, size[0] * size[1])
         if play != self.fps:
