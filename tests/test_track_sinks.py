@@ -797,3 +797,42 @@ def test_a_video_given_up_is_released_without_its_check(tmp_path):
     video._writer.frames -= 1  # as a signal between the write and its count leaves it
     video.abort()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_committed_partial_file_takes_no_more_rows(tmp_path):
+    """A write after commit began a new, untracked partial file, and a second commit
+    replaced the output with the later rows alone ('row1\\nrow2\\n' became 'row3\\n')."""
+    f = PartialFile(tmp_path / "r.txt")
+    f.write("row1\\nrow2\\n")
+    f.commit()
+    for late in (lambda: f.write("row3\\n"), f.commit):
+        with pytest.raises(ValueError, match=re.escape(
+                f"{tmp_path / 'r.txt'}: the file is committed or given up: no more can be "
+                "written to it")):
+            late()
+    assert (tmp_path / "r.txt").read_text() == "row1\\nrow2\\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.txt"]
+    g = PartialFile(tmp_path / "s.txt")
+    g.write("x")
+    g.abort()
+    g.abort()  # twice: harmless, as documented
+    with pytest.raises(ValueError, match="committed or given up"):
+        g.write("y")
+
+
+def test_a_video_writers_size_and_an_os_errors_odd_name_are_named():
+    """VideoWriter(size=...) took (64.5, 48) to OpenCV's overload error, (0, 0) to "cannot
+    write an MP4 here" and (64,) to an IndexError; message() of an OSError whose file is a
+    descriptor (os.stat(999)) raised a TypeError that hid the error."""
+    from vistrack._pool import message
+    from vistrack.io.video import VideoWriter
+
+    for size, said in (((64.5, 48), "size's width must be a whole number >= 1 (pixels); got "
+                        "64.5"), ((0, 0), "size's width must be a whole number >= 1 (pixels); "
+                        "got 0"), ((64,), "size must be (width, height); got (64,)")):
+        with pytest.raises(ValueError, match=re.escape(said)):
+            VideoWriter("x.mp4", 10, size)
+    try:
+        os.stat(999)
+    except OSError as e:
+        assert message(e) == "[Errno 9] Bad file descriptor: 999"

@@ -49,11 +49,15 @@ def message(exc: BaseException) -> str:
     'two lines'
     >>> message(OSError(28, "No space left on device", "out/.res.000a1b2c3d.partial.txt"))
     'out/res.txt: No space left on device'
+    >>> message(OSError(9, "Bad file descriptor", 999))
+    '[Errno 9] Bad file descriptor: 999'
     """
-    if isinstance(exc, OSError) and exc.strerror and exc.filename is not None:
+    if isinstance(exc, OSError) and exc.strerror and isinstance(exc.filename, str):
         from .io.atomic import final_path
 
-        # an output's partial file is named by the output (a name the user gave)
+        # an output's partial file is named by the output (a name the user gave); a file
+        # descriptor or bytes for a name (os.stat(999)) is said as Python says it (a
+        # TypeError hid the error)
         text = f"{final_path(exc.filename)}: {exc.strerror}"
     else:
         text = str(exc) or type(exc).__name__

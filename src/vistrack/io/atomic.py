@@ -419,8 +419,14 @@ class PartialFile:
         self.path = Path(path)
         self.part = partial_path(self.path)
         self._fh: IO[str] | None = None
+        self._ended = False  # committed or given up
 
     def _open(self) -> IO[str]:
+        if self._ended:
+            # (a write after commit began an untracked partial file, and a second commit
+            # replaced the output with the later rows alone)
+            raise ValueError(f"{self.path}: the file is committed or given up: no more can be "
+                             "written to it")
         if self._fh is None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._fh = open(self.part, "w")  # closed by commit or abort
@@ -462,11 +468,13 @@ class PartialFile:
             raise
         finally:
             self._fh = None
+            self._ended = True
 
     def abort(self) -> None:
         """Give the file up: close and remove the partial file; ``path`` is left as it was.
         Harmless when nothing was written, or called twice."""
         fh, self._fh = self._fh, None
+        self._ended = True
         try:
             if fh is not None:
                 fh.close()

@@ -811,6 +811,10 @@ class VideoWriter:
     name : str or Path, optional
         What messages call the file (default ``path``: a partial file's final name).
 
+    The file is written at ``path`` as the frames come: a run stopped midway leaves the
+    frames written so far there. :class:`~vistrack.viz.AnnotatedVideo` writes to a partial
+    file and renames it over its path when complete.
+
     Attributes
     ----------
     frames : int
@@ -819,7 +823,7 @@ class VideoWriter:
     Raises
     ------
     ValueError
-        If ``fps`` is not a finite number > 0.
+        If ``fps`` is not a finite number > 0, or ``size`` not two whole numbers >= 1.
 
     Examples
     --------
@@ -836,6 +840,15 @@ class VideoWriter:
     def __init__(self, path: str | Path, fps: float, size: tuple[int, int] | None = None, *,
                  name: str | Path | None = None):
         fps = as_finite(fps, "fps", 0.0, above=True)
+        if size is not None:
+            # (64.5 met OpenCV's overload error, (0, 0) "cannot write an MP4 here", (64,) an
+            # IndexError)
+            try:
+                w, h = size
+            except (TypeError, ValueError):
+                raise ValueError(f"size must be (width, height); got {size!r}") from None
+            size = (as_whole(w, "size's width", 1, "pixels"),
+                    as_whole(h, "size's height", 1, "pixels"))
         self.path, self.fps, self.size = Path(path), fps, size
         self.name = str(path if name is None else name)
         self._w: cv2.VideoWriter | None = None
