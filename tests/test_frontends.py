@@ -2215,3 +2215,19 @@ def test_a_name_opencv_cannot_open_is_refused_before_it_stops_the_process(tmp_pa
     assert len(lines) == 3 and all(
         "the name is not UTF-8 text, which OpenCV cannot open (it stops the process): "
         "rename it" in line for line in lines), lines
+
+
+def test_sixteen_bit_images_after_an_eight_bit_first_keep_their_depth(tmp_path):
+    """The folder's depth was read from its first image alone when that was 8-bit: later
+    12-bit images were divided by 256 (1600 and 4000 read as 6 and 16, near black), what
+    the reader's depth rule is there to avoid. Oracle: the values written, over 16."""
+    d = tmp_path / "f"
+    d.mkdir()
+    cv2.imwrite(str(d / "000001.png"), np.full((8, 8), 100, np.uint8))
+    for k, v in ((2, 1600), (3, 4000)):
+        cv2.imwrite(str(d / f"{k:06d}.png"), np.full((8, 8), v, np.uint16))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        values = [int(f.image[0, 0, 0]) for f in VideoReader(d)]
+    assert values == [100, 100, 250]
+    assert any("read as 12-bit" in str(w.message) for w in caught)

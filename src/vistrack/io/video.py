@@ -551,15 +551,19 @@ class VideoReader:
         """The bits of a folder's 16-bit images (``first``, the first readable one, as
         decoded), from the largest value of up to ten images spread over the folder, and the
         note that says so."""
-        if first.dtype != np.uint16:
-            return
         assert self._files is not None
         picks = np.unique(np.linspace(0, len(self._files) - 1, 10).round().astype(int))
-        top, seen = int(first.max()), 1
+        # the first image's depth, and the others' (a folder whose first image is 8-bit and
+        # later ones 16-bit had those divided by 256, 12-bit values of 1600 read as 6)
+        top, seen = (int(first.max()), 1) if first.dtype == np.uint16 else (0, 0)
         for k in picks[1:]:
+            if not seen and self._files[k].suffix.lower() not in _DEEP:
+                continue  # (an 8-bit folder of JPEGs: no image decoded twice)
             im, _ = self._decode(self._files[k])
             if im is not None and im.dtype == np.uint16:
                 top, seen = max(top, int(im.max())), seen + 1
+        if not seen:
+            return
         # the depth a camera delivers (8, 10, 12, 14 or 16 bits) that holds them: a dark
         # first image alone would have set too few bits, and the later ones clipped to white
         self._bits = min(16, max(8, top.bit_length() + top.bit_length() % 2))
@@ -746,6 +750,10 @@ class VideoReader:
                 k += 1
         finally:
             cap.release()
+
+
+_DEEP = frozenset({".png", ".tif", ".tiff"})
+"""The image formats of 16 bits a channel that a folder may hold (JPEGs are of 8)."""
 
 
 def _opencv_name(path: Path, name: str | None = None) -> None:
