@@ -159,7 +159,7 @@ def test_a_configuration_file_runs_beside_the_defaults(tmp_path):
     cfg.write_text("[motion]\nstd_mea = 0.1\n")
     r = subprocess.run([sys.executable, str(bench), "--set", f"mine={tmp_path / 'mine'}",
                         "--config", str(cfg)], capture_output=True, text=True, timeout=600)
-    assert r.returncode == 1 and f"{cfg}: [motion] has no key 'std_mea'" in r.stderr
+    assert r.returncode == 1 and f"{cfg}:2: [motion] has no key 'std_mea'" in r.stderr
 
 
 def test_goals_check_a_configuration_files_rows_as_the_defaults():

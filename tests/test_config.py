@@ -764,7 +764,7 @@ def test_durations_and_rates_a_run_cannot_count_are_refused_when_read(seq, tmp_p
         f = tmp_path / f"r{rate}.toml"
         f.write_text(f"[motion]\nframe_rate = {rate}\n")
         r = cli(seq, "--out", tmp_path / "a.txt", "--config", f)
-        assert r.returncode == 2 and (f"{f}: [motion] frame_rate must be a number from 0.001 "
+        assert r.returncode == 2 and (f"{f}:2: [motion] frame_rate must be a number from 0.001 "
                                       f"to 1e+06 frames/s; got {float(rate)!r}") in r.stderr, \
             r.stderr
 

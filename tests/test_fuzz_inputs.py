@@ -136,7 +136,7 @@ def check_mot(path, data: bytes) -> None:
         msg = str(e)
         if msg.startswith(f"{path} is not a text MOTChallenge file ("):
             return
-        m = re.match(re.escape(str(path)) + r", line (\d+), column (\d+) \(", msg)
+        m = re.match(re.escape(str(path)) + r", line (\d+), column (\d+)[ :(]", msg)
         assert m, msg
         assert 1 <= int(m[1]) <= _lines(data) and 1 <= int(m[2]) <= 11, msg
         return

@@ -885,6 +885,14 @@ def test_the_step_functions_name_what_they_passed_on_as_nan():
             "Q must be positive semi-definite; Q[0, 1] = 2, beyond the product of the two "
             "standard deviations, 1")):
         kf_predict(g, np.eye(2), [[1.0, 2.0], [2.0, 1.0]])
+    # the entry the compiled check refused, at its tolerances (-1e-20 beside 1 is a
+    # variance of 0 there, and 1 + 1e-12 beside 1 a correlation of 1)
+    g3 = vt.Gaussian(np.zeros(3), np.eye(3))
+    for Q in ([[-1e-20, 0, 0], [0, 1, 2], [0, 2, 1]],
+              [[1, 1 + 1e-12, 0], [1 + 1e-12, 1, 2], [0, 2, 1]]):
+        with pytest.raises(ValueError, match=re.escape(
+                "Q must be positive semi-definite; Q[1, 2] = 2, beyond the product")):
+            kf_predict(g3, np.eye(3), Q)
     kf = KalmanFilter(ConstantVelocity(dim=2, q=0.1), Position(dim=2, r=0.5))
     for call in (lambda: kf.predict(g), lambda: kf.update(g, [1.0, 2.0])):
         with pytest.raises(ValueError, match=re.escape(
@@ -908,8 +916,9 @@ def test_the_step_functions_name_what_they_passed_on_as_nan():
                         x0=np.zeros(2), P0=np.eye(2))
     assert not res.loglik.flags.writeable
     ys = np.array([[1.0, 2.0], [2.0, 3.0]])
-    for bad in (np.nan, -2.0, 0.0):
-        with pytest.raises(ValueError, match="scale must be a finite number > 0"):
+    for bad in (np.nan, -2.0):
+        with pytest.raises(ValueError, match="scale must be a finite number >= 0"):
             kf.default_prior(ys, scale=bad)
+    assert kf.default_prior(ys, scale=0.0)[1].diagonal()[2:].tolist() == [0.0, 0.0]
     with pytest.raises(TypeError, match="scale must be a number"):
         kf.default_prior(ys, scale="a")

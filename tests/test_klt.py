@@ -293,6 +293,24 @@ def test_new_features_keep_min_distance_from_those_kept(min_distance):
     assert topped >= 1
 
 
+def test_a_top_up_reaches_max_features_where_the_image_has_the_corners():
+    """The exact min_distance test dropped corners OpenCV had counted against the top-up's
+    quota: the features stayed short of max_features (on vtest.avi 5 of 150 frames at 500,
+    against 14 before it). Oracle: a textured frame with corners to spare, shifted so that a
+    fifth of the features leave: the top-up brings them back to max_features."""
+    rng = np.random.default_rng(6)
+    base = texture(rng, (240, 320), blur=1.5)
+    other = texture(rng, (240, 320), blur=1.5)
+    for md in (7.0, 10.9):
+        klt = KLTTracker(max_features=150, min_distance=md)
+        assert len(klt.track(shifted(base, 0, 0))) == 150
+        # the left part of the view replaced: its features fail, a top-up follows
+        cut = base.copy()
+        cut[:, :120] = other[:, :120]
+        f = klt.track(shifted(cut, 0, 0))
+        assert f.terminated >= 30 and len(f) == 150, (md, f.terminated, len(f))
+
+
 def test_patches_are_compared_inside_each_image_by_its_own_size():
     """patch_ncc checked b's patch against a's size: a patch of a large b outside a small
     a's bounds scored -1 (and a small b was read past its end). Oracle: the same pixels

@@ -850,3 +850,8 @@ def test_results_past_a_short_ground_truth_are_said():
         "each counts as a false positive (a ground truth of part of the sequence?)"]
     few = MOTTable.from_rows([(f, 7, 10, 0, 20, 40) for f in range(1, 13)], path="res.txt")
     assert sanity_warnings(gt, few) == []
+    # the frames the rows lie on, one of them said as one
+    one = MOTTable.from_rows([(f, 7, 10, 0, 20, 40) for f in (9, 10, 19)], path="res.txt")
+    assert sanity_warnings(gt, one) == [
+        "1 of the 3 rows of res.txt lie past the last frame of gt.txt (10), on frame 19: "
+        "each counts as a false positive (a ground truth of part of the sequence?)"]

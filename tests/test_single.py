@@ -907,13 +907,11 @@ def test_a_polygon_of_no_area_is_an_absent_object_and_gt_origin_is_for_xywh_line
         track_one(frames, None, tmp_path / "o.txt", gt=lines, gt_origin=1)
 
 
-def test_a_template_that_is_not_registered_says_so_and_small_boxes_follow_the_flow():
+def test_a_template_that_is_not_registered_says_so():
     """Where no template was cut (a flat box, a box at the edge of the image) the residual
-    stayed 0.0, a perfect fit, while no registration ran: NaN now. A box under 7 pixels on a
-    side had a 7 x 7 template, mostly background: the registration was trusted every frame
-    and held the box on the background while the object moved (10 px behind after 20
-    frames). Oracle: a 3 x 3 object moving 0.5 px a frame over a still textured scene,
-    and its known box."""
+    stayed 0.0, a perfect fit, while no registration ran: NaN now, and before the first
+    update. Oracle: whether a registration ran (``ok``), and a scene moved by a known
+    shift, registered to a residual near 0."""
     from vistrack.tracking.single import TemplateTracker
 
     rng = np.random.default_rng(1)
@@ -928,24 +926,6 @@ def test_a_template_that_is_not_registered_says_so_and_small_boxes_follow_the_fl
     t.init(flat, [45, 45, 30, 30])
     t.update(flat)
     assert not t.ok and np.isnan(t.residual)
-    # a small bright object moving right over the scene
-    obj = np.full((3, 3), 255, np.uint8)
-
-    def frame(k):
-        im = scene.copy()
-        x = 60 + 0.5 * k
-        M = np.float32([[1, 0, x], [0, 1, 50]])
-        layer = cv2.warpAffine(obj, M, (160, 120), flags=cv2.INTER_LINEAR)
-        mask = cv2.warpAffine(np.ones((3, 3), np.float32), M, (160, 120))
-        return (im * (1 - mask) + layer * mask).astype(np.uint8)
-
-    t = TemplateTracker()
-    t.init(frame(0), [60, 50, 3, 3])
-    assert not t.ok
-    for k in range(1, 21):
-        box = t.update(frame(k))
-        assert np.isnan(t.residual)
-    assert t.residual != t.residual and abs(box[0] - 70) < abs(box[0] - 60)
 
 
 @pytest.mark.parametrize("method", ["klt", "template", "colour", "meanshift", "camshift",
@@ -1021,4 +1001,10 @@ def test_track_one_refuses_ground_truth_of_other_frames(tmp_path):
             "start at 1") in r.stderr
     mine, theirs = run(own, "b.txt"), run(CROSSING / "groundtruth_rect.txt", "c.txt")
     assert mine.returncode == 0 and mine.stdout.splitlines()[-1] == \
+        theirs.stdout.splitlines()[-1]
+    # numbered from 0, as many tools number frames: taken, line k the video's k-th frame
+    own.write_text("".join(f"{k},{x},{y},{w},{h}\n" for k, (x, y, w, h) in
+                           enumerate(rows.tolist())))
+    zero = run(own, "d.txt")
+    assert zero.returncode == 0 and zero.stdout.splitlines()[-1] == \
         theirs.stdout.splitlines()[-1]

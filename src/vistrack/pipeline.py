@@ -2903,12 +2903,13 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     start = Detections.from_xywh(as_box(init, init_name)[None])
     reader = VideoReader(source, prefetch=4)
     first = reader.start
-    if truth is not None and gt_first is not None and gt_first != first:
+    if truth is not None and gt_first is not None and gt_first not in (first, first - 1):
         # frame,x,y,w,h lines number their frames: of frames 201-320, they were scored as
-        # the video's 1-120 without a word
+        # the video's 1-120 without a word (numbered from 0 for frames from 1: taken)
         raise ValueError(f"{gt}'s frame,x,y,w,h lines start at frame {gt_first}; the video's "
                          f"frames start at {first}: a ground truth of other frames (its line "
-                         "k is scored against the video's k-th frame)")
+                         "k is scored against the video's k-th frame; lines numbered from "
+                         f"{first - 1} or {first} are taken)")
 
     def detect(frame: Frame) -> Detections | None:
         if frame.index != first:

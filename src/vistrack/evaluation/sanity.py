@@ -154,13 +154,15 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False,
                    f"and {gname} {_frames(gt)}, no frame in common")
         return out
     last = int(gt.frames.max())
-    past = int(np.sum(pred.frames > last))
-    if past >= 0.25 * len(pred):
+    late = pred.frames[pred.frames > last]
+    if len(late) and len(late) >= 0.25 * len(pred):
         # (a ground truth cut short scored every later row as a false positive, without a
         # word: MOTA -660 for results past a ground truth of the first 100 frames)
-        out.append(f"{past} of the {len(pred)} rows of {pname} lie past the last frame of "
-                   f"{gname} ({last}), on frames {last + 1}-{int(pred.frames.max())}: each "
-                   "counts as a false positive (a ground truth of part of the sequence?)")
+        lo, hi = int(late.min()), int(late.max())
+        on = f"frame {lo}" if lo == hi else f"frames {lo}-{hi}"
+        out.append(f"{len(late)} of the {len(pred)} rows of {pname} lie past the last frame of "
+                   f"{gname} ({last}), on {on}: each counts as a false positive (a ground "
+                   "truth of part of the sequence?)")
     gs = np.searchsorted(gt.frames, common, side="left"), np.searchsorted(gt.frames, common,
                                                                            side="right")
     ps = np.searchsorted(pred.frames, common, side="left"), np.searchsorted(pred.frames, common,

@@ -28,6 +28,19 @@ def check_gaussian(g: object) -> Gaussian:
     return g
 
 
+def check_model_values(z: np.ndarray, points: np.ndarray, what: str) -> None:
+    """Name the sigma point or member (``what``) ``points[..., k, :]`` at which the
+    measurement model's values ``z (..., K, m)`` hold NaN or infinity: a batch's estimates,
+    or an ensemble's members, came out NaN without a word."""
+    bad = ~np.isfinite(z).all(axis=-1)
+    if bad.any():
+        at = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(f"the measurement model gave NaN or infinity at {what} "
+                         f"[{', '.join(map(str, at))}]: "
+                         f"h({np.array2string(points[at], precision=4)}) = "
+                         f"{np.array2string(z[at], precision=4)}")
+
+
 def step_times(dt: ArrayLike, times: ArrayLike | None, T: int) -> tuple[np.ndarray, np.ndarray]:
     """``dt`` (a scalar, the ``T-1`` intervals between steps, or ``(T,)`` with ``dt[t]`` the
     step from ``t-1`` to ``t``, ``dt[0]`` unused) as ``(T,)``, as ``KalmanFilter`` takes it,

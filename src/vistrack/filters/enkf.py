@@ -47,6 +47,7 @@ from ..models.protocols import (
     NonlinearMotionModel,
 )
 from ._nonlinear import (
+    check_model_values,
     check_y,
     run_sequence,
 )
@@ -307,12 +308,7 @@ def _enkf_update(ens: Ensemble, y: ArrayLike,
     # (..., N, m); a missing component's value is not used: 0, not NaN, where h has none
     # there (NaN times the mask's 0 below is NaN, and made every member NaN)
     Z = np.where(obs[..., None, :], np.asarray(me.h(X), dtype=float), 0.0)
-    bad = ~np.isfinite(Z).all(axis=-1)
-    if bad.any():  # (every member came out NaN, without a word)
-        at = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise ValueError(f"the measurement model gave NaN or infinity at member "
-                         f"[{', '.join(map(str, at))}]: h({np.array2string(X[at], precision=4)})"
-                         f" = {np.array2string(Z[at], precision=4)}")
+    check_model_values(Z, X, "member")  # (every member came out NaN, without a word)
     # the members' mean measurement: circular for angles (bearings either side of π average
     # to π, not 0), as the model's mean gives it
     zbar = Z.mean(-2) if me.mean is _plain_mean else me.mean(Z, np.full(N, 1.0 / N))

@@ -381,40 +381,36 @@ _KERNEL_ERRORS = {
     7: "R must be symmetric",
     8: "{b} must be positive semi-definite: a variance (diagonal entry) is negative, or a "
     "covariance is larger than the product of its two standard deviations",
+    13: "g.mean must be finite",
+    14: "g.cov must be finite",
     12: "R must be positive semi-definite: a variance (diagonal entry) is negative, or a "
     "covariance is larger than the product of its two standard deviations",
 }
 
 
-def _check_finite_gaussian(g: Gaussian) -> None:
-    """Name a NaN or an infinite entry of ``g``: the step functions passed it on, and every
-    mean it touched came out NaN without a word. (A sum is finite when every entry is, and
-    costs less than the test of each; where it is not, each is tested, to name one.)"""
-    if not isinstance(g, Gaussian):
-        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
-    for arr, name in ((g.mean, "g.mean"), (g.cov, "g.cov")):
-        if not np.isfinite(arr.sum()):
-            check_finite(arr, name)
-
-
 def _matrix_entry(code: int, a: str, b: str, mats: dict[str, ArrayLike]) -> None:
     """The entry a kernel's ``code`` is about, named from the matrices themselves (checked
     in Python only here, on the way to the error)."""
-    name = {1: a, 2: b, 3: b, 8: b, 5: "H", 6: "R", 7: "R", 12: "R"}.get(code)
+    name = {1: a, 2: b, 3: b, 8: b, 5: "H", 6: "R", 7: "R", 12: "R", 13: "g.mean",
+            14: "g.cov"}.get(code)
     if name not in mats:
         return
     arr = np.asarray(mats[name], dtype=float)
-    if code in (1, 2, 5, 6):
+    if code in (1, 2, 5, 6, 13, 14):
         check_finite(arr, name)
     elif code in (3, 7):
         check_symmetric(arr, name)
     elif code in (8, 12):
+        # the compiled check's own tolerances (_kernels.check_matrices), so that the entry
+        # named is the one it refused (-1e-20 beside 1 is a variance of 0 there)
+        tol = 1e-8
         d = np.diagonal(arr)
-        if (d < 0).any():
-            i = int(np.argmax(d < 0))
+        top = float(np.abs(d).max())
+        if (d < -tol * top).any():
+            i = int(np.argmax(d < -tol * top))
             raise ValueError(f"{name} must be positive semi-definite; {name}[{i}, {i}] = "
                              f"{d[i]:g}, a negative variance")
-        over = np.triu(arr ** 2 > np.outer(d, d), 1)
+        over = np.triu(arr ** 2 > np.outer(d, d) * (1 + tol) + (tol * top) ** 2, 1)
         if over.any():
             i, k = (int(v) for v in np.argwhere(over)[0])
             raise ValueError(f"{name} must be positive semi-definite; {name}[{i}, {k}] = "
@@ -430,7 +426,8 @@ def _kernel_error(code: int, a: str, b: str, mats: dict[str, ArrayLike] | None =
 
 def _with_measurement(g: Gaussian, y: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Check ``g`` and one measurement per Gaussian; contiguous ``mean, cov, y`` for a kernel."""
-    _check_finite_gaussian(g)
+    if not isinstance(g, Gaussian):
+        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
     mean = g.mean
     if not (type(y) is np.ndarray and y.dtype == np.float64):
         y = as_float_array(y, "y")
@@ -498,7 +495,8 @@ def kf_step(
         _small_matrix(Q, "Q", n, n), _small_matrix(H, "H", m, n), _small_matrix(R, "R", m, m),
     )
     if code >= 0:
-        _kernel_error(code, "F", "Q", {"F": F, "Q": Q, "H": H, "R": R})
+        _kernel_error(code, "F", "Q", {"F": F, "Q": Q, "H": H, "R": R, "g.mean": g.mean,
+                                       "g.cov": g.cov})
     return Gaussian._trusted(mean.reshape(g.mean.shape), cov.reshape(g.cov.shape))
 
 
@@ -538,14 +536,15 @@ def kf_predict(g: Gaussian, F: ArrayLike, Q: ArrayLike) -> Gaussian:
     array([[2.1, 1. ],
            [1. , 1.1]])
     """
-    _check_finite_gaussian(g)
+    if not isinstance(g, Gaussian):
+        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
     n = g.mean.shape[-1]
     code, mean, cov = _kernels.predict_batch_py(
         _one_batch_axis(g.mean, 1), _one_batch_axis(g.cov, 2), _small_matrix(F, "F", n, n),
         _small_matrix(Q, "Q", n, n),
     )
     if code >= 0:
-        _kernel_error(code, "F", "Q", {"F": F, "Q": Q})
+        _kernel_error(code, "F", "Q", {"F": F, "Q": Q, "g.mean": g.mean, "g.cov": g.cov})
     return Gaussian._trusted(mean.reshape(g.mean.shape), cov.reshape(g.cov.shape))
 
 
@@ -639,7 +638,7 @@ def _update(g: Gaussian, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> tuple[Gaus
         _small_matrix(R, "R", m, m),
     )
     if code >= 0:
-        _kernel_error(code, "H", "R", {"H": H, "R": R})
+        _kernel_error(code, "H", "R", {"H": H, "R": R, "g.mean": g.mean, "g.cov": g.cov})
     batch = g.mean.shape[:-1]
     return (Gaussian._trusted(mean.reshape(g.mean.shape), cov.reshape(g.cov.shape)),
             ll.reshape(batch))

@@ -253,7 +253,7 @@ class KalmanFilter:
             Measurements, NaN (or masked, in a numpy masked array) where missing.
         scale : float
             The prior's standard deviation on the unmeasured part of the state, in units of
-            the largest measurement standard deviation: a finite number > 0.
+            the largest measurement standard deviation: a finite number >= 0.
 
         Returns
         -------
@@ -271,8 +271,9 @@ class KalmanFilter:
         (array([2., 0.]), array([1.e+00, 1.e+06]))
         """
         self._check_ys(ys)
-        # (NaN gave a prior of NaN, a string numpy's words, and -2 was taken as 2)
-        scale = as_finite(scale, "scale", 0.0, above=True)
+        # (NaN gave a prior of NaN, a string numpy's words, and -2 was taken as 2; 0, a
+        # prior of no variance off the measured part, is one)
+        scale = as_finite(scale, "scale", 0.0)
         y, single = as_measurement_series(ys)
         check_has_steps(y[0] if single else y)
         n = self.motion.ndim_state

@@ -62,6 +62,7 @@ from ._jitmath import wrap_angle
 from ._kernels import back_solve, chol_factor, forward_solve
 from ._nonlinear import (
     check_gaussian,
+    check_model_values,
     check_y,
     run_sequence,
 )
@@ -787,19 +788,6 @@ def ukf_update(g: Gaussian, y: ArrayLike,
     return _ukf_update(g, y, measurement, points, residual, mean, state_residual)[0]
 
 
-def _check_model_values(z: np.ndarray, gamma: np.ndarray, model: str, f: str) -> None:
-    """Name a sigma point (or member) ``gamma[..., k, :]`` at which a model's ``z`` holds NaN
-    or infinity (a batch's estimates, or an ensemble's members, came out NaN without a
-    word, where a single Gaussian's update named it)."""
-    bad = ~np.isfinite(z).all(axis=-1)
-    if bad.any():
-        at = tuple(int(i) for i in np.argwhere(bad)[0])
-        where = f"[{', '.join(map(str, at))}]"
-        raise ValueError(f"{model} gave NaN or infinity at sigma point {where}: "
-                         f"{f}({np.array2string(gamma[at], precision=4)}) = "
-                         f"{np.array2string(z[at], precision=4)}")
-
-
 def _ukf_update(g: Gaussian, y: ArrayLike,
                 measurement: MeasurementModel | NonlinearMeasurementModel,
                 points: _SigmaPoints | None,
@@ -833,7 +821,7 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
     # a missing component's value is not used: 0, not NaN, where h has none there (NaN times
     # the mask's 0 below is NaN, and made every estimate of the batch NaN)
     zs = np.where(obs[..., None, :], np.asarray(me.h(gamma), dtype=float), 0.0)
-    _check_model_values(zs, gamma, "the measurement model", "h")
+    check_model_values(zs, gamma, "sigma point")
     zhat, Pzz, rz = (_central_transform(zs, Wm, Wc, me.residual) if me.standard
                      else _transform(zs, Wm, Wc, me.mean, me.residual))
     rz = rz * obs[..., None, :]  # missing components: no cross-covariance

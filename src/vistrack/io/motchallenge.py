@@ -1693,18 +1693,21 @@ def _seqinfo_value(path: Path, s: Any, key: str, kind: type) -> Any:
         hint = ("; give the rate (vistrack track --fps, read_seqinfo's frame_rate)"
                 if key == "frameRate" else "")
         raise MOTFormatError(f"{path}: [Sequence] has no {key}{hint}")
-    where = _ini_line(path, key)
     try:
         # a count written as a float (600.0, 6e2) is a number > 0 as the contract asks
         v = float(s[key]) if kind is int else kind(s[key])
     except ValueError:
-        # ("is not float", Python's word, and no line before)
-        raise MOTFormatError(f"{where}: {key} = {s[key]!r} is not a number") from None
+        # ("is not float", Python's word, and no line before; the file is read again for
+        # the line only on the way to an error)
+        raise MOTFormatError(f"{_ini_line(path, key)}: {key} = {s[key]!r} is not a "
+                             "number") from None
     if kind is not str and not 0 < v < np.inf:
-        raise MOTFormatError(f"{where}: {key} must be a finite number > 0; got {s[key]}")
+        raise MOTFormatError(f"{_ini_line(path, key)}: {key} must be a finite number > 0; "
+                             f"got {s[key]}")
     if kind is int:
         if not float(v).is_integer():
-            raise MOTFormatError(f"{where}: {key} must be a whole number; got {s[key]}")
+            raise MOTFormatError(f"{_ini_line(path, key)}: {key} must be a whole number; "
+                                 f"got {s[key]}")
         v = int(v)
     return v
 

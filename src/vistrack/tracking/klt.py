@@ -258,7 +258,9 @@ class KLTTracker:
         best, left = float(eig.max()), float(eig[mask > 0].max(initial=0.0))
         if left <= 0.0 or left < self.quality * best:
             return  # (no corner in the mask passes the frame's share)
-        new = cv2.goodFeaturesToTrack(grey, need, self.quality * best / left,
+        # twice the corners needed: some are dropped below, nearer a kept feature than
+        # min_distance (the quota spent on them left the features short of max_features)
+        new = cv2.goodFeaturesToTrack(grey, 2 * need, self.quality * best / left,
                                       self.min_distance, mask=mask, blockSize=self.block_size)
         if new is None:
             return
@@ -272,6 +274,7 @@ class KLTTracker:
             pts = pts[near >= self.min_distance]
             if not len(pts):
                 return
+        pts = pts[:need]  # the strongest (OpenCV gives them strongest first)
         if self.affine_check:
             T, SD, Hinv, ok = prepare_templates(grey, pts, self.half)
             pts, T, SD, Hinv = pts[ok], T[ok], SD[ok], Hinv[ok]

@@ -284,8 +284,8 @@ class TemplateTracker(SingleObjectTracker):
     residual : float
         The registration's RMS residual at the last frame; NaN where none ran: before the
         first :meth:`update`, or where no template was cut and the median flow alone
-        moves the box (a box under 7 pixels on a side, a flat one, or one whose central
-        patch the image's edge cuts to nothing).
+        moves the box (a flat box, or one whose central patch the image's edge cuts to
+        nothing).
 
     References
     ----------
@@ -328,10 +328,7 @@ class TemplateTracker(SingleObjectTracker):
         room = min(np.floor(cx), np.ceil(W - 2 - cx), np.floor(cy), np.ceil(H - 2 - cy)) - 1
         self.half = max(3, min(int(min(b[2], b[3]) / 2) - 1, int(room)))
         self.T, self.SD, self.Hinv, ok = prepare_templates(grey, c, self.half)
-        # a box under 7 pixels on a side has no central patch of the template's least size
-        # (7 x 7): its template was mostly background, and the registration, trusted, held
-        # the box still on the background while the object moved
-        self.ok = bool(ok[0]) and min(b[2], b[3]) >= 2 * 3 + 1
+        self.ok = bool(ok[0])
         self.p = np.zeros((1, 6))
         self.p[0, 4:] = c[0]
         self.flow.init(image, b)
