@@ -329,17 +329,20 @@ def update_chunk(H, R, th, tr, yv, xp, Pp, x, P, AP, W, U, K, S, e, wv, obs, nob
 
 
 @njit(cache=True)
+def all_finite(a):
+    """Whether every entry of the array ``a`` is finite."""
+    for v in a.ravel():
+        if not math.isfinite(v):
+            return False
+    return True
+
+
+@njit(cache=True)
 def check_gaussians(mean, cov):
     """0 if every entry of ``mean`` and ``cov`` is finite, 13 if one of ``mean`` is not, 14
     if one of ``cov`` is not (a NaN Gaussian's update gave NaN means without a word; checked
     here, where it costs a pass over the batch, not in Python, where it cost a step's half)."""
-    for v in mean.ravel():
-        if not math.isfinite(v):
-            return 13
-    for v in cov.ravel():
-        if not math.isfinite(v):
-            return 14
-    return 0
+    return 0 if all_finite(mean) and all_finite(cov) else 13 if not all_finite(mean) else 14
 
 
 @njit(cache=True)
@@ -347,12 +350,10 @@ def check_matrices(F, Q, sym_tol):
     """0 if ``F`` and ``Q`` (``(1, n, n)`` / ``(1, r, r)``) are finite and ``Q`` symmetric with
     variances >= 0 and correlations within ±1; 1 if ``F`` has a non-finite entry, 2 if ``Q``
     has, 3 if ``Q`` is not symmetric, 8 if a variance or a correlation is not."""
-    for v in F.ravel():
-        if not math.isfinite(v):
-            return 1
-    for v in Q.ravel():
-        if not math.isfinite(v):
-            return 2
+    if not all_finite(F):
+        return 1
+    if not all_finite(Q):
+        return 2
     r = Q.shape[1]
     # symmetric to a tolerance of the matrix's largest entry, as the Python checks
     # (_validate.check_symmetric): of each entry's own size, an off-diagonal entry near 0
