@@ -338,8 +338,9 @@ def test_a_video_holding_more_frames_than_its_header_says_loses_none(tmp_path):
     # runs one apart with a gap longer than the folder's count: frames 20-22 were numbered
     # 4-6 without a word
     ([f"{k:06d}.png" for k in (1, 2, 3, 20, 21, 22)],
-     "the names skip 16 numbers between 000003.png and 000020.png, more than the folder has "
-     "images: frames missing, or timestamps"),
+     "the names run from 1 to 22, over twice the folder's 6 images, mostly one apart (the "
+     "longest gap 16 numbers, between 000003.png and 000020.png): frames missing, or "
+     "timestamps"),
 ])
 def test_images_numbered_by_place_instead_of_name_are_named(tmp_path, names, why):
     """A stray copy (``000002 (copy).jpg``) or a second extension of one number in a folder

@@ -885,6 +885,11 @@ def test_the_step_functions_name_what_they_passed_on_as_nan():
             "Q must be positive semi-definite; Q[0, 1] = 2, beyond the product of the two "
             "standard deviations, 1")):
         kf_predict(g, np.eye(2), [[1.0, 2.0], [2.0, 1.0]])
+    # a prediction that overflows from a finite g is named as such (g.mean was blamed)
+    with pytest.raises(ValueError, match=re.escape(
+            "the prediction F m, F P F' + Q is not finite: it overflowed")):
+        kf_step(vt.Gaussian(np.array([1e200, 0.0]), np.eye(2)), [0.0, 0.0], 1e200 * np.eye(2),
+                np.eye(2), np.eye(2), np.eye(2))
     # the entry the compiled check refused, at its tolerances (-1e-20 beside 1 is a
     # variance of 0 there, and 1 + 1e-12 beside 1 a correlation of 1)
     g3 = vt.Gaussian(np.zeros(3), np.eye(3))

@@ -839,3 +839,15 @@ def test_pda_update_refuses_an_innovation_covariance_singular_to_rounding():
     ok = pda_update(Gaussian(np.zeros((2, 2)), np.tile(np.eye(2), (2, 1, 1))),
                     [[1.0, 2.0]], np.eye(2), 0.1 * np.eye(2), [[0.5], [0.5]], [0.5, 0.5])
     assert np.isfinite(ok.mean).all()
+    # axes of other units are no singularity: S = diag(1e4 + 1, 1e-7), a correlation near 1
+    # and a tiny S are taken, and with one detection of weight 1 the update is Kalman's
+    from vistrack.filters import kf_update
+
+    for P, R in ((np.diag([1e4, 0.0]), np.diag([1.0, 1e-7])),
+                 (np.array([[1.0, 1 - 1e-10], [1 - 1e-10, 1.0]]), np.zeros((2, 2))),
+                 (np.zeros((2, 2)), 1e-300 * np.eye(2))):
+        g = Gaussian(np.zeros((1, 2)), P[None])
+        z = [[1e-6, 2e-6]]
+        got = pda_update(g, z, np.eye(2), R, [[1.0]], [0.0])
+        want = kf_update(g, z, np.eye(2), R)
+        np.testing.assert_allclose(got.mean, want.mean, rtol=1e-6, atol=1e-12)

@@ -727,6 +727,54 @@ def test_a_video_cut_short_by_a_failed_write_is_named_and_replaces_nothing(tmp_p
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4", "w.py"]
 
 
+def test_a_complete_video_of_another_container_closes(tmp_path):
+    """The frames are counted back only where the container keeps an exact count (MP4):
+    an MKV's estimate from its rate ("holds 12 of the 10 frames" at 12345.678 frames/s)
+    failed complete videos. Oracle: each frame read back."""
+    import warnings
+
+    from vistrack.io.video import VideoReader, VideoWriter
+
+    for name in ("a.mkv", "b.mp4"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # (the nearest rate an MP4 holds)
+            w = VideoWriter(tmp_path / name, fps=12345.678)
+            for k in range(10):
+                w.write(np.full((16, 16, 3), 20 * k, np.uint8))
+            w.close()
+        assert sum(1 for _ in VideoReader(tmp_path / name, fps=25)) == 10
+
+
+def test_a_held_interrupt_wins_over_a_failed_rename(tmp_path):
+    """A Ctrl-C held during the group's renames was dropped where a rename then failed (the
+    OSError alone escaped); the interrupt is delivered over it."""
+    import signal
+
+    from vistrack.io import atomic
+    from vistrack.io.atomic import replacing, together
+
+    rename, calls = atomic._rename, []
+
+    def failing(part, path):
+        calls.append(path.name)
+        if len(calls) == 1:
+            os.kill(os.getpid(), signal.SIGINT)
+            rename(part, path)
+            return
+        raise OSError(28, "No space left on device", str(path))
+
+    atomic._rename = failing
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with together():
+                for n in ("a.txt", "b.txt"):
+                    with replacing(tmp_path / n) as part:
+                        part.write_text("new")
+    finally:
+        atomic._rename = rename
+    assert calls == ["a.txt", "b.txt"]
+
+
 def test_a_video_writer_refuses_frames_after_close(tmp_path):
     """A write after close began a new file over the closed one's frames: 15 counted, the
     last 5 in the file."""

@@ -421,6 +421,10 @@ def _matrix_entry(code: int, a: str, b: str, mats: dict[str, ArrayLike]) -> None
 def _kernel_error(code: int, a: str, b: str, mats: dict[str, ArrayLike] | None = None) -> None:
     if mats:
         _matrix_entry(code, a, b, mats)
+        if code in (13, 14) and "F" in mats and "H" in mats:
+            # kf_step: g was finite, so its prediction overflowed (g.mean was blamed)
+            raise ValueError("the prediction F m, F P F' + Q is not finite: it overflowed "
+                             "(g, F or Q too large)")
     raise ValueError(_KERNEL_ERRORS[code].format(a=a, b=b))
 
 

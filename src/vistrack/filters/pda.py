@@ -118,11 +118,16 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
         raise ValueError(f"Z[{j}] is not finite but has weight beta[{t}, {j}] = {beta[t, j]}")
     zp = m @ H.T
     S = H @ P @ H.T + R
-    # positive definite to the tolerance of check_psd's strict test, its smallest eigenvalue
-    # above 1e-10 of its largest entry (the solve below refused only an exactly zero pivot:
-    # a rank-1 S whose pivot rounds to 1e-17 passed, and the covariance grew where the prior
-    # had none)
-    low = np.linalg.eigvalsh(S)[:, 0] <= 1e-10 * np.abs(S).max(axis=(1, 2))
+    # positive definite: its correlation matrix's smallest eigenvalue above 1e-12, so that
+    # axes of other units (S = diag(1e4, 1e-7)) are no matter (the solve below refused only
+    # an exactly zero pivot: a rank-1 S whose pivot rounds to 1e-17 passed, and the
+    # covariance grew where the prior had none)
+    d = np.diagonal(S, axis1=1, axis2=2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        root = 1.0 / np.sqrt(d)
+        corr = S * root[:, :, None] * root[:, None, :]
+    low = np.asarray(~(d > 0).all(axis=1))
+    low[~low] = np.linalg.eigvalsh(corr[~low])[:, 0] <= 1e-12
     bad = int(np.flatnonzero(low)[0]) if low.any() else None
     if bad is not None:
         raise ValueError(f"the innovation covariance S = H P H' + R of track {bad} is "

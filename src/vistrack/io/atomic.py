@@ -158,8 +158,8 @@ def _apply(pending: list[tuple[Path | None, Path]]) -> None:
     finally:
         for number, handler in saved.items():
             signal.signal(number, handler)
-    if held:  # delivered now, to the handlers put back
-        signal.raise_signal(held[0])
+        if held:  # delivered now, to the handlers put back (over a rename's error too)
+            signal.raise_signal(held[0])
 
 
 def commit_partial(part: Path, path: Path) -> None:

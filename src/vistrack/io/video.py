@@ -179,7 +179,7 @@ def _unnumbered_why(files: list[Path]) -> str | None:
     >>> _unnumbered_why([Path("000001.jpg"), Path("000004.jpg"), Path("000007.jpg")])
     'the names step by 3 (000001.jpg, 000004.jpg, ...): every 3rd frame, or timestamps'
     >>> print(_unnumbered_why([Path(f"{k:06d}.jpg") for k in (1, 2, 3, 20, 21, 22)]))
-    the names skip 16 numbers between 000003.jpg and 000020.jpg, more than the folder has images: frames missing, or timestamps
+    the names run from 1 to 22, over twice the folder's 6 images, mostly one apart (the longest gap 16 numbers, between 000003.jpg and 000020.jpg): frames missing, or timestamps
     """  # noqa: E501
     numbers = [re.findall(r"\d+", p.stem) for p in files]
     if not any(numbers):
@@ -205,9 +205,10 @@ def _unnumbered_why(files: list[Path]) -> str | None:
         # runs of frames one apart with a long gap between: frames missing, not timestamps
         # (which skip many between every two), numbered by place without a word before
         k = max(range(1, len(values)), key=lambda i: values[i] - values[i - 1])
-        return (f"the names skip {values[k] - values[k - 1] - 1} numbers between "
-                f"{files[k - 1].name} and {files[k].name}, more than the folder has images: "
-                "frames missing, or timestamps")
+        return (f"the names run from {values[0]} to {values[-1]}, over twice the folder's "
+                f"{len(values)} images, mostly one apart (the longest gap "
+                f"{values[k] - values[k - 1] - 1} numbers, between {files[k - 1].name} and "
+                f"{files[k].name}): frames missing, or timestamps")
     return None
 
 
@@ -557,8 +558,8 @@ class VideoReader:
         # later ones 16-bit had those divided by 256, 12-bit values of 1600 read as 6)
         top, seen = (int(first.max()), 1) if first.dtype == np.uint16 else (0, 0)
         for k in picks[1:]:
-            if not seen and self._files[k].suffix.lower() not in _DEEP:
-                continue  # (an 8-bit folder of JPEGs: no image decoded twice)
+            if not seen and not _may_be_deep(self._files[k]):
+                continue  # (an 8-bit folder: no image decoded twice)
             im, _ = self._decode(self._files[k])
             if im is not None and im.dtype == np.uint16:
                 top, seen = max(top, int(im.max())), seen + 1
@@ -752,8 +753,20 @@ class VideoReader:
             cap.release()
 
 
-_DEEP = frozenset({".png", ".tif", ".tiff"})
-"""The image formats of 16 bits a channel that a folder may hold (JPEGs are of 8)."""
+def _may_be_deep(path: Path) -> bool:
+    """Whether an image may hold 16 bits a channel: a TIFF, or a PNG whose header says so
+    (its bit depth, byte 24; read without decoding it). JPEGs and 8-bit PNGs do not."""
+    suffix = path.suffix.lower()
+    if suffix in (".tif", ".tiff"):
+        return True
+    if suffix != ".png":
+        return False
+    try:
+        with open(path, "rb") as f:
+            head = f.read(25)
+    except OSError:
+        return False
+    return len(head) == 25 and head[:8] == b"\x89PNG\r\n\x1a\n" and head[24] == 16
 
 
 def _opencv_name(path: Path, name: str | None = None) -> None:
@@ -963,7 +976,10 @@ class VideoWriter:
             self._w = None
             # OpenCV's writer says nothing of a write that failed (a full disk, a limit on a
             # file's size): a video cut short, without its index, was taken for complete and
-            # replaced a good one. Its frames are counted back from the file's own index.
+            # replaced a good one. Its frames are counted back from the file's own index,
+            # where an MP4 keeps an exact count (other containers' counts are estimates)
+            if self.path.suffix.lower() not in (".mp4", ".m4v", ".mov"):
+                return
             cap = _cv2().VideoCapture(str(self.path))
             got = int(cap.get(_cv2().CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0
             cap.release()
