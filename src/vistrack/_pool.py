@@ -26,6 +26,17 @@ _ONE_THREAD = (*_BLAS_THREADS, "NUMBA_NUM_THREADS")
 
 
 
+def frames_text(first: int, last: int) -> str:
+    """``frame 4``, or ``frames 4-9``: the frames from ``first`` to ``last``.
+
+    Examples
+    --------
+    >>> frames_text(6, 6), frames_text(6, 7)
+    ('frame 6', 'frames 6-7')
+    """
+    return f"frame {first}" if first == last else f"frames {first}-{last}"
+
+
 def counted(count: int, one: str, many: str | None = None) -> str:
     """``count`` and the word, in the singular for 1 (``1 track``, ``2 tracks``, ``1 box``,
     ``2 boxes`` with ``many``).

@@ -34,7 +34,7 @@ import numpy as np
 
 from . import _compile
 from ._memory import PeriodicRelease
-from ._pool import counted
+from ._pool import counted, frames_text
 from ._registry import Registry
 from .config import OfflineConfig, TrackConfig
 from .detector_checks import (
@@ -2609,9 +2609,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 if end is not None and table is not None and len(table) and \
                         table.frames[-1] > end:
                     past = table.frames[table.frames > end]
-                    on = (f"{counted(len(past), 'row')} on frame {past[0]}"
-                          if past[0] == past[-1] else
-                          f"{len(past)} rows on frames {past[0]}-{past[-1]}")
+                    on = f"{counted(len(past), 'row')} on {frames_text(past[0], past[-1])}"
                     warnings.warn(f"{label}: {on}, "
                                   f"past the video's last frame ({end}): {what}", UserWarning,
                                   stacklevel=2)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._pool import frames_text
 from ..io.motchallenge import MOTTable
 from .mot import _lines_of, _similarity, _where
 
@@ -158,8 +159,7 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False,
     if len(late) and len(late) >= 0.25 * len(pred):
         # (a ground truth cut short scored every later row as a false positive, without a
         # word: MOTA -660 for results past a ground truth of the first 100 frames)
-        lo, hi = int(late.min()), int(late.max())
-        on = f"frame {lo}" if lo == hi else f"frames {lo}-{hi}"
+        on = frames_text(int(late.min()), int(late.max()))
         out.append(f"{len(late)} of the {len(pred)} rows of {pname} lie past the last frame of "
                    f"{gname} ({last}), on {on}: each counts as a false positive (a ground "
                    "truth of part of the sequence?)")
