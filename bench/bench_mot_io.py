@@ -23,6 +23,7 @@ import functools
 import itertools
 import os
 import platform
+import shutil
 import statistics
 import sys
 import tempfile
@@ -158,46 +159,50 @@ def main() -> None:
     warnings.simplefilter("ignore")
     load = os.getloadavg()[0]
     work = Path(tempfile.mkdtemp(prefix="vt-motio-"))
-    f, i, b, c = results(args.rows)
-    big = write_mot(work / "results.txt", f, i, b, c)
-    files: list[tuple[str, Path | None, int, int]] = []
-    for name in ("gt", "det"):
-        p = SEQ / name / f"{name}.txt"
-        if p.exists():
-            t = read_mot(p)
-            files.append((f"MOT17-04 {name}.txt", p, len(t), t.columns))
-        else:
-            print(f"  ({p} not found: skipped)", file=sys.stderr)
-    files.append(("results", big, args.rows, 10))
+    try:
+        f, i, b, c = results(args.rows)
+        big = write_mot(work / "results.txt", f, i, b, c)
+        files: list[tuple[str, Path | None, int, int]] = []
+        for name in ("gt", "det"):
+            p = SEQ / name / f"{name}.txt"
+            if p.exists():
+                t = read_mot(p)
+                files.append((f"MOT17-04 {name}.txt", p, len(t), t.columns))
+            else:
+                print(f"  ({p} not found: skipped)", file=sys.stderr)
+        files.append(("results", big, args.rows, 10))
 
-    rd = readers()
-    for _, fn in rd:
-        fn(files[0][1], files[0][3])  # once before timing: first-call costs are not reading
-    jobs = [(name, fname, n, functools.partial(fn, p, w))
-            for name, fn in rd for fname, p, n, w in files]
-    got = medians([j[3] for j in jobs], args.repeat)
-    read_rows = [(name, [(s, cpu) for (nm, _, _, _), (s, cpu, _) in zip(jobs, got) if nm == name])
-                 for name, _ in rd]
-    for (name, fname, n, _), (s, cpu, runs) in zip(jobs, got):
-        print(f"{name:55s} {fname:18s} {1e3 * s:9.1f} ms  {n / s / 1e6:6.2f} M rows/s "
-              f"({n / cpu / 1e6:6.2f} CPU; {runs} runs)", flush=True)
+        rd = readers()
+        for _, fn in rd:
+            fn(files[0][1], files[0][3])  # once before timing: first-call costs are not reading
+        jobs = [(name, fname, n, functools.partial(fn, p, w))
+                for name, fn in rd for fname, p, n, w in files]
+        got = medians([j[3] for j in jobs], args.repeat)
+        read_rows = [(name, [(s, cpu) for (nm, _, _, _), (s, cpu, _) in zip(jobs, got)
+                             if nm == name])
+                     for name, _ in rd]
+        for (name, fname, n, _), (s, cpu, runs) in zip(jobs, got):
+            print(f"{name:55s} {fname:18s} {1e3 * s:9.1f} ms  {n / s / 1e6:6.2f} M rows/s "
+                  f"({n / cpu / 1e6:6.2f} CPU; {runs} runs)", flush=True)
 
-    wr = writers(f, i, b, c)
-    outs = [work / f"written-{k}.txt" for k in range(len(wr))]
-    got = medians([functools.partial(fn, out) for (_, fn), out in zip(wr, outs)], args.repeat)
-    write_rows = [(name, [(s, cpu)]) for (name, _), (s, cpu, _) in zip(wr, got)]
-    written = [out.read_bytes() for out in outs]
-    for (name, _), (s, cpu, runs) in zip(wr, got):
-        print(f"{name:55s} {'results':18s} {1e3 * s:9.1f} ms  {args.rows / s / 1e6:6.2f} M "
-              f"rows/s ({args.rows / cpu / 1e6:6.2f} CPU; {runs} runs)", flush=True)
+        wr = writers(f, i, b, c)
+        outs = [work / f"written-{k}.txt" for k in range(len(wr))]
+        got = medians([functools.partial(fn, out) for (_, fn), out in zip(wr, outs)], args.repeat)
+        write_rows = [(name, [(s, cpu)]) for (name, _), (s, cpu, _) in zip(wr, got)]
+        written = [out.read_bytes() for out in outs]
+        for (name, _), (s, cpu, runs) in zip(wr, got):
+            print(f"{name:55s} {'results':18s} {1e3 * s:9.1f} ms  {args.rows / s / 1e6:6.2f} M "
+                  f"rows/s ({args.rows / cpu / 1e6:6.2f} CPU; {runs} runs)", flush=True)
 
-    # read_mot gives what its careful reader gives, and write_mot what it wrote before
-    same_read = all(
-        all(np.array_equal(getattr(a, k), getattr(z, k)) for k in ("frames", "ids", "boxes",
-                                                                   "conf", "classes",
-                                                                   "visibility"))
-        for a, z in ((read_mot(p), readers()[1][1](p, w)) for _, p, _, w in files))
-    same_write = written[0] == written[1]
+        # read_mot gives what its careful reader gives, and write_mot what it wrote before
+        same_read = all(
+            all(np.array_equal(getattr(a, k), getattr(z, k)) for k in ("frames", "ids", "boxes",
+                                                                       "conf", "classes",
+                                                                       "visibility"))
+            for a, z in ((read_mot(p), readers()[1][1](p, w)) for _, p, _, w in files))
+        same_write = written[0] == written[1]
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
     print(f"same arrays read: {same_read}; same bytes written: {same_write}", file=sys.stderr)
     same = {True: "the same", False: "NOT the same"}
 
@@ -239,9 +244,6 @@ def main() -> None:
     ]
     section = "\n".join(lines)
     publish(section, args.write)
-    for p in work.iterdir():
-        p.unlink()
-    work.rmdir()
 
 
 if __name__ == "__main__":

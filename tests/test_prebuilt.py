@@ -557,3 +557,32 @@ def test_copied_numba_caches_load_each_signature_with_its_own_code(tmp_path):
     # the destination's own signatures compiled again, with their own results
     assert run("dest", "complex", "array", "int") == (
         [want["complex"], want["array"], want["int"]], 1, 2)
+
+
+@pytest.mark.slow
+def test_a_build_leaves_nothing_in_the_temporary_folder(tmp_path):
+    """A build, in one process or in parts, leaves the temporary folder as it found it
+    (numba's check for a C compiler leaves a folder there in each process that runs it) and
+    its own folders in the output folder removed; two small kernels are built, in one part
+    and in two."""
+    spec = {key: json.loads(_prebuilt.SIGNATURES.read_text())["kernels"][key]
+            for key in ("vistrack.models.box:_size_scaled", "vistrack.tracking.calibration:_pava")}
+    (tmp_path / "spec.json").write_text(json.dumps({"kernels": spec}))
+    temp = tmp_path / "temp"
+    temp.mkdir()
+    code = textwrap.dedent(f"""
+        from pathlib import Path
+        from vistrack import _prebuilt_build as b
+        b.SIGNATURES = Path({str(tmp_path / 'spec.json')!r})
+        for jobs in (1, 2):
+            b.build(Path({str(tmp_path)!r}) / f"out{{jobs}}", jobs=jobs)
+    """)
+    env = dict(os.environ, TMPDIR=str(temp), NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+               VISTRACK_PREBUILT="0")
+    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
+                       text=True)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    assert sorted(p.name for p in temp.iterdir()) == []
+    for jobs in (1, 2):
+        built = sorted(p.name for p in (tmp_path / f"out{jobs}").iterdir())
+        assert len(built) == jobs + 1 and _prebuilt.BUILD_INFO in built, built

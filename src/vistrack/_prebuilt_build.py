@@ -237,6 +237,24 @@ def _forwarder(target: Any, n: int) -> Any:
     return scope["forward"]
 
 
+@contextlib.contextmanager
+def _own_temporary_folder(parent: Path) -> Iterator[Path]:
+    """A new folder in ``parent``, the temporary folder of this process (``tempfile``) and of
+    the processes it starts (``TMPDIR``) inside the block; removed with what it holds after."""
+    folder = Path(tempfile.mkdtemp(prefix=".kernels-tmp-", dir=parent))
+    saved, saved_env = tempfile.tempdir, os.environ.get("TMPDIR")
+    tempfile.tempdir = os.environ["TMPDIR"] = str(folder)
+    try:
+        yield folder
+    finally:
+        tempfile.tempdir = saved
+        if saved_env is None:
+            os.environ.pop("TMPDIR", None)
+        else:
+            os.environ["TMPDIR"] = saved_env
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def build(out_dir: Path, filename: str | None = None, verbose: bool = False,
           jobs: int | None = None, numba_cache: Path | None = None) -> Path:
     """Compile every kernel of ``_prebuilt.json`` into ``out_dir``: the extension, in ``jobs``
@@ -257,49 +275,53 @@ def build(out_dir: Path, filename: str | None = None, verbose: bool = False,
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     jobs = max(1, min(jobs or cpus or 1, 4, len(spec)))
     out_dir.mkdir(parents=True, exist_ok=True)
-    first = filename or Path(_cc(EXTENSION_NAME).output_file).name
-    modules = [EXTENSION_NAME] + [f"{EXTENSION_NAME}_{i}" for i in range(1, jobs)]
-    files = _prebuilt.part_files(first, modules)
-    # every build its exported name; then the kernels dealt to the parts by module, the
-    # modules with the most builds first, each to the part with the fewest builds so far. A
-    # kernel's callees are compiled again in every part that calls them, so the box tracker's
-    # modules, which share their association kernels, go to one part together.
-    items, n = {}, 0
-    units: dict[str, list[Any]] = {}
-    for key, sigs in spec.items():
-        items[key] = [(encoded, f"k{n + i}") for i, encoded in enumerate(sigs)]
-        n += len(sigs)
-        module = key.partition(":")[0]
-        unit = "tracking" if module.startswith(_SHARING) else module
-        units.setdefault(unit, []).append((key, items[key]))
-    parts: list[list[Any]] = [[] for _ in modules]
-    for unit in sorted(units, key=lambda u: -sum(len(b) for _, b in units[u])):
-        min(parts, key=lambda p: sum(len(b) for _, b in p)).extend(units[unit])
-    info["build_id"] = secrets.randbits(62)
-    tmp = Path(tempfile.mkdtemp(prefix=".kernels-", dir=out_dir))
-    try:
-        jobs_spec = [dict(dir=str(tmp), module=m, file=f, kernels=p, cpu=info["cpu"],
-                          build_id=info["build_id"], verbose=verbose)
-                     for m, f, p in zip(modules, files, parts)]
-        if len(jobs_spec) == 1 and numba_cache is None:
-            _build_part(jobs_spec[0])
-        else:
-            _run_parts(jobs_spec, tmp)
-        if numba_cache is not None:
-            shutil.rmtree(numba_cache, ignore_errors=True)
-            for i in range(len(jobs_spec)):
-                copy_numba_cache(tmp / f"numba{i}", numba_cache)
-            (numba_cache / "sources").write_text(info["sources"] + "\n", encoding="utf-8")
-        info["parts"] = modules
-        info["kernels"] = {key: [[e, name if m == EXTENSION_NAME else f"{m}.{name}"]
-                                 for e, name in builds]
-                           for m, p in zip(modules, parts) for key, builds in p}
-        (tmp / BUILD_INFO).write_text(json.dumps(info, indent=1) + "\n", encoding="utf-8")
-        for f in files:
-            os.replace(tmp / f, out_dir / f)
-        os.replace(tmp / BUILD_INFO, out_dir / BUILD_INFO)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+    # numba's check for a C compiler, made once in each process that builds, leaves a folder of
+    # its test files in the temporary folder (numba.pycc.platform._gentmpfile): this build's
+    # temporary files, and its parts' processes', go to a folder of its own, removed after
+    with _own_temporary_folder(out_dir):
+        first = filename or Path(_cc(EXTENSION_NAME).output_file).name
+        modules = [EXTENSION_NAME] + [f"{EXTENSION_NAME}_{i}" for i in range(1, jobs)]
+        files = _prebuilt.part_files(first, modules)
+        # every build its exported name; then the kernels dealt to the parts by module, the
+        # modules with the most builds first, each to the part with the fewest builds so far. A
+        # kernel's callees are compiled again in every part that calls them, so the box tracker's
+        # modules, which share their association kernels, go to one part together.
+        items, n = {}, 0
+        units: dict[str, list[Any]] = {}
+        for key, sigs in spec.items():
+            items[key] = [(encoded, f"k{n + i}") for i, encoded in enumerate(sigs)]
+            n += len(sigs)
+            module = key.partition(":")[0]
+            unit = "tracking" if module.startswith(_SHARING) else module
+            units.setdefault(unit, []).append((key, items[key]))
+        parts: list[list[Any]] = [[] for _ in modules]
+        for unit in sorted(units, key=lambda u: -sum(len(b) for _, b in units[u])):
+            min(parts, key=lambda p: sum(len(b) for _, b in p)).extend(units[unit])
+        info["build_id"] = secrets.randbits(62)
+        tmp = Path(tempfile.mkdtemp(prefix=".kernels-", dir=out_dir))
+        try:
+            jobs_spec = [dict(dir=str(tmp), module=m, file=f, kernels=p, cpu=info["cpu"],
+                              build_id=info["build_id"], verbose=verbose)
+                         for m, f, p in zip(modules, files, parts)]
+            if len(jobs_spec) == 1 and numba_cache is None:
+                _build_part(jobs_spec[0])
+            else:
+                _run_parts(jobs_spec, tmp)
+            if numba_cache is not None:
+                shutil.rmtree(numba_cache, ignore_errors=True)
+                for i in range(len(jobs_spec)):
+                    copy_numba_cache(tmp / f"numba{i}", numba_cache)
+                (numba_cache / "sources").write_text(info["sources"] + "\n", encoding="utf-8")
+            info["parts"] = modules
+            info["kernels"] = {key: [[e, name if m == EXTENSION_NAME else f"{m}.{name}"]
+                                     for e, name in builds]
+                               for m, p in zip(modules, parts) for key, builds in p}
+            (tmp / BUILD_INFO).write_text(json.dumps(info, indent=1) + "\n", encoding="utf-8")
+            for f in files:
+                os.replace(tmp / f, out_dir / f)
+            os.replace(tmp / BUILD_INFO, out_dir / BUILD_INFO)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
     return out_dir / first
 
 
