@@ -649,6 +649,9 @@ def test_an_unknown_tracker_lists_every_form(tmp_path, capsys, name):
     (["eval", "res.txt", "gt.txt"],
      "vistrack eval: error: unrecognized arguments: res.txt gt.txt; vistrack eval takes its "
      "files as options: --pred RESULTS --gt GROUND_TRUTH, or --pred-dir and --gt-dir"),
+    # a missing argument of a few values is told them
+    (["demo"], "vistrack demo: error: the following arguments are required: DEMO (kalman or "
+     "track)"),
     (["demo", "kalman", "--seeds", "x"],
      "vistrack demo: error: argument --seeds: invalid int value: 'x'"),
     (["demo", "kalman", "--seeds", "0"], "vistrack demo: error: --seeds must be >= 1; got 0"),

@@ -431,6 +431,14 @@ def test_cli_takes_a_tracker_of_ones_own(tmp_path):
                          env=env, cwd=tmp_path)
     assert bad.returncode == 2
     assert "cannot import make from nomodule" in bad.stderr
+    # a module that does not parse: its file and line, on one line (not a traceback)
+    (tmp_path / "broken.py").write_text("def make():\n    return (\n")
+    bad = subprocess.run(cmd[:6] + ["broken:make"] + cmd[7:], capture_output=True, text=True,
+                         env=env, cwd=tmp_path)
+    assert bad.returncode == 2
+    assert bad.stderr.startswith(f"vistrack track: error: tracker 'broken:make': "
+                                 f"{tmp_path / 'broken.py'}:2: ")
+    assert bad.stderr.count("\n") == 1
     box_only = subprocess.run(cmd[:6] + ["dcpf", "--high", "0.5"] + cmd[7:],
                               capture_output=True, text=True, env=env, cwd=tmp_path)
     assert box_only.returncode == 2 and "goes with the box trackers" in box_only.stderr

@@ -80,6 +80,13 @@ class _Parser(argparse.ArgumentParser):
     then the error. ``--help`` shows the usage."""
 
     def error(self, message: str) -> NoReturn:
+        required = "the following arguments are required: "
+        if message.startswith(required):  # with the values a missing argument may take
+            named = {a.metavar or a.dest: a.choices for a in self._actions
+                     if not a.option_strings and a.choices}
+            message = required + ", ".join(
+                f"{name} ({' or '.join(map(str, named[name]))})" if name in named else name
+                for name in message[len(required):].split(", "))
         self.exit(2, f"{self.prog}: error: {_message(ValueError(message))}\n")
 
 
@@ -1405,7 +1412,8 @@ def build_parser() -> argparse.ArgumentParser:
         "CLIP --gt GT --out-dir OUT/pets09-s2l1` writes them. 'kalman': the 1-D filter, the "
         "forward-backward smoother and the 2-D constant-velocity example's figures in OUT.",
     )
-    demo.add_argument("name", choices=DEMOS, help="which demo")
+    demo.add_argument("name", choices=DEMOS, metavar="DEMO",
+                      help=f"which demo: {' or '.join(DEMOS)}")
     demo.add_argument("--out", default="out", metavar="OUT",
                       help="folder for what the demo writes (default: out)")
     demo.add_argument("--force", action="store_true",

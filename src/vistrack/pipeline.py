@@ -1156,6 +1156,9 @@ def make_tracker(tracker: str | Tracker, ctx: Context) -> tuple[Tracker, str]:
         except (ImportError, AttributeError) as exc:
             raise ValueError(f"tracker {tracker!r}: cannot import {name} from {module} "
                              f"({exc})") from exc
+        except SyntaxError as exc:  # the module's file and line, in the one-line form
+            raise ValueError(f"tracker {tracker!r}: {exc.filename}:{exc.lineno}: {exc.msg}"
+                             ) from exc
         made = maker()
         if not callable(getattr(made, "step", None)):
             raise TypeError(f"tracker {tracker!r} made a {type(made).__name__}, which has no "
