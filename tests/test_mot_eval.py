@@ -177,6 +177,43 @@ def test_two_pairs_of_one_name_are_refused(tmp_path):
                                                                                "b"]
 
 
+def test_pairs_of_any_iterable_and_arguments_named(tmp_path):
+    """A zip or a generator of pairs is scored as the list is (the checks used it up: an
+    empty result, as if there were no pairs); an argument of the wrong kind is named."""
+    from vistrack.evaluation import evaluate_files
+    from vistrack.evaluation.files import pair_matches
+
+    g = tmp_path / "gt.txt"
+    g.write_text("1,1,0,0,10,10,1,1,1\n2,1,1,0,10,10,1,1,1\n")
+    listed = evaluate_files([("a", g, g, None), ("b", g, g, None)])
+    for pairs in (zip("ab", [g, g], [g, g], [None, None]),
+                  ((n, g, g, None) for n in "ab")):
+        got = evaluate_files(pairs)
+        assert sorted(got) == ["COMBINED", "a", "b"]
+        assert got["COMBINED"].TP == listed["COMBINED"].TP == 4
+    with pytest.raises(TypeError, match="jobs"):
+        evaluate_files([("a", g, g, None)], jobs="2")
+    with pytest.raises(ValueError, match=r"jobs must be a whole number >= 1; got 3\.5"):
+        evaluate_files([("a", g, g, None)], jobs=3.5)
+    with pytest.raises(TypeError, match="n_frames"):
+        evaluate_mot(read_mot(g), read_mot(g), "3")
+    with pytest.raises(ValueError, match=re.escape("a pair is a (name, gt, results, seqinfo "
+                                                   "or None) tuple; pair is ('a', ")):
+        pair_matches(("a", g, g))
+    with pytest.raises(TypeError, match="MOTCounts"):
+        MOTCounts() + 1
+
+
+def test_a_fractional_class_of_a_table_made_by_hand_is_named_as_it_is():
+    """(it was named class 1, which is one)"""
+    g = MOTTable.from_rows([(1, 1, 0, 0, 10, 10, 1, 1, 1), (2, 1, 0, 0, 10, 10, 1, 1, 1)])
+    table = MOTTable(g.frames, g.ids, g.boxes, g.conf, np.array([1.5, 1.0]), g.visibility, "",
+                     9)
+    with pytest.raises(ValueError, match=re.escape("ground truth: class 1.5 is not a MOT17 "
+                                                   "class (1-13)")):
+        evaluate_mot(table, g, benchmark="MOT17")
+
+
 def motmetrics_summary(gt_path, pred_path):
     if not hasattr(np, "asfarray"):  # py-motmetrics 1.4 still calls np.asfarray (numpy < 2)
         np.asfarray = lambda a, dtype=float: np.asarray(a, dtype=dtype)  # noqa: NPY201 (the shim)
@@ -833,6 +870,11 @@ def test_ground_truth_without_conf_is_said_to_count_every_row(tmp_path):
         warnings.simplefilter("error")
         b = read_truth(seven)
     assert len(a) == len(b) == 2
+    # a ground-truth CSV file's error calls it one (it was "not a CSV results file")
+    bad = tmp_path / "empty.csv"
+    bad.write_text("")
+    with pytest.raises(Exception, match="not a CSV ground-truth file"):
+        read_truth(bad)
 
 
 def test_results_past_a_short_ground_truth_are_said():

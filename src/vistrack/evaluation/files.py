@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from .._pool import one_line
+from .._validate import as_whole
 from ..io.motchallenge import MOTTable, read_mot, read_seq_length
 from .mot import (
     BENCHMARKS,
@@ -86,7 +87,9 @@ def read_truth(path: str | Path, *, points: bool = False) -> MOTTable:
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".parquet" or (suffix == ".csv" and not _text_without_header(path)):
-        return _read_results(path, points=points)
+        # (its own columns: without conf, every row counts, as a points file's always does)
+        return MOTTable.from_pandas(_table_file(path, "ground-truth"), path=str(path),
+                                    points=points)
     table = read_mot(path)
     if len(table) and table.columns < 7:
         # (its rows to ignore, conf 0 in MOTChallenge's ground truth, were counted as people
@@ -95,6 +98,17 @@ def read_truth(path: str | Path, *, points: bool = False) -> MOTTable:
                       "value, 0 on the rows a benchmark ignores): every row is counted",
                       UserWarning, stacklevel=2)
     return table
+
+
+def _table_file(path: Path, what: str) -> Any:
+    """A Parquet or CSV file with a header (by its suffix) as a pandas DataFrame; ``what``
+    it holds (``"results"``, ``"ground-truth"``) for its errors."""
+    from ..io.motchallenge import _pandas, _read_csv, need_parquet
+
+    if path.suffix.lower() == ".parquet":
+        need_parquet()
+        return _pandas(f"a Parquet {what} file").read_parquet(path)
+    return _read_csv(path, f"a CSV {what} file")
 
 
 def _text_without_header(path: Path) -> bool:
@@ -125,14 +139,8 @@ def _read_results(path: Path, columns: dict[str, str] | None = None,
             raise ValueError(f"columns name a CSV or Parquet file's columns; {path} is read as "
                              "a MOTChallenge text file")
         return read_mot(path)
-    from ..io.motchallenge import _pandas, _read_csv, need_parquet
-
-    if suffix == ".parquet":
-        need_parquet()
-        df = _pandas("a Parquet results file").read_parquet(path)
-    else:
-        df = _read_csv(path, "a CSV results file")
-    return MOTTable.from_pandas(df, columns, path=str(path), points=points)
+    return MOTTable.from_pandas(_table_file(path, "results"), columns, path=str(path),
+                                points=points)
 
 
 def _score_on(executor: Executor, pairs: list[tuple[str, Path, Path, Path | None]],
@@ -155,6 +163,12 @@ def _score_on(executor: Executor, pairs: list[tuple[str, Path, Path, Path | None
     return scored
 
 
+def _check_pair(pair: Any, name: str) -> None:
+    if not isinstance(pair, (tuple, list)) or len(pair) != 4:
+        raise ValueError(f"a pair is a (name, gt, results, seqinfo or None) tuple; {name} is "
+                         f"{pair!r}")
+
+
 def pair_matches(pair: tuple[str, Path, Path, Path | None], benchmark: str = "auto",
                  columns: dict[str, str] | None = None,
                  zero_distance: float | None = None) -> Matches:
@@ -162,6 +176,7 @@ def pair_matches(pair: tuple[str, Path, Path, Path | None], benchmark: str = "au
     frame (:func:`~vistrack.evaluation.clear_matches`), read and scored as
     :func:`evaluate_files` does (a CSV or Parquet file's ``columns`` named as there;
     positions by distance with ``zero_distance``)."""
+    _check_pair(pair, "pair")
     return clear_matches(*_read(pair, columns, points=zero_distance is not None),
                          benchmark=benchmark, zero_distance=zero_distance)
 
@@ -238,17 +253,17 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     (['COMBINED', 'a', 'b'], 6, 0, [])
     """
     out = EvalResults()
-    if jobs is not None and jobs < 1:
-        raise ValueError(f"jobs must be 1 or more; got {jobs}")
+    if jobs is not None:
+        jobs = as_whole(jobs, "jobs", 1)
+    # any iterable of pairs (a zip, a generator): the checks below would use one up
+    pairs = list(pairs)
     if benchmark not in BENCHMARKS:  # an argument's error, not a file's (keep_going)
         raise ValueError(f"benchmark must be one of {', '.join(map(repr, BENCHMARKS))}; got "
                          f"{benchmark!r}")
     if zero_distance is not None:  # (the same: not one pair's error)
         zero_distance = check_zero_distance(zero_distance)
     for k, pair in enumerate(pairs):
-        if not isinstance(pair, (tuple, list)) or len(pair) != 4:
-            raise ValueError(f"pairs must hold (name, gt, results, seqinfo or None) tuples; "
-                             f"pairs[{k}] is {pair!r}")
+        _check_pair(pair, f"pairs[{k}]")
     seen: dict[str, int] = {}
     for k, (name, *_) in enumerate(pairs):
         # the results are keyed by the name as text: two pairs of one name would keep one

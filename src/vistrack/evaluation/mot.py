@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import decode_text
+from .._validate import as_whole, decode_text
 from ..io.motchallenge import MOTTable, _row_cells, _text_lines
 
 _LSA: list[Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]] = []
@@ -423,9 +423,7 @@ def _n_frames(gt: MOTTable, pred: MOTTable, n_frames: int | None) -> int:
     _check_table(pred, "pred")
     if n_frames is None:
         return int(max(gt.frames.max() if len(gt) else 0, pred.frames.max() if len(pred) else 0))
-    if not (0 <= n_frames < np.inf and int(n_frames) == n_frames):  # NaN too
-        raise ValueError(f"n_frames must be a whole number >= 0; got {n_frames}")
-    return int(n_frames)
+    return as_whole(n_frames, "n_frames", 0)
 
 
 def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str,
@@ -442,7 +440,7 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str,
         bad = ~np.isin(gt.classes, np.arange(1, 14))
         if bad.any():
             where, written = _class_row(gt, "ground truth", lambda c: c not in range(1, 14))
-            value = f"{written:g}" if written is not None else str(int(gt.classes[np.argmax(bad)]))
+            value = f"{written if written is not None else gt.classes[np.argmax(bad)]:g}"
             raise ValueError(f"{where}: class {value} is not a {bench} class (1-13)")
     if bench != "MOT15" and len(pred) and (pred.classes > 1).any():
         # TrackEval refuses such results ("only valid for pedestrian class"): a car of a
@@ -591,6 +589,8 @@ class MOTCounts:
     combined: bool = False
 
     def __add__(self, other: MOTCounts) -> MOTCounts:
+        if not isinstance(other, MOTCounts):
+            return NotImplemented
         out = MOTCounts(combined=True)
         for f in fields(self):
             if f.name not in ("AssA_alpha", "AssRe_alpha", "AssPr_alpha", "LocA_alpha",
