@@ -2232,3 +2232,70 @@ def test_sixteen_bit_images_after_an_eight_bit_first_keep_their_depth(tmp_path):
         values = [int(f.image[0, 0, 0]) for f in VideoReader(d)]
     assert values == [100, 100, 250]
     assert any("read as 12-bit" in str(w.message) for w in caught)
+
+
+@pytest.mark.parametrize("call, error, message", [
+    # flags read by truth: the text "False" froze the model, "no" detected shadows
+    (lambda: SelectiveBackground(freeze="False"), TypeError,
+     "freeze must be True or False; got 'False'"),
+    (lambda: MOG2Background(detect_shadows="no"), TypeError,
+     "detect_shadows must be True or False; got 'no'"),
+    (lambda: MOG2Background(freeze=1), TypeError, "freeze must be True or False; got 1"),
+    # settings that pass as numbers but are 0 (or infinite) in the float32 model: every
+    # unchanged pixel was foreground for good
+    (lambda: SelectiveBackground(min_sigma=1e-25), ValueError,
+     "min_sigma² (min_sigma squared) must lie within float32's range (1.2e-38 to 3.4e38), in "
+     "which the model is kept; got 1e-50"),
+    (lambda: SelectiveBackground(threshold=1e-50), ValueError,
+     "threshold must lie within float32's range"),
+    (lambda: SelectiveBackground(threshold=1e39), ValueError,
+     "threshold must lie within float32's range"),
+])
+def test_background_flags_and_settings_float32_cannot_hold_are_named(call, error, message):
+    with pytest.raises(error, match=re.escape(message)):
+        call()
+
+
+def test_a_tiny_min_sigma_float32_holds_still_keeps_a_still_scene_background():
+    """The oracle: a still, unchanged scene has no foreground (the model's floor on σ at
+    the smallest value float32 squares to a number > 0)."""
+    still = [np.full((8, 10), 90, np.uint8)] * 5
+    bg = SelectiveBackground(min_sigma=1e-18, n_init=3).initialize(still[:3])
+    assert all(not bg.apply(f).any() for f in still)
+
+
+def test_mog2_names_a_frame_of_another_size_by_its_place():
+    """initialize's k-th frame of another size was named 'image'."""
+    frames = [np.zeros((40, 60), np.uint8)] * 2 + [np.zeros((30, 60), np.uint8)]
+    with pytest.raises(ValueError, match=re.escape("frames[2] is 60x30 with 1 channel(s); the "
+                                                   "model's frames are 60x40 with 1")):
+        MOG2Background().initialize(frames)
+
+
+def test_detector_settings_of_no_use_are_named_and_tiny_images_find_nobody():
+    from vistrack.frontends.detectors import ConfidenceMap, ConfidencePeaks, HOGDetector, nms
+
+    for call, error, message in (
+            (lambda: HOGDetector(upscale=float("inf")), ValueError,
+             "upscale must be a finite number > 0; got inf"),
+            (lambda: HOGDetector(upscale="2"), TypeError, "upscale must be a number; got '2'"),
+            (lambda: ConfidencePeaks(lambda im: None, threshold=float("nan")), ValueError,
+             "threshold must be a finite number; got nan"),
+            (lambda: ConfidencePeaks(lambda im: None, threshold="x"), TypeError,
+             "threshold must be a number; got 'x'"),
+            (lambda: nms(np.zeros((2, 4)), np.ones(2), float("nan")), ValueError,
+             "max_iou must be a finite number >= 0 and <= 1; got nan"),
+            (lambda: ConfidenceMap([90.0], [np.zeros((3, 3))], [(0.0, 0.0)], [8.0], aspect=-1),
+             ValueError, "aspect must be a finite number > 0; got -1"),
+            (lambda: ConfidenceMap([90.0], [np.zeros((3, 3))], [(0.0, 0.0)], [8.0]).detections(
+                threshold=float("nan")), ValueError, "threshold must be a finite number"),
+    ):
+        with pytest.raises(error, match=re.escape(message)):
+            call()
+    # nms at a NaN kept every box; the oracle of a threshold is the greedy rule by hand
+    boxes = np.array([[0, 0, 10, 10], [1, 1, 11, 11], [20, 20, 30, 30.0]])
+    assert nms(boxes, np.array([0.5, 0.9, 0.1]), 0.5).tolist() == [1, 2]
+    # smaller than the window, as documented, at any upscale (a factor below 1 on a 1-pixel
+    # tall image failed in OpenCV's resize)
+    for shape, up in (((1, 300, 3), 0.5), ((2, 2), 0.1), ((40, 100, 3), 2.0)):
+        assert len(HOGDetector(upscale=up).detect(np.zeros(shape, np.uint8))) == 0

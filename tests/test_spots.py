@@ -308,3 +308,16 @@ def test_half_floats_object_empty_images_and_a_separation_per_axis():
     for name in ("separation", "noise_size", "minmass", "threshold"):
         with pytest.raises(TypeError, match=f"^{name} must be a number; got '1'$"):
             locate(im, 9, **{name: "1"})
+
+
+def test_settings_are_checked_before_any_spot_is_found():
+    """A bad max_iterations was refused only on an image with a spot (a batch ran to the
+    first such frame); invert was read by its truth ("no" inverted the image)."""
+    from vistrack.frontends import locate
+
+    blank = np.zeros((32, 32), np.uint8)
+    for bad, error in ((-1, ValueError), ("ten", TypeError), (2.5, ValueError)):
+        with pytest.raises(error, match="max_iterations"):
+            locate(blank, 9, max_iterations=bad)
+    with pytest.raises(TypeError, match=re.escape("invert must be True or False; got 'no'")):
+        locate(blank, 9, invert="no")

@@ -50,7 +50,7 @@ import numpy as np
 from .._jit import bind, njit
 from .._prebuilt import kernel
 from .._registry import Registry
-from .._validate import as_finite, as_number, as_uint8_image, as_whole, is_whole
+from .._validate import as_finite, as_flag, as_number, as_uint8_image, as_whole, is_whole
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -174,8 +174,17 @@ class SelectiveBackground:
             # infinity nothing ever is
             raise ValueError(f"min_sigma must be > 0 and finite (grey levels): at 0 every "
                              f"pixel that never changed is foreground; got {min_sigma}")
+        # the model is kept in float32: a value that is 0 or infinite there is as above
+        for name, value in (("threshold", threshold), ("min_sigma² (min_sigma squared)",
+                                                       float(min_sigma) ** 2)):
+            with np.errstate(over="ignore"):
+                held = np.float32(value)
+            if not 0 < held < np.inf:
+                raise ValueError(f"{name} must lie within float32's range (1.2e-38 to "
+                                 f"3.4e38), in which the model is kept; got {value:g}")
         self.alpha, self.threshold, self.n_init = float(alpha), float(threshold), int(n_init)
-        self.min_sigma, self.freeze, self.n_new = float(min_sigma), bool(freeze), int(n_new)
+        self.min_sigma, self.n_new = float(min_sigma), int(n_new)
+        self.freeze = as_flag(freeze, "freeze")  # ("False" was true)
         self.mean: np.ndarray | None = None  # B (H, W, C) float32
         self.mean_sq: np.ndarray | None = None  # J² (H, W, C) float32
         self._buffer: list[np.ndarray] = []
@@ -456,8 +465,8 @@ class MOG2Background:
         history = as_whole(history, "history", 1)
         var_threshold = as_finite(var_threshold, "var_threshold", 0.0, above=True)
         self._m = cv2.createBackgroundSubtractorMOG2(history, var_threshold,
-                                                     bool(detect_shadows))
-        self.freeze = bool(freeze)
+                                                     as_flag(detect_shadows, "detect_shadows"))
+        self.freeze = as_flag(freeze, "freeze")
         self._seen = 0
         self._shape: tuple[int, ...] | None = None  # (H, W, C) of the frames learnt from
 
@@ -494,7 +503,7 @@ class MOG2Background:
         if self._shape is None:
             self._shape = shape
         elif shape != self._shape:
-            _one_shape([self._shape, shape], "image")
+            _one_shape([self._shape, shape], name)
         return im
 
     def apply(self, image: np.ndarray) -> np.ndarray:

@@ -54,6 +54,8 @@ def nms(boxes: np.ndarray, scores: np.ndarray, max_iou: float,
     from ..association import non_maximum
 
     order = np.argsort(-np.asarray(scores), kind="stable")
+    # (a NaN kept every box, a string failed in numpy's words)
+    max_iou = as_finite(max_iou, "max_iou", 0.0, high=1.0)
     keep = non_maximum(boxes, scores, classes, float(np.nextafter(max_iou, np.inf)))
     return order[keep[order]]
 
@@ -164,9 +166,8 @@ class HOGDetector:
         self.scale = as_finite(scale, "scale", 1.0, above=True)
         self.hit_threshold = as_finite(hit_threshold, "hit_threshold")
         self.nms_iou = as_finite(nms_iou, "nms_iou", 0.0, high=1.0)
-        if not upscale > 0:
-            raise ValueError(f"upscale must be > 0; got {upscale}")
-        self.upscale = float(upscale)
+        # (infinity was taken, and failed allocating 1.4e19 bytes)
+        self.upscale = as_finite(upscale, "upscale", 0.0, above=True)
 
     def detect(self, image: np.ndarray) -> Detections:
         """The people in ``image``.
@@ -193,6 +194,8 @@ class HOGDetector:
         import cv2
 
         im = bgr_or_grey(image)
+        if min(im.shape[:2]) * self.upscale < 1:  # (OpenCV's resize to nothing failed)
+            return Detections(boxes=np.zeros((0, 4)))
         if self.upscale != 1.0:
             im = cv2.resize(im, None, fx=self.upscale, fy=self.upscale,
                             interpolation=cv2.INTER_LINEAR)
@@ -280,7 +283,8 @@ class ConfidenceMap:
                              f"level, shape ({L}, 2); got {st.tolist()}")
         if not (np.isfinite(self.heights).all() and (self.heights > 0).all()):
             raise ValueError(f"heights must be finite and > 0; got {self.heights.tolist()}")
-        self.aspect = float(aspect)
+        # (-1 was taken, and detections() failed naming the boxes' widths)
+        self.aspect = as_finite(aspect, "aspect", 0.0, above=True)
 
     def level(self, h: ArrayLike) -> np.ndarray:
         """Index of the level nearest each height (in log height).
@@ -379,6 +383,8 @@ class ConfidenceMap:
         >>> d.xywh.tolist(), d.scores.round(3).tolist()
         ([[11.5, -9.0, 45.0, 90.0]], [0.881])
         """
+        threshold = as_finite(threshold, "threshold")  # (a NaN found nothing)
+        nms_iou = as_finite(nms_iou, "nms_iou", 0.0, high=1.0)
         boxes, scores = [], []
         for k, s in enumerate(self.scores):
             pad = np.pad(s, 1, constant_values=-np.inf)
@@ -525,7 +531,8 @@ class ConfidencePeaks:
         if not callable(confidence):
             raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                             f"{type(confidence).__name__}")
-        self.confidence, self.threshold = confidence, float(threshold)
+        # (a NaN found nothing, without a word)
+        self.confidence, self.threshold = confidence, as_finite(threshold, "threshold")
 
     def detect(self, image: np.ndarray) -> Detections:
         """The peaks of the image's confidence above the threshold.

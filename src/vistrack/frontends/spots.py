@@ -8,11 +8,13 @@ give the same positions.
    values below ``threshold`` become 0; the result is scaled to integers, over the range of
    the image's own integer type (0–65535 for 16 bits), 0–255 for a float image (trackpy's);
 2. **local maxima**: pixels equal to the grey dilation over a square inscribed in the circle of
-   diameter ``separation`` (default ``diameter + 1``), brighter than the ``percentile`` of the
-   image's non-zero pixels, and away from the margins;
+   radius ``separation`` (default ``diameter + 1``; trackpy's square, of side
+   ``2 separation / sqrt(2)``), brighter than the ``percentile`` of the image's non-zero
+   pixels, and away from the margins;
 3. **refine**: the centroid of the band-passed intensity in a disc of radius ``diameter // 2``;
    while it is more than 0.6 pixel off the disc's centre, the disc moves one pixel towards it
-   (at most ``max_iterations`` times); ``mass`` is the disc's total band-passed intensity;
+   and is measured again (at most ``max_iterations`` measurements, as trackpy counts them:
+   ``max_iterations - 1`` moves); ``mass`` is the disc's total band-passed intensity;
 4. of each pair of spots closer than ``separation`` the less massive is dropped; so are
    spots with ``mass <= minmass``.
 
@@ -28,7 +30,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_finite, as_number, as_whole, bgr_to_grey, is_whole
+from .._validate import as_finite, as_flag, as_number, as_whole, bgr_to_grey, is_whole
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -211,8 +213,10 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         A local maximum must be brighter than this percentile of the band-passed image's
         non-zero pixels.
     max_iterations : int
-        Most moves of the disc in the refinement (>= 0); the centre of mass of the disc at
-        the local maximum is measured even with 0, as trackpy's ``locate`` does.
+        Most measurements of the disc in the refinement (>= 0), each but the first after a
+        move of one pixel: ``max_iterations - 1`` moves at most, as trackpy counts them. The
+        centre of mass of the disc at the local maximum is measured even with 0 (as with 1),
+        as trackpy's ``locate`` does.
 
     Returns
     -------
@@ -297,12 +301,14 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
             raise ValueError(f"{name} must be a finite number; got {value}")
     # (None failed in the search, naming no argument; 150 was taken where nothing was lit)
     percentile = as_finite(percentile, "percentile", 0.0, high=100.0)
+    # (checked only once a spot was found: a batch failed at the first frame with one)
+    max_iterations = as_whole(max_iterations, "max_iterations", 0)
     if im.dtype.kind == "f" and not np.isfinite(im).all():
         # one NaN made the band-pass's top NaN, and every value with it: no spot, no word
         r0, c0 = np.argwhere(~np.isfinite(im))[0]
         raise ValueError(f"image must be finite; image[{r0}, {c0}] = {im[r0, c0]} (a NaN of "
                          "a flat-field division? replace it, e.g. with the image's median)")
-    if invert:
+    if as_flag(invert, "invert"):
         im = _inverted(im)
     if threshold is None:
         threshold = 1.0 if np.issubdtype(im.dtype, np.integer) else 1.0 / 255
@@ -362,7 +368,7 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         return empty
     # 3. refine
     # at least the first disc measured (0 reported the integer maxima themselves)
-    moves = max(1, as_whole(max_iterations, "max_iterations", 0))
+    moves = max(1, max_iterations)
     pos, mass, rg = _refine(img.astype(np.float64), coords, r, _disc(r), moves,
                             0.6)
     # 4. of each pair of spots closer than the separation, the less massive goes (ties: the
