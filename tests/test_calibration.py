@@ -1072,3 +1072,15 @@ def test_each_class_loosens_its_own_links(tmp_path):
                                                                   index=False)
     run = track_sequence(tmp_path / "both.csv", tmp_path / "out.csv", fps=10, offline=True)
     assert run.derived["calibration_link_iou"] == {"1": 0.2, "2": 0.3}
+
+
+def test_top_min_that_is_no_whole_number_is_named():
+    """NaN failed on "cannot convert float NaN to integer", infinity on an OverflowError,
+    2.5 was cut to 2."""
+    for bad, error in ((np.nan, ValueError), (np.inf, ValueError), (2.5, ValueError),
+                       ("20", TypeError)):
+        with pytest.raises(error, match="top_min"):
+            ScoreCalibrator(top_min=bad)
+        with pytest.raises(error, match="top_min"):
+            ScoreCalibration.fit([0.1, 0.9], [0, 1], top_min=bad)
+    assert ScoreCalibrator(top_min=2.0).top_min == 2

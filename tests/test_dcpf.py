@@ -695,6 +695,35 @@ def test_two_detections_of_one_person_start_one_target():
     np.testing.assert_allclose(out.boxes[0], boxes[1], atol=1.0)  # from the stronger
 
 
+def test_a_target_keeps_to_its_detections_class():
+    """Trackers never give two classes one identity (`Detections`): a box of class 7 took
+    the target of a class-3 box at its place, and every target was reported as class 0. Two
+    overlapping boxes of two classes start two targets (one person by a car)."""
+    im = np.zeros((240, 320, 3), np.uint8)
+    trk = DetectorConfidencePF(gamma=0.0, eta=0.0, rng=0)
+    box = np.array([[100.0, 60, 124, 120]])
+    seen = {}
+    for t in range(8):
+        cls = [3] if t < 4 else [7]
+        out = trk.update(im, Detections(boxes=box, scores=[0.9], classes=cls))
+        for i, c in zip(out.ids.tolist(), out.classes.tolist()):
+            seen.setdefault(i, set()).add(c)
+            assert c == cls[0]
+    assert len(seen) == 2 and all(len(c) == 1 for c in seen.values())
+    both = DetectorConfidencePF(gamma=0.0, eta=0.0, rng=0)
+    for _ in range(3):
+        out = both.update(im, Detections(boxes=np.r_[box, box + 1.0], scores=[0.9, 0.8],
+                                         classes=[3, 7]))
+    assert sorted(out.classes.tolist()) == [3, 7] and len(set(out.ids.tolist())) == 2
+
+
+def test_the_colour_classifier_names_a_grey_frame():
+    with pytest.raises(ValueError, match=re.escape("image must be a BGR frame (H, W, 3) for the "
+                                                   "colour features")):
+        DetectorConfidencePF(gamma=0.0, rng=0).update(np.zeros((240, 320), np.uint8),
+                                                      Detections(boxes=np.zeros((0, 4))))
+
+
 def test_no_confidence_map_is_computed_without_its_term():
     """With ``gamma`` 0 nothing reads the detector's confidence, but :meth:`step` computed
     it every frame (a dense HOG map, 0.1 s a frame, for nothing)."""

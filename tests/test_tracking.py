@@ -1351,6 +1351,17 @@ def test_a_track_tables_times_confirmations_and_kept_rows_are_checked():
     with pytest.raises(ValueError, match=re.escape(
             "mask's indices must each be given once; got [0, 0, 1]")):
         table().keep(np.array([0, 0, 1]))
+    with pytest.raises(ValueError, match=re.escape(  # (-1 is row 1: two tracks of id 2)
+            "mask's indices must each be given once; got [1, -1]")):
+        table().keep(np.array([1, -1]))
+    # a column of another shape refused before the table changes (scores (1, 1) failed in
+    # numpy's words with the columns before it grown, and `keep` failed later)
+    t = table()
+    with pytest.raises(ValueError, match=re.escape(
+            "scores must be of shape (1,), one value per track; got shape (1, 1)")):
+        t.add(np.zeros((1, 1)), np.ones((1, 1, 1)), 0.0, np.zeros(1, np.int64),
+              np.ones((1, 1)), confirmed=True)
+    assert {len(getattr(t, c)) for c in ("mean", "ids", "classes", "scores")} == {2}
     t = table()
     t.keep(np.array([1]))
     assert t.ids.tolist() == [2]

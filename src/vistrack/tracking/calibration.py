@@ -68,7 +68,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import is_whole
+from .._validate import as_whole, is_whole
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
 from ..types import Detections
@@ -545,6 +545,7 @@ class ScoreCalibration:
             raise ValueError(f"top must be in (0, 1]; got {top}")
         if not cap_sigma > 0:
             raise ValueError(f"cap_sigma must be > 0; got {cap_sigma}")
+        top_min = as_whole(top_min, "top_min", 1)
         s = _scores(scores)
         p = np.asarray(persisted, dtype=np.float64).ravel()
         if p.shape != s.shape:
@@ -822,8 +823,7 @@ class ScoreCalibrator:
             raise ValueError(f"top must be in (0, 1]; got {top}")
         if not cap_sigma > 0:
             raise ValueError(f"cap_sigma must be > 0; got {cap_sigma}")
-        if top_min < 1:
-            raise ValueError(f"top_min must be >= 1; got {top_min}")
+        top_min = as_whole(top_min, "top_min", 1)  # (NaN: "cannot convert", 2.5 cut to 2)
         for name, v in (("prior", prior), ("chain_span", chain_span), ("chain_gap", chain_gap)):
             if not 0 <= v < np.inf:
                 raise ValueError(f"{name} must be a finite number >= 0; got {v}")

@@ -277,6 +277,10 @@ class ColourFeatures:
         from .._validate import as_uint8_image
 
         im = as_uint8_image(image, channels=(3,))
+        if im.ndim != 3:  # (a grey frame failed in OpenCV's words, naming nothing)
+            raise ValueError(f"image must be a BGR frame (H, W, 3) for the colour features of "
+                             f"the targets' classifiers; got a grey frame of shape {im.shape} "
+                             "(with eta=0 there is no classifier)")
         small = cv2.resize(im, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
         hsv = cv2.cvtColor(small, cv2.COLOR_BGR2HSV)
         b = (hsv[..., 0].astype(np.int32) * bins // 180) * bins_s \
@@ -347,6 +351,11 @@ class DetectorConfidencePF:
     :meth:`step` is the tracker protocol (:class:`~vistrack.tracking.Tracker`): a frame with
     its BGR image, and its discrete detections (scores in (0, 1)). :meth:`update` is the same
     step with the confidence map given, for a map computed elsewhere.
+
+    A target is of its first detection's class, takes detections of that class only, and
+    is reported with it; two targets of different classes may overlap (a person by a car)
+    without being merged, and a detection overlapping a target of another class starts one
+    of its own.
     """
 
     def __init__(self, config: DCPFConfig | None = None, *,
@@ -488,6 +497,11 @@ class DetectorConfidencePF:
             detections = detections[sized]
             det_xywh = det_xywh[sized]
         det_c = det_xywh[:, :2] + det_xywh[:, 2:] / 2
+        assert detections.classes is not None  # set by Detections.__post_init__
+        det_cls = detections.classes if len(detections) else np.zeros(0, np.int64)
+        # a target takes, starts from and is merged with its own class's only (a box of
+        # class 7 took a target of class 3, reported as class 0)
+        tab_cls = self.tracks.classes
 
         # predict: constant velocity over k frames, noise scaled by each target's height and,
         # as random walks in continuous time, by the frames' duration against noise_rate's
@@ -519,7 +533,7 @@ class DetectorConfidencePF:
             dist = np.linalg.norm(det_c[None] - centre[:, None], axis=-1)
             ratio = det_xywh[None, :, 3] / self.size[:, None, 1]
             gate = ((dist <= cfg.gate_heights * self.size[:, None, 1]) & (ratio < 1.5)
-                    & (ratio > 1 / 1.5))
+                    & (ratio > 1 / 1.5) & (tab_cls[:, None] == det_cls[None, :]))
             if cfg.eta > 0:
                 assert feats is not None  # made above when eta > 0
                 clf = self._classify(feats(det_xywh)[None], slice(None))
@@ -585,7 +599,8 @@ class DetectorConfidencePF:
         if T > 1:
             xyxy = np.c_[est[:, :2], est[:, :2] + est[:, 2:]]
             ov = np.triu(iou(xyxy, xyxy), 1)       # rows are older: ids grow with the index
-            both = confirmed[:, None] & confirmed[None, :]
+            both = (confirmed[:, None] & confirmed[None, :]
+                    & (tab_cls[:, None] == tab_cls[None, :]))
             covered = cast(np.ndarray, ((ov > cfg.merge_iou) & both).any(0))  # (T,) array
         self.overlapped = np.where(covered, self.overlapped + k / self.frame_rate, 0.0)
         # for more than merge_time, whatever the rounding of the sum of the frames' 1 /
@@ -597,7 +612,7 @@ class DetectorConfidencePF:
                      boxes=np.c_[est[report, :2], est[report, :2] + est[report, 2:]],
                      points=None, scores=conf_mean[report] if cfg.gamma > 0
                      else np.ones(int(report.sum())),
-                     classes=np.zeros(int(report.sum()), np.int64))
+                     classes=tab.classes[report].copy())
 
         # the classifiers learn where their targets were detected
         if cfg.eta > 0 and has.any():
@@ -613,9 +628,11 @@ class DetectorConfidencePF:
             assert detections.scores is not None  # set by Detections.__post_init__
             strong = free & (detections.scores >= cfg.init_score)
             if strong.any():
-                cand = det_xywh[strong]
-                cand = cand[self._starts(cand, detections.scores[strong], est)]
-                self._start(cand, feats, time)
+                cand, cand_cls = det_xywh[strong], det_cls[strong]
+                taken = self._starts(cand, detections.scores[strong], cand_cls, est,
+                                     tab.classes)
+                cand, cand_cls = cand[taken], cand_cls[taken]
+                self._start(cand, cand_cls, feats, time)
                 if cfg.confirm <= 1 and len(cand):
                     # confirmed as they start: reported in this frame too (they were not, so
                     # every track lost its first frame, and a target of one frame was never
@@ -629,21 +646,24 @@ class DetectorConfidencePF:
                                  boxes=np.r_[out.boxes, np.c_[cand[:, :2],
                                                               cand[:, :2] + cand[:, 2:]]],
                                  points=None, scores=np.r_[out.scores, scores],
-                                 classes=np.zeros(len(out.ids) + len(cand), np.int64))
+                                 classes=np.r_[out.classes, cand_cls])
         return out
 
-    def _starts(self, cand: np.ndarray, scores: np.ndarray, est: np.ndarray) -> np.ndarray:
-        """Which candidate boxes ``cand (C, 4)`` (``x, y, w, h``) start targets: taken by
-        ``scores``, highest first, each overlapping no target's box ``est`` and no candidate
-        taken before it by more than ``max_overlap`` (two detections of one person, which a
-        detection file may hold, started two targets, both reported until one ended)."""
+    def _starts(self, cand: np.ndarray, scores: np.ndarray, classes: np.ndarray,
+                est: np.ndarray, est_classes: np.ndarray) -> np.ndarray:
+        """Which candidate boxes ``cand (C, 4)`` (``x, y, w, h``) of ``classes`` start
+        targets: taken by ``scores``, highest first, each overlapping no target's box ``est``
+        of its class (``est_classes``) and no candidate of its class taken before it by more
+        than ``max_overlap`` (two detections of one person, which a detection file may hold,
+        started two targets, both reported until one ended)."""
         limit = self.config.max_overlap
         cxyxy = np.c_[cand[:, :2], cand[:, :2] + cand[:, 2:]]
         ok = np.ones(len(cand), bool)
         if len(est):
             exyxy = np.c_[est[:, :2], est[:, :2] + est[:, 2:]]
-            ok = iou(cxyxy, exyxy).max(1) <= limit
-        among = iou(cxyxy, cxyxy)
+            ov = np.where(classes[:, None] == est_classes[None, :], iou(cxyxy, exyxy), 0.0)
+            ok = ov.max(1) <= limit
+        among = np.where(classes[:, None] == classes[None, :], iou(cxyxy, cxyxy), 0.0)
         taken = np.zeros(len(cand), bool)
         for j in np.argsort(-scores, kind="stable"):
             if ok[j] and not (among[j, taken] > limit).any():
@@ -673,7 +693,8 @@ class DetectorConfidencePF:
         for name in ("particles", "size", "overlapped", "weights_clf"):
             setattr(self, name, getattr(self, name)[keep])
 
-    def _start(self, boxes: np.ndarray, feats: ColourFeatures | None, time: float) -> None:
+    def _start(self, boxes: np.ndarray, classes: np.ndarray, feats: ColourFeatures | None,
+               time: float) -> None:
         k, N = len(boxes), self.config.n_particles
         if k == 0:
             return
@@ -687,7 +708,7 @@ class DetectorConfidencePF:
         dim = feats.dim + 1 if feats is not None else 1
         if self.weights_clf.shape[1] != dim:
             self.weights_clf = np.zeros((len(self.ids), dim))
-        self.tracks.add(boxes, np.zeros((k, 0)), time, np.zeros(k, np.int64), np.zeros(k),
+        self.tracks.add(boxes, np.zeros((k, 0)), time, classes, np.zeros(k),
                         confirmed=self.config.confirm <= 1)
         self.particles = np.concatenate([self.particles, parts])
         self.size = np.concatenate([self.size, boxes[:, 2:]])

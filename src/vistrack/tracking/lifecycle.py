@@ -175,6 +175,12 @@ class TrackTable:
             if len(column) != k:  # one row per track in every column
                 raise ValueError(f"{name} must have one row for each of the {k} tracks' "
                                  f"mean; got {len(column)}")
+        for name, column in (("classes", classes), ("scores", scores)):
+            # (scores of shape (1, 1) failed in numpy's words after the columns before it had
+            # grown: the table's columns no longer had one row per track)
+            if np.ndim(column) != 1:
+                raise ValueError(f"{name} must be of shape ({k},), one value per track; got "
+                                 f"shape {np.shape(column)}")
         # each row as the table's (numpy's concatenate named neither), and classes whole:
         # float classes turned the column to float for every later track
         for name, column, shape in (("mean", mean, (self.n,)), ("cov", cov, self.cov_shape)):
@@ -219,8 +225,9 @@ class TrackTable:
         rows = np.asarray(mask)
         if rows.size == 0 and rows.dtype.kind == "f":  # ([]: no row, as numpy took it)
             rows = rows.astype(np.int64)
-        if rows.dtype != np.bool_ and len(np.unique(rows)) != rows.size:
-            # (a row kept twice gave two tracks of one identity, which is never reused)
+        if rows.dtype != np.bool_ and len(np.unique(np.arange(len(self.ids))[rows])) != rows.size:
+            # (a row kept twice gave two tracks of one identity, which is never reused; -1
+            # and the last row are one row)
             raise ValueError(f"mask's indices must each be given once; got {rows.tolist()}")
         for name in ("mean", "cov", "ids", "state", "hits", "streak", "first_time",
                      "last_time", "found", "classes", "scores"):
