@@ -346,8 +346,12 @@ def fit_box_motion(sequences: list[tuple[list[Series], float]], *,
         for k, (_, z, g) in enumerate(series):
             w, h = np.nanmedian(g[:, 2]), np.nanmedian(g[:, 3])
             Y[k, :len(z)] = z / np.array([w, h, w, h])
-        first = np.array([y[np.flatnonzero(~np.isnan(y[:, 0]))[0]] for y in Y])
-        x0 = np.c_[first, np.zeros((len(Y), 4))]
+        detections = int(np.isfinite(Y[..., 0]).sum())
+        # each series starts at its first detection (matched_series), which is the first
+        # step's prior mean, with the measurement noise as its spread: the likelihood is
+        # that of the later detections given it, not of the first detection twice
+        x0 = np.c_[Y[:, 0], np.zeros((len(Y), 4))]
+        Y[:, 0] = np.nan
         P0 = np.diag(np.r_[meas ** 2, np.full(4, (m.init_vel * m.std_vel) ** 2)])
         R = np.diag(meas ** 2)
 
@@ -371,7 +375,7 @@ def fit_box_motion(sequences: list[tuple[list[Series], float]], *,
         at_30 = BoxMotion(std_pos=float(std_pos), std_vel=float(std_vel),
                           frame_rate=fps).at_rate(30.0)
         rows.append(dict(sequence=index, frame_rate=float(fps), objects=len(Y),
-                         detections=int(np.isfinite(Y[..., 0]).sum()),
+                         detections=detections,
                          std_pos=at_30.std_pos, std_vel=at_30.std_vel,
                          std_meas=[float(x) for x in meas], iterations=int(best.nit),
                          converged=bool(best.success), loglik=float(-best.fun)))
