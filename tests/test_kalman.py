@@ -477,6 +477,13 @@ def test_kernel_argument_errors():
         kf_update(vt.Gaussian(np.zeros(2), np.full((2, 2), np.nan)), [1.0], [[1.0, 0.0]], [[1.0]])
     with pytest.raises(ValueError, match="sigma_m must be a scalar or have shape"):
         kalman_filter_1d(np.ones(4), d=1, m=1, sigma_d=1, sigma_m=np.ones(3), x0=0, sigma0=1)
+    # no step: refused as the n-D filter refuses it (it returned empty results)
+    for call in (lambda: kalman_filter_1d([], d=1, m=1, sigma_d=1, sigma_m=1, x0=0, sigma0=1),
+                 lambda: kalman_filter(np.zeros((0, 1)), F=[[1.0]], Q=[[1.0]], H=[[1.0]],
+                                       R=[[1.0]], x0=[0.0], P0=[[1.0]])):
+        with pytest.raises(ValueError, match=re.escape("ys must have at least one step; got "
+                                                       "shape (0,")):
+            call()
 
 
 @pytest.mark.parametrize("bad,message", [

@@ -136,6 +136,14 @@ def test_two_filter_smooth_names_an_r_singular_to_rounding():
     two = two_filter_smooth(1e-10 * ys, **small, R=R)
     rts = rts_smooth(kalman_filter(1e-10 * ys, **small, R=R), F=F, Q=Q)
     np.testing.assert_allclose(two.means, rts.means, atol=1e-9)
+    # components in units far apart (variances 1e8 and 1e-8, a ratio past 1 / eps) are
+    # regular: the rank is judged on the correlation matrix (it was refused as singular to
+    # rounding); as the RTS smoother, as closely as the small R above
+    ys[2, 1] = 0.2
+    R = np.diag([1e8, 1e-8])
+    two = two_filter_smooth(ys, **model, R=R)
+    rts = rts_smooth(kalman_filter(ys, **model, R=R), F=F, Q=Q)
+    np.testing.assert_allclose(two.means, rts.means, atol=1e-7)
 
 
 @pytest.mark.parametrize("case", ["short", "state", "nan_cov", "nan_mean"])

@@ -734,8 +734,9 @@ def kalman_filter_1d(
     Raises
     ------
     ValueError
-        If an array parameter does not have shape ``(T,)``, a parameter is not finite, ``ys``
-        holds an infinity (NaN is a missing step), a standard deviation is negative, or the
+        If ``ys`` has no step, an array parameter does not have shape ``(T,)``, a parameter
+        is not finite, ``ys`` holds an infinity (NaN is a missing step), a standard deviation
+        is negative, or the
         innovation variance of an observed step is 0 (no measurement noise, and a state with
         no uncertainty or ``m = 0``), as the n-D filter refuses such a step.
 
@@ -749,6 +750,8 @@ def kalman_filter_1d(
     y = as_float_array(ys, "ys", ndim=(1,))
     check_not_infinite(y, "ys")
     T = y.shape[0]
+    if T == 0:  # as the n-D filter refuses it (an empty result, before)
+        raise ValueError("ys must have at least one step; got shape (0,)")
     par = {}
     for name, v in (("d", d), ("m", m), ("sigma_d", sigma_d), ("sigma_m", sigma_m)):
         a = as_float_array(v, name, ndim=(0, 1))

@@ -336,10 +336,14 @@ def two_filter_smooth(
         scale = np.where(obs, np.abs(diag), 0.0).max(axis=-1, initial=0.0)
         scale = np.where(scale > 0, scale, 1.0)
         Rm = np.where(both, Rt, np.eye(m) * scale[:, None, None])
-        ev = np.linalg.eigvalsh(Rm)
         # singular to rounding: numerical rank below m (numpy's matrix_rank tolerance), where
-        # solve may still return a finite, wrong inverse
-        singular = (ev[:, 0] <= ev[:, -1] * m * np.finfo(float).eps).any()
+        # solve may still return a finite, wrong inverse; of the correlation matrix, so that
+        # components of other units (variances 1e4 and 1e-13) are not taken for singular
+        sd = np.sqrt(np.clip(np.diagonal(Rm, axis1=-2, axis2=-1), 0.0, None))
+        unit = np.where(sd > 0, sd, 1.0)
+        ev = np.linalg.eigvalsh(Rm / (unit[:, :, None] * unit[:, None, :]))
+        singular = bool((sd <= 0).any() or (ev[:, 0] <= ev[:, -1] * m * np.finfo(float).eps)
+                        .any())
         try:
             if singular:
                 raise np.linalg.LinAlgError

@@ -670,7 +670,9 @@ class ScoreCalibration:
         return self.confidence[np.maximum(k, 0)]
 
     def score_at(self, level: float) -> float:
-        """The lowest score whose confidence is at least ``level`` (``inf`` if none is).
+        """The lowest of the map's scores whose confidence is at least ``level`` (``inf`` if
+        none is); scores below the map's first take its first confidence, so a score lower
+        than the one returned may map to ``level`` or more too.
 
         Parameters
         ----------
