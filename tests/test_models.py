@@ -523,3 +523,28 @@ def test_model_settings_that_were_cut_or_wrong_are_named():
     with pytest.raises(TypeError, match=re.escape("min_iou must be a number; got 'a'")):
         matched_series(np.zeros(0), np.zeros(0), np.zeros((0, 4)), np.zeros(0),
                        np.zeros((0, 4)), min_iou="a")
+
+
+def test_a_linear_motion_keeps_its_own_matrices():
+    """LinearMotion kept the caller's arrays: a Q changed after its check (made not positive
+    semi-definite) was used as it was, and so was one changed through the matrix Q() gave."""
+    from vistrack.models import LinearMotion
+
+    F, Q = np.eye(2), 0.1 * np.eye(2)
+    m = LinearMotion(F, Q)
+    Q[0, 0] = -5.0
+    F[0, 1] = 3.0
+    np.testing.assert_array_equal(m.Q(), 0.1 * np.eye(2))
+    np.testing.assert_array_equal(m.F(), np.eye(2))
+    with pytest.raises(ValueError, match="read-only"):
+        m.Q()[1, 1] = -3.0
+    with pytest.raises(ValueError, match="read-only"):
+        m.F()[0, 0] = 2.0
+
+
+def test_a_range_bearing_sensor_must_be_finite():
+    """A NaN sensor position gave NaN ranges and bearings, without a word."""
+    from vistrack.models import RangeBearing
+
+    with pytest.raises(ValueError, match=re.escape("sensor must be finite; sensor[0] = nan")):
+        RangeBearing(sensor=(np.nan, 0.0))

@@ -1133,3 +1133,76 @@ def test_the_unscented_and_ensemble_filters_name_what_they_cannot_use():
             "filters[1] must have predict(g, dt, t), update(g, y) and a motion model "
             "(.motion.ndim_state); got NoMotion")):
         IMMFilter([kf, NoMotion()], [[0.9, 0.1], [0.1, 0.9]])
+
+
+def test_the_nonlinear_filters_refuse_a_motion_q_that_is_no_covariance():
+    """A user's model whose Q(dt) had a typo (an eigenvalue -0.0043): the Kalman filter
+    refused it, the EKF gave covariances with a negative eigenvalue without a word (and
+    Q = -I was named as R), the particle filter's square root clipped it. Each nonlinear
+    filter names it now, with its dt; a Q of another shape too."""
+    from vistrack.filters import ekf_predict, enkf_predict
+    from vistrack.filters.particle import ParticleFilter
+    from vistrack.models import ConstantVelocity, Position
+
+    class Typo(ConstantVelocity):
+        def Q(self, dt):
+            return self.q * np.array([[dt ** 3 / 3, dt], [dt, dt]])
+
+    class Wide(ConstantVelocity):
+        def Q(self, dt):
+            return np.eye(3)
+
+    g = vt.Gaussian(np.zeros(2), np.eye(2))
+    typo = Typo(dim=1, q=1.0)
+    assert np.linalg.eigvalsh(typo.Q(0.1))[0] < 0
+    ens = Ensemble(np.zeros((50, 2)))
+    for call in (lambda m: ekf_predict(g, m, 0.1), lambda m: ukf_predict(g, m, 0.1),
+                 lambda m: enkf_predict(ens, m, 0.1, rng=0),
+                 lambda m: ParticleFilter(m, Position(dim=1, r=1.0), 100,
+                                          rng=0).filter(np.zeros((3, 1)), x0=[0.0, 0.0],
+                                                        P0=np.eye(2), dt=0.1)):
+        with pytest.raises(ValueError, match=re.escape(
+                "motion.Q(0.1) must be positive semi-definite; its smallest eigenvalue is")):
+            call(typo)
+        with pytest.raises(ValueError, match=re.escape(
+                "motion.Q(0.1) must have shape (2, 2), the state's; got (3, 3)")):
+            call(Wide(dim=1, q=1.0))
+
+
+def test_a_models_q_is_kept_across_single_steps_and_follows_its_settings():
+    """ekf_predict and ukf_predict called one step at a time keep a model's Q for each dt (as
+    a filter object does); a setting changed between calls is seen. Oracle: a new model with
+    that setting."""
+    from vistrack.filters import ekf_predict
+    from vistrack.models import ConstantVelocity
+
+    g = vt.Gaussian(np.array([0.0, 1.0]), np.eye(2))
+    cv = ConstantVelocity(dim=1, q=0.1)
+    for predict in (ekf_predict, ukf_predict):
+        a = predict(g, cv, 0.5)
+        cv.q = 0.3
+        b = predict(g, cv, 0.5)
+        cv.q = 0.1
+        np.testing.assert_allclose(a.cov, predict(g, ConstantVelocity(dim=1, q=0.1), 0.5).cov)
+        np.testing.assert_allclose(b.cov, predict(g, ConstantVelocity(dim=1, q=0.3), 0.5).cov)
+        assert not np.allclose(a.cov, b.cov)
+
+
+def test_a_state_or_a_measurement_of_another_size_is_named():
+    """ekf_predict with a state of 4 values and a model of 2 failed in numpy's broadcasting
+    (ukf_predict named it); a measurement model whose h gives 3 values and whose R is 2 x 2
+    failed so in the EKF, and the UKF's step for one Gaussian read the first 2 values and
+    returned a wrong estimate without a word."""
+    from vistrack.filters import ekf_predict
+    from vistrack.models import ConstantVelocity
+
+    with pytest.raises(ValueError, match=re.escape("g must have a state of 2 values, the "
+                                                   "motion model's; got 4")):
+        ekf_predict(vt.Gaussian(np.zeros(4), np.eye(4)), ConstantVelocity(dim=1), 1.0)
+    meas = NonlinearMeasurement(lambda x: x[..., :3], R=np.eye(2), ndim_state=5)
+    message = re.escape("the measurement model's h(x) gives 3 values a state; its R is 2 x 2")
+    for g in (vt.Gaussian(np.ones(5), np.eye(5)),
+              vt.Gaussian(np.ones((2, 5)), np.broadcast_to(np.eye(5), (2, 5, 5)).copy())):
+        for update in (ekf_update, ukf_update):
+            with pytest.raises(ValueError, match=message):
+                update(g, np.ones(g.mean.shape[:-1] + (2,)), meas)

@@ -28,6 +28,17 @@ def check_gaussian(g: object) -> Gaussian:
     return g
 
 
+def check_h_size(z: np.ndarray, m: int) -> np.ndarray:
+    """``z``, the measurement model's values ``h(x) (..., m')``, or a ValueError where they
+    are not ``m`` values a state, the size of its ``R`` (numpy's broadcast error named
+    neither; the UKF's compiled step read the first ``m`` values, without a word)."""
+    if np.shape(z)[-1:] != (m,):
+        got = np.shape(z)[-1] if np.ndim(z) else "no"
+        raise ValueError(f"the measurement model's h(x) gives {got} values a state; its R is "
+                         f"{m} x {m}")
+    return z
+
+
 def check_model_values(z: np.ndarray, points: np.ndarray, what: str) -> None:
     """Name the sigma point or member (``what``) ``points[..., k, :]`` at which the
     measurement model's values ``z (..., K, m)`` hold NaN or infinity: a batch's estimates,

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import check_one_step
-from ..models.adapters import MeasurementFunctions, MotionFunctions
+from ..models.adapters import MeasurementFunctions, MotionFunctions, motion_functions
 from ..models.protocols import (
     MeasurementModel,
     MotionModel,
@@ -34,6 +34,7 @@ from ..models.protocols import (
 from ..types import Gaussian
 from ._nonlinear import (
     check_gaussian,
+    check_h_size,
     check_y,
     run_sequence,
 )
@@ -59,7 +60,10 @@ def ekf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     """
     g = check_gaussian(g)
     check_one_step(dt)
-    mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
+    mo = motion_functions(motion)
+    if g.mean.shape[-1] != mo.n:  # (numpy's broadcast error, naming neither; as ukf_predict)
+        raise ValueError(f"g must have a state of {mo.n} values, the motion model's; got "
+                         f"{g.mean.shape[-1]}")
     G = mo.jacobian(g.mean, dt, t)
     cov = symmetric(G @ g.cov @ np.swapaxes(G, -1, -2) + mo.Q(dt))
     return Gaussian(np.asarray(mo.f(g.mean, dt, t), dtype=float), cov)
@@ -90,7 +94,7 @@ def _ekf_update(g: Gaussian, y: ArrayLike,
     y = check_y(y, g.mean.shape[:-1], me.m)
     obs = ~np.isnan(y)
     x = g.mean
-    e = me.residual(np.where(obs, y, 0.0), me.h(x))
+    e = me.residual(np.where(obs, y, 0.0), check_h_size(me.h(x), me.m))
     mean, cov, ll = condition_on(x, g.cov, me.jacobian(x), me.Rm, e, obs)
     return Gaussian(mean, cov), ll
 

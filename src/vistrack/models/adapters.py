@@ -6,12 +6,14 @@ with."""
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from functools import partial
 from typing import cast
 
 import numpy as np
 
+from .._validate import check_finite, check_psd
 from .nonlinear import AngleAwareMeasurement, _offset_mean, _residual, _weighted_mean
 from .protocols import (
     MeasurementModel,
@@ -195,7 +197,17 @@ class MotionFunctions:
         key = float(dt)  # (a 0-d array is not hashable)
         Q = self._Q.get(key)
         if Q is None:
-            Q = _remember(self._Q, key, np.asarray(self.model.Q(dt), dtype=float))
+            Q = np.asarray(self.model.Q(dt), dtype=float)
+            # checked once for each dt, as kept: the EKF took a Q with a negative eigenvalue
+            # and gave covariances with one too, without a word (the particle filter's square
+            # root clipped it; Q = -I was named as R)
+            name = f"motion.Q({key:g})"
+            if Q.shape != (self.n, self.n):
+                raise ValueError(f"{name} must have shape ({self.n}, {self.n}), the state's; "
+                                 f"got {Q.shape}")
+            check_finite(Q, name)
+            check_psd(Q, name)
+            Q = _remember(self._Q, key, Q)
         return Q
 
     def Q_sqrt(self, dt: float) -> np.ndarray:
@@ -210,6 +222,26 @@ class MotionFunctions:
 
 _KEPT = 16
 """How many distinct time steps' ``Q`` a model's functions keep."""
+
+_RECENT: dict[int, MotionFunctions] = {}
+_RECENT_LOCK = threading.Lock()
+
+
+def motion_functions(motion: object) -> MotionFunctions:
+    """``motion`` as :class:`MotionFunctions`: itself if it is, else the functions of one of
+    the last few models seen, kept, so that a filter's steps called one at a time
+    (``ekf_predict``, ``ukf_predict``) compute and check a model's ``Q`` once for each
+    ``dt``, as a filter object does."""
+    if isinstance(motion, MotionFunctions):
+        return motion
+    mo = _RECENT.get(id(motion))
+    if mo is None or mo.model is not motion:  # (each kept holds its model: no id reused)
+        mo = MotionFunctions(cast(MotionModel | NonlinearMotionModel, motion))
+        with _RECENT_LOCK:  # (threads filtering at once)
+            while len(_RECENT) >= 8:
+                del _RECENT[next(iter(_RECENT))]
+            _RECENT[id(motion)] = mo
+    return mo
 
 
 def _remember(cache: dict, key: float, value: np.ndarray) -> np.ndarray:

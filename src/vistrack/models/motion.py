@@ -624,6 +624,10 @@ class LinearMotion:
                                      else None)
         self._Q = check_matrix_stack(Q_arr, "Q", n, n, T)
         check_psd(self._Q, "Q")
+        # its own copies, read-only: the caller's arrays were kept, so a Q changed after the
+        # check (or through the view Q() returned) was used as it was, unchecked
+        self._F, self._Q = self._F.copy(), self._Q.copy()
+        self._F.flags.writeable = self._Q.flags.writeable = False
         self.ndim_state = n
         self.n_steps = T
 

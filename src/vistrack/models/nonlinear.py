@@ -31,7 +31,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._jit import njit
-from .._validate import as_finite, as_float_array, as_whole, check_matrix_stack, check_psd
+from .._validate import (
+    as_finite,
+    as_float_array,
+    as_whole,
+    check_finite,
+    check_matrix_stack,
+    check_psd,
+)
 from .motion import _as_dt, _check_q
 
 __all__ = [
@@ -839,8 +846,8 @@ class RangeBearing(AngleAwareMeasurement):
     Raises
     ------
     ValueError
-        If a variance is not a finite number > 0, ``sensor`` does not have two entries, or
-        ``ndim_state < 2``.
+        If a variance is not a finite number > 0, ``sensor`` does not have two finite
+        entries, or ``ndim_state < 2``.
 
     Examples
     --------
@@ -877,6 +884,7 @@ class RangeBearing(AngleAwareMeasurement):
         self.sensor = as_float_array(sensor, "sensor", ndim=(1,))
         if self.sensor.shape != (2,):
             raise ValueError(f"sensor must have shape (2,); got {self.sensor.shape}")
+        check_finite(self.sensor, "sensor")  # (a NaN gave NaN ranges, without a word)
         self.ndim_state = as_whole(ndim_state, "ndim_state", 2)  # 2.5 was cut to 2
 
     def __repr__(self) -> str:
