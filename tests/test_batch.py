@@ -233,6 +233,46 @@ def test_a_worker_killed_mid_job_is_replaced_and_the_outputs_are_complete(tmp_pa
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no partial file left
 
 
+class _KillsItsWorker:
+    """A tracker that tracks nothing, and kills its own process (as a crash or the
+    out-of-memory killer would) on a frame 170 pixels wide."""
+
+    def step(self, frame, detections=None):
+        from vistrack.types import Tracks
+
+        if frame.image is not None and frame.image.shape[1] == 170:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return Tracks.empty()
+
+
+def kills_its_worker():
+    return _KillsItsWorker()
+
+
+def test_a_job_that_kills_its_worker_fails_alone(tmp_path):
+    """A job whose worker dies each time took the pool down with the jobs beside it, and
+    each death was counted against every one of them: after three, all were failed ("its
+    worker died 3 times"), though each of the others runs alone. Those that died together
+    run again alone now, and only a death alone counts."""
+    from tests.test_pipeline import red_disc_clip, write_clip
+
+    inputs = [write_clip(tmp_path / name, red_disc_clip(T=4, size=(width, 120))[0])
+              for name, width in (("good-a", 160), ("good-b", 160), ("good-c", 160),
+                                  ("poison", 170))]
+    jobs = plan(inputs, tmp_path / "out", kind="pixels", fps=10, annotate=False,
+                tracker="tests.test_batch:kills_its_worker")
+    outcomes = {o.input.name: o for o in run_jobs(jobs, workers=3)}
+    assert not outcomes["poison"].ok
+    # its deaths in all: three alone (retries=2), and once beside the others if it ran
+    # beside them (the largest input, it starts first)
+    assert outcomes["poison"].error == "its worker died 4 times"
+    assert outcomes["poison"].attempts == 4
+    for name in ("good-a", "good-b", "good-c"):
+        assert outcomes[name].ok, outcomes[name].error
+        assert outcomes[name].attempts <= 2  # (once alone, if it died beside the poison)
+        assert (outcomes[name].out / "tracks.txt").read_bytes() == b""  # nothing tracked
+
+
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux")
 def test_the_command_forks_its_workers_and_one_terminated_mid_job_is_replaced(tmp_path):
     """`vistrack track` with several inputs keeps to one thread until its workers start, so
@@ -766,11 +806,12 @@ def test_the_progress_bar_on_a_terminal_and_lines_elsewhere(tmp_path):
 
     done = [Outcome(Path("A"), tmp_path / "A.txt", True, 10, 30, 3, 0.2),
             Outcome(Path("B"), tmp_path / "B.txt", False, error="ValueError: bad"),
-            Outcome(Path("C"), tmp_path / "C.txt", True, 5, 9, 2, 0.1)]
+            Outcome(Path("C"), tmp_path / "C.txt", True, 5, 9, 2, 0.1),
+            Outcome(Path("D"), tmp_path / "D.txt", True, 1, 1, 1, 0.1)]  # ("1 frames")
     term = Terminal()
     report = progress_lines(term, 3)
     assert term.getvalue() == "[------------------------] 0/3 inputs, 0 s"
-    for k, o in enumerate(done, 1):
+    for k, o in enumerate(done[:3], 1):
         report(o, k, 3)
     shown = term.getvalue().split("\r\x1b[K")  # each line clears the bar's line first
     assert shown[1] == ("[1/3] A: 10 frames, 3 tracks, 0.2 s\n"
@@ -780,11 +821,12 @@ def test_the_progress_bar_on_a_terminal_and_lines_elsewhere(tmp_path):
     assert shown[3] == "[3/3] C: 5 frames, 2 tracks, 0.1 s\n"  # the bar gone at the end
     plain = io.StringIO()  # a log file: the lines only
     report = progress_lines(plain, 3)
-    for k, o in enumerate(done, 1):
+    for k, o in enumerate(done[:3], 1):
         report(o, k, 3)
+    report(done[3], 4, 4)
     assert plain.getvalue().splitlines() == [
         "[1/3] A: 10 frames, 3 tracks, 0.2 s", "[2/3] B: failed: ValueError: bad",
-        "[3/3] C: 5 frames, 2 tracks, 0.1 s"]
+        "[3/3] C: 5 frames, 2 tracks, 0.1 s", "[4/4] D: 1 frame, 1 track, 0.1 s"]
     assert progress_lines(None, 3) is None
 
 
@@ -1079,3 +1121,64 @@ def test_a_worker_sent_sigterm_removes_a_csv_outputs_staging_file(tmp_path):
     r = subprocess.run([sys.executable, str(tmp_path / "staged.py"), str(tmp_path / "run")],
                        env=env, capture_output=True, text=True, timeout=120)
     assert r.stdout.splitlines() == ["died ['det.txt']"], r.stderr
+
+
+def _in_its_own_folder(folder):
+    os.chdir(folder)
+
+
+def test_an_executors_workers_in_another_folder_find_the_inputs_and_write_where_planned(
+        bench, tmp_path, monkeypatch):
+    """A Dask worker's working folder is its own: relative inputs were looked for there
+    (refused), and relative outputs written there while the table said "ok". Its jobs are
+    given absolute paths; the outcomes say the paths as planned. Oracle: the same inputs
+    tracked alone. The same for vistrack eval's pairs."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from vistrack.evaluation import evaluate_files
+
+    here, elsewhere = tmp_path / "here", tmp_path / "elsewhere"
+    here.mkdir()
+    elsewhere.mkdir()
+    shutil.copytree(bench / "SIM-0", here / "SIM-0")
+    monkeypatch.chdir(here)
+    with ProcessPoolExecutor(1, initializer=_in_its_own_folder,
+                             initargs=(str(elsewhere),)) as pool:
+        (outcome,) = run_jobs(plan([Path("SIM-0")], Path("out"), offline=False), executor=pool)
+        assert outcome.ok, outcome.error
+        assert outcome.input == Path("SIM-0") and outcome.out == Path("out/SIM-0.txt")
+        assert (here / "out" / "SIM-0.txt").read_bytes() == _alone(
+            here / "SIM-0", tmp_path / "alone.txt")
+        assert not list(elsewhere.iterdir())
+        gt = Path("SIM-0/gt/gt.txt")
+        scores = evaluate_files([("s", gt, Path("out/SIM-0.txt"), None)], executor=pool)
+        assert scores["s"].TP == evaluate_files([("s", gt, Path("out/SIM-0.txt"), None)])[
+            "s"].TP > 0
+
+
+def exits_in_a_job():
+    """A tracker whose making calls sys.exit(0), as a library might."""
+    sys.exit(0)
+
+
+def test_a_job_that_calls_sys_exit_is_reported_and_the_others_run(tmp_path):
+    """SystemExit is no Exception: a sys.exit in one job ended the whole batch, status 0
+    and no table, the inputs after it not run."""
+    from tests.test_pipeline import red_disc_clip, write_clip
+
+    inputs = [write_clip(tmp_path / name, red_disc_clip(T=3)[0]) for name in ("a", "b")]
+    jobs = plan(inputs[:1], tmp_path / "out", kind="pixels", fps=10, annotate=False,
+                tracker="tests.test_batch:exits_in_a_job") + plan(
+        inputs[1:], tmp_path / "out", kind="pixels", fps=10, annotate=False)
+    bad, good = run_jobs(jobs, workers=1)
+    assert not bad.ok and bad.error == "SystemExit: sys.exit(0) in the job"
+    assert good.ok, good.error
+
+
+def test_several_inputs_take_an_out_folder_named_like_a_file_given_with_a_slash(bench, tmp_path):
+    """--out res.csv/ is a folder, as --help says of a name ending in /, and as one input
+    takes it; with several inputs it was refused as a file's name."""
+    out = tmp_path / "res.csv"
+    assert main(["track", str(bench / "SIM-0"), str(bench / "SIM-1"), "--out", f"{out}/",
+                 "--quiet"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["SIM-0.txt", "SIM-1.txt"]

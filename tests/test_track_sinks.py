@@ -591,6 +591,11 @@ def test_replacing_removes_the_folders_it_made_when_interrupted(tmp_path):
     (0, [1], [0.0, 0.0, 1.0, 1.0], 1.0, "frame 0: MOTChallenge frames count from 1"),
     (1, [1], [np.nan, 0.0, 1.0, 1.0], 1.0, "frame 1, track 1: box (x, y, w, h) [nan, 0.0, "),
     (1, [1.7], [0.0, 0.0, 1.0, 1.0], 1.0, "frame 1: ids[0] = 1.7 is not a whole number"),
+    # a tracker's class NaN was written as -9223372036854775808, 2.7 as 2
+    (1, [1], [0.0, 0.0, 1.0, 1.0], (1.0, np.nan), "frame 1: classes[0] = nan is not a whole "
+                                                  "number"),
+    (1, [1], [0.0, 0.0, 1.0, 1.0], (1.0, 2.7), "frame 1: classes[0] = 2.7 is not a whole "
+                                               "number"),
     (1, [1], [0.0, 0.0, 1.0, 1.0], np.inf, "frame 1, track 1: box (x, y, w, h) [0.0, 0.0, 1.0,"
                                            " 1.0], score inf: a row read_mot refuses"),
 ])
@@ -600,8 +605,9 @@ def test_the_file_sinks_refuse_rows_read_mot_would_refuse(tmp_path, sink, frame,
     """The sinks wrote frame 0, NaN boxes and infinite scores, which read_mot then refused
     (as write_mot refuses them), and wrote track 1.7 as track 1."""
     x0, y0, w, h = box
+    score, cls = score if isinstance(score, tuple) else (score, 0)
     tracks = Tracks(ids=np.asarray(ids), boxes=np.array([[x0, y0, x0 + w, y0 + h]]),
-                    points=None, scores=np.array([score]), classes=np.zeros(1, int))
+                    points=None, scores=np.array([score]), classes=np.array([cls]))
     out = sink(tmp_path / ("t.txt" if sink is MOTWriter else "t.csv"))
     with pytest.raises(ValueError, match="^" + re.escape(message)):
         out.write(Frame(frame, 0.0), tracks)

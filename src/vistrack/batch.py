@@ -12,10 +12,12 @@ returning a future): a thread pool, a process pool of its own, or a Dask client'
   into place when complete (:mod:`vistrack.io.atomic`).
 - A job that fails is reported with its error, one line, and the others go on
   (``keep_going``), or no new job starts after the first failure.
-- On the pool it owns, a worker that dies (killed, out of memory) breaks the pool; its jobs
-  and the others not finished are run again on a new pool, up to ``retries`` times. What
-  they wrote is replaced whole, so outputs are complete and the same as a run without the
-  failure.
+- On the pool it owns, a worker that dies (killed, out of memory) breaks the pool; the jobs
+  it ended are run again on a new pool, each alone when several were (which one's worker
+  died is not known), and the others not started after them. A job is failed once its
+  worker has died ``retries + 1`` times with it running alone, so a job that kills its
+  worker each time fails alone, not those beside it. What they wrote is replaced whole, so
+  outputs are complete and the same as a run without the failure.
 - On a pool or an executor, the largest inputs (by the bytes of their detections file, video
   or images) start first, so that a large one does not start last and run alone; outcomes
   are reported in the inputs' order all the same.
@@ -33,7 +35,14 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ._pool import default_jobs, one_line, one_thread_here, process_pool, stop_workers
+from ._pool import (
+    counted,
+    default_jobs,
+    one_line,
+    one_thread_here,
+    process_pool,
+    stop_workers,
+)
 
 if TYPE_CHECKING:
     from concurrent.futures import Executor, Future
@@ -244,13 +253,26 @@ def _run(job: Job) -> Outcome:
             run: Any = track_sequence(job.input, job.out, **job.options)
         else:
             run = track_video(job.input, job.out, **job.options)
-    except Exception as e:  # noqa: BLE001 - reported, and the other jobs go on
+    except (Exception, SystemExit) as e:  # noqa: BLE001 - reported, the other jobs go on
+        # (a sys.exit in a user's tracker or a library ended the whole batch, status 0 and
+        # no table)
         return Outcome(job.input, job.out, False, seconds=time.perf_counter() - t0,
-                       error=one_line(e))
+                       error=one_line(e) if isinstance(e, Exception)
+                       else f"SystemExit: sys.exit({e.code!r}) in the job")
     return Outcome(job.input, job.out, True, frames=run.frames, rows=run.rows,
                    tracks=run.tracks, seconds=time.perf_counter() - t0,
                    replaced_rate=run.replaced_rate)
 
+
+
+def _absolute(job: Job) -> Job:
+    """``job`` with its input, its output and the options that are paths absolute, as a
+    worker of an executor's (Dask's), whose working folder is its own, must be given them:
+    relative ones were found, or written, in the worker's folder (an input refused, or
+    results written elsewhere while the table said "ok")."""
+    return replace(job, input=job.input.absolute(), out=job.out.absolute(),
+                   options={k: Path(v).absolute() if isinstance(v, os.PathLike) else v
+                            for k, v in job.options.items()})
 
 
 def _size(job: Job) -> int:
@@ -294,7 +316,8 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
         those it has started by the time the failure is seen run to their end (a thread
         pool of one starts the next job as the failed one ends).
     retries : int
-        Times a job whose worker died is run again, on a new pool (the pool made here only).
+        Times a job whose worker died while it ran alone is run again, on a new pool (the
+        pool made here only); a death beside other jobs is followed by a run alone.
     on_done : callable, optional
         Called with each outcome as it comes, the number done and the number of jobs.
 
@@ -312,7 +335,9 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
     attempts = dict.fromkeys(range(n), 0)
 
     def done(i: int, outcome: Outcome) -> None:
-        outcomes[i] = replace(outcome, attempts=attempts[i])
+        # (an executor's job ran with its paths absolute: said as planned)
+        outcomes[i] = replace(outcome, input=jobs[i].input, out=jobs[i].out,
+                              attempts=attempts[i])
         if on_done is not None:
             on_done(outcomes[i], len(outcomes), n)
 
@@ -342,7 +367,7 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
         futures = {}
         for i in _largest_first(jobs, range(n)):
             attempts[i] += 1
-            futures[executor.submit(_run, jobs[i])] = i
+            futures[executor.submit(_run, _absolute(jobs[i]))] = i
         try:
             for f in _as_done(futures, stopped):
                 i = futures[f]
@@ -356,16 +381,26 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
     else:
         size = workers or default_jobs()
         pending = _largest_first(jobs, range(n))
-        while pending and not stopped():
-            pool = process_pool(min(size, len(pending)), imports=(_PIPELINE,))
+        # the jobs under way when a worker died, which took the pool down with them: which
+        # one's worker it was is not known, so each is run again alone, on a pool of one,
+        # and only a death alone counts against a job (every job beside one that killed its
+        # worker each time was failed as if it had killed its own)
+        suspects: list[int] = []
+        deaths, alone_deaths = dict.fromkeys(range(n), 0), dict.fromkeys(range(n), 0)
+        while (pending or suspects) and not stopped():
+            alone = bool(suspects)
+            width = 1 if alone else size
+            queue = list(suspects if alone else pending)
+            pool = process_pool(min(width, len(queue)), imports=(_PIPELINE,))
             running: dict[Future, int] = {}
-            queue, died, broken = list(pending), [], False
+            died: list[int] = []
+            broken = False
             try:
                 while (queue or running) and not broken:
                     # one job a worker handed to the pool, the rest waiting here: a stop (a
                     # failure, a signal) leaves them unstarted. (Twice as many were handed
                     # over, and those the pool had queued ran after the stop)
-                    while queue and len(running) < size and not stopped():
+                    while queue and len(running) < width and not stopped():
                         i = queue.pop(0)
                         try:
                             f = pool.submit(_run, jobs[i])
@@ -409,15 +444,25 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
                 raise
             finally:
                 pool.shutdown(wait=True, cancel_futures=True)
-            pending = []
+            unstarted = queue if broken else []
             for i in died:
-                if attempts[i] > retries:
-                    failed(i, f"its worker died {attempts[i]} times")
-                else:
-                    pending.append(i)
-            if broken:
-                pending += queue
-            pending = _largest_first(jobs, pending)
+                deaths[i] += 1
+            if len(died) > 1:  # died together: not counted; each run again alone
+                again = died
+            else:
+                again = []
+                for i in died:
+                    alone_deaths[i] += 1
+                    if alone_deaths[i] > retries:
+                        failed(i, f"its worker died {deaths[i]} times")
+                    else:
+                        again.append(i)
+            if alone:
+                suspects = _largest_first(jobs, again + unstarted)
+            elif len(died) > 1:
+                suspects, pending = _largest_first(jobs, again), _largest_first(jobs, unstarted)
+            else:
+                pending = _largest_first(jobs, again + unstarted)
     return [outcomes.get(i, Outcome(job.input, job.out, False, attempts=0,
                                     error="not run (an earlier input failed)"))
             for i, job in enumerate(jobs)]
@@ -521,7 +566,8 @@ def progress_lines(stream: TextIO | None,
     def report(o: Outcome, k: int, n: int) -> None:
         nonlocal failed
         failed += not o.ok
-        what = (f"{o.frames} frames, {o.tracks} tracks, {o.seconds:.1f} s" if o.ok else
+        what = (f"{counted(o.frames, 'frame')}, {counted(o.tracks, 'track')}, "
+                f"{o.seconds:.1f} s" if o.ok else
                 f"failed: {o.error}")
         line = f"[{k}/{n}] {o.input.name}: {what}"
         if not bar:

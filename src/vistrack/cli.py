@@ -908,7 +908,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         return fail("give --out RESULTS/ (each sequence's detections, NAME.txt each) or "
                     "--out-dir OUT/ (from pixels, NAME/ each)")
     if args.out is not None and Path(args.out).suffix.lower() in (".txt", ".csv", ".parquet") \
-            and not Path(args.out).is_dir():
+            and not Path(args.out).is_dir() and not args.out.endswith(("/", os.sep)):
         # (a folder of that name was made, which looked like one results file)
         many = (f"{len(args.input)} inputs" if len(args.input) > 1 else
                 f"{args.input[0]}, a folder of sequences,")

@@ -279,7 +279,12 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
         with process_pool(min(jobs or 1, len(pairs)), imports=(__name__,)) as pool:
             scored = _score_on(pool, pairs, benchmark, keep_going, columns, zero_distance)
     elif executor is not None:
-        scored = _score_on(executor, pairs, benchmark, keep_going, columns, zero_distance)
+        # its workers' working folders are their own (Dask's): the files' paths absolute,
+        # or relative ones were looked for there
+        anywhere = [(name, Path(gt).absolute(), Path(pred).absolute(),
+                     None if info is None else Path(info).absolute())
+                    for name, gt, pred, info in pairs]
+        scored = _score_on(executor, anywhere, benchmark, keep_going, columns, zero_distance)
     else:
         scored = [_score(pair, benchmark, keep_going, columns, zero_distance)
                   for pair in pairs]

@@ -322,7 +322,7 @@ class _RowsFile:
             raise ValueError(f"frame {f}, track {ids[k]}: box (x, y, w, h) "
                              f"{xywh[k].tolist()}, score {scores[k]}: a row read_mot refuses "
                              "(a box must be finite with w, h >= 0, a score finite)")
-        return f, ids, xywh, scores, self._count(ids, tracks)
+        return f, ids, xywh, scores, self._count(ids, tracks, f)
 
     @staticmethod
     def _ids_of(f: int, tracks: Tracks) -> np.ndarray:
@@ -332,9 +332,14 @@ class _RowsFile:
         except ValueError as e:
             raise ValueError(f"frame {f}: {e}") from None
 
-    def _count(self, ids: np.ndarray, tracks: Tracks) -> list[int]:
-        """Count rows ``ids`` written, each identity with its class; returns the classes."""
-        classes = np.asarray(tracks.classes).astype(int).tolist()
+    def _count(self, ids: np.ndarray, tracks: Tracks, f: int) -> list[int]:
+        """Count rows ``ids`` of frame ``f`` written, each identity with its class; returns
+        the classes (whole numbers, or a ValueError naming the frame: a tracker's NaN class
+        was written as -9223372036854775808, 2.7 as 2)."""
+        try:
+            classes = _integers(tracks.classes, "classes").tolist()
+        except ValueError as e:
+            raise ValueError(f"frame {f}: {e}") from None
         self._rows += len(ids)
         self._ids.update(zip(ids.tolist(), classes))
         return classes
@@ -688,7 +693,7 @@ class PointsCSVWriter(_RowsFile):
             k = int(np.argmax(bad))
             raise ValueError(f"frame {f}, particle {ids[k]}: position {xy[k].tolist()} is not "
                              "finite")
-        self._count(ids, tracks)
+        self._count(ids, tracks, f)
         cells = zip([f] * len(ids), ids.tolist(), *xy.T.tolist())
         self._file.write((self._ROW * len(ids)) % tuple(itertools.chain.from_iterable(cells)))
 
