@@ -1450,3 +1450,49 @@ def test_box_tracker_arguments_of_the_wrong_kind_are_named():
         Tracks(ids=[1], boxes=None, points=None, scores=[0.9], classes=[0])
     assert Tracks(ids=[], boxes=[], points=None, scores=[], classes=[]).boxes.shape == (0, 4)
     assert len(out) >= 0
+
+
+@pytest.mark.slow
+def test_joining_many_tracks_takes_memory_in_proportion_to_the_pairs_it_may_join():
+    """Offline joining built arrays of every track against every other (3.4 GB for 10,000
+    tracks of a long video) and then of all the pairs that may join at once (0.6 GB for
+    3,000). 8,000 tracks, 20 starting a frame, none of which join (they lie far apart):
+    nothing joined, and the memory stays that of a block of pairs. Then 200 people, each
+    hidden for 1 s once among them, are joined each to itself (oracle: the truth)."""
+    import tracemalloc
+
+    from vistrack.tracking import smooth
+    from vistrack.tracking.offline import _link, _Track
+
+    rng = np.random.default_rng(5)
+    n = 8000
+    first = 1 + np.arange(n) // 20
+    tracks = []
+    for k in range(n):
+        box = np.r_[rng.uniform(0, 1e7, 2), 30.0, 60.0]
+        f = np.array([first[k], first[k] + 5])
+        tracks.append(_Track(k + 1, 0, f, np.array([box, box + [10, 0, 10, 0]]), np.ones(2),
+                             np.zeros(2, bool), np.zeros((2, 8, 8)), (), ()))
+    cam = dict.fromkeys(range(1, first[-1] + 7), np.zeros(2))
+    tracemalloc.start()
+    try:
+        out = _link(None, tracks, cam, 60, 0.3, 9)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert [t.id for t in out] == [t.id for t in tracks]  # nothing joined
+    assert peak < 250 * 2 ** 20, peak / 2 ** 20
+    # the same joining where people do join: 200 people at 10 frames/s, each hidden once for
+    # 2.5 s (longer than the 2 s a lost track is kept online), each joined to itself
+    T, people = 100, 200
+    hidden = (np.arange(people)[:, None] % 50 + 20 <= np.arange(1, T + 1)[None, :]) & (
+        np.arange(1, T + 1)[None, :] < np.arange(people)[:, None] % 50 + 45)
+    tr = BoxTracker("bytetrack", record=True, camera_motion=False, frame_rate=10.0)
+    for f in range(1, T + 1):
+        seen = ~hidden[:, f - 1]
+        x = 120.0 * np.arange(people)[seen] + 2 * f
+        tr.step(f, Detections.from_xywh(np.c_[x, np.full(len(x), 100.0), np.full(len(x), 40.0),
+                                              np.full(len(x), 80.0)], np.full(len(x), 0.95)))
+    apart, joined = smooth(tr, link_gap=0), smooth(tr, link_gap=30)
+    assert len(np.unique(apart.ids)) == 2 * people
+    assert len(np.unique(joined.ids)) == people

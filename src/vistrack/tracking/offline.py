@@ -442,19 +442,40 @@ def _link(tracker: BoxTracker, tracks: list[_Track], cam: dict, link_gap: int,
     ends = [_carried_ends(t, cam, window) for t in tracks]
     c0, c1, v0, v1, f0, f1 = (np.array([e[k] for e in ends]) for k in range(6))
     cls = np.array([t.cls for t in tracks])
-    gap = f0[None, :] - f1[:, None]  # [a, b]: frames from a's last to b's first
-    a, b = np.nonzero((gap > 0) & (gap <= link_gap) & (cls[:, None] == cls[None, :]))
-    if len(a) == 0:
+    # the pairs (a, b) where b starts 1 to link_gap frames after a's last, of a's class and
+    # scoring min_iou or more, in the order of a then b: each block of tracks a against the
+    # tracks sorted by their first frame, about 260,000 pairs at a time (every track
+    # against every other, tracks x tracks arrays, took 3.4 GB for 10,000 tracks, and all
+    # the pairs at once 0.6 GB for 3,000 tracks born 20 a frame)
+    order = np.argsort(f0, kind="stable")
+    lo = np.searchsorted(f0[order], f1, "right")
+    counts = np.searchsorted(f0[order], f1 + link_gap, "right") - lo
+    kept: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    start = 0
+    while start < len(tracks):
+        stop = start + max(1, int(np.searchsorted(np.cumsum(counts[start:]), 1 << 18,
+                                                  "right")))
+        k = counts[start:stop]
+        a = np.repeat(np.arange(start, stop), k)
+        b = order[np.arange(k.sum()) - np.repeat(np.cumsum(k) - k - lo[start:stop], k)]
+        same = cls[a] == cls[b]
+        a, b = a[same], b[same]
+        pairs = np.lexsort((b, a))
+        a, b = a[pairs], b[pairs]
+        d = (f0[b] - f1[a])[:, None]  # frames from a's last to b's first
+        fwd = c1[a].copy()
+        fwd[:, :2] += v1[a] * d  # a's last box carried forward to b's first frame
+        back = c0[b].copy()
+        back[:, :2] -= v0[b] * d  # b's first box carried back to a's last frame
+        score = (paired_iou(_to_xyxy(fwd), _to_xyxy(c0[b]))
+                 + paired_iou(_to_xyxy(back), _to_xyxy(c1[a]))) / 2
+        ok = score >= min_iou
+        kept.append((a[ok], b[ok], score[ok]))
+        start = stop
+    if not kept or not sum(len(x[0]) for x in kept):
         return tracks
-    d = gap[a, b][:, None]
-    fwd = c1[a].copy()
-    fwd[:, :2] += v1[a] * d  # a's last box carried forward to b's first frame
-    back = c0[b].copy()
-    back[:, :2] -= v0[b] * d  # b's first box carried back to a's last frame
-    score = (paired_iou(_to_xyxy(fwd), _to_xyxy(c0[b]))
-             + paired_iou(_to_xyxy(back), _to_xyxy(c1[a]))) / 2
-    ok = score >= min_iou
-    r, c = gnn_sparse(a[ok], b[ok], 1.0 - score[ok], (len(tracks), len(tracks)))
+    a, b, score = (np.concatenate([x[k] for x in kept]) for k in range(3))
+    r, c = gnn_sparse(a, b, 1.0 - score, (len(tracks), len(tracks)))
     nxt = dict(zip(r.tolist(), c.tolist()))
     frames = np.fromiter(cam, dtype=np.int64)  # the recorded frames, in order
     heads = set(range(len(tracks))) - set(nxt.values())
