@@ -624,10 +624,10 @@ class LinearMotion:
                                      else None)
         self._Q = check_matrix_stack(Q_arr, "Q", n, n, T)
         check_psd(self._Q, "Q")
-        # its own copies, read-only: the caller's arrays were kept, so a Q changed after the
+        # its own copies, and copies given out (read-only arrays would be new argument types
+        # for the compiled filters): the caller's arrays were kept, so a Q changed after the
         # check (or through the view Q() returned) was used as it was, unchecked
         self._F, self._Q = self._F.copy(), self._Q.copy()
-        self._F.flags.writeable = self._Q.flags.writeable = False
         self.ndim_state = n
         self.n_steps = T
 
@@ -669,7 +669,7 @@ class LinearMotion:
         (2, 2)
         """
         self._check_dt(dt)
-        return self._F[0] if self.n_steps is None else self._F
+        return (self._F[0] if self.n_steps is None else self._F).copy()
 
     def Q(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
         """The process-noise covariance or covariances.
@@ -697,7 +697,7 @@ class LinearMotion:
                [0. , 0.5]])
         """
         self._check_dt(dt)
-        return self._Q[0] if self.n_steps is None else self._Q
+        return (self._Q[0] if self.n_steps is None else self._Q).copy()
 
     def f(self, x: np.ndarray, dt: float = 1.0) -> np.ndarray:
         """Propagate states one step without noise: ``x F'``.
