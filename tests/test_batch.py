@@ -242,6 +242,7 @@ class _KillsItsWorker:
 
         if frame.image is not None and frame.image.shape[1] == 170:
             os.kill(os.getpid(), signal.SIGKILL)
+        time.sleep(0.5)  # (the others run while it dies: the pool breaks under them)
         return Tracks.empty()
 
 
@@ -263,10 +264,11 @@ def test_a_job_that_kills_its_worker_fails_alone(tmp_path):
                 tracker="tests.test_batch:kills_its_worker")
     outcomes = {o.input.name: o for o in run_jobs(jobs, workers=3)}
     assert not outcomes["poison"].ok
-    # its deaths in all: three alone (retries=2), and once beside the others if it ran
-    # beside them (the largest input, it starts first)
+    # its deaths in all: three alone (retries=2), and once beside two of the others (the
+    # largest input, it starts first, with two of them; each takes 2 s)
     assert outcomes["poison"].error == "its worker died 4 times"
     assert outcomes["poison"].attempts == 4
+    assert sorted(o.attempts for n, o in outcomes.items() if n != "poison") == [1, 2, 2]
     for name in ("good-a", "good-b", "good-c"):
         assert outcomes[name].ok, outcomes[name].error
         assert outcomes[name].attempts <= 2  # (once alone, if it died beside the poison)
@@ -1150,6 +1152,12 @@ def test_an_executors_workers_in_another_folder_find_the_inputs_and_write_where_
         assert (here / "out" / "SIM-0.txt").read_bytes() == _alone(
             here / "SIM-0", tmp_path / "alone.txt")
         assert not list(elsewhere.iterdir())
+        # an option naming a file as text, as the command line gives it
+        (again,) = run_jobs(plan([Path("SIM-0")], Path("out2"), offline=False,
+                                 detections="SIM-0/det/det.txt"), executor=pool)
+        assert again.ok, again.error
+        assert (here / "out2" / "SIM-0.txt").read_bytes() == (here / "out" / "SIM-0.txt"
+                                                                ).read_bytes()
         gt = Path("SIM-0/gt/gt.txt")
         scores = evaluate_files([("s", gt, Path("out/SIM-0.txt"), None)], executor=pool)
         assert scores["s"].TP == evaluate_files([("s", gt, Path("out/SIM-0.txt"), None)])[

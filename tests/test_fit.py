@@ -511,3 +511,16 @@ def test_fit_learns_the_same_from_a_detections_file_in_any_row_order(tmp_path, m
     import vistrack.pipeline as pipeline
     monkeypatch.setattr(pipeline, "in_own_order", lambda t: t)
     assert learned(b) != want  # the file's order decided, without
+
+
+def test_a_series_that_starts_without_a_detection_learns_as_from_its_first():
+    """fit_box_motion took each series' first row as its first detection: a series whose
+    first frames have none (padded, as the public API allows) failed on "x0 must be finite".
+    Oracle: the same series without those rows."""
+    rng = np.random.default_rng(9)
+    truth, dets = _simulate(rng, 40, 20, 0.004, 0.001, (0.03, 0.02, 0.06, 0.04))
+    series = _series(truth, dets)
+    padded = [(np.arange(-3, len(t)), np.r_[np.full((3, 4), np.nan), z],
+               np.r_[np.full((3, 4), np.nan), g]) for t, z, g in series]
+    a, b = (fit_box_motion([(s, 30.0)]).per_sequence[0] for s in (series, padded))
+    assert a == b

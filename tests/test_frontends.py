@@ -2244,7 +2244,7 @@ def test_sixteen_bit_images_after_an_eight_bit_first_keep_their_depth(tmp_path):
     # settings that pass as numbers but are 0 (or infinite) in the float32 model: every
     # unchanged pixel was foreground for good
     (lambda: SelectiveBackground(min_sigma=1e-25), ValueError,
-     "min_sigma² (min_sigma squared) must lie within float32's range (1.2e-38 to 3.4e38), in "
+     "min_sigma² (min_sigma squared) must lie within float32's range (1.4e-45 to 3.4e38), in "
      "which the model is kept; got 1e-50"),
     (lambda: SelectiveBackground(threshold=1e-50), ValueError,
      "threshold must lie within float32's range"),

@@ -1169,23 +1169,43 @@ def test_the_nonlinear_filters_refuse_a_motion_q_that_is_no_covariance():
             call(Wide(dim=1, q=1.0))
 
 
-def test_a_models_q_is_kept_across_single_steps_and_follows_its_settings():
-    """ekf_predict and ukf_predict called one step at a time keep a model's Q for each dt (as
-    a filter object does); a setting changed between calls is seen. Oracle: a new model with
-    that setting."""
+def test_the_check_of_a_models_q_never_serves_another_q():
+    """A model's Q is checked once for each value it takes (kept by the matrix's values,
+    not by the model): a setting changed between single steps, even inside a list the
+    model holds, gives its own Q (oracle: a new model with that setting), from threads at
+    once too."""
+    from concurrent.futures import ThreadPoolExecutor
+
     from vistrack.filters import ekf_predict
     from vistrack.models import ConstantVelocity
 
+    class Held(ConstantVelocity):  # its noise in a list: changed in place
+        def __init__(self, box):
+            super().__init__(dim=1, q=1.0)
+            self.box = box
+
+        def Q(self, dt):
+            return self.box[0] * super().Q(dt)
+
     g = vt.Gaussian(np.array([0.0, 1.0]), np.eye(2))
-    cv = ConstantVelocity(dim=1, q=0.1)
+    cv, held = ConstantVelocity(dim=1, q=0.1), Held([0.1])
     for predict in (ekf_predict, ukf_predict):
-        a = predict(g, cv, 0.5)
-        cv.q = 0.3
-        b = predict(g, cv, 0.5)
-        cv.q = 0.1
-        np.testing.assert_allclose(a.cov, predict(g, ConstantVelocity(dim=1, q=0.1), 0.5).cov)
-        np.testing.assert_allclose(b.cov, predict(g, ConstantVelocity(dim=1, q=0.3), 0.5).cov)
-        assert not np.allclose(a.cov, b.cov)
+        for model, set_q in ((cv, lambda q: setattr(cv, "q", q)),
+                             (held, lambda q: held.box.__setitem__(0, q))):
+            a = predict(g, model, 0.5)
+            set_q(10.0)
+            b = predict(g, model, 0.5)
+            set_q(0.1)
+            np.testing.assert_allclose(a.cov, predict(g, ConstantVelocity(dim=1, q=0.1),
+                                                      0.5).cov)
+            np.testing.assert_allclose(b.cov, predict(g, ConstantVelocity(dim=1, q=10.0),
+                                                      0.5).cov)
+    dts = np.random.default_rng(0).uniform(0.1, 2.0, 400)
+    with ThreadPoolExecutor(8) as pool:
+        got = list(pool.map(lambda dt: ekf_predict(g, cv, dt).cov, dts))
+    for dt, cov in zip(dts, got):
+        np.testing.assert_allclose(cov, ekf_predict(g, ConstantVelocity(dim=1, q=0.1),
+                                                    dt).cov)
 
 
 def test_a_state_or_a_measurement_of_another_size_is_named():
@@ -1200,9 +1220,16 @@ def test_a_state_or_a_measurement_of_another_size_is_named():
                                                    "motion model's; got 4")):
         ekf_predict(vt.Gaussian(np.zeros(4), np.eye(4)), ConstantVelocity(dim=1), 1.0)
     meas = NonlinearMeasurement(lambda x: x[..., :3], R=np.eye(2), ndim_state=5)
-    message = re.escape("the measurement model's h(x) gives 3 values a state; its R is 2 x 2")
+    message = re.escape("the measurement model's h(x) gives values of shape (")
     for g in (vt.Gaussian(np.ones(5), np.eye(5)),
               vt.Gaussian(np.ones((2, 5)), np.broadcast_to(np.eye(5), (2, 5, 5)).copy())):
         for update in (ekf_update, ukf_update):
-            with pytest.raises(ValueError, match=message):
+            with pytest.raises(ValueError, match=message + r"(.* )?3,?\) for states of shape "
+                               r".* its R is 2 x 2"):
                 update(g, np.ones(g.mean.shape[:-1] + (2,)), meas)
+    # an h that drops the measurement's axis (m = 1): said as such, not as 5 values a state
+    flat = NonlinearMeasurement(lambda x: x[..., 0], R=np.eye(1), ndim_state=5)
+    with pytest.raises(ValueError, match=re.escape(
+            "gives values of shape (11,) for states of shape (11, 5); its R is 1 x 1, so "
+            "(11, 1) was expected")):
+        ukf_update(vt.Gaussian(np.ones(5), np.eye(5)), np.ones(1), flat)

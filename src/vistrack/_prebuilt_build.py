@@ -238,10 +238,11 @@ def _forwarder(target: Any, n: int) -> Any:
 
 
 @contextlib.contextmanager
-def _own_temporary_folder(parent: Path) -> Iterator[Path]:
-    """A new folder in ``parent``, the temporary folder of this process (``tempfile``) and of
-    the processes it starts (``TMPDIR``) inside the block; removed with what it holds after."""
-    folder = Path(tempfile.mkdtemp(prefix=".kernels-tmp-", dir=parent))
+def _own_temporary_folder(parent: Path, prefix: str = ".kernels-tmp-") -> Iterator[Path]:
+    """A new folder in ``parent`` (its name starting ``prefix``), the temporary folder of
+    this process (``tempfile``) and of the processes it starts (``TMPDIR``) inside the block;
+    removed with what it holds after (the test suite's too: ``conftest.py``)."""
+    folder = Path(tempfile.mkdtemp(prefix=prefix, dir=parent))
     saved, saved_env = tempfile.tempdir, os.environ.get("TMPDIR")
     tempfile.tempdir = os.environ["TMPDIR"] = str(folder)
     try:

@@ -270,9 +270,23 @@ def _absolute(job: Job) -> Job:
     worker of an executor's (Dask's), whose working folder is its own, must be given them:
     relative ones were found, or written, in the worker's folder (an input refused, or
     results written elsewhere while the table said "ok")."""
+    def anywhere(key: str, value: Any) -> Any:
+        if isinstance(value, os.PathLike) or (key in _PATH_OPTIONS and isinstance(value, str)):
+            return str(Path(value).absolute()) if isinstance(value, str) else Path(
+                value).absolute()
+        kind, colon, path = value.partition(":") if isinstance(value, str) else ("", "", "")
+        if key == "frontend" and colon and kind in ("detections", "onnx") and path:
+            return f"{kind}:{Path(path).absolute()}"
+        return value
+
     return replace(job, input=job.input.absolute(), out=job.out.absolute(),
-                   options={k: Path(v).absolute() if isinstance(v, os.PathLike) else v
-                            for k, v in job.options.items()})
+                   options={k: anywhere(k, v) for k, v in job.options.items()})
+
+
+_PATH_OPTIONS = ("detections", "gt", "config")
+"""The options of :func:`~vistrack.pipeline.track_sequence` and
+:func:`~vistrack.pipeline.track_video` that name a file when given as text (and the
+front-ends ``detections:FILE`` and ``onnx:MODEL``)."""
 
 
 def _size(job: Job) -> int:

@@ -28,14 +28,15 @@ def check_gaussian(g: object) -> Gaussian:
     return g
 
 
-def check_h_size(z: np.ndarray, m: int) -> np.ndarray:
-    """``z``, the measurement model's values ``h(x) (..., m')``, or a ValueError where they
-    are not ``m`` values a state, the size of its ``R`` (numpy's broadcast error named
-    neither; the UKF's compiled step read the first ``m`` values, without a word)."""
-    if np.shape(z)[-1:] != (m,):
-        got = np.shape(z)[-1] if np.ndim(z) else "no"
-        raise ValueError(f"the measurement model's h(x) gives {got} values a state; its R is "
-                         f"{m} x {m}")
+def check_h_size(z: np.ndarray, m: int, x: np.ndarray) -> np.ndarray:
+    """``z``, the measurement model's values ``h(x)`` for states ``x (..., n)``, or a
+    ValueError where they are not ``(..., m)``, ``m`` values a state, the size of its ``R``
+    (numpy's broadcast error named neither; the UKF's compiled step read the first ``m``
+    values, without a word)."""
+    if np.shape(z) != np.shape(x)[:-1] + (m,):
+        raise ValueError(f"the measurement model's h(x) gives values of shape {np.shape(z)} "
+                         f"for states of shape {np.shape(x)}; its R is {m} x {m}, so "
+                         f"{np.shape(x)[:-1] + (m,)} was expected")
     return z
 
 

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import check_one_step
-from ..models.adapters import MeasurementFunctions, MotionFunctions, motion_functions
+from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
     MeasurementModel,
     MotionModel,
@@ -60,7 +60,7 @@ def ekf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     """
     g = check_gaussian(g)
     check_one_step(dt)
-    mo = motion_functions(motion)
+    mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
     if g.mean.shape[-1] != mo.n:  # (numpy's broadcast error, naming neither; as ukf_predict)
         raise ValueError(f"g must have a state of {mo.n} values, the motion model's; got "
                          f"{g.mean.shape[-1]}")
@@ -94,7 +94,7 @@ def _ekf_update(g: Gaussian, y: ArrayLike,
     y = check_y(y, g.mean.shape[:-1], me.m)
     obs = ~np.isnan(y)
     x = g.mean
-    e = me.residual(np.where(obs, y, 0.0), check_h_size(me.h(x), me.m))
+    e = me.residual(np.where(obs, y, 0.0), check_h_size(me.h(x), me.m, x))
     mean, cov, ll = condition_on(x, g.cov, me.jacobian(x), me.Rm, e, obs)
     return Gaussian(mean, cov), ll
 

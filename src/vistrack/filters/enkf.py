@@ -38,7 +38,6 @@ from ..models.adapters import (
     MotionFunctions,
     _plain_mean,
     _principal_root,
-    motion_functions,
     psd_sqrt,
 )
 from ..models.protocols import (
@@ -223,7 +222,7 @@ def enkf_predict(ens: Ensemble, motion: MotionModel | NonlinearMotionModel, dt: 
     array([1., 1.])
     """
     check_one_step(dt, "every ensemble of ens")
-    mo = motion_functions(motion)
+    mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
     if ens.members.shape[-1] != mo.n:  # (numpy's matmul error, naming neither)
         raise ValueError(f"ens must have members of {mo.n} values, the motion model's; got "
                          f"{ens.members.shape[-1]}")

@@ -49,7 +49,7 @@ from .._validate import (
     check_psd,
     check_symmetric,
 )
-from ..models.adapters import MeasurementFunctions, MotionFunctions, motion_functions, psd_sqrt
+from ..models.adapters import MeasurementFunctions, MotionFunctions, psd_sqrt
 from ..models.nonlinear import _offset_mean
 from ..models.protocols import (
     MeasurementModel,
@@ -669,7 +669,7 @@ def ukf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     """
     g = check_gaussian(g)
     check_one_step(dt)
-    mo = motion_functions(motion)
+    mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
     points = points or MerweScaledSigmaPoints()
     n = g.mean.shape[-1]
     if n != mo.n:  # (numpy's matmul error, naming neither)
@@ -804,7 +804,7 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
     if g.mean.ndim == 1 and me.standard and state_residual is None:
         gamma = points._one(g.mean, g.cov, "g.cov")
         xo, Po = np.empty(n), np.empty((n, n))
-        z = check_h_size(np.asarray(me.h(gamma), dtype=float), me.m)
+        z = check_h_size(np.asarray(me.h(gamma), dtype=float), me.m, gamma)
         ok, ll1 = _update_one(gamma, z, Wm, Wc, me.Rm, y, me.angle_mask, g.mean, g.cov, xo, Po)
         if not ok:
             zo = z[:, ~np.isnan(y)]  # (a missing component's value is not used)
@@ -821,8 +821,8 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
     obs = ~np.isnan(y)
     # a missing component's value is not used: 0, not NaN, where h has none there (NaN times
     # the mask's 0 below is NaN, and made every estimate of the batch NaN)
-    zs = np.where(obs[..., None, :], check_h_size(np.asarray(me.h(gamma), dtype=float), me.m),
-                  0.0)
+    hz = check_h_size(np.asarray(me.h(gamma), dtype=float), me.m, gamma)
+    zs = np.where(obs[..., None, :], hz, 0.0)
     check_model_values(zs, gamma, "sigma point")
     zhat, Pzz, rz = (_central_transform(zs, Wm, Wc, me.residual) if me.standard
                      else _transform(zs, Wm, Wc, me.mean, me.residual))

@@ -180,7 +180,7 @@ class SelectiveBackground:
             with np.errstate(over="ignore"):
                 held = np.float32(value)
             if not 0 < held < np.inf:
-                raise ValueError(f"{name} must lie within float32's range (1.2e-38 to "
+                raise ValueError(f"{name} must lie within float32's range (1.4e-45 to "
                                  f"3.4e38), in which the model is kept; got {value:g}")
         self.alpha, self.threshold, self.n_init = float(alpha), float(threshold), int(n_init)
         self.min_sigma, self.n_new = float(min_sigma), int(n_new)

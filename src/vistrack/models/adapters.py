@@ -201,12 +201,7 @@ class MotionFunctions:
             # checked once for each dt, as kept: the EKF took a Q with a negative eigenvalue
             # and gave covariances with one too, without a word (the particle filter's square
             # root clipped it; Q = -I was named as R)
-            name = f"motion.Q({key:g})"
-            if Q.shape != (self.n, self.n):
-                raise ValueError(f"{name} must have shape ({self.n}, {self.n}), the state's; "
-                                 f"got {Q.shape}")
-            check_finite(Q, name)
-            check_psd(Q, name)
+            _check_q(Q, self.n, f"motion.Q({key:g})")
             Q = _remember(self._Q, key, Q)
         return Q
 
@@ -223,25 +218,26 @@ class MotionFunctions:
 _KEPT = 16
 """How many distinct time steps' ``Q`` a model's functions keep."""
 
-_RECENT: dict[int, MotionFunctions] = {}
-_RECENT_LOCK = threading.Lock()
+_CHECKED: dict[tuple, None] = {}
+_CHECKED_LOCK = threading.Lock()
 
 
-def motion_functions(motion: object) -> MotionFunctions:
-    """``motion`` as :class:`MotionFunctions`: itself if it is, else the functions of one of
-    the last few models seen, kept, so that a filter's steps called one at a time
-    (``ekf_predict``, ``ukf_predict``) compute and check a model's ``Q`` once for each
-    ``dt``, as a filter object does."""
-    if isinstance(motion, MotionFunctions):
-        return motion
-    mo = _RECENT.get(id(motion))
-    if mo is None or mo.model is not motion:  # (each kept holds its model: no id reused)
-        mo = MotionFunctions(cast(MotionModel | NonlinearMotionModel, motion))
-        with _RECENT_LOCK:  # (threads filtering at once)
-            while len(_RECENT) >= 8:
-                del _RECENT[next(iter(_RECENT))]
-            _RECENT[id(motion)] = mo
-    return mo
+def _check_q(Q: np.ndarray, n: int, name: str) -> None:
+    """A model's ``Q`` checked (shape ``(n, n)``, finite, symmetric positive semi-definite),
+    or found among the last few matrices that passed, by their values: the filters' steps
+    called one at a time (``ekf_predict``, ``ukf_predict``) make a model's functions afresh
+    each call, and its eigenvalues cost a step half its time again."""
+    if Q.shape != (n, n):
+        raise ValueError(f"{name} must have shape ({n}, {n}), the state's; got {Q.shape}")
+    key = (n, Q.tobytes())
+    if key in _CHECKED:
+        return
+    check_finite(Q, name)
+    check_psd(Q, name)
+    with _CHECKED_LOCK:  # (threads filtering at once)
+        while len(_CHECKED) >= 64:
+            del _CHECKED[next(iter(_CHECKED))]
+        _CHECKED[key] = None
 
 
 def _remember(cache: dict, key: float, value: np.ndarray) -> np.ndarray:

@@ -345,11 +345,12 @@ def fit_box_motion(sequences: list[tuple[list[Series], float]], *,
         Y = np.full((len(series), T, 4), np.nan)
         for k, (_, z, g) in enumerate(series):
             w, h = np.nanmedian(g[:, 2]), np.nanmedian(g[:, 3])
-            Y[k, :len(z)] = z / np.array([w, h, w, h])
+            first = int(np.flatnonzero(np.isfinite(z[:, 0]))[0])  # (matched_series': 0)
+            Y[k, :len(z) - first] = z[first:] / np.array([w, h, w, h])
         detections = int(np.isfinite(Y[..., 0]).sum())
-        # each series starts at its first detection (matched_series), which is the first
-        # step's prior mean, with the measurement noise as its spread: the likelihood is
-        # that of the later detections given it, not of the first detection twice
+        # each series from its first detection, which is the first step's prior mean, with
+        # the measurement noise as its spread: the likelihood is that of the later
+        # detections given it, not of the first detection twice
         x0 = np.c_[Y[:, 0], np.zeros((len(Y), 4))]
         Y[:, 0] = np.nan
         P0 = np.diag(np.r_[meas ** 2, np.full(4, (m.init_vel * m.std_vel) ** 2)])
