@@ -870,6 +870,17 @@ def test_ground_truth_without_conf_is_said_to_count_every_row(tmp_path):
         warnings.simplefilter("error")
         b = read_truth(seven)
     assert len(a) == len(b) == 2
+    # scored by evaluate_files, in this process or in workers: the warning is the result's,
+    # the same either way (a worker's was said on its stderr, or nowhere with Dask)
+    from vistrack.evaluation import evaluate_files
+
+    for jobs in (1, 2):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            got = evaluate_files([("a", six, seven, None), ("b", seven, seven, None)],
+                                 jobs=jobs)
+        assert got.warnings == [f"{six}: 6 values a row, no conf (MOTChallenge's 7th value, "
+                                "0 on the rows a benchmark ignores): every row is counted"]
     # a ground-truth CSV file's error calls it one (it was "not a CSV results file")
     bad = tmp_path / "empty.csv"
     bad.write_text("")

@@ -60,9 +60,12 @@ def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going
     one line ("" if none; raised without ``keep_going``); in a worker, for
     :func:`evaluate_files`."""
     try:
-        g, p, n = _read(pair, columns, points=zero_distance is not None)
+        # the ground truth's warning goes with the scores (raised in a worker, jobs > 1 or
+        # Dask's, it was said on the worker's stderr, or nowhere)
+        g, said = _truth(pair[1], points=zero_distance is not None)
+        p, n = _results_and_length(pair, columns, points=zero_distance is not None)
         return (evaluate_mot(g, p, n, benchmark=benchmark, zero_distance=zero_distance),
-                sanity_warnings(g, p, zero_distance=zero_distance), "")
+                said + sanity_warnings(g, p, zero_distance=zero_distance), "")
     except Exception as e:
         if not keep_going:
             raise
@@ -74,9 +77,16 @@ def _read(pair: tuple[str, Path, Path, Path | None], columns: dict[str, str] | N
     """A pair's ground truth, results and sequence length (None without seqinfo.ini); ground
     truth in a CSV or Parquet file is read by its own columns' names, ``columns`` naming the
     results'; ``points``, ``x, y`` alone read as points (:func:`read_truth`)."""
-    _, gt, pred, info = pair
+    p, n = _results_and_length(pair, columns, points)
+    return read_truth(pair[1], points=points), p, n
+
+
+def _results_and_length(pair: tuple[str, Path, Path, Path | None],
+                        columns: dict[str, str] | None, points: bool
+                        ) -> tuple[MOTTable, int | None]:
+    _, _, pred, info = pair
     n = read_seq_length(info) if info is not None else None
-    return read_truth(gt, points=points), _read_results(Path(pred), columns, points), n
+    return _read_results(Path(pred), columns, points), n
 
 
 def read_truth(path: str | Path, *, points: bool = False) -> MOTTable:
@@ -84,20 +94,27 @@ def read_truth(path: str | Path, *, points: bool = False) -> MOTTable:
     always was read), or a CSV or Parquet file with a header, read by its own columns' names
     (:meth:`MOTTable.from_pandas <vistrack.io.MOTTable.from_pandas>`: a box; with
     ``points``, ``x, y`` alone as a point's, to be scored by distance)."""
+    table, said = _truth(path, points=points)
+    for message in said:
+        warnings.warn(message, UserWarning, stacklevel=2)
+    return table
+
+
+def _truth(path: str | Path, *, points: bool = False) -> tuple[MOTTable, list[str]]:
+    """:func:`read_truth`'s table and its warning, returned rather than warned."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".parquet" or (suffix == ".csv" and not _text_without_header(path)):
         # (its own columns: without conf, every row counts, as a points file's always does)
         return MOTTable.from_pandas(_table_file(path, "ground-truth"), path=str(path),
-                                    points=points)
+                                    points=points), []
     table = read_mot(path)
     if len(table) and table.columns < 7:
         # (its rows to ignore, conf 0 in MOTChallenge's ground truth, were counted as people
         # to find without a word: PETS09-S2L1's FN 941 became 1,091)
-        warnings.warn(f"{path}: {table.columns} values a row, no conf (MOTChallenge's 7th "
-                      "value, 0 on the rows a benchmark ignores): every row is counted",
-                      UserWarning, stacklevel=2)
-    return table
+        return table, [f"{path}: {table.columns} values a row, no conf (MOTChallenge's 7th "
+                       "value, 0 on the rows a benchmark ignores): every row is counted"]
+    return table, []
 
 
 def _table_file(path: Path, what: str) -> Any:
