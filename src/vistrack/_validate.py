@@ -276,6 +276,24 @@ def check_symmetric(arr: np.ndarray, name: str) -> np.ndarray:
     return scale
 
 
+def correlation(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The correlation matrices ``C = D^-1 S D^-1`` of a stack of covariances ``S (..., n,
+    n)``, ``D = diag(S)^(1/2)``, and those standard deviations ``(..., n)`` (0 where a
+    variance is 0 or below, whose row and column are then divided by 1): ``S`` without the
+    scales of its axes, whose rank and definiteness hold at any units (variances of 1e4 and
+    1e-13 beside each other were taken for a singular matrix).
+
+    Examples
+    --------
+    >>> C, sd = correlation(np.diag([1e4, 1e-12]))
+    >>> C.tolist(), sd.tolist()
+    ([[1.0, 0.0], [0.0, 1.0]], [100.0, 1e-06])
+    """
+    sd = np.sqrt(np.clip(np.diagonal(S, axis1=-2, axis2=-1), 0.0, None))
+    unit = np.where(sd > 0, sd, 1.0)
+    return S / (unit[..., :, None] * unit[..., None, :]), sd
+
+
 def check_psd(arr: np.ndarray, name: str, *, strict: bool = False) -> None:
     """Check that every matrix of a stack ``(..., n, n)`` is symmetric positive (semi-)definite.
 

@@ -271,10 +271,13 @@ def _absolute(job: Job) -> Job:
     relative ones were found, or written, in the worker's folder (an input refused, or
     results written elsewhere while the table said "ok")."""
     def anywhere(key: str, value: Any) -> Any:
-        if isinstance(value, os.PathLike) or (key in _PATH_OPTIONS and isinstance(value, str)):
-            return str(Path(value).absolute()) if isinstance(value, str) else Path(
-                value).absolute()
-        kind, colon, path = value.partition(":") if isinstance(value, str) else ("", "", "")
+        if isinstance(value, os.PathLike):
+            return Path(value).absolute()
+        if not isinstance(value, str):
+            return value
+        if key in _PATH_OPTIONS:
+            return str(Path(value).absolute())
+        kind, colon, path = value.partition(":")
         if key == "frontend" and colon and kind in ("detections", "onnx") and path:
             return f"{kind}:{Path(path).absolute()}"
         return value

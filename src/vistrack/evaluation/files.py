@@ -62,8 +62,7 @@ def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going
     try:
         # the ground truth's warning goes with the scores (raised in a worker, jobs > 1 or
         # Dask's, it was said on the worker's stderr, or nowhere)
-        g, said = _truth(pair[1], points=zero_distance is not None)
-        p, n = _results_and_length(pair, columns, points=zero_distance is not None)
+        g, p, n, said = _read(pair, columns, points=zero_distance is not None)
         return (evaluate_mot(g, p, n, benchmark=benchmark, zero_distance=zero_distance),
                 said + sanity_warnings(g, p, zero_distance=zero_distance), "")
     except Exception as e:
@@ -73,20 +72,15 @@ def _score(pair: tuple[str, Path, Path, Path | None], benchmark: str, keep_going
 
 
 def _read(pair: tuple[str, Path, Path, Path | None], columns: dict[str, str] | None = None,
-          *, points: bool = False) -> tuple[MOTTable, MOTTable, int | None]:
-    """A pair's ground truth, results and sequence length (None without seqinfo.ini); ground
-    truth in a CSV or Parquet file is read by its own columns' names, ``columns`` naming the
-    results'; ``points``, ``x, y`` alone read as points (:func:`read_truth`)."""
-    p, n = _results_and_length(pair, columns, points)
-    return read_truth(pair[1], points=points), p, n
-
-
-def _results_and_length(pair: tuple[str, Path, Path, Path | None],
-                        columns: dict[str, str] | None, points: bool
-                        ) -> tuple[MOTTable, int | None]:
-    _, _, pred, info = pair
+          *, points: bool = False) -> tuple[MOTTable, MOTTable, int | None, list[str]]:
+    """A pair's ground truth, results, sequence length (None without seqinfo.ini) and the
+    ground truth's warnings (:func:`read_truth`'s, returned); ground truth in a CSV or
+    Parquet file is read by its own columns' names, ``columns`` naming the results';
+    ``points``, ``x, y`` alone read as points."""
+    _, gt, pred, info = pair
     n = read_seq_length(info) if info is not None else None
-    return _read_results(Path(pred), columns, points), n
+    truth, said = _truth(gt, points=points)
+    return truth, _read_results(Path(pred), columns, points), n, said
 
 
 def read_truth(path: str | Path, *, points: bool = False) -> MOTTable:
@@ -194,8 +188,10 @@ def pair_matches(pair: tuple[str, Path, Path, Path | None], benchmark: str = "au
     :func:`evaluate_files` does (a CSV or Parquet file's ``columns`` named as there;
     positions by distance with ``zero_distance``)."""
     _check_pair(pair, "pair")
-    return clear_matches(*_read(pair, columns, points=zero_distance is not None),
-                         benchmark=benchmark, zero_distance=zero_distance)
+    g, p, n, said = _read(pair, columns, points=zero_distance is not None)
+    for message in said:
+        warnings.warn(message, UserWarning, stacklevel=2)
+    return clear_matches(g, p, n, benchmark=benchmark, zero_distance=zero_distance)
 
 
 def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import check_finite, check_psd
+from .._validate import check_finite, check_psd, correlation
 from ..types import Gaussian
 
 __all__ = ["pda_update"]
@@ -122,11 +122,8 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
     # axes of other units (S = diag(1e4, 1e-7)) are no matter (the solve below refused only
     # an exactly zero pivot: a rank-1 S whose pivot rounds to 1e-17 passed, and the
     # covariance grew where the prior had none)
-    d = np.diagonal(S, axis1=1, axis2=2)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        root = 1.0 / np.sqrt(d)
-        corr = S * root[:, :, None] * root[:, None, :]
-    low = np.asarray(~(d > 0).all(axis=1))
+    corr, sd = correlation(S)
+    low = np.asarray(~(sd > 0).all(axis=1))
     low[~low] = np.linalg.eigvalsh(corr[~low])[:, 0] <= 1e-12
     bad = int(np.flatnonzero(low)[0]) if low.any() else None
     if bad is not None:

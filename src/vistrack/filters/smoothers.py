@@ -21,6 +21,7 @@ from .._validate import (
     check_linear_gaussian,
     check_matrix_stack,
     check_psd,
+    correlation,
 )
 from ._kernels import chol_solve, copy_mat, copy_vec, predict_one
 from .kalman import FilterResult, _is_dask, _readonly, kalman_filter
@@ -339,9 +340,8 @@ def two_filter_smooth(
         # singular to rounding: numerical rank below m (numpy's matrix_rank tolerance), where
         # solve may still return a finite, wrong inverse; of the correlation matrix, so that
         # components of other units (variances 1e4 and 1e-13) are not taken for singular
-        sd = np.sqrt(np.clip(np.diagonal(Rm, axis1=-2, axis2=-1), 0.0, None))
-        unit = np.where(sd > 0, sd, 1.0)
-        ev = np.linalg.eigvalsh(Rm / (unit[:, :, None] * unit[:, None, :]))
+        C, sd = correlation(Rm)
+        ev = np.linalg.eigvalsh(C)
         singular = bool((sd <= 0).any() or (ev[:, 0] <= ev[:, -1] * m * np.finfo(float).eps)
                         .any())
         try:

@@ -289,6 +289,15 @@ def _box_rows(tracks: Tracks, frame: Frame, what: str) -> np.ndarray:
     return tracks.xywh
 
 
+def _integers_of(f: int, values: np.ndarray, name: str) -> np.ndarray:
+    """Frame ``f``'s ``values`` (the tracks' ids or classes) as integers, or a ValueError
+    naming the frame."""
+    try:
+        return _integers(values, name)
+    except ValueError as e:
+        raise ValueError(f"frame {f}: {e}") from None
+
+
 class _RowsFile:
     """Box tracks written as text rows, frame by frame, to the partial file of ``path``
     (:class:`~vistrack.io.atomic.PartialFile`), renamed into place when closed: only the
@@ -311,7 +320,7 @@ class _RowsFile:
         if f < 1:
             raise ValueError(f"frame {f}: MOTChallenge frames count from 1 (read_mot refuses "
                              f"frame {f})")
-        ids = self._ids_of(f, tracks)
+        ids = _integers_of(f, tracks.ids, "ids")  # (1.7 was written as track 1)
         xywh = np.asarray(_box_rows(tracks, frame, f"{type(self).__name__}({self.path})"),
                           dtype=float)
         scores = np.asarray(tracks.scores, dtype=float)
@@ -324,22 +333,11 @@ class _RowsFile:
                              "(a box must be finite with w, h >= 0, a score finite)")
         return f, ids, xywh, scores, self._count(ids, tracks, f)
 
-    @staticmethod
-    def _ids_of(f: int, tracks: Tracks) -> np.ndarray:
-        """The tracks' identities as integers, a ValueError naming frame ``f`` otherwise."""
-        try:  # 1.7 was written as track 1
-            return _integers(tracks.ids, "ids")
-        except ValueError as e:
-            raise ValueError(f"frame {f}: {e}") from None
-
     def _count(self, ids: np.ndarray, tracks: Tracks, f: int) -> list[int]:
         """Count rows ``ids`` of frame ``f`` written, each identity with its class; returns
         the classes (whole numbers, or a ValueError naming the frame: a tracker's NaN class
         was written as -9223372036854775808, 2.7 as 2)."""
-        try:
-            classes = _integers(tracks.classes, "classes").tolist()
-        except ValueError as e:
-            raise ValueError(f"frame {f}: {e}") from None
+        classes = _integers_of(f, tracks.classes, "classes").tolist()
         self._rows += len(ids)
         self._ids.update(zip(ids.tolist(), classes))
         return classes
@@ -686,7 +684,7 @@ class PointsCSVWriter(_RowsFile):
             raise ValueError(f"frame {f}: frames count from 1")
         if not len(tracks):
             return
-        ids = self._ids_of(f, tracks)
+        ids = _integers_of(f, tracks.ids, "ids")  # (1.7 was written as track 1)
         xy = np.asarray(tracks.points, dtype=float)
         bad = ~np.isfinite(xy).all(axis=1)
         if bad.any():

@@ -13,7 +13,7 @@ from typing import cast
 
 import numpy as np
 
-from .._validate import check_finite, check_psd
+from .._validate import check_finite, check_psd, correlation
 from .nonlinear import AngleAwareMeasurement, _offset_mean, _residual, _weighted_mean
 from .protocols import (
     MeasurementModel,
@@ -73,10 +73,8 @@ def psd_sqrt(S: np.ndarray) -> np.ndarray:
                    * np.abs(w).max(axis=-1, keepdims=True))
     off = (np.abs(got - d) > tol).any(axis=-1)
     if off.any():
-        s = np.sqrt(np.maximum(d[off], 0.0))
-        s = np.where(s > 0, s, 1.0)  # (a zero variance: its row and column are 0)
-        C = S[off] / (s[..., :, None] * s[..., None, :])
-        A[off] = s[..., :, None] * _principal_root(*np.linalg.eigh(C))
+        C, s = correlation(S[off])  # (a zero variance: its row and column are 0)
+        A[off] = np.where(s > 0, s, 1.0)[..., :, None] * _principal_root(*np.linalg.eigh(C))
     return A
 
 
@@ -201,7 +199,7 @@ class MotionFunctions:
             # checked once for each dt, as kept: the EKF took a Q with a negative eigenvalue
             # and gave covariances with one too, without a word (the particle filter's square
             # root clipped it; Q = -I was named as R)
-            _check_q(Q, self.n, f"motion.Q({key:g})")
+            _check_noise_matrix(Q, self.n, f"motion.Q({key:g})")
             Q = _remember(self._Q, key, Q)
         return Q
 
@@ -222,7 +220,7 @@ _CHECKED: dict[tuple, None] = {}
 _CHECKED_LOCK = threading.Lock()
 
 
-def _check_q(Q: np.ndarray, n: int, name: str) -> None:
+def _check_noise_matrix(Q: np.ndarray, n: int, name: str) -> None:
     """A model's ``Q`` checked (shape ``(n, n)``, finite, symmetric positive semi-definite),
     or found among the last few matrices that passed, by their values: the filters' steps
     called one at a time (``ekf_predict``, ``ukf_predict``) make a model's functions afresh
