@@ -548,3 +548,23 @@ def test_a_range_bearing_sensor_must_be_finite():
 
     with pytest.raises(ValueError, match=re.escape("sensor must be finite; sensor[0] = nan")):
         RangeBearing(sensor=(np.nan, 0.0))
+
+
+def test_a_boolean_dt_is_refused():
+    """F(True) was the step of 1: a flag passed where a time step belongs."""
+    for model in (ConstantVelocity(), Periodic()):
+        for bad in (True, np.bool_(False), np.array([1.0, 2.0]) > 1, [1.0, True]):
+            with pytest.raises(TypeError, match=r"dt must be a number or an array of numbers"):
+                model.F(bad)
+    np.testing.assert_array_equal(ConstantVelocity(dim=1).F(1), [[1.0, 1.0], [0.0, 1.0]])
+
+
+def test_periodic_euler_names_an_overflowing_step():
+    """omega 1e160 with the Euler step: -omega² dt raised Python's OverflowError,
+    "Numerical result out of range", naming neither omega nor dt."""
+    with pytest.raises(ValueError, match=r"Euler step overflows.*omega=1e\+160, dt=0\.5"):
+        Periodic(omega=1e160, discretisation="euler").F(0.5)
+    # the largest omega whose square is finite still gives the seeds' matrix [[1, dt], [-ω² dt, 1]]
+    w = 1e154
+    np.testing.assert_array_equal(Periodic(omega=w, discretisation="euler").F(0.5),
+                                  [[1.0, 0.5], [-w * w * 0.5, 1.0]])

@@ -22,6 +22,7 @@ from vistrack.filters import (
 )
 from vistrack.models import (
     CoordinatedTurn,
+    MeasurementFunctions,
     NonlinearMeasurement,
     NonlinearMotion,
     RangeBearing,
@@ -1233,3 +1234,59 @@ def test_a_state_or_a_measurement_of_another_size_is_named():
             "gives values of shape (11,) for states of shape (11, 5); its R is 1 x 1, so "
             "(11, 1) was expected")):
         ukf_update(vt.Gaussian(np.ones(5), np.eye(5)), np.ones(1), flat)
+
+
+def test_coordinated_turn_names_a_dt_that_is_not_one_finite_step():
+    """CoordinatedTurn.f and .jacobian took a NaN step (every state NaN) or a negative one
+    (the states moved backwards), where Q and every filter refused them."""
+    ct, x = CoordinatedTurn(), np.array([0.0, 0.0, 1.0, 0.0, 0.5])
+    for call in (ct.f, ct.jacobian, lambda x, dt: ct.Q(dt)):
+        for bad in (np.nan, -0.5, np.inf):
+            with pytest.raises(ValueError, match=r"dt must be finite and >= 0"):
+                call(x, bad)
+        with pytest.raises(ValueError, match=r"dt must be one value; got shape \(2,\)"):
+            call(x, [1.0, 2.0])
+        with pytest.raises(TypeError, match=r"dt must be a number"):
+            call(x, True)
+    # the same numbers as before for a good step: a quarter turn at ω = π/2 (closed form)
+    np.testing.assert_allclose(ct.f(np.array([0.0, 0.0, 1.0, 0.0, np.pi / 2]), 1.0),
+                               [2 / np.pi, 2 / np.pi, 0.0, 1.0, np.pi / 2], atol=1e-15)
+
+
+def test_numerical_jacobian_names_a_scalar_point():
+    """A scalar x was an IndexError from x.shape[-1]; one value is a point of shape (1,)."""
+    with pytest.raises(ValueError, match=r"x must be points of shape \(\.\.\., n\).*scalar 2\.0"):
+        numerical_jacobian(np.sin, 2.0)
+    np.testing.assert_allclose(numerical_jacobian(np.sin, np.array([2.0])), [[np.cos(2.0)]],
+                               rtol=1e-9)
+
+
+class _Double:
+    """A residual twice the difference, to see which residual an update used."""
+
+    def __call__(self, a, b):
+        return 2.0 * (np.asarray(a) - np.asarray(b))
+
+
+@pytest.mark.parametrize("update", ["ekf", "ukf", "enkf"])
+def test_a_residual_given_with_measurement_functions_is_used(update):
+    """ekf_update(g, y, MeasurementFunctions(...), residual=f) ignored f: the functions' own
+    residual was used. Given with functions already made, f is used, as with a model; the
+    oracle is the same update with the residual given beside the model itself."""
+    g = vt.Gaussian(np.array([0.0, 1.0]), np.diag([1.0, 0.5]))
+    model = vt.Position(dim=1, r=0.25)
+    me = MeasurementFunctions(model, 2)
+    if update == "enkf":
+        ens = Ensemble.sample(g.mean, g.cov, 200, rng=0)
+
+        def run(m, **kw):
+            return enkf_update(ens, [1.5], m, rng=1, **kw).members.mean(0)
+    else:
+        fn = ekf_update if update == "ekf" else ukf_update
+
+        def run(m, **kw):
+            return fn(g, [1.5], m, **kw).mean
+    flipped = run(model, residual=_Double())
+    np.testing.assert_array_equal(run(me, residual=_Double()), flipped)
+    assert not np.allclose(flipped, run(me))   # (the residual does change the answer)
+    np.testing.assert_array_equal(run(me), run(model))

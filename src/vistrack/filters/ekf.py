@@ -89,8 +89,7 @@ def _ekf_update(g: Gaussian, y: ArrayLike,
                 residual: Callable | None) -> tuple[Gaussian, np.ndarray]:
     g = check_gaussian(g)
     n = g.mean.shape[-1]
-    me = measurement if isinstance(measurement, MeasurementFunctions) else MeasurementFunctions(
-        measurement, n, residual)
+    me = MeasurementFunctions.of(measurement, n, residual)
     y = check_y(y, g.mean.shape[:-1], me.m)
     obs = ~np.isnan(y)
     x = g.mean

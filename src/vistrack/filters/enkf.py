@@ -301,8 +301,7 @@ def _enkf_update(ens: Ensemble, y: ArrayLike,
     # a word; the filter names a prediction that is not finite before it gets here)
     check_finite(X, "ens.members")
     N, n = X.shape[-2:]
-    me = measurement if isinstance(measurement, MeasurementFunctions) else MeasurementFunctions(
-        measurement, n, residual)
+    me = MeasurementFunctions.of(measurement, n, residual)
     y = check_y(y, X.shape[:-2], me.m)
     obs = ~np.isnan(y)
     # (..., N, m); a missing component's value is not used: 0, not NaN, where h has none

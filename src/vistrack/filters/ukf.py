@@ -796,8 +796,7 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
                 state_residual: Callable | None) -> tuple[Gaussian, np.ndarray]:
     g = check_gaussian(g)
     n = g.mean.shape[-1]
-    me = measurement if isinstance(measurement, MeasurementFunctions) else MeasurementFunctions(
-        measurement, n, residual, mean)
+    me = MeasurementFunctions.of(measurement, n, residual, mean)
     y = check_y(y, g.mean.shape[:-1], me.m)
     points = points or MerweScaledSigmaPoints()
     Wm, Wc = points.weights(n)

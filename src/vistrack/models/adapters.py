@@ -6,6 +6,7 @@ with."""
 
 from __future__ import annotations
 
+import copy
 import threading
 from collections.abc import Callable
 from functools import partial
@@ -344,6 +345,34 @@ class MeasurementFunctions:
             or not (hasattr(model, "residual") or hasattr(model, "mean")))
         self.angle_mask = np.zeros(self.m, dtype=np.bool_)
         self.angle_mask[list(getattr(model, "angles", ()))] = True
+
+    @classmethod
+    def of(cls, measurement: MeasurementModel | NonlinearMeasurementModel | MeasurementFunctions,
+           n: int, residual: Callable | None = None,
+           mean: Callable | None = None) -> MeasurementFunctions:
+        """The functions of ``measurement``, a model or functions already made, with
+        ``residual`` and ``mean`` in place of its own where given (functions already made
+        kept theirs, and the ones given were not used).
+
+        Examples
+        --------
+        >>> from vistrack.models import Position
+        >>> me = MeasurementFunctions(Position(dim=1, r=0.5), 2)
+        >>> MeasurementFunctions.of(me, 2) is me
+        True
+        >>> flip = MeasurementFunctions.of(me, 2, residual=lambda a, b: b - a)
+        >>> flip.residual(np.array([1.0]), np.array([3.0])), flip.standard
+        (array([2.]), False)
+        """
+        if not isinstance(measurement, MeasurementFunctions):
+            return cls(measurement, n, residual, mean)
+        if residual is None and mean is None:
+            return measurement
+        out = copy.copy(measurement)
+        out.residual = residual or measurement.residual
+        out.mean = mean or measurement.mean
+        out.standard = False
+        return out
 
     def R(self) -> np.ndarray:
         """The noise covariance ``(m, m)``, as a measurement model gives it."""

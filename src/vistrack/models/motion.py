@@ -100,6 +100,10 @@ class MotionModel(Protocol):
 
 
 def _as_dt(dt: float | np.ndarray) -> np.ndarray:
+    if isinstance(dt, (bool, np.bool_)) or getattr(dt, "dtype", None) == np.bool_ or (
+            isinstance(dt, (list, tuple)) and any(isinstance(v, (bool, np.bool_)) for v in dt)):
+        # (True was read as a step of 1)
+        raise TypeError(f"dt must be a number or an array of numbers; got {dt!r}")
     d = as_float_array(dt, "dt", ndim=(0, 1))
     if not np.all(np.isfinite(d)) or np.any(d < 0):
         bad = d[~(np.isfinite(d) & (d >= 0))].ravel()[0]
@@ -488,7 +492,11 @@ class Periodic:
         if self.discretisation == "euler":
             out[..., 0, 0] = 1.0
             out[..., 0, 1] = d
-            out[..., 1, 0] = -(w**2) * d
+            with np.errstate(over="ignore"):  # (w**2 of a Python float raised OverflowError)
+                out[..., 1, 0] = -np.float64(w) * w * d
+            if not np.isfinite(out[..., 1, 0]).all():
+                raise ValueError(f"Periodic's Euler step overflows: omega² dt is past the "
+                                 f"largest float at omega={w}, dt={d.max()}")
             out[..., 1, 1] = 1.0
         else:
             wd = w * d

@@ -79,6 +79,15 @@ def wrap_angle(a: np.ndarray) -> np.ndarray:
     return np.where(w <= -np.pi, w + 2.0 * np.pi, w)
 
 
+def _one_dt(dt: float) -> float:
+    """``dt`` as one finite time step >= 0, or an error naming ``dt`` (a NaN or negative step
+    moved the states backwards or to NaN without a word)."""
+    d = _as_dt(dt)
+    if d.ndim:
+        raise ValueError(f"dt must be one value; got shape {d.shape}")
+    return float(d)
+
+
 def _states(x: ArrayLike, n: int, model: str) -> np.ndarray:
     """``x`` as float states ``(..., n)``, or ``ValueError`` naming ``x`` and the model (a
     state of another size was unpacked into numpy's "not enough values to unpack", or taken
@@ -126,7 +135,10 @@ def numerical_jacobian(fun: Callable[[np.ndarray], np.ndarray], x: np.ndarray,
     array([[ 3.      ,  2.      ],
            [-0.416147,  0.      ]])
     """
-    x = np.asarray(x, dtype=float)
+    x = as_float_array(x, "x")
+    if x.ndim == 0:  # (an IndexError from x.shape[-1])
+        raise ValueError(f"x must be points of shape (..., n), one value as shape (1,); got "
+                         f"the scalar {float(x)!r}")
     n = x.shape[-1]
     h = eps * np.maximum(1.0, np.abs(x))  # (..., n)
     eye = np.eye(n)
@@ -739,7 +751,7 @@ class CoordinatedTurn:
         """
         x = _states(x, 5, "CoordinatedTurn")
         px, py, vx, vy, w = np.moveaxis(x, -1, 0)
-        sa, ca, s, c, _, _ = self._coeffs(w, dt, derivatives=False)
+        sa, ca, s, c, _, _ = self._coeffs(w, _one_dt(dt), derivatives=False)
         return np.stack([px + s * vx - c * vy, py + c * vx + s * vy,
                          ca * vx - sa * vy, sa * vx + ca * vy, w], axis=-1)
 
@@ -774,6 +786,7 @@ class CoordinatedTurn:
         """
         x = _states(x, 5, "CoordinatedTurn")
         _, _, vx, vy, w = np.moveaxis(x, -1, 0)
+        dt = _one_dt(dt)
         sa, ca, s, c, ds, dc = self._coeffs(w, dt)
         J = np.zeros(x.shape[:-1] + (5, 5))
         J[..., 0, 0] = J[..., 1, 1] = J[..., 4, 4] = 1.0
@@ -801,10 +814,7 @@ class CoordinatedTurn:
         >>> CoordinatedTurn(q=0.1, q_turn=0.01).Q(2.0).diagonal().round(3)
         array([0.267, 0.267, 0.2  , 0.2  , 0.02 ])
         """
-        d_arr = _as_dt(dt)
-        if d_arr.ndim:
-            raise ValueError(f"dt must be one value; got shape {d_arr.shape}")
-        d = float(d_arr)
+        d = _one_dt(dt)
         Q = np.zeros((5, 5))
         for i in range(2):
             Q[i, i] = self.q * d**3 / 3
