@@ -153,8 +153,9 @@ def test_generated_kernel_reports_the_first_bad_step(generated):
     H, R = np.eye(2), np.diag([1.0, 0.0])
     ys = np.ones((3, 4, 2))
     ys[:, :2, 1] = np.nan  # the zero-variance component is missing at steps 0 and 1 only
+    ys[0, 2, 1] = np.nan  # ... and at step 2 of series 0, whose S is then positive definite
     P0 = np.broadcast_to(np.diag([1.0, 0.0]), (3, 2, 2))
-    with pytest.raises(ValueError, match="not positive definite at step 2"):
+    with pytest.raises(ValueError, match="not positive definite at step 2 of series 1;"):
         kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=np.zeros(2), P0=P0)
     assert generated
 

@@ -876,3 +876,31 @@ def test_an_unpooled_series_without_a_measurement_is_named():
         em(ys, **kw, pooled=False)
     with pytest.raises(ValueError, match=re.escape("ys has no measurement")):
         em(ys[1], **kw)
+
+
+def test_learn_that_is_no_sequence_is_named():
+    """learn=None was "'NoneType' object is not iterable"."""
+    E = np.eye(1)
+    with pytest.raises(TypeError, match=r"learn must be a sequence of names, some of .*got None"):
+        em(np.ones((10, 1)), F=E, Q=E, H=E, R=E, x0=[0.0], P0=E, learn=None)
+
+
+def test_noise_learned_from_constant_data_is_not_reported_converged():
+    """Constant measurements fit a random walk with no noise at all: the likelihood has no
+    maximum (it grows as Q and R fall). EM ran on until both were subnormal (1e-323) and said
+    it had converged there; it warns and reports the fit not converged. With noise in the
+    data, the same call converges without a word (the oracle: the data's own variance)."""
+    E = np.eye(1)
+    with pytest.warns(RuntimeWarning, match=r"Q fell to zero .* the fit is not converged"):
+        fit = em(np.full((30, 1), 5.0), F=E, Q=E, H=E, R=E, x0=[5.0], P0=E, max_iter=2000)
+    assert not fit.converged
+    assert fit.Q[0, 0] < np.finfo(float).tiny
+    rng = np.random.default_rng(0)
+    walk = 5.0 + np.cumsum(rng.normal(0.0, 1.0, 2000))  # Q = 1
+    ys = (walk + rng.normal(0.0, 2.0, 2000))[:, None]  # R = 4
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fit = em(ys, F=E, Q=E, H=E, R=E, x0=[5.0], P0=E, max_iter=2000)
+    assert fit.converged
+    assert fit.Q[0, 0] == pytest.approx(1.0, rel=0.3)
+    assert fit.R[0, 0] == pytest.approx(4.0, rel=0.15)

@@ -934,3 +934,33 @@ def test_the_step_functions_name_what_they_passed_on_as_nan():
     assert kf.default_prior(ys, scale=0.0)[1].diagonal()[2:].tolist() == [0.0, 0.0]
     with pytest.raises(TypeError, match="scale must be a number"):
         kf.default_prior(ys, scale="a")
+
+
+@pytest.mark.parametrize("B", [3, 40])
+def test_a_batch_names_the_series_whose_innovation_covariance_fails(B):
+    """A batch said "not positive definite at step 0" and left the series to be guessed;
+    it names the series (here the one whose prior leaves a noiseless component exact, so
+    that S = H P0 H' + R has a zero variance there: diag(2, 0))."""
+    P0 = np.broadcast_to(np.eye(2), (B, 2, 2)).copy()
+    P0[B // 2] = np.diag([1.0, 0.0])
+    args = dict(F=np.eye(2), Q=np.eye(2), H=np.eye(2), R=np.diag([1.0, 0.0]),
+                x0=np.zeros(2))
+    with pytest.raises(ValueError, match=rf"not positive definite at step 0 of series {B // 2};"):
+        kalman_filter(np.ones((B, 4, 2)), P0=P0, **args)
+    with pytest.raises(ValueError, match=r"not positive definite at step 0; R must"):
+        kalman_filter(np.ones((4, 2)), P0=P0[B // 2], **args)
+    # the other series alone filter (the oracle of which one fails)
+    kalman_filter(np.ones((4, 2)), P0=P0[0], **args)
+
+
+def test_complex_measurements_and_priors_are_refused():
+    """Complex values were cast to their real parts with numpy's ComplexWarning alone."""
+    E = np.eye(2)
+    args = dict(F=E, Q=E, H=E, R=E, x0=np.zeros(2), P0=E)
+    for name, value in (("ys", np.ones((5, 2)) + 1j), ("x0", np.zeros(2) + 0j),
+                        ("P0", E.astype(complex)), ("F", E.astype(np.complex64))):
+        kw = dict(args, ys=np.ones((5, 2)))
+        kw[name] = value
+        ys = kw.pop("ys")
+        with pytest.raises(TypeError, match=rf"{name} must be real numbers; got complex"):
+            kalman_filter(ys, **kw)

@@ -1290,3 +1290,26 @@ def test_a_residual_given_with_measurement_functions_is_used(update):
     np.testing.assert_array_equal(run(me, residual=_Double()), flipped)
     assert not np.allclose(flipped, run(me))   # (the residual does change the answer)
     np.testing.assert_array_equal(run(me), run(model))
+
+
+def test_ukf_names_an_asymmetric_covariance():
+    """The UKF's square root read g.cov's lower triangle alone, where kf_predict reads the
+    whole matrix: [[1, 0.9], [0, 1]] gave the points of [[1, 0.9], [0.9, 1]]. It is named, on
+    the one-Gaussian (compiled) path and on a batch, as a prior is."""
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1, r=0.5)
+    bad = np.array([[1.0, 0.9], [0.0, 1.0]])
+    for mean, cov in ((np.zeros(2), bad), (np.zeros((3, 2)), np.stack([np.eye(2), bad, bad]))):
+        g = vt.Gaussian(mean, cov)
+        y = np.ones(mean.shape[:-1] + (1,))
+        with pytest.raises(ValueError, match=r"g\.cov must be symmetric; g\.cov\[.*0, 1\] = 0\.9"):
+            ukf_predict(g, cv)
+        with pytest.raises(ValueError, match=r"g\.cov must be symmetric; g\.cov\[.*0, 1\] = 0\.9"):
+            ukf_update(g, y, pos)
+    # symmetric to rounding (1e-12 of the largest entry) is taken, and on a linear model the
+    # UKF's prediction is the Kalman filter's (the oracle)
+    ok = np.array([[1.0, 0.3], [0.3 + 1e-12, 2.0]])
+    g = vt.Gaussian(np.array([0.5, 1.0]), ok)
+    want = vt.filters.kf_predict(g, F=cv.F(1.0), Q=cv.Q(1.0))
+    got = ukf_predict(g, cv)
+    np.testing.assert_allclose(got.mean, want.mean, rtol=1e-9)  # (W0 about -1e6: digits lost)
+    np.testing.assert_allclose(got.cov, want.cov, rtol=1e-9)

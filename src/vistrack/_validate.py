@@ -58,6 +58,10 @@ def as_float_array(value: ArrayLike | None, name: str, *,
     """
     if isinstance(value, np.ma.MaskedArray):
         value = _masked_as_nan(value, name)
+    if getattr(getattr(value, "dtype", None), "kind", None) == "c":
+        # (numpy cast them to their real parts with a ComplexWarning alone)
+        raise TypeError(f"{name} must be real numbers; got complex values "
+                        f"({np.asarray(value).dtype})")
     try:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:

@@ -134,12 +134,31 @@ def _shared_gains(Pp: np.ndarray, H: np.ndarray,
             np.linalg.cholesky(S))
 
 
-def _raise_not_pd(bad_t: int) -> None:
+def _raise_not_pd(bad_t: int, series: int | None = None) -> None:
     if bad_t >= 0:
+        where = f"step {bad_t}" + ("" if series is None else f" of series {series}")
         raise ValueError(
-            f"the innovation covariance H P H' + R is not positive definite at step {bad_t}; "
+            f"the innovation covariance H P H' + R is not positive definite at {where}; "
             "R must be positive definite on the observed components (or P must make S so)"
         )
+
+
+def _failing_series(y: np.ndarray, F: np.ndarray, Q: np.ndarray, H: np.ndarray,
+                    R: np.ndarray, x0: np.ndarray, P0: np.ndarray, bad_t: int) -> int | None:
+    """The first series of a batch whose innovation covariance is not positive definite at
+    step ``bad_t`` (the batch kernels say the step alone), each run alone by the one-series
+    kernel: on the error's path only."""
+    B, T, _ = y.shape
+    n, m = x0.shape[-1], y.shape[-1]
+    for b in range(B):
+        t, _ = _kernels.single_kernel(n, m)(
+            y[b], F, Q, H, R, x0[b % len(x0)], P0[b % len(P0)], np.empty((T, n)),
+            np.empty((1, n, n)), np.empty((1, n)), np.empty((1, n, n)), np.empty((n, n)),
+            False,
+        )
+        if t == bad_t:
+            return b
+    return None
 
 
 def kalman_filter(
@@ -325,7 +344,8 @@ def kalman_filter(
                 y, F_, Q_, H_, R_, x0_, P0_, means, covs, pmeans, pcovs, loglik, last_P,
                 np.empty((0, n, m)), np.empty((0, m, m)), store_covs,
             )
-        _raise_not_pd(bad_t)
+        if bad_t >= 0:  # (the kernels give the step; the series is found by running each alone)
+            _raise_not_pd(bad_t, _failing_series(y, F_, Q_, H_, R_, x0_, P0_, bad_t))
         if not store_covs:
             covs = pcovs = None
     pred_means: np.ndarray | None = pmeans if store_covs else None

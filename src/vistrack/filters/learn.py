@@ -123,7 +123,9 @@ class FitResult:
     iterations : int
         M-steps taken (:func:`em`), or L-BFGS and Newton iterations (:func:`mle`).
     converged : bool
-        :func:`em`: the last iteration changed the log-likelihood by ``tol`` or less;
+        :func:`em`: the last iteration changed the log-likelihood by ``tol`` or less, and
+        no learned ``Q`` or ``R`` fell to zero (constant data, whose likelihood has no
+        maximum: warned);
         :func:`mle`: a Newton step from where L-BFGS stopped would change no parameter by
         more than ``xtol`` (relative).
     stderr : dict of str to float or ndarray
@@ -360,7 +362,11 @@ def _names(learn: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
     """``learn`` as a tuple of names, each one of ``allowed``."""
     if isinstance(learn, str):
         raise ValueError(f"learn must be a sequence of names (e.g. ({learn!r},)), not a string")
-    names = tuple(learn)
+    try:
+        names = tuple(learn)
+    except TypeError:  # (None was "'NoneType' object is not iterable")
+        raise TypeError(f"learn must be a sequence of names, some of {list(allowed)}; got "
+                        f"{learn!r}") from None
     for name in names:
         if name not in allowed:
             raise ValueError(f"learn must name some of {list(allowed)}; got {name!r}")
@@ -751,6 +757,17 @@ def _fit(estep: Any, T: int, p: dict[str, np.ndarray], learn: tuple[str, ...],
             if name in learn:
                 new[name] = _psd((new[name] + np.swapaxes(new[name], -1, -2)) / 2)
         p = new
+    for name in ("Q", "R"):
+        d = np.diagonal(p[name], axis1=-2, axis2=-1)
+        if name in learn and (d < np.finfo(float).tiny).all():
+            # (constant data: EM went on until the variances were subnormal, 1e-323, and
+            # said it had converged there)
+            warnings.warn(f"{label}{name} fell to zero (its largest variance {d.max():.3g}): "
+                          f"the measurements fit the model without that noise, and the "
+                          f"likelihood grows without bound as it falls; the fit is not "
+                          f"converged. Keep {name} fixed, or learn from data with noise",
+                          RuntimeWarning, stacklevel=4)
+            converged = False
     return FitResult(F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"], P0=p["P0"], q=q, r=r,
                     loglik=np.array(lls), iterations=len(lls) - 1, converged=converged)
 

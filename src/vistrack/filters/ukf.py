@@ -173,17 +173,28 @@ def _settled(P: np.ndarray, prior: np.ndarray) -> np.ndarray:
 @kernel
 @njit(cache=True, error_model="numpy")
 def _points_one(x, P, scale, out):
+    """0 with the points in ``out``; 1 where ``P`` has no Cholesky factor; 2 where ``P`` is
+    not symmetric to 1e-8 of its largest entry, as :func:`check_symmetric` judges (its lower
+    triangle alone was read, where the other filters read it whole)."""
     n = x.shape[0]
+    big = 0.0
+    for v in P.ravel():
+        big = max(big, abs(v))
+    tol = 1e-8 * (big if big > 0.0 else 1.0)
+    for i in range(n):
+        for k in range(i):
+            if abs(P[i, k] - P[k, i]) > tol:
+                return 2
     L = np.zeros((n, n))  # (the upper triangle stays zero)
     if not chol_factor(L, scale * P, n):
-        return False
+        return 1
     for k in range(n):
         out[0, k] = x[k]
     for i in range(n):
         for k in range(n):
             out[1 + i, k] = x[k] + L[k, i]
             out[1 + n + i, k] = x[k] - L[k, i]
-    return True
+    return 0
 
 
 @kernel
@@ -346,7 +357,10 @@ class _SigmaPoints:
         n = x.shape[0]
         out = np.empty((2 * n + 1, n))
         scale = float(n + self._lam(n))
-        if not _points_one(x, P, scale, out):  # no Cholesky factor: see _root_semidefinite
+        code = _points_one(x, P, scale, out)
+        if code == 2:
+            check_symmetric(P, name)
+        if code:  # no Cholesky factor: see _root_semidefinite
             Lt = _root_semidefinite(P, scale, name, compiled=False).T
             out[0], out[1:n + 1], out[n + 1:] = x, x + Lt, x - Lt
         return out
@@ -392,6 +406,7 @@ class _SigmaPoints:
 
     def _many(self, x: np.ndarray, P: np.ndarray, name: str) -> np.ndarray:
         n = x.shape[-1]
+        check_symmetric(P, name)  # (LAPACK's factor reads the lower triangle alone)
         L = _sqrt(P, n + self._lam(n), name)
         Lt = np.swapaxes(L, -1, -2)  # row i = column i of L
         return np.concatenate([x[..., None, :], x[..., None, :] + Lt, x[..., None, :] - Lt],
