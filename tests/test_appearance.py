@@ -351,3 +351,13 @@ def test_the_view_of_a_long_thin_box_spans_the_box(w, h):
         box = t.update(bar(k))
     want = [x + (10 if h > w else 0), y + (10 if w > h else 0)]
     assert np.abs(box[:2] - want).max() <= 1.0, (box, want)
+
+
+def test_a_start_below_the_stable_components_floor_is_refused():
+    """sigma_s0 below sigma_min started the stable component under its own floor (the first
+    update then raised it)."""
+    with pytest.raises(ValueError, match=r"sigma_s0 must be at least sigma_min.*0\.01 below 0\.02"):
+        WSLModel((4, 4), sigma_s0=0.01, sigma_min=0.02)
+    m = WSLModel((4, 4), sigma_s0=0.02, sigma_min=0.02)  # equal: the floor itself
+    m.init(np.full((4, 4), 0.5))
+    np.testing.assert_array_equal(m.var_s, np.full((4, 4), 0.02**2))

@@ -796,3 +796,18 @@ def test_a_detection_of_another_height_is_not_associated():
                                                   [0.9]))
         assert (out.ids.tolist() == [1]) is updated, factor
         assert len(trk.ids) == (1 if updated else 2), factor
+
+
+def test_a_nan_height_has_no_level_and_a_cell_beside_minus_inf_keeps_its_score():
+    """level(nan) was level 0, so a NaN height scored on the first level; and a centre on a
+    cell whose neighbour is -inf scored NaN (its zero weight times -inf). The oracle: the
+    cells' own values, and `outside` where no level applies."""
+    grid = np.array([[1.0, 2.0, -np.inf], [3.0, 4.0, 5.0]])
+    cm = ConfidenceMap([50.0, 100.0], [grid, grid], [(0.0, 0.0)] * 2, [10.0, 10.0])
+    assert cm.level([np.nan, 50.0, 100.0]).tolist() == [-1, 0, 1]
+    assert cm.score(0.0, 0.0, np.nan, outside=-7.0) == -7.0
+    # on cell (0, 1), beside the -inf at (0, 2): its own 2; on (1, 2) below it: 5
+    np.testing.assert_array_equal(cm.score([10.0, 20.0, 15.0], [0.0, 10.0, 10.0], 50.0),
+                                  [2.0, 5.0, 4.5])
+    # between the -inf cell and another, a person can be nowhere there: -inf, not NaN
+    assert cm.score(15.0, 0.0, 50.0) == -np.inf

@@ -2299,3 +2299,21 @@ def test_detector_settings_of_no_use_are_named_and_tiny_images_find_nobody():
     # tall image failed in OpenCV's resize)
     for shape, up in (((1, 300, 3), 0.5), ((2, 2), 0.1), ((40, 100, 3), 2.0)):
         assert len(HOGDetector(upscale=up).detect(np.zeros(shape, np.uint8))) == 0
+
+
+def test_a_start_past_the_last_frame_is_warned_of(tmp_path):
+    """VideoReader(start=k) past the end yielded nothing without a word; an image folder
+    and a video each say so (and a start on the last frame reads it)."""
+    for k in range(1, 4):
+        cv2.imwrite(str(tmp_path / f"{k:06d}.png"), np.full((8, 8, 3), 40 * k, np.uint8))
+    with pytest.warns(RuntimeWarning, match=r"no frame from start = 5 on: the folder's images end"):
+        assert list(VideoReader(tmp_path, start=5)) == []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert [f.index for f in VideoReader(tmp_path, start=3)] == [3]
+    video = tmp_path / "clip.mp4"
+    with VideoWriter(video, fps=5) as w:
+        for k in range(3):
+            w.write(np.full((16, 16, 3), 60 * k, np.uint8))
+    with pytest.warns(RuntimeWarning, match=r"no frame from start = 9 on: the video ends before"):
+        assert list(VideoReader(video, start=9)) == []

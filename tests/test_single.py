@@ -1008,3 +1008,13 @@ def test_track_one_refuses_ground_truth_of_other_frames(tmp_path):
     zero = run(own, "d.txt")
     assert zero.returncode == 0 and zero.stdout.splitlines()[-1] == \
         theirs.stdout.splitlines()[-1]
+
+
+def test_read_boxes_names_an_unknown_rule_for_any_file(tmp_path):
+    """rule was checked only where the file held polygons: rule="areaa" on x y w h lines
+    was taken, and failed only on the first polygon file."""
+    f = tmp_path / "boxes.txt"
+    f.write_text("1 2 3 4\n")
+    with pytest.raises(ValueError, match=r"rule must be 'area' or 'minmax'; got 'areaa'"):
+        read_boxes(f, rule="areaa")
+    np.testing.assert_array_equal(read_boxes(f, rule="minmax"), [[1.0, 2.0, 3.0, 4.0]])

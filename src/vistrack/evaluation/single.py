@@ -372,6 +372,8 @@ def _read_box_rows(path: str | Path, rule: str = "area", origin: int | None = No
     if not (origin is None or (isinstance(origin, (int, np.integer))
                                and not isinstance(origin, bool) and origin in (0, 1))):
         raise ValueError(f"origin must be 0, 1 or None (by the file's name); got {origin!r}")
+    if rule not in ("area", "minmax"):  # (checked only where the file held polygons)
+        raise ValueError(f"rule must be 'area' or 'minmax'; got {rule!r}")
     path = Path(path)
     rows: list[list[float]] = []
     last = 0  # the line of rows[-1]

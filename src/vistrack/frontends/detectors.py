@@ -219,6 +219,13 @@ class HOGDetector:
         return Detections.from_xywh(r[keep], 1.0 / (1.0 + np.exp(-w[keep])))
 
 
+def _weighed(w: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """``w s``, 0 where the weight is 0: a centre on a cell beside a cell of -inf (no person
+    there) scored NaN, 0 times -inf."""
+    with np.errstate(invalid="ignore"):
+        return np.where(w == 0, 0.0, w * s)
+
+
 class ConfidenceMap:
     """A detector's continuous confidence over positions and sizes: one grid of scores per
     box height (seed 004, "Tracking based on detector confidence").
@@ -297,17 +304,19 @@ class ConfidenceMap:
         Returns
         -------
         int ndarray
-            The level of each, of ``h``'s shape.
+            The level of each, of ``h``'s shape; -1 for a NaN height, which has none (it was
+            level 0, and scored there).
 
         Examples
         --------
         >>> cmap = ConfidenceMap([50.0, 100.0], [np.zeros((2, 2))] * 2, [(0, 0)] * 2, [8, 8])
-        >>> cmap.level([40, 70, 71, 300]).tolist()
-        [0, 0, 1, 1]
+        >>> cmap.level([40, 70, 71, 300, np.nan]).tolist()
+        [0, 0, 1, 1, -1]
         """
         h = np.asarray(h, float)
-        return np.abs(np.log(np.maximum(h, 1e-6))[..., None]
-                      - np.log(self.heights)).argmin(-1)
+        lev = np.abs(np.log(np.maximum(h, 1e-6))[..., None]
+                     - np.log(self.heights)).argmin(-1)
+        return np.where(np.isnan(h), -1, lev)
 
     def score(self, x: ArrayLike, y: ArrayLike, h: ArrayLike,
               outside: float = -np.inf) -> np.ndarray:
@@ -352,8 +361,9 @@ class ConfidenceMap:
             j0 = np.clip(np.floor(u).astype(int), 0, nx - 2)
             i0 = np.clip(np.floor(v).astype(int), 0, ny - 2)
             fu, fv = u - j0, v - i0
-            val = ((1 - fv) * ((1 - fu) * s[i0, j0] + fu * s[i0, j0 + 1])
-                   + fv * ((1 - fu) * s[i0 + 1, j0] + fu * s[i0 + 1, j0 + 1]))
+            val = (_weighed(1 - fv, _weighed(1 - fu, s[i0, j0]) + _weighed(fu, s[i0, j0 + 1]))
+                   + _weighed(fv, _weighed(1 - fu, s[i0 + 1, j0])
+                              + _weighed(fu, s[i0 + 1, j0 + 1])))
             out[sel] = np.where(ok, val, outside)
         return out
 

@@ -705,6 +705,18 @@ class VideoReader:
             t.join()
 
     def _frames(self) -> Iterator[Frame | _Note]:
+        # the frames, and a note where none lies at or after a start past the first frame
+        # (a start past the end yielded nothing, without a word)
+        read = False
+        for item in self._read_frames():
+            read = read or not isinstance(item, _Note)
+            yield item
+        if not read and self.start > 1:
+            what = "folder's images end" if self._files is not None else "video ends"
+            yield _Note(f"{self.source}: no frame from start = {self.start} on: the {what} "
+                        "before it")
+
+    def _read_frames(self) -> Iterator[Frame | _Note]:
         # frames in order, and the notes of a file that stops early or an image skipped
         last = self.frame_count if self.stop is None else min(self.stop, self.frame_count)
         if self._files is not None:

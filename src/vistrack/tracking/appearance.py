@@ -76,7 +76,8 @@ class WSLModel:
     ------
     ValueError
         If ``shape`` is empty or not positive integers, a scale or ``tau`` is not a finite
-        positive number, or ``m0`` is not three finite positive numbers.
+        positive number, ``sigma_s0`` is below ``sigma_min``, or ``m0`` is not three finite
+        positive numbers.
 
     References
     ----------
@@ -109,6 +110,9 @@ class WSLModel:
             # (a string failed in numpy's isfinite, naming nothing)
             if not np.isfinite(as_number(v, name)) or v <= 0:
                 raise ValueError(f"{name} must be positive; got {v!r}")
+        if sigma_s0 < sigma_min:  # (the stable component started below its own floor)
+            raise ValueError(f"sigma_s0 must be at least sigma_min, the stable component's "
+                             f"smallest standard deviation; got {sigma_s0!r} below {sigma_min!r}")
         try:  # ("a", 1, 1) was numpy's "could not convert string to float: 'a'"
             m0_arr = np.asarray(m0, dtype=float)
             got = m0_arr.tolist()
