@@ -787,3 +787,21 @@ def test_a_start_score_that_changes_nothing_and_a_files_value_are_said(seq, tmp_
     low.write_text("[tracker]\nlow = 0.5\n")
     r = cli(seq, "--out", tmp_path / "c.txt", "--config", low, "--high", "0.4")
     assert r.returncode == 2 and f"--high over {low}: low must be at most high" in r.stderr
+
+
+@pytest.mark.parametrize("value, read", [("-5e-1", -0.5), ("-.25E+1", -2.5), ("-0.5", -0.5),
+                                         ("-2", -2.0)])
+def test_a_negative_threshold_in_exponent_form_is_a_value(value, read, capsys):
+    """`--low -5e-1` was argparse's "expected one argument" (it took -5e-1 for an option:
+    only integers and decimals counted as negative numbers); any form float() reads is a
+    value, as raw scores below 0 need (`--low=-5e-1` worked)."""
+    from vistrack.cli import main
+
+    assert main(["track", "--scores", "raw", "--low", value, "--print-config"]) == 0
+    out = capsys.readouterr().out
+    assert f"\nlow = {read}\n" in out
+    with pytest.raises(SystemExit) as ended:
+        main(["track", "--low", "-x", "--print-config"])
+    assert ended.value.code == 2
+    assert capsys.readouterr().err == ("vistrack track: error: argument --low: expected one "
+                                       "argument\n")

@@ -908,3 +908,20 @@ def test_results_past_a_short_ground_truth_are_said():
     assert sanity_warnings(gt, one) == [
         "1 of the 3 rows of res.txt lie past the last frame of gt.txt (10), on frame 19: "
         "each counts as a false positive (a ground truth of part of the sequence?)"]
+
+
+def test_a_misspelt_column_name_is_raised_once_with_keep_going(tmp_path):
+    """keep_going with a misspelt key of columns failed every pair, one by one, as if each
+    file were at fault; it is the argument's error, raised once before any file is read."""
+    from vistrack.evaluation import evaluate_files
+
+    gt = tmp_path / "gt.txt"
+    gt.write_text("1,1,0,0,10,10,1,1,1\n")
+    pred = tmp_path / "A.csv"
+    pred.write_text("t,id,bb_left,bb_top,bb_width,bb_height\n1,1,0,0,10,10\n")
+    pairs = [("A", gt, pred, None), ("B", gt, pred, None)]
+    with pytest.raises(ValueError, match=r"columns fram=t: 'fram' is not a column vistrack "
+                                         r"reads \(did you mean 'frame'\?\)"):
+        evaluate_files(pairs, keep_going=True, columns={"fram": "t"})
+    res = evaluate_files(pairs, keep_going=True, columns={"frame": "t"})
+    assert res.errors == {} and res["COMBINED"].TP == 2

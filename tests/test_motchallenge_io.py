@@ -505,3 +505,20 @@ def test_a_text_file_after_a_byte_order_mark_names_the_byte_that_is_not_utf8(tmp
     with pytest.raises(ValueError, match=re.escape(
             f"bom.txt is not a text MOTChallenge file (byte {at}: b'\\xf6' is not UTF-8)")):
         read_mot(path)
+
+
+def test_a_text_file_of_semicolons_is_pointed_to_csv(tmp_path):
+    """A CSV file of semicolons named .txt was "expected at least 6 values, got 1" alone;
+    the message says what the semicolons suggest, and the same file named .csv reads."""
+    rows = "frame;id;bb_left;bb_top;bb_width;bb_height;conf\n1;-1;10;20;30;40;0.9\n"
+    (tmp_path / "d.txt").write_text(rows)
+    with pytest.raises(MOTFormatError, match=r"got 1: .* \(values separated by ';': a CSV "
+                                             r"file\? name it \.csv to read it as one\)"):
+        read_mot(tmp_path / "d.txt")
+    (tmp_path / "d.csv").write_text(rows)
+    from vistrack.pipeline import read_detections
+
+    assert read_detections(tmp_path / "d.csv").boxes.tolist() == [[10.0, 20.0, 30.0, 40.0]]
+    (tmp_path / "plain.txt").write_text("1 -1 10 20\n")  # no semicolon: no such hint
+    with pytest.raises(MOTFormatError, match=r"got 4: '1 -1 10 20'$"):
+        read_mot(tmp_path / "plain.txt")

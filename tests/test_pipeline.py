@@ -1917,3 +1917,35 @@ def test_tracks_follow_the_image_s_scale_and_ignore_the_rows_order(tmp_path, ben
         assert len(got.frames) == len(want.frames) > 1000
         assert (tmp_path / f"sh{offline}.txt").read_text() == \
             (tmp_path / f"as{offline}.txt").read_text()
+
+
+def test_a_detections_file_that_ends_long_before_the_video_is_warned_of(tmp_path):
+    """Detections ending at frame 10 of a 40-frame video left frames 11-40 tracked with no
+    detections, without a word. Where the rows a frame before would have given 10 or more
+    over the rest (a Poisson count's chance of none below e^-10) it is said; a sparse file
+    whose tail is short against its rate is not."""
+    import warnings
+
+    import cv2
+
+    from vistrack.pipeline import track_video
+
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k in range(40):
+        cv2.imwrite(str(folder / f"{k + 1:06d}.png"), np.zeros((60, 200, 3), np.uint8))
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{f},-1,{10 + 50 * i + f},20,20,30,0.9,-1,-1,-1\n"
+                           for f in range(1, 11) for i in range(3)))
+    with pytest.warns(UserWarning, match=re.escape(
+            f"{det}: no rows after frame 10, where the video runs to frame 40 (3 rows a frame "
+            "before): frames 11-40 were tracked without detections")):
+        track_video(folder, tmp_path / "a", frontend=f"detections:{det}", annotate=False,
+                    fps=25)
+    # one row a frame to frame 36: 4 frames without, 4 rows expected there: not said
+    det.write_text("".join(f"{f},-1,{10 + f},20,20,30,0.9,-1,-1,-1\n" for f in range(1, 37)))
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        track_video(folder, tmp_path / "b", frontend=f"detections:{det}", annotate=False,
+                    fps=25)
+    assert not any("no rows after" in str(w.message) for w in seen), seen

@@ -79,6 +79,13 @@ class _Parser(argparse.ArgumentParser):
     ``vistrack COMMAND: error: MESSAGE`` and exit status 2, where argparse prints its usage and
     then the error. ``--help`` shows the usage."""
 
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        # a value that is a negative number in any form float() reads, not argparse's
+        # integers and decimals alone: "--low -5e-1" was "expected one argument"
+        self._negative_number_matcher = re.compile(
+            r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-inf(inity)?$", re.IGNORECASE)
+
     def error(self, message: str) -> NoReturn:
         required = "the following arguments are required: "
         if message.startswith(required):  # with the values a missing argument may take

@@ -825,6 +825,23 @@ MAX_FRAMES = 10 ** 8
 30 frames/s): the tracker steps through every frame to its last, and a frame number that is a
 timestamp would keep it going for years."""
 
+def _warn_detections_end(grid: _FileDetections, last: int) -> None:
+    """Warn where a detections file ends before the video's last frame, ``last``, by so many
+    of its detector's frames that the rows it had a frame before would have given 10 or more
+    there: a detector finding rows at that rate (as a Poisson count) finds none over them
+    with a chance below e^-10, so the file is more likely one for a shorter video, or cut
+    short (the frames after it were tracked without a word)."""
+    frames = grid.dets.frames
+    end = int(frames[-1])
+    tail = (last - end) // grid.stride  # the detector's frames after its last row
+    rate = len(frames) / ((end - grid.first) // grid.stride + 1)
+    if tail and rate * tail >= 10:
+        warnings.warn(f"{grid.path}: no rows after frame {end}, where the video runs to frame "
+                      f"{last} ({rate:.3g} rows a frame before): frames {end + 1}-{last} "
+                      "were tracked without detections (a file for a shorter video, or cut "
+                      "short?)", UserWarning, stacklevel=3)
+
+
 class _FileDetections:
     """The ``detections:FILE`` front-end: each frame's rows of a detections file, up to the file's
     last frame (none after it: a video may run past its header's count, or give none); ``stride``
@@ -2616,6 +2633,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                     warnings.warn(f"{label}: {on}, "
                                   f"past the video's last frame ({end}): {what}", UserWarning,
                                   stacklevel=2)
+            if grid is not None and len(grid.dets) and last is not None:
+                _warn_detections_end(grid, last)
             scores = scored[0] if scored else None
             n_tracks = len(rows.identities)
             if isinstance(trk, BoxTracker):

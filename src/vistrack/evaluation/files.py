@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 from .._pool import one_line
 from .._validate import as_whole
-from ..io.motchallenge import MOTTable, read_mot, read_seq_length
+from ..io.motchallenge import MOTTable, check_column_names, read_mot, read_seq_length
 from .mot import (
     BENCHMARKS,
     Matches,
@@ -275,6 +275,8 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
                          f"{benchmark!r}")
     if zero_distance is not None:  # (the same: not one pair's error)
         zero_distance = check_zero_distance(zero_distance)
+    if columns is not None:  # (the same: a misspelt name failed every pair, one by one)
+        columns = check_column_names(columns)
     for k, pair in enumerate(pairs):
         _check_pair(pair, f"pairs[{k}]")
     seen: dict[str, int] = {}

@@ -485,12 +485,7 @@ class MOTTable:
         >>> MOTTable.from_pandas(corners).boxes.tolist()
         [[10.0, 20.0, 10.0, 20.0]]
         """
-        if isinstance(columns, str):  # (dict() of it: "dictionary update sequence element
-            # #0 has length 1; 2 is required")
-            raise TypeError(f"columns must be a dict {{ours: theirs}}, such as {{'frame': "
-                            f"'t'}}; got the text {columns!r} (the command line's --columns "
-                            "OURS=THEIRS,... form)")
-        names = dict(columns or {})
+        names = check_column_names(columns)
         have = set(df.keys())
         where = f" in {path}" if path else ""
 
@@ -512,11 +507,6 @@ class MOTTable:
 
         for ours, theirs in names.items():
             # a name mistyped on either side was ignored: the column then went unread
-            if ours not in _COLUMNS:
-                close = difflib.get_close_matches(str(ours), _COLUMNS, n=1)
-                raise ValueError(f"columns {ours}={theirs}: {ours!r} is not a column vistrack "
-                                 "reads" + (f" (did you mean {close[0]!r}?)" if close else "")
-                                 + f"; those are {', '.join(_COLUMNS)}")
             if theirs not in have:
                 no_header()
                 raise ValueError(f"columns {ours}={theirs}: no column {theirs!r}{where}; "
@@ -757,6 +747,37 @@ _COLUMNS = ("frame", "particle", "id", "bb_left", "bb_top", "bb_width", "bb_heig
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
 
 
+def check_column_names(columns: Any) -> dict[str, str]:
+    """``columns``, ``{ours: theirs}`` names of a CSV or Parquet file's columns, as a dict,
+    each of ours one vistrack reads (the file's own names are checked against the file).
+
+    Examples
+    --------
+    >>> check_column_names({"frame": "t"})
+    {'frame': 't'}
+    >>> check_column_names({"fram": "t"})
+    Traceback (most recent call last):
+    ...
+    ValueError: columns fram=t: 'fram' is not a column vistrack reads (did you mean 'frame'?); \
+those are frame, particle, id, bb_left, bb_top, bb_width, bb_height, x, y, x1, y1, x2, y2, \
+conf, class, visibility
+    """
+    if isinstance(columns, str):  # (dict() of it: "dictionary update sequence element #0
+        # has length 1; 2 is required")
+        raise TypeError(f"columns must be a dict {{ours: theirs}}, such as {{'frame': "
+                        f"'t'}}; got the text {columns!r} (the command line's --columns "
+                        "OURS=THEIRS,... form)")
+    names = dict(columns or {})
+    for ours, theirs in names.items():
+        # a name mistyped was ignored: the column then went unread
+        if ours not in _COLUMNS:
+            close = difflib.get_close_matches(str(ours), _COLUMNS, n=1)
+            raise ValueError(f"columns {ours}={theirs}: {ours!r} is not a column vistrack "
+                             "reads" + (f" (did you mean {close[0]!r}?)" if close else "")
+                             + f"; those are {', '.join(_COLUMNS)}")
+    return names
+
+
 def _text_lines(text: str) -> list[str]:
     r"""``text``'s lines as editors, ``wc -l`` and numpy's reader count them: broken at
     ``\n``, ``\r\n`` or a lone ``\r`` only (``str.splitlines`` also breaks at a form feed,
@@ -816,6 +837,8 @@ def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
         # the line as it is, and what a '#' in it does to the count
         line = repr(raw.strip()) + (" ('#' starts a comment, to the end of the line)"
                                     if "#" in raw else "")
+        if len(cells) < 6 and ";" in raw:  # (a CSV file of semicolons, named .txt)
+            line += " (values separated by ';': a CSV file? name it .csv to read it as one)"
         if len(cells) < 6:
             raise _bad(path, k, len(cells) + 1,
                        f"expected at least 6 values (separated by commas, or by spaces or tabs), "
