@@ -268,6 +268,8 @@ def test_a_job_that_kills_its_worker_fails_alone(tmp_path):
     # largest input, it starts first, with two of them; each takes 2 s)
     assert outcomes["poison"].error == "its worker died 4 times"
     assert outcomes["poison"].attempts == 4
+    # its output folder, made by its dead worker and left empty, is gone (it stayed)
+    assert not outcomes["poison"].out.exists()
     assert sorted(o.attempts for n, o in outcomes.items() if n != "poison") == [1, 2, 2]
     for name in ("good-a", "good-b", "good-c"):
         assert outcomes[name].ok, outcomes[name].error
@@ -1190,3 +1192,29 @@ def test_several_inputs_take_an_out_folder_named_like_a_file_given_with_a_slash(
     assert main(["track", str(bench / "SIM-0"), str(bench / "SIM-1"), "--out", f"{out}/",
                  "--quiet"]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["SIM-0.txt", "SIM-1.txt"]
+
+
+class _DiesAfterMakingItsFolder:
+    """An executor whose worker makes the job's output folder and dies."""
+
+    def submit(self, fn, job):
+        from concurrent.futures import Future
+
+        Path(job.out).mkdir(exist_ok=True)
+        f = Future()
+        f.set_exception(RuntimeError("worker lost"))
+        return f
+
+
+def test_a_failed_jobs_empty_new_folder_is_removed_and_an_old_one_kept(tmp_path):
+    """A job whose worker died left the output folder it had made, empty. The folder this
+    run made is removed; one that was there before the run (an earlier run's) is kept."""
+    from vistrack.batch import Job
+
+    old = tmp_path / "old"
+    old.mkdir()
+    jobs = [Job(tmp_path / "a.mp4", tmp_path / "new", "pixels"), Job(tmp_path / "b.mp4", old,
+                                                                       "pixels")]
+    outcomes = run_jobs(jobs, executor=_DiesAfterMakingItsFolder())
+    assert [o.error for o in outcomes] == ["RuntimeError: worker lost"] * 2
+    assert not (tmp_path / "new").exists() and old.is_dir()

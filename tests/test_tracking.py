@@ -1496,3 +1496,18 @@ def test_joining_many_tracks_takes_memory_in_proportion_to_the_pairs_it_may_join
     apart, joined = smooth(tr, link_gap=0), smooth(tr, link_gap=30)
     assert len(np.unique(apart.ids)) == 2 * people
     assert len(np.unique(joined.ids)) == people
+
+
+def test_a_track_table_refuses_a_time_that_goes_back():
+    """manage() took a frame's time earlier than the last one's: `found` weighed it as no
+    time gone by and a track's last update went back in time, without a word."""
+    from vistrack.tracking.lifecycle import TrackTable
+
+    t = TrackTable(1)
+    t.add(np.zeros((1, 1)), np.ones((1, 1, 1)), 0.0, np.zeros(1, np.int64), np.ones(1),
+          confirmed=True)
+    t.manage(np.array([True]), 1.0, 2, 5.0)
+    with pytest.raises(ValueError, match=r"must not go back: 0\.5 after the last frame's 1\.0"):
+        t.manage(np.array([True]), 0.5, 2, 5.0)
+    assert t.last_time.tolist() == [1.0]  # (checked before the table changed)
+    t.manage(np.array([True]), 1.0, 2, 5.0)  # the same time again is taken

@@ -27,6 +27,7 @@ returning a future): a thread pool, a process pool of its own, or a Dask client'
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 import warnings
@@ -350,6 +351,9 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
     n = len(jobs)
     outcomes: dict[int, Outcome] = {}
     attempts = dict.fromkeys(range(n), 0)
+    # the output folders this run makes: one a failed job leaves empty is removed (a worker
+    # that died left it behind)
+    new = {i for i, job in enumerate(jobs) if not os.path.lexists(job.out)}
 
     def done(i: int, outcome: Outcome) -> None:
         # (an executor's job ran with its paths absolute: said as planned)
@@ -359,6 +363,9 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
             on_done(outcomes[i], len(outcomes), n)
 
     def failed(i: int, error: str) -> None:
+        if i in new:
+            with contextlib.suppress(OSError):  # (not a folder, not empty, or gone)
+                os.rmdir(jobs[i].out)
         done(i, Outcome(jobs[i].input, jobs[i].out, False, error=error))
 
     def stopped() -> bool:

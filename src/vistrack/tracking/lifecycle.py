@@ -265,6 +265,11 @@ class TrackTable:
         # checked before the table changes (a NaN time was taken in, and named by ended only
         # after; confirm_hits NaN kept every track tentative, 0 or -1 was 1)
         time = as_finite(time, "time", what="number of seconds")
+        if self._time is not None and time < self._time:
+            # (an earlier frame's time was taken: found weighed it as no time gone by, and a
+            # track's last update went back)
+            raise ValueError(f"time must not go back: {time} after the last frame's "
+                             f"{self._time}")
         if not is_whole(confirm_hits, 1):
             raise ValueError(f"confirm_hits must be a whole number >= 1; got {confirm_hits!r}")
         # found: this frame weighs the time since the last (a frame passed over, none: its
