@@ -37,8 +37,6 @@ NOT_RUN = {
         "a benchmark: its tables are measurements, times included",
     "cat centre.toml":
         "a benchmark: its tables are measurements, times included",
-    "vistrack track pan.mp4":
-        "a video the section describes, not shipped",
     "vistrack eval --gt-dir ../shared/data/mot17 --pred-dir out/mot17":
         "a results folder made by hand, with a malformed line 12",
 }
