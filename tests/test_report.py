@@ -349,3 +349,29 @@ def test_a_folder_without_its_run_description_is_said(run_dir, tmp_path, capsys)
     assert (f"warning: {moved}: no run.json: the report has no command, counts, warnings or "
             "scores of the run, only its files") in capsys.readouterr().err
     assert "<h2>Scores</h2>" not in (moved / "report.html").read_text()
+
+
+def test_the_folder_of_several_runs_names_them_and_dot_has_a_title(run_dir, tmp_path, capsys,
+                                                                   monkeypatch):
+    """The folder --out-dir took for several inputs (a folder each) said "tracks.txt does
+    not exist: give the folder that vistrack track --out-dir wrote", the very folder given;
+    it names the runs inside. `vistrack report .` without run.json titled the page
+    "vistrack report: " (the name of ".")."""
+    several = tmp_path / "several"
+    for name in ("a", "b"):
+        shutil.copytree(run_dir, several / name)
+    assert main(["report", str(several)]) == 2
+    assert capsys.readouterr().err == (
+        f"vistrack report: error: {several} holds no run of its own, but runs in folders of "
+        f"their own ({several / 'a'}, {several / 'b'}): give one of them\n")
+    shutil.rmtree(several / "b")  # (as `vistrack demo track --out OUT` leaves OUT)
+    assert main(["report", str(several)]) == 2
+    assert capsys.readouterr().err == (
+        f"vistrack report: error: {several} holds no run of its own, but the run in "
+        f"{several / 'a'}: give that folder\n")
+    bare = tmp_path / "bare-dot"
+    bare.mkdir()
+    shutil.copy(run_dir / "tracks.txt", bare / "tracks.txt")
+    monkeypatch.chdir(bare)
+    assert main(["report", "."]) == 0
+    assert "<h1>vistrack report: bare-dot</h1>" in (bare / "report.html").read_text()

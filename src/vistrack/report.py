@@ -215,6 +215,20 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
         and (out_dir / SINK_FILES["csv"]).is_file())
     tracks = out_dir / SINK_FILES["csv" if points else "tracks"]
     if not tracks.is_file():
+        # a run of several inputs (or `vistrack demo track`) writes a folder for each: the
+        # folder given to --out-dir holds them, and "give the folder --out-dir wrote" sent
+        # the user back to it
+        runs = sorted(str(d) for d in out_dir.iterdir() if d.is_dir() and (
+            (d / RUN_INFO).is_file() or (d / SINK_FILES["tracks"]).is_file()
+            or (d / SINK_FILES["csv"]).is_file())) if out_dir.is_dir() else []
+        if runs:
+            inside = ", ".join(runs[:3]) + (f" and {len(runs) - 3} more" if len(runs) > 3
+                                             else "")
+            raise FileNotFoundError(f"{out_dir} holds no run of its own, but "
+                                    + (f"the run in {inside}: give that folder"
+                                       if len(runs) == 1 else
+                                       f"runs in folders of their own ({inside}): give one of "
+                                       "them"))
         raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
                                 "track --out-dir wrote")
     check_output(target, force=force, name="report")
@@ -223,7 +237,7 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
         # missing video or plot is said)
         warnings.warn(f"{out_dir}: no {RUN_INFO}: the report has no command, counts, warnings "
                       "or scores of the run, only its files", RuntimeWarning, stacklevel=2)
-    name = info.get("name") or out_dir.name
+    name = info.get("name") or out_dir.resolve().name  # ("." has no name of its own)
     parts = [f"<h1>vistrack report: {html.escape(name)}</h1>"]
     if info.get("command"):
         parts.append(f"<p>Made by</p><pre>{html.escape(info['command'])}</pre>")
