@@ -870,3 +870,42 @@ def test_clouds_and_priors_a_filter_cannot_use_are_named():
     with pytest.raises(ValueError, match=re.escape("ndim_state must be a whole number >= 1; "
                                                    "got 2.5")):
         ParticleFilter(lambda x, dt, t, rng: x, vt.Position(dim=1), 10, ndim_state=2.5)
+
+
+def test_flags_sizes_methods_and_masks_are_named():
+    """modes="no" and compiled="no" were true; a conflicting ndim_state beside a model was
+    dropped; resample with a list for its method met "unhashable type"; a boolean mask was
+    taken as weights or a bandwidth; a boolean dt as a step of 1 (the models refuse it)."""
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1)
+    ys = np.arange(5.0)[:, None]
+    pf = ParticleFilter(cv, pos, 100, rng=0)
+    with pytest.raises(TypeError, match=r"modes must be True or False"):
+        pf.filter(ys, x0=[0.0, 1.0], P0=np.eye(2), modes="no")
+    with pytest.raises(TypeError, match=r"compiled must be True or False"):
+        ParticleFilter(cv, pos, 10, compiled="no")
+    with pytest.raises(ValueError, match=r"ndim_state is 7, where the motion model's states "
+                                         r"have 2 values"):
+        ParticleFilter(cv, pos, 100, ndim_state=7)
+    assert ParticleFilter(cv, pos, 100, ndim_state=2).ndim_state == 2
+    with pytest.raises(ValueError, match=r"method must be one of .*got \['systematic'\]"):
+        resample([0.5, 0.5], ["systematic"])
+    for call in (lambda: resample([True, False]), lambda: effective_sample_size([True, True]),
+                 lambda: particle_mode(np.zeros((2, 1)), [True, True])):
+        with pytest.raises(TypeError, match=r"weights must be numbers >= 0"):
+            call()
+    with pytest.raises(TypeError, match=r"bandwidth must be one number > 0"):
+        particle_mode(np.zeros((2, 1)), [0.5, 0.5], bandwidth=True)
+    for bad in (True, [True] * 5, np.True_):
+        with pytest.raises(TypeError, match=r"dt must be a number or an array of numbers"):
+            pf.filter(ys, x0=[0.0, 1.0], P0=np.eye(2), dt=bad)
+        with pytest.raises(TypeError, match=r"dt must be a number or an array of numbers"):
+            vt.filters.IMMFilter([vt.KalmanFilter(cv, pos)], [[1.0]]).filter(
+                ys, x0=[0.0, 1.0], P0=np.eye(2), dt=bad)
+        with pytest.raises(TypeError, match=r"dt must be a number or an array of numbers"):
+            vt.simulate.simulate(cv, pos, 3, x0=[0.0, 1.0], dt=bad, rng=0)
+    with pytest.raises(TypeError, match=r"rng must be a numpy Generator, an int seed or None"):
+        ParticleFilter(cv, pos, 10, rng=True)
+    # the same numbers as before for a good call (the oracle: the same seed twice)
+    a = pf.filter(ys, x0=[0.0, 1.0], P0=np.eye(2)).means
+    b = ParticleFilter(cv, pos, 100, rng=0).filter(ys, x0=[0.0, 1.0], P0=np.eye(2)).means
+    np.testing.assert_array_equal(a, b)

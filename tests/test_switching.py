@@ -262,3 +262,32 @@ def test_a_negative_transition_entry_is_named_not_its_rows_sums():
         SwitchingLinearSystem([cv, cv], vt.Position(dim=1), bad)
     with pytest.raises(ValueError, match=re.escape("transition[0, 1] = -0.1")):
         IMMFilter([vt.KalmanFilter(cv, vt.Position(dim=1))] * 2, bad)
+
+
+def test_a_switching_system_names_what_it_cannot_sample():
+    """A NaN x0 without P0 gave NaN states and measurements, with numpy's warning alone; an
+    array dt met numpy's broadcast error; a nonlinear motion or measurement was taken, and
+    failed at sample() with "'CoordinatedTurn' object has no attribute 'F'"; a boolean
+    transition or mode_probs was read as probabilities 1 and 0."""
+    cv = vt.ConstantVelocity(dim=1, q=0.01)
+    s = SwitchingLinearSystem([cv, cv], vt.Position(dim=1), [[0.9, 0.1], [0.1, 0.9]])
+    with pytest.raises(ValueError, match=r"x0 must be finite"):
+        s.sample(3, x0=[np.nan, np.inf], rng=0)
+    with pytest.raises(ValueError, match=r"dt must be one time step, the same for every step"):
+        s.sample(3, x0=[0.0, 1.0], dt=[1.0, 2.0, 1.0], rng=0)
+    with pytest.raises(TypeError, match=r"motions\[0\] must be a linear motion model"):
+        SwitchingLinearSystem([vt.models.CoordinatedTurn(), vt.models.CoordinatedTurn(q=4.0)],
+                              vt.Position(dim=2), np.eye(2))
+    with pytest.raises(TypeError, match=r"measurement must be a linear measurement model"):
+        SwitchingLinearSystem([vt.ConstantVelocity(dim=2)] * 2,
+                              vt.models.RangeBearing(ndim_state=4), np.eye(2))
+    for kw in (dict(transition=[[True, False], [False, True]]),
+               dict(transition=np.eye(2), mode_probs=[True, False])):
+        with pytest.raises(TypeError, match=r"must be probabilities; got"):
+            SwitchingLinearSystem([cv, cv], vt.Position(dim=1), **kw)
+        with pytest.raises(TypeError, match=r"must be probabilities; got"):
+            IMMFilter([vt.KalmanFilter(cv, vt.Position(dim=1))] * 2, **kw)
+    # a good draw is as before: the first state exactly x0, the same seed the same draw
+    zs, xs, ys = s.sample(5, x0=[0.0, 1.0], rng=3)
+    np.testing.assert_array_equal(xs[0], [0.0, 1.0])
+    np.testing.assert_array_equal(s.sample(5, x0=[0.0, 1.0], rng=3)[2], ys)

@@ -80,6 +80,23 @@ def _is_boolean(value: Any) -> bool:
         isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind == "b")
 
 
+def check_not_boolean(value: Any, name: str, what: str = "a number or an array of numbers"
+                      ) -> None:
+    """Raise TypeError where ``value`` is a boolean, an array of them, or a list or tuple
+    holding one: a flag or a mask passed where numbers belong (numpy reads True as 1).
+
+    >>> check_not_boolean([1.0, True], "dt")
+    Traceback (most recent call last):
+    ...
+    TypeError: dt must be a number or an array of numbers; got [1.0, True]
+    """
+    if _is_boolean(value) or getattr(value, "dtype", None) == np.bool_ or (
+            isinstance(value, (list, tuple)) and any(
+                _is_boolean(v) or isinstance(v, (list, tuple)) and any(map(_is_boolean, v))
+                for v in value)):
+        raise TypeError(f"{name} must be {what}; got {value!r:.80}")
+
+
 def is_number(value: Any) -> bool:
     """Whether ``value`` is one real number, Python's or numpy's (``np.float32(0.5)``), and
     not a boolean, a string, None or an array (where ``0 < value < 1`` raised its own
@@ -323,7 +340,7 @@ def as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
     """Normalise ``rng`` (a Generator, a seed or None) to a ``numpy.random.Generator``."""
     if isinstance(rng, np.random.Generator):
         return rng
-    if rng is None or isinstance(rng, (int, np.integer)):
+    if rng is None or isinstance(rng, (int, np.integer)) and not _is_boolean(rng):  # (True: 1)
         return np.random.default_rng(rng)
     raise TypeError(f"rng must be a numpy Generator, an int seed or None; got {type(rng).__name__}")
 

@@ -43,6 +43,7 @@ from .._validate import (
     as_rng,
     check_finite,
     check_has_steps,
+    check_not_boolean,
     check_not_infinite,
     check_prior,
 )
@@ -153,6 +154,8 @@ def _logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
     m = np.where(np.isfinite(m), m, 0.0)
     with np.errstate(divide="ignore"):  # all -inf: log 0 = -inf, reported by the caller
         return np.squeeze(m, axis) + np.log(np.exp(a - m).sum(axis))
+
+
 
 
 class IMMFilter:
@@ -269,6 +272,8 @@ class IMMFilter:
                 # (one without a motion model failed on the attribute, after every check)
                 raise TypeError(f"filters[{k}] must have predict(g, dt, t), update(g, y) and a "
                                 f"motion model (.motion.ndim_state); got {type(f).__name__}")
+        # (a mask of True and False was read as probabilities 1 and 0)
+        check_not_boolean(transition, "transition", "probabilities")
         Pi = as_float_array(transition, "transition", ndim=(2,))
         check_finite(Pi, "transition")
         if Pi.shape != (M, M):
@@ -280,6 +285,7 @@ class IMMFilter:
         if not np.allclose(Pi.sum(1), 1.0, rtol=0.0, atol=1e-9):
             raise ValueError(f"transition must be non-negative with rows summing to 1; row sums "
                              f"are {Pi.sum(1).tolist()}")
+        check_not_boolean(mode_probs, "mode_probs", "probabilities")
         mu = np.full(M, 1.0 / M) if mode_probs is None else as_float_array(
             mode_probs, "mode_probs", ndim=(1,))
         check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)

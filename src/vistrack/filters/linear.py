@@ -17,6 +17,7 @@ from .._validate import (
     as_measurement_series,
     check_has_steps,
     check_matrix_stack,
+    check_not_boolean,
     check_one_step,
     check_psd,
 )
@@ -38,6 +39,7 @@ def dt_steps(dt: ArrayLike, T: int) -> np.ndarray | float:
     values, so that a model that checks its steps (``LinearMotion`` takes 1 alone) sees none
     it would refuse (a 0 the user never gave, or the NaN of ``np.diff(times,
     prepend=np.nan)``)."""
+    check_not_boolean(dt, "dt")  # (True was a step of 1 here, where the models refuse it)
     d = as_float_array(dt, "dt", ndim=(0, 1))
     if d.ndim == 0:
         return float(d)

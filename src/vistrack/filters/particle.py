@@ -37,11 +37,13 @@ from .._prebuilt import Kernel, kernel
 from .._registry import Registry
 from .._validate import (
     as_finite,
+    as_flag,
     as_float_array,
     as_rng,
     as_whole,
     check_finite,
     check_has_steps,
+    check_not_boolean,
     check_not_infinite,
     check_prior,
 )
@@ -230,6 +232,7 @@ need not sum to 1 (any positive scale)."""
 
 
 def _check_weights(weights: ArrayLike) -> np.ndarray:
+    check_not_boolean(weights, "weights", "numbers >= 0")  # (a mask was taken as weights)
     w = as_float_array(weights, "weights", ndim=(1, 2))
     if w.shape[-1] == 0:
         raise ValueError("weights must not be empty")
@@ -306,7 +309,7 @@ def resample(weights: ArrayLike, method: str = "systematic", *, n: int | None = 
     array([[0, 1],
            [1, 1]])
     """
-    if method not in RESAMPLERS:
+    if not isinstance(method, str) or method not in RESAMPLERS:  # (a list: "unhashable type")
         raise ValueError(f"method must be one of {sorted(RESAMPLERS)}; got {method!r}")
     w = _check_weights(weights)
     n = w.shape[-1] if n is None else as_whole(n, "n", 1)
@@ -348,6 +351,7 @@ def effective_sample_size(weights: ArrayLike) -> float:
     >>> effective_sample_size([3.0, 1.0])  # the same as (0.75, 0.25)
     1.6
     """
+    check_not_boolean(weights, "weights", "numbers >= 0")
     w = as_float_array(weights, "weights", ndim=(1,))
     if w.size == 0:
         raise ValueError("weights is empty: no particles")
@@ -385,6 +389,7 @@ def _ess(w: np.ndarray) -> float:
 def _particles_and_weights(particles: ArrayLike,
                            weights: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     x = as_float_array(particles, "particles", ndim=(2,))
+    check_not_boolean(weights, "weights", "numbers >= 0")
     w = as_float_array(weights, "weights", ndim=(1,))
     if w.shape != x.shape[:1]:
         raise ValueError(f"weights must have shape ({x.shape[0]},), one per particle (row of "
@@ -557,6 +562,7 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
         neff = _ess(w)
         h = sd * (4.0 / ((n + 2) * neff)) ** (1.0 / (n + 4))
     else:
+        check_not_boolean(bandwidth, "bandwidth", "one number > 0 or one per dimension")
         hb = as_float_array(bandwidth, "bandwidth", ndim=(0, 1))
         if hb.size not in (1, n):
             raise ValueError(f"bandwidth must be a number or ({n},), one per dimension; got "
@@ -1024,8 +1030,13 @@ class ParticleFilter:
             n_particles, resampling, ess_threshold)
         self.resampling, self.rng = resampling, as_rng(rng)
         self._user_motion = False  # a propagate callable, whose output is checked each step
+        compiled = as_flag(compiled, "compiled")  # ("no" was true)
         if hasattr(motion, "Q"):
             mo = MotionFunctions(cast(MotionModel | NonlinearMotionModel, motion))
+            if ndim_state is not None and as_whole(ndim_state, "ndim_state", 1) != mo.n:
+                # (dropped without a word: the model's own size was used)
+                raise ValueError(f"ndim_state is {ndim_state}, where the motion model's states "
+                                 f"have {mo.n} values: give it only with a callable motion")
             self.ndim_state = mo.n
             self._propagate = self._model_propagate(mo)
         elif callable(motion):
@@ -1143,6 +1154,7 @@ class ParticleFilter:
         >>> exact.means[:, 0].round(2), bool(np.abs(res.means - exact.means).max() < 0.1)
         (array([0.  , 1.06, 2.1 , 2.94, 4.09]), True)
         """
+        modes = as_flag(modes, "modes")  # ("no" was true: the modes were searched)
         ys = as_float_array(ys, "ys", ndim=(2,))
         check_has_steps(ys)
         if self._m is not None and ys.shape[1] != self._m:  # both paths, before any step
@@ -1151,11 +1163,14 @@ class ParticleFilter:
         check_not_infinite(ys, "ys")  # every particle's likelihood 0: not a lost target
         T = ys.shape[0]
         n, N, rng = self.ndim_state, self.n_particles, self.rng
+        # checked before the first particles are drawn (a bad dt used up the generator's
+        # draws, and the next call's particles were other ones)
+        dts, ts = step_times(dt, times, T)
         if self._fused is not None and not modes:
             x = self._initial(particles, x0, P0)
             return self._filter_fused(ys, x, dt, times)
         x = self._initial(particles, x0, P0)
-        dts, times = step_times(dt, times, T)
+        times = ts
         logw = np.full(N, -math.log(N))
         means, covs = np.empty((T, n)), np.empty((T, n, n))
         mode_arr = np.empty((T, n)) if modes else None

@@ -22,7 +22,14 @@ from typing import Literal, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_number, check_matrix_stack, check_psd, is_whole
+from .._validate import (
+    as_float_array,
+    as_number,
+    check_matrix_stack,
+    check_not_boolean,
+    check_psd,
+    is_whole,
+)
 
 __all__ = [
     "MotionModel",
@@ -100,10 +107,7 @@ class MotionModel(Protocol):
 
 
 def _as_dt(dt: float | np.ndarray) -> np.ndarray:
-    if isinstance(dt, (bool, np.bool_)) or getattr(dt, "dtype", None) == np.bool_ or (
-            isinstance(dt, (list, tuple)) and any(isinstance(v, (bool, np.bool_)) for v in dt)):
-        # (True was read as a step of 1)
-        raise TypeError(f"dt must be a number or an array of numbers; got {dt!r}")
+    check_not_boolean(dt, "dt")  # (True was read as a step of 1)
     d = as_float_array(dt, "dt", ndim=(0, 1))
     if not np.all(np.isfinite(d)) or np.any(d < 0):
         bad = d[~(np.isfinite(d) & (d >= 0))].ravel()[0]

@@ -20,12 +20,21 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_rng, as_whole, check_finite, check_prior
+from .._validate import (
+    as_float_array,
+    as_rng,
+    as_whole,
+    check_finite,
+    check_not_boolean,
+    check_prior,
+)
 from .adapters import psd_sqrt
 from .measurement import MeasurementModel
 from .motion import MotionModel
 
 __all__ = ["SwitchingLinearSystem"]
+
+
 
 
 class SwitchingLinearSystem:
@@ -69,6 +78,9 @@ class SwitchingLinearSystem:
         the measurement's ``H`` does not take the motions' states, ``transition`` is not a finite
         non-negative ``(k, k)`` matrix whose rows sum to one, or ``mode_probs`` is not ``k``
         finite non-negative numbers summing to one (a NaN or infinite entry is named).
+    TypeError
+        If a motion is not a linear motion model (``F``, ``Q``) or the measurement not a
+        linear measurement model (``H``, ``R``).
 
     References
     ----------
@@ -94,6 +106,16 @@ class SwitchingLinearSystem:
         k = len(self.motions)
         if k < 1:
             raise ValueError("motions must hold at least one model")
+        # linear models alone: a nonlinear one was taken, and failed at sample() or in the
+        # filters with "'CoordinatedTurn' object has no attribute 'F'"
+        for i, m in enumerate(self.motions):
+            if not (callable(getattr(m, "F", None)) and callable(getattr(m, "Q", None))):
+                raise TypeError(f"motions[{i}] must be a linear motion model, with F(dt) and "
+                                f"Q(dt); got {type(m).__name__}")
+        if not (callable(getattr(measurement, "H", None))
+                and callable(getattr(measurement, "R", None))):
+            raise TypeError(f"measurement must be a linear measurement model, with H(n) and R(); "
+                            f"got {type(measurement).__name__}")
         sizes = {int(m.ndim_state) for m in self.motions}
         if len(sizes) != 1:
             raise ValueError(f"motions must share one state size; got sizes {sorted(sizes)}")
@@ -111,6 +133,8 @@ class SwitchingLinearSystem:
             raise ValueError(f"measurement must measure states of size {self.ndim_state}, as "
                              f"the motions give them; its H is {H.shape}")
         self.measurement = measurement
+        # (a mask of True and False was read as probabilities 1 and 0)
+        check_not_boolean(transition, "transition", "probabilities")
         Pi = as_float_array(transition, "transition", ndim=(2,))
         check_finite(Pi, "transition")
         if Pi.shape == (k, k) and np.any(Pi < 0):
@@ -121,6 +145,7 @@ class SwitchingLinearSystem:
             raise ValueError(f"transition must be a ({k}, {k}) non-negative matrix whose rows sum "
                              f"to 1; got shape {Pi.shape} and row sums {Pi.sum(1).tolist()}")
         self.transition = Pi
+        check_not_boolean(mode_probs, "mode_probs", "probabilities")
         mu = np.full(k, 1.0 / k) if mode_probs is None else as_float_array(
             mode_probs, "mode_probs", ndim=(1,))
         check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)
@@ -166,7 +191,8 @@ class SwitchingLinearSystem:
         Raises
         ------
         ValueError
-            If ``x0`` does not have shape ``(n,)``.
+            If ``x0`` does not have shape ``(n,)`` or is not finite, or ``dt`` is not one
+            number.
 
         Examples
         --------
@@ -185,6 +211,10 @@ class SwitchingLinearSystem:
         x = as_float_array(x0, "x0", ndim=(1,)).copy()
         if x.shape != (n,):
             raise ValueError(f"x0 must have shape ({n},); got {x.shape}")
+        check_finite(x, "x0")  # (without P0, NaN states and measurements, unsaid)
+        if np.ndim(dt) != 0:  # (a stack of F met numpy's broadcast error)
+            raise ValueError(f"dt must be one time step, the same for every step; got shape "
+                             f"{np.shape(dt)}")
         # noise drawn by the principal roots, the same on every machine (psd_sqrt)
         if P0 is not None:
             x, P0_ = check_prior(x, P0, n, batch=False)  # shape, finite, semi-definite
