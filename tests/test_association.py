@@ -322,8 +322,11 @@ def test_iou_pairs_with_a_box_beyond_any_image():
     near = np.c_[lo, lo + rng.uniform(20, 60, (40, 2))]
     for far in (1e15, 1e20, 1e100, -1e307, 1e307):
         box = np.array([[far, 10.0, far + 30, 60.0]])
+        # the same far box on the other side of x = 0 (y as it is: boxes whose far corner
+        # lies before the near one are refused)
+        mirrored = np.c_[-box[:, 2], box[:, 1], -box[:, 0], box[:, 3]]
         for a, b in ((near, np.r_[near, box]), (np.r_[near, box], near),
-                     (np.r_[box, near], np.r_[near, box, -box[:, [2, 1, 0, 3]]])):
+                     (np.r_[box, near], np.r_[near, box, mirrored])):
             r, c, v = iou_pairs(a, b, 0.1)
             with np.errstate(invalid="ignore"):
                 dense = iou(a, b)
@@ -596,3 +599,61 @@ def test_boxes_and_detections_that_cannot_be_measured_are_named():
         mahalanobis_pairs([[0.0, 0.0]], S, [[np.nan, 0.0], [1.0, 0.0]], threshold=4.0)
     with pytest.raises(ValueError, match=re.escape("scores must be numbers; scores[1] is NaN")):
         non_maximum([[0, 0, 10, 10], [1, 0, 11, 10]], [0.8, np.nan])
+
+
+def test_inverted_boxes_and_a_bad_min_iou_are_named_by_every_box_function():
+    """A box whose far corner lies before its near one overlapped nothing, itself included
+    (IoU 0, and two such boxes, the same, both survived non_maximum), as giou refused;
+    min_iou NaN gave no pair and turned non_maximum off, True was 1."""
+    from vistrack.association import iou_pairs, non_maximum, overlapping_pairs
+
+    flipped = [[2.0, 2.0, 0.0, 0.0]]
+    for call in (lambda: iou(flipped, flipped), lambda: paired_iou(flipped, flipped),
+                 lambda: iou_pairs(flipped, flipped), lambda: overlapping_pairs(flipped),
+                 lambda: non_maximum(flipped * 2, [1.0, 2.0]), lambda: giou(flipped, flipped)):
+        with pytest.raises(ValueError, match=r"\[0\] = \[2\.0, 2\.0, 0\.0, 0\.0\] is not a box "
+                                             r"x0, y0, x1, y1 with x0 <= x1"):
+            call()
+    box = [[0.0, 0.0, 2.0, 2.0]]
+    for bad in (np.nan, np.inf):
+        with pytest.raises(ValueError, match=r"min_iou must be a finite number"):
+            iou_pairs(box, box, bad)
+        with pytest.raises(ValueError, match=r"min_iou must be a finite number"):
+            non_maximum(box * 2, [1.0, 2.0], min_iou=bad)
+    with pytest.raises(TypeError, match=r"min_iou must be a number; got True"):
+        iou_pairs(box, box, True)
+    # a box of no size is still a box; identical boxes overlap fully (the oracle: IoU 1)
+    assert iou([[1.0, 1.0, 1.0, 3.0]], box).tolist() == [[0.0]]
+    assert non_maximum(box * 2, [1.0, 2.0]).tolist() == [False, True]
+
+
+def test_costs_gates_and_indices_are_numbers_as_given():
+    """Complex costs and squared distances lost their imaginary parts with numpy's warning
+    alone; booleans were costs 1 and 0; gnn_sparse cut an index of 0.7 to 0 and took True
+    for 1; a gate entry of None met an AttributeError from the check; components() took a
+    NaN in its mask for True."""
+    from vistrack.association import gnn_sparse, lsa
+
+    for call in (lambda: gnn(np.array([[1 + 5j, 2.0]])), lambda: lsa(np.array([[1 + 5j, 2.0]])),
+                 lambda: chi2_gate(np.array([[1 + 3j]]), 2),
+                 lambda: mahalanobis(np.zeros((1, 2)), np.eye(2)[None],
+                                     np.array([[1j, 0.0]]))):
+        with pytest.raises(TypeError, match=r"must be real numbers; got complex"):
+            call()
+    for call in (lambda: gnn([[True, False]]), lambda: lsa([[True, False]]),
+                 lambda: chi2_gate([[True, False]], 2)):
+        with pytest.raises(TypeError, match=r"must be (numbers|squared distances)"):
+            call()
+    with pytest.raises(ValueError, match=r"rows must be whole numbers, indices; got \[0\.7\]"):
+        gnn_sparse([0.7], [0], [1.0], (1, 1))
+    with pytest.raises(ValueError, match=r"rows must be whole numbers, indices; got \[True\]"):
+        gnn_sparse([True], [0], [1.0], (2, 1))
+    with pytest.raises(ValueError, match=r"shape must be two whole numbers >= 0.*got 3"):
+        gnn_sparse([0], [0], [1.0], 3)
+    r, c = gnn_sparse([1.0, 0.0], [0, 0], [1.0, 2.0], (2, 1))  # whole floats are indices
+    assert (r.tolist(), c.tolist()) == ([1], [0])
+    with pytest.raises(ValueError, match=r"gate must be True/False \(or 1/0\) for each pair; "
+                                         r"gate\[0, 0\] is None"):
+        gnn(np.ones((1, 2)), [[None, 1]])
+    with pytest.raises(ValueError, match=r"gate\[0, 1\] is nan"):
+        components(np.array([[1.0, np.nan]]))

@@ -851,3 +851,26 @@ def test_pda_update_refuses_an_innovation_covariance_singular_to_rounding():
         got = pda_update(g, z, np.eye(2), R, [[1.0]], [0.0])
         want = kf_update(g, z, np.eye(2), R)
         np.testing.assert_allclose(got.mean, want.mean, rtol=1e-6, atol=1e-12)
+
+
+def test_probabilities_that_are_not_numbers_are_named():
+    """A boolean p_detect, clutter_density or p_gate was taken as 1 (a clutter density of 1
+    among them), an existence of [True] as 1; a string met "'<' not supported" and an array
+    numpy's "truth value ... is ambiguous", naming neither."""
+    from vistrack.association import ipda_weights
+
+    L, G = np.array([[0.5]]), np.array([[True]])
+    for kw in ("p_detect", "clutter_density", "p_gate"):
+        for bad in (True, "0.9", np.array([0.9, 0.5])):
+            with pytest.raises(TypeError, match=rf"{kw} must be a number; got"):
+                pda_weights(L, G, **{kw: bad})
+    with pytest.raises(TypeError, match=r"existence must be probabilities; got \[True\]"):
+        ipda_weights(L, G, [True])
+    with pytest.raises(TypeError, match=r"lik must be real numbers; got complex"):
+        pda_weights(L + 1j, G)
+    # numbers of other types are numbers: the same weights as floats (the oracle)
+    from fractions import Fraction
+
+    b, b0 = pda_weights(L, G, p_detect=Fraction(9, 10), clutter_density=np.float32(0.5))
+    b_, b0_ = pda_weights(L, G, p_detect=0.9, clutter_density=0.5)
+    np.testing.assert_allclose(b, b_, rtol=1e-7)

@@ -486,3 +486,18 @@ def test_gnn_ranks_the_pairs_it_takes_past_the_gate_by_their_likelihood():
     out = [tr.step(f, Detections(points=[p])) for f, p in enumerate(([55.0, 0], [0.0, 0],
                                                                       [25.0, 0]), 1)]
     assert [o.ids.tolist() for o in out] == [[1], [2], [2]]
+
+
+def test_a_gate_probability_of_another_number_type_is_taken():
+    """p_gate=np.array(0.5) or Fraction(1, 2) passed the tracker's own check, and then
+    chi2_threshold refused it naming "p", an argument the user never gave; the gate is the
+    same as for 0.5 (the oracle: scipy's chi-square quantile)."""
+    from fractions import Fraction
+
+    from scipy.stats import chi2
+
+    from vistrack.tracking import PointTracker
+
+    for p in (np.array(0.5), Fraction(1, 2), np.float32(0.5)):
+        t = PointTracker("pda", p_gate=p)
+        assert t.threshold == pytest.approx(chi2.ppf(0.5, t.m), rel=1e-12)

@@ -23,11 +23,12 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._jit import njit
 from .._prebuilt import kernel
 from .._registry import Registry
-from .._validate import is_real, is_whole
+from .._validate import as_float_array, check_not_boolean, is_real, is_whole
 
 __all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_pairs_limited", "gnn_sparse",
            "greedy", "lsa", "lsa_kernel", "nearest_neighbour", "components"]
@@ -36,14 +37,23 @@ _EMPTY = (np.zeros(0, np.int64), np.zeros(0, np.int64))
 
 
 def _check(cost: np.ndarray, gate: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    cost = np.asarray(cost, dtype=float)
+    check_not_boolean(cost, "cost", "numbers")  # (True and False were costs 1 and 0)
+    cost = as_float_array(cost, "cost")  # (complex costs lost their imaginary parts)
     if cost.ndim != 2:
         raise ValueError(f"cost must be 2-D (tracks, detections); got shape {cost.shape}")
     if gate is None:
         return cost, np.isfinite(cost)
+    gate = _as_mask(gate)
+    if gate.shape != cost.shape:  # before combining: (1, D) would broadcast without a word
+        raise ValueError(f"gate must have the shape of cost {cost.shape}; got {gate.shape}")
+    return cost, gate & np.isfinite(cost)
+
+
+def _as_mask(gate: ArrayLike) -> np.ndarray:
+    """``gate`` as booleans, each entry True/False or 1/0 (a NaN or 0.2 was cast to True: a
+    pair allowed that was meant not to be)."""
     given = np.asarray(gate)
     if given.dtype != bool:
-        # (a NaN or 0.2 was cast to True: a pair allowed that was meant not to be)
         flat = given.reshape(-1)
         try:
             odd = np.flatnonzero((flat != 0) & (flat != 1))
@@ -51,12 +61,10 @@ def _check(cost: np.ndarray, gate: np.ndarray | None) -> tuple[np.ndarray, np.nd
             odd = np.zeros(1, np.int64)
         if odd.size:
             at = tuple(int(v) for v in np.unravel_index(odd[0], given.shape))
+            v = flat[odd[0]]  # (None has no .item(): an AttributeError from this check)
             raise ValueError(f"gate must be True/False (or 1/0) for each pair; gate"
-                             f"{list(at)} is {flat[odd[0]].item()!r}")
-    gate = given.astype(bool)
-    if gate.shape != cost.shape:  # before combining: (1, D) would broadcast without a word
-        raise ValueError(f"gate must have the shape of cost {cost.shape}; got {gate.shape}")
-    return cost, gate & np.isfinite(cost)
+                             f"{list(at)} is {v.item() if hasattr(v, 'item') else v!r}")
+    return given.astype(bool)
 
 
 def _check_limit(limit: float | None) -> None:
@@ -91,7 +99,7 @@ def components(gate: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
     >>> k, tl.tolist(), dl.tolist()     # {t0, t1, d0}, {t2, d2}, {d1}
     (3, [0, 0, 1], [0, 2, 1])
     """
-    gate = np.asarray(gate, dtype=bool)  # array_like, as documented (a list had no shape)
+    gate = _as_mask(gate)  # array_like, as documented (a list had no shape; NaN was True)
     if gate.ndim != 2:
         raise ValueError(f"gate must be a 2-D mask, tracks by detections; got shape "
                          f"{gate.shape}")
@@ -233,7 +241,8 @@ def lsa(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     >>> r.tolist(), c.tolist()
     ([0, 1], [1, 0])
     """
-    arr = np.asarray(cost, dtype=np.float64)
+    check_not_boolean(cost, "cost", "numbers")  # (True and False were costs 1 and 0)
+    arr = as_float_array(cost, "cost")  # (complex costs lost their imaginary parts)
     if arr.ndim != 2:
         raise ValueError(f"cost must be a 2-D matrix; got shape {arr.shape}")
     arr = np.ascontiguousarray(arr)
@@ -542,8 +551,20 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
     >>> r.tolist(), c.tolist()
     ([0, 1], [1, 0])
     """
+    for name, idx in (("rows", rows), ("cols", cols)):
+        # (0.7 was cut to 0, True was 1, NaN met "cannot convert float NaN to integer")
+        a = np.asarray(idx)
+        if a.dtype.kind not in "iu" and not (a.dtype.kind == "f" and a.size == 0):
+            whole = a.dtype.kind == "f" and bool(np.all(np.isfinite(a) & (a == np.round(a))))
+            if not whole:
+                raise ValueError(f"{name} must be whole numbers, indices; got "
+                                 f"{a.ravel()[:5].tolist()}{' ...' if a.size > 5 else ''}")
     rows, cols = np.ascontiguousarray(rows, np.int64), np.ascontiguousarray(cols, np.int64)
-    cost = np.ascontiguousarray(cost, dtype=float)
+    check_not_boolean(cost, "cost", "numbers")
+    cost = np.ascontiguousarray(as_float_array(cost, "cost"))
+    if isinstance(shape, (int, np.integer)) or not hasattr(shape, "__len__"):
+        raise ValueError(f"shape must be two whole numbers >= 0 (tracks, detections); got "
+                         f"{shape!r}")
     if len(shape) != 2 or not all(is_whole(x, 0) for x in shape):  # (2.7 was cut to 2)
         raise ValueError(f"shape must be two whole numbers >= 0 (tracks, detections); got "
                          f"{tuple(shape)!r}")

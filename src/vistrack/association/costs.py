@@ -16,14 +16,14 @@ from numpy.typing import ArrayLike
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import check_symmetric
+from .._validate import as_finite, as_float_array, check_symmetric
 
 __all__ = ["iou", "paired_iou", "iou_pairs", "iou_pairs_same_class", "overlapping_pairs",
            "non_maximum", "giou", "euclidean", "mahalanobis"]
 
 
 def _boxes(b: ArrayLike, name: str) -> np.ndarray:
-    a = np.asarray(b, dtype=float)
+    a = as_float_array(b, name)  # (complex boxes lost their imaginary parts)
     # none: (0, 4), or a bare [] (a (3, 0) array was taken for none, its 3 rows dropped)
     if a.size == 0 and (a.ndim == 1 or (a.ndim == 2 and (len(a) == 0 or a.shape[1] == 4))):
         return a.reshape(0, 4)
@@ -32,6 +32,13 @@ def _boxes(b: ArrayLike, name: str) -> np.ndarray:
     if not np.isfinite(a).all():  # (a NaN box overlapped nothing: IoU 0, GIoU 0, unsaid)
         k = int(np.flatnonzero(~np.isfinite(a).all(axis=1))[0])
         raise ValueError(f"{name} must be finite boxes; {name}[{k}] = {a[k].tolist()}")
+    # (a far corner before the near one overlapped nothing, itself included: IoU 0, and two
+    # such boxes, the same, both survived non_maximum)
+    inverted = (a[:, 2] < a[:, 0]) | (a[:, 3] < a[:, 1])
+    if inverted.any():
+        k = int(np.flatnonzero(inverted)[0])
+        raise ValueError(f"{name}[{k}] = {a[k].tolist()} is not a box x0, y0, x1, y1 with "
+                         "x0 <= x1 and y0 <= y1")
     return a
 
 
@@ -154,12 +161,6 @@ def giou(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     [[-0.3333333333333333]]
     """
     a, b = _boxes(a, "a"), _boxes(b, "b")
-    for name, x in (("a", a), ("b", b)):
-        inverted = (x[:, 2] < x[:, 0]) | (x[:, 3] < x[:, 1])
-        if inverted.any():
-            k = int(np.flatnonzero(inverted)[0])
-            raise ValueError(f"{name}[{k}] = {x[k].tolist()} is not a box x0, y0, x1, y1 with "
-                             "x0 <= x1 and y0 <= y1")
     inter, union = _overlap(a[:, None], b[None, :])
     cw = np.maximum(a[:, None, 2], b[None, :, 2]) - np.minimum(a[:, None, 0], b[None, :, 0])
     ch = np.maximum(a[:, None, 3], b[None, :, 3]) - np.minimum(a[:, None, 1], b[None, :, 1])
@@ -205,9 +206,10 @@ def euclidean(a: ArrayLike, b: ArrayLike) -> np.ndarray:
 def _innovations(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, z_name: str = "z"
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     # predicted measurements (T, m), innovation covariances (T, m, m), detections (D, m)
-    zp = np.atleast_2d(np.asarray(z_pred, dtype=float))
-    S = np.asarray(S, dtype=float)
-    z = np.atleast_2d(np.asarray(z, dtype=float))
+    # (complex values lost their imaginary parts)
+    zp = np.atleast_2d(as_float_array(z_pred, "z_pred"))
+    S = as_float_array(S, "S")
+    z = np.atleast_2d(as_float_array(z, z_name))
     if zp.ndim != 2:  # (Python's "too many values to unpack")
         raise ValueError(f"z_pred must have shape (T, m); got {zp.shape}")
     T, m = zp.shape
@@ -535,11 +537,13 @@ def iou_pairs(a: ArrayLike, b: ArrayLike,
     ([0], [0], [0.333])
     """
     a, b = _boxes(a, "a"), _boxes(b, "b")
+    # (NaN gave no pair, and turned non_maximum off; True was 1; "0.1" was taken)
+    min_iou = as_finite(min_iou, "min_iou")
     if len(a) == 0 or len(b) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
     # (its finiteness flag is for compiled callers: _boxes has named a box that is not)
     rows, cols, vals, _ = _grid_pairs_py(np.ascontiguousarray(a), np.ascontiguousarray(b),
-                                         float(min_iou))
+                                         min_iou)
     return rows, cols, vals
 
 

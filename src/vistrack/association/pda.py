@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._jit import njit
-from .._validate import as_whole
+from .._validate import as_float_array, as_number, as_whole, check_not_boolean
 from .costs import _innovations, cholesky_innovations
 
 __all__ = ["pda_weights", "jpda_weights", "ipda_weights", "jipda_weights", "likelihoods"]
@@ -98,7 +98,8 @@ def _lik_gate(lik: ArrayLike, gate: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     must be a finite number >= 0 (a NaN detection's is NaN: outside every gate that
     :func:`~vistrack.association.chi2_gate` draws, refused inside one). The pairs of
     likelihood 0 are taken out of the gate: no event may hold them."""
-    lik = np.asarray(lik, dtype=float)
+    check_not_boolean(lik, "lik", "likelihoods, numbers >= 0")
+    lik = as_float_array(lik, "lik")  # (complex ones lost their imaginary parts)
     if lik.ndim != 2:
         raise ValueError(f"lik must have shape (T, D), tracks by detections; got shape "
                          f"{lik.shape}")
@@ -122,7 +123,12 @@ def _lik_gate(lik: ArrayLike, gate: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     return lik, gate & (lik > 0)
 
 
-def _check(p_detect: float, clutter_density: float, p_gate: float) -> None:
+def _check(p_detect: float, clutter_density: float, p_gate: float
+           ) -> tuple[float, float, float]:
+    """The three as floats, each checked (a boolean was taken as 1, a clutter density of
+    1 among them; a string or an array met Python's or numpy's error, naming none)."""
+    p_detect, clutter_density, p_gate = (as_number(v, k) for v, k in (
+        (p_detect, "p_detect"), (clutter_density, "clutter_density"), (p_gate, "p_gate")))
     if not 0.0 < p_detect <= 1.0:
         raise ValueError(f"p_detect must be in (0, 1]; got {p_detect}")
     if not 0 < clutter_density < math.inf:
@@ -131,6 +137,7 @@ def _check(p_detect: float, clutter_density: float, p_gate: float) -> None:
                          f"got {clutter_density}")
     if not 0.0 < p_gate <= 1.0:
         raise ValueError(f"p_gate must be in (0, 1]; got {p_gate}")
+    return p_detect, clutter_density, p_gate
 
 
 def _weights(w: float | np.ndarray, lik: np.ndarray, gate: np.ndarray, clutter_density: float
@@ -220,7 +227,7 @@ def pda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     >>> (b.round(3).tolist(), round(float(b0[0]), 3))    # G = 1.8, 0.9; B = 0.1
     ([[0.643, 0.321]], 0.036)
     """
-    _check(p_detect, clutter_density, p_gate)
+    p_detect, clutter_density, p_gate = _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
     G, c = _weights(p_detect, lik, gate, clutter_density)
     return _pda(G, (1.0 - p_detect * p_gate) * c)
@@ -851,7 +858,7 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
     (array([[0.924, 0.024],
            [0.   , 0.924]]), array([0.051, 0.076]))
     """
-    _check(p_detect, clutter_density, p_gate)
+    p_detect, clutter_density, p_gate = _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
     G, c = _weights(p_detect, lik, gate, clutter_density)
     with _quiet_if(c):
@@ -859,7 +866,8 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
 
 
 def _existence(existence: ArrayLike, T: int) -> np.ndarray:
-    eps = np.asarray(existence, dtype=float)
+    check_not_boolean(existence, "existence", "probabilities")  # ([True] was 1)
+    eps = as_float_array(existence, "existence")
     if eps.shape != (T,):
         raise ValueError(f"existence must have one probability per track, shape ({T},); "
                          f"got shape {eps.shape}")
@@ -959,7 +967,7 @@ def ipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     ...                          p_detect=0.9, p_gate=1.0)[2][0]), 3)      # odds x 0.1
     0.091
     """
-    _check(p_detect, clutter_density, p_gate)
+    p_detect, clutter_density, p_gate = _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
     eps = _existence(existence, len(lik))
     G, c = _weights(p_detect, lik, gate, clutter_density)
@@ -1029,7 +1037,7 @@ def jipda_weights(lik: ArrayLike, gate: ArrayLike, existence: ArrayLike, *,
     >>> b.round(3).ravel().tolist(), e.round(3).tolist()
     ([0.912, 0.654], [0.911, 0.11])
     """
-    _check(p_detect, clutter_density, p_gate)
+    p_detect, clutter_density, p_gate = _check(p_detect, clutter_density, p_gate)
     lik, gate = _lik_gate(lik, gate)
     eps = _existence(existence, len(lik))
     G, c = _weights((eps * p_detect)[:, None], lik, gate, clutter_density)

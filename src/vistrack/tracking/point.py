@@ -187,7 +187,7 @@ class PointTracker:
             raise ValueError(f"p_gate must be in (0, 1); got {p_gate}")
         self.p_gate = float(p_gate)
         _check_pda(self.p_detect, self.clutter_density, self.p_gate)  # at once, any mode
-        self.threshold = chi2_threshold(self.m, p_gate)
+        self.threshold = chi2_threshold(self.m, self.p_gate)  # (a 0-d array was named "p")
         self.init_speed = as_finite(init_speed, "init_speed", 0.0, above=True)
         if self.init_speed >= 1e154:
             # (its square, a variance, overflowed at the first step, after the frame was
