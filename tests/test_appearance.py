@@ -361,3 +361,8 @@ def test_a_start_below_the_stable_components_floor_is_refused():
     m = WSLModel((4, 4), sigma_s0=0.02, sigma_min=0.02)  # equal: the floor itself
     m.init(np.full((4, 4), 0.5))
     np.testing.assert_array_equal(m.var_s, np.full((4, 4), 0.02**2))
+    # the floor raised alone: the default start follows it (0.05 below 0.1 is not refused)
+    m = WSLModel((4, 4), sigma_min=0.1)
+    m.init(np.full((4, 4), 0.5))
+    np.testing.assert_array_equal(m.var_s, np.full((4, 4), 0.1**2))
+    assert WSLModel((4, 4)).sigma_s0 == 0.05

@@ -811,3 +811,33 @@ def test_a_nan_height_has_no_level_and_a_cell_beside_minus_inf_keeps_its_score()
                                   [2.0, 5.0, 4.5])
     # between the -inf cell and another, a person can be nowhere there: -inf, not NaN
     assert cm.score(15.0, 0.0, 50.0) == -np.inf
+
+
+def test_a_centre_on_the_grids_edge_by_rounding_keeps_its_cells_score():
+    """Within the edge's allowance of 1e-9 of a cell, (x - origin) / stride can pass the
+    last column by rounding (1.0000000000000002 here): the weight of the -inf column beside
+    it came to -2e-16, and the score to +inf. It is the last column's own, 2."""
+    grid = np.array([[-np.inf, 2.0], [-np.inf, 2.0]])
+    cm = ConfidenceMap([50.0], [grid], [(0.1, 0.0)], [0.7])
+    assert (0.8 - 0.1) / 0.7 > 1.0  # (the rounding this is about)
+    assert cm.score(0.8, 0.0, 50.0) == 2.0
+
+
+def test_a_step_before_the_last_update_is_refused_by_its_frame():
+    """step(Frame(3)) after update() had moved the tracker to frame 4 was refused by the
+    track table, "time must not go back: 0.1 after ... 0.133", in seconds, after the
+    tracker had taken frame 3 as its own; it is refused by its frame, before anything
+    changes."""
+    from vistrack.types import Detections, Frame
+
+    img = np.zeros((120, 160, 3), np.uint8)
+    tr = DetectorConfidencePF(DCPFConfig(gamma=0.0), frame_rate=30)
+    tr.step(Frame(1, 0.0, img), Detections(boxes=np.zeros((0, 4))))
+    for _ in range(3):
+        tr.update(img, Detections(boxes=np.zeros((0, 4))))
+    assert tr.frame == 4
+    with pytest.raises(ValueError, match=r"^frame must increase; got 3 after 4$"):
+        tr.step(Frame(3, 0.0, img), Detections(boxes=np.zeros((0, 4))))
+    assert tr.frame == 4
+    tr.step(Frame(5, 0.0, img), Detections(boxes=np.zeros((0, 4))))  # the next is taken
+    assert tr.frame == 5

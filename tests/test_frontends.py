@@ -2317,3 +2317,17 @@ def test_a_start_past_the_last_frame_is_warned_of(tmp_path):
             w.write(np.full((16, 16, 3), 60 * k, np.uint8))
     with pytest.warns(RuntimeWarning, match=r"no frame from start = 9 on: the video ends before"):
         assert list(VideoReader(video, start=9)) == []
+
+
+def test_a_start_in_a_gap_of_the_images_is_not_said_past_the_end(tmp_path):
+    """Images 1-4 and 7-9, start=5, stop=6: nothing to read, but the folder goes on past
+    it; the note that the images end before the start was untrue there (and after an
+    unreadable last image skipped)."""
+    for k in (*range(1, 5), *range(7, 10)):
+        cv2.imwrite(str(tmp_path / f"{k:06d}.png"), np.full((8, 8, 3), 20 * k, np.uint8))
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        assert list(VideoReader(tmp_path, start=5, stop=6)) == []
+    assert not any("no frame from start" in str(w.message) for w in seen), seen
+    with pytest.warns(RuntimeWarning, match=r"no frame from start = 10 on"):
+        list(VideoReader(tmp_path, start=10))

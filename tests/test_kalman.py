@@ -964,3 +964,13 @@ def test_complex_measurements_and_priors_are_refused():
         ys = kw.pop("ys")
         with pytest.raises(TypeError, match=rf"{name} must be real numbers; got complex"):
             kalman_filter(ys, **kw)
+
+
+def test_a_complex_gaussian_is_refused():
+    """Gaussian([1+5j, 0], I) became mean [1, 0] with numpy's ComplexWarning alone, and
+    kf_predict and the UKF took it."""
+    with pytest.raises(TypeError, match=r"Gaussian mean must be real numbers; got complex"):
+        vt.Gaussian(np.array([1 + 5j, 0.0]), np.eye(2))
+    with pytest.raises(TypeError, match=r"Gaussian cov must be real numbers; got complex"):
+        vt.Gaussian(np.zeros(2), np.eye(2) + 1j)
+    assert vt.Gaussian([1, 0], np.eye(2, dtype=int)).mean.dtype == np.float64

@@ -841,8 +841,8 @@ def test_a_model_that_gives_nan_is_named_not_taken_for_a_lost_target():
         if not fused:
             pf._fused = None
         with pytest.raises(ValueError, match=re.escape(
-                "dt must be finite (dt[0], before the first step, aside); the step to step 1 "
-                "is nan")):
+                "dt must be finite and >= 0 (dt[0], before the first step, aside); the step "
+                "to step 1 is nan")):
             pf.filter(np.zeros((3, 1)), x0=[0, 0], P0=np.eye(2), dt=[1, np.nan, 1])
     # every particle's likelihood 0 at step 1: a lost target
     pf = ParticleFilter(vt.ConstantVelocity(dim=1, q=0.1),
@@ -909,3 +909,23 @@ def test_flags_sizes_methods_and_masks_are_named():
     a = pf.filter(ys, x0=[0.0, 1.0], P0=np.eye(2)).means
     b = ParticleFilter(cv, pos, 100, rng=0).filter(ys, x0=[0.0, 1.0], P0=np.eye(2)).means
     np.testing.assert_array_equal(a, b)
+
+
+def test_a_negative_dt_is_refused_before_any_particle_is_drawn():
+    """A negative step was refused by the motion model after the first particles were
+    drawn: the generator's draws were used up, and the next call's particles differed from
+    a fresh filter's of the same seed."""
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1)
+    ys = np.arange(4.0)[:, None]
+    for fused in (True, False):
+        pf = ParticleFilter(cv, pos, 50, rng=0)
+        if not fused:
+            pf._fused = None
+        for bad in (-1.0, [1.0, 1.0, -1.0, 1.0]):
+            with pytest.raises(ValueError, match=r"dt must be finite and >= 0"):
+                pf.filter(ys, x0=[0.0, 1.0], P0=np.eye(2), dt=bad)
+        fresh = ParticleFilter(cv, pos, 50, rng=0)
+        if not fused:
+            fresh._fused = None
+        np.testing.assert_array_equal(pf.filter(ys, x0=[0.0, 1.0], P0=np.eye(2)).means,
+                                      fresh.filter(ys, x0=[0.0, 1.0], P0=np.eye(2)).means)

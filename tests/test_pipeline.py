@@ -1921,9 +1921,12 @@ def test_tracks_follow_the_image_s_scale_and_ignore_the_rows_order(tmp_path, ben
 
 def test_a_detections_file_that_ends_long_before_the_video_is_warned_of(tmp_path):
     """Detections ending at frame 10 of a 40-frame video left frames 11-40 tracked with no
-    detections, without a word. Where the rows a frame before would have given 10 or more
-    over the rest (a Poisson count's chance of none below e^-10) it is said; a sparse file
-    whose tail is short against its rate is not."""
+    detections, without a word. It is said where the file ends a second or more before the
+    video, by more frames than its longest run without rows, and by so many that frames as
+    often with rows as its own would have left none empty by chance below e^-10; not said:
+    a file ending less than a second early (a video a frame longer than its file), or one
+    whose rows stop for longer runs inside it (a scene that empties, as KITTI-13's does
+    for 14 frames)."""
     import warnings
 
     import cv2
@@ -1935,17 +1938,23 @@ def test_a_detections_file_that_ends_long_before_the_video_is_warned_of(tmp_path
     for k in range(40):
         cv2.imwrite(str(folder / f"{k + 1:06d}.png"), np.zeros((60, 200, 3), np.uint8))
     det = tmp_path / "det.txt"
-    det.write_text("".join(f"{f},-1,{10 + 50 * i + f},20,20,30,0.9,-1,-1,-1\n"
-                           for f in range(1, 11) for i in range(3)))
+
+    def rows(frames):
+        return "".join(f"{f},-1,{10 + 50 * i + f},20,20,30,0.9,-1,-1,-1\n"
+                       for f in frames for i in range(3))
+
+    det.write_text(rows(range(1, 11)))
     with pytest.warns(UserWarning, match=re.escape(
-            f"{det}: no rows after frame 10, where the video runs to frame 40 (3 rows a frame "
-            "before): frames 11-40 were tracked without detections")):
+            f"{det}: no rows after frame 10, where the video runs to frame 40: frames 11-40 "
+            "were tracked without detections (100 % of the frames before have some; a file "
+            "for a shorter video, or cut short?)")):
         track_video(folder, tmp_path / "a", frontend=f"detections:{det}", annotate=False,
-                    fps=25)
-    # one row a frame to frame 36: 4 frames without, 4 rows expected there: not said
-    det.write_text("".join(f"{f},-1,{10 + f},20,20,30,0.9,-1,-1,-1\n" for f in range(1, 37)))
-    with warnings.catch_warnings(record=True) as seen:
-        warnings.simplefilter("always")
-        track_video(folder, tmp_path / "b", frontend=f"detections:{det}", annotate=False,
-                    fps=25)
-    assert not any("no rows after" in str(w.message) for w in seen), seen
+                    fps=10)
+    for name, frames in (("short", range(1, 36)),  # 0.5 s early
+                         ("gappy", [*range(1, 5), *range(26, 31)])):  # 21 empty inside
+        det.write_text(rows(frames))
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            track_video(folder, tmp_path / name, frontend=f"detections:{det}",
+                        annotate=False, fps=10)
+        assert not any("no rows after" in str(w.message) for w in seen), (name, seen)

@@ -825,21 +825,26 @@ MAX_FRAMES = 10 ** 8
 30 frames/s): the tracker steps through every frame to its last, and a frame number that is a
 timestamp would keep it going for years."""
 
-def _warn_detections_end(grid: _FileDetections, last: int) -> None:
-    """Warn where a detections file ends before the video's last frame, ``last``, by so many
-    of its detector's frames that the rows it had a frame before would have given 10 or more
-    there: a detector finding rows at that rate (as a Poisson count) finds none over them
-    with a chance below e^-10, so the file is more likely one for a shorter video, or cut
-    short (the frames after it were tracked without a word)."""
-    frames = grid.dets.frames
+def _warn_detections_end(grid: _FileDetections, last: int, fps: float) -> None:
+    """Warn where a detections file ends before the video's last frame, ``last``, by a
+    second or more, by more of its detector's frames than the longest run without rows
+    inside the file, and by so many that frames as often with rows as the file's before
+    would have left none of them empty by chance below e^-10: the file is more likely one
+    for a shorter video, or cut short (the frames after it were tracked without a word). A
+    scene that empties at its end, or a video a frame longer than its file, is not said."""
+    frames = np.unique(grid.dets.frames)
     end = int(frames[-1])
     tail = (last - end) // grid.stride  # the detector's frames after its last row
-    rate = len(frames) / ((end - grid.first) // grid.stride + 1)
-    if tail and rate * tail >= 10:
+    if last - end < fps or tail < 1:
+        return
+    on_grid = (frames - grid.first) // grid.stride  # the grid frames with rows, 0 first
+    longest = int(np.max(np.diff(np.r_[-1, on_grid]) - 1))  # empty grid frames in a row
+    share = len(on_grid) / (on_grid[-1] + 1)  # of the grid frames to the end, with rows
+    if tail > longest and (share == 1.0 or tail * math.log1p(-share) < -10.0):
         warnings.warn(f"{grid.path}: no rows after frame {end}, where the video runs to frame "
-                      f"{last} ({rate:.3g} rows a frame before): frames {end + 1}-{last} "
-                      "were tracked without detections (a file for a shorter video, or cut "
-                      "short?)", UserWarning, stacklevel=3)
+                      f"{last}: frames {end + 1}-{last} were tracked without detections "
+                      f"({100 * share:.3g} % of the frames before have some; a file for a "
+                      "shorter video, or cut short?)", UserWarning, stacklevel=3)
 
 
 class _FileDetections:
@@ -2634,7 +2639,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                                   f"past the video's last frame ({end}): {what}", UserWarning,
                                   stacklevel=2)
             if grid is not None and len(grid.dets) and last is not None:
-                _warn_detections_end(grid, last)
+                _warn_detections_end(grid, last, reader.fps)
             scores = scored[0] if scored else None
             n_tracks = len(rows.identities)
             if isinstance(trk, BoxTracker):

@@ -66,6 +66,10 @@ class Gaussian:
     cov: np.ndarray
 
     def __post_init__(self) -> None:
+        for name in ("mean", "cov"):
+            if getattr(getattr(self, name), "dtype", np.dtype(float)).kind == "c":
+                # (cast to its real part with numpy's ComplexWarning alone)
+                raise TypeError(f"Gaussian {name} must be real numbers; got complex values")
         mean = np.asarray(self.mean, dtype=np.float64)
         cov = np.asarray(self.cov, dtype=np.float64)
         if mean.ndim < 1:

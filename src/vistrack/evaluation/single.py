@@ -271,11 +271,10 @@ def region_to_bbox(polygons: ArrayLike, rule: str = "area") -> np.ndarray:
     q = _boxes(polygons, "polygons", 8)
     xs, ys = q[:, 0::2], q[:, 1::2]
     x1, x2, y1, y2 = xs.min(1), xs.max(1), ys.min(1), ys.max(1)
+    _check_rule(rule)
     if rule == "minmax":
         none = _no_area(xs, ys)
         return np.c_[x1, y1, np.where(none, 0.0, x2 - x1), np.where(none, 0.0, y2 - y1)]
-    if rule != "area":
-        raise ValueError(f"rule must be 'area' or 'minmax'; got {rule!r}")
     cx, cy = xs.mean(1), ys.mean(1)
     a1 = np.linalg.norm(q[:, 0:2] - q[:, 2:4], axis=1) * np.linalg.norm(q[:, 2:4] - q[:, 4:6],
                                                                          axis=1)
@@ -285,6 +284,11 @@ def region_to_bbox(polygons: ArrayLike, rule: str = "area") -> np.ndarray:
     none = _no_area(xs, ys)
     w, h = np.where(none, 0.0, w), np.where(none, 0.0, h)
     return np.c_[np.where(none, cx, cx - w / 2), np.where(none, cy, cy - h / 2), w, h]
+
+
+def _check_rule(rule: str) -> None:
+    if rule not in ("area", "minmax"):
+        raise ValueError(f"rule must be 'area' or 'minmax'; got {rule!r}")
 
 
 def _no_area(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
@@ -372,8 +376,7 @@ def _read_box_rows(path: str | Path, rule: str = "area", origin: int | None = No
     if not (origin is None or (isinstance(origin, (int, np.integer))
                                and not isinstance(origin, bool) and origin in (0, 1))):
         raise ValueError(f"origin must be 0, 1 or None (by the file's name); got {origin!r}")
-    if rule not in ("area", "minmax"):  # (checked only where the file held polygons)
-        raise ValueError(f"rule must be 'area' or 'minmax'; got {rule!r}")
+    _check_rule(rule)  # (checked only where the file held polygons)
     path = Path(path)
     rows: list[list[float]] = []
     last = 0  # the line of rows[-1]

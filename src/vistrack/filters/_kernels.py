@@ -346,6 +346,24 @@ def check_gaussians(mean, cov):
 
 
 @njit(cache=True)
+def symmetric_within(A, rel_tol):
+    """Whether the square matrix ``A`` is symmetric to ``rel_tol`` of its largest entry (of
+    1 where all are 0), as :func:`vistrack._validate.check_symmetric` judges: of each
+    entry's own size, an off-diagonal entry near 0 that rounding made differ from its
+    transpose by 1e-17 refused a rotated isotropic R."""
+    big = 0.0
+    for v in A.ravel():
+        big = max(big, abs(v))
+    tol = rel_tol * (big if big > 0.0 else 1.0)
+    n = A.shape[0]
+    for i in range(n):
+        for k in range(i + 1, n):
+            if abs(A[i, k] - A[k, i]) > tol:
+                return False
+    return True
+
+
+@njit(cache=True)
 def check_matrices(F, Q, sym_tol):
     """0 if ``F`` and ``Q`` (``(1, n, n)`` / ``(1, r, r)``) are finite and ``Q`` symmetric with
     variances >= 0 and correlations within ±1; 1 if ``F`` has a non-finite entry, 2 if ``Q``
@@ -355,17 +373,8 @@ def check_matrices(F, Q, sym_tol):
     if not all_finite(Q):
         return 2
     r = Q.shape[1]
-    # symmetric to a tolerance of the matrix's largest entry, as the Python checks
-    # (_validate.check_symmetric): of each entry's own size, an off-diagonal entry near 0
-    # that rounding made differ from its transpose by 1e-17 refused a rotated isotropic R
-    big = 0.0
-    for v in Q.ravel():
-        big = max(big, abs(v))
-    tol = sym_tol * (big if big > 0.0 else 1.0)
-    for i in range(r):
-        for k in range(i + 1, r):
-            if abs(Q[0, i, k] - Q[0, k, i]) > tol:
-                return 3
+    if not symmetric_within(Q[0], sym_tol):
+        return 3
     # what semi-definiteness asks of each variance and each pair: no variance below 0, no
     # covariance beyond the product of the standard deviations (the full test costs more
     # than a step; kalman_filter makes it)

@@ -59,7 +59,7 @@ from ..models.protocols import (
 )
 from ..types import Gaussian
 from ._jitmath import wrap_angle
-from ._kernels import back_solve, chol_factor, forward_solve
+from ._kernels import back_solve, chol_factor, forward_solve, symmetric_within
 from ._nonlinear import (
     check_gaussian,
     check_h_size,
@@ -177,14 +177,8 @@ def _points_one(x, P, scale, out):
     not symmetric to 1e-8 of its largest entry, as :func:`check_symmetric` judges (its lower
     triangle alone was read, where the other filters read it whole)."""
     n = x.shape[0]
-    big = 0.0
-    for v in P.ravel():
-        big = max(big, abs(v))
-    tol = 1e-8 * (big if big > 0.0 else 1.0)
-    for i in range(n):
-        for k in range(i):
-            if abs(P[i, k] - P[k, i]) > tol:
-                return 2
+    if not symmetric_within(P, 1e-8):
+        return 2
     L = np.zeros((n, n))  # (the upper triangle stays zero)
     if not chol_factor(L, scale * P, n):
         return 1

@@ -360,7 +360,9 @@ class ConfidenceMap:
             ok = (u >= -e) & (u <= nx - 1 + e) & (v >= -e) & (v <= ny - 1 + e)
             j0 = np.clip(np.floor(u).astype(int), 0, nx - 2)
             i0 = np.clip(np.floor(v).astype(int), 0, ny - 2)
-            fu, fv = u - j0, v - i0
+            # (within the edge's allowance u - j0 can pass 1 by rounding, and a weight of
+            # -2e-16 on a -inf cell gave +inf)
+            fu, fv = np.clip(u - j0, 0.0, 1.0), np.clip(v - i0, 0.0, 1.0)
             val = (_weighed(1 - fv, _weighed(1 - fu, s[i0, j0]) + _weighed(fu, s[i0, j0 + 1]))
                    + _weighed(fv, _weighed(1 - fu, s[i0 + 1, j0])
                               + _weighed(fu, s[i0 + 1, j0 + 1])))

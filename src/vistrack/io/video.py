@@ -711,7 +711,9 @@ class VideoReader:
         for item in self._read_frames():
             read = read or not isinstance(item, _Note)
             yield item
-        if not read and self.start > 1:
+        last = (max(self._index, default=0) if self._files is not None
+                else self.frame_count or None)
+        if not read and self.start > 1 and (last is None or self.start > last):
             what = "folder's images end" if self._files is not None else "video ends"
             yield _Note(f"{self.source}: no frame from start = {self.start} on: the {what} "
                         "before it")

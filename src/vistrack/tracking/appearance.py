@@ -55,7 +55,8 @@ class WSLModel:
     sigma_w : float
         Standard deviation of the wandering component around the last observation.
     sigma_s0, sigma_min : float
-        Initial and smallest standard deviation of the stable component.
+        Initial and smallest standard deviation of the stable component (``sigma_s0``
+        default: 0.05, or ``sigma_min`` where that is higher).
     m0 : three floats
         Initial mixing probabilities of S, W and L.
     lost_density : float
@@ -96,7 +97,7 @@ class WSLModel:
     """
 
     def __init__(self, shape: tuple[int, ...], *, tau: float = 20.0, sigma_w: float = 0.08,
-                 sigma_s0: float = 0.05, sigma_min: float = 0.02,
+                 sigma_s0: float | None = None, sigma_min: float = 0.02,
                  m0: tuple[float, float, float] = (0.4, 0.15, 0.45), lost_density: float = 1.0):
         dims = np.atleast_1d(shape)
         if dims.ndim != 1 or dims.dtype.kind not in "iuf" or not (
@@ -105,6 +106,8 @@ class WSLModel:
         self.shape = tuple(int(s) for s in dims)
         if not self.shape or min(self.shape) < 1:
             raise ValueError(f"shape must be positive; got {shape!r}")
+        if sigma_s0 is None:  # 0.05, or the floor where that is higher
+            sigma_s0 = max(0.05, as_number(sigma_min, "sigma_min"))
         for name, v in (("tau", tau), ("sigma_w", sigma_w), ("sigma_s0", sigma_s0),
                         ("sigma_min", sigma_min), ("lost_density", lost_density)):
             # (a string failed in numpy's isfinite, naming nothing)

@@ -392,7 +392,6 @@ class DetectorConfidencePF:
         self.overlapped = np.zeros(0)
         self.weights_clf = np.zeros((0, 0))
         self.frame = 0
-        self._last_index: int | None = None  # the last frame step() was given
         self._said_unsized = False
 
     @property
@@ -425,8 +424,10 @@ class DetectorConfidencePF:
         # the frame's own index: a gap in the frames (images skipped as bad) is time, which
         # ends a target lost longer than max_lost (calls were counted: 13.9 s away, a target
         # kept its identity), and a frame before the last is refused, as by the box trackers
-        index = frame_index(frame, self._last_index)
-        self._last_index = index
+        # after the last frame stepped or updated (update() moves the frame too: checked
+        # against step()'s alone, a frame before an update's was refused by the track
+        # table, in seconds, after update() had taken its number)
+        index = frame_index(frame, self.frame or None)
         if detections is None:
             detections = Detections(boxes=np.zeros((0, 4)))
         # (with gamma 0 nothing reads it: a dense HOG map a frame was computed for nothing)
