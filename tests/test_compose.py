@@ -212,3 +212,42 @@ def test_a_member_box_of_another_shape_is_named():
     c.init(img, np.array([30.0, 20, 10, 10]))
     c.update(img)
     assert c.accepted == {"a": False}
+
+
+def _scene(x=30):
+    im = np.full((60, 80, 3), (40, 120, 40), np.uint8)
+    im[20:40, x:x + 20] = (0, 0, 255)
+    return im
+
+
+def test_a_refused_start_leaves_every_member_as_it_was():
+    """A grey frame refused by the colour member left the template member started on it
+    (its box and template cut from the refused frame) while the composite kept its old
+    state: all members start, or none does."""
+    template, colour = single_tracker("template"), single_tracker("colour")
+    c = Composite({"t": (template, (4.0, 0.1)), "c": (colour, (4.0, 0.1))})
+    c.init(_scene(), [30, 20, 20, 20])
+    before = {k: v.copy() if isinstance(v, np.ndarray) else v
+              for k, v in template.__dict__.items()}
+    grey = np.zeros((60, 80), np.uint8)
+    with pytest.raises(ValueError):
+        c.init(grey, [5, 5, 30, 30])
+    for k, v in before.items():
+        got = template.__dict__[k]
+        if isinstance(v, np.ndarray):
+            np.testing.assert_array_equal(got, v)
+    np.testing.assert_array_equal(template.box, [30, 20, 20, 20])
+    # the oracle: a composite never given the refused frame gives the same boxes after
+    fresh = Composite({"t": (single_tracker("template"), (4.0, 0.1)),
+                       "c": (single_tracker("colour"), (4.0, 0.1))})
+    fresh.init(_scene(), [30, 20, 20, 20])
+    for x in (33, 36):
+        np.testing.assert_array_equal(c.update(_scene(x)), fresh.update(_scene(x)))
+
+
+def test_one_tracker_listed_twice_is_refused():
+    """One instance under two names was updated twice a frame (a MedianFlow's second
+    update saw no motion and counted the first's box twice)."""
+    ms = single_tracker("meanshift")
+    with pytest.raises(ValueError, match=r"members\['b'\] is the tracker of members\['a'\]"):
+        Composite({"a": (ms, (4.0, 0.1)), "b": (ms, (4.0, 0.1))})

@@ -1018,3 +1018,25 @@ def test_read_boxes_names_an_unknown_rule_for_any_file(tmp_path):
     with pytest.raises(ValueError, match=r"rule must be 'area' or 'minmax'; got 'areaa'"):
         read_boxes(f, rule="areaa")
     np.testing.assert_array_equal(read_boxes(f, rule="minmax"), [[1.0, 2.0, 3.0, 4.0]])
+
+
+def test_boxes_flags_and_seeds_are_named():
+    """as_box took [True, 10, 20, 20] as a box at x 1, a complex coordinate's real part,
+    [[10, 10], [20, 20]] flattened into a box, and "10,10,20,20" failed in float()'s words;
+    KLTTracker(affine_check="False") was true; ColourParticleTracker(rng=True) was seed 1,
+    and -1, 1.5 or "a" failed at init() in numpy's words."""
+    im = np.full((60, 80, 3), (40, 120, 40), np.uint8)
+    im[20:40, 30:50] = (0, 0, 255)
+    t = single_tracker("colour")
+    for bad, err in (([True, 10, 20, 20], TypeError), (np.array([10 + 5j, 10, 20, 20]), TypeError),
+                     ([[10, 10], [20, 20]], ValueError), ("10,10,20,20", TypeError)):
+        with pytest.raises(err, match=r"box must be"):
+            t.init(im, bad)
+    t.init(im, np.array([[30.0, 20.0, 20.0, 20.0]]))  # one row of four is a box
+    np.testing.assert_array_equal(t.box, [30, 20, 20, 20])
+    with pytest.raises(TypeError, match=r"affine_check must be True or False"):
+        KLTTracker(affine_check="False")
+    for bad in (True, -1, 1.5, "a"):
+        with pytest.raises(ValueError, match=r"rng must be a numpy Generator, a whole-number"):
+            ColourParticleTracker(rng=bad)
+    ColourParticleTracker(rng=np.random.default_rng(0))

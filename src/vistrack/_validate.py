@@ -236,10 +236,19 @@ def bgr_to_grey(im: np.ndarray) -> np.ndarray:
 
 
 def as_box(box: ArrayLike, name: str = "box") -> np.ndarray:
-    """One box ``x, y, w, h`` as 4 finite floats with ``w, h > 0``."""
-    b = np.asarray(box, dtype=float).reshape(-1)
-    if b.shape != (4,) or not np.isfinite(b).all() or b[2] <= 0 or b[3] <= 0:
-        raise ValueError(f"{name} must be x, y, w, h with w, h > 0; got {np.asarray(box).tolist()}")
+    """One box ``x, y, w, h`` as 4 finite floats with ``w, h > 0``, given as 4 numbers or one
+    row of them (``(1, 4)``). A boolean was a coordinate of 1, a complex number its real
+    part, and ``[[x, y], [w, h]]`` was flattened into a box."""
+    said = f"{name} must be x, y, w, h with w, h > 0"
+    check_not_boolean(box, name, "x, y, w, h: four numbers")
+    if isinstance(box, (str, bytes)):  # ("could not convert string to float", unnamed)
+        raise TypeError(f"{said}; got the text {box!r}")
+    b = as_float_array(box, name)
+    if b.shape not in ((4,), (1, 4)):
+        raise ValueError(f"{said}; got shape {b.shape}")
+    b = b.reshape(-1)
+    if not np.isfinite(b).all() or b[2] <= 0 or b[3] <= 0:
+        raise ValueError(f"{said}; got {b.tolist()}")
     return b
 
 

@@ -23,6 +23,7 @@ given the composite's estimate of that frame too.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Protocol
 
@@ -149,6 +150,10 @@ class Composite(SingleObjectTracker):
                 # ("a", 1) was a bare "'<' not supported", (True, 1) taken as 1.0
                 raise ValueError(f"members[{name!r}]: noise must be two positive, finite "
                                  f"numbers; got {(pos_sd, size_sd)!r}")
+            twin = next((k for k, t in self.members.items() if t is tracker), None)
+            if twin is not None:  # (updated twice a frame: a MedianFlow's second saw no motion)
+                raise ValueError(f"members[{name!r}] is the tracker of members[{twin!r}]: each "
+                                 "member needs a tracker of its own")
             self.members[name] = tracker
             self.noise[name] = np.array([pos_sd, size_sd], float)
         # (a string or None was a bare "'<' not supported", an array numpy's "ambiguous")
@@ -162,8 +167,17 @@ class Composite(SingleObjectTracker):
         self.threshold = float(chi2.ppf(p_gate, 4))
 
     def _start(self, image: np.ndarray, b: np.ndarray) -> None:
-        for tracker in self.members.values():
-            tracker.init(image, b)
+        # all members or none: one refusing the frame left those before it started on it
+        # (a template cut from the refused frame) while the composite kept its old state
+        saved = {name: copy.deepcopy(t.__dict__) for name, t in self.members.items()}
+        try:
+            for tracker in self.members.values():
+                tracker.init(image, b)
+        except BaseException:
+            for name, t in self.members.items():
+                t.__dict__.clear()
+                t.__dict__.update(saved[name])
+            raise
         z = _measure(b)
         mean = np.r_[z[:2], 0.0, 0.0, z[2:]]
         cov = np.diag([1.0, 1.0, (_V0 * b[2]) ** 2, (_V0 * b[3]) ** 2, 1e-4, 1e-4])

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import as_finite, as_uint8_image, as_whole
+from .._validate import as_finite, as_flag, as_uint8_image, as_whole
 from ..types import Detections, Frame, Tracks
 from ._affine import patch_ncc, prepare_templates, register
 from .base import frame_image
@@ -162,7 +162,9 @@ class KLTTracker:
         self.win_size = as_whole(win_size, "win_size", 3)
         self.levels = as_whole(levels, "levels", 0)
         self.fb_max = as_finite(fb_max, "fb_max", 0.0, above=True)
-        self.affine_check, self.half = bool(affine_check), as_whole(half, "half", 1)
+        # ("False" was true; an array met numpy's "ambiguous")
+        self.affine_check = as_flag(affine_check, "affine_check")
+        self.half = as_whole(half, "half", 1)
         self.max_residual = as_finite(max_residual, "max_residual", 0.0, above=True)
         self.search_radius = as_whole(search_radius, "search_radius", 0)
         # (above -1: a patch that leaves its image, or is flat, scores -1, and at -1 such

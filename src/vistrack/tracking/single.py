@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, Any, TypedDict
 import numpy as np
 
 from .._registry import Registry
-from .._validate import as_box, as_finite, as_scales, as_uint8_image, as_whole
+from .._validate import as_box, as_finite, as_scales, as_uint8_image, as_whole, is_whole
 from ._affine import prepare_templates, register
 from .appearance import WSLTracker
 from .base import _HALF, SingleObjectTracker, _index_centre
@@ -727,6 +727,10 @@ class ColourParticleTracker(ColourTracker):
         self.n = as_whole(n_particles, "n_particles", 1)
         self.step_size = as_finite(step, "step", 0.0)
         self.sharpness = as_finite(sharpness, "sharpness", 0.0)
+        if not (rng is None or isinstance(rng, np.random.Generator) or is_whole(rng, 0)):
+            # (True was seed 1; -1, 1.5 or "a" failed at init() in numpy's words)
+            raise ValueError(f"rng must be a numpy Generator, a whole-number seed >= 0 or "
+                             f"None; got {rng!r}")
         self._seed = rng
 
     def _start(self, image: np.ndarray, box: np.ndarray) -> None:
