@@ -1381,3 +1381,31 @@ def test_an_interrupt_inside_a_compiled_function_is_an_interrupt(capsys):
     args = argparse.Namespace(command="eval", func=raises(ValueError("x")), debug=False)
     with pytest.raises(SystemError):
         _run(args)
+
+
+def test_options_that_mean_nothing_alone_and_a_tracker_that_is_no_callable(tmp_path, capsys,
+                                                                           monkeypatch):
+    """`eval --force` without --plots and `fit --no-held-out` without --gt were taken and did
+    nothing; `--tracker mod:NAME` whose NAME is no callable said "'int' object is not
+    callable", naming nothing; an empty ground truth was scored as all false positives
+    without a word (an empty results file was warned of)."""
+    from vistrack.cli import main
+
+    gt, res = tmp_path / "gt.txt", tmp_path / "res.txt"
+    gt.write_text("")
+    res.write_text("1,1,0,0,10,10,1,-1,-1,-1\n2,1,0,0,10,10,1,-1,-1,-1\n")
+    assert main(["eval", "--gt", str(gt), "--pred", str(res), "--force"]) == 2
+    assert capsys.readouterr().err == "vistrack eval: error: --force goes with --plots\n"
+    assert main(["eval", "--gt", str(gt), "--pred", str(res)]) == 0
+    assert (f"{gt} holds no rows: the 2 rows of {res} on its frames 1-2 count as false "
+            "positives (FP)") in capsys.readouterr().err
+    assert main(["fit", str(tmp_path), "--out", str(tmp_path / "c.toml"),
+                 "--no-held-out"]) == 2
+    assert capsys.readouterr().err == "vistrack fit: error: --no-held-out goes with --gt\n"
+    (tmp_path / "mymod.py").write_text("notcallable = 3\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert main(["track", str(VIDEO), "--out-dir", str(tmp_path / "o"), "--stop", "2",
+                 "--tracker", "mymod:notcallable"]) == 2
+    assert capsys.readouterr().err == (
+        "vistrack track: error: tracker 'mymod:notcallable': notcallable = 3, not a callable "
+        "that makes a tracker\n")

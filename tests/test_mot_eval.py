@@ -465,7 +465,12 @@ def test_sanity_warnings_of_unrelated_files(tmp_path):
         f"{empty.path} holds no rows: the 10 rows of {gt} on its frames 1-10 count as missed "
         "(FN) or ignored"]
     assert sanity_warnings(g, empty, empty_said=True) == []  # the caller said why
-    assert sanity_warnings(empty, far) == [] and sanity_warnings(empty, empty) == []
+    # an empty ground truth scores every result row as a false positive: said (it was not)
+    assert sanity_warnings(empty, far) == [
+        f"{empty.path} holds no rows: the 10 rows of {far.path} on its frames 1-10 count as "
+        "false positives (FP)"]
+    assert sanity_warnings(empty, far, empty_said=True) == []
+    assert sanity_warnings(empty, empty) == []
 
 
 def test_sanity_warnings_on_the_shared_files_and_a_chance_overlap(tmp_path):

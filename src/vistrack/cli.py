@@ -1060,6 +1060,8 @@ def _fit(args: argparse.Namespace) -> int:
     from .io.atomic import check_not_input, check_output, open_replacing
     from .pipeline import fit_sequences, sequence_inputs
 
+    if args.no_held_out and not args.gt:  # (accepted, and meant nothing)
+        return _fail("fit", "--no-held-out goes with --gt")
     inputs = expand_inputs(args.inputs)  # a folder of sequences: its sequences, as track's
     # (--force wrote the configuration over a sequence's detections, or its ground truth)
     check_not_input([args.out], [r for s in inputs for r in sequence_inputs(s)], name="--out")
@@ -1212,6 +1214,8 @@ def _eval(args: argparse.Namespace) -> int:
     from .evaluation import evaluate_files
 
     pairs = []
+    if args.force and not args.plots:  # (it overwrites plots alone: it did nothing)
+        return _fail("eval", "--force goes with --plots")
     if (args.gt_dir or args.pred_dir) and (args.gt or args.pred):
         # (the one pair was dropped without a word, and the folders scored)
         return _fail("eval", "give --gt and --pred, or --gt-dir and --pred-dir, not both")
@@ -1524,9 +1528,9 @@ def build_parser() -> argparse.ArgumentParser:
                        "detections file alone or a sequence without seqinfo.ini (put over the "
                        "rate an input gives, where it gives one; with several inputs, every "
                        "input's)")
-    track.add_argument("--gt", help="video mode: MOTChallenge ground truth to score against "
-                       "(or a .csv or .parquet file with a header; for points, frame, "
-                       "particle, x, y)")
+    track.add_argument("--gt", help="video mode, one input: MOTChallenge ground truth to "
+                       "score against (or a .csv or .parquet file with a header; for points, "
+                       "frame, particle, x, y)")
     track.add_argument("--zero-distance", type=float, metavar="PX",
                        help="with --gt: score positions by distance rather than boxes by "
                        "IoU, a match within PX/2 (as vistrack eval --zero-distance); points "
@@ -1554,9 +1558,9 @@ def build_parser() -> argparse.ArgumentParser:
                        "found (the gate grows while it is missed), and the longest link "
                        "(default: half --diameter); its --max-lost is 3.5 frames by default")
     track.add_argument("--report", action="store_true",
-                       help="video mode: also write OUT/report.html, one page with the "
-                       "command, the scores, the annotated video and the plots (as vistrack "
-                       "report OUT writes it)")
+                       help="video mode, one input: also write OUT/report.html, one page "
+                       "with the command, the scores, the annotated video and the plots (as "
+                       "vistrack report OUT writes it)")
     track.add_argument("--force", action="store_true", help="overwrite existing outputs")
     track.add_argument("--quiet", action="store_true",
                        help="no progress bar (shown on a terminal only)")

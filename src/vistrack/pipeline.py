@@ -1181,6 +1181,9 @@ def make_tracker(tracker: str | Tracker, ctx: Context) -> tuple[Tracker, str]:
         except SyntaxError as exc:  # the module's file and line, in the one-line form
             raise ValueError(f"tracker {tracker!r}: {exc.filename}:{exc.lineno}: {exc.msg}"
                              ) from exc
+        if not callable(maker):  # ("'int' object is not callable", naming nothing)
+            raise TypeError(f"tracker {tracker!r}: {name} = {maker!r:.40}, not a callable "
+                            "that makes a tracker")
         made = maker()
         if not callable(getattr(made, "step", None)):
             raise TypeError(f"tracker {tracker!r} made a {type(made).__name__}, which has no "
@@ -2555,7 +2558,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 # as vistrack eval warns: another sequence's ground truth scores valid numbers
                 # (results left empty by a front-end that found nothing: the run says so
                 # itself, after the loop)
-                for message in sanity_warnings(g, written, empty_said=found_nothing(),
+                for message in sanity_warnings(g, written,
+                                               empty_said=found_nothing() or not len(g),
                                                zero_distance=zero_distance):
                     warnings.warn(message, UserWarning, stacklevel=4)
 

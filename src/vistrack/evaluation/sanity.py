@@ -85,8 +85,9 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False,
     gt, pred : MOTTable
         From :func:`vistrack.io.read_mot`, sorted by frame; their ``path`` names them.
     empty_said : bool
-        Whether the caller has already said why ``pred`` is empty (a run whose front-end
-        found nothing): then its emptiness is not warned of again.
+        Whether the caller has already said why ``pred`` or ``gt`` is empty (a run whose
+        front-end found nothing, or a ground truth with no row on the frames tracked): then
+        its emptiness is not warned of again.
     zero_distance : float, optional
         Positions scored by distance (:func:`~vistrack.evaluation.evaluate_mot`): a
         predicted position meets the ground truth within half of it, not a box by IoU.
@@ -147,6 +148,9 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False,
     if len(gt) and not len(pred) and not empty_said:
         out.append(f"{pname} holds no rows: the {len(gt)} rows of {gname} on its "
                    f"{_frames(gt)} count as missed (FN) or ignored")
+    if len(pred) and not len(gt) and not empty_said:  # (all false positives, unsaid)
+        out.append(f"{gname} holds no rows: the {len(pred)} rows of {pname} on its "
+                   f"{_frames(pred)} count as false positives (FP)")
     if not len(gt) or not len(pred):
         return out
     common = np.intersect1d(gt.frames, pred.frames)
