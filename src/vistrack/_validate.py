@@ -48,14 +48,24 @@ def _masked_as_nan(value: np.ma.MaskedArray, name: str) -> np.ndarray:
 
 
 def as_float_array(value: ArrayLike | None, name: str, *,
-                   ndim: tuple[int, ...] | None = None) -> np.ndarray:
+                   ndim: tuple[int, ...] | None = None,
+                   not_boolean: str | None = None) -> np.ndarray:
     """Convert ``value`` to a C-contiguous float64 array, checking its number of dimensions.
 
     A numpy masked array (``numpy.ma``, pykalman's way of marking missing measurements)
     gives NaN at its masked entries: missing where NaN means missing (measurements), and an
     error naming the entry where values must be finite, instead of the values under the
-    mask read as data.
+    mask read as data. With ``not_boolean``, what the values are (``"probabilities"``),
+    booleans are refused in those words (:func:`check_not_boolean`) instead of read as 1
+    and 0.
+
+    >>> as_float_array([0.5, True], "weights", not_boolean="numbers >= 0")
+    Traceback (most recent call last):
+    ...
+    TypeError: weights must be numbers >= 0; got [0.5, True]
     """
+    if not_boolean is not None:
+        check_not_boolean(value, name, not_boolean)
     if isinstance(value, np.ma.MaskedArray):
         value = _masked_as_nan(value, name)
     if getattr(getattr(value, "dtype", None), "kind", None) == "c":

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike
 from .._jit import njit
 from .._prebuilt import kernel
 from .._registry import Registry
-from .._validate import as_float_array, check_not_boolean, is_real, is_whole
+from .._validate import as_float_array, is_real, is_whole
 
 __all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_pairs_limited", "gnn_sparse",
            "greedy", "lsa", "lsa_kernel", "nearest_neighbour", "components"]
@@ -37,8 +37,8 @@ _EMPTY = (np.zeros(0, np.int64), np.zeros(0, np.int64))
 
 
 def _check(cost: np.ndarray, gate: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    check_not_boolean(cost, "cost", "numbers")  # (True and False were costs 1 and 0)
-    cost = as_float_array(cost, "cost")  # (complex costs lost their imaginary parts)
+    # (complex costs lost their imaginary parts; True and False were costs 1 and 0)
+    cost = as_float_array(cost, "cost", not_boolean="numbers")
     if cost.ndim != 2:
         raise ValueError(f"cost must be 2-D (tracks, detections); got shape {cost.shape}")
     if gate is None:
@@ -241,8 +241,8 @@ def lsa(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     >>> r.tolist(), c.tolist()
     ([0, 1], [1, 0])
     """
-    check_not_boolean(cost, "cost", "numbers")  # (True and False were costs 1 and 0)
-    arr = as_float_array(cost, "cost")  # (complex costs lost their imaginary parts)
+    # (complex costs lost their imaginary parts; True and False were costs 1 and 0)
+    arr = as_float_array(cost, "cost", not_boolean="numbers")
     if arr.ndim != 2:
         raise ValueError(f"cost must be a 2-D matrix; got shape {arr.shape}")
     arr = np.ascontiguousarray(arr)
@@ -560,8 +560,7 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
                 raise ValueError(f"{name} must be whole numbers, indices; got "
                                  f"{a.ravel()[:5].tolist()}{' ...' if a.size > 5 else ''}")
     rows, cols = np.ascontiguousarray(rows, np.int64), np.ascontiguousarray(cols, np.int64)
-    check_not_boolean(cost, "cost", "numbers")
-    cost = np.ascontiguousarray(as_float_array(cost, "cost"))
+    cost = np.ascontiguousarray(as_float_array(cost, "cost", not_boolean="numbers"))
     if isinstance(shape, (int, np.integer)) or not hasattr(shape, "__len__"):
         raise ValueError(f"shape must be two whole numbers >= 0 (tracks, detections); got "
                          f"{shape!r}")

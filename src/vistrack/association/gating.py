@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array, check_not_boolean, is_number, is_whole
+from .._validate import as_float_array, is_number, is_whole
 
 __all__ = ["chi2_gate", "chi2_threshold"]
 
@@ -79,8 +79,8 @@ def chi2_gate(d2: np.ndarray, m: int, p: float = 0.99) -> np.ndarray:
     >>> chi2_gate(np.array([[1.0, 10.0]]), m=2)
     array([[ True, False]])
     """
-    check_not_boolean(d2, "d2", "squared distances, numbers >= 0")
-    d2 = as_float_array(d2, "d2")  # (complex ones lost their imaginary parts)
+    # (complex ones lost their imaginary parts)
+    d2 = as_float_array(d2, "d2", not_boolean="squared distances, numbers >= 0")
     if (d2 < 0).any():  # (NaN, a detection that is not finite, is outside every gate)
         where = [int(i) for i in np.argwhere(d2 < 0)[0]]
         raise ValueError(f"d2 must hold squared distances, >= 0; d2{where} = "

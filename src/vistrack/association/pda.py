@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._jit import njit
-from .._validate import as_float_array, as_number, as_whole, check_not_boolean
+from .._validate import as_float_array, as_number, as_whole
 from .costs import _innovations, cholesky_innovations
 
 __all__ = ["pda_weights", "jpda_weights", "ipda_weights", "jipda_weights", "likelihoods"]
@@ -98,8 +98,8 @@ def _lik_gate(lik: ArrayLike, gate: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     must be a finite number >= 0 (a NaN detection's is NaN: outside every gate that
     :func:`~vistrack.association.chi2_gate` draws, refused inside one). The pairs of
     likelihood 0 are taken out of the gate: no event may hold them."""
-    check_not_boolean(lik, "lik", "likelihoods, numbers >= 0")
-    lik = as_float_array(lik, "lik")  # (complex ones lost their imaginary parts)
+    # (complex ones lost their imaginary parts)
+    lik = as_float_array(lik, "lik", not_boolean="likelihoods, numbers >= 0")
     if lik.ndim != 2:
         raise ValueError(f"lik must have shape (T, D), tracks by detections; got shape "
                          f"{lik.shape}")
@@ -866,8 +866,7 @@ def jpda_weights(lik: ArrayLike, gate: ArrayLike, *, p_detect: float = 0.9,
 
 
 def _existence(existence: ArrayLike, T: int) -> np.ndarray:
-    check_not_boolean(existence, "existence", "probabilities")  # ([True] was 1)
-    eps = as_float_array(existence, "existence")
+    eps = as_float_array(existence, "existence", not_boolean="probabilities")  # ([True] was 1)
     if eps.shape != (T,):
         raise ValueError(f"existence must have one probability per track, shape ({T},); "
                          f"got shape {eps.shape}")

@@ -12,7 +12,6 @@ from numpy.typing import ArrayLike
 from .._validate import (
     as_float_array,
     check_has_steps,
-    check_not_boolean,
     check_not_infinite,
     check_prior,
 )
@@ -63,8 +62,8 @@ def step_times(dt: ArrayLike, times: ArrayLike | None, T: int) -> tuple[np.ndarr
     """``dt`` (a scalar, the ``T-1`` intervals between steps, or ``(T,)`` with ``dt[t]`` the
     step from ``t-1`` to ``t``, ``dt[0]`` unused) as ``(T,)``, as ``KalmanFilter`` takes it,
     and the time of each step: ``times``, by default the cumulative ``dt`` from 0."""
-    check_not_boolean(dt, "dt")  # (True was a step of 1 here, where the models refuse it)
-    d = as_float_array(dt, "dt", ndim=(0, 1))
+    # (True was a step of 1 here, where the models refuse it)
+    d = as_float_array(dt, "dt", ndim=(0, 1), not_boolean="a number or an array of numbers")
     if d.ndim == 1 and d.shape == (T - 1,):  # np.diff(times), as the Kalman filter takes
         d = np.concatenate([d[:1] if T > 1 else [1.0], d])
     if d.ndim == 1 and d.shape != (T,):

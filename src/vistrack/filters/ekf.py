@@ -60,7 +60,7 @@ def ekf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     """
     g = check_gaussian(g)
     check_one_step(dt)
-    mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
+    mo = MotionFunctions.of(motion)
     if g.mean.shape[-1] != mo.n:  # (numpy's broadcast error, naming neither; as ukf_predict)
         raise ValueError(f"g must have a state of {mo.n} values, the motion model's; got "
                          f"{g.mean.shape[-1]}")

@@ -222,7 +222,7 @@ def enkf_predict(ens: Ensemble, motion: MotionModel | NonlinearMotionModel, dt: 
     array([1., 1.])
     """
     check_one_step(dt, "every ensemble of ens")
-    mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
+    mo = MotionFunctions.of(motion)
     if ens.members.shape[-1] != mo.n:  # (numpy's matmul error, naming neither)
         raise ValueError(f"ens must have members of {mo.n} values, the motion model's; got "
                          f"{ens.members.shape[-1]}")

@@ -43,7 +43,6 @@ from .._validate import (
     as_rng,
     check_finite,
     check_has_steps,
-    check_not_boolean,
     check_not_infinite,
     check_prior,
 )
@@ -273,8 +272,7 @@ class IMMFilter:
                 raise TypeError(f"filters[{k}] must have predict(g, dt, t), update(g, y) and a "
                                 f"motion model (.motion.ndim_state); got {type(f).__name__}")
         # (a mask of True and False was read as probabilities 1 and 0)
-        check_not_boolean(transition, "transition", "probabilities")
-        Pi = as_float_array(transition, "transition", ndim=(2,))
+        Pi = as_float_array(transition, "transition", ndim=(2,), not_boolean="probabilities")
         check_finite(Pi, "transition")
         if Pi.shape != (M, M):
             raise ValueError(f"transition must have shape ({M}, {M}); got {Pi.shape}")
@@ -285,9 +283,8 @@ class IMMFilter:
         if not np.allclose(Pi.sum(1), 1.0, rtol=0.0, atol=1e-9):
             raise ValueError(f"transition must be non-negative with rows summing to 1; row sums "
                              f"are {Pi.sum(1).tolist()}")
-        check_not_boolean(mode_probs, "mode_probs", "probabilities")
         mu = np.full(M, 1.0 / M) if mode_probs is None else as_float_array(
-            mode_probs, "mode_probs", ndim=(1,))
+            mode_probs, "mode_probs", ndim=(1,), not_boolean="probabilities")
         check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)
         if mu.shape != (M,) or np.any(mu < 0) or abs(mu.sum() - 1.0) > 1e-9:
             raise ValueError(f"mode_probs must be {M} non-negative numbers summing to 1; "

@@ -17,7 +17,6 @@ from .._validate import (
     as_measurement_series,
     check_has_steps,
     check_matrix_stack,
-    check_not_boolean,
     check_one_step,
     check_psd,
 )
@@ -39,8 +38,8 @@ def dt_steps(dt: ArrayLike, T: int) -> np.ndarray | float:
     values, so that a model that checks its steps (``LinearMotion`` takes 1 alone) sees none
     it would refuse (a 0 the user never gave, or the NaN of ``np.diff(times,
     prepend=np.nan)``)."""
-    check_not_boolean(dt, "dt")  # (True was a step of 1 here, where the models refuse it)
-    d = as_float_array(dt, "dt", ndim=(0, 1))
+    # (True was a step of 1 here, where the models refuse it)
+    d = as_float_array(dt, "dt", ndim=(0, 1), not_boolean="a number or an array of numbers")
     if d.ndim == 0:
         return float(d)
     if d.shape[0] == T - 1:

@@ -43,7 +43,6 @@ from .._validate import (
     as_whole,
     check_finite,
     check_has_steps,
-    check_not_boolean,
     check_not_infinite,
     check_prior,
 )
@@ -232,8 +231,8 @@ need not sum to 1 (any positive scale)."""
 
 
 def _check_weights(weights: ArrayLike) -> np.ndarray:
-    check_not_boolean(weights, "weights", "numbers >= 0")  # (a mask was taken as weights)
-    w = as_float_array(weights, "weights", ndim=(1, 2))
+    # (a mask was taken as weights)
+    w = as_float_array(weights, "weights", ndim=(1, 2), not_boolean="numbers >= 0")
     if w.shape[-1] == 0:
         raise ValueError("weights must not be empty")
     if not np.all(np.isfinite(w)) or np.any(w < 0):
@@ -351,8 +350,7 @@ def effective_sample_size(weights: ArrayLike) -> float:
     >>> effective_sample_size([3.0, 1.0])  # the same as (0.75, 0.25)
     1.6
     """
-    check_not_boolean(weights, "weights", "numbers >= 0")
-    w = as_float_array(weights, "weights", ndim=(1,))
+    w = as_float_array(weights, "weights", ndim=(1,), not_boolean="numbers >= 0")
     if w.size == 0:
         raise ValueError("weights is empty: no particles")
     top = _some_weight(w)
@@ -389,8 +387,7 @@ def _ess(w: np.ndarray) -> float:
 def _particles_and_weights(particles: ArrayLike,
                            weights: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     x = as_float_array(particles, "particles", ndim=(2,))
-    check_not_boolean(weights, "weights", "numbers >= 0")
-    w = as_float_array(weights, "weights", ndim=(1,))
+    w = as_float_array(weights, "weights", ndim=(1,), not_boolean="numbers >= 0")
     if w.shape != x.shape[:1]:
         raise ValueError(f"weights must have shape ({x.shape[0]},), one per particle (row of "
                          f"particles); got {w.shape}")
@@ -562,8 +559,8 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
         neff = _ess(w)
         h = sd * (4.0 / ((n + 2) * neff)) ** (1.0 / (n + 4))
     else:
-        check_not_boolean(bandwidth, "bandwidth", "one number > 0 or one per dimension")
-        hb = as_float_array(bandwidth, "bandwidth", ndim=(0, 1))
+        hb = as_float_array(bandwidth, "bandwidth", ndim=(0, 1),
+                            not_boolean="one number > 0 or one per dimension")
         if hb.size not in (1, n):
             raise ValueError(f"bandwidth must be a number or ({n},), one per dimension; got "
                              f"shape {hb.shape}")

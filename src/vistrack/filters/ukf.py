@@ -678,7 +678,7 @@ def ukf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     """
     g = check_gaussian(g)
     check_one_step(dt)
-    mo = motion if isinstance(motion, MotionFunctions) else MotionFunctions(motion)
+    mo = MotionFunctions.of(motion)
     points = points or MerweScaledSigmaPoints()
     n = g.mean.shape[-1]
     if n != mo.n:  # (numpy's matmul error, naming neither)

@@ -151,6 +151,19 @@ class MotionFunctions:
         self._Q_sqrt: dict = {}
         self._seen: tuple = ()
 
+    @classmethod
+    def of(cls, motion: MotionModel | NonlinearMotionModel | MotionFunctions
+           ) -> MotionFunctions:
+        """The functions of ``motion``: a model's, or functions already made, as they are
+        (their kept ``Q`` kept).
+
+        >>> from vistrack.models import ConstantVelocity
+        >>> mo = MotionFunctions.of(ConstantVelocity(dim=1, q=0.1))
+        >>> MotionFunctions.of(mo) is mo
+        True
+        """
+        return motion if isinstance(motion, MotionFunctions) else cls(motion)
+
     @property
     def ndim_state(self) -> int:
         """The state's size, as a motion model gives it."""

@@ -26,7 +26,6 @@ from .._validate import (
     as_float_array,
     as_number,
     check_matrix_stack,
-    check_not_boolean,
     check_psd,
     is_whole,
 )
@@ -107,8 +106,8 @@ class MotionModel(Protocol):
 
 
 def _as_dt(dt: float | np.ndarray) -> np.ndarray:
-    check_not_boolean(dt, "dt")  # (True was read as a step of 1)
-    d = as_float_array(dt, "dt", ndim=(0, 1))
+    # (True was read as a step of 1)
+    d = as_float_array(dt, "dt", ndim=(0, 1), not_boolean="a number or an array of numbers")
     if not np.all(np.isfinite(d)) or np.any(d < 0):
         bad = d[~(np.isfinite(d) & (d >= 0))].ravel()[0]
         raise ValueError(f"dt must be finite and >= 0; got {bad}")

@@ -25,7 +25,6 @@ from .._validate import (
     as_rng,
     as_whole,
     check_finite,
-    check_not_boolean,
     check_prior,
 )
 from .adapters import psd_sqrt
@@ -134,8 +133,7 @@ class SwitchingLinearSystem:
                              f"the motions give them; its H is {H.shape}")
         self.measurement = measurement
         # (a mask of True and False was read as probabilities 1 and 0)
-        check_not_boolean(transition, "transition", "probabilities")
-        Pi = as_float_array(transition, "transition", ndim=(2,))
+        Pi = as_float_array(transition, "transition", ndim=(2,), not_boolean="probabilities")
         check_finite(Pi, "transition")
         if Pi.shape == (k, k) and np.any(Pi < 0):
             i, j = (int(x) for x in np.argwhere(Pi < 0)[0])
@@ -145,9 +143,8 @@ class SwitchingLinearSystem:
             raise ValueError(f"transition must be a ({k}, {k}) non-negative matrix whose rows sum "
                              f"to 1; got shape {Pi.shape} and row sums {Pi.sum(1).tolist()}")
         self.transition = Pi
-        check_not_boolean(mode_probs, "mode_probs", "probabilities")
         mu = np.full(k, 1.0 / k) if mode_probs is None else as_float_array(
-            mode_probs, "mode_probs", ndim=(1,))
+            mode_probs, "mode_probs", ndim=(1,), not_boolean="probabilities")
         check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)
         if mu.shape != (k,) or np.any(mu < 0) or abs(mu.sum() - 1.0) > 1e-9:
             raise ValueError(f"mode_probs must be {k} non-negative numbers summing to 1; "
