@@ -128,6 +128,23 @@ def test_gnn_with_a_limit_equals_brute_force(seed):
                                                        abs=1e-9)
 
 
+@pytest.mark.parametrize("seed", range(40))
+def test_gnn_with_a_limit_near_the_largest_float_equals_brute_force(seed):
+    """Costs and a limit near 1.7e308: the pairs of the same problem scaled down by 2^1000
+    (exact), by brute force. The solver's sums overflowed to -inf, and it paired wrongly
+    (4 of 300 such problems)."""
+    rng = np.random.default_rng(700 + seed)
+    T, D = rng.integers(2, 5, 2)
+    cost = rng.random((T, D)) * 1.7e308
+    limit = float(rng.uniform(0.3, 1.05) * 1.7e308)
+    gate = np.ones((T, D), bool)
+    r, c = gnn(cost, limit=limit)
+    scale = 2.0 ** -1000
+    small, L = cost * scale, limit * scale
+    assert (small[r, c] - L).sum() == pytest.approx(brute_force_limited(small, gate, L),
+                                                    rel=1e-12)
+
+
 def test_gnn_with_a_limit_equals_the_extended_assignment():
     """``limit`` is ByteTrack's ``lapjv(cost, cost_limit=limit)``: the square problem whose
     every track and detection may go to a dummy at ``limit / 2``, solved by scipy."""
@@ -237,6 +254,8 @@ def test_greedy_and_nearest_neighbour():
     assert r.tolist() == [0] and c.tolist() == [1]
     with pytest.raises(ValueError, match=r"method must be one of \['gnn', 'greedy', 'nn'\]"):
         assign(cost, method="hungarian")
+    with pytest.raises(ValueError, match=r"method must be one of .*got \['gnn'\]"):
+        assign(cost, method=["gnn"])  # (was "unhashable type: 'list'")
     assert [len(a) for a in assign(np.zeros((3, 0)))] == [0, 0]
 
 

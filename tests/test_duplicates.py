@@ -50,6 +50,15 @@ def test_non_maximum_is_the_greedy_loop(seed):
         assert got == _greedy(boxes.tolist(), scores.tolist(), classes.tolist(), min_iou)
 
 
+def test_a_nan_class_is_named():
+    """NaN equals no class, its own included: two copies of one box of class NaN were both
+    kept, where any class shared suppresses one."""
+    box = [[0, 0, 10, 10], [0, 0, 10, 10]]
+    assert non_maximum(box, [0.9, 0.8], [1.0, 1.0]).tolist() == [True, False]
+    with pytest.raises(ValueError, match=r"classes must be numbers; classes\[0\] is NaN"):
+        non_maximum(box, [0.9, 0.8], [np.nan, np.nan])
+
+
 def test_exact_copies_are_suppressed_to_the_original_tracks(tmp_path):
     """Each detection repeated with a lower score: suppressed at any ``nms_iou`` below 1, the
     file tracks exactly as the one without the copies; left in, they make tracks of their

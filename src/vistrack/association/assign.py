@@ -361,7 +361,17 @@ def _limited_lsa(cost, gate):
     # costs relative to leaving the pair unassigned: a disallowed pair costs 0, as much as
     # leaving it, so the least-cost full assignment takes the allowed pairs of least total
     # (negative) cost, and the pairs that gain nothing are dropped
-    r, k = lsa_kernel(np.where(gate, cost, 0.0))
+    top = 0.0
+    for i in range(cost.shape[0]):
+        for j in range(cost.shape[1]):
+            if gate[i, j]:
+                top = max(top, abs(cost[i, j]))
+    c = np.where(gate, cost, 0.0)
+    if not np.isfinite((top + 1.0) * (min(cost.shape[0], cost.shape[1]) + 1) * 2.0):
+        # costs near the largest float: the same problem scaled into [-1, 0] (as
+        # _gated_lsa's; the solver's sums overflowed to -inf, and it paired wrongly)
+        c = c / top
+    r, k = lsa_kernel(c)
     n = 0
     for p in range(r.shape[0]):
         if gate[r[p], k[p]] and cost[r[p], k[p]] < 0.0:
@@ -723,6 +733,6 @@ def assign(cost: np.ndarray, gate: np.ndarray | None = None,
     >>> [a.tolist() for a in assign(cost, method="greedy")]
     [[0, 1], [0, 1]]
     """
-    if method not in ASSIGNERS:
+    if not isinstance(method, str) or method not in ASSIGNERS:  # (["gnn"]: "unhashable")
         raise ValueError(f"method must be one of {sorted(ASSIGNERS)}; got {method!r}")
     return ASSIGNERS[method](cost, gate)
