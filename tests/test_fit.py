@@ -362,6 +362,21 @@ def test_without_ground_truth_only_a_larger_measurement_noise_is_taken(tmp_path,
     assert read_config(out).motion == got
 
 
+def test_fit_out_of_another_suffix_is_written_as_toml_and_said(tmp_path, capsys):
+    """``fit --out learned.json`` wrote TOML unsaid, where ``track --out results.json`` warns
+    that it writes MOTChallenge's text: said the same way; the file is the configuration."""
+    rng = np.random.default_rng(5)
+    seqs = [str(_sequence(tmp_path / f"SIM-{k}", rng)) for k in range(2)]
+    out = tmp_path / "learned.json"
+    assert main(["fit", *seqs, "--out", str(out), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert f"vistrack fit: warning: {out}: written as TOML" in err and ".json is not" in err
+    assert read_config(out) == TrackConfig.preset()
+    for name in ("fit.toml", "fit"):  # TOML's suffix, or none: nothing said
+        assert main(["fit", *seqs, "--out", str(tmp_path / name), "--quiet"]) == 0
+        assert "warning" not in capsys.readouterr().err
+
+
 def test_a_sequence_given_twice_is_refused(tmp_path, capsys, monkeypatch):
     """One sequence given twice (or by two paths) was learned from twice and "held out" from
     itself: `fit S S ../x/S --gt` reported three times its objects."""

@@ -1066,6 +1066,11 @@ def _fit(args: argparse.Namespace) -> int:
     # (--force wrote the configuration over a sequence's detections, or its ground truth)
     check_not_input([args.out], [r for s in inputs for r in sequence_inputs(s)], name="--out")
     check_output(args.out, force=args.force, name="--out")
+    if Path(args.out).suffix.lower() not in ("", ".toml"):
+        # (fit --out learned.json wrote TOML unsaid, where track --out results.json warns)
+        warnings.warn(f"{args.out}: written as TOML, the configuration's format (read back "
+                      f"with --config); {Path(args.out).suffix} is not a format vistrack fit "
+                      "writes", UserWarning, stacklevel=2)
     cfg = read_config(args.config) if args.config is not None else TrackConfig.preset()
     progress = sys.stderr if not args.quiet else None
     if args.gt:
