@@ -737,9 +737,17 @@ def test_the_cli_says_an_interrupted_run_in_one_line(tmp_path, monkeypatch, caps
         raise KeyboardInterrupt
 
     monkeypatch.setattr(vistrack.pipeline, "track_video", interrupted)
-    assert main(["track", str(tmp_path), "--out-dir", str(tmp_path / "out")]) == 130
+    out = tmp_path / "out"
+    # a first run: nothing there before, nothing left ("earlier outputs are kept" was said)
+    assert main(["track", str(tmp_path), "--out-dir", str(out)]) == 130
+    assert capsys.readouterr().err == "vistrack track: interrupted; nothing was written\n"
+    assert not out.exists()
+    out.mkdir()
+    (out / "tracks.txt").write_text("an earlier run's\n")
+    assert main(["track", str(tmp_path), "--out-dir", str(out), "--force"]) == 130
     err = capsys.readouterr().err
     assert err == "vistrack track: interrupted; earlier outputs are kept\n"
+    assert (out / "tracks.txt").read_text() == "an earlier run's\n"
 
 
 def test_a_detector_on_a_frame_without_an_image_names_the_frame():

@@ -1819,7 +1819,13 @@ def _stopped(args: argparse.Namespace, exc: BaseException) -> int:
     """Ctrl-C's or SIGTERM's one line and exit status."""
     # tracks, boxes, video and plot are written under partial names and renamed only when
     # complete (vistrack.io.atomic): what an earlier run wrote is still there
-    kept = "; earlier outputs are kept" if args.command in ("track", "track-one") else ""
+    kept = ""
+    if args.command in ("track", "track-one"):
+        # a first run's outputs are removed with the folder it made: "earlier outputs are
+        # kept" was said of none
+        out = Path(getattr(args, "out", None) or getattr(args, "out_dir", None) or ".")
+        there = out.is_file() or out.is_dir() and any(out.iterdir())
+        kept = "; earlier outputs are kept" if there else "; nothing was written"
     written = getattr(args, "outputs_written", None)
     if written:  # (stopped while --report's page was made)
         kept = (f" after this run's outputs were written ({', '.join(map(str, written))}); "
