@@ -221,17 +221,17 @@ def _scene(x=30):
 
 
 def test_a_refused_start_leaves_every_member_as_it_was():
-    """A grey frame refused by the colour member left the template member started on it
-    (its box and template cut from the refused frame) while the composite kept its old
-    state: all members start, or none does."""
+    """A frame refused by the colour member (BGRA, which the template member takes) left
+    the template member started on it (its box and template cut from the refused frame)
+    while the composite kept its old state: all members start, or none does."""
     template, colour = single_tracker("template"), single_tracker("colour")
     c = Composite({"t": (template, (4.0, 0.1)), "c": (colour, (4.0, 0.1))})
     c.init(_scene(), [30, 20, 20, 20])
     before = {k: v.copy() if isinstance(v, np.ndarray) else v
               for k, v in template.__dict__.items()}
-    grey = np.zeros((60, 80), np.uint8)
-    with pytest.raises(ValueError):
-        c.init(grey, [5, 5, 30, 30])
+    bgra = np.zeros((60, 80, 4), np.uint8)
+    with pytest.raises(ValueError, match=r"C in \(1, 3\); got shape \(60, 80, 4\)"):
+        c.init(bgra, [5, 5, 30, 30])
     for k, v in before.items():
         got = template.__dict__[k]
         if isinstance(v, np.ndarray):

@@ -330,14 +330,28 @@ def test_step_refuses_a_starting_detection_outside_the_image():
 
 
 @pytest.mark.parametrize("method", ["colour", "meanshift", "camshift", "particle"])
-def test_a_colour_tracker_given_a_grey_image_says_so(method):
-    """The colour trackers need BGR frames: a grey one is named, with the trackers that take
-    it (OpenCV's 'Bad number of channels' error came out before)."""
+def test_a_colour_tracker_follows_a_grey_image_as_the_same_image_in_bgr(method):
+    """A grey frame is tracked by its brightness's histogram, as the same frame with three
+    equal channels (how the command line reads a grey image folder) is: the same boxes, and
+    on the bright square moving 3 pixels a frame. Before, a grey array was refused while
+    the command line tracked the same frames."""
     from vistrack.tracking.single import single_tracker
 
-    with pytest.raises(ValueError, match=r"^image is grey \(100, 120\): the colour trackers "
-                       r".* need BGR frames \(H, W, 3\); template, klt, wsl and snake"):
-        single_tracker(method).init(np.zeros((100, 120), np.uint8), [40, 30, 30, 30])
+    rng = np.random.default_rng(0)
+    frames = []
+    for x in range(30, 58, 3):
+        im = np.clip(rng.normal(60, 10, (120, 160)), 0, 255).astype(np.uint8)
+        im[40:70, x:x + 25] = np.clip(rng.normal(180, 10, (30, 25)), 0, 255).astype(np.uint8)
+        frames.append(im)
+    boxes = {}
+    for kind, convert in (("grey", lambda im: im),
+                          ("bgr", lambda im: cv2.cvtColor(im, cv2.COLOR_GRAY2BGR))):
+        t = single_tracker(method)
+        t.init(convert(frames[0]), [30, 40, 25, 30])
+        boxes[kind] = np.array([t.update(convert(im)) for im in frames[1:]])
+    np.testing.assert_array_equal(boxes["grey"], boxes["bgr"])
+    centre = boxes["grey"][:, 0] + boxes["grey"][:, 2] / 2
+    np.testing.assert_allclose(centre, np.arange(33, 58, 3) + 12.5, atol=2.5)
 
 
 def _dots(dots, shift=(0, 0), drop=()):
@@ -599,7 +613,7 @@ def test_wsl_keeps_a_still_box_still_at_every_edge():
 
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_a_refused_init_leaves_the_tracker_as_it_was(method):
-    """An ``init`` refused (a float image; a grey one for the colour trackers) leaves the
+    """An ``init`` refused (a float image; a BGRA one for the colour trackers) leaves the
     tracker following what it followed: its next box equals that of a tracker never given
     the bad start. The colour trackers kept the refused box (meanshift then followed
     [0, 0, 10, 10] from a red square at [30, 20, 20, 20])."""
@@ -614,7 +628,7 @@ def test_a_refused_init_leaves_the_tracker_as_it_was(method):
     bad.init(image(30), [30, 20, 20, 20])
     refused = [image(30).astype(np.float64)]
     if method in ("colour", "meanshift", "camshift", "particle"):
-        refused.append(image(30)[..., 0])
+        refused.append(np.dstack([image(30), np.full((60, 80), 255, np.uint8)]))
     for im in refused:
         with pytest.raises(ValueError):
             bad.init(im, [0, 0, 10, 10])

@@ -71,9 +71,10 @@ def _hsv(image: np.ndarray) -> np.ndarray:
 
     im = as_uint8_image(image, channels=(1, 3))
     if im.ndim != 3:
-        raise ValueError(f"image is grey {im.shape}: the colour trackers (colour, meanshift, "
-                         "camshift, particle) need BGR frames (H, W, 3); template, klt, wsl "
-                         "and snake track grey ones")
+        # a grey frame is its value alone (hue and saturation 0), as the same frame in BGR
+        # gives: the model is then the brightness's histogram (a grey image read by the
+        # command line, three equal channels, was tracked so, and refused as an array)
+        im = cv2.cvtColor(im, cv2.COLOR_GRAY2BGR)
     return cv2.cvtColor(im, cv2.COLOR_BGR2HSV)
 
 
@@ -518,6 +519,9 @@ def _cell_tables(bins: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 class ColourTracker(SingleObjectTracker):
     """Mean shift on a colour back-projection, with an online histogram (see the module).
+
+    Frames are BGR, or grey: a grey frame is its brightness alone (hue and saturation 0, as
+    the same frame in BGR), and the model that brightness's histogram.
 
     Parameters
     ----------
