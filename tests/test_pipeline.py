@@ -661,7 +661,7 @@ def test_an_interrupted_run_leaves_the_earlier_outputs_as_they_were(tmp_path):
     assert not (tmp_path / "new").exists()
 
 
-def test_a_run_found_wrong_at_its_end_writes_nothing(tmp_path):
+def test_a_run_found_wrong_at_its_end_writes_nothing(tmp_path, monkeypatch):
     """What fails only once the frames are through (a video with no frame to track; results
     that cannot be scored against --gt, a tracker reporting one id twice in a frame; a
     track-one --gt shorter than the video) was found after the outputs were committed: the
@@ -704,6 +704,17 @@ def test_a_run_found_wrong_at_its_end_writes_nothing(tmp_path):
     with pytest.raises(ValueError, match="has 3 boxes for 8 frames"):
         track_one(folder, truth[0], tmp_path / "one" / "boxes.txt", gt=short)
     assert not (tmp_path / "one").exists()
+    # an image folder counts its frames: refused before a frame is tracked (the whole run
+    # came first)
+    import vistrack.pipeline
+
+    def tracked(*args, **kwargs):
+        raise AssertionError("the frames were tracked")
+
+    with monkeypatch.context() as m:
+        m.setattr(vistrack.pipeline, "run", tracked)
+        with pytest.raises(ValueError, match="has 3 boxes for 8 frames"):
+            track_one(folder, truth[0], tmp_path / "one" / "boxes.txt", gt=short)
 
 
 def test_the_folder_of_the_images_tracked_is_no_output_folder(tmp_path):
