@@ -132,12 +132,13 @@ def test_an_existing_out_without_force_is_refused_before_reading(bad_sequence, t
 
 
 def test_out_dir_that_is_a_file_is_refused(tmp_path, capsys):
-    # the video does not exist: the output is checked first, and the video never opened
+    # the output is checked before the video is read (a video that does not exist is
+    # named first: test_an_input_that_does_not_exist_is_named_before_an_existing_output)
     (tmp_path / "file").write_text("")
-    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir",
+    assert main(["track", str(VIDEO), "--out-dir",
                  str(tmp_path / "file")]) == 2
     one_line(capsys, "track", f"--out-dir {tmp_path / 'file'} is a file, not a folder")
-    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir",
+    assert main(["track", str(VIDEO), "--out-dir",
                  str(tmp_path / "file" / "sub")]) == 2
     one_line(capsys, "track", f"--out-dir {tmp_path / 'file' / 'sub'}: {tmp_path / 'file'} "
              "is a file, not a folder")
@@ -146,11 +147,11 @@ def test_out_dir_that_is_a_file_is_refused(tmp_path, capsys):
 
 def test_out_dir_with_earlier_outputs_needs_force(tmp_path, capsys):
     (tmp_path / "tracks.txt").write_text("earlier")
-    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir", str(tmp_path)]) == 2
+    assert main(["track", str(VIDEO), "--out-dir", str(tmp_path)]) == 2
     one_line(capsys, "track", f"{tmp_path / 'tracks.txt'} exists; pass --force to overwrite "
              "it")
     (tmp_path / "tracks.csv").mkdir()
-    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir", str(tmp_path),
+    assert main(["track", str(VIDEO), "--out-dir", str(tmp_path),
                  "--force"]) == 2
     one_line(capsys, "track", f"--out-dir {tmp_path}: {tmp_path / 'tracks.csv'} is a folder, "
              "not a file")
@@ -160,11 +161,11 @@ def test_an_output_folder_that_cannot_be_written_is_refused(tmp_path, capsys, mo
     import vistrack.io.atomic
 
     monkeypatch.setattr(vistrack.io.atomic.os, "access", lambda path, mode: False)
-    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir",
+    assert main(["track", str(VIDEO), "--out-dir",
                  str(tmp_path / "out")]) == 2
     one_line(capsys, "track", f"--out-dir {tmp_path / 'out'}: cannot write in {tmp_path} "
              "(no permission)")
-    assert main(["track-one", str(tmp_path / "missing.mp4"), "--init", "1,2,3,4", "--out",
+    assert main(["track-one", str(VIDEO), "--init", "1,2,3,4", "--out",
                  str(tmp_path / "boxes.txt")]) == 2
     one_line(capsys, "track-one", f"--out {tmp_path / 'boxes.txt'}: cannot write in "
              f"{tmp_path} (no permission)")
@@ -175,7 +176,7 @@ def test_an_output_folder_that_cannot_be_written_is_refused(tmp_path, capsys, mo
         f_flag = real.f_flag | os.ST_RDONLY
 
     monkeypatch.setattr(vistrack.io.atomic.os, "statvfs", lambda path: ReadOnly())
-    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir",
+    assert main(["track", str(VIDEO), "--out-dir",
                  str(tmp_path / "out")]) == 2
     one_line(capsys, "track", f"--out-dir {tmp_path / 'out'}: cannot write in {tmp_path} "
              "(a read-only file system)")
@@ -195,8 +196,9 @@ def test_a_folder_that_refuses_new_files_is_named_not_a_partial_file(tmp_path, c
     vistrack.io.atomic.check_output(tmp_path / "a.txt")
     assert list(tmp_path.iterdir()) == []  # the file made to find out is gone
     if os.path.isdir("/proc/self"):  # Linux: /proc takes no new files, even from root
-        seq = tmp_path / "missing"
-        assert main(["track", str(seq), "--out", "/proc/vistrack-x.txt"]) == 2
+        seq = tmp_path / "dets.txt"
+        seq.write_text("1,-1,10,10,20,20,0.9,-1,-1,-1\n")
+        assert main(["track", str(seq), "--fps", "10", "--out", "/proc/vistrack-x.txt"]) == 2
         # root passes the permissions and fails at the file; another user at the permissions
         why = "No such file or directory" if os.geteuid() == 0 else "no permission"
         one_line(capsys, "track", f"--out /proc/vistrack-x.txt: cannot write in /proc ({why})")
@@ -205,7 +207,7 @@ def test_a_folder_that_refuses_new_files_is_named_not_a_partial_file(tmp_path, c
         raise OSError(errno.EROFS, os.strerror(errno.EROFS))
 
     monkeypatch.setattr(vistrack.io.atomic.tempfile, "mkstemp", read_only)
-    assert main(["track", str(tmp_path / "missing.mp4"), "--out-dir",
+    assert main(["track", str(VIDEO), "--out-dir",
                  str(tmp_path / "out")]) == 2
     one_line(capsys, "track", f"--out-dir {tmp_path / 'out'}: cannot write in {tmp_path} "
              f"({os.strerror(errno.EROFS)})")
@@ -227,7 +229,7 @@ def test_a_read_only_folder_is_refused(tmp_path, capsys):
 
 def test_track_one_checks_its_output_first(tmp_path, capsys):
     (tmp_path / "folder").mkdir()
-    missing = tmp_path / "missing.mp4"
+    missing = VIDEO  # (checked before the video is read)
     assert main(["track-one", str(missing), "--init", "1,2,3,4", "--out",
                  str(tmp_path / "folder"), "--force"]) == 2
     one_line(capsys, "track-one", f"--out {tmp_path / 'folder'} is a folder, not a file")
@@ -1409,3 +1411,37 @@ def test_options_that_mean_nothing_alone_and_a_tracker_that_is_no_callable(tmp_p
     assert capsys.readouterr().err == (
         "vistrack track: error: tracker 'mymod:notcallable': notcallable = 3, not a callable "
         "that makes a tracker\n")
+
+
+def test_an_input_that_does_not_exist_is_named_before_an_existing_output(tmp_path, capsys):
+    """A missing input beside an output that exists said "pass --force"; given --force, the
+    next run named the input. The input is named first, in the words a run without the
+    output names it (the oracle: the same command with a new output)."""
+    out_dir, res = tmp_path / "out", tmp_path / "res.txt"
+    out_dir.mkdir()
+    (out_dir / "tracks.txt").write_text("an earlier run's\n")
+    res.write_text("an earlier run's\n")
+    seq = tmp_path / "SEQ"
+    (seq / "det").mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=SEQ\nframeRate=10\nseqLength=3\n"
+                                     "imWidth=100\nimHeight=80\n")
+    (seq / "det" / "det.txt").write_text("1,-1,10,10,20,20,0.9,-1,-1,-1\n")
+    gone = str(tmp_path / "gone.txt")
+    cases = [
+        ("track", [str(tmp_path / "missing.mp4")], "--out-dir", out_dir),
+        ("track", [str(tmp_path / "missing")], "--out", res),
+        ("track", [str(VIDEO), "--gt", gone], "--out-dir", out_dir),
+        ("track", [str(VIDEO), "--frontend", f"detections:{gone}"], "--out-dir", out_dir),
+        ("track", [str(seq), "--detections", gone], "--out", res),
+        ("track-one", [str(tmp_path / "missing.mp4"), "--init", "1,1,5,5"], "--out", res),
+        ("track-one", [str(VIDEO), "--gt", gone], "--out", res),
+    ]
+    for command, argv, flag, existing in cases:
+        new = tmp_path / ("new" if flag == "--out-dir" else "new.txt")
+        assert main([command, *argv, flag, str(new)]) == 2
+        _, want = capsys.readouterr()
+        assert "does not exist" in want, want
+        assert main([command, *argv, flag, str(existing)]) == 2
+        assert capsys.readouterr() == ("", want)
+        assert not new.exists()
+    assert (out_dir / "tracks.txt").read_text() == res.read_text() == "an earlier run's\n"

@@ -538,6 +538,16 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
                     f"{what} goes with --out-dir")
     if args.zero_distance is not None and args.gt is None:
         return "--zero-distance goes with --gt (it says how the tracks are scored against it)"
+    # inputs that do not exist, named before an existing output's "pass --force" (which,
+    # given, named the input next), in the words the run would name them in
+    frontend = args.frontend or ""
+    for path, what in ((args.input, " (a sequence folder, or a detections file)"
+                        if args.out is not None else ""),
+                       (args.gt, " (--gt FILE)"), (args.detections, " (--detections FILE)"),
+                       (frontend[len("detections:"):] if frontend.startswith("detections:")
+                        else None, " (--frontend detections:FILE)")):
+        if path and not Path(path).exists():
+            return f"{path} does not exist{what}"
     if args.out is not None:
         folder = Path(args.input)
         sequence = folder.is_dir() and ((folder / "seqinfo.ini").exists()
@@ -1162,6 +1172,11 @@ def _track_one(args: argparse.Namespace) -> int:
     except ValueError:
         return _fail("track-one", f"--init must be x,y,w,h (four finite numbers, w and h "
                      f"> 0); got {args.init!r}")
+    # inputs that do not exist, named before an existing output's "pass --force" (which,
+    # given, named the input next)
+    for given, what in ((args.input, ""), (args.gt, " (--gt FILE)")):
+        if given is not None and not Path(given).exists():
+            return _fail("track-one", f"{given} does not exist{what}")
     # before anything is read or computed: a run that would write over what it reads, or
     # cannot write, fails now
     check_not_input([args.out], input_files(args.input, gt=args.gt), name="--out")
