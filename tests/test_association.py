@@ -145,6 +145,56 @@ def test_gnn_with_a_limit_near_the_largest_float_equals_brute_force(seed):
                                                     rel=1e-12)
 
 
+def _exact_best_limited(cost, gate, limit):
+    """The least total of cost - limit over every matching of allowed pairs, in exact
+    fractions (floats overflow at these magnitudes)."""
+    from fractions import Fraction
+
+    T, D = cost.shape
+    pairs = [(i, j) for i in range(T) for j in range(D) if gate[i, j] and cost[i, j] < limit]
+    best = Fraction(0)
+    for k in range(1, min(T, D) + 1):
+        for chosen in itertools.combinations(pairs, k):
+            if len({i for i, _ in chosen}) == k and len({j for _, j in chosen}) == k:
+                best = min(best, sum(Fraction(cost[i, j]) - Fraction(limit)
+                                     for i, j in chosen))
+    return best
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_gnn_with_a_limit_over_the_whole_float_range_equals_brute_force(seed):
+    """Costs and a limit of either sign up to 1.7e308, where cost - limit overflows to
+    -inf (the solver called such a problem infeasible, or paired wrongly), and gains from
+    1e-300 to 1e308 side by side (a tiny gain nothing contests was scaled to 0 and
+    dropped): the pairs of least exact total, within rounding of the total."""
+    from fractions import Fraction
+
+    rng = np.random.default_rng(900 + seed)
+    T, D = rng.integers(1, 5, 2)
+    if seed % 2:
+        cost = (rng.random((T, D)) * 2 - 1) * 1.7e308
+        limit = float((rng.random() * 2 - 1) * 1.7e308)
+    else:
+        cost = -rng.random((T, D)) * rng.choice([1.7e308, 1e308, 1e300, 1.0, 1e-300], (T, D))
+        limit = 0.0
+    gate = rng.random((T, D)) < 0.7
+    r, c = gnn(np.where(gate, cost, np.inf), gate, limit=limit)
+    assert len(set(r)) == len(r) and len(set(c)) == len(c) and gate[r, c].all()
+    got = sum((Fraction(cost[i, j]) - Fraction(limit) for i, j in zip(r, c)), Fraction(0))
+    best = _exact_best_limited(cost, gate, limit)
+    assert got == best or abs(float((got - best) / best)) < 1e-12
+
+
+def test_a_gain_too_small_to_scale_is_still_taken():
+    """A pair worth 1.2e-302 that no other track wants, beside gains of 1e307: taken (it
+    was scaled to 0, as much as leaving it, and dropped)."""
+    inf = np.inf
+    cost = np.array([[inf, -9.5e-301, inf], [-0.46, -8e307, -1.5e298],
+                     [inf, -4.6e-301, -4.7e298], [-1.2e-302, -6.3e297, -6.2e-311]])
+    r, c = gnn(cost, limit=0.0)
+    assert sorted(zip(r.tolist(), c.tolist())) == [(1, 1), (2, 2), (3, 0)]
+
+
 def test_gnn_with_a_limit_equals_the_extended_assignment():
     """``limit`` is ByteTrack's ``lapjv(cost, cost_limit=limit)``: the square problem whose
     every track and detection may go to a dummy at ``limit / 2``, solved by scipy."""

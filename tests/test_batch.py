@@ -128,6 +128,19 @@ def test_an_interrupted_batch_names_the_outputs_it_wrote(bench, tmp_path, monkey
     assert capsys.readouterr().err.splitlines()[-2:] == [
         "vistrack track: 1 of 3 inputs written before it stopped: SIM-0.txt",
         "vistrack track: interrupted; earlier outputs are kept"]
+    # a first run: what it wrote is named, and no earlier outputs are said to be kept
+    first = tmp_path / "first"
+
+    def interrupted_first(jobs, **kwargs):
+        first.mkdir()
+        (first / "SIM-0.txt").write_text("this run's\n")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(vistrack.batch, "run_jobs", interrupted_first)
+    assert main(["track", str(bench), "--out", str(first)]) == 130
+    assert capsys.readouterr().err.splitlines()[-2:] == [
+        "vistrack track: 1 of 3 inputs written before it stopped: SIM-0.txt",
+        "vistrack track: interrupted"]
 
 
 def _broken(tmp_path: Path, bench: Path) -> Path:

@@ -1433,6 +1433,8 @@ def test_an_input_that_does_not_exist_is_named_before_an_existing_output(tmp_pat
         ("track", [str(VIDEO), "--gt", gone], "--out-dir", out_dir),
         ("track", [str(VIDEO), "--frontend", f"detections:{gone}"], "--out-dir", out_dir),
         ("track", [str(seq), "--detections", gone], "--out", res),
+        ("track", [str(VIDEO), "--frontend", f"onnx:{tmp_path / 'gone.onnx'}"], "--out-dir",
+         out_dir),
         ("track-one", [str(tmp_path / "missing.mp4"), "--init", "1,1,5,5"], "--out", res),
         ("track-one", [str(VIDEO), "--gt", gone], "--out", res),
     ]
@@ -1445,3 +1447,7 @@ def test_an_input_that_does_not_exist_is_named_before_an_existing_output(tmp_pat
         assert capsys.readouterr() == ("", want)
         assert not new.exists()
     assert (out_dir / "tracks.txt").read_text() == res.read_text() == "an earlier run's\n"
+    # an option of the other mode is named before the file it names is looked for
+    assert main(["track", str(seq), "--out", str(tmp_path / "new.txt"), "--frontend",
+                 f"detections:{gone}"]) == 2
+    one_line(capsys, "track", "--frontend goes with --out-dir")

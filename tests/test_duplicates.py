@@ -57,6 +57,10 @@ def test_a_nan_class_is_named():
     assert non_maximum(box, [0.9, 0.8], [1.0, 1.0]).tolist() == [True, False]
     with pytest.raises(ValueError, match=r"classes must be numbers; classes\[0\] is NaN"):
         non_maximum(box, [0.9, 0.8], [np.nan, np.nan])
+    with pytest.raises(ValueError, match=r"classes\[1\] is NaN"):
+        non_maximum(box, [0.9, 0.8], np.array(["a", np.nan], dtype=object))
+    assert non_maximum(box, [0.9, 0.8], np.array(["a", "a"], dtype=object)).tolist() == [
+        True, False]  # (names as classes, as before)
 
 
 def test_exact_copies_are_suppressed_to_the_original_tracks(tmp_path):

@@ -715,6 +715,12 @@ def test_a_run_found_wrong_at_its_end_writes_nothing(tmp_path, monkeypatch):
         m.setattr(vistrack.pipeline, "run", tracked)
         with pytest.raises(ValueError, match="has 3 boxes for 8 frames"):
             track_one(folder, truth[0], tmp_path / "one" / "boxes.txt", gt=short)
+        # frame,x,y,w,h lines of other frames are named as such, not by their count
+        other = tmp_path / "other.txt"
+        other.write_text("".join(f"{200 + k},{x},{y},{w},{h}\n"
+                                 for k, (x, y, w, h) in enumerate(truth[:3], 1)))
+        with pytest.raises(ValueError, match="lines start at frame 201"):
+            track_one(folder, truth[0], tmp_path / "one" / "boxes.txt", gt=other)
 
 
 def test_the_folder_of_the_images_tracked_is_no_output_folder(tmp_path):
@@ -753,12 +759,28 @@ def test_the_cli_says_an_interrupted_run_in_one_line(tmp_path, monkeypatch, caps
     assert main(["track", str(tmp_path), "--out-dir", str(out)]) == 130
     assert capsys.readouterr().err == "vistrack track: interrupted; nothing was written\n"
     assert not out.exists()
+    # a folder holding files of the user's own, none a run's output: nothing was written
     out.mkdir()
+    (out / "notes.md").write_text("mine\n")
+    assert main(["track", str(tmp_path), "--out-dir", str(out)]) == 130
+    assert capsys.readouterr().err == "vistrack track: interrupted; nothing was written\n"
     (out / "tracks.txt").write_text("an earlier run's\n")
     assert main(["track", str(tmp_path), "--out-dir", str(out), "--force"]) == 130
     err = capsys.readouterr().err
     assert err == "vistrack track: interrupted; earlier outputs are kept\n"
     assert (out / "tracks.txt").read_text() == "an earlier run's\n"
+    # a first run stopped after its outputs were renamed into place says so
+    fresh = tmp_path / "fresh"
+
+    def written_then_interrupted(video, out_dir, **kwargs):
+        Path(out_dir).mkdir()
+        (Path(out_dir) / "tracks.txt").write_text("this run's\n")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(vistrack.pipeline, "track_video", written_then_interrupted)
+    assert main(["track", str(tmp_path), "--out-dir", str(fresh)]) == 130
+    assert capsys.readouterr().err == ("vistrack track: interrupted; this run's outputs were "
+                                       "written\n")
 
 
 def test_a_detector_on_a_frame_without_an_image_names_the_frame():

@@ -538,16 +538,6 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
                     f"{what} goes with --out-dir")
     if args.zero_distance is not None and args.gt is None:
         return "--zero-distance goes with --gt (it says how the tracks are scored against it)"
-    # inputs that do not exist, named before an existing output's "pass --force" (which,
-    # given, named the input next), in the words the run would name them in
-    frontend = args.frontend or ""
-    for path, what in ((args.input, " (a sequence folder, or a detections file)"
-                        if args.out is not None else ""),
-                       (args.gt, " (--gt FILE)"), (args.detections, " (--detections FILE)"),
-                       (frontend[len("detections:"):] if frontend.startswith("detections:")
-                        else None, " (--frontend detections:FILE)")):
-        if path and not Path(path).exists():
-            return f"{path} does not exist{what}"
     if args.out is not None:
         folder = Path(args.input)
         sequence = folder.is_dir() and ((folder / "seqinfo.ini").exists()
@@ -587,6 +577,9 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
             if args.fps is None:
                 return (f"{args.input} is a detections file alone: give its frame rate "
                         "with --fps")
+        missing = _missing_input(args)
+        if missing:
+            return missing
         # (--force wrote the results over the configuration the run read, or the sequence's
         # own files; named before "exists; pass --force")
         check_not_input([args.out], sequence_inputs(args.input, args.detections)
@@ -613,11 +606,46 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
             return problem
         if args.skip_bad_frames and Path(args.input).is_file():
             return _skip_bad_frames_problem([args.input])
+        missing = _missing_input(args)
+        if missing:
+            return missing
         video_outputs(args.out_dir, force=args.force, name="--out-dir",
                       points=_points(name),
                       inputs=input_files(args.input, gt=args.gt, frontend=args.frontend,
                                          config=args.config))
+    # what a stop says it kept: the outputs there before the run (looked at when it stopped,
+    # an unrelated file in --out-dir, or a file this run wrote, was taken for one)
+    args.outputs_to = [(args.out if args.out is not None else args.out_dir, args.out is None)]
+    args.had_outputs = _had_outputs(*args.outputs_to[0])
     return ""
+
+
+def _missing_input(args: argparse.Namespace) -> str:
+    """The first of one input's files (INPUT, ``--gt``, ``--detections``, ``--frontend
+    detections:FILE`` or ``onnx:MODEL``) that does not exist, in the words the run would name
+    it in, "" if none: named before an existing output's "pass --force" (which, given, named
+    the input next), after the options that do not go with the run's mode."""
+    frontend = args.frontend or ""
+    kind, _, file = frontend.partition(":")
+    for path, what in ((args.input, " (a sequence folder, or a detections file)"
+                        if args.out is not None else ""),
+                       (args.gt, " (--gt FILE)"), (args.detections, " (--detections FILE)"),
+                       (file if kind in ("detections", "onnx") else None,
+                        f" (--frontend {kind}:{'FILE' if kind == 'detections' else 'MODEL'})")):
+        if path and not Path(path).exists():
+            return f"{path} does not exist{what}"
+    return ""
+
+
+def _had_outputs(out: str | Path, folder: bool) -> bool:
+    """Whether an output of a run to ``out`` (a results file, or a folder of a video's
+    outputs) is there before it runs: what a stopped run says it kept."""
+    from .pipeline import REPORT, RUN_INFO, SINK_FILES
+
+    p = Path(out)
+    if not folder:
+        return p.exists()
+    return any((p / name).exists() for name in (*SINK_FILES.values(), RUN_INFO, REPORT))
 
 
 def _skip_bad_frames_problem(videos: Sequence[str]) -> str:
@@ -993,6 +1021,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         else:
             video_outputs(job.out, force=args.force, name="--out-dir", points=_points(name),
                           inputs=read)
+    args.had_outputs = any(_had_outputs(job.out, kind != "detections") for job in jobs)
     if args.scheduler is not None:
         if args.jobs is not None:
             return fail("--jobs goes with the local pool; the cluster has its own workers")
@@ -1016,6 +1045,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
             written = _written_since(jobs, t0)
             print(f"vistrack track: {len(written)} of {len(jobs)} inputs written before it "
                   f"stopped{': ' if written else ''}{', '.join(written)}", file=sys.stderr)
+            args.batch_written = written
             raise
         clear_bar()
     if kind == "pixels" and said:
@@ -1181,6 +1211,8 @@ def _track_one(args: argparse.Namespace) -> int:
     # cannot write, fails now
     check_not_input([args.out], input_files(args.input, gt=args.gt), name="--out")
     check_output(args.out, force=args.force, name="--out")
+    args.outputs_to = [(args.out, False)]
+    args.had_outputs = _had_outputs(args.out, False)
     run = track_one(args.input, init, args.out, method=args.method, gt=args.gt,
                     force=args.force, progress=sys.stderr if sys.stderr.isatty()
                     and not args.quiet else None, init_name="--init", gt_origin=args.gt_origin)
@@ -1835,12 +1867,15 @@ def _stopped(args: argparse.Namespace, exc: BaseException) -> int:
     # tracks, boxes, video and plot are written under partial names and renamed only when
     # complete (vistrack.io.atomic): what an earlier run wrote is still there
     kept = ""
-    if args.command in ("track", "track-one"):
-        # a first run's outputs are removed with the folder it made: "earlier outputs are
-        # kept" was said of none
-        out = Path(getattr(args, "out", None) or getattr(args, "out_dir", None) or ".")
-        there = out.is_file() or out.is_dir() and any(out.iterdir())
-        kept = "; earlier outputs are kept" if there else "; nothing was written"
+    if getattr(args, "had_outputs", False):
+        kept = "; earlier outputs are kept"
+    elif any(_had_outputs(*o) for o in getattr(args, "outputs_to", ())):
+        # a first run stopped after its outputs were renamed into place
+        kept = "; this run's outputs were written"
+    elif hasattr(args, "had_outputs") and not getattr(args, "batch_written", None):
+        # a first run ("earlier outputs are kept" was said of none); a batch that wrote some
+        # inputs has named them in the line before
+        kept = "; nothing was written"
     written = getattr(args, "outputs_written", None)
     if written:  # (stopped while --report's page was made)
         kept = (f" after this run's outputs were written ({', '.join(map(str, written))}); "

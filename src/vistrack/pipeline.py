@@ -2932,12 +2932,6 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
     start = Detections.from_xywh(as_box(init, init_name)[None])
     reader = VideoReader(source, prefetch=4)
     first = reader.start
-    if truth is not None and reader._files is not None and len(truth) < len(reader):
-        # an image folder counts its frames exactly: refused before tracking them (checked
-        # after the run, it cost the whole run first); a video's header may count wrong,
-        # and is checked against the frames read (check, below)
-        raise ValueError(f"{gt} has {counted(len(truth), 'box', 'boxes')} for "
-                         f"{counted(len(reader), 'frame')}")
     if truth is not None and gt_first is not None and gt_first not in (first, first - 1):
         # frame,x,y,w,h lines number their frames: of frames 201-320, they were scored as
         # the video's 1-120 without a word (numbered from 0 for frames from 1: taken)
@@ -2945,6 +2939,12 @@ def track_one(source: str | Path, init: ArrayLike | None, out: str | Path, *,
                          f"frames start at {first}: a ground truth of other frames (its line "
                          "k is scored against the video's k-th frame; lines numbered from "
                          f"{first - 1} or {first} are taken)")
+    if truth is not None and reader._files is not None and len(truth) < len(reader):
+        # an image folder counts its frames exactly: refused before tracking them (checked
+        # after the run, it cost the whole run first); a video's header may count wrong,
+        # and is checked against the frames read (check, below)
+        raise ValueError(f"{gt} has {counted(len(truth), 'box', 'boxes')} for "
+                         f"{counted(len(reader), 'frame')}")
 
     def detect(frame: Frame) -> Detections | None:
         if frame.index != first:

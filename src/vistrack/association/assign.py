@@ -369,8 +369,14 @@ def _limited_lsa(cost, gate):
     c = np.where(gate, cost, 0.0)
     if not np.isfinite((top + 1.0) * (min(cost.shape[0], cost.shape[1]) + 1) * 2.0):
         # costs near the largest float: the same problem scaled into [-1, 0] (as
-        # _gated_lsa's; the solver's sums overflowed to -inf, and it paired wrongly)
+        # _gated_lsa's; the solver's sums overflowed to -inf, and it paired wrongly); a
+        # gain too small to survive the scaling kept below 0, the least gain there is (it
+        # became 0, as much as leaving the pair, and a pair nothing contested was dropped)
         c = c / top
+        for i in range(cost.shape[0]):
+            for j in range(cost.shape[1]):
+                if gate[i, j] and cost[i, j] < 0.0 and c[i, j] == 0.0:
+                    c[i, j] = -5e-324
     r, k = lsa_kernel(c)
     n = 0
     for p in range(r.shape[0]):
@@ -617,7 +623,14 @@ def _gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray, T: int, D:
     cost = np.ascontiguousarray(cost, dtype=float)
     if limit is None:
         return gnn_pairs_py(rows, cols, cost, T, D)
-    return gnn_pairs_limited_py(rows, cols, cost - float(limit), T, D)
+    with np.errstate(over="ignore"):  # (said below, without numpy's warning)
+        gain = cost - float(limit)
+    if not np.isfinite(gain).all():
+        # a cost and a limit of opposite signs near the largest float: the difference of
+        # the halves, which cannot overflow (-inf made the solver's problem NaN, and it
+        # called it infeasible or paired wrongly)
+        gain = cost * 0.5 - float(limit) * 0.5
+    return gnn_pairs_limited_py(rows, cols, gain, T, D)
 
 
 def greedy(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -733,6 +746,6 @@ def assign(cost: np.ndarray, gate: np.ndarray | None = None,
     >>> [a.tolist() for a in assign(cost, method="greedy")]
     [[0, 1], [0, 1]]
     """
-    if not isinstance(method, str) or method not in ASSIGNERS:  # (["gnn"]: "unhashable")
+    if method not in ASSIGNERS:  # (a Registry: ["gnn"] is in none)
         raise ValueError(f"method must be one of {sorted(ASSIGNERS)}; got {method!r}")
     return ASSIGNERS[method](cost, gate)

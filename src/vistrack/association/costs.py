@@ -579,11 +579,12 @@ def overlapping_pairs(boxes: ArrayLike, classes: ArrayLike | None = None,
         cl = np.asarray(classes).reshape(-1)
         if len(cl) != len(b):
             raise ValueError(f"classes must have one value a box ({len(b)}); got {len(cl)}")
-        if cl.dtype.kind in "fc" and np.isnan(cl).any():
-            # (NaN equals no class, its own included: such boxes were never paired, and
-            # non_maximum suppressed nothing among them)
-            raise ValueError(f"classes must be numbers; classes[{int(np.isnan(cl).argmax())}]"
-                             " is NaN")
+        # NaN equals no class, its own included: such boxes were never paired, and
+        # non_maximum suppressed nothing among them (in an array of objects too)
+        nan = np.array([v != v for v in cl.tolist()], bool) if cl.dtype.kind == "O" else (
+            np.isnan(cl) if cl.dtype.kind in "fc" else np.zeros(len(cl), bool))
+        if nan.any():
+            raise ValueError(f"classes must be numbers; classes[{int(nan.argmax())}] is NaN")
     r, c, _ = iou_pairs(b, b, min_iou)
     keep = r != c
     if classes is not None:
