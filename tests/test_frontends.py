@@ -2331,3 +2331,57 @@ def test_a_start_in_a_gap_of_the_images_is_not_said_past_the_end(tmp_path):
     assert not any("no frame from start" in str(w.message) for w in seen), seen
     with pytest.warns(RuntimeWarning, match=r"no frame from start = 10 on"):
         list(VideoReader(tmp_path, start=10))
+
+
+def test_frames_too_small_to_check_the_view_are_tracked_without_the_check():
+    """Under 16 pixels on a side, view_shift's least size, the blob detector's view check
+    failed every 10th frame (and initialize, given more than 10 frames) with view_shift's
+    error about frames never given to it, --still-camera or not; the selective model takes
+    such frames. Oracle: the same frames with the check off (``check_view=0``)."""
+    from vistrack.frontends.blobs import BlobDetector
+
+    rng = np.random.default_rng(3)
+    frames = [np.clip(100 + rng.normal(0, 2, (12, 40)), 0, 255).astype(np.uint8)
+              for _ in range(40)]
+    for k in range(20, 40):
+        frames[k][3:9, k - 18:k - 12] = 250  # a bright blob moving right
+    got = {}
+    for name, kwargs in (("checked", {}), ("still", {"follow_view": False}),
+                         ("off", {"check_view": 0})):
+        det = BlobDetector(min_area=4, **kwargs)
+        det.initialize(frames[:15])
+        got[name] = [det.detect(f).boxes.tolist() for f in frames[15:]]
+    assert got["checked"] == got["still"] == got["off"]
+    assert got["off"][-1] == [[21.0, 3.0, 27.0, 9.0]]  # frame 39: columns 21-26
+
+
+def test_flags_of_the_blob_front_end_take_booleans_only():
+    """``"False"`` was true: ``follow_view`` and ``refine`` followed and refined, and
+    ``threshold(above="False")`` set the pixels above."""
+    from vistrack.frontends import view_shift
+    from vistrack.frontends.blobs import BlobDetector, threshold
+
+    with pytest.raises(TypeError, match="follow_view must be True or False; got 'False'"):
+        BlobDetector(follow_view="False")
+    with pytest.raises(TypeError, match="above must be True or False; got 'False'"):
+        threshold(np.zeros((3, 3), np.uint8), 5, above="False")
+    with pytest.raises(TypeError, match="refine must be True or False; got 'no'"):
+        view_shift(np.zeros((20, 20), np.uint8), np.zeros((20, 20), np.uint8), refine="no")
+    assert threshold(np.zeros((3, 3), np.uint8), 5, above=np.False_).min() == 255
+
+
+def test_a_second_mog2_start_forgets_the_first():
+    """``BlobDetector("mog2").initialize`` is "a new start", as with the selective model:
+    MOG2 kept its first frames' size and mixture, and refused frames of another size. Oracle:
+    a model started on the second frames alone gives the same mask."""
+    rng = np.random.default_rng(4)
+    first = [np.clip(100 + rng.normal(0, 2, (20, 20)), 0, 255).astype(np.uint8)
+             for _ in range(10)]
+    second = [np.clip(60 + rng.normal(0, 2, (30, 30)), 0, 255).astype(np.uint8)
+              for _ in range(10)]
+    im = second[0].copy()
+    im[5:15, 5:15] = 200
+    twice = MOG2Background(history=20).initialize(first).initialize(second)
+    once = MOG2Background(history=20).initialize(second)
+    np.testing.assert_array_equal(twice.apply(im), once.apply(im))
+    assert int(once.apply(im)[5:15, 5:15].min()) == 255

@@ -200,8 +200,17 @@ def test_what_the_onnx_detector_takes_is_named_before_the_first_frame(tmp_path):
                         ({"input_size": (0, 64)}, r"input_size\[0\] must be a whole number"),
                         ({"input_size": (64.9, 64)}, r"input_size\[0\] must be a whole"),
                         ({"input_size": 64}, r"input_size must be \(height, width\)"),
-                        ({"mean": (np.nan, 0, 0)}, "mean and std must be 3 finite numbers")):
-        with pytest.raises(ValueError, match=message):
+                        ({"mean": (np.nan, 0, 0)}, "mean must be 3 finite numbers"),
+                        # each named: a comparison's TypeError, np.r_'s "unknown special
+                        # directive", "has no len()", and True taken as 1, before
+                        ({"min_score": "0.5"}, "min_score must be a number"),
+                        ({"min_score": None}, "min_score must be a number"),
+                        ({"nms_iou": True}, "nms_iou must be a number"),
+                        ({"nms_iou": 1.5}, r"nms_iou must be a finite number >= 0 and <= 1"),
+                        ({"mean": "abc"}, "mean must be 3 finite numbers, one a channel"),
+                        ({"std": 1.0}, "std must be 3 finite numbers, one a channel"),
+                        ({"std": (1, 0, 1)}, "std must be above 0 in each channel")):
+        with pytest.raises((TypeError, ValueError), match=message):
             ONNXDetector(model, **kw)
     nhwc = _model_taking(tmp_path / "nhwc.onnx", [1, 64, 64, 3])
     with pytest.raises(ValueError, match=r"must take one image \(1, 3, H, W\) of floats"):

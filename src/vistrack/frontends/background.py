@@ -464,14 +464,16 @@ class MOG2Background:
         # each named (any history and threshold were taken: 0, -5, a NaN)
         history = as_whole(history, "history", 1)
         var_threshold = as_finite(var_threshold, "var_threshold", 0.0, above=True)
-        self._m = cv2.createBackgroundSubtractorMOG2(history, var_threshold,
-                                                     as_flag(detect_shadows, "detect_shadows"))
+        self._settings = (history, var_threshold, as_flag(detect_shadows, "detect_shadows"))
+        self._m = cv2.createBackgroundSubtractorMOG2(*self._settings)
         self.freeze = as_flag(freeze, "freeze")
         self._seen = 0
         self._shape: tuple[int, ...] | None = None  # (H, W, C) of the frames learnt from
 
     def initialize(self, frames: Iterable[np.ndarray]) -> MOG2Background:
-        """Learn from ``frames`` first (each is one step of the mixture's learning).
+        """Start afresh and learn from ``frames`` (each is one step of the mixture's
+        learning), as :meth:`SelectiveBackground.initialize` starts its model: what earlier
+        frames taught it is forgotten, and frames of another size may start it.
 
         Parameters
         ----------
@@ -489,6 +491,12 @@ class MOG2Background:
         >>> int(bg.apply(np.zeros((4, 6), np.uint8)).max())
         0
         """
+        import cv2
+
+        # (a second start kept the first's mixture and frame size: BlobDetector("mog2")'s
+        # initialize, "a new start", refused frames of another size)
+        self._m = cv2.createBackgroundSubtractorMOG2(*self._settings)
+        self._seen, self._shape = 0, None
         for k, f in enumerate(frames):
             self._m.apply(self._same(f, f"frames[{k}]"))
             self._seen += 1
@@ -601,6 +609,10 @@ def _there_and_back(a: np.ndarray, b: np.ndarray, p: np.ndarray, *, levels: int,
     return q, (there[:, 0] == 1) & (again[:, 0] == 1) & (np.hypot(*(r - p)[:, 0].T) < within)
 
 
+VIEW_MIN = 16
+"""The least width and height of the frames :func:`view_shift` compares (pixels)."""
+
+
 def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool = False,
                guess: tuple[float, float] | None = None) -> tuple[float, float, float]:
     """How far the view moved from frame ``a`` to frame ``b``: the median displacement of up
@@ -678,6 +690,7 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool =
                          f"{b.shape[1]}x{b.shape[0]}")
     # (a width of 100.0 failed inside OpenCV's resize, and one of NaN was taken)
     width = as_whole(width, "width", 16, "pixels across the reduced copies")
+    refine = as_flag(refine, "refine")  # ("no" refined)
     moved = None
     if guess is not None:  # (before the corners: a frame with none returned NaN first)
         try:
@@ -687,8 +700,9 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool =
         if moved.shape != (2,) or not np.isfinite(moved).all():
             raise ValueError(f"guess must be two finite numbers, dx and dy; got {guess!r}")
     h, w = a.shape
-    if min(h, w) < 16:
-        raise ValueError(f"the frames must be at least 16 pixels on a side; got {w}x{h}")
+    if min(h, w) < VIEW_MIN:
+        raise ValueError(f"the frames must be at least {VIEW_MIN} pixels on a side; got "
+                         f"{w}x{h}")
     s = max(1, min(w // width, h // 16))
     size = (w // s, h // s)
     # the reduction along each axis: s where it divides the size, a little more where not

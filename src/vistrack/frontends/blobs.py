@@ -21,7 +21,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_number, as_whole, bgr_to_grey, is_whole
+from .._validate import as_flag, as_number, as_whole, bgr_to_grey, is_whole
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -158,6 +158,7 @@ def threshold(image: ArrayLike, level: float, above: bool = True) -> np.ndarray:
         raise ValueError(f"image must be (H, W) grey or (H, W, C) with C 1, 3 (BGR) or 4 "
                          f"(BGRA); got shape {im.shape}")
     _check_no_nan(im, "image")  # (a NaN pixel is neither above nor below: dropped unsaid)
+    above = as_flag(above, "above")  # ("False" set the pixels above)
     if im.ndim == 3:
         im = bgr_to_grey(im)
     m = im > level if above else im < level
@@ -395,7 +396,7 @@ class BlobDetector:
         self.close_size = as_whole(close_size, "close_size", 0, "pixels across; 0 skips it")
         self.min_area = float(min_area)
         self.check_view, self.max_shift = int(check_view), float(max_shift)
-        self.follow_view = bool(follow_view)
+        self.follow_view = as_flag(follow_view, "follow_view")  # ("False" was true)
         self._reset()
 
     def _reset(self) -> None:
@@ -456,7 +457,7 @@ class BlobDetector:
         (40, 60, 1)
         """
         from .._validate import as_uint8_image
-        from .background import SelectiveBackground, view_shift
+        from .background import VIEW_MIN, SelectiveBackground, view_shift
 
         # grey, as detect gives the model its frames: a BGR start made the selective model
         # refuse the first grey frame, and MOG2 start again on it, learning the people there
@@ -466,8 +467,10 @@ class BlobDetector:
                   for k, im in enumerate(images)]
         self._reset()  # a new start: what earlier frames said of the view no longer holds
         k = self.check_view
+        # (frames too small for view_shift: no view to follow, as detect's checks; they
+        # failed here with view_shift's error about frames never given to it)
         if not (self.follow_view and isinstance(self.model, SelectiveBackground) and k
-                and len(frames) > k):
+                and len(frames) > k and min(frames[0].shape) >= VIEW_MIN):
             self.model.initialize(frames)
             return
         # the view's shift from each frame to the next (small, so followed reliably where
@@ -544,10 +547,13 @@ class BlobDetector:
         ([[20.0, 10.0, 30.0, 30.0]], [1.0])
         """
         from .._validate import as_uint8_image
-        from .background import SelectiveBackground, view_shift
+        from .background import VIEW_MIN, SelectiveBackground, view_shift
 
         grey = _own(as_uint8_image(image, grey=True), image)  # kept as the next's reference
-        if self.check_view and self._frames % self.check_view == 0:
+        # (frames under view_shift's least size: not checked, no evidence either way; every
+        # 10th frame failed with its error, --still-camera or not)
+        if self.check_view and self._frames % self.check_view == 0 \
+                and min(grey.shape) >= VIEW_MIN:
             if self._last_check is not None and self._last_check.shape == grey.shape:
                 dx, dy, followed = view_shift(self._last_check, grey)
                 if followed == followed:  # NaN: no corners to follow, no evidence either way

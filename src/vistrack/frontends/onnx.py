@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import as_whole
+from .._validate import as_finite, as_whole, is_number
 from ..types import Detections
 from .detectors import bgr_or_grey, nms
 
@@ -139,13 +139,16 @@ class ONNXDetector:
             raise ValueError(f"layout must be one of {list(LAYOUTS)}; got {layout!r}")
         if resize not in (None, "letterbox", "stretch"):
             raise ValueError(f"resize must be 'letterbox' or 'stretch'; got {resize!r}")
-        if not 0.0 <= min_score <= 1.0 or not 0.0 <= nms_iou <= 1.0:
-            raise ValueError(f"min_score and nms_iou must be within [0, 1]; got {min_score} "
-                             f"and {nms_iou}")
-        if len(mean) != 3 or len(std) != 3 or not all(s > 0 for s in std) \
-                or not np.isfinite(np.r_[mean, std]).all():
-            raise ValueError(f"mean and std must be 3 finite numbers each, std above 0; got "
-                             f"{mean} and {std}")
+        # each named ("0.5" and None failed in a comparison, True was 1)
+        min_score = as_finite(min_score, "min_score", 0.0, high=1.0)
+        nms_iou = as_finite(nms_iou, "nms_iou", 0.0, high=1.0)
+        for name, v in (("mean", mean), ("std", std)):
+            # (a text was "unknown special directive", one number "has no len()")
+            if isinstance(v, (str, bytes)) or np.ndim(v) != 1 or len(v) != 3 \
+                    or not all(is_number(x) and np.isfinite(x) for x in v):
+                raise ValueError(f"{name} must be 3 finite numbers, one a channel; got {v!r}")
+        if not all(s > 0 for s in std):
+            raise ValueError(f"std must be above 0 in each channel; got {std!r}")
         options = ort.SessionOptions()
         options.log_severity_level = 3
         try:

@@ -372,7 +372,7 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     pos, mass, rg = _refine(img.astype(np.float64), coords, r, _disc(r), moves,
                             0.6)
     # 4. of each pair of spots closer than the separation, the less massive goes (ties: the
-    # one further from the origin, as trackpy); then the mass limit
+    # one whose coordinates sum less, nearer the origin, as trackpy); then the mass limit
     if len(pos) > 1:
         from scipy.spatial import cKDTree
 
