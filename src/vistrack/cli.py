@@ -627,11 +627,18 @@ def _missing_input(args: argparse.Namespace) -> str:
     the input next), after the options that do not go with the run's mode."""
     frontend = args.frontend or ""
     kind, _, file = frontend.partition(":")
-    for path, what in ((args.input, " (a sequence folder, or a detections file)"
-                        if args.out is not None else ""),
-                       (args.gt, " (--gt FILE)"), (args.detections, " (--detections FILE)"),
-                       (file if kind in ("detections", "onnx") else None,
-                        f" (--frontend {kind}:{'FILE' if kind == 'detections' else 'MODEL'})")):
+    return _first_missing(
+        (args.input, " (a sequence folder, or a detections file)" if args.out is not None
+         else ""),
+        (args.gt, " (--gt FILE)"), (args.detections, " (--detections FILE)"),
+        (file if kind in ("detections", "onnx") else None,
+         f" (--frontend {kind}:{'FILE' if kind == 'detections' else 'MODEL'})"))
+
+
+def _first_missing(*given: tuple[str | None, str]) -> str:
+    """``"PATH does not exist WHAT"`` for the first ``(PATH, WHAT)`` given whose path does
+    not exist (None and "": not given), "" if none."""
+    for path, what in given:
         if path and not Path(path).exists():
             return f"{path} does not exist{what}"
     return ""
@@ -1204,9 +1211,9 @@ def _track_one(args: argparse.Namespace) -> int:
                      f"> 0); got {args.init!r}")
     # inputs that do not exist, named before an existing output's "pass --force" (which,
     # given, named the input next)
-    for given, what in ((args.input, ""), (args.gt, " (--gt FILE)")):
-        if given is not None and not Path(given).exists():
-            return _fail("track-one", f"{given} does not exist{what}")
+    missing = _first_missing((args.input, ""), (args.gt, " (--gt FILE)"))
+    if missing:
+        return _fail("track-one", missing)
     # before anything is read or computed: a run that would write over what it reads, or
     # cannot write, fails now
     check_not_input([args.out], input_files(args.input, gt=args.gt), name="--out")
