@@ -250,10 +250,9 @@ def as_box(box: ArrayLike, name: str = "box") -> np.ndarray:
     row of them (``(1, 4)``). A boolean was a coordinate of 1, a complex number its real
     part, and ``[[x, y], [w, h]]`` was flattened into a box."""
     said = f"{name} must be x, y, w, h with w, h > 0"
-    check_not_boolean(box, name, "x, y, w, h: four numbers")
     if isinstance(box, (str, bytes)):  # ("could not convert string to float", unnamed)
         raise TypeError(f"{said}; got the text {box!r}")
-    b = as_float_array(box, name)
+    b = as_float_array(box, name, not_boolean="x, y, w, h: four numbers")
     if b.shape not in ((4,), (1, 4)):
         raise ValueError(f"{said}; got shape {b.shape}")
     b = b.reshape(-1)

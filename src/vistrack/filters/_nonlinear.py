@@ -70,11 +70,12 @@ def step_times(dt: ArrayLike, times: ArrayLike | None, T: int) -> tuple[np.ndarr
         raise ValueError(f"dt must be a scalar, the T-1={T - 1} intervals between steps or "
                          f"T={T} values (dt[0] unused); got shape {d.shape}")
     dts = np.broadcast_to(d, (T,))
-    if not (np.isfinite(dts[1:]) & (dts[1:] >= 0)).all():
+    ok = np.isfinite(dts[1:]) & (dts[1:] >= 0)
+    if not ok.all():
         # (a user's model took it and gave NaN states, blamed on the model or on a lost
         # target; a negative step was refused by the model, after the particle filter had
         # drawn its first particles)
-        k = 1 + int(np.flatnonzero(~(np.isfinite(dts[1:]) & (dts[1:] >= 0)))[0])
+        k = 1 + int(np.flatnonzero(~ok)[0])
         raise ValueError(f"dt must be finite and >= 0 (dt[0], before the first step, aside); "
                          f"the step to step {k} is {dts[k]}")
     if times is None:
