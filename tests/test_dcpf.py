@@ -503,6 +503,39 @@ def test_a_confidence_map_names_its_strides_origins_and_heights(change, message)
         ConfidenceMap(**args)
 
 
+@pytest.mark.parametrize("make,error,message", [
+    (lambda: ConfidenceMap("a", [np.zeros((3, 3))], [(0, 0)], [8]), TypeError,
+     "heights must be an array of numbers; got str"),
+    (lambda: ConfidenceMap([90], [np.zeros((3, 3))], [("a", 0)], [8]), TypeError,
+     "origins must be an array of numbers; got list"),
+    (lambda: ConfidenceMap([90], [np.zeros((3, 3))], [(0, 0)], [True]), TypeError,
+     "strides must be numbers > 0; got [True]"),
+    (lambda: ConfidenceMap([90], ["ab"], [(0, 0)], [8]), TypeError,
+     "scores[0] must be an array of numbers; got str"),
+    (lambda: ConfidenceMap([90, 60], [np.zeros((3, 3)), np.where(np.eye(3) > 0, np.nan, 0.0)],
+                           [(0, 0)] * 2, [8, 8]), ValueError,
+     "scores[1] holds NaN (first at row 0, column 0); a cell with no score is -inf"),
+    (lambda: HOGConfidence(heights="abc"), TypeError,
+     "heights must be an array of numbers; got str"),
+    (lambda: HOGConfidence(heights=[True, 2]), TypeError,
+     "heights must be numbers > 0; got [True, 2]"),
+])
+def test_a_confidence_map_and_hog_name_values_that_are_not_numbers(make, error, message):
+    """Strings failed in numpy's words ("could not convert string to float"), booleans were
+    read as 1, and a grid of NaN scores was taken and found nobody without a word."""
+    with pytest.raises(error, match=re.escape(message)):
+        make()
+
+
+def test_a_confidence_map_takes_minus_infinity_as_a_cell_with_no_score():
+    """-inf is what HOGConfidence leaves where no window was scored; it stays accepted."""
+    s = np.zeros((4, 4))
+    s[0, 0] = -np.inf
+    s[2, 2] = 3.0
+    cm = ConfidenceMap([80], [s], [(0, 0)], [8])
+    assert float(cm.score(16, 16, 80)) == 3.0
+
+
 def _walker(t, seen=True):
     """One person walking right, 2 pixels a frame; no detection where ``seen`` is False."""
     if not seen:

@@ -131,6 +131,56 @@ def test_ssd_layout(tmp_path):
     assert d.classes.tolist() == [2, 1]
 
 
+def test_a_segmentation_model_s_mask_coefficients_are_not_read_as_classes(tmp_path):
+    """A YOLO segmentation export (ultralytics' -seg) gives a second output, the masks'
+    prototypes (1, M, h, w), and M mask coefficients after each box's class scores. "auto"
+    took the two outputs for SSD's and refused them; layout="yolov8" read the coefficients as
+    class scores (here a coefficient of 5 became a box of "class 3" scoring 5). The oracle is
+    the same boxes from the export without masks (the layouts' own tests, worked by hand)."""
+    C, M, N = 2, 3, 84  # N: the grid's cells at 64 x 64 (64 + 16 + 4), one box a cell
+    v8 = np.zeros((N, 4 + C + M), np.float32)
+    v8[0] = [32, 32, 20, 10, 0.9, 0.1, 5.0, -4.0, 2.0]   # class 0 at 0.9
+    v8[1] = [10, 40, 8, 8, 0.0, 0.6, 0.0, 7.0, 0.0]      # class 1 at 0.6
+    v8[2] = [50, 30, 6, 6, 0.01, 0.02, 9.0, 9.0, 9.0]    # below min_score in its classes
+    protos = np.zeros((1, M, 16, 16), np.float32)
+    seg = constant_model(tmp_path / "v8seg.onnx", [v8.T[None], protos])
+    plain = constant_model(tmp_path / "v8.onnx", [np.ascontiguousarray(v8[:, :4 + C].T)[None]])
+    want = ONNXDetector(plain).detect(IMAGE)
+    assert want.classes.tolist() == [0, 1]
+    np.testing.assert_allclose(want.scores, [0.9, 0.6], rtol=1e-6)
+    for layout in ("auto", "yolov8"):
+        det = ONNXDetector(seg, layout=layout)
+        assert det.layout == "yolov8"
+        d = det.detect(IMAGE)
+        np.testing.assert_array_equal(d.boxes, want.boxes)
+        np.testing.assert_array_equal(d.scores, want.scores)
+        np.testing.assert_array_equal(d.classes, want.classes)
+    # a class past the model's two is refused: the coefficients are not classes
+    with pytest.raises(ValueError, match=r"classes \[2\] are not among the model's classes 0 "
+                                         r"to 1"):
+        ONNXDetector(seg, classes=[2]).detect(IMAGE)
+    # YOLOv5's segmentation export: (1, 3 cells, 5 + C + M), an objectness first
+    v5 = np.zeros((3 * N, 5 + C + M), np.float32)
+    v5[0] = [40, 40, 8, 8, 0.9, 0.9, 0.1, 8.0, 8.0, 8.0]  # class 0 at 0.81
+    v5[1] = [20, 30, 8, 8, 0.5, 0.2, 0.8, 0.0, 9.0, 0.0]  # class 1 at 0.4
+    seg5 = constant_model(tmp_path / "v5seg.onnx", [v5[None], protos])
+    plain5 = constant_model(tmp_path / "v5.onnx", [np.ascontiguousarray(v5[:, :5 + C])[None]])
+    want = ONNXDetector(plain5).detect(IMAGE)
+    np.testing.assert_allclose(want.scores, [0.81, 0.4], rtol=1e-6)
+    for layout in ("auto", "yolov5"):
+        det = ONNXDetector(seg5, layout=layout)
+        assert det.layout == "yolov5"
+        d = det.detect(IMAGE)
+        np.testing.assert_array_equal(d.scores, want.scores)
+        np.testing.assert_array_equal(d.classes, want.classes)
+    # a second output that is not prototypes is no YOLO layout's, and says what it takes
+    other = constant_model(tmp_path / "odd.onnx", [v8.T[None], np.zeros((1, 5), np.float32)])
+    with pytest.raises(ValueError, match=r"or two for segmentation, the second its masks' "
+                                         r"prototypes \(1, M, h, w\); got \[\(1, 9, 84\), "
+                                         r"\(1, 5\)\]"):
+        ONNXDetector(other, layout="yolov8").detect(IMAGE)
+
+
 def test_the_onnx_detector_checks_what_it_is_given(tmp_path):
     model = constant_model(tmp_path / "m.onnx", [np.zeros((1, 6, 10))])
     with pytest.raises(FileNotFoundError, match="nope.onnx"):

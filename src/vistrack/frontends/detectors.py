@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from .._validate import as_finite
+from .._validate import as_finite, as_float_array
 from ..types import Detections
 
 if TYPE_CHECKING:
@@ -250,7 +250,10 @@ class ConfidenceMap:
     ------
     ValueError
         If the four have not one entry per level (at least one; ``strides`` one or two
-        numbers each), or a level's scores are not a 2-D grid of at least 2 x 2.
+        numbers each), or a level's scores are not a 2-D grid of at least 2 x 2, or hold
+        NaN (a cell with no score is ``-inf``).
+    TypeError
+        If any of the four is not numbers (a string, or booleans).
 
     Examples
     --------
@@ -265,13 +268,15 @@ class ConfidenceMap:
     def __init__(self, heights: ArrayLike, scores: Sequence[ArrayLike], origins: ArrayLike,
                  strides: ArrayLike,
                  aspect: float = _INNER_W * 64 / (_INNER_H * 128)):
-        self.heights = np.asarray(heights, float).reshape(-1)
-        self.scores = [np.asarray(s, float) for s in scores]
-        o = np.asarray(origins, float)
+        # (a string or a boolean failed in numpy's words, or was read as 1 and 0)
+        self.heights = as_float_array(heights, "heights", not_boolean="numbers > 0").reshape(-1)
+        self.scores = [as_float_array(s, f"scores[{k}]", not_boolean="a grid of numbers")
+                       for k, s in enumerate(scores)]
+        o = as_float_array(origins, "origins", not_boolean="numbers")
         if o.size % 2 or not np.isfinite(o).all():  # a reshape's message named nothing
             raise ValueError(f"origins must be an x and a y per level, finite; got {o.tolist()}")
         self.origins = o.reshape(-1, 2)
-        st = np.asarray(strides, float)
+        st = as_float_array(strides, "strides", not_boolean="numbers > 0")
         # (L, 2): x and y; one stride per level serves both
         self.strides = (np.repeat(st.reshape(-1, 1), 2, axis=1) if st.ndim <= 1
                         else st if st.ndim == 2 and st.shape[1] == 2 else st.reshape(-1, 1))
@@ -282,6 +287,13 @@ class ConfidenceMap:
                              f"{len(self.strides)}")
         if any(s.ndim != 2 or min(s.shape) < 2 for s in self.scores):
             raise ValueError("each level's scores must be a 2-D grid of at least 2 x 2")
+        for k, s in enumerate(self.scores):
+            # (a NaN grid was taken and gave no detections without a word; -inf is a cell no
+            # window was scored at, as HOGConfidence leaves them)
+            if np.isnan(s).any():
+                i, j = np.argwhere(np.isnan(s))[0]
+                raise ValueError(f"scores[{k}] holds NaN (first at row {i}, column {j}); a "
+                                 f"cell with no score is -inf")
         # (a stride of (L, 1) failed at score() with an IndexError, a stride of 0 gave -inf
         # everywhere)
         if self.strides.shape != (L, 2) or not (np.isfinite(self.strides).all()
@@ -444,6 +456,8 @@ class HOGConfidence:
         If ``heights`` is not a non-empty list of positive numbers; called on an image
         smaller than every level can hold 2 x 2 windows in, :class:`ImageTooSmall` (a
         ``ValueError``).
+    TypeError
+        If ``heights`` is not numbers (a string, or booleans).
 
     Notes
     -----
@@ -463,7 +477,7 @@ class HOGConfidence:
     def __init__(self, heights: ArrayLike = (46, 58, 75, 96, 121)):
         import cv2
 
-        self.heights = np.asarray(heights, float)
+        self.heights = as_float_array(heights, "heights", not_boolean="numbers > 0")
         if self.heights.ndim != 1 or len(self.heights) == 0 or not (
                 np.isfinite(self.heights) & (self.heights > 0)).all():
             # (NaN failed at the first image: "cannot convert float NaN to integer")

@@ -17,7 +17,13 @@ Output layouts (``layout``; ``"auto"`` tells them apart from the outputs' shapes
   network input, and scores ``(1, N, C)`` whose class 0 is the background (the classes
   reported are 1 to ``C - 1``).
 
-``"auto"``: two outputs are SSD's; one output whose columns are one box a cell of YOLO's
+A YOLO segmentation model (``yolov8`` or ``yolov5`` layout; ultralytics' ``-seg``
+exports) has a second output, the masks' prototypes ``(1, M, h, w)``, and ``M`` mask
+coefficients after each box's class scores in the first; vistrack follows boxes, so the
+coefficients and the prototypes are left unread (they were read as class scores).
+
+``"auto"``: two outputs are SSD's, unless the second is a segmentation model's prototypes
+(four dimensions); one output whose columns are one box a cell of YOLO's
 grid at the input's size (strides 8, 16 and 32: 8,400 at 640 × 640) is YOLOv8's, whose rows
 are three a cell YOLOv5's; otherwise one with fewer rows than columns is YOLOv8's, and the
 rest YOLOv5's (rows of one box a cell with 5 + C columns, YOLOX's or YOLOv6's, are read as
@@ -230,9 +236,9 @@ class ONNXDetector:
 
     def _guess_layout(self, path: Path) -> str:
         outs = self.session.get_outputs()
-        if len(outs) == 2:
+        if len(outs) == 2 and len(outs[1].shape) != 4:
             return "ssd"
-        if len(outs) == 1 and len(outs[0].shape) == 3:
+        if len(outs) in (1, 2) and len(outs[0].shape) == 3:  # (two: YOLO's with masks)
             rows, cols = outs[0].shape[1:]
             if isinstance(rows, int) and isinstance(cols, int):
                 return self._yolo_layout(rows, cols)
@@ -298,28 +304,37 @@ class ONNXDetector:
             H, W = self.size
             return boxes * np.array([W, H, W, H]), best, cls
         out = np.asarray(outputs[0])
-        if out.ndim != 3 or out.shape[0] != 1:
-            raise ValueError(f"a YOLO-style model has one output (1, ..., ...); got "
-                             f"{[np.shape(o) for o in outputs]}")
+        # a segmentation model's second output is its masks' prototypes (1, M, h, w), and
+        # each box's last M values are its mask coefficients: left unread (they were read
+        # as class scores, and their largest taken for the box's class)
+        masks = np.shape(outputs[1])[1] if len(outputs) == 2 and np.ndim(outputs[1]) == 4 \
+            and np.shape(outputs[1])[0] == 1 else 0
+        if out.ndim != 3 or out.shape[0] != 1 or len(outputs) != 1 + (masks > 0):
+            raise ValueError(f"a YOLO-style model has one output (1, ..., ...), or two for "
+                             f"segmentation, the second its masks' prototypes (1, M, h, w); "
+                             f"got {[np.shape(o) for o in outputs]}")
         a = out[0]
+        with_masks = f" + {masks} mask coefficients" if masks else ""
         if layout == "yolov8":
             if self._transposed(*a.shape):  # an export transposed to (N, 4 + C)
                 a = a.T
-            a = a.T  # (N, 4 + C)
-            if a.shape[1] < 5:
-                raise ValueError(f"a YOLOv8-style output has 4 + C rows (C >= 1); got "
-                                 f"{out.shape}")
+            a = a.T  # (N, 4 + C + M)
+            if a.shape[1] - masks < 5:
+                raise ValueError(f"a YOLOv8-style output has 4 + C{with_masks} rows (C >= 1); "
+                                 f"got {out.shape}")
+            n = a.shape[1] - masks - 4
             if not self._classes_checked:
-                self._check_classes(0, a.shape[1] - 4)
-            cls = np.argmax(a[:, 4:], axis=1)
+                self._check_classes(0, n)
+            cls = np.argmax(a[:, 4:4 + n], axis=1)
             best = a[np.arange(len(a)), 4 + cls]
         else:
-            if a.shape[1] < 6:
-                raise ValueError(f"a YOLOv5-style output has 5 + C columns (C >= 1); got "
-                                 f"{out.shape}")
+            if a.shape[1] - masks < 6:
+                raise ValueError(f"a YOLOv5-style output has 5 + C{with_masks} columns "
+                                 f"(C >= 1); got {out.shape}")
+            n = a.shape[1] - masks - 5
             if not self._classes_checked:
-                self._check_classes(0, a.shape[1] - 5)
-            cls = np.argmax(a[:, 5:], axis=1)
+                self._check_classes(0, n)
+            cls = np.argmax(a[:, 5:5 + n], axis=1)
             best = a[:, 4] * a[np.arange(len(a)), 5 + cls]
         c, s = a[:, :2], a[:, 2:4] / 2
         return np.c_[c - s, c + s], best, cls
