@@ -951,7 +951,7 @@ def test_view_shift_finds_the_translation_applied(dx, dy):
     moved = cv2.warpAffine(img, np.float32([[1, 0, dx], [0, 1, dy]]), (640, 480),
                            flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
     got_dx, got_dy, followed = view_shift(img, moved)
-    assert (got_dx, got_dy) == pytest.approx((dx, dy), abs=0.05)  # documented: 0.03
+    assert (got_dx, got_dy) == pytest.approx((dx, dy), abs=0.05)  # documented: 0.1 at worst
     assert followed > 0.9
     assert view_shift(img, moved, width=640)[:2] == pytest.approx((dx, dy), abs=0.05)
     blank = np.full_like(img, 128)  # no corners: nothing to follow
@@ -965,6 +965,26 @@ def test_view_shift_finds_the_translation_applied(dx, dy):
     with pytest.raises(ValueError, match=re.escape("width must be a whole number >= 16 "
                                                    "(pixels across the reduced copies); got 8")):
         view_shift(img, img, width=8)
+
+
+def test_view_shift_is_as_accurate_as_its_docstring_says():
+    """The docstring said 0.03 of a pixel, where sub-pixel shifts of a blurred texture came
+    out up to 0.09 off; it says the median and the worst now (0.02 and 0.1). Oracle: the
+    textures moved by known translations (bilinear warps)."""
+    from vistrack.frontends import view_shift
+
+    rng = np.random.default_rng(1)
+    errors = {False: [], True: []}
+    for seed in range(3):
+        img = _texture((480, 640), seed)
+        for dx, dy in rng.uniform(-20, 20, (8, 2)):
+            moved = cv2.warpAffine(img, np.float32([[1, 0, dx], [0, 1, dy]]), (640, 480),
+                                   flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+            for refine in errors:
+                got = view_shift(img, moved, refine=refine)[:2]
+                errors[refine].append(max(abs(got[0] - dx), abs(got[1] - dy)))
+    for refine, e in errors.items():
+        assert np.median(e) < 0.025 and max(e) < 0.1, (refine, np.median(e), max(e))
 
 
 def test_view_shift_does_not_take_a_bright_object_on_a_flat_noisy_frame_for_the_view():

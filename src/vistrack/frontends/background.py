@@ -624,7 +624,10 @@ def view_shift(a: np.ndarray, b: np.ndarray, *, width: int = 256, refine: bool =
     that move before a still camera do not move it (0.0 pixels between frames 10 apart of
     PETS09-S2L1, people walking), where the phase correlation of the whole image followed
     a textured object covering a sixteenth of a still frame. Translations of a textured
-    640 × 480 image are found within 0.03 of a pixel.
+    640 × 480 image (six textures, eight sub-pixel shifts of up to 20 pixels each) are
+    found to 0.02 of a pixel at the median and within 0.1 at worst (refined: 0.01 and
+    0.1; moved by a cubic warp instead of a bilinear one, 0.04 and 0.07, refined 0.04
+    and 0.05).
 
     Parameters
     ----------
