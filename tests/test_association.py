@@ -345,6 +345,19 @@ def test_suppression_names_scores_or_classes_of_another_length():
     assert non_maximum([], []).tolist() == []
 
 
+def test_non_maximum_at_zero_drops_boxes_that_overlap_at_all_and_keeps_those_that_touch():
+    """As its docstring says: boxes that do not overlap never suppress each other, so at
+    min_iou 0 two boxes sharing an edge (IoU 0, by hand) are both kept and any overlap
+    (IoU 25 / 175 here) drops the weaker. Oracle: the greedy rule worked by hand."""
+    from vistrack.association import iou, non_maximum
+
+    boxes = np.array([[0, 0, 10, 10], [5, 5, 15, 15], [10, 0, 20, 10], [100, 100, 110, 110.]])
+    assert iou(boxes[:1], boxes[1:3]).tolist() == [[25 / 175, 0.0]]
+    assert non_maximum(boxes, [0.9, 0.8, 0.7, 0.6], min_iou=0.0).tolist() == [
+        True, False, True, True]
+    assert non_maximum(boxes, [0.9, 0.8, 0.7, 0.6], min_iou=0.15).tolist() == [True] * 4
+
+
 def test_sparse_pairs_and_assignment_equal_the_dense_ones():
     from vistrack.association import gnn_sparse, iou_pairs
 

@@ -192,7 +192,8 @@ _SETTINGS = (
     ("max_lost", "tracker", "max_lost", float, "SECONDS", "how long a lost track is kept", 2.0),
     ("nms_iou", "tracker", "nms_iou", float, "X",
      "drop a detection overlapping a more confident one of its frame at IoU X or more "
-     "(non-maximum suppression, for a detector that applies none; 1: none dropped)", 1.0),
+     "(non-maximum suppression, for a detector that applies none; 1: none dropped, 0: any "
+     "that overlaps)", 1.0),
     ("max_gap", "offline", "max_gap", float, "SECONDS", "offline: the longest gap filled", 1.0),
     ("min_track_score", "offline", "min_track_score", float, "X",
      "offline: the lowest mean confidence of a track's detections kept", 0.75),

@@ -607,7 +607,8 @@ def non_maximum(boxes: ArrayLike, scores: ArrayLike, classes: ArrayLike | None =
     classes : (N,) array_like of int, optional
         Their classes (default one class): boxes of two classes never suppress each other.
     min_iou : float
-        The IoU at which the less confident of two boxes is dropped.
+        The IoU at which the less confident of two boxes is dropped. Boxes that do not
+        overlap never suppress each other: at 0, any two that overlap at all (IoU > 0).
 
     Returns
     -------

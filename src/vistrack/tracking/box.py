@@ -194,7 +194,8 @@ class BoxTrackerConfig:
         Non-maximum suppression of each frame's detections before anything else: a detection
         overlapping a more confident one of its class at IoU ``nms_iou`` or more is dropped,
         for a detector that applies none, whose duplicates of one object would each start a
-        track of their own (1, the default: none dropped; detectors apply their own).
+        track of their own (1, the default: none dropped; detectors apply their own; 0:
+        any that overlaps a more confident one at all).
     """
 
     two_stage: bool = True
