@@ -160,3 +160,27 @@ def test_write_mot_takes_whole_floats_and_one_row_as_four_numbers(tmp_path):
     assert t.frames.tolist() == [1, 2] and t.ids.tolist() == [3, 7]
     one = read_mot(write_mot(tmp_path / "b.txt", [4], [1], [1.5, 2, 3, 4]))
     assert one.boxes.tolist() == [[1.5, 2.0, 3.0, 4.0]] and one.frames.tolist() == [4]
+
+
+def test_written_holds_the_rows_in_the_order_the_closed_file_will(tmp_path):
+    """written() is "the rows as the file will hold them". With a frame written twice it
+    gave that frame's two writes one after the other, each sorted by id, where close()
+    sorts the whole file by frame and id. Oracle: the closed file read back."""
+    writer = MOTWriter(tmp_path / "w.txt")
+
+    def tracks(ids):
+        n = len(ids)
+        boxes = np.c_[np.arange(n), np.zeros(n), np.arange(n) + 5.0, np.full(n, 5.0)]
+        return Tracks(ids=np.array(ids), boxes=boxes, points=None, scores=np.ones(n),
+                      classes=np.zeros(n))
+
+    writer.write(Frame(2, 0.1), tracks([7, 3]))
+    writer.write(Frame(1, 0.0), tracks([4]))
+    writer.write(Frame(2, 0.1), tracks([5, 1]))
+    seen = writer.written()
+    writer.close()
+    closed = read_mot(tmp_path / "w.txt")
+    assert closed.frames.tolist() == [1, 2, 2, 2, 2] and closed.ids.tolist() == [4, 1, 3, 5, 7]
+    assert seen.frames.tolist() == closed.frames.tolist()
+    assert seen.ids.tolist() == closed.ids.tolist()
+    np.testing.assert_array_equal(seen.boxes, closed.boxes)

@@ -1097,6 +1097,26 @@ def test_pass_over_counts_the_frame_for_default_indices():
     np.testing.assert_array_equal(a.tracks.mean, b.tracks.mean)
 
 
+def test_pass_over_before_the_first_step_is_refused():
+    """A frame not delivered lies between two steps. Before the first it was taken: the
+    calibration was shown an empty frame and the first step was numbered 1 all the same.
+    Refused now, before the first step and after reset(), and the tracker left as it was
+    (the oracle: a tracker never asked)."""
+    det = lambda f: Detections.from_xywh([[100 + 10 * f, 20, 30, 60]], [0.9])  # noqa: E731
+    a, b = BoxTracker(frame_rate=10), BoxTracker(frame_rate=10)
+    with pytest.raises(RuntimeError, match=re.escape(
+            "pass_over() is for a frame the detector did not deliver between two steps; "
+            "no frame has been stepped yet")):
+        a.pass_over()
+    for f in (1, 2):
+        np.testing.assert_array_equal(a.step(None, det(f)).boxes, b.step(None, det(f)).boxes)
+    assert a.frame == b.frame == 2
+    assert a.calibrator.outcomes()[1].tolist() == b.calibrator.outcomes()[1].tolist()
+    a.reset()
+    with pytest.raises(RuntimeError, match="no frame has been stepped yet"):
+        a.pass_over()
+
+
 def test_a_frame_passed_over_is_not_stepped_after():
     """The frame passed over is past: stepping it after all took it twice (the tracks
     predicted over one frame where two had gone, the calibration shown it empty and then

@@ -502,7 +502,12 @@ class MOTWriter(_RowsFile):
         >>> sink.abort()
         """
         self._file.read()  # flushed to the partial file
-        return replace(read_mot(self._file.part), path=str(self.path))
+        table = read_mot(self._file.part)  # (sorted by frame, stably)
+        if not self._in_order:
+            # as close() will sort the file: by frame and id (a frame written twice came
+            # back as its two writes, each sorted by id on its own)
+            table = table[np.lexsort((table.ids, table.frames))]
+        return replace(table, path=str(self.path))
 
     def close(self) -> None:
         """Finish the file (sorting it by frame and id if frames came out of order) and

@@ -963,10 +963,19 @@ class BoxTracker:
         >>> tr.pass_over()  # frame 3
         >>> tr.step(4, two(22)).ids.tolist()
         [1, 2]
+
+        Raises
+        ------
+        RuntimeError
+            Before the first :meth:`step` (or after :meth:`reset`): there is no frame before
+            it to be between (it was taken, the calibration shown an empty frame, and the
+            first step numbered 1 all the same).
         """
+        if self.frame is None:
+            raise RuntimeError("pass_over() is for a frame the detector did not deliver "
+                               "between two steps; no frame has been stepped yet")
         self._observe(_NOTHING)
-        if self.frame is not None:  # step(None) next is the frame after this one
-            self._passed += 1
+        self._passed += 1  # step(None) next is the frame after this one
 
     def boxes_ahead(self, ids: ArrayLike, dt: float) -> np.ndarray:
         """The boxes of tracks predicted ``dt`` frames past the last step, along their
