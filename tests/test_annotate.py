@@ -183,6 +183,33 @@ def test_an_identity_is_numbered_inside_the_image_and_off_the_frame_label():
     assert (out[bottom + 5:bottom + 30, 8:30] == id_colour(5)).all(axis=2).any()
 
 
+def test_tracks_drawn_over_the_frame_label_leave_its_text_whole():
+    """The frame label was drawn first and a crowd's points and trails over it ("frame 26"
+    read "frame 2o"); its box still goes under the tracks, its text over them now. Oracle:
+    the label's white strokes as drawn with no track."""
+    import cv2
+
+    grey = np.full((120, 160, 3), 128, np.uint8)
+    empty = Tracks(ids=np.zeros(0, int), boxes=np.zeros((0, 4)), points=None,
+                   scores=np.zeros(0), classes=np.zeros(0))
+    alone = Annotator().draw(grey, empty, label="frame 26")
+    (w, h), base = cv2.getTextSize("frame 26", cv2.FONT_HERSHEY_SIMPLEX, 0.6, 1)
+    strokes = (alone[22 - h:22 + base, 8:8 + w] > 200).all(axis=2)
+    assert strokes.sum() > 50
+    # points along the label's row, and a box whose side crosses it
+    xs = np.arange(4, 8 + w, 6.0)
+    points = Tracks(ids=np.arange(1, len(xs) + 1), boxes=None,
+                    points=np.c_[xs, np.full(len(xs), 18.0)], scores=np.ones(len(xs)),
+                    classes=np.zeros(len(xs)))
+    boxed = Tracks(ids=np.array([3]), boxes=np.array([[20.0, -5, 60, 80]]), points=None,
+                   scores=np.ones(1), classes=np.zeros(1))
+    for tracks in (points, boxed):
+        out = Annotator(labels=False).draw(grey, tracks, label="frame 26")
+        text = out[22 - h:22 + base, 8:8 + w]
+        assert (text[strokes] > 200).all()
+        assert (out != alone).any(axis=2)[:22 + base, :8 + w].any()  # the tracks are drawn
+
+
 def test_boxes_not_finite_are_left_out_and_far_ones_drawn_as_near_ones():
     """A NaN or infinite box made OpenCV fail ("Can't parse 'pt1'"), and the annotated video
     with it; so did one beyond OpenCV's integers (x = -3e9). The first are left out (the
@@ -245,6 +272,11 @@ def test_hota_over_alpha_is_drawn_from_the_scores(tmp_path, capsys):
     legend = plot_hota_alpha(many).axes[-1].get_legend()
     assert [t.get_text() for t in legend.get_texts()] == ["21 sequences (named up to 20)",
                                                           "COMBINED"]
+    # a sequence named with a leading "_" is named too (matplotlib leaves such labels out of
+    # a legend it collects: a curve was drawn without its name)
+    legend = plot_hota_alpha({"_night": res["S0"], "day": res["S1"],
+                              "COMBINED": res["COMBINED"]}).axes[-1].get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == ["_night", "day", "COMBINED"]
 
 
 def test_the_timeline_draws_each_objects_matches(tmp_path):
@@ -341,6 +373,15 @@ def test_the_timeline_of_a_ground_truth_with_nothing_to_score(tmp_path):
     assert (tmp_path / "t.png").stat().st_size > 0
     assert fig.axes[0].get_title() == "S: 0 objects, 0 identity switches"
     assert len(fig.axes[0].collections[0].get_paths()) == 0
+    # no frame ticks (the frame locator put -0.04 to 0.04 back over set_xticks([])), and the
+    # y label inside the figure (it was cut to "ground-truth objec" at 176 pixels high)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig).draw()
+    ax = fig.axes[0]
+    assert [t.get_text() for t in ax.get_xticklabels()] == []
+    span = ax.yaxis.label.get_window_extent(fig.canvas.get_renderer())
+    assert 0 <= span.y0 and span.y1 <= fig.bbox.height
 
 
 def test_names_are_drawn_as_written_and_whole_frames_counted(tmp_path):

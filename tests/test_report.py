@@ -375,3 +375,49 @@ def test_the_folder_of_several_runs_names_them_and_dot_has_a_title(run_dir, tmp_
     monkeypatch.chdir(bare)
     assert main(["report", "."]) == 0
     assert "<h1>vistrack report: bare-dot</h1>" in (bare / "report.html").read_text()
+
+
+@pytest.mark.parametrize("size, want", [((640, 480), (640, 480)), ((768, 576), (768, 576)),
+                                        ((1280, 720), (1280, 720)), ((1920, 1080), (1280, 720)),
+                                        ((1080, 1920), (720, 1280)), ((960, 200), (960, 200))])
+def test_the_pages_video_is_shrunk_no_further_than_its_labels_read(tmp_path, size, want):
+    """Every video was shrunk to 640 pixels across: a 1920 x 1080 one's identity numbers,
+    drawn 1.5 times as large as at 720 rows (the annotator's text scale), came out 7 pixels
+    tall, a blur, and a 1280 x 720 one's, drawn at scale 1, half their size. Shrunk by that
+    scale now, to 720 pixels on the short side, where the labels are as large as drawn on a
+    frame of that size. Oracle: the WebM decoded back (its frame size)."""
+    import cv2
+
+    from vistrack.report import _webm
+    from vistrack.viz.annotate import text_scale
+
+    w, h = size
+    path = tmp_path / "v.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), 10, (w, h))
+    for k in range(3):
+        writer.write(np.full((h, w, 3), 60 * k, np.uint8))
+    writer.release()
+    (tmp_path / "v.webm").write_bytes(_webm(path))
+    cap = cv2.VideoCapture(str(tmp_path / "v.webm"))
+    ok, frame = cap.read()
+    assert ok and (frame.shape[1], frame.shape[0]) == want
+    # the labels as large as the annotator's text at scale 1
+    assert want[0] / w * text_scale((h, w)) == pytest.approx(1.0, abs=2 / w)
+
+
+def test_the_pages_counts_say_one_in_the_singular(tmp_path):
+    """"1 frames of x.mp4: 1 boxes of 1 tracks" where the command line says "1 frame"."""
+    from vistrack.report import write_report
+
+    d = tmp_path / "one"
+    d.mkdir()
+    (d / "tracks.txt").write_text("1,1,10,10,20,40,1,-1,-1,-1\n")
+    info = {"name": "x", "input": "x.mp4", "frames": 1, "rows": 1, "tracks": 1, "fps": 50.0,
+            "outputs": ["tracks.txt"]}
+    (d / "run.json").write_text(json.dumps(info))
+    write_report(d, force=True)
+    assert "<p>1 frame of x.mp4: 1 box of 1 track, 50 frames/s" in (d / "report.html").read_text()
+    info |= {"frames": 2, "rows": 2, "tracks": 2}
+    (d / "run.json").write_text(json.dumps(info))
+    write_report(d, force=True)
+    assert "<p>2 frames of x.mp4: 2 boxes of 2 tracks, " in (d / "report.html").read_text()

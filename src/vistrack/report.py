@@ -3,11 +3,12 @@ writes ``OUT_DIR/report.html`` from what ``vistrack track --out-dir OUT_DIR`` wr
 
 The page holds everything itself (no file beside it, no network): the command that made the
 results, the run's numbers, the scores against the ground truth, the annotated video
-(``annotated.mp4`` re-encoded as WebM VP8, which every browser plays, at most 640 pixels
-wide), the trajectories and, with ground truth, HOTA, DetA and AssA over the localisation
-threshold and the timeline of every object (:func:`vistrack.viz.plot_timeline`). Images and
-the video are embedded as ``data:`` URIs. A short script marks the video ``data-state=
-"playable"`` once the browser has decoded its first frame, or shows a note if it cannot.
+(``annotated.mp4`` re-encoded as WebM VP8, which every browser plays, at most 720 pixels
+on its short side, where its labels read as drawn), the trajectories and, with ground
+truth, HOTA, DetA and AssA over the localisation threshold and the timeline of every
+object (:func:`vistrack.viz.plot_timeline`). Images and the video are embedded as
+``data:`` URIs. A short script marks the video ``data-state="playable"`` once the browser
+has decoded its first frame, or shows a note if it cannot.
 
 ``run.json`` (:data:`vistrack.pipeline.RUN_INFO`), which ``vistrack track --out-dir``
 writes beside its outputs, says how they
@@ -30,20 +31,23 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from ._pool import counted
+
 __all__ = ["write_report"]
 
-_MAX_WIDTH = 640
-
-
-def _webm(video: Path, max_width: int = _MAX_WIDTH) -> bytes:
-    """``video`` re-encoded as WebM (VP8), scaled down to ``max_width`` pixels if wider."""
+def _webm(video: Path) -> bytes:
+    """``video`` re-encoded as WebM (VP8), scaled down by the annotator's text scale
+    (:func:`~vistrack.viz.annotate.text_scale`), to 720 pixels on its short side if longer:
+    its labels then read as on a frame of that size (shrunk to 640 pixels across, as every
+    video was, a 1920 × 1080 one's identity numbers were 7 pixels tall, a blur)."""
     import cv2
 
     from .io.video import VideoReader
+    from .viz.annotate import text_scale
 
     reader = VideoReader(video)
     w, h = reader.size
-    scale = min(1.0, max_width / max(w, 1))
+    scale = 1.0 / text_scale((h, w))
     size = (max(2, int(round(w * scale / 2)) * 2), max(2, int(round(h * scale / 2)) * 2))
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "video.webm"
@@ -242,10 +246,12 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
     if info.get("command"):
         parts.append(f"<p>Made by</p><pre>{html.escape(info['command'])}</pre>")
     if info.get("frames"):
-        parts.append(
-            f"<p>{info['frames']} frames of {html.escape(str(info.get('input', '')))}: "
-            f"{info.get('rows', 0)} {'positions' if points else 'boxes'} of "
-            f"{info.get('tracks', 0)} {'particles' if points else 'tracks'}, "
+        n_rows, n_tracks = info.get("rows", 0), info.get("tracks", 0)
+        parts.append(  # (in the singular for one: "1 frames of" was said)
+            f"<p>{counted(info['frames'], 'frame')} of "
+            f"{html.escape(str(info.get('input', '')))}: "
+            f"{counted(n_rows, 'position') if points else counted(n_rows, 'box', 'boxes')} of "
+            f"{counted(n_tracks, 'particle' if points else 'track')}, "
             f"{info.get('fps', 0):.0f} frames/s without writing; vistrack "
             f"{html.escape(str(info.get('vistrack', '')))}.</p>")
     said = info.get("warnings")

@@ -12,7 +12,7 @@ import numpy as np
 if TYPE_CHECKING:
     from ..types import Frame, Tracks
 
-__all__ = ["Annotator", "AnnotatedVideo", "id_colour", "PALETTE_SIZE"]
+__all__ = ["Annotator", "AnnotatedVideo", "id_colour", "PALETTE_SIZE", "text_scale"]
 
 
 PALETTE_SIZE = 64
@@ -80,6 +80,17 @@ def id_colour(i: int) -> tuple[int, int, int]:
 LABEL_COVER = 0.1
 """The share of a frame that :class:`Annotator`'s identity numbers may cover (each number's
 box with its outline) for them to be drawn, by default."""
+
+
+def text_scale(shape: tuple[int, ...]) -> float:
+    """How much larger than at 720 pixels :class:`Annotator` draws its text and lines on an
+    image of ``shape`` (``(H, W, ...)``): they grow with images larger than 720 pixels on
+    their short side, so that they read on a 4K frame as on a PAL one.
+
+    >>> text_scale((576, 768, 3)), text_scale((1080, 1920, 3)), text_scale((2160, 3840))
+    (1.0, 1.5, 3.0)
+    """
+    return max(1.0, min(shape[:2]) / 720)
 
 
 class Annotator:
@@ -171,22 +182,20 @@ class Annotator:
         import cv2
 
         out = image.copy() if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
-        # text and lines grow with images larger than 720 pixels on their short side, so that
-        # they read on a 4K frame as on a PAL one (sizes below are at scale 1)
-        z = max(1.0, min(out.shape[:2]) / 720)
+        z = text_scale(out.shape)  # (sizes below are at scale 1)
         thin, thick = max(1, round(z)), max(2, round(2 * z))
         H, W = out.shape[:2]
         banner = (0, 0)  # the label's box: right and bottom edges
         if label:
             # white on a black box: an outlined label read double ("frame 101" as "1011") on
-            # a light background once the video was compressed. Drawn first: the tracks go
-            # over it, so it hides none
+            # a light background once the video was compressed. The box is drawn first, so
+            # that the tracks go over it and it hides none; the text last, on a black halo,
+            # so that no track hides it ("frame 26" read "frame 2o" under a crowd's trails)
             (w, h), base = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * z, thin)
-            y = round(22 * z)
-            banner = (round(12 * z) + w, y + base + round(2 * z))
-            cv2.rectangle(out, (round(4 * z), y - h - round(5 * z)), banner, (0, 0, 0), -1)
-            cv2.putText(out, label, (round(8 * z), y), cv2.FONT_HERSHEY_SIMPLEX, 0.6 * z,
-                        (255, 255, 255), thin, cv2.LINE_AA)
+            at_label = (round(8 * z), round(22 * z))
+            banner = (round(12 * z) + w, at_label[1] + base + round(2 * z))
+            cv2.rectangle(out, (round(4 * z), at_label[1] - h - round(5 * z)), banner,
+                          (0, 0, 0), -1)
         self._n += 1
         boxes = tracks.boxes
         ids = tracks.ids
@@ -274,6 +283,11 @@ class Annotator:
             cv2.putText(out, str(i), org, font, scale, (0, 0, 0), halo,
                         cv2.LINE_AA)
             cv2.putText(out, str(i), org, font, scale, c, thin, cv2.LINE_AA)
+        if label:
+            for colour, width in (((0, 0, 0), thin + 2 * max(1, round(z))),
+                                  ((255, 255, 255), thin)):
+                cv2.putText(out, label, at_label, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * z, colour,
+                            width, cv2.LINE_AA)
         return out
 
     def _window(self, slot: int) -> np.ndarray:

@@ -453,8 +453,11 @@ def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = No
     if len(names) <= 20:
         # beside the panels, where it hides no curve (inside the last one, 20 names covered
         # a third of its width)
-        axes[-1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
-                        borderaxespad=0)
+        # the lines given, not collected: matplotlib leaves out a label that starts with
+        # "_" (a sequence named _night had a curve and no name)
+        lines = axes[-1].get_lines()
+        axes[-1].legend(lines, [line.get_label() for line in lines], fontsize=7,
+                        loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
     else:
         # too many to name (their colours repeat): the legend says what the lines are (it
         # was left out, without a word, and COMBINED's line with it)
@@ -514,7 +517,9 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
     objects = objects[np.argsort(first, kind="stable")]  # in the order they appear
     row = {int(g): k for k, g in enumerate(objects)}
     n = len(objects)
-    fig = Figure(figsize=(12, min(40.0, 1.6 + 0.16 * n)))
+    # (at least 2.4 inches: at 1.76, with no object, the y label was cut to "ground-truth
+    # objec")
+    fig = Figure(figsize=(12, min(40.0, max(2.4, 1.6 + 0.16 * n))))
     ax = fig.subplots()
     boxes, colours = [], []
     order = np.lexsort((frames, gts))
@@ -554,7 +559,8 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
     k = int(switches.sum())
     counts = f"{n} object{'s' if n != 1 else ''}, {k} identity switch{'es' if k != 1 else ''}"
     ax.set_title(f"{_label(title)}: {counts}" if title else counts)
-    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # frames are whole
+    if len(frames):  # frames are whole (with none, the locator put ticks at ±0.05 back)
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()
     if path is not None:
