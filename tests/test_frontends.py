@@ -321,6 +321,13 @@ def test_a_video_holding_more_frames_than_its_header_says_loses_none(tmp_path):
     frames, msg = _read(r)
     assert [f.index for f in frames] == list(range(1, 31)) and msg == []
     assert all(abs(int(f.image[0, 0, 0]) - 5 * (f.index - 1)) <= 2 for f in frames)
+    # from a start past the header's count: a seek there landed on frame 11 (the last
+    # counted) and gave frames 11, 12, ... as 15, 16, ..., without a word; and from a start
+    # inside it, as seeked. Oracle: each frame's grey level (5 per frame)
+    for start in (11, 15, 30, 5):
+        frames, msg = _read(VideoReader(path, start=start))
+        assert [f.index for f in frames] == list(range(start, 31)) and msg == []
+        assert all(abs(int(f.image[0, 0, 0]) - 5 * (f.index - 1)) <= 2 for f in frames), start
 
 
 @pytest.mark.parametrize("names, why", [

@@ -742,11 +742,22 @@ class VideoReader:
             # a stream without a count may accept a seek and not move, and a transport or
             # program stream (.ts, .mts, .mpg) lands on another frame than it reports (H.264
             # in .ts: frame 31 for any start from 2 to 30): those are read through
-            if self.start > 1 and (self.frame_count == 0
+            # too; so is a start past the header's count, where a seek lands on the last
+            # frame counted (a header of 10 for 20 frames gave frame 11 as frame 15, and on,
+            # without a word), and any seek that does not land where it was sent
+            if self.start > 1 and (self.start > self.frame_count
                                    or self.source.suffix.lower() not in _SEEKABLE
-                                   or not cap.set(cv2.CAP_PROP_POS_FRAMES, self.start - 1)):
-                for _ in range(self.start - 1):
+                                   or not cap.set(cv2.CAP_PROP_POS_FRAMES, self.start - 1)
+                                   or cap.get(cv2.CAP_PROP_POS_FRAMES) != self.start - 1):
+                if cap.get(cv2.CAP_PROP_POS_FRAMES) != 0:  # (moved: from the first frame)
+                    cap.release()
+                    cap = cv2.VideoCapture(str(self.source))
+                for j in range(1, self.start):
                     if not cap.grab():
+                        if j <= last:  # (as a read that stops: said)
+                            yield _Note(f"{self.source}: reading stopped at frame {j} of the "
+                                        f"{self.frame_count} its header gives (truncated or "
+                                        "corrupt)")
                         return
             # to the end of the file, whatever its header's count (a frame past it is read
             # too), or to stop
