@@ -279,6 +279,29 @@ def test_a_class_column_that_holds_no_class(tmp_path):
     assert set(read_mot(p).classes.tolist()) == {-1}
 
 
+def test_a_world_y_is_no_visibility(tmp_path):
+    """MOT15's ground truth holds world x, y, z in columns 8-10: x was known for no class,
+    but y was read as the visibility (3.3 to 143 on ETH-Bahnhof, -16 to 7.7 on
+    PETS09-S2L1) and written as one by to_csv. -1 now, as where absent; MOT17's visibility
+    is read as its file holds it (oracle: numpy's loadtxt of the column)."""
+    for name in ("ETH-Bahnhof", "PETS09-S2L1"):
+        gt = seq_dir("MOT15", name) / "gt" / "gt.txt"
+        table = read_mot(gt)
+        assert set(table.visibility.tolist()) == {-1.0}
+        assert np.ptp(np.loadtxt(gt, delimiter=",")[:, 8]) > 1  # (a world y, not a share)
+    gt = seq_dir("MOT17", "MOT17-09-FRCNN") / "gt" / "gt.txt"
+    rows = np.loadtxt(gt, delimiter=",")
+    rows = rows[np.argsort(rows[:, 0], kind="stable")]
+    np.testing.assert_array_equal(read_mot(gt).visibility, rows[:, 8])
+    # a world x of whole numbers beside a world y: no class is told from it, but the y is
+    # no share, so no visibility either; shares and -1 are visibilities
+    p = tmp_path / "gt.txt"
+    p.write_text("1,1,10,10,5,5,1,3,12.5,0\n2,1,10,10,5,5,1,4,-3.25,0\n")
+    assert read_mot(p).visibility.tolist() == [-1.0, -1.0]
+    p.write_text("1,1,10,10,5,5,1,1,0.25\n2,1,10,10,5,5,1,1,-1\n3,1,10,10,5,5,1,1,1\n")
+    assert read_mot(p).visibility.tolist() == [0.25, -1.0, 1.0]
+
+
 @pytest.mark.parametrize("row, message", [
     ((1.7, 1, 0, 0, 1, 1), "row 1, value 1 (frame): frame must be an integer; got 1.7"),
     ((1, 2.7, 0, 0, 1, 1), "row 1, value 2 (id): id must be an integer; got 2.7"),

@@ -264,7 +264,9 @@ class MOTTable:
         and in every row where any row's is not an integer below 2**53 in size (MOT15
         ground truth and MOTChallenge's detections files hold a world ``x`` there).
     visibility : (N,) float
-        Column 9 of MOT16/17/20 ground truth, -1 where absent.
+        Column 9 of MOT16/17/20 ground truth, -1 where absent, and in every row where
+        column 8 is a world ``x`` (above) or any row's column 9 is not a share from 0 to 1
+        (MOT15 ground truth's world ``y``).
     path : str
         The file read, for messages.
     columns : int
@@ -358,16 +360,21 @@ class MOTTable:
         def col(j: int, fill: float) -> np.ndarray:
             return a[:, j] if w > j else np.full(N, fill, dtype=float)
 
-        c = col(7, -1.0)
+        c, v = col(7, -1.0), col(8, -1.0)
         if w > 7 and not ((c == np.round(c)) & (np.abs(c) < _INT_LIMIT)).all():
             # a class is an integer: a column holding anything else is MOT15's world x (as
             # detections files have it there too, -1 where there is none), and none of its
             # values is a class, a whole number among them (a world x of 3.000) no more
-            # than the rest
-            c = np.full(N, -1.0)
+            # than the rest; the column after it is then the world y, no visibility (it was
+            # read as one: 3.3 to 143 on ETH-Bahnhof)
+            c = v = np.full(N, -1.0)
+        elif w > 8 and not (((v >= 0) & (v <= 1)) | (v == -1)).all():
+            # a visibility is a share, 0 to 1 (-1: none given): anything else is a world y
+            # (beside a world x of whole numbers)
+            v = np.full(N, -1.0)
         return cls(frames=a[:, 0].astype(np.int64), ids=a[:, 1].astype(np.int64),
                    boxes=np.ascontiguousarray(a[:, 2:6]), conf=col(6, 1.0),
-                   classes=c.astype(np.int64), visibility=col(8, -1.0), path=path, columns=w)
+                   classes=c.astype(np.int64), visibility=v, path=path, columns=w)
 
     def __getitem__(self, index: _Index) -> MOTTable:
         """Rows by boolean mask or indices."""
