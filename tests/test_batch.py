@@ -474,6 +474,31 @@ def test_inputs_expand_and_are_checked(bench, tmp_path):
         plan([video], tmp_path, kind="pictures")
 
 
+def test_one_inputs_own_file_is_refused_with_several_inputs(bench, tmp_path):
+    """track_many(several, detections=FILE) tracked every sequence from the one file and
+    wrote each result under its own sequence's name (the command line refuses --detections
+    with several inputs). Refused before any job, as a ground truth or a detections front-end
+    of one video for several; with one input each is taken, and a shared ONNX model too."""
+    det = bench / "SIM-1" / "det" / "det.txt"
+    seqs = [bench / "SIM-0", bench / "SIM-1"]
+    with pytest.raises(ValueError, match=re.escape(
+            f"detections={det!r} is one input's file, and there are 2 inputs: give it with "
+            "one input")):
+        plan(seqs, tmp_path / "out", detections=det)
+    with pytest.raises(ValueError, match="detections=.* 3 inputs"):
+        track_many([bench], tmp_path / "out", detections=det)
+    assert not (tmp_path / "out").exists()
+    assert plan(seqs[:1], tmp_path / "out", detections=det)[0].options["detections"] == det
+    videos = [tmp_path / "a.mp4", tmp_path / "b.mp4"]
+    for v in videos:
+        v.write_bytes(b"")
+    for option in ({"gt": tmp_path / "gt.txt"}, {"frontend": "detections:d.txt"}):
+        with pytest.raises(ValueError, match="is one input's file, and there are 2 inputs"):
+            plan(videos, tmp_path / "out", kind="pixels", **option)
+        assert len(plan(videos[:1], tmp_path / "out", kind="pixels", **option)) == 1
+    assert len(plan(videos, tmp_path / "out", kind="pixels", frontend="onnx:m.onnx")) == 2
+
+
 def test_vistrack_track_with_several_inputs(bench, tmp_path, capsys):
     out = tmp_path / "results"
     assert main(["track", str(bench), "--out", str(out), "--jobs", "2", "--quiet"]) == 0

@@ -151,12 +151,14 @@ def test_a_bad_file_is_named_with_its_key(tmp_path, text, match):
     # a table misspelt is named with a near one
     ('# mine\n[trackr]\nhigh = 0.5\n', 2, r"unknown table or key 'trackr'; did you mean "
                                              r"\[tracker\]\?"),
+    # a line separator in a comment ends no line (it was counted as one, a line too far)
+    ('# a\u2028b\n[tracker]\nhigh = 2\n', 3, r"\[tracker\] high must be"),
 ])
 def test_a_bad_key_is_named_by_its_line(tmp_path, text, line, match):
     """The message opens with FILE:LINE where LINE is the line that sets the key (counted
     from 1, as editors count)."""
     path = tmp_path / "c.toml"
-    path.write_text(text)
+    path.write_text(text, encoding="utf-8")
     with pytest.raises(ConfigError, match=match) as e:
         read_config(path)
     assert str(e.value).startswith(f"{path}:{line}: "), str(e.value)

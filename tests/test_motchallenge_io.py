@@ -256,6 +256,37 @@ def test_seqinfo_counts_written_as_floats_are_read(tmp_path):
     assert str(e.value) == f"{p}:3: seqLength must be a whole number; got 600.5"
 
 
+@pytest.mark.parametrize("before", ["; page\fbreak\n", "; a\u2028b\n", "name=Caf\x85e\n"])
+def test_a_seqinfo_value_is_named_by_its_line_as_editors_count_them(tmp_path, before):
+    """Lines were counted with str.splitlines, which also breaks at a form feed, NEL and
+    U+2028: a bad value after one was named a line too far. Oracle: the lines split at \\n."""
+    p = tmp_path / "seqinfo.ini"
+    text = f"[Sequence]\n{before}frameRate=25\nseqLength=abc\nimWidth=640\nimHeight=480\n"
+    p.write_text(text, encoding="utf-8")
+    line = text.split("\n").index("seqLength=abc") + 1
+    with pytest.raises(MOTFormatError) as e:
+        read_seqinfo(p)
+    assert str(e.value) == f"{p}:{line}: seqLength = 'abc' is not a number"
+
+
+@pytest.mark.parametrize("rate, error, message", [
+    (-5, ValueError, "frame_rate must be a finite number > 0; got -5"),
+    (0, ValueError, "frame_rate must be a finite number > 0; got 0"),
+    (float("nan"), ValueError, "frame_rate must be a finite number > 0; got nan"),
+    (True, TypeError, "frame_rate must be a number; got True"),
+    ("abc", TypeError, "frame_rate must be a number; got 'abc'"),
+])
+def test_read_seqinfo_names_a_frame_rate_given_that_is_no_rate(tmp_path, rate, error, message):
+    """The rate given for a file without frameRate was taken as it came (-5, 0, NaN, True as
+    1.0), or failed in float()'s words ("could not convert string to float"), where the same
+    value in the file is named."""
+    p = tmp_path / "seqinfo.ini"
+    p.write_text("[Sequence]\nname=S\nseqLength=3\nimWidth=640\nimHeight=480\n")
+    with pytest.raises(error, match=re.escape(message)):
+        read_seqinfo(p, frame_rate=rate)
+    assert read_seqinfo(p, frame_rate=12.5).frame_rate == 12.5
+
+
 def test_a_class_column_that_holds_no_class(tmp_path):
     """Column 8 is the class of MOT16/17/20 ground truth and a world x in MOT15's (and in
     MOTChallenge's detections files): a column with a value that is not an integer (3.5,

@@ -197,8 +197,10 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
     ValueError
         If ``kind`` is unknown, with ``"detections"`` an input is not a sequence folder (or,
         given ``fps``, a detections file or a folder with ``det/det.txt``) or a setting's
-        value is invalid, two inputs would write to the same place, or an input resolves to
-        no name to name its outputs after (the root folder).
+        value is invalid, two inputs would write to the same place, an input resolves to
+        no name to name its outputs after (the root folder), or a file of one input's own
+        (``detections``, ``gt``, a ``frontend`` of ``detections:FILE``) is given with
+        several inputs.
     TypeError
         With ``"detections"``, if an option is no setting of ``track_sequence``.
     """
@@ -236,6 +238,18 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
         else:  # a video's name without its suffix, a folder's name
             target = out / sequence_name(path)
         jobs.append(Job(path, target, kind, dict(options)))
+    if len(jobs) > 1:
+        # a file of one input's own, given for all: every sequence was tracked from the one
+        # detections file and its results written under its own name (the command line
+        # refuses --detections, --gt and --frontend detections:FILE with several inputs)
+        own = [k for k in ("detections", "gt") if options.get(k) is not None]
+        frontend = options.get("frontend")
+        if isinstance(frontend, str) and frontend.startswith("detections:"):
+            own.append("frontend")
+        if own:
+            raise ValueError(f"{own[0]}={options[own[0]]!r} is one input's file, and there "
+                             f"are {len(jobs)} inputs: give it with one input (each sequence "
+                             "folder holds its own)")
     names: dict[Path, Path] = {}
     for job in jobs:
         if job.out in names:

@@ -367,7 +367,10 @@ def _key_line(text: str, table: str, key: str | None = None) -> int | None:
         return [p.strip().strip("\"'") for p in dotted.split(".")]
 
     current: list[str] = []
-    for number, line in enumerate(text.splitlines(), 1):
+    from .io.motchallenge import _text_lines
+
+    # (lines as editors and TOML count them: splitlines also broke at U+2028 in a comment)
+    for number, line in enumerate(_text_lines(text), 1):
         # read with string methods, not patterns, so a long line costs its length once
         line = line.strip()
         if line.startswith("[["):  # an array of tables: none of ours, but named where asked

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
-from .._validate import decode_text
+from .._validate import as_finite, decode_text
 from .atomic import replacing
 
 if TYPE_CHECKING:
@@ -1647,6 +1647,8 @@ def read_seqinfo(path: str | os.PathLike, *, frame_rate: float | None = None) ->
     ------
     FileNotFoundError
         If the file does not exist.
+    ValueError, TypeError
+        If ``frame_rate`` is given and is not a finite number > 0.
     MOTFormatError
         If it is not a UTF-8 text INI file, has no ``[Sequence]`` section, or lacks
         ``frameRate`` (without ``frame_rate``), ``seqLength``, ``imWidth`` or ``imHeight`` or
@@ -1664,6 +1666,8 @@ def read_seqinfo(path: str | os.PathLike, *, frame_rate: float | None = None) ->
     >>> info.name, info.frame_rate, info.seq_length, (info.im_width, info.im_height)
     ('S', 25.0, 3, (640, 480))
     """
+    if frame_rate is not None:  # (-5, NaN and True were taken, "abc" failed unnamed)
+        frame_rate = as_finite(frame_rate, "frame_rate", 0.0, above=True)
     path, s = _sequence_section(path)
     return SeqInfo(name=s.get("name", path.parent.name),
                    frame_rate=(float(frame_rate) if frame_rate is not None
@@ -1746,7 +1750,9 @@ def _ini_line(path: Path, key: str) -> str:
     """``path:LINE`` of the line that sets ``key`` in ``[Sequence]`` (keys are read without
     regard to case, as configparser reads them), or ``path`` alone where none is found."""
     section = ""
-    for n, line in enumerate(_read_text(os.fspath(path), "seqinfo.ini").splitlines(), 1):
+    # (lines as editors count them: splitlines also broke at a form feed or U+2028 in a
+    # comment, and named the line after)
+    for n, line in enumerate(_text_lines(_read_text(os.fspath(path), "seqinfo.ini")), 1):
         t = line.strip()
         if t.startswith("["):
             section = t.strip("[] ")
