@@ -353,6 +353,21 @@ def test_rows_a_table_cannot_hold_are_named(row, message):
     assert MOTTable.from_rows([(0, 1, 0, 0, 1, 1)]).frames.tolist() == [0]
 
 
+def test_rows_not_given_as_a_list_of_rows_are_named():
+    """A single row not in a list: 12 values were cut into two rows without a word, and 7
+    failed in a reshape's words ("cannot reshape array of size 7"). No rows at all is an
+    empty table, as before."""
+    for flat in ([1, 1, 0, 0, 1, 1, 1], list(range(1, 13))):
+        with pytest.raises(ValueError, match=re.escape(
+                f"rows must be a list of rows, (N, w); got shape ({len(flat)},) (one row: "
+                "[row])")):
+            MOTTable.from_rows(flat)
+        assert MOTTable.from_rows([flat]).columns == len(flat)
+    with pytest.raises(ValueError, match=re.escape("got shape (2, 1, 6)")):
+        MOTTable.from_rows(np.ones((2, 1, 6)))
+    assert len(MOTTable.from_rows([])) == len(MOTTable.from_rows(np.zeros((0, 9)))) == 0
+
+
 # the lines around a bad row: every kind of line that holds no row, and rows
 FILLER = {
     "comment": "# frame,id,left,top,width,height,conf",
@@ -573,6 +588,17 @@ def test_a_text_file_of_semicolons_is_pointed_to_csv(tmp_path):
     from vistrack.pipeline import read_detections
 
     assert read_detections(tmp_path / "d.csv").boxes.tolist() == [[10.0, 20.0, 30.0, 40.0]]
+    # a .csv of semicolons without its header was told to be named .csv, which it was: it is
+    # told to name its columns, and with that header it reads
+    from vistrack.evaluation.files import read_truth
+
+    (tmp_path / "gt.csv").write_text(rows.partition("\n")[2])
+    with pytest.raises(MOTFormatError, match=r"got 1: .* \(values separated by ';': a CSV file "
+                                             r"of semicolons is read by its header, a first "
+                                             r"line naming its columns: frame;id;bb_left;"):
+        read_truth(tmp_path / "gt.csv")
+    (tmp_path / "gt.csv").write_text(rows)
+    assert read_truth(tmp_path / "gt.csv").boxes.tolist() == [[10.0, 20.0, 30.0, 40.0]]
     (tmp_path / "plain.txt").write_text("1 -1 10 20\n")  # no semicolon: no such hint
     with pytest.raises(MOTFormatError, match=r"got 4: '1 -1 10 20'$"):
         read_mot(tmp_path / "plain.txt")

@@ -613,6 +613,20 @@ def test_the_file_sinks_refuse_rows_read_mot_would_refuse(tmp_path, sink, frame,
         out.write(Frame(frame, 0.0), tracks)
 
 
+def test_track_rows_refuse_an_id_that_is_not_whole():
+    """TrackRows took ids 1.2 and 1.7 as track 1 both (two tracks merged, no word), where the
+    file sinks name them (the test above); whole ids of any numeric type are taken."""
+    tracks = Tracks(ids=np.array([1.2, 1.7]), boxes=np.array([[0, 0, 10, 10.0], [50, 50, 60, 60]]),
+                    points=None, scores=np.array([0.9, 0.8]), classes=np.zeros(2))
+    rows = TrackRows()
+    with pytest.raises(ValueError, match=re.escape("frame 3: ids[0] = 1.2 is not a whole number")):
+        rows.write(Frame(3, 0.0), tracks)
+    assert len(rows) == 0
+    rows.write(Frame(3, 0.0), Tracks(ids=np.array([4.0, 9.0]), boxes=tracks.boxes, points=None,
+                                     scores=tracks.scores, classes=tracks.classes))
+    assert rows.ids.tolist() == [4, 9] and rows.frames.tolist() == [3, 3]
+
+
 def _partials(path):
     """The partial files of ``path`` on disk (their names carry a token of their own)."""
     path = Path(path)

@@ -314,7 +314,8 @@ class MOTTable:
         Raises
         ------
         ValueError
-            If the rows have fewer than 6 values; :class:`MOTFormatError` (a ``ValueError``)
+            If ``rows`` is not 2-D (a single row not in a list), or the rows have fewer
+            than 6 values; :class:`MOTFormatError` (a ``ValueError``)
             naming the row and value for one the table cannot hold as given: a value that is
             not finite, a frame or identity that is not an integer (1.7 was frame 1) or lies
             from 2**53 on. A frame of 0 or a negative width it holds, as a tracker that
@@ -328,7 +329,13 @@ class MOTTable:
         ([1, 2], [1.0, 1.0])
         """
         a = np.asarray(rows, dtype=float)
-        a = a.reshape(-1, a.shape[-1] if a.ndim == 2 else 6)
+        if a.ndim != 2:
+            if a.size:
+                # (a flat row of 12 values was cut into two rows, one of 7 failed in a
+                # reshape's words)
+                raise ValueError(f"rows must be a list of rows, (N, w); got shape {a.shape}"
+                                 + (" (one row: [row])" if a.ndim == 1 else ""))
+            a = a.reshape(0, 6)  # (no rows: [])
         if a.shape[1] < 6:
             raise ValueError(f"rows need at least 6 values (frame, id, box); got {a.shape[1]}")
         # what the table cannot hold as given (a frame of 1.7 was frame 1); a frame of 0 or a
@@ -844,8 +851,12 @@ def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
         # the line as it is, and what a '#' in it does to the count
         line = repr(raw.strip()) + (" ('#' starts a comment, to the end of the line)"
                                     if "#" in raw else "")
-        if len(cells) < 6 and ";" in raw:  # (a CSV file of semicolons, named .txt)
-            line += " (values separated by ';': a CSV file? name it .csv to read it as one)"
+        if len(cells) < 6 and ";" in raw:  # (a CSV file of semicolons)
+            line += (" (values separated by ';': a CSV file? name it .csv to read it as one)"
+                     if not path.lower().endswith(".csv") else
+                     " (values separated by ';': a CSV file of semicolons is read by its "
+                     "header, a first line naming its columns: "
+                     "frame;id;bb_left;bb_top;bb_width;bb_height)")
         if len(cells) < 6:
             raise _bad(path, k, len(cells) + 1,
                        f"expected at least 6 values (separated by commas, or by spaces or tabs), "

@@ -163,7 +163,7 @@ class TrackRows:
         Raises
         ------
         ValueError
-            If the tracks are points.
+            If the tracks are points, or an id is not a whole number.
 
         Examples
         --------
@@ -175,8 +175,10 @@ class TrackRows:
         (2, [4, 5])
         """
         if len(tracks):
+            # (ids 1.2 and 1.7 were both track 1, where the writers name them)
+            ids = _integers_of(int(frame.index), np.asarray(tracks.ids), "ids")
             self._frames.add(np.full(len(tracks), int(frame.index)))
-            self._ids.add(np.asarray(tracks.ids))
+            self._ids.add(ids)
             self._xywh.add(_box_rows(tracks, frame, "TrackRows"))
             self._scores.add(np.asarray(tracks.scores, dtype=float))
 
