@@ -1054,3 +1054,59 @@ def test_boxes_flags_and_seeds_are_named():
         with pytest.raises(ValueError, match=r"rng must be a numpy Generator, a whole-number"):
             ColourParticleTracker(rng=bad)
     ColourParticleTracker(rng=np.random.default_rng(0))
+
+
+@pytest.mark.parametrize("method", ["colour", "meanshift"])
+def test_a_window_under_a_pixel_stays_put_on_a_still_frame(method):
+    """The mean shift widened a window under a pixel from its corner, not about its centre: a
+    still box 0.5 pixel wide moved 0.25 pixel right and down a frame (15 pixels in 60
+    frames), with nothing under it too. Oracle: nothing moves, so the box's centre stays
+    (colour may choose another scale about it)."""
+    from vistrack.tracking.single import _mean_shift
+
+    im = np.full((120, 160, 3), (40, 120, 40), np.uint8)
+    im[50:70, 70:90] = (0, 0, 255)
+    t = single_tracker(method)
+    t.init(im, [80, 60, 0.5, 0.5])
+    for _ in range(60):
+        box = t.update(im)
+    np.testing.assert_allclose(box[:2] + box[2:] / 2, [80.25, 60.25], atol=1e-9)
+    assert _mean_shift(np.zeros((120, 160), np.uint8), np.array([80, 60, 0.5, 0.5])) == (
+        80.25, 60.25)
+
+
+def test_a_start_box_under_half_a_pixel_wide_has_a_colour_model():
+    """A side under half a pixel rounded to none, and the colour model to nothing, without a
+    word. The model is now the pixel under the box's centre. Oracle: the histogram of that
+    one pixel (and of the box 1 pixel wide that holds it)."""
+    from vistrack.tracking.single import ColourTracker
+
+    im = np.full((60, 80, 3), (40, 120, 40), np.uint8)
+    im[20:40, 51:55] = (0, 0, 255)  # a red bar 4 pixels wide
+    for box in ([52.3, 25.0, 0.4, 10.0], [52.3, 25.2, 0.45, 0.3]):
+        t = ColourTracker()
+        t.init(im, box)
+        one = ColourTracker()
+        one.init(im, [52.0, np.floor(box[1] + box[3] / 2) if box[3] < 0.5 else box[1], 1.0,
+                      1.0 if box[3] < 0.5 else box[3]])
+        assert t.pt.sum() == pytest.approx(1.0)
+        np.testing.assert_array_equal(t.pt, one.pt)
+
+
+def test_a_start_box_too_flat_for_the_snake_is_named():
+    """The snake said "control_points lie on one line ... or shape='free'": points the caller
+    never gave, and an option track-one has not. The box is named."""
+    im = np.zeros((120, 160, 3), np.uint8)
+    with pytest.raises(ValueError, match=re.escape(
+            "box [30.0, 60.0, 100.0, 1e-05] is too flat for the snake (shape='affine'): the "
+            "control points on its ellipse lie on one line; give a box around an area")):
+        single_tracker("snake").init(im, [30, 60, 100, 1e-5])
+
+
+def test_the_colour_particle_tracker_takes_no_scales():
+    """scales was taken and never used (the same boxes as the default)."""
+    from vistrack.tracking.single import ColourParticleTracker
+
+    with pytest.raises(TypeError, match="ColourParticleTracker takes no scales"):
+        ColourParticleTracker(rng=0, scales=(0.5, 3.0))
+    assert ColourParticleTracker(rng=0, bins=8).bins == 8

@@ -460,9 +460,11 @@ def _mean_shift(bp: np.ndarray, box: np.ndarray, iters: int = 20, eps: float = 0
     [50.0, 30.0]
     """
     x, y, w, h = (float(v) for v in box)
+    # a window under a pixel is widened to one about its centre (widened from its corner,
+    # a still box 0.5 pixel wide moved 0.25 pixel a frame, with nothing under it too)
+    cx, cy = x + w / 2, y + h / 2
     w, h = max(w, 1.0), max(h, 1.0)
     H, W = bp.shape
-    cx, cy = x + w / 2, y + h / 2
     for _ in range(iters):
         x0, y0 = cx - w / 2, cy - h / 2
         i0, i1 = max(int(np.floor(x0)), 0), min(int(np.ceil(x0 + w)), W)
@@ -569,6 +571,12 @@ class ColourTracker(SingleObjectTracker):
     def _hist(self, cells: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
         x, y, w, h = np.round(box).astype(int)
+        # a side under half a pixel rounded to none, and the model to nothing (every colour
+        # then equally likely, the box followed nothing): the pixel under its centre
+        if w < 1:
+            x, w = int(np.floor(box[0] + box[2] / 2)), 1
+        if h < 1:
+            y, h = int(np.floor(box[1] + box[3] / 2)), 1
         H, W = cells.shape[:2]
         inner = np.zeros((H, W), np.uint8)
         inner[max(y, 0):max(y + h, 0), max(x, 0):max(x + w, 0)] = 1
@@ -726,6 +734,9 @@ class ColourParticleTracker(ColourTracker):
 
     def __init__(self, n_particles: int = 300, step: float = 0.15, sharpness: float = 30.0,
                  rng: np.random.Generator | int | None = 0, **kwargs: Any):
+        if "scales" in kwargs:  # (taken and never used: the particles carry the size)
+            raise TypeError("ColourParticleTracker takes no scales: its particles' sizes are "
+                            "its own (bins and rate go to ColourTracker)")
         super().__init__(**kwargs)
         # an infinite sharpness gave NaN boxes, a NaN step an IndexError
         self.n = as_whole(n_particles, "n_particles", 1)

@@ -521,7 +521,14 @@ class SnakeTracker(SingleObjectTracker):
         a = 2 * np.pi * np.arange(s.n) / s.n
         c = _index_centre(b)
         Q = np.c_[c[0] + k * b[2] / 2 * np.cos(a), c[1] + k * b[3] / 2 * np.sin(a)]
-        s.init(Q)
+        try:
+            s.init(Q)
+        except ValueError:
+            # (named the control points, which the caller never gave, and shape='free',
+            # which track-one has no option for)
+            raise ValueError(f"box {b.tolist()} is too flat for the snake (shape="
+                             f"{s.shape!r}): the control points on its ellipse lie on one "
+                             "line; give a box around an area") from None
         if s.shape != "free" and self.settle:
             # the template: the object's outline in the first frame, found by the free snake
             free = Snake(s.n, s.m, search=s.search, min_edge=s.min_edge, q=s.q, r=s.r,
