@@ -834,14 +834,16 @@ def test_results_of_other_classes_are_refused_as_trackeval_refuses_them(tmp_path
         pred.write_text("1,5,0,0,10,10,0.9,1,-1,-1\n"
                         f"2,5,0,0,10,10,0.9,{cls},-1,-1\n")
         if refused:
-            with pytest.raises(ValueError) as e:
-                evaluate_files([("S-1", seq / "gt" / "gt.txt", pred, seq / "seqinfo.ini")],
-                               benchmark="MOT17")
-            assert str(e.value).startswith(f"{pred}, line 2, column 8 (class): class 3: MOT17 "
-                                           "scores pedestrians alone")
-            with pytest.raises(Exception, match="only valid for pedestrian class"):
-                trackeval_scores("MOT17", {"S-1": seq}, {"S-1": pred}, tmp_path / f"te{cls}",
-                                 raise_errors=True)
+            # under MOT15's convention too (it was scored there, the car a pedestrian)
+            for bench in ("MOT17", "MOT15"):
+                with pytest.raises(ValueError) as e:
+                    evaluate_files([("S-1", seq / "gt" / "gt.txt", pred, seq / "seqinfo.ini")],
+                                   benchmark=bench)
+                assert str(e.value).startswith(f"{pred}, line 2, column 8 (class): class 3: "
+                                               f"{bench} scores pedestrians alone")
+                with pytest.raises(Exception, match="only valid for pedestrian class"):
+                    trackeval_scores(bench, {"S-1": seq}, {"S-1": pred},
+                                     tmp_path / f"te{cls}{bench}", raise_errors=True)
         else:
             got = evaluate_files([("S-1", seq / "gt" / "gt.txt", pred, seq / "seqinfo.ini")],
                                  benchmark="MOT17")["S-1"]
@@ -854,6 +856,35 @@ def test_results_of_other_classes_are_refused_as_trackeval_refuses_them(tmp_path
     with pytest.raises(ValueError, match=re.escape("gt.classes must be an array of shape (N,) "
                                                    "= (3,), as frames")):
         evaluate_mot(table, table)
+
+
+@pytest.mark.parametrize("extra", ["", ",-1"])  # 8 and 10 values a row
+def test_auto_reads_classes_in_ground_truth_of_8_or_10_columns(tmp_path, extra):
+    """--benchmark auto took MOT17's convention for 9 values a row alone: with 8 or 10, a
+    distractor (class 7) was a person to find (FN 8, MOTA 0.5), where TrackEval reads column
+    8 as the class of any row of 8 values or more. The oracle: TrackEval's MOT17 scores."""
+    from vistrack.evaluation import evaluate_files
+
+    seq = tmp_path / "gt" / "S-1"
+    (seq / "gt").mkdir(parents=True)
+    rows = [f"{f},1,0,0,10,10,1,1{',1' if extra else ''}{extra}\n" for f in range(1, 9)]
+    rows += [f"{f},2,50,50,10,10,1,7{',1' if extra else ''}{extra}\n" for f in range(1, 9)]
+    (seq / "gt" / "gt.txt").write_text("".join(rows))
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=S-1\nframeRate=10\nseqLength=8\n"
+                                     "imWidth=64\nimHeight=48\nimDir=img1\nimExt=.jpg\n")
+    pred = tmp_path / "pred.txt"
+    pred.write_text("".join(f"{f},5,0,0,10,10,0.9,-1,-1,-1\n" for f in range(1, 9)))
+    got = evaluate_files([("S-1", seq / "gt" / "gt.txt", pred, seq / "seqinfo.ini")])["S-1"]
+    want = trackeval_scores("MOT17", {"S-1": seq}, {"S-1": pred}, tmp_path / "te")["S-1"]
+    assert (got.MOTA, got.HOTA, got.IDF1, got.FN) == (1.0, 1.0, 1.0, 0)
+    assert got.MOTA == want["CLEAR"]["MOTA"] and got.FN == want["CLEAR"]["CLR_FN"]
+    assert got.HOTA == pytest.approx(float(np.mean(want["HOTA"]["HOTA"])))
+    # MOT15's ten columns (a world x in column 8, -1 where there is none) stay MOT15's
+    mot15 = tmp_path / "gt15.txt"
+    mot15.write_text("".join(f"{f},{i},{50 * (i - 1)},0,10,10,1,-1,-1,-1\n"
+                             for f in range(1, 9) for i in (1, 2)))
+    got = evaluate_files([("S-1", mot15, pred, seq / "seqinfo.ini")])["S-1"]
+    assert got.FN == 8  # the second person is one to find
 
 
 def test_ground_truth_without_conf_is_said_to_count_every_row(tmp_path):

@@ -1732,7 +1732,8 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--pred-dir", help="folder of results SEQ.txt (or SEQ.parquet, SEQ.csv)")
     ev.add_argument("--benchmark", default="auto", choices=("auto", "MOT15", "MOT16", "MOT17",
                                                            "MOT20"),
-                    help="preprocessing of the ground truth (default: auto, from its columns)")
+                    help="preprocessing of the ground truth (default: auto, MOT17's where "
+                         "column 8 holds MOT16/17/20 classes in every row, MOT15's otherwise)")
     ev.add_argument("--zero-distance", type=float, metavar="PX",
                     help="score positions rather than boxes (points, such as particles; or "
                     "boxes' centres): a pair's similarity 1 - distance / PX, at least 0, in "

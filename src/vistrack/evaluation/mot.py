@@ -268,8 +268,8 @@ class _Sequence:
 
 
 BENCHMARKS = ("auto", "MOT15", "MOT16", "MOT17", "MOT20")
-"""The scoring conventions ``benchmark`` names (``auto``: MOT17's for a nine-column ground
-truth of MOT16/17/20 classes, MOT15's otherwise)."""
+"""The scoring conventions ``benchmark`` names (``auto``: MOT17's for a ground truth whose
+column 8 holds MOT16/17/20 classes, 1-13, in every row, MOT15's otherwise)."""
 
 
 def _benchmark_of(gt: MOTTable, benchmark: str) -> str:
@@ -278,7 +278,10 @@ def _benchmark_of(gt: MOTTable, benchmark: str) -> str:
             raise ValueError(f"benchmark must be one of {', '.join(map(repr, BENCHMARKS))}; "
                              f"got {benchmark!r}")
         return benchmark
-    has_classes = gt.columns == 9 and len(gt) and np.isin(gt.classes, np.arange(1, 14)).all()
+    # a column 8 of classes, whatever follows it: with 8 or 10 columns a distractor (class 7)
+    # was scored as a person to find, where TrackEval reads column 8 as the class of any row
+    # of 8 values or more (MOT15's 10 columns hold a world x there, read as no class)
+    has_classes = gt.columns >= 8 and len(gt) and np.isin(gt.classes, np.arange(1, 14)).all()
     return "MOT17" if has_classes else "MOT15"
 
 
@@ -442,9 +445,11 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str,
             where, written = _class_row(gt, "ground truth", lambda c: c not in range(1, 14))
             value = f"{written if written is not None else gt.classes[np.argmax(bad)]:g}"
             raise ValueError(f"{where}: class {value} is not a {bench} class (1-13)")
-    if bench != "MOT15" and len(pred) and (pred.classes > 1).any():
-        # TrackEval refuses such results ("only valid for pedestrian class"): a car of a
-        # tracker of many classes was counted as a pedestrian, a false positive or a match
+    if len(pred) and (pred.classes > 1).any():
+        # TrackEval refuses such results ("only valid for pedestrian class"), under every
+        # convention: a car of a tracker of many classes was counted as a pedestrian, a false
+        # positive or a match (under MOT15's too; a world x there, MOT15's column 8 in
+        # results, is read as no class)
         where, written = _class_row(pred, "prediction", lambda c: c > 1)
         first = written if written is not None else pred.classes[np.argmax(pred.classes > 1)]
         raise ValueError(f"{where}: class {first:g}: {bench} scores pedestrians alone (class 1, "

@@ -117,24 +117,24 @@ def sanity_warnings(gt: MOTTable, pred: MOTTable, *, empty_said: bool = False,
     why = looks_like_detections(gt)
     if why:
         out.append(f"{gname} looks like a detections or results file, not ground truth: {why}")
-    mot17 = np.isin(gt.classes, np.arange(1, 14)) if gt.columns == 9 and len(gt) else None
+    mot17 = np.isin(gt.classes, np.arange(1, 14)) if gt.columns >= 8 and len(gt) else None
     if mot17 is not None and 0.5 <= mot17.mean() < 1:
         # MOT16/17/20 columns with a few classes that are none of theirs: --benchmark auto
         # then scores the file as MOT15, without their preprocessing
         bad = gt.classes[~mot17][0]
-        lines = _lines_of(gt.path, lambda row: len(row) == 9 and row[7] == bad)[:1]
+        lines = _lines_of(gt.path, lambda row: len(row) >= 8 and row[7] == bad)[:1]
         out.append(f"{_where(gt, 'the ground truth', lines)}: class {bad:g} is not a MOT16/17/20 "
                    "class (1-13), though most rows have one: --benchmark auto scores the file "
                    "as MOT15, without their preprocessing (--benchmark MOT17 refuses it, naming "
                    "the row)")
-    elif gt.columns == 9 and len(gt) and (gt.classes == -1).all():
+    elif gt.columns in (8, 9) and len(gt) and (gt.classes == -1).all():
         # a value in column 8 that is not a whole number makes the reader take the column
         # for no classes at all (MOT15's world x): one such row among MOT16/17/20 classes
         # turns the whole file into MOT15's convention
         odd: list[float] = []
 
         def fraction(row: list[float]) -> bool:
-            if len(row) == 9 and not float(row[7]).is_integer():
+            if len(row) in (8, 9) and not float(row[7]).is_integer():
                 odd.append(row[7])
                 return True
             return False
