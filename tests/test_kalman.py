@@ -974,3 +974,87 @@ def test_a_complex_gaussian_is_refused():
     with pytest.raises(TypeError, match=r"Gaussian cov must be real numbers; got complex"):
         vt.Gaussian(np.zeros(2), np.eye(2) + 1j)
     assert vt.Gaussian([1, 0], np.eye(2, dtype=int)).mean.dtype == np.float64
+
+
+_LONG_MEASUREMENT = """
+import numpy as np
+from vistrack.filters import kalman_filter
+
+def numpy_filter(ys, F, Q, H, R, x0, P0):
+    x, P, ll, means = np.array(x0, float), np.array(P0, float), 0.0, []
+    for t, y in enumerate(ys):
+        if t:
+            x, P = F @ x, F @ P @ F.T + Q
+        S = H @ P @ H.T + R
+        K = np.linalg.solve(S, H @ P).T
+        e = y - H @ x
+        ll -= 0.5 * (e @ np.linalg.solve(S, e) + np.linalg.slogdet(2 * np.pi * S)[1])
+        x, P = x + K @ e, P - K @ S @ K.T
+        means.append(x)
+    return np.array(means), ll
+
+for n, m in ((1, 60), (2, 10), (4, 20)):
+    rng = np.random.default_rng(n + m)
+    F, Q = np.eye(n), 0.1 * np.eye(n)
+    H, R = rng.normal(size=(m, n)), 0.5 * np.eye(m)
+    ys = rng.normal(size=(500, m))
+    r = kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=np.zeros(n), P0=np.eye(n))
+    means, ll = numpy_filter(ys, F, Q, H, R, np.zeros(n), np.eye(n))
+    assert np.abs(r.means - means).max() < 1e-9 and abs(float(r.loglik) - ll) < 1e-6 * abs(ll)
+blocks = [np.ones(k) for k in range(1, 3000)]  # (the heap, used after the filter)
+print("ok")
+"""
+
+
+def test_a_measurement_longer_than_the_state_does_not_write_past_its_work_space():
+    """Once the covariance reached its steady state, the single-series kernel wrote each
+    step's whitened innovation (m values) into a work array of n rows: with m > n it wrote
+    past it, and the process died after the filter (status 139, n = 1 and m = 60). Run in a
+    process of its own; the oracle is a plain numpy Kalman filter."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", _LONG_MEASUREMENT], capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0 and done.stdout.strip() == "ok", (done.returncode,
+                                                                   done.stderr[-2000:])
+
+
+def test_a_negative_variance_beside_a_large_one_is_refused_and_named():
+    """The definiteness check's tolerance was 1e-10 of the largest entry: Q = diag(1e10,
+    -0.5) passed and the filter gave a variance of -0.5, R = diag(1e10, -0.1) ran to the end
+    (variances -0.11, a finite log-likelihood); kf_predict refused it naming Q[0, 1] = 0 and
+    a NaN. Every such variance is named now; a positive definite R of units far apart
+    (1e4 and 1e-7) is no longer refused as not positive definite."""
+    ys = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]])
+    kw = dict(F=np.eye(2), H=np.eye(2), x0=[0.0, 0.0], P0=np.eye(2))
+    with pytest.raises(ValueError, match=re.escape(
+            "Q must be positive semi-definite (matrix [0]); Q[1, 1] = -0.5, a negative "
+            "variance")):
+        kalman_filter(ys, Q=np.diag([1e10, -0.5]), R=np.eye(2), **kw)
+    with pytest.raises(ValueError, match=re.escape("R[1, 1] = -0.1, a negative variance")):
+        kalman_filter(ys, Q=np.eye(2), R=np.diag([1e10, -0.1]), **kw)
+    with pytest.raises(ValueError, match=re.escape(
+            "Q must be positive semi-definite; Q[1, 1] = -0.5, a negative variance")):
+        kf_predict(vt.Gaussian(np.zeros(2), np.eye(2)), np.eye(2), np.diag([1e10, -0.5]))
+    # rounding is not refused: a variance of -1e-20 beside 1
+    kalman_filter(ys, Q=np.diag([1.0, -1e-20]), R=np.eye(2), **kw)
+    r = vt.Position(dim=2, r=np.diag([1e4, 1e-7]))
+    np.testing.assert_array_equal(r.R(), np.diag([1e4, 1e-7]))
+    with pytest.raises(ValueError, match=re.escape("r[1, 1] = 0, a variance of 0")):
+        vt.Position(dim=2, r=np.diag([1e4, 0.0]))
+
+
+def test_a_linear_measurement_keeps_its_own_matrices():
+    """LinearMeasurement kept the caller's H and R and gave them out: an R changed after the
+    check (to -3), or through the array R() returned, was used unchecked. Its own copies
+    now, as LinearMotion's."""
+    from vistrack.models import LinearMeasurement
+
+    H, R = np.array([[1.0, 0.0]]), np.array([[0.5]])
+    me = LinearMeasurement(H, R)
+    R[0, 0], H[0, 0] = -3.0, 7.0
+    assert me.R().tolist() == [[0.5]] and me.H().tolist() == [[1.0, 0.0]]
+    me.R()[0, 0] = -7.0
+    me.H()[0, 1] = 9.0
+    assert me.R().tolist() == [[0.5]] and me.H().tolist() == [[1.0, 0.0]]

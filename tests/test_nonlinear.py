@@ -435,7 +435,8 @@ def test_nonlinear_filter_errors_name_the_argument(rng):
         flt.filter(np.ones((3, 2)), x0=np.ones(5), P0=np.eye(5), times=[0.0, 1.0])
     with pytest.raises(ValueError, match=r"y must have shape \(2,\)"):
         ekf_update(vt.Gaussian(np.ones(5), np.eye(5)), np.ones(3), meas)
-    with pytest.raises(ValueError, match=r"^g.cov must be positive semi-definite; its smallest "):
+    with pytest.raises(ValueError, match=r"^g.cov must be positive semi-definite; "
+                                         r"g.cov\[0, 0\] = -1, a negative variance$"):
         ukf_update(vt.Gaussian(np.ones(5), -np.eye(5)), np.ones(2), meas)
     # an infinite measurement gave a mean of [inf, nan, ...] without a word, as kf_update
     # refuses it (NaN is a missing value)

@@ -207,3 +207,20 @@ def test_masked_measurements_are_smoothed_as_missing_as_by_pykalman(rng):
         sm, sP = pk.smooth(y)
         np.testing.assert_allclose(batch.means[b], sm, rtol=1e-8, atol=1e-10)
         np.testing.assert_allclose(batch.covs[b], sP, rtol=1e-8, atol=1e-10)
+
+
+def test_two_filter_smooth_names_a_step_whose_information_form_rounding_makes_singular():
+    """Variances 1e10 beside 1e-10 (a valid model: rts_smooth smooths it) made I + P Λ
+    singular to rounding, and numpy's bare LinAlgError ("Singular matrix") came out, naming
+    nothing. The step is named, and rts_smooth pointed to."""
+    from vistrack.filters import kalman_filter, rts_smooth, two_filter_smooth
+
+    F, H = np.array([[1.0, 1.0], [0.0, 1.0]]), np.array([[1.0, 0.0]])
+    Q, R, P0 = np.diag([1e-10, 1e10]), np.array([[1e-10]]), np.diag([1e10, 1e-10])
+    ys = np.random.default_rng(0).normal(size=(10, 1)) * 10
+    ys[4] = np.nan
+    kw = dict(F=F, Q=Q, H=H, R=R, x0=[1.0, -1.0], P0=P0)
+    assert np.isfinite(rts_smooth(kalman_filter(ys, **kw), F=F, Q=Q).means).all()
+    with pytest.raises(ValueError, match=r"^step 4: I \+ P Λ is singular to working precision "
+                                         r".*; rts_smooth smooths such a model$"):
+        two_filter_smooth(ys, **kw)

@@ -141,7 +141,7 @@ def test_a_nan_probability_is_named(transition, mode_probs, match):
 
 @pytest.mark.parametrize("P0, match", [
     ([[1.0, 0.0], [0.0, -1.0]],
-     r"^P0 must be positive semi-definite; its smallest eigenvalue is -1"),
+     r"^P0 must be positive semi-definite; P0\[1, 1\] = -1, a negative variance$"),
     (np.eye(3), r"^P0 must have shape \(2, 2\); got \(3, 3\)$"),
     ([[1.0, np.nan], [np.nan, 1.0]], r"^P0 must be finite; P0\[0, 1\] = nan$"),
 ])

@@ -337,21 +337,43 @@ def check_psd(arr: np.ndarray, name: str, *, strict: bool = False) -> None:
     """Check that every matrix of a stack ``(..., n, n)`` is symmetric positive (semi-)definite.
 
     Symmetry is checked to a relative tolerance of 1e-8 of the largest entry
-    (:func:`check_symmetric`); definiteness by the smallest eigenvalue, to a tolerance of
-    1e-10 of the largest.
+    (:func:`check_symmetric`). A variance (diagonal entry) below 0 is named, beyond rounding
+    (1e-12 of the largest variance); with ``strict``, one of 0 too. Semi-definiteness is
+    judged by the smallest eigenvalue, to a tolerance of 1e-10 of the largest entry (the
+    rounding of a computed covariance of low rank); definiteness (``strict``, a covariance
+    given, such as a measurement's noise) on the correlation matrix (:func:`correlation`),
+    whose smallest eigenvalue must be above 1e-10, so that it holds at any units. Judged on
+    the matrix alone, a variance of -0.5 beside one of 1e10 passed (and a filter gave
+    negative variances), and ``diag(1e4, 1e-7)`` was refused as not positive definite.
+
+    >>> check_psd(np.diag([1e4, 1e-7]), "r", strict=True)
+    >>> check_psd(np.diag([1e10, -0.5]), "Q")
+    Traceback (most recent call last):
+    ...
+    ValueError: Q must be positive semi-definite; Q[1, 1] = -0.5, a negative variance
     """
-    scale = check_symmetric(arr, name)
-    eig = np.linalg.eigvalsh(arr)
-    tol = 1e-10 * scale[..., 0]
-    bad = eig[..., 0] <= tol[..., 0] if strict else eig[..., 0] < -tol[..., 0]
+    check_symmetric(arr, name)
+    kind = "positive definite" if strict else "positive semi-definite"
+    d = np.diagonal(arr, axis1=-2, axis2=-1)
+    top = np.max(np.abs(d), axis=-1, keepdims=True)
+    low = (d <= 0) if strict else (d < -1e-12 * top)
+    if np.any(low):
+        where = tuple(int(i) for i in np.argwhere(low)[0])
+        loc = f" (matrix {list(where[:-1])})" if where[:-1] else ""
+        raise ValueError(f"{name} must be {kind}{loc}; {name}[{where[-1]}, {where[-1]}] = "
+                         f"{d[where]:g}, a "
+                         + ("variance of 0" if strict and d[where] == 0 else
+                            "negative variance"))
+    eig = np.linalg.eigvalsh(arr)[..., 0]
+    if strict:
+        bad = np.linalg.eigvalsh(correlation(arr)[0])[..., 0] <= 1e-10
+    else:
+        bad = eig < -1e-10 * np.max(np.abs(arr), axis=(-2, -1))
     if np.any(bad):
         which = tuple(int(i) for i in np.argwhere(np.atleast_1d(bad))[0]) if bad.ndim else ()
-        kind = "positive definite" if strict else "positive semi-definite"
         loc = f" (matrix {list(which)})" if which else ""
-        raise ValueError(
-            f"{name} must be {kind}{loc}; its smallest eigenvalue is "
-            f"{float(np.atleast_1d(eig[..., 0])[which if which else 0]):.3g}"
-        )
+        raise ValueError(f"{name} must be {kind}{loc}; its smallest eigenvalue is "
+                         f"{float(np.atleast_1d(eig)[which if which else 0]):.3g}")
 
 
 def as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:

@@ -915,6 +915,9 @@ def single_kernel(n, m):
     def kf_single(ys, F, Q, H, R, x0, P0, means, covs, pmeans, pcovs, last_P, store_covs):
         T = ys.shape[0]
         idx, e, Ut, KT, S, L, AP, W, FP = one_scratch(n, m)
+        # the steady state's whitened innovation, (m,): it went into W's first column, (n, m),
+        # which a measurement longer than the state (m > n) overran, corrupting the heap
+        white = np.empty(m)
         x = x0.copy()
         P = P0.copy()
         xp = np.empty(n)
@@ -949,12 +952,12 @@ def single_kernel(n, m):
                             s -= h * xp[i]
                     e[a] = s
                 ll = ll_const
-                for a in range(m):  # whitened innovation, into W's first column (scratch)
+                for a in range(m):  # the whitened innovation
                     s = e[a]
                     for p in range(a):
-                        s -= L[a, p] * W[p, 0]
-                    W[a, 0] = s / L[a, a]
-                    ll -= 0.5 * W[a, 0] * W[a, 0]
+                        s -= L[a, p] * white[p]
+                    white[a] = s / L[a, a]
+                    ll -= 0.5 * white[a] * white[a]
                 total += ll
                 for i in range(n):
                     s = xp[i]

@@ -433,6 +433,11 @@ def _matrix_entry(code: int, a: str, b: str, mats: dict[str, ArrayLike]) -> None
         over = np.triu(arr ** 2 > np.outer(d, d) * (1 + tol) + (tol * top) ** 2, 1)
         if over.any():
             i, k = (int(v) for v in np.argwhere(over)[0])
+            if min(d[i], d[k]) < 0:  # (a variance below 0 within the tolerance: the product
+                # of the two is then below 0, and the entry was named, beside a NaN)
+                j = i if d[i] < 0 else k
+                raise ValueError(f"{name} must be positive semi-definite; {name}[{j}, {j}] = "
+                                 f"{d[j]:g}, a negative variance")
             raise ValueError(f"{name} must be positive semi-definite; {name}[{i}, {k}] = "
                              f"{arr[i, k]:g}, beyond the product of the two standard "
                              f"deviations, {np.sqrt(d[i] * d[k]):g}")

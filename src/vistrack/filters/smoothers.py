@@ -231,6 +231,15 @@ def rts_smooth(result: FilterResult, *, F: ArrayLike, Q: ArrayLike) -> SmoothRes
     return SmoothResult(s_means, s_covs, result)
 
 
+def _too_far_apart(t: int, what: str) -> ValueError:
+    """The error of a two-filter step whose ``what`` numpy found singular: nonsingular in
+    exact arithmetic (P and Λ are positive semi-definite), singular in rounding where
+    variances lie too far apart (1e10 beside 1e-10)."""
+    return ValueError(f"step {t}: {what} is singular to working precision (the model's "
+                      "variances lie too far apart for the information form, such as 1e10 "
+                      "beside 1e-10); rts_smooth smooths such a model")
+
+
 def two_filter_smooth(
     ys: ArrayLike, *, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, x0: ArrayLike,
     P0: ArrayLike
@@ -274,7 +283,9 @@ def two_filter_smooth(
     ------
     ValueError
         As :func:`kalman_filter` raises; or if ``R`` is singular on the components observed
-        at a step (an exact measurement, which :func:`rts_smooth` smooths), naming the step.
+        at a step (an exact measurement, which :func:`rts_smooth` smooths), naming the step;
+        or if the information form is singular to rounding at a step (variances 1e10 beside
+        1e-10, which :func:`rts_smooth` smooths), naming the step.
 
     See Also
     --------
@@ -314,7 +325,11 @@ def two_filter_smooth(
         if t < T - 1:
             # backward prediction from t+1 to t
             Ft, Qt = F_[t + 1 if F_.shape[0] > 1 else 0], Q_[t + 1 if Q_.shape[0] > 1 else 0]
-            C = np.linalg.solve(eye + Lam @ Qt, np.concatenate([Lam, eta[..., None]], axis=-1))
+            try:
+                C = np.linalg.solve(eye + Lam @ Qt,
+                                    np.concatenate([Lam, eta[..., None]], axis=-1))
+            except np.linalg.LinAlgError:
+                raise _too_far_apart(t + 1, "I + Λ Q") from None
             Lam = Ft.T @ C[..., :n] @ Ft
             Lam = 0.5 * (Lam + np.swapaxes(Lam, -1, -2))
             eta = (Ft.T @ C[..., n:])[..., 0]
@@ -323,7 +338,10 @@ def two_filter_smooth(
         P = fP[:, t]
         Mx = eye + P @ Lam
         rhs = (fm[:, t] + (P @ eta[..., None])[..., 0])[..., None]
-        sol = np.linalg.solve(Mx, np.concatenate([P, rhs], axis=-1))
+        try:
+            sol = np.linalg.solve(Mx, np.concatenate([P, rhs], axis=-1))
+        except np.linalg.LinAlgError:
+            raise _too_far_apart(t, "I + P Λ") from None
         Ps = sol[..., :n]
         s_covs[:, t] = 0.5 * (Ps + np.swapaxes(Ps, -1, -2))
         s_means[:, t] = sol[..., n]

@@ -212,6 +212,10 @@ class LinearMeasurement:
                                      else None)
         self._R = check_matrix_stack(R_arr, "R", m, m, T)
         check_psd(self._R, "R")
+        # its own copies, and copies given out, as LinearMotion's: the caller's arrays were
+        # kept, so an R changed after the check (or through the array R() returned) was used
+        # unchecked (a variance of -3)
+        self._H, self._R = self._H.copy(), self._R.copy()
         self.ndim_meas = m
         self.ndim_state = n
         self.n_steps = T
@@ -248,7 +252,7 @@ class LinearMeasurement:
                 f"this LinearMeasurement's H has {self.ndim_state} columns; "
                 f"the motion model's state has {ndim_state}"
             )
-        return self._H[0] if self._H.shape[0] == 1 else self._H
+        return (self._H[0] if self._H.shape[0] == 1 else self._H).copy()
 
     def R(self) -> np.ndarray:
         """The measurement-noise covariance or covariances.
@@ -264,4 +268,4 @@ class LinearMeasurement:
         >>> LinearMeasurement([[1.0, 0.0]], [[0.5]]).R()
         array([[0.5]])
         """
-        return self._R[0] if self._R.shape[0] == 1 else self._R
+        return (self._R[0] if self._R.shape[0] == 1 else self._R).copy()
