@@ -2412,3 +2412,25 @@ def test_a_second_mog2_start_forgets_the_first():
     once = MOG2Background(history=20).initialize(second)
     np.testing.assert_array_equal(twice.apply(im), once.apply(im))
     assert int(once.apply(im)[5:15, 5:15].min()) == 255
+
+
+def test_a_folder_of_float_tiffs_is_read_from_0_to_1(tmp_path):
+    """OpenCV decodes a TIFF of 32-bit float samples in their own depth only, and the folder
+    was refused as "corrupt or truncated". Read as 8 bits now, 0 to 1 times 255 (the
+    convention of a float image; oracle: the samples written, scaled by hand); samples
+    outside 0-1, whose scale nobody knows, are refused as such."""
+    rng = np.random.default_rng(0)
+    frames = [rng.uniform(0, 1, (20, 30)).astype(np.float32) for _ in range(3)]
+    for k, f in enumerate(frames, 1):
+        assert cv2.imwrite(str(tmp_path / f"{k:06d}.tiff"), f)
+    got, msg = _read(VideoReader(tmp_path))
+    assert msg == [] and [g.index for g in got] == [1, 2, 3]
+    for g, f in zip(got, frames):
+        want = np.round(f.astype(np.float64) * 255).astype(np.uint8)
+        np.testing.assert_array_equal(g.image, np.repeat(want[..., None], 3, axis=2))
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    assert cv2.imwrite(str(bad / "000001.tiff"), (frames[0] * 1000).astype(np.float32))
+    with pytest.raises(VideoError, match=r"floating-point samples from [0-9.e+-]+ to "
+                                         r"[0-9.e+-]+, which are read from 0 to 1 only"):
+        VideoReader(bad)

@@ -21,7 +21,7 @@ import re
 import warnings
 from collections.abc import Iterator, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -618,7 +618,14 @@ class VideoReader:
             pages = _pages(path)
             if pages > 1:
                 raise _stack_error(path, pages)
-            im = cv2.imread(str(path), flags)
+            tiff = path.suffix.lower() in (".tif", ".tiff")
+            im = _quietly(cv2.imread, str(path), flags) if tiff else cv2.imread(str(path), flags)
+            if im is None and tiff:
+                # OpenCV decodes a TIFF of floating-point samples in their own depth only (it
+                # was called corrupt): 0 to 1 read as 8 bits, as a float image is by convention
+                raw = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+                if raw is not None and raw.dtype.kind == "f":
+                    return _float_as_8bit(raw)
             if im is not None and im.dtype not in (np.uint8, np.uint16):
                 im = cv2.imread(str(path), plain)
             return (None, unreadable) if im is None else (im, "")
@@ -776,6 +783,33 @@ class VideoReader:
                 k += 1
         finally:
             cap.release()
+
+
+def _quietly(read: Any, *args: Any) -> Any:
+    """``read(*args)`` with OpenCV's log silenced (its decoders' errors and warnings, which
+    a fallback after them makes misleading)."""
+    from cv2.utils import logging as cv_log
+
+    level = cv_log.getLogLevel()
+    cv_log.setLogLevel(cv_log.LOG_LEVEL_SILENT)
+    try:
+        return read(*args)
+    finally:
+        cv_log.setLogLevel(level)
+
+
+def _float_as_8bit(raw: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """A floating-point image (a TIFF's samples) as 8-bit BGR: values from 0 to 1 times 255,
+    rounded; or None and why, where they lie outside (their scale unknown)."""
+    cv2 = _cv2()
+    if not (np.isfinite(raw).all() and raw.min() >= 0 and raw.max() <= 1):
+        return None, (f"floating-point samples from {float(np.nanmin(raw)):g} to "
+                      f"{float(np.nanmax(raw)):g}, which are read from 0 to 1 only: write the "
+                      "frames as 8- or 16-bit images, or scaled to 0-1")
+    im = np.round(raw.astype(np.float64) * 255).astype(np.uint8)
+    if im.ndim == 2 or im.shape[2] == 1:
+        return cv2.cvtColor(im, cv2.COLOR_GRAY2BGR), ""
+    return (cv2.cvtColor(im, cv2.COLOR_BGRA2BGR) if im.shape[2] == 4 else im[..., :3]), ""
 
 
 def _may_be_deep(path: Path) -> bool:
