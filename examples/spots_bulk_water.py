@@ -42,9 +42,12 @@ def main() -> None:
                  "checkout for the default)")
     out = Path(sys.argv[2] if len(sys.argv) > 2 else "out/bulk-water")
     out.mkdir(parents=True, exist_ok=True)
+    # each particle at its located position, as trackpy links them (the filter's estimate
+    # is drawn towards the track's past, which shrinks every step)
     tracker = PointTracker("gnn", motion=ConstantPosition(dim=2, q=FPS),  # 1 px² a frame
                            measurement=Position(dim=2, r=0.01), frame_rate=FPS,
-                           confirm_hits=1, max_lost=3.5 / FPS, p_gate=0.999)
+                           confirm_hits=1, max_lost=3.5 / FPS, p_gate=0.999,
+                           report="measurement")
 
     def spots(frame):
         return locate(frame.image, 11, invert=True, minmass=20).detections()

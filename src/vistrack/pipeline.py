@@ -1014,7 +1014,7 @@ def _particles(ctx: Context) -> Tracker:
     return PointTracker("gnn", motion=ConstantPosition(dim=2, q=step * ctx.fps),
                         measurement=Position(dim=2, r=PARTICLE_NOISE ** 2), frame_rate=ctx.fps,
                         confirm_hits=1, max_lost=max_lost, p_gate=PARTICLE_GATE,
-                        max_distance=search)
+                        max_distance=search, report="measurement")
 
 
 PARTICLE_NOISE = 0.1

@@ -117,6 +117,12 @@ class PointTracker:
         a track's predicted measurement is not associated with it, however far the track's
         gate has grown while it was missed (trackpy's ``search_range``). Default: the gate
         alone.
+    report : {"estimate", "measurement"}
+        What a track updated in a frame reports as its point: the filter's estimate (the
+        default), or the measurement it was updated with (``"nn"``, ``"gnn"`` and
+        ``"greedy"``, which give each track one), as trackpy's ``link`` keeps the located
+        positions: a filtered position is drawn towards the track's past, which shrinks
+        every step (a mean squared displacement taken from it came out low).
 
     Attributes
     ----------
@@ -155,11 +161,19 @@ class PointTracker:
                  init_speed: float = 10.0, confirm_hits: int = 3, max_lost: float = 1.0,
                  frame_rate: float = 30.0, p_survive: float = 0.99,
                  init_existence: float = 0.2, confirm_existence: float = 0.95,
-                 delete_existence: float = 0.01, max_distance: float | None = None):
+                 delete_existence: float = 0.01, max_distance: float | None = None,
+                 report: str = "estimate"):
         if association not in POINT_ASSOCIATIONS:
             raise ValueError(f"association must be one of {list(POINT_ASSOCIATIONS)}; "
                              f"got {association!r}")
         self.association = association
+        if report not in ("estimate", "measurement"):
+            raise ValueError(f"report must be 'estimate' or 'measurement'; got {report!r}")
+        if report == "measurement" and association in ("pda", "jpda", "ipda", "jipda"):
+            raise ValueError(f"report='measurement' needs an association that gives each "
+                             f"track one measurement (nn, gnn, greedy); {association!r} weighs "
+                             "every measurement in the gate")
+        self.report = report
         # (a string was float()-ed for p_detect, and a bare "'<' not supported" for the rest)
         for name, v in (("p_detect", p_detect), ("clutter_density", clutter_density),
                         ("p_gate", p_gate), ("p_survive", p_survive),
@@ -326,6 +340,7 @@ class PointTracker:
         K = len(t)
         updated = np.zeros(K, bool)
         in_gate = np.zeros(len(Z), bool)
+        measured: dict[int, np.ndarray] = {}  # each track's measurement of this frame
         if K:
             g = Gaussian(t.mean, t.cov)
             if dt > 0:
@@ -362,6 +377,7 @@ class PointTracker:
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
                     t.scores[r] = scores[c]
+                    measured.update(zip(t.ids[r].tolist(), Z[c]))
                 updated[r] = True
                 in_gate[c] = True  # every measurement not taken starts a track
                 gate = None
@@ -400,6 +416,7 @@ class PointTracker:
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
                     t.scores[r] = scores[c]
+                    measured.update(zip(t.ids[r].tolist(), Z[c]))
                 updated[r] = True
                 in_gate = np.zeros(len(Z), bool)  # every measurement not taken starts a track
                 in_gate[c] = True
@@ -425,8 +442,12 @@ class PointTracker:
                 start, confirmed = 1.0, first or self.confirm_hits <= 1
             t.add(mean, cov, time, classes[new], scores[new], confirmed=confirmed)
             self.existence = np.concatenate([self.existence, np.full(len(new), start)])
+            measured.update(zip(t.ids[-len(new):].tolist(), Z[new]))
         out = np.flatnonzero((t.state == CONFIRMED) & (t.last_time == time))
         H = self.H
         covs = H @ t.cov[out] @ H.T
-        return Tracks(ids=t.ids[out], boxes=None, points=t.mean[out] @ H.T,
+        points = t.mean[out] @ H.T
+        if self.report == "measurement" and len(out):
+            points = np.array([measured[i] for i in t.ids[out].tolist()], dtype=float)
+        return Tracks(ids=t.ids[out], boxes=None, points=points,
                       scores=t.scores[out], classes=t.classes[out], covs=covs[:, :2, :2])
