@@ -1999,3 +1999,23 @@ def test_a_detections_file_that_ends_long_before_the_video_is_warned_of(tmp_path
             track_video(folder, tmp_path / name, frontend=f"detections:{det}",
                         annotate=False, fps=10)
         assert not any("no rows after" in str(w.message) for w in seen), (name, seen)
+
+
+@pytest.mark.parametrize("run, max_lost", [(50, 2.0), (55, 2.2), (60, 2.4), (54, 2.2)])
+def test_a_run_without_rows_as_long_as_max_lost_is_not_undelivered(tmp_path, run, max_lost):
+    """Frames not delivered are runs shorter than max_lost (docs/mot.md, Frame rate); at 25
+    frames/s 2.2 s is 55.000000000000007 frames, whose ceiling took a run of exactly 55 for
+    shorter. Oracle: the rule in whole frames (run < max_lost x 25)."""
+    import warnings
+
+    from vistrack.pipeline import track_sequence
+
+    rows = [f"{f},-1,{100 + 150 * k},100,40,80,0.9" for f in
+            [*range(1, 21), *range(21 + run, 21 + run + 20)] for k in range(6)]
+    det = tmp_path / "det.txt"
+    det.write_text("\n".join(rows) + "\n")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        track_sequence(det, tmp_path / "out.txt", fps=25.0, max_lost=max_lost)
+    said = any("did not deliver" in str(w.message) for w in caught)
+    assert said == (run < round(max_lost * 25)), [str(w.message) for w in caught]

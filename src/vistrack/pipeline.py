@@ -1800,7 +1800,12 @@ def _on_detector_frames(trk: BoxTracker, path: str | Path, frames: np.ndarray, f
     a lost track outlives: shorter than ``max_lost``): ``trk`` itself where it ran on every frame
     and delivered them all, else :class:`_OnDetectorFrames`; a ``RuntimeWarning`` says which
     frames it steps over."""
-    longest = max(0, math.ceil(trk.config.max_lost * trk.frame_rate) - 1)
+    # (frames, to rounding: 2.2 s at 25 frames/s is 55.000000000000007, whose ceiling took
+    # a run of 55 frames, exactly max_lost, for shorter than it)
+    span = trk.config.max_lost * trk.frame_rate
+    if abs(span - round(span)) <= 1e-9 * max(1.0, span):
+        span = float(round(span))
+    longest = max(0, math.ceil(span) - 1)
     skip = undelivered_frames(frames, first, stride, longest)
     if stride > 1:
         warnings.warn(stride_warning(path, first, stride, trk.frame_rate, offline),
