@@ -131,6 +131,16 @@ def test_ssd_layout(tmp_path):
     assert d.classes.tolist() == [2, 1]
 
 
+def _same_detections(model, layout, want):
+    """The model read with ``layout`` given and guessed: ``want``'s boxes, scores, classes."""
+    for given in ("auto", layout):
+        det = ONNXDetector(model, layout=given)
+        assert det.layout == layout
+        d = det.detect(IMAGE)
+        for field in ("boxes", "scores", "classes"):
+            np.testing.assert_array_equal(getattr(d, field), getattr(want, field))
+
+
 def test_a_segmentation_model_s_mask_coefficients_are_not_read_as_classes(tmp_path):
     """A YOLO segmentation export (ultralytics' -seg) gives a second output, the masks'
     prototypes (1, M, h, w), and M mask coefficients after each box's class scores. "auto"
@@ -148,13 +158,7 @@ def test_a_segmentation_model_s_mask_coefficients_are_not_read_as_classes(tmp_pa
     want = ONNXDetector(plain).detect(IMAGE)
     assert want.classes.tolist() == [0, 1]
     np.testing.assert_allclose(want.scores, [0.9, 0.6], rtol=1e-6)
-    for layout in ("auto", "yolov8"):
-        det = ONNXDetector(seg, layout=layout)
-        assert det.layout == "yolov8"
-        d = det.detect(IMAGE)
-        np.testing.assert_array_equal(d.boxes, want.boxes)
-        np.testing.assert_array_equal(d.scores, want.scores)
-        np.testing.assert_array_equal(d.classes, want.classes)
+    _same_detections(seg, "yolov8", want)
     # a class past the model's two is refused: the coefficients are not classes
     with pytest.raises(ValueError, match=r"classes \[2\] are not among the model's classes 0 "
                                          r"to 1"):
@@ -167,12 +171,7 @@ def test_a_segmentation_model_s_mask_coefficients_are_not_read_as_classes(tmp_pa
     plain5 = constant_model(tmp_path / "v5.onnx", [np.ascontiguousarray(v5[:, :5 + C])[None]])
     want = ONNXDetector(plain5).detect(IMAGE)
     np.testing.assert_allclose(want.scores, [0.81, 0.4], rtol=1e-6)
-    for layout in ("auto", "yolov5"):
-        det = ONNXDetector(seg5, layout=layout)
-        assert det.layout == "yolov5"
-        d = det.detect(IMAGE)
-        np.testing.assert_array_equal(d.scores, want.scores)
-        np.testing.assert_array_equal(d.classes, want.classes)
+    _same_detections(seg5, "yolov5", want)
     # a second output that is not prototypes is no YOLO layout's, and says what it takes
     other = constant_model(tmp_path / "odd.onnx", [v8.T[None], np.zeros((1, 5), np.float32)])
     with pytest.raises(ValueError, match=r"or two for segmentation, the second its masks' "
