@@ -328,6 +328,11 @@ def test_a_video_holding_more_frames_than_its_header_says_loses_none(tmp_path):
         frames, msg = _read(VideoReader(path, start=start))
         assert [f.index for f in frames] == list(range(start, 31)) and msg == []
         assert all(abs(int(f.image[0, 0, 0]) - 5 * (f.index - 1)) <= 2 for f in frames), start
+    # a start past every frame is said, read on from the last frame the header counts (not
+    # from the first: an hour's video was read through to find nothing)
+    frames, msg = _read(VideoReader(path, start=40))
+    assert frames == [] and any("no frame from start = 40" in m or "reading stopped" in m
+                                for m in msg)
 
 
 @pytest.mark.parametrize("names, why", [
@@ -606,9 +611,9 @@ def test_a_dark_first_16_bit_image_does_not_set_the_depth(tmp_path):
 
 
 def test_other_deep_images_are_read_as_opencv_reads_them(tmp_path):
-    """Signed 16-bit and floating-point TIFFs are read as cv2.imread reads them (8 bits), as
-    before the 16-bit reading: the deep reading made a signed image white and took a float
-    one that OpenCV could not read."""
+    """Signed 16-bit TIFFs are read as cv2.imread reads them (8 bits), as before the 16-bit
+    reading, which made a signed image white; floating-point ones, which cv2.imread reads in
+    their own depth only, from 0 to 1 (test_a_folder_of_float_tiffs_is_read_from_0_to_1)."""
     rng = np.random.default_rng(3)
     for name, im in (("signed", rng.integers(-300, 300, (12, 10)).astype(np.int16)),
                      ("float", rng.random((12, 10, 3)).astype(np.float32))):
@@ -616,11 +621,9 @@ def test_other_deep_images_are_read_as_opencv_reads_them(tmp_path):
         d.mkdir()
         assert cv2.imwrite(str(d / "000001.tif"), im)
         want = cv2.imread(str(d / "000001.tif"), cv2.IMREAD_COLOR)
-        if want is None:
-            with pytest.raises(VideoError, match="not a readable image"):
-                VideoReader(d)
-        else:
-            np.testing.assert_array_equal(next(iter(VideoReader(d))).image, want)
+        if name == "float":
+            want = np.round(im.astype(np.float64) * 255).astype(np.uint8)
+        np.testing.assert_array_equal(next(iter(VideoReader(d))).image, want)
 
 
 def test_16_bit_images_of_8_bit_values_and_of_the_full_range(tmp_path):
@@ -2428,6 +2431,16 @@ def test_a_folder_of_float_tiffs_is_read_from_0_to_1(tmp_path):
     for g, f in zip(got, frames):
         want = np.round(f.astype(np.float64) * 255).astype(np.uint8)
         np.testing.assert_array_equal(g.image, np.repeat(want[..., None], 3, axis=2))
+    # colour ones too (OpenCV gives them as floats, which were then read again and refused)
+    colour = tmp_path / "colour"
+    colour.mkdir()
+    bgr = rng.uniform(0, 1, (20, 30, 3))
+    for dtype in (np.float32, np.float64):
+        assert cv2.imwrite(str(colour / "000001.tiff"), bgr.astype(dtype))
+        got, msg = _read(VideoReader(colour))
+        want = np.round(bgr.astype(dtype).astype(np.float64) * 255).astype(np.uint8)
+        assert msg == [] and len(got) == 1
+        np.testing.assert_array_equal(got[0].image, want)
     bad = tmp_path / "bad"
     bad.mkdir()
     assert cv2.imwrite(str(bad / "000001.tiff"), (frames[0] * 1000).astype(np.float32))

@@ -1020,29 +1020,47 @@ def test_a_measurement_longer_than_the_state_does_not_write_past_its_work_space(
                                                                    done.stderr[-2000:])
 
 
-def test_a_negative_variance_beside_a_large_one_is_refused_and_named():
-    """The definiteness check's tolerance was 1e-10 of the largest entry: Q = diag(1e10,
-    -0.5) passed and the filter gave a variance of -0.5, R = diag(1e10, -0.1) ran to the end
-    (variances -0.11, a finite log-likelihood); kf_predict refused it naming Q[0, 1] = 0 and
-    a NaN. Every such variance is named now; a positive definite R of units far apart
-    (1e4 and 1e-7) is no longer refused as not positive definite."""
+def test_a_negative_variance_is_named_and_a_noise_of_units_far_apart_is_taken():
+    """A negative variance was refused as "its smallest eigenvalue is -0.5", and kf_predict,
+    whose compiled check takes -0.5 beside 1e10 for rounding but then refuses the pair,
+    named Q[0, 1] = 0 beside a NaN: each names the variance now. Semi-definiteness keeps the
+    tolerance of a computed covariance's rounding, 1e-10 of the largest entry (as scipy's);
+    a positive definite noise given, judged on its correlation matrix, is taken at units far
+    apart (diag(1e4, 1e-7) was refused, "its smallest eigenvalue is 1e-07"), and the
+    eigenvalue named is the one judged."""
     ys = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]])
     kw = dict(F=np.eye(2), H=np.eye(2), x0=[0.0, 0.0], P0=np.eye(2))
     with pytest.raises(ValueError, match=re.escape(
             "Q must be positive semi-definite (matrix [0]); Q[1, 1] = -0.5, a negative "
             "variance")):
-        kalman_filter(ys, Q=np.diag([1e10, -0.5]), R=np.eye(2), **kw)
+        kalman_filter(ys, Q=np.diag([1.0, -0.5]), R=np.eye(2), **kw)
     with pytest.raises(ValueError, match=re.escape("R[1, 1] = -0.1, a negative variance")):
-        kalman_filter(ys, Q=np.eye(2), R=np.diag([1e10, -0.1]), **kw)
+        kalman_filter(ys, Q=np.eye(2), R=np.diag([1.0, -0.1]), **kw)
     with pytest.raises(ValueError, match=re.escape(
             "Q must be positive semi-definite; Q[1, 1] = -0.5, a negative variance")):
         kf_predict(vt.Gaussian(np.zeros(2), np.eye(2)), np.eye(2), np.diag([1e10, -0.5]))
-    # rounding is not refused: a variance of -1e-20 beside 1
+    # rounding is not refused: a variance of -1e-20 beside 1, and the posterior of two exact
+    # measurements, P - K S K', whose variances come out about -1e-12
     kalman_filter(ys, Q=np.diag([1.0, -1e-20]), R=np.eye(2), **kw)
+    from vistrack._validate import check_psd
+
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        A = rng.normal(size=(3, 3))
+        P = A @ A.T
+        H = np.eye(3)[:2]
+        K = np.linalg.solve(H @ P @ H.T, H @ P).T
+        post = P - K @ (H @ P @ H.T) @ K.T
+        check_psd(0.5 * (post + post.T), "P")
     r = vt.Position(dim=2, r=np.diag([1e4, 1e-7]))
     np.testing.assert_array_equal(r.R(), np.diag([1e4, 1e-7]))
     with pytest.raises(ValueError, match=re.escape("r[1, 1] = 0, a variance of 0")):
         vt.Position(dim=2, r=np.diag([1e4, 0.0]))
+    near = 1e10 * np.array([[1.0, 1 - 1e-11], [1 - 1e-11, 1.0]])
+    with pytest.raises(ValueError, match=r"^r must be positive definite; its correlation "
+                                         r"matrix's smallest eigenvalue is [0-9.e+-]+$") as e:
+        vt.Position(dim=2, r=near)
+    assert float(str(e.value).rsplit(" ", 1)[1]) < 1e-10
 
 
 def test_a_linear_measurement_keeps_its_own_matrices():
@@ -1058,3 +1076,11 @@ def test_a_linear_measurement_keeps_its_own_matrices():
     me.R()[0, 0] = -7.0
     me.H()[0, 1] = 9.0
     assert me.R().tolist() == [[0.5]] and me.H().tolist() == [[1.0, 0.0]]
+    # and Position and NonlinearMeasurement, which kept a view of the caller's r and R
+    from vistrack.models import NonlinearMeasurement
+
+    r = np.eye(2)
+    pos = vt.Position(dim=2, r=r)
+    nl = NonlinearMeasurement(lambda x: x[..., :2], r, ndim_state=2)
+    r[1, 1] = -3.0
+    assert pos.R().tolist() == nl.R().tolist() == [[1.0, 0.0], [0.0, 1.0]]

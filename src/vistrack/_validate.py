@@ -337,17 +337,17 @@ def check_psd(arr: np.ndarray, name: str, *, strict: bool = False) -> None:
     """Check that every matrix of a stack ``(..., n, n)`` is symmetric positive (semi-)definite.
 
     Symmetry is checked to a relative tolerance of 1e-8 of the largest entry
-    (:func:`check_symmetric`). A variance (diagonal entry) below 0 is named, beyond rounding
-    (1e-12 of the largest variance); with ``strict``, one of 0 too. Semi-definiteness is
-    judged by the smallest eigenvalue, to a tolerance of 1e-10 of the largest entry (the
-    rounding of a computed covariance of low rank); definiteness (``strict``, a covariance
-    given, such as a measurement's noise) on the correlation matrix (:func:`correlation`),
-    whose smallest eigenvalue must be above 1e-10, so that it holds at any units. Judged on
-    the matrix alone, a variance of -0.5 beside one of 1e10 passed (and a filter gave
-    negative variances), and ``diag(1e4, 1e-7)`` was refused as not positive definite.
+    (:func:`check_symmetric`). Semi-definiteness is judged by the smallest eigenvalue, to a
+    tolerance of 1e-10 of the largest entry, the rounding of a computed covariance of low
+    rank (as scipy's ``multivariate_normal`` judges it): a variance below that is named
+    (where the eigenvalue alone was given). Definiteness (``strict``, a covariance given,
+    such as a measurement's noise) is judged on the correlation matrix
+    (:func:`correlation`), whose smallest eigenvalue must be above 1e-10, so that it holds
+    at any units (on the matrix itself, ``diag(1e4, 1e-7)`` was refused); a variance of 0
+    is named.
 
     >>> check_psd(np.diag([1e4, 1e-7]), "r", strict=True)
-    >>> check_psd(np.diag([1e10, -0.5]), "Q")
+    >>> check_psd(np.diag([1.0, -0.5]), "Q")
     Traceback (most recent call last):
     ...
     ValueError: Q must be positive semi-definite; Q[1, 1] = -0.5, a negative variance
@@ -355,8 +355,8 @@ def check_psd(arr: np.ndarray, name: str, *, strict: bool = False) -> None:
     check_symmetric(arr, name)
     kind = "positive definite" if strict else "positive semi-definite"
     d = np.diagonal(arr, axis1=-2, axis2=-1)
-    top = np.max(np.abs(d), axis=-1, keepdims=True)
-    low = (d <= 0) if strict else (d < -1e-12 * top)
+    top = np.max(np.abs(arr), axis=(-2, -1))
+    low = (d <= 0) if strict else (d < -1e-10 * top[..., None])
     if np.any(low):
         where = tuple(int(i) for i in np.argwhere(low)[0])
         loc = f" (matrix {list(where[:-1])})" if where[:-1] else ""
@@ -364,15 +364,16 @@ def check_psd(arr: np.ndarray, name: str, *, strict: bool = False) -> None:
                          f"{d[where]:g}, a "
                          + ("variance of 0" if strict and d[where] == 0 else
                             "negative variance"))
-    eig = np.linalg.eigvalsh(arr)[..., 0]
-    if strict:
-        bad = np.linalg.eigvalsh(correlation(arr)[0])[..., 0] <= 1e-10
+    if strict:  # (the eigenvalue named is the one judged)
+        eig = np.linalg.eigvalsh(correlation(arr)[0])[..., 0]
+        bad, of = eig <= 1e-10, "its correlation matrix's smallest eigenvalue is"
     else:
-        bad = eig < -1e-10 * np.max(np.abs(arr), axis=(-2, -1))
+        eig = np.linalg.eigvalsh(arr)[..., 0]
+        bad, of = eig < -1e-10 * top, "its smallest eigenvalue is"
     if np.any(bad):
         which = tuple(int(i) for i in np.argwhere(np.atleast_1d(bad))[0]) if bad.ndim else ()
         loc = f" (matrix {list(which)})" if which else ""
-        raise ValueError(f"{name} must be {kind}{loc}; its smallest eigenvalue is "
+        raise ValueError(f"{name} must be {kind}{loc}; {of} "
                          f"{float(np.atleast_1d(eig)[which if which else 0]):.3g}")
 
 

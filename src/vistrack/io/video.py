@@ -620,10 +620,11 @@ class VideoReader:
                 raise _stack_error(path, pages)
             tiff = path.suffix.lower() in (".tif", ".tiff")
             im = _quietly(cv2.imread, str(path), flags) if tiff else cv2.imread(str(path), flags)
-            if im is None and tiff:
+            if tiff and (im is None or im.dtype.kind == "f"):
                 # OpenCV decodes a TIFF of floating-point samples in their own depth only (it
-                # was called corrupt): 0 to 1 read as 8 bits, as a float image is by convention
-                raw = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+                # was called corrupt, grey or colour): 0 to 1 read as 8 bits, as a float image
+                # is by convention
+                raw = im if im is not None else cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
                 if raw is not None and raw.dtype.kind == "f":
                     return _float_as_8bit(raw)
             if im is not None and im.dtype not in (np.uint8, np.uint16):
@@ -752,14 +753,19 @@ class VideoReader:
             # too; so is a start past the header's count, where a seek lands on the last
             # frame counted (a header of 10 for 20 frames gave frame 11 as frame 15, and on,
             # without a word), and any seek that does not land where it was sent
-            if self.start > 1 and (self.start > self.frame_count
-                                   or self.source.suffix.lower() not in _SEEKABLE
-                                   or not cap.set(cv2.CAP_PROP_POS_FRAMES, self.start - 1)
-                                   or cap.get(cv2.CAP_PROP_POS_FRAMES) != self.start - 1):
-                if cap.get(cv2.CAP_PROP_POS_FRAMES) != 0:  # (moved: from the first frame)
+            if self.start > 1:
+                # the frame before the start, or the last the header counts (a start past
+                # it: read on from there), where a seek lands where it was sent
+                at = 0
+                if self.frame_count > 0 and self.source.suffix.lower() in _SEEKABLE:
+                    at = min(self.start - 1, self.frame_count - 1)
+                    if at and not (cap.set(cv2.CAP_PROP_POS_FRAMES, at)
+                                   and cap.get(cv2.CAP_PROP_POS_FRAMES) == at):
+                        at = 0
+                if at == 0 and cap.get(cv2.CAP_PROP_POS_FRAMES) != 0:  # (moved: from the first)
                     cap.release()
                     cap = cv2.VideoCapture(str(self.source))
-                for j in range(1, self.start):
+                for j in range(at + 1, self.start):
                     if not cap.grab():
                         if j <= last:  # (as a read that stops: said)
                             yield _Note(f"{self.source}: reading stopped at frame {j} of the "

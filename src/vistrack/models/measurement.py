@@ -116,7 +116,7 @@ class Position:
             r_arr = float(r_arr) * np.eye(self.ndim_meas)
         r_arr = check_matrix_stack(r_arr, "r", self.ndim_meas, self.ndim_meas)[0]
         check_psd(r_arr, "r", strict=True)
-        self._R = r_arr
+        self._R = r_arr.copy()  # (a view of the caller's array was kept, and used unchecked)
 
     def __repr__(self) -> str:
         return f"Position(dim={self.ndim_meas})"

@@ -417,7 +417,7 @@ class NonlinearMeasurement(AngleAwareMeasurement):
         R_arr = check_matrix_stack(R_arr, "R", m, m)[0]
         check_psd(R_arr, "R", strict=True)
         self.ndim_meas, self.ndim_state = m, as_whole(ndim_state, "ndim_state", 1)
-        self._h, self._jac, self._R = h, jacobian, R_arr
+        self._h, self._jac, self._R = h, jacobian, R_arr.copy()  # (not the caller's array)
         self.angles = tuple(as_whole(a, "angles", 0) for a in angles)  # (0.5 was taken as 0)
         for a in self.angles:
             if not 0 <= a < m:

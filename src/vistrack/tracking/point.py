@@ -341,6 +341,7 @@ class PointTracker:
         updated = np.zeros(K, bool)
         in_gate = np.zeros(len(Z), bool)
         measured: dict[int, np.ndarray] = {}  # each track's measurement of this frame
+        keep_z = self.report == "measurement"
         if K:
             g = Gaussian(t.mean, t.cov)
             if dt > 0:
@@ -377,7 +378,8 @@ class PointTracker:
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
                     t.scores[r] = scores[c]
-                    measured.update(zip(t.ids[r].tolist(), Z[c]))
+                    if keep_z:
+                        measured.update(zip(t.ids[r].tolist(), Z[c]))
                 updated[r] = True
                 in_gate[c] = True  # every measurement not taken starts a track
                 gate = None
@@ -416,7 +418,8 @@ class PointTracker:
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
                     t.scores[r] = scores[c]
-                    measured.update(zip(t.ids[r].tolist(), Z[c]))
+                    if keep_z:
+                        measured.update(zip(t.ids[r].tolist(), Z[c]))
                 updated[r] = True
                 in_gate = np.zeros(len(Z), bool)  # every measurement not taken starts a track
                 in_gate[c] = True
@@ -442,7 +445,8 @@ class PointTracker:
                 start, confirmed = 1.0, first or self.confirm_hits <= 1
             t.add(mean, cov, time, classes[new], scores[new], confirmed=confirmed)
             self.existence = np.concatenate([self.existence, np.full(len(new), start)])
-            measured.update(zip(t.ids[-len(new):].tolist(), Z[new]))
+            if keep_z:
+                measured.update(zip(t.ids[-len(new):].tolist(), Z[new]))
         out = np.flatnonzero((t.state == CONFIRMED) & (t.last_time == time))
         H = self.H
         covs = H @ t.cov[out] @ H.T
