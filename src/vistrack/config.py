@@ -39,6 +39,7 @@ from typing import Any, cast
 import numpy as np
 
 from ._validate import decode_text
+from .io.motchallenge import _text_lines
 from .models.box import BoxMotion
 from .tracking.box import TRACKERS, BoxTrackerConfig
 
@@ -367,8 +368,6 @@ def _key_line(text: str, table: str, key: str | None = None) -> int | None:
         return [p.strip().strip("\"'") for p in dotted.split(".")]
 
     current: list[str] = []
-    from .io.motchallenge import _text_lines
-
     # (lines as editors and TOML count them: splitlines also broke at U+2028 in a comment)
     for number, line in enumerate(_text_lines(text), 1):
         # read with string methods, not patterns, so a long line costs its length once

@@ -624,7 +624,8 @@ class VideoReader:
                 # OpenCV decodes a TIFF of floating-point samples in their own depth only (it
                 # was called corrupt, grey or colour): 0 to 1 read as 8 bits, as a float image
                 # is by convention
-                raw = im if im is not None else cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+                raw = im if im is not None else _quietly(cv2.imread, str(path),
+                                                         cv2.IMREAD_UNCHANGED)
                 if raw is not None and raw.dtype.kind == "f":
                     return _float_as_8bit(raw)
             if im is not None and im.dtype not in (np.uint8, np.uint16):

@@ -451,7 +451,7 @@ class PointTracker:
         H = self.H
         covs = H @ t.cov[out] @ H.T
         points = t.mean[out] @ H.T
-        if self.report == "measurement" and len(out):
+        if keep_z and len(out):
             points = np.array([measured[i] for i in t.ids[out].tolist()], dtype=float)
         return Tracks(ids=t.ids[out], boxes=None, points=points,
                       scores=t.scores[out], classes=t.classes[out], covs=covs[:, :2, :2])

@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._pool import counted
+
 if TYPE_CHECKING:
     import os
 
@@ -557,7 +559,7 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
                   "black mark: an identity switch)")
     ax.set_ylabel("ground-truth object")
     k = int(switches.sum())
-    counts = f"{n} object{'s' if n != 1 else ''}, {k} identity switch{'es' if k != 1 else ''}"
+    counts = f"{counted(n, 'object')}, {counted(k, 'identity switch', 'identity switches')}"
     ax.set_title(f"{_label(title)}: {counts}" if title else counts)
     if len(frames):  # frames are whole (with none, the locator put ticks at ±0.05 back)
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
