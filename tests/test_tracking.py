@@ -107,17 +107,20 @@ def test_frame_gaps_predict_over_the_true_time():
 
 
 @pytest.mark.parametrize("seq", ["mot15/PETS09-S2L1", "mot15/ETH-Sunnyday",
-                                 "kitti-tracking/KITTI-0001-Car", "mot16-fairmot/MOT16-11"])
+                                 "kitti-tracking/KITTI-0001-Car", "mot16-fairmot/MOT16-11",
+                                 "mot17/MOT17-13-FRCNN"])
 @pytest.mark.parametrize("k", [2, 3])
 def test_frame_numbers_k_apart_at_k_times_the_rate_track_as_the_frames_themselves(seq, k):
     """Time is the frame number over the frame rate, so frames 1, 2, 3, ... at ``r`` frames/s
-    and frames ``k``, ``2k``, ``3k``, ... at ``k r`` are the same sequence, and every setting
-    with a time scale must see it so: the motion's noise, coasting (its half-frame slack is
-    half a step), the calibration's chains (their span and gap, and the tie-break between
-    chains, count frames, not calls). The oracle is the run on the frames themselves: the
-    same identities in every frame, the boxes within rounding (the motion's noise is scaled
-    by ``k^0.5`` and ``k^1.5``). Before, the calibration counted calls, and every one of
-    these runs parted.
+    and frames ``k``, ``2k``, ``3k``, ... (or 1, ``1 + k``, ``1 + 2k``, ...) at ``k r`` are
+    the same sequence, and every setting with a time scale must see it so: the motion's
+    noise, coasting (its half-frame slack is half a step, and a half is rounded up whatever
+    the times' last bits), the calibration's chains (their span and gap, and the tie-break
+    between chains, count frames, not calls). The oracle is the run on the frames
+    themselves: the same identities in every frame, the boxes within rounding (the motion's
+    noise is scaled by ``k^0.5`` and ``k^1.5``). Before, the calibration counted calls, and
+    every one of these runs parted; and at 25 frames/s (MOT17-13) coasting's 2.5 frames were
+    2 or 3 by the rounding of the frames' times, and frames 1, 3, 5, ... at 50 parted.
 
     The camera's motion is off: with it, a track whose prediction lies inside its detection
     both with the camera's shift and without overlaps it equally both ways, and the last bits
@@ -134,18 +137,23 @@ def test_frame_numbers_k_apart_at_k_times_the_rate_track_as_the_frames_themselve
     rate = float(re.search(r"frameRate=(\d+)", (d / "seqinfo.ini").read_text())[1])
     tab = read_detections(d / "det" / "det.txt")
 
-    def run(k, compiled):
+    def run(k, compiled, first=None):
         tr = BoxTracker(frame_rate=rate * k, compiled=compiled, camera_motion=False)
         rows = []
         for f in range(1, int(tab.frames.max()) + 1):
             m = tab.frames == f
-            out = tr.step(f * k, Detections.from_xywh(tab.boxes[m], tab.conf[m],
-                                                      classes=tab.classes[m]))
+            out = tr.step((first or k) + (f - 1) * k,
+                          Detections.from_xywh(tab.boxes[m], tab.conf[m],
+                                               classes=tab.classes[m]))
             rows += [(f, i, *b) for i, b in zip(out.ids.tolist(), out.boxes.tolist())]
         return np.array(rows)
 
-    for compiled in ([True, False] if k == 2 and "PETS" in seq else [True]):
-        one, apart = run(1, compiled), run(k, compiled)
+    one = run(1, True)
+    for compiled, first in [(True, k), (True, 1)] + [(False, k)] * (k == 2 and "PETS" in seq):
+        # frames k, 2k, 3k, ... and 1, 1 + k, 1 + 2k, ... (every kth frame of a video)
+        apart = run(k, compiled, first)
+        if not compiled:
+            one = run(1, False)
         assert one.shape == apart.shape and len(one) > 500
         assert (one[:, :2] == apart[:, :2]).all()
         np.testing.assert_allclose(apart[:, 2:], one[:, 2:], rtol=0, atol=1e-9)
@@ -274,6 +282,33 @@ def test_coasting_follows_how_often_a_track_is_found_not_one_run():
         # D's last update before a missed frame f is f - 1: followed (f - 2) / 30 s
         assert (D in ids[f]) == (d_seen or (f - 2) / 30 >= 1 - 1e-9), f
         assert (E in ids[f]) == e_seen, f
+
+
+@pytest.mark.parametrize("rate, step, frames", [(25, 1, 3), (15, 1, 2), (5, 1, 1), (30, 2, 2),
+                                                (30, 1, 3), (10, 1, 1), (7, 1, 1)])
+def test_coasting_rounds_a_half_frame_up_wherever_the_miss_falls(rate, step, frames):
+    """``coast_time`` 0.1 s, rounded to the nearest frame stepped, a half rounded up as a
+    duration of exactly ``coast_after`` or ``max_lost`` counts: 2.5 frames at 25 frames/s
+    are 3, 1.5 at 15 are 2, 0.5 at 5 is 1, and at 30 frames/s stepped every 2nd frame 1.5
+    steps are 2; 3 at 30, 1 at 10 and 0.7 at 7 are 3, 1 and 1. 200 still boxes, each last
+    seen in another frame (the 40th, then every frame stepped after it), each coasts that
+    many frames: float rounding of the frames' times decided it before (at 25 frames/s, 149
+    coasted 2 frames and 51 coasted 3)."""
+    n = 200
+    g = np.arange(n)
+    boxes = np.stack([40.0 * (g % 20), 40.0 * (g // 20), np.full(n, 20.0), np.full(n, 20.0)],
+                     axis=1)
+    last = 1 + step * (39 + g)  # box g is last seen in frame last[g]
+    tr = BoxTracker("bytetrack", frame_rate=rate)
+    coasted = np.zeros(n, int)
+    ids = None
+    for f in range(1, int(last.max()) + 10 * step, step):
+        seen = f <= last
+        out = tr.step(f, Detections.from_xywh(boxes[seen], np.full(seen.sum(), 0.9)))
+        if ids is None:
+            ids = out.ids.copy()
+        coasted += np.isin(ids, out.ids) & ~seen
+    np.testing.assert_array_equal(np.bincount(coasted, minlength=frames + 1)[frames], n)
 
 
 def test_classes_never_share_an_identity_and_reset():

@@ -165,10 +165,10 @@ class BoxTrackerConfig:
         standard errors from zero it must be.
     coast_time, coast_after, coast_rate, coast_window : float
         Report a lost track's prediction for up to ``coast_time`` seconds, rounded to the
-        nearest frame (0: never; 0.1 s is 3 frames at 30 frames/s, 1 at 10 or at 7), if it
-        had been followed for at least ``coast_after`` seconds (from its first update to its
-        last) and found in at least ``coast_rate`` (in [0, 1]) of its recent frames, weighed
-        over ``coast_window`` seconds (> 0;
+        nearest frame, a half up (0: never; 0.1 s is 3 frames at 30 or 25 frames/s, 2 at 15,
+        1 at 10, 7 or 5), if it had been followed for at least ``coast_after`` seconds
+        (from its first update to its last) and found in at least ``coast_rate`` (in
+        [0, 1]) of its recent frames, weighed over ``coast_window`` seconds (> 0;
         :attr:`~vistrack.tracking.lifecycle.TrackTable.found`).
     calibration_iou, calibration_top, calibration_prior : float
         With calibrated scores: the IoU at which a detection continues one of the previous
@@ -1277,8 +1277,11 @@ class BoxTracker:
         if cfg.coast_time > 0:
             coast = ((t.state == LOST) & (t.found >= cfg.coast_rate)
                      & (t.last_time - t.first_time >= cfg.coast_after - time_slack(time))
-                     # (coast_time to the nearest frame stepped: half a step's slack)
-                     & (time - t.last_time <= cfg.coast_time + 0.5 * step / self.frame_rate))
+                     # (coast_time to the nearest frame stepped, a half up: half a step's
+                     # slack, and the times' rounding, or 2.5 frames were 2 or 3 by where
+                     # in the sequence the miss fell)
+                     & (time - t.last_time <= cfg.coast_time + 0.5 * step / self.frame_rate
+                        + time_slack(time)))
             if self.image_size is not None and coast.any():
                 b = _to_xyxy(t.mean[:, :4])
                 coast &= ((b[:, 0] >= 0) & (b[:, 1] >= 0) & (b[:, 2] <= self.image_size[0])
