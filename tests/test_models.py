@@ -550,6 +550,114 @@ def test_a_range_bearing_sensor_must_be_finite():
         RangeBearing(sensor=(np.nan, 0.0))
 
 
+def test_nonlinear_motion_and_range_bearing_keep_their_own_arrays():
+    """NonlinearMotion kept a view of the caller's Q and RangeBearing one of its sensor
+    position: changed after their checks (Q not positive semi-definite, the sensor NaN), the
+    model gave them as changed. The oracle: the values given at construction."""
+    from vistrack.models import NonlinearMotion, RangeBearing
+
+    Q = 0.1 * np.eye(2)
+    m = NonlinearMotion(lambda x, dt, t: x, Q, 2)
+    Q[0, 0] = -5.0
+    np.testing.assert_array_equal(m.Q(), 0.1 * np.eye(2))
+    sensor = np.zeros(2)
+    rb = RangeBearing(sensor=sensor)
+    sensor[:] = np.nan
+    np.testing.assert_allclose(rb.h([3.0, 4.0, 0.0, 0.0]), [5.0, np.arctan2(4.0, 3.0)])
+
+
+def test_switching_samples_refuse_a_noise_matrix_the_filters_refuse():
+    """A mode's Q of a model of the caller's own, NaN or with a negative variance, was drawn
+    as no noise at all, or without that variance, where the filters refuse it; an R likewise.
+    Both named now as the filters name them (MotionFunctions' check)."""
+    class Still:
+        ndim_state = 2
+
+        def __init__(self, Q):
+            self._Q = np.asarray(Q, float)
+
+        def F(self, dt=1.0):
+            return np.eye(2)
+
+        def Q(self, dt=1.0):
+            return self._Q
+
+    meas = Position(dim=1)
+    for Q, message in (([[np.nan, 0.0], [0.0, 1.0]], "motions[1].Q(1) must be finite; "
+                                                        "motions[1].Q(1)[0, 0] = nan"),
+                       (np.diag([-4.0, 9.0]), "motions[1].Q(1) must be positive "
+                                              "semi-definite; motions[1].Q(1)[0, 0] = -4, a "
+                                              "negative variance")):
+        slds = SwitchingLinearSystem([Still(np.eye(2)), Still(Q)], meas, [[0.5, 0.5]] * 2)
+        with pytest.raises(ValueError, match=re.escape(message)):
+            slds.sample(4, x0=[0.0, 0.0], rng=0)
+
+    class BadR:
+        ndim_meas = 1
+
+        def H(self, n):
+            return np.eye(1, n)
+
+        def R(self):
+            return np.array([[-1.0]])
+
+    slds = SwitchingLinearSystem([Still(np.eye(2))], BadR(), [[1.0]])
+    with pytest.raises(ValueError, match=re.escape("measurement.R() must be positive "
+                                                   "semi-definite")):
+        slds.sample(4, x0=[0.0, 0.0], rng=0)
+    # a good system still draws, the first state exactly x0
+    zs, xs, ys = SwitchingLinearSystem([Still(np.eye(2))], meas, [[1.0]]).sample(
+        3, x0=[1.0, 2.0], rng=0)
+    assert xs[0].tolist() == [1.0, 2.0] and ys.shape == (3, 1)
+
+
+def test_the_growth_model_and_numerical_jacobian_name_bad_arguments():
+    """The growth model's functions broadcast a state of another size into a result of the
+    wrong shape (x of shape (2,) against t of shape (2,): a (2, 2) array); eps 0 gave a NaN
+    Jacobian with a RuntimeWarning alone. The oracle for the good cases: the formulas."""
+    from vistrack.models import GrowthMeasurement, GrowthMotion, numerical_jacobian
+
+    gm, gh = GrowthMotion(), GrowthMeasurement()
+    for call, model in ((lambda: gm.f(np.array([1.0, 2.0]), t=np.array([0.0, 1.0])),
+                         "GrowthMotion"),
+                        (lambda: gm.jacobian(np.array([1.0, 2.0, 3.0])), "GrowthMotion"),
+                        (lambda: gh.h(np.array([1.0, 2.0])), "GrowthMeasurement"),
+                        (lambda: gh.jacobian(np.float64(2.0)), "GrowthMeasurement")):
+        with pytest.raises(ValueError, match=rf"^x must be {model} states of 1 entry "
+                                             r"\(last axis\); got shape"):
+            call()
+    x = np.array([[1.0], [2.0]])
+    np.testing.assert_allclose(gm.f(x, t=0.0), x / 2 + 25 * x / (1 + x * x) + 8)
+    np.testing.assert_allclose(gh.jacobian(x), (x / 10)[..., None])
+    for eps in (0.0, -1e-6, np.nan, np.inf):
+        with pytest.raises(ValueError, match=r"^eps must be a finite step > 0; got "):
+            numerical_jacobian(lambda v: v ** 2, np.array([3.0]), eps=eps)
+    np.testing.assert_allclose(numerical_jacobian(lambda v: v ** 2, np.array([3.0])), [[6.0]],
+                               rtol=1e-8)
+
+
+def test_linear_models_check_their_arguments_as_the_others_do():
+    """LinearMotion.F(True) was a step of 1 where ConstantVelocity's refuses it, and its f of
+    a state of another size met numpy's bare matmul error; Position(r=True) was a variance of
+    1 and Position().H(2.5) met numpy's "cannot be interpreted as an integer"."""
+    lm = LinearMotion(np.eye(2), np.eye(2))
+    with pytest.raises(TypeError, match=r"^dt must be a number or an array of numbers; "
+                                        r"got True"):
+        lm.F(True)
+    with pytest.raises(ValueError, match=re.escape("x must be states of size 2, shape "
+                                                   "(..., 2); got shape (3,)")):
+        lm.f(np.zeros(3))
+    np.testing.assert_array_equal(lm.f(np.ones((4, 2))), np.ones((4, 2)))
+    with pytest.raises(TypeError, match=r"^r must be a variance or a covariance matrix; "
+                                        r"got True"):
+        Position(r=True)
+    with pytest.raises(ValueError, match=re.escape("Position(dim=2) needs a state of at least "
+                                                   "2 entries, a whole number; got "
+                                                   "ndim_state=2.5")):
+        Position().H(2.5)
+    np.testing.assert_array_equal(Position(dim=1).H(np.int64(3)), [[1.0, 0.0, 0.0]])
+
+
 def test_a_boolean_dt_is_refused():
     """F(True) was the step of 1: a flag passed where a time step belongs."""
     for model in (ConstantVelocity(), Periodic()):

@@ -109,7 +109,8 @@ class Position:
         if not (is_whole(dim, 1) and dim <= 3):
             raise ValueError(f"dim must be 1, 2 or 3; got {dim!r}")
         self.ndim_meas = int(dim)
-        r_arr = as_float_array(r, "r", ndim=(0, 2))
+        r_arr = as_float_array(r, "r", ndim=(0, 2), not_boolean="a variance or a covariance "
+                               "matrix")  # (True was a variance of 1)
         if r_arr.ndim == 0:
             if not np.isfinite(r_arr) or r_arr <= 0:
                 raise ValueError(f"r must be a finite variance > 0; got {float(r_arr)}")
@@ -144,12 +145,13 @@ class Position:
         >>> Position(dim=1).H(3)
         array([[1., 0., 0.]])
         """
-        if ndim_state < self.ndim_meas:
+        if not is_whole(ndim_state) or ndim_state < self.ndim_meas:
+            # (2.5 met numpy's "'float' object cannot be interpreted as an integer")
             raise ValueError(
                 f"Position(dim={self.ndim_meas}) needs a state of at least {self.ndim_meas} "
-                f"entries; got ndim_state={ndim_state}"
+                f"entries, a whole number; got ndim_state={ndim_state!r}"
             )
-        return np.eye(self.ndim_meas, ndim_state)
+        return np.eye(self.ndim_meas, int(ndim_state))
 
     def R(self) -> np.ndarray:
         """The measurement-noise covariance.

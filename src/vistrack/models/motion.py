@@ -647,7 +647,7 @@ class LinearMotion:
 
     @staticmethod
     def _check_dt(dt: float | np.ndarray) -> None:
-        d = np.asarray(dt, dtype=float)
+        d = _as_dt(dt)  # (True and "1" were taken as a step of 1)
         if not np.all(d == 1.0):
             raise ValueError(
                 "LinearMotion is a discrete-time model whose F and Q do not depend on dt; "
@@ -739,4 +739,4 @@ class LinearMotion:
         if self._F.shape[0] > 1:  # (a Q per step alone leaves one F to apply)
             raise ValueError("f(x) needs a constant F; this LinearMotion has one F per step")
         self._check_dt(dt)
-        return np.asarray(x) @ self._F[0].T
+        return _apply(self._F[0], x)  # (matmul's mismatch named no argument)

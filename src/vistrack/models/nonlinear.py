@@ -94,8 +94,8 @@ def _states(x: ArrayLike, n: int, model: str) -> np.ndarray:
     as it came)."""
     a = np.asarray(x, dtype=float)
     if a.ndim == 0 or a.shape[-1] != n:
-        raise ValueError(f"x must be {model} states of {n} entries (last axis); got shape "
-                         f"{a.shape}")
+        raise ValueError(f"x must be {model} states of {n} entr{'y' if n == 1 else 'ies'} "
+                         f"(last axis); got shape {a.shape}")
     return a
 
 
@@ -139,6 +139,8 @@ def numerical_jacobian(fun: Callable[[np.ndarray], np.ndarray], x: np.ndarray,
     if x.ndim == 0:  # (an IndexError from x.shape[-1])
         raise ValueError(f"x must be points of shape (..., n), one value as shape (1,); got "
                          f"the scalar {float(x)!r}")
+    # (0 divided by 0 into NaN Jacobians, with a RuntimeWarning alone)
+    eps = as_finite(eps, "eps", 0.0, above=True, what="step")
     n = x.shape[-1]
     h = eps * np.maximum(1.0, np.abs(x))  # (..., n)
     eye = np.eye(n)
@@ -194,8 +196,9 @@ class NonlinearMotion:
         else:
             Qa = check_matrix_stack(Q, "Q", self.ndim_state, self.ndim_state)[0]
             check_psd(Qa, "Q")
-            # a bound method, not a lambda: the model (and a filter holding it) pickles
-            self._Q_const = Qa
+            # a bound method, not a lambda: the model (and a filter holding it) pickles; a
+            # copy (a view of the caller's array was kept, and Q() gave it changed, unchecked)
+            self._Q_const = Qa.copy()
             self._Q = self._constant_Q
         self._f = f
         self._jac = jacobian
@@ -891,7 +894,8 @@ class RangeBearing(AngleAwareMeasurement):
         self._R = np.diag([as_finite(r_range, "r_range", 0.0, above=True, what="variance"),
                            as_finite(r_bearing, "r_bearing", 0.0, above=True,
                                      what="variance")])
-        self.sensor = as_float_array(sensor, "sensor", ndim=(1,))
+        # a copy: a view of the caller's array was kept, and changed after the check
+        self.sensor = as_float_array(sensor, "sensor", ndim=(1,)).copy()
         if self.sensor.shape != (2,):
             raise ValueError(f"sensor must have shape (2,); got {self.sensor.shape}")
         check_finite(self.sensor, "sensor")  # (a NaN gave NaN ranges, without a word)
@@ -1047,7 +1051,7 @@ class GrowthMotion:
         >>> GrowthMotion().f(np.array([0.0]), t=0.0)
         array([8.])
         """
-        x = np.asarray(x, dtype=float)
+        x = _states(x, 1, "GrowthMotion")  # ((2,) against t (2,) broadcast to (2, 2))
         return x / 2 + 25 * x / (1 + x * x) + 8 * np.cos(1.2 * np.asarray(t))[..., None]
 
     def jacobian(self, x: np.ndarray, dt: float = 1.0, t: float = 0.0) -> np.ndarray:
@@ -1070,7 +1074,7 @@ class GrowthMotion:
         >>> GrowthMotion().jacobian(np.array([1.0]))
         array([[0.5]])
         """
-        x = np.asarray(x, dtype=float)
+        x = _states(x, 1, "GrowthMotion")
         return (0.5 + 25 * (1 - x * x) / (1 + x * x) ** 2)[..., None]
 
     def Q(self, dt: float = 1.0) -> np.ndarray:
@@ -1174,7 +1178,7 @@ class GrowthMeasurement(AngleAwareMeasurement):
         >>> GrowthMeasurement().h(np.array([10.0]))
         array([5.])
         """
-        return np.asarray(x, dtype=float) ** 2 / 20
+        return _states(x, 1, "GrowthMeasurement") ** 2 / 20
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         """The derivative ``x / 10``.
@@ -1194,7 +1198,7 @@ class GrowthMeasurement(AngleAwareMeasurement):
         >>> GrowthMeasurement().jacobian(np.array([2.0]))
         array([[0.2]])
         """
-        return (np.asarray(x, dtype=float) / 10)[..., None]
+        return (_states(x, 1, "GrowthMeasurement") / 10)[..., None]
 
 
 

@@ -27,7 +27,7 @@ from .._validate import (
     check_finite,
     check_prior,
 )
-from .adapters import psd_sqrt
+from .adapters import _check_noise_matrix, psd_sqrt
 from .measurement import MeasurementModel
 from .motion import MotionModel
 
@@ -188,8 +188,9 @@ class SwitchingLinearSystem:
         Raises
         ------
         ValueError
-            If ``x0`` does not have shape ``(n,)`` or is not finite, or ``dt`` is not one
-            number.
+            If ``x0`` does not have shape ``(n,)`` or is not finite, ``dt`` is not one
+            number, or a mode's ``Q(dt)`` or the measurement's ``R()`` is not a finite
+            symmetric positive semi-definite matrix of its size.
 
         Examples
         --------
@@ -218,7 +219,13 @@ class SwitchingLinearSystem:
             x = x + psd_sqrt(P0_) @ gen.standard_normal(n)
         k = len(self.motions)
         Fs = [m.F(dt) for m in self.motions]  # each mode's, once: dt is the same every step
-        roots = [psd_sqrt(m.Q(dt)) for m in self.motions]
+        Qs = [np.asarray(m.Q(dt), dtype=float) for m in self.motions]
+        # checked as the filters check them (a model of the caller's own with a NaN or a
+        # negative variance was drawn without noise, or without that variance, unsaid)
+        for i, Q in enumerate(Qs):
+            _check_noise_matrix(Q, n, f"motions[{i}].Q({float(dt):g})")
+        _check_noise_matrix(R, H.shape[0], "measurement.R()")
+        roots = [psd_sqrt(Q) for Q in Qs]
         zs, xs = np.empty(T, np.int64), np.empty((T, n))
         z = gen.choice(k, p=self.mode_probs)
         for t in range(T):
