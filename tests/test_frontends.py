@@ -1257,9 +1257,16 @@ def test_selective_model_moves_with_the_view():
     # the last 2 columns were seen by the last frame alone, 2 more by two frames, the rest
     # by three or more (n_new)
     np.testing.assert_array_equal(bg._seen[0, -9:], [3, 3, 3, 3, 3, 2, 2, 1, 1])
-    with pytest.raises(ValueError, match="shifts must be one row of two whole numbers for "
-                                         "each of the 5 frames; got shape"):
-        SelectiveBackground().initialize(frames, shifts=[(0.5, 0)] * 5)
+    with pytest.raises(ValueError, match=re.escape("shifts must be one row of two whole "
+                                                   "numbers for each of the 5 frames; got "
+                                                   "shape (4, 2)")):
+        SelectiveBackground().initialize(frames, shifts=[(0, 0)] * 4)
+    # a value that is no whole number is named, where the right shape, (5, 2), was given
+    for bad, named in (([(-8, 0), (-6, 0.5)], "shifts[1] = (-6, 0.5)"),
+                       ([(np.nan, 0), (0, 0)], "shifts[0] = (nan, 0)")):
+        with pytest.raises(ValueError, match=re.escape(f"shifts must be whole numbers of "
+                                                       f"pixels; {named}")):
+            SelectiveBackground().initialize(frames, shifts=bad + [(0, 0)] * 3)
 
     bg = SelectiveBackground(n_new=3).initialize([window(10)] * 5)
     bg.move(-4, 0, window(14))  # the window moved 4 right: the scene 4 left

@@ -50,7 +50,15 @@ import numpy as np
 from .._jit import bind, njit
 from .._prebuilt import kernel
 from .._registry import Registry
-from .._validate import as_finite, as_flag, as_number, as_uint8_image, as_whole, is_whole
+from .._validate import (
+    as_finite,
+    as_flag,
+    as_float_array,
+    as_number,
+    as_uint8_image,
+    as_whole,
+    is_whole,
+)
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -243,11 +251,15 @@ class SelectiveBackground:
             self.mean = np.median(stack, axis=0).astype(np.float32)
             mad = np.median(np.abs(stack.astype(np.float32) - self.mean), axis=0)
         else:
-            d = np.asarray(shifts, dtype=np.float64)
-            if d.shape != (len(images), 2) or not (np.isfinite(d).all()
-                                                   and (d == np.round(d)).all()):
+            d = as_float_array(shifts, "shifts", not_boolean="whole numbers of pixels")
+            if d.shape != (len(images), 2):
                 raise ValueError(f"shifts must be one row of two whole numbers for each of the "
                                  f"{len(images)} frames; got shape {d.shape}")
+            whole = np.isfinite(d) & (d == np.round(d))
+            if not whole.all():  # (the right shape was given as the complaint)
+                k = int(np.flatnonzero(~whole.all(axis=1))[0])
+                raise ValueError(f"shifts must be whole numbers of pixels; shifts[{k}] = "
+                                 f"({d[k, 0]:g}, {d[k, 1]:g})")
             if d[-1].any():  # (each row is a shift to the last frame: any other was ignored)
                 raise ValueError(f"shifts' last row is the last frame's shift to itself, 0, 0; "
                                  f"got {d[-1, 0]:g}, {d[-1, 1]:g}")

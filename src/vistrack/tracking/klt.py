@@ -12,7 +12,9 @@ One step (seed 003, "Tracking over many frames" and "Shi-Tomasi feature tracker"
    ``search_radius`` pixels around its last place; the best integer location is refined to
    sub-pixel by Lucas-Kanade;
 4. **forward-backward check**: tracked back to the previous frame, every feature must land
-   within ``fb_max`` pixels of where it was;
+   within ``fb_max`` pixels of where it was (one the search found is searched for back the
+   same way, around its new place in the previous frame, so that a look-alike the search
+   matched does not come back to where the feature was);
 5. **affine consistency**: the patch of the frame the feature was *first* seen in is
    registered to the current frame with an affine warp (inverse-compositional Lucas-Kanade,
    started from the last warp moved to the new position); a feature whose normalised RMS
@@ -207,12 +209,21 @@ class KLTTracker:
 
     def _forward_backward(self, grey, p0, p1, searched):
         # tracked back to the previous frame, a feature must land where it was. Lucas-Kanade
-        # starts from the feature's new place, except for those the discrete search found:
-        # they moved too far for it, and start from where they were (their match is already
-        # established by the search's correlation)
-        guess = np.where(searched[:, None], p0, p1).astype(np.float32)
+        # starts from the feature's new place; those the discrete search found moved too far
+        # for it, and are searched for back the same way, around their new place in the
+        # previous frame, Lucas-Kanade starting from what that finds. (Started from where
+        # they were, they came back there whatever the search had matched: a feature hidden
+        # in the new frame was taken to a look-alike 10-30 px off and kept)
+        guess = p1.astype(np.float32)
+        unfound = np.zeros(len(p1), bool)
+        if searched.any():
+            idx = np.flatnonzero(searched)
+            back_at = self._search(grey, self._prev, p1[idx])
+            lost = np.isnan(back_at[:, 0])
+            guess[idx[~lost]] = back_at[~lost]
+            unfound[idx[lost]] = True
         back, ok = self._lk(grey, self._prev, p1.astype(np.float32), guess=guess)
-        return ok & (np.linalg.norm(back - p0, axis=1) <= self.fb_max)
+        return ok & ~unfound & (np.linalg.norm(back - p0, axis=1) <= self.fb_max)
 
     def _search(self, prev, cur, pts):
         # discrete NCC search of each feature's last patch around its last place
