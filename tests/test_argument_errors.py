@@ -227,7 +227,7 @@ WHOLE_CASES = [
     (lambda v: BlobDetector(check_view=v), "check_view must be"),
     (lambda v: ScoreCalibrator(window=v), "window must be"),
     (lambda v: DCPFConfig(n_particles=v), "n_particles must be"),
-    (lambda v: chi2_band(v), "need whole numbers dof >= 1"),
+    (lambda v: chi2_band(v), "dof must be a whole number >= 1"),
 ]
 
 

@@ -1,5 +1,7 @@
 """Simulation statistics, NEES/NIS consistency, and long-run numerical stability."""
 
+import re
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -122,8 +124,51 @@ def test_the_consistency_scores_name_what_does_not_fit():
     with pytest.raises(ValueError, match="truth and means must have the same shape"):
         nees(1.0, 0.0, 1.0)
     for bad in (np.nan, 2.5):
-        with pytest.raises(ValueError, match="need whole numbers dof >= 1"):
+        with pytest.raises(ValueError, match="dof must be a whole number >= 1"):
             chi2_band(bad)
+
+
+def test_the_consistency_scores_name_each_argument_and_step():
+    """chi2_band named its three values together (``level=95``: "need whole numbers dof >= 1
+    and n_runs >= 1, and 0 < level < 1; got 2, 1, 95"), and a string level met a bare
+    comparison; nees and nis gave numpy's "Matrix is not positive definite" alone for one
+    singular step among a hundred; nis read S's lower triangle alone, so an R that is not
+    symmetric gave a NIS that depended on the triangle holding the slip (2.5 and 2.0 at the
+    first step for R and its transpose, the filter's own refusing both), and a series' length
+    was named by the batch's shapes."""
+    for kw, message in (({"level": 95}, "level must be a probability in (0, 1); got 95"),
+                        ({"level": "0.95"}, "level must be a probability in (0, 1); got '0.95'"),
+                        ({"n_runs": 0}, "n_runs must be a whole number >= 1; got 0")):
+        with pytest.raises(ValueError, match=re.escape(message)):
+            chi2_band(2, **kw)
+    P = np.tile(np.eye(2), (100, 1, 1))
+    P[57] = np.diag([1.0, 0.0])
+    with pytest.raises(np.linalg.LinAlgError, match=re.escape("covs[57] is not positive "
+                                                              "definite")):
+        nees(np.zeros((100, 2)), np.ones((100, 2)), P)
+    P[57] = np.eye(2)  # the oracle: e' P^-1 e with P = I
+    np.testing.assert_array_equal(nees(np.zeros((100, 2)), np.ones((100, 2)), P), 2.0)
+    ys = np.array([[1.0, 2.0], [1.5, 2.5], [2.0, 2.0]])
+    res = vt.kalman_filter(ys, F=np.eye(2), Q=np.zeros((2, 2)), H=np.eye(2), R=np.eye(2),
+                           x0=[0.0, 0.0], P0=np.diag([1.0, 0.0]))
+    with pytest.raises(np.linalg.LinAlgError, match=re.escape("S = H P H' + R at step 0 is "
+                                                              "not positive definite")):
+        nis(ys, res, H=np.eye(2), R=np.zeros((2, 2)))
+    with pytest.raises(ValueError, match=re.escape("R must be symmetric; R[0, 1] = 0.9 but its "
+                                                   "transpose entry is 0.0")):
+        nis(ys, res, H=np.eye(2), R=[[1.0, 0.9], [0.0, 1.0]])
+    with pytest.raises(ValueError, match=re.escape("R must be positive semi-definite; R[1, 1] = "
+                                                   "-5, a negative variance")):
+        nis(ys, res, H=np.eye(2), R=np.diag([1.0, -5.0]))
+    with pytest.raises(ValueError, match=re.escape("ys has 2 steps (shape (2, 2)) but the "
+                                                   "result covers 3")):
+        nis(ys[:2], res, H=np.eye(2), R=np.eye(2))
+    # the oracle for a good R: nu' S^-1 nu from the predictions
+    v, _ = nis(ys, res, H=np.eye(2), R=np.eye(2))
+    nu = ys - res.pred_means
+    S = res.pred_covs + np.eye(2)
+    np.testing.assert_allclose(v, np.einsum("ti,tij,tj->t", nu, np.linalg.inv(S), nu),
+                               rtol=1e-12)
     with pytest.raises(ValueError, match="estimates and truth are empty"):
         rmse([], [])
 

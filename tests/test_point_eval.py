@@ -4,6 +4,7 @@ Euclidean similarity."""
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -276,3 +277,29 @@ def test_a_box_run_scored_by_distance_says_so_to_its_report(tmp_path):
     assert want.summary() != evaluate_mot(gt[gt.frames <= 20], pred, 20).summary()
     assert len(_gt_plots(tmp_path / "o" / "tracks.txt", "clip", info)) == 2
     assert (tmp_path / "o" / "report.html").stat().st_size > 0
+
+
+def test_the_similarities_refuse_rows_that_are_not_boxes_and_a_bad_zero_distance():
+    """``reshape(-1, 4)`` read a transposed (4, N) array, or a VOT polygon's 8 values a row,
+    as other boxes, without a word (the IoU of three boxes with themselves, transposed, was
+    not the identity); ``point_similarity`` took a zero distance of 0 (all 0, numpy's divide
+    warning), -5 (similarities of 1.2) or NaN. The oracle for the good cases: the IoU of
+    boxes with themselves is the identity, one row (4,) is one box, nothing is nothing."""
+    from vistrack.evaluation import box_iou_xywh
+
+    gt = np.array([[0.0, 0, 10, 10], [20, 20, 10, 10], [50, 0, 10, 10]])
+    np.testing.assert_array_equal(box_iou_xywh(gt, gt), np.eye(3))
+    for fn in (box_iou_xywh, lambda a, b: point_similarity(a, b, 10.0)):
+        for a, shape in ((gt.T, "(4, 3)"), ([[0, 0, 1]], "(1, 3)"),
+                         ([[0, 0, 4, 0, 4, 2, 0, 2]], "(1, 8)"), (np.zeros((1, 2, 4)),
+                                                                 "(1, 2, 4)")):
+            with pytest.raises(ValueError, match=re.escape(
+                    f"a must be rows (N, 4) of left, top, width, height; got shape {shape}")):
+                fn(a, gt)
+        assert fn(gt[0], gt).shape == (1, 3) and fn([], gt).shape == (0, 3)
+        assert fn(gt, np.zeros((0, 4))).shape == (3, 0)
+    for bad in (0, -5, np.nan, np.inf, True):
+        with pytest.raises(ValueError, match=re.escape(
+                f"zero_distance must be a finite number > 0 (the distance at which a pair's "
+                f"similarity falls to 0); got {bad!r}")):
+            point_similarity([[0, 0, 0, 0]], [[1, 0, 0, 0]], bad)

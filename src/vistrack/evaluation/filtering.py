@@ -10,12 +10,13 @@ Applications to Tracking and Navigation*, §5.4). Averaged over ``N`` independen
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_float_array, as_measurement_series, check_psd, is_whole
+from .._validate import as_float_array, as_measurement_series, check_psd, is_real, is_whole
 
 if TYPE_CHECKING:  # the filters import numba; scoring needs none of it
     from ..filters.kalman import FilterResult
@@ -64,8 +65,19 @@ def rmse(estimates: ArrayLike, truth: ArrayLike, *,
     return np.sqrt(np.mean((est - tru) ** 2, axis=axis))
 
 
-def _quadratic(e: np.ndarray, S: np.ndarray) -> np.ndarray:
-    L = np.linalg.cholesky(S)
+def _quadratic(e: np.ndarray, S: np.ndarray, name: Callable[[tuple], str]) -> np.ndarray:
+    """``e' S^-1 e`` for each of a stack, or a LinAlgError naming the first ``S`` that is
+    not positive definite by ``name(index)`` (numpy's said "Matrix is not positive definite"
+    alone, of one step among thousands)."""
+    try:
+        L = np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        for i in np.ndindex(S.shape[:-2]):
+            try:
+                np.linalg.cholesky(S[i])
+            except np.linalg.LinAlgError:
+                raise np.linalg.LinAlgError(f"{name(i)} is not positive definite") from None
+        raise
     w = np.linalg.solve(L, e[..., None])[..., 0]
     return np.sum(w * w, axis=-1)
 
@@ -96,7 +108,8 @@ def nees(truth: ArrayLike, means: ArrayLike, covs: ArrayLike) -> np.ndarray:
     ValueError
         If the shapes disagree.
     numpy.linalg.LinAlgError
-        If a covariance is not positive definite.
+        If a covariance is not positive definite (the first such is named,
+        ``covs[57] is not positive definite``).
 
     References
     ----------
@@ -117,7 +130,7 @@ def nees(truth: ArrayLike, means: ArrayLike, covs: ArrayLike) -> np.ndarray:
             f"got {x.shape}, {m.shape}, {P.shape}"
         )
     check_psd(P, "covs")  # symmetric: its lower triangle alone was read
-    return _quadratic(x - m, P)
+    return _quadratic(x - m, P, lambda i: f"covs[{', '.join(map(str, i))}]" if i else "covs")
 
 
 def nis(ys: ArrayLike, result: FilterResult, *, H: ArrayLike,
@@ -152,7 +165,10 @@ def nis(ys: ArrayLike, result: FilterResult, *, H: ArrayLike,
     Raises
     ------
     ValueError
-        If the result has no predictions (``store_covs=False``) or does not cover ``ys``.
+        If the result has no predictions (``store_covs=False``) or does not cover ``ys``, or
+        ``R`` is not symmetric positive semi-definite.
+    numpy.linalg.LinAlgError
+        If an innovation covariance ``S`` is not positive definite (the first such named).
 
     References
     ----------
@@ -180,6 +196,9 @@ def nis(ys: ArrayLike, result: FilterResult, *, H: ArrayLike,
     H_ = as_float_array(H, "H", ndim=(2, 3))
     R_ = as_float_array(R, "R", ndim=(2, 3))
     if y.shape[:2] != pm.shape[:2]:
+        if single:  # (the batch's shapes, (1, T, m), were given for a series of its own)
+            raise ValueError(f"ys has {y.shape[1]} steps (shape {y.shape[1:]}) but the result "
+                             f"covers {pm.shape[1]}")
         raise ValueError(f"ys has shape {y.shape} but the result covers {pm.shape[:2]}")
     m, n, T = y.shape[-1], pm.shape[-1], y.shape[1]
     # named here: a (1, 1) R was added to every entry of S, a (1, n) H broadcast over m rows
@@ -187,13 +206,18 @@ def nis(ys: ArrayLike, result: FilterResult, *, H: ArrayLike,
         if arr.shape[-2:] != want or (arr.ndim == 3 and arr.shape[0] != T):
             raise ValueError(f"{name} must be {want} or ({T}, {want[0]}, {want[1]}) for ys of "
                              f"{m} values and states of {n}; got {arr.shape}")
+    # as the filters check it: S's lower triangle alone was read, so an R not symmetric gave
+    # a NIS that depended on which triangle held the slip, without a word
+    check_psd(R_, "R")
     Ht = np.swapaxes(H_, -1, -2)
     nu = y - pm @ Ht if H_.ndim == 2 else y - np.einsum("tmn,btn->btm", H_, pm)
     S = H_ @ pP @ Ht + R_
     obs = ~np.isnan(y)
     both = obs[..., :, None] & obs[..., None, :]
     S = np.where(both, S, np.eye(m))
-    val = _quadratic(np.where(obs, nu, 0.0), S)
+    val = _quadratic(np.where(obs, nu, 0.0), S,
+                     lambda i: f"S = H P H' + R at step {i[1]}" + ("" if single
+                                                                   else f" of series {i[0]}"))
     dof = obs.sum(axis=-1)
     if single:
         return val[0], dof[0]
@@ -241,10 +265,12 @@ def chi2_band(dof: int, *, n_runs: int = 1, level: float = 0.95) -> tuple[float,
     """
     from scipy import stats  # imported here: scipy.stats costs ~60 MB and 0.8 s at import
 
-    # written so that NaN fails too (it passed, and gave a band of NaN)
-    if not (is_whole(dof, 1) and is_whole(n_runs, 1) and 0 < level < 1):
-        raise ValueError(f"need whole numbers dof >= 1 and n_runs >= 1, and 0 < level < 1; got "
-                         f"{dof!r}, {n_runs!r}, {level!r}")
+    # written so that NaN fails too (it passed, and gave a band of NaN); each named alone
+    for name, value in (("dof", dof), ("n_runs", n_runs)):
+        if not is_whole(value, 1):
+            raise ValueError(f"{name} must be a whole number >= 1; got {value!r}")
+    if not (is_real(level) and 0 < level < 1):  # (a string met a bare comparison error)
+        raise ValueError(f"level must be a probability in (0, 1); got {level!r}")
     a = (1 - level) / 2
     k = dof * n_runs
     return float(stats.chi2.ppf(a, k) / n_runs), float(stats.chi2.ppf(1 - a, k) / n_runs)

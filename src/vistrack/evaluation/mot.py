@@ -124,6 +124,11 @@ def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     (N, M) ndarray
         IoU in [0, 1]; 0 where the union is empty (at most machine epsilon).
 
+    Raises
+    ------
+    ValueError
+        If ``a`` or ``b`` is not rows of 4 values (one row ``(4,)`` is taken as one box).
+
     See Also
     --------
     vistrack.association.iou : The same for boxes ``x0, y0, x1, y1``.
@@ -135,8 +140,7 @@ def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     >>> box_iou_xywh([[0, 0, 1e300, 1e300]], [[0, 0, 1e300, 5e299]])
     array([[0.5]])
     """
-    a = np.asarray(a, dtype=float).reshape(-1, 4)
-    b = np.asarray(b, dtype=float).reshape(-1, 4)
+    a, b = _rows4(a, "a"), _rows4(b, "b")
     big_a, big_b = (np.abs(a) > _BIG).any(1), (np.abs(b) > _BIG).any(1)
     if not (big_a.any() or big_b.any()):
         return _iou(a, b)
@@ -148,6 +152,19 @@ def box_iou_xywh(a: ArrayLike, b: ArrayLike) -> np.ndarray:
 
 
 _BIG = 2.0 ** 500  # below it, no sum or product of the IoU overflows
+
+
+def _rows4(x: ArrayLike, name: str) -> np.ndarray:
+    """``x`` as float rows ``(N, 4)`` (one row ``(4,)``, or nothing, taken as such), or a
+    ValueError naming it: ``reshape(-1, 4)`` read a transposed ``(4, N)`` array, or a VOT
+    polygon's 8 values a row, as other boxes, without a word."""
+    arr = np.asarray(x, dtype=float)
+    if arr.size == 0:
+        return arr.reshape(0, 4)
+    if arr.shape[-1:] != (4,) or arr.ndim > 2:
+        raise ValueError(f"{name} must be rows (N, 4) of left, top, width, height; got shape "
+                         f"{arr.shape}")
+    return arr.reshape(-1, 4)
 
 
 def point_similarity(a: ArrayLike, b: ArrayLike, zero_distance: float) -> np.ndarray:
@@ -171,14 +188,21 @@ def point_similarity(a: ArrayLike, b: ArrayLike, zero_distance: float) -> np.nda
     (N, M) ndarray
         In [0, 1].
 
+    Raises
+    ------
+    ValueError
+        If ``a`` or ``b`` is not rows of 4 values, or ``zero_distance`` is not a finite
+        number > 0.
+
     Examples
     --------
     >>> point_similarity([[0, 0, 0, 0]], [[3, 4, 0, 0], [1, 0, 0, 0], [0, 0, 2, 2]],
     ...                  zero_distance=10).round(3)
     array([[0.5  , 0.9  , 0.859]])
     """
-    a = np.asarray(a, dtype=float).reshape(-1, 4)
-    b = np.asarray(b, dtype=float).reshape(-1, 4)
+    a, b = _rows4(a, "a"), _rows4(b, "b")
+    # (0, negative or NaN gave similarities of 0, above 1 or NaN, with a RuntimeWarning at most)
+    zero_distance = check_zero_distance(zero_distance)
     # the centres halved, which no finite row overflows (x + w / 2 near 1.7e308 was inf, and
     # inf - inf a NaN that SciPy's assignment refused, naming nothing): exact, a power of 2;
     # a distance past the largest float is inf, a similarity of 0
