@@ -353,6 +353,43 @@ def test_the_view_of_a_long_thin_box_spans_the_box(w, h):
     assert np.abs(box[:2] - want).max() <= 1.0, (box, want)
 
 
+def test_anchored_to_a_box_of_another_shape_the_view_spans_it():
+    """A view of square pixels anchored to a box of another shape was scaled by the box's
+    width alone: anchored from 20 x 20 to 20 x 40 it spanned 20 x 20, the box's upper half
+    (a view of a side raised to 4 was rescaled, and spanned its box). The oracle: the view's
+    rows span the box's height, and its mean is the box's own pixels'; the same shape
+    anchored again keeps its square pixels."""
+    img = np.zeros((120, 120), np.uint8)
+    img[70:90, 50:70] = 250  # the lower half of the 20 x 40 box at (50, 50)
+    t = WSLTracker(blur=0.0)
+    t.init(img, [50, 50, 20, 20])
+    t.anchor([50, 50, 10, 10])  # the same shape: square pixels kept
+    assert t.aspect == 1.0
+    t.anchor([50, 50, 20, 40])
+    assert t.aspect * (t.w / t.vw) * t.vh == pytest.approx(40.0)
+    g = t._prepare(img)
+    view = t._sample(g, *t.centre, t.w / t.vw, t.vw, t.vh)
+    assert view.mean() == pytest.approx(g[50:90, 50:70].mean(), rel=0.1)
+
+
+def test_a_forgetting_time_too_short_to_remember_a_frame_is_refused():
+    """``tau`` 0.02 frames made the update's weight 1 - exp(-1 / tau) exactly 1: a pixel the
+    stable component did not own at all took its moments to 0 / 0, NaN for good, and the
+    tracker's score to -inf, without a word. The shortest tau accepted keeps finite
+    moments through the same data (the equations' oracle: m = o at a weight of 1)."""
+    for tau in (0.02, 0.026):
+        with pytest.raises(ValueError, match=re.escape(f"tau must be long enough for the "
+                                                       f"model to remember a frame, 1 - exp(-1 "
+                                                       f"/ tau) < 1 (tau above about 0.027); "
+                                                       f"got {tau!r}")):
+            WSLModel((1,), tau=tau)
+    m = WSLModel((1,), tau=0.0275)
+    m.init([0.05])
+    m.update([0.05])
+    m.update([0.98])
+    assert np.isfinite(m.mu_s).all() and np.isfinite(m.var_s).all()
+
+
 def test_a_start_below_the_stable_components_floor_is_refused():
     """sigma_s0 below sigma_min started the stable component under its own floor (the first
     update then raised it)."""

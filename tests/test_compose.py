@@ -212,6 +212,11 @@ def test_a_member_box_of_another_shape_is_named():
     c.init(img, np.array([30.0, 20, 10, 10]))
     c.update(img)
     assert c.accepted == {"a": False}
+    # a box of no width is a failure too, said in a plain bool (np.False_ before)
+    c = Composite({"a": (Fixed([[32.0, 20, 0, 10]]), (0.1, 0.1))})
+    c.init(img, np.array([30.0, 20, 10, 10]))
+    c.update(img)
+    assert c.accepted == {"a": False} and type(c.accepted["a"]) is bool
 
 
 def _scene(x=30):

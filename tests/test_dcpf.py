@@ -568,6 +568,67 @@ def test_step_follows_the_frames_own_index_and_time():
         trk.step(Frame(50, 49 / 7, im), _walker(50))
 
 
+@pytest.mark.parametrize("gap", [13, 18, 30])
+def test_a_gap_in_the_frames_longer_than_max_lost_ends_a_target_found_after_it(gap):
+    """Frames 11 to 10 + ``gap`` left out (images skipped) at 7 frames/s, max_lost 1.5 s
+    (10.5 frames), the person detected before and after: the target was predicted across
+    the gap and took the detection after it before the lifecycle looked, so it kept its
+    identity (on every seed over gaps of 1.9 to 4.3 s). The oracles: the same frames stepped
+    one by one without detections, and the box tracker given the gap; both start a new
+    identity for the person after it."""
+    from vistrack.tracking import BoxTracker
+    from vistrack.types import Frame
+
+    im = np.full((300, 600, 3), 128, np.uint8)
+    after = 11 + gap
+    for seed in range(5):
+        skipped = DetectorConfidencePF(rng=seed, gamma=0.0, eta=0.0, frame_rate=7)
+        stepped = DetectorConfidencePF(rng=seed, gamma=0.0, eta=0.0, frame_rate=7)
+        for t in range(1, 11):
+            skipped.step(Frame(t, (t - 1) / 7, im), _walker(t))
+        for t in range(1, after):
+            stepped.step(Frame(t, (t - 1) / 7, im), _walker(t, seen=t <= 10))
+        for trk in (skipped, stepped):
+            for t in (after, after + 1):
+                out = trk.step(Frame(t, (t - 1) / 7, im), _walker(t))
+            assert trk.ids.tolist() == [2] and out.ids.tolist() == [2], (seed, trk.ids)
+    box = BoxTracker(frame_rate=7, max_lost=1.5)
+    for t in list(range(1, 11)) + [after, after + 1]:
+        out = box.step(Frame(t, (t - 1) / 7), _walker(t))
+    assert out.ids.tolist() == [2]
+
+
+def test_frame_zero_is_a_frame_and_a_confidence_is_a_map():
+    """Frame 0 stepped was read as no frame before, so frame 0 could be stepped again (three
+    times: one frame confirmed a target on its own) and frame -2 after it was refused in
+    seconds, by the track table; a confidence callable returning an array was taken, and
+    failed a frame later in numpy's words. The box tracker's words are the oracle."""
+    from vistrack.frontends.detectors import ImageTooSmall
+    from vistrack.types import Frame
+
+    im = np.full((300, 600, 3), 128, np.uint8)
+    trk = DetectorConfidencePF(rng=0, gamma=0.0, eta=0.0)
+    trk.step(Frame(0, 0.0, im), _walker(1))
+    for again in (0, -2):
+        with pytest.raises(ValueError, match=f"^frame must increase; got {again} after 0$"):
+            trk.step(Frame(again, 0.0, im), _walker(1))
+    trk = DetectorConfidencePF(rng=0, eta=0.0, confidence=lambda image: np.zeros((60, 80)))
+    with pytest.raises(TypeError, match="^confidence must be a callable image -> "
+                                        "ConfidenceMap; it returned ndarray$"):
+        trk.step(Frame(1, 0.0, im), _walker(1))
+    # the maps' own words: a level named with its shape, no heights, the least image
+    with pytest.raises(ValueError, match=re.escape("scores[1] has shape (1, 5)")):
+        ConfidenceMap([60.0, 80.0], [np.zeros((3, 3)), np.zeros((1, 5))], [(0, 0)] * 2,
+                      [4.0] * 2)
+    with pytest.raises(ValueError, match="^heights must hold at least one height; got none$"):
+        HOGConfidence([])
+    hog = HOGConfidence([46.0])
+    assert hog(np.zeros((65, 35), np.uint8)).heights.tolist() == [46.0]  # it fits
+    for shape in ((65, 34), (64, 35)):
+        with pytest.raises(ImageTooSmall, match="needs 35 x 65 or more"):
+            hog(np.zeros(shape, np.uint8))
+
+
 def test_a_confidence_map_giving_nan_is_named():
     """NaN scores from a user's confidence map failed inside resample ("weights must be
     finite and >= 0"), of weights the user never gave."""

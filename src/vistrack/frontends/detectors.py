@@ -285,8 +285,10 @@ class ConfidenceMap:
             raise ValueError(f"heights, scores, origins and strides must have one entry per "
                              f"level; got {L}, {len(self.scores)}, {len(self.origins)}, "
                              f"{len(self.strides)}")
-        if any(s.ndim != 2 or min(s.shape) < 2 for s in self.scores):
-            raise ValueError("each level's scores must be a 2-D grid of at least 2 x 2")
+        for k, s in enumerate(self.scores):
+            if s.ndim != 2 or min(s.shape) < 2:  # (the level and its shape went unnamed)
+                raise ValueError(f"each level's scores must be a 2-D grid of at least 2 x 2; "
+                                 f"scores[{k}] has shape {s.shape}")
         for k, s in enumerate(self.scores):
             # (a NaN grid was taken and gave no detections without a word; -inf is a cell no
             # window was scored at, as HOGConfidence leaves them)
@@ -478,7 +480,9 @@ class HOGConfidence:
         import cv2
 
         self.heights = as_float_array(heights, "heights", not_boolean="numbers > 0")
-        if self.heights.ndim != 1 or len(self.heights) == 0 or not (
+        if self.heights.ndim == 1 and len(self.heights) == 0:  # (said "finite and > 0")
+            raise ValueError("heights must hold at least one height; got none")
+        if self.heights.ndim != 1 or not (
                 np.isfinite(self.heights) & (self.heights > 0)).all():
             # (NaN failed at the first image: "cannot convert float NaN to integer")
             raise ValueError(f"heights must be finite and > 0; got {heights!r}")
@@ -520,10 +524,22 @@ class HOGConfidence:
         if not heights:
             raise ImageTooSmall(f"image of {W} x {H} pixels is too small for HOG's levels: "
                                 f"the one for people {self.heights.min():g} pixels tall needs "
-                                f"{int(np.ceil(72 * self.heights.min() / (_INNER_H * 128)))} x "
-                                f"{int(np.ceil(136 * self.heights.min() / (_INNER_H * 128)))} "
-                                "or more")
+                                f"{_least_side(72, self.heights.min())} x "
+                                f"{_least_side(136, self.heights.min())} or more")
         return ConfidenceMap(np.array(heights), scores, origins, strides)
+
+
+def _least_side(pixels: int, height: float) -> int:
+    """The least side of an image whose resize for people ``height`` pixels tall is at least
+    ``pixels`` across (as :class:`HOGConfidence` rounds it; the ceiling of the exact ratio
+    said 66 where 65 served)."""
+    f = _INNER_H * 128 / height
+    n = max(1, int(np.floor((pixels - 0.5) / f)))
+    while int(round(n * f)) < pixels:
+        n += 1
+    while n > 1 and int(round((n - 1) * f)) >= pixels:
+        n -= 1
+    return n
 
 
 class ConfidencePeaks:

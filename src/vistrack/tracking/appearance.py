@@ -125,6 +125,11 @@ class WSLModel:
             raise ValueError("m0 must be three finite positive mixing probabilities; got "
                              f"{got!r}")  # NaN and inf gave NaN mixtures
         self.alpha = 1.0 - float(np.exp(-1.0 / tau))
+        if self.alpha >= 1.0:
+            # (the model kept no memory: a pixel the stable component did not own at all
+            # took its moments to 0 / 0, NaN for good, and the tracker's score to -inf)
+            raise ValueError(f"tau must be long enough for the model to remember a frame, "
+                             f"1 - exp(-1 / tau) < 1 (tau above about 0.027); got {tau!r}")
         self.sigma_w, self.sigma_s0 = float(sigma_w), float(sigma_s0)
         self.sigma_min = float(sigma_min)
         self.m0, self.log_lost = m0_arr / m0_arr.sum(), float(np.log(lost_density))
@@ -350,7 +355,7 @@ class WSLTracker(SingleObjectTracker):
     scales : tuple of float
         Relative scales tried each frame (of equally likely ones, the nearest 1). The
         default keeps the first box's size: with ``(0.95, 1, 1.05)`` the box shrinks on OTB
-        Crossing (39 % success against 67 % at a fixed size), as the model adapts to the
+        Crossing (38 % success against 70 % at a fixed size), as the model adapts to the
         inner part of the target.
     blur : float
         Gaussian blur (σ, image pixels) before sampling.
@@ -494,7 +499,11 @@ class WSLTracker(SingleObjectTracker):
         self._need_start("anchor")
         b = as_box(box)
         self.centre = b[:2] + b[2:] / 2
+        reshaped = not np.isclose(b[3] / b[2], self.h / self.w, rtol=1e-9, atol=0.0)
         self.w, self.h = float(b[2]), float(b[3])
-        if self.aspect != 1.0:  # a view of a side raised to 4 spans the new box
+        if self.aspect != 1.0 or reshaped:
+            # the view spans the new box: a view of a side raised to 4, or of square pixels
+            # anchored to a box of another shape (its width alone set the scale, and a box
+            # twice as tall was seen over its upper half)
             self.aspect = (self.h / self.vh) / (self.w / self.vw)
         self.box = b

@@ -216,7 +216,7 @@ class Composite(SingleObjectTracker):
                 raise ValueError(f"members[{name!r}].update returned shape {box.shape}; "
                                  "expected one box x, y, w, h, (4,)")
             self.boxes[name] = box
-            ok = bool(np.isfinite(box).all()) and box[2] > 0 and box[3] > 0
+            ok = bool(np.isfinite(box).all() and box[2] > 0 and box[3] > 0)
             if ok:
                 pos_sd, size_sd = self.noise[name]
                 R = np.diag([(pos_sd * size[0]) ** 2, (pos_sd * size[1]) ** 2,

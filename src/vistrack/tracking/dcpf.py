@@ -379,8 +379,9 @@ class DetectorConfidencePF:
         self.reset()
 
     def reset(self) -> None:
-        """Forget every target; identities start again from 1 (and, with an integer or no
-        ``rng``, the randomness starts again: the same frames give the same tracks)."""
+        """Forget every target; identities start again from 1 (and, with an integer ``rng``,
+        the default 0, the randomness starts again: the same frames give the same tracks;
+        with None it is drawn afresh)."""
         config = self.config
         self.rng = np.random.default_rng(self._rng_seed)
         N = config.n_particles
@@ -392,6 +393,7 @@ class DetectorConfidencePF:
         self.overlapped = np.zeros(0)
         self.weights_clf = np.zeros((0, 0))
         self.frame = 0
+        self._stepped = False  # (frame 0 stepped read as no frame: it could be stepped again)
         self._said_unsized = False
 
     @property
@@ -427,12 +429,16 @@ class DetectorConfidencePF:
         # after the last frame stepped or updated (update() moves the frame too: checked
         # against step()'s alone, a frame before an update's was refused by the track
         # table, in seconds, after update() had taken its number)
-        index = frame_index(frame, self.frame or None)
+        index = frame_index(frame, self.frame if self._stepped else None)
         if detections is None:
             detections = Detections(boxes=np.zeros((0, 4)))
         # (with gamma 0 nothing reads it: a dense HOG map a frame was computed for nothing)
         cmap = (self.confidence(image) if self.confidence is not None
                 and self.config.gamma > 0 else None)
+        if cmap is not None and not callable(getattr(cmap, "score", None)):
+            # (an array was taken, and failed a frame later, in numpy's words)
+            raise TypeError(f"confidence must be a callable image -> ConfidenceMap; it "
+                            f"returned {type(cmap).__name__}")
         return self.update(image, detections, cmap, _index=index)
 
     # ------------------------------------------------------------------ helpers
@@ -473,7 +479,16 @@ class DetectorConfidencePF:
         # frames since the last one stepped (a gap of frames moves the targets as far)
         k = 1 if _index is None else max(1, _index - self.frame)
         self.frame = self.frame + 1 if _index is None else _index
+        self._stepped = True
         time = self.frame / self.frame_rate
+        if k > 1 and len(self.ids):
+            # frames left out (images skipped): the targets that stepping through them would
+            # have ended, unsupported for longer than max_lost at the frame before this one,
+            # end before they can take a detection (found in the frame after a gap of 1.8 s,
+            # max_lost 1.5 s, a target kept its identity), as the box tracker's do
+            gone = self.tracks.stale((self.frame - 1) / self.frame_rate, cfg.max_lost)
+            if gone.any():
+                self._select(~gone)
         if cfg.gamma > 0 and confidence is None:
             raise ValueError("the detector-confidence term (gamma > 0) needs the detector's "
                              "confidence: construct with confidence=HOGConfidence() (or "
