@@ -267,3 +267,61 @@ def test_a_template_on_one_line_is_named(shape):
         with pytest.raises(ValueError, match=msg):
             s.init(Q)
     Snake(n_control=6, n_samples=12, shape="free").init(np.full((6, 2), 40.0))
+
+
+def test_a_refused_move_leaves_the_snake_as_it_was():
+    """The shape space's base was set before the check that the points make a contour, so
+    a refused init, move_to or anchor left the old map about the new, flat points: the
+    tracker followed a flat line after its error, and anchor's error named control points
+    its caller never gave. The oracle: the contour before the refused call."""
+    from vistrack.tracking.snake import SnakeTracker
+
+    img = np.zeros((120, 160), np.uint8)
+    img[40:90, 60:110] = 200
+    t = SnakeTracker(n_control=8, n_samples=32)
+    t.init(img, [50, 30, 60, 60])
+    before = t.snake.contour().copy()
+    box = t.box.copy()
+    with pytest.raises(ValueError, match=re.escape("box [50.0, 60.0, 60.0, 1e-07] is too flat "
+                                                   "for the snake (shape='affine'): the control "
+                                                   "points moved to it lie on one line")):
+        t.anchor([50, 60, 60, 1e-7])
+    flat = np.c_[np.linspace(0, 10, 8), np.zeros(8)]
+    for call in (lambda: t.snake.move_to(flat), lambda: t.snake.init(flat)):
+        with pytest.raises(ValueError, match="control_points lie on one line"):
+            call()
+    np.testing.assert_array_equal(t.snake.contour(), before)
+    np.testing.assert_array_equal(t.box, box)
+
+
+def test_an_edge_at_the_last_row_or_column_is_found_as_at_the_first():
+    """Samples on the last pixel centres were left out where the first's were taken: an
+    edge between the last two columns or rows was placed half a pixel inside, at half its
+    step (a 30-level step, under twice min_edge, was missed there alone). The oracle: the
+    edges drawn at 0.5 and 58.5, found alike on all four sides."""
+    img = np.full((60, 60), 100, np.uint8)
+    img[:, 0] = img[:, -1] = img[0, :] = img[-1, :] = 130  # steps of 30 at 0.5 and 58.5
+    from vistrack.tracking.snake import _radial_search
+
+    pts = np.array([[1.5, 30.0], [57.5, 30.0], [30.0, 1.5], [30.0, 57.5]])
+    normals = np.array([[-1.0, 0], [1, 0], [0, -1], [0, 1]])
+    found, ok = np.zeros((4, 2)), np.zeros(4, bool)
+    _radial_search(img.astype(np.float32), pts, normals, 3, 20.0, found, ok)
+    assert ok.all()
+    np.testing.assert_allclose(found, [[0.5, 30], [58.5, 30], [30, 0.5], [30, 58.5]])
+
+
+def test_a_snake_needs_three_samples_and_names_its_arguments():
+    """n_samples 1 or 2 was taken, and a snake whose update needs edges at 3 never moved;
+    bspline_matrix said "got n=6" for the string '6', and took derivative="no" as true;
+    ``found``, documented, did not exist before a frame; min_edge is strict, as said."""
+    for m in (1, 2):
+        with pytest.raises(ValueError, match=r"^n_samples must be a whole number >= 3"):
+            Snake(n_control=8, n_samples=m)
+    with pytest.raises(ValueError, match=re.escape("got n='6', m=5")):
+        bspline_matrix("6", 5)
+    with pytest.raises(TypeError, match="derivative"):
+        bspline_matrix(6, 5, derivative="no")
+    s = Snake(n_control=8, n_samples=16)
+    assert s.found.tolist() == [False] * 16
+    np.testing.assert_allclose(bspline_matrix(6, 5, derivative=True).sum(1), 0, atol=1e-15)

@@ -36,7 +36,15 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_box, as_finite, as_float_array, as_uint8_image, as_whole, is_whole
+from .._validate import (
+    as_box,
+    as_finite,
+    as_flag,
+    as_float_array,
+    as_uint8_image,
+    as_whole,
+    is_whole,
+)
 from ..filters import kf_predict, kf_update
 from ..types import Gaussian
 from .base import _HALF, SingleObjectTracker, _index_centre
@@ -82,7 +90,8 @@ def bspline_matrix(n: int, m: int, derivative: bool = False) -> np.ndarray:
     # (4.5 control points was a bare TypeError in numpy, NaN a cast warning)
     if not (is_whole(n, 4) and is_whole(m, 1)):
         raise ValueError(f"need n >= 4 control points and m >= 1 samples, whole numbers; "
-                         f"got n={n}, m={m}")
+                         f"got n={n!r}, m={m!r}")
+    derivative = as_flag(derivative, "derivative")  # ("no" gave the derivative's basis)
     n, m = int(n), int(m)
     s = np.arange(m) * n / m
     i = np.floor(s).astype(int)
@@ -115,10 +124,13 @@ def _radial_search(img, pts, normals, search, min_edge, out, found):
         for a in range(steps + 2):
             d = -search - 0.5 + a * 0.5
             x, y = px + d * nx, py + d * ny
-            if not (0.0 <= x < W - 1.0 and 0.0 <= y < H - 1.0):
+            # the last row and column's centres too (a sample there was left out, where the
+            # first's was taken: an edge between the last two was placed half a pixel off,
+            # at half its step)
+            if not (W > 1 and H > 1 and 0.0 <= x <= W - 1.0 and 0.0 <= y <= H - 1.0):
                 v = np.nan
             else:
-                x0, y0 = int(x), int(y)
+                x0, y0 = min(int(x), W - 2), min(int(y), H - 2)
                 fx, fy = x - x0, y - y0
                 v = ((1.0 - fy) * ((1.0 - fx) * img[y0, x0] + fx * img[y0, x0 + 1])
                      + fy * ((1.0 - fx) * img[y0 + 1, x0] + fx * img[y0 + 1, x0 + 1]))
@@ -139,11 +151,11 @@ class Snake:
     n_control : int
         Control points of the spline.
     n_samples : int
-        Points where edges are searched for.
+        Points where edges are searched for (3 or more: an update needs edges at 3).
     search : int
         Half-length of the radial search, in pixels.
     min_edge : float
-        Smallest intensity change over a pixel that counts as an edge.
+        An intensity change over a pixel counts as an edge where it is larger than this.
     q, r : float
         Process variance per frame of each control point coordinate, and the variance of an
         edge's position along its normal (pixels²). In a shape space, ``q`` for a
@@ -170,8 +182,8 @@ class Snake:
     Raises
     ------
     ValueError
-        If ``n_control`` is not a whole number >= 4, ``n_samples`` or ``search`` not one
-        >= 1, ``min_edge`` not a finite number >= 0, ``q`` or ``r`` not a finite number
+        If ``n_control`` is not a whole number >= 4, ``n_samples`` not one >= 3, ``search``
+        not one >= 1, ``min_edge`` not a finite number >= 0, ``q`` or ``r`` not a finite number
         > 0 (a TypeError for what is no number), or ``shape`` not one of the three.
 
     References
@@ -198,7 +210,9 @@ class Snake:
         # each named: a search of -1 or a min_edge of NaN gave a snake that never moved, a
         # n_control of 4.7 was cut to 4, and an infinite q failed at the first update
         self.n = as_whole(n_control, "n_control", 4, "control points of a closed B-spline")
-        self.m = as_whole(n_samples, "n_samples", 1)
+        # (1 or 2 were taken, and a snake that needs 3 edges to move never moved)
+        self.m = as_whole(n_samples, "n_samples", 3, "samples, 3 or more: an update needs "
+                                                     "edges at 3")
         self.B = bspline_matrix(self.n, self.m)
         self.dB = bspline_matrix(self.n, self.m, derivative=True)
         self.search = as_whole(search, "search", 1, "pixels each way along a normal")
@@ -210,6 +224,7 @@ class Snake:
                              f"got {shape!r}")
         self.shape = shape
         self.state: Gaussian | None = None
+        self.found = np.zeros(self.m, bool)  # (documented, and missing before a frame)
         # set by init (_template): Q₀ stacked x then y, W of Q = Q₀ + W X, each parameter's
         # process variance
         self._base: np.ndarray
@@ -252,8 +267,8 @@ class Snake:
         # the shape space about the control points Q (n, 2): Q₀, W, and the process noise of
         # each parameter (q for translations and free points, q / ρ² for linear parameters)
         n = self.n
-        self._base = np.r_[Q[:, 0], Q[:, 1]]
         if self.shape == "free":
+            self._base = np.r_[Q[:, 0], Q[:, 1]]
             self._W = np.eye(2 * n)
             self._qdiag = np.full(2 * n, self.q)
             return
@@ -273,6 +288,9 @@ class Snake:
             cols += [np.r_[x0, zero], np.r_[y0, zero], np.r_[zero, x0], np.r_[zero, y0]]
         else:
             cols += [np.r_[x0, y0], np.r_[-y0, x0]]
+        # set only once the points are known to make a contour (the base was set before the
+        # check, so a refused init, move_to or anchor left the old map about the new points)
+        self._base = np.r_[Q[:, 0], Q[:, 1]]
         self._W = np.stack(cols, axis=1)
         self._qdiag = np.r_[self.q, self.q, np.full(len(cols) - 2, self.q / rho2)]
 
@@ -573,5 +591,11 @@ class SnakeTracker(SingleObjectTracker):
         s = b[2:] / cur[2:]
         c0, c1 = cur[:2] + cur[2:] / 2, b[:2] + b[2:] / 2
         Q = self.snake.control_points
-        self.snake.move_to(c1 + s * (Q + _HALF - c0) - _HALF)
+        try:
+            self.snake.move_to(c1 + s * (Q + _HALF - c0) - _HALF)
+        except ValueError:
+            # (named the control points, which the caller never gave)
+            raise ValueError(f"box {b.tolist()} is too flat for the snake (shape="
+                             f"{self.snake.shape!r}): the control points moved to it lie on "
+                             "one line; give a box around an area") from None
         self.box = b
