@@ -1,6 +1,7 @@
 """Learning a box tracker's noise (vistrack.tracking.fit, vistrack.pipeline.fit_sequences,
 vistrack fit): against the parameters simulated data were drawn with."""
 
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -154,7 +155,8 @@ def test_matched_series_names_the_frame_an_identity_is_duplicated_in():
                         ([50, 50, 10], 50), ([3, 3, 7, 7], 3), ([10**6, 5, 10**6], 10**6)):
         # the second box of a frame apart from the first: each matches its own detection
         boxes = np.array([far if f in frames[:k] else box for k, f in enumerate(frames)])
-        with pytest.raises(ValueError, match=f"identity 7 appears twice in frame {dup}$"):
+        with pytest.raises(ValueError, match=f"identity 7 appears twice in frame {dup} "
+                                             r"\(ref_ids\[\d+\] and ref_ids\[\d+\]\)$"):
             matched_series(frames, [7] * len(frames), boxes, frames, boxes, min_length=2)
 
 
@@ -539,3 +541,55 @@ def test_a_series_that_starts_without_a_detection_learns_as_from_its_first():
                np.r_[np.full((3, 4), np.nan), g]) for t, z, g in series]
     a, b = (fit_box_motion([(s, 30.0)]).per_sequence[0] for s in (series, padded))
     assert a == b
+
+
+def test_fit_prints_the_given_noise_at_30_frames_a_second_and_names_short_objects(
+        tmp_path, capsys):
+    """A --config whose [motion] frame_rate is 10 had its noise printed at 10 beside the
+    learned values at 30, under a footer saying both were at 30 (1.7 and 5.2 times off):
+    the oracle is BoxMotion.at_rate(30) of the given model. And objects matched in fewer
+    than 10 frames, left out, were reported as "no object was matched in two frames or
+    more" where every object was matched in 9."""
+    rng = np.random.default_rng(7)
+    seq = _sequence(tmp_path / "SIM-0", rng)
+    given = BoxMotion(std_pos=0.05, std_vel=0.003125, frame_rate=10.0)
+    cfg = tmp_path / "cfg10.toml"
+    cfg.write_text("[motion]\nstd_pos = 0.05\nstd_vel = 0.003125\nframe_rate = 10.0\n")
+    assert main(["fit", str(seq), "--gt", "--no-held-out", "--config", str(cfg), "--out",
+                 str(tmp_path / "o.toml"), "--quiet"]) == 0
+    rows = {line.split()[0]: line.split() for line in capsys.readouterr().out.splitlines()
+            if line.startswith(("std_pos", "std_vel"))}
+    at_30 = given.at_rate(30.0)
+    assert float(rows["std_pos"][1]) == pytest.approx(at_30.std_pos, rel=1e-3)
+    assert float(rows["std_vel"][1]) == pytest.approx(at_30.std_vel, rel=1e-3)
+    short = _sequence(tmp_path / "SIM-9", rng, T=9)
+    with pytest.raises(ValueError, match="^no object was matched in 10 frames or more in the "
+                                         "sequence: nothing to learn from$"):
+        fit_sequences([short], gt=True)
+
+
+def test_matched_series_names_a_box_that_is_no_number_and_any_identity_twice(tmp_path):
+    """A NaN box failed inside iou_pairs, named "a" or "b" by its index in its frame, as
+    x0, y0, x1, y1 (and a NaN detection in a frame without reference boxes was taken); an
+    identity twice in a frame was named only where both rows were matched, and by no file
+    from vistrack fit."""
+    ref = np.array([[0, 0, 10, 20], [0, 0, 10, 20.0]])
+    det = np.array([[0, 0, 10, 20], [5, 5, 10, 20], [1, 0, 10, 20.0]])
+    for r, d, message in ((ref, np.r_[det[:2], [[0, 0, np.nan, 10]]],
+                           "det_boxes must be finite; det_boxes[2] = [0.0, 0.0, nan, 10.0]"),
+                          (np.r_[ref[:1], [[0, 0, 10, np.nan]]], det,
+                           "ref_boxes must be finite; ref_boxes[1] = [0.0, 0.0, 10.0, nan]")):
+        with pytest.raises(ValueError, match=re.escape(message)):
+            matched_series([1, 2], [1, 1], r, [1, 2, 9], d, min_length=1)
+    # identity 3 twice in frame 2, neither row matched by any detection
+    far = np.array([[500, 500, 10, 20.0]] * 3)
+    with pytest.raises(ValueError, match=re.escape("reference identity 3 appears twice in "
+                                                   "frame 2 (ref_ids[1] and ref_ids[2])")):
+        matched_series([1, 2, 2], [3, 3, 3], far, [1], det[:1], min_length=1)
+    seq = _sequence(tmp_path / "SIM-D", np.random.default_rng(2))
+    gt = seq / "gt" / "gt.txt"
+    lines = gt.read_text().splitlines()
+    gt.write_text("\n".join(lines + [lines[0].replace(",1,1,1", ",1,1,1")]) + "\n")
+    with pytest.raises(ValueError, match=re.escape(f"{gt}: reference identity 1 appears twice "
+                                                   f"in frame 1")):
+        fit_sequences([seq], gt=True)

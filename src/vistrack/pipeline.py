@@ -1913,6 +1913,11 @@ def _gt_reference(seq: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return gt.frames[keep], gt.ids[keep], gt.boxes[keep]
 
 
+_MIN_MATCHED = 10
+"""The least number of detections matched to an object for :func:`fit_sequences` to learn
+from it (:func:`~vistrack.tracking.fit.matched_series`' ``min_length``)."""
+
+
 def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
                   config: TrackConfig | str | None = None, held_out: bool = True,
                   keep_learned: bool = False, progress: TextIO | None = None) -> FitRun:
@@ -1974,7 +1979,7 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
         sequences (``vistrack fit`` takes one for its sequences).
     ValueError
         If no sequences are given, a sequence is given twice (two paths of one folder) or is
-        a file, or no object is detected in two frames or more.
+        a file, or no object is matched in 10 frames or more (shorter ones are left out).
     """
     import tempfile
 
@@ -2026,12 +2031,22 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
                 stride = (run.derived or {}).get("detection_stride", 1)
                 smoothers.append(start.at_rate(info.frame_rate / stride))
             dets = in_own_order(read_mot(det_path))
-            s = matched_series(*ref, dets.frames, dets.boxes)
+            try:
+                s = matched_series(*ref, dets.frames, dets.boxes, min_length=_MIN_MATCHED)
+            except ValueError as e:  # (an identity twice in a frame named no file)
+                where = seq / "gt" / "gt.txt" if gt else f"{seq.name}'s first pass"
+                raise ValueError(f"{where}: {e}") from None
             series.append((s, info.frame_rate))
             if progress is not None:
                 n = sum(int(np.isfinite(z[:, 0]).sum()) for _, z, _ in s)
                 print(f"{info.name}: {len(s)} objects, {n} matched detections",
                       file=progress, flush=True)
+        if not any(len(s) for s, _ in series):
+            # (fit_box_motion's own words said two frames, where matched_series keeps the
+            # objects matched in 10 or more: 50 objects of 9 frames each were "none")
+            raise ValueError(f"no object was matched in {_MIN_MATCHED} frames or more in "
+                             f"{'the sequence' if len(seqs) == 1 else 'any sequence'}: "
+                             "nothing to learn from")
         learned = fit_box_motion(series, start=start, smoothed_by=None if gt else smoothers)
         scores = None
         if gt and held_out and len(seqs) > 1:

@@ -120,6 +120,12 @@ def matched_series(ref_frames: np.ndarray, ref_ids: np.ndarray, ref_boxes: np.nd
         if boxes.ndim != 2 or boxes.shape[1] != 4 or len(boxes) != n:
             raise ValueError(f"{name} must be ({n}, 4), a box [x, y, w, h] for each of "
                              f"{of}; got shape {boxes.shape}")
+        bad = ~np.isfinite(boxes).all(axis=1)
+        if bad.any():
+            # (named as iou_pairs' "a" or "b", by its index in its frame, as x0, y0, x1, y1;
+            # and a NaN detection in a frame without reference boxes was taken)
+            k = int(np.flatnonzero(bad)[0])
+            raise ValueError(f"{name} must be finite; {name}[{k}] = {boxes[k].tolist()}")
     if len(ri) != len(rf):
         raise ValueError(f"ref_ids must be ({len(rf)},), one for each of ref_frames; got "
                          f"shape {ri.shape}")
@@ -136,15 +142,19 @@ def matched_series(ref_frames: np.ndarray, ref_ids: np.ndarray, ref_boxes: np.nd
         rows, cols = gnn_sparse(r, c, 1.0 - v, (len(gi), len(di)))
         match[gi[rows]] = di[cols]
     out = []
+    # an identity twice in a frame, whether or not either row was matched (only a pair both
+    # matched was named): named by the first such frame and both rows' indices
+    key = np.lexsort((ri, rf))
+    twice = np.flatnonzero((np.diff(rf[key]) == 0) & (np.diff(ri[key]) == 0))
+    if len(twice):
+        a, b = sorted((int(key[twice[0]]), int(key[twice[0] + 1])))
+        raise ValueError(f"reference identity {ri[a]} appears twice in frame {rf[a]} "
+                         f"(ref_ids[{a}] and ref_ids[{b}])")
     for i in np.unique(ri):
         rows = np.flatnonzero((ri == i) & (match >= 0))
         if len(rows) < min_length:
             continue
         frames = rf[rows]
-        seen, counts = np.unique(frames, return_counts=True)
-        if len(seen) != len(frames):  # named: the first frame it appears in twice
-            raise ValueError(f"reference identity {i} appears twice in frame "
-                             f"{int(seen[np.argmax(counts > 1)])}")
         t = np.arange(frames.min(), frames.max() + 1)
         z, ref = np.full((len(t), 4), np.nan), np.full((len(t), 4), np.nan)
         b, g = db[match[rows]], rb[rows]
