@@ -807,3 +807,28 @@ def test_a_negative_threshold_in_exponent_form_is_a_value(value, read, capsys):
     assert ended.value.code == 2
     assert capsys.readouterr().err == ("vistrack track: error: argument --low: expected one "
                                        "argument\n")
+
+
+@pytest.mark.parametrize("rate", [30.0, 25.0, 15.0, 14.0, 12.5, 10.0, 7.5, 7.0, 5.0, 2.5,
+                                  25 / 3, 25 / 6, 10 / 6])
+def test_offline_durations_are_frames_to_the_nearest_a_half_up(rate):
+    """Python's round took a half frame to the even one: ``link_window`` 0.3 s was 4 frames
+    at 15 frames/s but 8 at 25, ``max_gap`` 1 s 2 frames at 2.5 frames/s and 12 at 12.5,
+    where the box tracker's coasting rounds a half up. The oracle: exact rational
+    arithmetic, floor(seconds x rate + 1/2), the durations' decimal values as written."""
+    from fractions import Fraction
+
+    cfg = OfflineConfig()
+    exact = Fraction(rate).limit_denominator(1000)  # 25/3 as the third it is
+    want = {name: math.floor(Fraction(str(getattr(cfg, name))) * exact + Fraction(1, 2))
+            for name in ("max_gap", "link_gap", "link_window")}
+    want["link_window"] = max(1, want["link_window"])
+    assert cfg.frames(rate) == want
+
+
+def test_offline_durations_need_a_frame_rate():
+    """frames(-30) gave negative frame counts, NaN and inf numpy's conversion errors."""
+    for bad in (-30.0, 0.0, math.nan, math.inf):
+        with pytest.raises(ValueError, match=re.escape(f"frame_rate must be a finite number "
+                                                       f"> 0; got {bad!r}")):
+            OfflineConfig().frames(bad)

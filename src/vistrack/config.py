@@ -91,8 +91,10 @@ class OfflineConfig:
         prediction by this IoU (0: not at all).
     link_gap, link_iou, link_window : float
         Join tracks up to ``link_gap`` seconds apart whose boxes, carried across the gap by
-        the velocities of their last and first ``link_window`` seconds, overlap by
-        ``link_iou`` on average (``link_gap`` 0: never; ``link_iou`` above 0).
+        the velocities of their last and first ``link_window`` seconds of detections (as
+        many detections as frames in ``link_window``: over a longer time where a track
+        missed frames), overlap by ``link_iou`` on average (``link_gap`` 0: never;
+        ``link_iou`` above 0).
     calibration_iou_min : float
         With calibrated scores, the loosest overlap at which the whole file's score
         calibration links detections from frame to frame: where the detector's most
@@ -164,18 +166,35 @@ class OfflineConfig:
 
     def frames(self, frame_rate: float) -> dict[str, int]:
         """The durations :func:`vistrack.tracking.smooth` counts in frames, at ``frame_rate``
-        frames a second: ``max_gap``, ``link_gap`` and ``link_window`` (at least 1).
+        frames a second: ``max_gap``, ``link_gap`` and ``link_window`` (at least 1), each to
+        the nearest frame, a half up, as the box tracker's coasting rounds (a half was
+        rounded to the even frame: ``link_window`` 0.3 s was 4 frames at 15 frames/s and 8
+        at 25).
+
+        Raises
+        ------
+        ValueError
+            If ``frame_rate`` is not a finite number > 0.
 
         Examples
         --------
         >>> OfflineConfig().frames(30.0)
         {'max_gap': 30, 'link_gap': 60, 'link_window': 9}
         >>> OfflineConfig().frames(2.5)
-        {'max_gap': 2, 'link_gap': 5, 'link_window': 1}
+        {'max_gap': 3, 'link_gap': 5, 'link_window': 1}
         """
-        return {"max_gap": int(round(self.max_gap * frame_rate)),
-                "link_gap": int(round(self.link_gap * frame_rate)),
-                "link_window": max(1, int(round(self.link_window * frame_rate)))}
+        from ._validate import as_finite
+
+        # (-30 gave negative frame counts, NaN and inf numpy's conversion errors)
+        rate = as_finite(frame_rate, "frame_rate", 0.0, above=True)
+
+        def nearest(seconds: float) -> int:
+            # (with a few units of the product's rounding: 0.3 s at 25 frames/s is 7.5)
+            x = seconds * rate
+            return int(math.floor(x + 0.5 + 16 * np.spacing(max(1.0, abs(x)))))
+
+        return {"max_gap": nearest(self.max_gap), "link_gap": nearest(self.link_gap),
+                "link_window": max(1, nearest(self.link_window))}
 
 
 _MOTION = ("std_pos", "std_vel", "std_meas", "init_pos", "init_vel", "frame_rate")
