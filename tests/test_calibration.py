@@ -1084,3 +1084,19 @@ def test_top_min_that_is_no_whole_number_is_named():
         with pytest.raises(error, match="top_min"):
             ScoreCalibration.fit([0.1, 0.9], [0, 1], top_min=bad)
     assert ScoreCalibrator(top_min=2.0).top_min == 2
+
+
+@pytest.mark.parametrize("rate, step, frames", [(12.5, 1, 3), (22.5, 1, 5), (37.5, 1, 8),
+                                                (25.0, 2, 6), (2.5, 1, 1), (30.0, 1, 6),
+                                                (14.0, 1, 3), (7.0, 1, 1)])
+def test_the_chains_gap_is_whole_steps_a_half_up(rate, step, frames):
+    """chain_gap 0.2 s in whole steps: Python's round took a half to the even number (2.5
+    frames at 12.5 frames/s to 2, 4.5 at 22.5 to 4, but 7.5 at 37.5 to 8; 2.5 steps of 2
+    frames at 25 to 2 steps), where coasting and the offline durations round a half up. The
+    oracle: floor(0.2 rate / step + 1/2) steps, at least one."""
+    from fractions import Fraction
+    from math import floor
+
+    want = step * max(1, floor(Fraction("0.2") * Fraction(rate) / step + Fraction(1, 2)))
+    assert want == frames
+    assert ScoreCalibrator(frame_rate=rate, chain_gap=0.2)._gap_frames(step) == frames

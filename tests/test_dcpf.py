@@ -616,6 +616,16 @@ def test_frame_zero_is_a_frame_and_a_confidence_is_a_map():
     with pytest.raises(TypeError, match="^confidence must be a callable image -> "
                                         "ConfidenceMap; it returned ndarray$"):
         trk.step(Frame(1, 0.0, im), _walker(1))
+    # refused by update() too, before anything changes: the frame and the targets stay
+    cmap = ConfidenceMap([60.0], [np.zeros((3, 3))], [(0.0, 0.0)], [100.0])
+    trk = DetectorConfidencePF(rng=0, eta=0.0, frame_rate=7)
+    for t in range(1, 11):
+        trk.update(im, _walker(t), cmap)
+    with pytest.raises(TypeError, match="^confidence must be a ConfidenceMap; got ndarray$"):
+        trk.update(im, _walker(11), np.zeros((60, 80)))
+    with pytest.raises(ValueError, match="needs the detector's confidence"):
+        trk.step(Frame(30, 29 / 7, im), _walker(30))
+    assert trk.frame == 10 and trk.ids.tolist() == [1]
     # the maps' own words: a level named with its shape, no heights, the least image
     with pytest.raises(ValueError, match=re.escape("scores[1] has shape (1, 5)")):
         ConfidenceMap([60.0, 80.0], [np.zeros((3, 3)), np.zeros((1, 5))], [(0, 0)] * 2,

@@ -676,3 +676,16 @@ def test_periodic_euler_names_an_overflowing_step():
     w = 1e154
     np.testing.assert_array_equal(Periodic(omega=w, discretisation="euler").F(0.5),
                                   [[1.0, 0.5], [-w * w * 0.5, 1.0]])
+
+
+def test_a_switching_system_keeps_its_own_transition_and_mode_probabilities():
+    """Views of the caller's transition and mode_probs were kept: changed after the checks
+    (a row of 3 and -2), the switching particle filter used them unchecked. The oracle: the
+    values given at construction."""
+    Pi, mu = np.array([[0.95, 0.05], [0.2, 0.8]]), np.array([0.5, 0.5])
+    slds = SwitchingLinearSystem([ConstantVelocity(dim=1, q=0.01), ConstantVelocity(dim=1)],
+                                 Position(dim=1), Pi, mode_probs=mu)
+    Pi[0] = [3.0, -2.0]
+    mu[:] = [2.0, -1.0]
+    np.testing.assert_array_equal(slds.transition, [[0.95, 0.05], [0.2, 0.8]])
+    np.testing.assert_array_equal(slds.mode_probs, [0.5, 0.5])

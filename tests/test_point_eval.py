@@ -298,6 +298,12 @@ def test_the_similarities_refuse_rows_that_are_not_boxes_and_a_bad_zero_distance
                 fn(a, gt)
         assert fn(gt[0], gt).shape == (1, 3) and fn([], gt).shape == (0, 3)
         assert fn(gt, np.zeros((0, 4))).shape == (3, 0)
+    from vistrack.types import xyxy_to_xywh
+
+    with pytest.raises(ValueError, match=re.escape("boxes must be rows (N, 4) of x0, y0, x1, "
+                                                   "y1; got shape (4, 3)")):
+        xyxy_to_xywh(gt.T)
+    assert xyxy_to_xywh(gt[0]).shape == (1, 4) and xyxy_to_xywh([]).shape == (0, 4)
     for bad in (0, -5, np.nan, np.inf, True):
         with pytest.raises(ValueError, match=re.escape(
                 f"zero_distance must be a finite number > 0 (the distance at which a pair's "

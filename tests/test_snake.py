@@ -325,3 +325,7 @@ def test_a_snake_needs_three_samples_and_names_its_arguments():
     s = Snake(n_control=8, n_samples=16)
     assert s.found.tolist() == [False] * 16
     np.testing.assert_allclose(bspline_matrix(6, 5, derivative=True).sum(1), 0, atol=1e-15)
+    # 1 and 0 as before
+    np.testing.assert_array_equal(bspline_matrix(6, 5, derivative=1),
+                                  bspline_matrix(6, 5, derivative=True))
+    np.testing.assert_array_equal(bspline_matrix(6, 5, derivative=0), bspline_matrix(6, 5))

@@ -142,14 +142,16 @@ class SwitchingLinearSystem:
         if Pi.shape != (k, k) or not np.allclose(Pi.sum(1), 1.0, rtol=0.0, atol=1e-9):
             raise ValueError(f"transition must be a ({k}, {k}) non-negative matrix whose rows sum "
                              f"to 1; got shape {Pi.shape} and row sums {Pi.sum(1).tolist()}")
-        self.transition = Pi
+        # copies (views of the caller's arrays were kept, and a change after the checks was
+        # used unchecked by the switching filters)
+        self.transition = Pi.copy()
         mu = np.full(k, 1.0 / k) if mode_probs is None else as_float_array(
             mode_probs, "mode_probs", ndim=(1,), not_boolean="probabilities")
         check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)
         if mu.shape != (k,) or np.any(mu < 0) or abs(mu.sum() - 1.0) > 1e-9:
             raise ValueError(f"mode_probs must be {k} non-negative numbers summing to 1; "
                              f"got {mu.tolist()}")
-        self.mode_probs = mu
+        self.mode_probs = mu.copy()
 
     def __repr__(self) -> str:
         return f"SwitchingLinearSystem(k={len(self.motions)}, ndim_state={self.ndim_state})"

@@ -849,8 +849,11 @@ class ScoreCalibrator:
         previous frame's detections always continue a chain), so that a detector delivering
         every ``step``-th frame at ``step`` times the rate links as one delivering every frame
         at the rate; with ``step`` 1, ``chain_gap`` rounded to whole frames."""
-        # (held within int64, which the compiled step takes: a gap of 1e300 s is for ever)
-        steps = round(min(self.chain_gap * self.frame_rate / step, 2.0**62 / step))
+        # (held within int64, which the compiled step takes: a gap of 1e300 s is for ever); a
+        # half step rounded up, as coasting and the offline durations round (Python's round
+        # took 2.5 steps to 2 and 7.5 to 8), with a few units of the product's rounding
+        x = min(self.chain_gap * self.frame_rate / step, 2.0**62 / step)
+        steps = math.floor(x + 0.5 + 16 * np.spacing(max(1.0, x)))
         return step * max(1, int(steps))
 
     def reset(self) -> None:

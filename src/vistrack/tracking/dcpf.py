@@ -476,6 +476,16 @@ class DetectorConfidencePF:
         a :class:`~vistrack.frontends.detectors.ConfidenceMap` (None when ``gamma`` is 0);
         as :meth:`step`, the frame the one after the last."""
         cfg = self.config
+        # refused before anything changes (the frame moved, and targets over a gap ended,
+        # before this was refused)
+        if cfg.gamma > 0 and confidence is None:
+            raise ValueError("the detector-confidence term (gamma > 0) needs the detector's "
+                             "confidence: construct with confidence=HOGConfidence() (or "
+                             "your own), pass a ConfidenceMap to update(), or set gamma=0")
+        if confidence is not None and not callable(getattr(confidence, "score", None)):
+            # (an array was taken, and failed a frame later, in numpy's words)
+            raise TypeError(f"confidence must be a ConfidenceMap; got "
+                            f"{type(confidence).__name__}")
         # frames since the last one stepped (a gap of frames moves the targets as far)
         k = 1 if _index is None else max(1, _index - self.frame)
         self.frame = self.frame + 1 if _index is None else _index
@@ -489,10 +499,6 @@ class DetectorConfidencePF:
             gone = self.tracks.stale((self.frame - 1) / self.frame_rate, cfg.max_lost)
             if gone.any():
                 self._select(~gone)
-        if cfg.gamma > 0 and confidence is None:
-            raise ValueError("the detector-confidence term (gamma > 0) needs the detector's "
-                             "confidence: construct with confidence=HOGConfidence() (or "
-                             "your own), pass a ConfidenceMap to update(), or set gamma=0")
         img = np.asarray(image)
         H, W = img.shape[:2]
         feats = None

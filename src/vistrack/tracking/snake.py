@@ -91,7 +91,8 @@ def bspline_matrix(n: int, m: int, derivative: bool = False) -> np.ndarray:
     if not (is_whole(n, 4) and is_whole(m, 1)):
         raise ValueError(f"need n >= 4 control points and m >= 1 samples, whole numbers; "
                          f"got n={n!r}, m={m!r}")
-    derivative = as_flag(derivative, "derivative")  # ("no" gave the derivative's basis)
+    if not (isinstance(derivative, (int, np.integer)) and derivative in (0, 1)):
+        derivative = as_flag(derivative, "derivative")  # ("no" gave the derivative's basis)
     n, m = int(n), int(m)
     s = np.arange(m) * n / m
     i = np.floor(s).astype(int)
