@@ -184,17 +184,13 @@ class OfflineConfig:
         {'max_gap': 3, 'link_gap': 5, 'link_window': 1}
         """
         from ._validate import as_finite
+        from .tracking.lifecycle import nearest_whole
 
         # (-30 gave negative frame counts, NaN and inf numpy's conversion errors)
         rate = as_finite(frame_rate, "frame_rate", 0.0, above=True)
-
-        def nearest(seconds: float) -> int:
-            # (with a few units of the product's rounding: 0.3 s at 25 frames/s is 7.5)
-            x = seconds * rate
-            return int(math.floor(x + 0.5 + 16 * np.spacing(max(1.0, abs(x)))))
-
-        return {"max_gap": nearest(self.max_gap), "link_gap": nearest(self.link_gap),
-                "link_window": max(1, nearest(self.link_window))}
+        return {"max_gap": nearest_whole(self.max_gap * rate),
+                "link_gap": nearest_whole(self.link_gap * rate),
+                "link_window": max(1, nearest_whole(self.link_window * rate))}
 
 
 _MOTION = ("std_pos", "std_vel", "std_meas", "init_pos", "init_vel", "frame_rate")

@@ -72,6 +72,7 @@ from .._validate import as_whole, is_whole
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
 from ..types import Detections
+from .lifecycle import nearest_whole
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -851,10 +852,9 @@ class ScoreCalibrator:
         at the rate; with ``step`` 1, ``chain_gap`` rounded to whole frames."""
         # (held within int64, which the compiled step takes: a gap of 1e300 s is for ever); a
         # half step rounded up, as coasting and the offline durations round (Python's round
-        # took 2.5 steps to 2 and 7.5 to 8), with a few units of the product's rounding
-        x = min(self.chain_gap * self.frame_rate / step, 2.0**62 / step)
-        steps = math.floor(x + 0.5 + 16 * np.spacing(max(1.0, x)))
-        return step * max(1, int(steps))
+        # took 2.5 steps to 2 and 7.5 to 8)
+        steps = nearest_whole(min(self.chain_gap * self.frame_rate / step, 2.0**62 / step))
+        return step * max(1, steps)
 
     def reset(self) -> None:
         """Forget everything seen.

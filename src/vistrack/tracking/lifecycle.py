@@ -33,6 +33,18 @@ def time_slack(time: float) -> float:
     return 16 * float(np.spacing(max(1.0, abs(time))))
 
 
+def nearest_whole(x: float) -> int:
+    """``x`` to the nearest whole number, a half up, with :func:`time_slack`'s margin for the
+    rounding of the product that gave it: a duration in frames or steps (0.3 s at 25
+    frames/s is 7.5 frames, 8; 0.2 s at 12.5 is 2.5, 3), as coasting rounds its
+    ``coast_time`` (Python's ``round`` takes a half to the even number: 2.5 to 2, 7.5 to 8).
+
+    >>> nearest_whole(2.5), nearest_whole(0.3 * 25), nearest_whole(2.4999)
+    (3, 8, 2)
+    """
+    return int(np.floor(x + 0.5 + time_slack(x)))
+
+
 def _check_lost(time: float, max_lost: float) -> None:
     """A ValueError unless ``max_lost`` is a number >= 0 (inf: kept for good) and ``time``
     finite (NaN kept every lost track for good, without a word)."""
