@@ -245,6 +245,26 @@ def bgr_to_grey(im: np.ndarray) -> np.ndarray:
     return g
 
 
+def as_rows4(value: ArrayLike, name: str, columns: str) -> np.ndarray:
+    """``value`` as float rows ``(N, 4)`` (one row ``(4,)``, or nothing, taken as such), or a
+    ValueError naming ``name`` and what its ``columns`` are: ``reshape(-1, 4)`` read a
+    transposed ``(4, N)`` array, or 8 values a row, as other boxes, without a word.
+
+    >>> as_rows4([1, 2, 3, 4], "a", "x0, y0, x1, y1").shape
+    (1, 4)
+    >>> as_rows4([[1, 2, 3]], "a", "x0, y0, x1, y1")
+    Traceback (most recent call last):
+    ...
+    ValueError: a must be rows (N, 4) of x0, y0, x1, y1; got shape (1, 3)
+    """
+    arr = np.asarray(value, dtype=float)
+    if arr.size == 0:
+        return arr.reshape(0, 4)
+    if arr.shape[-1:] != (4,) or arr.ndim > 2:
+        raise ValueError(f"{name} must be rows (N, 4) of {columns}; got shape {arr.shape}")
+    return arr.reshape(-1, 4)
+
+
 def as_box(box: ArrayLike, name: str = "box") -> np.ndarray:
     """One box ``x, y, w, h`` as 4 finite floats with ``w, h > 0``, given as 4 numbers or one
     row of them (``(1, 4)``). A boolean was a coordinate of 1, a complex number its real

@@ -7,6 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ._validate import as_rows4
+
 if TYPE_CHECKING:
     from collections.abc import Sequence
     from typing import TypeAlias
@@ -142,11 +144,7 @@ def xyxy_to_xywh(boxes: np.ndarray) -> np.ndarray:
     >>> xyxy_to_xywh([[10, 20, 40, 60]]).tolist()
     [[10.0, 20.0, 30.0, 40.0]]
     """
-    b = np.asarray(boxes, dtype=np.float64)
-    if b.size and (b.shape[-1:] != (4,) or b.ndim > 2):
-        # (reshape(-1, 4) read a transposed (4, N) array, or 8 values a row, as other boxes)
-        raise ValueError(f"boxes must be rows (N, 4) of x0, y0, x1, y1; got shape {b.shape}")
-    b = b.reshape(-1, 4)
+    b = as_rows4(boxes, "boxes", "x0, y0, x1, y1")  # (reshape(-1, 4) read any array)
     return np.c_[b[:, :2], b[:, 2:] - b[:, :2]]
 
 

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_whole, decode_text
+from .._validate import as_rows4, as_whole, decode_text
 from ..io.motchallenge import MOTTable, _row_cells, _text_lines
 
 _LSA: list[Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]] = []
@@ -155,16 +155,9 @@ _BIG = 2.0 ** 500  # below it, no sum or product of the IoU overflows
 
 
 def _rows4(x: ArrayLike, name: str) -> np.ndarray:
-    """``x`` as float rows ``(N, 4)`` (one row ``(4,)``, or nothing, taken as such), or a
-    ValueError naming it: ``reshape(-1, 4)`` read a transposed ``(4, N)`` array, or a VOT
-    polygon's 8 values a row, as other boxes, without a word."""
-    arr = np.asarray(x, dtype=float)
-    if arr.size == 0:
-        return arr.reshape(0, 4)
-    if arr.shape[-1:] != (4,) or arr.ndim > 2:
-        raise ValueError(f"{name} must be rows (N, 4) of left, top, width, height; got shape "
-                         f"{arr.shape}")
-    return arr.reshape(-1, 4)
+    """``x`` as rows ``left, top, width, height`` (:func:`~vistrack._validate.as_rows4`: a
+    VOT polygon's 8 values a row, or a transposed array, were read as other boxes)."""
+    return as_rows4(x, name, "left, top, width, height")
 
 
 def point_similarity(a: ArrayLike, b: ArrayLike, zero_distance: float) -> np.ndarray:
