@@ -282,9 +282,10 @@ def test_a_box_run_scored_by_distance_says_so_to_its_report(tmp_path):
 def test_the_similarities_refuse_rows_that_are_not_boxes_and_a_bad_zero_distance():
     """``reshape(-1, 4)`` read a transposed (4, N) array, or a VOT polygon's 8 values a row,
     as other boxes, without a word (the IoU of three boxes with themselves, transposed, was
-    not the identity); ``point_similarity`` took a zero distance of 0 (all 0, numpy's divide
-    warning), -5 (similarities of 1.2) or NaN. The oracle for the good cases: the IoU of
-    boxes with themselves is the identity, one row (4,) is one box, nothing is nothing."""
+    not the identity), and an empty (3, 0) or (0, 5) as no boxes; ``point_similarity`` took
+    a zero distance of 0 (all 0, numpy's divide warning), -5 (similarities of 1.2) or NaN.
+    The oracle for the good cases: the IoU of boxes with themselves is the identity, one
+    row (4,) is one box, nothing is nothing."""
     from vistrack.evaluation import box_iou_xywh
 
     gt = np.array([[0.0, 0, 10, 10], [20, 20, 10, 10], [50, 0, 10, 10]])
@@ -292,7 +293,8 @@ def test_the_similarities_refuse_rows_that_are_not_boxes_and_a_bad_zero_distance
     for fn in (box_iou_xywh, lambda a, b: point_similarity(a, b, 10.0)):
         for a, shape in ((gt.T, "(4, 3)"), ([[0, 0, 1]], "(1, 3)"),
                          ([[0, 0, 4, 0, 4, 2, 0, 2]], "(1, 8)"), (np.zeros((1, 2, 4)),
-                                                                 "(1, 2, 4)")):
+                                                                 "(1, 2, 4)"),
+                         (np.zeros((3, 0)), "(3, 0)"), (np.zeros((0, 5)), "(0, 5)")):
             with pytest.raises(ValueError, match=re.escape(
                     f"a must be rows (N, 4) of left, top, width, height; got shape {shape}")):
                 fn(a, gt)

@@ -246,9 +246,10 @@ def bgr_to_grey(im: np.ndarray) -> np.ndarray:
 
 
 def as_rows4(value: ArrayLike, name: str, columns: str) -> np.ndarray:
-    """``value`` as float rows ``(N, 4)`` (one row ``(4,)``, or nothing, taken as such), or a
-    ValueError naming ``name`` and what its ``columns`` are: ``reshape(-1, 4)`` read a
-    transposed ``(4, N)`` array, or 8 values a row, as other boxes, without a word.
+    """``value`` as float rows ``(N, 4)`` (one row ``(4,)``, or nothing, ``(0,)``, taken as
+    such), or a ValueError naming ``name`` and what its ``columns`` are: ``reshape(-1, 4)``
+    read a transposed ``(4, N)`` array, or 8 values a row, as other boxes, without a word,
+    and an empty ``(3, 0)`` as no rows.
 
     >>> as_rows4([1, 2, 3, 4], "a", "x0, y0, x1, y1").shape
     (1, 4)
@@ -256,9 +257,11 @@ def as_rows4(value: ArrayLike, name: str, columns: str) -> np.ndarray:
     Traceback (most recent call last):
     ...
     ValueError: a must be rows (N, 4) of x0, y0, x1, y1; got shape (1, 3)
+    >>> as_rows4([], "a", "x0, y0, x1, y1").shape
+    (0, 4)
     """
     arr = np.asarray(value, dtype=float)
-    if arr.size == 0:
+    if arr.shape in ((0,), (0, 4)):
         return arr.reshape(0, 4)
     if arr.shape[-1:] != (4,) or arr.ndim > 2:
         raise ValueError(f"{name} must be rows (N, 4) of {columns}; got shape {arr.shape}")
