@@ -172,6 +172,14 @@ def test_a_value_not_measured_is_left_as_the_full_filter_leaves_it():
      r"dt must be one finite number of time units for every state; got array"),
     (lambda m, c: axes_predict(m, c, float("nan"), np.zeros((3, 2))),
      r"dt must be one finite number .*; got nan"),
+    # a 0-d array of True was a step of 1, of "2.0" one of 2 (True itself is refused), of a
+    # complex number float()'s bare TypeError
+    (lambda m, c: axes_predict(m, c, np.array(True), np.zeros((3, 2))),
+     r"dt must be one finite number .*; got array\(True\)"),
+    (lambda m, c: axes_predict(m, c, np.array("2.0"), np.zeros((3, 2))),
+     r"dt must be one finite number .*; got array\('2.0'"),
+    (lambda m, c: axes_predict(m, c, np.array(2 + 1j), np.zeros((3, 2))),
+     r"dt must be one finite number .*; got array\(2.\+1.j\)"),
     (lambda m, c: axes_predict(m, c, 1.0, -np.ones((3, 2))),
      r"q holds variances, finite and >= 0; q\[0, 0\] = -1.0"),
     (lambda m, c: axes_update(m, c, np.zeros((3, 1)), [[1.0], [-1.0], [1.0]]),

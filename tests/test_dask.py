@@ -425,3 +425,44 @@ def test_empty_and_unknown_chunks_and_errors_by_place_in_the_batch():
                 else kalman_filter(ys, **model)
     with pytest.raises(ValueError, match=re.escape("(B=4, 2)")):
         kalman_filter(da.from_array(y, chunks=(2, 6, 1)), **(model | {"x0": np.zeros((4, 3))}))
+
+
+def test_a_masked_dask_array_is_missing_where_masked_and_priors_are_named_by_batch_place():
+    """A masked Dask array's blocks were read with ``np.asarray``, which keeps the values
+    under the mask: a placeholder of -999 was filtered as a measurement (mean -745 where the
+    in-memory filter gives 2.6) and pooled EM learned R = 41,590 for 0.2. A bad per-series
+    P0 was named by its place in its chunk (matrix [1] for [5]), and only once computed.
+    Oracle: the in-memory filter and EM on the same masked array, and their messages."""
+    import re
+
+    from vistrack.filters import em
+
+    rng = np.random.default_rng(0)
+    F1 = np.array([[1.0, 1.0], [0.0, 1.0]])
+    model = dict(F=F1, Q=np.diag([0.01, 0.1]), H=np.eye(1, 2), R=[[0.5]], x0=np.zeros(2),
+                 P0=np.eye(2))
+    y = rng.normal(size=(4, 6, 1)).cumsum(1)
+    mask = np.zeros_like(y, bool)
+    mask[1, 2, 0] = mask[3, 0, 0] = True
+    ym = np.ma.masked_array(np.where(mask, -999.0, y), mask=mask)
+    lazy = da.from_array(ym, chunks=(2, 6, 1), asarray=False)
+    want = kalman_filter(ym, **model)
+    np.testing.assert_allclose(kalman_filter(lazy, **model).means.compute(), want.means,
+                               rtol=0, atol=1e-12)
+    fit = dict(learn=("R",), max_iter=3, tol=-np.inf)
+    np.testing.assert_allclose(em(lazy, **model, **fit).R, em(ym, **model, **fit).R,
+                               rtol=1e-10)
+    np.testing.assert_allclose(em(lazy, **model, **fit, pooled=False).R.compute(),
+                               em(ym, **model, **fit, pooled=False).R, rtol=1e-10)
+    ys = rng.normal(size=(6, 20, 1)).cumsum(1)
+    P0 = np.stack([np.eye(2)] * 5 + [np.diag([1.0, -1.0])])
+    bad = model | {"P0": P0}
+    said = "P0 must be positive semi-definite (matrix [5]); P0[1, 1] = -1, a negative variance"
+    with pytest.raises(ValueError, match=re.escape(said)):
+        em(ys, **bad, max_iter=2)  # the oracle's words
+    chunked = da.from_array(ys, chunks=(4, 20, 1))
+    for call in (lambda: em(chunked, **bad, max_iter=2),
+                 lambda: em(chunked, **bad, max_iter=2, pooled=False),  # (lazy: at once)
+                 lambda: kalman_filter(chunked, **bad)):
+        with pytest.raises(ValueError, match=re.escape(said)):
+            call()

@@ -1314,3 +1314,59 @@ def test_ukf_names_an_asymmetric_covariance():
     got = ukf_predict(g, cv)
     np.testing.assert_allclose(got.mean, want.mean, rtol=1e-9)  # (W0 about -1e6: digits lost)
     np.testing.assert_allclose(got.cov, want.cov, rtol=1e-9)
+
+
+def test_the_ensemble_filter_checks_before_it_draws_and_names_model_values_of_wrong_size():
+    """`EnsembleKalmanFilter.filter` drew its first ensemble before `dt`, `times` and `ys`
+    were checked, so a refused call used up the generator and the next one differed from a
+    fresh filter's; an `h` of one value too few was broadcast over the measurement (a
+    posterior, without a word), an `f` of one too few kept members of the wrong size (the
+    unscented filter read zeros past them: [0, 0]); `Ensemble.sample` and
+    `EnsembleKalmanFilter.update` met numpy's broadcast and matmul errors. Oracles: a fresh
+    filter of the same seed, and the EKF's words for `h` (`ekf_update`)."""
+    from vistrack.filters import (
+        EnsembleKalmanFilter,
+        ekf_predict,
+        ekf_update,
+        enkf_predict,
+        enkf_update,
+        ukf_predict,
+    )
+    from vistrack.filters.enkf import Ensemble
+    from vistrack.models import NonlinearMeasurement, NonlinearMotion
+
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.3), vt.Position(dim=1, r=0.7)
+    ys, prior = np.arange(5.0)[:, None], dict(x0=[0.0, 0.0], P0=np.eye(2))
+    fresh = EnsembleKalmanFilter(cv, pos, n_members=30, rng=5).filter(ys, **prior).means
+    for bad in (dict(dt=-1.0), dict(dt=np.ones(3)), dict(times=[0.0, 1.0]),
+                dict(ys=np.zeros((5, 2)))):
+        f = EnsembleKalmanFilter(cv, pos, n_members=30, rng=5)
+        with pytest.raises(ValueError):
+            f.filter(bad.pop("ys", ys), **bad, **prior)
+        assert np.array_equal(f.filter(ys, **prior).means, fresh)
+    g = vt.Gaussian([0.0, 1.0], np.eye(2))
+    h = NonlinearMeasurement(lambda x: x[..., :1], np.eye(2), ndim_state=2)
+    with pytest.raises(ValueError, match=re.escape(
+            "the measurement model's h(x) gives values of shape (1,) for states of shape (2,)"
+            "; its R is 2 x 2, so (2,) was expected")):
+        ekf_update(g, [1.0, 2.0], h)
+    with pytest.raises(ValueError, match=re.escape(
+            "the measurement model's h(x) gives values of shape (100, 1) for states of shape "
+            "(100, 2); its R is 2 x 2, so (100, 2) was expected")):
+        enkf_update(Ensemble.sample([0.0, 1.0], np.eye(2), 100, rng=0), [1.0, 2.0], h, rng=1)
+    for Q in (np.zeros((2, 2)), 0.1 * np.eye(2)):
+        mo = NonlinearMotion(lambda x, dt, t: x[..., :1], Q, ndim_state=2)
+        ens = Ensemble.sample([0.0, 1.0], np.eye(2), 10, rng=0)
+        for predict, state, shape in ((ekf_predict, g, "(2,)"), (ukf_predict, g, "(5, 2)"),
+                                      (enkf_predict, ens, "(10, 2)")):
+            with pytest.raises(ValueError, match=re.escape(
+                    f"for states of shape {shape}; its ndim_state is 2, so {shape} was "
+                    "expected")):
+                predict(state, mo)
+    with pytest.raises(ValueError, match=re.escape(
+            "mean and cov must have batch shapes that broadcast; got mean (3, 2) and cov "
+            "(4, 2, 2)")):
+        Ensemble.sample(np.zeros((3, 2)), np.broadcast_to(np.eye(2), (4, 2, 2)), 10, rng=0)
+    with pytest.raises(ValueError, match=re.escape(
+            "ens must have members of 2 values, the motion model's; got 3")):
+        EnsembleKalmanFilter(cv, pos).update(Ensemble(np.zeros((5, 3))), [0.0])

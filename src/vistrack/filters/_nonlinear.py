@@ -100,13 +100,16 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
                  dt: ArrayLike, times: ArrayLike | None,
                  predict: Callable[[State, float, float], State],
                  update: Callable[[State, np.ndarray], tuple[State, np.ndarray]],
-                 state: State | None = None) -> FilterResult:
+                 state: State | None = None,
+                 start: Callable[[], State] | None = None) -> FilterResult:
     """Filter ``ys (T, m)`` or ``(B, T, m)`` with ``predict(state, dt, t)`` and
     ``update(state, y) -> (state, loglik)``, where ``state`` starts as ``Gaussian(x0, P0)`` (or
     the given ``state``) and ``moments(state) -> (mean, cov)`` is ``state.mean, state.cov``.
 
     ``dt`` is a scalar or ``(T,)`` (``dt[t]`` is the step from ``t-1`` to ``t``); ``times``
-    defaults to the cumulative sum of ``dt`` with ``times[0] = 0``."""
+    defaults to the cumulative sum of ``dt`` with ``times[0] = 0``. Given ``start`` instead
+    of ``state``, the first state is ``start()``, made once ``ys``, ``dt`` and ``times`` are
+    checked (an ensemble drawn first used up its generator's draws on a call refused)."""
     Y = as_float_array(ys, "ys", ndim=(2, 3))
     check_has_steps(Y)
     if Y.shape[-1] != m:
@@ -118,6 +121,8 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
         Y = Y[None]
     B, T, _ = Y.shape
     dts, times = step_times(dt, times, T)
+    if start is not None:
+        state = start()
     if state is None:
         mean0, cov0 = check_prior(x0, P0, n, series=B)
         if B == 1 and mean0.ndim == 1 and cov0.ndim == 2:

@@ -85,7 +85,9 @@ def _time_step(dt: object) -> float:
     broadcast along the axes instead, silently)."""
     import numbers
 
-    if isinstance(dt, np.ndarray) and dt.ndim == 0 or \
+    # (a 0-d array of True was a step of 1, of "2.0" one of 2, of a complex number
+    # float()'s bare TypeError)
+    if isinstance(dt, np.ndarray) and dt.ndim == 0 and dt.dtype.kind in "iuf" or \
             isinstance(dt, numbers.Real) and not isinstance(dt, bool):
         value = float(dt)  # a real number, or a 0-d array
         if np.isfinite(value):

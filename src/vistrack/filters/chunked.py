@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._validate import as_float_array
 from ..types import Gaussian
 from .kalman import _is_dask
 
@@ -58,6 +59,13 @@ def _whole_after_batch(a: Any, batch: tuple[int, ...] | None = None) -> Any:
     return a if a.chunks == want else a.rechunk(want)
 
 
+def _block(y: Any) -> np.ndarray:
+    """One chunk of ``ys`` as floats, a masked entry (a masked Dask array's blocks) as NaN,
+    missing, as the filters in memory read it: ``np.asarray`` kept the values under the mask
+    and filtered them as measurements."""
+    return as_float_array(y, "ys")
+
+
 def _one_for_all(p: Any, ndim_shared: int) -> Any:
     """A prior with a batch axis of one, ``(1, n)`` or ``(1, n, n)``, as the one for every
     series (as the in-memory filter takes it); any other as given."""
@@ -78,7 +86,7 @@ def _chunk_filter(y: np.ndarray, x0: Any, P0: Any, model: dict, store_covs: bool
                   first: int = 0) -> tuple:
     from .kalman import kalman_filter as in_memory
 
-    y = np.asarray(y)
+    y = _block(y)
     inf = np.isinf(y)
     if inf.any():  # named by its place in the batch (the chunk's own was named: ys[1, ...])
         b, t, k = (int(v) for v in np.argwhere(inf)[0])
@@ -172,6 +180,12 @@ def kalman_filter(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any,
         want = model["F"].shape[-1]
         raise ValueError(f"x0 must have shape ({want},) or (B={B}, {want}), F's state size; "
                          f"got {np.shape(x0)}")
+    if not (_is_dask(x0) or _is_dask(P0)):
+        # the in-memory filter's checks, at once and with the batch's indices (a chunk named
+        # its own, within the chunk, when it ran)
+        from .kalman import _prior
+
+        _prior(x0, P0, B, model["F"].shape[-1] if model["F"].ndim >= 2 else None)
     # each series' place in the batch, chunked as ys: a block's first is its chunk's offset
     places = da.from_array(np.arange(B, dtype=np.int64), chunks=(ys.chunks[0],))
     args: list[Any] = [ys, "btm", places, "b"]
@@ -237,7 +251,7 @@ def _chunk_summary(y: Any, first: int) -> dict:
     measured something at each step."""
     from .learn import _Observed
 
-    y = np.asarray(y)
+    y = _block(y)
     o = _Observed(y)
     bad = np.argwhere(np.isinf(y))
     inf = None if not len(bad) else ((int(bad[0][0]) + first,) + tuple(int(i) for i in bad[0][1:]),
@@ -258,7 +272,7 @@ def _chunk_sums(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...],
     cancel (see :mod:`vistrack.filters.learn`)."""
     from .learn import _EStep, _Observed, _shared_x0_sums, _transitions
 
-    y = np.asarray(y)
+    y = _block(y)
     p = dict(p, x0=np.asarray(x0), P0=np.asarray(P0))
     e = _EStep(_Observed(y), p)
     if H is not None:
@@ -375,7 +389,7 @@ def _chunk_em(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...], Q_form:
     from .learn import _fit_each
 
     p = dict(p, x0=np.asarray(x0), P0=np.asarray(P0))
-    f = _fit_each(np.asarray(y), p, learn, Q_form, R_form, tol, max_iter, None, first)
+    f = _fit_each(_block(y), p, learn, Q_form, R_form, tol, max_iter, None, first)
     ll = np.full((f.loglik.shape[0], max_iter + 1), np.nan)
     ll[:, :f.loglik.shape[1]] = f.loglik
     return (f.F, f.Q, f.H, f.R, f.x0, f.P0, np.asarray(f.q, dtype=np.float64),
@@ -413,7 +427,7 @@ def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tupl
     """
     import dask
 
-    from .._validate import check_linear_gaussian
+    from .._validate import check_linear_gaussian, check_prior
     from .learn import _check_em, _check_steps, _fit, _state_size
 
     ys, spans = _batch_blocks(ys)
@@ -432,6 +446,10 @@ def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tupl
     if np.shape(x0)[-1] != n or np.shape(P0)[-2:] != (n, n):
         raise ValueError(f"x0 must have shape ({n},) or (B, {n}) and P0 ({n}, {n}) or "
                          f"(B, {n}, {n}); got {np.shape(x0)} and {np.shape(P0)}")
+    if not (_is_dask(x0) or _is_dask(P0)):
+        # em's checks in memory, at once and with the batch's indices: a chunk's E-step
+        # named a series by its place in the chunk, and only once computed
+        check_prior(x0, P0, n, series=B)
     p = {k: np.asarray(v, dtype=np.float64) for k, v in (("F", F), ("Q", Q), ("H", H),
                                                            ("R", R))}
     blocks = ys.to_delayed().ravel()

@@ -47,6 +47,7 @@ from ..models.protocols import (
     NonlinearMotionModel,
 )
 from ._nonlinear import (
+    check_h_size,
     check_model_values,
     check_y,
     run_sequence,
@@ -130,6 +131,11 @@ class Ensemble:
         if mean.ndim < 1 or cov.ndim < 2 or cov.shape[-2:] != (n, n):
             raise ValueError(f"cov must have shape (n, n) or (..., n, n) with n = {n}, the size "
                              f"of mean {mean.shape}; got {cov.shape}")
+        try:  # (numpy's broadcast error at the draw named neither)
+            np.broadcast_shapes(mean.shape[:-1], cov.shape[:-2])
+        except ValueError:
+            raise ValueError(f"mean and cov must have batch shapes that broadcast; got mean "
+                             f"{mean.shape} and cov {cov.shape}") from None
         # (Cholesky reads the lower triangle alone: another matrix's draws)
         check_psd(cov, "cov")
         n_members = as_whole(n_members, "n_members", 2)
@@ -306,7 +312,9 @@ def _enkf_update(ens: Ensemble, y: ArrayLike,
     obs = ~np.isnan(y)
     # (..., N, m); a missing component's value is not used: 0, not NaN, where h has none
     # there (NaN times the mask's 0 below is NaN, and made every member NaN)
-    Z = np.where(obs[..., None, :], np.asarray(me.h(X), dtype=float), 0.0)
+    # (an h of one value too few was broadcast over the measurement, without a word)
+    Z = np.where(obs[..., None, :], check_h_size(np.asarray(me.h(X), dtype=float), me.m, X),
+                 0.0)
     check_model_values(Z, X, "member")  # (every member came out NaN, without a word)
     # the members' mean measurement: circular for angles (bearings either side of π average
     # to π, not 0), as the model's mean gives it
@@ -431,10 +439,9 @@ class EnsembleKalmanFilter:
         x0, P0 = check_prior(x0, P0, n, series=B)
         x0 = np.broadcast_to(x0, (B, n))
         P0 = np.broadcast_to(P0, (B, n, n))
-        ens = Ensemble.sample(x0, P0, self.n_members, self.rng)
         return run_sequence(
-            ys_arr, None, None, n, self.measurement.m, dt, times,
-            self.predict, self.update, state=ens,
+            ys_arr, None, None, n, self.measurement.m, dt, times, self.predict, self.update,
+            start=lambda: Ensemble.sample(x0, P0, self.n_members, self.rng),
         )
 
     def predict(self, ens: Ensemble, dt: float = 1.0, t: float = 0.0) -> Ensemble:
@@ -490,4 +497,8 @@ class EnsembleKalmanFilter:
         >>> post.moments()[0].round(1), ll.shape
         (array([0.5, 1. ]), ())
         """
+        n = self.motion.n
+        if ens.members.shape[-1] != n:  # (numpy's matmul error, naming neither; as predict)
+            raise ValueError(f"ens must have members of {n} values, the motion model's; got "
+                             f"{ens.members.shape[-1]}")
         return _enkf_update(ens, y, self.measurement, self.rng, None)

@@ -176,7 +176,14 @@ class MotionFunctions:
             # a dt per state gives F (K, n, n): .T reversed all three axes (wrong states,
             # of the wrong shape, without a word)
             return x @ F.T if F.ndim == 2 else (F @ x[..., None])[..., 0]
-        return cast(NonlinearMotionModel, self.model).f(x, dt, t)
+        out = cast(NonlinearMotionModel, self.model).f(x, dt, t)
+        if np.shape(out) != np.shape(x):
+            # (the ensemble filter kept members of the wrong size and the unscented filter
+            # read zeros past them, without a word; the EKF named its Gaussian's shapes)
+            raise ValueError(f"the motion model's f(x, dt, t) gives values of shape "
+                             f"{np.shape(out)} for states of shape {np.shape(x)}; its "
+                             f"ndim_state is {self.n}, so {np.shape(x)} was expected")
+        return out
 
     def jacobian(self, x: np.ndarray, dt: float, t: float) -> np.ndarray:
         """``∂f/∂x (..., n, n)`` at states ``x (..., n)``."""
