@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from vistrack import Gaussian
-from vistrack.association import jpda_weights, likelihoods, pda_weights
+from vistrack.association import jipda_weights, jpda_weights, likelihoods, pda_weights
 from vistrack.filters import kf_update, pda_update
 
 
@@ -874,3 +874,29 @@ def test_probabilities_that_are_not_numbers_are_named():
     b, b0 = pda_weights(L, G, p_detect=Fraction(9, 10), clutter_density=np.float32(0.5))
     b_, b0_ = pda_weights(L, G, p_detect=0.9, clutter_density=0.5)
     np.testing.assert_allclose(b, b_, rtol=1e-7)
+
+
+@pytest.mark.parametrize("lik, pd, lam, pg", [
+    ([1.0, 3.0], 0.9, 1e-322, 0.99),
+    ([1.0, 3.0], 1.0, 1e-305, 1 - 2**-52),
+    ([1.0, 1.0], 1.0, 1e-310, 1 - 2**-52),
+    ([0.02, 0.05], 1.0, 1e-320, 0.5),
+])
+def test_two_tracks_whose_miss_is_below_the_smallest_normal_float_are_exact(lik, pd, lam, pg):
+    """Two tracks sharing a detection, whose miss weight against the track's largest weight
+    is below the smallest normal float (2.2e-308): the closed form of two tracks kept a few
+    of its digits, or none, and gave 0.333 / 0.667 for 0.25 / 0.75, or refused the weights
+    as spanning more than a float holds (JPDA and JIPDA). Oracle: every joint event written
+    out in logarithms."""
+    lik = np.array(lik)[:, None]
+    gate = np.ones((2, 1), bool)
+    beta, beta0 = jpda_weights(lik, gate, p_detect=pd, clutter_density=lam, p_gate=pg)
+    want, want0, _ = _log_brute_jipda(np.log(lik), gate, np.ones(2), pd, math.log(lam), pg)
+    np.testing.assert_allclose(beta, want, rtol=1e-9)
+    np.testing.assert_allclose(beta0, want0, rtol=1e-6, atol=1e-300)
+    eps = np.array([0.6, 0.9])
+    beta, beta0, ex = jipda_weights(lik, gate, eps, p_detect=pd, clutter_density=lam,
+                                    p_gate=pg)
+    want, want0, want_ex = _log_brute_jipda(np.log(lik), gate, eps, pd, math.log(lam), pg)
+    np.testing.assert_allclose(beta, want, rtol=1e-9)
+    np.testing.assert_allclose(ex, want_ex, rtol=1e-9)

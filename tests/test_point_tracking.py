@@ -537,3 +537,70 @@ def test_report_measurement_gives_each_track_the_point_it_was_updated_with():
         PointTracker("jpda", report="measurement")
     with pytest.raises(ValueError, match="report must be 'estimate' or 'measurement'"):
         PointTracker("gnn", report="located")
+
+
+def test_a_point_tracker_step_that_fails_changes_nothing():
+    """Points of 3 coordinates were taken with no track (the frame counted) and, with
+    tracks, named as ``z`` after the frame was counted and a stale track deleted; a track
+    lost long enough with an accepted ``init_speed`` (1e153 with ``max_lost`` 100 s at 1
+    frame/s) overflowed its variance at frame 15, after the frame was counted, and every
+    later frame failed until it was deleted. The oracle: the tracker's state before the
+    step, and a twin that never saw the refused step."""
+    from vistrack.models import ConstantVelocity
+
+    def state(tr):
+        t = tr.tracks
+        return (tr.frame, t.ids.tolist(), t.mean.tolist(), t.cov.tolist(), t.state.tolist(),
+                t.last_time.tolist(), t.scores.tolist(), tr.existence.tolist())
+
+    tr = PointTracker("gnn", frame_rate=1.0)
+    with pytest.raises(ValueError, match=re.escape(
+            "points must have 2 coordinates; got shape (0, 3)")):
+        tr.step(1, Detections(points=np.zeros((0, 3))))
+    assert tr.frame is None
+    for assoc in ("gnn", "jpda", "jipda"):
+        tr = PointTracker(assoc, frame_rate=1.0, max_lost=2.0)
+        tr.step(1, Detections(points=[[0.0, 0.0], [50.0, 50.0]]))
+        tr.step(2, Detections(points=[[0.0, 0.0]]))
+        before = state(tr)
+        with pytest.raises(ValueError, match=re.escape("got shape (0, 3)")):
+            tr.step(5, Detections(points=np.zeros((0, 3))))
+        assert state(tr) == before
+        tr.step(5, Detections(points=np.zeros((0, 2))))  # the frame can be given again
+
+    class Breaks(ConstantVelocity):
+        """Process noise that is not finite over exactly 2 s, or over 10 s or more (a
+        model's failure)."""
+
+        def Q(self, dt):
+            Q = super().Q(dt)
+            return np.full_like(Q, np.inf) if dt == 2 or dt >= 10 else Q
+
+    with pytest.raises(ValueError, match=re.escape(
+            "max_lost 9.5 makes the process noise of a lost track not finite before it is "
+            "deleted")):
+        PointTracker("gnn", motion=Breaks(dim=2), frame_rate=1.0, max_lost=9.5)
+    tr = PointTracker("gnn", motion=Breaks(dim=2), frame_rate=1.0, max_lost=5)
+    twin = PointTracker("gnn", motion=Breaks(dim=2), frame_rate=1.0, max_lost=5)
+    for f in (1, 2, 3):
+        for x in (tr, twin):
+            x.step(f, Detections(points=[[0.0, 0.0], [40.0, 0.0]][:1 if f == 3 else 2]))
+    before = state(tr)
+    with pytest.raises(ValueError, match="Q"):  # (the tracks predicted over 2 s)
+        tr.step(5, Detections(points=[[0.0, 0.0]]))
+    assert state(tr) == before
+    for f in (4, 5):
+        a = tr.step(f, Detections(points=[[0.0, 0.0]]))
+        b = twin.step(f, Detections(points=[[0.0, 0.0]]))
+        assert a.ids.tolist() == b.ids.tolist() and np.array_equal(a.points, b.points)
+    assert state(tr) == state(twin)
+    with pytest.raises(ValueError, match=re.escape(
+            "init_speed times (max_lost + one frame) must be below 1e154, so that a lost "
+            "track's variance stays finite until it is deleted; got 1e+153 over 101 s")):
+        PointTracker("gnn", frame_rate=1.0, init_speed=1e153, max_lost=100.0)
+    tr = PointTracker("gnn", frame_rate=1.0, init_speed=1e152, max_lost=8.0)
+    tr.step(1, Detections(points=[[0.0, 0.0]]))
+    for f in range(2, 12):  # lost, predicted until deleted: every variance finite
+        tr.step(f, None)
+        assert np.isfinite(tr.tracks.cov).all()
+    assert len(tr.tracks) == 0

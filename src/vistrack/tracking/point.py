@@ -223,6 +223,20 @@ class PointTracker:
             raise ValueError(f"frame_rate {frame_rate!r} makes a frame's process noise not "
                              f"finite ({self.motion!r} over {1.0 / self.frame_rate:g} s)")
         self._logdet_ref = float(np.linalg.slogdet(S_ref)[1])
+        span = self.max_lost + 1.0 / self.frame_rate
+        if self.init_speed * span >= 1e154:
+            # a track never found again is predicted for up to max_lost and a frame: its
+            # position's variance, about (init_speed t)², overflowed there, after the frame
+            # was counted, and every later frame failed on S until the track was deleted
+            raise ValueError(f"init_speed times (max_lost + one frame) must be below 1e154, "
+                             f"so that a lost track's variance stays finite until it is "
+                             f"deleted; got {init_speed!r} over {span:g} s")
+        with np.errstate(over="ignore", invalid="ignore"):
+            Q_span = np.asarray(self.motion.Q(span), float)
+        if not np.isfinite(Q_span).all():  # (as init_speed: S not finite, frame after frame)
+            raise ValueError(f"max_lost {max_lost!r} makes the process noise of a lost track "
+                             f"not finite before it is deleted ({self.motion!r} over "
+                             f"{span:g} s)")
         # a new track starts where its first measurement puts it: pinv(H) z (the measured
         # components, for the usual H = [I 0]); what H does not see, with init_speed
         self._Hp = np.linalg.pinv(self.H)
@@ -318,10 +332,28 @@ class PointTracker:
         if not isinstance(detections, Detections) or detections.points is None:
             raise TypeError("detections must be vistrack.Detections with points")
         Z = detections.points
+        if Z.ndim != 2 or Z.shape[1] != self.m:
+            # (none of 3 coordinates was taken with no track, and named as z after the frame
+            # was counted with some)
+            raise ValueError(f"points must have {self.m} coordinates; got shape {Z.shape}")
+        # all or nothing: a step that fails (a model giving a covariance that is not finite)
+        # leaves the tracker as it was, the frame not counted and no track deleted
+        t = self.tracks
+        saved = (self.frame, self.existence,
+                 {k: v.copy() if isinstance(v, np.ndarray) else v
+                  for k, v in t.__dict__.items()})
+        try:
+            return self._step(frame, Z, detections)
+        except BaseException:
+            self.frame, self.existence = saved[0], saved[1]
+            t.__dict__.clear()
+            t.__dict__.update(saved[2])
+            raise
+
+    def _step(self, frame: Frame | int | None, Z: np.ndarray,
+              detections: Detections) -> Tracks:
         scores, classes = detections.scores, detections.classes
         assert scores is not None and classes is not None  # set by Detections.__post_init__
-        if len(Z) and Z.shape[1] != self.m:
-            raise ValueError(f"points must have {self.m} coordinates; got {Z.shape[1]}")
         frame = frame_index(frame, self.frame)
         first = self.frame is None
         gap = 0 if self.frame is None else frame - self.frame
