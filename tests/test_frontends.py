@@ -2454,3 +2454,42 @@ def test_a_folder_of_float_tiffs_is_read_from_0_to_1(tmp_path):
     with pytest.raises(VideoError, match=r"floating-point samples from [0-9.e+-]+ to "
                                          r"[0-9.e+-]+, which are read from 0 to 1 only"):
         VideoReader(bad)
+
+
+def test_blob_detector_that_refuses_a_start_or_a_frame_changes_nothing():
+    """`initialize([])`, or frames of two sizes, reset the view's checks and then failed in
+    the model, which kept its state; a frame of the wrong size was counted before the model
+    refused it, which moved the view's checks by a frame (one shift measured over one frame
+    instead of two). Oracle: the same detector's state before the refused call, and a twin
+    that never saw it."""
+    from vistrack.frontends import BlobDetector
+
+    scene = _pan_scene()
+
+    def state(d):
+        return (d.view_shifts, d.view_motion, d.following_from, d._frames,
+                d._moved.tolist(), len(d._check_moves))
+
+    det, twin = BlobDetector(min_area=50, check_view=2), BlobDetector(min_area=50, check_view=2)
+    for d in (det, twin):
+        d.initialize([scene[:, 0:320]] * 3)
+    for k in range(1, 14):
+        for d in (det, twin):
+            d.detect(scene[:, 6 * k:6 * k + 320])
+        if k == 3:
+            before = state(det)
+            with pytest.raises(ValueError, match="the model was built on"):
+                det.detect(scene[:100, 6 * k:6 * k + 320])
+            assert state(det) == before
+    assert state(det) == state(twin) and det.view_moves
+    before = state(det)
+    for bad, said in (([], "at least one frame"),
+                      ([scene[:, :320], scene[:100, :320]], r"frames\[1\] is 320x100")):
+        with pytest.raises(ValueError, match=said):
+            det.initialize(bad)
+        assert state(det) == before
+    for k in (14, 15):
+        a = det.detect(scene[:, 6 * k:6 * k + 320])
+        b = twin.detect(scene[:, 6 * k:6 * k + 320])
+        assert a.boxes.tolist() == b.boxes.tolist()
+    assert state(det) == state(twin)

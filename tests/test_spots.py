@@ -321,3 +321,32 @@ def test_settings_are_checked_before_any_spot_is_found():
             locate(blank, 9, max_iterations=bad)
     with pytest.raises(TypeError, match=re.escape("invert must be True or False; got 'no'")):
         locate(blank, 9, invert="no")
+
+
+def test_a_separation_or_diameter_larger_than_the_image_finds_nothing_quickly():
+    """A separation of 1e6 built a dilation square of 1.8 TiB (a MemoryError naming nothing;
+    30,000 took 4 s and 2 GB) and a diameter of 2**31 + 1 filtered for minutes, where no
+    pixel lies far enough from the edges to hold a spot; a `max_iterations` of 2**63
+    overflowed the compiled search. Oracle: trackpy's locate (no spot at a separation of 1e6
+    and 30,000, the spot near separations it allows), and the same spot at 2**63 iterations
+    as at 2**63 - 1."""
+    import resource
+
+    tp = pytest.importorskip("trackpy")
+    tp.quiet()
+    y, x = np.mgrid[0:64, 0:64]
+    im = (200 * np.exp(-((x - 20.3) ** 2 + (y - 15.6) ** 2) / 8.0)).astype(np.uint8)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    for sep in (30.0, 60.0, 3e4, 1e6):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            f = tp.locate(im, 9, separation=sep, engine="python")
+        s = locate(im, 9, separation=sep)
+        assert len(s) == len(f)
+        np.testing.assert_allclose(s.centroids, f[["x", "y"]].to_numpy(float).reshape(-1, 2),
+                                   atol=1e-9)
+    assert len(locate(im, 2**31 + 1)) == 0
+    # (kilobytes: far under the 2 GB a separation of 30,000 took)
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 200_000
+    a = locate(im, 9, max_iterations=2**63 - 1).centroids
+    np.testing.assert_array_equal(locate(im, 9, max_iterations=2**63).centroids, a)

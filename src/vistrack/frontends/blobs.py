@@ -15,7 +15,7 @@ From a binary image (a threshold of the frame, or a background model's foregroun
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -457,7 +457,6 @@ class BlobDetector:
         (40, 60, 1)
         """
         from .._validate import as_uint8_image
-        from .background import VIEW_MIN, SelectiveBackground, view_shift
 
         # grey, as detect gives the model its frames: a BGR start made the selective model
         # refuse the first grey frame, and MOG2 start again on it, learning the people there
@@ -465,6 +464,27 @@ class BlobDetector:
         # next, and drawing on it after this call must not change that)
         frames = [_own(as_uint8_image(im, f"images[{k}]", grey=True), im)
                   for k, im in enumerate(images)]
+        # all or nothing: no frames, or frames of two sizes, reset the view's checks and
+        # then failed in the model, which kept its state (detector and model disagreed)
+        self._all_or_nothing(self._initialize, frames)
+
+    def _all_or_nothing(self, call: Any, *args: Any) -> Any:
+        """``call(*args)``, the detector's own state (not its model's, which refuses before
+        it changes) as it was if it raises: a refused frame was counted, which moved the
+        view's checks by a frame."""
+        saved = dict(self.__dict__)
+        lists = {k: list(v) for k, v in saved.items() if isinstance(v, list)}
+        try:
+            return call(*args)
+        except BaseException:
+            self.__dict__.clear()
+            self.__dict__.update(saved)
+            self.__dict__.update(lists)
+            raise
+
+    def _initialize(self, frames: list[np.ndarray]) -> None:
+        from .background import VIEW_MIN, SelectiveBackground, view_shift
+
         self._reset()  # a new start: what earlier frames said of the view no longer holds
         k = self.check_view
         # (frames too small for view_shift: no view to follow, as detect's checks; they
@@ -547,9 +567,13 @@ class BlobDetector:
         ([[20.0, 10.0, 30.0, 30.0]], [1.0])
         """
         from .._validate import as_uint8_image
-        from .background import VIEW_MIN, SelectiveBackground, view_shift
 
         grey = _own(as_uint8_image(image, grey=True), image)  # kept as the next's reference
+        return cast(Detections, self._all_or_nothing(self._detect, grey))
+
+    def _detect(self, grey: np.ndarray) -> Detections:
+        from .background import VIEW_MIN, SelectiveBackground, view_shift
+
         # (frames under view_shift's least size: not checked, no evidence either way; every
         # 10th frame failed with its error, --still-camera or not)
         if self.check_view and self._frames % self.check_view == 0 \

@@ -234,9 +234,9 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         ``noise_size``, ``minmass`` or ``threshold`` is not finite, ``percentile`` is not
         in [0, 100], or ``max_iterations`` is not a whole number >= 0.
     TypeError
-        If ``separation``, ``noise_size``, ``minmass``, ``threshold`` or ``percentile`` is
-        no number (a
-        string; ``separation`` a pair, one per axis, which is not supported).
+        If ``separation``, ``noise_size``, ``smoothing_size``, ``minmass``, ``threshold``,
+        ``percentile`` or ``max_iterations`` is no number (a string or None; ``separation``
+        a pair, one per axis, which is not supported).
 
     References
     ----------
@@ -312,6 +312,13 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         im = _inverted(im)
     if threshold is None:
         threshold = 1.0 if np.issubdtype(im.dtype, np.integer) else 1.0 / 255
+    empty = Spots(np.zeros((0, 2)), np.zeros(0), np.zeros(0))
+    # a spot is kept this far from the edges: where no pixel is, there is none (a diameter
+    # or separation larger than the image filtered, or built a square of 1.8 TiB, for it)
+    margin = max(r, int(sep) // 2 - 1, smooth // 2)
+    H, W = im.shape[:2]
+    if 2 * margin >= min(H, W):
+        return empty
     raw = im.astype(np.float64)
     # 1. band-pass, then integers. As trackpy does, the boxcar of an integer image is
     # taken in its own integer type (each pass rounds)
@@ -345,30 +352,29 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     else:  # OpenCV's dilation takes no wider integers: their values, truncated, as floats
         # (a 64-bit integer's top, 2^63 - 1 as a float, would not fit back into it)
         img = np.floor(img)
-    empty = Spots(np.zeros((0, 2)), np.zeros(0), np.zeros(0))
     # 2. local maxima
     lit = img[img > 0]
     if lit.size == 0:
         return empty
     floor = np.percentile(lit, percentile)
     # at least 1: below a separation of 0.71 the side was 0, which OpenCV takes as its
-    # default 3 x 3 (a square of side 0 dilates nothing, as trackpy's does)
-    box = max(1, int(2 * sep / np.sqrt(2)))
+    # default 3 x 3 (a square of side 0 dilates nothing, as trackpy's does); at most the
+    # side that reaches the whole image from any pixel, as any larger one does (a
+    # separation of 1e6 built a square of 1.8 TiB)
+    box = min(max(1, int(2 * sep / np.sqrt(2))), 2 * max(H, W) + 1)
     # a flat square's dilation, zero outside the image; for an even side scipy's
     # grey_dilation (trackpy's) reflects the square, so its anchor is (box - 1) // 2
     a = (box - 1) // 2
     dil = cv2.dilate(img, np.ones((box, box), np.uint8), anchor=(a, a),
                      borderType=cv2.BORDER_CONSTANT, borderValue=0)
     rows, cols = np.nonzero((img == dil) & (img > floor))
-    margin = max(r, int(sep) // 2 - 1, smooth // 2)
-    H, W = img.shape
     ok = (rows >= margin) & (cols >= margin) & (rows <= H - margin - 1) & (cols <= W - margin - 1)
     coords = np.c_[rows[ok], cols[ok]].astype(np.int64)
     if len(coords) == 0:
         return empty
     # 3. refine
     # at least the first disc measured (0 reported the integer maxima themselves)
-    moves = max(1, max_iterations)
+    moves = max(1, min(max_iterations, 2**62))  # (2**63 overflowed the compiled kernel)
     pos, mass, rg = _refine(img.astype(np.float64), coords, r, _disc(r), moves,
                             0.6)
     # 4. of each pair of spots closer than the separation, the less massive goes (ties: the
