@@ -961,3 +961,71 @@ def test_a_misspelt_column_name_is_raised_once_with_keep_going(tmp_path):
         evaluate_files(pairs, keep_going=True, columns={"fram": "t"})
     res = evaluate_files(pairs, keep_going=True, columns={"frame": "t"})
     assert res.errors == {} and res["COMBINED"].TP == 2
+
+
+def test_counts_and_matches_compare_with_equals():
+    """`evaluate_mot(g, g) == evaluate_mot(g, g)` and the same of `clear_matches` raised
+    numpy's "truth value of an array is ambiguous" (the generated `==` compared array
+    fields as one value). Oracle: the same scoring twice is equal, another is not."""
+    from vistrack.evaluation import MOTCounts, clear_matches, evaluate_mot
+
+    g = MOTTable.from_rows([(1, 1, 0, 0, 10, 10), (2, 1, 1, 0, 10, 10), (2, 2, 50, 0, 10, 10)])
+    p = MOTTable.from_rows([(1, 1, 0, 0, 10, 10), (2, 3, 1, 0, 10, 10)])
+    assert evaluate_mot(g, p) == evaluate_mot(g, p)
+    assert evaluate_mot(g, p) != evaluate_mot(g, g) and evaluate_mot(g, g) != MOTCounts()
+    assert clear_matches(g, p) == clear_matches(g, p)
+    assert clear_matches(g, p) != clear_matches(g, g)
+    assert evaluate_mot(g, p) != "counts"
+
+
+def test_hand_built_tables_with_an_infinite_frame_or_ids_that_are_no_whole_numbers():
+    """A table built by hand with an infinite frame failed in float()'s bare OverflowError;
+    NaN ids escaped the duplicate check (NaN != NaN) and were one object to np.unique
+    (MOTA 1.0 and IDF1 0.667 without a word; SciPy's "invalid numeric entries" against
+    itself); an id of 1.5, which read_mot and from_rows refuse, was scored as a switch.
+    Oracle: from_rows's refusal of the same rows, and the message's own index."""
+    from vistrack.evaluation import clear_matches, evaluate_mot
+
+    def table(frames, ids):
+        n = len(frames)
+        return MOTTable(frames=np.array(frames, float), ids=np.array(ids, float),
+                        boxes=np.tile([0.0, 0.0, 10.0, 10.0], (n, 1)), conf=np.ones(n),
+                        classes=np.ones(n, np.int64), visibility=np.ones(n))
+
+    g = table([1, 2, 2], [1, 1, 2])
+    with pytest.raises(ValueError, match="id must be an integer; got 1.5"):
+        MOTTable.from_rows([(1, 1.5, 0, 0, 10, 10)])
+    for gt, pred, said in ((g, table([1, 2, np.inf], [1, 1, 2]),
+                            "pred.frames[2] must be a whole number; got inf"),
+                           (table([1, 2, 2], [1, np.nan, np.nan]), g,
+                            "gt.ids[1] must be a whole number; got nan"),
+                           (g, table([1, 2, 2], [1, np.nan, 2]),
+                            "pred.ids[1] must be a whole number; got nan"),
+                           (g, table([1, 2, 2], [1, 1.5, 2]),
+                            "pred.ids[1] must be a whole number; got 1.5")):
+        for score in (evaluate_mot, clear_matches):
+            with pytest.raises(ValueError, match=re.escape(said)):
+                score(gt, pred)
+
+
+def test_a_csv_of_motchallenge_text_names_the_lines_as_a_txt_does(tmp_path):
+    """A ground truth of MOTChallenge's text named `.csv` (read as text, without a header)
+    lost the line numbers of its errors, which the same rows named `.txt` give. Oracle: the
+    `.txt` file's message, its path changed."""
+    from vistrack.evaluation import evaluate_files
+
+    ok = tmp_path / "ok.txt"
+    ok.write_text("1,1,0,0,10,10,1,1,1\n2,1,0,0,10,10,1,1,1\n")
+    rows = "1,1,0,0,10,10,1,1,1\n2,1,0,0,10,10,1,1,1\n2,1,5,0,10,10,1,1,1\n"
+    said = {}
+    for name in ("gt.txt", "gt.csv"):
+        (tmp_path / name).write_text(rows)
+        with pytest.raises(ValueError) as e:
+            evaluate_files([("s", tmp_path / name, ok, None)])
+        said[name] = str(e.value).replace(str(tmp_path / name), "FILE")
+    assert said["gt.csv"] == said["gt.txt"] == (
+        "FILE, lines 2 and 3: id 1 appears more than once in frame 2")
+    (tmp_path / "cls.csv").write_text("1,1,0,0,10,10,1,1,1\n2,1,0,0,10,10,1,14,1\n")
+    with pytest.raises(ValueError, match=re.escape(
+            "cls.csv, line 2, column 8 (class): class 14 is not a MOT17 class (1-13)")):
+        evaluate_files([("s", tmp_path / "cls.csv", ok, None)], benchmark="MOT17")

@@ -8,7 +8,13 @@ from typing import TYPE_CHECKING, Any
 
 from .._pool import one_line
 from .._validate import as_whole
-from ..io.motchallenge import MOTTable, check_column_names, read_mot, read_seq_length
+from ..io.motchallenge import (
+    MOTTable,
+    _text_without_header,
+    check_column_names,
+    read_mot,
+    read_seq_length,
+)
 from .mot import (
     BENCHMARKS,
     Matches,
@@ -120,22 +126,6 @@ def _table_file(path: Path, what: str) -> Any:
         need_parquet()
         return _pandas(f"a Parquet {what} file").read_parquet(path)
     return _read_csv(path, f"a CSV {what} file")
-
-
-def _text_without_header(path: Path) -> bool:
-    """Whether ``path``'s first line that holds values is numbers only: MOTChallenge's text
-    in a file named ``.csv`` (False where it cannot be read: the reader then says why)."""
-    from ..io.motchallenge import _all_numbers, _row_cells
-
-    try:
-        with open(path, encoding="utf-8-sig", errors="replace") as f:
-            for line in f:
-                cells = _row_cells(line)
-                if cells:
-                    return _all_numbers(cells)
-    except OSError:
-        pass
-    return False
 
 
 def _read_results(path: Path, columns: dict[str, str] | None = None,

@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import as_rows4, as_whole, decode_text
-from ..io.motchallenge import MOTTable, _row_cells, _text_lines
+from ..io.motchallenge import MOTTable, _row_cells, _text_lines, _text_without_header
 
 _LSA: list[Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]] = []
 
@@ -318,9 +318,12 @@ def considered(conf: np.ndarray) -> np.ndarray:
 def _lines_of(path: str, match: Callable[[list[float]], bool]) -> list[int]:
     """The lines (from 1) of the MOTChallenge file ``path`` whose row ``match`` accepts, for a
     message; empty for a table not read from a file (or a file no longer readable), and for
-    a CSV or Parquet file, whose columns need not start with frame and id (the message then
-    names the file, the frame and the id)."""
-    if not path or Path(path).suffix.lower() in (".csv", ".parquet"):
+    a CSV or Parquet file with a header, whose columns need not start with frame and id (the
+    message then names the file, the frame and the id): a ``.csv`` of MOTChallenge's text,
+    without one, is read as text, and its lines are named as a ``.txt``'s."""
+    suffix = Path(path).suffix.lower() if path else ""
+    if not path or suffix == ".parquet" or (
+            suffix == ".csv" and not _text_without_header(Path(path))):
         return []
     try:
         text = decode_text(Path(path).read_bytes(), path, "MOTChallenge", ValueError)
@@ -429,12 +432,16 @@ def _check_table(table: Any, name: str) -> None:
         raise ValueError(f"{name}.boxes[{k}] has a negative width or height: "
                          f"{table.boxes[k].tolist()} (x, y, w, h: a box of corners x1, y1, "
                          "x2, y2?)")
-    if n and table.frames.dtype.kind == "f":  # (frames before the first: _check_frames)
-        part = table.frames != np.floor(table.frames)
-        if part.any():
-            k = int(np.flatnonzero(part)[0])
-            raise ValueError(f"{name}.frames[{k}] must be a whole number; got "
-                             f"{table.frames[k]}")
+    # (frames before the first: _check_frames). An infinite frame was float()'s bare
+    # OverflowError; a NaN id escaped the duplicate check (NaN != NaN) and was one object to
+    # np.unique, an id of 1.5 a switch: as read_mot refuses them
+    for col in ("frames", "ids"):
+        v = getattr(table, col)
+        if n and v.dtype.kind == "f":
+            part = ~np.isfinite(v) | (v != np.floor(v))
+            if part.any():
+                k = int(np.flatnonzero(part)[0])
+                raise ValueError(f"{name}.{col}[{k}] must be a whole number; got {v[k]}")
 
 
 def _n_frames(gt: MOTTable, pred: MOTTable, n_frames: int | None) -> int:
@@ -505,6 +512,24 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str,
     return _Sequence([np.searchsorted(ug, i) for i in gt_ids],
                      [np.searchsorted(up, i) for i in pred_ids], sims, len(ug), len(up),
                      frames, ug, up)
+
+
+def _same_fields(a: Any, b: Any) -> bool:
+    """Whether two dataclasses of one type hold the same values, arrays compared whole (the
+    generated ``==`` compared them as one value: numpy's "truth value of an array is
+    ambiguous"); NaN in the same places is the same."""
+    if type(a) is not type(b):
+        return NotImplemented
+    for f in fields(a):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+            x, y = np.asarray(x), np.asarray(y)
+            nan = x.dtype.kind in "fc" and y.dtype.kind in "fc"
+            if not np.array_equal(x, y, equal_nan=nan):
+                return False
+        elif x != y:
+            return False
+    return True
 
 
 def _assign(score: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -609,6 +634,18 @@ class MOTCounts:
     AssPr_alpha: np.ndarray = field(default_factory=lambda: np.zeros(len(ALPHAS)))
     LocA_alpha: np.ndarray = field(default_factory=lambda: np.ones(len(ALPHAS)))
     combined: bool = False
+
+    def __eq__(self, other: object) -> bool:
+        """Whether two counts are the same, their arrays compared whole.
+
+        >>> from vistrack.io import MOTTable
+        >>> g = MOTTable.from_rows([(1, 1, 0, 0, 10, 10), (2, 1, 1, 0, 10, 10)])
+        >>> evaluate_mot(g, g) == evaluate_mot(g, g), evaluate_mot(g, g) == MOTCounts()
+        (True, False)
+        """
+        return _same_fields(self, other)
+
+    __hash__ = None  # type: ignore[assignment]  # (mutable, as the generated == made it)
 
     def __add__(self, other: MOTCounts) -> MOTCounts:
         if not isinstance(other, MOTCounts):
@@ -1112,6 +1149,13 @@ class Matches:
     pred_ids: np.ndarray
     switches: np.ndarray
     matched: np.ndarray
+
+    def __eq__(self, other: object) -> bool:
+        """Whether two matchings are the same, row by row (the generated ``==`` compared the
+        arrays as one value: numpy's "ambiguous")."""
+        return _same_fields(self, other)
+
+    __hash__ = None  # type: ignore[assignment]  # (its arrays hold no hash)
 
     def __post_init__(self) -> None:
         # a Matches built by hand: one row per scored box in every field, or the timeline

@@ -761,6 +761,20 @@ _COLUMNS = ("frame", "particle", "id", "bb_left", "bb_top", "bb_width", "bb_heig
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
 
 
+def _text_without_header(path: Path) -> bool:
+    """Whether ``path``'s first line that holds values is numbers only: MOTChallenge's text
+    in a file named ``.csv`` (False where it cannot be read: the reader then says why)."""
+    try:
+        with open(path, encoding="utf-8-sig", errors="replace") as f:
+            for line in f:
+                cells = _row_cells(line)
+                if cells:
+                    return _all_numbers(cells)
+    except OSError:
+        pass
+    return False
+
+
 def check_column_names(columns: Any) -> dict[str, str]:
     """``columns``, ``{ours: theirs}`` names of a CSV or Parquet file's columns, as a dict,
     each of ours one vistrack reads (the file's own names are checked against the file).
