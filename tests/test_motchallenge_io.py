@@ -602,3 +602,70 @@ def test_a_text_file_of_semicolons_is_pointed_to_csv(tmp_path):
     (tmp_path / "plain.txt").write_text("1 -1 10 20\n")  # no semicolon: no such hint
     with pytest.raises(MOTFormatError, match=r"got 4: '1 -1 10 20'$"):
         read_mot(tmp_path / "plain.txt")
+
+
+def test_messages_show_every_digit_and_named_columns_are_read_as_named(tmp_path):
+    """A value was shown to six digits (`frame must be an integer ...; got 123456` for
+    123456.5); a column named `visibility` holding 40 or 1.0000001 was read by the text
+    file's rule as a world y and became -1 in every row (written so by `to_csv`); columns
+    of True and False were ids of 1 and 0; a `seqinfo.ini` whose header carries a comment
+    (`[Sequence] ; MOT`) lost its error's line, and a `seqLength` past 2**53 was changed
+    by a float (12345678901234567 read as ...568, where configparser and `int()` keep it).
+    Oracle: the files' own text."""
+    from vistrack.io.motchallenge import _read_csv
+
+    p = tmp_path / "f.txt"
+    p.write_text("123456.5,1,1,2,3,4,1\n")
+    with pytest.raises(MOTFormatError, match=re.escape("frame must be an integer >= 1 "
+                                                       "(frames count from 1, as MOTChallenge's"
+                                                       " do); got 123456.5")):
+        read_mot(p)
+    with pytest.raises(MOTFormatError, match=re.escape("id must be an integer; got 2.5")):
+        MOTTable.from_rows([(1, 2.5, 0, 0, 1, 1)])
+    for text, said in (("0.5\n2,1,0,0,10,10,1,1,1.0000001", "line 3, column 'visibility': "
+                        "visibility must be a share from 0 to 1 (-1: not given); got "
+                        "1.0000001"),
+                       ("40\n2,1,0,0,10,10,1,1,100", "line 2, column 'visibility': visibility"
+                        " must be a share from 0 to 1 (-1: not given); got 40")):
+        c = tmp_path / "v.csv"
+        c.write_text("frame,id,bb_left,bb_top,bb_width,bb_height,conf,class,visibility\n"
+                     f"1,1,0,0,10,10,1,1,{text}\n")
+        with pytest.raises(MOTFormatError, match=re.escape(said)):
+            MOTTable.from_pandas(_read_csv(c, "x"), path=str(c))
+    c.write_text("frame,id,bb_left,bb_top,bb_width,bb_height,conf,class,visibility\n"
+                 "1,1,0,0,10,10,1,1,0.5\n2,1,0,0,10,10,1,1,-1\n")
+    assert MOTTable.from_pandas(_read_csv(c, "x"), path=str(c)).visibility.tolist() == [0.5, -1]
+    c.write_text("frame,id,bb_left,bb_top,bb_width,bb_height,conf\n1,True,1,2,3,4,False\n")
+    with pytest.raises(MOTFormatError, match=re.escape("line 2, column 'id': not a number: "
+                                                       "True")):
+        MOTTable.from_pandas(_read_csv(c, "x"), path=str(c))
+    seq = tmp_path / "s"
+    seq.mkdir()
+    (seq / "seqinfo.ini").write_text("[Sequence] ; MOT\nname=S\nframeRate=25\nseqLength=3.5\n")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"{seq / 'seqinfo.ini'}:4: seqLength must be a whole number; got 3.5")):
+        read_seqinfo(seq)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=S\nframeRate=25\n"
+                                     "seqLength=12345678901234567\nimWidth=640\nimHeight=480\n")
+    assert read_seqinfo(seq).seq_length == 12345678901234567
+
+
+def test_write_mot_and_from_rows_name_what_is_no_number(tmp_path):
+    """Ids of Python's big integers, or None, failed with "'int' object has no attribute
+    'tolist'"; ragged boxes, or a conf of text, failed in numpy's words naming neither
+    argument (from_rows too). Oracle: the argument and the entry named."""
+    out = tmp_path / "a.txt"
+    for ids, said in (([2**70], "ids[0] = 1180591620717411303424 is not within ±(2**53 - 1)"),
+                      ([None], "ids[0] = None is not a whole number"),
+                      (["7"], "ids[0] = '7' is not a whole number")):
+        with pytest.raises(ValueError, match=re.escape(said)):
+            write_mot(out, [1], ids, [[0, 0, 1, 1]])
+    with pytest.raises(TypeError, match="^boxes must be an array of numbers"):
+        write_mot(out, [1, 2], [1, 1], [[0, 0, 1, 1], [0, 0, 1]])
+    with pytest.raises(TypeError, match="^conf must be an array of numbers"):
+        write_mot(out, [1], [1], [[0, 0, 1, 1]], ["high"])
+    with pytest.raises(TypeError, match="^rows must be an array of numbers"):
+        MOTTable.from_rows([(1, 1, 0, 0, 1, 1), (2, 1, 0, 0, 1)])
+    assert not out.exists()
+    write_mot(out, np.array([1], object), np.array([2**40], object), [[0, 0, 1, 1]])
+    assert read_mot(out).ids.tolist() == [2**40]

@@ -904,3 +904,49 @@ def test_a_video_writers_size_and_an_os_errors_odd_name_are_named():
         os.stat(999)
     except OSError as e:
         assert message(e) == "[Errno 9] Bad file descriptor: 999"
+
+
+def test_the_sinks_name_a_frame_that_is_no_whole_number_and_points_they_cannot_write(tmp_path):
+    """A frame of 2.7 was written as frame 2 by every sink (ids of 1.7 were refused), one of
+    2**53 + 1 written where read_mot refuses it; PointsCSVWriter failed on points of three
+    coordinates in a %-format's words; BoxesWriter refused point tracks in Tracks.xywh's
+    words, naming neither the frame nor the sink, after keeping the frame as its first.
+    Oracle: write_mot's refusal of the same values, and what read_mot reads back."""
+    from vistrack.io import PointsCSVWriter
+
+    box = Tracks(ids=np.array([1]), boxes=np.array([[0.0, 0, 2, 3]]), points=None,
+                 scores=np.ones(1), classes=np.zeros(1))
+    for sink in (lambda: MOTWriter(tmp_path / "m.txt"), lambda: CSVWriter(tmp_path / "c.csv"),
+                 TrackRows):
+        for index, said in ((2.7, "frame 2.7: a frame's index must be a whole number"),
+                            (2**53 + 1, "frame 9007199254740993: a frame's index must lie "
+                                        "within ±(2**53 - 1)")):
+            s = sink()
+            with pytest.raises(ValueError, match=re.escape(said)):
+                s.write(Frame(index, 0.0), box)
+            s.abort() if hasattr(s, "abort") else None
+    with pytest.raises(ValueError, match="not within"):
+        write_mot(tmp_path / "w.txt", [2**53 + 1], [1], [[0, 0, 1, 1]])
+    w = MOTWriter(tmp_path / "ok.txt")
+    w.write(Frame(np.int64(3), 0.0), box)
+    w.close()
+    from vistrack.io import read_mot
+
+    assert read_mot(tmp_path / "ok.txt").frames.tolist() == [3]
+    pts = PointsCSVWriter(tmp_path / "p.csv")
+    with pytest.raises(ValueError, match=re.escape(
+            "frame 1: PointsCSVWriter(" + str(tmp_path / "p.csv") + ") writes points of two "
+            "coordinates, x and y; got shape (1, 3)")):
+        pts.write(Frame(1, 0.0), Tracks(ids=np.array([1]), boxes=None,
+                                        points=np.array([[1.0, 2.0, 3.0]]), scores=np.ones(1),
+                                        classes=np.zeros(1)))
+    pts.abort()
+    b = BoxesWriter(tmp_path / "b.txt")
+    points = Tracks(ids=np.array([1]), boxes=None, points=np.array([[1.0, 2.0]]),
+                    scores=np.ones(1), classes=np.zeros(1))
+    with pytest.raises(ValueError, match=re.escape(
+            f"frame 4: BoxesWriter({tmp_path / 'b.txt'}) takes box tracks")):
+        b.write(Frame(4, 0.0), points)
+    b.write(Frame(6, 0.0), box)  # the refused frame 4 is not its first
+    assert len(b.boxes) == 1
+    b.abort()

@@ -27,6 +27,7 @@ import difflib
 import importlib
 import itertools
 import math
+import numbers
 import os
 import re
 import warnings
@@ -38,7 +39,7 @@ from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
-from .._validate import as_finite, decode_text
+from .._validate import as_finite, as_float_array, decode_text
 from .atomic import replacing
 
 if TYPE_CHECKING:
@@ -328,7 +329,7 @@ class MOTTable:
         >>> t.frames.tolist(), t.conf.tolist()
         ([1, 2], [1.0, 1.0])
         """
-        a = np.asarray(rows, dtype=float)
+        a = as_float_array(rows, "rows")  # (ragged rows, or text, failed in numpy's words)
         if a.ndim != 2:
             if a.size:
                 # (a flat row of 12 values was cut into two rows, one of 7 failed in a
@@ -354,7 +355,7 @@ class MOTTable:
                 c = j if col is None else col
                 name = _NAMES[c] if c < len(_NAMES) else f"value {c + 1}"
                 raise MOTFormatError(f"{where}row {i + 1}, value {c + 1} ({name}): {text}; got "
-                                     f"{a[i, c]:g}")
+                                     f"{_shown(a[i, c])}")
         # (np.take copies whole rows 2-3 times faster than a[order])
         return cls._of(np.take(a, np.argsort(a[:, 0], kind="stable"), axis=0), path)
 
@@ -543,6 +544,10 @@ class MOTTable:
             if name(ours) not in have:
                 return None
             column = df[name(ours)]
+            if np.asarray(column).dtype.kind == "b" and len(column):
+                # (pandas reads a column of True and False as booleans: ids of 1 and 0)
+                raise MOTFormatError(f"{at(0, ours)}: not a number: "
+                                     f"{np.asarray(column, dtype=object).ravel()[0]!r}")
             try:
                 v = np.asarray(column, dtype=float).ravel()
             except (TypeError, ValueError):
@@ -607,8 +612,8 @@ class MOTTable:
                 if (b < a).any():
                     k = int(np.argmax(b < a))
                     raise MOTFormatError(f"{at(k, hi)}: the box's far corner must not lie "
-                                         f"before its near one; {name(lo)} = {a[k]:g}, "
-                                         f"{name(hi)} = {b[k]:g}")
+                                         f"before its near one; {name(lo)} = {_shown(a[k])}, "
+                                         f"{name(hi)} = {_shown(b[k])}")
             left, top, w, h = x1, y1, x2 - x1, y2 - y1
         elif (point := every(get("x"), get("y"))) is not None and (
                 w is not None or h is not None):  # one of a box's two: the other is missing
@@ -652,8 +657,18 @@ class MOTTable:
         bad = (kind != np.round(kind)) | (np.abs(kind) >= _INT_LIMIT)
         if bad.any():
             k = int(np.argmax(bad))
-            raise MOTFormatError(f"{at(k, 'class')}: class must be an integer; got {kind[k]:g}")
-        rows = np.column_stack([box, or_fill("conf", 1.0), kind, or_fill("visibility", -1.0)])
+            raise MOTFormatError(f"{at(k, 'class')}: class must be an integer; got "
+                                 f"{_shown(kind[k])}")
+        seen = or_fill("visibility", -1.0)
+        # a column named as the visibility is one: a value that is no share (a percentage of
+        # 40, or 1.0000001) made the text file's rule read the whole column as a world y,
+        # and every value became -1, written so by to_csv
+        bad = ~(((seen >= 0) & (seen <= 1)) | (seen == -1))
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise MOTFormatError(f"{at(k, 'visibility')}: visibility must be a share from 0 "
+                                 f"to 1 (-1: not given); got {_shown(seen[k])}")
+        rows = np.column_stack([box, or_fill("conf", 1.0), kind, seen])
         return cls.from_rows(rows if n else np.zeros((0, 9)), path)
 
     def frame_slices(self, n_frames: int | None = None) -> FrameSlices:
@@ -911,6 +926,14 @@ _ROW_RULES = (
 file, a DataFrame): (column, the values that break the rule, what is wrong)."""
 
 
+def _shown(v: float) -> str:
+    """A value as a message shows it: a whole number below 2**53 as one, any other as
+    Python writes the float, every digit it holds (``:g`` kept six: 123456.5 was "123456",
+    an integer in a message saying it was none)."""
+    v = float(v)
+    return str(int(v)) if v == v and abs(v) < _INT_LIMIT and v == int(v) else repr(v)
+
+
 def _first_bad_row(a: np.ndarray) -> tuple[int, int, str] | None:
     """The first rule of :data:`_ROW_RULES` the rows ``a (N, >= 6)`` break: the first row
     breaking it, its column and what is wrong with the value; None if none is broken."""
@@ -918,7 +941,7 @@ def _first_bad_row(a: np.ndarray) -> tuple[int, int, str] | None:
         bad = breaks(a[:, col])
         if bad.any():
             i = int(np.argmax(bad))
-            return i, col, f"{text}; got {a[i, col]:g}"
+            return i, col, f"{text}; got {_shown(a[i, col])}"
     return None
 
 
@@ -1281,6 +1304,8 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
         frame or id that is not a whole number or lies from 2**53 on, a frame below 1, a box
         that is not finite or of negative width or height, a score that is not finite
         (naming the first such row).
+    TypeError
+        If ``boxes`` or ``conf`` is not an array of numbers (ragged rows, text).
 
     Examples
     --------
@@ -1296,12 +1321,13 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
         raise FileExistsError(f"{path} exists; pass force=True (--force) to overwrite it")
     _check_decimals(decimals)
     f, i = _integers(frames, "frames"), _integers(ids, "ids")
-    b = np.asarray(boxes, dtype=float)
+    # (ragged boxes, or a conf of text, failed in numpy's words, naming neither)
+    b = as_float_array(boxes, "boxes")
     if b.size == 0 or b.shape == (4,):  # no rows, or one
         b = b.reshape(-1, 4)
     if b.ndim != 2 or b.shape[1] != 4:
         raise ValueError(f"boxes must have shape (N, 4); got {b.shape}")
-    c = np.ones(len(f)) if conf is None else np.asarray(conf, dtype=float).ravel()
+    c = np.ones(len(f)) if conf is None else as_float_array(conf, "conf").ravel()
     if not len(f) == len(i) == len(b) == len(c):
         raise ValueError(f"frames, ids, boxes and conf must have the same length; got "
                          f"{len(f)}, {len(i)}, {len(b)}, {len(c)}")
@@ -1390,19 +1416,24 @@ def _integers(values: ArrayLike, name: str) -> np.ndarray:
     was written as a negative number: 2**64 - 1 as -1, a detection's identity)."""
     a = np.asarray(values).ravel()
     integer = a.dtype.kind in "iub"
+    if a.dtype.kind not in "iubf":  # (Python's big integers, None, text: an object array)
+        for k, v in enumerate(a.tolist()):
+            if isinstance(v, (str, bytes)) or not isinstance(v, numbers.Real):
+                raise ValueError(f"{name}[{k}] = {v!r} is not a whole number")
     x = a.astype(float)
     if not integer:
         bad = ~np.isfinite(x) | (x != np.round(x))
         if bad.any():
             k = int(np.argmax(bad))
-            raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is not a whole number")
+            raise ValueError(f"{name}[{k}] = {np.asarray(a[k]).tolist()!r} is not a whole "
+                             "number")
     # compared as integers where they are (2**53 + 1 becomes 2**53 as a float): from 2**53
     # on, a float no longer holds every integer, and read_mot refuses them
     big = ((a >= 2**53) | (a <= -(2**53))) if integer else (np.abs(x) >= _INT_LIMIT)
     if big.any():
         k = int(np.argmax(big))
-        raise ValueError(f"{name}[{k}] = {a[k].tolist()!r} is not within ±(2**53 - 1), which "
-                         "read_mot refuses")
+        raise ValueError(f"{name}[{k}] = {np.asarray(a[k]).tolist()!r} is not within "
+                         "±(2**53 - 1), which read_mot refuses")
     return a.astype(np.int64, copy=False) if integer else x.astype(np.int64)
 
 
@@ -1753,8 +1784,11 @@ def _seqinfo_value(path: Path, s: Any, key: str, kind: type) -> Any:
                 if key == "frameRate" else "")
         raise MOTFormatError(f"{path}: [Sequence] has no {key}{hint}")
     try:
-        # a count written as a float (600.0, 6e2) is a number > 0 as the contract asks
-        v = float(s[key]) if kind is int else kind(s[key])
+        # a count written as a float (600.0, 6e2) is a number > 0 as the contract asks;
+        # written as an integer, it is read as one (past 2**53 a float changed it)
+        text = s[key].strip()
+        v = (int(text) if re.fullmatch(r"[+-]?[0-9]+", text) else float(text)) \
+            if kind is int else kind(s[key])
     except ValueError:
         # ("is not float", Python's word, and no line before; the file is read again for
         # the line only on the way to an error)
@@ -1780,7 +1814,9 @@ def _ini_line(path: Path, key: str) -> str:
     for n, line in enumerate(_text_lines(_read_text(os.fspath(path), "seqinfo.ini")), 1):
         t = line.strip()
         if t.startswith("["):
-            section = t.strip("[] ")
+            # the header as configparser reads it: "[Sequence] ; MOT" is [Sequence]
+            head = re.match(r"\[(?P<h>.+)\]", t)
+            section = head.group("h") if head else ""
         elif section == "Sequence" and t.partition("=")[0].partition(":")[0].strip().lower() \
                 == key.lower():
             return f"{path}:{n}"

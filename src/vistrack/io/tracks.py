@@ -176,8 +176,9 @@ class TrackRows:
         """
         if len(tracks):
             # (ids 1.2 and 1.7 were both track 1, where the writers name them)
-            ids = _integers_of(int(frame.index), np.asarray(tracks.ids), "ids")
-            self._frames.add(np.full(len(tracks), int(frame.index)))
+            f = _frame_of(frame)
+            ids = _integers_of(f, np.asarray(tracks.ids), "ids")
+            self._frames.add(np.full(len(tracks), f))
             self._ids.add(ids)
             self._xywh.add(_box_rows(tracks, frame, "TrackRows"))
             self._scores.add(np.asarray(tracks.scores, dtype=float))
@@ -291,6 +292,21 @@ def _box_rows(tracks: Tracks, frame: Frame, what: str) -> np.ndarray:
     return tracks.xywh
 
 
+def _frame_of(frame: Frame) -> int:
+    """``frame.index`` as an int, or a ValueError where it is no whole number or lies from
+    2**53 on (a frame of 2.7 was written as frame 2, and one of 2**53 + 1 written where
+    :func:`~vistrack.io.read_mot` refuses it); below 1 is for each sink to say."""
+    v = frame.index
+    x = float(v) if isinstance(v, (int, float, np.integer, np.floating)) \
+        and not isinstance(v, bool) else float("nan")
+    if not (np.isfinite(x) and x == np.round(x)):
+        raise ValueError(f"frame {v!r}: a frame's index must be a whole number")
+    if abs(int(v)) >= 2**53:
+        raise ValueError(f"frame {int(v)}: a frame's index must lie within ±(2**53 - 1), "
+                         "which read_mot refuses past")
+    return int(v)
+
+
 def _integers_of(f: int, values: np.ndarray, name: str) -> np.ndarray:
     """Frame ``f``'s ``values`` (the tracks' ids or classes) as integers, or a ValueError
     naming the frame."""
@@ -318,7 +334,7 @@ class _RowsFile:
         :class:`TrackRows` keeps them (int and float64), and classes (a list), counted; a
         row :func:`~vistrack.io.read_mot` would refuse to read back (as
         :func:`~vistrack.io.write_mot` refuses it) is a ValueError naming the frame."""
-        f = int(frame.index)
+        f = _frame_of(frame)
         if f < 1:
             raise ValueError(f"frame {f}: MOTChallenge frames count from 1 (read_mot refuses "
                              f"frame {f})")
@@ -683,7 +699,7 @@ class PointsCSVWriter(_RowsFile):
             If the tracks are boxes, a frame is below 1, an identity is not a whole number
             or a position is not finite (each naming the frame).
         """
-        f = int(frame.index)
+        f = _frame_of(frame)
         if tracks.points is None or tracks.boxes is not None:
             raise ValueError(f"frame {f}: PointsCSVWriter({self.path}) takes point tracks; "
                              "these are boxes (CSVWriter writes them)")
@@ -693,6 +709,9 @@ class PointsCSVWriter(_RowsFile):
             return
         ids = _integers_of(f, tracks.ids, "ids")  # (1.7 was written as track 1)
         xy = np.asarray(tracks.points, dtype=float)
+        if xy.ndim != 2 or xy.shape[1] != 2:  # (the row's %-format failed, naming nothing)
+            raise ValueError(f"frame {f}: PointsCSVWriter({self.path}) writes points of two "
+                             f"coordinates, x and y; got shape {xy.shape}")
         bad = ~np.isfinite(xy).all(axis=1)
         if bad.any():
             k = int(np.argmax(bad))
@@ -839,6 +858,10 @@ class BoxesWriter:
         array([[nan, nan, nan, nan]])
         >>> sink.abort()
         """
+        # (before the first frame is kept: point tracks were refused in Tracks.xywh's words,
+        # naming neither the frame nor the sink, after it)
+        box = np.asarray(_box_rows(tracks, frame, f"BoxesWriter({self.path})")[0]
+                         if len(tracks) else np.full(4, np.nan), dtype=float)
         if self._first is None:
             self._first = frame.index
         line = frame.index - self._first + 1
@@ -848,7 +871,6 @@ class BoxesWriter:
         while self._boxes.n < line - 1:  # frames the source skipped
             self._boxes.add(np.full((1, 4), np.nan))
             self._file.write(self._ROW % (self._boxes.n, *(np.nan,) * 4))
-        box = np.asarray(tracks.xywh[0] if len(tracks) else np.full(4, np.nan), dtype=float)
         self._boxes.add(box.reshape(1, 4))
         self._file.write(self._ROW % (self._boxes.n, *box.tolist()))
 
