@@ -1735,7 +1735,9 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--benchmark", default="auto", choices=("auto", "MOT15", "MOT16", "MOT17",
                                                            "MOT20"),
                     help="preprocessing of the ground truth (default: auto, MOT17's where "
-                         "column 8 holds MOT16/17/20 classes in every row, MOT15's otherwise)")
+                         "column 8 holds MOT16/17/20 classes in every row, MOT15's otherwise; "
+                         "MOT20's classes are MOT17's, so give MOT20 for its sequences, whose "
+                         "predictions on class 6, a non-motorised vehicle, it ignores)")
     ev.add_argument("--zero-distance", type=float, metavar="PX",
                     help="score positions rather than boxes (points, such as particles; or "
                     "boxes' centres): a pair's similarity 1 - distance / PX, at least 0, in "

@@ -286,7 +286,10 @@ class _Sequence:
 
 BENCHMARKS = ("auto", "MOT15", "MOT16", "MOT17", "MOT20")
 """The scoring conventions ``benchmark`` names (``auto``: MOT17's for a ground truth whose
-column 8 holds MOT16/17/20 classes, 1-13, in every row, MOT15's otherwise)."""
+column 8 holds MOT16/17/20 classes, 1-13, in every row, MOT15's otherwise). MOT20's classes
+are MOT17's, so ``auto`` cannot tell its ground truth apart: name ``MOT20`` for it, whose
+predictions on a non-motorised vehicle (class 6) TrackEval ignores and MOT17's rules count
+as false positives."""
 
 
 def _benchmark_of(gt: MOTTable, benchmark: str) -> str:
