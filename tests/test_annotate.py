@@ -603,3 +603,45 @@ def test_the_trajectory_plot_names_what_it_cannot_show(tmp_path):
     light = centre[h // 2 - 5:h // 2 + 5, w // 2 + 40:w // 2 + 50, :3]
     # 255 under the figure's white at alpha 0.45: white; 44 (wrapped) was a grey of about 160
     assert light.min() > 0.95
+
+
+def test_no_box_covers_a_number_and_a_narrow_frame_shows_its_label_whole():
+    """Each track's box and number were drawn together, so a box drawn later covered an
+    earlier track's number (10 of the 22 stroke pixels of "9" took track 19's colour); the
+    frame label ran past a narrow frame's edge ("frame 100" read "frame 10" 80 pixels wide);
+    a float identity was labelled "3.0". Oracles: the number drawn alone, the label drawn
+    on a frame wide enough for it (its ink the same share of its box), and the writers'
+    whole numbers."""
+    import cv2
+
+    grey = np.full((1400, 1200, 3), 128, np.uint8)  # (large: numbers of thick strokes)
+
+    def tracks(ids, boxes):
+        return Tracks(ids=np.array(ids), boxes=np.array(boxes, float), points=None,
+                      scores=np.ones(len(ids)), classes=np.zeros(len(ids)))
+
+    nine = [300, 400, 600, 1000]
+    alone = Annotator(labels=True).draw(grey, tracks([9], [nine]))
+    ink = (alone == id_colour(9)).all(axis=2)
+    ink[380:] = False  # (the number above the box; not the box)
+    assert ink.sum() > 20
+    rows = np.flatnonzero(ink.any(axis=1))
+    across = int(rows.mean())  # track 19's top edge through the middle of the number
+    both = Annotator(labels=True).draw(grey, tracks([9, 19], [nine, [280, across, 550, 900]]))
+    assert (both[ink] == id_colour(9)).all()
+    for W, label in ((80, "frame 100"), (64, "frame 7"), (96, "frame 1234")):
+        out = Annotator().draw(np.full((60, W, 3), 128, np.uint8), Tracks.empty(), label=label)
+        white = (out > 200).all(axis=2)
+        cols = np.flatnonzero(white.any(axis=0))
+        assert cols.max() < W - 1  # whole: no stroke reaches the edge
+        wide = Annotator().draw(np.full((60, 400, 3), 128, np.uint8), Tracks.empty(),
+                                label=label)
+        (w, h), _ = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.6, 1)
+        full = (wide > 200).all(axis=2).sum() / (w * h)
+        span = cols.max() - cols.min() + 1
+        assert white.sum() / (span * span * h / w) > 0.5 * full  # (its ink, not cut away)
+    floats = Annotator(labels=True).draw(grey, tracks([3.0, 12.0], [[20, 30, 50, 80],
+                                                                    [70, 30, 100, 80]]))
+    ints = Annotator(labels=True).draw(grey, tracks([3, 12], [[20, 30, 50, 80],
+                                                              [70, 30, 100, 80]]))
+    assert np.array_equal(floats, ints)

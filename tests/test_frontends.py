@@ -8,6 +8,7 @@ import re
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -396,7 +397,9 @@ def test_an_image_folder_is_numbered_by_its_names(tmp_path):
         assert [f.index for f in frames] == [1, 2, 4, 5, 8] and msg == []
         assert [f.time for f in frames] == [0.0, 1 / 30, 3 / 30, 4 / 30, 7 / 30]
     r = VideoReader(tmp_path / "gap", start=3, stop=7)
-    assert len(VideoReader(tmp_path / "gap")) == 8 and [f.index for f in r] == [4, 5]
+    # (len: the frames yielded, the images present)
+    assert len(VideoReader(tmp_path / "gap")) == 5 and len(r) == 2
+    assert [f.index for f in r] == [4, 5]
     # warned once a process, when first opened
     gap2 = _folder(tmp_path / "gap2", n=3, ext=".png")
     gap2[1].unlink()
@@ -2493,3 +2496,80 @@ def test_blob_detector_that_refuses_a_start_or_a_frame_changes_nothing():
         b = twin.detect(scene[:, 6 * k:6 * k + 320])
         assert a.boxes.tolist() == b.boxes.tolist()
     assert state(det) == state(twin)
+
+
+_FIXTURES = Path(__file__).resolve().parent / "fixtures" / "video"
+
+
+def _read_through(path):
+    """Every frame of ``path`` as OpenCV reads it, frame by frame (the oracle)."""
+    cap, frames = cv2.VideoCapture(str(path)), []
+    while True:
+        ok, im = cap.read()
+        if not ok:
+            return frames
+        frames.append(im)
+
+
+def test_a_variable_rate_video_read_from_any_start_gives_the_frames_read_through():
+    """OpenCV's seek in a video of variable rate (a phone's) reports the frame sent to and
+    lands on another: frames 30-32 of tests/fixtures/video/vfr.mp4 (40 ms apart, then 200)
+    showed its frames 49-51, and a start at 60 read 78-80 as 60-62 and warned the file was
+    truncated. Oracle: the file read through frame by frame, at every start."""
+    path = _FIXTURES / "vfr.mp4"
+    want = _read_through(path)
+    assert len(want) == 80
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # (no "truncated or corrupt")
+        for start in range(2, 81):
+            got = list(VideoReader(path, start=start, stop=start + 2))
+            assert [f.index for f in got] == list(range(start, min(start + 2, 80) + 1))
+            assert all(np.array_equal(f.image, want[f.index - 1]) for f in got), start
+
+
+def test_a_matroska_count_is_an_estimate_not_a_truncation():
+    """Matroska holds no frame count: OpenCV's 85 for a whole file of 60 frames whose times
+    start at 1 s made len() 85 and every reading warn "truncated or corrupt". Oracle: the
+    file read through (60 frames), and every start against it."""
+    path = _FIXTURES / "offset.mkv"
+    want = _read_through(path)
+    assert len(want) == 60
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = VideoReader(path)
+        assert r.frame_count == 0 and len(r) == 0 and len(VideoReader(path, stop=10)) == 10
+        got = list(r)
+        assert len(got) == 60 and all(np.array_equal(f.image, want[f.index - 1]) for f in got)
+        for start in (2, 17, 59, 60):
+            got = list(VideoReader(path, start=start, stop=start + 1))
+            assert [f.index for f in got] == list(range(start, min(start + 1, 60) + 1))
+            assert all(np.array_equal(f.image, want[f.index - 1]) for f in got)
+
+
+def test_a_writer_refusing_its_first_frame_keeps_the_video_it_would_replace(tmp_path):
+    """A first frame of another size than the writer's was refused after the file was begun:
+    an existing video was left empty and unreadable. Oracle: the video read before."""
+    path = tmp_path / "keep.mp4"
+    w = VideoWriter(path, fps=10)
+    for k in range(5):
+        w.write(np.full((48, 64, 3), 40 * k, np.uint8))
+    w.close()
+    before = path.read_bytes()
+    w = VideoWriter(path, fps=10, size=(64, 48))
+    with pytest.raises(ValueError, match="frame 1 is 32x32; the video is 64x48"):
+        w.write(np.zeros((32, 32, 3), np.uint8))
+    w.close()
+    assert path.read_bytes() == before and len(list(VideoReader(path))) == 5
+
+
+def test_a_folder_s_length_counts_the_images_present(tmp_path):
+    """len() of a folder whose frame 3 has no image was 5 for 4 frames yielded (and 7 for a
+    sequence whose images start at frame 5 of 7): len() is the frames yielded, the progress
+    total. Oracle: the frames the reader yields."""
+    for k in (1, 2, 4, 5):
+        cv2.imwrite(str(tmp_path / f"{k:06d}.png"), np.full((16, 16, 3), 10 * k, np.uint8))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # (the missing frame, said)
+        for kw in ({}, {"start": 3}, {"start": 2, "stop": 4}, {"stop": 3}):
+            r = VideoReader(tmp_path, **kw)
+            assert len(r) == len(list(r)), kw

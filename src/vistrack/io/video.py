@@ -512,6 +512,12 @@ class VideoReader:
             # their end all the same
             count = cap.get(cv2.CAP_PROP_FRAME_COUNT)
             self.frame_count = int(count) if 0 < count < 2**31 else 0
+            # Matroska (and WebM) holds no count: OpenCV's is its duration times its rate
+            # (85 for a whole file of 60 whose times start at 1 s), which said "truncated" of
+            # a whole file; kept as no count, and only to bound a seek
+            self._seek_count = self.frame_count
+            if src.suffix.lower() in _ESTIMATED_COUNT:
+                self.frame_count = 0
             header_fps = cap.get(cv2.CAP_PROP_FPS) or None
             cap.release()
         # the folder the images are read from (a sequence's img1/), None for a video file
@@ -531,10 +537,14 @@ class VideoReader:
         self.fps = float(fps)
 
     def __len__(self) -> int:
-        """Frames to yield, from the header's count for video files (the file may hold fewer:
-        reading then stops with a warning; or more, which are read too); 0 where the header
-        gives no count and no ``stop`` is given."""
-        if self.frame_count == 0 and self._files is None:
+        """Frames to yield: the images present for a folder; from the header's count for
+        video files (the file may hold fewer: reading then stops with a warning; or more,
+        which are read too); 0 where the header gives no count (nor a Matroska or WebM file,
+        whose count is an estimate) and no ``stop`` is given."""
+        if self._files is not None:  # the images present (a frame without one is none)
+            stop = self.frame_count if self.stop is None else self.stop
+            return sum(1 for k in self._index if self.start <= k <= stop)
+        if self.frame_count == 0:
             return 0 if self.stop is None else max(0, self.stop - self.start + 1)
         stop = self.frame_count if self.stop is None else min(self.stop, self.frame_count)
         return max(0, stop - self.start + 1)
@@ -758,10 +768,11 @@ class VideoReader:
                 # the frame before the start, or the last the header counts (a start past
                 # it: read on from there), where a seek lands where it was sent
                 at = 0
-                if self.frame_count > 0 and self.source.suffix.lower() in _SEEKABLE:
-                    at = min(self.start - 1, self.frame_count - 1)
+                if self._seek_count > 0 and self.source.suffix.lower() in _SEEKABLE:
+                    at = min(self.start - 1, self._seek_count - 1)
                     if at and not (cap.set(cv2.CAP_PROP_POS_FRAMES, at)
-                                   and cap.get(cv2.CAP_PROP_POS_FRAMES) == at):
+                                   and cap.get(cv2.CAP_PROP_POS_FRAMES) == at
+                                   and _at_its_time(cap, at, self.own_fps, self.source)):
                         at = 0
                 if at == 0 and cap.get(cv2.CAP_PROP_POS_FRAMES) != 0:  # (moved: from the first)
                     cap.release()
@@ -848,7 +859,34 @@ def _opencv_name(path: Path, name: str | None = None) -> None:
 
 _SEEKABLE = frozenset({".mp4", ".m4v", ".mov", ".mkv", ".webm", ".avi"})
 """Containers whose frame index OpenCV seeks to exactly (each checked against a reading
-through, frame by frame); a video of another is read through to its start."""
+through, frame by frame), where their frames come at a constant rate (:func:`_at_its_time`);
+a video of another is read through to its start."""
+
+_ESTIMATED_COUNT = frozenset({".mkv", ".webm"})
+"""Containers whose frame count OpenCV estimates from the duration (Matroska holds none)."""
+
+
+def _at_its_time(cap: Any, at: int, fps: float | None, source: Path) -> bool:
+    """Whether a capture sent to frame ``at`` (``CAP_PROP_POS_FRAMES``) lies at the time a
+    constant rate puts it, against frame 1's (B-frames in an AVI put every frame one or two
+    frames late), within half a frame: a seek in a video of variable rate (a phone's)
+    reports the frame sent to and lands on another (frame 30 of one whose second half is 5
+    times slower showed frame 49), which a reading through does not."""
+    import cv2
+
+    if not fps:
+        return False
+    step = 1000.0 / fps
+    probe = cv2.VideoCapture(str(source))
+    try:
+        if not (probe.set(cv2.CAP_PROP_POS_FRAMES, 1)
+                and probe.get(cv2.CAP_PROP_POS_FRAMES) == 1):
+            return False
+        first = probe.get(cv2.CAP_PROP_POS_MSEC)
+    finally:
+        probe.release()
+    off = cap.get(cv2.CAP_PROP_POS_MSEC) - (at - 1) * step - first
+    return bool(abs(off) <= 0.5 * step)
 
 
 def _mp4_rate(fps: float, pixels: int) -> float:
@@ -997,12 +1035,14 @@ class VideoWriter:
             raise ValueError(f"{self.name}: frame {self.frames + 1}: image must be (H, W) or "
                              f"(H, W, 3) uint8; got {im.shape} {im.dtype}")
         size = (im.shape[1], im.shape[0])
+        if self.size is not None and size != self.size:
+            # (before the file is begun: a first frame refused replaced an existing video
+            # with an empty, unreadable one)
+            raise ValueError(f"{self.name}: frame {self.frames + 1} is {size[0]}x{size[1]}; the "
+                             f"video is {self.size[0]}x{self.size[1]}")
         if self._w is None:
             self._open(self.size or size)
         assert self._w is not None and self.size is not None  # both set by _open
-        if size != self.size:
-            raise ValueError(f"{self.name}: frame {self.frames + 1} is {size[0]}x{size[1]}; the "
-                             f"video is {self.size[0]}x{self.size[1]}")
         if im.ndim == 2:
             im = np.repeat(im[:, :, None], 3, axis=2)
         if size[0] % 2 or size[1] % 2:  # the last column or row repeated (see _open)

@@ -191,14 +191,23 @@ class Annotator:
             # a light background once the video was compressed. The box is drawn first, so
             # that the tracks go over it and it hides none; the text last, on a black halo,
             # so that no track hides it ("frame 26" read "frame 2o" under a crowd's trails)
-            (w, h), base = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * z, thin)
+            label_scale = 0.6 * z
+            (w, h), base = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, label_scale, thin)
+            if round(12 * z) + w > W:
+                # narrower than the label: smaller text, whole ("frame 100" on a frame 80
+                # wide was cut to "frame 10")
+                label_scale *= max(W - round(12 * z), 1) / w
+                (w, h), base = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, label_scale,
+                                               thin)
             at_label = (round(8 * z), round(22 * z))
             banner = (round(12 * z) + w, at_label[1] + base + round(2 * z))
             cv2.rectangle(out, (round(4 * z), at_label[1] - h - round(5 * z)), banner,
                           (0, 0, 0), -1)
         self._n += 1
         boxes = tracks.boxes
-        ids = tracks.ids
+        ids = np.asarray(tracks.ids)
+        if ids.dtype.kind == "f" and np.isfinite(ids).all() and (ids == np.round(ids)).all():
+            ids = ids.astype(np.int64)  # (a float identity was labelled "3.0"; written as 3)
         covs = getattr(tracks, "covs", None)
         # a box or point that is not finite has nowhere to be drawn (OpenCV failed on it, and
         # the annotated video with it); one far outside the image is drawn clipped to where
@@ -254,6 +263,9 @@ class Annotator:
             axes_px = np.maximum(np.round(semi).astype(int), 1)[:, ::-1].tolist()
             turned = angles.tolist()
         corners = np.round(boxes).astype(int).tolist() if boxes is not None else None
+        # the numbers after every box and trail: a box drawn after another's number covered
+        # it (track 9's under track 19's top edge)
+        numbers: list[tuple[str, tuple[int, int], tuple[int, int, int]]] = []
         for k, i in enumerate(ids.tolist()):
             c = id_colour(i)
             if covs is not None and has_ellipse[k]:
@@ -280,14 +292,16 @@ class Annotator:
                 continue
             # the whole number inside the image (a box past the left edge showed a sliver)
             org = (min(max(x, 0), max(W - tw, 0)), min(max(y, th), max(H - tb, th)))
-            cv2.putText(out, str(i), org, font, scale, (0, 0, 0), halo,
-                        cv2.LINE_AA)
-            cv2.putText(out, str(i), org, font, scale, c, thin, cv2.LINE_AA)
+            numbers.append((str(i), org, c))
+        for text, org, _ in numbers:
+            cv2.putText(out, text, org, font, scale, (0, 0, 0), halo, cv2.LINE_AA)
+        for text, org, c in numbers:  # (each halo under every number, none over one)
+            cv2.putText(out, text, org, font, scale, c, thin, cv2.LINE_AA)
         if label:
             for colour, width in (((0, 0, 0), thin + 2 * max(1, round(z))),
                                   ((255, 255, 255), thin)):
-                cv2.putText(out, label, at_label, cv2.FONT_HERSHEY_SIMPLEX, 0.6 * z, colour,
-                            width, cv2.LINE_AA)
+                cv2.putText(out, label, at_label, cv2.FONT_HERSHEY_SIMPLEX, label_scale,
+                            colour, width, cv2.LINE_AA)
         return out
 
     def _window(self, slot: int) -> np.ndarray:
