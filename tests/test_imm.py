@@ -245,3 +245,31 @@ def test_p_vs_pv_on_a_real_pedestrian_who_stands_and_walks():
     p = res.mode_probs[:, 0]
     assert (speed < 3).sum() > 40 and (speed > 15).sum() > 60
     assert p[speed < 3].mean() > 0.85 and p[speed > 15].mean() < 0.1
+
+
+def test_a_member_s_nan_log_likelihood_is_named_and_loglik_is_read_only():
+    """One member's NaN log-likelihood was reported as "every model gives zero likelihood"
+    (the other's was finite); `IMMResult.loglik` was writable where the docstring says every
+    array is read-only. Oracle: the member that gave NaN, and the docstring."""
+    import re
+
+    from vistrack.filters import ExtendedKalmanFilter, IMMFilter
+
+    class NaNLL(ExtendedKalmanFilter):
+        def update(self, g, y):
+            g2, ll = super().update(g, y)
+            return g2, np.full(np.shape(ll), np.nan)
+
+    good = ExtendedKalmanFilter(vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1))
+    bad = NaNLL(vt.ConstantVelocity(dim=1, q=1.0), vt.Position(dim=1))
+    with pytest.raises(ValueError, match=re.escape(
+            "filters[1] gave a log-likelihood of NaN for the measurement of series 0 at "
+            "step 0")):
+        IMMFilter([good, bad], [[0.9, 0.1], [0.1, 0.9]]).filter(np.ones((3, 1)), x0=[0, 0],
+                                                                  P0=np.eye(2))
+    imm = IMMFilter([good, ExtendedKalmanFilter(vt.ConstantVelocity(dim=1, q=1.0),
+                                                vt.Position(dim=1))], [[0.9, 0.1], [0.1, 0.9]])
+    for ys in (np.ones((3, 1)), np.ones((2, 3, 1))):
+        res = imm.filter(ys, x0=[0, 0], P0=np.eye(2))
+        with pytest.raises(ValueError, match="read-only"):
+            res.loglik[...] = 0.0

@@ -164,7 +164,8 @@ class IMMFilter:
     ----------
     filters : sequence of filters
         Each with ``predict(g, dt, t) -> Gaussian``, ``update(g, y) -> (Gaussian, loglik)``
-        and ``motion.n`` (its state size): :class:`~vistrack.filters.ExtendedKalmanFilter`,
+        and ``motion.ndim_state`` (its state size):
+        :class:`~vistrack.filters.ExtendedKalmanFilter`,
         :class:`~vistrack.filters.UnscentedKalmanFilter`.
     transition : (M, M) array
         ``transition[i, j]``: probability of switching from model ``i`` to model ``j`` in one
@@ -395,6 +396,11 @@ class IMMFilter:
                     gs[j], ll = f.update(gs[j], y)
                     lls.append(np.broadcast_to(ll, (B,)))
                 joint = log_c + np.stack(lls, -1)
+                nan = np.isnan(joint)
+                if nan.any():  # (one member's NaN read as "every model gives zero")
+                    b, j = (int(v) for v in np.argwhere(nan)[0])
+                    raise ValueError(f"filters[{j}] gave a log-likelihood of NaN for the "
+                                     f"measurement of series {b} at step {t}")
                 norm = _logsumexp(joint, 1)
                 if not np.all(np.isfinite(norm)):
                     b = int(np.argmin(np.isfinite(norm)))
@@ -411,8 +417,9 @@ class IMMFilter:
         if single:
             means, covs, probs, loglik = means[0], covs[0], probs[0], loglik[0]
             member_means = [m[0] for m in member_means]
-        _readonly(means, covs, probs, *member_means)
-        return IMMResult(means, covs, probs, member_means, np.asarray(loglik))
+        loglik = np.asarray(loglik)  # (read-only as the rest, as the docstring says)
+        _readonly(means, covs, probs, loglik, *member_means)
+        return IMMResult(means, covs, probs, member_means, loglik)
 
 
 @dataclass(frozen=True)

@@ -573,7 +573,8 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     else:
         xs, ws = x, w
     z = xs / h
-    picks = _systematic(ws, max(n_starts - 1, 1), search)
+    # (one start was two: the mean and a particle, as the docstring's n_starts - 1 says not)
+    picks = _systematic(ws, n_starts - 1, search) if n_starts > 1 else np.zeros(0, np.intp)
     starts = np.concatenate([[_wmean(xs, ws)], xs[picks]]) / h
     # the kernel is scaled by its largest term over the particles of positive weight (those
     # of zero weight are infinitely far): scaled by the nearest particle, one of zero weight
@@ -664,6 +665,7 @@ def run(x, xb, ys, obs, nobs, Linv, c, angles, dts, times, fp, hp, S, scheme, th
     for t in range(T):
         no = nobs[t]
         top = -np.inf
+        bad = False  # a particle, or its h, not finite: the model's fault, named by the caller
         for i in range(N):
             j = idx[i] if moved else i
             if t > 0:
@@ -675,6 +677,8 @@ def run(x, xb, ys, obs, nobs, Linv, c, angles, dts, times, fp, hp, S, scheme, th
                     for l in range(n):
                         v += S[t, k, l] * e[l]
                     xb[i, k] = v
+                    if not abs(v) < np.inf:
+                        bad = True
             else:
                 for k in range(n):
                     xb[i, k] = x[j, k]
@@ -683,6 +687,8 @@ def run(x, xb, ys, obs, nobs, Linv, c, angles, dts, times, fp, hp, S, scheme, th
                 h(xb[i], hp, z)
                 for a in range(no):
                     k = obs[t, a]
+                    if not abs(z[k]) < np.inf:
+                        bad = True
                     d = ys[t, k] - z[k]
                     if angles[k]:
                         d = wrap_angle(d)
@@ -697,7 +703,7 @@ def run(x, xb, ys, obs, nobs, Linv, c, angles, dts, times, fp, hp, S, scheme, th
             top = max(top, v)
         x, xb = xb, x
         moved = False
-        if not top > -np.inf:
+        if bad or not top > -np.inf:
             s[0], s[1], s[2], s[3] = st
             return t, loglik, x
         for i in range(N):  # vectorised
@@ -1080,9 +1086,13 @@ class ParticleFilter:
             if key not in whiten:
                 whiten[key] = _whitening(me.Rm, np.flatnonzero(obs))
             Linv, c = whiten[key]
-            r = me.residual(np.where(obs, y, 0.0), me.h(x))[:, obs]
+            hx = np.asarray(me.h(x), dtype=float)
+            r = me.residual(np.where(obs, y, 0.0), hx)[:, obs]
             z = r * Linv[0, 0] if r.shape[1] == 1 else r @ Linv.T
-            return c - 0.5 * (z * z).sum(1)
+            ll = c - 0.5 * (z * z).sum(1)
+            # a particle whose h is infinite: NaN, the model's fault (its weight was 0, and
+            # every particle's such read as a lost target); named by the filter
+            return np.where(np.isfinite(hx[:, obs]).all(axis=1), ll, np.nan)
 
         return loglik
 
@@ -1178,6 +1188,8 @@ class ParticleFilter:
                 x = self._propagate(x, float(dts[t]), float(times[t]), rng)
                 if self._user_motion:
                     x = _user_particles(x, N, n, t)
+                elif not np.isfinite(x).all():  # (an infinite particle: NaN means, unsaid)
+                    raise self._failure(t, ys[t], x)
             if not np.isnan(ys[t]).all():
                 a = logw + self._loglik(ys[t], x, t)
                 top = np.max(a)
@@ -1218,9 +1230,9 @@ class ParticleFilter:
             ll = np.asarray(self._loglik(y, x, t), dtype=float)
         if np.isnan(ll).any():
             i = int(np.flatnonzero(np.isnan(ll))[0])
-            return ValueError(f"the measurement model gave NaN for {int(np.isnan(ll).sum())} "
-                              f"of {len(x)} particles at step {t} (measurement {y.tolist()}); "
-                              f"particles[{i}] = {x[i].tolist()}")
+            return ValueError(f"the measurement model gave NaN or infinity for "
+                              f"{int(np.isnan(ll).sum())} of {len(x)} particles at step {t} "
+                              f"(measurement {y.tolist()}); particles[{i}] = {x[i].tolist()}")
         return _degenerate(t, y)
 
     def _initial(self, particles: ArrayLike | None, x0: ArrayLike | None,
