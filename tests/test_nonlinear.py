@@ -1370,3 +1370,75 @@ def test_the_ensemble_filter_checks_before_it_draws_and_names_model_values_of_wr
     with pytest.raises(ValueError, match=re.escape(
             "ens must have members of 2 values, the motion model's; got 3")):
         EnsembleKalmanFilter(cv, pos).update(Ensemble(np.zeros((5, 3))), [0.0])
+
+
+def test_the_sigma_point_filters_and_the_ekf_refuse_what_their_other_path_refuses():
+    """The batched sigma points took a NaN covariance (LAPACK's factor is NaN, no error: the
+    update blamed `h`) where the one-Gaussian path named it, and an infinite one on both;
+    a measurement model's `R` of a negative variance gave a posterior variance of -1.33
+    (UKF and EKF), an asymmetric one was read by its lower triangle in the UKF and whole in
+    the EKF; `alpha` 1e155 met float's OverflowError and `kappa` 1e308 gave NaN weights;
+    `points(x (2,), P (3, 2, 2))` met numpy's words; the EKF took a covariance of a
+    negative variance; `points="merwe"` failed at the first step and `points=0` was the
+    default. Oracles: the other path's words, and `Q`'s checks for `R`."""
+    from vistrack.filters import (
+        MerweScaledSigmaPoints,
+        UnscentedKalmanFilter,
+        ekf_predict,
+        ekf_update,
+        ukf_predict,
+        ukf_update,
+    )
+
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1)
+    nan = np.array([[np.nan, 0.0], [0.0, 1.0]])
+    for g in (vt.Gaussian(np.zeros(2), nan), vt.Gaussian(np.zeros((1, 2)), nan[None]),
+              vt.Gaussian(np.zeros(2), np.diag([np.inf, 1.0]))):
+        with pytest.raises(ValueError, match=r"^g\.cov must be finite"):
+            ukf_predict(g, cv)
+        with pytest.raises(ValueError, match=r"^g\.cov must be finite"):
+            ukf_update(g, np.zeros(g.mean.shape[:-1] + (1,)), pos)
+    with pytest.raises(ValueError, match=r"^P must be finite"):
+        MerweScaledSigmaPoints(0.5).points(np.zeros((1, 2)), nan[None])
+    prior = vt.Gaussian(np.zeros(2), 4 * np.eye(2))
+    class Plain:  # (a user's own model: NonlinearMeasurement checks its R itself)
+        def __init__(self, R):
+            self._R = np.asarray(R, float)
+
+        def h(self, x):
+            return x
+
+        def jacobian(self, x):
+            return np.broadcast_to(np.eye(2), x.shape[:-1] + (2, 2))
+
+        def R(self):
+            return self._R
+
+    for R, said in ((np.diag([-1.0, 1.0]), "measurement.R() must be positive semi-definite"),
+                    ([[1.0, 0.5], [0.0, 1.0]], "measurement.R() must be symmetric")):
+        me = Plain(R)
+        for update in (ukf_update, ekf_update):
+            with pytest.raises(ValueError, match=re.escape(said)):
+                update(prior, [1.0, 1.0], me)
+    for kw in (dict(alpha=1e155), dict(alpha=10.0, kappa=1e308)):
+        with pytest.raises(ValueError, match=re.escape("alpha**2 * (n + kappa) must be "
+                                                       "finite")):
+            MerweScaledSigmaPoints(**kw).weights(2)
+    p = MerweScaledSigmaPoints(0.5)
+    many = p.points(np.zeros(2), np.broadcast_to(np.eye(2), (3, 2, 2)))
+    assert many.shape == (3, 5, 2) and np.array_equal(many[1], p.points_one(np.zeros(2),
+                                                                            np.eye(2)))
+    with pytest.raises(ValueError, match=re.escape(
+            "x and P must have batch shapes that broadcast; got x (3, 2) and P (4, 2, 2)")):
+        p.points(np.zeros((3, 2)), np.broadcast_to(np.eye(2), (4, 2, 2)))
+    for call in (lambda: ekf_update(vt.Gaussian(np.zeros(2), [[1.0, 2.0], [2.0, 1.0]]), [1.0],
+                                    pos),
+                 lambda: ekf_predict(vt.Gaussian(np.zeros(2), -np.eye(2)), cv)):
+        with pytest.raises(ValueError, match=r"^g\.cov must be positive semi-definite"):
+            call()
+    for points in ("merwe", 0):
+        with pytest.raises(TypeError, match="^points must be MerweScaledSigmaPoints or "
+                                            "JulierSigmaPoints"):
+            UnscentedKalmanFilter(cv, pos, points=points)
+        with pytest.raises(TypeError, match="^points must be"):
+            ukf_predict(prior, cv, points=points)

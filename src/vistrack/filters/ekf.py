@@ -23,7 +23,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import check_one_step
+from .._validate import check_finite, check_one_step, check_psd
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
     MeasurementModel,
@@ -58,7 +58,7 @@ def ekf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     >>> ekf_predict(g, CoordinatedTurn(q=0.1), dt=1.0).mean.round(3)
     array([0.998, 0.05 , 0.995, 0.1  , 0.1  ])
     """
-    g = check_gaussian(g)
+    g = _checked(g)
     check_one_step(dt)
     mo = MotionFunctions.of(motion)
     if g.mean.shape[-1] != mo.n:  # (numpy's broadcast error, naming neither; as ukf_predict)
@@ -67,6 +67,17 @@ def ekf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     G = mo.jacobian(g.mean, dt, t)
     cov = symmetric(G @ g.cov @ np.swapaxes(G, -1, -2) + mo.Q(dt))
     return Gaussian(np.asarray(mo.f(g.mean, dt, t), dtype=float), cov)
+
+
+def _checked(g: object) -> Gaussian:
+    """``g``, a Gaussian whose mean and covariance are finite and whose covariance is
+    symmetric positive semi-definite, as the UKF takes it (a covariance of a negative
+    variance, or not symmetric, gave estimates with negative variances, without a word)."""
+    g = check_gaussian(g)
+    check_finite(g.mean, "g.mean")
+    check_finite(g.cov, "g.cov")
+    check_psd(g.cov, "g.cov")
+    return g
 
 
 def ekf_update(g: Gaussian, y: ArrayLike,
@@ -87,7 +98,7 @@ def ekf_update(g: Gaussian, y: ArrayLike,
 def _ekf_update(g: Gaussian, y: ArrayLike,
                 measurement: MeasurementModel | NonlinearMeasurementModel,
                 residual: Callable | None) -> tuple[Gaussian, np.ndarray]:
-    g = check_gaussian(g)
+    g = _checked(g)
     n = g.mean.shape[-1]
     me = MeasurementFunctions.of(measurement, n, residual)
     y = check_y(y, g.mean.shape[:-1], me.m)

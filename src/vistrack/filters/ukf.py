@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -344,10 +345,23 @@ class _SigmaPoints:
         if P.shape[-2:] != (n, n):
             raise ValueError(f"P must be (..., {n}, {n}), the size of x's {n} values; got "
                              f"shape {P.shape}")
+        try:  # (numpy's broadcast error named neither: x (2,) with P (3, 2, 2) is 3 points)
+            np.broadcast_shapes(x.shape[:-1], P.shape[:-2])
+        except ValueError:
+            raise ValueError(f"x and P must have batch shapes that broadcast; got x "
+                             f"{x.shape} and P {P.shape}") from None
         check_finite(x, "x")
         check_symmetric(P, "P")
 
+    @staticmethod
+    def _finite(x: np.ndarray, P: np.ndarray, name: str) -> None:
+        """The mean and covariance ``name`` finite (LAPACK's factor of a NaN matrix is NaN,
+        without an error: the batch's points were NaN, and its update blamed ``h``)."""
+        check_finite(x, name.replace("cov", "mean") if "cov" in name else "x")
+        check_finite(P, name)
+
     def _one(self, x: np.ndarray, P: np.ndarray, name: str) -> np.ndarray:
+        self._finite(x, P, name)
         n = x.shape[0]
         out = np.empty((2 * n + 1, n))
         scale = float(n + self._lam(n))
@@ -399,12 +413,29 @@ class _SigmaPoints:
         return self._many(x, P, "P")
 
     def _many(self, x: np.ndarray, P: np.ndarray, name: str) -> np.ndarray:
+        self._finite(x, P, name)
         n = x.shape[-1]
         check_symmetric(P, name)  # (LAPACK's factor reads the lower triangle alone)
         L = _sqrt(P, n + self._lam(n), name)
         Lt = np.swapaxes(L, -1, -2)  # row i = column i of L
-        return np.concatenate([x[..., None, :], x[..., None, :] + Lt, x[..., None, :] - Lt],
-                              axis=-2)
+        xb = x[..., None, :]
+        if xb.shape[:-2] != Lt.shape[:-2]:  # (a mean for many covariances, or the reverse)
+            batch = np.broadcast_shapes(xb.shape[:-2], Lt.shape[:-2])
+            xb = np.broadcast_to(xb, batch + xb.shape[-2:])
+            Lt = np.broadcast_to(Lt, batch + Lt.shape[-2:])
+        return np.concatenate([xb, xb + Lt, xb - Lt], axis=-2)
+
+
+def _points_or_default(points: Any) -> _SigmaPoints:
+    """``points``, the package's sigma points, or Van der Merwe's by default (None): a falsy
+    value (0) was taken as the default, and text or another library's points failed at the
+    first step on an attribute."""
+    if points is None:
+        return MerweScaledSigmaPoints()
+    if not isinstance(points, _SigmaPoints):
+        raise TypeError(f"points must be MerweScaledSigmaPoints or JulierSigmaPoints; got "
+                        f"{type(points).__name__}")
+    return points
 
 
 class MerweScaledSigmaPoints(_SigmaPoints):
@@ -467,7 +498,11 @@ class MerweScaledSigmaPoints(_SigmaPoints):
         return f"MerweScaledSigmaPoints(alpha={self.alpha}, beta={self.beta}, kappa={self.kappa})"
 
     def _lam(self, n: int) -> float:
-        lam = self.alpha**2 * (n + self.kappa) - n
+        with np.errstate(over="ignore"):  # (alpha 1e155: float's OverflowError, unnamed)
+            lam = float(np.float64(self.alpha) ** 2 * (n + np.float64(self.kappa)) - n)
+        if not n + lam < np.inf:  # (kappa 1e308 gave weights of NaN, and NaN estimates)
+            raise ValueError(f"alpha**2 * (n + kappa) must be finite; got alpha {self.alpha}, "
+                             f"kappa {self.kappa} for n={n}")
         if n + lam <= 0:
             raise ValueError(f"alpha**2 * (n + kappa) must be > 0; got {n + lam} for n={n}")
         return lam
@@ -679,7 +714,7 @@ def ukf_predict(g: Gaussian, motion: MotionModel | NonlinearMotionModel, dt: flo
     g = check_gaussian(g)
     check_one_step(dt)
     mo = MotionFunctions.of(motion)
-    points = points or MerweScaledSigmaPoints()
+    points = _points_or_default(points)
     n = g.mean.shape[-1]
     if n != mo.n:  # (numpy's matmul error, naming neither)
         raise ValueError(f"g must have a state of {mo.n} values, the motion model's; got {n}")
@@ -807,7 +842,7 @@ def _ukf_update(g: Gaussian, y: ArrayLike,
     n = g.mean.shape[-1]
     me = MeasurementFunctions.of(measurement, n, residual, mean)
     y = check_y(y, g.mean.shape[:-1], me.m)
-    points = points or MerweScaledSigmaPoints()
+    points = _points_or_default(points)
     Wm, Wc = points.weights(n)
     if g.mean.ndim == 1 and me.standard and state_residual is None:
         gamma = points._one(g.mean, g.cov, "g.cov")
@@ -893,7 +928,7 @@ class UnscentedKalmanFilter:
                  state_residual: Callable | None = None, state_mean: Callable | None = None):
         self.motion = MotionFunctions(motion)
         self.measurement = MeasurementFunctions(measurement, self.motion.n, residual, mean)
-        self.points = points or MerweScaledSigmaPoints()
+        self.points = _points_or_default(points)
         self.state_residual, self.state_mean = state_residual, state_mean
 
     def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike, dt: ArrayLike = 1.0,

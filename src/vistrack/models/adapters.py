@@ -344,7 +344,10 @@ class MeasurementFunctions:
                 f"and R(); got {type(model).__name__}"
             )
         self.Rm = np.asarray(model.R(), dtype=float)
-        self.m = self.Rm.shape[-1]
+        self.m = self.Rm.shape[-1] if self.Rm.ndim else 0
+        # checked as Q is: a negative variance gave posteriors with one too, an asymmetric R
+        # was read by its lower triangle in the UKF and whole in the EKF
+        _check_noise_matrix(self.Rm, self.m, "measurement.R()")
         angles = tuple(int(k) for k in getattr(model, "angles", ()))
         # a model with angles but no residual or mean of its own: its angles wrapped and
         # averaged on the circle all the same (the ensemble KF's mean; the UKF, compiled or
