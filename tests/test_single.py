@@ -1110,3 +1110,64 @@ def test_the_colour_particle_tracker_takes_no_scales():
     with pytest.raises(TypeError, match="ColourParticleTracker takes no scales"):
         ColourParticleTracker(rng=0, scales=(0.5, 3.0))
     assert ColourParticleTracker(rng=0, bins=8).bins == 8
+
+
+def test_scores_name_boxes_that_are_no_numbers_and_count_an_infinite_truth_as_a_box():
+    """The scores took boolean boxes as boxes of 1s and complex ones as their real parts,
+    and text or ragged rows failed in numpy's words; an infinite true value was an absent
+    object (a hit for precision) where OTB's test (`rect_anno > 0`) takes it as a box (an
+    infinite centre error, a miss). Oracle: OTB's rule, written out."""
+    from vistrack.evaluation.single import precision, success_rate
+
+    g = [[0, 0, 10, 10]]
+    with pytest.raises(TypeError, match="^pred must be x, y, w, h"):
+        success_rate(np.ones((1, 4), bool), g)
+    with pytest.raises(TypeError, match="^pred must be real numbers"):
+        success_rate(np.array(g) + 5j, g)
+    for bad in ("0,0,10,10", [[0, 0, 10, 10], [0, 0, 10]]):
+        with pytest.raises(TypeError, match="^pred must be an array of numbers"):
+            success_rate(bad, g * 2)
+    p = np.array([[10.0, 10, 20, 20]] * 2)
+    gt = p.copy()
+    gt[1, 0] = np.inf
+    # OTB: frame 2's truth is a box (every value > 0), its centre error infinite: a miss
+    assert precision(p, gt) == 0.5 and success_rate(p, gt) == 0.5
+
+
+def test_colour_trackers_keep_their_boxes_in_reach_and_take_a_whole_float_seed():
+    """CamShift took the bounding box of a turned rectangle larger than the image (49 pixels
+    past every edge) where OpenCV's own window is clipped to the image; the colour particle
+    tracker's log-scale walk overflowed with a large step (an IndexError on the second
+    frame, the particles moved) and a seed of 3.0 failed at init() in numpy's words.
+    Oracles: OpenCV's window, and the same tracker seeded 3."""
+    from vistrack.tracking.single import CamShiftTracker
+
+    rng = np.random.default_rng(1)
+    bg = cv2.GaussianBlur(rng.uniform(60, 200, (240, 320, 3)).astype(np.float32), (0, 0), 3)
+    tex = cv2.GaussianBlur(rng.uniform(0, 255, (50, 50, 3)).astype(np.float32), (0, 0), 1.5)
+
+    def frame(cx):
+        im = bg.copy()
+        x0 = int(cx) - 25
+        a, b = max(x0, 0), min(x0 + 50, 320)
+        if b > a:
+            im[95:145, a:b] = tex[:, a - x0:b - x0]
+        return np.clip(im, 0, 255).astype(np.uint8)
+
+    t = CamShiftTracker()
+    t.init(frame(200), [175, 95, 50, 50])
+    for k in range(1, 20):  # the object leaves on the right
+        x, y, w, h = t.update(frame(200 + 12 * k))
+        assert x >= 0 and y >= 0 and x + w <= 320 and y + h <= 240
+    for step in (100, 0.15):
+        p = ColourParticleTracker(step=step, rng=0)
+        p.init(frame(150), [125, 95, 50, 50])
+        for _ in range(30):
+            box = p.update(frame(150))
+            assert np.isfinite(box).all() and (box[2:] > 0).all()
+    with pytest.raises(ValueError, match="step must be a finite number >= 0 and <= 100"):
+        ColourParticleTracker(step=1000)
+    a, b = ColourParticleTracker(rng=3.0), ColourParticleTracker(rng=3)
+    for tr in (a, b):
+        tr.init(frame(150), [125, 95, 50, 50])
+    assert np.array_equal(a.update(frame(153)), b.update(frame(153)))

@@ -10,7 +10,8 @@ scored as OTB's toolkit scores them (``calcSeqErrRobust``): a predicted box that
 of no size (a tracker that lost the object) stands for the last box before it, where the
 ground truth has a box (a box with only some of its values NaN, or infinite, is a miss); a
 frame whose ground truth is NaN or of no size (the object absent) counts as a failure for
-success and as a hit for precision. (OTB also takes a true box whose ``x`` or ``y`` is 0 or
+success and as a hit for precision (an infinite true value is a box, and a miss, as OTB's
+test takes it). (OTB also takes a true box whose ``x`` or ``y`` is 0 or
 less, in its 1-based pixels, as absent; vistrack's boxes count from 0, and a box at the
 image's edge is a box. OTB's toolkit also puts the ground truth's first box in place of the
 tracker's, the frame it started from; vistrack scores the tracker's own first box, which may
@@ -26,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_finite, decode_text
+from .._validate import as_finite, as_float_array, decode_text
 from ..io.motchallenge import _text_lines
 from ..io.tracks import write_boxes
 
@@ -37,7 +38,9 @@ __all__ = ["success_rate", "success_curve", "precision", "region_to_bbox", "read
 def _boxes(value: ArrayLike, name: str, k: int = 4) -> np.ndarray:
     """``(T, k)`` from ``(T, k)`` or one ``(k,)``; anything else named (a ``(4, T)`` array was
     read row by row as other boxes, and 5 values failed in numpy's reshape)."""
-    a = np.asarray(value, dtype=float)
+    # (booleans were boxes of 1s, complex values their real parts, text and ragged rows
+    # numpy's words naming neither argument)
+    a = as_float_array(value, name, not_boolean="x, y, w, h")
     if a.ndim == 1 and a.shape[0] == k:
         a = a[None]
     if a.ndim != 2 or a.shape[1] != k:
@@ -56,7 +59,9 @@ def _pair(pred: ArrayLike, gt: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _has_box(b: np.ndarray) -> np.ndarray:
-    return np.isfinite(b).all(axis=1) & (b[:, 2] > 0) & (b[:, 3] > 0)
+    # absent: a NaN, or no size; an infinite value is a box (a miss), as OTB's test
+    # (every value > 0 or not NaN) takes it, where it was an absent object, a hit
+    return ~np.isnan(b).any(axis=1) & (b[:, 2] > 0) & (b[:, 3] > 0)
 
 
 def _otb(pred: ArrayLike, gt: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

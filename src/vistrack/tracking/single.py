@@ -689,8 +689,13 @@ class CamShiftTracker(ColourTracker):
             # the corners' own bounding box (cv2.boundingRect's whole pixels, first and last
             # included, made the box 1-2 pixels larger than the window, and learnt from that)
             pts = cv2.boxPoints(rect)
-            lo, hi = pts.min(axis=0), pts.max(axis=0)
-            self.box = np.r_[lo, hi - lo].astype(float)
+            # within the image, as OpenCV's own window is (a rectangle larger than the
+            # image, turned, reached 49 pixels past every edge)
+            H, W = bp.shape[:2]
+            lo = np.maximum(pts.min(axis=0), 0.0)
+            hi = np.minimum(pts.max(axis=0), [W, H])
+            if (hi > lo).all():
+                self.box = np.r_[lo, hi - lo].astype(float)
         self._learn(cells)
         return self.box.copy()
 
@@ -740,13 +745,16 @@ class ColourParticleTracker(ColourTracker):
         super().__init__(**kwargs)
         # an infinite sharpness gave NaN boxes, a NaN step an IndexError
         self.n = as_whole(n_particles, "n_particles", 1)
-        self.step_size = as_finite(step, "step", 0.0)
+        # at most 100 box sizes a frame (a step of 1000 overflowed the log scale's walk, and
+        # the boxes' sums then failed in an IndexError, the particles moved)
+        self.step_size = as_finite(step, "step", 0.0, high=100.0)
         self.sharpness = as_finite(sharpness, "sharpness", 0.0)
         if not (rng is None or isinstance(rng, np.random.Generator) or is_whole(rng, 0)):
             # (True was seed 1; -1, 1.5 or "a" failed at init() in numpy's words)
             raise ValueError(f"rng must be a numpy Generator, a whole-number seed >= 0 or "
                              f"None; got {rng!r}")
-        self._seed = rng
+        # a seed of 3.0 is seed 3 (numpy's SeedSequence refused the float at init())
+        self._seed = rng if rng is None or isinstance(rng, np.random.Generator) else int(rng)
 
     def _start(self, image: np.ndarray, box: np.ndarray) -> None:
         super()._start(image, box)  # first: an image refused leaves the tracker as it was
@@ -793,6 +801,11 @@ class ColourParticleTracker(ColourTracker):
         sz = self.size * np.exp(self.x[:, 2:3])
         self.x[:, :2] += self.rng.standard_normal((self.n, 2)) * self.step_size * sz
         self.x[:, 2] += self.rng.standard_normal(self.n) * self.step_size / 4
+        # sizes from a pixel to four times the image (the log scale's walk is unbounded: a
+        # large step overflowed it over a few frames)
+        H, W = image.shape[:2]
+        np.clip(self.x[:, 2], np.log(1.0 / self.size.min()),
+                np.log(4.0 * max(H, W) / self.size.max()), out=self.x[:, 2])
         # weigh
         sz = self.size * np.exp(self.x[:, 2:3])
         boxes = np.c_[self.x[:, :2] - sz / 2, sz]
