@@ -957,7 +957,9 @@ def test_a_configuration_file_without_a_name_goes_over_the_tracker_given(tmp_pat
     path.write_text('[tracker]\nscores = "raw"\n[offline]\nstart_score = 3.0\n')
     assert main(["track", "--print-config", "--config", str(path), "--scores",
                  "calibrated"]) == 2
-    assert f"--scores over {path}: start_score must be in [0, 1]" in capsys.readouterr().err
+    said = capsys.readouterr().err
+    assert f"{path}:4: [offline] start_score must be in [0, 1]" in said
+    assert said.rstrip().endswith("(with --scores calibrated)")
 
 
 @pytest.mark.parametrize("flag, value", [("--jobs", "2"), ("--scheduler", "tcp://x:1")])

@@ -788,7 +788,9 @@ def test_a_start_score_that_changes_nothing_and_a_files_value_are_said(seq, tmp_
     low = tmp_path / "low.toml"
     low.write_text("[tracker]\nlow = 0.5\n")
     r = cli(seq, "--out", tmp_path / "c.txt", "--config", low, "--high", "0.4")
-    assert r.returncode == 2 and f"--high over {low}: low must be at most high" in r.stderr
+    # the file's low at its line, with the option that made it wrong
+    assert r.returncode == 2 and f"{low}:2: [tracker] low must be at most high" in r.stderr
+    assert r.stderr.rstrip().endswith("(with --high 0.4)")
 
 
 @pytest.mark.parametrize("value, read", [("-5e-1", -0.5), ("-.25E+1", -2.5), ("-0.5", -0.5),
@@ -832,3 +834,85 @@ def test_offline_durations_need_a_frame_rate():
         with pytest.raises(ValueError, match=re.escape(f"frame_rate must be a finite number "
                                                        f"> 0; got {bad!r}")):
             OfflineConfig().frames(bad)
+
+
+def test_the_options_are_checked_over_the_file_and_name_what_is_theirs(seq, tmp_path):
+    """The --config file was checked on its own before the options came over it: a file of
+    raw thresholds (high = 3) was refused before --scores raw, one of high = 0.2 before
+    --low 0.1 (which the same values as options take); an error from a value of the file
+    was blamed on the option alone; a key's text inside a string of several lines named
+    that line. Oracles: the same values as options, and the line that sets the key."""
+    raw = tmp_path / "raw.toml"
+    raw.write_text("[tracker]\nhigh = 3\nlow = 1\nnew_track = 4\nfuse_score = false\n")
+    a = tmp_path / "a.txt"
+    r = cli(seq, "--out", a, "--config", raw, "--scores", "raw")
+    assert r.returncode == 0, r.stderr
+    low = tmp_path / "low.toml"
+    low.write_text("[tracker]\nhigh = 0.2\n")
+    c, d = tmp_path / "c.txt", tmp_path / "d.txt"
+    assert cli(seq, "--out", c, "--config", low, "--low", "0.1").returncode == 0
+    assert cli(seq, "--out", d, "--high", "0.2", "--low", "0.1").returncode == 0
+    assert c.read_bytes() == d.read_bytes()
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[offline]\nlink_gap = 0\nlink_iou = 0\n")
+    r = cli(seq, "--out", c, "--config", bad, "--offline", "--link-gap", "1", "--force")
+    assert r.returncode == 2
+    assert f"{bad}:3: [offline] link_iou must be in (0, 1]" in r.stderr
+    high = tmp_path / "high.toml"
+    high.write_text("[tracker]\nhigh = 0.4\n")
+    r = cli(seq, "--out", c, "--config", high, "--low", "0.5", "--force")
+    assert r.returncode == 2 and f"--low over {high}: low must be at most high" in r.stderr
+    r = cli(seq, "--out", c, "--config", raw, "--force")  # (the file alone: its line)
+    assert r.returncode == 2 and f"{raw}:2: [tracker] high must be in [0, 1]" in r.stderr
+    note = tmp_path / "note.toml"
+    note.write_text('[derived]\nnote = """\n[tracker]\nhigh = 1\n"""\n[tracker]\nhigh = 2\n')
+    with pytest.raises(ConfigError, match=re.escape(f"{note}:7: [tracker] high must be")):
+        read_config(note)
+
+
+def test_fit_refuses_to_write_over_its_own_config_and_thresholds_are_finite(tmp_path, seq):
+    """`vistrack fit --out c.toml --config c.toml --force` replaced its own input, which
+    `track` refuses; raw thresholds of -inf or inf were taken from a file where --high
+    refuses them; [motion] values of 1e160 were taken and failed partway through a run.
+    Oracle: track's refusal, and the options' ranges."""
+    c = tmp_path / "c.toml"
+    c.write_text("[tracker]\nmax_lost = 1.5\n")
+    before = c.read_text()
+    r = subprocess.run([sys.executable, "-m", "vistrack.cli", "fit", str(seq), "--out",
+                        str(c), "--config", str(c), "--force"], capture_output=True, text=True)
+    assert r.returncode == 2 and "--config" in r.stderr and c.read_text() == before
+    for key in ("high", "low", "new_track"):
+        for v in ("inf", "-inf"):
+            c.write_text(f'[tracker]\nscores = "raw"\n{key} = {v}\n')
+            with pytest.raises(ConfigError, match=re.escape(f"{key} must be a finite number")):
+                read_config(c)
+    for key in ("std_pos", "std_vel", "init_pos", "init_vel", "std_meas"):
+        c.write_text(f"[motion]\n{key} = 1e160\n")
+        with pytest.raises(ConfigError, match=re.escape(f"[motion] {key} must be a finite "
+                                                        f"number > 0 and <= 1e+100")):
+            read_config(c)
+    c.write_text("[motion]\nstd_pos = 1e100\n")
+    assert read_config(c).motion.std_pos == 1e100
+
+
+def test_a_file_printed_with_still_camera_says_so_when_read_back_without_it(tmp_path):
+    """In video mode --still-camera turns the background model's following of the view
+    off, a front-end's option the file does not hold: read back without it, the view was
+    followed and the tracks differed (736 boxes against 267 on a pan), without a word. The
+    file records it in [derived] (as --fps), a run read back without it is warned, and with
+    it the tracks are the same. Oracle: the printing run's own tracks."""
+    clip = demo_clip().video
+    p1, p2 = tmp_path / "p1", tmp_path / "p2"
+    r = subprocess.run(CLI + [str(clip), "--out-dir", str(p1), "--still-camera", "--stop", "40",
+                              "--print-config"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    toml = tmp_path / "p1.toml"
+    toml.write_text(r.stdout)
+    assert "still_camera_option = true" in r.stdout
+    r = subprocess.run(CLI + [str(clip), "--out-dir", str(p2), "--config", str(toml), "--stop",
+                              "40"], capture_output=True, text=True)
+    assert "was printed by a run given --still-camera" in r.stderr
+    r = subprocess.run(CLI + [str(clip), "--out-dir", str(p2), "--config", str(toml), "--stop",
+                              "40", "--still-camera", "--force"], capture_output=True, text=True)
+    assert r.returncode == 0 and "was printed by a run given --still-camera" not in r.stderr
+    assert (p1 / "tracks.txt").read_bytes() == (p2 / "tracks.txt").read_bytes()

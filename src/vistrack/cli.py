@@ -198,7 +198,8 @@ _SETTINGS = (
     ("min_track_score", "offline", "min_track_score", float, "X",
      "offline: the lowest mean confidence of a track's detections kept", 0.75),
     ("start_score", "offline", "start_score", float, "X",
-     "offline: the lowest confidence that starts a track, if above --new-track", 0.8),
+     "offline: the lowest confidence that starts a track, if above --high and "
+     "--new-track", 0.8),
     ("link_gap", "offline", "link_gap", float, "SECONDS",
      "offline: join tracks up to this far apart (0: never)", 2.0),
 )
@@ -213,7 +214,17 @@ def _config_file(args: argparse.Namespace) -> tuple[TrackConfig, dict[str, Any]]
     memo = getattr(args, "config_file_read", None)
     if memo is None:
         base = TrackConfig.preset(args.tracker) if args.tracker is not None else None
-        memo = args.config_file_read = _read_config_file(args.config, base)
+        # the setting options over the file's values, checked together (each option is put
+        # over --config, as its help says: checked alone, the file's high = 0.2 was refused
+        # before --low 0.1 came over it)
+        over: dict[str, dict[str, Any]] = {}
+        names: dict[tuple[str, str], str] = {}
+        for option, table, key, *_ in _SETTINGS:
+            value = getattr(args, option, None)
+            if value is not None:
+                over.setdefault(table, {})[key] = value
+                names[(table, key)] = "--" + option.replace("_", "-")
+        memo = args.config_file_read = _read_config_file(args.config, base, over, names)
     return memo[:2]
 
 
@@ -494,6 +505,11 @@ def _track(args: argparse.Namespace) -> int:
         if args.fps is not None:  # the frame rate is the input's, not the configuration's:
             # a file read back with --config warns where the run is given another
             derived["fps_option"] = float(args.fps)
+        if args.still_camera and _follows_view(args):
+            # the background model's following of the view is the front-end's, not the
+            # tracker's: read back without --still-camera the view was followed, and the
+            # tracks differed (736 boxes against 267), without a word
+            derived["still_camera_option"] = True
         sys.stdout.write(config_toml(run.config, derived))
     return 0
 
@@ -693,6 +709,12 @@ def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
     why = _still_already(args) if args.still_camera else None
     if why:
         warnings.warn(f"--still-camera changes nothing here: {why}", UserWarning, stacklevel=1)
+    if args.config is not None and _config_file(args)[1].get("still_camera_option") is True \
+            and not args.still_camera and _follows_view(args):
+        warnings.warn(f"{args.config} was printed by a run given --still-camera ([derived] "
+                      "still_camera_option): the background model's following of the view "
+                      "is the front-end's, not a setting of the file; give --still-camera "
+                      "for that run's tracks", UserWarning, stacklevel=1)
     printed = _printed_fps(_config_file(args)[1]) if args.config is not None and rate \
         else None
     if printed is not None and printed != args.fps:
@@ -759,6 +781,16 @@ def _dask_client(address: str) -> Any:
                          f"({' '.join(str(e).split())})") from None
     finally:
         log.setLevel(level)
+
+
+def _follows_view(args: argparse.Namespace) -> bool:
+    """Whether this run's front-end, from pixels, follows a view that moves unless
+    ``--still-camera`` (the selective background model's)."""
+    from .pipeline import FRONTENDS, default_frontend
+
+    front = args.frontend or default_frontend(args.tracker or "bytetrack")
+    return args.out_dir is not None and front in FRONTENDS and FRONTENDS[front].still_camera \
+        and args.background != "mog2"
 
 
 def _still_already(args: argparse.Namespace) -> str | None:
@@ -1112,7 +1144,11 @@ def _fit(args: argparse.Namespace) -> int:
         return _fail("fit", "--no-held-out goes with --gt")
     inputs = expand_inputs(args.inputs)  # a folder of sequences: its sequences, as track's
     # (--force wrote the configuration over a sequence's detections, or its ground truth)
-    check_not_input([args.out], [r for s in inputs for r in sequence_inputs(s)], name="--out")
+    # (and over its own --config: fit --out c.toml --config c.toml --force replaced it, where
+    # track refuses the same)
+    check_not_input([args.out], [r for s in inputs for r in sequence_inputs(s)]
+                    + ([("--config", args.config)] if args.config is not None else []),
+                    name="--out")
     check_output(args.out, force=args.force, name="--out")
     if Path(args.out).suffix.lower() not in ("", ".toml"):
         # (fit --out learned.json wrote TOML unsaid, where track --out results.json warns)

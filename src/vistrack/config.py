@@ -378,13 +378,21 @@ def _key_line(text: str, table: str, key: str | None = None) -> int | None:
     1
     >>> _key_line('tracker.high = 2\n', "tracker", "high")
     1
+    >>> _key_line("[derived]\nnote = '''\n[tracker]\nhigh = 1\n'''\n[tracker]\nhigh = 2\n",
+    ...           "tracker", "high")
+    7
     """
     def parts(dotted: str) -> list[str]:
         return [p.strip().strip("\"'") for p in dotted.split(".")]
 
     current: list[str] = []
+    inside: str | None = None  # the delimiter of a string of several lines the line is in
     # (lines as editors and TOML count them: splitlines also broke at U+2028 in a comment)
     for number, line in enumerate(_text_lines(text), 1):
+        if inside is not None:  # (a key's text in such a string was named as the key's line)
+            if inside in line:
+                inside = None
+            continue
         # read with string methods, not patterns, so a long line costs its length once
         line = line.strip()
         if line.startswith("[["):  # an array of tables: none of ours, but named where asked
@@ -403,6 +411,9 @@ def _key_line(text: str, table: str, key: str | None = None) -> int | None:
         said, equals, value = line.partition("=")
         if not equals or "#" in said:
             continue
+        opened = [d for d in ('"""', "'''") if value.count(d) % 2]
+        if opened:  # the value's string goes on over the next lines
+            inside = opened[0]
         where = current + parts(said)
         if where[:1] != [table]:
             continue
@@ -461,11 +472,19 @@ def read_config_file(path: str | os.PathLike, base: TrackConfig | None = None
     return _read_config_file(path, base)[:2]
 
 
-def _read_config_file(path: str | os.PathLike, base: TrackConfig | None = None
+def _read_config_file(path: str | os.PathLike, base: TrackConfig | None = None,
+                      over: dict[str, dict[str, Any]] | None = None,
+                      names: dict[tuple[str, str], str] | None = None
                       ) -> tuple[TrackConfig, dict[str, Any], dict[str, frozenset[str]]]:
     """:func:`read_config_file`, and the keys the file sets in each table (``tracker``,
     ``motion``, ``offline``): what it leaves to the preset, or to the command line's
-    front-end (a background model's still camera)."""
+    front-end (a background model's still camera).
+
+    ``over`` holds values put over the file's, table by table (the command line's options,
+    whose names ``names`` gives by table and key), checked with them: checked alone first,
+    a file of raw thresholds (``high = 3``) was refused before ``--scores raw`` came over
+    it, and one of ``high = 0.2`` before ``--low 0.1``. A value at fault that ``over``
+    gave is named by its option."""
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -540,15 +559,29 @@ def _read_config_file(path: str | os.PathLike, base: TrackConfig | None = None
             elif kind == "float":
                 given[key] = float(value)
     for table, given in values.items():  # one table at a time, to name the one that is wrong
+        extra = (over or {}).get(table, {})
+        merged = {**given, **extra}
         try:
-            cfg = cfg.with_values(**{table: given})
+            cfg = cfg.with_values(**{table: merged})
         except ValueError as exc:
             # the key the message is about: the one it opens with, else the first it names
             said = str(exc)
-            named = [k for k in given if re.search(rf"\b{re.escape(str(k))}\b", said)]
+            named = [k for k in merged if re.search(rf"\b{re.escape(str(k))}\b", said)]
             first = re.match(r"\w+", said)
-            key = first[0] if first and first[0] in given else (named[0] if named else None)
-            raise ConfigError(f"{at(table, key)}: [{table}] {exc}") from None
+            key = first[0] if first and first[0] in merged else (named[0] if named else None)
+            # an option's value the message is about: the options, over the file
+            theirs = [key] if key in extra else [] if key is not None else [
+                k for k in extra if re.search(rf"\b{re.escape(str(k))}\b", said)]
+            if theirs:
+                options = ", ".join((names or {}).get((table, k), f"[{table}] {k}")
+                                    for k in theirs)
+                raise ConfigError(f"{options} over {path}: {exc}") from None
+            # the file's value at fault, with what the options made of it (--scores
+            # calibrated: a start_score of 3 the file gave for raw scores)
+            given_options = [f"{n} {(over or {})[t][k]}" for (t, k), n in (names or {}).items()
+                             if k in (over or {}).get(t, {})]
+            with_ = f" (with {', '.join(given_options)})" if given_options else ""
+            raise ConfigError(f"{at(table, key)}: [{table}] {exc}{with_}") from None
     keys = {t: frozenset(data.get(t, {})) for t in ("tracker", "motion", "offline")}
     return cfg, dict(data.get("derived", {})), keys
 

@@ -256,6 +256,10 @@ class BoxTrackerConfig:
         if self.assigner not in ASSIGNERS:
             raise bad("assigner", f"one of {sorted(ASSIGNERS)}")
         unit = ("high", "low", "new_track") if self.scores == "calibrated" else ()
+        for name in ("high", "low", "new_track"):
+            # (raw scores: -inf and inf were taken from a file where --high refuses them)
+            if not np.isfinite(getattr(self, name)):
+                raise bad(name, "a finite number")
         for name in unit + ("min_iou", "min_iou_low", "min_iou_tentative", "camera_min_iou",
                             "nms_iou", "coast_rate"):
             if not 0 <= getattr(self, name) <= 1:
