@@ -1442,3 +1442,43 @@ def test_the_sigma_point_filters_and_the_ekf_refuse_what_their_other_path_refuse
             UnscentedKalmanFilter(cv, pos, points=points)
         with pytest.raises(TypeError, match="^points must be"):
             ukf_predict(prior, cv, points=points)
+
+
+def test_the_second_reading_of_the_filters_checks():
+    """From the second reading: a particle filter's `h` of the wrong size failed in numpy's
+    IndexError (the other filters name it); a measurement's `R` of the wrong shape was said
+    to be "the state's" size; `axes_predict` took `np.timedelta64` through float()'s bare
+    TypeError; the EKF's check of its covariance cost an eigendecomposition every step
+    (the numbers are the same as an exact Kalman filter's, the oracle)."""
+    from vistrack.filters import KalmanFilter, axes_predict, ekf_update
+    from vistrack.filters.particle import ParticleFilter
+    from vistrack.models import NonlinearMeasurement
+
+    short = NonlinearMeasurement(lambda x: x[..., :1], np.eye(2), ndim_state=2)
+    pf = ParticleFilter(vt.ConstantVelocity(dim=1, q=0.1), short, 50, rng=0)
+    with pytest.raises(ValueError, match=re.escape("the measurement model's h(x) gives values "
+                                                   "of shape (50, 1)")):
+        pf.filter(np.zeros((2, 2)), x0=[0.0, 0.0], P0=np.eye(2))
+
+    class Plain:
+        def h(self, x):
+            return x
+
+        def jacobian(self, x):
+            return np.broadcast_to(np.eye(2), x.shape[:-1] + (2, 2))
+
+        def R(self):
+            return np.eye(2, 3)
+
+    with pytest.raises(ValueError, match=re.escape(
+            "measurement.R() must have shape (3, 3), the measurement's; got (2, 3)")):
+        ekf_update(vt.Gaussian(np.zeros(2), np.eye(2)), [0.0, 0.0, 0.0], Plain())
+    with pytest.raises(ValueError, match="dt must be one finite number"):
+        axes_predict([[0.0, 1.0]], [[[1.0, 0.0, 1.0]]], np.timedelta64(1, "s"), [[0.0, 0.0]])
+    from vistrack.filters import ExtendedKalmanFilter
+
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1)
+    ys = np.cumsum(np.random.default_rng(0).normal(size=(200, 1)), axis=0)
+    ekf = ExtendedKalmanFilter(cv, pos).filter(ys, x0=[0.0, 0.0], P0=np.eye(2))
+    kf = KalmanFilter(cv, pos).filter(ys, x0=[0.0, 0.0], P0=np.eye(2))
+    np.testing.assert_allclose(ekf.means, kf.means, rtol=1e-10, atol=1e-10)

@@ -595,8 +595,9 @@ def test_a_point_tracker_step_that_fails_changes_nothing():
         assert a.ids.tolist() == b.ids.tolist() and np.array_equal(a.points, b.points)
     assert state(tr) == state(twin)
     with pytest.raises(ValueError, match=re.escape(
-            "init_speed times (max_lost + one frame) must be below 1e154, so that a lost "
-            "track's variance stays finite until it is deleted; got 1e+153 over 101 s")):
+            "init_speed times (max_lost + one frame) must be below 1e154 (past it a lost "
+            "track's variance, its square, overflows before the track is deleted); got "
+            "1e+153 over 101 s")):
         PointTracker("gnn", frame_rate=1.0, init_speed=1e153, max_lost=100.0)
     tr = PointTracker("gnn", frame_rate=1.0, init_speed=1e152, max_lost=8.0)
     tr.step(1, Detections(points=[[0.0, 0.0]]))

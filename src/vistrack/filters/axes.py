@@ -87,9 +87,12 @@ def _time_step(dt: object) -> float:
 
     # (a 0-d array of True was a step of 1, of "2.0" one of 2, of a complex number
     # float()'s bare TypeError)
-    if isinstance(dt, np.ndarray) and dt.ndim == 0 and dt.dtype.kind in "iuf" or \
-            isinstance(dt, numbers.Real) and not isinstance(dt, bool):
-        value = float(dt)  # a real number, or a 0-d array
+    if isinstance(dt, (np.ndarray, np.generic)):  # (np.timedelta64 is a numbers.Real)
+        ok = dt.ndim == 0 and dt.dtype.kind in "iuf"
+    else:
+        ok = isinstance(dt, numbers.Real) and not isinstance(dt, bool)
+    if ok:
+        value = float(dt)  # type: ignore[arg-type]  # (a real number, or a 0-d array)
         if np.isfinite(value):
             return value
     raise ValueError(f"dt must be one finite number of time units for every state; "

@@ -54,7 +54,7 @@ from ..models.protocols import (
     NonlinearMotionModel,
 )
 from . import _jitmath, _random
-from ._nonlinear import step_times
+from ._nonlinear import check_h_size, step_times
 from ._random import last_drawable, last_positive
 from .kalman import _readonly
 
@@ -1086,7 +1086,7 @@ class ParticleFilter:
             if key not in whiten:
                 whiten[key] = _whitening(me.Rm, np.flatnonzero(obs))
             Linv, c = whiten[key]
-            hx = np.asarray(me.h(x), dtype=float)
+            hx = check_h_size(np.asarray(me.h(x), dtype=float), me.m, x)
             r = me.residual(np.where(obs, y, 0.0), hx)[:, obs]
             z = r * Linv[0, 0] if r.shape[1] == 1 else r @ Linv.T
             ll = c - 0.5 * (z * z).sum(1)

@@ -498,9 +498,11 @@ class MerweScaledSigmaPoints(_SigmaPoints):
         return f"MerweScaledSigmaPoints(alpha={self.alpha}, beta={self.beta}, kappa={self.kappa})"
 
     def _lam(self, n: int) -> float:
-        with np.errstate(over="ignore"):  # (alpha 1e155: float's OverflowError, unnamed)
-            lam = float(np.float64(self.alpha) ** 2 * (n + np.float64(self.kappa)) - n)
-        if not n + lam < np.inf:  # (kappa 1e308 gave weights of NaN, and NaN estimates)
+        try:  # (alpha 1e155: float's OverflowError, unnamed)
+            lam = self.alpha**2 * (n + self.kappa) - n
+        except OverflowError:
+            lam = math.inf
+        if not n + lam < math.inf:  # (kappa 1e308 gave weights of NaN, and NaN estimates)
             raise ValueError(f"alpha**2 * (n + kappa) must be finite; got alpha {self.alpha}, "
                              f"kappa {self.kappa} for n={n}")
         if n + lam <= 0:

@@ -507,11 +507,18 @@ class MOG2Background:
 
         # (a second start kept the first's mixture and frame size: BlobDetector("mog2")'s
         # initialize, "a new start", refused frames of another size)
+        # every frame checked before the new mixture replaces the old one (a frame of
+        # another size refused after the first was learnt left a mixture of one frame)
+        kept = self._m, self._seen, self._shape
         self._m = cv2.createBackgroundSubtractorMOG2(*self._settings)
         self._seen, self._shape = 0, None
-        for k, f in enumerate(frames):
-            self._m.apply(self._same(f, f"frames[{k}]"))
-            self._seen += 1
+        try:
+            for k, f in enumerate(frames):
+                self._m.apply(self._same(f, f"frames[{k}]"))
+                self._seen += 1
+        except BaseException:
+            self._m, self._seen, self._shape = kept
+            raise
         return self
 
     def _same(self, image: np.ndarray, name: str = "image") -> np.ndarray:

@@ -241,13 +241,13 @@ _CHECKED: dict[tuple, None] = {}
 _CHECKED_LOCK = threading.Lock()
 
 
-def _check_noise_matrix(Q: np.ndarray, n: int, name: str) -> None:
+def _check_noise_matrix(Q: np.ndarray, n: int, name: str, size: str = "the state's") -> None:
     """A model's ``Q`` checked (shape ``(n, n)``, finite, symmetric positive semi-definite),
     or found among the last few matrices that passed, by their values: the filters' steps
     called one at a time (``ekf_predict``, ``ukf_predict``) make a model's functions afresh
     each call, and its eigenvalues cost a step half its time again."""
     if Q.shape != (n, n):
-        raise ValueError(f"{name} must have shape ({n}, {n}), the state's; got {Q.shape}")
+        raise ValueError(f"{name} must have shape ({n}, {n}), {size}; got {Q.shape}")
     key = (n, Q.tobytes())
     if key in _CHECKED:
         return
@@ -344,10 +344,10 @@ class MeasurementFunctions:
                 f"and R(); got {type(model).__name__}"
             )
         self.Rm = np.asarray(model.R(), dtype=float)
-        self.m = self.Rm.shape[-1] if self.Rm.ndim else 0
+        self.m = self.Rm.shape[-1] if self.Rm.ndim else 1
         # checked as Q is: a negative variance gave posteriors with one too, an asymmetric R
         # was read by its lower triangle in the UKF and whole in the EKF
-        _check_noise_matrix(self.Rm, self.m, "measurement.R()")
+        _check_noise_matrix(self.Rm, self.m, "measurement.R()", "the measurement's")
         angles = tuple(int(k) for k in getattr(model, "angles", ()))
         # a model with angles but no residual or mean of its own: its angles wrapped and
         # averaged on the circle all the same (the ensemble KF's mean; the UKF, compiled or

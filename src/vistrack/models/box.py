@@ -164,10 +164,8 @@ class BoxMotion:
         for name, v in (("std_pos", std_pos), ("std_vel", std_vel), ("init_pos", init_pos),
                         ("init_vel", init_vel), ("frame_rate", frame_rate),
                         *(("std_meas", m) for m in given.ravel())):
-            # (True was taken as 1, in std_meas too; "a" failed in float(), naming nothing);
-            # at most 1e100 box sizes (1e160 overflowed the variances partway through a
-            # run, named as a NaN box of a frame); the rate is bounded by _frame_rate
-            as_finite(v, name, 0.0, above=True, high=None if name == "frame_rate" else 1e100)
+            # (True was taken as 1, in std_meas too; "a" failed in float(), naming nothing)
+            as_finite(v, name, 0.0, above=True)
         # the rate its values are per frame at: scaled to another (at_rate) from 1e300 they
         # overflowed, from 1e-300 they were 0 ("std_vel must be ... got 0.0")
         _frame_rate(frame_rate)

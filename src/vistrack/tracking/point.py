@@ -228,9 +228,9 @@ class PointTracker:
             # a track never found again is predicted for up to max_lost and a frame: its
             # position's variance, about (init_speed t)², overflowed there, after the frame
             # was counted, and every later frame failed on S until the track was deleted
-            raise ValueError(f"init_speed times (max_lost + one frame) must be below 1e154, "
-                             f"so that a lost track's variance stays finite until it is "
-                             f"deleted; got {init_speed!r} over {span:g} s")
+            raise ValueError(f"init_speed times (max_lost + one frame) must be below 1e154 "
+                             f"(past it a lost track's variance, its square, overflows before "
+                             f"the track is deleted); got {init_speed!r} over {span:g} s")
         with np.errstate(over="ignore", invalid="ignore"):
             Q_span = np.asarray(self.motion.Q(span), float)
         if not np.isfinite(Q_span).all():  # (as init_speed: S not finite, frame after frame)
