@@ -645,3 +645,17 @@ def test_no_box_covers_a_number_and_a_narrow_frame_shows_its_label_whole():
     ints = Annotator(labels=True).draw(grey, tracks([3, 12], [[20, 30, 50, 80],
                                                               [70, 30, 100, 80]]))
     assert np.array_equal(floats, ints)
+
+
+def test_float_identities_past_2_53_keep_their_own_labels():
+    """From the second reading: float identities were turned to int64 to be labelled as
+    whole numbers, and 1e20 became -9223372036854775808 (as did 2**63). Oracle: the
+    labels drawn from the floats themselves, as before, where no int64 holds them."""
+    grey = np.full((100, 140, 3), 128, np.uint8)
+
+    def draw(ids):
+        return Annotator(labels=True).draw(grey, Tracks(
+            ids=np.array(ids), boxes=np.array([[20, 30, 50, 80.0], [80, 30, 110, 80]]),
+            points=None, scores=np.ones(2), classes=np.zeros(2)))
+
+    assert not np.array_equal(draw([1e20, 3.0]), draw([2.0**63, 3.0]))

@@ -908,3 +908,27 @@ def test_a_file_printed_with_still_camera_says_so_when_read_back_without_it(tmp_
                               "40", "--still-camera", "--force"], capture_output=True, text=True)
     assert r.returncode == 0 and "was printed by a run given --still-camera" not in r.stderr
     assert (p1 / "tracks.txt").read_bytes() == (p2 / "tracks.txt").read_bytes()
+
+
+def test_the_second_reading_of_the_configuration_messages(seq, tmp_path):
+    """From the second reading: a ''' in a comment after a value made every later line
+    "inside a string" (the error lost its line); two options that clash were named as one
+    over the file (the file gave neither); an offline start_score of -inf was taken from a
+    file where --start-score refuses it. Oracles: the line that sets the key, the options'
+    own message without a file, and the option's range."""
+    c = tmp_path / "c.toml"
+    c.write_text("[tracker]\nscores = \"calibrated\"  # not '''raw\nhigh = 3\n")
+    with pytest.raises(ConfigError, match=re.escape(f"{c}:3: [tracker] high must be in")):
+        read_config(c)
+    c.write_text('[tracker]\nname = "bytetrack"\n')
+    with_file = cli(seq, "--out", tmp_path / "a.txt", "--config", c, "--high", "0.5", "--low",
+                    "0.6")
+    alone = cli(seq, "--out", tmp_path / "a.txt", "--high", "0.5", "--low", "0.6")
+    assert with_file.returncode == alone.returncode == 2
+    assert "--high, --low: low must be at most high" in alone.stderr
+    assert "--high, --low: low must be at most high" in with_file.stderr
+    for key in ("start_score", "min_track_score"):
+        c.write_text(f"[offline]\n{key} = -inf\n")
+        with pytest.raises(ConfigError, match=re.escape(f"[offline] {key} must be a finite "
+                                                        "number")):
+            read_config(c)

@@ -669,3 +669,42 @@ def test_write_mot_and_from_rows_name_what_is_no_number(tmp_path):
     assert not out.exists()
     write_mot(out, np.array([1], object), np.array([2**40], object), [[0, 0, 1, 1]])
     assert read_mot(out).ids.tolist() == [2**40]
+
+
+def test_the_second_reading_of_the_track_files(tmp_path):
+    """From the second reading: a seqLength of 400 digits failed in a bare OverflowError
+    (the check of a whole number took a float of it); a ground truth's conf column of True
+    and False, a flag, was refused with the booleans of other columns; a class of 1234567
+    was shown as 1.23457e+06; BoxesWriter wrote a frame of 2.5 as its line 2, and one of
+    2**53 + 1 as lines of NaN without end. Oracles: the file's own text, and the sinks'
+    rule for frames."""
+    from vistrack.evaluation import evaluate_mot
+    from vistrack.io.motchallenge import _read_csv
+    from vistrack.io.tracks import BoxesWriter
+    from vistrack.types import Frame, Tracks
+
+    seq = tmp_path / "s"
+    seq.mkdir()
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=S\nframeRate=25\nseqLength=1"
+                                     + "0" * 400 + "\n")
+    with pytest.raises(MOTFormatError, match=re.escape(":4: seqLength must be a finite "
+                                                       "number > 0")):
+        read_seqinfo(seq)
+    c = tmp_path / "gt.csv"
+    c.write_text("frame,id,bb_left,bb_top,bb_width,bb_height,conf\n1,1,0,0,10,10,True\n"
+                 "1,2,50,0,10,10,False\n")
+    gt = MOTTable.from_pandas(_read_csv(c, "x"), path=str(c))
+    assert gt.conf.tolist() == [1.0, 0.0]
+    g = MOTTable.from_rows([(1, 1, 0, 0, 10, 10, 1, 1234567)])
+    with pytest.raises(ValueError, match=re.escape("class 1234567 is not a MOT17 class")):
+        evaluate_mot(g, g, benchmark="MOT17")
+    box = Tracks(ids=np.array([1]), boxes=np.array([[0.0, 0, 2, 3]]), points=None,
+                 scores=np.ones(1), classes=np.zeros(1))
+    for index, said in ((2.5, "frame 2.5: a frame's index must be a whole number"),
+                        (2**53 + 1, "must lie within ±(2**53 - 1)")):
+        b = BoxesWriter(tmp_path / "b.txt")
+        b.write(Frame(1, 0.0), box)
+        with pytest.raises(ValueError, match=re.escape(said)):
+            b.write(Frame(index, 0.0), box)
+        assert len(b.boxes) == 1
+        b.abort()

@@ -1171,3 +1171,12 @@ def test_colour_trackers_keep_their_boxes_in_reach_and_take_a_whole_float_seed()
     for tr in (a, b):
         tr.init(frame(150), [125, 95, 50, 50])
     assert np.array_equal(a.update(frame(153)), b.update(frame(153)))
+
+
+def test_polygons_that_are_booleans_are_named_as_polygons():
+    """From the second reading: the boxes' wording named VOT polygons of booleans as
+    "x, y, w, h". Oracle: what the argument holds, rows of 8 numbers."""
+    from vistrack.evaluation.single import region_to_bbox
+
+    with pytest.raises(TypeError, match=re.escape("polygons must be rows of 8 numbers")):
+        region_to_bbox([[True] * 8])

@@ -142,8 +142,9 @@ class OfflineConfig:
         for f in fields(self)[1:]:
             v = getattr(self, f.name)
             low = -math.inf if f.name in scores else 0
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not low <= v < math.inf \
-                    or math.isnan(v):
+            # (-inf passed low <= v for the scores: a start_score of -inf was taken)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+                    or not low <= v:
                 raise ValueError(f"{f.name} must be a finite number"
                                  f"{'' if f.name in scores else ' >= 0'}; got {v!r}")
         from .models.box import MAX_SECONDS
@@ -411,7 +412,10 @@ def _key_line(text: str, table: str, key: str | None = None) -> int | None:
         said, equals, value = line.partition("=")
         if not equals or "#" in said:
             continue
-        opened = [d for d in ('"""', "'''") if value.count(d) % 2]
+        # (a string of several lines opens the value; a delimiter in a comment after a
+        # value opens nothing, and named no line after it)
+        opened = [d for d in ('"""', "'''") if value.lstrip().startswith(d)
+                  and value.count(d) % 2]
         if opened:  # the value's string goes on over the next lines
             inside = opened[0]
         where = current + parts(said)
@@ -570,8 +574,13 @@ def _read_config_file(path: str | os.PathLike, base: TrackConfig | None = None,
             first = re.match(r"\w+", said)
             key = first[0] if first and first[0] in merged else (named[0] if named else None)
             # an option's value the message is about: the options, over the file
-            theirs = [key] if key in extra else [] if key is not None else [
-                k for k in extra if re.search(rf"\b{re.escape(str(k))}\b", said)]
+            mentioned = [k for k in merged if re.search(rf"\b{re.escape(str(k))}\b", said)]
+            theirs = [k for k in extra if k == key or k in mentioned] if key in extra or (
+                key is None) else []
+            if theirs and all(k in extra for k in mentioned):  # the options' values alone
+                options = ", ".join((names or {}).get((table, k), f"[{table}] {k}")
+                                    for k in theirs)
+                raise ConfigError(f"{options}: {exc}") from None
             if theirs:
                 options = ", ".join((names or {}).get((table, k), f"[{table}] {k}")
                                     for k in theirs)

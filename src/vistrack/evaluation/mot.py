@@ -37,7 +37,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import as_rows4, as_whole, decode_text
-from ..io.motchallenge import MOTTable, _row_cells, _text_lines, _text_without_header
+from ..io.motchallenge import (
+    MOTTable,
+    _row_cells,
+    _shown,
+    _text_lines,
+    _text_without_header,
+)
 
 _LSA: list[Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]] = []
 
@@ -470,7 +476,7 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str,
         bad = ~np.isin(gt.classes, np.arange(1, 14))
         if bad.any():
             where, written = _class_row(gt, "ground truth", lambda c: c not in range(1, 14))
-            value = f"{written if written is not None else gt.classes[np.argmax(bad)]:g}"
+            value = _shown(written if written is not None else gt.classes[np.argmax(bad)])
             raise ValueError(f"{where}: class {value} is not a {bench} class (1-13)")
     if len(pred) and (pred.classes > 1).any():
         # TrackEval refuses such results ("only valid for pedestrian class"), under every
@@ -479,8 +485,9 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str,
         # results, is read as no class)
         where, written = _class_row(pred, "prediction", lambda c: c > 1)
         first = written if written is not None else pred.classes[np.argmax(pred.classes > 1)]
-        raise ValueError(f"{where}: class {first:g}: {bench} scores pedestrians alone (class 1, "
-                         "or -1 where the tracker gives none); give a pedestrian tracker's "
+        raise ValueError(f"{where}: class {_shown(first)}: {bench} scores pedestrians alone "
+                         "(class 1, or -1 where the tracker gives none); give a pedestrian "
+                         "tracker's "
                          "results, or those of class 1 alone")
     distractors = np.array(_DISTRACTORS.get(bench, ()), dtype=np.int64)
     # the frames with a row: a frame without any adds nothing to a count, and the sequence may

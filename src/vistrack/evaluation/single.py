@@ -40,7 +40,8 @@ def _boxes(value: ArrayLike, name: str, k: int = 4) -> np.ndarray:
     read row by row as other boxes, and 5 values failed in numpy's reshape)."""
     # (booleans were boxes of 1s, complex values their real parts, text and ragged rows
     # numpy's words naming neither argument)
-    a = as_float_array(value, name, not_boolean="x, y, w, h")
+    a = as_float_array(value, name, not_boolean="x, y, w, h" if k == 4 else f"rows of {k} "
+                       "numbers")
     if a.ndim == 1 and a.shape[0] == k:
         a = a[None]
     if a.ndim != 2 or a.shape[1] != k:

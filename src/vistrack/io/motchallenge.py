@@ -322,6 +322,8 @@ class MOTTable:
             from 2**53 on. A frame of 0 or a negative width it holds, as a tracker that
             counts from 0 writes them, and :func:`~vistrack.evaluation.evaluate_mot` names
             them.
+        TypeError
+            If ``rows`` are not numbers (text, or rows of different lengths).
 
         Examples
         --------
@@ -544,8 +546,9 @@ class MOTTable:
             if name(ours) not in have:
                 return None
             column = df[name(ours)]
-            if np.asarray(column).dtype.kind == "b" and len(column):
-                # (pandas reads a column of True and False as booleans: ids of 1 and 0)
+            if np.asarray(column).dtype.kind == "b" and len(column) and ours != "conf":
+                # (pandas reads a column of True and False as booleans: ids of 1 and 0;
+                # conf, a flag of 0 and 1 in ground truth, is meant by them)
                 raise MOTFormatError(f"{at(0, ours)}: not a number: "
                                      f"{np.asarray(column, dtype=object).ravel()[0]!r}")
             try:
@@ -1787,7 +1790,8 @@ def _seqinfo_value(path: Path, s: Any, key: str, kind: type) -> Any:
         # a count written as a float (600.0, 6e2) is a number > 0 as the contract asks;
         # written as an integer, it is read as one (past 2**53 a float changed it)
         text = s[key].strip()
-        v = (int(text) if re.fullmatch(r"[+-]?[0-9]+", text) else float(text)) \
+        # (at most 18 digits: int() took 400 and float() of it overflowed, unnamed)
+        v = (int(text) if re.fullmatch(r"[+-]?[0-9]{1,18}", text) else float(text)) \
             if kind is int else kind(s[key])
     except ValueError:
         # ("is not float", Python's word, and no line before; the file is read again for
@@ -1798,7 +1802,7 @@ def _seqinfo_value(path: Path, s: Any, key: str, kind: type) -> Any:
         raise MOTFormatError(f"{_ini_line(path, key)}: {key} must be a finite number > 0; "
                              f"got {s[key]}")
     if kind is int:
-        if not float(v).is_integer():
+        if not isinstance(v, int) and not float(v).is_integer():
             raise MOTFormatError(f"{_ini_line(path, key)}: {key} must be a whole number; "
                                  f"got {s[key]}")
         v = int(v)

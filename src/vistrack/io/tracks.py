@@ -858,6 +858,9 @@ class BoxesWriter:
         array([[nan, nan, nan, nan]])
         >>> sink.abort()
         """
+        # a whole frame within 2**53 (a frame of 2**53 + 1 wrote lines of NaN without end,
+        # 2.5 was written as line 2)
+        _frame_of(frame)
         # (before the first frame is kept: point tracks were refused in Tracks.xywh's words,
         # naming neither the frame nor the sink, after it)
         box = np.asarray(_box_rows(tracks, frame, f"BoxesWriter({self.path})")[0]

@@ -332,8 +332,9 @@ class VideoReader:
         The frames' size (of the header, for video files).
     frame_count : int
         Frames in the source: the header's count, for video files (0 where it gives none, as
-        a raw stream such as ``.mjpeg``; the frames are read to the file's end all the
-        same); for image folders the last image's frame, missing frames included.
+        a raw stream such as ``.mjpeg``, or where OpenCV only estimates it, as for Matroska
+        and WebM; the frames are read to the file's end all the same); for image folders
+        the last image's frame, missing frames included.
     image_folder : Path or None
         The folder the images are read from (a sequence folder's ``img1/``); None for a
         video file.

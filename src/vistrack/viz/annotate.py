@@ -206,7 +206,8 @@ class Annotator:
         self._n += 1
         boxes = tracks.boxes
         ids = np.asarray(tracks.ids)
-        if ids.dtype.kind == "f" and np.isfinite(ids).all() and (ids == np.round(ids)).all():
+        if ids.dtype.kind == "f" and (np.abs(ids) < 2**53).all() and \
+                (ids == np.round(ids)).all():  # (past 2**53 an int64 read 1e20 as -2**63)
             ids = ids.astype(np.int64)  # (a float identity was labelled "3.0"; written as 3)
         covs = getattr(tracks, "covs", None)
         # a box or point that is not finite has nowhere to be drawn (OpenCV failed on it, and
