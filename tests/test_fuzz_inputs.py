@@ -424,8 +424,8 @@ def check_eval_error(msg: str, files: dict) -> None:
         assert int(beyond[1]) > int(beyond[2]), msg
     cls = re.search(r": class (\S+) is not a MOT\d\d class", rest)
     if cls:  # the line of a class out of range, or a file without classes (6-7 values a row)
-        if lines:  # the value as written, to 6 significant digits (%g)
-            assert len(lines) == 1 and f"{_row(data, lines[0])[7]:g}" == cls[1], msg
+        if lines:  # the value as written, every digit
+            assert len(lines) == 1 and _row(data, lines[0])[7] == float(cls[1]), msg
         else:
             assert read_mot(path).columns <= 7 and cls[1] == "-1", msg
 
