@@ -473,13 +473,16 @@ class BlobDetector:
         it changes) as it was if it raises: a refused frame was counted, which moved the
         view's checks by a frame."""
         saved = dict(self.__dict__)
-        lists = {k: list(v) for k, v in saved.items() if isinstance(v, list)}
+        # the lists only grow in a frame (a start makes new ones): their lengths, not copies,
+        # which a long video's checks would make a frame's cost grow with its length
+        lengths = {k: len(v) for k, v in saved.items() if isinstance(v, list)}
         try:
             return call(*args)
         except BaseException:
             self.__dict__.clear()
             self.__dict__.update(saved)
-            self.__dict__.update(lists)
+            for k, n in lengths.items():
+                del self.__dict__[k][n:]
             raise
 
     def _initialize(self, frames: list[np.ndarray]) -> None:
