@@ -573,18 +573,15 @@ def _read_config_file(path: str | os.PathLike, base: TrackConfig | None = None,
             named = [k for k in merged if re.search(rf"\b{re.escape(str(k))}\b", said)]
             first = re.match(r"\w+", said)
             key = first[0] if first and first[0] in merged else (named[0] if named else None)
-            # an option's value the message is about: the options, over the file
-            mentioned = [k for k in merged if re.search(rf"\b{re.escape(str(k))}\b", said)]
-            theirs = [k for k in extra if k == key or k in mentioned] if key in extra or (
+            # an option's value the message is about: the options, over the file where it
+            # gave a value the message names too
+            theirs = [k for k in extra if k == key or k in named] if key in extra or (
                 key is None) else []
-            if theirs and all(k in extra for k in mentioned):  # the options' values alone
-                options = ", ".join((names or {}).get((table, k), f"[{table}] {k}")
-                                    for k in theirs)
-                raise ConfigError(f"{options}: {exc}") from None
             if theirs:
                 options = ", ".join((names or {}).get((table, k), f"[{table}] {k}")
                                     for k in theirs)
-                raise ConfigError(f"{options} over {path}: {exc}") from None
+                where = "" if all(k in extra for k in named) else f" over {path}"
+                raise ConfigError(f"{options}{where}: {exc}") from None
             # the file's value at fault, with what the options made of it (--scores
             # calibrated: a start_score of 3 the file gave for raw scores)
             given_options = [f"{n} {(over or {})[t][k]}" for (t, k), n in (names or {}).items()
