@@ -58,10 +58,30 @@ def check_model_values(z: np.ndarray, points: np.ndarray, what: str) -> None:
                          f"{np.array2string(z[at], precision=4)}")
 
 
-def step_times(dt: ArrayLike, times: ArrayLike | None, T: int) -> tuple[np.ndarray, np.ndarray]:
+def step_times(dt: ArrayLike | None, times: ArrayLike | None,
+               T: int) -> tuple[np.ndarray, np.ndarray]:
     """``dt`` (a scalar, the ``T-1`` intervals between steps, or ``(T,)`` with ``dt[t]`` the
     step from ``t-1`` to ``t``, ``dt[0]`` unused) as ``(T,)``, as ``KalmanFilter`` takes it,
-    and the time of each step: ``times``, by default the cumulative ``dt`` from 0."""
+    and the time of each step: ``times``, by default the cumulative ``dt`` from 0. ``dt``
+    None is ``np.diff(times)`` where ``times`` is given, else 1; given both, they must agree
+    (``times`` alone filtered with steps of 1, whatever it said: a gap of 4.9 s was
+    predicted over 1 s, without a word)."""
+    if dt is None and times is None:
+        dt = 1.0
+    if times is not None:
+        times = as_float_array(times, "times", ndim=(1,))
+        if times.shape != (T,):
+            raise ValueError(f"times must have shape ({T},); got {times.shape}")
+        if not np.isfinite(times).all():  # a model of time (growth) gave NaN states
+            k = int(np.flatnonzero(~np.isfinite(times))[0])
+            raise ValueError(f"times must be finite; times[{k}] = {times[k]}")
+        gaps = np.diff(times)
+        if (gaps < 0).any():
+            k = 1 + int(np.flatnonzero(gaps < 0)[0])
+            raise ValueError(f"times must not decrease; times[{k}] = {times[k]} comes after "
+                             f"times[{k - 1}] = {times[k - 1]}")
+        if dt is None:
+            dt = gaps
     # (True was a step of 1 here, where the models refuse it)
     d = as_float_array(dt, "dt", ndim=(0, 1), not_boolean="a number or an array of numbers")
     if d.ndim == 1 and d.shape == (T - 1,):  # np.diff(times), as the Kalman filter takes
@@ -80,12 +100,15 @@ def step_times(dt: ArrayLike, times: ArrayLike | None, T: int) -> tuple[np.ndarr
                          f"the step to step {k} is {dts[k]}")
     if times is None:
         return dts, np.concatenate([[0.0], np.cumsum(dts[1:])])
-    times = as_float_array(times, "times", ndim=(1,))
-    if times.shape != (T,):
-        raise ValueError(f"times must have shape ({T},); got {times.shape}")
-    if not np.isfinite(times).all():  # a model of time (growth) gave NaN states
-        k = int(np.flatnonzero(~np.isfinite(times))[0])
-        raise ValueError(f"times must be finite; times[{k}] = {times[k]}")
+    # the steps the times say, within their rounding (times of 1.7e9 s, an epoch's, differ
+    # from their steps' sum by a few 1e-7)
+    slack = 1e-9 * np.abs(dts[1:]) + 64 * np.finfo(float).eps * np.abs(times).max()
+    off = np.abs(dts[1:] - np.diff(times)) > slack
+    if off.any():
+        k = 1 + int(np.flatnonzero(off)[0])
+        raise ValueError(f"dt and times disagree: the step to step {k} is {dts[k]} in dt and "
+                         f"{times[k] - times[k - 1]} in times (times[{k}] - times[{k - 1}]); "
+                         f"give one of them")
     return dts, times
 
 
@@ -97,7 +120,7 @@ State = TypeVar("State", bound=Gaussian | _Moments)
 
 
 def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: int, m: int,
-                 dt: ArrayLike, times: ArrayLike | None,
+                 dt: ArrayLike | None, times: ArrayLike | None,
                  predict: Callable[[State, float, float], State],
                  update: Callable[[State, np.ndarray], tuple[State, np.ndarray]],
                  state: State | None = None,

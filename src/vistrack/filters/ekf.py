@@ -141,12 +141,14 @@ class ExtendedKalmanFilter:
         self.motion = MotionFunctions(motion)
         self.measurement = MeasurementFunctions(measurement, self.motion.n, residual)
 
-    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike, dt: ArrayLike = 1.0,
-               times: ArrayLike | None = None) -> FilterResult:
+    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike,
+               dt: ArrayLike | None = None, times: ArrayLike | None = None) -> FilterResult:
         """Filter ``ys (T, m)`` or ``(B, T, m)`` (NaN = missing). ``x0, P0`` are the prior of the
         first step, as in :func:`~vistrack.filters.kalman_filter`. ``dt`` is a scalar, the
-        ``T-1`` intervals between steps or one per step (``dt[0]`` unused); ``times``
-        (default: the cumulative ``dt``, from 0) is passed to the model. A model that gives
+        ``T-1`` intervals between steps or one per step (``dt[0]`` unused), by default
+        ``np.diff(times)`` where ``times`` is given, else 1; ``times`` (not decreasing;
+        default: the cumulative ``dt``, from 0) is passed to the model, and must agree with
+        ``dt`` where both are given. A model that gives
         NaN or infinity mid-run is a ValueError naming the first step (and series) whose
         prediction or correction it made so."""
         return run_sequence(ys, x0, P0, self.motion.n, self.measurement.m, dt, times,

@@ -385,8 +385,8 @@ class EnsembleKalmanFilter:
         self.n_members = int(n_members)
         self.rng = as_rng(rng)
 
-    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike, dt: ArrayLike = 1.0,
-               times: ArrayLike | None = None) -> FilterResult:
+    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike,
+               dt: ArrayLike | None = None, times: ArrayLike | None = None) -> FilterResult:
         """Filter a sequence, or a batch of them.
 
         The first ensemble is drawn from ``N(x0, P0)``, the prior of the first step, which
@@ -401,11 +401,13 @@ class EnsembleKalmanFilter:
             Prior mean of the first step.
         P0 : (n, n) or (B, n, n) array_like
             Prior covariance of the first step, positive definite.
-        dt : float or (T,) array_like
+        dt : float or (T,) array_like, optional
             Time step: a scalar, the ``T-1`` intervals between steps (``np.diff(times)``),
-            or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused).
+            or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused);
+            default ``np.diff(times)`` where ``times`` is given, else 1.
         times : (T,) array_like, optional
-            Time of each step; default the cumulative ``dt`` from 0.
+            Time of each step, not decreasing; default the cumulative ``dt`` from 0. Given
+            with ``dt``, the two must agree.
 
         Returns
         -------

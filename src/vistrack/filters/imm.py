@@ -295,8 +295,8 @@ class IMMFilter:
         self.sizes = [int(f.motion.ndim_state) for f in self.filters]
         self.ref = int(np.argmax(self.sizes))
 
-    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike, dt: ArrayLike = 1.0,
-               times: ArrayLike | None = None) -> IMMResult:
+    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike,
+               dt: ArrayLike | None = None, times: ArrayLike | None = None) -> IMMResult:
         """Filter a sequence, or a batch of them.
 
         Parameters
@@ -310,11 +310,13 @@ class IMMFilter:
             takes its leading part).
         P0 : (n, n) or (B, n, n) array_like
             Prior covariance of the first step.
-        dt : float or (T,) array_like
+        dt : float or (T,) array_like, optional
             Time step: a scalar, the ``T-1`` intervals between steps (``np.diff(times)``),
-            or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused).
+            or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused);
+            default ``np.diff(times)`` where ``times`` is given, else 1.
         times : (T,) array_like, optional
-            Time of each step; default the cumulative ``dt`` from 0.
+            Time of each step, not decreasing; default the cumulative ``dt`` from 0. Given
+            with ``dt``, the two must agree.
 
         Returns
         -------

@@ -1097,7 +1097,7 @@ class ParticleFilter:
         return loglik
 
     def filter(self, ys: ArrayLike, *, x0: ArrayLike | None = None, P0: ArrayLike | None = None,
-               particles: ArrayLike | None = None, dt: ArrayLike = 1.0,
+               particles: ArrayLike | None = None, dt: ArrayLike | None = None,
                times: ArrayLike | None = None, modes: bool = False) -> ParticleResult:
         """Filter one sequence.
 
@@ -1117,11 +1117,13 @@ class ParticleFilter:
             Prior covariance of the first step.
         particles : (N, n) array_like, optional
             The first cloud, instead of draws from ``N(x0, P0)``.
-        dt : float or (T,) array_like
+        dt : float or (T,) array_like, optional
             Time step: a scalar, the ``T-1`` intervals between steps (``np.diff(times)``),
-            or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused).
+            or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused);
+            default ``np.diff(times)`` where ``times`` is given, else 1.
         times : (T,) array_like, optional
-            Time of each step; default the cumulative ``dt`` from 0.
+            Time of each step, not decreasing; default the cumulative ``dt`` from 0. Given
+            with ``dt``, the two must agree.
         modes : bool
             Also compute :func:`particle_mode` at every step (on the numpy path).
 
@@ -1258,7 +1260,7 @@ class ParticleFilter:
         # the principal root: the same particles on every machine (psd_sqrt)
         return m0 + self.rng.standard_normal((N, n)) @ psd_sqrt(C0).T
 
-    def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: ArrayLike,
+    def _filter_fused(self, ys: np.ndarray, x: np.ndarray, dt: ArrayLike | None,
                       times: ArrayLike | None) -> ParticleResult:
         assert self._fused is not None  # filter calls this only with the compiled parts
         fref, fparams, href, hp, mo, me = self._fused

@@ -933,8 +933,8 @@ class UnscentedKalmanFilter:
         self.points = _points_or_default(points)
         self.state_residual, self.state_mean = state_residual, state_mean
 
-    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike, dt: ArrayLike = 1.0,
-               times: ArrayLike | None = None) -> FilterResult:
+    def filter(self, ys: ArrayLike, *, x0: ArrayLike, P0: ArrayLike,
+               dt: ArrayLike | None = None, times: ArrayLike | None = None) -> FilterResult:
         """Filter a sequence, or a batch of them; arguments as
         :meth:`ExtendedKalmanFilter.filter <vistrack.filters.ExtendedKalmanFilter.filter>`.
 
@@ -951,11 +951,13 @@ class UnscentedKalmanFilter:
         P0 : (n, n) or (B, n, n) array_like
             Prior covariance of the first step, positive semi-definite (a state known exactly
             along a direction has its sigma points there at the mean).
-        dt : float or (T,) array_like
+        dt : float or (T,) array_like, optional
             Time step: a scalar, the ``T-1`` intervals between steps (``np.diff(times)``),
-            or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused).
+            or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused);
+            default ``np.diff(times)`` where ``times`` is given, else 1.
         times : (T,) array_like, optional
-            Time of each step, passed to the model; default the cumulative ``dt`` from 0.
+            Time of each step, not decreasing, passed to the model; default the cumulative
+            ``dt`` from 0. Given with ``dt``, the two must agree.
 
         Returns
         -------
