@@ -490,22 +490,45 @@ def test_columns_name_a_csv_s_columns_from_pixels_and_for_eval(tmp_path, capsys)
 def test_eval_of_a_run_stopped_early_says_the_frames_after_count_as_missed(tmp_path, capsys):
     """A run with --stop scored against the whole clip's ground truth: the frames after its
     last count as missed, which the scores alone do not say. Its run.json tells the frames
-    tracked; eval names them and counts the ground truth's rows after (counted here from the
-    file itself). The whole clip's run, or a results file without run.json, says nothing."""
+    tracked; eval names them and counts the ground truth's scored rows after (counted here
+    from the file itself, and checked against FN: the whole truth's FN less the FN against
+    its rows up to frame 12). The rows the convention ignores (a flag of 0; under MOT17's,
+    other classes) were counted as missed too: 1187 where FN had 1086. The whole clip's
+    run, or a results file without run.json, says nothing."""
     rows = [line.split(",") for line in GT.read_text().splitlines() if line.strip()]
     det = tmp_path / "det.txt"
     det.write_text("".join(f"{r[0]},-1,{r[2]},{r[3]},{r[4]},{r[5]},0.9\n" for r in rows))
-    after = sum(int(r[0]) > 12 for r in rows)
     out = tmp_path / "stopped"
     assert main(["track", str(VIDEO), "--frontend", f"detections:{det}", "--stop", "12",
                  "--out-dir", str(out), "--quiet"]) == 0
     capsys.readouterr()
-    assert main(["eval", "--gt", str(GT), "--pred", str(out / "tracks.txt")]) == 0
-    err = capsys.readouterr().err
     last = max(int(r[0]) for r in rows)
-    assert err == (f"vistrack eval: warning: {out / 'tracks.txt'}: its run ({out / 'run.json'}) "
-                   f"tracked frames 1-12 only, and {GT} runs to frame {last}: its {after} rows "
-                   "after frame 12 count as missed (FN)\n")
+    # the bundled truth in MOT15's columns, and the same rows in MOT17's with a distractor
+    # class (7) on every fifth identity
+    mot17 = tmp_path / "gt17.txt"
+    mot17.write_text("".join(f"{','.join(r[:7])},{7 if int(r[1]) % 5 == 0 else 1},1\n"
+                             for r in rows))
+    for gt, scored in ((GT, lambda r: int(float(r[6])) != 0),
+                       (mot17, lambda r: int(float(r[6])) != 0 and int(r[1]) % 5 != 0)):
+        after = [r for r in rows if int(r[0]) > 12]
+        missed = sum(map(scored, after))
+        ignored = len(after) - missed
+        assert 0 < missed and 0 < ignored  # (both kinds of row, for the oracle to tell apart)
+        assert main(["eval", "--gt", str(gt), "--pred", str(out / "tracks.txt")]) == 0
+        err = capsys.readouterr().err
+        assert err == (f"vistrack eval: warning: {out / 'tracks.txt'}: its run "
+                       f"({out / 'run.json'}) tracked frames 1-12 only, and {gt} runs to "
+                       f"frame {last}: its {missed} scored rows after frame 12 count as "
+                       f"missed (FN) ({ignored} more are ignored)\n")
+        head = tmp_path / f"head-{gt.name}"
+        head.write_text("".join(line + "\n" for line in gt.read_text().splitlines()
+                                if int(line.split(",")[0]) <= 12))
+        fn = []
+        for truth in (gt, head):
+            assert main(["eval", "--gt", str(truth), "--pred", str(out / "tracks.txt"),
+                         "--json"]) == 0
+            fn.append(next(iter(json.loads(capsys.readouterr().out).values()))["FN"])
+        assert fn[0] - fn[1] == missed
     whole = tmp_path / "whole"
     assert main(["track", str(VIDEO), "--frontend", f"detections:{det}", "--out-dir",
                  str(whole), "--quiet"]) == 0
@@ -1453,3 +1476,25 @@ def test_an_input_that_does_not_exist_is_named_before_an_existing_output(tmp_pat
     assert main(["track", str(seq), "--out", str(tmp_path / "new.txt"), "--frontend",
                  f"detections:{gone}"]) == 2
     one_line(capsys, "track", "--frontend goes with --out-dir")
+
+
+def test_one_frame_is_said_as_one(tmp_path, capsys):
+    """A folder of one image: `track-one` said "1 boxes; colour 0 frames/s" (no frame was
+    followed after the start, so there is no rate), and `track` "found nothing in 1
+    frames". Oracle: the count of images given."""
+    import cv2
+    import numpy as np
+
+    folder = tmp_path / "one"
+    folder.mkdir()
+    image = np.full((120, 160, 3), 90, np.uint8)
+    image[40:80, 60:90] = (20, 40, 200)
+    cv2.imwrite(str(folder / "000001.png"), image)
+    out = tmp_path / "box.txt"
+    assert main(["track-one", str(folder), "--init", "60,40,30,40", "--out", str(out)]) == 0
+    assert capsys.readouterr().out == (f"wrote {out}: 1 box; colour started on the first "
+                                       "frame, with none after it to follow\n")
+    assert len(out.read_text().splitlines()) == 1
+    assert main(["track", str(folder), "--out-dir", str(tmp_path / "t"), "--quiet"]) == 0
+    assert (f"{folder}: the bgsub front-end found nothing in 1 frame (blobs of 500 pixels"
+            in capsys.readouterr().err)

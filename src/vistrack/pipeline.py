@@ -2633,7 +2633,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                             + ("spots brighter than the background need no --invert"
                                if invert else "for dark spots on a light background, --invert")
                             + ", or another --diameter or --minmass)")
-                warnings.warn(f"{video}: {what} found nothing in {n} frames{hint}: the "
+                warnings.warn(f"{video}: {what} found nothing in {counted(n, 'frame')}{hint}: the "
                               "results hold no rows", UserWarning, stacklevel=2)
             elif grid is None and found and isinstance(trk, BoxTracker):
                 # a detector's raw scores all below the start: its boxes were found and dropped

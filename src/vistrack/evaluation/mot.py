@@ -324,6 +324,25 @@ def considered(conf: np.ndarray) -> np.ndarray:
     return np.trunc(np.asarray(conf, dtype=np.float64)) != 0
 
 
+def scored_truth(gt: MOTTable, benchmark: str = "auto") -> np.ndarray:
+    """Which rows of the ground truth ``gt`` are scored, found or missed, under
+    ``benchmark``'s convention (as :func:`evaluate_mot` takes it): a flag other than 0
+    (:func:`considered`), and under MOT16/17/20's a pedestrian (class 1); the others are
+    ignored, or distractors.
+
+    Examples
+    --------
+    >>> gt = MOTTable.from_rows([(1, 1, 0, 0, 5, 9, 1, 1, 1.0), (1, 2, 9, 0, 5, 9, 0, 1, 1.0),
+    ...                          (1, 3, 20, 0, 5, 9, 1, 7, 1.0)])
+    >>> scored_truth(gt).tolist(), scored_truth(gt, "MOT15").tolist()
+    ([True, False, False], [True, False, True])
+    """
+    keep = considered(gt.conf)
+    if _benchmark_of(gt, benchmark) != "MOT15":
+        keep &= gt.classes == 1
+    return keep
+
+
 def _lines_of(path: str, match: Callable[[list[float]], bool]) -> list[int]:
     """The lines (from 1) of the MOTChallenge file ``path`` whose row ``match`` accepts, for a
     message; empty for a table not read from a file (or a file no longer readable), and for
@@ -499,9 +518,7 @@ def _prepare(gt: MOTTable, pred: MOTTable, n_frames: int, benchmark: str,
           np.searchsorted(pred.frames, frames, "right"))
     # each row's part in it, once: whether a ground-truth row is scored and whether it is a
     # distractor (a prediction matched to one is removed)
-    keep_gt = considered(gt.conf)
-    if bench != "MOT15":
-        keep_gt &= gt.classes == 1
+    keep_gt = scored_truth(gt, bench)
     distractor = np.isin(gt.classes, distractors)
     gt_ids, pred_ids, sims = [], [], []
     for g0, g1, p0, p1 in zip(gs[0].tolist(), gs[1].tolist(), ps[0].tolist(), ps[1].tolist()):
