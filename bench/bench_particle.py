@@ -5,8 +5,10 @@
 Particle filter: the univariate growth model (q = 10, r = 1), 100 steps, systematic resampling
 every step, N = 1,000 and N = 100,000, one core. Every implementation runs in this process on
 the same measurements; the table gives the median time per step of a few runs and the RMSE of
-the filtered mean against the simulated states. UKF: 2-D coordinated turn with range-bearing
-measurements, one predict + update per call.
+the filtered mean against the simulated states. UKF and EKF: 2-D coordinated turn with
+range-bearing measurements, one predict + update per call; the EKF's means are checked against
+FilterPy's (its `ExtendedKalmanFilter` given the model's f, Jacobians and residual) before the
+times are reported.
 """
 
 from __future__ import annotations
@@ -24,7 +26,15 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 import vistrack as vt  # noqa: E402
-from vistrack.filters import ParticleFilter, UnscentedKalmanFilter, ukf_predict, ukf_update  # noqa: E402
+from vistrack.filters import (  # noqa: E402
+    ExtendedKalmanFilter,
+    ParticleFilter,
+    UnscentedKalmanFilter,
+    ekf_predict,
+    ekf_update,
+    ukf_predict,
+    ukf_update,
+)
 
 from _common import median_time, optional  # noqa: E402  (bench/ is on the path of its scripts)
 from _markdown import publish  # noqa: E402
@@ -211,6 +221,52 @@ def ukf_rows(rows, repeats):
         rows.append((label, "FilterPy UnscentedKalmanFilter", sec / len(zs) * 1e3, None))
 
 
+def ekf_rows(rows, repeats):
+    """The UKF's problem through the EKF: vistrack's functions and filter, and FilterPy's
+    ExtendedKalmanFilter (its predict_x given the model's f, its F the model's Jacobian)."""
+    motion, meas = vt.models.CoordinatedTurn(q=0.05, q_turn=1e-3), vt.models.RangeBearing(
+        1.0, 1e-3, ndim_state=5)
+    _, zs = vt.simulate.simulate(motion, meas, 200, x0=[-20.0, 8.0, 0.0, -0.8, 0.01], rng=5)
+    x0, P0 = np.array([-20.0, 8.0, 0.0, -0.8, 0.01]), np.diag([4.0, 4.0, 0.5, 0.5, 1e-3])
+    label = "EKF, coordinated turn + range-bearing, one predict + update"
+
+    def functional():
+        g = ekf_update(vt.Gaussian(x0, P0), zs[0], meas)  # (x0, P0: the first step's prior)
+        for z in zs[1:]:
+            g = ekf_update(ekf_predict(g, motion), z, meas)
+
+    sec, _ = median_time(functional, repeats)
+    rows.append((label, "vistrack ekf_predict + ekf_update", sec / len(zs) * 1e3, None))
+    flt = ExtendedKalmanFilter(motion, meas)
+    sec, _ = median_time(lambda: flt.filter(zs, x0=x0, P0=P0), repeats)
+    rows.append((label, "vistrack ExtendedKalmanFilter.filter, per step",
+                 sec / len(zs) * 1e3, None))
+    if optional("filterpy") is not None:
+        from filterpy.kalman import ExtendedKalmanFilter as FPE
+
+        class Turn(FPE):
+            def predict_x(self, u=0):
+                self.x = motion.f(self.x, 1.0)
+
+        def filterpy_run():
+            kf = Turn(dim_x=5, dim_z=2)
+            kf.x, kf.P, kf.Q, kf.R = x0.copy(), P0.copy(), motion.Q(1.0), meas.R()
+            means = []
+            for k, z in enumerate(zs):
+                if k:  # (the first step's prior is x0, P0, as vistrack's filter takes it)
+                    kf.F = motion.jacobian(kf.x, 1.0)
+                    kf.predict()
+                kf.update(z, meas.jacobian, meas.h, residual=meas.residual)
+                means.append(kf.x.copy())
+            return np.array(means)
+
+        gap = np.abs(filterpy_run() - flt.filter(zs, x0=x0, P0=P0).means).max()
+        if not gap < 1e-9:
+            raise SystemExit(f"the EKFs disagree: vistrack's means and FilterPy's differ by {gap}")
+        sec, _ = median_time(filterpy_run, repeats)
+        rows.append((label, "FilterPy ExtendedKalmanFilter", sec / len(zs) * 1e3, None))
+
+
 def to_markdown(rows):
     out, current = [], None
     for label, lib, ms, rmse in rows:
@@ -237,6 +293,8 @@ def main():
     particle_rows(rows, 7, (1000,) if args.quick else (1000, 100_000))
     print("UKF ...", file=sys.stderr)
     ukf_rows(rows, 5)
+    print("EKF ...", file=sys.stderr)
+    ekf_rows(rows, 5)
     import numba
 
     env = (f"Python {platform.python_version()}, numpy {np.__version__}, "
