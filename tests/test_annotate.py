@@ -659,3 +659,32 @@ def test_float_identities_past_2_53_keep_their_own_labels():
             points=None, scores=np.ones(2), classes=np.zeros(2)))
 
     assert not np.array_equal(draw([1e20, 3.0]), draw([2.0**63, 3.0]))
+
+
+def test_hota_alpha_curves_on_the_frame_are_seen():
+    """A curve at exactly 100 % (or 0 %) lies on the axes' frame, which was drawn over it:
+    a perfect sequence's colour had no pixel inside the panels, only in the legend. Oracle:
+    the rendered figure's pixels of the curve's colour inside each panel's box."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.colors import to_rgb
+
+    from vistrack.evaluation.mot import evaluate_mot
+    from vistrack.io.motchallenge import MOTTable
+    from vistrack.viz import plot_hota_alpha
+
+    gt = MOTTable.from_rows([(1, 1, 0, 0, 10, 20), (2, 1, 1, 0, 10, 20)])
+    off = MOTTable.from_rows([(1, 1, 1, 1, 10, 20), (2, 1, 2, 0, 10, 20)])
+    fig = plot_hota_alpha({"perfect": evaluate_mot(gt, gt), "other": evaluate_mot(gt, off)})
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    image = np.asarray(canvas.buffer_rgba())[..., :3].astype(int)
+    height = image.shape[0]
+    for name in ("perfect", "other"):
+        line = next(line for line in fig.axes[0].lines if line.get_label() == name)
+        colour = np.round(255 * np.array(to_rgb(line.get_color()))).astype(int)
+        near = (np.abs(image - colour).max(axis=-1) <= 8)
+        for ax in fig.axes:
+            box = ax.get_window_extent()
+            rows = slice(int(height - box.y1) - 2, int(height - box.y0) + 3)
+            cols = slice(int(box.x0) - 2, int(box.x1) + 3)
+            assert near[rows, cols].sum() > 50, (name, ax.get_title())

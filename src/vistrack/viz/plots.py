@@ -438,13 +438,14 @@ def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = No
     for ax, metric in zip(axes, ("HOTA", "DetA", "AssA")):
         for k, name in enumerate(names):
             y = 100 * np.asarray(getattr(results[name], f"{metric}_alpha"), dtype=float)
-            # clip_on off: a score of 0 or 100 lies on the axes' frame, and was hidden
+            # clip_on off and above the frame (whose zorder is 2.5; a line of the same was
+            # drawn under it): a score of 0 or 100 lies on the axes' frame, and was hidden
             if name == "COMBINED":
                 ax.plot(ALPHAS, y, color="black", linewidth=2.5, label=name, clip_on=False,
-                        zorder=3)
+                        zorder=3.5)
             else:
                 ax.plot(ALPHAS, y, color=colours[k], linewidth=1, label=_label(name, 40),
-                        clip_on=False, zorder=2.5)
+                        clip_on=False, zorder=3)
         ax.set_title(metric)
         ax.set_xlabel("localisation threshold α (IoU)" if zero_distance is None else
                       f"localisation threshold α (1 - distance / {zero_distance:g})")
