@@ -189,7 +189,8 @@ def test_without_keep_going_no_input_starts_after_the_first_failure(tmp_path, mo
     stop = batch.run_jobs(jobs, workers=2, keep_going=False)
     assert [(o.ok, o.attempts) for o in stop] == [(False, 1), (True, 1), (False, 0),
                                                    (False, 0)]
-    assert all(o.error.startswith("not run") for o in stop[2:])
+    # (not "an earlier input failed": the one that failed may come later in the inputs)
+    assert all(o.error == "not run (another input failed first)" for o in stop[2:])
 
 
 def _children(parent: int) -> dict[int, bytes]:
@@ -574,7 +575,11 @@ def test_detections_files_alone_at_the_frame_rate_given(bench, tmp_path, capsys)
     out = tmp_path / "results"
     assert main(["track", *map(str, inputs), "--out", str(out), "--fps", "12", "--jobs",
                  "2", "--quiet"]) == 0
-    assert "3 of 3 inputs tracked" in capsys.readouterr().out
+    said = capsys.readouterr().out
+    assert "3 of 3 inputs tracked" in said
+    # the table names SEQ/det/det.txt after its sequence, as its results (every such file
+    # was "det.txt")
+    assert [line.split()[0] for line in said.splitlines()[1:4]] == ["SIM-0", "BARE", "cam.txt"]
     assert sorted(p.name for p in out.iterdir()) == ["BARE.txt", "SIM-0.txt", "cam.txt"]
     for name, path in zip(("SIM-0", "BARE", "cam"), inputs):
         track_sequence(path, tmp_path / "alone.txt", fps=12, force=True)
@@ -924,6 +929,21 @@ def test_options_are_checked_once_before_any_job(bench, tmp_path, option, error,
     with pytest.raises(error) as e:
         track_many([bench], tmp_path / "out", jobs=1, **{option: value})
     assert str(e.value).startswith(message)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("fps", [-1, 0, "abc", float("nan")])
+def test_a_bad_frame_rate_is_named_before_any_job(bench, tmp_path, fps):
+    """A frame rate no tracker takes failed every input on its own, each outcome saying
+    the same, where plan's other settings are named once before any job. Oracle:
+    track_sequence's own message."""
+    with pytest.raises(ValueError) as alone:
+        track_sequence(bench / "SIM-0" / "det" / "det.txt", tmp_path / "a.txt", fps=fps)
+    with pytest.raises(ValueError) as e:
+        track_many([bench / "SIM-0" / "det" / "det.txt", bench / "SIM-1" / "det" / "det.txt"],
+                   tmp_path / "out", jobs=1, fps=fps)
+    assert str(e.value) == str(alone.value)
+    assert str(e.value).startswith("fps must be a number from 0.001 to 1e+06")
     assert not (tmp_path / "out").exists()
 
 

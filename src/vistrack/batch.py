@@ -180,6 +180,23 @@ class Outcome:
     replaced_rate: tuple[str, float] | None = None
 
 
+def input_label(path: Path) -> str:
+    """An input as progress lines and the command line's table name it: its name, a path
+    whose name says nothing (``.``, ``..``) as given, and MOTChallenge's ``SEQ/det/det.txt``
+    as ``SEQ`` (as its results are named; several such files were each "det.txt").
+
+    Examples
+    --------
+    >>> input_label(Path("KITTI-13/det/det.txt")), input_label(Path("clip.mp4"))
+    ('KITTI-13', 'clip.mp4')
+    """
+    if path.name in ("", ".", ".."):
+        return str(path)
+    if path.name == "det.txt" and path.parent.name == "det" and path.parent.parent.name:
+        return path.parent.parent.name
+    return path.name
+
+
 def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detections",
          **options: Any) -> list[Job]:
     """The jobs of :func:`track_many`: each input (benchmark folders expanded,
@@ -213,13 +230,14 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
         # value is named before any job runs, not once for each input
         import inspect
 
-        from .pipeline import resolve_config, track_sequence
+        from .pipeline import check_fps, resolve_config, track_sequence
 
         # track_sequence's own options (detections, fps, ...), read from the two signatures
         # rather than listed again here
         run = set(inspect.signature(track_sequence).parameters) - set(
             inspect.signature(resolve_config).parameters)
         resolve_config(**{k: v for k, v in options.items() if k not in run})
+        check_fps(options.get("fps"))  # (a bad one failed each job on its own)
 
     out = Path(out)
     jobs = []
@@ -502,7 +520,7 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None,
             else:
                 pending = _largest_first(jobs, again + unstarted)
     return [outcomes.get(i, Outcome(job.input, job.out, False, attempts=0,
-                                    error="not run (an earlier input failed)"))
+                                    error="not run (another input failed first)"))
             for i, job in enumerate(jobs)]
 
 
@@ -607,7 +625,7 @@ def progress_lines(stream: TextIO | None,
         what = (f"{counted(o.frames, 'frame')}, {counted(o.tracks, 'track')}, "
                 f"{o.seconds:.1f} s" if o.ok else
                 f"failed: {o.error}")
-        line = f"[{k}/{n}] {o.input.name}: {what}"
+        line = f"[{k}/{n}] {input_label(o.input)}: {what}"
         if not bar:
             # one write for the line and its newline: print's two let a worker's warning,
             # written to the same stderr unbuffered (python -u), fall between them

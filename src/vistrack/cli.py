@@ -969,7 +969,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     done, a table at the end; exit status 1 if any failed. ``offline_given``: the offline
     mode's settings given, refused with ``--out-dir`` and said to change nothing without
     ``--offline``, as for one input."""
-    from .batch import Outcome, one_thread_here, plan, progress_lines, run_jobs
+    from .batch import Outcome, input_label, one_thread_here, plan, progress_lines, run_jobs
 
     if args.own_process:
         one_thread_here()  # before numpy: this process hands out the inputs, its workers track
@@ -1097,9 +1097,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
                     _keep_warnings(o.out, said, before=True)
                 except OSError:  # (a cluster's outputs out of reach here: printed above)
                     pass
-    # an input's name, or the path given where its name says nothing (".", "..")
-    names = [o.input.name if o.input.name not in ("", ".", "..") else str(o.input)
-             for o in outcomes]
+    names = [input_label(o.input) for o in outcomes]
     width = max(len("input"), *map(len, names))  # (names shorter than the header: misaligned)
     print(f"{'input':{width}s}  status  frames  tracks  seconds  output")
     for o, input_name in zip(outcomes, names):

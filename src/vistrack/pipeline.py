@@ -1556,14 +1556,19 @@ def _a_frame_rate(x: Any) -> bool:
         return False
 
 
+def check_fps(fps: Any) -> None:
+    """``fps`` None, or a frame rate :func:`track_sequence` takes (a ValueError naming it)."""
+    if fps is not None and not _a_frame_rate(fps):
+        raise ValueError(f"fps must be a number from {FRAME_RATES[0]:g} to "
+                         f"{FRAME_RATES[1]:g} (frames a second); got {fps!r}")
+
+
 def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
                    columns: dict[str, str] | None, fps: float | None) -> _SequenceInput:
     """The detections of a sequence folder, or of a detections file alone, read and checked
     against the sequence (:func:`track_sequence`'s errors; its warnings name the caller of
     :func:`track_sequence`)."""
-    if fps is not None and not _a_frame_rate(fps):
-        raise ValueError(f"fps must be a number from {FRAME_RATES[0]:g} to "
-                         f"{FRAME_RATES[1]:g} (frames a second); got {fps!r}")
+    check_fps(fps)
     if not seq_dir.exists():  # not "SEQ/det/det.txt does not exist" for a mistyped SEQ
         raise FileNotFoundError(f"{seq_dir} does not exist (a sequence folder, or a "
                                 "detections file)")
