@@ -1276,3 +1276,27 @@ def test_a_failed_jobs_empty_new_folder_is_removed_and_an_old_one_kept(tmp_path)
     outcomes = run_jobs(jobs, executor=_DiesAfterMakingItsFolder())
     assert [o.error for o in outcomes] == ["RuntimeError: worker lost"] * 2
     assert not (tmp_path / "new").exists() and old.is_dir()
+
+
+def test_track_many_clears_its_bar_when_inputs_are_left_unrun(tmp_path, monkeypatch):
+    """Without keep_going, the inputs after a failure are not run, so the bar never reached
+    its last input and stayed on the terminal: the caller's next words ran on after
+    "about 0 s left". Oracle: the text ends with the bar's line cleared."""
+    import io
+
+    import vistrack.batch as batch
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    monkeypatch.setattr(batch, "_run", _failing_or_slow)
+    monkeypatch.setattr(batch, "plan", lambda inputs, out, **_: [
+        batch.Job(tmp_path / name, tmp_path / f"{name}.txt", "detections")
+        for name in ("BAD", "A", "B")])
+    term = Terminal()
+    outcomes = track_many(["x"], tmp_path, jobs=1, keep_going=False, progress=term)
+    assert [o.attempts for o in outcomes] == [1, 0, 0]
+    text = term.getvalue()
+    assert text.endswith("\r\x1b[K")
+    assert "inputs" not in text.rsplit("\r\x1b[K", 2)[-1]

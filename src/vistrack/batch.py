@@ -593,8 +593,15 @@ def track_many(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "de
     if jobs is not None:  # (0 was taken as every core, which --jobs refuses)
         jobs = _count(jobs, "jobs")
     planned = plan(inputs, out, kind=kind, **options)
-    return run_jobs(planned, workers=jobs, executor=executor, keep_going=keep_going,
-                    retries=retries, on_done=progress_lines(progress, len(planned)))
+    try:
+        return run_jobs(planned, workers=jobs, executor=executor, keep_going=keep_going,
+                        retries=retries, on_done=progress_lines(progress, len(planned)))
+    finally:
+        if progress is not None and getattr(progress, "isatty", lambda: False)():
+            # the bar cleared: it stayed where inputs were left unrun after a failure, or
+            # an interrupt came, and the caller's next words ran on after it
+            progress.write("\r\x1b[K")
+            progress.flush()
 
 
 def progress_lines(stream: TextIO | None,
