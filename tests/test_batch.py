@@ -462,8 +462,17 @@ def test_the_command_line_does_not_start_numpy_before_it_knows_the_command():
 
 def test_inputs_expand_and_are_checked(bench, tmp_path):
     assert [p.name for p in expand_inputs([bench])] == ["SIM-0", "SIM-1", "SIM-2"]
-    with pytest.raises(ValueError, match="given twice"):
-        expand_inputs([bench, bench / "SIM-1"])
+    # each path given once, one of them inside a folder of sequences: the error names that
+    # folder (it named the same path twice, "SIM-1 is given twice (as SIM-1 too)")
+    for inputs, first, second in (([bench, bench / "SIM-1"], "SIM-1", "SIM-1"),
+                                  ([bench / "SIM-1", bench], "SIM-1", "SIM-1")):
+        with pytest.raises(ValueError) as e:
+            expand_inputs(inputs)
+        assert str(e.value) == (f"{bench / second} is given twice (as {bench / first} too; one "
+                                f"of them found in the folder of sequences {bench})")
+    with pytest.raises(ValueError) as e:
+        expand_inputs([bench / "SIM-1", bench / "SIM-1"])
+    assert "folder of sequences" not in str(e.value)
     with pytest.raises(FileNotFoundError, match="nowhere"):
         expand_inputs([tmp_path / "nowhere"])
     video = tmp_path / "clip.mp4"

@@ -82,13 +82,16 @@ def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
         If an input appears twice.
     """
     out: list[Path] = []
+    within: list[Path | None] = []  # each input's folder of sequences, if it came from one
     for item in inputs:
         path = Path(item)
         if not path.exists():
             raise FileNotFoundError(f"{path} does not exist")
         if is_benchmark(path):
-            out.extend(sorted((p for p in path.iterdir() if _is_sequence(p)),
-                              key=lambda p: p.name))
+            members = sorted((p for p in path.iterdir() if _is_sequence(p)),
+                             key=lambda p: p.name)
+            out.extend(members)
+            within.extend([path] * len(members))
             left = sorted(p.name for p in path.iterdir() if p.is_dir() and not _is_sequence(p)
                           and ((p / "det" / "det.txt").is_file() or (p / "img1").is_dir()))
             if left:  # (the count said "1 of 1 inputs tracked" without them)
@@ -100,14 +103,18 @@ def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
                               stacklevel=2)
         else:
             out.append(path)
-    check_distinct(out)
+            within.append(None)
+    check_distinct(out, within)
     return out
 
 
-def check_distinct(paths: Iterable[str | Path]) -> None:
+def check_distinct(paths: Iterable[str | Path],
+                   within: Sequence[Path | None] | None = None) -> None:
     """Check that no two of ``paths`` resolve to the same file or folder, a sequence folder
     counting as its images' folder and its detections file too (a sequence and its own
-    ``img1/`` are the same frames, tracked twice under two names).
+    ``img1/`` are the same frames, tracked twice under two names). ``within`` gives, for each
+    path, the folder of sequences it was found in (or None), which the error names: each was
+    given once, one of them as a member of that folder.
 
     Raises
     ------
@@ -122,19 +129,23 @@ def check_distinct(paths: Iterable[str | Path]) -> None:
     ...
     ValueError: a is given twice (as a too)
     """
-    seen: dict[Path, tuple[Path, str]] = {}  # what each path is, and how
-    for p in map(Path, paths):
+    seen: dict[Path, tuple[Path, str, Path | None]] = {}  # what each path is, how, and where
+    given = [Path(p) for p in paths]
+    for p, folder in zip(given, within or [None] * len(given)):
         own = {p.resolve(): ""}
         if _is_sequence(p):  # its frames and its detections, as given alone
             for part in (_image_dir(p), "det/det.txt"):
                 own[(p / part).resolve()] = f"{p}/{part}"
         for key, via in own.items():
             if key in seen:
-                other, via_other = seen[key]
+                other, via_other, folder_other = seen[key]
                 why = via or via_other
+                found = folder or folder_other  # (not both: a folder's members differ)
                 raise ValueError(f"{p} is given twice (as {other} too"
-                                 + (f": {why} is the same input" if why else "") + ")")
-        seen.update({key: (p, via) for key, via in own.items()})
+                                 + (f": {why} is the same input" if why else "")
+                                 + (f"; one of them found in the folder of sequences {found}"
+                                    if found else "") + ")")
+        seen.update({key: (p, via, folder) for key, via in own.items()})
 
 
 def _image_dir(sequence: Path) -> str:
