@@ -1100,3 +1100,52 @@ def test_the_chains_gap_is_whole_steps_a_half_up(rate, step, frames):
     want = step * max(1, floor(Fraction("0.2") * Fraction(rate) / step + Fraction(1, 2)))
     assert want == frames
     assert ScoreCalibrator(frame_rate=rate, chain_gap=0.2)._gap_frames(step) == frames
+
+
+def test_the_top_fraction_is_the_outcomes_own_rate_of_a_whole_count():
+    """`top` x n a whole number in reals but not in floats (0.07 x 100 = 7.000000000000001)
+    took one outcome more than the top fraction, and where the top fraction reaches below
+    the top third its rate was taken from the outcomes after the rank cap lowered them.
+    Oracles: the mean of the top outcomes by score, and scipy's isotonic regression."""
+    from scipy.optimize import isotonic_regression
+
+    s = np.arange(100.0)
+    p = np.zeros(100)
+    p[93:] = 1
+    p[40:60:2] = 1
+    cal = ScoreCalibration.fit(s, p, top=0.07, top_min=1)
+    assert cal.top_persistence == p[-7:].mean() == 1.0
+    assert cal([50.0])[0] == pytest.approx(isotonic_regression(p).x[50] / p[-7:].mean())
+    s = np.arange(600.0)
+    p = np.zeros(600)
+    p[400:] = np.arange(200) % 2
+    p[300:400] = 1
+    assert ScoreCalibration.fit(s, p, top=0.5, top_min=1).top_persistence == pytest.approx(
+        p[300:].mean())
+
+
+def test_calibration_settings_that_mean_nothing_are_named():
+    """`from_frames(min_link_iou=0, -1 or NaN)` left the links as they were; `blend` clipped
+    a weight of 2 or -1 into a map, warned of a division by 0 on no ranked scores and named
+    a NaN among them by its place in the union; `score_at(NaN)` said inf ("no score
+    reaches it")."""
+    fast = [Detections(boxes=np.array([[10.0 + 18 * f, 10, 40 + 18 * f, 80],
+                                       [200.0 + 50 * f, 100, 230 + 50 * f, 160]]),
+                       scores=np.array([0.9, 0.4])) for f in range(6)]
+    for bad in (0.0, -1.0, float("nan"), True):
+        with pytest.raises(ValueError, match=re.escape(
+                f"min_link_iou must be an overlap > 0, or None; got {bad!r}")):
+            ScoreCalibration.from_frames(fast, min_link_iou=bad)
+    assert ScoreCalibration.from_frames(fast, min_link_iou=0.1).link_iou == 0.2
+    cal = ScoreCalibration([0.4, 0.9], [0.0, 1.0])
+    for weight in (2.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match=re.escape(f"weight must be in [0, 1]; got "
+                                                       f"{weight!r}")):
+            cal.blend(weight, np.array([0.4, 0.9]))
+    with pytest.raises(ValueError, match="ranked must hold at least one score"):
+        cal.blend(0.5, np.array([]))
+    with pytest.raises(ValueError, match=re.escape("ranked must not be NaN; ranked[0] is NaN")):
+        cal.blend(0.5, np.array([np.nan, 0.4]))
+    assert cal.blend(0.5, np.array([0.4, 0.9])).confidence.tolist() == [0.25, 1.0]
+    with pytest.raises(ValueError, match="level must be a confidence, not NaN"):
+        ScoreCalibration([0.2, 0.5, 0.8], [0.0, 0.6, 1.0]).score_at(float("nan"))

@@ -364,11 +364,11 @@ def _rank_capped(hits: np.ndarray, counts: np.ndarray, cap_sigma: float) -> np.n
     return (rh * np.repeat(scale, np.diff(starts + [len(rc)])))[::-1]
 
 
-def _scores(scores: ArrayLike) -> np.ndarray:
+def _scores(scores: ArrayLike, name: str = "scores") -> np.ndarray:
     s = np.asarray(scores, dtype=np.float64).ravel()
     bad = np.flatnonzero(np.isnan(s))
     if len(bad):
-        raise ValueError(f"scores must not be NaN; scores[{int(bad[0])}] is NaN")
+        raise ValueError(f"{name} must not be NaN; {name}[{int(bad[0])}] is NaN")
     return s
 
 
@@ -558,14 +558,18 @@ class ScoreCalibration:
         if len(s) == 0:
             raise NoOutcomesError("no scores to fit")
         u, inv, counts = np.unique(s, return_inverse=True, return_counts=True)
-        hits = np.bincount(inv, weights=p, minlength=len(u))
+        hits = outcomes = np.bincount(inv, weights=p, minlength=len(u))
         if np.isfinite(cap_sigma):
             hits = _rank_capped(hits, counts, cap_sigma)
         fit = _pava(hits / counts, counts.astype(np.float64))
-        # the rate of the top fraction by score (ties at its edge included)
+        # the rate of the top fraction by score (ties at its edge included), of the outcomes
+        # themselves (the cap's, where the top reaches below the top third, lowered it); a
+        # fraction of a whole count taken as that count (0.07 x 100 is 7.000000000000001,
+        # and took 8)
         above = np.cumsum(counts[::-1])[::-1]  # detections scoring >= u[k]
-        k = int(np.flatnonzero(above >= min(len(s), max(top * len(s), top_min)))[-1])
-        a = hits[k:].sum() / counts[k:].sum()
+        need = min(len(s), max(math.ceil(round(top * len(s), 9)), top_min))
+        k = int(np.flatnonzero(above >= need)[-1])
+        a = outcomes[k:].sum() / counts[k:].sum()
         if a <= 0:
             conf = np.ones(len(u))  # nothing persists: no evidence to tell scores apart
         else:
@@ -620,6 +624,8 @@ class ScoreCalibration:
         NoOutcomesError
             If no outcome is resolved: the frames but the first and the last hold no
             detections, and no chain has lasted or ended (a ``ValueError``).
+        ValueError
+            If ``min_link_iou`` is not an overlap > 0 (nor None).
 
         Examples
         --------
@@ -646,8 +652,14 @@ class ScoreCalibration:
         >>> cal([0.4, 0.9]).tolist(), cal.link_iou
         ([0.0, 1.0], 0.2)
         """
+        if min_link_iou is not None and not (isinstance(min_link_iou, (int, float, np.number))
+                                             and not isinstance(min_link_iou, bool)
+                                             and min_link_iou > 0):
+            # (0, a negative one or NaN left the links as they were, without a word)
+            raise ValueError(f"min_link_iou must be an overlap > 0, or None; got "
+                             f"{min_link_iou!r}")
         ious = [float(link_iou)]
-        if min_link_iou is not None and 0 < min_link_iou < link_iou:
+        if min_link_iou is not None and min_link_iou < link_iou:
             # 0.1 lower each time (rounded: 0.3 - 0.1 - 0.1 falls short of 0.1), and the
             # least itself last where it falls between two steps (0.35: 0.25, 0.15, 0.1)
             while round(ious[-1] - 0.1, 10) >= min_link_iou:
@@ -685,12 +697,19 @@ class ScoreCalibration:
         float
             The lowest of the map's scores with at least that confidence, or ``inf``.
 
+        Raises
+        ------
+        ValueError
+            If ``level`` is NaN.
+
         Examples
         --------
         >>> cal = ScoreCalibration([0.2, 0.5, 0.8], [0.0, 0.6, 1.0])
         >>> cal.score_at(0.5), cal.score_at(1.0), cal.score_at(1.5)
         (0.5, 0.8, inf)
         """
+        if math.isnan(level):  # (no confidence is >= NaN: it said inf, "none reaches it")
+            raise ValueError("level must be a confidence, not NaN")
         k = np.flatnonzero(self.confidence >= level)
         return float(self.scores[k[0]]) if len(k) else float("inf")
 
@@ -742,13 +761,22 @@ class ScoreCalibration:
             The blend, clipped to ``[0, 1]``, with this map's ``n``, ``top_persistence`` and
             ``link_iou``.
 
+        Raises
+        ------
+        ValueError
+            If ``weight`` is not in ``[0, 1]``, or ``ranked`` is empty or holds NaN.
+
         Examples
         --------
         >>> cal = ScoreCalibration([0.4, 0.9], [0.0, 1.0])
         >>> cal.blend(0.5, np.array([0.4, 0.9])).confidence.tolist()
         [0.25, 1.0]
         """
-        r = np.sort(ranked)
+        if not 0 <= weight <= 1:  # (2 or -1 were clipped into a map, NaN too)
+            raise ValueError(f"weight must be in [0, 1]; got {weight!r}")
+        r = np.sort(_scores(ranked, "ranked"))
+        if not len(r):  # (numpy's division by 0 warned, then the map was named)
+            raise ValueError("ranked must hold at least one score")
         u = np.union1d(self.scores, r)
         cdf = np.searchsorted(r, u, side="right") / len(r)
         c = weight * self(u) + (1.0 - weight) * cdf
