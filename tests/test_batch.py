@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from tests.test_fit import _sequence
-from vistrack.batch import expand_inputs, plan, run_jobs, track_many
+from vistrack.batch import check_distinct, expand_inputs, plan, run_jobs, track_many
 from vistrack.cli import main
 from vistrack.data import demo_clip
 from vistrack.pipeline import track_sequence
@@ -473,6 +473,11 @@ def test_inputs_expand_and_are_checked(bench, tmp_path):
     with pytest.raises(ValueError) as e:
         expand_inputs([bench / "SIM-1", bench / "SIM-1"])
     assert "folder of sequences" not in str(e.value)
+    with pytest.raises(ValueError) as e:  # (it was named by its first sequence)
+        expand_inputs([bench, bench])
+    assert str(e.value) == f"{bench} is given twice (as {bench} too)"
+    with pytest.raises(ValueError, match="within must give a folder .* each of the 2 paths"):
+        check_distinct([bench / "SIM-0", bench / "SIM-0"], [None])
     with pytest.raises(FileNotFoundError, match="nowhere"):
         expand_inputs([tmp_path / "nowhere"])
     video = tmp_path / "clip.mp4"
@@ -954,6 +959,10 @@ def test_a_bad_frame_rate_is_named_before_any_job(bench, tmp_path, fps):
     assert str(e.value) == str(alone.value)
     assert str(e.value).startswith("fps must be a number from 0.001 to 1e+06")
     assert not (tmp_path / "out").exists()
+    # from pixels: the video reader's words, once, before any job
+    with pytest.raises(ValueError, match=re.escape(f"fps must be a finite number > 0; got "
+                                                   f"{fps}")):
+        plan([bench / "SIM-0", bench / "SIM-1"], tmp_path / "out", kind="pixels", fps=fps)
 
 
 def test_an_input_of_dot_or_dot_dot_is_named_from_the_folder_it_resolves_to(

@@ -529,6 +529,20 @@ def test_eval_of_a_run_stopped_early_says_the_frames_after_count_as_missed(tmp_p
                          "--json"]) == 0
             fn.append(next(iter(json.loads(capsys.readouterr().out).values()))["FN"])
         assert fn[0] - fn[1] == missed
+    # rows after the last frame that no convention scores (a flag of 0) change no score:
+    # nothing is said ("its 0 scored rows ... count as missed"); one is one row
+    quiet = tmp_path / "quiet.txt"
+    quiet.write_text("".join(",".join(r[:6] + ["0" if int(r[0]) > 12 else r[6]] + r[7:]) + "\n"
+                             for r in rows))
+    assert main(["eval", "--gt", str(quiet), "--pred", str(out / "tracks.txt")]) == 0
+    assert capsys.readouterr().err == ""
+    one = tmp_path / "one.txt"
+    first_after = next(k for k, r in enumerate(rows) if int(r[0]) > 12)
+    one.write_text("".join(",".join(r[:6] + ["1" if k == first_after else
+                                             ("0" if int(r[0]) > 12 else r[6])] + r[7:]) + "\n"
+                           for k, r in enumerate(rows)))
+    assert main(["eval", "--gt", str(one), "--pred", str(out / "tracks.txt")]) == 0
+    assert ": its 1 scored row after frame 12 counts as missed (FN) (" in capsys.readouterr().err
     whole = tmp_path / "whole"
     assert main(["track", str(VIDEO), "--frontend", f"detections:{det}", "--out-dir",
                  str(whole), "--quiet"]) == 0

@@ -1519,9 +1519,13 @@ def test_times_alone_are_the_steps(make, tol):
     with pytest.raises(ValueError, match=re.escape(
             "times must not decrease; times[1] = 5.0 comes after times[0] = 5.1")):
         make(cv, pos).filter(ys, times=t[::-1], **prior)
-    # an epoch's seconds beside their steps: equal within the times' own rounding
+    # an epoch's seconds beside their steps: equal within the times' own rounding; float32
+    # times of 1/30 s beside float64 steps, 5e-9 apart, within theirs (they were refused)
     epoch = make(cv, pos).filter(ys, dt=np.diff(t), times=1.7e9 + t, **prior)
     assert np.array_equal(epoch.means, want.means)
+    t32 = (np.arange(4) / 30).astype(np.float32)
+    assert np.array_equal(make(cv, pos).filter(ys, dt=1 / 30, times=t32, **prior).means,
+                          make(cv, pos).filter(ys, dt=1 / 30, **prior).means)
 
 
 def test_ekf_filter_equals_filterpy_and_the_numpy_correction():
@@ -1581,3 +1585,58 @@ def test_ekf_filter_equals_filterpy_and_the_numpy_correction():
 
     Counted(motion, meas).filter(zs[:5], x0=x0, P0=P0)
     assert len(calls) == 5
+
+
+def test_ekf_filter_corrects_in_the_kernel_and_checks_what_is_not_its_own(monkeypatch):
+    """The filter's one-Gaussian corrections go through the compiled kernel, fully or partly
+    observed (numpy's correction made to fail here); a predict or update of a subclass's, of
+    the instance's or patched on the class is called, and what it gives is checked (a
+    subclass's prediction of a variance of -5 was corrected without a word, an instance's
+    predict was skipped); a Jacobian of the wrong shape is named (it met numba's reshape
+    error). Oracle: the code before the kernel, whose messages these are."""
+    from unittest import mock
+
+    import vistrack.filters.ekf as ekf_module
+    from vistrack.filters import ekf_predict
+
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1, r=0.5)
+    prior = dict(x0=[0.0, 1.0], P0=np.eye(2))
+    ys = np.array([[0.0], [1.0], [np.nan], [3.1]])
+    want = kalman_filter(ys, F=cv.F(1.0), Q=cv.Q(1.0), H=pos.H(2), R=pos.R(), **prior)
+
+    def numpy_path(*args, **kwargs):
+        raise AssertionError("numpy's correction")
+
+    with monkeypatch.context() as m:
+        m.setattr(ekf_module, "condition_on", numpy_path)
+        got = ExtendedKalmanFilter(cv, pos).filter(ys, **prior)
+        motion, meas = CoordinatedTurn(q=0.05), RangeBearing(1.0, 1e-3, ndim_state=5)
+        zs = np.array([[20.0, 0.3], [np.nan, 0.31], [19.5, np.nan]])
+        ExtendedKalmanFilter(motion, meas).filter(
+            zs, x0=[-20.0, 8.0, 0.0, -0.8, 0.01], P0=np.diag([4.0, 4.0, 0.5, 0.5, 1e-3]))
+    np.testing.assert_allclose(got.means, want.means, atol=1e-12)
+    np.testing.assert_allclose(got.loglik, want.loglik, atol=1e-12)
+
+    class NegativePredict(ExtendedKalmanFilter):
+        def predict(self, g, dt=1.0, t=0.0):
+            p = ekf_predict(g, self.motion, dt, t)
+            return vt.Gaussian(p.mean, np.array([[1.0, 3.0], [3.0, 1.0]]))
+
+    with pytest.raises(ValueError, match="step 1: g.cov must be positive semi-definite"):
+        NegativePredict(cv, pos).filter(ys, **prior)
+    still = ExtendedKalmanFilter(cv, pos)
+    still.predict = lambda g, dt=1.0, t=0.0: vt.Gaussian(g.mean, g.cov)
+    np.testing.assert_allclose(  # (predicting nothing: the Kalman filter of F = I, Q = 0)
+        still.filter(ys[:2], **prior).means,
+        kalman_filter(ys[:2], F=np.eye(2), Q=np.zeros((2, 2)), H=pos.H(2), R=pos.R(),
+                      **prior).means, atol=1e-12)
+    with mock.patch.object(ExtendedKalmanFilter, "update", autospec=True,
+                           side_effect=ExtendedKalmanFilter.update) as patched:
+        ExtendedKalmanFilter(cv, pos).filter(ys, **prior)
+    assert patched.call_count == 3  # (the step of no measurement is predicted only)
+    wide = vt.models.NonlinearMeasurement(lambda x: x[..., :1], np.eye(1), ndim_state=2,
+                                          jacobian=lambda x: np.ones(x.shape[:-1] + (1, 3)))
+    with pytest.raises(ValueError, match=re.escape(
+            "the measurement model's jacobian(x) gives shape (1, 3) for states of shape (2,); "
+            "(..., 1, 2) was expected (its R is 1 x 1)")):
+        ExtendedKalmanFilter(cv, wide).filter(ys, **prior)

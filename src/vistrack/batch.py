@@ -81,9 +81,11 @@ def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
     ValueError
         If an input appears twice.
     """
+    given = [Path(item) for item in inputs]
+    check_distinct(given)  # (a folder given twice was named by its first sequence)
     out: list[Path] = []
     within: list[Path | None] = []  # each input's folder of sequences, if it came from one
-    for item in inputs:
+    for item in given:
         path = Path(item)
         if not path.exists():
             raise FileNotFoundError(f"{path} does not exist")
@@ -131,7 +133,10 @@ def check_distinct(paths: Iterable[str | Path],
     """
     seen: dict[Path, tuple[Path, str, Path | None]] = {}  # what each path is, how, and where
     given = [Path(p) for p in paths]
-    for p, folder in zip(given, within or [None] * len(given)):
+    if within is not None and len(within) != len(given):
+        raise ValueError(f"within must give a folder (or None) for each of the {len(given)} "
+                         f"paths; got {len(within)}")
+    for p, folder in zip(given, within if within is not None else [None] * len(given)):
         own = {p.resolve(): ""}
         if _is_sequence(p):  # its frames and its detections, as given alone
             for part in (_image_dir(p), "det/det.txt"):
@@ -140,7 +145,7 @@ def check_distinct(paths: Iterable[str | Path],
             if key in seen:
                 other, via_other, folder_other = seen[key]
                 why = via or via_other
-                found = folder or folder_other  # (not both: a folder's members differ)
+                found = folder or folder_other  # (not both: each folder is given once)
                 raise ValueError(f"{p} is given twice (as {other} too"
                                  + (f": {why} is the same input" if why else "")
                                  + (f"; one of them found in the folder of sequences {found}"
@@ -249,6 +254,10 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
             inspect.signature(resolve_config).parameters)
         resolve_config(**{k: v for k, v in options.items() if k not in run})
         check_fps(options.get("fps"))  # (a bad one failed each job on its own)
+    elif options.get("fps") is not None:  # (the same, read from pixels)
+        from .io.video import check_rate
+
+        check_rate(options["fps"])
 
     out = Path(out)
     jobs = []

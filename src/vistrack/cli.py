@@ -1298,13 +1298,14 @@ def _partial_runs(pairs: list[tuple[str, Path, Path, Path | None]],
             continue  # not a run's own file: nothing to tell from it
         truth = read_truth(gt, points=points)
         after = truth.frames > last
-        if after.any():
-            missed = int((after & scored_truth(truth, benchmark)).sum())
+        missed = int((after & scored_truth(truth, benchmark)).sum())
+        if missed:  # (rows the convention ignores alone change no score: nothing to say)
             ignored = int(after.sum()) - missed
             more = f" ({ignored} more {'is' if ignored == 1 else 'are'} ignored)" if ignored else ""
             out.append(f"{pred}: its run ({info}) tracked frames {run.get('first_frame', 1)}-"
-                       f"{last} only, and {gt} runs to frame {truth.frames[-1]}: its {missed} "
-                       f"scored rows after frame {last} count as missed (FN){more}")
+                       f"{last} only, and {gt} runs to frame {truth.frames[-1]}: its "
+                       f"{_n(missed, 'scored row')} after frame {last} "
+                       f"{'counts' if missed == 1 else 'count'} as missed (FN){more}")
     return out
 
 

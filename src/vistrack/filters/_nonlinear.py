@@ -68,6 +68,9 @@ def step_times(dt: ArrayLike | None, times: ArrayLike | None,
     predicted over 1 s, without a word)."""
     if dt is None and times is None:
         dt = 1.0
+    # the rounding the times and steps came with (float32 times of 1/30 s differ from
+    # float64 steps by 5e-9, within their own rounding)
+    eps = max(_eps_of(times), _eps_of(dt))
     if times is not None:
         times = as_float_array(times, "times", ndim=(1,))
         if times.shape != (T,):
@@ -102,7 +105,7 @@ def step_times(dt: ArrayLike | None, times: ArrayLike | None,
         return dts, np.concatenate([[0.0], np.cumsum(dts[1:])])
     # the steps the times say, within their rounding (times of 1.7e9 s, an epoch's, differ
     # from their steps' sum by a few 1e-7)
-    slack = 1e-9 * np.abs(dts[1:]) + 64 * np.finfo(float).eps * np.abs(times).max()
+    slack = 1e-9 * np.abs(dts[1:]) + 64 * eps * np.abs(times).max()
     off = np.abs(dts[1:] - np.diff(times)) > slack
     if off.any():
         k = 1 + int(np.flatnonzero(off)[0])
@@ -110,6 +113,15 @@ def step_times(dt: ArrayLike | None, times: ArrayLike | None,
                          f"{times[k] - times[k - 1]} in times (times[{k}] - times[{k - 1}]); "
                          f"give one of them")
     return dts, times
+
+
+def _eps_of(values: ArrayLike | None) -> float:
+    """The spacing of floats near 1 in ``values``' own precision (float64's for anything
+    else: integers, lists, None)."""
+    dtype = getattr(values, "dtype", None)
+    if dtype is not None and np.issubdtype(dtype, np.floating):
+        return float(np.finfo(dtype).eps)
+    return float(np.finfo(float).eps)
 
 
 class _Moments(Protocol):

@@ -122,6 +122,10 @@ def _ekf_update(g: Gaussian, y: ArrayLike,
     x = g.mean
     e = me.residual(np.where(obs, y, 0.0), check_h_size(me.h(x), me.m, x))
     H = me.jacobian(x)
+    if np.shape(H)[-2:] != (me.m, n):  # (numpy's matmul error, or numba's reshape's)
+        raise ValueError(f"the measurement model's jacobian(x) gives shape {np.shape(H)} for "
+                         f"states of shape {x.shape}; (..., {me.m}, {n}) was expected (its R "
+                         f"is {me.m} x {me.m})")
     if x.ndim == 1 and np.ndim(H) == 2 and np.isfinite(e[obs]).all():
         # one Gaussian: the correction in one compiled call (the Kalman filter's own, which
         # forms the innovation as y - H x: given e for y and a zero mean, it gives the step
@@ -178,14 +182,15 @@ class ExtendedKalmanFilter:
         ``dt`` where both are given. A model that gives
         NaN or infinity mid-run is a ValueError naming the first step (and series) whose
         prediction or correction it made so."""
-        # the prior checked by run_sequence, the states since the filter's own: the steps
-        # without the checks of a Gaussian given, a third of their time (a subclass's own
-        # predict or update is called as it is)
         predict: Callable[[Gaussian, float, float], Gaussian] = self.predict
         update: Callable[[Gaussian, np.ndarray], tuple[Gaussian, np.ndarray]] = self.update
-        if type(self).predict is ExtendedKalmanFilter.predict:
+        if _own_steps(self):
+            # the prior checked by run_sequence, the states since the filter's own: the steps
+            # without the checks of a Gaussian given, a third of their time (a predict or
+            # update of a subclass's, the instance's or a patch's is called as it is, and
+            # each Gaussian checked: a subclass's prediction of a negative variance was
+            # corrected without a word)
             predict = partial(_predict, self.motion)
-        if type(self).update is ExtendedKalmanFilter.update:
             update = partial(_ekf_update, measurement=self.measurement, residual=None,
                              trusted=True)
         return run_sequence(ys, x0, P0, self.motion.n, self.measurement.m, dt, times,
@@ -198,3 +203,13 @@ class ExtendedKalmanFilter:
     def update(self, g: Gaussian, y: ArrayLike) -> tuple[Gaussian, np.ndarray]:
         """One correction and its innovation log-density (:func:`ekf_update`)."""
         return _ekf_update(g, y, self.measurement, None)
+
+
+_OWN_STEPS = (ExtendedKalmanFilter.predict, ExtendedKalmanFilter.update)
+
+
+def _own_steps(f: ExtendedKalmanFilter) -> bool:
+    """Whether ``f``'s ``predict`` and ``update`` are both this module's own: not a
+    subclass's, not set on the instance, not patched on the class."""
+    return (type(f).predict is _OWN_STEPS[0] and type(f).update is _OWN_STEPS[1]
+            and "predict" not in vars(f) and "update" not in vars(f))

@@ -280,6 +280,16 @@ def images_of(folder: str | os.PathLike) -> Path:
     return folder / _sequence_section(info).get("imDir", "img1") if info.exists() else folder
 
 
+def check_rate(fps: Any) -> None:
+    """``fps`` a frame rate a video is read at: a finite number > 0 (a ValueError naming it)."""
+    try:  # (text met numpy's "ufunc 'isfinite' not supported"; True was 1 frame a second)
+        ok = not isinstance(fps, bool) and math.isfinite(float(fps)) and float(fps) > 0
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise ValueError(f"fps must be a finite number > 0; got {fps}")
+
+
 class VideoReader:
     """Frames of a video file, an image folder, or a MOTChallenge sequence folder (its
     ``img1/``, with the frame rate of its ``seqinfo.ini``).
@@ -533,8 +543,7 @@ class VideoReader:
         # argument not given), and it is 30
         self.fps_from = "fps" if fps is not None else self.own_fps_from
         fps = fps if fps is not None else self.own_fps or 30.0
-        if not np.isfinite(fps) or fps <= 0:
-            raise ValueError(f"fps must be a finite number > 0; got {fps}")
+        check_rate(fps)
         self.fps = float(fps)
 
     def __len__(self) -> int:
