@@ -186,24 +186,38 @@ def particle_rows(rows, repeats, sizes):
             rows.append((label, "particles (SMC, systematic)", sec / T * 1e3, rmse(m)))
 
 
-def ukf_rows(rows, repeats):
+def _turn():
+    """The UKF's and EKF's problem: a coordinated turn seen by range and bearing, 200
+    steps, and the first step's prior."""
     motion, meas = vt.models.CoordinatedTurn(q=0.05, q_turn=1e-3), vt.models.RangeBearing(
         1.0, 1e-3, ndim_state=5)
     _, zs = vt.simulate.simulate(motion, meas, 200, x0=[-20.0, 8.0, 0.0, -0.8, 0.01], rng=5)
     x0, P0 = np.array([-20.0, 8.0, 0.0, -0.8, 0.01]), np.diag([4.0, 4.0, 0.5, 0.5, 1e-3])
-    label = "UKF, coordinated turn + range-bearing, one predict + update"
+    return motion, meas, zs, x0, P0
+
+
+def _vistrack_rows(rows, repeats, label, name, predict, update, flt):
+    """vistrack's functions (``name_predict`` + ``name_update``, a Gaussian each call) and
+    its filter ``flt`` on :func:`_turn`'s problem, per step."""
+    motion, meas, zs, x0, P0 = _turn()
 
     def functional():
-        g = vt.Gaussian(x0, P0)
-        for z in zs:
-            g = ukf_update(ukf_predict(g, motion), z, meas)
+        g = update(vt.Gaussian(x0, P0), zs[0], meas)  # (x0, P0: the first step's prior)
+        for z in zs[1:]:
+            g = update(predict(g, motion), z, meas)
 
     sec, _ = median_time(functional, repeats)
-    rows.append((label, "vistrack ukf_predict + ukf_update", sec / len(zs) * 1e3, None))
-    flt = UnscentedKalmanFilter(motion, meas)
+    rows.append((label, f"vistrack {name}_predict + {name}_update", sec / len(zs) * 1e3, None))
     sec, _ = median_time(lambda: flt.filter(zs, x0=x0, P0=P0), repeats)
-    rows.append((label, "vistrack UnscentedKalmanFilter.filter, per step",
+    rows.append((label, f"vistrack {type(flt).__name__}.filter, per step",
                  sec / len(zs) * 1e3, None))
+
+
+def ukf_rows(rows, repeats):
+    motion, meas, zs, x0, P0 = _turn()
+    label = "UKF, coordinated turn + range-bearing, one predict + update"
+    _vistrack_rows(rows, repeats, label, "ukf", ukf_predict, ukf_update,
+                   UnscentedKalmanFilter(motion, meas))
     if optional("filterpy") is not None:
         from filterpy.kalman import MerweScaledSigmaPoints
         from filterpy.kalman import UnscentedKalmanFilter as FPU
@@ -213,8 +227,9 @@ def ukf_rows(rows, repeats):
                      fx=lambda x, dt: motion.f(x, dt), hx=meas.h, residual_z=meas.residual,
                      z_mean_fn=meas.mean)
             kf.x, kf.P, kf.Q, kf.R = x0.copy(), P0.copy(), motion.Q(1.0), meas.R()
-            for z in zs:
-                kf.predict()
+            for k, z in enumerate(zs):
+                if k:  # (the first step's prior is x0, P0, as vistrack's filter takes it)
+                    kf.predict()
                 kf.update(z)
 
         sec, _ = median_time(filterpy_run, repeats)
@@ -224,23 +239,10 @@ def ukf_rows(rows, repeats):
 def ekf_rows(rows, repeats):
     """The UKF's problem through the EKF: vistrack's functions and filter, and FilterPy's
     ExtendedKalmanFilter (its predict_x given the model's f, its F the model's Jacobian)."""
-    motion, meas = vt.models.CoordinatedTurn(q=0.05, q_turn=1e-3), vt.models.RangeBearing(
-        1.0, 1e-3, ndim_state=5)
-    _, zs = vt.simulate.simulate(motion, meas, 200, x0=[-20.0, 8.0, 0.0, -0.8, 0.01], rng=5)
-    x0, P0 = np.array([-20.0, 8.0, 0.0, -0.8, 0.01]), np.diag([4.0, 4.0, 0.5, 0.5, 1e-3])
+    motion, meas, zs, x0, P0 = _turn()
     label = "EKF, coordinated turn + range-bearing, one predict + update"
-
-    def functional():
-        g = ekf_update(vt.Gaussian(x0, P0), zs[0], meas)  # (x0, P0: the first step's prior)
-        for z in zs[1:]:
-            g = ekf_update(ekf_predict(g, motion), z, meas)
-
-    sec, _ = median_time(functional, repeats)
-    rows.append((label, "vistrack ekf_predict + ekf_update", sec / len(zs) * 1e3, None))
     flt = ExtendedKalmanFilter(motion, meas)
-    sec, _ = median_time(lambda: flt.filter(zs, x0=x0, P0=P0), repeats)
-    rows.append((label, "vistrack ExtendedKalmanFilter.filter, per step",
-                 sec / len(zs) * 1e3, None))
+    _vistrack_rows(rows, repeats, label, "ekf", ekf_predict, ekf_update, flt)
     if optional("filterpy") is not None:
         from filterpy.kalman import ExtendedKalmanFilter as FPE
 
