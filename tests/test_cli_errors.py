@@ -1512,3 +1512,24 @@ def test_one_frame_is_said_as_one(tmp_path, capsys):
     assert main(["track", str(folder), "--out-dir", str(tmp_path / "t"), "--quiet"]) == 0
     assert (f"{folder}: the bgsub front-end found nothing in 1 frame (blobs of 500 pixels"
             in capsys.readouterr().err)
+
+
+def test_an_existing_output_is_said_in_the_callers_words(tmp_path, capsys):
+    """Python callers were told "pass --force" where their option is `force=True`
+    (`track_many`'s outcomes, `track_sequence`, `write_boxes`); the command line still says
+    `--force`. Oracle: the option each caller has."""
+    from vistrack.io.tracks import write_boxes
+    from vistrack.pipeline import track_sequence
+
+    det = tmp_path / "cam.txt"
+    det.write_text("".join(f"{f},-1,{10 + 2 * f},20,30,60,0.9\n" for f in range(1, 11)))
+    out = tmp_path / "res.txt"
+    out.write_text("")
+    with pytest.raises(FileExistsError, match=re.escape(
+            f"out {out} exists; pass force=True to overwrite it")):
+        track_sequence(det, out, fps=10)
+    with pytest.raises(FileExistsError, match=re.escape(
+            f"{out} exists; pass force=True to overwrite it")):
+        write_boxes(out, [[1.0, 2.0, 3.0, 4.0]])
+    assert main(["track", str(det), "--fps", "10", "--out", str(out)]) == 2
+    assert f"--out {out} exists; pass --force to overwrite it" in capsys.readouterr().err

@@ -1496,7 +1496,7 @@ def test_track_video_writes_tracks_video_plot_and_scores(tmp_path):
     want = evaluate_mot(gt[gt.frames <= 60], t, 60)
     assert run.scores.MOTA == want.MOTA and run.scores.HOTA == want.HOTA
     assert run.scores.HOTA > 0.25  # people are tracked (PETS09 ground truth)
-    with pytest.raises(FileExistsError, match="tracks.txt.*exist; pass --force"):
+    with pytest.raises(FileExistsError, match="tracks.txt.*exist; pass force=True to overwrite"):
         track_video(demo / "pets09-s2l1.mp4", tmp_path / "out", stop=5)
     with pytest.raises(ValueError, match="--frontend must be bgsub, confidence, hog, spots, "
                                          "detections:FILE or onnx:MODEL.onnx; got"):

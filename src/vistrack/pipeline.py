@@ -57,6 +57,7 @@ from .io.atomic import (
     Input,
     check_not_input,
     check_output,
+    force_option,
     made_folder,
     remove_on_commit,
     staging,
@@ -2305,7 +2306,7 @@ def video_outputs(out_dir: str | Path, *, annotate: bool = True, force: bool = F
     there = [str(p) for p in written if p.exists()]
     if there and not force:
         raise FileExistsError(f"{', '.join(there)} exist{'s' if len(there) == 1 else ''}; "
-                              "pass --force to overwrite "
+                              f"pass {force_option(name)} to overwrite "
                               + ("it" if len(there) == 1 else "them"))
     return files
 

@@ -536,6 +536,10 @@ def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "o
     Traceback (most recent call last):
     ...
     FileExistsError: --out .../f exists; pass --force to overwrite it
+    >>> check_output(tmp / "f")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    FileExistsError: out .../f exists; pass force=True to overwrite it
     >>> check_output(tmp / "f", name="--out-dir", folder=True)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
@@ -572,7 +576,14 @@ def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "o
     os.close(fd)
     os.unlink(probe)
     if not folder and p.exists() and not force:
-        raise FileExistsError(f"{name} {p} exists; pass --force to overwrite it")
+        raise FileExistsError(f"{name} {p} exists; pass {force_option(name)} to overwrite it")
+
+
+def force_option(name: str) -> str:
+    """How to say "overwrite" to whoever named an output ``name``: ``--force`` to the command
+    line (an option's name, ``--out``), ``force=True`` to Python (an argument's, ``out``;
+    a Python caller was told to pass ``--force``)."""
+    return "--force" if name.startswith("--") else "force=True"
 
 
 Input = tuple[str, str | os.PathLike | None] | tuple[str, str | os.PathLike | None,

@@ -785,7 +785,7 @@ def write_boxes(path: str | os.PathLike, boxes: ArrayLike, *, force: bool = Fals
         raise ValueError(f"boxes must be (T, 4), x, y, w, h in each frame; got shape "
                          f"{b.shape}")
     if path.exists() and not force:
-        raise FileExistsError(f"{path} exists; pass --force to overwrite it")
+        raise FileExistsError(f"{path} exists; pass force=True to overwrite it")
     with open_replacing(path) as fh:
         for k, (x, y, w, h) in enumerate(b, start=1):
             fh.write(f"{k},{x:.2f},{y:.2f},{w:.2f},{h:.2f}\n")
