@@ -82,6 +82,8 @@ def wrap_angle(a: np.ndarray) -> np.ndarray:
 def _one_dt(dt: float) -> float:
     """``dt`` as one finite time step >= 0, or an error naming ``dt`` (a NaN or negative step
     moved the states backwards or to NaN without a word)."""
+    if type(dt) is float and dt >= 0.0 and dt != math.inf:  # (the filters' own: no array)
+        return dt
     d = _as_dt(dt)
     if d.ndim:
         raise ValueError(f"dt must be one value; got shape {d.shape}")
