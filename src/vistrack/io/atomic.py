@@ -497,12 +497,14 @@ def _naming(path: Path) -> Iterator[None]:
 
 
 def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "out",
-                 folder: bool = False) -> None:
+                 folder: bool = False, option: str | None = None) -> None:
     """Raise, before any work is done, if ``path`` cannot be written: a file (or with
     ``folder``, a folder to write files in) that is a folder (a file), lies under a file,
     lies in a folder that cannot be written, or (a file) exists and ``force`` is False.
 
-    ``name`` names the argument or option in the messages.
+    ``name`` names the argument or option in the messages, and ``option`` how to overwrite
+    an existing file (by default ``--force`` where ``name`` is an option, ``--out``, and
+    ``force=True`` where it is Python's argument, :func:`force_option`).
 
     Raises
     ------
@@ -576,7 +578,8 @@ def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "o
     os.close(fd)
     os.unlink(probe)
     if not folder and p.exists() and not force:
-        raise FileExistsError(f"{name} {p} exists; pass {force_option(name)} to overwrite it")
+        raise FileExistsError(f"{name} {p} exists; pass {option or force_option(name)} to "
+                              "overwrite it")
 
 
 def force_option(name: str) -> str:
