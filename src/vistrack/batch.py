@@ -206,11 +206,11 @@ def input_label(path: Path) -> str:
     >>> input_label(Path("KITTI-13/det/det.txt")), input_label(Path("clip.mp4"))
     ('KITTI-13', 'clip.mp4')
     """
+    from .io.motchallenge import _det_file_sequence
+
     if path.name in ("", ".", ".."):
         return str(path)
-    if path.name == "det.txt" and path.parent.name == "det" and path.parent.parent.name:
-        return path.parent.parent.name
-    return path.name
+    return _det_file_sequence(path) or path.name
 
 
 def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detections",

@@ -1663,9 +1663,17 @@ def sequence_name(path: str | os.PathLike) -> str:
         if p.name in ("", ".", ".."):
             raise ValueError(f"{path} has no name to name its results after (it resolves "
                              f"to {p})")
+    seq = _det_file_sequence(p)
+    if seq is not None:
+        return seq
+    return p.name if p.is_dir() else p.stem
+
+
+def _det_file_sequence(p: Path) -> str | None:
+    """``SEQ`` for MOTChallenge's ``SEQ/det/det.txt``, else None."""
     if p.name == "det.txt" and p.parent.name == "det" and p.parent.parent.name:
         return p.parent.parent.name
-    return p.name if p.is_dir() else p.stem
+    return None
 
 
 def _ini_error(exc: configparser.Error) -> str:

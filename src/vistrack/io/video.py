@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._validate import as_finite, as_number, as_whole, bgr_to_grey, ordinal
+from .._validate import as_finite, as_number, as_whole, bgr_to_grey, is_real, ordinal
 from ..types import Frame
 
 if TYPE_CHECKING:
@@ -282,11 +282,8 @@ def images_of(folder: str | os.PathLike) -> Path:
 
 def check_rate(fps: Any) -> None:
     """``fps`` a frame rate a video is read at: a finite number > 0 (a ValueError naming it)."""
-    try:  # (text met numpy's "ufunc 'isfinite' not supported"; True was 1 frame a second)
-        ok = not isinstance(fps, bool) and math.isfinite(float(fps)) and float(fps) > 0
-    except (TypeError, ValueError):
-        ok = False
-    if not ok:
+    # (text met numpy's "ufunc 'isfinite' not supported"; True was 1 frame a second)
+    if not (is_real(fps) and math.isfinite(float(fps)) and float(fps) > 0):
         raise ValueError(f"fps must be a finite number > 0; got {fps}")
 
 

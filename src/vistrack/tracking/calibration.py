@@ -68,7 +68,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_whole, is_whole
+from .._validate import as_whole, is_number, is_whole
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
 from ..types import Detections
@@ -652,9 +652,7 @@ class ScoreCalibration:
         >>> cal([0.4, 0.9]).tolist(), cal.link_iou
         ([0.0, 1.0], 0.2)
         """
-        if min_link_iou is not None and not (isinstance(min_link_iou, (int, float, np.number))
-                                             and not isinstance(min_link_iou, bool)
-                                             and min_link_iou > 0):
+        if min_link_iou is not None and not (is_number(min_link_iou) and min_link_iou > 0):
             # (0, a negative one or NaN left the links as they were, without a word)
             raise ValueError(f"min_link_iou must be an overlap > 0, or None; got "
                              f"{min_link_iou!r}")
