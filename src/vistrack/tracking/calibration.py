@@ -129,7 +129,9 @@ def isotonic_increasing(y: ArrayLike, weights: ArrayLike | None = None) -> np.nd
     ------
     ValueError
         If ``weights`` does not have the shape of ``y``, or a value or weight is not finite,
-        or a weight is not > 0.
+        or a weight is not > 0, or, where a pool's sums would overflow, weights pooled
+        with each other alone are all under about 2^-1074 of ``N`` times the largest (they
+        vanish when the weights are scaled to keep the sums finite).
 
     Examples
     --------
@@ -142,7 +144,24 @@ def isotonic_increasing(y: ArrayLike, weights: ArrayLike | None = None) -> np.nd
         raise ValueError(f"weights must have the shape of y {y.shape}; got {w.shape}")
     if not (np.isfinite(y).all() and np.isfinite(w).all() and (w > 0).all()):
         raise ValueError("y must be finite and weights finite and > 0")
-    return _pava(y, w) if len(y) else y.copy()
+    if not len(y):
+        return y.copy()
+    fit = _pava(y, w)
+    if np.isfinite(fit).all():
+        return fit
+    # a pool's weighted sum overflowed (values or weights near the largest float gave inf
+    # or NaN): again with the values halved and the weights scaled so that they add up to
+    # at most 1, both by powers of two, which leave every product and quotient as it was
+    # (weights under 2^-1074 of that scale vanish; two such pooled first give NaN)
+    scale = math.ldexp(1.0, -(math.frexp(float(w.max()))[1] + math.frexp(len(w))[1]))
+    try:
+        fit = _pava(y * 0.5, w * scale) * 2.0
+    except ZeroDivisionError:  # (the compiled pool's 0 / 0)
+        fit = np.array([np.nan])
+    if not np.isfinite(fit).all():
+        raise ValueError("weights span too wide a range to pool (adjacent weights under "
+                         "2^-1074 of the largest, times the number of values)")
+    return fit
 
 
 @njit(cache=True)
