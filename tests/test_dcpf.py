@@ -245,6 +245,65 @@ def test_track_video_runs_the_particle_filter_on_a_users_confidence(tmp_path):
         track_video(folder, tmp_path / "o2", tracker="dcpf", confidence=3)
 
 
+def test_the_scores_seen_and_why_no_target_started():
+    """A detector whose scores all lie under ``init_score`` starts no target: the tracker
+    keeps the highest score it has seen (the oracle: numpy's maximum of the scores given),
+    and :func:`~vistrack.pipeline.start_warning` says so; with the scores as they are, or
+    one reaching ``init_score``, it says nothing (it was silent either way)."""
+    from vistrack.pipeline import start_warning
+    from vistrack.types import Frame
+
+    frames, dets, maps, _ = crossing_scene(miss=0.3, seed=4)
+    rng = np.random.default_rng(0)
+    scores = [rng.uniform(0.8, 0.99, len(d)) for d in dets]
+    every = np.concatenate(scores)
+    for scale, starts in ((1.0, True), (1 / 200, False)):
+        calls = iter(maps)
+        trk = DetectorConfidencePF(confidence=lambda image, c=calls: next(c), frame_rate=10)
+        reported = 0
+        for t, (img, d, sc) in enumerate(zip(frames, dets, scores), 1):
+            out = trk.step(Frame(t, (t - 1) / 10, img),
+                           Detections.from_xywh(d.xywh, sc * scale))
+            reported += len(out)
+        assert trk.n_scored == len(every)
+        assert trk.top_score == every.max() * scale
+        assert (reported > 0) == starts
+        said = start_warning(trk, "SEQ")
+        assert (said is None) == starts
+    assert said == (f"SEQ: no target started: no detection reached init_score 0.75 (the "
+                    f"highest of {len(every)} scored {every.max() / 200:.3g}); the "
+                    "detector-confidence particle filter's settings are for scores in (0, 1), "
+                    "as the confidence front end gives; for another detector's scale set "
+                    "init_score (DetectorConfidencePF(init_score=...))")
+    trk.reset()
+    assert trk.n_scored == 0 and trk.top_score == -np.inf and start_warning(trk, "S") is None
+
+
+def test_track_video_says_when_a_weaker_detector_starts_no_target(tmp_path):
+    """The confidence front end's peaks of a detector whose margins are half the scene's
+    (1.0 at a person: a score of 0.731 after the logistic, under ``init_score`` 0.75) start
+    no target; the run says so, with the highest score (the oracle: the logistic of the
+    largest margin above the threshold)."""
+    import cv2
+
+    from vistrack.pipeline import track_video
+
+    frames, _, maps, _ = crossing_scene(miss=0.3, seed=4)
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for t, f in enumerate(frames, 1):
+        cv2.imwrite(str(folder / f"{t:06d}.png"), f)
+    weak = [ConfidenceMap([50], [m.scores[0] * 0.5], [(0, 0)], [4], aspect=0.4) for m in maps]
+    top = 1.0 / (1.0 + np.exp(-max(float(m.scores[0].max()) for m in weak)))
+    calls = iter(weak)
+    with pytest.warns(RuntimeWarning, match=re.escape(
+            "no target started: no detection reached init_score 0.75 (the highest of ")
+            + r"\d+" + re.escape(f" scored {top:.3g})")):
+        run = track_video(folder, tmp_path / "out", tracker="dcpf", fps=10,
+                          confidence=lambda image: next(calls))
+    assert run.tracks == 0
+
+
 @pytest.mark.slow
 def test_pets09_clip_terms_of_the_observation_model():
     """The bundled PETS09-S2L1 clip (200 frames) from pixels, against MOT15's annotations:

@@ -95,7 +95,7 @@ if TYPE_CHECKING:
 
 __all__ = ["run", "LoopStats", "Context", "Registry", "FRONTENDS", "TRACKERS", "SINKS",
            "as_detector", "make_tracker", "track_sequence", "TrackRun", "resolve_config",
-           "derived_values", "calibration_warning", "track_video",
+           "derived_values", "calibration_warning", "start_warning", "track_video",
            "VideoRun", "track_one", "SingleRun", "video_outputs", "RUN_INFO", "fit_sequences",
            "FitRun"]
 
@@ -315,6 +315,52 @@ def derived_values(trk: BoxTracker) -> dict:
             out[f"{name}_score"] = each(partial(ScoreCalibration.score_at,
                                                 level=getattr(c, name)))
     return out
+
+
+def start_warning(trk: Any, name: str) -> str | None:
+    """Why a detector-confidence particle filter's run started no target, as a warning, or
+    None: its ``init_score`` (0.75 by default, for scores in (0, 1)) lies above every
+    detection's score (a detector of another scale).
+
+    Parameters
+    ----------
+    trk : DetectorConfidencePF
+        A tracker that has tracked a sequence (other trackers: None).
+    name : str
+        What to call the sequence in the message.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> from vistrack.tracking import DetectorConfidencePF
+    >>> trk = DetectorConfidencePF(gamma=0.0, eta=0.0)
+    >>> image = np.zeros((240, 320, 3), np.uint8)
+    >>> for f in range(1, 6):
+    ...     _ = trk.step(Frame(f, (f - 1) / 30, image), Detections(boxes=[[100, 50, 140, 130]],
+    ...                                                         scores=[0.004]))
+    >>> print(start_warning(trk, "SEQ"))  # doctest: +NORMALIZE_WHITESPACE
+    SEQ: no target started: no detection reached init_score 0.75 (the highest of 5 scored
+    0.004); the detector-confidence particle filter's settings are for scores in (0, 1), as
+    the confidence front end gives; for another detector's scale set init_score
+    (DetectorConfidencePF(init_score=...))
+    """
+    from .tracking.dcpf import DetectorConfidencePF
+
+    if not isinstance(trk, DetectorConfidencePF) or not trk.n_scored:
+        return None
+    cfg = trk.config
+    if trk.top_score >= cfg.init_score:
+        return None
+    seen = ("the only detection" if trk.n_scored == 1 else
+            f"the highest of {trk.n_scored:,}")
+    return (f"{name}: no target started: no detection reached init_score {cfg.init_score:g} "
+            f"({seen} scored {trk.top_score:.3g}); the detector-confidence particle filter's "
+            "settings "
+            "are for scores in (0, 1), as the confidence front end gives; for another "
+            "detector's scale set init_score (DetectorConfidencePF(init_score=...))")
 
 
 def _warn_calibration(trk: BoxTracker, name: str) -> None:
@@ -2674,6 +2720,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             n_tracks = len(rows.identities)
             if isinstance(trk, BoxTracker):
                 _warn_calibration(trk, str(video))
+            started = start_warning(trk, str(video))
+            if started is not None:
+                warnings.warn(started, RuntimeWarning, stacklevel=2)
             result = VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
                               ctx.resolved if isinstance(trk, BoxTracker) else None,
                               derived_values(trk) if isinstance(trk, BoxTracker) else None,

@@ -346,11 +346,21 @@ class DetectorConfidencePF:
     **overrides
         Fields of :class:`DCPFConfig`.
 
+    Attributes
+    ----------
+    n_scored : int
+        Detections seen with a score (not NaN) since the last :meth:`reset`.
+    top_score : float
+        The highest of their scores (``-inf`` before any): where it stays under
+        ``init_score``, no target can start.
+
     Notes
     -----
     :meth:`step` is the tracker protocol (:class:`~vistrack.tracking.Tracker`): a frame with
-    its BGR image, and its discrete detections (scores in (0, 1)). :meth:`update` is the same
-    step with the confidence map given, for a map computed elsewhere.
+    its BGR image, and its discrete detections, whose scores are taken on the detector's own
+    scale (``init_score``'s default, 0.75, is for scores in (0, 1), as the confidence front
+    end's peaks of HOG's squashed confidence). :meth:`update` is the same step with the
+    confidence map given, for a map computed elsewhere.
 
     A target is of its first detection's class, takes detections of that class only, and
     is reported with it; two targets of different classes may overlap (a person by a car)
@@ -395,6 +405,9 @@ class DetectorConfidencePF:
         self.frame = 0
         self._stepped = False  # (frame 0 stepped read as no frame: it could be stepped again)
         self._said_unsized = False
+        # the detections' scores seen, against init_score (a run can say why nothing started)
+        self.n_scored = 0
+        self.top_score = -np.inf
 
     @property
     def _slow(self) -> float:
@@ -414,7 +427,10 @@ class DetectorConfidencePF:
         frame : Frame
             The frame, with its BGR image (the classifiers and the confidence read it).
         detections : Detections, optional
-            The frame's detections, scores in (0, 1) (None: none).
+            The frame's detections (None: none). Their scores are taken on the detector's
+            own scale: ``init_score`` and the defaults are for the confidence front end's,
+            in (0, 1); :attr:`top_score` and :attr:`n_scored` hold the highest score seen
+            and how many were.
 
         Returns
         -------
@@ -648,6 +664,10 @@ class DetectorConfidencePF:
             free = np.ones(len(det_c), bool)
             free[match[match >= 0]] = False
             assert detections.scores is not None  # set by Detections.__post_init__
+            real = detections.scores[~np.isnan(detections.scores)]
+            if len(real):
+                self.n_scored += len(real)
+                self.top_score = max(self.top_score, float(real.max()))
             strong = free & (detections.scores >= cfg.init_score)
             if strong.any():
                 cand, cand_cls = det_xywh[strong], det_cls[strong]
