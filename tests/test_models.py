@@ -689,3 +689,105 @@ def test_a_switching_system_keeps_its_own_transition_and_mode_probabilities():
     mu[:] = [2.0, -1.0]
     np.testing.assert_array_equal(slds.transition, [[0.95, 0.05], [0.2, 0.8]])
     np.testing.assert_array_equal(slds.mode_probs, [0.5, 0.5])
+
+
+@pytest.mark.parametrize("dt", ["0.5", b"1", np.array(["1.0"]), [1.0, "2"], None])
+def test_a_time_step_of_text_or_none_is_refused(dt):
+    """Text was read as a step (``F("0.5")`` was the step of 0.5) and None was said as "got
+    nan"; both are refused, as ``q`` refuses text, and the shared step check of the filters
+    with them."""
+    from vistrack.filters._nonlinear import step_times
+
+    for model in (ConstantVelocity(dim=1), Periodic(omega=1.0),
+                  LinearMotion(np.eye(2), np.eye(2))):
+        with pytest.raises(TypeError, match="dt must be a number or an array of numbers; got"):
+            model.F(dt)
+        with pytest.raises(TypeError, match="dt must be a number or an array of numbers; got"):
+            model.Q(dt)
+    if dt is not None:  # (None is step_times' "not given")
+        with pytest.raises(TypeError, match="dt must be a number or an array of numbers"):
+            step_times(dt, None, 3)
+
+
+def test_a_time_step_past_the_largest_float_is_named():
+    """An integer past the largest float failed in Python's words (OverflowError: int too
+    large to convert to float), naming nothing; a step whose F or Q overflows gave inf."""
+    with pytest.raises(ValueError, match="dt must be numbers a float can hold .*1329 bits"):
+        ConstantVelocity(dim=1).F(10**400)
+    with pytest.raises(ValueError, match=r"ConstantVelocity's Q\(dt\) overflows past the "
+                                         r"largest float at dt=1e\+155"):
+        ConstantVelocity(dim=1).Q(1e155)
+    with pytest.raises(ValueError, match=r"ConstantAcceleration's F\(dt\) overflows"):
+        ConstantAcceleration(dim=1).F(1e200)
+    # the closed forms themselves at a step well inside the range: unchanged
+    np.testing.assert_allclose(ConstantVelocity(dim=1, q=1.0).Q(1e100),
+                               [[1e300 / 3, 1e200 / 2], [1e200 / 2, 1e100]], rtol=1e-15)
+
+
+def test_periodic_noise_at_a_phase_past_the_largest_float():
+    """At ω 1e308 and dt 1, 2 ω dt overflowed and Q was NaN, where its closed form
+    ``q (dt/2 + sin(2ωdt) / 4ω)`` is 0.5 to within 2.5e-309 and the position's entries
+    within 1e-616 of 0; a phase ω dt past the largest float itself (F and Q NaN) is named."""
+    Q = Periodic(omega=1e308, q=1.0).Q(1.0)
+    np.testing.assert_allclose(Q, [[0.0, 0.0], [0.0, 0.5]], rtol=0, atol=1e-300)
+    for call in (lambda m: m.F(1e10), lambda m: m.Q(1e10)):
+        with pytest.raises(ValueError, match="Periodic's phase omega dt is past the largest "
+                                             "float at omega=1e\\+300, dt=1e\\+10"):
+            call(Periodic(omega=1e300))
+
+
+def test_an_empty_stack_of_matrices_is_refused():
+    """A stack of no matrices was taken as a constant model ("steps=constant", n_steps 0)
+    and failed later in numpy's words; a 0 x 0 model failed in the covariance check's."""
+    for F, Q, name in ((np.zeros((0, 2, 2)), np.eye(2), "F"), (np.eye(2), np.zeros((0, 2, 2)),
+                                                               "Q")):
+        with pytest.raises(ValueError, match=re.escape(
+                f"{name} must hold at least one matrix; got shape (0, 2, 2)")):
+            LinearMotion(F, Q)
+    with pytest.raises(ValueError, match="F must hold at least one matrix"):
+        LinearGaussian(np.zeros((0, 2, 2)), np.eye(2), np.eye(2), np.eye(2))
+    with pytest.raises(ValueError, match=re.escape("F must be at least 1 x 1")):
+        LinearMotion(np.zeros((0, 0)), np.zeros((0, 0)))
+
+
+def test_a_switching_system_refuses_a_motion_whose_noise_needs_the_state():
+    """BoxMotion's ``Q(boxes, dt)`` passed the check of a linear motion model (it is
+    callable) and failed at ``sample`` naming ``boxes``, which the caller never gave."""
+    with pytest.raises(TypeError, match=r"motions\[0\] must be a linear motion model whose "
+                                        r"Q\(dt\) takes the time step alone; BoxMotion's"):
+        SwitchingLinearSystem([BoxMotion(), BoxMotion()],
+                              LinearMeasurement(np.eye(4, 8), np.eye(4)), [[0.9, 0.1],
+                                                                          [0.1, 0.9]])
+
+
+def test_probabilities_stored_as_float32_are_taken():
+    """A float32 switching matrix whose rows sum to 1 in float32 sums to 1 - 2.2e-8 in
+    float64, and was refused at the absolute 1e-9; the tolerance is now the input's own
+    rounding, and each row scaled to sum to 1. The filter then equals the one given the
+    float32 values in float64, each row scaled to sum to 1 (the oracle), and a row that is
+    off is still refused."""
+    from vistrack.filters import IMMFilter
+
+    cv = [ConstantVelocity(dim=1, q=0.1), ConstantVelocity(dim=1, q=2.0)]
+    Pi32, mu32 = np.float32([[0.9, 0.1], [0.3, 0.7]]), np.float32([0.1, 0.9])
+    assert (Pi32.sum(1, dtype=np.float32) == 1).all() and mu32.sum(dtype=np.float32) == 1
+    slds = SwitchingLinearSystem(cv, Position(dim=1), Pi32, mode_probs=mu32)
+    Pi64, mu64 = Pi32.astype(float), mu32.astype(float)
+    same = SwitchingLinearSystem(cv, Position(dim=1), Pi64 / Pi64.sum(1, keepdims=True),
+                                 mode_probs=mu64 / mu64.sum())
+    ys = np.array([[0.0], [1.1], [1.9], [3.2]])
+    a = IMMFilter.from_system(slds).filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
+    b = IMMFilter.from_system(same).filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
+    np.testing.assert_array_equal(a.means, b.means)
+    np.testing.assert_array_equal(a.mode_probs, b.mode_probs)
+    with pytest.raises(ValueError, match="rows summing to 1"):
+        IMMFilter([vt_kf(c) for c in cv], np.float32([[0.9, 0.2], [0.3, 0.7]]))
+    with pytest.raises(ValueError, match="whose rows sum to 1"):
+        SwitchingLinearSystem(cv, Position(dim=1), np.float32([[0.9, 0.2], [0.3, 0.7]]))
+
+
+def vt_kf(motion):
+    """A Kalman filter of ``motion`` measuring its position."""
+    from vistrack.filters import KalmanFilter
+
+    return KalmanFilter(motion, Position(dim=1))

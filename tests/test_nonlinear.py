@@ -1640,3 +1640,60 @@ def test_ekf_filter_corrects_in_the_kernel_and_checks_what_is_not_its_own(monkey
             "the measurement model's jacobian(x) gives shape (1, 3) for states of shape (2,); "
             "(..., 1, 2) was expected (its R is 1 x 1)")):
         ExtendedKalmanFilter(cv, wide).filter(ys, **prior)
+
+
+def test_an_ensemble_drawn_for_a_batch_of_covariances_has_draws_of_its_own():
+    """One mean beside a batch of covariances drew one set of normals and scaled it for
+    every ensemble: the two ensembles' members correlated exactly 1. Each now has its own
+    draws (the oracle: independent members correlate near 0, within 5 standard errors,
+    and each ensemble's sample covariance is its own)."""
+    from vistrack.filters import Ensemble
+
+    covs = np.stack([np.eye(2), 4 * np.eye(2)])
+    m = Ensemble.sample(np.zeros(2), covs, 20000, rng=0).members
+    assert m.shape == (2, 20000, 2)
+    r = np.corrcoef(m[0, :, 0], m[1, :, 0])[0, 1]
+    assert abs(r) < 5 / np.sqrt(20000), r
+    for b in range(2):
+        np.testing.assert_allclose(np.cov(m[b].T), covs[b], atol=5 * covs[b, 0, 0]
+                                   * np.sqrt(2 / 20000))
+    # a batch of means with one covariance draws as it did: the same members
+    same = Ensemble.sample(np.zeros((2, 2)), np.eye(2), 50, rng=3).members
+    z = np.random.default_rng(3).standard_normal((2, 50, 2))
+    np.testing.assert_array_equal(same, z @ np.linalg.cholesky(np.eye(2)).T)
+
+
+def test_an_ensemble_of_a_singular_covariance_of_far_apart_scales_has_its_variances():
+    """A constant-acceleration process noise at dt 1e-4 beside a component known exactly
+    (singular): the principal root gave the position 35/36 of its variance (a sample of
+    400,000 had 0.971 of it). The oracle: each component's sample variance against the
+    covariance's own, within 5 standard errors (sqrt(2 / N))."""
+    from vistrack.filters import Ensemble
+    Q = vt.ConstantAcceleration(dim=1, q=1.0).Q(1e-4)
+    cov = np.zeros((4, 4))
+    cov[:3, :3] = Q
+    N = 400_000
+    m = Ensemble.sample(np.zeros(4), cov, N, rng=0).members
+    ratio = m[:, :3].var(0) / np.diag(Q)
+    np.testing.assert_allclose(ratio, 1.0, atol=5 * np.sqrt(2 / N))
+    assert (m[:, 3] == 0).all()
+
+
+def test_the_ensemble_steps_name_an_argument_that_is_no_ensemble():
+    """A Gaussian given to an ensemble step failed in Python's words (no attribute
+    'members'); a measurement of the wrong size was said "to match g", a name the ensemble
+    functions do not have."""
+    from vistrack.filters import Ensemble, EnsembleKalmanFilter, enkf_predict, enkf_update
+
+    cv, pos = vt.ConstantVelocity(dim=1, q=0.1), vt.Position(dim=1)
+    g = vt.Gaussian(np.zeros(2), np.eye(2))
+    with pytest.raises(TypeError, match="ens must be a vistrack.filters.Ensemble .*got Gaussian"):
+        enkf_predict(g, cv)
+    with pytest.raises(TypeError, match="ens must be .*got ndarray"):
+        enkf_update(np.zeros((10, 2)), [1.0], pos)
+    with pytest.raises(TypeError, match="ens must be .*got Gaussian"):
+        EnsembleKalmanFilter(cv, pos, rng=0).update(g, [1.0])
+    ens = Ensemble.sample(np.zeros(2), np.eye(2), 10, rng=0)
+    with pytest.raises(ValueError, match=re.escape("y must have shape (1,) to match ens; got "
+                                                   "(2,)")):
+        enkf_update(ens, [1.0, 2.0], pos)

@@ -76,6 +76,11 @@ def as_float_array(value: ArrayLike | None, name: str, *,
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise TypeError(f"{name} must be an array of numbers; got {type(value).__name__}") from exc
+    except OverflowError:  # (an int past the largest float: Python's words, naming nothing)
+        got = (f"an integer of {value.bit_length()} bits" if isinstance(value, int)
+               else f"{value!r:.80}")
+        raise ValueError(f"{name} must be numbers a float can hold (up to 1.8e308); got "
+                         f"{got}") from None
     if ndim is not None and arr.ndim not in ndim:
         want = " or ".join(f"{d}-D" for d in ndim)
         raise ValueError(f"{name} must be {want}; got shape {_fmt_shape(arr.shape)}")
@@ -90,19 +95,33 @@ def _is_boolean(value: Any) -> bool:
         isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind == "b")
 
 
+def _is_text(value: Any) -> bool:
+    """Whether ``value`` is text: a string, bytes, or an array of them."""
+    return isinstance(value, (str, bytes)) or getattr(
+        getattr(value, "dtype", None), "kind", None) in ("U", "S")
+
+
 def check_not_boolean(value: Any, name: str, what: str = "a number or an array of numbers"
                       ) -> None:
-    """Raise TypeError where ``value`` is a boolean, an array of them, or a list or tuple
-    holding one: a flag or a mask passed where numbers belong (numpy reads True as 1).
+    """Raise TypeError where ``value`` is a boolean or text, an array of them, or a list or
+    tuple holding one: a flag or a mask passed where numbers belong (numpy reads True as 1),
+    or numbers left as text (numpy reads ``"0.5"`` as 0.5).
 
     >>> check_not_boolean([1.0, True], "dt")
     Traceback (most recent call last):
     ...
     TypeError: dt must be a number or an array of numbers; got [1.0, True]
+    >>> check_not_boolean("0.5", "dt")
+    Traceback (most recent call last):
+    ...
+    TypeError: dt must be a number or an array of numbers; got '0.5'
     """
-    if _is_boolean(value) or getattr(value, "dtype", None) == np.bool_ or (
+    def bad(v: Any) -> bool:
+        return _is_boolean(v) or _is_text(v)
+
+    if bad(value) or getattr(value, "dtype", None) == np.bool_ or (
             isinstance(value, (list, tuple)) and any(
-                _is_boolean(v) or isinstance(v, (list, tuple)) and any(map(_is_boolean, v))
+                bad(v) or isinstance(v, (list, tuple)) and any(map(bad, v))
                 for v in value)):
         raise TypeError(f"{name} must be {what}; got {value!r:.80}")
 
@@ -312,6 +331,9 @@ def check_matrix_stack(
     arr = as_float_array(value, name, ndim=(2, 3))
     if arr.ndim == 2:
         arr = arr[None]
+    if arr.shape[0] == 0:  # (taken as constant: a model of no steps, failing in numpy later)
+        raise ValueError(f"{name} must hold at least one matrix; got shape "
+                         f"{_fmt_shape(arr.shape)}")
     ok_rc = arr.shape[1:] == (rows, cols)
     ok_t = arr.shape[0] == 1 or T is None or arr.shape[0] == T
     if not (ok_rc and ok_t):
@@ -434,6 +456,44 @@ def as_measurement_series(ys: ArrayLike, name: str = "ys") -> tuple[np.ndarray, 
         raise ValueError(f"{name} must be finite or NaN (missing); {name}{list(idx)} = {y[idx]}")
     single = y.ndim == 2
     return (y[None] if single else y), single
+
+
+def sum_tolerance(value: Any, n: int) -> float:
+    """How far ``n`` probabilities may sum from 1: 1e-9, or the rounding of ``n`` values of
+    ``value``'s own floating type where that is coarser (a float32 row ``(0.9, 0.1)``, whose
+    sum is 1 in float32, sums to 1 - 2.2e-8 in float64, and was refused).
+
+    >>> sum_tolerance([0.5, 0.5], 2), sum_tolerance(np.float32([0.5, 0.5]), 2) > 2e-7
+    (1e-09, True)
+    """
+    return max(1e-9, n * eps_of(value))
+
+
+def rescaled_rows(arr: np.ndarray, value: Any) -> np.ndarray:
+    """Probabilities ``arr`` (float64, rows along the last axis, checked to sum to 1 within
+    :func:`sum_tolerance`) with each row scaled to sum to 1 where ``value``, as given, was
+    of a coarser floating type than float64 (its rows sum to 1 only to that type's
+    rounding); as they are otherwise.
+
+    >>> rescaled_rows(np.float32([0.9, 0.1]).astype(float), np.float32([0.9, 0.1])).sum()
+    np.float64(1.0)
+    """
+    if eps_of(value) > np.finfo(float).eps:
+        return arr / arr.sum(-1, keepdims=True)
+    return arr
+
+
+def eps_of(values: Any) -> float:
+    """The spacing of floats near 1 in ``values``' own precision (float64's for anything
+    else: integers, lists, None).
+
+    >>> eps_of(np.float32([0.5])) == 2.0 ** -23, eps_of([0.5]) == 2.0 ** -52
+    (True, True)
+    """
+    dtype = getattr(values, "dtype", None)
+    if dtype is not None and np.issubdtype(dtype, np.floating):
+        return float(np.finfo(dtype).eps)
+    return float(np.finfo(float).eps)
 
 
 def check_one_step(dt: Any, batch: str = "every estimate of g") -> None:

@@ -14,15 +14,16 @@ from .._validate import (
     check_has_steps,
     check_not_infinite,
     check_prior,
+    eps_of,
 )
 from ..types import Gaussian
 from .kalman import FilterResult, _readonly
 
 
-def check_y(y: ArrayLike, batch: tuple, m: int) -> np.ndarray:
+def check_y(y: ArrayLike, batch: tuple, m: int, prior: str = "g") -> np.ndarray:
     y = as_float_array(y, "y")
     if y.shape != batch + (m,):
-        raise ValueError(f"y must have shape {batch + (m,)} to match g; got {y.shape}")
+        raise ValueError(f"y must have shape {batch + (m,)} to match {prior}; got {y.shape}")
     check_not_infinite(y)  # as kf_update: an infinite value gave NaN means
     return y
 
@@ -70,7 +71,7 @@ def step_times(dt: ArrayLike | None, times: ArrayLike | None,
         dt = 1.0
     # the rounding the times and steps came with (float32 times of 1/30 s differ from
     # float64 steps by 5e-9, within their own rounding)
-    eps = max(_eps_of(times), _eps_of(dt))
+    eps = max(eps_of(times), eps_of(dt))
     if times is not None:
         times = as_float_array(times, "times", ndim=(1,))
         if times.shape != (T,):
@@ -113,15 +114,6 @@ def step_times(dt: ArrayLike | None, times: ArrayLike | None,
                          f"{times[k] - times[k - 1]} in times (times[{k}] - times[{k - 1}]); "
                          f"give one of them")
     return dts, times
-
-
-def _eps_of(values: ArrayLike | None) -> float:
-    """The spacing of floats near 1 in ``values``' own precision (float64's for anything
-    else: integers, lists, None)."""
-    dtype = getattr(values, "dtype", None)
-    if dtype is not None and np.issubdtype(dtype, np.floating):
-        return float(np.finfo(dtype).eps)
-    return float(np.finfo(float).eps)
 
 
 class _Moments(Protocol):

@@ -37,7 +37,6 @@ from ..models.adapters import (
     MeasurementFunctions,
     MotionFunctions,
     _plain_mean,
-    _principal_root,
     psd_sqrt,
 )
 from ..models.protocols import (
@@ -149,8 +148,13 @@ class Ensemble:
             if (w < -1e-10 * np.abs(w).max(-1, keepdims=True)).any() or not np.isfinite(w).all():
                 raise ValueError("cov must be positive semi-definite to sample an ensemble"
                                  ) from None
-            L = _principal_root(w, V)
-        z = rng.standard_normal(mean.shape[:-1] + (int(n_members), mean.shape[-1]))
+            # (the principal root alone gave a constant-acceleration prior at dt 1e-4 35/36
+            # of its position's variance: psd_sqrt roots the correlation matrix there)
+            L = psd_sqrt(sym)
+        # one draw per ensemble of the batch, mean's or cov's (a batch of cov beside one
+        # mean drew one set and scaled it for every ensemble: their members correlated 1)
+        batch = np.broadcast_shapes(mean.shape[:-1], cov.shape[:-2])
+        z = rng.standard_normal(batch + (int(n_members), mean.shape[-1]))
         return cls(mean[..., None, :] + z @ np.swapaxes(L, -1, -2))
 
     def moments(self) -> tuple[np.ndarray, np.ndarray]:
@@ -185,6 +189,15 @@ def _noise(rng, shape, A):
     return rng.standard_normal(shape) @ A.T
 
 
+def check_ensemble(ens: object) -> Ensemble:
+    """``ens``, or a TypeError where it is no :class:`Ensemble` (a ``Gaussian`` given to an
+    ensemble step failed in Python's words: no attribute ``members``)."""
+    if not isinstance(ens, Ensemble):
+        raise TypeError(f"ens must be a vistrack.filters.Ensemble (Ensemble.sample draws one "
+                        f"from a mean and covariance); got {type(ens).__name__}")
+    return ens
+
+
 def enkf_predict(ens: Ensemble, motion: MotionModel | NonlinearMotionModel, dt: float = 1.0,
                  t: float = 0.0, *,
                  rng: np.random.Generator | int | None = None) -> Ensemble:
@@ -212,6 +225,13 @@ def enkf_predict(ens: Ensemble, motion: MotionModel | NonlinearMotionModel, dt: 
     Ensemble
         The predicted members ``(..., N, n)``.
 
+    Raises
+    ------
+    TypeError
+        If ``ens`` is no :class:`Ensemble`.
+    ValueError
+        If the members are not of the motion model's size, or ``dt`` is not one step.
+
     References
     ----------
     .. [1] G. Evensen, "Sequential data assimilation with a nonlinear quasi-geostrophic model
@@ -228,6 +248,7 @@ def enkf_predict(ens: Ensemble, motion: MotionModel | NonlinearMotionModel, dt: 
     array([1., 1.])
     """
     check_one_step(dt, "every ensemble of ens")
+    check_ensemble(ens)
     mo = MotionFunctions.of(motion)
     if ens.members.shape[-1] != mo.n:  # (numpy's matmul error, naming neither)
         raise ValueError(f"ens must have members of {mo.n} values, the motion model's; got "
@@ -272,6 +293,8 @@ def enkf_update(ens: Ensemble, y: ArrayLike,
 
     Raises
     ------
+    TypeError
+        If ``ens`` is no :class:`Ensemble`.
     ValueError
         If a member of ``ens`` is not finite (named), or ``y`` does not fit the measurement.
 
@@ -302,13 +325,13 @@ def _enkf_update(ens: Ensemble, y: ArrayLike,
                  measurement: MeasurementModel | NonlinearMeasurementModel,
                  rng: np.random.Generator | int | None,
                  residual: Callable | None) -> tuple[Ensemble, np.ndarray]:
-    X = ens.members
+    X = check_ensemble(ens).members
     # (one member that is not finite made every member NaN, and the log-likelihood, without
     # a word; the filter names a prediction that is not finite before it gets here)
     check_finite(X, "ens.members")
     N, n = X.shape[-2:]
     me = MeasurementFunctions.of(measurement, n, residual)
-    y = check_y(y, X.shape[:-2], me.m)
+    y = check_y(y, X.shape[:-2], me.m, "ens")
     obs = ~np.isnan(y)
     # (..., N, m); a missing component's value is not used: 0, not NaN, where h has none
     # there (NaN times the mask's 0 below is NaN, and made every member NaN)
@@ -500,7 +523,8 @@ class EnsembleKalmanFilter:
         (array([0.5, 1. ]), ())
         """
         n = self.motion.n
-        if ens.members.shape[-1] != n:  # (numpy's matmul error, naming neither; as predict)
+        # (numpy's matmul error, naming neither; as predict)
+        if check_ensemble(ens).members.shape[-1] != n:
             raise ValueError(f"ens must have members of {n} values, the motion model's; got "
                              f"{ens.members.shape[-1]}")
         return _enkf_update(ens, y, self.measurement, self.rng, None)

@@ -45,6 +45,8 @@ from .._validate import (
     check_has_steps,
     check_not_infinite,
     check_prior,
+    rescaled_rows,
+    sum_tolerance,
 )
 from ..models.protocols import MotionModel, NonlinearMotionModel
 from ..models.switching import SwitchingLinearSystem
@@ -169,9 +171,11 @@ class IMMFilter:
         :class:`~vistrack.filters.UnscentedKalmanFilter`.
     transition : (M, M) array
         ``transition[i, j]``: probability of switching from model ``i`` to model ``j`` in one
-        step; rows sum to one. The identity gives the seed's multiple-model filter.
+        step; rows sum to one (to 1e-9, or to the rounding of the array's own floating type
+        where that is coarser: a float32 matrix's rows are then scaled to sum to one). The
+        identity gives the seed's multiple-model filter.
     mode_probs : (M,) array, optional
-        Prior model probabilities (default uniform).
+        Prior model probabilities (default uniform); as ``transition``'s rows.
 
     Attributes
     ----------
@@ -281,15 +285,17 @@ class IMMFilter:
             i, j = (int(x) for x in np.argwhere(Pi < 0)[0])
             raise ValueError(f"transition must be non-negative with rows summing to 1; "
                              f"transition[{i}, {j}] = {Pi[i, j]}")
-        if not np.allclose(Pi.sum(1), 1.0, rtol=0.0, atol=1e-9):
+        if not np.allclose(Pi.sum(1), 1.0, rtol=0.0, atol=sum_tolerance(transition, M)):
             raise ValueError(f"transition must be non-negative with rows summing to 1; row sums "
                              f"are {Pi.sum(1).tolist()}")
         mu = np.full(M, 1.0 / M) if mode_probs is None else as_float_array(
             mode_probs, "mode_probs", ndim=(1,), not_boolean="probabilities")
         check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)
-        if mu.shape != (M,) or np.any(mu < 0) or abs(mu.sum() - 1.0) > 1e-9:
+        if mu.shape != (M,) or np.any(mu < 0) or \
+                abs(mu.sum() - 1.0) > sum_tolerance(mode_probs, M):
             raise ValueError(f"mode_probs must be {M} non-negative numbers summing to 1; "
                              f"got {mu.tolist()}")
+        Pi, mu = rescaled_rows(Pi, transition), rescaled_rows(mu, mode_probs)
         with np.errstate(divide="ignore"):
             self.log_transition, self.log_mu0 = np.log(Pi), np.log(mu)
         self.sizes = [int(f.motion.ndim_state) for f in self.filters]

@@ -85,9 +85,9 @@ class LinearGaussian:
 
     @property
     def F(self) -> np.ndarray:
-        """Transition matrix ``D``, ``(n, n) or (T, n, n)``.
-
-        As :meth:`LinearMotion.F` gives it.
+        """Transition matrix ``D``: ``(n, n)`` when neither ``F`` nor ``Q`` is per step,
+        ``(T, n, n)`` when ``F`` is, and ``(1, n, n)`` when ``F`` is constant beside a
+        per-step ``Q``, as :meth:`LinearMotion.F` gives it.
 
         Examples
         --------
@@ -98,9 +98,9 @@ class LinearGaussian:
 
     @property
     def Q(self) -> np.ndarray:
-        """Process-noise covariance ``Σd``, ``(n, n) or (T, n, n)``.
-
-        As :meth:`LinearMotion.Q` gives it.
+        """Process-noise covariance ``Σd``: ``(n, n)`` when neither ``F`` nor ``Q`` is per
+        step, ``(T, n, n)`` when ``Q`` is, and ``(1, n, n)`` when ``Q`` is constant beside a
+        per-step ``F``, as :meth:`LinearMotion.Q` gives it.
 
         Examples
         --------

@@ -106,12 +106,23 @@ class MotionModel(Protocol):
 
 
 def _as_dt(dt: float | np.ndarray) -> np.ndarray:
-    # (True was read as a step of 1)
+    # (True, "0.5" and b"1" were read as steps; None was said as "got nan")
+    if dt is None:
+        raise TypeError("dt must be a number or an array of numbers; got None")
     d = as_float_array(dt, "dt", ndim=(0, 1), not_boolean="a number or an array of numbers")
     if not np.all(np.isfinite(d)) or np.any(d < 0):
         bad = d[~(np.isfinite(d) & (d >= 0))].ravel()[0]
         raise ValueError(f"dt must be finite and >= 0; got {bad}")
     return d
+
+
+def _finite(out: np.ndarray, name: str, model: object, dt: np.ndarray) -> np.ndarray:
+    """``out``, or a ValueError where an entry overflowed past the largest float (a
+    constant velocity's ``Q`` at ``dt`` 1e155 was inf, and reached the filters)."""
+    if not np.isfinite(out).all():
+        raise ValueError(f"{type(model).__name__}'s {name}(dt) overflows past the largest "
+                         f"float at dt={float(np.max(dt)):g}: too long a step for this model")
+    return out
 
 
 def _apply(F: np.ndarray, x: ArrayLike) -> np.ndarray:
@@ -226,7 +237,10 @@ class _Kinematic:
         >>> ConstantVelocity(dim=1).F([1.0, 2.0]).shape
         (2, 2, 2)
         """
-        return np.kron(self._F1(_as_dt(dt)), np.eye(self.dim))
+        d = _as_dt(dt)
+        with np.errstate(over="ignore"):
+            F1 = _finite(self._F1(d), "F", self, d)
+        return np.kron(F1, np.eye(self.dim))
 
     def Q(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
         """Process-noise covariance over ``dt`` (see the class), shaped like :meth:`F`.
@@ -246,7 +260,10 @@ class _Kinematic:
         >>> ConstantVelocity(dim=1, q=1.0).Q(1.0).round(3).tolist()
         [[0.333, 0.5], [0.5, 1.0]]
         """
-        return np.kron(self._Q1(_as_dt(dt)), np.eye(self.dim))
+        d = _as_dt(dt)
+        with np.errstate(over="ignore", invalid="ignore"):
+            Q1 = _finite(self._Q1(d), "Q", self, d)
+        return np.kron(Q1, np.eye(self.dim))
 
     def f(self, x: np.ndarray, dt: float = 1.0) -> np.ndarray:
         """Propagate states by ``dt`` without noise: ``x F(dt)'``.
@@ -397,6 +414,17 @@ class ConstantAcceleration(_Kinematic):
     order = 2
 
 
+def _phase(omega: float, dt: np.ndarray) -> np.ndarray:
+    """``ω dt``, or a ValueError where it is past the largest float (the sines of it were
+    NaN, and reached the filters)."""
+    with np.errstate(over="ignore"):
+        wd = omega * dt
+    if not np.isfinite(wd).all():
+        raise ValueError(f"Periodic's phase omega dt is past the largest float at "
+                         f"omega={omega:g}, dt={float(np.max(dt)):g}")
+    return wd
+
+
 class Periodic:
     r"""Periodic motion ``d²p/dt² = -ω² p`` (the seeds use ``ω = 1``), per spatial axis.
 
@@ -502,7 +530,7 @@ class Periodic:
                                  f"largest float at omega={w}, dt={d.max()}")
             out[..., 1, 1] = 1.0
         else:
-            wd = w * d
+            wd = _phase(w, d)
             c, s = np.cos(wd), np.sin(wd)
             # sin(ωdt)/ω as dt sin(u)/u, by the series below u = 1: a subnormal ω dt rounds
             # (to 0 at ω = 5e-324), and sin(ωdt)/ω with it, where the limit is dt
@@ -544,7 +572,8 @@ class Periodic:
         else:
             dd = d.reshape(-1)
             q11, q12, q22 = np.empty_like(dd), np.empty_like(dd), np.empty_like(dd)
-            small = 2 * w * dd < 1.0  # the closed forms cancel: the series (see the class)
+            with np.errstate(over="ignore"):  # (the phase is checked below)
+                small = 2 * w * dd < 1.0  # the closed forms cancel: the series (see the class)
             ds = dd[small]
             u2 = (2 * w * ds) ** 2
             q11[small] = 2 * q * ds**3 * _sin_series(u2, 3)
@@ -552,7 +581,13 @@ class Periodic:
             q22[small] = q * ds * (1 + _sin_series(u2, 1)) / 2
             if not small.all():
                 db = dd[~small]
-                s2 = np.sin(2 * w * db) / (4 * w)
+                wd = _phase(w, db)
+                with np.errstate(over="ignore"):
+                    two = 2 * wd
+                # sin(2 ω dt) / 4ω; where 2 ω dt alone is past the largest float (ω 1e308 at
+                # dt 1: NaN), as sin(ω dt) cos(ω dt) / 2ω
+                s2 = np.where(np.isfinite(two), np.sin(np.where(np.isfinite(two), two, 0.0)),
+                              2 * np.sin(wd) * np.cos(wd)) / (4 * w)
                 # (w**2 of a Python float past 1.3e154 raised OverflowError: divided twice)
                 q11[~small] = q / w / w * (db / 2 - s2)
                 q12[~small] = q * np.sin(w * db) ** 2 / 2 / w / w
@@ -610,8 +645,9 @@ class LinearMotion:
     Raises
     ------
     ValueError
-        If a matrix is not finite or square of size ``n``, the two disagree on the number of
-        steps, or ``Q`` is not symmetric positive semi-definite.
+        If a matrix is not finite or square of size ``n`` (at least 1), a stack holds no
+        matrix, the two disagree on the number of steps, or ``Q`` is not symmetric positive
+        semi-definite.
 
     Notes
     -----
@@ -627,6 +663,9 @@ class LinearMotion:
     def __init__(self, F: np.ndarray, Q: np.ndarray):
         F_arr = as_float_array(F, "F", ndim=(2, 3))
         n = F_arr.shape[-1]
+        if n == 0:  # (numpy's "zero-size array to reduction operation" in the Q check)
+            raise ValueError(f"F must be at least 1 x 1 (a state of one value or more); got "
+                             f"shape {F_arr.shape}")
         # a stack of one matrix is the constant, as kalman_filter takes it
         T = F_arr.shape[0] if F_arr.ndim == 3 and F_arr.shape[0] != 1 else None
         self._F = check_matrix_stack(F_arr, "F", n, n, T)

@@ -26,6 +26,8 @@ from .._validate import (
     as_whole,
     check_finite,
     check_prior,
+    rescaled_rows,
+    sum_tolerance,
 )
 from .adapters import _check_noise_matrix, psd_sqrt
 from .measurement import MeasurementModel
@@ -53,9 +55,11 @@ class SwitchingLinearSystem:
     measurement : measurement model
         A linear measurement model (``H(n)``, ``R()``).
     transition : (k, k) array_like
-        ``transition[i, j] = P(z_t = j | z_{t-1} = i)``; non-negative, rows sum to one.
+        ``transition[i, j] = P(z_t = j | z_{t-1} = i)``; non-negative, rows sum to one (to
+        1e-9, or to the rounding of the array's own floating type where that is coarser: a
+        float32 matrix's rows are then scaled to sum to one).
     mode_probs : (k,) array_like, optional
-        Distribution of the first mode (default uniform).
+        Distribution of the first mode (default uniform); as ``transition``'s rows.
 
     Attributes
     ----------
@@ -78,8 +82,9 @@ class SwitchingLinearSystem:
         non-negative ``(k, k)`` matrix whose rows sum to one, or ``mode_probs`` is not ``k``
         finite non-negative numbers summing to one (a NaN or infinite entry is named).
     TypeError
-        If a motion is not a linear motion model (``F``, ``Q``) or the measurement not a
-        linear measurement model (``H``, ``R``).
+        If a motion is not a linear motion model (``F``, ``Q``; ``Q(1.0)`` must take the
+        step alone, not a state as ``BoxMotion``'s) or the measurement not a linear
+        measurement model (``H``, ``R``).
 
     References
     ----------
@@ -111,6 +116,14 @@ class SwitchingLinearSystem:
             if not (callable(getattr(m, "F", None)) and callable(getattr(m, "Q", None))):
                 raise TypeError(f"motions[{i}] must be a linear motion model, with F(dt) and "
                                 f"Q(dt); got {type(m).__name__}")
+            # a Q of the state as well (BoxMotion's Q(boxes, dt)) was taken, and failed at
+            # sample() or in the filters naming boxes, which the caller never gave
+            try:
+                m.Q(1.0)
+            except (TypeError, ValueError) as exc:
+                raise TypeError(f"motions[{i}] must be a linear motion model whose Q(dt) takes "
+                                f"the time step alone; {type(m).__name__}'s Q(1.0) failed: "
+                                f"{exc}") from None
         if not (callable(getattr(measurement, "H", None))
                 and callable(getattr(measurement, "R", None))):
             raise TypeError(f"measurement must be a linear measurement model, with H(n) and R(); "
@@ -139,19 +152,21 @@ class SwitchingLinearSystem:
             i, j = (int(x) for x in np.argwhere(Pi < 0)[0])
             raise ValueError(f"transition must be a ({k}, {k}) non-negative matrix whose rows sum "
                              f"to 1; transition[{i}, {j}] = {Pi[i, j]}")
-        if Pi.shape != (k, k) or not np.allclose(Pi.sum(1), 1.0, rtol=0.0, atol=1e-9):
+        if Pi.shape != (k, k) or not np.allclose(Pi.sum(1), 1.0, rtol=0.0,
+                                                 atol=sum_tolerance(transition, k)):
             raise ValueError(f"transition must be a ({k}, {k}) non-negative matrix whose rows sum "
                              f"to 1; got shape {Pi.shape} and row sums {Pi.sum(1).tolist()}")
         # copies (views of the caller's arrays were kept, and a change after the checks was
         # used unchecked by the switching filters)
-        self.transition = Pi.copy()
+        self.transition = rescaled_rows(Pi, transition).copy()
         mu = np.full(k, 1.0 / k) if mode_probs is None else as_float_array(
             mode_probs, "mode_probs", ndim=(1,), not_boolean="probabilities")
         check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)
-        if mu.shape != (k,) or np.any(mu < 0) or abs(mu.sum() - 1.0) > 1e-9:
+        if mu.shape != (k,) or np.any(mu < 0) or \
+                abs(mu.sum() - 1.0) > sum_tolerance(mode_probs, k):
             raise ValueError(f"mode_probs must be {k} non-negative numbers summing to 1; "
                              f"got {mu.tolist()}")
-        self.mode_probs = mu.copy()
+        self.mode_probs = rescaled_rows(mu, mode_probs).copy()
 
     def __repr__(self) -> str:
         return f"SwitchingLinearSystem(k={len(self.motions)}, ndim_state={self.ndim_state})"
