@@ -9,6 +9,7 @@ import shutil
 import subprocess
 import sys
 from dataclasses import fields, replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -201,9 +202,17 @@ def test_bad_files_and_values_on_the_command_line(seq, tmp_path):
     r = cli(seq, "--out-dir", tmp_path / "v", "--link-gap", "0")  # a zero is a value given
     assert r.returncode == 2 and "--offline, its settings and --detections go with --out" in \
         r.stderr
+    # dcpf reads its own table: a box tracker's file is named, at its line, with the table
+    # dcpf reads (it said --config went with the box trackers alone)
     r = cli(seq, "--out-dir", tmp_path / "v", "--tracker", "dcpf", "--config",
             tmp_path / "s.toml")
-    assert r.returncode == 2 and "--config goes with the box trackers" in r.stderr
+    assert r.returncode == 2 and (f"{tmp_path / 's.toml'}:1: unknown table or key 'tracker'; "
+                                  "it is the box trackers' table (bytetrack, sort), and "
+                                  "--tracker dcpf reads [dcpf]") in r.stderr
+    r = cli(seq, "--out-dir", tmp_path / "v", "--tracker", "particles", "--config",
+            tmp_path / "s.toml")
+    assert r.returncode == 2 and \
+        "--config goes with the box trackers (bytetrack, sort) and dcpf" in r.stderr
     # raw scores of -1 to 15: refused before tracking, naming the file, the scores' range and
     # the way out on the command line (it named a Python argument and frame 1)
     r = cli(seq, "--out", tmp_path / "r.txt", "--scores", "raw")
@@ -362,8 +371,10 @@ def test_print_config_without_input_is_what_a_run_prints(seq, tmp_path, flags):
     (["--print-config", "--fps", "25"],
      "--fps goes with INPUT; without one, --print-config prints the configuration the other "
      "options give"),
-    (["--print-config", "--tracker", "dcpf"],
-     "--print-config goes with the box trackers (bytetrack, sort)"),
+    (["--print-config", "--tracker", "particles"],
+     "--print-config goes with the box trackers (bytetrack, sort) and dcpf"),
+    (["--print-config", "--tracker", "dcpf", "--high", "0.5"],
+     "--high goes with the box trackers (bytetrack, sort)"),
     (["--print-config", "--high", "2"],
      "--high: high must be in [0, 1] (a calibrated confidence); got 2.0"),
 ])
@@ -932,3 +943,83 @@ def test_the_second_reading_of_the_configuration_messages(seq, tmp_path):
         with pytest.raises(ConfigError, match=re.escape(f"[offline] {key} must be a finite "
                                                         "number")):
             read_config(c)
+
+
+DEMO_CLIP = (Path(__file__).resolve().parents[1] / "src" / "vistrack" / "data" / "pets09-s2l1"
+             / "pets09-s2l1.mp4")
+
+
+def test_dcpf_settings_round_trip_through_print_config_and_config(tmp_path):
+    """`--tracker dcpf` had its defaults alone on the command line (`--config` and
+    `--print-config` went with the box trackers). Its settings now come from a `[dcpf]`
+    table: `--print-config` without INPUT prints the defaults (`DCPFConfig()`'s, the
+    oracle), a file changing some is used (the run prints them back, with what it derived),
+    and the printed file read back with `--config` gives identical tracks."""
+    from vistrack.config import read_dcpf_config
+    from vistrack.tracking import DCPFConfig
+
+    r = cli("--print-config", "--tracker", "dcpf")
+    assert r.returncode == 0, r.stderr
+    (tmp_path / "defaults.toml").write_text(r.stdout)
+    assert read_dcpf_config(tmp_path / "defaults.toml") == (DCPFConfig(), {})
+    (tmp_path / "mine.toml").write_text("[dcpf]\nn_particles = 60\nmax_lost = 1.0\n")
+    r = cli(DEMO_CLIP, "--tracker", "dcpf", "--config", tmp_path / "mine.toml", "--stop", "25",
+            "--out-dir", tmp_path / "a", "--print-config")
+    assert r.returncode == 0, r.stderr
+    (tmp_path / "used.toml").write_text(r.stdout)
+    used, derived = read_dcpf_config(tmp_path / "used.toml")
+    assert used == DCPFConfig(n_particles=60, max_lost=1.0)
+    assert derived["frame_rate"] == 7.0 and derived["scored_detections"] > 0
+    assert 0.75 <= derived["top_score"] < 1  # the confidence front end's logistic
+    r = cli(DEMO_CLIP, "--tracker", "dcpf", "--config", tmp_path / "used.toml", "--stop", "25",
+            "--out-dir", tmp_path / "b")
+    assert r.returncode == 0, r.stderr
+    a, b = ((tmp_path / d / "tracks.txt").read_text() for d in "ab")
+    assert a == b and len(a.splitlines()) > 50
+    r = cli(DEMO_CLIP, "--tracker", "dcpf", "--stop", "25", "--out-dir", tmp_path / "c")
+    assert (tmp_path / "c" / "tracks.txt").read_text() != a  # the settings changed the run
+
+
+def test_a_dcpf_start_above_every_score_is_said_and_read_from_the_file(tmp_path):
+    """A file's `init_score` reaches the tracker: above every score of the clip's detector
+    (the confidence front end's, under 1), no target starts, and the run says so with the
+    file's value."""
+    (tmp_path / "c.toml").write_text("[dcpf]\ninit_score = 0.999\n")
+    r = cli(DEMO_CLIP, "--tracker", "dcpf", "--config", tmp_path / "c.toml", "--stop", "10",
+            "--out-dir", tmp_path / "o")
+    assert r.returncode == 0, r.stderr
+    assert "no target started: no detection reached init_score 0.999 (the highest of" in \
+        r.stderr
+    assert (tmp_path / "o" / "tracks.txt").read_text() == ""
+    # several inputs read it too (the file's settings went to the box trackers' checks)
+    for name in ("a", "b"):
+        shutil.copy(DEMO_CLIP, tmp_path / f"{name}.mp4")
+    r = cli(tmp_path / "a.mp4", tmp_path / "b.mp4", "--tracker", "dcpf", "--config",
+            tmp_path / "c.toml", "--stop", "5", "--out-dir", tmp_path / "many")
+    assert r.returncode == 0, r.stderr
+    assert r.stderr.count("no target started: no detection reached init_score 0.999") == 2
+
+
+@pytest.mark.parametrize("text, message", [
+    ("[dcpf]\nbeta = 1.0\nsigma_det = 0\n", "c.toml:3: [dcpf] sigma_det must be a finite "
+     "number > 0; got 0.0"),
+    ("[dcpf]\ninit_scor = 0.5\n", "c.toml:2: [dcpf] has no key 'init_scor'; did you mean "
+     "'init_score'?"),
+    ("[dcpf]\nn_particles = \"100\"\n", "c.toml:2: [dcpf] n_particles must be an integer; "
+     "got '100'"),
+    ("[dcpf]\nmin_score = 3\n", "c.toml:2: [dcpf] min_score must be below the largest "
+     "association score"),
+    ("[dcpf]\n[motion]\nstd_pos = 1\n", "c.toml:2: unknown table or key 'motion'; it is the "
+     "box trackers' table (bytetrack, sort), and --tracker dcpf reads [dcpf]"),
+])
+def test_a_dcpf_file_at_fault_is_named_at_its_line(tmp_path, text, message):
+    (tmp_path / "c.toml").write_text(text)
+    r = cli(DEMO_CLIP, "--tracker", "dcpf", "--config", tmp_path / "c.toml", "--stop", "2",
+            "--out-dir", tmp_path / "o")
+    assert r.returncode == 2 and message in r.stderr, r.stderr
+    assert not (tmp_path / "o").exists()
+    # and a box tracker given the dcpf table says whose it is
+    r = cli(DEMO_CLIP, "--config", tmp_path / "c.toml", "--stop", "2", "--out-dir",
+            tmp_path / "o")
+    assert r.returncode == 2 and "unknown table or key 'dcpf'; it is --tracker dcpf's table" \
+        in r.stderr

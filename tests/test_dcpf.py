@@ -274,7 +274,8 @@ def test_the_scores_seen_and_why_no_target_started():
                     f"highest of {len(every)} scored {every.max() / 200:.3g}); the "
                     "detector-confidence particle filter's settings are for scores in (0, 1), "
                     "as the confidence front end gives; for another detector's scale set "
-                    "init_score (DetectorConfidencePF(init_score=...))")
+                    "init_score (a --config file's [dcpf] init_score, or "
+                    "DetectorConfidencePF(init_score=...))")
     trk.reset()
     assert trk.n_scored == 0 and trk.top_score == -np.inf and start_warning(trk, "S") is None
 

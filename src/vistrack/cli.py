@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from .batch import Job
     from .config import TrackConfig
     from .pipeline import TrackRun, VideoRun
+    from .tracking.dcpf import DCPFConfig
 
 DEMOS = ("kalman", "track")
 
@@ -273,6 +274,20 @@ def _box_config(args: argparse.Namespace):
     return cfg, None
 
 
+def _dcpf_config(args: argparse.Namespace):
+    """The detector-confidence particle filter's settings (``--tracker dcpf``): --config's
+    ``[dcpf]`` table over the defaults, or the defaults; or an error message."""
+    from .config import ConfigError, read_dcpf_config
+    from .tracking.dcpf import DCPFConfig
+
+    if args.config is None:
+        return DCPFConfig(), None
+    try:
+        return read_dcpf_config(args.config)[0], None
+    except (ConfigError, FileNotFoundError) as exc:
+        return None, str(exc)
+
+
 def _tracker_problem(name: str) -> str | None:
     """Why ``--tracker name`` names no tracker, listing the valid names, or None."""
     from .pipeline import TRACKERS
@@ -343,7 +358,8 @@ def _box_setting_problem(option: str) -> str:
     """``--option goes with the box trackers (...)``, and the particles tracker for
     ``--max-lost``."""
     return (f"--{option.replace('_', '-')} goes with {_box_trackers()}"
-            + (" and particles" if option == "max_lost" else ""))
+            + (" and particles" if option == "max_lost" else
+               " and dcpf" if option in ("config", "print_config") else ""))
 
 
 def _points(name: str) -> bool:
@@ -383,8 +399,23 @@ def _print_config(args: argparse.Namespace) -> int:
     name, box, problem = _tracker_and_numbers(args)
     if problem:
         return fail(problem)
+    if name == "dcpf":
+        from .config import dcpf_toml
+
+        given = _box_settings_given(args, name) + (["still_camera"] if args.still_camera
+                                                    else [])
+        if given:
+            return fail(_box_setting_problem(given[0]))
+        dcfg, problem = _dcpf_config(args)
+        if problem:
+            return fail(problem)
+        sys.stdout.write(dcpf_toml(dcfg))
+        print("\n# a run adds [derived], what it derives from its data (the frame rate, the "
+              "detections' scores):\n# vistrack track VIDEO --tracker dcpf --out-dir OUT "
+              "--print-config")
+        return 0
     if not box:
-        return fail(f"--print-config goes with {_box_trackers()}")
+        return fail(f"--print-config goes with {_box_trackers()} and dcpf")
     cfg, problem = _box_config(args)
     if problem:
         return fail(problem)
@@ -460,6 +491,11 @@ def _track(args: argparse.Namespace) -> int:
         cfg, problem = _box_config(args)
         if problem:
             return fail(problem)
+    dcfg = None
+    if name == "dcpf" and args.out is None:
+        dcfg, problem = _dcpf_config(args)
+        if problem:
+            return fail(problem)
     problem = _outputs_problem(args, name, box, offline_given)
     if problem:
         return fail(problem)
@@ -487,7 +523,7 @@ def _track(args: argparse.Namespace) -> int:
                              name="--report")
             run = track_video(args.input, args.out_dir, fps=args.fps, gt=args.gt,
                               force=args.force, progress=progress,
-                              **_video_options(args, name, box, cfg))
+                              **_video_options(args, name, box, cfg or dcfg))
         if box:
             _warn_printed_rate(args, run)
     if isinstance(run, VideoRun):
@@ -499,7 +535,11 @@ def _track(args: argparse.Namespace) -> int:
         print(f"wrote {run.out}: {_n(run.rows, 'box', 'boxes')} of {_n(run.tracks, 'track')} "
               f"over {_n(run.frames, 'frame')} from {_n(run.detections, 'detection')}; tracker "
               f"{run.fps:.0f} frames/s{_fps_words(args, run)}", file=report)
-    if args.print_config:
+    if args.print_config and dcfg is not None:  # --tracker dcpf's
+        from .config import dcpf_toml
+
+        sys.stdout.write(dcpf_toml(dcfg, run.derived))
+    elif args.print_config:
         assert run.config is not None  # a box tracker's run (others refuse --print-config)
         derived = dict(run.derived or {})
         if args.fps is not None:  # the frame rate is the input's, not the configuration's:
@@ -544,8 +584,10 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
 
     setting_flags = _box_settings_given(args, name)
     if not box:
+        # (dcpf reads its own table of --config, and prints it)
         given = setting_flags + [f for f in ("still_camera", "config", "print_config")
-                                 if getattr(args, f)]
+                                 if getattr(args, f)
+                                 and not (name == "dcpf" and f != "still_camera")]
         if given:
             return _box_setting_problem(given[0])
         if args.out is not None:
@@ -919,11 +961,15 @@ def _points_problem(args: argparse.Namespace, name: str, frontend: str) -> str:
 
 
 def _video_options(args: argparse.Namespace, name: str, box: bool,
-                   cfg: TrackConfig | None) -> dict:
+                   cfg: TrackConfig | DCPFConfig | None) -> dict:
     """``track_video``'s keyword arguments from ``vistrack track``'s options, for one input or
     many: the front-end's, and the tracker's configuration, a file used as it is, or the
-    options given over the front-end's defaults (bgsub: a still camera)."""
+    options given over the front-end's defaults (bgsub: a still camera); ``dcpf``'s
+    settings as its fields."""
+    from dataclasses import fields
+
     from .pipeline import FRONTENDS, default_frontend
+    from .tracking.dcpf import DCPFConfig
 
     options = {k: getattr(args, k) for k in _FRONTEND_OPTIONS if getattr(args, k) is not None}
     columns, _ = _columns(getattr(args, "columns", None))  # checked before, with its message
@@ -940,7 +986,9 @@ def _video_options(args: argparse.Namespace, name: str, box: bool,
     front = args.frontend or default_frontend(name)
     if args.still_camera and front in FRONTENDS and FRONTENDS[front].still_camera:
         options["follow_view"] = False  # the background model: the view is not followed
-    if args.config is not None or not box:
+    if isinstance(cfg, DCPFConfig):  # --tracker dcpf's settings, as its overrides
+        options.update({f.name: getattr(cfg, f.name) for f in fields(cfg)})
+    elif args.config is not None or not box:
         if cfg is not None and box and front in FRONTENDS and FRONTENDS[front].still_camera \
                 and cfg.tracker.camera_motion:
             # a front-end that needs a still camera turns the compensation off, as without a
@@ -1015,12 +1063,18 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
     if problem:
         return fail(problem)
     given = _box_settings_given(args, name) + [f for f in ("still_camera", "config")
-                                                if getattr(args, f)]
+                                                if getattr(args, f)
+                                                and not (name == "dcpf" and f == "config")]
     if not box and given:  # as for one input (they were taken and ignored)
         return fail(_box_setting_problem(given[0]))
     cfg = None
     if box:
         cfg, problem = _box_config(args)
+        if problem:
+            return fail(problem)
+    dcfg = None
+    if name == "dcpf" and args.out is None:
+        dcfg, problem = _dcpf_config(args)
         if problem:
             return fail(problem)
     options: dict = {"force": args.force}
@@ -1042,7 +1096,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         if problem:
             return fail(problem)
         kind, out = "pixels", args.out_dir
-        options.update(_video_options(args, name, box, cfg))
+        options.update(_video_options(args, name, box, cfg or dcfg))
     if args.fps is not None:  # every input's frame rate, put over any it gives
         options["fps"] = args.fps
     from .pipeline import _keep_warnings, _shown_warnings
@@ -1603,7 +1657,9 @@ def build_parser() -> argparse.ArgumentParser:
         "its preset ([tracker] name, which --tracker must then agree with). The defaults "
         "below are bytetrack's; --print-config --tracker NAME shows another preset's.")
     box.add_argument("--config", metavar="FILE",
-                     help="the whole tracker configuration, TOML (as --print-config writes)")
+                     help="the whole tracker configuration, TOML (as --print-config writes): "
+                     "a box tracker's [tracker], [motion] and [offline] tables, or "
+                     "--tracker dcpf's [dcpf] table")
     box.add_argument("--print-config", action="store_true",
                      help="print the configuration used, with the values derived from the "
                      "data (raw score of each threshold, frame rate), as TOML to stdout; "

@@ -34,7 +34,7 @@ import re
 import sys
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -43,8 +43,13 @@ from .io.motchallenge import _text_lines
 from .models.box import BoxMotion
 from .tracking.box import TRACKERS, BoxTrackerConfig
 
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from .tracking.dcpf import DCPFConfig
+
 __all__ = ["OfflineConfig", "TrackConfig", "read_config", "read_config_file", "config_toml",
-           "ConfigError"]
+           "ConfigError", "read_dcpf_config", "dcpf_toml"]
 
 
 class ConfigError(ValueError):
@@ -429,6 +434,125 @@ def _key_line(text: str, table: str, key: str | None = None) -> int | None:
     return None
 
 
+def _keys_said(message: str, keys: dict[str, Any]) -> tuple[str | None, list[str]]:
+    """The key of ``keys`` a setting's error ``message`` is about (the one it opens with,
+    else the first it names; None where it names none), and every key it names."""
+    named = [k for k in keys if re.search(rf"\b{re.escape(str(k))}\b", message)]
+    first = re.match(r"\w+", message)
+    return (first[0] if first and first[0] in keys else (named[0] if named else None)), named
+
+
+def _load_toml(path: Path) -> tuple[str, dict[str, Any], Callable[..., str]]:
+    """A configuration file's text, its TOML, and ``at(table, key=None)``: the file and
+    the line that sets ``key`` of ``[table]`` where one does, for messages; ConfigError
+    for a file that is no UTF-8 TOML."""
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{path} does not exist (--config FILE)") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path} is not a text TOML file (it is a folder)") from None
+    text = decode_text(raw, path, "TOML", ConfigError)
+    try:
+        data = _toml_loads(text)
+    except ValueError as exc:  # tomllib.TOMLDecodeError: names the line and column
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    except RecursionError:  # arrays or inline tables nested a thousand deep
+        raise ConfigError(f"{path}: not valid TOML: nested too deep") from None
+
+    def at(table: str, key: str | None = None) -> str:
+        line = _key_line(text, table, key)
+        return f"{path}:{line}" if line is not None else str(path)
+    return text, data, at
+
+
+def read_dcpf_config(path: str | os.PathLike) -> tuple[DCPFConfig, dict[str, Any]]:
+    """The detector-confidence particle filter's settings from a file's ``[dcpf]`` table
+    (``vistrack track VIDEO --tracker dcpf --config FILE``; what it leaves out keeps
+    :class:`~vistrack.tracking.DCPFConfig`'s default), and its ``[derived]`` table (what
+    the run that printed it derived; empty without one).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML file (as :func:`dcpf_toml` writes).
+
+    Returns
+    -------
+    DCPFConfig, dict
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    ConfigError
+        For a file that is not UTF-8 text or not TOML, a table other than ``[dcpf]`` and
+        ``[derived]`` (a box tracker's ``[tracker]`` too), a key that is no setting, or a
+        value of the wrong kind or out of range, naming the file, the line and the key.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "dcpf.toml"
+    >>> _ = path.write_text('[dcpf]\\ninit_score = 0.6\\nn_particles = 200\\n')
+    >>> cfg, derived = read_dcpf_config(path)
+    >>> cfg.init_score, cfg.n_particles, cfg.beta, derived
+    (0.6, 200, 1.0, {})
+    """
+    from .tracking.dcpf import DCPFConfig
+
+    path = Path(path)
+    _, data, at = _load_toml(path)
+    for table in data:
+        if table not in ("dcpf", "derived"):
+            hint = ("; it is the box trackers' table (bytetrack, sort), and --tracker dcpf "
+                    "reads [dcpf]" if table in ("tracker", "motion", "offline") else "")
+            raise ConfigError(f"{at(table)}: unknown table or key {table!r}{hint} (tables: "
+                              "[dcpf], [derived])")
+        if not isinstance(data[table], dict):
+            raise ConfigError(f"{at(table)}: {table} must be a table ([{table}])")
+    kinds = {f.name: cast(str, f.type) for f in fields(DCPFConfig)}
+    given = dict(data.get("dcpf", {}))
+    for key, value in given.items():
+        kind = kinds.get(key)
+        if kind is None:
+            close = difflib.get_close_matches(str(key), kinds, n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise ConfigError(f"{at('dcpf', key)}: [dcpf] has no key {key!r}{hint} (keys: "
+                              f"{', '.join(sorted(kinds))})")
+        if not _kind(value, kind):
+            raise ConfigError(f"{at('dcpf', key)}: [dcpf] {key} must be {_KIND_WORDS[kind]}; "
+                              f"got {value!r}")
+    try:
+        cfg = DCPFConfig(**given)
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"{at('dcpf', _keys_said(str(exc), given)[0])}: [dcpf] {exc}"
+                          ) from None
+    return cfg, dict(data.get("derived", {}))
+
+
+def dcpf_toml(cfg: DCPFConfig, derived: dict | None = None) -> str:
+    """The detector-confidence particle filter's settings as TOML, a ``[dcpf]`` table that
+    :func:`read_dcpf_config` reads back to the same settings, with ``derived`` values in a
+    last ``[derived]`` table that it ignores.
+
+    Examples
+    --------
+    >>> from vistrack.tracking import DCPFConfig
+    >>> text = dcpf_toml(DCPFConfig(init_score=0.6), {"frame_rate": 7.0})
+    >>> text.splitlines()[2:4], "init_score = 0.6" in text, text.splitlines()[-1]
+    (['[dcpf]', 'beta = 1.0'], True, 'frame_rate = 7.0')
+    """
+    kinds = {f.name: cast(str, f.type) for f in fields(cfg)}
+    lines = ["# vistrack track configuration: vistrack track VIDEO --tracker dcpf --config "
+             "FILE", "", "[dcpf]"]
+    lines += [f"{k} = {_value(v, kinds[k])}" for k, v in asdict(cfg).items()]
+    if derived:
+        lines += ["", "[derived]  # what the run derived from the data; not read back"]
+        lines += [f"{k} = {_value(v)}" for k, v in derived.items()]
+    return "\n".join(lines) + "\n"
+
+
 def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> TrackConfig:
     """Read a configuration file (see the module) over ``base`` (default: the preset its
     ``[tracker] name`` gives, ``bytetrack`` without one).
@@ -490,29 +614,13 @@ def _read_config_file(path: str | os.PathLike, base: TrackConfig | None = None,
     it, and one of ``high = 0.2`` before ``--low 0.1``. A value at fault that ``over``
     gave is named by its option."""
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{path} does not exist (--config FILE)") from None
-    except IsADirectoryError:
-        raise ConfigError(f"{path} is not a text TOML file (it is a folder)") from None
-    text = decode_text(raw, path, "TOML", ConfigError)
-    try:
-        data = _toml_loads(text)
-    except ValueError as exc:  # tomllib.TOMLDecodeError: names the line and column
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
-    except RecursionError:  # arrays or inline tables nested a thousand deep
-        raise ConfigError(f"{path}: not valid TOML: nested too deep") from None
-    def at(table: str, key: str | None = None) -> str:
-        """The file, and the line that sets ``key`` of ``[table]`` where one does."""
-        line = _key_line(text, table, key)
-        return f"{path}:{line}" if line is not None else str(path)
-
+    text, data, at = _load_toml(path)
     unknown = set(data) - {"tracker", "motion", "offline", "derived"}
     if unknown:
         first = sorted(unknown)[0]
         close = difflib.get_close_matches(str(first), ["tracker", "motion", "offline"], n=1)
-        hint = f"; did you mean [{close[0]}]?" if close else ""
+        hint = (f"; did you mean [{close[0]}]?" if close else
+                "; it is --tracker dcpf's table" if first == "dcpf" else "")
         raise ConfigError(f"{at(first)}: unknown table or key {first!r}{hint} (tables: "
                           "[tracker], [motion], [offline], [derived])")
     for table in ("tracker", "motion", "offline", "derived"):
@@ -568,11 +676,7 @@ def _read_config_file(path: str | os.PathLike, base: TrackConfig | None = None,
         try:
             cfg = cfg.with_values(**{table: merged})
         except ValueError as exc:
-            # the key the message is about: the one it opens with, else the first it names
-            said = str(exc)
-            named = [k for k in merged if re.search(rf"\b{re.escape(str(k))}\b", said)]
-            first = re.match(r"\w+", said)
-            key = first[0] if first and first[0] in merged else (named[0] if named else None)
+            key, named = _keys_said(str(exc), merged)
             # an option's value the message is about: the options, over the file where it
             # gave a value the message names too
             theirs = [k for k in extra if k == key or k in named] if key in extra or (

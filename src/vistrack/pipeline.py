@@ -344,8 +344,8 @@ def start_warning(trk: Any, name: str) -> str | None:
     >>> print(start_warning(trk, "SEQ"))  # doctest: +NORMALIZE_WHITESPACE
     SEQ: no target started: no detection reached init_score 0.75 (the highest of 5 scored
     0.004); the detector-confidence particle filter's settings are for scores in (0, 1), as
-    the confidence front end gives; for another detector's scale set init_score
-    (DetectorConfidencePF(init_score=...))
+    the confidence front end gives; for another detector's scale set init_score (a
+    --config file's [dcpf] init_score, or DetectorConfidencePF(init_score=...))
     """
     from .tracking.dcpf import DetectorConfidencePF
 
@@ -358,9 +358,25 @@ def start_warning(trk: Any, name: str) -> str | None:
             f"the highest of {trk.n_scored:,}")
     return (f"{name}: no target started: no detection reached init_score {cfg.init_score:g} "
             f"({seen} scored {trk.top_score:.3g}); the detector-confidence particle filter's "
-            "settings "
-            "are for scores in (0, 1), as the confidence front end gives; for another "
-            "detector's scale set init_score (DetectorConfidencePF(init_score=...))")
+            "settings are for scores in (0, 1), as the confidence front end gives; for "
+            "another detector's scale set init_score (a --config file's [dcpf] init_score, "
+            "or DetectorConfidencePF(init_score=...))")
+
+
+def _run_derived(trk: Any) -> dict | None:
+    """What a run's tracker derived from the data (``VideoRun.derived``): a box tracker's
+    :func:`derived_values`; the detector-confidence particle filter's frame rate and the
+    detections' scores it saw (how many, and the highest); None for other trackers."""
+    from .tracking.dcpf import DetectorConfidencePF
+
+    if isinstance(trk, BoxTracker):
+        return derived_values(trk)
+    if isinstance(trk, DetectorConfidencePF):
+        out: dict = {"frame_rate": trk.frame_rate, "scored_detections": trk.n_scored}
+        if trk.n_scored:
+            out["top_score"] = trk.top_score
+        return out
+    return None
 
 
 def _warn_calibration(trk: BoxTracker, name: str) -> None:
@@ -2177,7 +2193,8 @@ class VideoRun:
     config : TrackConfig or None
         A box tracker's configuration.
     derived : dict or None
-        :func:`derived_values` of a box tracker.
+        :func:`derived_values` of a box tracker; of the detector-confidence particle
+        filter (``dcpf``), its ``frame_rate``, ``scored_detections`` and ``top_score``.
     first, last : int
         The first and the last frame tracked (0: ``first + frames - 1``); frames missing
         from the source between them are not counted in ``frames``.
@@ -2725,7 +2742,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 warnings.warn(started, RuntimeWarning, stacklevel=2)
             result = VideoRun(out_dir, files, n, len(rows), n_tracks, stats.seconds, scores,
                               ctx.resolved if isinstance(trk, BoxTracker) else None,
-                              derived_values(trk) if isinstance(trk, BoxTracker) else None,
+                              _run_derived(trk),
                               reader.start, stats.last, _replaced_rate(reader))
             _write_run_info(result, video, gt, command, reader.fps, said, points=points,
                             zero_distance=zero_distance)
