@@ -565,18 +565,18 @@ def test_a_confidence_map_names_its_strides_origins_and_heights(change, message)
 
 @pytest.mark.parametrize("make,error,message", [
     (lambda: ConfidenceMap("a", [np.zeros((3, 3))], [(0, 0)], [8]), TypeError,
-     "heights must be an array of numbers; got str"),
+     "heights must be numbers > 0; got 'a'"),
     (lambda: ConfidenceMap([90], [np.zeros((3, 3))], [("a", 0)], [8]), TypeError,
-     "origins must be an array of numbers; got list"),
+     "origins must be numbers; got [('a', 0)]"),
     (lambda: ConfidenceMap([90], [np.zeros((3, 3))], [(0, 0)], [True]), TypeError,
      "strides must be numbers > 0; got [True]"),
     (lambda: ConfidenceMap([90], ["ab"], [(0, 0)], [8]), TypeError,
-     "scores[0] must be an array of numbers; got str"),
+     "scores[0] must be a grid of numbers; got 'ab'"),
     (lambda: ConfidenceMap([90, 60], [np.zeros((3, 3)), np.where(np.eye(3) > 0, np.nan, 0.0)],
                            [(0, 0)] * 2, [8, 8]), ValueError,
      "scores[1] holds NaN (first at row 0, column 0); a cell with no score is -inf"),
     (lambda: HOGConfidence(heights="abc"), TypeError,
-     "heights must be an array of numbers; got str"),
+     "heights must be numbers > 0; got 'abc'"),
     (lambda: HOGConfidence(heights=[True, 2]), TypeError,
      "heights must be numbers > 0; got [True, 2]"),
 ])

@@ -427,6 +427,8 @@ def as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
     if isinstance(rng, np.random.Generator):
         return rng
     if rng is None or isinstance(rng, (int, np.integer)) and not _is_boolean(rng):  # (True: 1)
+        if rng is not None and rng < 0:  # (numpy's "expected non-negative integer")
+            raise ValueError(f"rng must be a seed >= 0, a numpy Generator or None; got {rng}")
         return np.random.default_rng(rng)
     raise TypeError(f"rng must be a numpy Generator, an int seed or None; got {type(rng).__name__}")
 

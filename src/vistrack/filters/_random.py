@@ -164,9 +164,10 @@ def _merge_uniforms(cw, scheme, st, out):
 
 @njit(inline="always")
 def resample_into(w, scheme, st, cw, out):
-    """Indices ``out (n,)`` drawn from weights ``w (N,)`` (any positive scale) by scheme code
-    ``scheme`` (:data:`SCHEMES`), each ``i`` ``n w_i / Σ w`` times in expectation, from state
-    ``st``; returns the next state. ``cw (N,)`` is scratch."""
+    """Indices ``out (n,)`` drawn from weights ``w (N,)`` (any positive scale whose sum is
+    finite: the filters' normalised weights; ``particle.RESAMPLERS`` scales others) by scheme
+    code ``scheme`` (:data:`SCHEMES`), each ``i`` ``n w_i / Σ w`` times in expectation, from
+    state ``st``; returns the next state. ``cw (N,)`` is scratch."""
     N, n = w.shape[0], out.shape[0]
     total = 0.0
     for i in range(N):

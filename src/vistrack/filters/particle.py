@@ -43,6 +43,7 @@ from .._validate import (
     as_whole,
     check_finite,
     check_has_steps,
+    check_not_boolean,
     check_not_infinite,
     check_prior,
 )
@@ -94,7 +95,12 @@ def _user_loglik(ll: object, N: int, t: int, y: np.ndarray) -> np.ndarray:
     """The values a user's log-likelihood callable returned at step ``t``, checked: ``N`` of
     them, none NaN or ``+inf`` (``-inf`` is an impossible particle; NaN is a bug in the
     callable, and so is ``+inf``, which read as every particle having zero likelihood)."""
-    a = np.asarray(ll, dtype=float)
+    try:  # (text failed in numpy's words: "could not convert string to float")
+        check_not_boolean(ll, "likelihood's values", "log-likelihoods, numbers")
+        a = np.asarray(ll, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"likelihood must return (N,) = ({N},) log-likelihoods, numbers; got "
+                        f"{ll!r:.80} at step {t}") from None
     if a.shape != (N,):
         raise ValueError(f"likelihood must return (N,) = ({N},) log-likelihoods, one per "
                          f"particle; got shape {a.shape} at step {t}")
@@ -144,8 +150,15 @@ def _merge(cw, u, out):
     return out
 
 
+def _finite_scale(w: np.ndarray) -> np.ndarray:
+    """Weights of any positive scale as they are, or over their largest where their sum
+    overflows (three weights of 1e308 summed to inf, and each scheme drew from a cumulative
+    sum of inf: particle 1 alone, or 0 alone)."""
+    return w if np.isfinite(w.sum()) else w / w.max()
+
+
 def _cumulative(w: np.ndarray) -> np.ndarray:
-    cw = np.cumsum(w)
+    cw = np.cumsum(_finite_scale(w))
     cw /= cw[-1]  # exactly 1 at the end, whatever the rounding of the sum
     return cw
 
@@ -186,13 +199,14 @@ _systematic_kernel_py = kernel(_systematic_kernel)
 
 
 def _systematic(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
-    return _systematic_kernel_py(w, rng.random(), np.empty(n, np.int64))
+    return _systematic_kernel_py(_finite_scale(w), rng.random(), np.empty(n, np.int64))
 
 
 def _residual(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
     # weights of any positive scale, as the other schemes (floor(n w) of (2, 1, 1) was 16
     # copies of 4); a sum within rounding of 1 is taken as it is, so that normalised weights
     # give the same draws as before
+    w = _finite_scale(w)
     s = w.sum()
     if abs(s - 1.0) > 1e-9 * max(1, len(w)) ** 0.5:
         w = w / s
@@ -474,7 +488,7 @@ def weighted_cov(particles: ArrayLike, weights: ArrayLike) -> np.ndarray:
 
 
 def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayLike | None = None,
-                  n_starts: int = 8, max_iter: int = 50,
+                  n_starts: int = 8, max_iter: int = 500,
                   max_points: int = 5000) -> tuple[np.ndarray, float]:
     r"""The mode of a weighted cloud, "the mean of the tallest peak", and its confidence.
 
@@ -499,7 +513,11 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
         K(d) = \exp\left(-\tfrac12 \textstyle\sum_k d_k^2 / h_k^2\right),
 
     with Silverman's bandwidth :math:`h_k = \sigma_k \big(4 / ((n + 2) N_\text{eff})
-    \big)^{1/(n+4)}` by default.
+    \big)^{1/(n+4)}` by default. A dimension in which every particle has the same value
+    (within rounding of it: a state the prior or the motion leaves fixed) has no spread to
+    scale by; its bandwidth is then the value's own size (1 at 0), so that it counts for
+    nothing in the search (a bandwidth of about 1e-150 made its last bits outweigh every
+    real distance, and gave the weighted mean as the mode, with confidence 1).
 
     Parameters
     ----------
@@ -513,7 +531,8 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     n_starts : int
         Number of mean-shift starts (the weighted mean and ``n_starts - 1`` particles).
     max_iter : int
-        Largest number of mean-shift steps.
+        Largest number of mean-shift steps; the search stops before once no start moves
+        by 1e-6 bandwidths in a step (a skewed peak's climb takes a few hundred).
     max_points : int
         Clouds larger than this are subsampled for the search.
 
@@ -555,9 +574,13 @@ def particle_mode(particles: ArrayLike, weights: ArrayLike, *, bandwidth: ArrayL
     max_iter = as_whole(max_iter, "max_iter", 0)
     max_points = as_whole(max_points, "max_points", 1)
     if bandwidth is None:
-        sd = np.sqrt(np.maximum(np.diagonal(_wcov(x, w)), 1e-300))
+        sd = np.sqrt(np.maximum(np.diagonal(_wcov(x, w)), 0.0))
         neff = _ess(w)
         h = sd * (4.0 / ((n + 2) * neff)) ** (1.0 / (n + 4))
+        # a dimension of one value (to rounding): its own size, 1 at 0 (see above)
+        size = np.abs(x).max(0)
+        flat = sd <= 64 * np.finfo(float).eps * size
+        h = np.where(flat, np.where(size > 0, size, 1.0), h)
     else:
         hb = as_float_array(bandwidth, "bandwidth", ndim=(0, 1),
                             not_boolean="one number > 0 or one per dimension")
