@@ -228,8 +228,8 @@ def motmetrics_summary(gt_path, pred_path):
 
 @pytest.mark.parametrize("name", ["KITTI-17", "ETH-Sunnyday", "ADL-Rundle-6"])
 def test_identity_scores_equal_py_motmetrics(name, tmp_path):
-    """IDF1, IDP and IDR equal py-motmetrics'. Its CLEAR matching keeps a pair while it stays
-    within the threshold, where TrackEval prefers only the previous frame's pairs, so its
+    """IDF1, IDP and IDR equal py-motmetrics'. Its CLEAR matching prefers each object's last
+    pair however long ago, where TrackEval prefers only the previous frame's pairs, so its
     counts may differ a little (on ADL-Rundle-6 here: FP 468 against 470, ID switches 12
     against 24); vistrack follows TrackEval, the official scorer."""
     d = seq_dir("MOT15", name)
@@ -1029,3 +1029,63 @@ def test_a_csv_of_motchallenge_text_names_the_lines_as_a_txt_does(tmp_path):
     with pytest.raises(ValueError, match=re.escape(
             "cls.csv, line 2, column 8 (class): class 14 is not a MOT17 class (1-13)")):
         evaluate_files([("s", tmp_path / "cls.csv", ok, None)], benchmark="MOT17")
+
+
+def test_the_identity_matching_equals_every_matching_tried_and_a_dense_assignment():
+    """IDF1's matched detections (IDTP) from the sparse assignment on the pairs that ever
+    match: the oracles are every one-to-one matching enumerated, on small cases, and
+    scipy's dense assignment of every pair of identities, on larger ones."""
+    import itertools
+
+    from scipy.optimize import linear_sum_assignment
+
+    from vistrack.evaluation.mot import most_matched
+
+    rng = np.random.default_rng(5)
+    for trial in range(300):
+        small = trial < 200
+        G, P = (int(rng.integers(1, 5)), int(rng.integers(1, 5))) if small else \
+            (int(rng.integers(5, 60)), int(rng.integers(5, 200)))
+        n = int(rng.integers(0, 40 if small else 2000))
+        keys = rng.integers(0, G, n) * P + rng.integers(0, P, n)
+        pot = np.zeros((G, P))
+        np.add.at(pot, (keys // P, keys % P), 1)
+        if small:  # every matching: each row to a distinct column or to none
+            best = max(sum(pot[i, c] for i, c in enumerate(cols) if c is not None)
+                       for cols in itertools.product(*[[None, *range(P)]] * G)
+                       if len([c for c in cols if c is not None])
+                       == len({c for c in cols if c is not None}))
+        else:
+            r, c = linear_sum_assignment(-pot)
+            best = pot[r, c].sum()
+        assert most_matched(keys, P) == best
+
+
+def test_identity_scores_of_very_many_identities_keep_to_their_pairs():
+    """A tracker that gives every detection its own identity (120,000 of them beside 2,420
+    people) made IDF1 a dense matrix of every pair of identities: 4.7 GB, and a failure to
+    allocate at 180,000. Here 20 people a frame over 1,000 frames, each seen for 10 frames
+    (2,000 people), every box its own identity (20,000): the scores equal the closed form
+    (each person keeps one box of their own: IDTP is the number of people; every box is a
+    CLEAR match, and each person switches at every frame after their first) within 100 MB
+    of peak allocation, where the dense matrix took 320 MB a copy."""
+    import tracemalloc
+
+    slots, frames, life = 20, 1000, 10
+    f = np.repeat(np.arange(1, frames + 1), slots)
+    k = np.tile(np.arange(slots), frames)
+    x = k * 50.0
+    people = (f - 1) // life * slots + k + 1
+    ones = np.ones_like(x)
+    gt = MOTTable.from_rows(np.c_[f, people, x, 0 * x, 20 * ones, 40 * ones, ones, -ones,
+                                  -ones, -ones])
+    pred = MOTTable.from_rows(np.c_[f, np.arange(1, len(f) + 1), x, 0 * x, 20 * ones,
+                                    40 * ones, ones, ones, ones, ones])
+    tracemalloc.start()
+    s = evaluate_mot(gt, pred, frames, benchmark="MOT15")
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    n_people = frames // life * slots
+    assert s.IDTP == n_people and s.IDFN == s.IDFP == len(f) - n_people
+    assert s.TP == len(f) and s.IDSW == n_people * (life - 1)
+    assert peak < 100e6, peak

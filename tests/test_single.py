@@ -72,6 +72,14 @@ def test_measures_in_closed_form(tmp_path):
             read_boxes(mine)
         assert str(e.value) == (f"{mine}:{line}: {message}: the frames of frame,x,y,w,h lines "
                                 "must count up by one")
+    # frames of 200.5, 201.5, ... counted up by one, and their first frame went unsaid: the
+    # boxes were scored against the video's frames from 1 (track-one checks a first frame
+    # other than the video's, and could not)
+    mine.write_text("200.5,10,20,30,40\n201.5,11,20,30,40\n")
+    with pytest.raises(ValueError) as e:
+        read_boxes(mine)
+    assert str(e.value) == (f"{mine}:1: frame 200.5 is not a whole number (the first value of "
+                            "a frame,x,y,w,h line is a frame number)")
     # a form feed inside a line is white space in it, as an editor shows one line (it was
     # broken into two: "2 values" at line 2), and the lines after keep their numbers
     feed = tmp_path / "feed.txt"
@@ -1124,8 +1132,9 @@ def test_scores_name_boxes_that_are_no_numbers_and_count_an_infinite_truth_as_a_
         success_rate(np.ones((1, 4), bool), g)
     with pytest.raises(TypeError, match="^pred must be real numbers"):
         success_rate(np.array(g) + 5j, g)
-    for bad in ("0,0,10,10", [[0, 0, 10, 10], [0, 0, 10]]):
-        with pytest.raises(TypeError, match="^pred must be an array of numbers"):
+    for bad, said in (("0,0,10,10", "x, y, w, h; got '0,0,10,10'"),
+                      ([[0, 0, 10, 10], [0, 0, 10]], "an array of numbers")):
+        with pytest.raises(TypeError, match=f"^pred must be {re.escape(said)}"):
             success_rate(bad, g * 2)
     p = np.array([[10.0, 10, 20, 20]] * 2)
     gt = p.copy()

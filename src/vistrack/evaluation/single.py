@@ -342,10 +342,10 @@ def read_boxes(path: str | Path, rule: str = "area", origin: int | None = None) 
     ------
     ValueError
         If the file is not UTF-8 text, a line is not numbers, not 4, 5 or 8 of them, or not
-        as many as the line before, or (``frame,x,y,w,h``) its frame is not the one after the
-        line before's, or a blank line comes before a box of ``x y w h`` or polygon lines,
-        which number their frames by line (blank lines at the end are left alone); the
-        message names the file and line.
+        as many as the line before, or (``frame,x,y,w,h``) its frame is not a whole number or
+        not the one after the line before's, or a blank line comes before a box of ``x y w
+        h`` or polygon lines, which number their frames by line (blank lines at the end are
+        left alone); the message names the file and line.
 
     Examples
     --------
@@ -410,6 +410,11 @@ def _read_box_rows(path: str | Path, rule: str = "area", origin: int | None = No
                              "line is one frame's box (NaN,NaN,NaN,NaN for a frame without "
                              "one)")
         blank = 0
+        if len(vals) == 5 and not float(vals[0]).is_integer():
+            # (200.5, 201.5, ... counted up by one, and left the first frame unsaid: the
+            # boxes were scored against the video's frames from 1, without a word)
+            raise ValueError(f"{path}:{n}: frame {vals[0]:g} is not a whole number (the "
+                             "first value of a frame,x,y,w,h line is a frame number)")
         if len(vals) == 5 and rows and vals[0] != rows[-1][0] + 1:
             raise ValueError(f"{path}:{n}: frame {vals[0]:g} after frame {rows[-1][0]:g} (line "
                              f"{last}): the frames of frame,x,y,w,h lines must count up "
@@ -422,7 +427,7 @@ def _read_box_rows(path: str | Path, rule: str = "area", origin: int | None = No
     if a.shape[1] == 8:
         return region_to_bbox(a, rule), 8, None
     if a.shape[1] == 5:
-        return a[:, 1:], 5, int(a[0, 0]) if a[0, 0].is_integer() else None
+        return a[:, 1:], 5, int(a[0, 0])
     if boxes_origin(path) if origin is None else origin:  # OTB: 1-based pixels
         a[:, :2] -= 1
     return a, 4, None
