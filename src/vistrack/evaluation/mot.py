@@ -1048,7 +1048,8 @@ def most_matched(keys: np.ndarray, n_cols: int) -> int:
     cost = csr_matrix((np.r_[top - count, np.full(R, top)].astype(float),
                        (np.r_[r, np.arange(R)], np.r_[c, C + np.arange(R)])), shape=(R, C + R))
     i, j = min_weight_full_bipartite_matching(cost)
-    return int(round(R * top - float(np.asarray(cost[i, j]).sum())))
+    real = j < C  # the rows matched to a pair, not to their way out: that pair's detections
+    return int(count[np.searchsorted(pair, rows[i[real]] * n_cols + cols[j[real]])].sum())
 
 
 def _hota(seq: _Sequence, out: MOTCounts) -> None:
