@@ -980,6 +980,28 @@ def test_dcpf_settings_round_trip_through_print_config_and_config(tmp_path):
     assert (tmp_path / "c" / "tracks.txt").read_text() != a  # the settings changed the run
 
 
+def test_a_dcpf_file_printed_by_a_run_given_fps_says_so_when_read_back_without_it(tmp_path):
+    """The frame rate is the input's, not a setting: a file printed by a run given --fps 2,
+    read back without it, tracked at the clip's 7 frames/s and gave other tracks without a
+    word (the box trackers' files warn). It warns now, naming the option; with --fps 2 it
+    gives the printing run's tracks (the oracle) and says nothing."""
+    r = cli(DEMO_CLIP, "--tracker", "dcpf", "--fps", "2", "--stop", "20", "--out-dir",
+            tmp_path / "a", "--print-config")
+    assert r.returncode == 0, r.stderr
+    (tmp_path / "c.toml").write_text(r.stdout)
+    assert "fps_option = 2.0" in r.stdout and "frame_rate = 2.0" in r.stdout
+    r = cli(DEMO_CLIP, "--tracker", "dcpf", "--config", tmp_path / "c.toml", "--stop", "20",
+            "--out-dir", tmp_path / "b")
+    assert r.returncode == 0, r.stderr
+    assert ("c.toml was printed by a run given --fps 2 ([derived] fps_option), tracked at 2 "
+            "frames/s; this run tracks at 7 (its input's frame rate): give --fps 2") in r.stderr
+    r = cli(DEMO_CLIP, "--tracker", "dcpf", "--config", tmp_path / "c.toml", "--fps", "2",
+            "--stop", "20", "--out-dir", tmp_path / "c")
+    assert r.returncode == 0 and "was printed by a run" not in r.stderr
+    assert (tmp_path / "c" / "tracks.txt").read_text() == \
+        (tmp_path / "a" / "tracks.txt").read_text()
+
+
 def test_a_dcpf_start_above_every_score_is_said_and_read_from_the_file(tmp_path):
     """A file's `init_score` reaches the tracker: above every score of the clip's detector
     (the confidence front end's, under 1), no target starts, and the run says so with the

@@ -271,11 +271,10 @@ def test_the_scores_seen_and_why_no_target_started():
         said = start_warning(trk, "SEQ")
         assert (said is None) == starts
     assert said == (f"SEQ: no target started: no detection reached init_score 0.75 (the "
-                    f"highest of {len(every)} scored {every.max() / 200:.3g}); the "
-                    "detector-confidence particle filter's settings are for scores in (0, 1), "
-                    "as the confidence front end gives; for another detector's scale set "
-                    "init_score (a --config file's [dcpf] init_score, or "
-                    "DetectorConfidencePF(init_score=...))")
+                    f"highest of {len(every)} scored {every.max() / 200:.3g}); set init_score "
+                    "below the detector's scores (a --config file's [dcpf] init_score, or "
+                    "DetectorConfidencePF(init_score=...)): its default, 0.75, is for the "
+                    "confidence front end's scores in (0, 1)")
     trk.reset()
     assert trk.n_scored == 0 and trk.top_score == -np.inf and start_warning(trk, "S") is None
 

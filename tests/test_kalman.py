@@ -541,8 +541,9 @@ def test_online_filter_errors_leave_the_state_unchanged():
     np.testing.assert_array_equal(f.cov, before.cov)
     with pytest.raises(ValueError, match=r"x0 must have shape \(2,\)"):
         kf.online([0.0, 1.0, 2.0], np.eye(3))
-    # a dt that is no number: named ("could not convert string to float: 'a'")
-    for bad in ("a", [1, 2], object()):
+    # a dt that is no number: named ("could not convert string to float: 'a'"), text that
+    # reads as one too ("0.5" moved the mean by half a step)
+    for bad in ("a", [1, 2], object(), "0.5", b"2", True):
         with pytest.raises(ValueError, match=r"^dt must be a number; got "):
             f.predict(dt=bad)
     np.testing.assert_array_equal(f.mean, before.mean)

@@ -714,14 +714,30 @@ def test_a_time_step_past_the_largest_float_is_named():
     large to convert to float), naming nothing; a step whose F or Q overflows gave inf."""
     with pytest.raises(ValueError, match="dt must be numbers a float can hold .*1329 bits"):
         ConstantVelocity(dim=1).F(10**400)
-    with pytest.raises(ValueError, match=r"ConstantVelocity's Q\(dt\) overflows past the "
-                                         r"largest float at dt=1e\+155"):
+    with pytest.raises(ValueError, match=r"ConstantVelocity's Q\(dt\) is past the largest "
+                                         r"float at dt=1e\+155, q=1: too long a step or too "
+                                         "large a noise"):
         ConstantVelocity(dim=1).Q(1e155)
-    with pytest.raises(ValueError, match=r"ConstantAcceleration's F\(dt\) overflows"):
+    with pytest.raises(ValueError, match=r"ConstantVelocity's Q\(dt\) .* at dt=10, q=1e\+308"):
+        ConstantVelocity(dim=1, q=1e308).Q(10.0)
+    with pytest.raises(ValueError, match=r"ConstantAcceleration's F\(dt\) is past"):
         ConstantAcceleration(dim=1).F(1e200)
-    # the closed forms themselves at a step well inside the range: unchanged
-    np.testing.assert_allclose(ConstantVelocity(dim=1, q=1.0).Q(1e100),
-                               [[1e300 / 3, 1e200 / 2], [1e200 / 2, 1e100]], rtol=1e-15)
+    with pytest.raises(ValueError, match=r"Periodic's Q\(dt\) is past the largest float at "
+                                         r"dt=10, q=1e\+308"):
+        Periodic(omega=1.0, q=1e308).Q(10.0)
+    # entries within the range whose powers of dt are not (dt^3 of 1e103, dt^2 of 1.5e154),
+    # and no noise at all (0 x inf was NaN): the closed forms, exact in fractions
+    from fractions import Fraction as Fr
+
+    np.testing.assert_allclose(ConstantVelocity(dim=1, q=1e-20).Q(1e103), [
+        [float(Fr(1e-20) * Fr(1e103) ** 3 / 3), float(Fr(1e-20) * Fr(1e103) ** 2 / 2)],
+        [float(Fr(1e-20) * Fr(1e103) ** 2 / 2), float(Fr(1e-20) * Fr(1e103))]], rtol=1e-15)
+    assert ConstantAcceleration(dim=1).F(1.5e154)[0, 2] == pytest.approx(
+        float(Fr(1.5e154) ** 2 / 2), rel=1e-15)
+    assert (ConstantVelocity(dim=1, q=0.0).Q(1e103) == 0).all()
+    # the closed forms at a step well inside the range: computed as before, to the bit
+    np.testing.assert_array_equal(ConstantVelocity(dim=1, q=1.0).Q(1e100), [
+        [1.0 * 1e100**3 / 3, 1.0 * 1e100**2 / 2], [1.0 * 1e100**2 / 2, 1.0 * 1e100 / 1]])
 
 
 def test_periodic_noise_at_a_phase_past_the_largest_float():

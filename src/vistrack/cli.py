@@ -276,16 +276,18 @@ def _box_config(args: argparse.Namespace):
 
 def _dcpf_config(args: argparse.Namespace):
     """The detector-confidence particle filter's settings (``--tracker dcpf``): --config's
-    ``[dcpf]`` table over the defaults, or the defaults; or an error message."""
+    ``[dcpf]`` table over the defaults (its ``[derived]`` table kept as
+    ``args.dcpf_file_derived``), or the defaults; or an error message."""
     from .config import ConfigError, read_dcpf_config
     from .tracking.dcpf import DCPFConfig
 
     if args.config is None:
         return DCPFConfig(), None
     try:
-        return read_dcpf_config(args.config)[0], None
+        cfg, args.dcpf_file_derived = read_dcpf_config(args.config)
     except (ConfigError, FileNotFoundError) as exc:
         return None, str(exc)
+    return cfg, None
 
 
 def _tracker_problem(name: str) -> str | None:
@@ -526,6 +528,8 @@ def _track(args: argparse.Namespace) -> int:
                               **_video_options(args, name, box, cfg or dcfg))
         if box:
             _warn_printed_rate(args, run)
+        elif dcfg is not None and args.config is not None:
+            _warn_printed_rate(args, run, args.dcpf_file_derived)
     if isinstance(run, VideoRun):
         # run.json (and the report, from it) keeps the command's warnings too: one about a
         # setting that changes nothing came before the run, and was left out
@@ -538,7 +542,10 @@ def _track(args: argparse.Namespace) -> int:
     if args.print_config and dcfg is not None:  # --tracker dcpf's
         from .config import dcpf_toml
 
-        sys.stdout.write(dcpf_toml(dcfg, run.derived))
+        derived = dict(run.derived or {})
+        if args.fps is not None:  # the input's rate, no setting: said on reading back
+            derived["fps_option"] = float(args.fps)
+        sys.stdout.write(dcpf_toml(dcfg, derived))
     elif args.print_config:
         assert run.config is not None  # a box tracker's run (others refuse --print-config)
         derived = dict(run.derived or {})
@@ -770,15 +777,17 @@ def _warn_unused_settings(args: argparse.Namespace, cfg: TrackConfig | None,
                       stacklevel=1)
 
 
-def _warn_printed_rate(args: argparse.Namespace, run: TrackRun | VideoRun) -> None:
+def _warn_printed_rate(args: argparse.Namespace, run: TrackRun | VideoRun,
+                       derived: dict[str, Any] | None = None) -> None:
     """After one input's run: warn where its --config file was printed by a run given
     --fps whose tracker ran at another rate than this one's (``[derived] frame_rate``): the
     frame rate is no setting, and the file alone does not give that run's tracks. (Said
     before the run from --fps alone, it warned where this input's own rate is the one
-    printed, and the tracks were the same.)"""
+    printed, and the tracks were the same.) ``derived``: the file's ``[derived]`` table
+    (a box tracker's file's, read here, by default)."""
     if args.config is None or run.derived is None:
         return
-    derived = _config_file(args)[1]
+    derived = _config_file(args)[1] if derived is None else derived
     printed, then = _printed_fps(derived), derived.get("frame_rate")
     now = run.derived.get("frame_rate")
     if printed is None or printed == args.fps or now is None:

@@ -319,8 +319,9 @@ def derived_values(trk: BoxTracker) -> dict:
 
 def start_warning(trk: Any, name: str) -> str | None:
     """Why a detector-confidence particle filter's run started no target, as a warning, or
-    None: its ``init_score`` (0.75 by default, for scores in (0, 1)) lies above every
-    detection's score (a detector of another scale).
+    None: its ``init_score`` (0.75 by default, for the confidence front end's scores in
+    (0, 1)) lies above every detection's score (a detector of another scale, or a setting
+    above this detector's).
 
     Parameters
     ----------
@@ -343,9 +344,9 @@ def start_warning(trk: Any, name: str) -> str | None:
     ...                                                         scores=[0.004]))
     >>> print(start_warning(trk, "SEQ"))  # doctest: +NORMALIZE_WHITESPACE
     SEQ: no target started: no detection reached init_score 0.75 (the highest of 5 scored
-    0.004); the detector-confidence particle filter's settings are for scores in (0, 1), as
-    the confidence front end gives; for another detector's scale set init_score (a
-    --config file's [dcpf] init_score, or DetectorConfidencePF(init_score=...))
+    0.004); set init_score below the detector's scores (a --config file's [dcpf]
+    init_score, or DetectorConfidencePF(init_score=...)): its default, 0.75, is for the
+    confidence front end's scores in (0, 1)
     """
     from .tracking.dcpf import DetectorConfidencePF
 
@@ -357,10 +358,10 @@ def start_warning(trk: Any, name: str) -> str | None:
     seen = ("the only detection" if trk.n_scored == 1 else
             f"the highest of {trk.n_scored:,}")
     return (f"{name}: no target started: no detection reached init_score {cfg.init_score:g} "
-            f"({seen} scored {trk.top_score:.3g}); the detector-confidence particle filter's "
-            "settings are for scores in (0, 1), as the confidence front end gives; for "
-            "another detector's scale set init_score (a --config file's [dcpf] init_score, "
-            "or DetectorConfidencePF(init_score=...))")
+            f"({seen} scored {trk.top_score:.3g}); set init_score below the detector's "
+            "scores (a --config file's [dcpf] init_score, or "
+            "DetectorConfidencePF(init_score=...)): its default, 0.75, is for the confidence "
+            "front end's scores in (0, 1)")
 
 
 def _run_derived(trk: Any) -> dict | None:

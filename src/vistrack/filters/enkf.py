@@ -141,16 +141,12 @@ class Ensemble:
         try:
             L = np.linalg.cholesky(cov)
         except np.linalg.LinAlgError:
-            # singular (a state known exactly along some direction): the principal root,
-            # unique, so the draws are the same on every machine (psd_sqrt)
-            sym = 0.5 * (cov + np.swapaxes(cov, -1, -2))
-            w, V = np.linalg.eigh(sym)
-            if (w < -1e-10 * np.abs(w).max(-1, keepdims=True)).any() or not np.isfinite(w).all():
-                raise ValueError("cov must be positive semi-definite to sample an ensemble"
-                                 ) from None
-            # (the principal root alone gave a constant-acceleration prior at dt 1e-4 35/36
-            # of its position's variance: psd_sqrt roots the correlation matrix there)
-            L = psd_sqrt(sym)
+            # singular (a state known exactly along some direction; semi-definite, as
+            # check_psd found above): the principal root, unique, so the draws are the same on
+            # every machine, or where the scales lie far apart the correlation matrix's (the
+            # principal root alone gave a constant-acceleration prior at dt 1e-4 35/36 of its
+            # position's variance)
+            L = psd_sqrt(0.5 * (cov + np.swapaxes(cov, -1, -2)))
         # one draw per ensemble of the batch, mean's or cov's (a batch of cov beside one
         # mean drew one set and scaled it for every ensemble: their members correlated 1)
         batch = np.broadcast_shapes(mean.shape[:-1], cov.shape[:-2])

@@ -19,6 +19,7 @@ from .._validate import (
     check_matrix_stack,
     check_one_step,
     check_psd,
+    is_real,
 )
 from ..models.measurement import LinearMeasurement, MeasurementModel, Position
 from ..models.motion import MotionModel
@@ -688,10 +689,10 @@ class OnlineFilter:
 
     def _run(self, y: ArrayLike | None, predict: bool, update: bool, dt: float | None) -> float:
         if predict:
-            try:
-                d = self._dt0 if dt is None else float(dt)
-            except (TypeError, ValueError):  # ("could not convert string to float")
-                raise ValueError(f"dt must be a number; got {dt!r}") from None
+            # (text was read as a step: "0.5" moved the mean by half a step)
+            if dt is not None and not is_real(dt):
+                raise ValueError(f"dt must be a number; got {dt!r}")
+            d = self._dt0 if dt is None else float(dt)
             if d != self._dt:
                 self._set_dt(d)
         if update:

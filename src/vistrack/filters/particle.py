@@ -46,6 +46,7 @@ from .._validate import (
     check_not_boolean,
     check_not_infinite,
     check_prior,
+    sum_tolerance,
 )
 from ..models.adapters import MeasurementFunctions, MotionFunctions, psd_sqrt
 from ..models.protocols import (
@@ -253,12 +254,9 @@ def _check_weights(weights: ArrayLike) -> np.ndarray:
         bad = w[~(np.isfinite(w) & (w >= 0))][0]
         raise ValueError(f"weights must be finite and >= 0; got {bad}")
     s = w.sum(-1)
-    tol = 1e-9 * max(1, w.shape[-1]) ** 0.5
-    given = getattr(weights, "dtype", None)
-    if given is not None and np.issubdtype(given, np.floating) and given.itemsize < 8:
-        # weights normalised in float32 (or float16) are off by up to N of its ulp: 8e-9 for
-        # ten float32 weights was refused
-        tol = max(tol, w.shape[-1] * float(np.finfo(given).eps))
+    # (weights normalised in float32 or float16 are off by up to N of its ulp: 8e-9 for ten
+    # float32 weights was refused)
+    tol = max(1e-9 * max(1, w.shape[-1]) ** 0.5, sum_tolerance(weights, w.shape[-1]))
     off = np.abs(s - 1.0) > tol
     if off.any():
         k = np.flatnonzero(np.ravel(off))[0]

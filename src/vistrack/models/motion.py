@@ -16,6 +16,7 @@ State layout for the kinematic models in ``dim`` spatial dimensions is derivativ
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from math import factorial
 from typing import Literal, Protocol, runtime_checkable
 
@@ -116,12 +117,31 @@ def _as_dt(dt: float | np.ndarray) -> np.ndarray:
     return d
 
 
-def _finite(out: np.ndarray, name: str, model: object, dt: np.ndarray) -> np.ndarray:
-    """``out``, or a ValueError where an entry overflowed past the largest float (a
-    constant velocity's ``Q`` at ``dt`` 1e155 was inf, and reached the filters)."""
+def _powered(c: float, dt: np.ndarray, p: int) -> np.ndarray:
+    """``c dt^p`` multiplied a factor at a time, so that no power overflows where the product
+    does not (``dt^3`` of 1e103 is past the largest float; times 1e-21 it is not), and 0
+    where ``c`` is (``0 × inf`` was NaN)."""
+    out = np.full(dt.shape, c)
+    for _ in range(p):
+        out = out * dt
+    return out
+
+
+def _finite(entries: Callable[..., np.ndarray], dt: np.ndarray, name: str,
+            model: object) -> np.ndarray:
+    """``entries(dt)``, a kinematic model's ``F`` or ``Q`` block; where an entry overflows
+    (``dt^p`` past the largest float), again a factor at a time (``entries(dt, True)``),
+    and a ValueError naming the step and ``q`` where an entry itself is past it (a constant
+    velocity's ``Q`` at ``dt`` 1e155 was inf, and reached the filters). The entries of
+    ordinary steps are computed as before, to the bit."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = entries(dt)
+        if not np.isfinite(out).all():
+            out = entries(dt, True)
     if not np.isfinite(out).all():
-        raise ValueError(f"{type(model).__name__}'s {name}(dt) overflows past the largest "
-                         f"float at dt={float(np.max(dt)):g}: too long a step for this model")
+        raise ValueError(f"{type(model).__name__}'s {name}(dt) is past the largest float at "
+                         f"dt={float(np.max(dt)):g}, q={getattr(model, 'q', None):g}: too "
+                         "long a step or too large a noise for this model")
     return out
 
 
@@ -197,17 +217,18 @@ class _Kinematic:
         extra = "" if self.discretisation == "exact" else ", discretisation='euler'"
         return f"{type(self).__name__}(dim={self.dim}, q={self.q}{extra})"
 
-    def _F1(self, dt: np.ndarray) -> np.ndarray:
+    def _F1(self, dt: np.ndarray, stepwise: bool = False) -> np.ndarray:
         k = self.order + 1
         out = np.zeros(dt.shape + (k, k))
         for i in range(k):
             for j in range(i, k):
                 if self.discretisation == "euler" and j - i > 1:
                     continue  # forward Euler: I + A dt keeps only the first super-diagonal
-                out[..., i, j] = dt ** (j - i) / factorial(j - i)
+                out[..., i, j] = (_powered(1.0 / factorial(j - i), dt, j - i) if stepwise
+                                  else dt ** (j - i) / factorial(j - i))
         return out
 
-    def _Q1(self, dt: np.ndarray) -> np.ndarray:
+    def _Q1(self, dt: np.ndarray, stepwise: bool = False) -> np.ndarray:
         k = self.order
         out = np.zeros(dt.shape + (k + 1, k + 1))
         if self.discretisation == "euler":
@@ -216,7 +237,9 @@ class _Kinematic:
         for i in range(k + 1):
             for j in range(k + 1):
                 p = 2 * k + 1 - i - j
-                out[..., i, j] = self.q * dt**p / (p * factorial(k - i) * factorial(k - j))
+                out[..., i, j] = (
+                    _powered(self.q / (p * factorial(k - i) * factorial(k - j)), dt, p)
+                    if stepwise else self.q * dt**p / (p * factorial(k - i) * factorial(k - j)))
         return out
 
     def F(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
@@ -238,9 +261,7 @@ class _Kinematic:
         (2, 2, 2)
         """
         d = _as_dt(dt)
-        with np.errstate(over="ignore"):
-            F1 = _finite(self._F1(d), "F", self, d)
-        return np.kron(F1, np.eye(self.dim))
+        return np.kron(_finite(self._F1, d, "F", self), np.eye(self.dim))
 
     def Q(self, dt: float | np.ndarray = 1.0) -> np.ndarray:
         """Process-noise covariance over ``dt`` (see the class), shaped like :meth:`F`.
@@ -261,9 +282,7 @@ class _Kinematic:
         [[0.333, 0.5], [0.5, 1.0]]
         """
         d = _as_dt(dt)
-        with np.errstate(over="ignore", invalid="ignore"):
-            Q1 = _finite(self._Q1(d), "Q", self, d)
-        return np.kron(Q1, np.eye(self.dim))
+        return np.kron(_finite(self._Q1, d, "Q", self), np.eye(self.dim))
 
     def f(self, x: np.ndarray, dt: float = 1.0) -> np.ndarray:
         """Propagate states by ``dt`` without noise: ``x F(dt)'``.
@@ -566,35 +585,40 @@ class Periodic:
         """
         d = _as_dt(dt)
         w, q = self.omega, self.q
-        out = np.zeros(d.shape + (2, 2))
-        if self.discretisation == "euler":
-            out[..., 1, 1] = q * d
-        else:
-            dd = d.reshape(-1)
-            q11, q12, q22 = np.empty_like(dd), np.empty_like(dd), np.empty_like(dd)
-            with np.errstate(over="ignore"):  # (the phase is checked below)
-                small = 2 * w * dd < 1.0  # the closed forms cancel: the series (see the class)
-            ds = dd[small]
-            u2 = (2 * w * ds) ** 2
-            q11[small] = 2 * q * ds**3 * _sin_series(u2, 3)
-            q12[small] = q / 2 * (ds * _sin_series(u2 / 4, 1)) ** 2
-            q22[small] = q * ds * (1 + _sin_series(u2, 1)) / 2
-            if not small.all():
-                db = dd[~small]
-                wd = _phase(w, db)
-                with np.errstate(over="ignore"):
+        with np.errstate(over="ignore", invalid="ignore"):  # (checked below)
+            out = np.zeros(d.shape + (2, 2))
+            if self.discretisation == "euler":
+                out[..., 1, 1] = q * d
+            else:
+                dd = d.reshape(-1)
+                q11, q12, q22 = np.empty_like(dd), np.empty_like(dd), np.empty_like(dd)
+                # the closed forms cancel: the series (see the class); the phase is checked
+                small = 2 * w * dd < 1.0
+                ds = dd[small]
+                u2 = (2 * w * ds) ** 2
+                q11[small] = 2 * q * ds**3 * _sin_series(u2, 3)
+                q12[small] = q / 2 * (ds * _sin_series(u2 / 4, 1)) ** 2
+                q22[small] = q * ds * (1 + _sin_series(u2, 1)) / 2
+                if not small.all():
+                    db = dd[~small]
+                    wd = _phase(w, db)
                     two = 2 * wd
-                # sin(2 ω dt) / 4ω; where 2 ω dt alone is past the largest float (ω 1e308 at
-                # dt 1: NaN), as sin(ω dt) cos(ω dt) / 2ω
-                s2 = np.where(np.isfinite(two), np.sin(np.where(np.isfinite(two), two, 0.0)),
-                              2 * np.sin(wd) * np.cos(wd)) / (4 * w)
-                # (w**2 of a Python float past 1.3e154 raised OverflowError: divided twice)
-                q11[~small] = q / w / w * (db / 2 - s2)
-                q12[~small] = q * np.sin(w * db) ** 2 / 2 / w / w
-                q22[~small] = q * (db / 2 + s2)
-            out[..., 0, 0] = q11.reshape(d.shape)
-            out[..., 0, 1] = out[..., 1, 0] = q12.reshape(d.shape)
-            out[..., 1, 1] = q22.reshape(d.shape)
+                    # sin(2 ω dt) / 4ω; where 2 ω dt alone is past the largest float (ω 1e308
+                    # at dt 1: NaN), as sin(ω dt) cos(ω dt) / 2ω
+                    fin = np.isfinite(two)
+                    s2 = np.where(fin, np.sin(np.where(fin, two, 0.0)),
+                                  2 * np.sin(wd) * np.cos(wd)) / (4 * w)
+                    # (w**2 of a Python float past 1.3e154 raised OverflowError: divided twice)
+                    q11[~small] = q / w / w * (db / 2 - s2)
+                    q12[~small] = q * np.sin(w * db) ** 2 / 2 / w / w
+                    q22[~small] = q * (db / 2 + s2)
+                out[..., 0, 0] = q11.reshape(d.shape)
+                out[..., 0, 1] = out[..., 1, 0] = q12.reshape(d.shape)
+                out[..., 1, 1] = q22.reshape(d.shape)
+        if not np.isfinite(out).all():  # (q 1e308 at dt 10 gave inf, as the kinematic Q did)
+            raise ValueError(f"Periodic's Q(dt) is past the largest float at "
+                             f"dt={float(np.max(d)):g}, q={q:g}: too long a step or too large "
+                             "a noise for this model")
         return np.kron(out, np.eye(self.dim))
 
     def f(self, x: np.ndarray, dt: float = 1.0) -> np.ndarray:

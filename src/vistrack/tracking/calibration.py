@@ -131,7 +131,8 @@ def isotonic_increasing(y: ArrayLike, weights: ArrayLike | None = None) -> np.nd
         If ``weights`` does not have the shape of ``y``, or a value or weight is not finite,
         or a weight is not > 0, or, where a pool's sums would overflow, weights pooled
         with each other alone are all under about 2^-1074 of ``N`` times the largest (they
-        vanish when the weights are scaled to keep the sums finite).
+        vanish when the weights are scaled to keep the sums finite; under 2^-1022 of it,
+        they lose digits).
 
     Examples
     --------
@@ -146,13 +147,16 @@ def isotonic_increasing(y: ArrayLike, weights: ArrayLike | None = None) -> np.nd
         raise ValueError("y must be finite and weights finite and > 0")
     if not len(y):
         return y.copy()
-    fit = _pava(y, w)
-    if np.isfinite(fit).all():
-        return fit
+    if np.isfinite(w.sum()):  # (a pool's weight is then finite: none overflows)
+        fit = _pava(y, w)
+        if np.isfinite(fit).all():
+            return fit
     # a pool's weighted sum overflowed (values or weights near the largest float gave inf
-    # or NaN): again with the values halved and the weights scaled so that they add up to
-    # at most 1, both by powers of two, which leave every product and quotient as it was
-    # (weights under 2^-1074 of that scale vanish; two such pooled first give NaN)
+    # or NaN; weights whose sum overflows gave a finite value over an infinite weight, 0):
+    # again with the values halved and the weights scaled so that they add up to at most
+    # 1, both by powers of two, which leave every product and quotient as it was (weights
+    # under about 2^-1022 of that scale lose digits, and under 2^-1074 vanish: two such
+    # pooled first give NaN)
     scale = math.ldexp(1.0, -(math.frexp(float(w.max()))[1] + math.frexp(len(w))[1]))
     try:
         fit = _pava(y * 0.5, w * scale) * 2.0
