@@ -216,9 +216,12 @@ class PointTracker:
         # GNN's reference innovation: a track's one frame after an update (twice the
         # measurement noise and a frame's process noise), whose likelihood at the gate's edge
         # is the price of a pair left unassigned
-        with np.errstate(over="ignore", invalid="ignore"):
-            S_ref = self.H @ np.asarray(self.motion.Q(1.0 / self.frame_rate), float) \
-                @ self.H.T + 2 * self.R
+        try:  # (a model that names its own overflow: said here for the frame rate)
+            with np.errstate(over="ignore", invalid="ignore"):
+                S_ref = self.H @ np.asarray(self.motion.Q(1.0 / self.frame_rate), float) \
+                    @ self.H.T + 2 * self.R
+        except ValueError:
+            S_ref = np.full((1, 1), np.nan)
         if not np.isfinite(S_ref).all():  # (NaN for GNN's price, and Q named at the 2nd step)
             raise ValueError(f"frame_rate {frame_rate!r} makes a frame's process noise not "
                              f"finite ({self.motion!r} over {1.0 / self.frame_rate:g} s)")
