@@ -375,6 +375,8 @@ def test_print_config_without_input_is_what_a_run_prints(seq, tmp_path, flags):
      "--print-config goes with the box trackers (bytetrack, sort) and dcpf"),
     (["--print-config", "--tracker", "dcpf", "--high", "0.5"],
      "--high goes with the box trackers (bytetrack, sort)"),
+    (["--print-config", "--tracker", "dcpf", "--offline"],  # (it printed dcpf's, unsaid)
+     "--offline goes with the box trackers (bytetrack, sort)"),
     (["--print-config", "--high", "2"],
      "--high: high must be in [0, 1] (a calibrated confidence); got 2.0"),
 ])

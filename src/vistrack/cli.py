@@ -404,8 +404,8 @@ def _print_config(args: argparse.Namespace) -> int:
     if name == "dcpf":
         from .config import dcpf_toml
 
-        given = _box_settings_given(args, name) + (["still_camera"] if args.still_camera
-                                                    else [])
+        given = _box_settings_given(args, name) + [f for f in ("still_camera", "offline")
+                                                    if getattr(args, f)]
         if given:
             return fail(_box_setting_problem(given[0]))
         dcfg, problem = _dcpf_config(args)
