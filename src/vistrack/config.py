@@ -19,6 +19,10 @@ TOML.
     frame_rate = 30.0
     ...
 
+``vistrack track VIDEO --tracker dcpf`` reads a ``[dcpf]`` table of its own instead, every
+field of :class:`~vistrack.tracking.DCPFConfig` (:func:`read_dcpf_config`,
+:func:`dcpf_toml`).
+
 A file may hold any part: what it leaves out keeps the preset's value (``[tracker] name``,
 default ``bytetrack``). :func:`read_config` rejects unknown tables and keys, and values of the
 wrong kind, naming the file, the line and the key; :func:`config_toml` writes a configuration
@@ -547,10 +551,7 @@ def dcpf_toml(cfg: DCPFConfig, derived: dict | None = None) -> str:
     lines = ["# vistrack track configuration: vistrack track VIDEO --tracker dcpf --config "
              "FILE", "", "[dcpf]"]
     lines += [f"{k} = {_value(v, kinds[k])}" for k, v in asdict(cfg).items()]
-    if derived:
-        lines += ["", "[derived]  # what the run derived from the data; not read back"]
-        lines += [f"{k} = {_value(v)}" for k, v in derived.items()]
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + _derived_lines(derived)) + "\n"
 
 
 def read_config(path: str | os.PathLike, base: TrackConfig | None = None) -> TrackConfig:
@@ -718,6 +719,15 @@ def _value(v: object, kind: str | None = None) -> str:
     return str(v)
 
 
+def _derived_lines(derived: dict | None) -> list[str]:
+    """A last ``[derived]`` table of ``derived`` (none where it is empty or None), which the
+    readers ignore."""
+    if not derived:
+        return []
+    return ["", "[derived]  # what the run derived from the data; not read back"] + [
+        f"{k} = {_value(v)}" for k, v in derived.items()]
+
+
 def config_toml(cfg: TrackConfig, derived: dict | None = None) -> str:
     """The configuration as TOML (see the module), with ``derived`` values in a last
     ``[derived]`` table that :func:`read_config` ignores.
@@ -760,7 +770,4 @@ def config_toml(cfg: TrackConfig, derived: dict | None = None) -> str:
             lines.append(f"{k} = {_value([float(x) for x in v] if k == 'std_meas' else v)}")
     lines += ["", "[offline]"] + [f"{k} = {_value(v, kinds[k])}"
                                   for k, v in asdict(cfg.offline).items()]
-    if derived:
-        lines += ["", "[derived]  # what the run derived from the data; not read back"]
-        lines += [f"{k} = {_value(v)}" for k, v in derived.items()]
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + _derived_lines(derived)) + "\n"
