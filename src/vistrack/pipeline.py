@@ -348,7 +348,7 @@ def start_warning(trk: Any, name: str) -> str | None:
     init_score, or DetectorConfidencePF(init_score=...)): its default, 0.75, is for the
     confidence front end's scores in (0, 1)
     """
-    from .tracking.dcpf import DetectorConfidencePF
+    from .tracking.dcpf import DCPFConfig, DetectorConfidencePF
 
     if not isinstance(trk, DetectorConfidencePF) or not trk.n_scored:
         return None
@@ -360,8 +360,8 @@ def start_warning(trk: Any, name: str) -> str | None:
     return (f"{name}: no target started: no detection reached init_score {cfg.init_score:g} "
             f"({seen} scored {trk.top_score:.3g}); set init_score below the detector's "
             "scores (a --config file's [dcpf] init_score, or "
-            "DetectorConfidencePF(init_score=...)): its default, 0.75, is for the confidence "
-            "front end's scores in (0, 1)")
+            f"DetectorConfidencePF(init_score=...)): its default, {DCPFConfig.init_score:g}, "
+            "is for the confidence front end's scores in (0, 1)")
 
 
 def _run_derived(trk: Any) -> dict | None:

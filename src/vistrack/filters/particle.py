@@ -151,15 +151,17 @@ def _merge(cw, u, out):
     return out
 
 
-def _finite_scale(w: np.ndarray) -> np.ndarray:
+def _finite_scale(w: np.ndarray, total: float | None = None) -> np.ndarray:
     """Weights of any positive scale as they are, or over their largest where their sum
-    overflows (three weights of 1e308 summed to inf, and each scheme drew from a cumulative
-    sum of inf: particle 1 alone, or 0 alone)."""
-    return w if np.isfinite(w.sum()) else w / w.max()
+    (``total``, where the caller has it) overflows (three weights of 1e308 summed to inf,
+    and each scheme drew from a cumulative sum of inf: particle 1 alone, or 0 alone)."""
+    return w if np.isfinite(w.sum() if total is None else total) else w / w.max()
 
 
 def _cumulative(w: np.ndarray) -> np.ndarray:
-    cw = np.cumsum(_finite_scale(w))
+    cw = np.cumsum(w)
+    if not np.isfinite(cw[-1]):  # (the sum overflowed: _finite_scale)
+        cw = np.cumsum(_finite_scale(w, cw[-1]))
     cw /= cw[-1]  # exactly 1 at the end, whatever the rounding of the sum
     return cw
 
@@ -207,8 +209,10 @@ def _residual(w: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
     # weights of any positive scale, as the other schemes (floor(n w) of (2, 1, 1) was 16
     # copies of 4); a sum within rounding of 1 is taken as it is, so that normalised weights
     # give the same draws as before
-    w = _finite_scale(w)
     s = w.sum()
+    if not np.isfinite(s):
+        w = _finite_scale(w, s)
+        s = w.sum()
     if abs(s - 1.0) > 1e-9 * max(1, len(w)) ** 0.5:
         w = w / s
     nw = n * w

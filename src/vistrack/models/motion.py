@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from math import factorial
-from typing import Literal, Protocol, runtime_checkable
+from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -138,10 +138,16 @@ def _finite(entries: Callable[..., np.ndarray], dt: np.ndarray, name: str,
         out = entries(dt)
         if not np.isfinite(out).all():
             out = entries(dt, True)
+    return _in_range(out, name, model, dt)
+
+
+def _in_range(out: np.ndarray, name: str, model: Any, dt: np.ndarray) -> np.ndarray:
+    """``out``, a model's ``F`` or ``Q`` over ``dt``, or a ValueError naming the step and
+    the model's ``q`` where an entry is past the largest float."""
     if not np.isfinite(out).all():
         raise ValueError(f"{type(model).__name__}'s {name}(dt) is past the largest float at "
-                         f"dt={float(np.max(dt)):g}, q={getattr(model, 'q', None):g}: too "
-                         "long a step or too large a noise for this model")
+                         f"dt={float(np.max(dt)):g}, q={model.q:g}: too long a step or too "
+                         "large a noise for this model")
     return out
 
 
@@ -606,20 +612,18 @@ class Periodic:
                     # sin(2 ω dt) / 4ω; where 2 ω dt alone is past the largest float (ω 1e308
                     # at dt 1: NaN), as sin(ω dt) cos(ω dt) / 2ω
                     fin = np.isfinite(two)
+                    sin = np.sin(wd)
                     s2 = np.where(fin, np.sin(np.where(fin, two, 0.0)),
-                                  2 * np.sin(wd) * np.cos(wd)) / (4 * w)
+                                  2 * sin * np.cos(wd)) / (4 * w)
                     # (w**2 of a Python float past 1.3e154 raised OverflowError: divided twice)
                     q11[~small] = q / w / w * (db / 2 - s2)
-                    q12[~small] = q * np.sin(w * db) ** 2 / 2 / w / w
+                    q12[~small] = q * sin ** 2 / 2 / w / w
                     q22[~small] = q * (db / 2 + s2)
                 out[..., 0, 0] = q11.reshape(d.shape)
                 out[..., 0, 1] = out[..., 1, 0] = q12.reshape(d.shape)
                 out[..., 1, 1] = q22.reshape(d.shape)
-        if not np.isfinite(out).all():  # (q 1e308 at dt 10 gave inf, as the kinematic Q did)
-            raise ValueError(f"Periodic's Q(dt) is past the largest float at "
-                             f"dt={float(np.max(d)):g}, q={q:g}: too long a step or too large "
-                             "a noise for this model")
-        return np.kron(out, np.eye(self.dim))
+        # (q 1e308 at dt 10 gave inf, as the kinematic Q did)
+        return np.kron(_in_range(out, "Q", self, d), np.eye(self.dim))
 
     def f(self, x: np.ndarray, dt: float = 1.0) -> np.ndarray:
         """Propagate states by ``dt`` without noise: ``x F(dt)'``.
