@@ -154,8 +154,9 @@ def test_nonlinear_members_with_different_state_sizes(rng):
 @pytest.mark.parametrize(
     "transition, kwargs, match",
     [
-        ([[0.9, 0.2], [0.1, 0.9]], {}, "rows summing to 1"),
-        ([[1.0]], {}, r"transition must have shape \(2, 2\)"),
+        ([[0.9, 0.2], [0.1, 0.9]], {}, r"rows sum to 1; got shape \(2, 2\) and row sums \[1.1, "),
+        ([[1.0]], {}, r"transition must be a \(2, 2\) non-negative matrix whose rows sum to 1; "
+                      r"got shape \(1, 1\)"),
         ([[0.9, 0.1], [0.1, 0.9]], {"mode_probs": [0.5, 0.6]}, "mode_probs must be 2"),
         # NaN passed the checks (NaN < 0 and |NaN - 1| > 1e-9 are both False)
         ([[0.9, 0.1], [0.1, 0.9]], {"mode_probs": [0.5, np.nan]},

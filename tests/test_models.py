@@ -796,7 +796,7 @@ def test_probabilities_stored_as_float32_are_taken():
     b = IMMFilter.from_system(same).filter(ys, x0=[0.0, 1.0], P0=np.eye(2))
     np.testing.assert_array_equal(a.means, b.means)
     np.testing.assert_array_equal(a.mode_probs, b.mode_probs)
-    with pytest.raises(ValueError, match="rows summing to 1"):
+    with pytest.raises(ValueError, match="rows sum to 1; got shape"):
         IMMFilter([vt_kf(c) for c in cv], np.float32([[0.9, 0.2], [0.3, 0.7]]))
     with pytest.raises(ValueError, match="whose rows sum to 1"):
         SwitchingLinearSystem(cv, Position(dim=1), np.float32([[0.9, 0.2], [0.3, 0.7]]))

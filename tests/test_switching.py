@@ -175,7 +175,7 @@ def test_transition_rows_off_one_by_1e_5_are_refused(row):
     with pytest.raises(ValueError, match="transition must be a \\(2, 2\\) non-negative matrix"):
         SwitchingLinearSystem([cv, cv], pos, Pi)
     kf = vt.filters.KalmanFilter(cv, pos)
-    with pytest.raises(ValueError, match="transition must be non-negative with rows summing"):
+    with pytest.raises(ValueError, match="transition must be a \\(2, 2\\) non-negative matrix"):
         IMMFilter([kf, kf], Pi)
     SwitchingLinearSystem([cv, cv], pos, [[1 - 1e-10, 1e-10], [0.0, 1.0]])  # within 1e-9
 

@@ -485,6 +485,42 @@ def rescaled_rows(arr: np.ndarray, value: Any) -> np.ndarray:
     return arr
 
 
+def as_markov_chain(transition: ArrayLike, mode_probs: ArrayLike | None,
+                    k: int) -> tuple[np.ndarray, np.ndarray]:
+    """A ``(k, k)`` transition matrix (non-negative, rows summing to 1 within
+    :func:`sum_tolerance`) and ``k`` initial mode probabilities (uniform when None), checked
+    and returned as float64 copies, each row rescaled as :func:`rescaled_rows` does; each
+    error names the argument and, for a negative entry, where it is.
+
+    >>> Pi, mu = as_markov_chain([[0.9, 0.1], [0.2, 0.8]], None, 2)
+    >>> Pi.tolist(), mu.tolist()
+    ([[0.9, 0.1], [0.2, 0.8]], [0.5, 0.5])
+    >>> as_markov_chain([[1.1, -0.1], [0.0, 1.0]], None, 2)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: transition must be a (2, 2) non-negative matrix ...; transition[0, 1] = -0.1
+    """
+    # (a mask of True and False was read as probabilities 1 and 0)
+    Pi = as_float_array(transition, "transition", ndim=(2,), not_boolean="probabilities")
+    check_finite(Pi, "transition")
+    what = f"transition must be a ({k}, {k}) non-negative matrix whose rows sum to 1"
+    if Pi.shape == (k, k) and np.any(Pi < 0):
+        i, j = (int(x) for x in np.argwhere(Pi < 0)[0])
+        raise ValueError(f"{what}; transition[{i}, {j}] = {Pi[i, j]}")
+    if Pi.shape != (k, k) or not np.allclose(Pi.sum(1), 1.0, rtol=0.0,
+                                             atol=sum_tolerance(transition, k)):
+        raise ValueError(f"{what}; got shape {Pi.shape} and row sums {Pi.sum(1).tolist()}")
+    mu = np.full(k, 1.0 / k) if mode_probs is None else as_float_array(
+        mode_probs, "mode_probs", ndim=(1,), not_boolean="probabilities")
+    check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)
+    if mu.shape != (k,) or np.any(mu < 0) or abs(mu.sum() - 1.0) > sum_tolerance(mode_probs, k):
+        raise ValueError(f"mode_probs must be {k} non-negative numbers summing to 1; "
+                         f"got {mu.tolist()}")
+    # copies (views of the caller's arrays were kept, and a change after the checks was used
+    # unchecked by the switching filters)
+    return rescaled_rows(Pi, transition).copy(), rescaled_rows(mu, mode_probs).copy()
+
+
 def eps_of(values: Any) -> float:
     """The spacing of floats near 1 in ``values``' own precision (float64's for anything
     else: integers, lists, None).

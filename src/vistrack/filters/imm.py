@@ -40,13 +40,11 @@ from numpy.typing import ArrayLike
 
 from .._validate import (
     as_float_array,
+    as_markov_chain,
     as_rng,
-    check_finite,
     check_has_steps,
     check_not_infinite,
     check_prior,
-    rescaled_rows,
-    sum_tolerance,
 )
 from ..models.protocols import MotionModel, NonlinearMotionModel
 from ..models.switching import SwitchingLinearSystem
@@ -276,26 +274,7 @@ class IMMFilter:
                 # (one without a motion model failed on the attribute, after every check)
                 raise TypeError(f"filters[{k}] must have predict(g, dt, t), update(g, y) and a "
                                 f"motion model (.motion.ndim_state); got {type(f).__name__}")
-        # (a mask of True and False was read as probabilities 1 and 0)
-        Pi = as_float_array(transition, "transition", ndim=(2,), not_boolean="probabilities")
-        check_finite(Pi, "transition")
-        if Pi.shape != (M, M):
-            raise ValueError(f"transition must have shape ({M}, {M}); got {Pi.shape}")
-        if np.any(Pi < 0):
-            i, j = (int(x) for x in np.argwhere(Pi < 0)[0])
-            raise ValueError(f"transition must be non-negative with rows summing to 1; "
-                             f"transition[{i}, {j}] = {Pi[i, j]}")
-        if not np.allclose(Pi.sum(1), 1.0, rtol=0.0, atol=sum_tolerance(transition, M)):
-            raise ValueError(f"transition must be non-negative with rows summing to 1; row sums "
-                             f"are {Pi.sum(1).tolist()}")
-        mu = np.full(M, 1.0 / M) if mode_probs is None else as_float_array(
-            mode_probs, "mode_probs", ndim=(1,), not_boolean="probabilities")
-        check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)
-        if mu.shape != (M,) or np.any(mu < 0) or \
-                abs(mu.sum() - 1.0) > sum_tolerance(mode_probs, M):
-            raise ValueError(f"mode_probs must be {M} non-negative numbers summing to 1; "
-                             f"got {mu.tolist()}")
-        Pi, mu = rescaled_rows(Pi, transition), rescaled_rows(mu, mode_probs)
+        Pi, mu = as_markov_chain(transition, mode_probs, M)
         with np.errstate(divide="ignore"):
             self.log_transition, self.log_mu0 = np.log(Pi), np.log(mu)
         self.sizes = [int(f.motion.ndim_state) for f in self.filters]

@@ -22,12 +22,11 @@ from numpy.typing import ArrayLike
 
 from .._validate import (
     as_float_array,
+    as_markov_chain,
     as_rng,
     as_whole,
     check_finite,
     check_prior,
-    rescaled_rows,
-    sum_tolerance,
 )
 from .adapters import _check_noise_matrix, psd_sqrt
 from .measurement import MeasurementModel
@@ -145,28 +144,7 @@ class SwitchingLinearSystem:
             raise ValueError(f"measurement must measure states of size {self.ndim_state}, as "
                              f"the motions give them; its H is {H.shape}")
         self.measurement = measurement
-        # (a mask of True and False was read as probabilities 1 and 0)
-        Pi = as_float_array(transition, "transition", ndim=(2,), not_boolean="probabilities")
-        check_finite(Pi, "transition")
-        if Pi.shape == (k, k) and np.any(Pi < 0):
-            i, j = (int(x) for x in np.argwhere(Pi < 0)[0])
-            raise ValueError(f"transition must be a ({k}, {k}) non-negative matrix whose rows sum "
-                             f"to 1; transition[{i}, {j}] = {Pi[i, j]}")
-        if Pi.shape != (k, k) or not np.allclose(Pi.sum(1), 1.0, rtol=0.0,
-                                                 atol=sum_tolerance(transition, k)):
-            raise ValueError(f"transition must be a ({k}, {k}) non-negative matrix whose rows sum "
-                             f"to 1; got shape {Pi.shape} and row sums {Pi.sum(1).tolist()}")
-        # copies (views of the caller's arrays were kept, and a change after the checks was
-        # used unchecked by the switching filters)
-        self.transition = rescaled_rows(Pi, transition).copy()
-        mu = np.full(k, 1.0 / k) if mode_probs is None else as_float_array(
-            mode_probs, "mode_probs", ndim=(1,), not_boolean="probabilities")
-        check_finite(mu, "mode_probs")  # NaN would pass the checks below (NaN < 0 is False)
-        if mu.shape != (k,) or np.any(mu < 0) or \
-                abs(mu.sum() - 1.0) > sum_tolerance(mode_probs, k):
-            raise ValueError(f"mode_probs must be {k} non-negative numbers summing to 1; "
-                             f"got {mu.tolist()}")
-        self.mode_probs = rescaled_rows(mu, mode_probs).copy()
+        self.transition, self.mode_probs = as_markov_chain(transition, mode_probs, k)
 
     def __repr__(self) -> str:
         return f"SwitchingLinearSystem(k={len(self.motions)}, ndim_state={self.ndim_state})"
