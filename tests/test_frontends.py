@@ -738,7 +738,11 @@ def seed_model(frames, n_init, alpha, T, min_sigma, learn=True):
 
 @pytest.mark.parametrize("colour", [False, True])
 @pytest.mark.parametrize("freeze", [False, True])
-def test_selective_background_is_the_seeds_model(colour, freeze):
+@pytest.mark.parametrize("fortran", [False, True])
+def test_selective_background_is_the_seeds_model(colour, freeze, fortran):
+    """``fortran``: the start frames column-major (as ``scipy.io.loadmat`` gives them), whose
+    median kept their layout; each update then went to a flat copy of the model and was
+    lost (the model stayed B_0, and a drifting scene became all foreground)."""
     rng = np.random.default_rng(1)
     shape = (60, 170, 3) if colour else (60, 170)
     base = rng.uniform(40, 200, shape)
@@ -750,7 +754,7 @@ def test_selective_background_is_the_seeds_model(colour, freeze):
         im[10:25, 4 * k:4 * k + 12] = 250
         frames.append(np.clip(im, 0, 255).astype(np.uint8))
     bg = SelectiveBackground(alpha=0.05, threshold=16.0, min_sigma=2.0, freeze=freeze)
-    bg.initialize(frames[:10])
+    bg.initialize([np.asfortranarray(f) for f in frames[:10]] if fortran else frames[:10])
     ours = [bg.apply(f) for f in frames[10:]]
     want, B, J2 = seed_model(frames, 10, 0.05, 16.0, 2.0, learn=not freeze)
     same = np.all([(a == 255) == b for a, b in zip(ours, want)], axis=0)
@@ -2290,6 +2294,13 @@ def test_sixteen_bit_images_after_an_eight_bit_first_keep_their_depth(tmp_path):
      "threshold must lie within float32's range"),
     (lambda: SelectiveBackground(threshold=1e39), ValueError,
      "threshold must lie within float32's range"),
+    # each held, their product not: T σ² was 0 at a still pixel (float32), and D² >= 0
+    # made every unchanged pixel foreground; or inf, and nothing ever was
+    (lambda: SelectiveBackground(min_sigma=1e-18, threshold=1e-10), ValueError,
+     "threshold × min_sigma² must lie within float32's range (1.4e-45 to 3.4e38), in which "
+     "the model tests a pixel against T σ²; got 1e-10 × 1e-36"),
+    (lambda: SelectiveBackground(min_sigma=1e15, threshold=1e10), ValueError,
+     "threshold × min_sigma² must lie within float32's range"),
 ])
 def test_background_flags_and_settings_float32_cannot_hold_are_named(call, error, message):
     with pytest.raises(error, match=re.escape(message)):

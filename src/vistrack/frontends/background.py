@@ -152,7 +152,8 @@ class SelectiveBackground:
     ------
     ValueError
         If ``alpha`` is not in (0, 1], ``threshold`` not > 0, ``n_init`` less than 1,
-        ``min_sigma`` not > 0, or ``n_new`` not a whole number >= 1.
+        ``min_sigma`` not > 0, ``n_new`` not a whole number >= 1, or ``threshold``,
+        ``min_sigma²`` or their product 0 or infinite in float32, the model's type.
 
     Examples
     --------
@@ -190,6 +191,12 @@ class SelectiveBackground:
             if not 0 < held < np.inf:
                 raise ValueError(f"{name} must lie within float32's range (1.4e-45 to "
                                  f"3.4e38), in which the model is kept; got {value:g}")
+        with np.errstate(under="ignore", over="ignore"):  # the test's T σ² at the floor
+            floor = np.float32(threshold) * np.float32(float(min_sigma) ** 2)
+        if not 0 < floor < np.inf:
+            raise ValueError(f"threshold × min_sigma² must lie within float32's range (1.4e-45 "
+                             f"to 3.4e38), in which the model tests a pixel against T σ²; got "
+                             f"{threshold:g} × {float(min_sigma) ** 2:g}")
         self.alpha, self.threshold, self.n_init = float(alpha), float(threshold), int(n_init)
         self.min_sigma, self.n_new = float(min_sigma), int(n_new)
         self.freeze = as_flag(freeze, "freeze")  # ("False" was true)
@@ -277,7 +284,10 @@ class SelectiveBackground:
             # with too few frames to spread, σ from the floor (as new pixels start)
             mad = np.where(count[..., None] >= 3, mad, np.float32(self.min_sigma / 1.4826))
         var = (1.4826 * mad) ** 2
-        self.mean_sq = (self.mean * self.mean + var).astype(np.float32)
+        # C-ordered: the median keeps the frames' layout, and of column-major frames (as
+        # scipy.io.loadmat gives them) apply's flat views were copies, each update lost
+        self.mean = np.ascontiguousarray(self.mean)
+        self.mean_sq = np.ascontiguousarray(self.mean * self.mean + var, dtype=np.float32)
         self._buffer = []
         if shifts is None:
             self._seen = None
