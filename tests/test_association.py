@@ -739,3 +739,97 @@ def test_costs_gates_and_indices_are_numbers_as_given():
         gnn(np.ones((1, 2)), [[None, 1]])
     with pytest.raises(ValueError, match=r"gate\[0, 1\] is nan"):
         components(np.array([[1.0, np.nan]]))
+
+
+def test_none_given_as_a_bare_list_is_none_for_every_distance():
+    """A frame of no tracks or no detections given as ``[]`` (or an array built from an
+    empty list, shape ``(0,)``): ``euclidean([], [])`` was one phantom pair at distance 0,
+    which ``gnn`` assigned, and ``euclidean(points, [])`` refused the shapes as of another
+    point size; ``mahalanobis`` took ``z_pred`` and ``S`` of shape (0,) for one track of no
+    measurement and refused ``S`` as not (1, 0, 0). The oracle: ``iou``'s own contract, a
+    bare ``[]`` is no box, and scipy's ``cdist`` on the ``(0, d)`` arrays."""
+    from scipy.spatial.distance import cdist
+
+    pts = np.array([[0.0, 0.0], [3.0, 4.0]])
+    assert iou([], []).shape == (0, 0)
+    for a, b in (([], []), (pts, []), ([], pts)):
+        want = cdist(np.reshape(a, (-1, 2)), np.reshape(b, (-1, 2)))
+        got = euclidean(a, b)
+        assert got.shape == want.shape
+        assert [r.tolist() for r in gnn(got)] == [[], []]
+    no_tracks = np.array([t for t in []])  # shape (0,), as a loop over no tracks builds it
+    assert mahalanobis(no_tracks, no_tracks, pts).shape == (0, 2)
+    from vistrack.association.costs import mahalanobis_pairs
+
+    r, c, d2 = mahalanobis_pairs(no_tracks, no_tracks, pts, 9.21)
+    assert len(r) == len(c) == len(d2) == 0
+
+
+def test_euclidean_between_points_whose_squares_overflow_is_hypot():
+    """Points 5e200 apart: the squares overflowed and the distance was inf; the oracle is
+    ``math.hypot`` (as scipy's ``cdist`` gives inf here too)."""
+    import math
+
+    got = euclidean([[0.0, 0.0], [1.0, 1.0]], [[3e200, 4e200], [4.0, 5.0]])
+    assert got[0, 0] == pytest.approx(math.hypot(3e200, 4e200), rel=1e-15)
+    assert got[1, 1] == 5.0 and got[0, 1] == pytest.approx(math.hypot(4.0, 5.0))
+    assert np.isinf(euclidean([[0.0]], [[np.inf]])[0, 0])  # (an infinite point stays so)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_gnn_with_costs_near_the_largest_float_close_together_is_the_scaled_problem(seed):
+    """Costs of 9e307 within a few thousandths of each other: the penalty for a disallowed
+    pair stayed finite, so the problem was not scaled, but the solver's sums overflowed and
+    it gave one pair where three were allowed (163 of 3,000 such problems), or a worse
+    total. The oracle: brute force over every matching of the same problem scaled down
+    by 2^-1000 (exact)."""
+    rng = np.random.default_rng(4000 + seed)
+    T, D = rng.integers(2, 5, 2)
+    unit = rng.uniform(0.997, 1.0, (T, D))
+    gate = rng.random((T, D)) < 0.6
+    gate[0, 0] = True
+    cost = unit * 9e307
+    for g in (gate, np.ones((T, D), bool)):
+        r, c = gnn(cost, g)
+        assert len(set(r)) == len(r) and len(set(c)) == len(c) and g[r, c].all()
+        n, total = brute_force(cost * 2.0 ** -1000, g)
+        assert len(r) == n
+        assert (cost[r, c] * 2.0 ** -1000).sum() == pytest.approx(total, rel=1e-12)
+
+
+def test_gnn_near_the_largest_float_finds_the_whole_matching():
+    """The reading's case: three pairs allowed, (0, 2), (1, 0), (2, 1); one was given."""
+    unit = np.array([[0.997, 1.0, 0.999], [0.999, 0.999, 1.0], [0.999, 0.997, 0.998]])
+    gate = np.array([[1, 1, 1], [1, 0, 0], [0, 1, 0]], bool)
+    r, c = gnn(unit * 1e308, gate)
+    assert sorted(zip(r.tolist(), c.tolist())) == [(0, 2), (1, 0), (2, 1)]
+
+
+def test_boxes_whose_area_a_float_cannot_hold_are_named():
+    """Two identical boxes of side 1e160 (area inf) or 1e-170 (area 0) overlapped at IoU 0,
+    GIoU NaN, and both survived ``non_maximum``; IoU is the same at every scale, so the
+    oracle is 1, which these boxes cannot give: refused, named."""
+    from vistrack.association.costs import non_maximum
+
+    for side in (1e160, 1e-170):
+        box = [[0.0, 0.0, side, side]]
+        for f in (iou, giou, lambda a, b: non_maximum(a + b, [1.0, 0.5])):
+            with pytest.raises(ValueError, match="0] = \\[0.0, 0.0, .* is a box whose area a "
+                                                 "float cannot hold"):
+                f(box, box)
+    with pytest.raises(ValueError, match=re.escape(
+            "b[0] = [0.0, 0.0, 1e+160, 1e+160] is a box whose area a float cannot hold "
+            "(1e+160 x 1e+160); scale the boxes")):
+        iou([[0, 0, 1, 1]], [[0, 0, 1e160, 1e160]])
+    np.testing.assert_array_equal(iou([[0, 0, 1e150, 1e150]], [[0, 0, 1e150, 1e150]]), [[1.0]])
+
+
+def test_giou_of_boxes_whose_hull_overflows_is_its_limit():
+    """A unit box and one at 1e200: their hull's area overflows, and GIoU was NaN (inf minus
+    the union, over inf). In exact fractions it is -(1 - 2/hull), -1 to a float."""
+    from fractions import Fraction
+
+    a, b = [[0.0, 0.0, 1.0, 1.0]], [[1e200, 1e200, 1e200 + 1, 1e200 + 1]]
+    hull = Fraction(1e200 + 1) ** 2
+    assert giou(a, b)[0, 0] == float(-(1 - 2 / hull)) == -1.0
+    assert giou(a, [[0.0, 0.0, 1.0, 1.0], [2.0, 0.0, 3.0, 1.0]]).tolist() == [[1.0, -1 / 3]]

@@ -340,12 +340,15 @@ def _gated_lsa(cost, gate):
                 top = max(top, abs(cost[i, j]))
     if not any_ok:
         return np.empty(0, np.int64), np.empty(0, np.int64)
-    big = (hi - lo + 1.0) * (min(cost.shape[0], cost.shape[1]) + 1) + top
-    if not np.isfinite(big):
+    size = min(cost.shape[0], cost.shape[1]) + 1
+    big = (hi - lo + 1.0) * size + top
+    if not np.isfinite((big + top) * size * 2.0):
         # costs near the largest float: the same problem scaled into [-1, 1] (the penalty
-        # overflowed to inf, and a component with a disallowed pair was called infeasible)
+        # overflowed to inf, and a component with a disallowed pair was called infeasible;
+        # or, of costs close together, the solver's sums of a few did: fewer pairs, or a
+        # worse total, than the problem scaled down has)
         cost = cost / top
-        big = 3.0 * (min(cost.shape[0], cost.shape[1]) + 1) + 1.0
+        big = 3.0 * size + 1.0
     c = np.where(gate, cost, big)
     r, k = lsa_kernel(c)
     n = 0

@@ -39,6 +39,16 @@ def _boxes(b: ArrayLike, name: str) -> np.ndarray:
         k = int(np.flatnonzero(inverted)[0])
         raise ValueError(f"{name}[{k}] = {a[k].tolist()} is not a box x0, y0, x1, y1 with "
                          "x0 <= x1 and y0 <= y1")
+    # (a box of side 1e160 has an area of inf, one of 1e-170 an area of 0: two such boxes,
+    # the same, overlapped at IoU 0, and both survived non_maximum)
+    w, h = a[:, 2] - a[:, 0], a[:, 3] - a[:, 1]
+    with np.errstate(over="ignore", under="ignore"):
+        area = w * h
+    lost = np.isinf(w) | np.isinf(h) | np.isinf(area) | ((area == 0) & (w > 0) & (h > 0))
+    if lost.any():
+        k = int(np.flatnonzero(lost)[0])
+        raise ValueError(f"{name}[{k}] = {a[k].tolist()} is a box whose area a float cannot "
+                         f"hold ({w[k]:g} x {h[k]:g}); scale the boxes")
     return a
 
 
@@ -77,7 +87,7 @@ def iou(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     ------
     ValueError
         If ``a`` or ``b`` is not empty and not of shape ``(., 4)``, or holds a box that is
-        not finite (named).
+        not finite, inverted, or of an area a float cannot hold (each named).
 
     See Also
     --------
@@ -164,8 +174,14 @@ def giou(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     inter, union = _overlap(a[:, None], b[None, :])
     cw = np.maximum(a[:, None, 2], b[None, :, 2]) - np.minimum(a[:, None, 0], b[None, :, 0])
     ch = np.maximum(a[:, None, 3], b[None, :, 3]) - np.minimum(a[:, None, 1], b[None, :, 1])
-    hull = cw * ch
-    return _ratio(inter, union) - _ratio(hull - union, hull)
+    with np.errstate(over="ignore"):
+        hull = cw * ch
+    far = np.isinf(hull)  # boxes far apart, whose hull a float cannot hold: its limit,
+    # 1 - union / hull (inf - union over inf was NaN)
+    out = _ratio(inter, union) - _ratio(hull - union, np.where(far, 1.0, hull))
+    if far.any():
+        out[far] = _ratio(inter, union)[far] - 1.0
+    return out
 
 
 def euclidean(a: ArrayLike, b: ArrayLike) -> np.ndarray:
@@ -194,22 +210,50 @@ def euclidean(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     array([[ 0., 10.],
            [ 5.,  5.]])
     """
-    a, b = np.atleast_2d(np.asarray(a, dtype=float)), np.atleast_2d(np.asarray(b, dtype=float))
-    for name, x in (("a", a), ("b", b)):
-        if x.ndim != 2:
-            raise ValueError(f"{name} must be points, (N, d) or one (d,); got shape {x.shape}")
-    if a.shape[1] != b.shape[1]:
-        raise ValueError(f"a and b must have the same point size; got {a.shape} and {b.shape}")
-    return np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(-1))
+    pa, pb = _points(a, "a"), _points(b, "b")
+    if pa is None or pb is None:  # none (a bare []): as iou's, of the other's count
+        return np.zeros((0 if pa is None else len(pa), 0 if pb is None else len(pb)))
+    if pa.shape[1] != pb.shape[1]:
+        raise ValueError(f"a and b must have the same point size; got {pa.shape} and "
+                         f"{pb.shape}")
+    diff = pa[:, None, :] - pb[None, :, :]
+    with np.errstate(over="ignore"):
+        d = np.sqrt((diff * diff).sum(-1))
+    far = np.isinf(d) & np.isfinite(diff).all(-1)
+    if far.any():  # squares past the largest float (3e200 apart): each pair scaled
+        # by its largest coordinate, as math.hypot does
+        big = np.abs(diff[far]).max(-1, keepdims=True)
+        with np.errstate(over="ignore"):
+            d[far] = big[:, 0] * np.sqrt(((diff[far] / big) ** 2).sum(-1))
+    return d
+
+
+def _points(value: ArrayLike, name: str) -> np.ndarray | None:
+    """Points ``(N, d)`` (one given as ``(d,)``), or None for none given as a bare ``[]``
+    (as ``atleast_2d`` read it: one point of no coordinates, distance 0 from every other,
+    and a phantom pair)."""
+    x = as_float_array(value, name)  # (complex values lost their imaginary parts)
+    if x.ndim == 1 and x.size == 0:
+        return None
+    x = np.atleast_2d(x)
+    if x.ndim != 2:
+        raise ValueError(f"{name} must be points, (N, d) or one (d,); got shape {x.shape}")
+    return x
 
 
 def _innovations(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, z_name: str = "z"
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     # predicted measurements (T, m), innovation covariances (T, m, m), detections (D, m)
     # (complex values lost their imaginary parts)
-    zp = np.atleast_2d(as_float_array(z_pred, "z_pred"))
+    zp = as_float_array(z_pred, "z_pred")
     S = as_float_array(S, "S")
     z = np.atleast_2d(as_float_array(z, z_name))
+    if zp.shape == (0,):  # no tracks, a bare [] (or an array of none): read as one track
+        # of no measurement, and S, as bare, refused as not (1, 0, 0)
+        zp = np.zeros((0, z.shape[1] if z.ndim == 2 and z.size else 0))
+        if S.shape == (0,):
+            S = np.zeros((0, zp.shape[1], zp.shape[1]))
+    zp = np.atleast_2d(zp)
     if zp.ndim != 2:  # (Python's "too many values to unpack")
         raise ValueError(f"z_pred must have shape (T, m); got {zp.shape}")
     T, m = zp.shape
