@@ -1173,3 +1173,59 @@ def test_calibration_settings_that_mean_nothing_are_named():
     assert cal.blend(0.5, np.array([0.4, 0.9])).confidence.tolist() == [0.25, 1.0]
     with pytest.raises(ValueError, match="level must be a confidence, not NaN"):
         ScoreCalibration([0.2, 0.5, 0.8], [0.0, 0.6, 1.0]).score_at(float("nan"))
+
+
+def test_a_frame_given_as_none_is_a_frame_of_none_in_the_whole_file_fits():
+    """``persistence`` and ``ScoreCalibration.from_frames`` take an iterable of frames;
+    ``None`` among them was passed on to ``observe``, where it means the sequence has
+    ended: the sequence was cut there and the outcomes about the cut lost (none at all on
+    five frames). The oracle: ``BoxTracker.step``'s reading of None, a frame of no
+    detections."""
+    frames, _ = frames_with_clutter(np.random.default_rng(3), T=60)
+    empty = Detections(boxes=np.zeros((0, 4)))
+    with_none = [None if k in (20, 41) else d for k, d in enumerate(frames)]
+    with_empty = [empty if k in (20, 41) else d for k, d in enumerate(frames)]
+    for a, b in zip(persistence(with_none), persistence(with_empty)):
+        np.testing.assert_array_equal(a, b)
+    got, want = (ScoreCalibration.from_frames(f, frame_rate=30.0)
+                 for f in (with_none, with_empty))
+    np.testing.assert_array_equal(got.confidence, want.confidence)
+    np.testing.assert_array_equal(got.scores, want.scores)
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda s, p: ScoreCalibration.fit(s, p, top=True), "top must be a number; got True"),
+    (lambda s, p: ScoreCalibration.fit(s, p, top=None), "top must be a number; got None"),
+    (lambda s, p: ScoreCalibration.fit(s, p, cap_sigma="5"),
+     "cap_sigma must be a number; got '5'"),
+    (lambda s, p: ScoreCalibration.fit(s, p).blend(True, s),
+     "weight must be a number; got True"),
+    (lambda s, p: ScoreCalibrator(link_iou="0.3"), "link_iou must be a number; got '0.3'"),
+    (lambda s, p: ScoreCalibrator(frame_rate=None), "frame_rate must be a number; got None"),
+    (lambda s, p: ScoreCalibrator(top=True), "top must be a number; got True"),
+    (lambda s, p: ScoreCalibrator(prior=True), "prior must be a number; got True"),
+    (lambda s, p: ScoreCalibrator(chain_span=True), "chain_span must be a number; got True"),
+])
+def test_calibration_settings_that_are_no_numbers_are_named(call, message):
+    """``top=True`` was taken as 1, the rate of every outcome (the top's persistence 0.455
+    against 0.95, every confidence another); text or None failed in a comparison, naming
+    nothing. The rule of the package's numeric checks: a boolean is not a number."""
+    s, p = np.linspace(0, 1, 40), np.linspace(0, 1, 40) > 0.3
+    with pytest.raises(TypeError, match=re.escape(message)):
+        call(s, p)
+
+
+def test_the_calibration_names_boxes_beyond_the_trackers_range():
+    """Boxes past ±2^52 pixels (the tracker refuses them) made every overlap's area
+    overflow: no detection persisted, and the calibration took every score as confident,
+    without a word."""
+    frames, _ = frames_with_clutter(np.random.default_rng(1), T=20)
+    far = [Detections(boxes=d.boxes * 1e160, scores=d.scores) for d in frames]
+    with pytest.raises(ValueError, match=re.escape("detection boxes must lie within ±2^52 "
+                                                   "pixels, where a float holds every whole "
+                                                   "pixel; boxes[0] = [")):
+        persistence(far)
+    cal = ScoreCalibrator()
+    with pytest.raises(ValueError, match="must lie within ±2\\^52 pixels"):
+        cal.observe(far[0])
+    assert cal.n == 0

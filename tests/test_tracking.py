@@ -825,6 +825,12 @@ def test_offline_mode_links_tracks_across_a_long_occlusion():
     gap = linked.filled & (linked.frames > 40) & (linked.frames < 111)
     assert gap.sum() == 70 and np.all(np.linalg.eigvalsh(linked.covs) > 0)
     assert c_linked.MOTP > 0.9
+    # a gap past any the sequence holds joins as one spanning it does (documented: any whole
+    # number >= 0); 2**63 - 1 frames wrapped in int64 (numpy's "repeats may not contain
+    # negative values"), 2**63 overflowed (OverflowError naming nothing)
+    for huge in (T, 2**63 - 1, 2**63, 2**70):
+        got = smooth(tr, link_gap=huge)
+        assert np.array_equal(got.ids, linked.ids) and np.array_equal(got.boxes, linked.boxes)
 
 
 def test_offline_mode_follows_the_camera():

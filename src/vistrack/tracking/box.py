@@ -107,7 +107,7 @@ from ..filters.axes import (
 from ..models.box import MAX_SECONDS, BoxMotion
 from ..types import Detections, Frame, Tracks, _whole_numbers
 from .base import frame_index
-from .calibration import ScoreCalibration, ScoreCalibrator
+from .calibration import MAX_PIXELS, ScoreCalibration, ScoreCalibrator
 from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, time_slack
 
 if TYPE_CHECKING:
@@ -299,9 +299,6 @@ class BoxTrackerConfig:
                     frame_rate=frame_rate, chain_span=self.chain_span, chain_gap=self.chain_gap)
 
 
-MAX_PIXELS = 2.0 ** 52
-"""The largest box value (in pixels) a box tracker takes: beyond it a float no longer holds
-every whole pixel, and the filters' variances (the squares of the sizes) soon overflow."""
 
 
 TRACKERS: Registry[BoxTrackerConfig] = Registry("box-tracker preset", {

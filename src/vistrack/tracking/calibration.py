@@ -68,7 +68,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_whole, is_number, is_whole
+from .._validate import as_number, as_whole, is_number, is_whole
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
 from ..types import Detections
@@ -405,7 +405,8 @@ def persistence(frames: Iterable[Detections], link_iou: float = 0.3
     Parameters
     ----------
     frames : iterable of Detections
-        One frame's detections each, with boxes, in order.
+        One frame's detections each, with boxes, in order (None: a frame where nothing was
+        found, as :meth:`BoxTracker.step <vistrack.tracking.BoxTracker.step>` reads it).
     link_iou : float
         The IoU at which a detection continues one of the previous frame (boxes of one class,
         linked one-to-one by global nearest neighbour).
@@ -436,9 +437,20 @@ def _outcomes(frames: Iterable[Detections], **calibrator: Any) -> tuple[np.ndarr
     # every outcome of a whole sequence (ScoreCalibrator.outcomes after its last frame)
     cal = ScoreCalibrator(window=None, **calibrator)
     for d in frames:
-        cal.observe(d)
+        # None: a frame of none, as BoxTracker.step reads it (observe's None, the end, cut
+        # the sequence there, each side's outcomes lost at the cut)
+        cal.observe(_NONE if d is None else d)
     cal.observe(None)  # the last frame has no next frame: its detections do not persist
     return cal.outcomes()
+
+
+_NONE = Detections(boxes=np.zeros((0, 4)))
+"""A frame of no detections."""
+
+MAX_PIXELS = 2.0 ** 52
+"""The largest box value (in pixels) a box tracker, and its score calibration, takes: beyond
+it a float no longer holds every whole pixel, the filters' variances (the squares of the
+sizes) soon overflow, and so do the areas of the calibration's overlaps."""
 
 
 TOP_PERSISTS = 0.5
@@ -565,6 +577,9 @@ class ScoreCalibration:
         >>> cal.confidence.tolist(), cal.top_persistence
         ([0.0, 1.0, 1.0, 1.0], 1.0)
         """
+        # (True was taken as 1, every confidence then another; text or None failed in a
+        # comparison, naming nothing)
+        top, cap_sigma = as_number(top, "top"), as_number(cap_sigma, "cap_sigma")
         if not 0 < top <= 1:
             raise ValueError(f"top must be in (0, 1]; got {top}")
         if not cap_sigma > 0:
@@ -623,7 +638,7 @@ class ScoreCalibration:
         Parameters
         ----------
         frames : iterable of Detections
-            Every frame's detections, with boxes, in order.
+            Every frame's detections, with boxes, in order (None: a frame of none).
         link_iou : float
             The IoU at which a detection continues one of the previous frame.
         top, top_min, cap_sigma : float, int, float
@@ -793,6 +808,7 @@ class ScoreCalibration:
         >>> cal.blend(0.5, np.array([0.4, 0.9])).confidence.tolist()
         [0.25, 1.0]
         """
+        weight = as_number(weight, "weight")  # (True was a weight of 1)
         if not 0 <= weight <= 1:  # (2 or -1 were clipped into a map, NaN too)
             raise ValueError(f"weight must be in [0, 1]; got {weight!r}")
         r = np.sort(_scores(ranked, "ranked"))
@@ -869,6 +885,12 @@ class ScoreCalibrator:
     def __init__(self, *, link_iou: float = 0.3, top: float = 0.05, top_min: int = 20,
                  cap_sigma: float = 5.0, prior: float = 0.0, window: int | None = 20000,
                  frame_rate: float = 30.0, chain_span: float = 1.0, chain_gap: float = 0.2):
+        # (True was taken as 1; text or None failed in a comparison, naming nothing)
+        link_iou, top, cap_sigma, prior, frame_rate, chain_span, chain_gap = (
+            as_number(v, name) for v, name in (
+                (link_iou, "link_iou"), (top, "top"), (cap_sigma, "cap_sigma"),
+                (prior, "prior"), (frame_rate, "frame_rate"), (chain_span, "chain_span"),
+                (chain_gap, "chain_gap")))
         if not 0 < link_iou <= 1:
             raise ValueError(f"link_iou must be in (0, 1]; got {link_iou}")
         if not 0 < top <= 1:
@@ -1001,7 +1023,8 @@ class ScoreCalibrator:
         TypeError
             If the detections have no boxes.
         ValueError
-            If a score is NaN, or ``step`` is not an integer >= 1.
+            If a score is NaN, a box lies beyond ±2^52 pixels, or ``step`` is not an integer
+            >= 1.
 
         Examples
         --------
@@ -1027,6 +1050,12 @@ class ScoreCalibrator:
         # scores), and a detector that refills one buffer every frame would otherwise change
         # it under us (each box then continued itself, and clutter persisted)
         boxes = np.array(detections.boxes, dtype=np.float64, order="C")
+        if len(boxes) and np.abs(boxes).max() > MAX_PIXELS:
+            # (areas past the float range made every overlap NaN: nothing persisted, and the
+            # calibration took every score as confident; BoxTracker.step refuses them too)
+            i = int(np.flatnonzero((np.abs(boxes) > MAX_PIXELS).any(axis=1))[0])
+            raise ValueError(f"detection boxes must lie within ±2^52 pixels, where a float "
+                             f"holds every whole pixel; boxes[{i}] = {boxes[i].tolist()}")
         cls = np.array(detections.classes, order="C")
         s = _scores(detections.scores).copy()  # type: ignore[arg-type]  # set by __post_init__
         # the previous frame: its boxes, classes, scores, which of them continued one of the

@@ -447,6 +447,9 @@ def _link(tracker: BoxTracker, tracks: list[_Track], cam: dict, link_gap: int,
     # tracks sorted by their first frame, about 260,000 pairs at a time (every track
     # against every other, tracks x tracks arrays, took 3.4 GB for 10,000 tracks, and all
     # the pairs at once 0.6 GB for 3,000 tracks born 20 a frame)
+    if len(tracks):  # a gap past the recorded span joins as the span does (f1 + 2**63 - 1
+        # wrapped in int64: numpy's "repeats may not contain negative values")
+        link_gap = min(link_gap, max(0, int(f0.max()) - int(f1.min())))
     order = np.argsort(f0, kind="stable")
     lo = np.searchsorted(f0[order], f1, "right")
     counts = np.searchsorted(f0[order], f1 + link_gap, "right") - lo
