@@ -489,11 +489,34 @@ def test_sparse_assignment_checks_its_arguments():
         gnn_sparse([0, 1], [0, 1], [1.0, np.nan], (2, 2))
 
 
-@pytest.mark.parametrize("m", [0, -1, 2.7, True, "2", None])
+@pytest.mark.parametrize("m", [0, -1, 2.7, True, "2", None, 10**400])
 def test_the_gate_names_degrees_of_freedom_that_are_not_a_whole_number_from_1(m):
-    """0 and -1 gave a NaN threshold, so a gate that kept nothing; 2.7 was taken as 2."""
-    with pytest.raises(ValueError, match="m must be a whole number of degrees of freedom >= 1"):
+    """0 and -1 gave a NaN threshold, so a gate that kept nothing; 2.7 was taken as 2;
+    10**400 failed in scipy's words (an OverflowError naming nothing)."""
+    with pytest.raises(ValueError, match=re.escape(
+            "m must be a whole number of degrees of freedom from 1 to 2**53")):
         chi2_gate(np.zeros((1, 1)), m)
+
+
+def test_the_gate_takes_a_probability_as_it_takes_degrees_of_freedom():
+    """``m=np.array(2)`` was taken and ``p=np.array(0.99)`` refused as no number; the
+    oracle, scipy's quantile."""
+    from scipy.stats import chi2
+
+    from vistrack.association.gating import chi2_threshold
+
+    assert chi2_threshold(np.array(2), np.array(0.99)) == chi2.ppf(0.99, 2)
+
+
+@pytest.mark.parametrize("scores, error", [
+    (["0.8", "0.9"], TypeError), ([True, False], TypeError), ([0.8 + 1j, 0.9], TypeError)])
+def test_suppression_names_scores_that_are_no_numbers(scores, error):
+    """Text and booleans were read as numbers, complex scores lost their imaginary parts
+    with a warning alone: named, as every numeric argument of the package is."""
+    from vistrack.association.costs import non_maximum
+
+    with pytest.raises(error, match="scores must be"):
+        non_maximum([[0, 0, 10, 10], [1, 0, 11, 10]], scores)
 
 
 def test_the_gate_threshold_is_scipys_quantile():

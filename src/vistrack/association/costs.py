@@ -667,7 +667,8 @@ def non_maximum(boxes: ArrayLike, scores: ArrayLike, classes: ArrayLike | None =
     [True, True]
     """
     b = _boxes(boxes, "boxes")  # (reshaped to (-1, 4): (2, 8) boxes were cut into four)
-    s = np.asarray(scores, dtype=float).reshape(-1)
+    # (text and booleans were read as numbers; complex ones lost their imaginary parts)
+    s = as_float_array(scores, "scores", not_boolean="numbers").reshape(-1)
     if len(s) != len(b):
         raise ValueError(f"scores must have one value a box ({len(b)}); got {len(s)}")
     if np.isnan(s).any():  # (no place in the order: sorted last, as the least confident)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array, is_number, is_whole
+from .._validate import as_float_array, is_real, is_whole
 
 __all__ = ["chi2_gate", "chi2_threshold"]
 
@@ -39,14 +39,16 @@ def chi2_threshold(m: int, p: float = 0.99) -> float:
     >>> round(chi2_threshold(2, 0.99), 3)
     9.21
     """
-    if not (is_number(p) and 0.0 < p < 1.0):
+    # (a 0-d array was refused where m's was taken)
+    if not (is_real(p) and 0.0 < float(p) < 1.0):
         raise ValueError(f"p must be a number in (0, 1); got {p!r}")
-    if not is_whole(m, 1):
-        raise ValueError(f"m must be a whole number of degrees of freedom >= 1, the size of a "
-                         f"measurement; got {m!r}")
+    # (10**400 failed in scipy's words, an OverflowError naming nothing)
+    if not is_whole(m, 1) or m > 2**53:
+        raise ValueError(f"m must be a whole number of degrees of freedom from 1 to 2**53, "
+                         f"the size of a measurement; got {m!r}")
     from scipy.stats import chi2  # here: scipy.stats takes about 0.4 s to import
 
-    return float(chi2.ppf(p, int(m)))
+    return float(chi2.ppf(float(p), int(m)))
 
 
 def chi2_gate(d2: np.ndarray, m: int, p: float = 0.99) -> np.ndarray:
