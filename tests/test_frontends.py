@@ -1138,6 +1138,13 @@ def test_front_end_settings_of_no_number_are_named():
             "max_area must be at least min_area; got max_area 10 below min_area 20")):
         find_blobs(m, min_area=20, max_area=10, open_size=0, close_size=0)
     assert len(find_blobs(m, min_area=16, max_area=16, open_size=0, close_size=0)) == 1
+    # nor any region ever would (BlobDetector refused an infinite min_area already)
+    for kw, said in ((dict(min_area=np.inf), "min_area must be finite"),
+                     (dict(min_area=-5, max_area=-1), "max_area must be at least 1 pixel"),
+                     (dict(max_area=0.5), "max_area must be at least 1 pixel")):
+        with pytest.raises(ValueError, match=said):
+            find_blobs(m, open_size=0, close_size=0, **kw)
+    assert len(find_blobs(m, min_area=-5, max_area=1e9, open_size=0, close_size=0)) == 1
     for p in (150, -1, float("nan")):
         with pytest.raises(ValueError, match=re.escape(
                 f"percentile must be a finite number >= 0 and <= 100; got {p!r}")):

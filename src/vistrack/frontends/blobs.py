@@ -221,7 +221,7 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     ------
     ValueError
         If ``mask`` is not 2-D or holds a NaN, or ``min_area`` or ``max_area`` is NaN, or
-        ``max_area`` is below ``min_area``.
+        ``max_area`` is below ``min_area`` or 1, or ``min_area`` is infinite.
 
     Examples
     --------
@@ -245,6 +245,13 @@ def find_blobs(mask: ArrayLike, *, min_area: float = 0, max_area: float = np.inf
     if max_area < min_area:  # (no region can be both: none was found, without a word)
         raise ValueError(f"max_area must be at least min_area; got max_area {max_area} below "
                          f"min_area {min_area}")
+    # (no region is so large, or so small: none was found, without a word; BlobDetector
+    # refused them)
+    if min_area == np.inf:
+        raise ValueError("min_area must be finite: no region has an infinite area; got inf")
+    if max_area < 1:
+        raise ValueError(f"max_area must be at least 1 pixel, a region's least; got "
+                         f"{max_area}")
     # (2.7 was cut to 2, and -3 taken as 0)
     open_size = as_whole(open_size, "open_size", 0, "pixels across; 0 skips it")
     close_size = as_whole(close_size, "close_size", 0, "pixels across; 0 skips it")
