@@ -180,6 +180,47 @@ def test_em_on_a_chunked_batch_equals_em_in_memory(kw):
     assert np.all(np.diff(got.loglik) >= -1e-9)
 
 
+@pytest.mark.parametrize("chunk", [1, 2, 3, 7])
+def test_em_on_a_chunked_batch_with_a_series_never_measured_equals_em_in_memory(chunk):
+    """``P0`` learned beside an ``x0`` given per series, one series never measured: a chunk
+    of two or more took the measured series' first means less every series' ``x0`` (a
+    wrong ``P0`` without a word at chunks of 2, numpy's broadcast error at 3). The oracle:
+    em in memory, which leaves that series out (its prior says nothing)."""
+    import dask
+
+    from vistrack.filters import em
+
+    ys = _em_problem()
+    ys[1] = np.nan
+    args = dict(START, learn=("P0", "R"), max_iter=5, tol=-np.inf,
+                x0=np.arange(120.0).reshape(30, 4) / 10)
+    want = em(ys, **args)
+    with dask.config.set(scheduler="synchronous"):
+        got = em(da.from_array(ys, chunks=(chunk, 40, 2)), **args)
+    for name in ("P0", "R", "loglik"):
+        np.testing.assert_allclose(getattr(got, name), getattr(want, name), rtol=1e-9,
+                                   atol=1e-12, err_msg=name)
+
+
+def test_em_on_a_chunked_batch_returns_a_shared_dask_prior_learned_as_numpy():
+    """A shared prior given as Dask arrays and learned came back as Dask arrays (their
+    graphs one iteration longer at each), against the documented numpy parameters."""
+    import dask
+
+    from vistrack.filters import em
+
+    ys = _em_problem()
+    args = dict(START, learn=("x0", "P0", "Q"), max_iter=5, tol=-np.inf)
+    want = em(ys, **args)
+    with dask.config.set(scheduler="synchronous"):
+        got = em(da.from_array(ys, chunks=(7, 40, 2)),
+                 **dict(args, x0=da.zeros(4), P0=da.from_array(np.eye(4))))
+    for name in ("x0", "P0", "Q"):
+        assert type(getattr(got, name)) is np.ndarray, name
+        np.testing.assert_allclose(getattr(got, name), getattr(want, name), rtol=1e-9,
+                                   atol=1e-12, err_msg=name)
+
+
 def test_em_on_a_chunked_batch_of_padded_series_equals_em_in_memory():
     """Series of unequal length, padded with missing steps: each chunk leaves its series'
     padding out of ``Q``'s M-step and counts the transitions it keeps, as in memory."""

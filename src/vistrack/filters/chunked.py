@@ -293,7 +293,9 @@ def _chunk_sums(y: Any, x0: Any, P0: Any, p: dict, learn: tuple[str, ...],
         # prior (learn._prior_step)
         seen = e.o.seen
         ms, Ps, _, _ = e.smoothed
-        d = ms[seen, 0] - (p["x0"] if p["x0"].ndim == 2 else p["x0"][None])
+        # (the chunk's x0 of every series, beside the measured ones' means: (1, n) against
+        # (2, n) broadcast, a wrong P0 without a word, or numpy's broadcast error)
+        d = ms[seen, 0] - (p["x0"][seen] if p["x0"].ndim == 2 else p["x0"][None])
         P = Ps[0, 0] * seen.sum() if len(Ps) == 1 else Ps[seen, 0].sum(axis=0)
         out["d"], out["dd"], out["P"], out["n"] = d.sum(axis=0), d.T @ d, P, int(seen.sum())
         if p["P0"].ndim == 3:
@@ -443,6 +445,12 @@ def em(ys: Any, *, F: Any, Q: Any, H: Any, R: Any, x0: Any, P0: Any, learn: tupl
               P0 if _is_dask(P0) else np.asarray(P0, dtype=np.float64))
     x0, P0 = _one_for_all(x0, 1), _one_for_all(P0, 2)
     x0s, P0s = _per_series(x0, B, 1, "x0"), _per_series(P0, B, 2, "P0")
+    # a prior shared by every series is small: computed here (a Dask one, learned, came
+    # back as Dask, its graph one iteration longer at each, and numpy's eigh met it)
+    if x0s is None and _is_dask(x0):
+        x0 = np.asarray(x0.compute(), dtype=np.float64)
+    if P0s is None and _is_dask(P0):
+        P0 = np.asarray(P0.compute(), dtype=np.float64)
     if np.shape(x0)[-1] != n or np.shape(P0)[-2:] != (n, n):
         raise ValueError(f"x0 must have shape ({n},) or (B, {n}) and P0 ({n}, {n}) or "
                          f"(B, {n}, {n}); got {np.shape(x0)} and {np.shape(P0)}")
