@@ -451,12 +451,13 @@ def test_colour_tracker_keeps_its_size_on_unchanged_frames():
         ColourTracker(scales=(0.9, 0.0))
 
 
-def test_camshift_box_is_its_windows_bounding_box():
-    """The box is the bounding box of CamShift's rotated window: cv2.boundingRect of the
-    corners gave whole pixels, first and last included, 1-2 pixels larger ([38, 18, 25, 25]
-    for a window bounded by [38.97, 18.97, 23.07, 23.07]), and the histogram was learnt from
-    that. Oracle: the bounding box of a rectangle of size (w, h) turned by θ in closed form,
-    half-extents (|w cos θ| + |h sin θ|) / 2 and (|w sin θ| + |h cos θ|) / 2."""
+def test_camshift_box_is_its_windows_ellipses_bounding_box():
+    """The box is the bounding box of the ellipse whose axes are CamShift's rotated window:
+    cv2.boundingRect of the corners gave whole pixels, first and last included, 1-2 pixels
+    larger ([38, 18, 25, 25] for a window bounded by [38.97, 18.97, 23.07, 23.07]), and the
+    turned rectangle's corners made a round target's box up to 1.41 times too large (the
+    next test). Oracle: the bounding box of an ellipse of axes (w, h) turned by θ in closed
+    form, half-extents √((w cos θ)² + (h sin θ)²) / 2 and √((w sin θ)² + (h cos θ)²) / 2."""
     from vistrack.tracking.single import CamShiftTracker
 
     im = np.full((120, 160, 3), (40, 120, 40), np.uint8)
@@ -470,9 +471,33 @@ def test_camshift_box_is_its_windows_bounding_box():
         crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.5)
         (cx, cy), (w, h), angle = cv2.CamShift(bp, tuple(start), crit)[0]
         a = np.deg2rad(angle)
-        ex = (abs(w * np.cos(a)) + abs(h * np.sin(a))) / 2
-        ey = (abs(w * np.sin(a)) + abs(h * np.cos(a))) / 2
+        ex = np.sqrt((w * np.cos(a)) ** 2 + (h * np.sin(a)) ** 2) / 2
+        ey = np.sqrt((w * np.sin(a)) ** 2 + (h * np.cos(a)) ** 2) / 2
         np.testing.assert_allclose(t.update(im), [cx - ex, cy - ey, 2 * ex, 2 * ey], atol=1e-3)
+        if start[0] == 56:  # (on the ellipse: the drawn one's box, from its axes at 30°)
+            want = [2 * np.hypot(24 * np.cos(np.pi / 6), 10 * np.sin(np.pi / 6)),
+                    2 * np.hypot(24 * np.sin(np.pi / 6), 10 * np.cos(np.pi / 6))]
+            np.testing.assert_allclose(t.box[2:], want, atol=1.5)
+
+
+def test_camshift_boxes_a_round_target_by_its_size_wherever_it_stands():
+    """A still disc 24 pixels across: its moments leave the window's angle arbitrary (45 or
+    90 degrees by where the disc stands within a pixel), and the turned rectangle's corners
+    boxed it 33.8 or 23.7 pixels wide. Oracle: the disc's own diameter, 24."""
+    from vistrack.tracking.single import CamShiftTracker
+
+    H, W = 120, 160
+    yy, xx = np.mgrid[:H, :W]
+    for cx in np.arange(60, 61, 0.25):
+        for cy in np.arange(50, 51, 0.25):
+            im = np.full((H, W, 3), (40, 120, 40), np.uint8)
+            im[(xx + 0.5 - cx) ** 2 + (yy + 0.5 - cy) ** 2 <= 144] = (0, 0, 255)
+            t = CamShiftTracker(rate=0.0)
+            t.init(im, [cx - 12, cy - 12, 24, 24])
+            box = t.update(im)
+            np.testing.assert_allclose(box[2:], [24, 24], atol=0.6)
+            # (the centre within OpenCV's whole-pixel window)
+            np.testing.assert_allclose(box[:2] + box[2:] / 2, [cx, cy], atol=1.0)
 
 
 def _brute_mean_shift(weights, box):
@@ -552,12 +577,15 @@ def test_cli_track_one_names_a_box_opencv_cannot_start_on(tmp_path):
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert ("error: box (x, y, w, h) = (100, 100, 1, 1), whole pixels (100, 100, 1, 1): "
             "OpenCV's csrt needs w and h of at least 2 whole pixels") in r.stderr
-    # a box whose width a float cannot hold at x = 1e17: a ZeroDivisionError's traceback
-    r = subprocess.run([sys.executable, "-m", "vistrack.cli", "track-one", str(CROSSING / "img"),
-                        "--init", "100000000000000000,10,5,5", "--out",
-                        str(tmp_path / "c.txt")], capture_output=True, text=True)
-    assert r.returncode == 2 and "Traceback" not in r.stderr
-    assert "has no size a float holds at its place" in r.stderr
+    # a box whose width a float cannot hold at x = 2^52: a ZeroDivisionError's traceback;
+    # one beyond 2^52 pixels (1e17), as the box trackers' detections
+    for init, said in (("4503599627370496,10,0.4,0.4", "has no size a float holds at its place"),
+                       ("100000000000000000,10,5,5", "--init must lie within ±2^52 pixels")):
+        r = subprocess.run([sys.executable, "-m", "vistrack.cli", "track-one",
+                            str(CROSSING / "img"), "--init", init, "--out",
+                            str(tmp_path / "c.txt")], capture_output=True, text=True)
+        assert r.returncode == 2 and "Traceback" not in r.stderr
+        assert said in r.stderr
 
 
 def test_read_boxes_reads_utf8_with_a_mark_and_names_a_file_that_is_not_text(tmp_path):
@@ -986,11 +1014,12 @@ def test_median_flows_motion_names_a_frame_it_cannot_use():
     assert np.allclose(d, [3, 1], atol=0.05) and s == pytest.approx(1, abs=0.01)
 
 
-@pytest.mark.parametrize("box", [[10, 10, 1e-200, 1e-200], [1e17, 10, 5, 5],
-                                 [10, 1e17, 5, 5]])
+@pytest.mark.parametrize("box", [[10, 10, 1e-200, 1e-200], [2**52, 10, 0.4, 0.4],
+                                 [10, 2**52, 0.4, 0.4]])
 def test_a_start_box_whose_size_floating_point_loses_is_refused(box):
-    """A start box of 1e-200 on a side (its area 0 in floating point), or at x = 1e17 (where
-    a float cannot hold its width: x + w == x), failed in a ZeroDivisionError with a
+    """A start box of 1e-200 on a side (its area 0 in floating point), or at x = 2^52 (where
+    a float cannot hold its width of 0.4: x + w == x; it was 1e17 here, refused now as past
+    2^52 pixels), failed in a ZeroDivisionError with a
     traceback from `vistrack track-one --init`. Oracle: floating point's own sums; a box
     under a pixel is still followed (by the pixels about it)."""
     from vistrack.tracking.single import single_tracker
@@ -1189,3 +1218,58 @@ def test_polygons_that_are_booleans_are_named_as_polygons():
 
     with pytest.raises(TypeError, match=re.escape("polygons must be rows of 8 numbers")):
         region_to_bbox([[True] * 8])
+
+
+def test_camshift_leaves_a_window_wholly_outside_the_image_where_it_is():
+    """OpenCV's mean shift moved an empty window to the image's centre, here onto a
+    distractor of the target's colour; past int32 its window could not be read (OpenCV's
+    "Can't parse 'window'"). The oracle: ``ColourTracker``'s documented rule, the window left
+    where it is, followed by both."""
+    from vistrack.tracking.single import CamShiftTracker, ColourTracker
+
+    im = np.full((120, 160, 3), (40, 120, 40), np.uint8)
+    im[50:70, 0:20] = (0, 0, 255)
+    im[50:70, 70:90] = (0, 0, 255)
+    for anchor in ([-25, 50, 20, 20], [300, 90, 20, 20], [-3e9, 30, 40, 40]):
+        got = []
+        for kind in (CamShiftTracker, ColourTracker):
+            t = kind(rate=0.0)
+            t.init(im, [0, 50, 20, 20])
+            t.anchor(anchor)
+            got.append(t.update(im))
+        np.testing.assert_array_equal(got[0], anchor)
+        np.testing.assert_array_equal(got[0], got[1])
+
+
+@pytest.mark.parametrize("method", ["colour", "camshift", "particle", "wsl", "template", "klt"])
+def test_a_box_beyond_2_52_pixels_is_named(method):
+    """``anchor([40, 30, 1e200, 1e200])`` crashed the process in OpenCV's warp (wsl), gave
+    NaN boxes (particle: the area overflowed) or named an internal array; refused as the
+    box trackers refuse such detections."""
+    from vistrack.tracking.single import single_tracker
+
+    im = np.full((60, 80, 3), 90, np.uint8)
+    t = single_tracker(method)
+    with pytest.raises(ValueError, match=re.escape("box must lie within ±2^52 pixels")):
+        t.init(im, [40, 30, 1e200, 1e200])
+    t.init(im, [30, 20, 20, 20])
+    if hasattr(t, "anchor"):
+        with pytest.raises(ValueError, match=re.escape("box must lie within ±2^52 pixels")):
+            t.anchor([1e300, 0, 10, 10])
+
+
+def test_the_particle_clouds_mean_box_is_the_box_it_was_anchored_to():
+    """The docstring's contract: anchored to 40 x 10 from a 20 x 20 start, the cloud carried
+    the area's root alone and reported 20 x 20 at the next frame."""
+    from vistrack.tracking.single import ColourParticleTracker
+
+    im = np.full((60, 80, 3), (40, 120, 40), np.uint8)
+    t = ColourParticleTracker(rng=0, rate=0.0)
+    t.init(im, [30, 20, 20, 20])
+    t.anchor([40, 20, 40, 10])
+    m = t.w @ t.x
+    size = t.size * np.exp(m[2])
+    np.testing.assert_allclose(np.r_[m[:2] - size / 2, size], [40, 20, 40, 10], atol=1e-9)
+    im[20:30, 40:80] = (0, 0, 255)  # the target, 40 x 10, where the box was anchored
+    b = t.update(im)
+    assert b[2] / b[3] == pytest.approx(4.0, rel=0.05)

@@ -288,9 +288,9 @@ def as_rows4(value: ArrayLike, name: str, columns: str) -> np.ndarray:
 
 
 def as_box(box: ArrayLike, name: str = "box") -> np.ndarray:
-    """One box ``x, y, w, h`` as 4 finite floats with ``w, h > 0``, given as 4 numbers or one
-    row of them (``(1, 4)``). A boolean was a coordinate of 1, a complex number its real
-    part, and ``[[x, y], [w, h]]`` was flattened into a box."""
+    """One box ``x, y, w, h`` as 4 finite floats with ``w, h > 0`` within ±2^52 pixels, given
+    as 4 numbers or one row of them (``(1, 4)``). A boolean was a coordinate of 1, a complex
+    number its real part, and ``[[x, y], [w, h]]`` was flattened into a box."""
     said = f"{name} must be x, y, w, h with w, h > 0"
     if isinstance(box, (str, bytes)):  # ("could not convert string to float", unnamed)
         raise TypeError(f"{said}; got the text {box!r}")
@@ -300,6 +300,11 @@ def as_box(box: ArrayLike, name: str = "box") -> np.ndarray:
     b = b.reshape(-1)
     if not np.isfinite(b).all() or b[2] <= 0 or b[3] <= 0:
         raise ValueError(f"{said}; got {b.tolist()}")
+    if np.abs(b).max() > 2.0 ** 52:
+        # (as the box trackers' detections: a box of 1e200 crashed OpenCV's warp, the
+        # process with it, and areas overflowed to NaN boxes)
+        raise ValueError(f"{name} must lie within ±2^52 pixels, where a float holds every "
+                         f"whole pixel; got {b.tolist()}")
     return b
 
 

@@ -647,7 +647,8 @@ class CamShiftTracker(ColourTracker):
     """OpenCV's CamShift on the colour back-projection of :class:`ColourTracker`.
 
     The back-projection below one half (pixels more likely background than object) is set
-    to 0 first; the box is the bounding box of CamShift's rotated window.
+    to 0 first; the box is the bounding box of the ellipse whose axes are CamShift's rotated
+    window (the same for a round target at whatever angle its moments leave it).
 
     Parameters
     ----------
@@ -681,19 +682,31 @@ class CamShiftTracker(ColourTracker):
         # likely background than object (below one half) must not count, or the window
         # grows over the background's faint mass
         bp[bp < 128] = 0
+        H, W = bp.shape[:2]
+        bx, by, bw, bh = self.box
+        if bx + bw <= 0 or by + bh <= 0 or bx >= W or by >= H:
+            # a window wholly outside the image is left where it is, as ColourTracker's is
+            # (OpenCV's mean shift moved an empty window to the image's centre, onto
+            # whatever lay there; past int32, its window could not be read)
+            self._learn(cells)
+            return self.box.copy()
         x, y, w, h = np.round(self.box).astype(int)
         crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.5)
         rect, _ = cv2.CamShift(bp, (x, y, max(w, 1), max(h, 1)), crit)
-        (cx, cy), (rw, rh), _ = rect
+        (cx, cy), (rw, rh), angle = rect
         if rw > 1 and rh > 1:
-            # the corners' own bounding box (cv2.boundingRect's whole pixels, first and last
-            # included, made the box 1-2 pixels larger than the window, and learnt from that)
-            pts = cv2.boxPoints(rect)
-            # within the image, as OpenCV's own window is (a rectangle larger than the
-            # image, turned, reached 49 pixels past every edge)
-            H, W = bp.shape[:2]
-            lo = np.maximum(pts.min(axis=0), 0.0)
-            hi = np.minimum(pts.max(axis=0), [W, H])
+            # the bounding box of the ellipse the window's axes are (OpenCV's 4 standard
+            # deviations of the mass along each): its turned rectangle's corners made a
+            # round target's box up to 1.41 times too large, by an angle its moments leave
+            # arbitrary (a disc of 24 px boxed 33.8 or 23.7 by where it stood within a
+            # pixel); cv2.boundingRect's whole pixels, 1-2 more
+            a = np.deg2rad(angle)
+            ex = np.hypot(rw * np.cos(a), rh * np.sin(a)) / 2
+            ey = np.hypot(rw * np.sin(a), rh * np.cos(a)) / 2
+            # within the image, as OpenCV's own window is (a window larger than the image,
+            # turned, reached 49 pixels past every edge)
+            lo = np.maximum([cx - ex, cy - ey], 0.0)
+            hi = np.minimum([cx + ex, cy + ey], [W, H])
             if (hi > lo).all():
                 self.box = np.r_[lo, hi - lo].astype(float)
         self._learn(cells)
@@ -785,7 +798,11 @@ class ColourParticleTracker(ColourTracker):
         b = as_box(box)
         m = self.w @ self.x
         self.x[:, :2] += b[:2] + b[2:] / 2 - m[:2]
-        self.x[:, 2] += np.log(np.sqrt(b[2] * b[3] / np.prod(self.size))) - m[2]
+        # the box's own shape: the particles' sizes are scales of it (the area's root alone
+        # was carried, and a cloud anchored at 40 x 10 reported 20 x 20 at the next frame;
+        # b[2] b[3] overflowed at 1e200, a NaN box)
+        self.size = b[2:].copy()
+        self.x[:, 2] -= m[2]
         self.box = b
 
     def _follow(self, image: np.ndarray) -> np.ndarray:
