@@ -258,6 +258,11 @@ def test_a_csv_file_pandas_cannot_read_is_named(tmp_path):
         # so, frame 100 at left 200, and nothing said)
         (f"{head},conf\n1,100,200,50,120,0.9,1\n2,102,200,50,120,0.9,1\n",
          ", line 2: 7 values where the header has 6"),
+        # the same where the first values count 0, 1, 2, ...: pandas' index is then a
+        # range, like its own, and the rows were read shifted without a word (frames 1, 2,
+        # 3 from the second column)
+        (f"{head},conf\n0,1,100,200,50,120,0.9\n1,2,102,200,50,120,0.9\n"
+         "2,3,104,200,50,120,0.9\n", ", line 2: 7 values where the header has 6"),
         # a column named twice in the header: pandas read the second as 'conf.1', which
         # nothing read, without a word
         (f"{head},conf,conf\n1,1,2,3,4,0.9,0.1\n",
@@ -305,17 +310,20 @@ def test_a_csv_file_separated_by_tabs_or_semicolons_reads_as_with_commas(tmp_pat
     rows = [(f, -1, 10.5 + 3 * f, 20, 30, 60, 0.9) for f in range(1, 11)]
     head = ["frame", "id", "bb_left", "bb_top", "bb_width", "bb_height", "conf"]
 
-    def write(name, sep, decimal="."):
+    def write(name, sep, decimal=".", before=""):
         path = tmp_path / name
-        path.write_text("\n".join([sep.join(head)] + [
+        path.write_text(before + "\n".join([sep.join(head)] + [
             sep.join(str(v).replace(".", decimal) for v in r) for r in rows]) + "\n")
         return path
 
     comma = track_sequence(write("a.csv", ","), tmp_path / "a.txt", fps=10)
     assert comma.rows == 10
-    for name, sep, decimal in (("t.csv", "\t", "."), ("s.csv", ";", "."),
-                               ("d.csv", ";", ",")):
-        track_sequence(write(name, sep, decimal), tmp_path / f"{name}.txt", fps=10)
+    # a blank line before the header, as pandas skips it: the separator was taken from the
+    # blank line ("line 3: 1 values where the header has 7" for a semicolon file)
+    for name, sep, decimal, before in (("t.csv", "\t", ".", ""), ("s.csv", ";", ".", ""),
+                                       ("d.csv", ";", ",", ""), ("b.csv", ";", ",", "\n"),
+                                       ("bt.csv", "\t", ".", " \n")):
+        track_sequence(write(name, sep, decimal, before), tmp_path / f"{name}.txt", fps=10)
         assert (tmp_path / f"{name}.txt").read_text() == (tmp_path / "a.txt").read_text()
 
 

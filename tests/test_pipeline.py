@@ -1825,6 +1825,31 @@ def test_progress_that_is_no_stream_is_named(tmp_path):
         run([Frame(1, 0.0)], None, BoxTracker(), progress=True)
 
 
+def test_a_det_file_given_from_inside_its_sequence_is_named_by_the_sequence(
+        tmp_path, monkeypatch):
+    """``vistrack track det/det.txt`` run inside MOT17-02 named the sequence ``det``, and
+    wrote ``det.txt`` where TrackEval looks for ``MOT17-02.txt``; ``det.txt`` inside its
+    ``det`` folder too. The oracle: the folders the file lies in (``Path.resolve``)."""
+    from vistrack.batch import input_label
+    from vistrack.io import sequence_name
+    from vistrack.pipeline import track_sequence
+
+    seq = tmp_path / "MOT17-02" / "det"
+    seq.mkdir(parents=True)
+    (seq / "det.txt").write_text("".join(f"{f},-1,{10 + f},20,30,60,0.9\n"
+                                         for f in range(1, 6)))
+    for where, given in ((seq.parent, "det/det.txt"), (seq, "det.txt"),
+                         (seq, "../det/det.txt")):
+        monkeypatch.chdir(where)
+        want = Path(given).resolve().parent.parent.name
+        assert sequence_name(given) == input_label(Path(given)) == want == "MOT17-02"
+    monkeypatch.chdir(seq.parent)
+    assert sequence_name("other/x.txt") == "x" and sequence_name("det.txt") == "det"
+    track_sequence("det/det.txt", tmp_path / "res" / f"{sequence_name('det/det.txt')}.txt",
+                   fps=10)
+    assert (tmp_path / "res" / "MOT17-02.txt").exists()
+
+
 def test_a_dotted_folders_run_is_named_by_its_whole_name(tmp_path):
     """``cam1.2024-05-01`` (a folder of images) was named ``cam1`` in run.json, the report's
     title and the score table, where a batch names it ``cam1.2024-05-01``

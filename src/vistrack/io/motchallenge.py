@@ -93,7 +93,9 @@ def _csv_dialect(path: str | os.PathLike) -> dict[str, str]:
     semicolon file's numbers with decimal commas where any of its rows has a comma (its
     first rows may hold whole numbers only)."""
     with open(path, encoding="utf-8-sig", errors="replace") as fh:
-        header = fh.readline()
+        # the first line that is not blank, as pandas takes for the header (a blank first
+        # line made a semicolon file's header, of no separator, one of commas)
+        header = next((line for line in fh if line.strip(" \t\r\n")), "")
         if "," in header or not ("\t" in header or ";" in header):
             return {"sep": ","}
         if "\t" in header:
@@ -127,9 +129,12 @@ def _read_csv(path: str | os.PathLike, what: str) -> Any:
         raise _not_utf8(path, None)
     df.columns = [c.strip() if isinstance(c, str) else c for c in df.columns]  # "id " too
     _check_header_names(path, dialect["sep"])
-    if not df.index.equals(pandas.RangeIndex(len(df))):
+    if not df.index.equals(pandas.RangeIndex(len(df))) or _first_row_longer(path,
+                                                                          dialect["sep"]):
         # every row one value longer than the header: pandas took the first column for the
-        # index and read each of the others under the name of the one before it
+        # index and read each of the others under the name of the one before it (its first
+        # values counting 0, 1, 2, ... made that index a range, and the rows were read
+        # shifted without a word)
         _check_row_lengths(path, dialect["sep"])
     if df.isna().to_numpy().any():
         # pandas fills a short row's missing values with NaN, named later as empty cells
@@ -200,6 +205,17 @@ def _check_row_lengths(path: str | os.PathLike, sep: str) -> None:
             if len(row) != len(header):
                 raise MOTFormatError(f"{path}, line {line}: {len(row)} values where the "
                                      f"header has {len(header)}")
+
+
+def _first_row_longer(path: str | os.PathLike, sep: str) -> bool:
+    """Whether a CSV file's first row after its header has more values than the header
+    (pandas then takes the first column for the index, from that row alone)."""
+    body = _csv_body(path, sep)
+    if body is None:
+        return False
+    _, header, rows = body
+    with closing(rows):
+        return len(next(rows, (0, header))[1]) > len(header)
 
 
 def _csv_row_line(path: str | os.PathLike, sep: str, k: int) -> int | None:
@@ -1670,8 +1686,15 @@ def sequence_name(path: str | os.PathLike) -> str:
 
 
 def _det_file_sequence(p: Path) -> str | None:
-    """``SEQ`` for MOTChallenge's ``SEQ/det/det.txt``, else None."""
-    if p.name == "det.txt" and p.parent.name == "det" and p.parent.parent.name:
+    """``SEQ`` for MOTChallenge's ``SEQ/det/det.txt``, else None; given relative to its
+    sequence's folder or below (``det/det.txt`` run inside ``SEQ``, ``det.txt`` inside its
+    ``det``), named from the folders it lies in (it was named ``det``, its results
+    ``det.txt`` where TrackEval looks for ``SEQ.txt``)."""
+    if p.name != "det.txt":
+        return None
+    if not p.parent.parent.name or p.parent.parent.name in (".", ".."):
+        p = Path(os.path.abspath(p))  # (the names as given: not a link's target's)
+    if p.parent.name == "det" and p.parent.parent.name:
         return p.parent.parent.name
     return None
 
