@@ -900,3 +900,35 @@ def test_two_tracks_whose_miss_is_below_the_smallest_normal_float_are_exact(lik,
     want, want0, want_ex = _log_brute_jipda(np.log(lik), gate, eps, pd, math.log(lam), pg)
     np.testing.assert_allclose(beta, want, rtol=1e-9)
     np.testing.assert_allclose(ex, want_ex, rtol=1e-9)
+
+
+@pytest.mark.parametrize("T, D, e", [(30, 12, 24.1), (12, 4, 70.0), (20, 3, 90.0),
+                                     (30, 6, 45.0)])
+def test_jpda_of_a_dense_cluster_of_heavy_weights_is_the_closed_form(T, D, e):
+    """Weights 10^e times a miss's, in clusters summed by subsets: the backward pass took
+    the product of two scaled sums below what a float holds, unguarded (and its margin was
+    the smallest normal float, where 1e-280 was meant: the constant was defined twice), and
+    a huge weight times it gave some tracks no detection at all (β0 1 against 0.85). The
+    oracle: :func:`equal_weights`'s closed form, in logarithms."""
+    pd, pg = 0.9, 0.99
+    B = 1 - pd * pg
+    ell = 10.0 ** e * B / pd  # G / B = 10^e at a clutter density of 1
+    k = np.arange(min(T, D) + 1)
+    logw = np.array([math.lgamma(T + 1) - math.lgamma(i + 1) - math.lgamma(T - i + 1)
+                     + math.lgamma(D + 1) - math.lgamma(D - i + 1) + i * e * math.log(10)
+                     for i in k])
+    w = np.exp(logw - logw.max())
+    missed = float(((1 - k / T) * w).sum() / w.sum())
+    beta, beta0 = jpda_weights(np.full((T, D), ell), np.ones((T, D), bool), p_detect=pd,
+                               clutter_density=1.0, p_gate=pg)
+    np.testing.assert_allclose(beta0, missed, rtol=1e-9)
+    np.testing.assert_allclose(beta, (1 - missed) / D, rtol=1e-9)
+
+
+def test_subset_sums_of_a_huge_weight_give_every_row_its_share():
+    """Three rows sharing one column at a weight of 1e200 against misses of 1: 1/3 each
+    (by symmetry), where the subset sums gave the middle row 0."""
+    from vistrack.association.pda import _matchings
+
+    pair, row0, col0 = _matchings(np.full((3, 1), 1e200), np.ones(3), np.ones(1))
+    np.testing.assert_allclose(pair.ravel(), [1 / 3] * 3, rtol=1e-12)

@@ -302,6 +302,10 @@ def _matchings(G: np.ndarray, a: np.ndarray, c: np.ndarray
     # entries themselves looked at where it falls too low)
     lo = np.minimum(a, np.where(G > 0, G, np.inf).min(1))
     floor: float = 1.0
+    # a lower bound on each F[i]'s positive entries, which the backward pass multiplies by
+    # R's (a product of the two fell below what a float holds, unguarded, and a huge G
+    # times it gave a track's pairs 0: every detection in its gate lost)
+    floors = np.ones(I + 1)
     for i in range(I):
         if lo[i] * floor < _TINY:
             return _matchings_log(G, a, c)
@@ -321,6 +325,7 @@ def _matchings(G: np.ndarray, a: np.ndarray, c: np.ndarray
             if kept_min is None:
                 return _matchings_log(G, a, c)
             floor = kept_min
+        floors[i + 1] = floor
     zero = c == 0
     level = (~bit[zero]).sum(0)  # the columns of c = 0 each subset leaves unmatched
     left = np.prod(np.where(bit, 1.0, np.where(zero, 1.0, c)[:, None]), axis=0)
@@ -337,7 +342,8 @@ def _matchings(G: np.ndarray, a: np.ndarray, c: np.ndarray
     col0 = (F[I][off] * R[off]).sum(1) / whole
     pair, row0 = np.zeros((I, K)), np.zeros(I)
     for i in range(I - 1, -1, -1):
-        if lo[i] * floor < _TINY:
+        # G R, F R and G F R (a, a F R) each kept above _TINY
+        if lo[i] * floor < _TINY or min(lo[i], 1.0) * floors[i] * floor < _TINY:
             return _matchings_log(G, a, c)
         row0[i] = a[i] * (F[i] @ R)
         below = a[i] * R
@@ -465,9 +471,10 @@ def _exact_is_affordable(T: int, D: int, B: np.ndarray, max_exact: int) -> bool:
 # 0.3 ms by subsets in numpy, 5 among 6 (4,051 events) 0.12 against 0.35, 6 among 6 (13,327)
 # about as long either way
 _ENUMERATED = 20_000
-_TINY = float(np.finfo(np.float64).tiny)
+_NORMAL = float(np.finfo(np.float64).tiny)
 """The smallest normal float: a pair's miss weight below it, against its track's largest
-weight, has lost digits (:func:`_clusters`)."""
+weight, has lost digits (:func:`_clusters`). (Named ``_TINY`` too, it replaced
+:data:`_TINY`'s margin of 1e-280 in :func:`_matchings` with its own.)"""
 
 
 def _exact(G: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -602,7 +609,7 @@ def _clusters(G, B, max_exact, enumerated, beta, beta0, label_t, label_d, left):
             for k in range(kd):
                 W1[k], W2[k] = G[t1, de[k]] / s1, G[t2, de[k]] / s2
             B1, B2 = B[t1] / s1, B[t2] / s2
-            if B1 < _TINY or B2 < _TINY:
+            if B1 < _NORMAL or B2 < _NORMAL:
                 # a miss below the smallest normal float against the track's largest weight
                 # keeps a few digits, or none: the events' ratios hinge on it (2/3 came out
                 # 0.667 for 0.75), so such a pair is weighed in logarithms with the rest
