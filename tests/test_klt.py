@@ -372,3 +372,15 @@ def test_a_frame_too_small_for_any_patch_is_refused():
     with pytest.raises(ValueError, match="need 124 pixels"):
         KLTTracker(half=60).track(frame)
     assert len(KLTTracker(half=58).track(frame)) > 0  # 120 = 2 x 58 + 4: it fits
+
+
+@pytest.mark.parametrize("name, value", [
+    ("min_distance", 3e9), ("max_features", 2**30), ("win_size", 2**31), ("levels", 2**31),
+    ("block_size", 2**31), ("half", 2**31), ("search_radius", 2**31)])
+def test_sizes_past_what_opencv_holds_are_named(name, value):
+    """OpenCV takes these as C ints: ``min_distance=3e9`` crashed the process (a
+    segmentation fault in goodFeaturesToTrack, at the first frame), the others failed in
+    OpenCV's overload error naming none. Refused at construction, named."""
+    with pytest.raises(ValueError, match=re.escape(f"{name} must be at most 2**20")):
+        KLTTracker(**{name: value})
+    KLTTracker(**{name: 2**20 if name != "levels" else 8})

@@ -412,7 +412,9 @@ class MOTTable:
         (``frame``, ``particle``, ``x``, ``y``: the box's centre) beside MOTChallenge's own
         (``bb_left``, ``bb_top``, ``bb_width``, ``bb_height``, ``conf``, ``class``,
         ``visibility``), so that a trackpy user's code reads tracks as it reads its own.
-        :meth:`from_pandas` reads it back unchanged. Needs pandas.
+        :meth:`from_pandas` reads it back unchanged where the rows are MOTChallenge's
+        (frames from 1, sizes >= 0; it refuses others, which :meth:`from_rows` takes as a
+        tracker that counts from 0 writes them). Needs pandas.
 
         Examples
         --------

@@ -98,6 +98,10 @@ class Features:
         return Detections(points=self.points)
 
 
+_LARGEST = 2**20
+"""The largest of :class:`KLTTracker`'s sizes and counts, which OpenCV takes as C ints."""
+
+
 class KLTTracker:
     """Shi-Tomasi + Lucas-Kanade feature tracker with forward-backward and affine checks.
 
@@ -172,6 +176,13 @@ class KLTTracker:
         # (above -1: a patch that leaves its image, or is flat, scores -1, and at -1 such
         # features were kept)
         self.min_ncc = as_finite(min_ncc, "min_ncc", -1.0, above=True, high=1.0)
+        # OpenCV takes them as C ints: min_distance 3e9 crashed the process in
+        # goodFeaturesToTrack, the others failed in its words (an overload, naming none)
+        for name in ("max_features", "min_distance", "block_size", "win_size", "levels",
+                     "half", "search_radius"):
+            if getattr(self, name) > _LARGEST:
+                raise ValueError(f"{name} must be at most 2**20 (pixels, or features: more "
+                                 f"than any image holds); got {getattr(self, name):g}")
         self.reset()
 
     def reset(self) -> None:
