@@ -31,7 +31,8 @@ from .._registry import Registry
 from .._validate import as_float_array, is_real, is_whole
 
 __all__ = ["ASSIGNERS", "assign", "gnn", "gnn_pairs", "gnn_pairs_limited", "gnn_sparse",
-           "greedy", "lsa", "lsa_kernel", "nearest_neighbour", "components"]
+           "greedy", "greedy_pairs", "lsa", "lsa_kernel", "nearest_neighbour", "nearest_pairs",
+           "components"]
 
 _EMPTY = (np.zeros(0, np.int64), np.zeros(0, np.int64))
 
@@ -665,16 +666,32 @@ def greedy(cost: np.ndarray, gate: np.ndarray | None = None) -> tuple[np.ndarray
     """
     cost, gate = _check(cost, gate)
     r, c = np.nonzero(gate)
-    order = np.argsort(cost[r, c], kind="stable")
-    used_t, used_d = np.zeros(cost.shape[0], bool), np.zeros(cost.shape[1], bool)
-    rows, cols = [], []
+    return greedy_pairs(r, c, cost[r, c], cost.shape)
+
+
+def greedy_pairs(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
+                 shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`greedy` on the allowed pairs alone, ``rows``, ``cols`` and their ``cost``
+    listed in row-major order (as ``np.nonzero`` lists them; ties are taken in that order),
+    of a problem of ``shape``: without the dense matrices, which at 8,000 points a frame
+    took a gigabyte.
+
+    >>> greedy_pairs(np.array([0, 0, 1]), np.array([0, 1, 0]), np.array([1.0, 2.0, 0.5]),
+    ...              (2, 2))
+    (array([1, 0]), array([0, 1]))
+    """
+    order = np.argsort(cost, kind="stable")
+    used_t, used_d = np.zeros(shape[0], bool), np.zeros(shape[1], bool)
+    taken_r, taken_c = [], []
     for i in order:
-        a, b = r[i], c[i]
+        a, b = rows[i], cols[i]
+        if not np.isfinite(cost[i]):  # (never assigned; sorted last)
+            break
         if not used_t[a] and not used_d[b]:
             used_t[a] = used_d[b] = True
-            rows.append(a)
-            cols.append(b)
-    return np.array(rows, np.int64), np.array(cols, np.int64)
+            taken_r.append(a)
+            taken_c.append(b)
+    return np.array(taken_r, np.int64), np.array(taken_c, np.int64)
 
 
 def nearest_neighbour(cost: np.ndarray,
@@ -705,12 +722,25 @@ def nearest_neighbour(cost: np.ndarray,
     [[0, 1], [0, 0]]
     """
     cost, gate = _check(cost, gate)
-    if cost.shape[1] == 0:
-        return _EMPTY
-    c = np.where(gate, cost, np.inf)
-    best = np.argmin(c, axis=1)
-    rows = np.flatnonzero(np.isfinite(c[np.arange(len(c)), best]))
-    return rows.astype(np.int64), best[rows].astype(np.int64)
+    r, c = np.nonzero(gate)
+    return nearest_pairs(r, c, cost[r, c])
+
+
+def nearest_pairs(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`nearest_neighbour` on the allowed pairs alone (``rows``, ``cols`` and their
+    ``cost``, in any order): each row's cheapest pair of finite cost, the lowest column of
+    those tied, rows in order; without the dense matrices.
+
+    >>> nearest_pairs(np.array([1, 0, 0]), np.array([0, 1, 0]), np.array([0.5, 2.0, 2.0]))
+    (array([0, 1]), array([0, 0]))
+    """
+    ok = np.isfinite(cost)
+    r, c, k = rows[ok], cols[ok], cost[ok]
+    order = np.lexsort((c, k, r))  # by row, then cost, then column
+    r, c = r[order], c[order]
+    first = np.r_[True, r[1:] != r[:-1]] if len(r) else np.zeros(0, bool)
+    return r[first].astype(np.int64), c[first].astype(np.int64)
 
 
 ASSIGNERS: Registry[Callable] = Registry("assigner", {"gnn": gnn, "greedy": greedy,

@@ -49,7 +49,6 @@ import numpy as np
 
 from .._validate import as_finite, as_whole, is_real
 from ..association import (
-    assign,
     chi2_threshold,
     gnn_sparse,
     ipda_weights,
@@ -57,6 +56,7 @@ from ..association import (
     jpda_weights,
     pda_weights,
 )
+from ..association.assign import greedy_pairs, nearest_pairs
 from ..association.costs import cholesky_innovations, mahalanobis_pairs
 from ..association.pda import _check as _check_pda
 from ..filters import kf_predict, kf_update, pda_update
@@ -353,6 +353,29 @@ class PointTracker:
             t.__dict__.update(saved[2])
             raise
 
+    def _gnn(self, r: np.ndarray, c: np.ndarray, d2: np.ndarray, S: np.ndarray,
+             shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """The gated pairs ``(r, c)`` (squared distances ``d2``) that global nearest
+        neighbour takes."""
+        if not len(r):
+            return r, c
+        # one assignment per connected group, on each pair's likelihood against a track's
+        # one frame after an update: d² alone made a track lost for frames, its gate grown,
+        # cheaper than one found in the frame before
+        logdet = _log_determinants(S)
+        cost = d2 + (logdet[r] - self._logdet_ref)
+        r1, c1 = gnn_sparse(r, c, cost, shape, limit=self.threshold)
+        # then the gated pairs of the tracks and measurements left, on the same cost but each
+        # of them worth taking: a track whose |S| exceeds |S₁| by e^χ² (a new one of large
+        # init_speed, or one lost long) could take no measurement at all, even one on its
+        # prediction with no rival, and a new track started beside it every frame
+        free = ~np.isin(r, r1) & ~np.isin(c, c1)
+        r2, c2 = r[free], c[free]
+        if len(r2):
+            r2, c2 = gnn_sparse(r2, c2, cost[free], shape,
+                                limit=float(cost[free].max()) + self.threshold)
+        return np.r_[r1, r2], np.r_[c1, c2]
+
     def _step(self, frame: Frame | int | None, Z: np.ndarray,
               detections: Detections) -> Tracks:
         scores, classes = detections.scores, detections.classes
@@ -391,24 +414,16 @@ class PointTracker:
             if self.max_distance is not None:  # however far the gate has grown
                 keep &= ((zp[r] - Z[c]) ** 2).sum(1) <= self.max_distance ** 2
             r, c, d2 = r[keep], c[keep], d2[keep]
-            if self.association == "gnn" and len(Z):
-                # one assignment per connected group, on each pair's likelihood against a
-                # track's one frame after an update: d² alone made a track lost for frames,
-                # its gate grown, cheaper than one found in the frame before
-                logdet = _log_determinants(S)
-                cost = d2 + (logdet[r] - self._logdet_ref)
-                r1, c1 = gnn_sparse(r, c, cost, (K, len(Z)), limit=self.threshold)
-                # then the gated pairs of the tracks and measurements left, on the same cost
-                # but each of them worth taking: a track whose |S| exceeds |S₁| by e^χ² (a new
-                # one of large init_speed, or one lost long) could take no measurement at
-                # all, even one on its prediction with no rival, and a new track started
-                # beside it every frame
-                free = ~np.isin(r, r1) & ~np.isin(c, c1)
-                r2, c2 = r[free], c[free]
-                if len(r2):
-                    r2, c2 = gnn_sparse(r2, c2, cost[free], (K, len(Z)),
-                                        limit=float(cost[free].max()) + self.threshold)
-                r, c = np.r_[r1, r2], np.r_[c1, c2]
+            if self.association in ("gnn", "nn", "greedy"):
+                # on the gated pairs alone (the dense matrices nn and greedy were given took a
+                # gigabyte at 8,000 points a frame, and 8 s)
+                if self.association == "gnn":
+                    r, c = self._gnn(r, c, d2, S, (K, len(Z)))
+                else:
+                    order = np.lexsort((c, r))  # row-major, as the dense assigners list them
+                    r, c, d2 = r[order], c[order], d2[order]
+                    r, c = (nearest_pairs(r, c, d2) if self.association == "nn"
+                            else greedy_pairs(r, c, d2, (K, len(Z))))
                 if len(r):
                     upd = kf_update(g[r], Z[c], self.H, self.R)
                     mean[r], cov[r] = upd.mean, upd.cov
@@ -417,15 +432,10 @@ class PointTracker:
                         measured.update(zip(t.ids[r].tolist(), Z[c]))
                 updated[r] = True
                 in_gate[c] = True  # every measurement not taken starts a track
-                gate = None
-            else:
+            else:  # the PDA family: the Gaussian likelihoods of the gated pairs (0 outside)
                 gate = np.zeros((K, len(Z)), bool)
                 gate[r, c] = True
                 in_gate[c] = True
-            if gate is None:
-                pass
-            elif self.association in ("pda", "jpda", "ipda", "jipda"):
-                # the Gaussian likelihoods of the gated pairs (0 outside the gates)
                 logdet = _log_determinants(S)
                 lik = np.zeros((K, len(Z)))
                 lik[r, c] = np.exp(-0.5 * d2 - 0.5 * logdet[r]
@@ -445,19 +455,6 @@ class PointTracker:
                     upd = pda_update(g[hit], Z, self.H, self.R, beta[hit], beta0[hit])
                     mean[hit], cov[hit] = upd.mean, upd.cov
                 updated = hit
-            elif len(Z):
-                cost = np.full((K, len(Z)), np.inf)
-                cost[r, c] = d2
-                r, c = assign(cost, gate, self.association)
-                if len(r):
-                    upd = kf_update(g[r], Z[c], self.H, self.R)
-                    mean[r], cov[r] = upd.mean, upd.cov
-                    t.scores[r] = scores[c]
-                    if keep_z:
-                        measured.update(zip(t.ids[r].tolist(), Z[c]))
-                updated[r] = True
-                in_gate = np.zeros(len(Z), bool)  # every measurement not taken starts a track
-                in_gate[c] = True
             t.mean, t.cov = mean, cov
         if self.association in _EXISTENCE:
             t.advance(updated, time, confirm_hits=np.iinfo(np.int64).max)
