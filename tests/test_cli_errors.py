@@ -1533,3 +1533,23 @@ def test_an_existing_output_is_said_in_the_callers_words(tmp_path, capsys):
         write_boxes(out, [[1.0, 2.0, 3.0, 4.0]])
     assert main(["track", str(det), "--fps", "10", "--out", str(out)]) == 2
     assert f"--out {out} exists; pass --force to overwrite it" in capsys.readouterr().err
+
+
+def test_two_inputs_of_one_name_are_told_how_to_be_tracked(tmp_path, capsys):
+    """Two image folders both called img (each OTB sequence keeps its frames in img/) would
+    write one output; the message said so and nothing more."""
+    import cv2
+    import numpy as np
+
+    for seq in ("a", "b"):
+        (tmp_path / seq / "img").mkdir(parents=True)
+        for k in range(2):
+            cv2.imwrite(str(tmp_path / seq / "img" / f"{k + 1:04d}.jpg"),
+                        np.zeros((20, 30, 3), np.uint8))
+    out = tmp_path / "out"
+    assert main(["track", str(tmp_path / "a" / "img"), str(tmp_path / "b" / "img"),
+                 "--out-dir", str(out), "--fps", "25", "--quiet"]) == 2
+    assert capsys.readouterr().err == (
+        f"vistrack track: error: {tmp_path / 'a' / 'img'} and {tmp_path / 'b' / 'img'} would "
+        f"both write {out / 'img'} (outputs are named after each input's last part): track "
+        "them one at a time, each into its own output folder\n")

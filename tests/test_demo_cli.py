@@ -21,6 +21,11 @@ def test_demo_writes_the_figures(tmp_path, capsys):
         assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
         assert name in out
     assert "mean over 20 seeds" in out
+    # the peers' line is stored, and said so (it read as computed beside any --seeds); the
+    # slide's run is placed by percentile only among 100 seeds or more (of one seed it was
+    # "the 100th / 100th percentile")
+    assert "FilterPy and pykalman, 1000 seeds, measured once:" in out
+    assert "percentile" not in out and "placed among ours from 100 seeds on" in out
 
 
 def test_demo_kalman_keeps_earlier_figures_without_force(tmp_path, capsys):

@@ -2044,3 +2044,30 @@ def test_a_run_without_rows_as_long_as_max_lost_is_not_undelivered(tmp_path, run
         track_sequence(det, tmp_path / "out.txt", fps=25.0, max_lost=max_lost)
     said = any("did not deliver" in str(w.message) for w in caught)
     assert said == (run < round(max_lost * 25)), [str(w.message) for w in caught]
+
+
+def test_a_video_whose_header_disagrees_with_its_ground_truths_sequence_is_warned(tmp_path):
+    """PETS09's vtest.avi says 10 frames/s in its header where the sequence is 7 (its
+    seqinfo.ini, beside the ground truth given): tracked at 10 without a word. The oracle:
+    the two files' own rates, said; none where they agree or ``fps`` is given."""
+    import shutil
+    import warnings
+
+    from vistrack.pipeline import track_video
+
+    data = ROOT / "src" / "vistrack" / "data" / "pets09-s2l1"
+    video = data / "pets09-s2l1.mp4"  # (its header: 7 frames/s)
+    for rate, fps, warned in ((10, None, True), (7, None, False), (10, 7.0, False)):
+        seq = tmp_path / f"seq{rate}{fps}"
+        (seq / "gt").mkdir(parents=True)
+        shutil.copy(data / "gt.txt", seq / "gt" / "gt.txt")
+        (seq / "seqinfo.ini").write_text(f"[Sequence]\nname=s\nframeRate={rate}\n"
+                                         "seqLength=200\nimWidth=768\nimHeight=576\n")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            track_video(video, tmp_path / f"out{rate}{fps}", gt=seq, fps=fps, stop=3,
+                        annotate=False)
+        said = [str(w.message) for w in caught if "ground truth's sequence" in str(w.message)]
+        assert said == ([f"{video}: its header gives 7 frames/s, and the ground truth's "
+                         f"sequence 10 ({seq / 'seqinfo.ini'}): tracked at 7 (give the true "
+                         "rate with --fps, or fps=)"] if warned else [])

@@ -43,7 +43,9 @@ def test_the_page_holds_the_run(run_dir):
 
 def test_report_command_and_its_errors(run_dir, tmp_path, capsys):
     assert main(["report", str(run_dir)]) == 2
-    assert "--force" in capsys.readouterr().err
+    # the option's words (it said "pass force=True (--force)", Python's argument beside it)
+    assert capsys.readouterr().err == (f"vistrack report: error: report {run_dir / 'report.html'}"
+                                       " exists; pass --force to overwrite it\n")
     assert main(["report", str(run_dir), "--force"]) == 0
     assert capsys.readouterr().out.strip() == f"wrote {run_dir / 'report.html'}"
     assert main(["report", str(tmp_path)]) == 2

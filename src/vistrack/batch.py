@@ -291,7 +291,10 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
     names: dict[Path, Path] = {}
     for job in jobs:
         if job.out in names:
-            raise ValueError(f"{names[job.out]} and {job.input} would both write {job.out}")
+            # (and said no way out: OTB's sequences each keep their frames in img/)
+            raise ValueError(f"{names[job.out]} and {job.input} would both write {job.out} "
+                             f"(outputs are named after each input's last part): track them "
+                             f"one at a time, each into its own output folder")
         names[job.out] = job.input
     return jobs
 

@@ -2571,6 +2571,10 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             warnings.warn(f"{video} gives no frame rate (an image folder, or a video whose "
                           f"header has none): tracked at {reader.fps:g} frames/s (give the true "
                           "one with --fps, or fps=)", UserWarning, stacklevel=2)
+        elif gt is not None and reader.fps_from != "fps":
+            disagree = _gt_rate_disagrees(video, reader.fps, reader.fps_from, gt)
+            if disagree:
+                warnings.warn(disagree, UserWarning, stacklevel=2)
         # the options not given are left to the front-ends' own defaults
         ctx = Context(reader.fps, reader.size, reader, config, dict(overrides),
                       {k: v for k, v in options.items() if v is not None}
@@ -2764,6 +2768,33 @@ def _replaced_rate(reader: VideoReader) -> tuple[str, float] | None:
     if reader.fps_from != "fps" or own is None or math.isclose(own, reader.fps):
         return None
     return str(reader.own_fps_from), own
+
+
+def _gt_rate_disagrees(video: str | Path, fps: float, fps_from: str,
+                       gt: str | Path) -> str | None:
+    """Where the ground truth lies in a MOTChallenge sequence (``SEQ/gt/gt.txt``) whose
+    ``seqinfo.ini`` gives another frame rate than the video's own (``fps_from``, its header),
+    a warning saying both; None where they agree, or there is no such file to read. (A video
+    whose header is wrong, as PETS09's vtest.avi says 10 frames/s for 7, was tracked at its
+    header's rate without a word beside the sequence's own file.)"""
+    from .io.motchallenge import _ground_truth_file
+
+    try:
+        truth = _ground_truth_file(gt)
+    except ValueError:
+        return None
+    ini = truth.parent.parent / "seqinfo.ini"
+    if truth.parent.name != "gt" or not ini.is_file():
+        return None
+    try:
+        rate = read_seqinfo(ini.parent).frame_rate
+    except (OSError, ValueError):  # (a seqinfo.ini of its own faults: the ground truth's
+        return None                # file is what is read; nothing to compare)
+    if math.isclose(rate, fps, rel_tol=1e-6):
+        return None
+    return (f"{video}: its {fps_from.removeprefix('the ')} gives {fps:g} frames/s, and the "
+            f"ground truth's sequence {rate:g} ({ini}): tracked at {fps:g} (give the true rate "
+            "with --fps, or fps=)")
 
 
 def _ground_truth(gt: str | Path, zero_distance: float | None = None) -> MOTTable:

@@ -235,8 +235,8 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
                                        "them"))
         raise FileNotFoundError(f"{tracks} does not exist: give the folder that vistrack "
                                 "track --out-dir wrote")
-    # (both ways: the command line's `vistrack report` and Python's write_report call here)
-    check_output(target, force=force, name="report", option="force=True (--force)")
+    # (`vistrack report` checks it first, in its option's words)
+    check_output(target, force=force, name="report", option="force=True")
     if not run_info.is_file():
         # (the page was written without the command, the counts and the scores, unsaid, as a
         # missing video or plot is said)

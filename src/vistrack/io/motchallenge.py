@@ -1339,7 +1339,7 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
     """
     path = Path(path)
     if path.exists() and not force:
-        raise FileExistsError(f"{path} exists; pass force=True (--force) to overwrite it")
+        raise FileExistsError(f"{path} exists; pass force=True to overwrite it")
     _check_decimals(decimals)
     f, i = _integers(frames, "frames"), _integers(ids, "ids")
     # (ragged boxes, or a conf of text, failed in numpy's words, naming neither)
