@@ -781,11 +781,18 @@ def test_none_given_as_a_bare_list_is_none_for_every_distance():
         assert got.shape == want.shape
         assert [r.tolist() for r in gnn(got)] == [[], []]
     no_tracks = np.array([t for t in []])  # shape (0,), as a loop over no tracks builds it
-    assert mahalanobis(no_tracks, no_tracks, pts).shape == (0, 2)
     from vistrack.association.costs import mahalanobis_pairs
 
-    r, c, d2 = mahalanobis_pairs(no_tracks, no_tracks, pts, 9.21)
-    assert len(r) == len(c) == len(d2) == 0
+    # and with no detections either, given bare or as (0, 2) (numpy's "zero-size array to
+    # reduction operation" where the second reading found it)
+    for zp, S, z, D in ((no_tracks, no_tracks, pts, 2), (no_tracks, no_tracks, [], 0),
+                        (no_tracks, no_tracks, np.zeros((0, 2)), 0),
+                        (np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros((0, 2)), 0)):
+        assert mahalanobis(zp, S, z).shape == (0, D)
+        r, c, d2 = mahalanobis_pairs(zp, S, z, 9.21)
+        assert len(r) == len(c) == len(d2) == 0
+    with pytest.raises(ValueError, match=re.escape("z must have shape (D, 2); got (1, 3)")):
+        mahalanobis(np.zeros((0, 2)), np.zeros((0, 2, 2)), [[1.0, 2.0, 3.0]])
 
 
 def test_euclidean_between_points_whose_squares_overflow_is_hypot():
@@ -882,6 +889,12 @@ def test_greedy_and_nearest_on_pairs_equal_their_definitions(seed):
             want.append((i, j))
     got = greedy_pairs(r, c, cost[r, c], (T, D))
     assert list(zip(got[0].tolist(), got[1].tolist())) == want
+    # a pair of infinite cost (either sign) is never taken, and takes nothing from the
+    # others (-inf sorted first, and ended the loop before any pair was taken)
+    if len(r):
+        k = np.r_[cost[r, c], np.inf, -np.inf]
+        got = greedy_pairs(np.r_[r, 0, 0], np.r_[c, 0, 0], k, (max(T, 1), max(D, 1)))
+        assert list(zip(got[0].tolist(), got[1].tolist())) == want
     assert [list(a) for a in greedy(cost, gate)] == [list(a) for a in got]
     # nearest, by its definition, from the pairs in any order
     want_nn = [(i, min((cost[i, j], j) for j in range(D) if gate[i, j])[1])

@@ -1551,5 +1551,5 @@ def test_two_inputs_of_one_name_are_told_how_to_be_tracked(tmp_path, capsys):
                  "--out-dir", str(out), "--fps", "25", "--quiet"]) == 2
     assert capsys.readouterr().err == (
         f"vistrack track: error: {tmp_path / 'a' / 'img'} and {tmp_path / 'b' / 'img'} would "
-        f"both write {out / 'img'} (outputs are named after each input's last part): track "
-        "them one at a time, each into its own output folder\n")
+        f"both write {out / 'img'} (outputs are named after each input): track them one at "
+        "a time, each into its own output folder\n")

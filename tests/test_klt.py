@@ -374,13 +374,21 @@ def test_a_frame_too_small_for_any_patch_is_refused():
     assert len(KLTTracker(half=58).track(frame)) > 0  # 120 = 2 x 58 + 4: it fits
 
 
-@pytest.mark.parametrize("name, value", [
-    ("min_distance", 3e9), ("max_features", 2**30), ("win_size", 2**31), ("levels", 2**31),
-    ("block_size", 2**31), ("half", 2**31), ("search_radius", 2**31)])
-def test_sizes_past_what_opencv_holds_are_named(name, value):
+@pytest.mark.parametrize("name, value, most", [
+    ("min_distance", 3e9, "2**20"), ("max_features", 2**30, "2**20"), ("levels", 2**31, "2**20"),
+    ("half", 2**31, "2**20"), ("search_radius", 2**31, "2**20"),
+    ("win_size", 100_000, "4096 pixels"), ("block_size", 2**31, "4096 pixels")])
+def test_sizes_past_what_opencv_holds_are_named(name, value, most):
     """OpenCV takes these as C ints: ``min_distance=3e9`` crashed the process (a
     segmentation fault in goodFeaturesToTrack, at the first frame), the others failed in
-    OpenCV's overload error naming none. Refused at construction, named."""
-    with pytest.raises(ValueError, match=re.escape(f"{name} must be at most 2**20")):
+    OpenCV's overload error naming none, and a window of 100,000 pixels in its failure to
+    allocate 40 GB. Refused at construction, named; the largest taken tracks."""
+    with pytest.raises(ValueError, match=re.escape(f"{name} must be at most {most}")):
         KLTTracker(**{name: value})
-    KLTTracker(**{name: 2**20 if name != "levels" else 8})
+    if name in ("win_size", "block_size", "min_distance"):
+        rng = np.random.default_rng(0)
+        scene = cv2.GaussianBlur(rng.integers(0, 256, (60, 80), dtype=np.uint8), (0, 0), 2)
+        klt = KLTTracker(**{name: 4095 if name == "block_size" else
+                            4096 if name == "win_size" else 2**20})
+        klt.track(scene)
+        klt.track(np.roll(scene, 1, axis=1))

@@ -423,3 +423,12 @@ def test_the_pages_counts_say_one_in_the_singular(tmp_path):
     (d / "run.json").write_text(json.dumps(info))
     write_report(d, force=True)
     assert "<p>2 frames of x.mp4: 2 boxes of 2 tracks, " in (d / "report.html").read_text()
+
+
+def test_report_names_a_folder_without_tracks_before_its_old_page(tmp_path, capsys):
+    """A folder holding an old report.html and no tracks.txt: the command line said "exists;
+    pass --force" first, and only with --force that tracks.txt does not exist."""
+    (tmp_path / "report.html").write_text("<html></html>")
+    assert main(["report", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "tracks.txt does not exist" in err and "--force" not in err

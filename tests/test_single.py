@@ -1239,6 +1239,18 @@ def test_camshift_leaves_a_window_wholly_outside_the_image_where_it_is():
             got.append(t.update(im))
         np.testing.assert_array_equal(got[0], anchor)
         np.testing.assert_array_equal(got[0], got[1])
+    # a window past int32 that reaches into the image is cut to it (OpenCV's "Can't parse
+    # 'window'" before): CamShift finds the target the window holds, as it does from a
+    # window of the image's own size (the oracle)
+    for far, near in (([-3e9, 50, 3e9 + 90, 20], [0, 50, 90, 20]),
+                      ([70, 50, 3e9, 20], [70, 50, 90, 20])):
+        got = []
+        for start in (far, near):
+            t = CamShiftTracker(rate=0.0)
+            t.init(im, [0, 50, 20, 20])
+            t.anchor(start)
+            got.append(t.update(im))
+        np.testing.assert_array_equal(got[0], got[1])
 
 
 @pytest.mark.parametrize("method", ["colour", "camshift", "particle", "wsl", "template", "klt"])

@@ -300,12 +300,36 @@ def as_box(box: ArrayLike, name: str = "box") -> np.ndarray:
     b = b.reshape(-1)
     if not np.isfinite(b).all() or b[2] <= 0 or b[3] <= 0:
         raise ValueError(f"{said}; got {b.tolist()}")
-    if np.abs(b).max() > 2.0 ** 52:
-        # (as the box trackers' detections: a box of 1e200 crashed OpenCV's warp, the
-        # process with it, and areas overflowed to NaN boxes)
-        raise ValueError(f"{name} must lie within ±2^52 pixels, where a float holds every "
-                         f"whole pixel; got {b.tolist()}")
+    # (as the box trackers' detections: a box of 1e200 crashed OpenCV's warp, the process
+    # with it, and areas overflowed to NaN boxes)
+    check_in_pixels(b[None], name, got=True)
     return b
+
+
+MAX_PIXELS = 2.0 ** 52
+"""The largest box value (in pixels) the trackers take: beyond it a float no longer holds
+every whole pixel, the filters' variances (the squares of the sizes) soon overflow, and so
+do the areas of overlaps."""
+
+
+def check_in_pixels(boxes: np.ndarray, name: str, suffix: str = "", *,
+                    got: bool = False) -> None:
+    """Raise ``ValueError`` if a row of ``boxes`` (``(N, 4)``) has a value beyond
+    :data:`MAX_PIXELS`, naming it (``name[i] = [...]``; ``got [...]`` with ``got``, for one
+    box) and then ``suffix``.
+
+    >>> check_in_pixels(np.array([[0, 0, 5, 5], [1e17, 0, 5, 5]]), "boxes")
+    ... # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: boxes must lie within ±2^52 pixels, ...; boxes[1] = [1e+17, 0.0, 5.0, 5.0]
+    """
+    if not len(boxes) or np.abs(boxes).max() <= MAX_PIXELS:
+        return
+    i = int(np.flatnonzero((np.abs(boxes) > MAX_PIXELS).any(axis=1))[0])
+    where = "got" if got else f"{name.split()[-1]}[{i}] ="
+    raise ValueError(f"{name} must lie within ±2^52 pixels, where a float holds every whole "
+                     f"pixel; {where} {boxes[i].tolist()}{suffix}")
 
 
 def check_finite(arr: np.ndarray, name: str) -> None:

@@ -293,8 +293,8 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
         if job.out in names:
             # (and said no way out: OTB's sequences each keep their frames in img/)
             raise ValueError(f"{names[job.out]} and {job.input} would both write {job.out} "
-                             f"(outputs are named after each input's last part): track them "
-                             f"one at a time, each into its own output folder")
+                             f"(outputs are named after each input): track them one at a "
+                             f"time, each into its own output folder")
         names[job.out] = job.input
     return jobs
 

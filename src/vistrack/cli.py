@@ -130,13 +130,17 @@ def _command_line(argv: Sequence[str]) -> str:
 
 def _report(args: argparse.Namespace) -> int:
     from .io.atomic import check_output
+    from .pipeline import REPORT
     from .report import write_report
 
-    page = Path(args.out_dir) / "report.html"
-    if page.is_file():  # in the option's own words (write_report's are Python's: it said
-        # "pass force=True (--force)"); anything else wrong is write_report's to name
-        check_output(page, force=args.force, name="report", option="--force")
-    print(f"wrote {write_report(args.out_dir, force=args.force)}")
+    try:
+        print(f"wrote {write_report(args.out_dir, force=args.force)}")
+    except FileExistsError:
+        # the page, found after the run folder's own faults: said in the option's words
+        # (write_report's are Python's; it said "pass force=True (--force)")
+        check_output(Path(args.out_dir) / REPORT, force=args.force, name="report",
+                     option="--force")
+        raise
     return 0
 
 

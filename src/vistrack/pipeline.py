@@ -36,6 +36,7 @@ from . import _compile
 from ._memory import PeriodicRelease
 from ._pool import counted, frames_text
 from ._registry import Registry
+from ._validate import MAX_PIXELS
 from .config import OfflineConfig, TrackConfig
 from .detector_checks import (
     detector_grid,
@@ -79,7 +80,7 @@ from .io.motchallenge import (
 from .io.tracks import BoxesWriter, CSVWriter, MOTWriter, PointsCSVWriter, Sink
 from .models.box import FRAME_RATES, BoxMotion
 from .tracking.base import Tracker, check_start_box
-from .tracking.box import MAX_PIXELS, BoxTracker, BoxTrackerConfig
+from .tracking.box import BoxTracker, BoxTrackerConfig
 from .tracking.calibration import TOP_PERSISTS, NoOutcomesError, ScoreCalibration
 from .tracking.offline import SmoothedTracks, smooth
 from .types import Detections, Frame, Tracks

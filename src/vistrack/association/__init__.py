@@ -7,9 +7,11 @@ from .assign import (
     gnn,
     gnn_sparse,
     greedy,
+    greedy_pairs,
     lsa,
     lsa_kernel,
     nearest_neighbour,
+    nearest_pairs,
 )
 from .costs import (
     euclidean,
@@ -25,8 +27,8 @@ from .costs import (
 from .gating import chi2_gate, chi2_threshold
 from .pda import ipda_weights, jipda_weights, jpda_weights, likelihoods, pda_weights
 
-__all__ = ["ASSIGNERS", "assign", "components", "gnn", "gnn_sparse", "greedy", "lsa", "lsa_kernel",
-           "nearest_neighbour",
+__all__ = ["ASSIGNERS", "assign", "components", "gnn", "gnn_sparse", "greedy", "greedy_pairs",
+           "lsa", "lsa_kernel", "nearest_neighbour", "nearest_pairs",
            "euclidean", "giou", "iou", "iou_pairs", "iou_pairs_same_class", "mahalanobis",
            "non_maximum", "overlapping_pairs", "paired_iou", "chi2_gate", "chi2_threshold",
            "ipda_weights", "jipda_weights", "jpda_weights", "likelihoods", "pda_weights"]

@@ -680,15 +680,14 @@ def greedy_pairs(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
     ...              (2, 2))
     (array([1, 0]), array([0, 1]))
     """
+    ok = np.isfinite(cost)  # (never assigned: -inf sorted first, and was taken)
+    rows, cols, cost = rows[ok], cols[ok], cost[ok]
     order = np.argsort(cost, kind="stable")
-    used_t, used_d = np.zeros(shape[0], bool), np.zeros(shape[1], bool)
+    used_t, used_d = bytearray(shape[0]), bytearray(shape[1])
     taken_r, taken_c = [], []
-    for i in order:
-        a, b = rows[i], cols[i]
-        if not np.isfinite(cost[i]):  # (never assigned; sorted last)
-            break
+    for a, b in zip(rows[order].tolist(), cols[order].tolist()):  # (Python's ints: quicker)
         if not used_t[a] and not used_d[b]:
-            used_t[a] = used_d[b] = True
+            used_t[a] = used_d[b] = 1
             taken_r.append(a)
             taken_c.append(b)
     return np.array(taken_r, np.int64), np.array(taken_c, np.int64)
@@ -722,8 +721,14 @@ def nearest_neighbour(cost: np.ndarray,
     [[0, 1], [0, 0]]
     """
     cost, gate = _check(cost, gate)
-    r, c = np.nonzero(gate)
-    return nearest_pairs(r, c, cost[r, c])
+    if cost.shape[1] == 0:
+        return _EMPTY
+    # (a row's argmin, the lowest column of those tied: nearest_pairs' rule on every pair,
+    # without sorting them all)
+    c = np.where(gate, cost, np.inf)
+    best = np.argmin(c, axis=1)
+    rows = np.flatnonzero(np.isfinite(c[np.arange(len(c)), best]))
+    return rows.astype(np.int64), best[rows].astype(np.int64)
 
 
 def nearest_pairs(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray

@@ -250,7 +250,8 @@ def _innovations(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, z_name: str = "z
     z = np.atleast_2d(as_float_array(z, z_name))
     if zp.shape == (0,):  # no tracks, a bare [] (or an array of none): read as one track
         # of no measurement, and S, as bare, refused as not (1, 0, 0)
-        zp = np.zeros((0, z.shape[1] if z.ndim == 2 and z.size else 0))
+        none = z.size == 0 and z.shape == (1, 0)  # (a bare [] of detections: atleast_2d's)
+        zp = np.zeros((0, 0 if none else z.shape[1]))
         if S.shape == (0,):
             S = np.zeros((0, zp.shape[1], zp.shape[1]))
     zp = np.atleast_2d(zp)
@@ -259,6 +260,12 @@ def _innovations(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, z_name: str = "z
     T, m = zp.shape
     if S.shape != (T, m, m):
         raise ValueError(f"S must have shape ({T}, {m}, {m}); got {S.shape}")
+    # (none: a bare [] or (0, m); a (5, 0) array was taken for none, its rows dropped)
+    if z.shape[1:] != (m,) and not (z.size == 0 and z.shape in ((1, 0), (0, m))):
+        raise ValueError(f"{z_name} must have shape (D, {m}); got {z.shape}")
+    if T == 0:  # no tracks: nothing to check in S or z_pred (the checks below reduced over
+        # no entry, in numpy's words, where there were no detections either)
+        return zp, S, z
     finite = np.isfinite(S).all(axis=(1, 2))
     if not finite.all():  # numpy's Cholesky factor of NaN is NaN, without an error
         raise ValueError(f"S must be finite and positive definite for every track; S["
@@ -272,9 +279,6 @@ def _innovations(z_pred: ArrayLike, S: ArrayLike, z: ArrayLike, z_name: str = "z
     # numpy's Cholesky reads the lower triangle alone: an S that is not symmetric would be
     # taken for another
     check_symmetric(S, "S")
-    # (none: a bare [] or (0, m); a (5, 0) array was taken for none, its rows dropped)
-    if z.shape[1:] != (m,) and not (z.size == 0 and z.shape in ((1, 0), (0, m))):
-        raise ValueError(f"{z_name} must have shape (D, {m}); got {z.shape}")
     return zp, S, z
 
 

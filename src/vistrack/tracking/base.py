@@ -202,7 +202,7 @@ def check_start_box(image: np.ndarray, box: np.ndarray, name: str = "box") -> No
     x, y, w, h = (float(v) for v in box)
     where = f"{name} (x, y, w, h) = ({', '.join(f'{v:g}' for v in (x, y, w, h))})"
     if not w * h > 0 or x + w == x or y + h == y:
-        # (1e-200 on a side, or a size lost at x = 1e17 in floating point, divided by an
+        # (1e-200 on a side, or a size under a unit of the last place at x = 2^52, divided by an
         # area of 0 in a ZeroDivisionError; a box under a pixel is followed, by the pixels
         # about it)
         raise ValueError(f"{where} has no size a float holds at its place (its area, or "

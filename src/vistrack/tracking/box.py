@@ -92,7 +92,7 @@ import numpy as np
 from .._jit import njit
 from .._prebuilt import kernel
 from .._registry import Registry
-from .._validate import is_number
+from .._validate import check_in_pixels, is_number
 from ..association import ASSIGNERS, assign, iou_pairs, non_maximum
 from ..association.assign import _gnn_sparse, gnn_pairs, gnn_pairs_limited
 from ..association.costs import iou_pairs_same_class
@@ -107,7 +107,7 @@ from ..filters.axes import (
 from ..models.box import MAX_SECONDS, BoxMotion
 from ..types import Detections, Frame, Tracks, _whole_numbers
 from .base import frame_index
-from .calibration import MAX_PIXELS, ScoreCalibration, ScoreCalibrator
+from .calibration import ScoreCalibration, ScoreCalibrator
 from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, time_slack
 
 if TYPE_CHECKING:
@@ -297,8 +297,6 @@ class BoxTrackerConfig:
         return dict(link_iou=self.calibration_iou, top=self.calibration_top,
                     top_min=self.calibration_top_min, cap_sigma=self.calibration_cap_sigma,
                     frame_rate=frame_rate, chain_span=self.chain_span, chain_gap=self.chain_gap)
-
-
 
 
 TRACKERS: Registry[BoxTrackerConfig] = Registry("box-tracker preset", {
@@ -1185,12 +1183,8 @@ class BoxTracker:
             i = int(np.flatnonzero(np.isnan(raw))[0])
             raise ValueError(f"detection scores must not be NaN; scores[{i}] is NaN (frame "
                              f"{frame})")
-        if len(db) and np.abs(db).max() > MAX_PIXELS:
-            # the filters square a box's size; far past any image the squares overflow
-            i = int(np.flatnonzero((np.abs(db) > MAX_PIXELS).any(axis=1))[0])
-            raise ValueError(f"detection boxes must lie within ±2^52 pixels, where a float "
-                             f"holds every whole pixel; boxes[{i}] = {db[i].tolist()} (frame "
-                             f"{frame})")
+        # the filters square a box's size; far past any image the squares overflow
+        check_in_pixels(db, "detection boxes", f" (frame {frame})")
         if cfg.nms_iou < 1 and len(raw) > 1:  # (changes no state)
             keep = non_maximum(db, raw, dc, cfg.nms_iou)
             if not keep.all():

@@ -68,7 +68,7 @@ import numpy as np
 
 from .._jit import njit
 from .._prebuilt import kernel
-from .._validate import as_number, as_whole, is_number, is_whole
+from .._validate import as_number, as_whole, check_in_pixels, is_number, is_whole
 from ..association.assign import gnn_pairs
 from ..association.costs import iou_pairs_same_class
 from ..types import Detections
@@ -446,11 +446,6 @@ def _outcomes(frames: Iterable[Detections], **calibrator: Any) -> tuple[np.ndarr
 
 _NONE = Detections(boxes=np.zeros((0, 4)))
 """A frame of no detections."""
-
-MAX_PIXELS = 2.0 ** 52
-"""The largest box value (in pixels) a box tracker, and its score calibration, takes: beyond
-it a float no longer holds every whole pixel, the filters' variances (the squares of the
-sizes) soon overflow, and so do the areas of the calibration's overlaps."""
 
 
 TOP_PERSISTS = 0.5
@@ -1050,12 +1045,9 @@ class ScoreCalibrator:
         # scores), and a detector that refills one buffer every frame would otherwise change
         # it under us (each box then continued itself, and clutter persisted)
         boxes = np.array(detections.boxes, dtype=np.float64, order="C")
-        if len(boxes) and np.abs(boxes).max() > MAX_PIXELS:
-            # (areas past the float range made every overlap NaN: nothing persisted, and the
-            # calibration took every score as confident; BoxTracker.step refuses them too)
-            i = int(np.flatnonzero((np.abs(boxes) > MAX_PIXELS).any(axis=1))[0])
-            raise ValueError(f"detection boxes must lie within ±2^52 pixels, where a float "
-                             f"holds every whole pixel; boxes[{i}] = {boxes[i].tolist()}")
+        # (areas past the float range made every overlap NaN: nothing persisted, and the
+        # calibration took every score as confident; BoxTracker.step refuses them too)
+        check_in_pixels(boxes, "detection boxes")
         cls = np.array(detections.classes, order="C")
         s = _scores(detections.scores).copy()  # type: ignore[arg-type]  # set by __post_init__
         # the previous frame: its boxes, classes, scores, which of them continued one of the

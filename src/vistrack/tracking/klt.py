@@ -101,6 +101,9 @@ class Features:
 _LARGEST = 2**20
 """The largest of :class:`KLTTracker`'s sizes and counts, which OpenCV takes as C ints."""
 
+_WINDOW = 4096
+"""The largest window (``win_size``, ``block_size``) of :class:`KLTTracker`, in pixels."""
+
 
 class KLTTracker:
     """Shi-Tomasi + Lucas-Kanade feature tracker with forward-backward and affine checks.
@@ -135,7 +138,8 @@ class KLTTracker:
     Raises
     ------
     ValueError
-        If ``max_features`` is less than 1.
+        If a setting lies outside its range, named: ``max_features`` less than 1, a size or
+        count past 2**20 (a window past 4096 pixels), which OpenCV cannot take.
 
     Examples
     --------
@@ -178,11 +182,15 @@ class KLTTracker:
         self.min_ncc = as_finite(min_ncc, "min_ncc", -1.0, above=True, high=1.0)
         # OpenCV takes them as C ints: min_distance 3e9 crashed the process in
         # goodFeaturesToTrack, the others failed in its words (an overload, naming none)
-        for name in ("max_features", "min_distance", "block_size", "win_size", "levels",
-                     "half", "search_radius"):
+        for name in ("max_features", "min_distance", "levels", "half", "search_radius"):
             if getattr(self, name) > _LARGEST:
                 raise ValueError(f"{name} must be at most 2**20 (pixels, or features: more "
                                  f"than any image holds); got {getattr(self, name):g}")
+        # and allocates a window's square of each (win_size 100000: 40 GB, in its words)
+        for name in ("block_size", "win_size"):
+            if getattr(self, name) > _WINDOW:
+                raise ValueError(f"{name} must be at most 4096 pixels (OpenCV allocates its "
+                                 f"square for each window); got {getattr(self, name)}")
         self.reset()
 
     def reset(self) -> None:

@@ -643,6 +643,10 @@ class ColourTracker(SingleObjectTracker):
         self.box = as_box(box)
 
 
+_FAR = 2.0 ** 29
+"""How far past the image CamShift's window is given to OpenCV (which cuts it to the image)."""
+
+
 class CamShiftTracker(ColourTracker):
     """OpenCV's CamShift on the colour back-projection of :class:`ColourTracker`.
 
@@ -690,7 +694,12 @@ class CamShiftTracker(ColourTracker):
             # whatever lay there; past int32, its window could not be read)
             self._learn(cells)
             return self.box.copy()
-        x, y, w, h = np.round(self.box).astype(int)
+        # the window as OpenCV's ints, cut to within 2^29 pixels of the image (it cuts it to
+        # the image itself; past int32, "Can't parse 'window'")
+        b = np.round(self.box)  # (each value rounded, as always; then cut)
+        lo = np.maximum(b[:2], -_FAR)
+        hi = np.minimum(b[:2] + b[2:], _FAR)
+        x, y, w, h = (int(v) for v in np.r_[lo, hi - lo])
         crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.5)
         rect, _ = cv2.CamShift(bp, (x, y, max(w, 1), max(h, 1)), crit)
         (cx, cy), (rw, rh), angle = rect
