@@ -1230,27 +1230,23 @@ def test_camshift_leaves_a_window_wholly_outside_the_image_where_it_is():
     im = np.full((120, 160, 3), (40, 120, 40), np.uint8)
     im[50:70, 0:20] = (0, 0, 255)
     im[50:70, 70:90] = (0, 0, 255)
+
+    def after(kind, anchor):
+        t = kind(rate=0.0)
+        t.init(im, [0, 50, 20, 20])
+        t.anchor(anchor)
+        return t.update(im)
+
     for anchor in ([-25, 50, 20, 20], [300, 90, 20, 20], [-3e9, 30, 40, 40]):
-        got = []
-        for kind in (CamShiftTracker, ColourTracker):
-            t = kind(rate=0.0)
-            t.init(im, [0, 50, 20, 20])
-            t.anchor(anchor)
-            got.append(t.update(im))
-        np.testing.assert_array_equal(got[0], anchor)
-        np.testing.assert_array_equal(got[0], got[1])
+        got = after(CamShiftTracker, anchor)
+        np.testing.assert_array_equal(got, anchor)
+        np.testing.assert_array_equal(got, after(ColourTracker, anchor))
     # a window past int32 that reaches into the image is cut to it (OpenCV's "Can't parse
     # 'window'" before): CamShift finds the target the window holds, as it does from a
     # window of the image's own size (the oracle)
     for far, near in (([-3e9, 50, 3e9 + 90, 20], [0, 50, 90, 20]),
                       ([70, 50, 3e9, 20], [70, 50, 90, 20])):
-        got = []
-        for start in (far, near):
-            t = CamShiftTracker(rate=0.0)
-            t.init(im, [0, 50, 20, 20])
-            t.anchor(start)
-            got.append(t.update(im))
-        np.testing.assert_array_equal(got[0], got[1])
+        np.testing.assert_array_equal(after(CamShiftTracker, far), after(CamShiftTracker, near))
 
 
 @pytest.mark.parametrize("method", ["colour", "camshift", "particle", "wsl", "template", "klt"])
