@@ -181,6 +181,14 @@ def test_an_identity_is_numbered_inside_the_image_and_off_the_frame_label():
     out = draw([6, bottom + 3, 60, 100], label="frame 2")
     np.testing.assert_array_equal(out[:bottom + 1], alone[:bottom + 1])
     assert (out[bottom + 5:bottom + 30, 8:30] == id_colour(5)).all(axis=2).any()
+    # a point's number there was drawn under the label, hidden but for a sliver: now
+    # below it, as a box's; the label's rows as drawn without the track, but for the dot
+    dot = Tracks(ids=np.array([7]), boxes=None, points=np.array([[30.0, bottom + 2]]),
+                 scores=np.ones(1), classes=np.zeros(1))
+    out = Annotator().draw(grey, dot, label="frame 2")
+    differ = (out[:bottom + 1] != alone[:bottom + 1]).any(axis=2)
+    assert not differ[:, 40:].any()  # (the number's columns, right of the dot)
+    assert (out[bottom + 1:bottom + 30, 34:60] == id_colour(7)).all(axis=2).any()
 
 
 def test_tracks_drawn_over_the_frame_label_leave_its_text_whole():
@@ -272,6 +280,21 @@ def test_hota_over_alpha_is_drawn_from_the_scores(tmp_path, capsys):
     legend = plot_hota_alpha(many).axes[-1].get_legend()
     assert [t.get_text() for t in legend.get_texts()] == ["21 sequences (named up to 20)",
                                                           "COMBINED"]
+    # 20 and COMBINED: COMBINED was counted among the 20, and none was named ("20
+    # sequences (named up to 20)")
+    twenty = {f"S{k:02d}": res["S0"] for k in range(20)} | {"COMBINED": res["COMBINED"]}
+    legend = plot_hota_alpha(twenty).axes[-1].get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == [*list(twenty)]
+    # the first ten curves are of ten hues, not pairs told apart by lightness alone (the
+    # first two were dark and light blue, 9 degrees apart): hues read back from the lines
+    # (matplotlib's HSV), neighbours of colour (not grey) at least 30 degrees apart
+    from matplotlib.colors import rgb_to_hsv
+
+    hsv = [rgb_to_hsv(np.array(line.get_color()[:3]))
+           for line in plot_hota_alpha(twenty).axes[0].lines[:10]]
+    for (h1, s1, _), (h2, s2, _) in zip(hsv, hsv[1:]):
+        if min(s1, s2) > 0.2:
+            assert min(abs(h1 - h2), 1 - abs(h1 - h2)) >= 30 / 360
     # a sequence named with a leading "_" is named too (matplotlib leaves such labels out of
     # a legend it collects: a curve was drawn without its name)
     legend = plot_hota_alpha({"_night": res["S0"], "day": res["S1"],

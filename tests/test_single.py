@@ -1281,3 +1281,18 @@ def test_the_particle_clouds_mean_box_is_the_box_it_was_anchored_to():
     im[20:30, 40:80] = (0, 0, 255)  # the target, 40 x 10, where the box was anchored
     b = t.update(im)
     assert b[2] / b[3] == pytest.approx(4.0, rel=0.05)
+
+
+def test_a_polygon_in_crossed_order_is_a_box_not_an_absent_object():
+    """A square's corners listed as a bow tie sum to no area by the shoelace formula, but
+    lie on no one line: they were read as the object absent (a box of no size), and an
+    exact prediction scored 0 there. The oracle: VOT's toolkit, the corners' bounding box
+    ("minmax"), as for the same corners in order; a polygon on one line stays absent."""
+    crossed = [[0, 0, 10, 10, 10, 0, 0, 10]]
+    np.testing.assert_array_equal(region_to_bbox(crossed, "minmax"),
+                                  region_to_bbox([[0, 0, 10, 0, 10, 10, 0, 10]], "minmax"))
+    gt = region_to_bbox(crossed, "minmax")
+    assert success_rate(np.array([[0.0, 0, 10, 10]]), gt) == 1.0
+    line = [[0, 0, 1, 3, 2, 6, 3, 9]]
+    np.testing.assert_array_equal(region_to_bbox(line, "minmax")[0, 2:], [0.0, 0.0])
+    np.testing.assert_array_equal(region_to_bbox(line)[0, 2:], [0.0, 0.0])

@@ -329,3 +329,20 @@ def test_a_snake_needs_three_samples_and_names_its_arguments():
     np.testing.assert_array_equal(bspline_matrix(6, 5, derivative=1),
                                   bspline_matrix(6, 5, derivative=True))
     np.testing.assert_array_equal(bspline_matrix(6, 5, derivative=0), bspline_matrix(6, 5))
+
+
+@pytest.mark.parametrize("call, error, said", [
+    (lambda s: s.init([[True, False]] * 8), TypeError, "control_points must be x, y"),
+    (lambda s: s.init([["10", "0"]] * 8), TypeError, "control_points must be x, y"),
+    (lambda s: s.init(np.full((8, 2), 1 + 1j)), TypeError, "control_points must be real"),
+    (lambda s: s.init(np.ma.masked_array(np.arange(16.0).reshape(8, 2),
+                                         mask=np.eye(8, 2, dtype=bool))),
+     ValueError, "control_points must be finite; control_points[0] = [nan, 1.0]"),
+    (lambda s: s.init_circle((True, 60), 26), TypeError, "centre must be x and y"),
+])
+def test_control_points_that_are_no_coordinates_are_named(call, error, said):
+    """Booleans and text were read as numbers (a 1 x 1 square of 0s and 1s), complex
+    points as their real parts, a masked array's hidden points as data, and a centre of
+    True as x = 1: the package's numeric rules, each named."""
+    with pytest.raises(error, match=re.escape(said)):
+        call(Snake(n_control=8, n_samples=16))

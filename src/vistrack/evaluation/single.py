@@ -302,7 +302,11 @@ def _no_area(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
     corners on a point or on any one line, however it runs) or have a corner that is not
     finite: the object absent."""
     area = 0.5 * np.abs((xs * np.roll(ys, -1, axis=1) - np.roll(xs, -1, axis=1) * ys).sum(1))
-    return ~((area > 0) & np.isfinite(area))
+    # a crossed order (a square's corners as a bow tie) sums to no area too, its corners on
+    # no one line: not absent (it was, and an exact prediction scored 0 there)
+    dx, dy = xs - xs[:, :1], ys - ys[:, :1]
+    flat = (dx[:, :, None] * dy[:, None, :] == dy[:, :, None] * dx[:, None, :]).all((1, 2))
+    return ~np.isfinite(area) | ((area == 0) & flat)
 
 
 _OTB_NAME = re.compile(r"groundtruth_rect(\.\d+)?\.txt")

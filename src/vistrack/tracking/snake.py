@@ -296,7 +296,9 @@ class Snake:
         self._qdiag = np.r_[self.q, self.q, np.full(len(cols) - 2, self.q / rho2)]
 
     def _points(self, control_points: ArrayLike) -> np.ndarray:
-        Q = np.asarray(control_points, dtype=float)
+        # (booleans and text were read as numbers, complex ones as their real parts, and a
+        # masked array's hidden points as data: the package's numeric rules)
+        Q = as_float_array(control_points, "control_points", not_boolean="x, y coordinates")
         if Q.shape != (self.n, 2):
             raise ValueError(f"control_points must have shape ({self.n}, 2); got {Q.shape}")
         if not np.isfinite(Q).all():  # a NaN point tracked an all-NaN contour without a word
@@ -340,7 +342,7 @@ class Snake:
         R = radius * 3 / (2 + np.cos(2 * np.pi / self.n))
         # (one number was a bare IndexError, a third coordinate dropped, NaN named as
         # control_points)
-        c = as_float_array(centre, "centre")
+        c = as_float_array(centre, "centre", not_boolean="x and y")  # (True was x = 1)
         if c.shape != (2,) or not np.isfinite(c).all():
             raise ValueError(f"centre must be two finite numbers, x and y; got {centre!r}")
         self.init(np.c_[c[0] + R * np.cos(a), c[1] + R * np.sin(a)], std)

@@ -282,6 +282,9 @@ class Annotator:
             else:
                 cv2.circle(out, at[k], dot, c, -1)
                 x, y = cut[k][0] + gap, cut[k][1] - gap
+                top = banner[1] if x < banner[0] else 0
+                if y - th < top:  # under the frame's label (hidden there), or off the image:
+                    y = top + th + gap  # below it, as a box's number goes
             if not numbered:
                 continue
             # a box or point wholly off the image has no number: pulled inside, it stood at

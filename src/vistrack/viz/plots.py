@@ -453,7 +453,8 @@ def plot_hota_alpha(results: dict[str, Any], path: str | os.PathLike | None = No
         ax.set_ylim(0, 100)
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("score (%)")
-    if len(names) <= 20:
+    if len(names) - ("COMBINED" in results) <= 20:  # (COMBINED counted among 20 left
+        # twenty sequences unnamed, the legend saying "named up to 20")
         # beside the panels, where it hides no curve (inside the last one, 20 names covered
         # a third of its width)
         # the lines given, not collected: matplotlib leaves out a label that starts with
@@ -572,10 +573,13 @@ def plot_timeline(matches: Any, path: str | os.PathLike | None = None, *,
 
 
 def _tab20(n: int) -> list[Any]:
-    """``n`` colours of matplotlib's tab20, repeating past 20."""
+    """``n`` colours of matplotlib's tab20, its ten dark hues first and then their light
+    pairs, repeating past 20 (taken in order, the first two were dark and light blue, the
+    next two orange: neighbours told apart by lightness alone)."""
     import matplotlib
 
-    return [matplotlib.colormaps["tab20"](k % 20) for k in range(n)]
+    tab = matplotlib.colormaps["tab20"]
+    return [tab(2 * (k % 20) if k % 20 < 10 else 2 * (k % 20 - 10) + 1) for k in range(n)]
 
 
 def _save_over(fig: Figure, ax: Axes, image: Any, background: np.ndarray,
