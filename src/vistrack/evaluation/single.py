@@ -31,8 +31,8 @@ from .._validate import as_finite, as_float_array, decode_text
 from ..io.motchallenge import _text_lines
 from ..io.tracks import write_boxes
 
-__all__ = ["success_rate", "success_curve", "precision", "region_to_bbox", "read_boxes",
-           "read_box_lines", "boxes_origin", "write_boxes"]
+__all__ = ["overlaps", "success_rate", "success_curve", "precision", "region_to_bbox",
+           "read_boxes", "read_box_lines", "boxes_origin", "write_boxes"]
 
 
 def _boxes(value: ArrayLike, name: str, k: int = 4) -> np.ndarray:
@@ -298,9 +298,10 @@ def _check_rule(rule: str) -> None:
 
 
 def _no_area(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
-    """Which polygons (corners ``xs, ys`` in order) enclose no area (the shoelace formula:
-    corners on a point or on any one line, however it runs) or have a corner that is not
-    finite: the object absent."""
+    """Which polygons (corners ``xs, ys`` in order) enclose no area, their corners on a point
+    or on any one line (the shoelace formula's zero, however the line runs, and not a
+    crossed order's: a bow tie's halves cancel), or have a corner that is not finite: the
+    object absent."""
     area = 0.5 * np.abs((xs * np.roll(ys, -1, axis=1) - np.roll(xs, -1, axis=1) * ys).sum(1))
     # a crossed order (a square's corners as a bow tie) sums to no area too, its corners on
     # no one line: not absent (it was, and an exact prediction scored 0 there)
