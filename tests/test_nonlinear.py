@@ -1697,3 +1697,221 @@ def test_the_ensemble_steps_name_an_argument_that_is_no_ensemble():
     with pytest.raises(ValueError, match=re.escape("y must have shape (1,) to match ens; got "
                                                    "(2,)")):
         enkf_update(ens, [1.0, 2.0], pos)
+
+
+# ---------------------------------------------------------------- the EKF's compiled path
+def _jit_jacobian_cases():
+    from vistrack.models import GrowthMeasurement, GrowthMotion
+
+    rng = np.random.default_rng(3)
+    ct, rb = CoordinatedTurn(), RangeBearing(sensor=(1.0, -2.0), ndim_state=5)
+    growth, square = GrowthMotion(), GrowthMeasurement()
+    cases = []
+    for w in (0.7, -0.3, 1e-6, 0.0, 3.0):  # (|ω dt| < 1e-4: the series)
+        for dt in (0.1, 1.0, 2.5):
+            x = np.r_[rng.normal(0, 5, 4), w]
+            cases.append((ct, x, dt, 0.0))
+    cases += [(rb, np.r_[rng.normal(0, 5, 2), 0.0, 0.0, 0.1], None, None) for _ in range(4)]
+    cases += [(growth, np.array([v]), 1.0, t) for v, t in ((0.3, 0.0), (-4.0, 3.0))]
+    cases += [(square, np.array([v]), None, None) for v in (2.0, -7.5)]
+    return cases
+
+
+@pytest.mark.parametrize("model, x, dt, t", _jit_jacobian_cases())
+def test_compiled_jacobians_equal_the_models_and_finite_differences(model, x, dt, t):
+    """Each model's compiled Jacobian (``jit_jacobian``, what the EKF's compiled path calls)
+    against its numpy ``jacobian`` (to rounding) and central differences of its compiled
+    ``jit_f`` / ``jit_h`` (an independent oracle of the derivative)."""
+    motion = dt is not None
+    n = len(x)
+    if motion:
+        p = model.jit_params(np.array([dt]), np.array([t]))[0]
+        rows = n
+        want = model.jacobian(x, dt, t)
+
+        def value(z):
+            out = np.empty(n)
+            model.jit_f(z, dt, t, p, out)
+            return out
+    else:
+        p = model.jit_params()
+        rows = model.ndim_meas if hasattr(model, "ndim_meas") else 1
+        want = model.jacobian(x)
+
+        def value(z):
+            out = np.empty(rows)
+            model.jit_h(z, p, out)
+            return out
+
+    got = np.full((rows, n), np.nan)
+    if motion:
+        model.jit_jacobian(x, dt, t, p, got)
+    else:
+        model.jit_jacobian(x, p, got)
+    np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-14)
+    h = 1e-6 * np.maximum(1.0, np.abs(x))
+    diff = np.column_stack([(value(x + h[k] * np.eye(n)[k]) - value(x - h[k] * np.eye(n)[k]))
+                            / (2 * h[k]) for k in range(n)])
+    np.testing.assert_allclose(got, diff, rtol=1e-6, atol=1e-6)
+
+
+def _turn_series():
+    """A coordinated turn seen by range and bearing over 80 steps, bearings missing every
+    third step and step 7 missing whole; its prior, uneven steps with their times, and a
+    batch of three such series."""
+    motion, meas = CoordinatedTurn(q=0.05, q_turn=1e-3), RangeBearing(1.0, 1e-3, ndim_state=5)
+    x0 = np.array([-20.0, 8.0, 0.0, -0.8, 0.01])
+    P0 = np.diag([4.0, 4.0, 0.5, 0.5, 1e-3])
+    _, zs = vt.simulate.simulate(motion, meas, 80, x0=x0, rng=5)
+    zs[::3, 1] = np.nan
+    zs[7] = np.nan
+    dt = np.r_[1.0, np.random.default_rng(0).uniform(0.2, 2.0, 79)]
+    times = np.r_[0.0, np.cumsum(dt[1:])] + 5.0
+    return motion, meas, x0, P0, zs, dt, times, np.stack([zs, zs + 0.05, zs * 1.01])
+
+
+def _python_steps(cls=ExtendedKalmanFilter):
+    """The EKF's filter with its steps called from Python: a subclass's own update runs the
+    loop of `run_sequence`, the path before the compiled one."""
+    class Steps(cls):
+        def update(self, g, y):
+            return super().update(g, y)
+    return Steps
+
+
+def test_ekf_filter_runs_compiled_and_equals_its_steps_from_python(monkeypatch):
+    """With models of compiled functions and Jacobians (the coordinated turn, range and
+    bearing, the growth model) the EKF's filter runs in one compiled call (Python's loop
+    made to fail here) and gives what its steps from Python give, to rounding: bearings
+    missing every third step, a step missing whole, steps of different lengths with their
+    times (the growth model's forcing depends on the time), a batch of three series with a
+    prior each, and one prior for all. Oracle: the steps from Python (`ekf_predict`,
+    `ekf_update`; FilterPy's EKF is the oracle of `test_ekf_filter_equals_filterpy_and_the_numpy
+    _correction`, which now runs this path)."""
+    import vistrack.filters._nonlinear as nl
+    import vistrack.filters.ekf as ekf_module
+
+    motion, meas, x0, P0, zs, dt, times, batch = _turn_series()
+    priors = (dict(x0=x0, P0=P0),
+              dict(x0=np.stack([x0, x0 + 0.5, x0 - 0.5]), P0=np.stack([P0, 2 * P0, P0])))
+    gm, gh = growth_model(q=10.0, r=1.0)
+    _, gys = vt.simulate.simulate(gm, gh, 60, x0=[0.1], rng=2)
+    gys[4] = np.nan
+    cases = [(motion, meas, zs, dict(x0=x0, P0=P0), {}),
+             (motion, meas, zs, dict(x0=x0, P0=P0), dict(dt=dt, times=times)),
+             (gm, gh, gys, dict(x0=[0.1], P0=[[5.0]]), dict(times=np.arange(60.0)))]
+    cases += [(motion, meas, batch, prior, dict(dt=dt)) for prior in priors]
+    results = []
+    with monkeypatch.context() as m:
+        def no_loop(*args, **kwargs):
+            raise AssertionError("the filter's loop in Python")
+
+        m.setattr(ekf_module, "run_sequence", no_loop)
+        for mo, me, ys, prior, when in cases:
+            results.append(ExtendedKalmanFilter(mo, me).filter(ys, **prior, **when))
+    assert nl.run_sequence is not None
+    for (mo, me, ys, prior, when), got in zip(cases, results):
+        want = _python_steps()(mo, me).filter(ys, **prior, **when)
+        assert got.means.shape == want.means.shape
+        for name in ("means", "covs", "pred_means", "pred_covs"):
+            a, b = getattr(got, name), getattr(want, name)
+            np.testing.assert_allclose(a, b, rtol=1e-11, atol=1e-11 * np.abs(b).max())
+            assert not a.flags.writeable
+        np.testing.assert_allclose(got.loglik, want.loglik, rtol=1e-11)
+        np.testing.assert_allclose(got.last.mean, want.last.mean, rtol=1e-11, atol=1e-11)
+
+
+def test_ekf_filter_names_what_its_compiled_path_cannot_take_as_its_steps_from_python():
+    """What the compiled call cannot take (a state at the sensor, where range-bearing's
+    Jacobian divides by 0; a motion model's noise that makes a prediction infinite) is
+    filtered again from Python, which gives the same error as the steps from Python."""
+    motion, meas = CoordinatedTurn(q=0.05), RangeBearing(1.0, 1e-3, ndim_state=5)
+    zs = np.array([[1.0, 0.2], [1.1, 0.25], [1.2, 0.3]])
+    cases = [dict(x0=[0.0, 0.0, 0.0, 0.0, 0.0], P0=np.eye(5)),  # at the sensor
+             dict(x0=[1.0, 1.0, 1e200, 1e200, 0.0], P0=np.eye(5) * 1e300)]
+    for prior in cases:
+        with pytest.raises(Exception) as want:
+            _python_steps()(motion, meas).filter(zs, **prior)
+        with pytest.raises(type(want.value)) as got:
+            ExtendedKalmanFilter(motion, meas).filter(zs, **prior)
+        assert str(got.value) == str(want.value)
+
+
+def test_ukf_filter_runs_compiled_and_equals_its_steps_from_python(monkeypatch):
+    """With models of compiled functions (`jit_f`, `jit_h`) the UKF's filter runs in one
+    compiled call (Python's loop made to fail here) and gives what its steps from Python
+    give: bearings missing every third step, a step missing whole, steps of different
+    lengths with their times, a batch with a prior each, the growth model, and sigma points
+    of three settings. With the default points (α = 1e-3, weights near -1e6 and 1e5) the
+    two round apart by up to 1e-8 of the scale, as FilterPy's do from them (the oracle of
+    `test_ukf_equals_filterpy_on_range_bearing_with_bearings_crossing_pi`, which now runs
+    this path); with α = 0.3 or Julier's points to 1e-11. A batch's series are compared
+    with the steps from Python on each alone, within three times the distance between those
+    and the steps from Python for the batch (numpy's sums, not the one-Gaussian kernels):
+    its second series, of a wider prior, rounds apart by up to 7e-7 of its scale there with
+    the default points, 4e-12 with α = 0.3. A prior whose covariance has no Cholesky factor
+    (ω known exactly) is filtered from Python, as before."""
+    import vistrack.filters.ukf as ukf_module
+
+    motion, meas, x0, P0, zs, dt, times, batch = _turn_series()
+    gm, gh = growth_model(q=10.0, r=1.0)
+    _, gys = vt.simulate.simulate(gm, gh, 60, x0=[0.1], rng=2)
+    gys[4] = np.nan
+    cases = []
+    for pts, tol in ((MerweScaledSigmaPoints(), 1e-8), (MerweScaledSigmaPoints(0.3), 1e-11),
+                     (JulierSigmaPoints(kappa=1.0), 1e-11)):
+        cases += [(motion, meas, pts, tol, zs, dict(x0=x0, P0=P0), {}),
+                  (motion, meas, pts, tol, zs, dict(x0=x0, P0=P0), dict(dt=dt, times=times)),
+                  (gm, gh, pts, tol, gys, dict(x0=[0.1], P0=[[5.0]]),
+                   dict(times=np.arange(60.0)))]
+
+    results = []
+    with monkeypatch.context() as m:
+        def no_loop(*args, **kwargs):
+            raise AssertionError("the filter's loop in Python")
+
+        m.setattr(ukf_module, "run_sequence", no_loop)
+        for mo, me, pts, _, ys, prior, when in cases:
+            results.append(UnscentedKalmanFilter(mo, me, points=pts).filter(ys, **prior, **when))
+    for (mo, me, pts, tol, ys, prior, when), got in zip(cases, results):
+        want = _python_steps(UnscentedKalmanFilter)(mo, me, points=pts).filter(
+            ys, **prior, **when)
+        for name in ("means", "covs", "pred_means", "pred_covs"):
+            a, b = getattr(got, name), getattr(want, name)
+            np.testing.assert_allclose(a, b, rtol=tol, atol=tol * np.abs(b).max())
+            assert not a.flags.writeable
+        np.testing.assert_allclose(got.loglik, want.loglik, rtol=tol)
+    X0, PP = np.stack([x0, x0 + 0.5, x0 - 0.5]), np.stack([P0, 2 * P0, P0])
+    for pts, tol in ((MerweScaledSigmaPoints(), 1e-8), (MerweScaledSigmaPoints(0.3), 1e-11),
+                     (JulierSigmaPoints(kappa=1.0), 1e-11)):
+        with monkeypatch.context() as m:
+            m.setattr(ukf_module, "run_sequence", no_loop)
+            got = UnscentedKalmanFilter(motion, meas, points=pts).filter(batch, x0=X0, P0=PP,
+                                                                         dt=dt)
+        steps = _python_steps(UnscentedKalmanFilter)(motion, meas, points=pts)
+        numpy_sums = steps.filter(batch, x0=X0, P0=PP, dt=dt)
+        for b in range(3):
+            want = steps.filter(batch[b], x0=X0[b], P0=PP[b], dt=dt)
+            for name in ("means", "covs", "pred_means", "pred_covs"):
+                a, w, other = getattr(got, name)[b], getattr(want, name), getattr(
+                    numpy_sums, name)[b]
+                spread = max(3 * np.abs(other - w).max(), tol * np.abs(w).max())
+                assert np.abs(a - w).max() <= spread, (name, b, np.abs(a - w).max(), spread)
+    # ω known exactly: no Cholesky factor; the steps from Python take its points from the
+    # eigendecomposition, as before
+    singular = np.diag([4.0, 4.0, 0.5, 0.5, 0.0])
+    got = UnscentedKalmanFilter(motion, meas).filter(zs, x0=x0, P0=singular)
+    want = _python_steps(UnscentedKalmanFilter)(motion, meas).filter(zs, x0=x0, P0=singular)
+    assert np.array_equal(got.means, want.means) and np.array_equal(got.covs, want.covs)
+    # a subclass's own step, a state mean of its own: the steps from Python
+    calls = []
+
+    class Counted(UnscentedKalmanFilter):
+        def predict(self, g, dt=1.0, t=0.0):
+            calls.append(1)
+            return super().predict(g, dt, t)
+
+    Counted(motion, meas).filter(zs[:5], x0=x0, P0=P0)
+    UnscentedKalmanFilter(motion, meas, state_mean=lambda p, w: np.einsum("...kn,k->...n", p, w)
+                          ).filter(zs[:5], x0=x0, P0=P0)
+    assert len(calls) == 4

@@ -432,13 +432,13 @@ def test_kernel_resampling_is_unbiased(method):
 def test_source_hash_reads_the_files_and_closes_them():
     """The compiled kernel's cache key: sha1 of the modules' source files, read with hashlib on
     the files themselves; no file is left open (no ResourceWarning)."""
-    from vistrack.filters import _jitmath, particle
+    from vistrack.filters import _codegen, _jitmath
 
     names = (_random.__name__, _jitmath.__name__)
     ref = hashlib.sha1(b"".join(Path(m.__file__).read_bytes() for m in (_random, _jitmath)))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        got = particle._source_hash(*names)
+        got = _codegen.source_hash(*names)
         gc.collect()
     assert got == ref.hexdigest()[:16]
     assert not [w for w in caught if issubclass(w.category, ResourceWarning)]

@@ -154,6 +154,10 @@ def _more_workloads(root: Path, clip: Path, d: Path, ys: Any, cv: Any, pos: Any)
     for f in (ExtendedKalmanFilter(ct, rb), UnscentedKalmanFilter(ct, rb),
               EnsembleKalmanFilter(ct, rb, n_members=50, rng=0)):
         f.filter(zs, x0=x0, P0=P0)
+    # the UKF's steps one at a time (the filter above runs them in one compiled call)
+    from vistrack.filters import ukf_predict, ukf_update
+
+    ukf_update(ukf_predict(vt.Gaussian(x0, P0), ct), zs[1], rb)
     # a batch whose prior has a singular member: its sigma points from the compiled factor
     UnscentedKalmanFilter(ct, rb).filter(np.stack([zs, zs]), x0=x0,
                                          P0=np.stack([P0, np.diag([1.0, 1, 1, 1, 0])]))

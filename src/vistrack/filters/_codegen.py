@@ -559,3 +559,27 @@ def load(prefix: str, src: str):
     sys.modules[name] = module
     spec.loader.exec_module(module)
     return module
+
+
+Ref = tuple[str, str]
+"""A module-level numba function's module and name, as a generated kernel imports it."""
+
+
+def jit_ref(fn) -> Ref | None:
+    """Module and name of a module-level numba function, or None."""
+    py = getattr(fn, "py_func", None)
+    if py is None or "<locals>" in py.__qualname__:
+        return None
+    return py.__module__, py.__name__
+
+
+def source_hash(*modules: str) -> str:
+    """A hash of the source files of ``modules``: part of the generated kernel's source, so
+    that numba's cache of it (which tracks its own file only) is rebuilt when a function it
+    inlines changes."""
+    h = hashlib.sha1()
+    for name in modules:
+        spec = importlib.util.find_spec(name)
+        if spec is not None and spec.origin and os.path.exists(spec.origin):
+            h.update(Path(spec.origin).read_bytes())
+    return h.hexdigest()[:16]

@@ -823,6 +823,42 @@ def step_batch(mean_in, cov_in, y_in, F2, Q2, H2, R2):
 
 
 @njit(cache=True)
+def load_state(x0, P0, b, x, P):
+    """Copy series ``b``'s prior ``x0[b]``, ``P0[b]`` into ``x``, ``P`` (the generated
+    nonlinear filters' start of a series)."""
+    n = x.shape[0]
+    for i in range(n):
+        x[i] = x0[b, i]
+        for k in range(n):
+            P[i, k] = P0[b, i, k]
+
+
+@njit(cache=True)
+def keep_state(x, P, means, covs, b, t):
+    """Write ``x``, ``P`` into ``means[b, t]``, ``covs[b, t]``; whether every value is
+    finite (the generated nonlinear filters' record of a step)."""
+    n = x.shape[0]
+    ok = True
+    for i in range(n):
+        means[b, t, i] = x[i]
+        ok = ok and abs(x[i]) < np.inf
+        for k in range(n):
+            covs[b, t, i, k] = P[i, k]
+            ok = ok and abs(P[i, k]) < np.inf
+    return ok
+
+
+@njit(cache=True)
+def observed(y):
+    """How many components of the measurement ``y`` are not NaN."""
+    seen = 0
+    for v in y:
+        if not math.isnan(v):
+            seen += 1
+    return seen
+
+
+@njit(cache=True)
 def one_scratch(n, m):
     """Work arrays of :func:`update_one` and :func:`predict_one`:
     ``idx, e, Ut, KT, S, L, AP, W, FP``."""

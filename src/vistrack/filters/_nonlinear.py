@@ -4,7 +4,7 @@ the loop over a sequence. Private; the public functions are in ekf.py, ukf.py an
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Protocol, TypeVar, cast
+from typing import Any, NamedTuple, Protocol, TypeVar, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -16,7 +16,9 @@ from .._validate import (
     check_prior,
     eps_of,
 )
+from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..types import Gaussian
+from ._codegen import Ref, jit_ref
 from .kalman import FilterResult, _readonly
 
 
@@ -137,17 +139,8 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
     defaults to the cumulative sum of ``dt`` with ``times[0] = 0``. Given ``start`` instead
     of ``state``, the first state is ``start()``, made once ``ys``, ``dt`` and ``times`` are
     checked (an ensemble drawn first used up its generator's draws on a call refused)."""
-    Y = as_float_array(ys, "ys", ndim=(2, 3))
-    check_has_steps(Y)
-    if Y.shape[-1] != m:
-        raise ValueError(f"ys must have {m} measurement components (last axis); got "
-                         f"{Y.shape[-1]}")
-    check_not_infinite(Y, "ys")  # here, to name the step in the series
-    single = Y.ndim == 2
-    if single:
-        Y = Y[None]
+    Y, single, dts, times = sequence_inputs(ys, m, dt, times)
     B, T, _ = Y.shape
-    dts, times = step_times(dt, times, T)
     if start is not None:
         state = start()
     if state is None:
@@ -198,6 +191,104 @@ def run_sequence(ys: ArrayLike, x0: ArrayLike | None, P0: ArrayLike | None, n: i
     bad = _not_finite(pmeans, pcovs, means, covs, B > 1)
     if bad:
         raise ValueError(bad)
+    return sequence_result(means, covs, pmeans, pcovs, loglik, single)
+
+
+def sequence_inputs(ys: ArrayLike, m: int, dt: ArrayLike | None,
+                    times: ArrayLike | None) -> tuple[np.ndarray, bool, np.ndarray, np.ndarray]:
+    """:func:`run_sequence`'s measurements ``ys`` checked and as ``(B, T, m)``, whether they
+    were one series, and each step's ``dt`` and time (:func:`step_times`)."""
+    Y = as_float_array(ys, "ys", ndim=(2, 3))
+    check_has_steps(Y)
+    if Y.shape[-1] != m:
+        raise ValueError(f"ys must have {m} measurement components (last axis); got "
+                         f"{Y.shape[-1]}")
+    check_not_infinite(Y, "ys")  # here, to name the step in the series
+    single = Y.ndim == 2
+    if single:
+        Y = Y[None]
+    dts, times = step_times(dt, times, Y.shape[1])
+    return Y, single, dts, times
+
+
+class CompiledRun(NamedTuple):
+    """What a filter's compiled run over a sequence takes (``inputs``: the priors ``(B, n)``
+    and ``(B, n, n)``, the measurements ``(B, T, m)``, each step's ``dt`` and time, the
+    models' parameters per step and fixed, ``Q`` per distinct step and each step's index
+    into them, ``R``, and which components are angles) and fills (``outputs``: corrected and
+    predicted means and covariances ``(B, T, ...)``, the log-likelihoods ``(B,)``), and
+    whether the measurements were one series."""
+
+    inputs: tuple[Any, ...]
+    outputs: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+    single: bool
+
+    def result(self) -> FilterResult:
+        """The :class:`FilterResult` of the filled outputs."""
+        return sequence_result(*self.outputs, self.single)
+
+
+def compiled_run(mo: MotionFunctions, me: MeasurementFunctions, ys: ArrayLike, x0: ArrayLike,
+                 P0: ArrayLike, dt: ArrayLike | None, times: ArrayLike | None) -> CompiledRun:
+    """The arrays of a compiled run (:class:`CompiledRun`) of a filter of models with
+    compiled one-state functions (``jit_params``), checked as :func:`run_sequence` checks
+    them."""
+    n, m = mo.n, me.m
+    Y, single, dts, ts = sequence_inputs(ys, m, dt, times)
+    B, T, _ = Y.shape
+    mean0, cov0 = check_prior(x0, P0, n, series=B)
+    # dt[0], the step before the first measurement, is not used (as from Python): the model
+    # is not evaluated at it; Q once per distinct step
+    dts = np.array(dts, dtype=float)
+    dts[0] = dts[1] if T > 1 else 1.0
+    ts = np.array(ts, dtype=float)
+    steps, qi = np.unique(dts, return_inverse=True)
+    Qs = np.array([mo.Q(float(v)) for v in steps])
+    fp = np.array(cast(Any, mo.model).jit_params(dts, ts), dtype=float).reshape(T, -1)
+    hp = np.array(cast(Any, me.model).jit_params(), dtype=float).ravel()
+    # (writeable C-ordered copies, the types the kernels are built for ahead of time: np.array
+    # of a broadcast view may come out Fortran-ordered, np.ascontiguousarray read-only, and
+    # a caller's read-only times compiled the kernel again, seconds)
+    inputs = (np.array(np.broadcast_to(mean0, (B, n)), dtype=float, order="C"),
+              np.array(np.broadcast_to(cov0, (B, n, n)), dtype=float, order="C"),
+              np.array(Y, order="C"), dts, ts, fp, hp, Qs, qi.ravel().astype(np.int64),
+              np.array(me.Rm, dtype=float), np.array(me.angle_mask, dtype=np.bool_))
+    outputs = (np.empty((B, T, n)), np.empty((B, T, n, n)), np.empty((B, T, n)),
+               np.empty((B, T, n, n)), np.zeros(B))
+    return CompiledRun(inputs, outputs, single)
+
+
+def compiled_functions(mo: MotionFunctions, me: MeasurementFunctions,
+                       motion_names: tuple[str, ...],
+                       measurement_names: tuple[str, ...]) -> tuple[Ref, ...] | None:
+    """The module and name of each compiled one-state function ``motion_names`` of the motion
+    model and ``measurement_names`` of the measurement model (``jit_f``, ``jit_jacobian``,
+    ...; each model with ``jit_params``), for a generated kernel to import; or None: a model
+    without them, or a measurement residual or mean of its own (a compiled filter takes
+    differences, angles wrapped), runs the steps from Python."""
+    if not me.standard:
+        return None
+    motion, meas = mo.model, me.model
+    if not (hasattr(motion, "jit_params") and hasattr(meas, "jit_params")):
+        return None
+    refs = tuple(jit_ref(getattr(model, name, None))
+                 for model, names in ((motion, motion_names), (meas, measurement_names))
+                 for name in names)
+    return None if any(r is None for r in refs) else cast(tuple[Ref, ...], refs)
+
+
+def own_steps(f: object, originals: tuple[Callable, Callable]) -> bool:
+    """Whether ``f``'s ``predict`` and ``update`` are its class's ``originals``: not a
+    subclass's, not set on the instance, not patched on the class."""
+    return (type(f).predict is originals[0]  # type: ignore[attr-defined]
+            and type(f).update is originals[1]  # type: ignore[attr-defined]
+            and "predict" not in vars(f) and "update" not in vars(f))
+
+
+def sequence_result(means: np.ndarray, covs: np.ndarray, pmeans: np.ndarray,
+                    pcovs: np.ndarray, loglik: np.ndarray, single: bool) -> FilterResult:
+    """The :class:`FilterResult` of a filter's ``(B, T, ...)`` outputs, one series' without
+    its batch axis, its arrays read-only."""
     # copies, not views of the results (which are made read-only below; a view made before
     # would stay writable, and changing `last` in place changed them)
     last = Gaussian(means[:, -1].copy(), covs[:, -1].copy())

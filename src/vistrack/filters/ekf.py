@@ -14,16 +14,24 @@ in the Joseph form (which keeps ``Σ⁺`` symmetric positive definite, where the
 ``(I - K H) Σ⁻`` can lose both to rounding), with the residual ``r`` of the measurement model
 (angles wrap). As the seed says, the EKF is in general not an optimal estimator; on a linear
 model it is exactly the Kalman filter.
+
+:meth:`ExtendedKalmanFilter.filter` runs the whole sequence in one compiled call where both
+models provide compiled one-state functions and Jacobians (``jit_f`` and ``jit_jacobian``,
+``jit_h`` and ``jit_jacobian``, with ``jit_params``: the coordinated turn, range-bearing, the
+growth model; see :mod:`vistrack.models.nonlinear`): about a microsecond a step, against
+some hundred for the steps from Python. Other models run the steps from Python.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from functools import partial
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._prebuilt import Kernel, kernel
 from .._validate import check_finite, check_one_step, check_psd, check_symmetric
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
@@ -33,11 +41,16 @@ from ..models.protocols import (
     NonlinearMotionModel,
 )
 from ..types import Gaussian
+from . import _codegen, _jitmath, _kernels
+from ._codegen import Ref
 from ._kernels import update_batch_py
 from ._nonlinear import (
     check_gaussian,
     check_h_size,
     check_y,
+    compiled_functions,
+    compiled_run,
+    own_steps,
     run_sequence,
 )
 from .kalman import FilterResult
@@ -153,7 +166,16 @@ class ExtendedKalmanFilter:
     motion, measurement
         Nonlinear models (:mod:`vistrack.models.nonlinear`) or linear ones.
     residual : callable, optional
-        ``residual(a, b)`` for measurements, overriding the model's.
+        ``residual(a, b)`` for measurements, overriding the model's (the steps then run from
+        Python).
+
+    Notes
+    -----
+    With models that provide compiled one-state functions and their Jacobians (module
+    level numba functions ``jit_f``, ``jit_h`` and each model's ``jit_jacobian``, with
+    ``jit_params``), :meth:`filter` runs in one compiled call. A value that call cannot
+    take (a state or a model's value not finite, an innovation covariance not positive
+    definite) makes it filter again from Python, which names it.
 
     Examples
     --------
@@ -184,7 +206,18 @@ class ExtendedKalmanFilter:
         prediction or correction it made so."""
         predict: Callable[[Gaussian, float, float], Gaussian] = self.predict
         update: Callable[[Gaussian, np.ndarray], tuple[Gaussian, np.ndarray]] = self.update
-        if _own_steps(self):
+        if own_steps(self, _OWN_STEPS):
+            # models with compiled functions and Jacobians: the whole filter in one compiled
+            # call; anything it cannot take (a state or a model's value not finite, an
+            # innovation covariance not positive definite) is filtered again below, which
+            # names it as before
+            parts = compiled_functions(self.motion, self.measurement, ("jit_f", "jit_jacobian"),
+                                       ("jit_h", "jit_jacobian"))
+            if parts is not None:
+                done = _filter_compiled(parts, self.motion, self.measurement, ys, x0, P0, dt,
+                                        times)
+                if done is not None:
+                    return done
             # the prior checked by run_sequence, the states since the filter's own: the steps
             # without the checks of a Gaussian given, a third of their time (a predict or
             # update of a subclass's, the instance's or a patch's is called as it is, and
@@ -208,8 +241,126 @@ class ExtendedKalmanFilter:
 _OWN_STEPS = (ExtendedKalmanFilter.predict, ExtendedKalmanFilter.update)
 
 
-def _own_steps(f: ExtendedKalmanFilter) -> bool:
-    """Whether ``f``'s ``predict`` and ``update`` are both this module's own: not a
-    subclass's, not set on the instance, not patched on the class."""
-    return (type(f).predict is _OWN_STEPS[0] and type(f).update is _OWN_STEPS[1]
-            and "predict" not in vars(f) and "update" not in vars(f))
+# ---------------------------------------------------------------- the compiled path
+_FUSED = """
+# depends on: {depends}
+import math
+import numpy as np
+from numba import njit
+from vistrack.filters._jitmath import wrap_angle
+from vistrack.filters._kernels import keep_state, load_state, observed, one_scratch, update_one
+from {fmod} import {fname} as f
+from {jfmod} import {jfname} as jf
+from {hmod} import {hname} as h
+from {jhmod} import {jhname} as jh
+
+
+@njit(cache=True, error_model="numpy", fastmath={{"nsz"}})
+def run(x0, P0, ys, dts, times, fp, hp, Qs, qi, R, angles, means, covs, pmeans, pcovs,
+        loglik):
+    # The EKF over every series, one compiled call: per step the prediction
+    # (f, G P G' + Q, symmetrised) and the correction of the Kalman filter's one-Gaussian
+    # update_one, given the residual y - h(x) (angles wrapped) for y and a zero mean, with
+    # the Jacobian of h for H, as the filter's steps from Python do. Returns (-1, -1), or the
+    # series and step of the first value not finite or innovation covariance not positive
+    # definite, which the caller filters again from Python to name.
+    B, T = ys.shape[0], ys.shape[1]
+    n, m = {n}, {m}  # literal sizes: the loops unroll
+    x = np.empty(n)
+    xn = np.empty(n)
+    step = np.empty(n)
+    zero = np.zeros(n)
+    P = np.empty((n, n))
+    A = np.empty((n, n))
+    G = np.empty((n, n))
+    GP = np.empty((n, n))
+    z = np.empty(m)
+    e = np.empty(m)
+    H = np.empty((1, m, n))
+    R3 = R.reshape((1, m, m))
+    idx, ee, Ut, KT, S, L, AP, W, _ = one_scratch(n, m)
+    for b in range(B):
+        load_state(x0, P0, b, x, P)
+        total = 0.0
+        for t in range(T):
+            if t > 0:
+                f(x, dts[t], times[t], fp[t], xn)
+                jf(x, dts[t], times[t], fp[t], G)
+                for i in range(n):
+                    for k in range(n):
+                        v = 0.0
+                        for l in range(n):
+                            v += G[i, l] * P[l, k]
+                        GP[i, k] = v
+                q = qi[t]
+                for i in range(n):
+                    for k in range(n):
+                        v = 0.0
+                        for l in range(n):
+                            v += GP[i, l] * G[k, l]
+                        A[i, k] = v + Qs[q, i, k]
+                for i in range(n):
+                    x[i] = xn[i]
+                    for k in range(n):
+                        P[i, k] = 0.5 * (A[i, k] + A[k, i])
+            if not keep_state(x, P, pmeans, pcovs, b, t):
+                return b, t
+            if observed(ys[b, t]) > 0:
+                h(x, hp, z)
+                fine = True
+                jh(x, hp, H[0])
+                for k in range(m):
+                    y = ys[b, t, k]
+                    if math.isnan(y):
+                        e[k] = np.nan
+                        continue
+                    d = y - z[k]
+                    e[k] = wrap_angle(d) if angles[k] else d
+                    fine = fine and abs(z[k]) < np.inf
+                    for l in range(n):
+                        fine = fine and abs(H[0, k, l]) < np.inf
+                if not fine:
+                    return b, t
+                good, ll = update_one(H, R3, 0, 0, e, zero, P, step, A, idx, ee, Ut, KT, S,
+                                      L, AP, W, n, m)
+                if not good:
+                    return b, t
+                total += ll
+                for i in range(n):
+                    x[i] += step[i]
+                    for k in range(n):
+                        P[i, k] = A[i, k]
+            if not keep_state(x, P, means, covs, b, t):
+                return b, t
+        loglik[b] = total
+    return -1, -1
+"""
+
+
+@functools.cache
+def _fused(fref: Ref, jfref: Ref, href: Ref, jhref: Ref, n: int, m: int):
+    depends = _codegen.source_hash(*sorted({fref[0], jfref[0], href[0], jhref[0]}),
+                                   _jitmath.__name__, _kernels.__name__)
+    src = _FUSED.format(fmod=fref[0], fname=fref[1], jfmod=jfref[0], jfname=jfref[1],
+                        hmod=href[0], hname=href[1], jhmod=jhref[0], jhname=jhref[1], n=n,
+                        m=m, depends=depends)
+    return _codegen.load("vistrack_ekf", src)
+
+
+@functools.cache
+def _fused_kernel(fref: Ref, jfref: Ref, href: Ref, jhref: Ref, n: int, m: int) -> Kernel:
+    """The compiled filter of :func:`_fused` for calls from Python (and for compiling it ahead
+    of time, see :mod:`vistrack._prebuilt`)."""
+    return kernel(_fused(fref, jfref, href, jhref, n, m).run,
+                  f"{__name__}:_fused_kernel({fref!r}, {jfref!r}, {href!r}, {jhref!r}, "
+                  f"{n!r}, {m!r})")
+
+
+def _filter_compiled(parts: tuple[Ref, ...], mo: MotionFunctions,
+                     me: MeasurementFunctions, ys: ArrayLike, x0: ArrayLike, P0: ArrayLike,
+                     dt: ArrayLike | None, times: ArrayLike | None) -> FilterResult | None:
+    """:meth:`ExtendedKalmanFilter.filter` in one compiled call, or None where the call met
+    a value it cannot take (filtered again from Python, which names it)."""
+    c = compiled_run(mo, me, ys, x0, P0, dt, times)
+    b, _ = _fused_kernel(*parts, mo.n, me.m)(*c.inputs, *c.outputs)
+    return None if b >= 0 else c.result()

@@ -20,13 +20,9 @@ in that peak as its confidence.
 from __future__ import annotations
 
 import functools
-import hashlib
-import importlib.util
 import math
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, cast
 
 import numpy as np
@@ -55,7 +51,7 @@ from ..models.protocols import (
     NonlinearMeasurementModel,
     NonlinearMotionModel,
 )
-from . import _jitmath, _random
+from . import _codegen, _jitmath, _random
 from ._nonlinear import check_h_size, step_times
 from ._random import last_drawable, last_positive
 from .kalman import _readonly
@@ -788,31 +784,9 @@ def run(x, xb, ys, obs, nobs, Linv, c, angles, dts, times, fp, hp, S, scheme, th
 """
 
 
-def _jit_ref(fn) -> tuple[str, str] | None:
-    """Module and name of a module-level numba function, or None."""
-    py = getattr(fn, "py_func", None)
-    if py is None or "<locals>" in py.__qualname__:
-        return None
-    return py.__module__, py.__name__
-
-
-def _source_hash(*modules: str) -> str:
-    """A hash of the source files of ``modules``: part of the generated kernel's source, so
-    that numba's cache of it (which tracks its own file only) is rebuilt when a function it
-    inlines changes."""
-    h = hashlib.sha1()
-    for name in modules:
-        spec = importlib.util.find_spec(name)
-        if spec is not None and spec.origin and os.path.exists(spec.origin):
-            h.update(Path(spec.origin).read_bytes())
-    return h.hexdigest()[:16]
-
-
 @functools.cache
 def _fused(fref: tuple[str, str], href: tuple[str, str], n: int, m: int):
-    from . import _codegen
-
-    depends = _source_hash(fref[0], href[0], _random.__name__, _jitmath.__name__)
+    depends = _codegen.source_hash(fref[0], href[0], _random.__name__, _jitmath.__name__)
     src = _FUSED.format(fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m,
                         depends=depends)
     return _codegen.load("vistrack_pf", src)
@@ -857,7 +831,7 @@ def _compiled_parts(mo: MotionFunctions, me: MeasurementFunctions):
     motion, meas = mo.model, me.model
     if not me.standard:
         return None
-    fref = _jit_ref(getattr(motion, "jit_f", None))
+    fref = _codegen.jit_ref(getattr(motion, "jit_f", None))
     if fref is not None and hasattr(motion, "jit_params"):
         fparams = motion.jit_params
     elif mo.linear and np.ndim(cast(MotionModel, motion).F(1.0)) == 2:
@@ -866,14 +840,14 @@ def _compiled_parts(mo: MotionFunctions, me: MeasurementFunctions):
             d, inv = np.unique(dts, return_inverse=True)
             return np.array([np.ravel(motion.F(float(v))) for v in d])[inv]
 
-        fref = _jit_ref(_linear_f)
+        fref = _codegen.jit_ref(_linear_f)
     else:
         return None
-    href = _jit_ref(getattr(meas, "jit_h", None))
+    href = _codegen.jit_ref(getattr(meas, "jit_h", None))
     if href is not None and hasattr(meas, "jit_params"):
         hparams = meas.jit_params()
     elif me.linear:
-        href, hparams = _jit_ref(_linear_h), me.H
+        href, hparams = _codegen.jit_ref(_linear_h), me.H
     else:
         return None
     return fref, fparams, href, np.asarray(hparams, dtype=float).ravel(), mo, me

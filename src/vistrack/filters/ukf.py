@@ -27,12 +27,19 @@ with every residual about the same :math:`m` the covariances stay positive semi-
 are the equations of FilterPy's ``UnscentedKalmanFilter`` given that mean (its ``z_mean_fn``),
 which the tests check to 1e-8.
 
+:meth:`UnscentedKalmanFilter.filter` runs the whole sequence in one compiled call where both
+models provide compiled one-state functions (``jit_f``, ``jit_h`` with ``jit_params``: the
+coordinated turn, range-bearing, the growth model) and the state has no mean or residual of
+its own: a few microseconds a step, against some hundred for the steps from Python, with the
+same one-Gaussian kernels. Other models run the steps from Python.
+
 References: Julier and Uhlmann (1997), "A new extension of the Kalman filter to nonlinear
 systems"; Wan and van der Merwe (2000), "The unscented Kalman filter for nonlinear estimation".
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from typing import Any
@@ -41,7 +48,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._jit import njit
-from .._prebuilt import kernel
+from .._prebuilt import Kernel, kernel
 from .._validate import (
     as_float_array,
     as_whole,
@@ -59,6 +66,8 @@ from ..models.protocols import (
     NonlinearMotionModel,
 )
 from ..types import Gaussian
+from . import _codegen, _jitmath, _kernels
+from ._codegen import Ref
 from ._jitmath import wrap_angle
 from ._kernels import back_solve, chol_factor, forward_solve, symmetric_within
 from ._nonlinear import (
@@ -66,6 +75,9 @@ from ._nonlinear import (
     check_h_size,
     check_model_values,
     check_y,
+    compiled_functions,
+    compiled_run,
+    own_steps,
     run_sequence,
 )
 from .kalman import FilterResult
@@ -983,6 +995,16 @@ class UnscentedKalmanFilter:
         >>> res.means.shape, res.loglik.shape
         ((2, 5, 2), (2,))
         """
+        if (own_steps(self, _OWN_STEPS) and self.state_mean is None
+                and self.state_residual is None):
+            # models with compiled functions: the whole filter in one compiled call; what it
+            # cannot take (a covariance without a Cholesky factor, a value not finite) is
+            # filtered again below, which takes or names it as before
+            parts = compiled_functions(self.motion, self.measurement, ("jit_f",), ("jit_h",))
+            if parts is not None:
+                done = _filter_compiled(parts, self, ys, x0, P0, dt, times)
+                if done is not None:
+                    return done
         return run_sequence(ys, x0, P0, self.motion.n, self.measurement.m, dt, times,
                             self.predict, self.update)
 
@@ -1040,3 +1062,113 @@ class UnscentedKalmanFilter:
         """
         return _ukf_update(g, y, self.measurement, self.points, None, None,
                            self.state_residual)
+
+
+_OWN_STEPS = (UnscentedKalmanFilter.predict, UnscentedKalmanFilter.update)
+
+
+# ---------------------------------------------------------------- the compiled path
+_FUSED = """
+# depends on: {depends}
+import math
+import numpy as np
+from numba import njit
+from vistrack.filters import ukf as _ukf
+from vistrack.filters._kernels import chol_factor, keep_state, load_state, observed
+from {fmod} import {fname} as f
+from {hmod} import {hname} as h
+
+points_one = _ukf._points_one.jit
+state_moments_one = _ukf._state_moments_one.jit
+update_one = _ukf._update_one.jit
+
+
+@njit(cache=True, error_model="numpy")
+def run(x0, P0, ys, dts, times, fp, hp, Qs, qi, R, angles, Wm, Wc, scale, means, covs,
+        pmeans, pcovs, loglik):
+    # The UKF over every series, one compiled call, with the kernels of its one-Gaussian
+    # steps from Python: sigma points, f or h at each, the moments or the correction. Returns
+    # (-1, -1), or the series and step of the first covariance without a Cholesky factor or
+    # value not finite, which the caller filters again from Python (a singular covariance's
+    # points from its eigendecomposition; a correction that rounding took below zero settled;
+    # anything else named).
+    B, T = ys.shape[0], ys.shape[1]
+    n, m = {n}, {m}  # literal sizes: the loops unroll
+    K = 2 * n + 1
+    x = np.empty(n)
+    P = np.empty((n, n))
+    xo = np.empty(n)
+    Po = np.empty((n, n))
+    L = np.zeros((n, n))
+    pts = np.empty((K, n))
+    gam = np.empty((K, n))
+    z = np.empty((K, m))
+    for b in range(B):
+        load_state(x0, P0, b, x, P)
+        total = 0.0
+        for t in range(T):
+            if t > 0:
+                if points_one(x, P, scale, pts) != 0:
+                    return b, t
+                for i in range(K):
+                    f(pts[i], dts[t], times[t], fp[t], gam[i])
+                state_moments_one(gam, Wm, Wc, Qs[qi[t]], x, P)
+            if not keep_state(x, P, pmeans, pcovs, b, t):
+                return b, t
+            if observed(ys[b, t]) > 0:
+                if points_one(x, P, scale, pts) != 0:
+                    return b, t
+                for i in range(K):
+                    h(pts[i], hp, z[i])
+                    for k in range(m):
+                        if not math.isnan(ys[b, t, k]) and not abs(z[i, k]) < np.inf:
+                            return b, t
+                good, ll = update_one(pts, z, Wm, Wc, R, ys[b, t], angles, x, P, xo, Po)
+                if not good or not chol_factor(L, Po, n):
+                    return b, t
+                total += ll
+                for i in range(n):
+                    x[i] = xo[i]
+                    for k in range(n):
+                        P[i, k] = Po[i, k]
+            if not keep_state(x, P, means, covs, b, t):
+                return b, t
+        loglik[b] = total
+    return -1, -1
+"""
+
+
+@functools.cache
+def _fused(fref: Ref, href: Ref, n: int, m: int):
+    depends = _codegen.source_hash(*sorted({fref[0], href[0]}), __name__, _jitmath.__name__,
+                                   _kernels.__name__)
+    src = _FUSED.format(fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m,
+                        depends=depends)
+    return _codegen.load("vistrack_ukf", src)
+
+
+@functools.cache
+def _fused_kernel(fref: Ref, href: Ref, n: int, m: int) -> Kernel:
+    """The compiled filter of :func:`_fused` for calls from Python (and for compiling it ahead
+    of time, see :mod:`vistrack._prebuilt`)."""
+    return kernel(_fused(fref, href, n, m).run,
+                  f"{__name__}:_fused_kernel({fref!r}, {href!r}, {n!r}, {m!r})")
+
+
+def _filter_compiled(parts: tuple[Ref, ...], flt: UnscentedKalmanFilter, ys: ArrayLike,
+                     x0: ArrayLike, P0: ArrayLike, dt: ArrayLike | None,
+                     times: ArrayLike | None) -> FilterResult | None:
+    """:meth:`UnscentedKalmanFilter.filter` in one compiled call, or None where the call met
+    what it cannot take (filtered again from Python)."""
+    mo, me = flt.motion, flt.measurement
+    n = mo.n
+    try:  # (points whose n + λ is not positive: named by the steps from Python)
+        Wm, Wc = flt.points.weights(n)
+        scale = float(n + flt.points._lam(n))
+    except ValueError:
+        return None
+    c = compiled_run(mo, me, ys, x0, P0, dt, times)
+    b, _ = _fused_kernel(*parts, n, me.m)(
+        *c.inputs, np.ascontiguousarray(Wm, dtype=float), np.ascontiguousarray(Wc, dtype=float),
+        scale, *c.outputs)
+    return None if b >= 0 else c.result()

@@ -511,8 +511,24 @@ def _weighted_mean(z, w, angles):
 # ``f(x (n,), dt, t, params, out (n,))`` and ``h(x (n,), params, out (m,))`` for one state: the
 # particle filter's compiled path calls them per particle. Models expose them as ``jit_f`` /
 # ``jit_h``, with ``jit_params``: for motion, ``jit_params(dts (T,), times (T,)) -> (T, p)``,
-# each step's parameters at once; for measurement, ``jit_params() -> (p,)``. User models may
-# provide their own, defined at module level.
+# each step's parameters at once; for measurement, ``jit_params() -> (p,)``. Their Jacobians,
+# ``jit_jacobian``, take the same arguments and write ``out (n, n)`` or ``(m, n)``: the EKF's
+# compiled path calls them once a step. User models may provide their own, defined at module
+# level.
+@njit(cache=True, error_model="numpy", inline="always")
+def _ct_coeffs(w, dt):
+    """For one turn rate ``w``: ``sin(wΔ)``, ``cos(wΔ)``, ``s = sin(wΔ)/w``,
+    ``c = (1 - cos wΔ)/w`` and their derivatives in ``w``, with the series near ``w = 0``
+    (:meth:`CoordinatedTurn._coeffs` for one state, compiled)."""
+    a = w * dt
+    sa, ca = math.sin(a), math.cos(a)
+    if abs(a) < 1e-4:
+        return (sa, ca, dt * (1 - a * a / 6), dt * (a / 2 - a**3 / 24),
+                dt * dt * (-a / 3 + a**3 / 30), dt * dt * (0.5 - a * a / 8))
+    s, c = sa / w, (1 - ca) / w
+    return sa, ca, s, c, (dt * ca - s) / w, (dt * sa - c) / w
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _ct_f(x, dt, t, params, out):
     """The coordinated turn's ``f`` for one state, compiled: writes ``f(x, dt)`` into ``out``.
@@ -539,12 +555,7 @@ def _ct_f(x, dt, t, params, out):
     array([0.637, 0.637, 0.   , 1.   , 1.571])
     """
     w = x[4]
-    a = w * dt
-    sa, ca = math.sin(a), math.cos(a)
-    if abs(a) < 1e-4:
-        s, c = dt * (1 - a * a / 6), dt * (a / 2 - a**3 / 24)
-    else:
-        s, c = sa / w, (1 - ca) / w
+    sa, ca, s, c, _, _ = _ct_coeffs(w, dt)
     out[0] = x[0] + s * x[2] - c * x[3]
     out[1] = x[1] + c * x[2] + s * x[3]
     out[2] = ca * x[2] - sa * x[3]
@@ -627,6 +638,113 @@ def _square_h(x, params, out):
     out[0] = x[0] * x[0] / 20
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _ct_jacobian(x, dt, t, params, out):
+    """The coordinated turn's Jacobian ``∂f/∂x`` at one state, compiled: written into ``out``.
+
+    The same terms as :meth:`CoordinatedTurn.jacobian` (its ``ω → 0`` limit by series).
+
+    Parameters
+    ----------
+    x : (5,) ndarray
+        The state ``[x, y, vx, vy, ω]``.
+    dt : float
+        Time step.
+    t : float
+        Unused.
+    params : (0,) ndarray
+        Unused (a row of :meth:`CoordinatedTurn.jit_params`).
+    out : (5, 5) ndarray
+        Receives the Jacobian; nothing is returned.
+
+    Examples
+    --------
+    >>> out = np.empty((5, 5))
+    >>> CoordinatedTurn.jit_jacobian(np.array([0.0, 0.0, 1.0, 0.0, 0.0]), 1.0, 0.0,
+    ...                              np.zeros(0), out)
+    >>> out[:, 2:] + 0.0   # (+ 0.0: no negative zeros)
+    array([[1. , 0. , 0. ],
+           [0. , 1. , 0.5],
+           [1. , 0. , 0. ],
+           [0. , 1. , 1. ],
+           [0. , 0. , 1. ]])
+    """
+    vx, vy = x[2], x[3]
+    sa, ca, s, c, ds, dc = _ct_coeffs(x[4], dt)
+    for i in range(5):
+        for k in range(5):
+            out[i, k] = 0.0
+    out[0, 0] = out[1, 1] = out[4, 4] = 1.0
+    out[0, 2], out[0, 3], out[0, 4] = s, -c, ds * vx - dc * vy
+    out[1, 2], out[1, 3], out[1, 4] = c, s, dc * vx + ds * vy
+    out[2, 2], out[2, 3], out[2, 4] = ca, -sa, -dt * (sa * vx + ca * vy)
+    out[3, 2], out[3, 3], out[3, 4] = sa, ca, dt * (ca * vx - sa * vy)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _range_bearing_jacobian(x, params, out):
+    """Range-bearing's Jacobian ``∂h/∂x`` at one state, compiled: written into ``out``, as
+    :meth:`RangeBearing.jacobian` gives it.
+
+    Parameters
+    ----------
+    x : (n,) ndarray
+        The state; its first two entries are the position.
+    params : (2,) ndarray
+        The sensor's position (:meth:`RangeBearing.jit_params`).
+    out : (2, n) ndarray
+        Receives the Jacobian; nothing is returned.
+
+    Examples
+    --------
+    >>> out = np.empty((2, 4))
+    >>> RangeBearing.jit_jacobian(np.array([4.0, 5.0, 0.0, 0.0]), np.array([1.0, 1.0]), out)
+    >>> out.round(3)
+    array([[ 0.6 ,  0.8 ,  0.  ,  0.  ],
+           [-0.16,  0.12,  0.  ,  0.  ]])
+    """
+    dx, dy = x[0] - params[0], x[1] - params[1]
+    r2 = dx * dx + dy * dy
+    r = math.sqrt(r2)
+    for k in range(out.shape[1]):
+        out[0, k] = 0.0
+        out[1, k] = 0.0
+    out[0, 0], out[0, 1] = dx / r, dy / r
+    out[1, 0], out[1, 1] = -dy / r2, dx / r2
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _growth_jacobian(x, dt, t, params, out):
+    """The growth model's derivative ``1/2 + 25 (1 - x²) / (1 + x²)²`` at one state,
+    compiled, into ``out (1, 1)`` (``dt``, ``t``, ``params`` unused: the forcing does not
+    depend on the state).
+
+    Examples
+    --------
+    >>> out = np.empty((1, 1))
+    >>> GrowthMotion.jit_jacobian(np.array([1.0]), 1.0, 0.0, np.array([8.0]), out)
+    >>> out
+    array([[0.5]])
+    """
+    v = x[0]
+    out[0, 0] = 0.5 + 25 * (1 - v * v) / (1 + v * v) ** 2
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _square_jacobian(x, params, out):
+    """The derivative ``x / 10`` of the growth model's measurement at one state, compiled,
+    into ``out (1, 1)``.
+
+    Examples
+    --------
+    >>> out = np.empty((1, 1))
+    >>> GrowthMeasurement.jit_jacobian(np.array([2.0]), np.zeros(0), out)
+    >>> out
+    array([[0.2]])
+    """
+    out[0, 0] = x[0] / 10
+
+
 _NO_PARAMS = np.zeros(0)
 
 
@@ -666,6 +784,8 @@ class CoordinatedTurn:
         Size of the state: 5.
     jit_f : numba function
         ``f`` for one state, compiled, for the particle filter's compiled path.
+    jit_jacobian : numba function
+        Its Jacobian at one state, compiled, for the extended Kalman filter's compiled path.
 
     Raises
     ------
@@ -686,6 +806,7 @@ class CoordinatedTurn:
 
     ndim_state = 5
     jit_f = staticmethod(_ct_f)
+    jit_jacobian = staticmethod(_ct_jacobian)
 
     def jit_params(self, dt: np.ndarray, t: np.ndarray) -> np.ndarray:
         """The parameters of :attr:`jit_f` for each step: none.
@@ -857,6 +978,8 @@ class RangeBearing(AngleAwareMeasurement):
         The sensor's position.
     jit_h : numba function
         ``h`` for one state, compiled, for the particle filter's compiled path.
+    jit_jacobian : numba function
+        Its Jacobian at one state, compiled, for the extended Kalman filter's compiled path.
 
     Raises
     ------
@@ -873,6 +996,7 @@ class RangeBearing(AngleAwareMeasurement):
     angles = (1,)
     ndim_meas = 2
     jit_h = staticmethod(_range_bearing_h)
+    jit_jacobian = staticmethod(_range_bearing_jacobian)
 
     def jit_params(self) -> np.ndarray:
         """The parameters of :attr:`jit_h`: the sensor's position.
@@ -981,6 +1105,8 @@ class GrowthMotion:
         Size of the state: 1.
     jit_f : numba function
         ``f`` for one state, compiled, for the particle filter's compiled path.
+    jit_jacobian : numba function
+        Its Jacobian at one state, compiled, for the extended Kalman filter's compiled path.
 
     Raises
     ------
@@ -1003,6 +1129,7 @@ class GrowthMotion:
 
     ndim_state = 1
     jit_f = staticmethod(_growth_f)
+    jit_jacobian = staticmethod(_growth_jacobian)
 
     def jit_params(self, dt: np.ndarray, t: np.ndarray) -> np.ndarray:
         """The parameters of :attr:`jit_f` for each step: the forcing ``8 cos(1.2 t)``.
@@ -1118,6 +1245,8 @@ class GrowthMeasurement(AngleAwareMeasurement):
         Sizes of a measurement and of the state: 1 and 1.
     jit_h : numba function
         ``h`` for one state, compiled, for the particle filter's compiled path.
+    jit_jacobian : numba function
+        Its Jacobian at one state, compiled, for the extended Kalman filter's compiled path.
 
     Raises
     ------
@@ -1139,6 +1268,7 @@ class GrowthMeasurement(AngleAwareMeasurement):
 
     ndim_meas, ndim_state, angles = 1, 1, ()
     jit_h = staticmethod(_square_h)
+    jit_jacobian = staticmethod(_square_jacobian)
 
     def jit_params(self) -> np.ndarray:
         """The parameters of :attr:`jit_h`: none.

@@ -15,6 +15,13 @@ are checkable at run time with ``isinstance``, which looks for the names only, n
 signatures. A model with both ``F`` and ``jacobian`` is taken as nonlinear: the filters look
 for ``jacobian`` to tell the two apart.
 
+Optionally, for speed, a nonlinear model may also give its functions for one state as
+module-level numba functions: ``jit_f(x, dt, t, params, out)`` and
+``jit_jacobian(x, dt, t, params, out)`` for motion, ``jit_h(x, params, out)`` and
+``jit_jacobian(x, params, out)`` for measurement, with ``jit_params`` (see
+:mod:`vistrack.models.nonlinear`, whose models have them). The particle filter, and the
+filters of the EKF and the UKF, then run a whole sequence in one compiled call.
+
 Examples
 --------
 >>> from vistrack.models import ConstantVelocity, CoordinatedTurn, Position, RangeBearing
