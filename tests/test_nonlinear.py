@@ -1915,3 +1915,176 @@ def test_ukf_filter_runs_compiled_and_equals_its_steps_from_python(monkeypatch):
     UnscentedKalmanFilter(motion, meas, state_mean=lambda p, w: np.einsum("...kn,k->...n", p, w)
                           ).filter(zs[:5], x0=x0, P0=P0)
     assert len(calls) == 4
+
+
+_USER_MODELS = '''
+import numpy as np
+from numba import njit
+
+
+@njit(cache=False)
+def drift_f(x, dt, t, params, out):
+    out[0] = x[0] + SPEED * params[0] * dt
+
+
+@njit(cache=False)
+def drift_jacobian(x, dt, t, params, out):
+    out[0, 0] = 1.0
+
+
+@njit(cache=False)
+def seen_h(x, params, out):
+    out[0] = x[0]
+
+
+@njit(cache=False)
+def seen_jacobian(x, params, out):
+    out[0, 0] = 1.0
+
+
+class Drift:
+    """x' = x + SPEED drift dt, its drift a row of jit_params a step."""
+    ndim_state = 1
+    jit_f = staticmethod(drift_f)
+    jit_jacobian = staticmethod(drift_jacobian)
+
+    def __init__(self, rows=0):
+        self.rows = rows  # rows of jit_params more than the steps
+
+    def jit_params(self, dt, t):
+        return np.full((len(t) + self.rows, 1), 2.0)
+
+    def f(self, x, dt=1.0, t=0.0):
+        return np.asarray(x) + SPEED * 2.0 * dt
+
+    def jacobian(self, x, dt=1.0, t=0.0):
+        return np.ones(np.shape(x) + (1,))
+
+    def Q(self, dt=1.0):
+        return np.array([[0.1 * dt]])
+
+
+class Seen:
+    ndim_state = 1
+    jit_h = staticmethod(seen_h)
+    jit_jacobian = staticmethod(seen_jacobian)
+
+    def jit_params(self):
+        return np.zeros(0)
+
+    def h(self, x):
+        return np.asarray(x)[..., :1]
+
+    def jacobian(self, x):
+        return np.ones(np.shape(x)[:-1] + (1, 1))
+
+    def R(self):
+        return np.array([[0.5]])
+'''
+
+
+@pytest.mark.parametrize("cls", [ExtendedKalmanFilter, UnscentedKalmanFilter])
+def test_the_compiled_filters_run_only_the_functions_the_models_are(cls, tmp_path,
+                                                                     monkeypatch):
+    """The compiled path (EKF, UKF) is taken only where the compiled functions are the
+    models': a subclass of a shipped model that overrides `f` or `h` (which inherits
+    `jit_f` / `jit_h`, and gave the base model's estimates), an `f` set on the instance, a
+    measurement model of another state's size (its compiled functions read past the state:
+    estimates without a word, or garbage), a `Q` that refuses a step (named without its
+    step), a `Q` of one step never taken, `jit_params` of another number of rows (numpy's
+    reshape error), and a user's module changed and reloaded (the old kernel's estimates)
+    all filter as the steps from Python do. Oracle: the steps from Python (a subclass's own
+    update), which were the filter before the compiled path."""
+    import importlib
+    import sys
+
+    motion, meas, x0, P0, zs, _, _, _ = _turn_series()
+    zs = zs[:12]
+    steps = _python_steps(cls)
+
+    def same(mo, me, ys, **kw):
+        try:
+            want = steps(mo, me).filter(ys, **kw)
+        except ValueError as e:
+            with pytest.raises(ValueError) as got:
+                cls(mo, me).filter(ys, **kw)
+            assert str(got.value) == str(e)
+            return
+        got = cls(mo, me).filter(ys, **kw)
+        np.testing.assert_allclose(got.means, want.means, rtol=1e-7, atol=1e-9)
+        np.testing.assert_allclose(got.pred_means, want.pred_means, rtol=1e-7, atol=1e-9)
+
+    class Damped(CoordinatedTurn):
+        def f(self, x, dt=1.0, t=0.0):
+            out = super().f(x, dt, t)
+            out[..., 2:4] *= 0.9
+            return out
+
+        def jacobian(self, x, dt=1.0, t=0.0):
+            J = super().jacobian(x, dt, t)
+            J[..., 2:4, :] *= 0.9
+            return J
+
+    class Biased(RangeBearing):
+        def h(self, x):
+            z = super().h(x)
+            z[..., 0] += 5.0
+            return z
+
+    class Fussy(CoordinatedTurn):
+        def Q(self, dt=1.0):
+            if dt > 1.5:
+                raise ValueError(f"a step of {dt} is too long for this model")
+            return super().Q(dt)
+
+    prior = dict(x0=x0, P0=P0)
+    same(Damped(q=0.05, q_turn=1e-3), meas, zs, **prior)
+    same(motion, Biased(1.0, 1e-3, ndim_state=5), zs, **prior)
+    patched = CoordinatedTurn(q=0.05, q_turn=1e-3)
+    patched.f = lambda x, dt=1.0, t=0.0: CoordinatedTurn.f(patched, x, dt, t) + 1.0
+    same(patched, meas, zs, **prior)
+    for n in (4, 6):
+        same(motion, RangeBearing(1.0, 1e-3, ndim_state=n), zs, **prior)
+    same(vt.models.GrowthMotion(), RangeBearing(ndim_state=2), zs[:, :1].repeat(2, 1),
+         x0=[0.5], P0=[[1.0]])
+    same(Fussy(q=0.05), meas, zs, dt=np.r_[1.0, 1.0, 1.0, 2.0, np.ones(8)], **prior)
+    same(Fussy(q=0.05), meas, zs[:1], dt=5.0, **prior)  # one step: nothing predicted
+    # a user's models, in a module of their own
+    monkeypatch.syspath_prepend(str(tmp_path))
+    name = f"user_models_{cls.__name__.lower()}"
+    (tmp_path / f"{name}.py").write_text("SPEED = 1.0\n" + _USER_MODELS)
+    user = importlib.import_module(name)
+    ys = np.array([[0.5], [2.6], [4.4], [6.4]])
+    kw = dict(x0=[0.0], P0=[[1.0]])
+    same(user.Drift(), user.Seen(), ys, **kw)
+    same(user.Drift(rows=1), user.Seen(), ys, **kw)
+    (tmp_path / f"{name}.py").write_text("SPEED = 10.0\n" + _USER_MODELS)
+    importlib.invalidate_caches()
+    user = importlib.reload(user)
+    same(user.Drift(), user.Seen(), ys, **kw)
+    assert cls(user.Drift(), user.Seen()).filter(ys, **kw).pred_means[1, 0] > 10
+    sys.modules.pop(name, None)
+
+
+def test_the_compiled_particle_filter_runs_only_the_functions_the_models_are():
+    """The particle filter's compiled path, likewise: not for a subclass's own `f` or `h`
+    (it moved the particles by the base model's), nor for a measurement model of another
+    state's size (range and bearing of a state of one value read past it); those run on
+    numpy, which takes the subclass's functions and names the sizes."""
+    motion, meas = CoordinatedTurn(q=0.05), RangeBearing(1.0, 1e-3, ndim_state=5)
+
+    class Damped(CoordinatedTurn):
+        def f(self, x, dt=1.0, t=0.0):
+            return super().f(x, dt, t) * 0.9
+
+    class Biased(RangeBearing):
+        def h(self, x):
+            return super().h(x) + 5.0
+
+    assert ParticleFilter(motion, meas, 50, rng=0)._fused is not None
+    assert ParticleFilter(Damped(q=0.05), meas, 50, rng=0)._fused is None
+    assert ParticleFilter(motion, Biased(1.0, 1e-3, ndim_state=5), 50, rng=0)._fused is None
+    small = ParticleFilter(vt.models.GrowthMotion(), RangeBearing(ndim_state=2), 50, rng=0)
+    assert small._fused is None
+    with pytest.raises(ValueError, match="RangeBearing states of 2 entries"):
+        small.filter(np.ones((3, 2)), x0=[0.5], P0=[[1.0]])

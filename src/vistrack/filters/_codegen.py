@@ -573,13 +573,27 @@ def jit_ref(fn) -> Ref | None:
     return py.__module__, py.__name__
 
 
+_HASHES: dict[tuple, str] = {}
+
+
 def source_hash(*modules: str) -> str:
     """A hash of the source files of ``modules``: part of the generated kernel's source, so
     that numba's cache of it (which tracks its own file only) is rebuilt when a function it
-    inlines changes."""
-    h = hashlib.sha1()
+    inlines changes, and part of the key its callers keep the kernel under, so that a
+    module changed and reloaded in the same process (a notebook's) gets a kernel of its new
+    functions (the old one gave the old model's estimates). Read once per file's version
+    (its path, time of change and size)."""
+    files = []
     for name in modules:
         spec = importlib.util.find_spec(name)
         if spec is not None and spec.origin and os.path.exists(spec.origin):
-            h.update(Path(spec.origin).read_bytes())
-    return h.hexdigest()[:16]
+            st = os.stat(spec.origin)
+            files.append((spec.origin, st.st_mtime_ns, st.st_size))
+    key = tuple(files)
+    got = _HASHES.get(key)
+    if got is None:
+        h = hashlib.sha1()
+        for origin, _, _ in files:
+            h.update(Path(origin).read_bytes())
+        got = _HASHES[key] = h.hexdigest()[:16]
+    return got

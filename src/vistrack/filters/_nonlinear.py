@@ -229,10 +229,12 @@ class CompiledRun(NamedTuple):
 
 
 def compiled_run(mo: MotionFunctions, me: MeasurementFunctions, ys: ArrayLike, x0: ArrayLike,
-                 P0: ArrayLike, dt: ArrayLike | None, times: ArrayLike | None) -> CompiledRun:
+                 P0: ArrayLike, dt: ArrayLike | None, times: ArrayLike | None
+                 ) -> CompiledRun | None:
     """The arrays of a compiled run (:class:`CompiledRun`) of a filter of models with
     compiled one-state functions (``jit_params``), checked as :func:`run_sequence` checks
-    them."""
+    them; None where a model's ``Q`` or ``jit_params`` refuses a step, or the parameters
+    are not one row a step (the steps from Python then run, and name what they refuse)."""
     n, m = mo.n, me.m
     Y, single, dts, ts = sequence_inputs(ys, m, dt, times)
     B, T, _ = Y.shape
@@ -242,20 +244,46 @@ def compiled_run(mo: MotionFunctions, me: MeasurementFunctions, ys: ArrayLike, x
     dts = np.array(dts, dtype=float)
     dts[0] = dts[1] if T > 1 else 1.0
     ts = np.array(ts, dtype=float)
-    steps, qi = np.unique(dts, return_inverse=True)
-    Qs = np.array([mo.Q(float(v)) for v in steps])
-    fp = np.array(cast(Any, mo.model).jit_params(dts, ts), dtype=float).reshape(T, -1)
-    hp = np.array(cast(Any, me.model).jit_params(), dtype=float).ravel()
+    # Q of each step predicted (none for one step), and the models' parameters; what the
+    # model refuses is refused by the steps from Python, at the step it names
+    steps, qi = np.unique(dts[1:], return_inverse=True)
+    try:
+        Qs = np.array([mo.Q(float(v)) for v in steps]).reshape(len(steps), n, n)
+        fp = np.array(cast(Any, mo.model).jit_params(dts, ts), dtype=float)
+        hp = np.array(cast(Any, me.model).jit_params(), dtype=float).ravel()
+    except Exception:  # (the steps from Python raise it again, as they did)
+        return None
+    if fp.ndim != 2 or len(fp) != T:  # (the steps from Python do not read them)
+        return None
+    if not len(steps):
+        Qs = np.zeros((1, n, n))
+    qi = np.concatenate([[0], qi.ravel()]).astype(np.int64)
     # (writeable C-ordered copies, the types the kernels are built for ahead of time: np.array
     # of a broadcast view may come out Fortran-ordered, np.ascontiguousarray read-only, and
     # a caller's read-only times compiled the kernel again, seconds)
     inputs = (np.array(np.broadcast_to(mean0, (B, n)), dtype=float, order="C"),
               np.array(np.broadcast_to(cov0, (B, n, n)), dtype=float, order="C"),
-              np.array(Y, order="C"), dts, ts, fp, hp, Qs, qi.ravel().astype(np.int64),
+              np.array(Y, order="C"), dts, ts, np.ascontiguousarray(fp), hp, Qs, qi,
               np.array(me.Rm, dtype=float), np.array(me.angle_mask, dtype=np.bool_))
     outputs = (np.empty((B, T, n)), np.empty((B, T, n, n)), np.empty((B, T, n)),
                np.empty((B, T, n, n)), np.zeros(B))
     return CompiledRun(inputs, outputs, single)
+
+
+_PYTHON_OF = {"jit_f": "f", "jit_h": "h", "jit_jacobian": "jacobian"}
+
+
+def compiled_stands_for(model: object, names: tuple[str, ...]) -> bool:
+    """Whether ``model``'s compiled one-state functions ``names`` (``jit_f``, ...) stand for
+    its Python ones (``f``, ...): each, its Python twin and ``jit_params`` defined by one
+    class of its type's, none set on the instance. A subclass of a shipped model that
+    overrides ``f`` inherits ``jit_f``, which is not its ``f``: the compiled filters gave
+    the base model's estimates, without a word."""
+    wanted = {*names, *(_PYTHON_OF[n] for n in names), "jit_params"}
+    if wanted & set(getattr(model, "__dict__", {})):
+        return False
+    owners = {next((k for k in type(model).__mro__ if n in vars(k)), None) for n in wanted}
+    return len(owners) == 1 and None not in owners
 
 
 def compiled_functions(mo: MotionFunctions, me: MeasurementFunctions,
@@ -263,13 +291,15 @@ def compiled_functions(mo: MotionFunctions, me: MeasurementFunctions,
                        measurement_names: tuple[str, ...]) -> tuple[Ref, ...] | None:
     """The module and name of each compiled one-state function ``motion_names`` of the motion
     model and ``measurement_names`` of the measurement model (``jit_f``, ``jit_jacobian``,
-    ...; each model with ``jit_params``), for a generated kernel to import; or None: a model
-    without them, or a measurement residual or mean of its own (a compiled filter takes
-    differences, angles wrapped), runs the steps from Python."""
-    if not me.standard:
-        return None
+    ...; each model with ``jit_params``), for a generated kernel to import; or None, and the
+    steps run from Python: a model without them, or whose Python functions are not theirs
+    (:func:`compiled_stands_for`), a measurement model of another state's size (its compiled
+    functions would read past the state), or a measurement residual or mean of its own (a
+    compiled filter takes differences, angles wrapped)."""
     motion, meas = mo.model, me.model
-    if not (hasattr(motion, "jit_params") and hasattr(meas, "jit_params")):
+    if not (me.standard and getattr(meas, "ndim_state", None) == mo.n
+            and compiled_stands_for(motion, motion_names)
+            and compiled_stands_for(meas, measurement_names)):
         return None
     refs = tuple(jit_ref(getattr(model, name, None))
                  for model, names in ((motion, motion_names), (meas, measurement_names))

@@ -337,21 +337,22 @@ def run(x0, P0, ys, dts, times, fp, hp, Qs, qi, R, angles, means, covs, pmeans, 
 """
 
 
-@functools.cache
-def _fused(fref: Ref, jfref: Ref, href: Ref, jhref: Ref, n: int, m: int):
+def _fused_kernel(fref: Ref, jfref: Ref, href: Ref, jhref: Ref, n: int, m: int) -> Kernel:
+    """The compiled filter of these functions and sizes for calls from Python (and for
+    compiling it ahead of time, see :mod:`vistrack._prebuilt`), of their modules' current
+    source (:func:`._codegen.source_hash`)."""
     depends = _codegen.source_hash(*sorted({fref[0], jfref[0], href[0], jhref[0]}),
                                    _jitmath.__name__, _kernels.__name__)
+    return _fused_kernel_of(fref, jfref, href, jhref, n, m, depends)
+
+
+@functools.cache
+def _fused_kernel_of(fref: Ref, jfref: Ref, href: Ref, jhref: Ref, n: int, m: int,
+                     depends: str) -> Kernel:
     src = _FUSED.format(fmod=fref[0], fname=fref[1], jfmod=jfref[0], jfname=jfref[1],
                         hmod=href[0], hname=href[1], jhmod=jhref[0], jhname=jhref[1], n=n,
                         m=m, depends=depends)
-    return _codegen.load("vistrack_ekf", src)
-
-
-@functools.cache
-def _fused_kernel(fref: Ref, jfref: Ref, href: Ref, jhref: Ref, n: int, m: int) -> Kernel:
-    """The compiled filter of :func:`_fused` for calls from Python (and for compiling it ahead
-    of time, see :mod:`vistrack._prebuilt`)."""
-    return kernel(_fused(fref, jfref, href, jhref, n, m).run,
+    return kernel(_codegen.load("vistrack_ekf", src).run,
                   f"{__name__}:_fused_kernel({fref!r}, {jfref!r}, {href!r}, {jhref!r}, "
                   f"{n!r}, {m!r})")
 
@@ -362,5 +363,8 @@ def _filter_compiled(parts: tuple[Ref, ...], mo: MotionFunctions,
     """:meth:`ExtendedKalmanFilter.filter` in one compiled call, or None where the call met
     a value it cannot take (filtered again from Python, which names it)."""
     c = compiled_run(mo, me, ys, x0, P0, dt, times)
-    b, _ = _fused_kernel(*parts, mo.n, me.m)(*c.inputs, *c.outputs)
+    if c is None:
+        return None
+    f, jf, h, jh = parts
+    b, _ = _fused_kernel(f, jf, h, jh, mo.n, me.m)(*c.inputs, *c.outputs)
     return None if b >= 0 else c.result()

@@ -52,7 +52,8 @@ from ..models.protocols import (
     NonlinearMotionModel,
 )
 from . import _codegen, _jitmath, _random
-from ._nonlinear import check_h_size, step_times
+from ._codegen import Ref
+from ._nonlinear import check_h_size, compiled_stands_for, step_times
 from ._random import last_drawable, last_positive
 from .kalman import _readonly
 
@@ -784,19 +785,19 @@ def run(x, xb, ys, obs, nobs, Linv, c, angles, dts, times, fp, hp, S, scheme, th
 """
 
 
-@functools.cache
-def _fused(fref: tuple[str, str], href: tuple[str, str], n: int, m: int):
+def _fused_kernel(fref: Ref, href: Ref, n: int, m: int) -> Kernel:
+    """The fused filter of these functions and sizes for calls from Python (and for
+    compiling it ahead of time, see :mod:`vistrack._prebuilt`), of their modules' current
+    source (:func:`._codegen.source_hash`)."""
     depends = _codegen.source_hash(fref[0], href[0], _random.__name__, _jitmath.__name__)
+    return _fused_kernel_of(fref, href, n, m, depends)
+
+
+@functools.cache
+def _fused_kernel_of(fref: Ref, href: Ref, n: int, m: int, depends: str) -> Kernel:
     src = _FUSED.format(fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m,
                         depends=depends)
-    return _codegen.load("vistrack_pf", src)
-
-
-@functools.cache
-def _fused_kernel(fref: tuple[str, str], href: tuple[str, str], n: int, m: int) -> Kernel:
-    """The fused filter of :func:`_fused` for calls from Python (and for compiling it ahead of
-    time, see :mod:`vistrack._prebuilt`)."""
-    return kernel(_fused(fref, href, n, m).run,
+    return kernel(_codegen.load("vistrack_pf", src).run,
                   f"{__name__}:_fused_kernel({fref!r}, {href!r}, {n!r}, {m!r})")
 
 
@@ -826,14 +827,16 @@ def _compiled_parts(mo: MotionFunctions, me: MeasurementFunctions):
     """What the compiled path needs of the models: the module-level compiled one-state ``f``
     and ``h`` and their parameters (``params(dt, t)`` per step, and a fixed array), from the
     models' ``jit_f``/``jit_h`` or, for linear models, ``F x`` and ``H x``. None when a model
-    has neither (a user model in Python runs on the numpy path), or the measurement's
-    residual is its own (the compiled path takes differences, angles wrapped)."""
+    has neither (a user model in Python runs on the numpy path) or its Python functions are
+    not theirs (a subclass's own ``f``: :func:`~._nonlinear.compiled_stands_for`), the
+    measurement model's state is of another size, or the measurement's residual is its own
+    (the compiled path takes differences, angles wrapped)."""
     motion, meas = mo.model, me.model
     if not me.standard:
         return None
     fref = _codegen.jit_ref(getattr(motion, "jit_f", None))
-    if fref is not None and hasattr(motion, "jit_params"):
-        fparams = motion.jit_params
+    if fref is not None and compiled_stands_for(motion, ("jit_f",)):
+        fparams = cast(Any, motion).jit_params
     elif mo.linear and np.ndim(cast(MotionModel, motion).F(1.0)) == 2:
         # a constant F; one per step runs in numpy
         def fparams(dts, times):
@@ -844,8 +847,9 @@ def _compiled_parts(mo: MotionFunctions, me: MeasurementFunctions):
     else:
         return None
     href = _codegen.jit_ref(getattr(meas, "jit_h", None))
-    if href is not None and hasattr(meas, "jit_params"):
-        hparams = meas.jit_params()
+    if (href is not None and compiled_stands_for(meas, ("jit_h",))
+            and getattr(meas, "ndim_state", None) == mo.n):
+        hparams = cast(Any, meas).jit_params()
     elif me.linear:
         href, hparams = _codegen.jit_ref(_linear_h), me.H
     else:

@@ -1138,20 +1138,20 @@ def run(x0, P0, ys, dts, times, fp, hp, Qs, qi, R, angles, Wm, Wc, scale, means,
 """
 
 
-@functools.cache
-def _fused(fref: Ref, href: Ref, n: int, m: int):
+def _fused_kernel(fref: Ref, href: Ref, n: int, m: int) -> Kernel:
+    """The compiled filter of these functions and sizes for calls from Python (and for
+    compiling it ahead of time, see :mod:`vistrack._prebuilt`), of their modules' current
+    source (:func:`._codegen.source_hash`)."""
     depends = _codegen.source_hash(*sorted({fref[0], href[0]}), __name__, _jitmath.__name__,
                                    _kernels.__name__)
-    src = _FUSED.format(fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m,
-                        depends=depends)
-    return _codegen.load("vistrack_ukf", src)
+    return _fused_kernel_of(fref, href, n, m, depends)
 
 
 @functools.cache
-def _fused_kernel(fref: Ref, href: Ref, n: int, m: int) -> Kernel:
-    """The compiled filter of :func:`_fused` for calls from Python (and for compiling it ahead
-    of time, see :mod:`vistrack._prebuilt`)."""
-    return kernel(_fused(fref, href, n, m).run,
+def _fused_kernel_of(fref: Ref, href: Ref, n: int, m: int, depends: str) -> Kernel:
+    src = _FUSED.format(fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m,
+                        depends=depends)
+    return kernel(_codegen.load("vistrack_ukf", src).run,
                   f"{__name__}:_fused_kernel({fref!r}, {href!r}, {n!r}, {m!r})")
 
 
@@ -1168,7 +1168,10 @@ def _filter_compiled(parts: tuple[Ref, ...], flt: UnscentedKalmanFilter, ys: Arr
     except ValueError:
         return None
     c = compiled_run(mo, me, ys, x0, P0, dt, times)
-    b, _ = _fused_kernel(*parts, n, me.m)(
+    if c is None:
+        return None
+    f, h = parts
+    b, _ = _fused_kernel(f, h, n, me.m)(
         *c.inputs, np.ascontiguousarray(Wm, dtype=float), np.ascontiguousarray(Wc, dtype=float),
         scale, *c.outputs)
     return None if b >= 0 else c.result()
