@@ -586,9 +586,13 @@ def source_hash(*modules: str) -> str:
     files = []
     for name in modules:
         spec = importlib.util.find_spec(name)
-        if spec is not None and spec.origin and os.path.exists(spec.origin):
+        if spec is None or not spec.origin:
+            continue
+        try:
             st = os.stat(spec.origin)
-            files.append((spec.origin, st.st_mtime_ns, st.st_size))
+        except OSError:  # (built in, or no file)
+            continue
+        files.append((spec.origin, st.st_mtime_ns, st.st_size))
     key = tuple(files)
     got = _HASHES.get(key)
     if got is None:
