@@ -683,3 +683,54 @@ def test_the_pda_family_weighed_by_groups_of_clusters_is_the_whole_problem(assoc
             assert np.array_equal(a[0], other[0])
             for x, y in zip(a[1:], other[1:]):
                 np.testing.assert_allclose(y, x, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("association", ["ipda", "jipda"])
+def test_a_frame_that_fails_leaves_the_existences_as_they_were(association, monkeypatch):
+    """The existences of a frame weighed group by group are written into a new array: a step
+    interrupted during the correction (Ctrl-C) put back the array it had already changed,
+    and the frame given again counted its evidence twice (a track confirmed a frame early);
+    a reference taken before a step was changed by it. Oracle: a twin tracker never
+    interrupted, and the array as it was."""
+    import vistrack.tracking.point as point
+
+    def pts(f):
+        return Detections(points=[[0.1 * f, 0.0]])
+
+    kw = dict(frame_rate=10.0, clutter_density=0.01)
+    twin, tr = PointTracker(association, **kw), PointTracker(association, **kw)
+    twin.step(1, pts(1))
+    tr.step(1, pts(1))
+    before = tr.existence
+    kept = before.copy()
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(point, "pda_update", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            tr.step(2, pts(2))
+    assert np.array_equal(tr.existence, kept) and np.array_equal(before, kept)
+    for f in (2, 3, 4):
+        a, b = twin.step(f, pts(f)), tr.step(f, pts(f))
+        assert np.array_equal(a.ids, b.ids)
+        np.testing.assert_array_equal(tr.existence, twin.existence)
+    assert np.array_equal(before, kept)  # (a normal step wrote a new array too)
+
+
+@pytest.mark.parametrize("association", ["pda", "jpda", "ipda", "jipda"])
+def test_a_likelihood_past_the_float_range_is_named_by_the_frame_s_track(association):
+    """A gated pair whose likelihood overflows (3-D, variances of 1e-207: the density at the
+    mean passes the largest float) is named by its track and measurement in the frame, as
+    the weights name it in the tracks-by-measurements matrix; it was named by its row and
+    column in its group's block (lik[0, 0] for track 2's measurement 1)."""
+    from vistrack.models import ConstantPosition, Position
+
+    tiny = np.exp(-477.0)
+    tr = PointTracker(association, motion=ConstantPosition(dim=3, q=tiny),
+                      measurement=Position(dim=3, r=tiny), frame_rate=1.0)
+    tr.step(1, Detections(points=[[0.0, 0, 0], [100.0, 0, 0], [200.0, 0, 0]]))
+    with pytest.raises(ValueError, match=re.escape(
+            "lik must be finite and >= 0 inside the gate; lik[2, 1] = inf")):
+        tr.step(2, Detections(points=[[900.0, 0, 0], [200.0, 0, 0]]))

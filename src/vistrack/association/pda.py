@@ -115,12 +115,22 @@ def _lik_gate(lik: ArrayLike, gate: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
             raise ValueError(f"gate must hold True / False (or 1 / 0); gate[{t}, {j}] = "
                              f"{gate[t, j]!r}")
     gate = gate.astype(bool)
-    bad = gate & ~(np.isfinite(lik) & (lik >= 0))
-    if bad.any():
-        t, j = (int(i) for i in np.argwhere(bad)[0])
-        raise ValueError(f"lik must be finite and >= 0 inside the gate; lik[{t}, {j}] = "
-                         f"{lik[t, j]}")
+    rows, cols = np.nonzero(gate)
+    check_pair_likelihoods(rows, cols, lik[rows, cols])
     return lik, gate & (lik > 0)
+
+
+def check_pair_likelihoods(rows: np.ndarray, cols: np.ndarray, lik: np.ndarray) -> None:
+    """Raise the ValueError that names the first gated pair, in the order of the rows and
+    then the columns, whose likelihood ``lik[k]`` (of pair ``rows[k], cols[k]``) is not a
+    finite number >= 0 (a NaN detection's is NaN, refused inside a gate); the weights' own
+    check, for pairs a caller holds without the dense matrix."""
+    bad = ~(np.isfinite(lik) & (lik >= 0))
+    if bad.any():
+        k = np.flatnonzero(bad)
+        k = k[np.lexsort((cols[k], rows[k]))[0]]
+        raise ValueError(f"lik must be finite and >= 0 inside the gate; "
+                         f"lik[{int(rows[k])}, {int(cols[k])}] = {lik[k]}")
 
 
 def _check(p_detect: float, clutter_density: float, p_gate: float

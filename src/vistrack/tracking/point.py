@@ -65,6 +65,7 @@ from ..association import (
 from ..association.assign import _pair_components, greedy_pairs, nearest_pairs
 from ..association.costs import cholesky_innovations, mahalanobis_pairs
 from ..association.pda import _check as _check_pda
+from ..association.pda import check_pair_likelihoods
 from ..filters import kf_predict, kf_update, pda_update
 from ..models import ConstantVelocity, Position
 from ..types import Detections, Frame, Gaussian, Tracks
@@ -489,6 +490,12 @@ class PointTracker:
                             p_gate=self.p_gate)
                 existence = self.association in _EXISTENCE
                 prior = self.existence * self.p_survive ** dt
+                # written group by group into a new array (step keeps the old one, to put
+                # back if the frame fails; a caller's reference to it stays as it was)
+                self.existence = self.existence.copy()
+                # named by the frame's track and measurement, as the weights name them in
+                # their block of a group
+                check_pair_likelihoods(r, c, lik_rc)
                 weigh = cast(Callable[..., tuple[np.ndarray, ...]], {
                     "pda": pda_weights, "jpda": jpda_weights, "ipda": ipda_weights,
                     "jipda": jipda_weights}[self.association])
