@@ -274,3 +274,134 @@ def test_a_member_s_nan_log_likelihood_is_named_and_loglik_is_read_only():
         res = imm.filter(ys, x0=[0, 0], P0=np.eye(2))
         with pytest.raises(ValueError, match="read-only"):
             res.loglik[...] = 0.0
+
+
+def _python_steps(cls):
+    """A member class whose own update runs the IMM's steps from Python (the filter before
+    its compiled path)."""
+    class Steps(cls):
+        def update(self, g, y):
+            return super().update(g, y)
+    return Steps
+
+
+def test_kalman_members_run_compiled_and_equal_the_steps_from_python(monkeypatch):
+    """Members that are Kalman filters of linear models (`KalmanFilter`, or
+    `ExtendedKalmanFilter` of linear models) run the whole IMM in one compiled call
+    (`_mix`, the steps from Python, made to fail here). Oracle: the same IMM of members
+    whose own update runs the steps from Python, to 1e-10: members of one size and of two
+    (a position-only model beside constant velocity), components missing, a step missing
+    whole, uneven steps, a batch with a prior each, a model of probability 0."""
+    import vistrack.filters.imm as imm_module
+    from vistrack.filters import KalmanFilter
+
+    rng = np.random.default_rng(4)
+    T = 60
+    ys = np.cumsum(rng.normal(0, 1, (T, 2)), 0)
+    ys[::7, 1] = np.nan
+    ys[10] = np.nan
+    dt = np.r_[1.0, rng.uniform(0.2, 1.5, T - 1)]
+    cp, cvs, cvf = (vt.ConstantPosition(dim=2, q=1.0), vt.ConstantVelocity(dim=2, q=0.01),
+                    vt.ConstantVelocity(dim=2, q=10.0))
+    pos, loose = vt.Position(dim=2, r=1.0), vt.Position(dim=2, r=4.0)
+    x0, P0 = np.zeros(4), np.eye(4) * 10
+    Pi = [[0.97, 0.03], [0.03, 0.97]]
+    batch = np.stack([ys, ys + 1.0, ys * 0.5])
+    cases = []
+    for cls in (KalmanFilter, ExtendedKalmanFilter):
+        cases += [([cls(cvs, pos), cls(cvf, loose)], Pi, {}, ys, dict(x0=x0, P0=P0)),
+                  ([cls(cp, pos), cls(cvf, pos)], Pi, {}, ys, dict(x0=x0, P0=P0, dt=dt)),
+                  ([cls(cp, pos), cls(cvs, pos), cls(cvf, pos)],
+                   [[0.9, 0.05, 0.05], [0.05, 0.9, 0.05], [0.05, 0.05, 0.9]], {}, batch,
+                   dict(x0=np.stack([x0, x0 + 1, x0 - 1]), P0=P0, dt=0.5)),
+                  ([cls(cvs, pos), cls(cvf, pos)], np.eye(2), dict(mode_probs=[1.0, 0.0]),
+                   ys, dict(x0=x0, P0=P0))]
+    got = []
+    with monkeypatch.context() as m:
+        def no_python(*args, **kwargs):
+            raise AssertionError("the IMM's steps from Python")
+
+        m.setattr(imm_module, "_mix", no_python)
+        for members, Pi_, kw, y, prior in cases:
+            got.append(IMMFilter(members, Pi_, **kw).filter(y, **prior))
+    for (members, Pi_, kw, y, prior), res in zip(cases, got):
+        slow = [_python_steps(type(f))(f.motion if isinstance(f, KalmanFilter)
+                                       else f.motion.model,
+                                       f.measurement if isinstance(f, KalmanFilter)
+                                       else f.measurement.model) for f in members]
+        want = IMMFilter(slow, Pi_, **kw).filter(y, **prior)
+        for name in ("means", "covs", "mode_probs"):
+            np.testing.assert_allclose(getattr(res, name), getattr(want, name), rtol=1e-10,
+                                       atol=1e-11)
+            assert not getattr(res, name).flags.writeable
+        for a, b in zip(res.member_means, want.member_means):
+            np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-11)
+        np.testing.assert_allclose(res.loglik, want.loglik, rtol=1e-11)
+
+
+def test_compiled_imm_equals_filterpy_s_imm_estimator():
+    """FilterPy's IMMEstimator (its Kalman filters given the models' matrices) as an
+    independent oracle of the compiled IMM: the combined means and covariances and the mode
+    probabilities, step by step, on a target that walks, stands and runs."""
+    from filterpy.kalman import IMMEstimator
+    from filterpy.kalman import KalmanFilter as FilterPyKF
+
+    from vistrack.filters import KalmanFilter
+
+    rng = np.random.default_rng(2)
+    v = np.r_[np.full(30, 1.0), np.zeros(30), np.full(30, -4.0)]
+    x = np.cumsum(v)
+    ys = np.column_stack([x, 0.5 * x]) + rng.normal(0, 1.0, (90, 2))
+    slow, fast, pos = (vt.ConstantVelocity(dim=2, q=0.01), vt.ConstantVelocity(dim=2, q=5.0),
+                       vt.Position(dim=2, r=1.0))
+    Pi = np.array([[0.95, 0.05], [0.1, 0.9]])
+    x0, P0 = np.zeros(4), np.eye(4) * 4.0
+    res = IMMFilter([KalmanFilter(slow, pos), KalmanFilter(fast, pos)], Pi).filter(
+        ys, x0=x0, P0=P0)
+    members = []
+    for model in (slow, fast):
+        k = FilterPyKF(dim_x=4, dim_z=2)
+        k.F, k.Q, k.H, k.R = model.F(1.0), model.Q(1.0), pos.H(4), pos.R()
+        k.x, k.P = x0.copy(), P0.copy()
+        members.append(k)
+    # FilterPy weighs the first measurement by mu Π (vistrack by the first step's prior, the
+    # mode probabilities given): its mu is the one that mu Π makes uniform
+    est = IMMEstimator(members, np.linalg.solve(Pi.T, [0.5, 0.5]), Pi)
+    for t, y in enumerate(ys):
+        if t:  # (the first step's prior is x0, P0)
+            est.predict()
+        est.update(y)
+        np.testing.assert_allclose(res.means[t], est.x, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(res.covs[t], est.P, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(res.mode_probs[t], est.mu, rtol=1e-9, atol=1e-12)
+
+
+def test_compiled_imm_names_what_it_cannot_take_as_the_steps_from_python():
+    """What the compiled IMM cannot take is filtered again from Python, which names it as
+    before: a measurement every model gives zero likelihood (an outlier of 1e200), a motion
+    model whose matrix is not finite."""
+    from vistrack.filters import KalmanFilter
+
+    pos = vt.Position(dim=1, r=1.0)
+    members = [KalmanFilter(vt.ConstantVelocity(dim=1, q=q), pos) for q in (0.01, 1.0)]
+    slow = [_python_steps(KalmanFilter)(f.motion, pos) for f in members]
+    ys = np.array([[0.0], [1.0], [1e200], [3.0]])
+    for y in (ys,):
+        with pytest.raises(ValueError) as want:
+            IMMFilter(slow, np.eye(2)).filter(y, x0=[0.0, 0.0], P0=np.eye(2))
+        with pytest.raises(ValueError) as got:
+            IMMFilter(members, np.eye(2)).filter(y, x0=[0.0, 0.0], P0=np.eye(2))
+        assert str(got.value) == str(want.value)
+        assert "zero likelihood" in str(got.value)
+
+    class Broken(vt.ConstantVelocity):
+        def F(self, dt=1.0):
+            return super().F(dt) * np.nan
+
+    bad = [KalmanFilter(Broken(dim=1, q=0.1), pos), members[1]]
+    with pytest.raises(ValueError) as want:
+        IMMFilter([_python_steps(KalmanFilter)(f.motion, pos) for f in bad], np.eye(2)
+                  ).filter(ys[:2], x0=[0.0, 0.0], P0=np.eye(2))
+    with pytest.raises(ValueError) as got:
+        IMMFilter(bad, np.eye(2)).filter(ys[:2], x0=[0.0, 0.0], P0=np.eye(2))
+    assert str(got.value) == str(want.value)

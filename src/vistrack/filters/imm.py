@@ -27,6 +27,16 @@ and their covariance, from the receiving model's own estimate; to a smaller one 
 them. Members may be any filter with ``predict(g, dt, t)`` and ``update(g, y) -> (g, loglik)``:
 :class:`~vistrack.filters.ExtendedKalmanFilter` (exact for linear models),
 :class:`~vistrack.filters.UnscentedKalmanFilter`, or one's own.
+
+Where every member is a Kalman filter of linear models (a
+:class:`~vistrack.filters.KalmanFilter`, or an
+:class:`~vistrack.filters.ExtendedKalmanFilter` of linear models, as
+:meth:`IMMFilter.from_system` makes), :meth:`IMMFilter.filter` runs the whole sequence in one
+compiled call, each member's steps by the Kalman filter's own one-Gaussian kernels: a few
+microseconds a step, against some hundreds for the steps from Python (and FilterPy's
+``IMMEstimator``). What that call cannot take (a matrix not finite, an innovation covariance
+not positive definite, a measurement every model gives zero likelihood) is filtered again
+from Python, which names it.
 """
 
 from __future__ import annotations
@@ -38,6 +48,8 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._jit import njit
+from .._prebuilt import kernel
 from .._validate import (
     as_float_array,
     as_markov_chain,
@@ -49,7 +61,8 @@ from .._validate import (
 from ..models.protocols import MotionModel, NonlinearMotionModel
 from ..models.switching import SwitchingLinearSystem
 from ..types import Gaussian
-from ._nonlinear import step_times
+from ._kernels import check_matrices, one_scratch, predict_one, update_one
+from ._nonlinear import own_steps, step_times
 from .kalman import _readonly, _update, kf_predict
 from .particle import RESAMPLERS, _ess, check_particle_options, resample_now
 
@@ -328,6 +341,15 @@ class IMMFilter:
         >>> rmse(res.means[:, 0]) < rmse(ys[:, 0])       # better than the measurements
         True
         """
+        linear = _linear_members(self.filters)
+        if linear is not None:
+            # Kalman members of linear models: the whole filter in one compiled call; what
+            # it cannot take (a matrix not finite, an innovation covariance not positive
+            # definite, every model giving a measurement zero likelihood) is filtered again
+            # below, which names it as before
+            done = self._filter_linear(linear, ys, x0, P0, dt, times)
+            if done is not None:
+                return done
         ys = as_float_array(ys, "ys", ndim=(2, 3))
         check_has_steps(ys)
         meas = getattr(self.filters[self.ref], "measurement", None)
@@ -401,12 +423,269 @@ class IMMFilter:
             means[:, t], covs[:, t] = out.mean, out.cov
             for j, g in enumerate(gs):
                 member_means[j][:, t] = g.mean
+        return _result(means, covs, probs, member_means, loglik, single)
+
+    def _filter_linear(self, linear: list, ys: ArrayLike, x0: ArrayLike, P0: ArrayLike,
+                       dt: ArrayLike | None, times: ArrayLike | None) -> IMMResult | None:
+        """:meth:`filter` of Kalman members of linear models (``linear``: each member's
+        motion and measurement model) in one compiled call, or None where the call met what
+        it cannot take (filtered again from Python, which names it)."""
+        Y = as_float_array(ys, "ys", ndim=(2, 3))
+        check_has_steps(Y)
+        m = linear[self.ref][1].ndim_meas
+        if Y.shape[-1] != m or any(me.ndim_meas != m for _, me in linear):
+            return None  # (named from Python)
+        check_not_infinite(Y, "ys")
+        single = Y.ndim == 2
         if single:
-            means, covs, probs, loglik = means[0], covs[0], probs[0], loglik[0]
-            member_means = [m[0] for m in member_means]
-        loglik = np.asarray(loglik)  # (read-only as the rest, as the docstring says)
-        _readonly(means, covs, probs, loglik, *member_means)
-        return IMMResult(means, covs, probs, member_means, loglik)
+            Y = Y[None]
+        B, T, _ = Y.shape
+        n, M = self.sizes[self.ref], len(linear)
+        mean0, cov0 = check_prior(x0, P0, n, space=" (the largest member's state)", series=B)
+        dts, _ = step_times(dt, times, T)
+        steps, qi = np.unique(dts[1:], return_inverse=True)
+        U = max(len(steps), 1)
+        Fs, Qs = np.zeros((M, U, n, n)), np.zeros((M, U, n, n))
+        Hs, Rs = np.zeros((M, 1, m, n)), np.zeros((M, 1, m, m))
+        try:
+            for j, (mo, me) in enumerate(linear):
+                k = self.sizes[j]
+                for u, d in enumerate(steps.tolist()):
+                    Fs[j, u, :k, :k], Qs[j, u, :k, :k] = mo.F(d), mo.Q(d)
+                Hs[j, 0, :, :k], Rs[j, 0] = me.H(k), me.R()
+        except Exception:  # (the steps from Python raise it again, at their step)
+            return None
+        gone = np.isnan(Y).all(axis=(0, 2))  # a step no series measured: mixed only
+        means, covs = np.empty((B, T, n)), np.empty((B, T, n, n))
+        probs, loglik = np.empty((B, T, M)), np.zeros(B)
+        member = np.empty((M, B, T, n))
+        bad = _imm_linear(np.array(np.broadcast_to(mean0, (B, n)), order="C"),
+                          np.array(np.broadcast_to(cov0, (B, n, n)), order="C"),
+                          np.array(Y, order="C"), gone, np.asarray(self.sizes, np.int64),
+                          np.ascontiguousarray(self.log_transition, dtype=float),
+                          np.ascontiguousarray(self.log_mu0, dtype=float), self.ref, Fs, Qs,
+                          np.concatenate([[0], qi.ravel()]).astype(np.int64), Hs, Rs, means,
+                          covs, probs, member, loglik)
+        if bad >= 0:
+            return None
+        return _result(means, covs, probs, [member[j, :, :, :k] for j, k in
+                                            enumerate(self.sizes)], loglik, single)
+
+
+_OWN: dict[type, tuple] = {}  # filter class: its own (predict, update), as own_steps takes them
+
+
+def _linear_members(filters: list) -> list | None:
+    """Each member's linear motion and measurement models, where every member is a
+    :class:`~vistrack.filters.KalmanFilter` or an
+    :class:`~vistrack.filters.ExtendedKalmanFilter` of linear models with its own steps
+    (not a subclass's, nor patched), its measurement residual a plain difference and its
+    matrices one for every step; else None (the members' steps from Python)."""
+    from .ekf import ExtendedKalmanFilter
+    from .linear import KalmanFilter
+
+    if not _OWN:
+        _OWN.update({c: (c.predict, c.update) for c in (KalmanFilter, ExtendedKalmanFilter)})
+    out = []
+    for f in filters:
+        kind = type(f)
+        if kind not in _OWN or not own_steps(f, _OWN[kind]):
+            return None
+        if kind is ExtendedKalmanFilter:
+            fo, fe = f.motion, f.measurement
+            if not (fo.linear and fe.linear and fe.standard and not fe.angle_mask.any()):
+                return None
+            mo, me = fo.model, fe.model
+        else:
+            mo, me = f.motion, f.measurement
+            if hasattr(mo, "jacobian") or hasattr(me, "jacobian") or len(
+                    getattr(me, "angles", ())):
+                return None
+        if getattr(mo, "n_steps", None) is not None or getattr(me, "n_steps", None) is not None:
+            return None
+        out.append((mo, me))
+    return out
+
+
+def _result(means: np.ndarray, covs: np.ndarray, probs: np.ndarray, member_means: list,
+            loglik: np.ndarray, single: bool) -> IMMResult:
+    """The :class:`IMMResult` of ``(B, T, ...)`` arrays, one series' without its batch axis,
+    read-only."""
+    if single:
+        means, covs, probs, loglik = means[0], covs[0], probs[0], loglik[0]
+        member_means = [m[0] for m in member_means]
+    loglik = np.asarray(loglik)  # (read-only as the rest, as the docstring says)
+    _readonly(means, covs, probs, loglik, *member_means)
+    return IMMResult(means, covs, probs, member_means, loglik)
+
+
+@njit(cache=True)
+def _logsumexp_col(a, j, M):
+    """``log Σ_i exp(a[i, j])``, as :func:`_logsumexp` (its largest term taken out; -inf
+    where every term is)."""
+    top = -np.inf
+    for i in range(M):
+        top = max(top, a[i, j])
+    if not abs(top) < np.inf:
+        top = 0.0
+    s = 0.0
+    for i in range(M):
+        s += np.exp(a[i, j] - top)
+    return top + np.log(s)
+
+
+@njit(cache=True)
+def _mix_into(X, P, w, sz, into, xm, Pm, xc, Pc):
+    """The moment-matched mixture ``Σ_i w[i] g_i`` of the members' ``X (M, n)``,
+    ``P (M, n, n)`` (member ``i``'s first ``sz[i]`` entries) in the space of member ``into``,
+    a smaller member's missing entries (and their covariance) taken from ``into``'s own
+    estimate, as :func:`_mix` does; into ``xm``, ``Pm`` (``xc``, ``Pc``: scratch)."""
+    M = X.shape[0]
+    k = sz[into]
+    for a in range(k):
+        xm[a] = 0.0
+        for b in range(k):
+            Pm[a, b] = 0.0
+    for i in range(M):
+        ni = sz[i]
+        for a in range(k):
+            xc[i, a] = X[i, a] if a < ni else X[into, a]
+        for a in range(k):
+            xm[a] += w[i] * xc[i, a]
+    for i in range(M):
+        ni = sz[i]
+        for a in range(k):
+            for b in range(k):
+                if a < ni and b < ni:
+                    v = P[i, a, b]
+                elif a >= ni and b >= ni:
+                    v = P[into, a, b]
+                else:
+                    v = 0.0
+                Pc[a, b] = v + (xc[i, a] - xm[a]) * (xc[i, b] - xm[b])
+        for a in range(k):
+            for b in range(k):
+                Pm[a, b] += w[i] * Pc[a, b]
+    for a in range(k):
+        for b in range(a + 1, k):
+            v = 0.5 * (Pm[a, b] + Pm[b, a])
+            Pm[a, b] = v
+            Pm[b, a] = v
+
+
+@kernel
+@njit(cache=True)
+def _imm_linear(x0, P0, ys, gone, sz, logPi, logmu0, ref, Fs, Qs, qi, Hs, Rs, means, covs,
+                probs, member, loglik):
+    """The IMM of Kalman members over every series, one compiled call: the cycle of
+    :meth:`IMMFilter.filter` (mixing, each member's prediction and correction by the
+    Kalman filter's one-Gaussian kernels, the mode probabilities in logarithms, the
+    moment-matched output). Returns -1, or the first series at which a matrix, a state or a
+    likelihood is not what the steps take (filtered again from Python, which names it)."""
+    B, T, m = ys.shape
+    M, n = Fs.shape[0], Fs.shape[2]
+    for j in range(M):
+        for u in range(Fs.shape[1]):
+            if check_matrices(Fs[j, u:u + 1], Qs[j, u:u + 1], 1e-8):
+                return 0
+        if check_matrices(Hs[j], Rs[j], 1e-8):
+            return 0
+    X = np.empty((M, n))
+    P = np.empty((M, n, n))
+    X0 = np.empty((M, n))
+    P0m = np.empty((M, n, n))
+    xc = np.empty((M, n))
+    Pc = np.empty((n, n))
+    FP = np.empty((n, n))
+    xp = np.empty(n)
+    Pp = np.empty((n, n))
+    a = np.empty((M, M))
+    w = np.empty(M)
+    log_mu = np.empty(M)
+    log_c = np.empty(M)
+    joint = np.empty(M)
+    idx, e, Ut, KT, S, L, AP, W, _ = one_scratch(n, m)
+    for b in range(B):
+        for j in range(M):
+            k = sz[j]
+            for r in range(k):
+                X[j, r] = x0[b, r]
+                for c in range(k):
+                    P[j, r, c] = P0[b, r, c]
+            log_mu[j] = logmu0[j]
+        total = 0.0
+        for t in range(T):
+            if t > 0:
+                for i in range(M):
+                    for j in range(M):
+                        a[i, j] = logPi[i, j] + log_mu[i]
+                for j in range(M):
+                    log_c[j] = _logsumexp_col(a, j, M)
+                for j in range(M):
+                    if abs(log_c[j]) < np.inf:
+                        for i in range(M):
+                            v = np.exp(a[i, j] - log_c[j])
+                            w[i] = v if v == v else 0.0
+                    else:  # no mass to mix: the model keeps its own estimate
+                        for i in range(M):
+                            w[i] = 1.0 if i == j else 0.0
+                    _mix_into(X, P, w, sz, j, X0[j], P0m[j], xc, Pc)
+                for j in range(M):
+                    k = sz[j]
+                    predict_one(Fs[j], Qs[j], qi[t], qi[t], X0[j], P0m[j], xp, Pp, FP, k)
+                    for r in range(k):
+                        X[j, r] = xp[r]
+                        for c in range(k):
+                            P[j, r, c] = Pp[r, c]
+            else:
+                for j in range(M):
+                    log_c[j] = log_mu[j]
+            if gone[t]:
+                for j in range(M):
+                    log_mu[j] = log_c[j]
+            else:
+                for j in range(M):
+                    k = sz[j]
+                    ok, ll = update_one(Hs[j], Rs[j], 0, 0, ys[b, t], X[j], P[j], xp, Pp, idx,
+                                        e, Ut, KT, S, L, AP, W, k, m)
+                    if not ok:
+                        return b
+                    for r in range(k):
+                        X[j, r] = xp[r]
+                        for c in range(k):
+                            P[j, r, c] = Pp[r, c]
+                    joint[j] = log_c[j] + ll
+                    if joint[j] != joint[j]:
+                        return b
+                top = -np.inf
+                for j in range(M):
+                    top = max(top, joint[j])
+                if not abs(top) < np.inf:
+                    return b
+                s = 0.0
+                for j in range(M):
+                    s += np.exp(joint[j] - top)
+                norm = top + np.log(s)
+                total += norm
+                for j in range(M):
+                    log_mu[j] = joint[j] - norm
+            for j in range(M):
+                w[j] = np.exp(log_mu[j])
+                probs[b, t, j] = w[j]
+            _mix_into(X, P, w, sz, ref, xp, Pp, xc, Pc)
+            for r in range(n):
+                means[b, t, r] = xp[r]
+                if not abs(xp[r]) < np.inf:
+                    return b
+                for c in range(n):
+                    covs[b, t, r, c] = Pp[r, c]
+                    if not abs(Pp[r, c]) < np.inf:
+                        return b
+            for j in range(M):
+                for r in range(sz[j]):
+                    member[j, b, t, r] = X[j, r]
+        loglik[b] = total
+    return -1
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,10 @@ module-level numba functions: ``jit_f(x, dt, t, params, out)`` and
 ``jit_jacobian(x, dt, t, params, out)`` for motion, ``jit_h(x, params, out)`` and
 ``jit_jacobian(x, params, out)`` for measurement, with ``jit_params`` (see
 :mod:`vistrack.models.nonlinear`, whose models have them). The particle filter, and the
-filters of the EKF and the UKF, then run a whole sequence in one compiled call.
+filters of the EKF and the UKF, then run a whole sequence in one compiled call, where the
+compiled functions are the model's own (not inherited by a subclass that overrides ``f`` or
+``h``) and the measurement model's ``ndim_state`` is the motion model's. Compiled code does
+not check its indices: ``jit_params`` must give every value the compiled functions read.
 
 Examples
 --------
