@@ -405,3 +405,94 @@ def test_compiled_imm_names_what_it_cannot_take_as_the_steps_from_python():
     with pytest.raises(ValueError) as got:
         IMMFilter(bad, np.eye(2)).filter(ys[:2], x0=[0.0, 0.0], P0=np.eye(2))
     assert str(got.value) == str(want.value)
+
+
+def test_compiled_imm_takes_its_members_as_their_steps_do(monkeypatch):
+    """The compiled IMM takes each member's models as the member's own steps take them, and
+    leaves to those steps what they refuse: a patch of `KalmanFilter.update` made before
+    the first IMM is called (it was taken for the class's own, and never called); an EKF of
+    a linear measurement model without `ndim_meas` (AttributeError); an EKF's `Q` with a
+    negative eigenvalue (filtered where its steps refuse it); matrices of the wrong shape
+    (broadcast into the kernel's blocks, where the steps name them); an EKF's `R` as it
+    kept it when it was made, not the model's changed since. Oracle: the same members
+    whose own update runs the steps from Python."""
+    from vistrack.filters import KalmanFilter
+
+    ys = np.c_[np.r_[np.zeros(10), np.arange(1.0, 11.0)]]
+    Pi = [[0.95, 0.05], [0.05, 0.95]]
+    prior = dict(x0=[0.0, 0.0], P0=np.eye(2))
+
+    def same(make, classes=(KalmanFilter, ExtendedKalmanFilter)):
+        def run(cls):
+            try:
+                return IMMFilter(make(cls), Pi).filter(ys, **prior)
+            except (ValueError, AttributeError) as e:
+                return f"{type(e).__name__}: {e}"
+
+        for cls in classes:
+            got, want = run(cls), run(_python_steps(cls))
+            if isinstance(want, str):
+                assert got == want
+            else:
+                np.testing.assert_allclose(got.means, want.means, rtol=1e-10, atol=1e-12)
+                np.testing.assert_allclose(got.mode_probs, want.mode_probs, rtol=1e-10,
+                                           atol=1e-12)
+
+    class PositionOnly:  # linear, no ndim_meas
+        def H(self, n):
+            return np.eye(1, n)
+
+        def R(self):
+            return np.array([[0.1]])
+
+    class NotPSD(vt.ConstantPosition):
+        def Q(self, dt=1.0):
+            return np.array([[0.0, 0.3], [0.3, 0.0]]) + super().Q(dt)
+
+    class ScalarQ:
+        ndim_state = 1
+
+        def F(self, dt):
+            return np.eye(1)
+
+        def Q(self, dt):
+            return 0.1 * dt
+
+    class FlatH(PositionOnly):
+        ndim_meas = 1
+
+        def H(self, n):
+            return np.eye(1, n)[0]
+
+    cp, cv_ = vt.ConstantPosition(dim=1, q=0.01), vt.ConstantVelocity(dim=1, q=0.01)
+    pos = vt.Position(dim=1, r=0.1)
+    same(lambda cls: [cls(cp, PositionOnly()), cls(cv_, PositionOnly())],
+         (ExtendedKalmanFilter,))  # (a KalmanFilter asks for ndim_meas)
+    same(lambda cls: [cls(NotPSD(dim=2, q=0.01), vt.Position(dim=2, r=0.1))])
+    same(lambda cls: [cls(ScalarQ(), pos), cls(cv_, pos)])
+    same(lambda cls: [cls(cp, FlatH()), cls(cv_, FlatH())])
+
+    class Mutable(PositionOnly):
+        ndim_meas = 1
+        r = 0.1
+
+        def R(self):
+            return np.array([[self.r]])
+
+    def changed_after(cls):
+        sensor = Mutable()
+        members = [cls(cp, sensor), cls(cv_, sensor)]
+        sensor.r = 25.0
+        return members
+
+    same(changed_after, (ExtendedKalmanFilter,))  # (a KalmanFilter asks R each step)
+    calls = []
+    original = KalmanFilter.update
+
+    def counted(self, g, y):
+        calls.append(1)
+        return original(self, g, y)
+
+    monkeypatch.setattr(KalmanFilter, "update", counted)
+    IMMFilter([KalmanFilter(cp, pos), KalmanFilter(cv_, pos)], Pi).filter(ys, **prior)
+    assert len(calls) == 2 * len(ys)

@@ -43,7 +43,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Protocol, cast, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -432,9 +432,12 @@ class IMMFilter:
         it cannot take (filtered again from Python, which names it)."""
         Y = as_float_array(ys, "ys", ndim=(2, 3))
         check_has_steps(Y)
-        m = linear[self.ref][1].ndim_meas
-        if Y.shape[-1] != m or any(me.ndim_meas != m for _, me in linear):
-            return None  # (named from Python)
+        m = Y.shape[-1]
+        # each member's H and R of the measurement's size and its state's, as its steps take
+        # them (else named from Python: broadcast here, they gave estimates without a word)
+        if any(np.shape(H) != (m, k) or np.shape(R) != (m, m)
+               for (_, _, H, R), k in zip(linear, self.sizes)):
+            return None
         check_not_infinite(Y, "ys")
         single = Y.ndim == 2
         if single:
@@ -448,11 +451,14 @@ class IMMFilter:
         Fs, Qs = np.zeros((M, U, n, n)), np.zeros((M, U, n, n))
         Hs, Rs = np.zeros((M, 1, m, n)), np.zeros((M, 1, m, m))
         try:
-            for j, (mo, me) in enumerate(linear):
+            for j, (F, Q, H, R) in enumerate(linear):
                 k = self.sizes[j]
                 for u, d in enumerate(steps.tolist()):
-                    Fs[j, u, :k, :k], Qs[j, u, :k, :k] = mo.F(d), mo.Q(d)
-                Hs[j, 0, :, :k], Rs[j, 0] = me.H(k), me.R()
+                    Fd, Qd = np.asarray(F(d), dtype=float), np.asarray(Q(d), dtype=float)
+                    if Fd.shape != (k, k) or Qd.shape != (k, k):
+                        return None  # (the steps from Python name the shape)
+                    Fs[j, u, :k, :k], Qs[j, u, :k, :k] = Fd, Qd
+                Hs[j, 0, :, :k], Rs[j, 0] = H, R
         except Exception:  # (the steps from Python raise it again, at their step)
             return None
         gone = np.isnan(Y).all(axis=(0, 2))  # a step no series measured: mixed only
@@ -468,42 +474,42 @@ class IMMFilter:
                           covs, probs, member, loglik)
         if bad >= 0:
             return None
-        return _result(means, covs, probs, [member[j, :, :, :k] for j, k in
-                                            enumerate(self.sizes)], loglik, single)
-
-
-_OWN: dict[type, tuple] = {}  # filter class: its own (predict, update), as own_steps takes them
+        return _result(means, covs, probs, [np.ascontiguousarray(member[j, :, :, :k])
+                                            for j, k in enumerate(self.sizes)], loglik, single)
 
 
 def _linear_members(filters: list) -> list | None:
-    """Each member's linear motion and measurement models, where every member is a
+    """What each member's steps use, where every member is a
     :class:`~vistrack.filters.KalmanFilter` or an
     :class:`~vistrack.filters.ExtendedKalmanFilter` of linear models with its own steps
-    (not a subclass's, nor patched), its measurement residual a plain difference and its
-    matrices one for every step; else None (the members' steps from Python)."""
-    from .ekf import ExtendedKalmanFilter
-    from .linear import KalmanFilter
+    (not a subclass's, nor patched on the class or the instance), its measurement residual
+    a plain difference and its matrices one for every step: ``(F, Q, H, R)``, ``F(dt)`` and
+    ``Q(dt)`` functions and ``H (m, n)``, ``R (m, m)`` as those steps take them (an EKF's
+    ``Q`` checked and ``H``, ``R`` kept when it was made, a Kalman filter's asked of its
+    models). Else None: the members' steps from Python."""
+    from . import ekf, linear
 
-    if not _OWN:
-        _OWN.update({c: (c.predict, c.update) for c in (KalmanFilter, ExtendedKalmanFilter)})
     out = []
     for f in filters:
         kind = type(f)
-        if kind not in _OWN or not own_steps(f, _OWN[kind]):
-            return None
-        if kind is ExtendedKalmanFilter:
+        if kind is ekf.ExtendedKalmanFilter and own_steps(f, ekf._OWN_STEPS):
             fo, fe = f.motion, f.measurement
             if not (fo.linear and fe.linear and fe.standard and not fe.angle_mask.any()):
                 return None
             mo, me = fo.model, fe.model
-        else:
+            parts = (cast(MotionModel, mo).F, fo.Q, fe.H, fe.Rm)
+        elif kind is linear.KalmanFilter and own_steps(f, linear._OWN_STEPS):
             mo, me = f.motion, f.measurement
             if hasattr(mo, "jacobian") or hasattr(me, "jacobian") or len(
                     getattr(me, "angles", ())):
                 return None
+            k = mo.ndim_state
+            parts = (mo.F, mo.Q, me.H(k), me.R())
+        else:
+            return None
         if getattr(mo, "n_steps", None) is not None or getattr(me, "n_steps", None) is not None:
             return None
-        out.append((mo, me))
+        out.append(parts)
     return out
 
 

@@ -546,6 +546,10 @@ class KalmanFilter:
         return KalmanFilter(motion, meas), fit
 
 
+_OWN_STEPS = (KalmanFilter.predict, KalmanFilter.update)
+"""The class's own steps, as imported (a patch made later is told apart from them)."""
+
+
 class OnlineFilter:
     """One target's Gaussian, predicted and corrected in place, one measurement at a time.
 
