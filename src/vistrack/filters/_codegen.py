@@ -601,3 +601,21 @@ def source_hash(*modules: str) -> str:
             h.update(Path(origin).read_bytes())
         got = _HASHES[key] = h.hexdigest()[:16]
     return got
+
+
+def generated_kernel(template: str, prefix: str, key: str, modules: tuple[str, ...],
+                     **fields: object):
+    """The ``run`` function of the source ``template`` formatted with ``fields`` and
+    ``depends``, the :func:`source_hash` of ``modules`` (the modules its functions come
+    from), loaded by :func:`load` under ``prefix`` and wrapped for calls from Python (and
+    its build ahead of time) as ``key`` (:func:`vistrack._prebuilt.kernel`). Kept per
+    source hash: a module changed and reloaded gets a kernel of its new functions."""
+    return _generated(template, prefix, key, source_hash(*modules),
+                      tuple(sorted(fields.items())))
+
+
+@functools.cache
+def _generated(template: str, prefix: str, key: str, depends: str, fields: tuple):
+    from .._prebuilt import kernel
+
+    return kernel(load(prefix, template.format(depends=depends, **dict(fields))).run, key)

@@ -24,14 +24,13 @@ some hundred for the steps from Python. Other models run the steps from Python.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Callable
 from functools import partial
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._prebuilt import Kernel, kernel
+from .._prebuilt import Kernel
 from .._validate import check_finite, check_one_step, check_psd, check_symmetric
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..models.protocols import (
@@ -340,21 +339,14 @@ def run(x0, P0, ys, dts, times, fp, hp, Qs, qi, R, angles, means, covs, pmeans, 
 def _fused_kernel(fref: Ref, jfref: Ref, href: Ref, jhref: Ref, n: int, m: int) -> Kernel:
     """The compiled filter of these functions and sizes for calls from Python (and for
     compiling it ahead of time, see :mod:`vistrack._prebuilt`), of their modules' current
-    source (:func:`._codegen.source_hash`)."""
-    depends = _codegen.source_hash(*sorted({fref[0], jfref[0], href[0], jhref[0]}),
-                                   _jitmath.__name__, _kernels.__name__)
-    return _fused_kernel_of(fref, jfref, href, jhref, n, m, depends)
-
-
-@functools.cache
-def _fused_kernel_of(fref: Ref, jfref: Ref, href: Ref, jhref: Ref, n: int, m: int,
-                     depends: str) -> Kernel:
-    src = _FUSED.format(fmod=fref[0], fname=fref[1], jfmod=jfref[0], jfname=jfref[1],
-                        hmod=href[0], hname=href[1], jhmod=jhref[0], jhname=jhref[1], n=n,
-                        m=m, depends=depends)
-    return kernel(_codegen.load("vistrack_ekf", src).run,
-                  f"{__name__}:_fused_kernel({fref!r}, {jfref!r}, {href!r}, {jhref!r}, "
-                  f"{n!r}, {m!r})")
+    source."""
+    return _codegen.generated_kernel(
+        _FUSED, "vistrack_ekf",
+        f"{__name__}:_fused_kernel({fref!r}, {jfref!r}, {href!r}, {jhref!r}, {n!r}, {m!r})",
+        (*sorted({fref[0], jfref[0], href[0], jhref[0]}), _jitmath.__name__,
+         _kernels.__name__),
+        fmod=fref[0], fname=fref[1], jfmod=jfref[0], jfname=jfref[1], hmod=href[0],
+        hname=href[1], jhmod=jhref[0], jhname=jhref[1], n=n, m=m)
 
 
 def _filter_compiled(parts: tuple[Ref, ...], mo: MotionFunctions,

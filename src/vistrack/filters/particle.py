@@ -19,7 +19,6 @@ in that peak as its confidence.
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -788,17 +787,11 @@ def run(x, xb, ys, obs, nobs, Linv, c, angles, dts, times, fp, hp, S, scheme, th
 def _fused_kernel(fref: Ref, href: Ref, n: int, m: int) -> Kernel:
     """The fused filter of these functions and sizes for calls from Python (and for
     compiling it ahead of time, see :mod:`vistrack._prebuilt`), of their modules' current
-    source (:func:`._codegen.source_hash`)."""
-    depends = _codegen.source_hash(fref[0], href[0], _random.__name__, _jitmath.__name__)
-    return _fused_kernel_of(fref, href, n, m, depends)
-
-
-@functools.cache
-def _fused_kernel_of(fref: Ref, href: Ref, n: int, m: int, depends: str) -> Kernel:
-    src = _FUSED.format(fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m,
-                        depends=depends)
-    return kernel(_codegen.load("vistrack_pf", src).run,
-                  f"{__name__}:_fused_kernel({fref!r}, {href!r}, {n!r}, {m!r})")
+    source."""
+    return _codegen.generated_kernel(
+        _FUSED, "vistrack_pf", f"{__name__}:_fused_kernel({fref!r}, {href!r}, {n!r}, {m!r})",
+        (fref[0], href[0], _random.__name__, _jitmath.__name__),
+        fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m)
 
 
 @njit(cache=True, error_model="numpy", inline="always")

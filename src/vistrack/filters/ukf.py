@@ -39,7 +39,6 @@ systems"; Wan and van der Merwe (2000), "The unscented Kalman filter for nonline
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Callable
 from typing import Any
@@ -1141,18 +1140,11 @@ def run(x0, P0, ys, dts, times, fp, hp, Qs, qi, R, angles, Wm, Wc, scale, means,
 def _fused_kernel(fref: Ref, href: Ref, n: int, m: int) -> Kernel:
     """The compiled filter of these functions and sizes for calls from Python (and for
     compiling it ahead of time, see :mod:`vistrack._prebuilt`), of their modules' current
-    source (:func:`._codegen.source_hash`)."""
-    depends = _codegen.source_hash(*sorted({fref[0], href[0]}), __name__, _jitmath.__name__,
-                                   _kernels.__name__)
-    return _fused_kernel_of(fref, href, n, m, depends)
-
-
-@functools.cache
-def _fused_kernel_of(fref: Ref, href: Ref, n: int, m: int, depends: str) -> Kernel:
-    src = _FUSED.format(fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m,
-                        depends=depends)
-    return kernel(_codegen.load("vistrack_ukf", src).run,
-                  f"{__name__}:_fused_kernel({fref!r}, {href!r}, {n!r}, {m!r})")
+    source."""
+    return _codegen.generated_kernel(
+        _FUSED, "vistrack_ukf", f"{__name__}:_fused_kernel({fref!r}, {href!r}, {n!r}, {m!r})",
+        (*sorted({fref[0], href[0]}), __name__, _jitmath.__name__, _kernels.__name__),
+        fmod=fref[0], fname=fref[1], hmod=href[0], hname=href[1], n=n, m=m)
 
 
 def _filter_compiled(parts: tuple[Ref, ...], flt: UnscentedKalmanFilter, ys: ArrayLike,
