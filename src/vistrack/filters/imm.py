@@ -428,8 +428,9 @@ class IMMFilter:
     def _filter_linear(self, linear: list, ys: ArrayLike, x0: ArrayLike, P0: ArrayLike,
                        dt: ArrayLike | None, times: ArrayLike | None) -> IMMResult | None:
         """:meth:`filter` of Kalman members of linear models (``linear``: each member's
-        motion and measurement model) in one compiled call, or None where the call met what
-        it cannot take (filtered again from Python, which names it)."""
+        ``F(dt)``, ``Q(dt)``, ``H`` and ``R``, :func:`_linear_members`) in one compiled
+        call, or None where the call met what it cannot take (filtered again from Python,
+        which names it)."""
         Y = as_float_array(ys, "ys", ndim=(2, 3))
         check_has_steps(Y)
         m = Y.shape[-1]
