@@ -341,15 +341,6 @@ class IMMFilter:
         >>> rmse(res.means[:, 0]) < rmse(ys[:, 0])       # better than the measurements
         True
         """
-        linear = _linear_members(self.filters)
-        if linear is not None:
-            # Kalman members of linear models: the whole filter in one compiled call; what
-            # it cannot take (a matrix not finite, an innovation covariance not positive
-            # definite, every model giving a measurement zero likelihood) is filtered again
-            # below, which names it as before
-            done = self._filter_linear(linear, ys, x0, P0, dt, times)
-            if done is not None:
-                return done
         ys = as_float_array(ys, "ys", ndim=(2, 3))
         check_has_steps(ys)
         meas = getattr(self.filters[self.ref], "measurement", None)
@@ -367,8 +358,17 @@ class IMMFilter:
         x0, P0 = check_prior(x0, P0, n, space=" (the largest member's state)", series=B)
         x0 = np.broadcast_to(x0, (B, n))
         P0 = np.broadcast_to(P0, (B, n, n))
-        gs = [Gaussian(x0[:, :k].copy(), P0[:, :k, :k].copy()) for k in self.sizes]
         dts, times = step_times(dt, times, T)
+        linear = _linear_members(self.filters)
+        if linear is not None:
+            # Kalman members of linear models: the whole filter in one compiled call; what
+            # it cannot take (a matrix not finite, an innovation covariance not positive
+            # definite, every model giving a measurement zero likelihood) is filtered again
+            # below, which names it as before
+            done = self._filter_linear(linear, ys, single, x0, P0, dts)
+            if done is not None:
+                return done
+        gs = [Gaussian(x0[:, :k].copy(), P0[:, :k, :k].copy()) for k in self.sizes]
         M = len(self.filters)
         log_mu = np.broadcast_to(self.log_mu0, (B, M)).copy()
         means, covs = np.empty((B, T, n)), np.empty((B, T, n, n))
@@ -425,28 +425,20 @@ class IMMFilter:
                 member_means[j][:, t] = g.mean
         return _result(means, covs, probs, member_means, loglik, single)
 
-    def _filter_linear(self, linear: list, ys: ArrayLike, x0: ArrayLike, P0: ArrayLike,
-                       dt: ArrayLike | None, times: ArrayLike | None) -> IMMResult | None:
+    def _filter_linear(self, linear: list, Y: np.ndarray, single: bool, x0: np.ndarray,
+                       P0: np.ndarray, dts: np.ndarray) -> IMMResult | None:
         """:meth:`filter` of Kalman members of linear models (``linear``: each member's
         ``F(dt)``, ``Q(dt)``, ``H`` and ``R``, :func:`_linear_members`) in one compiled
-        call, or None where the call met what it cannot take (filtered again from Python,
-        which names it)."""
-        Y = as_float_array(ys, "ys", ndim=(2, 3))
-        check_has_steps(Y)
-        m = Y.shape[-1]
+        call, given what :meth:`filter` checked (``Y (B, T, m)``, the priors ``(B, n)`` and
+        ``(B, n, n)``, each step's ``dt``); or None where the call met what it cannot take
+        (filtered again from Python, which names it)."""
+        B, T, m = Y.shape
+        n, M = self.sizes[self.ref], len(linear)
         # each member's H and R of the measurement's size and its state's, as its steps take
         # them (else named from Python: broadcast here, they gave estimates without a word)
         if any(np.shape(H) != (m, k) or np.shape(R) != (m, m)
                for (_, _, H, R), k in zip(linear, self.sizes)):
             return None
-        check_not_infinite(Y, "ys")
-        single = Y.ndim == 2
-        if single:
-            Y = Y[None]
-        B, T, _ = Y.shape
-        n, M = self.sizes[self.ref], len(linear)
-        mean0, cov0 = check_prior(x0, P0, n, space=" (the largest member's state)", series=B)
-        dts, _ = step_times(dt, times, T)
         steps, qi = np.unique(dts[1:], return_inverse=True)
         U = max(len(steps), 1)
         Fs, Qs = np.zeros((M, U, n, n)), np.zeros((M, U, n, n))
@@ -466,8 +458,8 @@ class IMMFilter:
         means, covs = np.empty((B, T, n)), np.empty((B, T, n, n))
         probs, loglik = np.empty((B, T, M)), np.zeros(B)
         member = np.empty((M, B, T, n))
-        bad = _imm_linear(np.array(np.broadcast_to(mean0, (B, n)), order="C"),
-                          np.array(np.broadcast_to(cov0, (B, n, n)), order="C"),
+        bad = _imm_linear(np.array(x0, dtype=float, order="C"),
+                          np.array(P0, dtype=float, order="C"),
                           np.array(Y, order="C"), gone, np.asarray(self.sizes, np.int64),
                           np.ascontiguousarray(self.log_transition, dtype=float),
                           np.ascontiguousarray(self.log_mu0, dtype=float), self.ref, Fs, Qs,
