@@ -7,6 +7,10 @@ import pytest
 import vistrack as vt
 from vistrack.filters import ExtendedKalmanFilter, IMMFilter, UnscentedKalmanFilter, kalman_filter
 
+# (a member class whose own update runs the IMM's steps from Python, the filter before
+# its compiled path)
+from .test_nonlinear import _python_steps
+
 
 def cv(q, r=1.0, dim=1):
     return ExtendedKalmanFilter(vt.ConstantVelocity(dim=dim, q=q), vt.Position(dim=dim, r=r))
@@ -274,15 +278,6 @@ def test_a_member_s_nan_log_likelihood_is_named_and_loglik_is_read_only():
         res = imm.filter(ys, x0=[0, 0], P0=np.eye(2))
         with pytest.raises(ValueError, match="read-only"):
             res.loglik[...] = 0.0
-
-
-def _python_steps(cls):
-    """A member class whose own update runs the IMM's steps from Python (the filter before
-    its compiled path)."""
-    class Steps(cls):
-        def update(self, g, y):
-            return super().update(g, y)
-    return Steps
 
 
 def test_kalman_members_run_compiled_and_equal_the_steps_from_python(monkeypatch):

@@ -1771,8 +1771,9 @@ def _turn_series():
 
 
 def _python_steps(cls=ExtendedKalmanFilter):
-    """The EKF's filter with its steps called from Python: a subclass's own update runs the
-    loop of `run_sequence`, the path before the compiled one."""
+    """``cls`` (a filter) with its steps called from Python: a subclass's own update runs
+    the loop of `run_sequence` (or, as an IMM's member, the IMM's steps from Python), the
+    path before the compiled one."""
     class Steps(cls):
         def update(self, g, y):
             return super().update(g, y)
