@@ -247,7 +247,8 @@ import math
 import numpy as np
 from numba import njit
 from vistrack.filters._jitmath import wrap_angle
-from vistrack.filters._kernels import keep_state, load_state, observed, one_scratch, update_one
+from vistrack.filters._kernels import (keep_state, load_state, observed, one_scratch,
+                                       predict_one, update_one)
 from {fmod} import {fname} as f
 from {jfmod} import {jfname} as jf
 from {hmod} import {hname} as h
@@ -258,7 +259,7 @@ from {jhmod} import {jhname} as jh
 def run(x0, P0, ys, dts, times, fp, hp, Qs, qi, R, angles, means, covs, pmeans, pcovs,
         loglik):
     # The EKF over every series, one compiled call: per step the prediction
-    # (f, G P G' + Q, symmetrised) and the correction of the Kalman filter's one-Gaussian
+    # (f, G P G' + Q) and the correction of the Kalman filter's one-Gaussian
     # update_one, given the residual y - h(x) (angles wrapped) for y and a zero mean, with
     # the Jacobian of h for H, as the filter's steps from Python do. Returns (-1, -1), or the
     # series and step of the first value not finite or innovation covariance not positive
@@ -271,7 +272,7 @@ def run(x0, P0, ys, dts, times, fp, hp, Qs, qi, R, angles, means, covs, pmeans, 
     zero = np.zeros(n)
     P = np.empty((n, n))
     A = np.empty((n, n))
-    G = np.empty((n, n))
+    G = np.empty((1, n, n))
     GP = np.empty((n, n))
     z = np.empty(m)
     e = np.empty(m)
@@ -283,25 +284,15 @@ def run(x0, P0, ys, dts, times, fp, hp, Qs, qi, R, angles, means, covs, pmeans, 
         total = 0.0
         for t in range(T):
             if t > 0:
+                # G P G' + Q by the Kalman filter's own prediction, G for F (its mean, G x,
+                # is not the EKF's: f(x) replaces it)
                 f(x, dts[t], times[t], fp[t], xn)
-                jf(x, dts[t], times[t], fp[t], G)
-                for i in range(n):
-                    for k in range(n):
-                        v = 0.0
-                        for l in range(n):
-                            v += G[i, l] * P[l, k]
-                        GP[i, k] = v
-                q = qi[t]
-                for i in range(n):
-                    for k in range(n):
-                        v = 0.0
-                        for l in range(n):
-                            v += GP[i, l] * G[k, l]
-                        A[i, k] = v + Qs[q, i, k]
+                jf(x, dts[t], times[t], fp[t], G[0])
+                predict_one(G, Qs, 0, qi[t], x, P, step, A, GP, n)
                 for i in range(n):
                     x[i] = xn[i]
                     for k in range(n):
-                        P[i, k] = 0.5 * (A[i, k] + A[k, i])
+                        P[i, k] = A[i, k]
             if not keep_state(x, P, pmeans, pcovs, b, t):
                 return b, t
             if observed(ys[b, t]) > 0:
