@@ -8,8 +8,9 @@ the same measurements; the table gives the median time per step of a few runs an
 the filtered mean against the simulated states. UKF and EKF: 2-D coordinated turn with
 range-bearing measurements, one predict + update per call; the EKF's means are checked against
 FilterPy's (its `ExtendedKalmanFilter` given the model's f, Jacobians and residual) before the
-times are reported. IMM: two constant-velocity Kalman filters beside FilterPy's
-`IMMEstimator`, checked equal likewise.
+times are reported. EnKF: the same problem with 100 and 1,000 members beside FilterPy's
+`EnsembleKalmanFilter`, each with its RMSE over four seeds. IMM: two constant-velocity
+Kalman filters beside FilterPy's `IMMEstimator`, checked equal likewise.
 """
 
 from __future__ import annotations
@@ -187,14 +188,14 @@ def particle_rows(rows, repeats, sizes):
             rows.append((label, "particles (SMC, systematic)", sec / T * 1e3, rmse(m)))
 
 
-def _turn():
+def _turn(states=False):
     """The UKF's and EKF's problem: a coordinated turn seen by range and bearing, 200
-    steps, and the first step's prior."""
+    steps, and the first step's prior (and the simulated states, with ``states``)."""
     motion, meas = vt.models.CoordinatedTurn(q=0.05, q_turn=1e-3), vt.models.RangeBearing(
         1.0, 1e-3, ndim_state=5)
-    _, zs = vt.simulate.simulate(motion, meas, 200, x0=[-20.0, 8.0, 0.0, -0.8, 0.01], rng=5)
+    xs, zs = vt.simulate.simulate(motion, meas, 200, x0=[-20.0, 8.0, 0.0, -0.8, 0.01], rng=5)
     x0, P0 = np.array([-20.0, 8.0, 0.0, -0.8, 0.01]), np.diag([4.0, 4.0, 0.5, 0.5, 1e-3])
-    return motion, meas, zs, x0, P0
+    return (motion, meas, zs, x0, P0) + ((xs,) if states else ())
 
 
 def _vistrack_rows(rows, repeats, label, name, predict, update, flt):
@@ -268,6 +269,58 @@ def ekf_rows(rows, repeats):
             raise SystemExit(f"the EKFs disagree: vistrack's means and FilterPy's differ by {gap}")
         sec, _ = median_time(filterpy_run, repeats)
         rows.append((label, "FilterPy ExtendedKalmanFilter", sec / len(zs) * 1e3, None))
+
+
+def enkf_rows(rows, repeats, sizes):
+    """The UKF's problem through the stochastic EnKF of ``N`` members: vistrack's
+    `EnsembleKalmanFilter.filter` and FilterPy's `EnsembleKalmanFilter`. The draws differ, so
+    the two are compared by the RMSE of the filtered positions against the simulated states
+    over four seeds. FilterPy takes no residual: its ``hx`` gives each member's bearing
+    within half a turn of the step's measured one, which makes ``z - hx`` the wrapped residual
+    vistrack's model gives (the bearing crosses ±π on this track)."""
+    from vistrack.filters import EnsembleKalmanFilter
+
+    motion, meas, zs, x0, P0, xs = _turn(states=True)
+
+    def rmse(means):
+        return float(np.sqrt(np.mean(np.sum((means[:, :2] - xs[:, :2]) ** 2, axis=1))))
+
+    for N in sizes:
+        label = (f"EnKF, coordinated turn + range-bearing, N = {N:,} members, "
+                 "one predict + update")
+        seeds = range(5)
+        flts = [EnsembleKalmanFilter(motion, meas, N, rng=s) for s in seeds]
+        sec, _ = median_time(lambda: flts[0].filter(zs, x0=x0, P0=P0), repeats)
+        err = np.mean([rmse(f.filter(zs, x0=x0, P0=P0).means) for f in flts[1:]])
+        rows.append((label, "vistrack EnsembleKalmanFilter.filter, per step",
+                     sec / len(zs) * 1e3, err))
+        if optional("filterpy") is None:
+            continue
+        from filterpy.kalman import EnsembleKalmanFilter as FPEn
+
+        def filterpy_run(seed):
+            np.random.seed(seed)  # (FilterPy draws from numpy's global generator)
+            ref = [0.0]
+
+            def hx(x):
+                r, b = meas.h(x)
+                return np.array([r, ref[0] + (b - ref[0] + np.pi) % (2 * np.pi) - np.pi])
+
+            kf = FPEn(x=x0.copy(), P=P0.copy(), dim_z=2, dt=1.0, N=N, hx=hx,
+                      fx=lambda x, dt: motion.f(x, dt))
+            kf.Q, kf.R = motion.Q(1.0), meas.R()
+            means = []
+            for k, z in enumerate(zs):
+                if k:  # (the first step's prior is x0, P0, as vistrack's filter takes it)
+                    kf.predict()
+                ref[0] = z[1]
+                kf.update(z)
+                means.append(kf.x.copy())
+            return np.array(means)
+
+        sec, _ = median_time(lambda: filterpy_run(0), max(1, repeats if N <= 100 else 1))
+        err = np.mean([rmse(filterpy_run(s)) for s in seeds[1:]])
+        rows.append((label, "FilterPy EnsembleKalmanFilter", sec / len(zs) * 1e3, err))
 
 
 def imm_rows(rows, repeats):
@@ -345,6 +398,8 @@ def main():
     ukf_rows(rows, 5)
     print("EKF ...", file=sys.stderr)
     ekf_rows(rows, 5)
+    print("EnKF ...", file=sys.stderr)
+    enkf_rows(rows, 5, (100,) if args.quick else (100, 1000))
     print("IMM ...", file=sys.stderr)
     imm_rows(rows, 5)
     import numba
