@@ -17,10 +17,12 @@ Three steps make every linear-Gaussian filter and smoother in :mod:`vistrack.fil
     P^s = P + G (P^s_{t+1} - P^-_{t+1}) G',
 
 the covariance correction in the Joseph form (symmetric positive definite to rounding, where
-``(I - K H) P⁻`` can lose both) and symmetrised. NaN components of ``y`` are missing: their rows
-of ``H`` and their innovations are zero and their rows and columns of ``S`` a unit's, so the
-update and ``ℓ`` use the observed components alone (a wholly missing ``y`` leaves the Gaussian
-unchanged, with ``ℓ = 0``).
+``(I - K H) P⁻`` can lose both) and symmetrised; the smoothed covariance likewise as the
+equal sum ``(I - G F) P (I - G F)' + G (Q + P^s_{t+1}) G'``, where the difference loses every
+digit of a small variance beside a large one (1e-10 beside 1e10). NaN components of ``y``
+are missing: their rows of ``H`` and their innovations are zero and their rows and columns of
+``S`` a unit's, so the update and ``ℓ`` use the observed components alone (a wholly missing
+``y`` leaves the Gaussian unchanged, with ``ℓ = 0``).
 
 Each function takes a batch (leading dimensions) and is a few lines, as dynamax's
 ``_predict`` and ``_condition_on``. :func:`condition_on` takes the innovation and a per-Gaussian
@@ -233,7 +235,10 @@ def smooth_step(
 
         P^-_{t+1} = F P F' + Q, \quad G = P F' (P^-_{t+1})^{-1}, \quad
         \bar x^s = \bar x + G (\bar x^s_{t+1} - F \bar x), \quad
-        P^s = P + G (P^s_{t+1} - P^-_{t+1}) G'.
+        P^s = P + G (P^s_{t+1} - P^-_{t+1}) G'
+            = (I - G F) P (I - G F)' + G (Q + P^s_{t+1}) G',
+
+    computed in the second form (see the module).
 
     Parameters
     ----------
@@ -279,5 +284,8 @@ def smooth_step(
     xp, Pp = predict(x, P, F, Q)
     G = _t(np.linalg.solve(Pp, F @ P))  # (Pp^-1 F P)' = P F' Pp^-1
     ms = x + (G @ (np.asarray(next_smoothed_mean, dtype=float) - xp)[..., None])[..., 0]
-    Ps = P + G @ (np.asarray(next_smoothed_cov, dtype=float) - Pp) @ _t(G)
+    # P + G (P_s - Pp) G' as a sum of positive semi-definite terms (see the module)
+    A = np.eye(x.shape[-1]) - G @ F
+    Ps = A @ P @ _t(A) + G @ (np.asarray(Q, dtype=float)
+                              + np.asarray(next_smoothed_cov, dtype=float)) @ _t(G)
     return ms, symmetric(Ps)
