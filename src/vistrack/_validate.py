@@ -462,6 +462,38 @@ def as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
     raise TypeError(f"rng must be a numpy Generator, an int seed or None; got {type(rng).__name__}")
 
 
+def masked_batch(ys: Any) -> Any:
+    """``ys`` as one masked array where it is a list or tuple with a masked series in it, so
+    that every series keeps its mask (``np.asarray`` of the list drops them, and the values
+    under the masks are read as data); anything else as it is.
+
+    >>> ys = [np.ma.masked_array([1.0, 9e9], mask=[0, 1]), np.array([2.0, 3.0])]
+    >>> as_float_array(masked_batch(ys), "ys").tolist()
+    [[1.0, nan], [2.0, 3.0]]
+    """
+    if isinstance(ys, (list, tuple)) and any(isinstance(s, np.ma.MaskedArray) for s in ys):
+        try:
+            return np.ma.array(ys)
+        except (TypeError, ValueError):
+            pass  # ragged or not numbers: as_float_array names the argument
+    return ys
+
+
+def check_not_masked(value: Any, name: str, why: str) -> None:
+    """Raise ValueError, naming the first masked entry, where ``value`` is a numpy masked
+    array with an entry masked: for values that have no missing one (``why``).
+
+    >>> check_not_masked(np.ma.masked_array([1.0, 2.0], mask=[0, 1]), "x0", "a prior has no "
+    ...                  "missing value")
+    Traceback (most recent call last):
+    ...
+    ValueError: x0 must not have masked entries (a prior has no missing value); x0[1] is masked
+    """
+    if isinstance(value, np.ma.MaskedArray) and np.ma.is_masked(value):
+        idx = [int(i) for i in np.argwhere(np.ma.getmaskarray(value))[0]]
+        raise ValueError(f"{name} must not have masked entries ({why}); {name}{idx} is masked")
+
+
 def as_measurement_series(ys: ArrayLike, name: str = "ys") -> tuple[np.ndarray, bool]:
     """Measurements ``(T, m)`` or ``(B, T, m)`` as ``(B, T, m)`` float64 (NaN: missing), and
     whether a single series was given; an infinite value is named with its index.
@@ -476,12 +508,7 @@ def as_measurement_series(ys: ArrayLike, name: str = "ys") -> tuple[np.ndarray, 
     >>> y[0, :, 0], single
     (array([0.1, nan, 3.2]), True)
     """
-    if isinstance(ys, (list, tuple)) and any(isinstance(s, np.ma.MaskedArray) for s in ys):
-        try:  # one masked array with every series' mask (np.asarray would drop them)
-            ys = np.ma.array(ys)
-        except (TypeError, ValueError):
-            pass  # ragged or not numbers: as_float_array names the argument
-    y = as_float_array(ys, name, ndim=(2, 3))
+    y = as_float_array(masked_batch(ys), name, ndim=(2, 3))
     if np.isinf(y).any():
         idx = tuple(int(i) for i in np.argwhere(np.isinf(y))[0])
         raise ValueError(f"{name} must be finite or NaN (missing); {name}{list(idx)} = {y[idx]}")
@@ -591,11 +618,8 @@ def check_prior(x0: ArrayLike | None, P0: ArrayLike | None, n: int, *, batch: bo
     for name, value in (("x0", x0), ("P0", P0)):
         if value is None:
             raise ValueError(f"{name} is required (the prior of the first step); got None")
-        if isinstance(value, np.ma.MaskedArray) and np.ma.is_masked(value):
-            # (as_float_array would make it NaN, which the filters would carry silently)
-            idx = [int(i) for i in np.argwhere(np.ma.getmaskarray(value))[0]]
-            raise ValueError(f"{name} must not have masked entries (a prior has no missing "
-                             f"value); {name}{idx} is masked")
+        # (as_float_array would make it NaN, which the filters would carry silently)
+        check_not_masked(value, name, "a prior has no missing value")
     x = as_float_array(x0, "x0", ndim=(1, 2) if batch else (1,))
     # a NaN mean went through the extended and ensemble filters as NaN estimates, and
     # an IMM's as "every model gives zero likelihood"

@@ -15,6 +15,7 @@ from .._validate import (
     check_not_infinite,
     check_prior,
     eps_of,
+    masked_batch,
 )
 from ..models.adapters import MeasurementFunctions, MotionFunctions
 from ..types import Gaussian
@@ -198,7 +199,7 @@ def sequence_inputs(ys: ArrayLike, m: int, dt: ArrayLike | None,
                     times: ArrayLike | None) -> tuple[np.ndarray, bool, np.ndarray, np.ndarray]:
     """:func:`run_sequence`'s measurements ``ys`` checked and as ``(B, T, m)``, whether they
     were one series, and each step's ``dt`` and time (:func:`step_times`)."""
-    Y = as_float_array(ys, "ys", ndim=(2, 3))
+    Y = as_float_array(masked_batch(ys), "ys", ndim=(2, 3))  # (a list of masked series too)
     check_has_steps(Y)
     if Y.shape[-1] != m:
         raise ValueError(f"ys must have {m} measurement components (last axis); got "

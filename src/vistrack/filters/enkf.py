@@ -28,10 +28,12 @@ from .._validate import (
     as_whole,
     check_finite,
     check_has_steps,
+    check_not_masked,
     check_one_step,
     check_prior,
     check_psd,
     is_whole,
+    masked_batch,
 )
 from ..models.adapters import (
     MeasurementFunctions,
@@ -69,7 +71,10 @@ class Ensemble:
     Raises
     ------
     ValueError
-        If ``members`` has fewer than 2 dimensions or fewer than 2 members.
+        If ``members`` has fewer than 2 dimensions or fewer than 2 members, or is a numpy
+        masked array with an entry masked.
+    TypeError
+        If ``members`` are not real numbers (complex values, text).
 
     Examples
     --------
@@ -82,7 +87,10 @@ class Ensemble:
     members: np.ndarray
 
     def __post_init__(self) -> None:
-        m = np.asarray(self.members, dtype=np.float64)
+        # (np.asarray read the values under a mask as members and took complex ones' real
+        # parts with a warning alone)
+        check_not_masked(self.members, "members", "an ensemble has no missing member")
+        m = as_float_array(self.members, "members")
         if m.ndim < 2 or m.shape[-2] < 2:
             raise ValueError(f"members must have shape (..., N, n) with N >= 2; got {m.shape}")
         object.__setattr__(self, "members", m)
@@ -112,8 +120,10 @@ class Ensemble:
         ------
         ValueError
             If ``mean`` or ``cov`` has a NaN or an infinite entry, their sizes disagree,
-            ``cov`` is not symmetric positive semi-definite, or ``n_members`` is not a whole
-            number >= 2.
+            ``cov`` is not symmetric positive semi-definite, ``n_members`` is not a whole
+            number >= 2, or either is a numpy masked array with an entry masked.
+        TypeError
+            If ``mean`` or ``cov`` are not real numbers (complex values, text).
 
         Examples
         --------
@@ -121,8 +131,12 @@ class Ensemble:
         (3, 100, 2)
         """
         rng = as_rng(rng)
-        mean = np.asarray(mean, dtype=float)
-        cov = np.asarray(cov, dtype=float)
+        # (np.asarray drew about the values under a mask, and took complex values' real
+        # parts with a warning alone)
+        check_not_masked(mean, "mean", "a distribution has no missing value")
+        check_not_masked(cov, "cov", "a distribution has no missing value")
+        mean = as_float_array(mean, "mean")
+        cov = as_float_array(cov, "cov")
         # (a NaN covariance passed Cholesky's factorisation and drew NaN members)
         check_finite(mean, "mean")
         check_finite(cov, "cov")
@@ -454,7 +468,7 @@ class EnsembleKalmanFilter:
         ((2, 5, 2), (2,))
         """
         n = self.motion.n
-        ys_arr = as_float_array(ys, "ys", ndim=(2, 3))
+        ys_arr = as_float_array(masked_batch(ys), "ys", ndim=(2, 3))
         check_has_steps(ys_arr)
         B = 1 if ys_arr.ndim == 2 else ys_arr.shape[0]
         x0, P0 = check_prior(x0, P0, n, series=B)

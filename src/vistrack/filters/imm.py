@@ -57,6 +57,7 @@ from .._validate import (
     check_has_steps,
     check_not_infinite,
     check_prior,
+    masked_batch,
 )
 from ..models.protocols import MotionModel, NonlinearMotionModel
 from ..models.switching import SwitchingLinearSystem
@@ -341,7 +342,7 @@ class IMMFilter:
         >>> rmse(res.means[:, 0]) < rmse(ys[:, 0])       # better than the measurements
         True
         """
-        ys = as_float_array(ys, "ys", ndim=(2, 3))
+        ys = as_float_array(masked_batch(ys), "ys", ndim=(2, 3))
         check_has_steps(ys)
         meas = getattr(self.filters[self.ref], "measurement", None)
         # a measurement model's size, or a nonlinear member's measurement functions' (m)
