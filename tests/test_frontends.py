@@ -659,8 +659,40 @@ def test_a_binary_seqinfo_beside_the_images_is_named(tmp_path):
     _folder(tmp_path / "img1", n=1)
     (tmp_path / "seqinfo.ini").write_bytes(b"\x89PNG\r\n\x00")
     with pytest.raises(VideoError, match=re.escape(f"{tmp_path / 'seqinfo.ini'} is not a "
-                                                   "readable seqinfo.ini")):
+                                                   "text seqinfo.ini file (byte 0: b'\\x89' "
+                                                   "is not UTF-8)")):
         VideoReader(tmp_path)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("[Sequence]\nname=S\nframeRate=30\nframerate=30\n",
+     ", line 4: not a valid INI file: 'framerate' appears twice in [Sequence]"),
+    ("hello world\n", ", line 1: not a valid INI file: no [section] header before 'hello world'"),
+    ("[Sequence]\nname=S\n\nframeRate=abc\n", ":4: frameRate = 'abc' is not a number"),
+    ("[Sequence]\nname=S\n\nframeRate=0\n", ":4: frameRate must be a finite number > 0; got 0"),
+])
+def test_a_seqinfo_beside_the_images_is_named_by_its_line_as_read_seqinfo_names_it(
+        tmp_path, text, message):
+    """Read beside a sequence's images (tracking from pixels), a seqinfo.ini at fault was
+    named in configparser's and Python's own words ("While reading from ... [line  4]:
+    option 'framerate' in section 'Sequence' already exists", "could not convert string to
+    float: 'abc'"), and frameRate's line was not named, where reading the same sequence's
+    detections named both (read_seqinfo): the same words now, the file and line."""
+    from vistrack.io import MOTFormatError, read_seqinfo
+
+    (tmp_path / "img1").mkdir()
+    _folder(tmp_path / "img1", n=1)
+    info = tmp_path / "seqinfo.ini"
+    info.write_text(text)
+    with pytest.raises(VideoError) as e:
+        VideoReader(tmp_path)
+    assert str(e.value) == f"{info}{message}"
+    with pytest.raises(MOTFormatError) as e2:  # the oracle: the detections' reading
+        read_seqinfo(tmp_path)
+    assert str(e2.value) == str(e.value)
+    # a file without a [Sequence] section is read as none, as before
+    info.write_text("[Other]\nx = 1\n")
+    assert VideoReader(tmp_path, fps=5).fps == 5
 
 
 @pytest.mark.parametrize("rate", ["0", "-5", "inf"])
@@ -672,8 +704,8 @@ def test_a_frame_rate_that_is_no_rate_is_named_in_its_seqinfo(tmp_path, rate):
     (tmp_path / "seqinfo.ini").write_text(f"[Sequence]\nframeRate={rate}\n")
     with pytest.raises(VideoError) as e:
         VideoReader(tmp_path)
-    assert str(e.value) == (f"{tmp_path / 'seqinfo.ini'}: frameRate must be a finite number > "
-                            f"0; got {rate}")
+    assert str(e.value) == (f"{tmp_path / 'seqinfo.ini'}:2: frameRate must be a finite number "
+                            f"> 0; got {rate}")
     assert VideoReader(tmp_path, fps=12).fps == 12  # the rate given overrides it
     (tmp_path / "seqinfo.ini").write_text("[Sequence]\nframeRate=2.5\n")
     assert VideoReader(tmp_path).fps == 2.5

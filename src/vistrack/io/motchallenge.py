@@ -1793,8 +1793,10 @@ def read_seq_length(path: str | os.PathLike) -> int:
     return int(_seqinfo_value(path, s, "seqLength", int))
 
 
-def _sequence_section(path: str | os.PathLike) -> tuple[Path, Any]:
-    """The file and its ``[Sequence]`` section (see :func:`read_seqinfo`'s errors)."""
+def _sequence_section(path: str | os.PathLike, required: bool = True) -> tuple[Path, Any]:
+    """The file and its ``[Sequence]`` section (see :func:`read_seqinfo`'s errors); without
+    ``required``, an empty one where the file has none (as :class:`~vistrack.io.VideoReader`
+    reads a folder's images)."""
     path = Path(path)
     if path.is_dir():
         path = path / "seqinfo.ini"
@@ -1808,6 +1810,8 @@ def _sequence_section(path: str | os.PathLike) -> tuple[Path, Any]:
     except configparser.Error as exc:
         raise MOTFormatError(f"{path}{_ini_error(exc)}") from None
     if "Sequence" not in cp:
+        if not required:
+            return path, {}
         raise MOTFormatError(f"{path}: no [Sequence] section")
     return path, cp["Sequence"]
 

@@ -14,7 +14,6 @@ cameras append, are fine) and an image of another size than the first raise
 
 from __future__ import annotations
 
-import configparser
 import math
 import os
 import re
@@ -256,14 +255,38 @@ def _holds_images(folder: Path) -> bool:
 
 
 def _sequence_section(info: Path) -> Mapping[str, str]:
-    """The ``[Sequence]`` section of ``seqinfo.ini`` as :class:`VideoReader` reads it (a
-    byte-order mark taken off; empty without one), or a :class:`VideoError` naming the file."""
-    cp = configparser.ConfigParser(interpolation=None)
+    """The ``[Sequence]`` section of ``seqinfo.ini`` as :class:`VideoReader` reads it (empty
+    without one), or a :class:`VideoError` naming the file and line as
+    :func:`~vistrack.io.read_seqinfo` names them (configparser's and the decoder's own words
+    before, without the line where the detections' reading named it)."""
+    from .motchallenge import MOTFormatError
+    from .motchallenge import _sequence_section as section
+
     try:
-        cp.read_string(info.read_bytes().decode("utf-8-sig"), source=str(info))
-    except (UnicodeDecodeError, configparser.Error) as exc:
-        raise VideoError(f"{info} is not a readable seqinfo.ini ({exc})") from None
-    return cp["Sequence"] if "Sequence" in cp else {}
+        return section(info, required=False)[1]
+    except MOTFormatError as exc:
+        raise VideoError(str(exc)) from None
+
+
+def _frame_rate(info: Path, seq: Mapping[str, str], given: float | None) -> float | None:
+    """``frameRate`` of a sequence's ``[Sequence]`` section ``seq`` (None without one), or a
+    :class:`VideoError` naming the file and line where it is no number, or where it is no
+    finite number > 0 and no frame rate is ``given`` to replace it."""
+    if "frameRate" not in seq:
+        return None
+    from .motchallenge import _ini_line
+
+    try:
+        rate = float(seq["frameRate"])
+    except ValueError:  # (Python's "could not convert string to float" before, no line)
+        raise VideoError(f"{_ini_line(info, 'frameRate')}: frameRate = "
+                         f"{seq['frameRate']!r} is not a number") from None
+    if given is None and not (np.isfinite(rate) and rate > 0):
+        # 0 fell back to 30 frames/s without a word, as no frame rate at all; the frame
+        # rate given (fps, --fps) overrides it
+        raise VideoError(f"{_ini_line(info, 'frameRate')}: frameRate must be a finite number "
+                         f"> 0; got {seq['frameRate']}")
+    return rate
 
 
 def images_of(folder: str | os.PathLike) -> Path:
@@ -411,18 +434,9 @@ class VideoReader:
             if info.exists():
                 in_sequence = True
                 seq = _sequence_section(info)
-                try:
-                    seq_fps = float(seq["frameRate"]) if "frameRate" in seq else None
-                except ValueError as exc:
-                    raise VideoError(f"{info} is not a readable seqinfo.ini ({exc})") from None
+                seq_fps = _frame_rate(info, seq, fps)
                 length = str(seq.get("seqLength", "")).strip()
                 seq_length = int(length) if length.isdigit() else None  # for a warning
-                if fps is None and seq_fps is not None and not (np.isfinite(seq_fps)
-                                                                and seq_fps > 0):
-                    # 0 fell back to 30 frames/s without a word, as no frame rate at all;
-                    # the frame rate given (fps, --fps) overrides it
-                    raise VideoError(f"{info}: frameRate must be a finite number > 0; got "
-                                     f"{seq['frameRate']}")
                 src = src / seq.get("imDir", "img1")
                 if not src.is_dir():
                     raise FileNotFoundError(f"{src} does not exist ({info} names it)")
