@@ -378,8 +378,10 @@ def test_a_detections_file_alone_needs_its_frame_rate_once(tmp_path, capsys, bad
 
 # ------------------------------------------------------------------- numbers and names
 @pytest.mark.parametrize("option, value, message", [
-    ("--min-area", "-1", "--min-area must be a number >= 0; got -1"),
-    ("--min-area", "nan", "--min-area must be a number >= 0; got nan"),
+    ("--min-area", "-1", "--min-area must be a finite number >= 0; got -1"),
+    ("--min-area", "nan", "--min-area must be a finite number >= 0; got nan"),
+    # (inf is >= 0: "must be a number >= 0; got inf" named a rule it meets)
+    ("--min-area", "inf", "--min-area must be a finite number >= 0; got inf"),
     ("--fps", "0", "--fps must be a number from 0.001 to 1e+06 (frames a second); got 0"),
     ("--fps", "inf", "--fps must be a number from 0.001 to 1e+06 (frames a second); got inf"),
     # the motion's noise scales with powers of the rate: 1e-300 overflowed it (a traceback)
@@ -412,7 +414,7 @@ def test_trackers_of_any_frame_rate_take_any_fps_above_0(tmp_path, capsys, track
     assert "--fps" not in err and "missing.mp4" in err, err
     assert main(["track", str(missing), "--tracker", tracker, "--fps", "0", "--out-dir",
                  str(tmp_path / "out"), *extra]) == 2
-    one_line(capsys, "track", "--fps must be a number > 0 (frames a second); got 0")
+    one_line(capsys, "track", "--fps must be a finite number > 0 (frames a second); got 0")
 
 
 def test_track_one_takes_a_box_as_otb_writes_it(tmp_path, capsys):

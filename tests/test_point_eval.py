@@ -227,7 +227,7 @@ def test_vistrack_eval_scores_points_files(tmp_path, capsys):
         in capsys.readouterr().err
     assert main(["eval", "--gt", str(truth), "--pred", str(tracks), "--zero-distance",
                  "0"]) == 2
-    assert "--zero-distance must be a distance > 0" in capsys.readouterr().err
+    assert "--zero-distance must be a finite distance > 0" in capsys.readouterr().err
     far = pred.copy()
     far[:, 2:4] += 500
     res = evaluate_files([("s", truth, write(tmp_path / "far.csv", far), None)],

@@ -132,7 +132,13 @@ def test_a_points_run_over_an_earlier_box_run_replaces_its_tracks(tmp_path, caps
 @pytest.mark.parametrize("extra, message", [
     ([], "--frontend spots needs --diameter: the spots' diameter in pixels, odd (round up)"),
     (["--diameter", "8"], "--diameter must be an odd number of pixels >= 3; got 8"),
-    (["--diameter", "9", "--minmass", "-1"], "--minmass must be a number >= 0; got -1"),
+    (["--diameter", "9", "--minmass", "-1"], "--minmass must be a finite number >= 0; got -1"),
+    # (inf meets "> 0" and ">= 0": the words now name the rule it breaks)
+    (["--diameter", "9", "--minmass", "inf"], "--minmass must be a finite number >= 0; got inf"),
+    (["--diameter", "9", "--search-range", "inf"],
+     "--search-range must be a finite number of pixels > 0; got inf"),
+    (["--diameter", "9", "--fps", "inf"],
+     "--fps must be a finite number > 0 (frames a second); got inf"),
     (["--diameter", "9", "--tracker", "bytetrack"],
      "--frontend spots finds points, and --tracker bytetrack tracks boxes: track spots with "
      "--tracker particles (the default with them)"),
@@ -144,7 +150,7 @@ def test_a_points_run_over_an_earlier_box_run_replaces_its_tracks(tmp_path, caps
      "--search-range must be above 0.53 pixels (the gate of the positions' own noise); got "
      "0.3"),
     (["--diameter", "9", "--max-lost", "-1"],
-     "--max-lost must be a number of seconds >= 0; got -1"),
+     "--max-lost must be a finite number of seconds >= 0; got -1"),
     (["--gt", "gt.txt"], "--frontend spots needs --diameter"),  # (the diameter named first)
     (["--diameter", "9", "--still-camera"],
      "--still-camera goes with the box trackers (bytetrack, sort)"),

@@ -325,15 +325,16 @@ def _number_problem(args: argparse.Namespace, box: bool = True) -> str | None:
     trackers take any rate above 0, as they take a file's (1e7 was refused)."""
     fps = ((lambda v: _FPS[0] <= v <= _FPS[1],
             f"a number from {_FPS[0]:g} to {_FPS[1]:g} (frames a second)") if box else
-           (lambda v: 0 < v < math.inf, "a number > 0 (frames a second)"))
+           (lambda v: 0 < v < math.inf, "a finite number > 0 (frames a second)"))
     checks = (("fps", *fps),
               ("stop", lambda v: v >= 1, "a frame number >= 1"),
-              ("min_area", lambda v: math.isfinite(v) and v >= 0, "a number >= 0"),
+              ("min_area", lambda v: math.isfinite(v) and v >= 0, "a finite number >= 0"),
               ("diameter", lambda v: v >= 3 and v % 2 == 1, "an odd number of pixels >= 3"),
-              ("minmass", lambda v: math.isfinite(v) and v >= 0, "a number >= 0"),
-              ("search_range", lambda v: math.isfinite(v) and v > 0, "a number of pixels > 0"),
+              ("minmass", lambda v: math.isfinite(v) and v >= 0, "a finite number >= 0"),
+              ("search_range", lambda v: math.isfinite(v) and v > 0,
+               "a finite number of pixels > 0"),
               ("zero_distance", lambda v: math.isfinite(v) and v > 0,
-               "a distance > 0 (where a pair counts for nothing)"))
+               "a finite distance > 0 (where a pair counts for nothing)"))
     for option, ok, what in checks:
         value = getattr(args, option, None)
         if value is not None and not ok(value):
@@ -974,7 +975,7 @@ def _points_problem(args: argparse.Namespace, name: str, frontend: str) -> str:
         return (f"--search-range must be above {floor:.2f} pixels (the gate of the positions' "
                 f"own noise); got {args.search_range:g}")
     if args.max_lost is not None and not (math.isfinite(args.max_lost) and args.max_lost >= 0):
-        return f"--max-lost must be a number of seconds >= 0; got {args.max_lost:g}"
+        return f"--max-lost must be a finite number of seconds >= 0; got {args.max_lost:g}"
     return ""
 
 
