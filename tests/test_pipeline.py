@@ -844,9 +844,10 @@ def test_a_detections_file_with_boxes_of_no_area_says_so(tmp_path):
     assert out.frames[~flat].tolist() == list(range(1, 11)) and out.frames[flat].tolist() == [1]
 
     csv = tmp_path / "det.csv"
-    csv.write_text("conf,frame,x0,y0,w,h\n0.9,3,5,5,10,0\n0.9,4,5,5,10,10\n")
+    # (a CSV file's box was named by its frame: its line now, the rows out of frame order)
+    csv.write_text("conf,frame,x0,y0,w,h\n0.9,4,5,5,10,10\n0.9,3,5,5,10,0\n")
     names = {"bb_left": "x0", "bb_top": "y0", "bb_width": "w", "bb_height": "h"}
-    with pytest.warns(RuntimeWarning, match=rf"^{csv}, frame 3: a box of zero height "
+    with pytest.warns(RuntimeWarning, match=rf"^{csv}, line 3: a box of zero height "
                                             r"\(5, 5, 10, 0\): a box with no area"):
         track_sequence(csv, tmp_path / "csv.txt", fps=10, columns=names)
 
@@ -2071,3 +2072,39 @@ def test_a_video_whose_header_disagrees_with_its_ground_truths_sequence_is_warne
         assert said == ([f"{video}: its header gives 7 frames/s, and the ground truth's "
                          f"sequence 10 ({seq / 'seqinfo.ini'}): tracked at 7 (give the true "
                          "rate with --fps, or fps=)"] if warned else [])
+
+
+def test_a_csv_file_of_detections_is_named_by_its_lines(tmp_path):
+    """A CSV file's rows at fault were named by their frame alone ("big.csv, frame 2: a box
+    ... beyond 2^52 pixels"), where a MOTChallenge text file's were named by their lines:
+    its columns may lie in any order, so its rows were not looked for. They are now found by
+    reading the file again, its columns named as for the run; the line counts blank lines,
+    as an editor does. Oracle: the line written."""
+    from vistrack.pipeline import track_sequence
+
+    names = {"conf": "score", "frame": "t", "bb_left": "x", "bb_top": "y", "bb_width": "w",
+             "bb_height": "h"}
+    head = "h,score,w,t,y,x\n"
+
+    def rows(*extra):  # frames 1-3 of a box, then the rows given, each (frame, x, w)
+        body = [f"50,0.9,30,{f},10,{10 + f}" for f in (3, 1, 2)]
+        return head + "\n".join(body + [f"50,0.8,{w},{f},10,{x}" for f, x, w in extra]) + "\n"
+
+    big = tmp_path / "big.csv"
+    big.write_text(rows((2, 1e100, 30)))
+    with pytest.raises(ValueError, match=rf"^{big}, line 5: a box \(1e\+100, 10, 30, 50\) "
+                                         "beyond 2\\^52 pixels"):
+        track_sequence(big, tmp_path / "o.txt", fps=10, columns=names)
+    huge = tmp_path / "huge.csv"
+    huge.write_text(rows().replace("\n50,0.9,30,1,", "\n\n50,0.9,30,100000000000,"))
+    with pytest.raises(ValueError, match=rf"^{huge}, line 4: frame 100000000000 is beyond"):
+        track_sequence(huge, tmp_path / "o.txt", fps=10, columns=names)
+    far = tmp_path / "far.csv"
+    far.write_text(rows((100, 40, 30)))  # (96 frames without rows: 2.7 hours at 0.01/s)
+    with pytest.warns(UserWarning, match=rf"^{far}, line 5: frame 100's rows come after"):
+        track_sequence(far, tmp_path / "far.txt", fps=0.01, columns=names)
+    # the first of two rows of one frame and box is the one named
+    twice = tmp_path / "twice.csv"
+    twice.write_text(rows((2, 7, 0), (2, 7, 0)))
+    with pytest.warns(RuntimeWarning, match=rf"^{twice}, line 5: a box of zero width"):
+        track_sequence(twice, tmp_path / "twice.txt", fps=10, columns=names, scores="raw")

@@ -21,7 +21,7 @@ import numpy as np
 from ._validate import is_real, ordinal
 from .association import overlapping_pairs
 from .evaluation.mot import _lines_of
-from .io.motchallenge import MOTTable
+from .io.motchallenge import MOTTable, _csv_detection_line
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -30,25 +30,49 @@ __all__ = ["detection_stride", "detector_grid", "undelivered_frames", "duplicate
            "DUPLICATE_IOU", "UNDELIVERED_AROUND"]
 
 
-def first_box(dets: MOTTable, k: int, path: str | Path) -> tuple[str, str]:
+def row_line(path: str | Path, frame: int, box: list[float] | None = None,
+             columns: dict[str, str] | None = None) -> int | None:
+    """The line of the detections file ``path`` of its first row of ``frame`` (and ``box``,
+    as read), for a message: a MOTChallenge text file's found by its values, a CSV file's
+    with a header by reading it again with its columns named by ``columns`` (they may lie in
+    any order); None where it is not found."""
+    lines = _lines_of(str(path), lambda row: row[0] == frame
+                      and (box is None or row[2:6] == box))
+    if lines:
+        return lines[0]
+    if Path(path).suffix.lower() == ".csv":
+        # (a CSV file's row was named by its frame alone)
+        return _csv_detection_line(path, columns, frame, box)
+    return None
+
+
+def row_place(path: str | Path, frame: int, box: list[float] | None = None,
+              columns: dict[str, str] | None = None) -> str:
+    """``"PATH, line N"`` for :func:`row_line`'s line, or ``"PATH, frame F"`` where there is
+    none."""
+    line = row_line(path, frame, box, columns)
+    return f"{path}, line {line}" if line is not None else f"{path}, frame {frame}"
+
+
+def first_box(dets: MOTTable, k: int, path: str | Path,
+              columns: dict[str, str] | None = None) -> tuple[str, str]:
     """Where row ``k`` of a detections file is, for a message (``"PATH, line N"``, or its
-    frame where the line is not found: a CSV file's columns may lie in any order), and its
-    box as written there (``"1241, 185.448, 0, 188.552"``)."""
+    frame where the line is not found), and its box as written there (``"1241, 185.448, 0,
+    188.552"``); a CSV file's columns named by ``columns``."""
     f, box = int(dets.frames[k]), dets.boxes[k].tolist()
-    lines = _lines_of(str(path), lambda row: row[0] == f and row[2:6] == box)
-    where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
-    return where, ", ".join(f"{v:g}" for v in box)
+    return row_place(path, f, box, columns), ", ".join(f"{v:g}" for v in box)
 
 
-def warn_no_area(dets: MOTTable, path: Path, stacklevel: int) -> None:
+def warn_no_area(dets: MOTTable, path: Path, stacklevel: int,
+                 columns: dict[str, str] | None = None) -> None:
     """Warn of a detections file's boxes of zero width or height, naming the first one's line
-    (its frame, where the line is not found: a CSV file's columns may lie in any order): a
+    (its frame, where the line is not found; a CSV file's columns named by ``columns``): a
     box with no area overlaps no other, so no track can follow it from frame to frame."""
     flat = (dets.boxes[:, 2] == 0) | (dets.boxes[:, 3] == 0)
     if not flat.any():
         return
     k = int(np.argmax(flat))
-    where, box = first_box(dets, k, path)
+    where, box = first_box(dets, k, path, columns)
     more = int(flat.sum()) - 1
     zero = "width" if dets.boxes[k, 2] == 0 else "height"
     warnings.warn(f"{where}: a box of zero {zero} ({box})"
@@ -63,7 +87,7 @@ OUTSIDE_SHARE = 0.05
 
 
 def warn_outside(dets: MOTTable, path: str | Path, size: tuple[int, int],
-                 stacklevel: int) -> None:
+                 stacklevel: int, columns: dict[str, str] | None = None) -> None:
     """Warn of a detections file of which a twentieth of the boxes or more lie wholly
     outside the ``(width, height)`` image, naming the first one's line (its frame, where the
     line is not found) and how many there are: such boxes are tracked as any other, but no
@@ -77,7 +101,7 @@ def warn_outside(dets: MOTTable, path: str | Path, size: tuple[int, int],
         | (b[:, 1] + b[:, 3] <= 0)
     if out.sum() < OUTSIDE_SHARE * len(b):
         return
-    where, box = first_box(dets, int(np.argmax(out)), path)
+    where, box = first_box(dets, int(np.argmax(out)), path, columns)
     n = int(out.sum())
     warnings.warn(f"{where}: a box ({box}) wholly outside the "
                   f"{size[0]}x{size[1]} image" + (f", and {n - 1} more of {len(b)}" if n > 1
@@ -87,7 +111,7 @@ def warn_outside(dets: MOTTable, path: str | Path, size: tuple[int, int],
 
 
 def warn_long_silence(dets: MOTTable, path: Path, frame_rate: float,
-                      stacklevel: int) -> None:
+                      stacklevel: int, columns: dict[str, str] | None = None) -> None:
     """Warn of a detections file (tracked without a sequence's length) whose frames with rows
     leave a run of frames without any longer than an hour and than ten times the frames that
     have rows: the tracker steps through every frame up to the last (some thousands a
@@ -101,8 +125,7 @@ def warn_long_silence(dets: MOTTable, path: Path, frame_rate: float,
     if gaps[k] <= max(3600 * frame_rate, 10 * len(have)):
         return
     f = int(have[k])
-    lines = _lines_of(str(path), lambda row: row[0] == f)
-    where = f"{path}, line {lines[0]}" if lines else f"{path}, frame {f}"
+    where = row_place(path, f, columns=columns)
     start = int(have[k - 1]) + 1 if k else 1
     warnings.warn(f"{where}: frame {f:,}'s rows come after frames {start:,}-{f - 1:,} without "
                   f"any ({int(gaps[k]):,} frames, {gaps[k] / frame_rate / 3600:,.1f} hours at "

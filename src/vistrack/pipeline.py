@@ -42,6 +42,7 @@ from .detector_checks import (
     detector_grid,
     first_box,
     ordinal,
+    row_line,
     stride_warning,
     undelivered_frames,
     undelivered_text,
@@ -52,7 +53,7 @@ from .detector_checks import (
     warn_no_area,
     warn_outside,
 )
-from .evaluation.mot import MOTCounts, _lines_of, check_zero_distance, considered, evaluate_mot
+from .evaluation.mot import MOTCounts, check_zero_distance, considered, evaluate_mot
 from .evaluation.sanity import sanity_warnings
 from .io.atomic import (
     Input,
@@ -918,8 +919,9 @@ class _FileDetections:
     and ``first`` are :func:`~vistrack.detector_checks.detection_stride`'s and the first frame of
     its grid (:func:`track_video` steps a box tracker through those frames alone)."""
 
-    def __init__(self, path: Path, dets: MOTTable) -> None:
-        self.path, self.dets = path, dets
+    def __init__(self, path: Path, dets: MOTTable,
+                 columns: dict[str, str] | None = None) -> None:
+        self.path, self.dets, self.columns = path, dets, columns
         self.slices = dets.frame_slices()
         self.first, self.stride = detector_grid(dets.frames)
 
@@ -933,8 +935,9 @@ def _detections_file(path: str | Path, ctx: Context) -> FrameDetector:
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist (--frontend detections:FILE)")
     # MOTChallenge's text, or CSV with a header (its columns named by columns=, --columns)
-    dets = read_detections(path, ctx.options.get("columns"), stacklevel=3)
-    return _FileDetections(path, dets)
+    columns = ctx.options.get("columns")
+    dets = read_detections(path, columns, stacklevel=3)
+    return _FileDetections(path, dets, columns)
 
 
 @dataclass(frozen=True)
@@ -1351,7 +1354,7 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
     far = (np.abs(table.boxes) > MAX_PIXELS).any(axis=1)
     if far.any():
         # a corrupt row: refused here, by its line, rather than by the tracker at its frame
-        where, box = first_box(table, int(np.argmax(far)), path)
+        where, box = first_box(table, int(np.argmax(far)), path, columns)
         raise ValueError(f"{where}: a box ({box}) beyond 2^52 pixels, where a float no longer "
                          "holds every whole pixel: not a box of any image (a corrupt row?)")
     if len(table) and (table.ids >= 0).all():
@@ -1361,7 +1364,7 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
                       "-1): ground truth or tracks rather than detections? The identities are "
                       "not used, and each row is tracked as a detection scoring its conf",
                       UserWarning, stacklevel=stacklevel + 1)
-    warn_no_area(table, path, stacklevel + 1)
+    warn_no_area(table, path, stacklevel + 1, columns)
     warn_classes(table, path, stacklevel + 1,
                  None if classless is None else Path(classless))
     return in_own_order(table)
@@ -1695,12 +1698,12 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
         if len(dets) and dets.frames.max() > MAX_FRAMES:
             # tracked frame by frame up to its last frame: 10^11 would never end
             f = int(dets.frames.max())
-            lines = _lines_of(str(det_path), lambda row: row[0] == f)
-            raise ValueError(f"{det_path}" + (f", line {lines[0]}" if lines else "")
+            line = row_line(det_path, f, columns=columns)
+            raise ValueError(f"{det_path}" + (f", line {line}" if line is not None else "")
                              + f": frame {f} is beyond the {MAX_FRAMES:,} frames a detections "
                              "file is tracked over (a timestamp or another column where the "
                              "frame should be?)")
-        warn_long_silence(dets, det_path, float(fps), stacklevel=3)
+        warn_long_silence(dets, det_path, float(fps), stacklevel=3, columns=columns)
         info = SeqInfo.from_detections(det_path if alone else seq_dir, dets, float(fps))
     else:
         if fps is not None:
@@ -1710,10 +1713,11 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
         if len(dets) and dets.frames.max() > info.seq_length:
             n = info.seq_length
             f = int(dets.frames[dets.frames > n].min())  # the first frame beyond, its line
-            lines = _lines_of(str(det_path), lambda row: row[0] == f)
-            raise ValueError(f"{det_path}" + (f", line {lines[0]}" if lines else "")
+            line = row_line(det_path, f, columns=columns)
+            raise ValueError(f"{det_path}" + (f", line {line}" if line is not None else "")
                              + f": frame {f} is beyond the sequence's {n} frames ({ini})")
-        warn_outside(dets, det_path, (info.im_width, info.im_height), stacklevel=3)
+        warn_outside(dets, det_path, (info.im_width, info.im_height), stacklevel=3,
+                     columns=columns)
     return _SequenceInput(det_path, str(det_path if alone else seq_dir), info, dets, replaced)
 
 
@@ -2603,7 +2607,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         # frame
         grid = detect if isinstance(detect, _FileDetections) else None
         if grid is not None:
-            warn_outside(grid.dets, grid.path, reader.size, stacklevel=2)
+            warn_outside(grid.dets, grid.path, reader.size, stacklevel=2, columns=grid.columns)
         if box and grid is not None:
             at_rate = replace(ctx, fps=ctx.fps / grid.stride)
             trk, _ = make_tracker(tracker, at_rate)

@@ -231,6 +231,28 @@ def _csv_row_line(path: str | os.PathLike, sep: str, k: int) -> int | None:
         return next(itertools.islice(rows, k, None), (None, []))[0]
 
 
+def _csv_detection_line(path: str | os.PathLike, columns: dict[str, str] | None, frame: int,
+                        box: list[float] | None) -> int | None:
+    """The line of a CSV file of detections (with its header) of its first row of ``frame``
+    (and ``box``, as :meth:`MOTTable.from_pandas` reads it, its columns named by
+    ``columns``), for a message; None where there is none or the file cannot be read again.
+    The file is read again with each row's place in it for its score, which the table
+    carries through its sorting by frame."""
+    try:
+        df = _read_csv(path, "a CSV file of detections")
+        sep = df.attrs["csv_sep"]
+        df[(columns or {}).get("conf", "conf")] = np.arange(len(df), dtype=float)
+        table = MOTTable.from_pandas(df, columns, path=os.fspath(path))
+    except (OSError, ValueError, TypeError, ImportError):
+        return None
+    hit = table.frames == frame
+    if box is not None:
+        hit &= (table.boxes == np.asarray(box, dtype=float)).all(axis=1)
+    if not hit.any():
+        return None
+    return _csv_row_line(path, sep, int(table.conf[hit].min()))
+
+
 def _not_utf8(path: str | os.PathLike, exc: UnicodeDecodeError | None) -> MOTFormatError:
     """The error for a CSV file that is not UTF-8 text, naming it and the first byte (from the
     file's start, a byte-order mark counted) that is not UTF-8 or is a NUL byte, as read_mot
