@@ -1614,6 +1614,29 @@ def test_frames_a_detector_did_not_deliver_are_tracked_over(tmp_path):
         video = track_video(clip, tmp_path / "video", frontend=f"detections:{file}", fps=25,
                             annotate=False, scores="raw")
     rows = read_mot(video.files["tracks"])
+    # rows for frames past the folder's last image, with frames 30 and 31 left out there: only
+    # the frames tracked are said to be without detections (frames 9, 10, 30, 31 were, beside
+    # "rows on frames 25-40, past the video's last frame (24): not tracked"), for the box
+    # trackers and a caller's alike; their tracks are as before
+    longer = tmp_path / "longer.txt"
+    longer.write_text(file.read_text() + "".join(
+        f"{f},-1,{100 + 10 * j},{5 + 20 * j},8,8,0.9\n" for f in range(25, 41)
+        if f not in (30, 31) for j in range(6)))
+    for tracker, said in (("bytetrack", r" \(frames 9, 10\): taken as frames the detector"),
+                          (BoxTracker(frame_rate=25), r": the tracker, BoxTracker, steps")):
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always")
+            more = track_video(clip, tmp_path / f"longer{type(tracker).__name__}",
+                               frontend=f"detections:{longer}", fps=25, annotate=False,
+                               scores="raw", tracker=tracker)
+        said_gone = [str(w.message) for w in got if "without detections" in str(w.message)]
+        assert len(said_gone) == 1 and re.search(rf"^{longer}: 2 frames without detections "
+                                                 rf"amid frames with 5 or more each{said}",
+                                                 said_gone[0]), said_gone
+        assert any("rows on frames 25-40, past the video's last frame (24): not tracked"
+                   in str(w.message) for w in got)
+        if tracker == "bytetrack":
+            assert read_mot(more.files["tracks"]).boxes.tolist() == rows.boxes.tolist()
     # a tracker made by the caller steps through every frame, and is told so
     with pytest.warns(RuntimeWarning, match=rf"^{file}: 2 frames without detections amid "
                                             r"frames with 5 or more each: the tracker, "

@@ -1868,12 +1868,13 @@ class _OnDetectorFrames:
 
 
 def _on_detector_frames(trk: BoxTracker, path: str | Path, frames: np.ndarray, first: int,
-                        stride: int, offline: bool) -> tuple[Tracker, np.ndarray]:
+                        stride: int, offline: bool, last: int | None = None
+                        ) -> tuple[Tracker, np.ndarray]:
     """What steps ``trk`` (made at the detector's rate) through a detections file's frames, and the
     frames the detector did not deliver (:func:`~vistrack.detector_checks.undelivered_frames`, runs
     a lost track outlives: shorter than ``max_lost``): ``trk`` itself where it ran on every frame
     and delivered them all, else :class:`_OnDetectorFrames`; a ``RuntimeWarning`` says which
-    frames it steps over."""
+    frames it steps over, up to ``last``, the last frame tracked where it is known."""
     # (frames, to rounding: 2.2 s at 25 frames/s is 55.000000000000007, whose ceiling took
     # a run of 55 frames, exactly max_lost, for shorter than it)
     span = trk.config.max_lost * trk.frame_rate
@@ -1884,8 +1885,9 @@ def _on_detector_frames(trk: BoxTracker, path: str | Path, frames: np.ndarray, f
     if stride > 1:
         warnings.warn(stride_warning(path, first, stride, trk.frame_rate, offline),
                       RuntimeWarning, stacklevel=3)
-    if len(skip):
-        warnings.warn(undelivered_warning(path, skip, offline), RuntimeWarning, stacklevel=3)
+    shown = skip if last is None else skip[skip <= last]
+    if len(shown):
+        warnings.warn(undelivered_warning(path, shown, offline), RuntimeWarning, stacklevel=3)
     if stride == 1 and not len(skip):
         return trk, skip
     return _OnDetectorFrames(trk, first, stride, skip), skip
@@ -2606,6 +2608,13 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         # not deliver; any other tracker, or one made by the caller, keeps its rate and every
         # frame
         grid = detect if isinstance(detect, _FileDetections) else None
+        # the last frame tracked, where known before the run: an image folder's last image
+        # (a video's header may count fewer frames than it holds) or the stop; the frames of
+        # a detections file past it are not said to be frames without detections (they are
+        # said to be past the video's end, after the run)
+        known_end = min((k for k in (reader.stop, reader.frame_count if
+                                     reader.image_folder is not None else None) if k),
+                        default=None)
         if grid is not None:
             warn_outside(grid.dets, grid.path, reader.size, stacklevel=2, columns=grid.columns)
         if box and grid is not None:
@@ -2616,7 +2625,7 @@ def track_video(video: str | Path, out_dir: str | Path, *,
             if trk.config.nms_iou >= 1:  # as track_sequence warns, with the tracker's setting
                 warn_duplicates(grid.dets, grid.path, stacklevel=2)
             stepper, _ = _on_detector_frames(trk, grid.path, grid.dets.frames, grid.first,
-                                             grid.stride, offline=False)
+                                             grid.stride, offline=False, last=known_end)
         else:
             trk, _ = make_tracker(tracker, ctx)
             stepper = trk
@@ -2626,7 +2635,9 @@ def track_video(video: str | Path, out_dir: str | Path, *,
                 # stray frame number of 10^11 listed its run frame by frame: 745 GiB)
                 skip = (undelivered_frames(grid.dets.frames,
                                            max_run=math.ceil(3600 * ctx.fps))
-                        if grid.stride == 1 else ())
+                        if grid.stride == 1 else np.zeros(0, np.int64))
+                if known_end is not None:
+                    skip = skip[skip <= known_end]
                 gaps = (f"detections on every {ordinal(grid.stride)} frame only"
                         if grid.stride > 1 else undelivered_text(skip) if len(skip) else "")
                 if gaps:
