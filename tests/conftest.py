@@ -74,3 +74,71 @@ def random_model(rng, n, m, T=None, *, tv=False):
     F = np.eye(n) + 0.3 * rng.normal(size=lead + (n, n)) / np.sqrt(n)
     H = rng.normal(size=lead + (m, n))
     return dict(F=F, Q=spd(n, 0.2, lead), H=H, R=spd(m, 0.5, lead))
+
+
+def exact_posterior(ys, *, F, Q, H, R, x0, P0, fractions=False):
+    """The posterior of every state of a linear-Gaussian model given ``ys (T, m)`` (a step
+    with a NaN is not measured; ``F, Q, H, R`` constant), in exact rational arithmetic: the
+    means ``(T, n)`` and the covariance of all states ``(T n, T n)``, the inverse of the
+    block-tridiagonal posterior precision by Gauss-Jordan on fractions (floats lose a small
+    variance beside a large one). For a few steps and states: it is cubic in ``T n`` on
+    fractions whose digits grow. With ``fractions``, the two as fractions (lists), for sums
+    that must not round either."""
+    from fractions import Fraction
+
+    def inv(M):
+        k = len(M)
+        A = [[Fraction(x) for x in row] + [Fraction(int(i == j)) for j in range(k)]
+             for i, row in enumerate(M)]
+        for c in range(k):
+            p = next(r for r in range(c, k) if A[r][c] != 0)
+            A[c], A[p] = A[p], A[c]
+            A[c] = [x / A[c][c] for x in A[c]]
+            for r in range(k):
+                if r != c and A[r][c] != 0:
+                    f = A[r][c]
+                    A[r] = [a - f * b for a, b in zip(A[r], A[c])]
+        return [row[k:] for row in A]
+
+    def mul(A, B):
+        return [[sum(a * b for a, b in zip(row, col)) for col in zip(*B)] for row in A]
+
+    def tr(A):
+        return [list(col) for col in zip(*A)]
+
+    def frac(A):
+        return [[Fraction(float(x)) for x in row] for row in np.atleast_2d(A)]
+
+    ys = np.asarray(ys, float)
+    T, n = len(ys), len(np.asarray(x0))
+    Fq, Hq, Qi, Ri, P0i = frac(F), frac(H), inv(frac(Q)), inv(frac(R)), inv(frac(P0))
+    N = T * n
+    J = [[Fraction(0)] * N for _ in range(N)]
+    h = [Fraction(0)] * N
+
+    def add(i, j, M):
+        for a in range(n):
+            for b in range(n):
+                J[i * n + a][j * n + b] += M[a][b]
+
+    add(0, 0, P0i)
+    for a, v in enumerate(mul(P0i, [[Fraction(float(x))] for x in x0])):
+        h[a] += v[0]
+    FtQi = mul(tr(Fq), Qi)
+    for t in range(1, T):
+        add(t, t, Qi)
+        add(t - 1, t - 1, mul(FtQi, Fq))
+        add(t, t - 1, [[-x for x in row] for row in mul(Qi, Fq)])
+        add(t - 1, t, [[-x for x in row] for row in FtQi])
+    HtRi = mul(tr(Hq), Ri)
+    for t in range(T):
+        if not np.isnan(ys[t]).any():
+            add(t, t, mul(HtRi, Hq))
+            for a, v in enumerate(mul(HtRi, [[Fraction(float(y))] for y in ys[t]])):
+                h[t * n + a] += v[0]
+    C = inv(J)
+    mu = [sum(C[i][j] * h[j] for j in range(N)) for i in range(N)]
+    if fractions:
+        return mu, C
+    return (np.array([float(v) for v in mu]).reshape(T, n),
+            np.array([[float(x) for x in row] for row in C]))

@@ -6,7 +6,7 @@ import pytest
 import vistrack as vt
 from vistrack.filters import kalman_filter, rts_smooth, two_filter_smooth
 
-from .conftest import random_model
+from .conftest import exact_posterior, random_model
 
 
 @pytest.mark.parametrize("tv", [False, True])
@@ -226,61 +226,6 @@ def test_two_filter_smooth_names_a_step_whose_information_form_rounding_makes_si
         two_filter_smooth(ys, **kw)
 
 
-def _exact_posterior_covs(F, Q, H, R, P0, observed, T):
-    """The covariances of every state given the measured steps, in exact rational arithmetic:
-    the inverse of the posterior precision of all states (block tridiagonal), by Gauss-Jordan
-    on fractions. (Floats lose the small variances beside the large ones.)"""
-    from fractions import Fraction
-
-    def inv(M):
-        k = len(M)
-        A = [[Fraction(x) for x in row] + [Fraction(int(i == j)) for j in range(k)]
-             for i, row in enumerate(M)]
-        for c in range(k):
-            p = next(r for r in range(c, k) if A[r][c] != 0)
-            A[c], A[p] = A[p], A[c]
-            A[c] = [x / A[c][c] for x in A[c]]
-            for r in range(k):
-                if r != c and A[r][c] != 0:
-                    f = A[r][c]
-                    A[r] = [a - f * b for a, b in zip(A[r], A[c])]
-        return [row[k:] for row in A]
-
-    def mul(A, B):
-        return [[sum(a * b for a, b in zip(row, col)) for col in zip(*B)] for row in A]
-
-    def tr(A):
-        return [list(col) for col in zip(*A)]
-
-    n = len(F)
-    Fq = [[Fraction(x) for x in row] for row in F]
-    Hq = [[Fraction(x) for x in row] for row in H]
-    Qi, Ri = inv(Q), inv(R)
-    blocks = {(0, 0): inv(P0)}
-
-    def add(i, j, M):
-        old = blocks.get((i, j), [[Fraction(0)] * n for _ in range(n)])
-        blocks[i, j] = [[a + b for a, b in zip(r1, r2)] for r1, r2 in zip(old, M)]
-
-    FtQi = mul(tr(Fq), Qi)
-    for t in range(1, T):
-        add(t, t, Qi)
-        add(t - 1, t - 1, mul(FtQi, Fq))
-        add(t, t - 1, [[-x for x in row] for row in mul(Qi, Fq)])
-        add(t - 1, t, [[-x for x in row] for row in FtQi])
-    for t in range(T):
-        if observed[t]:
-            add(t, t, mul(mul(tr(Hq), Ri), Hq))
-    J = [[Fraction(0)] * (T * n) for _ in range(T * n)]
-    for (i, j), M in blocks.items():
-        for a in range(n):
-            for b in range(n):
-                J[i * n + a][j * n + b] = M[a][b]
-    C = inv(J)
-    return np.array([[[float(C[t * n + a][t * n + b]) for b in range(n)] for a in range(n)]
-                     for t in range(T)])
-
-
 def test_rts_covariances_keep_small_variances_beside_large_ones():
     """Variances 1e10 beside 1e-10 (the model two_filter_smooth refuses, naming rts_smooth):
     the smoothed covariance as P + G (P_s - P⁻) G' subtracted numbers of 1e10 to get one of
@@ -294,7 +239,8 @@ def test_rts_covariances_keep_small_variances_beside_large_ones():
     ys[4] = np.nan
     filtered = kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=[1.0, -1.0], P0=P0)
     sm = rts_smooth(filtered, F=F, Q=Q)
-    exact = _exact_posterior_covs(F, Q, H, R, P0, ~np.isnan(ys[:, 0]), len(ys))
+    _, C = exact_posterior(ys, F=F, Q=Q, H=H, R=R, x0=[1.0, -1.0], P0=P0)
+    exact = np.array([C[2 * t:2 * t + 2, 2 * t:2 * t + 2] for t in range(len(ys))])
     d, d_exact = np.diagonal(sm.covs, axis1=1, axis2=2), np.diagonal(exact, axis1=1, axis2=2)
     np.testing.assert_allclose(d, d_exact, rtol=1e-6)
     assert np.linalg.eigvalsh(sm.covs).min() >= 0.0

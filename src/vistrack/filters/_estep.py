@@ -187,14 +187,16 @@ def _add_hph(H, P, HP, v, V):
 
 
 @njit(cache=True, fastmath=_FM)
-def _smoothed_covariances(meas, F, H, Pp, Pf, same, src, X, xsrc, A, V, Ps0):
+def _smoothed_covariances(meas, F, Q, H, Pp, Pf, same, src, X, xsrc, A, V, Ps0):
     """The smoother's covariances of one series, backwards from the filter's (at ``src``, see
     :func:`_covariances`), with the transposed gains ``X_t = Pp_{t+1}^-1 F Pf_t`` of each
     transition at ``X[xsrc[t]]`` (``X (T - 1, n, n)``, written where computed); adds to
     ``A (n, n)`` each transition's part of ``E[w_t w_t']`` that is not from the means, ``Ps_t -
     F C_t' - C_t F' + F Ps_{t-1} F'`` (``C_t = Ps_t X_{t-1}``, the lag-one covariance), and to
     ``V (m, m)`` each measured step's ``H Ps_t H'``, per series; writes the first step's
-    ``Ps0``. Returns False if a predicted covariance is singular."""
+    ``Ps0``. Both covariances are computed as sums of positive semi-definite terms (see the
+    loop), which keep a small variance beside a large one. Returns False if a predicted
+    covariance is singular."""
     T, n, _ = Pp.shape
     m = H.shape[0]
     Ps = Pf[src[T - 1]].copy()
@@ -237,48 +239,77 @@ def _smoothed_covariances(meas, F, H, Pp, Pf, same, src, X, xsrc, A, V, Ps0):
             return False
         forward_solve(Lp, X[t], n, n)
         back_solve(Lp, X[t], n, n)
-        # Ps_t = Pf_t + X_t' (Ps_{t+1} - Pp_{t+1}) X_t
+        # Ps_t = Pf_t + X_t' (Ps_{t+1} - Pp_{t+1}) X_t, as the sum of semi-definite terms
+        # (I - X' F) Pf (I - X' F)' + X' (Q + Ps_{t+1}) X (rts_smooth's form: the difference
+        # lost a variance of 1e-8 beside one of 1e8, which the steady state then repeated)
         for i in range(n):
             for j in range(n):
-                D[i, j] = Ps[i, j] - Pp[pt, i, j]
-        for i in range(n):
-            for j in range(n):
-                s = 0.0
+                s = 1.0 if i == j else 0.0
                 for l in range(n):
-                    s += D[i, l] * X[t, l, j]
-                DX[i, j] = s
-        for i in range(n):
-            for j in range(i, n):
-                s = Pf[ft, i, j]
-                for l in range(n):
-                    s += X[t, l, i] * DX[l, j]
-                Pn[i, j] = s
-                Pn[j, i] = s
-        # the transition t -> t + 1: Ps_{t+1} - F C' - C F' + F Ps_t F', C = Ps_{t+1} X_t
-        for i in range(n):
-            for j in range(n):
-                s = 0.0
-                for l in range(n):
-                    s += Ps[i, l] * X[t, l, j]
-                C[i, j] = s
+                    f = F[l, j]
+                    if f != 0.0:
+                        s -= X[t, l, i] * f
+                D[i, j] = s  # I - X' F
+                C[i, j] = Q[i, j] + Ps[i, j]
         for i in range(n):
             for j in range(n):
                 s = 0.0
                 s2 = 0.0
                 for l in range(n):
-                    f = F[i, l]
-                    if f != 0.0:
-                        s += f * C[j, l]
-                        s2 += f * Pn[l, j]
-                FC[i, j] = s
-                FPs[i, j] = s2
+                    s += D[i, l] * Pf[ft, l, j]
+                    s2 += X[t, l, i] * C[l, j]
+                DX[i, j] = s  # (I - X' F) Pf
+                FC[i, j] = s2  # X' (Q + Ps)
         for i in range(n):
             for j in range(i, n):
-                s = Ps[i, j] - FC[i, j] - FC[j, i]
+                s = 0.0
+                for l in range(n):
+                    s += DX[i, l] * D[j, l] + FC[i, l] * X[t, l, j]
+                Pn[i, j] = s
+                Pn[j, i] = s
+        # the transition t -> t + 1: Cov(w_t | y), w_t = x_{t+1} - F x_t, equal to Ps_{t+1} -
+        # F C' - C F' + F Ps_t F' (C = Ps_{t+1} X_t) but as the sum of semi-definite terms
+        # (I - K) Q (I - K)' + K (F Pf F' + Ps_{t+1}) K', K = Q Pp^-1 (w_t given x_{t+1} and
+        # the measurements to t, then x_{t+1}'s smoothed spread)
+        for i in range(n):
+            for j in range(n):
+                C[i, j] = Q[i, j]
+        forward_solve(Lp, C, n, n)
+        back_solve(Lp, C, n, n)  # C = Pp^-1 Q = K'
+        for i in range(n):
+            for j in range(n):
+                s = 0.0
+                for l in range(n):
+                    f = F[i, l]
+                    if f != 0.0:
+                        s += f * Pf[ft, l, j]
+                FC[i, j] = s  # F Pf
+        for i in range(n):
+            for j in range(i, n):
+                s = 0.0
                 for l in range(n):
                     f = F[j, l]
                     if f != 0.0:
-                        s += FPs[i, l] * f
+                        s += FC[i, l] * f
+                FPs[i, j] = s + Ps[i, j]  # F Pf F' + Ps
+                FPs[j, i] = FPs[i, j]
+        for i in range(n):
+            for j in range(n):
+                D[i, j] = (1.0 if i == j else 0.0) - C[j, i]  # I - K
+        for i in range(n):
+            for j in range(n):
+                s = 0.0
+                s2 = 0.0
+                for l in range(n):
+                    s += D[i, l] * Q[l, j]
+                    s2 += C[l, i] * FPs[l, j]
+                DX[i, j] = s  # (I - K) Q
+                FC[i, j] = s2  # K (F Pf F' + Ps)
+        for i in range(n):
+            for j in range(i, n):
+                s = 0.0
+                for l in range(n):
+                    s += DX[i, l] * D[j, l] + FC[i, l] * C[l, j]
                 a[i, j] = s
                 a[j, i] = s
         for i in range(n):
@@ -369,7 +400,7 @@ def estep_shared(yt, F, Q, H, R, x0, P0, A, V, ms0, Ps0, work, out):
     if bad >= 0:
         out[1] = bad
         return
-    if not _smoothed_covariances(meas, F, H, Pp, Pf, same, src, X, xsrc, A, V, Ps0):
+    if not _smoothed_covariances(meas, F, Q, H, Pp, Pf, same, src, X, xsrc, A, V, Ps0):
         out[1] = NOT_POSITIVE
         return
     for i in range(n):  # the covariances' parts stand for every series

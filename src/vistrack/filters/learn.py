@@ -221,6 +221,14 @@ def em(
     TypeError
         If ``pooled`` is not True or False, or ``progress`` has no ``write``.
 
+    Warns
+    -----
+    RuntimeWarning
+        If a learned ``Q`` or ``R`` falls to zero (every variance below the smallest normal
+        float, 2.2e-308: constant data, whose likelihood grows without bound as the noise
+        falls): the iterations stop there, at the last parameters whose likelihood was
+        computed, and the fit is not converged.
+
     Examples
     --------
     A random walk seen in noise, its two variances learned from a start ten times off:
@@ -730,6 +738,12 @@ def _fit(estep: Any, T: int, p: dict[str, np.ndarray], learn: tuple[str, ...],
         lls.append(ll)
         if progress is not None:
             progress.write(f"{label}EM iteration {k}: log-likelihood {ll:.6f}\n")
+        if k > 0 and any(name in learn and (np.diagonal(p[name], axis1=-2, axis2=-1)
+                                            < np.finfo(float).tiny).all() for name in ("Q", "R")):
+            # a learned noise fell to zero (constant data: said below); its variances below
+            # the smallest normal float, the E-steps after it underflow to 0 and to a
+            # covariance that is not positive definite
+            break
         # a change of tol or less either way (a fall larger than that, as from a per-step
         # start outside the constant family learned, goes on)
         if k > 0 and abs(ll - lls[-2]) <= tol:
