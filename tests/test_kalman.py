@@ -1031,9 +1031,8 @@ def test_a_negative_variance_is_named_and_a_noise_of_units_far_apart_is_taken():
     eigenvalue named is the one judged."""
     ys = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]])
     kw = dict(F=np.eye(2), H=np.eye(2), x0=[0.0, 0.0], P0=np.eye(2))
-    with pytest.raises(ValueError, match=re.escape(
-            "Q must be positive semi-definite (matrix [0]); Q[1, 1] = -0.5, a negative "
-            "variance")):
+    with pytest.raises(ValueError, match=re.escape(  # (one matrix: "(matrix [0])" before)
+            "Q must be positive semi-definite; Q[1, 1] = -0.5, a negative variance")):
         kalman_filter(ys, Q=np.diag([1.0, -0.5]), R=np.eye(2), **kw)
     with pytest.raises(ValueError, match=re.escape("R[1, 1] = -0.1, a negative variance")):
         kalman_filter(ys, Q=np.eye(2), R=np.diag([1.0, -0.1]), **kw)
@@ -1085,3 +1084,23 @@ def test_a_linear_measurement_keeps_its_own_matrices():
     nl = NonlinearMeasurement(lambda x: x[..., :2], r, ndim_state=2)
     r[1, 1] = -3.0
     assert pos.R().tolist() == nl.R().tolist() == [[1.0, 0.0], [0.0, 1.0]]
+
+
+def test_a_model_matrix_at_fault_is_named_by_its_index_as_given():
+    """One Q or R (n, n) at fault was named by the index of its stack, Q[0, 0, 1], an index
+    the matrix given does not have (kalman_filter, em); a per-step stack's keeps its step."""
+    from vistrack.filters import em
+
+    A = np.array([[1.0, 0.5], [0.2, 1.0]])
+    kw = dict(F=np.eye(2), H=np.array([[1.0, 0.0]]), x0=np.zeros(2), P0=np.eye(2))
+    ys = np.zeros((5, 1))
+    for run in (kalman_filter, em):
+        with pytest.raises(ValueError, match=r"^Q must be symmetric; Q\[0, 1\] = 0\.5 but its "
+                                             r"transpose entry is 0\.2$"):
+            run(ys, Q=A, R=np.eye(1), **kw)
+    with pytest.raises(ValueError, match=r"^R must be positive semi-definite; R\[1, 1\] = -1, a "
+                                         r"negative variance$"):
+        kalman_filter(np.zeros((5, 2)), F=np.eye(2), Q=np.eye(2), H=np.eye(2),
+                      R=np.diag([1.0, -1.0]), x0=np.zeros(2), P0=np.eye(2))
+    with pytest.raises(ValueError, match=r"^Q must be symmetric; Q\[4, 0, 1\] = 0\.5"):
+        kalman_filter(ys, Q=np.stack([np.eye(2)] * 4 + [A]), R=np.eye(1), **kw)

@@ -655,8 +655,10 @@ def check_linear_gaussian(F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike
     Q_ = check_matrix_stack(Q, "Q", n, n, T)
     H_ = check_matrix_stack(H, "H", m, n, T)
     R_ = check_matrix_stack(R, "R", m, m, T)
-    check_psd(Q_, "Q")
-    check_psd(R_, "R")
+    # each named by its index as given: one matrix's by [i, j] (the stack's leading 0 named
+    # Q[0, 0, 1], an index a matrix does not have)
+    check_psd(Q_ if np.ndim(Q) == 3 else Q_[0], "Q")
+    check_psd(R_ if np.ndim(R) == 3 else R_[0], "R")
     return F_, Q_, H_, R_
 
 
