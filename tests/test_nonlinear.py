@@ -2145,6 +2145,10 @@ def test_an_ensemble_refuses_masked_and_complex_values():
         Ensemble.sample(np.array([1j, 0]), np.eye(2), 10, rng=0)
     with pytest.raises(TypeError, match=r"^members must be an array of numbers"):
         Ensemble("ab")
+    # more members than memory holds: numpy's "Maximum allowed dimension exceeded" before
+    with pytest.raises(ValueError, match=r"^n_members 10+ makes an ensemble of 2e\+30 "
+                                         r"values, more than memory holds$"):
+        Ensemble.sample([0.0, 0.0], np.eye(2), 10 ** 30, rng=0)
     # an unmasked masked array is an array
     ens = Ensemble.sample(np.ma.masked_array([1.0, 2.0]), np.eye(2), 4, rng=0)
     np.testing.assert_array_equal(ens.members, Ensemble.sample([1.0, 2.0], np.eye(2), 4,

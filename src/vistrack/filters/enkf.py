@@ -16,6 +16,7 @@ the ensemble grows, the EnKF tends to the Kalman filter on linear models.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -164,7 +165,13 @@ class Ensemble:
         # one draw per ensemble of the batch, mean's or cov's (a batch of cov beside one
         # mean drew one set and scaled it for every ensemble: their members correlated 1)
         batch = np.broadcast_shapes(mean.shape[:-1], cov.shape[:-2])
-        z = rng.standard_normal(batch + (int(n_members), mean.shape[-1]))
+        shape = batch + (int(n_members), mean.shape[-1])
+        try:
+            z = rng.standard_normal(shape)
+        except (ValueError, MemoryError):  # (numpy's words named neither: "Maximum allowed
+            # dimension exceeded", "Unable to allocate 14.6 TiB")
+            raise ValueError(f"n_members {n_members} makes an ensemble of {math.prod(shape):.3g} "
+                             "values, more than memory holds") from None
         return cls(mean[..., None, :] + z @ np.swapaxes(L, -1, -2))
 
     def moments(self) -> tuple[np.ndarray, np.ndarray]:
