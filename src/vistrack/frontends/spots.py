@@ -231,12 +231,13 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
         or infinity,
         ``diameter`` is not an odd integer >= 3, ``noise_size`` is negative, ``separation``
         not > 0, ``smoothing_size`` is not a whole number, is even or not larger than
-        ``noise_size``, ``minmass`` or ``threshold`` is not finite, ``percentile`` is not
-        in [0, 100], or ``max_iterations`` is not a whole number >= 0.
+        ``noise_size``, ``minmass`` or ``threshold`` is not finite (``minmass`` None
+        too), ``percentile`` is not in [0, 100], or ``max_iterations`` is not a whole
+        number >= 0.
     TypeError
         If ``separation``, ``noise_size``, ``smoothing_size``, ``minmass``, ``threshold``,
-        ``percentile`` or ``max_iterations`` is no number (a string or None; ``separation``
-        a pair, one per axis, which is not supported).
+        ``percentile`` or ``max_iterations`` is no number (a string, or None but for
+        ``minmass``; ``separation`` a pair, one per axis, which is not supported).
 
     References
     ----------
@@ -378,16 +379,19 @@ def locate(image: ArrayLike, diameter: int, *, minmass: float = 0.0,
     pos, mass, rg = _refine(img.astype(np.float64), coords, r, _disc(r), moves,
                             0.6)
     # 4. of each pair of spots closer than the separation, the less massive goes (ties: the
-    # one whose coordinates sum less, nearer the origin, as trackpy); then the mass limit
+    # one whose coordinates over the separation sum less, nearer the origin, as trackpy: the
+    # coordinates' own sums, equal where theirs differ in the last bit, kept the other spot
+    # of a two-pixel plateau, and its size); then the mass limit
     if len(pos) > 1:
         from scipy.spatial import cKDTree
 
-        pairs = cKDTree(pos / sep).query_pairs(1 - 1e-7, output_type="ndarray")
+        scaled = pos / sep
+        pairs = cKDTree(scaled).query_pairs(1 - 1e-7, output_type="ndarray")
         if len(pairs):
             a, b = pairs[:, 0], pairs[:, 1]
             drop = np.where(mass[a] > mass[b], b, a)
             tie = mass[a] == mass[b]
-            drop[tie] = np.where(pos[a[tie]].sum(1) > pos[b[tie]].sum(1), b[tie], a[tie])
+            drop[tie] = np.where(scaled[a[tie]].sum(1) > scaled[b[tie]].sum(1), b[tie], a[tie])
             keep = np.ones(len(pos), bool)
             keep[drop] = False
             pos, mass, rg = pos[keep], mass[keep], rg[keep]
