@@ -903,3 +903,56 @@ def test_greedy_and_nearest_on_pairs_equal_their_definitions(seed):
     got = nearest_pairs(r[shuffle], c[shuffle], cost[r, c][shuffle])
     assert list(zip(got[0].tolist(), got[1].tolist())) == want_nn
     assert [a.tolist() for a in nearest_neighbour(cost, gate)] == [a.tolist() for a in got]
+
+
+def test_gnn_of_tiny_costs_takes_the_least_total():
+    """The least-cost assignment does not change when every cost is scaled by the same
+    positive number; below 1e-16 a gated problem's penalty for a disallowed pair, of an
+    absolute 1 beside costs that small, swallowed their differences in the solver's sums,
+    and a worse total was taken (-5 where -6 is least). Oracle: scipy's assignment with the
+    disallowed pairs priced above any set of allowed ones, scaled alike."""
+    from scipy.optimize import linear_sum_assignment
+
+    from vistrack.association import gnn, gnn_sparse
+
+    C = np.array([[-2.0, 2.0, 2.0, -3.0], [1.0, -2.0, -2.0, 0.0], [-2.0, -1.0, -3.0, -2.0]])
+    gate = np.array([[0, 1, 1, 1], [0, 0, 1, 0], [0, 0, 1, 0]], bool)
+    r0, c0 = linear_sum_assignment(np.where(gate, C, 1e6))
+    keep = gate[r0, c0]
+    want = sorted(zip(r0[keep].tolist(), c0[keep].tolist()))
+    assert want == [(0, 3), (2, 2)]
+    for s in (1.0, 1e-15, 1e-16, 1e-20, 1e-300):
+        r, c = gnn(C * s, gate)
+        assert sorted(zip(r.tolist(), c.tolist())) == want, s
+        i, j = np.nonzero(gate)
+        r, c = gnn_sparse(i, j, C[i, j] * s, C.shape)
+        assert sorted(zip(r.tolist(), c.tolist())) == want, s
+    rng = np.random.default_rng(1)
+    for _ in range(300):  # random gated problems, each at a tiny scale
+        C = rng.integers(-3, 4, size=(4, 5)).astype(float)
+        gate = rng.random((4, 5)) < 0.5
+        if not gate.any():
+            continue
+        r0, c0 = linear_sum_assignment(np.where(gate, C, 1e6))
+        keep = gate[r0, c0]
+        r, c = gnn(C * 1e-200, gate)
+        assert len(r) == keep.sum() and C[r, c].sum() == C[r0[keep], c0[keep]].sum()
+
+
+def test_the_pairs_assigners_name_an_index_outside_the_problem():
+    """greedy_pairs took a negative index (-1 as the last column, which it then blocked, so
+    track 1 lost its only detection) and met one past the end with a bare IndexError;
+    nearest_pairs took a negative one. Each is named now, as gnn_sparse names it."""
+    from vistrack.association import greedy_pairs, nearest_pairs
+
+    with pytest.raises(ValueError, match=r"^rows and cols must index a \(2, 2\) problem; "
+                                         r"cols\[0\] is -1$"):
+        greedy_pairs(np.array([0, 1]), np.array([-1, 1]), np.array([1.0, 2.0]), (2, 2))
+    with pytest.raises(ValueError, match=r"^rows and cols must index a \(2, 2\) problem; "
+                                         r"cols\[1\] is 5$"):
+        greedy_pairs([0, 1], [0, 5], [1.0, 2.0], (2, 2))
+    with pytest.raises(ValueError, match=r"^cols must be indices >= 0; cols\[0\] is -2$"):
+        nearest_pairs(np.array([0]), np.array([-2]), np.array([1.0]))
+    # lists are taken as arrays (their .tolist() failed in numpy's words)
+    assert [a.tolist() for a in greedy_pairs([0, 1], [1, 0], [1.0, 2.0], (2, 2))] == [[0, 1],
+                                                                                      [1, 0]]

@@ -932,3 +932,20 @@ def test_subset_sums_of_a_huge_weight_give_every_row_its_share():
 
     pair, row0, col0 = _matchings(np.full((3, 1), 1e200), np.ones(3), np.ones(1))
     np.testing.assert_allclose(pair.ravel(), [1 / 3] * 3, rtol=1e-12)
+
+
+def test_a_large_likelihood_outside_the_gate_raises_no_overflow_warning():
+    """A track whose weights overflow is rescaled; a likelihood of 1e300 outside its gate
+    overflowed in the rescaling's product (then dropped by the gate: the weights were
+    right) with a RuntimeWarning. Oracle: the closed form, beta = 1 for the one gated
+    detection and beta0 = (1 - P_D P_G) lambda / (P_D lik) beside it."""
+    import warnings
+
+    from vistrack.association import pda_weights
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        beta, beta0 = pda_weights(np.array([[1e10, 1e300]]), np.array([[True, False]]),
+                                  clutter_density=1e-300)
+    np.testing.assert_allclose(beta, [[1.0, 0.0]])
+    np.testing.assert_allclose(beta0, [(1 - 0.9 * 0.99) * 1e-300 / (0.9 * 1e10)], rtol=1e-12)

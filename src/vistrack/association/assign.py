@@ -21,6 +21,7 @@ once (except ``"nn"``).
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -343,11 +344,13 @@ def _gated_lsa(cost, gate):
         return np.empty(0, np.int64), np.empty(0, np.int64)
     size = min(cost.shape[0], cost.shape[1]) + 1
     big = (hi - lo + 1.0) * size + top
-    if not np.isfinite((big + top) * size * 2.0):
+    if not np.isfinite((big + top) * size * 2.0) or 0.0 < top < 2.0 ** -30:
         # costs near the largest float: the same problem scaled into [-1, 1] (the penalty
         # overflowed to inf, and a component with a disallowed pair was called infeasible;
         # or, of costs close together, the solver's sums of a few did: fewer pairs, or a
-        # worse total, than the problem scaled down has)
+        # worse total, than the problem scaled down has); and costs far below the penalty's
+        # 1 (1e-16 and less: the solver's sums beside it lost their differences, and took a
+        # worse total)
         cost = cost / top
         big = 3.0 * size + 1.0
     c = np.where(gate, cost, big)
@@ -531,6 +534,48 @@ gnn_pairs_limited_py = kernel(gnn_pairs_limited)
 """:func:`gnn_pairs_limited` for calls from Python."""
 
 
+def _pair_problem(rows: Any, cols: Any, cost: Any, shape: Any
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
+    """``rows``, ``cols`` and ``cost`` of the listed pairs of a problem of ``shape`` (tracks,
+    detections; None: as large as the indices), checked: whole-number indices inside it, the
+    three 1-D of one length, the costs numbers; as ``int64``, ``int64`` and ``float64``, and
+    the shape."""
+    for name, idx in (("rows", rows), ("cols", cols)):
+        # (0.7 was cut to 0, True was 1, NaN met "cannot convert float NaN to integer")
+        a = np.asarray(idx)
+        if a.dtype.kind not in "iu" and not (a.dtype.kind == "f" and a.size == 0):
+            whole = a.dtype.kind == "f" and bool(np.all(np.isfinite(a) & (a == np.round(a))))
+            if not whole:
+                raise ValueError(f"{name} must be whole numbers, indices; got "
+                                 f"{a.ravel()[:5].tolist()}{' ...' if a.size > 5 else ''}")
+    rows, cols = np.ascontiguousarray(rows, np.int64), np.ascontiguousarray(cols, np.int64)
+    cost = np.ascontiguousarray(as_float_array(cost, "cost", not_boolean="numbers"))
+    if not rows.shape == cols.shape == cost.shape or rows.ndim != 1:
+        raise ValueError(f"rows, cols and cost must be 1-D of one length; got shapes "
+                         f"{rows.shape}, {cols.shape} and {cost.shape}")
+    if shape is None:  # as large as the indices
+        for name, idx in (("rows", rows), ("cols", cols)):
+            if len(idx) and idx.min() < 0:
+                p = int(np.argmax(idx < 0))
+                raise ValueError(f"{name} must be indices >= 0; {name}[{p}] is {int(idx[p])}")
+        shape = (int(rows.max()) + 1 if len(rows) else 0,
+                 int(cols.max()) + 1 if len(cols) else 0)
+    if isinstance(shape, (int, np.integer)) or not hasattr(shape, "__len__"):
+        raise ValueError(f"shape must be two whole numbers >= 0 (tracks, detections); got "
+                         f"{shape!r}")
+    if len(shape) != 2 or not all(is_whole(x, 0) for x in shape):  # (2.7 was cut to 2)
+        raise ValueError(f"shape must be two whole numbers >= 0 (tracks, detections); got "
+                         f"{tuple(shape)!r}")
+    T, D = (int(x) for x in shape)
+    for name, idx, n in (("rows", rows, T), ("cols", cols, D)):
+        out = (idx < 0) | (idx >= n)
+        if out.any():
+            p = int(np.flatnonzero(out)[0])
+            raise ValueError(f"rows and cols must index a ({T}, {D}) problem; {name}[{p}] is "
+                             f"{int(idx[p])}")
+    return rows, cols, cost, T, D
+
+
 def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
                shape: tuple[int, int], limit: float | None = None,
                ) -> tuple[np.ndarray, np.ndarray]:
@@ -571,35 +616,10 @@ def gnn_sparse(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
     >>> r.tolist(), c.tolist()
     ([0, 1], [1, 0])
     """
-    for name, idx in (("rows", rows), ("cols", cols)):
-        # (0.7 was cut to 0, True was 1, NaN met "cannot convert float NaN to integer")
-        a = np.asarray(idx)
-        if a.dtype.kind not in "iu" and not (a.dtype.kind == "f" and a.size == 0):
-            whole = a.dtype.kind == "f" and bool(np.all(np.isfinite(a) & (a == np.round(a))))
-            if not whole:
-                raise ValueError(f"{name} must be whole numbers, indices; got "
-                                 f"{a.ravel()[:5].tolist()}{' ...' if a.size > 5 else ''}")
-    rows, cols = np.ascontiguousarray(rows, np.int64), np.ascontiguousarray(cols, np.int64)
-    cost = np.ascontiguousarray(as_float_array(cost, "cost", not_boolean="numbers"))
-    if isinstance(shape, (int, np.integer)) or not hasattr(shape, "__len__"):
-        raise ValueError(f"shape must be two whole numbers >= 0 (tracks, detections); got "
-                         f"{shape!r}")
-    if len(shape) != 2 or not all(is_whole(x, 0) for x in shape):  # (2.7 was cut to 2)
-        raise ValueError(f"shape must be two whole numbers >= 0 (tracks, detections); got "
-                         f"{tuple(shape)!r}")
-    T, D = (int(x) for x in shape)
-    if not rows.shape == cols.shape == cost.shape or rows.ndim != 1:
-        raise ValueError(f"rows, cols and cost must be 1-D of one length; got shapes "
-                         f"{rows.shape}, {cols.shape} and {cost.shape}")
+    rows, cols, cost, T, D = _pair_problem(rows, cols, cost, shape)
     _check_limit(limit)  # (with no pair too: NaN or "x" went unsaid where none was allowed)
     if len(rows) == 0:
         return _EMPTY
-    for name, idx, n in (("rows", rows, T), ("cols", cols, D)):
-        out = (idx < 0) | (idx >= n)
-        if out.any():
-            p = int(np.flatnonzero(out)[0])
-            raise ValueError(f"rows and cols must index a ({T}, {D}) problem; {name}[{p}] is "
-                             f"{int(idx[p])}")
     finite = np.isfinite(cost)
     if not finite.all():
         p = int(np.flatnonzero(~finite)[0])
@@ -680,10 +700,13 @@ def greedy_pairs(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray,
     ...              (2, 2))
     (array([1, 0]), array([0, 1]))
     """
+    # (a negative index was taken, -1 as the last column, which it then blocked; one past
+    # the end raised a bare IndexError)
+    rows, cols, cost, T, D = _pair_problem(rows, cols, cost, shape)
     ok = np.isfinite(cost)  # (never assigned: -inf sorted first, and was taken)
     rows, cols, cost = rows[ok], cols[ok], cost[ok]
     order = np.argsort(cost, kind="stable")
-    used_t, used_d = bytearray(shape[0]), bytearray(shape[1])
+    used_t, used_d = bytearray(T), bytearray(D)
     taken_r, taken_c = [], []
     for a, b in zip(rows[order].tolist(), cols[order].tolist()):  # (Python's ints: quicker)
         if not used_t[a] and not used_d[b]:
@@ -740,6 +763,7 @@ def nearest_pairs(rows: np.ndarray, cols: np.ndarray, cost: np.ndarray
     >>> nearest_pairs(np.array([1, 0, 0]), np.array([0, 1, 0]), np.array([0.5, 2.0, 2.0]))
     (array([0, 1]), array([0, 0]))
     """
+    rows, cols, cost, _, _ = _pair_problem(rows, cols, cost, None)
     ok = np.isfinite(cost)
     r, c, k = rows[ok], cols[ok], cost[ok]
     order = np.lexsort((c, k, r))  # by row, then cost, then column

@@ -172,7 +172,9 @@ def _weights(w: float | np.ndarray, lik: np.ndarray, gate: np.ndarray, clutter_d
         top = np.where(gate[over], lik[over], 0.0).max(axis=1)
         c[over] = clutter_density * (_LARGE / top)
         ww = np.broadcast_to(w, lik.shape)[over] if np.ndim(w) else w
-        G[over] = np.where(gate[over], ww * (lik[over] / top[:, None]) * _LARGE, 0.0)
+        # (the likelihoods outside the gate taken out first: one of 1e300 there overflowed
+        # in the product, which np.where then dropped, with a RuntimeWarning all the same)
+        G[over] = ww * (np.where(gate[over], lik[over], 0.0) / top[:, None]) * _LARGE
     return G, c
 
 
