@@ -1572,3 +1572,29 @@ def test_a_track_table_refuses_a_time_that_goes_back():
         t.manage(np.array([True]), 0.5, 2, 5.0)
     assert t.last_time.tolist() == [1.0]  # (checked before the table changed)
     t.manage(np.array([True]), 1.0, 2, 5.0)  # the same time again is taken
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda d: d.scores.__setitem__(0, np.inf), r"detection scores must be finite; scores\[0\] "
+                                                r"is inf \(frame 1\)"),
+    (lambda d: d.boxes.__setitem__(0, [200.0, 100.0, 100.0, 180.0]),
+     r"detection boxes must be \(x1, y1, x2, y2\) with x1 <= x2 and y1 <= y2, not NaN; "
+     r"boxes\[0\] = \[200.0, 100.0, 100.0, 180.0\] \(frame 1\)"),
+    (lambda d: d.boxes.__setitem__((0, 0), np.nan), r"boxes\[0\] = \[nan, 10.0, 30.0, 30.0\]"),
+])
+@pytest.mark.parametrize("compiled", [True, False])
+def test_step_refuses_detections_changed_after_they_were_made(change, message, compiled):
+    """Detections refuses an infinite score, an inverted box and NaN as made; changed in its
+    arrays after, the tracker took an infinite score and (compiled) an inverted box, failed
+    on it inside the association after taking the frame (numpy steps: retried, "frame must
+    increase"), and met a NaN box with an IndexError. Each is named before the frame is
+    taken, which a retry with the detections mended then steps."""
+    tr = BoxTracker(frame_rate=10, compiled=compiled)
+    d = Detections.from_xywh(np.array([[10.0, 10.0, 20.0, 20.0], [50.0, 50.0, 20.0, 20.0]]),
+                             [0.9, 0.8])
+    change(d)
+    with pytest.raises(ValueError, match=message):
+        tr.step(1, d)
+    assert tr.frame is None
+    ok = Detections.from_xywh(np.array([[10.0, 10.0, 20.0, 20.0]]), [0.9])
+    assert tr.step(1, ok) is not None and tr.frame == 1

@@ -324,8 +324,8 @@ def check_in_pixels(boxes: np.ndarray, name: str, suffix: str = "", *,
     ...
     ValueError: boxes must lie within ±2^52 pixels, ...; boxes[1] = [1e+17, 0.0, 5.0, 5.0]
     """
-    if not len(boxes) or np.abs(boxes).max() <= MAX_PIXELS:
-        return
+    if not len(boxes) or not (np.abs(boxes) > MAX_PIXELS).any():
+        return  # (NaN is the callers' to name: its max() failed the test, then an IndexError)
     i = int(np.flatnonzero((np.abs(boxes) > MAX_PIXELS).any(axis=1))[0])
     where = "got" if got else f"{name.split()[-1]}[{i}] ="
     raise ValueError(f"{name} must lie within ±2^52 pixels, where a float holds every whole "

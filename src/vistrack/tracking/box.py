@@ -1183,6 +1183,18 @@ class BoxTracker:
             i = int(np.flatnonzero(np.isnan(raw))[0])
             raise ValueError(f"detection scores must not be NaN; scores[{i}] is NaN (frame "
                              f"{frame})")
+        # (Detections refuses these as made; arrays changed after were taken: an infinite
+        # score, a box whose far corner lies before its near one, or a NaN box, which failed
+        # in an IndexError)
+        if np.isinf(raw).any():
+            i = int(np.flatnonzero(np.isinf(raw))[0])
+            raise ValueError(f"detection scores must be finite; scores[{i}] is {raw[i]} (frame "
+                             f"{frame})")
+        bad = np.isnan(db).any(axis=1) | (db[:, 2] < db[:, 0]) | (db[:, 3] < db[:, 1])
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise ValueError(f"detection boxes must be (x1, y1, x2, y2) with x1 <= x2 and y1 "
+                             f"<= y2, not NaN; boxes[{i}] = {db[i].tolist()} (frame {frame})")
         # the filters square a box's size; far past any image the squares overflow
         check_in_pixels(db, "detection boxes", f" (frame {frame})")
         if cfg.nms_iou < 1 and len(raw) > 1:  # (changes no state)
