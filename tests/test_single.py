@@ -1296,3 +1296,24 @@ def test_a_polygon_in_crossed_order_is_a_box_not_an_absent_object():
     line = [[0, 0, 1, 3, 2, 6, 3, 9]]
     np.testing.assert_array_equal(region_to_bbox(line, "minmax")[0, 2:], [0.0, 0.0])
     np.testing.assert_array_equal(region_to_bbox(line)[0, 2:], [0.0, 0.0])
+
+
+@pytest.mark.parametrize("kind, start", [("csrt", [0, 0, 9, 31]), ("kcf", [3.2, 14.8, 2.6, 1.4])])
+def test_opencv_trackers_keep_the_last_box_where_opencv_fails_in_its_own_way(kind, start):
+    """On a 31 x 9 frame CSRT's fourth update raised OpenCV's own assertion (copyMakeBorder),
+    a traceback from track-one; KCF reported success with a box of 0 x 0, which was taken and
+    written. Each is a failure, as the docstring says: the last box is kept (the oracle)."""
+    cv2 = pytest.importorskip("cv2")
+    from vistrack.tracking.single import OpenCVTracker
+
+    rng = np.random.default_rng(3)
+    tex = cv2.GaussianBlur(rng.integers(0, 256, (300, 300, 3), dtype=np.uint8), (0, 0), 1.5)
+
+    def frame(k):
+        f = np.roll(tex, (k, 2 * k), (0, 1))[:31, :9]
+        return cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) if kind == "csrt" else f
+
+    t = OpenCVTracker(kind)
+    t.init(frame(0), start)
+    boxes = [t.update(frame(k)) for k in range(1, 6)]
+    assert all(np.isfinite(b).all() and b[2] > 0 and b[3] > 0 for b in boxes), boxes

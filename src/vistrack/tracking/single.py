@@ -858,7 +858,8 @@ class OpenCVTracker(SingleObjectTracker):
     """OpenCV contrib's CSRT or KCF behind the same interface (for comparison).
 
     Boxes are rounded to whole pixels when the tracker starts; where OpenCV's tracker
-    reports a failure, the last box is kept. It has no ``anchor``, so it cannot be a member
+    reports a failure, raises its own error in an update, or reports a box of no width or
+    height, the last box is kept. It has no ``anchor``, so it cannot be a member
     of :class:`~vistrack.tracking.compose.Composite`.
 
     Parameters
@@ -931,8 +932,17 @@ class OpenCVTracker(SingleObjectTracker):
         self.box = b
 
     def _follow(self, image: np.ndarray) -> np.ndarray:
-        ok, b = self._t.update(self._image(image))
-        if ok:
+        import cv2
+
+        try:
+            ok, b = self._t.update(self._image(image))
+        except cv2.error:
+            # (CSRT's window past a small image's edge: OpenCV's assertion in copyMakeBorder,
+            # a traceback from track-one) a failure, as OpenCV's own report of one
+            ok, b = False, None
+        # a box of no size reported as found (KCF's [0, 0, 0, 0] on a 3 x 1 box) is a failure
+        # too: it was taken, and written
+        if ok and b is not None and b[2] > 0 and b[3] > 0:
             self.box = np.asarray(b, float)
         return self.box.copy()
 
