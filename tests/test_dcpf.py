@@ -1004,3 +1004,21 @@ def test_a_step_before_the_last_update_is_refused_by_its_frame():
     assert tr.frame == 4
     tr.step(Frame(5, 0.0, img), Detections(boxes=np.zeros((0, 4))))  # the next is taken
     assert tr.frame == 5
+
+
+def test_the_tracker_names_a_config_or_rng_it_cannot_take():
+    """A config that is no DCPFConfig (a dict of settings, a file's path) failed in reset,
+    "'dict' object has no attribute 'n_particles'"; a bad rng in numpy's SeedSequence words
+    at reset, and True was taken as the seed 1. Each is named when the tracker is made."""
+    from vistrack.tracking.dcpf import DetectorConfidencePF
+
+    for config in ({"beta": 1.0}, "dcpf.toml"):
+        with pytest.raises(TypeError, match=r"^config must be a DCPFConfig \(DCPFConfig\("
+                                            r"\*\*settings\), or vistrack\.config\."
+                                            r"read_dcpf_config\(path\) for a file\); got "):
+            DetectorConfidencePF(config, gamma=0.0)
+    for rng, kind in (("a", TypeError), (1.5, TypeError), (True, TypeError), (-1, ValueError)):
+        with pytest.raises(kind, match=r"^rng must be "):
+            DetectorConfidencePF(rng=rng, gamma=0.0)
+    for rng in (None, 3, np.random.default_rng(1)):  # what it takes
+        DetectorConfidencePF(rng=rng, gamma=0.0)

@@ -354,6 +354,15 @@ class DetectorConfidencePF:
         The highest of their scores (``-inf`` before any): where it stays under
         ``init_score``, no target can start.
 
+    Raises
+    ------
+    TypeError
+        If ``config`` is not a :class:`DCPFConfig`, ``confidence`` is not callable, or
+        ``rng`` is not an int seed, a numpy Generator or None (a boolean included).
+    ValueError
+        If ``rng`` is a negative seed, ``frame_rate`` is not a finite number > 0, or a
+        setting is out of its range (as :class:`DCPFConfig` names it).
+
     Notes
     -----
     :meth:`step` is the tracker protocol (:class:`~vistrack.tracking.Tracker`): a frame with
@@ -372,10 +381,19 @@ class DetectorConfidencePF:
                  confidence: Callable[[np.ndarray], ConfidenceMap] | None = None,
                  rng: np.random.Generator | int | None = 0, frame_rate: float = 30.0,
                  **overrides: Any):
+        if config is not None and not isinstance(config, DCPFConfig):
+            # (a dict or a file's path failed in reset, "'dict' object has no attribute
+            # 'n_particles'")
+            raise TypeError(f"config must be a DCPFConfig (DCPFConfig(**settings), or "
+                            f"vistrack.config.read_dcpf_config(path) for a file); got "
+                            f"{type(config).__name__}")
         if config is None:
             config = DCPFConfig(**overrides)
         elif overrides:
             config = replace(config, **overrides)
+        from .._validate import as_rng
+
+        as_rng(rng)  # named here (numpy's SeedSequence words at reset, and True taken as 1)
         if confidence is not None and not callable(confidence):
             raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                             f"{type(confidence).__name__}")
