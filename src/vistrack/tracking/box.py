@@ -1179,20 +1179,18 @@ class BoxTracker:
         assert db is not None and raw is not None and dc is not None
         # every check before the frame is taken: a frame refused had been counted as
         # stepped (retried, "frame must increase"; the next one predicted a frame short)
-        if np.isnan(raw).any():
-            i = int(np.flatnonzero(np.isnan(raw))[0])
-            raise ValueError(f"detection scores must not be NaN; scores[{i}] is NaN (frame "
-                             f"{frame})")
         # (Detections refuses these as made; arrays changed after were taken: an infinite
         # score, a box whose far corner lies before its near one, or a NaN box, which failed
-        # in an IndexError)
-        if np.isinf(raw).any():
-            i = int(np.flatnonzero(np.isinf(raw))[0])
-            raise ValueError(f"detection scores must be finite; scores[{i}] is {raw[i]} (frame "
+        # in an IndexError) one pass each where all is well
+        if not np.isfinite(raw).all():
+            i = int(np.flatnonzero(~np.isfinite(raw))[0])
+            raise ValueError(f"detection scores must not be NaN; scores[{i}] is NaN (frame "
+                             f"{frame})" if np.isnan(raw[i]) else
+                             f"detection scores must be finite; scores[{i}] is {raw[i]} (frame "
                              f"{frame})")
-        bad = np.isnan(db).any(axis=1) | (db[:, 2] < db[:, 0]) | (db[:, 3] < db[:, 1])
-        if bad.any():
-            i = int(np.flatnonzero(bad)[0])
+        ordered = db[:, 2:] >= db[:, :2]  # (False for NaN too)
+        if not ordered.all():
+            i = int(np.flatnonzero(~ordered.all(axis=1))[0])
             raise ValueError(f"detection boxes must be (x1, y1, x2, y2) with x1 <= x2 and y1 "
                              f"<= y2, not NaN; boxes[{i}] = {db[i].tolist()} (frame {frame})")
         # the filters square a box's size; far past any image the squares overflow
