@@ -79,7 +79,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from .._validate import as_number, as_whole
+from .._validate import as_number, as_rng, as_whole
 from ..association import greedy, iou
 from ..filters.particle import resample
 from ..types import Detections, Frame, Tracks
@@ -391,9 +391,6 @@ class DetectorConfidencePF:
             config = DCPFConfig(**overrides)
         elif overrides:
             config = replace(config, **overrides)
-        from .._validate import as_rng
-
-        as_rng(rng)  # named here (numpy's SeedSequence words at reset, and True taken as 1)
         if confidence is not None and not callable(confidence):
             raise TypeError(f"confidence must be a callable image -> ConfidenceMap; got "
                             f"{type(confidence).__name__}")
@@ -411,7 +408,9 @@ class DetectorConfidencePF:
         the default 0, the randomness starts again: the same frames give the same tracks;
         with None it is drawn afresh)."""
         config = self.config
-        self.rng = np.random.default_rng(self._rng_seed)
+        # (as_rng names a seed it cannot take: numpy's SeedSequence words before, and True
+        # was the seed 1; reset is called when the tracker is made)
+        self.rng = as_rng(self._rng_seed)
         N = config.n_particles
         # the lifecycle's table (mean: each target's box x, y, w, h), and per target its
         # particles, size, seconds in a row on an older target, and classifier
