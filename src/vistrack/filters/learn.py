@@ -738,8 +738,7 @@ def _fit(estep: Any, T: int, p: dict[str, np.ndarray], learn: tuple[str, ...],
         lls.append(ll)
         if progress is not None:
             progress.write(f"{label}EM iteration {k}: log-likelihood {ll:.6f}\n")
-        if k > 0 and any(name in learn and (np.diagonal(p[name], axis1=-2, axis2=-1)
-                                            < np.finfo(float).tiny).all() for name in ("Q", "R")):
+        if k > 0 and _fell_to_zero(p, learn):
             # a learned noise fell to zero (constant data: said below); its variances below
             # the smallest normal float, the E-steps after it underflow to 0 and to a
             # covariance that is not positive definite
@@ -771,17 +770,16 @@ def _fit(estep: Any, T: int, p: dict[str, np.ndarray], learn: tuple[str, ...],
             if name in learn:
                 new[name] = _psd((new[name] + np.swapaxes(new[name], -1, -2)) / 2)
         p = new
-    for name in ("Q", "R"):
+    for name in _fell_to_zero(p, learn):
+        # (constant data: EM went on until the variances were subnormal, 1e-323, and said it
+        # had converged there)
         d = np.diagonal(p[name], axis1=-2, axis2=-1)
-        if name in learn and (d < np.finfo(float).tiny).all():
-            # (constant data: EM went on until the variances were subnormal, 1e-323, and
-            # said it had converged there)
-            warnings.warn(f"{label}{name} fell to zero (its largest variance {d.max():.3g}): "
-                          f"the measurements fit the model without that noise, and the "
-                          f"likelihood grows without bound as it falls; the fit is not "
-                          f"converged. Keep {name} fixed, or learn from data with noise",
-                          RuntimeWarning, stacklevel=4)
-            converged = False
+        warnings.warn(f"{label}{name} fell to zero (its largest variance {d.max():.3g}): "
+                      f"the measurements fit the model without that noise, and the "
+                      f"likelihood grows without bound as it falls; the fit is not "
+                      f"converged. Keep {name} fixed, or learn from data with noise",
+                      RuntimeWarning, stacklevel=4)
+        converged = False
     return FitResult(F=p["F"], Q=p["Q"], H=p["H"], R=p["R"], x0=p["x0"], P0=p["P0"], q=q, r=r,
                     loglik=np.array(lls), iterations=len(lls) - 1, converged=converged)
 
@@ -1021,6 +1019,13 @@ def _estep(o: _Observed, p: dict[str, np.ndarray], shared: bool) -> _EStep | _Sh
         if e.done:
             return e
     return _EStep(o, p)
+
+
+def _fell_to_zero(p: dict[str, np.ndarray], learn: tuple[str, ...]) -> list[str]:
+    """The learned noises of ``p`` (``Q``, ``R``) whose every variance lies below the
+    smallest normal float: fallen to zero, as on constant data."""
+    return [name for name in ("Q", "R") if name in learn and (
+        np.diagonal(p[name], axis1=-2, axis2=-1) < np.finfo(float).tiny).all()]
 
 
 def _psd(M: np.ndarray) -> np.ndarray:
