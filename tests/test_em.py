@@ -486,6 +486,43 @@ def test_a_singular_start_learns_a_positive_semi_definite_Q():
     assert np.abs(fit.Q[:2, :2]).max() < 1e-20  # (positions first)
 
 
+# an M-step's Q of the test above (Euler constant velocity, learned from its singular start): the
+# positions' noise is 1e-26 and eigh takes its smallest eigenvalue for -7.9e-24 or 1.8e-16, its
+# rounding of 0 beside 0.75
+SINGULAR_Q = np.array([
+    [5.8939661151002438e-27, 5.6703423332470284e-28, 6.9517341318935990e-15,
+     -2.5680840112435432e-15],
+    [5.6703423332470284e-28, 1.9925032476479880e-26, -1.0914910667263281e-15,
+     -5.6667758968670966e-15],
+    [6.9517341318935990e-15, -1.0914910667263281e-15, 5.9764098867218896e-01,
+     7.0841932254915072e-02],
+    [-2.5680840112435432e-15, -5.6667758968670966e-15, 7.0841932254915072e-02,
+     7.2290930604238934e-01]])
+
+
+def test_a_learned_noise_keeps_its_digits_where_it_is_not_below_zero():
+    """The M-step lifts a learned noise's eigenvalues below zero to zero. It rebuilt the whole
+    matrix from its eigenvectors, on a negative eigenvalue of -7.9e-24 that is the eigen
+    solver's rounding beside 0.75: the positions' noise, 1e-26, became 1.8e-16. Oracles: a
+    matrix negative only within that rounding is kept; one with a true negative eigenvalue
+    (-1e-3, along the velocities' eigenvector v of eigenvalue lam) becomes its nearest
+    positive semi-definite matrix, ``SINGULAR_Q - lam v v'`` (the eigenvalue's part taken
+    away), the positions' noise among its entries (2e-26) to within 1e-28 (the eigenvectors'
+    rounding times their 1e-14 parts there)."""
+    psd = learn_module._psd
+    assert psd(SINGULAR_Q) is SINGULAR_Q
+    lam, V = np.linalg.eigh(SINGULAR_Q)
+    v = V[:, 2]  # (0.566: the velocities', its positions' parts 1e-14)
+    bad = SINGULAR_Q - (lam[2] + 1e-3) * np.outer(v, v)
+    want = SINGULAR_Q - lam[2] * np.outer(v, v)
+    got = psd(bad)
+    assert np.abs(got[:2, :2] - want[:2, :2]).max() < 1e-28
+    assert np.abs(got - want).max() < 4 * np.finfo(float).eps
+    assert np.linalg.eigvalsh(got).min() >= -4 * np.finfo(float).eps
+    stack = psd(np.stack([SINGULAR_Q, bad]))  # (per step: each judged on its own)
+    assert (stack[0] == SINGULAR_Q).all() and (stack[1] == got).all()
+
+
 def test_maximum_likelihood_names_what_it_cannot_learn_from():
     ys = series(60, 21)
     with pytest.raises(ValueError, match="R's diagonal must be > 0"):

@@ -1030,11 +1030,18 @@ def _fell_to_zero(p: dict[str, np.ndarray], learn: tuple[str, ...]) -> list[str]
 
 def _psd(M: np.ndarray) -> np.ndarray:
     """A symmetric matrix (or stack) with its eigenvalues below zero, which rounding leaves
-    in the sums of a singular noise, set to zero; unchanged when there are none."""
+    in the sums of a singular noise, lifted to zero; unchanged when there are none beyond
+    the eigen solver's own rounding, ``n eps`` of the largest in magnitude (its estimate of an
+    eigenvalue of 0). The negative part alone is taken away, ``M - sum w v v'`` over those
+    ``w < 0``, so that the rest of ``M`` keeps its digits: rebuilding ``M`` from all its
+    eigenvectors put that rounding into every entry, 1e-16 on a noise that is exactly 0."""
     w, V = np.linalg.eigh(M)
-    if w.min() >= 0:
+    n = M.shape[-1]
+    tol = n * np.finfo(float).eps * np.abs(w).max(axis=-1, keepdims=True)
+    neg = np.where(w < -tol, w, 0.0)
+    if not neg.any():
         return M
-    out = (V * np.clip(w, 0.0, None)[..., None, :]) @ np.swapaxes(V, -1, -2)
+    out = M - (V * neg[..., None, :]) @ np.swapaxes(V, -1, -2)
     return (out + np.swapaxes(out, -1, -2)) / 2
 
 
