@@ -242,7 +242,7 @@ def test_other_argument_types_go_to_numba():
                  _prebuilt.encode(types.float64)]
     k._builds = {_prebuilt._frozen(signature): lambda *a: "built"}
     assert k(np.zeros(3), 1.0) == "built"
-    # other dtypes, layouts, read-only arrays and scalar types: numba's own dispatch
+    # other dtypes, layouts and scalar types: numba's own dispatch (read-only arrays: below)
     assert k(np.zeros(3, np.float32), 1.0) == 3.0
     assert k(np.zeros(6)[::2], 1.0) == 3.0
     assert k(np.zeros(3), 1) == 3.0
@@ -255,6 +255,46 @@ def test_other_argument_types_go_to_numba():
 
     assert resolve(ro, 1.0) is None and resolve(np.zeros(3), 1.0) is not None
     assert resolve(np.zeros(3), None) is None  # a type the quick check does not know
+
+
+def test_read_only_arrays_run_the_build_on_copies():
+    """A read-only array (a broadcast view, a memory map opened for reading) is not a type the
+    kernels are built for: numba compiled the kernel again for it at its first call (the
+    Kalman update given a broadcast measurement, 17 s). A kernel does not write to an argument
+    it is given read-only, so the build runs on a writeable C-ordered copy, and numba compiles
+    nothing. Oracles: the build's answer on the values, and the same bits as the writeable
+    array's on the Kalman update."""
+    @njit
+    def total(a, x):
+        return a.sum() * x
+
+    k = _prebuilt.Kernel(total, "tests:total")
+    signature = [_prebuilt.encode(types.Array(types.float64, 1, "C")),
+                 _prebuilt.encode(types.float64)]
+    given = []
+    k._builds = {_prebuilt._frozen(signature): lambda a, x: given.append(a.copy()) or -1.0}
+    ro = np.arange(3.0)
+    ro.flags.writeable = False
+    assert k(ro, 2.0) == -1.0 and k(np.broadcast_to(np.array([5.0, 6.0]), (2,)), 1.0) == -1.0
+    assert k(np.broadcast_to(7.0, (3,)), 1.0) == -1.0  # (strided: a stride of 0)
+    assert [g.tolist() for g in given] == [[0.0, 1.0, 2.0], [5.0, 6.0], [7.0, 7.0, 7.0]]
+    assert total.signatures == []
+    ro32 = np.arange(3.0, dtype=np.float32)
+    ro32.flags.writeable = False
+    assert k(ro32, 2.0) == 6.0 and len(total.signatures) == 1  # no build for float32 either
+
+    if not _prebuilt.status().startswith("ahead-of-time kernels in use"):
+        return
+    import vistrack as vt
+    from vistrack.filters import _kernels, kf_update
+
+    g = vt.Gaussian(np.tile([1.0, 2.0, 0.5, -1.0], (3, 1)), np.tile(np.eye(4), (3, 1, 1)))
+    H, R = np.eye(2, 4), np.broadcast_to(0.5 * np.eye(2), (2, 2))
+    y = np.broadcast_to(np.array([1.5, 1.0]), (3, 2))
+    before = list(_kernels.update_batch.signatures)
+    got, want = kf_update(g, y, H, R), kf_update(g, y.copy(), H, R.copy())
+    assert _kernels.update_batch.signatures == before
+    assert got.mean.tobytes() == want.mean.tobytes() and got.cov.tobytes() == want.cov.tobytes()
 
 
 def _unaligned(n):

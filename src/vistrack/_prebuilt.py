@@ -204,7 +204,7 @@ class Kernel:
         key = tuple([_argument(a) for a in args])
         fn = self._table.get(key, _MISSING)
         if fn is _MISSING:
-            fn = self._resolve(key)
+            fn = self._resolve(key) or self._through_copies(args, key)
             if len(self._table) < 64:
                 self._table[key] = fn
         return (fn or self.jit)(*args)  # type: ignore[operator]
@@ -224,6 +224,32 @@ class Kernel:
         if not self._builds or any(k is None for k in key):
             return None  # a type this check does not know: numba decides
         return self._builds.get(_frozen([_encoded(k) for k in key]))
+
+    def _through_copies(self, args: tuple[Any, ...],
+                        key: tuple[Any, ...]) -> Callable[..., Any] | None:
+        """The build for writeable C-ordered copies of the read-only arrays among ``args`` (a
+        broadcast view, a memory map opened for reading), if there is one: numba would compile
+        the kernel again for their types, seconds at the first call (the Kalman update's, 17
+        s), and a kernel does not write to an argument it is given read-only (numba refuses
+        such code). None if no array is read-only or the copies' types have no build either."""
+        at = tuple(i for i, a in enumerate(args) if type(a) is np.ndarray
+                   and not a.flags.writeable)
+        if not at:
+            return None
+        plain = list(key)
+        for i in at:
+            plain[i] = _argument(np.empty(args[i].shape, args[i].dtype))  # (a copy's type)
+        build = self._resolve(tuple(plain))
+        if build is None:
+            return None
+
+        def on_copies(*given: Any) -> Any:
+            a = list(given)
+            for i in at:
+                a[i] = np.array(a[i], order="C")
+            return build(*a)
+
+        return on_copies
 
     def __repr__(self) -> str:
         return f"Kernel({self.key})"

@@ -144,11 +144,13 @@ def _ekf_update(g: Gaussian, y: ArrayLike,
         # K e, the same Joseph form and log-density), where numpy's some thirty calls cost
         # more than the model's f and h (the filter ran at 0.25 ms a step, FilterPy's 0.13)
         # (writeable C-ordered copies: the argument types the kernel was built for ahead of
-        # time; a model's read-only R compiled it again at the first call, seconds)
-        H = np.where(obs[:, None], np.asarray(H, dtype=float), 0.0)
-        code, step, cov, ll = update_batch_py(np.zeros(n), np.array(g.cov, dtype=float),
+        # time; a model's read-only R, or a Jacobian in Fortran order, compiled it again at
+        # the first call, seconds)
+        H = np.ascontiguousarray(np.where(obs[:, None], np.asarray(H, dtype=float), 0.0))
+        code, step, cov, ll = update_batch_py(np.zeros(n),
+                                              np.array(g.cov, dtype=float, order="C"),
                                               np.where(obs, e, np.nan), H,
-                                              np.array(me.Rm, dtype=float))
+                                              np.array(me.Rm, dtype=float, order="C"))
         if code < 0:
             return Gaussian._trusted(x + step, cov), ll
         # (anything else, not finite or not positive definite: as numpy's path words it; an
