@@ -136,7 +136,6 @@ def test_the_kalman_kernels_give_the_same_bits_whatever_numba_compiled_before(tm
                    VISTRACK_CACHE_DIR=str(tmp_path / "kernels"), VISTRACK_PREBUILT=prebuilt)
         return ast.literal_eval(_in_a_process("kalman_bits", env))
 
-    fresh = bits("fresh")
     solves = textwrap.dedent("""
         import numpy as np
         from vistrack.filters._kernels import chol_solve
@@ -144,9 +143,14 @@ def test_the_kalman_kernels_give_the_same_bits_whatever_numba_compiled_before(tm
     """)
     subprocess.run([sys.executable, "-c", solves], cwd=ROOT, check=True,
                    env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "solves first")))
-    assert bits("solves first") == fresh
+    after_solves = bits("solves first")
+    # the kernels built ahead of time are numba's compilation from an empty cache, call for
+    # call (test_each_build_equals_numbas_compilation_on_first_use): where they are in use
+    # they stand for it, and the kernels are compiled from an empty cache once, not twice
     if _prebuilt.status().startswith("ahead-of-time kernels in use"):
-        assert bits("ahead of time", prebuilt="1") == fresh
+        assert after_solves == bits("ahead of time", prebuilt="1")
+    else:
+        assert after_solves == bits("fresh")
 
 
 @pytest.mark.slow
