@@ -262,7 +262,7 @@ def test_other_argument_types_go_to_numba():
 
 
 def test_read_only_arrays_run_the_build_on_copies():
-    """A read-only array (a broadcast view, a memory map opened for reading) is not a type the
+    """A read-only array (a broadcast view, an array its owner made read-only) is not a type the
     kernels are built for: numba compiled the kernel again for it at its first call (the
     Kalman update given a broadcast measurement, 17 s). A kernel does not write to an argument
     it is given read-only, so the build runs on a writeable C-ordered copy, and numba compiles

@@ -228,7 +228,7 @@ class Kernel:
     def _through_copies(self, args: tuple[Any, ...],
                         key: tuple[Any, ...]) -> Callable[..., Any] | None:
         """The build for writeable C-ordered copies of the read-only arrays among ``args`` (a
-        broadcast view, a memory map opened for reading), if there is one: numba would compile
+        broadcast view, an array its owner made read-only), if there is one: numba would compile
         the kernel again for their types, seconds at the first call (the Kalman update's, 17
         s), and a kernel does not write to an argument it is given read-only (numba refuses
         such code). None if no array is read-only or the copies' types have no build either."""
