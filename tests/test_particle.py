@@ -366,6 +366,39 @@ def test_the_step_before_the_first_measurement_is_not_used_on_either_path(model)
                                rtol=1e-9, atol=1e-10)
 
 
+def test_equal_and_unequal_steps_call_the_compiled_kernel_with_one_type(monkeypatch):
+    """numba compiles a kernel once for each distinct tuple of argument types. With every step
+    the same, the motion noise's root went to the compiled kernel as a broadcast view (read-only,
+    of no fixed layout), with unequal steps as a C array: two compilations of each model's
+    kernel (about 10 s each). Oracle: the types numba's dispatch reads (`_prebuilt._argument`)
+    of the two calls are one tuple, and the values are the root of each step's ``Q`` (1 x 1)."""
+    from vistrack import _prebuilt
+    from vistrack.filters import particle
+
+    motion, meas = vt.models.growth_model(q=0.5)
+    x0, P0 = np.array([0.1]), np.array([[5.0]])
+    made, calls = particle._fused_kernel, []
+
+    def spy(*key):
+        run = made(*key)
+
+        def record(*args):
+            calls.append(([_prebuilt._argument(a) for a in args], args[12].copy()))
+            return run(*args)
+
+        return record
+
+    monkeypatch.setattr(particle, "_fused_kernel", spy)
+    _, ys = vt.simulate.simulate(motion, meas, 6, x0=x0, rng=4)
+    steps = {"equal": np.ones(6), "unequal": np.array([1.0, 1.0, 0.5, 2.0, 1.0, 0.5])}
+    for dt in steps.values():
+        ParticleFilter(motion, meas, 50, rng=5, compiled=True).filter(ys, dt=dt, x0=x0, P0=P0)
+    assert len(calls) == 2 and calls[0][0] == calls[1][0]
+    for (_, S), dt in zip(calls, steps.values()):
+        want = [np.sqrt(motion.Q(v)) for v in np.concatenate([[dt[1]], dt[1:]])]  # (1 x 1)
+        np.testing.assert_array_equal(S, want)
+
+
 @pytest.mark.parametrize("compiled", [True, False])
 def test_both_paths_approach_the_kalman_filter_with_resampling(rng, compiled):
     """With noise and resampling (every step, and by ESS), each path's mean is the Kalman

@@ -1291,11 +1291,11 @@ class ParticleFilter:
         dts[0] = dts[1] if T > 1 else 1.0
         times = np.ascontiguousarray(times, dtype=float)
         fp = np.asarray(fparams(dts, times), dtype=float).reshape(T, -1)
-        if (dts == dts[0]).all():
-            S = np.broadcast_to(mo.Q_sqrt(float(dts[0])), (T, n, n))
-        else:
-            d, inv = np.unique(dts, return_inverse=True)
-            S = np.array([mo.Q_sqrt(float(v)) for v in d])[inv.ravel()]
+        # the square root of Q of each distinct step, gathered into a C array (T, n, n) even
+        # where every step is the same: a broadcast view there, read-only and of no fixed
+        # layout, was another type to numba, so each model's kernel was compiled twice
+        d, inv = np.unique(dts, return_inverse=True)
+        S = np.array([mo.Q_sqrt(float(v)) for v in d])[inv.ravel()]
         means, covs = np.empty((T, n)), np.empty((T, n, n))
         ess, resampled = np.empty(T), np.zeros(T, bool)
         logw, w = np.full(N, -math.log(N)), np.empty(N)
