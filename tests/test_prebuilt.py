@@ -62,6 +62,44 @@ def test_vistracks_commands_compile_nothing_on_a_first_run(tmp_path):
         assert parallel, (module, name)
 
 
+def test_the_seeds_linear_models_filter_and_smooth_without_numba_on_a_first_use(tmp_path):
+    """A user's first script with the seeds' models (a drifting point, constant velocity and
+    acceleration, periodic motion; 1-D and 2-D), each filtered and smoothed, waited 4-8 s for
+    numba to compile the one-series filter and the smoother of its state size. With empty
+    caches it now runs on the kernels built ahead of time: numba is never imported, so nothing
+    can have been compiled. The filter's answer is the closed form of the 1-D drifting point
+    (a scalar Kalman recursion written out)."""
+    script = textwrap.dedent("""
+        import sys
+        import numpy as np
+        import vistrack as vt
+        for kind, dim in ((vt.ConstantPosition, 1), (vt.ConstantPosition, 2),
+                          (vt.ConstantVelocity, 1), (vt.ConstantVelocity, 2),
+                          (vt.ConstantAcceleration, 1), (vt.ConstantAcceleration, 2),
+                          (vt.Periodic, 1), (vt.Periodic, 2)):
+            model, meas = kind(dim=dim), vt.Position(dim=dim, r=0.5)
+            x0 = np.zeros(model.F(1.0).shape[0])
+            _, ys = vt.simulate.simulate(model, meas, 20, x0=x0, rng=1)
+            vt.KalmanFilter(model, meas).smooth(ys)
+        ys = np.array([[1.0], [0.5], [2.0]])
+        means = vt.KalmanFilter(vt.ConstantPosition(dim=1, q=0.3),
+                                vt.Position(dim=1, r=0.5)).filter(ys, x0=[0.0], P0=[[2.0]]).means
+        print(repr(means.ravel().tolist()), "numba" in sys.modules)
+    """)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+               VISTRACK_CACHE_DIR=str(tmp_path / "kernels"))
+    out = subprocess.run([sys.executable, "-c", script], env=env, check=True,
+                         capture_output=True, text=True).stdout.strip().rsplit(" ", 1)
+    x, P, want = 0.0, 2.0, []
+    for t, y in enumerate((1.0, 0.5, 2.0)):
+        P += 0.3 * (t > 0)  # ConstantPosition's Q(1) = q; no prediction before the first
+        k = P / (P + 0.5)
+        x, P = x + k * (y - x), (1 - k) * P
+        want.append(x)
+    np.testing.assert_allclose(ast.literal_eval(out[0]), want, rtol=1e-14)
+    assert out[1] == "False"
+
+
 @pytest.mark.slow
 def test_each_build_equals_numbas_compilation_on_first_use(tmp_path):
     """Every kernel call of the workloads, repeated with the numba function itself: the same

@@ -3,8 +3,9 @@
 ``python -m vistrack._prebuilt_build record``
     runs what vistrack's commands run (the bundled clip tracked online and offline, the same
     detections as a MOTChallenge sequence, ``vistrack demo kalman``, a filter and a smoother on
-    a short series) and writes to ``_prebuilt.json`` every kernel wrapped by
-    :func:`vistrack._prebuilt.kernel` and the argument types it was compiled for.
+    a short series, the seeds' linear models in 1-D and 2-D) and writes to ``_prebuilt.json``
+    every kernel wrapped by :func:`vistrack._prebuilt.kernel` and the argument types it was
+    compiled for.
 ``python -m vistrack._prebuilt_build build [--inplace | --out FILE] [--jobs N] [--numba-cache DIR]``
     compiles them into the extension (``setup.py`` does this when pip installs vistrack;
     ``make`` when the sources changed), in parts compiled at once by processes of their own,
@@ -100,6 +101,17 @@ def _workloads(root: Path) -> None:
         kf = vt.KalmanFilter(cv, pos)
         kf.filter(ys, dt=np.ones(6))
         kf.smooth(ys, dt=np.ones(6))
+        # the seeds' linear models in one and two dimensions (drifting points, constant
+        # velocity, constant acceleration, periodic motion), filtered and smoothed as a user's
+        # first script does: compiled on first use, each state size took 4-8 s
+        for kind, dim in ((vt.ConstantPosition, 1), (vt.ConstantPosition, 2),
+                          (vt.ConstantVelocity, 1), (vt.ConstantAcceleration, 1),
+                          (vt.ConstantAcceleration, 2), (vt.Periodic, 1)):
+            model, meas = kind(dim=dim), vt.Position(dim=dim)
+            x0 = np.zeros(model.F(1.0).shape[0])
+            _, series = vt.simulate.simulate(model, meas, 5, x0=x0, rng=0)
+            vt.KalmanFilter(model, meas).filter(series)
+            vt.KalmanFilter(model, meas).smooth(series)
         # a batch whose series miss different steps: each its own covariances
         two = np.stack([ys, ys])
         two[1, 2, 0] = np.nan
