@@ -64,7 +64,7 @@ def test_vistracks_commands_compile_nothing_on_a_first_run(tmp_path):
 
 def test_the_seeds_linear_models_filter_and_smooth_without_numba_on_a_first_use(tmp_path):
     """A user's first script with the seeds' models (a drifting point, constant velocity and
-    acceleration, periodic motion; 1-D and 2-D), each filtered and smoothed, waited 4-8 s for
+    acceleration, periodic motion; 1-D and 2-D), each filtered and smoothed, waited up to 8 s for
     numba to compile the one-series filter and the smoother of its state size. With empty
     caches it now runs on the kernels built ahead of time: numba is never imported, so nothing
     can have been compiled. The filter's answer is the closed form of the 1-D drifting point
