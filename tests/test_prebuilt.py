@@ -78,8 +78,7 @@ def test_the_seeds_linear_models_filter_and_smooth_without_numba_on_a_first_use(
                           (vt.ConstantAcceleration, 1), (vt.ConstantAcceleration, 2),
                           (vt.Periodic, 1), (vt.Periodic, 2)):
             model, meas = kind(dim=dim), vt.Position(dim=dim, r=0.5)
-            x0 = np.zeros(model.F(1.0).shape[0])
-            _, ys = vt.simulate.simulate(model, meas, 20, x0=x0, rng=1)
+            _, ys = vt.simulate.simulate(model, meas, 20, x0=np.zeros(model.ndim_state), rng=1)
             vt.KalmanFilter(model, meas).smooth(ys)
         ys = np.array([[1.0], [0.5], [2.0]])
         means = vt.KalmanFilter(vt.ConstantPosition(dim=1, q=0.3),

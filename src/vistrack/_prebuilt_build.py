@@ -102,15 +102,15 @@ def _workloads(root: Path) -> None:
         kf.filter(ys, dt=np.ones(6))
         kf.smooth(ys, dt=np.ones(6))
         # the seeds' linear models in one and two dimensions (drifting points, constant
-        # velocity, constant acceleration, periodic motion), filtered and smoothed as a user's
-        # first script does: compiled on first use, each state size took 4-8 s
+        # velocity, constant acceleration, periodic motion), smoothed (the smoother runs the
+        # filter's kernel with the filter's types): compiled on first use, each state size took
+        # up to 8 s
         for kind, dim in ((vt.ConstantPosition, 1), (vt.ConstantPosition, 2),
                           (vt.ConstantVelocity, 1), (vt.ConstantAcceleration, 1),
                           (vt.ConstantAcceleration, 2), (vt.Periodic, 1)):
             model, meas = kind(dim=dim), vt.Position(dim=dim)
-            x0 = np.zeros(model.F(1.0).shape[0])
-            _, series = vt.simulate.simulate(model, meas, 5, x0=x0, rng=0)
-            vt.KalmanFilter(model, meas).filter(series)
+            _, series = vt.simulate.simulate(model, meas, 5, x0=np.zeros(model.ndim_state),
+                                             rng=0)
             vt.KalmanFilter(model, meas).smooth(series)
         # a batch whose series miss different steps: each its own covariances
         two = np.stack([ys, ys])
