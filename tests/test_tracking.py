@@ -1598,3 +1598,66 @@ def test_step_refuses_detections_changed_after_they_were_made(change, message, c
     assert tr.frame is None
     ok = Detections.from_xywh(np.array([[10.0, 10.0, 20.0, 20.0]]), [0.9])
     assert tr.step(1, ok) is not None and tr.frame == 1
+
+
+@pytest.mark.parametrize("offset", [10**15, 2**52, 2**62])
+def test_frame_numbers_far_from_1_give_the_same_tracks(offset):
+    """Times were ``frame / frame_rate``: from frame 1e15 on their rounding passed the
+    lifecycle's margin, so a track coasted 5 or 6 frames for 3 (0.1 s at 30 frames/s) and a
+    track lost longer than ``max_lost`` was kept. Times now count from the first frame
+    stepped. Oracle: the same detections numbered from 1 (only differences of frame numbers
+    are time), on every tracker with a lifecycle in seconds and on a real sequence."""
+    from vistrack.tracking import PointTracker
+    from vistrack.tracking.dcpf import DetectorConfidencePF
+    from vistrack.types import Frame
+
+    one = Detections.from_xywh([[100, 100, 30, 60]], [0.9])
+    none = Detections(boxes=np.zeros((0, 4)))
+
+    def box_run(start, **kw):
+        tr = BoxTracker(frame_rate=30, camera_motion=False, **kw)
+        return [(o.ids.tolist(), o.boxes.tolist(), len(tr.tracks)) for o in
+                (tr.step(start + f, one if f <= 60 else none) for f in range(70))]
+
+    coasting, lost = box_run(1, coast_time=0.1), box_run(1, coast_time=0.0, max_lost=0.1)
+    assert box_run(offset, coast_time=0.1) == coasting
+    assert box_run(offset, coast_time=0.0, max_lost=0.1) == lost
+    # the rules at 30 frames/s (the last detection in frame 61): reported 3 frames after it
+    # (0.1 s), and kept lost 3 frames, deleted at the 4th
+    assert [len(ids) for ids, _, _ in coasting[61:66]] == [1, 1, 1, 0, 0]
+    assert [n for _, _, n in lost[61:66]] == [1, 1, 1, 0, 0]
+
+    def point_run(start):
+        tr = PointTracker(frame_rate=30, max_lost=0.1)
+        pts = lambda f: Detections(points=[[10.0 + f, 5.0]] if f <= 20 else np.zeros((0, 2)))
+        return [(o.ids.tolist(), len(tr.tracks)) for o in
+                (tr.step(start + f, pts(f)) for f in range(30))]
+
+    assert point_run(offset) == point_run(1)
+
+    def dcpf_run(start):
+        im = np.full((240, 320, 3), 128, np.uint8)
+        tr = DetectorConfidencePF(rng=0, gamma=0.0, eta=0.0, frame_rate=7, max_lost=0.5)
+        det = lambda f: Detections.from_xywh([[40 + 3 * f, 60, 24, 60]], [0.9]) if f <= 10 \
+            else Detections(boxes=np.zeros((0, 4)))
+        return [(o.ids.tolist(), np.round(o.xywh, 6).tolist(), len(tr.ids)) for o in
+                (tr.step(Frame(start + f, 0.0, im), det(f)) for f in range(16))]
+
+    assert dcpf_run(offset) == dcpf_run(1)
+
+
+def test_a_real_sequence_numbered_from_2_to_52_gives_the_same_tracks():
+    """The compiled box tracker on 150 frames of a real sequence, its frames numbered from
+    2**52 (``read_mot`` takes frame numbers below 2**53): the tracks numbered from 1."""
+    det = read_mot(seq_dir("MOT17", "MOT17-09-FRCNN") / "det" / "det.txt")
+    slices = det.frame_slices()[:150]
+
+    def run(start):
+        tr = BoxTracker(frame_rate=30)
+        out = []
+        for f, s in enumerate(slices):
+            o = tr.step(start + f, Detections.from_xywh(det.boxes[s], det.conf[s]))
+            out.append((o.ids.tolist(), o.boxes.tolist()))
+        return out
+
+    assert run(2**52) == run(1)

@@ -674,6 +674,11 @@ class BoxTracker:
                            and not isinstance(self.calibration, ScoreCalibration) else None)
         self.tracks.reset()
         self.frame: int | None = None
+        # the frame before the first stepped: times count from it, exact at any frame number
+        # (from frame 1e15 on, frame / frame_rate rounded by more than time_slack's margin,
+        # and coasting and max_lost counted other frames); frames from 1 keep frame /
+        # frame_rate, bit for bit
+        self._origin = 0
         self._passed = 0  # frames passed over since the last step (pass_over)
         self.history: list = []
         self._q, self._r = np.zeros((0, 8)), np.zeros((0, 4))
@@ -1212,8 +1217,10 @@ class BoxTracker:
         step = 1 if last is None else frame - last
         self._passed = 0
         dt = 0.0 if self.frame is None else float(frame - self.frame)
+        if self.frame is None:
+            self._origin = frame - 1
         self.frame = frame
-        time = frame / self.frame_rate
+        time = (frame - self._origin) / self.frame_rate
         self._observe(detections, step)
         ds = self.confidence(raw, dc)
         high = ds >= cfg.high
@@ -1223,7 +1230,7 @@ class BoxTracker:
             # through them would have deleted, lost longer than max_lost at the frame before
             # this one, are deleted before they can take a detection (one last seen 3 s
             # before was found again, max_lost 2 s)
-            gone = t.stale((frame - 1) / self.frame_rate, cfg.max_lost)
+            gone = t.stale((frame - 1 - self._origin) / self.frame_rate, cfg.max_lost)
             if gone.any():
                 t.keep(~gone)
                 self._offsets = self._offsets[~gone]

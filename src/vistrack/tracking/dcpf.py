@@ -421,6 +421,7 @@ class DetectorConfidencePF:
         self.weights_clf = np.zeros((0, 0))
         self.frame = 0
         self._stepped = False  # (frame 0 stepped read as no frame: it could be stepped again)
+        self._origin = 0  # the frame before the first stepped: times count from it (BoxTracker's)
         self._said_unsized = False
         # the detections' scores seen, against init_score (a run can say why nothing started)
         self.n_scored = 0
@@ -522,14 +523,17 @@ class DetectorConfidencePF:
         # frames since the last one stepped (a gap of frames moves the targets as far)
         k = 1 if _index is None else max(1, _index - self.frame)
         self.frame = self.frame + 1 if _index is None else _index
+        if not self._stepped:
+            self._origin = self.frame - 1
         self._stepped = True
-        time = self.frame / self.frame_rate
+        time = (self.frame - self._origin) / self.frame_rate
         if k > 1 and len(self.ids):
             # frames left out (images skipped): the targets that stepping through them would
             # have ended, unsupported for longer than max_lost at the frame before this one,
             # end before they can take a detection (found in the frame after a gap of 1.8 s,
             # max_lost 1.5 s, a target kept its identity), as the box tracker's do
-            gone = self.tracks.stale((self.frame - 1) / self.frame_rate, cfg.max_lost)
+            gone = self.tracks.stale((self.frame - 1 - self._origin) / self.frame_rate,
+                                     cfg.max_lost)
             if gone.any():
                 self._select(~gone)
         img = np.asarray(image)

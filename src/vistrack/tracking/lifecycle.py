@@ -89,7 +89,9 @@ class TrackTable:
     streak : (K,) int64 ndarray
         The length of the last run of updates in a row, kept while the track is lost.
     first_time, last_time : (K,) float ndarray
-        Time of the first and of the last update (seconds).
+        Time of the first and of the last update (seconds; the package's trackers count
+        it from the frame before their first, so that it keeps its digits at any frame
+        number: frame ``f`` of a run from frame 1 at ``f / frame_rate``).
     found : (K,) float ndarray
         The share of its recent frames the track was updated in: the mean of its updates (1)
         and misses (0), each frame weighing the time since the frame before it (or since

@@ -326,6 +326,7 @@ class PointTracker:
         self.tracks.reset()
         self.existence = np.zeros(0)
         self.frame: int | None = None
+        self._origin = 0  # the frame before the first stepped: times count from it (BoxTracker's)
 
     def _initial(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         n, m = self.tracks.n, self.m
@@ -434,14 +435,16 @@ class PointTracker:
         first = self.frame is None
         gap = 0 if self.frame is None else frame - self.frame
         dt = gap / self.frame_rate
+        if first:
+            self._origin = frame - 1
         self.frame = frame
-        time = frame / self.frame_rate
+        time = (frame - self._origin) / self.frame_rate
         t = self.tracks
         if gap > 1 and len(t):
             # frames not stepped: the tracks that stepping them (without detections) would have
             # deleted, lost longer than max_lost at the frame before, are deleted before they
             # can take a detection (as BoxTracker.step does)
-            gone = t.stale((frame - 1) / self.frame_rate, self.max_lost)
+            gone = t.stale((frame - 1 - self._origin) / self.frame_rate, self.max_lost)
             if gone.any():
                 t.keep(~gone)
                 self.existence = self.existence[~gone]
