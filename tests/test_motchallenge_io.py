@@ -708,3 +708,55 @@ def test_the_second_reading_of_the_track_files(tmp_path):
             b.write(Frame(index, 0.0), box)
         assert len(b.boxes) == 1
         b.abort()
+
+
+def test_a_folder_or_a_file_above_the_output_is_named_before_anything_is_written(tmp_path):
+    """``write_mot`` given a folder told the caller to pass ``force=True``; with it, the whole
+    file was written and the rename failed naming the partial file
+    (``'.nd.00436f4e82.partial' -> 'nd'``); under a file, ``force=True`` raised the
+    ``FileExistsError`` that means "exists, without force". The writers that take no
+    ``force`` (``to_csv``, ``MOTWriter``, ``write_boxes``) failed the same way. Oracle: the
+    messages ``check_output`` gives the command line's ``--out``, with the argument's name,
+    and no file left behind."""
+    from vistrack.io.tracks import CSVWriter, MOTWriter, write_boxes
+
+    folder = tmp_path / "nd"
+    folder.mkdir()
+    (tmp_path / "f.txt").write_text("")
+    under = tmp_path / "f.txt" / "y.txt"
+    row = ([1], [1], [[0, 0, 1, 1]])
+    for force in (False, True):
+        with pytest.raises(IsADirectoryError, match=re.escape(
+                f"path {folder} is a folder, not a file")):
+            write_mot(folder, *row, force=force)
+        with pytest.raises(NotADirectoryError, match=re.escape(
+                f"path {under}: {tmp_path / 'f.txt'} is a file, not a folder")):
+            write_mot(under, *row, force=force)
+        with pytest.raises(IsADirectoryError, match=re.escape(f"{folder} is a folder")):
+            write_boxes(folder, [[1.0, 2.0, 3.0, 4.0]], force=force)
+    table = MOTTable.from_rows([(1, 1, 0, 0, 10, 20)])
+    for call in (table.to_csv, MOTWriter, CSVWriter):
+        with pytest.raises(IsADirectoryError, match=re.escape(f"{folder} is a folder, not a "
+                                                              "file")):
+            call(folder)
+        with pytest.raises(NotADirectoryError, match=re.escape(
+                f"{under}: {tmp_path / 'f.txt'} is a file, not a folder")):
+            call(under)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.txt", "nd"]
+    assert list(folder.iterdir()) == []
+
+
+def test_frame_slices_name_a_length_that_would_leave_rows_out():
+    """``frame_slices(2)`` of a table with rows in frame 3 left them in no slice, unsaid;
+    2.7 was cut to 2, -1 gave no frame and the text '3' was read. Oracle: ``evaluate_mot``'s
+    own check of its ``n_frames``."""
+    t = MOTTable.from_rows([(1, 1, 0, 0, 10, 20), (3, 1, 5, 5, 10, 20), (3, 2, 1, 1, 3, 3)])
+    with pytest.raises(ValueError, match=re.escape(
+            "MOTTable: frame 3 is beyond n_frames = 2 (2 rows past it)")):
+        t.frame_slices(2)
+    for bad, error in ((2.7, ValueError), (-1, ValueError), (float("nan"), ValueError),
+                       ("3", TypeError), (True, ValueError)):
+        with pytest.raises(error, match="n_frames must be"):
+            t.frame_slices(bad)
+    assert [len(t.ids[s]) for s in t.frame_slices(3.0)] == [1, 0, 2]
+    assert len(MOTTable.from_rows(np.zeros((0, 6))).frame_slices(0)) == 0

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from vistrack.cli import main
 from vistrack.io import PartialFile, box_decimals, partial_path, replacing, write_mot
 from vistrack.io.motchallenge import _write_sorted
 from vistrack.io.tracks import BoxesWriter, CSVWriter, MOTWriter, TrackRows, write_boxes
@@ -263,9 +264,11 @@ def test_a_sink_that_fails_to_close_aborts_the_sinks_after_it(tmp_path):
 
 
 def test_a_partial_file_that_cannot_be_renamed_is_removed(tmp_path):
-    (tmp_path / "t.txt").mkdir()  # the final name is taken by a folder
     f = PartialFile(tmp_path / "t.txt")
     f.write("rows\n")
+    # the final name taken by a folder after the file was opened (a folder there before is
+    # refused when it is made: test_motchallenge_io)
+    (tmp_path / "t.txt").mkdir()
     with pytest.raises(OSError):
         f.commit()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.txt"]
@@ -280,9 +283,10 @@ def test_replacing_removes_its_partial_file_when_the_rename_fails(tmp_path):
     with pytest.raises(OSError):
         write_mot(tmp_path / "res.txt", [1], [1], [[0, 0, 1, 1]], force=True)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["res.txt"]
-    with pytest.raises(OSError), replacing(tmp_path / "res.txt") as part:
+    with pytest.raises(OSError), replacing(tmp_path / "new.txt") as part:
         part.write_text("rows")
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["res.txt"]
+        (tmp_path / "new.txt").mkdir()  # taken by a folder while written
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["new.txt", "res.txt"]
 
 
 def test_two_writers_of_one_path_each_write_their_own_partial_file(tmp_path):
@@ -950,3 +954,58 @@ def test_the_sinks_name_a_frame_that_is_no_whole_number_and_points_they_cannot_w
     b.write(Frame(6, 0.0), box)  # the refused frame 4 is not its first
     assert len(b.boxes) == 1
     b.abort()
+
+
+def _under_size_limit(tmp_path, limit, argv):
+    """``vistrack`` run in a child process whose files may not grow past ``limit`` bytes
+    (RLIMIT_FSIZE, as a full disk): its status and stderr."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "limited.py"
+    script.write_text(
+        "import resource, sys\n"
+        f"resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, resource.RLIM_INFINITY))\n"
+        "from vistrack.cli import main\n"
+        "sys.exit(main(sys.argv[1:]))\n")
+    r = subprocess.run([sys.executable, str(script), *map(str, argv)], capture_output=True,
+                       text=True, cwd=tmp_path)
+    return r.returncode, r.stderr
+
+
+def test_a_refused_write_of_offline_tracks_or_of_plots_names_the_output(tmp_path):
+    """The offline mode's tracks (written sorted, through one buffered file) and `eval`'s
+    plots met a full disk as "[Errno 27] File too large", no file named, where the online
+    tracks said "res.txt: File too large"; and the plots were renamed one by one, so a
+    failure at the second left the first under its final name, in a folder the run had
+    made. Oracle: the operating system's limit on a file's size (RLIMIT_FSIZE) in a child
+    process; the folder's listing before and after."""
+    box = lambda f, k: f"{10 + 40 * k + f},{20 + k},30,60"
+    det = tmp_path / "det.txt"
+    det.write_text("".join(f"{f},-1,{box(f, k)},0.9\n" for f in range(1, 301)
+                           for k in range(1, 9)))
+    (tmp_path / "res.txt").write_text("earlier\n")
+    status, err = _under_size_limit(tmp_path, 20_000, [
+        "track", det, "--fps", "25", "--offline", "--out", "res.txt", "--force"])
+    assert status == 2 and err.strip() == "vistrack track: error: res.txt: File too large"
+    assert (tmp_path / "res.txt").read_text() == "earlier\n"
+    # eval's plots under a limit between their sizes: the smaller fits, the larger does not
+    # (here the timeline, written second: the HOTA plot is written whole first)
+    gt, pred = tmp_path / "gt.txt", tmp_path / "pred.txt"
+    gt.write_text("".join(f"{f},{k},{box(f, k)},1,1,1\n" for f in range(1, 301)
+                          for k in range(1, 9)))
+    # an identity switch every 3 frames, and misses: a timeline of many colours
+    pred.write_text("".join(f"{f},{k + 8 * (f // 3)},{box(f, k)},1,-1,-1,-1\n"
+                            for f in range(1, 301) for k in range(1, 9) if (f * k) % 7))
+    assert main(["eval", "--gt", str(gt), "--pred", str(pred), "--plots",
+                 str(tmp_path / "sizes")]) == 0
+    sizes = sorted((p.stat().st_size, p.name) for p in (tmp_path / "sizes").iterdir())
+    assert len(sizes) == 2 and sizes[0][0] < sizes[1][0], sizes
+    before = sorted(p.name for p in tmp_path.iterdir())
+    status, err = _under_size_limit(tmp_path, (sizes[0][0] + sizes[1][0]) // 2, [
+        "eval", "--gt", gt, "--pred", pred, "--plots", tmp_path / "plq"])
+    last = err.strip().splitlines()[-1]
+    assert status == 2 and re.fullmatch(
+        rf"vistrack eval: error: {re.escape(str(tmp_path / 'plq'))}/\S+\.png: File too large",
+        last), err
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # no plq/, no plot

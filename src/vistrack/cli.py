@@ -1528,12 +1528,14 @@ def _eval(args: argparse.Namespace) -> int:
     sys.stdout.flush()
     if plots:
         from .evaluation.files import pair_matches
-        from .io.atomic import made_folder, replacing
+        from .io.atomic import made_folder, replacing, together
         from .viz.plots import plot_hota_alpha, plot_timeline
 
         written = plots[:1] + [path for pair, path in zip(pairs, plots[1:])
                                if pair[0] not in res.errors]
-        with made_folder(plots[0].parent):
+        # the plots as one set, as a run's outputs: one that failed (a full disk) left the
+        # plots written before it under their final names, in a folder the run had made
+        with made_folder(plots[0].parent), together():
             with replacing(plots[0]) as part:
                 plot_hota_alpha(res, part, zero_distance=zero)
             for pair, path in zip(pairs, plots[1:]):

@@ -15,7 +15,8 @@ from pathlib import Path
 from typing import IO, Any
 
 __all__ = ["partial_path", "replacing", "open_replacing", "PartialFile", "check_output",
-           "check_not_input", "Input", "made_folder", "together", "remove_on_commit", "staging"]
+           "check_place", "check_not_input", "Input", "made_folder", "together",
+           "remove_on_commit", "staging"]
 
 
 _NAME_MAX = 255
@@ -365,10 +366,14 @@ def replacing(path: str | os.PathLike) -> Iterator[Path]:
     ('earlier', ['a.txt'])
     """
     p = Path(path)
+    check_place(p)
     part = partial_path(p)
     made = _make_folder(p.parent)
     try:
-        yield part
+        # a buffered write's error (a full disk) names the file, as PartialFile's do: it
+        # reached the command line as "[Errno 28] No space left on device", no file named
+        with _naming(part):
+            yield part
         commit_partial(part, p)  # (failing, as over a folder: the partial file removed too)
     except BaseException:
         part.unlink(missing_ok=True)
@@ -417,6 +422,7 @@ class PartialFile:
 
     def __init__(self, path: str | os.PathLike) -> None:
         self.path = Path(path)
+        check_place(self.path)
         self.part = partial_path(self.path)
         self._fh: IO[str] | None = None
         self._ended = False  # committed or given up
@@ -548,17 +554,7 @@ def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "o
     NotADirectoryError: --out-dir .../f is a file, not a folder
     """
     p = Path(path)
-    if folder:
-        if p.exists() and not p.is_dir():
-            raise NotADirectoryError(f"{name} {p} is a file, not a folder")
-    elif p.is_dir():
-        raise IsADirectoryError(f"{name} {p} is a folder, not a file")
-    # the nearest existing folder at or above where the file is written
-    here = p if folder else p.parent
-    while not here.exists() and here != here.parent:
-        here = here.parent
-    if here.exists() and not here.is_dir():
-        raise NotADirectoryError(f"{name} {p}: {here} is a file, not a folder")
+    here = check_place(p, name=name, folder=folder)
     if not os.access(here, os.W_OK | os.X_OK):
         why = "no permission"
         try:  # access() fails on a read-only mount too, whatever the permissions say
@@ -580,6 +576,54 @@ def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "o
     if not folder and p.exists() and not force:
         raise FileExistsError(f"{name} {p} exists; pass {option or force_option(name)} to "
                               "overwrite it")
+
+
+def check_place(path: str | os.PathLike, *, name: str | None = None,
+                folder: bool = False) -> Path:
+    """Raise if ``path`` cannot be where a file (with ``folder``, a folder) is written: it is
+    an existing folder (file), or a folder above it is a file. Returns the nearest existing
+    folder at or above where the file is written. ``name``, where given, names the argument
+    before the path in the messages. Nothing is made or written (:func:`check_output` checks
+    besides that the folder can be written in and what exists).
+
+    Every writer checks this before its work (:func:`replacing`, :class:`PartialFile`):
+    a folder given as the file was found only at the rename, after the whole file was
+    written, in words naming the partial file (``Is a directory: '.nd.00436f4e82.partial'
+    -> 'nd'``), and a file above the path as ``[Errno 17] File exists``.
+
+    Raises
+    ------
+    IsADirectoryError
+        If ``path`` is to be a file and is an existing folder.
+    NotADirectoryError
+        If ``path`` is to be a folder and is an existing file, or a folder above it is a
+        file.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> tmp = Path(tempfile.mkdtemp())
+    >>> check_place(tmp / "new" / "a.txt") == tmp
+    True
+    >>> check_place(tmp)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    IsADirectoryError: ... is a folder, not a file
+    """
+    p = Path(path)
+    label = f"{name} {p}" if name else str(p)
+    if folder:
+        if p.exists() and not p.is_dir():
+            raise NotADirectoryError(f"{label} is a file, not a folder")
+    elif p.is_dir():
+        raise IsADirectoryError(f"{label} is a folder, not a file")
+    # the nearest existing folder at or above where the file is written
+    here = p if folder else p.parent
+    while not here.exists() and here != here.parent:
+        here = here.parent
+    if here.exists() and not here.is_dir():
+        raise NotADirectoryError(f"{label}: {here} is a file, not a folder")
+    return here
 
 
 def force_option(name: str) -> str:

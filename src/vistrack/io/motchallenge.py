@@ -39,8 +39,8 @@ from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
-from .._validate import as_finite, as_float_array, decode_text
-from .atomic import replacing
+from .._validate import as_finite, as_float_array, as_whole, decode_text
+from .atomic import check_output, replacing
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -464,6 +464,8 @@ class MOTTable:
         ------
         ImportError
             If pandas or pyarrow is missing, saying what to install.
+        IsADirectoryError, NotADirectoryError
+            If ``path`` is a folder, or a folder above it is a file (before writing).
         """
         need_parquet()
         df = self.to_pandas()
@@ -480,6 +482,8 @@ class MOTTable:
         ------
         ImportError
             If pandas is missing.
+        IsADirectoryError, NotADirectoryError
+            If ``path`` is a folder, or a folder above it is a file (before writing).
         """
         df = self.to_pandas()
         # the centre, derived from the box, to 15 digits: 1283.7, not the 1283.6999999999998
@@ -733,7 +737,8 @@ class MOTTable:
         Raises
         ------
         ValueError
-            If the rows are not sorted by frame.
+            If the rows are not sorted by frame, ``n_frames`` is not a whole number of 0 or
+            more, or rows lie past it (their frames were in no slice, unsaid).
 
         Examples
         --------
@@ -741,12 +746,25 @@ class MOTTable:
         ...                         (3, 2, 1, 1, 3, 3)])
         >>> [len(t.ids[s]) for s in t.frame_slices(4)]
         [1, 0, 2, 0]
+        >>> t.frame_slices(2)
+        Traceback (most recent call last):
+        ...
+        ValueError: MOTTable: frame 3 is beyond n_frames = 2 (2 rows past it)
         """
+        name = self.path or "MOTTable"
         if len(self) > 1 and np.any(np.diff(self.frames) < 0):
-            raise ValueError(f"{self.path or 'MOTTable'}: rows must be sorted by frame "
-                             f"(read_mot sorts them)")
+            raise ValueError(f"{name}: rows must be sorted by frame (read_mot sorts them)")
         last = int(self.frames.max()) if len(self) else 0
-        return FrameSlices(self.frames, last if n_frames is None else int(n_frames))
+        if n_frames is None:
+            return FrameSlices(self.frames, last)
+        # (2.7 was cut to 2, -1 gave no frame, text was read, and the rows past n_frames
+        # were in no slice)
+        n = as_whole(n_frames, "n_frames", 0)
+        if last > n:
+            past = len(self) - int(np.searchsorted(self.frames, n, side="right"))
+            raise ValueError(f"{name}: frame {last} is beyond n_frames = {n} ({past} "
+                             f"row{'s' * (past != 1)} past it)")
+        return FrameSlices(self.frames, n)
 
 
 class FrameSlices(Sequence[slice]):
@@ -1341,6 +1359,9 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
     ------
     FileExistsError
         If ``path`` exists and ``force`` is False.
+    IsADirectoryError, NotADirectoryError, PermissionError
+        Before anything is written: if ``path`` is a folder, a folder above it is a file,
+        or its folder cannot be written in (:func:`~vistrack.io.atomic.check_output`).
     ValueError
         If ``decimals`` is not an integer in 0-12, the columns differ in length, or a row is
         one :func:`read_mot` would refuse: a
@@ -1360,8 +1381,9 @@ def write_mot(path: str | os.PathLike, frames: ArrayLike, ids: ArrayLike, boxes:
     2,1,0.00,0.00,10.00,20.00,0.9,-1,-1,-1
     """
     path = Path(path)
-    if path.exists() and not force:
-        raise FileExistsError(f"{path} exists; pass force=True to overwrite it")
+    # a folder, or a file above it, was found at the rename after the whole file was
+    # written (and a folder was told to pass force=True)
+    check_output(path, force=force, name="path")
     _check_decimals(decimals)
     f, i = _integers(frames, "frames"), _integers(ids, "ids")
     # (ragged boxes, or a conf of text, failed in numpy's words, naming neither)

@@ -23,7 +23,7 @@ import numpy as np
 
 from .._validate import as_float_array
 from ..types import Frame, Tracks
-from .atomic import PartialFile, open_replacing
+from .atomic import PartialFile, check_output, open_replacing
 from .motchallenge import _ROW as _MOT_ROW
 from .motchallenge import (
     MOTTable,
@@ -767,6 +767,9 @@ def write_boxes(path: str | os.PathLike, boxes: ArrayLike, *, force: bool = Fals
     ------
     FileExistsError
         If ``path`` exists and ``force`` is False.
+    IsADirectoryError, NotADirectoryError, PermissionError
+        Before anything is written: if ``path`` is a folder, a folder above it is a file,
+        or its folder cannot be written in (:func:`~vistrack.io.atomic.check_output`).
     ValueError
         If ``boxes`` is not ``(T, 4)`` (a VOT polygon's ``(T, 8)`` corners, or ``(T, 2)``
         centres, were written as other boxes).
@@ -784,8 +787,9 @@ def write_boxes(path: str | os.PathLike, boxes: ArrayLike, *, force: bool = Fals
     if b.ndim != 2 or b.shape[1] != 4:
         raise ValueError(f"boxes must be (T, 4), x, y, w, h in each frame; got shape "
                          f"{b.shape}")
-    if path.exists() and not force:
-        raise FileExistsError(f"{path} exists; pass force=True to overwrite it")
+    # a folder, or a file above it, was found at the rename after the whole file was
+    # written (and a folder was told to pass force=True)
+    check_output(path, force=force, name="path")
     with open_replacing(path) as fh:
         for k, (x, y, w, h) in enumerate(b, start=1):
             fh.write(f"{k},{x:.2f},{y:.2f},{w:.2f},{h:.2f}\n")
