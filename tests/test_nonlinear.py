@@ -1084,6 +1084,7 @@ def test_the_unscented_and_ensemble_filters_name_what_they_cannot_use():
     failed in numpy's words; a state of the wrong size met numpy's matmul error; an IMM
     member without a motion model failed on the attribute."""
     from vistrack.filters import (
+        EnsembleKalmanFilter,
         IMMFilter,
         JulierSigmaPoints,
         KalmanFilter,
@@ -1137,6 +1138,14 @@ def test_the_unscented_and_ensemble_filters_name_what_they_cannot_use():
             "filters[1] must have predict(g, dt, t), update(g, y) and a motion model "
             "(.motion.ndim_state); got NoMotion")):
         IMMFilter([kf, NoMotion()], [[0.9, 0.1], [0.1, 0.9]])
+    # an EnKF has both steps and a motion model, but its steps take ensembles: it was
+    # taken, and filter() failed on "ens must be a vistrack.filters.Ensemble", an argument
+    # the caller never gave
+    enkf = EnsembleKalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1), rng=0)
+    with pytest.raises(TypeError, match=re.escape(
+            "filters[0] is an EnsembleKalmanFilter, whose steps take and give ensembles; "
+            "IMMFilter mixes Gaussians")):
+        IMMFilter([enkf, kf], [[0.9, 0.1], [0.1, 0.9]])
 
 
 def test_the_nonlinear_filters_refuse_a_motion_q_that_is_no_covariance():

@@ -148,6 +148,16 @@ def test_run_feeds_sinks_and_writes_nothing_from_a_failed_run(tmp_path):
         run(frames, None, BoxTracker(), [object()])
     with pytest.raises(TypeError, match="tracker must have step"):
         run(frames, None, object())
+    # a source of no frames failed in Python's words ("'int' object is not iterable"), and
+    # one giving images (or indices) on "has no attribute 'index'"
+    with pytest.raises(TypeError, match=re.escape(
+            "source must be an iterable of Frame (a VideoReader, a list of Frame); got int")):
+        run(5, None, BoxTracker())
+    with pytest.raises(TypeError, match=re.escape(
+            "source must give Frame objects; its frame 3 is a ndarray")):
+        run([*frames[:2], np.zeros((4, 4)), *frames[2:]], None, BoxTracker(),
+            [MOTWriter(tmp_path / "part.txt")])
+    assert not (tmp_path / "part.txt").exists()
 
 
 def test_registries_list_the_valid_names():

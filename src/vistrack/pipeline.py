@@ -585,6 +585,13 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
     LoopStats
         The frames and the seconds of each stage.
 
+    Raises
+    ------
+    TypeError
+        Before any frame: if ``source`` is not iterable, or ``tracker``, a sink or
+        ``progress`` is not of the kind described; at a frame: if ``source`` gives one that
+        is not a :class:`~vistrack.types.Frame`, or the tracker returns no ``Tracks``.
+
     Notes
     -----
     Every 10 s of a run, and once more at the end of one that lasted that long, the memory
@@ -605,6 +612,11 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
     ([1, 2, 3], [1, 1, 1])
     """
     detect = as_detector(detector)
+    try:
+        frames = iter(source)
+    except TypeError:  # ("'int' object is not iterable", naming no argument)
+        raise TypeError(f"source must be an iterable of Frame (a VideoReader, a list of "
+                        f"Frame); got {type(source).__name__}") from None
     if not callable(getattr(tracker, "step", None)):
         raise TypeError(f"tracker must have step(frame, detections) -> Tracks; got "
                         f"{type(tracker).__name__}")
@@ -622,7 +634,11 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
     release = PeriodicRelease()  # freed frame buffers back to the system, on long runs
     t0, c0 = time.perf_counter(), _compile.seconds()
     try:
-        for frame in source:
+        for frame in frames:
+            if not isinstance(frame, Frame):
+                # (an image or an index failed on "has no attribute 'index'")
+                raise TypeError(f"source must give Frame objects; its frame {n + 1} is a "
+                                f"{type(frame).__name__}")
             t1, c1 = time.perf_counter(), _compile.seconds()
             sec["decode"] += (t1 - t0) - (c1 - c0)
             try:

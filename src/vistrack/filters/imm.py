@@ -203,7 +203,8 @@ class IMMFilter:
     Raises
     ------
     TypeError
-        If a member lacks ``predict``, ``update`` or a motion model (``motion``).
+        If a member lacks ``predict``, ``update`` or a motion model (``motion``), or is an
+        :class:`~vistrack.filters.EnsembleKalmanFilter` (its steps take ensembles).
     ValueError
         If there are no members, ``transition`` is not a finite non-negative ``(M, M)``
         matrix with rows summing to one, or ``mode_probs`` is not ``M`` finite non-negative
@@ -278,6 +279,8 @@ class IMMFilter:
 
     def __init__(self, filters: Sequence[GaussianFilter], transition: ArrayLike, *,
                  mode_probs: ArrayLike | None = None):
+        from .enkf import EnsembleKalmanFilter
+
         self.filters = list(filters)
         M = len(self.filters)
         if M < 1:
@@ -288,6 +291,13 @@ class IMMFilter:
                 # (one without a motion model failed on the attribute, after every check)
                 raise TypeError(f"filters[{k}] must have predict(g, dt, t), update(g, y) and a "
                                 f"motion model (.motion.ndim_state); got {type(f).__name__}")
+            if isinstance(f, EnsembleKalmanFilter):
+                # (taken, and refused in filter() as "ens must be a vistrack.filters.Ensemble",
+                # an argument the caller never gave)
+                raise TypeError(f"filters[{k}] is an EnsembleKalmanFilter, whose steps take "
+                                "and give ensembles; IMMFilter mixes Gaussians: give its modes "
+                                "as KalmanFilter, ExtendedKalmanFilter or "
+                                "UnscentedKalmanFilter")
         Pi, mu = as_markov_chain(transition, mode_probs, M)
         with np.errstate(divide="ignore"):
             self.log_transition, self.log_mu0 = np.log(Pi), np.log(mu)
