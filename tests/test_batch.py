@@ -1074,6 +1074,15 @@ def test_a_batch_stopped_early_on_a_terminal_clears_its_progress_bar(
     assert term.getvalue().endswith("\r\x1b[K")  # the bar's line cleared
     out = capsys.readouterr().out
     assert out.startswith("input ") and "not run" in out
+    # the numbers end where their headers do ("not run", 7 wide in a column of 6, moved
+    # its row's numbers one to the right)
+    lines = out.splitlines()
+    header, rows = lines[0], lines[1:4]
+    want = [header.index(h) + len(h) for h in ("frames", "tracks", "seconds")]
+    for row in rows:
+        m = re.search(r" (\d+) +(\d+) +(\d+\.\d) ", row)
+        assert m and [m.end(k) for k in (1, 2, 3)] == want, (header, row)
+    assert sum("not run" in row for row in rows) == 1
 
 
 def test_each_inputs_run_json_keeps_the_commands_warnings(tmp_path, capsys):

@@ -524,6 +524,9 @@ def _track(args: argparse.Namespace) -> int:
             run = track_sequence(args.input, args.out, detections=args.detections,
                                  columns=columns, config=cfg, fps=args.fps, force=args.force,
                                  progress=progress)
+            # the outputs are in place: an interrupt from here on said "earlier outputs are
+            # kept" of outputs this run had replaced
+            args.run_written = True
         else:
             if cfg is not None and cfg.offline.enabled:
                 return fail(_OFFLINE_NEEDS_OUT)
@@ -536,6 +539,7 @@ def _track(args: argparse.Namespace) -> int:
             run = track_video(args.input, args.out_dir, fps=args.fps, gt=args.gt,
                               force=args.force, progress=progress,
                               **_video_options(args, name, box, cfg or dcfg))
+            args.run_written = True  # (as above)
         if box:
             _warn_printed_rate(args, run)
         elif dcfg is not None and args.config is not None:
@@ -1172,10 +1176,11 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
                     pass
     names = [input_label(o.input) for o in outcomes]
     width = max(len("input"), *map(len, names))  # (names shorter than the header: misaligned)
-    print(f"{'input':{width}s}  status  frames  tracks  seconds  output")
+    # ("not run" is 7 wide: in a column of 6 it moved the rest of its row by one)
+    print(f"{'input':{width}s}  status   frames  tracks  seconds  output")
     for o, input_name in zip(outcomes, names):
         status = "ok" if o.ok else ("failed" if o.attempts else "not run")
-        print(f"{input_name:{width}s}  {status:6s}  {o.frames:6d}  {o.tracks:6d}  "
+        print(f"{input_name:{width}s}  {status:7s}  {o.frames:6d}  {o.tracks:6d}  "
               f"{o.seconds:7.1f}  {o.out if o.ok else o.error}")
     bad = [o for o in outcomes if not o.ok]
     print(f"{len(outcomes) - len(bad)} of {len(outcomes)} inputs tracked"
@@ -1739,8 +1744,9 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--search-range", type=float, metavar="PX",
                        help="--tracker particles: the farthest a particle moves between "
                        "frames, in pixels: the radius of its gate one frame after it was "
-                       "found (the gate grows while it is missed), and the longest link "
-                       "(default: half --diameter); its --max-lost is 3.5 frames by default")
+                       "found (the gate grows while it is missed), and the farthest a link "
+                       "reaches from where the particle is predicted (default: half "
+                       "--diameter); its --max-lost is 3.5 frames by default")
     track.add_argument("--report", action="store_true",
                        help="video mode, one input: also write OUT/report.html, one page "
                        "with the command, the scores, the annotated video and the plots (as "
@@ -2002,7 +2008,10 @@ def _stopped(args: argparse.Namespace, exc: BaseException) -> int:
     # tracks, boxes, video and plot are written under partial names and renamed only when
     # complete (vistrack.io.atomic): what an earlier run wrote is still there
     kept = ""
-    if getattr(args, "had_outputs", False):
+    if getattr(args, "run_written", False):
+        # stopped after the run's outputs were renamed into place (over earlier ones or not)
+        kept = "; this run's outputs were written"
+    elif getattr(args, "had_outputs", False):
         kept = "; earlier outputs are kept"
     elif any(_had_outputs(*o) for o in getattr(args, "outputs_to", ())):
         # a first run stopped after its outputs were renamed into place
