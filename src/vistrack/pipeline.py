@@ -1065,8 +1065,9 @@ def _dcpf(ctx: Context) -> Tracker:
 
 PARTICLE_GATE = 0.999
 """The gate probability of the ``particles`` tracker: its ``search_range`` is the radius of
-this quantile of a track's innovation, one frame after an update, and the longest link
-(``PointTracker(max_distance=)``) however far the gate grows while a particle is missed."""
+this quantile of a track's innovation, one frame after an update, and the farthest a link
+reaches from the track's predicted position (``PointTracker(max_distance=)``) however far
+the gate grows while a particle is missed."""
 
 
 def _particles(ctx: Context) -> Tracker:
@@ -2448,7 +2449,8 @@ def track_video(video: str | Path, out_dir: str | Path, *,
         particle filter; ``overrides`` are fields of its
         :class:`~vistrack.tracking.dcpf.DCPFConfig`), ``"particles"`` (drifting points,
         linked by global nearest neighbour; ``overrides`` ``search_range``, the radius of a
-        track's gate one frame after an update in pixels and the longest link, default
+        track's gate one frame after an update in pixels and the farthest a link reaches
+        from its predicted position, default
         half ``diameter``, and
         ``max_lost``, seconds, default 3.5 frames), ``"single:METHOD"`` (one object,
         from the first frame's most confident detection); ``"module:callable"``; or any

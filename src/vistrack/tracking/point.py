@@ -163,9 +163,12 @@ class PointTracker:
         a track, and the existence below which a track is deleted; ``0 <= delete_existence
         < init_existence < 1`` and ``delete_existence < confirm_existence <= 1``.
     max_distance : float, optional
-        The longest link, in the measurement's units: a measurement farther than this from
-        a track's predicted measurement is not associated with it, however far the track's
-        gate has grown while it was missed (trackpy's ``search_range``). Default: the gate
+        The farthest a link reaches, in the measurement's units: a measurement farther than
+        this from a track's predicted measurement is not associated with it, however far the
+        track's gate has grown while it was missed (trackpy's ``search_range``, measured
+        there from the particle's last position, or from a predictor's). Reported
+        measurements (``report="measurement"``) can lie a little farther than this from the
+        track's last one, where the prediction has moved on from it. Default: the gate
         alone.
     report : {"estimate", "measurement"}
         What a track updated in a frame reports as its point: the filter's estimate (the
