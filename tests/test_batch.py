@@ -1170,6 +1170,47 @@ def test_a_worker_sent_sigterm_removes_its_partial_files_and_dies(tmp_path):
     assert (tmp_path / "parent" / "mine.txt").read_text() == "kept\n"
 
 
+MADE = """import os, signal, sys
+from concurrent.futures.process import BrokenProcessPool
+from vistrack._pool import process_pool
+from vistrack.io.atomic import made_folder, replacing
+
+def half_written(out):
+    with made_folder(os.path.dirname(out)), replacing(out) as part:
+        with open(part, "w") as f:
+            f.write("1,1,10,20,30,40,1,-1,-1,-1\\n")
+        os.kill(os.getpid(), signal.SIGTERM)  # as timeout or kill -TERM -PGID sends it
+    return "not terminated"
+
+if __name__ == "__main__":
+    root = sys.argv[1]
+    # the parent's own folder, made for a block under way (empty while the worker dies): its
+    # forked worker must leave it
+    with made_folder(os.path.join(root, "mine")):
+        with process_pool(1) as pool:
+            try:
+                got = pool.submit(half_written,
+                                  os.path.join(root, "new", "deep", "res.txt")).result()
+            except BrokenProcessPool:
+                got = "died"
+        print(got, sorted(os.listdir(root)))
+"""
+
+
+def test_a_worker_sent_sigterm_removes_the_folders_it_made(tmp_path):
+    """SIGTERM sent to a batch's process group (``timeout 1 vistrack track ... --jobs 2``)
+    left each worker's new output folders behind, empty, after the command said "nothing was
+    written": the worker's partial files were removed, but the folders made for them stayed
+    (their removal is in blocks that SIGTERM's default action never finishes). Oracle: the
+    folder's listing; the parent's own folder, made for a block still under way, stays."""
+    (tmp_path / "made.py").write_text(MADE)
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1",
+               PYTHONPATH=str(Path(__file__).parents[1] / "src"))
+    r = subprocess.run([sys.executable, str(tmp_path / "made.py"), str(tmp_path)], env=env,
+                       capture_output=True, text=True, timeout=120)
+    assert r.stdout.splitlines() == ["died ['made.py', 'mine']"], (r.stdout, r.stderr)
+
+
 STAGED = """import os, signal, sys
 from concurrent.futures.process import BrokenProcessPool
 import vistrack.pipeline as pipeline

@@ -247,6 +247,11 @@ _NAMED: set[Path] = set()
 """The partial and staging files this process has named and not yet renamed over their
 outputs or removed."""
 
+_MADE: list[list[Path]] = []
+"""The folders made for the blocks under way (:func:`made_folder`, :func:`replacing`), each
+block's outermost first: a block that ends by SIGTERM's default action in a worker cannot
+remove them (:func:`remove_partials` does)."""
+
 
 STAGING_TAIL = "rows.txt"
 """The tail of :func:`staging`'s hidden names."""
@@ -280,20 +285,27 @@ def staging(path: str | os.PathLike) -> Iterator[Path]:
 
 
 def forget_partials() -> None:
-    """Forget the partial files named so far: in a forked process, they are its parent's."""
+    """Forget the partial files named so far, and the folders made for blocks under way: in
+    a forked process, they are its parent's."""
     _NAMED.clear()
+    _MADE.clear()
 
 
 def remove_partials() -> None:
     """Remove the partial and staging files this process has named that are still there:
     what a job stopped by SIGTERM in a worker leaves (the default action ends the process at
-    once, and its partial files stayed until a later run wrote the same outputs)."""
+    once, and its partial files stayed until a later run wrote the same outputs); then the
+    folders made for the blocks under way, where empty."""
     for part in list(_NAMED):
         try:
             part.unlink()
         except OSError:  # (never made, already renamed, or a folder)
             pass
     _NAMED.clear()
+    # and the folders made for them, where empty now (a batch terminated by SIGTERM left
+    # its inputs' new folders, empty, after saying "nothing was written")
+    for made in reversed(_MADE):
+        _remove_empty(made)
 
 
 def _make_folder(path: Path) -> list[Path]:
@@ -304,6 +316,14 @@ def _make_folder(path: Path) -> list[Path]:
         p = p.parent
     path.mkdir(parents=True, exist_ok=True)
     return made[::-1]
+
+
+def _forget(made: list[Path]) -> None:
+    """Take a block's folders off :data:`_MADE` (that list object, not an equal one)."""
+    for k in range(len(_MADE) - 1, -1, -1):
+        if _MADE[k] is made:
+            del _MADE[k]
+            return
 
 
 def _remove_empty(made: list[Path]) -> None:
@@ -339,11 +359,14 @@ def made_folder(path: str | os.PathLike) -> Iterator[Path]:
     """
     p = Path(path)
     made = _make_folder(p)
+    _MADE.append(made)
     try:
         yield p
     except BaseException:
         _remove_empty(made)
         raise
+    finally:
+        _forget(made)
 
 
 @contextlib.contextmanager
@@ -369,6 +392,7 @@ def replacing(path: str | os.PathLike) -> Iterator[Path]:
     check_place(p)
     part = partial_path(p)
     made = _make_folder(p.parent)
+    _MADE.append(made)
     try:
         # a buffered write's error (a full disk) names the file, as PartialFile's do: it
         # reached the command line as "[Errno 28] No space left on device", no file named
@@ -379,6 +403,8 @@ def replacing(path: str | os.PathLike) -> Iterator[Path]:
         part.unlink(missing_ok=True)
         _remove_empty(made)
         raise
+    finally:
+        _forget(made)
 
 
 @contextlib.contextmanager
