@@ -956,3 +956,27 @@ def test_the_pairs_assigners_name_an_index_outside_the_problem():
     # lists are taken as arrays (their .tolist() failed in numpy's words)
     assert [a.tolist() for a in greedy_pairs([0, 1], [1, 0], [1.0, 2.0], (2, 2))] == [[0, 1],
                                                                                       [1, 0]]
+
+
+def test_tiny_distances_and_boxes_keep_their_digits_or_are_named():
+    """``euclidean`` squared the differences, and below 1e-154 the squares underflowed: two
+    points 3e-170 and 1e-170 from the origin were both 0 from it, and the nearest taken was
+    the farther. A box of side 2.3e-162 has an area below the smallest normal float, of a
+    digit or none: two such boxes overlapping by half had IoU 1, and ``non_maximum`` dropped
+    the second. Oracles: ``math.hypot``; the same boxes scaled by 1e161 (IoU 1/3)."""
+    import math
+
+    from vistrack.association import euclidean, iou, nearest_neighbour, non_maximum
+
+    d = euclidean([[0.0, 0.0]], [[3e-170, 0.0], [1e-170, 0.0], [3e-160, 4e-160]])
+    np.testing.assert_allclose(d[0], [3e-170, 1e-170, math.hypot(3e-160, 4e-160)],
+                               rtol=1e-15)
+    assert nearest_neighbour(d[:, :2])[1].tolist() == [1]
+    np.testing.assert_array_equal(euclidean([[1.0, 2.0]], [[1.0, 2.0]]), [[0.0]])
+    scaled = np.array([[0, 0, 2.3, 2.3], [1.15, 0, 3.45, 2.3]])
+    np.testing.assert_allclose(iou(scaled, scaled)[0, 1], 1 / 3, rtol=1e-12)
+    tiny = scaled * 1e-162
+    with pytest.raises(ValueError, match=re.escape("is a box whose area a float cannot hold")):
+        iou(tiny, tiny)
+    with pytest.raises(ValueError, match="a float cannot hold"):
+        non_maximum(tiny, [0.9, 0.8], 0.5)

@@ -734,3 +734,37 @@ def test_a_likelihood_past_the_float_range_is_named_by_the_frame_s_track(associa
     with pytest.raises(ValueError, match=re.escape(
             "lik must be finite and >= 0 inside the gate; lik[2, 1] = inf")):
         tr.step(2, Detections(points=[[900.0, 0, 0], [200.0, 0, 0]]))
+
+
+@pytest.mark.parametrize("association", ["pda", "jpda", "ipda", "jipda"])
+def test_pda_tracks_report_the_score_of_their_most_probable_detection(association):
+    """The PDA family's tracks kept the score of the detection they started from (0.3 in
+    every frame below), where ``Tracks.scores`` is the score of the detection a track was
+    last updated with. Oracle: one detection in the gate each frame, so the most probable
+    one is it, and ``gnn``'s scores on the same frames."""
+    frames = [(1, 0.3), (2, 0.9), (3, 0.8), (4, 0.7), (5, 0.6)]
+
+    def scores(method):
+        tr = PointTracker(method, frame_rate=1.0, confirm_hits=1)
+        return [tr.step(f, Detections(points=[[0.1 * f, 0.0]], scores=[s])).scores.tolist()
+                for f, s in frames]
+
+    got, want = scores(association), scores("gnn")
+    assert want == [[0.3], [0.9], [0.8], [0.7], [0.6]]
+    # (the existence-based filters confirm a track some frames after its start)
+    assert [g for g in got if g] == [w for g, w in zip(got, want) if g]
+    assert got[-1] == [0.6]
+
+
+@pytest.mark.parametrize("association", ["gnn", "nn", "jpda"])
+def test_points_far_past_the_gates_arithmetic_are_named(association):
+    """A point 2e154 from a track overflowed the gate's squared distance in scipy's words
+    ("The value of p too large for this dataset"), naming no argument; the tracker is as
+    it was before the step."""
+    tr = PointTracker(association, frame_rate=1.0)
+    tr.step(1, Detections(points=[[0.0, 0.0]]))
+    with pytest.raises(ValueError, match=re.escape(
+            "points must lie within ±1e150, where the gates' squared distances hold; "
+            "points[0] = [2e+154, 0.0]")):
+        tr.step(2, Detections(points=[[2e154, 0.0], [0.0, 0.0]]))
+    assert tr.frame == 1 and tr.step(2, Detections(points=[[1e150, 0.0]])) is not None

@@ -44,7 +44,10 @@ def _boxes(b: ArrayLike, name: str) -> np.ndarray:
     w, h = a[:, 2] - a[:, 0], a[:, 3] - a[:, 1]
     with np.errstate(over="ignore", under="ignore"):
         area = w * h
-    lost = np.isinf(w) | np.isinf(h) | np.isinf(area) | ((area == 0) & (w > 0) & (h > 0))
+    # (an area below the smallest normal float kept a few digits or one: two boxes of side
+    # 2.3e-162 overlapping by half had IoU 1, and non_maximum dropped the second)
+    lost = np.isinf(w) | np.isinf(h) | np.isinf(area) | (
+        (area < np.finfo(float).tiny) & (w > 0) & (h > 0))
     if lost.any():
         k = int(np.flatnonzero(lost)[0])
         raise ValueError(f"{name}[{k}] = {a[k].tolist()} is a box whose area a float cannot "
@@ -217,14 +220,18 @@ def euclidean(a: ArrayLike, b: ArrayLike) -> np.ndarray:
         raise ValueError(f"a and b must have the same point size; got {pa.shape} and "
                          f"{pb.shape}")
     diff = pa[:, None, :] - pb[None, :, :]
-    with np.errstate(over="ignore"):
+    with np.errstate(over="ignore", under="ignore"):
         d = np.sqrt((diff * diff).sum(-1))
-    far = np.isinf(d) & np.isfinite(diff).all(-1)
-    if far.any():  # squares past the largest float (3e200 apart): each pair scaled
-        # by its largest coordinate, as math.hypot does
-        big = np.abs(diff[far]).max(-1, keepdims=True)
+    # squares past the largest float (3e200 apart), or below the smallest normal one (1e-154
+    # apart: points 3e-170 and 1e-170 from the origin were both 0 from it, and the nearest
+    # taken was the farther): each such pair scaled by its largest coordinate, as math.hypot
+    # does
+    scale = (np.isinf(d) | (d < 1e-150)) & np.isfinite(diff).all(-1) & (d >= 0)
+    if scale.any():
+        big = np.abs(diff[scale]).max(-1, keepdims=True)
+        safe = np.where(big > 0, big, 1.0)
         with np.errstate(over="ignore"):
-            d[far] = big[:, 0] * np.sqrt(((diff[far] / big) ** 2).sum(-1))
+            d[scale] = big[:, 0] * np.sqrt(((diff[scale] / safe) ** 2).sum(-1))
     return d
 
 

@@ -133,6 +133,11 @@ def _log_determinants(S: np.ndarray) -> np.ndarray:
     return 2 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(1)
 
 
+
+_FARTHEST = 1e150
+"""The largest coordinate :meth:`PointTracker.step` takes: squared distances between points
+within it are finite."""
+
 class PointTracker:
     """A multi-target point tracker (see the module).
 
@@ -363,15 +368,17 @@ class PointTracker:
         Tracks
             The confirmed tracks updated in this frame, with ``points`` and their
             covariances (``covs (K, d, d)``, of the first ``d`` coordinates: two, or one
-            for points on a line).
+            for points on a line), and ``scores``: the score of the detection each was
+            updated with (the PDA family, which weighs every detection in the gate: of
+            the most probable one).
 
         Raises
         ------
         TypeError
             If ``detections`` are not :class:`~vistrack.types.Detections` with points.
         ValueError
-            If the points do not have the measurement's size, or the frame index does not
-            increase.
+            If the points do not have the measurement's size or lie beyond ±1e150, or the
+            frame index does not increase.
 
         Examples
         --------
@@ -393,6 +400,13 @@ class PointTracker:
             # (none of 3 coordinates was taken with no track, and named as z after the frame
             # was counted with some)
             raise ValueError(f"points must have {self.m} coordinates; got shape {Z.shape}")
+        far = np.abs(Z) > _FARTHEST
+        if far.any():
+            # (a point 1.3e154 from a track overflowed the gate's squared distance, in
+            # scipy's words: "The value of p too large for this dataset")
+            i = int(np.flatnonzero(far.any(axis=1))[0])
+            raise ValueError(f"points must lie within ±1e150, where the gates' squared "
+                             f"distances hold; points[{i}] = {Z[i].tolist()}")
         # all or nothing: a step that fails (a model giving a covariance that is not finite)
         # leaves the tracker as it was, the frame not counted and no track deleted
         t = self.tracks
@@ -522,6 +536,9 @@ class PointTracker:
                         beta, beta0 = weigh(lik, gate, **args)
                     upd = pda_update(g[rows], Z[cols], self.H, self.R, beta, beta0)
                     mean[rows], cov[rows] = upd.mean, upd.cov
+                    # the score of each track's most probable detection (the start's stayed)
+                    seen = beta.max(axis=1) > 0
+                    t.scores[rows[seen]] = scores[cols][np.argmax(beta[seen], axis=1)]
                 if existence and not hit.all():  # nothing in their gates: a miss each
                     lone = np.flatnonzero(~hit)
                     none = np.zeros((len(lone), 0))
