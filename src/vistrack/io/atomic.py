@@ -540,11 +540,9 @@ def check_output(path: str | os.PathLike, *, force: bool = False, name: str = "o
 
     Raises
     ------
-    IsADirectoryError
-        If ``path`` is to be a file and is an existing folder.
-    NotADirectoryError
-        If ``path`` is to be a folder and is an existing file, or a folder above it is a
-        file.
+    IsADirectoryError, NotADirectoryError
+        As :func:`check_place`: ``path`` is where no file (with ``folder``, no folder) can
+        be, or a folder above it is a file.
     FileExistsError
         If ``path`` is to be a file, exists and ``force`` is False.
     PermissionError
