@@ -1104,3 +1104,42 @@ def test_a_model_matrix_at_fault_is_named_by_its_index_as_given():
                       R=np.diag([1.0, -1.0]), x0=np.zeros(2), P0=np.eye(2))
     with pytest.raises(ValueError, match=r"^Q must be symmetric; Q\[4, 0, 1\] = 0\.5"):
         kalman_filter(ys, Q=np.stack([np.eye(2)] * 4 + [A]), R=np.eye(1), **kw)
+
+
+def test_arguments_the_filters_took_or_named_in_other_words():
+    """From a new user's walk: ``KalmanFilter.online`` took the text "0.5" as a step and True
+    as 1 (``predict`` refuses both), and None or an array failed in ``float()``'s words;
+    ``filter(dt=None)`` said "got nan"; the EKF's ``loglik`` was writable though
+    ``FilterResult``'s arrays are read-only; ``pda_update`` given a tuple failed on "has no
+    attribute 'mean'"; the filters took ``BoxMotion`` and failed at the first step on
+    "boxes must have shape (K, 4)"; ``kalman_filter_1d`` said "d[] = nan" and read None as
+    NaN. Oracle: the words each argument's own check gives elsewhere."""
+    from vistrack.filters import ExtendedKalmanFilter, KalmanFilter, pda_update
+    from vistrack.models import BoxMotion, ConstantVelocity, LinearMeasurement, Position
+
+    kf = KalmanFilter(ConstantVelocity(dim=1, q=0.1), Position(dim=1))
+    for dt in ("0.5", True, None, np.array([1.0, 2.0])):
+        with pytest.raises(ValueError, match=re.escape(f"dt must be a number; got {dt!r}")):
+            kf.online([0.0, 1.0], np.eye(2), dt=dt)
+    f = kf.online([0.0, 1.0], np.eye(2), dt=np.float32(0.5))  # a number of numpy's: taken
+    f.predict()
+    np.testing.assert_allclose(f.mean, [0.5, 1.0])
+    with pytest.raises(ValueError, match=re.escape(
+            "dt must be a number or an array of numbers; got None")):
+        kf.filter(np.zeros((3, 1)), dt=None)
+    ekf = ExtendedKalmanFilter(ConstantVelocity(dim=1), Position(dim=1))
+    r = ekf.filter(np.zeros((3, 1)), x0=[0.0, 0.0], P0=np.eye(2))
+    assert not r.loglik.flags.writeable and not r.means.flags.writeable
+    with pytest.raises(TypeError, match=re.escape("g must be a vistrack.Gaussian; got tuple")):
+        pda_update((np.zeros((1, 2)), np.eye(2)[None]), np.zeros((1, 2)), np.eye(2),
+                   np.eye(2), [[0.5]], [0.5])
+    box = (BoxMotion(), LinearMeasurement(np.eye(4, 8), np.eye(4)))
+    for make in (KalmanFilter, ExtendedKalmanFilter):
+        with pytest.raises(TypeError, match=re.escape(
+                "motion is a BoxMotion, whose noise Q(boxes, dt) follows the boxes' sizes")):
+            make(*box)
+    one = dict(m=1, sigma_d=1, sigma_m=1, sigma0=1)
+    with pytest.raises(ValueError, match=re.escape("d must be finite; got nan")):
+        kalman_filter_1d([1.0], d=np.nan, x0=0, **one)
+    with pytest.raises(ValueError, match=re.escape("x0 must be a finite number; got None")):
+        kalman_filter_1d([1.0], d=1, x0=None, **one)

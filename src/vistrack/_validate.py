@@ -336,6 +336,8 @@ def check_finite(arr: np.ndarray, name: str) -> None:
     """Raise ``ValueError`` if ``arr`` has a NaN or an infinite entry, naming the first one."""
     bad = ~np.isfinite(arr)
     if bad.any():
+        if np.ndim(arr) == 0:  # (one value was named as "d[] = nan")
+            raise ValueError(f"{name} must be finite; got {arr}")
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
         raise ValueError(f"{name} must be finite; {name}[{', '.join(map(str, idx))}] = {arr[idx]}")
 

@@ -327,8 +327,10 @@ def sequence_result(means: np.ndarray, covs: np.ndarray, pmeans: np.ndarray,
         means, covs, pmeans, pcovs = means[0], covs[0], pmeans[0], pcovs[0]
         loglik = loglik[0]
         last = Gaussian(last.mean[0], last.cov[0])
-    _readonly(means, covs, pmeans, pcovs)
-    return FilterResult(means, covs, pmeans, pcovs, np.asarray(loglik), last, False)
+    loglik = np.asarray(loglik)
+    # (the log-likelihood was left writable, where FilterResult says its arrays are not)
+    _readonly(means, covs, pmeans, pcovs, loglik)
+    return FilterResult(means, covs, pmeans, pcovs, loglik, last, False)
 
 
 def _not_finite(pmeans: np.ndarray, pcovs: np.ndarray, means: np.ndarray, covs: np.ndarray,

@@ -788,6 +788,8 @@ def kalman_filter_1d(
         _check_square(a, name)
         par[name] = np.broadcast_to(a, (T,))
     for name, v in (("x0", x0), ("sigma0", sigma0)):
+        if v is None:  # (read as NaN: "x0 must be a finite number; got nan")
+            raise ValueError(f"{name} must be a finite number; got None")
         x = float(as_float_array(v, name, ndim=(0,)))
         if not np.isfinite(x) or (name == "sigma0" and x < 0):
             raise ValueError(f"{name} must be a finite number{' >= 0' * (name == 'sigma0')}; "

@@ -21,6 +21,7 @@ from .._validate import (
     check_psd,
     is_real,
 )
+from ..models.adapters import check_not_box_motion
 from ..models.measurement import LinearMeasurement, MeasurementModel, Position
 from ..models.motion import MotionModel
 from ..types import Gaussian
@@ -39,7 +40,9 @@ def dt_steps(dt: ArrayLike, T: int) -> np.ndarray | float:
     values, so that a model that checks its steps (``LinearMotion`` takes 1 alone) sees none
     it would refuse (a 0 the user never gave, or the NaN of ``np.diff(times,
     prepend=np.nan)``)."""
-    # (True was a step of 1 here, where the models refuse it)
+    # (True was a step of 1 here, where the models refuse it; None was "got nan")
+    if dt is None:
+        raise ValueError("dt must be a number or an array of numbers; got None")
     d = as_float_array(dt, "dt", ndim=(0, 1), not_boolean="a number or an array of numbers")
     if d.ndim == 0:
         return float(d)
@@ -101,6 +104,7 @@ class KalmanFilter:
             if missing:
                 raise TypeError(f"{name} must provide {', '.join(attrs)}; "
                                 f"{type(obj).__name__} lacks {', '.join(missing)}")
+        check_not_box_motion(motion)
         # a position measured in more dimensions than the motion has would read its rates as
         # positions (Position(dim=3) of a 2-D constant velocity: x, y and vx)
         from ..models.measurement import Position
@@ -622,6 +626,10 @@ class OnlineFilter:
         self._put("R", R)
         self._idx = np.empty(m, dtype=np.int64)
         self._kernel = _kernels.online_kernel(n, m)
+        # (text was taken as a step and True as 1 here, where predict refuses them; None and
+        # arrays failed in float()'s words)
+        if not is_real(dt):
+            raise ValueError(f"dt must be a number; got {dt!r}")
         self._dt0 = float(dt)  # the default time step; F, Q are kept for the last one used
         self._dt: float | None = None
         self._set_dt(self._dt0)

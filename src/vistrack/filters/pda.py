@@ -82,6 +82,8 @@ def pda_update(g: Gaussian, Z: ArrayLike, H: ArrayLike, R: ArrayLike, beta: np.n
     >>> post.mean.round(3) + 0.0, post.cov[0].diagonal().round(3)
     (array([[0., 0.]]), array([0.752, 0.505]))
     """
+    if not isinstance(g, Gaussian):  # (a tuple failed on "has no attribute 'mean'")
+        raise TypeError(f"g must be a vistrack.Gaussian; got {type(g).__name__}")
     m, P = g.mean, g.cov
     if m.ndim != 2:
         raise ValueError(f"g must be a batch of tracks, batch shape (T,); got batch shape "

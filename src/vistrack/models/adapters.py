@@ -26,6 +26,19 @@ from .protocols import (
 __all__ = ["MotionFunctions", "MeasurementFunctions", "psd_sqrt"]
 
 
+def check_not_box_motion(model: object, name: str = "motion") -> None:
+    """Refuse :class:`~vistrack.models.BoxMotion` as a filter's motion model: its noise,
+    ``Q(boxes, dt)``, scales with the boxes' sizes (the box trackers' own), and a filter took
+    it and failed at its first step on "boxes must have shape (K, 4)", an argument the caller
+    never gave."""
+    from .box import BoxMotion
+
+    if isinstance(model, BoxMotion):
+        raise TypeError(f"{name} is a BoxMotion, whose noise Q(boxes, dt) follows the boxes' "
+                        "sizes (the box trackers' model); give a filter a motion model whose "
+                        "Q(dt) takes the time step alone (ConstantVelocity(dim=4), say)")
+
+
 def psd_sqrt(S: np.ndarray, name: str = "S") -> np.ndarray:
     """The principal square root ``A`` (symmetric, ``A A' = A A = S``) of each of a stack of
     positive semi-definite matrices, from the eigendecomposition (singular matrices allowed:
@@ -165,6 +178,7 @@ class MotionFunctions:
             )
         if self.n < 1:
             raise TypeError(f"motion must have ndim_state >= 1; got {type(model).__name__}")
+        check_not_box_motion(model)
         steps = getattr(model, "n_steps", None)
         if self.linear and steps is not None:
             # F (T, n, n) per step: f and jacobian took the stack for one matrix (a state of
