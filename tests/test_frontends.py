@@ -2200,6 +2200,37 @@ def test_a_sequence_whose_first_images_are_missing_keeps_their_frame_numbers(tmp
     assert [f.index for f in frames] == [1, 2]
 
 
+def test_a_sequence_starting_late_with_a_gap_says_both(tmp_path):
+    """A sequence without frame 1 said so, and nothing of a missing frame after it (the
+    two warnings were one or the other): frame 5 was dropped unsaid. Oracle: the file
+    list. A video writer given an image's suffix wrote one undecodable frame, unsaid."""
+    seq = tmp_path / "SEQ"
+    (seq / "img1").mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=SEQ\nimDir=img1\nframeRate=25\n")
+    files = _folder(seq / "img1", n=6, ext=".png")
+    files[0].unlink()
+    files[4].unlink()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        reader = VideoReader(seq)
+    said = [str(w.message) for w in caught]
+    img = seq / "img1"
+    assert f"{img}: no image for frame 1: the sequence starts at 000002.png, frame 2, as " \
+           "seqinfo.ini and its files number it" in said
+    assert f"{img}: no image for frame 5, numbering the images by their names from " \
+           "000002.png as frame 2: that frame is missing, and the images after a gap keep " \
+           "the frames their names give" in said, said
+    assert [f.index for f in _read(reader)[0]] == [2, 3, 4, 6]
+    from vistrack.io import VideoWriter
+
+    for name in ("out.png", "out.JPG"):
+        with pytest.raises(ValueError, match=re.escape(
+                f"path {tmp_path / name}: {Path(name).suffix.lower()} is an image's suffix; "
+                "VideoWriter writes a video (.mp4)")):
+            VideoWriter(tmp_path / name, fps=5)
+    assert not any(p.suffix.lower() in (".png", ".jpg") for p in tmp_path.iterdir())
+
+
 def test_a_tiff_stack_is_named_not_read_as_its_first_page(tmp_path):
     """A TIFF of several pages (a microscope's stack) was read as one frame, its first page,
     given as a file or in a folder, and the others dropped without a word (oracle: OpenCV's

@@ -485,23 +485,24 @@ class VideoReader:
             start = numbered[0] if numbered is not None else 1
             self._index = numbered or list(range(1, len(self._files) + 1))
             self.frame_count = self._index[-1]
-            if start > 1 and src not in _GAP_WARNED:
+            said = src in _GAP_WARNED
+            if start > 1 and not said:
                 _GAP_WARNED.add(src)
                 warnings.warn(f"{src}: no image for frame"
                               f"{f's 1-{start - 1}' if start > 2 else ' 1'}: the sequence "
                               f"starts at {self._files[0].name}, frame {start}, as "
                               f"{info.name} and its files number it",
                               RuntimeWarning, stacklevel=2)
-            elif numbered is not None and self.frame_count > len(self._files) \
-                    and src not in _GAP_WARNED:
+            if numbered is not None and numbered[-1] - start + 1 > len(self._files) \
+                    and not said:
                 # a frame dropped from a folder: its number is a missing frame, and the
                 # images after it keep the frames their names give, as detections and ground
-                # truth number them
+                # truth number them (said after a late start too: it was one or the other)
                 _GAP_WARNED.add(src)
                 n, which = _missing(numbered)
                 what = f"frame {which}" if n == 1 else f"{n} frames ({which})"
                 warnings.warn(f"{src}: no image for {what}, numbering the images by their "
-                              f"names from {self._files[0].name} as frame 1: "
+                              f"names from {self._files[0].name} as frame {start}: "
                               f"{'that frame is' if n == 1 else 'those frames are'} missing, "
                               "and the images after a gap keep the frames their names give",
                               RuntimeWarning, stacklevel=2)
@@ -969,7 +970,8 @@ class VideoWriter:
     Raises
     ------
     ValueError
-        If ``fps`` is not a finite number > 0, or ``size`` not two whole numbers >= 1.
+        If ``fps`` is not a finite number > 0, ``size`` not two whole numbers >= 1, or
+        ``path`` (``name``, where given) ends in an image's suffix (``.png``, ``.jpg``).
 
     Examples
     --------
@@ -997,6 +999,12 @@ class VideoWriter:
                     as_whole(h, "size's height", 1, "pixels"))
         self.path, self.fps, self.size = Path(path), fps, size
         self.name = str(path if name is None else name)
+        suffix = Path(self.name).suffix.lower()
+        if suffix in IMAGE_SUFFIXES + (".gif", ".webp"):
+            # (OpenCV's image-sequence writer took it: every frame after the first failed to
+            # write under the one name, unsaid, and the file held no frame a reader decodes)
+            raise ValueError(f"path {self.name}: {suffix} is an image's suffix; VideoWriter "
+                             "writes a video (.mp4)")
         self._w: cv2.VideoWriter | None = None
         self._closed = False
         self.frames = 0
