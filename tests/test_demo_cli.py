@@ -63,6 +63,13 @@ def test_demo_out_that_is_a_file_is_named_as_out(tmp_path, capsys):
         assert main(["demo", name, "--out", str(afile)]) == 2
         assert capsys.readouterr().err == (f"vistrack demo: error: --out {afile} is a file, not "
                                            "a folder\n")
+    # and a file where the track demo's run folder goes (named as --out-dir, still)
+    folder = tmp_path / "dfile"
+    folder.mkdir()
+    (folder / "pets09-s2l1").write_text("x\n")
+    assert main(["demo", "track", "--out", str(folder)]) == 2
+    assert capsys.readouterr().err == (f"vistrack demo: error: --out {folder / 'pets09-s2l1'} "
+                                       "is a file, not a folder\n")
 
 
 def test_console_script_runs():

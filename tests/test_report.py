@@ -184,6 +184,25 @@ def test_a_run_description_that_is_not_an_object_is_named(run_dir, tmp_path, cap
                                                "object)")
 
 
+@pytest.mark.parametrize("patch, said", [
+    ({"scores": {"HOTA": 1}}, "its scores have no DetA, AssA, MOTA, ..."),
+    ({"fps": "x"}, "fps is 'x'"),
+    ({"gt": 5}, "gt is 5"),
+    ({"first_frame": "a"}, "first_frame is 'a'"),
+])
+def test_a_run_description_of_other_fields_is_named(run_dir, tmp_path, capsys, patch, said):
+    """A run.json whose fields hold other kinds of value (hand-edited, or another tool's)
+    failed with a KeyError's traceback (a score without DetA, status 1) or in Python's words
+    naming no file ("Unknown format code 'f'", "invalid literal for int()")."""
+    odd = tmp_path / "odd"
+    shutil.copytree(run_dir, odd)
+    info = json.loads((odd / "run.json").read_text())
+    (odd / "run.json").write_text(json.dumps({**info, **patch}))
+    assert main(["report", str(odd), "--force"]) == 2
+    assert capsys.readouterr().err.strip() == (f"vistrack report: error: {odd / 'run.json'}: not "
+                                               f"a run's description ({said})")
+
+
 def test_a_run_without_a_video_by_choice_is_not_said_to_have_lost_it(tmp_path):
     """track_video(annotate=False) writes no annotated.mp4, and run.json lists what it wrote:
     the page and the command say nothing of a missing video (they did), but a plot removed

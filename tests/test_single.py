@@ -98,9 +98,17 @@ def test_measures_in_closed_form(tmp_path):
         with pytest.raises(ValueError) as e:
             read_boxes(gap)
         blank = text.splitlines().index(next(t for t in text.splitlines() if not t.strip())) + 1
+        # the advice in the file's own width (4 NaNs where its lines hold 8, a polygon's,
+        # met "4 values after lines of 8" when followed)
+        width = len(next(t for t in text.splitlines() if t.strip()).split(","))
+        nans = ",".join(["NaN"] * width)
         assert str(e.value) == (f"{gap}:{blank}: a blank line before the box of line {n}: "
-                                "each line is one frame's box (NaN,NaN,NaN,NaN for a frame "
-                                "without one)")
+                                f"each line is one frame's box ({nans} for a frame without "
+                                "one)")
+        fixed = gap.read_text().splitlines()
+        fixed[blank - 1] = nans
+        gap.write_text("\n".join(t for t in fixed if t.strip()) + "\n")
+        assert np.isnan(read_boxes(gap)).any()  # the advice, followed, is read
     gap.write_text("11,21,30,40\n12,21,30,40\n\n\n")
     assert read_boxes(gap).tolist() == [[11, 21, 30, 40], [12, 21, 30, 40]]
 

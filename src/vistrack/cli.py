@@ -166,6 +166,10 @@ def _demo(args: argparse.Namespace) -> int:
     if args.name == "track":  # the main job on the clip that ships with vistrack
         from .data import demo_clip
 
+        # and the run's folder in it, named as --out's too (a file there was named as
+        # --out-dir, the option the demo gives its track run)
+        check_output(Path(args.out) / "pets09-s2l1", name="--out", folder=True)
+
         clip = demo_clip()
         argv = ["track", str(clip.video), "--gt", str(clip.gt), "--out-dir",
                 str(Path(args.out) / "pets09-s2l1")] + (["--force"] if args.force else [])

@@ -103,6 +103,29 @@ def _score_table(scores: dict[str, dict]) -> str:
             f"</table>")
 
 
+def _check_info(info: dict, path: Path) -> None:
+    """A ValueError naming ``path`` where a field the page reads holds another kind of value
+    (a hand-edited or another tool's ``run.json``: a score without DetA was a KeyError's
+    traceback, text for ``fps`` "Unknown format code 'f'", naming nothing)."""
+    from .evaluation.mot import SCORE_COLUMNS
+
+    number = (int, float)
+    kinds: dict[str, type | tuple[type, ...]] = {
+        "name": str, "command": str, "input": str, "vistrack": str, "gt": str,
+        "frames": number, "rows": number, "tracks": number, "fps": number,
+        "first_frame": int, "last_frame": int, "warnings": list, "outputs": list,
+        "scores": dict}
+    for key, kind in kinds.items():
+        value = info.get(key)
+        if value is not None and (not isinstance(value, kind) or isinstance(value, bool)):
+            raise ValueError(f"{path}: not a run's description ({key} is {value!r})")
+    scores = info.get("scores") or {}
+    lost = [c for c, _ in SCORE_COLUMNS if not isinstance(scores.get(c, None), number)]
+    if scores and lost:
+        raise ValueError(f"{path}: not a run's description (its scores have no "
+                         f"{', '.join(lost[:3])}{', ...' if len(lost) > 3 else ''})")
+
+
 def _gt_plots(tracks: Path, name: str, info: dict) -> list[tuple[str, bytes]]:
     """HOTA over α and the timeline of the run's ``tracks`` (its results file), when its
     ground truth is known and readable."""
@@ -213,6 +236,7 @@ def write_report(out_dir: str | Path, *, force: bool = False) -> Path:
         if not isinstance(info, dict):
             raise ValueError(f"{run_info}: not a run's description (a JSON "
                              f"{type(info).__name__}, not an object)")
+        _check_info(info, run_info)
     # without run.json: a folder of tracks.csv alone is a points run's
     points = bool(info.get("points", False)) if run_info.is_file() else (
         not (out_dir / SINK_FILES["tracks"]).is_file()

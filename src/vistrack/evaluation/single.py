@@ -411,9 +411,11 @@ def _read_box_rows(path: str | Path, rule: str = "area", origin: int | None = No
             raise ValueError(f"{path}:{n}: {len(vals)} values after lines of {len(rows[-1])}")
         if blank and len(vals) != 5:
             # a line is a frame: skipped, it put every later box a frame early
+            # (the advice gave 4 NaNs where the file's lines hold 8, a polygon's: following it
+            # met "4 values after lines of 8")
+            nans = ",".join(["NaN"] * len(vals))
             raise ValueError(f"{path}:{blank}: a blank line before the box of line {n}: each "
-                             "line is one frame's box (NaN,NaN,NaN,NaN for a frame without "
-                             "one)")
+                             f"line is one frame's box ({nans} for a frame without one)")
         blank = 0
         if len(vals) == 5 and not float(vals[0]).is_integer():
             # (200.5, 201.5, ... counted up by one, and left the first frame unsaid: the
