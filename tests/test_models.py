@@ -457,20 +457,25 @@ def test_psd_sqrt_keeps_the_noise_of_a_matrix_of_scales_far_apart():
 
 
 @pytest.mark.parametrize("S, message", [
-    (np.diag([1.0, -1.0]), "S must be positive semi-definite; its smallest eigenvalue is -1"),
+    (np.diag([1.0, -1.0]), "S must be positive semi-definite; S[1, 1] = -1, a negative variance"),
+    (np.array([[1.0, 2.0], [2.0, 1.0]]),
+     "S must be positive semi-definite; its smallest eigenvalue is -1"),
     (np.array([[1.0, 2.0], [0.0, 1.0]]),
      "S must be symmetric; S[0, 1] = 2.0 but its transpose entry is 0.0"),
     (np.zeros((2, 3)), "S must be square matrices (..., n, n); got shape (2, 3)"),
     (np.array([[np.nan, 0.0], [0.0, 1.0]]), "S must be finite"),
     (np.stack([np.eye(2), np.diag([1.0, -2.0])]),
-     "S must be positive semi-definite (matrix [1]); its smallest eigenvalue is -2"),
+     "S must be positive semi-definite (matrix [1]); S[1, 1] = -2, a negative variance"),
+    (np.stack([np.eye(2), np.array([[1.0, 2.0], [2.0, 1.0]])]),
+     "S must be positive semi-definite (matrix [1]); its smallest eigenvalue is -1"),
 ])
 def test_psd_sqrt_refuses_what_has_no_root(S, message):
     """``psd_sqrt`` took any square matrix: ``diag(1, -1)`` gave the root of ``diag(1, 0)``
     (its square is not ``S``), a triangular matrix the root of another (``eigh`` reads one
     triangle), and a (2, 3) array failed in numpy's words. Oracle: ``check_psd``'s rule (no
     eigenvalue below -1e-10 of the largest entry); a semi-definite matrix whose least
-    eigenvalue is negative by rounding still has its root, ``A A' = S``."""
+    eigenvalue is negative by rounding still has its root, ``A A' = S``. The words are
+    ``check_psd``'s, as every covariance's check in the package."""
     from vistrack.models import psd_sqrt
 
     with pytest.raises(ValueError, match=re.escape(message)):

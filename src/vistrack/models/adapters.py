@@ -14,7 +14,7 @@ from typing import cast
 
 import numpy as np
 
-from .._validate import as_float_array, check_finite, check_psd, check_symmetric, correlation
+from .._validate import as_float_array, check_finite, check_psd, correlation
 from .nonlinear import AngleAwareMeasurement, _offset_mean, _residual, _weighted_mean
 from .protocols import (
     MeasurementModel,
@@ -75,9 +75,9 @@ def psd_sqrt(S: np.ndarray, name: str = "S") -> np.ndarray:
     ValueError
         If ``S`` is not a stack of square matrices, or one is not finite, not symmetric (to
         1e-8 of its largest entry), or has an eigenvalue below -1e-10 of its largest entry
-        (:func:`~vistrack._validate.check_psd`'s tolerances): ``diag(1, -1)`` gave the root
-        of ``diag(1, 0)``, and a triangular matrix the root of the symmetric matrix of its
-        lower triangle, without a word.
+        (:func:`~vistrack._validate.check_psd`, whose words these are): ``diag(1, -1)`` gave
+        the root of ``diag(1, 0)``, and a triangular matrix the root of the symmetric matrix
+        of its lower triangle, without a word.
 
     Examples
     --------
@@ -86,7 +86,7 @@ def psd_sqrt(S: np.ndarray, name: str = "S") -> np.ndarray:
     >>> A = psd_sqrt(S)
     >>> bool(np.allclose(A @ A.T, S))
     True
-    >>> psd_sqrt(np.diag([1.0, -1.0]))
+    >>> psd_sqrt(np.array([[1.0, 2.0], [2.0, 1.0]]))
     Traceback (most recent call last):
     ...
     ValueError: S must be positive semi-definite; its smallest eigenvalue is -1
@@ -95,14 +95,8 @@ def psd_sqrt(S: np.ndarray, name: str = "S") -> np.ndarray:
     if S.ndim < 2 or S.shape[-1] != S.shape[-2]:
         raise ValueError(f"{name} must be square matrices (..., n, n); got shape {S.shape}")
     check_finite(S, name)
-    top = check_symmetric(S, name)[..., 0, 0]
+    check_psd(S, name)
     w, V = np.linalg.eigh(S)
-    bad = w[..., 0] < -1e-10 * top
-    if np.any(bad):
-        which = tuple(int(i) for i in np.argwhere(np.atleast_1d(bad))[0]) if bad.ndim else ()
-        loc = f" (matrix {list(which)})" if which else ""
-        raise ValueError(f"{name} must be positive semi-definite{loc}; its smallest "
-                         f"eigenvalue is {float(w[which + (0,)]):.3g}")
     A = _principal_root(w, V)
     d = np.diagonal(S, axis1=-2, axis2=-1)
     # each variance as the root gives it, against S's own: within rounding where the scales
