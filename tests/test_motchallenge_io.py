@@ -71,6 +71,28 @@ def test_bad_rows_are_named(tmp_path, text, where):
         read_mot(p)
 
 
+@pytest.mark.parametrize("field", ["1_0", "\u0661\u0662", "\uff11"])
+def test_numbers_pythons_float_reads_and_numpy_refuses_are_named(tmp_path, field):
+    """A value np.loadtxt refuses sent the file to the line-by-line reader, whose float() read
+    ``1_0`` as 10 and Arabic-Indic or full-width digits as numbers: the file was read, or
+    refused, by whether its other lines were plain. Oracle: numpy's text reader, which refuses
+    each field."""
+    with pytest.raises(ValueError):
+        np.loadtxt([f"1,1,{field},10,5,5,1"], delimiter=",")
+    p = tmp_path / "gt.txt"
+    p.write_text(f"1,1,10,10,5,5,1\n2,1,{field},10,5,5,1\n", encoding="utf-8")
+    with pytest.raises(MOTFormatError, match=re.escape(
+            f"gt.txt, line 2, column 3 (left): not a number: {field!r}")):
+        read_mot(p)
+    ini = tmp_path / "seqinfo.ini"
+    for key in ("frameRate", "seqLength"):
+        values = {"frameRate": "25", "seqLength": "600", key: field.replace("1_0", "3_0")}
+        ini.write_text("[Sequence]\n" + "".join(f"{k}={v}\n" for k, v in values.items())
+                       + "imWidth=640\nimHeight=480\n", encoding="utf-8")
+        with pytest.raises(MOTFormatError, match="is not a number"):
+            read_seqinfo(ini)
+
+
 def test_write_then_read_and_no_overwrite(tmp_path):
     p = tmp_path / "out" / "res.txt"
     write_mot(p, [2, 1, 1], [5, 9, 3], [[1, 2, 3, 4], [5, 6, 7, 8], [0.5, 0, 1, 1]], [0.5, 1, 1])

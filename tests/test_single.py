@@ -56,6 +56,9 @@ def test_measures_in_closed_form(tmp_path):
     bad.write_text("1,2,3,4\n1,2,x,4\n")
     with pytest.raises(ValueError, match=r"b.txt:2: not numbers"):
         read_boxes(bad)
+    bad.write_text("1,2,3,4\n1,2,3_0,4\n")  # (float() read 3_0 as 30; numpy refuses it)
+    with pytest.raises(ValueError, match=r"b.txt:2: not numbers"):
+        read_boxes(bad)
     otb = tmp_path / "groundtruth_rect.txt"
     otb.write_text("205\t151\t17\t50\n")
     assert read_boxes(otb).tolist() == [[204.0, 150.0, 17.0, 50.0]]  # 1-based to 0-based

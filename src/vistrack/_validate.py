@@ -8,6 +8,7 @@ surfacing later as a broadcasting error or a silent NaN.
 from __future__ import annotations
 
 import math
+import re
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -684,3 +685,22 @@ def decode_text(data: bytes, path: object, what: str, error: type[Exception]) ->
     if "\x00" in text:
         raise error(f"{path} is not a text {what} file (byte {data.index(0)} is a NUL byte)")
     return text
+
+
+_NUMBER_TEXT = re.compile(r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+                          r"|inf|infinity|nan)", re.IGNORECASE)
+"""A number as a data file writes it and C's ``strtod`` (numpy's text reader) reads it:
+ASCII digits, a sign, a point, an exponent; or a word for infinity or NaN."""
+
+
+def text_number(text: str) -> float:
+    """``text`` (stripped) read as a number as numpy's text reader reads it, or ValueError.
+
+    Python's ``float()`` reads more: ``1_0`` as 10 (a digit separator of Python's source) and
+    digits of other scripts (``"١٢"`` as 12); a data file's reader took them where
+    ``np.loadtxt`` refuses them, so the same file was read one way or the other by where its
+    other lines failed."""
+    t = text.strip()
+    if not _NUMBER_TEXT.fullmatch(t):
+        raise ValueError(f"could not convert string to float: {text!r}")
+    return float(t)

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_rows4, as_whole, decode_text
+from .._validate import as_rows4, as_whole, decode_text, text_number
 from ..io.motchallenge import (
     MOTTable,
     _row_cells,
@@ -363,7 +363,7 @@ def _lines_of(path: str, match: Callable[[list[float]], bool]) -> list[int]:
     for k, raw in enumerate(_text_lines(text), start=1):  # as read_mot counts lines
         try:  # a row's values as read_mot splits them (commas, or spaces and tabs); a blank
             # or comment line (np.loadtxt skips those) is not a row
-            row = [float(c) for c in _row_cells(raw)]
+            row = [text_number(c) for c in _row_cells(raw)]
         except ValueError:
             continue
         if len(row) >= 6 and match(row):

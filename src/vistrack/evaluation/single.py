@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import as_finite, as_float_array, decode_text
+from .._validate import as_finite, as_float_array, decode_text, text_number
 from ..io.motchallenge import _text_lines
 from ..io.tracks import write_boxes
 
@@ -401,7 +401,7 @@ def _read_box_rows(path: str | Path, rule: str = "area", origin: int | None = No
             blank = blank or n
             continue
         try:
-            vals = [float(v) for v in line.replace(",", " ").replace("\t", " ").split()]
+            vals = [text_number(v) for v in line.replace(",", " ").replace("\t", " ").split()]
         except ValueError:
             raise ValueError(f"{path}:{n}: not numbers: {line.strip()!r}") from None
         if len(vals) not in (4, 5, 8):

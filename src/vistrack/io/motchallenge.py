@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
-from .._validate import as_finite, as_float_array, as_whole, decode_text
+from .._validate import as_finite, as_float_array, as_whole, decode_text, text_number
 from .atomic import check_output, replacing
 
 if TYPE_CHECKING:
@@ -961,7 +961,7 @@ def _parse_slow(path: str, lines: list[str]) -> np.ndarray:
         vals = []
         for j, c in enumerate(cells, start=1):
             try:
-                v = float(c)
+                v = text_number(c)
             except ValueError:
                 words = not rows and any(ch.isalpha() for cell in cells for ch in cell)
                 header = (" (a header line? MOTChallenge files have none; a .csv file's header "
@@ -1872,8 +1872,8 @@ def _seqinfo_value(path: Path, s: Any, key: str, kind: type) -> Any:
         # written as an integer, it is read as one (past 2**53 a float changed it)
         text = s[key].strip()
         # (at most 18 digits: int() took 400 and float() of it overflowed, unnamed)
-        v = (int(text) if re.fullmatch(r"[+-]?[0-9]{1,18}", text) else float(text)) \
-            if kind is int else kind(s[key])
+        v = (int(text) if re.fullmatch(r"[+-]?[0-9]{1,18}", text) else text_number(text)) \
+            if kind is int else text_number(text) if kind is float else kind(s[key])
     except ValueError:
         # ("is not float", Python's word, and no line before; the file is read again for
         # the line only on the way to an error)
