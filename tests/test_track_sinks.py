@@ -617,6 +617,64 @@ def test_the_file_sinks_refuse_rows_read_mot_would_refuse(tmp_path, sink, frame,
         out.write(Frame(frame, 0.0), tracks)
 
 
+@pytest.mark.parametrize("kind", ["mot", "csv", "points"])
+def test_the_file_sinks_refuse_a_track_given_twice_in_a_frame(tmp_path, kind):
+    """The sinks wrote track 3 twice in frame 2, in one call or in two calls for the frame,
+    and the file was refused only when scored (evaluate_mot names the two lines: the oracle
+    of what a results file may hold). A frame after it may hold track 3 again, and a frame
+    given again later (out of order) adds its own tracks."""
+    from vistrack.evaluation import evaluate_mot
+    from vistrack.io import PointsCSVWriter, read_mot
+
+    def tracks(ids):
+        n = len(ids)
+        xy = np.arange(2.0 * n).reshape(n, 2) * 10
+        if kind == "points":
+            return Tracks(ids=np.array(ids), boxes=None, points=xy, scores=np.ones(n),
+                          classes=np.zeros(n))
+        return Tracks(ids=np.array(ids), boxes=np.c_[xy, xy + 5], points=None,
+                      scores=np.ones(n), classes=np.zeros(n))
+
+    path = tmp_path / ("t.txt" if kind == "mot" else "t.csv")
+    # what the sinks wrote: a file evaluate_mot refuses
+    write_mot(tmp_path / "old.txt", [2, 2], [3, 3], [[0, 0, 5, 5], [10, 10, 5, 5]])
+    with pytest.raises(ValueError, match="id 3 appears more than once in frame 2"):
+        evaluate_mot(read_mot(tmp_path / "old.txt"), read_mot(tmp_path / "old.txt"))
+    sink = {"mot": MOTWriter, "csv": CSVWriter, "points": PointsCSVWriter}[kind](path)
+    said = "frame 2: track 3 is given twice (a track is one row a frame"
+    with pytest.raises(ValueError, match=re.escape(said)):
+        sink.write(Frame(2, 0.0), tracks([3, 5, 3]))
+    sink.write(Frame(2, 0.0), tracks([3, 5]))
+    with pytest.raises(ValueError, match=re.escape(said)):
+        sink.write(Frame(2, 0.0), tracks([7, 3]))
+    sink.write(Frame(2, 0.0), tracks([7]))
+    sink.write(Frame(3, 0.0), tracks([3]))
+    sink.write(Frame(2, 0.0), tracks([8]))  # (frame 2's earlier tracks are not kept)
+    assert len(sink) == 5 and sink.identities.tolist() == [3, 5, 7, 8]
+    sink.close()
+    if kind == "mot":
+        t = read_mot(path)
+        assert list(zip(t.frames.tolist(), t.ids.tolist())) == [(2, 3), (2, 5), (2, 7), (2, 8),
+                                                                 (3, 3)]
+
+
+def test_the_points_sink_takes_no_tracks_of_either_kind(tmp_path):
+    """PointsCSVWriter refused Tracks.empty() (whose default is box tracks) as box tracks: a
+    frame without tracks is nothing to write, whatever their kind."""
+    from vistrack.io import PointsCSVWriter
+
+    sink = PointsCSVWriter(tmp_path / "p.csv")
+    sink.write(Frame(1, 0.0), Tracks.empty())
+    sink.write(Frame(2, 0.0), Tracks.empty(boxes=False))
+    with pytest.raises(ValueError, match="takes point tracks; these are boxes"):
+        sink.write(Frame(3, 0.0), Tracks(ids=np.array([1]), boxes=np.array([[0.0, 0, 2, 2]]),
+                                         points=None, scores=np.ones(1), classes=np.zeros(1)))
+    with pytest.raises(ValueError, match="frames count from 1"):
+        sink.write(Frame(0, 0.0), Tracks.empty())
+    sink.close()
+    assert (tmp_path / "p.csv").read_text() == "frame,particle,x,y\n" and len(sink) == 0
+
+
 def test_track_rows_refuse_an_id_that_is_not_whole():
     """TrackRows took ids 1.2 and 1.7 as track 1 both (two tracks merged, no word), where the
     file sinks name them (the test above); whole ids of any numeric type are taken."""

@@ -327,6 +327,9 @@ class _RowsFile:
         self._file = PartialFile(self.path)
         self._rows = 0
         self._ids: dict[int, int] = {}  # identity: its class (the latest written)
+        # the latest frame written and its identities (a frame given again next is checked
+        # against them)
+        self._frame: tuple[int, set[int]] = (0, set())
 
     def _columns(self, frame: Frame, tracks: Tracks
                  ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, list[int]]:
@@ -354,8 +357,23 @@ class _RowsFile:
     def _count(self, ids: np.ndarray, tracks: Tracks, f: int) -> list[int]:
         """Count rows ``ids`` of frame ``f`` written, each identity with its class; returns
         the classes (whole numbers, or a ValueError naming the frame: a tracker's NaN class
-        was written as -9223372036854775808, 2.7 as 2)."""
+        was written as -9223372036854775808, 2.7 as 2).
+
+        An identity written twice in a frame (in one call, or in two calls for the frame one
+        after the other) is a ValueError naming both: the file was written, and
+        :func:`~vistrack.evaluation.evaluate_mot` refused it only when scored."""
         classes = _integers_of(f, tracks.classes, "classes").tolist()
+        before = self._frame[1] if self._frame[0] == f else set()
+        now = ids.tolist()
+        given = set(now)
+        if len(given) < len(now) or not before.isdisjoint(given):
+            seen = set(before)
+            for i in now:
+                if i in seen:
+                    raise ValueError(f"frame {f}: track {i} is given twice (a track is one "
+                                     "row a frame; evaluate_mot refuses a file with two)")
+                seen.add(i)
+        self._frame = (f, before | given)
         self._rows += len(ids)
         self._ids.update(zip(ids.tolist(), classes))
         return classes
@@ -481,7 +499,10 @@ class MOTWriter(_RowsFile):
         Raises
         ------
         ValueError
-            If the tracks are points.
+            If the tracks are points, or a row is one :func:`~vistrack.io.read_mot` or
+            :func:`~vistrack.evaluation.evaluate_mot` refuses (a frame below 1, an id that
+            is not a whole number or is given twice in the frame, a box or score that is
+            not finite), naming the frame.
 
         Examples
         --------
@@ -615,7 +636,10 @@ class CSVWriter(_RowsFile):
         Raises
         ------
         ValueError
-            If the tracks are points.
+            If the tracks are points, or a row is one :func:`~vistrack.io.read_mot` or
+            :func:`~vistrack.evaluation.evaluate_mot` refuses (a frame below 1, an id that
+            is not a whole number or is given twice in the frame, a box or score that is
+            not finite), naming the frame.
 
         Examples
         --------
@@ -697,10 +721,13 @@ class PointsCSVWriter(_RowsFile):
         ------
         ValueError
             If the tracks are boxes, a frame is below 1, an identity is not a whole number
-            or a position is not finite (each naming the frame).
+            or is given twice in the frame, or a position is not finite (each naming the
+            frame).
         """
         f = _frame_of(frame)
-        if tracks.points is None or tracks.boxes is not None:
+        if len(tracks) and (tracks.points is None or tracks.boxes is not None):
+            # (no tracks of either kind are none to write: Tracks.empty(), the default's
+            # boxes, was refused)
             raise ValueError(f"frame {f}: PointsCSVWriter({self.path}) takes point tracks; "
                              "these are boxes (CSVWriter writes them)")
         if f < 1:
