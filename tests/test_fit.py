@@ -248,6 +248,26 @@ def test_fit_sequences_from_ground_truth_and_from_a_first_pass(tmp_path):
         fit_sequences([])
 
 
+@pytest.mark.parametrize("file", ["det/det.txt", "gt/gt.txt"])
+def test_fit_gt_refuses_a_frame_past_the_sequences_length_as_track_does(tmp_path, file):
+    """`fit --gt` learned from detections and ground truth past seqLength unsaid, where
+    `vistrack track` refuses such a detections file, naming its line (the oracle here:
+    track_sequence's error on the same detections file)."""
+    rng = np.random.default_rng(4)
+    seq = _sequence(tmp_path / "SIM", rng, T=60)
+    path = seq / file
+    rows = path.read_text().splitlines()
+    line = len(rows) - 5
+    rows[line - 1] = "61" + rows[line - 1][rows[line - 1].index(","):]
+    path.write_text("\n".join(rows) + "\n")
+    said = f"{path}, line {line}: frame 61 is beyond the sequence's 60 frames"
+    if file.startswith("det"):
+        with pytest.raises(ValueError, match=re.escape(said)):
+            track_sequence(seq, tmp_path / "out.txt")
+    with pytest.raises(ValueError, match=re.escape(said)):
+        fit_sequences([seq], gt=True, held_out=False)
+
+
 def test_two_sequence_folders_of_one_name_are_two_sequences(tmp_path):
     """a/S and b/S (the same name in two folders): the held-out check scored them under their
     names, so one replaced the other and `vistrack fit` failed with KeyError: 'COMBINED'."""

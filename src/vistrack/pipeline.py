@@ -1727,15 +1727,22 @@ def _read_sequence(seq_dir: Path, out: Path, detections: str | Path | None,
             if not math.isclose(info.frame_rate, float(fps)):
                 replaced = ("seqinfo.ini", info.frame_rate)
             info = replace(info, frame_rate=float(fps))
-        if len(dets) and dets.frames.max() > info.seq_length:
-            n = info.seq_length
-            f = int(dets.frames[dets.frames > n].min())  # the first frame beyond, its line
-            line = row_line(det_path, f, columns=columns)
-            raise ValueError(f"{det_path}" + (f", line {line}" if line is not None else "")
-                             + f": frame {f} is beyond the sequence's {n} frames ({ini})")
+        _check_within_length(det_path, dets, info.seq_length, ini, columns)
         warn_outside(dets, det_path, (info.im_width, info.im_height), stacklevel=3,
                      columns=columns)
     return _SequenceInput(det_path, str(det_path if alone else seq_dir), info, dets, replaced)
+
+
+def _check_within_length(path: Path, table: MOTTable, n: int, ini: Path | None,
+                        columns: dict[str, str] | None = None) -> None:
+    """Refuse a row of ``table`` (read from ``path``) past the sequence's ``n`` frames (its
+    ``seqLength``, in ``ini``), naming the file, the line of the first frame beyond and
+    ``ini``."""
+    if len(table) and table.frames.max() > n:
+        f = int(table.frames[table.frames > n].min())  # the first frame beyond, its line
+        line = row_line(path, f, columns=columns)
+        raise ValueError(f"{path}" + (f", line {line}" if line is not None else "")
+                         + f": frame {f} is beyond the sequence's {n} frames ({ini})")
 
 
 def _check_detections(src: _SequenceInput, tc: BoxTrackerConfig, oc: OfflineConfig) -> None:
@@ -1999,8 +2006,11 @@ class FitRun:
     chosen: str = "learned"
 
 
-def _gt_reference(seq: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _gt_reference(seq: Path, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rows of ``seq``'s ground truth that scoring considers, refusing a frame past the
+    sequence's ``n`` frames."""
     gt = read_mot(seq / "gt" / "gt.txt")
+    _check_within_length(seq / "gt" / "gt.txt", gt, n, seq / "seqinfo.ini")
     # the rows the scoring considers (0: to ignore), as TrackEval reads the flag
     keep = considered(gt.conf) if gt.conf is not None else np.ones(len(gt), bool)
     return gt.frames[keep], gt.ids[keep], gt.boxes[keep]
@@ -2112,8 +2122,12 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
         for seq in seqs:
             info = read_seqinfo(seq)
             det_path = seq / "det" / "det.txt"  # (checked above, with gt/gt.txt)
+            # (track refuses a frame past seqLength, naming its line; fit --gt learned from
+            # one unsaid, matched to ground truth past the sequence's end)
+            dets = in_own_order(read_mot(det_path))
+            _check_within_length(det_path, dets, info.seq_length, seq / "seqinfo.ini")
             if gt:
-                ref = _gt_reference(seq)
+                ref = _gt_reference(seq, info.seq_length)
             else:
                 first = Path(tmp) / f"{len(series)}.txt"
                 run = track_sequence(seq, first, config=replace(
@@ -2123,7 +2137,6 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
                 # its smoother ran on the detector's own frames: every stride-th
                 stride = (run.derived or {}).get("detection_stride", 1)
                 smoothers.append(start.at_rate(info.frame_rate / stride))
-            dets = in_own_order(read_mot(det_path))
             try:
                 s = matched_series(*ref, dets.frames, dets.boxes, min_length=_MIN_MATCHED)
             except ValueError as e:  # (an identity twice in a frame named no file)
