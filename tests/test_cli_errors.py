@@ -695,7 +695,8 @@ def test_an_unknown_tracker_lists_every_form(tmp_path, capsys, name):
      "track)"),
     (["demo", "kalman", "--seeds", "x"],
      "vistrack demo: error: argument --seeds: invalid int value: 'x'"),
-    (["demo", "kalman", "--seeds", "0"], "vistrack demo: error: --seeds must be >= 1; got 0"),
+    (["demo", "kalman", "--seeds", "0"],
+     "vistrack demo: error: --seeds must be from 1 to 1,000,000; got 0"),
     (["--bogus"], "vistrack: error: unrecognized arguments: --bogus"),
 ])
 def test_argument_errors_are_one_line(capsys, argv, message):

@@ -268,6 +268,28 @@ def test_fit_gt_refuses_a_frame_past_the_sequences_length_as_track_does(tmp_path
         fit_sequences([seq], gt=True, held_out=False)
 
 
+def test_ctrl_c_in_vistrack_fit_says_what_was_kept(tmp_path, monkeypatch, capsys):
+    """`vistrack fit` stopped by Ctrl-C said "interrupted" alone, not whether the --out of an
+    earlier run was kept (it is: written whole or not at all)."""
+    import vistrack.pipeline as pipeline
+
+    seq = _sequence(tmp_path / "SIM", np.random.default_rng(4))
+
+    def stopped(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pipeline, "fit_sequences", stopped)
+    out = tmp_path / "learned.toml"
+    assert main(["fit", str(seq), "--out", str(out)]) == 130
+    assert capsys.readouterr().err.strip() == "vistrack fit: interrupted; nothing was written"
+    assert not out.exists()
+    out.write_text("# earlier\n")
+    assert main(["fit", str(seq), "--out", str(out), "--force"]) == 130
+    assert capsys.readouterr().err.strip() == ("vistrack fit: interrupted; earlier outputs are "
+                                               "kept")
+    assert out.read_text() == "# earlier\n"
+
+
 def test_two_sequence_folders_of_one_name_are_two_sequences(tmp_path):
     """a/S and b/S (the same name in two folders): the held-out check scored them under their
     names, so one replaced the other and `vistrack fit` failed with KeyError: 'COMBINED'."""

@@ -451,3 +451,32 @@ def test_report_names_a_folder_without_tracks_before_its_old_page(tmp_path, caps
     assert main(["report", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "tracks.txt does not exist" in err and "--force" not in err
+
+
+def test_ctrl_c_in_vistrack_report_says_what_was_kept(tmp_path, monkeypatch, capsys):
+    """`vistrack report` stopped by Ctrl-C said "interrupted" alone: whether a page was there
+    before, and kept, was not said."""
+    import vistrack.report
+
+    out = tmp_path / "run"
+    assert main(["track", str(demo_clip().video), "--stop", "3", "--out-dir", str(out),
+                 "--quiet"]) == 0
+    real = vistrack.report.write_report
+
+    def stopped(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(vistrack.report, "write_report", stopped)
+    capsys.readouterr()
+    assert main(["report", str(out)]) == 130
+    assert capsys.readouterr().err.strip() == "vistrack report: interrupted; nothing was written"
+    assert not (out / "report.html").exists()
+    monkeypatch.setattr(vistrack.report, "write_report", real)
+    assert main(["report", str(out)]) == 0
+    page = (out / "report.html").read_bytes()
+    monkeypatch.setattr(vistrack.report, "write_report", stopped)
+    capsys.readouterr()
+    assert main(["report", str(out), "--force"]) == 130
+    assert capsys.readouterr().err.strip() == ("vistrack report: interrupted; earlier outputs "
+                                               "are kept")
+    assert (out / "report.html").read_bytes() == page

@@ -133,8 +133,12 @@ def _report(args: argparse.Namespace) -> int:
     from .pipeline import REPORT
     from .report import write_report
 
+    args.outputs_to = [(Path(args.out_dir) / REPORT, False)]  # (what Ctrl-C says it kept)
+    args.had_outputs = _had_outputs(*args.outputs_to[0])
     try:
-        print(f"wrote {write_report(args.out_dir, force=args.force)}")
+        page = write_report(args.out_dir, force=args.force)
+        args.run_written = True
+        print(f"wrote {page}")
     except FileExistsError:
         # the page, found after the run folder's own faults: said in the option's words
         # (write_report's are Python's; it said "pass force=True (--force)")
@@ -175,11 +179,22 @@ def _demo(args: argparse.Namespace) -> int:
                 str(Path(args.out) / "pets09-s2l1")] + (["--force"] if args.force else [])
         track = _parser().parse_args(argv)
         track.command_line = getattr(args, "command_line", None)
-        return int(track.func(track))
+        try:
+            return int(track.func(track))
+        finally:  # what the run kept, for Ctrl-C's line (it said "interrupted" alone)
+            for name in ("outputs_to", "had_outputs", "run_written", "outputs_written"):
+                if hasattr(track, name):
+                    setattr(args, name, getattr(track, name))
     from .demo import run_kalman_demo
 
-    print(run_kalman_demo(args.out, n_seeds=1000 if args.seeds is None else args.seeds,
-                          force=args.force))
+    # what Ctrl-C says it kept (the figures are replaced as one set)
+    args.outputs_to = [(Path(args.out) / n, False)
+                       for n in ("kalman_1d.png", "smoothing_1d.png", "kalman_2d.png")]
+    args.had_outputs = any(_had_outputs(*o) for o in args.outputs_to)
+    summary = run_kalman_demo(args.out, n_seeds=1000 if args.seeds is None else args.seeds,
+                              force=args.force)
+    args.run_written = True
+    print(summary)
     return 0
 
 
@@ -1230,6 +1245,8 @@ def _fit(args: argparse.Namespace) -> int:
                     + ([("--config", args.config)] if args.config is not None else []),
                     name="--out")
     check_output(args.out, force=args.force, name="--out")
+    args.outputs_to = [(args.out, False)]  # (what Ctrl-C says it kept)
+    args.had_outputs = _had_outputs(args.out, False)
     if Path(args.out).suffix.lower() not in ("", ".toml"):
         # (fit --out learned.json wrote TOML unsaid, where track --out results.json warns)
         warnings.warn(f"{args.out}: written as TOML, the configuration's format (read back "
@@ -1306,6 +1323,7 @@ def _fit(args: argparse.Namespace) -> int:
                         for k in ("std_pos", "std_vel", "std_meas")})
     with open_replacing(args.out) as fh:
         fh.write(config_toml(run.config, derived))
+    args.run_written = True
     print(f"wrote {args.out} (vistrack track SEQ_DIR --out RESULTS.txt --config {args.out})")
     return 0
 
@@ -1621,7 +1639,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--force", action="store_true",
                       help="replace the results of an earlier run")
     demo.add_argument("--seeds", type=int,
-                      help="kalman: simulated runs for the error statistics (default: 1000)")
+                      help="kalman: simulated runs for the error statistics, 1 to 1,000,000 "
+                      "(default: 1000)")
     _runs(demo, _demo, debug_help)
     track = sub.add_parser(
         "track", help="track a MOTChallenge sequence's detections, or a video from pixels",
@@ -1927,8 +1946,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         return 2
     seeds = getattr(args, "seeds", None)
-    if seeds is not None and seeds < 1:
-        command.error(f"--seeds must be >= 1; got {seeds}")
+    if seeds is not None and not 1 <= seeds <= 1_000_000:
+        # (10**10 ran out of memory after the figures were written; 10**20 failed in numpy's
+        # words): demo.MAX_SEEDS, not imported for an error of the command line
+        command.error(f"--seeds must be from 1 to 1,000,000; got {seeds}")
     if seeds is not None and getattr(args, "name", None) == "track":
         command.error("--seeds goes with 'vistrack demo kalman' (the error statistics' runs); "
                       "'track' takes none")

@@ -159,7 +159,7 @@ class MurphyStats:
                 float(100 * np.mean(self.smoothed < smoothed)))
 
 
-def _murphy_run(seed: int, n_series: int | None = None):
+def _murphy_run(seed: int | np.random.Generator, n_series: int | None = None):
     """Simulate the 2-D example, filter and RTS-smooth it; ``(xs, ys, filtered, smoothed)``."""
     m = MURPHY
     xs, ys = simulate_lgssm(MURPHY_T, F=m.F, Q=m.Q, H=m.H, R=m.R, x0=MURPHY_X0,
@@ -173,10 +173,34 @@ def _toolbox_error(est: np.ndarray, xs: np.ndarray) -> np.ndarray:
     return np.sqrt(((est[..., :2] - xs[..., :2]) ** 2).sum(axis=(-2, -1)))
 
 
+MAX_SEEDS = 1_000_000
+"""The most runs :func:`murphy_errors` takes (about two minutes; 10**10 ran out of memory)."""
+
+_CHUNK = 10_000
+"""The runs filtered as one batch (about 90 MB): more are drawn and filtered in batches of
+this many, one random generator for them all."""
+
+
 def murphy_errors(n_seeds: int = 1000, *, seed: int = 0) -> MurphyStats:
-    """Run the 2-D example on ``n_seeds`` simulated tracks as one batch: filter and RTS-smooth."""
-    xs, _, res, sm = _murphy_run(seed, n_seeds)
-    return MurphyStats(n_seeds, _toolbox_error(res.means, xs), _toolbox_error(sm.means, xs))
+    """Run the 2-D example on ``n_seeds`` simulated tracks (1 to :data:`MAX_SEEDS`) in
+    batches: filter and RTS-smooth. Up to 10,000 runs are one batch, drawn from ``seed``
+    alone; more take their batches from one generator of ``seed``, so memory stays that of
+    one batch (8 KB a run)."""
+    from ._validate import as_whole
+
+    n = as_whole(n_seeds, "n_seeds", 1)
+    if n > MAX_SEEDS:
+        raise ValueError(f"n_seeds must be at most {MAX_SEEDS:,}; got {n:,}")
+    if n <= _CHUNK:
+        xs, _, res, sm = _murphy_run(seed, n)
+        return MurphyStats(n, _toolbox_error(res.means, xs), _toolbox_error(sm.means, xs))
+    rng = np.random.default_rng(seed)
+    filtered, smoothed = np.empty(n), np.empty(n)
+    for a in range(0, n, _CHUNK):
+        b = min(n, a + _CHUNK)
+        xs, _, res, sm = _murphy_run(rng, b - a)
+        filtered[a:b], smoothed[a:b] = _toolbox_error(res.means, xs), _toolbox_error(sm.means, xs)
+    return MurphyStats(n, filtered, smoothed)
 
 
 def murphy_2d(path: str | Path, *, seed: int = 8) -> tuple[Path, float, float]:
@@ -222,17 +246,23 @@ _PERCENTILE_SEEDS = 100
 
 def run_kalman_demo(out_dir: str | Path, *, n_seeds: int = 1000, force: bool = False) -> str:
     """Write the three figures into ``out_dir`` and return a text summary; figures there
-    already are replaced only with ``force`` (else a FileExistsError naming them)."""
+    already are replaced only with ``force`` (else a FileExistsError naming them). The
+    statistics over ``n_seeds`` runs (:func:`murphy_errors`) are computed first, and the
+    figures replace earlier ones as one set (:func:`~vistrack.io.atomic.together`): a
+    failure or Ctrl-C leaves every earlier figure as it was, or none written."""
     out = Path(out_dir)
     names = ("kalman_1d.png", "smoothing_1d.png", "kalman_2d.png")
     there = [str(out / n) for n in names if (out / n).exists()]
     if there and not force:
         raise FileExistsError(f"{', '.join(there)} exist; pass --force to overwrite them")
-    out.mkdir(parents=True, exist_ok=True)
-    p1 = constant_velocity_1d(out / names[0])
-    p2 = smoothing_1d(out / names[1])
-    p3, ef, es = murphy_2d(out / names[2])
+    from .io.atomic import made_folder, together
+
     st = murphy_errors(n_seeds)
+    # the three as one set: stopped between two, new figures stood beside an earlier run's
+    with made_folder(out), together():
+        p1 = constant_velocity_1d(out / names[0])
+        p2 = smoothing_1d(out / names[1])
+        p3, ef, es = murphy_2d(out / names[2])
     pf, ps = st.percentile_of(4.9, 3.2)
     mean = f"vistrack, mean over {st.n_seeds} seed{'s' if st.n_seeds != 1 else ''}:"
     lines = [
