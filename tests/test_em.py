@@ -348,6 +348,11 @@ def test_maximum_likelihood_of_q_alone_leaves_a_full_or_per_step_R_as_given():
 
 def test_maximum_likelihood_refuses_what_it_does_not_learn():
     ys = series(50, 14)
+    # learn=() ran EM one iteration (mle none) and returned the model as given, "converged"
+    for fit in (em, mle):
+        for nothing in ((), []):
+            with pytest.raises(ValueError, match=r"learn must name at least one of \["):
+                fit(ys, **cv_model(), learn=nothing)
     with pytest.raises(ValueError, match=r"learn must name some of \['Q', 'R'\]"):
         mle(ys, **cv_model(), learn=("F",))
     with pytest.raises(ValueError, match="R_form must be 'diag' or 'scaled'"):

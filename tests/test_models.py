@@ -486,6 +486,26 @@ def test_psd_sqrt_refuses_what_has_no_root(S, message):
     np.testing.assert_allclose(A @ A.T, S, rtol=0, atol=1e-11)
 
 
+def test_psd_sqrt_of_matrices_of_no_entries_is_theirs():
+    """The root of a (0, 0) matrix, or of a stack of them, failed in numpy's words ("zero-size
+    array to reduction operation maximum"); it is the matrix of no entries itself (A A' = S
+    holds vacuously, as scipy's sqrtm gives), and the checks of symmetry and definiteness
+    find nothing to refuse in it."""
+    from scipy.linalg import sqrtm
+
+    from vistrack._validate import check_psd, check_symmetric
+    from vistrack.models import psd_sqrt
+
+    assert sqrtm(np.zeros((0, 0))).shape == (0, 0)
+    for shape in ((0, 0), (3, 0, 0)):
+        S = np.zeros(shape)
+        A = psd_sqrt(S)
+        assert A.shape == shape and A is not S
+        check_psd(S, "S")
+        check_psd(S, "S", strict=True)
+        assert check_symmetric(S, "S").shape == shape[:-2] + (1, 1)
+
+
 def test_model_settings_that_were_cut_or_wrong_are_named():
     """`MotionFunctions.f` with a `dt` for each state reversed the three axes of the F stack
     (states of the wrong shape and values, no error; the model's own `f` is the oracle);

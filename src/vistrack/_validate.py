@@ -380,7 +380,8 @@ def check_symmetric(arr: np.ndarray, name: str) -> np.ndarray:
     """Check that every matrix of a stack ``(..., n, n)`` is symmetric, to a relative
     tolerance of 1e-8 of its largest entry, naming the first entry that is not; returns each
     matrix's scale, that largest entry (1 where all are 0), shaped ``(..., 1, 1)``."""
-    scale = np.max(np.abs(arr), axis=(-2, -1), keepdims=True)
+    # (the largest of no entries, of a (0, 0) matrix, failed in numpy's words)
+    scale = np.max(np.abs(arr), axis=(-2, -1), keepdims=True, initial=0.0)
     scale = np.where(scale > 0, scale, 1.0)
     asym = np.abs(arr - np.swapaxes(arr, -1, -2)) > 1e-8 * scale
     if asym.any():
@@ -430,6 +431,8 @@ def check_psd(arr: np.ndarray, name: str, *, strict: bool = False) -> None:
     ValueError: Q must be positive semi-definite; Q[1, 1] = -0.5, a negative variance
     """
     check_symmetric(arr, name)
+    if arr.shape[-1] == 0:  # (no entries to judge: the largest of none failed in numpy's words)
+        return
     kind = "positive definite" if strict else "positive semi-definite"
     d = np.diagonal(arr, axis1=-2, axis2=-1)
     top = np.max(np.abs(arr), axis=(-2, -1))

@@ -211,13 +211,13 @@ def em(
     Raises
     ------
     ValueError
-        If ``learn`` is a string or names something unknown, a form is unknown, ``tol`` is
-        not a number or ``max_iter`` not a positive integer, ``ys`` measures nothing, a prior
-        is given for another number of series, ``Q`` or ``F`` is learned from series of one
-        step, ``F`` (``H``) is learned with a ``Q`` (``R``) that stays one per step, ``H``
-        where some steps miss some components and ``R`` is not diagonal, or for a component
-        never measured, a learned ``Q``, ``R`` or ``P0`` is zero, or the model's arguments
-        are invalid (as :func:`kalman_filter` says).
+        If ``learn`` is a string, is empty or names something unknown, a form is unknown,
+        ``tol`` is not a number or ``max_iter`` not a positive integer, ``ys`` measures
+        nothing, a prior is given for another number of series, ``Q`` or ``F`` is learned
+        from series of one step, ``F`` (``H``) is learned with a ``Q`` (``R``) that stays
+        one per step, ``H`` where some steps miss some components and ``R`` is not diagonal,
+        or for a component never measured, a learned ``Q``, ``R`` or ``P0`` is zero, or the
+        model's arguments are invalid (as :func:`kalman_filter` says).
     TypeError
         If ``pooled`` is not True or False, or ``progress`` has no ``write``.
 
@@ -375,6 +375,8 @@ def _names(learn: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
     except TypeError:  # (None was "'NoneType' object is not iterable")
         raise TypeError(f"learn must be a sequence of names, some of {list(allowed)}; got "
                         f"{learn!r}") from None
+    if not names:  # (nothing to learn ran an iteration and returned the model as given)
+        raise ValueError(f"learn must name at least one of {list(allowed)}; got {learn!r}")
     for name in names:
         if name not in allowed:
             raise ValueError(f"learn must name some of {list(allowed)}; got {name!r}")
@@ -494,10 +496,11 @@ def mle(
     Raises
     ------
     ValueError
-        If ``learn`` names something else than ``"Q"`` and ``"R"``, ``R_form`` is unknown,
-        ``xtol`` is not > 0, ``max_iter`` is not a positive integer, ``ys`` measures nothing,
-        the noise learned is zero (or ``R``'s diagonal is not > 0, or a component is never
-        measured, for ``"diag"``), or the model is invalid (as :func:`kalman_filter` says).
+        If ``learn`` is empty or names something else than ``"Q"`` and ``"R"``, ``R_form``
+        is unknown, ``xtol`` is not > 0, ``max_iter`` is not a positive integer, ``ys``
+        measures nothing, the noise learned is zero (or ``R``'s diagonal is not > 0, or a
+        component is never measured, for ``"diag"``), or the model is invalid (as
+        :func:`kalman_filter` says).
 
     Examples
     --------

@@ -96,6 +96,8 @@ def psd_sqrt(S: np.ndarray, name: str = "S") -> np.ndarray:
         raise ValueError(f"{name} must be square matrices (..., n, n); got shape {S.shape}")
     check_finite(S, name)
     check_psd(S, name)
+    if S.shape[-1] == 0:  # the root of a matrix of no entries is one (numpy's words before)
+        return S.copy()
     w, V = np.linalg.eigh(S)
     A = _principal_root(w, V)
     d = np.diagonal(S, axis1=-2, axis2=-1)
