@@ -169,9 +169,15 @@ def test_a_link_is_never_longer_than_max_distance():
     after an update; with ``max_distance`` a measurement beyond it starts a new track
     however far the gate has grown (trackpy's search range); without it, the track takes
     it."""
+    from vistrack.models import ConstantPosition, Position
+    from vistrack.pipeline import PARTICLE_GATE, PARTICLE_NOISE
+
+    base = _particles_like()  # (its settings are fixed once made: built again with the cap)
     for cap, ids in ((None, [1]), (5.0, [2])):
-        tr = _particles_like()
-        tr.max_distance = cap
+        tr = PointTracker("gnn", motion=ConstantPosition(dim=2, q=base.motion.q),
+                          measurement=Position(dim=2, r=PARTICLE_NOISE ** 2),
+                          frame_rate=base.frame_rate, confirm_hits=1, max_lost=base.max_lost,
+                          p_gate=PARTICLE_GATE, max_distance=cap, report="measurement")
         tr.step(0, Detections(points=[[10.0, 10.0]]))
         out = tr.step(4, Detections(points=[[16.5, 10.0]]))  # 6.5 px, 4 frames on
         assert out.ids.tolist() == ids
@@ -285,6 +291,34 @@ def test_jipda_keeps_crossing_targets_in_clutter_without_false_tracks():
     assert rec > 0.8 and sum(ids) <= 8, (rec, ids)
     assert false_boxes(outs, truth) <= 2
     assert false_boxes(run(PointTracker("jpda", **kw), frames), truth) > 20
+
+
+@pytest.mark.parametrize("association", ["ipda", "jipda"])
+def test_a_track_certain_to_exist_is_still_lowered_by_its_misses(association):
+    """With p_survive 1 a target seen for some frames had its existence rounded to 1, and no
+    miss lowered it again: it was never deleted by its existence (only by max_lost). The
+    prior is kept at most 1 - 2**-40 now. Oracle: IPDA's closed form for a miss with nothing
+    in the gate, the odds of existence times B = 1 - P_D P_G each frame, from that cap."""
+    kw = dict(p_detect=0.9, clutter_density=1e-4, p_gate=0.99, frame_rate=1.0, max_lost=1e3,
+              p_survive=1.0)
+    tr = PointTracker(association, **kw)
+    for f in range(1, 31):
+        tr.step(f, Detections(points=np.array([[50.0, 50.0]])))
+    assert tr.existence[0] > 1.0 - 1e-12  # (1.0 exactly before)
+    B = 1.0 - 0.9 * 0.99
+    odds = (1.0 - 2.0 ** -40) / 2.0 ** -40
+    for k in range(1, 40):
+        tr.step(30 + k, Detections(points=np.zeros((0, 2))))
+        odds *= B
+        want = odds / (1.0 + odds)
+        if want < 0.01:  # below delete_existence: deleted
+            assert len(tr.tracks) == 0 and k == 15
+            break
+        # (the complement, 1 - existence, to 1e-4: a probability near 1 holds it to 1e-16
+        # absolute, 1e-5 of the 1e-11 left after the first miss, carried on by the odds)
+        np.testing.assert_allclose(1.0 - tr.existence, [1.0 - want], rtol=1e-4)
+    else:
+        raise AssertionError("the track was never deleted by its existence")
 
 
 def test_existence_settings_are_checked():

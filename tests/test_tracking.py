@@ -1661,3 +1661,36 @@ def test_a_real_sequence_numbered_from_2_to_52_gives_the_same_tracks():
         return out
 
     assert run(2**52) == run(1)
+
+
+def test_a_trackers_settings_are_fixed_once_it_is_made():
+    """A BoxTracker's config changed after it was made ran half of it: the compiled
+    association kept the gates it was made with while the lifecycle took the new, so the
+    compiled and numpy paths parted (one detection a frame: a track every frame against
+    none); a PointTracker's p_gate changed nothing (its threshold is derived when made); a
+    DetectorConfidencePF's n_particles failed in numpy's words at the next frame. Each is
+    refused now, naming the setting; the tracker made with the new settings is the oracle
+    of what they give."""
+    from dataclasses import replace
+
+    from vistrack.tracking import DetectorConfidencePF, PointTracker
+
+    tr = BoxTracker(scores="raw", camera_motion=False)
+    strict = replace(tr.config, min_iou=0.95, min_iou_tentative=0.95, min_iou_low=0.95,
+                     tentative_gate=0.0)
+    with pytest.raises(AttributeError, match=re.escape(
+            "BoxTracker.config is fixed when the tracker is made (what it derives from it "
+            "would not follow): make a new BoxTracker(config=...)")):
+        tr.config = strict
+    assert tr.config.min_iou != 0.95
+    for compiled in (True, False):
+        made = BoxTracker(strict, compiled=compiled)
+        seen = [made.step(f, Detections.from_xywh([[10 + 8 * f, 20, 30, 60]], [0.9])
+                          ).ids.tolist() for f in range(1, 5)]
+        assert seen == [[1], [], [], []]
+    for tracker, name, value in ((PointTracker(), "p_gate", 0.5),
+                                 (DetectorConfidencePF(), "config", None),
+                                 (BoxTracker(), "frame_rate", 10.0)):
+        with pytest.raises(AttributeError, match=f"{type(tracker).__name__}.{name} is fixed"):
+            setattr(tracker, name, value)
+    tr.record = True  # (what it reads each frame stays free)

@@ -83,6 +83,36 @@ class Tracker(Protocol):
         ...
 
 
+class FixedSettings:
+    """A tracker whose settings (the names of ``_fixed``) are fixed once it is made: what it
+    derives from them when made (a compiled association, a gate's threshold, a track
+    table's window) would not follow a later change, so assigning one raises
+    AttributeError naming it (a changed ``config`` ran half of it: the compiled association
+    kept the old gates while the lifecycle took the new). A subclass sets ``_made`` at the
+    end of its ``__init__``.
+
+    Examples
+    --------
+    >>> from vistrack.tracking import PointTracker
+    >>> tr = PointTracker()
+    >>> try:
+    ...     tr.p_gate = 0.5
+    ... except AttributeError as e:
+    ...     print(str(e).split(" (")[0] + "; " + str(e).split(": ")[1])
+    PointTracker.p_gate is fixed when the tracker is made; make a new PointTracker(p_gate=...)
+    """
+
+    _fixed: frozenset[str] = frozenset()
+
+    def __setattr__(self, name: str, value: object) -> None:
+        if name in self._fixed and self.__dict__.get("_made", False):
+            kind = type(self).__name__
+            raise AttributeError(f"{kind}.{name} is fixed when the tracker is made (what it "
+                                 f"derives from it would not follow): make a new "
+                                 f"{kind}({name}=...)")
+        super().__setattr__(name, value)
+
+
 def frame_index(frame: Frame | int | None, last: int | None) -> int:
     """The index of ``frame`` (a :class:`~vistrack.types.Frame`, or its index; None: the
     one after ``last``, or 1), checked to come after ``last``.

@@ -106,7 +106,7 @@ from ..filters.axes import (
 )
 from ..models.box import MAX_SECONDS, BoxMotion
 from ..types import Detections, Frame, Tracks, _whole_numbers
-from .base import frame_index
+from .base import FixedSettings, frame_index
 from .calibration import ScoreCalibration, ScoreCalibrator
 from .lifecycle import CONFIRMED, LOST, TENTATIVE, TrackTable, time_slack
 
@@ -550,7 +550,7 @@ def _nothing_seen() -> ScoreCalibration:
     return ScoreCalibration([0.0], [1.0])
 
 
-class BoxTracker:
+class BoxTracker(FixedSettings):
     """A multi-object box tracker (see the module for the algorithm).
 
     Parameters
@@ -600,6 +600,9 @@ class BoxTracker:
     >>> out.ids.tolist(), out.boxes.round(1).tolist()
     ([1], [[24.0, 20.0, 54.0, 80.0]])
     """
+
+    _fixed = frozenset({"config", "motion", "frame_rate", "calibration", "image_size",
+                        "compiled"})
 
     def __init__(self, config: BoxTrackerConfig | str = "bytetrack", *,
                  motion: BoxMotion | None = None, frame_rate: float = 30.0,
@@ -661,6 +664,7 @@ class BoxTracker:
         self.compiled = bool(compiled) and self.config.assigner == "gnn"
         self._association = _association(self.config)
         self.reset()
+        self._made = True  # the settings are fixed from here (FixedSettings)
 
     def reset(self) -> None:
         """Forget every track (and what the online score calibration learnt); identities

@@ -73,6 +73,7 @@ it in the frame by more than ``max_overlap``.
 
 from __future__ import annotations
 
+import copy
 import warnings
 from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING, Any, cast
@@ -83,7 +84,7 @@ from .._validate import as_number, as_rng, as_whole
 from ..association import greedy, iou
 from ..filters.particle import resample
 from ..types import Detections, Frame, Tracks
-from .base import frame_image, frame_index
+from .base import FixedSettings, frame_image, frame_index
 from .lifecycle import CONFIRMED, TENTATIVE, TrackTable
 
 if TYPE_CHECKING:
@@ -327,7 +328,14 @@ def _sigmoid(z: np.ndarray) -> np.ndarray:
     return 1.0 / (1.0 + np.exp(-np.clip(z, -50, 50)))
 
 
-class DetectorConfidencePF:
+_SHARED = frozenset({"confidence", "config", "rng", "_integral"})
+"""What :meth:`DetectorConfidencePF.update` keeps by reference when it saves the tracker
+to put back after a refused frame: the callable, the settings (replaced whole, never
+changed in place), the generator (its state is saved) and the scratch buffer of the
+integral images (written anew each frame)."""
+
+
+class DetectorConfidencePF(FixedSettings):
     """Multi-person tracking by one particle filter per target (see the module).
 
     Parameters
@@ -377,6 +385,8 @@ class DetectorConfidencePF:
     of its own.
     """
 
+    _fixed = frozenset({"config", "frame_rate"})
+
     def __init__(self, config: DCPFConfig | None = None, *,
                  confidence: Callable[[np.ndarray], ConfidenceMap] | None = None,
                  rng: np.random.Generator | int | None = 0, frame_rate: float = 30.0,
@@ -402,6 +412,7 @@ class DetectorConfidencePF:
         self._rng_seed = rng
         self._integral: np.ndarray | None = None  # ColourFeatures' buffer, frame after frame
         self.reset()
+        self._made = True  # the settings are fixed from here (FixedSettings)
 
     def reset(self) -> None:
         """Forget every target; identities start again from 1 (and, with an integer ``rng``,
@@ -508,7 +519,28 @@ class DetectorConfidencePF:
                confidence: ConfidenceMap | None = None, *, _index: int | None = None) -> Tracks:
         """One frame with its confidence map given: ``image`` (BGR), its ``detections`` and
         a :class:`~vistrack.frontends.detectors.ConfidenceMap` (None when ``gamma`` is 0);
-        as :meth:`step`, the frame the one after the last."""
+        as :meth:`step`, the frame the one after the last.
+
+        A frame refused, or stopped, partway (a grey image with ``eta`` > 0, a confidence
+        map that gives NaN, Ctrl-C) leaves the tracker as it was before it, its random
+        generator too: the frame can be given again. (The frame was taken, the particles
+        moved and targets over a gap ended before such a refusal, and the same frame was
+        then refused as one that does not increase.)"""
+        if not isinstance(detections, Detections) or detections.boxes is None:
+            # (point detections failed in Detections.xywh's words, after the frame moved)
+            raise TypeError("detections must be vistrack.Detections with boxes")
+        kept = {name: (value if name in _SHARED else copy.deepcopy(value))
+                for name, value in vars(self).items()}
+        drawn = self.rng.bit_generator.state
+        try:
+            return self._update(image, detections, confidence, _index)
+        except BaseException:
+            self.__dict__.update(kept)
+            self.rng.bit_generator.state = drawn
+            raise
+
+    def _update(self, image: np.ndarray, detections: Detections,
+                confidence: ConfidenceMap | None, _index: int | None) -> Tracks:
         cfg = self.config
         # refused before anything changes (the frame moved, and targets over a gap ended,
         # before this was refused)

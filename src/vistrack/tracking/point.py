@@ -69,7 +69,7 @@ from ..association.pda import check_pair_likelihoods
 from ..filters import kf_predict, kf_update, pda_update
 from ..models import ConstantVelocity, Position
 from ..types import Detections, Frame, Gaussian, Tracks
-from .base import frame_index
+from .base import FixedSettings, frame_index
 from .lifecycle import CONFIRMED, TENTATIVE, TrackTable
 
 if TYPE_CHECKING:
@@ -81,6 +81,10 @@ POINT_ASSOCIATIONS = ("gnn", "nn", "greedy", "pda", "jpda", "ipda", "jipda")
 """Association methods of :class:`PointTracker`."""
 
 _EXISTENCE = ("ipda", "jipda")
+
+_MOST_EXISTENCE = 1.0 - 2.0 ** -40
+"""The largest prior existence a frame of IPDA or JIPDA takes (odds of about 1.1e12): at 1
+(rounded from a track seen for some frames with ``p_survive`` 1) no miss lowers it."""
 
 
 _GROUP_SIZE = 1 << 16
@@ -138,7 +142,7 @@ _FARTHEST = 1e150
 """The largest coordinate :meth:`PointTracker.step` takes: squared distances between points
 within it are finite."""
 
-class PointTracker:
+class PointTracker(FixedSettings):
     """A multi-target point tracker (see the module).
 
     Parameters
@@ -162,7 +166,9 @@ class PointTracker:
         JIPDA).
     p_survive : float
         IPDA and JIPDA: probability that a target is still there one second later, in
-        (0, 1].
+        (0, 1]. A frame's prior existence is at most 1 − 2⁻⁴⁰ (odds of about 10¹²), which
+        binds only where ``p_survive`` a frame is within 1e-12 of 1 (1 itself): an
+        existence rounded to 1 would be one no miss could lower.
     init_existence, confirm_existence, delete_existence : float
         IPDA and JIPDA: a new track's probability of existence, the existence that confirms
         a track, and the existence below which a track is deleted; ``0 <= delete_existence
@@ -212,6 +218,12 @@ class PointTracker:
     >>> out.ids.tolist(), out.points.round(1).tolist()
     ([1, 2], [[8.0, 0.0], [50.0, 12.0]])
     """
+
+    _fixed = frozenset({
+        "association", "report", "motion", "measurement", "H", "R", "m", "p_detect",
+        "clutter_density", "p_gate", "threshold", "init_speed", "confirm_hits", "max_lost",
+        "frame_rate", "max_distance", "p_survive", "init_existence", "confirm_existence",
+        "delete_existence"})
 
     def __init__(self, association: str = "gnn", *, motion: MotionModel | None = None,
                  measurement: MeasurementModel | None = None,
@@ -319,6 +331,7 @@ class PointTracker:
         self.delete_existence = float(delete_existence)
         self.tracks = TrackTable(n)
         self.reset()
+        self._made = True  # the settings are fixed from here (FixedSettings)
 
     def reset(self) -> None:
         """Forget every track; identities start again from 1.
@@ -509,7 +522,9 @@ class PointTracker:
                 args = dict(p_detect=self.p_detect, clutter_density=self.clutter_density,
                             p_gate=self.p_gate)
                 existence = self.association in _EXISTENCE
-                prior = self.existence * self.p_survive ** dt
+                # at most _MOST_EXISTENCE: an existence rounded to 1 is one no miss lowers
+                # (with p_survive 1, a track seen for some frames was never deleted by it)
+                prior = np.minimum(self.existence * self.p_survive ** dt, _MOST_EXISTENCE)
                 # written group by group into a new array (step keeps the old one, to put
                 # back if the frame fails; a caller's reference to it stays as it was)
                 self.existence = self.existence.copy()
