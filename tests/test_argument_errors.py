@@ -166,6 +166,9 @@ def test_a_likelihood_of_minus_infinity_everywhere_is_still_degeneracy():
     (lambda: vt.Detections(boxes=[[0, 0, 1, 1]], classes=[np.nan]),
      "classes must be whole numbers; classes[0] = nan"),
     (lambda: vt.Detections(boxes=np.zeros((5, 0))), "boxes must have shape (N, 4); got (5, 0)"),
+    # (points=[] says no dimension, where boxes=[] is boxes of 4 values: said how to give none)
+    (lambda: vt.Detections(points=[]), "points must have shape (N, d); got (0,) (no points: "
+                                       "np.zeros((0, d)), d the points' dimension)"),
     (lambda: vt.Detections.from_xywh([1, 2, 3]), "xywh must have shape (N, 4); got (3,)"),
     (lambda: vt.Detections.from_xywh([[1, 2, np.inf, 4]]),
      "xywh must be finite; xywh[0] = [1.0, 2.0, inf, 4.0]"),

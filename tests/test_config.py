@@ -1047,3 +1047,40 @@ def test_a_dcpf_file_at_fault_is_named_at_its_line(tmp_path, text, message):
             tmp_path / "o")
     assert r.returncode == 2 and "unknown table or key 'dcpf'; it is --tracker dcpf's table" \
         in r.stderr
+
+
+def test_configurations_take_numpys_numbers_and_refuse_what_no_file_reads_back():
+    """OfflineConfig refused np.int64(2), np.float32(0.5) and np.bool_(True) as no number
+    and no flag, where BoxTrackerConfig takes them (kept as Python's own types); TrackConfig
+    took a name of no preset, which config_toml wrote into a file read_config refuses, and a
+    dict of settings for tracker, which failed in config_toml as an AttributeError. Oracle:
+    read_config of config_toml's text gives the configuration back."""
+    c = OfflineConfig(enabled=np.bool_(True), max_gap=np.int64(2), link_iou=np.float32(0.5))
+    assert (c.enabled, c.max_gap, c.link_iou) == (True, 2, 0.5)
+    assert (type(c.enabled), type(c.max_gap), type(c.link_iou)) == (bool, int, float)
+    cfg = TrackConfig.preset().with_values(offline={"max_gap": np.int64(3),
+                                                    "enabled": np.bool_(True)})
+    assert cfg.offline == OfflineConfig(enabled=True, max_gap=3)
+    with pytest.raises(ValueError, match=re.escape("max_gap must be a finite number >= 0; "
+                                                   "got np.float64(nan)")):
+        OfflineConfig(max_gap=np.float64("nan"))
+    with pytest.raises(ValueError, match="enabled must be true or false; got 1"):
+        OfflineConfig(enabled=1)
+    with pytest.raises(ValueError, match=re.escape("name must be one of ['bytetrack', 'sort']; "
+                                                   "got 'nope'")):
+        TrackConfig(name="nope")
+    with pytest.raises(TypeError, match=re.escape("tracker must be a BoxTrackerConfig; got dict "
+                                                  "{'high': 0.5}")):
+        TrackConfig(tracker={"high": 0.5})
+    with pytest.raises(TypeError, match="motion must be a BoxMotion or None; got int 3"):
+        TrackConfig(motion=3)
+    for made in (TrackConfig(name="sort"), cfg):
+        assert read_config(_toml(made)) == made
+
+
+def _toml(cfg):
+    import tempfile
+
+    path = Path(tempfile.mkdtemp()) / "c.toml"
+    path.write_text(config_toml(cfg))
+    return path

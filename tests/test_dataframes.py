@@ -375,6 +375,22 @@ def test_detections_to_and_from_supervision_and_ultralytics():
         Detections.from_ultralytics([result, result])
     with pytest.raises(TypeError, match="result must be a detection model's result, with boxes"):
         Detections.from_ultralytics(SimpleNamespace(boxes=None))
+    # a (2, 8) array was read as 4 boxes and class 2.7 as 2, where from_supervision and
+    # Detections refuse them (the oracle: their words)
+    bad = SimpleNamespace(xyxy=np.arange(16.0).reshape(2, 8), conf=np.full(2, 0.5),
+                          cls=np.zeros(2))
+    with pytest.raises(ValueError, match=re.escape("boxes.xyxy must have shape (N, 4); got "
+                                                   "(2, 8)")):
+        Detections.from_ultralytics(SimpleNamespace(boxes=bad))
+    with pytest.raises(ValueError, match=re.escape("xyxy must have shape (N, 4); got (2, 8)")):
+        Detections.from_supervision(SimpleNamespace(xyxy=bad.xyxy, confidence=bad.conf,
+                                                    class_id=bad.cls))
+    odd = SimpleNamespace(xyxy=np.array([[0.0, 0, 1, 1]]), conf=np.ones(1), cls=np.array([2.7]))
+    with pytest.raises(ValueError, match=re.escape("classes must be whole numbers; classes[0] "
+                                                   "= 2.7")):
+        Detections.from_ultralytics(SimpleNamespace(boxes=odd))
+    none = SimpleNamespace(xyxy=np.zeros((0, 4)), conf=np.zeros(0), cls=np.zeros(0))
+    assert len(Detections.from_ultralytics(SimpleNamespace(boxes=none))) == 0
 
 
 def test_tracks_written_as_parquet_are_the_text_files_rows(tmp_path):

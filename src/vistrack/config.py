@@ -143,8 +143,11 @@ class OfflineConfig:
     calibration_iou_min: float = 0.1
 
     def __post_init__(self) -> None:
-        if not isinstance(self.enabled, bool):
+        # numpy's numbers and flags too (np.int64(2) and np.bool_(True) were refused as no
+        # number and no flag, where BoxTrackerConfig takes them), each kept as Python's own
+        if not isinstance(self.enabled, (bool, np.bool_)):
             raise ValueError(f"enabled must be true or false; got {self.enabled!r}")
+        object.__setattr__(self, "enabled", bool(self.enabled))
         # the two scores may be any number on raw scores (a detector's logits run below 0;
         # TrackConfig checks them against [0, 1] where they are calibrated confidences)
         scores = ("min_track_score", "start_score")
@@ -152,10 +155,13 @@ class OfflineConfig:
             v = getattr(self, f.name)
             low = -math.inf if f.name in scores else 0
             # (-inf passed low <= v for the scores: a start_score of -inf was taken)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
-                    or not low <= v:
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer,
+                                                                     np.floating)) \
+                    or not math.isfinite(v) or not low <= v:
                 raise ValueError(f"{f.name} must be a finite number"
                                  f"{'' if f.name in scores else ' >= 0'}; got {v!r}")
+            object.__setattr__(self, f.name, v if type(v) in (int, float) else (
+                int(v) if isinstance(v, np.integer) else float(v)))
         from .models.box import MAX_SECONDS
 
         for name in ("max_gap", "link_gap", "link_window"):
@@ -226,8 +232,11 @@ class TrackConfig:
     Raises
     ------
     ValueError
-        If the scores are calibrated and ``offline.start_score`` or
-        ``offline.min_track_score`` is outside [0, 1].
+        If ``name`` is no preset's, or the scores are calibrated and
+        ``offline.start_score`` or ``offline.min_track_score`` is outside [0, 1].
+    TypeError
+        If ``tracker``, ``offline`` or ``motion`` is not of its type (a dict of settings:
+        :meth:`with_values` takes those).
 
     Examples
     --------
@@ -242,6 +251,17 @@ class TrackConfig:
     offline: OfflineConfig = field(default_factory=OfflineConfig)
 
     def __post_init__(self) -> None:
+        # (a name of no preset was written by config_toml into a file read_config refuses;
+        # a dict for tracker failed in config_toml as "'dict' object has no attribute")
+        if self.name not in TRACKERS:
+            raise ValueError(f"name must be one of {sorted(TRACKERS)}; got {self.name!r}")
+        for name, kind in (("tracker", BoxTrackerConfig), ("offline", OfflineConfig),
+                           ("motion", BoxMotion)):
+            value = getattr(self, name)
+            if not isinstance(value, kind) and not (name == "motion" and value is None):
+                raise TypeError(f"{name} must be a {kind.__name__}"
+                                f"{' or None' if name == 'motion' else ''}; got "
+                                f"{type(value).__name__} {value!r}")
         # the offline start replaces the tracker's new_track, so it is on the same scale, and
         # a track's mean score too (above 1, every track was dropped: 0 boxes)
         for name in ("start_score", "min_track_score"):

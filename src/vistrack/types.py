@@ -257,7 +257,10 @@ class Detections:
         else:
             p = np.asarray(self.points, dtype=np.float64)
             if p.ndim != 2:
-                raise ValueError(f"points must have shape (N, d); got {p.shape}")
+                # (no points given as [] say no dimension: the tracker's must be matched)
+                hint = (" (no points: np.zeros((0, d)), d the points' dimension)"
+                        if p.size == 0 else "")
+                raise ValueError(f"points must have shape (N, d); got {p.shape}{hint}")
             if not np.isfinite(p).all():  # a tracker would start a track at NaN
                 i = int(np.flatnonzero(~np.isfinite(p).all(axis=1))[0])
                 raise ValueError(f"points must be finite; points[{i}] = {p[i].tolist()}")
@@ -386,9 +389,14 @@ class Detections:
         if b is None:
             raise TypeError(f"result must be a detection model's result, with boxes; this "
                             f"{type(result).__name__} has none (a classification model's?)")
-        return cls(boxes=array(b.xyxy).astype(np.float64).reshape(-1, 4),
-                   scores=array(b.conf).astype(np.float64),
-                   classes=array(b.cls).astype(np.int64))
+        xyxy = array(b.xyxy).astype(np.float64)
+        if xyxy.size == 0:
+            xyxy = xyxy.reshape(0, 4)
+        elif xyxy.ndim != 2 or xyxy.shape[1] != 4:  # (a (2, 8) was read as 4 boxes)
+            raise ValueError(f"boxes.xyxy must have shape (N, 4); got {xyxy.shape}")
+        # the classes as given: Detections names one that is not whole (2.7 was class 2)
+        return cls(boxes=xyxy, scores=array(b.conf).astype(np.float64),
+                   classes=array(b.cls).astype(np.float64))
 
     def __len__(self) -> int:
         assert self.scores is not None  # filled in by __post_init__
