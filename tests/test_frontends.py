@@ -2196,8 +2196,25 @@ def test_a_sequence_whose_first_images_are_missing_keeps_their_frame_numbers(tmp
     plain = tmp_path / "plain"
     plain.mkdir()
     _folder(plain, n=3, ext=".png")[0].unlink()
-    frames, _ = _read(VideoReader(plain))
+    # (said now: a folder cut from a longer one was numbered from 1 unsaid, every frame off
+    # by as many from detections numbered as its names)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        reader = VideoReader(plain)
+        VideoReader(plain)  # (once a process)
+    assert [str(w.message) for w in caught] == [
+        f"{plain}: 000002.png is frame 1: a folder of images counts its frames from its first "
+        "image, whose name gives 2; detections and ground truth must count from it too (in a "
+        "MOTChallenge sequence folder, with seqinfo.ini, the names' numbers are the frames)"]
+    frames, _ = _read(reader)
     assert [f.index for f in frames] == [1, 2]
+    zero = tmp_path / "zero"  # from 000000 or 000001: nothing to say
+    zero.mkdir()
+    for k, f in enumerate(_folder(zero, n=2, ext=".png")):
+        f.rename(zero / f"{k:06d}.png")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert [f.index for f in _read(VideoReader(zero))[0]] == [1, 2]
 
 
 def test_a_sequence_starting_late_with_a_gap_says_both(tmp_path):

@@ -809,6 +809,61 @@ def test_a_video_cut_short_by_a_failed_write_is_named_and_replaces_nothing(tmp_p
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4", "w.py"]
 
 
+def test_a_video_writer_names_a_frame_of_no_pixels_and_stays_whole(tmp_path, monkeypatch):
+    """A frame of shape (0, 0, 3) was blamed on the file ("OpenCV cannot write an MP4 here"),
+    and the writer kept the unopened OpenCV writer: the next, good frame failed with a bare
+    AssertionError and close() reported nothing of a video never written. A writer that
+    OpenCV cannot open is left as it was: a frame given again tries again. Oracle: the
+    frames read back."""
+    import cv2
+
+    from vistrack.io.video import VideoError, VideoReader, VideoWriter
+
+    w = VideoWriter(tmp_path / "z.mp4", fps=10)
+    for shape in ((0, 0, 3), (0, 10, 3), (10, 0)):
+        with pytest.raises(ValueError, match=re.escape(
+                f"z.mp4: frame 1 has no pixels: its shape is {shape}")):
+            w.write(np.zeros(shape, np.uint8))
+    real = cv2.VideoWriter
+
+    class Unopened:
+        def __init__(self, *args):
+            pass
+
+        def isOpened(self):
+            return False
+
+        def release(self):
+            pass
+
+    monkeypatch.setattr(cv2, "VideoWriter", Unopened)
+    with pytest.raises(VideoError, match="cannot write an MP4 here"):
+        w.write(np.zeros((16, 16, 3), np.uint8))
+    monkeypatch.setattr(cv2, "VideoWriter", real)
+    for k in range(3):
+        w.write(np.full((16, 16, 3), 40 * k, np.uint8))
+    w.close()
+    frames = list(VideoReader(tmp_path / "z.mp4"))
+    means = [float(f.image.mean()) for f in frames]
+    assert len(frames) == 3 and frames[0].image.shape == (16, 16, 3)
+    assert means[0] < means[1] < means[2], means  # the three frames, in order
+
+
+@pytest.mark.parametrize("name", ["grey", "skip_bad"])
+def test_a_video_readers_flags_are_true_or_false(tmp_path, name):
+    """grey="False" and skip_bad="no" were taken as true (bool() of a string): grey frames,
+    bad frames skipped."""
+    from vistrack.io.video import VideoReader, VideoWriter
+
+    w = VideoWriter(tmp_path / "a.mp4", fps=10)
+    w.write(np.zeros((16, 16, 3), np.uint8))
+    w.close()
+    for value in ("False", "no", 1):
+        with pytest.raises(TypeError, match=f"{name} must be True or False; got {value!r}"):
+            VideoReader(tmp_path / "a.mp4", **{name: value})
+    assert getattr(VideoReader(tmp_path / "a.mp4", **{name: np.bool_(True)}), name) is True
+
+
 def test_a_complete_video_of_another_container_closes(tmp_path):
     """The frames are counted back only where the container keeps an exact count (MP4):
     an MKV's estimate from its rate ("holds 12 of the 10 frames" at 12345.678 frames/s)

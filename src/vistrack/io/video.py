@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._validate import as_finite, as_number, as_whole, bgr_to_grey, is_real, ordinal
+from .._validate import as_finite, as_flag, as_number, as_whole, bgr_to_grey, is_real, ordinal
 from ..types import Frame
 
 if TYPE_CHECKING:
@@ -413,7 +413,8 @@ class VideoReader:
         if not src.exists():
             raise FileNotFoundError(f"{src} does not exist")
         _opencv_name(src)
-        self.source, self.grey = src, bool(grey)
+        # ("False" and "no" were true: grey frames, bad frames skipped)
+        self.source, self.grey = src, as_flag(grey, "grey")
         # whole numbers: int() cut 2.7 to 2 (a frame early) and named nothing for "x"
         self.start = as_whole(start, "start", 1, "frames count from 1")
         # (before the start: "no frames to track")
@@ -422,7 +423,7 @@ class VideoReader:
         self.prefetch = as_whole(prefetch, "prefetch", 0, "frames decoded ahead")
         if fps is not None:
             fps = as_number(fps, "fps")
-        self.skip_bad = bool(skip_bad)
+        self.skip_bad = as_flag(skip_bad, "skip_bad")
         self._files: list[Path] | None = None
         # a folder's 16-bit images: their depth in bits, and how many were clipped above it
         self._bits: int | None = None
@@ -506,6 +507,18 @@ class VideoReader:
                               f"{'that frame is' if n == 1 else 'those frames are'} missing, "
                               "and the images after a gap keep the frames their names give",
                               RuntimeWarning, stacklevel=2)
+            named = (int(re.findall(r"\d+", self._files[0].stem)[-1])
+                     if numbered is not None and not in_sequence else 1)
+            if named > 1 and src not in _GAP_WARNED:
+                # (a folder cut from a longer one, whose detections or ground truth number its
+                # frames as its names do, was numbered from 1 unsaid: every frame off by as
+                # many)
+                _GAP_WARNED.add(src)
+                warnings.warn(f"{src}: {self._files[0].name} is frame 1: a folder of images "
+                              f"counts its frames from its first image, whose name gives "
+                              f"{named}; detections and ground truth must count from it too "
+                              "(in a MOTChallenge sequence folder, with seqinfo.ini, the "
+                              "names' numbers are the frames)", RuntimeWarning, stacklevel=2)
             unnumbered = _unnumbered_why(self._files) if numbered is None else None
             if unnumbered and src not in _GAP_WARNED:
                 # images whose names give frames, but not one each: numbered by position,
@@ -1022,9 +1035,12 @@ class VideoWriter:
         # and an odd height's last row; such frames are padded by one instead (write)
         even = (size[0] + size[0] % 2, size[1] + size[1] % 2)
         w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), self.fps, even)
-        self._w = w
         if not w.isOpened():
+            # (kept before this was refused: the next frame found a writer unopened and no
+            # size, an AssertionError, and close() said nothing of a video never written)
+            w.release()
             raise VideoError(f"{self.name}: OpenCV cannot write an MP4 here")
+        self._w = w
         self.size = size
 
     def write(self, image: np.ndarray) -> None:
@@ -1043,9 +1059,10 @@ class VideoWriter:
         Raises
         ------
         ValueError
-            If ``image`` is not such an array, or its size is not the video's.
+            If ``image`` is not such an array, has no pixels, or its size is not the video's.
         VideoError
-            If OpenCV cannot open the file for writing.
+            If OpenCV cannot open the file for writing (the writer is left as it was: a
+            frame given again tries again).
 
         Examples
         --------
@@ -1064,6 +1081,9 @@ class VideoWriter:
             raise ValueError(f"{self.name}: frame {self.frames + 1}: image must be (H, W) or "
                              f"(H, W, 3) uint8; got {im.shape} {im.dtype}")
         size = (im.shape[1], im.shape[0])
+        if 0 in size:  # (OpenCV "cannot write an MP4 here", the file blamed for the frame)
+            raise ValueError(f"{self.name}: frame {self.frames + 1} has no pixels: its shape is "
+                             f"{im.shape}")
         if self.size is not None and size != self.size:
             # (before the file is begun: a first frame refused replaced an existing video
             # with an empty, unreadable one)
