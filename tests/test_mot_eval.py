@@ -172,7 +172,12 @@ def test_two_pairs_of_one_name_are_refused(tmp_path):
                             "of its own")
     with pytest.raises(ValueError) as e:
         evaluate_files([("seq", g, g, None), ("COMBINED", g, g, None)])
-    assert str(e.value) == "pairs[1] is named 'COMBINED', the name of the sum of all"
+    assert str(e.value) == (f"pairs[1] ({g}) is named 'COMBINED', the name of the sum of "
+                            "all: give its sequence another name")
+    # one pair alone has no sum: its name is its own (a sequence folder named COMBINED was
+    # refused in words about pairs[0])
+    alone = evaluate_files([("COMBINED", g, g, None)])
+    assert list(alone) == ["COMBINED"] and alone["COMBINED"].MOTA == 1.0
     assert sorted(evaluate_files([("a", g, g, None), ("b", g, g, None)])) == ["COMBINED", "a",
                                                                                "b"]
 
@@ -1089,3 +1094,48 @@ def test_identity_scores_of_very_many_identities_keep_to_their_pairs():
     assert s.IDTP == n_people and s.IDFN == s.IDFP == len(f) - n_people
     assert s.TP == len(f) and s.IDSW == n_people * (life - 1)
     assert peak < 100e6, peak
+
+
+def test_vistrack_eval_given_odd_but_plain_inputs(tmp_path, capsys, monkeypatch):
+    """Four ways `vistrack eval` misread what it was given: a second --gt/--pred pair replaced
+    the first, unsaid; `--gt gt.txt` from inside SEQ/gt/ did not read SEQ/seqinfo.ini (a row
+    past seqLength scored as a false positive, the sequence named "gt"); --plots said the
+    ground truth's warning twice; a ground-truth CSV missing its frame column was told to
+    name it with --columns, which names the results' columns only. Oracles: the same files
+    given as SEQ/gt/gt.txt from outside, and the warning as evaluate_files returns it."""
+    from vistrack.cli import main
+
+    seq = tmp_path / "S"
+    (seq / "gt").mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=S\nframeRate=10\nseqLength=2\n"
+                                     "imWidth=640\nimHeight=480\n")
+    (seq / "gt" / "gt.txt").write_text("1,1,10,10,20,40,1,1,1\n2,1,12,10,20,40,1,1,1\n")
+    past = tmp_path / "res3.txt"
+    past.write_text("1,1,10,10,20,40,1,-1,-1,-1\n3,1,12,10,20,40,1,-1,-1,-1\n")
+    said = "frame 3 is beyond the sequence's 2 frames"
+    assert main(["eval", "--gt", str(seq / "gt" / "gt.txt"), "--pred", str(past)]) == 2
+    assert said in capsys.readouterr().err
+    monkeypatch.chdir(seq / "gt")
+    assert main(["eval", "--gt", "gt.txt", "--pred", str(past)]) == 2
+    assert said in capsys.readouterr().err
+    monkeypatch.chdir(tmp_path)
+    good = tmp_path / "res.txt"
+    good.write_text("1,1,10,10,20,40,1,-1,-1,-1\n")
+    with pytest.raises(SystemExit) as e:
+        main(["eval", "--gt", str(seq), "--pred", str(good), "--gt", str(seq), "--pred",
+              str(past)])
+    assert e.value.code == 2
+    assert f"--gt is given twice ({seq} and {seq}): one sequence is scored by --gt and " \
+           "--pred, several by --gt-dir and --pred-dir" in capsys.readouterr().err
+    six = tmp_path / "g6.txt"
+    six.write_text("1,1,10,10,20,40\n2,1,12,10,20,40\n")
+    assert main(["eval", "--gt", str(six), "--pred", str(good), "--plots",
+                 str(tmp_path / "pl")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("6 values a row, no conf") == 1, err
+    csv = tmp_path / "gt.csv"
+    csv.write_text("t,id,bb_left,bb_top,bb_width,bb_height\n1,1,10,10,20,40\n")
+    assert main(["eval", "--gt", str(csv), "--pred", str(good), "--columns", "frame=t"]) == 2
+    err = capsys.readouterr().err
+    assert "no column 'frame' (the frame)" in err and "a ground truth is read by its own " \
+        "columns' names" in err and "--columns frame=NAME" not in err, err

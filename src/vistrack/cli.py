@@ -128,6 +128,20 @@ def _command_line(argv: Sequence[str]) -> str:
     return shlex.join(["vistrack", *argv])
 
 
+class _Once(argparse.Action):
+    """An option that takes one value: given twice, it is an error naming both (argparse
+    keeps the last: `eval --gt A --pred a --gt B --pred b` scored B alone, unsaid)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:
+        before = getattr(namespace, self.dest, None)
+        if before is not None:
+            parser.error(f"{option_string} is given twice ({before} and {values}): one "
+                         "sequence is scored by --gt and --pred, several by --gt-dir and "
+                         "--pred-dir")
+        setattr(namespace, self.dest, values)
+
+
 def _report(args: argparse.Namespace) -> int:
     from .io.atomic import check_output
     from .pipeline import REPORT
@@ -1396,7 +1410,9 @@ def _partial_runs(pairs: list[tuple[str, Path, Path, Path | None]],
                 continue
         except (OSError, ValueError, KeyError, TypeError):
             continue  # not a run's own file: nothing to tell from it
-        truth = read_truth(gt, points=points)
+        with warnings.catch_warnings():  # (said already, by the scoring's read of it)
+            warnings.simplefilter("ignore")
+            truth = read_truth(gt, points=points)
         after = truth.frames > last
         missed = int((after & scored_truth(truth, benchmark)).sum())
         if missed:  # (rows the convention ignores alone change no score: nothing to say)
@@ -1494,10 +1510,13 @@ def _eval(args: argparse.Namespace) -> int:
         except ValueError as exc:
             return _fail("eval", str(exc))
         # SEQ/gt/gt.txt, or a ground-truth file beside its seqinfo.ini (SEQ/gt.txt), named
-        # after SEQ; any other file after itself (runs/MOT17-09.txt, not "runs")
-        seq = gt.parent.parent if gt.parent.name == "gt" else gt.parent
+        # after SEQ; any other file after itself (runs/MOT17-09.txt, not "runs"). Its folders
+        # as an absolute path (gt.txt given from inside SEQ/gt/ has the parent ".": its
+        # seqinfo.ini was not read, and a row past seqLength was scored)
+        where = Path(os.path.normpath(gt.absolute()))
+        seq = where.parent.parent if where.parent.name == "gt" else where.parent
         info = seq / "seqinfo.ini"
-        own = gt.parent.name == "gt" or gt.name == "gt.txt" or info.exists()
+        own = where.parent.name == "gt" or gt.name == "gt.txt" or info.exists()
         pairs.append(((seq.resolve().name if own else gt.stem) or "sequence", gt,
                       Path(args.pred), info if info.exists() else None))
     else:
@@ -1567,7 +1586,9 @@ def _eval(args: argparse.Namespace) -> int:
                 plot_hota_alpha(res, part, zero_distance=zero)
             for pair, path in zip(pairs, plots[1:]):
                 if pair[0] not in res.errors:
-                    with replacing(path) as part:
+                    with replacing(path) as part, warnings.catch_warnings():
+                        # (the files' warnings were said by the scoring: not twice)
+                        warnings.simplefilter("ignore")
                         plot_timeline(pair_matches(pair, args.benchmark, columns, zero),
                                       part, title=pair[0])
         for path in written:
@@ -1853,11 +1874,13 @@ def build_parser() -> argparse.ArgumentParser:
         "eval", help="score results against ground truth (HOTA, CLEAR MOT, IDF1)",
         description="Score MOTChallenge results as TrackEval does: HOTA, DetA, AssA, MOTA, "
         "MOTP, IDF1 and the counts, per sequence and combined.")
-    ev.add_argument("--gt", help="ground-truth file (SEQ/gt/gt.txt; seqinfo.ini is read "
-                    "beside), or the sequence folder SEQ holding it; or a .csv or .parquet "
-                    "file, read by its columns' names (for points: frame, particle, x, y)")
-    ev.add_argument("--pred", help="results file: MOTChallenge's text, or the .parquet or .csv "
-                    "file vistrack track --out writes (or the tracks.csv of points that "
+    ev.add_argument("--gt", action=_Once,
+                    help="ground-truth file (SEQ/gt/gt.txt; seqinfo.ini is read beside), or "
+                    "the sequence folder SEQ holding it; or a .csv or .parquet file, read by "
+                    "its columns' names (for points: frame, particle, x, y)")
+    ev.add_argument("--pred", action=_Once,
+                    help="results file: MOTChallenge's text, or the .parquet or .csv file "
+                    "vistrack track --out writes (or the tracks.csv of points that "
                     "--frontend spots writes)")
     ev.add_argument("--gt-dir", help="folder of sequences SEQ/gt/gt.txt")
     ev.add_argument("--columns", metavar="OURS=THEIRS,...",

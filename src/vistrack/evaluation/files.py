@@ -107,7 +107,7 @@ def _truth(path: str | Path, *, points: bool = False) -> tuple[MOTTable, list[st
     if suffix == ".parquet" or (suffix == ".csv" and not _text_without_header(path)):
         # (its own columns: without conf, every row counts, as a points file's always does)
         return MOTTable.from_pandas(_table_file(path, "ground-truth"), path=str(path),
-                                    points=points), []
+                                    points=points, truth=True), []
     table = read_mot(path)
     if len(table) and table.columns < 7:
         # (its rows to ignore, conf 0 in MOTChallenge's ground truth, were counted as people
@@ -270,10 +270,12 @@ def evaluate_files(pairs: list[tuple[str, Path, Path, Path | None]], *,
     for k, pair in enumerate(pairs):
         _check_pair(pair, f"pairs[{k}]")
     seen: dict[str, int] = {}
-    for k, (name, *_) in enumerate(pairs):
+    for k, (name, gt, *_) in enumerate(pairs):
         # the results are keyed by the name as text: two pairs of one name would keep one
-        if str(name) == "COMBINED":
-            raise ValueError(f"pairs[{k}] is named 'COMBINED', the name of the sum of all")
+        # (one pair alone has no sum: a sequence folder of that name was refused)
+        if str(name) == "COMBINED" and len(pairs) > 1:
+            raise ValueError(f"pairs[{k}] ({gt}) is named 'COMBINED', the name of the sum of "
+                             "all: give its sequence another name")
         if str(name) in seen:
             raise ValueError(f"pairs[{seen[str(name)]}] and pairs[{k}] are both named "
                              f"{str(name)!r}: each pair needs a name of its own")

@@ -1126,8 +1126,9 @@ def evaluate_mot(gt: MOTTable, pred: MOTTable, n_frames: int | None = None, *,
         The sequence length (``seqinfo.ini``'s ``seqLength``); default the last frame in
         either file.
     benchmark : {"auto", "MOT15", "MOT16", "MOT17", "MOT20"}
-        Which preprocessing. "auto" is MOT17 for ground truth with a class column (9 values a
-        row, classes 1-13), else MOT15 (whose rows end in three world coordinates).
+        Which preprocessing. "auto" is MOT17 for ground truth with a class column (8 values
+        a row or more, every class 1-13), else MOT15 (whose rows end in three world
+        coordinates).
     zero_distance : float, optional
         Score positions rather than boxes: each row at its centre (a point, a row of width
         and height 0, at itself), a pair's similarity ``max(0, 1 - d / zero_distance)`` in

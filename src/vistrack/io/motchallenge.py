@@ -496,7 +496,7 @@ class MOTTable:
 
     @classmethod
     def from_pandas(cls, df: Any, columns: dict[str, str] | None = None,
-                    path: str = "", *, points: bool = False) -> MOTTable:
+                    path: str = "", *, points: bool = False, truth: bool = False) -> MOTTable:
         """A table from a DataFrame (or any mapping of column names to arrays): ``frame``,
         an identity (``particle`` or ``id``; -1 for detections if neither) and a box,
         ``bb_left, bb_top, bb_width, bb_height``, or its centre ``x, y`` with ``bb_width,
@@ -518,6 +518,10 @@ class MOTTable:
             Read ``x, y`` without a width and height as points, to be scored by distance
             (:func:`~vistrack.evaluation.evaluate_mot`'s ``zero_distance``); without it,
             such a table has no box, an error (its size columns may be named otherwise).
+        truth : bool
+            The rows are a ground truth, read by their own columns' names (``vistrack eval
+            --columns`` names the results' alone): a missing column's message says so, where
+            it advises ``--columns`` for results.
 
         Raises
         ------
@@ -619,8 +623,9 @@ class MOTTable:
             # a column of another case or spelling named as the one meant (Frame, frames)
             lower = {str(c).lower(): str(c) for c in have}
             close = difflib.get_close_matches(name("frame").lower(), lower, n=1, cutoff=0.7)
-            hint = (f"did you mean {lower[close[0]]!r}? " if close else "") + \
-                "name the frame's column: --columns frame=NAME, or columns={'frame': NAME}"
+            hint = (f"did you mean {lower[close[0]]!r}? " if close else "") + (
+                _TRUTH_NAMES if truth else
+                "name the frame's column: --columns frame=NAME, or columns={'frame': NAME}")
             raise ValueError(f"no column {name('frame')!r} (the frame){where}; columns: "
                              f"{sorted(map(str, have))} ({hint})")
         n = len(frame)
@@ -680,8 +685,9 @@ class MOTTable:
                              f"{name('x')!r}, {name('y')!r} with {name('bb_width')!r}, "
                              f"{name('bb_height')!r}; or the corners "
                              f"{', '.join(repr(name(c)) for c in _CORNERS)}); columns: "
-                             f"{sorted(map(str, have))} (name yours: --columns "
-                             "bb_left=NAME,..., or columns={'bb_left': NAME, ...})"
+                             f"{sorted(map(str, have))} ("
+                             + (_TRUTH_NAMES if truth else "name yours: --columns "
+                                "bb_left=NAME,..., or columns={'bb_left': NAME, ...}") + ")"
                              + ("; x, y alone are points, scored by distance with vistrack "
                                 "eval --zero-distance PX" if point is not None else ""))
         box = np.column_stack([frame, ident if ident is not None else np.full(n, -1.0),
@@ -798,6 +804,12 @@ class FrameSlices(Sequence[slice]):
             raise IndexError(f"frame {int(k) + 1} is outside frames 1-{self._n}")
         a, b = np.searchsorted(self._frames, (i + 1, i + 2))
         return slice(int(a), int(b))
+
+
+_TRUTH_NAMES = ("a ground truth is read by its own columns' names, MOTChallenge's: frame, id, "
+                "bb_left, bb_top, bb_width, bb_height; vistrack eval --columns names the "
+                "results' columns only")
+"""What a ground truth's missing column is told (:meth:`MOTTable.from_pandas`'s ``truth``)."""
 
 
 def _bad(path: str, line: int, column: int, text: str) -> MOTFormatError:
