@@ -151,6 +151,48 @@ def test_scalar_equations_equal_matrix_form(rng):
     np.testing.assert_allclose(s.pred_std ** 2, res.pred_covs[:, 0, 0], rtol=1e-12)
 
 
+def test_per_step_matrices_are_pykalmans_one_step_on(rng):
+    """README said the per-step ``F[t]`` (predicting step t from t-1) was pykalman's
+    convention too; pykalman's ``transition_matrices[t]`` predicts t+1 from t, so the same
+    array gave dynamics one step apart (means 1, 2, 6 against 1, 3, 15). Oracle: pykalman
+    given ``F[1:]`` and ``Q[1:]``, as README now says."""
+    T = 12
+    F = 1 + 0.3 * rng.random((T, 2, 2))
+    Q = np.stack([np.eye(2) * q for q in 0.1 + rng.random(T)])
+    ys = rng.normal(size=(T, 1)).cumsum(0)
+    ys[[3, 7]] = np.nan
+    H, R, x0, P0 = [[1.0, 0.5]], [[0.8]], [0.2, -0.1], np.eye(2)
+    ours = kalman_filter(ys, F=F, Q=Q, H=H, R=R, x0=x0, P0=P0)
+    pk = pykalman.KalmanFilter(transition_matrices=F[1:], transition_covariance=Q[1:],
+                               observation_matrices=H, observation_covariance=R,
+                               initial_state_mean=x0, initial_state_covariance=P0)
+    means, covs = pk.filter(np.ma.masked_invalid(ys))
+    np.testing.assert_allclose(ours.means, means, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(ours.covs, covs, rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("scale", [1e-150, 1e-100, 1e-77, 1e77, 1e80, 1e150])
+def test_scalar_equations_hold_at_any_scale_the_filter_takes(rng, scale):
+    """The scalar filter squared products of standard deviations: from 1e77 they overflowed
+    (a std of inf, then NaN means, then "the innovation variance is 0"), from 1e-77 they
+    underflowed (stds of 0 and wrong means, unsaid), well inside the 1.34e154 it takes.
+    Oracle: the same series at unit scale, filtered in matrix form, times the scale (the
+    filter is linear in the measurements and the standard deviations together)."""
+    T = 30
+    d = 1 + 0.05 * rng.normal(size=T)
+    mm = 1 + 0.2 * rng.random(T)
+    sd, sm = 0.3 + rng.random(T), 0.5 + rng.random(T)
+    ys = rng.normal(size=T).cumsum()
+    ys[[5, 6, 20]] = np.nan
+    s = kalman_filter_1d(ys * scale, d=d, m=mm, sigma_d=sd * scale, sigma_m=sm * scale,
+                         x0=0.5 * scale, sigma0=2.0 * scale)
+    res = kalman_filter(ys[:, None], F=d[:, None, None], Q=(sd**2)[:, None, None],
+                        H=mm[:, None, None], R=(sm**2)[:, None, None], x0=[0.5], P0=[[4.0]])
+    np.testing.assert_allclose(s.mean / scale, res.means[:, 0], rtol=1e-12)
+    np.testing.assert_allclose(s.std / scale, np.sqrt(res.covs[:, 0, 0]), rtol=1e-12)
+    np.testing.assert_allclose(s.pred_std / scale, np.sqrt(res.pred_covs[:, 0, 0]), rtol=1e-12)
+
+
 @pytest.mark.parametrize("missing", [True, False], ids=["missing", "full"])
 @pytest.mark.parametrize("store_covs", [True, False])
 def test_batch_shared_and_general_paths_agree_with_single_series(rng, store_covs, missing):

@@ -440,7 +440,8 @@ class EnsembleKalmanFilter:
         x0 : (n,) or (B, n) array_like
             Prior mean of the first step.
         P0 : (n, n) or (B, n, n) array_like
-            Prior covariance of the first step, positive definite.
+            Prior covariance of the first step, positive semi-definite (a singular one draws
+            the ensemble on its subspace).
         dt : float or (T,) array_like, optional
             Time step: a scalar, the ``T-1`` intervals between steps (``np.diff(times)``),
             or ``T`` values, ``dt[t]`` the step from ``t-1`` to ``t`` (``dt[0]`` unused);

@@ -802,17 +802,21 @@ def kalman_filter_1d(
         di, mi, sd, sm = (float(par[k][i]) for k in ("d", "m", "sigma_d", "sigma_m"))
         if i > 0:
             xp = di * out["mean"][i - 1]
-            sp = np.sqrt(sd**2 + (di * out["std"][i - 1]) ** 2)
+            sp = float(np.hypot(sd, di * out["std"][i - 1]))
         out["pred_mean"][i], out["pred_std"][i] = xp, sp
         if np.isnan(y[i]):
             out["mean"][i], out["std"][i] = xp, sp
             continue
-        den = sm**2 + mi**2 * sp**2
-        if not den > 0:  # as the n-D filter's innovation covariance (NaN, or 1/0, before)
+        # the innovation's standard deviation, and the update in ratios to it: the squares
+        # of standard deviations from 1e77 overflowed (a std of inf, then NaN) and from
+        # 1e-77 underflowed (stds of 0, wrong means), well inside the 1.34e154 taken
+        s_i = float(np.hypot(sm, mi * sp))
+        if not s_i > 0:  # as the n-D filter's innovation covariance (NaN, or 1/0, before)
             raise ValueError(f"the innovation variance sigma_m^2 + m^2 pred_std^2 is 0 at step "
                              f"{i}: a measurement without noise of a state without "
                              f"uncertainty, or that does not see it (m[{i}] = {mi:g})")
-        out["mean"][i] = (xp * sm**2 + mi * y[i] * sp**2) / den
-        out["std"][i] = np.sqrt(sm**2 * sp**2 / den)
+        r_m, r_p = sm / s_i, sp / s_i
+        out["mean"][i] = xp * r_m * r_m + y[i] * (mi * r_p) * r_p
+        out["std"][i] = r_m * sp
     _readonly(*out.values())
     return FilterResult1D(**out)

@@ -156,6 +156,11 @@ class BoxTrackerConfig:
         the association of the first frame past them, so it can still take a detection there
         (over a gap in frame numbers, tracks lost that long at the frame before are deleted
         first).
+    assigner : {"gnn", "greedy", "nn"}
+        How each stage assigns its gated pairs (:data:`~vistrack.association.ASSIGNERS`):
+        global nearest neighbour (the default, and the only one the compiled tracker runs),
+        the best pair first, or each track its nearest detection (one detection can then
+        update two tracks). The gate's price of a pair left unassigned is GNN's alone.
     camera_motion : bool
         Move the predictions by the shift of the image between frames, estimated from the
         confidently matched tracks, track by track where it fits the detections (see the
