@@ -135,13 +135,19 @@ def test_loglik_equals_joint_gaussian_density(rng):
     assert got == pytest.approx(want, rel=1e-10)
 
 
-def test_scalar_equations_equal_matrix_form(rng):
-    T = 50
+def _scalar_model(rng, T, missing):
+    """A random scalar model's per-step ``d, m, sigma_d, sigma_m`` and a series ``ys`` with
+    the steps ``missing`` unmeasured."""
     d = 1 + 0.05 * rng.normal(size=T)
     mm = 1 + 0.2 * rng.random(T)
     sd, sm = 0.3 + rng.random(T), 0.5 + rng.random(T)
     ys = rng.normal(size=T).cumsum()
-    ys[[5, 6, 30]] = np.nan
+    ys[missing] = np.nan
+    return d, mm, sd, sm, ys
+
+
+def test_scalar_equations_equal_matrix_form(rng):
+    d, mm, sd, sm, ys = _scalar_model(rng, 50, [5, 6, 30])
     s = kalman_filter_1d(ys, d=d, m=mm, sigma_d=sd, sigma_m=sm, x0=0.5, sigma0=2.0)
     res = kalman_filter(ys[:, None], F=d[:, None, None], Q=(sd**2)[:, None, None],
                         H=mm[:, None, None], R=(sm**2)[:, None, None], x0=[0.5], P0=[[4.0]])
@@ -178,12 +184,7 @@ def test_scalar_equations_hold_at_any_scale_the_filter_takes(rng, scale):
     underflowed (stds of 0 and wrong means, unsaid), well inside the 1.34e154 it takes.
     Oracle: the same series at unit scale, filtered in matrix form, times the scale (the
     filter is linear in the measurements and the standard deviations together)."""
-    T = 30
-    d = 1 + 0.05 * rng.normal(size=T)
-    mm = 1 + 0.2 * rng.random(T)
-    sd, sm = 0.3 + rng.random(T), 0.5 + rng.random(T)
-    ys = rng.normal(size=T).cumsum()
-    ys[[5, 6, 20]] = np.nan
+    d, mm, sd, sm, ys = _scalar_model(rng, 30, [5, 6, 20])
     s = kalman_filter_1d(ys * scale, d=d, m=mm, sigma_d=sd * scale, sigma_m=sm * scale,
                          x0=0.5 * scale, sigma0=2.0 * scale)
     res = kalman_filter(ys[:, None], F=d[:, None, None], Q=(sd**2)[:, None, None],
