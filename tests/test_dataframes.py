@@ -568,3 +568,22 @@ def test_a_semicolon_csv_whose_first_rows_are_whole_numbers_reads_its_decimal_co
     np.testing.assert_array_equal(_read_csv(p, "a CSV file").to_numpy(),
                                   pd.read_csv(p, sep=";", decimal=",").to_numpy())
     assert _read_csv(p, "a CSV file").to_numpy()[1, 2:4].tolist() == [10.5, 20.25]
+
+
+def test_corners_named_without_their_far_corner_are_named():
+    """A table read by corners named in `columns` (x1=x, y1=y) without x2 and y2 was told
+    "no column 'h'", a column it lists, where the far corner is what is missing (it read the
+    x, y mapped as x1, y1 as a centre). Oracle: the columns given."""
+    from vistrack.io import MOTTable
+
+    rows = {"t": [1], "x": [1.0], "y": [2.0], "w": [3.0], "h": [4.0], "score": [0.5]}
+    with pytest.raises(ValueError) as e:
+        MOTTable.from_pandas(rows, columns={"frame": "t", "x1": "x", "y1": "y", "bb_width": "w",
+                                            "bb_height": "h", "conf": "score"}, path="d.csv")
+    assert str(e.value) == ("no column 'x2' or 'y2' in d.csv (a box by its corners needs all "
+                            "four, 'x', 'y', 'x2', 'y2'); columns: ['h', 'score', 't', 'w', "
+                            "'x', 'y']")
+    whole = {"t": [1], "a": [1.0], "b": [2.0], "c": [4.0], "d": [7.0]}
+    t = MOTTable.from_pandas(whole, columns={"frame": "t", "x1": "a", "y1": "b", "x2": "c",
+                                             "y2": "d"})
+    assert t.boxes.tolist() == [[1.0, 2.0, 3.0, 5.0]]

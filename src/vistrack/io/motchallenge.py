@@ -667,6 +667,11 @@ class MOTTable:
                                          f"before its near one; {name(lo)} = {_shown(a[k])}, "
                                          f"{name(hi)} = {_shown(b[k])}")
             left, top, w, h = x1, y1, x2 - x1, y2 - y1
+        elif corners_named:  # (told "no column 'h'" of a column there, where x2 was missing)
+            gone = " or ".join(repr(name(c)) for c in _CORNERS if get(c) is None)
+            raise ValueError(f"no column {gone}{where} (a box by its corners needs all four, "
+                             f"{', '.join(repr(name(c)) for c in _CORNERS)}); columns: "
+                             f"{sorted(map(str, have))}")
         elif (point := every(get("x"), get("y"))) is not None and (
                 w is not None or h is not None):  # one of a box's two: the other is missing
             gone = repr(name("bb_width" if w is None else "bb_height"))
