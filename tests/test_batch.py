@@ -1368,3 +1368,96 @@ def test_track_many_clears_its_bar_when_inputs_are_left_unrun(tmp_path, monkeypa
     text = term.getvalue()
     assert text.endswith("\r\x1b[K")
     assert "inputs" not in text.rsplit("\r\x1b[K", 2)[-1]
+
+
+def test_runs_in_threads_keep_their_own_warnings():
+    """Each run keeps the warnings it gave for its run.json: in a thread pool every run's
+    run.json listed every other run's (warnings.catch_warnings swaps the process's one
+    showwarning, and is not safe in threads), and a swapped hook could be left in after the
+    runs. Oracle: the warnings each thread gave, and the hook there before."""
+    import warnings
+
+    from vistrack.pipeline import _shown_warnings
+
+    before = warnings.showwarning
+    barrier = threading.Barrier(3)
+    kept: dict[int, list[str]] = {}
+
+    def run(k: int) -> None:
+        with _shown_warnings() as said:
+            for step in range(20):
+                barrier.wait()  # the three threads warn step by step, interleaved
+                warnings.warn(f"run {k}: step {step}", UserWarning, stacklevel=1)
+            with _shown_warnings() as inner:  # a block inside keeps its own too
+                warnings.warn(f"run {k}: inner", UserWarning, stacklevel=1)
+        kept[k] = said + ["|"] + inner
+
+    with warnings.catch_warnings(record=True) as shown:
+        warnings.simplefilter("always")
+        recorder = warnings.showwarning
+        threads = [threading.Thread(target=run, args=(k,)) for k in range(3)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        hook = warnings.showwarning
+    for k in range(3):
+        own = [f"run {k}: step {step}" for step in range(20)] + [f"run {k}: inner"]
+        assert kept[k] == own + ["|", f"run {k}: inner"], kept[k]
+    assert len(shown) == 63  # each still shown as it came
+    assert hook is recorder and warnings.showwarning is before  # the hooks put back
+
+
+def test_sequences_sharing_one_image_folder_are_distinct_inputs_of_their_detections(tmp_path):
+    """MOT17's sequences of three detectors share one folder of images through links: given
+    together (a folder of them) to `vistrack track --out` or `vistrack fit`, which read their
+    detections alone, they were refused as one input given twice. Tracked from pixels they
+    are still one input given twice. Oracle: each sequence tracked alone."""
+    from vistrack.pipeline import fit_sequences
+
+    rng = np.random.default_rng(5)
+    share = tmp_path / "share"
+    a = _sequence(share / "SIM-FRCNN", rng)
+    b = _sequence(share / "SIM-DPM", rng)
+    (a / "img1").mkdir()
+    (b / "img1").symlink_to(a / "img1", target_is_directory=True)
+    assert expand_inputs([share], reads="detections") == [b, a]
+    with pytest.raises(ValueError, match="is the same input"):
+        expand_inputs([share], reads="pixels")
+    with pytest.raises(ValueError, match="is the same input"):
+        check_distinct([a, b])  # (both read: as before)
+    assert main(["track", str(share), "--out", str(tmp_path / "out") + "/", "--quiet"]) == 0
+    for seq in (a, b):
+        assert (tmp_path / "out" / f"{seq.name}.txt").read_bytes() == _alone(
+            seq, tmp_path / f"{seq.name}-alone.txt")
+    assert len(fit_sequences([a, b], gt=True, held_out=False).fit.per_sequence) == 2
+
+
+def test_an_output_name_too_long_for_a_folder_still_to_be_made_is_named_first(tmp_path,
+                                                                               capsys):
+    """Outputs are checked before any frame is read: a name longer than the file system
+    takes was refused by its stat where its folder existed, but below a folder still to be
+    made it was found only when written, the other inputs of the batch tracked first
+    (status 1). Oracle: the file system's own refusal of the name (ENAMETOOLONG)."""
+    import errno
+
+    from vistrack.io.atomic import check_place
+
+    rng = np.random.default_rng(6)
+    long = "S" * 253
+    bench = tmp_path / "bench"
+    _sequence(bench / "SIM-A", rng, n_objects=2, T=12)
+    _sequence(bench / long, rng, n_objects=2, T=12)
+    with pytest.raises(OSError) as e:
+        (tmp_path / f"{long}.txt").write_text("")
+    assert e.value.errno == errno.ENAMETOOLONG
+    for where in (tmp_path / "new" / f"{long}.txt", tmp_path / "new" / (long + "SSS") / "a.txt"):
+        with pytest.raises(OSError) as e:
+            check_place(where)
+        assert e.value.errno == errno.ENAMETOOLONG and e.value.filename == str(where)
+    assert check_place(tmp_path / "new" / ("S" * 251 + ".txt")) == tmp_path
+    out = tmp_path / "out"
+    assert main(["track", str(bench), "--out", f"{out}/"]) == 2
+    assert capsys.readouterr().err.strip() == (f"vistrack track: error: {out / long}.txt: File "
+                                               "name too long")
+    assert not out.exists()

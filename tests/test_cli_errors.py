@@ -698,6 +698,18 @@ def test_an_unknown_tracker_lists_every_form(tmp_path, capsys, name):
     (["demo", "kalman", "--seeds", "0"],
      "vistrack demo: error: --seeds must be from 1 to 1,000,000; got 0"),
     (["--bogus"], "vistrack: error: unrecognized arguments: --bogus"),
+    # an option of one value given twice: argparse kept the last, unsaid (the first --out
+    # was never written, the first --detections never read)
+    (["track", "x", "--out", "a.txt", "--out", "b.txt"],
+     "vistrack track: error: --out is given twice (a.txt and b.txt): give it once"),
+    (["track", "x", "--out", "a.txt", "--detections", "d1.txt", "--detections", "d2.txt"],
+     "vistrack track: error: --detections is given twice (d1.txt and d2.txt): give it once"),
+    (["fit", "x", "--out", "a.toml", "--config", "c1.toml", "--config", "c2.toml"],
+     "vistrack fit: error: --config is given twice (c1.toml and c2.toml): give it once"),
+    (["track-one", "v.mp4", "--init", "1,2,3,4", "--init", "5,6,7,8", "--out", "b.txt"],
+     "vistrack track-one: error: --init is given twice (1,2,3,4 and 5,6,7,8): give it once"),
+    (["demo", "kalman", "--out", "o1", "--out", "o2"],
+     "vistrack demo: error: --out is given twice (o1 and o2): give it once"),
 ])
 def test_argument_errors_are_one_line(capsys, argv, message):
     """An unknown option, a value of the wrong type, a missing argument: argparse's message in
@@ -1556,3 +1568,60 @@ def test_two_inputs_of_one_name_are_told_how_to_be_tracked(tmp_path, capsys):
         f"vistrack track: error: {tmp_path / 'a' / 'img'} and {tmp_path / 'b' / 'img'} would "
         f"both write {out / 'img'} (outputs are named after each input): track them one at "
         "a time, each into its own output folder\n")
+
+
+def test_a_config_files_offline_mode_with_out_dir_is_named_by_the_file(tmp_path, capsys):
+    """A --config file whose [offline] table enables the offline mode, given with --out-dir,
+    was refused in words about --offline, an option never given; the file is named now (one
+    input or several). --offline itself is still named as before."""
+    import cv2
+    import numpy as np
+
+    from vistrack.data import demo_clip
+
+    clip = demo_clip().video
+    assert main(["track", "--print-config", "--offline"]) == 0
+    cfg = tmp_path / "c1.toml"
+    cfg.write_text(capsys.readouterr().out)
+    folders = []
+    for k in range(2):
+        f = tmp_path / f"imgs{k}"
+        f.mkdir()
+        cv2.imwrite(str(f / "000001.png"), np.zeros((16, 16, 3), np.uint8))
+        folders.append(str(f))
+    said = (f"vistrack track: error: {cfg}: [offline] enabled = true goes with --out, a "
+            "sequence's detections into a results file (with --out-dir a video is tracked "
+            "online: set it false, or give --out)")
+    for inputs in ([str(clip)], folders):
+        assert main(["track", *inputs, "--out-dir", str(tmp_path / "o"), "--config",
+                     str(cfg), "--fps", "10"]) == 2
+        assert capsys.readouterr().err.strip() == said
+        assert main(["track", *inputs, "--out-dir", str(tmp_path / "o"), "--offline",
+                     "--fps", "10"]) == 2
+        assert "--offline, its settings and --detections go with --out" in \
+            capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_parquet_detections_are_said_not_to_be_read(tmp_path, capsys):
+    """A Parquet file of detections (vistrack writes Parquet results) given to --out was sent
+    to --out-dir as a video, and given as --detections was "not a text MOTChallenge file"."""
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("pyarrow")
+    dets = tmp_path / "o.parquet"
+    pd.DataFrame({"frame": [1], "bb_left": [1.0], "bb_top": [1.0], "bb_width": [3.0],
+                  "bb_height": [3.0], "conf": [0.5]}).to_parquet(dets)
+    said = "Parquet detections are not read: write them as CSV with a header, " \
+           "DataFrame.to_csv, or as MOTChallenge text"
+    assert main(["track", str(dets), "--fps", "25", "--out", str(tmp_path / "p.txt")]) == 2
+    err = capsys.readouterr().err
+    assert f"{dets} is neither ({said})" in err and "--out-dir" not in err.split("neither")[1]
+    seq = tmp_path / "seq"
+    (seq / "det").mkdir(parents=True)
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=seq\nframeRate=10\nseqLength=2\n"
+                                     "imWidth=320\nimHeight=240\n")
+    (seq / "det" / "det.txt").write_text("1,-1,10,10,20,40,0.9\n")
+    assert main(["track", str(seq), "--detections", str(dets), "--out",
+                 str(tmp_path / "p.txt")]) == 2
+    assert capsys.readouterr().err.strip() == f"vistrack track: error: {dets}: {said}"
+    assert not (tmp_path / "p.txt").exists()

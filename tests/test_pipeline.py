@@ -1220,7 +1220,7 @@ def test_the_results_never_overwrite_the_detections_file(tmp_path):
     before = det.read_bytes()
     for out in (det, tmp_path / "sub" / ".." / "det.txt"):
         with pytest.raises(ValueError, match=r"is the detections file: the run would write "
-                                             r"over it; give another --out"):
+                                             r"over it; give another out"):
             track_sequence(det, out, fps=10, force=True)
     seq = tmp_path / "seq"
     (seq / "det").mkdir(parents=True)
@@ -1238,9 +1238,10 @@ def test_the_results_never_overwrite_the_detections_file(tmp_path):
     files = {p: p.read_bytes() for p in seq.rglob("*") if p.is_file()}
     for out, what in ((seq / "seqinfo.ini", "seqinfo.ini"), (seq / "gt" / "gt.txt", "ground truth"),
                       (seq / "det" / ".." / "det" / "det.txt", "detections file")):
+        # (named as Python's argument, out: "--out" was the command line's)
         with pytest.raises(ValueError, match=re.escape(
-                f"--out {out} is the sequence's {what}: the run would write over it; give "
-                "another --out")):
+                f"out {out} is the sequence's {what}: the run would write over it; give "
+                "another out")):
             track_sequence(seq, out, detections=det, force=True)
     assert {p: p.read_bytes() for p in seq.rglob("*") if p.is_file()} == files
 
@@ -2177,3 +2178,28 @@ def test_a_csv_file_of_detections_is_named_by_its_lines(tmp_path):
     twice.write_text(rows((2, 7, 0), (2, 7, 0)))
     with pytest.warns(RuntimeWarning, match=rf"^{twice}, line 5: a box of zero width"):
         track_sequence(twice, tmp_path / "twice.txt", fps=10, columns=names, scores="raw")
+
+
+def test_run_takes_its_sinks_from_any_iterable_and_names_one_given_alone():
+    """A generator of sinks was used up by run's check of them, and its sinks were given no
+    row, unsaid; one sink given without a list failed as "'TrackRows' object is not
+    iterable". Oracle: the same sink given in a list."""
+    from vistrack.io.tracks import TrackRows
+    from vistrack.tracking import BoxTracker
+
+    def frames():
+        return [Frame(k, k / 10) for k in range(1, 6)]
+
+    def det(frame):
+        x = 10.0 + 2 * frame.index
+        return Detections(boxes=np.array([[x, 10, x + 20, 50]]), scores=np.array([0.9]))
+
+    listed, made = TrackRows(), TrackRows()
+    run(frames(), det, BoxTracker(scores="raw"), [listed])
+    run(frames(), det, BoxTracker(scores="raw"), (r for r in [made]))
+    assert len(listed) > 0 and made.ids.tolist() == listed.ids.tolist()
+    with pytest.raises(TypeError, match=re.escape("sinks must be a sequence of sinks; got one, "
+                                                  "a TrackRows: give [sink]")):
+        run(frames(), det, BoxTracker(scores="raw"), TrackRows())
+    with pytest.raises(TypeError, match="sinks must be a sequence of sinks; got int"):
+        run(frames(), det, BoxTracker(scores="raw"), 3)

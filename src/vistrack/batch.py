@@ -68,11 +68,12 @@ def is_benchmark(path: Path) -> bool:
         return False
 
 
-def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
+def expand_inputs(inputs: Iterable[str | Path], *, reads: str = "both") -> list[Path]:
     """The inputs, each benchmark folder (a folder of sequence folders, each with
     ``seqinfo.ini``) replaced by its sequences, sorted by name; other inputs as given. A
     benchmark folder's sub-folders that hold detections or images but no ``seqinfo.ini`` are
     left out with a warning naming them (given alone, with ``--fps``, they are tracked).
+    ``reads`` is what is read of a sequence, for :func:`check_distinct`.
 
     Raises
     ------
@@ -82,7 +83,7 @@ def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
         If an input appears twice.
     """
     given = [Path(item) for item in inputs]
-    check_distinct(given)  # (a folder given twice was named by its first sequence)
+    check_distinct(given, reads=reads)  # (a folder given twice was named by its first one)
     out: list[Path] = []
     within: list[Path | None] = []  # each input's folder of sequences, if it came from one
     for item in given:
@@ -106,15 +107,19 @@ def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
         else:
             out.append(path)
             within.append(None)
-    check_distinct(out, within)
+    check_distinct(out, within, reads=reads)
     return out
 
 
 def check_distinct(paths: Iterable[str | Path],
-                   within: Sequence[Path | None] | None = None) -> None:
+                   within: Sequence[Path | None] | None = None, *,
+                   reads: str = "both") -> None:
     """Check that no two of ``paths`` resolve to the same file or folder, a sequence folder
-    counting as its images' folder and its detections file too (a sequence and its own
-    ``img1/`` are the same frames, tracked twice under two names). ``within`` gives, for each
+    counting as what is read of it too (a sequence and its own ``img1/`` are the same frames,
+    tracked twice under two names): its detections file and its images' folder (``reads``
+    ``"both"``), or the one read, ``"detections"`` or ``"pixels"`` (MOT17's three detectors'
+    sequences share one folder of images through links: tracked from their detections they
+    are three inputs, and were refused as one given three times). ``within`` gives, for each
     path, the folder of sequences it was found in (or None), which the error names: each was
     given once, one of them as a member of that folder.
 
@@ -131,6 +136,8 @@ def check_distinct(paths: Iterable[str | Path],
     ...
     ValueError: a is given twice (as a too)
     """
+    if reads not in ("both", "detections", "pixels"):
+        raise ValueError(f"reads must be 'both', 'detections' or 'pixels'; got {reads!r}")
     seen: dict[Path, tuple[Path, str, Path | None]] = {}  # what each path is, how, and where
     given = [Path(p) for p in paths]
     if within is not None and len(within) != len(given):
@@ -138,8 +145,10 @@ def check_distinct(paths: Iterable[str | Path],
                          f"paths; got {len(within)}")
     for p, folder in zip(given, within if within is not None else [None] * len(given)):
         own = {p.resolve(): ""}
-        if _is_sequence(p):  # its frames and its detections, as given alone
-            for part in (_image_dir(p), "det/det.txt"):
+        if _is_sequence(p):  # what is read of it: as if given alone
+            parts = ([_image_dir(p)] if reads != "detections" else []) + (
+                ["det/det.txt"] if reads != "pixels" else [])
+            for part in parts:
                 own[(p / part).resolve()] = f"{p}/{part}"
         for key, via in own.items():
             if key in seen:
@@ -261,7 +270,7 @@ def plan(inputs: Iterable[str | Path], out: str | Path, *, kind: str = "detectio
 
     out = Path(out)
     jobs = []
-    for path in expand_inputs(inputs):
+    for path in expand_inputs(inputs, reads=kind):
         if kind == "detections":
             alone = path.is_file() and path.suffix.lower() in DETECTION_SUFFIXES
             if alone and options.get("fps") is None:

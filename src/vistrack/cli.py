@@ -130,15 +130,18 @@ def _command_line(argv: Sequence[str]) -> str:
 
 class _Once(argparse.Action):
     """An option that takes one value: given twice, it is an error naming both (argparse
-    keeps the last: `eval --gt A --pred a --gt B --pred b` scored B alone, unsaid)."""
+    keeps the last: `eval --gt A --pred a --gt B --pred b` scored B alone, `track --out
+    a.txt --out b.txt` wrote b.txt alone, unsaid)."""
 
     def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
                  values: Any, option_string: str | None = None) -> None:
-        before = getattr(namespace, self.dest, None)
-        if before is not None:
-            parser.error(f"{option_string} is given twice ({before} and {values}): one "
-                         "sequence is scored by --gt and --pred, several by --gt-dir and "
-                         "--pred-dir")
+        given = vars(namespace).setdefault("_given_once", {})
+        if self.dest in given:
+            hint = (": one sequence is scored by --gt and --pred, several by --gt-dir and "
+                    "--pred-dir" if parser.prog.endswith(" eval") else ": give it once")
+            parser.error(f"{option_string} is given twice ({given[self.dest]} and {values})"
+                         f"{hint}")
+        given[self.dest] = values
         setattr(namespace, self.dest, values)
 
 
@@ -218,6 +221,22 @@ _OFFLINE_NEEDS_OUT = ("--offline, its settings and --detections go with --out, a
                       "sequence's detections into a results file (with --out-dir a video is "
                       "tracked online, its detections read from a file with --frontend "
                       "detections:FILE)")
+
+_PARQUET_DETECTIONS = ("Parquet detections are not read: write them as CSV with a header, "
+                       "DataFrame.to_csv, or as MOTChallenge text")
+"""Said of a .parquet file given as detections (it was sent to --out-dir as a video)."""
+
+
+def _offline_needs_out(args: argparse.Namespace, given: bool = False) -> str:
+    """Why the offline mode cannot run with --out-dir: said of --offline (or its settings,
+    ``given``), or of the --config file whose [offline] table enables it (it was said of
+    --offline, an option never given)."""
+    if getattr(args, "offline", False) or given or getattr(args, "config", None) is None:
+        return _OFFLINE_NEEDS_OUT
+    return (f"{args.config}: [offline] enabled = true goes with --out, a sequence's detections "
+            "into a results file (with --out-dir a video is tracked online: set it false, or "
+            "give --out)")
+
 
 # command-line options that set the box tracker's configuration: (option, table, key, type,
 # metavar, help, the default as the help says it); vistrack.config is not imported to build the
@@ -562,7 +581,7 @@ def _track(args: argparse.Namespace) -> int:
             args.run_written = True
         else:
             if cfg is not None and cfg.offline.enabled:
-                return fail(_OFFLINE_NEEDS_OUT)
+                return fail(_offline_needs_out(args))
             problem = _frontend_problem(args, name)
             if problem:
                 return fail(problem)
@@ -683,6 +702,7 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
                         f"det/det.txt) or a detections file (.txt, .csv), and "
                         f"{args.input} is neither" + (
                             f" (a {suffix} file)" if suffix in _TEXT_SUFFIXES
+                            else f" ({_PARQUET_DETECTIONS})" if suffix == ".parquet"
                             else ": track a video with --out-dir OUT/"))
             if args.detections is not None:
                 return (f"{args.input} is a detections file, and --detections gives "
@@ -1145,7 +1165,7 @@ def _track_many(args: argparse.Namespace, offline_given: list[str]) -> int:
         kind, out, options["config"] = "detections", args.out, cfg
     else:
         if (cfg is not None and cfg.offline.enabled) or offline_given:
-            return fail(_OFFLINE_NEEDS_OUT)
+            return fail(_offline_needs_out(args, bool(offline_given)))
         if args.skip_bad_frames and all(Path(i).is_file() for i in args.input):
             return fail(_skip_bad_frames_problem(args.input))
         problem = _frontend_problem(args, name)
@@ -1251,7 +1271,8 @@ def _fit(args: argparse.Namespace) -> int:
 
     if args.no_held_out and not args.gt:  # (accepted, and meant nothing)
         return _fail("fit", "--no-held-out goes with --gt")
-    inputs = expand_inputs(args.inputs)  # a folder of sequences: its sequences, as track's
+    # a folder of sequences: its sequences, as track's (their detections are what is read)
+    inputs = expand_inputs(args.inputs, reads="detections")
     # (--force wrote the configuration over a sequence's detections, or its ground truth)
     # (and over its own --config: fit --out c.toml --config c.toml --force replaced it, where
     # track refuses the same)
@@ -1655,7 +1676,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     demo.add_argument("name", choices=DEMOS, metavar="DEMO",
                       help=f"which demo: {' or '.join(DEMOS)}")
-    demo.add_argument("--out", default="out", metavar="OUT",
+    demo.add_argument("--out", action=_Once, default="out", metavar="OUT",
                       help="folder for what the demo writes (default: out)")
     demo.add_argument("--force", action="store_true",
                       help="replace the results of an earlier run")
@@ -1675,10 +1696,12 @@ def build_parser() -> argparse.ArgumentParser:
                        "video (--out-dir); "
                        "several, or a folder of sequences, are tracked in parallel; none "
                        "with --print-config: print the configuration the options give")
-    track.add_argument("--out", help="results file to write (detections mode); with several "
-                       "inputs, or ending in /, the folder of their results, NAME.txt each")
-    track.add_argument("--out-dir", help="folder for the outputs (video mode); with several "
-                       "inputs, a folder NAME/ each inside it")
+    track.add_argument("--out", action=_Once,
+                       help="results file to write (detections mode); with several inputs, or "
+                       "ending in /, the folder of their results, NAME.txt each")
+    track.add_argument("--out-dir", action=_Once,
+                       help="folder for the outputs (video mode); with several inputs, a folder "
+                       "NAME/ each inside it")
     track.add_argument("--jobs", type=int, metavar="N",
                        help="several inputs: processes tracking at once (default: the cores "
                        "this process may use; 1: one after the other, in this process)")
@@ -1690,8 +1713,9 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--keep-going", action="store_true",
                        help="several inputs: after one fails, track the others (default: "
                        "start no new one)")
-    track.add_argument("--detections", help="detections file (default INPUT/det/det.txt): "
-                       "MOTChallenge's format, or CSV with a header (.csv); a detector run on "
+    track.add_argument("--detections", action=_Once,
+                       help="detections file (default INPUT/det/det.txt): MOTChallenge's format, "
+                       "or CSV with a header (.csv); a detector run on "
                        "every k-th frame only (rows on frames 1, 1 + k, ...) is tracked on "
                        "its own frames, the frames between given the tracks' predicted "
                        "(offline: filled) boxes")
@@ -1726,7 +1750,7 @@ def build_parser() -> argparse.ArgumentParser:
         "raw to the scores themselves. Each option is put over --config, and the file over "
         "its preset ([tracker] name, which --tracker must then agree with). The defaults "
         "below are bytetrack's; --print-config --tracker NAME shows another preset's.")
-    box.add_argument("--config", metavar="FILE",
+    box.add_argument("--config", action=_Once, metavar="FILE",
                      help="the whole tracker configuration, TOML (as --print-config writes): "
                      "a box tracker's [tracker], [motion] and [offline] tables, or "
                      "--tracker dcpf's [dcpf] table")
@@ -1761,8 +1785,9 @@ def build_parser() -> argparse.ArgumentParser:
                        "detections file alone or a sequence without seqinfo.ini (put over the "
                        "rate an input gives, where it gives one; with several inputs, every "
                        "input's)")
-    track.add_argument("--gt", help="video mode, one input: MOTChallenge ground truth to "
-                       "score against (or a .csv or .parquet file with a header; for points, "
+    track.add_argument("--gt", action=_Once,
+                       help="video mode, one input: MOTChallenge ground truth to score against "
+                       "(or a .csv or .parquet file with a header; for points, "
                        "frame, particle, x, y)")
     track.add_argument("--zero-distance", type=float, metavar="PX",
                        help="with --gt: score positions by distance rather than boxes by "
@@ -1827,10 +1852,11 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("inputs", metavar="SEQ_DIR", nargs="+",
                      help="MOTChallenge sequence folders (seqinfo.ini, det/det.txt), or a "
                      "folder of them")
-    fit.add_argument("--out", required=True, help="configuration file to write (TOML)")
+    fit.add_argument("--out", action=_Once, required=True,
+                     help="configuration file to write (TOML)")
     fit.add_argument("--gt", action="store_true",
                      help="learn from each sequence's ground truth (SEQ_DIR/gt/gt.txt)")
-    fit.add_argument("--config", metavar="FILE",
+    fit.add_argument("--config", action=_Once, metavar="FILE",
                      help="the configuration to start from and compare with (default: the "
                      "default one)")
     fit.add_argument("--no-held-out", action="store_true",
@@ -1848,7 +1874,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Follow one object through a video or image folder from its box in the "
         "first frame; write frame,x,y,w,h lines (frames from 1).")
     one.add_argument("input", metavar="INPUT", help="video file or image folder")
-    one.add_argument("--init",
+    one.add_argument("--init", action=_Once,
                      help="the first frame's box: x,y,w,h in 0-based pixels (or separated by "
                      "tabs or spaces; OTB's groundtruth_rect.txt counts from 1: subtract 1 from "
                      "x and y, or leave --init out and give --gt, whose first box is then the "
@@ -1861,9 +1887,10 @@ def build_parser() -> argparse.ArgumentParser:
                      "(CONDENSATION on the colour model), template (affine SSD), klt (median "
                      "flow), wsl (robust online appearance model), snake (B-spline contour), "
                      "or OpenCV's csrt and kcf for comparison")
-    one.add_argument("--out", required=True, help="boxes file to write")
-    one.add_argument("--gt", help="ground truth (OTB groundtruth_rect.txt, VOT groundtruth.txt "
-                     "or a boxes file) to score against")
+    one.add_argument("--out", action=_Once, required=True, help="boxes file to write")
+    one.add_argument("--gt", action=_Once,
+                     help="ground truth (OTB groundtruth_rect.txt, VOT groundtruth.txt or a boxes"
+                     " file) to score against")
     one.add_argument("--gt-origin", type=int, choices=(0, 1), default=None,
                      help="where --gt's x y w h lines count pixels from: 1 (OTB's) or 0; "
                      "default by its name, 1 for groundtruth_rect.txt, else 0 with a warning")
@@ -1887,7 +1914,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the results' column names in a .csv or .parquet file: frame, id, "
                     "bb_left, bb_top, bb_width, bb_height (or x, y: the centre; or the corners "
                     "x1, y1, x2, y2), conf (e.g. frame=t,id=tid,bb_width=w,bb_height=h)")
-    ev.add_argument("--plots", metavar="DIR",
+    ev.add_argument("--plots", action=_Once, metavar="DIR",
                     help="also draw HOTA, DetA and AssA over the localisation threshold α, "
                     "each sequence and COMBINED, into DIR/hota_alpha.png, and each "
                     "sequence's objects over time, coloured by the predicted identity that "

@@ -21,6 +21,7 @@ import itertools
 import math
 import os
 import re
+import threading
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -547,7 +548,7 @@ def as_detector(detector: Detector | Callable[[Frame], Detections | None] | None
 
 
 def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detections | None] | None,
-        tracker: Tracker, sinks: Sequence[Sink] = (), *, progress: TextIO | None = None,
+        tracker: Tracker, sinks: Iterable[Sink] = (), *, progress: TextIO | None = None,
         total: int | None = None, label: str = "",
         check: Callable[[LoopStats], None] | None = None,
         detector_label: str | None = "the front-end") -> LoopStats:
@@ -564,7 +565,7 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
     tracker : Tracker
         Anything with ``step(frame, detections) -> Tracks``
         (:class:`~vistrack.tracking.Tracker`).
-    sinks : sequence of Sink
+    sinks : iterable of Sink
         Each takes every frame's tracks (``write(frame, tracks)``) and is closed when the
         source ends. If the loop fails, sinks with an ``abort()`` are aborted instead, and
         none is closed: no results file is written from part of a run. If a sink fails to
@@ -624,6 +625,16 @@ def run(source: Iterable[Frame], detector: Detector | Callable[[Frame], Detectio
         # (progress=True: "'bool' object has no attribute 'write'", after the first frames)
         raise TypeError(f"progress must be a text stream (sys.stderr, say) or None; got "
                         f"{type(progress).__name__}")
+    if isinstance(sinks, Sink):  # (one sink: "'TrackRows' object is not iterable")
+        raise TypeError(f"sinks must be a sequence of sinks; got one, a "
+                        f"{type(sinks).__name__}: give [sink]")
+    try:
+        # a list of them, once: a generator was used up by the check below, and its sinks
+        # were given no row, unsaid
+        sinks = list(sinks)
+    except TypeError:
+        raise TypeError(f"sinks must be a sequence of sinks; got {type(sinks).__name__}"
+                        ) from None
     for k, sink in enumerate(sinks):
         if not isinstance(sink, Sink):
             raise TypeError(f"sinks[{k}] must have write(frame, tracks) and close(); got "
@@ -1321,7 +1332,8 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
     Raises
     ------
     ValueError
-        If ``columns`` is given for a MOTChallenge file, or the CSV file lacks a column.
+        If ``columns`` is given for a MOTChallenge file, the CSV file lacks a column, or the
+        file is Parquet (not read as detections).
 
     Warns
     -----
@@ -1335,6 +1347,9 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
         file): such a box overlaps no other, so no track can follow it.
     """
     path = Path(path)
+    if path.suffix.lower() == ".parquet":  # (read as text: "not a text MOTChallenge file")
+        raise ValueError(f"{path}: Parquet detections are not read: write them as CSV with a "
+                         "header, DataFrame.to_csv, or as MOTChallenge text")
     if path.suffix.lower() != ".csv":
         if columns:
             raise ValueError(f"columns name a CSV file's columns; {path} is read as a "
@@ -1525,8 +1540,9 @@ def track_sequence(seq_dir: str | Path, out: str | Path, *, detections: str | Pa
     5
     """
     out = Path(out)
-    # (named first: "exists; pass --force" would have the input overwritten next)
-    check_not_input([out], sequence_inputs(seq_dir, detections), name="--out")
+    # (named first: "exists; pass --force" would have the input overwritten next; as
+    # Python's argument, out: the command line checks --out itself first)
+    check_not_input([out], sequence_inputs(seq_dir, detections), name="out")
     check_output(out, force=force)
     table_kind = _results_format(out)
     cfg = resolve_config(config, tracker=tracker, offline=offline, **overrides)
@@ -2093,7 +2109,7 @@ def fit_sequences(seq_dirs: Sequence[str | Path], *, gt: bool = False,
     if not seqs:
         raise ValueError("no sequences to learn from")
     # one sequence given twice would be learned from twice, and held out from itself
-    check_distinct(seqs)
+    check_distinct(seqs, reads="detections")  # (their images are not read)
     cfg = resolve_config(config)
     start = cfg.motion if cfg.motion is not None else BoxMotion()
     series: list[tuple[list[Series], float]] = []
@@ -2865,10 +2881,17 @@ def _ground_truth(gt: str | Path, zero_distance: float | None = None) -> MOTTabl
 
 @contextmanager
 def _shown_warnings() -> Iterator[list[str]]:
-    """The messages of the warnings shown while inside, in the order shown: each is still
-    shown as it comes (by whatever shows warnings outside: the command line's one line, a
-    test's recorder), and kept. Warnings that the filters hide or turn into errors are not
-    kept.
+    """The messages of the warnings shown while inside, in the order shown, by this thread:
+    each is still shown as it comes (by whatever shows warnings outside: the command line's
+    one line, a test's recorder), and kept. Warnings that the filters hide or turn into
+    errors are not kept.
+
+    Runs in threads of one process (a thread pool given to
+    :func:`~vistrack.batch.track_many`) keep their own: ``warnings.catch_warnings``, which
+    this used, swaps the process's one ``showwarning`` and is not safe in threads, so every
+    run's ``run.json`` listed every other's warnings, and a swapped hook could be left
+    behind. One hook is put in while any thread keeps warnings, and taken out after the
+    last.
 
     Examples
     --------
@@ -2878,17 +2901,38 @@ def _shown_warnings() -> Iterator[list[str]]:
     >>> said
     ['a.txt: no detections']
     """
+    global _KEEPING
     said: list[str] = []
-    with warnings.catch_warnings():
-        show = warnings.showwarning
-
-        def keep(message: Warning | str, category: type[Warning], filename: str, lineno: int,
-                 file: Any = None, line: str | None = None) -> None:
-            said.append(str(message))
-            show(message, category, filename, lineno, file, line)
-
-        warnings.showwarning = keep
+    with _KEEP_LOCK:
+        if _KEEPING == 0:
+            _SHOWN["show"] = warnings.showwarning
+            warnings.showwarning = _keep_shown
+        _KEEPING += 1
+    kept = getattr(_KEPT, "lists", [])
+    _KEPT.lists = [*kept, said]
+    try:
         yield said
+    finally:
+        _KEPT.lists = kept
+        with _KEEP_LOCK:
+            _KEEPING -= 1
+            if _KEEPING == 0 and warnings.showwarning is _keep_shown:
+                warnings.showwarning = _SHOWN.pop("show")
+
+
+_KEPT = threading.local()  # each thread's lists of kept messages, outermost first
+_KEEP_LOCK = threading.Lock()
+_KEEPING = 0  # the blocks of _shown_warnings open, in every thread
+_SHOWN: dict[str, Any] = {}  # what showed warnings before the first block opened
+
+
+def _keep_shown(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                file: Any = None, line: str | None = None) -> None:
+    """``warnings.showwarning`` while :func:`_shown_warnings` blocks are open: the message
+    kept in each of the calling thread's open blocks, then shown as before them."""
+    for said in getattr(_KEPT, "lists", ()):
+        said.append(str(message))
+    _SHOWN["show"](message, category, filename, lineno, file, line)
 
 
 def _write_run_info(run: VideoRun, video: str | Path, gt: str | Path | None,

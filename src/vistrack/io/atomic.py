@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import errno
 import itertools
 import os
 import re
@@ -622,6 +623,9 @@ def check_place(path: str | os.PathLike, *, name: str | None = None,
     NotADirectoryError
         If ``path`` is to be a folder and is an existing file, or a folder above it is a
         file.
+    OSError
+        ``ENAMETOOLONG``, if a name of ``path`` still to be made is longer than the file
+        system takes there (``PC_NAME_MAX``, 255 bytes where it does not say).
 
     Examples
     --------
@@ -647,6 +651,18 @@ def check_place(path: str | os.PathLike, *, name: str | None = None,
         here = here.parent
     if here.exists() and not here.is_dir():
         raise NotADirectoryError(f"{label}: {here} is a file, not a folder")
+    # each name to be made below it within what the file system takes there: past an
+    # existing folder the name was refused by its stat, but below one still to be made it
+    # was found only when written (a batch ran its other inputs first)
+    try:
+        longest = os.pathconf(here, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        longest = 255
+    q = p
+    while q != here and q != q.parent:
+        if len(os.fsencode(q.name)) > longest:
+            raise OSError(errno.ENAMETOOLONG, os.strerror(errno.ENAMETOOLONG), str(p))
+        q = q.parent
     return here
 
 
