@@ -587,3 +587,21 @@ def test_corners_named_without_their_far_corner_are_named():
     t = MOTTable.from_pandas(whole, columns={"frame": "t", "x1": "a", "y1": "b", "x2": "c",
                                              "y2": "d"})
     assert t.boxes.tolist() == [[1.0, 2.0, 3.0, 5.0]]
+
+
+def test_one_column_named_for_two_of_ours_is_refused(tmp_path, capsys):
+    """`--columns bb_left=x,bb_top=x` read one column as both, unsaid (boxes on the diagonal,
+    warned of as outside the image at best). Oracle: the names given."""
+    from vistrack.cli import main
+    from vistrack.io import MOTTable
+
+    rows = {"frame": [1], "x": [1.0], "y": [2.0], "w": [3.0], "h": [4.0]}
+    said = "columns bb_left=x and bb_top=x: one column, 'x', named for two of ours"
+    with pytest.raises(ValueError, match=re.escape(said)):
+        MOTTable.from_pandas(rows, columns={"bb_left": "x", "bb_top": "x", "bb_width": "w",
+                                            "bb_height": "h"})
+    csv = tmp_path / "d.csv"
+    csv.write_text("frame,x,y,w,h\n1,1,2,3,4\n")
+    assert main(["track", str(csv), "--fps", "10", "--out", str(tmp_path / "r.txt"),
+                 "--columns", "bb_left=x,bb_top=x,bb_width=w,bb_height=h"]) == 2
+    assert said in capsys.readouterr().err

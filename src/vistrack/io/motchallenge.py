@@ -896,6 +896,13 @@ conf, class, visibility
             raise ValueError(f"columns {ours}={theirs}: {ours!r} is not a column vistrack "
                              "reads" + (f" (did you mean {close[0]!r}?)" if close else "")
                              + f"; those are {', '.join(_COLUMNS)}")
+    first: dict[Any, str] = {}
+    for ours, theirs in names.items():
+        # (bb_left=x,bb_top=x read one column as both, unsaid: a mistyped name, surely)
+        if theirs in first:
+            raise ValueError(f"columns {first[theirs]}={theirs} and {ours}={theirs}: one "
+                             f"column, {theirs!r}, named for two of ours")
+        first[theirs] = ours
     return names
 
 
