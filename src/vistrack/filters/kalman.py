@@ -16,6 +16,7 @@ definite.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -710,6 +711,13 @@ def _check_square(a: np.ndarray, name: str) -> None:
                          f"number; got {np.max(np.abs(a)):g}")
 
 
+def _power_of_two(*values: float) -> float:
+    """The power of two at or just above the largest of ``values``' magnitudes (1 where none
+    is finite and above 0): dividing by it is exact, and leaves them at most 1."""
+    top = max((abs(v) for v in values if math.isfinite(v)), default=0.0)
+    return math.ldexp(1.0, math.frexp(top)[1]) if top > 0 else 1.0
+
+
 def kalman_filter_1d(
     ys: ArrayLike,
     *,
@@ -800,23 +808,28 @@ def kalman_filter_1d(
     xp, sp = float(x0), float(sigma0)
     for i in range(T):
         di, mi, sd, sm = (float(par[k][i]) for k in ("d", "m", "sigma_d", "sigma_m"))
+        # the standard deviations over a power of two near the largest, k: the squares of
+        # standard deviations from 1e77 overflowed (a std of inf, then NaN) and from 1e-77
+        # underflowed (stds of 0, wrong means), well inside the 1.34e154 taken; a power of
+        # two scales exactly, and the squares are products (correctly rounded: ** 2 went
+        # through pow(), whose last bit is not always), so the results hold at any scale
         if i > 0:
             xp = di * out["mean"][i - 1]
-            sp = float(np.hypot(sd, di * out["std"][i - 1]))
+            k = _power_of_two(sd, di * out["std"][i - 1])
+            u, v = sd / k, di * (out["std"][i - 1] / k)
+            sp = math.sqrt(u * u + v * v) * k
         out["pred_mean"][i], out["pred_std"][i] = xp, sp
         if np.isnan(y[i]):
             out["mean"][i], out["std"][i] = xp, sp
             continue
-        # the innovation's standard deviation, and the update in ratios to it: the squares
-        # of standard deviations from 1e77 overflowed (a std of inf, then NaN) and from
-        # 1e-77 underflowed (stds of 0, wrong means), well inside the 1.34e154 taken
-        s_i = float(np.hypot(sm, mi * sp))
-        if not s_i > 0:  # as the n-D filter's innovation covariance (NaN, or 1/0, before)
+        k = _power_of_two(sm, mi * sp)
+        sm2, sp2 = (sm / k) * (sm / k), (sp / k) * (sp / k)
+        den = sm2 + mi * mi * sp2
+        if not den > 0:  # as the n-D filter's innovation covariance (NaN, or 1/0, before)
             raise ValueError(f"the innovation variance sigma_m^2 + m^2 pred_std^2 is 0 at step "
                              f"{i}: a measurement without noise of a state without "
                              f"uncertainty, or that does not see it (m[{i}] = {mi:g})")
-        r_m, r_p = sm / s_i, sp / s_i
-        out["mean"][i] = xp * r_m * r_m + y[i] * (mi * r_p) * r_p
-        out["std"][i] = r_m * sp
+        out["mean"][i] = (xp * sm2 + mi * y[i] * sp2) / den
+        out["std"][i] = math.sqrt(sm2 * sp2 / den) * k
     _readonly(*out.values())
     return FilterResult1D(**out)
