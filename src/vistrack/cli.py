@@ -222,11 +222,6 @@ _OFFLINE_NEEDS_OUT = ("--offline, its settings and --detections go with --out, a
                       "tracked online, its detections read from a file with --frontend "
                       "detections:FILE)")
 
-_PARQUET_DETECTIONS = ("Parquet detections are not read: write them as CSV with a header, "
-                       "DataFrame.to_csv, or as MOTChallenge text")
-"""Said of a .parquet file given as detections (it was sent to --out-dir as a video)."""
-
-
 def _offline_needs_out(args: argparse.Namespace, given: bool = False) -> str:
     """Why the offline mode cannot run with --out-dir: said of --offline (or its settings,
     ``given``), or of the --config file whose [offline] table enables it (it was said of
@@ -651,7 +646,7 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
     cannot write its outputs fails now (raises as :func:`~vistrack.io.atomic.check_output`
     and :func:`~vistrack.pipeline.video_outputs` do)."""
     from .io.atomic import check_not_input, check_output
-    from .io.motchallenge import DETECTION_SUFFIXES
+    from .io.motchallenge import DETECTION_SUFFIXES, PARQUET_DETECTIONS
     from .io.video import _TEXT_SUFFIXES, _holds_images
     from .pipeline import input_files, sequence_inputs, video_outputs
 
@@ -702,7 +697,7 @@ def _outputs_problem(args: argparse.Namespace, name: str, box: bool,
                         f"det/det.txt) or a detections file (.txt, .csv), and "
                         f"{args.input} is neither" + (
                             f" (a {suffix} file)" if suffix in _TEXT_SUFFIXES
-                            else f" ({_PARQUET_DETECTIONS})" if suffix == ".parquet"
+                            else f" ({PARQUET_DETECTIONS})" if suffix == ".parquet"
                             else ": track a video with --out-dir OUT/"))
             if args.detections is not None:
                 return (f"{args.input} is a detections file, and --detections gives "

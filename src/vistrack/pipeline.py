@@ -68,6 +68,7 @@ from .io.atomic import (
 )
 from .io.motchallenge import (
     DETECTION_SUFFIXES,
+    PARQUET_DETECTIONS,
     MOTFormatError,
     MOTTable,
     SeqInfo,
@@ -1348,8 +1349,7 @@ def read_detections(path: str | Path, columns: dict[str, str] | None = None,
     """
     path = Path(path)
     if path.suffix.lower() == ".parquet":  # (read as text: "not a text MOTChallenge file")
-        raise ValueError(f"{path}: Parquet detections are not read: write them as CSV with a "
-                         "header, DataFrame.to_csv, or as MOTChallenge text")
+        raise ValueError(f"{path}: {PARQUET_DETECTIONS}")
     if path.suffix.lower() != ".csv":
         if columns:
             raise ValueError(f"columns name a CSV file's columns; {path} is read as a "

@@ -1726,6 +1726,11 @@ DETECTION_SUFFIXES = (".txt", ".csv")
 """The suffixes of a detections file tracked without a sequence folder: MOTChallenge's text,
 or CSV with a header."""
 
+PARQUET_DETECTIONS = ("Parquet detections are not read: write them as CSV with a header, "
+                      "DataFrame.to_csv, or as MOTChallenge text")
+"""Said of a ``.parquet`` file given as detections (the command line and
+:func:`~vistrack.pipeline.read_detections` say it alike)."""
+
 
 def sequence_name(path: str | os.PathLike) -> str:
     """The name of the sequence a folder or a detections file holds: a folder's name, or a
