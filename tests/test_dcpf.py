@@ -104,6 +104,54 @@ def test_hog_confidence_maps_every_window_by_the_resize_made():
     assert across.score(10 + 4 * 3, 20 + 8 * 2, 90) == s[2, 3]
 
 
+def test_hog_confidence_scores_its_levels_on_opencvs_threads_to_the_same_bits():
+    """OpenCV's HOG search is one thread a call, so the levels of a frame ran one after the
+    other (184 ms a frame of the bundled clip here, 104 ms on two threads). They run on as many
+    threads as OpenCV uses (``cv2.setNumThreads``), and each level's grid is OpenCV's margin
+    of each window, bit for bit, as on one thread."""
+    import threading
+
+    import cv2
+
+    from vistrack.data import demo_clip
+    from vistrack.io import VideoReader
+
+    clip = demo_clip()
+    img = next(iter(VideoReader(clip.video))).image
+
+    class Spy:  # OpenCV's detector, noting the thread of each call
+        def __init__(self, hog):
+            self.hog, self.threads = hog, set()
+
+        def detect(self, *args, **kwargs):
+            self.threads.add(threading.get_ident())
+            return self.hog.detect(*args, **kwargs)
+
+    ref = cv2.HOGDescriptor()
+    ref.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+    before = cv2.getNumThreads()
+    maps = {}
+    try:
+        for n in (1, 2):
+            cv2.setNumThreads(n)
+            hog = HOGConfidence()
+            hog._hog = spy = Spy(hog._hog)
+            maps[n] = hog(img)
+            assert len(spy.threads) == min(n, cv2.getNumThreads()), n
+    finally:
+        cv2.setNumThreads(before)
+    for h, grid, other in zip(maps[2].heights, maps[2].scores, maps[1].scores):
+        np.testing.assert_array_equal(grid, other)
+        f = 96 / h
+        sw, sh = int(round(768 * f)), int(round(576 * f))
+        loc, w = ref.detect(cv2.resize(img, (sw, sh)), hitThreshold=-1e9, winStride=(8, 8),
+                            padding=(0, 0))
+        loc = np.asarray(loc).reshape(-1, 2) // 8
+        np.testing.assert_array_equal(grid[loc[:, 1], loc[:, 0]], np.asarray(w, float).ravel())
+        assert len(loc) == grid.size  # every cell is one of OpenCV's windows
+    assert maps[1].heights.tolist() == maps[2].heights.tolist() == [46, 58, 75, 96, 121]
+
+
 def test_hog_confidence_on_small_frames_leaves_out_the_levels_that_do_not_fit():
     """A 160 x 120 frame holds fewer than 2 x 2 windows at the tallest people's level (121
     pixels: the frame resized to 119 rows, under one 128-row window): that level was kept, as
