@@ -1546,6 +1546,21 @@ def test_track_video_writes_tracks_video_plot_and_scores(tmp_path):
         track_video(demo / "pets09-s2l1.mp4", tmp_path / "o2", frontend="yolo", stop=5)
 
 
+def test_a_run_stopped_before_the_backgrounds_frames_is_the_start_of_a_longer_run(tmp_path):
+    """`--stop` below the 20 frames the background model starts from: the model still starts
+    from those 20 frames (as docs/frontends.md and the option's help say), so the run's
+    tracks are the longer run's tracks of its frames, row for row (the oracle)."""
+    from vistrack.data import demo_clip
+    from vistrack.pipeline import track_video
+
+    rows = {}
+    for stop in (10, 40):
+        run = track_video(demo_clip().video, tmp_path / str(stop), stop=stop, annotate=False)
+        rows[stop] = run.files["tracks"].read_text().splitlines()
+    assert rows[10] and rows[10] == [r for r in rows[40] if int(r.split(",")[0]) <= 10]
+    assert len(rows[40]) > len(rows[10])
+
+
 def test_track_video_follows_a_pan_read_from_colour_images(tmp_path):
     """A view panning 7 pixels a frame over a still textured scene, nothing moving in it, read
     from a folder of colour PNGs: no blob, no track. The model's frames were read grey by

@@ -1788,7 +1788,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="with --gt: score positions by distance rather than boxes by "
                        "IoU, a match within PX/2 (as vistrack eval --zero-distance); points "
                        "(--frontend spots) are always scored so, by default at --diameter")
-    track.add_argument("--stop", type=int, help="video mode: the last frame to track")
+    track.add_argument("--stop", type=int,
+                       help="video mode: the last frame to track (the background model "
+                            "still starts from the first 20 frames, as a whole run's)")
     track.add_argument("--skip-bad-frames", action="store_true",
                        help="image folders: skip an unreadable, cut-short or differently sized "
                             "image with a warning naming it (default: stop with an error)")
