@@ -26,3 +26,14 @@ def median_time(fn, repeats: int):
         out = fn()
         times.append(time.perf_counter() - t)
     return statistics.median(times), out
+
+
+def per_frame(fn, frames, repeats: int = 3):
+    """Median over ``repeats`` passes of the mean milliseconds a frame of ``fn(frame)``."""
+    out = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        for f in frames:
+            fn(f)
+        out.append((time.perf_counter() - t) / len(frames) * 1e3)
+    return statistics.median(out)

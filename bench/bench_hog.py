@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import statistics
 import sys
 import time
 
@@ -28,7 +27,8 @@ from vistrack.data import demo_clip
 from vistrack.frontends import HOGConfidence
 from vistrack.io import VideoReader
 
-from _markdown import publish  # noqa: E402  (bench/ is on the path of its scripts)
+from _common import per_frame  # noqa: E402  (bench/ is on the path of its scripts)
+from _markdown import publish  # noqa: E402
 
 
 def opencv_loop(heights):
@@ -53,18 +53,6 @@ def opencv_loop(heights):
     return margins
 
 
-def per_frame(fn, frames, repeats=3):
-    """Median over ``repeats`` passes of the mean milliseconds a frame, after one frame."""
-    fn(frames[0])
-    out = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        for f in frames:
-            fn(f)
-        out.append((time.perf_counter() - t) / len(frames) * 1e3)
-    return statistics.median(out)
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -79,12 +67,14 @@ def main():
         assert len(ours) == len(theirs) and all(
             np.array_equal(a, b) for a, b in zip(ours, theirs)), "the maps differ"
     threads = cv2.getNumThreads()
+    hog(frames[0])  # (each front-end's first call untimed)
     rows = [(f"vistrack `HOGConfidence` ({threads} threads, OpenCV's)", per_frame(hog, frames))]
     cv2.setNumThreads(1)
     try:
         rows.append(("vistrack `HOGConfidence`, OpenCV set to 1 thread", per_frame(hog, frames)))
     finally:
         cv2.setNumThreads(threads)
+    script(frames[0])
     rows.append(("OpenCV: the levels one after another (a script's loop)",
                  per_frame(script, frames)))
     for name, ms in rows:

@@ -33,7 +33,7 @@ from vistrack.io import MOTTable, VideoReader, read_mot
 from vistrack.tracking import BoxTracker
 from vistrack.types import Detections
 
-from _common import optional  # noqa: E402  (bench/ is on the path of its scripts)
+from _common import optional, per_frame  # noqa: E402  (bench/ is on the path of its scripts)
 from _markdown import publish  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -41,17 +41,6 @@ VIDEO = DATA / "opencv-vtest" / "vtest.avi"
 GT = DATA / "mot15" / "PETS09-S2L1" / "gt" / "gt.txt"
 FPS = 7.0  # MOTChallenge's rate for PETS09-S2L1 (the AVI header says 10)
 SIZE = (768, 576)  # vtest.avi's frames
-
-
-def per_frame(fn, frames, repeats=3):
-    """Median over `repeats` passes of the mean milliseconds a frame."""
-    out = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        for f in frames:
-            fn(f)
-        out.append((time.perf_counter() - t) / len(frames) * 1e3)
-    return statistics.median(out)
 
 
 def background_rows():
