@@ -138,8 +138,13 @@ def test_hog_confidence_scores_its_levels_on_opencvs_threads_to_the_same_bits():
             hog._hog = spy = Spy(hog._hog)
             maps[n] = hog(img)
             assert len(spy.threads) == min(n, cv2.getNumThreads()), n
+        # levels given in any order (searched the largest image first) keep their order
+        mixed = HOGConfidence(heights=(121, 46, 75))(img)
     finally:
         cv2.setNumThreads(before)
+    assert mixed.heights.tolist() == [121, 46, 75]
+    for h, grid in zip(mixed.heights, mixed.scores):
+        np.testing.assert_array_equal(grid, maps[1].scores[maps[1].heights.tolist().index(h)])
     for h, grid, other in zip(maps[2].heights, maps[2].scores, maps[1].scores):
         np.testing.assert_array_equal(grid, other)
         f = 96 / h

@@ -527,14 +527,16 @@ class HOGConfidence:
             return grid
 
         # OpenCV's detect is one thread a call and lets Python's other threads run: the levels
-        # (the largest first) go to as many threads as OpenCV uses (cv2.setNumThreads), each
-        # level's margins as they are on one thread
+        # (the largest image first) go to as many threads as OpenCV uses (cv2.setNumThreads),
+        # each level's margins as they are on one thread
         workers = min(len(levels), max(1, cv2.getNumThreads()))
         if workers > 1:
             from concurrent.futures import ThreadPoolExecutor
 
+            order = sorted(range(len(levels)), key=lambda k: -levels[k][1] * levels[k][2])
             with ThreadPoolExecutor(workers) as pool:
-                scores = list(pool.map(margins, levels))
+                done = dict(zip(order, pool.map(margins, [levels[k] for k in order])))
+            scores = [done[k] for k in range(len(levels))]
         else:
             scores = [margins(level) for level in levels]
         # cell (i, j): the window at (8j, 8i) of the resized image, centred at (8j + 32,
