@@ -721,6 +721,49 @@ def test_argument_errors_are_one_line(capsys, argv, message):
     assert out == "" and err == message + "\n"
 
 
+@pytest.mark.parametrize("argv, name", [
+    (["track", "", "--out", "a.txt"], "INPUT"),
+    (["track", "{seq}", "--out", ""], "--out"),
+    (["track", "{video}", "--out-dir", ""], "--out-dir"),
+    (["track", "{seq}", "--out", "a.txt", "--detections", ""], "--detections"),
+    (["track", "{seq}", "--out", "a.txt", "--config", ""], "--config"),
+    (["track", "{video}", "--out-dir", "o", "--gt", ""], "--gt"),
+    (["report", ""], "OUT_DIR"),
+    (["fit", "", "--out", "f.toml"], "SEQ_DIR"),
+    (["fit", "{seq}", "--out", ""], "--out"),
+    (["fit", "{seq}", "--out", "f.toml", "--config", ""], "--config"),
+    (["track-one", "", "--init", "1,2,3,4", "--out", "b.txt"], "INPUT"),
+    (["track-one", "{video}", "--init", "1,2,3,4", "--out", ""], "--out"),
+    (["track-one", "{video}", "--init", "1,2,3,4", "--out", "b.txt", "--gt", ""], "--gt"),
+    (["eval", "--gt", "", "--pred", "{gt}"], "--gt"),
+    (["eval", "--gt", "{gt}", "--pred", ""], "--pred"),
+    (["eval", "--gt-dir", "", "--pred-dir", "r"], "--gt-dir"),
+    (["eval", "--gt-dir", "g", "--pred-dir", ""], "--pred-dir"),
+    (["eval", "--gt", "{gt}", "--pred", "{gt}", "--plots", ""], "--plots"),
+    (["demo", "track", "--out", ""], "--out"),
+])
+def test_an_empty_name_is_refused_and_nothing_is_written_here(tmp_path, capsys, monkeypatch,
+                                                             argv, name):
+    """An empty file or folder name was the current folder: `report ''` read ./run.json and
+    wrote report.html there, `track-one ''` tracked the images there, `demo track --out ''`
+    wrote its outputs there, `eval --gt ''` said to give --gt. Each is refused by name, in
+    one line, and the current folder stays empty (the oracle)."""
+    seq = tmp_path / "in" / "seq"
+    (seq / "det").mkdir(parents=True)
+    (seq / "det" / "det.txt").write_text("1,-1,10,20,30,60,0.9,-1,-1,-1\n")
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    argv = [a.format(seq=seq, video=VIDEO, gt=GT) for a in argv]
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    out, err = capsys.readouterr()
+    assert (e.value.code, out) == (2, "")
+    assert err == (f"vistrack {argv[0]}: error: argument {name}: an empty name: give a file "
+                   "or folder\n")
+    assert list(here.iterdir()) == []
+
+
 @pytest.mark.parametrize("argv, start", [
     (["eval", "--benchmark", "MOT99"],
      "vistrack eval: error: argument --benchmark: invalid choice: 'MOT99' "),

@@ -128,6 +128,15 @@ def _command_line(argv: Sequence[str]) -> str:
     return shlex.join(["vistrack", *argv])
 
 
+def _path(value: str) -> str:
+    """A file or folder argument: any name but the empty one, which meant the current folder
+    (`report ''` read ./run.json, `track-one ''` tracked the images there, `demo track --out
+    ''` wrote there, `eval --gt ''` was taken as no --gt)."""
+    if value == "":
+        raise argparse.ArgumentTypeError("an empty name: give a file or folder")
+    return value
+
+
 class _Once(argparse.Action):
     """An option that takes one value: given twice, it is an error naming both (argparse
     keeps the last: `eval --gt A --pred a --gt B --pred b` scored B alone, `track --out
@@ -1671,7 +1680,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     demo.add_argument("name", choices=DEMOS, metavar="DEMO",
                       help=f"which demo: {' or '.join(DEMOS)}")
-    demo.add_argument("--out", action=_Once, default="out", metavar="OUT",
+    demo.add_argument("--out", action=_Once, type=_path, default="out", metavar="OUT",
                       help="folder for what the demo writes (default: out)")
     demo.add_argument("--force", action="store_true",
                       help="replace the results of an earlier run")
@@ -1686,15 +1695,15 @@ def build_parser() -> argparse.ArgumentParser:
         "and write a results file. With --out-dir: track a video "
         "file, image folder or sequence folder from pixels and write tracks.txt, tracks.csv, "
         "annotated.mp4 and trajectories.png (and scores, given --gt).")
-    track.add_argument("input", metavar="INPUT", nargs="*",
+    track.add_argument("input", metavar="INPUT", nargs="*", type=_path,
                        help="MOTChallenge sequence folder or detections file (--out), or "
                        "video (--out-dir); "
                        "several, or a folder of sequences, are tracked in parallel; none "
                        "with --print-config: print the configuration the options give")
-    track.add_argument("--out", action=_Once,
+    track.add_argument("--out", action=_Once, type=_path,
                        help="results file to write (detections mode); with several inputs, or "
                        "ending in /, the folder of their results, NAME.txt each")
-    track.add_argument("--out-dir", action=_Once,
+    track.add_argument("--out-dir", action=_Once, type=_path,
                        help="folder for the outputs (video mode); with several inputs, a folder "
                        "NAME/ each inside it")
     track.add_argument("--jobs", type=int, metavar="N",
@@ -1708,7 +1717,7 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("--keep-going", action="store_true",
                        help="several inputs: after one fails, track the others (default: "
                        "start no new one)")
-    track.add_argument("--detections", action=_Once,
+    track.add_argument("--detections", action=_Once, type=_path,
                        help="detections file (default INPUT/det/det.txt): MOTChallenge's format, "
                        "or CSV with a header (.csv); a detector run on "
                        "every k-th frame only (rows on frames 1, 1 + k, ...) is tracked on "
@@ -1745,7 +1754,7 @@ def build_parser() -> argparse.ArgumentParser:
         "raw to the scores themselves. Each option is put over --config, and the file over "
         "its preset ([tracker] name, which --tracker must then agree with). The defaults "
         "below are bytetrack's; --print-config --tracker NAME shows another preset's.")
-    box.add_argument("--config", action=_Once, metavar="FILE",
+    box.add_argument("--config", action=_Once, type=_path, metavar="FILE",
                      help="the whole tracker configuration, TOML (as --print-config writes): "
                      "a box tracker's [tracker], [motion] and [offline] tables, or "
                      "--tracker dcpf's [dcpf] table")
@@ -1780,7 +1789,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "detections file alone or a sequence without seqinfo.ini (put over the "
                        "rate an input gives, where it gives one; with several inputs, every "
                        "input's)")
-    track.add_argument("--gt", action=_Once,
+    track.add_argument("--gt", action=_Once, type=_path,
                        help="video mode, one input: MOTChallenge ground truth to score against "
                        "(or a .csv or .parquet file with a header; for points, "
                        "frame, particle, x, y)")
@@ -1828,8 +1837,8 @@ def build_parser() -> argparse.ArgumentParser:
         "ground truth, the annotated video (as WebM) and the trajectories, and with ground "
         "truth HOTA over α and each object's timeline. The page holds everything itself: it "
         "can be mailed or opened anywhere.")
-    rep.add_argument("out_dir", metavar="OUT_DIR", help="a folder written by vistrack track "
-                     "--out-dir")
+    rep.add_argument("out_dir", metavar="OUT_DIR", type=_path,
+                     help="a folder written by vistrack track --out-dir")
     rep.add_argument("--force", action="store_true", help="overwrite an existing report.html")
     _runs(rep, _report, debug_help)
     fit = sub.add_parser(
@@ -1846,14 +1855,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--gt nothing is scored: it writes the given configuration with each measurement "
         "noise raised to the learned one where that is larger (a detector whose boxes stray "
         "more than the configuration assumes).")
-    fit.add_argument("inputs", metavar="SEQ_DIR", nargs="+",
+    fit.add_argument("inputs", metavar="SEQ_DIR", nargs="+", type=_path,
                      help="MOTChallenge sequence folders (seqinfo.ini, det/det.txt), or a "
                      "folder of them")
-    fit.add_argument("--out", action=_Once, required=True,
+    fit.add_argument("--out", action=_Once, type=_path, required=True,
                      help="configuration file to write (TOML)")
     fit.add_argument("--gt", action="store_true",
                      help="learn from each sequence's ground truth (SEQ_DIR/gt/gt.txt)")
-    fit.add_argument("--config", action=_Once, metavar="FILE",
+    fit.add_argument("--config", action=_Once, type=_path, metavar="FILE",
                      help="the configuration to start from and compare with (default: the "
                      "default one)")
     fit.add_argument("--no-held-out", action="store_true",
@@ -1870,7 +1879,7 @@ def build_parser() -> argparse.ArgumentParser:
         "track-one", help="follow one object from a box drawn on the first frame",
         description="Follow one object through a video or image folder from its box in the "
         "first frame; write frame,x,y,w,h lines (frames from 1).")
-    one.add_argument("input", metavar="INPUT", help="video file or image folder")
+    one.add_argument("input", metavar="INPUT", type=_path, help="video file or image folder")
     one.add_argument("--init", action=_Once,
                      help="the first frame's box: x,y,w,h in 0-based pixels (or separated by "
                      "tabs or spaces; OTB's groundtruth_rect.txt counts from 1: subtract 1 from "
@@ -1884,8 +1893,8 @@ def build_parser() -> argparse.ArgumentParser:
                      "(CONDENSATION on the colour model), template (affine SSD), klt (median "
                      "flow), wsl (robust online appearance model), snake (B-spline contour), "
                      "or OpenCV's csrt and kcf for comparison")
-    one.add_argument("--out", action=_Once, required=True, help="boxes file to write")
-    one.add_argument("--gt", action=_Once,
+    one.add_argument("--out", action=_Once, type=_path, required=True, help="boxes file to write")
+    one.add_argument("--gt", action=_Once, type=_path,
                      help="ground truth (OTB groundtruth_rect.txt, VOT groundtruth.txt or a boxes"
                      " file) to score against")
     one.add_argument("--gt-origin", type=int, choices=(0, 1), default=None,
@@ -1898,20 +1907,20 @@ def build_parser() -> argparse.ArgumentParser:
         "eval", help="score results against ground truth (HOTA, CLEAR MOT, IDF1)",
         description="Score MOTChallenge results as TrackEval does: HOTA, DetA, AssA, MOTA, "
         "MOTP, IDF1 and the counts, per sequence and combined.")
-    ev.add_argument("--gt", action=_Once,
+    ev.add_argument("--gt", action=_Once, type=_path,
                     help="ground-truth file (SEQ/gt/gt.txt; seqinfo.ini is read beside), or "
                     "the sequence folder SEQ holding it; or a .csv or .parquet file, read by "
                     "its columns' names (for points: frame, particle, x, y)")
-    ev.add_argument("--pred", action=_Once,
+    ev.add_argument("--pred", action=_Once, type=_path,
                     help="results file: MOTChallenge's text, or the .parquet or .csv file "
                     "vistrack track --out writes (or the tracks.csv of points that "
                     "--frontend spots writes)")
-    ev.add_argument("--gt-dir", help="folder of sequences SEQ/gt/gt.txt")
+    ev.add_argument("--gt-dir", type=_path, help="folder of sequences SEQ/gt/gt.txt")
     ev.add_argument("--columns", metavar="OURS=THEIRS,...",
                     help="the results' column names in a .csv or .parquet file: frame, id, "
                     "bb_left, bb_top, bb_width, bb_height (or x, y: the centre; or the corners "
                     "x1, y1, x2, y2), conf (e.g. frame=t,id=tid,bb_width=w,bb_height=h)")
-    ev.add_argument("--plots", action=_Once, metavar="DIR",
+    ev.add_argument("--plots", action=_Once, type=_path, metavar="DIR",
                     help="also draw HOTA, DetA and AssA over the localisation threshold α, "
                     "each sequence and COMBINED, into DIR/hota_alpha.png, and each "
                     "sequence's objects over time, coloured by the predicted identity that "
@@ -1929,7 +1938,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="with --gt-dir: score the sequences on the running Dask cluster whose "
                     "scheduler is at ADDRESS (tcp://host:8786), each worker with vistrack "
                     "installed and the files on a filesystem it shares (needs vistrack[dask])")
-    ev.add_argument("--pred-dir", help="folder of results SEQ.txt (or SEQ.parquet, SEQ.csv)")
+    ev.add_argument("--pred-dir", type=_path,
+                    help="folder of results SEQ.txt (or SEQ.parquet, SEQ.csv)")
     ev.add_argument("--benchmark", default="auto", choices=("auto", "MOT15", "MOT16", "MOT17",
                                                            "MOT20"),
                     help="preprocessing of the ground truth (default: auto, MOT17's where "
