@@ -748,9 +748,7 @@ def test_an_empty_name_is_refused_and_nothing_is_written_here(tmp_path, capsys, 
     wrote report.html there, `track-one ''` tracked the images there, `demo track --out ''`
     wrote its outputs there, `eval --gt ''` said to give --gt. Each is refused by name, in
     one line, and the current folder stays empty (the oracle)."""
-    seq = tmp_path / "in" / "seq"
-    (seq / "det").mkdir(parents=True)
-    (seq / "det" / "det.txt").write_text("1,-1,10,20,30,60,0.9,-1,-1,-1\n")
+    seq = _sequence(tmp_path / "in" / "seq")
     here = tmp_path / "here"
     here.mkdir()
     monkeypatch.chdir(here)
